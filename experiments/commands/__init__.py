@@ -1,0 +1,1 @@
+"""Subcommands of `lmsbench`: one module each, with `register(subparsers)`."""

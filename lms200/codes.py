@@ -1,0 +1,84 @@
+"""SICK LMS200 distance codes and their REP-117 meaning.
+
+A raw LMS200 value carries the distance in bits 0-12 (units of 1 mm or 1 cm, set by the device's
+unit mode) and field-A/B/dazzle flags in bits 13-15. Codes 8183-8191 are not distances:
+8183 "measured value above the maximum" means no return within range (REP-117: ``+inf``);
+8186, 8187, 8189, 8190 and 8191 are invalid readings (REP-117: ``nan``). The largest valid
+distance code is 8182.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+
+Units = Literal["mm", "cm"]
+
+DISTANCE_MASK = 0x1FFF
+CODE_ABOVE_MAXIMUM = 8183  # -> +inf
+CODES_INVALID = (8186, 8187, 8189, 8190, 8191)  # -> nan
+CODE_NOT_VALID = 8191  # what an invalid range is written back as
+MAX_VALID_CODE = 8182
+METRES_PER_UNIT = {"mm": 0.001, "cm": 0.01}
+
+
+def metres_per_unit(units: Units) -> float:
+    """Size of one distance unit in metres; raises ValueError for an unknown unit."""
+    try:
+        return METRES_PER_UNIT[units]
+    except KeyError:
+        raise ValueError(f"units: must be 'mm' or 'cm', got {units!r}") from None
+
+
+def codes_to_ranges(codes: np.ndarray, units: Units = "mm") -> np.ndarray:
+    """Raw LMS200 values (flag bits are masked off) to ranges in metres, the REP-117 way.
+
+    8183 -> +inf, 8186/8187/8189/8190/8191 (and any other code above 8182) -> nan.
+    """
+    scale = metres_per_unit(units)
+    c = np.asarray(codes).astype(np.int64) & DISTANCE_MASK
+    r = c * scale
+    r = np.where(c > MAX_VALID_CODE, np.nan, r)
+    return np.where(c == CODE_ABOVE_MAXIMUM, np.inf, r)
+
+
+def ranges_to_codes(ranges: np.ndarray, units: Units = "mm") -> np.ndarray:
+    """Ranges in metres to LMS200 distance codes (uint16), the inverse of :func:`codes_to_ranges`.
+
+    +inf and ranges beyond the largest code -> 8183; nan -> 8191. Ranges are rounded to the unit.
+
+    Raises:
+        ValueError: for negative ranges.
+    """
+    scale = metres_per_unit(units)
+    r = np.asarray(ranges, dtype=np.float64)
+    if np.any(r < 0):
+        raise ValueError("ranges: negative ranges have no LMS200 code")
+    with np.errstate(invalid="ignore", over="ignore"):
+        c = np.rint(np.where(np.isfinite(r), r, 0.0) / scale)
+    c = np.where(c > MAX_VALID_CODE, CODE_ABOVE_MAXIMUM, c)
+    c = np.where(np.isposinf(r), CODE_ABOVE_MAXIMUM, c)
+    c = np.where(np.isnan(r), CODE_NOT_VALID, c)
+    return c.astype(np.uint16)
+
+
+def decode_logged_ranges(ranges: np.ndarray) -> np.ndarray:
+    """Map SICK special codes stored as plain ranges in logs (CARMEN) to REP-117 values.
+
+    CARMEN loggers write the raw code times the unit: 81.83 / 81.91 m in cm mode, 8.183 / 8.191 m
+    in mm mode. A range that is exactly such a value (to a thousandth of a unit) becomes +inf
+    (8183) or nan (8186, 8187, 8189, 8190, 8191); every other range is returned unchanged.
+    """
+    r = np.array(ranges, dtype=np.float64)
+    special = np.array((CODE_ABOVE_MAXIMUM,) + CODES_INVALID, dtype=np.float64)
+    out = r.copy()
+    with np.errstate(invalid="ignore"):
+        for scale in (0.01, 0.001):
+            units = r / scale
+            code = np.rint(units)
+            exact = np.abs(units - code) < 1e-3
+            hit = exact & np.isin(code, special)
+            out[hit & (code == CODE_ABOVE_MAXIMUM)] = np.inf
+            out[hit & (code != CODE_ABOVE_MAXIMUM)] = np.nan
+    return out

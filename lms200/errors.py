@@ -1,0 +1,18 @@
+"""The project's base exception: every known error a user can fix derives from it.
+
+The command line turns these into one-line messages (exit status 2) instead of tracebacks.
+"""
+
+
+class LmsbenchError(Exception):
+    """A known error whose message says what went wrong and what to do about it."""
+
+
+class LogFormatError(LmsbenchError, ValueError):
+    """A log file that cannot be read: the message names the file and the line number."""
+
+    def __init__(self, path: str, line_no: int, reason: str) -> None:
+        self.path = str(path)
+        self.line_no = line_no
+        self.reason = reason
+        super().__init__(f"{self.path}:{line_no}: {reason}")

@@ -1,0 +1,150 @@
+"""The Scan type: one 2-D laser scan in sensor coordinates, with ROS ``sensor_msgs/LaserScan`` names.
+
+Conventions (REP-117 and REP-103):
+- ``ranges`` in metres, beam 0 first; ``+inf`` = no return within range, ``nan`` = invalid reading.
+- Bearing of beam i is ``angle_min + i * angle_increment`` (rad), counter-clockwise, 0 = straight
+  ahead (sensor x axis), y to the left.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+LMS200_BEAMS = 361
+LMS200_RESOLUTION_RAD = np.deg2rad(0.5)
+LMS200_ANGLE_MIN_RAD = -np.pi / 2
+LMS200_RANGE_MAX_MM_MODE = 8.183  # m: SICK code 8183 in mm units = "above maximum"
+LMS200_RANGE_MAX_CM_MODE = 81.83  # m: SICK code 8183 in cm units
+
+
+@dataclass(frozen=True, eq=False)
+class Scan:
+    """One laser scan. Fields mirror ROS ``sensor_msgs/LaserScan``.
+
+    Args:
+        ranges: 1-D float64 array of ranges in metres; +inf beyond range, nan invalid.
+        angle_min: bearing of beam 0 in radians (sensor frame, CCW, 0 = ahead).
+        angle_increment: bearing step between beams in radians, > 0.
+        range_min: smallest valid range in metres.
+        range_max: largest valid range in metres.
+        stamp: time of the first beam in seconds.
+
+    Raises:
+        ValueError: naming the field, when the fields are inconsistent.
+    """
+
+    ranges: np.ndarray
+    angle_min: float
+    angle_increment: float
+    range_min: float
+    range_max: float
+    stamp: float = 0.0
+    _angles: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        try:
+            r = np.array(self.ranges, dtype=np.float64)  # a private copy: the scan is immutable
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"ranges: cannot be read as float64 numbers ({exc})") from None
+        if r.ndim != 1:
+            raise ValueError(f"ranges: must be 1-D, got shape {r.shape}")
+        if r.size == 0:
+            raise ValueError("ranges: must hold at least one beam")
+        if np.any(r < 0):  # nan compares False, so nan and +inf pass
+            raise ValueError("ranges: negative ranges are not allowed (use nan for invalid readings)")
+        if np.any(r == -np.inf):
+            raise ValueError("ranges: -inf is not allowed (REP-117 uses +inf and nan)")
+        for name in ("angle_min", "angle_increment", "range_min", "range_max", "stamp"):
+            value = getattr(self, name)
+            try:
+                value = float(value)
+            except (TypeError, ValueError):
+                raise ValueError(f"{name}: must be a number, got {value!r}") from None
+            if not np.isfinite(value):
+                raise ValueError(f"{name}: must be finite, got {value}")
+            object.__setattr__(self, name, value)
+        if self.angle_increment <= 0:
+            raise ValueError(f"angle_increment: must be > 0, got {self.angle_increment}")
+        if self.range_min < 0:
+            raise ValueError(f"range_min: must be >= 0, got {self.range_min}")
+        if self.range_max <= self.range_min:
+            raise ValueError(
+                f"range_max: must be > range_min ({self.range_min}), got {self.range_max}"
+            )
+        r.setflags(write=False)
+        object.__setattr__(self, "ranges", r)
+        angles = self.angle_min + np.arange(r.size) * self.angle_increment
+        angles.setflags(write=False)
+        object.__setattr__(self, "_angles", angles)
+
+    # -- constructors -------------------------------------------------------------------------
+    @classmethod
+    def lms200(
+        cls,
+        ranges: np.ndarray,
+        stamp: float = 0.0,
+        range_max: float = LMS200_RANGE_MAX_MM_MODE,
+        range_min: float = 0.0,
+    ) -> "Scan":
+        """The LMS200 default: 361 beams at 0.5 deg from -90 deg to +90 deg (mm mode range)."""
+        r = np.asarray(ranges, dtype=np.float64)
+        if r.shape != (LMS200_BEAMS,):
+            raise ValueError(f"ranges: LMS200 default needs {LMS200_BEAMS} beams, got shape {r.shape}")
+        return cls(r, LMS200_ANGLE_MIN_RAD, LMS200_RESOLUTION_RAD, range_min, range_max, stamp)
+
+    # -- derived ------------------------------------------------------------------------------
+    def __len__(self) -> int:
+        return int(self.ranges.size)
+
+    @property
+    def angles(self) -> np.ndarray:
+        """Bearing of every beam in radians (read-only array)."""
+        return self._angles
+
+    @property
+    def angle_max(self) -> float:
+        """Bearing of the last beam: ``angle_min + (n-1) * angle_increment`` (rad)."""
+        return self.angle_min + (self.ranges.size - 1) * self.angle_increment
+
+    @property
+    def valid(self) -> np.ndarray:
+        """Mask of beams with a finite return inside [range_min, range_max]."""
+        r = self.ranges
+        with np.errstate(invalid="ignore"):
+            return np.isfinite(r) & (r >= self.range_min) & (r <= self.range_max)
+
+    @property
+    def points(self) -> np.ndarray:
+        """(n, 2) Cartesian points in the sensor frame (m); nan rows for beams that are not valid."""
+        r = np.where(self.valid, self.ranges, np.nan)
+        return np.column_stack((r * np.cos(self._angles), r * np.sin(self._angles)))
+
+    def replace(self, **changes: object) -> "Scan":
+        """A copy with some fields changed (like ``dataclasses.replace``)."""
+        kw = dict(
+            ranges=self.ranges,
+            angle_min=self.angle_min,
+            angle_increment=self.angle_increment,
+            range_min=self.range_min,
+            range_max=self.range_max,
+            stamp=self.stamp,
+        )
+        kw.update(changes)
+        return Scan(**kw)  # type: ignore[arg-type]
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Scan):
+            return NotImplemented
+        return (
+            self.angle_min == other.angle_min
+            and self.angle_increment == other.angle_increment
+            and self.range_min == other.range_min
+            and self.range_max == other.range_max
+            and self.stamp == other.stamp
+            and self.ranges.shape == other.ranges.shape
+            and bool(np.array_equal(self.ranges, other.ranges, equal_nan=True))
+        )
+
+    __hash__ = None  # type: ignore[assignment]

@@ -1,0 +1,1 @@
+"""PyBullet office worlds that emulate a SICK LMS200, with exact ground truth."""

@@ -1,0 +1,1 @@
+"""Odometry-free EKF-SLAM with line and corner landmarks, and trajectory scoring."""
