@@ -1,0 +1,50 @@
+"""`lmsbench bench`: run the benchmarks of every area (or the named ones) and save a table."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+from pathlib import Path
+
+import pandas as pd
+
+from experiments import benchmarks
+
+
+def discover() -> dict[str, object]:
+    """Benchmark modules by NAME."""
+    found = {}
+    for info in sorted(pkgutil.iter_modules(benchmarks.__path__), key=lambda m: m.name):
+        module = importlib.import_module(f"{benchmarks.__name__}.{info.name}")
+        if hasattr(module, "run"):
+            found[getattr(module, "NAME", info.name)] = module
+    return found
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("bench", help="run the speed benchmarks and save a table of rates")
+    p.add_argument("names", nargs="*", help="benchmark areas to run (default: all)")
+    p.add_argument("--quick", action="store_true", help="fewer repetitions, for a smoke run")
+    p.add_argument("--out", type=Path, default=Path("results/bench"), help="output folder")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    found = discover()
+    names = args.names or list(found)
+    missing = [n for n in names if n not in found]
+    if missing:
+        raise SystemExit(f"lmsbench bench: unknown benchmark(s) {missing}; available: {list(found)}")
+    rows = []
+    for name in names:
+        print(f"== {name}", flush=True)
+        for row in found[name].run(quick=args.quick):
+            row = {"area": name, **row}
+            rows.append(row)
+            print("   " + ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()), flush=True)
+    args.out.mkdir(parents=True, exist_ok=True)
+    table = pd.DataFrame(rows)
+    table.to_csv(args.out / "bench.csv", index=False)
+    print(f"wrote {args.out / 'bench.csv'}")
+    return 0
