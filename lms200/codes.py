@@ -20,7 +20,10 @@ CODE_ABOVE_MAXIMUM = 8183  # -> +inf
 CODES_INVALID = (8186, 8187, 8189, 8190, 8191)  # -> nan
 CODE_NOT_VALID = 8191  # what an invalid range is written back as
 MAX_VALID_CODE = 8182
+_SPECIAL_CODES = np.array((CODE_ABOVE_MAXIMUM,) + CODES_INVALID, dtype=np.float64)
 METRES_PER_UNIT = {"mm": 0.001, "cm": 0.01}
+# Range of the "above maximum" code (8183) in each unit mode: the LMS200's maximum range (m).
+LMS200_MAX_RANGE = {"mm": 8.183, "cm": 81.83}
 
 
 def metres_per_unit(units: Units) -> float:
@@ -63,22 +66,34 @@ def ranges_to_codes(ranges: np.ndarray, units: Units = "mm") -> np.ndarray:
     return c.astype(np.uint16)
 
 
-def decode_logged_ranges(ranges: np.ndarray) -> np.ndarray:
+def infer_units(values: np.ndarray) -> Units:
+    """Guess the LMS unit mode of logged ranges (m) that carry no unit field.
+
+    cm mode if any reading lies above the mm-mode special band (> 8.1915 m) or every reading sits
+    on the 1 cm grid; mm mode otherwise (readings with millimetre digits, all below 8.192 m).
+    """
+    v = np.asarray(values, dtype=np.float64)
+    v = v[np.isfinite(v)]
+    if v.size == 0 or np.any(v > 8.1915):
+        return "cm"
+    off_cm_grid = np.abs(v * 100.0 - np.rint(v * 100.0)) > 1e-4
+    return "mm" if np.any(off_cm_grid) else "cm"
+
+
+def decode_logged_ranges(ranges: np.ndarray, units: Units | None = None) -> np.ndarray:
     """Map SICK special codes stored as plain ranges in logs (CARMEN) to REP-117 values.
 
     CARMEN loggers write the raw code times the unit: 81.83 / 81.91 m in cm mode, 8.183 / 8.191 m
-    in mm mode. A range that is exactly such a value (to a thousandth of a unit) becomes +inf
-    (8183) or nan (8186, 8187, 8189, 8190, 8191); every other range is returned unchanged.
+    in mm mode. A range that is exactly such a code of ``units`` (inferred with
+    :func:`infer_units` when None) becomes +inf (8183) or nan (8186, 8187, 8189, 8190, 8191);
+    every other range is returned unchanged.
     """
-    r = np.array(ranges, dtype=np.float64)
-    special = np.array((CODE_ABOVE_MAXIMUM,) + CODES_INVALID, dtype=np.float64)
-    out = r.copy()
+    values = np.array(ranges, dtype=np.float64)
+    scale = metres_per_unit(units or infer_units(values))
     with np.errstate(invalid="ignore"):
-        for scale in (0.01, 0.001):
-            units = r / scale
-            code = np.rint(units)
-            exact = np.abs(units - code) < 1e-3
-            hit = exact & np.isin(code, special)
-            out[hit & (code == CODE_ABOVE_MAXIMUM)] = np.inf
-            out[hit & (code != CODE_ABOVE_MAXIMUM)] = np.nan
+        code_float = values / scale
+        code = np.rint(code_float)
+        special = (np.abs(code_float - code) < 1e-3) & np.isin(code, _SPECIAL_CODES)
+    out = values.copy()
+    out[special] = np.where(code[special] == CODE_ABOVE_MAXIMUM, np.inf, np.nan)
     return out

@@ -17,6 +17,15 @@ LMS200_RESOLUTION_RAD = np.deg2rad(0.5)
 LMS200_ANGLE_MIN_RAD = -np.pi / 2
 LMS200_RANGE_MAX_MM_MODE = 8.183  # m: SICK code 8183 in mm units = "above maximum"
 LMS200_RANGE_MAX_CM_MODE = 81.83  # m: SICK code 8183 in cm units
+ANGLE_GRID_DEG = 0.05  # every LMS2xx start angle and resolution is a multiple of 0.05 deg
+
+
+def snap_angle(value: float, tolerance: float = 2e-5) -> float:
+    """Snap an angle (rad) stored with limited precision (text, float32) onto the exact 0.05 deg
+    grid when it lies within ``tolerance`` rad of it; otherwise return it unchanged."""
+    step = np.deg2rad(ANGLE_GRID_DEG)
+    snapped = float(np.round(value / step) * step)
+    return snapped if abs(snapped - value) < tolerance else float(value)
 
 
 @dataclass(frozen=True, eq=False)

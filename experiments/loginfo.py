@@ -1,0 +1,83 @@
+"""Summaries of a scan source (a log, a bag, a simulator run): counts, geometry, rates, validity."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Iterable
+
+import numpy as np
+
+from lms200 import Record
+
+
+@dataclass(frozen=True)
+class LogSummary:
+    """What ``lmsbench info`` prints. Angles in degrees, times in seconds."""
+
+    scans: int
+    beams: str  # "361", or "180-361" when the log mixes scan sizes
+    fov_deg: float
+    resolution_deg: float
+    angle_min_deg: float
+    scan_rate_hz: float
+    duration_s: float
+    no_return_fraction: float
+    invalid_fraction: float
+    odometry: bool
+    truth: bool
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+    def lines(self) -> list[str]:
+        return [
+            f"scans           {self.scans}",
+            f"beams per scan  {self.beams}",
+            f"field of view   {self.fov_deg:.2f} deg (from {self.angle_min_deg:.2f} deg)",
+            f"resolution      {self.resolution_deg:.3f} deg",
+            f"scan rate       {self.scan_rate_hz:.2f} scans/s",
+            f"duration        {self.duration_s:.2f} s",
+            f"no return (inf) {100 * self.no_return_fraction:.2f} % of readings",
+            f"invalid (nan)   {100 * self.invalid_fraction:.2f} % of readings",
+            f"odometry        {'yes' if self.odometry else 'no'}",
+            f"true poses      {'yes' if self.truth else 'no'}",
+        ]
+
+
+def summarise(records: Iterable[Record]) -> LogSummary:
+    """Summarise every record of a source in one pass."""
+    n = 0
+    sizes: set[int] = set()
+    stamps: list[float] = []
+    readings = inf = nan = 0
+    odom = truth = False
+    first = None
+    for rec in records:
+        s = rec.scan
+        first = first or s
+        n += 1
+        sizes.add(len(s))
+        stamps.append(s.stamp)
+        readings += len(s)
+        inf += int(np.isposinf(s.ranges).sum())
+        nan += int(np.isnan(s.ranges).sum())
+        odom |= rec.odom is not None
+        truth |= rec.truth is not None
+    if first is None:
+        return LogSummary(0, "0", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False)
+    duration = max(stamps) - min(stamps) if n > 1 else 0.0
+    rate = (n - 1) / duration if duration > 0 else 0.0
+    beams = str(min(sizes)) if len(sizes) == 1 else f"{min(sizes)}-{max(sizes)}"
+    return LogSummary(
+        scans=n,
+        beams=beams,
+        fov_deg=float(np.degrees(first.angle_max - first.angle_min)),
+        resolution_deg=float(np.degrees(first.angle_increment)),
+        angle_min_deg=float(np.degrees(first.angle_min)),
+        scan_rate_hz=rate,
+        duration_s=duration,
+        no_return_fraction=inf / readings,
+        invalid_fraction=nan / readings,
+        odometry=odom,
+        truth=truth,
+    )

@@ -1,0 +1,190 @@
+"""ROS 1 and ROS 2 bags: ``sensor_msgs/LaserScan`` in and out, through the ``rosbags`` library.
+
+No ROS installation is needed. Writing: a ``.bag`` path gives a ROS 1 bag, any other path a ROS 2
+bag folder (sqlite3 storage). Scans go to ``/scan`` (frame ``laser``); a record's odometry and true
+pose, when present, go to ``/odom`` and ``/ground_truth`` as ``geometry_msgs/PoseStamped`` with the
+scan's stamp, written just before the scan. Reading: every LaserScan topic (or the one named) in
+time order; odometry from ``/odom`` and truth from ``/ground_truth`` (PoseStamped or
+nav_msgs/Odometry), the latest message at or before each scan.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Iterable, Iterator
+
+import numpy as np
+
+from .errors import LmsbenchError
+from .records import Pose2D, Record
+from .scan import Scan, snap_angle
+
+SCAN_TOPIC = "/scan"
+ODOM_TOPIC = "/odom"
+TRUTH_TOPIC = "/ground_truth"
+_POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "nav_msgs/msg/Odometry")
+
+
+class BagError(LmsbenchError):
+    """A bag that cannot be read as laser scans."""
+
+
+def is_bag(path: str | Path) -> bool:
+    """True for a ROS 1 ``.bag`` file or a ROS 2 bag folder (with ``metadata.yaml``)."""
+    p = Path(path)
+    return (p.is_file() and p.suffix == ".bag") or (p.is_dir() and (p / "metadata.yaml").is_file())
+
+
+def _typestore(ros1: bool):  # noqa: ANN202 - rosbags' Typestore
+    from rosbags.typesys import Stores, get_typestore
+
+    return get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+
+
+def _split_stamp(t: float) -> tuple[int, int]:
+    ns = int(round(t * 1e9))
+    return ns // 1_000_000_000, ns % 1_000_000_000
+
+
+def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOPIC) -> int:
+    """Write Records to a ROS 1 (``*.bag``) or ROS 2 (folder) bag; returns the number of scans.
+
+    Ranges are stored as float32 (the message type), +inf / nan kept as they are (REP-117).
+    """
+    path = Path(path)
+    ros1 = path.suffix == ".bag"
+    if path.exists():
+        raise FileExistsError(f"{path} exists; bags are not overwritten")
+    ts = _typestore(ros1)
+    T = ts.types
+    LaserScan, Header, Time = T["sensor_msgs/msg/LaserScan"], T["std_msgs/msg/Header"], T["builtin_interfaces/msg/Time"]
+    PoseStamped, Pose = T["geometry_msgs/msg/PoseStamped"], T["geometry_msgs/msg/Pose"]
+    Point, Quaternion = T["geometry_msgs/msg/Point"], T["geometry_msgs/msg/Quaternion"]
+    serialize = ts.serialize_ros1 if ros1 else ts.serialize_cdr
+    if ros1:
+        from rosbags.rosbag1 import Writer
+
+        writer = Writer(path)
+    else:
+        from rosbags.rosbag2 import Writer
+
+        writer = Writer(path, version=8)
+    count = 0
+    with writer:
+        kw = {"typestore": ts}
+        conns: dict[str, object] = {}
+
+        def conn(name: str, msgtype: str):  # noqa: ANN202
+            if name not in conns:
+                conns[name] = writer.add_connection(name, msgtype, **kw)
+            return conns[name]
+
+        for seq, rec in enumerate(records):
+            scan = rec.scan
+            sec, nsec = _split_stamp(scan.stamp)
+            ns = sec * 1_000_000_000 + nsec
+            header_kw = {"stamp": Time(sec=sec, nanosec=nsec), "frame_id": "laser"}
+            if ros1:
+                header_kw["seq"] = seq
+            for name, pose in ((ODOM_TOPIC, rec.odom), (TRUTH_TOPIC, rec.truth)):
+                if pose is None:
+                    continue
+                x, y, th = pose
+                msg = PoseStamped(
+                    header=Header(**{**header_kw, "frame_id": "map" if name == TRUTH_TOPIC else "odom"}),
+                    pose=Pose(
+                        position=Point(x=float(x), y=float(y), z=0.0),
+                        orientation=Quaternion(x=0.0, y=0.0, z=float(np.sin(th / 2)), w=float(np.cos(th / 2))),
+                    ),
+                )
+                c = conn(name, "geometry_msgs/msg/PoseStamped")
+                writer.write(c, ns, serialize(msg, "geometry_msgs/msg/PoseStamped"))
+            msg = LaserScan(
+                header=Header(**header_kw),
+                angle_min=scan.angle_min,
+                angle_max=scan.angle_max,
+                angle_increment=scan.angle_increment,
+                time_increment=0.0,
+                scan_time=0.0,
+                range_min=scan.range_min,
+                range_max=scan.range_max,
+                ranges=scan.ranges.astype(np.float32),
+                intensities=np.zeros(0, dtype=np.float32),
+            )
+            writer.write(conn(topic, "sensor_msgs/msg/LaserScan"), ns, serialize(msg, "sensor_msgs/msg/LaserScan"))
+            count += 1
+    return count
+
+
+def _pose_of(msg) -> Pose2D:  # noqa: ANN001
+    pose = msg.pose.pose if hasattr(msg.pose, "pose") else msg.pose
+    q = pose.orientation
+    yaw = float(np.arctan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z)))
+    return (float(pose.position.x), float(pose.position.y), yaw)
+
+
+def _stamp_of(msg) -> float:  # noqa: ANN001
+    return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+
+
+class BagReader:
+    """Iterate the LaserScans of a ROS 1 or ROS 2 bag as Records (iterable several times).
+
+    Args:
+        path: ``*.bag`` file or ROS 2 bag folder.
+        topic: the LaserScan topic; by default every LaserScan topic of the bag.
+    """
+
+    def __init__(self, path: str | Path, topic: str | None = None) -> None:
+        self.path = Path(path)
+        if not self.path.exists():
+            raise FileNotFoundError(f"no such bag: {self.path}")
+        self.topic = topic
+
+    def __iter__(self) -> Iterator[Record]:
+        from rosbags.highlevel import AnyReader
+
+        try:
+            reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
+            reader.open()
+        except Exception as exc:  # rosbags raises its own types for every kind of damage
+            raise BagError(f"{self.path}: cannot open as a ROS bag: {exc}") from None
+        try:
+            scans = [c for c in reader.connections if c.msgtype == "sensor_msgs/msg/LaserScan"]
+            if self.topic is not None:
+                scans = [c for c in scans if c.topic == self.topic]
+            if not scans:
+                topics = sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections})
+                wanted = f"topic {self.topic!r}" if self.topic else "any sensor_msgs/LaserScan topic"
+                raise BagError(f"{self.path}: no {wanted}; topics: {topics}")
+            poses = [c for c in reader.connections if c.msgtype in _POSE_TYPES and c.topic in (ODOM_TOPIC, TRUTH_TOPIC)]
+            # Poses stamped like a scan may come just before or just after it (ties in bag time are
+            # unordered across topics): hold each scan until bag time moves past it.
+            latest: dict[str, Pose2D | None] = {ODOM_TOPIC: None, TRUTH_TOPIC: None}
+            held: list[tuple[int, Scan]] = []
+            for conn, t, raw in reader.messages(connections=scans + poses):
+                while held and held[0][0] < t:
+                    yield self._record(held.pop(0)[1], latest)
+                msg = reader.deserialize(raw, conn.msgtype)
+                if conn.msgtype != "sensor_msgs/msg/LaserScan":
+                    latest[conn.topic] = _pose_of(msg)
+                    continue
+                ranges = np.asarray(msg.ranges, dtype=np.float64)
+                ranges[ranges < 0] = np.nan  # some drivers mark invalid beams with negative values
+                scan = Scan(
+                    ranges,
+                    snap_angle(float(msg.angle_min)),  # float32 in the message: back onto the 0.05 deg grid
+                    snap_angle(float(msg.angle_increment)),
+                    float(msg.range_min),
+                    float(msg.range_max),
+                    _stamp_of(msg),
+                )
+                held.append((t, scan))
+            for _, scan in held:
+                yield self._record(scan, latest)
+        finally:
+            reader.close()
+
+    @staticmethod
+    def _record(scan: Scan, latest: dict[str, Pose2D | None]) -> Record:
+        return Record(scan=scan, odom=latest[ODOM_TOPIC], truth=latest[TRUTH_TOPIC])

@@ -1,0 +1,45 @@
+"""`lmsbench info` and `lmsbench demo` through the command-line entry point."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from experiments.cli import main
+from experiments.demo import room_scan
+
+
+@pytest.mark.shared_data
+def test_info_json_on_intel(shared_data: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["info", str(shared_data / "intel-corrected.log.gz"), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["scans"] == 910 and info["beams"] == "180"
+    assert info["fov_deg"] == pytest.approx(179.0) and info["resolution_deg"] == pytest.approx(1.0)
+    assert info["duration_s"] == pytest.approx(2650.8632, abs=1e-3)
+    assert info["scan_rate_hz"] == pytest.approx(909 / 2650.8632, rel=1e-6)
+    assert 0.02 < info["no_return_fraction"] < 0.03 and info["invalid_fraction"] == 0.0
+    assert info["odometry"] is True and info["truth"] is False
+
+
+def test_info_errors_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["info", str(tmp_path / "missing.clf")]) == 2
+    assert "no such log" in capsys.readouterr().err
+    bad = tmp_path / "bad.clf"
+    bad.write_text("FLASER 361 1 2 3\n")
+    assert main(["info", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "bad.clf:1:" in err and err.count("\n") == 1
+
+
+def test_room_scan_matches_geometry() -> None:
+    s = room_scan(sigma=0.0, x=1.5, y=0.5, theta=0.0)
+    # straight ahead: the far wall at x = 6; to the left (beam 360): the wall at y = +2
+    assert s.ranges[180] == pytest.approx(4.5, abs=5e-4)
+    assert s.ranges[360] == pytest.approx(1.5, abs=5e-4)
+    assert s.ranges[0] == pytest.approx(2.5, abs=5e-4)
+    p = s.points
+    on_wall = np.isclose(p[:, 0] + 1.5, 6.0, atol=1e-3) | np.isclose(np.abs(p[:, 1] + 0.5), 2.0, atol=1e-3)
+    assert on_wall.all()

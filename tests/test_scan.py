@@ -1,0 +1,108 @@
+"""The Scan type and the SICK special codes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lms200 import Scan, codes_to_ranges, decode_logged_ranges, ranges_to_codes
+from lms200.scan import snap_angle
+
+
+def test_lms200_default_geometry() -> None:
+    s = Scan.lms200(np.full(361, 2.0), stamp=3.5)
+    assert len(s) == 361
+    assert s.angle_min == pytest.approx(-np.pi / 2, abs=1e-15)
+    assert s.angle_max == pytest.approx(np.pi / 2, abs=1e-12)
+    assert s.angles[180] == pytest.approx(0.0, abs=1e-12)
+    assert np.diff(s.angles) == pytest.approx(np.deg2rad(0.5))
+    assert s.stamp == 3.5
+    # beam 0 looks to the right (-y), beam 180 ahead (+x), beam 360 to the left (+y)
+    np.testing.assert_allclose(s.points[[0, 180, 360]], [[0, -2], [2, 0], [0, 2]], atol=1e-12)
+
+
+def test_points_and_valid_follow_rep117() -> None:
+    s = Scan(np.array([1.0, np.inf, np.nan, 0.05, 9.0]), 0.0, 0.1, 0.1, 8.0)
+    np.testing.assert_array_equal(s.valid, [True, False, False, False, False])
+    assert np.isnan(s.points[1:]).all()
+    np.testing.assert_allclose(s.points[0], [1.0, 0.0])
+
+
+def test_scan_is_immutable_and_copies_its_input() -> None:
+    r = np.ones(5)
+    s = Scan(r, 0.0, 0.1, 0.0, 10.0)
+    r[0] = 7.0
+    assert s.ranges[0] == 1.0
+    with pytest.raises(ValueError):
+        s.ranges[0] = 3.0
+    with pytest.raises(AttributeError):
+        s.angle_min = 1.0  # type: ignore[misc]
+    assert s.replace(stamp=2.0).stamp == 2.0 and s.replace(stamp=2.0) != s
+    assert Scan(np.ones(5), 0.0, 0.1, 0.0, 10.0) == s
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        (dict(ranges=np.ones((2, 3))), "ranges"),
+        (dict(ranges=np.array([1.0, -0.5])), "ranges"),
+        (dict(ranges=np.array([1.0, -np.inf])), "ranges"),
+        (dict(ranges=np.array([])), "ranges"),
+        (dict(ranges=["a", "b"]), "ranges"),
+        (dict(angle_increment=0.0), "angle_increment"),
+        (dict(angle_increment=-0.01), "angle_increment"),
+        (dict(angle_min=np.nan), "angle_min"),
+        (dict(range_min=-1.0), "range_min"),
+        (dict(range_max=0.0), "range_max"),
+        (dict(stamp=np.inf), "stamp"),
+    ],
+)
+def test_inconsistent_fields_raise_naming_the_field(kwargs: dict, field: str) -> None:
+    base = dict(ranges=np.ones(3), angle_min=0.0, angle_increment=0.01, range_min=0.0, range_max=8.0)
+    base.update(kwargs)
+    with pytest.raises(ValueError, match=f"^{field}"):
+        Scan(**base)
+
+
+def test_lms200_constructor_checks_beam_count() -> None:
+    with pytest.raises(ValueError, match="ranges"):
+        Scan.lms200(np.ones(180))
+
+
+def test_sick_codes_map_the_rep117_way() -> None:
+    codes = np.array([0, 1234, 8182, 8183, 8186, 8187, 8189, 8190, 8191, 8183 | 0x8000])
+    mm = codes_to_ranges(codes, "mm")
+    np.testing.assert_allclose(mm[:3], [0.0, 1.234, 8.182])
+    assert np.isposinf(mm[3]) and np.isposinf(mm[9])  # flag bits are masked off
+    assert np.isnan(mm[4:9]).all()
+    cm = codes_to_ranges(codes, "cm")
+    np.testing.assert_allclose(cm[:3], [0.0, 12.34, 81.82])
+    with pytest.raises(ValueError, match="units"):
+        codes_to_ranges(codes, "m")  # type: ignore[arg-type]
+
+
+def test_sick_codes_inverse() -> None:
+    r = np.array([0.0, 1.2344, 8.182, np.inf, np.nan, 9.5])
+    np.testing.assert_array_equal(ranges_to_codes(r, "mm"), [0, 1234, 8182, 8183, 8191, 8183])
+    np.testing.assert_array_equal(ranges_to_codes(r, "cm"), [0, 123, 818, 8183, 8191, 950])
+    back = codes_to_ranges(ranges_to_codes(r[:5], "mm"), "mm")
+    np.testing.assert_allclose(back[:3], [0.0, 1.234, 8.182])
+    with pytest.raises(ValueError, match="negative"):
+        ranges_to_codes(np.array([-1.0]))
+
+
+def test_logged_special_values() -> None:
+    cm = decode_logged_ranges(np.array([81.83, 81.91, 81.86, 1.5, 81.82, 8.19, 8.18]))
+    assert np.isposinf(cm[0]) and np.isnan(cm[[1, 2]]).all()
+    np.testing.assert_allclose(cm[3:], [1.5, 81.82, 8.19, 8.18])  # 8.19 m is a valid cm reading
+    mm = decode_logged_ranges(np.array([8.183, 8.191, 8.19, 1.234, 8.182]))  # mm digits: mm mode
+    assert np.isposinf(mm[0]) and np.isnan(mm[[1, 2]]).all()
+    np.testing.assert_allclose(mm[3:], [1.234, 8.182])
+    forced = decode_logged_ranges(np.array([8.19, 1.5]), units="mm")
+    assert np.isnan(forced[0]) and forced[1] == 1.5
+
+
+def test_snap_angle() -> None:
+    assert snap_angle(0.008727) == np.deg2rad(0.5)
+    assert snap_angle(-1.570796) == -np.pi / 2
+    assert snap_angle(0.0123) == 0.0123  # not near the 0.05 deg grid: unchanged
