@@ -21,7 +21,7 @@ demo: $(STAMP)
 	$(BIN)/lmsbench demo
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -rs
 
 bench: $(STAMP)
 	$(BIN)/lmsbench bench
