@@ -38,13 +38,13 @@ def valid_points(scan: Scan) -> Points:
     return Points(idx, r * np.cos(b), r * np.sin(b), r, b)
 
 
-def breakpoints(pts: Points, angle_increment: float, lambda_rad: float, sigma: float) -> np.ndarray:
+def breakpoints(pts: Points, angle_increment: float, lambda_rad: float, sigma: float, max_skip: int = 1) -> np.ndarray:
     """Cluster boundaries by the adaptive breakpoint detector (Borges & Aldon 2004).
 
     Consecutive valid points n-1, n belong to different clusters when their distance exceeds
     ``D_max = r_{n-1} sin(dphi) / sin(lambda - dphi) + 3 sigma`` (dphi = bearing step between them,
-    lambda = the shallowest incidence angle still accepted as the same surface) or when dropped
-    beams lie between them. Returns the (c, 2) array of inclusive [start, end] positions into ``pts``.
+    lambda = the shallowest incidence angle still accepted as the same surface) or when they are
+    more than ``max_skip`` beams apart (``max_skip - 1`` dropped beams are bridged). Returns the (c, 2) array of inclusive [start, end] positions into ``pts``.
     """
     n = pts.idx.size
     if n == 0:
@@ -54,7 +54,7 @@ def breakpoints(pts: Points, angle_increment: float, lambda_rad: float, sigma: f
     gap = np.hypot(np.diff(pts.x), np.diff(pts.y))
     with np.errstate(divide="ignore", invalid="ignore"):
         dmax = pts.r[:-1] * np.sin(dphi) / np.sin(lambda_rad - dphi) + 3.0 * sigma
-    cut = (gap > dmax) | (dmax <= 0) | (step > 1)
+    cut = (gap > dmax) | (dmax <= 0) | (step > max_skip)
     ends = np.flatnonzero(cut)
     starts = np.concatenate(([0], ends + 1))
     stops = np.concatenate((ends, [n - 1]))

@@ -35,6 +35,7 @@ class SplitMergeConfig:
       collinear neighbours after splitting).
     - min_points / min_length: 8 points and 0.15 m per line (Nguyen et al. 2007 discard segments
       with too few points, "P_min", and too short, "L_min"; values chosen for 0.5 deg beams).
+    - max_skip: 3: a cluster bridges up to two dropped (nan / no-return) beams, as hough / ransac.
     """
 
     sigma: float = 0.005
@@ -43,17 +44,18 @@ class SplitMergeConfig:
     merge_rms: float = 0.01
     min_points: int = 8
     min_length: float = 0.15
+    max_skip: int = 3
     corners: CornerConfig = field(default_factory=CornerConfig)
 
 
 def segment_lines(scan: Scan, sigma: float, lam_deg: float, threshold: float, merge_rms: float,
-                  min_points: int, min_length: float, chord: bool):
+                  min_points: int, min_length: float, max_skip: int, chord: bool):
     """The split / merge / refit pipeline shared with ``iepf``; returns beam-ordered Lines."""
     pts = valid_points(scan)
     if pts.idx.size < 2:
         return []
     fitter = PrefixFit(pts.x, pts.y)
-    clusters = breakpoints(pts, scan.angle_increment, np.deg2rad(lam_deg), sigma)
+    clusters = breakpoints(pts, scan.angle_increment, np.deg2rad(lam_deg), sigma, max_skip)
     segs = split(pts, fitter, clusters, threshold, min_points, chord)
     if merge_rms > 0:
         segs = merge_collinear(fitter, segs, merge_rms)
@@ -70,7 +72,7 @@ def segment_lines(scan: Scan, sigma: float, lam_deg: float, threshold: float, me
 def run(scan: Scan, cfg: SplitMergeConfig) -> FeatureSet:
     """Extract lines and corners from ``scan`` (sensor frame) by split-and-merge."""
     lines = segment_lines(scan, cfg.sigma, cfg.breakpoint_lambda_deg, cfg.split_threshold,
-                          cfg.merge_rms, cfg.min_points, cfg.min_length, chord=False)
+                          cfg.merge_rms, cfg.min_points, cfg.min_length, cfg.max_skip, chord=False)
     return feature_set(lines, cfg.corners, "split_merge")
 
 
