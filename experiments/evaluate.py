@@ -94,6 +94,8 @@ def score_row(fs, truth) -> dict[str, float]:
     score = score_scan(fs, truth)
     row: dict[str, float] = {}
     for name, value in dataclasses.asdict(score).items():
+        if name in ("matches", "extra"):  # indices and free-form extras are not metrics
+            continue
         if np.ndim(value) == 0:
             if isinstance(value, (bool, int, float, np.integer, np.floating)):
                 row[name] = value
@@ -107,13 +109,13 @@ def score_row(fs, truth) -> dict[str, float]:
 
 def summarise_methods(per_scan: pd.DataFrame) -> pd.DataFrame:
     """One row per method: pooled accuracy and time per scan."""
-    return pd.DataFrame([summarise_scans(g).assign(method=m) for m, g in per_scan.groupby("method", sort=False)]
-                        ).pipe(lambda t: t[["method", *[c for c in t.columns if c != "method"]]])
+    rows = [{"method": m, **summarise_scans(g).to_dict()} for m, g in per_scan.groupby("method", sort=False)]
+    return pd.DataFrame(rows)
 
 
 def summarise_scans(table: pd.DataFrame) -> pd.Series:
     """Pooled metrics of the scans of one run of one method (see module docstring)."""
-    out: dict[str, float] = {"scans": len(table)}
+    out: dict[str, float] = {"scans": float(len(table))}
     t = table["time_ms"].to_numpy()
     out.update(time_ms_median=float(np.median(t)), time_ms_mean=float(np.mean(t)),
                time_ms_p05=float(np.percentile(t, 5)), time_ms_p95=float(np.percentile(t, 95)),
