@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from matplotlib.ticker import FormatStrFormatter
 
 from experiments.style import (CORNER_COLOR, LINE_COLOR, SCAN_COLOR, TRUTH_COLOR, equal_axes, method_color,
                                new_figure, save_figure)
@@ -37,6 +38,7 @@ def fig_timing(timing: pd.DataFrame, stem: Path) -> list[Path]:
         ax.plot(group["scan"], group["time_ms"], lw=0.9, color=method_color(method),
                 label=f"{method} (median {med:.2f} ms)")
     ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
     ax.set_xlabel("scan")
     ax.set_ylabel("processing time per scan (ms)")
     ax.set_title("Processing time for successive scans")
@@ -108,6 +110,8 @@ def fig_accuracy_speed(summary: pd.DataFrame, stem: Path, accuracy: str = "f1") 
         ax.annotate(row.method, (row.time_ms_median, getattr(row, accuracy)), textcoords="offset points",
                     xytext=(5, 5), fontsize=8)
     ax.set_xscale("log")
+    ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.xaxis.set_minor_formatter(FormatStrFormatter("%g"))
     ax.set_xlabel("time per scan (ms; median, 5-95 %)")
     ax.set_ylabel(f"line {accuracy} against ground truth")
     ax.set_ylim(0, 1.05)
