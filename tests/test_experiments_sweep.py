@@ -214,3 +214,27 @@ def test_the_cli_runs_a_sweep_file_on_its_own_local_cluster(tmp_path):
     table = pd.read_parquet(tmp_path / "out" / "results.parquet")
     assert list(table["y"]) == [5, 6, 9]
     assert (tmp_path / "out" / "results.csv").exists() and (tmp_path / "out" / "sweep.yaml").exists()
+
+
+def test_linked_grid_parameters_change_together():
+    spec = SweepSpec.from_dict({"kind": KIND, "grid": {"a,b": [[0.5, 361], [1.0, 181]], "c": ["x", "y"]},
+                                "seeds": [0]})
+    assert spec.cells() == [{"a": 0.5, "b": 361, "c": "x", "seed": 0}, {"a": 0.5, "b": 361, "c": "y", "seed": 0},
+                            {"a": 1.0, "b": 181, "c": "x", "seed": 0}, {"a": 1.0, "b": 181, "c": "y", "seed": 0}]
+    with pytest.raises(SweepSpecError, match=r"links 2 parameters"):
+        SweepSpec.from_dict({"kind": KIND, "grid": {"a,b": [[0.5]]}})
+    with pytest.raises(SweepSpecError, match=r"given twice"):
+        SweepSpec.from_dict({"kind": KIND, "grid": {"a,b": [[0.5, 1]]}, "fixed": {"b": 2}})
+
+
+def test_the_example_sweep_files_parse_and_name_built_in_kinds():
+    from experiments.sweep.cells import BUILTIN_KINDS
+
+    files = sorted((REPO / "sweeps").glob("*.yaml"))
+    names = {f.stem for f in files}
+    assert {"k_vs_noise", "extractors_vs_resolution", "slam_vs_noise"} <= names
+    for path in files:
+        spec = load_sweep(path)
+        assert spec.name == path.stem and spec.kind in BUILTIN_KINDS
+        cells = spec.cells()
+        assert len({cell_key(spec.kind, c) for c in cells}) == len(cells)

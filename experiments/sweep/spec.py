@@ -16,6 +16,9 @@ A sweep file is YAML::
     sample_seed: 0            # seeds the draws (numpy Generator), so the cells are reproducible
     seeds: [0, 1, 2]          # crossed with everything; each cell gets a `seed` column
 
+Parameters that must change together are linked: a grid key of comma-separated names takes
+tuples, e.g. ``"sensor.resolution_deg,sensor.n_beams": [[0.5, 361], [1.0, 181]]``.
+
 Random distributions: ``{uniform: [lo, hi]}``, ``{loguniform: [lo, hi]}``, ``{int: [lo, hi]}``
 (inclusive), ``{choice: [a, b, ...]}``. Parameter names are free; the built-in cell kinds read
 ``extractor.*`` (extractor parameters), ``sensor.*`` (``SensorConfig`` fields), ``slam.*``
@@ -103,8 +106,12 @@ class SweepSpec:
 
     def cells(self) -> list[dict[str, Scalar]]:
         """Every parameter set: fixed x grid product x random draws x seeds, in that nesting order."""
-        grid_keys = list(self.grid)
-        combos = [dict(zip(grid_keys, values)) for values in itertools.product(*self.grid.values())]
+        combos = []
+        for values in itertools.product(*self.grid.values()):
+            combo: dict[str, Scalar] = {}
+            for key, value in zip(self.grid, values):
+                combo.update(zip(_names(key), value) if "," in key else {key: value})
+            combos.append(combo)
         draws = _draw(self.random, self.samples, self.sample_seed) if self.random else [{}]
         cells = []
         for combo in combos:
@@ -133,8 +140,13 @@ def cell_key(kind: str, params: dict[str, Scalar]) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+def _names(key: str) -> list[str]:
+    """The parameter names of a grid key (several for a linked key "a,b")."""
+    return [name.strip() for name in key.split(",")]
+
+
 def _check(spec: SweepSpec) -> None:
-    names = [*spec.fixed, *spec.grid, *spec.random]
+    names = [*spec.fixed, *(n for key in spec.grid for n in _names(key)), *spec.random]
     clashes = sorted({n for n in names if names.count(n) > 1} | ({"seed"} & set(names)))
     if clashes:
         raise SweepSpecError(f"parameter(s) {clashes} given twice (fixed/grid/random/seeds); give each once")
@@ -144,7 +156,14 @@ def _check(spec: SweepSpec) -> None:
         if not values:
             raise SweepSpecError(f"grid.{name} is empty; give at least one value")
         for value in values:
-            _check_scalar(f"grid.{name}", value)
+            if "," in name:
+                if not isinstance(value, (list, tuple)) or len(value) != len(_names(name)):
+                    raise SweepSpecError(f"grid.{name} links {len(_names(name))} parameters: each value must be "
+                                         f"a list of {len(_names(name))}, got {value!r}")
+                for v in value:
+                    _check_scalar(f"grid.{name}", v)
+            else:
+                _check_scalar(f"grid.{name}", value)
     for name, dist in spec.random.items():
         if not (isinstance(dist, dict) and len(dist) == 1 and next(iter(dist)) in _DISTRIBUTIONS):
             raise SweepSpecError(f"random.{name} must be one of {{{'|'.join(_DISTRIBUTIONS)}: [...]}}, got {dist!r}")
