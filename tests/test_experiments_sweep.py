@@ -238,3 +238,18 @@ def test_the_example_sweep_files_parse_and_name_built_in_kinds():
         assert spec.name == path.stem and spec.kind in BUILTIN_KINDS
         cells = spec.cells()
         assert len({cell_key(spec.kind, c) for c in cells}) == len(cells)
+
+
+def test_the_cli_uses_an_existing_scheduler_and_matches_in_process(tmp_path, dask_client):
+    log = tmp_path / "log.txt"
+    spec_path = tmp_path / "squares.yaml"
+    spec_path.write_text(yaml.safe_dump(make_spec(log, xs=[2, 3, 4]).to_dict()))
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), str(REPO / "tests")])}
+    run = subprocess.run([sys.executable, "-m", "experiments.cli", "sweep", str(spec_path), "--no-progress",
+                          "--scheduler", dask_client.scheduler.address, "--out", str(tmp_path / "out")],
+                         env=env, cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert "6 cells, 6 computed, 0 already done, 2 failed" in run.stdout
+    remote = pd.read_parquet(tmp_path / "out" / "results.parquet")
+    local = run_sweep(make_spec(log, xs=[2, 3, 4]), tmp_path / "inproc", "inprocess", progress=False).table
+    pd.testing.assert_frame_equal(comparable(remote), comparable(local))
