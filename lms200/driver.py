@@ -28,6 +28,7 @@ from .framing import Frame, FrameParser
 from .protocol import (
     ACK,
     BAUD_MODES,
+    CMD_MEASURE,
     CMD_SET_CONFIG,
     MAX_LEN,
     MODE_CONTINUOUS,
@@ -58,6 +59,7 @@ from .scan import Scan
 
 PROBE_BAUDS = (9600, 19200, 38400, 500000)
 _READ_POLL_S = 0.01  # longest blocking read (s)
+_SHORT_REPLY_BYTES = 64  # every reply but 0xB0 fits (the 0xF7 configuration reply is 41 bytes)
 _READ_CHUNK = 4096  # bytes asked for when the port cannot tell how many are waiting
 
 
@@ -185,11 +187,19 @@ class LMS200:
             return self.parser.idle()
         return []
 
-    def _request(self, payload: bytes, what: str, timeout: float | None = None, retries: int | None = None) -> Frame:
-        """Send a request and return its reply frame, retrying on silence and NAK."""
+    def _request(self, payload: bytes, what: str, timeout: float | None = None, retries: int | None = None,
+                 budget: float | None = None) -> Frame:
+        """Send a request and return its reply frame, retrying on silence and NAK.
+
+        Each attempt waits ``timeout`` plus the line time of the reply (and of a scan telegram
+        that may be in flight in continuous mode), or ``budget`` seconds when given.
+        """
         expected = reply_code(payload[0])
         telegram = build_frame(payload, self.address)
-        budget = (self.timeout if timeout is None else timeout) + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
+        if budget is None:
+            reply_bytes = MAX_LEN + OVERHEAD_BYTES if payload[0] == CMD_MEASURE else _SHORT_REPLY_BYTES
+            in_flight = MAX_LEN + OVERHEAD_BYTES if self.streaming else 0
+            budget = (self.timeout if timeout is None else timeout) + frame_seconds(reply_bytes + in_flight + 1, self.baud)
         attempts = self.retries if retries is None else retries
         seen: list[str] = []
         for attempt in range(attempts):
@@ -235,10 +245,16 @@ class LMS200:
         bauds = PROBE_BAUDS if probe else (POWER_ON_BAUD,)
         for baud in bauds:
             self._use_baud(baud)
-            try:
-                reply = self._request(type_request(), f"request the type (0x3A) at {baud} baud", retries=2)
+            what = f"request the type (0x3A) at {baud} baud"
+            frames_before = self.parser.stats.frames
+            try:  # a short wait first: at a wrong baud nothing sensible comes back
+                reply = self._request(type_request(), what, retries=2, budget=self.timeout + frame_seconds(64, baud))
             except (LmsTimeoutError, LmsNakError):
-                continue
+                if self.parser.stats.frames == frames_before:
+                    continue
+                # Good frames at this baud (a device in continuous mode): the baud is right.
+                self.streaming = True
+                reply = self._request(type_request(), what)
             self.type_string = reply.payload[1:-1].decode("ascii", errors="replace")
             return
         raise LmsTimeoutError(f"no LMS200 answered the type request (0x3A) on {self.port} at {list(bauds)} baud")

@@ -3,7 +3,8 @@
 It resynchronises on garbage the way SICK's listing asks: look for ``STX ADDR`` (``02 80`` for
 device 0), read LEN, check LEN <= 812 and the CRC, and drop what fails by skipping that one STX
 byte and searching on, so a frame hidden behind a false start is still found. ACK / NAK bytes
-outside frames are reported as handshake events (in stream order) and otherwise skipped.
+just before a frame (or ending what has arrived) are reported as handshake events in stream
+order; stray ones amid garbage are skipped with it.
 
 A false start whose LEN reaches beyond the bytes received so far waits for more bytes; call
 :meth:`FrameParser.idle` when the line has gone quiet (a real device sends a frame without gaps),
@@ -47,7 +48,7 @@ class ParserStats:
         bad_length: candidate frames dropped for LEN 0 or LEN > 812.
         stalled: candidate frames dropped by :meth:`FrameParser.idle` (cut off by a quiet line).
         skipped_bytes: bytes outside any good frame that were not ACK / NAK (garbage).
-        acks, naks: handshake bytes seen outside frames.
+        acks, naks: handshake bytes seen between frames (not amid garbage).
     """
 
     frames: int = 0
@@ -85,7 +86,7 @@ class FrameParser:
 
     def reset(self) -> None:
         """Forget any buffered bytes (e.g. after a baud change); keeps the counters."""
-        self.stats.skipped_bytes += self._skip_count(bytes(self._buf))
+        self.stats.skipped_bytes += len(self._buf)
         self._buf.clear()
 
     def feed(self, data: bytes) -> list[Event]:
@@ -107,23 +108,22 @@ class FrameParser:
         return [e for e in self.feed(data) if isinstance(e, Frame)]
 
     # -----------------------------------------------------------------------------------------
-    def _skip_count(self, garbage: bytes) -> int:
-        return len(garbage) - garbage.count(ACK) - garbage.count(NAK)
-
     def _garbage(self, events: list[Event], garbage: bytes) -> None:
-        """Account for bytes outside frames, emitting ACK / NAK events in order."""
+        """Account for bytes outside frames. ACK / NAK bytes that end the run (just before a frame
+        or at the end of what has arrived) are handshakes and become events in order; any other
+        byte, an ACK / NAK value amid garbage included, is skipped garbage."""
         if not garbage:
             return
-        n_ack, n_nak = garbage.count(ACK), garbage.count(NAK)
-        self.stats.skipped_bytes += len(garbage) - n_ack - n_nak
-        if n_ack or n_nak:
-            for b in garbage:
-                if b == ACK:
-                    self.stats.acks += 1
-                    events.append(ACK)
-                elif b == NAK:
-                    self.stats.naks += 1
-                    events.append(NAK)
+        cut = len(garbage)
+        while cut and garbage[cut - 1] in (ACK, NAK):
+            cut -= 1
+        self.stats.skipped_bytes += cut
+        for b in garbage[cut:]:
+            if b == ACK:
+                self.stats.acks += 1
+            else:
+                self.stats.naks += 1
+            events.append(b)
 
     def _scan(self, final: bool) -> list[Event]:
         buf = self._buf

@@ -91,6 +91,7 @@ class Faults:
         corrupt_prob: probability that a byte sent is corrupted (XOR with a random nonzero mask).
         drop_prob: probability that a byte sent is lost.
         miss_prob: probability that a correct request is ignored (as during a mirror turn).
+        rx_corrupt_prob: probability that a host telegram arrives with a bit error (-> NAK).
         mute: the device stops answering and sending altogether.
         seed: seed of the fault generator.
     """
@@ -98,6 +99,7 @@ class Faults:
     corrupt_prob: float = 0.0
     drop_prob: float = 0.0
     miss_prob: float = 0.0
+    rx_corrupt_prob: float = 0.0
     mute: bool = False
     seed: int = 0
 
@@ -188,6 +190,7 @@ class VirtualLMS200:
         self._queue: deque[_Chunk] = deque()
         self._line_free = 0.0
         self._continuous_from = 0.0
+        self._last_scan_index = -1
         self._rx = bytearray()
         self._rx_last = -math.inf
 
@@ -239,7 +242,8 @@ class VirtualLMS200:
             del buf[:end]
             if self.faults.mute:
                 continue
-            if crc16(frame[:-2]) != (frame[-2] | (frame[-1] << 8)):
+            hit = self.faults.rx_corrupt_prob and self._rng.random() < self.faults.rx_corrupt_prob
+            if hit or crc16(frame[:-2]) != (frame[-2] | (frame[-1] << 8)):
                 self._send(bytes([NAK]), now + self._s(self.timing.ack_s))
                 continue
             if frame[1] != self.address:
@@ -305,7 +309,7 @@ class VirtualLMS200:
         else:
             ok = False
         payload = bytes([reply_code(CMD_MODE), 0 if ok else 1])
-        self._reply(payload, t_reply + delay, done=done if ok else None)
+        self._reply(payload, t_reply + (delay if ok else 0.0), done=done if ok else None)
 
     def _set_config(self, data: bytes, t_reply: float) -> None:
         ok = self.mode == MODE_INSTALLATION and len(data) == CONFIG_BYTES and data[CONFIG_UNITS_OFFSET] in (0, 1)
@@ -349,9 +353,17 @@ class VirtualLMS200:
     def _fill_continuous(self, now: float) -> None:
         if self._queue or self.mode != MODE_CONTINUOUS or self.faults.mute or self.source_exhausted:
             return
+        # Send the newest scan completed when the line frees; if it was sent already, wait for
+        # the next one (the mirror completes a scan every `period` seconds).
         period = self._scan_period()
         base = max(self._line_free, self._continuous_from, now - period)
-        ready = math.ceil(base / period) * period
+        newest = math.floor(base / period + 1e-9)
+        if newest > self._last_scan_index:
+            ready = base
+        else:
+            newest = self._last_scan_index + 1
+            ready = newest * period
+        self._last_scan_index = newest
         self._reply(self._scan_payload(), ready, count_scan=True)
 
     def transmit(self, now: float) -> list[tuple[bytes, int]]:
