@@ -5,36 +5,29 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from lms200 import read_log
-
-from experiments.demo import plot_scan, room_scan
-from experiments.loginfo import summarise
-
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("demo", help="run the main job end to end and write results/demo/")
-    p.add_argument("--log", help="use this CARMEN log or bag instead of a simulated scan")
+    p = sub.add_parser("demo", help="simulate an office run, compare every extractor, run SLAM, a sweep, "
+                                    "figures and results/demo/report.md")
     p.add_argument("--out", type=Path, default=Path("results/demo"), help="output folder")
-    p.add_argument("--seed", type=int, default=0, help="random seed")
+    p.add_argument("--seed", type=int, default=0, help="world and run seed")
+    p.add_argument("--duration", type=float, default=40.0, help="simulated run, s (default 40)")
+    p.add_argument("--rate-hz", type=float, default=10.0, help="scans kept per second of the run (default 10)")
+    p.add_argument("--log", help="real CARMEN log or bag for Fig. 9 (default: the Intel log where present)")
+    p.add_argument("--no-sweep", action="store_true", help="skip the small Dask sweep")
+    p.add_argument("--inprocess", action="store_true", help="run the sweep in this process instead of on Dask")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    args.out.mkdir(parents=True, exist_ok=True)
-    if args.log:
-        records = read_log(args.log)
-        summary = summarise(records)
-        scan = next(iter(records)).scan
-        source = str(args.log)
-    else:
-        scan = room_scan(seed=args.seed)
-        source = "analytic 6 m x 4 m room"
-        from lms200 import Record
+    from experiments.demo import run_demo
+    from experiments.figures.study import StudyConfig
 
-        summary = summarise([Record(scan)])
-    print(source)
-    for line in summary.lines():
-        print("  " + line)
-    plot_scan(scan, args.out / "scan.png", title=source)
-    print(f"wrote {args.out / 'scan.png'}")
+    cfg = StudyConfig(seed=args.seed, duration=args.duration, rate_hz=args.rate_hz)
+    if args.log:
+        if not Path(args.log).exists():
+            raise FileNotFoundError(f"no such log: {args.log}")
+        cfg.intel_log = args.log
+    executor = None if args.no_sweep else ("inprocess" if args.inprocess else "local")
+    run_demo(args.out, cfg, sweep_executor=executor)
     return 0

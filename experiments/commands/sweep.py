@@ -1,0 +1,38 @@
+"""`lmsbench sweep SWEEP.yaml`: run a parameter sweep on Dask and write one tidy Parquet table."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("sweep", help="run a parameter sweep (grid or random) on Dask; resumable")
+    p.add_argument("sweep", type=Path, help="sweep file (YAML; see sweeps/*.yaml)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use this running Dask scheduler")
+    where.add_argument("--inprocess", "--local", dest="inprocess", action="store_true",
+                       help="run in this process, without Dask (default: a local Dask cluster)")
+    p.add_argument("--workers", type=int, default=2, help="worker processes of the local cluster (default 2)")
+    p.add_argument("--out", type=Path, help="sweep folder (default results/sweeps/NAME)")
+    p.add_argument("--retry-failed", action="store_true", help="compute again the cells that failed before")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from experiments.sweep import load_sweep, run_sweep
+
+    spec = load_sweep(args.sweep)
+    out = args.out or Path("results/sweeps") / spec.name
+    executor = "inprocess" if args.inprocess else (args.scheduler or "local")
+    result = run_sweep(spec, out, executor, workers=args.workers, retry_failed=args.retry_failed,
+                       progress=not args.no_progress)
+    print(f"{spec.name}: {result.total} cells, {result.computed} computed, {result.skipped} already done, "
+          f"{result.failed} failed")
+    print(f"wrote {out / 'results.parquet'}")
+    if result.failed:
+        errors = result.table.loc[result.table["status"] != "ok", "error"].value_counts()
+        for text, n in errors.head(5).items():
+            print(f"  {n} x {text}")
+    return 0

@@ -1,0 +1,140 @@
+"""Draw each figure from its tidy table(s) alone, so any figure can be redrawn without rerunning.
+
+Every ``fig_*`` function takes DataFrames (schemas in :mod:`experiments.figures.tables`) and a
+path stem, and writes ``stem.png``, ``stem.pdf`` and the tables beside them (CSV).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.ticker import FormatStrFormatter
+
+from experiments.style import (CORNER_COLOR, LINE_COLOR, SCAN_COLOR, TRUTH_COLOR, equal_axes, method_color,
+                               new_figure, save_figure)
+
+
+def fig_signal(signals: pd.DataFrame, column: str, ylabel: str, title: str, stem: Path,
+               reference: float | None = None) -> list[Path]:
+    """Figs. 4-6: one per-beam signal of a scan (``ad``, ``theta_deg``, ``psi_deg``) over the beam index."""
+    fig, ax = new_figure(height=3.2)
+    ax.plot(signals["beam"], signals[column], ".-", lw=0.7, ms=2.5, color=method_color("sensor"))
+    if reference is not None:
+        ax.axhline(reference, color=TRUTH_COLOR, lw=0.8, ls="--", label=f"straight line: {reference:.4f}")
+        ax.legend(loc="best")
+    ax.set_xlabel("beam index i")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    return save_figure(fig, stem, data=signals)
+
+
+def fig_timing(timing: pd.DataFrame, stem: Path) -> list[Path]:
+    """Fig. 7: processing time per scan (ms) over the scans of a run, one line per method."""
+    fig, ax = new_figure(height=3.6)
+    for method, group in timing.groupby("method", sort=False):
+        med = group["time_ms"].median()
+        ax.plot(group["scan"], group["time_ms"], lw=0.9, color=method_color(method),
+                label=f"{method} (median {med:.2f} ms)")
+    ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.set_xlabel("scan")
+    ax.set_ylabel("processing time per scan (ms)")
+    ax.set_title("Processing time for successive scans")
+    ax.legend(loc="upper right", ncol=2)
+    return save_figure(fig, stem, data=timing)
+
+
+def fig_scans(points: pd.DataFrame, lines: pd.DataFrame, corners: pd.DataFrame, stem: Path,
+              title: str) -> list[Path]:
+    """Fig. 9: scans (sensor frame) with extracted lines and corners, one panel per scan.
+
+    ``points``: panel, label, x, y; ``lines``: panel, x1, y1, x2, y2; ``corners``: panel, x, y.
+    """
+    panels = list(dict.fromkeys(points["panel"]))
+    ncols = min(3, len(panels))
+    nrows = int(np.ceil(len(panels) / ncols))
+    fig, axes = new_figure(nrows, ncols, width=3.4 * ncols, height=3.2 * nrows, squeeze=False)
+    for ax, panel in zip(axes.ravel(), panels):
+        pts = points[points["panel"] == panel]
+        ax.plot(pts["x"], pts["y"], ".", ms=1.5, color=SCAN_COLOR)
+        ax.plot([0], [0], "k^", ms=5)
+        ln = lines[lines["panel"] == panel]
+        for row in ln.itertuples():
+            ax.plot([row.x1, row.x2], [row.y1, row.y2], "-", lw=1.6, color=LINE_COLOR)
+        ax.plot((ln["x1"] + ln["x2"]) / 2, (ln["y1"] + ln["y2"]) / 2, "*", ms=5, color=LINE_COLOR)
+        cr = corners[corners["panel"] == panel]
+        ax.plot(cr["x"], cr["y"], "D", ms=5, mfc="none", mew=1.2, color=CORNER_COLOR)
+        ax.set_title(f"{pts['label'].iloc[0]}: {len(ln)} lines, {len(cr)} corners", fontsize=8)
+        equal_axes(ax, "x (m, ahead)", "y (m, left)")
+    for ax in axes.ravel()[len(panels):]:
+        ax.set_visible(False)
+    fig.suptitle(title)
+    return save_figure(fig, stem, data={"points": points, "lines": lines, "corners": corners})
+
+
+def fig_slam(trajectory: pd.DataFrame, map_lines: pd.DataFrame, stem: Path, title: str) -> list[Path]:
+    """Fig. 10: SLAM trajectory and line map against ground truth (world frame, equal axes).
+
+    ``trajectory``: source (slam / truth / ...), t, x, y, theta; ``map_lines``: source
+    (slam / truth), x1, y1, x2, y2.
+    """
+    fig, ax = new_figure(width=6.4, height=5.6)
+    truth_map = map_lines[map_lines["source"] == "truth"]
+    for i, row in enumerate(truth_map.itertuples()):
+        ax.plot([row.x1, row.x2], [row.y1, row.y2], "-", lw=3.0, color="#d0d0d0",
+                label="true walls" if i == 0 else None)
+    est_map = map_lines[map_lines["source"] == "slam"]
+    for i, row in enumerate(est_map.itertuples()):
+        ax.plot([row.x1, row.x2], [row.y1, row.y2], "-", lw=1.2, color=LINE_COLOR,
+                label="SLAM map lines" if i == 0 else None)
+    for source, group in trajectory.groupby("source", sort=False):
+        style = "--" if source == "truth" else "-"
+        ax.plot(group["x"], group["y"], style, lw=1.4, color=method_color(source), label=f"{source} trajectory")
+    first = trajectory[trajectory["source"] == "truth"].head(1)
+    ax.plot(first["x"], first["y"], "ko", ms=5, label="start")
+    equal_axes(ax)
+    ax.set_title(title)
+    ax.legend(loc="best")
+    return save_figure(fig, stem, data={"trajectory": trajectory, "map": map_lines})
+
+
+def fig_accuracy_speed(summary: pd.DataFrame, stem: Path, accuracy: str = "f1") -> list[Path]:
+    """Accuracy (line F1 against ground truth) versus time per scan (ms), one point per method."""
+    fig, ax = new_figure(height=3.8)
+    for row in summary.itertuples():
+        ax.errorbar(row.time_ms_median, getattr(row, accuracy),
+                    xerr=[[row.time_ms_median - row.time_ms_p05], [row.time_ms_p95 - row.time_ms_median]],
+                    fmt="o", ms=6, capsize=3, color=method_color(row.method), label=row.method)
+        ax.annotate(row.method, (row.time_ms_median, getattr(row, accuracy)), textcoords="offset points",
+                    xytext=(5, 5), fontsize=8)
+    ax.set_xscale("log")
+    ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.xaxis.set_minor_formatter(FormatStrFormatter("%g"))
+    ax.set_xlabel("time per scan (ms; median, 5-95 %)")
+    ax.set_ylabel(f"line {accuracy} against ground truth")
+    ax.set_ylim(0, 1.05)
+    ax.set_title("Accuracy versus speed")
+    return save_figure(fig, stem, data=summary)
+
+
+def fig_sweep(table: pd.DataFrame, x: str, y: str, stem: Path, hue: str | None = None,
+              title: str = "") -> list[Path]:
+    """A sweep plot: metric ``y`` (mean over seeds, +/- one std) against parameter ``x``, a line per ``hue``."""
+    ok = table[table["status"] == "ok"] if "status" in table else table
+    keys = [c for c in (hue, x) if c]
+    stats = ok.groupby(keys, dropna=False)[y].agg(["mean", "std", "count"]).reset_index()
+    fig, ax = new_figure(height=3.6)
+    groups = stats.groupby(hue, sort=True, dropna=False) if hue else [(None, stats)]
+    for value, group in groups:
+        label = f"{hue} = {value}" if hue else y
+        color = method_color(str(value)) if hue in ("method", "extractor") else None
+        ax.errorbar(group[x], group["mean"], yerr=group["std"].fillna(0.0), fmt="o-", ms=4, capsize=2,
+                    lw=1.0, label=label, color=color)
+    ax.set_xlabel(x)
+    ax.set_ylabel(f"{y} (mean +/- std over seeds)")
+    ax.set_title(title or f"{y} against {x}")
+    if hue:
+        ax.legend(loc="best", fontsize=7)
+    return save_figure(fig, stem, data=stats)

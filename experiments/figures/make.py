@@ -1,0 +1,82 @@
+"""Draw every figure from the study's tables (and sweep tables): the named figures of the paper.
+
+Figure names (files ``NAME.png``, ``NAME.pdf`` and the data ``NAME*.csv`` in the output folder):
+
+- ``fig4_ad``, ``fig5_theta``, ``fig6_psi``: AD_i10, theta_i, psi_i of a 361-beam office scan;
+- ``fig7_timing``: processing time per scan over the run, every method;
+- ``fig9_office``, ``fig9_intel``: scans with extracted lines (*) and corners (diamonds);
+- ``fig10_slam``: SLAM trajectory and map against ground truth;
+- ``accuracy_speed``: line F1 against time per scan, every extractor;
+- ``sweep_NAME_METRIC``: one per sweep folder and metric.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import yaml
+
+from . import draw
+from .tables import ad_reference
+
+#: Metrics plotted for a sweep when its table has them.
+SWEEP_METRICS = ("f1", "corner_f1", "time_ms_median", "ate_rms", "final_error_m")
+
+PAPER_FIGURES = ("fig4_ad", "fig5_theta", "fig6_psi", "fig7_timing", "fig9_office", "fig9_intel",
+                 "fig10_slam", "accuracy_speed")
+
+
+def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10,
+                 angle_increment: float | None = None) -> dict[str, list[Path]]:
+    """Every paper figure whose tables are present; returns name -> files written."""
+    out.mkdir(parents=True, exist_ok=True)
+    written: dict[str, list[Path]] = {}
+    if "signals" in tables:
+        sig = tables["signals"]
+        inc = angle_increment or float(pd.Series(sig["bearing_deg"]).diff().median() * 3.141592653589793 / 180)
+        written["fig4_ad"] = draw.fig_signal(sig, "ad", f"AD_i{signals_k}", f"Fig. 4: AD_i{signals_k} of an office scan",
+                                             out / "fig4_ad", reference=ad_reference(signals_k, inc))
+        written["fig5_theta"] = draw.fig_signal(sig, "theta_deg", "theta_i (deg)",
+                                                "Fig. 5: theta_i (line normal angle) of the scan", out / "fig5_theta")
+        written["fig6_psi"] = draw.fig_signal(sig, "psi_deg", "psi_i (deg)",
+                                              f"Fig. 6: psi_i = theta_i - theta_i+{signals_k}", out / "fig6_psi")
+    if "timing" in tables:
+        written["fig7_timing"] = draw.fig_timing(tables["timing"], out / "fig7_timing")
+    for source, title in (("office", "Fig. 9: extracted features, simulated office"),
+                          ("intel", "Fig. 9: extracted features, Intel Research Lab (real log)")):
+        if f"{source}_points" in tables:
+            written[f"fig9_{source}"] = draw.fig_scans(tables[f"{source}_points"], tables[f"{source}_lines"],
+                                                       tables[f"{source}_corners"], out / f"fig9_{source}", title)
+    if "trajectory" in tables and "map" in tables:
+        written["fig10_slam"] = draw.fig_slam(tables["trajectory"], tables["map"], out / "fig10_slam",
+                                              "Fig. 10: SLAM without odometry against ground truth")
+    if "summary" in tables and "f1" in tables["summary"]:
+        written["accuracy_speed"] = draw.fig_accuracy_speed(tables["summary"], out / "accuracy_speed")
+    return written
+
+
+def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
+    """Plots of one sweep folder: each metric against the first grid parameter, one line per
+    combination of the other grid parameters (mean +/- std over seeds and random draws)."""
+    table = pd.read_parquet(folder / "results.parquet")
+    spec = yaml.safe_load((folder / "sweep.yaml").read_text())
+    name = spec.get("name", folder.name)
+    varied = [n.strip() for key in spec.get("grid", {}) for n in key.split(",")]
+    varied = [n for n in varied if n in table and table[n].nunique() > 1]
+    if not varied:
+        varied = [n for n in spec.get("random", {}) if n in table]
+    if not varied:
+        return {}
+    x, rest = varied[0], varied[1:]
+    if rest:
+        table = table.assign(**{"+".join(rest): table[rest].astype(str).agg(", ".join, axis=1)})
+    hue = "+".join(rest) if rest else None
+    if rest == ["method"]:
+        hue = "method"
+    written = {}
+    for metric in SWEEP_METRICS:
+        if metric in table and table[metric].notna().any():
+            stem = f"sweep_{name}_{metric}"
+            written[stem] = draw.fig_sweep(table, x, metric, out / stem, hue=hue, title=f"{name}: {metric} against {x}")
+    return written

@@ -1,0 +1,149 @@
+"""The study behind the figures and the demo: simulate, extract, score, SLAM -> tidy tables.
+
+:func:`run_study` computes every table (see :mod:`experiments.figures.tables` for schemas) and
+:func:`save_tables` writes them as Parquet with the resolved settings as YAML beside them; the
+figures are then drawn from those files alone (:mod:`experiments.figures.make`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import pandas as pd
+import yaml
+
+from experiments.evaluate import (ALL_METHODS, evaluate_extractor, sensor_config, simulate_run,
+                                  summarise_methods, truths_for)
+
+from .tables import feature_panels, map_table, pick_evenly, signals_table, trajectory_table
+
+INTEL_LOG = Path(__file__).resolve().parents[3] / "shared" / "data" / "carmen" / "intel-corrected.log.gz"
+
+
+@dataclass
+class StudyConfig:
+    """Settings of one study. Times in s of simulated time, rates in scans/s."""
+
+    world: str = "office"
+    seed: int = 0
+    duration: float = 40.0  # simulated run for the comparison and the SLAM
+    rate_hz: float = 10.0  # scans kept per second of the run (the LMS200 gives 37.5)
+    methods: tuple[str, ...] = ALL_METHODS
+    signals_k: int = 10  # the paper's AD_i10
+    panels: int = 4  # scans shown in Fig. 9, per source
+    slam: bool = True
+    intel_log: str | None = str(INTEL_LOG)  # skipped with a note where absent
+    sensor: dict = field(default_factory=dict)  # SensorConfig overrides
+
+    def to_dict(self) -> dict:
+        d = dataclasses.asdict(self)
+        d["methods"] = list(self.methods)
+        return d
+
+
+Log = Callable[[str], None]
+
+
+def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFrame], list[str]]:
+    """Every table of the figures and the report; and notes on anything skipped."""
+    t0 = time.perf_counter()
+    say = lambda msg: log(f"[{time.perf_counter() - t0:6.1f} s] {msg}")  # noqa: E731
+    tables: dict[str, pd.DataFrame] = {}
+    notes: list[str] = []
+    sensor = sensor_config(cfg.sensor)
+    world, records = simulate_run(cfg.world, cfg.seed, cfg.duration, sensor, cfg.rate_hz)
+    say(f"simulated {cfg.world} (seed {cfg.seed}): {len(records)} scans over {cfg.duration:g} s at {cfg.rate_hz:g} Hz")
+    truths = truths_for(world, records, sensor)
+    say(f"ground truth of {len(records)} scans")
+
+    tables["signals"] = signals_table(records[len(records) // 2].scan, k=cfg.signals_k)
+    per_scan, feature_sets = [], {}
+    for method in cfg.methods:
+        table, fsets = evaluate_extractor(records, method, None, truths, keep_features=True)
+        per_scan.append(table)
+        feature_sets[method] = fsets
+        say(f"{method:12s} {len(table)} scans, median {table['time_ms'].median():.2f} ms/scan, "
+            f"{table['n_lines'].mean():.1f} lines/scan")
+    tables["timing"] = pd.concat(per_scan, ignore_index=True)
+    tables["summary"] = summarise_methods(tables["timing"])
+
+    picks = pick_evenly(len(records), cfg.panels)
+    pts, lns, crs = feature_panels([records[i].scan for i in picks], [f"office scan {i}" for i in picks],
+                                   [feature_sets["sensor" if "sensor" in feature_sets else cfg.methods[0]][i]
+                                    for i in picks])
+    tables.update(office_points=pts, office_lines=lns, office_corners=crs)
+
+    intel = Path(cfg.intel_log) if cfg.intel_log else None
+    if intel is not None and intel.exists():
+        tables.update(_intel_panels(intel, cfg.panels, "sensor" if "sensor" in cfg.methods else cfg.methods[0]))
+        say(f"Intel log: {cfg.panels} scans with features")
+    else:
+        notes.append(f"Fig. 9 (Intel log) skipped: {intel} is not present on this machine.")
+        say(notes[-1])
+
+    if cfg.slam:
+        from slam import SlamConfig, run_slam
+
+        start = time.perf_counter()
+        result = run_slam(records, SlamConfig())
+        slam_s = time.perf_counter() - start
+        tables["trajectory"] = trajectory_table(result.trajectory, records)
+        tables["map"] = map_table(_slam_segments(result), world.walls)
+        tables["slam_metrics"] = _slam_metrics(result, records, slam_s)
+        say(f"SLAM: {len(records)} scans in {slam_s:.1f} s, "
+            f"ATE {tables['slam_metrics']['ate_rms_m'].iloc[0]:.3f} m")
+    return tables, notes
+
+
+def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[str], folder: Path) -> None:
+    """Parquet per table, the settings (study.yaml) and the notes (notes.txt)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, table in tables.items():
+        table.to_parquet(folder / f"{name}.parquet", index=False)
+    (folder / "study.yaml").write_text(yaml.safe_dump(cfg.to_dict(), sort_keys=False))
+    (folder / "notes.txt").write_text("\n".join(notes) + ("\n" if notes else ""))
+
+
+def load_tables(folder: Path) -> tuple[dict[str, pd.DataFrame], list[str]]:
+    tables = {p.stem: pd.read_parquet(p) for p in sorted(folder.glob("*.parquet"))}
+    notes_file = folder / "notes.txt"
+    notes = notes_file.read_text().splitlines() if notes_file.exists() else []
+    return tables, notes
+
+
+def _intel_panels(path: Path, n: int, method: str) -> dict[str, pd.DataFrame]:
+    from lms200 import read_log
+
+    from experiments.evaluate import extract_timed
+
+    records = list(read_log(path))
+    picks = pick_evenly(len(records), n)
+    scans = [records[i].scan for i in picks]
+    fsets, _ = extract_timed(scans, method)
+    pts, lns, crs = feature_panels(scans, [f"Intel scan {i}" for i in picks], fsets)
+    return {"intel_points": pts, "intel_lines": lns, "intel_corners": crs}
+
+
+def _slam_segments(result):
+    """World-frame map line segments (k, 4) of a SlamResult."""
+    import numpy as np
+
+    lines = getattr(result, "map_lines", None)
+    if lines is None:
+        lines = getattr(result, "lines", [])
+    if isinstance(lines, np.ndarray):
+        return lines.reshape(-1, 4)
+    return np.array([[*np.asarray(ln.start)[:2], *np.asarray(ln.end)[:2]] for ln in lines], float).reshape(-1, 4)
+
+
+def _slam_metrics(result, records, seconds: float) -> pd.DataFrame:
+    from experiments.sweep.kinds import slam_metrics
+
+    m = slam_metrics(result, records)
+    return pd.DataFrame([{"scans": len(records), "ate_rms_m": m["ate_rms"], "final_error_m": m["final_error_m"],
+                          "map_lines": len(_slam_segments(result)), "time_s": seconds,
+                          "time_per_scan_ms": 1e3 * seconds / max(1, len(records))}])

@@ -1,0 +1,78 @@
+"""Cell kinds: what one sweep cell computes from its parameters.
+
+A cell kind is a function ``fn(params: dict) -> dict`` of metric name to scalar. It must be
+deterministic in its parameters (all randomness seeded from ``params["seed"]``), so that any
+executor gives the same table. Built-in kinds are registered by name here and imported lazily
+(``extract``, ``slam``: see :mod:`experiments.sweep.kinds`); any importable function may also be
+named as ``"package.module:function"``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import time
+import traceback
+from typing import Any, Callable
+
+from .spec import Scalar, SweepSpecError
+
+CellFn = Callable[[dict[str, Scalar]], dict[str, Any]]
+
+#: Built-in cell kinds: name -> "module:function", imported on first use.
+BUILTIN_KINDS: dict[str, str] = {
+    "extract": "experiments.sweep.kinds:extract_cell",
+    "slam": "experiments.sweep.kinds:slam_cell",
+}
+
+_registry: dict[str, CellFn] = {}
+
+
+def register_cell(name: str, fn: CellFn) -> CellFn:
+    """Register ``fn`` as cell kind ``name`` in this process (workers resolve "module:function" names)."""
+    _registry[name] = fn
+    return fn
+
+
+def available_kinds() -> list[str]:
+    return sorted(set(BUILTIN_KINDS) | set(_registry))
+
+
+def resolve_kind(kind: str) -> CellFn:
+    """The cell function for ``kind``: a registered name, a built-in, or ``"module:function"``."""
+    if kind in _registry:
+        return _registry[kind]
+    target = BUILTIN_KINDS.get(kind, kind)
+    if ":" not in target:
+        raise SweepSpecError(f"unknown cell kind {kind!r}; known: {available_kinds()} or 'package.module:function'")
+    module_name, _, attr = target.partition(":")
+    try:
+        fn = getattr(importlib.import_module(module_name), attr)
+    except (ImportError, AttributeError) as exc:
+        raise SweepSpecError(f"cell kind {kind!r}: cannot import {target}: {exc}") from exc
+    if not callable(fn):
+        raise SweepSpecError(f"cell kind {kind!r}: {target} is not callable")
+    return fn
+
+
+def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> dict[str, Any]:
+    """Run one cell and return its metrics plus status "ok", or status "error" with the error text.
+
+    ``fn`` is the cell function when the caller resolved it already (else ``resolve_kind(kind)``).
+    Exceptions from the cell become an error row (the sweep goes on); ``KeyboardInterrupt`` and
+    ``SystemExit`` propagate. ``elapsed_s`` is the wall time of the cell function (s).
+    """
+    start = time.perf_counter()
+    try:
+        metrics = (fn or resolve_kind(kind))(dict(params))
+        if not isinstance(metrics, dict):
+            raise TypeError(f"cell kind {kind!r} returned {type(metrics).__name__}, expected a dict of metrics")
+        clash = sorted(set(metrics) & (set(params) | {"status", "error", "elapsed_s", "cell"}))
+        if clash:
+            raise ValueError(f"cell kind {kind!r} returned metric(s) {clash} that clash with parameter/column names")
+        row = {"status": "ok", "error": "", **metrics}
+    except Exception as exc:  # noqa: BLE001 - a failing cell is recorded, not fatal
+        last = traceback.extract_tb(exc.__traceback__)[-1:]
+        where = f" ({last[0].filename.rsplit('/', 1)[-1]}:{last[0].lineno})" if last else ""
+        row = {"status": "error", "error": f"{type(exc).__name__}: {exc}{where}"}
+    row["elapsed_s"] = time.perf_counter() - start
+    return row

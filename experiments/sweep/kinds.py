@@ -1,0 +1,74 @@
+"""The built-in cell kinds: an extractor scored against ground truth, and the SLAM against truth.
+
+Parameters (flat, as in the sweep file): ``method``, ``world`` (default office), ``seed``,
+``duration`` (s of simulated time), ``rate_hz`` (scans per second kept), ``sensor.*`` (fields of
+``sim.SensorConfig``), ``extractor.*`` (the extractor's config fields), ``slam.*`` (fields of
+``slam.SlamConfig``). Each returns a dict of scalar metrics.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import Any
+
+import numpy as np
+
+from experiments.evaluate import (evaluate_extractor, sensor_config, simulate_run, split_params,
+                                  summarise_scans, truths_for)
+
+EXTRACT_DEFAULTS = {"method": "sensor", "world": "office", "duration": 5.0, "rate_hz": 4.0}
+SLAM_DEFAULTS = {"world": "office", "duration": 30.0, "rate_hz": None}
+
+
+@functools.lru_cache(maxsize=4)
+def _run(world: str, seed: int, duration: float, rate_hz: float | None, sensor_items: tuple, with_truth: bool):
+    """Simulated records (and their visible truths), cached per worker: a grid over extractor
+    parameters simulates each (world, seed, sensor) once per worker process."""
+    sensor = sensor_config(dict(sensor_items))
+    world_obj, records = simulate_run(world, seed, duration, sensor, rate_hz)
+    truths = truths_for(world_obj, records, sensor) if with_truth else None
+    return world_obj, records, truths
+
+
+def _records(params: dict[str, Any], defaults: dict[str, Any], with_truth: bool):
+    p = {**defaults, **params}
+    rate = p.get("rate_hz")
+    rate = None if rate is None or (isinstance(rate, float) and math.isnan(rate)) else float(rate)
+    sensor_items = tuple(sorted(split_params(p, "sensor").items()))
+    return _run(str(p["world"]), int(p.get("seed", 0)), float(p["duration"]), rate, sensor_items, with_truth)
+
+
+def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
+    """One extractor over a simulated run, scored scan by scan against the visible ground truth."""
+    p = {**EXTRACT_DEFAULTS, **params}
+    _, records, truths = _records(p, EXTRACT_DEFAULTS, with_truth=True)
+    per_scan = evaluate_extractor(records, str(p["method"]), split_params(p, "extractor"), truths)
+    return {k: (float(v) if isinstance(v, (int, float, np.number)) else v)
+            for k, v in summarise_scans(per_scan).items()}
+
+
+def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
+    """The odometry-free SLAM over a simulated run: trajectory error against the true poses."""
+    from slam import SlamConfig, run_slam
+
+    p = {**SLAM_DEFAULTS, **params}
+    _, records, _ = _records(p, SLAM_DEFAULTS, with_truth=False)
+    result = run_slam(records, SlamConfig.from_dict(split_params(p, "slam")))
+    return slam_metrics(result, records)
+
+
+def slam_metrics(result, records) -> dict[str, float]:
+    """ATE (RMS, m) after 2-D alignment, final position error (m), landmarks and scans."""
+    from slam import metrics
+
+    truth = np.array([[r.scan.stamp, *r.truth] for r in records], dtype=float)
+    est = np.asarray(result.trajectory, dtype=float)
+    ate = metrics.ate(est, truth)
+    final = float(np.hypot(*(est[-1, 1:3] - truth[-1, 1:3])))
+    out = {"ate_rms": float(getattr(ate, "rmse", ate)), "final_error_m": final, "scans": float(len(records))}
+    for name in ("map_lines", "lines"):
+        if hasattr(result, name):
+            out["n_map_lines"] = float(len(getattr(result, name)))
+            break
+    return out

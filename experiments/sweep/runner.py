@@ -1,0 +1,161 @@
+"""Run a sweep on Dask (a local cluster, an existing scheduler) or in this process; resume for free.
+
+Every finished cell is written at once (atomically) by this driver process as its result comes
+back, so a killed sweep loses at most the cells in flight; run again, it computes only the cells
+without a file. The rows are the same whichever executor computed them (cells are deterministic
+in their parameters); only ``elapsed_s`` and any timing metric a cell reports differ.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterator
+
+import pandas as pd
+import yaml
+from tqdm import tqdm
+
+from .cells import resolve_kind, run_cell
+from .spec import Scalar, SweepSpec, cell_key
+from .store import CellStore, write_atomic
+
+#: Columns every row has besides its parameters and metrics.
+BOOKKEEPING = ("status", "error", "elapsed_s", "cell")
+
+
+@dataclass
+class SweepResult:
+    """What a run did: the full table (finished cells, in sweep order) and the counts."""
+
+    table: pd.DataFrame
+    total: int
+    computed: int
+    skipped: int
+    failed: int
+    out: Path
+
+
+def run_sweep(
+    spec: SweepSpec,
+    out: str | Path,
+    executor: Any = "local",
+    *,
+    workers: int = 2,
+    retry_failed: bool = False,
+    progress: bool = True,
+) -> SweepResult:
+    """Compute every cell of ``spec`` not yet finished in ``out`` and write the tidy table.
+
+    Args:
+        spec: the sweep.
+        out: the sweep folder (created); see :mod:`experiments.sweep.store` for its layout.
+        executor: ``"local"`` (a Dask LocalCluster of ``workers`` processes, started and closed
+            here), ``"inprocess"`` (a plain loop, no Dask), a scheduler address
+            ``"tcp://HOST:PORT"``, or a ``distributed.Client`` to use as is.
+        retry_failed: compute again the cells whose recorded status is "error".
+        progress: show a tqdm bar (on stderr) with cells done, failed and the time left.
+
+    Returns:
+        A :class:`SweepResult`; ``out/results.parquet`` and ``out/results.csv`` hold its table.
+    """
+    out = Path(out)
+    store = CellStore(out)
+    fn = resolve_kind(spec.kind)  # fail early on an unknown kind
+    (out / "sweep.yaml").write_text(yaml.safe_dump(spec.to_dict(), sort_keys=False))
+    cells = spec.cells()
+    keys = [cell_key(spec.kind, params) for params in cells]
+    done = store.done()
+    if retry_failed:
+        done = {k for k in done if store.status(k) == "ok"}
+    todo = [(key, params) for key, params in zip(keys, cells) if key not in done]
+    todo = list({key: params for key, params in todo}.items())  # identical cells once
+    skipped = len(set(keys)) - len(todo)
+    counts = {"computed": 0, "failed": 0}
+
+    bar = tqdm(total=len(set(keys)), initial=skipped, desc=spec.name, unit="cell", file=sys.stderr,
+               disable=not progress, dynamic_ncols=True)
+
+    def record(key: str, params: dict[str, Scalar], result: dict[str, Any]) -> None:
+        store.write(key, _row(params, result, key))
+        counts["computed"] += 1
+        counts["failed"] += result["status"] != "ok"
+        bar.update(1)
+        bar.set_postfix(done=skipped + counts["computed"], failed=counts["failed"], refresh=False)
+
+    try:
+        if todo:
+            if executor == "inprocess":
+                for key, params in todo:
+                    record(key, params, run_cell(spec.kind, params, fn))
+            else:
+                with _client(executor, workers) as client:
+                    _run_on_dask(client, spec.kind, fn, todo, record)
+    finally:
+        bar.close()
+        table = store.read(keys)
+        if not table.empty:
+            table = table.drop_duplicates("cell", ignore_index=True)
+            write_atomic(table, out / "results.parquet")
+            write_atomic(table, out / "results.csv")
+    failed = int((table["status"] != "ok").sum()) if not table.empty else 0
+    return SweepResult(table, len(set(keys)), counts["computed"], skipped, failed, out)
+
+
+def load_results(out: str | Path) -> pd.DataFrame:
+    """The table of a sweep folder (``results.parquet``)."""
+    return pd.read_parquet(Path(out) / "results.parquet")
+
+
+def _row(params: dict[str, Scalar], result: dict[str, Any], key: str) -> dict[str, Any]:
+    metrics = {k: v for k, v in result.items() if k not in BOOKKEEPING}
+    return {**params, **metrics, "status": result["status"], "error": result.get("error", ""),
+            "elapsed_s": float(result.get("elapsed_s", float("nan"))), "cell": key}
+
+
+def _run_on_dask(client, kind: str, fn, todo: list[tuple[str, dict]], record) -> None:
+    from distributed import as_completed
+
+    futures = {}
+    for key, params in todo:
+        future = client.submit(run_cell, kind, params, fn, key=f"lmsbench-cell-{key}", pure=False)
+        futures[future] = (key, params)
+    try:
+        for future in as_completed(futures):
+            key, params = futures[future]
+            if future.status == "finished":
+                result = future.result()
+            else:  # the cell took its worker down, or the cluster failed it: record and go on
+                exc = future.exception()
+                result = {"status": "error", "error": f"{type(exc).__name__}: {exc}", "elapsed_s": float("nan")}
+            record(key, params, result)
+            future.release()
+    except BaseException:
+        client.cancel(list(futures))
+        raise
+
+
+@contextlib.contextmanager
+def _client(executor: Any, workers: int) -> Iterator[Any]:
+    """A Dask client for ``executor``: a new LocalCluster, a scheduler address, or a given client."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    if executor == "local":
+        # a cell that kills its worker fails after one retry instead of three
+        with dask.config.set({"distributed.scheduler.allowed-failures": 1}):
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR)
+            try:
+                with Client(cluster) as client:
+                    yield client
+            finally:
+                cluster.close()
+    elif isinstance(executor, str):
+        with Client(executor, timeout="10s") as client:
+            yield client
+    else:
+        yield executor

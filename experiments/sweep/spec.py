@@ -1,0 +1,206 @@
+"""Sweep files: what to vary, and the list of cells (parameter sets) they expand to.
+
+A sweep file is YAML::
+
+    name: k_vs_noise          # names the output folder by default
+    kind: extract             # the cell kind (see experiments.sweep.cells), or "pkg.module:function"
+    fixed:                    # the same in every cell
+      world: office
+      duration: 4.0
+    grid:                     # every combination of these (Cartesian product)
+      extractor.k: [5, 10, 15]
+      sensor.noise_sigma: [0.0, 0.005, 0.01]
+    random:                   # optional: `samples` draws from these, crossed with the grid
+      extractor.ad_threshold: {uniform: [0.02, 0.2]}
+    samples: 8                # number of random draws (needs `random`)
+    sample_seed: 0            # seeds the draws (numpy Generator), so the cells are reproducible
+    seeds: [0, 1, 2]          # crossed with everything; each cell gets a `seed` column
+
+Parameters that must change together are linked: a grid key of comma-separated names takes
+tuples, e.g. ``"sensor.resolution_deg,sensor.n_beams": [[0.5, 361], [1.0, 181]]``.
+
+Random distributions: ``{uniform: [lo, hi]}``, ``{loguniform: [lo, hi]}``, ``{int: [lo, hi]}``
+(inclusive), ``{choice: [a, b, ...]}``. Parameter names are free; the built-in cell kinds read
+``extractor.*`` (extractor parameters), ``sensor.*`` (``SensorConfig`` fields), ``slam.*``
+(``SlamConfig`` fields) and plain names (``method``, ``world``, ``duration``, ...). Every
+parameter becomes a column of the result table, under the name written here.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from lms200 import LmsbenchError
+
+Scalar = str | int | float | bool | None
+_DISTRIBUTIONS = ("uniform", "loguniform", "int", "choice")
+_KEYS = {"name", "kind", "fixed", "grid", "random", "samples", "sample_seed", "seeds", "description"}
+
+
+class SweepSpecError(LmsbenchError):
+    """A sweep file that cannot be expanded; the message says which field and what to fix."""
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A parsed sweep file. :meth:`cells` expands it into parameter sets, in a stable order."""
+
+    name: str
+    kind: str
+    fixed: dict[str, Scalar] = field(default_factory=dict)
+    grid: dict[str, list[Scalar]] = field(default_factory=dict)
+    random: dict[str, dict[str, list[Any]]] = field(default_factory=dict)
+    samples: int = 0
+    sample_seed: int = 0
+    seeds: list[int] = field(default_factory=lambda: [0])
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        _check(self)
+
+    @classmethod
+    def from_dict(cls, raw: dict[str, Any], default_name: str = "sweep") -> "SweepSpec":
+        if not isinstance(raw, dict):
+            raise SweepSpecError("a sweep file must be a YAML mapping (name, kind, grid, ...)")
+        unknown = set(raw) - _KEYS
+        if unknown:
+            raise SweepSpecError(f"unknown key(s) {sorted(unknown)} in the sweep file; known: {sorted(_KEYS)}")
+        if "kind" not in raw:
+            raise SweepSpecError("the sweep file needs `kind:` (a cell kind such as extract or slam)")
+        seeds = raw.get("seeds", [0])
+        if isinstance(seeds, int):
+            seeds = [seeds]
+        return cls(
+            name=str(raw.get("name", default_name)),
+            kind=str(raw["kind"]),
+            fixed=dict(raw.get("fixed") or {}),
+            grid={k: list(v) if isinstance(v, (list, tuple)) else [v] for k, v in (raw.get("grid") or {}).items()},
+            random=dict(raw.get("random") or {}),
+            samples=int(raw.get("samples", 0)),
+            sample_seed=int(raw.get("sample_seed", 0)),
+            seeds=[int(s) for s in seeds],
+            description=str(raw.get("description", "")),
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"name": self.name, "kind": self.kind}
+        if self.description:
+            out["description"] = self.description
+        for key in ("fixed", "grid", "random"):
+            if getattr(self, key):
+                out[key] = getattr(self, key)
+        if self.random:
+            out["samples"] = self.samples
+            out["sample_seed"] = self.sample_seed
+        out["seeds"] = list(self.seeds)
+        return out
+
+    def cells(self) -> list[dict[str, Scalar]]:
+        """Every parameter set: fixed x grid product x random draws x seeds, in that nesting order."""
+        combos = []
+        for values in itertools.product(*self.grid.values()):
+            combo: dict[str, Scalar] = {}
+            for key, value in zip(self.grid, values):
+                combo.update(zip(_names(key), value) if "," in key else {key: value})
+            combos.append(combo)
+        draws = _draw(self.random, self.samples, self.sample_seed) if self.random else [{}]
+        cells = []
+        for combo in combos:
+            for draw in draws:
+                for seed in self.seeds:
+                    cells.append({**self.fixed, **combo, **draw, "seed": seed})
+        return cells
+
+
+def load_sweep(path: str | Path) -> SweepSpec:
+    """Read and check a sweep YAML file."""
+    path = Path(path)
+    try:
+        raw = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise SweepSpecError(f"{path}: not valid YAML: {exc}") from exc
+    try:
+        return SweepSpec.from_dict(raw, default_name=path.stem)
+    except SweepSpecError as exc:
+        raise SweepSpecError(f"{path}: {exc}") from exc
+
+
+def cell_key(kind: str, params: dict[str, Scalar]) -> str:
+    """A stable 16-hex-digit hash of the cell kind and its parameters (key order does not matter)."""
+    text = json.dumps({"kind": kind, "params": params}, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _names(key: str) -> list[str]:
+    """The parameter names of a grid key (several for a linked key "a,b")."""
+    return [name.strip() for name in key.split(",")]
+
+
+def _check(spec: SweepSpec) -> None:
+    names = [*spec.fixed, *(n for key in spec.grid for n in _names(key)), *spec.random]
+    clashes = sorted({n for n in names if names.count(n) > 1} | ({"seed"} & set(names)))
+    if clashes:
+        raise SweepSpecError(f"parameter(s) {clashes} given twice (fixed/grid/random/seeds); give each once")
+    for name, value in spec.fixed.items():
+        _check_scalar(f"fixed.{name}", value)
+    for name, values in spec.grid.items():
+        if not values:
+            raise SweepSpecError(f"grid.{name} is empty; give at least one value")
+        for value in values:
+            if "," in name:
+                if not isinstance(value, (list, tuple)) or len(value) != len(_names(name)):
+                    raise SweepSpecError(f"grid.{name} links {len(_names(name))} parameters: each value must be "
+                                         f"a list of {len(_names(name))}, got {value!r}")
+                for v in value:
+                    _check_scalar(f"grid.{name}", v)
+            else:
+                _check_scalar(f"grid.{name}", value)
+    for name, dist in spec.random.items():
+        if not (isinstance(dist, dict) and len(dist) == 1 and next(iter(dist)) in _DISTRIBUTIONS):
+            raise SweepSpecError(f"random.{name} must be one of {{{'|'.join(_DISTRIBUTIONS)}: [...]}}, got {dist!r}")
+        (law, args), = dist.items()
+        if law != "choice" and (not isinstance(args, list) or len(args) != 2 or not args[0] <= args[1]):
+            raise SweepSpecError(f"random.{name}: {law} needs [low, high] with low <= high, got {args!r}")
+        if law == "loguniform" and args[0] <= 0:
+            raise SweepSpecError(f"random.{name}: loguniform needs low > 0, got {args!r}")
+        if law == "choice" and (not isinstance(args, list) or not args):
+            raise SweepSpecError(f"random.{name}: choice needs a non-empty list, got {args!r}")
+    if spec.random and spec.samples < 1:
+        raise SweepSpecError("`random:` needs `samples:` >= 1 (the number of draws)")
+    if not spec.seeds:
+        raise SweepSpecError("`seeds:` is empty; give at least one seed")
+
+
+def _check_scalar(where: str, value: Any) -> None:
+    if not isinstance(value, (str, int, float, bool, type(None))):
+        raise SweepSpecError(f"{where} must be a number, string, bool or null, got {value!r}")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise SweepSpecError(f"{where} must be finite, got {value!r}")
+
+
+def _draw(space: dict[str, dict[str, list[Any]]], samples: int, seed: int) -> list[dict[str, Scalar]]:
+    """``samples`` draws from ``space`` with a seeded Generator; plain Python scalars out."""
+    rng = np.random.default_rng(seed)
+    draws: list[dict[str, Scalar]] = [{} for _ in range(samples)]
+    for name, dist in space.items():  # one parameter at a time: adding one keeps the others' draws
+        (law, args), = dist.items()
+        if law == "uniform":
+            values = rng.uniform(args[0], args[1], samples).tolist()
+        elif law == "loguniform":
+            values = np.exp(rng.uniform(np.log(args[0]), np.log(args[1]), samples)).tolist()
+        elif law == "int":
+            values = rng.integers(int(args[0]), int(args[1]), samples, endpoint=True).tolist()
+        else:
+            values = [args[i] for i in rng.integers(0, len(args), samples)]
+        for draw, value in zip(draws, values):
+            draw[name] = value
+    return draws

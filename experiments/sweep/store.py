@@ -1,0 +1,98 @@
+"""Where a sweep keeps its results: one small Parquet file per finished cell, written atomically.
+
+Layout of a sweep folder::
+
+    sweep.yaml            the sweep as run (resolved), for reproduction
+    cells/KEY.parquet     one row per finished cell; KEY = cell_key(kind, params)
+    results.parquet       every finished cell of the sweep, in the sweep's order (also results.csv)
+
+A cell file is written to a temporary name in the same folder and renamed into place
+(``os.replace`` is atomic on POSIX), so a sweep killed at any moment leaves only whole cell files.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+CELLS_DIR = "cells"
+
+
+class CellStore:
+    """The finished cells of one sweep folder."""
+
+    def __init__(self, root: str | Path) -> None:
+        self.root = Path(root)
+        self.cells = self.root / CELLS_DIR
+        self.cells.mkdir(parents=True, exist_ok=True)
+        for stale in self.cells.glob(".*.tmp"):  # left by a kill between write and rename
+            stale.unlink(missing_ok=True)
+
+    def path(self, key: str) -> Path:
+        return self.cells / f"{key}.parquet"
+
+    def done(self) -> set[str]:
+        """Keys of every cell with a finished file."""
+        return {p.stem for p in self.cells.glob("*.parquet")}
+
+    def status(self, key: str) -> str | None:
+        """"ok", "error", or None when the cell has no file."""
+        path = self.path(key)
+        if not path.exists():
+            return None
+        return str(pd.read_parquet(path, columns=["status"])["status"].iloc[0])
+
+    def write(self, key: str, row: dict[str, Any]) -> Path:
+        """Write one cell's row atomically (temporary file, fsync, rename)."""
+        table = _tidy(pd.DataFrame([row]))
+        fd, tmp = tempfile.mkstemp(dir=self.cells, prefix=f".{key}.", suffix=".tmp")
+        try:
+            with os.fdopen(fd, "wb") as handle:
+                table.to_parquet(handle, index=False)
+                handle.flush()
+                os.fsync(handle.fileno())
+            os.replace(tmp, self.path(key))
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        return self.path(key)
+
+    def read(self, keys: list[str]) -> pd.DataFrame:
+        """The rows of the given cells that have files, in the given order."""
+        frames = [pd.read_parquet(self.path(k)) for k in keys if self.path(k).exists()]
+        if not frames:
+            return pd.DataFrame()
+        columns = list(dict.fromkeys(c for f in frames for c in f.columns))
+        frames = [f.dropna(axis=1, how="all") for f in frames]  # all-null cells must not decide dtypes
+        return _tidy(pd.concat(frames, ignore_index=True, sort=False).reindex(columns=columns))
+
+
+def write_atomic(table: pd.DataFrame, path: Path) -> None:
+    """Write a table as Parquet (or CSV for a .csv path) via a temporary file and a rename."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        if path.suffix == ".csv":
+            table.to_csv(tmp, index=False)
+        else:
+            _tidy(table).to_parquet(tmp, index=False)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _tidy(table: pd.DataFrame) -> pd.DataFrame:
+    """Make object columns Parquet-safe: a column mixing strings with numbers becomes strings."""
+    for name in table.columns:
+        col = table[name]
+        if col.dtype == object:
+            kinds = {type(v) for v in col if v is not None and not (isinstance(v, float) and pd.isna(v))}
+            if len(kinds) > 1 and str in kinds:
+                table[name] = col.map(lambda v: v if v is None or isinstance(v, str) else str(v))
+    return table

@@ -1,0 +1,268 @@
+"""Shared pieces of the Cartesian baselines: points, breakpoints, batched least-squares line fits,
+Line objects and the Cartesian corner step.
+
+Everything works on the compacted arrays of valid beams (``idx`` = beam indices, ``x``, ``y`` in the
+sensor frame, metres). Line fits are batched over many index ranges at once with prefix sums, so a
+fit costs O(1) per range whatever its length (the total-least-squares fit of Arras & Siegwart 1997,
+the one used by every algorithm in Nguyen et al. 2007).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from lms200 import Scan
+
+from ..types import Corner, FeatureSet, Line
+
+
+@dataclass(frozen=True)
+class Points:
+    """Valid beams of a scan in Cartesian form (sensor frame)."""
+
+    idx: np.ndarray  # beam index of each valid point
+    x: np.ndarray  # m
+    y: np.ndarray  # m
+    r: np.ndarray  # range, m
+    bearing: np.ndarray  # rad
+
+
+def valid_points(scan: Scan) -> Points:
+    """The valid beams of ``scan`` (REP-117: +inf and nan dropped) as Cartesian points."""
+    valid = scan.valid
+    idx = np.flatnonzero(valid)
+    r = scan.ranges[idx]
+    b = scan.angles[idx]
+    return Points(idx, r * np.cos(b), r * np.sin(b), r, b)
+
+
+def breakpoints(pts: Points, angle_increment: float, lambda_rad: float, sigma: float, max_skip: int = 1) -> np.ndarray:
+    """Cluster boundaries by the adaptive breakpoint detector (Borges & Aldon 2004).
+
+    Consecutive valid points n-1, n belong to different clusters when their distance exceeds
+    ``D_max = r_{n-1} sin(dphi) / sin(lambda - dphi) + 3 sigma`` (dphi = bearing step between them,
+    lambda = the shallowest incidence angle still accepted as the same surface) or when they are
+    more than ``max_skip`` beams apart (``max_skip - 1`` dropped beams are bridged). Returns the (c, 2) array of inclusive [start, end] positions into ``pts``.
+    """
+    n = pts.idx.size
+    if n == 0:
+        return np.empty((0, 2), dtype=np.int64)
+    step = np.diff(pts.idx)
+    dphi = step * angle_increment
+    gap = np.hypot(np.diff(pts.x), np.diff(pts.y))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dmax = pts.r[:-1] * np.sin(dphi) / np.sin(lambda_rad - dphi) + 3.0 * sigma
+    cut = (gap > dmax) | (dmax <= 0) | (step > max_skip)
+    ends = np.flatnonzero(cut)
+    starts = np.concatenate(([0], ends + 1))
+    stops = np.concatenate((ends, [n - 1]))
+    return np.column_stack((starts, stops))
+
+
+class PrefixFit:
+    """Batched total-least-squares line fits over index ranges of one point sequence."""
+
+    def __init__(self, x: np.ndarray, y: np.ndarray) -> None:
+        zero = np.zeros(1)
+        self.sx = np.concatenate((zero, np.cumsum(x)))
+        self.sy = np.concatenate((zero, np.cumsum(y)))
+        self.sxx = np.concatenate((zero, np.cumsum(x * x)))
+        self.syy = np.concatenate((zero, np.cumsum(y * y)))
+        self.sxy = np.concatenate((zero, np.cumsum(x * y)))
+
+    def fit(self, start: np.ndarray, end: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Fit ``x cos(a) + y sin(a) = rho`` to points start..end (inclusive) for each range.
+
+        Returns rho (>= 0, m), alpha (rad, (-pi, pi]), n, centroid x, centroid y and the scatter
+        along the line ``S = sum (t - t_mean)^2`` (m^2), all arrays of the ranges' shape.
+        """
+        lo, hi = start, end + 1
+        return fit_moments(
+            (hi - lo).astype(float),
+            self.sx[hi] - self.sx[lo],
+            self.sy[hi] - self.sy[lo],
+            self.sxx[hi] - self.sxx[lo],
+            self.syy[hi] - self.syy[lo],
+            self.sxy[hi] - self.sxy[lo],
+        )[:6]
+
+    def residual_rms(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+        """RMS perpendicular residual of the least-squares line over each range (m)."""
+        lo, hi = start, end + 1
+        out = fit_moments(
+            (hi - lo).astype(float),
+            self.sx[hi] - self.sx[lo],
+            self.sy[hi] - self.sy[lo],
+            self.sxx[hi] - self.sxx[lo],
+            self.syy[hi] - self.syy[lo],
+            self.sxy[hi] - self.sxy[lo],
+        )
+        return np.sqrt(out[6] / out[2])
+
+
+def fit_moments(n, sx, sy, sxx, syy, sxy) -> tuple[np.ndarray, ...]:
+    """Total-least-squares line from raw sums (Arras & Siegwart 1997): the normal angle minimising
+    ``sum (x cos a + y sin a - rho)^2``. Returns rho (>= 0), alpha, n, centroid x, y, scatter along
+    the line and the residual sum of squares across it."""
+    mx, my = sx / n, sy / n
+    cxx = sxx - n * mx * mx
+    cyy = syy - n * my * my
+    cxy = sxy - n * mx * my
+    alpha = 0.5 * np.arctan2(-2.0 * cxy, cyy - cxx)
+    rho = mx * np.cos(alpha) + my * np.sin(alpha)
+    alpha = wrap(np.where(rho < 0, alpha + np.pi, alpha))
+    rho = np.abs(rho)
+    c, s = np.cos(alpha), np.sin(alpha)
+    across = np.maximum(cxx * c * c + cyy * s * s + 2 * cxy * s * c, 0.0)
+    along = np.maximum(cxx + cyy - across, 1e-12)
+    return rho, alpha, n, mx, my, along, across
+
+
+def fit_groups(x: np.ndarray, y: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Least-squares lines of consecutive groups of points starting at ``offsets`` (as fit_moments)."""
+    red = np.add.reduceat
+    n = np.diff(np.concatenate((offsets, [x.size]))).astype(float)
+    return fit_moments(n, red(x, offsets), red(y, offsets), red(x * x, offsets), red(y * y, offsets),
+                       red(x * y, offsets))
+
+
+def contiguous_runs(pts: Points, pos: np.ndarray, angle_increment: float, lambda_rad: float,
+                    sigma: float, max_skip: int) -> np.ndarray:
+    """Split sorted point positions ``pos`` (inliers of one line) into runs that are contiguous in
+    the scan: at most ``max_skip`` - 1 points skipped between neighbours, and neighbours no farther
+    apart than the adaptive breakpoint distance (Borges & Aldon 2004) for their bearing step.
+    Returns the offsets of the runs' starts into ``pos``."""
+    if pos.size < 2:
+        return np.zeros(min(pos.size, 1), dtype=np.int64)
+    skip = np.diff(pos)
+    dphi = np.diff(pts.idx[pos]) * angle_increment
+    gap = np.hypot(np.diff(pts.x[pos]), np.diff(pts.y[pos]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dmax = pts.r[pos[:-1]] * np.sin(dphi) / np.sin(lambda_rad - dphi) + 3.0 * sigma
+    cut = (skip > max_skip) | (gap > dmax) | (dmax <= 0)
+    return np.concatenate(([0], np.flatnonzero(cut) + 1))
+
+
+def wrap(a: np.ndarray | float) -> np.ndarray:
+    """Angles wrapped to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2 * np.pi)
+
+
+def point_line_distance(x: np.ndarray, y: np.ndarray, rho: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """Absolute perpendicular distance of points from lines (broadcasting; m)."""
+    return np.abs(x * np.cos(alpha) + y * np.sin(alpha) - rho)
+
+
+def build_lines(
+    pts: Points,
+    start: np.ndarray,
+    end: np.ndarray,
+    rho: np.ndarray,
+    alpha: np.ndarray,
+    n: np.ndarray,
+    mx: np.ndarray,
+    my: np.ndarray,
+    along: np.ndarray,
+    sigma: float,
+) -> list[Line]:
+    """Line objects for fitted ranges ``start..end`` (positions into ``pts``), sorted by beam.
+
+    Endpoints are the projections of the first and last points on the line. The (rho, alpha)
+    covariance is that of a total-least-squares fit under isotropic noise ``sigma`` (m):
+    var(alpha) = s^2/S, var(rho) = s^2/n + t^2 s^2/S, cov = t s^2/S, with t the centroid's
+    coordinate along the line and S the scatter along it.
+    """
+    if start.size == 0:
+        return []
+    order = np.argsort(pts.idx[start], kind="stable")
+    c, s = np.cos(alpha), np.sin(alpha)
+    # projections of the first / last points onto their lines
+    x0, y0 = pts.x[start], pts.y[start]
+    x1, y1 = pts.x[end], pts.y[end]
+    d0 = x0 * c + y0 * s - rho
+    d1 = x1 * c + y1 * s - rho
+    px0, py0 = x0 - d0 * c, y0 - d0 * s
+    px1, py1 = x1 - d1 * c, y1 - d1 * s
+    t = -mx * s + my * c
+    s2 = sigma * sigma
+    var_a = s2 / along
+    var_r = s2 / n + t * t * var_a
+    cov_ra = t * var_a
+    first = pts.idx[start]
+    last = pts.idx[end]
+    lines = []
+    for k in order.tolist():
+        cov = np.array([[var_r[k], cov_ra[k]], [cov_ra[k], var_a[k]]])
+        lines.append(
+            Line(
+                float(rho[k]),
+                float(alpha[k]),
+                (float(px0[k]), float(py0[k])),
+                (float(px1[k]), float(py1[k])),
+                int(first[k]),
+                int(last[k]),
+                cov,
+                int(n[k]),
+            )
+        )
+    return lines
+
+
+@dataclass(frozen=True)
+class CornerConfig:
+    """The shared Cartesian corner step: corners where consecutive segments meet (Castellanos et al.
+    1996). Defaults: a direction change of at least 30 deg between the two segments (interior angle
+    at most 150 deg), the lines at most ``max_gap_beams`` apart in beam order, and their
+    intersection within ``max_distance`` of both adjacent endpoints (0.15 m: several times the
+    endpoint scatter at 5 mm range noise, far below the depth jumps of occlusions)."""
+
+    min_turn_deg: float = 30.0
+    max_gap_beams: int = 4
+    max_distance: float = 0.15
+
+
+def corners_from_lines(lines: list[Line], cfg: CornerConfig) -> list[Corner]:
+    """Corners where consecutive lines (beam order) meet at an angle; at the lines' intersection.
+
+    ``Corner.angle`` is the interior angle between the two segments at the corner, in (0, pi).
+    """
+    if len(lines) < 2:
+        return []
+    arr = np.array([(l.rho, l.alpha, *l.start, *l.end, l.first, l.last) for l in lines])
+    rho, alpha = arr[:, 0], arr[:, 1]
+    a1, a2 = alpha[:-1], alpha[1:]
+    r1, r2 = rho[:-1], rho[1:]
+    det = np.sin(a2 - a1)  # cos a1 sin a2 - sin a1 cos a2
+    # the turn between the segment directions (start -> end), 0 = collinear
+    d1 = np.column_stack((arr[:-1, 4] - arr[:-1, 2], arr[:-1, 5] - arr[:-1, 3]))
+    d2 = np.column_stack((arr[1:, 4] - arr[1:, 2], arr[1:, 5] - arr[1:, 3]))
+    n1 = np.linalg.norm(d1, axis=1)
+    n2 = np.linalg.norm(d2, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cos_turn = np.sum(d1 * d2, axis=1) / (n1 * n2)
+        turn = np.arccos(np.clip(cos_turn, -1, 1))
+        cx = (r1 * np.sin(a2) - r2 * np.sin(a1)) / det
+        cy = (r2 * np.cos(a1) - r1 * np.cos(a2)) / det
+    gap_ok = (arr[1:, 6] - arr[:-1, 7]) <= cfg.max_gap_beams
+    dist_a = np.hypot(cx - arr[:-1, 4], cy - arr[:-1, 5])
+    dist_b = np.hypot(cx - arr[1:, 2], cy - arr[1:, 3])
+    ok = (
+        gap_ok
+        & (turn >= np.deg2rad(cfg.min_turn_deg))
+        & (dist_a <= cfg.max_distance)
+        & (dist_b <= cfg.max_distance)
+        & np.isfinite(cx)
+    )
+    corners = []
+    for k in np.flatnonzero(ok).tolist():
+        corners.append(
+            Corner(float(cx[k]), float(cy[k]), float(np.pi - turn[k]), int(arr[k, 7]), (k, k + 1))
+        )
+    return corners
+
+
+def feature_set(lines: list[Line], corner_cfg: CornerConfig, method: str) -> FeatureSet:
+    """FeatureSet of beam-ordered lines plus the shared corner step."""
+    return FeatureSet(lines, corners_from_lines(lines, corner_cfg), method)

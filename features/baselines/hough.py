@@ -1,0 +1,113 @@
+"""``hough``: the full Hough transform of the Cartesian points (Duda & Hart 1972 normal form
+``rho = x cos(a) + y sin(a)``) over the whole (rho, alpha) space, with sequential peak picking.
+
+Each valid point votes once per alpha bin (a vectorised N x A index array and one ``bincount``).
+Then, until the highest peak has fewer than ``min_points`` votes: take the peak's line, select the
+points near it and refit them by least squares (two shrinking bands), cut them into runs contiguous
+in the scan, keep the runs long enough as Lines, and withdraw those points' votes from the
+accumulator. A peak that yields no line has its neighbourhood suppressed; ``max_failures`` such
+peaks in a row end the search.
+
+Resolution (default): 1 deg in alpha over [0, 180) deg and 2 cm in rho over [-R, R] with R the
+scan's largest valid range: 180 x 820 cells at the LMS200's 8.18 m. The peak only seeds the
+least-squares fit, so this coarse grid costs no accuracy and keeps the transform fast.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from lms200 import Scan
+
+from ..registry import register
+from ..types import FeatureSet
+from .common import CornerConfig, build_lines, feature_set, valid_points
+from .runs import refine, segments_of
+
+
+@dataclass(frozen=True)
+class HoughConfig:
+    """Defaults:
+
+    - alpha_step_deg / rho_step: 1 deg x 0.02 m accumulator cells (see the module docstring).
+    - band_coarse: 0.05 m, the first inlier band around a peak: the half-diagonal of a cell's
+      spread over a 4 m wall (4 m x sin 0.5 deg + 1 cm) plus noise.
+    - band_fine: 0.025 m = 5 sigma, the final inlier band after the first refit.
+    - min_points, min_length, sigma, breakpoint_lambda_deg: as the other baselines (8 points,
+      0.15 m, 5 mm, Borges & Aldon's 10 deg); max_skip: 3, a run may jump over two outliers.
+    - max_lines: 60, an upper bound on peaks taken per scan; max_failures: 5 peaks in a row that
+      yield no line end the search (such peaks gather collinear points scattered across the scan:
+      once the walls are out, what is left is clutter).
+    """
+
+    alpha_step_deg: float = 1.0
+    rho_step: float = 0.02
+    band_coarse: float = 0.05
+    band_fine: float = 0.025
+    min_points: int = 8
+    min_length: float = 0.15
+    sigma: float = 0.005
+    breakpoint_lambda_deg: float = 10.0
+    max_skip: int = 3
+    max_lines: int = 60
+    max_failures: int = 5
+    corners: CornerConfig = field(default_factory=CornerConfig)
+
+
+def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
+    """Extract lines and corners from ``scan`` (sensor frame) with the full Hough transform."""
+    pts = valid_points(scan)
+    if pts.idx.size < cfg.min_points:
+        return feature_set([], cfg.corners, "hough")
+    n_alpha = int(round(180.0 / cfg.alpha_step_deg))
+    theta = np.arange(n_alpha) * np.deg2rad(cfg.alpha_step_deg)
+    r_ext = float(pts.r.max()) + cfg.rho_step
+    n_rho = int(np.ceil(2 * r_ext / cfg.rho_step)) + 1
+    # votes: cell of every (point, alpha) pair, in float32 on the rho-step grid (|rho| / step < 1e4,
+    # so float32 places every vote exactly enough), one bincount for the whole accumulator
+    xs = (pts.x / cfg.rho_step).astype(np.float32)[:, None]
+    ys = (pts.y / cfg.rho_step).astype(np.float32)[:, None]
+    shift = np.float32(r_ext / cfg.rho_step)
+    cells = (xs * np.cos(theta).astype(np.float32) + ys * np.sin(theta).astype(np.float32) + shift).astype(np.int32)
+    cells += (np.arange(n_alpha) * n_rho).astype(np.int32)
+    acc = np.bincount(cells.ravel(), minlength=n_alpha * n_rho)
+    remaining = np.ones(pts.idx.size, dtype=bool)
+    lam = np.deg2rad(cfg.breakpoint_lambda_deg)
+    starts, ends, fits = [], [], []
+    failures = 0
+    while len(starts) < cfg.max_lines and failures < cfg.max_failures:
+        peak = int(np.argmax(acc))
+        if acc[peak] < cfg.min_points:
+            break
+        ia, ir = divmod(peak, n_rho)
+        a0 = float(theta[ia])
+        r0 = (ir + 0.5) * cfg.rho_step - r_ext
+        cand = np.flatnonzero(remaining)
+        inl, rho, alpha = refine(pts, cand, r0, a0, (cfg.band_coarse, cfg.band_fine))
+        found = None
+        if inl.size >= cfg.min_points:
+            found = segments_of(pts, inl, scan.angle_increment, lam, cfg.sigma, cfg.max_skip,
+                                cfg.min_points, cfg.min_length)
+        if found is None:
+            grid = acc.reshape(n_alpha, n_rho)
+            grid[max(ia - 1, 0): ia + 2, max(ir - 2, 0): ir + 3] = 0
+            failures += 1
+            continue
+        failures = 0
+        used, s, e, fit = found
+        starts.append(s)
+        ends.append(e)
+        fits.append(fit)
+        remaining[used] = False
+        acc -= np.bincount(cells[used].ravel(), minlength=acc.size)
+    if not starts:
+        return feature_set([], cfg.corners, "hough")
+    s, e = np.concatenate(starts), np.concatenate(ends)
+    rho, alpha, n, mx, my, along = (np.concatenate(f) for f in zip(*fits))
+    lines = build_lines(pts, s, e, rho, alpha, n, mx, my, along, cfg.sigma)
+    return feature_set(lines, cfg.corners, "hough")
+
+
+register("hough", HoughConfig, run)

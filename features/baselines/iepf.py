@@ -1,0 +1,48 @@
+"""``iepf``: iterative end-point fit. Clusters (adaptive breakpoints, Borges & Aldon 2004) are split
+recursively at the point farthest from the chord between the segment's end points (Duda & Hart
+1973; Douglas & Peucker 1973), then each final segment is refitted by least squares. As in Nguyen
+et al. (2007), IEPF is split-and-merge with the chord in place of the fit; collinear neighbours are
+merged before the refit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from lms200 import Scan
+
+from ..registry import register
+from ..types import FeatureSet
+from .common import CornerConfig, feature_set
+from .split_merge import segment_lines
+
+
+@dataclass(frozen=True)
+class IepfConfig:
+    """Defaults, for the LMS200 (sigma = 5 mm in mm mode):
+
+    - split_threshold: 0.04 m = 8 sigma: a chord between two noisy end points is itself off by up to
+      ~3 sigma at each end, so the chord threshold sits above split-and-merge's 6 sigma.
+    - the rest as ``split_merge`` (breakpoint lambda 10 deg, Borges & Aldon 2004; merge RMS 2 sigma;
+      8 points and 0.15 m per line, Nguyen et al. 2007's P_min / L_min; up to two dropped beams
+      bridged).
+    """
+
+    sigma: float = 0.005
+    breakpoint_lambda_deg: float = 10.0
+    split_threshold: float = 0.04
+    merge_rms: float = 0.01
+    min_points: int = 8
+    min_length: float = 0.15
+    max_skip: int = 3
+    corners: CornerConfig = field(default_factory=CornerConfig)
+
+
+def run(scan: Scan, cfg: IepfConfig) -> FeatureSet:
+    """Extract lines and corners from ``scan`` (sensor frame) by iterative end-point fit."""
+    lines = segment_lines(scan, cfg.sigma, cfg.breakpoint_lambda_deg, cfg.split_threshold,
+                          cfg.merge_rms, cfg.min_points, cfg.min_length, cfg.max_skip, chord=True)
+    return feature_set(lines, cfg.corners, "iepf")
+
+
+register("iepf", IepfConfig, run)

@@ -1,0 +1,113 @@
+"""``ransac``: sequential RANSAC line extraction (Fischler & Bolles 1981), as evaluated by Nguyen et
+al. (2007).
+
+Each round draws ``hypotheses`` point pairs at once from the points not yet explained, scores
+every pair's line against every remaining point in one (hypotheses x points) array, keeps the line
+with most inliers, refits it by least squares, cuts its inliers into runs contiguous in the scan,
+keeps the long-enough runs as Lines and removes their points. The second point of a pair is drawn
+within ``window`` beams of the first (neighbourhood sampling, NAPSAC, Myatt et al. 2002), which
+raises the chance that both lie on one wall; ``window=0`` draws both uniformly. Rounds stop when
+the best line has fewer than ``min_points`` inliers or ``max_failures`` rounds in a row yield no
+line. Random draws come from ``numpy.random.default_rng(seed)``: the same scan gives the same lines.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from lms200 import Scan
+
+from ..registry import register
+from ..types import FeatureSet
+from .common import CornerConfig, build_lines, feature_set, valid_points
+from .runs import refine, segments_of
+
+
+@dataclass(frozen=True)
+class RansacConfig:
+    """Defaults:
+
+    - hypotheses: 64 pairs per round: with neighbourhood sampling a pair lies on a wall holding a
+      fraction w of the remaining points with probability ~0.9 w, so 64 draws find a wall with
+      w = 0.08 with probability 1 - (1 - 0.072)^64 = 0.99 (Fischler & Bolles' formula, p = 0.99).
+    - window: 10 beams for the second point of a pair (NAPSAC neighbourhood).
+    - inlier_band: 0.025 m = 5 sigma for counting inliers and the final refit.
+    - min_points, min_length, sigma, breakpoint_lambda_deg, max_skip: as ``hough``.
+    - max_failures: 3 rounds in a row without a line end the search; max_lines: 60.
+    - seed: 0 (the generator is seeded per scan, so results are deterministic).
+    """
+
+    hypotheses: int = 64
+    window: int = 10
+    inlier_band: float = 0.025
+    min_points: int = 8
+    min_length: float = 0.15
+    sigma: float = 0.005
+    breakpoint_lambda_deg: float = 10.0
+    max_skip: int = 3
+    max_failures: int = 3
+    max_lines: int = 60
+    seed: int = 0
+    corners: CornerConfig = field(default_factory=CornerConfig)
+
+
+def run(scan: Scan, cfg: RansacConfig) -> FeatureSet:
+    """Extract lines and corners from ``scan`` (sensor frame) by sequential RANSAC."""
+    pts = valid_points(scan)
+    rng = np.random.default_rng(cfg.seed)
+    remaining = np.ones(pts.idx.size, dtype=bool)
+    lam = np.deg2rad(cfg.breakpoint_lambda_deg)
+    starts, ends, fits = [], [], []
+    failures = 0
+    for _ in range(cfg.max_lines):
+        cand = np.flatnonzero(remaining)
+        m = cand.size
+        if m < cfg.min_points or failures >= cfg.max_failures:
+            break
+        i = rng.integers(0, m, cfg.hypotheses)
+        if cfg.window > 0:
+            j = i + rng.integers(1, cfg.window + 1, cfg.hypotheses) * rng.choice((-1, 1), cfg.hypotheses)
+            j = np.clip(j, 0, m - 1)
+        else:
+            j = rng.integers(0, m, cfg.hypotheses)
+        pi, pj = cand[i], cand[j]
+        dx, dy = pts.x[pj] - pts.x[pi], pts.y[pj] - pts.y[pi]
+        norm = np.hypot(dx, dy)
+        good = norm > 1e-9
+        nx, ny = -dy[good] / norm[good], dx[good] / norm[good]
+        if nx.size == 0:
+            failures += 1
+            continue
+        rho = nx * pts.x[pi[good]] + ny * pts.y[pi[good]]
+        dist = np.abs(np.outer(nx, pts.x[cand]) + np.outer(ny, pts.y[cand]) - rho[:, None])
+        counts = np.count_nonzero(dist <= cfg.inlier_band, axis=1)
+        best = int(np.argmax(counts))
+        if counts[best] < cfg.min_points:
+            failures += 1
+            continue
+        alpha0 = float(np.arctan2(ny[best], nx[best]))
+        inl, r, a = refine(pts, cand, float(rho[best]), alpha0, (cfg.inlier_band, cfg.inlier_band))
+        found = None
+        if inl.size >= cfg.min_points:
+            found = segments_of(pts, inl, scan.angle_increment, lam, cfg.sigma, cfg.max_skip,
+                                cfg.min_points, cfg.min_length)
+        if found is None:
+            failures += 1
+            continue
+        failures = 0
+        used, s, e, fit = found
+        starts.append(s)
+        ends.append(e)
+        fits.append(fit)
+        remaining[used] = False
+    if not starts:
+        return feature_set([], cfg.corners, "ransac")
+    s, e = np.concatenate(starts), np.concatenate(ends)
+    rho, alpha, n, mx, my, along = (np.concatenate(f) for f in zip(*fits))
+    lines = build_lines(pts, s, e, rho, alpha, n, mx, my, along, cfg.sigma)
+    return feature_set(lines, cfg.corners, "ransac")
+
+
+register("ransac", RansacConfig, run)

@@ -1,0 +1,43 @@
+"""Turning the inliers of one candidate line into Line segments (shared by ``hough`` and ``ransac``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .common import Points, contiguous_runs, fit_groups, fit_moments, point_line_distance
+
+
+def refine(pts: Points, cand: np.ndarray, rho: float, alpha: float, tolerances: tuple[float, ...]):
+    """Re-select the inliers among candidate positions ``cand`` and refit by least squares, once
+    per tolerance (m), shrinking the band around the line. Returns (inlier positions, rho, alpha)."""
+    inl = cand
+    for tol in tolerances:
+        inl = cand[point_line_distance(pts.x[cand], pts.y[cand], rho, alpha) <= tol]
+        if inl.size < 2:
+            return inl, rho, alpha
+        x, y = pts.x[inl], pts.y[inl]
+        rho, alpha, *_ = fit_moments(float(inl.size), x.sum(), y.sum(), (x * x).sum(), (y * y).sum(), (x * y).sum())
+        rho, alpha = float(rho), float(alpha)
+    return inl, rho, alpha
+
+
+def segments_of(pts: Points, inl: np.ndarray, angle_increment: float, lambda_rad: float, sigma: float,
+                max_skip: int, min_points: int, min_length: float):
+    """Contiguous runs of the inliers ``inl`` with at least ``min_points`` points and ``min_length``
+    (m), each fitted by least squares. Returns (used positions, start, end, fit tuple) or None."""
+    offsets = contiguous_runs(pts, inl, angle_increment, lambda_rad, sigma, max_skip)
+    counts = np.diff(np.concatenate((offsets, [inl.size])))
+    ok = counts >= min_points
+    if not ok.any():
+        return None
+    labels = np.repeat(ok, counts)
+    used = inl[labels]
+    offs = (np.cumsum(counts[ok]) - counts[ok])
+    start = used[offs]
+    end = used[offs + counts[ok] - 1]
+    fit = fit_groups(pts.x[used], pts.y[used], offs)
+    length = np.hypot(pts.x[end] - pts.x[start], pts.y[end] - pts.y[start])
+    keep = length >= min_length
+    if not keep.any():
+        return None
+    return used, start[keep], end[keep], tuple(f[keep] for f in fit[:6])

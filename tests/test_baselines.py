@@ -1,0 +1,111 @@
+"""Each Cartesian baseline recovers the known walls and corners of exact synthetic rooms."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from experiments.synthetic import L_ROOM, polygon, room_scan
+from features import available_methods, extract, make_config
+from features.registry import UnknownMethodError
+from features.scoring import score_scan, truth_lines
+from lms200 import Scan
+
+BASELINES = ["split_merge", "iepf", "hough", "ransac"]
+POSES = [(0.0, 0.0, 0.3), (1.0, -1.0, -0.4), (3.5, -1.5, 1.9)]
+
+
+def test_baselines_are_registered():
+    assert set(BASELINES) <= set(available_methods())
+
+
+@pytest.mark.parametrize("method", BASELINES)
+@pytest.mark.parametrize("pose", POSES)
+def test_exact_room_lines_recovered(method, pose):
+    scan, truth = room_scan(L_ROOM, pose, sigma=0.0)
+    fs = extract(scan, method)
+    s = score_scan(fs, truth)
+    assert (s.fp, s.fn) == (0, 0), (s.tp, s.fp, s.fn)
+    # exact points: only the beams at a corner can pull a fit
+    assert np.max(np.abs(s.rho_errors)) < 0.003
+    assert np.max(np.abs(s.alpha_errors)) < np.deg2rad(0.15)
+    assert (s.corner_fp, s.corner_fn) == (0, 0)
+    assert np.max(s.corner_errors) < 0.01
+    # lines come in beam order with consistent beam spans and endpoints on the line
+    firsts = [l.first for l in fs.lines]
+    assert firsts == sorted(firsts)
+    for l in fs.lines:
+        for p in (l.start, l.end):
+            assert p[0] * np.cos(l.alpha) + p[1] * np.sin(l.alpha) == pytest.approx(l.rho, abs=1e-9)
+        assert l.n_points >= 8 and np.all(np.isfinite(l.cov))
+
+
+@pytest.mark.parametrize("method", BASELINES)
+def test_noisy_room_lines_within_noise(method):
+    """5 mm range noise: every wall found; rho and alpha errors of a few mm / tenths of a degree."""
+    errs_rho, errs_alpha = [], []
+    for seed, pose in enumerate(POSES):
+        scan, truth = room_scan(L_ROOM, pose, sigma=0.005, seed=seed)
+        s = score_scan(extract(scan, method), truth)
+        assert (s.fp, s.fn) == (0, 0), (pose, s.tp, s.fp, s.fn)
+        errs_rho += list(s.rho_errors)
+        errs_alpha += list(s.alpha_errors)
+    assert np.sqrt(np.mean(np.square(errs_rho))) < 0.005
+    assert np.sqrt(np.mean(np.square(errs_alpha))) < np.deg2rad(0.3)
+
+
+@pytest.mark.parametrize("method", BASELINES)
+def test_line_covariance_matches_monte_carlo(method):
+    """The reported (rho, alpha) covariance of a wall's line agrees with the scatter over noise draws."""
+    walls = polygon([(-1.0, -6.0), (3.0, -6.0), (3.0, 6.0), (-1.0, 6.0)])
+    est = []
+    for seed in range(40):
+        scan, _ = room_scan(walls, (0.0, 0.0, 0.0), sigma=0.005, seed=seed)
+        fs = extract(scan, method)
+        front = [l for l in fs.lines if abs(l.alpha) < 0.2]
+        assert len(front) == 1
+        est.append((front[0].rho, front[0].alpha, front[0].cov))
+    rho = np.array([e[0] for e in est])
+    alpha = np.array([e[1] for e in est])
+    cov = np.mean([e[2] for e in est], axis=0)
+    assert np.std(rho) == pytest.approx(np.sqrt(cov[0, 0]), rel=0.5)
+    assert np.std(alpha) == pytest.approx(np.sqrt(cov[1, 1]), rel=0.5)
+    assert abs(np.mean(rho) - 3.0) < 3 * np.sqrt(cov[0, 0])
+
+
+@pytest.mark.parametrize("method", BASELINES)
+def test_dropouts_are_bridged_and_rep117_respected(method):
+    scan, truth = room_scan(L_ROOM, POSES[0], sigma=0.0)
+    r = scan.ranges.copy()
+    r[40] = np.nan
+    r[41] = np.inf
+    fs = extract(scan.replace(ranges=r), method)
+    s = score_scan(fs, truth)
+    assert (s.tp, s.fp, s.fn) == (truth.segments.shape[0], 0, 0)
+    assert all(np.isfinite(l.rho) for l in fs.lines)
+
+
+@pytest.mark.parametrize("method", BASELINES)
+def test_empty_and_tiny_scans_give_no_lines(method):
+    assert extract(Scan.lms200(np.full(361, np.inf)), method).lines == []
+    assert extract(Scan.lms200(np.full(361, np.nan)), method).lines == []
+    tiny = Scan(np.array([1.0, 1.0, 1.0]), -0.01, 0.01, 0.0, 8.0)
+    assert extract(tiny, method).lines == []
+
+
+def test_ransac_is_deterministic_and_seeded():
+    scan, _ = room_scan(L_ROOM, POSES[1], sigma=0.005, seed=3)
+    a = extract(scan, "ransac").line_array()
+    b = extract(scan, "ransac").line_array()
+    np.testing.assert_array_equal(a, b)
+
+
+def test_unknown_parameter_is_a_clear_error():
+    with pytest.raises(UnknownMethodError, match="split_threshold"):
+        make_config("hough", split_threshold=0.1)
+
+
+def test_truth_lines_normal_form():
+    rho, alpha = truth_lines(np.array([[3.0, -1.0, 3.0, 1.0], [1.0, -2.0, -1.0, -2.0]]))
+    np.testing.assert_allclose(rho, [3.0, 2.0])
+    np.testing.assert_allclose(alpha, [0.0, -np.pi / 2])

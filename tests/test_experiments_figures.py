@@ -1,0 +1,128 @@
+"""Figures drawn from tables, the evaluation tables behind them, and the report formatting.
+
+The extractor runs here use exact synthetic rooms (``experiments.synthetic``) so that the pooled
+scores can be checked against ``features.scoring.score_scan`` called directly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from experiments.evaluate import evaluate_extractor, summarise_methods
+from experiments.figures import draw
+from experiments.figures.make import PAPER_FIGURES, draw_figures, draw_sweep
+from experiments.figures.tables import ad_reference, feature_panels, map_table, pick_evenly, trajectory_table
+from experiments.report import fmt, markdown_table, markdown_to_html
+from experiments.synthetic import L_ROOM, room_scan
+from lms200 import Record
+
+METHODS = ["split_merge", "iepf"]
+
+
+@pytest.fixture(scope="module")
+def synthetic_run():
+    """Eight noisy scans of the L-shaped room with their exact truths and true poses."""
+    records, truths = [], []
+    for i in range(8):
+        pose = (0.3 + 0.2 * i, 0.1 * i, 0.15 * i)
+        scan, truth = room_scan(L_ROOM, pose, sigma=0.005, seed=i)
+        records.append(Record(scan.__class__(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min,
+                                             scan.range_max, stamp=0.1 * i), truth=pose))
+        truths.append(truth)
+    return records, truths
+
+
+def test_pooled_scores_equal_score_scan_summed_by_hand(synthetic_run):
+    from features import extract
+    from features.scoring import score_scan
+
+    records, truths = synthetic_run
+    per_scan = pd.concat([evaluate_extractor(records, m, None, truths) for m in METHODS], ignore_index=True)
+    summary = summarise_methods(per_scan).set_index("method")
+    for method in METHODS:
+        scores = [score_scan(extract(r.scan, method=method), t) for r, t in zip(records, truths)]
+        tp = sum(s.tp for s in scores)
+        fp = sum(s.fp for s in scores)
+        fn = sum(s.fn for s in scores)
+        assert summary.loc[method, "tp"] == tp and summary.loc[method, "fp"] == fp
+        assert summary.loc[method, "f1"] == pytest.approx(2 * tp / (2 * tp + fp + fn))
+        rho = np.concatenate([s.rho_errors for s in scores])
+        assert summary.loc[method, "rho_errors_rms"] == pytest.approx(np.sqrt(np.mean(rho**2)))
+        ctp = sum(s.corner_tp for s in scores)
+        assert summary.loc[method, "corner_recall"] == pytest.approx(ctp / (ctp + sum(s.corner_fn for s in scores)))
+    assert (per_scan["time_ms"] > 0).all() and len(per_scan) == len(METHODS) * len(records)
+
+
+def test_every_figure_is_drawn_from_its_tables_with_the_data_beside_it(tmp_path, synthetic_run):
+    from features import extract
+
+    records, truths = synthetic_run
+    per_scan = pd.concat([evaluate_extractor(records, m, None, truths) for m in METHODS], ignore_index=True)
+    fsets = [extract(r.scan, method="split_merge") for r in records[:3]]
+    pts, lns, crs = feature_panels([r.scan for r in records[:3]], ["a", "b", "c"], fsets)
+    assert len(lns) == sum(len(f.lines) for f in fsets) and len(crs) == sum(len(f.corners) for f in fsets)
+    scan = records[0].scan
+    signals = pd.DataFrame({"beam": np.arange(361), "bearing_deg": np.degrees(scan.angles), "range_m": scan.ranges,
+                            "ad": np.full(361, ad_reference(10, scan.angle_increment)),
+                            "theta_deg": np.zeros(361), "psi_deg": np.zeros(361)})
+    trajectory = trajectory_table(np.array([[0.1 * i, *r.truth] for i, r in enumerate(records)]), records)
+    tables = {"signals": signals, "timing": per_scan, "summary": summarise_methods(per_scan),
+              "office_points": pts, "office_lines": lns, "office_corners": crs,
+              "intel_points": pts, "intel_lines": lns, "intel_corners": crs,
+              "trajectory": trajectory, "map": map_table(L_ROOM[:3], L_ROOM)}
+    written = draw_figures(tables, tmp_path)
+    assert set(written) == set(PAPER_FIGURES)
+    for name in PAPER_FIGURES:
+        assert (tmp_path / f"{name}.png").stat().st_size > 1000
+        assert (tmp_path / f"{name}.pdf").read_bytes()[:5] == b"%PDF-"
+    back = pd.read_csv(tmp_path / "fig7_timing.csv")
+    np.testing.assert_allclose(back["time_ms"], per_scan["time_ms"])
+    back_lines = pd.read_csv(tmp_path / "fig9_office_lines.csv")
+    np.testing.assert_allclose(back_lines[["x1", "y1", "x2", "y2"]], lns[["x1", "y1", "x2", "y2"]])
+    assert set(pd.read_csv(tmp_path / "fig10_slam_trajectory.csv")["source"]) == {"slam", "truth"}
+
+
+def test_ad_reference_is_the_straight_line_value():
+    # k = 1, D = 60 deg: 1 + 2 cos(60 deg) = 2
+    assert ad_reference(1, np.pi / 3) == pytest.approx(2.0)
+    assert ad_reference(10, np.deg2rad(0.5)) == pytest.approx(1 + 2 * sum(np.cos(np.deg2rad(0.5) * j) for j in range(1, 11)))
+
+
+def test_sweep_plot_averages_over_seeds(tmp_path):
+    rows = [{"x": x, "method": m, "seed": s, "f1": x + (m == "b") + 0.1 * s, "status": "ok"}
+            for x in (1, 2) for m in ("a", "b") for s in (0, 1)]
+    rows.append({"x": 1, "method": "a", "seed": 2, "f1": np.nan, "status": "error"})
+    folder = tmp_path / "sw"
+    folder.mkdir()
+    pd.DataFrame(rows).to_parquet(folder / "results.parquet")
+    (folder / "sweep.yaml").write_text("name: sw\nkind: extract\ngrid:\n  x: [1, 2]\n  method: [a, b]\nseeds: [0, 1]\n")
+    written = draw_sweep(folder, tmp_path / "figs")
+    assert list(written) == ["sweep_sw_f1"]
+    stats = pd.read_csv(tmp_path / "figs" / "sweep_sw_f1.csv")
+    got = stats.set_index(["method", "x"])["mean"]
+    assert got[("a", 1)] == pytest.approx(1.05) and got[("b", 2)] == pytest.approx(3.05)
+    assert (stats["count"] == 2).all()  # the failed cell is left out
+
+
+def test_pick_evenly_spreads_indices_away_from_the_ends():
+    assert pick_evenly(100, 4) == [20, 40, 59, 79]
+    assert pick_evenly(3, 5) == [0, 1, 2]
+    assert pick_evenly(0, 4) == []
+
+
+def test_report_tables_and_html():
+    table = pd.DataFrame({"method": ["a", "b"], "ms": [1.23456, 12.0], "f1": [0.98765, float("nan")]})
+    md = markdown_table(table)
+    assert md.splitlines() == ["| method | ms | f1 |", "|---|---|---|", "| a | 1.23 | 0.988 |", "| b | 12 | – |"]
+    assert fmt(123456.7) == "123457" and fmt(0.000123) == "0.000123"
+    html = markdown_to_html("# T\n\n" + md + "\n\n![cap](figures/x.png)\n\n- item `code`\n", "T")
+    assert "<h1>T</h1>" in html and html.count("<tr>") == 3 and "<img src='figures/x.png' alt='cap'>" in html
+    assert "<li>item <code>code</code></li>" in html
+
+
+def test_fig_signal_draws_the_reference_line(tmp_path):
+    sig = pd.DataFrame({"beam": np.arange(5), "ad": np.linspace(20, 21, 5)})
+    paths = draw.fig_signal(sig, "ad", "AD", "t", tmp_path / "s", reference=21.0)
+    assert [p.suffix for p in paths] == [".png", ".pdf", ".csv"]

@@ -1,0 +1,240 @@
+"""The sweep runner: cells, Dask vs in-process, resume after a kill, failures recorded.
+
+The cell kind used here, :func:`square`, is defined in this file so that the runner is tested
+without the extractors or the simulator: its rows are known exactly (y = x^2 + seed; x = 3
+fails), and it appends one line per computation to a log file, an independent count of the work
+done.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from experiments.sweep import SweepSpec, SweepSpecError, cell_key, load_sweep, run_sweep
+
+REPO = Path(__file__).resolve().parents[1]
+KIND = f"{Path(__file__).stem}:square"
+
+
+def square(params: dict) -> dict:
+    """y = x^2 + seed; x == 3 raises; x == $SWEEP_TEST_DIE_AT kills the process (no clean-up)."""
+    with open(params["log"], "a") as handle:
+        handle.write(f"{params['x']} {params['seed']}\n")
+    if str(params["x"]) == os.environ.get("SWEEP_TEST_DIE_AT"):
+        os._exit(9)
+    if params["x"] == 3:
+        raise ValueError("x = 3 is not allowed")
+    if params.get("interrupt_at") == params["x"]:
+        raise KeyboardInterrupt
+    return {"y": params["x"] ** 2 + params["seed"], "x_half": params["x"] / 2}
+
+
+def make_spec(log: Path, xs=range(6), seeds=(0, 1), **fixed) -> SweepSpec:
+    return SweepSpec.from_dict({"name": "squares", "kind": KIND, "fixed": {"log": str(log), **fixed},
+                                "grid": {"x": list(xs)}, "seeds": list(seeds)})
+
+
+def expected_table(log: Path, xs=range(6), seeds=(0, 1)) -> pd.DataFrame:
+    """The full table worked out by hand, in the sweep's order."""
+    rows = []
+    for x in xs:
+        for seed in seeds:
+            ok = x != 3
+            rows.append({"log": str(log), "x": x, "seed": seed, "y": x * x + seed if ok else np.nan,
+                         "x_half": x / 2 if ok else np.nan, "status": "ok" if ok else "error"})
+    return pd.DataFrame(rows)
+
+
+def comparable(table: pd.DataFrame) -> pd.DataFrame:
+    """The columns that must not depend on the executor (no timing)."""
+    cols = ["log", "x", "seed", "y", "x_half", "status"]
+    return table[cols].reset_index(drop=True)
+
+
+def computed(log: Path) -> list[str]:
+    return log.read_text().splitlines() if log.exists() else []
+
+
+@pytest.fixture(scope="module")
+def dask_client():
+    """One two-process local cluster for the module (start-up costs seconds)."""
+    from distributed import Client, LocalCluster
+
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                           silence_logs=logging.ERROR)
+    client = Client(cluster)
+    yield client
+    client.close()
+    cluster.close()
+
+
+def test_a_small_sweep_on_the_local_cluster_gives_the_exact_table(tmp_path, dask_client):
+    log = tmp_path / "log.txt"
+    result = run_sweep(make_spec(log), tmp_path / "out", dask_client, progress=False)
+    pd.testing.assert_frame_equal(comparable(result.table), expected_table(log), check_dtype=False)
+    assert (result.total, result.computed, result.skipped, result.failed) == (12, 12, 0, 2)
+    assert sorted(computed(log)) == sorted(f"{x} {s}" for x in range(6) for s in (0, 1))
+    errors = result.table.loc[result.table["status"] == "error", "error"]
+    assert len(errors) == 2 and all(e.startswith("ValueError: x = 3 is not allowed") for e in errors)
+    on_disk = pd.read_parquet(tmp_path / "out" / "results.parquet")
+    pd.testing.assert_frame_equal(on_disk, result.table)
+    assert len(list((tmp_path / "out" / "cells").glob("*.parquet"))) == 12
+
+
+def test_the_same_sweep_run_twice_computes_nothing_the_second_time(tmp_path, dask_client):
+    log = tmp_path / "log.txt"
+    first = run_sweep(make_spec(log), tmp_path / "out", dask_client, progress=False)
+    n = len(computed(log))
+    second = run_sweep(make_spec(log), tmp_path / "out", dask_client, progress=False)
+    assert len(computed(log)) == n == 12
+    assert (second.computed, second.skipped) == (0, 12)
+    pd.testing.assert_frame_equal(second.table, first.table)
+
+
+def test_local_cluster_and_in_process_results_are_equal(tmp_path, dask_client):
+    log = tmp_path / "log.txt"
+    on_dask = run_sweep(make_spec(log), tmp_path / "dask", dask_client, progress=False)
+    in_process = run_sweep(make_spec(log), tmp_path / "inproc", "inprocess", progress=False)
+    pd.testing.assert_frame_equal(comparable(on_dask.table), comparable(in_process.table))
+    assert list(on_dask.table["cell"]) == list(in_process.table["cell"])
+
+
+def test_a_sweep_killed_midway_resumes_and_ends_with_exactly_the_full_table(tmp_path):
+    """The first run dies hard (os._exit, like SIGKILL) in cell x = 4; the second finishes the rest."""
+    log = tmp_path / "log.txt"
+    spec_path = tmp_path / "squares.yaml"
+    spec_path.write_text(yaml.safe_dump(make_spec(log).to_dict()))
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), str(REPO / "tests")]),
+           "SWEEP_TEST_DIE_AT": "4"}
+    cmd = [sys.executable, "-m", "experiments.cli", "sweep", str(spec_path), "--local", "--no-progress",
+           "--out", str(tmp_path / "out")]
+    killed = subprocess.run(cmd, env=env, cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert killed.returncode == 9, killed.stderr
+    finished = {p.stem for p in (tmp_path / "out" / "cells").glob("*.parquet")}
+    spec = make_spec(log)
+    first_eight = {cell_key(spec.kind, c) for c in spec.cells()[:8]}  # x = 0..3, both seeds
+    assert finished == first_eight
+    assert not list((tmp_path / "out" / "cells").glob(".*"))  # no half-written files
+    assert len(computed(log)) == 9  # eight cells and the one that died
+
+    del env["SWEEP_TEST_DIE_AT"]
+    resumed = subprocess.run(cmd, env=env, cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert resumed.returncode == 0, resumed.stderr
+    assert "12 cells, 4 computed, 8 already done, 2 failed" in resumed.stdout
+    assert computed(log)[9:] == ["4 0", "4 1", "5 0", "5 1"]
+    table = pd.read_parquet(tmp_path / "out" / "results.parquet")
+    pd.testing.assert_frame_equal(comparable(table), expected_table(log), check_dtype=False)
+
+
+def test_an_interrupted_in_process_sweep_keeps_what_finished(tmp_path):
+    log = tmp_path / "log.txt"
+    spec = make_spec(log, interrupt_at=2)
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    partial = pd.read_parquet(tmp_path / "out" / "results.parquet")
+    assert list(partial["x"]) == [0, 0, 1, 1]
+    # run again: it resumes at cell (x = 2, seed 0), computing none of the finished cells again
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert computed(log) == ["0 0", "0 1", "1 0", "1 1", "2 0", "2 0"]
+
+
+def test_retry_failed_recomputes_only_the_failed_cells(tmp_path):
+    log = tmp_path / "log.txt"
+    run_sweep(make_spec(log), tmp_path / "out", "inprocess", progress=False)
+    again = run_sweep(make_spec(log), tmp_path / "out", "inprocess", retry_failed=True, progress=False)
+    assert (again.computed, again.skipped, again.failed) == (2, 10, 2)
+    assert computed(log)[12:] == ["3 0", "3 1"]
+
+
+def test_random_sampling_is_seeded_in_range_and_crossed_with_grid_and_seeds():
+    raw = {"kind": KIND, "grid": {"method": ["a", "b"]}, "seeds": [0, 1, 2], "samples": 5, "sample_seed": 7,
+           "random": {"u": {"uniform": [1.0, 2.0]}, "l": {"loguniform": [1e-3, 1e-1]},
+                      "k": {"int": [3, 5]}, "c": {"choice": ["x", "y"]}}}
+    cells = SweepSpec.from_dict(raw).cells()
+    assert len(cells) == 2 * 5 * 3
+    assert cells == SweepSpec.from_dict(raw).cells()
+    assert cells != SweepSpec.from_dict({**raw, "sample_seed": 8}).cells()
+    u = np.array([c["u"] for c in cells])
+    l_ = np.array([c["l"] for c in cells])
+    assert u.min() >= 1.0 and u.max() < 2.0 and l_.min() >= 1e-3 and l_.max() < 1e-1
+    assert {c["k"] for c in cells} <= {3, 4, 5} and {c["c"] for c in cells} <= {"x", "y"}
+    assert all(isinstance(c["k"], int) and isinstance(c["u"], float) for c in cells)
+    # the same five draws under both methods and all seeds
+    draws = {(c["method"], c["seed"]): (c["u"], c["k"]) for c in cells if c is not None}
+    assert len({v for v in draws.values()}) <= 5
+    keys = {cell_key(raw["kind"], c) for c in cells}
+    assert len(keys) == len(cells)
+
+
+@pytest.mark.parametrize(
+    "raw, message",
+    [
+        ({"grid": {"x": [1]}}, "needs `kind:`"),
+        ({"kind": "k", "grid": {"x": []}}, r"grid.x is empty"),
+        ({"kind": "k", "grid": {"x": [1]}, "fixed": {"x": 2}}, r"given twice"),
+        ({"kind": "k", "random": {"u": {"uniform": [2, 1]}}, "samples": 3}, r"low <= high"),
+        ({"kind": "k", "random": {"u": {"normal": [0, 1]}}, "samples": 3}, r"random.u must be one of"),
+        ({"kind": "k", "random": {"u": {"uniform": [0, 1]}}}, r"needs `samples:`"),
+        ({"kind": "k", "fixed": {"x": [1, 2]}}, r"fixed.x must be a number"),
+        ({"kind": "k", "gird": {"x": [1]}}, r"unknown key\(s\) \['gird'\]"),
+    ],
+)
+def test_bad_sweep_files_raise_errors_that_say_what_to_fix(raw, message):
+    with pytest.raises(SweepSpecError, match=message):
+        SweepSpec.from_dict(raw)
+
+
+def test_unknown_kind_fails_before_anything_runs(tmp_path):
+    spec = SweepSpec.from_dict({"kind": "no_such_kind", "grid": {"x": [1]}})
+    with pytest.raises(SweepSpecError, match="unknown cell kind 'no_such_kind'"):
+        run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert not list((tmp_path / "out" / "cells").glob("*"))
+
+
+def test_the_cli_runs_a_sweep_file_on_its_own_local_cluster(tmp_path):
+    log = tmp_path / "log.txt"
+    spec_path = tmp_path / "squares.yaml"
+    spec_path.write_text(yaml.safe_dump(make_spec(log, xs=[0, 1, 2], seeds=[5]).to_dict()))
+    assert load_sweep(spec_path).cells()[0] == {"log": str(log), "x": 0, "seed": 5}
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), str(REPO / "tests")])}
+    run = subprocess.run([sys.executable, "-m", "experiments.cli", "sweep", str(spec_path), "--no-progress",
+                          "--out", str(tmp_path / "out")], env=env, cwd=REPO, capture_output=True, text=True,
+                         timeout=120)
+    assert run.returncode == 0, run.stderr
+    table = pd.read_parquet(tmp_path / "out" / "results.parquet")
+    assert list(table["y"]) == [5, 6, 9]
+    assert (tmp_path / "out" / "results.csv").exists() and (tmp_path / "out" / "sweep.yaml").exists()
+
+
+def test_linked_grid_parameters_change_together():
+    spec = SweepSpec.from_dict({"kind": KIND, "grid": {"a,b": [[0.5, 361], [1.0, 181]], "c": ["x", "y"]},
+                                "seeds": [0]})
+    assert spec.cells() == [{"a": 0.5, "b": 361, "c": "x", "seed": 0}, {"a": 0.5, "b": 361, "c": "y", "seed": 0},
+                            {"a": 1.0, "b": 181, "c": "x", "seed": 0}, {"a": 1.0, "b": 181, "c": "y", "seed": 0}]
+    with pytest.raises(SweepSpecError, match=r"links 2 parameters"):
+        SweepSpec.from_dict({"kind": KIND, "grid": {"a,b": [[0.5]]}})
+    with pytest.raises(SweepSpecError, match=r"given twice"):
+        SweepSpec.from_dict({"kind": KIND, "grid": {"a,b": [[0.5, 1]]}, "fixed": {"b": 2}})
+
+
+def test_the_example_sweep_files_parse_and_name_built_in_kinds():
+    from experiments.sweep.cells import BUILTIN_KINDS
+
+    files = sorted((REPO / "sweeps").glob("*.yaml"))
+    names = {f.stem for f in files}
+    assert {"k_vs_noise", "extractors_vs_resolution", "slam_vs_noise"} <= names
+    for path in files:
+        spec = load_sweep(path)
+        assert spec.name == path.stem and spec.kind in BUILTIN_KINDS
+        cells = spec.cells()
+        assert len({cell_key(spec.kind, c) for c in cells}) == len(cells)
