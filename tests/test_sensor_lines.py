@@ -1,0 +1,165 @@
+"""The sensor-coordinate extractor on exact synthetic geometry: lines, covariance, segments, corners."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from sensor_geometry import ROOM, cast, line_scan, polygon
+
+from features import FeatureSet, extract
+from features.registry import UnknownMethodError
+from features.sensor.hough import band_search, logcos_template
+
+ROOM_LINES = {  # wall -> (rho, alpha) of x=3, y=2, y=-2.5 as seen from the origin
+    "x=3": (3.0, 0.0),
+    "y=2": (2.0, np.pi / 2),
+    "y=-2.5": (2.5, -np.pi / 2),
+}
+ROOM_CORNERS = [(3.0, -2.5), (3.0, 2.0)]
+
+
+def angle_diff(a: float, b: float) -> float:
+    return float(np.angle(np.exp(1j * (a - b))))
+
+
+def match(fs: FeatureSet, rho: float, alpha: float, tol_rho: float = 0.05, tol_alpha: float = 0.05):
+    found = [l for l in fs.lines if abs(l.rho - rho) < tol_rho and abs(angle_diff(l.alpha, alpha)) < tol_alpha]
+    assert len(found) == 1, f"expected one line near ({rho}, {alpha}), got {fs.lines}"
+    return found[0]
+
+
+def test_exact_room_lines_and_corners() -> None:
+    fs = extract(cast(ROOM), method="sensor")
+    assert fs.method == "sensor"
+    assert len(fs.lines) == 3
+    for rho, alpha in ROOM_LINES.values():
+        line = match(fs, rho, alpha)
+        assert line.rho == pytest.approx(rho, abs=1e-9)
+        assert abs(angle_diff(line.alpha, alpha)) < 1e-9
+        assert line.cov.shape == (2, 2) and np.all(np.linalg.eigvalsh(line.cov) > 0)
+        # endpoints lie on the line and in beam order
+        for x, y in (line.start, line.end):
+            assert x * np.cos(line.alpha) + y * np.sin(line.alpha) == pytest.approx(line.rho, abs=1e-9)
+        b0, b1 = np.arctan2(line.start[1], line.start[0]), np.arctan2(line.end[1], line.end[0])
+        assert b0 < b1 and line.first < line.last
+    assert len(fs.corners) == 2
+    for c, (x, y) in zip(fs.corners, ROOM_CORNERS):
+        assert (c.x, c.y) == pytest.approx((x, y), abs=1e-9)
+        assert c.angle == pytest.approx(np.pi / 2, abs=1e-9)
+        true_beam = round((np.arctan2(y, x) + np.pi / 2) / np.deg2rad(0.5))
+        assert abs(c.index - true_beam) <= 1
+        l1, l2 = (fs.lines[i] for i in c.lines)
+        assert l1.last <= c.index <= l2.first
+
+
+@pytest.mark.parametrize("n,inc_deg", [(361, 0.5), (180, 1.0), (401, 0.25)])
+def test_any_resolution_and_field_of_view(n: int, inc_deg: float) -> None:
+    inc = np.deg2rad(inc_deg)
+    amin = -inc * (n - 1) / 2
+    fs = extract(cast(ROOM, n=n, angle_min=amin, increment=inc))
+    half_fov = inc * (n - 1) / 2
+    for rho, alpha in ROOM_LINES.values():
+        # a wall is in view when enough of it falls inside the field of view
+        b_end = np.arctan2(*{0.0: (2.0, 3.0)}.get(alpha, (0, 1))[::1]) if False else None
+        del b_end
+    visible = [(3.0, 0.0)] + ([(2.0, np.pi / 2), (2.5, -np.pi / 2)] if half_fov > np.deg2rad(60) else [])
+    for rho, alpha in visible:
+        line = match(fs, rho, alpha)
+        assert line.rho == pytest.approx(rho, abs=1e-9)
+    assert all(line.first >= 0 and line.last < n for line in fs.lines)
+
+
+def test_noisy_room_within_the_tolerance_its_noise_implies() -> None:
+    """Errors of (rho, alpha) against truth, normalised by the reported covariance, over 60 seeds:
+    mean ~0, variance ~1 (the covariance is the true spread of the estimate)."""
+    z = []
+    for seed in range(60):
+        fs = extract(cast(ROOM, sigma=0.005, seed=seed))
+        for rho, alpha in ROOM_LINES.values():
+            line = match(fs, rho, alpha)
+            err = np.array([line.rho - rho, angle_diff(line.alpha, alpha)])
+            assert abs(err[0]) < 0.01 and abs(err[1]) < 0.01  # a few mm / mrad at 5 mm noise
+            z.append(err / np.sqrt(np.diag(line.cov)))
+    z = np.array(z)
+    assert np.abs(z).max() < 4.5
+    assert np.abs(z.mean(axis=0)).max() < 0.35
+    assert 0.7 < z.std(axis=0).min() and z.std(axis=0).max() < 1.35
+
+
+def test_no_return_beams_split_a_line() -> None:
+    scan = line_scan(2.0, 0.0)
+    r = scan.ranges.copy()
+    r[175:185] = np.inf
+    fs = extract(scan.replace(ranges=r))
+    assert len(fs.lines) == 2
+    a, b = fs.lines
+    assert a.last < 175 and b.first > 184
+    for line in fs.lines:
+        assert line.rho == pytest.approx(2.0, abs=1e-9)
+
+
+def test_range_discontinuity_splits_and_corners_need_contact() -> None:
+    # a box in front of a wall: the wall is interrupted, and no corner at the occluding edges
+    wall = [(3.0, -5.0, 3.0, 5.0)]
+    box = polygon([(1.5, -0.3), (1.9, -0.3), (1.9, 0.3), (1.5, 0.3)])
+    fs = extract(cast(np.vstack((wall, box))))
+    walls = [l for l in fs.lines if abs(l.rho - 3.0) < 0.01 and abs(l.alpha) < 0.01]
+    front = [l for l in fs.lines if abs(l.rho - 1.5) < 0.01 and abs(l.alpha) < 0.01]
+    assert len(walls) == 2 and len(front) == 1
+    for c in fs.corners:  # any corner must be a true corner of the box or the wall
+        raise AssertionError(f"no corner is visible as a meeting of two lines here, got {c}")
+
+
+@pytest.mark.parametrize("angle_deg", [45.0, 60.0, 90.0, 120.0, 135.0])
+@pytest.mark.parametrize("tilt", [0.0, 0.25])
+def test_corners_of_other_angles(angle_deg: float, tilt: float) -> None:
+    """A concave wedge with its apex at (4, 0), interior angle angle_deg, axis tilted by tilt rad."""
+    t = np.deg2rad(angle_deg)
+    walls = []
+    for side in (-1, 1):
+        d = np.pi + tilt + side * t / 2
+        walls.append((4.0, 0.0, 4.0 + 3.0 * np.cos(d), 3.0 * np.sin(d)))
+    fs = extract(cast(np.array(walls)))
+    assert len(fs.lines) == 2
+    assert len(fs.corners) == 1
+    c = fs.corners[0]
+    assert (c.x, c.y) == pytest.approx((4.0, 0.0), abs=1e-6)
+    assert c.angle == pytest.approx(t, abs=1e-6)
+    assert c.lines == (0, 1)
+
+
+def test_no_lines_on_circles() -> None:
+    circles = [(2.0, 0.0, 0.3), (3.0, 1.5, 0.5), (1.5, -1.0, 0.2), (4.0, -2.5, 1.0)]
+    for seed in range(5):
+        fs = extract(cast(circles=circles, sigma=0.005, seed=seed))
+        assert fs.lines == [] and fs.corners == []
+
+
+def test_params_override_defaults() -> None:
+    scan = cast(ROOM)
+    assert extract(scan, corners=False).corners == []
+    assert len(extract(scan, min_length=10.0).lines) == 0
+    with pytest.raises(UnknownMethodError, match="no_such_param"):
+        extract(scan, no_such_param=1)
+    with pytest.raises(ValueError, match="k: must be an integer >= 1"):
+        extract(scan, k=0)
+
+
+def test_log_hough_band_search_finds_the_line_and_rejects_outliers() -> None:
+    step = np.deg2rad(0.5) / 4
+    template, zero = logcos_template(step)
+    m = np.array([-100, 0, 37])
+    np.testing.assert_allclose(template[zero + m], np.log(np.cos(m * step)))
+    # one run of 40 beams on x cos(a) + y sin(a) = p with 3 outliers
+    p, a = 2.0, 0.35
+    beam = np.arange(150, 190)
+    b = -np.pi / 2 + beam * np.deg2rad(0.5)
+    d = p / np.cos(b - a)
+    d[[5, 20, 33]] *= 1.2
+    peak = band_search(
+        beam, np.log(d), np.zeros(40, int), np.array([0]), np.array([40]), np.array([a + 0.02]),
+        np.array([0.05]), np.array([0.003]), -np.pi / 2, np.deg2rad(0.5), 4, 11,
+    )
+    assert abs(peak.alpha[0] - a) <= 5 * step + 1e-12  # one band step: 0.05 rad / 5 on the grid
+    assert peak.rho[0] == pytest.approx(p, rel=0.01)
+    assert peak.inlier.sum() == 37 and not peak.inlier[[5, 20, 33]].any()

@@ -1,0 +1,53 @@
+"""Property-based tests: any ranges array a Scan accepts gives a well-formed FeatureSet, never an
+exception (all-inf, all-nan, one valid beam, zeros, huge values, any resolution and field of view)."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from features import FeatureSet, extract
+from lms200 import Scan
+
+SPECIAL = [0.0, np.inf, np.nan, 1e-300, 1e300, 1e-3, 80.0, 8.183]
+
+
+@st.composite
+def scans(draw: st.DrawFn) -> Scan:
+    n = draw(st.integers(1, 450))
+    kind = draw(st.sampled_from(["special", "smooth", "mixed", "constant"]))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    if kind == "special":
+        r = rng.choice(SPECIAL, n)
+    elif kind == "constant":
+        r = np.full(n, draw(st.sampled_from(SPECIAL + [2.5])))
+    else:
+        # piecewise walls with noise, then sprinkled special values
+        r = np.repeat(rng.uniform(0.1, 20.0, 1 + n // 30), 30)[:n] + rng.normal(0, 0.01, n)
+        r = np.abs(r)
+        if kind == "mixed":
+            hits = rng.random(n) < 0.1
+            r[hits] = rng.choice(SPECIAL, hits.sum())
+    inc = draw(st.sampled_from([np.deg2rad(0.25), np.deg2rad(0.5), np.deg2rad(1.0), 2 * np.pi / 360, 1e-4, 0.3]))
+    amin = draw(st.floats(-np.pi, np.pi))
+    range_max = draw(st.sampled_from([8.183, 81.83, 1e308]))
+    return Scan(r, amin, inc, 0.0, range_max)
+
+
+@settings(max_examples=300, deadline=None)
+@given(scans(), st.integers(1, 12))
+def test_never_raises_and_output_is_well_formed(scan: Scan, k: int) -> None:
+    fs = extract(scan, method="sensor", k=k)
+    assert isinstance(fs, FeatureSet)
+    n = len(scan)
+    for line in fs.lines:
+        assert np.isfinite([line.rho, line.alpha, *line.start, *line.end]).all()
+        assert line.rho >= 0 and -np.pi < line.alpha <= np.pi
+        assert 0 <= line.first <= line.last < n
+        assert line.cov.shape == (2, 2) and np.isfinite(line.cov).all()
+        assert line.n_points <= line.last - line.first + 1
+    for c in fs.corners:
+        assert np.isfinite([c.x, c.y]).all() and 0 < c.angle < np.pi
+        assert 0 <= c.lines[0] < c.lines[1] < len(fs.lines)
+        assert 0 <= c.index < n
