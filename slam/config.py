@@ -45,6 +45,12 @@ class SlamConfig:
         prealign_radius: map lines within this distance (m) of the predicted position take part.
         prealign_sigma_xy, prealign_sigma_phi: std of the resulting pose pseudo-measurement.
         prealign_min_fraction: the alignment is used only when it explains this fraction of line length.
+        point_stride, verify_tolerance: pre-alignment candidates are checked by the fraction of the
+            scan's points (every ``point_stride``-th beam) within ``verify_tolerance`` m of the
+            previous scan's points; ``verify_margin``: a candidate far from the prediction must
+            beat the one near it by this fraction.
+        max_turn_rate: fastest turn considered possible (rad/s): headings further from the previous
+            one than this times the scan interval (+10 deg) are rejected (corridor 180-degree flips).
     Consistency:
         nis_window, nis_divergence: the filter is flagged as diverged when the mean normalised
             innovation squared per degree of freedom over the last ``nis_window`` scans exceeds this.
@@ -75,6 +81,10 @@ class SlamConfig:
     prealign_sigma_xy: float = 0.1
     prealign_sigma_phi: float = 0.03
     prealign_min_fraction: float = 0.3
+    max_turn_rate: float = 8.0
+    point_stride: int = 2
+    verify_tolerance: float = 0.1
+    verify_margin: float = 0.1
     nis_window: int = 20
     nis_divergence: float = 5.0
 

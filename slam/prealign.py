@@ -10,6 +10,7 @@ squares on the line distances of paired lines; the candidate explaining the most
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -26,6 +27,7 @@ class Alignment:
     matched_length: float  # m of scan line length explained by map lines
     total_length: float  # m of scan line length
     candidates: int  # headings tried
+    verify_score: float = float("nan")  # fraction of points confirmed by the verifier (nan: none)
 
 
 def angle_histogram(angles: np.ndarray, weights: np.ndarray, sigma_deg: float = 2.0) -> np.ndarray:
@@ -109,7 +111,10 @@ def align(scan_rho: np.ndarray, scan_alpha: np.ndarray, scan_len: np.ndarray,
           angle_tol: float = np.radians(6.0), trans_tols: tuple[float, ...] = (1.0, 0.5, 0.2, 0.1),
           max_candidates: int = 4, prefer_margin: float = 0.1, trans_scale: float = 0.5,
           rot_scale: float = np.pi / 2, scan_ends: np.ndarray | None = None,
-          map_ends: np.ndarray | None = None, extent_margin: float = 0.5) -> Alignment | None:
+          map_ends: np.ndarray | None = None, extent_margin: float = 0.5,
+          reference_heading: float | None = None, max_turn: float = np.inf,
+          near_tol: float = np.radians(10.0), near_accept: float = 0.6, far_factor: float = 1.5,
+          verify: Callable[[np.ndarray], float] | None = None, verify_margin: float = 0.1) -> Alignment | None:
     """Pose of the scan in the map frame, without using the predicted heading to find it.
 
     Args:
@@ -124,6 +129,17 @@ def align(scan_rho: np.ndarray, scan_alpha: np.ndarray, scan_len: np.ndarray,
         scan_ends, map_ends: optional segment endpoints (m, 4) sensor frame and (L, 4) world frame
             in the map lines' original orientation order; a pairing then also needs the segments
             to overlap within ``extent_margin`` m.
+        reference_heading, max_turn: headings more than ``max_turn`` rad from the reference (the
+            previous scan's heading) are physically out of reach and not considered; this removes
+            the 180-degree ambiguity of a corridor, which looks the same both ways.
+        near_tol, near_accept, far_factor: the prediction comes first: the best candidate within
+            ``near_tol`` of the predicted heading is taken when it explains ``near_accept`` of
+            the scan's line length; a candidate further away replaces it only when it scores
+            ``far_factor`` times better (a rectilinear building matches itself every 90 deg).
+        verify, verify_margin: optional independent check ``verify(pose) -> score in [0, 1]``
+            (e.g. the fraction of scan points that land on the previous scan's points). With it,
+            candidates are ranked by that score instead, and one far from the prediction must
+            beat the best near one by ``verify_margin``.
 
     Returns:
         The best Alignment, or None when there are no lines to align.
@@ -138,14 +154,61 @@ def align(scan_rho: np.ndarray, scan_alpha: np.ndarray, scan_len: np.ndarray,
     w_scan = np.minimum(scan_len, 5.0)
     cands = list(rotation_candidates(scan_alpha, w_scan, th, np.minimum(map_len, 5.0), max_candidates))
     cands.append(float(predicted[2]))
+    if reference_heading is not None:
+        cands.append(float(reference_heading))  # no turn at all
+    if reference_heading is not None and np.isfinite(max_turn):
+        cands = [c for c in cands if abs(wrap(c - reference_heading)) <= max_turn + angle_tol]
     results = []
     for phi in cands:
         p, phi_r, m = _translation(scan_rho, scan_alpha, w_scan, R, th, phi, p0, angle_tol, trans_tols,
                                    scan_ends, map_ends, extent_margin)
+        if reference_heading is not None and abs(wrap(phi_r - reference_heading)) > max_turn:
+            continue
         jump = np.hypot(*(p - p0)) / trans_scale
         closeness = jump + abs(wrap(phi_r - predicted[2])) / rot_scale
         results.append((m * np.exp(-0.5 * jump**2), closeness, p, phi_r, m))
-    best_m = max(r[0] for r in results)
-    near = [r for r in results if r[0] >= (1.0 - prefer_margin) * best_m]
-    _, _, p, phi, m = min(near, key=lambda r: r[1])
-    return Alignment(np.array([p[0], p[1], phi]), float(m), float(w_scan.sum()), len(cands))
+    if not results:
+        return None
+    total = float(w_scan.sum())
+    if verify is not None:
+        return _choose_verified(results, verify, predicted, near_tol, verify_margin, total, len(cands))
+    is_near = [abs(wrap(r[3] - predicted[2])) <= near_tol for r in results]
+    near = [r for r, n in zip(results, is_near) if n]
+    far = [r for r, n in zip(results, is_near) if not n]
+    best_near = _pick(near, prefer_margin)
+    best_far = _pick(far, prefer_margin)
+    if best_near is not None and (best_near[0] >= near_accept * total or best_far is None
+                                  or best_far[0] < far_factor * best_near[0]):
+        chosen = best_near
+    else:
+        chosen = best_far
+    if chosen is None:
+        return None
+    _, _, p, phi, m = chosen
+    return Alignment(np.array([p[0], p[1], phi]), float(m), total, len(cands))
+
+
+def _choose_verified(results, verify, predicted, near_tol, margin, total, n_cands) -> Alignment | None:
+    scored = []
+    for r in results:
+        pose = np.array([r[2][0], r[2][1], r[3]])
+        scored.append((verify(pose), -r[1], pose, r[4]))
+    near = [s for s in scored if abs(wrap(s[2][2] - predicted[2])) <= near_tol]
+    far = [s for s in scored if abs(wrap(s[2][2] - predicted[2])) > near_tol]
+    best_near = max(near, key=lambda s: (s[0], s[1])) if near else None
+    best_far = max(far, key=lambda s: (s[0], s[1])) if far else None
+    if best_near is not None and (best_far is None or best_far[0] <= best_near[0] + margin):
+        chosen = best_near
+    else:
+        chosen = best_far
+    if chosen is None:
+        return None
+    return Alignment(chosen[2], float(chosen[3]), total, n_cands, float(chosen[0]))
+
+
+def _pick(results: list, prefer_margin: float):
+    """The candidate closest to the prediction among those within ``prefer_margin`` of the best."""
+    if not results:
+        return None
+    best = max(r[0] for r in results)
+    return min((r for r in results if r[0] >= (1.0 - prefer_margin) * best), key=lambda r: r[1])
