@@ -179,8 +179,9 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
     """One row per source x method: counts pooled over scans and seeds (micro-averaged precision,
     recall, F1), error bias and RMS pooled over matched lines (rho in mm, alpha in deg), corner
     scores, mean explained fraction, time per scan (mean and median, microseconds), scans per
-    second, and ``speed_vs_sensor`` = the reference method's mean time / this method's (above 1 =
-    faster than the reference; nan when the reference did not run)."""
+    second and ``speed_vs_sensor`` = the reference method's time / this method's (above 1 =
+    faster than the reference; nan when the reference did not run). Both rates use the median
+    time: on a shared machine a pre-empted call can take 100 times the usual, which swamps a mean."""
     out = []
     for (source, method), g in table.groupby(["source", "method"], sort=False):
         row: dict[str, Any] = dict(source=source, method=method, kind=g["kind"].iloc[0], scans=len(g),
@@ -203,13 +204,13 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
             )
         row.update(explained=g["explained"].mean(), range_rms_mm=1e3 * g["range_rms"].mean(),
                    us_mean=g["microseconds"].mean(), us_median=g["microseconds"].median())
-        row["scans_per_s"] = 1e6 / row["us_mean"]
+        row["scans_per_s"] = 1e6 / row["us_median"]
         out.append(row)
     summary = pd.DataFrame(out)
     if summary.empty:
         return summary
-    ref = summary[summary["method"] == reference].set_index("source")["us_mean"]
-    summary["speed_vs_sensor"] = summary["source"].map(ref) / summary["us_mean"]
+    ref = summary[summary["method"] == reference].set_index("source")["us_median"]
+    summary["speed_vs_sensor"] = summary["source"].map(ref) / summary["us_median"]
     return summary
 
 
