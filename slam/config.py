@@ -37,6 +37,7 @@ class SlamConfig:
             starts a new one; between the two it is ignored as ambiguous.
         association: "nn" (nearest neighbour) or "jcbb" (joint compatibility branch and bound).
         extent_margin: an observation must overlap the landmark's extent grown by this (m).
+        reject_ambiguous: (nn) leave an observation unpaired when two landmarks pass its gate.
     Map management:
         confirm_hits: sightings (including the first) that confirm a tentative landmark...
         tentative_window: ...within this many scans of its creation, else it is pruned.
@@ -44,6 +45,8 @@ class SlamConfig:
         prealign: find the scan's heading (and position) against the map's lines before the update.
         prealign_radius: map lines within this distance (m) of the predicted position take part.
         prealign_sigma_xy, prealign_sigma_phi: std of the resulting pose pseudo-measurement.
+        prealign_xy_turn: the alignment's position is used (besides its heading) only when its
+            heading differs from the prediction by more than this (rad).
         prealign_min_fraction: the alignment is used only when it explains this fraction of line length.
         point_stride, verify_tolerance: pre-alignment candidates are checked by the fraction of the
             scan's points (every ``point_stride``-th beam) within ``verify_tolerance`` m of the
@@ -73,7 +76,8 @@ class SlamConfig:
     gate_probability: float = 0.99
     new_landmark_probability: float = 0.9999
     association: str = "nn"
-    extent_margin: float = 2.0
+    extent_margin: float = 1.0
+    reject_ambiguous: bool = True
     confirm_hits: int = 3
     tentative_window: int = 6
     prealign: bool = True
@@ -81,6 +85,7 @@ class SlamConfig:
     prealign_sigma_xy: float = 0.1
     prealign_sigma_phi: float = 0.03
     prealign_min_fraction: float = 0.3
+    prealign_xy_turn: float = 0.1
     max_turn_rate: float = 8.0
     point_stride: int = 2
     verify_tolerance: float = 0.1

@@ -135,18 +135,30 @@ class SlamFilter:
                   verify_margin=cfg.verify_margin)
         if a is None or a.matched_length <= 0 or a.matched_length < cfg.prealign_min_fraction * a.total_length:
             return
-        H = np.zeros((3, self.ekf.dim_x))
-        H[:, :3] = np.eye(3)
-        Rm = np.diag([cfg.prealign_sigma_xy**2, cfg.prealign_sigma_xy**2, cfg.prealign_sigma_phi**2])
         nu = a.pose - x[:3]
         nu[2] = wrap(nu[2])
-        S = self.ekf.P[:3, :3] + Rm
-        if nu @ np.linalg.solve(S, nu) > chi2.ppf(0.999, 3):
-            # the constant-velocity prior cannot explain the alignment (a fast turn): widen it
-            self.ekf.P[:3, :3] += np.diag(nu**2)
-            self.ekf.P[4, 4] += (nu[2] / max(self._dt, 1e-3)) ** 2 * 0.25
-        self.ekf.update(a.pose.reshape(3, 1), lambda _x: H, lambda xx: xx[:3], R=Rm,
-                        residual=lambda z, h: np.vstack((z[:2] - h[:2], [[wrap((z[2] - h[2]).item())]])))
+        P = self.ekf.P
+        var_phi = cfg.prealign_sigma_phi**2
+        if nu[2] ** 2 > chi2.ppf(0.999, 1) * (P[2, 2] + var_phi):
+            # the constant-velocity prior cannot explain the turn the lines show: widen it
+            P[2, 2] += nu[2] ** 2
+            P[4, 4] += 0.25 * (nu[2] / max(self._dt, 1e-3)) ** 2
+        # position: only along the normals of the matched lines (a corridor fixes one direction)
+        R_xy = cfg.prealign_sigma_xy**2 * np.linalg.inv(a.information + 1e-3 * np.eye(2))
+        S_xy = P[:2, :2] + R_xy
+        rows = [2]
+        # the line update fixes the position once the heading is right; the alignment's position
+        # is used too only after a turn the prediction missed (it double-counts the lines)
+        if abs(nu[2]) > cfg.prealign_xy_turn and nu[:2] @ np.linalg.solve(S_xy, nu[:2]) < chi2.ppf(0.999, 2):
+            rows = [0, 1, 2]
+        Rm = np.zeros((len(rows), len(rows)))
+        Rm[-1, -1] = var_phi
+        if len(rows) == 3:
+            Rm[:2, :2] = R_xy
+        H = np.zeros((len(rows), self.ekf.dim_x))
+        H[np.arange(len(rows)), rows] = 1.0
+        self.ekf.update(a.pose[rows].reshape(-1, 1), lambda _x: H, lambda xx: xx[rows],
+                        R=Rm, residual=_pose_residual)
         info.prealign_used = True
         info.prealign_shift = float(wrap(a.pose[2] - x[2]))
 
@@ -219,8 +231,9 @@ class SlamFilter:
 
             pairs = assoc.jcbb(d2, self.gate, nu_fn, S_fn, self.config.gate_probability)
         else:
-            pairs = assoc.nearest_neighbour(d2, self.gate)
-        new = [o for o in range(z.shape[0]) if np.min(cand.d2[o]) > self.new_gate and o not in {p[0] for p in pairs}]
+            pairs = assoc.nearest_neighbour(d2, self.gate, self.config.reject_ambiguous)
+        paired = {p[0] for p in pairs}
+        new = [o for o in range(z.shape[0]) if np.min(cand.d2[o]) > self.new_gate and o not in paired]
         return [(o, int(pos[l])) for o, l in pairs], new
 
     def _associate_lines(self, obs: Observations):
@@ -340,6 +353,13 @@ class SlamFilter:
         except np.linalg.LinAlgError:
             return False
         return True
+
+
+def _pose_residual(z: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """z - h for stacked pose measurements whose last row is a heading (wrapped)."""
+    y = np.asarray(z, float).reshape(-1, 1) - np.asarray(h, float).reshape(-1, 1)
+    y[-1, 0] = wrap(y[-1, 0])
+    return y
 
 
 def _point_segment_distance(p: np.ndarray, seg: np.ndarray) -> np.ndarray:

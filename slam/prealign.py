@@ -9,7 +9,7 @@ squares on the line distances of paired lines; the candidate explaining the most
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -28,6 +28,7 @@ class Alignment:
     total_length: float  # m of scan line length
     candidates: int  # headings tried
     verify_score: float = float("nan")  # fraction of points confirmed by the verifier (nan: none)
+    information: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))  # sum n n^T of matched normals
 
 
 def angle_histogram(angles: np.ndarray, weights: np.ndarray, sigma_deg: float = 2.0) -> np.ndarray:
@@ -81,9 +82,11 @@ def _overlaps(scan_ends: np.ndarray, map_ends: np.ndarray, pose: np.ndarray, mar
 
 def _translation(scan_rho, scan_alpha, scan_w, map_R, map_theta, phi, p0, angle_tol, trans_tols,
                  scan_ends=None, map_ends=None, extent_margin=0.5):
-    """Weighted least squares for the position given heading ``phi``; returns (p, phi, matched length)."""
+    """Weighted least squares for the position given heading ``phi``; returns (p, phi, matched
+    length, information (2x2) = sum of n n^T over the matched lines' world normals)."""
     p = np.array(p0, float)
     matched = 0.0
+    info = np.zeros((2, 2))
     for tol in trans_tols:
         theta_i = scan_alpha + phi
         dang = wrap(map_theta[None, :] - theta_i[:, None])  # (m, L)
@@ -95,7 +98,7 @@ def _translation(scan_rho, scan_alpha, scan_w, map_R, map_theta, phi, p0, angle_
         j = np.argmin(cost, axis=1)
         ok = cost[np.arange(len(j)), j] < tol
         if ok.sum() == 0:
-            return p, phi, 0.0
+            return p, phi, 0.0, np.zeros((2, 2))
         jj, w = j[ok], scan_w[ok]
         A = np.column_stack((np.cos(map_theta[jj]), np.sin(map_theta[jj])))
         b = r[np.nonzero(ok)[0], jj]
@@ -103,7 +106,8 @@ def _translation(scan_rho, scan_alpha, scan_w, map_R, map_theta, phi, p0, angle_
         p = p + np.linalg.solve(N, A.T @ (w * b))
         phi = wrap(phi + np.sum(w * dang[np.nonzero(ok)[0], jj]) / np.sum(w))
         matched = float(w.sum())
-    return p, phi, matched
+        info = A.T @ A
+    return p, phi, matched, info
 
 
 def align(scan_rho: np.ndarray, scan_alpha: np.ndarray, scan_len: np.ndarray,
@@ -160,55 +164,49 @@ def align(scan_rho: np.ndarray, scan_alpha: np.ndarray, scan_len: np.ndarray,
         cands = [c for c in cands if abs(wrap(c - reference_heading)) <= max_turn + angle_tol]
     results = []
     for phi in cands:
-        p, phi_r, m = _translation(scan_rho, scan_alpha, w_scan, R, th, phi, p0, angle_tol, trans_tols,
-                                   scan_ends, map_ends, extent_margin)
+        p, phi_r, m, info = _translation(scan_rho, scan_alpha, w_scan, R, th, phi, p0, angle_tol, trans_tols,
+                                         scan_ends, map_ends, extent_margin)
         if reference_heading is not None and abs(wrap(phi_r - reference_heading)) > max_turn:
             continue
         jump = np.hypot(*(p - p0)) / trans_scale
         closeness = jump + abs(wrap(phi_r - predicted[2])) / rot_scale
-        results.append((m * np.exp(-0.5 * jump**2), closeness, p, phi_r, m))
+        results.append(_Candidate(m * np.exp(-0.5 * jump**2), closeness, np.array([p[0], p[1], phi_r]), m, info))
     if not results:
         return None
     total = float(w_scan.sum())
     if verify is not None:
-        return _choose_verified(results, verify, predicted, near_tol, verify_margin, total, len(cands))
-    is_near = [abs(wrap(r[3] - predicted[2])) <= near_tol for r in results]
-    near = [r for r, n in zip(results, is_near) if n]
-    far = [r for r, n in zip(results, is_near) if not n]
-    best_near = _pick(near, prefer_margin)
-    best_far = _pick(far, prefer_margin)
-    if best_near is not None and (best_near[0] >= near_accept * total or best_far is None
-                                  or best_far[0] < far_factor * best_near[0]):
-        chosen = best_near
+        for r in results:
+            r.score = verify(r.pose)
+        margin = verify_margin
     else:
-        chosen = best_far
+        margin = None
+    is_near = [abs(wrap(r.pose[2] - predicted[2])) <= near_tol for r in results]
+    best_near = _pick([r for r, n in zip(results, is_near) if n], prefer_margin)
+    best_far = _pick([r for r, n in zip(results, is_near) if not n], prefer_margin)
+    if margin is not None:  # verified scores: a far candidate must beat the near one by the margin
+        take_near = best_near is not None and (best_far is None or best_far.score <= best_near.score + margin)
+    else:
+        take_near = best_near is not None and (best_near.score >= near_accept * total or best_far is None
+                                               or best_far.score < far_factor * best_near.score)
+    chosen = best_near if take_near else best_far
     if chosen is None:
         return None
-    _, _, p, phi, m = chosen
-    return Alignment(np.array([p[0], p[1], phi]), float(m), total, len(cands))
+    return Alignment(chosen.pose, float(chosen.matched), total, len(cands),
+                     float(chosen.score) if verify is not None else float("nan"), chosen.info)
 
 
-def _choose_verified(results, verify, predicted, near_tol, margin, total, n_cands) -> Alignment | None:
-    scored = []
-    for r in results:
-        pose = np.array([r[2][0], r[2][1], r[3]])
-        scored.append((verify(pose), -r[1], pose, r[4]))
-    near = [s for s in scored if abs(wrap(s[2][2] - predicted[2])) <= near_tol]
-    far = [s for s in scored if abs(wrap(s[2][2] - predicted[2])) > near_tol]
-    best_near = max(near, key=lambda s: (s[0], s[1])) if near else None
-    best_far = max(far, key=lambda s: (s[0], s[1])) if far else None
-    if best_near is not None and (best_far is None or best_far[0] <= best_near[0] + margin):
-        chosen = best_near
-    else:
-        chosen = best_far
-    if chosen is None:
-        return None
-    return Alignment(chosen[2], float(chosen[3]), total, n_cands, float(chosen[0]))
+@dataclass
+class _Candidate:
+    score: float  # matched length damped by the position jump, or the verifier's score
+    closeness: float  # to the prediction: |dp| / trans_scale + |dphi| / rot_scale
+    pose: np.ndarray
+    matched: float
+    info: np.ndarray
 
 
-def _pick(results: list, prefer_margin: float):
+def _pick(results: list[_Candidate], prefer_margin: float) -> _Candidate | None:
     """The candidate closest to the prediction among those within ``prefer_margin`` of the best."""
     if not results:
         return None
-    best = max(r[0] for r in results)
-    return min((r for r in results if r[0] >= (1.0 - prefer_margin) * best), key=lambda r: r[1])
+    best = max(r.score for r in results)
+    return min((r for r in results if r.score >= (1.0 - prefer_margin) * best), key=lambda r: r.closeness)
