@@ -7,7 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2
+from .models import chi2_quantile
 
 from .models import wrap
 
@@ -121,7 +121,7 @@ def jcbb(d2: np.ndarray, gate: float, nu_fn, S_fn, confidence: float = 0.99, max
     after ``max_nodes`` nodes."""
     m = d2.shape[0]
     options = [list(np.nonzero(d2[o] < gate)[0][np.argsort(d2[o][d2[o] < gate])]) for o in range(m)]
-    thresholds = [0.0] + [chi2.ppf(confidence, 2 * k) for k in range(1, m + 1)]
+    thresholds = [0.0] + [chi2_quantile(confidence, 2 * k) for k in range(1, m + 1)]
     best: list = [[], np.inf]
     nodes = [0]
 

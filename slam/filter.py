@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
-from scipy.stats import chi2
+from .models import chi2_quantile
 
 from . import association as assoc
 from . import models
@@ -52,8 +52,8 @@ class SlamFilter:
         self.scan_no = -1
         self.stamp: float | None = None
         self.odom: tuple[float, float, float] | None = None
-        self.gate = float(chi2.ppf(config.gate_probability, 2))
-        self.new_gate = float(chi2.ppf(config.new_landmark_probability, 2))
+        self.gate = float(chi2_quantile(config.gate_probability, 2))
+        self.new_gate = float(chi2_quantile(config.new_landmark_probability, 2))
         self._previous_points: cKDTree | None = None
         self._heading_before = float(initial_pose[2])
         self._dt = 0.0
@@ -139,7 +139,7 @@ class SlamFilter:
         nu[2] = wrap(nu[2])
         P = self.ekf.P
         var_phi = cfg.prealign_sigma_phi**2
-        if nu[2] ** 2 > chi2.ppf(0.999, 1) * (P[2, 2] + var_phi):
+        if nu[2] ** 2 > chi2_quantile(0.999, 1) * (P[2, 2] + var_phi):
             # the constant-velocity prior cannot explain the turn the lines show: widen it
             P[2, 2] += nu[2] ** 2
             P[4, 4] += 0.25 * (nu[2] / max(self._dt, 1e-3)) ** 2
@@ -149,7 +149,7 @@ class SlamFilter:
         rows = [2]
         # the line update fixes the position once the heading is right; the alignment's position
         # is used too only after a turn the prediction missed (it double-counts the lines)
-        if abs(nu[2]) > cfg.prealign_xy_turn and nu[:2] @ np.linalg.solve(S_xy, nu[:2]) < chi2.ppf(0.999, 2):
+        if abs(nu[2]) > cfg.prealign_xy_turn and nu[:2] @ np.linalg.solve(S_xy, nu[:2]) < chi2_quantile(0.999, 2):
             rows = [0, 1, 2]
         Rm = np.zeros((len(rows), len(rows)))
         Rm[-1, -1] = var_phi

@@ -87,10 +87,12 @@ def _translation(scan_rho, scan_alpha, scan_w, map_R, map_theta, phi, p0, angle_
     p = np.array(p0, float)
     matched = 0.0
     info = np.zeros((2, 2))
+    cos_m, sin_m = np.cos(map_theta), np.sin(map_theta)
+    base = map_R[None, :] - scan_rho[:, None]
     for tol in trans_tols:
         theta_i = scan_alpha + phi
         dang = wrap(map_theta[None, :] - theta_i[:, None])  # (m, L)
-        r = map_R[None, :] - scan_rho[:, None] - (np.cos(map_theta) * p[0] + np.sin(map_theta) * p[1])[None, :]
+        r = base - (cos_m * p[0] + sin_m * p[1])[None, :]
         ok_pair = np.abs(dang) < angle_tol
         if scan_ends is not None and map_ends is not None:
             ok_pair &= _overlaps(scan_ends, map_ends, np.array([p[0], p[1], phi]), extent_margin + tol)
@@ -100,7 +102,7 @@ def _translation(scan_rho, scan_alpha, scan_w, map_R, map_theta, phi, p0, angle_
         if ok.sum() == 0:
             return p, phi, 0.0, np.zeros((2, 2))
         jj, w = j[ok], scan_w[ok]
-        A = np.column_stack((np.cos(map_theta[jj]), np.sin(map_theta[jj])))
+        A = np.column_stack((cos_m[jj], sin_m[jj]))
         b = r[np.nonzero(ok)[0], jj]
         N = A.T @ (A * w[:, None]) + 1e-3 * np.eye(2)  # regularised: a corridor fixes one direction only
         p = p + np.linalg.solve(N, A.T @ (w * b))
@@ -118,7 +120,8 @@ def align(scan_rho: np.ndarray, scan_alpha: np.ndarray, scan_len: np.ndarray,
           map_ends: np.ndarray | None = None, extent_margin: float = 0.5,
           reference_heading: float | None = None, max_turn: float = np.inf,
           near_tol: float = np.radians(10.0), near_accept: float = 0.6, far_factor: float = 1.5,
-          verify: Callable[[np.ndarray], float] | None = None, verify_margin: float = 0.1) -> Alignment | None:
+          verify: Callable[[np.ndarray], float] | None = None, verify_margin: float = 0.1,
+          early_accept: float = 0.8) -> Alignment | None:
     """Pose of the scan in the map frame, without using the predicted heading to find it.
 
     Args:
@@ -144,6 +147,8 @@ def align(scan_rho: np.ndarray, scan_alpha: np.ndarray, scan_len: np.ndarray,
             (e.g. the fraction of scan points that land on the previous scan's points). With it,
             candidates are ranked by that score instead, and one far from the prediction must
             beat the best near one by ``verify_margin``.
+        early_accept: when the predicted heading alone explains this fraction of the line length
+            (and of the verifier's points) with a small position change, it is taken at once.
 
     Returns:
         The best Alignment, or None when there are no lines to align.
@@ -156,16 +161,24 @@ def align(scan_rho: np.ndarray, scan_alpha: np.ndarray, scan_len: np.ndarray,
     R = np.where(flip, -map_R, map_R)
     th = wrap(np.where(flip, map_theta + np.pi, map_theta))
     w_scan = np.minimum(scan_len, 5.0)
-    cands = list(rotation_candidates(scan_alpha, w_scan, th, np.minimum(map_len, 5.0), max_candidates))
-    cands.append(float(predicted[2]))
+    total = float(w_scan.sum())
+    peaks = list(rotation_candidates(scan_alpha, w_scan, th, np.minimum(map_len, 5.0), max_candidates))
+    cands = [float(predicted[2])]  # the prediction first: most scans need nothing else
     if reference_heading is not None:
         cands.append(float(reference_heading))  # no turn at all
+    for c in peaks:  # distinct histogram peaks
+        if all(abs(wrap(c - d)) > 0.5 * angle_tol for d in cands):
+            cands.append(c)
     if reference_heading is not None and np.isfinite(max_turn):
         cands = [c for c in cands if abs(wrap(c - reference_heading)) <= max_turn + angle_tol]
     results = []
-    for phi in cands:
+    for k, phi in enumerate(cands):
         p, phi_r, m, info = _translation(scan_rho, scan_alpha, w_scan, R, th, phi, p0, angle_tol, trans_tols,
                                          scan_ends, map_ends, extent_margin)
+        if k == 0 and m >= early_accept * total and np.hypot(*(p - p0)) < 0.5 * trans_scale and (
+                verify is None or verify(np.array([p[0], p[1], phi_r])) >= early_accept):
+            # the prediction explains the scan: no need to look further (the common case)
+            return Alignment(np.array([p[0], p[1], phi_r]), float(m), total, 1, float("nan"), info)
         if reference_heading is not None and abs(wrap(phi_r - reference_heading)) > max_turn:
             continue
         jump = np.hypot(*(p - p0)) / trans_scale
@@ -173,7 +186,6 @@ def align(scan_rho: np.ndarray, scan_alpha: np.ndarray, scan_len: np.ndarray,
         results.append(_Candidate(m * np.exp(-0.5 * jump**2), closeness, np.array([p[0], p[1], phi_r]), m, info))
     if not results:
         return None
-    total = float(w_scan.sum())
     if verify is not None:
         for r in results:
             r.score = verify(r.pose)
