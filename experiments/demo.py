@@ -114,9 +114,10 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
             f9.text.append(figure(f"figures/{name}.png", caption))
     sections.append(f9)
     if "slam_metrics" in tables:
-        m = tables["slam_metrics"].rename(columns={"ate_rms_m": "ATE RMS (m)", "final_error_m": "final error (m)",
-                                                   "map_lines": "map lines", "time_s": "time (s)",
-                                                   "time_per_scan_ms": "ms/scan"})
+        m = tables["slam_metrics"].rename(columns={
+            "ate_rms_m": "ATE RMS (m)", "ate_max_m": "ATE max (m)", "heading_rms_deg": "heading RMS (deg)",
+            "final_error_m": "final error (m)", "map_lines": "map lines", "time_s": "time (s)",
+            "time_per_scan_ms": "ms/scan"})
         sl = Section("SLAM without odometry (Fig. 10)", [markdown_table(m)])
         if "fig10_slam" in figs:
             sl.text.append(figure("figures/fig10_slam.png", "Fig. 10: SLAM trajectory and line map against the true "

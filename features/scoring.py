@@ -24,7 +24,7 @@ Corners match one-to-one within ``corner_tol`` (0.1 m); a truth corner next to a
 
 Without ground truth (``explained_fraction``): a valid beam is explained when some extracted line
 whose beam span covers it predicts its range within 3 sigma (the range where the beam meets the
-line, ``rho / cos(bearing - alpha)``).
+line, ``rho / cos(bearing - alpha)``); the RMS range residual is taken over the explained beams.
 """
 
 from __future__ import annotations
@@ -243,8 +243,10 @@ def _score_corners(fs: FeatureSet, truth: Any, dont_faces: np.ndarray, cfg: Scor
 
 def explained_fraction(fs: FeatureSet, scan: Scan, sigma: float = 0.005) -> tuple[float, float]:
     """Fraction of valid beams whose range some line predicts within 3 ``sigma`` (m), and the RMS
-    range residual (m, measured minus predicted along the beam) over the valid beams covered by a
-    line's beam span (the best-fitting line where spans overlap). nan where undefined."""
+    range residual (m, measured minus predicted along the beam) of those explained beams (the
+    inlier RMS, as Open3D's ``fitness`` / ``inlier_rmse`` pair). A beam is explained by the lines
+    whose beam span [first, last] covers it; where spans overlap the closest line counts.
+    nan where undefined (no valid beam; no explained beam for the RMS)."""
     valid = scan.valid
     n_valid = int(np.count_nonzero(valid))
     if n_valid == 0:
@@ -265,7 +267,7 @@ def explained_fraction(fs: FeatureSet, scan: Scan, sigma: float = 0.005) -> tupl
     beam, residual = beam[use], np.abs(residual[use])
     best = np.full(len(scan), np.inf)
     np.minimum.at(best, beam, residual)
-    covered = np.isfinite(best)
-    explained = int(np.count_nonzero(best[covered] <= 3.0 * sigma))
-    rms = float(np.sqrt(np.mean(best[covered] ** 2))) if covered.any() else float("nan")
+    inlier = best <= 3.0 * sigma
+    explained = int(np.count_nonzero(inlier))
+    rms = float(np.sqrt(np.mean(best[inlier] ** 2))) if explained else float("nan")
     return explained / n_valid, rms

@@ -16,3 +16,23 @@ class LogFormatError(LmsbenchError, ValueError):
         self.line_no = line_no
         self.reason = reason
         super().__init__(f"{self.path}:{line_no}: {reason}")
+
+
+class LmsDeviceError(LmsbenchError):
+    """A problem talking to an LMS200 (real or virtual): the message says what was asked and what came back."""
+
+
+class LmsTimeoutError(LmsDeviceError, TimeoutError):
+    """The device did not answer a request in time (after the retries)."""
+
+
+class LmsNakError(LmsDeviceError):
+    """The device answered a request with NAK (0x15): it received the telegram with a bad CRC."""
+
+
+class LmsModeRefusedError(LmsDeviceError):
+    """The device refused a mode, baud, variant or configuration change."""
+
+
+class LmsProtocolError(LmsDeviceError, ValueError):
+    """A telegram that does not make sense: wrong reply code, bad length, unknown variant, ..."""

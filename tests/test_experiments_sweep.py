@@ -206,13 +206,16 @@ def test_the_cli_runs_a_sweep_file_on_its_own_local_cluster(tmp_path):
     spec_path = tmp_path / "squares.yaml"
     spec_path.write_text(yaml.safe_dump(make_spec(log, xs=[0, 1, 2], seeds=[5]).to_dict()))
     assert load_sweep(spec_path).cells()[0] == {"log": str(log), "x": 0, "seed": 5}
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), str(REPO / "tests")])}
+    # the cell x = 1 kills its worker process: recorded as an error, the other cells go on
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), str(REPO / "tests")]), "SWEEP_TEST_DIE_AT": "1"}
     run = subprocess.run([sys.executable, "-m", "experiments.cli", "sweep", str(spec_path), "--no-progress",
                           "--out", str(tmp_path / "out")], env=env, cwd=REPO, capture_output=True, text=True,
                          timeout=120)
     assert run.returncode == 0, run.stderr
     table = pd.read_parquet(tmp_path / "out" / "results.parquet")
-    assert list(table["y"]) == [5, 6, 9]
+    assert list(table["x"]) == [0, 1, 2] and list(table["status"]) == ["ok", "error", "ok"]
+    assert table["y"][0] == 5 and table["y"][2] == 9
+    assert table["error"][1].startswith("KilledWorker")
     assert (tmp_path / "out" / "results.csv").exists() and (tmp_path / "out" / "sweep.yaml").exists()
 
 
@@ -238,3 +241,18 @@ def test_the_example_sweep_files_parse_and_name_built_in_kinds():
         assert spec.name == path.stem and spec.kind in BUILTIN_KINDS
         cells = spec.cells()
         assert len({cell_key(spec.kind, c) for c in cells}) == len(cells)
+
+
+def test_the_cli_uses_an_existing_scheduler_and_matches_in_process(tmp_path, dask_client):
+    log = tmp_path / "log.txt"
+    spec_path = tmp_path / "squares.yaml"
+    spec_path.write_text(yaml.safe_dump(make_spec(log, xs=[2, 3, 4]).to_dict()))
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), str(REPO / "tests")])}
+    run = subprocess.run([sys.executable, "-m", "experiments.cli", "sweep", str(spec_path), "--no-progress",
+                          "--scheduler", dask_client.scheduler.address, "--out", str(tmp_path / "out")],
+                         env=env, cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert "6 cells, 6 computed, 0 already done, 2 failed" in run.stdout
+    remote = pd.read_parquet(tmp_path / "out" / "results.parquet")
+    local = run_sweep(make_spec(log, xs=[2, 3, 4]), tmp_path / "inproc", "inprocess", progress=False).table
+    pd.testing.assert_frame_equal(comparable(remote), comparable(local))

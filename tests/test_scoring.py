@@ -158,12 +158,15 @@ def test_explained_fraction_exact_and_perturbed():
     line = Line(3.0, 0.0, (3.0, -5.0), (3.0, 5.0), int(span[0]), int(span[-1]))
     frac, rms = explained_fraction(FeatureSet([line], [], "hand"), scan)
     assert frac == 1.0 and rms == pytest.approx(0.0, abs=1e-12)
+    moved = Line(3.5, 0.0, (3.5, -5.0), (3.5, 5.0), int(span[0]), int(span[-1]))
+    frac, rms = explained_fraction(FeatureSet([moved], [], "hand"), scan)
+    assert frac == 0.0 and np.isnan(rms)
     r = scan.ranges.copy()
     r[span[:10]] += 0.02  # 4 sigma: unexplained
     r[span[10:20]] -= 0.01  # 2 sigma: explained
     frac, rms = explained_fraction(FeatureSet([line], [], "hand"), scan.replace(ranges=r), sigma=0.005)
     assert frac == pytest.approx((span.size - 10) / span.size)
-    assert rms == pytest.approx(np.sqrt((10 * 0.02**2 + 10 * 0.01**2) / span.size))
+    assert rms == pytest.approx(np.sqrt(10 * 0.01**2 / (span.size - 10)))  # RMS of explained beams
 
 
 def test_explained_fraction_counts_uncovered_beams_as_unexplained():

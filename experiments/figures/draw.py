@@ -23,6 +23,9 @@ def fig_signal(signals: pd.DataFrame, column: str, ylabel: str, title: str, stem
     ax.plot(signals["beam"], signals[column], ".-", lw=0.7, ms=2.5, color=method_color("sensor"))
     if reference is not None:
         ax.axhline(reference, color=TRUTH_COLOR, lw=0.8, ls="--", label=f"straight line: {reference:.4f}")
+        if "ad_band" in signals and column == "ad" and signals["ad_band"].notna().any():
+            ax.fill_between(signals["beam"], reference - signals["ad_band"], reference + signals["ad_band"],
+                            color=TRUTH_COLOR, alpha=0.12, lw=0, label="line test band (ad_tau x noise std)")
         ax.legend(loc="best")
     ax.set_xlabel("beam index i")
     ax.set_ylabel(ylabel)

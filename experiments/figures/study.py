@@ -13,9 +13,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
 import pandas as pd
 import yaml
 
+from experiments.sweep.kinds import align, slam_metrics, true_trajectory
 from experiments.evaluate import (ALL_METHODS, evaluate_extractor, sensor_config, simulate_run,
                                   summarise_methods, truths_for)
 
@@ -60,7 +62,7 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
     truths = truths_for(world, records, sensor)
     say(f"ground truth of {len(records)} scans")
 
-    tables["signals"] = signals_table(records[len(records) // 2].scan, k=cfg.signals_k)
+    tables["signals"] = signals_table(records[len(records) // 2].scan, k=cfg.signals_k, sigma_r=sensor.noise_sigma or 0.005)
     per_scan, feature_sets = [], {}
     for method in cfg.methods:
         table, fsets = evaluate_extractor(records, method, None, truths, keep_features=True)
@@ -91,11 +93,17 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
         start = time.perf_counter()
         result = run_slam(records, SlamConfig())
         slam_s = time.perf_counter() - start
-        tables["trajectory"] = trajectory_table(result.trajectory, records)
-        tables["map"] = map_table(_slam_segments(result), world.walls)
-        tables["slam_metrics"] = _slam_metrics(result, records, slam_s)
-        say(f"SLAM: {len(records)} scans in {slam_s:.1f} s, "
-            f"ATE {tables['slam_metrics']['ate_rms_m'].iloc[0]:.3f} m")
+        metrics = slam_metrics(result, records)
+        traj, segs = _slam_in_world(result, records)
+        tables["trajectory"] = trajectory_table(traj, records)
+        tables["map"] = map_table(segs, world.walls)
+        tables["slam_metrics"] = pd.DataFrame([{
+            "scans": len(records), "ate_rms_m": metrics["ate_rms"], "ate_max_m": metrics["ate_max"],
+            "heading_rms_deg": float(np.degrees(metrics["heading_rms"])), "final_error_m": metrics["final_error_m"],
+            "map_lines": int(metrics["n_map_lines"]), "diverged": bool(metrics["diverged"]), "time_s": slam_s,
+            "time_per_scan_ms": 1e3 * slam_s / max(1, len(records))}])
+        say(f"SLAM: {len(records)} scans in {slam_s:.1f} s, ATE {metrics['ate_rms']:.3f} m, "
+            f"{int(metrics['n_map_lines'])} map lines")
     return tables, notes
 
 
@@ -128,22 +136,17 @@ def _intel_panels(path: Path, n: int, method: str) -> dict[str, pd.DataFrame]:
     return {"intel_points": pts, "intel_lines": lns, "intel_corners": crs}
 
 
-def _slam_segments(result):
-    """World-frame map line segments (k, 4) of a SlamResult."""
-    import numpy as np
+def _slam_in_world(result, records) -> tuple[np.ndarray, np.ndarray]:
+    """The SLAM trajectory (n, 4) and map segments (k, 4) moved into the world frame by the same
+    2-D alignment the ATE uses (the SLAM's frame is that of its first pose)."""
+    from slam import metrics
 
-    lines = getattr(result, "map_lines", None)
-    if lines is None:
-        lines = getattr(result, "lines", [])
-    if isinstance(lines, np.ndarray):
-        return lines.reshape(-1, 4)
-    return np.array([[*np.asarray(ln.start)[:2], *np.asarray(ln.end)[:2]] for ln in lines], float).reshape(-1, 4)
-
-
-def _slam_metrics(result, records, seconds: float) -> pd.DataFrame:
-    from experiments.sweep.kinds import slam_metrics
-
-    m = slam_metrics(result, records)
-    return pd.DataFrame([{"scans": len(records), "ate_rms_m": m["ate_rms"], "final_error_m": m["final_error_m"],
-                          "map_lines": len(_slam_segments(result)), "time_s": seconds,
-                          "time_per_scan_ms": 1e3 * seconds / max(1, len(records))}])
+    est = np.asarray(result.trajectory, float)
+    ate = metrics.ate(est, true_trajectory(records))
+    traj = est.copy()
+    traj[:, 1:3] = align(est[:, 1:3], ate.rotation, ate.translation)
+    traj[:, 3] = np.arctan2(np.sin(est[:, 3] + ate.rotation), np.cos(est[:, 3] + ate.rotation))
+    lines = np.asarray(result.map_lines, float).reshape(-1, 7)
+    segs = np.column_stack((align(lines[:, 2:4], ate.rotation, ate.translation),
+                            align(lines[:, 4:6], ate.rotation, ate.translation)))
+    return traj, segs

@@ -19,16 +19,23 @@ import pandas as pd
 from lms200 import Record, Scan
 
 
-def signals_table(scan: Scan, k: int = 10) -> pd.DataFrame:
-    """AD_ik, theta_i and psi_i of every beam (``features.sensor.signals``); angles in degrees."""
-    from features.sensor import signals
+def signals_table(scan: Scan, k: int = 10, sigma_r: float = 0.005) -> pd.DataFrame:
+    """AD_ik, theta_i and psi_i of every beam (``features.sensor.signals``); angles in degrees.
 
-    sig = signals(scan, k=k)
+    ``ad_band`` is the half-width of the extractor's straight-line test around the line value,
+    ``ad_tau * sigma(AD_ik)`` with the extractor's default ``ad_tau`` (nan where not given).
+    """
+    from features.sensor import SensorMethodConfig, signals
+
+    sig = signals(scan, k=k, sigma_r=sigma_r)
+    n = len(scan.ranges)
+    ad_sigma = np.asarray(sig.get("ad_sigma", np.full(n, np.nan)), dtype=float)
     return pd.DataFrame({
-        "beam": np.arange(len(scan.ranges)),
+        "beam": np.arange(n),
         "bearing_deg": np.degrees(scan.angles),
         "range_m": scan.ranges,
         "ad": np.asarray(sig["ad"], dtype=float),
+        "ad_band": SensorMethodConfig().ad_tau * ad_sigma,
         "theta_deg": np.degrees(np.asarray(sig["theta"], dtype=float)),
         "psi_deg": np.degrees(np.asarray(sig["psi"], dtype=float)),
     })

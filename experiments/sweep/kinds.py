@@ -59,16 +59,28 @@ def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
 
 
 def slam_metrics(result, records) -> dict[str, float]:
-    """ATE (RMS, m) after 2-D alignment, final position error (m), landmarks and scans."""
+    """Trajectory error against the true poses after 2-D alignment (``slam.metrics.ate``, m and
+    rad), final position error after that alignment (m), confirmed map lines, scans, divergence."""
     from slam import metrics
 
-    truth = np.array([[r.scan.stamp, *r.truth] for r in records], dtype=float)
+    truth = true_trajectory(records)
     est = np.asarray(result.trajectory, dtype=float)
     ate = metrics.ate(est, truth)
-    final = float(np.hypot(*(est[-1, 1:3] - truth[-1, 1:3])))
-    out = {"ate_rms": float(getattr(ate, "rmse", ate)), "final_error_m": final, "scans": float(len(records))}
-    for name in ("map_lines", "lines"):
-        if hasattr(result, name):
-            out["n_map_lines"] = float(len(getattr(result, name)))
-            break
-    return out
+    aligned = align(est[:, 1:3], ate.rotation, ate.translation)
+    final = float(np.hypot(*(aligned[-1] - truth[-1, 1:3])))
+    diag = getattr(result, "diagnostics", {}) or {}
+    return {"ate_rms": float(ate.rmse), "ate_max": float(ate.max), "heading_rms": float(ate.heading_rmse),
+            "final_error_m": final, "n_map_lines": float(len(result.map_lines)),
+            "diverged": float(bool(diag.get("diverged", False))), "scans": float(len(records))}
+
+
+def true_trajectory(records) -> np.ndarray:
+    """(n, 4) t, x, y, theta of the records' true poses."""
+    return np.array([[r.scan.stamp, *r.truth] for r in records if r.truth is not None], dtype=float).reshape(-1, 4)
+
+
+def align(xy: np.ndarray, rotation: float, translation) -> np.ndarray:
+    """Points (n, 2) rotated by ``rotation`` (rad) about the origin, then shifted by ``translation`` (m)."""
+    c, s = np.cos(rotation), np.sin(rotation)
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    return np.column_stack((c * xy[:, 0] - s * xy[:, 1], s * xy[:, 0] + c * xy[:, 1])) + np.asarray(translation, float)

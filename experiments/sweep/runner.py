@@ -8,6 +8,7 @@ in their parameters); only ``elapsed_s`` and any timing metric a cell reports di
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import logging
 import sys
@@ -128,8 +129,11 @@ def _run_on_dask(client, kind: str, fn, todo: list[tuple[str, dict]], record) ->
             key, params = futures[future]
             if future.status == "finished":
                 result = future.result()
-            else:  # the cell took its worker down, or the cluster failed it: record and go on
-                exc = future.exception()
+            else:  # the cell took its worker down, or the cluster failed or cancelled it: record, go on
+                try:
+                    exc = future.exception()
+                except (Exception, asyncio.CancelledError) as cancelled:  # a cancelled future raises here
+                    exc = cancelled
                 result = {"status": "error", "error": f"{type(exc).__name__}: {exc}", "elapsed_s": float("nan")}
             record(key, params, result)
             future.release()

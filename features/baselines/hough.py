@@ -5,7 +5,8 @@ Each valid point votes once per alpha bin (a vectorised N x A index array and on
 Then, until the highest peak has fewer than ``min_points`` votes: take the peak's line, select the
 points near it and refit them by least squares (two shrinking bands), cut them into runs contiguous
 in the scan, keep the runs long enough as Lines, and withdraw those points' votes from the
-accumulator. A peak that yields no line has its neighbourhood suppressed.
+accumulator. A peak that yields no line has its neighbourhood suppressed; ``max_failures`` such
+peaks in a row end the search.
 
 Resolution (default): 1 deg in alpha over [0, 180) deg and 2 cm in rho over [-R, R] with R the
 scan's largest valid range: 180 x 820 cells at the LMS200's 8.18 m. The peak only seeds the
@@ -36,7 +37,9 @@ class HoughConfig:
     - band_fine: 0.025 m = 5 sigma, the final inlier band after the first refit.
     - min_points, min_length, sigma, breakpoint_lambda_deg: as the other baselines (8 points,
       0.15 m, 5 mm, Borges & Aldon's 10 deg); max_skip: 3, a run may jump over two outliers.
-    - max_lines: 60, an upper bound on peaks taken per scan.
+    - max_lines: 60, an upper bound on peaks taken per scan; max_failures: 5 peaks in a row that
+      yield no line end the search (such peaks gather collinear points scattered across the scan:
+      once the walls are out, what is left is clutter).
     """
 
     alpha_step_deg: float = 1.0
@@ -49,6 +52,7 @@ class HoughConfig:
     breakpoint_lambda_deg: float = 10.0
     max_skip: int = 3
     max_lines: int = 60
+    max_failures: int = 5
     corners: CornerConfig = field(default_factory=CornerConfig)
 
 
@@ -56,18 +60,24 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
     """Extract lines and corners from ``scan`` (sensor frame) with the full Hough transform."""
     pts = valid_points(scan)
     if pts.idx.size < cfg.min_points:
-        return feature_set([], cfg.corners, "hough")
+        return feature_set([], cfg.corners, "hough", scan.angle_increment)
     n_alpha = int(round(180.0 / cfg.alpha_step_deg))
     theta = np.arange(n_alpha) * np.deg2rad(cfg.alpha_step_deg)
     r_ext = float(pts.r.max()) + cfg.rho_step
     n_rho = int(np.ceil(2 * r_ext / cfg.rho_step)) + 1
-    rho_all = np.outer(pts.x, np.cos(theta)) + np.outer(pts.y, np.sin(theta))
-    cells = ((rho_all + r_ext) / cfg.rho_step).astype(np.int64) + np.arange(n_alpha) * n_rho
+    # votes: cell of every (point, alpha) pair, in float32 on the rho-step grid (|rho| / step < 1e4,
+    # so float32 places every vote exactly enough), one bincount for the whole accumulator
+    xs = (pts.x / cfg.rho_step).astype(np.float32)[:, None]
+    ys = (pts.y / cfg.rho_step).astype(np.float32)[:, None]
+    shift = np.float32(r_ext / cfg.rho_step)
+    cells = (xs * np.cos(theta).astype(np.float32) + ys * np.sin(theta).astype(np.float32) + shift).astype(np.int32)
+    cells += (np.arange(n_alpha) * n_rho).astype(np.int32)
     acc = np.bincount(cells.ravel(), minlength=n_alpha * n_rho)
     remaining = np.ones(pts.idx.size, dtype=bool)
     lam = np.deg2rad(cfg.breakpoint_lambda_deg)
     starts, ends, fits = [], [], []
-    for _ in range(cfg.max_lines):
+    failures = 0
+    while len(starts) < cfg.max_lines and failures < cfg.max_failures:
         peak = int(np.argmax(acc))
         if acc[peak] < cfg.min_points:
             break
@@ -83,7 +93,9 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
         if found is None:
             grid = acc.reshape(n_alpha, n_rho)
             grid[max(ia - 1, 0): ia + 2, max(ir - 2, 0): ir + 3] = 0
+            failures += 1
             continue
+        failures = 0
         used, s, e, fit = found
         starts.append(s)
         ends.append(e)
@@ -91,11 +103,11 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
         remaining[used] = False
         acc -= np.bincount(cells[used].ravel(), minlength=acc.size)
     if not starts:
-        return feature_set([], cfg.corners, "hough")
+        return feature_set([], cfg.corners, "hough", scan.angle_increment)
     s, e = np.concatenate(starts), np.concatenate(ends)
     rho, alpha, n, mx, my, along = (np.concatenate(f) for f in zip(*fits))
     lines = build_lines(pts, s, e, rho, alpha, n, mx, my, along, cfg.sigma)
-    return feature_set(lines, cfg.corners, "hough")
+    return feature_set(lines, cfg.corners, "hough", scan.angle_increment)
 
 
 register("hough", HoughConfig, run)

@@ -1,0 +1,229 @@
+"""Every extractor on identical scans: timing interleaved per scan in one process, scores against
+ground truth where the source has it, and a summary per source and method.
+
+Sources: simulated worlds (``sim.simulate_records`` with the truth of ``sim.visible_truth`` at each
+record's true pose) or a real log (``lms200.read_log``; scored by ``explained_fraction`` only).
+Timing wraps only the method's function (``time.perf_counter_ns``); on each scan the methods run
+in an order rotated by one per scan, so no method always runs first (cold caches) or last.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterable, Sequence
+
+import numpy as np
+import pandas as pd
+
+from features.registry import available_methods, get_method, make_config
+from features.scoring import ScoreConfig, explained_fraction, prf, score_scan
+from lms200 import LmsbenchError, Record, read_log
+
+WORLD_NAMES = ("office", "corridor", "angles", "pillars", "random")
+
+
+@dataclass
+class Source:
+    """Scans to compare on. ``truth_of(record)`` gives the visible truth, or is None (real logs)."""
+
+    name: str
+    kind: str  # "sim" or "log"
+    seed: int | None
+    records: Iterable[Record]
+    truth_of: Callable[[Record], Any] | None = None
+    total: int | None = None
+
+
+def sim_source(world: str, seed: int = 0, duration: float = 30.0, rate_hz: float | None = 2.0,
+               sensor: Any = None) -> Source:
+    """Records of the simulated ``world`` (seeded) with their visible truth (sensor frame)."""
+    import sim
+
+    sensor = sensor if sensor is not None else sim.SensorConfig()
+    records = sim.simulate_records(world=world, seed=seed, duration=duration, sensor=sensor, rate_hz=rate_hz)
+    w = sim.make_world(world, seed=seed)
+
+    def truth_of(rec: Record) -> Any:
+        if rec.truth is None:
+            raise LmsbenchError(f"simulated record at t={rec.scan.stamp} has no true pose")
+        return sim.visible_truth(w, rec.truth, sensor)
+
+    return Source(world, "sim", seed, records, truth_of, len(records))
+
+
+def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None) -> Source:
+    """Every ``stride``-th scan of a real log (CARMEN or bag); no ground truth."""
+    if stride < 1:
+        raise ValueError(f"stride: must be >= 1, got {stride}")
+    reader = read_log(path)
+
+    def records() -> Iterable[Record]:
+        for k, rec in enumerate(reader):
+            if k % stride == 0:
+                yield rec
+
+    return Source(Path(path).name, "log", None, records(), None, max_scans)
+
+
+def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: float = 30.0,
+                  rate_hz: float | None = 2.0, stride: int = 1, max_scans: int | None = None) -> list[Source]:
+    """Sources from command-line words: a world name (one source per seed), ``world:seed``, or the
+    path of a log."""
+    out: list[Source] = []
+    for spec in specs:
+        name, _, seed = spec.partition(":")
+        if name in WORLD_NAMES:
+            for s in ([int(seed)] if seed else seeds):
+                out.append(sim_source(name, s, duration, rate_hz))
+        else:
+            if not Path(spec).exists():
+                raise FileNotFoundError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}) nor an existing log")
+            out.append(log_source(spec, stride, max_scans))
+    return out
+
+
+def _errors(values: np.ndarray) -> tuple[float, float]:
+    if values.size == 0:
+        return float("nan"), float("nan")
+    return float(np.mean(values)), float(np.sqrt(np.mean(values**2)))
+
+
+def compare(
+    sources: Sequence[Source | str],
+    methods: Sequence[str] | None = None,
+    *,
+    params: dict[str, dict[str, Any]] | None = None,
+    score_config: ScoreConfig | None = None,
+    sigma: float = 0.005,
+    max_scans: int | None = None,
+    progress: bool = False,
+) -> pd.DataFrame:
+    """Run ``methods`` (default: every available one) on every scan of ``sources``.
+
+    Args:
+        sources: Source objects, or strings as for :func:`parse_sources` (seed 0).
+        methods: extractor names; the order does not matter (it is rotated per scan).
+        params: per-method overrides of config fields, ``{"hough": {"rho_step": 0.01}}``.
+        score_config: line / corner matching tolerances.
+        sigma: range noise (m) for the explained fraction (3 sigma band).
+        max_scans: at most this many scans per source.
+        progress: show a tqdm progress bar.
+
+    Returns:
+        A tidy table, one row per method x scan: method, source, kind, seed, scan, stamp, n_valid,
+        n_lines, n_corners, microseconds, explained, range_rms (m) and, for simulated sources,
+        n_truth, tp, fp, fn, precision, recall, f1, rho_err_mean / rho_err_rms (m),
+        alpha_err_mean / alpha_err_rms (rad), endpoint_err_mean (m), n_truth_corners, corner_tp,
+        corner_fp, corner_fn, corner_err_mean (m).
+    """
+    methods = list(methods) if methods else available_methods()
+    params = params or {}
+    runs = [(m, get_method(m).run, make_config(m, **params.get(m, {}))) for m in methods]
+    srcs = [s for spec in sources for s in ([spec] if isinstance(spec, Source) else parse_sources([spec]))]
+    total = sum(min(s.total or 0, max_scans or s.total or 0) for s in srcs) or None
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, unit="scan", desc="compare")
+    rows: list[dict[str, Any]] = []
+    for src in srcs:
+        for k, rec in enumerate(src.records):
+            if max_scans is not None and k >= max_scans:
+                break
+            scan = rec.scan
+            truth = src.truth_of(rec) if src.truth_of else None
+            n_valid = int(np.count_nonzero(scan.valid))
+            shift = k % len(runs)
+            for name, fn, cfg in runs[shift:] + runs[:shift]:
+                t0 = time.perf_counter_ns()
+                fs = fn(scan, cfg)
+                elapsed = time.perf_counter_ns() - t0
+                explained, range_rms = explained_fraction(fs, scan, sigma)
+                row = dict(method=name, source=src.name, kind=src.kind, seed=src.seed, scan=k,
+                           stamp=scan.stamp, n_valid=n_valid, n_lines=len(fs.lines),
+                           n_corners=len(fs.corners), microseconds=elapsed / 1e3,
+                           explained=explained, range_rms=range_rms)
+                if truth is not None:
+                    row.update(_score_row(score_scan(fs, truth, score_config)))
+                rows.append(row)
+            if bar is not None:
+                bar.update(1)
+    if bar is not None:
+        bar.close()
+    return pd.DataFrame(rows)
+
+
+def _score_row(s) -> dict[str, Any]:
+    rho_mean, rho_rms = _errors(s.rho_errors)
+    alpha_mean, alpha_rms = _errors(s.alpha_errors)
+    return dict(
+        n_truth=s.n_truth, tp=s.tp, fp=s.fp, fn=s.fn, precision=s.precision, recall=s.recall, f1=s.f1,
+        rho_err_mean=rho_mean, rho_err_rms=rho_rms, alpha_err_mean=alpha_mean, alpha_err_rms=alpha_rms,
+        endpoint_err_mean=float(np.mean(s.endpoint_errors)) if s.tp else float("nan"),
+        n_truth_corners=s.corner_tp + s.corner_fn, corner_tp=s.corner_tp, corner_fp=s.corner_fp,
+        corner_fn=s.corner_fn,
+        corner_err_mean=float(np.mean(s.corner_errors)) if s.corner_tp else float("nan"),
+    )
+
+
+def _weighted(values: pd.Series, weights: pd.Series) -> float:
+    ok = values.notna() & (weights > 0)
+    return float((values[ok] * weights[ok]).sum() / weights[ok].sum()) if ok.any() else float("nan")
+
+
+def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
+    """One row per source x method: counts pooled over scans and seeds (micro-averaged precision,
+    recall, F1), error bias and RMS pooled over matched lines (rho in mm, alpha in deg), corner
+    scores, mean explained fraction, time per scan (mean and median, microseconds), scans per
+    second and ``speed_vs_sensor`` = the reference method's time / this method's (above 1 =
+    faster than the reference; nan when the reference did not run). Both rates use the median
+    time: on a shared machine a pre-empted call can take 100 times the usual, which swamps a mean."""
+    out = []
+    for (source, method), g in table.groupby(["source", "method"], sort=False):
+        row: dict[str, Any] = dict(source=source, method=method, kind=g["kind"].iloc[0], scans=len(g),
+                                   seeds=g["seed"].nunique(), lines_per_scan=g["n_lines"].mean())
+        if "tp" in g and g["tp"].notna().any():
+            tp, fp, fn = (int(g[c].sum()) for c in ("tp", "fp", "fn"))
+            p, r, f = prf(tp, fp, fn)
+            ctp, cfp, cfn = (int(g[c].sum()) for c in ("corner_tp", "corner_fp", "corner_fn"))
+            cp, cr, cf = prf(ctp, cfp, cfn)
+            w = g["tp"]
+            row.update(
+                tp=tp, fp=fp, fn=fn, precision=p, recall=r, f1=f,
+                rho_bias_mm=1e3 * _weighted(g["rho_err_mean"], w),
+                rho_rms_mm=1e3 * np.sqrt(_weighted(g["rho_err_rms"] ** 2, w)),
+                alpha_bias_deg=np.rad2deg(_weighted(g["alpha_err_mean"], w)),
+                alpha_rms_deg=np.rad2deg(np.sqrt(_weighted(g["alpha_err_rms"] ** 2, w))),
+                endpoint_err_mm=1e3 * _weighted(g["endpoint_err_mean"], w),
+                corner_precision=cp, corner_recall=cr, corner_f1=cf,
+                corner_err_mm=1e3 * _weighted(g["corner_err_mean"], g["corner_tp"]),
+            )
+        row.update(explained=g["explained"].mean(), range_rms_mm=1e3 * g["range_rms"].mean(),
+                   us_mean=g["microseconds"].mean(), us_median=g["microseconds"].median())
+        row["scans_per_s"] = 1e6 / row["us_median"]
+        out.append(row)
+    summary = pd.DataFrame(out)
+    if summary.empty:
+        return summary
+    ref = summary[summary["method"] == reference].set_index("source")["us_median"]
+    summary["speed_vs_sensor"] = summary["source"].map(ref) / summary["us_median"]
+    return summary
+
+
+def format_summary(summary: pd.DataFrame) -> str:
+    """The summary as a fixed-width text table (the columns that exist)."""
+    cols = ["source", "method", "scans", "f1", "precision", "recall", "rho_bias_mm", "rho_rms_mm",
+            "alpha_bias_deg", "alpha_rms_deg", "corner_precision", "corner_recall", "corner_err_mm",
+            "explained", "range_rms_mm", "us_median", "scans_per_s", "speed_vs_sensor"]
+    cols = [c for c in cols if c in summary]
+    return summary[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}", na_rep="-")
+
+
+def resolved_configs(methods: Sequence[str], params: dict[str, dict[str, Any]] | None = None) -> dict[str, Any]:
+    """Each method's full config as plain data (saved beside the results)."""
+    params = params or {}
+    return {m: dataclasses.asdict(make_config(m, **params.get(m, {}))) for m in methods}

@@ -1,0 +1,175 @@
+"""Put a :class:`~lms200.virtual.VirtualLMS200` on a pseudo-terminal or a TCP port.
+
+Each adapter runs one thread that moves bytes between the device and its port and paces the
+device's output by the device's baud. Both are context managers; ``close()`` stops the thread.
+
+- :class:`PtyAdapter`: ``adapter.path`` (``/dev/pts/N``) opens like a serial port. The host's baud
+  (its termios setting) is compared with the device's: when they differ, both directions are
+  garbled as a real UART would garble them, so baud probing and baud changes are exercised.
+- :class:`TcpServer`: ``adapter.url`` (``socket://127.0.0.1:PORT``), one client at a time; a raw TCP
+  stream carries no baud, so only the pacing follows the device's baud. The device keeps its state
+  (baud, mode) across connections, like a unit that stays powered.
+
+Bytes the host does not read are dropped once the kernel buffer is full (a UART overrun), so a
+device in continuous mode never blocks the adapter.
+"""
+
+from __future__ import annotations
+
+import os
+import select
+import socket
+import termios
+import threading
+import time
+import tty
+from typing import Callable
+
+from .virtual import VirtualLMS200, garble
+
+_TICK_S = 0.002  # longest sleep between pacing steps
+_IDLE_S = 0.05  # sleep while the device has nothing to send
+_SPEEDS = {getattr(termios, f"B{b}"): b for b in (9600, 19200, 38400, 57600, 115200, 230400, 500000) if hasattr(termios, f"B{b}")}
+
+
+class _Adapter:
+    def __init__(self, device: VirtualLMS200, clock: Callable[[], float] = time.monotonic) -> None:
+        self.device = device
+        self.clock = clock
+        self.overrun_bytes = 0
+        self._stop = threading.Event()
+        self._lock = threading.Lock()
+        self._thread = threading.Thread(target=self._run, name=type(self).__name__, daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def _timeout(self) -> float:
+        now = self.clock()
+        with self._lock:
+            wake = self.device.next_wakeup(now)
+        if wake is None:
+            return _IDLE_S
+        return min(_TICK_S, max(0.0, wake - now))
+
+    def _exchange(self, data: bytes | None, host_baud: int | None, write: Callable[[bytes], int] | None) -> None:
+        """Feed host bytes to the device and write its due bytes (dropping what does not fit)."""
+        with self._lock:
+            dev = self.device
+            if data:
+                dev.receive(garble(data, host_baud or dev.baud, dev.baud), self.clock())
+            for piece, baud in dev.transmit(self.clock()):
+                if write is None:
+                    continue
+                out = garble(piece, baud, host_baud or baud)
+                try:
+                    sent = write(out)
+                except (BlockingIOError, InterruptedError):
+                    sent = 0
+                except OSError:  # the host went away mid-write: the bytes are lost
+                    sent = len(out)
+                self.overrun_bytes += len(out) - sent
+
+    def _run(self) -> None:  # pragma: no cover - overridden
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """Stop the thread and release the port."""
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=2.0)
+
+    def __enter__(self) -> "_Adapter":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class PtyAdapter(_Adapter):
+    """The device on a new pseudo-terminal; open ``adapter.path`` with any serial client."""
+
+    def __init__(self, device: VirtualLMS200, clock: Callable[[], float] = time.monotonic) -> None:
+        super().__init__(device, clock)
+        self._master, self._slave = os.openpty()
+        tty.setraw(self._slave)
+        os.set_blocking(self._master, False)
+        self.path = os.ttyname(self._slave)
+        self.start()
+
+    def host_baud(self) -> int | None:
+        """The baud the host has set on its end of the terminal (None if not a known speed)."""
+        try:
+            return _SPEEDS.get(termios.tcgetattr(self._slave)[5])
+        except termios.error:
+            return None
+
+    def _write(self, data: bytes) -> int:
+        return os.write(self._master, data)
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            ready, _, _ = select.select([self._master], [], [], self._timeout())
+            data = None
+            if ready:
+                try:
+                    data = os.read(self._master, 4096)
+                except (BlockingIOError, InterruptedError):
+                    data = None
+                except OSError:  # EIO: no process holds the terminal open
+                    data = None
+            self._exchange(data, self.host_baud(), self._write)
+
+    def close(self) -> None:
+        super().close()
+        for fd in (self._master, self._slave):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+
+class TcpServer(_Adapter):
+    """The device behind a TCP port: ``adapter.url`` = ``socket://HOST:PORT`` for pyserial."""
+
+    def __init__(self, device: VirtualLMS200, host: str = "127.0.0.1", port: int = 0,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        super().__init__(device, clock)
+        self._listener = socket.create_server((host, port))
+        self._listener.setblocking(False)
+        self.host, self.port = self._listener.getsockname()[:2]
+        self.url = f"socket://{self.host}:{self.port}"
+        self.connections = 0
+        self.start()
+
+    def _run(self) -> None:
+        client: socket.socket | None = None
+        while not self._stop.is_set():
+            watch = [client] if client is not None else [self._listener]
+            ready, _, _ = select.select(watch, [], [], self._timeout())
+            data = None
+            if ready and client is None:
+                try:
+                    client, _ = self._listener.accept()
+                    client.setblocking(False)
+                    client.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+                    self.connections += 1
+                except (BlockingIOError, InterruptedError):
+                    client = None
+            elif ready and client is not None:
+                try:
+                    data = client.recv(4096)
+                except (BlockingIOError, InterruptedError):
+                    data = None
+                except OSError:
+                    data = b""
+                if data == b"":  # the host hung up: wait for the next one
+                    client.close()
+                    client, data = None, None
+            self._exchange(data, None, client.send if client is not None else None)
+        if client is not None:
+            client.close()
+
+    def close(self) -> None:
+        super().close()
+        self._listener.close()

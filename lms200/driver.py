@@ -1,0 +1,364 @@
+"""Serial driver for a SICK LMS200 (a real unit or :mod:`lms200.virtual`) over pyserial.
+
+::
+
+    with LMS200("/dev/ttyUSB0", baud=38400) as dev:   # or socket://host:port, rfc2217://, loop://
+        for scan in dev.scans():                      # lms200.Scan, stamped with host time (s)
+            ...
+
+Opening talks at the power-on 9600 baud (probing 19200, 38400 and 500000 when nothing answers),
+stops continuous output, sets the variant, the units (through the configuration telegrams, only
+when they differ) and the baud; ``scans()`` starts continuous output (0x20 0x24). ``close()``
+returns the device to on-request mode and 9600 baud. Every request is retried (the device can
+miss one during a mirror turn); failures raise :class:`LmsTimeoutError`, :class:`LmsNakError`,
+:class:`LmsModeRefusedError` or :class:`LmsProtocolError`, naming what was asked and what came back.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Callable, Iterator
+
+import serial
+
+from .codes import Units
+from .errors import LmsDeviceError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
+from .framing import Frame, FrameParser
+from .protocol import (
+    ACK,
+    BAUD_MODES,
+    CMD_MEASURE,
+    CMD_SET_CONFIG,
+    MAX_LEN,
+    MODE_CONTINUOUS,
+    MODE_INSTALLATION,
+    MODE_ON_REQUEST,
+    NAK,
+    OVERHEAD_BYTES,
+    PASSWORD,
+    POWER_ON_BAUD,
+    REPLY_BAD_COMMAND,
+    REPLY_FLAG,
+    REPLY_MEASURE,
+    VARIANTS,
+    baud_request,
+    build_frame,
+    decode_scan,
+    frame_seconds,
+    get_config_request,
+    mode_request,
+    reply_code,
+    set_config_request,
+    type_request,
+    units_of_config,
+    variant_request,
+    with_units,
+)
+from .scan import Scan
+
+PROBE_BAUDS = (9600, 19200, 38400, 500000)
+_READ_POLL_S = 0.01  # longest blocking read (s)
+_SHORT_REPLY_BYTES = 64  # every reply but 0xB0 fits (the 0xF7 configuration reply is 41 bytes)
+_READ_CHUNK = 4096  # bytes asked for when the port cannot tell how many are waiting
+
+
+@dataclass
+class DriverStats:
+    """Counters of one connection: scans yielded, frames dropped by the parser, undecodable scans."""
+
+    scans: int
+    dropped_frames: int
+    skipped_bytes: int
+    decode_errors: int
+    retries: int
+
+
+class LMS200:
+    """A connection to one LMS200.
+
+    Args:
+        port_or_url: serial device (``/dev/ttyUSB0``) or pyserial URL (``socket://``, ``rfc2217://``,
+            ``loop://``).
+        baud: line speed to switch to (9600, 19200, 38400 or 500000).
+        fov_deg, resolution_deg: variant (180 or 100 deg; 1, 0.5 or 0.25 deg, 0.25 only with 100).
+        units: 'mm' (8.18 m, 1 mm) or 'cm' (81.8 m, 1 cm).
+        address: device address (0 for a single unit).
+        timeout: seconds to wait for the ACK and reply of a request, on top of the line time of
+            the longest telegram (the listing promises 60 ms; USB adapters and TCP need more).
+        mode_timeout: the same for mode changes and configuration writes (up to 3 s).
+        retries: attempts per request.
+        probe: when 9600 baud gets no answer, try 19200, 38400 and 500000.
+        password: installation-mode password (needed to change the units).
+
+    Raises:
+        LmsDeviceError: the port cannot be opened, or a subclass when the device does not cooperate.
+    """
+
+    def __init__(
+        self,
+        port_or_url: str,
+        baud: int = 38400,
+        *,
+        fov_deg: int = 180,
+        resolution_deg: float = 0.5,
+        units: Units = "mm",
+        address: int = 0,
+        timeout: float = 0.5,
+        mode_timeout: float = 3.5,
+        retries: int = 3,
+        probe: bool = True,
+        password: bytes = PASSWORD,
+    ) -> None:
+        if baud not in BAUD_MODES:
+            raise ValueError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {baud}")
+        self.variant = (int(fov_deg), int(round(resolution_deg * 100)))
+        if self.variant not in VARIANTS:
+            raise ValueError(f"variant: ({fov_deg} deg, {resolution_deg} deg) is not an LMS200 variant")
+        if units not in ("mm", "cm"):
+            raise ValueError(f"units: must be 'mm' or 'cm', got {units!r}")
+        if retries < 1:
+            raise ValueError(f"retries: must be >= 1, got {retries}")
+        self.port = port_or_url
+        self.target_baud = baud
+        self.units: Units = units
+        self.address = address
+        self.timeout = timeout
+        self.mode_timeout = mode_timeout
+        self.retries = retries
+        self.password = password
+        self.type_string = ""
+        self.baud = POWER_ON_BAUD
+        self.streaming = False
+        self.parser = FrameParser(REPLY_FLAG | address)
+        self._scans = 0
+        self._decode_errors = 0
+        self._retries = 0
+        self._last_rx = time.monotonic()
+        self._backlog: list = []  # events read past a reply, handed out by the next _pump
+        try:
+            self._ser = serial.serial_for_url(port_or_url, baudrate=POWER_ON_BAUD, timeout=_READ_POLL_S,
+                                              write_timeout=2.0)
+        except (serial.SerialException, ValueError, OSError) as exc:
+            raise LmsDeviceError(f"cannot open {port_or_url}: {exc}") from None
+        try:
+            self._connect(probe)
+            self._set_mode(MODE_ON_REQUEST, "stop continuous output (0x20 0x25)")
+            self._set_variant()
+            self._set_units()
+            self._switch_baud(baud)
+        except BaseException:
+            self._ser.close()
+            raise
+
+    # -- context manager -----------------------------------------------------------------------
+    def __enter__(self) -> "LMS200":
+        return self
+
+    def __exit__(self, exc_type: object, exc: object, tb: object) -> None:
+        try:
+            self.close()
+        except LmsDeviceError:
+            if exc_type is None:
+                raise
+
+    @property
+    def stats(self) -> DriverStats:
+        p = self.parser.stats
+        return DriverStats(self._scans, p.dropped_frames, p.skipped_bytes, self._decode_errors, self._retries)
+
+    # -- low level -----------------------------------------------------------------------------
+    def _idle_gap(self) -> float:
+        return max(0.1, frame_seconds(20, self.baud))
+
+    def _pump(self) -> list:
+        """Events left over from the last read, else read what has arrived (blocking at most
+        10 ms) and parse it into events."""
+        if self._backlog:
+            events, self._backlog = self._backlog, []
+            return events
+        waiting = self._ser.in_waiting  # exact on serial ports; only 0 / 1 on socket:// and loop://
+        data = self._ser.read(waiting if waiting > 1 else _READ_CHUNK)
+        now = time.monotonic()
+        if data:
+            self._last_rx = now
+            return self.parser.feed(data)
+        if self.parser.pending and now - self._last_rx > self._idle_gap():
+            return self.parser.idle()
+        return []
+
+    def _request(self, payload: bytes, what: str, timeout: float | None = None, retries: int | None = None,
+                 budget: float | None = None) -> Frame:
+        """Send a request and return its reply frame, retrying on silence and NAK.
+
+        Each attempt waits ``timeout`` plus the line time of the reply (and of a scan telegram
+        that may be in flight in continuous mode), or ``budget`` seconds when given.
+        """
+        expected = reply_code(payload[0])
+        telegram = build_frame(payload, self.address)
+        if budget is None:
+            reply_bytes = MAX_LEN + OVERHEAD_BYTES if payload[0] == CMD_MEASURE else _SHORT_REPLY_BYTES
+            in_flight = MAX_LEN + OVERHEAD_BYTES if self.streaming else 0
+            budget = (self.timeout if timeout is None else timeout) + frame_seconds(reply_bytes + in_flight + 1, self.baud)
+        attempts = self.retries if retries is None else retries
+        seen: list[str] = []
+        for attempt in range(attempts):
+            if attempt:
+                self._retries += 1
+            self._ser.write(telegram)
+            self._ser.flush()
+            deadline = time.monotonic() + budget
+            acked = naked = False
+            others = 0
+            while time.monotonic() < deadline and not naked:
+                events = self._pump()
+                for i, ev in enumerate(events):
+                    if ev == ACK:
+                        acked = True
+                    elif ev == NAK and not acked:
+                        naked = True
+                    elif isinstance(ev, Frame):
+                        if ev.code == expected:
+                            self._backlog = events[i + 1 :] + self._backlog
+                            return ev
+                        if ev.code == REPLY_BAD_COMMAND:
+                            raise LmsProtocolError(f"{what}: the device answered 0x92 (incorrect command) to {telegram.hex(' ')}")
+                        others += 1
+            seen.append("NAK" if naked else ("ACK, then no reply" if acked else "nothing") +
+                        (f" ({others} other frames)" if others else ""))
+        summary = "; ".join(f"attempt {i + 1}: {s}" for i, s in enumerate(seen))
+        if seen and seen[-1] == "NAK":
+            raise LmsNakError(f"{what}: sent {telegram.hex(' ')} on {self.port} at {self.baud} baud; {summary}")
+        raise LmsTimeoutError(
+            f"{what}: no 0x{expected:02X} reply within {budget:.2f} s on {self.port} at {self.baud} baud; {summary}"
+        )
+
+    def _set_mode(self, sub_command: int, what: str) -> None:
+        reply = self._request(mode_request(sub_command, self.password), what, timeout=self.mode_timeout)
+        if len(reply.payload) < 2 or reply.payload[1] != 0:
+            raise LmsModeRefusedError(f"{what}: the device refused (0xA0 reply {reply.payload.hex(' ')})")
+        if sub_command in (MODE_CONTINUOUS, MODE_ON_REQUEST):
+            self.streaming = sub_command == MODE_CONTINUOUS
+
+    # -- setup ---------------------------------------------------------------------------------
+    def _connect(self, probe: bool) -> None:
+        bauds = PROBE_BAUDS if probe else (POWER_ON_BAUD,)
+        for baud in bauds:
+            self._use_baud(baud)
+            what = f"request the type (0x3A) at {baud} baud"
+            frames_before = self.parser.stats.frames
+            try:  # a short wait first: at a wrong baud nothing sensible comes back
+                reply = self._request(type_request(), what, retries=2, budget=self.timeout + frame_seconds(64, baud))
+            except (LmsTimeoutError, LmsNakError):
+                if self.parser.stats.frames == frames_before:
+                    continue
+                # Good frames at this baud (a device in continuous mode): the baud is right.
+                self.streaming = True
+                reply = self._request(type_request(), what)
+            self.type_string = reply.payload[1:-1].decode("ascii", errors="replace")
+            return
+        raise LmsTimeoutError(f"no LMS200 answered the type request (0x3A) on {self.port} at {list(bauds)} baud")
+
+    def _use_baud(self, baud: int) -> None:
+        self._ser.baudrate = baud
+        self.baud = baud
+        self._ser.reset_input_buffer()
+        self.parser.reset()
+        self._backlog = []
+
+    def _set_variant(self) -> None:
+        fov, res = self.variant
+        what = f"set the variant {fov} deg at {res / 100} deg (0x3B)"
+        reply = self._request(variant_request(fov, res), what)
+        if len(reply.payload) < 2 or reply.payload[1] != 1:
+            raise LmsModeRefusedError(f"{what}: the device refused (0xBB reply {reply.payload.hex(' ')})")
+
+    def _set_units(self) -> None:
+        config = self._request(get_config_request(), "read the configuration (0x74)").payload[1:-1]
+        if units_of_config(config) == self.units:
+            return  # a configuration write goes to EEPROM: skip it when nothing changes
+        self._set_mode(MODE_INSTALLATION, "enter installation mode (0x20 0x00)")
+        what = f"set the units to {self.units} (0x77)"
+        reply = self._request(set_config_request(with_units(config, self.units)), what, timeout=self.mode_timeout)
+        if reply.code != reply_code(CMD_SET_CONFIG) or len(reply.payload) < 2 or reply.payload[1] != 1:
+            raise LmsModeRefusedError(f"{what}: the device refused (0xF7 reply {reply.payload[:2].hex(' ')})")
+        self._set_mode(MODE_ON_REQUEST, "leave installation mode (0x20 0x25)")
+
+    def _switch_baud(self, baud: int) -> None:
+        if baud == self.baud:
+            return
+        what = f"switch from {self.baud} to {baud} baud (0x20 0x{BAUD_MODES[baud]:02X})"
+        old = self.baud
+        try:
+            reply = self._request(baud_request(baud), what, timeout=self.mode_timeout)
+        except LmsTimeoutError:
+            # The device may have switched but its 0xA0 got lost: ask again at the new baud.
+            self._use_baud(baud)
+            try:
+                self._request(type_request(), f"{what}: check at {baud} baud", retries=1)
+                return
+            except LmsTimeoutError:
+                self._use_baud(old)
+                raise
+        if len(reply.payload) < 2 or reply.payload[1] != 0:
+            raise LmsModeRefusedError(f"{what}: the device refused (0xA0 reply {reply.payload.hex(' ')})")
+        self._use_baud(baud)
+
+    # -- data ----------------------------------------------------------------------------------
+    def scans(self, stall_timeout: float | None = None, stop: Callable[[], bool] | None = None) -> Iterator[Scan]:
+        """Start continuous output and yield every scan the device sends, as it sends them.
+
+        ``scan.stamp`` is the host's clock (``time.time()``, s) when the telegram began to arrive.
+        Frames with a bad CRC are dropped and counted in :attr:`stats`.
+
+        ``stop``: checked between reads (at least every 10 ms); the generator ends when it
+        returns True (e.g. a flag set by a Ctrl-C handler). The device keeps streaming until
+        :meth:`close`.
+
+        Raises:
+            LmsTimeoutError: when no scan arrives for ``stall_timeout`` seconds (default: the
+                request timeout plus the line time of two telegrams).
+        """
+        if not self.streaming:
+            self._set_mode(MODE_CONTINUOUS, "start continuous output (0x20 0x24)")
+        limit = stall_timeout if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
+        last = time.monotonic()
+        while stop is None or not stop():
+            events = self._pump()
+            now = time.monotonic()
+            for ev in events:
+                if isinstance(ev, Frame) and ev.code == REPLY_MEASURE:
+                    stamp = time.time() - frame_seconds(len(ev), self.baud)
+                    try:
+                        scan = decode_scan(ev.payload, stamp)
+                    except LmsProtocolError:
+                        self._decode_errors += 1
+                        continue
+                    self._scans += 1
+                    last = now
+                    yield scan
+            if now - last > limit:
+                raise LmsTimeoutError(
+                    f"no scan from {self.port} for {now - last:.2f} s in continuous mode at {self.baud} baud "
+                    f"({self.parser.stats.dropped_frames} frames dropped so far)"
+                )
+
+    def close(self) -> None:
+        """Return the device to on-request mode and 9600 baud, then close the port.
+
+        The port is closed even when the device does not answer; the error is raised afterwards.
+        """
+        ser = getattr(self, "_ser", None)
+        if ser is None or not ser.is_open:
+            return
+        try:
+            self._set_mode(MODE_ON_REQUEST, "stop continuous output (0x20 0x25)")
+            self._switch_baud(POWER_ON_BAUD)
+        finally:
+            ser.close()
+
+    def __repr__(self) -> str:
+        return f"LMS200({self.port!r}, baud={self.baud}, type={self.type_string!r})"
+
+
+__all__ = ["LMS200", "DriverStats", "PROBE_BAUDS"]

@@ -1,0 +1,176 @@
+"""Streaming frame parser for LMS200 replies: bytes in any chunking in, whole frames out.
+
+It resynchronises on garbage the way SICK's listing asks: look for ``STX ADDR`` (``02 80`` for
+device 0), read LEN, check LEN <= 812 and the CRC, and drop what fails by skipping that one STX
+byte and searching on, so a frame hidden behind a false start is still found. ACK / NAK bytes
+just before a frame (or ending what has arrived) are reported as handshake events in stream
+order; stray ones amid garbage are skipped with it.
+
+A false start whose LEN reaches beyond the bytes received so far waits for more bytes; call
+:meth:`FrameParser.idle` when the line has gone quiet (a real device sends a frame without gaps),
+which drops such stalled false starts and returns the frames behind them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Union
+
+from .protocol import ACK, MAX_LEN, NAK, OVERHEAD_BYTES, REPLY_FLAG, STX, crc16
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One telegram with a good CRC: ``payload`` = command / reply code, data and status bytes."""
+
+    address: int
+    payload: bytes
+
+    @property
+    def code(self) -> int:
+        """The command or reply code (first payload byte)."""
+        return self.payload[0]
+
+    def __len__(self) -> int:
+        return len(self.payload) + OVERHEAD_BYTES
+
+
+Event = Union[Frame, int]  # a Frame, or a handshake byte ACK (0x06) / NAK (0x15) outside frames
+
+
+@dataclass
+class ParserStats:
+    """What the parser has seen so far.
+
+    Attributes:
+        frames: frames returned (good CRC).
+        bad_crc: candidate frames dropped for a CRC mismatch.
+        bad_length: candidate frames dropped for LEN 0 or LEN > 812.
+        stalled: candidate frames dropped by :meth:`FrameParser.idle` (cut off by a quiet line).
+        skipped_bytes: bytes outside any good frame that were not ACK / NAK (garbage).
+        acks, naks: handshake bytes seen between frames (not amid garbage).
+    """
+
+    frames: int = 0
+    bad_crc: int = 0
+    bad_length: int = 0
+    stalled: int = 0
+    skipped_bytes: int = 0
+    acks: int = 0
+    naks: int = 0
+
+    @property
+    def dropped_frames(self) -> int:
+        """Frame candidates thrown away: bad CRC + impossible length + stalled."""
+        return self.bad_crc + self.bad_length + self.stalled
+
+
+class FrameParser:
+    """Incremental parser of device-to-host frames.
+
+    Args:
+        address: the reply address byte to synchronise on (device address + 0x80).
+        max_len: largest LEN accepted (812 for the LMS2xx family).
+    """
+
+    def __init__(self, address: int = REPLY_FLAG, max_len: int = MAX_LEN) -> None:
+        self._sync = bytes([STX, address])
+        self.max_len = max_len
+        self._buf = bytearray()
+        self.stats = ParserStats()
+
+    @property
+    def pending(self) -> int:
+        """Bytes held back while waiting for the rest of a frame."""
+        return len(self._buf)
+
+    def reset(self) -> None:
+        """Forget any buffered bytes (e.g. after a baud change); keeps the counters."""
+        self.stats.skipped_bytes += len(self._buf)
+        self._buf.clear()
+
+    def feed(self, data: bytes) -> list[Event]:
+        """Add received bytes; returns the complete frames and handshake bytes, in stream order."""
+        if data:
+            self._buf += data
+        return self._scan(final=False)
+
+    def idle(self) -> list[Event]:
+        """The line has gone quiet: drop stalled false starts and return the frames behind them.
+
+        Bytes that may still begin a frame (a lone STX, or a complete header whose frame would not
+        yet be complete only because its LEN is false) are resolved; a trailing lone STX is kept.
+        """
+        return self._scan(final=True)
+
+    def frames(self, data: bytes) -> list[Frame]:
+        """Like :meth:`feed`, keeping only the frames."""
+        return [e for e in self.feed(data) if isinstance(e, Frame)]
+
+    # -----------------------------------------------------------------------------------------
+    def _garbage(self, events: list[Event], garbage: bytes) -> None:
+        """Account for bytes outside frames. ACK / NAK bytes that end the run (just before a frame
+        or at the end of what has arrived) are handshakes and become events in order; any other
+        byte, an ACK / NAK value amid garbage included, is skipped garbage."""
+        if not garbage:
+            return
+        cut = len(garbage)
+        while cut and garbage[cut - 1] in (ACK, NAK):
+            cut -= 1
+        self.stats.skipped_bytes += cut
+        for b in garbage[cut:]:
+            if b == ACK:
+                self.stats.acks += 1
+            else:
+                self.stats.naks += 1
+            events.append(b)
+
+    def _scan(self, final: bool) -> list[Event]:
+        buf = self._buf
+        events: list[Event] = []
+        pos = 0
+        size = len(buf)
+        sync = self._sync
+        stats = self.stats
+        while True:
+            start = buf.find(sync, pos)
+            if start < 0:
+                # Keep a trailing STX: it may be the first byte of the next frame.
+                keep = size - 1 if size > pos and buf[size - 1] == STX else size
+                self._garbage(events, bytes(buf[pos:keep]))
+                pos = keep
+                break
+            self._garbage(events, bytes(buf[pos:start]))
+            pos = start
+            if size - start < 4:
+                if final:  # a header cut short by a quiet line
+                    stats.stalled += 1
+                    stats.skipped_bytes += 1
+                    pos = start + 1
+                    continue
+                break
+            length = buf[start + 2] | (buf[start + 3] << 8)
+            if length == 0 or length > self.max_len:
+                stats.bad_length += 1
+                stats.skipped_bytes += 1
+                pos = start + 1
+                continue
+            end = start + length + OVERHEAD_BYTES
+            if end > size:
+                if final:
+                    stats.stalled += 1
+                    stats.skipped_bytes += 1
+                    pos = start + 1
+                    continue
+                break
+            crc = buf[end - 2] | (buf[end - 1] << 8)
+            if crc16(bytes(buf[start : end - 2])) != crc:
+                stats.bad_crc += 1
+                stats.skipped_bytes += 1
+                pos = start + 1
+                continue
+            events.append(Frame(buf[start + 1], bytes(buf[start + 4 : end - 2])))
+            stats.frames += 1
+            pos = end
+        del buf[:pos]
+        return events

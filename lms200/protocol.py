@@ -1,0 +1,314 @@
+"""SICK LMS200 telegram codec: CRC, frames, the commands the project uses, and the 0xB0 decoder.
+
+Pure functions (bytes in, bytes or Scans out); no I/O, no clocks. The streaming parser lives in
+:mod:`lms200.framing`, the serial driver in :mod:`lms200.driver`.
+
+Frame layout (see ``docs/lms200-protocol.md``)::
+
+    STX 0x02 | ADDR | LEN (u16 LE) | CMD | DATA ... | [STATUS, replies] | CRC16 (u16 LE)
+
+LEN counts every byte after the length field except the CRC, so a frame is LEN + 6 bytes long.
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+
+import numpy as np
+
+from .codes import LMS200_MAX_RANGE, Units, codes_to_ranges, ranges_to_codes
+from .errors import LmsProtocolError
+from .scan import Scan
+
+STX = 0x02
+ACK = 0x06
+NAK = 0x15
+HOST_ADDRESS = 0x00
+REPLY_FLAG = 0x80  # device-to-host address = device address + 0x80; reply code = command + 0x80
+MAX_LEN = 812  # largest LEN field of any LMS2xx telegram
+HEADER_BYTES = 4  # STX, ADDR, LEN
+OVERHEAD_BYTES = 6  # header + CRC
+STATUS_OK = 0x10  # STATUS byte of a healthy LMS200
+CRC_POLY = 0x8005
+
+# Commands (host -> device) and their replies (device -> host).
+CMD_RESET = 0x10
+CMD_MODE = 0x20
+CMD_MEASURE = 0x30
+CMD_STATUS = 0x31
+CMD_TYPE = 0x3A
+CMD_VARIANT = 0x3B
+CMD_GET_CONFIG = 0x74  # not on the protocol page: from SICK's LMS2xx telegram listing
+CMD_SET_CONFIG = 0x77  # idem
+REPLY_RESET = 0x91
+REPLY_POWER_ON = 0x90
+REPLY_BAD_COMMAND = 0x92  # "incorrect command in a correct frame"
+REPLY_MEASURE = CMD_MEASURE | REPLY_FLAG  # 0xB0
+
+
+def reply_code(command: int) -> int:
+    """Reply code of a command: command + 0x80 (0x20 -> 0xA0, 0x30 -> 0xB0 ...)."""
+    return (command | REPLY_FLAG) & 0xFF
+
+
+# Sub-commands of 0x20 (operating mode).
+MODE_INSTALLATION = 0x00
+MODE_CONTINUOUS = 0x24  # all measured values, continuously
+MODE_ON_REQUEST = 0x25  # measured values only on request (power-on default)
+PASSWORD = b"SICK_LMS"  # installation-mode password of a factory-set LMS200
+BAUD_MODES = {38400: 0x40, 19200: 0x41, 9600: 0x42, 500000: 0x48}
+MODE_BAUDS = {v: k for k, v in BAUD_MODES.items()}
+POWER_ON_BAUD = 9600
+
+# Variants: (field of view deg, resolution in 1/100 deg) -> number of values.
+VARIANTS = {(180, 100): 181, (180, 50): 361, (100, 100): 101, (100, 50): 201, (100, 25): 401}
+VARIANT_OF_COUNT = {n: v for v, n in VARIANTS.items()}
+
+# Configuration block of 0x74 / 0x77 (LMS2xx listing; not on the protocol page). The driver only
+# reads and rewrites the byte below and treats the rest of the block as opaque.
+CONFIG_BYTES = 32
+CONFIG_UNITS_OFFSET = 5  # after WORD blanking, BYTE sensitivity, BYTE availability, BYTE mode
+UNITS_CODES = {"cm": 0x00, "mm": 0x01}
+CODE_UNITS = {v: k for k, v in UNITS_CODES.items()}
+
+
+# ---------------------------------------------------------------------------------------------
+# CRC
+# The register update is crc = (crc << 1 [^ 0x8005 if the top bit fell out]) ^ (prev << 8 | byte).
+# It is linear over GF(2): byte b at distance k from the end contributes b * x^k (+ b * x^(k+7)
+# for k >= 1, its copy in the next word's high byte) modulo P = x^16 + 0x8005. The table below
+# holds that contribution for every (k, b), so a CRC is one gather and one XOR reduction.
+def _crc_bitwise(data: bytes) -> int:
+    """The CRC one step at a time, exactly as SICK's listing states it (reference, slow)."""
+    crc = 0
+    prev = 0
+    for byte in data:
+        if crc & 0x8000:
+            crc = ((crc << 1) & 0xFFFF) ^ CRC_POLY
+        else:
+            crc = (crc << 1) & 0xFFFF
+        crc ^= (prev << 8) | byte
+        prev = byte
+    return crc
+
+
+def _build_crc_table(rows: int) -> np.ndarray:
+    powers = np.zeros(rows + 16, dtype=np.uint16)  # x^e mod P
+    value = 1
+    for e in range(powers.size):
+        powers[e] = value
+        value = ((value << 1) & 0xFFFF) ^ (CRC_POLY if value & 0x8000 else 0)
+    b = np.arange(256, dtype=np.uint16)
+    table = np.zeros((rows, 256), dtype=np.uint16)
+    for k in range(rows):
+        for j in range(8):
+            term = powers[k + j] ^ (powers[k + j + 7] if k >= 1 else np.uint16(0))
+            table[k] ^= np.where((b >> j) & 1, term, np.uint16(0)).astype(np.uint16)
+    return table
+
+
+_CRC_ROWS = MAX_LEN + HEADER_BYTES + 8
+_CRC_TABLE = _build_crc_table(_CRC_ROWS)
+_CRC_K = np.arange(_CRC_ROWS - 1, -1, -1)  # distance from the end, for the last n bytes: _CRC_K[-n:]
+
+
+def crc16(data: bytes) -> int:
+    """SICK's CRC-16 over ``data`` (for a frame: STX through STATUS); an int in 0..65535."""
+    n = len(data)
+    if n == 0:
+        return 0
+    if n > _CRC_ROWS or n < 24:
+        return _crc_bitwise(data)
+    arr = np.frombuffer(bytes(data), dtype=np.uint8)
+    return int(np.bitwise_xor.reduce(_CRC_TABLE[_CRC_K[-n:], arr]))
+
+
+def build_frame(payload: bytes, address: int = HOST_ADDRESS) -> bytes:
+    """A whole telegram: STX, address, LEN, payload (command, data[, status]), CRC (low byte first).
+
+    Raises:
+        ValueError: for an empty payload, one longer than 812 bytes, or an address beyond a byte.
+    """
+    payload = bytes(payload)
+    if not payload:
+        raise ValueError("payload: must hold at least the command byte")
+    if len(payload) > MAX_LEN:
+        raise ValueError(f"payload: at most {MAX_LEN} bytes, got {len(payload)}")
+    if not 0 <= address <= 0xFF:
+        raise ValueError(f"address: must be 0..255, got {address}")
+    head = struct.pack("<BBH", STX, address, len(payload)) + payload
+    return head + struct.pack("<H", crc16(head))
+
+
+# ---------------------------------------------------------------------------------------------
+# Requests (payloads: pass them to build_frame)
+def reset_request() -> bytes:
+    """0x10: reset the device (it answers 0x91, later the 0x90 power-on string)."""
+    return bytes([CMD_RESET])
+
+
+def mode_request(sub_command: int, password: bytes = PASSWORD) -> bytes:
+    """0x20: switch the operating mode; installation mode (0x00) carries the 8-byte password."""
+    if not 0 <= sub_command <= 0xFF:
+        raise ValueError(f"sub_command: must be a byte, got {sub_command}")
+    if sub_command == MODE_INSTALLATION:
+        if len(password) != 8:
+            raise ValueError(f"password: must be 8 bytes, got {len(password)}")
+        return bytes([CMD_MODE, sub_command]) + bytes(password)
+    return bytes([CMD_MODE, sub_command])
+
+
+def baud_request(baud: int) -> bytes:
+    """0x20 with the sub-command that switches to ``baud`` (9600, 19200, 38400, 500000)."""
+    if baud not in BAUD_MODES:
+        raise ValueError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {baud}")
+    return mode_request(BAUD_MODES[baud])
+
+
+def measure_request() -> bytes:
+    """0x30 01: request one full scan."""
+    return bytes([CMD_MEASURE, 0x01])
+
+
+def status_request() -> bytes:
+    """0x31: request the status block."""
+    return bytes([CMD_STATUS])
+
+
+def type_request() -> bytes:
+    """0x3A: request the type string (``LMS200;301063;V02.10 ``)."""
+    return bytes([CMD_TYPE])
+
+
+def variant_request(fov_deg: int, resolution_cdeg: int) -> bytes:
+    """0x3B: field of view (100 or 180 deg) and resolution (100, 50, 25 hundredths of a deg)."""
+    if (fov_deg, resolution_cdeg) not in VARIANTS:
+        raise ValueError(
+            f"variant: ({fov_deg} deg, {resolution_cdeg / 100} deg) is not an LMS200 variant; "
+            f"choose one of {[(a, r / 100) for a, r in VARIANTS]}"
+        )
+    return struct.pack("<BHH", CMD_VARIANT, fov_deg, resolution_cdeg)
+
+
+def get_config_request() -> bytes:
+    """0x74: request the configuration block (LMS2xx listing; reply 0xF4)."""
+    return bytes([CMD_GET_CONFIG])
+
+
+def set_config_request(config: bytes) -> bytes:
+    """0x77: write the configuration block (installation mode only; reply 0xF7)."""
+    return bytes([CMD_SET_CONFIG]) + bytes(config)
+
+
+def with_units(config: bytes, units: Units) -> bytes:
+    """A configuration block with the measured-value unit byte set to ``units``."""
+    if units not in UNITS_CODES:
+        raise ValueError(f"units: must be 'mm' or 'cm', got {units!r}")
+    if len(config) <= CONFIG_UNITS_OFFSET:
+        raise LmsProtocolError(f"configuration block of {len(config)} bytes has no unit byte")
+    block = bytearray(config)
+    block[CONFIG_UNITS_OFFSET] = UNITS_CODES[units]
+    return bytes(block)
+
+
+def units_of_config(config: bytes) -> Units:
+    """The measured-value unit a configuration block sets ('mm' or 'cm')."""
+    if len(config) <= CONFIG_UNITS_OFFSET or config[CONFIG_UNITS_OFFSET] not in CODE_UNITS:
+        raise LmsProtocolError(f"configuration block {config.hex(' ')} holds no known unit code")
+    return CODE_UNITS[config[CONFIG_UNITS_OFFSET]]
+
+
+# ---------------------------------------------------------------------------------------------
+# Measured values (0xB0)
+@dataclass(frozen=True)
+class Measurement:
+    """The fields of one 0xB0 reply.
+
+    Attributes:
+        codes: raw 16-bit values (distance in bits 0-12, flags in bits 13-15), uint16.
+        units: 'mm' or 'cm', from bits 14-15 of the count word.
+        partial: True for one partial scan of an interlaced scan (bit 13).
+        partial_index: which partial scan (bits 11-12).
+        status: the STATUS byte.
+    """
+
+    codes: np.ndarray
+    units: Units
+    partial: bool
+    partial_index: int
+    status: int
+
+
+def parse_measurement(payload: bytes) -> Measurement:
+    """Split a 0xB0 payload (reply code, count word, values, status) into its fields.
+
+    Raises:
+        LmsProtocolError: for another reply code, a length that disagrees with the count word,
+            or a unit code other than cm / mm.
+    """
+    if len(payload) < 4 or payload[0] != REPLY_MEASURE:
+        raise LmsProtocolError(f"not a 0xB0 measured-value reply: {bytes(payload[:8]).hex(' ')}")
+    count = payload[1] | (payload[2] << 8)
+    n = count & 0x3FF
+    if len(payload) != 4 + 2 * n:
+        raise LmsProtocolError(f"0xB0 reply announces {n} values but holds {(len(payload) - 4) / 2:g}")
+    unit_bits = count >> 14
+    if unit_bits not in (0, 1):
+        raise LmsProtocolError(f"0xB0 reply with unit code {unit_bits} (only 0 = cm and 1 = mm are known)")
+    codes = np.frombuffer(payload, dtype="<u2", count=n, offset=3)
+    return Measurement(
+        codes=codes,
+        units="mm" if unit_bits == 1 else "cm",
+        partial=bool(count & 0x2000),
+        partial_index=(count >> 11) & 0x3,
+        status=payload[-1],
+    )
+
+
+def scan_geometry(n_values: int) -> tuple[float, float]:
+    """(angle_min, angle_increment) in rad of an LMS200 scan of ``n_values`` beams.
+
+    180 deg variants run from -90 deg, 100 deg variants from -50 deg (right to left).
+    """
+    try:
+        fov, res = VARIANT_OF_COUNT[n_values]
+    except KeyError:
+        raise LmsProtocolError(
+            f"a scan of {n_values} values matches no LMS200 variant (expected {sorted(VARIANT_OF_COUNT)})"
+        ) from None
+    return float(np.deg2rad(-fov / 2)), float(np.deg2rad(res / 100))
+
+
+def decode_scan(payload: bytes, stamp: float = 0.0) -> Scan:
+    """A 0xB0 payload to a :class:`Scan` (ranges in m, 8183 -> +inf, invalid codes -> nan).
+
+    Raises:
+        LmsProtocolError: for a malformed reply, an unknown beam count or a partial scan of an
+            interlaced scan (not supported: request full scans).
+    """
+    m = parse_measurement(payload)
+    if m.partial:
+        raise LmsProtocolError(f"0xB0 partial scan {m.partial_index}: interlaced partial scans are not supported")
+    angle_min, increment = scan_geometry(m.codes.size)
+    ranges = codes_to_ranges(m.codes, m.units)
+    return Scan(ranges, angle_min, increment, 0.0, LMS200_MAX_RANGE[m.units], stamp)
+
+
+def encode_measurement(codes: np.ndarray, units: Units, status: int = STATUS_OK) -> bytes:
+    """A 0xB0 payload carrying ``codes`` (uint16, one per beam) in ``units``."""
+    values = np.asarray(codes, dtype="<u2")
+    if values.ndim != 1 or not 0 < values.size <= 0x3FF:
+        raise ValueError(f"codes: must be 1-D with 1..1023 values, got shape {values.shape}")
+    count = values.size | (UNITS_CODES[units] << 14)
+    return struct.pack("<BH", REPLY_MEASURE, count) + values.tobytes() + bytes([status])
+
+
+def encode_scan(scan: Scan, units: Units = "mm", status: int = STATUS_OK) -> bytes:
+    """A 0xB0 payload for ``scan`` (ranges rounded to the unit; +inf -> 8183, nan -> 8191)."""
+    return encode_measurement(ranges_to_codes(scan.ranges, units), units, status)
+
+
+def frame_seconds(n_bytes: int, baud: int) -> float:
+    """Time ``n_bytes`` take on the line at ``baud`` (8N1: 10 bits a byte), in seconds."""
+    return n_bytes * 10.0 / baud

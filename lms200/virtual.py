@@ -1,0 +1,428 @@
+"""A virtual LMS200: the device's serial behaviour as a state machine, bytes in and bytes out.
+
+The device knows nothing of ports or threads: an adapter (:mod:`lms200.adapters`) passes it the
+host's bytes with ``receive(data, now)`` and asks ``transmit(now)`` for the bytes whose last bit has
+left the line by ``now`` (seconds on any monotonic clock). Every byte takes 10 bits at the current
+baud (8N1), times ``time_scale``; so does every device delay (ACK, reply, mode change, mirror
+period), so tests can run a faithful device 100 times faster than real time.
+
+Behaviour (``docs/lms200-protocol.md``): ACK before every reply, NAK for a telegram with a bad CRC,
+silence for another address, a host telegram with a gap of more than 6 ms between bytes is dropped;
+commands 0x10, 0x20 (installation mode with password, continuous 0x24, on-request 0x25, bauds
+0x40/0x41/0x42/0x48; the 0xA0 reply to a baud change still goes out at the old baud), 0x30 01,
+0x31, 0x3A, 0x3B, and the configuration telegrams 0x74 / 0x77 (units); anything else gets 0x92.
+In continuous mode one 0xB0 frame follows another as fast as the baud allows, each carrying the
+newest complete scan (a 0.5 deg scan completes every 26.7 ms). Each scan sent is the source's next
+scan, so a replayed log comes out in order and complete.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Callable, Iterable, Iterator
+
+import numpy as np
+
+from .codes import Units, ranges_to_codes
+from .protocol import (
+    ACK,
+    BAUD_MODES,
+    CMD_GET_CONFIG,
+    CMD_MEASURE,
+    CMD_MODE,
+    CMD_RESET,
+    CMD_SET_CONFIG,
+    CMD_STATUS,
+    CMD_TYPE,
+    CMD_VARIANT,
+    CONFIG_BYTES,
+    CONFIG_UNITS_OFFSET,
+    MAX_LEN,
+    MODE_BAUDS,
+    MODE_CONTINUOUS,
+    MODE_INSTALLATION,
+    MODE_ON_REQUEST,
+    NAK,
+    OVERHEAD_BYTES,
+    PASSWORD,
+    POWER_ON_BAUD,
+    REPLY_BAD_COMMAND,
+    REPLY_FLAG,
+    REPLY_POWER_ON,
+    REPLY_RESET,
+    STATUS_OK,
+    STX,
+    UNITS_CODES,
+    VARIANTS,
+    build_frame,
+    crc16,
+    encode_measurement,
+    reply_code,
+)
+from .scan import Scan
+
+MIRROR_PERIOD_S = 1.0 / 75.0  # one mirror turn: a 1 deg scan every 13.3 ms
+TYPE_STRING = b"LMS200;301063;V02.10 "
+SOURCE_GRID_DEG = (-90.0, 0.5, 361)  # every scan source is resampled onto the 0.5 deg frame
+# Power-on configuration block: blanking 0, sensitivity 0, availability 0, 8 m / 80 m mode, cm.
+POWER_ON_CONFIG = bytes([0, 0, 0, 0, 0x0D, UNITS_CODES["cm"]]) + bytes(CONFIG_BYTES - 6)
+
+
+@dataclass
+class DeviceTiming:
+    """Device delays in seconds at time_scale 1 (the listing's typical and worst values)."""
+
+    ack_s: float = 0.002  # ACK within 60 ms
+    reply_s: float = 0.010  # reply after the ACK
+    mode_change_s: float = 0.050  # on-request / continuous / baud switches
+    installation_s: float = 3.0  # installation mode and a configuration write ("up to 3 s")
+    reset_s: float = 1.0  # from the 0x91 reply to the 0x90 power-on string
+    rx_gap_s: float = 0.006  # largest gap between bytes of one host telegram (never scaled)
+
+
+@dataclass
+class Faults:
+    """Fault injection; change the fields at any time (the device reads them on every call).
+
+    Attributes:
+        corrupt_prob: probability that a byte sent is corrupted (XOR with a random nonzero mask).
+        drop_prob: probability that a byte sent is lost.
+        miss_prob: probability that a correct request is ignored (as during a mirror turn).
+        rx_corrupt_prob: probability that a host telegram arrives with a bit error (-> NAK).
+        mute: the device stops answering and sending altogether.
+        seed: seed of the fault generator.
+    """
+
+    corrupt_prob: float = 0.0
+    drop_prob: float = 0.0
+    miss_prob: float = 0.0
+    rx_corrupt_prob: float = 0.0
+    mute: bool = False
+    seed: int = 0
+
+
+def resample_to_grid(scan: Scan) -> np.ndarray:
+    """A scan's ranges on the LMS200's 361-beam 0.5 deg frame (nearest beam; nan where uncovered)."""
+    start, step, n = SOURCE_GRID_DEG
+    target = np.deg2rad(start + step * np.arange(n))
+    if len(scan) == n and math.isclose(scan.angle_min, target[0], abs_tol=1e-9) and math.isclose(
+        scan.angle_increment, target[1] - target[0], rel_tol=1e-9
+    ):
+        return np.array(scan.ranges)
+    idx = np.rint((target - scan.angle_min) / scan.angle_increment).astype(np.int64)
+    covered = (idx >= 0) & (idx < len(scan))
+    out = np.full(n, np.nan)
+    out[covered] = scan.ranges[idx[covered]]
+    return out
+
+
+def variant_codes(ranges361: np.ndarray, variant: tuple[int, int], units: Units) -> np.ndarray:
+    """Distance codes a variant reports from 0.5 deg ranges: 1 deg takes every other beam, 100 deg
+    the beams from -50 to +50 deg, 0.25 deg adds midpoints (mean of two valid neighbours, else nan)."""
+    fov, res = variant
+    r = np.asarray(ranges361, dtype=np.float64)
+    if fov == 100:
+        r = r[80:281]
+    if res == 100:
+        r = r[::2]
+    elif res == 25:
+        mid = 0.5 * (r[:-1] + r[1:])  # inf + x = inf, nan propagates
+        fine = np.empty(2 * r.size - 1)
+        fine[0::2], fine[1::2] = r, mid
+        r = fine
+    return ranges_to_codes(r, units)
+
+
+@dataclass
+class _Chunk:
+    start: float  # when the first bit goes out
+    byte_s: float  # seconds per byte
+    data: bytes
+    baud: int
+    done: Callable[[], None] | None = None
+    sent: int = 0
+
+
+class VirtualLMS200:
+    """The device state machine.
+
+    Args:
+        source: scans to report (any iterable of :class:`Scan`; each is resampled onto the 0.5 deg
+            frame). When it runs out, the device reports no more scans.
+        address: device address (replies go to address + 0x80).
+        time_scale: multiplies every byte time and device delay (1 = real time, 0.01 = 100x faster).
+        timing: device delays; faults: fault injection.
+        units, variant: power-on unit mode and (field of view deg, resolution 1/100 deg).
+    """
+
+    def __init__(
+        self,
+        source: Iterable[Scan],
+        address: int = 0,
+        time_scale: float = 1.0,
+        timing: DeviceTiming | None = None,
+        faults: Faults | None = None,
+        units: Units = "cm",
+        variant: tuple[int, int] = (180, 50),
+    ) -> None:
+        if not time_scale > 0:
+            raise ValueError(f"time_scale: must be > 0, got {time_scale}")
+        if variant not in VARIANTS:
+            raise ValueError(f"variant: {variant} is not an LMS200 variant")
+        self._source: Iterator[Scan] = iter(source)
+        self.address = address
+        self.time_scale = float(time_scale)
+        self.timing = timing or DeviceTiming()
+        self.faults = faults or Faults()
+        self._rng = np.random.default_rng(self.faults.seed)
+        self.config = bytearray(POWER_ON_CONFIG)
+        self.config[CONFIG_UNITS_OFFSET] = UNITS_CODES[units]
+        self._power_on_variant = variant
+        self.variant = variant
+        self.baud = POWER_ON_BAUD
+        self.mode = MODE_ON_REQUEST
+        self.source_exhausted = False
+        self.scans_sent = 0
+        self.requests = 0
+        self._queue: deque[_Chunk] = deque()
+        self._line_free = 0.0
+        self._continuous_from = 0.0
+        self._last_scan_index = -1
+        self._rx = bytearray()
+        self._rx_last = -math.inf
+
+    # -- state ---------------------------------------------------------------------------------
+    @property
+    def units(self) -> Units:
+        """Current unit mode ('mm' or 'cm'), from the configuration block."""
+        return "mm" if self.config[CONFIG_UNITS_OFFSET] == UNITS_CODES["mm"] else "cm"
+
+    @property
+    def continuous(self) -> bool:
+        return self.mode == MODE_CONTINUOUS
+
+    def _s(self, seconds: float) -> float:
+        return seconds * self.time_scale
+
+    def _scan_period(self) -> float:
+        turns = {100: 1, 50: 2, 25: 4}[self.variant[1]]
+        return self._s(MIRROR_PERIOD_S * turns)
+
+    # -- host -> device ------------------------------------------------------------------------
+    def receive(self, data: bytes, now: float) -> None:
+        """Bytes from the host, received at ``now`` (s)."""
+        if not data:
+            return
+        if self._rx and now - self._rx_last > self.timing.rx_gap_s:
+            self._rx.clear()  # the host paused mid-telegram: the device drops it
+        self._rx_last = now
+        self._rx += data
+        self._parse_requests(now)
+
+    def _parse_requests(self, now: float) -> None:
+        buf = self._rx
+        while buf:
+            if buf[0] != STX:
+                start = buf.find(bytes([STX]))
+                del buf[: start if start >= 0 else len(buf)]
+                continue
+            if len(buf) < 4:
+                return
+            length = buf[2] | (buf[3] << 8)
+            if length == 0 or length > MAX_LEN:
+                del buf[:1]
+                continue
+            end = length + OVERHEAD_BYTES
+            if len(buf) < end:
+                return
+            frame = bytes(buf[:end])
+            del buf[:end]
+            if self.faults.mute:
+                continue
+            hit = self.faults.rx_corrupt_prob and self._rng.random() < self.faults.rx_corrupt_prob
+            if hit or crc16(frame[:-2]) != (frame[-2] | (frame[-1] << 8)):
+                self._send(bytes([NAK]), now + self._s(self.timing.ack_s))
+                continue
+            if frame[1] != self.address:
+                continue  # another device's telegram: silence
+            self.requests += 1
+            if self.faults.miss_prob and self._rng.random() < self.faults.miss_prob:
+                continue  # missed during a mirror turn
+            self._handle(frame[4:-2], now)
+
+    # -- commands ------------------------------------------------------------------------------
+    def _handle(self, payload: bytes, now: float) -> None:
+        t_ack = now + self._s(self.timing.ack_s)
+        t_reply = t_ack + self._s(self.timing.reply_s)
+        self._send(bytes([ACK]), t_ack)
+        cmd, data = payload[0], payload[1:]
+        if cmd == CMD_MODE and data:
+            self._mode(data, t_reply)
+        elif cmd == CMD_MEASURE and data == b"\x01":
+            self._reply(self._scan_payload(), t_reply, count_scan=True)
+        elif cmd == CMD_TYPE and not data:
+            self._reply(bytes([reply_code(cmd)]) + TYPE_STRING, t_reply)
+        elif cmd == CMD_STATUS and not data:
+            # Simplified 0xB1: software version and operating mode (the real block is 152 bytes).
+            self._reply(bytes([reply_code(cmd)]) + TYPE_STRING[-7:] + bytes([self.mode]), t_reply)
+        elif cmd == CMD_VARIANT and len(data) == 4:
+            fov, res = struct.unpack("<HH", data)
+            ok = (fov, res) in VARIANTS
+            if ok:
+                self.variant = (fov, res)
+            cur = struct.pack("<HH", *self.variant)
+            self._reply(bytes([reply_code(cmd), 1 if ok else 0]) + cur, t_reply)
+        elif cmd == CMD_GET_CONFIG and not data:
+            self._reply(bytes([reply_code(cmd)]) + bytes(self.config), t_reply)
+        elif cmd == CMD_SET_CONFIG:
+            self._set_config(data, t_reply)
+        elif cmd == CMD_RESET and not data:
+            self._reply(bytes([REPLY_RESET]), t_reply, done=self._power_on)
+        else:
+            self._reply(bytes([REPLY_BAD_COMMAND]), t_reply)
+
+    def _mode(self, data: bytes, t_reply: float) -> None:
+        sub = data[0]
+        done: Callable[[], None] | None = None
+        delay = self._s(self.timing.mode_change_s)
+        ok = True
+        if sub == MODE_INSTALLATION:
+            ok = data[1:] == PASSWORD
+            delay = self._s(self.timing.installation_s)
+            if ok:
+                self.mode = MODE_INSTALLATION
+        elif sub in (MODE_CONTINUOUS, MODE_ON_REQUEST) and len(data) == 1:
+            if sub == MODE_ON_REQUEST:
+                self.mode = MODE_ON_REQUEST
+            else:
+                def done() -> None:
+                    self.mode = MODE_CONTINUOUS
+                    self._continuous_from = self._line_free
+        elif sub in MODE_BAUDS and len(data) == 1:
+            new_baud = MODE_BAUDS[sub]
+
+            def done() -> None:  # the reply goes out at the old baud
+                self.baud = new_baud
+        else:
+            ok = False
+        payload = bytes([reply_code(CMD_MODE), 0 if ok else 1])
+        self._reply(payload, t_reply + (delay if ok else 0.0), done=done if ok else None)
+
+    def _set_config(self, data: bytes, t_reply: float) -> None:
+        ok = self.mode == MODE_INSTALLATION and len(data) == CONFIG_BYTES and data[CONFIG_UNITS_OFFSET] in (0, 1)
+        if ok:
+            self.config[:] = data
+        payload = bytes([reply_code(CMD_SET_CONFIG), 1 if ok else 0]) + bytes(self.config)
+        self._reply(payload, t_reply + (self._s(self.timing.installation_s) if ok else 0.0))
+
+    def _power_on(self) -> None:
+        """After a reset: 9600 baud, on-request mode, power-on variant; then the 0x90 string."""
+        self.baud = POWER_ON_BAUD
+        self.mode = MODE_ON_REQUEST
+        self.variant = self._power_on_variant
+        self._reply(bytes([REPLY_POWER_ON]) + TYPE_STRING, self._line_free + self._s(self.timing.reset_s))
+
+    # -- device -> host ------------------------------------------------------------------------
+    def _scan_payload(self) -> bytes | None:
+        try:
+            scan = next(self._source)
+        except StopIteration:
+            self.source_exhausted = True
+            return None
+        codes = variant_codes(resample_to_grid(scan), self.variant, self.units)
+        return encode_measurement(codes, self.units)[:-1]  # _reply appends the status byte
+
+    def _reply(self, payload: bytes | None, ready: float, done: Callable[[], None] | None = None,
+               count_scan: bool = False) -> None:
+        if payload is None:
+            return
+        payload = payload + bytes([STATUS_OK])
+        if count_scan:
+            self.scans_sent += 1
+        self._send(build_frame(payload, self.address | REPLY_FLAG), ready, done)
+
+    def _send(self, data: bytes, ready: float, done: Callable[[], None] | None = None) -> None:
+        byte_s = self._s(10.0 / self.baud)
+        start = max(ready, self._line_free)
+        self._queue.append(_Chunk(start, byte_s, data, self.baud, done))
+        self._line_free = start + byte_s * len(data)
+
+    def _fill_continuous(self, now: float) -> None:
+        if self._queue or self.mode != MODE_CONTINUOUS or self.faults.mute or self.source_exhausted:
+            return
+        # Send the newest scan completed when the line frees; if it was sent already, wait for
+        # the next one (the mirror completes a scan every `period` seconds).
+        period = self._scan_period()
+        base = max(self._line_free, self._continuous_from, now - period)
+        newest = math.floor(base / period + 1e-9)
+        if newest > self._last_scan_index:
+            ready = base
+        else:
+            newest = self._last_scan_index + 1
+            ready = newest * period
+        self._last_scan_index = newest
+        self._reply(self._scan_payload(), ready, count_scan=True)
+
+    def transmit(self, now: float) -> list[tuple[bytes, int]]:
+        """Bytes that have left the line by ``now``, as (bytes, baud they were sent at) pieces."""
+        if self.faults.mute:
+            self._queue.clear()
+            self._line_free = now
+            return []
+        out: list[tuple[bytes, int]] = []
+        self._fill_continuous(now)
+        while self._queue:
+            chunk = self._queue[0]
+            due = int((now - chunk.start) / chunk.byte_s + 1e-9) if now >= chunk.start else 0
+            n = min(len(chunk.data), due) - chunk.sent
+            if n <= 0:
+                break
+            piece = chunk.data[chunk.sent : chunk.sent + n]
+            chunk.sent += n
+            out.append((self._inject(piece), chunk.baud))
+            if chunk.sent < len(chunk.data):
+                break
+            self._queue.popleft()
+            if chunk.done is not None:
+                chunk.done()
+            self._fill_continuous(now)
+        return [(d, b) for d, b in out if d]
+
+    def next_wakeup(self, now: float) -> float | None:
+        """When the next byte will be due (s), or None while the device waits for the host."""
+        if self.faults.mute:
+            return None
+        self._fill_continuous(now)
+        if self._queue:
+            chunk = self._queue[0]
+            return chunk.start + (chunk.sent + 1) * chunk.byte_s
+        return None
+
+    def _inject(self, data: bytes) -> bytes:
+        f = self.faults
+        if not (f.corrupt_prob or f.drop_prob):
+            return data
+        arr = np.frombuffer(data, dtype=np.uint8).copy()
+        if f.corrupt_prob:
+            hit = self._rng.random(arr.size) < f.corrupt_prob
+            arr[hit] ^= self._rng.integers(1, 256, hit.sum(), dtype=np.uint8)
+        if f.drop_prob:
+            arr = arr[self._rng.random(arr.size) >= f.drop_prob]
+        return arr.tobytes()
+
+
+def garble(data: bytes, baud_sent: int, baud_read: int) -> bytes:
+    """What a UART set to ``baud_read`` makes of bytes sent at ``baud_sent``: unchanged when the
+    bauds agree, else a deterministic stream of wrong bytes (framing errors), about as many
+    bytes as bit times fit (never a valid telegram in practice)."""
+    if baud_sent == baud_read or not data:
+        return data
+    n = max(1, round(len(data) * baud_read / baud_sent))
+    src = np.resize(np.frombuffer(data, dtype=np.uint8), n).astype(np.uint16)
+    return ((src * 37 + 0x5B + np.arange(n)) & 0xFF).astype(np.uint8).tobytes().replace(bytes([STX]), b"\xfd")
+
+
+__all__ = ["VirtualLMS200", "DeviceTiming", "Faults", "garble", "resample_to_grid", "variant_codes", "BAUD_MODES"]

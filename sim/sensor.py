@@ -1,0 +1,134 @@
+"""The LMS200 sensor model configuration, with the source of every default.
+
+Sources: SICK LMS200/211/221/291 Technical Description (8008970, 2006) - scanning angle 180 deg at
+0.25/0.5/1 deg (0.25 deg only over 100 deg), mirror 75 rev/s (13.33 ms a turn; a 0.5 deg scan is two
+interlaced 1 deg turns, a 0.25 deg scan four), range codes in mm (max 8.183 m) or cm (max
+81.83 m), statistical error 5 mm (1 sigma) in mm mode; Ye & Borenstein, "Characterization of a 2-D
+laser scanner for mobile robot obstacle negotiation", ICRA 2002 - mixed pixels at depth edges
+(ranges between the two surfaces when the spot straddles them) and rare dropouts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, replace
+from typing import Any, Literal
+
+import numpy as np
+
+from lms200.codes import LMS200_MAX_RANGE
+
+MIRROR_TURN_S = 1.0 / 75.0  # s: one mirror revolution (75 Hz)
+
+
+@dataclass(frozen=True)
+class SensorConfig:
+    """Configuration of the emulated LMS200.
+
+    Attributes:
+        n_beams: beams per scan (361 at 0.5 deg, 181 at 1 deg, 401 at 0.25 deg over 100 deg).
+        resolution_deg: angular step between beams (deg); the scan is centred on straight ahead.
+        units: "mm" (1 mm codes, max range 8.183 m) or "cm" (1 cm codes, max 81.83 m).
+        noise_sigma: Gaussian range noise, 1 sigma (m); datasheet mm mode: 5 mm.
+        quantise: round ranges to the unit (1 mm or 1 cm) as the device's codes do.
+        dropout_prob: probability that a beam returns an invalid reading (nan).
+        mixed_pixels: a beam whose spot straddles a depth edge returns a range between the two
+            surfaces (weighted by the share of the spot on each).
+        beam_width_deg: width of the laser spot used for mixed pixels (deg).
+        mixed_gap: smallest depth step (m) inside a spot that makes a mixed pixel.
+        interlaced: each beam is taken from the pose at its own time (mirror turns of 13.3 ms),
+            so a moving scanner distorts the scan; False = every beam from the scan's pose.
+    """
+
+    n_beams: int = 361
+    resolution_deg: float = 0.5
+    units: Literal["mm", "cm"] = "mm"
+    noise_sigma: float = 0.005
+    quantise: bool = True
+    dropout_prob: float = 0.001
+    mixed_pixels: bool = True
+    beam_width_deg: float = 0.5
+    mixed_gap: float = 0.1
+    interlaced: bool = True
+
+    def __post_init__(self) -> None:
+        if self.units not in ("mm", "cm"):
+            raise ValueError(f"units: must be 'mm' or 'cm', got {self.units!r}")
+        if self.n_beams < 2:
+            raise ValueError(f"n_beams: must be >= 2, got {self.n_beams}")
+        if not 0 < self.resolution_deg <= 1.0:
+            raise ValueError(f"resolution_deg: must be in (0, 1], got {self.resolution_deg}")
+        if self.fov_deg > 180.0 + 1e-9:
+            raise ValueError(f"n_beams, resolution_deg: field of view {self.fov_deg} deg exceeds 180 deg")
+        if self.noise_sigma < 0:
+            raise ValueError(f"noise_sigma: must be >= 0, got {self.noise_sigma}")
+        if not 0 <= self.dropout_prob < 1:
+            raise ValueError(f"dropout_prob: must be in [0, 1), got {self.dropout_prob}")
+
+    # -- presets ------------------------------------------------------------------------------
+    @classmethod
+    def ideal(cls, **changes: Any) -> "SensorConfig":
+        """Exact geometry: no noise, quantisation, dropouts, mixed pixels or interlacing."""
+        base = dict(noise_sigma=0.0, quantise=False, dropout_prob=0.0, mixed_pixels=False, interlaced=False)
+        base.update(changes)
+        return cls(**base)  # type: ignore[arg-type]
+
+    @classmethod
+    def lms200_1deg(cls, **changes: Any) -> "SensorConfig":
+        """181 beams at 1 deg (one mirror turn a scan, 75 scans/s)."""
+        return cls(**{"n_beams": 181, "resolution_deg": 1.0, **changes})
+
+    @classmethod
+    def lms200_quarter_deg(cls, **changes: Any) -> "SensorConfig":
+        """401 beams at 0.25 deg over 100 deg (four interlaced turns, 18.75 scans/s)."""
+        return cls(**{"n_beams": 401, "resolution_deg": 0.25, **changes})
+
+    def replace(self, **changes: Any) -> "SensorConfig":
+        return replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    # -- derived ------------------------------------------------------------------------------
+    @property
+    def fov_deg(self) -> float:
+        return (self.n_beams - 1) * self.resolution_deg
+
+    @property
+    def angle_min(self) -> float:
+        """Bearing of beam 0 (rad)."""
+        return -np.deg2rad(self.fov_deg) / 2
+
+    @property
+    def angle_increment(self) -> float:
+        return float(np.deg2rad(self.resolution_deg))
+
+    @property
+    def angles(self) -> np.ndarray:
+        """Bearing of every beam (rad), sensor frame."""
+        return self.angle_min + np.arange(self.n_beams) * self.angle_increment
+
+    @property
+    def range_max(self) -> float:
+        """The maximum range (m): 8.183 (mm) or 81.83 (cm); farther returns are +inf."""
+        return LMS200_MAX_RANGE[self.units]
+
+    @property
+    def unit_m(self) -> float:
+        return 0.001 if self.units == "mm" else 0.01
+
+    @property
+    def turns_per_scan(self) -> int:
+        """Interlaced mirror turns per scan: 1 at 1 deg, 2 at 0.5 deg, 4 at 0.25 deg."""
+        return max(1, int(round(1.0 / self.resolution_deg)))
+
+    @property
+    def scan_period(self) -> float:
+        """Seconds between scans: 1/75 s a turn times the turns per scan (0.5 deg: 37.5 scans/s)."""
+        return self.turns_per_scan * MIRROR_TURN_S
+
+    @property
+    def beam_time_offsets(self) -> np.ndarray:
+        """Time of each beam after the scan's first beam (s): beam i lies in turn i mod turns, at
+        its bearing's share of the turn."""
+        i = np.arange(self.n_beams)
+        return ((i % self.turns_per_scan) + i * self.resolution_deg / 360.0) * MIRROR_TURN_S

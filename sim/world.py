@@ -1,0 +1,169 @@
+"""A world: 3-D solids (boxes, cylinders) for PyBullet plus their exact 2-D cross-section at the
+scanner's height (the ground truth), and a route graph for the robot.
+
+All coordinates in metres in the world frame, angles in radians.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from lms200 import LmsbenchError
+
+from .geometry import face_corners, rectangle_corners, union_faces
+
+SCAN_HEIGHT_M = 0.35  # height of the scan plane above the floor (LMS200 on a Pioneer-class robot)
+FACE_BOX_THICKNESS_M = 0.05  # thickness of the boxes rebuilt behind faces for a walls-only world.json
+
+
+@dataclass(eq=False)
+class World:
+    """A simulated office world.
+
+    Attributes:
+        boxes: (n, 7) cx, cy, yaw, hx, hy, z0, z1: boxes (centre, heading, half sizes, bottom and
+            top height), as PyBullet builds them.
+        cylinders: (m, 5) cx, cy, r, z0, z1: vertical cylinders.
+        scan_height: height of the scan plane (m).
+        walls: (k, 4) x1, y1, x2, y2: every straight face of the cross-section at scan_height (the
+            boundary of the union of the solids cut by the plane), solid on the left of p1 -> p2.
+        circles: (c, 3) cx, cy, r: cylinders cut by the scan plane.
+        corners: (q, 4) x, y, angle_rad, convex: where one face meets the next; angle_rad is the
+            angle of the wedge the two faces make, in (0, pi); convex = 1 when that wedge is solid
+            (the corner points into free space), 0 when it is free space (a room's corner).
+        corner_faces: (q, 2) int: indices into walls of the face ending and the face starting at
+            each corner.
+        route_nodes: (p, 2) free-space points the robot may drive between; route_edges: (e, 2)
+            int pairs of nodes joined by a collision-free straight drive; route_targets: node
+            indices worth visiting (room centres).
+    """
+
+    name: str
+    seed: int
+    boxes: np.ndarray
+    cylinders: np.ndarray
+    scan_height: float = SCAN_HEIGHT_M
+    route_nodes: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    route_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=int))
+    route_targets: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    walls: np.ndarray = field(init=False)
+    circles: np.ndarray = field(init=False)
+    corners: np.ndarray = field(init=False)
+    corner_faces: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.boxes = np.asarray(self.boxes, dtype=float).reshape(-1, 7)
+        self.cylinders = np.asarray(self.cylinders, dtype=float).reshape(-1, 5)
+        self.route_nodes = np.asarray(self.route_nodes, dtype=float).reshape(-1, 2)
+        self.route_edges = np.asarray(self.route_edges, dtype=int).reshape(-1, 2)
+        self.route_targets = np.asarray(self.route_targets, dtype=int).reshape(-1)
+        h = self.scan_height
+        cut_boxes = self.boxes[(self.boxes[:, 5] <= h) & (self.boxes[:, 6] >= h)]
+        cut_cyl = self.cylinders[(self.cylinders[:, 3] <= h) & (self.cylinders[:, 4] >= h)]
+        self.circles = cut_cyl[:, :3].copy()
+        rects = [rectangle_corners(*b[:5]) for b in cut_boxes]
+        self.walls = union_faces(rects, self.circles)
+        self.corners, self.corner_faces = face_corners(self.walls)
+
+    # -- JSON ---------------------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        """The world.json content: the public ground truth (walls, circles, corners) plus what
+        rebuilds the world exactly (solids, scan height, route)."""
+        return {
+            "name": self.name,
+            "seed": int(self.seed),
+            "scan_height": float(self.scan_height),
+            "walls": _rows(self.walls),
+            "circles": _rows(self.circles),
+            "corners": [[*map(_num, c[:3]), bool(c[3])] for c in self.corners],
+            "boxes": _rows(self.boxes),
+            "cylinders": _rows(self.cylinders),
+            "route_nodes": _rows(self.route_nodes),
+            "route_edges": self.route_edges.tolist(),
+            "route_targets": self.route_targets.tolist(),
+        }
+
+    def to_json(self, path: str | Path) -> None:
+        """Write world.json (see :meth:`to_dict`)."""
+        Path(path).write_text(json.dumps(self.to_dict(), indent=1) + "\n", encoding="ascii")
+
+    @classmethod
+    def from_json(cls, path: str | Path) -> "World":
+        """Read a world.json. A file with only walls/circles gets boxes rebuilt behind each face
+        (on its solid, left side) and cylinders of 2 m height, so it can be simulated.
+
+        Raises:
+            LmsbenchError: for a file that is not a world description.
+        """
+        try:
+            d = json.loads(Path(path).read_text(encoding="ascii"))
+            walls = np.asarray(d.get("walls", []), dtype=float).reshape(-1, 4)
+            circles = np.asarray(d.get("circles", []), dtype=float).reshape(-1, 3)
+        except (ValueError, TypeError, UnicodeDecodeError) as exc:
+            raise LmsbenchError(f"{path}: not a world.json ({exc})") from None
+        h = float(d.get("scan_height", SCAN_HEIGHT_M))
+        if "boxes" in d:
+            boxes, cylinders = d["boxes"], d.get("cylinders", [])
+        else:
+            boxes = boxes_behind_faces(walls, h)
+            cylinders = [[cx, cy, r, 0.0, 2.0] for cx, cy, r in circles]
+        return cls(
+            name=str(d.get("name", Path(path).stem)),
+            seed=int(d.get("seed", 0)),
+            boxes=boxes,
+            cylinders=cylinders,
+            scan_height=h,
+            route_nodes=d.get("route_nodes", []),
+            route_edges=d.get("route_edges", []),
+            route_targets=d.get("route_targets", []),
+        )
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(xmin, ymin, xmax, ymax) of the cross-section (m)."""
+        pts = [self.walls[:, :2], self.walls[:, 2:]]
+        if len(self.circles):
+            c = self.circles
+            pts += [c[:, :2] - c[:, 2:3], c[:, :2] + c[:, 2:3]]
+        allp = np.vstack(pts)
+        return (*allp.min(axis=0), *allp.max(axis=0))  # type: ignore[return-value]
+
+    def clearance(self, points: np.ndarray) -> np.ndarray:
+        """Distance (m) from each of (n, 2) points to the nearest face or circle."""
+        p = np.asarray(points, dtype=float).reshape(-1, 2)
+        a, b = self.walls[:, :2], self.walls[:, 2:]
+        ab = b - a
+        t = np.clip(((p[:, None, :] - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-18), 0, 1)
+        nearest = a + t[..., None] * ab
+        d = np.hypot(*(p[:, None, :] - nearest).transpose(2, 0, 1)).min(axis=1)
+        if len(self.circles):
+            c = self.circles
+            dc = np.hypot(p[:, None, 0] - c[:, 0], p[:, None, 1] - c[:, 1]) - c[:, 2]
+            d = np.minimum(d, dc.min(axis=1))
+        return d
+
+
+def boxes_behind_faces(walls: np.ndarray, height: float) -> np.ndarray:
+    """Thin boxes (n, 7) whose right face lies exactly on each wall face (solid on the left)."""
+    out = []
+    for x1, y1, x2, y2 in walls:
+        d = np.array([x2 - x1, y2 - y1])
+        length = float(np.hypot(*d))
+        u = d / length
+        left = np.array([-u[1], u[0]])
+        c = np.array([(x1 + x2) / 2, (y1 + y2) / 2]) + left * FACE_BOX_THICKNESS_M / 2
+        yaw = float(np.arctan2(u[1], u[0]))
+        out.append([c[0], c[1], yaw, length / 2, FACE_BOX_THICKNESS_M / 2, 0.0, max(2.0, 2 * height)])
+    return np.array(out, dtype=float).reshape(-1, 7)
+
+
+def _num(v: float) -> float:
+    return float(v) + 0.0  # full precision (exact round trip); + 0.0 turns -0.0 into 0.0
+
+
+def _rows(a: np.ndarray) -> list[list[float]]:
+    return [[_num(v) for v in row] for row in np.asarray(a)]

@@ -1,0 +1,212 @@
+"""Named worlds and the seeded procedural office generator.
+
+- ``office``: a corridor with three rooms on each side behind doorways, a chamfered (135 deg)
+  corridor end, open door leaves, cabinets, shelves, desks (only their panel legs cut the scan
+  plane) and the odd round pillar; the seed moves doors and furniture.
+- ``corridor``: a 30 m corridor with door recesses (convex and concave right angles) and round
+  columns half sunk into its walls.
+- ``angles``: a hall whose corners are acute (50 deg) and obtuse (130-135 deg), with freestanding
+  V-shaped screens (convex and concave 135 deg corners): the paper's Fig. 9c and 9e cases.
+- ``pillars``: a hall with round pillars (r 0.1-0.5 m) and a curved wall (a cylinder of r 2 m
+  sunk into a wall): curved surfaces a line extractor must not call lines.
+- ``random``: the office generator with room count, sizes and corridor width drawn from the seed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .layout import Layout, WALL_THICKNESS_M, distance_to_rects
+from .world import World
+
+ROBOT_RADIUS_M = 0.25
+CLEARANCE_M = ROBOT_RADIUS_M + 0.15  # furniture keeps this far from the route
+WORLD_NAMES = ("office", "corridor", "angles", "pillars", "random")
+_STREAM_WORLD = 1  # numpy seed-sequence stream for world generation
+
+
+def make_world(name: str = "office", seed: int = 0) -> World:
+    """Build a named world; every random choice comes from ``seed``.
+
+    Raises:
+        ValueError: for an unknown name (listing the known ones).
+    """
+    rng = np.random.default_rng([int(seed), _STREAM_WORLD])
+    if name == "office":
+        return office(rng, name, seed)
+    if name == "random":
+        return office(rng, name, seed, n_per_side=int(rng.integers(2, 5)), room_w=float(rng.uniform(3.2, 5.0)),
+                      room_d=float(rng.uniform(3.5, 5.0)), corridor_w=float(rng.uniform(1.6, 2.6)),
+                      chamfer=bool(rng.random() < 0.5))
+    if name == "corridor":
+        return corridor(rng, seed)
+    if name == "angles":
+        return angles(rng, seed)
+    if name == "pillars":
+        return pillars(rng, seed)
+    raise ValueError(f"name: unknown world {name!r}; known worlds: {', '.join(WORLD_NAMES)}")
+
+
+def _walls_with_doors(lay: Layout, y: float, length: float, doors: list[float], door_w: float) -> None:
+    xs = [0.0]
+    for xd in sorted(doors):
+        xs += [xd - door_w / 2, xd + door_w / 2]
+    xs.append(length)
+    for k in range(0, len(xs), 2):
+        first, last = k == 0, k == len(xs) - 2
+        lay.wall([(xs[k], y), (xs[k + 1], y)], extend_ends=(first, last))
+
+
+def office(rng: np.random.Generator, name: str, seed: int, n_per_side: int = 3, room_w: float = 4.0,
+           room_d: float = 4.0, corridor_w: float = 2.0, door_w: float = 1.0, chamfer: bool = True) -> World:
+    """Rooms on both sides of a corridor along x (corridor centre line y = corridor_w / 2)."""
+    lay = Layout(name, seed)
+    t, cw, rw, rd = WALL_THICKNESS_M, corridor_w, room_w, room_d
+    length = n_per_side * rw
+    lay.wall([(0, -rd), (length, -rd), (length, cw + rd), (0, cw + rd)], closed=True)
+    slack = rw / 2 - door_w / 2 - 0.35
+    doors = {side: [k * rw + rw / 2 + float(rng.uniform(-slack, slack)) for k in range(n_per_side)]
+             for side in (1, -1)}
+    _walls_with_doors(lay, cw, length, doors[1], door_w)
+    _walls_with_doors(lay, 0.0, length, doors[-1], door_w)
+    for k in range(1, n_per_side):
+        lay.wall([(k * rw, cw), (k * rw, cw + rd)])
+        lay.wall([(k * rw, -rd), (k * rw, 0.0)])
+    if chamfer:  # a 45 deg wall across the corridor's east end: two concave 135 deg corners
+        c = min(0.7, cw / 2 - 0.1)
+        lay.segment_box(np.array([length, cw - c]), np.array([length - c, cw]), t, 0.01, 0.01)
+    # route: along the corridor, through every door to the room's centre
+    corridor_nodes = {x: lay.node(x, cw / 2) for x in sorted(doors[1] + doors[-1])}
+    west, east = lay.node(0.8, cw / 2), lay.node(length - 0.8 - (0.4 if chamfer else 0.0), cw / 2)
+    lay.link(west, *corridor_nodes.values(), east)
+    for side in (1, -1):
+        for k, xd in enumerate(doors[side]):
+            face_y = cw + t / 2 if side == 1 else -t / 2  # the room side of the corridor wall
+            inside = lay.node(xd, face_y + side * 0.8)
+            centre = lay.node(k * rw + rw / 2, cw + rd / 2 if side == 1 else -rd / 2, target=True)
+            lay.link(corridor_nodes[xd], inside, centre)
+            room = (k * rw + t / 2, (k + 1) * rw - t / 2,
+                    (cw + t / 2, cw + rd - t / 2) if side == 1 else (-rd + t / 2, -t / 2))
+            route = np.array([lay.nodes[inside], lay.nodes[centre]])
+            _furnish_room(lay, rng, room, xd, door_w, side, route)
+    return lay.build()
+
+
+def _furnish_room(lay: Layout, rng: np.random.Generator, room: tuple, xd: float, door_w: float,
+                  side: int, route: np.ndarray) -> None:
+    """Furniture against the walls of one room, an open door leaf, maybe a pillar; nothing comes
+    within CLEARANCE_M of the room's route (door -> centre)."""
+    x0, x1, (y0, y1) = room
+    pts = route[0] + np.linspace(0, 1, 40)[:, None] * (route[1] - route[0])
+    door_face_y = y0 if side == 1 else y1
+    far_face_y = y1 if side == 1 else y0
+    # open door leaf: hinged at the jamb away from the room's centre, swung 90 deg into the room
+    hinge_side = 1.0 if route[1][0] < xd else -1.0
+    leaf_x = xd + hinge_side * (door_w / 2 - 0.04)
+    leaf_c = np.array([leaf_x, door_face_y + side * (0.45 - 0.01)])
+    lay.box(leaf_c[0], leaf_c[1], 0.0, 0.02, 0.45, 0.0, 2.0)
+    occupied = {"far": [], "west": [], "east": [], "door": [(xd - door_w / 2 - 0.15, xd + door_w / 2 + 0.15)]}
+    walls = {  # name: (point at start of usable span, direction along, inward normal, span length)
+        "far": (np.array([x0, far_face_y]), np.array([1.0, 0.0]), np.array([0.0, -side]), x1 - x0),
+        "door": (np.array([x0, door_face_y]), np.array([1.0, 0.0]), np.array([0.0, side]), x1 - x0),
+        "west": (np.array([x0, y0]), np.array([0.0, 1.0]), np.array([1.0, 0.0]), y1 - y0),
+        "east": (np.array([x1, y0]), np.array([0.0, 1.0]), np.array([-1.0, 0.0]), y1 - y0),
+    }
+    kinds = {"cabinet": ((0.8, 1.2), 0.45), "desk": ((1.2, 1.6), 0.7), "shelf": ((0.8, 1.0), 0.4)}
+    placed: list[np.ndarray] = []
+    for _ in range(int(rng.integers(2, 6))):
+        kind = str(rng.choice(list(kinds)))
+        wall = str(rng.choice(list(walls)))
+        (wlo, whi), depth = kinds[kind]
+        width = float(rng.uniform(wlo, whi))
+        start, along, inward, span = walls[wall]
+        lo, hi = 0.8 + width / 2, span - 0.8 - width / 2
+        if hi <= lo:
+            continue
+        s = float(rng.uniform(lo, hi))
+        offset = start[0] if wall in ("far", "door") else start[1]
+        iv = (offset + s - width / 2 - 0.2, offset + s + width / 2 + 0.2)
+        if any(iv[0] < b and a < iv[1] for a, b in occupied[wall]):
+            continue
+        at = start + along * s
+        from .geometry import rectangle_corners
+        yaw = float(np.arctan2(inward[1], inward[0]))
+        c = at + inward * depth / 2
+        footprint = rectangle_corners(c[0], c[1], yaw, depth / 2, width / 2)
+        if distance_to_rects(pts, [footprint]).min() < CLEARANCE_M:
+            continue
+        occupied[wall].append(iv)
+        placed.append(footprint)
+        lay.against_wall(kind, at, inward, width, depth)
+    if rng.random() < 0.4:  # a round pillar somewhere free
+        for _ in range(20):
+            r = float(rng.uniform(0.12, 0.3))
+            c = np.array([rng.uniform(x0 + 0.9, x1 - 0.9), rng.uniform(y0 + 0.9, y1 - 0.9)])
+            free_route = np.hypot(*(pts - c).T).min() - r >= CLEARANCE_M
+            free_furniture = not placed or distance_to_rects(c[None], placed)[0] - r >= 0.5
+            if free_route and free_furniture:
+                lay.cylinder(c[0], c[1], r)
+                break
+
+
+def corridor(rng: np.random.Generator, seed: int, length: float = 30.0, width: float = 1.8) -> World:
+    """A long corridor: door recesses (0.3 m deep) and half-sunk round columns along both walls."""
+    lay = Layout("corridor", seed)
+    for side, y in ((1, width), (-1, 0.0)):
+        pts = [(0.0, y)]
+        x = 1.5
+        while x < length - 3.0:
+            w = float(rng.uniform(0.9, 1.3))
+            if rng.random() < 0.65:  # a door recess
+                pts += [(x, y), (x, y + side * 0.3), (x + w, y + side * 0.3), (x + w, y)]
+            elif rng.random() < 0.6:  # a round column half sunk into the wall
+                lay.cylinder(x + w / 2, y - side * 0.05, float(rng.uniform(0.15, 0.25)))
+            x += w + float(rng.uniform(1.5, 4.0))
+        pts.append((length, y))
+        lay.wall(pts)
+    lay.wall([(0.0, 0.0), (0.0, width)])
+    lay.wall([(length, 0.0), (length, width)])
+    a = lay.node(0.8, width / 2, target=True)
+    b = lay.node(length - 0.8, width / 2, target=True)
+    lay.link(a, b)
+    return lay.build()
+
+
+def _v_screen(lay: Layout, apex: np.ndarray, heading: float, opening_deg: float, arm: float) -> None:
+    """A freestanding V-shaped screen (5 cm thick, 1.6 m tall) with its apex at ``apex``."""
+    half = np.deg2rad(opening_deg) / 2
+    a = apex + arm * np.array([np.cos(heading + half), np.sin(heading + half)])
+    b = apex + arm * np.array([np.cos(heading - half), np.sin(heading - half)])
+    lay.wall([tuple(a), tuple(apex), tuple(b)], thickness=0.05, extend_ends=(False, False), z1=1.6)
+
+
+def angles(rng: np.random.Generator, seed: int) -> World:
+    """A hall with an acute (about 50 deg) corner, obtuse (130-135 deg) corners and V screens."""
+    lay = Layout("angles", seed)
+    jitter = float(rng.uniform(-0.3, 0.3))
+    hall = [(0.0, 0.0), (8.0, 0.0), (10.0, 2.0), (10.0, 6.0), (5.0 + jitter, 6.0)]
+    lay.wall(hall, closed=True)
+    _v_screen(lay, np.array([6.5, 3.9]), np.deg2rad(-90 + float(rng.uniform(-20, 20))), 135.0, 1.0)
+    _v_screen(lay, np.array([5.2, 2.0]), np.deg2rad(180 + float(rng.uniform(-20, 20))), 100.0, 0.8)
+    nodes = [lay.node(*p, target=True) for p in ((2.4, 1.0), (4.5, 0.8), (8.6, 1.4), (8.8, 4.8),
+                                                 (6.0, 5.2), (4.2, 3.6))]
+    lay.link(*nodes, nodes[0])
+    return lay.build()
+
+
+def pillars(rng: np.random.Generator, seed: int) -> World:
+    """A 12 x 8 m hall with round pillars of radius 0.1-0.5 m and a curved wall (r = 2 m)."""
+    lay = Layout("pillars", seed)
+    lay.wall([(0.0, 0.0), (12.0, 0.0), (12.0, 8.0), (0.0, 8.0)], closed=True)
+    lay.cylinder(6.0, 8.0 + 1.2, 2.0)  # curved wall: bulges 0.75 m into the hall from the north wall
+    for x in (3.0, 6.0, 9.0):
+        for y in (2.5, 5.5):
+            lay.cylinder(x + float(rng.uniform(-0.2, 0.2)), y + float(rng.uniform(-0.2, 0.2)),
+                         float(rng.uniform(0.1, 0.5)))
+    # lanes at y = 1.2, 4.0, 6.7 joined at x = 1.2 and 10.8
+    loop = [(1.2, 1.2), (6.0, 1.2), (10.8, 1.2), (10.8, 4.0), (10.8, 6.7), (6.0, 6.7), (1.2, 6.7), (1.2, 4.0)]
+    nodes = [lay.node(*p, target=True) for p in loop]
+    lay.link(*nodes, nodes[0])
+    middle = lay.node(6.0, 4.0, target=True)
+    lay.link(nodes[7], middle, nodes[3])
+    return lay.build()

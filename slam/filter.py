@@ -1,0 +1,322 @@
+"""The SLAM loop: predict, pre-align, associate, update, manage the map. Pure: no I/O, no clocks."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.stats import chi2
+
+from . import association as assoc
+from . import models
+from .config import SlamConfig
+from .ekf import SlamEKF, stacked_H, stacked_h, stacked_residual
+from .models import ROBOT_DIM, wrap
+from .observations import Observations
+from .prealign import align
+
+
+@dataclass
+class Landmark:
+    """Bookkeeping of one landmark; its value lives in the filter state."""
+
+    kind: str  # "line" or "corner"
+    born: int  # scan number of creation
+    hits: int = 1
+    last_seen: int = 0
+    confirmed: bool = False
+    extent: tuple[float, float] = (np.inf, -np.inf)  # lines: min, max of s along (-sin, cos)(theta)
+
+
+@dataclass
+class StepInfo:
+    """What one scan did to the filter (diagnostics)."""
+
+    n_lines: int = 0
+    n_matched: int = 0
+    n_new: int = 0
+    nis: float = 0.0
+    nis_dof: int = 0
+    prealign_used: bool = False
+    prealign_shift: float = 0.0  # rad, heading change the alignment applied to the prediction
+
+
+class SlamFilter:
+    """EKF-SLAM over line (and optionally corner) landmarks; call :meth:`step` once per scan."""
+
+    def __init__(self, config: SlamConfig = SlamConfig(), initial_pose: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> None:
+        self.config = config
+        self.ekf = SlamEKF(initial_pose)
+        self.landmarks: list[Landmark] = []
+        self.scan_no = -1
+        self.stamp: float | None = None
+        self.odom: tuple[float, float, float] | None = None
+        self.gate = float(chi2.ppf(config.gate_probability, 2))
+        self.new_gate = float(chi2.ppf(config.new_landmark_probability, 2))
+
+    # -- state views ---------------------------------------------------------------------------
+    @property
+    def pose(self) -> np.ndarray:
+        return self.ekf.x[:3, 0].copy()
+
+    def _indices(self, kind: str) -> tuple[np.ndarray, np.ndarray]:
+        """(positions in self.landmarks, state indices) of the landmarks of one kind."""
+        pos = np.array([k for k, lm in enumerate(self.landmarks) if lm.kind == kind], dtype=int)
+        return pos, ROBOT_DIM + 2 * pos
+
+    # -- one scan ------------------------------------------------------------------------------
+    def step(self, stamp: float, obs: Observations, odom: tuple[float, float, float] | None = None) -> StepInfo:
+        """Process the observations of the scan taken at ``stamp`` (s)."""
+        cfg = self.config
+        self.scan_no += 1
+        info = StepInfo(n_lines=obs.lines.shape[0])
+        if self.stamp is not None:
+            self._predict(stamp - self.stamp, odom)
+        self.stamp = stamp
+        if odom is not None:
+            self.odom = odom
+        if cfg.prealign and self.landmarks and obs.lines.shape[0]:
+            self._prealign(obs, info)
+        pairs_l, new_l = self._associate_lines(obs)
+        pairs_c, new_c = self._associate_corners(obs)
+        self._update(obs, pairs_l, pairs_c, info)
+        self._extend(obs, pairs_l)
+        for o in new_l:
+            self._add("line", obs.lines[o], obs.line_cov[o], obs.line_ends[o])
+        for o in new_c:
+            self._add("corner", obs.corners[o], obs.corner_cov[o], None)
+        info.n_new = len(new_l) + len(new_c)
+        self._manage()
+        return info
+
+    def _predict(self, dt: float, odom: tuple[float, float, float] | None) -> None:
+        cfg = self.config
+        dt = max(float(dt), 0.0)
+        self._dt = dt
+        if cfg.use_odometry and odom is not None and self.odom is not None:
+            delta = models.odometry_delta(self.odom, odom)
+            dist = float(np.hypot(delta[0], delta[1]))
+            a_t, a_r, a_rt = cfg.odom_noise
+            var_t = (a_t * dist) ** 2 + 1e-6
+            var_r = (a_r * abs(delta[2]) + a_rt * dist) ** 2 + 1e-6
+            self.ekf.set_odometry(delta, dt, np.diag([var_t, var_t, var_r]))
+            self.ekf.predict()
+            return
+        n = max(1, int(np.ceil(dt / cfg.max_dt)))
+        for _ in range(n):
+            self.ekf.set_motion(dt / n, cfg.sigma_accel, cfg.sigma_alpha, cfg.sigma_lateral)
+            self.ekf.predict()
+
+    def _prealign(self, obs: Observations, info: StepInfo) -> None:
+        cfg = self.config
+        pos, idx = self._indices("line")
+        if pos.size == 0:
+            return
+        x = self.ekf.x[:, 0]
+        R, th = x[idx], x[idx + 1]
+        ends = self._extent_points(R, th, pos)
+        p = x[:2]
+        dist = _point_segment_distance(p, ends)
+        near = dist <= cfg.prealign_radius
+        if not near.any():
+            return
+        lengths = np.hypot(ends[:, 2] - ends[:, 0], ends[:, 3] - ends[:, 1])
+        a = align(obs.lines[:, 0], obs.lines[:, 1], obs.line_lengths, R[near], th[near], np.maximum(lengths[near], 0.3), x[:3],
+                  scan_ends=obs.line_ends, map_ends=ends[near])
+        if a is None or a.matched_length < cfg.prealign_min_fraction * a.total_length:
+            return
+        H = np.zeros((3, self.ekf.dim_x))
+        H[:, :3] = np.eye(3)
+        Rm = np.diag([cfg.prealign_sigma_xy**2, cfg.prealign_sigma_xy**2, cfg.prealign_sigma_phi**2])
+        nu = a.pose - x[:3]
+        nu[2] = wrap(nu[2])
+        S = self.ekf.P[:3, :3] + Rm
+        if nu @ np.linalg.solve(S, nu) > chi2.ppf(0.999, 3):
+            # the constant-velocity prior cannot explain the alignment (a fast turn): widen it
+            self.ekf.P[:3, :3] += np.diag(nu**2)
+            self.ekf.P[4, 4] += (nu[2] / max(self._last_dt(), 1e-3)) ** 2 * 0.25
+        self.ekf.update(a.pose.reshape(3, 1), lambda _x: H, lambda xx: xx[:3], R=Rm,
+                        residual=lambda z, h: np.vstack((z[:2] - h[:2], [[wrap((z[2] - h[2]).item())]])))
+        info.prealign_used = True
+        info.prealign_shift = float(wrap(a.pose[2] - x[2]))
+
+    def _last_dt(self) -> float:
+        return getattr(self, "_dt", 0.2)
+
+    def _extent_points(self, R: np.ndarray, th: np.ndarray, pos: np.ndarray) -> np.ndarray:
+        """(L, 4) world endpoints of line landmarks from their extents."""
+        ext = np.array([self.landmarks[k].extent for k in pos]).reshape(-1, 2)
+        c, s = np.cos(th), np.sin(th)
+        return np.column_stack((R * c - ext[:, 0] * s, R * s + ext[:, 0] * c, R * c - ext[:, 1] * s, R * s + ext[:, 1] * c))
+
+    def _world_ends(self, ends: np.ndarray) -> np.ndarray:
+        X, Y, Phi = self.ekf.x[:3, 0]
+        c, s = np.cos(Phi), np.sin(Phi)
+        out = np.empty_like(ends)
+        out[:, 0] = X + c * ends[:, 0] - s * ends[:, 1]
+        out[:, 1] = Y + s * ends[:, 0] + c * ends[:, 1]
+        out[:, 2] = X + c * ends[:, 2] - s * ends[:, 3]
+        out[:, 3] = Y + s * ends[:, 2] + c * ends[:, 3]
+        return out
+
+    # -- association ---------------------------------------------------------------------------
+    def _associate(self, kind: str, z: np.ndarray, Rz: np.ndarray, extra_mask: np.ndarray | None = None):
+        pos, idx = self._indices(kind)
+        if z.shape[0] == 0:
+            return [], []
+        if pos.size == 0:
+            return [], list(range(z.shape[0]))
+        x, P = self.ekf.x[:, 0], self.ekf.P
+        lm = np.column_stack((x[idx], x[idx + 1]))
+        zhat, Hp, Hl = (assoc.predict_lines if kind == "line" else assoc.predict_corners)(x[:3], lm)
+        HPH = assoc.innovation_covariances(P, idx, Hp, Hl)
+        cand = assoc.candidates(z, Rz, zhat, HPH, 1 if kind == "line" else None)
+        d2 = cand.d2.copy()
+        if extra_mask is not None:
+            d2[~extra_mask] = np.inf
+        if self.config.association == "jcbb":
+            def nu_fn(o, l):
+                return cand.nu[o, l]
+
+            def S_fn(pairs):
+                ids = [int(idx[l]) for _, l in pairs]
+                H = stacked_H(self.ekf.x, [kind] * len(pairs), ids)
+                S = H @ P @ H.T
+                for k, (o, _) in enumerate(pairs):
+                    S[2 * k : 2 * k + 2, 2 * k : 2 * k + 2] += Rz[o]
+                return S
+
+            pairs = assoc.jcbb(d2, self.gate, nu_fn, S_fn, self.config.gate_probability)
+        else:
+            pairs = assoc.nearest_neighbour(d2, self.gate)
+        new = [o for o in range(z.shape[0]) if np.min(cand.d2[o]) > self.new_gate and o not in {p[0] for p in pairs}]
+        return [(o, int(pos[l])) for o, l in pairs], new
+
+    def _associate_lines(self, obs: Observations):
+        pos, idx = self._indices("line")
+        mask = None
+        if pos.size and obs.lines.shape[0] and np.isfinite(self.config.extent_margin):
+            x = self.ekf.x[:, 0]
+            th = x[idx + 1]
+            d = np.column_stack((-np.sin(th), np.cos(th)))  # (L, 2) line directions
+            w = self._world_ends(obs.line_ends)
+            s0 = w[:, :2] @ d.T
+            s1 = w[:, 2:] @ d.T  # (m, L)
+            ext = np.array([self.landmarks[k].extent for k in pos]).reshape(-1, 2)
+            m = self.config.extent_margin
+            mask = (np.maximum(s0, s1) >= ext[None, :, 0] - m) & (np.minimum(s0, s1) <= ext[None, :, 1] + m)
+        return self._associate("line", obs.lines, obs.line_cov, mask)
+
+    def _associate_corners(self, obs: Observations):
+        if not self.config.use_corners:
+            return [], []
+        return self._associate("corner", obs.corners, obs.corner_cov)
+
+    # -- update and map management ---------------------------------------------------------------
+    def _update(self, obs: Observations, pairs_l, pairs_c, info: StepInfo) -> None:
+        kinds = ["line"] * len(pairs_l) + ["corner"] * len(pairs_c)
+        if not kinds:
+            return
+        ids = [ROBOT_DIM + 2 * k for _, k in pairs_l] + [ROBOT_DIM + 2 * k for _, k in pairs_c]
+        z = np.concatenate([obs.lines[o] for o, _ in pairs_l] + [obs.corners[o] for o, _ in pairs_c])
+        covs = [obs.line_cov[o] for o, _ in pairs_l] + [obs.corner_cov[o] for o, _ in pairs_c]
+        R = np.zeros((2 * len(covs), 2 * len(covs)))
+        for k, c in enumerate(covs):
+            R[2 * k : 2 * k + 2, 2 * k : 2 * k + 2] = c
+        self.ekf.update(z.reshape(-1, 1), stacked_H, stacked_h, R=R, args=(kinds, ids), hx_args=(kinds, ids),
+                        residual=stacked_residual(kinds))
+        self.ekf.x[2, 0] = wrap(self.ekf.x[2, 0])
+        line_rows = [i + 1 for i, k in zip(ids, kinds) if k == "line"]
+        self.ekf.x[line_rows, 0] = wrap(self.ekf.x[line_rows, 0])
+        y = self.ekf.y[:, 0]
+        info.nis = float(y @ self.ekf.SI @ y)
+        info.nis_dof = y.size
+        info.n_matched = len(kinds)
+        for _, k in pairs_l + pairs_c:
+            lm = self.landmarks[k]
+            lm.hits += 1
+            lm.last_seen = self.scan_no
+
+    def _extend(self, obs: Observations, pairs_l) -> None:
+        if not pairs_l:
+            return
+        w = self._world_ends(obs.line_ends)
+        for o, k in pairs_l:
+            th = self.ekf.x[ROBOT_DIM + 2 * k + 1, 0]
+            d = np.array([-np.sin(th), np.cos(th)])
+            s = (w[o, :2] @ d, w[o, 2:] @ d)
+            lo, hi = self.landmarks[k].extent
+            self.landmarks[k].extent = (min(lo, *s), max(hi, *s))
+
+    def _add(self, kind: str, z: np.ndarray, Rz: np.ndarray, ends: np.ndarray | None) -> None:
+        pose = self.ekf.x[:3, 0]
+        value, Gp, Gz = (models.init_line if kind == "line" else models.init_corner)(pose, z)
+        self.ekf.add_landmark(value, Gp, Gz, Rz)
+        lm = Landmark(kind, born=self.scan_no, last_seen=self.scan_no, confirmed=self.config.confirm_hits <= 1)
+        if ends is not None:
+            w = self._world_ends(ends.reshape(1, 4))[0]
+            d = np.array([-np.sin(value[1]), np.cos(value[1])])
+            s = (w[:2] @ d, w[2:] @ d)
+            lm.extent = (min(s), max(s))
+        self.landmarks.append(lm)
+
+    def _manage(self) -> None:
+        cfg = self.config
+        drop = []
+        for k, lm in enumerate(self.landmarks):
+            if lm.confirmed:
+                continue
+            if lm.hits >= cfg.confirm_hits:
+                lm.confirmed = True
+            elif self.scan_no - lm.born >= cfg.tentative_window:
+                drop.append(k)
+        if drop:
+            self.ekf.remove_landmarks([ROBOT_DIM + 2 * k for k in drop])
+            keep = set(range(len(self.landmarks))) - set(drop)
+            self.landmarks = [lm for k, lm in enumerate(self.landmarks) if k in keep]
+
+    # -- output --------------------------------------------------------------------------------
+    def map_lines(self, confirmed_only: bool = True) -> np.ndarray:
+        """(k, 7) world lines: R, theta, x0, y0, x1, y1, hits."""
+        pos, idx = self._indices("line")
+        keep = np.array([self.landmarks[k].confirmed or not confirmed_only for k in pos], bool).reshape(-1)
+        pos, idx = pos[keep], idx[keep]
+        x = self.ekf.x[:, 0]
+        R, th = x[idx], x[idx + 1]
+        ends = self._extent_points(R, th, pos)
+        hits = np.array([self.landmarks[k].hits for k in pos], float)
+        return np.column_stack((R, th, ends, hits)).reshape(-1, 7)
+
+    def map_corners(self, confirmed_only: bool = True) -> np.ndarray:
+        """(k, 3) world corners: x, y, hits."""
+        pos, idx = self._indices("corner")
+        keep = np.array([self.landmarks[k].confirmed or not confirmed_only for k in pos], bool).reshape(-1)
+        pos, idx = pos[keep], idx[keep]
+        x = self.ekf.x[:, 0]
+        hits = np.array([self.landmarks[k].hits for k in pos], float)
+        return np.column_stack((x[idx], x[idx + 1], hits)).reshape(-1, 3)
+
+    def healthy(self, full: bool = False) -> bool:
+        """State finite and covariance symmetric positive (semi-)definite (robot block, or all if
+        ``full``); the first pose defines the frame, so a zero pose covariance is legitimate."""
+        if not np.all(np.isfinite(self.ekf.x)):
+            return False
+        P = self.ekf.P if full else self.ekf.P[:ROBOT_DIM, :ROBOT_DIM]
+        if not np.all(np.isfinite(P)) or not np.allclose(P, P.T, atol=1e-9):
+            return False
+        try:
+            np.linalg.cholesky(P + 1e-12 * np.eye(P.shape[0]))
+        except np.linalg.LinAlgError:
+            return False
+        return True
+
+
+def _point_segment_distance(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    """Distance (m) from point p (2,) to segments (L, 4)."""
+    a, b = seg[:, :2], seg[:, 2:]
+    ab = b - a
+    L2 = np.einsum("ij,ij->i", ab, ab)
+    t = np.where(L2 > 0, np.einsum("ij,ij->i", p - a, ab) / np.where(L2 > 0, L2, 1.0), 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    q = a + t[:, None] * ab
+    return np.hypot(*(p - q).T)

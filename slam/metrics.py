@@ -1,0 +1,263 @@
+"""Trajectory and map scores: ATE after a 2-D rigid alignment, RPE, map error against true walls,
+and the relations metric of Kummerle et al. 2009 ("On measuring the accuracy of SLAM algorithms").
+
+Trajectories are (n, 4) arrays ``t s, x m, y m, theta rad``. Pure functions, plus one reader.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from lms200 import LogFormatError
+
+from .models import wrap
+
+
+def interpolate_poses(traj: np.ndarray, stamps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Poses (k, 3) of ``traj`` at ``stamps`` (linear in x, y; shortest arc in theta) and a mask of
+    the stamps inside the trajectory's time span (poses outside are nan)."""
+    traj = np.asarray(traj, float).reshape(-1, 4)
+    stamps = np.asarray(stamps, float).reshape(-1)
+    t = traj[:, 0]
+    if np.any(np.diff(t) < 0):
+        raise ValueError("trajectory: stamps must not decrease")
+    inside = (stamps >= t[0] - 1e-9) & (stamps <= t[-1] + 1e-9)
+    out = np.full((stamps.size, 3), np.nan)
+    if traj.shape[0] == 1:
+        out[inside] = traj[0, 1:]
+        return out, inside
+    s = np.clip(stamps[inside], t[0], t[-1])
+    i = np.clip(np.searchsorted(t, s, side="right") - 1, 0, t.size - 2)
+    span = t[i + 1] - t[i]
+    f = np.where(span > 0, (s - t[i]) / np.where(span > 0, span, 1.0), 0.0)
+    a, b = traj[i, 1:], traj[i + 1, 1:]
+    out[inside, :2] = a[:, :2] + f[:, None] * (b[:, :2] - a[:, :2])
+    out[inside, 2] = wrap(a[:, 2] + f * wrap(b[:, 2] - a[:, 2]))
+    return out, inside
+
+
+def relative(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Pose b in the frame of pose a, row-wise for (k, 3) arrays."""
+    d = b[:, :2] - a[:, :2]
+    c, s = np.cos(a[:, 2]), np.sin(a[:, 2])
+    return np.column_stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1], wrap(b[:, 2] - a[:, 2])))
+
+
+# --- ATE --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Alignment2D:
+    """x_truth = R(rotation) x_est + translation (rotation about z only)."""
+
+    rotation: float
+    translation: tuple[float, float]
+
+    def apply(self, xy: np.ndarray) -> np.ndarray:
+        c, s = np.cos(self.rotation), np.sin(self.rotation)
+        xy = np.asarray(xy, float).reshape(-1, 2)
+        return xy @ np.array([[c, s], [-s, c]]) + np.asarray(self.translation)
+
+
+def align_2d(est_xy: np.ndarray, true_xy: np.ndarray) -> tuple[Alignment2D, float]:
+    """Least-squares rigid 2-D alignment (Umeyama without scale) of est onto truth, restricted to
+    a proper rotation; also returns the RMSE of the best *reflection*, to detect a mirrored estimate."""
+    mu_e, mu_t = est_xy.mean(0), true_xy.mean(0)
+    E, T = est_xy - mu_e, true_xy - mu_t
+    U, _, Vt = np.linalg.svd(E.T @ T)
+    Rp = (U @ np.diag([1.0, np.sign(np.linalg.det(U @ Vt)) or 1.0]) @ Vt).T  # proper rotation
+    Rm = (U @ np.diag([1.0, -np.sign(np.linalg.det(U @ Vt)) or -1.0]) @ Vt).T  # reflection
+    rot = float(np.arctan2(Rp[1, 0], Rp[0, 0]))
+    al = Alignment2D(rot, tuple(mu_t - Rp @ mu_e))
+    mirror_err = T - E @ Rm.T
+    return al, float(np.sqrt(np.mean(np.sum(mirror_err**2, axis=1))))
+
+
+@dataclass(frozen=True)
+class AteResult:
+    """Absolute trajectory error (m) after 2-D rigid alignment; heading error (rad)."""
+
+    rmse: float
+    mean: float
+    median: float
+    max: float
+    heading_rmse: float
+    n: int
+    rotation: float
+    translation: tuple[float, float]
+    mirror_rmse: float
+    mirrored: bool  # a reflection fits better: the estimate is probably mirrored
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def ate(estimate: np.ndarray, truth: np.ndarray, align: bool = True) -> AteResult:
+    """ATE of ``estimate`` against ``truth`` (both (n, 4) t, x, y, theta); the truth is
+    interpolated at the estimate's stamps (stamps outside its span are left out)."""
+    est = np.asarray(estimate, float).reshape(-1, 4)
+    tru, inside = interpolate_poses(truth, est[:, 0])
+    est, tru = est[inside], tru[inside]
+    if est.shape[0] < 2:
+        raise ValueError("ate: fewer than 2 estimated poses fall inside the ground truth's time span")
+    if align:
+        al, mirror = align_2d(est[:, 1:3], tru[:, :2])
+    else:
+        al, mirror = Alignment2D(0.0, (0.0, 0.0)), np.inf
+    xy = al.apply(est[:, 1:3])
+    e = np.hypot(*(xy - tru[:, :2]).T)
+    he = wrap(est[:, 3] + al.rotation - tru[:, 2])
+    rmse = float(np.sqrt(np.mean(e**2)))
+    return AteResult(rmse, float(e.mean()), float(np.median(e)), float(e.max()), float(np.sqrt(np.mean(he**2))),
+                     int(e.size), al.rotation, tuple(float(v) for v in al.translation), mirror,
+                     bool(mirror < 0.5 * rmse))
+
+
+# --- RPE --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class RpeResult:
+    """Relative pose error over a travelled distance ``delta`` (m): translation (m), rotation (rad)."""
+
+    delta: float
+    trans_rmse: float
+    trans_mean: float
+    trans_max: float
+    rot_rmse: float
+    rot_mean: float
+    n: int
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def rpe(estimate: np.ndarray, truth: np.ndarray, delta: float = 1.0) -> RpeResult:
+    """RPE over pose pairs (i, j) where j is the first pose at least ``delta`` m of true travel
+    after i; needs no alignment."""
+    est = np.asarray(estimate, float).reshape(-1, 4)
+    tru, inside = interpolate_poses(truth, est[:, 0])
+    est, tru = est[inside, 1:], tru[inside]
+    travelled = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(tru[:, :2], axis=0).T))))
+    j = np.searchsorted(travelled, travelled + delta)
+    ok = j < travelled.size
+    i, j = np.nonzero(ok)[0], j[ok]
+    if i.size == 0:
+        return RpeResult(delta, np.nan, np.nan, np.nan, np.nan, np.nan, 0)
+    de, dt = relative(est[i], est[j]), relative(tru[i], tru[j])
+    err = relative(dt, de)  # (truth relative)^-1 (estimate relative)
+    te, re = np.hypot(err[:, 0], err[:, 1]), np.abs(err[:, 2])
+    return RpeResult(delta, float(np.sqrt(np.mean(te**2))), float(te.mean()), float(te.max()),
+                     float(np.sqrt(np.mean(re**2))), float(re.mean()), int(i.size))
+
+
+# --- map against true walls -------------------------------------------------------------------------
+@dataclass(frozen=True)
+class MapError:
+    """Map lines against the true walls: perpendicular distance of segment endpoints (m) and
+    direction error (rad) to the matched wall; ``matched`` of ``n_lines`` lines found a wall."""
+
+    n_lines: int
+    matched: int
+    distance_mean: float
+    distance_rmse: float
+    angle_mean: float
+    wall_coverage: float  # fraction of the total true wall length overlapped by matched map lines
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def map_error(map_segments: np.ndarray, walls: np.ndarray, alignment: Alignment2D | None = None,
+              max_angle: float = np.radians(10.0), max_distance: float = 0.5) -> MapError:
+    """Match each map segment (k, 4: x0, y0, x1, y1, map frame) to the true wall (n, 4) nearest in
+    mean endpoint distance among those within ``max_angle`` in direction that it overlaps; the map
+    is first moved into the truth frame by ``alignment`` (e.g. the ATE's)."""
+    seg = np.asarray(map_segments, float).reshape(-1, 4)
+    walls = np.asarray(walls, float).reshape(-1, 4)
+    if alignment is not None and seg.size:
+        seg = np.column_stack((alignment.apply(seg[:, :2]), alignment.apply(seg[:, 2:])))
+    if seg.shape[0] == 0 or walls.shape[0] == 0:
+        return MapError(seg.shape[0], 0, np.nan, np.nan, np.nan, 0.0)
+    wa, wb = walls[:, :2], walls[:, 2:]
+    wlen = np.hypot(*(wb - wa).T)
+    wd = (wb - wa) / wlen[:, None]  # (n, 2) wall directions
+    wn = np.column_stack((-wd[:, 1], wd[:, 0]))
+    sa, sb = seg[:, :2], seg[:, 2:]
+    sd = (sb - sa) / np.maximum(np.hypot(*(sb - sa).T), 1e-12)[:, None]
+    ang = np.arccos(np.clip(np.abs(sd @ wd.T), 0.0, 1.0))  # (k, n), direction error mod pi
+    da = np.abs(np.einsum("kj,nj->kn", sa, wn) - np.sum(wa * wn, 1)[None, :])
+    db = np.abs(np.einsum("kj,nj->kn", sb, wn) - np.sum(wa * wn, 1)[None, :])
+    dist = 0.5 * (da + db)
+    ta = np.einsum("kj,nj->kn", sa, wd) - np.sum(wa * wd, 1)[None, :]
+    tb = np.einsum("kj,nj->kn", sb, wd) - np.sum(wa * wd, 1)[None, :]
+    lo, hi = np.minimum(ta, tb), np.maximum(ta, tb)
+    overlap = np.minimum(hi, wlen[None, :]) - np.maximum(lo, 0.0)
+    ok = (ang < max_angle) & (overlap > 0) & (dist < max_distance)
+    cost = np.where(ok, dist, np.inf)
+    best = np.argmin(cost, axis=1)
+    matched = np.isfinite(cost[np.arange(seg.shape[0]), best])
+    if not matched.any():
+        return MapError(seg.shape[0], 0, np.nan, np.nan, np.nan, 0.0)
+    k = np.nonzero(matched)[0]
+    dk = np.concatenate((da[k, best[k]], db[k, best[k]]))
+    covered = np.zeros(walls.shape[0])
+    for w in np.unique(best[k]):  # union of overlaps per wall
+        iv = sorted((max(lo[i, w], 0.0), min(hi[i, w], wlen[w])) for i in k[best[k] == w])
+        total, end = 0.0, -np.inf
+        for a, b in iv:
+            if b > end:
+                total += b - max(a, end)
+                end = b
+        covered[w] = total
+    return MapError(seg.shape[0], int(k.size), float(dk.mean()), float(np.sqrt(np.mean(dk**2))),
+                    float(ang[k, best[k]].mean()), float(covered.sum() / wlen.sum()))
+
+
+# --- relations (Kummerle et al. 2009) ----------------------------------------------------------------
+def read_relations(path: str | Path) -> np.ndarray:
+    """Read a relations file (``t1 t2 x y z roll pitch yaw`` a line) into (m, 5): t1, t2, x, y, yaw."""
+    rows = []
+    with open(path, encoding="ascii", errors="replace") as f:
+        for no, line in enumerate(f, 1):
+            s = line.split()
+            if not s or s[0].startswith("#"):
+                continue
+            if len(s) != 8:
+                raise LogFormatError(path, no, f"relation rows need 8 numbers (t1 t2 x y z roll pitch yaw), got {len(s)}")
+            try:
+                v = [float(w) for w in s]
+            except ValueError:
+                raise LogFormatError(path, no, f"relation row has a non-number: {line.strip()[:60]!r}") from None
+            rows.append((v[0], v[1], v[2], v[3], v[7]))
+    return np.array(rows, float).reshape(-1, 5)
+
+
+@dataclass(frozen=True)
+class RelationsResult:
+    """Mean and std of the absolute translational (m) and rotational (deg) relation errors."""
+
+    trans_mean: float
+    trans_std: float
+    rot_mean_deg: float
+    rot_std_deg: float
+    n: int
+    n_skipped: int  # relations outside the trajectory's time span
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def relations_error(trajectory: np.ndarray, relations: np.ndarray) -> RelationsResult:
+    """Kummerle et al.'s metric: for each relation (t1, t2, x, y, yaw), the estimated motion from
+    t1 to t2 (poses interpolated at the stamps) against the true one; eps = true^-1 * estimated."""
+    rel = np.asarray(relations, float).reshape(-1, 5)
+    p1, in1 = interpolate_poses(trajectory, rel[:, 0])
+    p2, in2 = interpolate_poses(trajectory, rel[:, 1])
+    ok = in1 & in2
+    if not ok.any():
+        raise ValueError("relations_error: no relation falls inside the trajectory's time span")
+    est = relative(p1[ok], p2[ok])
+    err = relative(rel[ok, 2:5], est)
+    te = np.hypot(err[:, 0], err[:, 1])
+    re = np.degrees(np.abs(err[:, 2]))
+    return RelationsResult(float(te.mean()), float(te.std()), float(re.mean()), float(re.std()), int(ok.sum()), int((~ok).sum()))

@@ -1,0 +1,69 @@
+"""Observations of one scan in the form the filter uses, built from a ``features.FeatureSet``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from features.types import FeatureSet
+
+from .config import SlamConfig
+
+
+def _empty(shape: tuple[int, ...]) -> np.ndarray:
+    return np.zeros(shape)
+
+
+@dataclass(frozen=True)
+class Observations:
+    """Line and corner observations of one scan, in the sensor frame.
+
+    Attributes:
+        lines: (m, 2) rho m >= 0, alpha rad.
+        line_cov: (m, 2, 2) covariance of (rho, alpha).
+        line_ends: (m, 4) segment endpoints x0, y0, x1, y1 (m).
+        corners: (k, 2) x, y (m).
+        corner_cov: (k, 2, 2) covariance of (x, y).
+    """
+
+    lines: np.ndarray = field(default_factory=lambda: _empty((0, 2)))
+    line_cov: np.ndarray = field(default_factory=lambda: _empty((0, 2, 2)))
+    line_ends: np.ndarray = field(default_factory=lambda: _empty((0, 4)))
+    corners: np.ndarray = field(default_factory=lambda: _empty((0, 2)))
+    corner_cov: np.ndarray = field(default_factory=lambda: _empty((0, 2, 2)))
+
+    @property
+    def line_lengths(self) -> np.ndarray:
+        e = self.line_ends
+        return np.hypot(e[:, 2] - e[:, 0], e[:, 3] - e[:, 1])
+
+
+def from_features(fs: FeatureSet, config: SlamConfig) -> Observations:
+    """Keep the lines with enough support; their covariance is the extractor's (where finite and
+    positive definite) plus the floor ``diag(sigma_rho^2, sigma_alpha_obs^2)``."""
+    floor = np.diag([config.sigma_rho**2, config.sigma_alpha_obs**2])
+    lines, covs, ends = [], [], []
+    for ln in fs.lines:
+        if ln.n_points and ln.n_points < config.min_line_points:
+            continue
+        if ln.length < config.min_line_length:
+            continue
+        c = np.asarray(ln.cov, dtype=float)
+        if c.shape != (2, 2) or not np.all(np.isfinite(c)) or np.linalg.eigvalsh(0.5 * (c + c.T)).min() < 0:
+            c = np.zeros((2, 2))
+        lines.append((ln.rho, ln.alpha))
+        covs.append(0.5 * (c + c.T) + floor)
+        ends.append((*ln.start, *ln.end))
+    corners, ccov = [], []
+    if config.use_corners:
+        for cn in fs.corners:
+            corners.append((cn.x, cn.y))
+            ccov.append(np.eye(2) * config.sigma_corner**2)
+    return Observations(
+        np.array(lines, float).reshape(-1, 2),
+        np.array(covs, float).reshape(-1, 2, 2),
+        np.array(ends, float).reshape(-1, 4),
+        np.array(corners, float).reshape(-1, 2),
+        np.array(ccov, float).reshape(-1, 2, 2),
+    )

@@ -1,0 +1,157 @@
+"""``run_slam(records, config)``: the filter over a scan source, and its result."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Iterable
+
+import numpy as np
+
+from lms200.records import Record
+
+from .config import SlamConfig
+from .filter import SlamFilter
+from .models import wrap
+from .observations import Observations, from_features
+
+
+class SlamInputError(ValueError):
+    """The records cannot be processed (no scans, time going backwards)."""
+
+
+@dataclass
+class SlamResult:
+    """Output of a SLAM run. World frame = the frame of the first scan's estimated pose.
+
+    Attributes:
+        trajectory: (n, 4) t s, x m, y m, theta rad: one pose per input scan, the input's stamps.
+        covariances: (n, 3, 3) covariance of (x, y, theta).
+        map_lines: (k, 7) confirmed line landmarks: R, theta, x0, y0, x1, y1, hits.
+        map_corners: (c, 3) confirmed corner landmarks: x, y, hits.
+        diagnostics: per-scan arrays ``nis``, ``nis_dof``, ``nees`` (nan without truth),
+            ``n_landmarks``, ``n_matched``, ``n_lines``, ``prealign_used``; scalars ``diverged``,
+            ``diverged_at`` (stamp or None), ``mean_nis_per_dof``, ``mean_nees``, ``healthy``.
+    """
+
+    trajectory: np.ndarray
+    covariances: np.ndarray
+    map_lines: np.ndarray
+    map_corners: np.ndarray
+    diagnostics: dict[str, Any] = field(default_factory=dict)
+
+    def map_dict(self) -> dict[str, Any]:
+        """The map as plain lists (for map.json)."""
+        return {
+            "frame": "world frame of the first scan (x m, y m, angles rad)",
+            "lines": [
+                {"R": r[0], "theta": r[1], "start": [r[2], r[3]], "end": [r[4], r[5]], "hits": int(r[6])}
+                for r in self.map_lines.tolist()
+            ],
+            "corners": [{"x": c[0], "y": c[1], "hits": int(c[2])} for c in self.map_corners.tolist()],
+        }
+
+
+def _compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a[2]), np.sin(a[2])
+    return np.array([a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], wrap(a[2] + b[2])])
+
+
+def run_observations(
+    stamps: Iterable[float],
+    observations: Iterable[Observations],
+    config: SlamConfig = SlamConfig(),
+    odometry: Iterable[tuple[float, float, float] | None] | None = None,
+    truths: Iterable[tuple[float, float, float] | None] | None = None,
+) -> SlamResult:
+    """Run the filter over ready observations (one per scan); see :func:`run_steps`."""
+    stamps = list(stamps)
+    odometry = list(odometry) if odometry is not None else [None] * len(stamps)
+    truths = list(truths) if truths is not None else [None] * len(stamps)
+    return run_steps(zip(stamps, observations, odometry, truths), config)
+
+
+def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: SlamConfig = SlamConfig()) -> SlamResult:
+    """Run the filter over (stamp s, observations, odometry pose or None, true pose or None).
+
+    The filter starts at the origin; with true poses, the pose NEES is computed in the truth frame
+    anchored at the first true pose.
+    """
+    slam = SlamFilter(config)
+    traj, covs = [], []
+    keys = ("nis", "nis_dof", "nees", "n_landmarks", "n_matched", "n_lines", "prealign_used", "prealign_shift")
+    diag: dict[str, list] = {k: [] for k in keys}
+    diverged_at = None
+    anchor = None
+    previous = None
+    healthy = True
+    for k, (t, obs, odom, truth) in enumerate(steps):
+        t = float(t)
+        if previous is not None and t < previous:
+            raise SlamInputError(f"scan {k}: timestamp {t} is earlier than the previous one ({previous})")
+        previous = t
+        info = slam.step(t, obs, odom if config.use_odometry else None)
+        pose = slam.pose
+        P = slam.ekf.P[:3, :3].copy()
+        traj.append((t, *pose))
+        covs.append(P)
+        nees = np.nan
+        if truth is not None:
+            if anchor is None:
+                anchor = np.asarray(truth, float)
+            est = _compose(anchor, pose)
+            e = np.asarray(truth, float) - est
+            e[2] = wrap(e[2])
+            c, s = np.cos(anchor[2]), np.sin(anchor[2])
+            Rw = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
+            Pw = Rw @ P @ Rw.T
+            if k > 0:
+                try:
+                    nees = float(e @ np.linalg.solve(Pw, e))
+                except np.linalg.LinAlgError:
+                    nees = np.inf
+        for key, value in (("nis", info.nis), ("nis_dof", info.nis_dof), ("nees", nees),
+                           ("n_landmarks", len(slam.landmarks)), ("n_matched", info.n_matched),
+                           ("n_lines", info.n_lines), ("prealign_used", info.prealign_used),
+                           ("prealign_shift", info.prealign_shift)):
+            diag[key].append(value)
+        ok = slam.healthy(full=(k % 50 == 0))
+        healthy &= ok
+        window = config.nis_window
+        nis_w = np.sum(diag["nis"][-window:])
+        dof_w = np.sum(diag["nis_dof"][-window:])
+        if diverged_at is None and (not ok or (len(diag["nis"]) >= window and dof_w > 0 and nis_w / dof_w > config.nis_divergence)):
+            diverged_at = t
+    if not traj:
+        raise SlamInputError("no scans in the input")
+    out: dict[str, Any] = {k: np.array(v) for k, v in diag.items()}
+    dof = out["nis_dof"].sum()
+    finite_nees = out["nees"][np.isfinite(out["nees"])]
+    out.update(
+        diverged=diverged_at is not None,
+        diverged_at=diverged_at,
+        healthy=bool(healthy and slam.healthy(full=True)),
+        mean_nis_per_dof=float(out["nis"].sum() / dof) if dof else float("nan"),
+        mean_nees=float(finite_nees.mean()) if finite_nees.size else float("nan"),
+    )
+    return SlamResult(np.array(traj, float).reshape(-1, 4), np.array(covs).reshape(-1, 3, 3),
+                      slam.map_lines(), slam.map_corners(), out)
+
+
+def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> SlamResult:
+    """Odometry-free EKF-SLAM over a scan source (a log reader, the simulator's records...).
+
+    Line (and, with ``config.use_corners``, corner) observations come from
+    ``features.extract(scan, method=config.extractor, **config.extractor_params)``. The records'
+    odometry is used only with ``config.use_odometry``; true poses only for the NEES diagnostic.
+
+    Returns:
+        SlamResult with one pose per record, stamped with the record's ``scan.stamp``.
+    """
+    from features import extract  # the extractor registry (methods load lazily)
+
+    def steps():
+        for rec in records:
+            fs = extract(rec.scan, method=config.extractor, **config.extractor_params)
+            yield rec.scan.stamp, from_features(fs, config), rec.odom, rec.truth
+
+    return run_steps(steps(), config)

@@ -1,0 +1,104 @@
+"""`compare` on synthetic rooms with exact truth, `summarise` on a hand-built table, and the CLI."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from experiments.compare import Source, compare, summarise
+from experiments.synthetic import L_ROOM, room_scan
+from lms200 import Record, write_log
+
+ROOT = Path(__file__).resolve().parents[1]
+BASELINES = ["split_merge", "iepf", "hough", "ransac"]
+POSES = [(0.0, 0.0, 0.3), (1.0, -1.0, -0.4), (3.5, -1.5, 1.9)]
+
+
+def room_source(sigma: float = 0.005) -> Source:
+    records, truths = [], {}
+    for k, pose in enumerate(POSES):
+        scan, truth = room_scan(L_ROOM, pose, sigma=sigma, seed=k)
+        scan = scan.replace(stamp=float(k))
+        records.append(Record(scan, None, pose))
+        truths[float(k)] = truth
+    return Source("lroom", "sim", 7, records, lambda rec: truths[rec.scan.stamp], len(records))
+
+
+def test_compare_table_rows_and_scores():
+    table = compare([room_source()], BASELINES)
+    assert len(table) == len(BASELINES) * len(POSES)
+    assert set(table["method"]) == set(BASELINES)
+    assert (table["seed"] == 7).all() and sorted(table["scan"].unique()) == [0, 1, 2]
+    assert (table["microseconds"] > 0).all()
+    # exact room, 5 mm noise: every wall of every scan found, nothing else
+    assert (table["f1"] == 1.0).all() and (table["fp"] == 0).all()
+    assert (table["tp"] == table["n_truth"]).all()
+    assert (table["rho_err_rms"] < 0.005).all()
+    assert (table["corner_fn"] == 0).all()
+    assert (table["explained"] > 0.9).all()
+    s = summarise(table)
+    assert set(s["method"]) == set(BASELINES) and (s["f1"] == 1.0).all()
+    assert s["speed_vs_sensor"].isna().all()  # no sensor method in this run
+
+
+def test_methods_run_interleaved_in_rotating_order():
+    table = compare([room_source()], BASELINES)
+    firsts = [table[table["scan"] == k]["method"].iloc[0] for k in range(len(POSES))]
+    assert firsts == BASELINES[: len(POSES)]
+
+
+def test_summarise_pools_counts_and_errors():
+    rows = []
+    for method, us, tp, fp, fn, rho_mean, rho_rms in [
+        ("sensor", 100.0, 3, 0, 1, 0.001, 0.002), ("sensor", 300.0, 1, 1, 0, 0.005, 0.005),
+        ("hough", 800.0, 2, 2, 2, 0.0, 0.004), ("hough", 800.0, 0, 0, 2, np.nan, np.nan),
+    ]:
+        rows.append(dict(method=method, source="w", kind="sim", seed=0, scan=0, n_lines=tp + fp,
+                         microseconds=us, explained=0.9, range_rms=0.004, tp=tp, fp=fp, fn=fn,
+                         rho_err_mean=rho_mean, rho_err_rms=rho_rms, alpha_err_mean=0.0, alpha_err_rms=0.0,
+                         endpoint_err_mean=0.01, corner_tp=1, corner_fp=0, corner_fn=1, corner_err_mean=0.02))
+    s = summarise(pd.DataFrame(rows)).set_index("method")
+    assert s.loc["sensor", "f1"] == pytest.approx(2 * 4 / (2 * 4 + 1 + 1))
+    assert s.loc["sensor", "rho_bias_mm"] == pytest.approx((3 * 1 + 1 * 5) / 4)
+    assert s.loc["sensor", "rho_rms_mm"] == pytest.approx(np.sqrt((3 * 4 + 1 * 25) / 4))
+    assert s.loc["hough", "f1"] == pytest.approx(4 / (4 + 2 + 4))
+    assert s.loc["hough", "speed_vs_sensor"] == pytest.approx(200.0 / 800.0)
+    assert s.loc["sensor", "speed_vs_sensor"] == 1.0
+    assert s.loc["hough", "scans_per_s"] == pytest.approx(1250.0)
+    assert s.loc["sensor", "corner_recall"] == 0.5
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run([sys.executable, "-m", "experiments.cli", "compare", *args],
+                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
+
+
+def test_cli_on_a_log_writes_table_summary_and_config(tmp_path):
+    log = tmp_path / "room.log"
+    write_log(log, [Record(room_scan(L_ROOM, p, sigma=0.005, seed=k)[0].replace(stamp=float(k)))
+                    for k, p in enumerate(POSES)])
+    out = tmp_path / "out"
+    res = _cli(str(log), "--methods", "split_merge", "hough", "--format", "csv", "--out", str(out),
+               "--no-progress", "--set", "hough.rho_step=0.01")
+    assert res.returncode == 0, res.stderr
+    table = pd.read_csv(out / "compare.csv")
+    assert len(table) == 2 * len(POSES)
+    assert (table["explained"] > 0.9).all()  # mm-mode log of 5 mm noise: 3 sigma explains ~99%
+    summary = pd.read_csv(out / "summary.csv")
+    assert list(summary["method"]) == ["split_merge", "hough"]
+    assert "split_merge" in res.stdout and (out / "summary.txt").exists()
+    assert "rho_step: 0.01" in (out / "config.yaml").read_text()
+
+
+def test_cli_errors_are_one_line(tmp_path):
+    res = _cli("no_such_world_or_log", "--out", str(tmp_path))
+    assert res.returncode == 2 and "neither a world" in res.stderr
+    res = _cli("office", "--methods", "nonexistent", "--out", str(tmp_path))
+    assert res.returncode == 2 and "unknown extraction method" in res.stderr

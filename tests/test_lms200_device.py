@@ -1,0 +1,162 @@
+"""The virtual LMS200 as a state machine on a simulated clock: replies, pacing, units, faults."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lms200 import Scan
+from lms200.codes import ranges_to_codes
+from lms200.framing import Frame, FrameParser
+from lms200.protocol import (
+    ACK,
+    NAK,
+    build_frame,
+    decode_scan,
+    get_config_request,
+    measure_request,
+    mode_request,
+    set_config_request,
+    type_request,
+    variant_request,
+    with_units,
+)
+from lms200.virtual import Faults, VirtualLMS200, garble
+
+
+def scans(n: int = 20, seed: int = 0) -> list[Scan]:
+    rng = np.random.default_rng(seed)
+    return [Scan.lms200(rng.uniform(0.2, 8.0, 361)) for _ in range(n)]
+
+
+class Host:
+    """Drives a device on a simulated clock and parses what it sends, with arrival times."""
+
+    def __init__(self, device: VirtualLMS200) -> None:
+        self.dev, self.t, self.parser = device, 0.0, FrameParser()
+        self.events: list[tuple[float, object]] = []
+
+    def send(self, payload: bytes, address: int = 0) -> None:
+        self.dev.receive(build_frame(payload, address), self.t)
+
+    def run(self, seconds: float, step: float = 0.0005) -> list[object]:
+        start = len(self.events)
+        end = self.t + seconds
+        while self.t < end:
+            self.t += step
+            for data, _baud in self.dev.transmit(self.t):
+                self.events += [(self.t, e) for e in self.parser.feed(data)]
+        return [e for _, e in self.events[start:]]
+
+
+def test_replies_are_the_listing_frames() -> None:
+    host = Host(VirtualLMS200(scans()))
+    host.send(type_request())
+    host.send(variant_request(180, 50))
+    host.send(mode_request(0x25))
+    events = host.run(0.3)
+    frames = [build_frame(e.payload, e.address) for e in events if isinstance(e, Frame)]
+    assert events[0] == ACK and events.count(ACK) == 3
+    assert frames == [
+        bytes.fromhex("02 80 17 00 BA 4C 4D 53 32 30 30 3B 33 30 31 30 36 33 3B 56 30 32 2E 31 30 20 10 22 61"),
+        bytes.fromhex("02 80 07 00 BB 01 B4 00 32 00 10 03 9D"),
+        bytes.fromhex("02 80 03 00 A0 00 10 16 0A"),
+    ]
+
+
+def test_nak_on_bad_crc_and_silence_for_another_address() -> None:
+    host = Host(VirtualLMS200(scans()))
+    bad = bytearray(build_frame(type_request()))
+    bad[-1] ^= 0xFF
+    host.dev.receive(bytes(bad), 0.0)
+    assert host.run(0.1) == [NAK]
+    host.send(type_request(), address=5)
+    assert host.run(0.1) == []
+    host.send(b"\x55")  # no such command: 0x92 in a correct frame
+    assert [e.code for e in host.run(0.1) if isinstance(e, Frame)] == [0x92]
+
+
+def test_requested_scan_carries_the_source_in_the_current_units() -> None:
+    source = scans(3)
+    host = Host(VirtualLMS200(source, units="cm"))
+    host.send(measure_request())
+    (reply,) = [e for e in host.run(1.0) if isinstance(e, Frame)]
+    assert reply.payload[2] >> 6 == 0  # cm
+    np.testing.assert_array_equal(ranges_to_codes(decode_scan(reply.payload).ranges, "cm"), ranges_to_codes(source[0].ranges, "cm"))
+
+
+def test_units_change_needs_installation_mode_and_the_password() -> None:
+    host = Host(VirtualLMS200(scans(), units="cm"))
+    host.send(get_config_request())
+    config = [e for e in host.run(0.2) if isinstance(e, Frame)][0].payload[1:-1]
+    host.send(set_config_request(with_units(config, "mm")))
+    assert [e.payload[1] for e in host.run(0.2) if isinstance(e, Frame)] == [0]  # refused
+    host.send(mode_request(0x00, b"WRONG_PW"))
+    assert [e.payload[1] for e in host.run(0.2) if isinstance(e, Frame)] == [1]  # refused
+    # Installation mode and the configuration write take 3 s each at time_scale 1.
+    sent = host.t
+    host.send(mode_request(0x00))
+    assert [e.payload[1] for e in host.run(3.5) if isinstance(e, Frame)] == [0]
+    assert 3.0 < host.events[-1][0] - sent < 3.1
+    sent = host.t
+    host.send(set_config_request(with_units(config, "mm")))
+    assert [e.payload[1] for e in host.run(3.5) if isinstance(e, Frame)] == [1]
+    assert 3.0 < host.events[-1][0] - sent < 3.1 and host.dev.units == "mm"
+
+
+@pytest.mark.parametrize("baud, interval", [(38400, 732 * 10 / 38400), (500000, 2 / 75)])
+def test_continuous_output_is_paced_by_the_baud_rate(baud: int, interval: float) -> None:
+    dev = VirtualLMS200(scans(30))
+    dev.baud = baud
+    host = Host(dev)
+    host.send(mode_request(0x24))
+    host.run(1.2, step=0.0002)
+    times = np.array([t for t, e in host.events if isinstance(e, Frame) and e.code == 0xB0])
+    assert len(times) >= 4
+    # 38400 baud: back to back, 732 bytes take 190.6 ms; 500000: one scan per 26.7 ms (37.5 Hz).
+    np.testing.assert_allclose(np.diff(times)[1:], interval, atol=0.0005)  # the first goes at once
+
+
+def test_time_scale_speeds_up_everything_alike() -> None:
+    dev = VirtualLMS200(scans(30), time_scale=0.01)
+    dev.baud = 38400
+    host = Host(dev)
+    host.send(mode_request(0x24))
+    host.run(0.012, step=0.000002)
+    times = np.array([t for t, e in host.events if isinstance(e, Frame) and e.code == 0xB0])
+    np.testing.assert_allclose(np.diff(times), 0.01 * 732 * 10 / 38400, atol=0.00001)
+
+
+def test_baud_change_reply_goes_out_at_the_old_baud() -> None:
+    dev = VirtualLMS200(scans())
+    dev.receive(build_frame(mode_request(0x48)), 0.0)
+    pieces = []
+    t = 0.0
+    while t < 0.2:
+        t += 0.001
+        pieces += dev.transmit(t)
+    assert {b for _, b in pieces} == {9600} and dev.baud == 500000
+
+
+def test_faults_mute_miss_and_corrupt() -> None:
+    host = Host(VirtualLMS200(scans(), faults=Faults(mute=True)))
+    host.send(type_request())
+    assert host.run(0.2) == []
+    host = Host(VirtualLMS200(scans(), faults=Faults(miss_prob=1.0)))
+    host.send(type_request())
+    assert host.run(0.2) == [] and host.dev.requests == 1
+    host = Host(VirtualLMS200(scans(), faults=Faults(rx_corrupt_prob=1.0)))
+    host.send(type_request())
+    assert host.run(0.2) == [NAK]
+    dev = VirtualLMS200(scans(40), faults=Faults(corrupt_prob=0.002, seed=3))
+    dev.baud = 500000
+    host = Host(dev)
+    host.send(mode_request(0x24))
+    got = [e for e in host.run(1.0) if isinstance(e, Frame) and e.code == 0xB0]
+    assert host.parser.stats.bad_crc > 0 and len(got) + host.parser.stats.bad_crc >= dev.scans_sent - 1
+
+
+def test_garble_changes_bytes_only_when_bauds_differ() -> None:
+    data = build_frame(type_request())
+    assert garble(data, 9600, 9600) == data
+    assert 0x02 not in garble(data, 9600, 38400)

@@ -1,0 +1,141 @@
+"""The driver against the virtual LMS200, end to end over a pseudo-terminal and over TCP.
+
+The device runs 100 times faster than real time (time_scale=0.01), so baud pacing and 3 s mode
+changes take milliseconds; every scan the driver yields is compared with the scan the device sent.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from lms200 import LMS200, Scan
+from lms200.adapters import PtyAdapter, TcpServer
+from lms200.codes import ranges_to_codes
+from lms200.errors import LmsModeRefusedError, LmsNakError, LmsTimeoutError
+from lms200.virtual import Faults, VirtualLMS200
+
+SCALE = 0.01
+
+
+def source(n: int = 60, seed: int = 0) -> list[Scan]:
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        r = rng.uniform(0.2, 8.0, 361)
+        r[rng.integers(0, 361, 5)] = np.inf
+        r[rng.integers(0, 361, 3)] = np.nan
+        out.append(Scan.lms200(r))
+    return out
+
+
+def codes(ranges: np.ndarray) -> np.ndarray:
+    return ranges_to_codes(ranges, "mm")
+
+
+@pytest.mark.parametrize("adapter, baud", [(PtyAdapter, 38400), (TcpServer, 500000), (PtyAdapter, 19200)])
+def test_scans_end_to_end_with_baud_change(adapter, baud: int) -> None:  # noqa: ANN001
+    sent = source()
+    dev = VirtualLMS200(sent, time_scale=SCALE, units="cm")
+    with adapter(dev) as ad:
+        url = getattr(ad, "path", None) or ad.url
+        with LMS200(url, baud=baud) as lms:
+            assert lms.type_string.startswith("LMS200;") and dev.baud == baud and dev.units == "mm"
+            got = list(itertools.islice(lms.scans(), 8))
+            assert dev.continuous
+        assert dev.baud == 9600 and not dev.continuous  # restored on close
+    assert lms.stats.scans == 8 and lms.stats.dropped_frames == 0
+    for g, s in zip(got, sent):
+        assert g.angle_min == s.angle_min and g.range_max == pytest.approx(8.183)
+        np.testing.assert_array_equal(codes(g.ranges), codes(s.ranges))
+        assert np.array_equal(np.isnan(g.ranges), np.isnan(s.ranges)) and np.array_equal(np.isinf(g.ranges), np.isinf(s.ranges))
+
+
+def test_one_degree_variant_over_tcp() -> None:
+    sent = source(10)
+    dev = VirtualLMS200(sent, time_scale=SCALE)
+    with TcpServer(dev) as ad, LMS200(ad.url, baud=38400, resolution_deg=1.0) as lms:
+        scan = next(lms.scans())
+    assert len(scan) == 181 and scan.angle_increment == pytest.approx(np.deg2rad(1.0))
+    np.testing.assert_array_equal(codes(scan.ranges), codes(sent[0].ranges[::2]))
+
+
+def test_probes_the_baud_of_a_device_left_streaming_at_38400() -> None:
+    dev = VirtualLMS200(itertools.cycle(source()), time_scale=SCALE)
+    dev.baud = 38400
+    dev.mode = 0x24  # left in continuous mode by a crashed client
+    with PtyAdapter(dev) as ad:
+        with LMS200(ad.path, baud=500000, timeout=0.2) as lms:
+            assert dev.baud == 500000 and not dev.continuous
+            assert len(next(lms.scans())) == 361
+        assert dev.baud == 9600
+
+
+def test_missed_requests_are_retried() -> None:
+    dev = VirtualLMS200(source(), time_scale=SCALE, faults=Faults(miss_prob=0.3, seed=1))
+    with TcpServer(dev) as ad, LMS200(ad.url, timeout=0.05, retries=6) as lms:
+        assert lms.stats.retries > 0
+        dev.faults.miss_prob = 0.0
+        assert len(next(lms.scans())) == 361
+
+
+def test_corrupted_bytes_drop_frames_but_every_scan_is_right() -> None:
+    sent = source(80)
+    dev = VirtualLMS200(sent, time_scale=SCALE)
+    with TcpServer(dev) as ad, LMS200(ad.url, baud=500000) as lms:
+        dev.faults.corrupt_prob = 0.0005
+        got = list(itertools.islice(lms.scans(), 25))
+        dev.faults.corrupt_prob = 0.0
+    assert lms.stats.dropped_frames > 0
+    sent_codes = [codes(s.ranges).tobytes() for s in sent]
+    index = [sent_codes.index(codes(g.ranges).tobytes()) for g in got]
+    assert index == sorted(index)
+
+
+def test_silent_device_raises_timeout_naming_the_request() -> None:
+    dev = VirtualLMS200(source(), time_scale=SCALE, faults=Faults(mute=True))
+    with TcpServer(dev) as ad:
+        with pytest.raises(LmsTimeoutError, match=r"no LMS200 answered the type request \(0x3A\).*9600, 19200, 38400, 500000"):
+            LMS200(ad.url, timeout=0.05)
+
+
+def test_device_that_stops_mid_stream_raises_timeout() -> None:
+    dev = VirtualLMS200(source(), time_scale=SCALE)
+    with TcpServer(dev) as ad:
+        lms = LMS200(ad.url, baud=500000, timeout=0.05, mode_timeout=0.1, retries=1)
+        stream = lms.scans()
+        next(stream)
+        dev.faults.mute = True
+        with pytest.raises(LmsTimeoutError, match="no scan from"):
+            for _ in stream:
+                pass
+        with pytest.raises(LmsTimeoutError, match=r"stop continuous output.*attempt 1: nothing"):
+            lms.close()
+        assert not lms._ser.is_open
+
+
+def test_nak_is_reported_as_nak() -> None:
+    dev = VirtualLMS200(source(), time_scale=SCALE)
+    with TcpServer(dev) as ad:
+        lms = LMS200(ad.url, timeout=0.1, retries=2)
+        dev.faults.rx_corrupt_prob = 1.0
+        with pytest.raises(LmsNakError, match=r"start continuous output.*attempt 1: NAK; attempt 2: NAK"):
+            next(lms.scans())
+        dev.faults.rx_corrupt_prob = 0.0
+        lms.close()
+        assert dev.baud == 9600
+
+
+def test_refused_installation_mode_is_its_own_error() -> None:
+    dev = VirtualLMS200(source(), time_scale=SCALE, units="cm")
+    with TcpServer(dev) as ad:
+        with pytest.raises(LmsModeRefusedError, match="enter installation mode"):
+            LMS200(ad.url, units="mm", password=b"WRONG_PW")
+    assert dev.units == "cm"
+
+
+def test_loop_url_opens_and_times_out_on_its_own_echo() -> None:
+    with pytest.raises(LmsTimeoutError, match="loop://"):
+        LMS200("loop://", timeout=0.02, retries=1, probe=False)

@@ -1,0 +1,116 @@
+"""The streaming frame parser: resynchronisation, drop counters, and a property-based fuzz."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from lms200.framing import Frame, FrameParser
+from lms200.protocol import ACK, NAK, build_frame
+
+
+def frame(payload: bytes) -> bytes:
+    return build_frame(payload, address=0x80)
+
+
+def test_frames_split_byte_by_byte_with_acks_between() -> None:
+    a, b = frame(b"\xa0\x00\x10"), frame(b"\xba" + b"LMS200" + b"\x10")
+    stream = bytes([ACK]) + a + bytes([ACK]) + b
+    p = FrameParser()
+    events = []
+    for i in range(len(stream)):
+        events += p.feed(stream[i : i + 1])
+    assert events == [ACK, Frame(0x80, b"\xa0\x00\x10"), ACK, Frame(0x80, b"\xbaLMS200\x10")]
+    assert p.stats.acks == 2 and p.stats.skipped_bytes == 0 and p.stats.dropped_frames == 0
+
+
+def test_bad_crc_and_impossible_length_are_counted_and_skipped() -> None:
+    good = frame(b"\xb0\x01\x00\x10")
+    bad = bytearray(good)
+    bad[5] ^= 0x01
+    too_long = bytes([0x02, 0x80, 0x2D, 0x03])  # LEN 813
+    p = FrameParser()
+    out = p.feed(bytes(bad) + too_long + b"gar\x15bage\x15" + good)
+    assert out == [0x15, Frame(0x80, b"\xb0\x01\x00\x10")]  # the NAK amid garbage is garbage
+    assert p.stats.bad_crc == 1 and p.stats.bad_length == 1 and p.stats.naks == 1
+
+
+def test_false_start_waits_then_idle_recovers_the_frame_behind_it() -> None:
+    good = frame(b"\xa0\x00\x10")
+    false_start = bytes([0x02, 0x80, 0x00, 0x02])  # announces 512 bytes that never come
+    p = FrameParser()
+    assert p.frames(false_start + good) == []
+    assert p.idle() == [Frame(0x80, b"\xa0\x00\x10")]
+    assert p.stats.stalled == 1 and p.pending == 0
+
+
+def test_frames_for_other_addresses_are_ignored() -> None:
+    p = FrameParser(address=0x81)
+    assert p.frames(frame(b"\xa0\x00\x10") + build_frame(b"\xa0\x01\x10", address=0x81)) == [Frame(0x81, b"\xa0\x01\x10")]
+
+
+# -- fuzz ---------------------------------------------------------------------------------------
+
+
+@st.composite
+def streams(draw):  # noqa: ANN001, ANN201
+    """A byte stream of intact frames mixed with garbage, truncated frames and bit-flipped frames."""
+    parts: list[bytes] = []
+    intact: list[bytes] = []
+    for _ in range(draw(st.integers(1, 8))):
+        kind = draw(st.sampled_from(["frame", "frame", "garbage", "truncated", "flipped", "header"]))
+        if kind == "frame":
+            n = draw(st.sampled_from([1, 3, 12, 40, 726]))
+            payload = draw(st.binary(min_size=n, max_size=n))
+            parts.append(frame(payload))
+            intact.append(payload)
+        elif kind == "garbage":
+            parts.append(draw(st.binary(max_size=60)))
+        elif kind == "header":  # a plausible false start: STX, reply address, random length
+            parts.append(bytes([0x02, 0x80]) + draw(st.binary(min_size=0, max_size=3)))
+        else:
+            f = bytearray(frame(draw(st.binary(min_size=1, max_size=60))))
+            if kind == "truncated":
+                f = f[: draw(st.integers(1, len(f) - 1))]
+            else:
+                i = draw(st.integers(0, len(f) - 1))
+                f[i] ^= 1 << draw(st.integers(0, 7))
+            parts.append(bytes(f))
+    stream = b"".join(parts)
+    cuts = sorted(draw(st.lists(st.integers(0, len(stream)), max_size=6)))
+    return stream, intact, cuts
+
+
+def is_subsequence(needles: list[bytes], haystack: list[bytes]) -> bool:
+    it = iter(haystack)
+    return all(any(n == h for h in it) for n in needles)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(streams())
+def test_fuzz_every_intact_frame_is_recovered(case) -> None:  # noqa: ANN001
+    stream, intact, cuts = case
+    p = FrameParser()
+    events = []
+    bounds = [0, *cuts, len(stream)]
+    for lo, hi in zip(bounds[:-1], bounds[1:]):
+        events += p.feed(stream[lo:hi])
+    events += p.idle()
+    got = [e.payload for e in events if isinstance(e, Frame)]
+    assert is_subsequence(intact, got)
+    assert all(e in (ACK, NAK) for e in events if not isinstance(e, Frame))
+    assert p.stats.frames == len(got)
+    assert p.pending <= 1  # at most a trailing STX is held back
+
+
+def test_fuzz_random_noise_never_raises_and_counts_every_byte() -> None:
+    rng = np.random.default_rng(5)
+    noise = rng.integers(0, 256, 20000, dtype=np.uint8).tobytes()
+    p = FrameParser()
+    for i in range(0, len(noise), 997):
+        p.feed(noise[i : i + 997])
+    p.idle()
+    s = p.stats
+    assert s.frames == 0
+    assert s.skipped_bytes + s.acks + s.naks + p.pending == len(noise)

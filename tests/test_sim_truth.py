@@ -1,0 +1,124 @@
+"""Ground truth (world faces, corners, visible_truth) against hand-built geometry and against the
+independent exact ray caster in sim_oracle."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from sim import SensorConfig, World, make_world, visible_truth
+from sim.layout import Layout
+
+from sim_oracle import free_poses, oracle_ranges
+
+
+def test_square_room_faces_and_corners_by_hand() -> None:
+    lay = Layout("room", 0)
+    lay.wall([(0, 0), (4, 0), (4, 3), (0, 3)], closed=True)  # 10 cm walls centred on the lines
+    w = lay.build()
+    inner = [f for f in w.walls if max(abs(f[0] - 2), abs(f[2] - 2)) <= 1.95 + 1e-9 and max(abs(f[1] - 1.5), abs(f[3] - 1.5)) <= 1.45 + 1e-9]
+    assert len(w.walls) == 8 and len(inner) == 4
+    lengths = sorted(np.hypot(f[2] - f[0], f[3] - f[1]) for f in inner)
+    assert lengths == pytest.approx([2.9, 2.9, 3.9, 3.9])
+    assert len(w.corners) == 8
+    concave = w.corners[w.corners[:, 3] == 0]
+    assert sorted(map(tuple, np.round(concave[:, :2], 9))) == [(0.05, 0.05), (0.05, 2.95), (3.95, 0.05), (3.95, 2.95)]
+    assert np.allclose(w.corners[:, 2], np.pi / 2)
+    # solid on the left of every face: the room's centre is on the right of the inner faces
+    for x1, y1, x2, y2 in inner:
+        assert (x2 - x1) * (1.5 - y1) - (y2 - y1) * (2 - x1) < 0
+
+
+def test_v_screen_corner_angles() -> None:
+    w = make_world("angles", seed=0)
+    degrees = np.rad2deg(w.corners[:, 2])
+    assert np.any(np.abs(degrees - 135) < 0.5) and np.any(degrees < 60)
+    convex_obtuse = w.corners[(w.corners[:, 3] == 1) & (np.abs(degrees - 135) < 0.5)]
+    assert len(convex_obtuse) >= 1  # outside of the 135 deg V screen
+
+
+def test_world_json_round_trip(tmp_path) -> None:
+    w = make_world("office", seed=2)
+    w.to_json(tmp_path / "world.json")
+    d = json.loads((tmp_path / "world.json").read_text())
+    assert set(d) >= {"walls", "circles", "corners"}
+    assert all(len(r) == 4 for r in d["walls"]) and all(isinstance(c[3], bool) for c in d["corners"])
+    w2 = World.from_json(tmp_path / "world.json")
+    assert np.allclose(w2.walls, w.walls, atol=1e-8) and np.allclose(w2.corners, w.corners, atol=1e-8)
+    w2.to_json(tmp_path / "again.json")
+    assert (tmp_path / "again.json").read_bytes() == (tmp_path / "world.json").read_bytes()
+
+
+def test_make_world_is_seeded_and_names_checked() -> None:
+    assert np.array_equal(make_world("random", 5).walls, make_world("random", 5).walls)
+    assert not np.array_equal(make_world("random", 5).boxes.shape, make_world("random", 6).boxes.shape) or \
+        not np.allclose(make_world("random", 5).boxes, make_world("random", 6).boxes)
+    with pytest.raises(ValueError, match="unknown world 'moon'"):
+        make_world("moon")
+
+
+@pytest.mark.parametrize("name", ["office", "corridor", "angles", "pillars", "random"])
+def test_routes_keep_clear_of_everything(name: str) -> None:
+    for seed in range(3):
+        w = make_world(name, seed)
+        for a, b in w.route_edges:
+            pts = w.route_nodes[a] + np.linspace(0, 1, 60)[:, None] * (w.route_nodes[b] - w.route_nodes[a])
+            assert w.clearance(pts).min() >= 0.4
+
+
+def _sensor_hits(pose: np.ndarray, ranges: np.ndarray, sensor: SensorConfig) -> np.ndarray:
+    return np.column_stack((ranges * np.cos(sensor.angles), ranges * np.sin(sensor.angles)))
+
+
+@pytest.mark.parametrize("name", ["office", "angles", "pillars"])
+def test_visible_truth_agrees_with_exact_ray_caster(name: str) -> None:
+    world = make_world(name, seed=1)
+    sensor = SensorConfig.ideal()
+    rng = np.random.default_rng(11)
+    for pose in free_poses(world, rng, 10):
+        truth = visible_truth(world, tuple(pose), sensor)
+        ref, grazing = oracle_ranges(world.boxes, world.cylinders, world.scan_height, pose[:2],
+                                     pose[2] + sensor.angles, sensor.range_max)
+        hits = _sensor_hits(pose, ref, sensor)
+        covered = np.zeros(sensor.n_beams, dtype=bool)
+        for (x1, y1, x2, y2), (first, last) in zip(truth.segments, truth.segment_beams):
+            assert 0 <= first <= last < sensor.n_beams
+            u = np.array([x2 - x1, y2 - y1]) / np.hypot(x2 - x1, y2 - y1)
+            rel = hits[first:last + 1] - (x1, y1)
+            ok = ~grazing[first:last + 1]
+            # every beam of the span hits this segment: on its line, between its ends
+            assert np.all(np.abs(rel[ok] @ np.array([-u[1], u[0]])) < 1e-6)
+            along = rel[ok] @ u
+            assert np.all((along > -1e-6) & (along < np.hypot(x2 - x1, y2 - y1) + 1e-6))
+            covered[first:last + 1] = True
+        # every beam that hits a straight face is in some segment's span
+        on_circle = np.zeros(sensor.n_beams, dtype=bool)
+        world_hits = pose[:2] + ref[:, None] * np.column_stack((np.cos(pose[2] + sensor.angles), np.sin(pose[2] + sensor.angles)))
+        for cx, cy, r in world.circles:
+            on_circle |= np.abs(np.hypot(world_hits[:, 0] - cx, world_hits[:, 1] - cy) - r) < 1e-6
+        should = np.isfinite(ref) & ~on_circle & ~grazing
+        assert np.all(covered[should])
+        # every visible corner: nothing between the scanner and it
+        for (cx, cy, _, _), beam in zip(truth.corners, truth.corner_beams):
+            bearing = np.arctan2(cy, cx)
+            r, g = oracle_ranges(world.boxes, world.cylinders, world.scan_height, pose[:2],
+                                 np.array([pose[2] + bearing]), sensor.range_max)
+            assert g[0] or r[0] == pytest.approx(np.hypot(cx, cy), abs=1e-6)
+            assert abs(sensor.angles[beam] - bearing) <= sensor.angle_increment / 2 + 1e-9
+
+
+def test_visible_truth_sees_room_from_inside_by_hand() -> None:
+    lay = Layout("room", 0)
+    lay.wall([(0, 0), (4, 0), (4, 3), (0, 3)], closed=True)
+    w = lay.build()
+    t = visible_truth(w, (2.0, 1.5, 0.0), SensorConfig.ideal())
+    # looking along +x from the centre: the far wall x = 3.95 whole, half of each side wall
+    assert len(t.segments) == 3 and len(t.corners) == 2
+    far = t.segments[1]
+    assert far == pytest.approx([1.95, -1.45, 1.95, 1.45])
+    assert t.segments[0] == pytest.approx([0.0, -1.45, 1.95, -1.45])  # beam 0 looks along -y
+    assert t.segment_beams[0][0] == 0 and t.segment_beams[-1][1] == 360
+    assert np.allclose(t.corners[:, :2], [[1.95, -1.45], [1.95, 1.45]])
+    assert np.all(t.corners[:, 3] == 0)

@@ -1,0 +1,127 @@
+"""The SLAM loop on analytic line observations of a convex room (no extractor, no simulator)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from slam import Observations, SlamConfig, SlamConfigError, SlamFilter, SlamInputError, run_observations
+from slam.metrics import ate
+from slam.models import wrap
+from slam.synthetic import CONVEX_ROOM, circle_path, observe_walls
+
+
+def _run(config: SlamConfig, n: int = 250, rate: float = 10.0, seed: int = 0, corners: bool = False, odometry=None):
+    rng = np.random.default_rng(seed)
+    t, poses = circle_path(n, rate)
+    obs = [observe_walls(CONVEX_ROOM, p, rng=rng, corners=corners) for p in poses]
+    res = run_observations(t, obs, config, odometry=odometry, truths=[tuple(p) for p in poses])
+    return res, np.column_stack((t, poses))
+
+
+def test_short_run_tracks_truth_and_maps_each_wall_once():
+    res, truth = _run(SlamConfig())
+    a = ate(res.trajectory, truth)
+    assert a.rmse < 0.03 and a.max < 0.06
+    assert not a.mirrored
+    assert res.map_lines.shape[0] == len(CONVEX_ROOM)  # one confirmed landmark per wall, no duplicates
+    d = res.diagnostics
+    assert not d["diverged"] and d["healthy"]
+    assert 0.3 < d["mean_nees"] < 6.0  # 3 dof: consistent, not grossly over- or under-confident
+    assert 0.3 < d["mean_nis_per_dof"] < 2.0
+    assert res.trajectory.shape == (250, 4) and np.all(np.isfinite(res.trajectory))
+
+
+def test_map_lines_lie_on_the_true_walls():
+    from slam.metrics import map_error
+
+    res, truth = _run(SlamConfig())
+    a = ate(res.trajectory, truth)
+    from slam.metrics import Alignment2D
+
+    err = map_error(res.map_lines[:, 2:6], CONVEX_ROOM, Alignment2D(a.rotation, a.translation))
+    assert err.matched == len(CONVEX_ROOM)
+    assert err.distance_mean < 0.03 and err.angle_mean < np.radians(1.0)
+
+
+def test_jcbb_and_corners_give_the_same_quality():
+    res, truth = _run(SlamConfig(association="jcbb", use_corners=True), n=150, corners=True)
+    assert ate(res.trajectory, truth).rmse < 0.03
+    assert res.map_corners.shape[0] >= 4  # room vertices seen often enough to be confirmed
+    assert res.map_lines.shape[0] == len(CONVEX_ROOM)
+
+
+def _turn_run(prealign: bool, turn_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Stand still for 8 scans, turn by ``turn_deg`` between two scans (0.2 s apart), stand still."""
+    rng = np.random.default_rng(5)
+    poses = [np.array([4.5, 3.5, 0.3])] * 8 + [np.array([4.5, 3.5, wrap(0.3 + np.radians(turn_deg))])] * 6
+    t = 0.2 * np.arange(len(poses))
+    obs = [observe_walls(CONVEX_ROOM, p, rng=rng, max_range=20.0) for p in poses]
+    res = run_observations(t, obs, SlamConfig(prealign=prealign))
+    return res.trajectory, np.array(poses)
+
+
+@pytest.mark.parametrize("turn_deg", [90.0, -80.0])
+def test_filter_keeps_track_through_a_fast_turn_between_two_scans(turn_deg):
+    traj, poses = _turn_run(True, turn_deg)
+    heading = traj[:, 3] + poses[0, 2]  # the filter's frame starts at the first pose
+    assert np.abs(wrap(heading - poses[:, 2])).max() < np.radians(1.5)
+    assert np.hypot(*(traj[:, 1:3]).T).max() < 0.05  # the robot never moved
+
+
+def test_without_prealignment_the_turn_is_lost():
+    traj, poses = _turn_run(False, 90.0)
+    assert abs(wrap(traj[-1, 3] + poses[0, 2] - poses[-1, 2])) > np.radians(10.0)
+
+
+def test_spurious_lines_are_pruned():
+    rng = np.random.default_rng(9)
+    t, poses = circle_path(60, 10.0)
+    obs = []
+    for k, p in enumerate(poses):
+        o = observe_walls(CONVEX_ROOM, p, rng=rng)
+        if k % 7 == 3:  # a one-off ghost line (a person walking by)
+            ghost = np.array([[1.0 + 0.01 * k, 2.0]])
+            o = Observations(np.vstack((o.lines, [[1.0, 0.2 + k]])), np.vstack((o.line_cov, o.line_cov[:1])),
+                             np.vstack((o.line_ends, [[1.0, -0.5, 1.0, 0.5]])), o.corners, o.corner_cov)
+        obs.append(o)
+    f = SlamFilter(SlamConfig())
+    for tt, o in zip(t, obs):
+        f.step(tt, o)
+    assert len(f.landmarks) <= len(CONVEX_ROOM) + 1  # ghosts of the last window may still be tentative
+    assert f.map_lines().shape[0] == len(CONVEX_ROOM)
+
+
+def test_odometry_mode_uses_the_increments():
+    t, poses = circle_path(120, 10.0)
+    odometry = [tuple(p) for p in poses]  # perfect odometry
+    res, truth = _run(SlamConfig(use_odometry=True, prealign=False), n=120, odometry=odometry)
+    assert ate(res.trajectory, truth).rmse < 0.02
+    # with odometry the speed state follows the increments
+    assert abs(res.trajectory.shape[0] - 120) == 0
+
+
+def test_divergence_is_reported_not_hidden():
+    # observations claim 1 mm / 0.05 deg noise but carry 10 cm / 3 deg: the NIS explodes
+    rng = np.random.default_rng(2)
+    t, poses = circle_path(80, 10.0)
+    obs = []
+    for p in poses:
+        o = observe_walls(CONVEX_ROOM, p, sigma_rho=0.1, sigma_alpha=0.05, rng=rng)
+        obs.append(Observations(o.lines, np.tile(np.diag([1e-3, 1e-3]) ** 2, (len(o.lines), 1, 1)), o.line_ends))
+    res = run_observations(t, obs, SlamConfig(prealign=False))
+    assert res.diagnostics["diverged"]
+    assert res.diagnostics["mean_nis_per_dof"] > 5.0
+
+
+def test_bad_input_raises_clear_errors():
+    with pytest.raises(SlamConfigError, match="association"):
+        SlamConfig(association="magic")
+    with pytest.raises(SlamConfigError, match="unknown SLAM config"):
+        SlamConfig.from_dict({"sigma_acel": 1.0})
+    with pytest.raises(SlamInputError, match="earlier"):
+        run_observations([0.0, 1.0, 0.5], [Observations()] * 3)
+    with pytest.raises(SlamInputError, match="no scans"):
+        run_observations([], [])
+    cfg = SlamConfig(sigma_accel=2.0)
+    assert SlamConfig.from_dict(cfg.to_dict()) == cfg

@@ -1,0 +1,124 @@
+"""Trajectory and map metrics on hand-built cases with known answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lms200 import LogFormatError
+from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
+
+
+def square_path(n: int = 81) -> np.ndarray:
+    """A 4 m x 4 m square driven at 1 m/s, heading along the path: (n, 4) t, x, y, theta."""
+    s = np.linspace(0, 16, n)
+    x = np.interp(s, [0, 4, 8, 12, 16], [0, 4, 4, 0, 0])
+    y = np.interp(s, [0, 4, 8, 12, 16], [0, 0, 4, 4, 0])
+    th = np.select([s < 4, s < 8, s < 12], [0.0, np.pi / 2, np.pi], -np.pi / 2)
+    return np.column_stack((s, x, y, th))
+
+
+def transformed(traj: np.ndarray, rot: float, t: tuple[float, float]) -> np.ndarray:
+    c, s = np.cos(rot), np.sin(rot)
+    xy = traj[:, 1:3] @ np.array([[c, s], [-s, c]]) + t
+    return np.column_stack((traj[:, 0], xy, traj[:, 3] + rot))
+
+
+def test_ate_is_zero_for_a_rigidly_moved_copy_and_recovers_the_motion():
+    truth = square_path()
+    est = transformed(truth, 0.7, (3.0, -2.0))
+    a = ate(est, truth)
+    assert a.rmse < 1e-9 and a.heading_rmse < 1e-9 and a.n == truth.shape[0]
+    assert abs(a.rotation + 0.7) < 1e-9  # aligns est back onto truth
+    assert not a.mirrored
+
+
+def test_ate_of_a_constant_offset_without_alignment():
+    truth = square_path()
+    est = truth.copy()
+    est[:, 1] += 0.3
+    a = ate(est, truth, align=False)
+    assert a.rmse == pytest.approx(0.3) and a.max == pytest.approx(0.3)
+    assert ate(est, truth).rmse < 1e-9  # a pure shift aligns away
+
+
+def test_ate_detects_a_mirrored_estimate():
+    truth = square_path()
+    est = truth.copy()
+    est[:, 2] *= -1  # mirror y: a 3-D alignment could fold this onto the truth
+    est[:, 3] *= -1
+    a = ate(est, truth)
+    assert a.mirrored and a.mirror_rmse < 1e-9 and a.rmse > 0.5
+
+
+def test_ate_interpolates_the_truth_at_the_estimate_stamps():
+    truth = square_path(17)  # 1 s steps
+    est = np.array([[0.5, 0.5, 0.0, 0.0], [1.25, 1.25, 0.0, 0.0], [4.5, 4.0, 0.5, np.pi / 2]])
+    assert ate(est, truth, align=False).rmse < 1e-12
+
+
+def test_rpe_counts_errors_per_distance():
+    truth = square_path(161)
+    est = truth.copy()
+    est[:, 1:3] *= 1.1  # 10 % scale error: 0.1 m per metre travelled on straight stretches
+    r = rpe(est, truth, delta=1.0)
+    assert r.n > 100
+    assert r.trans_mean == pytest.approx(0.1, abs=0.02)
+    assert r.rot_mean < 1e-9
+
+
+def test_map_error_of_shifted_walls():
+    walls = np.array([[0, 0, 10, 0], [10, 0, 10, 5], [10, 5, 0, 5.0]])
+    lines = np.array([[1, 0.05, 8, 0.05], [10.02, 1, 10.02, 4], [3, 5, 2, 5], [5, 2.5, 5.5, 2.6]])
+    e = map_error(lines, walls)
+    assert e.n_lines == 4 and e.matched == 3  # the free-standing segment matches no wall
+    assert e.distance_mean == pytest.approx((0.05 * 2 + 0.02 * 2) / 6)
+    assert e.wall_coverage == pytest.approx((7 + 3 + 1) / 25)
+    # the same map in a frame rotated by -0.3 rad and shifted: the alignment brings it back
+    in_slam_frame = _invert(lines, 0.3, (1, 2))
+    assert map_error(in_slam_frame, walls).matched < 3
+    back = map_error(in_slam_frame, walls, Alignment2D(0.3, (1, 2)))
+    assert back.matched == 3 and back.distance_mean == pytest.approx(e.distance_mean)
+
+
+def _invert(seg, rot, t):
+    """Segments moved by the inverse of Alignment2D(rot, t)."""
+    c, s = np.cos(rot), np.sin(rot)
+    R = np.array([[c, -s], [s, c]])
+    return np.column_stack(((seg[:, :2] - t) @ R, (seg[:, 2:] - t) @ R))
+
+
+def test_relations_metric_on_a_hand_built_case(tmp_path):
+    traj = np.array([[0.0, 0, 0, 0], [1.0, 1, 0, np.pi / 2], [2.0, 1, 1, np.pi / 2]])
+    # true motion 0 -> 1: 1 m ahead and a 90 deg turn; our estimate has it exactly
+    # true motion 1 -> 2: 1.1 m ahead (our 1.0 is 0.1 short), no turn; relation at 1.5 s interpolated
+    p = tmp_path / "r.relations"
+    p.write_text("0 1 1 0 0 0 0 1.5707963267948966\n1 2 1.1 0 0 0 0 0.1\n0.5 1.5 0.5 0 0 0 0 0\n7 8 1 0 0 0 0 0\n")
+    rel = read_relations(p)
+    r = relations_error(traj, rel)
+    assert r.n == 3 and r.n_skipped == 1
+    errs = np.array([0.0, 0.1, np.hypot(0.5 - 0.5, 0.5 - 0.0)])
+    # 0.5 s: (0.5, 0, 45 deg); 1.5 s: (1, 0.5, 90 deg): relative = (0.5 cos45 + 0.5 sin45... ) computed below
+    a, b = np.array([0.5, 0.0, np.pi / 4]), np.array([1.0, 0.5, np.pi / 2])
+    d = b[:2] - a[:2]
+    rel3 = np.array([np.cos(a[2]) * d[0] + np.sin(a[2]) * d[1], -np.sin(a[2]) * d[0] + np.cos(a[2]) * d[1]])
+    errs[2] = np.hypot(rel3[0] - 0.5, rel3[1])
+    assert r.trans_mean == pytest.approx(errs.mean())
+    assert r.rot_mean_deg == pytest.approx((0 + np.degrees(0.1) + 45.0) / 3)
+
+
+def test_relations_reader_errors_name_the_line(tmp_path):
+    p = tmp_path / "bad.relations"
+    p.write_text("0 1 1 0 0 0 0 0\n0 1 x 0 0 0 0 0\n")
+    with pytest.raises(LogFormatError, match=":2"):
+        read_relations(p)
+    p.write_text("0 1 1 0 0\n")
+    with pytest.raises(LogFormatError, match="8 numbers"):
+        read_relations(p)
+
+
+def test_interpolation_takes_the_short_way_round():
+    traj = np.array([[0.0, 0, 0, 3.0], [1.0, 0, 0, -3.0]])
+    pose, inside = interpolate_poses(traj, np.array([0.5, 2.0]))
+    assert inside.tolist() == [True, False]
+    assert abs(abs(pose[0, 2]) - np.pi) < 1e-9
