@@ -21,7 +21,7 @@ from . import draw
 from .tables import ad_reference
 
 #: Metrics plotted for a sweep when its table has them.
-SWEEP_METRICS = ("f1", "corner_f1", "time_ms_median", "ate_rms", "final_error_m")
+SWEEP_METRICS = ("f1", "corner_f1", "rho_rms_mm", "time_ms_median", "ate_rms", "final_error_m")
 
 PAPER_FIGURES = ("fig4_ad", "fig5_theta", "fig6_psi", "fig7_timing", "fig9_office", "fig9_intel",
                  "fig10_slam", "accuracy_speed")
