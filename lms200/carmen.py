@@ -231,6 +231,7 @@ def write_carmen(
     records: Iterable[Record],
     fmt: str = "robotlaser1",
     hostname: str = "lmsbench",
+    flush: bool = False,
 ) -> int:
     """Write Records as a CARMEN log (plain, or gzip when the name ends in ``.gz``).
 
@@ -238,7 +239,9 @@ def write_carmen(
     record has a true pose. Ranges are written at the sensor unit (mm when range_max <= 8.183 m,
     else cm), +inf / nan as SICK codes 8183 / 8191; a ``PARAM lmsbench_range_units`` line records
     the unit, and ``PARAM lmsbench_odometry absent|present`` lines mark records without odometry
-    (their pose fields are written as zeros). Returns the number of scans written.
+    (their pose fields are written as zeros). ``flush=True`` pushes every scan to the file as soon
+    as it is written (for recorders: a crash or Ctrl-C loses nothing already received).
+    Returns the number of scans written.
     """
     if fmt not in ("robotlaser1", "flaser"):
         raise ValueError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
@@ -287,4 +290,6 @@ def write_carmen(
                     f"{odom} {odom} 0.000000 0.000000 0.000000 0.000000 0.000000 {stamp}\n"
                 )
             count += 1
+            if flush:
+                f.flush()
     return count

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Iterator
+from typing import Callable, Iterator
 
 import serial
 
@@ -305,11 +305,15 @@ class LMS200:
         self._use_baud(baud)
 
     # -- data ----------------------------------------------------------------------------------
-    def scans(self, stall_timeout: float | None = None) -> Iterator[Scan]:
+    def scans(self, stall_timeout: float | None = None, stop: Callable[[], bool] | None = None) -> Iterator[Scan]:
         """Start continuous output and yield every scan the device sends, as it sends them.
 
         ``scan.stamp`` is the host's clock (``time.time()``, s) when the telegram began to arrive.
         Frames with a bad CRC are dropped and counted in :attr:`stats`.
+
+        ``stop``: checked between reads (at least every 10 ms); the generator ends when it
+        returns True (e.g. a flag set by a Ctrl-C handler). The device keeps streaming until
+        :meth:`close`.
 
         Raises:
             LmsTimeoutError: when no scan arrives for ``stall_timeout`` seconds (default: the
@@ -319,7 +323,7 @@ class LMS200:
             self._set_mode(MODE_CONTINUOUS, "start continuous output (0x20 0x24)")
         limit = stall_timeout if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
         last = time.monotonic()
-        while True:
+        while stop is None or not stop():
             events = self._pump()
             now = time.monotonic()
             for ev in events:

@@ -109,3 +109,30 @@ def test_truth_lines_normal_form():
     rho, alpha = truth_lines(np.array([[3.0, -1.0, 3.0, 1.0], [1.0, -2.0, -1.0, -2.0]]))
     np.testing.assert_allclose(rho, [3.0, 2.0])
     np.testing.assert_allclose(alpha, [0.0, -np.pi / 2])
+
+
+BOX = polygon([(1.0, 0.5), (1.6, 0.5), (1.6, 1.2), (1.0, 1.2)])
+
+
+def _box_room_scans(n: int):
+    rng = np.random.default_rng(1)
+    out = []
+    while len(out) < n:
+        x, y = rng.uniform(-1.5, 4.5), rng.uniform(-2.5, 3.5)
+        if (x > 3.0 and y > 0.5 + (5.0 - x)) or (0.8 < x < 1.8 and 0.3 < y < 1.4):
+            continue
+        out.append(room_scan(np.vstack((L_ROOM, BOX)), (x, y, rng.uniform(-np.pi, np.pi)), sigma=0.005, seed=len(out)))
+    return out
+
+
+@pytest.mark.parametrize("method", BASELINES)
+def test_occlusions_give_no_false_corners(method):
+    """A box in the room: its faces occlude walls; depth jumps must not become corners."""
+    tp = fp = fn = ctp = cfp = cfn = 0
+    for scan, truth in _box_room_scans(12):
+        s = score_scan(extract(scan, method), truth)
+        tp, fp, fn = tp + s.tp, fp + s.fp, fn + s.fn
+        ctp, cfp, cfn = ctp + s.corner_tp, cfp + s.corner_fp, cfn + s.corner_fn
+    assert fp <= 1 and fn <= 1, (tp, fp, fn)
+    assert cfp == 0
+    assert ctp >= 0.9 * (ctp + cfn)

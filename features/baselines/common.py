@@ -213,20 +213,29 @@ def build_lines(
 @dataclass(frozen=True)
 class CornerConfig:
     """The shared Cartesian corner step: corners where consecutive segments meet (Castellanos et al.
-    1996). Defaults: a direction change of at least 30 deg between the two segments (interior angle
-    at most 150 deg), the lines at most ``max_gap_beams`` apart in beam order, and their
-    intersection within ``max_distance`` of both adjacent endpoints (0.15 m: several times the
-    endpoint scatter at 5 mm range noise, far below the depth jumps of occlusions)."""
+    1996). Two lines neighbouring in beam order make a corner when
+    - they are at most ``max_gap_beams`` (6) apart in beam order,
+    - their facing end points are connected in the scan: no farther apart than the adaptive
+      breakpoint distance for that bearing step (Borges & Aldon 2004, ``lambda_deg`` = 10 deg,
+      ``sigma`` = 5 mm), so an occlusion's depth jump is no corner,
+    - the direction turns by at least ``min_turn_deg`` (30 deg: interior angle <= 150 deg), and
+    - the lines' intersection lies within ``max_distance`` (0.15 m: several times the end-point
+      scatter at 5 mm noise) plus the gap between the facing end points of each of them (far
+      away, the beams dropped at a corner leave a gap of tens of centimetres).
+    """
 
     min_turn_deg: float = 30.0
-    max_gap_beams: int = 4
+    max_gap_beams: int = 6
     max_distance: float = 0.15
+    lambda_deg: float = 10.0
+    sigma: float = 0.005
 
 
-def corners_from_lines(lines: list[Line], cfg: CornerConfig) -> list[Corner]:
+def corners_from_lines(lines: list[Line], cfg: CornerConfig, angle_increment: float) -> list[Corner]:
     """Corners where consecutive lines (beam order) meet at an angle; at the lines' intersection.
 
-    ``Corner.angle`` is the interior angle between the two segments at the corner, in (0, pi).
+    ``Corner.angle`` is the interior angle between the two segments at the corner, in (0, pi);
+    ``angle_increment`` is the scan's beam step (rad).
     """
     if len(lines) < 2:
         return []
@@ -240,19 +249,24 @@ def corners_from_lines(lines: list[Line], cfg: CornerConfig) -> list[Corner]:
     d2 = np.column_stack((arr[1:, 4] - arr[1:, 2], arr[1:, 5] - arr[1:, 3]))
     n1 = np.linalg.norm(d1, axis=1)
     n2 = np.linalg.norm(d2, axis=1)
+    step = arr[1:, 6] - arr[:-1, 7]
+    gap = np.hypot(arr[1:, 2] - arr[:-1, 4], arr[1:, 3] - arr[:-1, 5])
+    dphi = np.maximum(step, 1) * angle_increment
+    lam = np.deg2rad(cfg.lambda_deg)
     with np.errstate(divide="ignore", invalid="ignore"):
         cos_turn = np.sum(d1 * d2, axis=1) / (n1 * n2)
         turn = np.arccos(np.clip(cos_turn, -1, 1))
         cx = (r1 * np.sin(a2) - r2 * np.sin(a1)) / det
         cy = (r2 * np.cos(a1) - r1 * np.cos(a2)) / det
-    gap_ok = (arr[1:, 6] - arr[:-1, 7]) <= cfg.max_gap_beams
+        connect = np.hypot(arr[:-1, 4], arr[:-1, 5]) * np.sin(dphi) / np.sin(lam - dphi) + 3 * cfg.sigma
     dist_a = np.hypot(cx - arr[:-1, 4], cy - arr[:-1, 5])
     dist_b = np.hypot(cx - arr[1:, 2], cy - arr[1:, 3])
     ok = (
-        gap_ok
+        (step <= cfg.max_gap_beams)
+        & (gap <= connect) & (connect > 0)
         & (turn >= np.deg2rad(cfg.min_turn_deg))
-        & (dist_a <= cfg.max_distance)
-        & (dist_b <= cfg.max_distance)
+        & (dist_a <= cfg.max_distance + gap)
+        & (dist_b <= cfg.max_distance + gap)
         & np.isfinite(cx)
     )
     corners = []
@@ -263,6 +277,6 @@ def corners_from_lines(lines: list[Line], cfg: CornerConfig) -> list[Corner]:
     return corners
 
 
-def feature_set(lines: list[Line], corner_cfg: CornerConfig, method: str) -> FeatureSet:
+def feature_set(lines: list[Line], corner_cfg: CornerConfig, method: str, angle_increment: float) -> FeatureSet:
     """FeatureSet of beam-ordered lines plus the shared corner step."""
-    return FeatureSet(lines, corners_from_lines(lines, corner_cfg), method)
+    return FeatureSet(lines, corners_from_lines(lines, corner_cfg, angle_increment), method)

@@ -60,7 +60,7 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
     """Extract lines and corners from ``scan`` (sensor frame) with the full Hough transform."""
     pts = valid_points(scan)
     if pts.idx.size < cfg.min_points:
-        return feature_set([], cfg.corners, "hough")
+        return feature_set([], cfg.corners, "hough", scan.angle_increment)
     n_alpha = int(round(180.0 / cfg.alpha_step_deg))
     theta = np.arange(n_alpha) * np.deg2rad(cfg.alpha_step_deg)
     r_ext = float(pts.r.max()) + cfg.rho_step
@@ -103,11 +103,11 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
         remaining[used] = False
         acc -= np.bincount(cells[used].ravel(), minlength=acc.size)
     if not starts:
-        return feature_set([], cfg.corners, "hough")
+        return feature_set([], cfg.corners, "hough", scan.angle_increment)
     s, e = np.concatenate(starts), np.concatenate(ends)
     rho, alpha, n, mx, my, along = (np.concatenate(f) for f in zip(*fits))
     lines = build_lines(pts, s, e, rho, alpha, n, mx, my, along, cfg.sigma)
-    return feature_set(lines, cfg.corners, "hough")
+    return feature_set(lines, cfg.corners, "hough", scan.angle_increment)
 
 
 register("hough", HoughConfig, run)

@@ -42,7 +42,7 @@ def run(scan: Scan, cfg: IepfConfig) -> FeatureSet:
     """Extract lines and corners from ``scan`` (sensor frame) by iterative end-point fit."""
     lines = segment_lines(scan, cfg.sigma, cfg.breakpoint_lambda_deg, cfg.split_threshold,
                           cfg.merge_rms, cfg.min_points, cfg.min_length, cfg.max_skip, chord=True)
-    return feature_set(lines, cfg.corners, "iepf")
+    return feature_set(lines, cfg.corners, "iepf", scan.angle_increment)
 
 
 register("iepf", IepfConfig, run)

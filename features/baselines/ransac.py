@@ -103,11 +103,11 @@ def run(scan: Scan, cfg: RansacConfig) -> FeatureSet:
         fits.append(fit)
         remaining[used] = False
     if not starts:
-        return feature_set([], cfg.corners, "ransac")
+        return feature_set([], cfg.corners, "ransac", scan.angle_increment)
     s, e = np.concatenate(starts), np.concatenate(ends)
     rho, alpha, n, mx, my, along = (np.concatenate(f) for f in zip(*fits))
     lines = build_lines(pts, s, e, rho, alpha, n, mx, my, along, cfg.sigma)
-    return feature_set(lines, cfg.corners, "ransac")
+    return feature_set(lines, cfg.corners, "ransac", scan.angle_increment)
 
 
 register("ransac", RansacConfig, run)

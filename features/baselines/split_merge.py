@@ -73,7 +73,7 @@ def run(scan: Scan, cfg: SplitMergeConfig) -> FeatureSet:
     """Extract lines and corners from ``scan`` (sensor frame) by split-and-merge."""
     lines = segment_lines(scan, cfg.sigma, cfg.breakpoint_lambda_deg, cfg.split_threshold,
                           cfg.merge_rms, cfg.min_points, cfg.min_length, cfg.max_skip, chord=False)
-    return feature_set(lines, cfg.corners, "split_merge")
+    return feature_set(lines, cfg.corners, "split_merge", scan.angle_increment)
 
 
 register("split_merge", SplitMergeConfig, run)

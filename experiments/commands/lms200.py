@@ -1,0 +1,158 @@
+"""`lmsbench lms200 emulate|record`: a virtual LMS200 on a pseudo-terminal or TCP port, and a
+recorder that logs a real (or virtual) LMS200 to a CARMEN log or a ROS bag."""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import signal
+import sys
+import time
+from pathlib import Path
+from typing import Iterable, Iterator
+
+from lms200 import LmsbenchError, Record, Scan, read_log
+from lms200.carmen import write_carmen
+from lms200.driver import LMS200
+from lms200.protocol import BAUD_MODES
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("lms200", help="virtual LMS200 (emulate) and serial recorder (record)")
+    cmds = p.add_subparsers(dest="lms200_command", metavar="ACTION", required=True)
+
+    e = cmds.add_parser("emulate", help="serve a virtual LMS200 on a pseudo-terminal (or TCP); prints its path / URL")
+    e.add_argument("--world", default="office", help="simulator world to scan (office, corridor, angles, pillars, random)")
+    e.add_argument("--seed", type=int, default=0, help="seed of the world and the sensor noise")
+    e.add_argument("--log", type=Path, help="replay this log (CARMEN or bag) instead of the simulator, in a loop")
+    e.add_argument("--tcp", type=int, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")
+    e.add_argument("--host", default="127.0.0.1", help="address to listen on with --tcp")
+    e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (the LMS200 ships in cm)")
+    e.add_argument("--time-scale", type=float, default=1.0, help="multiplies every byte time and device delay (0.01 = 100x faster)")
+    e.add_argument("--sim-duration", type=float, default=60.0, help="seconds of simulated robot tour to loop over")
+    e.add_argument("--duration", type=float, help="stop after this many seconds (default: until Ctrl-C)")
+    e.set_defaults(func=run_emulate)
+
+    r = cmds.add_parser("record", help="record an LMS200 to a CARMEN log (.clf, .log, .gz) or a ROS bag (.bag)")
+    r.add_argument("--port", required=True, help="serial device or pyserial URL (socket://host:port, rfc2217://, loop://)")
+    r.add_argument("--out", type=Path, required=True, help="output: FILE.clf / .log / .gz (CARMEN) or FILE.bag (ROS 1)")
+    r.add_argument("--baud", type=int, default=38400, choices=sorted(BAUD_MODES), help="line speed to switch to")
+    r.add_argument("--units", choices=("mm", "cm"), default="mm", help="range unit: mm (8.18 m) or cm (81.8 m)")
+    r.add_argument("--fov", type=int, default=180, choices=(180, 100), help="field of view (deg)")
+    r.add_argument("--resolution", type=float, default=0.5, choices=(1.0, 0.5, 0.25), help="angular resolution (deg)")
+    r.add_argument("--max-scans", type=int, help="stop after this many scans")
+    r.add_argument("--duration", type=float, help="stop after this many seconds")
+    r.add_argument("--timeout", type=float, default=0.5, help="seconds to wait for a reply, on top of the line time")
+    r.set_defaults(func=run_record)
+
+
+# -- emulate ------------------------------------------------------------------------------------
+def _simulator_scans(world: str, seed: int, duration: float) -> list[Scan]:
+    try:
+        from sim import simulate_records  # the command line wires the simulator in, not lms200
+    except ImportError:
+        raise LmsbenchError("the simulator (sim.simulate_records) is not available here; replay a log with --log FILE") from None
+    return [rec.scan for rec in simulate_records(world=world, seed=seed, duration=duration)]
+
+
+def _log_scans(path: Path) -> list[Scan]:
+    scans = [rec.scan for rec in read_log(path)]
+    if not scans:
+        raise LmsbenchError(f"{path} holds no scans to replay")
+    return scans
+
+
+def run_emulate(args: argparse.Namespace) -> int:
+    from lms200.adapters import PtyAdapter, TcpServer
+    from lms200.virtual import VirtualLMS200
+
+    if args.time_scale <= 0:
+        raise LmsbenchError(f"--time-scale must be > 0, got {args.time_scale}")
+    scans = _log_scans(args.log) if args.log else _simulator_scans(args.world, args.seed, args.sim_duration)
+    device = VirtualLMS200(itertools.cycle(scans), time_scale=args.time_scale, units=args.units)
+    adapter = TcpServer(device, args.host, args.tcp) if args.tcp is not None else PtyAdapter(device)
+    where = adapter.url if args.tcp is not None else adapter.path
+    what = f"log {args.log}" if args.log else f"world {args.world} (seed {args.seed})"
+    print(where, flush=True)
+    print(f"virtual LMS200 at {where}: {len(scans)} scans of {what} in a loop, 9600 baud at power-on, "
+          f"time scale {args.time_scale:g}; Ctrl-C stops", file=sys.stderr, flush=True)
+    stop = {"now": False}
+    previous = signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))
+    signal.signal(signal.SIGTERM, lambda *_: stop.update(now=True))
+    start = time.monotonic()
+    try:
+        while not stop["now"] and (args.duration is None or time.monotonic() - start < args.duration):
+            time.sleep(0.05)
+    finally:
+        adapter.close()
+        signal.signal(signal.SIGINT, previous)
+    print(f"virtual LMS200 stopped: {device.scans_sent} scans sent, {device.requests} requests", file=sys.stderr)
+    return 0
+
+
+# -- record -------------------------------------------------------------------------------------
+class _Progress:
+    """One status line on stderr, redrawn at most 4 times a second."""
+
+    def __init__(self, dev: LMS200) -> None:
+        self.dev, self.start, self.shown, self.count = dev, time.monotonic(), 0.0, 0
+
+    def update(self, final: bool = False) -> None:
+        now = time.monotonic()
+        if not final and now - self.shown < 0.25:
+            return
+        self.shown = now
+        elapsed = max(now - self.start, 1e-9)
+        stats = self.dev.stats
+        print(f"\r{self.count} scans  {self.count / elapsed:5.1f} scans/s  {stats.dropped_frames} dropped frames  "
+              f"{elapsed:6.1f} s", end="\n" if final else "", file=sys.stderr, flush=True)
+
+
+def _records(dev: LMS200, progress: _Progress, stop: dict, max_scans: int | None,
+             duration: float | None) -> Iterator[Record]:
+    """Records from the device until Ctrl-C, the scan limit or the duration."""
+    def done() -> bool:
+        return stop["now"] or (duration is not None and time.monotonic() - progress.start >= duration)
+
+    if max_scans is not None and max_scans <= 0:
+        return
+    for scan in dev.scans(stop=done):
+        progress.count += 1
+        yield Record(scan)
+        progress.update()
+        if max_scans is not None and progress.count >= max_scans:
+            return
+
+
+def _write(out: Path, records: Iterable[Record]) -> int:
+    if out.suffix == ".bag":
+        from lms200.bag import write_bag
+
+        return write_bag(out, records)
+    return write_carmen(out, records, flush=True)
+
+
+def run_record(args: argparse.Namespace) -> int:
+    if args.out.suffix == ".bag" and args.out.exists():
+        raise LmsbenchError(f"{args.out} exists; bags are not overwritten")
+    if not args.out.parent.is_dir():
+        raise LmsbenchError(f"--out: folder {args.out.parent} does not exist")
+    stop = {"now": False}
+    previous = signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))
+    try:
+        print(f"opening {args.port} ...", file=sys.stderr, flush=True)
+        with LMS200(args.port, baud=args.baud, fov_deg=args.fov, resolution_deg=args.resolution,
+                    units=args.units, timeout=args.timeout) as dev:
+            print(f"{dev.type_string.strip()} at {dev.baud} baud, {args.units}; recording to {args.out} "
+                  f"(Ctrl-C stops)", file=sys.stderr, flush=True)
+            progress = _Progress(dev)
+            try:
+                written = _write(args.out, _records(dev, progress, stop, args.max_scans, args.duration))
+            finally:
+                progress.update(final=True)
+            stats = dev.stats
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    print(f"recorded {written} scans to {args.out} ({stats.dropped_frames} frames dropped, "
+          f"{stats.decode_errors} undecodable); device back in on-request mode at 9600 baud")
+    return 0

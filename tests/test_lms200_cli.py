@@ -1,0 +1,96 @@
+"""`lmsbench lms200 record` and `emulate` in subprocesses, against virtual devices."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lms200 import LMS200, Record, Scan, read_log, write_log
+from lms200.adapters import TcpServer
+from lms200.codes import ranges_to_codes
+from lms200.virtual import VirtualLMS200
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
+
+
+def source(n: int = 30) -> list[Scan]:
+    rng = np.random.default_rng(7)
+    return [Scan.lms200(rng.uniform(0.2, 8.0, 361), stamp=float(i)) for i in range(n)]
+
+
+def codes(scan: Scan) -> bytes:
+    return ranges_to_codes(scan.ranges, "mm").tobytes()
+
+
+def cli(*args: str) -> list[str]:
+    return [sys.executable, "-m", "experiments.cli", "lms200", *args]
+
+
+@pytest.mark.parametrize("name", ["rec.clf", "rec.bag"])
+def test_record_writes_every_scan_in_order(tmp_path: Path, name: str) -> None:
+    sent = source()
+    dev = VirtualLMS200(sent, time_scale=0.01)
+    out = tmp_path / name
+    with TcpServer(dev) as ad:
+        run = subprocess.run(cli("record", "--port", ad.url, "--out", str(out), "--max-scans", "12", "--baud", "500000"),
+                             env=ENV, capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    assert "recorded 12 scans" in run.stdout and "12 scans" in run.stderr
+    got = [rec.scan for rec in read_log(out)]
+    assert [codes(s) for s in got] == [codes(s) for s in sent[:12]]
+    assert dev.baud == 9600 and not dev.continuous
+
+
+def test_ctrl_c_closes_the_device_and_keeps_every_scan(tmp_path: Path) -> None:
+    sent = source(400)
+    dev = VirtualLMS200(sent, time_scale=0.1)
+    out = tmp_path / "rec.clf"
+    with TcpServer(dev) as ad:
+        proc = subprocess.Popen(cli("record", "--port", ad.url, "--out", str(out), "--baud", "38400"),
+                                env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:  # wait for a few scans on disk (flushed per scan)
+            if out.exists() and out.read_text().count("ROBOTLASER1 0") >= 5:
+                break
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=30)
+        assert proc.returncode == 0, stderr
+        assert dev.baud == 9600 and not dev.continuous
+    n = int(stdout.split("recorded ")[1].split()[0])
+    got = [rec.scan for rec in read_log(out)]
+    assert n >= 5 and len(got) == n
+    assert [codes(s) for s in got] == [codes(s) for s in sent[:n]]
+
+
+def test_emulate_serves_a_log_on_a_pty(tmp_path: Path) -> None:
+    log = tmp_path / "src.clf"
+    sent = source(10)
+    write_log(log, [Record(s) for s in sent])
+    proc = subprocess.Popen(cli("emulate", "--log", str(log), "--time-scale", "0.01"),
+                            env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        path = proc.stdout.readline().strip()
+        assert path.startswith("/dev/pts/")
+        with LMS200(path, baud=38400) as lms:
+            got = [s for _, s in zip(range(3), lms.scans())]
+        assert [codes(s) for s in got] == [codes(s) for s in sent[:3]]
+    finally:
+        proc.send_signal(signal.SIGINT)
+        _, stderr = proc.communicate(timeout=30)
+    assert proc.returncode == 0
+    assert int(stderr.split("stopped: ")[1].split()[0]) >= 3  # scans sent (one more may be in flight at close)
+
+
+def test_record_reports_an_unreachable_port_in_one_line(tmp_path: Path) -> None:
+    run = subprocess.run(cli("record", "--port", "socket://127.0.0.1:9", "--out", str(tmp_path / "x.clf")),
+                         env=ENV, capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2 and "lmsbench lms200: error: cannot open socket://127.0.0.1:9" in run.stderr
