@@ -25,7 +25,9 @@ DEMO_SWEEP = {
     "kind": "extract",
     "description": "sensor-coordinate extractor: window k against range noise (demo size)",
     "fixed": {"method": "sensor", "world": "office", "duration": 3.0, "rate_hz": 4.0},
-    "grid": {"sensor.noise_sigma": [0.002, 0.01, 0.03], "extractor.k": [3, 5, 10]},
+    # the extractor is told the sensor's range noise (sigma_r), as for a sensor of known noise
+    "grid": {"sensor.noise_sigma,extractor.sigma_r": [[0.002, 0.002], [0.01, 0.01], [0.03, 0.03]],
+             "extractor.k": [3, 5, 10]},
     "seeds": [0],
 }
 
@@ -131,7 +133,9 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
         sw.text.append(f"{len(sweep_table)} cells, {int((sweep_table['status'] != 'ok').sum())} failed; "
                        f"table in `sweeps/{DEMO_SWEEP['name']}/results.parquet`. Larger sweeps: `sweeps/*.yaml`.")
         for name in sorted(n for n in figs if n.startswith("sweep_")):
-            sw.text.append(figure(f"figures/{name}.png", name.replace("_", " ")))
+            metric = name[len(f"sweep_{DEMO_SWEEP['name']}_"):]
+            sw.text.append(figure(f"figures/{name}.png", f"Sweep: {metric} against the range noise (m), one line "
+                                                         f"per window size k."))
         sections.append(sw)
     if notes:
         sections.append(Section("Notes", [f"- {n}" for n in notes]))
