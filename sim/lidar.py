@@ -6,7 +6,9 @@ the hit positions (not ``hitFraction * length``).
 
 from __future__ import annotations
 
+import ctypes
 import os
+import sys
 from contextlib import contextmanager
 from typing import Iterator
 
@@ -21,22 +23,34 @@ _STREAM_SENSOR = 2
 _MIXED_SUBRAYS = 5  # sub-rays across the spot of a beam next to a depth edge
 
 
+def _flush_c_stdout() -> None:
+    try:
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError):  # pragma: no cover - no C library handle
+        pass
+
+
 @contextmanager
 def _quiet_stdout() -> Iterator[None]:
-    """Silence fd 1 (PyBullet prints a build banner from C on import/connect)."""
+    """Silence fds 1 and 2 (PyBullet prints a build banner from C on import and connect)."""
     try:
-        saved = os.dup(1)
+        saved = [os.dup(1), os.dup(2)]
     except OSError:
         yield
         return
     devnull = os.open(os.devnull, os.O_WRONLY)
     try:
+        sys.stdout.flush()
+        sys.stderr.flush()
         os.dup2(devnull, 1)
+        os.dup2(devnull, 2)
         yield
     finally:
-        os.dup2(saved, 1)
-        os.close(saved)
-        os.close(devnull)
+        _flush_c_stdout()  # the banner may sit in C's stdio buffer: flush it into /dev/null
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in saved + [devnull]:
+            os.close(fd)
 
 
 with _quiet_stdout():

@@ -38,9 +38,15 @@ def candidate_runs(sig: BeamSignals, k: int, cfg: SensorMethodConfig) -> tuple[n
         ok = np.abs(sig.AD - sig.ad_line) <= cfg.ad_tau * sig.AD_sigma
         big = np.abs(sig.psi) > np.maximum(cfg.psi_split, cfg.psi_tau * sig.psi_sigma)
     if big.any():
-        # psi_i compares the windows at i and i+k: no centre between them belongs to one line
-        spread = np.convolve(big.view(np.int8), np.ones(k + 1, np.int8), "full")[:n]
-        ok &= spread == 0
+        # a slope break between the windows at i and i+k peaks near i + k/2: drop the centres
+        # whose windows reach it (those within k), as the AD test does at sharp corners
+        mag = np.where(big, np.abs(sig.psi), 0.0)
+        peak = big.copy()
+        peak[1:] &= mag[1:] >= mag[:-1]
+        peak[:-1] &= mag[:-1] >= mag[1:]
+        hit = np.zeros(n, np.int8)
+        hit[np.minimum(np.flatnonzero(peak) + k // 2, n - 1)] = 1
+        ok &= np.convolve(hit, np.ones(2 * k + 1, np.int8), "same") == 0  # n >= 2k+1 here
     edges = np.diff(ok.view(np.int8), prepend=np.int8(0), append=np.int8(0))
     return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
 
@@ -83,17 +89,32 @@ def fit_spans(
     with np.errstate(invalid="ignore"):
         z = range_residuals(d, b, run_id, rho, alpha, sigma)
         inl = ok & (np.abs(z) <= cfg.inlier_tau)
-    z2 = np.where(inl, z * z, 0.0)
-    big = np.iinfo(np.int64).max
-    stats = np.add.reduceat(np.stack((inl.astype(float), z2)), starts, axis=1)
+    # curvature: t-statistic of the residuals against a parabola in the beam index, centred on
+    # the inliers (orthogonal to the constant and slope the fit absorbs); ~N(0, 1) on a line
+    w_in = inl.astype(float)
+    zi = np.where(inl, z, 0.0)
+    t = (beam - beam[starts][run_id]).astype(float)
+    t2 = t * t
+    stats = np.add.reduceat(np.stack((w_in, zi * zi, w_in * t, w_in * t2, t2 * t2 * w_in, t * t2 * w_in)), starts, axis=1)
     n_in = stats[0].astype(np.int64)
+    n_f = np.maximum(stats[0], 1.0)
     chi2 = stats[1] / np.maximum(n_in - 2, 1)
+    # parabola q = t^2 - a - b t fitted out against 1 and t over the inliers (weighted normal eqs)
+    m1, m2, m4, m3 = stats[2] / n_f, stats[3] / n_f, stats[4] / n_f, stats[5] / n_f
+    var_t = np.maximum(m2 - m1 * m1, 1e-12)
+    b_lin = (m3 - m1 * m2) / var_t
+    a_lin = m2 - b_lin * m1
+    qq = t2 - a_lin[run_id] - b_lin[run_id] * t
+    cs = np.add.reduceat(np.stack((zi * qq, w_in * qq * qq)), starts, axis=1)
+    curvature = np.abs(cs[0]) / np.sqrt(np.maximum(cs[1], 1e-300))
+    big = np.iinfo(np.int64).max
     first_in = np.minimum.reduceat(np.where(inl, beam, big), starts)
     last_in = np.maximum.reduceat(np.where(inl, beam, -1), starts)
     good = (
         (n_in >= cfg.min_points)
         & (n_in >= cfg.min_inlier_fraction * counts)
         & (chi2 <= cfg.max_chi2)
+        & (curvature <= cfg.curvature_tau)
         & np.isfinite(rho)
         & np.isfinite(alpha)
         & np.isfinite(cov).all(axis=(1, 2))

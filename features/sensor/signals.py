@@ -107,7 +107,7 @@ def compute(
     return BeamSignals(valid, u, AD, AD_sigma, ad, theta, theta_sigma, psi, psi_sigma, const.ad_line)
 
 
-def signals(scan: Scan, k: int = 5, sigma_r: float = 0.005, min_range: float = 0.02) -> dict:
+def signals(scan: Scan, k: int = 3, sigma_r: float = 0.005, min_range: float = 0.02) -> dict:
     """The paper's intermediate signals of ``scan`` for its figures 4-6.
 
     Args:

@@ -1,0 +1,114 @@
+"""The `lmsbench simulate` driver: simulate a run and write its files.
+
+Files in the output folder:
+- ``scans.clf``: CARMEN log, one ROBOTLASER1 line per scan, each preceded by a TRUEPOS line with
+  the true scanner pose at the scan's timestamp (the time of its first beam); odometry only when
+  asked for (else the pose fields are zeros and ``PARAM lmsbench_odometry absent`` says so).
+- ``groundtruth.tum``: the true pose at every scan's timestamp (TUM, z = 0).
+- ``world.json``: the world's ground truth (walls, circles, corners) and solids.
+- ``config.yaml``: everything needed to rerun it (no run timestamps: same seed, same bytes).
+- ``map.png``: the world, the path and one scan.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from lms200 import Record
+from lms200.carmen import write_carmen
+from lms200.tum import write_tum
+from sim import SensorConfig, World, make_world
+from sim.records import OdometryConfig, scan_stamps, simulate_tour
+from sim.robot import RobotLimits, Tour, robot_tour
+
+
+@dataclass(frozen=True)
+class SimulationConfig:
+    """One simulated run (the content of config.yaml)."""
+
+    world: str = "office"
+    seed: int = 0
+    duration: float = 120.0
+    rate_hz: float | None = None
+    sensor: SensorConfig = SensorConfig()
+    odometry: OdometryConfig | None = None
+    robot: RobotLimits = RobotLimits()
+
+    def to_dict(self) -> dict:
+        return {
+            "world": self.world,
+            "seed": int(self.seed),
+            "duration": float(self.duration),
+            "rate_hz": None if self.rate_hz is None else float(self.rate_hz),
+            "sensor": self.sensor.to_dict(),
+            "odometry": None if self.odometry is None else self.odometry.to_dict(),
+            "robot": {k: list(v) if isinstance(v, tuple) else v for k, v in self.robot.to_dict().items()},
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "SimulationConfig":
+        robot = dict(d.get("robot") or {})
+        if "pause_s" in robot:
+            robot["pause_s"] = tuple(robot["pause_s"])
+        return cls(world=str(d.get("world", "office")), seed=int(d.get("seed", 0)),
+                   duration=float(d.get("duration", 120.0)), rate_hz=d.get("rate_hz"),
+                   sensor=SensorConfig(**(d.get("sensor") or {})),
+                   odometry=OdometryConfig(**d["odometry"]) if d.get("odometry") else None,
+                   robot=RobotLimits(**robot))
+
+
+def run_simulation(cfg: SimulationConfig, out: Path) -> list[Record]:
+    """Simulate ``cfg`` and write scans.clf, groundtruth.tum, world.json, config.yaml, map.png."""
+    out.mkdir(parents=True, exist_ok=True)
+    world = World.from_json(cfg.world) if cfg.world.endswith(".json") else make_world(cfg.world, cfg.seed)
+    tour = robot_tour(world, cfg.seed, cfg.duration, cfg.robot)
+    stamps = scan_stamps(cfg.sensor, cfg.duration, cfg.rate_hz)
+    records = simulate_tour(world, tour, stamps, cfg.sensor, cfg.seed, cfg.odometry)
+    write_carmen(out / "scans.clf", records)
+    write_tum(out / "groundtruth.tum", stamps, np.array([r.truth for r in records]).reshape(-1, 3))
+    world.to_json(out / "world.json")
+    (out / "config.yaml").write_text(yaml.safe_dump(cfg.to_dict(), sort_keys=False), encoding="ascii")
+    draw_map(world, tour, records, out / "map.png")
+    return records
+
+
+def draw_map(world: World, tour: Tour, records: list[Record], path: Path) -> None:
+    """The world's cross-section, the driven path and the middle scan (world frame)."""
+    try:
+        from experiments.style import apply_style, equal_axes
+        apply_style()
+    except ImportError:  # pragma: no cover - style module of another area
+        equal_axes = None
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+    from matplotlib.patches import Circle
+
+    fig, ax = plt.subplots(figsize=(7, 6))
+    ax.add_collection(LineCollection(world.walls.reshape(-1, 2, 2), colors="k", linewidths=0.8))
+    for cx, cy, r in world.circles:
+        ax.add_patch(Circle((cx, cy), r, fill=False, color="k", lw=0.8))
+    if records:
+        truth = np.array([r.truth for r in records])
+        ax.plot(truth[:, 0], truth[:, 1], "-", color="tab:blue", lw=1.0, label="path")
+        mid = records[len(records) // 2]
+        x, y, th = mid.truth
+        pts = mid.scan.points
+        c, s = np.cos(th), np.sin(th)
+        ax.plot(x + c * pts[:, 0] - s * pts[:, 1], y + s * pts[:, 0] + c * pts[:, 1], ".", ms=1.5,
+                color="tab:red", label=f"scan at t = {mid.scan.stamp:.2f} s")
+        ax.plot([x], [y], "o", color="tab:red", ms=4)
+    ax.autoscale_view()
+    if equal_axes is not None:
+        equal_axes(ax)
+    else:
+        ax.set_aspect("equal")
+    ax.set_title(f"world {world.name} (seed {world.seed})")
+    ax.legend(loc="upper right")
+    fig.savefig(path, dpi=120, metadata={"Software": None})
+    plt.close(fig)

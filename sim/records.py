@@ -1,0 +1,95 @@
+"""Simulated runs: a robot tour scanned by the emulated LMS200, as lms200 Records."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from lms200 import Record
+
+from .lidar import LMS200Sim
+from .robot import RobotLimits, Tour, robot_tour, wrap
+from .sensor import SensorConfig
+from .world import World
+from .worlds import make_world
+
+_STREAM_ODOMETRY = 4
+
+
+@dataclass(frozen=True)
+class OdometryConfig:
+    """Wheel odometry with the odometry motion model's noise (Thrun, Burgard and Fox,
+    Probabilistic Robotics, 2005, sec. 5.4): each step's rotation-translation-rotation gets zero
+    mean Gaussian noise of standard deviation alpha1 |rot| + alpha2 |trans| (rotations) and
+    alpha3 |trans| + alpha4 (|rot1| + |rot2|) (translation). Starts at the true first pose."""
+
+    alpha1: float = 0.05  # rad/rad
+    alpha2: float = 0.01  # rad/m
+    alpha3: float = 0.05  # m/m
+    alpha4: float = 0.01  # m/rad
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def odometry_poses(truth: np.ndarray, config: OdometryConfig, rng: np.random.Generator) -> np.ndarray:
+    """(n, 3) noisy odometry poses integrated along the (n, 3) true poses."""
+    d = np.diff(truth, axis=0)
+    trans = np.hypot(d[:, 0], d[:, 1])
+    moving = trans > 1e-9
+    rot1 = np.where(moving, wrap(np.arctan2(d[:, 1], d[:, 0]) - truth[:-1, 2]), 0.0)
+    rot2 = wrap(d[:, 2] - rot1)
+    c = config
+    n1, n2, n3 = rng.standard_normal((3, len(d)))
+    rot1_n = rot1 + n1 * (c.alpha1 * np.abs(rot1) + c.alpha2 * trans)
+    trans_n = trans + n2 * (c.alpha3 * trans + c.alpha4 * (np.abs(rot1) + np.abs(rot2)))
+    rot2_n = rot2 + n3 * (c.alpha1 * np.abs(rot2) + c.alpha2 * trans)
+    out = np.empty_like(truth)
+    out[0] = truth[0]
+    th = truth[0, 2] + np.cumsum(rot1_n + rot2_n)
+    heading = np.concatenate(([truth[0, 2]], th[:-1])) + rot1_n
+    out[1:, 0] = truth[0, 0] + np.cumsum(trans_n * np.cos(heading))
+    out[1:, 1] = truth[0, 1] + np.cumsum(trans_n * np.sin(heading))
+    out[1:, 2] = wrap(th)
+    return out
+
+
+def scan_stamps(sensor: SensorConfig, duration: float, rate_hz: float | None = None) -> np.ndarray:
+    """Times (s) of the first beam of each scan kept: every scan of the sensor (37.5/s at 0.5 deg)
+    whose last beam falls within ``duration``, decimated to about ``rate_hz`` when given."""
+    period = sensor.scan_period
+    step = 1 if rate_hz is None else max(1, int(round(1.0 / (period * rate_hz))))
+    last_beam = float(sensor.beam_time_offsets.max())
+    n = int(np.floor((duration - last_beam) / period + 1e-9)) + 1
+    return np.arange(0, max(n, 0), step) * period
+
+
+def simulate_tour(world: World, tour: Tour, stamps: np.ndarray, sensor: SensorConfig, seed: int = 0,
+                  odometry: OdometryConfig | None = None) -> list[Record]:
+    """Scan ``world`` along ``tour`` at ``stamps``; each beam from the pose at its own time."""
+    truth = tour.pose_at(stamps)
+    odom = odometry_poses(truth, odometry, np.random.default_rng([int(seed), _STREAM_ODOMETRY])) if odometry else None
+    offsets = sensor.beam_time_offsets if sensor.interlaced else np.zeros(sensor.n_beams)
+    records = []
+    with LMS200Sim(world, sensor, seed) as sim:
+        for j, t in enumerate(stamps):
+            scan = sim.scan_from_beam_poses(tour.pose_at(t + offsets), float(t))
+            records.append(Record(scan=scan, odom=tuple(map(float, odom[j])) if odom is not None else None,
+                                  truth=(float(truth[j, 0]), float(truth[j, 1]), float(truth[j, 2]))))
+    return records
+
+
+def simulate_records(world: str | World = "office", seed: int = 0, duration: float = 120.0,
+                     sensor: SensorConfig | None = None, odometry: OdometryConfig | None = None,
+                     rate_hz: float | None = None, limits: RobotLimits | None = None) -> list[Record]:
+    """A simulated run as Records: the robot tours ``world`` (a name, built with ``seed``, or a
+    World) for ``duration`` s and the LMS200 scans at its rate (decimated to ``rate_hz``).
+
+    Every record has the true scanner pose at its stamp (the time of its first beam); odometry
+    only when ``odometry`` is given.
+    """
+    w = world if isinstance(world, World) else make_world(world, seed)
+    s = sensor if sensor is not None else SensorConfig()
+    tour = robot_tour(w, seed, duration, limits)
+    return simulate_tour(w, tour, scan_stamps(s, duration, rate_hz), s, seed, odometry)
