@@ -139,3 +139,17 @@ def test_refused_installation_mode_is_its_own_error() -> None:
 def test_loop_url_opens_and_times_out_on_its_own_echo() -> None:
     with pytest.raises(LmsTimeoutError, match="loop://"):
         LMS200("loop://", timeout=0.02, retries=1, probe=False)
+
+
+@pytest.mark.filterwarnings("ignore:set(Daemon|Name)\\(\\) is deprecated:DeprecationWarning")  # inside pyserial
+def test_rfc2217_url_with_probing_and_baud_change() -> None:
+    sent = source(20)
+    dev = VirtualLMS200(itertools.cycle(sent), time_scale=0.05)
+    dev.baud = 19200  # the host must find it: other bauds are garbled
+    with TcpServer(dev, rfc2217=True) as ad:
+        assert ad.url.startswith("rfc2217://")
+        with LMS200(ad.url, baud=500000, timeout=0.2) as lms:
+            assert dev.baud == 500000
+            scan = next(lms.scans())
+        assert dev.baud == 9600
+    assert codes(scan.ranges).tobytes() in {codes(s.ranges).tobytes() for s in sent}

@@ -27,6 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--seed", type=int, default=0, help="seed of the world and the sensor noise")
     e.add_argument("--log", type=Path, help="replay this log (CARMEN or bag) instead of the simulator, in a loop")
     e.add_argument("--tcp", type=int, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")
+    e.add_argument("--rfc2217", action="store_true", help="with --tcp: speak RFC 2217 (rfc2217://HOST:PORT), so the host sets the baud")
     e.add_argument("--host", default="127.0.0.1", help="address to listen on with --tcp")
     e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (the LMS200 ships in cm)")
     e.add_argument("--time-scale", type=float, default=1.0, help="multiplies every byte time and device delay (0.01 = 100x faster)")
@@ -60,7 +61,9 @@ def run_emulate(args: argparse.Namespace) -> int:
         scans = simulator_scans(args.world, args.seed)
         what = f"simulated scans of world {args.world} (seed {args.seed}) along its route graph"
     device = VirtualLMS200(scans, time_scale=args.time_scale, units=args.units)
-    adapter = TcpServer(device, args.host, args.tcp) if args.tcp is not None else PtyAdapter(device)
+    if args.rfc2217 and args.tcp is None:
+        raise LmsbenchError("--rfc2217 needs --tcp PORT")
+    adapter = TcpServer(device, args.host, args.tcp, rfc2217=args.rfc2217) if args.tcp is not None else PtyAdapter(device)
     where = adapter.url if args.tcp is not None else adapter.path
     print(where, flush=True)
     print(f"virtual LMS200 at {where}: {what}, 9600 baud at power-on, "
