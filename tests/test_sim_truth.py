@@ -69,7 +69,8 @@ def test_routes_keep_clear_of_everything(name: str) -> None:
 
 
 def _sensor_hits(pose: np.ndarray, ranges: np.ndarray, sensor: SensorConfig) -> np.ndarray:
-    return np.column_stack((ranges * np.cos(sensor.angles), ranges * np.sin(sensor.angles)))
+    r = np.where(np.isfinite(ranges), ranges, np.nan)
+    return np.column_stack((r * np.cos(sensor.angles), r * np.sin(sensor.angles)))
 
 
 @pytest.mark.parametrize("name", ["office", "angles", "pillars"])
@@ -95,7 +96,7 @@ def test_visible_truth_agrees_with_exact_ray_caster(name: str) -> None:
             covered[first:last + 1] = True
         # every beam that hits a straight face is in some segment's span
         on_circle = np.zeros(sensor.n_beams, dtype=bool)
-        world_hits = pose[:2] + ref[:, None] * np.column_stack((np.cos(pose[2] + sensor.angles), np.sin(pose[2] + sensor.angles)))
+        world_hits = pose[:2] + np.where(np.isfinite(ref), ref, np.nan)[:, None] * np.column_stack((np.cos(pose[2] + sensor.angles), np.sin(pose[2] + sensor.angles)))
         for cx, cy, r in world.circles:
             on_circle |= np.abs(np.hypot(world_hits[:, 0] - cx, world_hits[:, 1] - cy) - r) < 1e-6
         should = np.isfinite(ref) & ~on_circle & ~grazing

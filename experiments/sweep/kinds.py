@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from experiments.evaluate import (evaluate_extractor, sensor_config, simulate_run, split_params,
-                                  summarise_scans, truths_for)
+from experiments.evaluate import (compare_records, sensor_config, simulate_run, split_params, summarise_table,
+                                  truths_for)
 
 EXTRACT_DEFAULTS = {"method": "sensor", "world": "office", "duration": 5.0, "rate_hz": 4.0}
 SLAM_DEFAULTS = {"world": "office", "duration": 30.0, "rate_hz": None}
@@ -40,12 +40,18 @@ def _records(params: dict[str, Any], defaults: dict[str, Any], with_truth: bool)
 
 
 def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
-    """One extractor over a simulated run, scored scan by scan against the visible ground truth."""
+    """One extractor over a simulated run, scored scan by scan against the visible ground truth
+    (``experiments.compare``): the pooled summary row (f1, precision, recall, rho_rms_mm,
+    alpha_rms_deg, corner_*, explained, us_median, time_ms_median, lines_per_scan, ...)."""
     p = {**EXTRACT_DEFAULTS, **params}
     _, records, truths = _records(p, EXTRACT_DEFAULTS, with_truth=True)
-    per_scan = evaluate_extractor(records, str(p["method"]), split_params(p, "extractor"), truths)
-    return {k: (float(v) if isinstance(v, (int, float, np.number)) else v)
-            for k, v in summarise_scans(per_scan).items()}
+    method = str(p["method"])
+    noise = float(split_params(p, "sensor").get("noise_sigma", 0.005))
+    table = compare_records(records, truths, [method], {method: split_params(p, "extractor")},
+                            seed=int(p.get("seed", 0)), sigma=max(noise, 0.001))
+    row = summarise_table(table, reference=method).iloc[0]
+    skip = {"source", "method", "kind", "seeds", "speed_vs_sensor"}
+    return {k: float(v) for k, v in row.items() if k not in skip and isinstance(v, (int, float, np.number))}
 
 
 def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
