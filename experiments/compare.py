@@ -100,6 +100,7 @@ def compare(
     sigma: float = 0.005,
     max_scans: int | None = None,
     progress: bool = False,
+    matches: list[dict[str, Any]] | None = None,
 ) -> pd.DataFrame:
     """Run ``methods`` (default: every available one) on every scan of ``sources``.
 
@@ -111,6 +112,8 @@ def compare(
         sigma: range noise (m) for the explained fraction (3 sigma band).
         max_scans: at most this many scans per source.
         progress: show a tqdm progress bar.
+        matches: if a list, one dict per matched line is appended to it (method, source, seed,
+            scan, face, rho_err, alpha_err): see :func:`common_errors`.
 
     Returns:
         A tidy table, one row per method x scan: method, source, kind, seed, scan, stamp, n_valid,
@@ -148,7 +151,13 @@ def compare(
                            n_corners=len(fs.corners), microseconds=elapsed / 1e3,
                            explained=explained, range_rms=range_rms)
                 if truth is not None:
-                    row.update(_score_row(score_scan(fs, truth, score_config)))
+                    score = score_scan(fs, truth, score_config)
+                    row.update(_score_row(score))
+                    if matches is not None:
+                        for face, dr, da in zip(score.matches[:, 1].tolist(), score.rho_errors.tolist(),
+                                                score.alpha_errors.tolist()):
+                            matches.append(dict(method=name, source=src.name, seed=src.seed, scan=k,
+                                                face=face, rho_err=dr, alpha_err=da))
                 rows.append(row)
             if bar is not None:
                 bar.update(1)
@@ -214,10 +223,31 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
     return summary
 
 
+def common_errors(matches: pd.DataFrame) -> pd.DataFrame:
+    """Errors on the faces every method matched (per source): the like-for-like accuracy, since a
+    method that finds more (harder: far, short, grazing) faces pools larger errors. One row per
+    source x method: n_common, rho_rms_common_mm, alpha_rms_common_deg."""
+    cols = ["source", "method", "n_common", "rho_rms_common_mm", "alpha_rms_common_deg"]
+    if matches.empty:
+        return pd.DataFrame(columns=cols)
+    out = []
+    key = ["seed", "scan", "face"]
+    for source, g in matches.groupby("source", sort=False):
+        n_methods = g["method"].nunique()
+        seen = g.groupby(key)["method"].nunique()
+        common = seen[seen == n_methods].index
+        c = g.set_index(key).loc[lambda d: d.index.isin(common)]
+        for method, h in c.groupby("method", sort=False):
+            out.append(dict(source=source, method=method, n_common=len(h),
+                            rho_rms_common_mm=1e3 * float(np.sqrt(np.mean(h["rho_err"] ** 2))),
+                            alpha_rms_common_deg=float(np.rad2deg(np.sqrt(np.mean(h["alpha_err"] ** 2))))))
+    return pd.DataFrame(out, columns=cols)
+
+
 def format_summary(summary: pd.DataFrame) -> str:
     """The summary as a fixed-width text table (the columns that exist)."""
     cols = ["source", "method", "scans", "f1", "precision", "recall", "rho_bias_mm", "rho_rms_mm",
-            "alpha_bias_deg", "alpha_rms_deg", "corner_precision", "corner_recall", "corner_err_mm",
+            "alpha_bias_deg", "alpha_rms_deg", "rho_rms_common_mm", "alpha_rms_common_deg", "corner_precision", "corner_recall", "corner_err_mm",
             "explained", "range_rms_mm", "us_median", "scans_per_s", "speed_vs_sensor"]
     cols = [c for c in cols if c in summary]
     return summary[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}", na_rep="-")
