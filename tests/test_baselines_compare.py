@@ -35,7 +35,7 @@ def test_compare_table_rows_and_scores():
     assert len(table) == len(BASELINES) * len(POSES)
     assert set(table["method"]) == set(BASELINES)
     assert (table["seed"] == 7).all() and sorted(table["scan"].unique()) == [0, 1, 2]
-    assert (table["microseconds"] > 0).all()
+    assert (table["microseconds"] > 0).all() and (table["cpu_microseconds"] > 0).all()
     # exact room, 5 mm noise: every wall of every scan found, nothing else
     assert (table["f1"] == 1.0).all() and (table["fp"] == 0).all()
     assert (table["tp"] == table["n_truth"]).all()
@@ -45,6 +45,7 @@ def test_compare_table_rows_and_scores():
     s = summarise(table)
     assert set(s["method"]) == set(BASELINES) and (s["f1"] == 1.0).all()
     assert s["speed_vs_sensor"].isna().all()  # no sensor method in this run
+    assert (s["cpu_us_median"] > 0).all() and s["cpu_speed_vs_sensor"].isna().all()
 
 
 def test_methods_run_interleaved_in_rotating_order():
