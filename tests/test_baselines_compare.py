@@ -102,3 +102,19 @@ def test_cli_errors_are_one_line(tmp_path):
     assert res.returncode == 2 and "neither a world" in res.stderr
     res = _cli("office", "--methods", "nonexistent", "--out", str(tmp_path))
     assert res.returncode == 2 and "unknown extraction method" in res.stderr
+
+
+def test_compare_on_a_simulated_world():
+    sim = pytest.importorskip("sim")
+    if not hasattr(sim, "simulate_records"):
+        pytest.skip("sim.simulate_records not on this branch yet")
+    from experiments.compare import parse_sources
+
+    sources = parse_sources(["angles"], seeds=[1], duration=2.0, rate_hz=2.0)
+    table = compare(sources, ["split_merge", "hough"])
+    assert set(table["source"]) == {"angles"} and set(table["seed"]) == {1}
+    assert len(table) == 2 * table["scan"].nunique() and table["scan"].nunique() >= 3
+    # scored against the simulator's visible truth: most faces found on a noisy LMS200 scan
+    assert table["tp"].sum() > 0 and (table["n_truth"] > 0).all()
+    s = summarise(table).set_index("method")
+    assert (s["f1"] > 0.6).all() and (s["rho_rms_mm"] < 30).all()

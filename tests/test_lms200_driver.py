@@ -153,3 +153,27 @@ def test_rfc2217_url_with_probing_and_baud_change() -> None:
             scan = next(lms.scans())
         assert dev.baud == 9600
     assert codes(scan.ranges).tobytes() in {codes(s.ranges).tobytes() for s in sent}
+
+
+class LosesOneBaudReply(VirtualLMS200):
+    """A device that switches baud but whose 0xA0 reply to the first baud change is lost."""
+
+    lost = False
+
+    def _mode(self, data: bytes, t_reply: float) -> None:
+        from lms200.protocol import MODE_BAUDS
+
+        if data[0] in MODE_BAUDS and not self.lost:
+            self.lost = True
+            self.baud = MODE_BAUDS[data[0]]  # the ACK already queued still goes out at the old baud
+            return
+        super()._mode(data, t_reply)
+
+
+def test_lost_baud_change_reply_is_checked_at_the_new_baud() -> None:
+    dev = LosesOneBaudReply(source(), time_scale=SCALE, units="mm")
+    with PtyAdapter(dev) as ad:
+        with LMS200(ad.path, baud=38400, mode_timeout=0.1) as lms:
+            assert dev.lost and dev.baud == 38400 and lms.baud == 38400
+            assert len(next(lms.scans())) == 361
+        assert dev.baud == 9600

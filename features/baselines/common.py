@@ -128,6 +128,24 @@ def fit_groups(x: np.ndarray, y: np.ndarray, offsets: np.ndarray) -> tuple[np.nd
                        red(x * y, offsets))
 
 
+def trim_ends(x: np.ndarray, y: np.ndarray, offsets: np.ndarray, rho: np.ndarray, alpha: np.ndarray,
+              tol: float, keep: int) -> tuple[np.ndarray, np.ndarray]:
+    """For groups of points (starting at ``offsets`` in the concatenated ``x``, ``y``) fitted by
+    lines: the index range [lo, hi] (into the concatenation) left after dropping the leading and
+    trailing points farther than ``tol`` (m) from the line. Such end points belong to a small
+    neighbouring face (a door frame, a pillar's edge) that the split threshold let in; they tilt
+    the fit. Never trims a group below ``keep`` points (then it is left whole)."""
+    sizes = np.diff(np.concatenate((offsets, [x.size])))
+    g = np.repeat(np.arange(offsets.size), sizes)
+    good = np.abs(x * np.cos(alpha)[g] + y * np.sin(alpha)[g] - rho[g]) <= tol
+    idx = np.arange(x.size)
+    ends = offsets + sizes - 1
+    lo = np.minimum.reduceat(np.where(good, idx, x.size), offsets)
+    hi = np.maximum.reduceat(np.where(good, idx, -1), offsets)
+    whole = (hi - lo + 1) < keep
+    return np.where(whole, offsets, lo), np.where(whole, ends, hi)
+
+
 def straight_enough(x: np.ndarray, y: np.ndarray, offsets: np.ndarray, rho: np.ndarray,
                     alpha: np.ndarray, z_min: float, dead_zone: float) -> np.ndarray:
     """Wald-Wolfowitz runs test (Wald & Wolfowitz 1940) on the signs of each group's residuals

@@ -18,7 +18,8 @@ from lms200 import Scan
 
 from ..registry import register
 from ..types import FeatureSet
-from .common import CornerConfig, PrefixFit, breakpoints, build_lines, feature_set, straight_enough, valid_points
+from .common import (CornerConfig, PrefixFit, breakpoints, build_lines, feature_set, straight_enough, trim_ends,
+                     valid_points)
 from .splitting import _ragged, merge_collinear, split, unshare
 
 
@@ -36,6 +37,8 @@ class SplitMergeConfig:
     - min_points / min_length: 8 points and 0.15 m per line (Nguyen et al. 2007 discard segments
       with too few points, "P_min", and too short, "L_min"; values chosen for 0.5 deg beams).
     - max_skip: 3: a cluster bridges up to two dropped (nan / no-return) beams, as hough / ransac.
+    - end points farther than 3 sigma from the fitted line are trimmed (twice, refitting): they
+      belong to a small neighbouring face the split threshold let in.
     - runs_z: 3.0: a line whose residual signs form 3 standard deviations fewer runs than noise
       would (Wald-Wolfowitz runs test) is an arc, not a line, and is dropped (0 disables); a
       straight wall fails it with probability ~0.1 %.
@@ -69,6 +72,11 @@ def segment_lines(scan: Scan, sigma: float, lam_deg: float, threshold: float, me
         return []
     s, e = segs[:, 0], segs[:, 1]
     rho, alpha, n, mx, my, along = fitter.fit(s, e)
+    for _ in range(2):  # drop end points off the fitted line (a neighbouring small face), refit
+        pos, _, offsets = _ragged(s, e)
+        lo, hi = trim_ends(pts.x[pos], pts.y[pos], offsets, rho, alpha, 3.0 * sigma, min_points)
+        s, e = pos[lo], pos[hi]
+        rho, alpha, n, mx, my, along = fitter.fit(s, e)
     if runs_z > 0:
         pos, _, offsets = _ragged(s, e)
         ok = straight_enough(pts.x[pos], pts.y[pos], offsets, rho, alpha, runs_z, 0.5 * sigma)
