@@ -28,7 +28,6 @@ class SensorMethodConfig:
     inlier_tau: float = 3.0  # |range residual| <= inlier_tau * sigma_r after the weighted fit
     max_chi2: float = 3.0  # largest mean squared normalised residual of an accepted line
     min_inlier_fraction: float = 0.7  # fraction of a run's beams the line must explain
-    curvature_tau: float = 4.0  # reject a line whose residuals bend (quadratic t-statistic) above this
     min_points: int = 8  # fewest supporting beams of a line
     min_length: float = 0.3  # shortest line segment kept, m
     merge_gap: int = 4  # neighbouring lines at most this many beams apart may merge ...
