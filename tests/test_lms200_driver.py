@@ -104,9 +104,10 @@ def test_silent_device_raises_timeout_naming_the_request() -> None:
 def test_device_that_stops_mid_stream_raises_timeout() -> None:
     dev = VirtualLMS200(source(), time_scale=SCALE)
     with TcpServer(dev) as ad:
-        lms = LMS200(ad.url, baud=500000, timeout=0.05, mode_timeout=0.1, retries=1)
+        lms = LMS200(ad.url, baud=500000)
         stream = lms.scans()
         next(stream)
+        lms.timeout, lms.mode_timeout, lms.retries = 0.05, 0.1, 1
         dev.faults.mute = True
         with pytest.raises(LmsTimeoutError, match="no scan from"):
             for _ in stream:
@@ -119,7 +120,7 @@ def test_device_that_stops_mid_stream_raises_timeout() -> None:
 def test_nak_is_reported_as_nak() -> None:
     dev = VirtualLMS200(source(), time_scale=SCALE)
     with TcpServer(dev) as ad:
-        lms = LMS200(ad.url, timeout=0.1, retries=2)
+        lms = LMS200(ad.url, retries=2)
         dev.faults.rx_corrupt_prob = 1.0
         with pytest.raises(LmsNakError, match=r"start continuous output.*attempt 1: NAK; attempt 2: NAK"):
             next(lms.scans())
