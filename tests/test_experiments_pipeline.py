@@ -36,9 +36,13 @@ def test_extract_cell_agrees_with_compare_on_the_same_simulated_run():
 def test_slam_cell_reports_trajectory_error_against_truth():
     from experiments.sweep.kinds import slam_cell
 
-    cell = slam_cell({"world": "office", "seed": 0, "duration": 4.0, "rate_hz": 10.0})
+    params = {"world": "office", "seed": 0, "duration": 4.0, "rate_hz": 10.0, "slam.extractor_params.k": 5}
+    cell = slam_cell(params)
     assert cell["scans"] == pytest.approx(len(sim.simulate_records("office", 0, 4.0, rate_hz=10.0)))
     assert 0 <= cell["ate_rms"] <= cell["ate_max"] and np.isfinite(cell["final_error_m"])
+    # slam.extractor_params.NAME reaches the SLAM's extractor: an unknown name is refused there
+    with pytest.raises(ValueError, match="no_such_field"):
+        slam_cell({**params, "slam.extractor_params.no_such_field": 1})
 
 
 def test_the_figure_command_writes_every_named_figure_and_redraws_from_its_tables(tmp_path, capsys):

@@ -39,6 +39,8 @@ class StudyConfig:
     panels: int = 4  # scans shown in Fig. 9, per source
     slam: bool = True
     intel_log: str | None = str(INTEL_LOG)  # skipped with a note where absent
+    # the paper's extractor on the Intel log: cm-mode ranges (1 cm codes), so a larger range noise
+    intel_sensor_params: dict = field(default_factory=lambda: {"sigma_r": 0.02})
     sensor: dict = field(default_factory=dict)  # SensorConfig overrides
 
     def to_dict(self) -> dict:
@@ -78,7 +80,8 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
 
     intel = Path(cfg.intel_log) if cfg.intel_log else None
     if intel is not None and intel.exists():
-        tables.update(_intel_panels(intel, cfg.panels, panel_method))
+        tables.update(_intel_panels(intel, cfg.panels, panel_method,
+                                    cfg.intel_sensor_params if panel_method == "sensor" else None))
         say(f"Intel log: {cfg.panels} scans with features")
     else:
         notes.append(f"Fig. 9 (Intel log) skipped: {intel} is not present on this machine.")
@@ -120,13 +123,13 @@ def load_tables(folder: Path) -> tuple[dict[str, pd.DataFrame], list[str]]:
     return tables, notes
 
 
-def _intel_panels(path: Path, n: int, method: str) -> dict[str, pd.DataFrame]:
+def _intel_panels(path: Path, n: int, method: str, params: dict | None) -> dict[str, pd.DataFrame]:
     from lms200 import read_log
 
     records = list(read_log(path))
     picks = pick_evenly(len(records), n)
     scans = [records[i].scan for i in picks]
-    fsets, _ = extract_timed(scans, method)
+    fsets, _ = extract_timed(scans, method, params)
     pts, lns, crs = feature_panels(scans, [f"Intel scan {i}" for i in picks], fsets)
     return {"intel_points": pts, "intel_lines": lns, "intel_corners": crs}
 

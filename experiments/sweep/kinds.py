@@ -3,7 +3,7 @@
 Parameters (flat, as in the sweep file): ``method``, ``world`` (default office), ``seed``,
 ``duration`` (s of simulated time), ``rate_hz`` (scans per second kept), ``sensor.*`` (fields of
 ``sim.SensorConfig``), ``extractor.*`` (the extractor's config fields), ``slam.*`` (fields of
-``slam.SlamConfig``). Each returns a dict of scalar metrics.
+``slam.SlamConfig``; ``slam.extractor_params.NAME`` sets one entry of its extractor_params). Each returns a dict of scalar metrics.
 """
 
 from __future__ import annotations
@@ -60,7 +60,12 @@ def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
 
     p = {**SLAM_DEFAULTS, **params}
     _, records, _ = _records(p, SLAM_DEFAULTS, with_truth=False)
-    result = run_slam(records, SlamConfig.from_dict(split_params(p, "slam")))
+    slam_params = split_params(p, "slam")
+    extractor_params = split_params(slam_params, "extractor_params")  # slam.extractor_params.NAME
+    slam_params = {k: v for k, v in slam_params.items() if not k.startswith("extractor_params.")}
+    if extractor_params:
+        slam_params["extractor_params"] = extractor_params
+    result = run_slam(records, SlamConfig.from_dict(slam_params))
     return slam_metrics(result, records)
 
 
