@@ -84,6 +84,7 @@ def new_figure(nrows: int = 1, ncols: int = 1, width: float | None = None, heigh
     apply_style()
     w, h = STYLE["figure.figsize"]  # type: ignore[misc]
     size = (width or w * max(1, ncols) ** 0.8, height or h * max(1, nrows) ** 0.8)
+    kwargs.setdefault("layout", "constrained")  # titles and labels of panels never overlap
     return plt.subplots(nrows, ncols, figsize=size, **kwargs)
 
 

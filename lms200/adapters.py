@@ -7,7 +7,8 @@ device's output by the device's baud. Both are context managers; ``close()`` sto
   (its termios setting) is compared with the device's: when they differ, both directions are
   garbled as a real UART would garble them, so baud probing and baud changes are exercised.
 - :class:`TcpServer`: ``adapter.url`` (``socket://127.0.0.1:PORT``), one client at a time; a raw TCP
-  stream carries no baud, so only the pacing follows the device's baud. The device keeps its state
+  stream carries no baud, so only the pacing follows the device's baud. With ``rfc2217=True``
+  (``rfc2217://127.0.0.1:PORT``) the host sets the baud over RFC 2217 and mismatches garble. The device keeps its state
   (baud, mode) across connections, like a unit that stays powered.
 
 Bytes the host does not read are dropped once the kernel buffer is full (a UART overrun), so a
@@ -129,18 +130,78 @@ class PtyAdapter(_Adapter):
                 pass
 
 
+class _LineSettings:
+    """The serial-port attributes pyserial's RFC 2217 server side reads and sets."""
+
+    def __init__(self) -> None:
+        self.baudrate = 9600
+        self.bytesize, self.parity, self.stopbits = 8, "N", 1
+        self.xonxoff = self.rtscts = self.break_condition = False
+        self.dtr = self.rts = True
+        self.cts = self.dsr = self.ri = self.cd = False
+
+    def reset_input_buffer(self) -> None:
+        pass
+
+    def reset_output_buffer(self) -> None:
+        pass
+
+
+class _SocketWriter:
+    def __init__(self, sock: socket.socket) -> None:
+        self.sock = sock
+
+    def write(self, data: bytes) -> None:
+        try:
+            self.sock.send(data)
+        except OSError:
+            pass
+
+
 class TcpServer(_Adapter):
-    """The device behind a TCP port: ``adapter.url`` = ``socket://HOST:PORT`` for pyserial."""
+    """The device behind a TCP port: ``adapter.url`` = ``socket://HOST:PORT`` for pyserial.
+
+    With ``rfc2217=True`` the port speaks RFC 2217 (``rfc2217://HOST:PORT``): the host sets the
+    line's baud over the network, and as on the pseudo-terminal a baud that differs from the
+    device's garbles both directions.
+    """
 
     def __init__(self, device: VirtualLMS200, host: str = "127.0.0.1", port: int = 0,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic, rfc2217: bool = False) -> None:
         super().__init__(device, clock)
         self._listener = socket.create_server((host, port))
         self._listener.setblocking(False)
         self.host, self.port = self._listener.getsockname()[:2]
-        self.url = f"socket://{self.host}:{self.port}"
+        self.rfc2217 = rfc2217
+        self.url = f"{'rfc2217' if rfc2217 else 'socket'}://{self.host}:{self.port}"
         self.connections = 0
+        self._manager = None
+        self._line = _LineSettings()
         self.start()
+
+    def _accepted(self, client: socket.socket) -> None:
+        if self.rfc2217:
+            from serial.rfc2217 import PortManager
+
+            self._line = _LineSettings()
+            self._manager = PortManager(self._line, _SocketWriter(client))
+
+    def _from_host(self, data: bytes) -> bytes:
+        if self._manager is None or not data:
+            return data
+        return b"".join(self._manager.filter(data))
+
+    def _send(self, client: socket.socket) -> Callable[[bytes], int]:
+        if self._manager is None:
+            return client.send
+        manager = self._manager
+
+        def send(data: bytes) -> int:
+            escaped = b"".join(manager.escape(data))
+            sent = client.send(escaped)
+            return len(data) if sent == len(escaped) else min(sent, len(data))
+
+        return send
 
     def _run(self) -> None:
         client: socket.socket | None = None
@@ -154,6 +215,7 @@ class TcpServer(_Adapter):
                     client.setblocking(False)
                     client.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
                     self.connections += 1
+                    self._accepted(client)
                 except (BlockingIOError, InterruptedError):
                     client = None
             elif ready and client is not None:
@@ -165,8 +227,11 @@ class TcpServer(_Adapter):
                     data = b""
                 if data == b"":  # the host hung up: wait for the next one
                     client.close()
-                    client, data = None, None
-            self._exchange(data, None, client.send if client is not None else None)
+                    client, data, self._manager = None, None, None
+                else:
+                    data = self._from_host(data)
+            host_baud = self._line.baudrate if self._manager is not None else None
+            self._exchange(data, host_baud, self._send(client) if client is not None else None)
         if client is not None:
             client.close()
 

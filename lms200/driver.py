@@ -137,8 +137,7 @@ class LMS200:
         self._last_rx = time.monotonic()
         self._backlog: list = []  # events read past a reply, handed out by the next _pump
         try:
-            self._ser = serial.serial_for_url(port_or_url, baudrate=POWER_ON_BAUD, timeout=_READ_POLL_S,
-                                              write_timeout=2.0)
+            self._ser = serial.serial_for_url(port_or_url, baudrate=POWER_ON_BAUD, timeout=_READ_POLL_S)
         except (serial.SerialException, ValueError, OSError) as exc:
             raise LmsDeviceError(f"cannot open {port_or_url}: {exc}") from None
         try:

@@ -3,7 +3,7 @@
 Pure functions (bytes in, bytes or Scans out); no I/O, no clocks. The streaming parser lives in
 :mod:`lms200.framing`, the serial driver in :mod:`lms200.driver`.
 
-Frame layout (see ``docs/lms200-protocol.md``)::
+Frame layout (SICK LMS2xx telegram listing; summary in the README section ``lms200``)::
 
     STX 0x02 | ADDR | LEN (u16 LE) | CMD | DATA ... | [STATUS, replies] | CRC16 (u16 LE)
 

@@ -6,7 +6,7 @@ left the line by ``now`` (seconds on any monotonic clock). Every byte takes 10 b
 baud (8N1), times ``time_scale``; so does every device delay (ACK, reply, mode change, mirror
 period), so tests can run a faithful device 100 times faster than real time.
 
-Behaviour (``docs/lms200-protocol.md``): ACK before every reply, NAK for a telegram with a bad CRC,
+Behaviour (SICK LMS2xx telegram listing; README section ``lms200``): ACK before every reply, NAK for a telegram with a bad CRC,
 silence for another address, a host telegram with a gap of more than 6 ms between bytes is dropped;
 commands 0x10, 0x20 (installation mode with password, continuous 0x24, on-request 0x25, bauds
 0x40/0x41/0x42/0x48; the 0xA0 reply to a baud change still goes out at the old baud), 0x30 01,

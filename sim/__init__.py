@@ -32,3 +32,16 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = ["make_world", "World", "WORLD_NAMES", "SensorConfig", "visible_truth", "VisibleTruth", *_LAZY]
+
+
+def _register_gym_env() -> None:
+    """Register ``lmsbench/Office-v0`` with Gymnasium (the class loads on ``gymnasium.make``)."""
+    try:
+        import gymnasium
+    except ImportError:  # pragma: no cover - gymnasium is a dependency
+        return
+    if "lmsbench/Office-v0" not in gymnasium.registry:
+        gymnasium.register(id="lmsbench/Office-v0", entry_point="sim.gym_env:OfficeEnv")
+
+
+_register_gym_env()

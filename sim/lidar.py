@@ -9,6 +9,8 @@ from __future__ import annotations
 import ctypes
 import os
 import sys
+from itertools import chain
+from operator import itemgetter
 from contextlib import contextmanager
 from typing import Iterator
 
@@ -20,7 +22,7 @@ from .sensor import SensorConfig
 from .world import World
 
 _STREAM_SENSOR = 2
-_MIXED_SUBRAYS = 5  # sub-rays across the spot of a beam next to a depth edge
+_FIRST, _POSITION = itemgetter(0), itemgetter(3)  # rayTestBatch result: body id, hit position
 
 
 def _flush_c_stdout() -> None:
@@ -80,27 +82,35 @@ class LMS200Sim:
         s = self.sensor
         self._angles = s.angles
         self._offsets = s.beam_time_offsets
-        self._ray_length = s.range_max + 0.5
+        self._ray_length = s.range_max + 0.01
         self._half_width = np.deg2rad(s.beam_width_deg) / 2
 
     def _load(self, world: World) -> None:
-        """Load the solids as static triangle meshes: Bullet's ray test against meshes is exact,
-        while its convex cast against primitive boxes and cylinders is off by up to 2 cm near
-        edges (measured against the exact caster of the tests). Cylinders are prisms that
-        circumscribe the circle; a hit on one is moved onto the exact circle (see :meth:`cast`)."""
+        """Load each solid as a static triangle-mesh body (Bullet's ray test against meshes is
+        exact in double precision, while its convex cast against primitive boxes and cylinders is
+        off by up to 2 cm near edges). Cylinders are prisms circumscribing the circle; a hit on
+        one is moved onto the exact circle, and a hit Bullet accepts just outside a box's edge
+        (its ray-triangle test tolerates 1e-4 x the triangle's width) is rejected (see
+        :meth:`cast`)."""
         cid = self.client
-        self._cylinder_of_body: dict[int, int] = {}
-        if len(world.boxes):
-            verts, faces = _box_mesh(world.boxes)
+        bodies: list[tuple[int, int, int]] = []  # body id, kind (0 box, 1 cylinder), index
+        for k, box in enumerate(world.boxes):
+            verts, faces = _box_mesh(box[None, :])
             shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=verts.tolist(), indices=faces.ravel().tolist(),
                                             physicsClientId=cid)
-            pb.createMultiBody(0.0, shape, -1, [0, 0, 0], physicsClientId=cid)
+            bodies.append((pb.createMultiBody(0.0, shape, -1, [0, 0, 0], physicsClientId=cid), 0, k))
         for k, (cx, cy, r, z0, z1) in enumerate(world.cylinders):
             verts, faces = _prism_mesh(cx, cy, r, z0, z1)
             shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=verts.tolist(), indices=faces.ravel().tolist(),
                                             physicsClientId=cid)
-            body = pb.createMultiBody(0.0, shape, -1, [0, 0, 0], physicsClientId=cid)
-            self._cylinder_of_body[body] = k
+            bodies.append((pb.createMultiBody(0.0, shape, -1, [0, 0, 0], physicsClientId=cid), 1, k))
+        size = max([b[0] for b in bodies], default=-1) + 2
+        self._kind_of_body = np.full(size, -1, dtype=np.int64)  # index by body id; last slot = no hit
+        self._index_of_body = np.zeros(size, dtype=np.int64)
+        for body, kind, k in bodies:
+            self._kind_of_body[body], self._index_of_body[body] = kind, k
+        self._boxes = np.asarray(world.boxes, dtype=float)
+        self._box_cos, self._box_sin = np.cos(self._boxes[:, 2]), np.sin(self._boxes[:, 2])
         self._circles = np.asarray(world.cylinders[:, :3], dtype=float)
 
     # -- lifetime -----------------------------------------------------------------------------
@@ -127,50 +137,50 @@ class LMS200Sim:
         self.rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng([int(seed), _STREAM_SENSOR])
 
     # -- ray casting --------------------------------------------------------------------------
-    def cast(self, origins: np.ndarray, headings: np.ndarray) -> np.ndarray:
+    def cast(self, origins: np.ndarray, headings: np.ndarray, _depth: int = 0) -> np.ndarray:
         """Exact ranges (m) of horizontal rays at scan height from (n, 2) origins along (n,)
         world headings (rad); +inf where nothing is hit within range_max."""
         n = len(headings)
-        h = self.world.scan_height
         start = np.empty((n, 3))
         start[:, :2] = origins
-        start[:, 2] = h
+        start[:, 2] = self.world.scan_height
+        ux, uy = np.cos(headings), np.sin(headings)
         end = start.copy()
-        end[:, 0] += self._ray_length * np.cos(headings)
-        end[:, 1] += self._ray_length * np.sin(headings)
-        hits = pb.rayTestBatch(start.tolist(), end.tolist(), physicsClientId=self.client)
-        flat = np.array([(hit[0], *hit[3][:2]) for hit in hits])
-        body = flat[:, 0].astype(int)
-        ranges = np.hypot(flat[:, 1] - start[:, 0], flat[:, 2] - start[:, 1])
-        ranges[body < 0] = np.inf
-        if self._cylinder_of_body:
-            ranges = self._exact_circles(origins, headings, body, ranges)
+        end[:, 0] += self._ray_length * ux
+        end[:, 1] += self._ray_length * uy
+        hits = pb.rayTestBatch(start, end, physicsClientId=self.client)
+        body = np.fromiter(map(_FIRST, hits), dtype=np.int64, count=n)
+        pos = np.fromiter(chain.from_iterable(map(_POSITION, hits)), dtype=float, count=3 * n).reshape(n, 3)
+        ranges = np.hypot(pos[:, 0] - start[:, 0], pos[:, 1] - start[:, 1])
+        kind = self._kind_of_body[body]  # body -1 reads the last slot: -1
+        ranges[kind < 0] = np.inf
+        index = self._index_of_body[body]
+        again = np.zeros(n, dtype=bool)
+        on_box = np.flatnonzero(kind == 0)
+        if on_box.size:  # reject hits outside the true box (Bullet's edge tolerance)
+            k = index[on_box]
+            bx, c, s = self._boxes[k], self._box_cos[k], self._box_sin[k]
+            dx, dy = pos[on_box, 0] - bx[:, 0], pos[on_box, 1] - bx[:, 1]
+            outside = (np.abs(c * dx + s * dy) > bx[:, 3] + _BOX_TOL_M) | (np.abs(-s * dx + c * dy) > bx[:, 4] + _BOX_TOL_M)
+            again[on_box[outside]] = True
+        on_cyl = np.flatnonzero(kind == 1)
+        if on_cyl.size:  # move onto the exact circle; grazing the prism but missing the circle: again
+            circle = self._circles[index[on_cyl]]
+            fx, fy = origins[on_cyl, 0] - circle[:, 0], origins[on_cyl, 1] - circle[:, 1]
+            b = fx * ux[on_cyl] + fy * uy[on_cyl]
+            disc = b * b - (fx * fx + fy * fy - circle[:, 2] ** 2)
+            hit = disc >= 0
+            ranges[on_cyl[hit]] = -b[hit] - np.sqrt(disc[hit])
+            again[on_cyl[~hit]] = True
+        redo = np.flatnonzero(again)
+        if redo.size:
+            if _depth >= _MAX_RECASTS:
+                ranges[redo] = np.inf
+            else:  # go on from just past the false hit
+                skip = ranges[redo] + _RECAST_STEP_M
+                u = np.column_stack((ux[redo], uy[redo]))
+                ranges[redo] = skip + self.cast(origins[redo] + skip[:, None] * u, headings[redo], _depth + 1)
         ranges[ranges > self.sensor.range_max] = np.inf
-        return ranges
-
-    def _exact_circles(self, origins: np.ndarray, headings: np.ndarray, body: np.ndarray,
-                       ranges: np.ndarray) -> np.ndarray:
-        """Move hits on a cylinder's prism onto its exact circle; rays that graze the prism but
-        miss the circle are cast again from beyond it."""
-        on_cyl = np.flatnonzero(np.isin(body, list(self._cylinder_of_body)))
-        if on_cyl.size == 0:
-            return ranges
-        circle = self._circles[[self._cylinder_of_body[b] for b in body[on_cyl]]]
-        ux, uy = np.cos(headings[on_cyl]), np.sin(headings[on_cyl])
-        fx, fy = origins[on_cyl, 0] - circle[:, 0], origins[on_cyl, 1] - circle[:, 1]
-        b = fx * ux + fy * uy
-        disc = b * b - (fx * fx + fy * fy - circle[:, 2] ** 2)
-        hit = disc >= 0
-        ranges = ranges.copy()
-        ranges[on_cyl[hit]] = -b[hit] - np.sqrt(disc[hit])
-        miss = on_cyl[~hit]
-        if miss.size:
-            # start again just past the prism's circumcircle along the ray
-            rc = circle[~hit, 2] / np.cos(np.pi / _prism_sides(circle[~hit, 2]))
-            skip = -b[~hit] + np.sqrt(np.maximum(b[~hit] ** 2 - (fx[~hit] ** 2 + fy[~hit] ** 2 - rc**2), 0)) + 1e-6
-            u = np.column_stack((ux[~hit], uy[~hit]))
-            again = self.cast(origins[miss] + skip[:, None] * u, headings[miss])
-            ranges[miss] = skip + again
         return ranges
 
     def beam_poses(self, pose: tuple[float, float, float], twist: tuple[float, float] | None = None) -> np.ndarray:
@@ -221,31 +231,94 @@ class LMS200Sim:
         return Scan(r, s.angle_min, s.angle_increment, 0.0, s.range_max, stamp)
 
     def _mix_edges(self, bp: np.ndarray, ranges: np.ndarray) -> np.ndarray:
-        """Mixed pixels: beams next to a depth step get sub-rays across their spot; where those
-        split into a near and a far group the beam returns their mean (the far group at no
-        return counts only when it holds the larger share)."""
+        """Mixed pixels. Each beam's spot is sampled at 5 bearings (-w/2, -w/4, 0, +w/4, +w/2 of
+        beam width w): the centre is the beam's own ray; the half facing a neighbour across a
+        depth step (> mixed_gap, or return / no return) gets two sub-rays from the beam's own pose,
+        the other half is taken as the centre's surface. Where the samples split into a near and a
+        far group, the beam returns their mean (with a far group at no return, the near mean when
+        the near group holds the larger share, else no return)."""
+        gap = self.sensor.mixed_gap
+        far_value = 1e6  # stands for no return (+inf) so that differences stay finite
+        rf = np.where(ranges < far_value, ranges, far_value)
+        g = np.flatnonzero(np.abs(np.diff(rf)) > gap)
+        if g.size == 0:
+            return ranges
+        hw = self._half_width
+        right = np.array([hw / 2, hw])  # beam g looks towards g + 1
+        left = np.array([-hw, -hw / 2])  # beam g + 1 looks towards g
+        origins = np.vstack((np.repeat(bp[g, :2], 2, axis=0), np.repeat(bp[g + 1, :2], 2, axis=0)))
+        heads = np.concatenate((((bp[g, 2] + self._angles[g])[:, None] + right).ravel(),
+                                ((bp[g + 1, 2] + self._angles[g + 1])[:, None] + left).ravel()))
+        sub = self.cast(origins, heads)
+        samples = np.repeat(rf[:, None], 5, axis=1)
+        samples[g, 3:5] = np.minimum(sub[: 2 * g.size], far_value).reshape(-1, 2)
+        samples[g + 1, 0:2] = np.minimum(sub[2 * g.size :], far_value).reshape(-1, 2)
+        touched = np.zeros(len(ranges), dtype=bool)
+        touched[g] = touched[g + 1] = True
+        idx = np.flatnonzero(touched)
+        smp = samples[idx]
+        near = smp.min(axis=1)
+        far = smp > (near + gap)[:, None]
+        n_far = far.sum(axis=1)
+        no_return = (smp >= far_value).any(axis=1)
+        near_mean = np.where(far, 0.0, smp).sum(axis=1) / np.maximum(5 - n_far, 1)
+        mixed = np.where(no_return, np.where(2 * n_far > 5, np.inf, near_mean), smp.mean(axis=1))
+        out = ranges.copy()
+        split = (n_far > 0) & (near < far_value)
+        out[idx[split]] = mixed[split]
+        return out
+
+    def scan_from_beam_poses(self, beam_poses: np.ndarray, stamp: float = 0.0) -> Scan:
+        """One emulated scan whose beam i is taken from ``beam_poses[i]`` (x, y, theta)."""
+        s = self.sensor
+        bp = np.asarray(beam_poses, dtype=float)
+        ranges = self.exact_ranges(bp)
+        if s.mixed_pixels:
+            ranges = self._mix_edges(bp, ranges)
+        noise = self.rng.standard_normal(s.n_beams)
+        dropped = self.rng.random(s.n_beams) < s.dropout_prob
+        finite = np.isfinite(ranges)
+        r = np.where(finite, ranges, 0.0) + s.noise_sigma * noise
+        if s.quantise:
+            r = np.rint(r / s.unit_m) * s.unit_m
+        r = np.maximum(r, 0.0)
+        r = np.where(finite & (r < s.range_max), r, np.inf)
+        r[dropped] = np.nan
+        return Scan(r, s.angle_min, s.angle_increment, 0.0, s.range_max, stamp)
+
+    def _mix_edges(self, bp: np.ndarray, ranges: np.ndarray) -> np.ndarray:
+        """Mixed pixels. Each beam's spot is sampled at 5 bearings (-w/2, -w/4, 0, +w/4, +w/2 of
+        beam width w): the centre is the beam's own ray; the half facing a neighbour across a
+        depth step (> mixed_gap, or return / no return) gets two sub-rays from the beam's own pose,
+        the other half is taken as the centre's surface. Where the samples split into a near and a
+        far group, the beam returns their mean (with a far group at no return, the near mean when
+        the near group holds the larger share, else no return)."""
         gap = self.sensor.mixed_gap
         with np.errstate(invalid="ignore"):
             step = np.abs(np.diff(ranges))
-        jump = (step > gap) | (np.isfinite(ranges[1:]) != np.isfinite(ranges[:-1]))
-        edge = np.zeros(len(ranges), dtype=bool)
-        edge[:-1] |= jump
-        edge[1:] |= jump
-        idx = np.flatnonzero(edge)
-        if idx.size == 0:
+        g = np.flatnonzero((step > gap) | (np.isfinite(ranges[1:]) != np.isfinite(ranges[:-1])))
+        if g.size == 0:
             return ranges
-        offs = np.linspace(-self._half_width, self._half_width, _MIXED_SUBRAYS)
-        origins = np.repeat(bp[idx, :2], _MIXED_SUBRAYS, axis=0)
-        heads = (bp[idx, 2] + self._angles[idx])[:, None] + offs[None, :]
-        sub = self.cast(origins, heads.ravel()).reshape(-1, _MIXED_SUBRAYS)
-        near = sub.min(axis=1)
-        far_mask = ~(sub <= (near + gap)[:, None])  # +inf counts as far
-        n_far = far_mask.sum(axis=1)
+        hw = self._half_width
+        right = np.array([hw / 2, hw])  # beam g looks towards g + 1
+        left = np.array([-hw, -hw / 2])  # beam g + 1 looks towards g
+        origins = np.vstack((np.repeat(bp[g, :2], 2, axis=0), np.repeat(bp[g + 1, :2], 2, axis=0)))
+        heads = np.concatenate((((bp[g, 2] + self._angles[g])[:, None] + right).ravel(),
+                                ((bp[g + 1, 2] + self._angles[g + 1])[:, None] + left).ravel()))
+        sub = self.cast(origins, heads)
+        samples = np.repeat(ranges[:, None], 5, axis=1)
+        samples[g, 3:5] = sub[: 2 * g.size].reshape(-1, 2)
+        samples[g + 1, 0:2] = sub[2 * g.size :].reshape(-1, 2)
+        idx = np.union1d(g, g + 1)
+        smp = samples[idx]
+        near = smp.min(axis=1)
+        far = ~(smp <= (near + gap)[:, None])  # +inf counts as far
+        n_far = far.sum(axis=1)
+        finite = np.isfinite(smp).all(axis=1)
         with np.errstate(invalid="ignore"):
-            all_finite_mean = np.where(np.isfinite(sub).all(axis=1), sub.mean(axis=1), np.inf)
-            near_mean = np.where(~far_mask, sub, 0.0).sum(axis=1) / np.maximum(_MIXED_SUBRAYS - n_far, 1)
-        mixed = np.where(np.isfinite(sub).all(axis=1), all_finite_mean,
-                         np.where(n_far * 2 > _MIXED_SUBRAYS, np.inf, near_mean))
+            near_mean = np.where(far, 0.0, smp).sum(axis=1) / np.maximum(5 - n_far, 1)
+            mixed = np.where(finite, smp.mean(axis=1) if finite.any() else 0.0,
+                             np.where(2 * n_far > 5, np.inf, near_mean))
         out = ranges.copy()
         split = (n_far > 0) & np.isfinite(near)
         out[idx[split]] = mixed[split]
@@ -261,8 +334,10 @@ def _prism_sides(r: np.ndarray | float) -> np.ndarray:
     return np.maximum(12, np.ceil(np.pi / np.arccos(r / (r + _PRISM_TOLERANCE_M)))).astype(int)
 
 
-_MAX_TRIANGLE_WIDTH_M = 0.25  # Bullet's ray-triangle test accepts hits up to 1e-4 x the
-# triangle's width outside its edges; narrow triangles keep that below 25 micrometres.
+_MAX_TRIANGLE_WIDTH_M = np.inf  # side faces are two triangles each (false hits are rejected)
+_BOX_TOL_M = 1e-7  # a box hit farther than this outside the box is Bullet's edge tolerance
+_RECAST_STEP_M = 1e-4  # a rejected hit's ray goes on from this far past it
+_MAX_RECASTS = 4
 
 
 def _box_mesh(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

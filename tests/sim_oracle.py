@@ -8,7 +8,7 @@ import numpy as np
 def oracle_ranges(boxes: np.ndarray, cylinders: np.ndarray, height: float, origin: np.ndarray,
                   headings: np.ndarray, range_max: float) -> np.ndarray:
     """Nearest hit of rays from origin along headings with the solids cut by z = height, and a
-    mask of rays passing within 0.1 mm of a box's vertex (where which face is hit is ambiguous)."""
+    mask of rays passing within 1 um of a box's vertex (where which face is hit is ambiguous)."""
     ux, uy = np.cos(headings), np.sin(headings)
     best = np.full(len(headings), np.inf)
     grazing = np.zeros(len(headings), dtype=bool)
@@ -19,7 +19,7 @@ def oracle_ranges(boxes: np.ndarray, cylinders: np.ndarray, height: float, origi
         pts = [(cx + c * a - s * b, cy + s * a + c * b) for a, b in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]
         for (ax, ay), (bx, by) in zip(pts, pts[1:] + pts[:1]):
             along = (ax - origin[0]) * ux + (ay - origin[1]) * uy
-            grazing |= (along > 0) & (np.abs((ax - origin[0]) * uy - (ay - origin[1]) * ux) < 1e-4)
+            grazing |= (along > 0) & (np.abs((ax - origin[0]) * uy - (ay - origin[1]) * ux) < 1e-6)
             ex, ey = bx - ax, by - ay
             den = ux * ey - uy * ex
             wx, wy = ax - origin[0], ay - origin[1]

@@ -136,3 +136,20 @@ def test_occlusions_give_no_false_corners(method):
     assert fp <= 1 and fn <= 1, (tp, fp, fn)
     assert cfp == 0
     assert ctp >= 0.9 * (ctp + cfn)
+
+
+def test_runs_test_rejects_an_arc_and_keeps_a_noisy_line():
+    from features.baselines.common import straight_enough
+
+    rng = np.random.default_rng(0)
+    t = np.linspace(-0.4, 0.4, 40)
+    # a 0.8 m chord of a 1 m radius circle (sagitta 8 cm) and a noisy straight line, as two groups
+    arc_x, arc_y = np.sqrt(1.0 - t**2), t
+    line_x, line_y = 2.0 + rng.normal(0, 0.005, t.size), t
+    x, y = np.concatenate((arc_x, line_x)), np.concatenate((arc_y, line_y))
+    offsets = np.array([0, t.size])
+    rho = np.array([np.mean(arc_x), 2.0])
+    ok = straight_enough(x, y, offsets, rho, np.zeros(2), 3.0, 0.0025)
+    assert list(ok) == [False, True]
+    # disabled: everything passes
+    assert straight_enough(x, y, offsets, rho, np.zeros(2), 0.0, 0.0025).all()

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from experiments.evaluate import evaluate_extractor, summarise_methods
+from experiments.evaluate import compare_records, summarise_table
 from experiments.figures import draw
 from experiments.figures.make import PAPER_FIGURES, draw_figures, draw_sweep
 from experiments.figures.tables import ad_reference, feature_panels, map_table, pick_evenly, trajectory_table
@@ -34,13 +34,13 @@ def synthetic_run():
     return records, truths
 
 
-def test_pooled_scores_equal_score_scan_summed_by_hand(synthetic_run):
+def test_comparison_of_given_records_pools_score_scan_by_hand(synthetic_run):
     from features import extract
     from features.scoring import score_scan
 
     records, truths = synthetic_run
-    per_scan = pd.concat([evaluate_extractor(records, m, None, truths) for m in METHODS], ignore_index=True)
-    summary = summarise_methods(per_scan).set_index("method")
+    per_scan = compare_records(records, truths, METHODS)
+    summary = summarise_table(per_scan).set_index("method")
     for method in METHODS:
         scores = [score_scan(extract(r.scan, method=method), t) for r, t in zip(records, truths)]
         tp = sum(s.tp for s in scores)
@@ -49,9 +49,12 @@ def test_pooled_scores_equal_score_scan_summed_by_hand(synthetic_run):
         assert summary.loc[method, "tp"] == tp and summary.loc[method, "fp"] == fp
         assert summary.loc[method, "f1"] == pytest.approx(2 * tp / (2 * tp + fp + fn))
         rho = np.concatenate([s.rho_errors for s in scores])
-        assert summary.loc[method, "rho_errors_rms"] == pytest.approx(np.sqrt(np.mean(rho**2)))
+        assert summary.loc[method, "rho_rms_mm"] == pytest.approx(1e3 * np.sqrt(np.mean(rho**2)))
         ctp = sum(s.corner_tp for s in scores)
         assert summary.loc[method, "corner_recall"] == pytest.approx(ctp / (ctp + sum(s.corner_fn for s in scores)))
+        times = per_scan.loc[per_scan["method"] == method, "time_ms"]
+        assert summary.loc[method, "time_ms_median"] == pytest.approx(times.median())
+        assert summary.loc[method, "time_ms_p05"] <= summary.loc[method, "time_ms_median"] <= summary.loc[method, "time_ms_p95"]
     assert (per_scan["time_ms"] > 0).all() and len(per_scan) == len(METHODS) * len(records)
 
 
@@ -59,7 +62,7 @@ def test_every_figure_is_drawn_from_its_tables_with_the_data_beside_it(tmp_path,
     from features import extract
 
     records, truths = synthetic_run
-    per_scan = pd.concat([evaluate_extractor(records, m, None, truths) for m in METHODS], ignore_index=True)
+    per_scan = compare_records(records, truths, METHODS)
     fsets = [extract(r.scan, method="split_merge") for r in records[:3]]
     pts, lns, crs = feature_panels([r.scan for r in records[:3]], ["a", "b", "c"], fsets)
     assert len(lns) == sum(len(f.lines) for f in fsets) and len(crs) == sum(len(f.corners) for f in fsets)
@@ -68,7 +71,7 @@ def test_every_figure_is_drawn_from_its_tables_with_the_data_beside_it(tmp_path,
                             "ad": np.full(361, ad_reference(10, scan.angle_increment)),
                             "theta_deg": np.zeros(361), "psi_deg": np.zeros(361)})
     trajectory = trajectory_table(np.array([[0.1 * i, *r.truth] for i, r in enumerate(records)]), records)
-    tables = {"signals": signals, "timing": per_scan, "summary": summarise_methods(per_scan),
+    tables = {"signals": signals, "timing": per_scan, "summary": summarise_table(per_scan),
               "office_points": pts, "office_lines": lns, "office_corners": crs,
               "intel_points": pts, "intel_lines": lns, "intel_corners": crs,
               "trajectory": trajectory, "map": map_table(L_ROOM[:3], L_ROOM)}

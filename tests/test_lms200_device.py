@@ -160,3 +160,30 @@ def test_garble_changes_bytes_only_when_bauds_differ() -> None:
     data = build_frame(type_request())
     assert garble(data, 9600, 9600) == data
     assert 0x02 not in garble(data, 9600, 38400)
+
+
+def test_reset_answers_0x91_then_the_power_on_string_at_9600_baud() -> None:
+    dev = VirtualLMS200(scans(), units="mm")
+    dev.baud, dev.variant = 38400, (100, 25)
+    host = Host(dev)
+    host.send(b"\x10")
+    frames = [e for e in host.run(1.5) if isinstance(e, Frame)]
+    assert [f.code for f in frames] == [0x91, 0x90] and frames[1].payload[1:-1] == b"LMS200;301063;V02.10 "
+    assert dev.baud == 9600 and dev.variant == (180, 50) and dev.units == "mm"  # units live in EEPROM
+    t91, t90 = [t for t, e in host.events if isinstance(e, Frame)]
+    assert t90 - t91 == pytest.approx(1.0 + 29 * 10 / 9600, abs=0.002)
+
+
+def test_variants_report_the_right_beams() -> None:
+    ranges = np.linspace(1.0, 4.6, 361)
+    src = [Scan.lms200(ranges)] * 5
+    for variant, expected in [((180, 100), ranges[::2]), ((100, 50), ranges[80:281]), ((100, 100), ranges[80:281:2])]:
+        host = Host(VirtualLMS200(src, units="mm", variant=variant))
+        host.send(measure_request())
+        (reply,) = [e for e in host.run(1.0) if isinstance(e, Frame)]
+        np.testing.assert_allclose(decode_scan(reply.payload).ranges, np.round(expected, 3), atol=1e-12)
+    host = Host(VirtualLMS200(src, units="mm", variant=(100, 25)))
+    host.send(measure_request())
+    (reply,) = [e for e in host.run(1.0) if isinstance(e, Frame)]
+    scan = decode_scan(reply.payload)
+    assert len(scan) == 401 and scan.ranges[1] == pytest.approx(np.round((ranges[80] + ranges[81]) / 2, 3), abs=1e-12)

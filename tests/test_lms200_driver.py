@@ -104,9 +104,10 @@ def test_silent_device_raises_timeout_naming_the_request() -> None:
 def test_device_that_stops_mid_stream_raises_timeout() -> None:
     dev = VirtualLMS200(source(), time_scale=SCALE)
     with TcpServer(dev) as ad:
-        lms = LMS200(ad.url, baud=500000, timeout=0.05, mode_timeout=0.1, retries=1)
+        lms = LMS200(ad.url, baud=500000)
         stream = lms.scans()
         next(stream)
+        lms.timeout, lms.mode_timeout, lms.retries = 0.05, 0.1, 1
         dev.faults.mute = True
         with pytest.raises(LmsTimeoutError, match="no scan from"):
             for _ in stream:
@@ -119,7 +120,7 @@ def test_device_that_stops_mid_stream_raises_timeout() -> None:
 def test_nak_is_reported_as_nak() -> None:
     dev = VirtualLMS200(source(), time_scale=SCALE)
     with TcpServer(dev) as ad:
-        lms = LMS200(ad.url, timeout=0.1, retries=2)
+        lms = LMS200(ad.url, retries=2)
         dev.faults.rx_corrupt_prob = 1.0
         with pytest.raises(LmsNakError, match=r"start continuous output.*attempt 1: NAK; attempt 2: NAK"):
             next(lms.scans())
@@ -139,3 +140,41 @@ def test_refused_installation_mode_is_its_own_error() -> None:
 def test_loop_url_opens_and_times_out_on_its_own_echo() -> None:
     with pytest.raises(LmsTimeoutError, match="loop://"):
         LMS200("loop://", timeout=0.02, retries=1, probe=False)
+
+
+@pytest.mark.filterwarnings("ignore:set(Daemon|Name)\\(\\) is deprecated:DeprecationWarning")  # inside pyserial
+def test_rfc2217_url_with_probing_and_baud_change() -> None:
+    sent = source(20)
+    dev = VirtualLMS200(itertools.cycle(sent), time_scale=0.05)
+    dev.baud = 19200  # the host must find it: other bauds are garbled
+    with TcpServer(dev, rfc2217=True) as ad:
+        assert ad.url.startswith("rfc2217://")
+        with LMS200(ad.url, baud=500000, timeout=0.2) as lms:
+            assert dev.baud == 500000
+            scan = next(lms.scans())
+        assert dev.baud == 9600
+    assert codes(scan.ranges).tobytes() in {codes(s.ranges).tobytes() for s in sent}
+
+
+class LosesOneBaudReply(VirtualLMS200):
+    """A device that switches baud but whose 0xA0 reply to the first baud change is lost."""
+
+    lost = False
+
+    def _mode(self, data: bytes, t_reply: float) -> None:
+        from lms200.protocol import MODE_BAUDS
+
+        if data[0] in MODE_BAUDS and not self.lost:
+            self.lost = True
+            self.baud = MODE_BAUDS[data[0]]  # the ACK already queued still goes out at the old baud
+            return
+        super()._mode(data, t_reply)
+
+
+def test_lost_baud_change_reply_is_checked_at_the_new_baud() -> None:
+    dev = LosesOneBaudReply(source(), time_scale=SCALE, units="mm")
+    with PtyAdapter(dev) as ad:
+        with LMS200(ad.path, baud=38400, mode_timeout=0.1) as lms:
+            assert dev.lost and dev.baud == 38400 and lms.baud == 38400
+            assert len(next(lms.scans())) == 361
+        assert dev.baud == 9600

@@ -8,7 +8,6 @@ import pytest
 from sensor_geometry import cast, line_scan, polygon
 
 from features.sensor import signals
-from features.sensor.signals import compute
 
 RESOLUTIONS = [  # (n beams, increment deg): LMS200 0.5 deg, Intel logs 1 deg, 0.25 deg
     (361, 0.5),
@@ -71,9 +70,9 @@ def test_noise_std_matches_monte_carlo() -> None:
     draws_ad, draws_theta = [], []
     for _ in range(2000):
         r = clean.ranges + sigma * rng.standard_normal(clean.ranges.size)
-        s = compute(r, clean.angles, clean.angle_increment, 5, sigma, 0.02, 80.0)
-        draws_ad.append(s.AD[beams])
-        draws_theta.append(s.theta[beams])
-    ref = compute(clean.ranges, clean.angles, clean.angle_increment, 5, sigma, 0.02, 80.0)
-    np.testing.assert_allclose(np.std(draws_ad, axis=0), ref.AD_sigma[beams], rtol=0.08)
-    np.testing.assert_allclose(np.std(draws_theta, axis=0), ref.theta_sigma[beams], rtol=0.08)
+        s = signals(clean.replace(ranges=r), k=5, sigma_r=sigma)
+        draws_ad.append(s["ad"][beams])
+        draws_theta.append(s["theta"][beams])
+    ref = signals(clean, k=5, sigma_r=sigma)
+    np.testing.assert_allclose(np.std(draws_ad, axis=0), ref["ad_sigma"][beams], rtol=0.08)
+    np.testing.assert_allclose(np.std(draws_theta, axis=0), ref["theta_sigma"][beams], rtol=0.08)

@@ -23,7 +23,7 @@ def test_ideal_ranges_match_exact_ray_caster(name: str) -> None:
             ref, grazing = oracle_ranges(world.boxes, world.cylinders, world.scan_height, pose[:2],
                                          pose[2] + sensor.angles, sensor.range_max)
             got = scan.ranges.copy()
-            ref[grazing] = got[grazing] = np.nan  # rays within 0.1 mm of a vertex: ambiguous
+            ref[grazing] = got[grazing] = np.nan  # rays within 1 um of a vertex: ambiguous
             assert grazing.sum() <= 2
             both = np.isfinite(ref) & np.isfinite(got)
             # +inf exactly where the reference finds nothing within range (a hit within 1 mm of

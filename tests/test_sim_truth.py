@@ -39,6 +39,18 @@ def test_v_screen_corner_angles() -> None:
     assert len(convex_obtuse) >= 1  # outside of the 135 deg V screen
 
 
+def test_walls_only_world_json_is_simulated_on_boxes_behind_its_faces(tmp_path) -> None:
+    (tmp_path / "w.json").write_text('{"walls": [[0, 0, 0, 4], [0, 4, 5, 4], [5, 4, 5, 0], [5, 0, 0, 0]], '
+                                     '"circles": [[2.5, 2.0, 0.3]], "corners": []}')
+    w = World.from_json(tmp_path / "w.json")
+    from sim.lidar import LMS200Sim
+    with LMS200Sim(w, SensorConfig.ideal()) as lidar:
+        scan = lidar.scan_at((1.0, 2.0, 0.0))
+    assert scan.ranges[180] == pytest.approx(1.5 - 0.3, abs=1e-9)  # the circle, straight ahead
+    assert scan.ranges[0] == pytest.approx(2.0, abs=1e-9)  # the wall y = 0, to the right
+    assert scan.ranges[360] == pytest.approx(2.0, abs=1e-9)  # the wall y = 4, to the left
+
+
 def test_world_json_round_trip(tmp_path) -> None:
     w = make_world("office", seed=2)
     w.to_json(tmp_path / "world.json")
@@ -69,7 +81,8 @@ def test_routes_keep_clear_of_everything(name: str) -> None:
 
 
 def _sensor_hits(pose: np.ndarray, ranges: np.ndarray, sensor: SensorConfig) -> np.ndarray:
-    return np.column_stack((ranges * np.cos(sensor.angles), ranges * np.sin(sensor.angles)))
+    r = np.where(np.isfinite(ranges), ranges, np.nan)
+    return np.column_stack((r * np.cos(sensor.angles), r * np.sin(sensor.angles)))
 
 
 @pytest.mark.parametrize("name", ["office", "angles", "pillars"])
@@ -95,7 +108,7 @@ def test_visible_truth_agrees_with_exact_ray_caster(name: str) -> None:
             covered[first:last + 1] = True
         # every beam that hits a straight face is in some segment's span
         on_circle = np.zeros(sensor.n_beams, dtype=bool)
-        world_hits = pose[:2] + ref[:, None] * np.column_stack((np.cos(pose[2] + sensor.angles), np.sin(pose[2] + sensor.angles)))
+        world_hits = pose[:2] + np.where(np.isfinite(ref), ref, np.nan)[:, None] * np.column_stack((np.cos(pose[2] + sensor.angles), np.sin(pose[2] + sensor.angles)))
         for cx, cy, r in world.circles:
             on_circle |= np.abs(np.hypot(world_hits[:, 0] - cx, world_hits[:, 1] - cy) - r) < 1e-6
         should = np.isfinite(ref) & ~on_circle & ~grazing

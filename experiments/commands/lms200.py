@@ -4,17 +4,18 @@ recorder that logs a real (or virtual) LMS200 to a CARMEN log or a ROS bag."""
 from __future__ import annotations
 
 import argparse
-import itertools
 import signal
 import sys
 import time
 from pathlib import Path
 from typing import Iterable, Iterator
 
-from lms200 import LmsbenchError, Record, Scan, read_log
+from lms200 import LmsbenchError, Record
 from lms200.carmen import write_carmen
 from lms200.driver import LMS200
 from lms200.protocol import BAUD_MODES
+
+from experiments.lms200_sources import log_scans, simulator_scans
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -26,10 +27,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--seed", type=int, default=0, help="seed of the world and the sensor noise")
     e.add_argument("--log", type=Path, help="replay this log (CARMEN or bag) instead of the simulator, in a loop")
     e.add_argument("--tcp", type=int, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")
+    e.add_argument("--rfc2217", action="store_true", help="with --tcp: speak RFC 2217 (rfc2217://HOST:PORT), so the host sets the baud")
     e.add_argument("--host", default="127.0.0.1", help="address to listen on with --tcp")
     e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (the LMS200 ships in cm)")
     e.add_argument("--time-scale", type=float, default=1.0, help="multiplies every byte time and device delay (0.01 = 100x faster)")
-    e.add_argument("--sim-duration", type=float, default=60.0, help="seconds of simulated robot tour to loop over")
     e.add_argument("--duration", type=float, help="stop after this many seconds (default: until Ctrl-C)")
     e.set_defaults(func=run_emulate)
 
@@ -47,34 +48,25 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 # -- emulate ------------------------------------------------------------------------------------
-def _simulator_scans(world: str, seed: int, duration: float) -> list[Scan]:
-    try:
-        from sim import simulate_records  # the command line wires the simulator in, not lms200
-    except ImportError:
-        raise LmsbenchError("the simulator (sim.simulate_records) is not available here; replay a log with --log FILE") from None
-    return [rec.scan for rec in simulate_records(world=world, seed=seed, duration=duration)]
-
-
-def _log_scans(path: Path) -> list[Scan]:
-    scans = [rec.scan for rec in read_log(path)]
-    if not scans:
-        raise LmsbenchError(f"{path} holds no scans to replay")
-    return scans
-
-
 def run_emulate(args: argparse.Namespace) -> int:
     from lms200.adapters import PtyAdapter, TcpServer
     from lms200.virtual import VirtualLMS200
 
     if args.time_scale <= 0:
         raise LmsbenchError(f"--time-scale must be > 0, got {args.time_scale}")
-    scans = _log_scans(args.log) if args.log else _simulator_scans(args.world, args.seed, args.sim_duration)
-    device = VirtualLMS200(itertools.cycle(scans), time_scale=args.time_scale, units=args.units)
-    adapter = TcpServer(device, args.host, args.tcp) if args.tcp is not None else PtyAdapter(device)
+    if args.log:
+        scans = log_scans(args.log)
+        what = f"scans of {args.log} in a loop"
+    else:
+        scans = simulator_scans(args.world, args.seed)
+        what = f"simulated scans of world {args.world} (seed {args.seed}) along its route graph"
+    device = VirtualLMS200(scans, time_scale=args.time_scale, units=args.units)
+    if args.rfc2217 and args.tcp is None:
+        raise LmsbenchError("--rfc2217 needs --tcp PORT")
+    adapter = TcpServer(device, args.host, args.tcp, rfc2217=args.rfc2217) if args.tcp is not None else PtyAdapter(device)
     where = adapter.url if args.tcp is not None else adapter.path
-    what = f"log {args.log}" if args.log else f"world {args.world} (seed {args.seed})"
     print(where, flush=True)
-    print(f"virtual LMS200 at {where}: {len(scans)} scans of {what} in a loop, 9600 baud at power-on, "
+    print(f"virtual LMS200 at {where}: {what}, 9600 baud at power-on, "
           f"time scale {args.time_scale:g}; Ctrl-C stops", file=sys.stderr, flush=True)
     stop = {"now": False}
     previous = signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))

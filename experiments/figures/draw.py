@@ -25,7 +25,7 @@ def fig_signal(signals: pd.DataFrame, column: str, ylabel: str, title: str, stem
         ax.axhline(reference, color=TRUTH_COLOR, lw=0.8, ls="--", label=f"straight line: {reference:.4f}")
         if "ad_band" in signals and column == "ad" and signals["ad_band"].notna().any():
             ax.fill_between(signals["beam"], reference - signals["ad_band"], reference + signals["ad_band"],
-                            color=TRUTH_COLOR, alpha=0.12, lw=0, label="line test band (ad_tau x noise std)")
+                            color=TRUTH_COLOR, alpha=0.3, lw=0, label="line test band (ad_tau x noise std)")
         ax.legend(loc="best")
     ax.set_xlabel("beam index i")
     ax.set_ylabel(ylabel)
@@ -42,6 +42,7 @@ def fig_timing(timing: pd.DataFrame, stem: Path) -> list[Path]:
                 label=f"{method} (median {med:.2f} ms)")
     ax.set_yscale("log")
     ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.yaxis.set_minor_formatter(FormatStrFormatter("%g"))
     ax.set_xlabel("scan")
     ax.set_ylabel("processing time per scan (ms)")
     ax.set_title("Processing time for successive scans")
@@ -56,9 +57,9 @@ def fig_scans(points: pd.DataFrame, lines: pd.DataFrame, corners: pd.DataFrame, 
     ``points``: panel, label, x, y; ``lines``: panel, x1, y1, x2, y2; ``corners``: panel, x, y.
     """
     panels = list(dict.fromkeys(points["panel"]))
-    ncols = min(3, len(panels))
+    ncols = 2 if len(panels) == 4 else min(3, len(panels))
     nrows = int(np.ceil(len(panels) / ncols))
-    fig, axes = new_figure(nrows, ncols, width=3.4 * ncols, height=3.2 * nrows, squeeze=False)
+    fig, axes = new_figure(nrows, ncols, width=3.6 * ncols, height=3.4 * nrows, squeeze=False)
     for ax, panel in zip(axes.ravel(), panels):
         pts = points[points["panel"] == panel]
         ax.plot(pts["x"], pts["y"], ".", ms=1.5, color=SCAN_COLOR)
@@ -69,7 +70,8 @@ def fig_scans(points: pd.DataFrame, lines: pd.DataFrame, corners: pd.DataFrame, 
         ax.plot((ln["x1"] + ln["x2"]) / 2, (ln["y1"] + ln["y2"]) / 2, "*", ms=5, color=LINE_COLOR)
         cr = corners[corners["panel"] == panel]
         ax.plot(cr["x"], cr["y"], "D", ms=5, mfc="none", mew=1.2, color=CORNER_COLOR)
-        ax.set_title(f"{pts['label'].iloc[0]}: {len(ln)} lines, {len(cr)} corners", fontsize=8)
+        ax.set_title(f"{pts['label'].iloc[0]}: {len(ln)} lines, {len(cr)} corner{'s' if len(cr) != 1 else ''}",
+                     fontsize=8)
         equal_axes(ax, "x (m, ahead)", "y (m, left)")
     for ax in axes.ravel()[len(panels):]:
         ax.set_visible(False)

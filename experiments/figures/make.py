@@ -21,7 +21,7 @@ from . import draw
 from .tables import ad_reference
 
 #: Metrics plotted for a sweep when its table has them.
-SWEEP_METRICS = ("f1", "corner_f1", "time_ms_median", "ate_rms", "final_error_m")
+SWEEP_METRICS = ("f1", "corner_f1", "rho_rms_mm", "time_ms_median", "ate_rms", "final_error_m")
 
 PAPER_FIGURES = ("fig4_ad", "fig5_theta", "fig6_psi", "fig7_timing", "fig9_office", "fig9_intel",
                  "fig10_slam", "accuracy_speed")
@@ -58,22 +58,23 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
 
 def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
     """Plots of one sweep folder: each metric against the first grid parameter, one line per
-    combination of the other grid parameters (mean +/- std over seeds and random draws)."""
+    combination of the other grid parameters (mean +/- std over seeds and random draws; a linked
+    grid key "a,b" counts as its first name)."""
     table = pd.read_parquet(folder / "results.parquet")
     spec = yaml.safe_load((folder / "sweep.yaml").read_text())
     name = spec.get("name", folder.name)
-    varied = [n.strip() for key in spec.get("grid", {}) for n in key.split(",")]
+    # one name per grid key: parameters linked to it ("a,b") follow it and need no line of their own
+    varied = [key.split(",")[0].strip() for key in spec.get("grid", {})]
     varied = [n for n in varied if n in table and table[n].nunique() > 1]
     if not varied:
         varied = [n for n in spec.get("random", {}) if n in table]
     if not varied:
         return {}
     x, rest = varied[0], varied[1:]
-    if rest:
-        table = table.assign(**{"+".join(rest): table[rest].astype(str).agg(", ".join, axis=1)})
-    hue = "+".join(rest) if rest else None
-    if rest == ["method"]:
-        hue = "method"
+    hue = rest[0] if len(rest) == 1 else None
+    if len(rest) > 1:  # one line per combination, labelled "a=1, b=2"
+        hue = ", ".join(rest)
+        table = table.assign(**{hue: table[rest].apply(lambda r: ", ".join(f"{k}={v}" for k, v in r.items()), axis=1)})
     written = {}
     for metric in SWEEP_METRICS:
         if metric in table and table[metric].notna().any():

@@ -18,8 +18,8 @@ import pandas as pd
 import yaml
 
 from experiments.sweep.kinds import align, slam_metrics, true_trajectory
-from experiments.evaluate import (ALL_METHODS, evaluate_extractor, sensor_config, simulate_run,
-                                  summarise_methods, truths_for)
+from experiments.evaluate import (ALL_METHODS, compare_records, extract_timed, sensor_config, simulate_run,
+                                  summarise_table, truths_for)
 
 from .tables import feature_panels, map_table, pick_evenly, signals_table, trajectory_table
 
@@ -39,6 +39,8 @@ class StudyConfig:
     panels: int = 4  # scans shown in Fig. 9, per source
     slam: bool = True
     intel_log: str | None = str(INTEL_LOG)  # skipped with a note where absent
+    # the paper's extractor on the Intel log: cm-mode ranges (1 cm codes), so a larger range noise
+    intel_sensor_params: dict = field(default_factory=lambda: {"sigma_r": 0.02})
     sensor: dict = field(default_factory=dict)  # SensorConfig overrides
 
     def to_dict(self) -> dict:
@@ -63,25 +65,23 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
     say(f"ground truth of {len(records)} scans")
 
     tables["signals"] = signals_table(records[len(records) // 2].scan, k=cfg.signals_k, sigma_r=sensor.noise_sigma or 0.005)
-    per_scan, feature_sets = [], {}
-    for method in cfg.methods:
-        table, fsets = evaluate_extractor(records, method, None, truths, keep_features=True)
-        per_scan.append(table)
-        feature_sets[method] = fsets
-        say(f"{method:12s} {len(table)} scans, median {table['time_ms'].median():.2f} ms/scan, "
-            f"{table['n_lines'].mean():.1f} lines/scan")
-    tables["timing"] = pd.concat(per_scan, ignore_index=True)
-    tables["summary"] = summarise_methods(tables["timing"])
+    noise = max(float(sensor.noise_sigma), 0.001)
+    tables["timing"] = compare_records(records, truths, cfg.methods, seed=cfg.seed, sigma=noise)
+    tables["summary"] = summarise_table(tables["timing"])
+    for row in tables["summary"].itertuples():
+        say(f"{row.method:12s} median {row.time_ms_median:7.2f} ms/scan, line F1 {row.f1:.3f}, "
+            f"{row.lines_per_scan:.1f} lines/scan")
 
+    panel_method = "sensor" if "sensor" in cfg.methods else cfg.methods[0]
     picks = pick_evenly(len(records), cfg.panels)
-    pts, lns, crs = feature_panels([records[i].scan for i in picks], [f"office scan {i}" for i in picks],
-                                   [feature_sets["sensor" if "sensor" in feature_sets else cfg.methods[0]][i]
-                                    for i in picks])
+    fsets, _ = extract_timed([records[i].scan for i in picks], panel_method)
+    pts, lns, crs = feature_panels([records[i].scan for i in picks], [f"office scan {i}" for i in picks], fsets)
     tables.update(office_points=pts, office_lines=lns, office_corners=crs)
 
     intel = Path(cfg.intel_log) if cfg.intel_log else None
     if intel is not None and intel.exists():
-        tables.update(_intel_panels(intel, cfg.panels, "sensor" if "sensor" in cfg.methods else cfg.methods[0]))
+        tables.update(_intel_panels(intel, cfg.panels, panel_method,
+                                    cfg.intel_sensor_params if panel_method == "sensor" else None))
         say(f"Intel log: {cfg.panels} scans with features")
     else:
         notes.append(f"Fig. 9 (Intel log) skipped: {intel} is not present on this machine.")
@@ -123,15 +123,13 @@ def load_tables(folder: Path) -> tuple[dict[str, pd.DataFrame], list[str]]:
     return tables, notes
 
 
-def _intel_panels(path: Path, n: int, method: str) -> dict[str, pd.DataFrame]:
+def _intel_panels(path: Path, n: int, method: str, params: dict | None) -> dict[str, pd.DataFrame]:
     from lms200 import read_log
-
-    from experiments.evaluate import extract_timed
 
     records = list(read_log(path))
     picks = pick_evenly(len(records), n)
     scans = [records[i].scan for i in picks]
-    fsets, _ = extract_timed(scans, method)
+    fsets, _ = extract_timed(scans, method, params)
     pts, lns, crs = feature_panels(scans, [f"Intel scan {i}" for i in picks], fsets)
     return {"intel_points": pts, "intel_lines": lns, "intel_corners": crs}
 

@@ -3,7 +3,8 @@
 Schemas (one table per figure input; figures are drawn from these alone):
 
 - ``signals``: beam, bearing_deg, range_m, ad, theta_deg, psi_deg (Figs. 4-6; k = 10 as in the paper).
-- ``timing``: the per-scan table of :func:`experiments.evaluate.evaluate_extractor` (Fig. 7).
+- ``timing``: the per-scan table of ``experiments.compare.compare`` plus ``time_ms`` (Fig. 7);
+  ``summary``: its ``summarise`` plus time_ms_median / _p05 / _p95 (accuracy versus speed).
 - ``panels_points`` / ``panels_lines`` / ``panels_corners``: panel, label, x, y / panel, x1, y1,
   x2, y2 / panel, x, y, in each scan's sensor frame (m) (Fig. 9).
 - ``trajectory``: source, t, x, y, theta; ``map``: source, x1, y1, x2, y2 (world frame, m) (Fig. 10).

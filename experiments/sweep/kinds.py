@@ -3,7 +3,7 @@
 Parameters (flat, as in the sweep file): ``method``, ``world`` (default office), ``seed``,
 ``duration`` (s of simulated time), ``rate_hz`` (scans per second kept), ``sensor.*`` (fields of
 ``sim.SensorConfig``), ``extractor.*`` (the extractor's config fields), ``slam.*`` (fields of
-``slam.SlamConfig``). Each returns a dict of scalar metrics.
+``slam.SlamConfig``; ``slam.extractor_params.NAME`` sets one entry of its extractor_params). Each returns a dict of scalar metrics.
 """
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from experiments.evaluate import (evaluate_extractor, sensor_config, simulate_run, split_params,
-                                  summarise_scans, truths_for)
+from experiments.evaluate import (compare_records, sensor_config, simulate_run, split_params, summarise_table,
+                                  truths_for)
 
 EXTRACT_DEFAULTS = {"method": "sensor", "world": "office", "duration": 5.0, "rate_hz": 4.0}
 SLAM_DEFAULTS = {"world": "office", "duration": 30.0, "rate_hz": None}
@@ -40,12 +40,18 @@ def _records(params: dict[str, Any], defaults: dict[str, Any], with_truth: bool)
 
 
 def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
-    """One extractor over a simulated run, scored scan by scan against the visible ground truth."""
+    """One extractor over a simulated run, scored scan by scan against the visible ground truth
+    (``experiments.compare``): the pooled summary row (f1, precision, recall, rho_rms_mm,
+    alpha_rms_deg, corner_*, explained, us_median, time_ms_median, lines_per_scan, ...)."""
     p = {**EXTRACT_DEFAULTS, **params}
     _, records, truths = _records(p, EXTRACT_DEFAULTS, with_truth=True)
-    per_scan = evaluate_extractor(records, str(p["method"]), split_params(p, "extractor"), truths)
-    return {k: (float(v) if isinstance(v, (int, float, np.number)) else v)
-            for k, v in summarise_scans(per_scan).items()}
+    method = str(p["method"])
+    noise = float(split_params(p, "sensor").get("noise_sigma", 0.005))
+    table = compare_records(records, truths, [method], {method: split_params(p, "extractor")},
+                            seed=int(p.get("seed", 0)), sigma=max(noise, 0.001))
+    row = summarise_table(table, reference=method).iloc[0]
+    skip = {"source", "method", "kind", "seeds", "speed_vs_sensor"}
+    return {k: float(v) for k, v in row.items() if k not in skip and isinstance(v, (int, float, np.number))}
 
 
 def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
@@ -54,7 +60,12 @@ def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
 
     p = {**SLAM_DEFAULTS, **params}
     _, records, _ = _records(p, SLAM_DEFAULTS, with_truth=False)
-    result = run_slam(records, SlamConfig.from_dict(split_params(p, "slam")))
+    slam_params = split_params(p, "slam")
+    extractor_params = split_params(slam_params, "extractor_params")  # slam.extractor_params.NAME
+    slam_params = {k: v for k, v in slam_params.items() if not k.startswith("extractor_params.")}
+    if extractor_params:
+        slam_params["extractor_params"] = extractor_params
+    result = run_slam(records, SlamConfig.from_dict(slam_params))
     return slam_metrics(result, records)
 
 

@@ -84,8 +84,8 @@ def run_sweep(
         store.write(key, _row(params, result, key))
         counts["computed"] += 1
         counts["failed"] += result["status"] != "ok"
-        bar.update(1)
         bar.set_postfix(done=skipped + counts["computed"], failed=counts["failed"], refresh=False)
+        bar.update(1)
 
     try:
         if todo:

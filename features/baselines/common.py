@@ -128,6 +128,61 @@ def fit_groups(x: np.ndarray, y: np.ndarray, offsets: np.ndarray) -> tuple[np.nd
                        red(x * y, offsets))
 
 
+def trim_ends(x: np.ndarray, y: np.ndarray, offsets: np.ndarray, rho: np.ndarray, alpha: np.ndarray,
+              tol: float, keep: int) -> tuple[np.ndarray, np.ndarray]:
+    """For groups of points (starting at ``offsets`` in the concatenated ``x``, ``y``) fitted by
+    lines: the index range [lo, hi] (into the concatenation) left after dropping the leading and
+    trailing points farther than ``tol`` (m) from the line. Such end points belong to a small
+    neighbouring face (a door frame, a pillar's edge) that the split threshold let in; they tilt
+    the fit. Never trims a group below ``keep`` points (then it is left whole)."""
+    sizes = np.diff(np.concatenate((offsets, [x.size])))
+    g = np.repeat(np.arange(offsets.size), sizes)
+    good = np.abs(x * np.cos(alpha)[g] + y * np.sin(alpha)[g] - rho[g]) <= tol
+    idx = np.arange(x.size)
+    ends = offsets + sizes - 1
+    lo = np.minimum.reduceat(np.where(good, idx, x.size), offsets)
+    hi = np.maximum.reduceat(np.where(good, idx, -1), offsets)
+    whole = (hi - lo + 1) < keep
+    return np.where(whole, offsets, lo), np.where(whole, ends, hi)
+
+
+def straight_enough(x: np.ndarray, y: np.ndarray, offsets: np.ndarray, rho: np.ndarray,
+                    alpha: np.ndarray, z_min: float, dead_zone: float) -> np.ndarray:
+    """Wald-Wolfowitz runs test (Wald & Wolfowitz 1940) on the signs of each group's residuals
+    from its fitted line: noise on a straight surface gives random signs, an arc fitted by a line
+    (a pillar, a curved wall) gives a few long runs (+ - +). Groups start at ``offsets`` in the
+    concatenated ``x``, ``y``; a group fails when its runs are ``z_min`` standard deviations fewer
+    than expected. Residuals within ``dead_zone`` (m; the callers use sigma / 2) carry no sign, so
+    the small tilt one stray point gives an otherwise exact fit is no evidence of curvature.
+    Returns a mask of the groups that pass (``z_min <= 0`` passes all)."""
+    n_groups = offsets.size
+    if z_min <= 0 or n_groups == 0:
+        return np.ones(n_groups, dtype=bool)
+    sizes = np.diff(np.concatenate((offsets, [x.size])))
+    g = np.repeat(np.arange(n_groups), sizes)
+    res = x * np.cos(alpha)[g] + y * np.sin(alpha)[g] - rho[g]
+    signed = np.abs(res) > dead_zone
+    g = g[signed]
+    positive = res[signed] > 0
+    sizes = np.bincount(g, minlength=n_groups)
+    offsets = np.cumsum(sizes) - sizes
+    if positive.size == 0:
+        return np.ones(n_groups, dtype=bool)
+    change = np.empty(positive.size, dtype=np.int64)
+    change[0] = 0
+    change[1:] = positive[1:] != positive[:-1]
+    change[offsets[sizes > 0]] = 0  # no run boundary across groups
+    runs = 1 + np.bincount(g, weights=change, minlength=n_groups)
+    n = sizes.astype(float)
+    n_pos = np.bincount(g, weights=positive, minlength=n_groups)
+    prod = 2.0 * n_pos * (n - n_pos)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        expected = 1.0 + prod / n
+        var = prod * (prod - n) / (n * n * (n - 1.0))  # Wald & Wolfowitz's variance of the runs
+        z = (runs - expected) / np.sqrt(var)
+    return ~(var > 0) | (z >= -z_min)
+
+
 def contiguous_runs(pts: Points, pos: np.ndarray, angle_increment: float, lambda_rad: float,
                     sigma: float, max_skip: int) -> np.ndarray:
     """Split sorted point positions ``pos`` (inliers of one line) into runs that are contiguous in

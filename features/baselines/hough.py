@@ -40,6 +40,7 @@ class HoughConfig:
     - max_lines: 60, an upper bound on peaks taken per scan; max_failures: 5 peaks in a row that
       yield no line end the search (such peaks gather collinear points scattered across the scan:
       once the walls are out, what is left is clutter).
+    - runs_z: 3.0, the runs test on residual signs that drops arcs (as ``split_merge``).
     """
 
     alpha_step_deg: float = 1.0
@@ -51,6 +52,7 @@ class HoughConfig:
     sigma: float = 0.005
     breakpoint_lambda_deg: float = 10.0
     max_skip: int = 3
+    runs_z: float = 3.0
     max_lines: int = 60
     max_failures: int = 5
     corners: CornerConfig = field(default_factory=CornerConfig)
@@ -89,7 +91,7 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
         found = None
         if inl.size >= cfg.min_points:
             found = segments_of(pts, inl, scan.angle_increment, lam, cfg.sigma, cfg.max_skip,
-                                cfg.min_points, cfg.min_length)
+                                cfg.min_points, cfg.min_length, cfg.runs_z)
         if found is None:
             grid = acc.reshape(n_alpha, n_rho)
             grid[max(ia - 1, 0): ia + 2, max(ir - 2, 0): ir + 3] = 0

@@ -34,7 +34,7 @@ class RansacConfig:
       w = 0.08 with probability 1 - (1 - 0.072)^64 = 0.99 (Fischler & Bolles' formula, p = 0.99).
     - window: 10 beams for the second point of a pair (NAPSAC neighbourhood).
     - inlier_band: 0.025 m = 5 sigma for counting inliers and the final refit.
-    - min_points, min_length, sigma, breakpoint_lambda_deg, max_skip: as ``hough``.
+    - min_points, min_length, sigma, breakpoint_lambda_deg, max_skip, runs_z: as ``hough``.
     - max_failures: 3 rounds in a row without a line end the search; max_lines: 60.
     - seed: 0 (the generator is seeded per scan, so results are deterministic).
     """
@@ -47,6 +47,7 @@ class RansacConfig:
     sigma: float = 0.005
     breakpoint_lambda_deg: float = 10.0
     max_skip: int = 3
+    runs_z: float = 3.0
     max_failures: int = 3
     max_lines: int = 60
     seed: int = 0
@@ -68,7 +69,7 @@ def run(scan: Scan, cfg: RansacConfig) -> FeatureSet:
             break
         i = rng.integers(0, m, cfg.hypotheses)
         if cfg.window > 0:
-            j = i + rng.integers(1, cfg.window + 1, cfg.hypotheses) * rng.choice((-1, 1), cfg.hypotheses)
+            j = i + rng.integers(1, cfg.window + 1, cfg.hypotheses) * (2 * rng.integers(0, 2, cfg.hypotheses) - 1)
             j = np.clip(j, 0, m - 1)
         else:
             j = rng.integers(0, m, cfg.hypotheses)
@@ -92,7 +93,7 @@ def run(scan: Scan, cfg: RansacConfig) -> FeatureSet:
         found = None
         if inl.size >= cfg.min_points:
             found = segments_of(pts, inl, scan.angle_increment, lam, cfg.sigma, cfg.max_skip,
-                                cfg.min_points, cfg.min_length)
+                                cfg.min_points, cfg.min_length, cfg.runs_z)
         if found is None:
             failures += 1
             continue

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import Points, contiguous_runs, fit_groups, fit_moments, point_line_distance
+from .common import Points, contiguous_runs, fit_groups, fit_moments, point_line_distance, straight_enough, trim_ends
 
 
 def refine(pts: Points, cand: np.ndarray, rho: float, alpha: float, tolerances: tuple[float, ...]):
@@ -22,9 +22,12 @@ def refine(pts: Points, cand: np.ndarray, rho: float, alpha: float, tolerances: 
 
 
 def segments_of(pts: Points, inl: np.ndarray, angle_increment: float, lambda_rad: float, sigma: float,
-                max_skip: int, min_points: int, min_length: float):
+                max_skip: int, min_points: int, min_length: float, runs_z: float = 0.0):
     """Contiguous runs of the inliers ``inl`` with at least ``min_points`` points and ``min_length``
-    (m), each fitted by least squares. Returns (used positions, start, end, fit tuple) or None."""
+    (m), each fitted by least squares after trimming end points off the line (``trim_ends``, which
+    returns them to the pool). Runs that fail the runs test (``straight_enough``) are used up but
+    give no line. Returns (used positions, start, end, fit tuple) or None when no run is
+    long enough; the fit arrays may then be empty (every run an arc)."""
     offsets = contiguous_runs(pts, inl, angle_increment, lambda_rad, sigma, max_skip)
     counts = np.diff(np.concatenate((offsets, [inl.size])))
     ok = counts >= min_points
@@ -33,11 +36,21 @@ def segments_of(pts: Points, inl: np.ndarray, angle_increment: float, lambda_rad
     labels = np.repeat(ok, counts)
     used = inl[labels]
     offs = (np.cumsum(counts[ok]) - counts[ok])
-    start = used[offs]
-    end = used[offs + counts[ok] - 1]
     fit = fit_groups(pts.x[used], pts.y[used], offs)
+    sizes = counts[ok]
+    for _ in range(2):  # drop end points off the fitted line (a neighbouring small face), refit
+        lo, hi = trim_ends(pts.x[used], pts.y[used], offs, fit[0], fit[1], 3.0 * sigma, min_points)
+        if np.array_equal(lo, offs) and np.array_equal(hi, offs + sizes - 1):
+            break
+        sizes = hi - lo + 1
+        offs = np.cumsum(sizes) - sizes
+        used = used[np.arange(int(sizes.sum())) - np.repeat(offs - lo, sizes)]
+        fit = fit_groups(pts.x[used], pts.y[used], offs)
+    start, end = used[offs], used[offs + sizes - 1]
     length = np.hypot(pts.x[end] - pts.x[start], pts.y[end] - pts.y[start])
     keep = length >= min_length
     if not keep.any():
         return None
+    straight = straight_enough(pts.x[used], pts.y[used], offs, fit[0], fit[1], runs_z, 0.5 * sigma)
+    keep &= straight
     return used, start[keep], end[keep], tuple(f[keep] for f in fit[:6])

@@ -18,8 +18,9 @@ from lms200 import Scan
 
 from ..registry import register
 from ..types import FeatureSet
-from .common import CornerConfig, PrefixFit, breakpoints, build_lines, feature_set, valid_points
-from .splitting import merge_collinear, split, unshare
+from .common import (CornerConfig, PrefixFit, breakpoints, build_lines, feature_set, straight_enough, trim_ends,
+                     valid_points)
+from .splitting import _ragged, merge_collinear, split, unshare
 
 
 @dataclass(frozen=True)
@@ -36,6 +37,11 @@ class SplitMergeConfig:
     - min_points / min_length: 8 points and 0.15 m per line (Nguyen et al. 2007 discard segments
       with too few points, "P_min", and too short, "L_min"; values chosen for 0.5 deg beams).
     - max_skip: 3: a cluster bridges up to two dropped (nan / no-return) beams, as hough / ransac.
+    - end points farther than 3 sigma from the fitted line are trimmed (twice, refitting): they
+      belong to a small neighbouring face the split threshold let in.
+    - runs_z: 3.0: a line whose residual signs form 3 standard deviations fewer runs than noise
+      would (Wald-Wolfowitz runs test) is an arc, not a line, and is dropped (0 disables); a
+      straight wall fails it with probability ~0.1 %.
     """
 
     sigma: float = 0.005
@@ -45,11 +51,12 @@ class SplitMergeConfig:
     min_points: int = 8
     min_length: float = 0.15
     max_skip: int = 3
+    runs_z: float = 3.0
     corners: CornerConfig = field(default_factory=CornerConfig)
 
 
 def segment_lines(scan: Scan, sigma: float, lam_deg: float, threshold: float, merge_rms: float,
-                  min_points: int, min_length: float, max_skip: int, chord: bool):
+                  min_points: int, min_length: float, max_skip: int, runs_z: float, chord: bool):
     """The split / merge / refit pipeline shared with ``iepf``; returns beam-ordered Lines."""
     pts = valid_points(scan)
     if pts.idx.size < 2:
@@ -65,6 +72,17 @@ def segment_lines(scan: Scan, sigma: float, lam_deg: float, threshold: float, me
         return []
     s, e = segs[:, 0], segs[:, 1]
     rho, alpha, n, mx, my, along = fitter.fit(s, e)
+    for _ in range(2):  # drop end points off the fitted line (a neighbouring small face), refit
+        pos, _, offsets = _ragged(s, e)
+        lo, hi = trim_ends(pts.x[pos], pts.y[pos], offsets, rho, alpha, 3.0 * sigma, min_points)
+        if np.array_equal(pos[lo], s) and np.array_equal(pos[hi], e):
+            break
+        s, e = pos[lo], pos[hi]
+        rho, alpha, n, mx, my, along = fitter.fit(s, e)
+    if runs_z > 0:
+        pos, _, offsets = _ragged(s, e)
+        ok = straight_enough(pts.x[pos], pts.y[pos], offsets, rho, alpha, runs_z, 0.5 * sigma)
+        s, e, rho, alpha, n, mx, my, along = (v[ok] for v in (s, e, rho, alpha, n, mx, my, along))
     lines = build_lines(pts, s, e, rho, alpha, n, mx, my, along, sigma)
     return [l for l in lines if l.length >= min_length]
 
@@ -72,7 +90,7 @@ def segment_lines(scan: Scan, sigma: float, lam_deg: float, threshold: float, me
 def run(scan: Scan, cfg: SplitMergeConfig) -> FeatureSet:
     """Extract lines and corners from ``scan`` (sensor frame) by split-and-merge."""
     lines = segment_lines(scan, cfg.sigma, cfg.breakpoint_lambda_deg, cfg.split_threshold,
-                          cfg.merge_rms, cfg.min_points, cfg.min_length, cfg.max_skip, chord=False)
+                          cfg.merge_rms, cfg.min_points, cfg.min_length, cfg.max_skip, cfg.runs_z, chord=False)
     return feature_set(lines, cfg.corners, "split_merge", scan.angle_increment)
 
 

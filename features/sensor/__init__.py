@@ -59,14 +59,14 @@ def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
     bearings = scan.angles
     with np.errstate(all="ignore"):
         sig = compute(
-            ranges, bearings, scan.angle_increment, int(cfg.k), cfg.sigma_r,
-            max(scan.range_min, cfg.min_range), scan.range_max,
+            ranges, bearings, scan.angle_increment, int(cfg.k), max(scan.range_min, cfg.min_range), scan.range_max,
+            cfg.sigma_r,
         )
         table = find_lines(sig, ranges, bearings, scan.angle_min, scan.angle_increment, cfg)
         if table.rho.size == 0:
             return FeatureSet([], [], METHOD)
         invalid_cum = np.concatenate(([0], np.cumsum(~sig.valid)))
-        table = merge_neighbours(table, ranges, bearings, invalid_cum, cfg)
+        table = merge_neighbours(table, invalid_cum, cfg)
         first, last = table.first.copy(), table.last.copy()
         resolve_overlaps(first, last)
         p0 = endpoints(table.rho, table.alpha, ranges, bearings, first)

@@ -10,21 +10,16 @@ import numpy as np
 from ..types import Corner
 from .config import SensorMethodConfig
 
+SPACING_CAP = 1.0  # m: largest point spacing (grazing incidence) allowed for in the contact test
 
-def neighbourhood_var(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray, lo: int, hi: int) -> float:
-    """Mean squared distance (m^2) of the valid points of beams lo..hi from the chord joining the
-    first and last of them: ~sigma_r^2 when the neighbourhood is one straight line."""
-    sel = np.flatnonzero(valid[lo : hi + 1]) + lo
-    if sel.size < 3:
+
+def neighbourhood_var(ranges: np.ndarray, valid: np.ndarray, lo: int, hi: int) -> float:
+    """Variance (m^2) of the valid ranges of beams lo..hi: the paper's "variance in range between
+    neighbouring points" around a corner (0 when fewer than 3 are valid)."""
+    d = ranges[lo : hi + 1][valid[lo : hi + 1]]
+    if d.size < 3:
         return 0.0
-    d, b = ranges[sel], bearings[sel]
-    x, y = d * np.cos(b), d * np.sin(b)
-    dx, dy = x[-1] - x[0], y[-1] - y[0]
-    norm = math.hypot(dx, dy)
-    if norm == 0.0:
-        return 0.0
-    off = ((x - x[0]) * dy - (y - y[0]) * dx) / norm
-    return float(np.mean(off[1:-1] ** 2))
+    return float(d.var())
 
 
 def find_corners(
@@ -63,7 +58,7 @@ def find_corners(
         # spacing there (one beam step projected on each line, large at grazing incidence)
         b = math.atan2(y, x)
         spacing = math.hypot(x, y) * increment / max(min(math.cos(b - a1), math.cos(b - a2)), 0.1)
-        reach = cfg.corner_max_dist + 1.5 * min(spacing, 2 * cfg.corner_max_dist)
+        reach = cfg.corner_max_dist + 1.5 * min(spacing, SPACING_CAP)
         if math.hypot(x - end[i][0], y - end[i][1]) > reach:
             continue
         if math.hypot(x - start[j][0], y - start[j][1]) > reach:
@@ -77,7 +72,7 @@ def find_corners(
         index = int(round((b - angle_min) / increment))
         index = min(max(index, last[i]), first[j])
         if cfg.acute_check:
-            var = neighbourhood_var(ranges, bearings, valid, max(0, index - k), min(n - 1, index + k))
+            var = neighbourhood_var(ranges, valid, max(0, index - k), min(n - 1, index + k))
             if var < cfg.acute_min_var * cfg.sigma_r**2:
                 continue
         v1x, v1y = start[i][0] - x, start[i][1] - y

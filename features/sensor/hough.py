@@ -31,19 +31,20 @@ def logcos_template(step: float) -> tuple[np.ndarray, int]:
 
 
 @lru_cache(maxsize=16)
-def band_layout(n_angles: int, n_runs_cap: int) -> tuple[np.ndarray, np.ndarray]:
-    """Angle offsets -h..h of the band and the centre-preferring tie-break added to the votes."""
+def band_layout(n_angles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Angle offsets -h..h of the band, the centre-preferring tie-break added to the votes, and
+    the cell offsets (a * n_cells) of each band angle in a run's block of the accumulator."""
     h = (n_angles - 1) // 2
     offsets = np.arange(-h, h + 1)
     tie = -1e-3 * np.abs(offsets)[:, None]  # (n_angles, 1): prefer the band centre on ties
-    return offsets, tie
+    cell_base = np.arange(n_angles) * (N_BINS + 2)
+    return offsets, tie, cell_base
 
 
 class HoughPeak(NamedTuple):
     alpha: np.ndarray  # (R,) normal angle of the peak (rad, sensor frame, not wrapped)
     rho: np.ndarray  # (R,) distance of the peak line (m)
     inlier: np.ndarray  # (N,) bool: the beam voted in the peak cell
-    votes: np.ndarray  # (R,) votes in the peak cell
 
 
 def band_search(
@@ -73,37 +74,40 @@ def band_search(
     """
     step = increment / subdiv
     template, zero = logcos_template(step)
-    offsets, tie = band_layout(n_angles, 0)
-    h = offsets[-1]
+    offsets, tie, cell_base = band_layout(n_angles)
+    h = max(int(offsets[-1]), 1)
     n_runs = starts.size
+    n_cells = N_BINS + 2  # cells 1..N_BINS, 0 and N_BINS + 1 collect the votes outside
     # band of each run on the template grid: centre index and stride (in template steps)
     centre_idx = np.rint((centre - angle_min) / step).astype(np.int64)
-    stride = np.maximum(1, np.rint(half_width / (max(h, 1) * step))).astype(np.int64)
+    stride = np.maximum(np.rint(half_width / (h * step)), 1.0).astype(np.int64)
     a_idx = centre_idx[:, None] + stride[:, None] * offsets  # (R, A)
-    # eq. 5: log p = log d + log cos(a - b), a lookup at a - b
-    idx = a_idx[run_id] - (beam * subdiv - zero)[:, None]
-    log_p = template.take(idx, mode="clip") + log_d[:, None]  # (N, A)
+    # eq. 5: log p = log d + log cos(a - b), a lookup at a - b on the template
+    idx = (a_idx + zero)[run_id] - (beam * subdiv)[:, None]
+    log_p = template.take(idx, mode="clip")
+    log_p += log_d[:, None]  # (N, A)
     # cells are laid out around the median vote of three beams at 1/4, 1/2 and 3/4 of each run
     # (a mean would be dragged off by the neighbour-line beams at a run's ends, one beam can be a spike)
     q1 = log_p[starts + counts // 4]
     q2 = log_p[starts + counts // 2]
     q3 = log_p[starts + (3 * counts) // 4]
-    mean = np.maximum(np.minimum(q1, q2), np.minimum(np.maximum(q1, q2), q3))  # (R, A)
-    width = bin_half  # one accumulator cell
-    rel = (log_p - mean[run_id]) / width[run_id, None] + (N_BINS / 2.0)
-    cell = rel.astype(np.int64)  # truncation; rel < 0 and rel >= N_BINS go to the dump cell
-    np.putmask(cell, (rel < 0) | (cell >= N_BINS), N_BINS)
-    n_cells = N_BINS + 1
-    key = (run_id * (n_angles * n_cells))[:, None] + (np.arange(n_angles) * n_cells + cell)
+    ref = np.maximum(np.minimum(q1, q2), np.minimum(np.maximum(q1, q2), q3))  # (R, A)
+    inv_width = 1.0 / bin_half
+    # cell = floor((log p - ref) / width) + N_BINS / 2 + 1, clipped into the two outside cells
+    rel = (log_p - ref[run_id]) * inv_width[run_id, None]
+    rel += N_BINS / 2.0 + 1.0
+    np.fmax(rel, 0.0, out=rel)  # fmax also sends a nan vote to the outside cell 0
+    np.minimum(rel, N_BINS + 1.0, out=rel)
+    key = rel.astype(np.int64)
+    key += (run_id * (n_angles * n_cells))[:, None] + cell_base
     acc = np.bincount(key.ravel(), minlength=n_runs * n_angles * n_cells)
-    acc = acc.reshape(n_runs, n_angles, n_cells)[:, :, :N_BINS]
+    acc = acc.reshape(n_runs, n_angles, n_cells)[:, :, 1 : N_BINS + 1]
     pair = acc[:, :, :-1] + acc[:, :, 1:] + tie  # votes in two adjacent cells
-    flat = pair.reshape(n_runs, -1).argmax(axis=1)
-    best_a, best_c = np.divmod(flat, N_BINS - 1)
+    best_a, best_c = np.divmod(pair.reshape(n_runs, -1).argmax(axis=1), N_BINS - 1)
     runs = np.arange(n_runs)
-    votes = np.rint(pair[runs, best_a, best_c]).astype(np.int64)
-    peak_log_p = mean[runs, best_a] + (best_c + 1 - N_BINS / 2.0) * width
+    # the pair (c, c+1) covers (log p - ref) / width in [c - N_BINS/2, c + 2 - N_BINS/2)
+    peak_log_p = ref[runs, best_a] + (best_c + 1 - N_BINS / 2.0) * bin_half
     alpha = angle_min + a_idx[runs, best_a] * step
     chosen = log_p[np.arange(beam.size), best_a[run_id]]
-    inlier = np.abs(chosen - peak_log_p[run_id]) <= width[run_id]
-    return HoughPeak(alpha, np.exp(peak_log_p), inlier, votes)
+    inlier = np.abs(chosen - peak_log_p[run_id]) <= bin_half[run_id]
+    return HoughPeak(alpha, np.exp(peak_log_p), inlier)

@@ -47,18 +47,26 @@ def wrap(angle: np.ndarray | float) -> np.ndarray | float:
 
 
 class BeamSignals(NamedTuple):
-    """Per-beam arrays (length n, nan where a window is incomplete or holds an invalid beam)."""
+    """Per-beam arrays (length n, nan where a window is incomplete or holds an invalid beam).
+    Variances are per unit range noise: multiply by sigma_r**2 for m-based units."""
 
     valid: np.ndarray  # bool: finite range inside [max(range_min, min_range), range_max]
     u: np.ndarray  # inverse range 1/d (1/m), nan where not valid
     AD: np.ndarray  # eq. 4 over the window i-k..i+k
-    AD_sigma: np.ndarray  # std of AD from range noise
+    AD_var: np.ndarray  # variance of AD per sigma_r**2 (1/m^2)
     ad: np.ndarray  # eq. 6 over the window
-    theta: np.ndarray  # slope estimate: normal angle of the local line (rad, wrapped)
-    theta_sigma: np.ndarray  # its std from range noise (rad)
-    psi: np.ndarray  # theta_i - theta_{i+k}, wrapped (rad)
-    psi_sigma: np.ndarray  # its std (rad)
+    theta: np.ndarray  # slope estimate: normal angle of the local line (rad, b_i + arctan, unwrapped)
+    theta_var: np.ndarray  # its variance (rad^2)
+    psi: np.ndarray  # theta_i - theta_{i+k}, wrapped (rad); nan for the last k beams
+    psi_var: np.ndarray  # its variance (rad^2)
     ad_line: float  # AD on a straight line
+
+
+@lru_cache(maxsize=64)
+def _nan_pad(k: int) -> np.ndarray:
+    pad = np.full(k, np.nan)
+    pad.setflags(write=False)
+    return pad
 
 
 def compute(
@@ -66,48 +74,54 @@ def compute(
     bearings: np.ndarray,
     increment: float,
     k: int,
-    sigma_r: float,
     range_lo: float,
     range_hi: float,
+    sigma_r: float = 0.005,
 ) -> BeamSignals:
-    """All per-beam signals of one scan; never raises on special values (they become nan)."""
+    """All per-beam signals of one scan in a handful of whole-scan operations.
+
+    Special values become nan, never exceptions; call under ``np.errstate(all="ignore")``.
+    Noise propagation: d AD / d e_j = -u_j^2 / u_i (j != i) and (AD - 1) u_i (j = i), the same
+    for ad, so var(AD) / sigma_r^2 = (sum_j u_j^4 - u_i^4) / u_i^2 + (AD - 1)^2 u_i^2. The std of
+    theta = b + arctan(T) is taken as the half-difference of arctan over T +- std(T), which stays
+    right at grazing incidence, where the slope of arctan changes within the noise of T.
+    """
     n = ranges.size
     const = window_constants(k, increment)
-    with np.errstate(all="ignore"):
-        valid = (ranges >= range_lo) & (ranges <= range_hi)
-        u = np.where(valid, 1.0 / ranges, np.nan)
-        nan = np.full(n, np.nan)
-        AD, AD_var, ad, ad_var = nan, nan, nan, nan
-        if n >= 2 * k + 1:
-            # window sums; a nan inside a window makes that window nan (np.correlate is direct)
-            s1 = np.correlate(u, const.ones, "valid")
-            s4 = np.correlate(u * u * u * u, const.ones, "valid")
-            sd = np.correlate(u, const.signed, "valid")
-            uc = u[k : n - k]
-            u2 = uc * uc
-            other = (s4 - u2 * u2) / u2  # sum_{j != i} (d AD / d e_j)^2, same for ad
-            AD = nan.copy()
-            ad = nan.copy()
-            AD_var = nan.copy()
-            ad_var = nan.copy()
-            AD[k : n - k] = s1 / uc  # eq. 4
-            ad[k : n - k] = sd / uc  # eq. 6
-            AD_var[k : n - k] = other + (AD[k : n - k] - 1.0) ** 2 * u2
-            ad_var[k : n - k] = other + (ad[k : n - k] - 1.0) ** 2 * u2
-        tan_psi = (ad - 1.0) / const.two_sin_sum  # psi = alpha - b_i (NOTES eq. 7)
-        cos2 = 1.0 / (1.0 + tan_psi * tan_psi)
-        theta = wrap(bearings + np.arctan(tan_psi))
-        AD_sigma = sigma_r * np.sqrt(AD_var)
-        theta_sigma = sigma_r * np.sqrt(ad_var) / const.two_sin_sum * cos2
-        psi = nan.copy()
-        psi_sigma = nan.copy()
-        if n > k:
-            psi[: n - k] = wrap(theta[: n - k] - theta[k:])
-            psi_sigma[: n - k] = np.hypot(theta_sigma[: n - k], theta_sigma[k:])
-    return BeamSignals(valid, u, AD, AD_sigma, ad, theta, theta_sigma, psi, psi_sigma, const.ad_line)
+    valid = (ranges >= range_lo) & (ranges <= range_hi)
+    u = np.where(valid, 1.0 / ranges, np.nan)
+    if n >= 2 * k + 1:
+        pad = _nan_pad(k)
+        up = np.concatenate((pad, u, pad))  # windows at the ends hold a nan: they come out nan
+        up2 = up * up
+        s1 = np.correlate(up, const.ones, "valid")  # nan wherever the window holds a nan
+        sd = np.correlate(up, const.signed, "valid")
+        s4 = np.correlate(up2 * up2, const.ones, "valid")
+    else:
+        s1 = sd = s4 = np.full(n, np.nan)
+        up2 = np.full(n + 2 * k, np.nan)
+    u2 = up2[k : k + n]
+    AD = s1 / u  # eq. 4
+    ad = sd / u  # eq. 6
+    other = s4 / u2 - u2  # sum over j != i of u_j^4 / u_i^2
+    ad1 = ad - 1.0
+    AD1 = AD - 1.0
+    AD_var = other + AD1 * AD1 * u2
+    tan_psi = ad1 / const.two_sin_sum  # psi = alpha - b_i (NOTES eq. 7)
+    theta = bearings + np.arctan(tan_psi)
+    tan_sd = np.sqrt(other + ad1 * ad1 * u2) * (sigma_r / const.two_sin_sum)
+    theta_sd = 0.5 * (np.arctan(tan_psi + tan_sd) - np.arctan(tan_psi - tan_sd))
+    theta_var = theta_sd * theta_sd
+    psi = np.full(n, np.nan)
+    psi_var = np.full(n, np.nan)
+    if n > k:
+        dpsi = theta[: n - k] - theta[k:]
+        psi[: n - k] = dpsi - TWO_PI * np.rint(dpsi / TWO_PI)  # wrapped to [-pi, pi]
+        psi_var[: n - k] = theta_var[: n - k] + theta_var[k:]
+    return BeamSignals(valid, u, AD, AD_var, ad, theta, theta_var, psi, psi_var, const.ad_line)
 
 
-def signals(scan: Scan, k: int = 5, sigma_r: float = 0.005, min_range: float = 0.02) -> dict:
+def signals(scan: Scan, k: int = 3, sigma_r: float = 0.005, min_range: float = 0.02) -> dict:
     """The paper's intermediate signals of ``scan`` for its figures 4-6.
 
     Args:
@@ -123,23 +137,27 @@ def signals(scan: Scan, k: int = 5, sigma_r: float = 0.005, min_range: float = 0
         ``ad_slope`` = ad_ik (eq. 6), ``ad_sigma``, ``theta_sigma``, ``psi_sigma`` (noise std),
         ``bearing`` (rad), ``valid`` (bool); and the float ``ad_line`` = 1 + 2 sum cos(jD).
     """
-    s = compute(
-        np.asarray(scan.ranges, dtype=float),
-        np.asarray(scan.angles, dtype=float),
-        scan.angle_increment,
-        int(k),
-        float(sigma_r),
-        max(scan.range_min, min_range),
-        scan.range_max,
-    )
+    with np.errstate(all="ignore"):
+        s = compute(
+            np.asarray(scan.ranges, dtype=float),
+            np.asarray(scan.angles, dtype=float),
+            scan.angle_increment,
+            int(k),
+            max(scan.range_min, min_range),
+            scan.range_max,
+            float(sigma_r),
+        )
+        theta = wrap(s.theta)
+        ad_sigma = sigma_r * np.sqrt(s.AD_var)
+        theta_sigma, psi_sigma = np.sqrt(s.theta_var), np.sqrt(s.psi_var)
     return {
         "ad": s.AD,
-        "theta": s.theta,
+        "theta": theta,
         "psi": s.psi,
         "ad_slope": s.ad,
-        "ad_sigma": s.AD_sigma,
-        "theta_sigma": s.theta_sigma,
-        "psi_sigma": s.psi_sigma,
+        "ad_sigma": ad_sigma,
+        "theta_sigma": theta_sigma,
+        "psi_sigma": psi_sigma,
         "bearing": np.asarray(scan.angles, dtype=float),
         "valid": s.valid,
         "ad_line": s.ad_line,

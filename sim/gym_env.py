@@ -1,0 +1,156 @@
+"""A Gymnasium environment: drive the robot through an office world on its LMS200 scans.
+
+Registered as ``lmsbench/Office-v0`` (``import sim`` registers it, or pass
+``gymnasium.make("sim.gym_env:lmsbench/Office-v0")``).
+
+- Observation: the scan's ranges, float32 (n_beams,), in [0, range_max]; +inf (no return) and nan
+  (dropout) read as range_max.
+- Action: (forward speed m/s, turn rate rad/s) in [0, v_max] x [-w_max, w_max]; held for one
+  control period (0.1 s); the pose moves along the exact unicycle arc and the scan is taken at
+  the end of the period while moving (interlaced beams).
+- Reward: metres of progress along the world's planned tour path (arc length of the robot's
+  projection, searched near the previous one) minus 0.01 a step; -10 on collision.
+- Termination: collision (the robot's disc of radius 0.25 m touches a face or circle) or the end
+  of the path reached (+10). Truncation: after ``max_steps`` steps (default 500).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from .lidar import LMS200Sim
+from .robot import RobotLimits, robot_tour, wrap
+from .sensor import SensorConfig
+from .worlds import make_world
+
+ENV_ID = "lmsbench/Office-v0"
+COLLISION_REWARD = -10.0
+GOAL_REWARD = 10.0
+STEP_COST = 0.01
+
+
+class OfficeEnv(gym.Env):
+    """Drive through ``world`` (a named world built with ``world_seed``) along its tour."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
+
+    def __init__(self, world: str = "office", world_seed: int = 0, sensor: SensorConfig | None = None,
+                 control_period: float = 0.1, max_steps: int = 500, path_length_m: float = 60.0,
+                 render_mode: str | None = None) -> None:
+        self.world = make_world(world, world_seed)
+        self.sensor = sensor if sensor is not None else SensorConfig()
+        self.limits = RobotLimits()
+        self.control_period = float(control_period)
+        self.max_steps = int(max_steps)
+        self.render_mode = render_mode
+        self.sim = LMS200Sim(self.world, self.sensor, seed=0)
+        path = robot_tour(self.world, world_seed, duration=path_length_m / self.limits.v_max).waypoints
+        keep = np.concatenate(([True], np.hypot(*np.diff(path, axis=0).T) > 1e-9))
+        self.path = path[keep]
+        seg = np.diff(self.path, axis=0)
+        self._seg_len = np.hypot(seg[:, 0], seg[:, 1])
+        self._arc = np.concatenate(([0.0], np.cumsum(self._seg_len)))
+        rmax = np.float32(self.sensor.range_max)
+        self.observation_space = spaces.Box(0.0, rmax, shape=(self.sensor.n_beams,), dtype=np.float32)
+        self.action_space = spaces.Box(np.array([0.0, -self.limits.w_max], dtype=np.float32),
+                                       np.array([self.limits.v_max, self.limits.w_max], dtype=np.float32),
+                                       dtype=np.float32)
+        self.pose = np.zeros(3)
+        self.progress = 0.0
+        self.steps = 0
+        self._scan = None
+
+    # -- helpers ------------------------------------------------------------------------------
+    def _project(self, xy: np.ndarray, near: float) -> float:
+        """Arc length (m) of the path point nearest xy, searched within [near - 1, near + 2] m."""
+        a, d = self.path[:-1], np.diff(self.path, axis=0)
+        t = np.clip(((xy - a) * d).sum(1) / np.maximum(self._seg_len**2, 1e-18), 0, 1)
+        s = self._arc[:-1] + t * self._seg_len
+        dist = np.hypot(*(a + t[:, None] * d - xy).T)
+        window = (s >= near - 1.0) & (s <= near + 2.0)
+        dist = np.where(window, dist, np.inf)
+        return float(s[int(np.argmin(dist))]) if np.isfinite(dist).any() else near
+
+    def _observe(self, twist: tuple[float, float] | None) -> np.ndarray:
+        self._scan = self.sim.scan_at(tuple(self.pose), stamp=self.steps * self.control_period, twist=twist)
+        r = np.where(np.isfinite(self._scan.ranges), self._scan.ranges, self.sensor.range_max)
+        return np.minimum(r, self.sensor.range_max).astype(np.float32)
+
+    def _info(self) -> dict[str, Any]:
+        return {"pose": self.pose.copy(), "progress_m": self.progress, "path_length_m": float(self._arc[-1])}
+
+    # -- Gymnasium API ------------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        super().reset(seed=seed)
+        self.sim.reseed(int(self.np_random.integers(2**62)))
+        d = self.path[1] - self.path[0]
+        heading = float(np.arctan2(d[1], d[0]) + self.np_random.uniform(-0.3, 0.3))
+        self.pose = np.array([self.path[0, 0], self.path[0, 1], heading])
+        self.progress = 0.0
+        self.steps = 0
+        return self._observe(None), self._info()
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
+        v, w = np.clip(np.asarray(action, dtype=float), self.action_space.low, self.action_space.high)
+        dt = self.control_period
+        x, y, th = self.pose
+        if abs(w) < 1e-9:
+            x, y = x + v * dt * np.cos(th), y + v * dt * np.sin(th)
+        else:
+            x += v / w * (np.sin(th + w * dt) - np.sin(th))
+            y -= v / w * (np.cos(th + w * dt) - np.cos(th))
+        self.pose = np.array([x, y, float(wrap(th + w * dt))])
+        self.steps += 1
+        collided = bool(self.world.clearance(self.pose[None, :2])[0] < self.limits.radius)
+        new_progress = self._project(self.pose[:2], self.progress)
+        reward = new_progress - self.progress - STEP_COST
+        self.progress = max(self.progress, new_progress)
+        reached = self.progress >= self._arc[-1] - 0.3
+        if collided:
+            reward += COLLISION_REWARD
+        elif reached:
+            reward += GOAL_REWARD
+        obs = self._observe((float(v), float(w)))
+        truncated = self.steps >= self.max_steps and not (collided or reached)
+        return obs, float(reward), bool(collided or reached), bool(truncated), self._info()
+
+    def render(self) -> np.ndarray | None:
+        """rgb_array: a top view of the world, the path, the robot and its scan."""
+        if self.render_mode != "rgb_array":
+            return None
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from matplotlib.collections import LineCollection
+
+        fig, ax = plt.subplots(figsize=(4, 4), dpi=80)
+        ax.add_collection(LineCollection(self.world.walls.reshape(-1, 2, 2), colors="k", linewidths=0.6))
+        ax.plot(self.path[:, 0], self.path[:, 1], "-", color="tab:blue", lw=0.6)
+        if self._scan is not None:
+            p = self._scan.points
+            c, s = np.cos(self.pose[2]), np.sin(self.pose[2])
+            ax.plot(self.pose[0] + c * p[:, 0] - s * p[:, 1], self.pose[1] + s * p[:, 0] + c * p[:, 1], ".",
+                    ms=1, color="tab:red")
+        ax.plot([self.pose[0]], [self.pose[1]], "o", color="tab:red")
+        ax.set_aspect("equal")
+        ax.autoscale_view()
+        fig.canvas.draw()
+        image = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+        plt.close(fig)
+        return image
+
+    def close(self) -> None:
+        self.sim.close()
+
+
+def register() -> None:
+    """Register ``lmsbench/Office-v0`` with Gymnasium (once)."""
+    if ENV_ID not in gym.registry:
+        gym.register(id=ENV_ID, entry_point="sim.gym_env:OfficeEnv")
+
+
+register()
