@@ -66,7 +66,7 @@ class SlamConfig:
     sigma_alpha: float = 4.0
     sigma_lateral: float = 0.1
     use_odometry: bool = False
-    odom_noise: tuple[float, float, float] = (0.05, 0.05, 0.02)
+    odom_noise: tuple[float, float, float] = (0.1, 0.1, 0.05)
     max_dt: float = 0.5
     extractor: str = "sensor"
     extractor_params: dict[str, Any] = field(default_factory=dict)
