@@ -100,6 +100,7 @@ def compare(
     sigma: float = 0.005,
     max_scans: int | None = None,
     progress: bool = False,
+    matches: list[dict[str, Any]] | None = None,
 ) -> pd.DataFrame:
     """Run ``methods`` (default: every available one) on every scan of ``sources``.
 
@@ -111,10 +112,14 @@ def compare(
         sigma: range noise (m) for the explained fraction (3 sigma band).
         max_scans: at most this many scans per source.
         progress: show a tqdm progress bar.
+        matches: if a list, one dict per matched line is appended to it (method, source, seed,
+            scan, face, rho_err, alpha_err): see :func:`common_errors`.
 
     Returns:
         A tidy table, one row per method x scan: method, source, kind, seed, scan, stamp, n_valid,
-        n_lines, n_corners, microseconds, explained, range_rms (m) and, for simulated sources,
+        n_lines, n_corners, microseconds (wall, ``perf_counter_ns``), cpu_microseconds (this
+        thread's CPU time, ``thread_time_ns``: what a pre-empted call really used), explained,
+        range_rms (m) and, for simulated sources,
         n_truth, tp, fp, fn, precision, recall, f1, rho_err_mean / rho_err_rms (m),
         alpha_err_mean / alpha_err_rms (rad), endpoint_err_mean (m), n_truth_corners, corner_tp,
         corner_fp, corner_fn, corner_err_mean (m).
@@ -139,16 +144,23 @@ def compare(
             n_valid = int(np.count_nonzero(scan.valid))
             shift = k % len(runs)
             for name, fn, cfg in runs[shift:] + runs[:shift]:
-                t0 = time.perf_counter_ns()
+                t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
                 fs = fn(scan, cfg)
-                elapsed = time.perf_counter_ns() - t0
+                c1, t1 = time.thread_time_ns(), time.perf_counter_ns()
+                elapsed, cpu = t1 - t0, c1 - c0
                 explained, range_rms = explained_fraction(fs, scan, sigma)
                 row = dict(method=name, source=src.name, kind=src.kind, seed=src.seed, scan=k,
                            stamp=scan.stamp, n_valid=n_valid, n_lines=len(fs.lines),
-                           n_corners=len(fs.corners), microseconds=elapsed / 1e3,
+                           n_corners=len(fs.corners), microseconds=elapsed / 1e3, cpu_microseconds=cpu / 1e3,
                            explained=explained, range_rms=range_rms)
                 if truth is not None:
-                    row.update(_score_row(score_scan(fs, truth, score_config)))
+                    score = score_scan(fs, truth, score_config)
+                    row.update(_score_row(score))
+                    if matches is not None:
+                        for face, dr, da in zip(score.matches[:, 1].tolist(), score.rho_errors.tolist(),
+                                                score.alpha_errors.tolist()):
+                            matches.append(dict(method=name, source=src.name, seed=src.seed, scan=k,
+                                                face=face, rho_err=dr, alpha_err=da))
                 rows.append(row)
             if bar is not None:
                 bar.update(1)
@@ -181,7 +193,9 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
     scores, mean explained fraction, time per scan (mean and median, microseconds), scans per
     second and ``speed_vs_sensor`` = the reference method's time / this method's (above 1 =
     faster than the reference; nan when the reference did not run). Both rates use the median
-    time: on a shared machine a pre-empted call can take 100 times the usual, which swamps a mean."""
+    time: on a shared machine a pre-empted call can take 100 times the usual, which swamps a mean.
+    ``cpu_us_median`` and ``cpu_speed_vs_sensor`` are the same from CPU time: under load a call
+    longer than the scheduler's slice is pre-empted more often, which wall time penalises."""
     out = []
     for (source, method), g in table.groupby(["source", "method"], sort=False):
         row: dict[str, Any] = dict(source=source, method=method, kind=g["kind"].iloc[0], scans=len(g),
@@ -204,6 +218,8 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
             )
         row.update(explained=g["explained"].mean(), range_rms_mm=1e3 * g["range_rms"].mean(),
                    us_mean=g["microseconds"].mean(), us_median=g["microseconds"].median())
+        if "cpu_microseconds" in g:
+            row["cpu_us_median"] = g["cpu_microseconds"].median()
         row["scans_per_s"] = 1e6 / row["us_median"]
         out.append(row)
     summary = pd.DataFrame(out)
@@ -211,14 +227,39 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
         return summary
     ref = summary[summary["method"] == reference].set_index("source")["us_median"]
     summary["speed_vs_sensor"] = summary["source"].map(ref) / summary["us_median"]
+    if "cpu_us_median" in summary:
+        ref = summary[summary["method"] == reference].set_index("source")["cpu_us_median"]
+        summary["cpu_speed_vs_sensor"] = summary["source"].map(ref) / summary["cpu_us_median"]
     return summary
+
+
+def common_errors(matches: pd.DataFrame) -> pd.DataFrame:
+    """Errors on the faces every method matched (per source): the like-for-like accuracy, since a
+    method that finds more (harder: far, short, grazing) faces pools larger errors. One row per
+    source x method: n_common, rho_rms_common_mm, alpha_rms_common_deg."""
+    cols = ["source", "method", "n_common", "rho_rms_common_mm", "alpha_rms_common_deg"]
+    if matches.empty:
+        return pd.DataFrame(columns=cols)
+    out = []
+    key = ["seed", "scan", "face"]
+    for source, g in matches.groupby("source", sort=False):
+        n_methods = g["method"].nunique()
+        seen = g.groupby(key)["method"].nunique()
+        common = seen[seen == n_methods].index
+        c = g.set_index(key).loc[lambda d: d.index.isin(common)]
+        for method, h in c.groupby("method", sort=False):
+            out.append(dict(source=source, method=method, n_common=len(h),
+                            rho_rms_common_mm=1e3 * float(np.sqrt(np.mean(h["rho_err"] ** 2))),
+                            alpha_rms_common_deg=float(np.rad2deg(np.sqrt(np.mean(h["alpha_err"] ** 2))))))
+    return pd.DataFrame(out, columns=cols)
 
 
 def format_summary(summary: pd.DataFrame) -> str:
     """The summary as a fixed-width text table (the columns that exist)."""
     cols = ["source", "method", "scans", "f1", "precision", "recall", "rho_bias_mm", "rho_rms_mm",
-            "alpha_bias_deg", "alpha_rms_deg", "corner_precision", "corner_recall", "corner_err_mm",
-            "explained", "range_rms_mm", "us_median", "scans_per_s", "speed_vs_sensor"]
+            "alpha_bias_deg", "alpha_rms_deg", "rho_rms_common_mm", "alpha_rms_common_deg", "corner_precision", "corner_recall", "corner_err_mm",
+            "explained", "range_rms_mm", "us_median", "scans_per_s", "speed_vs_sensor", "cpu_us_median",
+            "cpu_speed_vs_sensor"]
     cols = [c for c in cols if c in summary]
     return summary[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}", na_rep="-")
 

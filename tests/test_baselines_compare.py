@@ -35,7 +35,7 @@ def test_compare_table_rows_and_scores():
     assert len(table) == len(BASELINES) * len(POSES)
     assert set(table["method"]) == set(BASELINES)
     assert (table["seed"] == 7).all() and sorted(table["scan"].unique()) == [0, 1, 2]
-    assert (table["microseconds"] > 0).all()
+    assert (table["microseconds"] > 0).all() and (table["cpu_microseconds"] > 0).all()
     # exact room, 5 mm noise: every wall of every scan found, nothing else
     assert (table["f1"] == 1.0).all() and (table["fp"] == 0).all()
     assert (table["tp"] == table["n_truth"]).all()
@@ -45,6 +45,7 @@ def test_compare_table_rows_and_scores():
     s = summarise(table)
     assert set(s["method"]) == set(BASELINES) and (s["f1"] == 1.0).all()
     assert s["speed_vs_sensor"].isna().all()  # no sensor method in this run
+    assert (s["cpu_us_median"] > 0).all() and s["cpu_speed_vs_sensor"].isna().all()
 
 
 def test_methods_run_interleaved_in_rotating_order():
@@ -118,3 +119,20 @@ def test_compare_on_a_simulated_world():
     assert table["tp"].sum() > 0 and (table["n_truth"] > 0).all()
     s = summarise(table).set_index("method")
     assert (s["f1"] > 0.6).all() and (s["rho_rms_mm"] < 30).all()
+
+
+def test_common_errors_use_only_faces_every_method_matched():
+    from experiments.compare import common_errors
+
+    m = pd.DataFrame([
+        dict(method="a", source="w", seed=0, scan=0, face=0, rho_err=0.003, alpha_err=0.0),
+        dict(method="b", source="w", seed=0, scan=0, face=0, rho_err=-0.004, alpha_err=0.01),
+        dict(method="b", source="w", seed=0, scan=0, face=1, rho_err=0.5, alpha_err=0.2),  # only b
+        dict(method="a", source="w", seed=1, scan=0, face=0, rho_err=0.004, alpha_err=0.0),
+        dict(method="b", source="w", seed=1, scan=0, face=0, rho_err=0.0, alpha_err=0.0),
+    ])
+    c = common_errors(m).set_index("method")
+    assert c.loc["a", "n_common"] == 2 and c.loc["b", "n_common"] == 2
+    assert c.loc["a", "rho_rms_common_mm"] == pytest.approx(np.sqrt((9 + 16) / 2))
+    assert c.loc["b", "rho_rms_common_mm"] == pytest.approx(np.sqrt(16 / 2))
+    assert c.loc["b", "alpha_rms_common_deg"] == pytest.approx(np.rad2deg(np.sqrt(0.01**2 / 2)))

@@ -2,7 +2,7 @@
 
 Scans: noisy synthetic rooms (exact L-shaped room, 5 mm noise, seeded poses) and, where the shared
 data is present, every 10th scan of the MIT CSAIL log. Rows: one per method x scan set, with the
-mean and median microseconds per scan, scans/s and the speed ratio to the sensor method.
+median wall and CPU microseconds per scan, scans/s and the speed ratios to the sensor method.
 """
 
 from __future__ import annotations
@@ -38,20 +38,23 @@ def _log_scans(n: int) -> list:
     return [rec.scan for k, rec in enumerate(read_log(MIT_LOG)) if k % 10 == 0][:n]
 
 
-def time_methods(scans: list, methods: list[str], repeats: int) -> dict[str, np.ndarray]:
-    """Microseconds per scan of each method (median of ``repeats``), interleaved per scan."""
+def time_methods(scans: list, methods: list[str], repeats: int) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Wall and CPU microseconds per scan of each method (medians of ``repeats``), interleaved."""
     runs = [(m, get_method(m).run, make_config(m)) for m in methods]
-    out = {m: np.empty(len(scans)) for m in methods}
+    wall = {m: np.empty(len(scans)) for m in methods}
+    cpu = {m: np.empty(len(scans)) for m in methods}
     for k, scan in enumerate(scans):
         shift = k % len(runs)
         for name, fn, cfg in runs[shift:] + runs[:shift]:
-            t = []
+            t, c = [], []
             for _ in range(repeats):
-                t0 = time.perf_counter_ns()
+                t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
                 fn(scan, cfg)
+                c.append(time.thread_time_ns() - c0)
                 t.append(time.perf_counter_ns() - t0)
-            out[name][k] = np.median(t) / 1e3
-    return out
+            wall[name][k] = np.median(t) / 1e3
+            cpu[name][k] = np.median(c) / 1e3
+    return wall, cpu
 
 
 def run(quick: bool = False) -> list[dict]:
@@ -61,11 +64,12 @@ def run(quick: bool = False) -> list[dict]:
     for label, scans in (("synthetic_room", _room_scans(n)), ("mit_csail", _log_scans(n))):
         if not scans:
             continue
-        times = time_methods(scans, methods, repeats)
-        ref = times["sensor"].mean() if "sensor" in times else float("nan")
+        wall, cpu = time_methods(scans, methods, repeats)
+        ref = np.median(wall["sensor"]) if "sensor" in wall else float("nan")
+        ref_cpu = np.median(cpu["sensor"]) if "sensor" in cpu else float("nan")
         for m in methods:
-            us = times[m]
-            rows.append(dict(case=f"{m}/{label}", method=m, scans=len(scans), us_mean=float(us.mean()),
-                             us_median=float(np.median(us)), scans_per_s=float(1e6 / us.mean()),
-                             speed_vs_sensor=float(ref / us.mean())))
+            us, cu = np.median(wall[m]), np.median(cpu[m])
+            rows.append(dict(case=f"{m}/{label}", method=m, scans=len(scans), us_median=float(us),
+                             cpu_us_median=float(cu), scans_per_s=float(1e6 / us),
+                             speed_vs_sensor=float(ref / us), cpu_speed_vs_sensor=float(ref_cpu / cu)))
     return rows

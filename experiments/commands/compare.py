@@ -43,7 +43,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from experiments.compare import compare, format_summary, parse_sources, resolved_configs, summarise
+    import pandas as pd
+
+    from experiments.compare import (common_errors, compare, format_summary, parse_sources, resolved_configs,
+                                     summarise)
     from features.registry import available_methods
     from features.scoring import ScoreConfig
 
@@ -56,11 +59,14 @@ def run(args: argparse.Namespace) -> int:
         raise LmsbenchError(f"--max-scans must be >= 1, got {args.max_scans}")
     sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans)
     score_config = ScoreConfig()
+    matches: list = []
     table = compare(sources, methods, params=params, score_config=score_config, sigma=args.sigma,
-                    max_scans=args.max_scans, progress=not args.no_progress)
+                    max_scans=args.max_scans, progress=not args.no_progress, matches=matches)
     if table.empty:
         raise LmsbenchError("no scans in the given sources")
     summary = summarise(table)
+    if matches:
+        summary = summary.merge(common_errors(pd.DataFrame(matches)), on=["source", "method"], how="left")
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / f"compare.{args.format}"
     if args.format == "parquet":

@@ -69,7 +69,7 @@ def run(scan: Scan, cfg: RansacConfig) -> FeatureSet:
             break
         i = rng.integers(0, m, cfg.hypotheses)
         if cfg.window > 0:
-            j = i + rng.integers(1, cfg.window + 1, cfg.hypotheses) * rng.choice((-1, 1), cfg.hypotheses)
+            j = i + rng.integers(1, cfg.window + 1, cfg.hypotheses) * (2 * rng.integers(0, 2, cfg.hypotheses) - 1)
             j = np.clip(j, 0, m - 1)
         else:
             j = rng.integers(0, m, cfg.hypotheses)

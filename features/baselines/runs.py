@@ -37,8 +37,11 @@ def segments_of(pts: Points, inl: np.ndarray, angle_increment: float, lambda_rad
     used = inl[labels]
     offs = (np.cumsum(counts[ok]) - counts[ok])
     fit = fit_groups(pts.x[used], pts.y[used], offs)
+    sizes = counts[ok]
     for _ in range(2):  # drop end points off the fitted line (a neighbouring small face), refit
         lo, hi = trim_ends(pts.x[used], pts.y[used], offs, fit[0], fit[1], 3.0 * sigma, min_points)
+        if np.array_equal(lo, offs) and np.array_equal(hi, offs + sizes - 1):
+            break
         sizes = hi - lo + 1
         offs = np.cumsum(sizes) - sizes
         used = used[np.arange(int(sizes.sum())) - np.repeat(offs - lo, sizes)]

@@ -75,6 +75,8 @@ def segment_lines(scan: Scan, sigma: float, lam_deg: float, threshold: float, me
     for _ in range(2):  # drop end points off the fitted line (a neighbouring small face), refit
         pos, _, offsets = _ragged(s, e)
         lo, hi = trim_ends(pts.x[pos], pts.y[pos], offsets, rho, alpha, 3.0 * sigma, min_points)
+        if np.array_equal(pos[lo], s) and np.array_equal(pos[hi], e):
+            break
         s, e = pos[lo], pos[hi]
         rho, alpha, n, mx, my, along = fitter.fit(s, e)
     if runs_z > 0:
