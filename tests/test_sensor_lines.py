@@ -98,6 +98,17 @@ def test_no_return_beams_split_a_line() -> None:
         assert line.rho == pytest.approx(2.0, abs=1e-9)
 
 
+def test_a_single_nan_beam_breaks_a_segment_unless_bridged() -> None:
+    scan = line_scan(2.0, 0.3)
+    r = scan.ranges.copy()
+    r[180] = np.nan
+    pieces = extract(scan.replace(ranges=r)).lines
+    assert len(pieces) == 2 and pieces[0].last < 180 < pieces[1].first
+    whole = extract(scan.replace(ranges=r), bridge_invalid=1).lines
+    assert len(whole) == 1 and whole[0].first < 180 < whole[0].last
+    assert whole[0].rho == pytest.approx(2.0, abs=1e-5) and whole[0].n_points == pieces[0].n_points + pieces[1].n_points
+
+
 def test_range_discontinuity_splits_and_corners_need_contact() -> None:
     # a box in front of a wall: the wall is interrupted, and no corner at the occluding edges
     wall = [(3.0, -5.0, 3.0, 5.0)]

@@ -28,10 +28,12 @@ class SensorMethodConfig:
     inlier_tau: float = 3.0  # |range residual| <= inlier_tau * sigma_r after the weighted fit
     max_chi2: float = 3.0  # largest mean squared normalised residual of an accepted line
     min_inlier_fraction: float = 0.7  # fraction of a run's beams the line must explain
+    curvature_tau: float = 4.0  # reject a line whose residuals bend (parabola t-statistic) more
     min_points: int = 8  # fewest supporting beams of a line
     min_length: float = 0.3  # shortest line segment kept, m
     merge_gap: int = 4  # neighbouring lines at most this many beams apart may merge ...
     merge_tau: float = 3.0  # ... when their (rho, alpha) agree within merge_tau std
+    bridge_invalid: int = 0  # invalid (+inf, nan) beams a merge may bridge; 0: they break segments
     corners: bool = True  # extract corners
     corner_min_turn: float = 0.35  # smallest change of line direction that makes a corner, rad
     corner_psi: float = 0.35  # psi must reach this fraction of the line-to-line turn near the corner

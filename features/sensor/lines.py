@@ -92,19 +92,37 @@ def fit_spans(
     s2 = gauss_newton(d, b, run_id, starts, ok, s1.rho, s1.alpha, sigma, cfg.inlier_tau)
     rho, alpha, cov, z = s2.rho, s2.alpha, s2.cov, s2.z
     inl = s2.weight > 0
-    # checks: enough inliers, most of the span explained, chi^2 of the inliers
+    # checks: enough inliers, most of the span explained, chi^2 of the inliers, and curvature:
+    # the t-statistic of the residuals against a parabola in the beam index, made orthogonal to
+    # 1 and t over the inliers (what the line fit absorbs): ~N(0, 1) on a line, large on an arc
     zi = np.where(inl, z, 0.0)
-    buf = np.empty((2, beam.size))
-    buf[0] = inl
+    w_in = inl.astype(float)
+    t = (beam - beam[starts][run_id]).astype(float)
+    t2 = t * t
+    buf = np.empty((5, beam.size))
+    buf[0] = w_in
     np.multiply(zi, zi, out=buf[1])
-    n_f, chi = np.add.reduceat(buf, starts, axis=1)
+    np.multiply(w_in, t, out=buf[2])
+    np.multiply(w_in, t2, out=buf[3])
+    np.multiply(buf[2], t2, out=buf[4])
+    n_f, chi, s_t, s_t2, s_t3 = np.add.reduceat(buf, starts, axis=1)
     n_in = n_f.astype(np.int64)
+    n_f = np.maximum(n_f, 1.0)
+    m1, m2, m3 = s_t / n_f, s_t2 / n_f, s_t3 / n_f
+    b_lin = (m3 - m1 * m2) / np.maximum(m2 - m1 * m1, 1e-12)
+    a_lin = m2 - b_lin * m1
+    q = t2 - a_lin[run_id] - b_lin[run_id] * t
+    zq = zi * q
+    buf[0] = zq
+    np.multiply(w_in * q, q, out=buf[1])
+    zq, qq = np.add.reduceat(buf[:2], starts, axis=1)
     first_in = np.minimum.reduceat(np.where(inl, beam, beam.size + first.max()), starts)
     last_in = np.maximum.reduceat(np.where(inl, beam, -1), starts)
     good = (
         (n_in >= cfg.min_points)
         & (n_in >= cfg.min_inlier_fraction * (counts if core is None else core))
         & (chi <= cfg.max_chi2 * np.maximum(n_in - 2, 1))
+        & (zq * zq <= (cfg.curvature_tau * cfg.curvature_tau) * qq)
         & np.isfinite(rho + alpha + cov[:, 0, 0] + cov[:, 1, 1])
     )
     # normal form with rho >= 0, alpha in (-pi, pi]

@@ -14,7 +14,8 @@ MERGE_FLOOR_VAR = np.array([0.005**2, 0.005**2])  # model-error floor on (rho m^
 
 
 def merge_neighbours(table: LineTable, invalid_cum: np.ndarray, cfg: SensorMethodConfig) -> LineTable:
-    """Merge neighbouring lines that are one line: close in beams, no invalid beam between, and
+    """Merge neighbouring lines that are one line: close in beams, at most ``bridge_invalid``
+    invalid beams between (none by default: +inf and nan beams break segments), and
     (rho, alpha) equal within ``merge_tau`` std. The merged line is the information-weighted
     combination of the pieces (independent fits of one line), so no refit is needed."""
     n = table.rho.size
@@ -30,7 +31,7 @@ def merge_neighbours(table: LineTable, invalid_cum: np.ndarray, cfg: SensorMetho
     cur = 0
     for i in range(1, n):
         gap = first[i] - last[cur] - 1
-        if gap > cfg.merge_gap or (gap > 0 and invalid_cum[first[i]] - invalid_cum[last[cur] + 1] > 0):
+        if gap > cfg.merge_gap or (gap > 0 and invalid_cum[first[i]] - invalid_cum[last[cur] + 1] > cfg.bridge_invalid):
             out.append(i)
             cur = i
             continue
