@@ -21,7 +21,7 @@ class Step(NamedTuple):
     rho: np.ndarray  # (R,) after the step (m)
     alpha: np.ndarray  # (R,) after the step (rad, not wrapped)
     cov: np.ndarray  # (R, 2, 2) covariance of (rho, alpha) at the step's linearisation
-    z: np.ndarray  # (N,) range residual / sigma_r before the step (inf where the beam cannot see the line)
+    z: np.ndarray | None  # (N,) range residual / sigma_r before the step (when inlier_tau is given)
     weight: np.ndarray  # (N,) 1/cos^2 weights used (0 for beams left out)
 
 
@@ -49,11 +49,12 @@ def gauss_newton(
     c = np.cos(phi)
     r = d * c - rho[run_id]  # residual along the normal (m); d r / d rho = -1
     g = d * np.sin(phi)  # d r / d alpha
-    seen = c > MIN_COS
-    z = r / (sigma_r * c)
-    z[~seen] = np.inf
-    use = seen if mask is None else seen & mask
+    use = c > MIN_COS
+    if mask is not None:
+        use &= mask
+    z = None
     if inlier_tau is not None:
+        z = r / (sigma_r * c)
         use &= np.abs(z) <= inlier_tau
     w = use / (c * c)
     buf = np.empty((5, d.size))
