@@ -74,8 +74,9 @@ def _extract(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
         table = merge_neighbours(table, invalid_cum, cfg)
     first, last = table.first.copy(), table.last.copy()
     resolve_overlaps(first, last)
-    p0 = endpoints(table.rho, table.alpha, ranges, bearings, first)
-    p1 = endpoints(table.rho, table.alpha, ranges, bearings, last)
+    n_lines = first.size
+    ends = endpoints(np.tile(table.rho, 2), np.tile(table.alpha, 2), ranges, bearings, np.concatenate((first, last)))
+    p0, p1 = ends[:n_lines], ends[n_lines:]
     d = p1 - p0
     keep = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] >= cfg.min_length * cfg.min_length  # nan -> dropped
     idx = np.flatnonzero(keep)
