@@ -21,7 +21,7 @@ class SensorMethodConfig:
     psi_split: float = 0.2  # a slope change |psi| above this splits a run (rad) ...
     psi_tau: float = 4.0  # ... when it also exceeds psi_tau * its noise std
     hough_subdiv: int = 4  # Log-Hough angle step = angle_increment / hough_subdiv
-    hough_angles: int = 11  # number of normal angles searched in each run's band
+    hough_angles: int = 7  # number of normal angles searched in each run's band
     band_tau: float = 4.0  # band half-width in std of the run's mean slope estimate
     band_min: float = 0.004  # smallest band half-width, rad
     bin_tau: float = 3.0  # Log-Hough log-range bin half-width in range-noise std
