@@ -39,5 +39,5 @@ class SensorMethodConfig:
     corner_psi: float = 0.35  # psi must reach this fraction of the line-to-line turn near the corner
     corner_max_gap: int = 1  # most beams between the two lines' facing ends
     corner_max_dist: float = 0.15  # the intersection must lie this close to both facing ends, m
-    acute_check: bool = False  # the paper's remedy: reject a corner when the variance of the ranges
+    acute_check: bool = True  # the paper's remedy: reject a corner when the variance of the ranges
     acute_min_var: float = 1.0  # of the beams within k of it is below acute_min_var * sigma_r**2
