@@ -104,11 +104,16 @@ def union_faces(rects: list[np.ndarray], circles: np.ndarray) -> np.ndarray:
     (4, 2) CCW corner array) and circles ((m, 3) cx, cy, r): every rectangle edge minus its parts
     strictly inside another solid; collinear pieces that touch are merged."""
     faces = []
+    lo = np.array([r.min(axis=0) for r in rects]).reshape(-1, 2) - 1e-6
+    hi = np.array([r.max(axis=0) for r in rects]).reshape(-1, 2) + 1e-6
     for i, poly in enumerate(rects):
         for k in range(4):
             p, q = poly[k], poly[(k + 1) % 4]
             cut = []
-            for j, other in enumerate(rects):
+            seg_lo, seg_hi = np.minimum(p, q), np.maximum(p, q)
+            near = np.flatnonzero(np.all((lo <= seg_hi) & (hi >= seg_lo), axis=1))
+            for j in near:
+                other = rects[j]
                 if j != i:
                     iv = _inside_interval_convex(p, q, other)
                     if iv:
@@ -126,26 +131,32 @@ def union_faces(rects: list[np.ndarray], circles: np.ndarray) -> np.ndarray:
 
 
 def _merge_collinear(faces: np.ndarray) -> np.ndarray:
-    faces = [f.copy() for f in faces]
-    merged = True
-    while merged:
-        merged = False
-        for i in range(len(faces)):
-            for j in range(len(faces)):
-                if i == j:
-                    continue
-                a, b = faces[i], faces[j]
-                if np.hypot(a[2] - b[0], a[3] - b[1]) < 1e-7:
-                    da, db = a[2:] - a[:2], b[2:] - b[:2]
-                    cross = da[0] * db[1] - da[1] * db[0]
-                    if abs(cross) < 1e-9 * np.hypot(*da) * np.hypot(*db) and da @ db > 0:
-                        faces[i] = np.concatenate((a[:2], b[2:]))
-                        del faces[j]
-                        merged = True
-                        break
-            if merged:
-                break
-    return np.array(faces, dtype=float).reshape(-1, 4)
+    """Join faces where one ends exactly where the next, collinear and pointing the same way,
+    begins (pieces of one straight face split by a solid that only touched it)."""
+    n = len(faces)
+    if n < 2:
+        return faces
+    d = faces[:, 2:] - faces[:, :2]
+    length = np.hypot(d[:, 0], d[:, 1])
+    gap = np.hypot(faces[:, None, 2] - faces[None, :, 0], faces[:, None, 3] - faces[None, :, 1])
+    cross = d[:, None, 0] * d[None, :, 1] - d[:, None, 1] * d[None, :, 0]
+    dot = d[:, None, 0] * d[None, :, 0] + d[:, None, 1] * d[None, :, 1]
+    joins = (gap < 1e-7) & (np.abs(cross) < 1e-9 * length[:, None] * length[None, :]) & (dot > 0)
+    np.fill_diagonal(joins, False)
+    following = np.where(joins.any(axis=1), joins.argmax(axis=1), -1)
+    is_next = np.zeros(n, dtype=bool)
+    is_next[following[following >= 0]] = True
+    out, used = [], np.zeros(n, dtype=bool)
+    for head in list(np.flatnonzero(~is_next)) + list(range(n)):  # chain heads first, then loops
+        if used[head]:
+            continue
+        tail = head
+        used[head] = True
+        while following[tail] >= 0 and not used[following[tail]]:
+            tail = following[tail]
+            used[tail] = True
+        out.append(np.concatenate((faces[head, :2], faces[tail, 2:])))
+    return np.array(out, dtype=float).reshape(-1, 4)
 
 
 def face_corners(faces: np.ndarray, tol: float = 1e-7) -> tuple[np.ndarray, np.ndarray]:

@@ -10,6 +10,7 @@ import ctypes
 import os
 import sys
 from itertools import chain
+from operator import itemgetter
 from contextlib import contextmanager
 from typing import Iterator
 
@@ -21,6 +22,7 @@ from .sensor import SensorConfig
 from .world import World
 
 _STREAM_SENSOR = 2
+_FIRST, _POSITION = itemgetter(0), itemgetter(3)  # rayTestBatch result: body id, hit position
 
 
 def _flush_c_stdout() -> None:
@@ -108,6 +110,7 @@ class LMS200Sim:
         for body, kind, k in bodies:
             self._kind_of_body[body], self._index_of_body[body] = kind, k
         self._boxes = np.asarray(world.boxes, dtype=float)
+        self._box_cos, self._box_sin = np.cos(self._boxes[:, 2]), np.sin(self._boxes[:, 2])
         self._circles = np.asarray(world.cylinders[:, :3], dtype=float)
 
     # -- lifetime -----------------------------------------------------------------------------
@@ -146,8 +149,8 @@ class LMS200Sim:
         end[:, 0] += self._ray_length * ux
         end[:, 1] += self._ray_length * uy
         hits = pb.rayTestBatch(start, end, physicsClientId=self.client)
-        body = np.fromiter((hit[0] for hit in hits), dtype=np.int64, count=n)
-        pos = np.fromiter(chain.from_iterable(hit[3] for hit in hits), dtype=float, count=3 * n).reshape(n, 3)
+        body = np.fromiter(map(_FIRST, hits), dtype=np.int64, count=n)
+        pos = np.fromiter(chain.from_iterable(map(_POSITION, hits)), dtype=float, count=3 * n).reshape(n, 3)
         ranges = np.hypot(pos[:, 0] - start[:, 0], pos[:, 1] - start[:, 1])
         kind = self._kind_of_body[body]  # body -1 reads the last slot: -1
         ranges[kind < 0] = np.inf
@@ -155,8 +158,8 @@ class LMS200Sim:
         again = np.zeros(n, dtype=bool)
         on_box = np.flatnonzero(kind == 0)
         if on_box.size:  # reject hits outside the true box (Bullet's edge tolerance)
-            bx = self._boxes[index[on_box]]
-            c, s = np.cos(bx[:, 2]), np.sin(bx[:, 2])
+            k = index[on_box]
+            bx, c, s = self._boxes[k], self._box_cos[k], self._box_sin[k]
             dx, dy = pos[on_box, 0] - bx[:, 0], pos[on_box, 1] - bx[:, 1]
             outside = (np.abs(c * dx + s * dy) > bx[:, 3] + _BOX_TOL_M) | (np.abs(-s * dx + c * dy) > bx[:, 4] + _BOX_TOL_M)
             again[on_box[outside]] = True
@@ -208,6 +211,62 @@ class LMS200Sim:
         time of its first beam ``stamp`` (s); ``twist`` = (v, w) moves the scanner during the
         scan when the sensor is interlaced."""
         return self.scan_from_beam_poses(self.beam_poses(pose, twist), stamp)
+
+    def scan_from_beam_poses(self, beam_poses: np.ndarray, stamp: float = 0.0) -> Scan:
+        """One emulated scan whose beam i is taken from ``beam_poses[i]`` (x, y, theta)."""
+        s = self.sensor
+        bp = np.asarray(beam_poses, dtype=float)
+        ranges = self.exact_ranges(bp)
+        if s.mixed_pixels:
+            ranges = self._mix_edges(bp, ranges)
+        noise = self.rng.standard_normal(s.n_beams)
+        dropped = self.rng.random(s.n_beams) < s.dropout_prob
+        finite = np.isfinite(ranges)
+        r = np.where(finite, ranges, 0.0) + s.noise_sigma * noise
+        if s.quantise:
+            r = np.rint(r / s.unit_m) * s.unit_m
+        r = np.maximum(r, 0.0)
+        r = np.where(finite & (r < s.range_max), r, np.inf)
+        r[dropped] = np.nan
+        return Scan(r, s.angle_min, s.angle_increment, 0.0, s.range_max, stamp)
+
+    def _mix_edges(self, bp: np.ndarray, ranges: np.ndarray) -> np.ndarray:
+        """Mixed pixels. Each beam's spot is sampled at 5 bearings (-w/2, -w/4, 0, +w/4, +w/2 of
+        beam width w): the centre is the beam's own ray; the half facing a neighbour across a
+        depth step (> mixed_gap, or return / no return) gets two sub-rays from the beam's own pose,
+        the other half is taken as the centre's surface. Where the samples split into a near and a
+        far group, the beam returns their mean (with a far group at no return, the near mean when
+        the near group holds the larger share, else no return)."""
+        gap = self.sensor.mixed_gap
+        far_value = 1e6  # stands for no return (+inf) so that differences stay finite
+        rf = np.where(ranges < far_value, ranges, far_value)
+        g = np.flatnonzero(np.abs(np.diff(rf)) > gap)
+        if g.size == 0:
+            return ranges
+        hw = self._half_width
+        right = np.array([hw / 2, hw])  # beam g looks towards g + 1
+        left = np.array([-hw, -hw / 2])  # beam g + 1 looks towards g
+        origins = np.vstack((np.repeat(bp[g, :2], 2, axis=0), np.repeat(bp[g + 1, :2], 2, axis=0)))
+        heads = np.concatenate((((bp[g, 2] + self._angles[g])[:, None] + right).ravel(),
+                                ((bp[g + 1, 2] + self._angles[g + 1])[:, None] + left).ravel()))
+        sub = self.cast(origins, heads)
+        samples = np.repeat(rf[:, None], 5, axis=1)
+        samples[g, 3:5] = np.minimum(sub[: 2 * g.size], far_value).reshape(-1, 2)
+        samples[g + 1, 0:2] = np.minimum(sub[2 * g.size :], far_value).reshape(-1, 2)
+        touched = np.zeros(len(ranges), dtype=bool)
+        touched[g] = touched[g + 1] = True
+        idx = np.flatnonzero(touched)
+        smp = samples[idx]
+        near = smp.min(axis=1)
+        far = smp > (near + gap)[:, None]
+        n_far = far.sum(axis=1)
+        no_return = (smp >= far_value).any(axis=1)
+        near_mean = np.where(far, 0.0, smp).sum(axis=1) / np.maximum(5 - n_far, 1)
+        mixed = np.where(no_return, np.where(2 * n_far > 5, np.inf, near_mean), smp.mean(axis=1))
+        out = ranges.copy()
+        split = (n_far > 0) & (near < far_value)
+        out[idx[split]] = mixed[split]
+        return out
 
     def scan_from_beam_poses(self, beam_poses: np.ndarray, stamp: float = 0.0) -> Scan:
         """One emulated scan whose beam i is taken from ``beam_poses[i]`` (x, y, theta)."""

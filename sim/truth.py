@@ -57,7 +57,7 @@ def _clip_halfplane(p: np.ndarray, q: np.ndarray, normal: np.ndarray) -> np.ndar
     out = np.column_stack((p, q))
     with np.errstate(divide="ignore", invalid="ignore"):
         t = dp / (dp - dq)
-    cut = p + t[:, None] * (q - p)
+        cut = p + t[:, None] * (q - p)
     out[:, :2] = np.where((dp < 0)[:, None], cut, p)
     out[:, 2:] = np.where((dq < 0)[:, None], cut, q)
     out[(dp < 0) & (dq < 0)] = np.nan

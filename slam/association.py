@@ -7,7 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2
+from .models import chi2_quantile
 
 from .models import wrap
 
@@ -83,8 +83,13 @@ def candidates(z: np.ndarray, Rz: np.ndarray, zhat: np.ndarray, HPH: np.ndarray,
     return Candidates(nu, S, mahalanobis2(nu, S))
 
 
-def nearest_neighbour(d2: np.ndarray, gate: float) -> list[tuple[int, int]]:
-    """Greedy one-to-one pairs (observation, landmark) by increasing distance, within the gate."""
+def nearest_neighbour(d2: np.ndarray, gate: float, reject_ambiguous: bool = False) -> list[tuple[int, int]]:
+    """Greedy one-to-one pairs (observation, landmark) by increasing distance, within the gate.
+    With ``reject_ambiguous``, an observation that falls in the gate of two or more landmarks is
+    left unpaired (a door jamb next to another along an unobservable corridor)."""
+    d2 = np.array(d2, dtype=float)
+    if reject_ambiguous and d2.size:
+        d2[np.sum(d2 < gate, axis=1) > 1] = np.inf
     obs, lms = np.nonzero(d2 < gate)
     order = np.argsort(d2[obs, lms], kind="stable")
     used_o, used_l, pairs = set(), set(), []
@@ -116,7 +121,7 @@ def jcbb(d2: np.ndarray, gate: float, nu_fn, S_fn, confidence: float = 0.99, max
     after ``max_nodes`` nodes."""
     m = d2.shape[0]
     options = [list(np.nonzero(d2[o] < gate)[0][np.argsort(d2[o][d2[o] < gate])]) for o in range(m)]
-    thresholds = [0.0] + [chi2.ppf(confidence, 2 * k) for k in range(1, m + 1)]
+    thresholds = [0.0] + [chi2_quantile(confidence, 2 * k) for k in range(1, m + 1)]
     best: list = [[], np.inf]
     nodes = [0]
 

@@ -37,6 +37,7 @@ class SlamConfig:
             starts a new one; between the two it is ignored as ambiguous.
         association: "nn" (nearest neighbour) or "jcbb" (joint compatibility branch and bound).
         extent_margin: an observation must overlap the landmark's extent grown by this (m).
+        reject_ambiguous: (nn) leave an observation unpaired when two landmarks pass its gate.
     Map management:
         confirm_hits: sightings (including the first) that confirm a tentative landmark...
         tentative_window: ...within this many scans of its creation, else it is pruned.
@@ -44,7 +45,15 @@ class SlamConfig:
         prealign: find the scan's heading (and position) against the map's lines before the update.
         prealign_radius: map lines within this distance (m) of the predicted position take part.
         prealign_sigma_xy, prealign_sigma_phi: std of the resulting pose pseudo-measurement.
+        prealign_xy_turn: the alignment's position is used (besides its heading) only when its
+            heading differs from the prediction by more than this (rad).
         prealign_min_fraction: the alignment is used only when it explains this fraction of line length.
+        point_stride, verify_tolerance: pre-alignment candidates are checked by the fraction of the
+            scan's points (every ``point_stride``-th beam) within ``verify_tolerance`` m of the
+            previous scan's points; ``verify_margin``: a candidate far from the prediction must
+            beat the one near it by this fraction.
+        max_turn_rate: fastest turn considered possible (rad/s): headings further from the previous
+            one than this times the scan interval (+10 deg) are rejected (corridor 180-degree flips).
     Consistency:
         nis_window, nis_divergence: the filter is flagged as diverged when the mean normalised
             innovation squared per degree of freedom over the last ``nis_window`` scans exceeds this.
@@ -67,7 +76,8 @@ class SlamConfig:
     gate_probability: float = 0.99
     new_landmark_probability: float = 0.9999
     association: str = "nn"
-    extent_margin: float = 2.0
+    extent_margin: float = 1.0
+    reject_ambiguous: bool = True
     confirm_hits: int = 3
     tentative_window: int = 6
     prealign: bool = True
@@ -75,6 +85,11 @@ class SlamConfig:
     prealign_sigma_xy: float = 0.1
     prealign_sigma_phi: float = 0.03
     prealign_min_fraction: float = 0.3
+    prealign_xy_turn: float = 0.1
+    max_turn_rate: float = 8.0
+    point_stride: int = 2
+    verify_tolerance: float = 0.1
+    verify_margin: float = 0.1
     nis_window: int = 20
     nis_divergence: float = 5.0
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import chi2
+from scipy.spatial import cKDTree
+from .models import chi2_quantile
 
 from . import association as assoc
 from . import models
@@ -51,8 +52,11 @@ class SlamFilter:
         self.scan_no = -1
         self.stamp: float | None = None
         self.odom: tuple[float, float, float] | None = None
-        self.gate = float(chi2.ppf(config.gate_probability, 2))
-        self.new_gate = float(chi2.ppf(config.new_landmark_probability, 2))
+        self.gate = float(chi2_quantile(config.gate_probability, 2))
+        self.new_gate = float(chi2_quantile(config.new_landmark_probability, 2))
+        self._previous_points: cKDTree | None = None
+        self._heading_before = float(initial_pose[2])
+        self._dt = 0.0
 
     # -- state views ---------------------------------------------------------------------------
     @property
@@ -70,6 +74,8 @@ class SlamFilter:
         cfg = self.config
         self.scan_no += 1
         info = StepInfo(n_lines=obs.lines.shape[0])
+        self._heading_before = float(self.ekf.x[2, 0])
+        self._dt = 0.0
         if self.stamp is not None:
             self._predict(stamp - self.stamp, odom)
         self.stamp = stamp
@@ -87,6 +93,7 @@ class SlamFilter:
             self._add("corner", obs.corners[o], obs.corner_cov[o], None)
         info.n_new = len(new_l) + len(new_c)
         self._manage()
+        self._remember_points(obs.points)
         return info
 
     def _predict(self, dt: float, odom: tuple[float, float, float] | None) -> None:
@@ -121,27 +128,63 @@ class SlamFilter:
         if not near.any():
             return
         lengths = np.hypot(ends[:, 2] - ends[:, 0], ends[:, 3] - ends[:, 1])
+        verify = self._verifier(obs.points)
         a = align(obs.lines[:, 0], obs.lines[:, 1], obs.line_lengths, R[near], th[near], np.maximum(lengths[near], 0.3), x[:3],
-                  scan_ends=obs.line_ends, map_ends=ends[near])
-        if a is None or a.matched_length < cfg.prealign_min_fraction * a.total_length:
+                  scan_ends=obs.line_ends, map_ends=ends[near], reference_heading=self._heading_before,
+                  max_turn=cfg.max_turn_rate * self._dt + np.radians(10.0), verify=verify,
+                  verify_margin=cfg.verify_margin)
+        if a is None or a.matched_length <= 0 or a.matched_length < cfg.prealign_min_fraction * a.total_length:
             return
-        H = np.zeros((3, self.ekf.dim_x))
-        H[:, :3] = np.eye(3)
-        Rm = np.diag([cfg.prealign_sigma_xy**2, cfg.prealign_sigma_xy**2, cfg.prealign_sigma_phi**2])
         nu = a.pose - x[:3]
         nu[2] = wrap(nu[2])
-        S = self.ekf.P[:3, :3] + Rm
-        if nu @ np.linalg.solve(S, nu) > chi2.ppf(0.999, 3):
-            # the constant-velocity prior cannot explain the alignment (a fast turn): widen it
-            self.ekf.P[:3, :3] += np.diag(nu**2)
-            self.ekf.P[4, 4] += (nu[2] / max(self._last_dt(), 1e-3)) ** 2 * 0.25
-        self.ekf.update(a.pose.reshape(3, 1), lambda _x: H, lambda xx: xx[:3], R=Rm,
-                        residual=lambda z, h: np.vstack((z[:2] - h[:2], [[wrap((z[2] - h[2]).item())]])))
+        P = self.ekf.P
+        var_phi = cfg.prealign_sigma_phi**2
+        if nu[2] ** 2 > chi2_quantile(0.999, 1) * (P[2, 2] + var_phi):
+            # the constant-velocity prior cannot explain the turn the lines show: widen it
+            P[2, 2] += nu[2] ** 2
+            P[4, 4] += 0.25 * (nu[2] / max(self._dt, 1e-3)) ** 2
+        # position: only along the normals of the matched lines (a corridor fixes one direction)
+        R_xy = cfg.prealign_sigma_xy**2 * np.linalg.inv(a.information + 1e-3 * np.eye(2))
+        S_xy = P[:2, :2] + R_xy
+        rows = [2]
+        # the line update fixes the position once the heading is right; the alignment's position
+        # is used too only after a turn the prediction missed (it double-counts the lines)
+        if abs(nu[2]) > cfg.prealign_xy_turn and nu[:2] @ np.linalg.solve(S_xy, nu[:2]) < chi2_quantile(0.999, 2):
+            rows = [0, 1, 2]
+        Rm = np.zeros((len(rows), len(rows)))
+        Rm[-1, -1] = var_phi
+        if len(rows) == 3:
+            Rm[:2, :2] = R_xy
+        H = np.zeros((len(rows), self.ekf.dim_x))
+        H[np.arange(len(rows)), rows] = 1.0
+        self.ekf.update(a.pose[rows].reshape(-1, 1), lambda _x: H, lambda xx: xx[rows],
+                        R=Rm, residual=_pose_residual)
         info.prealign_used = True
         info.prealign_shift = float(wrap(a.pose[2] - x[2]))
 
-    def _last_dt(self) -> float:
-        return getattr(self, "_dt", 0.2)
+    def _verifier(self, points: np.ndarray):
+        """``verify(pose)``: fraction of this scan's points within ``verify_tolerance`` of the
+        previous scan's points (world frame); None without points on either side."""
+        tree = self._previous_points
+        if tree is None or points.shape[0] < 10:
+            return None
+        tol = self.config.verify_tolerance
+
+        def verify(pose: np.ndarray) -> float:
+            c, s = np.cos(pose[2]), np.sin(pose[2])
+            w = points @ np.array([[c, s], [-s, c]]) + pose[:2]
+            d, _ = tree.query(w, distance_upper_bound=tol)
+            return float(np.mean(np.isfinite(d)))
+
+        return verify
+
+    def _remember_points(self, points: np.ndarray) -> None:
+        if points.shape[0] < 10:
+            self._previous_points = None
+            return
+        X, Y, Phi = self.ekf.x[:3, 0]
+        c, s = np.cos(Phi), np.sin(Phi)
+        self._previous_points = cKDTree(points @ np.array([[c, s], [-s, c]]) + (X, Y))
 
     def _extent_points(self, R: np.ndarray, th: np.ndarray, pos: np.ndarray) -> np.ndarray:
         """(L, 4) world endpoints of line landmarks from their extents."""
@@ -188,8 +231,9 @@ class SlamFilter:
 
             pairs = assoc.jcbb(d2, self.gate, nu_fn, S_fn, self.config.gate_probability)
         else:
-            pairs = assoc.nearest_neighbour(d2, self.gate)
-        new = [o for o in range(z.shape[0]) if np.min(cand.d2[o]) > self.new_gate and o not in {p[0] for p in pairs}]
+            pairs = assoc.nearest_neighbour(d2, self.gate, self.config.reject_ambiguous)
+        paired = {p[0] for p in pairs}
+        new = [o for o in range(z.shape[0]) if np.min(cand.d2[o]) > self.new_gate and o not in paired]
         return [(o, int(pos[l])) for o, l in pairs], new
 
     def _associate_lines(self, obs: Observations):
@@ -309,6 +353,13 @@ class SlamFilter:
         except np.linalg.LinAlgError:
             return False
         return True
+
+
+def _pose_residual(z: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """z - h for stacked pose measurements whose last row is a heading (wrapped)."""
+    y = np.asarray(z, float).reshape(-1, 1) - np.asarray(h, float).reshape(-1, 1)
+    y[-1, 0] = wrap(y[-1, 0])
+    return y
 
 
 def _point_segment_distance(p: np.ndarray, seg: np.ndarray) -> np.ndarray:

@@ -13,6 +13,14 @@ import numpy as np
 ROBOT_DIM = 5  # X, Y, Phi, V, w
 
 
+def chi2_quantile(probability: float, dof: int) -> float:
+    """Quantile of the chi-square distribution (``scipy.stats.chi2.ppf`` without importing
+    scipy.stats, which takes a second): ``2 * gammaincinv(dof / 2, p)``."""
+    from scipy.special import gammaincinv
+
+    return float(2.0 * gammaincinv(0.5 * dof, probability))
+
+
 def wrap(angle: np.ndarray | float) -> np.ndarray | float:
     """Wrap angles (rad) to (-pi, pi]."""
     a = np.asarray(angle, dtype=float)

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from features.types import FeatureSet
+from lms200 import Scan
 
 from .config import SlamConfig
 
@@ -25,6 +26,7 @@ class Observations:
         line_ends: (m, 4) segment endpoints x0, y0, x1, y1 (m).
         corners: (k, 2) x, y (m).
         corner_cov: (k, 2, 2) covariance of (x, y).
+        points: (p, 2) the scan's valid points (m), used only to check a pre-alignment.
     """
 
     lines: np.ndarray = field(default_factory=lambda: _empty((0, 2)))
@@ -32,6 +34,7 @@ class Observations:
     line_ends: np.ndarray = field(default_factory=lambda: _empty((0, 4)))
     corners: np.ndarray = field(default_factory=lambda: _empty((0, 2)))
     corner_cov: np.ndarray = field(default_factory=lambda: _empty((0, 2, 2)))
+    points: np.ndarray = field(default_factory=lambda: _empty((0, 2)))
 
     @property
     def line_lengths(self) -> np.ndarray:
@@ -39,9 +42,10 @@ class Observations:
         return np.hypot(e[:, 2] - e[:, 0], e[:, 3] - e[:, 1])
 
 
-def from_features(fs: FeatureSet, config: SlamConfig) -> Observations:
+def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) -> Observations:
     """Keep the lines with enough support; their covariance is the extractor's (where finite and
-    positive definite) plus the floor ``diag(sigma_rho^2, sigma_alpha_obs^2)``."""
+    positive definite) plus the floor ``diag(sigma_rho^2, sigma_alpha_obs^2)``. With ``scan``, its
+    valid points (every ``point_stride``-th) come along for checking pre-alignments."""
     floor = np.diag([config.sigma_rho**2, config.sigma_alpha_obs**2])
     lines, covs, ends = [], [], []
     for ln in fs.lines:
@@ -66,4 +70,11 @@ def from_features(fs: FeatureSet, config: SlamConfig) -> Observations:
         np.array(ends, float).reshape(-1, 4),
         np.array(corners, float).reshape(-1, 2),
         np.array(ccov, float).reshape(-1, 2, 2),
+        scan_points(scan, config.point_stride) if scan is not None else np.zeros((0, 2)),
     )
+
+
+def scan_points(scan: Scan, stride: int = 2) -> np.ndarray:
+    """(p, 2) valid points of the scan in the sensor frame (m), every ``stride``-th beam."""
+    pts = scan.points[::stride]
+    return pts[np.isfinite(pts[:, 0])]

@@ -152,6 +152,6 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
     def steps():
         for rec in records:
             fs = extract(rec.scan, method=config.extractor, **config.extractor_params)
-            yield rec.scan.stamp, from_features(fs, config), rec.odom, rec.truth
+            yield rec.scan.stamp, from_features(fs, config, rec.scan), rec.odom, rec.truth
 
     return run_steps(steps(), config)

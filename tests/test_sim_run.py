@@ -138,14 +138,16 @@ def _simulate(out: Path, *extra: str) -> subprocess.CompletedProcess:
 
 
 def test_simulate_command_files_and_determinism(tmp_path: Path) -> None:
-    a, b = tmp_path / "a", tmp_path / "b"
+    a, c = tmp_path / "a", tmp_path / "c"
     run = _simulate(a)
     assert run.returncode == 0, run.stderr
     assert run.stdout.startswith("simulated 112 scans") and run.stderr == ""
-    assert _simulate(b).returncode == 0
-    names = ["scans.clf", "groundtruth.tum", "world.json", "config.yaml", "map.png"]
-    for name in names:
-        assert (a / name).read_bytes() == (b / name).read_bytes(), name
+    # a second run from the written config.yaml: the same files, byte for byte
+    rerun = subprocess.run([sys.executable, "-m", "experiments.cli", "simulate", "--config", str(a / "config.yaml"),
+                            "--out", str(c)], capture_output=True, text=True, env={"PYTHONPATH": str(ROOT)})
+    assert rerun.returncode == 0, rerun.stderr
+    for name in ["scans.clf", "groundtruth.tum", "world.json", "config.yaml", "map.png"]:
+        assert (a / name).read_bytes() == (c / name).read_bytes(), name
     recs = list(read_log(a / "scans.clf"))
     stamps, poses = read_tum(a / "groundtruth.tum")
     assert len(recs) == len(stamps) == 112
@@ -154,16 +156,13 @@ def test_simulate_command_files_and_determinism(tmp_path: Path) -> None:
     assert np.allclose([r.scan.stamp for r in recs], stamps)
     direct = simulate_records("office", seed=2, duration=3.0)
     assert np.allclose(recs[7].scan.ranges, direct[7].scan.ranges, equal_nan=True)
-    assert World.from_json(a / "world.json").walls.shape == make_world("office", 2).walls.shape
-    # rerun from config.yaml: same scans
-    c = tmp_path / "c"
-    rerun = subprocess.run([sys.executable, "-m", "experiments.cli", "simulate", "--config", str(a / "config.yaml"),
-                            "--out", str(c)], capture_output=True, text=True, env={"PYTHONPATH": str(ROOT)})
-    assert rerun.returncode == 0, rerun.stderr
-    assert (c / "scans.clf").read_bytes() == (a / "scans.clf").read_bytes()
+    assert np.allclose(World.from_json(a / "world.json").walls, make_world("office", 2).walls)
 
 
-def test_simulate_command_errors(tmp_path: Path) -> None:
-    cmd = [sys.executable, "-m", "experiments.cli", "simulate", "--world", "moon", "--out", str(tmp_path)]
-    run = subprocess.run(cmd, capture_output=True, text=True, env={"PYTHONPATH": str(ROOT)})
-    assert run.returncode == 2 and "unknown world 'moon'" in run.stderr
+def test_simulate_command_errors(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    from experiments.cli import main
+    assert main(["simulate", "--world", "moon", "--out", str(tmp_path)]) == 2
+    assert "unknown world 'moon'" in capsys.readouterr().err
+    assert main(["simulate", "--world", "office", "--duration", "0", "--out", str(tmp_path)]) == 2
+    assert "--duration must be > 0" in capsys.readouterr().err
+    assert main(["simulate", "--world", str(tmp_path / "none.json"), "--out", str(tmp_path)]) == 2

@@ -39,6 +39,18 @@ def test_v_screen_corner_angles() -> None:
     assert len(convex_obtuse) >= 1  # outside of the 135 deg V screen
 
 
+def test_walls_only_world_json_is_simulated_on_boxes_behind_its_faces(tmp_path) -> None:
+    (tmp_path / "w.json").write_text('{"walls": [[0, 0, 0, 4], [0, 4, 5, 4], [5, 4, 5, 0], [5, 0, 0, 0]], '
+                                     '"circles": [[2.5, 2.0, 0.3]], "corners": []}')
+    w = World.from_json(tmp_path / "w.json")
+    from sim.lidar import LMS200Sim
+    with LMS200Sim(w, SensorConfig.ideal()) as lidar:
+        scan = lidar.scan_at((1.0, 2.0, 0.0))
+    assert scan.ranges[180] == pytest.approx(1.5 - 0.3, abs=1e-9)  # the circle, straight ahead
+    assert scan.ranges[0] == pytest.approx(2.0, abs=1e-9)  # the wall y = 0, to the right
+    assert scan.ranges[360] == pytest.approx(2.0, abs=1e-9)  # the wall y = 4, to the left
+
+
 def test_world_json_round_trip(tmp_path) -> None:
     w = make_world("office", seed=2)
     w.to_json(tmp_path / "world.json")

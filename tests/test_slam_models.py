@@ -98,3 +98,10 @@ def test_covariance_prediction_matches_monte_carlo():
     # the classic mistake G^T P G (transposed Jacobians) does not pass this test
     wrong = F.T @ P0 @ F + m.motion_noise(x0, dt, sa, sal, sl)
     assert np.abs((mc - wrong) / np.outer(sd, sd)).max() > 0.1
+
+
+def test_chi2_quantile_matches_scipy():
+    from scipy.stats import chi2
+
+    for p, k in [(0.99, 2), (0.999, 1), (0.999, 3), (0.95, 10), (0.5, 4)]:
+        assert m.chi2_quantile(p, k) == pytest.approx(chi2.ppf(p, k), rel=1e-10)

@@ -1,0 +1,244 @@
+"""Driver of a SLAM run: load an input (simulator folder, CARMEN log, bag), run ``slam.run_slam``
+with a progress bar and timing, score it against whatever reference the input has, write results.
+
+Outputs in ``out``: trajectory.tum (one pose per input scan, the input's own stamps), map.json,
+metrics.json, config.yaml, slam.png.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+
+from lms200 import LmsbenchError, read_log, read_tum, write_tum
+from lms200.records import Record
+from slam import SlamConfig, SlamResult, run_slam
+from slam.metrics import Alignment2D, ate, map_error, read_relations, relations_error, rpe
+
+#: Published mean absolute translational relation errors on MIT CSAIL (Kummerle et al. 2009) and
+#: the raw odometry measured on the log (see ../shared/data/README.md), metres.
+MIT_ANCHORS = {"scan matching": 0.106, "GMapping": 0.049, "raw odometry": 1.70}
+
+
+@dataclass
+class SlamInput:
+    """What a SLAM run reads: the records and the references found beside them."""
+
+    name: str
+    records: list[Record]
+    truth: np.ndarray | None = None  # (n, 4) t, x, y, theta
+    walls: np.ndarray | None = None  # (k, 4) true wall segments, world frame
+    relations: np.ndarray | None = None  # (m, 5) t1, t2, x, y, yaw
+    sources: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def odometry(self) -> np.ndarray | None:
+        """(n, 4) t, x, y, theta of the records' raw odometry, or None where any is missing."""
+        if not self.records or any(r.odom is None for r in self.records):
+            return None
+        return np.array([(r.scan.stamp, *r.odom) for r in self.records], float)
+
+
+def _relations_beside(path: Path) -> Path | None:
+    stem = path.name
+    for suffix in (".gz", ".clf", ".log", ".carmen"):
+        if stem.endswith(suffix):
+            stem = stem[: -len(suffix)]
+    candidate = path.with_name(stem + ".relations")
+    return candidate if candidate.is_file() else None
+
+
+def load_input(path: str | Path, relations: str | Path | None = None, every: int = 1,
+               max_scans: int | None = None) -> SlamInput:
+    """Read a simulator output folder (scans.clf, groundtruth.tum, world.json), a CARMEN log or a
+    bag; keep every ``every``-th scan, at most ``max_scans``. Relations come from ``relations`` or
+    a ``NAME.relations`` file beside a log.
+
+    Raises:
+        FileNotFoundError: the input does not exist.
+        LmsbenchError: a folder without scans.clf, or an input without scans.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"no such input: {p}")
+    if every < 1:
+        raise LmsbenchError(f"--every must be >= 1, got {every}")
+    sources: dict[str, str] = {}
+    truth = walls = rel = None
+    if p.is_dir() and (p / "scans.clf").is_file():
+        log = p / "scans.clf"
+        if (p / "groundtruth.tum").is_file():
+            stamps, poses = read_tum(p / "groundtruth.tum")
+            truth = np.column_stack((stamps, poses))
+            sources["truth"] = str(p / "groundtruth.tum")
+        if (p / "world.json").is_file():
+            try:
+                walls = np.asarray(json.loads((p / "world.json").read_text())["walls"], float).reshape(-1, 4)
+                sources["walls"] = str(p / "world.json")
+            except (KeyError, ValueError) as exc:
+                raise LmsbenchError(f"{p / 'world.json'}: no wall list ({exc})") from None
+    elif p.is_dir() and not (p / "metadata.yaml").is_file():
+        raise LmsbenchError(f"{p}: a folder input must hold scans.clf (a simulator output) or be a ROS 2 bag")
+    else:
+        log = p
+    sources["scans"] = str(log)
+    rel_path = Path(relations) if relations else (_relations_beside(p) if p.is_file() else None)
+    if rel_path is not None:
+        rel = read_relations(rel_path)
+        sources["relations"] = str(rel_path)
+    records = []
+    for k, rec in enumerate(read_log(log)):
+        if k % every == 0:
+            records.append(rec)
+            if max_scans is not None and len(records) >= max_scans:
+                break
+    if not records:
+        raise LmsbenchError(f"{log}: no laser scans found")
+    if truth is None and all(r.truth is not None for r in records):
+        truth = np.array([(r.scan.stamp, *r.truth) for r in records], float)
+        sources["truth"] = f"{log} (TRUEPOS)"
+    return SlamInput(p.name, records, truth, walls, rel, sources)
+
+
+def score(traj: np.ndarray, data: SlamInput, result: SlamResult | None = None) -> dict[str, Any]:
+    """Every score the input's references allow, as plain numbers."""
+    out: dict[str, Any] = {}
+    if data.truth is not None:
+        a = ate(traj, data.truth)
+        out["ate"] = a.as_dict()
+        out["rpe_1m"] = rpe(traj, data.truth, 1.0).as_dict()
+        if result is not None and data.walls is not None:
+            out["map"] = map_error(result.map_lines[:, 2:6], data.walls, Alignment2D(a.rotation, a.translation)).as_dict()
+    if data.relations is not None:
+        out["relations"] = relations_error(traj, data.relations).as_dict()
+    return out
+
+
+@dataclass
+class SlamRun:
+    """A finished run: the result, its scores, the baselines' scores, timing."""
+
+    result: SlamResult
+    metrics: dict[str, Any]
+    seconds: float
+
+
+def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_baseline: bool = True) -> SlamRun:
+    """Run the filter over ``data`` (timed: feature extraction + filter), score it, and score the
+    baselines: the raw odometry and, with ``odometry_baseline``, the filter driven by odometry."""
+    records: Iterable[Record] = data.records
+    if progress:
+        from tqdm import tqdm
+
+        records = tqdm(data.records, desc="slam", unit="scan", leave=False)
+    t0 = time.perf_counter()
+    result = run_slam(records, config)
+    seconds = time.perf_counter() - t0
+    d = result.diagnostics
+    table = [{"source": "slam (odometry)" if config.use_odometry else "slam", **_flat(score(result.trajectory, data, result))}]
+    odo = data.odometry
+    if odo is not None:
+        table.append({"source": "raw odometry", **_flat(score(odo, data))})
+        if odometry_baseline and not config.use_odometry:
+            with_odo = run_slam(data.records, dataclasses.replace(config, use_odometry=True))
+            table.append({"source": "slam (odometry)", **_flat(score(with_odo.trajectory, data, with_odo))})
+    metrics = {
+        "input": data.sources,
+        "n_scans": len(data.records),
+        "seconds": seconds,
+        "scans_per_s": len(data.records) / seconds if seconds > 0 else float("nan"),
+        "consistency": {
+            "diverged": bool(d["diverged"]),
+            "diverged_at": d["diverged_at"],
+            "healthy": bool(d["healthy"]),
+            "mean_nis_per_dof": d["mean_nis_per_dof"],
+            "mean_nees": d["mean_nees"],
+            "prealign_fraction": float(np.mean(d["prealign_used"])),
+        },
+        "landmarks": {"lines": int(result.map_lines.shape[0]), "corners": int(result.map_corners.shape[0])},
+        **score(result.trajectory, data, result),
+        "table": table,
+    }
+    if data.relations is not None and "mit" in data.name.lower():
+        metrics["anchors_relations_trans_mean_m"] = MIT_ANCHORS
+    return SlamRun(result, metrics, seconds)
+
+
+def _flat(scores: dict[str, Any]) -> dict[str, float]:
+    keep = {"ate": ("rmse", "mean", "max"), "rpe_1m": ("trans_rmse", "rot_rmse"), "map": ("distance_mean", "matched"),
+            "relations": ("trans_mean", "trans_std", "rot_mean_deg", "rot_std_deg")}
+    return {f"{k}_{f}": scores[k][f] for k, fields in keep.items() if k in scores for f in fields}
+
+
+def write_outputs(out: Path, data: SlamInput, config: SlamConfig, slam_run: SlamRun) -> None:
+    """trajectory.tum, map.json, metrics.json, config.yaml, slam.png in ``out``."""
+    import yaml
+
+    out.mkdir(parents=True, exist_ok=True)
+    res = slam_run.result
+    write_tum(out / "trajectory.tum", res.trajectory[:, 0], res.trajectory[:, 1:])
+    (out / "map.json").write_text(json.dumps(res.map_dict(), indent=1) + "\n")
+    (out / "metrics.json").write_text(json.dumps(_jsonable(slam_run.metrics), indent=2) + "\n")
+    (out / "config.yaml").write_text(yaml.safe_dump({"input": data.sources, "slam": config.to_dict()}, sort_keys=False))
+    plot(out / "slam.png", data, res)
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        return None if not np.isfinite(value) else float(value)
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+def plot(path: Path, data: SlamInput, res: SlamResult) -> None:
+    """Trajectory and map lines, over the ground truth (aligned into its frame) where there is one."""
+    try:
+        from experiments.style import apply_style, equal_axes
+    except ImportError:  # pragma: no cover - the style module is part of the project
+        apply_style = equal_axes = None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if apply_style:
+        apply_style()
+    fig, ax = plt.subplots(figsize=(7, 6))
+    al = Alignment2D(0.0, (0.0, 0.0))
+    if data.truth is not None:
+        a = ate(res.trajectory, data.truth)
+        al = Alignment2D(a.rotation, a.translation)
+        if data.walls is not None:
+            for w in data.walls:
+                ax.plot(w[[0, 2]], w[[1, 3]], color="0.75", lw=1.0)
+        ax.plot(data.truth[:, 1], data.truth[:, 2], color="k", lw=1.0, label="ground truth")
+    xy = al.apply(res.trajectory[:, 1:3])
+    for ln in res.map_lines:
+        ends = al.apply(ln[2:6].reshape(2, 2))
+        ax.plot(ends[:, 0], ends[:, 1], color="#1f77b4", lw=1.5)
+    ax.plot(xy[:, 0], xy[:, 1], color="#8c564b", lw=1.0, label="slam trajectory")
+    if res.map_corners.size:
+        c = al.apply(res.map_corners[:, :2])
+        ax.plot(c[:, 0], c[:, 1], "o", color="#2ca02c", ms=3, label="corner landmarks")
+    ax.plot([], [], color="#1f77b4", lw=1.5, label="line landmarks")
+    ax.set_title(f"{data.name}: {len(data.records)} scans, {res.map_lines.shape[0]} lines")
+    ax.legend(loc="best")
+    if equal_axes:
+        equal_axes(ax)
+    else:
+        ax.set_aspect("equal")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

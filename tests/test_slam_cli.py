@@ -1,0 +1,86 @@
+"""`lmsbench slam` end to end on a short simulated run, and SLAM on the simulator's scans."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lms200 import read_tum, write_log, write_tum
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def sim_folder(tmp_path_factory) -> Path:
+    """A 6 s office run written the way `lmsbench simulate` lays out its folder."""
+    from sim import make_world, simulate_records
+
+    out = tmp_path_factory.mktemp("sim")
+    records = simulate_records("office", seed=1, duration=6.0)
+    write_log(out / "scans.clf", records)
+    truth = np.array([(r.scan.stamp, *r.truth) for r in records])
+    write_tum(out / "groundtruth.tum", truth[:, 0], truth[:, 1:])
+    make_world("office", seed=1).to_json(out / "world.json")
+    return out
+
+
+def test_slam_command_writes_every_output(sim_folder, tmp_path):
+    out = tmp_path / "run"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run([sys.executable, "-m", "experiments.cli", "slam", str(sim_folder), "--out", str(out), "--quiet"],
+                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    for name in ("trajectory.tum", "map.json", "metrics.json", "config.yaml", "slam.png"):
+        assert (out / name).is_file(), name
+    stamps, poses = read_tum(out / "trajectory.tum")
+    true_stamps, _ = read_tum(sim_folder / "groundtruth.tum")
+    np.testing.assert_allclose(stamps, true_stamps, atol=1e-6)  # one pose per scan, the input's stamps
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["n_scans"] == stamps.size
+    assert m["ate"]["rmse"] < 0.1  # a short run in the simulated office stays on track
+    assert not m["consistency"]["diverged"]
+    lines = json.loads((out / "map.json").read_text())["lines"]
+    assert len(lines) == m["landmarks"]["lines"] > 3
+    assert m["map"]["distance_mean"] < 0.1
+
+
+def test_slam_command_errors_are_one_line(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run([sys.executable, "-m", "experiments.cli", "slam", str(tmp_path / "nothing"), "--out", str(tmp_path / "o")],
+                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
+    assert proc.returncode == 2 and "no such input" in proc.stderr
+    (tmp_path / "empty").mkdir()
+    proc = subprocess.run([sys.executable, "-m", "experiments.cli", "slam", str(tmp_path / "empty"), "--out", str(tmp_path / "o")],
+                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
+    assert proc.returncode == 2 and "scans.clf" in proc.stderr
+
+
+def test_decimated_input_and_odometry_rows(sim_folder):
+    from slam import SlamConfig
+
+    from experiments.slamrun import load_input, run
+
+    data = load_input(sim_folder, every=3)
+    assert len(data.records) == 75 and data.odometry is None
+    result = run(data, SlamConfig(), progress=False)
+    assert [row["source"] for row in result.metrics["table"]] == ["slam"]
+    assert result.metrics["ate"]["rmse"] < 0.15
+
+
+@pytest.mark.shared_data
+def test_mit_relations_of_raw_odometry_match_the_published_anchor(shared_data):
+    from slam.metrics import read_relations, relations_error
+
+    from experiments.slamrun import load_input
+
+    data = load_input(shared_data / "mit-csail.clf.gz")
+    assert data.relations is not None and data.relations.shape == (1172, 5)
+    r = relations_error(data.odometry, data.relations)
+    assert r.n == 1172 and r.n_skipped == 0
+    assert r.trans_mean == pytest.approx(1.70, abs=0.05)  # Kummerle et al.'s raw odometry on this log
