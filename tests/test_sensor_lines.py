@@ -185,8 +185,8 @@ def test_acute_remedy_is_switchable_and_measures_range_variance() -> None:
     lo, hi = c.index - 3, c.index + 3
     expected = float(np.var(scan.ranges[lo : hi + 1]))
     assert neighbourhood_var(scan.ranges, scan.valid, lo, hi) == pytest.approx(expected, rel=1e-12)
-    # off by default; on, a corner whose neighbouring ranges vary less than the threshold goes
-    assert len(extract(scan, acute_check=True).corners) == 2
+    # on by default (harmless at 1 sigma_r^2); a corner whose neighbouring ranges vary less than the threshold goes
+    assert len(extract(scan).corners) == 2 and len(extract(scan, acute_check=False).corners) == 2
     threshold = expected / 0.005**2 * 1.01  # just above this corner's variance (in sigma_r^2)
     kept = extract(scan, acute_check=True, acute_min_var=threshold).corners
     assert all(abs(k.index - c.index) > 1 for k in kept)

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import matplotlib.pyplot as plt
 from matplotlib.ticker import FormatStrFormatter
 
 from experiments.style import (CORNER_COLOR, LINE_COLOR, SCAN_COLOR, TRUTH_COLOR, equal_axes, method_color,
@@ -125,21 +126,33 @@ def fig_accuracy_speed(summary: pd.DataFrame, stem: Path, accuracy: str = "f1") 
 
 
 def fig_sweep(table: pd.DataFrame, x: str, y: str, stem: Path, hue: str | None = None,
-              title: str = "") -> list[Path]:
-    """A sweep plot: metric ``y`` (mean over seeds, +/- one std) against parameter ``x``, a line per ``hue``."""
+              facet: str | None = None, title: str = "") -> list[Path]:
+    """A sweep plot: metric ``y`` (mean over seeds, +/- one std) against parameter ``x``, a line per
+    value of ``hue``, a panel per value of ``facet``. Failed cells are left out."""
     ok = table[table["status"] == "ok"] if "status" in table else table
-    keys = [c for c in (hue, x) if c]
+    keys = [c for c in (facet, hue, x) if c]
     stats = ok.groupby(keys, dropna=False)[y].agg(["mean", "std", "count"]).reset_index()
-    fig, ax = new_figure(height=3.6)
-    groups = stats.groupby(hue, sort=True, dropna=False) if hue else [(None, stats)]
-    for value, group in groups:
-        label = f"{hue} = {value}" if hue else y
-        color = method_color(str(value)) if hue in ("method", "extractor") else None
-        ax.errorbar(group[x], group["mean"], yerr=group["std"].fillna(0.0), fmt="o-", ms=4, capsize=2,
-                    lw=1.0, label=label, color=color)
-    ax.set_xlabel(x)
-    ax.set_ylabel(f"{y} (mean +/- std over seeds)")
-    ax.set_title(title or f"{y} against {x}")
+    panels = list(stats.groupby(facet, sort=True)) if facet else [(None, stats)]
+    fig, axes = new_figure(1, len(panels), width=min(4.2 * len(panels), 13), height=3.6, squeeze=False,
+                           sharey=True)
+    hue_values = sorted(stats[hue].unique()) if hue else [None]
+    cmap = plt.get_cmap("viridis", max(2, len(hue_values)))
+    for ax, (facet_value, panel) in zip(axes.ravel(), panels):
+        groups = panel.groupby(hue, sort=True) if hue else [(None, panel)]
+        for value, group in groups:
+            if hue in ("method", "extractor"):
+                color = method_color(str(value))
+            elif hue:
+                color = cmap(hue_values.index(value) / max(1, len(hue_values) - 1))
+            else:
+                color = None
+            ax.errorbar(group[x], group["mean"], yerr=group["std"].fillna(0.0), fmt="o-", ms=4, capsize=2,
+                        lw=1.0, label=f"{value}" if hue else y, color=color)
+        ax.set_xlabel(x)
+        if facet:
+            ax.set_title(f"{facet} = {facet_value}", fontsize=9)
+    axes.ravel()[0].set_ylabel(f"{y} (mean +/- std over seeds)")
     if hue:
-        ax.legend(loc="best", fontsize=7)
+        axes.ravel()[-1].legend(title=hue, loc="best", fontsize=7, title_fontsize=7)
+    fig.suptitle(title or f"{y} against {x}")
     return save_figure(fig, stem, data=stats)

@@ -57,9 +57,9 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
 
 
 def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
-    """Plots of one sweep folder: each metric against the first grid parameter, one line per
-    combination of the other grid parameters (mean +/- std over seeds and random draws; a linked
-    grid key "a,b" counts as its first name)."""
+    """Plots of one sweep folder: each metric against the first grid parameter, a line per value
+    of the second, a panel per value of the third (or combination of the rest); mean +/- std over
+    seeds and random draws. A linked grid key "a,b" counts as its first name."""
     table = pd.read_parquet(folder / "results.parquet")
     spec = yaml.safe_load((folder / "sweep.yaml").read_text())
     name = spec.get("name", folder.name)
@@ -71,13 +71,18 @@ def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
     if not varied:
         return {}
     x, rest = varied[0], varied[1:]
-    hue = rest[0] if len(rest) == 1 else None
-    if len(rest) > 1:  # one line per combination, labelled "a=1, b=2"
-        hue = ", ".join(rest)
-        table = table.assign(**{hue: table[rest].apply(lambda r: ", ".join(f"{k}={v}" for k, v in r.items()), axis=1)})
+    hue = rest[0] if rest else None
+    facet = None
+    if len(rest) == 2:
+        facet = rest[1]
+    elif len(rest) > 2:  # one panel per combination of the remaining parameters
+        facet = ", ".join(rest[1:])
+        table = table.assign(**{facet: table[rest[1:]].astype(object).apply(
+            lambda r: ", ".join(f"{k}={v}" for k, v in r.items()), axis=1)})
     written = {}
     for metric in SWEEP_METRICS:
         if metric in table and table[metric].notna().any():
             stem = f"sweep_{name}_{metric}"
-            written[stem] = draw.fig_sweep(table, x, metric, out / stem, hue=hue, title=f"{name}: {metric} against {x}")
+            written[stem] = draw.fig_sweep(table, x, metric, out / stem, hue=hue, facet=facet,
+                                           title=f"{name}: {metric} against {x}")
     return written

@@ -55,43 +55,49 @@ def _new_line(rho, alpha, start, end, first, last, cov, n_points) -> Line:  # no
 def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
     """Lines and corners of ``scan`` in its sensor frame (the registered run function)."""
     _check(cfg)
+    with np.errstate(all="ignore"):
+        return _extract(scan, cfg)
+
+
+def _extract(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
     ranges = scan.ranges
     bearings = scan.angles
-    with np.errstate(all="ignore"):
-        sig = compute(
-            ranges, bearings, scan.angle_increment, int(cfg.k), max(scan.range_min, cfg.min_range), scan.range_max,
-            cfg.sigma_r,
-        )
-        table = find_lines(sig, ranges, bearings, scan.angle_min, scan.angle_increment, cfg)
-        if table.rho.size == 0:
-            return FeatureSet([], [], METHOD)
+    sig = compute(
+        ranges, bearings, scan.angle_increment, int(cfg.k), max(scan.range_min, cfg.min_range), scan.range_max,
+        cfg.sigma_r,
+    )
+    table = find_lines(sig, ranges, bearings, scan.angle_min, scan.angle_increment, cfg)
+    if table.rho.size == 0:
+        return FeatureSet([], [], METHOD)
+    if table.rho.size > 1:
         invalid_cum = np.concatenate(([0], np.cumsum(~sig.valid)))
         table = merge_neighbours(table, invalid_cum, cfg)
-        first, last = table.first.copy(), table.last.copy()
-        resolve_overlaps(first, last)
-        p0 = endpoints(table.rho, table.alpha, ranges, bearings, first)
-        p1 = endpoints(table.rho, table.alpha, ranges, bearings, last)
-        keep = np.hypot(*(p1 - p0).T) >= cfg.min_length
-        keep &= np.isfinite(p0).all(axis=1) & np.isfinite(p1).all(axis=1)
-        idx = np.flatnonzero(keep)
-        rho = table.rho[idx].tolist()
-        alpha = table.alpha[idx].tolist()
-        first_l = first[idx].tolist()
-        last_l = last[idx].tolist()
-        n_pts = np.minimum(table.n_points, last - first + 1)[idx].tolist()
-        start = list(map(tuple, p0[idx].tolist()))
-        end = list(map(tuple, p1[idx].tolist()))
-        covs = table.cov[idx]
-        lines = [
-            _new_line(rho[m], alpha[m], start[m], end[m], first_l[m], last_l[m], covs[m], n_pts[m])
-            for m in range(len(rho))
-        ]
-        corners = []
-        if cfg.corners and len(lines) > 1:
-            corners = find_corners(
-                rho, alpha, first_l, last_l, start, end, sig.psi, ranges, bearings, sig.valid,
-                scan.angle_min, scan.angle_increment, cfg,
-            )
+    first, last = table.first.copy(), table.last.copy()
+    resolve_overlaps(first, last)
+    n_lines = first.size
+    ends = endpoints(np.tile(table.rho, 2), np.tile(table.alpha, 2), ranges, bearings, np.concatenate((first, last)))
+    p0, p1 = ends[:n_lines], ends[n_lines:]
+    d = p1 - p0
+    keep = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] >= cfg.min_length * cfg.min_length  # nan -> dropped
+    idx = np.flatnonzero(keep)
+    rho = table.rho[idx].tolist()
+    alpha = table.alpha[idx].tolist()
+    first_l = first[idx].tolist()
+    last_l = last[idx].tolist()
+    n_pts = np.minimum(table.n_points, last - first + 1)[idx].tolist()
+    start = list(map(tuple, p0[idx].tolist()))
+    end = list(map(tuple, p1[idx].tolist()))
+    covs = table.cov[idx]
+    lines = [
+        _new_line(rho[m], alpha[m], start[m], end[m], first_l[m], last_l[m], covs[m], n_pts[m])
+        for m in range(len(rho))
+    ]
+    corners = []
+    if cfg.corners and len(lines) > 1:
+        corners = find_corners(
+            rho, alpha, first_l, last_l, start, end, sig.psi, ranges, bearings, sig.valid,
+            scan.angle_min, scan.angle_increment, cfg,
+        )
     return FeatureSet(lines, corners, METHOD)
 
 

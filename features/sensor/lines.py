@@ -88,7 +88,7 @@ def fit_spans(
     d = np.where(ok, ranges[beam], 0.0)  # invalid beams (in merged spans) get no weight and no nan
     b = bearings[beam]
     sigma = cfg.sigma_r
-    s1 = gauss_newton(d, b, run_id, starts, ok if inlier0 is None else ok & inlier0, rho, alpha, sigma)
+    s1 = gauss_newton(d, b, run_id, starts, ok if inlier0 is None else ok & inlier0, rho, alpha, sigma, with_cov=False)
     s2 = gauss_newton(d, b, run_id, starts, ok, s1.rho, s1.alpha, sigma, cfg.inlier_tau)
     rho, alpha, cov, z = s2.rho, s2.alpha, s2.cov, s2.z
     inl = s2.weight > 0
