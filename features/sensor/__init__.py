@@ -8,8 +8,6 @@ segments (``segments``) -> corners where two segments meet (``corners``).
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 import numpy as np
 
 from lms200 import Scan
@@ -27,9 +25,14 @@ __all__ = ["SensorMethodConfig", "extract_sensor", "signals"]
 METHOD = "sensor"
 
 
-@lru_cache(maxsize=32)
+_CHECKED: dict[int, SensorMethodConfig] = {}  # id -> config already checked (kept alive here)
+
+
 def _check(cfg: SensorMethodConfig) -> SensorMethodConfig:
-    """Raise ValueError naming the field when the configuration cannot work."""
+    """Raise ValueError naming the field when the configuration cannot work (once per config
+    object: hashing a 30-field dataclass on every scan would cost more than the check)."""
+    if _CHECKED.get(id(cfg)) is cfg:
+        return cfg
     if not isinstance(cfg.k, (int, np.integer)) or cfg.k < 1:
         raise ValueError(f"k: must be an integer >= 1, got {cfg.k!r}")
     if not cfg.sigma_r > 0:
@@ -40,6 +43,9 @@ def _check(cfg: SensorMethodConfig) -> SensorMethodConfig:
         raise ValueError(f"hough_angles: must be an odd integer >= 1, got {cfg.hough_angles!r}")
     if cfg.min_points < 3:
         raise ValueError(f"min_points: must be >= 3, got {cfg.min_points!r}")
+    if len(_CHECKED) > 64:
+        _CHECKED.clear()
+    _CHECKED[id(cfg)] = cfg
     return cfg
 
 
