@@ -256,3 +256,15 @@ def test_the_cli_uses_an_existing_scheduler_and_matches_in_process(tmp_path, das
     remote = pd.read_parquet(tmp_path / "out" / "results.parquet")
     local = run_sweep(make_spec(log, xs=[2, 3, 4]), tmp_path / "inproc", "inprocess", progress=False).table
     pd.testing.assert_frame_equal(comparable(remote), comparable(local))
+
+
+def test_cli_errors_are_one_line_with_exit_status_2(tmp_path, capsys):
+    from experiments.cli import main
+
+    assert main(["sweep", str(tmp_path / "missing.yaml"), "--local"]) == 2
+    assert "missing.yaml" in capsys.readouterr().err
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("kind: extract\ngrid:\n  x: []\n")
+    assert main(["sweep", str(bad), "--local", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bad.yaml: grid.x is empty" in err

@@ -40,7 +40,7 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
         written["fig5_theta"] = draw.fig_signal(sig, "theta_deg", "theta_i (deg)",
                                                 "Fig. 5: theta_i (line normal angle) of the scan", out / "fig5_theta")
         written["fig6_psi"] = draw.fig_signal(sig, "psi_deg", "psi_i (deg)",
-                                              f"Fig. 6: psi_i = theta_i - theta_i+{signals_k}", out / "fig6_psi")
+                                              f"Fig. 6: psi_i = theta_i - theta_(i+{signals_k})", out / "fig6_psi")
     if "timing" in tables:
         written["fig7_timing"] = draw.fig_timing(tables["timing"], out / "fig7_timing")
     for source, title in (("office", "Fig. 9: extracted features, simulated office"),

@@ -3,9 +3,10 @@
 found the fastest and among the most correct of six).
 
 Steps: adaptive breakpoints split the scan into clusters (Borges & Aldon 2004); each cluster is
-split recursively at the point farthest from its least-squares line; neighbours whose joint fit
-stays within noise are merged; every segment of enough points and length becomes a Line; corners
-come from the shared Cartesian corner step.
+split recursively while some point lies farther than the threshold from its least-squares line
+(at the point farthest from the chord, see ``splitting``); neighbours whose joint fit stays within
+noise are merged; end points off the fitted line are trimmed; every segment of enough points and
+length becomes a Line; corners come from the shared Cartesian corner step.
 """
 
 from __future__ import annotations
