@@ -190,3 +190,14 @@ def test_acute_remedy_is_switchable_and_measures_range_variance() -> None:
     threshold = expected / 0.005**2 * 1.01  # just above this corner's variance (in sigma_r^2)
     kept = extract(scan, acute_check=True, acute_min_var=threshold).corners
     assert all(abs(k.index - c.index) > 1 for k in kept)
+
+
+def test_cm_mode_scans_use_their_own_noise() -> None:
+    """A scan with range_max > 10 m (SICK cm codes) is treated with sigma_r_cm: the reported
+    covariance scales with the square of the noise std."""
+    mm = extract(cast(ROOM)).lines[0]  # range_max 8.183 m: mm codes
+    cm = extract(cast(ROOM, range_max=81.83)).lines[0]
+    assert cm.rho == pytest.approx(mm.rho, abs=1e-5)
+    np.testing.assert_allclose(cm.cov, mm.cov * (0.02 / 0.005) ** 2, rtol=1e-3)
+    same = extract(cast(ROOM, range_max=81.83), sigma_r_cm=0.005).lines[0]
+    np.testing.assert_allclose(same.cov, mm.cov, rtol=1e-3)

@@ -8,6 +8,8 @@ segments (``segments``) -> corners where two segments meet (``corners``).
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from lms200 import Scan
@@ -37,6 +39,8 @@ def _check(cfg: SensorMethodConfig) -> SensorMethodConfig:
         raise ValueError(f"k: must be an integer >= 1, got {cfg.k!r}")
     if not cfg.sigma_r > 0:
         raise ValueError(f"sigma_r: must be > 0 m, got {cfg.sigma_r!r}")
+    if not cfg.sigma_r_cm > 0:
+        raise ValueError(f"sigma_r_cm: must be > 0 m, got {cfg.sigma_r_cm!r}")
     if not isinstance(cfg.hough_subdiv, (int, np.integer)) or cfg.hough_subdiv < 1:
         raise ValueError(f"hough_subdiv: must be an integer >= 1, got {cfg.hough_subdiv!r}")
     if not isinstance(cfg.hough_angles, (int, np.integer)) or cfg.hough_angles < 1 or cfg.hough_angles % 2 == 0:
@@ -58,9 +62,27 @@ def _new_line(rho, alpha, start, end, first, last, cov, n_points) -> Line:  # no
     return line
 
 
+CM_MODE_RANGE_MAX = 10.0  # m: a scan with a larger range_max comes in SICK cm codes (1 cm steps)
+_CM_CONFIGS: dict[int, tuple[SensorMethodConfig, SensorMethodConfig]] = {}
+
+
+def _for_scan(cfg: SensorMethodConfig, scan: Scan) -> SensorMethodConfig:
+    """The config with ``sigma_r`` set for the scan's range units: ``sigma_r_cm`` for cm codes."""
+    if scan.range_max <= CM_MODE_RANGE_MAX or cfg.sigma_r_cm == cfg.sigma_r:
+        return cfg
+    hit = _CM_CONFIGS.get(id(cfg))
+    if hit is None or hit[0] is not cfg:
+        if len(_CM_CONFIGS) > 64:
+            _CM_CONFIGS.clear()
+        hit = (cfg, dataclasses.replace(cfg, sigma_r=cfg.sigma_r_cm))
+        _CM_CONFIGS[id(cfg)] = hit
+    return hit[1]
+
+
 def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
     """Lines and corners of ``scan`` in its sensor frame (the registered run function)."""
     _check(cfg)
+    cfg = _for_scan(cfg, scan)
     with np.errstate(all="ignore"):
         return _extract(scan, cfg)
 

@@ -15,7 +15,8 @@ class SensorMethodConfig:
     """
 
     k: int = 3  # half-width of the AD / slope window (eq. 4, 6), beams
-    sigma_r: float = 0.005  # range noise std of the sensor, m
+    sigma_r: float = 0.005  # range noise std of the sensor, m (SICK mm mode: range_max <= 10 m)
+    sigma_r_cm: float = 0.02  # range noise std used instead when range_max > 10 m (SICK cm mode, 1 cm codes), m
     min_range: float = 0.02  # ranges below this (or below the scan's range_min) are invalid, m
     ad_tau: float = 4.0  # |AD - (1 + 2 sum cos jD)| <= ad_tau * sigma_AD(beam) marks a line beam
     psi_split: float = 0.2  # a slope change |psi| above this splits a run (rad) ...
