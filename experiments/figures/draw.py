@@ -160,3 +160,15 @@ def fig_sweep(table: pd.DataFrame, x: str, y: str, stem: Path, hue: str | None =
         axes.ravel()[-1].legend(title=hue, loc="best", fontsize=7, title_fontsize=7)
     fig.suptitle(title or f"{y} against {x}")
     return save_figure(fig, stem, data=stats)
+
+
+def fig_sweep_scatter(table: pd.DataFrame, params: list[str], y: str, stem: Path, title: str = "") -> list[Path]:
+    """A random-search plot: metric ``y`` of every cell against each sampled parameter (a panel each)."""
+    ok = table[table["status"] == "ok"] if "status" in table else table
+    fig, axes = new_figure(1, len(params), width=min(3.6 * len(params), 14), height=3.4, squeeze=False, sharey=True)
+    for ax, name in zip(axes.ravel(), params):
+        ax.plot(ok[name], ok[y], "o", ms=4, color=method_color("sensor"), alpha=0.8)
+        ax.set_xlabel(name)
+    axes.ravel()[0].set_ylabel(y)
+    fig.suptitle(title or f"{y} against the sampled parameters")
+    return save_figure(fig, stem, data=ok[[*params, y]])

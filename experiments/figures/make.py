@@ -66,8 +66,11 @@ def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
     # one name per grid key: parameters linked to it ("a,b") follow it and need no line of their own
     varied = [key.split(",")[0].strip() for key in spec.get("grid", {})]
     varied = [n for n in varied if n in table and table[n].nunique() > 1]
-    if not varied:
-        varied = [n for n in spec.get("random", {}) if n in table]
+    sampled = [n for n in spec.get("random", {}) if n in table]
+    if not varied and sampled:  # a random search: each metric against each sampled parameter
+        return {f"sweep_{name}_{m}": draw.fig_sweep_scatter(table, sampled, m, out / f"sweep_{name}_{m}",
+                                                            title=f"{name}: {m} against the sampled parameters")
+                for m in SWEEP_METRICS if m in table and table[m].notna().any()}
     if not varied:
         return {}
     x, rest = varied[0], varied[1:]
