@@ -119,7 +119,7 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
             "matches of all scans against the faces visible from the true pose; `explained fraction` is the share "
             "of valid beams within 3 sigma of an extracted segment.",
         ])
-        for name, caption in (("accuracy_speed", "Accuracy (line F1) against time per scan, every extractor."),
+        for name, caption in (("accuracy_speed", "Accuracy (line F1, rho RMS error) against time per scan, every extractor."),
                               ("fig7_timing", "Fig. 7: processing time for successive scans, every method.")):
             if name in figs:
                 ext.text.append(figure(f"figures/{name}.png", caption))

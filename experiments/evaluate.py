@@ -66,12 +66,12 @@ def compare_records(records: Sequence[Record], truths: Sequence[Any] | None, met
 
 
 def summarise_table(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
-    """``experiments.compare.summarise`` plus time per scan in ms (median, 5 % and 95 %)."""
+    """``experiments.compare.summarise`` plus time per scan in ms (median, 5, 25, 75 and 95 %)."""
     from experiments.compare import summarise
 
     summary = summarise(table, reference=reference)
-    q = table.groupby(["source", "method"], sort=False)["time_ms"].quantile([0.05, 0.5, 0.95]).unstack()
-    q.columns = ["time_ms_p05", "time_ms_median", "time_ms_p95"]
+    q = table.groupby(["source", "method"], sort=False)["time_ms"].quantile([0.05, 0.25, 0.5, 0.75, 0.95]).unstack()
+    q.columns = ["time_ms_p05", "time_ms_p25", "time_ms_median", "time_ms_p75", "time_ms_p95"]
     return summary.merge(q.reset_index(), on=["source", "method"], how="left")
 
 
