@@ -58,10 +58,7 @@ def test_any_resolution_and_field_of_view(n: int, inc_deg: float) -> None:
     amin = -inc * (n - 1) / 2
     fs = extract(cast(ROOM, n=n, angle_min=amin, increment=inc))
     half_fov = inc * (n - 1) / 2
-    for rho, alpha in ROOM_LINES.values():
-        # a wall is in view when enough of it falls inside the field of view
-        b_end = np.arctan2(*{0.0: (2.0, 3.0)}.get(alpha, (0, 1))[::1]) if False else None
-        del b_end
+    # the side walls are in view only when the field of view reaches past the room's corners
     visible = [(3.0, 0.0)] + ([(2.0, np.pi / 2), (2.5, -np.pi / 2)] if half_fov > np.deg2rad(60) else [])
     for rho, alpha in visible:
         line = match(fs, rho, alpha)
