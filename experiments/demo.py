@@ -6,6 +6,7 @@ Also keeps :func:`room_scan`, an analytic room scan (exact ray casting), used by
 
 from __future__ import annotations
 
+import shutil
 import time
 from pathlib import Path
 from typing import Callable
@@ -46,7 +47,9 @@ def run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None = "local",
     if sweep_executor:
         spec = SweepSpec.from_dict(DEMO_SWEEP)
         log(f"== sweep {spec.name}: {len(spec.cells())} cells on {sweep_executor}")
-        result = run_sweep(spec, out / "sweeps" / spec.name, sweep_executor)
+        folder = out / "sweeps" / spec.name
+        shutil.rmtree(folder, ignore_errors=True)  # the demo recomputes everything, like the rest of it
+        result = run_sweep(spec, folder, sweep_executor)
         sweep_table = result.table
         log(f"   {result.computed} computed, {result.skipped} already done, {result.failed} failed")
     log("== figures")
