@@ -136,7 +136,7 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
             sig.text.append(figure(f"figures/{name}.png", caption))
     sections.append(sig)
     f9 = Section("Extracted features (Fig. 9)", [])
-    for name, caption in (("fig9_office", "Fig. 9: lines (red, * at the midpoint) and corners (diamonds), "
+    for name, caption in (("fig9_office", "Fig. 9: lines (red, a star at the midpoint) and corners (diamonds), "
                                           "simulated office, sensor frame."),
                           ("fig9_intel", "Fig. 9: the same on scans of the Intel Research Lab log (real data, "
                                          "180 beams at 1°, cm-mode ranges: the extractor is given sigma_r = 2 cm).")):
