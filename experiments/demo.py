@@ -53,7 +53,7 @@ def run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None = "local",
         sweep_table = result.table
         log(f"   {result.computed} computed, {result.skipped} already done, {result.failed} failed")
     log("== figures")
-    figs = draw_figures(tables, out / "figures", signals_k=cfg.signals_k)
+    figs = draw_figures(tables, out / "figures", signals_k=cfg.signals_k, world=cfg.world)
     if sweep_table is not None:
         figs.update(draw_sweep(out / "sweeps" / DEMO_SWEEP["name"], out / "figures"))
     log(f"   {sum(len(v) for v in figs.values())} files in {out / 'figures'}")
@@ -128,7 +128,7 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
                 ext.text.append(figure(f"figures/{name}.png", caption))
         sections.append(ext)
     sig = Section("The paper's signals (Figs. 4-6)", [])
-    for name, caption in (("fig4_ad", f"Fig. 4: AD_i{cfg.signals_k} of a 361-beam office scan; the dashed line is "
+    for name, caption in (("fig4_ad", f"Fig. 4: AD_i{cfg.signals_k} of a {cfg.world} scan; the dashed line is "
                                       f"its value on any straight line, 1 + 2 Σ cos(jΔ)."),
                           ("fig5_theta", "Fig. 5: θ_i, the line normal angle estimated at each beam."),
                           ("fig6_psi", f"Fig. 6: ψ_i = θ_i − θ_(i+{cfg.signals_k}), large at corners.")):
@@ -137,7 +137,7 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
     sections.append(sig)
     f9 = Section("Extracted features (Fig. 9)", [])
     for name, caption in (("fig9_office", "Fig. 9: lines (red, a star at the midpoint) and corners (diamonds), "
-                                          "simulated office, sensor frame."),
+                                          f"simulated {cfg.world}, sensor frame."),
                           ("fig9_intel", "Fig. 9: the same on scans of the Intel Research Lab log (real data, "
                                          "180 beams at 1°, cm-mode ranges: the extractor is given sigma_r = 2 cm).")):
         if name in figs:
