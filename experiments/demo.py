@@ -6,6 +6,7 @@ Also keeps :func:`room_scan`, an analytic room scan (exact ray casting), used by
 
 from __future__ import annotations
 
+import shutil
 import time
 from pathlib import Path
 from typing import Callable
@@ -46,16 +47,18 @@ def run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None = "local",
     if sweep_executor:
         spec = SweepSpec.from_dict(DEMO_SWEEP)
         log(f"== sweep {spec.name}: {len(spec.cells())} cells on {sweep_executor}")
-        result = run_sweep(spec, out / "sweeps" / spec.name, sweep_executor)
+        folder = out / "sweeps" / spec.name
+        shutil.rmtree(folder, ignore_errors=True)  # the demo recomputes everything, like the rest of it
+        result = run_sweep(spec, folder, sweep_executor)
         sweep_table = result.table
         log(f"   {result.computed} computed, {result.skipped} already done, {result.failed} failed")
     log("== figures")
-    figs = draw_figures(tables, out / "figures", signals_k=cfg.signals_k)
+    figs = draw_figures(tables, out / "figures", signals_k=cfg.signals_k, world=cfg.world)
     if sweep_table is not None:
         figs.update(draw_sweep(out / "sweeps" / DEMO_SWEEP["name"], out / "figures"))
     log(f"   {sum(len(v) for v in figs.values())} files in {out / 'figures'}")
     elapsed = time.perf_counter() - t0
-    sections = report_sections(tables, notes, cfg, figs, sweep_table, elapsed)
+    sections = report_sections(tables, notes, cfg, figs, sweep_table, elapsed, sweep_executor or "")
     md, html = write_report(out, "lmsbench demo: fast feature extraction in sensor coordinates", sections)
     log(f"== wrote {md} and {html} ({elapsed:.0f} s)")
     return md
@@ -72,8 +75,31 @@ def method_table(summary: pd.DataFrame) -> pd.DataFrame:
     return summary[[c for c in cols if c in summary]].rename(columns=cols)
 
 
+def at_a_glance(tables: dict[str, pd.DataFrame]) -> list[str]:
+    """Bullet points with the headline numbers, read off the tables."""
+    items = []
+    if "summary" in tables and "f1" in tables["summary"]:
+        sm = tables["summary"].set_index("method")
+        fastest, best = sm["time_ms_median"].idxmin(), sm["f1"].idxmax()
+        items.append(f"- Fastest extractor: **{fastest}**, {sm.loc[fastest, 'time_ms_median']:.2f} ms per scan "
+                     f"(median); highest line F1: **{best}**, {sm.loc[best, 'f1']:.3f}.")
+        if "sensor" in sm.index:
+            s = sm.loc["sensor"]
+            items.append(f"- The paper's extractor (`sensor`): {s['time_ms_median']:.2f} ms per scan, line F1 "
+                         f"{s['f1']:.3f} (precision {s['precision']:.3f}, recall {s['recall']:.3f}), rho RMS "
+                         f"{s['rho_rms_mm']:.1f} mm, corner precision {s['corner_precision']:.3f}.")
+        lowest = sm["rho_rms_mm"].idxmin()
+        items.append(f"- Most precise lines: **{lowest}**, rho RMS {sm.loc[lowest, 'rho_rms_mm']:.1f} mm.")
+    if "slam_metrics" in tables:
+        m = tables["slam_metrics"].iloc[0]
+        items.append(f"- SLAM without odometry: ATE {m['ate_rms_m']:.3f} m RMS over {int(m['scans'])} scans, "
+                     f"{int(m['map_lines'])} map lines, {m['time_per_scan_ms']:.1f} ms per scan"
+                     f"{' (diverged)' if m['diverged'] else ''}.")
+    return ["\n".join(items)] if items else []
+
+
 def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: StudyConfig, figs: dict,
-                    sweep_table: pd.DataFrame | None, elapsed: float) -> list[Section]:
+                    sweep_table: pd.DataFrame | None, elapsed: float, executor: str = "local") -> list[Section]:
     timing = tables["timing"]
     n_scans = int(timing["scan"].nunique())
     intro = Section("What was run", [
@@ -85,6 +111,9 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
         "`tables/*.parquet` and beside each figure as CSV).",
     ])
     sections = [intro]
+    glance = at_a_glance(tables)
+    if glance:
+        sections.append(Section("At a glance", glance))
     if "summary" in tables:
         ext = Section("Extractors: accuracy and speed", [
             markdown_table(method_table(tables["summary"])),
@@ -93,13 +122,13 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
             "matches of all scans against the faces visible from the true pose; `explained fraction` is the share "
             "of valid beams within 3 sigma of an extracted segment.",
         ])
-        for name, caption in (("accuracy_speed", "Accuracy (line F1) against time per scan, every extractor."),
+        for name, caption in (("accuracy_speed", "Accuracy (line F1, rho RMS error) against time per scan, every extractor."),
                               ("fig7_timing", "Fig. 7: processing time for successive scans, every method.")):
             if name in figs:
                 ext.text.append(figure(f"figures/{name}.png", caption))
         sections.append(ext)
     sig = Section("The paper's signals (Figs. 4-6)", [])
-    for name, caption in (("fig4_ad", f"Fig. 4: AD_i{cfg.signals_k} of a 361-beam office scan; the dashed line is "
+    for name, caption in (("fig4_ad", f"Fig. 4: AD_i{cfg.signals_k} of a {cfg.world} scan; the dashed line is "
                                       f"its value on any straight line, 1 + 2 Σ cos(jΔ)."),
                           ("fig5_theta", "Fig. 5: θ_i, the line normal angle estimated at each beam."),
                           ("fig6_psi", f"Fig. 6: ψ_i = θ_i − θ_(i+{cfg.signals_k}), large at corners.")):
@@ -107,8 +136,8 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
             sig.text.append(figure(f"figures/{name}.png", caption))
     sections.append(sig)
     f9 = Section("Extracted features (Fig. 9)", [])
-    for name, caption in (("fig9_office", "Fig. 9: lines (red, * at the midpoint) and corners (diamonds), "
-                                          "simulated office, sensor frame."),
+    for name, caption in (("fig9_office", "Fig. 9: lines (red, a star at the midpoint) and corners (diamonds), "
+                                          f"simulated {cfg.world}, sensor frame."),
                           ("fig9_intel", "Fig. 9: the same on scans of the Intel Research Lab log (real data, "
                                          "180 beams at 1°, cm-mode ranges: the extractor is given sigma_r = 2 cm).")):
         if name in figs:
@@ -126,7 +155,8 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
         sections.append(sl)
     if sweep_table is not None and not sweep_table.empty:
         ok = sweep_table[sweep_table["status"] == "ok"]
-        sw = Section("A sweep on Dask: window size k against range noise", [])
+        where = "on a local Dask cluster" if executor == "local" else "in process"
+        sw = Section(f"A sweep ({where}): window size k against range noise", [])
         if "f1" in ok:
             pivot = ok.pivot_table(index="extractor.k", columns="sensor.noise_sigma", values="f1", aggfunc="mean")
             pivot.columns = [f"F1 at σ = {c:g} m" for c in pivot.columns]

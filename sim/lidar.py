@@ -119,7 +119,7 @@ class LMS200Sim:
         if getattr(self, "client", None) is not None:
             try:
                 pb.disconnect(physicsClientId=self.client)
-            except pb.error:
+            except Exception:  # already gone (e.g. at interpreter shutdown)
                 pass
             self.client = None
 

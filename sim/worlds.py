@@ -2,7 +2,8 @@
 
 - ``office``: a corridor with three rooms on each side behind doorways, a chamfered (135 deg)
   corridor end, open door leaves, cabinets, shelves, desks (only their panel legs cut the scan
-  plane) and the odd round pillar; the seed moves doors and furniture.
+  plane), screens leaning off walls at 45-60 deg (acute and obtuse corners) and the odd round
+  pillar; the seed moves doors and furniture.
 - ``corridor``: a 30 m corridor with door recesses (convex and concave right angles) and round
   columns half sunk into its walls.
 - ``angles``: a hall whose corners are acute (50 deg) and obtuse (130-135 deg), with freestanding
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .geometry import rectangle_corners
 from .layout import Layout, WALL_THICKNESS_M, distance_to_rects
 from .world import World
 
@@ -129,7 +131,6 @@ def _furnish_room(lay: Layout, rng: np.random.Generator, room: tuple, xd: float,
         if any(iv[0] < b and a < iv[1] for a, b in occupied[wall]):
             continue
         at = start + along * s
-        from .geometry import rectangle_corners
         yaw = float(np.arctan2(inward[1], inward[0]))
         c = at + inward * depth / 2
         footprint = rectangle_corners(c[0], c[1], yaw, depth / 2, width / 2)
@@ -138,6 +139,8 @@ def _furnish_room(lay: Layout, rng: np.random.Generator, room: tuple, xd: float,
         occupied[wall].append(iv)
         placed.append(footprint)
         lay.against_wall(kind, at, inward, width, depth)
+    if rng.random() < 0.6:  # a screen leaning off a wall: acute (45-60 deg) and obtuse corners
+        _angled_screen(lay, rng, walls, occupied, placed, pts)
     if rng.random() < 0.4:  # a round pillar somewhere free
         for _ in range(20):
             r = float(rng.uniform(0.12, 0.3))
@@ -147,6 +150,39 @@ def _furnish_room(lay: Layout, rng: np.random.Generator, room: tuple, xd: float,
             if free_route and free_furniture:
                 lay.cylinder(c[0], c[1], r)
                 break
+
+
+def _angled_screen(lay: Layout, rng: np.random.Generator, walls: dict, occupied: dict,
+                   placed: list[np.ndarray], route_pts: np.ndarray) -> None:
+    """A 5 cm screen, 0.8-1.2 m long, standing off a wall at 45-60 deg: with the wall it makes an
+    acute and an obtuse concave corner; its foot is sunk 4 cm into the wall."""
+    thickness = 0.05
+    for _ in range(10):
+        wall = str(rng.choice(["far", "west", "east"]))
+        start, along, inward, span = walls[wall]
+        phi = np.deg2rad(float(rng.uniform(45.0, 60.0)))
+        length = float(rng.uniform(0.8, 1.2))
+        lean = float(rng.choice([-1.0, 1.0]))
+        direction = np.cos(phi) * lean * along + np.sin(phi) * inward
+        reach = length * np.cos(phi)  # extent along the wall
+        s = float(rng.uniform(0.9 + max(0.0, -lean * reach), span - 0.9 - max(0.0, lean * reach)))
+        at = start + along * s
+        tip = at + direction * length
+        foot = at - direction * (0.04 / np.sin(phi))
+        mid = (foot + tip) / 2
+        yaw = float(np.arctan2(direction[1], direction[0]))
+        footprint = rectangle_corners(mid[0], mid[1], yaw, float(np.hypot(*(tip - foot))) / 2, thickness / 2)
+        offset = start[0] if wall in ("far", "door") else start[1]
+        lo, hi = sorted((offset + s, offset + s + lean * reach))
+        iv = (lo - 0.2, hi + 0.2)
+        if any(iv[0] < b and a < iv[1] for a, b in occupied[wall]):
+            continue
+        if distance_to_rects(route_pts, [footprint]).min() < CLEARANCE_M:
+            continue
+        lay.segment_box(foot, tip, thickness, z1=1.6)
+        occupied[wall].append(iv)
+        placed.append(footprint)
+        return
 
 
 def corridor(rng: np.random.Generator, seed: int, length: float = 30.0, width: float = 1.8) -> World:

@@ -14,7 +14,7 @@ def cast(
     n: int = 361,
     angle_min: float = -np.pi / 2,
     increment: float = np.deg2rad(0.5),
-    range_max: float = 80.0,
+    range_max: float = 8.183,
     sigma: float = 0.0,
     seed: int = 0,
 ) -> Scan:

@@ -153,3 +153,27 @@ def test_runs_test_rejects_an_arc_and_keeps_a_noisy_line():
     assert list(ok) == [False, True]
     # disabled: everything passes
     assert straight_enough(x, y, offsets, rho, np.zeros(2), 0.0, 0.0025).all()
+
+
+@pytest.mark.parametrize("method", BASELINES)
+def test_runs_test_option_drops_lines_on_a_pillar(method):
+    """A 0.4 m pillar (a 90-gon: an arc at 0.5 deg beams) 2 m ahead: with ``runs_z=3`` fewer lines
+    lie on it than without, and the walls are still found."""
+    k = np.arange(90) * 2 * np.pi / 90
+    pillar = polygon(list(zip(2.0 + 0.4 * np.cos(k), 0.3 + 0.4 * np.sin(k))))
+    centre, radius = np.array([2.0, 0.3]), 0.4
+    on_pillar = {}
+    for z in (0.0, 3.0):
+        n = 0
+        for seed, pose in enumerate([(0.0, 0.0, 0.0), (0.2, -0.5, 0.3), (0.3, 1.0, -0.4), (-0.5, 0.0, 0.1)]):
+            scan, truth = room_scan(np.vstack((L_ROOM, pillar)), pose, sigma=0.005, seed=seed)
+            fs = extract(scan, method, runs_z=z)
+            c, s = np.cos(pose[2]), np.sin(pose[2])
+            local = np.array([[c, s], [-s, c]]) @ (centre - pose[:2])
+            for l in fs.lines:
+                mid = (np.array(l.start) + np.array(l.end)) / 2
+                n += abs(np.hypot(*(mid - local)) - radius) < 0.05
+            walls = score_scan(fs, truth)
+            assert walls.tp >= 4
+        on_pillar[z] = n
+    assert on_pillar[0.0] >= 3 and on_pillar[3.0] < on_pillar[0.0]

@@ -129,3 +129,34 @@ def test_fig_signal_draws_the_reference_line(tmp_path):
     sig = pd.DataFrame({"beam": np.arange(5), "ad": np.linspace(20, 21, 5)})
     paths = draw.fig_signal(sig, "ad", "AD", "t", tmp_path / "s", reference=21.0)
     assert [p.suffix for p in paths] == [".png", ".pdf", ".csv"]
+
+
+def test_sweep_plot_with_three_parameters_has_a_panel_per_value_of_the_third(tmp_path):
+    rows = [{"noise": n, "k": k, "tau": t, "seed": s, "f1": n * 10 + k + t + s, "status": "ok"}
+            for n in (0.01, 0.02) for k in (3, 5) for t in (2.0, 4.0) for s in (0, 1)]
+    folder = tmp_path / "sw3"
+    folder.mkdir()
+    pd.DataFrame(rows).to_parquet(folder / "results.parquet")
+    (folder / "sweep.yaml").write_text("name: sw3\nkind: extract\ngrid:\n  noise: [0.01, 0.02]\n  k: [3, 5]\n"
+                                       "  tau: [2.0, 4.0]\nseeds: [0, 1]\n")
+    draw_sweep(folder, tmp_path / "figs")
+    stats = pd.read_csv(tmp_path / "figs" / "sweep_sw3_f1.csv")
+    assert list(stats.columns[:3]) == ["tau", "k", "noise"] and len(stats) == 8
+    row = stats[(stats["tau"] == 4.0) & (stats["k"] == 5) & (stats["noise"] == 0.02)].iloc[0]
+    assert row["mean"] == pytest.approx(0.2 + 5 + 4 + 0.5) and row["count"] == 2
+
+
+def test_random_search_plots_every_cell_against_each_sampled_parameter(tmp_path):
+    rng = np.random.default_rng(0)
+    table = pd.DataFrame({"a": rng.uniform(0, 1, 6), "b": rng.integers(3, 9, 6), "seed": 0, "status": "ok"})
+    table["f1"] = table["a"] / 2
+    table.loc[5, "status"] = "error"
+    folder = tmp_path / "rs"
+    folder.mkdir()
+    table.to_parquet(folder / "results.parquet")
+    (folder / "sweep.yaml").write_text("name: rs\nkind: extract\nrandom:\n  a: {uniform: [0, 1]}\n"
+                                       "  b: {int: [3, 8]}\nsamples: 6\nseeds: [0]\n")
+    assert list(draw_sweep(folder, tmp_path / "figs")) == ["sweep_rs_f1"]
+    data = pd.read_csv(tmp_path / "figs" / "sweep_rs_f1.csv")
+    assert list(data.columns) == ["a", "b", "f1"] and len(data) == 5
+    np.testing.assert_allclose(data["f1"], table["a"][:5] / 2)

@@ -76,7 +76,7 @@ def test_the_demo_writes_a_report_whose_figures_exist(tmp_path):
     assert main(["demo", "--out", str(out), "--duration", "4", "--rate-hz", "5", "--inprocess"]) == 0
     report = (out / "report.md").read_text()
     for heading in ("## Extractors: accuracy and speed", "## SLAM without odometry (Fig. 10)",
-                    "## A sweep on Dask"):
+                    "## A sweep (in process)", "## At a glance"):
         assert heading in report
     images = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", report)
     assert len(images) >= 9 and all((out / p).exists() for p in images)

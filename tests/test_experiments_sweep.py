@@ -256,3 +256,30 @@ def test_the_cli_uses_an_existing_scheduler_and_matches_in_process(tmp_path, das
     remote = pd.read_parquet(tmp_path / "out" / "results.parquet")
     local = run_sweep(make_spec(log, xs=[2, 3, 4]), tmp_path / "inproc", "inprocess", progress=False).table
     pd.testing.assert_frame_equal(comparable(remote), comparable(local))
+
+
+def test_cli_errors_are_one_line_with_exit_status_2(tmp_path, capsys):
+    from experiments.cli import main
+
+    assert main(["sweep", str(tmp_path / "missing.yaml"), "--local"]) == 2
+    assert "missing.yaml" in capsys.readouterr().err
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("kind: extract\ngrid:\n  x: []\n")
+    assert main(["sweep", str(bad), "--local", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bad.yaml: grid.x is empty" in err
+
+
+def test_a_real_extractor_sweep_gives_the_same_scores_on_the_cluster_and_in_process(tmp_path, dask_client):
+    import sim
+
+    if not hasattr(sim, "simulate_records"):  # pragma: no cover - only while sim is being built
+        pytest.skip("sim.simulate_records is not available yet")
+    spec = SweepSpec.from_dict({"name": "real", "kind": "extract",
+                                "fixed": {"world": "office", "duration": 1.0, "rate_hz": 3.0},
+                                "grid": {"method": ["sensor", "iepf"]}, "seeds": [1]})
+    on_dask = run_sweep(spec, tmp_path / "dask", dask_client, progress=False).table
+    in_process = run_sweep(spec, tmp_path / "inproc", "inprocess", progress=False).table
+    assert (on_dask["status"] == "ok").all() and list(on_dask["method"]) == ["sensor", "iepf"]
+    scores = ["tp", "fp", "fn", "f1", "rho_rms_mm", "alpha_rms_deg", "lines_per_scan", "explained", "scans"]
+    pd.testing.assert_frame_equal(on_dask[scores], in_process[scores])

@@ -177,3 +177,11 @@ def test_explained_fraction_counts_uncovered_beams_as_unexplained():
     frac, _ = explained_fraction(FeatureSet([line], [], "hand"), scan)
     assert frac == pytest.approx(half.size / span.size)
     assert explained_fraction(FeatureSet([], [], "hand"), scan)[0] == 0.0
+
+
+def test_truth_without_faces_makes_every_line_a_false_positive():
+    empty = Truth(np.empty((0, 4)), np.empty((0, 2), int), np.empty((0, 4)), np.empty(0, int))
+    s = score_scan(FeatureSet(perfect(), corners_at([(3, -2)]), "hand"), empty)
+    assert (s.tp, s.fp, s.fn) == (0, 3, 0) and s.precision == 0.0 and np.isnan(s.recall)
+    assert (s.corner_tp, s.corner_fp, s.corner_fn) == (0, 1, 0)
+    assert s.rho_errors.shape == (0,) and s.endpoint_errors.shape == (0, 2)

@@ -58,10 +58,7 @@ def test_any_resolution_and_field_of_view(n: int, inc_deg: float) -> None:
     amin = -inc * (n - 1) / 2
     fs = extract(cast(ROOM, n=n, angle_min=amin, increment=inc))
     half_fov = inc * (n - 1) / 2
-    for rho, alpha in ROOM_LINES.values():
-        # a wall is in view when enough of it falls inside the field of view
-        b_end = np.arctan2(*{0.0: (2.0, 3.0)}.get(alpha, (0, 1))[::1]) if False else None
-        del b_end
+    # the side walls are in view only when the field of view reaches past the room's corners
     visible = [(3.0, 0.0)] + ([(2.0, np.pi / 2), (2.5, -np.pi / 2)] if half_fov > np.deg2rad(60) else [])
     for rho, alpha in visible:
         line = match(fs, rho, alpha)
@@ -185,8 +182,19 @@ def test_acute_remedy_is_switchable_and_measures_range_variance() -> None:
     lo, hi = c.index - 3, c.index + 3
     expected = float(np.var(scan.ranges[lo : hi + 1]))
     assert neighbourhood_var(scan.ranges, scan.valid, lo, hi) == pytest.approx(expected, rel=1e-12)
-    # off by default; on, a corner whose neighbouring ranges vary less than the threshold goes
-    assert len(extract(scan, acute_check=True).corners) == 2
+    # on by default (harmless at 1 sigma_r^2); a corner whose neighbouring ranges vary less than the threshold goes
+    assert len(extract(scan).corners) == 2 and len(extract(scan, acute_check=False).corners) == 2
     threshold = expected / 0.005**2 * 1.01  # just above this corner's variance (in sigma_r^2)
     kept = extract(scan, acute_check=True, acute_min_var=threshold).corners
     assert all(abs(k.index - c.index) > 1 for k in kept)
+
+
+def test_cm_mode_scans_use_their_own_noise() -> None:
+    """A scan with range_max > 10 m (SICK cm codes) is treated with sigma_r_cm: the reported
+    covariance scales with the square of the noise std."""
+    mm = extract(cast(ROOM)).lines[0]  # range_max 8.183 m: mm codes
+    cm = extract(cast(ROOM, range_max=81.83)).lines[0]
+    assert cm.rho == pytest.approx(mm.rho, abs=1e-5)
+    np.testing.assert_allclose(cm.cov, mm.cov * (0.02 / 0.005) ** 2, rtol=1e-3)
+    same = extract(cast(ROOM, range_max=81.83), sigma_r_cm=0.005).lines[0]
+    np.testing.assert_allclose(same.cov, mm.cov, rtol=1e-3)

@@ -51,6 +51,9 @@ def test_interlaced_beam_times_and_poses() -> None:
     assert off[0] == 0 and off[2] == pytest.approx(turn / 360)  # beam 2 = 1 deg later, same turn
     assert off[1] == pytest.approx(turn + 0.5 / 360 * turn)  # beam 1: second turn
     assert off.max() < s.scan_period
+    quarter = SensorConfig.lms200_quarter_deg().beam_time_offsets  # four interlaced turns
+    assert quarter[4] == pytest.approx(turn / 360) and quarter[3] == pytest.approx(3 * turn + 0.75 / 360 * turn)
+    assert np.array_equal(SensorConfig.lms200_1deg().beam_time_offsets, np.arange(181) / 360 * turn)
     world = make_world("office")
     with LMS200Sim(world, SensorConfig.ideal(interlaced=True)) as sim:
         v, w = 0.5, 0.8

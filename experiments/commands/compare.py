@@ -80,6 +80,10 @@ def run(args: argparse.Namespace) -> int:
         sources=args.sources, seeds=args.seeds, duration=args.duration, rate_hz=args.rate, stride=args.stride,
         max_scans=args.max_scans, sigma=args.sigma, methods=configs, scoring=dataclasses.asdict(score_config),
     )
+    if any(src.kind == "sim" for src in sources):
+        import sim
+
+        resolved["sensor"] = dataclasses.asdict(sim.SensorConfig())  # what parse_sources simulated
     (args.out / "config.yaml").write_text(yaml.safe_dump(resolved, sort_keys=False))
     print(text)
     print(f"wrote {path}, {args.out / 'summary.csv'}, {args.out / 'summary.txt'}, {args.out / 'config.yaml'}")

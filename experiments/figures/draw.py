@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import matplotlib.pyplot as plt
 from matplotlib.ticker import FormatStrFormatter
 
 from experiments.style import (CORNER_COLOR, LINE_COLOR, SCAN_COLOR, TRUTH_COLOR, equal_axes, method_color,
@@ -105,41 +106,69 @@ def fig_slam(trajectory: pd.DataFrame, map_lines: pd.DataFrame, stem: Path, titl
     return save_figure(fig, stem, data={"trajectory": trajectory, "map": map_lines})
 
 
-def fig_accuracy_speed(summary: pd.DataFrame, stem: Path, accuracy: str = "f1") -> list[Path]:
-    """Accuracy (line F1 against ground truth) versus time per scan (ms), one point per method."""
-    fig, ax = new_figure(height=3.8)
-    for row in summary.itertuples():
-        ax.errorbar(row.time_ms_median, getattr(row, accuracy),
-                    xerr=[[row.time_ms_median - row.time_ms_p05], [row.time_ms_p95 - row.time_ms_median]],
-                    fmt="o", ms=6, capsize=3, color=method_color(row.method), label=row.method)
-        ax.annotate(row.method, (row.time_ms_median, getattr(row, accuracy)), textcoords="offset points",
-                    xytext=(5, 5), fontsize=8)
-    ax.set_xscale("log")
-    ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
-    ax.xaxis.set_minor_formatter(FormatStrFormatter("%g"))
-    ax.set_xlabel("time per scan (ms; median, 5-95 %)")
-    ax.set_ylabel(f"line {accuracy} against ground truth")
-    ax.set_ylim(0, 1.05)
-    ax.set_title("Accuracy versus speed")
+def fig_accuracy_speed(summary: pd.DataFrame, stem: Path) -> list[Path]:
+    """Accuracy against time per scan, one point per extractor: line F1 (left) and rho RMS error
+    (right, mm) against the median time per scan (ms), bars from the 25 to the 75 % time."""
+    panels = [("f1", "line F1 against ground truth")]
+    if "rho_rms_mm" in summary:
+        panels.append(("rho_rms_mm", "rho RMS error of matched lines (mm)"))
+    fig, axes = new_figure(1, len(panels), width=4.6 * len(panels), height=3.8, squeeze=False)
+    for ax, (column, label) in zip(axes.ravel(), panels):
+        for i, row in enumerate(summary.itertuples()):
+            x, y = row.time_ms_median, getattr(row, column)
+            ax.errorbar(x, y, xerr=[[x - row.time_ms_p25], [row.time_ms_p75 - x]], fmt="o", ms=6, capsize=3,
+                        color=method_color(row.method))
+            ax.annotate(row.method, (x, y), textcoords="offset points", xytext=(5, 5 if i % 2 == 0 else -12),
+                        fontsize=8)  # alternate above / below so neighbours do not overwrite each other
+        ax.set_xscale("log")
+        ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+        ax.xaxis.set_minor_formatter(FormatStrFormatter("%g"))
+        ax.set_xlabel("time per scan (ms; median, 25-75 %)")
+        ax.set_ylabel(label)
+    fig.suptitle("Accuracy versus speed, every extractor")
     return save_figure(fig, stem, data=summary)
 
 
 def fig_sweep(table: pd.DataFrame, x: str, y: str, stem: Path, hue: str | None = None,
-              title: str = "") -> list[Path]:
-    """A sweep plot: metric ``y`` (mean over seeds, +/- one std) against parameter ``x``, a line per ``hue``."""
+              facet: str | None = None, title: str = "") -> list[Path]:
+    """A sweep plot: metric ``y`` (mean over seeds, +/- one std) against parameter ``x``, a line per
+    value of ``hue``, a panel per value of ``facet``. Failed cells are left out."""
     ok = table[table["status"] == "ok"] if "status" in table else table
-    keys = [c for c in (hue, x) if c]
+    keys = [c for c in (facet, hue, x) if c]
     stats = ok.groupby(keys, dropna=False)[y].agg(["mean", "std", "count"]).reset_index()
-    fig, ax = new_figure(height=3.6)
-    groups = stats.groupby(hue, sort=True, dropna=False) if hue else [(None, stats)]
-    for value, group in groups:
-        label = f"{hue} = {value}" if hue else y
-        color = method_color(str(value)) if hue in ("method", "extractor") else None
-        ax.errorbar(group[x], group["mean"], yerr=group["std"].fillna(0.0), fmt="o-", ms=4, capsize=2,
-                    lw=1.0, label=label, color=color)
-    ax.set_xlabel(x)
-    ax.set_ylabel(f"{y} (mean +/- std over seeds)")
-    ax.set_title(title or f"{y} against {x}")
+    panels = list(stats.groupby(facet, sort=True)) if facet else [(None, stats)]
+    fig, axes = new_figure(1, len(panels), width=min(4.2 * len(panels), 13), height=3.6, squeeze=False,
+                           sharey=True)
+    hue_values = sorted(stats[hue].unique()) if hue else [None]
+    cmap = plt.get_cmap("viridis", max(2, len(hue_values)))
+    for ax, (facet_value, panel) in zip(axes.ravel(), panels):
+        groups = panel.groupby(hue, sort=True) if hue else [(None, panel)]
+        for value, group in groups:
+            if hue in ("method", "extractor"):
+                color = method_color(str(value))
+            elif hue:
+                color = cmap(hue_values.index(value) / max(1, len(hue_values) - 1))
+            else:
+                color = None
+            ax.errorbar(group[x], group["mean"], yerr=group["std"].fillna(0.0), fmt="o-", ms=4, capsize=2,
+                        lw=1.0, label=f"{value}" if hue else y, color=color)
+        ax.set_xlabel(x)
+        if facet:
+            ax.set_title(f"{facet} = {facet_value}", fontsize=9)
+    axes.ravel()[0].set_ylabel(f"{y} (mean +/- std over seeds)")
     if hue:
-        ax.legend(loc="best", fontsize=7)
+        axes.ravel()[-1].legend(title=hue, loc="best", fontsize=7, title_fontsize=7)
+    fig.suptitle(title or f"{y} against {x}")
     return save_figure(fig, stem, data=stats)
+
+
+def fig_sweep_scatter(table: pd.DataFrame, params: list[str], y: str, stem: Path, title: str = "") -> list[Path]:
+    """A random-search plot: metric ``y`` of every cell against each sampled parameter (a panel each)."""
+    ok = table[table["status"] == "ok"] if "status" in table else table
+    fig, axes = new_figure(1, len(params), width=min(3.6 * len(params), 14), height=3.4, squeeze=False, sharey=True)
+    for ax, name in zip(axes.ravel(), params):
+        ax.plot(ok[name], ok[y], "o", ms=4, color=method_color("sensor"), alpha=0.8)
+        ax.set_xlabel(name)
+    axes.ravel()[0].set_ylabel(y)
+    fig.suptitle(title or f"{y} against the sampled parameters")
+    return save_figure(fig, stem, data=ok[[*params, y]])

@@ -28,22 +28,23 @@ PAPER_FIGURES = ("fig4_ad", "fig5_theta", "fig6_psi", "fig7_timing", "fig9_offic
 
 
 def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10,
-                 angle_increment: float | None = None) -> dict[str, list[Path]]:
-    """Every paper figure whose tables are present; returns name -> files written."""
+                 angle_increment: float | None = None, world: str = "office") -> dict[str, list[Path]]:
+    """Every paper figure whose tables are present; returns name -> files written. ``world`` names
+    the simulated world in the titles (the files keep the paper's names, e.g. ``fig9_office``)."""
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, list[Path]] = {}
     if "signals" in tables:
         sig = tables["signals"]
         inc = angle_increment or float(pd.Series(sig["bearing_deg"]).diff().median() * 3.141592653589793 / 180)
-        written["fig4_ad"] = draw.fig_signal(sig, "ad", f"AD_i{signals_k}", f"Fig. 4: AD_i{signals_k} of an office scan",
+        written["fig4_ad"] = draw.fig_signal(sig, "ad", f"AD_i{signals_k}", f"Fig. 4: AD_i{signals_k} of a {world} scan",
                                              out / "fig4_ad", reference=ad_reference(signals_k, inc))
         written["fig5_theta"] = draw.fig_signal(sig, "theta_deg", "theta_i (deg)",
                                                 "Fig. 5: theta_i (line normal angle) of the scan", out / "fig5_theta")
         written["fig6_psi"] = draw.fig_signal(sig, "psi_deg", "psi_i (deg)",
-                                              f"Fig. 6: psi_i = theta_i - theta_i+{signals_k}", out / "fig6_psi")
+                                              f"Fig. 6: psi_i = theta_i - theta_(i+{signals_k})", out / "fig6_psi")
     if "timing" in tables:
         written["fig7_timing"] = draw.fig_timing(tables["timing"], out / "fig7_timing")
-    for source, title in (("office", "Fig. 9: extracted features, simulated office"),
+    for source, title in (("office", f"Fig. 9: extracted features, simulated {world}"),
                           ("intel", "Fig. 9: extracted features, Intel Research Lab (real log)")):
         if f"{source}_points" in tables:
             written[f"fig9_{source}"] = draw.fig_scans(tables[f"{source}_points"], tables[f"{source}_lines"],
@@ -57,27 +58,35 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
 
 
 def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
-    """Plots of one sweep folder: each metric against the first grid parameter, one line per
-    combination of the other grid parameters (mean +/- std over seeds and random draws; a linked
-    grid key "a,b" counts as its first name)."""
+    """Plots of one sweep folder: each metric against the first grid parameter, a line per value
+    of the second, a panel per value of the third (or combination of the rest); mean +/- std over
+    seeds and random draws. A linked grid key "a,b" counts as its first name."""
     table = pd.read_parquet(folder / "results.parquet")
     spec = yaml.safe_load((folder / "sweep.yaml").read_text())
     name = spec.get("name", folder.name)
     # one name per grid key: parameters linked to it ("a,b") follow it and need no line of their own
     varied = [key.split(",")[0].strip() for key in spec.get("grid", {})]
     varied = [n for n in varied if n in table and table[n].nunique() > 1]
-    if not varied:
-        varied = [n for n in spec.get("random", {}) if n in table]
+    sampled = [n for n in spec.get("random", {}) if n in table]
+    if not varied and sampled:  # a random search: each metric against each sampled parameter
+        return {f"sweep_{name}_{m}": draw.fig_sweep_scatter(table, sampled, m, out / f"sweep_{name}_{m}",
+                                                            title=f"{name}: {m} against the sampled parameters")
+                for m in SWEEP_METRICS if m in table and table[m].notna().any()}
     if not varied:
         return {}
     x, rest = varied[0], varied[1:]
-    hue = rest[0] if len(rest) == 1 else None
-    if len(rest) > 1:  # one line per combination, labelled "a=1, b=2"
-        hue = ", ".join(rest)
-        table = table.assign(**{hue: table[rest].apply(lambda r: ", ".join(f"{k}={v}" for k, v in r.items()), axis=1)})
+    hue = rest[0] if rest else None
+    facet = None
+    if len(rest) == 2:
+        facet = rest[1]
+    elif len(rest) > 2:  # one panel per combination of the remaining parameters
+        facet = ", ".join(rest[1:])
+        table = table.assign(**{facet: table[rest[1:]].astype(object).apply(
+            lambda r: ", ".join(f"{k}={v}" for k, v in r.items()), axis=1)})
     written = {}
     for metric in SWEEP_METRICS:
         if metric in table and table[metric].notna().any():
             stem = f"sweep_{name}_{metric}"
-            written[stem] = draw.fig_sweep(table, x, metric, out / stem, hue=hue, title=f"{name}: {metric} against {x}")
+            written[stem] = draw.fig_sweep(table, x, metric, out / stem, hue=hue, facet=facet,
+                                           title=f"{name}: {metric} against {x}")
     return written

@@ -40,7 +40,7 @@ class HoughConfig:
     - max_lines: 60, an upper bound on peaks taken per scan; max_failures: 5 peaks in a row that
       yield no line end the search (such peaks gather collinear points scattered across the scan:
       once the walls are out, what is left is clutter).
-    - runs_z: 3.0, the runs test on residual signs that drops arcs (as ``split_merge``).
+    - runs_z: 0 (off), the runs test on residual signs that drops arcs (see ``split_merge``).
     """
 
     alpha_step_deg: float = 1.0
@@ -52,7 +52,7 @@ class HoughConfig:
     sigma: float = 0.005
     breakpoint_lambda_deg: float = 10.0
     max_skip: int = 3
-    runs_z: float = 3.0
+    runs_z: float = 0.0
     max_lines: int = 60
     max_failures: int = 5
     corners: CornerConfig = field(default_factory=CornerConfig)

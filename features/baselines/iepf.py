@@ -25,7 +25,7 @@ class IepfConfig:
       ~3 sigma at each end, so the chord threshold sits above split-and-merge's 6 sigma.
     - the rest as ``split_merge`` (breakpoint lambda 10 deg, Borges & Aldon 2004; merge RMS 2 sigma;
       8 points and 0.15 m per line, Nguyen et al. 2007's P_min / L_min; up to two dropped beams
-      bridged; arcs dropped by the runs test at z = 3).
+      bridged; runs test off, ``runs_z`` = 0).
     """
 
     sigma: float = 0.005
@@ -35,7 +35,7 @@ class IepfConfig:
     min_points: int = 8
     min_length: float = 0.15
     max_skip: int = 3
-    runs_z: float = 3.0
+    runs_z: float = 0.0
     corners: CornerConfig = field(default_factory=CornerConfig)
 
 

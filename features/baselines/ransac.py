@@ -47,7 +47,7 @@ class RansacConfig:
     sigma: float = 0.005
     breakpoint_lambda_deg: float = 10.0
     max_skip: int = 3
-    runs_z: float = 3.0
+    runs_z: float = 0.0
     max_failures: int = 3
     max_lines: int = 60
     seed: int = 0

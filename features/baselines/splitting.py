@@ -1,9 +1,11 @@
 """Recursive splitting and collinear merging, level-synchronous and vectorised over all segments.
 
 The split step is that of split-and-merge (Pavlidis & Horowitz 1974; as evaluated by Nguyen et al.
-2007): a segment whose farthest point lies more than a threshold from its line is split at that
-point. With ``chord=True`` the line is the chord between the segment's end points (iterative
-end-point fit, Duda & Hart 1973 / Douglas & Peucker 1973); otherwise it is the least-squares fit.
+2007): a segment whose farthest point lies more than a threshold from its line is split. With
+``chord=True`` the line is the chord between the segment's end points (iterative end-point fit,
+Duda & Hart 1973 / Douglas & Peucker 1973); otherwise the test uses the least-squares line. The
+split point is always the point farthest from the chord: the least-squares line of a bent segment
+lies farthest from its end points, and splitting there peels one point per pass.
 Each pass handles every pending segment at once: no Python loop over points or segments.
 """
 

@@ -15,13 +15,14 @@ class SensorMethodConfig:
     """
 
     k: int = 3  # half-width of the AD / slope window (eq. 4, 6), beams
-    sigma_r: float = 0.005  # range noise std of the sensor, m
+    sigma_r: float = 0.005  # range noise std of the sensor, m (SICK mm mode: range_max <= 10 m)
+    sigma_r_cm: float = 0.02  # range noise std used instead when range_max > 10 m (SICK cm mode, 1 cm codes), m
     min_range: float = 0.02  # ranges below this (or below the scan's range_min) are invalid, m
     ad_tau: float = 4.0  # |AD - (1 + 2 sum cos jD)| <= ad_tau * sigma_AD(beam) marks a line beam
     psi_split: float = 0.2  # a slope change |psi| above this splits a run (rad) ...
     psi_tau: float = 4.0  # ... when it also exceeds psi_tau * its noise std
     hough_subdiv: int = 4  # Log-Hough angle step = angle_increment / hough_subdiv
-    hough_angles: int = 11  # number of normal angles searched in each run's band
+    hough_angles: int = 7  # number of normal angles searched in each run's band
     band_tau: float = 4.0  # band half-width in std of the run's mean slope estimate
     band_min: float = 0.004  # smallest band half-width, rad
     bin_tau: float = 3.0  # Log-Hough log-range bin half-width in range-noise std
@@ -39,5 +40,5 @@ class SensorMethodConfig:
     corner_psi: float = 0.35  # psi must reach this fraction of the line-to-line turn near the corner
     corner_max_gap: int = 1  # most beams between the two lines' facing ends
     corner_max_dist: float = 0.15  # the intersection must lie this close to both facing ends, m
-    acute_check: bool = False  # the paper's remedy: reject a corner when the variance of the ranges
+    acute_check: bool = True  # the paper's remedy: reject a corner when the variance of the ranges
     acute_min_var: float = 1.0  # of the beams within k of it is below acute_min_var * sigma_r**2

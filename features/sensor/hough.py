@@ -83,19 +83,21 @@ def band_search(
     stride = np.maximum(np.rint(half_width / (h * step)), 1.0).astype(np.int64)
     a_idx = centre_idx[:, None] + stride[:, None] * offsets  # (R, A)
     # eq. 5: log p = log d + log cos(a - b), a lookup at a - b on the template
-    idx = (a_idx + zero)[run_id] - (beam * subdiv)[:, None]
+    idx = (a_idx + zero).take(run_id, axis=0)
+    idx -= (beam * subdiv)[:, None]
     log_p = template.take(idx, mode="clip")
     log_p += log_d[:, None]  # (N, A)
     # cells are laid out around the median vote of three beams at 1/4, 1/2 and 3/4 of each run
     # (a mean would be dragged off by the neighbour-line beams at a run's ends, one beam can be a spike)
-    q1 = log_p[starts + counts // 4]
-    q2 = log_p[starts + counts // 2]
-    q3 = log_p[starts + (3 * counts) // 4]
+    q1 = log_p.take(starts + counts // 4, axis=0)
+    q2 = log_p.take(starts + counts // 2, axis=0)
+    q3 = log_p.take(starts + (3 * counts) // 4, axis=0)
     ref = np.maximum(np.minimum(q1, q2), np.minimum(np.maximum(q1, q2), q3))  # (R, A)
     inv_width = 1.0 / bin_half
     # cell = floor((log p - ref) / width) + N_BINS / 2 + 1, clipped into the two outside cells
-    rel = (log_p - ref[run_id]) * inv_width[run_id, None]
-    rel += N_BINS / 2.0 + 1.0
+    offset = (N_BINS / 2.0 + 1.0) - ref * inv_width[:, None]  # (R, A)
+    rel = log_p * inv_width.take(run_id)[:, None]
+    rel += offset.take(run_id, axis=0)
     np.fmax(rel, 0.0, out=rel)  # fmax also sends a nan vote to the outside cell 0
     np.minimum(rel, N_BINS + 1.0, out=rel)
     key = rel.astype(np.int64)

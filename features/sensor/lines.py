@@ -88,7 +88,7 @@ def fit_spans(
     d = np.where(ok, ranges[beam], 0.0)  # invalid beams (in merged spans) get no weight and no nan
     b = bearings[beam]
     sigma = cfg.sigma_r
-    s1 = gauss_newton(d, b, run_id, starts, ok if inlier0 is None else ok & inlier0, rho, alpha, sigma)
+    s1 = gauss_newton(d, b, run_id, starts, ok if inlier0 is None else ok & inlier0, rho, alpha, sigma, with_cov=False)
     s2 = gauss_newton(d, b, run_id, starts, ok, s1.rho, s1.alpha, sigma, cfg.inlier_tau)
     rho, alpha, cov, z = s2.rho, s2.alpha, s2.cov, s2.z
     inl = s2.weight > 0
@@ -195,18 +195,19 @@ def extend_ends(
     """Grow every line over the up to ``reach`` beams beyond each end that continue it (valid and
     |range residual| <= inlier_tau sigma_r, without a break): the AD windows stop short of corners."""
     n = ranges.size
-    if table.rho.size == 0:
+    n_lines = table.rho.size
+    if n_lines == 0:
         return table
-    steps = np.concatenate((np.arange(1, reach + 1), -np.arange(1, reach + 1)))
-    base = np.where(steps > 0, table.last[:, None], table.first[:, None])
-    idx = base + steps  # (L, 2 * reach): after the last beam, then before the first
+    steps = np.arange(1, reach + 1)
+    idx = np.empty((n_lines, 2, reach), np.int64)
+    np.add(table.last[:, None], steps, out=idx[:, 0])
+    np.subtract(table.first[:, None], steps, out=idx[:, 1])
     inside = (idx >= 0) & (idx < n)
-    idx_c = np.clip(idx, 0, n - 1)
-    c = np.cos(bearings[idx_c] - table.alpha[:, None])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        z = (ranges[idx_c] * c - table.rho[:, None]) / (cfg.sigma_r * c)
-        ok = inside & valid[idx_c] & (c > 0.05) & (np.abs(z) <= cfg.inlier_tau)
-    grow = np.cumprod(ok.reshape(-1, 2, reach), axis=2).sum(axis=2)  # (L, 2) contiguous beams
+    np.clip(idx, 0, n - 1, out=idx)
+    c = np.cos(bearings[idx] - table.alpha[:, None, None])
+    dev = ranges[idx] * c - table.rho[:, None, None]
+    ok = inside & valid[idx] & (c > 0.05) & (np.abs(dev) <= (cfg.inlier_tau * cfg.sigma_r) * c)
+    grow = np.logical_and.accumulate(ok, axis=2).sum(axis=2)  # (L, 2) contiguous beams
     return table._replace(
         first=table.first - grow[:, 1], last=table.last + grow[:, 0], n_points=table.n_points + grow.sum(axis=1)
     )

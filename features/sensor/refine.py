@@ -20,8 +20,8 @@ MIN_COS = 0.05  # beams within ~3 deg of grazing the line get no weight
 class Step(NamedTuple):
     rho: np.ndarray  # (R,) after the step (m)
     alpha: np.ndarray  # (R,) after the step (rad, not wrapped)
-    cov: np.ndarray  # (R, 2, 2) covariance of (rho, alpha) at the step's linearisation
-    z: np.ndarray  # (N,) range residual / sigma_r before the step (inf where the beam cannot see the line)
+    cov: np.ndarray | None  # (R, 2, 2) covariance of (rho, alpha) at the step's linearisation
+    z: np.ndarray | None  # (N,) range residual / sigma_r before the step (when inlier_tau is given)
     weight: np.ndarray  # (N,) 1/cos^2 weights used (0 for beams left out)
 
 
@@ -35,6 +35,7 @@ def gauss_newton(
     alpha: np.ndarray,
     sigma_r: float,
     inlier_tau: float | None = None,
+    with_cov: bool = True,
 ) -> Step:
     """One Gauss-Newton step of every run's (rho, alpha) on its beams.
 
@@ -44,16 +45,18 @@ def gauss_newton(
         rho, alpha: (R,) current estimate. sigma_r: range noise std (m).
         inlier_tau: when given, only beams with |range residual| <= inlier_tau sigma_r at the
             current estimate are used (on top of ``mask``).
+        with_cov: compute the covariance (else ``cov`` is None).
     """
     phi = b - alpha[run_id]
     c = np.cos(phi)
     r = d * c - rho[run_id]  # residual along the normal (m); d r / d rho = -1
     g = d * np.sin(phi)  # d r / d alpha
-    seen = c > MIN_COS
-    z = r / (sigma_r * c)
-    z[~seen] = np.inf
-    use = seen if mask is None else seen & mask
+    use = c > MIN_COS
+    if mask is not None:
+        use &= mask
+    z = None
     if inlier_tau is not None:
+        z = r / (sigma_r * c)
         use &= np.abs(z) <= inlier_tau
     w = use / (c * c)
     buf = np.empty((5, d.size))
@@ -67,6 +70,8 @@ def gauss_newton(
     inv_det = 1.0 / (sw * swgg - swg * swg)
     rho = rho + (swgg * swr - swg * swgr) * inv_det
     alpha = alpha + (swg * swr - sw * swgr) * inv_det
+    if not with_cov:
+        return Step(rho, alpha, None, z, w)
     var = (sigma_r * sigma_r) * inv_det
     cov = np.empty((starts.size, 2, 2))
     cov[:, 0, 0] = swgg * var
