@@ -127,8 +127,10 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
             if name in figs:
                 ext.text.append(figure(f"figures/{name}.png", caption))
         sections.append(ext)
-    sig = Section("The paper's signals (Figs. 4-6)", [])
-    for name, caption in (("fig4_ad", f"Fig. 4: AD_i{cfg.signals_k} of a {cfg.world} scan; the dashed line is "
+    sig = Section("The paper's signals (Figs. 3-6)", [])
+    for name, caption in (("fig3_scan", f"Fig. 3: the {cfg.world} scan of Figs. 4-6, in the sensor frame and in "
+                                        f"sensor coordinates (range over beam index)."),
+                          ("fig4_ad", f"Fig. 4: AD_i{cfg.signals_k} of a {cfg.world} scan; the dashed line is "
                                       f"its value on any straight line, 1 + 2 Σ cos(jΔ)."),
                           ("fig5_theta", "Fig. 5: θ_i, the line normal angle estimated at each beam."),
                           ("fig6_psi", f"Fig. 6: ψ_i = θ_i − θ_(i+{cfg.signals_k}), large at corners.")):
