@@ -39,10 +39,15 @@ class Source:
 
 def sim_source(world: str, seed: int = 0, duration: float = 30.0, rate_hz: float | None = 2.0,
                sensor: Any = None) -> Source:
-    """Records of the simulated ``world`` (seeded) with their visible truth (sensor frame)."""
+    """Records of the simulated ``world`` (seeded) with their visible truth (sensor frame).
+
+    The default sensor is the LMS200 model without interlaced timing: the truth is that of a single
+    pose, so a scan whose beams come from poses up to 20 ms apart (1.2 deg of turn) would charge the
+    robot's motion to the extractor. Pass ``sensor=sim.SensorConfig()`` for the moving-scan model.
+    """
     import sim
 
-    sensor = sensor if sensor is not None else sim.SensorConfig()
+    sensor = sensor if sensor is not None else sim.SensorConfig(interlaced=False)
     records = sim.simulate_records(world=world, seed=seed, duration=duration, sensor=sensor, rate_hz=rate_hz)
     w = sim.make_world(world, seed=seed)
 

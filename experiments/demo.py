@@ -6,6 +6,7 @@ Also keeps :func:`room_scan`, an analytic room scan (exact ray casting), used by
 
 from __future__ import annotations
 
+import shutil
 import time
 from pathlib import Path
 from typing import Callable
@@ -46,11 +47,13 @@ def run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None = "local",
     if sweep_executor:
         spec = SweepSpec.from_dict(DEMO_SWEEP)
         log(f"== sweep {spec.name}: {len(spec.cells())} cells on {sweep_executor}")
-        result = run_sweep(spec, out / "sweeps" / spec.name, sweep_executor)
+        folder = out / "sweeps" / spec.name
+        shutil.rmtree(folder, ignore_errors=True)  # the demo recomputes everything, like the rest of it
+        result = run_sweep(spec, folder, sweep_executor)
         sweep_table = result.table
         log(f"   {result.computed} computed, {result.skipped} already done, {result.failed} failed")
     log("== figures")
-    figs = draw_figures(tables, out / "figures", signals_k=cfg.signals_k)
+    figs = draw_figures(tables, out / "figures", signals_k=cfg.signals_k, world=cfg.world)
     if sweep_table is not None:
         figs.update(draw_sweep(out / "sweeps" / DEMO_SWEEP["name"], out / "figures"))
     log(f"   {sum(len(v) for v in figs.values())} files in {out / 'figures'}")
@@ -124,8 +127,10 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
             if name in figs:
                 ext.text.append(figure(f"figures/{name}.png", caption))
         sections.append(ext)
-    sig = Section("The paper's signals (Figs. 4-6)", [])
-    for name, caption in (("fig4_ad", f"Fig. 4: AD_i{cfg.signals_k} of a 361-beam office scan; the dashed line is "
+    sig = Section("The paper's signals (Figs. 3-6)", [])
+    for name, caption in (("fig3_scan", f"Fig. 3: the {cfg.world} scan of Figs. 4-6, in the sensor frame and in "
+                                        f"sensor coordinates (range over beam index)."),
+                          ("fig4_ad", f"Fig. 4: AD_i{cfg.signals_k} of a {cfg.world} scan; the dashed line is "
                                       f"its value on any straight line, 1 + 2 Σ cos(jΔ)."),
                           ("fig5_theta", "Fig. 5: θ_i, the line normal angle estimated at each beam."),
                           ("fig6_psi", f"Fig. 6: ψ_i = θ_i − θ_(i+{cfg.signals_k}), large at corners.")):
@@ -133,8 +138,8 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
             sig.text.append(figure(f"figures/{name}.png", caption))
     sections.append(sig)
     f9 = Section("Extracted features (Fig. 9)", [])
-    for name, caption in (("fig9_office", "Fig. 9: lines (red, * at the midpoint) and corners (diamonds), "
-                                          "simulated office, sensor frame."),
+    for name, caption in (("fig9_office", "Fig. 9: lines (red, a star at the midpoint) and corners (diamonds), "
+                                          f"simulated {cfg.world}, sensor frame."),
                           ("fig9_intel", "Fig. 9: the same on scans of the Intel Research Lab log (real data, "
                                          "180 beams at 1°, cm-mode ranges: the extractor is given sigma_r = 2 cm).")):
         if name in figs:

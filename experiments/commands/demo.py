@@ -11,6 +11,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                     "figures and results/demo/report.md")
     p.add_argument("--out", type=Path, default=Path("results/demo"), help="output folder")
     p.add_argument("--seed", type=int, default=0, help="world and run seed")
+    p.add_argument("--world", default="office", help="simulated world: office, corridor, angles, pillars, random")
     p.add_argument("--duration", type=float, default=40.0, help="simulated run, s (default 40)")
     p.add_argument("--rate-hz", type=float, default=10.0, help="scans kept per second of the run (default 10)")
     p.add_argument("--log", help="real CARMEN log or bag for Fig. 9 (default: the Intel log where present)")
@@ -23,7 +24,7 @@ def run(args: argparse.Namespace) -> int:
     from experiments.demo import run_demo
     from experiments.figures.study import StudyConfig
 
-    cfg = StudyConfig(seed=args.seed, duration=args.duration, rate_hz=args.rate_hz)
+    cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz)
     if args.log:
         if not Path(args.log).exists():
             raise FileNotFoundError(f"no such log: {args.log}")

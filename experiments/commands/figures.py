@@ -16,6 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--duration", type=float, default=40.0, help="simulated run, s (default 40)")
     p.add_argument("--rate-hz", type=float, default=10.0, help="scans kept per second of the run (default 10)")
     p.add_argument("--seed", type=int, default=0, help="world and run seed")
+    p.add_argument("--world", default="office", help="simulated world: office, corridor, angles, pillars, random")
     p.add_argument("--methods", nargs="+", help="extractors to compare (default: all five)")
     p.add_argument("--intel", help="Intel CARMEN log for Fig. 9 (default ../shared/data/carmen/intel-corrected.log.gz)")
     p.add_argument("--no-slam", action="store_true", help="skip the SLAM run and Fig. 10")
@@ -24,21 +25,22 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from experiments.figures.make import draw_figures, draw_sweep
-    from experiments.figures.study import StudyConfig, load_tables, run_study, save_tables
+    from experiments.figures.study import StudyConfig, load_config, load_tables, run_study, save_tables
 
     if args.tables:
         if not args.tables.is_dir():
             raise FileNotFoundError(f"no tables folder {args.tables}")
         tables, notes = load_tables(args.tables)
+        cfg = load_config(args.tables)
     else:
-        cfg = StudyConfig(seed=args.seed, duration=args.duration, rate_hz=args.rate_hz, slam=not args.no_slam)
+        cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz, slam=not args.no_slam)
         if args.methods:
             cfg.methods = tuple(args.methods)
         if args.intel:
             cfg.intel_log = args.intel
         tables, notes = run_study(cfg)
         save_tables(tables, cfg, notes, args.out / "tables")
-    written = draw_figures(tables, args.out)
+    written = draw_figures(tables, args.out, signals_k=cfg.signals_k, world=cfg.world)
     for folder in args.sweep:
         if not (folder / "results.parquet").exists():
             raise FileNotFoundError(f"{folder} has no results.parquet (run `lmsbench sweep` first)")

@@ -17,6 +17,24 @@ from experiments.style import (CORNER_COLOR, LINE_COLOR, SCAN_COLOR, TRUTH_COLOR
                                new_figure, save_figure)
 
 
+def fig_scan(signals: pd.DataFrame, stem: Path, title: str) -> list[Path]:
+    """Fig. 3: the scan itself, Cartesian in the sensor frame (equal axes) and range over beam index."""
+    fig, (ax, ax2) = new_figure(1, 2, width=10.0, height=4.0)
+    b = np.radians(signals["bearing_deg"].to_numpy())
+    r = signals["range_m"].to_numpy(dtype=float)
+    shown = np.isfinite(r)
+    ax.plot(r[shown] * np.cos(b[shown]), r[shown] * np.sin(b[shown]), ".", ms=2.5, color=SCAN_COLOR)
+    ax.plot([0], [0], "k^", ms=6)
+    equal_axes(ax, "x (m, ahead)", "y (m, left)")
+    ax.set_title("Cartesian, sensor frame")
+    ax2.plot(signals["beam"][shown], r[shown], ".", ms=2.5, color=SCAN_COLOR)
+    ax2.set_xlabel("beam index i")
+    ax2.set_ylabel("range d_i (m)")
+    ax2.set_title("sensor coordinates")
+    fig.suptitle(title)
+    return save_figure(fig, stem, data=signals[["beam", "bearing_deg", "range_m"]])
+
+
 def fig_signal(signals: pd.DataFrame, column: str, ylabel: str, title: str, stem: Path,
                reference: float | None = None) -> list[Path]:
     """Figs. 4-6: one per-beam signal of a scan (``ad``, ``theta_deg``, ``psi_deg``) over the beam index."""

@@ -2,6 +2,7 @@
 
 Figure names (files ``NAME.png``, ``NAME.pdf`` and the data ``NAME*.csv`` in the output folder):
 
+- ``fig3_scan``: the scan of Figs. 4-6 (Cartesian and in sensor coordinates);
 - ``fig4_ad``, ``fig5_theta``, ``fig6_psi``: AD_i10, theta_i, psi_i of a 361-beam office scan;
 - ``fig7_timing``: processing time per scan over the run, every method;
 - ``fig9_office``, ``fig9_intel``: scans with extracted lines (*) and corners (diamonds);
@@ -23,19 +24,21 @@ from .tables import ad_reference
 #: Metrics plotted for a sweep when its table has them.
 SWEEP_METRICS = ("f1", "corner_f1", "rho_rms_mm", "time_ms_median", "ate_rms", "final_error_m")
 
-PAPER_FIGURES = ("fig4_ad", "fig5_theta", "fig6_psi", "fig7_timing", "fig9_office", "fig9_intel",
+PAPER_FIGURES = ("fig3_scan", "fig4_ad", "fig5_theta", "fig6_psi", "fig7_timing", "fig9_office", "fig9_intel",
                  "fig10_slam", "accuracy_speed")
 
 
 def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10,
-                 angle_increment: float | None = None) -> dict[str, list[Path]]:
-    """Every paper figure whose tables are present; returns name -> files written."""
+                 angle_increment: float | None = None, world: str = "office") -> dict[str, list[Path]]:
+    """Every paper figure whose tables are present; returns name -> files written. ``world`` names
+    the simulated world in the titles (the files keep the paper's names, e.g. ``fig9_office``)."""
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, list[Path]] = {}
     if "signals" in tables:
         sig = tables["signals"]
         inc = angle_increment or float(pd.Series(sig["bearing_deg"]).diff().median() * 3.141592653589793 / 180)
-        written["fig4_ad"] = draw.fig_signal(sig, "ad", f"AD_i{signals_k}", f"Fig. 4: AD_i{signals_k} of an office scan",
+        written["fig3_scan"] = draw.fig_scan(sig, out / "fig3_scan", f"Fig. 3: a {len(sig)}-beam scan of the {world}")
+        written["fig4_ad"] = draw.fig_signal(sig, "ad", f"AD_i{signals_k}", f"Fig. 4: AD_i{signals_k} of a {world} scan",
                                              out / "fig4_ad", reference=ad_reference(signals_k, inc))
         written["fig5_theta"] = draw.fig_signal(sig, "theta_deg", "theta_i (deg)",
                                                 "Fig. 5: theta_i (line normal angle) of the scan", out / "fig5_theta")
@@ -43,7 +46,7 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
                                               f"Fig. 6: psi_i = theta_i - theta_(i+{signals_k})", out / "fig6_psi")
     if "timing" in tables:
         written["fig7_timing"] = draw.fig_timing(tables["timing"], out / "fig7_timing")
-    for source, title in (("office", "Fig. 9: extracted features, simulated office"),
+    for source, title in (("office", f"Fig. 9: extracted features, simulated {world}"),
                           ("intel", "Fig. 9: extracted features, Intel Research Lab (real log)")):
         if f"{source}_points" in tables:
             written[f"fig9_{source}"] = draw.fig_scans(tables[f"{source}_points"], tables[f"{source}_lines"],

@@ -75,7 +75,7 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
     panel_method = "sensor" if "sensor" in cfg.methods else cfg.methods[0]
     picks = pick_evenly(len(records), cfg.panels)
     fsets, _ = extract_timed([records[i].scan for i in picks], panel_method)
-    pts, lns, crs = feature_panels([records[i].scan for i in picks], [f"office scan {i}" for i in picks], fsets)
+    pts, lns, crs = feature_panels([records[i].scan for i in picks], [f"{cfg.world} scan {i}" for i in picks], fsets)
     tables.update(office_points=pts, office_lines=lns, office_corners=crs)
 
     intel = Path(cfg.intel_log) if cfg.intel_log else None
@@ -117,6 +117,7 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
 
 
 def load_tables(folder: Path) -> tuple[dict[str, pd.DataFrame], list[str]]:
+    """The tables and notes saved by :func:`save_tables`."""
     tables = {p.stem: pd.read_parquet(p) for p in sorted(folder.glob("*.parquet"))}
     notes_file = folder / "notes.txt"
     notes = notes_file.read_text().splitlines() if notes_file.exists() else []
@@ -148,3 +149,13 @@ def _slam_in_world(result, records) -> tuple[np.ndarray, np.ndarray]:
     segs = np.column_stack((align(lines[:, 2:4], ate.rotation, ate.translation),
                             align(lines[:, 4:6], ate.rotation, ate.translation)))
     return traj, segs
+
+
+def load_config(folder: Path) -> StudyConfig:
+    """The settings saved beside the tables (defaults where there is no study.yaml)."""
+    path = folder / "study.yaml"
+    raw = yaml.safe_load(path.read_text()) if path.exists() else {}
+    known = {f.name for f in dataclasses.fields(StudyConfig)}
+    cfg = StudyConfig(**{k: v for k, v in (raw or {}).items() if k in known})
+    cfg.methods = tuple(cfg.methods)
+    return cfg
