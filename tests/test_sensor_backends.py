@@ -146,3 +146,21 @@ def test_degenerate_inputs(ranges: np.ndarray) -> None:
     ref, got = both(scan)
     assert_same(ref, got, "degenerate")
     assert got.lines == [] and got.corners == []
+
+
+def test_compare_reports_each_methods_backend() -> None:
+    import pandas as pd
+
+    from experiments.compare import format_summary
+    from features.registry import backend_of, make_config
+
+    assert backend_of("sensor") == "numba"
+    assert backend_of("sensor", make_config("sensor", backend="numpy")) == "numpy"
+    assert backend_of("hough") == "numpy"  # no backend field: the numpy implementation
+    rows = [dict(source="s", method="sensor", backend="numba", scans=1, us_median=100.0),
+            dict(source="s", method="hough", backend="numpy", scans=1, us_median=900.0)]
+    text = format_summary(pd.DataFrame(rows))
+    assert "backend" in text.splitlines()[0]
+    assert "sensor=numba, hough=numpy" in text and "not like for like" in text
+    same = format_summary(pd.DataFrame(rows[:1]))
+    assert "note" not in same
