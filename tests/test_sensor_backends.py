@@ -18,7 +18,7 @@ numba = pytest.importorskip("numba")
 TOL = 1e-9
 
 
-def assert_same(ref: FeatureSet, got: FeatureSet, label: str) -> None:
+def assert_same(ref: FeatureSet, got: FeatureSet, label: str, method: str = "sensor") -> None:
     """Same line count, beams, point counts and corners; geometry and covariance within TOL."""
     assert len(got.lines) == len(ref.lines), label
     for m, (a, b) in enumerate(zip(ref.lines, got.lines)):
@@ -34,7 +34,7 @@ def assert_same(ref: FeatureSet, got: FeatureSet, label: str) -> None:
     for a, b in zip(ref.corners, got.corners):
         assert (b.index, b.lines) == (a.index, a.lines), label
         np.testing.assert_allclose((b.x, b.y, b.angle), (a.x, a.y, a.angle), rtol=0, atol=TOL, err_msg=label)
-    assert got.method == ref.method == "sensor"
+    assert got.method == ref.method == method
 
 
 def both(scan: Scan, **params) -> tuple[FeatureSet, FeatureSet]:
