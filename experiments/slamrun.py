@@ -55,10 +55,11 @@ def _relations_beside(path: Path) -> Path | None:
 
 
 def load_input(path: str | Path, relations: str | Path | None = None, every: int = 1,
-               max_scans: int | None = None) -> SlamInput:
+               max_scans: int | None = None, rate_hz: float | None = None) -> SlamInput:
     """Read a simulator output folder (scans.clf, groundtruth.tum, world.json), a CARMEN log or a
-    bag; keep every ``every``-th scan, at most ``max_scans``. Relations come from ``relations`` or
-    a ``NAME.relations`` file beside a log.
+    bag; keep every ``every``-th scan (or, with ``rate_hz``, the first scan at least 1/rate_hz s
+    after the last one kept), at most ``max_scans``. Relations come from ``relations`` or a
+    ``NAME.relations`` file beside a log.
 
     Raises:
         FileNotFoundError: the input does not exist.
@@ -92,9 +93,15 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if rel_path is not None:
         rel = read_relations(rel_path)
         sources["relations"] = str(rel_path)
-    records = []
+    if rate_hz is not None and not rate_hz > 0:
+        raise LmsbenchError(f"--rate-hz must be > 0, got {rate_hz}")
+    records: list[Record] = []
     for k, rec in enumerate(read_log(log)):
-        if k % every == 0:
+        if rate_hz is not None:
+            keep = not records or rec.scan.stamp >= records[-1].scan.stamp + 1.0 / rate_hz - 1e-9
+        else:
+            keep = k % every == 0
+        if keep:
             records.append(rec)
             if max_scans is not None and len(records) >= max_scans:
                 break

@@ -83,13 +83,16 @@ def candidates(z: np.ndarray, Rz: np.ndarray, zhat: np.ndarray, HPH: np.ndarray,
     return Candidates(nu, S, mahalanobis2(nu, S))
 
 
-def nearest_neighbour(d2: np.ndarray, gate: float, reject_ambiguous: bool = False) -> list[tuple[int, int]]:
+def nearest_neighbour(d2: np.ndarray, gate: float, reject_ambiguous: bool = False,
+                      ambiguity_d2: np.ndarray | None = None) -> list[tuple[int, int]]:
     """Greedy one-to-one pairs (observation, landmark) by increasing distance, within the gate.
-    With ``reject_ambiguous``, an observation that falls in the gate of two or more landmarks is
-    left unpaired (a door jamb next to another along an unobservable corridor)."""
+    With ``reject_ambiguous``, an observation that falls in the gate of two or more landmarks
+    (counted in ``ambiguity_d2`` when given, e.g. before other masks) is left unpaired (a door
+    jamb next to another along an unobservable corridor)."""
     d2 = np.array(d2, dtype=float)
     if reject_ambiguous and d2.size:
-        d2[np.sum(d2 < gate, axis=1) > 1] = np.inf
+        ref = d2 if ambiguity_d2 is None else ambiguity_d2
+        d2[np.sum(ref < gate, axis=1) > 1] = np.inf
     obs, lms = np.nonzero(d2 < gate)
     order = np.argsort(d2[obs, lms], kind="stable")
     used_o, used_l, pairs = set(), set(), []

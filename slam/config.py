@@ -52,6 +52,9 @@ class SlamConfig:
             scan's points (every ``point_stride``-th beam) within ``verify_tolerance`` m of the
             previous scan's points; ``verify_margin``: a candidate far from the prediction must
             beat the one near it by this fraction.
+        point_fallback, point_min_score: a scan whose lines do not align falls back to its points:
+            normal-histogram headings against the previous scan, accepted when this fraction of
+            the points lands on the previous scan's.
         max_turn_rate: fastest turn considered possible (rad/s): headings further from the previous
             one than this times the scan interval (+10 deg) are rejected (corridor 180-degree flips).
     Consistency:
@@ -63,7 +66,7 @@ class SlamConfig:
     sigma_alpha: float = 4.0
     sigma_lateral: float = 0.1
     use_odometry: bool = False
-    odom_noise: tuple[float, float, float] = (0.05, 0.05, 0.02)
+    odom_noise: tuple[float, float, float] = (0.1, 0.1, 0.05)
     max_dt: float = 0.5
     extractor: str = "sensor"
     extractor_params: dict[str, Any] = field(default_factory=dict)
@@ -90,6 +93,9 @@ class SlamConfig:
     point_stride: int = 2
     verify_tolerance: float = 0.1
     verify_margin: float = 0.1
+    point_fallback: bool = True
+    point_min_score: float = 0.5
+    point_xy: bool = False
     nis_window: int = 20
     nis_divergence: float = 5.0
 

@@ -14,6 +14,7 @@ from .config import SlamConfig
 from .ekf import SlamEKF, stacked_H, stacked_h, stacked_residual
 from .models import ROBOT_DIM, wrap
 from .observations import Observations
+from .pointalign import align_to_previous
 from .prealign import align
 
 
@@ -55,6 +56,7 @@ class SlamFilter:
         self.gate = float(chi2_quantile(config.gate_probability, 2))
         self.new_gate = float(chi2_quantile(config.new_landmark_probability, 2))
         self._previous_points: cKDTree | None = None
+        self._previous_world = np.zeros((0, 2))
         self._heading_before = float(initial_pose[2])
         self._dt = 0.0
 
@@ -81,7 +83,7 @@ class SlamFilter:
         self.stamp = stamp
         if odom is not None:
             self.odom = odom
-        if cfg.prealign and self.landmarks and obs.lines.shape[0]:
+        if cfg.prealign and self.scan_no > 0:
             self._prealign(obs, info)
         pairs_l, new_l = self._associate_lines(obs)
         pairs_c, new_c = self._associate_corners(obs)
@@ -115,52 +117,74 @@ class SlamFilter:
             self.ekf.predict()
 
     def _prealign(self, obs: Observations, info: StepInfo) -> None:
+        """Heading (and after a missed turn, position) of the scan against the map's lines, or,
+        for a scan with too few lines, against the previous scan's points."""
         cfg = self.config
+        x = self.ekf.x[:, 0].copy()
+        max_turn = cfg.max_turn_rate * self._dt + np.radians(10.0)
+        a = self._line_alignment(obs, x, max_turn) if obs.lines.shape[0] else None
+        if a is not None and a.matched_length > 0 and a.matched_length >= cfg.prealign_min_fraction * a.total_length:
+            self._apply_alignment(a.pose, a.information, x, info)
+            return
+        if not cfg.point_fallback or self._previous_points is None or obs.points.shape[0] < 20:
+            return
+        cands = align_to_previous(obs.points, self._previous_world, self._previous_points, x[:3],
+                                  self._heading_before, max_turn, cfg.verify_tolerance)
+        near = [c for c in cands if abs(wrap(c[1][2] - x[2])) <= np.radians(10.0)]
+        far = [c for c in cands if abs(wrap(c[1][2] - x[2])) > np.radians(10.0)]
+        chosen = near[0] if near else None
+        if far and (chosen is None or far[0][0] > chosen[0] + cfg.verify_margin):
+            chosen = far[0]
+        if chosen is not None and chosen[0] >= cfg.point_min_score:
+            self._apply_alignment(chosen[1], np.eye(2) if cfg.point_xy else None, x, info, always_xy=cfg.point_xy)
+
+    def _line_alignment(self, obs: Observations, x: np.ndarray, max_turn: float):
         pos, idx = self._indices("line")
         if pos.size == 0:
-            return
-        x = self.ekf.x[:, 0]
+            return None
         R, th = x[idx], x[idx + 1]
         ends = self._extent_points(R, th, pos)
-        p = x[:2]
-        dist = _point_segment_distance(p, ends)
-        near = dist <= cfg.prealign_radius
+        near = _point_segment_distance(x[:2], ends) <= self.config.prealign_radius
         if not near.any():
-            return
+            return None
         lengths = np.hypot(ends[:, 2] - ends[:, 0], ends[:, 3] - ends[:, 1])
-        verify = self._verifier(obs.points)
-        a = align(obs.lines[:, 0], obs.lines[:, 1], obs.line_lengths, R[near], th[near], np.maximum(lengths[near], 0.3), x[:3],
-                  scan_ends=obs.line_ends, map_ends=ends[near], reference_heading=self._heading_before,
-                  max_turn=cfg.max_turn_rate * self._dt + np.radians(10.0), verify=verify,
-                  verify_margin=cfg.verify_margin)
-        if a is None or a.matched_length <= 0 or a.matched_length < cfg.prealign_min_fraction * a.total_length:
-            return
-        nu = a.pose - x[:3]
+        return align(obs.lines[:, 0], obs.lines[:, 1], obs.line_lengths, R[near], th[near],
+                     np.maximum(lengths[near], 0.3), x[:3], scan_ends=obs.line_ends, map_ends=ends[near],
+                     reference_heading=self._heading_before, max_turn=max_turn,
+                     verify=self._verifier(obs.points), verify_margin=self.config.verify_margin)
+
+    def _apply_alignment(self, pose: np.ndarray, information: np.ndarray | None, x: np.ndarray, info: StepInfo,
+                         always_xy: bool = False) -> None:
+        """Pose pseudo-measurement: the heading always; the position along the matched line
+        normals (``information``) only after a turn the prediction missed."""
+        cfg = self.config
+        nu = pose - x[:3]
         nu[2] = wrap(nu[2])
         P = self.ekf.P
         var_phi = cfg.prealign_sigma_phi**2
         if nu[2] ** 2 > chi2_quantile(0.999, 1) * (P[2, 2] + var_phi):
-            # the constant-velocity prior cannot explain the turn the lines show: widen it
+            # the constant-velocity prior cannot explain the turn the scan shows: widen it
             P[2, 2] += nu[2] ** 2
             P[4, 4] += 0.25 * (nu[2] / max(self._dt, 1e-3)) ** 2
-        # position: only along the normals of the matched lines (a corridor fixes one direction)
-        R_xy = cfg.prealign_sigma_xy**2 * np.linalg.inv(a.information + 1e-3 * np.eye(2))
-        S_xy = P[:2, :2] + R_xy
         rows = [2]
-        # the line update fixes the position once the heading is right; the alignment's position
-        # is used too only after a turn the prediction missed (it double-counts the lines)
-        if abs(nu[2]) > cfg.prealign_xy_turn and nu[:2] @ np.linalg.solve(S_xy, nu[:2]) < chi2_quantile(0.999, 2):
-            rows = [0, 1, 2]
+        if information is not None:
+            # position: only along the normals of the matched lines (a corridor fixes one direction);
+            # the line update fixes the position once the heading is right, so the alignment's
+            # position is used only after a turn the prediction missed (it double-counts the lines)
+            R_xy = cfg.prealign_sigma_xy**2 * np.linalg.inv(information + 1e-3 * np.eye(2))
+            S_xy = P[:2, :2] + R_xy
+            if (always_xy or abs(nu[2]) > cfg.prealign_xy_turn) and nu[:2] @ np.linalg.solve(S_xy, nu[:2]) < chi2_quantile(0.999, 2):
+                rows = [0, 1, 2]
         Rm = np.zeros((len(rows), len(rows)))
         Rm[-1, -1] = var_phi
         if len(rows) == 3:
             Rm[:2, :2] = R_xy
         H = np.zeros((len(rows), self.ekf.dim_x))
         H[np.arange(len(rows)), rows] = 1.0
-        self.ekf.update(a.pose[rows].reshape(-1, 1), lambda _x: H, lambda xx: xx[rows],
+        self.ekf.update(pose[rows].reshape(-1, 1), lambda _x: H, lambda xx: xx[rows],
                         R=Rm, residual=_pose_residual)
         info.prealign_used = True
-        info.prealign_shift = float(wrap(a.pose[2] - x[2]))
+        info.prealign_shift = float(nu[2])
 
     def _verifier(self, points: np.ndarray):
         """``verify(pose)``: fraction of this scan's points within ``verify_tolerance`` of the
@@ -184,7 +208,8 @@ class SlamFilter:
             return
         X, Y, Phi = self.ekf.x[:3, 0]
         c, s = np.cos(Phi), np.sin(Phi)
-        self._previous_points = cKDTree(points @ np.array([[c, s], [-s, c]]) + (X, Y))
+        self._previous_world = points @ np.array([[c, s], [-s, c]]) + (X, Y)
+        self._previous_points = cKDTree(self._previous_world)
 
     def _extent_points(self, R: np.ndarray, th: np.ndarray, pos: np.ndarray) -> np.ndarray:
         """(L, 4) world endpoints of line landmarks from their extents."""

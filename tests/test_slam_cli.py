@@ -71,6 +71,9 @@ def test_decimated_input_and_odometry_rows(sim_folder):
     result = run(data, SlamConfig(), progress=False)
     assert [row["source"] for row in result.metrics["table"]] == ["slam"]
     assert result.metrics["ate"]["rmse"] < 0.15
+    five = load_input(sim_folder, rate_hz=5.0)
+    stamps = np.array([r.scan.stamp for r in five.records])
+    assert np.all(np.diff(stamps) >= 0.2 - 1e-9) and np.all(np.diff(stamps) < 0.23)
 
 
 @pytest.mark.shared_data

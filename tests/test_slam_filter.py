@@ -125,3 +125,42 @@ def test_bad_input_raises_clear_errors():
         run_observations([], [])
     cfg = SlamConfig(sigma_accel=2.0)
     assert SlamConfig.from_dict(cfg.to_dict()) == cfg
+
+
+def test_scan_points_ray_caster_hits_the_walls():
+    from slam.synthetic import scan_points
+
+    pose = np.array([4.0, 3.0, 0.5])
+    pts = scan_points(CONVEX_ROOM, pose, max_range=30.0)
+    assert pts.shape == (361, 2)  # a closed convex room: every beam hits
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    world = pts @ np.array([[c, s], [-s, c]]) + pose[:2]
+    # every point lies on some wall (distance to the nearest segment ~ 0)
+    a, b = CONVEX_ROOM[:, :2], CONVEX_ROOM[:, 2:]
+    ab = b - a
+    t = np.clip(np.einsum("pwk,wk->pw", world[:, None, :] - a[None], ab) / np.sum(ab * ab, 1), 0, 1)
+    dist = np.hypot(*(world[:, None, :] - (a + t[..., None] * ab)).transpose(2, 0, 1)).min(axis=1)
+    assert dist.max() < 1e-9
+
+
+def test_a_turn_in_a_scan_without_lines_is_followed_by_its_points():
+    from slam.synthetic import scan_points
+
+    rng = np.random.default_rng(11)
+    poses = [np.array([4.5, 3.5, 0.3])] * 6 + [np.array([4.5, 3.5, wrap(0.3 + np.radians(60.0))])] * 2
+    steps = []
+    for k, p in enumerate(poses):
+        o = observe_walls(CONVEX_ROOM, p, rng=rng, max_range=20.0)
+        pts = scan_points(CONVEX_ROOM, p, max_range=20.0, sigma=0.005, rng=rng)
+        if k == 6:  # the extractor found no line in the first scan after the turn
+            o = Observations(points=pts)
+        else:
+            o = Observations(o.lines, o.line_cov, o.line_ends, points=pts)
+        steps.append((0.2 * k, o, None, None))
+    from slam import run_steps
+
+    traj = run_steps(steps, SlamConfig()).trajectory
+    assert abs(wrap(traj[6, 3] + poses[0][2] - poses[6][2])) < np.radians(2.0)
+    assert abs(wrap(traj[7, 3] + poses[0][2] - poses[7][2])) < np.radians(1.0)
+    off = run_steps(steps, SlamConfig(point_fallback=False)).trajectory
+    assert abs(wrap(off[6, 3] + poses[0][2] - poses[6][2])) > np.radians(20.0)

@@ -20,6 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="do not also run the filter with odometry for the comparison table")
     p.add_argument("--relations", type=Path, help="relations file (default: NAME.relations beside a log)")
     p.add_argument("--every", type=int, default=1, help="keep every N-th scan (decimation)")
+    p.add_argument("--rate-hz", type=float, help="decimate to about this many scans/s (by the stamps)")
     p.add_argument("--max-scans", type=int, help="stop after this many scans")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
@@ -60,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     from experiments.slamrun import load_input, run as run_slam, write_outputs
 
     config = _config(args)
-    data = load_input(args.input, args.relations, args.every, args.max_scans)
+    data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz)
     if config.use_odometry and data.odometry is None:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
     result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline)

@@ -22,11 +22,12 @@ from .lines import find_lines
 from .segments import endpoints, merge_neighbours, resolve_overlaps
 from .signals import compute, signals
 
-__all__ = ["SensorMethodConfig", "extract_sensor", "signals"]
+__all__ = ["BACKENDS", "SensorMethodConfig", "extract_sensor", "resolve_backend", "signals"]
 
 METHOD = "sensor"
 
 
+BACKENDS = ("auto", "numba", "numpy")
 _CHECKED: dict[int, SensorMethodConfig] = {}  # id -> config already checked (kept alive here)
 
 
@@ -47,6 +48,10 @@ def _check(cfg: SensorMethodConfig) -> SensorMethodConfig:
         raise ValueError(f"hough_angles: must be an odd integer >= 1, got {cfg.hough_angles!r}")
     if cfg.min_points < 3:
         raise ValueError(f"min_points: must be >= 3, got {cfg.min_points!r}")
+    if cfg.backend not in BACKENDS:
+        raise ValueError(f"backend: must be one of {', '.join(BACKENDS)}, got {cfg.backend!r}")
+    if cfg.backend == "numba" and not _numba_available():
+        raise ValueError("backend: 'numba' asked for but numba is not installed (pip install numba)")
     if len(_CHECKED) > 64:
         _CHECKED.clear()
     _CHECKED[id(cfg)] = cfg
@@ -79,11 +84,34 @@ def _for_scan(cfg: SensorMethodConfig, scan: Scan) -> SensorMethodConfig:
     return hit[1]
 
 
+_NUMBA: list[bool] = []  # cached answer of _numba_available
+
+
+def _numba_available() -> bool:
+    if not _NUMBA:
+        from .compiled import is_available  # noqa: PLC0415  (does not import numba)
+
+        _NUMBA.append(is_available())
+    return _NUMBA[0]
+
+
+def resolve_backend(backend: str) -> str:
+    """The backend a config's ``backend`` field runs on: "auto" is "numba" when importable."""
+    if backend == "auto":
+        return "numba" if _numba_available() else "numpy"
+    return backend
+
+
 def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
-    """Lines and corners of ``scan`` in its sensor frame (the registered run function)."""
+    """Lines and corners of ``scan`` in its sensor frame (the registered run function); the
+    config's ``backend`` picks the compiled kernels or the numpy reference (same results)."""
     _check(cfg)
     cfg = _for_scan(cfg, scan)
     with np.errstate(all="ignore"):
+        if resolve_backend(cfg.backend) == "numba":
+            from .compiled import extract_numba  # noqa: PLC0415  (numba is imported on first use)
+
+            return extract_numba(scan, cfg, max(scan.range_min, cfg.min_range))
         return _extract(scan, cfg)
 
 

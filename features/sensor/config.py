@@ -42,3 +42,4 @@ class SensorMethodConfig:
     corner_max_dist: float = 0.15  # the intersection must lie this close to both facing ends, m
     acute_check: bool = True  # the paper's remedy: reject a corner when the variance of the ranges
     acute_min_var: float = 1.0  # of the beams within k of it is below acute_min_var * sigma_r**2
+    backend: str = "auto"  # "numba" (compiled kernels), "numpy" (the reference), "auto": numba when importable

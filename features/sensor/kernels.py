@@ -1,0 +1,689 @@
+"""Compiled (numba) kernels of the sensor-coordinate extractor: the same algorithm as the numpy
+reference in ``signals``, ``lines``, ``hough``, ``refine``, ``segments`` and ``corners``, step for
+step, fused into loops over the beams of one scan.
+
+Why: the numpy reference spends most of its ~500 us a scan in numpy's fixed per-call cost (~150
+small array operations on a few hundred beams), not in arithmetic. Each function here mirrors a
+reference function (named in its docstring) and keeps its operation order; sums over beams use
+numpy's pairwise summation (``pairwise_sum``) so that sums agree with ``np.add.reduceat`` to the
+last bit. Transcendentals come from libm rather than numpy's SIMD routines, so results can differ
+in the last bit (tests check agreement to 1e-9 on many scans). Importing this module imports
+numba; ``features.sensor`` does so only when the numba backend is first used, and ``cache=True``
+keeps the compiled code between processes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+PW_BLOCKSIZE = 128  # numpy's pairwise-summation block (numpy/_core/src/umath/loops_utils.h.src)
+N_BINS = 13  # == hough.N_BINS
+MIN_COS = 0.05  # == refine.MIN_COS
+TWO_PI = 2.0 * math.pi
+
+# indices into the float parameter vector built by features.sensor.compiled.params
+F_SIGMA_R, F_AD_C, F_PSI_SPLIT2, F_PSI_TAU2, F_BAND_TAU, F_BAND_MIN, F_BIN_TAU, F_INLIER_TAU = range(8)
+F_MAX_CHI2, F_MIN_INLIER_FRACTION, F_CURV2, F_MIN_LENGTH, F_MERGE_TAU2, F_MIN_TURN = range(8, 14)
+F_CORNER_MAX_DIST, F_CORNER_PSI, F_ACUTE_VAR, F_AD_LINE, F_TWO_SIN_SUM, F_SUBDIV_STEP = range(14, 20)
+N_FLOAT = 20
+I_K, I_SUBDIV, I_ANGLES, I_MIN_POINTS, I_MERGE_GAP, I_BRIDGE, I_CORNERS, I_MAX_GAP, I_ACUTE, I_ZERO = range(10)
+N_INT = 10
+
+# cached between processes; IEEE division (x / 0 -> inf or nan, as in numpy, never an exception)
+kernel = njit(cache=True, error_model="numpy")
+
+
+@kernel
+def block_sum(a: np.ndarray, lo: int, n: int) -> float:
+    """numpy's pairwise sum of a[lo : lo + n] for n <= 128: sequential below 8, else 8 accumulators."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += a[lo + i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    while i < n - (n % 8):
+        r0 += a[lo + i]
+        r1 += a[lo + i + 1]
+        r2 += a[lo + i + 2]
+        r3 += a[lo + i + 3]
+        r4 += a[lo + i + 4]
+        r5 += a[lo + i + 5]
+        r6 += a[lo + i + 6]
+        r7 += a[lo + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@kernel
+def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
+    """Sum of a[lo : lo + n] in numpy's pairwise order (blocks of 128 halved at multiples of 8).
+    numpy recurses; this walks the same tree with an explicit stack (numba cannot cache
+    recursive functions reliably)."""
+    if n <= PW_BLOCKSIZE:
+        return block_sum(a, lo, n)
+    st_lo = np.empty(64, np.int64)
+    st_n = np.empty(64, np.int64)
+    st_state = np.empty(64, np.int64)
+    vals = np.empty(64)
+    sp = 1
+    st_lo[0], st_n[0], st_state[0] = lo, n, 0
+    nv = 0
+    while sp > 0:
+        top = sp - 1
+        l, m = st_lo[top], st_n[top]
+        if m <= PW_BLOCKSIZE:
+            vals[nv] = block_sum(a, l, m)
+            nv += 1
+            sp -= 1
+            continue
+        n2 = m // 2
+        n2 -= n2 % 8
+        if st_state[top] == 0:  # left half first
+            st_state[top] = 1
+            st_lo[sp], st_n[sp], st_state[sp] = l, n2, 0
+            sp += 1
+        elif st_state[top] == 1:  # then the right half
+            st_state[top] = 2
+            st_lo[sp], st_n[sp], st_state[sp] = l + n2, m - n2, 0
+            sp += 1
+        else:  # both done: left + right
+            vals[nv - 2] = vals[nv - 2] + vals[nv - 1]
+            nv -= 1
+            sp -= 1
+    return vals[0]
+
+
+@kernel
+def segment_sum(a: np.ndarray, lo: int, n: int) -> float:
+    """``np.add.reduceat`` of one segment: the first element plus the pairwise sum of the rest."""
+    return a[lo] + pairwise_sum(a, lo + 1, n - 1)
+
+
+@kernel
+def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):  # noqa: ANN001, ANN201
+    """signals.compute: valid, AD, AD_var, theta, theta_var, psi, psi_var per beam."""
+    n = ranges.size
+    valid = np.zeros(n, np.bool_)
+    u = np.full(n, np.nan)
+    for i in range(n):
+        d = ranges[i]
+        if d >= range_lo and d <= range_hi:
+            valid[i] = True
+            u[i] = 1.0 / d
+    AD = np.full(n, np.nan)
+    AD_var = np.full(n, np.nan)
+    theta = np.full(n, np.nan)
+    theta_var = np.full(n, np.nan)
+    psi = np.full(n, np.nan)
+    psi_var = np.full(n, np.nan)
+    if n >= 2 * k + 1:
+        for i in range(k, n - k):
+            s1 = 0.0
+            sd = 0.0
+            s4 = 0.0
+            for j in range(i - k, i + k + 1):  # eq. 4 and 6 over the window (nan when it holds one)
+                uj = u[j]
+                u2j = uj * uj
+                s1 += uj
+                sd += uj if j >= i else -uj
+                s4 += u2j * u2j
+            ui = u[i]
+            u2 = ui * ui
+            a = s1 / ui
+            ad = sd / ui
+            other = s4 / u2 - u2
+            ad1 = ad - 1.0
+            a1 = a - 1.0
+            AD[i] = a
+            AD_var[i] = other + a1 * a1 * u2
+            tan_psi = ad1 / two_sin_sum
+            theta[i] = bearings[i] + math.atan(tan_psi)
+            tan_sd = math.sqrt(other + ad1 * ad1 * u2) * (sigma_r / two_sin_sum)
+            theta_sd = 0.5 * (math.atan(tan_psi + tan_sd) - math.atan(tan_psi - tan_sd))
+            theta_var[i] = theta_sd * theta_sd
+    for i in range(n - k):
+        dpsi = theta[i] - theta[i + k]
+        psi[i] = dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
+        psi_var[i] = theta_var[i] + theta_var[i + k]
+    return valid, AD, AD_var, theta, theta_var, psi, psi_var
+
+
+@kernel
+def candidate_runs(AD, AD_var, psi, psi_var, k, ad_line, ad_c, psi_split2, psi_tau2):  # noqa: ANN001, ANN201
+    """lines.candidate_runs: first and last centre of each run of line beams."""
+    n = AD.size
+    ok = np.zeros(n, np.bool_)
+    for i in range(n):
+        dev = AD[i] - ad_line
+        ok[i] = dev * dev <= ad_c * AD_var[i]
+    mag = np.zeros(n)
+    big = np.zeros(n, np.bool_)
+    any_big = False
+    for i in range(n):
+        p2 = psi[i] * psi[i]
+        if p2 > psi_split2 and p2 > psi_tau2 * psi_var[i]:  # > max(.,.) (False on nan)
+            big[i] = True
+            mag[i] = p2
+            any_big = True
+    if any_big:
+        hit = np.zeros(n, np.bool_)
+        for i in range(n):
+            if big[i] and (i == 0 or mag[i] >= mag[i - 1]) and (i == n - 1 or mag[i] >= mag[i + 1]):
+                hit[min(i + k // 2, n - 1)] = True
+        for i in range(n):
+            if hit[i]:
+                for j in range(max(0, i - k), min(n, i + k + 1)):
+                    ok[j] = False
+    c0 = np.empty(n, np.int64)
+    c1 = np.empty(n, np.int64)
+    m = 0
+    i = 0
+    while i < n:
+        if ok[i]:
+            j = i
+            while j + 1 < n and ok[j + 1]:
+                j += 1
+            c0[m] = i
+            c1[m] = j
+            m += 1
+            i = j + 1
+        else:
+            i += 1
+    return c0[:m], c1[:m]
+
+
+@kernel
+def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, step, subdiv, n_angles,
+                template, zero):  # noqa: ANN001, ANN201
+    """hough.band_search: Log-Hough peak (alpha, rho) of every run in its band, and the inliers."""
+    n_runs = starts.size
+    h2 = (n_angles - 1) // 2
+    h = max(h2, 1)
+    n_tmpl = template.size
+    alpha = np.empty(n_runs)
+    rho = np.empty(n_runs)
+    inlier = np.zeros(beam.size, np.bool_)
+    a_idx = np.empty(n_angles, np.int64)
+    ref = np.empty(n_angles)
+    acc = np.zeros((n_angles, N_BINS + 2), np.int64)
+    for r in range(n_runs):
+        s, cnt = starts[r], counts[r]
+        centre_idx = np.int64(np.rint((centre[r] - angle_min) / step))
+        stride = np.int64(max(np.rint(half_width[r] / (h * step)), 1.0))
+        inv_width = 1.0 / bin_half[r]
+        rows = (s + cnt // 4, s + cnt // 2, s + (3 * cnt) // 4)
+        for a in range(n_angles):
+            a_idx[a] = centre_idx + stride * (a - h2)
+            q = np.empty(3)
+            for m in range(3):
+                row = rows[m]
+                idx = min(max(a_idx[a] + zero - beam[row] * subdiv, 0), n_tmpl - 1)
+                q[m] = template[idx] + log_d[row]
+            ref[a] = max(min(q[0], q[1]), min(max(q[0], q[1]), q[2]))  # median of three
+        acc[:, :] = 0
+        for a in range(n_angles):
+            offset = (N_BINS / 2.0 + 1.0) - ref[a] * inv_width
+            for row in range(s, s + cnt):
+                idx = min(max(a_idx[a] + zero - beam[row] * subdiv, 0), n_tmpl - 1)
+                rel = (template[idx] + log_d[row]) * inv_width + offset
+                if not rel >= 0.0:  # np.fmax(rel, 0): nan votes go to the outside cell 0
+                    rel = 0.0
+                rel = min(rel, N_BINS + 1.0)
+                acc[a, np.int64(rel)] += 1
+        best = -np.inf
+        best_a = 0
+        best_c = 0
+        for a in range(n_angles):
+            tie = -1e-3 * abs(a - h2)
+            for c in range(N_BINS - 1):
+                v = (acc[a, c + 1] + acc[a, c + 2]) + tie
+                if v > best:
+                    best, best_a, best_c = v, a, c
+        peak_log_p = ref[best_a] + (best_c + 1 - N_BINS / 2.0) * bin_half[r]
+        alpha[r] = angle_min + a_idx[best_a] * step
+        rho[r] = math.exp(peak_log_p)
+        for row in range(s, s + cnt):
+            idx = min(max(a_idx[best_a] + zero - beam[row] * subdiv, 0), n_tmpl - 1)
+            inlier[row] = abs((template[idx] + log_d[row]) - peak_log_p) <= bin_half[r]
+    return alpha, rho, inlier
+
+
+@kernel
+def gauss_newton(d, b, starts, counts, mask, rho, alpha, sigma_r, inlier_tau, buf):  # noqa: ANN001, ANN201
+    """refine.gauss_newton: one step of every run's (rho, alpha); inlier_tau <= 0 means none.
+    Returns (rho, alpha, cov (R, 2, 2), z (N,), w (N,)); ``buf`` is (5, N) scratch."""
+    n_runs = starts.size
+    n = d.size
+    z = np.full(n, np.nan)
+    w = np.empty(n)
+    new_rho = np.empty(n_runs)
+    new_alpha = np.empty(n_runs)
+    cov = np.empty((n_runs, 2, 2))
+    s2 = sigma_r * sigma_r
+    for r in range(n_runs):
+        s, cnt = starts[r], counts[r]
+        for row in range(s, s + cnt):
+            phi = b[row] - alpha[r]
+            c = math.cos(phi)
+            res = d[row] * c - rho[r]
+            g = d[row] * math.sin(phi)
+            use = c > MIN_COS and mask[row]
+            if inlier_tau > 0.0:
+                zz = res / (sigma_r * c)
+                z[row] = zz
+                use = use and abs(zz) <= inlier_tau
+            wr = (1.0 if use else 0.0) / (c * c)
+            w[row] = wr
+            wg = wr * g
+            buf[0, row] = wr
+            buf[1, row] = wg
+            buf[2, row] = wg * g
+            buf[3, row] = wr * res
+            buf[4, row] = wg * res
+        sw = segment_sum(buf[0], s, cnt)
+        swg = segment_sum(buf[1], s, cnt)
+        swgg = segment_sum(buf[2], s, cnt)
+        swr = segment_sum(buf[3], s, cnt)
+        swgr = segment_sum(buf[4], s, cnt)
+        inv_det = 1.0 / (sw * swgg - swg * swg)
+        new_rho[r] = rho[r] + (swgg * swr - swg * swgr) * inv_det
+        new_alpha[r] = alpha[r] + (swg * swr - sw * swgr) * inv_det
+        var = s2 * inv_det
+        cov[r, 0, 0] = swgg * var
+        cov[r, 0, 1] = swg * var
+        cov[r, 1, 0] = swg * var
+        cov[r, 1, 1] = sw * var
+    return new_rho, new_alpha, cov, z, w
+
+
+@kernel
+def wrap(a: float) -> float:
+    """signals.wrap for one angle: (-pi, pi] (rad)."""
+    return math.pi - (math.pi - a) % TWO_PI
+
+
+@kernel
+def fit_spans(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, fp, ip):  # noqa: ANN001, ANN201
+    """lines.fit_spans: two Gauss-Newton steps, the checks, normal form. Returns the line table
+    (rho, alpha, cov, first, last, n_points) and the mask of the lines that pass."""
+    n = beam.size
+    n_runs = starts.size
+    sigma = fp[F_SIGMA_R]
+    ok = np.empty(n, np.bool_)
+    d = np.empty(n)
+    b = np.empty(n)
+    m0 = np.empty(n, np.bool_)
+    first_max = 0
+    for r in range(n_runs):
+        first_max = max(first_max, beam[starts[r]])
+    for row in range(n):
+        j = beam[row]
+        ok[row] = valid[j]
+        d[row] = ranges[j] if valid[j] else 0.0
+        b[row] = bearings[j]
+        m0[row] = ok[row] and inlier0[row]
+    buf = np.empty((5, n))
+    rho1, alpha1, _, _, _ = gauss_newton(d, b, starts, counts, m0, rho0, alpha0, sigma, -1.0, buf)
+    rho, alpha, cov, z, w = gauss_newton(d, b, starts, counts, ok, rho1, alpha1, sigma, fp[F_INLIER_TAU], buf)
+    first_in = np.empty(n_runs, np.int64)
+    last_in = np.empty(n_runs, np.int64)
+    n_in = np.empty(n_runs, np.int64)
+    good = np.zeros(n_runs, np.bool_)
+    for r in range(n_runs):
+        s, cnt = starts[r], counts[r]
+        b0 = beam[s]
+        lo = n + first_max
+        hi = -1
+        for row in range(s, s + cnt):
+            inl = w[row] > 0
+            zi = z[row] if inl else 0.0
+            wi = 1.0 if inl else 0.0
+            t = float(beam[row] - b0)
+            t2 = t * t
+            wt = wi * t
+            buf[0, row] = wi
+            buf[1, row] = zi * zi
+            buf[2, row] = wt
+            buf[3, row] = wi * t2
+            buf[4, row] = wt * t2
+            if inl:
+                lo = min(lo, beam[row])
+                hi = max(hi, beam[row])
+        n_f = segment_sum(buf[0], s, cnt)
+        chi = segment_sum(buf[1], s, cnt)
+        s_t = segment_sum(buf[2], s, cnt)
+        s_t2 = segment_sum(buf[3], s, cnt)
+        s_t3 = segment_sum(buf[4], s, cnt)
+        ni = np.int64(n_f)
+        n_f = max(n_f, 1.0)
+        m1, m2, m3 = s_t / n_f, s_t2 / n_f, s_t3 / n_f
+        b_lin = (m3 - m1 * m2) / max(m2 - m1 * m1, 1e-12)
+        a_lin = m2 - b_lin * m1
+        for row in range(s, s + cnt):
+            inl = w[row] > 0
+            zi = z[row] if inl else 0.0
+            wi = 1.0 if inl else 0.0
+            t = float(beam[row] - b0)
+            q = t * t - a_lin - b_lin * t
+            buf[0, row] = zi * q
+            buf[1, row] = (wi * q) * q
+        zq = segment_sum(buf[0], s, cnt)
+        qq = segment_sum(buf[1], s, cnt)
+        first_in[r] = lo
+        last_in[r] = hi
+        n_in[r] = ni
+        good[r] = (
+            ni >= ip[I_MIN_POINTS]
+            and ni >= fp[F_MIN_INLIER_FRACTION] * core[r]
+            and chi <= fp[F_MAX_CHI2] * max(ni - 2, 1)
+            and zq * zq <= fp[F_CURV2] * qq
+            and np.isfinite(rho[r] + alpha[r] + cov[r, 0, 0] + cov[r, 1, 1])
+        )
+        if rho[r] < 0:
+            rho[r] = abs(rho[r])
+            alpha[r] = alpha[r] + math.pi
+            cov[r, 0, 1] *= -1.0
+            cov[r, 1, 0] *= -1.0
+        alpha[r] = wrap(alpha[r])
+    return rho, alpha, cov, first_in, last_in, n_in, good
+
+
+@kernel
+def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reach, inlier_tau, sigma_r):  # noqa: ANN001
+    """lines.extend_ends, in place: grow each line over the beams past its ends that continue it."""
+    n = ranges.size
+    lim = inlier_tau * sigma_r
+    for m in range(rho.size):
+        grow0 = 0
+        for s in range(1, reach + 1):
+            j = last[m] + s
+            if j >= n:
+                break
+            c = math.cos(bearings[j] - alpha[m])
+            if not (valid[j] and c > 0.05 and abs(ranges[j] * c - rho[m]) <= lim * c):
+                break
+            grow0 += 1
+        grow1 = 0
+        for s in range(1, reach + 1):
+            j = first[m] - s
+            if j < 0:
+                break
+            c = math.cos(bearings[j] - alpha[m])
+            if not (valid[j] and c > 0.05 and abs(ranges[j] * c - rho[m]) <= lim * c):
+                break
+            grow1 += 1
+        first[m] -= grow1
+        last[m] += grow0
+        n_points[m] += grow0 + grow1
+
+
+@kernel
+def find_lines(ranges, bearings, angle_min, increment, range_lo, range_hi, template, fp, ip):  # noqa: ANN001, ANN201
+    """signals.compute + lines.find_lines: the line table before merging, and the signals the
+    later stages need (valid, psi)."""
+    k = ip[I_K]
+    sigma_r = fp[F_SIGMA_R]
+    valid, AD, AD_var, theta, theta_var, psi, psi_var = beam_signals(
+        ranges, bearings, k, range_lo, range_hi, sigma_r, fp[F_TWO_SIN_SUM]
+    )
+    c0, c1 = candidate_runs(AD, AD_var, psi, psi_var, k, fp[F_AD_LINE], fp[F_AD_C], fp[F_PSI_SPLIT2], fp[F_PSI_TAU2])
+    keep = (c1 - c0 + 2 * k + 1) >= ip[I_MIN_POINTS]
+    c0, c1 = c0[keep], c1[keep]
+    n_runs = c0.size
+    empty_f = np.empty(0)
+    empty_i = np.empty(0, np.int64)
+    if n_runs == 0:
+        return empty_f, empty_f, np.empty((0, 2, 2)), empty_i, empty_i, empty_i, valid, psi
+    first = c0 - k
+    last = c1 + k
+    counts = last - first + 1
+    starts = np.empty(n_runs, np.int64)
+    total = 0
+    for r in range(n_runs):
+        starts[r] = total
+        total += counts[r]
+    beam = np.empty(total, np.int64)
+    log_d = np.empty(total)
+    for r in range(n_runs):
+        for t in range(counts[r]):
+            beam[starts[r] + t] = first[r] + t
+            log_d[starts[r] + t] = math.log(ranges[first[r] + t])
+    # slope estimate of each run: mean of theta over its centres, via cumulative sums (as numpy)
+    n = ranges.size
+    cs_t = np.empty(n)
+    cs_v = np.empty(n)
+    acc_t = 0.0
+    acc_v = 0.0
+    for i in range(n):
+        th = theta[i]
+        tv = theta_var[i]
+        acc_t += 0.0 if np.isnan(th) else th
+        acc_v += 0.0 if np.isnan(tv) else tv
+        cs_t[i] = acc_t
+        cs_v[i] = acc_v
+    h = max((ip[I_ANGLES] - 1) // 2, 1)
+    subdiv = ip[I_SUBDIV]
+    centre = np.empty(n_runs)
+    half_width = np.empty(n_runs)
+    bin_half = np.empty(n_runs)
+    for r in range(n_runs):
+        a, e = c0[r], c1[r]
+        n_c = e - a + 1
+        t0 = 0.0 if np.isnan(theta[a]) else theta[a]
+        v0 = 0.0 if np.isnan(theta_var[a]) else theta_var[a]
+        centre[r] = (cs_t[e] - cs_t[a] + t0) / n_c
+        cvar = (cs_v[e] - cs_v[a] + v0) / (n_c * (1.0 + n_c / (2 * k + 1)))
+        half_width[r] = min(max(fp[F_BAND_TAU] * math.sqrt(cvar), fp[F_BAND_MIN]), 0.5)
+        angle_step = max(half_width[r] / h, increment / subdiv)
+        tan_span = abs(math.tan(bearings[e + k] - centre[r]) - math.tan(bearings[a - k] - centre[r]))
+        d_min = np.inf
+        for j in range(first[r], last[r] + 1):
+            d_min = min(d_min, ranges[j])
+        bin_half[r] = fp[F_BIN_TAU] * sigma_r / d_min + 0.5 * angle_step * min(tan_span, 40.0)
+    alpha0, rho0, inlier0 = band_search(
+        beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, fp[F_SUBDIV_STEP], subdiv,
+        ip[I_ANGLES], template, ip[I_ZERO],
+    )
+    core = (c1 - c0 + 1) + 2 * k
+    rho, alpha, cov, f_in, l_in, n_in, good = fit_spans(
+        beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, fp, ip
+    )
+    idx = np.flatnonzero(good)
+    rho, alpha, cov = rho[idx], alpha[idx], cov[idx]
+    f_in, l_in, n_in = f_in[idx], l_in[idx], n_in[idx]
+    extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, fp[F_INLIER_TAU], sigma_r)
+    return rho, alpha, cov, f_in, l_in, n_in, valid, psi
+
+
+@kernel
+def inv2(a: float, b: float, d: float):  # noqa: ANN201
+    """segments._inv2: inverse of [[a, b], [b, d]] as (00, 01, 11)."""
+    det = a * d - b * b
+    return d / det, -b / det, a / det
+
+
+@kernel
+def merge_neighbours(rho, alpha, cov, first, last, npts, valid, fp, ip, floor00, floor11):  # noqa: ANN001, ANN201
+    """segments.merge_neighbours: information-weighted fusion of neighbouring pieces of one line."""
+    n = rho.size
+    if n < 2:
+        return rho, alpha, cov, first, last, npts
+    invalid_cum = np.zeros(valid.size + 1, np.int64)
+    for i in range(valid.size):
+        invalid_cum[i + 1] = invalid_cum[i] + (0 if valid[i] else 1)
+    rho = rho.copy()
+    alpha = alpha.copy()
+    c = cov.reshape(n, 4).copy()
+    last = last.copy()
+    npts = npts.copy()
+    tau2 = fp[F_MERGE_TAU2]
+    out = np.empty(n, np.int64)
+    out[0] = 0
+    n_out = 1
+    cur = 0
+    for i in range(1, n):
+        gap = first[i] - last[cur] - 1
+        if gap > ip[I_MERGE_GAP] or (gap > 0 and invalid_cum[first[i]] - invalid_cum[last[cur] + 1] > ip[I_BRIDGE]):
+            out[n_out] = i
+            n_out += 1
+            cur = i
+            continue
+        dr = rho[i] - rho[cur]
+        da = (alpha[i] - alpha[cur] + math.pi) % (2 * math.pi) - math.pi
+        a00, a01, a11 = c[cur, 0], c[cur, 1], c[cur, 3]
+        b00, b01, b11 = c[i, 0], c[i, 1], c[i, 3]
+        s00, s01, s11 = a00 + b00 + floor00, a01 + b01, a11 + b11 + floor11
+        det = s00 * s11 - s01 * s01
+        if not det > 0 or (s11 * dr * dr - 2 * s01 * dr * da + s00 * da * da) > tau2 * det:
+            out[n_out] = i
+            n_out += 1
+            cur = i
+            continue
+        pa0, pa1, pa2 = inv2(a00, a01, a11)
+        pb0, pb1, pb2 = inv2(b00, b01, b11)
+        p00, p01, p11 = pa0 + pb0, pa1 + pb1, pa2 + pb2
+        va0 = pa0 * rho[cur] + pa1 * alpha[cur] + pb0 * rho[i] + pb1 * (alpha[cur] + da)
+        va1 = pa1 * rho[cur] + pa2 * alpha[cur] + pb1 * rho[i] + pb2 * (alpha[cur] + da)
+        q00, q01, q11 = inv2(p00, p01, p11)
+        rho[cur] = q00 * va0 + q01 * va1
+        alpha[cur] = q01 * va0 + q11 * va1
+        c[cur, 0] = q00
+        c[cur, 1] = q01
+        c[cur, 2] = q01
+        c[cur, 3] = q11
+        last[cur] = max(last[cur], last[i])
+        npts[cur] += npts[i]
+    if n_out == n:
+        return rho, alpha, cov, first, last, npts
+    idx = out[:n_out]
+    alpha_o = alpha[idx]
+    for m in range(n_out):
+        alpha_o[m] = wrap(alpha_o[m])
+    return rho[idx], alpha_o, c[idx].reshape(n_out, 2, 2), first[idx], last[idx], npts[idx]
+
+
+@kernel
+def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, fp, ip, floor00, floor11):  # noqa: ANN001, ANN201
+    """The part of features.sensor._extract after find_lines: merge, resolve overlaps, endpoints,
+    drop short segments. Returns (rho, alpha, cov, first, last, n_points, start (L, 2), end (L, 2))."""
+    if rho.size > 1:
+        rho, alpha, cov, first, last, npts = merge_neighbours(
+            rho, alpha, cov, first, last, npts, valid, fp, ip, floor00, floor11
+        )
+    first = first.copy()
+    last = last.copy()
+    n_lines = rho.size
+    over = np.empty(n_lines, np.bool_)  # segments.resolve_overlaps: overlaps found before any change
+    for i in range(n_lines - 1):
+        over[i] = last[i] >= first[i + 1]
+    for i in range(n_lines - 1):
+        if over[i]:
+            mid = (first[i + 1] + last[i]) // 2
+            last[i] = max(mid, first[i])
+            first[i + 1] = min(mid + 1, last[i + 1])
+    ends = np.empty((2, n_lines, 2))
+    keep = np.zeros(n_lines, np.bool_)
+    min_len2 = fp[F_MIN_LENGTH] * fp[F_MIN_LENGTH]
+    for m in range(n_lines):
+        c, s = math.cos(alpha[m]), math.sin(alpha[m])
+        for e in range(2):
+            j = first[m] if e == 0 else last[m]
+            d = ranges[j]
+            bb = bearings[j]
+            x, y = d * math.cos(bb), d * math.sin(bb)
+            off = x * c + y * s - rho[m]
+            ends[e, m, 0] = x - off * c
+            ends[e, m, 1] = y - off * s
+        dx = ends[1, m, 0] - ends[0, m, 0]
+        dy = ends[1, m, 1] - ends[0, m, 1]
+        keep[m] = dx * dx + dy * dy >= min_len2
+    idx = np.flatnonzero(keep)
+    n_pts = np.minimum(npts, last - first + 1)
+    return (rho[idx], alpha[idx], cov[idx], first[idx], last[idx], n_pts[idx], ends[0][idx], ends[1][idx])
+
+
+@kernel
+def neighbourhood_var(ranges, valid, lo, hi) -> float:  # noqa: ANN001
+    """corners.neighbourhood_var: variance of the valid ranges of beams lo..hi (as ndarray.var)."""
+    d = np.empty(hi - lo + 1)
+    m = 0
+    for j in range(lo, hi + 1):
+        if valid[j]:
+            d[m] = ranges[j]
+            m += 1
+    if m < 3:
+        return 0.0
+    mean = pairwise_sum(d, 0, m) / m
+    for j in range(m):
+        x = d[j] - mean
+        d[j] = x * x
+    return pairwise_sum(d, 0, m) / m
+
+
+@kernel
+def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, increment, fp, ip):  # noqa: ANN001, ANN201
+    """corners.find_corners: (x, y, angle, index, i) of each corner between lines i and i + 1."""
+    n_lines = rho.size
+    n = ranges.size
+    k = ip[I_K]
+    min_turn = fp[F_MIN_TURN]
+    out_f = np.empty((max(n_lines - 1, 0), 3))
+    out_i = np.empty((max(n_lines - 1, 0), 2), np.int64)
+    m = 0
+    for i in range(n_lines - 1):
+        j = i + 1
+        if first[j] - last[i] - 1 > ip[I_MAX_GAP]:
+            continue
+        a1, a2 = alpha[i], alpha[j]
+        s = math.sin(a2 - a1)
+        if math.cos(a2 - a1) >= 0:
+            turn = math.asin(min(1.0, abs(s)))
+        else:
+            turn = math.pi - math.asin(min(1.0, abs(s)))
+        if turn < min_turn or turn > math.pi - min_turn:
+            continue
+        x = (rho[i] * math.sin(a2) - rho[j] * math.sin(a1)) / s
+        y = (rho[j] * math.cos(a1) - rho[i] * math.cos(a2)) / s
+        b = math.atan2(y, x)
+        spacing = math.hypot(x, y) * increment / max(min(math.cos(b - a1), math.cos(b - a2)), 0.1)
+        reach = fp[F_CORNER_MAX_DIST] + 1.5 * min(spacing, 1.0)  # corners.SPACING_CAP
+        if math.hypot(x - end[i, 0], y - end[i, 1]) > reach:
+            continue
+        if math.hypot(x - start[j, 0], y - start[j, 1]) > reach:
+            continue
+        lo, hi = max(0, last[i] - k), min(n - 1, first[j])
+        peak = -1.0
+        for t in range(lo, hi + 1):
+            if np.isfinite(psi[t]):
+                peak = max(peak, abs(psi[t]))
+        if peak < 0.0 or peak < fp[F_CORNER_PSI] * turn:
+            continue
+        index = np.int64(np.rint((b - angle_min) / increment))
+        index = min(max(index, last[i]), first[j])
+        if ip[I_ACUTE]:
+            var = neighbourhood_var(ranges, valid, max(0, index - k), min(n - 1, index + k))
+            if var < fp[F_ACUTE_VAR]:
+                continue
+        v1x, v1y = start[i, 0] - x, start[i, 1] - y
+        v2x, v2y = end[j, 0] - x, end[j, 1] - y
+        cos_angle = (v1x * v2x + v1y * v2y) / max(math.hypot(v1x, v1y) * math.hypot(v2x, v2y), 1e-300)
+        angle = math.acos(min(1.0, max(-1.0, cos_angle)))
+        if not (0.0 < angle < math.pi) or not (np.isfinite(x) and np.isfinite(y)):
+            continue
+        out_f[m, 0] = x
+        out_f[m, 1] = y
+        out_f[m, 2] = angle
+        out_i[m, 0] = index
+        out_i[m, 1] = i
+        m += 1
+    return out_f[:m], out_i[:m]
