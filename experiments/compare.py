@@ -18,7 +18,7 @@ from typing import Any, Callable, Iterable, Sequence
 import numpy as np
 import pandas as pd
 
-from features.registry import available_methods, get_method, make_config
+from features.registry import available_methods, backend_of, get_method, make_config
 from features.scoring import ScoreConfig, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Record, read_log
 
@@ -121,7 +121,8 @@ def compare(
             scan, face, rho_err, alpha_err): see :func:`common_errors`.
 
     Returns:
-        A tidy table, one row per method x scan: method, source, kind, seed, scan, stamp, n_valid,
+        A tidy table, one row per method x scan: method, backend ("numba" or "numpy", see
+        ``features.registry.backend_of``: speed ratios are fair only between equal backends), source, kind, seed, scan, stamp, n_valid,
         n_lines, n_corners, microseconds (wall, ``perf_counter_ns``), cpu_microseconds (this
         thread's CPU time, ``thread_time_ns``: what a pre-empted call really used), explained,
         range_rms (m) and, for simulated sources,
@@ -132,6 +133,7 @@ def compare(
     methods = list(methods) if methods else available_methods()
     params = params or {}
     runs = [(m, get_method(m).run, make_config(m, **params.get(m, {}))) for m in methods]
+    backends = {name: backend_of(name, cfg) for name, _, cfg in runs}
     srcs = [s for spec in sources for s in ([spec] if isinstance(spec, Source) else parse_sources([spec]))]
     total = sum(min(s.total or 0, max_scans or s.total or 0) for s in srcs) or None
     bar = None
@@ -140,6 +142,7 @@ def compare(
 
         bar = tqdm(total=total, unit="scan", desc="compare")
     rows: list[dict[str, Any]] = []
+    warmed = False
     for src in srcs:
         for k, rec in enumerate(src.records):
             if max_scans is not None and k >= max_scans:
@@ -148,13 +151,17 @@ def compare(
             truth = src.truth_of(rec) if src.truth_of else None
             n_valid = int(np.count_nonzero(scan.valid))
             shift = k % len(runs)
+            if not warmed:  # first calls load compiled kernels and fill caches: not timed
+                for _, fn, cfg in runs:
+                    fn(scan, cfg)
+                warmed = True
             for name, fn, cfg in runs[shift:] + runs[:shift]:
                 t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
                 fs = fn(scan, cfg)
                 c1, t1 = time.thread_time_ns(), time.perf_counter_ns()
                 elapsed, cpu = t1 - t0, c1 - c0
                 explained, range_rms = explained_fraction(fs, scan, sigma)
-                row = dict(method=name, source=src.name, kind=src.kind, seed=src.seed, scan=k,
+                row = dict(method=name, backend=backends[name], source=src.name, kind=src.kind, seed=src.seed, scan=k,
                            stamp=scan.stamp, n_valid=n_valid, n_lines=len(fs.lines),
                            n_corners=len(fs.corners), microseconds=elapsed / 1e3, cpu_microseconds=cpu / 1e3,
                            explained=explained, range_rms=range_rms)
@@ -204,6 +211,7 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
     out = []
     for (source, method), g in table.groupby(["source", "method"], sort=False):
         row: dict[str, Any] = dict(source=source, method=method, kind=g["kind"].iloc[0], scans=len(g),
+                                   backend=g["backend"].iloc[0] if "backend" in g else "numpy",
                                    seeds=g["seed"].nunique(), lines_per_scan=g["n_lines"].mean())
         if "tp" in g and g["tp"].notna().any():
             tp, fp, fn = (int(g[c].sum()) for c in ("tp", "fp", "fn"))
@@ -261,12 +269,17 @@ def common_errors(matches: pd.DataFrame) -> pd.DataFrame:
 
 def format_summary(summary: pd.DataFrame) -> str:
     """The summary as a fixed-width text table (the columns that exist)."""
-    cols = ["source", "method", "scans", "f1", "precision", "recall", "rho_bias_mm", "rho_rms_mm",
+    cols = ["source", "method", "backend", "scans", "f1", "precision", "recall", "rho_bias_mm", "rho_rms_mm",
             "alpha_bias_deg", "alpha_rms_deg", "rho_rms_common_mm", "alpha_rms_common_deg", "corner_precision", "corner_recall", "corner_err_mm",
             "explained", "range_rms_mm", "us_median", "scans_per_s", "speed_vs_sensor", "cpu_us_median",
             "cpu_speed_vs_sensor"]
     cols = [c for c in cols if c in summary]
-    return summary[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}", na_rep="-")
+    text = summary[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}", na_rep="-")
+    if "backend" in summary and summary["backend"].nunique() > 1:
+        mixed = ", ".join(f"{m}={b}" for m, b in summary.drop_duplicates("method")[["method", "backend"]].values)
+        text += (f"\nnote: the methods ran on different backends ({mixed}; numba = compiled kernels, numpy = "
+                 "vectorised numpy): speed ratios between different backends are not like for like")
+    return text
 
 
 def resolved_configs(methods: Sequence[str], params: dict[str, dict[str, Any]] | None = None) -> dict[str, Any]:

@@ -88,6 +88,17 @@ def make_config(method: str, **params: Any) -> Any:
     return m.config_type(**params)
 
 
+def backend_of(method: str, config: Any = None) -> str:
+    """The backend ``method`` runs on with ``config`` (its default config when None): "numba"
+    (compiled kernels) or "numpy". Methods whose config has no ``backend`` field are numpy;
+    "auto" means numba when it is installed. Speed comparisons report it per method."""
+    cfg = config if config is not None else _default_config(get_method(method))
+    backend = getattr(cfg, "backend", "numpy")
+    if backend == "auto":
+        return "numba" if importlib.util.find_spec("numba") is not None else "numpy"
+    return str(backend)
+
+
 _DEFAULTS: dict[str, tuple[Method, Any]] = {}
 
 

@@ -18,7 +18,7 @@ numba = pytest.importorskip("numba")
 TOL = 1e-9
 
 
-def assert_same(ref: FeatureSet, got: FeatureSet, label: str) -> None:
+def assert_same(ref: FeatureSet, got: FeatureSet, label: str, method: str = "sensor") -> None:
     """Same line count, beams, point counts and corners; geometry and covariance within TOL."""
     assert len(got.lines) == len(ref.lines), label
     for m, (a, b) in enumerate(zip(ref.lines, got.lines)):
@@ -34,7 +34,7 @@ def assert_same(ref: FeatureSet, got: FeatureSet, label: str) -> None:
     for a, b in zip(ref.corners, got.corners):
         assert (b.index, b.lines) == (a.index, a.lines), label
         np.testing.assert_allclose((b.x, b.y, b.angle), (a.x, a.y, a.angle), rtol=0, atol=TOL, err_msg=label)
-    assert got.method == ref.method == "sensor"
+    assert got.method == ref.method == method
 
 
 def both(scan: Scan, **params) -> tuple[FeatureSet, FeatureSet]:
@@ -146,3 +146,21 @@ def test_degenerate_inputs(ranges: np.ndarray) -> None:
     ref, got = both(scan)
     assert_same(ref, got, "degenerate")
     assert got.lines == [] and got.corners == []
+
+
+def test_compare_reports_each_methods_backend() -> None:
+    import pandas as pd
+
+    from experiments.compare import format_summary
+    from features.registry import backend_of, make_config
+
+    assert backend_of("sensor") == "numba"
+    assert backend_of("sensor", make_config("sensor", backend="numpy")) == "numpy"
+    assert backend_of("hough") == "numpy"  # no backend field: the numpy implementation
+    rows = [dict(source="s", method="sensor", backend="numba", scans=1, us_median=100.0),
+            dict(source="s", method="hough", backend="numpy", scans=1, us_median=900.0)]
+    text = format_summary(pd.DataFrame(rows))
+    assert "backend" in text.splitlines()[0]
+    assert "sensor=numba, hough=numpy" in text and "not like for like" in text
+    same = format_summary(pd.DataFrame(rows[:1]))
+    assert "note" not in same

@@ -2,7 +2,8 @@
 
 Scans: noisy synthetic rooms (exact L-shaped room, 5 mm noise, seeded poses) and, where the shared
 data is present, every 10th scan of the MIT CSAIL log. Rows: one per method x scan set, with the
-median wall and CPU microseconds per scan, scans/s and the speed ratios to the sensor method.
+median wall and CPU microseconds per scan, scans/s and the speed ratios to the sensor method, with
+the backend each ran on; the methods with a numba backend are timed on their numpy reference too.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments.synthetic import L_ROOM, room_scan
-from features.registry import available_methods, get_method, make_config
+from features.registry import available_methods, backend_of, get_method, make_config
 
 NAME = "baselines"
 MIT_LOG = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "carmen" / "mit-csail.clf.gz"
@@ -38,11 +39,27 @@ def _log_scans(n: int) -> list:
     return [rec.scan for k, rec in enumerate(read_log(MIT_LOG)) if k % 10 == 0][:n]
 
 
-def time_methods(scans: list, methods: list[str], repeats: int) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
-    """Wall and CPU microseconds per scan of each method (medians of ``repeats``), interleaved."""
-    runs = [(m, get_method(m).run, make_config(m)) for m in methods]
-    wall = {m: np.empty(len(scans)) for m in methods}
-    cpu = {m: np.empty(len(scans)) for m in methods}
+NUMPY_REFERENCES = ("sensor", "split_merge", "iepf")  # methods with a numba backend: also timed as numpy
+
+
+def variants(methods: list[str]) -> list[tuple[str, str, dict]]:
+    """(label, method, params) of every timed variant: each method on its default backend, and
+    the methods that have a numba backend once more on their numpy reference ("iepf[numpy]")."""
+    out = [(m, m, {}) for m in methods]
+    out += [(f"{m}[numpy]", m, {"backend": "numpy"}) for m in methods
+            if m in NUMPY_REFERENCES and backend_of(m) == "numba"]
+    return out
+
+
+def time_methods(scans: list, methods: list, repeats: int) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Wall and CPU microseconds per scan of each method (medians of ``repeats``), interleaved.
+    ``methods``: names, or (label, method, params) tuples as from :func:`variants`."""
+    specs = [(m, m, {}) if isinstance(m, str) else m for m in methods]
+    runs = [(label, get_method(m).run, make_config(m, **params)) for label, m, params in specs]
+    for _, fn, cfg in runs:  # first calls load compiled kernels and fill caches: not timed
+        fn(scans[0], cfg)
+    wall = {label: np.empty(len(scans)) for label, _, _ in runs}
+    cpu = {label: np.empty(len(scans)) for label, _, _ in runs}
     for k, scan in enumerate(scans):
         shift = k % len(runs)
         for name, fn, cfg in runs[shift:] + runs[:shift]:
@@ -58,18 +75,22 @@ def time_methods(scans: list, methods: list[str], repeats: int) -> tuple[dict[st
 
 
 def run(quick: bool = False) -> list[dict]:
-    methods = available_methods()
+    """One row per method variant x scan set; ``backend`` says which implementation ran (speed
+    ratios are like for like only between equal backends; the ratios are to the sensor method on
+    its default backend)."""
+    specs = variants(available_methods())
     n, repeats = (20, 1) if quick else (100, 3)
     rows = []
     for label, scans in (("synthetic_room", _room_scans(n)), ("mit_csail", _log_scans(n))):
         if not scans:
             continue
-        wall, cpu = time_methods(scans, methods, repeats)
+        wall, cpu = time_methods(scans, specs, repeats)
         ref = np.median(wall["sensor"]) if "sensor" in wall else float("nan")
         ref_cpu = np.median(cpu["sensor"]) if "sensor" in cpu else float("nan")
-        for m in methods:
-            us, cu = np.median(wall[m]), np.median(cpu[m])
-            rows.append(dict(case=f"{m}/{label}", method=m, scans=len(scans), us_median=float(us),
-                             cpu_us_median=float(cu), scans_per_s=float(1e6 / us),
-                             speed_vs_sensor=float(ref / us), cpu_speed_vs_sensor=float(ref_cpu / cu)))
+        for name, m, params in specs:
+            us, cu = np.median(wall[name]), np.median(cpu[name])
+            rows.append(dict(case=f"{name}/{label}", method=m, backend=backend_of(m, make_config(m, **params)),
+                             scans=len(scans), us_median=float(us), cpu_us_median=float(cu),
+                             scans_per_s=float(1e6 / us), speed_vs_sensor=float(ref / us),
+                             cpu_speed_vs_sensor=float(ref_cpu / cu)))
     return rows

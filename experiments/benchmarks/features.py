@@ -55,46 +55,59 @@ def room_scans(count: int, seed: int = 0) -> list[Scan]:
     return scans
 
 
-def run(quick: bool = False) -> list[dict]:
-    """One row: scans/s and per-scan time of extract(scan, method="sensor"), wall clock over all
-    repeats (``scans_per_s``, ``mean_us``), CPU time of this thread (``cpu_us``), and the mean over
-    scans of each scan's fastest repeat (``best_of_repeats_us``: on a shared machine the least
-    disturbed figure)."""
-    count = 200 if quick else 1500
-    scans, source = office_scans(count)
-    for s in scans[:50]:  # warm caches (templates, configs)
-        extract(s, method="sensor")
-    repeats = 1 if quick else 5
+def time_backend(scans: list[Scan], backend: str, repeats: int) -> dict:
+    """Per-scan times of extract(scan, method="sensor", backend=...) over ``repeats`` passes."""
+    for s in scans[:50]:  # warm caches (templates, configs) and load the compiled kernels
+        extract(s, method="sensor", backend=backend)
     times = np.empty((repeats, len(scans)))
     cpu = np.empty(repeats)
     n_lines = n_corners = 0
     for rep in range(repeats):
-        c0 = time.thread_time_ns()
+        c0 = time.process_time_ns()
         for i, s in enumerate(scans):
             t0 = time.perf_counter_ns()
-            fs = extract(s, method="sensor")
+            fs = extract(s, method="sensor", backend=backend)
             times[rep, i] = time.perf_counter_ns() - t0
             n_lines += len(fs.lines)
             n_corners += len(fs.corners)
-        cpu[rep] = (time.thread_time_ns() - c0) / len(scans)
+        cpu[rep] = (time.process_time_ns() - c0) / len(scans)
     us = times.ravel() / 1e3
     best_us = times.min(axis=0) / 1e3  # per scan, the least disturbed of the repeats
-    return [
-        {
-            "benchmark": "extract_sensor",
-            "source": source,
-            "scans": len(scans),
-            "scans_per_s": float(1e6 / us.mean()),
-            "mean_us": float(us.mean()),
-            "cpu_us": float(cpu.mean() / 1e3),
-            "best_of_repeats_us": float(best_us.mean()),
-            "scans_per_s_best": float(1e6 / best_us.mean()),
-            "median_us": float(np.median(us)),
-            "p95_us": float(np.percentile(us, 95)),
-            "lines_per_scan": n_lines / (repeats * len(scans)),
-            "corners_per_scan": n_corners / (repeats * len(scans)),
-        }
-    ]
+    return {
+        "scans_per_s": float(1e6 / us.mean()),
+        "mean_us": float(us.mean()),
+        "cpu_us": float(cpu.min() / 1e3),
+        "best_of_repeats_us": float(best_us.mean()),
+        "scans_per_s_best": float(1e6 / best_us.mean()),
+        "scans_per_s_cpu": float(1e9 / cpu.min()),
+        "median_us": float(np.median(us)),
+        "p95_us": float(np.percentile(us, 95)),
+        "lines_per_scan": n_lines / (repeats * len(scans)),
+        "corners_per_scan": n_corners / (repeats * len(scans)),
+    }
+
+
+def run(quick: bool = False) -> list[dict]:
+    """One row per backend ("numpy", the reference, and "numba" where installed): scans/s and
+    per-scan time of extract(scan, method="sensor"), wall clock over all repeats
+    (``scans_per_s``, ``mean_us``), the mean over scans of each scan's fastest repeat
+    (``best_of_repeats_us``, ``scans_per_s_best``: on a shared machine the least disturbed
+    figure), and the process CPU time per scan of the least disturbed pass (``cpu_us``,
+    ``scans_per_s_cpu``); ``speedup_vs_numpy`` from the best-of-repeats times."""
+    from features.sensor import resolve_backend
+
+    count = 200 if quick else 1500
+    scans, source = office_scans(count)
+    repeats = 2 if quick else 5
+    backends = ["numpy"] + (["numba"] if resolve_backend("auto") == "numba" else [])
+    rows = []
+    for backend in backends:
+        row = {"benchmark": "extract_sensor", "backend": backend, "source": source, "scans": len(scans)}
+        row.update(time_backend(scans, backend, repeats))
+        rows.append(row)
+    for row in rows:
+        row["speedup_vs_numpy"] = rows[0]["best_of_repeats_us"] / row["best_of_repeats_us"]
+    return rows
 
 
 def accuracy(world: str, duration: float = 300.0, rate_hz: float = 0.4, sensor=None, **params) -> dict:

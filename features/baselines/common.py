@@ -18,6 +18,26 @@ from lms200 import Scan
 from ..types import Corner, FeatureSet, Line
 
 
+BACKENDS = ("auto", "numba", "numpy")
+_NUMBA: list[bool] = []
+
+
+def use_numba(backend: str) -> bool:
+    """Whether a config's ``backend`` ("auto", "numba", "numpy") runs the compiled kernels:
+    "auto" does when numba is importable. Raises ValueError for unknown names or a missing numba."""
+    if backend == "numpy":
+        return False
+    if backend not in BACKENDS:
+        raise ValueError(f"backend: must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    if not _NUMBA:
+        import importlib.util  # noqa: PLC0415
+
+        _NUMBA.append(importlib.util.find_spec("numba") is not None)
+    if backend == "numba" and not _NUMBA[0]:
+        raise ValueError("backend: 'numba' asked for but numba is not installed (pip install numba)")
+    return _NUMBA[0]
+
+
 @dataclass(frozen=True)
 class Points:
     """Valid beams of a scan in Cartesian form (sensor frame)."""

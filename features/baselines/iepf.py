@@ -13,7 +13,7 @@ from lms200 import Scan
 
 from ..registry import register
 from ..types import FeatureSet
-from .common import CornerConfig, feature_set
+from .common import CornerConfig, feature_set, use_numba
 from .split_merge import segment_lines
 
 
@@ -37,10 +37,15 @@ class IepfConfig:
     max_skip: int = 3
     runs_z: float = 0.0
     corners: CornerConfig = field(default_factory=CornerConfig)
+    backend: str = "auto"  # "numba" (compiled kernels), "numpy" (the reference), "auto": numba when importable
 
 
 def run(scan: Scan, cfg: IepfConfig) -> FeatureSet:
     """Extract lines and corners from ``scan`` (sensor frame) by iterative end-point fit."""
+    if use_numba(cfg.backend):
+        from .compiled import extract_numba  # noqa: PLC0415  (numba is imported on first use)
+
+        return extract_numba(scan, cfg, "iepf", chord=True)
     lines = segment_lines(scan, cfg.sigma, cfg.breakpoint_lambda_deg, cfg.split_threshold,
                           cfg.merge_rms, cfg.min_points, cfg.min_length, cfg.max_skip, cfg.runs_z, chord=True)
     return feature_set(lines, cfg.corners, "iepf", scan.angle_increment)

@@ -20,7 +20,7 @@ from lms200 import Scan
 from ..registry import register
 from ..types import FeatureSet
 from .common import (CornerConfig, PrefixFit, breakpoints, build_lines, feature_set, straight_enough, trim_ends,
-                     valid_points)
+                     use_numba, valid_points)
 from .splitting import _ragged, merge_collinear, split, unshare
 
 
@@ -56,6 +56,7 @@ class SplitMergeConfig:
     max_skip: int = 3
     runs_z: float = 0.0
     corners: CornerConfig = field(default_factory=CornerConfig)
+    backend: str = "auto"  # "numba" (compiled kernels), "numpy" (the reference), "auto": numba when importable
 
 
 def segment_lines(scan: Scan, sigma: float, lam_deg: float, threshold: float, merge_rms: float,
@@ -92,6 +93,10 @@ def segment_lines(scan: Scan, sigma: float, lam_deg: float, threshold: float, me
 
 def run(scan: Scan, cfg: SplitMergeConfig) -> FeatureSet:
     """Extract lines and corners from ``scan`` (sensor frame) by split-and-merge."""
+    if use_numba(cfg.backend):
+        from .compiled import extract_numba  # noqa: PLC0415  (numba is imported on first use)
+
+        return extract_numba(scan, cfg, "split_merge", chord=False)
     lines = segment_lines(scan, cfg.sigma, cfg.breakpoint_lambda_deg, cfg.split_threshold,
                           cfg.merge_rms, cfg.min_points, cfg.min_length, cfg.max_skip, cfg.runs_z, chord=False)
     return feature_set(lines, cfg.corners, "split_merge", scan.angle_increment)

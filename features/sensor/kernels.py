@@ -221,15 +221,13 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
         centre_idx = np.int64(np.rint((centre[r] - angle_min) / step))
         stride = np.int64(max(np.rint(half_width[r] / (h * step)), 1.0))
         inv_width = 1.0 / bin_half[r]
-        rows = (s + cnt // 4, s + cnt // 2, s + (3 * cnt) // 4)
+        row1, row2, row3 = s + cnt // 4, s + cnt // 2, s + (3 * cnt) // 4
         for a in range(n_angles):
             a_idx[a] = centre_idx + stride * (a - h2)
-            q = np.empty(3)
-            for m in range(3):
-                row = rows[m]
-                idx = min(max(a_idx[a] + zero - beam[row] * subdiv, 0), n_tmpl - 1)
-                q[m] = template[idx] + log_d[row]
-            ref[a] = max(min(q[0], q[1]), min(max(q[0], q[1]), q[2]))  # median of three
+            q1 = template[min(max(a_idx[a] + zero - beam[row1] * subdiv, 0), n_tmpl - 1)] + log_d[row1]
+            q2 = template[min(max(a_idx[a] + zero - beam[row2] * subdiv, 0), n_tmpl - 1)] + log_d[row2]
+            q3 = template[min(max(a_idx[a] + zero - beam[row3] * subdiv, 0), n_tmpl - 1)] + log_d[row3]
+            ref[a] = max(min(q1, q2), min(max(q1, q2), q3))  # median of three
         acc[:, :] = 0
         for a in range(n_angles):
             offset = (N_BINS / 2.0 + 1.0) - ref[a] * inv_width

@@ -1,0 +1,309 @@
+"""Compiled (numba) kernels of ``split_merge`` and ``iepf``: the numpy reference of
+``split_merge.segment_lines``, ``common.build_lines`` and ``common.corners_from_lines``, step for
+step, as loops over the points of one scan, so that speed comparisons against the compiled
+sensor method are like for like.
+
+The reference splits level by level over all pending segments; the segments are independent, so
+splitting each one depth-first and sorting the result gives the same segments. Likewise the two
+end-trimming rounds act on each segment independently. Merging keeps the reference's passes
+(pairs with a locally smallest merged residual). Transcendentals come from libm rather than
+numpy's SIMD routines, so values can differ in the last bit (tests check 1e-9 agreement).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+TWO_PI = 2.0 * math.pi
+
+# cached between processes; IEEE division (x / 0 -> inf or nan, as in numpy, never an exception)
+kernel = njit(cache=True, error_model="numpy")
+
+
+@kernel
+def npmax(a: float, b: float) -> float:
+    """np.maximum for two floats (nan propagates)."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a >= b else b
+
+
+@kernel
+def fit_range(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
+    """common.PrefixFit.fit + fit_moments for positions s..e: (rho, alpha, n, mx, my, along, across)."""
+    lo, hi = s, e + 1
+    n = float(hi - lo)
+    mx = (sx[hi] - sx[lo]) / n
+    my = (sy[hi] - sy[lo]) / n
+    cxx = (sxx[hi] - sxx[lo]) - n * mx * mx
+    cyy = (syy[hi] - syy[lo]) - n * my * my
+    cxy = (sxy[hi] - sxy[lo]) - n * mx * my
+    alpha = 0.5 * math.atan2(-2.0 * cxy, cyy - cxx)
+    rho = mx * math.cos(alpha) + my * math.sin(alpha)
+    if rho < 0:
+        alpha = alpha + math.pi
+    alpha = math.pi - (math.pi - alpha) % TWO_PI
+    rho = abs(rho)
+    c, si = math.cos(alpha), math.sin(alpha)
+    across = npmax(cxx * c * c + cyy * si * si + 2 * cxy * si * c, 0.0)
+    along = npmax(cxx + cyy - across, 1e-12)
+    return rho, alpha, n, mx, my, along, across
+
+
+@kernel
+def trim(x, y, s, e, rho, alpha, tol, keep):  # noqa: ANN001, ANN201
+    """common.trim_ends for one segment s..e: the range left after dropping end points off the line."""
+    c, si = math.cos(alpha), math.sin(alpha)
+    lo = -1
+    hi = -1
+    for p in range(s, e + 1):
+        if abs(x[p] * c + y[p] * si - rho) <= tol:
+            if lo < 0:
+                lo = p
+            hi = p
+    if lo < 0 or hi - lo + 1 < keep:
+        return s, e
+    return lo, hi
+
+
+@kernel
+def straight_enough(x, y, s, e, rho, alpha, z_min, dead_zone) -> bool:  # noqa: ANN001
+    """common.straight_enough for one segment (Wald-Wolfowitz runs test on the residual signs)."""
+    c, si = math.cos(alpha), math.sin(alpha)
+    n_signed = 0
+    n_pos = 0.0
+    changes = 0.0
+    prev = False
+    for p in range(s, e + 1):
+        res = x[p] * c + y[p] * si - rho
+        if abs(res) > dead_zone:
+            pos = res > 0
+            if n_signed > 0 and pos != prev:
+                changes += 1.0
+            n_pos += 1.0 if pos else 0.0
+            prev = pos
+            n_signed += 1
+    n = float(n_signed)
+    runs = 1 + changes
+    prod = 2.0 * n_pos * (n - n_pos)
+    expected = 1.0 + prod / n
+    var = prod * (prod - n) / (n * n * (n - 1.0))
+    z = (runs - expected) / math.sqrt(var)
+    return not (var > 0) or z >= -z_min
+
+
+@kernel
+def segment_lines(ranges, bearings, valid, increment, sigma, lam, threshold, merge_rms, min_points,  # noqa: ANN001, ANN201, PLR0913
+                  min_length, max_skip, runs_z, chord):
+    """split_merge.segment_lines + common.build_lines: the kept lines in beam order as arrays
+    (rho, alpha, n, first, last, start (L, 2), end (L, 2), cov (L, 2, 2))."""
+    idx = np.flatnonzero(valid)
+    n_pts = idx.size
+    x = np.empty(n_pts)
+    y = np.empty(n_pts)
+    r = np.empty(n_pts)
+    for p in range(n_pts):
+        r[p] = ranges[idx[p]]
+        b = bearings[idx[p]]
+        x[p] = r[p] * math.cos(b)
+        y[p] = r[p] * math.sin(b)
+    if n_pts < 2:
+        return _no_lines()
+    sx = np.zeros(n_pts + 1)
+    sy = np.zeros(n_pts + 1)
+    sxx = np.zeros(n_pts + 1)
+    syy = np.zeros(n_pts + 1)
+    sxy = np.zeros(n_pts + 1)
+    for p in range(n_pts):  # np.cumsum: sequential
+        sx[p + 1] = sx[p] + x[p] if p else x[p]
+        sy[p + 1] = sy[p] + y[p] if p else y[p]
+        sxx[p + 1] = sxx[p] + x[p] * x[p] if p else x[p] * x[p]
+        syy[p + 1] = syy[p] + y[p] * y[p] if p else y[p] * y[p]
+        sxy[p + 1] = sxy[p] + x[p] * y[p] if p else x[p] * y[p]
+    # adaptive breakpoints (common.breakpoints) -> clusters, each split depth-first (splitting.split)
+    min_split = max(min_points, 3)
+    seg_s = np.empty(2 * n_pts + 2, np.int64)
+    seg_e = np.empty(2 * n_pts + 2, np.int64)
+    n_seg = 0
+    stack_s = np.empty(2 * n_pts + 2, np.int64)
+    stack_e = np.empty(2 * n_pts + 2, np.int64)
+    start = 0
+    for p in range(n_pts):
+        cut = p == n_pts - 1
+        if not cut:
+            step = idx[p + 1] - idx[p]
+            dphi = step * increment
+            gap = math.hypot(x[p + 1] - x[p], y[p + 1] - y[p])
+            dmax = r[p] * math.sin(dphi) / math.sin(lam - dphi) + 3.0 * sigma
+            cut = gap > dmax or dmax <= 0 or step > max_skip
+        if not cut:
+            continue
+        sp = 0
+        stack_s[0], stack_e[0] = start, p
+        sp = 1
+        start = p + 1
+        while sp > 0:
+            sp -= 1
+            s, e = stack_s[sp], stack_e[sp]
+            if e - s + 1 < min_split:
+                seg_s[n_seg], seg_e[n_seg] = s, e
+                n_seg += 1
+                continue
+            dx, dy = x[e] - x[s], y[e] - y[s]
+            norm = npmax(math.hypot(dx, dy), 1e-12)
+            nx, ny = -dy / norm, dx / norm
+            rho_c = nx * x[s] + ny * y[s]
+            if not chord:
+                rho_f, alpha_f, _, _, _, _, _ = fit_range(sx, sy, sxx, syy, sxy, s, e)
+                cf, sf = math.cos(alpha_f), math.sin(alpha_f)
+            dmax_seg = -np.inf
+            cmax = -np.inf
+            at = -1
+            for q in range(s, e + 1):
+                dc = -1.0 if (q == s or q == e) else abs(x[q] * nx + y[q] * ny - rho_c)
+                d = dc if chord else abs(x[q] * cf + y[q] * sf - rho_f)
+                dmax_seg = npmax(dmax_seg, d)
+                if dc != dc or cmax != cmax:
+                    cmax = np.nan
+                elif dc > cmax:
+                    cmax = dc
+                    at = q
+            if not (dmax_seg > threshold) or cmax != cmax:
+                seg_s[n_seg], seg_e[n_seg] = s, e
+                n_seg += 1
+                continue
+            stack_s[sp], stack_e[sp] = at, e
+            stack_s[sp + 1], stack_e[sp + 1] = s, at
+            sp += 2
+    order = np.argsort(seg_s[:n_seg] * (n_pts + 1) + seg_e[:n_seg])
+    segs_s = seg_s[:n_seg][order]
+    segs_e = seg_e[:n_seg][order]
+    m = n_seg
+    # merge collinear neighbours (splitting.merge_collinear), pass by pass
+    if merge_rms > 0:
+        rms = np.empty(n_seg)
+        pick = np.zeros(n_seg, np.bool_)
+        while m > 1:
+            any_ok = False
+            for i in range(m - 1):
+                if segs_s[i + 1] == segs_e[i]:
+                    _, _, nn, _, _, _, across = fit_range(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1])
+                    rms[i] = math.sqrt(across / nn)
+                else:
+                    rms[i] = np.inf
+                any_ok = any_ok or rms[i] <= merge_rms
+            if not any_ok:
+                break
+            for i in range(m - 1):
+                left = np.inf if i == 0 else rms[i - 1]
+                right = np.inf if i == m - 2 else rms[i + 1]
+                pick[i] = rms[i] <= merge_rms and rms[i] < left and rms[i] <= right
+            w = 0
+            i = 0
+            while i < m:
+                if i < m - 1 and pick[i]:
+                    segs_s[w], segs_e[w] = segs_s[i], segs_e[i + 1]
+                    i += 2
+                else:
+                    segs_s[w], segs_e[w] = segs_s[i], segs_e[i]
+                    i += 1
+                w += 1
+            m = w
+    # unshare split points (splitting.unshare), drop short segments
+    shared = np.zeros(m, np.bool_)
+    for i in range(m - 1):
+        shared[i] = segs_s[i + 1] == segs_e[i]
+    for i in range(m - 1):
+        if shared[i]:
+            segs_e[i] -= 1
+            segs_s[i + 1] += 1
+    rho = np.empty(m)
+    alpha = np.empty(m)
+    cnt = np.empty(m)
+    first = np.empty(m, np.int64)
+    last = np.empty(m, np.int64)
+    p0 = np.empty((m, 2))
+    p1 = np.empty((m, 2))
+    cov = np.empty((m, 2, 2))
+    s2 = sigma * sigma
+    tol = 3.0 * sigma
+    k = 0
+    for i in range(m):
+        s, e = segs_s[i], segs_e[i]
+        if e - s + 1 < min_points:
+            continue
+        fr, fa, fn, fmx, fmy, falong, _ = fit_range(sx, sy, sxx, syy, sxy, s, e)
+        for _ in range(2):  # drop end points off the fitted line, refit (common.trim_ends)
+            lo, hi = trim(x, y, s, e, fr, fa, tol, min_points)
+            if lo == s and hi == e:
+                break
+            s, e = lo, hi
+            fr, fa, fn, fmx, fmy, falong, _ = fit_range(sx, sy, sxx, syy, sxy, s, e)
+        if runs_z > 0 and not straight_enough(x, y, s, e, fr, fa, runs_z, 0.5 * sigma):
+            continue
+        c, si = math.cos(fa), math.sin(fa)
+        d0 = x[s] * c + y[s] * si - fr
+        d1 = x[e] * c + y[e] * si - fr
+        ax, ay = x[s] - d0 * c, y[s] - d0 * si
+        bx, by = x[e] - d1 * c, y[e] - d1 * si
+        if not math.hypot(bx - ax, by - ay) >= min_length:
+            continue
+        t = -fmx * si + fmy * c
+        var_a = s2 / falong
+        rho[k], alpha[k], cnt[k] = fr, fa, fn
+        first[k], last[k] = idx[s], idx[e]
+        p0[k, 0], p0[k, 1], p1[k, 0], p1[k, 1] = ax, ay, bx, by
+        cov[k, 0, 0] = s2 / fn + t * t * var_a
+        cov[k, 0, 1] = t * var_a
+        cov[k, 1, 0] = t * var_a
+        cov[k, 1, 1] = var_a
+        k += 1
+    return rho[:k], alpha[:k], cnt[:k], first[:k], last[:k], p0[:k], p1[:k], cov[:k]
+
+
+@kernel
+def _no_lines():  # noqa: ANN202
+    e = np.empty(0)
+    ei = np.empty(0, np.int64)
+    return e, e, e, ei, ei, np.empty((0, 2)), np.empty((0, 2)), np.empty((0, 2, 2))
+
+
+@kernel
+def corners(rho, alpha, first, last, p0, p1, increment, min_turn, max_gap, max_distance, lam, sigma):  # noqa: ANN001, ANN201, PLR0913
+    """common.corners_from_lines: (x, y, interior angle) and (beam index, line k) of each corner
+    between consecutive lines k, k + 1."""
+    n_lines = rho.size
+    out_f = np.empty((max(n_lines - 1, 0), 3))
+    out_i = np.empty((max(n_lines - 1, 0), 2), np.int64)
+    m = 0
+    for k in range(n_lines - 1):
+        a1, a2 = alpha[k], alpha[k + 1]
+        r1, r2 = rho[k], rho[k + 1]
+        det = math.sin(a2 - a1)
+        d1x, d1y = p1[k, 0] - p0[k, 0], p1[k, 1] - p0[k, 1]
+        d2x, d2y = p1[k + 1, 0] - p0[k + 1, 0], p1[k + 1, 1] - p0[k + 1, 1]
+        n1 = math.sqrt(d1x * d1x + d1y * d1y)
+        n2 = math.sqrt(d2x * d2x + d2y * d2y)
+        step = float(first[k + 1] - last[k])
+        gap = math.hypot(p0[k + 1, 0] - p1[k, 0], p0[k + 1, 1] - p1[k, 1])
+        dphi = max(step, 1.0) * increment
+        cos_turn = (d1x * d2x + d1y * d2y) / (n1 * n2)
+        if cos_turn == cos_turn:
+            cos_turn = min(max(cos_turn, -1.0), 1.0)
+        turn = math.acos(cos_turn)
+        cx = (r1 * math.sin(a2) - r2 * math.sin(a1)) / det
+        cy = (r2 * math.cos(a1) - r1 * math.cos(a2)) / det
+        connect = math.hypot(p1[k, 0], p1[k, 1]) * math.sin(dphi) / math.sin(lam - dphi) + 3 * sigma
+        dist_a = math.hypot(cx - p1[k, 0], cy - p1[k, 1])
+        dist_b = math.hypot(cx - p0[k + 1, 0], cy - p0[k + 1, 1])
+        if (step <= max_gap and gap <= connect and connect > 0 and turn >= min_turn
+                and dist_a <= max_distance + gap and dist_b <= max_distance + gap and np.isfinite(cx)):
+            out_f[m, 0], out_f[m, 1], out_f[m, 2] = cx, cy, math.pi - turn
+            out_i[m, 0], out_i[m, 1] = last[k], k
+            m += 1
+    return out_f[:m], out_i[:m]
