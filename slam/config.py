@@ -96,6 +96,11 @@ class SlamConfig:
     point_fallback: bool = True
     point_min_score: float = 0.5
     point_xy: bool = False
+    scan_velocity: bool = True
+    scan_velocity_min_score: float = 0.6
+    scan_velocity_min_fraction: float = 0.05
+    scan_velocity_sigma: float = 0.01
+    scan_velocity_floor: float = 0.05
     nis_window: int = 20
     nis_divergence: float = 5.0
 

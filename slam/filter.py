@@ -41,6 +41,7 @@ class StepInfo:
     nis_dof: int = 0
     prealign_used: bool = False
     prealign_shift: float = 0.0  # rad, heading change the alignment applied to the prediction
+    scan_velocity: float = float("nan")  # m/s, forward speed measured against the previous scan
 
 
 class SlamFilter:
@@ -57,6 +58,8 @@ class SlamFilter:
         self.new_gate = float(chi2_quantile(config.new_landmark_probability, 2))
         self._previous_points: cKDTree | None = None
         self._previous_world = np.zeros((0, 2))
+        self._previous_pose = np.array(initial_pose, float)
+        self._previous_normals: tuple[cKDTree, np.ndarray, np.ndarray] | None = None
         self._heading_before = float(initial_pose[2])
         self._dt = 0.0
 
@@ -85,6 +88,8 @@ class SlamFilter:
             self.odom = odom
         if cfg.prealign and self.scan_no > 0:
             self._prealign(obs, info)
+        if cfg.scan_velocity and self.scan_no > 0 and not cfg.use_odometry:
+            self._scan_velocity(obs, info)
         pairs_l, new_l = self._associate_lines(obs)
         pairs_c, new_c = self._associate_corners(obs)
         self._update(obs, pairs_l, pairs_c, info)
@@ -203,13 +208,56 @@ class SlamFilter:
         return verify
 
     def _remember_points(self, points: np.ndarray) -> None:
+        X, Y, Phi = self.ekf.x[:3, 0]
+        self._previous_pose = np.array([X, Y, Phi])
         if points.shape[0] < 10:
             self._previous_points = None
+            self._previous_normals = None
             return
-        X, Y, Phi = self.ekf.x[:3, 0]
         c, s = np.cos(Phi), np.sin(Phi)
         self._previous_world = points @ np.array([[c, s], [-s, c]]) + (X, Y)
         self._previous_points = cKDTree(self._previous_world)
+        if self.config.scan_velocity:
+            normals, ok = beam_normals(self._previous_world)
+            self._previous_normals = (cKDTree(self._previous_world[ok]), self._previous_world[ok], normals[ok]) if ok.sum() >= 10 else None
+
+    def _scan_velocity(self, obs: Observations, info: StepInfo) -> None:
+        """Forward speed from the scan's points against the previous scan's (point-to-line,
+        translation only, heading as estimated): a pseudo-measurement of V over the scan interval,
+        used only when the matched points' normals constrain the forward direction (a wall ahead, a
+        door frame): in a corridor the lines fix only the sideways position."""
+        cfg = self.config
+        if self._previous_normals is None or self._dt <= 0 or obs.points.shape[0] < 20:
+            return
+        tree, prev, normals = self._previous_normals
+        x = self.ekf.x[:, 0]
+        c, s = np.cos(x[2]), np.sin(x[2])
+        rotated = obs.points @ np.array([[c, s], [-s, c]])
+        best = None
+        for start in (x[:2], self._previous_pose[:2]):  # the prediction, and standing still
+            t, score, A = point_to_line_translation(rotated, tree, prev, normals, start, cfg.verify_tolerance)
+            if best is None or score > best[1] + 1e-9:
+                best = (t, score, A)
+        t, score, A = best
+        if score < cfg.scan_velocity_min_score:
+            return
+        phi_mid = self._previous_pose[2] + 0.5 * wrap(x[2] - self._previous_pose[2])
+        u = np.array([np.cos(phi_mid), np.sin(phi_mid)])
+        n_matched = max(np.trace(A), 1.0)
+        fraction = float(u @ A @ u) / n_matched
+        if fraction < cfg.scan_velocity_min_fraction:
+            return
+        v = float((t - self._previous_pose[:2]) @ u) / self._dt
+        var = (cfg.scan_velocity_sigma**2 / fraction) / self._dt**2 + cfg.scan_velocity_floor**2
+        P = self.ekf.P
+        if (v - x[3]) ** 2 > chi2_quantile(0.9999, 1) * (P[3, 3] + var):
+            # the prior is far off (a missed stop or start): widen it rather than fight it
+            P[3, 3] += (v - x[3]) ** 2
+        H = np.zeros((1, self.ekf.dim_x))
+        H[0, 3] = 1.0
+        self.ekf.update(np.array([[v]]), lambda _x: H, lambda xx: xx[3:4], R=np.array([[var]]))
+        self.ekf.x[2, 0] = wrap(self.ekf.x[2, 0])
+        info.scan_velocity = v
 
     def _extent_points(self, R: np.ndarray, th: np.ndarray, pos: np.ndarray) -> np.ndarray:
         """(L, 4) world endpoints of line landmarks from their extents."""
@@ -402,3 +450,45 @@ def _point_segment_distance(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
     t = np.clip(t, 0.0, 1.0)
     q = a + t[:, None] * ab
     return np.hypot(*(p - q).T)
+
+
+def beam_normals(points: np.ndarray, step: int = 2, max_gap: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals (p, 2) of points (p, 2) in beam order from the chord between the neighbours
+    ``step`` beams apart, and the mask of points whose chord is short enough to be a surface."""
+    p = np.asarray(points, float)
+    n = np.zeros_like(p)
+    ok = np.zeros(p.shape[0], bool)
+    if p.shape[0] < 2 * step + 1:
+        return n, ok
+    d = p[2 * step :] - p[: -2 * step]
+    length = np.hypot(d[:, 0], d[:, 1])
+    good = (length > 1e-3) & (length < max_gap)
+    n[step:-step] = np.column_stack((d[:, 1], -d[:, 0])) / np.maximum(length, 1e-12)[:, None]
+    ok[step:-step] = good
+    return n, ok
+
+
+def point_to_line_translation(points: np.ndarray, tree: cKDTree, ref: np.ndarray, ref_normals: np.ndarray,
+                              start: np.ndarray, tolerance: float, iterations: int = 8) -> tuple[np.ndarray, float, np.ndarray]:
+    """Translation (2,) of ``points`` (already rotated into the world frame) onto the reference
+    points ``ref`` with normals ``ref_normals`` (indexed by ``tree``), point-to-line least squares
+    from ``start``; its score (fraction of the points within ``tolerance`` m of a reference point)
+    and the information sum n n^T of the matched normals."""
+    t = np.array(start, float)
+    for k in range(iterations):
+        gate = 0.5 if k < 2 else 2 * tolerance
+        d, j = tree.query(points + t, distance_upper_bound=gate)
+        ok = np.isfinite(d)
+        if ok.sum() < 10:
+            break
+        n = ref_normals[j[ok]]
+        r = np.sum(n * (ref[j[ok]] - points[ok] - t), axis=1)
+        A = n.T @ n
+        step = np.linalg.solve(A + 1e-3 * ok.sum() * np.eye(2), n.T @ r)
+        t = t + step
+        if step @ step < 1e-8:
+            break
+    d, j = tree.query(points + t, distance_upper_bound=tolerance)
+    ok = np.isfinite(d)
+    n = ref_normals[j[ok]]
+    return t, float(np.mean(ok)) if ok.size else 0.0, n.T @ n

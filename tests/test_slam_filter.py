@@ -164,3 +164,39 @@ def test_a_turn_in_a_scan_without_lines_is_followed_by_its_points():
     assert abs(wrap(traj[7, 3] + poses[0][2] - poses[7][2])) < np.radians(1.0)
     off = run_steps(steps, SlamConfig(point_fallback=False)).trajectory
     assert abs(wrap(off[6, 3] + poses[0][2] - poses[6][2])) > np.radians(20.0)
+
+
+# a corridor: its two walls fix only the sideways position; door frames (0.15 m stubs, too short
+# for a line) are seen only as points
+CORRIDOR = np.array([[-10.0, -1.0, 40.0, -1.0], [-10.0, 1.0, 40.0, 1.0]])
+DOOR_FRAMES = np.array([[x, s * 1.0, x, s * 0.85] for x in np.arange(-9.0, 40.0, 1.5) for s in (-1.0, 1.0)])
+
+
+def _corridor_stop(config: SlamConfig, rate: float = 5.0):
+    """A robot driving along the corridor at 1 m/s that stops within 0.6 s and stands, at 5 scans/s."""
+    from slam import run_steps
+    from slam.synthetic import scan_points
+
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 9.0, 1.0 / rate)
+    v = np.clip(np.where(t < 4.0, 1.0, 1.0 - (t - 4.0) / 0.6), 0.0, 1.0)
+    x = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))))
+    poses = np.column_stack((x, np.full_like(x, 0.1), np.zeros_like(x)))
+    walls = np.vstack((CORRIDOR, DOOR_FRAMES))
+    steps = []
+    for k, p in enumerate(poses):
+        o = observe_walls(CORRIDOR, p, rng=rng, max_range=8.0)
+        pts = scan_points(walls, p, max_range=8.0, sigma=0.005, rng=rng)
+        steps.append((t[k], Observations(o.lines, o.line_cov, o.line_ends, points=pts), None, None))
+    traj = run_steps(steps, config).trajectory
+    return traj, poses - poses[0]
+
+
+def test_a_stop_in_a_corridor_is_seen_by_the_points():
+    traj, truth = _corridor_stop(SlamConfig())
+    along = np.abs(traj[:, 1] - truth[:, 0])
+    assert along.max() < 0.4  # ~5 m driven, then 4.4 s standing: the points see the robot stop
+    assert np.abs(traj[:, 2] - truth[:, 1]).max() < 0.1
+    # the lines alone cannot: the constant-velocity prediction carries on along the corridor
+    old, _ = _corridor_stop(SlamConfig(scan_velocity=False))
+    assert np.abs(old[:, 1] - truth[:, 0]).max() > 2.0
