@@ -59,7 +59,8 @@ class SlamFilter:
         self._previous_points: cKDTree | None = None
         self._previous_world = np.zeros((0, 2))
         self._previous_pose = np.array(initial_pose, float)
-        self._previous_normals: tuple[cKDTree, np.ndarray, np.ndarray] | None = None
+        # reference scans of the scan velocity: (stamp s, pose, tree, world points, normals), oldest first
+        self._references: list[tuple[float, np.ndarray, cKDTree, np.ndarray, np.ndarray]] = []
         self._heading_before = float(initial_pose[2])
         self._dt = 0.0
 
@@ -212,14 +213,21 @@ class SlamFilter:
         self._previous_pose = np.array([X, Y, Phi])
         if points.shape[0] < 10:
             self._previous_points = None
-            self._previous_normals = None
+            self._references = []
             return
         c, s = np.cos(Phi), np.sin(Phi)
         self._previous_world = points @ np.array([[c, s], [-s, c]]) + (X, Y)
         self._previous_points = cKDTree(self._previous_world)
         if self.config.scan_velocity:
             normals, ok = beam_normals(self._previous_world)
-            self._previous_normals = (cKDTree(self._previous_world[ok]), self._previous_world[ok], normals[ok]) if ok.sum() >= 10 else None
+            if ok.sum() < 10:
+                self._references = []
+                return
+            ref = (float(self.stamp), self._previous_pose.copy(), cKDTree(self._previous_world[ok]), self._previous_world[ok], normals[ok])
+            self._references.append(ref)
+            # the next scan picks the newest reference at least scan_velocity_baseline before it
+            while len(self._references) > 1 and self._references[1][0] <= self.stamp - self.config.scan_velocity_baseline + 1e-9:
+                self._references.pop(0)
 
     def _scan_velocity(self, obs: Observations, info: StepInfo) -> None:
         """Forward speed from the scan's points against the previous scan's (point-to-line,
@@ -227,30 +235,36 @@ class SlamFilter:
         used only when the matched points' normals constrain the forward direction (a wall ahead, a
         door frame): in a corridor the lines fix only the sideways position."""
         cfg = self.config
-        if self._previous_normals is None or self._dt <= 0 or obs.points.shape[0] < 20:
+        if not self._references or self._dt <= 0 or obs.points.shape[0] < 20:
             return
-        tree, prev, normals = self._previous_normals
+        old_enough = [r for r in self._references if r[0] <= self.stamp - cfg.scan_velocity_baseline + 1e-9]
+        ref_stamp, ref_pose, tree, prev, normals = old_enough[-1] if old_enough else self._references[0]
+        interval = float(self.stamp) - ref_stamp
+        if interval <= 0:
+            return
         x = self.ekf.x[:, 0]
         c, s = np.cos(x[2]), np.sin(x[2])
         rotated = obs.points @ np.array([[c, s], [-s, c]])
         best = None
-        for start in (x[:2], self._previous_pose[:2]):  # the prediction, and standing still
+        for start in (x[:2], ref_pose[:2]):  # the prediction, and standing still
             t, score, A = point_to_line_translation(rotated, tree, prev, normals, start, cfg.verify_tolerance)
             if best is None or score > best[1] + 1e-9:
                 best = (t, score, A)
         t, score, A = best
         if score < cfg.scan_velocity_min_score:
             return
-        phi_mid = self._previous_pose[2] + 0.5 * wrap(x[2] - self._previous_pose[2])
+        phi_mid = ref_pose[2] + 0.5 * wrap(x[2] - ref_pose[2])
         u = np.array([np.cos(phi_mid), np.sin(phi_mid)])
         n_matched = max(np.trace(A), 1.0)
         fraction = float(u @ A @ u) / n_matched
         if fraction < cfg.scan_velocity_min_fraction:
             return
-        v = float((t - self._previous_pose[:2]) @ u) / self._dt
-        var = (cfg.scan_velocity_sigma**2 / fraction) / self._dt**2 + cfg.scan_velocity_floor**2
+        v = float((t - ref_pose[:2]) @ u) / interval
+        var = (cfg.scan_velocity_sigma**2 / fraction) / interval**2 + cfg.scan_velocity_floor**2
         P = self.ekf.P
         if (v - x[3]) ** 2 > chi2_quantile(0.9999, 1) * (P[3, 3] + var):
+            if not cfg.scan_velocity_widen:
+                return
             # the prior is far off (a missed stop or start): widen it rather than fight it
             P[3, 3] += (v - x[3]) ** 2
         H = np.zeros((1, self.ekf.dim_x))
