@@ -263,8 +263,6 @@ class SlamFilter:
         var = (cfg.scan_velocity_sigma**2 / fraction) / interval**2 + cfg.scan_velocity_floor**2
         P = self.ekf.P
         if (v - x[3]) ** 2 > chi2_quantile(0.9999, 1) * (P[3, 3] + var):
-            if not cfg.scan_velocity_widen:
-                return
             # the prior is far off (a missed stop or start): widen it rather than fight it
             P[3, 3] += (v - x[3]) ** 2
         H = np.zeros((1, self.ekf.dim_x))
