@@ -241,7 +241,13 @@ class SlamFilter:
         cand = assoc.candidates(z, Rz, zhat, HPH, 1 if kind == "line" else None)
         d2 = cand.d2.copy()
         if extra_mask is not None:
-            d2[~extra_mask] = np.inf
+            # extents disambiguate: they veto a pairing only when another landmark could take the
+            # observation; a line that gates with exactly one landmark is that landmark seen
+            # along a part of it not seen before
+            in_gate = cand.d2 < self.gate
+            sole = in_gate.sum(axis=1) == 1
+            keep = extra_mask | (sole[:, None] & in_gate)
+            d2[~keep] = np.inf
         if self.config.association == "jcbb":
             def nu_fn(o, l):
                 return cand.nu[o, l]
