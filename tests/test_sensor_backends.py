@@ -179,3 +179,17 @@ def test_any_scan_gives_the_same_features_on_both_backends(scan: Scan, k: int) -
         ref = extract(scan, method=method, backend="numpy")
         got = extract(scan, method=method, backend="numba")
         assert_same(ref, got, f"{method} {len(scan)} beams", method)
+
+
+def test_importing_the_extractors_does_not_import_numba() -> None:
+    """numba (~0.5 s to import) loads on the first compiled call, not with ``import features``."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = ("import sys, features, features.sensor, features.baselines.split_merge, features.baselines.iepf; "
+            "print('numba' in sys.modules)")
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env={"PYTHONPATH": str(root), "PATH": ""}, cwd=root)
+    assert out.stdout.strip() == "False"
