@@ -685,3 +685,21 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
         out_i[m, 1] = i
         m += 1
     return out_f[:m], out_i[:m]
+
+
+@kernel
+def extract(ranges, bearings, angle_min, increment, range_lo, range_hi, template, fp, ip, floor00, floor11):  # noqa: ANN001, ANN201
+    """The whole extractor in one call (one kernel dispatch a scan): find_lines, segments and,
+    when ``ip[I_CORNERS]``, corners. Returns (rho, alpha, cov, first, last, n_points, start,
+    end, corner floats (C, 3), corner ints (C, 2))."""
+    rho, alpha, cov, first, last, npts, valid, psi = find_lines(
+        ranges, bearings, angle_min, increment, range_lo, range_hi, template, fp, ip
+    )
+    rho, alpha, cov, first, last, npts, p0, p1 = segments(
+        rho, alpha, cov, first, last, npts, ranges, bearings, valid, fp, ip, floor00, floor11
+    )
+    if ip[I_CORNERS] and rho.size > 1:
+        cf, ci = corners(rho, alpha, first, last, p0, p1, psi, ranges, valid, angle_min, increment, fp, ip)
+    else:
+        cf, ci = np.empty((0, 3)), np.empty((0, 2), np.int64)
+    return rho, alpha, cov, first, last, npts, p0, p1, cf, ci
