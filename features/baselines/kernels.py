@@ -8,6 +8,10 @@ splitting each one depth-first and sorting the result gives the same segments. L
 end-trimming rounds act on each segment independently. Merging keeps the reference's passes
 (pairs with a locally smallest merged residual). Transcendentals come from libm rather than
 numpy's SIMD routines, so values can differ in the last bit (tests check 1e-9 agreement).
+
+One module on purpose: numba's on-disk cache is invalidated by the modification time of the file
+that defines a function, not of the files of the functions it calls, so kernels that call each
+other live in one file.
 """
 
 from __future__ import annotations

@@ -10,6 +10,10 @@ last bit. Transcendentals come from libm rather than numpy's SIMD routines, so r
 in the last bit (tests check agreement to 1e-9 on many scans). Importing this module imports
 numba; ``features.sensor`` does so only when the numba backend is first used, and ``cache=True``
 keeps the compiled code between processes.
+
+One module on purpose: numba's on-disk cache is invalidated by the modification time of the file
+that defines a function, not of the files of the functions it calls, so kernels that call each
+other live in one file.
 """
 
 from __future__ import annotations
