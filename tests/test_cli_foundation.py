@@ -43,3 +43,37 @@ def test_room_scan_matches_geometry() -> None:
     p = s.points
     on_wall = np.isclose(p[:, 0] + 1.5, 6.0, atol=1e-3) | np.isclose(np.abs(p[:, 1] + 0.5), 2.0, atol=1e-3)
     assert on_wall.all()
+
+
+def test_os_errors_are_one_line_with_exit_status_2(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    # an output folder under a regular file: NotADirectoryError from mkdir
+    assert main(["simulate", "--duration", "0.1", "--out", str(afile / "x")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("lmsbench simulate: error: ") and err.count("\n") == 1 and "afile" in err
+    # an unreachable scheduler: distributed raises OSError("Timed out trying to connect ...")
+    import experiments.sweep.runner as runner
+
+    def unreachable(executor, workers):
+        raise OSError(f"Timed out trying to connect to {executor} after 10 s")
+
+    monkeypatch.setattr(runner, "_client", unreachable)
+    spec = tmp_path / "s.yaml"
+    spec.write_text("kind: extract\ngrid:\n  method: [sensor]\n")
+    assert main(["sweep", str(spec), "--scheduler", "tcp://127.0.0.1:1", "--no-progress",
+                 "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err == "lmsbench sweep: error: Timed out trying to connect to tcp://127.0.0.1:1 after 10 s\n"
+
+
+def test_keyboard_interrupt_exits_130(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    import experiments.commands.info as info
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(info, "run", interrupted)
+    assert main(["info", "whatever.clf"]) == 130
+    assert "lmsbench info: interrupted" in capsys.readouterr().err
