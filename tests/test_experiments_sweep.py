@@ -187,6 +187,9 @@ def test_random_sampling_is_seeded_in_range_and_crossed_with_grid_and_seeds():
         ({"kind": "k", "random": {"u": {"uniform": [0, 1]}}}, r"needs `samples:`"),
         ({"kind": "k", "fixed": {"x": [1, 2]}}, r"fixed.x must be a number"),
         ({"kind": "k", "gird": {"x": [1]}}, r"unknown key\(s\) \['gird'\]"),
+        ({"kind": "k", "grid": [1, 2]}, r"grid must be a mapping of parameter -> values"),
+        ({"kind": "k", "fixed": [1]}, r"fixed must be a mapping of parameter -> value"),
+        ({"kind": "k", "random": "uniform", "samples": 2}, r"random must be a mapping of parameter -> distribution"),
     ],
 )
 def test_bad_sweep_files_raise_errors_that_say_what_to_fix(raw, message):
@@ -268,6 +271,10 @@ def test_cli_errors_are_one_line_with_exit_status_2(tmp_path, capsys):
     assert main(["sweep", str(bad), "--local", "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "bad.yaml: grid.x is empty" in err
+    bad.write_text("kind: extract\ngrid: [1, 2]\n")
+    assert main(["sweep", str(bad), "--local", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bad.yaml: grid must be a mapping of parameter -> values" in err
 
 
 def test_a_real_extractor_sweep_gives_the_same_scores_on_the_cluster_and_in_process(tmp_path, dask_client):
