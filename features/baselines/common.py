@@ -16,6 +16,7 @@ import numpy as np
 from lms200 import Scan
 
 from ..types import Corner, FeatureSet, Line
+from . import checks
 
 
 BACKENDS = ("auto", "numba", "numpy")
@@ -304,6 +305,14 @@ class CornerConfig:
     max_distance: float = 0.15
     lambda_deg: float = 10.0
     sigma: float = 0.005
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.min_turn_deg, (int, float, np.integer, np.floating)) or not 0 <= self.min_turn_deg < 180:
+            raise ValueError(f"min_turn_deg: must be an angle in [0, 180) deg, got {self.min_turn_deg!r}")
+        checks.integer("max_gap_beams", self.max_gap_beams, 1)
+        checks.non_negative("max_distance", self.max_distance, "m")
+        checks.angle_deg("lambda_deg", self.lambda_deg, 90.0)
+        checks.positive("sigma", self.sigma, "m")
 
 
 def corners_from_lines(lines: list[Line], cfg: CornerConfig, angle_increment: float) -> list[Corner]:

@@ -23,6 +23,7 @@ from lms200 import Scan
 
 from ..registry import register
 from ..types import FeatureSet
+from . import checks
 from .common import CornerConfig, build_lines, feature_set, valid_points
 from .runs import refine, segments_of
 
@@ -56,6 +57,18 @@ class HoughConfig:
     max_lines: int = 60
     max_failures: int = 5
     corners: CornerConfig = field(default_factory=CornerConfig)
+
+    def __post_init__(self) -> None:
+        """Raise ValueError naming the field when a value cannot work."""
+        checks.positive("alpha_step_deg", self.alpha_step_deg, "deg")
+        if self.alpha_step_deg > 180:
+            raise ValueError(f"alpha_step_deg: must be <= 180 deg, got {self.alpha_step_deg!r}")
+        checks.positive("rho_step", self.rho_step, "m")
+        checks.positive("band_coarse", self.band_coarse, "m")
+        checks.positive("band_fine", self.band_fine, "m")
+        checks.shared_fields(self)
+        checks.integer("max_lines", self.max_lines, 1)
+        checks.integer("max_failures", self.max_failures, 1)
 
 
 def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:

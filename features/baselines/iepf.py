@@ -13,7 +13,8 @@ from lms200 import Scan
 
 from ..registry import register
 from ..types import FeatureSet
-from .common import CornerConfig, feature_set, use_numba
+from . import checks
+from .common import BACKENDS, CornerConfig, feature_set, use_numba
 from .split_merge import segment_lines
 
 
@@ -38,6 +39,13 @@ class IepfConfig:
     runs_z: float = 0.0
     corners: CornerConfig = field(default_factory=CornerConfig)
     backend: str = "auto"  # "numba" (compiled kernels), "numpy" (the reference), "auto": numba when importable
+
+    def __post_init__(self) -> None:
+        """Raise ValueError naming the field when a value cannot work."""
+        checks.shared_fields(self)
+        checks.positive("split_threshold", self.split_threshold, "m")
+        checks.non_negative("merge_rms", self.merge_rms, "m")
+        checks.choice("backend", self.backend, BACKENDS)
 
 
 def run(scan: Scan, cfg: IepfConfig) -> FeatureSet:

@@ -19,7 +19,8 @@ from lms200 import Scan
 
 from ..registry import register
 from ..types import FeatureSet
-from .common import (CornerConfig, PrefixFit, breakpoints, build_lines, feature_set, straight_enough, trim_ends,
+from . import checks
+from .common import (BACKENDS, CornerConfig, PrefixFit, breakpoints, build_lines, feature_set, straight_enough, trim_ends,
                      use_numba, valid_points)
 from .splitting import _ragged, merge_collinear, split, unshare
 
@@ -57,6 +58,13 @@ class SplitMergeConfig:
     runs_z: float = 0.0
     corners: CornerConfig = field(default_factory=CornerConfig)
     backend: str = "auto"  # "numba" (compiled kernels), "numpy" (the reference), "auto": numba when importable
+
+    def __post_init__(self) -> None:
+        """Raise ValueError naming the field when a value cannot work."""
+        checks.shared_fields(self)
+        checks.positive("split_threshold", self.split_threshold, "m")
+        checks.non_negative("merge_rms", self.merge_rms, "m")
+        checks.choice("backend", self.backend, BACKENDS)
 
 
 def segment_lines(scan: Scan, sigma: float, lam_deg: float, threshold: float, merge_rms: float,
