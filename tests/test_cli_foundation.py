@@ -16,7 +16,7 @@ from experiments.demo import room_scan
 def test_info_json_on_intel(shared_data: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["info", str(shared_data / "intel-corrected.log.gz"), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
-    assert info["scans"] == 910 and info["beams"] == "180"
+    assert info["scans"] == 910 and info["beams"] == 180 and info["beams_min"] == info["beams_max"] == 180
     assert info["fov_deg"] == pytest.approx(179.0) and info["resolution_deg"] == pytest.approx(1.0)
     assert info["duration_s"] == pytest.approx(2650.8632, abs=1e-3)
     assert info["scan_rate_hz"] == pytest.approx(909 / 2650.8632, rel=1e-6)
@@ -32,6 +32,32 @@ def test_info_errors_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[
     assert main(["info", str(bad)]) == 2
     err = capsys.readouterr().err
     assert "bad.clf:1:" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("content", [b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00", b'{"walls": [[0, 0, 1, 1]]}\n', b""])
+def test_info_on_a_file_without_laser_messages_is_an_error(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                           content: bytes) -> None:
+    path = tmp_path / "notalog.png"
+    path.write_bytes(content)
+    assert main(["info", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"lmsbench info: error: {path}:1: no laser messages found") and err.count("\n") == 1
+
+
+def test_info_json_numbers_are_numbers(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from lms200 import Record, Scan, write_log
+
+    scans = [Scan.lms200(np.full(361, 2.0), stamp=0.5 * k) for k in range(3)]
+    scans.append(Scan(np.full(181, 3.0), -np.pi / 2, np.pi / 180, scans[0].range_min, scans[0].range_max, stamp=1.5))
+    write_log(tmp_path / "mixed.clf", [Record(s) for s in scans])
+    assert main(["info", str(tmp_path / "mixed.clf"), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["scans"] == 4 and info["beams"] is None and (info["beams_min"], info["beams_max"]) == (181, 361)
+    assert info["duration_s"] == pytest.approx(1.5) and info["scan_rate_hz"] == pytest.approx(2.0)
+    write_log(tmp_path / "one.clf", [Record(s) for s in scans[:3]])
+    assert main(["info", str(tmp_path / "one.clf"), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["beams"] == 361 and isinstance(info["fov_deg"], float) and info["fov_deg"] == pytest.approx(180.0)
 
 
 def test_room_scan_matches_geometry() -> None:
