@@ -103,3 +103,13 @@ def test_keyboard_interrupt_exits_130(capsys: pytest.CaptureFixture[str], monkey
     monkeypatch.setattr(info, "run", interrupted)
     assert main(["info", "whatever.clf"]) == 130
     assert "lmsbench info: interrupted" in capsys.readouterr().err
+
+
+def test_bench_with_an_unknown_name_is_a_one_line_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from experiments.commands.bench import discover
+
+    assert main(["bench", "nosuch", "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("lmsbench bench: error: unknown benchmark(s) ['nosuch']; available: ") and err.count("\n") == 1
+    assert all(repr(name) in err for name in discover())
+    assert not (tmp_path / "b").exists()
