@@ -74,11 +74,13 @@ def test_line_covariance_matches_monte_carlo(method):
 
 
 @pytest.mark.parametrize("method", BASELINES)
-def test_dropouts_are_bridged_and_rep117_respected(method):
+def test_invalid_dropouts_are_bridged_and_rep117_respected(method):
+    """Two invalid (nan) beams in a wall are stepped over (max_skip = 3); a no-return (+inf) beam
+    breaks the wall instead (test_a_no_return_beam_breaks_a_wall_but_an_invalid_one_does_not)."""
     scan, truth = room_scan(L_ROOM, POSES[0], sigma=0.0)
     r = scan.ranges.copy()
     r[40] = np.nan
-    r[41] = np.inf
+    r[41] = np.nan
     fs = extract(scan.replace(ranges=r), method)
     s = score_scan(fs, truth)
     assert (s.tp, s.fp, s.fn) == (truth.segments.shape[0], 0, 0)
@@ -224,3 +226,26 @@ def test_bad_corner_config_values_raise(params: dict, field: str) -> None:
     with pytest.raises(ValueError, match=f"^{field}: must be"):
         CornerConfig(**params)
     CornerConfig()  # the defaults are valid
+
+
+@pytest.mark.parametrize("method", ["sensor", "split_merge", "iepf", "hough", "ransac"])
+def test_a_no_return_beam_breaks_a_wall_but_an_invalid_one_does_not(method: str) -> None:
+    """One rule for every method: a +inf beam (no return: open space, a doorway or beyond range)
+    in the middle of a wall ends the segment, so the wall gives two lines; the baselines step over
+    a nan beam (invalid: no information) and give one line."""
+    from sensor_geometry import cast
+
+    wall = cast([(2.0, -3.0, 2.0, 3.0)], sigma=0.002, seed=3)
+    whole = extract(wall, method=method)
+    assert len(whole.lines) == 1
+    for value, expected in ((np.inf, 2), (np.nan, 1)):
+        if method == "sensor" and value != np.inf:
+            continue  # the sensor method breaks at nan too (its bridge_invalid = 0)
+        ranges = wall.ranges.copy()
+        ranges[180] = value
+        fs = extract(wall.replace(ranges=ranges), method=method)
+        assert len(fs.lines) == expected, (value, [(l.first, l.last) for l in fs.lines])
+        if expected == 2:
+            assert fs.lines[0].last < 180 < fs.lines[1].first
+        for line in fs.lines:
+            assert abs(line.rho - 2.0) < 0.01 and abs(line.alpha) < 0.01

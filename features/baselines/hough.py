@@ -37,7 +37,8 @@ class HoughConfig:
       spread over a 4 m wall (4 m x sin 0.5 deg + 1 cm) plus noise.
     - band_fine: 0.025 m = 5 sigma, the final inlier band after the first refit.
     - min_points, min_length, sigma, breakpoint_lambda_deg: as the other baselines (8 points,
-      0.15 m, 5 mm, Borges & Aldon's 10 deg); max_skip: 3, a run may jump over two outliers.
+      0.15 m, 5 mm, Borges & Aldon's 10 deg); max_skip: 3, a run may jump over two outliers
+      or invalid beams, never over a no-return (+inf) beam.
     - max_lines: 60, an upper bound on peaks taken per scan; max_failures: 5 peaks in a row that
       yield no line end the search (such peaks gather collinear points scattered across the scan:
       once the walls are out, what is left is clutter).

@@ -25,8 +25,8 @@ class IepfConfig:
     - split_threshold: 0.04 m = 8 sigma: a chord between two noisy end points is itself off by up to
       ~3 sigma at each end, so the chord threshold sits above split-and-merge's 6 sigma.
     - the rest as ``split_merge`` (breakpoint lambda 10 deg, Borges & Aldon 2004; merge RMS 2 sigma;
-      8 points and 0.15 m per line, Nguyen et al. 2007's P_min / L_min; up to two dropped beams
-      bridged; runs test off, ``runs_z`` = 0).
+      8 points and 0.15 m per line, Nguyen et al. 2007's P_min / L_min; up to two invalid beams
+      bridged, none with no return; runs test off, ``runs_z`` = 0).
     """
 
     sigma: float = 0.005

@@ -38,7 +38,8 @@ class SplitMergeConfig:
       collinear neighbours after splitting).
     - min_points / min_length: 8 points and 0.15 m per line (Nguyen et al. 2007 discard segments
       with too few points, "P_min", and too short, "L_min"; values chosen for 0.5 deg beams).
-    - max_skip: 3: a cluster bridges up to two dropped (nan / no-return) beams, as hough / ransac.
+    - max_skip: 3: a cluster bridges up to two invalid (nan) beams, as hough / ransac; a no-return
+      (+inf) beam always breaks it (open space: a doorway, or beyond range), as in every method.
     - end points farther than 3 sigma from the fitted line are trimmed (twice, refitting): they
       belong to a small neighbouring face the split threshold let in.
     - runs_z: 0 (off). When > 0, a line whose residual signs form ``runs_z`` standard deviations
