@@ -1,8 +1,13 @@
-"""`lmsbench sweep SWEEP.yaml`: run a parameter sweep on Dask and write one tidy Parquet table."""
+"""`lmsbench sweep SWEEP.yaml`: run a parameter sweep on Dask and write one tidy Parquet table.
+
+Exit status: 0 when every cell succeeded, 1 when any failed (the table is written either way),
+2 for a bad sweep file or setup error.
+"""
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 
@@ -35,4 +40,7 @@ def run(args: argparse.Namespace) -> int:
         errors = result.table.loc[result.table["status"] != "ok", "error"].value_counts()
         for text, n in errors.head(5).items():
             print(f"  {n} x {text}")
+        print(f"lmsbench sweep: {result.failed} of {result.total} cells failed (their `error` column says why; "
+              f"--retry-failed computes them again)", file=sys.stderr)
+        return 1
     return 0

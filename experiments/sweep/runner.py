@@ -64,10 +64,13 @@ def run_sweep(
         A :class:`SweepResult`; ``out/results.parquet`` and ``out/results.csv`` hold its table.
     """
     out = Path(out)
-    store = CellStore(out)
     fn = resolve_kind(spec.kind)  # fail early on an unknown kind
-    (out / "sweep.yaml").write_text(yaml.safe_dump(spec.to_dict(), sort_keys=False))
     cells = spec.cells()
+    check = getattr(fn, "check_params", None)  # a kind may check parameter names before any cell runs
+    if check is not None:
+        check(cells)
+    store = CellStore(out)
+    (out / "sweep.yaml").write_text(yaml.safe_dump(spec.to_dict(), sort_keys=False))
     keys = [cell_key(spec.kind, params) for params in cells]
     done = store.done()
     if retry_failed:
