@@ -277,6 +277,11 @@ def test_cli_errors_are_one_line_with_exit_status_2(tmp_path, capsys):
     assert main(["sweep", str(bad), "--local", "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "bad.yaml: grid must be a mapping of parameter -> values" in err
+    bad.write_text("kind: extract\ngrid:\n  sensor.kk: [1, 2]\n")
+    assert main(["sweep", str(bad), "--local", "--out", str(tmp_path / "out2")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bad.yaml: unknown parameter(s) ['sensor.kk']: not fields of sim.SensorConfig" in err
+    assert not (tmp_path / "out2").exists()
 
 
 def test_a_real_extractor_sweep_gives_the_same_scores_on_the_cluster_and_in_process(tmp_path, dask_client):

@@ -26,13 +26,16 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from experiments.sweep import load_sweep, run_sweep
+    from experiments.sweep import SweepSpecError, load_sweep, run_sweep
 
     spec = load_sweep(args.sweep)
     out = args.out or Path("results/sweeps") / spec.name
     executor = "inprocess" if args.inprocess else (args.scheduler or "local")
-    result = run_sweep(spec, out, executor, workers=args.workers, retry_failed=args.retry_failed,
-                       progress=not args.no_progress)
+    try:
+        result = run_sweep(spec, out, executor, workers=args.workers, retry_failed=args.retry_failed,
+                           progress=not args.no_progress)
+    except SweepSpecError as exc:  # an unknown kind or parameter name, found before any cell ran
+        raise SweepSpecError(f"{args.sweep}: {exc}") from exc
     print(f"{spec.name}: {result.total} cells, {result.computed} computed, {result.skipped} already done, "
           f"{result.failed} failed")
     print(f"wrote {out / 'results.parquet'}")
