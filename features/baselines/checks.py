@@ -9,7 +9,8 @@ import math
 import numpy as np
 
 
-def _is_real(value: object) -> bool:
+def is_real(value: object) -> bool:
+    """A plain or numpy number, not a bool."""
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
 
@@ -21,19 +22,19 @@ def integer(name: str, value: object, minimum: int) -> None:
 
 def positive(name: str, value: object, unit: str) -> None:
     """``value`` must be a finite number > 0 (in ``unit``)."""
-    if not _is_real(value) or not (math.isfinite(value) and value > 0):
+    if not is_real(value) or not (math.isfinite(value) and value > 0):
         raise ValueError(f"{name}: must be a finite number > 0 {unit}, got {value!r}")
 
 
 def non_negative(name: str, value: object, unit: str = "") -> None:
     """``value`` must be a finite number >= 0 (in ``unit``)."""
-    if not _is_real(value) or not (math.isfinite(value) and value >= 0):
+    if not is_real(value) or not (math.isfinite(value) and value >= 0):
         raise ValueError(f"{name}: must be a finite number >= 0{' ' + unit if unit else ''}, got {value!r}")
 
 
 def angle_deg(name: str, value: object, high: float) -> None:
     """``value`` must be an angle in (0, ``high``] degrees."""
-    if not _is_real(value) or not (0 < value <= high):
+    if not is_real(value) or not (0 < value <= high):
         raise ValueError(f"{name}: must be an angle in (0, {high:g}] deg, got {value!r}")
 
 

@@ -320,7 +320,7 @@ class CornerConfig:
     sigma: float = 0.005
 
     def __post_init__(self) -> None:
-        if not isinstance(self.min_turn_deg, (int, float, np.integer, np.floating)) or not 0 <= self.min_turn_deg < 180:
+        if not checks.is_real(self.min_turn_deg) or not 0 <= self.min_turn_deg < 180:
             raise ValueError(f"min_turn_deg: must be an angle in [0, 180) deg, got {self.min_turn_deg!r}")
         checks.integer("max_gap_beams", self.max_gap_beams, 1)
         checks.non_negative("max_distance", self.max_distance, "m")
