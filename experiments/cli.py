@@ -1,7 +1,8 @@
 """The ``lmsbench`` command line. Each subcommand lives in its own module under
 ``experiments/commands/`` and exposes ``register(subparsers)``; this module finds them all.
 
-Known errors (``lms200.LmsbenchError``, missing files) become one-line messages with exit status 2.
+Known errors (``lms200.LmsbenchError``, any ``OSError``: missing files, bad paths, unreachable
+schedulers or devices) become one-line messages with exit status 2.
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
     try:
         return int(args.func(args) or 0)
-    except (LmsbenchError, FileNotFoundError, IsADirectoryError, PermissionError) as exc:
+    except (LmsbenchError, OSError) as exc:  # OSError: missing files, bad paths, unreachable hosts, timeouts
         print(f"lmsbench {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

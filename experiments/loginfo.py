@@ -27,7 +27,13 @@ class LogSummary:
     truth: bool
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        """The fields as JSON-ready values, numbers as numbers: ``beams`` is the beam count (int)
+        when every scan has the same size, else None; ``beams_min`` / ``beams_max`` always ints."""
+        out = asdict(self)
+        low, _, high = self.beams.partition("-")
+        out["beams"] = int(low) if not high else None
+        out["beams_min"], out["beams_max"] = int(low), int(high or low)
+        return out
 
     def lines(self) -> list[str]:
         return [

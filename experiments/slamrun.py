@@ -19,7 +19,7 @@ import numpy as np
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.records import Record
 from slam import SlamConfig, SlamResult, run_slam
-from slam.metrics import Alignment2D, ate, map_error, read_relations, relations_error, rpe
+from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
 
 #: Published mean absolute translational relation errors on MIT CSAIL (Kummerle et al. 2009) and
 #: the raw odometry measured on the log (see ../shared/data/README.md), metres.
@@ -123,8 +123,20 @@ def score(traj: np.ndarray, data: SlamInput, result: SlamResult | None = None) -
         if result is not None and data.walls is not None:
             out["map"] = map_error(result.map_lines[:, 2:6], data.walls, Alignment2D(a.rotation, a.translation)).as_dict()
     if data.relations is not None:
-        out["relations"] = relations_error(traj, data.relations).as_dict()
+        out["relations"] = _relations_score(traj, data.relations)
     return out
+
+
+def _relations_score(traj: np.ndarray, relations: np.ndarray) -> dict[str, Any]:
+    """The relations error, or ``{"n": 0, "note": ...}`` where no relation lies inside the run
+    (a run cut short by --max-scans ends before the first relation's second stamp)."""
+    _, in1 = interpolate_poses(traj, relations[:, 0])
+    _, in2 = interpolate_poses(traj, relations[:, 1])
+    if not np.any(in1 & in2):
+        return {"n": 0, "n_skipped": int(relations.shape[0]),
+                "note": f"none of the {relations.shape[0]} relations falls inside the run's time span "
+                        f"({traj[0, 0]:.3f} to {traj[-1, 0]:.3f} s)"}
+    return relations_error(traj, relations).as_dict()
 
 
 @dataclass
@@ -136,9 +148,12 @@ class SlamRun:
     seconds: float
 
 
-def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_baseline: bool = True) -> SlamRun:
+def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_baseline: bool = True,
+        out: Path | None = None) -> SlamRun:
     """Run the filter over ``data`` (timed: feature extraction + filter), score it, and score the
-    baselines: the raw odometry and, with ``odometry_baseline``, the filter driven by odometry."""
+    baselines: the raw odometry and, with ``odometry_baseline``, the filter driven by odometry.
+    With ``out``, trajectory.tum and map.json are written there before any scoring, so a scoring
+    error loses no result."""
     records: Iterable[Record] = data.records
     if progress:
         from tqdm import tqdm
@@ -147,6 +162,8 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     t0 = time.perf_counter()
     result = run_slam(records, config)
     seconds = time.perf_counter() - t0
+    if out is not None:
+        write_result(out, result)
     d = result.diagnostics
     table = [{"source": "slam (odometry)" if config.use_odometry else "slam", **_flat(score(result.trajectory, data, result))}]
     odo = data.odometry
@@ -180,17 +197,22 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
 def _flat(scores: dict[str, Any]) -> dict[str, float]:
     keep = {"ate": ("rmse", "mean", "max"), "rpe_1m": ("trans_rmse", "rot_rmse"), "map": ("distance_mean", "matched"),
             "relations": ("trans_mean", "trans_std", "rot_mean_deg", "rot_std_deg")}
-    return {f"{k}_{f}": scores[k][f] for k, fields in keep.items() if k in scores for f in fields}
+    return {f"{k}_{f}": scores[k][f] for k, fields in keep.items() if k in scores for f in fields if f in scores[k]}
+
+
+def write_result(out: Path, res: SlamResult) -> None:
+    """trajectory.tum and map.json in ``out`` (the run's own outputs, no scores)."""
+    out.mkdir(parents=True, exist_ok=True)
+    write_tum(out / "trajectory.tum", res.trajectory[:, 0], res.trajectory[:, 1:])
+    (out / "map.json").write_text(json.dumps(res.map_dict(), indent=1) + "\n")
 
 
 def write_outputs(out: Path, data: SlamInput, config: SlamConfig, slam_run: SlamRun) -> None:
     """trajectory.tum, map.json, metrics.json, config.yaml, slam.png in ``out``."""
     import yaml
 
-    out.mkdir(parents=True, exist_ok=True)
     res = slam_run.result
-    write_tum(out / "trajectory.tum", res.trajectory[:, 0], res.trajectory[:, 1:])
-    (out / "map.json").write_text(json.dumps(res.map_dict(), indent=1) + "\n")
+    write_result(out, res)
     (out / "metrics.json").write_text(json.dumps(_jsonable(slam_run.metrics), indent=2) + "\n")
     (out / "config.yaml").write_text(yaml.safe_dump({"input": data.sources, "slam": config.to_dict()}, sort_keys=False))
     plot(out / "slam.png", data, res)

@@ -5,7 +5,9 @@ bag folder (sqlite3 storage). Scans go to ``/scan`` (frame ``laser``); a record'
 pose, when present, go to ``/odom`` and ``/ground_truth`` as ``geometry_msgs/PoseStamped`` with the
 scan's stamp, written just before the scan. Reading: every LaserScan topic (or the one named) in
 time order; odometry from ``/odom`` and truth from ``/ground_truth`` (PoseStamped or
-nav_msgs/Odometry), the latest message at or before each scan.
+nav_msgs/Odometry): the latest message at or before each scan whose header stamp lies within
+half the bag's median scan period of the scan's stamp (``pose_tolerance``); a scan with no such
+pose gets None, so a record written without odometry or truth reads back without it.
 """
 
 from __future__ import annotations
@@ -127,6 +129,21 @@ def _stamp_of(msg) -> float:  # noqa: ANN001
     return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
 
 
+STAMP_EPS_S = 1e-6  # s: stamps this close are the same instant (float seconds vs integer ns)
+
+
+def pose_tolerance(scan_times_ns: Iterable[int]) -> float:
+    """How far (s) a pose's stamp may lie from a scan's for the pose to be attached to the scan:
+    half the median period between consecutive scans (bag time), at least ``STAMP_EPS_S``; a
+    single scan gets ``STAMP_EPS_S`` (only a pose at its own stamp)."""
+    t = np.sort(np.fromiter(scan_times_ns, dtype=np.int64))
+    periods = np.diff(t)
+    periods = periods[periods > 0]
+    if periods.size == 0:
+        return STAMP_EPS_S
+    return max(0.5 * float(np.median(periods)) * 1e-9, STAMP_EPS_S)
+
+
 class BagReader:
     """Iterate the LaserScans of a ROS 1 or ROS 2 bag as Records (iterable several times).
 
@@ -158,16 +175,17 @@ class BagReader:
                 wanted = f"topic {self.topic!r}" if self.topic else "any sensor_msgs/LaserScan topic"
                 raise BagError(f"{self.path}: no {wanted}; topics: {topics}")
             poses = [c for c in reader.connections if c.msgtype in _POSE_TYPES and c.topic in (ODOM_TOPIC, TRUTH_TOPIC)]
+            tolerance = pose_tolerance(t for _, t, _ in reader.messages(connections=scans)) if poses else 0.0
             # Poses stamped like a scan may come just before or just after it (ties in bag time are
             # unordered across topics): hold each scan until bag time moves past it.
-            latest: dict[str, Pose2D | None] = {ODOM_TOPIC: None, TRUTH_TOPIC: None}
+            latest: dict[str, tuple[float, Pose2D] | None] = {ODOM_TOPIC: None, TRUTH_TOPIC: None}
             held: list[tuple[int, Scan]] = []
             for conn, t, raw in reader.messages(connections=scans + poses):
                 while held and held[0][0] < t:
-                    yield self._record(held.pop(0)[1], latest)
+                    yield self._record(held.pop(0)[1], latest, tolerance)
                 msg = reader.deserialize(raw, conn.msgtype)
                 if conn.msgtype != "sensor_msgs/msg/LaserScan":
-                    latest[conn.topic] = _pose_of(msg)
+                    latest[conn.topic] = (_stamp_of(msg), _pose_of(msg))
                     continue
                 ranges = np.asarray(msg.ranges, dtype=np.float64)
                 ranges[ranges < 0] = np.nan  # some drivers mark invalid beams with negative values
@@ -181,10 +199,17 @@ class BagReader:
                 )
                 held.append((t, scan))
             for _, scan in held:
-                yield self._record(scan, latest)
+                yield self._record(scan, latest, tolerance)
         finally:
             reader.close()
 
     @staticmethod
-    def _record(scan: Scan, latest: dict[str, Pose2D | None]) -> Record:
-        return Record(scan=scan, odom=latest[ODOM_TOPIC], truth=latest[TRUTH_TOPIC])
+    def _record(scan: Scan, latest: dict[str, tuple[float, Pose2D] | None], tolerance: float) -> Record:
+        """The scan with the latest odometry / truth whose stamp is within ``tolerance`` (s) of its
+        own; None where the latest is older (the previous scan's pose is not this scan's)."""
+        def near(entry: tuple[float, Pose2D] | None) -> Pose2D | None:
+            if entry is None or abs(entry[0] - scan.stamp) > tolerance:
+                return None
+            return entry[1]
+
+        return Record(scan=scan, odom=near(latest[ODOM_TOPIC]), truth=near(latest[TRUTH_TOPIC]))

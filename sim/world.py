@@ -15,6 +15,7 @@ import numpy as np
 from lms200 import LmsbenchError
 
 from .geometry import face_corners, rectangle_corners, union_faces
+from .walls_only import box_thickness, orient_walls, unreproduced
 
 SCAN_HEIGHT_M = 0.35  # height of the scan plane above the floor (LMS200 on a Pioneer-class robot)
 FACE_BOX_THICKNESS_M = 0.05  # thickness of the boxes rebuilt behind faces for a walls-only world.json
@@ -93,11 +94,14 @@ class World:
 
     @classmethod
     def from_json(cls, path: str | Path) -> "World":
-        """Read a world.json. A file with only walls/circles gets boxes rebuilt behind each face
-        (on its solid, left side) and cylinders of 2 m height, so it can be simulated.
+        """Read a world.json. A file with only walls/circles gets thin boxes rebuilt behind each
+        face (on its solid side, see ``sim.walls_only``: closed loops are oriented from the
+        topology, open walls taken as drawn, solid on the left of p1 -> p2) and cylinders of 2 m
+        height, so it can be simulated.
 
         Raises:
-            LmsbenchError: for a file that is not a world description.
+            LmsbenchError: for a file that is not a world description, or a walls-only file whose
+                rebuilt boxes do not give back its walls as faces.
         """
         try:
             d = json.loads(Path(path).read_text(encoding="ascii"))
@@ -106,12 +110,15 @@ class World:
         except (ValueError, TypeError, UnicodeDecodeError) as exc:
             raise LmsbenchError(f"{path}: not a world.json ({exc})") from None
         h = float(d.get("scan_height", SCAN_HEIGHT_M))
-        if "boxes" in d:
-            boxes, cylinders = d["boxes"], d.get("cylinders", [])
-        else:
+        walls_only = "boxes" not in d
+        if walls_only:
+            route = np.asarray(d.get("route_nodes", []), dtype=float).reshape(-1, 2)
+            walls = orient_walls(walls, np.vstack([circles[:, :2], route]))
             boxes = boxes_behind_faces(walls, h)
             cylinders = [[cx, cy, r, 0.0, 2.0] for cx, cy, r in circles]
-        return cls(
+        else:
+            boxes, cylinders = d["boxes"], d.get("cylinders", [])
+        world = cls(
             name=str(d.get("name", Path(path).stem)),
             seed=int(d.get("seed", 0)),
             boxes=boxes,
@@ -121,6 +128,17 @@ class World:
             route_edges=d.get("route_edges", []),
             route_targets=d.get("route_targets", []),
         )
+        bad = unreproduced(walls, world.walls, FACE_BOX_THICKNESS_M) if walls_only else None
+        if bad is not None:
+            x1, y1, x2, y2 = walls[bad]
+            raise LmsbenchError(
+                f"{path}: wall {bad} ({x1:g}, {y1:g}) -> ({x2:g}, {y2:g}) is not a face of the world rebuilt "
+                f"from the walls: a walls-only world.json needs the solid on the LEFT of p1 -> p2 (a room's "
+                f"walls clockwise, a free-standing block's counter-clockwise; closed loops are re-oriented "
+                f"automatically, open walls are taken as drawn), and thin boxes of {FACE_BOX_THICKNESS_M} m "
+                f"behind each wall must not cover another wall; reverse that wall, or give 'boxes'"
+            )
+        return world
 
     @property
     def bounds(self) -> tuple[float, float, float, float]:
@@ -148,16 +166,19 @@ class World:
 
 
 def boxes_behind_faces(walls: np.ndarray, height: float) -> np.ndarray:
-    """Thin boxes (n, 7) whose right face lies exactly on each wall face (solid on the left)."""
+    """Thin boxes (n, 7) whose right face lies exactly on each wall face (solid on the left),
+    ``FACE_BOX_THICKNESS_M`` thick or half the gap to the next wall behind (``box_thickness``)."""
     out = []
-    for x1, y1, x2, y2 in walls:
+    walls = np.asarray(walls, dtype=float).reshape(-1, 4)
+    thickness = box_thickness(walls, FACE_BOX_THICKNESS_M) if len(walls) else np.zeros(0)
+    for (x1, y1, x2, y2), thick in zip(walls, thickness):
         d = np.array([x2 - x1, y2 - y1])
         length = float(np.hypot(*d))
         u = d / length
         left = np.array([-u[1], u[0]])
-        c = np.array([(x1 + x2) / 2, (y1 + y2) / 2]) + left * FACE_BOX_THICKNESS_M / 2
+        c = np.array([(x1 + x2) / 2, (y1 + y2) / 2]) + left * thick / 2
         yaw = float(np.arctan2(u[1], u[0]))
-        out.append([c[0], c[1], yaw, length / 2, FACE_BOX_THICKNESS_M / 2, 0.0, max(2.0, 2 * height)])
+        out.append([c[0], c[1], yaw, length / 2, thick / 2, 0.0, max(2.0, 2 * height)])
     return np.array(out, dtype=float).reshape(-1, 7)
 
 

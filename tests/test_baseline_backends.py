@@ -80,3 +80,17 @@ def test_a_cluster_longer_than_the_scan_half() -> None:
 )
 def test_degenerate_inputs(ranges: np.ndarray) -> None:
     check(Scan(ranges, -np.pi / 2, np.deg2rad(0.5), 0.0, 8.183), "degenerate")
+
+
+@pytest.mark.parametrize(
+    "beams, value, lines_per_method",
+    [([180], np.inf, 2), ([150, 151], np.inf, 2), ([120, 240], np.inf, 3),
+     ([180], np.nan, 1), ([150, 151], np.nan, 1), ([120, 240], np.nan, 1)],
+)
+def test_no_return_beams_break_and_invalid_beams_are_bridged_alike(beams: list, value: float,
+                                                                   lines_per_method: int) -> None:
+    """Both backends cut a cluster at a +inf beam and step over up to max_skip - 1 nan beams."""
+    wall = cast([(2.0, -3.0, 2.0, 3.0)], sigma=0.002, seed=5)
+    ranges = wall.ranges.copy()
+    ranges[beams] = value
+    assert check(wall.replace(ranges=ranges), f"{value} at {beams}") == len(METHODS) * lines_per_method

@@ -74,11 +74,13 @@ def test_line_covariance_matches_monte_carlo(method):
 
 
 @pytest.mark.parametrize("method", BASELINES)
-def test_dropouts_are_bridged_and_rep117_respected(method):
+def test_invalid_dropouts_are_bridged_and_rep117_respected(method):
+    """Two invalid (nan) beams in a wall are stepped over (max_skip = 3); a no-return (+inf) beam
+    breaks the wall instead (test_a_no_return_beam_breaks_a_wall_but_an_invalid_one_does_not)."""
     scan, truth = room_scan(L_ROOM, POSES[0], sigma=0.0)
     r = scan.ranges.copy()
     r[40] = np.nan
-    r[41] = np.inf
+    r[41] = np.nan
     fs = extract(scan.replace(ranges=r), method)
     s = score_scan(fs, truth)
     assert (s.tp, s.fp, s.fn) == (truth.segments.shape[0], 0, 0)
@@ -177,3 +179,73 @@ def test_runs_test_option_drops_lines_on_a_pillar(method):
             assert walls.tp >= 4
         on_pillar[z] = n
     assert on_pillar[0.0] >= 3 and on_pillar[3.0] < on_pillar[0.0]
+
+
+@pytest.mark.parametrize(
+    "method, params, field",
+    [
+        ("hough", {"rho_step": 0}, "rho_step"),
+        ("hough", {"rho_step": -1}, "rho_step"),
+        ("hough", {"alpha_step_deg": 0}, "alpha_step_deg"),
+        ("hough", {"alpha_step_deg": float("nan")}, "alpha_step_deg"),
+        ("hough", {"band_fine": -0.01}, "band_fine"),
+        ("hough", {"max_failures": 0}, "max_failures"),
+        ("ransac", {"hypotheses": -1}, "hypotheses"),
+        ("ransac", {"hypotheses": 2.5}, "hypotheses"),
+        ("ransac", {"seed": -1}, "seed"),
+        ("ransac", {"window": -1}, "window"),
+        ("ransac", {"inlier_band": 0}, "inlier_band"),
+        ("split_merge", {"split_threshold": 0}, "split_threshold"),
+        ("split_merge", {"max_skip": 0}, "max_skip"),
+        ("split_merge", {"min_points": 1}, "min_points"),
+        ("split_merge", {"sigma": -0.005}, "sigma"),
+        ("split_merge", {"merge_rms": -1.0}, "merge_rms"),
+        ("split_merge", {"backend": "cuda"}, "backend"),
+        ("iepf", {"breakpoint_lambda_deg": 0}, "breakpoint_lambda_deg"),
+        ("iepf", {"min_length": -0.1}, "min_length"),
+        ("iepf", {"runs_z": float("inf")}, "runs_z"),
+        ("iepf", {"max_skip": True}, "max_skip"),
+    ],
+)
+def test_bad_config_values_raise_naming_the_field(method: str, params: dict, field: str) -> None:
+    """Values that cannot work fail when the config is built, with the field's name first, not with
+    a ZeroDivisionError or a numpy shape error inside the extractor."""
+    scan = Scan.lms200(np.full(361, 2.0))
+    with pytest.raises(ValueError, match=f"^{field}: must be"):
+        extract(scan, method=method, **params)
+
+
+@pytest.mark.parametrize(
+    "params, field",
+    [({"min_turn_deg": 180.0}, "min_turn_deg"), ({"max_gap_beams": 0}, "max_gap_beams"),
+     ({"max_distance": -1.0}, "max_distance"), ({"sigma": 0.0}, "sigma"), ({"lambda_deg": 95.0}, "lambda_deg")],
+)
+def test_bad_corner_config_values_raise(params: dict, field: str) -> None:
+    from features.baselines.common import CornerConfig
+
+    with pytest.raises(ValueError, match=f"^{field}: must be"):
+        CornerConfig(**params)
+    CornerConfig()  # the defaults are valid
+
+
+@pytest.mark.parametrize("method", ["sensor", "split_merge", "iepf", "hough", "ransac"])
+def test_a_no_return_beam_breaks_a_wall_but_an_invalid_one_does_not(method: str) -> None:
+    """One rule for every method: a +inf beam (no return: open space, a doorway or beyond range)
+    in the middle of a wall ends the segment, so the wall gives two lines; the baselines step over
+    a nan beam (invalid: no information) and give one line."""
+    from sensor_geometry import cast
+
+    wall = cast([(2.0, -3.0, 2.0, 3.0)], sigma=0.002, seed=3)
+    whole = extract(wall, method=method)
+    assert len(whole.lines) == 1
+    for value, expected in ((np.inf, 2), (np.nan, 1)):
+        if method == "sensor" and value != np.inf:
+            continue  # the sensor method breaks at nan too (its bridge_invalid = 0)
+        ranges = wall.ranges.copy()
+        ranges[180] = value
+        fs = extract(wall.replace(ranges=ranges), method=method)
+        assert len(fs.lines) == expected, (value, [(l.first, l.last) for l in fs.lines])
+        if expected == 2:
+            assert fs.lines[0].last < 180 < fs.lines[1].first
+        for line in fs.lines:
+            assert abs(line.rho - 2.0) < 0.01 and abs(line.alpha) < 0.01

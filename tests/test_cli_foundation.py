@@ -16,7 +16,7 @@ from experiments.demo import room_scan
 def test_info_json_on_intel(shared_data: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["info", str(shared_data / "intel-corrected.log.gz"), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
-    assert info["scans"] == 910 and info["beams"] == "180"
+    assert info["scans"] == 910 and info["beams"] == 180 and info["beams_min"] == info["beams_max"] == 180
     assert info["fov_deg"] == pytest.approx(179.0) and info["resolution_deg"] == pytest.approx(1.0)
     assert info["duration_s"] == pytest.approx(2650.8632, abs=1e-3)
     assert info["scan_rate_hz"] == pytest.approx(909 / 2650.8632, rel=1e-6)
@@ -34,6 +34,32 @@ def test_info_errors_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[
     assert "bad.clf:1:" in err and err.count("\n") == 1
 
 
+@pytest.mark.parametrize("content", [b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00", b'{"walls": [[0, 0, 1, 1]]}\n', b""])
+def test_info_on_a_file_without_laser_messages_is_an_error(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                           content: bytes) -> None:
+    path = tmp_path / "notalog.png"
+    path.write_bytes(content)
+    assert main(["info", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"lmsbench info: error: {path}:1: no laser messages found") and err.count("\n") == 1
+
+
+def test_info_json_numbers_are_numbers(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from lms200 import Record, Scan, write_log
+
+    scans = [Scan.lms200(np.full(361, 2.0), stamp=0.5 * k) for k in range(3)]
+    scans.append(Scan(np.full(181, 3.0), -np.pi / 2, np.pi / 180, scans[0].range_min, scans[0].range_max, stamp=1.5))
+    write_log(tmp_path / "mixed.clf", [Record(s) for s in scans])
+    assert main(["info", str(tmp_path / "mixed.clf"), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["scans"] == 4 and info["beams"] is None and (info["beams_min"], info["beams_max"]) == (181, 361)
+    assert info["duration_s"] == pytest.approx(1.5) and info["scan_rate_hz"] == pytest.approx(2.0)
+    write_log(tmp_path / "one.clf", [Record(s) for s in scans[:3]])
+    assert main(["info", str(tmp_path / "one.clf"), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["beams"] == 361 and isinstance(info["fov_deg"], float) and info["fov_deg"] == pytest.approx(180.0)
+
+
 def test_room_scan_matches_geometry() -> None:
     s = room_scan(sigma=0.0, x=1.5, y=0.5, theta=0.0)
     # straight ahead: the far wall at x = 6; to the left (beam 360): the wall at y = +2
@@ -43,3 +69,47 @@ def test_room_scan_matches_geometry() -> None:
     p = s.points
     on_wall = np.isclose(p[:, 0] + 1.5, 6.0, atol=1e-3) | np.isclose(np.abs(p[:, 1] + 0.5), 2.0, atol=1e-3)
     assert on_wall.all()
+
+
+def test_os_errors_are_one_line_with_exit_status_2(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    # an output folder under a regular file: NotADirectoryError from mkdir
+    assert main(["simulate", "--duration", "0.1", "--out", str(afile / "x")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("lmsbench simulate: error: ") and err.count("\n") == 1 and "afile" in err
+    # an unreachable scheduler: distributed raises OSError("Timed out trying to connect ...")
+    import experiments.sweep.runner as runner
+
+    def unreachable(executor, workers):
+        raise OSError(f"Timed out trying to connect to {executor} after 10 s")
+
+    monkeypatch.setattr(runner, "_client", unreachable)
+    spec = tmp_path / "s.yaml"
+    spec.write_text("kind: extract\ngrid:\n  method: [sensor]\n")
+    assert main(["sweep", str(spec), "--scheduler", "tcp://127.0.0.1:1", "--no-progress",
+                 "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err == "lmsbench sweep: error: Timed out trying to connect to tcp://127.0.0.1:1 after 10 s\n"
+
+
+def test_keyboard_interrupt_exits_130(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    import experiments.commands.info as info
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(info, "run", interrupted)
+    assert main(["info", "whatever.clf"]) == 130
+    assert "lmsbench info: interrupted" in capsys.readouterr().err
+
+
+def test_bench_with_an_unknown_name_is_a_one_line_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from experiments.commands.bench import discover
+
+    assert main(["bench", "nosuch", "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("lmsbench bench: error: unknown benchmark(s) ['nosuch']; available: ") and err.count("\n") == 1
+    assert all(repr(name) in err for name in discover())
+    assert not (tmp_path / "b").exists()

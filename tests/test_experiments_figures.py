@@ -125,10 +125,30 @@ def test_report_tables_and_html():
     assert "<li>item <code>code</code></li>" in html
 
 
-def test_fig_signal_draws_the_reference_line(tmp_path):
+def test_fig_signal_draws_the_reference_line(tmp_path, monkeypatch):
+    k, delta = 10, np.deg2rad(0.5)
+    reference = 1 + 2 * sum(np.cos(j * delta) for j in range(1, k + 1))  # AD on a straight line, by hand
+    assert reference == pytest.approx(21.0, abs=0.05)
+    figures = []
+    save = draw.save_figure
+
+    def keep(fig, *args, **kwargs):
+        figures.append([(list(line.get_xdata()), list(line.get_ydata()), line.get_linestyle())
+                        for ax in fig.axes for line in ax.get_lines()])
+        return save(fig, *args, **kwargs)
+
+    monkeypatch.setattr(draw, "save_figure", keep)
     sig = pd.DataFrame({"beam": np.arange(5), "ad": np.linspace(20, 21, 5)})
-    paths = draw.fig_signal(sig, "ad", "AD", "t", tmp_path / "s", reference=21.0)
+    paths = draw.fig_signal(sig, "ad", "AD", "t", tmp_path / "s", reference=ad_reference(k, delta))
     assert [p.suffix for p in paths] == [".png", ".pdf", ".csv"]
+    (lines,) = figures
+    dashed = [y for _, y, style in lines if style == "--"]
+    assert len(dashed) == 1 and dashed[0] == pytest.approx([reference, reference])
+    signal = [y for _, y, style in lines if style != "--"]
+    assert len(signal) == 1 and signal[0] == pytest.approx(list(sig["ad"]))
+    saved = pd.read_csv(tmp_path / "s.csv")
+    np.testing.assert_allclose(saved["ad"], sig["ad"])
+    np.testing.assert_allclose(saved["reference"], reference, rtol=1e-12)
 
 
 def test_sweep_plot_with_three_parameters_has_a_panel_per_value_of_the_third(tmp_path):

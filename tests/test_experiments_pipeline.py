@@ -30,7 +30,7 @@ def test_extract_cell_agrees_with_compare_on_the_same_simulated_run():
     reference = summarise(compare([source], ["split_merge"], params={"split_merge": {"split_threshold": 0.05}})).iloc[0]
     for name in ("tp", "fp", "fn", "f1", "rho_rms_mm", "corner_precision", "corner_recall", "lines_per_scan", "scans"):
         assert cell[name] == pytest.approx(float(reference[name]), nan_ok=True), name
-    assert cell["scans"] == 4 and 0 < cell["time_ms_median"] < 1e3
+    assert cell["scans"] == 4 and cell["time_ms_median"] > 0
 
 
 def test_slam_cell_reports_trajectory_error_against_truth():

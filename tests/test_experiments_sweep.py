@@ -128,7 +128,7 @@ def test_a_sweep_killed_midway_resumes_and_ends_with_exactly_the_full_table(tmp_
 
     del env["SWEEP_TEST_DIE_AT"]
     resumed = subprocess.run(cmd, env=env, cwd=REPO, capture_output=True, text=True, timeout=120)
-    assert resumed.returncode == 0, resumed.stderr
+    assert resumed.returncode == 1, resumed.stderr  # the x = 3 cells fail by design
     assert "12 cells, 4 computed, 8 already done, 2 failed" in resumed.stdout
     assert computed(log)[9:] == ["4 0", "4 1", "5 0", "5 1"]
     table = pd.read_parquet(tmp_path / "out" / "results.parquet")
@@ -187,6 +187,9 @@ def test_random_sampling_is_seeded_in_range_and_crossed_with_grid_and_seeds():
         ({"kind": "k", "random": {"u": {"uniform": [0, 1]}}}, r"needs `samples:`"),
         ({"kind": "k", "fixed": {"x": [1, 2]}}, r"fixed.x must be a number"),
         ({"kind": "k", "gird": {"x": [1]}}, r"unknown key\(s\) \['gird'\]"),
+        ({"kind": "k", "grid": [1, 2]}, r"grid must be a mapping of parameter -> values"),
+        ({"kind": "k", "fixed": [1]}, r"fixed must be a mapping of parameter -> value"),
+        ({"kind": "k", "random": "uniform", "samples": 2}, r"random must be a mapping of parameter -> distribution"),
     ],
 )
 def test_bad_sweep_files_raise_errors_that_say_what_to_fix(raw, message):
@@ -211,7 +214,8 @@ def test_the_cli_runs_a_sweep_file_on_its_own_local_cluster(tmp_path):
     run = subprocess.run([sys.executable, "-m", "experiments.cli", "sweep", str(spec_path), "--no-progress",
                           "--out", str(tmp_path / "out")], env=env, cwd=REPO, capture_output=True, text=True,
                          timeout=120)
-    assert run.returncode == 0, run.stderr
+    assert run.returncode == 1, run.stderr  # a failed cell: the table is written, the status says so
+    assert run.stderr.strip().splitlines()[-1].startswith("lmsbench sweep: 1 of 3 cells failed")
     table = pd.read_parquet(tmp_path / "out" / "results.parquet")
     assert list(table["x"]) == [0, 1, 2] and list(table["status"]) == ["ok", "error", "ok"]
     assert table["y"][0] == 5 and table["y"][2] == 9
@@ -251,8 +255,9 @@ def test_the_cli_uses_an_existing_scheduler_and_matches_in_process(tmp_path, das
     run = subprocess.run([sys.executable, "-m", "experiments.cli", "sweep", str(spec_path), "--no-progress",
                           "--scheduler", dask_client.scheduler.address, "--out", str(tmp_path / "out")],
                          env=env, cwd=REPO, capture_output=True, text=True, timeout=120)
-    assert run.returncode == 0, run.stderr
+    assert run.returncode == 1, run.stderr
     assert "6 cells, 6 computed, 0 already done, 2 failed" in run.stdout
+    assert "lmsbench sweep: 2 of 6 cells failed" in run.stderr
     remote = pd.read_parquet(tmp_path / "out" / "results.parquet")
     local = run_sweep(make_spec(log, xs=[2, 3, 4]), tmp_path / "inproc", "inprocess", progress=False).table
     pd.testing.assert_frame_equal(comparable(remote), comparable(local))
@@ -268,6 +273,15 @@ def test_cli_errors_are_one_line_with_exit_status_2(tmp_path, capsys):
     assert main(["sweep", str(bad), "--local", "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "bad.yaml: grid.x is empty" in err
+    bad.write_text("kind: extract\ngrid: [1, 2]\n")
+    assert main(["sweep", str(bad), "--local", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bad.yaml: grid must be a mapping of parameter -> values" in err
+    bad.write_text("kind: extract\ngrid:\n  sensor.kk: [1, 2]\n")
+    assert main(["sweep", str(bad), "--local", "--out", str(tmp_path / "out2")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bad.yaml: unknown parameter(s) ['sensor.kk']: not fields of sim.SensorConfig" in err
+    assert not (tmp_path / "out2").exists()
 
 
 def test_a_real_extractor_sweep_gives_the_same_scores_on_the_cluster_and_in_process(tmp_path, dask_client):
@@ -283,3 +297,46 @@ def test_a_real_extractor_sweep_gives_the_same_scores_on_the_cluster_and_in_proc
     assert (on_dask["status"] == "ok").all() and list(on_dask["method"]) == ["sensor", "iepf"]
     scores = ["tp", "fp", "fn", "f1", "rho_rms_mm", "alpha_rms_deg", "lines_per_scan", "explained", "scans"]
     pd.testing.assert_frame_equal(on_dask[scores], in_process[scores])
+
+
+def test_the_cli_exits_0_when_every_cell_succeeds_and_1_when_any_fails(tmp_path, capsys):
+    from experiments.cli import main
+
+    log = tmp_path / "log.txt"
+    ok, bad = tmp_path / "ok.yaml", tmp_path / "bad.yaml"
+    ok.write_text(yaml.safe_dump(make_spec(log, xs=[0, 1], seeds=[0]).to_dict()))
+    assert main(["sweep", str(ok), "--local", "--no-progress", "--out", str(tmp_path / "o1")]) == 0
+    assert "0 failed" in capsys.readouterr().out
+    # x = 3 makes the test cell raise
+    bad.write_text(yaml.safe_dump(make_spec(log, xs=[0, 3], seeds=[0]).to_dict()))
+    assert main(["sweep", str(bad), "--local", "--no-progress", "--out", str(tmp_path / "o2")]) == 1
+    captured = capsys.readouterr()
+    assert "lmsbench sweep: 1 of 2 cells failed" in captured.err
+    assert pd.read_parquet(tmp_path / "o2" / "results.parquet")["status"].tolist() == ["ok", "error"]
+
+
+@pytest.mark.parametrize("param, message", [
+    ("sensor.kk", r"unknown parameter\(s\) \['sensor.kk'\]: not fields of sim.SensorConfig; known sensor.\* names: .*'noise_sigma'"),
+    ("extractor.kk", r"\['extractor.kk'\]: not fields of the 'sensor' extractor's .*known extractor.\* names: .*'k'"),
+])
+def test_misspelled_parameters_fail_before_any_cell_runs(tmp_path, param, message):
+    spec = SweepSpec.from_dict({"kind": "extract", "fixed": {"duration": 0.5}, "grid": {param: [1, 2]}})
+    with pytest.raises(SweepSpecError, match=message):
+        run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert not (tmp_path / "out").exists()
+
+
+def test_misspelled_slam_parameters_fail_before_any_cell_runs(tmp_path):
+    spec = SweepSpec.from_dict({"kind": "slam", "grid": {"slam.sigma_acel": [0.1]}})
+    with pytest.raises(SweepSpecError, match=r"\['slam.sigma_acel'\]: not fields of slam.SlamConfig.*'sigma_accel'"):
+        run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    spec = SweepSpec.from_dict({"kind": "slam", "fixed": {"slam.extractor": "split_merge"},
+                                "grid": {"slam.extractor_params.kk": [1]}})
+    with pytest.raises(SweepSpecError, match=r"slam.extractor_params.kk.*'split_merge' extractor"):
+        run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    # correct names pass the check (the extractor of the method named in each cell)
+    from experiments.sweep.kinds import check_extract_params
+
+    check_extract_params([{"method": "hough", "extractor.rho_step": 0.01, "sensor.noise_sigma": 0.0}])
+    with pytest.raises(SweepSpecError, match=r"\['extractor.k'\]: not fields of the 'hough' extractor"):
+        check_extract_params([{"method": "hough", "extractor.k": 5}])  # sensor's k is not hough's

@@ -131,12 +131,22 @@ def test_bag_round_trip(tmp_path: Path, fmt: str, name: str) -> None:
     back = list(read_log(tmp_path / name))
     # LaserScan stores float32: ranges to float32 precision; angles snap back onto the 0.05 deg grid
     _assert_same(recs, back, atol=1e-6, poses=False)
-    for x, y in zip(recs, back):  # poses are the latest at or before each scan
-        if x.truth is not None:
-            np.testing.assert_allclose(y.truth, x.truth, atol=1e-9)
-        if x.odom is not None:
-            np.testing.assert_allclose(y.odom, x.odom, atol=1e-9)
-    assert back[1].odom == pytest.approx(recs[0].odom)  # no odometry at scan 1: the previous one
+    for x, y in zip(recs, back):  # each scan's own poses; None stays None (not the previous pose)
+        for written, read in ((x.truth, y.truth), (x.odom, y.odom)):
+            if written is None:
+                assert read is None
+            else:
+                np.testing.assert_allclose(read, written, atol=1e-9)
+    assert recs[1].odom is None and back[1].odom is None  # was the previous scan's odometry
+    assert recs[1].truth is None and back[1].truth is None
+
+
+def test_bag_pose_tolerance_is_half_the_median_scan_period() -> None:
+    from lms200.bag import STAMP_EPS_S, pose_tolerance
+
+    ns = [1_000_000_000 + 26_666_667 * i for i in range(10)] + [1_500_000_000]  # 37.5 Hz and one stray
+    assert pose_tolerance(ns) == pytest.approx(0.5 * 0.026666667, abs=1e-9)
+    assert pose_tolerance([5]) == pose_tolerance([]) == STAMP_EPS_S
 
 
 def test_bag_errors(tmp_path: Path) -> None:

@@ -6,12 +6,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from features import FeatureSet, extract
 from features.sensor import resolve_backend
 from lms200 import Scan
 
 from sensor_geometry import cast, polygon
+from test_sensor_props import scans
 
 numba = pytest.importorskip("numba")
 
@@ -164,3 +167,30 @@ def test_compare_reports_each_methods_backend() -> None:
     assert "sensor=numba, hough=numpy" in text and "not like for like" in text
     same = format_summary(pd.DataFrame(rows[:1]))
     assert "note" not in same
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the numpy baselines' overflow on 1e300 ranges
+@settings(max_examples=150, deadline=None)
+@given(scans(), st.integers(1, 12))
+def test_any_scan_gives_the_same_features_on_both_backends(scan: Scan, k: int) -> None:
+    """Random resolutions, fields of view, special values and windows (the never-raise scans)."""
+    ref, got = both(scan, k=k)
+    assert_same(ref, got, f"{len(scan)} beams, k={k}")
+    for method in ("split_merge", "iepf"):
+        ref = extract(scan, method=method, backend="numpy")
+        got = extract(scan, method=method, backend="numba")
+        assert_same(ref, got, f"{method} {len(scan)} beams", method)
+
+
+def test_importing_the_extractors_does_not_import_numba() -> None:
+    """numba (~0.5 s to import) loads on the first compiled call, not with ``import features``."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = ("import sys, features, features.sensor, features.baselines.split_merge, features.baselines.iepf; "
+            "print('numba' in sys.modules)")
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env={"PYTHONPATH": str(root), "PATH": ""}, cwd=root)
+    assert out.stdout.strip() == "False"

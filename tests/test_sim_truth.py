@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 
+from lms200 import LmsbenchError
 from sim import SensorConfig, World, make_world, visible_truth
 from sim.layout import Layout
 
@@ -135,3 +136,64 @@ def test_visible_truth_sees_room_from_inside_by_hand() -> None:
     assert t.segment_beams[0][0] == 0 and t.segment_beams[-1][1] == 360
     assert np.allclose(t.corners[:, :2], [[1.95, -1.45], [1.95, 1.45]])
     assert np.all(t.corners[:, 3] == 0)
+
+
+def _square(tmp_path, name: str, loops: list, circles: list = (), extra: list = ()) -> World:
+    walls = [[*p[i], *p[(i + 1) % len(p)]] for p in loops for i in range(len(p))] + list(extra)
+    (tmp_path / name).write_text(json.dumps({"walls": walls, "circles": list(circles)}))
+    return World.from_json(tmp_path / name)
+
+
+def test_walls_only_room_is_the_same_drawn_either_way_round(tmp_path) -> None:
+    """A 3 m room drawn counter-clockwise got thin boxes inside it (truth 1.45 m from the centre,
+    8 faces); closed loops are now oriented from the topology, so both directions give the room
+    with its walls 1.5 m from the centre, each wall a face running clockwise (solid on the left)."""
+    from sim.lidar import LMS200Sim
+    ccw = [(0.0, 0.0), (3.0, 0.0), (3.0, 3.0), (0.0, 3.0)]
+    for name, loop in (("ccw.json", ccw), ("cw.json", ccw[::-1])):
+        w = _square(tmp_path, name, [loop])
+        inside = w.walls[(np.abs(w.walls - 1.5) <= 1.5 + 1e-9).all(axis=1)]
+        assert len(inside) == 4, name
+        assert all(x1 * y2 - x2 * y1 + (x2 - x1) * 1.5 - (y2 - y1) * 1.5 < 0 for x1, y1, x2, y2 in inside)  # CW
+        with LMS200Sim(w, SensorConfig.ideal()) as lidar:
+            scan = lidar.scan_at((1.5, 1.5, 0.0))
+        assert scan.ranges[[0, 180, 360]] == pytest.approx([1.5, 1.5, 1.5], abs=1e-9), name
+        truth = visible_truth(w, (1.5, 1.5, 0.0), SensorConfig.ideal())
+        assert len(truth.segments) == 3  # right, front and left walls, none 5 cm inside
+        rho = np.abs(truth.segments[:, 0] * truth.segments[:, 3] - truth.segments[:, 2] * truth.segments[:, 1]) / \
+            np.hypot(truth.segments[:, 2] - truth.segments[:, 0], truth.segments[:, 3] - truth.segments[:, 1])
+        assert rho == pytest.approx([1.5, 1.5, 1.5], abs=1e-9)
+
+
+def test_walls_only_block_in_a_room_with_a_pillar(tmp_path) -> None:
+    """Everything drawn counter-clockwise: the outer loop (the room, with a pillar in it) becomes
+    clockwise, the loop inside it stays a solid block (counter-clockwise)."""
+    room = [(0.0, 0.0), (6.0, 0.0), (6.0, 4.0), (0.0, 4.0)]
+    block = [(4.0, 1.5), (5.0, 1.5), (5.0, 2.5), (4.0, 2.5)]
+    w = _square(tmp_path, "w.json", [room, block], circles=[[1.0, 3.0, 0.2]])
+    from sim.lidar import LMS200Sim
+    with LMS200Sim(w, SensorConfig.ideal()) as lidar:
+        scan = lidar.scan_at((2.0, 2.0, 0.0))
+    assert scan.ranges[180] == pytest.approx(2.0, abs=1e-9)  # the block's near face at x = 4
+    assert scan.ranges[0] == pytest.approx(2.0, abs=1e-9)  # the room's wall y = 0
+
+
+def test_walls_only_exported_world_is_rebuilt_with_its_faces(tmp_path) -> None:
+    """An office's faces (both sides of every wall, 4 cm door panels) exported without boxes come
+    back unchanged: each original face is a face of the rebuilt world."""
+    from sim.walls_only import unreproduced
+    w = make_world("office", seed=0)
+    (tmp_path / "w.json").write_text(json.dumps({"walls": w.walls.tolist(), "circles": w.circles.tolist()}))
+    w2 = World.from_json(tmp_path / "w.json")
+    assert unreproduced(w.walls, w2.walls, 1e-9) is None
+
+
+def test_walls_only_walls_the_boxes_cannot_reproduce_are_an_error(tmp_path) -> None:
+    """A screen drawn as two opposite walls on the same line (zero thickness: solid on both sides)
+    cannot be rebuilt from boxes behind its faces: the file is refused with the direction rule."""
+    room_cw = [(0.0, 0.0), (0.0, 3.0), (3.0, 3.0), (3.0, 0.0)]
+    with pytest.raises(LmsbenchError, match=r"wall 4 \(1, 1\) -> \(2, 1\).*solid on the LEFT of p1 -> p2"):
+        _square(tmp_path, "bad.json", [room_cw], extra=[[1.0, 1.0, 2.0, 1.0], [2.0, 1.0, 1.0, 1.0]])
+    # a loose wall 2 cm in front of a room wall, solid towards it: its box is thinned to the gap
+    w = _square(tmp_path, "thin.json", [room_cw], extra=[[2.0, 0.02, 1.0, 0.02]])
+    assert any(np.allclose(f, [3.0, 0.0, 0.0, 0.0]) for f in w.walls)  # the room wall stays whole

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from lms200 import LmsbenchError
+
 from experiments import benchmarks
 
 
@@ -35,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     names = args.names or list(found)
     missing = [n for n in names if n not in found]
     if missing:
-        raise SystemExit(f"lmsbench bench: unknown benchmark(s) {missing}; available: {list(found)}")
+        raise LmsbenchError(f"unknown benchmark(s) {missing}; available: {list(found)}")
     rows = []
     for name in names:
         print(f"== {name}", flush=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from lms200 import read_log
+from lms200 import LogFormatError, read_log
 
 from experiments.loginfo import summarise
 
@@ -21,6 +21,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     reader = read_log(args.log, skip_bad_lines=args.skip_bad_lines)
     summary = summarise(reader)
+    if summary.scans == 0:
+        met = getattr(getattr(reader, "stats", None), "messages", {})
+        seen = f" (other lines: {sum(met.values())})" if met else ""
+        raise LogFormatError(args.log, 1, "no laser messages found: not a CARMEN log (FLASER/RLASER/ROBOTLASER "
+                                          f"lines) nor a bag with LaserScan messages{seen}")
     skipped = len(getattr(getattr(reader, "stats", None), "skipped", []))
     if args.json:
         print(json.dumps({**summary.as_dict(), "skipped_lines": skipped}, indent=2))

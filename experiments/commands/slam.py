@@ -64,7 +64,8 @@ def run(args: argparse.Namespace) -> int:
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz)
     if config.use_odometry and data.odometry is None:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
-    result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline)
+    result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
+                      out=args.out)
     write_outputs(args.out, data, config, result)
     m = result.metrics
     print(f"slam: {m['n_scans']} scans in {m['seconds']:.1f} s ({m['scans_per_s']:.1f} scans/s), "
@@ -74,6 +75,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {row['source']:<16} {cells}")
     if m["consistency"]["diverged"]:
         print(f"  warning: the filter diverged (NIS) at t={m['consistency']['diverged_at']}")
+    if "note" in m.get("relations", {}):
+        print(f"  relations: {m['relations']['note']}")
     if "anchors_relations_trans_mean_m" in m:
         print("  published relations error (m): " + ", ".join(f"{k} {v}" for k, v in m["anchors_relations_trans_mean_m"].items()))
     return 0

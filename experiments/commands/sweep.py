@@ -1,8 +1,13 @@
-"""`lmsbench sweep SWEEP.yaml`: run a parameter sweep on Dask and write one tidy Parquet table."""
+"""`lmsbench sweep SWEEP.yaml`: run a parameter sweep on Dask and write one tidy Parquet table.
+
+Exit status: 0 when every cell succeeded, 1 when any failed (the table is written either way),
+2 for a bad sweep file or setup error.
+"""
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 
@@ -21,13 +26,16 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from experiments.sweep import load_sweep, run_sweep
+    from experiments.sweep import SweepSpecError, load_sweep, run_sweep
 
     spec = load_sweep(args.sweep)
     out = args.out or Path("results/sweeps") / spec.name
     executor = "inprocess" if args.inprocess else (args.scheduler or "local")
-    result = run_sweep(spec, out, executor, workers=args.workers, retry_failed=args.retry_failed,
-                       progress=not args.no_progress)
+    try:
+        result = run_sweep(spec, out, executor, workers=args.workers, retry_failed=args.retry_failed,
+                           progress=not args.no_progress)
+    except SweepSpecError as exc:  # an unknown kind or parameter name, found before any cell ran
+        raise SweepSpecError(f"{args.sweep}: {exc}") from exc
     print(f"{spec.name}: {result.total} cells, {result.computed} computed, {result.skipped} already done, "
           f"{result.failed} failed")
     print(f"wrote {out / 'results.parquet'}")
@@ -35,4 +43,7 @@ def run(args: argparse.Namespace) -> int:
         errors = result.table.loc[result.table["status"] != "ok", "error"].value_counts()
         for text, n in errors.head(5).items():
             print(f"  {n} x {text}")
+        print(f"lmsbench sweep: {result.failed} of {result.total} cells failed (their `error` column says why; "
+              f"--retry-failed computes them again)", file=sys.stderr)
+        return 1
     return 0

@@ -37,7 +37,10 @@ def fig_scan(signals: pd.DataFrame, stem: Path, title: str) -> list[Path]:
 
 def fig_signal(signals: pd.DataFrame, column: str, ylabel: str, title: str, stem: Path,
                reference: float | None = None) -> list[Path]:
-    """Figs. 4-6: one per-beam signal of a scan (``ad``, ``theta_deg``, ``psi_deg``) over the beam index."""
+    """Figs. 4-6: one per-beam signal of a scan (``ad``, ``theta_deg``, ``psi_deg``) over the beam index,
+    with ``reference`` (the straight-line value) as a dashed line and a ``reference`` column of the data."""
+    if reference is not None:
+        signals = signals.assign(reference=float(reference))
     fig, ax = new_figure(height=3.2)
     ax.plot(signals["beam"], signals[column], ".-", lw=0.7, ms=2.5, color=method_color("sensor"))
     if reference is not None:

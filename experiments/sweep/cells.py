@@ -4,7 +4,9 @@ A cell kind is a function ``fn(params: dict) -> dict`` of metric name to scalar.
 deterministic in its parameters (all randomness seeded from ``params["seed"]``), so that any
 executor gives the same table. Built-in kinds are registered by name here and imported lazily
 (``extract``, ``slam``: see :mod:`experiments.sweep.kinds`); any importable function may also be
-named as ``"package.module:function"``.
+named as ``"package.module:function"``. A cell function may carry ``fn.check_params(cells)``,
+which the runner calls on the whole list before any cell runs (raising ``SweepSpecError``), so
+a misspelled parameter fails at once rather than in every cell.
 """
 
 from __future__ import annotations

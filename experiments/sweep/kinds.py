@@ -8,9 +8,10 @@ Parameters (flat, as in the sweep file): ``method``, ``world`` (default office),
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
-from typing import Any
+from typing import Any, Iterable
 
 import numpy as np
 
@@ -95,3 +96,63 @@ def align(xy: np.ndarray, rotation: float, translation) -> np.ndarray:
     c, s = np.cos(rotation), np.sin(rotation)
     xy = np.asarray(xy, float).reshape(-1, 2)
     return np.column_stack((c * xy[:, 0] - s * xy[:, 1], s * xy[:, 0] + c * xy[:, 1])) + np.asarray(translation, float)
+
+
+def _fields(config_type: type) -> set[str]:
+    return {f.name for f in dataclasses.fields(config_type)}
+
+
+def _unknown(cells: Iterable[dict[str, Any]], prefix: str, known_for) -> None:
+    """Raise SweepSpecError for the first ``prefix.NAME`` parameter whose NAME is not in
+    ``known_for(cell)`` (a set of field names, and what they are the fields of)."""
+    from .spec import SweepSpecError
+
+    for cell in cells:
+        names = split_params(cell, prefix)
+        if not names:
+            continue
+        known, owner = known_for(cell)
+        bad = sorted(set(names) - known)
+        if bad:
+            raise SweepSpecError(f"unknown parameter(s) {[f'{prefix}.{n}' for n in bad]}: not fields of {owner}; "
+                                 f"known {prefix}.* names: {sorted(known)}")
+
+
+def _sensor_fields(cell: dict[str, Any]) -> tuple[set[str], str]:
+    from sim import SensorConfig
+
+    return _fields(SensorConfig), "sim.SensorConfig"
+
+
+def _extractor_fields(method: str) -> tuple[set[str], str]:
+    from features.registry import UnknownMethodError, get_method
+
+    from .spec import SweepSpecError
+
+    try:
+        m = get_method(method)
+    except UnknownMethodError as exc:
+        raise SweepSpecError(str(exc)) from None
+    return _fields(m.config_type), f"the {method!r} extractor's {m.config_type.__name__}"
+
+
+def check_extract_params(cells: list[dict[str, Any]]) -> None:
+    """Every ``sensor.*`` and ``extractor.*`` name of every cell is a field of its config (checked
+    before any cell runs, so a misspelled name fails at once instead of in every cell)."""
+    _unknown(cells, "sensor", _sensor_fields)
+    _unknown(cells, "extractor", lambda c: _extractor_fields(str({**EXTRACT_DEFAULTS, **c}["method"])))
+
+
+def check_slam_params(cells: list[dict[str, Any]]) -> None:
+    """Every ``sensor.*``, ``slam.*`` and ``slam.extractor_params.*`` name is a field of its config."""
+    from slam import SlamConfig
+
+    _unknown(cells, "sensor", _sensor_fields)
+    slam_cells = [{k: v for k, v in c.items() if not k.startswith("slam.extractor_params.")} for c in cells]
+    _unknown(slam_cells, "slam", lambda c: (_fields(SlamConfig), "slam.SlamConfig"))
+    default = SlamConfig().extractor
+    _unknown(cells, "slam.extractor_params", lambda c: _extractor_fields(str(c.get("slam.extractor", default))))
+
+
+extract_cell.check_params = check_extract_params  # type: ignore[attr-defined]
+slam_cell.check_params = check_slam_params  # type: ignore[attr-defined]

@@ -64,10 +64,13 @@ def run_sweep(
         A :class:`SweepResult`; ``out/results.parquet`` and ``out/results.csv`` hold its table.
     """
     out = Path(out)
-    store = CellStore(out)
     fn = resolve_kind(spec.kind)  # fail early on an unknown kind
-    (out / "sweep.yaml").write_text(yaml.safe_dump(spec.to_dict(), sort_keys=False))
     cells = spec.cells()
+    check = getattr(fn, "check_params", None)  # a kind may check parameter names before any cell runs
+    if check is not None:
+        check(cells)
+    store = CellStore(out)
+    (out / "sweep.yaml").write_text(yaml.safe_dump(spec.to_dict(), sort_keys=False))
     keys = [cell_key(spec.kind, params) for params in cells]
     done = store.done()
     if retry_failed:
@@ -118,28 +121,50 @@ def _row(params: dict[str, Scalar], result: dict[str, Any], key: str) -> dict[st
 
 
 def _run_on_dask(client, kind: str, fn, todo: list[tuple[str, dict]], record) -> None:
+    """Run the cells on ``client``; record each as it finishes.
+
+    A worker that dies takes down every cell queued on it, and Dask may blame an innocent one
+    (``KilledWorker``). Such cells are run once more, one at a time, after the others: an innocent
+    cell then succeeds and only the cell that really kills its worker is recorded as failed.
+    """
     from distributed import as_completed
 
     futures = {}
     for key, params in todo:
         future = client.submit(run_cell, kind, params, fn, key=f"lmsbench-cell-{key}", pure=False)
         futures[future] = (key, params)
+    killed: list[tuple[str, dict]] = []
     try:
         for future in as_completed(futures):
             key, params = futures[future]
-            if future.status == "finished":
-                result = future.result()
-            else:  # the cell took its worker down, or the cluster failed or cancelled it: record, go on
-                try:
-                    exc = future.exception()
-                except (Exception, asyncio.CancelledError) as cancelled:  # a cancelled future raises here
-                    exc = cancelled
-                result = {"status": "error", "error": f"{type(exc).__name__}: {exc}", "elapsed_s": float("nan")}
-            record(key, params, result)
+            result = _future_result(future)
+            if result.get("error", "").startswith("KilledWorker"):
+                killed.append((key, params))
+            else:
+                record(key, params, result)
+            future.release()
+        for key, params in killed:  # alone on the cluster this time
+            future = client.submit(run_cell, kind, params, fn, key=f"lmsbench-cell-{key}-alone", pure=False)
+            futures[future] = (key, params)
+            record(key, params, _future_result(future))
             future.release()
     except BaseException:
         client.cancel(list(futures))
         raise
+
+
+def _future_result(future) -> dict[str, Any]:
+    """The cell's result dict, or an error row when the cell took its worker down or was cancelled."""
+    from distributed import wait
+
+    wait(future)
+    if future.status == "finished":
+        return future.result()
+    try:
+        exc = future.exception()
+    except (Exception, asyncio.CancelledError) as cancelled:  # a cancelled future raises here
+        exc = cancelled
+    return {"status": "error", "error": f"{type(exc).__name__}: {exc}", "elapsed_s": float("nan")}
 
 
 @contextlib.contextmanager

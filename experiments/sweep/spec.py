@@ -76,6 +76,11 @@ class SweepSpec:
             raise SweepSpecError(f"unknown key(s) {sorted(unknown)} in the sweep file; known: {sorted(_KEYS)}")
         if "kind" not in raw:
             raise SweepSpecError("the sweep file needs `kind:` (a cell kind such as extract or slam)")
+        for key in ("fixed", "grid", "random"):
+            if raw.get(key) is not None and not isinstance(raw[key], dict):
+                raise SweepSpecError(f"{key} must be a mapping of parameter -> "
+                                     f"{'value' if key == 'fixed' else 'values' if key == 'grid' else 'distribution'}, "
+                                     f"got {type(raw[key]).__name__} {raw[key]!r:.60}")
         seeds = raw.get("seeds", [0])
         if isinstance(seeds, int):
             seeds = [seeds]

@@ -16,6 +16,7 @@ import numpy as np
 from lms200 import Scan
 
 from ..types import Corner, FeatureSet, Line
+from . import checks
 
 
 BACKENDS = ("auto", "numba", "numpy")
@@ -47,6 +48,7 @@ class Points:
     y: np.ndarray  # m
     r: np.ndarray  # range, m
     bearing: np.ndarray  # rad
+    no_return: np.ndarray  # number of +inf (no-return) beams before each point's beam
 
 
 def valid_points(scan: Scan) -> Points:
@@ -55,7 +57,16 @@ def valid_points(scan: Scan) -> Points:
     idx = np.flatnonzero(valid)
     r = scan.ranges[idx]
     b = scan.angles[idx]
-    return Points(idx, r * np.cos(b), r * np.sin(b), r, b)
+    no_return = np.cumsum(np.isposinf(scan.ranges))[idx]
+    return Points(idx, r * np.cos(b), r * np.sin(b), r, b, no_return)
+
+
+def open_between(no_return: np.ndarray) -> np.ndarray:
+    """For consecutive points (their ``Points.no_return`` counts): whether a no-return (+inf) beam
+    lies between them. Such a beam saw open space (a doorway, or beyond range), so the surface
+    is not continuous there and no segment is bridged across it; invalid (nan or out-of-limits)
+    beams carry no information and up to ``max_skip - 1`` of them may be stepped over."""
+    return np.diff(no_return) > 0
 
 
 def breakpoints(pts: Points, angle_increment: float, lambda_rad: float, sigma: float, max_skip: int = 1) -> np.ndarray:
@@ -63,8 +74,10 @@ def breakpoints(pts: Points, angle_increment: float, lambda_rad: float, sigma: f
 
     Consecutive valid points n-1, n belong to different clusters when their distance exceeds
     ``D_max = r_{n-1} sin(dphi) / sin(lambda - dphi) + 3 sigma`` (dphi = bearing step between them,
-    lambda = the shallowest incidence angle still accepted as the same surface) or when they are
-    more than ``max_skip`` beams apart (``max_skip - 1`` dropped beams are bridged). Returns the (c, 2) array of inclusive [start, end] positions into ``pts``.
+    lambda = the shallowest incidence angle still accepted as the same surface), when they are
+    more than ``max_skip`` beams apart (``max_skip - 1`` invalid beams are bridged) or when a
+    no-return (+inf) beam lies between them (``open_between``). Returns the (c, 2) array of
+    inclusive [start, end] positions into ``pts``.
     """
     n = pts.idx.size
     if n == 0:
@@ -74,7 +87,7 @@ def breakpoints(pts: Points, angle_increment: float, lambda_rad: float, sigma: f
     gap = np.hypot(np.diff(pts.x), np.diff(pts.y))
     with np.errstate(divide="ignore", invalid="ignore"):
         dmax = pts.r[:-1] * np.sin(dphi) / np.sin(lambda_rad - dphi) + 3.0 * sigma
-    cut = (gap > dmax) | (dmax <= 0) | (step > max_skip)
+    cut = (gap > dmax) | (dmax <= 0) | (step > max_skip) | open_between(pts.no_return)
     ends = np.flatnonzero(cut)
     starts = np.concatenate(([0], ends + 1))
     stops = np.concatenate((ends, [n - 1]))
@@ -206,8 +219,9 @@ def straight_enough(x: np.ndarray, y: np.ndarray, offsets: np.ndarray, rho: np.n
 def contiguous_runs(pts: Points, pos: np.ndarray, angle_increment: float, lambda_rad: float,
                     sigma: float, max_skip: int) -> np.ndarray:
     """Split sorted point positions ``pos`` (inliers of one line) into runs that are contiguous in
-    the scan: at most ``max_skip`` - 1 points skipped between neighbours, and neighbours no farther
-    apart than the adaptive breakpoint distance (Borges & Aldon 2004) for their bearing step.
+    the scan: at most ``max_skip`` - 1 points skipped between neighbours, no no-return (+inf) beam
+    between them (``open_between``), and neighbours no farther apart than the adaptive breakpoint
+    distance (Borges & Aldon 2004) for their bearing step.
     Returns the offsets of the runs' starts into ``pos``."""
     if pos.size < 2:
         return np.zeros(min(pos.size, 1), dtype=np.int64)
@@ -216,7 +230,7 @@ def contiguous_runs(pts: Points, pos: np.ndarray, angle_increment: float, lambda
     gap = np.hypot(np.diff(pts.x[pos]), np.diff(pts.y[pos]))
     with np.errstate(divide="ignore", invalid="ignore"):
         dmax = pts.r[pos[:-1]] * np.sin(dphi) / np.sin(lambda_rad - dphi) + 3.0 * sigma
-    cut = (skip > max_skip) | (gap > dmax) | (dmax <= 0)
+    cut = (skip > max_skip) | (gap > dmax) | (dmax <= 0) | open_between(pts.no_return[pos])
     return np.concatenate(([0], np.flatnonzero(cut) + 1))
 
 
@@ -304,6 +318,14 @@ class CornerConfig:
     max_distance: float = 0.15
     lambda_deg: float = 10.0
     sigma: float = 0.005
+
+    def __post_init__(self) -> None:
+        if not checks.is_real(self.min_turn_deg) or not 0 <= self.min_turn_deg < 180:
+            raise ValueError(f"min_turn_deg: must be an angle in [0, 180) deg, got {self.min_turn_deg!r}")
+        checks.integer("max_gap_beams", self.max_gap_beams, 1)
+        checks.non_negative("max_distance", self.max_distance, "m")
+        checks.angle_deg("lambda_deg", self.lambda_deg, 90.0)
+        checks.positive("sigma", self.sigma, "m")
 
 
 def corners_from_lines(lines: list[Line], cfg: CornerConfig, angle_increment: float) -> list[Corner]:

@@ -23,6 +23,7 @@ from lms200 import Scan
 
 from ..registry import register
 from ..types import FeatureSet
+from . import checks
 from .common import CornerConfig, build_lines, feature_set, valid_points
 from .runs import refine, segments_of
 
@@ -36,7 +37,8 @@ class HoughConfig:
       spread over a 4 m wall (4 m x sin 0.5 deg + 1 cm) plus noise.
     - band_fine: 0.025 m = 5 sigma, the final inlier band after the first refit.
     - min_points, min_length, sigma, breakpoint_lambda_deg: as the other baselines (8 points,
-      0.15 m, 5 mm, Borges & Aldon's 10 deg); max_skip: 3, a run may jump over two outliers.
+      0.15 m, 5 mm, Borges & Aldon's 10 deg); max_skip: 3, a run may jump over two outliers
+      or invalid beams, never over a no-return (+inf) beam.
     - max_lines: 60, an upper bound on peaks taken per scan; max_failures: 5 peaks in a row that
       yield no line end the search (such peaks gather collinear points scattered across the scan:
       once the walls are out, what is left is clutter).
@@ -56,6 +58,18 @@ class HoughConfig:
     max_lines: int = 60
     max_failures: int = 5
     corners: CornerConfig = field(default_factory=CornerConfig)
+
+    def __post_init__(self) -> None:
+        """Raise ValueError naming the field when a value cannot work."""
+        checks.positive("alpha_step_deg", self.alpha_step_deg, "deg")
+        if self.alpha_step_deg > 180:
+            raise ValueError(f"alpha_step_deg: must be <= 180 deg, got {self.alpha_step_deg!r}")
+        checks.positive("rho_step", self.rho_step, "m")
+        checks.positive("band_coarse", self.band_coarse, "m")
+        checks.positive("band_fine", self.band_fine, "m")
+        checks.shared_fields(self)
+        checks.integer("max_lines", self.max_lines, 1)
+        checks.integer("max_failures", self.max_failures, 1)
 
 
 def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:

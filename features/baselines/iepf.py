@@ -13,7 +13,8 @@ from lms200 import Scan
 
 from ..registry import register
 from ..types import FeatureSet
-from .common import CornerConfig, feature_set, use_numba
+from . import checks
+from .common import BACKENDS, CornerConfig, feature_set, use_numba
 from .split_merge import segment_lines
 
 
@@ -24,8 +25,8 @@ class IepfConfig:
     - split_threshold: 0.04 m = 8 sigma: a chord between two noisy end points is itself off by up to
       ~3 sigma at each end, so the chord threshold sits above split-and-merge's 6 sigma.
     - the rest as ``split_merge`` (breakpoint lambda 10 deg, Borges & Aldon 2004; merge RMS 2 sigma;
-      8 points and 0.15 m per line, Nguyen et al. 2007's P_min / L_min; up to two dropped beams
-      bridged; runs test off, ``runs_z`` = 0).
+      8 points and 0.15 m per line, Nguyen et al. 2007's P_min / L_min; up to two invalid beams
+      bridged, none with no return; runs test off, ``runs_z`` = 0).
     """
 
     sigma: float = 0.005
@@ -38,6 +39,13 @@ class IepfConfig:
     runs_z: float = 0.0
     corners: CornerConfig = field(default_factory=CornerConfig)
     backend: str = "auto"  # "numba" (compiled kernels), "numpy" (the reference), "auto": numba when importable
+
+    def __post_init__(self) -> None:
+        """Raise ValueError naming the field when a value cannot work."""
+        checks.shared_fields(self)
+        checks.positive("split_threshold", self.split_threshold, "m")
+        checks.non_negative("merge_rms", self.merge_rms, "m")
+        checks.choice("backend", self.backend, BACKENDS)
 
 
 def run(scan: Scan, cfg: IepfConfig) -> FeatureSet:

@@ -8,6 +8,10 @@ splitting each one depth-first and sorting the result gives the same segments. L
 end-trimming rounds act on each segment independently. Merging keeps the reference's passes
 (pairs with a locally smallest merged residual). Transcendentals come from libm rather than
 numpy's SIMD routines, so values can differ in the last bit (tests check 1e-9 agreement).
+
+One module on purpose: numba's on-disk cache is invalidated by the modification time of the file
+that defines a function, not of the files of the functions it calls, so kernels that call each
+other live in one file.
 """
 
 from __future__ import annotations
@@ -107,7 +111,15 @@ def segment_lines(ranges, bearings, valid, increment, sigma, lam, threshold, mer
     x = np.empty(n_pts)
     y = np.empty(n_pts)
     r = np.empty(n_pts)
+    no_return = np.empty(n_pts, np.int64)  # common.Points.no_return: +inf beams before each point
+    n_inf = 0
+    beam = 0
     for p in range(n_pts):
+        while beam < idx[p]:
+            if ranges[beam] == np.inf:
+                n_inf += 1
+            beam += 1
+        no_return[p] = n_inf
         r[p] = ranges[idx[p]]
         b = bearings[idx[p]]
         x[p] = r[p] * math.cos(b)
@@ -140,7 +152,7 @@ def segment_lines(ranges, bearings, valid, increment, sigma, lam, threshold, mer
             dphi = step * increment
             gap = math.hypot(x[p + 1] - x[p], y[p + 1] - y[p])
             dmax = r[p] * math.sin(dphi) / math.sin(lam - dphi) + 3.0 * sigma
-            cut = gap > dmax or dmax <= 0 or step > max_skip
+            cut = gap > dmax or dmax <= 0 or step > max_skip or no_return[p + 1] > no_return[p]
         if not cut:
             continue
         sp = 0

@@ -21,6 +21,7 @@ from lms200 import Scan
 
 from ..registry import register
 from ..types import FeatureSet
+from . import checks
 from .common import CornerConfig, build_lines, feature_set, valid_points
 from .runs import refine, segments_of
 
@@ -52,6 +53,16 @@ class RansacConfig:
     max_lines: int = 60
     seed: int = 0
     corners: CornerConfig = field(default_factory=CornerConfig)
+
+    def __post_init__(self) -> None:
+        """Raise ValueError naming the field when a value cannot work."""
+        checks.integer("hypotheses", self.hypotheses, 1)
+        checks.integer("window", self.window, 0)
+        checks.positive("inlier_band", self.inlier_band, "m")
+        checks.shared_fields(self)
+        checks.integer("max_failures", self.max_failures, 1)
+        checks.integer("max_lines", self.max_lines, 1)
+        checks.integer("seed", self.seed, 0)
 
 
 def run(scan: Scan, cfg: RansacConfig) -> FeatureSet:

@@ -19,7 +19,8 @@ from lms200 import Scan
 
 from ..registry import register
 from ..types import FeatureSet
-from .common import (CornerConfig, PrefixFit, breakpoints, build_lines, feature_set, straight_enough, trim_ends,
+from . import checks
+from .common import (BACKENDS, CornerConfig, PrefixFit, breakpoints, build_lines, feature_set, straight_enough, trim_ends,
                      use_numba, valid_points)
 from .splitting import _ragged, merge_collinear, split, unshare
 
@@ -37,7 +38,8 @@ class SplitMergeConfig:
       collinear neighbours after splitting).
     - min_points / min_length: 8 points and 0.15 m per line (Nguyen et al. 2007 discard segments
       with too few points, "P_min", and too short, "L_min"; values chosen for 0.5 deg beams).
-    - max_skip: 3: a cluster bridges up to two dropped (nan / no-return) beams, as hough / ransac.
+    - max_skip: 3: a cluster bridges up to two invalid (nan) beams, as hough / ransac; a no-return
+      (+inf) beam always breaks it (open space: a doorway, or beyond range), as in every method.
     - end points farther than 3 sigma from the fitted line are trimmed (twice, refitting): they
       belong to a small neighbouring face the split threshold let in.
     - runs_z: 0 (off). When > 0, a line whose residual signs form ``runs_z`` standard deviations
@@ -57,6 +59,13 @@ class SplitMergeConfig:
     runs_z: float = 0.0
     corners: CornerConfig = field(default_factory=CornerConfig)
     backend: str = "auto"  # "numba" (compiled kernels), "numpy" (the reference), "auto": numba when importable
+
+    def __post_init__(self) -> None:
+        """Raise ValueError naming the field when a value cannot work."""
+        checks.shared_fields(self)
+        checks.positive("split_threshold", self.split_threshold, "m")
+        checks.non_negative("merge_rms", self.merge_rms, "m")
+        checks.choice("backend", self.backend, BACKENDS)
 
 
 def segment_lines(scan: Scan, sigma: float, lam_deg: float, threshold: float, merge_rms: float,

@@ -107,12 +107,22 @@ def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
     config's ``backend`` picks the compiled kernels or the numpy reference (same results)."""
     _check(cfg)
     cfg = _for_scan(cfg, scan)
+    if resolve_backend(cfg.backend) == "numba":  # IEEE arithmetic inside: no errstate needed
+        return _compiled()(scan, cfg, max(scan.range_min, cfg.min_range))
     with np.errstate(all="ignore"):
-        if resolve_backend(cfg.backend) == "numba":
-            from .compiled import extract_numba  # noqa: PLC0415  (numba is imported on first use)
-
-            return extract_numba(scan, cfg, max(scan.range_min, cfg.min_range))
         return _extract(scan, cfg)
+
+
+_COMPILED: list = []
+
+
+def _compiled():  # noqa: ANN202
+    """``compiled.extract_numba``, imported (with numba) on first use."""
+    if not _COMPILED:
+        from .compiled import extract_numba  # noqa: PLC0415
+
+        _COMPILED.append(extract_numba)
+    return _COMPILED[0]
 
 
 def _extract(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:

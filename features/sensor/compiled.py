@@ -10,7 +10,7 @@ import numpy as np
 
 from lms200 import Scan
 
-from ..types import Corner, FeatureSet
+from ..types import Corner, FeatureSet, Line
 from . import kernels as kn
 from .config import SensorMethodConfig
 from .hough import logcos_template
@@ -18,6 +18,7 @@ from .segments import MERGE_FLOOR_VAR
 from .signals import window_constants
 
 METHOD = "sensor"
+_FLOOR = (float(MERGE_FLOOR_VAR[0]), float(MERGE_FLOOR_VAR[1]))  # merge model-error floor (m^2, rad^2)
 _PARAMS: dict[tuple[int, float], tuple[SensorMethodConfig, np.ndarray, np.ndarray, np.ndarray]] = {}
 
 
@@ -75,24 +76,27 @@ def params(cfg: SensorMethodConfig, increment: float) -> tuple[np.ndarray, np.nd
     return fp, ip, template
 
 
+def _new_line(rho, alpha, start, end, first, last, cov, n_points) -> Line:  # noqa: ANN001
+    """A Line built without the frozen dataclass' per-field setattr (the same object)."""
+    line = object.__new__(Line)
+    line.__dict__.update(
+        rho=rho, alpha=alpha, start=start, end=end, first=first, last=last, cov=cov, n_points=n_points
+    )
+    return line
+
+
 def extract_numba(scan: Scan, cfg: SensorMethodConfig, range_lo: float) -> FeatureSet:
     """Lines and corners of ``scan`` (sensor frame) by the compiled kernels; ``cfg`` already has
     the scan's ``sigma_r``, ``range_lo`` = max(scan.range_min, cfg.min_range) (m)."""
-    from . import _new_line
-
     ranges = np.ascontiguousarray(scan.ranges, dtype=np.float64)
     bearings = np.ascontiguousarray(scan.angles, dtype=np.float64)
     fp, ip, template = params(cfg, scan.angle_increment)
-    rho, alpha, cov, first, last, npts, valid, psi = kn.find_lines(
+    rho, alpha, cov, first, last, npts, p0, p1, cf, ci = kn.extract(
         ranges, bearings, float(scan.angle_min), float(scan.angle_increment), float(range_lo),
-        float(scan.range_max), template, fp, ip,
+        float(scan.range_max), template, fp, ip, _FLOOR[0], _FLOOR[1],
     )
     if rho.size == 0:
         return FeatureSet([], [], METHOD)
-    rho, alpha, cov, first, last, npts, p0, p1 = kn.segments(
-        rho, alpha, cov, first, last, npts, ranges, bearings, valid, fp, ip,
-        float(MERGE_FLOOR_VAR[0]), float(MERGE_FLOOR_VAR[1]),
-    )
     rho_l, alpha_l = rho.tolist(), alpha.tolist()
     first_l, last_l, n_l = first.tolist(), last.tolist(), npts.tolist()
     start = list(map(tuple, p0.tolist()))
@@ -101,11 +105,5 @@ def extract_numba(scan: Scan, cfg: SensorMethodConfig, range_lo: float) -> Featu
         _new_line(rho_l[m], alpha_l[m], start[m], end[m], first_l[m], last_l[m], cov[m], n_l[m])
         for m in range(len(rho_l))
     ]
-    found = []
-    if cfg.corners and len(lines) > 1:
-        cf, ci = kn.corners(
-            rho, alpha, first, last, p0, p1, psi, ranges, valid, float(scan.angle_min),
-            float(scan.angle_increment), fp, ip,
-        )
-        found = [Corner(x, y, a, index, (i, i + 1)) for (x, y, a), (index, i) in zip(cf.tolist(), ci.tolist())]
+    found = [Corner(x, y, a, index, (i, i + 1)) for (x, y, a), (index, i) in zip(cf.tolist(), ci.tolist())]
     return FeatureSet(lines, found, METHOD)

@@ -10,6 +10,10 @@ last bit. Transcendentals come from libm rather than numpy's SIMD routines, so r
 in the last bit (tests check agreement to 1e-9 on many scans). Importing this module imports
 numba; ``features.sensor`` does so only when the numba backend is first used, and ``cache=True``
 keeps the compiled code between processes.
+
+One module on purpose: numba's on-disk cache is invalidated by the modification time of the file
+that defines a function, not of the files of the functions it calls, so kernels that call each
+other live in one file.
 """
 
 from __future__ import annotations
@@ -685,3 +689,21 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
         out_i[m, 1] = i
         m += 1
     return out_f[:m], out_i[:m]
+
+
+@kernel
+def extract(ranges, bearings, angle_min, increment, range_lo, range_hi, template, fp, ip, floor00, floor11):  # noqa: ANN001, ANN201
+    """The whole extractor in one call (one kernel dispatch a scan): find_lines, segments and,
+    when ``ip[I_CORNERS]``, corners. Returns (rho, alpha, cov, first, last, n_points, start,
+    end, corner floats (C, 3), corner ints (C, 2))."""
+    rho, alpha, cov, first, last, npts, valid, psi = find_lines(
+        ranges, bearings, angle_min, increment, range_lo, range_hi, template, fp, ip
+    )
+    rho, alpha, cov, first, last, npts, p0, p1 = segments(
+        rho, alpha, cov, first, last, npts, ranges, bearings, valid, fp, ip, floor00, floor11
+    )
+    if ip[I_CORNERS] and rho.size > 1:
+        cf, ci = corners(rho, alpha, first, last, p0, p1, psi, ranges, valid, angle_min, increment, fp, ip)
+    else:
+        cf, ci = np.empty((0, 3)), np.empty((0, 2), np.int64)
+    return rho, alpha, cov, first, last, npts, p0, p1, cf, ci
