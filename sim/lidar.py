@@ -238,62 +238,6 @@ class LMS200Sim:
         far group, the beam returns their mean (with a far group at no return, the near mean when
         the near group holds the larger share, else no return)."""
         gap = self.sensor.mixed_gap
-        far_value = 1e6  # stands for no return (+inf) so that differences stay finite
-        rf = np.where(ranges < far_value, ranges, far_value)
-        g = np.flatnonzero(np.abs(np.diff(rf)) > gap)
-        if g.size == 0:
-            return ranges
-        hw = self._half_width
-        right = np.array([hw / 2, hw])  # beam g looks towards g + 1
-        left = np.array([-hw, -hw / 2])  # beam g + 1 looks towards g
-        origins = np.vstack((np.repeat(bp[g, :2], 2, axis=0), np.repeat(bp[g + 1, :2], 2, axis=0)))
-        heads = np.concatenate((((bp[g, 2] + self._angles[g])[:, None] + right).ravel(),
-                                ((bp[g + 1, 2] + self._angles[g + 1])[:, None] + left).ravel()))
-        sub = self.cast(origins, heads)
-        samples = np.repeat(rf[:, None], 5, axis=1)
-        samples[g, 3:5] = np.minimum(sub[: 2 * g.size], far_value).reshape(-1, 2)
-        samples[g + 1, 0:2] = np.minimum(sub[2 * g.size :], far_value).reshape(-1, 2)
-        touched = np.zeros(len(ranges), dtype=bool)
-        touched[g] = touched[g + 1] = True
-        idx = np.flatnonzero(touched)
-        smp = samples[idx]
-        near = smp.min(axis=1)
-        far = smp > (near + gap)[:, None]
-        n_far = far.sum(axis=1)
-        no_return = (smp >= far_value).any(axis=1)
-        near_mean = np.where(far, 0.0, smp).sum(axis=1) / np.maximum(5 - n_far, 1)
-        mixed = np.where(no_return, np.where(2 * n_far > 5, np.inf, near_mean), smp.mean(axis=1))
-        out = ranges.copy()
-        split = (n_far > 0) & (near < far_value)
-        out[idx[split]] = mixed[split]
-        return out
-
-    def scan_from_beam_poses(self, beam_poses: np.ndarray, stamp: float = 0.0) -> Scan:
-        """One emulated scan whose beam i is taken from ``beam_poses[i]`` (x, y, theta)."""
-        s = self.sensor
-        bp = np.asarray(beam_poses, dtype=float)
-        ranges = self.exact_ranges(bp)
-        if s.mixed_pixels:
-            ranges = self._mix_edges(bp, ranges)
-        noise = self.rng.standard_normal(s.n_beams)
-        dropped = self.rng.random(s.n_beams) < s.dropout_prob
-        finite = np.isfinite(ranges)
-        r = np.where(finite, ranges, 0.0) + s.noise_sigma * noise
-        if s.quantise:
-            r = np.rint(r / s.unit_m) * s.unit_m
-        r = np.maximum(r, 0.0)
-        r = np.where(finite & (r < s.range_max), r, np.inf)
-        r[dropped] = np.nan
-        return Scan(r, s.angle_min, s.angle_increment, 0.0, s.range_max, stamp)
-
-    def _mix_edges(self, bp: np.ndarray, ranges: np.ndarray) -> np.ndarray:
-        """Mixed pixels. Each beam's spot is sampled at 5 bearings (-w/2, -w/4, 0, +w/4, +w/2 of
-        beam width w): the centre is the beam's own ray; the half facing a neighbour across a
-        depth step (> mixed_gap, or return / no return) gets two sub-rays from the beam's own pose,
-        the other half is taken as the centre's surface. Where the samples split into a near and a
-        far group, the beam returns their mean (with a far group at no return, the near mean when
-        the near group holds the larger share, else no return)."""
-        gap = self.sensor.mixed_gap
         with np.errstate(invalid="ignore"):
             step = np.abs(np.diff(ranges))
         g = np.flatnonzero((step > gap) | (np.isfinite(ranges[1:]) != np.isfinite(ranges[:-1])))
