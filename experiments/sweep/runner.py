@@ -138,7 +138,7 @@ def _run_on_dask(client, kind: str, fn, todo: list[tuple[str, dict]], record) ->
         for future in as_completed(futures):
             key, params = futures[future]
             result = _future_result(future)
-            if result.get("error", "").startswith("KilledWorker"):
+            if result is None:
                 killed.append((key, params))
             else:
                 record(key, params, result)
@@ -146,25 +146,43 @@ def _run_on_dask(client, kind: str, fn, todo: list[tuple[str, dict]], record) ->
         for key, params in killed:  # alone on the cluster this time
             future = client.submit(run_cell, kind, params, fn, key=f"lmsbench-cell-{key}-alone", pure=False)
             futures[future] = (key, params)
-            record(key, params, _future_result(future))
+            result = _future_result(future)
+            record(key, params, result if result is not None else _lost_result(future))
             future.release()
     except BaseException:
         client.cancel(list(futures))
         raise
 
 
-def _future_result(future) -> dict[str, Any]:
-    """The cell's result dict, or an error row when the cell took its worker down or was cancelled."""
+def _future_result(future) -> dict[str, Any] | None:
+    """The cell's result dict; an error row when the cell raised or was cancelled; None when the
+    cell's worker died under it (``KilledWorker``) or its finished result was lost with a worker
+    that died afterwards (worth running again)."""
     from distributed import wait
 
     wait(future)
     if future.status == "finished":
-        return future.result()
+        try:
+            return future.result()
+        except Exception:  # noqa: BLE001 - the result was lost with its worker after finishing
+            return None
     try:
         exc = future.exception()
     except (Exception, asyncio.CancelledError) as cancelled:  # a cancelled future raises here
         exc = cancelled
+    if exc is None or type(exc).__name__ == "KilledWorker":
+        return None
     return {"status": "error", "error": f"{type(exc).__name__}: {exc}", "elapsed_s": float("nan")}
+
+
+def _lost_result(future) -> dict[str, Any]:
+    """The error row of a cell that took its worker down twice, or whose result was lost again."""
+    try:
+        exc = future.exception()
+    except (Exception, asyncio.CancelledError) as other:
+        exc = other
+    text = f"{type(exc).__name__}: {exc}" if exc is not None else f"lost: the worker died ({future.status})"
+    return {"status": "error", "error": text, "elapsed_s": float("nan")}
 
 
 @contextlib.contextmanager
