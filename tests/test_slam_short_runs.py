@@ -54,3 +54,16 @@ def test_trajectory_and_map_are_written_before_scoring(short_log, tmp_path, monk
     stamps, _ = read_tum(tmp_path / "o" / "trajectory.tum")
     np.testing.assert_allclose(stamps, [r.scan.stamp for r in data.records], atol=1e-6)
     assert "lines" in json.loads((tmp_path / "o" / "map.json").read_text())
+
+
+def test_the_shipped_mit_csail_config_loads_and_sets_the_cm_mode_noise():
+    """configs/slam-mit-csail.yaml, which the README's MIT CSAIL command uses, is a valid SlamConfig."""
+    import yaml
+    from pathlib import Path
+
+    from slam import SlamConfig
+
+    path = Path(__file__).resolve().parents[1] / "configs" / "slam-mit-csail.yaml"
+    cfg = SlamConfig.from_dict(yaml.safe_load(path.read_text()))
+    assert cfg.extractor_params == {"sigma_r": 0.02}
+    assert cfg.extractor == SlamConfig().extractor
