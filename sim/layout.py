@@ -114,15 +114,6 @@ class Layout:
         for a, b in zip(chain, chain[1:]):
             self.edges.append((a, b))
 
-    def route_points(self, step: float = 0.1) -> np.ndarray:
-        """Points every ``step`` m along every route edge, for clearance checks."""
-        pts = []
-        for a, b in self.edges:
-            p, q = np.array(self.nodes[a]), np.array(self.nodes[b])
-            n = max(2, int(np.ceil(np.hypot(*(q - p)) / step)) + 1)
-            pts.append(p + np.linspace(0, 1, n)[:, None] * (q - p))
-        return np.vstack(pts) if pts else np.zeros((0, 2))
-
     def build(self, scan_height: float = SCAN_HEIGHT_M) -> World:
         return World(self.name, self.seed, np.array(self.boxes), np.array(self.cylinders).reshape(-1, 5),
                      scan_height, np.array(self.nodes), np.array(self.edges), np.array(self.targets))

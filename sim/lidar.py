@@ -59,10 +59,6 @@ with _quiet_stdout():
     import pybullet as pb
 
 
-def _yaw_quaternion(yaw: float) -> list[float]:
-    return [0.0, 0.0, float(np.sin(yaw / 2)), float(np.cos(yaw / 2))]
-
-
 class LMS200Sim:
     """An emulated SICK LMS200 in a world.
 
