@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -25,7 +25,6 @@ class Landmark:
     kind: str  # "line" or "corner"
     born: int  # scan number of creation
     hits: int = 1
-    last_seen: int = 0
     confirmed: bool = False
     extent: tuple[float, float] = (np.inf, -np.inf)  # lines: min, max of s along (-sin, cos)(theta)
 
@@ -58,7 +57,6 @@ class SlamFilter:
         self.new_gate = float(chi2_quantile(config.new_landmark_probability, 2))
         self._previous_points: cKDTree | None = None
         self._previous_world = np.zeros((0, 2))
-        self._previous_pose = np.array(initial_pose, float)
         # reference scans of the scan velocity: (stamp s, pose, tree, world points, normals), oldest first
         self._references: list[tuple[float, np.ndarray, cKDTree, np.ndarray, np.ndarray]] = []
         self._heading_before = float(initial_pose[2])
@@ -210,7 +208,6 @@ class SlamFilter:
 
     def _remember_points(self, points: np.ndarray) -> None:
         X, Y, Phi = self.ekf.x[:3, 0]
-        self._previous_pose = np.array([X, Y, Phi])
         if points.shape[0] < 10:
             self._previous_points = None
             self._references = []
@@ -223,7 +220,7 @@ class SlamFilter:
             if ok.sum() < 10:
                 self._references = []
                 return
-            ref = (float(self.stamp), self._previous_pose.copy(), cKDTree(self._previous_world[ok]), self._previous_world[ok], normals[ok])
+            ref = (float(self.stamp), np.array([X, Y, Phi]), cKDTree(self._previous_world[ok]), self._previous_world[ok], normals[ok])
             self._references.append(ref)
             # the next scan picks the newest reference at least scan_velocity_baseline before it
             while len(self._references) > 1 and self._references[1][0] <= self.stamp - self.config.scan_velocity_baseline + 1e-9:
@@ -370,7 +367,6 @@ class SlamFilter:
         for _, k in pairs_l + pairs_c:
             lm = self.landmarks[k]
             lm.hits += 1
-            lm.last_seen = self.scan_no
 
     def _extend(self, obs: Observations, pairs_l) -> None:
         if not pairs_l:
@@ -387,7 +383,7 @@ class SlamFilter:
         pose = self.ekf.x[:3, 0]
         value, Gp, Gz = (models.init_line if kind == "line" else models.init_corner)(pose, z)
         self.ekf.add_landmark(value, Gp, Gz, Rz)
-        lm = Landmark(kind, born=self.scan_no, last_seen=self.scan_no, confirmed=self.config.confirm_hits <= 1)
+        lm = Landmark(kind, born=self.scan_no, confirmed=self.config.confirm_hits <= 1)
         if ends is not None:
             w = self._world_ends(ends.reshape(1, 4))[0]
             d = np.array([-np.sin(value[1]), np.cos(value[1])])
