@@ -14,7 +14,7 @@ from .config import SlamConfig
 from .ekf import SlamEKF, stacked_H, stacked_h, stacked_residual
 from .models import ROBOT_DIM, wrap
 from .observations import Observations
-from .pointalign import align_to_previous
+from .pointalign import align_to_previous, beam_normals, point_to_line_translation
 from .prealign import align
 
 
@@ -458,45 +458,3 @@ def _point_segment_distance(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
     t = np.clip(t, 0.0, 1.0)
     q = a + t[:, None] * ab
     return np.hypot(*(p - q).T)
-
-
-def beam_normals(points: np.ndarray, step: int = 2, max_gap: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
-    """Unit normals (p, 2) of points (p, 2) in beam order from the chord between the neighbours
-    ``step`` beams apart, and the mask of points whose chord is short enough to be a surface."""
-    p = np.asarray(points, float)
-    n = np.zeros_like(p)
-    ok = np.zeros(p.shape[0], bool)
-    if p.shape[0] < 2 * step + 1:
-        return n, ok
-    d = p[2 * step :] - p[: -2 * step]
-    length = np.hypot(d[:, 0], d[:, 1])
-    good = (length > 1e-3) & (length < max_gap)
-    n[step:-step] = np.column_stack((d[:, 1], -d[:, 0])) / np.maximum(length, 1e-12)[:, None]
-    ok[step:-step] = good
-    return n, ok
-
-
-def point_to_line_translation(points: np.ndarray, tree: cKDTree, ref: np.ndarray, ref_normals: np.ndarray,
-                              start: np.ndarray, tolerance: float, iterations: int = 8) -> tuple[np.ndarray, float, np.ndarray]:
-    """Translation (2,) of ``points`` (already rotated into the world frame) onto the reference
-    points ``ref`` with normals ``ref_normals`` (indexed by ``tree``), point-to-line least squares
-    from ``start``; its score (fraction of the points within ``tolerance`` m of a reference point)
-    and the information sum n n^T of the matched normals."""
-    t = np.array(start, float)
-    for k in range(iterations):
-        gate = 0.5 if k < 2 else 2 * tolerance
-        d, j = tree.query(points + t, distance_upper_bound=gate)
-        ok = np.isfinite(d)
-        if ok.sum() < 10:
-            break
-        n = ref_normals[j[ok]]
-        r = np.sum(n * (ref[j[ok]] - points[ok] - t), axis=1)
-        A = n.T @ n
-        step = np.linalg.solve(A + 1e-3 * ok.sum() * np.eye(2), n.T @ r)
-        t = t + step
-        if step @ step < 1e-8:
-            break
-    d, j = tree.query(points + t, distance_upper_bound=tolerance)
-    ok = np.isfinite(d)
-    n = ref_normals[j[ok]]
-    return t, float(np.mean(ok)) if ok.size else 0.0, n.T @ n
