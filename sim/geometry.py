@@ -22,6 +22,14 @@ def rectangle_corners(cx: float, cy: float, yaw: float, hx: float, hy: float) ->
     return local @ rot.T + np.array([cx, cy])
 
 
+def distance_to_segments(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(n, m) distance (m) from each of (n, 2) points to each segment a[j] -> b[j] ((m, 2) each)."""
+    p = np.asarray(points, dtype=float).reshape(-1, 2)
+    ab = b - a
+    t = np.clip(((p[:, None, :] - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-18), 0, 1)
+    return np.hypot(*(p[:, None, :] - (a + t[..., None] * ab)).transpose(2, 0, 1))
+
+
 def _inside_interval_convex(p: np.ndarray, q: np.ndarray, poly: np.ndarray) -> tuple[float, float] | None:
     """Parameter interval (t0, t1) of segment p->q strictly inside a CCW convex polygon
     (Cyrus-Beck), or None."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .geometry import rectangle_corners
+from .geometry import distance_to_segments, rectangle_corners
 from .world import SCAN_HEIGHT_M, World
 
 WALL_THICKNESS_M = 0.10
@@ -126,8 +126,7 @@ def distance_to_rects(points: np.ndarray, rects: list[np.ndarray]) -> np.ndarray
     for r in rects:
         a, b = r, np.roll(r, -1, axis=0)
         ab = b - a
-        t = np.clip(((p[:, None, :] - a) * ab).sum(-1) / (ab * ab).sum(-1), 0, 1)
-        d = np.hypot(*(p[:, None, :] - (a + t[..., None] * ab)).transpose(2, 0, 1)).min(axis=1)
+        d = distance_to_segments(p, a, b).min(axis=1)
         rel = p[:, None, :] - a
         inside = np.all(ab[:, 0] * rel[..., 1] - ab[:, 1] * rel[..., 0] > 0, axis=1)
         best = np.minimum(best, np.where(inside, 0.0, d))

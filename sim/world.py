@@ -14,7 +14,7 @@ import numpy as np
 
 from lms200 import LmsbenchError
 
-from .geometry import face_corners, rectangle_corners, union_faces
+from .geometry import distance_to_segments, face_corners, rectangle_corners, union_faces
 from .walls_only import box_thickness, orient_walls, unreproduced
 
 SCAN_HEIGHT_M = 0.35  # height of the scan plane above the floor (LMS200 on a Pioneer-class robot)
@@ -153,11 +153,7 @@ class World:
     def clearance(self, points: np.ndarray) -> np.ndarray:
         """Distance (m) from each of (n, 2) points to the nearest face or circle."""
         p = np.asarray(points, dtype=float).reshape(-1, 2)
-        a, b = self.walls[:, :2], self.walls[:, 2:]
-        ab = b - a
-        t = np.clip(((p[:, None, :] - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-18), 0, 1)
-        nearest = a + t[..., None] * ab
-        d = np.hypot(*(p[:, None, :] - nearest).transpose(2, 0, 1)).min(axis=1)
+        d = distance_to_segments(p, self.walls[:, :2], self.walls[:, 2:]).min(axis=1)
         if len(self.circles):
             c = self.circles
             dc = np.hypot(p[:, None, 0] - c[:, 0], p[:, None, 1] - c[:, 1]) - c[:, 2]
