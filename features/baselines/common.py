@@ -111,6 +111,15 @@ class PrefixFit:
         Returns rho (>= 0, m), alpha (rad, (-pi, pi]), n, centroid x, centroid y and the scatter
         along the line ``S = sum (t - t_mean)^2`` (m^2), all arrays of the ranges' shape.
         """
+        return self._fit_all(start, end)[:6]
+
+    def residual_rms(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+        """RMS perpendicular residual of the least-squares line over each range (m)."""
+        out = self._fit_all(start, end)
+        return np.sqrt(out[6] / out[2])
+
+    def _fit_all(self, start: np.ndarray, end: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``fit_moments`` of the sums over points start..end (inclusive) of each range."""
         lo, hi = start, end + 1
         return fit_moments(
             (hi - lo).astype(float),
@@ -119,20 +128,7 @@ class PrefixFit:
             self.sxx[hi] - self.sxx[lo],
             self.syy[hi] - self.syy[lo],
             self.sxy[hi] - self.sxy[lo],
-        )[:6]
-
-    def residual_rms(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
-        """RMS perpendicular residual of the least-squares line over each range (m)."""
-        lo, hi = start, end + 1
-        out = fit_moments(
-            (hi - lo).astype(float),
-            self.sx[hi] - self.sx[lo],
-            self.sy[hi] - self.sy[lo],
-            self.sxx[hi] - self.sxx[lo],
-            self.syy[hi] - self.syy[lo],
-            self.sxy[hi] - self.sxy[lo],
         )
-        return np.sqrt(out[6] / out[2])
 
 
 def fit_moments(n, sx, sy, sxx, syy, sxy) -> tuple[np.ndarray, ...]:
