@@ -27,7 +27,6 @@ def merge_neighbours(table: LineTable, invalid_cum: np.ndarray, cfg: SensorMetho
     tau2 = cfg.merge_tau**2
     f00, f11 = MERGE_FLOOR_VAR
     out: list[int] = [0]  # index of the current line of each output row
-    merged: dict[int, list] = {}
     cur = 0
     for i in range(1, n):
         gap = first[i] - last[cur] - 1
@@ -57,7 +56,6 @@ def merge_neighbours(table: LineTable, invalid_cum: np.ndarray, cfg: SensorMetho
         c[cur] = [q00, q01, q01, q11]
         last[cur] = max(last[cur], last[i])
         npts[cur] += npts[i]
-        merged[cur] = c[cur]
     if len(out) == n:
         return table
     idx = np.array(out)
