@@ -114,12 +114,6 @@ def truth_lines(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return rho, np.arctan2(ny, nx)
 
 
-def _line_geometry(fs: FeatureSet) -> np.ndarray:
-    if not fs.lines:
-        return np.empty((0, 6))
-    return np.array([(l.rho, l.alpha, *l.start, *l.end) for l in fs.lines], dtype=float)
-
-
 def _dont_care(truth: Any, cfg: ScoreConfig) -> np.ndarray:
     seg = np.asarray(truth.segments, float).reshape(-1, 4)
     beams = np.asarray(truth.segment_beams).reshape(-1, 2)
@@ -169,7 +163,7 @@ def score_scan(fs: FeatureSet, truth: Any, config: ScoreConfig | None = None) ->
     cfg = config or ScoreConfig()
     seg = np.asarray(truth.segments, float).reshape(-1, 4)
     dont = _dont_care(truth, cfg)
-    lines = _line_geometry(fs)
+    lines = fs.line_array()[:, :6]  # rho, alpha, x0, y0, x1, y1
     ok, cost = line_compatibility(lines, seg, cfg) if lines.size and seg.size else (
         np.zeros((len(lines), len(seg)), bool), np.zeros((len(lines), len(seg))))
     cost = cost + 10.0 * dont[None, :]  # prefer scored faces over don't-care ones
