@@ -15,28 +15,9 @@ import numpy as np
 
 from lms200 import Scan
 
+from ..backends import BACKENDS, use_numba  # noqa: F401  (re-exported for the baselines)
 from ..types import Corner, FeatureSet, Line
 from . import checks
-
-
-BACKENDS = ("auto", "numba", "numpy")
-_NUMBA: list[bool] = []
-
-
-def use_numba(backend: str) -> bool:
-    """Whether a config's ``backend`` ("auto", "numba", "numpy") runs the compiled kernels:
-    "auto" does when numba is importable. Raises ValueError for unknown names or a missing numba."""
-    if backend == "numpy":
-        return False
-    if backend not in BACKENDS:
-        raise ValueError(f"backend: must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    if not _NUMBA:
-        import importlib.util  # noqa: PLC0415
-
-        _NUMBA.append(importlib.util.find_spec("numba") is not None)
-    if backend == "numba" and not _NUMBA[0]:
-        raise ValueError("backend: 'numba' asked for but numba is not installed (pip install numba)")
-    return _NUMBA[0]
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ import numpy as np
 
 from lms200 import Scan
 
+from ..backends import BACKENDS, numba_available as _numba_available
 from ..registry import register
 from ..types import FeatureSet, new_line
 from .config import SensorMethodConfig
@@ -27,7 +28,6 @@ __all__ = ["BACKENDS", "SensorMethodConfig", "extract_sensor", "resolve_backend"
 METHOD = "sensor"
 
 
-BACKENDS = ("auto", "numba", "numpy")
 _CHECKED: dict[int, SensorMethodConfig] = {}  # id -> config already checked (kept alive here)
 
 
@@ -73,17 +73,6 @@ def _for_scan(cfg: SensorMethodConfig, scan: Scan) -> SensorMethodConfig:
         hit = (cfg, dataclasses.replace(cfg, sigma_r=cfg.sigma_r_cm))
         _CM_CONFIGS[id(cfg)] = hit
     return hit[1]
-
-
-_NUMBA: list[bool] = []  # cached answer of _numba_available
-
-
-def _numba_available() -> bool:
-    if not _NUMBA:
-        from .compiled import is_available  # noqa: PLC0415  (does not import numba)
-
-        _NUMBA.append(is_available())
-    return _NUMBA[0]
 
 
 def resolve_backend(backend: str) -> str:

@@ -1,10 +1,8 @@
 """The numba backend of the sensor method: the compiled kernels of ``kernels`` behind the same
 ``(scan, config) -> FeatureSet`` call as the numpy reference. Imported (and numba with it) only
-when the backend is first used; ``is_available`` answers without compiling anything."""
+when the backend is first used (``features.backends`` tells whether numba is there)."""
 
 from __future__ import annotations
-
-import importlib.util
 
 import numpy as np
 
@@ -20,11 +18,6 @@ from .signals import window_constants
 METHOD = "sensor"
 _FLOOR = (float(MERGE_FLOOR_VAR[0]), float(MERGE_FLOOR_VAR[1]))  # merge model-error floor (m^2, rad^2)
 _PARAMS: dict[tuple[int, float], tuple[SensorMethodConfig, np.ndarray, np.ndarray, np.ndarray]] = {}
-
-
-def is_available() -> bool:
-    """True when numba can be imported (without importing it)."""
-    return importlib.util.find_spec("numba") is not None
 
 
 def params(cfg: SensorMethodConfig, increment: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
