@@ -165,7 +165,8 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     if out is not None:
         write_result(out, result)
     d = result.diagnostics
-    table = [{"source": "slam (odometry)" if config.use_odometry else "slam", **_flat(score(result.trajectory, data, result))}]
+    scores = score(result.trajectory, data, result)
+    table = [{"source": "slam (odometry)" if config.use_odometry else "slam", **_flat(scores)}]
     odo = data.odometry
     if odo is not None:
         table.append({"source": "raw odometry", **_flat(score(odo, data))})
@@ -186,7 +187,7 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
             "prealign_fraction": float(np.mean(d["prealign_used"])),
         },
         "landmarks": {"lines": int(result.map_lines.shape[0]), "corners": int(result.map_corners.shape[0])},
-        **score(result.trajectory, data, result),
+        **scores,
         "table": table,
     }
     if data.relations is not None and "mit" in data.name.lower():

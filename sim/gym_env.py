@@ -145,12 +145,3 @@ class OfficeEnv(gym.Env):
 
     def close(self) -> None:
         self.sim.close()
-
-
-def register() -> None:
-    """Register ``lmsbench/Office-v0`` with Gymnasium (once)."""
-    if ENV_ID not in gym.registry:
-        gym.register(id=ENV_ID, entry_point="sim.gym_env:OfficeEnv")
-
-
-register()

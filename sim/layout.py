@@ -50,25 +50,25 @@ class Layout:
             pts = pts + [pts[0]]
         n = len(pts) - 1
 
-        def miter(k: int) -> float:  # extension at joint between leg k-1 and leg k
-            d0, d1 = pts[k] - pts[k - 1], pts[k + 1] - pts[k]
+        def miter(d0: np.ndarray, d1: np.ndarray) -> float:  # extension at a joint turning from d0 to d1
             turn = abs(np.arctan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1))
             return thickness / 2 * np.tan(turn / 2)
 
+        def joint(k: int) -> float:  # extension at the joint between leg k-1 and leg k
+            return miter(pts[k] - pts[k - 1], pts[k + 1] - pts[k])
+
+        closing = miter(pts[n] - pts[n - 1], pts[1] - pts[0]) if closed else 0.0  # last leg -> first
         for k in range(n):
             if k > 0:
-                e0 = miter(k)
+                e0 = joint(k)
             elif closed:
-                pts_closed = [pts[-2]] + pts
-                d0, d1 = pts_closed[1] - pts_closed[0], pts_closed[2] - pts_closed[1]
-                e0 = thickness / 2 * np.tan(abs(np.arctan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1)) / 2)
+                e0 = closing
             else:
                 e0 = thickness / 2 if extend_ends[0] else 0.0
             if k < n - 1:
-                e1 = miter(k + 1)
+                e1 = joint(k + 1)
             elif closed:
-                d0, d1 = pts[n] - pts[n - 1], pts[1] - pts[0]
-                e1 = thickness / 2 * np.tan(abs(np.arctan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1)) / 2)
+                e1 = closing
             else:
                 e1 = thickness / 2 if extend_ends[1] else 0.0
             self.segment_box(pts[k], pts[k + 1], thickness, e0, e1, 0.0, z1)
@@ -113,15 +113,6 @@ class Layout:
     def link(self, *chain: int) -> None:
         for a, b in zip(chain, chain[1:]):
             self.edges.append((a, b))
-
-    def route_points(self, step: float = 0.1) -> np.ndarray:
-        """Points every ``step`` m along every route edge, for clearance checks."""
-        pts = []
-        for a, b in self.edges:
-            p, q = np.array(self.nodes[a]), np.array(self.nodes[b])
-            n = max(2, int(np.ceil(np.hypot(*(q - p)) / step)) + 1)
-            pts.append(p + np.linspace(0, 1, n)[:, None] * (q - p))
-        return np.vstack(pts) if pts else np.zeros((0, 2))
 
     def build(self, scan_height: float = SCAN_HEIGHT_M) -> World:
         return World(self.name, self.seed, np.array(self.boxes), np.array(self.cylinders).reshape(-1, 5),

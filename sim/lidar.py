@@ -18,6 +18,7 @@ import numpy as np
 
 from lms200 import Scan
 
+from .geometry import rectangle_corners
 from .sensor import SensorConfig
 from .world import World
 
@@ -57,10 +58,6 @@ def _quiet_stdout() -> Iterator[None]:
 
 with _quiet_stdout():
     import pybullet as pb
-
-
-def _yaw_quaternion(yaw: float) -> list[float]:
-    return [0.0, 0.0, float(np.sin(yaw / 2)), float(np.cos(yaw / 2))]
 
 
 class LMS200Sim:
@@ -287,12 +284,10 @@ _MAX_RECASTS = 4
 def _box_mesh(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Vertices and triangles of boxes (n, 7: cx, cy, yaw, hx, hy, z0, z1): side faces cut into
     columns at most _MAX_TRIANGLE_WIDTH_M wide, plus top and bottom."""
-    unit = np.array([[1, -1], [1, 1], [-1, 1], [-1, -1]], dtype=float)
     verts: list[tuple[float, float, float]] = []
     tris: list[tuple[int, int, int]] = []
     for cx, cy, yaw, hx, hy, z0, z1 in boxes:
-        c, s = np.cos(yaw), np.sin(yaw)
-        xy = unit * (hx, hy) @ np.array([[c, s], [-s, c]]) + (cx, cy)
+        xy = rectangle_corners(cx, cy, yaw, hx, hy)
         for k in range(4):
             a, b = xy[k], xy[(k + 1) % 4]
             cols = max(1, int(np.ceil(np.hypot(*(b - a)) / _MAX_TRIANGLE_WIDTH_M)))

@@ -15,7 +15,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from lms200.codes import LMS200_MAX_RANGE
+from lms200.codes import LMS200_MAX_RANGE, metres_per_unit
 
 MIRROR_TURN_S = 1.0 / 75.0  # s: one mirror revolution (75 Hz)
 
@@ -114,7 +114,8 @@ class SensorConfig:
 
     @property
     def unit_m(self) -> float:
-        return 0.001 if self.units == "mm" else 0.01
+        """Size of one range code (m): 0.001 (mm) or 0.01 (cm)."""
+        return metres_per_unit(self.units)
 
     @property
     def turns_per_scan(self) -> int:

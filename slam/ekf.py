@@ -86,7 +86,6 @@ class SlamEKF(ExtendedKalmanFilter):
         keep = ~drop
         self.x = self.x[keep]
         self.P = self.P[np.ix_(keep, keep)]
-        self.F = np.eye(int(keep.sum()))  # rebuilt below with the robot block kept
         self._sync_internals()
 
     # -- prediction ----------------------------------------------------------------------------

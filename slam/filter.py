@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -14,7 +14,7 @@ from .config import SlamConfig
 from .ekf import SlamEKF, stacked_H, stacked_h, stacked_residual
 from .models import ROBOT_DIM, wrap
 from .observations import Observations
-from .pointalign import align_to_previous
+from .pointalign import align_to_previous, beam_normals, point_to_line_translation
 from .prealign import align
 
 
@@ -25,7 +25,6 @@ class Landmark:
     kind: str  # "line" or "corner"
     born: int  # scan number of creation
     hits: int = 1
-    last_seen: int = 0
     confirmed: bool = False
     extent: tuple[float, float] = (np.inf, -np.inf)  # lines: min, max of s along (-sin, cos)(theta)
 
@@ -58,7 +57,6 @@ class SlamFilter:
         self.new_gate = float(chi2_quantile(config.new_landmark_probability, 2))
         self._previous_points: cKDTree | None = None
         self._previous_world = np.zeros((0, 2))
-        self._previous_pose = np.array(initial_pose, float)
         # reference scans of the scan velocity: (stamp s, pose, tree, world points, normals), oldest first
         self._references: list[tuple[float, np.ndarray, cKDTree, np.ndarray, np.ndarray]] = []
         self._heading_before = float(initial_pose[2])
@@ -210,7 +208,6 @@ class SlamFilter:
 
     def _remember_points(self, points: np.ndarray) -> None:
         X, Y, Phi = self.ekf.x[:3, 0]
-        self._previous_pose = np.array([X, Y, Phi])
         if points.shape[0] < 10:
             self._previous_points = None
             self._references = []
@@ -223,7 +220,7 @@ class SlamFilter:
             if ok.sum() < 10:
                 self._references = []
                 return
-            ref = (float(self.stamp), self._previous_pose.copy(), cKDTree(self._previous_world[ok]), self._previous_world[ok], normals[ok])
+            ref = (float(self.stamp), np.array([X, Y, Phi]), cKDTree(self._previous_world[ok]), self._previous_world[ok], normals[ok])
             self._references.append(ref)
             # the next scan picks the newest reference at least scan_velocity_baseline before it
             while len(self._references) > 1 and self._references[1][0] <= self.stamp - self.config.scan_velocity_baseline + 1e-9:
@@ -370,7 +367,6 @@ class SlamFilter:
         for _, k in pairs_l + pairs_c:
             lm = self.landmarks[k]
             lm.hits += 1
-            lm.last_seen = self.scan_no
 
     def _extend(self, obs: Observations, pairs_l) -> None:
         if not pairs_l:
@@ -387,7 +383,7 @@ class SlamFilter:
         pose = self.ekf.x[:3, 0]
         value, Gp, Gz = (models.init_line if kind == "line" else models.init_corner)(pose, z)
         self.ekf.add_landmark(value, Gp, Gz, Rz)
-        lm = Landmark(kind, born=self.scan_no, last_seen=self.scan_no, confirmed=self.config.confirm_hits <= 1)
+        lm = Landmark(kind, born=self.scan_no, confirmed=self.config.confirm_hits <= 1)
         if ends is not None:
             w = self._world_ends(ends.reshape(1, 4))[0]
             d = np.array([-np.sin(value[1]), np.cos(value[1])])
@@ -462,45 +458,3 @@ def _point_segment_distance(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
     t = np.clip(t, 0.0, 1.0)
     q = a + t[:, None] * ab
     return np.hypot(*(p - q).T)
-
-
-def beam_normals(points: np.ndarray, step: int = 2, max_gap: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
-    """Unit normals (p, 2) of points (p, 2) in beam order from the chord between the neighbours
-    ``step`` beams apart, and the mask of points whose chord is short enough to be a surface."""
-    p = np.asarray(points, float)
-    n = np.zeros_like(p)
-    ok = np.zeros(p.shape[0], bool)
-    if p.shape[0] < 2 * step + 1:
-        return n, ok
-    d = p[2 * step :] - p[: -2 * step]
-    length = np.hypot(d[:, 0], d[:, 1])
-    good = (length > 1e-3) & (length < max_gap)
-    n[step:-step] = np.column_stack((d[:, 1], -d[:, 0])) / np.maximum(length, 1e-12)[:, None]
-    ok[step:-step] = good
-    return n, ok
-
-
-def point_to_line_translation(points: np.ndarray, tree: cKDTree, ref: np.ndarray, ref_normals: np.ndarray,
-                              start: np.ndarray, tolerance: float, iterations: int = 8) -> tuple[np.ndarray, float, np.ndarray]:
-    """Translation (2,) of ``points`` (already rotated into the world frame) onto the reference
-    points ``ref`` with normals ``ref_normals`` (indexed by ``tree``), point-to-line least squares
-    from ``start``; its score (fraction of the points within ``tolerance`` m of a reference point)
-    and the information sum n n^T of the matched normals."""
-    t = np.array(start, float)
-    for k in range(iterations):
-        gate = 0.5 if k < 2 else 2 * tolerance
-        d, j = tree.query(points + t, distance_upper_bound=gate)
-        ok = np.isfinite(d)
-        if ok.sum() < 10:
-            break
-        n = ref_normals[j[ok]]
-        r = np.sum(n * (ref[j[ok]] - points[ok] - t), axis=1)
-        A = n.T @ n
-        step = np.linalg.solve(A + 1e-3 * ok.sum() * np.eye(2), n.T @ r)
-        t = t + step
-        if step @ step < 1e-8:
-            break
-    d, j = tree.query(points + t, distance_upper_bound=tolerance)
-    ok = np.isfinite(d)
-    n = ref_normals[j[ok]]
-    return t, float(np.mean(ok)) if ok.size else 0.0, n.T @ n

@@ -13,17 +13,25 @@ from .models import wrap
 from .prealign import rotation_candidates
 
 
+def _chord_normals(p: np.ndarray, step: int, max_gap: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit normals (p - 2 step, 2) of the chords between the points ``step`` beams before and after
+    each inner point of ``p`` (p, 2; at least 2 step + 1 points), the chord lengths (m), and the mask
+    of chords short enough to be a surface."""
+    d = p[2 * step :] - p[: -2 * step]
+    length = np.hypot(d[:, 0], d[:, 1])
+    ok = (length > 1e-3) & (length < max_gap)
+    n = np.column_stack((d[:, 1], -d[:, 0])) / np.maximum(length, 1e-12)[:, None]
+    return n, length, ok
+
+
 def point_normals(points: np.ndarray, step: int = 2, max_gap: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
     """Normal angles (rad, pointing away from the sensor) and weights (m of surface) of the
     points (p, 2) in beam order, from the chord between the neighbours ``step`` beams apart."""
     p = np.asarray(points, float)
     if p.shape[0] < 2 * step + 1:
         return np.zeros(0), np.zeros(0)
-    d = p[2 * step :] - p[: -2 * step]
-    length = np.hypot(d[:, 0], d[:, 1])
-    ok = (length > 1e-3) & (length < max_gap)
+    n, length, ok = _chord_normals(p, step, max_gap)
     mid = p[step:-step]
-    n = np.column_stack((d[:, 1], -d[:, 0])) / np.maximum(length, 1e-12)[:, None]
     n = np.where((np.sum(n * mid, axis=1) < 0)[:, None], -n, n)
     return np.arctan2(n[ok, 1], n[ok, 0]), length[ok] / (2 * step)
 
@@ -60,3 +68,41 @@ def align_to_previous(points: np.ndarray, prev_world: np.ndarray, tree: cKDTree,
         out.append((float(np.mean(np.isfinite(d))), np.array([t[0], t[1], phi])))
     out.sort(key=lambda r: -r[0])
     return out
+
+
+def beam_normals(points: np.ndarray, step: int = 2, max_gap: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals (p, 2) of points (p, 2) in beam order from the chord between the neighbours
+    ``step`` beams apart, and the mask of points whose chord is short enough to be a surface."""
+    p = np.asarray(points, float)
+    n = np.zeros_like(p)
+    ok = np.zeros(p.shape[0], bool)
+    if p.shape[0] < 2 * step + 1:
+        return n, ok
+    n[step:-step], _, ok[step:-step] = _chord_normals(p, step, max_gap)
+    return n, ok
+
+
+def point_to_line_translation(points: np.ndarray, tree: cKDTree, ref: np.ndarray, ref_normals: np.ndarray,
+                              start: np.ndarray, tolerance: float, iterations: int = 8) -> tuple[np.ndarray, float, np.ndarray]:
+    """Translation (2,) of ``points`` (already rotated into the world frame) onto the reference
+    points ``ref`` with normals ``ref_normals`` (indexed by ``tree``), point-to-line least squares
+    from ``start``; its score (fraction of the points within ``tolerance`` m of a reference point)
+    and the information sum n n^T of the matched normals."""
+    t = np.array(start, float)
+    for k in range(iterations):
+        gate = 0.5 if k < 2 else 2 * tolerance
+        d, j = tree.query(points + t, distance_upper_bound=gate)
+        ok = np.isfinite(d)
+        if ok.sum() < 10:
+            break
+        n = ref_normals[j[ok]]
+        r = np.sum(n * (ref[j[ok]] - points[ok] - t), axis=1)
+        A = n.T @ n
+        step = np.linalg.solve(A + 1e-3 * ok.sum() * np.eye(2), n.T @ r)
+        t = t + step
+        if step @ step < 1e-8:
+            break
+    d, j = tree.query(points + t, distance_upper_bound=tolerance)
+    ok = np.isfinite(d)
+    n = ref_normals[j[ok]]
+    return t, float(np.mean(ok)) if ok.size else 0.0, n.T @ n
