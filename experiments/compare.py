@@ -48,8 +48,8 @@ def sim_source(world: str, seed: int = 0, duration: float = 30.0, rate_hz: float
     import sim
 
     sensor = sensor if sensor is not None else sim.SensorConfig(interlaced=False)
-    records = sim.simulate_records(world=world, seed=seed, duration=duration, sensor=sensor, rate_hz=rate_hz)
     w = sim.make_world(world, seed=seed)
+    records = sim.simulate_records(world=w, seed=seed, duration=duration, sensor=sensor, rate_hz=rate_hz)
 
     def truth_of(rec: Record) -> Any:
         if rec.truth is None:

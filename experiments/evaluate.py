@@ -41,8 +41,8 @@ def simulate_run(world: str = "office", seed: int = 0, duration: float = 10.0, s
     """The world object and the records of a simulated run (truth pose on every record)."""
     from sim import make_world, simulate_records
 
-    records = simulate_records(world=world, seed=seed, duration=duration, sensor=sensor, rate_hz=rate_hz)
-    return make_world(world, seed=seed), records
+    world_obj = make_world(world, seed=seed)
+    return world_obj, simulate_records(world=world_obj, seed=seed, duration=duration, sensor=sensor, rate_hz=rate_hz)
 
 
 def truths_for(world, records: Sequence[Record], sensor=None) -> list[Any]:

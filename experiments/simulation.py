@@ -21,9 +21,9 @@ import yaml
 from lms200 import Record
 from lms200.carmen import write_carmen
 from lms200.tum import write_tum
-from sim import SensorConfig, World, make_world
-from sim.records import OdometryConfig, scan_stamps, simulate_tour
-from sim.robot import RobotLimits, Tour, robot_tour
+from sim import SensorConfig, World, make_world, simulate_records
+from sim.records import OdometryConfig
+from sim.robot import RobotLimits
 
 
 @dataclass(frozen=True)
@@ -65,18 +65,17 @@ def run_simulation(cfg: SimulationConfig, out: Path) -> list[Record]:
     """Simulate ``cfg`` and write scans.clf, groundtruth.tum, world.json, config.yaml, map.png."""
     out.mkdir(parents=True, exist_ok=True)
     world = World.from_json(cfg.world) if cfg.world.endswith(".json") else make_world(cfg.world, cfg.seed)
-    tour = robot_tour(world, cfg.seed, cfg.duration, cfg.robot)
-    stamps = scan_stamps(cfg.sensor, cfg.duration, cfg.rate_hz)
-    records = simulate_tour(world, tour, stamps, cfg.sensor, cfg.seed, cfg.odometry)
+    records = simulate_records(world, cfg.seed, cfg.duration, cfg.sensor, cfg.odometry, cfg.rate_hz, cfg.robot)
     write_carmen(out / "scans.clf", records)
+    stamps = np.array([r.scan.stamp for r in records], dtype=float)
     write_tum(out / "groundtruth.tum", stamps, np.array([r.truth for r in records]).reshape(-1, 3))
     world.to_json(out / "world.json")
     (out / "config.yaml").write_text(yaml.safe_dump(cfg.to_dict(), sort_keys=False), encoding="ascii")
-    draw_map(world, tour, records, out / "map.png")
+    draw_map(world, records, out / "map.png")
     return records
 
 
-def draw_map(world: World, tour: Tour, records: list[Record], path: Path) -> None:
+def draw_map(world: World, records: list[Record], path: Path) -> None:
     """The world's cross-section, the driven path and the middle scan (world frame)."""
     try:
         from experiments.style import apply_style, equal_axes

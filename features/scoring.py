@@ -37,6 +37,7 @@ from scipy.optimize import linear_sum_assignment
 
 from lms200 import Scan
 
+from .baselines.common import wrap
 from .types import FeatureSet
 
 _BIG = 1e6
@@ -102,10 +103,6 @@ def prf(tp: int, fp: int, fn: int) -> tuple[float, float, float]:
     return p, r, f
 
 
-def _wrap(a: np.ndarray) -> np.ndarray:
-    return np.pi - np.mod(np.pi - a, 2 * np.pi)
-
-
 def truth_lines(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Normal form (rho >= 0, alpha) of segments (k,4)."""
     dx, dy = segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1]
@@ -115,12 +112,6 @@ def truth_lines(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     flip = rho < 0
     nx, ny, rho = np.where(flip, -nx, nx), np.where(flip, -ny, ny), np.abs(rho)
     return rho, np.arctan2(ny, nx)
-
-
-def _line_geometry(fs: FeatureSet) -> np.ndarray:
-    if not fs.lines:
-        return np.empty((0, 6))
-    return np.array([(l.rho, l.alpha, *l.start, *l.end) for l in fs.lines], dtype=float)
 
 
 def _dont_care(truth: Any, cfg: ScoreConfig) -> np.ndarray:
@@ -135,7 +126,7 @@ def line_compatibility(lines: np.ndarray, seg: np.ndarray, cfg: ScoreConfig) -> 
     """(E, T) compatibility mask and matching cost of extracted lines (rho, alpha, x0, y0, x1, y1)
     against truth segments (x1, y1, x2, y2)."""
     rho_t, alpha_t = truth_lines(seg)
-    d_alpha = np.abs(_wrap(lines[:, 1:2] - alpha_t[None, :]))
+    d_alpha = np.abs(wrap(lines[:, 1:2] - alpha_t[None, :]))
     d_alpha = np.minimum(d_alpha, np.pi - d_alpha)  # a line through the origin has two normals
     nx, ny = np.cos(alpha_t)[None, :], np.sin(alpha_t)[None, :]
     d0 = np.abs(lines[:, 2:3] * nx + lines[:, 3:4] * ny - rho_t[None, :])
@@ -172,7 +163,7 @@ def score_scan(fs: FeatureSet, truth: Any, config: ScoreConfig | None = None) ->
     cfg = config or ScoreConfig()
     seg = np.asarray(truth.segments, float).reshape(-1, 4)
     dont = _dont_care(truth, cfg)
-    lines = _line_geometry(fs)
+    lines = fs.line_array()[:, :6]  # rho, alpha, x0, y0, x1, y1
     ok, cost = line_compatibility(lines, seg, cfg) if lines.size and seg.size else (
         np.zeros((len(lines), len(seg)), bool), np.zeros((len(lines), len(seg))))
     cost = cost + 10.0 * dont[None, :]  # prefer scored faces over don't-care ones
@@ -189,10 +180,10 @@ def score_scan(fs: FeatureSet, truth: Any, config: ScoreConfig | None = None) ->
     if tp:
         e, t = scored[:, 0], scored[:, 1]
         rho_e, alpha_e = lines[e, 0], lines[e, 1]
-        d_alpha = _wrap(alpha_e - alpha_t[t])
+        d_alpha = wrap(alpha_e - alpha_t[t])
         flip = np.abs(d_alpha) > np.pi / 2  # normals on opposite sides of a line through the origin
         rho_err = np.where(flip, -rho_e, rho_e) - rho_t[t]
-        alpha_err = _wrap(np.where(flip, d_alpha + np.pi, d_alpha))
+        alpha_err = wrap(np.where(flip, d_alpha + np.pi, d_alpha))
         a0, a1 = lines[e, 2:4], lines[e, 4:6]
         b0, b1 = seg[t, 0:2], seg[t, 2:4]
         same = np.hypot(*(a0 - b0).T) + np.hypot(*(a1 - b1).T)

@@ -40,6 +40,17 @@ class Line:
         return float(np.hypot(self.end[0] - self.start[0], self.end[1] - self.start[1]))
 
 
+def new_line(rho: float, alpha: float, start: tuple[float, float], end: tuple[float, float], first: int,
+             last: int, cov: np.ndarray, n_points: int) -> Line:
+    """``Line(...)`` built without the frozen dataclass' per-field setattr (the same object, ~3x
+    faster): for extractors that build many Lines per scan from values already of the right types."""
+    line = object.__new__(Line)
+    line.__dict__.update(
+        rho=rho, alpha=alpha, start=start, end=end, first=first, last=last, cov=cov, n_points=n_points
+    )
+    return line
+
+
 @dataclass(frozen=True)
 class Corner:
     """A corner where two extracted lines meet.

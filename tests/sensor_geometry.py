@@ -61,3 +61,17 @@ def polygon(points: list[tuple[float, float]]) -> np.ndarray:
 
 
 ROOM = polygon([(-1.0, -2.5), (3.0, -2.5), (3.0, 2.0), (-1.0, 2.0)])  # walls x=3, y=2, y=-2.5, x=-1
+
+
+def room(seed: int, n: int = 361, increment: float = np.deg2rad(0.5), sigma: float = 0.005) -> Scan:
+    """A noisy rectangular room with a box and a pillar, seen from a random pose."""
+    rng = np.random.default_rng(seed)
+    w, h = rng.uniform(3, 9), rng.uniform(3, 7)
+    x, y, th = rng.uniform(0.6, w - 0.6), rng.uniform(0.6, h - 0.6), rng.uniform(-np.pi, np.pi)
+    bx, by = rng.uniform(0.5, w - 1.5), rng.uniform(0.5, h - 1.5)
+    world = np.vstack((polygon([(0, 0), (w, 0), (w, h), (0, h)]), polygon([(bx, by), (bx + 0.8, by), (bx + 0.8, by + 0.5), (bx, by + 0.5)])))
+    c, s = np.cos(th), np.sin(th)
+    pts = world.reshape(-1, 2) - (x, y)
+    local = np.column_stack((c * pts[:, 0] + s * pts[:, 1], -s * pts[:, 0] + c * pts[:, 1])).reshape(-1, 4)
+    circle = [(rng.uniform(-3, 3), rng.uniform(-3, 3), 0.2)]
+    return cast(local, circle, n=n, angle_min=-(n - 1) * increment / 2, increment=increment, sigma=sigma, seed=seed)

@@ -11,8 +11,8 @@ from features import extract
 from features.registry import backend_of
 from lms200 import Scan
 
-from sensor_geometry import cast
-from test_sensor_backends import assert_same, room
+from backend_checks import assert_same
+from sensor_geometry import cast, room
 
 numba = pytest.importorskip("numba")
 

@@ -13,31 +13,11 @@ from features import FeatureSet, extract
 from features.sensor import resolve_backend
 from lms200 import Scan
 
-from sensor_geometry import cast, polygon
+from backend_checks import assert_same
+from sensor_geometry import cast, room
 from test_sensor_props import scans
 
 numba = pytest.importorskip("numba")
-
-TOL = 1e-9
-
-
-def assert_same(ref: FeatureSet, got: FeatureSet, label: str, method: str = "sensor") -> None:
-    """Same line count, beams, point counts and corners; geometry and covariance within TOL."""
-    assert len(got.lines) == len(ref.lines), label
-    for m, (a, b) in enumerate(zip(ref.lines, got.lines)):
-        where = f"{label} line {m}"
-        assert (b.first, b.last, b.n_points) == (a.first, a.last, a.n_points), where
-        assert b.rho == pytest.approx(a.rho, abs=TOL), where
-        assert b.alpha == pytest.approx(a.alpha, abs=TOL), where
-        np.testing.assert_allclose(b.start, a.start, rtol=0, atol=TOL, err_msg=where)
-        np.testing.assert_allclose(b.end, a.end, rtol=0, atol=TOL, err_msg=where)
-        np.testing.assert_allclose(b.cov, a.cov, rtol=1e-9, atol=1e-15, err_msg=where)
-        assert isinstance(b.first, int) and isinstance(b.rho, float), where
-    assert len(got.corners) == len(ref.corners), label
-    for a, b in zip(ref.corners, got.corners):
-        assert (b.index, b.lines) == (a.index, a.lines), label
-        np.testing.assert_allclose((b.x, b.y, b.angle), (a.x, a.y, a.angle), rtol=0, atol=TOL, err_msg=label)
-    assert got.method == ref.method == method
 
 
 def both(scan: Scan, **params) -> tuple[FeatureSet, FeatureSet]:
@@ -73,20 +53,6 @@ def test_simulated_office_ideal_and_cm_mode() -> None:
     for sensor in (sim.SensorConfig.ideal(), sim.SensorConfig(units="cm")):
         for i, rec in enumerate(sim.simulate_records(world="office", seed=5, duration=20.0, rate_hz=1.0, sensor=sensor)):
             assert_same(*both(rec.scan), f"{sensor.units} scan {i}")
-
-
-def room(seed: int, n: int = 361, increment: float = np.deg2rad(0.5), sigma: float = 0.005) -> Scan:
-    """A noisy rectangular room with a box and a pillar, seen from a random pose."""
-    rng = np.random.default_rng(seed)
-    w, h = rng.uniform(3, 9), rng.uniform(3, 7)
-    x, y, th = rng.uniform(0.6, w - 0.6), rng.uniform(0.6, h - 0.6), rng.uniform(-np.pi, np.pi)
-    bx, by = rng.uniform(0.5, w - 1.5), rng.uniform(0.5, h - 1.5)
-    world = np.vstack((polygon([(0, 0), (w, 0), (w, h), (0, h)]), polygon([(bx, by), (bx + 0.8, by), (bx + 0.8, by + 0.5), (bx, by + 0.5)])))
-    c, s = np.cos(th), np.sin(th)
-    pts = world.reshape(-1, 2) - (x, y)
-    local = np.column_stack((c * pts[:, 0] + s * pts[:, 1], -s * pts[:, 0] + c * pts[:, 1])).reshape(-1, 4)
-    circle = [(rng.uniform(-3, 3), rng.uniform(-3, 3), 0.2)]
-    return cast(local, circle, n=n, angle_min=-(n - 1) * increment / 2, increment=increment, sigma=sigma, seed=seed)
 
 
 @pytest.mark.parametrize(

@@ -8,10 +8,12 @@ import time
 
 import numpy as np
 
+from experiments.synthetic import cast
 from features import extract
 from lms200 import Scan
 
 NAME = "features"
+ANGLES = -np.pi / 2 + np.arange(361) * np.deg2rad(0.5)  # LMS200 beam bearings (rad), sensor frame
 
 
 def office_scans(count: int, seed: int = 0) -> tuple[list[Scan], str]:
@@ -26,7 +28,8 @@ def office_scans(count: int, seed: int = 0) -> tuple[list[Scan], str]:
 
 
 def room_scans(count: int, seed: int = 0) -> list[Scan]:
-    """Analytic scans of a 8 m x 5 m room with a 1 m box in it, from random poses (5 mm noise)."""
+    """Analytic scans (``experiments.synthetic.cast``) of a 8 m x 5 m room with a 1 m box in it, from
+    random poses (5 mm noise, 1 mm rounding)."""
     rng = np.random.default_rng(seed)
     room = [(0, 0, 8, 0), (8, 0, 8, 5), (8, 5, 0, 5), (0, 5, 0, 0)]
     box = [(4, 2, 5, 2), (5, 2, 5, 3), (5, 3, 4, 3), (4, 3, 4, 2)]
@@ -38,17 +41,7 @@ def room_scans(count: int, seed: int = 0) -> list[Scan]:
             if not (3.7 < x < 5.3 and 1.7 < y < 3.3):
                 break
         th = rng.uniform(-np.pi, np.pi)
-        b = th - np.pi / 2 + np.arange(361) * np.deg2rad(0.5)
-        dx, dy = np.cos(b), np.sin(b)
-        best = np.full(361, np.inf)
-        for x1, y1, x2, y2 in walls:
-            ex, ey = x2 - x1, y2 - y1
-            den = dx * ey - dy * ex
-            with np.errstate(divide="ignore", invalid="ignore"):
-                t = ((x1 - x) * ey - (y1 - y) * ex) / den
-                s = ((x1 - x) * dy - (y1 - y) * dx) / den
-            hit = (np.abs(den) > 1e-12) & (t > 0) & (s >= 0) & (s <= 1)
-            best = np.where(hit & (t < best), t, best)
+        best, _ = cast(walls, (x, y, th), ANGLES)
         best = np.round(best + rng.normal(0, 0.005, 361), 3)
         best[best > 8.183] = np.inf
         scans.append(Scan.lms200(best))

@@ -7,8 +7,6 @@ import importlib
 import pkgutil
 from pathlib import Path
 
-import pandas as pd
-
 from lms200 import LmsbenchError
 
 from experiments import benchmarks
@@ -45,6 +43,8 @@ def run(args: argparse.Namespace) -> int:
             row = {"area": name, **row}
             rows.append(row)
             print("   " + ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()), flush=True)
+    import pandas as pd  # here, not at import: every `lmsbench` start (even --help) loads this module
+
     args.out.mkdir(parents=True, exist_ok=True)
     table = pd.DataFrame(rows)
     table.to_csv(args.out / "bench.csv", index=False)

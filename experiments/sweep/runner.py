@@ -166,21 +166,23 @@ def _future_result(future) -> dict[str, Any] | None:
             return future.result()
         except Exception:  # noqa: BLE001 - the result was lost with its worker after finishing
             return None
-    try:
-        exc = future.exception()
-    except (Exception, asyncio.CancelledError) as cancelled:  # a cancelled future raises here
-        exc = cancelled
+    exc = _exception(future)
     if exc is None or type(exc).__name__ == "KilledWorker":
         return None
     return {"status": "error", "error": f"{type(exc).__name__}: {exc}", "elapsed_s": float("nan")}
 
 
+def _exception(future) -> BaseException | None:
+    """The exception the cell's future holds, if any (a cancelled future raises its own here)."""
+    try:
+        return future.exception()
+    except (Exception, asyncio.CancelledError) as raised:
+        return raised
+
+
 def _lost_result(future) -> dict[str, Any]:
     """The error row of a cell that took its worker down twice, or whose result was lost again."""
-    try:
-        exc = future.exception()
-    except (Exception, asyncio.CancelledError) as other:
-        exc = other
+    exc = _exception(future)
     text = f"{type(exc).__name__}: {exc}" if exc is not None else f"lost: the worker died ({future.status})"
     return {"status": "error", "error": text, "elapsed_s": float("nan")}
 

@@ -15,28 +15,9 @@ import numpy as np
 
 from lms200 import Scan
 
+from ..backends import BACKENDS, use_numba  # noqa: F401  (re-exported for the baselines)
 from ..types import Corner, FeatureSet, Line
 from . import checks
-
-
-BACKENDS = ("auto", "numba", "numpy")
-_NUMBA: list[bool] = []
-
-
-def use_numba(backend: str) -> bool:
-    """Whether a config's ``backend`` ("auto", "numba", "numpy") runs the compiled kernels:
-    "auto" does when numba is importable. Raises ValueError for unknown names or a missing numba."""
-    if backend == "numpy":
-        return False
-    if backend not in BACKENDS:
-        raise ValueError(f"backend: must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    if not _NUMBA:
-        import importlib.util  # noqa: PLC0415
-
-        _NUMBA.append(importlib.util.find_spec("numba") is not None)
-    if backend == "numba" and not _NUMBA[0]:
-        raise ValueError("backend: 'numba' asked for but numba is not installed (pip install numba)")
-    return _NUMBA[0]
 
 
 @dataclass(frozen=True)
@@ -69,6 +50,14 @@ def open_between(no_return: np.ndarray) -> np.ndarray:
     return np.diff(no_return) > 0
 
 
+def breakpoint_distance(r_prev: np.ndarray, dphi: np.ndarray, lambda_rad: float, sigma: float) -> np.ndarray:
+    """The adaptive breakpoint distance (Borges & Aldon 2004, m): ``D_max = r_{n-1} sin(dphi) /
+    sin(lambda - dphi) + 3 sigma`` for a point at range ``r_prev`` (m) and the bearing step
+    ``dphi`` (rad) to its neighbour; <= 0 or nan where dphi >= lambda (never connected)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return r_prev * np.sin(dphi) / np.sin(lambda_rad - dphi) + 3.0 * sigma
+
+
 def breakpoints(pts: Points, angle_increment: float, lambda_rad: float, sigma: float, max_skip: int = 1) -> np.ndarray:
     """Cluster boundaries by the adaptive breakpoint detector (Borges & Aldon 2004).
 
@@ -85,8 +74,7 @@ def breakpoints(pts: Points, angle_increment: float, lambda_rad: float, sigma: f
     step = np.diff(pts.idx)
     dphi = step * angle_increment
     gap = np.hypot(np.diff(pts.x), np.diff(pts.y))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        dmax = pts.r[:-1] * np.sin(dphi) / np.sin(lambda_rad - dphi) + 3.0 * sigma
+    dmax = breakpoint_distance(pts.r[:-1], dphi, lambda_rad, sigma)
     cut = (gap > dmax) | (dmax <= 0) | (step > max_skip) | open_between(pts.no_return)
     ends = np.flatnonzero(cut)
     starts = np.concatenate(([0], ends + 1))
@@ -111,6 +99,15 @@ class PrefixFit:
         Returns rho (>= 0, m), alpha (rad, (-pi, pi]), n, centroid x, centroid y and the scatter
         along the line ``S = sum (t - t_mean)^2`` (m^2), all arrays of the ranges' shape.
         """
+        return self._fit_all(start, end)[:6]
+
+    def residual_rms(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+        """RMS perpendicular residual of the least-squares line over each range (m)."""
+        out = self._fit_all(start, end)
+        return np.sqrt(out[6] / out[2])
+
+    def _fit_all(self, start: np.ndarray, end: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``fit_moments`` of the sums over points start..end (inclusive) of each range."""
         lo, hi = start, end + 1
         return fit_moments(
             (hi - lo).astype(float),
@@ -119,20 +116,7 @@ class PrefixFit:
             self.sxx[hi] - self.sxx[lo],
             self.syy[hi] - self.syy[lo],
             self.sxy[hi] - self.sxy[lo],
-        )[:6]
-
-    def residual_rms(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
-        """RMS perpendicular residual of the least-squares line over each range (m)."""
-        lo, hi = start, end + 1
-        out = fit_moments(
-            (hi - lo).astype(float),
-            self.sx[hi] - self.sx[lo],
-            self.sy[hi] - self.sy[lo],
-            self.sxx[hi] - self.sxx[lo],
-            self.syy[hi] - self.syy[lo],
-            self.sxy[hi] - self.sxy[lo],
         )
-        return np.sqrt(out[6] / out[2])
 
 
 def fit_moments(n, sx, sy, sxx, syy, sxy) -> tuple[np.ndarray, ...]:
@@ -228,8 +212,7 @@ def contiguous_runs(pts: Points, pos: np.ndarray, angle_increment: float, lambda
     skip = np.diff(pos)
     dphi = np.diff(pts.idx[pos]) * angle_increment
     gap = np.hypot(np.diff(pts.x[pos]), np.diff(pts.y[pos]))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        dmax = pts.r[pos[:-1]] * np.sin(dphi) / np.sin(lambda_rad - dphi) + 3.0 * sigma
+    dmax = breakpoint_distance(pts.r[pos[:-1]], dphi, lambda_rad, sigma)
     cut = (skip > max_skip) | (gap > dmax) | (dmax <= 0) | open_between(pts.no_return[pos])
     return np.concatenate(([0], np.flatnonzero(cut) + 1))
 
@@ -355,7 +338,7 @@ def corners_from_lines(lines: list[Line], cfg: CornerConfig, angle_increment: fl
         turn = np.arccos(np.clip(cos_turn, -1, 1))
         cx = (r1 * np.sin(a2) - r2 * np.sin(a1)) / det
         cy = (r2 * np.cos(a1) - r1 * np.cos(a2)) / det
-        connect = np.hypot(arr[:-1, 4], arr[:-1, 5]) * np.sin(dphi) / np.sin(lam - dphi) + 3 * cfg.sigma
+    connect = breakpoint_distance(np.hypot(arr[:-1, 4], arr[:-1, 5]), dphi, lam, cfg.sigma)
     dist_a = np.hypot(cx - arr[:-1, 4], cy - arr[:-1, 5])
     dist_b = np.hypot(cx - arr[1:, 2], cy - arr[1:, 3])
     ok = (

@@ -8,17 +8,8 @@ import numpy as np
 
 from lms200 import Scan
 
-from ..types import Corner, FeatureSet, Line
+from ..types import Corner, FeatureSet, new_line
 from . import kernels as kn
-
-
-def _new_line(rho, alpha, start, end, first, last, cov, n_points) -> Line:  # noqa: ANN001
-    """A Line built without the frozen dataclass' per-field setattr (the same object)."""
-    line = object.__new__(Line)
-    line.__dict__.update(
-        rho=rho, alpha=alpha, start=start, end=end, first=first, last=last, cov=cov, n_points=n_points
-    )
-    return line
 
 
 def extract_numba(scan: Scan, cfg, method: str, chord: bool) -> FeatureSet:  # noqa: ANN001
@@ -37,7 +28,7 @@ def extract_numba(scan: Scan, cfg, method: str, chord: bool) -> FeatureSet:  # n
     start = list(map(tuple, p0.tolist()))
     end = list(map(tuple, p1.tolist()))
     lines = [
-        _new_line(rho_l[m], alpha_l[m], start[m], end[m], first_l[m], last_l[m], cov[m], n_l[m])
+        new_line(rho_l[m], alpha_l[m], start[m], end[m], first_l[m], last_l[m], cov[m], n_l[m])
         for m in range(len(rho_l))
     ]
     found: list[Corner] = []

@@ -24,8 +24,8 @@ from lms200 import Scan
 from ..registry import register
 from ..types import FeatureSet
 from . import checks
-from .common import CornerConfig, build_lines, feature_set, valid_points
-from .runs import refine, segments_of
+from .common import CornerConfig, feature_set, valid_points
+from .runs import collect, refine, segments_of
 
 
 @dataclass(frozen=True)
@@ -118,12 +118,7 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
         fits.append(fit)
         remaining[used] = False
         acc -= np.bincount(cells[used].ravel(), minlength=acc.size)
-    if not starts:
-        return feature_set([], cfg.corners, "hough", scan.angle_increment)
-    s, e = np.concatenate(starts), np.concatenate(ends)
-    rho, alpha, n, mx, my, along = (np.concatenate(f) for f in zip(*fits))
-    lines = build_lines(pts, s, e, rho, alpha, n, mx, my, along, cfg.sigma)
-    return feature_set(lines, cfg.corners, "hough", scan.angle_increment)
+    return collect(pts, starts, ends, fits, cfg.sigma, cfg.corners, "hough", scan.angle_increment)
 
 
 register("hough", HoughConfig, run)

@@ -14,8 +14,8 @@ from lms200 import Scan
 from ..registry import register
 from ..types import FeatureSet
 from . import checks
-from .common import BACKENDS, CornerConfig, feature_set, use_numba
-from .split_merge import segment_lines
+from .common import BACKENDS, CornerConfig
+from .split_merge import run_pipeline
 
 
 @dataclass(frozen=True)
@@ -50,13 +50,7 @@ class IepfConfig:
 
 def run(scan: Scan, cfg: IepfConfig) -> FeatureSet:
     """Extract lines and corners from ``scan`` (sensor frame) by iterative end-point fit."""
-    if use_numba(cfg.backend):
-        from .compiled import extract_numba  # noqa: PLC0415  (numba is imported on first use)
-
-        return extract_numba(scan, cfg, "iepf", chord=True)
-    lines = segment_lines(scan, cfg.sigma, cfg.breakpoint_lambda_deg, cfg.split_threshold,
-                          cfg.merge_rms, cfg.min_points, cfg.min_length, cfg.max_skip, cfg.runs_z, chord=True)
-    return feature_set(lines, cfg.corners, "iepf", scan.angle_increment)
+    return run_pipeline(scan, cfg, "iepf", chord=True)
 
 
 register("iepf", IepfConfig, run)

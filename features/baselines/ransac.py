@@ -22,8 +22,8 @@ from lms200 import Scan
 from ..registry import register
 from ..types import FeatureSet
 from . import checks
-from .common import CornerConfig, build_lines, feature_set, valid_points
-from .runs import refine, segments_of
+from .common import CornerConfig, valid_points
+from .runs import collect, refine, segments_of
 
 
 @dataclass(frozen=True)
@@ -114,12 +114,7 @@ def run(scan: Scan, cfg: RansacConfig) -> FeatureSet:
         ends.append(e)
         fits.append(fit)
         remaining[used] = False
-    if not starts:
-        return feature_set([], cfg.corners, "ransac", scan.angle_increment)
-    s, e = np.concatenate(starts), np.concatenate(ends)
-    rho, alpha, n, mx, my, along = (np.concatenate(f) for f in zip(*fits))
-    lines = build_lines(pts, s, e, rho, alpha, n, mx, my, along, cfg.sigma)
-    return feature_set(lines, cfg.corners, "ransac", scan.angle_increment)
+    return collect(pts, starts, ends, fits, cfg.sigma, cfg.corners, "ransac", scan.angle_increment)
 
 
 register("ransac", RansacConfig, run)

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import Points, contiguous_runs, fit_groups, fit_moments, point_line_distance, straight_enough, trim_ends
+from ..types import FeatureSet
+from .common import (CornerConfig, Points, build_lines, contiguous_runs, feature_set, fit_groups, fit_moments,
+                     point_line_distance, straight_enough, trim_ends)
 
 
 def refine(pts: Points, cand: np.ndarray, rho: float, alpha: float, tolerances: tuple[float, ...]):
@@ -54,3 +56,15 @@ def segments_of(pts: Points, inl: np.ndarray, angle_increment: float, lambda_rad
     straight = straight_enough(pts.x[used], pts.y[used], offs, fit[0], fit[1], runs_z, 0.5 * sigma)
     keep &= straight
     return used, start[keep], end[keep], tuple(f[keep] for f in fit[:6])
+
+
+def collect(pts: Points, starts: list, ends: list, fits: list, sigma: float, corners: CornerConfig, method: str,
+            angle_increment: float) -> FeatureSet:
+    """The FeatureSet of the segments ``segments_of`` found, one (start, end, fit) per found line
+    (lists in the order found): beam-ordered Lines plus the shared corner step."""
+    if not starts:
+        return feature_set([], corners, method, angle_increment)
+    s, e = np.concatenate(starts), np.concatenate(ends)
+    rho, alpha, n, mx, my, along = (np.concatenate(f) for f in zip(*fits))
+    lines = build_lines(pts, s, e, rho, alpha, n, mx, my, along, sigma)
+    return feature_set(lines, corners, method, angle_increment)

@@ -100,15 +100,22 @@ def segment_lines(scan: Scan, sigma: float, lam_deg: float, threshold: float, me
     return [l for l in lines if l.length >= min_length]
 
 
-def run(scan: Scan, cfg: SplitMergeConfig) -> FeatureSet:
-    """Extract lines and corners from ``scan`` (sensor frame) by split-and-merge."""
+def run_pipeline(scan: Scan, cfg, method: str, chord: bool) -> FeatureSet:  # noqa: ANN001
+    """Lines and corners of ``scan`` (sensor frame) by the split / merge pipeline, splitting at the
+    least-squares fit (``chord=False``, split_merge) or the chord (``chord=True``, iepf), on the
+    backend the config (``SplitMergeConfig`` or ``IepfConfig``) names."""
     if use_numba(cfg.backend):
         from .compiled import extract_numba  # noqa: PLC0415  (numba is imported on first use)
 
-        return extract_numba(scan, cfg, "split_merge", chord=False)
+        return extract_numba(scan, cfg, method, chord=chord)
     lines = segment_lines(scan, cfg.sigma, cfg.breakpoint_lambda_deg, cfg.split_threshold,
-                          cfg.merge_rms, cfg.min_points, cfg.min_length, cfg.max_skip, cfg.runs_z, chord=False)
-    return feature_set(lines, cfg.corners, "split_merge", scan.angle_increment)
+                          cfg.merge_rms, cfg.min_points, cfg.min_length, cfg.max_skip, cfg.runs_z, chord=chord)
+    return feature_set(lines, cfg.corners, method, scan.angle_increment)
+
+
+def run(scan: Scan, cfg: SplitMergeConfig) -> FeatureSet:
+    """Extract lines and corners from ``scan`` (sensor frame) by split-and-merge."""
+    return run_pipeline(scan, cfg, "split_merge", chord=False)
 
 
 register("split_merge", SplitMergeConfig, run)

@@ -14,8 +14,9 @@ import numpy as np
 
 from lms200 import Scan
 
+from ..backends import BACKENDS, numba_available as _numba_available
 from ..registry import register
-from ..types import FeatureSet, Line
+from ..types import FeatureSet, new_line
 from .config import SensorMethodConfig
 from .corners import find_corners
 from .lines import find_lines
@@ -27,7 +28,6 @@ __all__ = ["BACKENDS", "SensorMethodConfig", "extract_sensor", "resolve_backend"
 METHOD = "sensor"
 
 
-BACKENDS = ("auto", "numba", "numpy")
 _CHECKED: dict[int, SensorMethodConfig] = {}  # id -> config already checked (kept alive here)
 
 
@@ -58,15 +58,6 @@ def _check(cfg: SensorMethodConfig) -> SensorMethodConfig:
     return cfg
 
 
-def _new_line(rho, alpha, start, end, first, last, cov, n_points) -> Line:  # noqa: ANN001
-    """A Line built without the frozen dataclass' per-field setattr (same object, ~3x faster)."""
-    line = object.__new__(Line)
-    line.__dict__.update(
-        rho=rho, alpha=alpha, start=start, end=end, first=first, last=last, cov=cov, n_points=n_points
-    )
-    return line
-
-
 CM_MODE_RANGE_MAX = 10.0  # m: a scan with a larger range_max comes in SICK cm codes (1 cm steps)
 _CM_CONFIGS: dict[int, tuple[SensorMethodConfig, SensorMethodConfig]] = {}
 
@@ -82,17 +73,6 @@ def _for_scan(cfg: SensorMethodConfig, scan: Scan) -> SensorMethodConfig:
         hit = (cfg, dataclasses.replace(cfg, sigma_r=cfg.sigma_r_cm))
         _CM_CONFIGS[id(cfg)] = hit
     return hit[1]
-
-
-_NUMBA: list[bool] = []  # cached answer of _numba_available
-
-
-def _numba_available() -> bool:
-    if not _NUMBA:
-        from .compiled import is_available  # noqa: PLC0415  (does not import numba)
-
-        _NUMBA.append(is_available())
-    return _NUMBA[0]
 
 
 def resolve_backend(backend: str) -> str:
@@ -155,7 +135,7 @@ def _extract(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
     end = list(map(tuple, p1[idx].tolist()))
     covs = table.cov[idx]
     lines = [
-        _new_line(rho[m], alpha[m], start[m], end[m], first_l[m], last_l[m], covs[m], n_pts[m])
+        new_line(rho[m], alpha[m], start[m], end[m], first_l[m], last_l[m], covs[m], n_pts[m])
         for m in range(len(rho))
     ]
     corners = []

@@ -1,16 +1,14 @@
 """The numba backend of the sensor method: the compiled kernels of ``kernels`` behind the same
 ``(scan, config) -> FeatureSet`` call as the numpy reference. Imported (and numba with it) only
-when the backend is first used; ``is_available`` answers without compiling anything."""
+when the backend is first used (``features.backends`` tells whether numba is there)."""
 
 from __future__ import annotations
-
-import importlib.util
 
 import numpy as np
 
 from lms200 import Scan
 
-from ..types import Corner, FeatureSet, Line
+from ..types import Corner, FeatureSet, new_line
 from . import kernels as kn
 from .config import SensorMethodConfig
 from .hough import logcos_template
@@ -20,11 +18,6 @@ from .signals import window_constants
 METHOD = "sensor"
 _FLOOR = (float(MERGE_FLOOR_VAR[0]), float(MERGE_FLOOR_VAR[1]))  # merge model-error floor (m^2, rad^2)
 _PARAMS: dict[tuple[int, float], tuple[SensorMethodConfig, np.ndarray, np.ndarray, np.ndarray]] = {}
-
-
-def is_available() -> bool:
-    """True when numba can be imported (without importing it)."""
-    return importlib.util.find_spec("numba") is not None
 
 
 def params(cfg: SensorMethodConfig, increment: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -76,15 +69,6 @@ def params(cfg: SensorMethodConfig, increment: float) -> tuple[np.ndarray, np.nd
     return fp, ip, template
 
 
-def _new_line(rho, alpha, start, end, first, last, cov, n_points) -> Line:  # noqa: ANN001
-    """A Line built without the frozen dataclass' per-field setattr (the same object)."""
-    line = object.__new__(Line)
-    line.__dict__.update(
-        rho=rho, alpha=alpha, start=start, end=end, first=first, last=last, cov=cov, n_points=n_points
-    )
-    return line
-
-
 def extract_numba(scan: Scan, cfg: SensorMethodConfig, range_lo: float) -> FeatureSet:
     """Lines and corners of ``scan`` (sensor frame) by the compiled kernels; ``cfg`` already has
     the scan's ``sigma_r``, ``range_lo`` = max(scan.range_min, cfg.min_range) (m)."""
@@ -102,7 +86,7 @@ def extract_numba(scan: Scan, cfg: SensorMethodConfig, range_lo: float) -> Featu
     start = list(map(tuple, p0.tolist()))
     end = list(map(tuple, p1.tolist()))
     lines = [
-        _new_line(rho_l[m], alpha_l[m], start[m], end[m], first_l[m], last_l[m], cov[m], n_l[m])
+        new_line(rho_l[m], alpha_l[m], start[m], end[m], first_l[m], last_l[m], cov[m], n_l[m])
         for m in range(len(rho_l))
     ]
     found = [Corner(x, y, a, index, (i, i + 1)) for (x, y, a), (index, i) in zip(cf.tolist(), ci.tolist())]

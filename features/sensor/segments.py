@@ -9,6 +9,7 @@ import numpy as np
 
 from .config import SensorMethodConfig
 from .lines import LineTable
+from .signals import wrap
 
 MERGE_FLOOR_VAR = np.array([0.005**2, 0.005**2])  # model-error floor on (rho m^2, alpha rad^2)
 
@@ -27,7 +28,6 @@ def merge_neighbours(table: LineTable, invalid_cum: np.ndarray, cfg: SensorMetho
     tau2 = cfg.merge_tau**2
     f00, f11 = MERGE_FLOOR_VAR
     out: list[int] = [0]  # index of the current line of each output row
-    merged: dict[int, list] = {}
     cur = 0
     for i in range(1, n):
         gap = first[i] - last[cur] - 1
@@ -57,14 +57,12 @@ def merge_neighbours(table: LineTable, invalid_cum: np.ndarray, cfg: SensorMetho
         c[cur] = [q00, q01, q01, q11]
         last[cur] = max(last[cur], last[i])
         npts[cur] += npts[i]
-        merged[cur] = c[cur]
     if len(out) == n:
         return table
     idx = np.array(out)
     cov = np.array([c[i] for i in out]).reshape(-1, 2, 2)
     rho_a = np.array([rho[i] for i in out])
-    alpha_a = np.array([alpha[i] for i in out])
-    alpha_a = np.pi - np.mod(np.pi - alpha_a, 2 * np.pi)
+    alpha_a = wrap(np.array([alpha[i] for i in out]))
     return LineTable(
         rho_a, alpha_a, cov, table.first[idx], np.array([last[i] for i in out]), np.array([npts[i] for i in out])
     )
