@@ -1,7 +1,5 @@
 """The demo, end to end: simulate an office run, compare every extractor against ground truth,
 run the SLAM, a small sweep on Dask, draw the figures and write ``report.md`` / ``report.html``.
-
-Also keeps :func:`room_scan`, an analytic room scan (exact ray casting), used by tests.
 """
 
 from __future__ import annotations
@@ -11,10 +9,7 @@ import time
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
 import pandas as pd
-
-from lms200 import Scan
 
 from experiments.figures.make import draw_figures, draw_sweep
 from experiments.figures.study import StudyConfig, run_study, save_tables
@@ -193,30 +188,3 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
     if notes:
         sections.append(Section("Notes", [f"- {n}" for n in notes]))
     return sections
-
-
-def room_scan(
-    width: float = 6.0,
-    depth: float = 4.0,
-    x: float = 1.5,
-    y: float = 0.5,
-    theta: float = 0.3,
-    sigma: float = 0.005,
-    seed: int = 0,
-) -> Scan:
-    """One 361-beam LMS200 scan from inside an axis-aligned rectangular room, cast exactly.
-
-    The room spans [0, width] x [-depth/2, depth/2] (m, world frame); the sensor sits at (x, y)
-    with heading theta (rad). Ranges get Gaussian noise of ``sigma`` m (seeded) and 1 mm
-    quantisation; beyond 8.183 m is +inf (mm mode).
-    """
-    angles = -np.pi / 2 + np.arange(361) * np.deg2rad(0.5) + theta
-    c, s = np.cos(angles), np.sin(angles)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tx = np.where(c > 0, (width - x) / c, np.where(c < 0, -x / c, np.inf))
-        ty = np.where(s > 0, (depth / 2 - y) / s, np.where(s < 0, (-depth / 2 - y) / s, np.inf))
-    r = np.minimum(tx, ty)
-    r = r + np.random.default_rng(seed).normal(0.0, sigma, r.size)
-    r = np.round(r, 3)
-    r[r > 8.182] = np.inf
-    return Scan.lms200(r)

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from experiments.cli import main
-from experiments.demo import room_scan
 
 
 @pytest.mark.shared_data
@@ -58,17 +57,6 @@ def test_info_json_numbers_are_numbers(tmp_path: Path, capsys: pytest.CaptureFix
     assert main(["info", str(tmp_path / "one.clf"), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
     assert info["beams"] == 361 and isinstance(info["fov_deg"], float) and info["fov_deg"] == pytest.approx(180.0)
-
-
-def test_room_scan_matches_geometry() -> None:
-    s = room_scan(sigma=0.0, x=1.5, y=0.5, theta=0.0)
-    # straight ahead: the far wall at x = 6; to the left (beam 360): the wall at y = +2
-    assert s.ranges[180] == pytest.approx(4.5, abs=5e-4)
-    assert s.ranges[360] == pytest.approx(1.5, abs=5e-4)
-    assert s.ranges[0] == pytest.approx(2.5, abs=5e-4)
-    p = s.points
-    on_wall = np.isclose(p[:, 0] + 1.5, 6.0, atol=1e-3) | np.isclose(np.abs(p[:, 1] + 0.5), 2.0, atol=1e-3)
-    assert on_wall.all()
 
 
 def test_os_errors_are_one_line_with_exit_status_2(tmp_path: Path, capsys: pytest.CaptureFixture[str],

@@ -78,7 +78,7 @@ def test_decimated_input_and_odometry_rows(sim_folder):
 
 @pytest.mark.shared_data
 def test_mit_relations_of_raw_odometry_match_the_published_anchor(shared_data):
-    from slam.metrics import read_relations, relations_error
+    from slam.metrics import relations_error
 
     from experiments.slamrun import load_input
 
