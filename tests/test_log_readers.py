@@ -308,3 +308,50 @@ def test_real_logs_read_without_a_skipped_line(shared_data: Path, name: str) -> 
     assert len(recs) in (1988, 686, 910, 440)
     assert reader.stats.skipped == [] and reader.stats.stopped is None
     assert reader.stats.other_lasers() == {}
+
+
+# --- the command line: one line, exit status 2, never a traceback ------------------------------------
+def _broken_files(tmp_path: Path) -> dict[str, Path]:
+    lines = [flaser(180, stamp=t) for t in range(5)]
+    inf = list(lines)
+    inf[2] = inf[2].replace("FLASER 180", "FLASER inf", 1)
+    res = 0.5 * DEG
+    data = gzip.compress(("\n".join(lines * 40) + "\n").encode())
+    files = {
+        "inf": write(tmp_path, "inf.log", inf),
+        "short": write(tmp_path, "short.log", [robotlaser(361, 361 * res, res), robotlaser(360, 361 * res, res)]),
+        "truncated": tmp_path / "cut.log.gz",
+        "stale": write(tmp_path, "stale.log", ["PARAM laser_front_laser_resolution 1.0 x 0",
+                                               "PARAM laser_front_laser_fov 180 x 0", flaser(181), flaser(361)]),
+    }
+    files["truncated"].write_bytes(data[: len(data) // 2])
+    return files
+
+
+def test_info_on_broken_files_is_one_line_and_status_2(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    from experiments.cli import main
+
+    for name, path in _broken_files(tmp_path).items():
+        assert main(["info", str(path)]) == 2, name
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"{path}:" in err and "Traceback" not in err, (name, err)
+        assert main(["info", str(path), "--skip-bad-lines", "--json"]) == 0, name
+        out, err = capsys.readouterr()
+        assert "skipped" in err and '"skipped_lines": 1' in out, (name, err)
+    bag = tmp_path / "two.bag"
+    _two_topic_bag(bag)
+    assert main(["info", str(bag)]) == 2
+    assert "/scan_front, /scan_rear" in capsys.readouterr().err
+    assert main(["info", str(bag), "--topic", "/scan_front", "--json"]) == 0
+    assert '"scans": 4' in capsys.readouterr().out
+
+
+def test_geometry_flags(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    from experiments.cli import main
+
+    path = write(tmp_path, "a.log", [flaser(181), flaser(181, stamp=11.0)])
+    assert main(["info", str(path), "--laser-resolution-deg", "0.5", "--laser-angle-min-deg", "-45"]) == 0
+    out = capsys.readouterr().out
+    assert "90.00 deg (from -45.00 deg)" in out and "0.500 deg" in out
+    assert main(["info", str(path), "--laser-resolution-deg", "-1"]) == 2
+    assert "--laser-resolution-deg: must be > 0" in capsys.readouterr().err
