@@ -16,6 +16,8 @@ _LAZY = {
     "write_log": ".logs",
     "LMS200": ".driver",
     "read_tum": ".tum",
+    "estimate_range_noise": ".noise",
+    "RangeNoise": ".noise",
     "write_tum": ".tum",
 }
 
