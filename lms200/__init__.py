@@ -18,6 +18,8 @@ _LAZY = {
     "LaserGeometry": ".laser_geometry",
     "LMS200": ".driver",
     "read_tum": ".tum",
+    "estimate_range_noise": ".noise",
+    "RangeNoise": ".noise",
     "write_tum": ".tum",
 }
 
