@@ -108,14 +108,14 @@ def fit_sensor(cal: LogCalibration, world: str = "office") -> CalibrationResult:
 
 
 def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_scans: int | None = None,
-                  topic: str | None = None, skip_bad_lines: bool = False) -> CalibrationResult:
-    """Measure a log (every ``stride``-th scan, at most ``max_scans``) and fit the sensor model.
+                  **read_options: Any) -> CalibrationResult:
+    """Measure a log (every ``stride``-th scan, at most ``max_scans``) and fit the sensor model;
+    ``read_options`` go to ``lms200.read_log`` (topic, skip_bad_lines, geometry).
 
     Raises:
         LmsbenchError: for a log without laser scans or an unsupported resolution.
     """
-    reader = read_log(path, skip_bad_lines=skip_bad_lines, topic=topic) if topic else read_log(
-        path, skip_bad_lines=skip_bad_lines)
+    reader = read_log(path, **read_options)
 
     def scans():
         for k, rec in enumerate(reader):

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from experiments.logargs import add_log_options, read_log_options
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("calibrate", help="measure a real log's noise, quantisation, no-return / invalid / "
@@ -15,8 +17,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="simulated world used to fit the spot width and the outlier baseline (default office)")
     p.add_argument("--stride", type=int, default=1, help="use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=int, help="use at most this many scans")
-    p.add_argument("--topic", help="bags: the LaserScan topic to read")
-    p.add_argument("--skip-bad-lines", action="store_true", help="skip malformed CARMEN lines")
+    add_log_options(p)
     p.set_defaults(func=run)
 
 
@@ -28,6 +29,7 @@ def run(args: argparse.Namespace) -> int:
 
     from experiments.calibrate import calibrate_log, format_calibration, write_sensor_yaml
 
+    read_options = read_log_options(args)
     if not Path(args.log).exists():
         raise FileNotFoundError(f"no such log: {args.log}")
     if args.stride < 1:
@@ -41,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None and not args.out.parent.exists():
         raise FileNotFoundError(f"--out: no such folder: {args.out.parent}")
     result = calibrate_log(args.log, world=args.world, stride=args.stride, max_scans=args.max_scans,
-                           topic=args.topic, skip_bad_lines=args.skip_bad_lines)
+                           **read_options)
     for line in format_calibration(result):
         print(line)
     if args.out is None:
