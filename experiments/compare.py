@@ -58,7 +58,8 @@ class Source:
         if len(truths) != len(records):
             raise LmsbenchError(f"{len(records)} records but {len(truths)} truths")
         by_index = {id(r): t for r, t in zip(records, truths)}
-        return cls(name, "sim", seed, records, lambda rec: by_index[id(rec)], len(records))
+        return cls(name, "sim", seed, records, lambda rec: by_index[id(rec)], len(records),
+                   pose_of=lambda rec: rec.truth)
 
 
 def sim_source(world: str, seed: int = 0, duration: float = 30.0, rate_hz: float | None = 2.0,
@@ -126,15 +127,17 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
 
 def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: float = 30.0,
                   rate_hz: float | None = 2.0, stride: int = 1, max_scans: int | None = None,
-                  read_options: dict[str, Any] | None = None, poses: str = "auto") -> list[Source]:
+                  read_options: dict[str, Any] | None = None, poses: str = "auto",
+                  sensor: Any = None) -> list[Source]:
     """Sources from command-line words: a world name (one source per seed), ``world:seed``, or the
-    path of a log (read with ``read_options``, see :func:`log_source`)."""
+    path of a log (read with ``read_options``, see :func:`log_source`). ``sensor`` (a
+    ``sim.SensorConfig``) is the simulated sources' sensor model."""
     out: list[Source] = []
     for spec in specs:
         name, _, seed = spec.partition(":")
         if name in WORLD_NAMES:
             for s in ([int(seed)] if seed else seeds):
-                out.append(sim_source(name, s, duration, rate_hz))
+                out.append(sim_source(name, s, duration, rate_hz, sensor))
         else:
             if not Path(spec).exists():
                 raise FileNotFoundError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}) nor an existing log")
