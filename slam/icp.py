@@ -17,6 +17,9 @@ from .geometry import to_world
 from .models import wrap
 
 
+_EYE3 = np.eye(3)
+
+
 @dataclass(frozen=True)
 class Reference:
     """Points (m, 2) with unit normals (m, 2), in the parent frame, and their k-d tree."""
@@ -94,14 +97,16 @@ def make_reference(points: np.ndarray, normals: np.ndarray, voxel: float = 0.0) 
 
 def refine(points: np.ndarray, ref: Reference, pose: np.ndarray, cfg: AlignmentConfig) -> Match:
     """Gauss-Newton point-to-line ICP from ``pose`` with Huber weights (``huber`` m) on the
-    residuals and correspondences within ``max_correspondence`` m."""
+    residuals and correspondences within ``max_correspondence`` m, then, once converged, within
+    ``fine_correspondence`` m."""
     pose = np.array(pose, float)
     n = points.shape[0]
     H = np.zeros((3, 3))
     r = np.zeros(0)
+    reach = cfg.max_correspondence
     for it in range(cfg.max_iterations):
         w = to_world(pose, points)
-        d, j = ref.tree.query(w, distance_upper_bound=cfg.max_correspondence)
+        d, j = ref.tree.query(w, distance_upper_bound=reach)
         ok = np.isfinite(d)
         if ok.sum() < 3:
             return Match(pose, np.zeros((3, 3)), 0.0, np.inf, n)
@@ -115,11 +120,15 @@ def refine(points: np.ndarray, ref: Reference, pose: np.ndarray, cfg: AlignmentC
         H = Jw.T @ J
         g = Jw.T @ r
         # Levenberg damping: an unconstrained direction (a corridor's axis) stays where it started
-        step = -np.linalg.solve(H + cfg.damping * np.trace(H) / 3.0 * np.eye(3) + 1e-12 * np.eye(3), g)
+        step = -np.linalg.solve(H + (cfg.damping * np.trace(H) / 3.0 + 1e-12) * _EYE3, g)
         pose = pose + step
         pose[2] = wrap(pose[2])
         if abs(step[0]) + abs(step[1]) < cfg.tolerance_xy and abs(step[2]) < cfg.tolerance_theta:
-            break
+            if reach == cfg.fine_correspondence:
+                break
+            # converged with the wide reach: finish with the narrow one, so points without a
+            # counterpart (a partial overlap) no longer pull the pose
+            reach = cfg.fine_correspondence
     w = to_world(pose, points)
     d, j = ref.tree.query(w, distance_upper_bound=cfg.inlier_distance)
     inl = np.isfinite(d)

@@ -57,7 +57,7 @@ def local_map(keyframes: list[Keyframe], voxel: float) -> Reference:
 
 
 def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyframe], cfg: LoopClosureConfig,
-                 alignment: AlignmentConfig, voxel: float) -> LoopClosure | None:
+                 alignment: AlignmentConfig, voxel: float, since_closure: float = 0.0) -> LoopClosure | None:
     """Match ``scan_points`` (the new keyframe's matching points, sensor frame) against the submaps
     of the nearest earlier keyframes within ``search_radius`` of the new one's estimate and at
     least ``min_travel`` of path behind it; the first match that passes every check is returned."""
@@ -66,13 +66,14 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
         return None
     xy = np.array([kf.pose[:2] for kf in old])
     dist = np.hypot(*(xy - new.pose[:2]).T)
-    order = [int(k) for k in np.argsort(dist) if dist[k] <= cfg.search_radius]
+    radius = cfg.search_radius + cfg.search_growth * since_closure
+    order = [int(k) for k in np.argsort(dist) if dist[k] <= radius]
     tried: list[int] = []
     for k in order:
         if len(tried) >= cfg.candidates:
             break
-        if any(abs(old[k].key - t) <= cfg.submap for t in tried):
-            continue  # the same place as a candidate already matched
+        if any(abs(old[k].key - t) <= cfg.visit_gap for t in tried):
+            continue  # the same visit as a candidate already matched: try other visits of the place
         tried.append(old[k].key)
         cand = old[k]
         lo = max(0, cand.key - cfg.submap)

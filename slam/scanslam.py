@@ -74,6 +74,7 @@ class ScanSlam:
         self.loops: list[LoopClosure] = []
         self.travelled = 0.0
         self._since_search = 0
+        self._closed_at = 0.0  # path length (m) at the last loop closure
         self.predict_velocity = True
 
     # -- one scan -------------------------------------------------------------------------------
@@ -146,8 +147,10 @@ class ScanSlam:
         lc = self.loop_cfg
         if lc.enabled and self._since_search >= lc.every and sp.matched.shape[0] >= 10:
             self._since_search = 0
-            loop = find_closure(kf, sp.matched, self.keyframes[:-1], lc, self.alignment, self.keyframes_cfg.voxel)
+            loop = find_closure(kf, sp.matched, self.keyframes[:-1], lc, self.alignment, self.keyframes_cfg.voxel,
+                                self.travelled - self._closed_at)
             if loop is not None:
+                self._closed_at = self.travelled
                 noise = robust_noise(np.array([lc.sigma_xy, lc.sigma_xy, lc.sigma_theta]), lc.kernel, lc.kernel_width)
                 self.graph.close(loop.old, loop.new, loop.relative, noise)
                 self.loops.append(loop)
@@ -167,3 +170,76 @@ class ScanSlam:
         pose relative to that keyframe."""
         kp = self.keyframe_poses()
         return np.array([compose(kp[k], rel) for k, rel in self.anchors]).reshape(-1, 3)
+
+
+def run_scan_slam(steps, config) -> "SlamResult":
+    """The default pipeline over (stamp s, scan, true pose or None) steps; see :func:`slam.run_slam`.
+
+    The trajectory and the keyframes come from the optimised pose graph; the map is the lines
+    extracted on the keyframes, placed by their optimised poses and merged (:mod:`slam.linemap`).
+    """
+    from .linemap import merge_lines
+    from .run import SlamInputError, SlamResult, pose_nees
+
+    from features import extract
+
+    slam = ScanSlam(config.alignment, config.keyframes, config.loop_closure)
+    stamps: list[float] = []
+    truths: list = []
+    infos: list[ScanStep] = []
+    kf_lines: dict[int, np.ndarray] = {}
+    previous = None
+    for k, (t, scan, truth) in enumerate(steps):
+        t = float(t)
+        if previous is not None and t < previous:
+            raise SlamInputError(f"scan {k}: timestamp {t} is earlier than the previous one ({previous})")
+        previous = t
+        info = slam.step(t, scan.points)
+        if info.new_keyframe:
+            fs = extract(scan, method=config.extractor, **config.extractor_params)
+            kf_lines[info.keyframe] = _segments(fs, config)
+        stamps.append(t)
+        truths.append(truth)
+        infos.append(info)
+    if not stamps:
+        raise SlamInputError("no scans in the input")
+    poses = slam.trajectory()
+    kposes = slam.keyframe_poses()
+    traj = np.column_stack((stamps, poses))
+    covs = np.array(slam.covariances).reshape(-1, 3, 3)
+    segs = [_place(kposes[key], seg) for key, seg in kf_lines.items() if seg.size]
+    lines = merge_lines(np.concatenate(segs) if segs else np.zeros((0, 4)))
+    inliers = np.array([i.inliers for i in infos])
+    matched = np.array([i.matched for i in infos])
+    nees = pose_nees(traj, covs, truths)
+    window = config.nis_window
+    lost = ~matched[1:]
+    run = np.convolve(lost.astype(float), np.ones(window), "valid") if lost.size >= window else np.zeros(0)
+    diverged_at = float(stamps[1 + int(np.argmax(run >= window)) + window - 1]) if run.size and run.max() >= window else None
+    finite = nees[np.isfinite(nees)]
+    diag = {
+        "inliers": inliers, "matched": matched, "nees": nees,
+        "keyframe": np.array([i.keyframe for i in infos]), "hypothesis": np.array([i.hypothesis for i in infos]),
+        "n_keyframes": len(slam.keyframes), "n_loops": len(slam.loops),
+        "loops": [{"old": lp.old, "new": lp.new, "inliers": lp.inliers, "rms": lp.rms, "correction": lp.correction,
+                   "old_stamp": slam.keyframes[lp.old].stamp, "new_stamp": slam.keyframes[lp.new].stamp}
+                  for lp in slam.loops],
+        "keyframes": np.column_stack(([kf.stamp for kf in slam.keyframes], kposes)),
+        "diverged": diverged_at is not None, "diverged_at": diverged_at, "healthy": bool(np.all(np.isfinite(poses))),
+        "mean_nis_per_dof": float("nan"), "mean_nees": float(finite.mean()) if finite.size else float("nan"),
+        "matched_fraction": float(matched[1:].mean()) if matched.size > 1 else 1.0,
+    }
+    return SlamResult(traj, covs, lines, np.zeros((0, 3)), diag)
+
+
+def _segments(fs, config) -> np.ndarray:
+    """(k, 4) sensor-frame segments of the extracted lines long and well supported enough."""
+    out = [(*ln.start, *ln.end) for ln in fs.lines
+           if ln.length >= config.min_line_length and not (ln.n_points and ln.n_points < config.min_line_points)]
+    return np.array(out, float).reshape(-1, 4)
+
+
+def _place(pose: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    from .geometry import to_world
+
+    return np.column_stack((to_world(pose, seg[:, :2]), to_world(pose, seg[:, 2:])))
