@@ -36,6 +36,20 @@ class Source:
     truth_of: Callable[[Record], Any] | None = None
     total: int | None = None
 
+    @classmethod
+    def from_records(cls, records: Sequence[Record], truths: Sequence[Any] | None = None, name: str = "sim",
+                     seed: int | None = None) -> "Source":
+        """Records already in memory (a simulated run, a log read once), with their visible truths
+        (one per record, sensor frame) when known: scored against them, else like a log."""
+        records = list(records)
+        if truths is None:
+            return cls(name, "log", seed, records, None, len(records))
+        truths = list(truths)
+        if len(truths) != len(records):
+            raise LmsbenchError(f"{len(records)} records but {len(truths)} truths")
+        by_index = {id(r): t for r, t in zip(records, truths)}
+        return cls(name, "sim", seed, records, lambda rec: by_index[id(rec)], len(records))
+
 
 def sim_source(world: str, seed: int = 0, duration: float = 30.0, rate_hz: float | None = 2.0,
                sensor: Any = None) -> Source:
@@ -123,7 +137,7 @@ def compare(
     Returns:
         A tidy table, one row per method x scan: method, backend ("numba" or "numpy", see
         ``features.registry.backend_of``: speed ratios are fair only between equal backends), source, kind, seed, scan, stamp, n_valid,
-        n_lines, n_corners, microseconds (wall, ``perf_counter_ns``), cpu_microseconds (this
+        n_lines, n_corners, microseconds (wall, ``perf_counter_ns``), time_ms (the same in ms), cpu_microseconds (this
         thread's CPU time, ``thread_time_ns``: what a pre-empted call really used), explained,
         range_rms (m) and, for simulated sources,
         n_truth, tp, fp, fn, precision, recall, f1, rho_err_mean / rho_err_rms (m),
@@ -178,7 +192,10 @@ def compare(
                 bar.update(1)
     if bar is not None:
         bar.close()
-    return pd.DataFrame(rows)
+    table = pd.DataFrame(rows)
+    if not table.empty:
+        table.insert(table.columns.get_loc("microseconds") + 1, "time_ms", table["microseconds"] / 1e3)
+    return table
 
 
 def _score_row(s) -> dict[str, Any]:
@@ -207,7 +224,9 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
     faster than the reference; nan when the reference did not run). Both rates use the median
     time: on a shared machine a pre-empted call can take 100 times the usual, which swamps a mean.
     ``cpu_us_median`` and ``cpu_speed_vs_sensor`` are the same from CPU time: under load a call
-    longer than the scheduler's slice is pre-empted more often, which wall time penalises."""
+    longer than the scheduler's slice is pre-empted more often, which wall time penalises.
+    ``time_ms_p05`` / ``_p25`` / ``_median`` / ``_p75`` / ``_p95``: quantiles of the wall time per
+    scan in ms (the figures' error bars)."""
     out = []
     for (source, method), g in table.groupby(["source", "method"], sort=False):
         row: dict[str, Any] = dict(source=source, method=method, kind=g["kind"].iloc[0], scans=len(g),
@@ -234,6 +253,9 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
         if "cpu_microseconds" in g:
             row["cpu_us_median"] = g["cpu_microseconds"].median()
         row["scans_per_s"] = 1e6 / row["us_median"]
+        ms = g["microseconds"] / 1e3
+        for q, label in ((0.05, "p05"), (0.25, "p25"), (0.5, "median"), (0.75, "p75"), (0.95, "p95")):
+            row[f"time_ms_{label}"] = float(ms.quantile(q))
         out.append(row)
     summary = pd.DataFrame(out)
     if summary.empty:

@@ -1,9 +1,9 @@
-"""Glue between the experiments and ``experiments.compare``: simulated runs with their truth,
-comparison tables over given records, and feature sets for the figure panels.
+"""What the experiments share besides the comparison: simulated runs with their truth, the
+experiments' sensor, flat parameter names, and timed feature sets for the figure panels.
 
-The comparison itself (interleaved timing, scores against truth, pooled summary) is
-``experiments.compare.compare`` / ``summarise``; this module feeds it records that were already
-simulated (so a sweep or the demo simulates each run once) and adds the columns the figures use.
+The one comparison (interleaved timing, scores against truth, pooled summary) is
+``experiments.compare.compare`` / ``summarise``, used by ``lmsbench compare``, the sweeps, the
+figures and the demo; they hand it records simulated once through ``Source.from_records``.
 """
 
 from __future__ import annotations
@@ -13,7 +13,6 @@ import time
 from typing import Any, Iterable, Sequence
 
 import numpy as np
-import pandas as pd
 
 from lms200 import Record, Scan
 
@@ -51,30 +50,6 @@ def truths_for(world, records: Sequence[Record], sensor=None) -> list[Any]:
 
     sensor = sensor if sensor is not None else SensorConfig()
     return [visible_truth(world, r.truth, sensor) for r in records]
-
-
-def compare_records(records: Sequence[Record], truths: Sequence[Any] | None, methods: Sequence[str],
-                    params: dict[str, dict[str, Any]] | None = None, name: str = "sim", seed: int | None = None,
-                    sigma: float = 0.005) -> pd.DataFrame:
-    """``experiments.compare.compare`` over these records (scored against ``truths`` when given),
-    with ``time_ms`` added (= microseconds / 1000)."""
-    from experiments.compare import Source, compare
-
-    by_id = {id(r): t for r, t in zip(records, truths)} if truths is not None else None
-    source = Source(name, "sim" if truths is not None else "log", seed, list(records),
-                    (lambda rec: by_id[id(rec)]) if by_id is not None else None, len(records))
-    table = compare([source], list(methods), params=params, sigma=sigma)
-    return table.assign(time_ms=table["microseconds"] / 1e3)
-
-
-def summarise_table(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
-    """``experiments.compare.summarise`` plus time per scan in ms (median, 5, 25, 75 and 95 %)."""
-    from experiments.compare import summarise
-
-    summary = summarise(table, reference=reference)
-    q = table.groupby(["source", "method"], sort=False)["time_ms"].quantile([0.05, 0.25, 0.5, 0.75, 0.95]).unstack()
-    q.columns = ["time_ms_p05", "time_ms_p25", "time_ms_median", "time_ms_p75", "time_ms_p95"]
-    return summary.merge(q.reset_index(), on=["source", "method"], how="left")
 
 
 def extract_timed(scans: Iterable[Scan], method: str, params: dict[str, Any] | None = None

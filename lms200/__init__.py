@@ -14,8 +14,12 @@ from .scan import Scan
 _LAZY = {
     "read_log": ".logs",
     "write_log": ".logs",
+    "BagError": ".bag",
+    "LaserGeometry": ".laser_geometry",
     "LMS200": ".driver",
     "read_tum": ".tum",
+    "estimate_range_noise": ".noise",
+    "RangeNoise": ".noise",
     "write_tum": ".tum",
 }
 

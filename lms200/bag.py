@@ -3,15 +3,16 @@
 No ROS installation is needed. Writing: a ``.bag`` path gives a ROS 1 bag, any other path a ROS 2
 bag folder (sqlite3 storage). Scans go to ``/scan`` (frame ``laser``); a record's odometry and true
 pose, when present, go to ``/odom`` and ``/ground_truth`` as ``geometry_msgs/PoseStamped`` with the
-scan's stamp, written just before the scan. Reading: every LaserScan topic (or the one named) in
-time order; odometry from ``/odom`` and truth from ``/ground_truth`` (PoseStamped or
-nav_msgs/Odometry): the latest message at or before each scan whose header stamp lies within
+scan's stamp, written just before the scan. Reading: the bag's LaserScan topic (a bag with
+several is refused unless one is named) in time order; odometry from ``/odom`` and truth from
+``/ground_truth`` (PoseStamped or nav_msgs/Odometry): the latest message at or before each scan whose header stamp lies within
 half the bag's median scan period of the scan's stamp (``pose_tolerance``); a scan with no such
 pose gets None, so a record written without odometry or truth reads back without it.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Iterator
 
@@ -129,6 +130,20 @@ def _stamp_of(msg) -> float:  # noqa: ANN001
     return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
 
 
+def _scan_of(msg) -> Scan:  # noqa: ANN001
+    """A LaserScan message as a Scan; raises ValueError for fields a scan cannot have."""
+    ranges = np.asarray(msg.ranges, dtype=np.float64)
+    ranges[ranges < 0] = np.nan  # some drivers mark invalid beams with negative values
+    return Scan(
+        ranges,
+        snap_angle(float(msg.angle_min)),  # float32 in the message: back onto the 0.05 deg grid
+        snap_angle(float(msg.angle_increment)),
+        float(msg.range_min),
+        float(msg.range_max),
+        _stamp_of(msg),
+    )
+
+
 STAMP_EPS_S = 1e-6  # s: stamps this close are the same instant (float seconds vs integer ns)
 
 
@@ -144,60 +159,116 @@ def pose_tolerance(scan_times_ns: Iterable[int]) -> float:
     return max(0.5 * float(np.median(periods)) * 1e-9, STAMP_EPS_S)
 
 
+@dataclass
+class BagReadStats:
+    """What a pass over a bag met.
+
+    Attributes:
+        messages: messages per topic read (scan and pose topics).
+        skipped: the bad messages skipped under ``skip_bad_lines``: (message index on its topic, reason).
+        stopped: why reading ended early (the bag cannot be iterated further), or None.
+        laser: the LaserScan topic read.
+    """
+
+    messages: dict[str, int] = field(default_factory=dict)
+    skipped: list[tuple[int, str]] = field(default_factory=list)
+    stopped: str | None = None
+    laser: str | None = None
+
+
 class BagReader:
     """Iterate the LaserScans of a ROS 1 or ROS 2 bag as Records (iterable several times).
 
     Args:
         path: ``*.bag`` file or ROS 2 bag folder.
-        topic: the LaserScan topic; by default every LaserScan topic of the bag.
+        topic: the LaserScan topic; may be left out when the bag has exactly one.
+        skip_bad_lines: skip messages that cannot be read as scans (recorded in ``stats.skipped``)
+            instead of raising; damage that stops iteration ends the pass (``stats.stopped``).
+
+    Raises:
+        BagError: (while iterating) a bag that cannot be opened, several LaserScan topics and no
+            ``topic``, a missing topic, or a message that cannot be read (naming topic and index).
     """
 
-    def __init__(self, path: str | Path, topic: str | None = None) -> None:
+    def __init__(self, path: str | Path, topic: str | None = None, skip_bad_lines: bool = False) -> None:
         self.path = Path(path)
         if not self.path.exists():
             raise FileNotFoundError(f"no such bag: {self.path}")
         self.topic = topic
+        self.skip_bad_lines = skip_bad_lines
+        self.stats = BagReadStats()
 
-    def __iter__(self) -> Iterator[Record]:
+    def _open(self):  # noqa: ANN202 - rosbags' AnyReader
         from rosbags.highlevel import AnyReader
 
         try:
             reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
             reader.open()
         except Exception as exc:  # rosbags raises its own types for every kind of damage
-            raise BagError(f"{self.path}: cannot open as a ROS bag: {exc}") from None
+            raise BagError(f"{self.path}: cannot open as a ROS bag: {type(exc).__name__}: {exc}") from None
+        return reader
+
+    def _scan_connections(self, reader) -> list:  # noqa: ANN001
+        scans = [c for c in reader.connections if c.msgtype == "sensor_msgs/msg/LaserScan"]
+        names = sorted({c.topic for c in scans})
+        if self.topic is not None:
+            scans = [c for c in scans if c.topic == self.topic]
+        if not scans:
+            topics = sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections})
+            wanted = f"topic {self.topic!r}" if self.topic else "any sensor_msgs/LaserScan topic"
+            raise BagError(f"{self.path}: no {wanted}; topics: {topics}")
+        if len(names) > 1 and self.topic is None:
+            raise BagError(f"{self.path}: {len(names)} LaserScan topics ({', '.join(names)}); choose one "
+                           "(--topic TOPIC, or read_log(path, topic=...))")
+        return scans
+
+    def _fail(self, where: str, exc: Exception, index: int, fatal: bool) -> None:
+        reason = f"{type(exc).__name__}: {exc}" if not isinstance(exc, ValueError) else str(exc)
+        if not self.skip_bad_lines:
+            raise BagError(f"{self.path}: {where}: cannot read: {reason}") from None
+        self.stats.skipped.append((index, f"{where}: {reason}"))
+        if fatal:
+            self.stats.stopped = f"{where}: {reason}"
+
+    def __iter__(self) -> Iterator[Record]:
+        self.stats = stats = BagReadStats(laser=self.topic)
+        reader = self._open()
         try:
-            scans = [c for c in reader.connections if c.msgtype == "sensor_msgs/msg/LaserScan"]
-            if self.topic is not None:
-                scans = [c for c in scans if c.topic == self.topic]
-            if not scans:
-                topics = sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections})
-                wanted = f"topic {self.topic!r}" if self.topic else "any sensor_msgs/LaserScan topic"
-                raise BagError(f"{self.path}: no {wanted}; topics: {topics}")
+            scans = self._scan_connections(reader)
+            stats.laser = scans[0].topic
             poses = [c for c in reader.connections if c.msgtype in _POSE_TYPES and c.topic in (ODOM_TOPIC, TRUTH_TOPIC)]
-            tolerance = pose_tolerance(t for _, t, _ in reader.messages(connections=scans)) if poses else 0.0
+            try:
+                tolerance = pose_tolerance(t for _, t, _ in reader.messages(connections=scans)) if poses else 0.0
+            except Exception as exc:  # damaged chunks, bad index: rosbags' own exception types
+                self._fail(f"topic {stats.laser}", exc, 0, fatal=True)
+                return
             # Poses stamped like a scan may come just before or just after it (ties in bag time are
             # unordered across topics): hold each scan until bag time moves past it.
             latest: dict[str, tuple[float, Pose2D] | None] = {ODOM_TOPIC: None, TRUTH_TOPIC: None}
             held: list[tuple[int, Scan]] = []
-            for conn, t, raw in reader.messages(connections=scans + poses):
+            messages = reader.messages(connections=scans + poses)
+            while True:
+                try:
+                    item = next(messages, None)
+                except Exception as exc:  # noqa: BLE001 - iteration errors of a damaged bag
+                    self._fail(f"topic {stats.laser} after message {stats.messages.get(stats.laser, 0)}", exc,
+                               stats.messages.get(stats.laser, 0), fatal=True)
+                    break
+                if item is None:
+                    break
+                conn, t, raw = item
+                index = stats.messages.get(conn.topic, 0)
+                stats.messages[conn.topic] = index + 1
                 while held and held[0][0] < t:
                     yield self._record(held.pop(0)[1], latest, tolerance)
-                msg = reader.deserialize(raw, conn.msgtype)
-                if conn.msgtype != "sensor_msgs/msg/LaserScan":
-                    latest[conn.topic] = (_stamp_of(msg), _pose_of(msg))
-                    continue
-                ranges = np.asarray(msg.ranges, dtype=np.float64)
-                ranges[ranges < 0] = np.nan  # some drivers mark invalid beams with negative values
-                scan = Scan(
-                    ranges,
-                    snap_angle(float(msg.angle_min)),  # float32 in the message: back onto the 0.05 deg grid
-                    snap_angle(float(msg.angle_increment)),
-                    float(msg.range_min),
-                    float(msg.range_max),
-                    _stamp_of(msg),
-                )
-                held.append((t, scan))
+                try:
+                    msg = reader.deserialize(raw, conn.msgtype)
+                    if conn.msgtype != "sensor_msgs/msg/LaserScan":
+                        latest[conn.topic] = (_stamp_of(msg), _pose_of(msg))
+                        continue
+                    held.append((t, _scan_of(msg)))
+                except Exception as exc:  # noqa: BLE001 - deserialisation errors are rosbags' own types
+                    self._fail(f"topic {conn.topic} message {index}", exc, index, fatal=False)
             for _, scan in held:
                 yield self._record(scan, latest, tolerance)
         finally:

@@ -1,13 +1,15 @@
-"""CARMEN log files: reader and writer for FLASER, ROBOTLASER1, ODOM, TRUEPOS and PARAM messages.
+"""CARMEN log files: reader and writer for FLASER / RLASER, ROBOTLASER1 / 2, ODOM, TRUEPOS and PARAM.
 
 Formats (one message a line, ``#`` comments, unknown messages skipped):
 
-- ``FLASER n r1..rn x y theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp``;
-  no angle fields: 361 beams = -90..+90 deg at 0.5 deg, 180 = -90..+89 deg at 1 deg,
-  181 = -90..+90 deg at 1 deg.
+- ``FLASER n r1..rn x y theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp``
+  (RLASER: the rear laser, same fields); no angle fields: the geometry comes from an override, the
+  log's PARAM lines or the CARMEN convention from the count (:mod:`lms200.laser_geometry`).
 - ``ROBOTLASER1 laser_type start_angle fov resolution max_range accuracy remission_mode n r1..rn
   m rem1..remm laser_x laser_y laser_theta robot_x robot_y robot_theta tv rv forward_safety
-  side_safety turn_axis ipc_timestamp hostname logger_timestamp``
+  side_safety turn_axis ipc_timestamp hostname logger_timestamp`` (ROBOTLASER2: the rear laser);
+  the declared field of view must hold the count at the declared resolution (fov = n x res, or
+  (n - 1) x res), and lines with the same declared geometry must carry the same count.
 - ``ODOM x y theta tv rv accel ipc_timestamp hostname logger_timestamp``
 - ``TRUEPOS true_x true_y true_theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp``
 
@@ -17,6 +19,11 @@ line directly preceding the laser message. SICK special codes stored as ranges (
 cm mode, 8.183 / 8.191 m in mm mode) map to +inf / nan (REP-117). The range unit comes from the
 ROBOTLASER1 accuracy field, a ``PARAM lmsbench_range_units mm|cm`` line (which this writer emits), or,
 for FLASER logs without it, from the values themselves (see :func:`infer_units`).
+
+One laser is read per pass (``topic``: a message kind); by default the first laser kind in the log.
+Every failure while reading (a malformed line, a count that is not a finite non-negative integer,
+gzip data that cannot be decompressed, a line over ``MAX_LINE_CHARS``) is a ``LogFormatError`` naming
+file and line; ``skip_bad_lines`` records it in ``stats.skipped`` and goes on.
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ from __future__ import annotations
 import gzip
 import io
 import math
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Iterable, Iterator
@@ -39,20 +47,39 @@ from .codes import (
     infer_units,
     metres_per_unit,
 )
+from . import laser_geometry
 from .errors import LogFormatError
+from .laser_geometry import LaserGeometry
 from .records import Pose2D, Record
 from .scan import Scan, snap_angle
 
 UNITS_PARAM = "lmsbench_range_units"
 ODOMETRY_PARAM = "lmsbench_odometry"  # "absent": the pose fields of the scans that follow are not odometry
+LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages read (one kind per pass)
+ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
+MAX_LINE_CHARS = 1 << 20  # a longer line is malformed (bounds memory on damaged files)
+_READ_ERRORS = (OSError, EOFError, zlib.error)  # what a damaged or truncated gzip stream raises
 
 
 @dataclass
 class ReadStats:
-    """What a pass over a log met: message counts and the bad lines skipped (line number, reason)."""
+    """What a pass over a log met.
+
+    Attributes:
+        messages: lines per message kind (every kind, read or not).
+        skipped: the bad lines skipped under ``skip_bad_lines``: (line number, reason).
+        stopped: why reading ended early (undecompressable data under ``skip_bad_lines``), or None.
+        laser: the laser message kind read (see ``topic``), None before the first one.
+    """
 
     messages: dict[str, int] = field(default_factory=dict)
     skipped: list[tuple[int, str]] = field(default_factory=list)
+    stopped: str | None = None
+    laser: str | None = None
+
+    def other_lasers(self) -> dict[str, int]:
+        """Laser message kinds in the log that were not read (kind -> lines)."""
+        return {k: n for k, n in self.messages.items() if k in LASER_KINDS and k != self.laser}
 
 
 def open_text(path: str | Path) -> IO[str]:
@@ -65,80 +92,125 @@ def open_text(path: str | Path) -> IO[str]:
     return open(path, encoding="ascii", errors="replace")
 
 
-def _flaser_geometry(n: int) -> tuple[float, float]:
-    """(angle_min, angle_increment) of a FLASER scan of n beams; raises ValueError otherwise."""
-    if n == 361:
-        return -math.pi / 2, math.radians(0.5)
-    if n in (180, 181):
-        return -math.pi / 2, math.radians(1.0)
-    if n == 401:
-        return -math.radians(50.0), math.radians(0.25)
-    raise ValueError(f"FLASER with {n} beams has no known geometry (expected 180, 181, 361 or 401)")
-
-
 class CarmenReader:
     """Iterate a CARMEN log's laser messages as Records; iterable several times.
 
     Args:
         path: plain or ``.gz`` CARMEN log.
-        skip_bad_lines: skip malformed lines (recorded in ``stats.skipped``) instead of raising.
+        skip_bad_lines: skip malformed lines (recorded in ``stats.skipped``) instead of raising; a
+            gzip stream that cannot be decompressed further ends the pass (``stats.stopped``).
+        topic: the laser message kind to read (FLASER, RLASER, ROBOTLASER1, ROBOTLASER2); by
+            default the first kind met in the log (the others are counted in ``stats.messages``).
+        geometry: FLASER / RLASER beam geometry that overrides the log's PARAM lines and the
+            convention from the count (see :mod:`lms200.laser_geometry`); ROBOTLASER lines carry
+            their own, except ``range_max``, which an override replaces there too.
 
     Raises:
-        LogFormatError: naming the file and line, for a malformed line (unless skipped).
+        LogFormatError: naming the file and line, for a malformed line (unless skipped) or data that
+            cannot be decompressed.
     """
 
-    def __init__(self, path: str | Path, skip_bad_lines: bool = False) -> None:
+    def __init__(self, path: str | Path, skip_bad_lines: bool = False, topic: str | None = None,
+                 geometry: LaserGeometry | None = None) -> None:
         self.path = Path(path)
         if not self.path.is_file():
             raise FileNotFoundError(f"no such log file: {self.path}")
+        if topic is not None and topic not in LASER_KINDS:
+            raise LogFormatError(self.path, 0, f"topic: a CARMEN log's laser topics are message kinds "
+                                               f"({', '.join(LASER_KINDS)}), got {topic!r}")
         self.skip_bad_lines = skip_bad_lines
+        self.topic = topic
+        self.geometry = geometry or LaserGeometry()
         self.stats = ReadStats()
 
+    def _lines(self) -> Iterator[tuple[int, str]]:
+        """(line number, text) of every line; damage in the stream becomes LogFormatError."""
+        line_no = 0
+        with open_text(self.path) as f:
+            while True:
+                try:
+                    line = f.readline(MAX_LINE_CHARS + 1)
+                    too_long = len(line) > MAX_LINE_CHARS
+                    while too_long and line and not line.endswith("\n"):  # skip to the end of the line
+                        line = f.readline(MAX_LINE_CHARS)
+                except _READ_ERRORS as exc:  # corrupt or truncated gzip data
+                    reason = f"cannot read on (damaged or truncated file): {type(exc).__name__}: {exc}"
+                    if not self.skip_bad_lines:
+                        raise LogFormatError(self.path, line_no + 1, reason) from None
+                    self.stats.stopped = f"line {line_no + 1}: {reason}"
+                    self.stats.skipped.append((line_no + 1, reason))
+                    return
+                if not line:
+                    return
+                line_no += 1
+                yield line_no, ("" if too_long else line)
+                if too_long:
+                    self._bad(line_no, "line", ValueError(f"line longer than {MAX_LINE_CHARS} characters"))
+
+    def _bad(self, line_no: int, kind: str, exc: Exception) -> None:
+        if not self.skip_bad_lines:
+            raise LogFormatError(self.path, line_no, f"malformed {kind} line: {exc}") from None
+        self.stats.skipped.append((line_no, f"{kind}: {exc}"))
+
     def __iter__(self) -> Iterator[Record]:
-        self.stats = ReadStats()
+        self.stats = stats = ReadStats(laser=self.topic)
         units: Units | None = None
         truth: Pose2D | None = None
         has_odometry = True
-        with open_text(self.path) as f:
-            line_no = 0
-            while True:
-                try:
-                    line = f.readline()
-                except (OSError, EOFError) as exc:  # truncated or corrupt gzip
-                    raise LogFormatError(self.path, line_no + 1, f"cannot read on: {exc}") from None
-                if not line:
-                    break
-                line_no += 1
-                words = line.split()
-                if not words or words[0].startswith("#"):
-                    continue
-                kind = words[0]
-                self.stats.messages[kind] = self.stats.messages.get(kind, 0) + 1
-                try:
-                    if kind == "PARAM":
-                        if len(words) >= 3 and words[1] == UNITS_PARAM:
-                            if words[2] not in ("mm", "cm"):
-                                raise ValueError(f"{UNITS_PARAM} must be mm or cm, got {words[2]!r}")
-                            units = words[2]  # type: ignore[assignment]
-                        if len(words) >= 3 and words[1] == ODOMETRY_PARAM:
-                            has_odometry = words[2] != "absent"
-                    elif kind == "TRUEPOS":
-                        truth = _pose(words, 1, "TRUEPOS")
-                        _require(len(words) >= 8, "TRUEPOS needs at least 7 numbers")
-                    elif kind == "ODOM":
-                        _require(len(words) >= 8, "ODOM needs x y theta tv rv accel timestamp")
-                        _floats(words[1:8], "ODOM")
-                    elif kind in ("FLASER", "ROBOTLASER1"):
-                        if kind == "FLASER":
-                            scan, odom = _parse_flaser(words, units)
-                        else:
-                            scan, odom = _parse_robotlaser1(words, units)
-                        yield Record(scan=scan, odom=odom if has_odometry else None, truth=truth)
-                        truth = None
-                except ValueError as exc:
-                    if not self.skip_bad_lines:
-                        raise LogFormatError(self.path, line_no, f"malformed {kind} line: {exc}") from None
-                    self.stats.skipped.append((line_no, f"{kind}: {exc}"))
+        params: dict[str, float] = {}
+        counts: dict[tuple[str, str, str], tuple[int, int]] = {}  # ROBOTLASER header -> (beams, first line)
+        for line_no, line in self._lines():
+            words = line.split()
+            if not words or words[0].startswith("#"):
+                continue
+            kind = words[0]
+            stats.messages[kind] = stats.messages.get(kind, 0) + 1
+            try:
+                if kind == "PARAM":
+                    units, has_odometry = _param(words, params, units, has_odometry)
+                elif kind == "TRUEPOS":
+                    truth = _pose(words, 1, "TRUEPOS")
+                    _require(len(words) >= 8, "TRUEPOS needs at least 7 numbers")
+                elif kind == "ODOM":
+                    _require(len(words) >= 8, "ODOM needs x y theta tv rv accel timestamp")
+                    _floats(words[1:8], "ODOM")
+                elif kind in LASER_KINDS:
+                    if stats.laser is None:
+                        stats.laser = kind
+                    if kind != stats.laser:
+                        continue
+                    if kind in ("FLASER", "RLASER"):
+                        geometry = self.geometry.merged(laser_geometry.from_params(kind, params))
+                        scan, odom = _parse_flaser(words, units, geometry)
+                    else:
+                        scan, odom = _parse_robotlaser(words, units, self.geometry.range_max)
+                        header = (words[2], words[3], words[4])  # start, fov, resolution as written
+                        first = counts.setdefault(header, (len(scan), line_no))
+                        _require(first[0] == len(scan),
+                                 f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
+                                 f"field of view and resolution carries {first[0]}")
+                    rec = Record(scan=scan, odom=odom if has_odometry else None, truth=truth)
+                    truth = None
+                    yield rec
+            except (ValueError, OverflowError, ArithmeticError) as exc:
+                self._bad(line_no, kind, exc)
+
+
+def _param(words: list[str], params: dict[str, float], units: Units | None,
+           has_odometry: bool) -> tuple[Units | None, bool]:
+    """Apply a PARAM line: the range unit, odometry flag and laser geometry; returns (units, odometry)."""
+    _require(len(words) >= 3, "PARAM needs a name and a value")
+    name, value = words[1], words[2]
+    if name == UNITS_PARAM:
+        _require(value in ("mm", "cm"), f"{UNITS_PARAM} must be mm or cm, got {value!r}")
+        units = value  # type: ignore[assignment]
+    elif name == ODOMETRY_PARAM:
+        has_odometry = value != "absent"
+    elif name in laser_geometry.GEOMETRY_PARAMS:
+        number = float(_floats([value], name)[0])
+        _require(math.isfinite(number) and number > 0, f"{name} must be a finite number > 0, got {value!r}")
+        params[name] = number
+    return units, has_odometry
 
 
 def _require(ok: bool, reason: str) -> None:
@@ -163,6 +235,17 @@ def _is_number(word: str) -> bool:
     return True
 
 
+def _count(word: str, what: str) -> int:
+    """A count field: a finite non-negative integer (written ``361`` or ``361.0``)."""
+    try:
+        value = float(word)
+    except ValueError:
+        raise ValueError(f"{what} {word!r} is not a number") from None
+    if not math.isfinite(value) or value < 0 or value != math.floor(value):
+        raise ValueError(f"{what} must be a finite non-negative integer, got {word!r}")
+    return int(value)
+
+
 def _pose(words: list[str], start: int, what: str) -> Pose2D:
     _require(len(words) >= start + 3, f"{what} needs x y theta")
     x, y, t = _floats(words[start : start + 3], what)
@@ -177,34 +260,46 @@ def _ranges(values: np.ndarray, units: Units | None, what: str) -> tuple[np.ndar
     return decode_logged_ranges(values, u), u
 
 
-def _parse_flaser(words: list[str], units: Units | None) -> tuple[Scan, Pose2D]:
-    _require(len(words) >= 2, "FLASER needs a beam count")
-    n = int(_floats(words[1:2], "beam count")[0])
-    _require(n > 0 and len(words) == n + 11, f"FLASER with {n} beams needs {n + 11} fields, got {len(words)}")
-    ranges, u = _ranges(_floats(words[2 : 2 + n], "FLASER ranges"), units, "FLASER")
-    tail = _floats(words[2 + n : 2 + n + 7], "FLASER poses and timestamp")
-    angle_min, increment = _flaser_geometry(n)
-    scan = Scan(ranges, angle_min, increment, 0.0, LMS200_MAX_RANGE[u], float(tail[6]))
-    return scan, (float(tail[3]), float(tail[4]), float(tail[5]))
+def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry) -> tuple[Scan, Pose2D]:
+    kind = words[0]
+    _require(len(words) >= 2, f"{kind} needs a beam count")
+    n = _count(words[1], "beam count")
+    _require(n > 0 and len(words) == n + 11, f"{kind} with {n} beams needs {n + 11} fields, got {len(words)}")
+    ranges, u = _ranges(_floats(words[2 : 2 + n], f"{kind} ranges"), units, kind)
+    tail = _floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
+    angle_min, increment = laser_geometry.beam_angles(n, geometry)
+    range_max = geometry.range_max if geometry.range_max is not None else LMS200_MAX_RANGE[u]
+    scan = Scan(ranges, snap_angle(angle_min), snap_angle(increment), 0.0, range_max, float(tail[6]))
+    return scan, _pose(words, 2 + n + 3, f"{kind} odometry")
 
 
-def _parse_robotlaser1(words: list[str], units: Units | None) -> tuple[Scan, Pose2D]:
-    _require(len(words) >= 10, "ROBOTLASER1 is too short")
-    head = _floats(words[1:9], "ROBOTLASER1 header")
-    start, _fov, resolution, max_range, accuracy = head[1:6]
-    n = int(head[7])
-    _require(n > 0 and len(words) > 9 + n, f"ROBOTLASER1 announces {n} beams but has fewer fields")
-    m = int(_floats(words[9 + n : 10 + n], "remission count")[0])
+def _parse_robotlaser(words: list[str], units: Units | None, range_max_override: float | None) -> tuple[Scan, Pose2D]:
+    kind = words[0]
+    _require(len(words) >= 10, f"{kind} is too short")
+    head = _floats(words[1:8], f"{kind} header")
+    start, fov, resolution, max_range, accuracy = (float(v) for v in head[1:6])
+    n = _count(words[8], "beam count")
+    _require(n > 0 and len(words) > 9 + n, f"{kind} announces {n} beams but has fewer fields")
+    m = _count(words[9 + n], "remission count")
     expected = 10 + n + m + 14
-    _require(m >= 0 and len(words) == expected, f"ROBOTLASER1 with {n} ranges and {m} remissions needs {expected} fields, got {len(words)}")
+    _require(len(words) == expected, f"{kind} with {n} ranges and {m} remissions needs {expected} fields, got {len(words)}")
+    _require(bool(np.all(np.isfinite(head))), f"{kind} header is not finite")
     _require(resolution > 0, f"angular resolution must be > 0, got {resolution}")
+    _require(fov >= 0, f"field of view must be >= 0, got {fov}")
+    steps = fov / resolution  # CARMEN loggers write fov = n x res (csail) or (n - 1) x res
+    _require(min(abs(steps - n), abs(steps - (n - 1))) <= ROBOTLASER_FIT_TOLERANCE_BEAMS,
+             f"declares a field of view of {math.degrees(fov):.3f} deg at {math.degrees(resolution):.4f} deg, "
+             f"which holds {steps:.1f} steps, but carries {n} beams (fov must be n or n - 1 steps)")
     if units is None and accuracy in (0.01, 0.001):
         units = "cm" if accuracy == 0.01 else "mm"
-    ranges, _ = _ranges(_floats(words[9 : 9 + n], "ROBOTLASER1 ranges"), units, "ROBOTLASER1")
-    tail = _floats(words[10 + n + m : 10 + n + m + 12], "ROBOTLASER1 poses and timestamp")
-    range_max = float(max_range) if max_range > 0 else LMS200_MAX_RANGE["cm"]
+    ranges, _ = _ranges(_floats(words[9 : 9 + n], f"{kind} ranges"), units, kind)
+    tail = _floats(words[10 + n + m : 10 + n + m + 12], f"{kind} poses and timestamp")
+    if range_max_override is not None:
+        range_max = range_max_override
+    else:
+        range_max = max_range if max_range > 0 else LMS200_MAX_RANGE["cm"]
     scan = Scan(ranges, snap_angle(start), snap_angle(resolution), 0.0, range_max, float(tail[11]))
-    return scan, (float(tail[3]), float(tail[4]), float(tail[5]))
+    return scan, _pose(words, 10 + n + m + 3, f"{kind} robot pose")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -226,6 +321,25 @@ def _pose_text(pose: Pose2D | None) -> str:
     return f"{x:.6f} {y:.6f} {t:.6f}"
 
 
+def _flaser_params(scan: Scan) -> dict[str, str]:
+    """The PARAM lines (CARMEN names, deg and m) that give a FLASER reader this scan's geometry.
+
+    Raises:
+        ValueError: for a scan that is not centred on the sensor's x axis (FLASER has no start angle).
+    """
+    res = math.degrees(scan.angle_increment)
+    fov = -2.0 * math.degrees(scan.angle_min)
+    n = len(scan)
+    centred = abs(fov / res - (n - 1)) < 1e-6 or abs(fov / res - n) < 1e-6
+    if not centred:
+        raise ValueError(
+            f"records: FLASER cannot carry a {n}-beam scan from {math.degrees(scan.angle_min):.2f} deg "
+            f"at {res:.3f} deg (not centred ahead); use fmt='robotlaser1'"
+        )
+    names = laser_geometry.PARAM_NAMES["FLASER"]
+    return {names[0]: repr(res), names[1]: repr(fov), names[2]: repr(scan.range_max)}
+
+
 def write_carmen(
     path: str | Path,
     records: Iterable[Record],
@@ -236,8 +350,9 @@ def write_carmen(
     """Write Records as a CARMEN log (plain, or gzip when the name ends in ``.gz``).
 
     Each scan becomes one FLASER or ROBOTLASER1 line (``fmt``), preceded by a TRUEPOS line when the
-    record has a true pose. Ranges are written at the sensor unit (mm when range_max <= 8.183 m,
-    else cm), +inf / nan as SICK codes 8183 / 8191; a ``PARAM lmsbench_range_units`` line records
+    record has a true pose. FLASER logs get ``PARAM laser_front_laser_resolution / _fov`` and
+    ``robot_front_laser_max`` lines, so any scan centred ahead reads back with its geometry. Ranges
+    are written at the sensor unit (mm when range_max <= 8.183 m, else cm), +inf / nan as SICK codes 8183 / 8191; a ``PARAM lmsbench_range_units`` line records
     the unit, and ``PARAM lmsbench_odometry absent|present`` lines mark records without odometry
     (their pose fields are written as zeros). ``flush=True`` pushes every scan to the file as soon
     as it is written (for recorders: a crash or Ctrl-C loses nothing already received).
@@ -250,6 +365,7 @@ def write_carmen(
     count = 0
     units: Units | None = None
     odometry: bool | None = None
+    flaser_params: dict[str, str] = {}
     with opener(path, "wt", encoding="ascii") as f:  # type: ignore[operator]
         f.write("# CARMEN log written by lmsbench\n")
         f.write("# FLASER num_readings [range_readings] x y theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp\n")
@@ -271,16 +387,11 @@ def write_carmen(
             ranges = _format_ranges(scan, u)
             odom = _pose_text(rec.odom)
             if fmt == "flaser":
-                geometry = (scan.angle_min, scan.angle_increment)
-                try:
-                    known = _flaser_geometry(len(scan))
-                except ValueError:
-                    known = None
-                if known is None or not np.allclose(geometry, known, atol=1e-9):
-                    raise ValueError(
-                        f"records: FLASER cannot carry a {len(scan)}-beam scan from {math.degrees(scan.angle_min):.2f} deg "
-                        f"at {math.degrees(scan.angle_increment):.3f} deg; use fmt='robotlaser1'"
-                    )
+                params = _flaser_params(scan)
+                if params != flaser_params:
+                    flaser_params = params
+                    for name, value in params.items():
+                        f.write(f"PARAM {name} {value} {hostname} 0\n")
                 f.write(f"FLASER {len(scan)} {ranges} {odom} {odom} {stamp}\n")
             else:
                 fov = scan.angle_max - scan.angle_min

@@ -87,7 +87,7 @@ def test_cli_on_a_log_writes_table_summary_and_config(tmp_path):
                     for k, p in enumerate(POSES)])
     out = tmp_path / "out"
     res = _cli(str(log), "--methods", "split_merge", "hough", "--format", "csv", "--out", str(out),
-               "--no-progress", "--set", "hough.rho_step=0.01")
+               "--no-progress", "--set", "extractor.hough.rho_step=0.01")
     assert res.returncode == 0, res.stderr
     table = pd.read_csv(out / "compare.csv")
     assert len(table) == 2 * len(POSES)

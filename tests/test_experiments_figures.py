@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from experiments.evaluate import compare_records, summarise_table
+from experiments.compare import Source, compare, summarise
 from experiments.figures import draw
 from experiments.figures.make import PAPER_FIGURES, draw_figures, draw_sweep
 from experiments.figures.tables import ad_reference, feature_panels, map_table, pick_evenly, trajectory_table
@@ -39,8 +39,8 @@ def test_comparison_of_given_records_pools_score_scan_by_hand(synthetic_run):
     from features.scoring import score_scan
 
     records, truths = synthetic_run
-    per_scan = compare_records(records, truths, METHODS)
-    summary = summarise_table(per_scan).set_index("method")
+    per_scan = compare([Source.from_records(records, truths)], METHODS)
+    summary = summarise(per_scan).set_index("method")
     for method in METHODS:
         scores = [score_scan(extract(r.scan, method=method), t) for r, t in zip(records, truths)]
         tp = sum(s.tp for s in scores)
@@ -62,7 +62,7 @@ def test_every_figure_is_drawn_from_its_tables_with_the_data_beside_it(tmp_path,
     from features import extract
 
     records, truths = synthetic_run
-    per_scan = compare_records(records, truths, METHODS)
+    per_scan = compare([Source.from_records(records, truths)], METHODS)
     fsets = [extract(r.scan, method="split_merge") for r in records[:3]]
     pts, lns, crs = feature_panels([r.scan for r in records[:3]], ["a", "b", "c"], fsets)
     assert len(lns) == sum(len(f.lines) for f in fsets) and len(crs) == sum(len(f.corners) for f in fsets)
@@ -71,7 +71,7 @@ def test_every_figure_is_drawn_from_its_tables_with_the_data_beside_it(tmp_path,
                             "ad": np.full(361, ad_reference(10, scan.angle_increment)),
                             "theta_deg": np.zeros(361), "psi_deg": np.zeros(361)})
     trajectory = trajectory_table(np.array([[0.1 * i, *r.truth] for i, r in enumerate(records)]), records)
-    tables = {"signals": signals, "timing": per_scan, "summary": summarise_table(per_scan),
+    tables = {"signals": signals, "timing": per_scan, "summary": summarise(per_scan),
               "office_points": pts, "office_lines": lns, "office_corners": crs,
               "intel_points": pts, "intel_lines": lns, "intel_corners": crs,
               "trajectory": trajectory, "map": map_table(L_ROOM[:3], L_ROOM)}

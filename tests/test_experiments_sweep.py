@@ -317,7 +317,8 @@ def test_the_cli_exits_0_when_every_cell_succeeds_and_1_when_any_fails(tmp_path,
 
 @pytest.mark.parametrize("param, message", [
     ("sensor.kk", r"unknown parameter\(s\) \['sensor.kk'\]: not fields of sim.SensorConfig; known sensor.\* names: .*'noise_sigma'"),
-    ("extractor.kk", r"\['extractor.kk'\]: not fields of the 'sensor' extractor's .*known extractor.\* names: .*'k'"),
+    ("extractor.kk", r"extractor.kk: no extractor of this run \(sensor\) has a field 'kk'; fields: .*\bk\b"),
+    ("extractor.hough.rho_stp", r"extractor.hough.rho_stp: hough has no field 'rho_stp'; its fields: .*rho_step"),
 ])
 def test_misspelled_parameters_fail_before_any_cell_runs(tmp_path, param, message):
     spec = SweepSpec.from_dict({"kind": "extract", "fixed": {"duration": 0.5}, "grid": {param: [1, 2]}})
@@ -338,5 +339,5 @@ def test_misspelled_slam_parameters_fail_before_any_cell_runs(tmp_path):
     from experiments.sweep.kinds import check_extract_params
 
     check_extract_params([{"method": "hough", "extractor.rho_step": 0.01, "sensor.noise_sigma": 0.0}])
-    with pytest.raises(SweepSpecError, match=r"\['extractor.k'\]: not fields of the 'hough' extractor"):
+    with pytest.raises(SweepSpecError, match=r"extractor.k: no extractor of this run \(hough\) has a field 'k'"):
         check_extract_params([{"method": "hough", "extractor.k": 5}])  # sensor's k is not hough's

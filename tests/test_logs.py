@@ -119,7 +119,10 @@ def test_carmen_flaser_round_trip(tmp_path: Path) -> None:
     # FLASER carries one pose pair: odometry round-trips; records without odometry read back (0, 0, 0)
     _assert_same(recs, back, poses=False)
     assert [r.odom for r in back] == [r.odom for r in recs]  # None round-trips as PARAM lmsbench_odometry
-    odd = Record(Scan(np.ones(100), -1.0, 0.02, 0.0, 8.183))
+    centred = [Record(Scan(np.ones(100), -1.0, 0.02, 0.0, 8.183))]  # even count: -1.0 .. +1.0 - 0.02 rad
+    write_log(tmp_path / "centred.log", centred, fmt="flaser")  # PARAM lines carry any centred geometry
+    _assert_same(centred, list(read_log(tmp_path / "centred.log")), poses=False)
+    odd = Record(Scan(np.ones(100), -1.0, 0.01, 0.0, 8.183))  # not centred ahead: FLASER has no start angle
     with pytest.raises(ValueError, match="robotlaser1"):
         write_log(tmp_path / "bad.log", [odd], fmt="flaser")
 
@@ -171,8 +174,11 @@ R180 = " ".join(["1.5"] * 178)
         (f"FLASER 180 {R180} 0 0 0 0 0 0 12.5 host 12.5", "needs 191 fields"),
         (f"FLASER 180 {R180} 1.0 abc 0 0 0 0 0 0 12.5 host 12.5", "'abc' is not a number"),
         (f"FLASER 180 {R180} 1.0 -2.0 0 0 0 0 0 0 12.5 host 12.5", "negative"),
-        ("FLASER 7 1 1 1 1 1 1 1 0 0 0 0 0 0 12.5 host 12.5", "no known geometry"),
-        ("ROBOTLASER1 0 -1.57 3.14 0.0087 80 0.01 0 5 1 1", "fewer fields"),
+        ("FLASER inf 1 1 1 1 1 1 1 0 0 0 0 0 0 12.5 host 12.5", "finite non-negative integer, got 'inf'"),
+        ("FLASER 7.5 1 1 1 1 1 1 1 0 0 0 0 0 0 12.5 host 12.5", "finite non-negative integer"),
+        ("FLASER -7 1 1 1 1 1 1 1 0 0 0 0 0 0 12.5 host 12.5", "finite non-negative integer"),
+        ("FLASER nan 1 1 1 1 1 1 1 0 0 0 0 0 0 12.5 host 12.5", "finite non-negative integer"),
+        ("FLASER 1e300 1 1 1 1 1 1 1 0 0 0 0 0 0 12.5 host 12.5", "needs"),
         ("TRUEPOS 1 2", "needs x y theta"),
         ("ODOM 1 2 3", "ODOM needs"),
     ],

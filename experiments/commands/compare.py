@@ -13,13 +13,16 @@ import yaml
 from lms200 import LmsbenchError
 
 
-def _param(text: str) -> tuple[str, str, Any]:
+def _param(text: str) -> tuple[str, Any]:
+    key, eq, value = text.partition("=")
+    if not eq or not key.startswith("extractor.") or len(key) <= len("extractor."):
+        hint = f" (write extractor.{key})" if eq and "." in key and not key.startswith("extractor.") else ""
+        raise argparse.ArgumentTypeError(f"--set takes extractor.FIELD=VALUE or extractor.METHOD.FIELD=VALUE, "
+                                         f"got {text!r}{hint}")
     try:
-        key, value = text.split("=", 1)
-        method, field = key.split(".", 1)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--set takes METHOD.FIELD=VALUE, got {text!r}") from None
-    return method, field, yaml.safe_load(value)
+        return key, yaml.safe_load(value)
+    except yaml.YAMLError:
+        raise argparse.ArgumentTypeError(f"--set {key}: {value!r} is not a value") from None
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,8 +37,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--stride", type=int, default=1, help="logs: use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=int, help="at most this many scans per source")
     p.add_argument("--sigma", type=float, default=0.005, help="range noise (m) for the explained fraction")
-    p.add_argument("--set", dest="params", action="append", type=_param, default=[], metavar="METHOD.FIELD=VALUE",
-                   help="override an extractor's config field (repeatable)")
+    p.add_argument("--set", dest="params", action="append", type=_param, default=[], metavar="extractor.[METHOD.]FIELD=VALUE",
+                   help="override a config field of every extractor that has it, or of METHOD only (repeatable)")
     p.add_argument("--out", type=Path, default=Path("results/compare"), help="output folder")
     p.add_argument("--format", choices=("parquet", "csv"), default="parquet", help="format of the tidy table")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -45,15 +48,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import pandas as pd
 
+    from experiments.overrides import extractor_overrides
     from experiments.compare import (common_errors, compare, format_summary, parse_sources, resolved_configs,
                                      summarise)
     from features.registry import available_methods
     from features.scoring import ScoreConfig
 
     methods = args.methods or available_methods()
-    params: dict[str, dict[str, Any]] = {}
-    for method, field, value in args.params:
-        params.setdefault(method, {})[field] = value
+    params = extractor_overrides(dict(args.params), methods)
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
     if args.max_scans is not None and args.max_scans < 1:
         raise LmsbenchError(f"--max-scans must be >= 1, got {args.max_scans}")

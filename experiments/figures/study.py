@@ -18,8 +18,8 @@ import pandas as pd
 import yaml
 
 from experiments.sweep.kinds import align, slam_metrics, true_trajectory
-from experiments.evaluate import (ALL_METHODS, compare_records, extract_timed, sensor_config, simulate_run,
-                                  summarise_table, truths_for)
+from experiments.compare import Source, compare, summarise
+from experiments.evaluate import ALL_METHODS, extract_timed, sensor_config, simulate_run, truths_for
 
 from .tables import feature_panels, map_table, pick_evenly, signals_table, trajectory_table
 
@@ -66,8 +66,8 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
 
     tables["signals"] = signals_table(records[len(records) // 2].scan, k=cfg.signals_k, sigma_r=sensor.noise_sigma or 0.005)
     noise = max(float(sensor.noise_sigma), 0.001)
-    tables["timing"] = compare_records(records, truths, cfg.methods, seed=cfg.seed, sigma=noise)
-    tables["summary"] = summarise_table(tables["timing"])
+    tables["timing"] = compare([Source.from_records(records, truths, seed=cfg.seed)], cfg.methods, sigma=noise)
+    tables["summary"] = summarise(tables["timing"])
     for row in tables["summary"].itertuples():
         say(f"{row.method:12s} median {row.time_ms_median:7.2f} ms/scan, line F1 {row.f1:.3f}, "
             f"{row.lines_per_scan:.1f} lines/scan")

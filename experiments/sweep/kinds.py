@@ -15,8 +15,9 @@ from typing import Any, Iterable
 
 import numpy as np
 
-from experiments.evaluate import (compare_records, sensor_config, simulate_run, split_params, summarise_table,
-                                  truths_for)
+from experiments.compare import Source, compare, summarise
+from experiments.evaluate import sensor_config, simulate_run, split_params, truths_for
+from experiments.overrides import OverrideError, extractor_overrides
 
 EXTRACT_DEFAULTS = {"method": "sensor", "world": "office", "duration": 5.0, "rate_hz": 4.0}
 SLAM_DEFAULTS = {"world": "office", "duration": 30.0, "rate_hz": None}
@@ -48,9 +49,10 @@ def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
     _, records, truths = _records(p, EXTRACT_DEFAULTS, with_truth=True)
     method = str(p["method"])
     noise = float(split_params(p, "sensor").get("noise_sigma", 0.005))
-    table = compare_records(records, truths, [method], {method: split_params(p, "extractor")},
-                            seed=int(p.get("seed", 0)), sigma=max(noise, 0.001))
-    row = summarise_table(table, reference=method).iloc[0]
+    source = Source.from_records(records, truths, seed=int(p.get("seed", 0)))
+    params = extractor_overrides(p, [method], other_methods=True)
+    table = compare([source], [method], params=params, sigma=max(noise, 0.001))
+    row = summarise(table, reference=method).iloc[0]
     skip = {"source", "method", "kind", "seeds", "speed_vs_sensor"}
     return {k: float(v) for k, v in row.items() if k not in skip and isinstance(v, (int, float, np.number))}
 
@@ -140,7 +142,15 @@ def check_extract_params(cells: list[dict[str, Any]]) -> None:
     """Every ``sensor.*`` and ``extractor.*`` name of every cell is a field of its config (checked
     before any cell runs, so a misspelled name fails at once instead of in every cell)."""
     _unknown(cells, "sensor", _sensor_fields)
-    _unknown(cells, "extractor", lambda c: _extractor_fields(str({**EXTRACT_DEFAULTS, **c}["method"])))
+    from .spec import SweepSpecError
+
+    for cell in cells:
+        method = str({**EXTRACT_DEFAULTS, **cell}["method"])
+        _extractor_fields(method)  # an unknown method, listing the known ones
+        try:
+            extractor_overrides(cell, [method], other_methods=True)
+        except OverrideError as exc:
+            raise SweepSpecError(str(exc)) from None
 
 
 def check_slam_params(cells: list[dict[str, Any]]) -> None:

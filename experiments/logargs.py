@@ -1,0 +1,82 @@
+"""The log-reading options every command that reads a log shares: one definition, one check.
+
+``add_log_options(parser)`` adds ``--topic``, ``--skip-bad-lines`` and the FLASER geometry override
+(``--laser-fov-deg``, ``--laser-resolution-deg``, ``--laser-angle-min-deg``, ``--laser-range-max``);
+``read_log_options(args)`` turns them into ``lms200.read_log`` keywords, checked before any work;
+``report_skipped(reader)`` says on stderr what a pass skipped.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from typing import IO, Any
+
+from lms200 import LaserGeometry, LmsbenchError
+from lms200.bag import BagReadStats
+
+_GEOMETRY_FLAGS = (("laser_fov_deg", "fov", True), ("laser_resolution_deg", "resolution", True),
+                   ("laser_angle_min_deg", "angle_min", True), ("laser_range_max", "range_max", False))
+
+
+def add_log_options(parser: argparse.ArgumentParser) -> None:
+    """Add the shared log-reading options to a command's parser."""
+    g = parser.add_argument_group("reading logs")
+    g.add_argument("--topic", help="the laser to read: a bag's LaserScan topic (needed when the bag has several) "
+                                   "or a CARMEN laser message kind (FLASER, RLASER, ROBOTLASER1, ROBOTLASER2; "
+                                   "default: the first in the log)")
+    g.add_argument("--skip-bad-lines", action="store_true",
+                   help="skip malformed log lines / unreadable bag messages (reported on stderr) instead of stopping")
+    g.add_argument("--laser-fov-deg", type=float, metavar="DEG",
+                   help="FLASER/RLASER field of view (deg), overriding PARAM lines and the 180 deg convention")
+    g.add_argument("--laser-resolution-deg", type=float, metavar="DEG",
+                   help="FLASER/RLASER angle between beams (deg), overriding PARAM lines and the count convention")
+    g.add_argument("--laser-angle-min-deg", type=float, metavar="DEG",
+                   help="FLASER/RLASER bearing of the first beam (deg; default: the scan is centred ahead)")
+    g.add_argument("--laser-range-max", type=float, metavar="M", help="largest valid range (m), overriding the log's")
+
+
+def read_log_options(args: argparse.Namespace) -> dict[str, Any]:
+    """``read_log`` keywords from the parsed options (topic, skip_bad_lines, geometry).
+
+    Raises:
+        LmsbenchError: for an option value that cannot be a geometry (naming the flag).
+    """
+    values: dict[str, float] = {}
+    for flag, name, degrees in _GEOMETRY_FLAGS:
+        value = getattr(args, flag, None)
+        if value is None:
+            continue
+        values[name] = math.radians(value) if degrees else value
+    try:
+        geometry = LaserGeometry(**values) if values else None
+    except ValueError as exc:
+        name, _, reason = str(exc).partition(": ")
+        flag = next(f for f, n, _ in _GEOMETRY_FLAGS if n == name)
+        raise LmsbenchError(f"--{flag.replace('_', '-')}: {reason}") from None
+    topic = getattr(args, "topic", None)
+    if topic is not None and not topic.strip():
+        raise LmsbenchError("--topic: must not be empty")
+    return dict(topic=topic, skip_bad_lines=bool(getattr(args, "skip_bad_lines", False)), geometry=geometry)
+
+
+def report_skipped(reader: Any, stream: IO[str] | None = None, show: int = 3) -> int:
+    """Print what the last pass over ``reader`` skipped (count, the first ``show`` reasons) and why it
+    stopped early, if it did; returns the number of skipped lines / messages."""
+    stream = stream or sys.stderr
+    stats = getattr(reader, "stats", None)
+    if stats is None:
+        return 0
+    path = getattr(reader, "path", "")
+    skipped = list(getattr(stats, "skipped", []))
+    bag = isinstance(stats, BagReadStats)  # bag reasons name topic and message index themselves
+    if skipped:
+        print(f"{path}: skipped {len(skipped)} bad {'messages' if bag else 'lines'}", file=stream)
+        for where, reason in skipped[:show]:
+            print(f"  {path}: {reason}" if bag else f"  {path}:{where}: {reason}", file=stream)
+        if len(skipped) > show:
+            print(f"  ... and {len(skipped) - show} more", file=stream)
+    if getattr(stats, "stopped", None):
+        print(f"{path}: reading stopped early at {stats.stopped}", file=stream)
+    return len(skipped)

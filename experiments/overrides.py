@@ -1,0 +1,64 @@
+"""The one spelling of extractor overrides, for ``lmsbench compare --set``, sweep files and the
+library: flat names ``extractor.FIELD`` (that field of every extractor of the run that has it) or
+``extractor.METHOD.FIELD`` (one extractor's field), resolved to ``{method: {field: value}}``, the
+``params`` argument of ``experiments.compare.compare``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Mapping, Sequence
+
+from lms200 import LmsbenchError
+
+PREFIX = "extractor"
+
+
+class OverrideError(LmsbenchError, ValueError):
+    """An override names no field of the extractors that run (the message lists the known ones)."""
+
+
+def _fields(method: str) -> list[str]:
+    from features.registry import get_method
+
+    return [f.name for f in dataclasses.fields(get_method(method).config_type)]
+
+
+def extractor_overrides(flat: Mapping[str, Any], methods: Sequence[str], *,
+                        other_methods: bool = False) -> dict[str, dict[str, Any]]:
+    """``{method: {field: value}}`` from the ``extractor.*`` entries of ``flat`` (others ignored).
+
+    ``extractor.FIELD`` goes to every method in ``methods`` whose config has FIELD;
+    ``extractor.METHOD.FIELD`` to METHOD alone. Raises :class:`OverrideError` for a method not in
+    ``methods`` or a field no such method has; with ``other_methods`` (a sweep cell of one method
+    in a grid over several), ``extractor.METHOD.FIELD`` of another known method is ignored."""
+    from features.registry import available_methods
+
+    fields = {m: _fields(m) for m in methods}
+    out: dict[str, dict[str, Any]] = {m: {} for m in methods}
+    head = PREFIX + "."
+    for key, value in flat.items():
+        if not key.startswith(head):
+            continue
+        name = key[len(head):]
+        method, _, field = name.partition(".")
+        if field:
+            if method not in fields and other_methods and method in available_methods():
+                if field not in _fields(method):
+                    raise OverrideError(f"{key}: {method} has no field {field!r}; its fields: {', '.join(_fields(method))}")
+                continue
+            if method not in fields:
+                known = methods if method in available_methods() else available_methods()
+                raise OverrideError(f"{key}: {method!r} is not an extractor of this run; known: {', '.join(known)}")
+            if field not in fields[method]:
+                raise OverrideError(f"{key}: {method} has no field {field!r}; its fields: {', '.join(fields[method])}")
+            out[method][field] = value
+            continue
+        targets = [m for m in methods if name in fields[m]]
+        if not targets:
+            known = sorted({f for fs in fields.values() for f in fs})
+            raise OverrideError(f"{key}: no extractor of this run ({', '.join(methods)}) has a field {name!r}; "
+                                f"fields: {', '.join(known)}")
+        for m in targets:
+            out[m].setdefault(name, value)  # an extractor.METHOD.FIELD entry wins, whatever the order
+    return {m: p for m, p in out.items() if p}

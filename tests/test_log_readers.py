@@ -1,0 +1,357 @@
+"""Readers that never break: FLASER geometry from PARAM lines / the count / an override, ROBOTLASER1
+checks, and every kind of damage (bad counts, corrupt gzip, broken bags) as LogFormatError / BagError
+naming file and line (or topic and message index); skip_bad_lines skips, goes on and reports."""
+
+from __future__ import annotations
+
+import gzip
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lms200 import LaserGeometry, LogFormatError, Record, Scan, read_log, write_log
+from lms200.bag import BagError
+from lms200.laser_geometry import beam_angles
+
+DEG = math.pi / 180
+
+
+def flaser(n: int, value: float = 2.0, stamp: float = 10.0, kind: str = "FLASER") -> str:
+    ranges = " ".join([f"{value:.2f}"] * n)
+    return f"{kind} {n} {ranges} 1 2 0.5 1 2 0.5 {stamp} host {stamp}"
+
+
+def robotlaser(n: int, fov: float, res: float, stamp: float = 10.0, start: float = -1.570796) -> str:
+    ranges = " ".join(["3.00"] * n)
+    return (f"ROBOTLASER1 0 {start} {fov:.6f} {res:.6f} 80.0 0.01 0 {n} {ranges} 0 "
+            f"0 0 0 1 2 0.5 0 0 0 0 0 {stamp} host {stamp}")
+
+
+def write(tmp_path: Path, name: str, lines: list[str]) -> Path:
+    path = tmp_path / name
+    text = "\n".join(lines) + "\n"
+    if name.endswith(".gz"):
+        path.write_bytes(gzip.compress(text.encode()))
+    else:
+        path.write_text(text)
+    return path
+
+
+# --- FLASER geometry -------------------------------------------------------------------------------
+@pytest.mark.parametrize(("n", "first_deg", "last_deg"),
+                         [(180, -90, 89), (181, -90, 90), (360, -90, 89.5), (361, -90, 90), (720, -90, 89.75),
+                          (7, -90, 90)])
+def test_flaser_without_param_lines_follows_the_carmen_convention(tmp_path: Path, n: int, first_deg: float,
+                                                                   last_deg: float) -> None:
+    path = write(tmp_path, "plain.log.gz", [flaser(n, stamp=1.0), flaser(n, stamp=2.0)])
+    recs = list(read_log(path))
+    assert len(recs) == 2
+    s = recs[0].scan
+    assert len(s) == n
+    assert s.angle_min == pytest.approx(first_deg * DEG, abs=1e-12)
+    assert s.angle_max == pytest.approx(last_deg * DEG, abs=1e-9)
+    assert s.range_max == 81.83  # cm-mode maximum (all readings on the 1 cm grid)
+    assert recs[0].odom == (1.0, 2.0, 0.5)
+
+
+def test_freiburg_like_log_with_param_lines(tmp_path: Path) -> None:
+    """Freiburg 079 / 101 style: 360 beams, PARAM resolution 0.5 deg and max range 80.99 m."""
+    lines = ["PARAM laser_front_laser_resolution 0.5 nohost 0", "PARAM robot_front_laser_max 80.99 nohost 0",
+             "ODOM 0 0 0 0 0 0 1.0 host 1.0", flaser(360, stamp=1.0), flaser(360, stamp=1.1)]
+    recs = list(read_log(write(tmp_path, "fr079.log", lines)))
+    assert len(recs) == 2
+    s = recs[0].scan
+    assert s.angle_min == -90 * DEG and s.angle_increment == 0.5 * DEG
+    assert s.angle_max == pytest.approx(89.5 * DEG)
+    assert s.range_max == 80.99
+
+
+def test_param_resolution_and_fov_set_a_narrow_scan(tmp_path: Path) -> None:
+    lines = ["PARAM laser_front_laser_fov 100 nohost 0", "PARAM laser_front_laser_resolution 0.25 nohost 0",
+             flaser(401)]
+    s = next(iter(read_log(write(tmp_path, "narrow.log", lines)))).scan
+    assert s.angle_min == -50 * DEG and s.angle_increment == 0.25 * DEG and s.angle_max == pytest.approx(50 * DEG)
+
+
+def test_rear_laser_uses_the_rear_params_and_is_read_when_chosen(tmp_path: Path) -> None:
+    lines = ["PARAM laser_front_laser_resolution 1.0 nohost 0", "PARAM laser_rear_laser_resolution 0.5 nohost 0",
+             flaser(181), flaser(361, kind="RLASER"), flaser(181, stamp=11.0)]
+    path = write(tmp_path, "two.log", lines)
+    reader = read_log(path)
+    front = list(reader)
+    assert [len(r.scan) for r in front] == [181, 181] and front[0].scan.angle_increment == 1.0 * DEG
+    assert reader.stats.laser == "FLASER" and reader.stats.other_lasers() == {"RLASER": 1}
+    rear = list(read_log(path, topic="RLASER"))
+    assert len(rear) == 1 and rear[0].scan.angle_increment == 0.5 * DEG
+    with pytest.raises(LogFormatError, match="laser topics are message kinds"):
+        read_log(path, topic="/scan")
+
+
+def test_param_lines_that_contradict_the_count_name_the_line(tmp_path: Path) -> None:
+    lines = ["PARAM laser_front_laser_fov 180 nohost 0", "PARAM laser_front_laser_resolution 1.0 nohost 0",
+             flaser(181), flaser(361), flaser(181)]
+    path = write(tmp_path, "stale.log", lines)
+    with pytest.raises(LogFormatError, match=r"stale\.log:4: malformed FLASER line: 361 beams do not fit"):
+        list(read_log(path))
+    reader = read_log(path, skip_bad_lines=True)
+    assert len(list(reader)) == 2 and [n for n, _ in reader.stats.skipped] == [4]
+    # an explicit override wins over the PARAM line it replaces (the fov of 180 deg still holds)
+    reader = read_log(path, skip_bad_lines=True, geometry=LaserGeometry(resolution=0.5 * DEG))
+    recs = list(reader)
+    assert [len(r.scan) for r in recs] == [361] and [n for n, _ in reader.stats.skipped] == [3, 5]
+    assert recs[0].scan.angle_min == -90 * DEG and recs[0].scan.angle_increment == 0.5 * DEG
+
+
+@pytest.mark.parametrize("bad", ["PARAM laser_front_laser_resolution zero", "PARAM laser_front_laser_resolution -1",
+                                 "PARAM robot_front_laser_max inf", "PARAM laser_front_laser_fov"])
+def test_bad_geometry_param_names_its_line(tmp_path: Path, bad: str) -> None:
+    path = write(tmp_path, "p.log", [flaser(180), bad, flaser(180)])
+    with pytest.raises(LogFormatError, match=r"p\.log:2: malformed PARAM line"):
+        list(read_log(path))
+    assert len(list(read_log(path, skip_bad_lines=True))) == 2
+
+
+def test_geometry_override() -> None:
+    assert beam_angles(361) == pytest.approx((-90 * DEG, 0.5 * DEG))
+    assert beam_angles(361, LaserGeometry(fov=100 * DEG)) == pytest.approx((-50 * DEG, 100 / 360 * DEG))
+    assert beam_angles(181, LaserGeometry(resolution=1 * DEG, angle_min=-45 * DEG)) == pytest.approx((-45 * DEG, DEG))
+    with pytest.raises(ValueError, match="resolution: must be > 0"):
+        LaserGeometry(resolution=0.0)
+    with pytest.raises(ValueError, match="more than 360 deg"):
+        beam_angles(1000, LaserGeometry(resolution=1 * DEG))
+
+
+def test_flaser_round_trips_any_centred_geometry(tmp_path: Path) -> None:
+    for n, res in ((401, 0.25), (180, 1.0), (360, 0.5), (101, 1.0)):
+        r = np.full(n, 1.5)
+        even = n % 2 == 0
+        angle_min = -(n if even else n - 1) * res / 2 * DEG
+        rec = Record(Scan(r, angle_min, res * DEG, 0.0, 8.183, 3.0), odom=(0.0, 0.0, 0.0))
+        path = tmp_path / f"r{n}.log"
+        write_log(path, [rec], fmt="flaser")
+        back = next(iter(read_log(path))).scan
+        assert back.angle_min == pytest.approx(angle_min, abs=1e-12)
+        assert back.angle_increment == pytest.approx(res * DEG, abs=1e-12) and back.range_max == 8.183
+
+
+# --- ROBOTLASER1 -----------------------------------------------------------------------------------
+def test_robotlaser1_fov_must_fit_the_count(tmp_path: Path) -> None:
+    res = 0.5 * DEG
+    good_n = robotlaser(361, 361 * res, res)  # csail style: fov = n x res
+    good_n1 = robotlaser(361, 360 * res, res, stamp=11.0)  # fov = (n - 1) x res
+    short = robotlaser(360, 361 * res, res, stamp=12.0)  # one beam short of its declared field of view
+    path = write(tmp_path, "rl.log", [good_n, good_n1, short, good_n])
+    with pytest.raises(LogFormatError, match=r"rl\.log:3: malformed ROBOTLASER1 line: declares a field of view"):
+        list(read_log(path))
+    reader = read_log(path, skip_bad_lines=True)
+    assert len(list(reader)) == 3 and [n for n, _ in reader.stats.skipped] == [3]
+    # one short of the (n - 1) convention fits the n convention: caught by the log's earlier lines
+    sneaky = robotlaser(360, 360 * res, res, stamp=13.0)
+    path = write(tmp_path, "rl2.log", [good_n1, sneaky])
+    with pytest.raises(LogFormatError, match=r"rl2\.log:2: .*carries 360 beams, but line 1 .* carries 361"):
+        list(read_log(path))
+    with pytest.raises(LogFormatError, match=r"rl3\.log:1: .*fewer fields"):
+        list(read_log(write(tmp_path, "rl3.log", ["ROBOTLASER1 0 -1.57 3.14 0.0087 80 0.01 0 5 1 1"])))
+
+
+# --- damage ----------------------------------------------------------------------------------------
+def test_inf_count_does_not_stop_skip_bad_lines(tmp_path: Path) -> None:
+    lines = [flaser(180, stamp=t) for t in range(5)]
+    lines[2] = lines[2].replace("FLASER 180", "FLASER inf", 1)
+    path = write(tmp_path, "inf.log", lines)
+    with pytest.raises(LogFormatError, match=r"inf\.log:3: .*finite non-negative integer, got 'inf'"):
+        list(read_log(path))
+    reader = read_log(path, skip_bad_lines=True)
+    assert [r.scan.stamp for r in reader] == [0, 1, 3, 4]
+    assert reader.stats.skipped[0][0] == 3 and reader.stats.stopped is None
+
+
+def test_overlong_line_is_malformed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import lms200.carmen as carmen
+
+    monkeypatch.setattr(carmen, "MAX_LINE_CHARS", 500)
+    path = write(tmp_path, "long.log", [flaser(5), "FLASER " + "1.0 " * 400, flaser(5, stamp=11.0)])
+    with pytest.raises(LogFormatError, match=r"long\.log:2: .*longer than 500 characters"):
+        list(read_log(path))
+    reader = read_log(path, skip_bad_lines=True)
+    assert [r.scan.stamp for r in reader] == [10.0, 11.0] and reader.stats.skipped[0][0] == 2
+
+
+def test_every_byte_flip_of_a_gzip_log_is_a_log_format_error(tmp_path: Path) -> None:
+    """48 one-byte flips spread over the compressed data: each read ends normally or with a
+    LogFormatError naming the file and a line (never zlib.error, EOFError, ...); skip_bad_lines never
+    raises and says why it stopped."""
+    rng = np.random.default_rng(13)
+    lines = [flaser(181, value=float(v), stamp=float(t)) for t, v in enumerate(rng.uniform(1, 5, 300).round(2))]
+    data = gzip.compress(("\n".join(lines) + "\n").encode())
+    failures = decompression = 0
+    for k, pos in enumerate(np.linspace(20, len(data) - 10, 48).astype(int)):
+        damaged = bytearray(data)
+        damaged[pos] ^= 0x55
+        path = tmp_path / f"flip{k}.log.gz"
+        path.write_bytes(bytes(damaged))
+        try:
+            list(read_log(path))
+        except LogFormatError as exc:
+            failures += 1
+            assert str(exc).startswith(f"{path}:")
+            decompression += "cannot read on" in str(exc)
+        reader = read_log(path, skip_bad_lines=True)
+        list(reader)  # never raises
+        if reader.stats.stopped:
+            assert "cannot read on" in reader.stats.stopped
+    assert failures > 0 and decompression > 0
+
+
+def test_truncated_gzip_with_skip_bad_lines_keeps_what_was_read(tmp_path: Path) -> None:
+    data = gzip.compress(("\n".join(flaser(181, stamp=t) for t in range(400)) + "\n").encode())
+    path = tmp_path / "cut.log.gz"
+    path.write_bytes(data[: len(data) // 2])
+    reader = read_log(path, skip_bad_lines=True)
+    recs = list(reader)
+    assert 0 < len(recs) < 400 and "cannot read on" in reader.stats.stopped
+    assert [r.scan.stamp for r in recs] == list(range(len(recs)))
+
+
+# --- bags ------------------------------------------------------------------------------------------
+def _two_topic_bag(path: Path, n: int = 4) -> None:
+    """A ROS 1 bag with LaserScans on /scan_front and /scan_rear (rosbags' own writer)."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    T = ts.types
+    with Writer(path) as w:
+        conns = {t: w.add_connection(t, "sensor_msgs/msg/LaserScan", typestore=ts) for t in ("/scan_front", "/scan_rear")}
+        for i in range(n):
+            for k, (topic, conn) in enumerate(conns.items()):
+                beams = 181 if k == 0 else 361
+                msg = T["sensor_msgs/msg/LaserScan"](
+                    header=T["std_msgs/msg/Header"](seq=i, stamp=T["builtin_interfaces/msg/Time"](sec=i, nanosec=k),
+                                                    frame_id="laser"),
+                    angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / (beams - 1),
+                    time_increment=0.0, scan_time=0.0, range_min=0.0, range_max=30.0,
+                    ranges=np.full(beams, 2.0, np.float32), intensities=np.zeros(0, np.float32))
+                w.write(conn, i * 1_000_000_000 + k, ts.serialize_ros1(msg, "sensor_msgs/msg/LaserScan"))
+
+
+def test_bag_with_two_laser_topics_is_refused_unless_one_is_chosen(tmp_path: Path) -> None:
+    path = tmp_path / "two.bag"
+    _two_topic_bag(path)
+    with pytest.raises(BagError, match=r"2 LaserScan topics \(/scan_front, /scan_rear\); choose one"):
+        list(read_log(path))
+    recs = list(read_log(path, topic="/scan_rear"))
+    assert len(recs) == 4 and all(len(r.scan) == 361 for r in recs)
+
+
+def _records(n: int = 30) -> list[Record]:
+    return [Record(Scan.lms200(np.full(361, 2.0 + 0.001 * i), stamp=1.0 + 0.1 * i), odom=(0.1 * i, 0.0, 0.0))
+            for i in range(n)]
+
+
+def test_damaged_bag_raises_bag_error_only(tmp_path: Path) -> None:
+    path = tmp_path / "good.bag"
+    write_log(path, _records())
+    data = path.read_bytes()
+    raised = 0
+    for k, pos in enumerate(np.linspace(len(data) // 10, len(data) - 20, 24).astype(int)):
+        damaged = bytearray(data)
+        damaged[pos : pos + 4] = b"\xff\xff\xff\x7f"
+        p = tmp_path / f"bad{k}.bag"
+        p.write_bytes(bytes(damaged))
+        try:
+            list(read_log(p))
+        except BagError as exc:
+            raised += 1
+            assert f"bad{k}.bag" in str(exc)
+        try:
+            list(read_log(p, skip_bad_lines=True))
+        except BagError as exc:  # only what cannot be skipped: a bag that does not open
+            assert "cannot open" in str(exc) or "no any" in str(exc) or "LaserScan" in str(exc)
+    assert raised > 0
+
+
+def test_bag_message_that_is_no_scan_names_topic_and_index(tmp_path: Path) -> None:
+    from lms200 import bag
+
+    path = tmp_path / "r.bag"
+    write_log(path, _records(5))
+    real = bag._scan_of
+    calls = {"n": 0}
+
+    def flaky(msg):  # noqa: ANN001, ANN202 - the third scan message cannot be a Scan
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise ValueError("angle_increment: must be > 0, got 0.0")
+        return real(msg)
+
+    bag._scan_of = flaky
+    try:
+        with pytest.raises(BagError, match=r"r\.bag: topic /scan message 2: cannot read: angle_increment"):
+            list(read_log(path))
+        calls["n"] = 0
+        reader = read_log(path, skip_bad_lines=True)
+        assert len(list(reader)) == 4 and reader.stats.skipped[0][0] == 2
+    finally:
+        bag._scan_of = real
+
+
+# --- the real logs ---------------------------------------------------------------------------------
+@pytest.mark.shared_data
+@pytest.mark.parametrize("name", ["mit-csail.clf.gz", "csail-robotlaser1.log.gz", "intel-corrected.log.gz",
+                                  "aces-corrected.log.gz"])
+def test_real_logs_read_without_a_skipped_line(shared_data: Path, name: str) -> None:
+    reader = read_log(shared_data / name, skip_bad_lines=True)
+    recs = list(reader)
+    assert len(recs) in (1988, 686, 910, 440)
+    assert reader.stats.skipped == [] and reader.stats.stopped is None
+    assert reader.stats.other_lasers() == {}
+
+
+# --- the command line: one line, exit status 2, never a traceback ------------------------------------
+def _broken_files(tmp_path: Path) -> dict[str, Path]:
+    lines = [flaser(180, stamp=t) for t in range(5)]
+    inf = list(lines)
+    inf[2] = inf[2].replace("FLASER 180", "FLASER inf", 1)
+    res = 0.5 * DEG
+    data = gzip.compress(("\n".join(lines * 40) + "\n").encode())
+    files = {
+        "inf": write(tmp_path, "inf.log", inf),
+        "short": write(tmp_path, "short.log", [robotlaser(361, 361 * res, res), robotlaser(360, 361 * res, res)]),
+        "truncated": tmp_path / "cut.log.gz",
+        "stale": write(tmp_path, "stale.log", ["PARAM laser_front_laser_resolution 1.0 x 0",
+                                               "PARAM laser_front_laser_fov 180 x 0", flaser(181), flaser(361)]),
+    }
+    files["truncated"].write_bytes(data[: len(data) // 2])
+    return files
+
+
+def test_info_on_broken_files_is_one_line_and_status_2(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    from experiments.cli import main
+
+    for name, path in _broken_files(tmp_path).items():
+        assert main(["info", str(path)]) == 2, name
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"{path}:" in err and "Traceback" not in err, (name, err)
+        assert main(["info", str(path), "--skip-bad-lines", "--json"]) == 0, name
+        out, err = capsys.readouterr()
+        assert "skipped" in err and '"skipped_lines": 1' in out, (name, err)
+    bag = tmp_path / "two.bag"
+    _two_topic_bag(bag)
+    assert main(["info", str(bag)]) == 2
+    assert "/scan_front, /scan_rear" in capsys.readouterr().err
+    assert main(["info", str(bag), "--topic", "/scan_front", "--json"]) == 0
+    assert '"scans": 4' in capsys.readouterr().out
+
+
+def test_geometry_flags(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    from experiments.cli import main
+
+    path = write(tmp_path, "a.log", [flaser(181), flaser(181, stamp=11.0)])
+    assert main(["info", str(path), "--laser-resolution-deg", "0.5", "--laser-angle-min-deg", "-45"]) == 0
+    out = capsys.readouterr().out
+    assert "90.00 deg (from -45.00 deg)" in out and "0.500 deg" in out
+    assert main(["info", str(path), "--laser-resolution-deg", "-1"]) == 2
+    assert "--laser-resolution-deg: must be > 0" in capsys.readouterr().err

@@ -1,0 +1,41 @@
+"""The one spelling of extractor overrides: extractor.FIELD and extractor.METHOD.FIELD."""
+
+from __future__ import annotations
+
+import pytest
+
+from experiments.overrides import OverrideError, extractor_overrides
+from lms200 import LmsbenchError
+
+
+def test_a_field_goes_to_every_extractor_that_has_it_and_a_method_field_to_one():
+    got = extractor_overrides({"extractor.min_points": 10, "extractor.hough.rho_step": 0.01, "method": "x"},
+                              ["sensor", "hough", "split_merge"])
+    assert got["hough"] == {"min_points": 10, "rho_step": 0.01}
+    assert got["sensor"]["min_points"] == 10 and got["split_merge"]["min_points"] == 10
+    assert extractor_overrides({"extractor.k": 5}, ["sensor", "hough"]) == {"sensor": {"k": 5}}
+
+
+def test_the_method_specific_value_wins_whatever_the_order():
+    for flat in ({"extractor.min_points": 10, "extractor.sensor.min_points": 6},
+                 {"extractor.sensor.min_points": 6, "extractor.min_points": 10}):
+        got = extractor_overrides(flat, ["sensor", "iepf"])
+        assert got == {"sensor": {"min_points": 6}, "iepf": {"min_points": 10}}
+
+
+@pytest.mark.parametrize("flat, methods, match", [
+    ({"extractor.kk": 5}, ["sensor"], "has a field 'kk'.*fields: .*ad_tau"),
+    ({"extractor.hough.k": 5}, ["hough"], "hough has no field 'k'"),
+    ({"extractor.hough.rho_step": 5}, ["sensor"], "not an extractor of this run; known: sensor"),
+    ({"extractor.nosuch.k": 5}, ["sensor"], "not an extractor of this run; known: .*split_merge"),
+])
+def test_unknown_names_are_one_line_errors_listing_the_known_ones(flat, methods, match):
+    with pytest.raises(OverrideError, match=match) as info:
+        extractor_overrides(flat, methods)
+    assert isinstance(info.value, LmsbenchError) and "\n" not in str(info.value)
+
+
+def test_a_sweep_cell_ignores_another_methods_fields_but_checks_them():
+    assert extractor_overrides({"extractor.hough.rho_step": 0.01}, ["sensor"], other_methods=True) == {}
+    with pytest.raises(OverrideError, match="rho_stp"):
+        extractor_overrides({"extractor.hough.rho_stp": 0.01}, ["sensor"], other_methods=True)
