@@ -88,15 +88,16 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None) 
 
 
 def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: float = 30.0,
-                  rate_hz: float | None = 2.0, stride: int = 1, max_scans: int | None = None) -> list[Source]:
+                  rate_hz: float | None = 2.0, stride: int = 1, max_scans: int | None = None,
+                  sensor: Any = None) -> list[Source]:
     """Sources from command-line words: a world name (one source per seed), ``world:seed``, or the
-    path of a log."""
+    path of a log. ``sensor`` (a ``sim.SensorConfig``) is the simulated sources' sensor model."""
     out: list[Source] = []
     for spec in specs:
         name, _, seed = spec.partition(":")
         if name in WORLD_NAMES:
             for s in ([int(seed)] if seed else seeds):
-                out.append(sim_source(name, s, duration, rate_hz))
+                out.append(sim_source(name, s, duration, rate_hz, sensor))
         else:
             if not Path(spec).exists():
                 raise FileNotFoundError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}) nor an existing log")

@@ -37,6 +37,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--stride", type=int, default=1, help="logs: use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=int, help="at most this many scans per source")
     p.add_argument("--sigma", type=float, default=0.005, help="range noise (m) for the explained fraction")
+    p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
+                   help="sensor model of the simulated sources, as written (e.g. from `lmsbench calibrate`)")
     p.add_argument("--set", dest="params", action="append", type=_param, default=[], metavar="extractor.[METHOD.]FIELD=VALUE",
                    help="override a config field of every extractor that has it, or of METHOD only (repeatable)")
     p.add_argument("--out", type=Path, default=Path("results/compare"), help="output folder")
@@ -59,7 +61,13 @@ def run(args: argparse.Namespace) -> int:
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
     if args.max_scans is not None and args.max_scans < 1:
         raise LmsbenchError(f"--max-scans must be >= 1, got {args.max_scans}")
-    sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans)
+    sensor = None
+    if args.sensor is not None:
+        import sim
+
+        sensor = sim.SensorConfig.from_yaml(args.sensor)
+    sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans,
+                            sensor=sensor)
     score_config = ScoreConfig()
     matches: list = []
     table = compare(sources, methods, params=params, score_config=score_config, sigma=args.sigma,
@@ -85,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
     if any(src.kind == "sim" for src in sources):
         import sim
 
-        resolved["sensor"] = dataclasses.asdict(sim.SensorConfig())  # what parse_sources simulated
+        # what parse_sources simulated (sim_source's default: the model without interlaced timing)
+        resolved["sensor"] = dataclasses.asdict(sensor if sensor is not None else sim.SensorConfig(interlaced=False))
     (args.out / "config.yaml").write_text(yaml.safe_dump(resolved, sort_keys=False))
     print(text)
     print(f"wrote {path}, {args.out / 'summary.csv'}, {args.out / 'summary.txt'}, {args.out / 'config.yaml'}")
