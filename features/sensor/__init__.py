@@ -29,7 +29,7 @@ def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
     grid = grid_constants(p.k, scan.angle_increment, p.hough_subdiv)
     rho, alpha, cov, first, last, npts, p0, p1, cf, ci = engine.extract_scan(
         scan.ranges, scan.angles, scan.angle_min, scan.angle_increment, max(scan.range_min, cfg.min_range),
-        scan.range_max, cfg.sigma_for(scan.range_max), grid, p,
+        scan.range_max, cfg.sigma_of(scan), grid, p,
     )
     if rho.size == 0:
         return FeatureSet([], [], METHOD)
