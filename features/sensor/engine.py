@@ -43,7 +43,7 @@ TAN_SPAN_CAP = 40.0  # cap on |tan(b - a)| differences across a run (grazing run
 TIE_BREAK = 1e-3  # votes a band angle loses per step from the band centre (prefers the centre on ties)
 MERGE_FLOOR_RHO_VAR = 0.005**2  # model-error floor added to the merge test's (rho) variance, m^2
 MERGE_FLOOR_ALPHA_VAR = 0.005**2  # ... and (alpha) variance, rad^2
-MAX_SPLIT_ROUNDS = 6  # times a run that fails the line checks is split and fitted again
+MAX_SPLIT_ROUNDS = 1  # times a run that fails the line checks is split and fitted again (more cut arcs into chords)
 SPACING_CAP = 1.0  # largest point spacing (grazing incidence) allowed for in the corner contact test, m
 
 
@@ -637,7 +637,9 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     """Steps 2-4 and the end growth: the line table (rho, alpha, cov, first, last, n_points)
     before merging. A run whose line fails the checks (it bends, or holds two faces the AD test
     did not part) is split at the beam farthest from its chord and each part is fitted again,
-    up to ``MAX_SPLIT_ROUNDS`` times, while the parts keep min_points beams (and 2k + 1)."""
+    ``MAX_SPLIT_ROUNDS`` times, while the parts keep min_points beams (and 2k + 1). More rounds
+    explain more of real scans but cut curved walls into chords that pass for lines (on the
+    simulated pillars world, precision 0.89 at one round, 0.83 at two, 0.79 at three)."""
     k = p.k
     c0, c1 = candidate_runs(AD, AD_var, psi, psi_var, k, grid.ad_line, sigma_r, p)
     keep = (c1 - c0 + 2 * k + 1) >= p.min_points
