@@ -22,7 +22,7 @@ from features.registry import available_methods, backend_of, get_method, make_co
 from features.scoring import ScoreConfig, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Record, read_log
 
-WORLD_NAMES = ("office", "corridor", "angles", "pillars", "random")
+WORLD_NAMES = ("office", "corridor", "angles", "pillars", "random", "cluttered", "mit")  # == sim.WORLD_NAMES (sim loads lazily)
 
 
 @dataclass
