@@ -242,17 +242,17 @@ def explained_fraction(fs: FeatureSet, scan: Scan, sigma: float = 0.005) -> tupl
     n_valid = int(np.count_nonzero(valid))
     if n_valid == 0:
         return float("nan"), float("nan")
-    if not fs.lines:
+    lines = fs.lines
+    if not len(lines):
         return 0.0, float("nan")
-    arr = np.array([(l.rho, l.alpha, l.first, l.last) for l in fs.lines], dtype=float)
-    first = np.clip(arr[:, 2].astype(int), 0, len(scan) - 1)
-    last = np.clip(arr[:, 3].astype(int), 0, len(scan) - 1)
+    first = np.clip(lines.first, 0, len(scan) - 1)
+    last = np.clip(lines.last, 0, len(scan) - 1)
     length = np.maximum(last - first + 1, 0)
-    labels = np.repeat(np.arange(arr.shape[0]), length)
+    labels = np.repeat(np.arange(len(lines)), length)
     beam = np.arange(int(length.sum())) - np.repeat(np.cumsum(length) - length - first, length)
-    cos = np.cos(scan.angles[beam] - arr[labels, 1])
+    cos = np.cos(scan.angles[beam] - lines.alpha[labels])
     with np.errstate(divide="ignore", invalid="ignore"):
-        predicted = np.where(cos > 1e-6, arr[labels, 0] / cos, np.inf)
+        predicted = np.where(cos > 1e-6, lines.rho[labels] / cos, np.inf)
     residual = scan.ranges[beam] - predicted
     use = valid[beam] & np.isfinite(residual)
     beam, residual = beam[use], np.abs(residual[use])
