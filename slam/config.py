@@ -23,8 +23,8 @@ class AlignmentConfig:
         max_correspondence: a point further than this (m) from every map point is left out of a step...
         fine_correspondence: ...and once converged, further than this (m) (partial overlaps).
         huber: Huber threshold (m) of the point-to-line residuals.
-        max_iterations: Gauss-Newton steps at most; ``tolerance_xy`` (m) and ``tolerance_theta``
-            (rad) stop earlier.
+        max_iterations, fine_iterations: Gauss-Newton steps at most with the wide and then the
+            narrow reach; a step below ``tolerance_xy`` (m) and ``tolerance_theta`` (rad) ends a stage.
         damping: Levenberg damping, a fraction of the Hessian's mean eigenvalue: an unconstrained
             direction (a corridor's axis) stays at the prediction.
         inlier_distance: a point this close (m) to a map point counts as explained.
@@ -43,14 +43,15 @@ class AlignmentConfig:
             ``normal_gap_per_range`` m per m of range (beams spread apart with range).
     """
 
-    stride: int = 2
+    stride: int = 3
     max_range: float = 30.0
     max_correspondence: float = 0.5
     fine_correspondence: float = 0.15
     huber: float = 0.05
-    max_iterations: int = 20
-    tolerance_xy: float = 1e-4
-    tolerance_theta: float = 1e-4
+    max_iterations: int = 10
+    fine_iterations: int = 5
+    tolerance_xy: float = 5e-4
+    tolerance_theta: float = 5e-4
     damping: float = 1e-8
     inlier_distance: float = 0.1
     sigma_point: float = 0.02

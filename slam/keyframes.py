@@ -79,19 +79,12 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
         lo = max(0, cand.key - cfg.submap)
         sub = [kf for kf in keyframes[lo: cand.key + cfg.submap + 1] if new.travelled - kf.travelled >= cfg.min_travel]
         ref = local_map(sub, voxel)
-        forced = _always_retry(alignment)
-        m = match(scan_points, ref, [new.pose], forced)
+        m = match(scan_points, ref, [new.pose], alignment)
         if not _verified(m, cfg):
             continue
         return LoopClosure(cand.key, new.key, between(cand.pose, m.pose), m.inliers, m.rms,
                            float(np.hypot(*(m.pose[:2] - new.pose[:2]))))
     return None
-
-
-def _always_retry(cfg: AlignmentConfig) -> AlignmentConfig:
-    from dataclasses import replace
-
-    return replace(cfg, retry_inliers=1.01)
 
 
 def _verified(m: Match, cfg: LoopClosureConfig) -> bool:

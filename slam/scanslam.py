@@ -37,22 +37,35 @@ class ScanStep:
 
 @dataclass
 class ScanPoints:
-    """A scan's points in the sensor frame: all valid ones with normals (for the map), and the
+    """A scan's points in the sensor frame: all valid ones in beam order (for the map), and the
     thinned subset that is matched."""
 
-    points: np.ndarray
-    normals: np.ndarray
+    valid: np.ndarray
     matched: np.ndarray
+    cfg: AlignmentConfig
 
     @classmethod
     def from_points(cls, points: np.ndarray, cfg: AlignmentConfig) -> "ScanPoints":
         p = np.asarray(points, float).reshape(-1, 2)
-        p = p[np.isfinite(p[:, 0]) & (np.hypot(p[:, 0], p[:, 1]) <= cfg.max_range)]
-        n, ok = chord_normals(p, cfg.normal_step, cfg.normal_gap, cfg.normal_gap_per_range)
+        p = p[np.isfinite(p[:, 0]) & (p[:, 0] ** 2 + p[:, 1] ** 2 <= cfg.max_range**2)]
+        return cls(p, p[:: cfg.stride], cfg)
+
+    def surface(self) -> tuple[np.ndarray, np.ndarray]:
+        """The points that lie on a surface and their unit normals (towards the sensor), (p, 2) each."""
+        cfg = self.cfg
+        n, ok = chord_normals(self.valid, cfg.normal_step, cfg.normal_gap, cfg.normal_gap_per_range)
         # normals point towards the sensor, so the map's two faces of a thin wall differ
-        flip = np.einsum("ij,ij->i", n, p) > 0
+        flip = np.einsum("ij,ij->i", n, self.valid) > 0
         n[flip] *= -1
-        return cls(p[ok], n[ok], p[:: cfg.stride])
+        return self.valid[ok], n[ok]
+
+    @property
+    def points(self) -> np.ndarray:
+        return self.surface()[0]
+
+    @property
+    def normals(self) -> np.ndarray:
+        return self.surface()[1]
 
 
 @dataclass
@@ -125,7 +138,7 @@ class ScanSlam:
 
     def _first(self, stamp: float, sp: ScanPoints) -> ScanStep:
         self.graph = PoseGraph(np.zeros(3), self.loop_cfg.prior_sigma)
-        self.keyframes.append(Keyframe(0, 0, stamp, np.zeros(3), sp.points, sp.normals, 0.0))
+        self.keyframes.append(Keyframe(0, 0, stamp, np.zeros(3), *sp.surface(), 0.0))
         self.ref = local_map(self.keyframes, self.keyframes_cfg.voxel)
         self.anchors.append((0, np.zeros(3)))
         self.covariances.append(np.zeros((3, 3)))
@@ -139,7 +152,7 @@ class ScanSlam:
         c, s = np.cos(pose[2]), np.sin(pose[2])
         A = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # world perturbation -> frame of pose
         key = self.graph.add(rel, A @ cov @ A.T, pose)
-        kf = Keyframe(key, len(self.anchors), stamp, pose.copy(), sp.points, sp.normals, self.travelled)
+        kf = Keyframe(key, len(self.anchors), stamp, pose.copy(), *sp.surface(), self.travelled)
         self.keyframes.append(kf)
         info.new_keyframe = True
         info.keyframe = key
