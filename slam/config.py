@@ -67,6 +67,29 @@ class AlignmentConfig:
 
 
 @dataclass(frozen=True)
+class MotionConfig:
+    """The motion prior of the default pipeline: constant velocity from the last two poses (no
+    odometry), and the check that keeps a match from jumping.
+
+    Attributes:
+        sigma_accel: std of the forward/sideways acceleration (m/s^2) the prediction ignores...
+        sigma_alpha: ...and of the angular acceleration (rad/s^2): over a scan interval dt the
+            prediction's std is ``sigma * dt^2`` (+ ``sigma_floor_xy`` m, ``sigma_floor_theta`` rad).
+        jump_probability: a match further from the prediction than this chi-square quantile
+            (3 dof, of the prediction's std) is a jump...
+        jump_margin: ...and replaced by the narrow-reach match started at the prediction when
+            that explains this fraction more of the scan's points (the point check).
+    """
+
+    sigma_accel: float = 1.0
+    sigma_alpha: float = 4.0
+    sigma_floor_xy: float = 0.01
+    sigma_floor_theta: float = 0.005
+    jump_probability: float = 0.999
+    jump_margin: float = 0.02
+
+
+@dataclass(frozen=True)
 class KeyframeConfig:
     """Keyframes of the default pipeline and the local map the scans are matched against.
 
@@ -133,7 +156,7 @@ class SlamConfig:
     preset: "default" (motion from scan matching, keyframe pose graph with loop closures, see
         :mod:`slam.scanslam`) or "paper" (the paper's EKF of section 4.1: constant-velocity model,
         line landmarks; the flat fields below).
-    alignment, keyframes, loop_closure: the default pipeline's sections (their own docstrings).
+    motion, alignment, keyframes, loop_closure: the default pipeline's sections (their own docstrings).
 
     Motion and noise:
         sigma_accel: white forward acceleration noise (m/s^2) of the constant-velocity model.
@@ -195,6 +218,7 @@ class SlamConfig:
     """
 
     preset: str = "default"
+    motion: MotionConfig = field(default_factory=MotionConfig)
     alignment: AlignmentConfig = field(default_factory=AlignmentConfig)
     keyframes: KeyframeConfig = field(default_factory=KeyframeConfig)
     loop_closure: LoopClosureConfig = field(default_factory=LoopClosureConfig)
@@ -295,7 +319,7 @@ class SlamConfig:
 
 
 PRESETS = ("default", "paper")
-SECTIONS: dict[str, type] = {"alignment": AlignmentConfig, "keyframes": KeyframeConfig, "loop_closure": LoopClosureConfig}
+SECTIONS: dict[str, type] = {"motion": MotionConfig, "alignment": AlignmentConfig, "keyframes": KeyframeConfig, "loop_closure": LoopClosureConfig}
 
 
 def _section(cls: type, name: str, values: dict[str, Any]) -> Any:

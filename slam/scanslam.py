@@ -15,9 +15,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .config import AlignmentConfig, KeyframeConfig, LoopClosureConfig
-from .geometry import between, compose
-from .icp import Match, Reference, chord_normals, match
+from dataclasses import replace
+
+from .config import AlignmentConfig, KeyframeConfig, LoopClosureConfig, MotionConfig
+from .models import chi2_quantile
+from .geometry import between, compose, rotation
+from .icp import Match, Reference, chord_normals, match, refine
 from .keyframes import Keyframe, LoopClosure, find_closure, local_map
 from .posegraph import PoseGraph, robust_noise
 
@@ -32,6 +35,7 @@ class ScanStep:
     hypothesis: int = 0  # ICP start that won (0 = the prediction)
     matched: bool = False  # the match was used (else the pose follows the prediction)
     new_keyframe: bool = False
+    jump_rejected: bool = False  # the match jumped from the prediction and failed the point check
     loop: LoopClosure | None = None
 
 
@@ -73,6 +77,7 @@ class ScanSlam:
     """Keyframe scan-matching SLAM; call :meth:`step` once per scan, then :meth:`trajectory`."""
 
     alignment: AlignmentConfig = field(default_factory=AlignmentConfig)
+    motion: MotionConfig = field(default_factory=MotionConfig)
     keyframes_cfg: KeyframeConfig = field(default_factory=KeyframeConfig)
     loop_cfg: LoopClosureConfig = field(default_factory=LoopClosureConfig)
 
@@ -88,6 +93,8 @@ class ScanSlam:
         self.travelled = 0.0
         self._since_search = 0
         self._closed_at = 0.0  # path length (m) at the last loop closure
+        self._jump_gate = chi2_quantile(self.motion.jump_probability, 3)
+        self._narrow = replace(self.alignment, max_iterations=0)
         self.predict_velocity = True
 
     # -- one scan -------------------------------------------------------------------------------
@@ -117,6 +124,7 @@ class ScanSlam:
         if sp.matched.shape[0] >= 10 and self.ref is not None:
             starts = [pred, self.last[-1][1]] if self.predict_velocity else [self.last[-1][1], pred]
             m = match(sp.matched, self.ref, starts, self.alignment)
+            m = self._check_jump(sp.matched, m, pred, stamp - self.last[-1][0], info)
             info.inliers, info.rms, info.hypothesis = m.inliers, m.rms, m.start
         if m is not None and m.inliers >= self.alignment.min_inliers:
             pose, cov = m.pose, m.covariance
@@ -135,6 +143,24 @@ class ScanSlam:
         self.covariances.append(cov)
         self.last = [self.last[-1], (stamp, pose)]
         return info
+
+    def _check_jump(self, points: np.ndarray, m: Match, pred: np.ndarray, dt: float, info: ScanStep) -> Match:
+        """The point check: a match further from the prediction than the motion's uncertainty is
+        compared with a narrow-reach match started at the prediction (which cannot slide to an
+        aliased place along a corridor); the jump stands unless that one explains clearly more
+        of the scan's points."""
+        mc = self.motion
+        dt2 = max(dt, 0.0) ** 2
+        sxy, sth = mc.sigma_accel * dt2 + mc.sigma_floor_xy, mc.sigma_alpha * dt2 + mc.sigma_floor_theta
+        e = m.pose - pred
+        e[2] = np.arctan2(np.sin(e[2]), np.cos(e[2]))
+        if (e[0] ** 2 + e[1] ** 2) / sxy**2 + e[2] ** 2 / sth**2 <= self._jump_gate:
+            return m
+        near = refine(points, self.ref, pred, self._narrow)
+        if near.inliers <= m.inliers + mc.jump_margin:
+            return m
+        info.jump_rejected = True
+        return near
 
     def _first(self, stamp: float, sp: ScanPoints) -> ScanStep:
         self.graph = PoseGraph(np.zeros(3), self.loop_cfg.prior_sigma)
@@ -178,6 +204,24 @@ class ScanSlam:
         assert self.graph is not None
         return self.graph.poses()
 
+    def pose_covariances(self) -> np.ndarray:
+        """(n, 3, 3) world-frame covariance of every scan's pose in :meth:`trajectory`: its
+        keyframe's marginal from the graph (relative to the first keyframe) composed with the
+        scan's match covariance against the local map."""
+        assert self.graph is not None
+        kp = self.keyframe_poses()
+        kcov = []
+        for k in range(len(kp)):
+            A = np.eye(3)
+            A[:2, :2] = rotation(kp[k][2])
+            kcov.append(A @ self.graph.covariance(k) @ A.T)
+        out = np.empty((len(self.anchors), 3, 3))
+        for i, ((k, rel), cov) in enumerate(zip(self.anchors, self.covariances)):
+            p = compose(kp[k], rel)
+            J = np.array([[1.0, 0.0, -(p[1] - kp[k][1])], [0.0, 1.0, p[0] - kp[k][0]], [0.0, 0.0, 1.0]])
+            out[i] = J @ kcov[k] @ J.T + (cov if rel.any() else 0.0)
+        return out
+
     def trajectory(self) -> np.ndarray:
         """(n, 3) world pose of every scan: its keyframe's optimised pose composed with the scan's
         pose relative to that keyframe."""
@@ -196,7 +240,7 @@ def run_scan_slam(steps, config) -> "SlamResult":
 
     from features import extract
 
-    slam = ScanSlam(config.alignment, config.keyframes, config.loop_closure)
+    slam = ScanSlam(config.alignment, config.motion, config.keyframes, config.loop_closure)
     stamps: list[float] = []
     truths: list = []
     infos: list[ScanStep] = []
@@ -219,7 +263,7 @@ def run_scan_slam(steps, config) -> "SlamResult":
     poses = slam.trajectory()
     kposes = slam.keyframe_poses()
     traj = np.column_stack((stamps, poses))
-    covs = np.array(slam.covariances).reshape(-1, 3, 3)
+    covs = slam.pose_covariances()
     segs = [_place(kposes[key], seg) for key, seg in kf_lines.items() if seg.size]
     lines = merge_lines(np.concatenate(segs) if segs else np.zeros((0, 4)))
     inliers = np.array([i.inliers for i in infos])
