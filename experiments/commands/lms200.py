@@ -16,6 +16,7 @@ from lms200.driver import LMS200
 from lms200.protocol import BAUD_MODES
 
 from experiments.lms200_sources import log_scans, simulator_scans
+from experiments.logargs import add_log_options, read_log_options
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,6 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (the LMS200 ships in cm)")
     e.add_argument("--time-scale", type=float, default=1.0, help="multiplies every byte time and device delay (0.01 = 100x faster)")
     e.add_argument("--duration", type=float, help="stop after this many seconds (default: until Ctrl-C)")
+    add_log_options(e)  # with --log
     e.set_defaults(func=run_emulate)
 
     r = cmds.add_parser("record", help="record an LMS200 to a CARMEN log (.clf, .log, .gz) or a ROS bag (.bag)")
@@ -55,7 +57,7 @@ def run_emulate(args: argparse.Namespace) -> int:
     if args.time_scale <= 0:
         raise LmsbenchError(f"--time-scale must be > 0, got {args.time_scale}")
     if args.log:
-        scans = log_scans(args.log)
+        scans = log_scans(args.log, read_options=read_log_options(args))
         what = f"scans of {args.log} in a loop"
     else:
         scans = simulator_scans(args.world, args.seed)

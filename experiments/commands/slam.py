@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from experiments.logargs import add_log_options, read_log_options
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("slam", help="odometry-free SLAM (scan matching + pose graph, or the paper's EKF) over a simulator folder, CARMEN log or bag "
@@ -28,6 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate-hz", type=float, help="decimate to about this many scans/s (by the stamps)")
     p.add_argument("--max-scans", type=int, help="stop after this many scans")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_log_options(p)
     p.set_defaults(func=run)
 
 
@@ -71,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
     from experiments.slamrun import load_input, run as run_slam, write_outputs
 
     config = _config(args)
-    data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz)
+    data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
+                      read_options=read_log_options(args))
     if config.use_odometry and data.odometry is None:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
     result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
