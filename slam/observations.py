@@ -46,12 +46,12 @@ def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) 
     """Keep the lines with enough support; their covariance is the extractor's (where finite and
     positive definite) plus the floor ``diag(sigma_rho^2, sigma_alpha_obs^2)``. With ``scan``, its
     valid points (every ``point_stride``-th) come along for checking pre-alignments."""
-    floor = np.diag([config.sigma_rho**2, config.sigma_alpha_obs**2])
+    floor = np.diag([config.observations.sigma_rho**2, config.observations.sigma_alpha_obs**2])
     lines, covs, ends = [], [], []
     for ln in fs.lines:
-        if ln.n_points and ln.n_points < config.min_line_points:
+        if ln.n_points and ln.n_points < config.observations.min_line_points:
             continue
-        if ln.length < config.min_line_length:
+        if ln.length < config.observations.min_line_length:
             continue
         c = np.asarray(ln.cov, dtype=float)
         if c.shape != (2, 2) or not np.all(np.isfinite(c)) or np.linalg.eigvalsh(0.5 * (c + c.T)).min() < 0:
@@ -60,17 +60,17 @@ def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) 
         covs.append(0.5 * (c + c.T) + floor)
         ends.append((*ln.start, *ln.end))
     corners, ccov = [], []
-    if config.use_corners:
+    if config.observations.use_corners:
         for cn in fs.corners:
             corners.append((cn.x, cn.y))
-            ccov.append(np.eye(2) * config.sigma_corner**2)
+            ccov.append(np.eye(2) * config.observations.sigma_corner**2)
     return Observations(
         np.array(lines, float).reshape(-1, 2),
         np.array(covs, float).reshape(-1, 2, 2),
         np.array(ends, float).reshape(-1, 4),
         np.array(corners, float).reshape(-1, 2),
         np.array(ccov, float).reshape(-1, 2, 2),
-        scan_points(scan, config.point_stride) if scan is not None else np.zeros((0, 2)),
+        scan_points(scan, config.observations.point_stride) if scan is not None else np.zeros((0, 2)),
     )
 
 

@@ -236,7 +236,7 @@ def run_scan_slam(steps, config) -> "SlamResult":
     extracted on the keyframes, placed by their optimised poses and merged (:mod:`slam.linemap`).
     """
     from .linemap import merge_lines
-    from .run import SlamInputError, SlamResult, pose_nees
+    from .run import SlamInputError, SlamResult, lost_against_scan, pose_nees
 
     from features import extract
 
@@ -269,10 +269,13 @@ def run_scan_slam(steps, config) -> "SlamResult":
     inliers = np.array([i.inliers for i in infos])
     matched = np.array([i.matched for i in infos])
     nees = pose_nees(traj, covs, truths)
-    window = config.nis_window
-    lost = ~matched[1:]
-    run = np.convolve(lost.astype(float), np.ones(window), "valid") if lost.size >= window else np.zeros(0)
-    diverged_at = float(stamps[1 + int(np.argmax(run >= window)) + window - 1]) if run.size and run.max() >= window else None
+    diverged_at = None
+    scores: list[float] = []
+    for t, i in zip(stamps, infos):
+        scores.append(i.inliers)
+        if lost_against_scan(scores, config.consistency):
+            diverged_at = float(t)
+            break
     finite = nees[np.isfinite(nees)]
     diag = {
         "inliers": inliers, "matched": matched, "nees": nees,
@@ -292,7 +295,7 @@ def run_scan_slam(steps, config) -> "SlamResult":
 def _segments(fs, config) -> np.ndarray:
     """(k, 4) sensor-frame segments of the extracted lines long and well supported enough."""
     out = [(*ln.start, *ln.end) for ln in fs.lines
-           if ln.length >= config.min_line_length and not (ln.n_points and ln.n_points < config.min_line_points)]
+           if ln.length >= config.observations.min_line_length and not (ln.n_points and ln.n_points < config.observations.min_line_points)]
     return np.array(out, float).reshape(-1, 4)
 
 
