@@ -244,14 +244,15 @@ class KeyframeConfig:
         distance, angle: a scan becomes a keyframe when it is this far (m) or turned this much (rad)
             from the current keyframe...
         min_inliers: ...or when it explains fewer than this fraction of its points on the local map.
-        local_map: the local map holds the points of the newest this many keyframes...
+        local_map: the local map holds the points of the newest this many keyframes (20 beat 10
+            on the tuning runs, seeds 100-105 at 5 and 37.5 scans/s: mean ATE 2.6 against 3.4 cm)...
         voxel: ...thinned to one point per square of this side (m).
     """
 
     distance: float = 0.3
     angle: float = 0.2
     min_inliers: float = 0.8
-    local_map: int = 10
+    local_map: int = 20
     voxel: float = 0.05
 
 
