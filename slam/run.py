@@ -183,23 +183,47 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
     ``config.preset == "default"``: motion measured by scan matching, keyframe pose graph with
     loop closures (:func:`slam.scanslam.run_scan_slam`); the trajectory is the optimised graph's.
     ``"paper"``: the paper's EKF (section 4.1) with line (and, with ``config.observations.use_corners``,
-    corner) observations from ``features.extract(scan, method=config.extractor,
-    **config.extractor_params)``. The records' odometry is used only with
+    corner) observations from ``features.extract_many(scans, method=config.extractor,
+    **config.extractor_params)`` in batches of ``EXTRACT_BATCH`` scans. The records' odometry is used only with
     ``config.motion.use_odometry`` (paper preset); true poses only for the NEES diagnostic.
 
     Returns:
         SlamResult with one pose per record, stamped with the record's ``scan.stamp``.
     """
-    from features import extract  # the extractor registry (methods load lazily)
-
     if config.preset == "default":
         from .scanslam import run_scan_slam
 
         return run_scan_slam(((rec.scan.stamp, rec.scan, rec.truth) for rec in records), config)
 
     def steps():
+        batch: list[Record] = []
         for rec in records:
-            fs = extract(rec.scan, method=config.extractor, **config.extractor_params)
-            yield rec.scan.stamp, from_features(fs, config, rec.scan), rec.odom, rec.truth
+            batch.append(rec)
+            if len(batch) == EXTRACT_BATCH:
+                yield from _observed(batch, config)
+                batch = []
+        yield from _observed(batch, config)
 
     return run_steps(steps(), config)
+
+
+#: scans extracted in one ``features.extract_many`` call (bounds the memory of a long log)
+EXTRACT_BATCH = 256
+
+
+def extract_all(scans: list, config: SlamConfig) -> list:
+    """``features.extract_many`` over scans of one geometry (one compiled call), or
+    ``features.extract`` scan by scan where the geometry changes within the batch."""
+    from features import extract, extract_many
+
+    if not scans:
+        return []
+    try:
+        return extract_many(scans, method=config.extractor, **config.extractor_params)
+    except ValueError:  # scans of different geometries: one call each
+        return [extract(s, method=config.extractor, **config.extractor_params) for s in scans]
+
+
+def _observed(batch: list, config: SlamConfig):
+    for rec, fs in zip(batch, extract_all([r.scan for r in batch], config)):
+        yield rec.scan.stamp, from_features(fs, config, rec.scan), rec.odom, rec.truth

@@ -233,18 +233,17 @@ def run_scan_slam(steps, config) -> "SlamResult":
     """The default pipeline over (stamp s, scan, true pose or None) steps; see :func:`slam.run_slam`.
 
     The trajectory and the keyframes come from the optimised pose graph; the map is the lines
-    extracted on the keyframes, placed by their optimised poses and merged (:mod:`slam.linemap`).
+    extracted on the keyframes (``features.extract_many``, once at the end), placed by their
+    optimised poses and merged (:mod:`slam.linemap`).
     """
     from .linemap import merge_lines
-    from .run import SlamInputError, SlamResult, lost_against_scan, pose_nees
-
-    from features import extract
+    from .run import SlamInputError, SlamResult, extract_all, lost_against_scan, pose_nees
 
     slam = ScanSlam(config.alignment, config.motion, config.keyframes, config.loop_closure)
     stamps: list[float] = []
     truths: list = []
     infos: list[ScanStep] = []
-    kf_lines: dict[int, np.ndarray] = {}
+    kf_scans: dict[int, object] = {}  # keyframe key -> its scan, for the map's lines
     previous = None
     for k, (t, scan, truth) in enumerate(steps):
         t = float(t)
@@ -253,8 +252,7 @@ def run_scan_slam(steps, config) -> "SlamResult":
         previous = t
         info = slam.step(t, scan.points)
         if info.new_keyframe:
-            fs = extract(scan, method=config.extractor, **config.extractor_params)
-            kf_lines[info.keyframe] = _segments(fs, config)
+            kf_scans[info.keyframe] = scan
         stamps.append(t)
         truths.append(truth)
         infos.append(info)
@@ -264,7 +262,9 @@ def run_scan_slam(steps, config) -> "SlamResult":
     kposes = slam.keyframe_poses()
     traj = np.column_stack((stamps, poses))
     covs = slam.pose_covariances()
-    segs = [_place(kposes[key], seg) for key, seg in kf_lines.items() if seg.size]
+    keys = list(kf_scans)
+    fsets = extract_all([kf_scans[k] for k in keys], config)  # one compiled call over the keyframes
+    segs = [_place(kposes[key], seg) for key, fs in zip(keys, fsets) if (seg := _segments(fs, config)).size]
     lines = merge_lines(np.concatenate(segs) if segs else np.zeros((0, 4)))
     inliers = np.array([i.inliers for i in infos])
     matched = np.array([i.matched for i in infos])
@@ -294,9 +294,9 @@ def run_scan_slam(steps, config) -> "SlamResult":
 
 def _segments(fs, config) -> np.ndarray:
     """(k, 4) sensor-frame segments of the extracted lines long and well supported enough."""
-    out = [(*ln.start, *ln.end) for ln in fs.lines
-           if ln.length >= config.observations.min_line_length and not (ln.n_points and ln.n_points < config.observations.min_line_points)]
-    return np.array(out, float).reshape(-1, 4)
+    ln, obs = fs.lines, config.observations
+    keep = ~((ln.n_points > 0) & (ln.n_points < obs.min_line_points)) & ~(ln.length < obs.min_line_length)
+    return np.asarray(ln.values[keep, 2:6], float).reshape(-1, 4)
 
 
 def _place(pose: np.ndarray, seg: np.ndarray) -> np.ndarray:
