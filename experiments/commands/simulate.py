@@ -10,7 +10,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("simulate", help="simulate an LMS200 run through an office world (scans.clf, "
                                         "groundtruth.tum, world.json, config.yaml, map.png)")
     p.add_argument("--world", default="office",
-                   help="office, corridor, angles, pillars, random, or a world.json (default office)")
+                   help="office, corridor, angles, pillars, random, cluttered (office with clutter 1), "
+                        "mit (the MIT-CSAIL-like preset), or a world.json (default office)")
+    p.add_argument("--clutter", type=float, default=None,
+                   help="clutter level of a named world: 0 none, 1 a furnished office, 2-3 busy "
+                        "(chair and table legs, people, plants, bins, glass, doors at any angle; default: the world's own)")
     p.add_argument("--seed", type=int, default=0, help="seed of the world, tour and sensor noise")
     p.add_argument("--duration", type=float, default=120.0, help="simulated time, s (default 120)")
     p.add_argument("--out", type=Path, required=True, help="output folder")
@@ -45,6 +49,10 @@ def run(args: argparse.Namespace) -> int:
             raise LmsbenchError(f"unknown world {args.world!r}; known worlds: {', '.join(WORLD_NAMES)} or a world.json")
         if args.world.endswith(".json") and not Path(args.world).is_file():
             raise FileNotFoundError(f"no such world file: {args.world}")
+        if args.clutter is not None and not args.clutter >= 0:
+            raise LmsbenchError(f"--clutter must be >= 0, got {args.clutter}")
+        if args.clutter is not None and args.world.endswith(".json"):
+            raise LmsbenchError("--clutter applies to named worlds; a world.json holds its own solids")
         if args.duration <= 0:
             raise LmsbenchError(f"--duration must be > 0, got {args.duration}")
         beams = {0.5: 361, 1.0: 181, 0.25: 401}[args.resolution]
@@ -57,7 +65,8 @@ def run(args: argparse.Namespace) -> int:
             sensor = base(n_beams=beams, resolution_deg=args.resolution, units=args.units,
                           **({} if args.ideal or args.units == "mm" else {"noise_sigma": 0.01}))
         cfg = SimulationConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz,
-                               sensor=sensor, odometry=OdometryConfig() if args.odometry else None)
+                               sensor=sensor, odometry=OdometryConfig() if args.odometry else None,
+                               clutter=args.clutter)
     records = run_simulation(cfg, args.out)
     print(f"simulated {len(records)} scans of world {cfg.world} (seed {cfg.seed}, {cfg.duration:g} s) into {args.out}")
     return 0
