@@ -20,8 +20,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-paper-baseline", action="store_true",
                    help="with the default preset, do not also run the paper preset for the comparison table")
     p.add_argument("--extractor", help="feature extraction method (default: the config's, 'sensor')")
-    p.add_argument("--association", choices=("nn", "jcbb"), help="data association (default: the config's)")
-    p.add_argument("--corners", action="store_true", help="add corner landmarks")
+    p.add_argument("--association", choices=("nn", "jcbb"), help="paper preset: data association (default: the config's)")
+    p.add_argument("--corners", action="store_true", help="paper preset: add corner landmarks")
     p.add_argument("--odometry", action="store_true", help="use the input's odometry as the motion input")
     p.add_argument("--no-odometry-baseline", action="store_true",
                    help="do not also run the filter with odometry for the comparison table")
@@ -57,13 +57,13 @@ def _config(args: argparse.Namespace):
     if args.extractor:
         changes["extractor"] = args.extractor
     if args.association:
-        changes["association"] = args.association
+        changes["association"] = dataclasses.replace(cfg.association, method=args.association)
     if args.corners:
-        changes["use_corners"] = True
+        changes["observations"] = dataclasses.replace(cfg.observations, use_corners=True)
     if args.odometry:
-        changes["use_odometry"] = True
+        changes["motion"] = dataclasses.replace(cfg.motion, use_odometry=True)
     cfg = dataclasses.replace(cfg, **changes)
-    if cfg.use_odometry and cfg.preset != "paper":
+    if cfg.motion.use_odometry and cfg.preset != "paper":
         raise LmsbenchError("--odometry drives the paper preset's filter: add --preset paper (the default pipeline uses no odometry)")
     return cfg
 
@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
     config = _config(args)
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
                       read_options=read_log_options(args))
-    if config.use_odometry and data.odometry is None:
+    if config.motion.use_odometry and data.odometry is None:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
     result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
                       out=args.out, paper_baseline=not args.no_paper_baseline)

@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from collections.abc import Sequence
+
 from lms200 import Scan
 
 from ..baselines import checks
@@ -108,8 +110,10 @@ class SensorMethodConfig:
         SICK cm codes (range_max > 10 m), else ``sigma_r``; either may be "auto"."""
         return self.sigma_r_cm if range_max > CM_MODE_RANGE_MAX else self.sigma_r
 
-    def sigma_of(self, scan: Scan) -> float:
-        """The range noise std (m) the thresholds use on ``scan``: :meth:`sigma_for`, with "auto"
-        estimated from the scan (:func:`features.noise_estimate.neighbour_sigma`)."""
-        sigma = self.sigma_for(scan.range_max)
-        return neighbour_sigma(scan) if sigma == AUTO else float(sigma)
+    def sigma_of(self, scans: Scan | Sequence[Scan]) -> float:
+        """The range noise std (m) the thresholds use on a scan (or a batch of one geometry):
+        :meth:`sigma_for`, with "auto" estimated from the data
+        (:func:`features.noise_estimate.neighbour_sigma`, pooled over a batch)."""
+        first = scans if isinstance(scans, Scan) else scans[0]
+        sigma = self.sigma_for(first.range_max)
+        return neighbour_sigma(scans) if sigma == AUTO else float(sigma)
