@@ -4,9 +4,8 @@ when it is built."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 from lms200 import Scan
 
