@@ -12,6 +12,8 @@ import yaml
 
 from lms200 import LmsbenchError
 
+from experiments.options import DURATION, SEED, check_methods, check_out, count, positive
+
 
 def _param(text: str) -> tuple[str, Any]:
     key, eq, value = text.partition("=")
@@ -28,15 +30,15 @@ def _param(text: str) -> tuple[str, Any]:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("compare", help="every extractor on identical scans: accuracy, corners and speed")
     p.add_argument("sources", nargs="+",
-                   help="world names (office, corridor, angles, pillars, random; WORLD:SEED for one seed) "
-                        "or paths of real logs")
+                   help="world names (office, corridor, angles, pillars, random; WORLD:SEED for one seed), "
+                        "`lmsbench simulate` folders, or paths of real logs")
     p.add_argument("--methods", nargs="+", help="extractors (default: every available one)")
-    p.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2], help="seeds of each world (default 0 1 2)")
-    p.add_argument("--duration", type=float, default=30.0, help="simulated seconds per world and seed (default 30)")
-    p.add_argument("--rate", type=float, default=2.0, help="simulated scans per second kept (default 2)")
-    p.add_argument("--stride", type=int, default=1, help="logs: use every STRIDE-th scan (default 1)")
-    p.add_argument("--max-scans", type=int, help="at most this many scans per source")
-    p.add_argument("--sigma", type=float, default=0.005, help="range noise (m) for the explained fraction")
+    p.add_argument("--seeds", nargs="+", type=SEED, default=[0, 1, 2], help="seeds of each world (default 0 1 2)")
+    p.add_argument("--duration", type=DURATION, default=30.0, help="simulated seconds per world and seed (default 30)")
+    p.add_argument("--rate", type=positive("scans/s"), default=2.0, help="simulated scans per second kept (default 2)")
+    p.add_argument("--stride", type=count(1), default=1, help="logs: use every STRIDE-th scan (default 1)")
+    p.add_argument("--max-scans", type=count(1), help="at most this many scans per source")
+    p.add_argument("--sigma", type=positive("m"), default=0.005, help="range noise (m) for the explained fraction")
     p.add_argument("--set", dest="params", action="append", type=_param, default=[], metavar="extractor.[METHOD.]FIELD=VALUE",
                    help="override a config field of every extractor that has it, or of METHOD only (repeatable)")
     p.add_argument("--out", type=Path, default=Path("results/compare"), help="output folder")
@@ -48,17 +50,16 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import pandas as pd
 
+    from experiments.compare import (check_sources, common_errors, compare, format_summary, parse_sources,
+                                     resolved_configs, summarise)
     from experiments.overrides import extractor_overrides
-    from experiments.compare import (common_errors, compare, format_summary, parse_sources, resolved_configs,
-                                     summarise)
-    from features.registry import available_methods
     from features.scoring import ScoreConfig
 
-    methods = args.methods or available_methods()
+    methods = check_methods(args.methods)
     params = extractor_overrides(dict(args.params), methods)
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
-    if args.max_scans is not None and args.max_scans < 1:
-        raise LmsbenchError(f"--max-scans must be >= 1, got {args.max_scans}")
+    check_out(args.out)
+    check_sources(args.sources)
     sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans)
     score_config = ScoreConfig()
     matches: list = []
@@ -82,10 +83,7 @@ def run(args: argparse.Namespace) -> int:
         sources=args.sources, seeds=args.seeds, duration=args.duration, rate_hz=args.rate, stride=args.stride,
         max_scans=args.max_scans, sigma=args.sigma, methods=configs, scoring=dataclasses.asdict(score_config),
     )
-    if any(src.kind == "sim" for src in sources):
-        import sim
-
-        resolved["sensor"] = dataclasses.asdict(sim.SensorConfig())  # what parse_sources simulated
+    resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
     (args.out / "config.yaml").write_text(yaml.safe_dump(resolved, sort_keys=False))
     print(text)
     print(f"wrote {path}, {args.out / 'summary.csv'}, {args.out / 'summary.txt'}, {args.out / 'config.yaml'}")
