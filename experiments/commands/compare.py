@@ -60,6 +60,9 @@ def run(args: argparse.Namespace) -> int:
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
     check_out(args.out)
     check_sources(args.sources)
+    from experiments.progress import warm_up_kernels
+
+    warm_up_kernels()
     sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans)
     score_config = ScoreConfig()
     matches: list = []

@@ -80,6 +80,9 @@ def run(args: argparse.Namespace) -> int:
         check_file(args.relations, "a relations file")
     check_out(args.out)
     config = _config(args)
+    from experiments.progress import warm_up_kernels
+
+    warm_up_kernels()
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz)
     stamps = [r.scan.stamp for r in data.records]
     back = next((k for k in range(1, len(stamps)) if stamps[k] < stamps[k - 1]), None)

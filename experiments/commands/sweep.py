@@ -35,6 +35,10 @@ def run(args: argparse.Namespace) -> int:
     out = args.out or Path("results/sweeps") / spec.name
     check_out(out)
     executor = "inprocess" if args.inprocess else (args.scheduler or "local")
+    if spec.kind in ("extract", "slam"):  # compile once here, not in every worker at the same time
+        from experiments.progress import warm_up_kernels
+
+        warm_up_kernels()
     try:
         result = run_sweep(spec, out, executor, workers=args.workers, retry_failed=args.retry_failed,
                            progress=not args.no_progress)
