@@ -128,9 +128,11 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None) 
 
 
 def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: float = 30.0,
-                  rate_hz: float | None = 2.0, stride: int = 1, max_scans: int | None = None) -> list[Source]:
+                  rate_hz: float | None = 2.0, stride: int = 1, max_scans: int | None = None,
+                  sensor: Any = None) -> list[Source]:
     """Sources from command-line words: a world name (one source per seed), ``world:seed``, a
-    ``lmsbench simulate`` folder, or the path of a log.
+    ``lmsbench simulate`` folder, or the path of a log. ``sensor`` (a ``sim.SensorConfig``) is the
+    simulated worlds' sensor model (a simulate folder has its own, in its config.yaml).
 
     Raises:
         LmsbenchError: a word that is none of these, a bad seed, or a log of the wrong kind.
@@ -142,7 +144,7 @@ def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: f
             if colon and not (seed.isdigit() and int(seed) < 2**32):
                 raise LmsbenchError(f"{spec}: the seed after the colon must be a whole number >= 0, got {seed!r}")
             for s in ([int(seed)] if colon else seeds):
-                out.append(sim_source(name, s, duration, rate_hz))
+                out.append(sim_source(name, s, duration, rate_hz, sensor))
         elif is_simulation_folder(spec):
             out.append(folder_source(spec, stride, max_scans))
         else:

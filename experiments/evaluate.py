@@ -26,13 +26,16 @@ def split_params(params: dict[str, Any], prefix: str) -> dict[str, Any]:
     return {k[len(head):]: v for k, v in params.items() if k.startswith(head)}
 
 
-def sensor_config(overrides: dict[str, Any] | None = None):
+def sensor_config(overrides: dict[str, Any] | None = None, sensor_file: str | None = None):
     """The experiments' sensor: ``sim.SensorConfig(interlaced=False)`` (as ``experiments.compare``
     uses: the truth is that of one pose, so the robot's motion within a scan is not charged to
-    the extractors) with the given fields changed (``interlaced=True`` for the moving-scan model)."""
+    the extractors) with the given fields changed (``interlaced=True`` for the moving-scan model).
+    With ``sensor_file`` (a sensor YAML, e.g. from ``lmsbench calibrate``) the base is that file's
+    config, exactly as written (its ``interlaced`` included), and ``overrides`` go on top."""
     from sim import SensorConfig
 
-    return dataclasses.replace(SensorConfig(interlaced=False), **(overrides or {}))
+    base = SensorConfig.from_yaml(sensor_file) if sensor_file else SensorConfig(interlaced=False)
+    return dataclasses.replace(base, **(overrides or {}))
 
 
 def simulate_run(world: str = "office", seed: int = 0, duration: float = 10.0, sensor=None,

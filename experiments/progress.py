@@ -15,8 +15,8 @@ import numpy as np
 Log = Callable[[str], None]
 
 #: Modules of compiled kernels (numba ``cache=True``): their cache sits in __pycache__ beside them.
-KERNEL_MODULES = ("features.sensor.kernels", "features.baselines.kernels")
-#: Methods whose default backend runs those kernels.
+KERNEL_MODULES = ("features.sensor.engine", "features.baselines.engine")
+#: Methods that run those kernels.
 COMPILED_METHODS = ("sensor", "split_merge", "iepf")
 
 
@@ -43,11 +43,8 @@ def warm_up_kernels(log: Log = stderr) -> float:
     """Load (or compile, the first time in a checkout) the extractors' numba kernels now, saying
     "compiling kernels, once" when they are not cached yet. Returns the seconds it took."""
     from features import extract
-    from features.backends import numba_available
     from lms200 import Scan
 
-    if not numba_available():
-        return 0.0
     cached = _kernels_cached()
     start = time.perf_counter()
     if not cached:

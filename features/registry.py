@@ -12,8 +12,9 @@ import importlib.util
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from lms200 import LmsbenchError, Scan
+from lms200 import Scan
 
+from .errors import ConfigError
 from .types import FeatureSet
 
 # name -> module that registers it on import (kept lazy so `import features` stays cheap)
@@ -28,21 +29,26 @@ _METHOD_MODULES: dict[str, str] = {
 
 @dataclass(frozen=True)
 class Method:
+    """A registered extractor: its typed config, its default config (built and checked once), the
+    run function and the implementation it runs on ("numba": compiled, "numpy": vectorised)."""
+
     name: str
     config_type: type
     run: Callable[[Scan, Any], FeatureSet]
+    default: Any
+    backend: str
 
 
 _REGISTRY: dict[str, Method] = {}
 
 
-class UnknownMethodError(LmsbenchError, ValueError):
+class UnknownMethodError(ConfigError):
     """The method name or one of its parameters does not exist."""
 
 
-def register(name: str, config_type: type, run: Callable[[Scan, Any], FeatureSet]) -> None:
+def register(name: str, config_type: type, run: Callable[[Scan, Any], FeatureSet], backend: str = "numpy") -> None:
     """Register an extractor under ``name`` (called by the method's module on import)."""
-    _REGISTRY[name] = Method(name, config_type, run)
+    _REGISTRY[name] = Method(name, config_type, run, config_type(), backend)
 
 
 def get_method(name: str) -> Method:
@@ -80,7 +86,7 @@ def available_methods() -> list[str]:
 def make_config(method: str, **params: Any) -> Any:
     """The method's default config with ``params`` overriding fields; unknown names raise."""
     m = get_method(method)
-    known = {f.name for f in dataclasses.fields(m.config_type)}
+    known = {f.name for f in dataclasses.fields(m.config_type) if f.init}
     unknown = sorted(set(params) - known)
     if unknown:
         raise UnknownMethodError(
@@ -90,30 +96,10 @@ def make_config(method: str, **params: Any) -> Any:
 
 
 def backend_of(method: str, config: Any = None) -> str:
-    """The backend ``method`` runs on with ``config`` (its default config when None): "numba"
-    (compiled kernels) or "numpy". Methods whose config has no ``backend`` field are numpy;
-    "auto" means numba when it is installed. Speed comparisons report it per method."""
-    cfg = config if config is not None else _default_config(get_method(method))
-    backend = getattr(cfg, "backend", "numpy")
-    if backend == "auto":
-        return "numba" if importlib.util.find_spec("numba") is not None else "numpy"
-    return str(backend)
-
-
-_DEFAULTS: dict[str, tuple[Method, Any]] = {}
-
-
-def _default_config(m: Method) -> Any:
-    """The method's default config, built once per registration when it is immutable (frozen
-    dataclass): ``make_config`` costs ~10 us a call, a large share of a fast extractor's budget."""
-    hit = _DEFAULTS.get(m.name)
-    if hit is not None and hit[0] is m:
-        return hit[1]
-    config = m.config_type()
-    params = getattr(m.config_type, "__dataclass_params__", None)
-    if params is not None and params.frozen:
-        _DEFAULTS[m.name] = (m, config)
-    return config
+    """The implementation ``method`` runs on: "numba" (compiled: sensor, split_merge, iepf) or
+    "numpy" (vectorised: hough, ransac). Speed comparisons report it per method; ``config`` is
+    accepted for callers that pass one (every config of a method runs on the same one)."""
+    return get_method(method).backend
 
 
 def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: Any) -> FeatureSet:
@@ -130,7 +116,7 @@ def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: An
     """
     m = _REGISTRY.get(method) or get_method(method)
     if config is None:
-        config = make_config(method, **params) if params else _default_config(m)
+        config = make_config(method, **params) if params else m.default
     elif params:
         config = dataclasses.replace(config, **params)
     return m.run(scan, config)

@@ -6,7 +6,7 @@ Against ground truth (``score_scan``): the truth is any object with the numpy fi
 
 Line matching (tolerances in ``ScoreConfig``): an extracted line and a truth face are *compatible*
 when
-- their normal angles differ by at most ``angle_tol_deg`` (5 deg),
+- their normal angles differ by at most ``angle_tol`` (5 deg, in rad),
 - both end points of the extracted segment lie within ``distance_tol`` (0.05 m) of the face's
   infinite line, and
 - projected on the face, the two overlap by at least ``min_overlap`` (0.5) of the extracted
@@ -37,7 +37,7 @@ from scipy.optimize import linear_sum_assignment
 
 from lms200 import Scan
 
-from .baselines.common import wrap
+from .angles import wrap
 from .types import FeatureSet
 
 _BIG = 1e6
@@ -47,7 +47,7 @@ _BIG = 1e6
 class ScoreConfig:
     """Matching tolerances (see the module docstring)."""
 
-    angle_tol_deg: float = 5.0
+    angle_tol: float = float(np.deg2rad(5.0))  # rad
     distance_tol: float = 0.05
     min_overlap: float = 0.5
     min_truth_beams: int = 10
@@ -143,7 +143,7 @@ def line_compatibility(lines: np.ndarray, seg: np.ndarray, cfg: ScoreConfig) -> 
     overlap = np.maximum(0.0, np.minimum(hi, length_t[None, :]) - np.maximum(lo, 0.0))
     length_e = np.maximum(np.hypot(lines[:, 4] - lines[:, 2], lines[:, 5] - lines[:, 3]), 1e-12)[:, None]
     cover = np.minimum(overlap / length_e, overlap / length_t[None, :])
-    angle_tol = np.deg2rad(cfg.angle_tol_deg)
+    angle_tol = cfg.angle_tol
     ok = (d_alpha <= angle_tol) & (dist <= cfg.distance_tol) & (cover >= cfg.min_overlap)
     cost = d_alpha / angle_tol + dist / cfg.distance_tol + (1.0 - cover)
     return ok, cost

@@ -19,7 +19,7 @@ import numpy as np
 from lms200 import Scan
 
 from .geometry import rectangle_corners
-from .sensor import SensorConfig
+from .sensor import OUTLIER_RANGE_SHARE, SensorConfig
 from .world import World
 
 _STREAM_SENSOR = 2
@@ -219,12 +219,23 @@ class LMS200Sim:
         noise = self.rng.standard_normal(s.n_beams)
         dropped = self.rng.random(s.n_beams) < s.dropout_prob
         finite = np.isfinite(ranges)
-        r = np.where(finite, ranges, 0.0) + s.noise_sigma * noise
+        r = np.where(finite, ranges, 0.0)
+        if s.outlier_prob > 0:  # extra draws only when asked for: the datasheet model's stream is unchanged
+            spurious = finite & (self.rng.random(s.n_beams) < s.outlier_prob)
+            lo, hi = OUTLIER_RANGE_SHARE
+            r = np.where(spurious, r * self.rng.uniform(lo, hi, s.n_beams), r)
+        sigma = s.sigma_at(r) if s.noise_sigma_per_m else s.noise_sigma
+        r = r + sigma * noise
         if s.quantise:
             r = np.rint(r / s.unit_m) * s.unit_m
         r = np.maximum(r, 0.0)
         r = np.where(finite & (r < s.range_max), r, np.inf)
+        if s.no_return_prob > 0:
+            r[self.rng.random(s.n_beams) < s.no_return_prob] = np.inf
         r[dropped] = np.nan
+        if s.max_reading is not None:  # the logger's cap: no-returns and farther echoes read as it
+            with np.errstate(invalid="ignore"):
+                r[np.isposinf(r) | (r > s.max_reading)] = s.max_reading
         return Scan(r, s.angle_min, s.angle_increment, 0.0, s.range_max, stamp)
 
     def _mix_edges(self, bp: np.ndarray, ranges: np.ndarray) -> np.ndarray:

@@ -10,14 +10,18 @@ laser scanner for mobile robot obstacle negotiation", ICRA 2002 - mixed pixels a
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 
+from lms200 import LmsbenchError
 from lms200.codes import LMS200_MAX_RANGE, metres_per_unit
 
 MIRROR_TURN_S = 1.0 / 75.0  # s: one mirror revolution (75 Hz)
+NOISE_REFERENCE_RANGE_M = 2.5  # m: noise_sigma holds at this range (the middle of 1-4 m)
+OUTLIER_RANGE_SHARE = (0.1, 0.9)  # an outlier reads this share of the true range (uniform)
 
 
 @dataclass(frozen=True)
@@ -37,6 +41,16 @@ class SensorConfig:
         mixed_gap: smallest depth step (m) inside a spot that makes a mixed pixel.
         interlaced: each beam is taken from the pose at its own time (mirror turns of 13.3 ms),
             so a moving scanner distorts the scan; False = every beam from the scan's pose.
+        noise_sigma_per_m: growth of the noise with range (m per m): a beam at range r has
+            sigma ``max(0, noise_sigma + noise_sigma_per_m * (r - 2.5 m))``.
+        no_return_prob: probability that a beam which hits a surface returns no echo (+inf).
+        outlier_prob: probability that a beam which hits a surface returns an isolated spurious
+            echo nearer than the surface (uniform in 10-90 % of its range: dust, stray light).
+        max_reading: when set (m), no-returns are logged as this finite range instead of +inf
+            (loggers that write their cap, e.g. 50 m, for "nothing").
+
+    The last four fields default to the datasheet model (none of these effects);
+    ``lmsbench calibrate`` fits all of them to a real log.
     """
 
     n_beams: int = 361
@@ -49,6 +63,10 @@ class SensorConfig:
     beam_width_deg: float = 0.5
     mixed_gap: float = 0.1
     interlaced: bool = True
+    noise_sigma_per_m: float = 0.0
+    no_return_prob: float = 0.0
+    outlier_prob: float = 0.0
+    max_reading: float | None = None
 
     def __post_init__(self) -> None:
         if self.units not in ("mm", "cm"):
@@ -61,8 +79,16 @@ class SensorConfig:
             raise ValueError(f"n_beams, resolution_deg: field of view {self.fov_deg} deg exceeds 180 deg")
         if self.noise_sigma < 0:
             raise ValueError(f"noise_sigma: must be >= 0, got {self.noise_sigma}")
-        if not 0 <= self.dropout_prob < 1:
-            raise ValueError(f"dropout_prob: must be in [0, 1), got {self.dropout_prob}")
+        for name in ("dropout_prob", "no_return_prob", "outlier_prob"):
+            value = getattr(self, name)
+            if not 0 <= value < 1:
+                raise ValueError(f"{name}: must be in [0, 1), got {value}")
+        if self.beam_width_deg < 0:
+            raise ValueError(f"beam_width_deg: must be >= 0, got {self.beam_width_deg}")
+        if not np.isfinite(self.noise_sigma_per_m):
+            raise ValueError(f"noise_sigma_per_m: must be finite, got {self.noise_sigma_per_m}")
+        if self.max_reading is not None and not 0 < self.max_reading <= self.range_max:
+            raise ValueError(f"max_reading: must be in (0, range_max = {self.range_max}], got {self.max_reading}")
 
     # -- presets ------------------------------------------------------------------------------
     @classmethod
@@ -87,6 +113,63 @@ class SensorConfig:
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any], where: str = "sensor") -> "SensorConfig":
+        """A config from a mapping of field names; keys other than fields raise, naming them.
+
+        Raises:
+            LmsbenchError: for unknown keys or a bad value (the message names ``where``).
+        """
+        if not isinstance(d, dict):
+            raise LmsbenchError(f"{where}: a sensor config must be a mapping of fields, got {type(d).__name__}")
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(d) - known)
+        if unknown:
+            raise LmsbenchError(f"{where}: unknown sensor field(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}")
+        try:
+            return cls(**d)
+        except (TypeError, ValueError) as exc:
+            raise LmsbenchError(f"{where}: {exc}") from None
+
+    @classmethod
+    def from_yaml(cls, path: str | Path) -> "SensorConfig":
+        """Read a sensor YAML: the fields at top level (as ``lmsbench calibrate`` writes them; its
+        ``calibration`` section of estimates is metadata and skipped), or a run's config.yaml
+        with a ``sensor`` section.
+
+        Raises:
+            LmsbenchError: for a missing or unreadable file, unknown fields or bad values.
+        """
+        import yaml
+
+        p = Path(path)
+        if not p.is_file():
+            raise LmsbenchError(f"{p}: no such sensor file")
+        try:
+            d = yaml.safe_load(p.read_text(encoding="utf-8"))
+        except (yaml.YAMLError, UnicodeDecodeError) as exc:
+            raise LmsbenchError(f"{p}: not a YAML file ({exc})") from None
+        if isinstance(d, dict) and isinstance(d.get("sensor"), dict):
+            d = d["sensor"]
+        if isinstance(d, dict):
+            d = {k: v for k, v in d.items() if k != "calibration"}
+        return cls.from_dict(d, where=str(p))
+
+    def to_yaml(self, path: str | Path, header: str = "", extra: dict[str, Any] | None = None) -> None:
+        """Write the fields as YAML (``header`` as # comment lines, ``extra`` as more sections)."""
+        import yaml
+
+        lines = "".join(f"# {line}\n" for line in header.splitlines())
+        body = yaml.safe_dump(self.to_dict(), sort_keys=False)
+        if extra:
+            body += yaml.safe_dump(extra, sort_keys=False)
+        Path(path).write_text(lines + body, encoding="utf-8")
+
+    def sigma_at(self, ranges: np.ndarray) -> np.ndarray:
+        """Range noise 1 sigma (m) at each range (m)."""
+        r = np.asarray(ranges, dtype=float)
+        return np.maximum(self.noise_sigma + self.noise_sigma_per_m * (r - NOISE_REFERENCE_RANGE_M), 0.0)
 
     # -- derived ------------------------------------------------------------------------------
     @property

@@ -138,17 +138,49 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
                       slam.map_lines(), slam.map_corners(), out)
 
 
-def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> SlamResult:
-    """Odometry-free EKF-SLAM over a scan source (a log reader, the simulator's records...).
+def pose_nees(traj: np.ndarray, covs: np.ndarray, truths: list) -> np.ndarray:
+    """Per-scan pose NEES ``e^T P^-1 e`` (3 dof) of an (n, 4) trajectory with (n, 3, 3) world-frame
+    covariances against true poses (None where unknown: nan), in the truth frame anchored at the
+    first true pose (the estimate's frame is that of its first pose)."""
+    out = np.full(traj.shape[0], np.nan)
+    anchor = None
+    for k, truth in enumerate(truths):
+        if truth is None:
+            continue
+        if anchor is None:
+            anchor = np.asarray(truth, float)
+            continue
+        e = np.asarray(truth, float) - _compose(anchor, traj[k, 1:])
+        e[2] = wrap(e[2])
+        c, s = np.cos(anchor[2]), np.sin(anchor[2])
+        Rw = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
+        Pw = Rw @ covs[k] @ Rw.T
+        try:
+            out[k] = float(e @ np.linalg.solve(Pw, e))
+        except np.linalg.LinAlgError:
+            out[k] = np.inf
+    return out
 
-    Line (and, with ``config.use_corners``, corner) observations come from
-    ``features.extract(scan, method=config.extractor, **config.extractor_params)``. The records'
-    odometry is used only with ``config.use_odometry``; true poses only for the NEES diagnostic.
+
+def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> SlamResult:
+    """Odometry-free SLAM over a scan source (a log reader, the simulator's records...).
+
+    ``config.preset == "default"``: motion measured by scan matching, keyframe pose graph with
+    loop closures (:func:`slam.scanslam.run_scan_slam`); the trajectory is the optimised graph's.
+    ``"paper"``: the paper's EKF (section 4.1) with line (and, with ``config.use_corners``,
+    corner) observations from ``features.extract(scan, method=config.extractor,
+    **config.extractor_params)``. The records' odometry is used only with
+    ``config.use_odometry`` (paper preset); true poses only for the NEES diagnostic.
 
     Returns:
         SlamResult with one pose per record, stamped with the record's ``scan.stamp``.
     """
     from features import extract  # the extractor registry (methods load lazily)
+
+    if config.preset == "default":
+        from .scanslam import run_scan_slam
+
+        return run_scan_slam(((rec.scan.stamp, rec.scan, rec.truth) for rec in records), config)
 
     def steps():
         for rec in records:

@@ -186,8 +186,9 @@ def test_runs_test_option_drops_lines_on_a_pillar(method):
     [
         ("hough", {"rho_step": 0}, "rho_step"),
         ("hough", {"rho_step": -1}, "rho_step"),
-        ("hough", {"alpha_step_deg": 0}, "alpha_step_deg"),
-        ("hough", {"alpha_step_deg": float("nan")}, "alpha_step_deg"),
+        ("hough", {"alpha_step": 0}, "alpha_step"),
+        ("hough", {"alpha_step": float("nan")}, "alpha_step"),
+        ("hough", {"alpha_step": 4.0}, "alpha_step"),
         ("hough", {"band_fine": -0.01}, "band_fine"),
         ("hough", {"max_failures": 0}, "max_failures"),
         ("ransac", {"hypotheses": -1}, "hypotheses"),
@@ -200,8 +201,8 @@ def test_runs_test_option_drops_lines_on_a_pillar(method):
         ("split_merge", {"min_points": 1}, "min_points"),
         ("split_merge", {"sigma": -0.005}, "sigma"),
         ("split_merge", {"merge_rms": -1.0}, "merge_rms"),
-        ("split_merge", {"backend": "cuda"}, "backend"),
-        ("iepf", {"breakpoint_lambda_deg": 0}, "breakpoint_lambda_deg"),
+        ("iepf", {"breakpoint_lambda": 0}, "breakpoint_lambda"),
+        ("iepf", {"breakpoint_lambda": 10.0}, "breakpoint_lambda"),
         ("iepf", {"min_length": -0.1}, "min_length"),
         ("iepf", {"runs_z": float("inf")}, "runs_z"),
         ("iepf", {"max_skip": True}, "max_skip"),
@@ -211,14 +212,19 @@ def test_bad_config_values_raise_naming_the_field(method: str, params: dict, fie
     """Values that cannot work fail when the config is built, with the field's name first, not with
     a ZeroDivisionError or a numpy shape error inside the extractor."""
     scan = Scan.lms200(np.full(361, 2.0))
-    with pytest.raises(ValueError, match=f"^{field}: must be"):
+    from features import ConfigError
+    from lms200 import LmsbenchError
+
+    with pytest.raises(ConfigError, match=f"^{field}: must be") as err:
         extract(scan, method=method, **params)
+    assert isinstance(err.value, ValueError) and isinstance(err.value, LmsbenchError)
 
 
 @pytest.mark.parametrize(
     "params, field",
-    [({"min_turn_deg": 180.0}, "min_turn_deg"), ({"max_gap_beams": 0}, "max_gap_beams"),
-     ({"max_distance": -1.0}, "max_distance"), ({"sigma": 0.0}, "sigma"), ({"lambda_deg": 95.0}, "lambda_deg")],
+    [({"min_turn": np.pi}, "min_turn"), ({"min_turn": 30.0}, "min_turn"), ({"max_gap_beams": 0}, "max_gap_beams"),
+     ({"max_distance": -1.0}, "max_distance"), ({"sigma": 0.0}, "sigma"),
+     ({"breakpoint_lambda": np.deg2rad(95.0)}, "breakpoint_lambda")],
 )
 def test_bad_corner_config_values_raise(params: dict, field: str) -> None:
     from features.baselines.common import CornerConfig

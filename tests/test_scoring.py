@@ -96,7 +96,7 @@ def test_turned_line_beyond_the_angle_tolerance_is_not_matched():
 def test_angle_tolerance_alone_rejects():
     lines = perfect()
     lines[1] = line_from(SEGS[1], *BEAMS[1], turn=np.deg2rad(0.3))
-    assert score_scan(FeatureSet(lines, [], "hand"), TRUTH, ScoreConfig(angle_tol_deg=0.2)).tp == 2
+    assert score_scan(FeatureSet(lines, [], "hand"), TRUTH, ScoreConfig(angle_tol=np.deg2rad(0.2))).tp == 2
 
 
 def test_duplicate_line_on_a_matched_face_is_a_false_positive():

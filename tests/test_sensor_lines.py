@@ -8,7 +8,10 @@ from sensor_geometry import ROOM, cast, line_scan, polygon
 
 from features import FeatureSet, extract
 from features.registry import UnknownMethodError
-from features.sensor.hough import band_search, logcos_template
+from features.sensor import engine
+from features.sensor.grid import LOGCOS_FLOOR, grid_constants
+
+import sensor_oracle
 
 ROOM_LINES = {  # wall -> (rho, alpha) of x=3, y=2, y=-2.5 as seen from the origin
     "x=3": (3.0, 0.0),
@@ -154,8 +157,8 @@ def test_params_override_defaults() -> None:
 
 
 def test_log_hough_band_search_finds_the_line_and_rejects_outliers() -> None:
-    step = np.deg2rad(0.5) / 4
-    template, zero = logcos_template(step)
+    grid = grid_constants(3, np.deg2rad(0.5), 4)
+    step, template, zero = grid.step, grid.template, grid.zero
     m = np.array([-100, 0, 37])
     np.testing.assert_allclose(template[zero + m], np.log(np.cos(m * step)))
     # one run of 40 beams on x cos(a) + y sin(a) = p with 3 outliers
@@ -164,17 +167,43 @@ def test_log_hough_band_search_finds_the_line_and_rejects_outliers() -> None:
     b = -np.pi / 2 + beam * np.deg2rad(0.5)
     d = p / np.cos(b - a)
     d[[5, 20, 33]] *= 1.2
-    peak = band_search(
-        beam, np.log(d), np.zeros(40, int), np.array([0]), np.array([40]), np.array([a + 0.02]),
-        np.array([0.05]), np.array([0.003]), -np.pi / 2, np.deg2rad(0.5), 4, 11,
+    alpha, rho, inlier = engine.band_search(
+        beam, np.log(d), np.array([0]), np.array([40]), np.array([a + 0.02]),
+        np.array([0.05]), np.array([0.003]), -np.pi / 2, 4, 11, grid,
     )
-    assert abs(peak.alpha[0] - a) <= 5 * step + 1e-12  # one band step: 0.05 rad / 5 on the grid
-    assert peak.rho[0] == pytest.approx(p, rel=0.01)
-    assert peak.inlier.sum() == 37 and not peak.inlier[[5, 20, 33]].any()
+    assert abs(alpha[0] - a) <= 5 * step + 1e-12  # one band step: 0.05 rad / 5 on the grid
+    assert rho[0] == pytest.approx(p, rel=0.01)
+    assert inlier.sum() == 37 and not inlier[[5, 20, 33]].any()
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_log_hough_vote_equals_the_oracle(seed: int) -> None:
+    """The template lookups of the compiled band search vote as log cos computed directly."""
+    rng = np.random.default_rng(seed)
+    inc, subdiv, n_angles = np.deg2rad(rng.choice([0.25, 0.5, 1.0])), int(rng.integers(1, 6)), int(rng.choice([5, 7, 11]))
+    grid = grid_constants(3, inc, subdiv)
+    count = int(rng.integers(12, 120))
+    beam = np.arange(count) + int(rng.integers(0, 50))
+    a_true, p = rng.uniform(-np.pi, np.pi), rng.uniform(0.5, 8.0)
+    angle_min = a_true - rng.uniform(0.2, 1.2) - beam[0] * inc
+    b = angle_min + beam * inc
+    d = p / np.cos(b - a_true) * (1 + rng.normal(0, 0.002, count))
+    d[rng.random(count) < 0.1] *= rng.uniform(0.7, 1.3)
+    half_width, bin_half = rng.uniform(0.004, 0.3), rng.uniform(0.002, 0.02)
+    centre = a_true + rng.normal(0, half_width / 3)
+    alpha, rho, inlier = engine.band_search(beam, np.log(d), np.array([0]), np.array([count]), np.array([centre]),
+                                            np.array([half_width]), np.array([bin_half]), angle_min, subdiv, n_angles, grid)
+    h = (n_angles - 1) // 2
+    stride = max(np.rint(half_width / (max(h, 1) * grid.step)), 1.0)
+    a_idx = np.rint((centre - angle_min) / grid.step) + stride * np.arange(-h, h + 1)
+    best, peak, oracle_inlier = sensor_oracle.log_hough_peak(beam, np.log(d), a_idx, grid.step, subdiv, bin_half, LOGCOS_FLOOR)
+    assert alpha[0] == pytest.approx(angle_min + a_idx[best] * grid.step, abs=1e-12)
+    assert rho[0] == pytest.approx(np.exp(peak), rel=1e-12)
+    np.testing.assert_array_equal(inlier, oracle_inlier)
 
 
 def test_acute_remedy_is_switchable_and_measures_range_variance() -> None:
-    from features.sensor.corners import neighbourhood_var
+    from features.sensor.engine import neighbourhood_var
 
     scan = cast(ROOM)
     fs = extract(scan)

@@ -69,7 +69,7 @@ def test_decimated_input_and_odometry_rows(sim_folder):
     data = load_input(sim_folder, every=3)
     assert len(data.records) == 75 and data.odometry is None
     result = run(data, SlamConfig(), progress=False)
-    assert [row["source"] for row in result.metrics["table"]] == ["slam"]
+    assert [row["source"] for row in result.metrics["table"]] == ["slam", "paper preset"]
     assert result.metrics["ate"]["rmse"] < 0.15
     five = load_input(sim_folder, rate_hz=5.0)
     stamps = np.array([r.scan.stamp for r in five.records])

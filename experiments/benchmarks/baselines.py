@@ -3,7 +3,7 @@
 Scans: noisy synthetic rooms (exact L-shaped room, 5 mm noise, seeded poses) and, where the shared
 data is present, every 10th scan of the MIT CSAIL log. Rows: one per method x scan set, with the
 median wall and CPU microseconds per scan, scans/s and the speed ratios to the sensor method, with
-the backend each ran on; the methods with a numba backend are timed on their numpy reference too.
+the implementation each runs on (numba: compiled, numpy: vectorised).
 """
 
 from __future__ import annotations
@@ -39,16 +39,9 @@ def _log_scans(n: int) -> list:
     return [rec.scan for k, rec in enumerate(read_log(MIT_LOG)) if k % 10 == 0][:n]
 
 
-NUMPY_REFERENCES = ("sensor", "split_merge", "iepf")  # methods with a numba backend: also timed as numpy
-
-
 def variants(methods: list[str]) -> list[tuple[str, str, dict]]:
-    """(label, method, params) of every timed variant: each method on its default backend, and
-    the methods that have a numba backend once more on their numpy reference ("iepf[numpy]")."""
-    out = [(m, m, {}) for m in methods]
-    out += [(f"{m}[numpy]", m, {"backend": "numpy"}) for m in methods
-            if m in NUMPY_REFERENCES and backend_of(m) == "numba"]
-    return out
+    """(label, method, params) of every timed variant: each method with its default config."""
+    return [(m, m, {}) for m in methods]
 
 
 def time_methods(scans: list, methods: list, repeats: int) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:

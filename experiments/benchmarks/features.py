@@ -48,10 +48,10 @@ def room_scans(count: int, seed: int = 0) -> list[Scan]:
     return scans
 
 
-def time_backend(scans: list[Scan], backend: str, repeats: int) -> dict:
-    """Per-scan times of extract(scan, method="sensor", backend=...) over ``repeats`` passes."""
-    for s in scans[:50]:  # warm caches (templates, configs) and load the compiled kernels
-        extract(s, method="sensor", backend=backend)
+def time_sensor(scans: list[Scan], repeats: int) -> dict:
+    """Per-scan times of extract(scan, method="sensor") over ``repeats`` passes."""
+    for s in scans[:50]:  # warm caches (templates) and load the compiled kernels
+        extract(s, method="sensor")
     times = np.empty((repeats, len(scans)))
     cpu = np.empty(repeats)
     n_lines = n_corners = 0
@@ -59,7 +59,7 @@ def time_backend(scans: list[Scan], backend: str, repeats: int) -> dict:
         c0 = time.process_time_ns()
         for i, s in enumerate(scans):
             t0 = time.perf_counter_ns()
-            fs = extract(s, method="sensor", backend=backend)
+            fs = extract(s, method="sensor")
             times[rep, i] = time.perf_counter_ns() - t0
             n_lines += len(fs.lines)
             n_corners += len(fs.corners)
@@ -81,26 +81,17 @@ def time_backend(scans: list[Scan], backend: str, repeats: int) -> dict:
 
 
 def run(quick: bool = False) -> list[dict]:
-    """One row per backend ("numpy", the reference, and "numba" where installed): scans/s and
-    per-scan time of extract(scan, method="sensor"), wall clock over all repeats
-    (``scans_per_s``, ``mean_us``), the mean over scans of each scan's fastest repeat
+    """One row: scans/s and per-scan time of extract(scan, method="sensor"), wall clock over all
+    repeats (``scans_per_s``, ``mean_us``), the mean over scans of each scan's fastest repeat
     (``best_of_repeats_us``, ``scans_per_s_best``: on a shared machine the least disturbed
     figure), and the process CPU time per scan of the least disturbed pass (``cpu_us``,
-    ``scans_per_s_cpu``); ``speedup_vs_numpy`` from the best-of-repeats times."""
-    from features.sensor import resolve_backend
-
+    ``scans_per_s_cpu``)."""
     count = 200 if quick else 1500
     scans, source = office_scans(count)
     repeats = 2 if quick else 5
-    backends = ["numpy"] + (["numba"] if resolve_backend("auto") == "numba" else [])
-    rows = []
-    for backend in backends:
-        row = {"benchmark": "extract_sensor", "backend": backend, "source": source, "scans": len(scans)}
-        row.update(time_backend(scans, backend, repeats))
-        rows.append(row)
-    for row in rows:
-        row["speedup_vs_numpy"] = rows[0]["best_of_repeats_us"] / row["best_of_repeats_us"]
-    return rows
+    row = {"benchmark": "extract_sensor", "backend": "numba", "source": source, "scans": len(scans)}
+    row.update(time_sensor(scans, repeats))
+    return [row]
 
 
 def accuracy(world: str, duration: float = 300.0, rate_hz: float = 0.4, sensor=None, **params) -> dict:

@@ -12,7 +12,7 @@ import yaml
 
 from lms200 import LmsbenchError
 
-from experiments.options import DURATION, SEED, check_methods, check_out, count, positive
+from experiments.options import DURATION, SEED, check_methods, check_out, check_yaml, count, positive
 
 
 def _param(text: str) -> tuple[str, Any]:
@@ -39,6 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--stride", type=count(1), default=1, help="logs: use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=count(1), help="at most this many scans per source")
     p.add_argument("--sigma", type=positive("m"), default=0.005, help="range noise (m) for the explained fraction")
+    p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
+                   help="sensor model of the simulated sources, as written (e.g. from `lmsbench calibrate`)")
     p.add_argument("--set", dest="params", action="append", type=_param, default=[], metavar="extractor.[METHOD.]FIELD=VALUE",
                    help="override a config field of every extractor that has it, or of METHOD only (repeatable)")
     p.add_argument("--out", type=Path, default=Path("results/compare"), help="output folder")
@@ -60,10 +62,22 @@ def run(args: argparse.Namespace) -> int:
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
     check_out(args.out)
     check_sources(args.sources)
+    sensor = None
+    if args.sensor is not None:
+        import sim
+
+        check_yaml(args.sensor, "a sensor YAML")
+        try:
+            sensor = sim.SensorConfig.from_yaml(args.sensor)
+        except LmsbenchError:
+            raise
+        except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
+            raise LmsbenchError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
     from experiments.progress import warm_up_kernels
 
     warm_up_kernels()
-    sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans)
+    sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans,
+                            sensor=sensor)
     score_config = ScoreConfig()
     matches: list = []
     table = compare(sources, methods, params=params, score_config=score_config, sigma=args.sigma,

@@ -23,6 +23,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="angular resolution, deg: 0.5 (361 beams), 1 (181), 0.25 (401 over 100 deg)")
     p.add_argument("--units", choices=("mm", "cm"), default="mm", help="range unit mode (default mm)")
     p.add_argument("--ideal", action="store_true", help="exact ranges: no noise, quantisation, dropouts, ...")
+    p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
+                   help="sensor model from a YAML (e.g. from `lmsbench calibrate`); replaces --resolution and --units")
     p.add_argument("--odometry", action="store_true", help="add noisy wheel odometry to the scans")
     p.add_argument("--config", type=Path, help="rerun a config.yaml written by an earlier run")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -32,6 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _config(args: argparse.Namespace):
     import yaml
 
+    from lms200 import LmsbenchError
     from sim import SensorConfig
     from sim.records import OdometryConfig
 
@@ -57,8 +60,19 @@ def _config(args: argparse.Namespace):
         check_file(args.world, "a world.json")
     beams = {0.5: 361, 1.0: 181, 0.25: 401}[args.resolution]
     base = SensorConfig.ideal if args.ideal else SensorConfig
-    sensor = base(n_beams=beams, resolution_deg=args.resolution, units=args.units,
-                  **({} if args.ideal or args.units == "mm" else {"noise_sigma": 0.01}))
+    if args.sensor is not None:
+        if args.ideal:
+            raise InputError("--sensor and --ideal exclude each other (the file holds the whole sensor model)")
+        check_yaml(args.sensor, "a sensor YAML")
+        try:
+            sensor = SensorConfig.from_yaml(args.sensor)
+        except LmsbenchError:
+            raise
+        except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
+            raise InputError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
+    else:
+        sensor = base(n_beams=beams, resolution_deg=args.resolution, units=args.units,
+                      **({} if args.ideal or args.units == "mm" else {"noise_sigma": 0.01}))
     return SimulationConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz,
                             sensor=sensor, odometry=OdometryConfig() if args.odometry else None)
 

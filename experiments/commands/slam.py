@@ -9,11 +9,16 @@ from experiments.options import InputError, check_file, check_log, check_methods
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("slam", help="EKF-SLAM with line landmarks over a simulator folder, CARMEN log or bag "
+    p = sub.add_parser("slam", help="odometry-free SLAM (scan matching + pose graph, or the paper's EKF) over a simulator folder, CARMEN log or bag "
                                     "(trajectory.tum, map.json, metrics.json, config.yaml, slam.png)")
     p.add_argument("input", help="simulator output folder (scans.clf, groundtruth.tum, world.json), CARMEN log or bag")
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument("--config", type=Path, help="a SLAM config.yaml (its 'slam' section or a flat mapping)")
+    p.add_argument("--preset", choices=("default", "paper"),
+                   help="default: scan matching + pose graph with loop closures; paper: the paper's EKF "
+                        "(constant velocity, line landmarks). Default: the config's, 'default'")
+    p.add_argument("--no-paper-baseline", action="store_true",
+                   help="with the default preset, do not also run the paper preset for the comparison table")
     p.add_argument("--extractor", help="feature extraction method (default: the config's, 'sensor')")
     p.add_argument("--association", choices=("nn", "jcbb"), help="data association (default: the config's)")
     p.add_argument("--corners", action="store_true", help="add corner landmarks")
@@ -47,6 +52,8 @@ def _config(args: argparse.Namespace):
             raise LmsbenchError(f"{args.config}: expected a mapping of SLAM config fields")
         cfg = SlamConfig.from_dict(raw.get("slam", raw))
     changes = {}
+    if args.preset:
+        changes["preset"] = args.preset
     if args.extractor:
         changes["extractor"] = check_methods([args.extractor])[0]
     if args.association:
@@ -55,7 +62,10 @@ def _config(args: argparse.Namespace):
         changes["use_corners"] = True
     if args.odometry:
         changes["use_odometry"] = True
-    return dataclasses.replace(cfg, **changes)
+    cfg = dataclasses.replace(cfg, **changes)
+    if cfg.use_odometry and cfg.preset != "paper":
+        raise LmsbenchError("--odometry drives the paper preset's filter: add --preset paper (the default pipeline uses no odometry)")
+    return cfg
 
 
 def _check_input(path: Path) -> None:
@@ -92,16 +102,18 @@ def run(args: argparse.Namespace) -> int:
     if config.use_odometry and data.odometry is None:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
     result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
-                      out=args.out)
+                      out=args.out, paper_baseline=not args.no_paper_baseline)
     write_outputs(args.out, data, config, result)
     m = result.metrics
-    print(f"slam: {m['n_scans']} scans in {m['seconds']:.1f} s ({m['scans_per_s']:.1f} scans/s), "
-          f"{m['landmarks']['lines']} line landmarks; outputs in {args.out}")
-    for row in m["table"]:
-        cells = ", ".join(f"{k}={v:.3f}" for k, v in row.items() if k != "source" and isinstance(v, float))
-        print(f"  {row['source']:<16} {cells}")
+    print(f"slam ({config.preset} preset): {m['n_scans']} scans in {m['seconds']:.1f} s "
+          f"({m['cpu_scans_per_s']:.0f} scans/s of CPU time), {m['landmarks']['lines']} map lines; outputs in {args.out}")
+    if "loop_closures" in m:
+        lc, t0 = m["loop_closures"], data.records[0].scan.stamp
+        shown = ", ".join(f"{c['new_stamp'] - t0:.1f} s -> {c['old_stamp'] - t0:.1f} s" for c in lc["closed"][:6])
+        more = ", ..." if lc["n"] > 6 else ""
+        print(f"  {lc['n']} loop closures over {lc['n_keyframes']} keyframes" + (f" ({shown}{more})" if lc["n"] else ""))
     if m["consistency"]["diverged"]:
-        print(f"  warning: the filter diverged (NIS) at t={m['consistency']['diverged_at']}")
+        print(f"  warning: the estimate diverged at t={m['consistency']['diverged_at']}")
     if "note" in m.get("relations", {}):
         print(f"  relations: {m['relations']['note']}")
     if "anchors_relations_trans_mean_m" in m:

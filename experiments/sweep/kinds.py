@@ -2,7 +2,8 @@
 
 Parameters (flat, as in the sweep file): ``method``, ``world`` (default office), ``seed``,
 ``duration`` (s of simulated time), ``rate_hz`` (scans per second kept), ``sensor.*`` (fields of
-``sim.SensorConfig``), ``extractor.*`` (the extractor's config fields), ``slam.*`` (fields of
+``sim.SensorConfig``; ``sensor_file`` names a sensor YAML, e.g. from ``lmsbench calibrate``, that
+they override), ``extractor.*`` (the extractor's config fields), ``slam.*`` (fields of
 ``slam.SlamConfig``; ``slam.extractor_params.NAME`` sets one entry of its extractor_params). Each returns a dict of scalar metrics.
 """
 
@@ -24,10 +25,11 @@ SLAM_DEFAULTS = {"world": "office", "duration": 30.0, "rate_hz": None}
 
 
 @functools.lru_cache(maxsize=4)
-def _run(world: str, seed: int, duration: float, rate_hz: float | None, sensor_items: tuple, with_truth: bool):
+def _run(world: str, seed: int, duration: float, rate_hz: float | None, sensor_items: tuple, with_truth: bool,
+         sensor_file: str | None = None):
     """Simulated records (and their visible truths), cached per worker: a grid over extractor
     parameters simulates each (world, seed, sensor) once per worker process."""
-    sensor = sensor_config(dict(sensor_items))
+    sensor = sensor_config(dict(sensor_items), sensor_file)
     world_obj, records = simulate_run(world, seed, duration, sensor, rate_hz)
     truths = truths_for(world_obj, records, sensor) if with_truth else None
     return world_obj, records, truths
@@ -38,7 +40,9 @@ def _records(params: dict[str, Any], defaults: dict[str, Any], with_truth: bool)
     rate = p.get("rate_hz")
     rate = None if rate is None or (isinstance(rate, float) and math.isnan(rate)) else float(rate)
     sensor_items = tuple(sorted(split_params(p, "sensor").items()))
-    return _run(str(p["world"]), int(p.get("seed", 0)), float(p["duration"]), rate, sensor_items, with_truth)
+    sensor_file = p.get("sensor_file")
+    return _run(str(p["world"]), int(p.get("seed", 0)), float(p["duration"]), rate, sensor_items, with_truth,
+                None if sensor_file is None else str(sensor_file))
 
 
 def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
@@ -48,7 +52,8 @@ def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
     p = {**EXTRACT_DEFAULTS, **params}
     _, records, truths = _records(p, EXTRACT_DEFAULTS, with_truth=True)
     method = str(p["method"])
-    noise = float(split_params(p, "sensor").get("noise_sigma", 0.005))
+    sensor = sensor_config(split_params(p, "sensor"), p.get("sensor_file"))
+    noise = float(sensor.noise_sigma)
     source = Source.from_records(records, truths, seed=int(p.get("seed", 0)))
     params = extractor_overrides(p, [method], other_methods=True)
     table = compare([source], [method], params=params, sigma=max(noise, 0.001))
@@ -138,9 +143,18 @@ def _extractor_fields(method: str) -> tuple[set[str], str]:
     return _fields(m.config_type), f"the {method!r} extractor's {m.config_type.__name__}"
 
 
+def _check_sensor_files(cells: Iterable[dict[str, Any]]) -> None:
+    """Every ``sensor_file`` reads as a sensor config (raises LmsbenchError naming the file)."""
+    from sim import SensorConfig
+
+    for path in sorted({str(c["sensor_file"]) for c in cells if c.get("sensor_file") is not None}):
+        SensorConfig.from_yaml(path)
+
+
 def check_extract_params(cells: list[dict[str, Any]]) -> None:
     """Every ``sensor.*`` and ``extractor.*`` name of every cell is a field of its config (checked
     before any cell runs, so a misspelled name fails at once instead of in every cell)."""
+    _check_sensor_files(cells)
     _unknown(cells, "sensor", _sensor_fields)
     from .spec import SweepSpecError
 
@@ -157,6 +171,7 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
     """Every ``sensor.*``, ``slam.*`` and ``slam.extractor_params.*`` name is a field of its config."""
     from slam import SlamConfig
 
+    _check_sensor_files(cells)
     _unknown(cells, "sensor", _sensor_fields)
     slam_cells = [{k: v for k, v in c.items() if not k.startswith("slam.extractor_params.")} for c in cells]
     _unknown(slam_cells, "slam", lambda c: (_fields(SlamConfig), "slam.SlamConfig"))

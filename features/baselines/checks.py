@@ -1,12 +1,19 @@
-"""Value checks for the baseline configs: each raises ValueError with a message that starts with the
-field's name (as the sensor method's config does), so a bad sweep value fails at config time with
-what to fix instead of deep inside an extractor (a ZeroDivisionError, a numpy shape error)."""
+"""Value checks for the extractors' configs: each raises ConfigError with a message that starts
+with the field's name, so a bad sweep value fails when the config is built, with what to fix,
+instead of deep inside an extractor (a ZeroDivisionError, a numpy shape error)."""
 
 from __future__ import annotations
 
 import math
 
 import numpy as np
+
+from ..errors import ConfigError
+
+
+def fail(name: str, requirement: str, value: object) -> None:
+    """Raise the ConfigError ``"<name>: <requirement>, got <value>"``."""
+    raise ConfigError(f"{name}: {requirement}, got {value!r}")
 
 
 def is_real(value: object) -> bool:
@@ -17,38 +24,57 @@ def is_real(value: object) -> bool:
 def integer(name: str, value: object, minimum: int) -> None:
     """``value`` must be an integer (not a bool) >= ``minimum``."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise ValueError(f"{name}: must be an integer >= {minimum}, got {value!r}")
+        fail(name, f"must be an integer >= {minimum}", value)
 
 
 def positive(name: str, value: object, unit: str) -> None:
     """``value`` must be a finite number > 0 (in ``unit``)."""
     if not is_real(value) or not (math.isfinite(value) and value > 0):
-        raise ValueError(f"{name}: must be a finite number > 0 {unit}, got {value!r}")
+        fail(name, f"must be a finite number > 0 {unit}", value)
 
 
 def non_negative(name: str, value: object, unit: str = "") -> None:
     """``value`` must be a finite number >= 0 (in ``unit``)."""
     if not is_real(value) or not (math.isfinite(value) and value >= 0):
-        raise ValueError(f"{name}: must be a finite number >= 0{' ' + unit if unit else ''}, got {value!r}")
+        fail(name, f"must be a finite number >= 0{' ' + unit if unit else ''}", value)
 
 
-def angle_deg(name: str, value: object, high: float) -> None:
-    """``value`` must be an angle in (0, ``high``] degrees."""
-    if not is_real(value) or not (0 < value <= high):
-        raise ValueError(f"{name}: must be an angle in (0, {high:g}] deg, got {value!r}")
+def real_at_least(name: str, value: object, minimum: float) -> None:
+    """``value`` must be a finite number >= ``minimum``."""
+    if not is_real(value) or not (math.isfinite(value) and value >= minimum):
+        fail(name, f"must be a finite number >= {minimum:g}", value)
+
+
+def between(name: str, value: object, low: float, high: float, unit: str = "") -> None:
+    """``value`` must be a number in [low, high] (in ``unit``)."""
+    if not is_real(value) or not (low <= value <= high):
+        fail(name, f"must be a number in [{low:g}, {high:g}]{' ' + unit if unit else ''}", value)
+
+
+def angle(name: str, value: object, high: float, low_open: bool = True) -> None:
+    """``value`` must be an angle in (0, ``high``] rad (``low_open``) or [0, high) rad."""
+    ok = is_real(value) and ((0 < value <= high) if low_open else (0 <= value < high))
+    if not ok:
+        fail(name, f"must be an angle in {'(0' if low_open else '[0'}, {high:.6g}{']' if low_open else ')'} rad", value)
+
+
+def flag(name: str, value: object) -> None:
+    """``value`` must be a bool."""
+    if not isinstance(value, (bool, np.bool_)):
+        fail(name, "must be True or False", value)
 
 
 def choice(name: str, value: object, allowed: tuple[str, ...]) -> None:
     """``value`` must be one of ``allowed``."""
     if value not in allowed:
-        raise ValueError(f"{name}: must be one of {', '.join(allowed)}, got {value!r}")
+        fail(name, f"must be one of {', '.join(allowed)}", value)
 
 
 def shared_fields(cfg: object) -> None:
-    """The fields every baseline has: sigma, breakpoint_lambda_deg, min_points, min_length,
-    max_skip, runs_z."""
+    """The fields every baseline has: sigma, breakpoint_lambda, min_points, min_length, max_skip,
+    runs_z."""
     positive("sigma", cfg.sigma, "m")
-    angle_deg("breakpoint_lambda_deg", cfg.breakpoint_lambda_deg, 90.0)
+    angle("breakpoint_lambda", cfg.breakpoint_lambda, math.pi / 2)
     integer("min_points", cfg.min_points, 2)
     non_negative("min_length", cfg.min_length, "m")
     integer("max_skip", cfg.max_skip, 1)

@@ -1,5 +1,6 @@
-"""Shared pieces of the Cartesian baselines: points, breakpoints, batched least-squares line fits,
-Line objects and the Cartesian corner step.
+"""Shared pieces of the vectorised Cartesian baselines (``hough``, ``ransac``): points, batched
+least-squares line fits, Line objects, and the FeatureSet with the Cartesian corner step
+(``engine.corners``, shared with split_merge and iepf).
 
 Everything works on the compacted arrays of valid beams (``idx`` = beam indices, ``x``, ``y`` in the
 sensor frame, metres). Line fits are batched over many index ranges at once with prefix sums, so a
@@ -15,9 +16,9 @@ import numpy as np
 
 from lms200 import Scan
 
-from ..backends import BACKENDS, use_numba  # noqa: F401  (re-exported for the baselines)
+from ..angles import wrap
 from ..types import Corner, FeatureSet, Line
-from . import checks
+from . import checks, engine
 
 
 @dataclass(frozen=True)
@@ -56,67 +57,6 @@ def breakpoint_distance(r_prev: np.ndarray, dphi: np.ndarray, lambda_rad: float,
     ``dphi`` (rad) to its neighbour; <= 0 or nan where dphi >= lambda (never connected)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         return r_prev * np.sin(dphi) / np.sin(lambda_rad - dphi) + 3.0 * sigma
-
-
-def breakpoints(pts: Points, angle_increment: float, lambda_rad: float, sigma: float, max_skip: int = 1) -> np.ndarray:
-    """Cluster boundaries by the adaptive breakpoint detector (Borges & Aldon 2004).
-
-    Consecutive valid points n-1, n belong to different clusters when their distance exceeds
-    ``D_max = r_{n-1} sin(dphi) / sin(lambda - dphi) + 3 sigma`` (dphi = bearing step between them,
-    lambda = the shallowest incidence angle still accepted as the same surface), when they are
-    more than ``max_skip`` beams apart (``max_skip - 1`` invalid beams are bridged) or when a
-    no-return (+inf) beam lies between them (``open_between``). Returns the (c, 2) array of
-    inclusive [start, end] positions into ``pts``.
-    """
-    n = pts.idx.size
-    if n == 0:
-        return np.empty((0, 2), dtype=np.int64)
-    step = np.diff(pts.idx)
-    dphi = step * angle_increment
-    gap = np.hypot(np.diff(pts.x), np.diff(pts.y))
-    dmax = breakpoint_distance(pts.r[:-1], dphi, lambda_rad, sigma)
-    cut = (gap > dmax) | (dmax <= 0) | (step > max_skip) | open_between(pts.no_return)
-    ends = np.flatnonzero(cut)
-    starts = np.concatenate(([0], ends + 1))
-    stops = np.concatenate((ends, [n - 1]))
-    return np.column_stack((starts, stops))
-
-
-class PrefixFit:
-    """Batched total-least-squares line fits over index ranges of one point sequence."""
-
-    def __init__(self, x: np.ndarray, y: np.ndarray) -> None:
-        zero = np.zeros(1)
-        self.sx = np.concatenate((zero, np.cumsum(x)))
-        self.sy = np.concatenate((zero, np.cumsum(y)))
-        self.sxx = np.concatenate((zero, np.cumsum(x * x)))
-        self.syy = np.concatenate((zero, np.cumsum(y * y)))
-        self.sxy = np.concatenate((zero, np.cumsum(x * y)))
-
-    def fit(self, start: np.ndarray, end: np.ndarray) -> tuple[np.ndarray, ...]:
-        """Fit ``x cos(a) + y sin(a) = rho`` to points start..end (inclusive) for each range.
-
-        Returns rho (>= 0, m), alpha (rad, (-pi, pi]), n, centroid x, centroid y and the scatter
-        along the line ``S = sum (t - t_mean)^2`` (m^2), all arrays of the ranges' shape.
-        """
-        return self._fit_all(start, end)[:6]
-
-    def residual_rms(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
-        """RMS perpendicular residual of the least-squares line over each range (m)."""
-        out = self._fit_all(start, end)
-        return np.sqrt(out[6] / out[2])
-
-    def _fit_all(self, start: np.ndarray, end: np.ndarray) -> tuple[np.ndarray, ...]:
-        """``fit_moments`` of the sums over points start..end (inclusive) of each range."""
-        lo, hi = start, end + 1
-        return fit_moments(
-            (hi - lo).astype(float),
-            self.sx[hi] - self.sx[lo],
-            self.sy[hi] - self.sy[lo],
-            self.sxx[hi] - self.sxx[lo],
-            self.syy[hi] - self.syy[lo],
-            self.sxy[hi] - self.sxy[lo],
-        )
 
 
 def fit_moments(n, sx, sy, sxx, syy, sxy) -> tuple[np.ndarray, ...]:
@@ -217,11 +157,6 @@ def contiguous_runs(pts: Points, pos: np.ndarray, angle_increment: float, lambda
     return np.concatenate(([0], np.flatnonzero(cut) + 1))
 
 
-def wrap(a: np.ndarray | float) -> np.ndarray:
-    """Angles wrapped to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2 * np.pi)
-
-
 def point_line_distance(x: np.ndarray, y: np.ndarray, rho: np.ndarray, alpha: np.ndarray) -> np.ndarray:
     """Absolute perpendicular distance of points from lines (broadcasting; m)."""
     return np.abs(x * np.cos(alpha) + y * np.sin(alpha) - rho)
@@ -285,78 +220,52 @@ def build_lines(
 @dataclass(frozen=True)
 class CornerConfig:
     """The shared Cartesian corner step: corners where consecutive segments meet (Castellanos et al.
-    1996). Two lines neighbouring in beam order make a corner when
+    1996; computed by ``engine.corners``). Two lines neighbouring in beam order make a corner when
     - they are at most ``max_gap_beams`` (6) apart in beam order,
     - their facing end points are connected in the scan: no farther apart than the adaptive
-      breakpoint distance for that bearing step (Borges & Aldon 2004, ``lambda_deg`` = 10 deg,
-      ``sigma`` = 5 mm), so an occlusion's depth jump is no corner,
-    - the direction turns by at least ``min_turn_deg`` (30 deg: interior angle <= 150 deg), and
+      breakpoint distance for that bearing step (Borges & Aldon 2004, ``breakpoint_lambda`` =
+      10 deg in rad, ``sigma`` = 5 mm), so an occlusion's depth jump is no corner,
+    - the direction turns by at least ``min_turn`` (30 deg in rad: interior angle <= 150 deg), and
     - the lines' intersection lies within ``max_distance`` (0.15 m: several times the end-point
       scatter at 5 mm noise) plus the gap between the facing end points of each of them (far
       away, the beams dropped at a corner leave a gap of tens of centimetres).
+
+    Raises:
+        ConfigError: naming the field, when a value cannot work.
     """
 
-    min_turn_deg: float = 30.0
+    min_turn: float = float(np.deg2rad(30.0))  # rad
     max_gap_beams: int = 6
-    max_distance: float = 0.15
-    lambda_deg: float = 10.0
-    sigma: float = 0.005
+    max_distance: float = 0.15  # m
+    breakpoint_lambda: float = float(np.deg2rad(10.0))  # rad
+    sigma: float = 0.005  # m
 
     def __post_init__(self) -> None:
-        if not checks.is_real(self.min_turn_deg) or not 0 <= self.min_turn_deg < 180:
-            raise ValueError(f"min_turn_deg: must be an angle in [0, 180) deg, got {self.min_turn_deg!r}")
+        checks.angle("min_turn", self.min_turn, np.pi, low_open=False)
         checks.integer("max_gap_beams", self.max_gap_beams, 1)
         checks.non_negative("max_distance", self.max_distance, "m")
-        checks.angle_deg("lambda_deg", self.lambda_deg, 90.0)
+        checks.angle("breakpoint_lambda", self.breakpoint_lambda, np.pi / 2)
         checks.positive("sigma", self.sigma, "m")
+        object.__setattr__(self, "_params", engine.CornerParams(
+            float(self.min_turn), int(self.max_gap_beams), float(self.max_distance), float(self.breakpoint_lambda),
+            float(self.sigma)))
 
-
-def corners_from_lines(lines: list[Line], cfg: CornerConfig, angle_increment: float) -> list[Corner]:
-    """Corners where consecutive lines (beam order) meet at an angle; at the lines' intersection.
-
-    ``Corner.angle`` is the interior angle between the two segments at the corner, in (0, pi);
-    ``angle_increment`` is the scan's beam step (rad).
-    """
-    if len(lines) < 2:
-        return []
-    arr = np.array([(l.rho, l.alpha, *l.start, *l.end, l.first, l.last) for l in lines])
-    rho, alpha = arr[:, 0], arr[:, 1]
-    a1, a2 = alpha[:-1], alpha[1:]
-    r1, r2 = rho[:-1], rho[1:]
-    det = np.sin(a2 - a1)  # cos a1 sin a2 - sin a1 cos a2
-    # the turn between the segment directions (start -> end), 0 = collinear
-    d1 = np.column_stack((arr[:-1, 4] - arr[:-1, 2], arr[:-1, 5] - arr[:-1, 3]))
-    d2 = np.column_stack((arr[1:, 4] - arr[1:, 2], arr[1:, 5] - arr[1:, 3]))
-    n1 = np.linalg.norm(d1, axis=1)
-    n2 = np.linalg.norm(d2, axis=1)
-    step = arr[1:, 6] - arr[:-1, 7]
-    gap = np.hypot(arr[1:, 2] - arr[:-1, 4], arr[1:, 3] - arr[:-1, 5])
-    dphi = np.maximum(step, 1) * angle_increment
-    lam = np.deg2rad(cfg.lambda_deg)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cos_turn = np.sum(d1 * d2, axis=1) / (n1 * n2)
-        turn = np.arccos(np.clip(cos_turn, -1, 1))
-        cx = (r1 * np.sin(a2) - r2 * np.sin(a1)) / det
-        cy = (r2 * np.cos(a1) - r1 * np.cos(a2)) / det
-    connect = breakpoint_distance(np.hypot(arr[:-1, 4], arr[:-1, 5]), dphi, lam, cfg.sigma)
-    dist_a = np.hypot(cx - arr[:-1, 4], cy - arr[:-1, 5])
-    dist_b = np.hypot(cx - arr[1:, 2], cy - arr[1:, 3])
-    ok = (
-        (step <= cfg.max_gap_beams)
-        & (gap <= connect) & (connect > 0)
-        & (turn >= np.deg2rad(cfg.min_turn_deg))
-        & (dist_a <= cfg.max_distance + gap)
-        & (dist_b <= cfg.max_distance + gap)
-        & np.isfinite(cx)
-    )
-    corners = []
-    for k in np.flatnonzero(ok).tolist():
-        corners.append(
-            Corner(float(cx[k]), float(cy[k]), float(np.pi - turn[k]), int(arr[k, 7]), (k, k + 1))
-        )
-    return corners
+    @property
+    def params(self) -> engine.CornerParams:
+        """The kernel's typed record of this config (built once, in ``__post_init__``)."""
+        return self._params
 
 
 def feature_set(lines: list[Line], corner_cfg: CornerConfig, method: str, angle_increment: float) -> FeatureSet:
     """FeatureSet of beam-ordered lines plus the shared corner step."""
-    return FeatureSet(lines, corners_from_lines(lines, corner_cfg, angle_increment), method)
+    if len(lines) < 2:
+        return FeatureSet(lines, [], method)
+    rho = np.array([l.rho for l in lines])
+    alpha = np.array([l.alpha for l in lines])
+    first = np.array([l.first for l in lines], dtype=np.int64)
+    last = np.array([l.last for l in lines], dtype=np.int64)
+    p0 = np.array([l.start for l in lines], dtype=float)
+    p1 = np.array([l.end for l in lines], dtype=float)
+    cf, ci = engine.corners(rho, alpha, first, last, p0, p1, angle_increment, corner_cfg.params)
+    corners = [Corner(x, y, a, index, (k, k + 1)) for (x, y, a), (index, k) in zip(cf.tolist(), ci.tolist())]
+    return FeatureSet(lines, corners, method)

@@ -32,11 +32,11 @@ from .runs import collect, refine, segments_of
 class HoughConfig:
     """Defaults:
 
-    - alpha_step_deg / rho_step: 1 deg x 0.02 m accumulator cells (see the module docstring).
+    - alpha_step / rho_step: 1 deg (in rad) x 0.02 m accumulator cells (see the module docstring).
     - band_coarse: 0.05 m, the first inlier band around a peak: the half-diagonal of a cell's
       spread over a 4 m wall (4 m x sin 0.5 deg + 1 cm) plus noise.
     - band_fine: 0.025 m = 5 sigma, the final inlier band after the first refit.
-    - min_points, min_length, sigma, breakpoint_lambda_deg: as the other baselines (8 points,
+    - min_points, min_length, sigma, breakpoint_lambda: as the other baselines (8 points,
       0.15 m, 5 mm, Borges & Aldon's 10 deg); max_skip: 3, a run may jump over two outliers
       or invalid beams, never over a no-return (+inf) beam.
     - max_lines: 60, an upper bound on peaks taken per scan; max_failures: 5 peaks in a row that
@@ -45,14 +45,14 @@ class HoughConfig:
     - runs_z: 0 (off), the runs test on residual signs that drops arcs (see ``split_merge``).
     """
 
-    alpha_step_deg: float = 1.0
+    alpha_step: float = float(np.deg2rad(1.0))  # rad
     rho_step: float = 0.02
     band_coarse: float = 0.05
     band_fine: float = 0.025
     min_points: int = 8
     min_length: float = 0.15
     sigma: float = 0.005
-    breakpoint_lambda_deg: float = 10.0
+    breakpoint_lambda: float = float(np.deg2rad(10.0))  # rad
     max_skip: int = 3
     runs_z: float = 0.0
     max_lines: int = 60
@@ -60,10 +60,8 @@ class HoughConfig:
     corners: CornerConfig = field(default_factory=CornerConfig)
 
     def __post_init__(self) -> None:
-        """Raise ValueError naming the field when a value cannot work."""
-        checks.positive("alpha_step_deg", self.alpha_step_deg, "deg")
-        if self.alpha_step_deg > 180:
-            raise ValueError(f"alpha_step_deg: must be <= 180 deg, got {self.alpha_step_deg!r}")
+        """Raise ConfigError naming the field when a value cannot work."""
+        checks.angle("alpha_step", self.alpha_step, np.pi)
         checks.positive("rho_step", self.rho_step, "m")
         checks.positive("band_coarse", self.band_coarse, "m")
         checks.positive("band_fine", self.band_fine, "m")
@@ -77,8 +75,8 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
     pts = valid_points(scan)
     if pts.idx.size < cfg.min_points:
         return feature_set([], cfg.corners, "hough", scan.angle_increment)
-    n_alpha = int(round(180.0 / cfg.alpha_step_deg))
-    theta = np.arange(n_alpha) * np.deg2rad(cfg.alpha_step_deg)
+    n_alpha = int(round(np.pi / cfg.alpha_step))
+    theta = np.arange(n_alpha) * cfg.alpha_step
     r_ext = float(pts.r.max()) + cfg.rho_step
     n_rho = int(np.ceil(2 * r_ext / cfg.rho_step)) + 1
     # votes: cell of every (point, alpha) pair, in float32 on the rho-step grid (|rho| / step < 1e4,
@@ -90,7 +88,7 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
     cells += (np.arange(n_alpha) * n_rho).astype(np.int32)
     acc = np.bincount(cells.ravel(), minlength=n_alpha * n_rho)
     remaining = np.ones(pts.idx.size, dtype=bool)
-    lam = np.deg2rad(cfg.breakpoint_lambda_deg)
+    lam = cfg.breakpoint_lambda
     starts, ends, fits = [], [], []
     failures = 0
     while len(starts) < cfg.max_lines and failures < cfg.max_failures:

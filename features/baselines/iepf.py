@@ -9,13 +9,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from lms200 import Scan
 
 from ..registry import register
 from ..types import FeatureSet
-from . import checks
-from .common import BACKENDS, CornerConfig
-from .split_merge import run_pipeline
+from .common import CornerConfig
+from .split_merge import check_split_fields, run_pipeline
 
 
 @dataclass(frozen=True)
@@ -24,13 +25,13 @@ class IepfConfig:
 
     - split_threshold: 0.04 m = 8 sigma: a chord between two noisy end points is itself off by up to
       ~3 sigma at each end, so the chord threshold sits above split-and-merge's 6 sigma.
-    - the rest as ``split_merge`` (breakpoint lambda 10 deg, Borges & Aldon 2004; merge RMS 2 sigma;
+    - the rest as ``split_merge`` (breakpoint_lambda 10 deg in rad, Borges & Aldon 2004; merge RMS 2 sigma;
       8 points and 0.15 m per line, Nguyen et al. 2007's P_min / L_min; up to two invalid beams
       bridged, none with no return; runs test off, ``runs_z`` = 0).
     """
 
     sigma: float = 0.005
-    breakpoint_lambda_deg: float = 10.0
+    breakpoint_lambda: float = float(np.deg2rad(10.0))  # rad
     split_threshold: float = 0.04
     merge_rms: float = 0.01
     min_points: int = 8
@@ -38,14 +39,10 @@ class IepfConfig:
     max_skip: int = 3
     runs_z: float = 0.0
     corners: CornerConfig = field(default_factory=CornerConfig)
-    backend: str = "auto"  # "numba" (compiled kernels), "numpy" (the reference), "auto": numba when importable
 
     def __post_init__(self) -> None:
-        """Raise ValueError naming the field when a value cannot work."""
-        checks.shared_fields(self)
-        checks.positive("split_threshold", self.split_threshold, "m")
-        checks.non_negative("merge_rms", self.merge_rms, "m")
-        checks.choice("backend", self.backend, BACKENDS)
+        """Raise ConfigError naming the field when a value cannot work."""
+        check_split_fields(self)
 
 
 def run(scan: Scan, cfg: IepfConfig) -> FeatureSet:
@@ -53,4 +50,4 @@ def run(scan: Scan, cfg: IepfConfig) -> FeatureSet:
     return run_pipeline(scan, cfg, "iepf", chord=True)
 
 
-register("iepf", IepfConfig, run)
+register("iepf", IepfConfig, run, backend="numba")

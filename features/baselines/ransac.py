@@ -35,7 +35,7 @@ class RansacConfig:
       w = 0.08 with probability 1 - (1 - 0.072)^64 = 0.99 (Fischler & Bolles' formula, p = 0.99).
     - window: 10 beams for the second point of a pair (NAPSAC neighbourhood).
     - inlier_band: 0.025 m = 5 sigma for counting inliers and the final refit.
-    - min_points, min_length, sigma, breakpoint_lambda_deg, max_skip, runs_z: as ``hough``.
+    - min_points, min_length, sigma, breakpoint_lambda, max_skip, runs_z: as ``hough``.
     - max_failures: 3 rounds in a row without a line end the search; max_lines: 60.
     - seed: 0 (the generator is seeded per scan, so results are deterministic).
     """
@@ -46,7 +46,7 @@ class RansacConfig:
     min_points: int = 8
     min_length: float = 0.15
     sigma: float = 0.005
-    breakpoint_lambda_deg: float = 10.0
+    breakpoint_lambda: float = float(np.deg2rad(10.0))  # rad
     max_skip: int = 3
     runs_z: float = 0.0
     max_failures: int = 3
@@ -55,7 +55,7 @@ class RansacConfig:
     corners: CornerConfig = field(default_factory=CornerConfig)
 
     def __post_init__(self) -> None:
-        """Raise ValueError naming the field when a value cannot work."""
+        """Raise ConfigError naming the field when a value cannot work."""
         checks.integer("hypotheses", self.hypotheses, 1)
         checks.integer("window", self.window, 0)
         checks.positive("inlier_band", self.inlier_band, "m")
@@ -70,7 +70,7 @@ def run(scan: Scan, cfg: RansacConfig) -> FeatureSet:
     pts = valid_points(scan)
     rng = np.random.default_rng(cfg.seed)
     remaining = np.ones(pts.idx.size, dtype=bool)
-    lam = np.deg2rad(cfg.breakpoint_lambda_deg)
+    lam = cfg.breakpoint_lambda
     starts, ends, fits = [], [], []
     failures = 0
     for _ in range(cfg.max_lines):

@@ -1,8 +1,16 @@
-"""Typed configuration of the paper's sensor-coordinate extractor (method "sensor")."""
+"""Typed configuration of the paper's sensor-coordinate extractor (method "sensor"), checked once
+when it is built."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+
+from ..baselines import checks
+from .engine import Params
+
+CM_MODE_RANGE_MAX = 10.0  # m: a scan with a larger range_max comes in SICK cm codes (1 cm steps)
+MAX_HOUGH_ANGLES = 1001  # most normal angles searched per band (bounds the accumulator)
 
 
 @dataclass(frozen=True)
@@ -12,6 +20,9 @@ class SensorMethodConfig:
     Windows and counts are in beams, distances in metres, angles in radians. The noise-scaled
     thresholds (``*_tau``) are in standard deviations of the quantity they test, derived from the
     range noise ``sigma_r``.
+
+    Raises:
+        ConfigError: naming the field, when a value cannot work.
     """
 
     k: int = 3  # half-width of the AD / slope window (eq. 4, 6), beams
@@ -22,7 +33,7 @@ class SensorMethodConfig:
     psi_split: float = 0.2  # a slope change |psi| above this splits a run (rad) ...
     psi_tau: float = 4.0  # ... when it also exceeds psi_tau * its noise std
     hough_subdiv: int = 4  # Log-Hough angle step = angle_increment / hough_subdiv
-    hough_angles: int = 7  # number of normal angles searched in each run's band
+    hough_angles: int = 7  # number of normal angles searched in each run's band (odd)
     band_tau: float = 4.0  # band half-width in std of the run's mean slope estimate
     band_min: float = 0.004  # smallest band half-width, rad
     bin_tau: float = 3.0  # Log-Hough log-range bin half-width in range-noise std
@@ -42,4 +53,48 @@ class SensorMethodConfig:
     corner_max_dist: float = 0.15  # the intersection must lie this close to both facing ends, m
     acute_check: bool = True  # the paper's remedy: reject a corner when the variance of the ranges
     acute_min_var: float = 1.0  # of the beams within k of it is below acute_min_var * sigma_r**2
-    backend: str = "auto"  # "numba" (compiled kernels), "numpy" (the reference), "auto": numba when importable
+
+    def __post_init__(self) -> None:
+        checks.integer("k", self.k, 1)
+        for name in ("sigma_r", "sigma_r_cm"):
+            checks.positive(name, getattr(self, name), "m")
+        checks.non_negative("min_range", self.min_range, "m")
+        for name in ("ad_tau", "psi_tau", "band_tau", "bin_tau", "inlier_tau", "max_chi2", "curvature_tau",
+                     "merge_tau"):
+            checks.non_negative(name, getattr(self, name), "std")
+        checks.non_negative("psi_split", self.psi_split, "rad")
+        checks.integer("hough_subdiv", self.hough_subdiv, 1)
+        checks.integer("hough_angles", self.hough_angles, 1)
+        if self.hough_angles % 2 == 0 or self.hough_angles > MAX_HOUGH_ANGLES:
+            checks.fail("hough_angles", f"must be an odd integer in [1, {MAX_HOUGH_ANGLES}]", self.hough_angles)
+        checks.positive("band_min", self.band_min, "rad")
+        checks.between("min_inlier_fraction", self.min_inlier_fraction, 0.0, 1.0)
+        checks.real_at_least("min_points", self.min_points, 3)
+        checks.non_negative("min_length", self.min_length, "m")
+        for name in ("merge_gap", "bridge_invalid", "corner_max_gap"):
+            checks.non_negative(name, getattr(self, name), "beams")
+        checks.flag("corners", self.corners)
+        checks.flag("acute_check", self.acute_check)
+        checks.between("corner_min_turn", self.corner_min_turn, 0.0, math.pi / 2, "rad")
+        checks.non_negative("corner_psi", self.corner_psi)
+        checks.non_negative("corner_max_dist", self.corner_max_dist, "m")
+        checks.non_negative("acute_min_var", self.acute_min_var, "sigma_r^2")
+        object.__setattr__(self, "_params", Params(
+            int(self.k), float(self.ad_tau), float(self.psi_split), float(self.psi_tau), int(self.hough_subdiv),
+            int(self.hough_angles), float(self.band_tau), float(self.band_min), float(self.bin_tau),
+            float(self.inlier_tau), float(self.max_chi2), float(self.min_inlier_fraction), float(self.curvature_tau),
+            math.ceil(self.min_points), float(self.min_length), math.floor(self.merge_gap), float(self.merge_tau),
+            math.floor(self.bridge_invalid), bool(self.corners), float(self.corner_min_turn), float(self.corner_psi),
+            math.floor(self.corner_max_gap), float(self.corner_max_dist), bool(self.acute_check),
+            float(self.acute_min_var),
+        ))
+
+    @property
+    def params(self) -> Params:
+        """The kernels' typed record of this config (built once, in ``__post_init__``)."""
+        return self._params
+
+    def sigma_for(self, range_max: float) -> float:
+        """The range noise std (m) for a scan with this ``range_max`` (m): ``sigma_r_cm`` for the
+        SICK cm codes (range_max > 10 m), else ``sigma_r``."""
+        return self.sigma_r_cm if range_max > CM_MODE_RANGE_MAX else self.sigma_r

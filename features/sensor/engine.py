@@ -1,15 +1,24 @@
-"""Compiled (numba) kernels of the sensor-coordinate extractor: the same algorithm as the numpy
-reference in ``signals``, ``lines``, ``hough``, ``refine``, ``segments`` and ``corners``, step for
-step, fused into loops over the beams of one scan.
+"""The sensor-coordinate extractor (method "sensor"): the one implementation, compiled with numba.
 
-Why: the numpy reference spends most of its ~500 us a scan in numpy's fixed per-call cost (~150
-small array operations on a few hundred beams), not in arithmetic. Each function here mirrors a
-reference function (named in its docstring) and keeps its operation order; sums over beams use
-numpy's pairwise summation (``pairwise_sum``) so that sums agree with ``np.add.reduceat`` to the
-last bit. Transcendentals come from libm rather than numpy's SIMD routines, so results can differ
-in the last bit (tests check agreement to 1e-9 on many scans). Importing this module imports
-numba; ``features.sensor`` does so only when the numba backend is first used, and ``cache=True``
-keeps the compiled code between processes.
+Every step works in range-bearing space, on the beams of one scan, in the order of the paper:
+
+1. per-beam signals (``beam_signals``): the invariant AD_ik (eq. 4), the slope estimate theta_i
+   (eq. 6-7 as corrected in NOTES.md) and psi_i = theta_i - theta_{i+k}, with their noise std;
+2. runs of beams on straight lines (``candidate_runs``): the AD test, broken where psi peaks;
+3. the Log-Hough transform (eq. 5) searched in a narrow band of normal angles around each run's
+   mean slope (``band_search``): every vote is a lookup in one log-cos template;
+4. two weighted Gauss-Newton steps on the range residuals, with the covariance of (rho, alpha)
+   implied by the range noise, and the acceptance checks (``fit_runs``);
+5. lines grown over the beams past their ends, neighbours merged, overlaps split, endpoints
+   projected, short segments dropped (``extend_ends``, ``merge_neighbours``, ``segments``);
+6. corners where two segments meet and psi shows the turn, with the paper's remedy against
+   false acute corners (``corners``).
+
+Beam i has bearing b_i = angle_min + i D. Sums over beams follow numpy's pairwise order
+(``pairwise_sum``), so that results do not depend on how a sum is split. Parameters come in as a
+typed record (``Params``, built once per config by ``features.sensor.config``), the scan's grid
+constants as another (``Grid``, built once per beam step by ``features.sensor.grid``).
+Importing this module imports numba (``features.jit``).
 
 One module on purpose: numba's on-disk cache is invalidated by the modification time of the file
 that defines a function, not of the files of the functions it calls, so kernels that call each
@@ -19,25 +28,73 @@ other live in one file.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+
+from ..angles import TWO_PI
+from ..jit import kernel
 
 PW_BLOCKSIZE = 128  # numpy's pairwise-summation block (numpy/_core/src/umath/loops_utils.h.src)
-N_BINS = 13  # == hough.N_BINS
-MIN_COS = 0.05  # == refine.MIN_COS
-TWO_PI = 2.0 * math.pi
+N_BINS = 13  # log-range cells of a run's Log-Hough accumulator around its middle vote
+MIN_COS = 0.05  # beams within ~3 deg of grazing a line get no weight and do not extend it
+BAND_MAX = 0.5  # largest half-width of a run's band of normal angles, rad
+TAN_SPAN_CAP = 40.0  # cap on |tan(b - a)| differences across a run (grazing runs), dimensionless
+TIE_BREAK = 1e-3  # votes a band angle loses per step from the band centre (prefers the centre on ties)
+MERGE_FLOOR_RHO_VAR = 0.005**2  # model-error floor added to the merge test's (rho) variance, m^2
+MERGE_FLOOR_ALPHA_VAR = 0.005**2  # ... and (alpha) variance, rad^2
+SPACING_CAP = 1.0  # largest point spacing (grazing incidence) allowed for in the corner contact test, m
 
-# indices into the float parameter vector built by features.sensor.compiled.params
-F_SIGMA_R, F_AD_C, F_PSI_SPLIT2, F_PSI_TAU2, F_BAND_TAU, F_BAND_MIN, F_BIN_TAU, F_INLIER_TAU = range(8)
-F_MAX_CHI2, F_MIN_INLIER_FRACTION, F_CURV2, F_MIN_LENGTH, F_MERGE_TAU2, F_MIN_TURN = range(8, 14)
-F_CORNER_MAX_DIST, F_CORNER_PSI, F_ACUTE_VAR, F_AD_LINE, F_TWO_SIN_SUM, F_SUBDIV_STEP = range(14, 20)
-N_FLOAT = 20
-I_K, I_SUBDIV, I_ANGLES, I_MIN_POINTS, I_MERGE_GAP, I_BRIDGE, I_CORNERS, I_MAX_GAP, I_ACUTE, I_ZERO = range(10)
-N_INT = 10
 
-# cached between processes; IEEE division (x / 0 -> inf or nan, as in numpy, never an exception)
-kernel = njit(cache=True, error_model="numpy")
+class Params(NamedTuple):
+    """The fields of a ``SensorMethodConfig`` as the kernels read them (units as in the config;
+    counts already rounded as the tests on integers need them)."""
+
+    k: int  # half-width of the AD / slope window, beams
+    ad_tau: float
+    psi_split: float  # rad
+    psi_tau: float
+    hough_subdiv: int
+    hough_angles: int
+    band_tau: float
+    band_min: float  # rad
+    bin_tau: float
+    inlier_tau: float
+    max_chi2: float
+    min_inlier_fraction: float
+    curvature_tau: float
+    min_points: int  # ceil(config.min_points): n >= min_points for an integer n
+    min_length: float  # m
+    merge_gap: int  # floor(config.merge_gap): gap > merge_gap for an integer gap
+    merge_tau: float
+    bridge_invalid: int  # floor
+    corners: bool
+    corner_min_turn: float  # rad
+    corner_psi: float
+    corner_max_gap: int  # floor
+    corner_max_dist: float  # m
+    acute_check: bool
+    acute_min_var: float  # in sigma_r**2
+
+
+class Grid(NamedTuple):
+    """Constants of a scan's angle grid for window half-width k and beam step D."""
+
+    ad_line: float  # 1 + 2 sum_{j=1..k} cos(jD): AD on any straight line (eq. 4)
+    two_sin_sum: float  # 2 sum_{m=1..k} sin(mD): the slope denominator (NOTES.md, eq. 7)
+    step: float  # Log-Hough angle step D / hough_subdiv, rad
+    zero: int  # index of angle 0 in the template
+    template: np.ndarray  # log cos(m step) for |m| <= zero, floored (eq. 5)
+
+
+@kernel
+def wrap(a: float) -> float:
+    """An angle wrapped to (-pi, pi] (rad)."""
+    w = math.pi - (math.pi - a) % TWO_PI
+    return w + TWO_PI if w <= -math.pi else w
+
+
+# -- sums in numpy's pairwise order ---------------------------------------------------------------
 
 
 @kernel
@@ -70,9 +127,8 @@ def block_sum(a: np.ndarray, lo: int, n: int) -> float:
 
 @kernel
 def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
-    """Sum of a[lo : lo + n] in numpy's pairwise order (blocks of 128 halved at multiples of 8).
-    numpy recurses; this walks the same tree with an explicit stack (numba cannot cache
-    recursive functions reliably)."""
+    """Sum of a[lo : lo + n] in numpy's pairwise order (blocks of 128 halved at multiples of 8),
+    walking numpy's recursion tree with an explicit stack (numba cannot cache recursive functions)."""
     if n <= PW_BLOCKSIZE:
         return block_sum(a, lo, n)
     st_lo = np.empty(64, np.int64)
@@ -109,13 +165,25 @@ def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
 
 @kernel
 def segment_sum(a: np.ndarray, lo: int, n: int) -> float:
-    """``np.add.reduceat`` of one segment: the first element plus the pairwise sum of the rest."""
+    """The sum of one segment as ``np.add.reduceat`` forms it: the first element plus the
+    pairwise sum of the rest."""
     return a[lo] + pairwise_sum(a, lo + 1, n - 1)
+
+
+# -- 1. per-beam signals --------------------------------------------------------------------------
 
 
 @kernel
 def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):  # noqa: ANN001, ANN201
-    """signals.compute: valid, AD, AD_var, theta, theta_var, psi, psi_var per beam."""
+    """Per-beam signals of one scan (nan where a window is incomplete or holds an invalid beam):
+    valid, u = 1/d, AD (eq. 4), its variance per sigma_r**2, ad (eq. 6), theta (rad, unwrapped)
+    and its variance, psi = theta_i - theta_{i+k} (wrapped) and its variance.
+
+    Noise, first order in the range noise e_j (std sigma_r): u_j = 1/(d_j + e_j) ~ u_j - u_j^2 e_j,
+    so var(AD) / sigma_r^2 = (sum_j u_j^4 - u_i^4) / u_i^2 + (AD - 1)^2 u_i^2, the same for ad.
+    The std of theta = b + arctan(T) is the half-difference of arctan over T +- std(T), which stays
+    right at grazing incidence.
+    """
     n = ranges.size
     valid = np.zeros(n, np.bool_)
     u = np.full(n, np.nan)
@@ -126,16 +194,17 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
             u[i] = 1.0 / d
     AD = np.full(n, np.nan)
     AD_var = np.full(n, np.nan)
+    ad = np.full(n, np.nan)
     theta = np.full(n, np.nan)
     theta_var = np.full(n, np.nan)
     psi = np.full(n, np.nan)
     psi_var = np.full(n, np.nan)
     if n >= 2 * k + 1:
         for i in range(k, n - k):
-            s1 = 0.0
-            sd = 0.0
-            s4 = 0.0
-            for j in range(i - k, i + k + 1):  # eq. 4 and 6 over the window (nan when it holds one)
+            s1 = 0.0  # sum_{j=-k..k} u_{i+j}
+            sd = 0.0  # sum_{m=0..k} u_{i+m} - sum_{m=1..k} u_{i-m}
+            s4 = 0.0  # sum_{j=-k..k} u_{i+j}^4 (noise)
+            for j in range(i - k, i + k + 1):
                 uj = u[j]
                 u2j = uj * uj
                 s1 += uj
@@ -143,33 +212,42 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
                 s4 += u2j * u2j
             ui = u[i]
             u2 = ui * ui
-            a = s1 / ui
-            ad = sd / ui
-            other = s4 / u2 - u2
-            ad1 = ad - 1.0
+            a = s1 / ui  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
+            ad_i = sd / ui  # eq. 6: ad_ik
+            other = s4 / u2 - u2  # sum over j != i of u_j^4 / u_i^2
+            ad1 = ad_i - 1.0
             a1 = a - 1.0
             AD[i] = a
             AD_var[i] = other + a1 * a1 * u2
+            ad[i] = ad_i
+            # eq. 7 as corrected in NOTES.md: ad - 1 = 2 tan(a - b_i) sum_{m=1..k} sin(mD)
             tan_psi = ad1 / two_sin_sum
             theta[i] = bearings[i] + math.atan(tan_psi)
             tan_sd = math.sqrt(other + ad1 * ad1 * u2) * (sigma_r / two_sin_sum)
             theta_sd = 0.5 * (math.atan(tan_psi + tan_sd) - math.atan(tan_psi - tan_sd))
             theta_var[i] = theta_sd * theta_sd
     for i in range(n - k):
-        dpsi = theta[i] - theta[i + k]
+        dpsi = theta[i] - theta[i + k]  # the corner signal psi_i = theta_i - theta_{i+k}
         psi[i] = dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
         psi_var[i] = theta_var[i] + theta_var[i + k]
-    return valid, AD, AD_var, theta, theta_var, psi, psi_var
+    return valid, u, AD, AD_var, ad, theta, theta_var, psi, psi_var
+
+
+# -- 2. runs of line beams ------------------------------------------------------------------------
 
 
 @kernel
-def candidate_runs(AD, AD_var, psi, psi_var, k, ad_line, ad_c, psi_split2, psi_tau2):  # noqa: ANN001, ANN201
-    """lines.candidate_runs: first and last centre of each run of line beams."""
+def candidate_runs(AD, AD_var, psi, psi_var, k, ad_line, sigma_r, p):  # noqa: ANN001, ANN201
+    """First and last centre of each run of beams whose window passes the AD test (eq. 4, the
+    threshold scaled by the AD noise at that beam) and reaches no slope break (|psi| large)."""
     n = AD.size
+    ad_c = p.ad_tau * p.ad_tau * (sigma_r * sigma_r)
+    psi_split2 = p.psi_split * p.psi_split
+    psi_tau2 = p.psi_tau * p.psi_tau
     ok = np.zeros(n, np.bool_)
     for i in range(n):
         dev = AD[i] - ad_line
-        ok[i] = dev * dev <= ad_c * AD_var[i]
+        ok[i] = dev * dev <= ad_c * AD_var[i]  # nan -> False
     mag = np.zeros(n)
     big = np.zeros(n, np.bool_)
     any_big = False
@@ -180,6 +258,8 @@ def candidate_runs(AD, AD_var, psi, psi_var, k, ad_line, ad_c, psi_split2, psi_t
             mag[i] = p2
             any_big = True
     if any_big:
+        # a slope break between the windows at i and i+k peaks near i + k/2: drop the centres
+        # whose windows reach it (those within k), as the AD test does at sharp corners
         hit = np.zeros(n, np.bool_)
         for i in range(n):
             if big[i] and (i == 0 or mag[i] >= mag[i - 1]) and (i == n - 1 or mag[i] >= mag[i + 1]):
@@ -207,9 +287,58 @@ def candidate_runs(AD, AD_var, psi, psi_var, k, ad_line, ad_c, psi_split2, psi_t
 
 
 @kernel
-def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, step, subdiv, n_angles,
-                template, zero):  # noqa: ANN001, ANN201
-    """hough.band_search: Log-Hough peak (alpha, rho) of every run in its band, and the inliers."""
+def band_of_runs(c0, c1, theta, theta_var, ranges, bearings, increment, sigma_r, k, p):  # noqa: ANN001, ANN201
+    """Each run's band of normal angles: its slope estimate (the mean of theta over its centres,
+    continuous along a run), the band half-width (band_tau std of that mean, at least band_min)
+    and the half-width of the peak's log-range window: range noise at the nearest beam plus the
+    spread an angle error of half a band step causes over the run (d log p / d a = -tan(a - b))."""
+    n = theta.size
+    cs_t = np.empty(n)  # cumulative sums as np.cumsum, nan counted as 0
+    cs_v = np.empty(n)
+    acc_t = 0.0
+    acc_v = 0.0
+    for i in range(n):
+        th = theta[i]
+        tv = theta_var[i]
+        acc_t += 0.0 if np.isnan(th) else th
+        acc_v += 0.0 if np.isnan(tv) else tv
+        cs_t[i] = acc_t
+        cs_v[i] = acc_v
+    h = max((p.hough_angles - 1) // 2, 1)
+    n_runs = c0.size
+    centre = np.empty(n_runs)
+    half_width = np.empty(n_runs)
+    bin_half = np.empty(n_runs)
+    for r in range(n_runs):
+        a, e = c0[r], c1[r]
+        n_c = e - a + 1
+        t0 = 0.0 if np.isnan(theta[a]) else theta[a]
+        v0 = 0.0 if np.isnan(theta_var[a]) else theta_var[a]
+        centre[r] = (cs_t[e] - cs_t[a] + t0) / n_c
+        cvar = (cs_v[e] - cs_v[a] + v0) / (n_c * (1.0 + n_c / (2 * k + 1)))
+        half_width[r] = min(max(p.band_tau * math.sqrt(cvar), p.band_min), BAND_MAX)
+        angle_step = max(half_width[r] / h, increment / p.hough_subdiv)
+        tan_span = abs(math.tan(bearings[e + k] - centre[r]) - math.tan(bearings[a - k] - centre[r]))
+        d_min = np.inf
+        for j in range(a - k, e + k + 1):
+            d_min = min(d_min, ranges[j])
+        bin_half[r] = p.bin_tau * sigma_r / d_min + 0.5 * angle_step * min(tan_span, TAN_SPAN_CAP)
+    return centre, half_width, bin_half
+
+
+# -- 3. the Log-Hough transform in a band ---------------------------------------------------------
+
+
+@kernel
+def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, subdiv, n_angles, grid):  # noqa: ANN001, ANN201
+    """The Log-Hough peak of every run in its band of normal angles, and the beams that voted in it.
+
+    Args: stacked beams of the runs (``beam`` index, ``log_d`` log range; run r holds rows
+    starts[r] .. starts[r] + counts[r] - 1); per run the band ``centre`` and ``half_width`` (rad)
+    and ``bin_half``, the half-width of a log-range cell; the scan's ``angle_min`` (rad).
+    Returns alpha (rad, not wrapped), rho (m) of each run's peak and the inlier mask of the rows.
+    """
+    template, zero, step = grid.template, grid.zero, grid.step
     n_runs = starts.size
     h2 = (n_angles - 1) // 2
     h = max(h2, 1)
@@ -219,12 +348,14 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
     inlier = np.zeros(beam.size, np.bool_)
     a_idx = np.empty(n_angles, np.int64)
     ref = np.empty(n_angles)
-    acc = np.zeros((n_angles, N_BINS + 2), np.int64)
+    acc = np.zeros((n_angles, N_BINS + 2), np.int64)  # cells 1..N_BINS; 0 and N_BINS + 1 outside
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         centre_idx = np.int64(np.rint((centre[r] - angle_min) / step))
         stride = np.int64(max(np.rint(half_width[r] / (h * step)), 1.0))
         inv_width = 1.0 / bin_half[r]
+        # cells are laid out around the median vote of the beams at 1/4, 1/2 and 3/4 of the run
+        # (a mean would be dragged off by neighbour-line beams at its ends; one beam can be a spike)
         row1, row2, row3 = s + cnt // 4, s + cnt // 2, s + (3 * cnt) // 4
         for a in range(n_angles):
             a_idx[a] = centre_idx + stride * (a - h2)
@@ -236,9 +367,10 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
         for a in range(n_angles):
             offset = (N_BINS / 2.0 + 1.0) - ref[a] * inv_width
             for row in range(s, s + cnt):
+                # eq. 5: log p = log d + log cos(a - b), a lookup at a - b in the template
                 idx = min(max(a_idx[a] + zero - beam[row] * subdiv, 0), n_tmpl - 1)
                 rel = (template[idx] + log_d[row]) * inv_width + offset
-                if not rel >= 0.0:  # np.fmax(rel, 0): nan votes go to the outside cell 0
+                if not rel >= 0.0:  # nan votes go to the outside cell 0
                     rel = 0.0
                 rel = min(rel, N_BINS + 1.0)
                 acc[a, np.int64(rel)] += 1
@@ -246,11 +378,12 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
         best_a = 0
         best_c = 0
         for a in range(n_angles):
-            tie = -1e-3 * abs(a - h2)
+            tie = -TIE_BREAK * abs(a - h2)
             for c in range(N_BINS - 1):
-                v = (acc[a, c + 1] + acc[a, c + 2]) + tie
+                v = (acc[a, c + 1] + acc[a, c + 2]) + tie  # votes in two adjacent cells
                 if v > best:
                     best, best_a, best_c = v, a, c
+        # the pair (c, c+1) covers (log p - ref) / width in [c - N_BINS/2, c + 2 - N_BINS/2)
         peak_log_p = ref[best_a] + (best_c + 1 - N_BINS / 2.0) * bin_half[r]
         alpha[r] = angle_min + a_idx[best_a] * step
         rho[r] = math.exp(peak_log_p)
@@ -260,10 +393,19 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
     return alpha, rho, inlier
 
 
+# -- 4. weighted refinement -----------------------------------------------------------------------
+
+
 @kernel
 def gauss_newton(d, b, starts, counts, mask, rho, alpha, sigma_r, inlier_tau, buf):  # noqa: ANN001, ANN201
-    """refine.gauss_newton: one step of every run's (rho, alpha); inlier_tau <= 0 means none.
-    Returns (rho, alpha, cov (R, 2, 2), z (N,), w (N,)); ``buf`` is (5, N) scratch."""
+    """One Gauss-Newton step of every run's (rho, alpha) on its beams (range d, bearing b).
+
+    Beam j on x cos(alpha) + y sin(alpha) = rho has residual r_j = d_j cos(b_j - alpha) - rho;
+    range noise moves it by e_j cos(b_j - alpha), so its weight is 1 / (sigma_r cos)^2 and
+    (J^T W J)^-1 is the covariance of (rho, alpha). Beams in ``mask`` are used, and when
+    ``inlier_tau`` > 0 only those within inlier_tau sigma_r (range residual) of the estimate.
+    Returns (rho, alpha, cov (R, 2, 2), z = r / (sigma_r cos) (N,), weights w (N,)); ``buf`` is
+    (5, N) scratch."""
     n_runs = starts.size
     n = d.size
     z = np.full(n, np.nan)
@@ -277,8 +419,8 @@ def gauss_newton(d, b, starts, counts, mask, rho, alpha, sigma_r, inlier_tau, bu
         for row in range(s, s + cnt):
             phi = b[row] - alpha[r]
             c = math.cos(phi)
-            res = d[row] * c - rho[r]
-            g = d[row] * math.sin(phi)
+            res = d[row] * c - rho[r]  # d res / d rho = -1
+            g = d[row] * math.sin(phi)  # d res / d alpha
             use = c > MIN_COS and mask[row]
             if inlier_tau > 0.0:
                 zz = res / (sigma_r * c)
@@ -297,7 +439,7 @@ def gauss_newton(d, b, starts, counts, mask, rho, alpha, sigma_r, inlier_tau, bu
         swgg = segment_sum(buf[2], s, cnt)
         swr = segment_sum(buf[3], s, cnt)
         swgr = segment_sum(buf[4], s, cnt)
-        inv_det = 1.0 / (sw * swgg - swg * swg)
+        inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
         new_rho[r] = rho[r] + (swgg * swr - swg * swgr) * inv_det
         new_alpha[r] = alpha[r] + (swg * swr - sw * swgr) * inv_det
         var = s2 * inv_det
@@ -309,18 +451,15 @@ def gauss_newton(d, b, starts, counts, mask, rho, alpha, sigma_r, inlier_tau, bu
 
 
 @kernel
-def wrap(a: float) -> float:
-    """signals.wrap for one angle: (-pi, pi] (rad)."""
-    return math.pi - (math.pi - a) % TWO_PI
-
-
-@kernel
-def fit_spans(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, fp, ip):  # noqa: ANN001, ANN201
-    """lines.fit_spans: two Gauss-Newton steps, the checks, normal form. Returns the line table
-    (rho, alpha, cov, first, last, n_points) and the mask of the lines that pass."""
+def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, sigma_r, p):  # noqa: ANN001, ANN201
+    """Refine every run's line: a Gauss-Newton step on the Log-Hough inliers, then one on the beams
+    within inlier_tau sigma_r of that (which gives the covariance), and the checks: enough inliers,
+    most of the run explained, chi^2 of the inliers, and curvature (the t-statistic of the
+    residuals against a parabola in the beam index, orthogonal to 1 and t over the inliers:
+    ~N(0, 1) on a line, large on an arc). Returns the lines in normal form (rho >= 0, alpha in
+    (-pi, pi]) with cov, first / last inlier beam, inlier count, and the mask of those that pass."""
     n = beam.size
     n_runs = starts.size
-    sigma = fp[F_SIGMA_R]
     ok = np.empty(n, np.bool_)
     d = np.empty(n)
     b = np.empty(n)
@@ -335,12 +474,13 @@ def fit_spans(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
         b[row] = bearings[j]
         m0[row] = ok[row] and inlier0[row]
     buf = np.empty((5, n))
-    rho1, alpha1, _, _, _ = gauss_newton(d, b, starts, counts, m0, rho0, alpha0, sigma, -1.0, buf)
-    rho, alpha, cov, z, w = gauss_newton(d, b, starts, counts, ok, rho1, alpha1, sigma, fp[F_INLIER_TAU], buf)
+    rho1, alpha1, _, _, _ = gauss_newton(d, b, starts, counts, m0, rho0, alpha0, sigma_r, -1.0, buf)
+    rho, alpha, cov, z, w = gauss_newton(d, b, starts, counts, ok, rho1, alpha1, sigma_r, p.inlier_tau, buf)
     first_in = np.empty(n_runs, np.int64)
     last_in = np.empty(n_runs, np.int64)
     n_in = np.empty(n_runs, np.int64)
     good = np.zeros(n_runs, np.bool_)
+    curv2 = p.curvature_tau * p.curvature_tau
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         b0 = beam[s]
@@ -385,10 +525,10 @@ def fit_spans(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
         last_in[r] = hi
         n_in[r] = ni
         good[r] = (
-            ni >= ip[I_MIN_POINTS]
-            and ni >= fp[F_MIN_INLIER_FRACTION] * core[r]
-            and chi <= fp[F_MAX_CHI2] * max(ni - 2, 1)
-            and zq * zq <= fp[F_CURV2] * qq
+            ni >= p.min_points
+            and ni >= p.min_inlier_fraction * core[r]
+            and chi <= p.max_chi2 * max(ni - 2, 1)
+            and zq * zq <= curv2 * qq
             and np.isfinite(rho[r] + alpha[r] + cov[r, 0, 0] + cov[r, 1, 1])
         )
         if rho[r] < 0:
@@ -402,7 +542,8 @@ def fit_spans(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
 
 @kernel
 def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reach, inlier_tau, sigma_r):  # noqa: ANN001
-    """lines.extend_ends, in place: grow each line over the beams past its ends that continue it."""
+    """In place: grow each line over the up to ``reach`` beams past each end that continue it
+    (valid, |range residual| <= inlier_tau sigma_r, no break): the AD windows stop short of corners."""
     n = ranges.size
     lim = inlier_tau * sigma_r
     for m in range(rho.size):
@@ -412,7 +553,7 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
             if j >= n:
                 break
             c = math.cos(bearings[j] - alpha[m])
-            if not (valid[j] and c > 0.05 and abs(ranges[j] * c - rho[m]) <= lim * c):
+            if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= lim * c):
                 break
             grow0 += 1
         grow1 = 0
@@ -421,7 +562,7 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
             if j < 0:
                 break
             c = math.cos(bearings[j] - alpha[m])
-            if not (valid[j] and c > 0.05 and abs(ranges[j] * c - rho[m]) <= lim * c):
+            if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= lim * c):
                 break
             grow1 += 1
         first[m] -= grow1
@@ -430,22 +571,19 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
 
 
 @kernel
-def find_lines(ranges, bearings, angle_min, increment, range_lo, range_hi, template, fp, ip):  # noqa: ANN001, ANN201
-    """signals.compute + lines.find_lines: the line table before merging, and the signals the
-    later stages need (valid, psi)."""
-    k = ip[I_K]
-    sigma_r = fp[F_SIGMA_R]
-    valid, AD, AD_var, theta, theta_var, psi, psi_var = beam_signals(
-        ranges, bearings, k, range_lo, range_hi, sigma_r, fp[F_TWO_SIN_SUM]
-    )
-    c0, c1 = candidate_runs(AD, AD_var, psi, psi_var, k, fp[F_AD_LINE], fp[F_AD_C], fp[F_PSI_SPLIT2], fp[F_PSI_TAU2])
-    keep = (c1 - c0 + 2 * k + 1) >= ip[I_MIN_POINTS]
+def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_var, angle_min, increment,  # noqa: ANN001, ANN201
+               sigma_r, grid, p):
+    """Steps 2-4 and the end growth: the line table (rho, alpha, cov, first, last, n_points)
+    before merging."""
+    k = p.k
+    c0, c1 = candidate_runs(AD, AD_var, psi, psi_var, k, grid.ad_line, sigma_r, p)
+    keep = (c1 - c0 + 2 * k + 1) >= p.min_points
     c0, c1 = c0[keep], c1[keep]
     n_runs = c0.size
-    empty_f = np.empty(0)
-    empty_i = np.empty(0, np.int64)
     if n_runs == 0:
-        return empty_f, empty_f, np.empty((0, 2, 2)), empty_i, empty_i, empty_i, valid, psi
+        e = np.empty(0, np.int64)
+        return np.empty(0), np.empty(0), np.empty((0, 2, 2)), e, e, e
+    # each run's windows cover c0 - k .. c1 + k (all valid beams): stack those beams run by run
     first = c0 - k
     last = c1 + k
     counts = last - first + 1
@@ -460,63 +598,37 @@ def find_lines(ranges, bearings, angle_min, increment, range_lo, range_hi, templ
         for t in range(counts[r]):
             beam[starts[r] + t] = first[r] + t
             log_d[starts[r] + t] = math.log(ranges[first[r] + t])
-    # slope estimate of each run: mean of theta over its centres, via cumulative sums (as numpy)
-    n = ranges.size
-    cs_t = np.empty(n)
-    cs_v = np.empty(n)
-    acc_t = 0.0
-    acc_v = 0.0
-    for i in range(n):
-        th = theta[i]
-        tv = theta_var[i]
-        acc_t += 0.0 if np.isnan(th) else th
-        acc_v += 0.0 if np.isnan(tv) else tv
-        cs_t[i] = acc_t
-        cs_v[i] = acc_v
-    h = max((ip[I_ANGLES] - 1) // 2, 1)
-    subdiv = ip[I_SUBDIV]
-    centre = np.empty(n_runs)
-    half_width = np.empty(n_runs)
-    bin_half = np.empty(n_runs)
-    for r in range(n_runs):
-        a, e = c0[r], c1[r]
-        n_c = e - a + 1
-        t0 = 0.0 if np.isnan(theta[a]) else theta[a]
-        v0 = 0.0 if np.isnan(theta_var[a]) else theta_var[a]
-        centre[r] = (cs_t[e] - cs_t[a] + t0) / n_c
-        cvar = (cs_v[e] - cs_v[a] + v0) / (n_c * (1.0 + n_c / (2 * k + 1)))
-        half_width[r] = min(max(fp[F_BAND_TAU] * math.sqrt(cvar), fp[F_BAND_MIN]), 0.5)
-        angle_step = max(half_width[r] / h, increment / subdiv)
-        tan_span = abs(math.tan(bearings[e + k] - centre[r]) - math.tan(bearings[a - k] - centre[r]))
-        d_min = np.inf
-        for j in range(first[r], last[r] + 1):
-            d_min = min(d_min, ranges[j])
-        bin_half[r] = fp[F_BIN_TAU] * sigma_r / d_min + 0.5 * angle_step * min(tan_span, 40.0)
+    centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, ranges, bearings, increment, sigma_r, k, p)
     alpha0, rho0, inlier0 = band_search(
-        beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, fp[F_SUBDIV_STEP], subdiv,
-        ip[I_ANGLES], template, ip[I_ZERO],
+        beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
     )
     core = (c1 - c0 + 1) + 2 * k
-    rho, alpha, cov, f_in, l_in, n_in, good = fit_spans(
-        beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, fp, ip
+    rho, alpha, cov, f_in, l_in, n_in, good = fit_runs(
+        beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, sigma_r, p
     )
     idx = np.flatnonzero(good)
     rho, alpha, cov = rho[idx], alpha[idx], cov[idx]
     f_in, l_in, n_in = f_in[idx], l_in[idx], n_in[idx]
-    extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, fp[F_INLIER_TAU], sigma_r)
-    return rho, alpha, cov, f_in, l_in, n_in, valid, psi
+    extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r)
+    return rho, alpha, cov, f_in, l_in, n_in
+
+
+# -- 5. segments ----------------------------------------------------------------------------------
 
 
 @kernel
 def inv2(a: float, b: float, d: float):  # noqa: ANN201
-    """segments._inv2: inverse of [[a, b], [b, d]] as (00, 01, 11)."""
+    """Inverse of the symmetric 2x2 matrix [[a, b], [b, d]] as (00, 01, 11)."""
     det = a * d - b * b
     return d / det, -b / det, a / det
 
 
 @kernel
-def merge_neighbours(rho, alpha, cov, first, last, npts, valid, fp, ip, floor00, floor11):  # noqa: ANN001, ANN201
-    """segments.merge_neighbours: information-weighted fusion of neighbouring pieces of one line."""
+def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p):  # noqa: ANN001, ANN201
+    """Merge neighbouring lines that are one line: at most merge_gap beams apart, at most
+    bridge_invalid invalid beams between (none by default: +inf and nan beams break segments),
+    and (rho, alpha) equal within merge_tau std (plus a model-error floor). The merged line is the
+    information-weighted combination of the pieces (independent fits of one line)."""
     n = rho.size
     if n < 2:
         return rho, alpha, cov, first, last, npts
@@ -528,14 +640,14 @@ def merge_neighbours(rho, alpha, cov, first, last, npts, valid, fp, ip, floor00,
     c = cov.reshape(n, 4).copy()
     last = last.copy()
     npts = npts.copy()
-    tau2 = fp[F_MERGE_TAU2]
+    tau2 = p.merge_tau**2
     out = np.empty(n, np.int64)
     out[0] = 0
     n_out = 1
     cur = 0
     for i in range(1, n):
         gap = first[i] - last[cur] - 1
-        if gap > ip[I_MERGE_GAP] or (gap > 0 and invalid_cum[first[i]] - invalid_cum[last[cur] + 1] > ip[I_BRIDGE]):
+        if gap > p.merge_gap or (gap > 0 and invalid_cum[first[i]] - invalid_cum[last[cur] + 1] > p.bridge_invalid):
             out[n_out] = i
             n_out += 1
             cur = i
@@ -544,13 +656,14 @@ def merge_neighbours(rho, alpha, cov, first, last, npts, valid, fp, ip, floor00,
         da = (alpha[i] - alpha[cur] + math.pi) % (2 * math.pi) - math.pi
         a00, a01, a11 = c[cur, 0], c[cur, 1], c[cur, 3]
         b00, b01, b11 = c[i, 0], c[i, 1], c[i, 3]
-        s00, s01, s11 = a00 + b00 + floor00, a01 + b01, a11 + b11 + floor11
+        s00, s01, s11 = a00 + b00 + MERGE_FLOOR_RHO_VAR, a01 + b01, a11 + b11 + MERGE_FLOOR_ALPHA_VAR
         det = s00 * s11 - s01 * s01
         if not det > 0 or (s11 * dr * dr - 2 * s01 * dr * da + s00 * da * da) > tau2 * det:
             out[n_out] = i
             n_out += 1
             cur = i
             continue
+        # information-weighted fusion (alpha of i unwrapped next to cur's)
         pa0, pa1, pa2 = inv2(a00, a01, a11)
         pb0, pb1, pb2 = inv2(b00, b01, b11)
         p00, p01, p11 = pa0 + pb0, pa1 + pb1, pa2 + pb2
@@ -575,17 +688,16 @@ def merge_neighbours(rho, alpha, cov, first, last, npts, valid, fp, ip, floor00,
 
 
 @kernel
-def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, fp, ip, floor00, floor11):  # noqa: ANN001, ANN201
-    """The part of features.sensor._extract after find_lines: merge, resolve overlaps, endpoints,
-    drop short segments. Returns (rho, alpha, cov, first, last, n_points, start (L, 2), end (L, 2))."""
+def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p):  # noqa: ANN001, ANN201
+    """Merge neighbours, split the beams two neighbours both claim (around a corner) at the middle,
+    project the end beams' points on the lines, drop segments shorter than min_length.
+    Returns (rho, alpha, cov, first, last, n_points, start (L, 2), end (L, 2))."""
     if rho.size > 1:
-        rho, alpha, cov, first, last, npts = merge_neighbours(
-            rho, alpha, cov, first, last, npts, valid, fp, ip, floor00, floor11
-        )
+        rho, alpha, cov, first, last, npts = merge_neighbours(rho, alpha, cov, first, last, npts, valid, p)
     first = first.copy()
     last = last.copy()
     n_lines = rho.size
-    over = np.empty(n_lines, np.bool_)  # segments.resolve_overlaps: overlaps found before any change
+    over = np.empty(n_lines, np.bool_)  # overlaps found before any change
     for i in range(n_lines - 1):
         over[i] = last[i] >= first[i + 1]
     for i in range(n_lines - 1):
@@ -595,7 +707,7 @@ def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, fp, ip
             first[i + 1] = min(mid + 1, last[i + 1])
     ends = np.empty((2, n_lines, 2))
     keep = np.zeros(n_lines, np.bool_)
-    min_len2 = fp[F_MIN_LENGTH] * fp[F_MIN_LENGTH]
+    min_len2 = p.min_length * p.min_length
     for m in range(n_lines):
         c, s = math.cos(alpha[m]), math.sin(alpha[m])
         for e in range(2):
@@ -608,15 +720,19 @@ def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, fp, ip
             ends[e, m, 1] = y - off * s
         dx = ends[1, m, 0] - ends[0, m, 0]
         dy = ends[1, m, 1] - ends[0, m, 1]
-        keep[m] = dx * dx + dy * dy >= min_len2
+        keep[m] = dx * dx + dy * dy >= min_len2  # nan -> dropped
     idx = np.flatnonzero(keep)
     n_pts = np.minimum(npts, last - first + 1)
     return (rho[idx], alpha[idx], cov[idx], first[idx], last[idx], n_pts[idx], ends[0][idx], ends[1][idx])
 
 
+# -- 6. corners -----------------------------------------------------------------------------------
+
+
 @kernel
 def neighbourhood_var(ranges, valid, lo, hi) -> float:  # noqa: ANN001
-    """corners.neighbourhood_var: variance of the valid ranges of beams lo..hi (as ndarray.var)."""
+    """Variance (m^2) of the valid ranges of beams lo..hi: the paper's "variance in range between
+    neighbouring points" around a corner (0 when fewer than 3 are valid)."""
     d = np.empty(hi - lo + 1)
     m = 0
     for j in range(lo, hi + 1):
@@ -633,18 +749,25 @@ def neighbourhood_var(ranges, valid, lo, hi) -> float:  # noqa: ANN001
 
 
 @kernel
-def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, increment, fp, ip):  # noqa: ANN001, ANN201
-    """corners.find_corners: (x, y, angle, index, i) of each corner between lines i and i + 1."""
+def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, increment, sigma_r, p):  # noqa: ANN001, ANN201
+    """Corners between consecutive lines i, i + 1 (beam order): (x, y, angle) and (beam, i) each.
+
+    A corner needs the two lines' facing ends within corner_max_gap beams, a turn of the line
+    direction in [corner_min_turn, pi - corner_min_turn], their intersection near both facing
+    ends, psi_i (the paper's corner signal) reaching corner_psi of the turn there, and (the
+    paper's remedy against false acute corners, when acute_check) a range variance of the beams
+    within k of it of at least acute_min_var sigma_r^2. ``angle`` is the interior angle (0, pi)."""
     n_lines = rho.size
     n = ranges.size
-    k = ip[I_K]
-    min_turn = fp[F_MIN_TURN]
+    k = p.k
+    min_turn = p.corner_min_turn
+    acute_var = p.acute_min_var * (sigma_r * sigma_r)
     out_f = np.empty((max(n_lines - 1, 0), 3))
     out_i = np.empty((max(n_lines - 1, 0), 2), np.int64)
     m = 0
     for i in range(n_lines - 1):
         j = i + 1
-        if first[j] - last[i] - 1 > ip[I_MAX_GAP]:
+        if first[j] - last[i] - 1 > p.corner_max_gap:
             continue
         a1, a2 = alpha[i], alpha[j]
         s = math.sin(a2 - a1)
@@ -654,27 +777,29 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
             turn = math.pi - math.asin(min(1.0, abs(s)))
         if turn < min_turn or turn > math.pi - min_turn:
             continue
-        x = (rho[i] * math.sin(a2) - rho[j] * math.sin(a1)) / s
+        x = (rho[i] * math.sin(a2) - rho[j] * math.sin(a1)) / s  # x cos a + y sin a = rho for both
         y = (rho[j] * math.cos(a1) - rho[i] * math.cos(a2)) / s
+        # near both facing ends: within corner_max_dist plus the point spacing there (one beam
+        # step projected on each line, large at grazing incidence)
         b = math.atan2(y, x)
         spacing = math.hypot(x, y) * increment / max(min(math.cos(b - a1), math.cos(b - a2)), 0.1)
-        reach = fp[F_CORNER_MAX_DIST] + 1.5 * min(spacing, 1.0)  # corners.SPACING_CAP
+        reach = p.corner_max_dist + 1.5 * min(spacing, SPACING_CAP)
         if math.hypot(x - end[i, 0], y - end[i, 1]) > reach:
             continue
         if math.hypot(x - start[j, 0], y - start[j, 1]) > reach:
             continue
         lo, hi = max(0, last[i] - k), min(n - 1, first[j])
-        peak = -1.0
+        peak = -1.0  # largest |psi| between the two segments
         for t in range(lo, hi + 1):
             if np.isfinite(psi[t]):
                 peak = max(peak, abs(psi[t]))
-        if peak < 0.0 or peak < fp[F_CORNER_PSI] * turn:
+        if peak < 0.0 or peak < p.corner_psi * turn:
             continue
         index = np.int64(np.rint((b - angle_min) / increment))
         index = min(max(index, last[i]), first[j])
-        if ip[I_ACUTE]:
+        if p.acute_check:
             var = neighbourhood_var(ranges, valid, max(0, index - k), min(n - 1, index + k))
-            if var < fp[F_ACUTE_VAR]:
+            if var < acute_var:
                 continue
         v1x, v1y = start[i, 0] - x, start[i, 1] - y
         v2x, v2y = end[j, 0] - x, end[j, 1] - y
@@ -691,19 +816,24 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
     return out_f[:m], out_i[:m]
 
 
+# -- the whole method -----------------------------------------------------------------------------
+
+
 @kernel
-def extract(ranges, bearings, angle_min, increment, range_lo, range_hi, template, fp, ip, floor00, floor11):  # noqa: ANN001, ANN201
-    """The whole extractor in one call (one kernel dispatch a scan): find_lines, segments and,
-    when ``ip[I_CORNERS]``, corners. Returns (rho, alpha, cov, first, last, n_points, start,
-    end, corner floats (C, 3), corner ints (C, 2))."""
-    rho, alpha, cov, first, last, npts, valid, psi = find_lines(
-        ranges, bearings, angle_min, increment, range_lo, range_hi, template, fp, ip
+def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p):  # noqa: ANN001, ANN201
+    """Lines and corners of one scan (sensor frame): steps 1-6. ``range_lo``, ``range_hi``: valid
+    range limits (m); ``sigma_r``: the range noise std for this scan's units (m).
+    Returns (rho, alpha, cov, first, last, n_points, start, end, corner (C, 3) x, y, angle,
+    corner (C, 2) beam, first line)."""
+    valid, _, AD, AD_var, _, theta, theta_var, psi, psi_var = beam_signals(
+        ranges, bearings, p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum
     )
-    rho, alpha, cov, first, last, npts, p0, p1 = segments(
-        rho, alpha, cov, first, last, npts, ranges, bearings, valid, fp, ip, floor00, floor11
+    rho, alpha, cov, first, last, npts = find_lines(
+        ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_var, angle_min, increment, sigma_r, grid, p
     )
-    if ip[I_CORNERS] and rho.size > 1:
-        cf, ci = corners(rho, alpha, first, last, p0, p1, psi, ranges, valid, angle_min, increment, fp, ip)
+    rho, alpha, cov, first, last, npts, p0, p1 = segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p)
+    if p.corners and rho.size > 1:
+        cf, ci = corners(rho, alpha, first, last, p0, p1, psi, ranges, valid, angle_min, increment, sigma_r, p)
     else:
         cf, ci = np.empty((0, 3)), np.empty((0, 2), np.int64)
     return rho, alpha, cov, first, last, npts, p0, p1, cf, ci

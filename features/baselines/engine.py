@@ -1,13 +1,15 @@
-"""Compiled (numba) kernels of ``split_merge`` and ``iepf``: the numpy reference of
-``split_merge.segment_lines``, ``common.build_lines`` and ``common.corners_from_lines``, step for
-step, as loops over the points of one scan, so that speed comparisons against the compiled
-sensor method are like for like.
+"""Split-and-merge and iterative end-point fit (methods "split_merge" and "iepf"), and the
+Cartesian corner step of every baseline: the one implementation, compiled with numba.
 
-The reference splits level by level over all pending segments; the segments are independent, so
-splitting each one depth-first and sorting the result gives the same segments. Likewise the two
-end-trimming rounds act on each segment independently. Merging keeps the reference's passes
-(pairs with a locally smallest merged residual). Transcendentals come from libm rather than
-numpy's SIMD routines, so values can differ in the last bit (tests check 1e-9 agreement).
+Steps of ``segment_lines``, as loops over the valid points of one scan: adaptive breakpoints cut
+the scan into clusters (Borges & Aldon 2004); each cluster is split depth-first while some point
+lies farther than the threshold from its least-squares line (split_merge, Pavlidis & Horowitz
+1974) or from its chord (iepf, Duda & Hart 1973 / Douglas & Peucker 1973), at the point farthest
+from the chord; neighbours sharing a split point merge, pass by pass, where their joint fit keeps
+an RMS residual within merge_rms (the pairs with a locally smallest merged residual first); split
+points shared by two neighbours are dropped from both; end points off the fitted line are trimmed
+(twice, refitting); segments of enough points and length become lines with the covariance of a
+total-least-squares fit (Arras & Siegwart 1997).
 
 One module on purpose: numba's on-disk cache is invalidated by the modification time of the file
 that defines a function, not of the files of the functions it calls, so kernels that call each
@@ -17,14 +19,53 @@ other live in one file.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
-TWO_PI = 2.0 * math.pi
+from ..angles import TWO_PI
+from ..jit import kernel
 
-# cached between processes; IEEE division (x / 0 -> inf or nan, as in numpy, never an exception)
-kernel = njit(cache=True, error_model="numpy")
+TRIM_TOL_SIGMA = 3.0  # end points farther than this many sigma from the fitted line are trimmed
+BREAK_SIGMA = 3.0  # the adaptive breakpoint distance's noise margin, in sigma
+
+
+class SplitParams(NamedTuple):
+    """The fields of a ``SplitMergeConfig`` / ``IepfConfig`` as ``segment_lines`` reads them."""
+
+    sigma: float  # range noise, m
+    breakpoint_lambda: float  # rad
+    split_threshold: float  # m
+    merge_rms: float  # m
+    min_points: int
+    min_length: float  # m
+    max_skip: int  # beams
+    runs_z: float
+    chord: bool  # split at the chord (iepf) instead of the least-squares line (split_merge)
+
+
+class CornerParams(NamedTuple):
+    """The fields of a ``CornerConfig`` as ``corners`` reads them."""
+
+    min_turn: float  # rad
+    max_gap_beams: int
+    max_distance: float  # m
+    breakpoint_lambda: float  # rad
+    sigma: float  # m
+
+@kernel
+def wrap(a: float) -> float:
+    """An angle wrapped to (-pi, pi] (rad)."""
+    w = math.pi - (math.pi - a) % TWO_PI
+    return w + TWO_PI if w <= -math.pi else w
+
+
+@kernel
+def breakpoint_distance(r_prev: float, dphi: float, lam: float, sigma: float) -> float:
+    """The adaptive breakpoint distance (Borges & Aldon 2004, m): r sin(dphi) / sin(lambda - dphi)
+    + 3 sigma for a point at range r_prev and the bearing step dphi to its neighbour (rad);
+    <= 0 or nan where dphi >= lambda (never connected)."""
+    return r_prev * math.sin(dphi) / math.sin(lam - dphi) + BREAK_SIGMA * sigma
 
 
 @kernel
@@ -39,7 +80,9 @@ def npmax(a: float, b: float) -> float:
 
 @kernel
 def fit_range(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
-    """common.PrefixFit.fit + fit_moments for positions s..e: (rho, alpha, n, mx, my, along, across)."""
+    """Total-least-squares line ``x cos(alpha) + y sin(alpha) = rho`` of points s..e (inclusive)
+    from prefix sums (Arras & Siegwart 1997): (rho >= 0, alpha in (-pi, pi], n, centroid x, y,
+    scatter along the line, residual sum of squares across it)."""
     lo, hi = s, e + 1
     n = float(hi - lo)
     mx = (sx[hi] - sx[lo]) / n
@@ -51,7 +94,7 @@ def fit_range(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     rho = mx * math.cos(alpha) + my * math.sin(alpha)
     if rho < 0:
         alpha = alpha + math.pi
-    alpha = math.pi - (math.pi - alpha) % TWO_PI
+    alpha = wrap(alpha)
     rho = abs(rho)
     c, si = math.cos(alpha), math.sin(alpha)
     across = npmax(cxx * c * c + cyy * si * si + 2 * cxy * si * c, 0.0)
@@ -61,7 +104,9 @@ def fit_range(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
 
 @kernel
 def trim(x, y, s, e, rho, alpha, tol, keep):  # noqa: ANN001, ANN201
-    """common.trim_ends for one segment s..e: the range left after dropping end points off the line."""
+    """The range s..e left after dropping the leading and trailing points farther than ``tol``
+    (m) from the line (a small neighbouring face the split threshold let in); never below ``keep``
+    points (then s..e whole)."""
     c, si = math.cos(alpha), math.sin(alpha)
     lo = -1
     hi = -1
@@ -77,7 +122,9 @@ def trim(x, y, s, e, rho, alpha, tol, keep):  # noqa: ANN001, ANN201
 
 @kernel
 def straight_enough(x, y, s, e, rho, alpha, z_min, dead_zone) -> bool:  # noqa: ANN001
-    """common.straight_enough for one segment (Wald-Wolfowitz runs test on the residual signs)."""
+    """Wald-Wolfowitz runs test on the signs of the residuals of points s..e from their line:
+    False when the runs are ``z_min`` std fewer than noise would give (an arc); residuals within
+    ``dead_zone`` (m) carry no sign."""
     c, si = math.cos(alpha), math.sin(alpha)
     n_signed = 0
     n_pos = 0.0
@@ -102,16 +149,20 @@ def straight_enough(x, y, s, e, rho, alpha, z_min, dead_zone) -> bool:  # noqa: 
 
 
 @kernel
-def segment_lines(ranges, bearings, valid, increment, sigma, lam, threshold, merge_rms, min_points,  # noqa: ANN001, ANN201, PLR0913
-                  min_length, max_skip, runs_z, chord):
-    """split_merge.segment_lines + common.build_lines: the kept lines in beam order as arrays
-    (rho, alpha, n, first, last, start (L, 2), end (L, 2), cov (L, 2, 2))."""
+def segment_lines(ranges, bearings, valid, increment, p):  # noqa: ANN001, ANN201
+    """The lines of one scan (sensor frame) in beam order, as arrays (rho, alpha, n, first, last,
+    start (L, 2), end (L, 2), cov (L, 2, 2)); ``p`` a SplitParams. The (rho, alpha) covariance is
+    that of a total-least-squares fit under isotropic noise sigma: var(alpha) = s^2/S,
+    var(rho) = s^2/n + t^2 s^2/S, cov = t s^2/S (t: the centroid's coordinate along the line,
+    S: the scatter along it)."""
+    sigma, lam, threshold, merge_rms = p.sigma, p.breakpoint_lambda, p.split_threshold, p.merge_rms
+    min_points, min_length, max_skip, runs_z, chord = p.min_points, p.min_length, p.max_skip, p.runs_z, p.chord
     idx = np.flatnonzero(valid)
     n_pts = idx.size
     x = np.empty(n_pts)
     y = np.empty(n_pts)
     r = np.empty(n_pts)
-    no_return = np.empty(n_pts, np.int64)  # common.Points.no_return: +inf beams before each point
+    no_return = np.empty(n_pts, np.int64)  # +inf (no-return) beams before each point
     n_inf = 0
     beam = 0
     for p in range(n_pts):
@@ -137,7 +188,8 @@ def segment_lines(ranges, bearings, valid, increment, sigma, lam, threshold, mer
         sxx[p + 1] = sxx[p] + x[p] * x[p] if p else x[p] * x[p]
         syy[p + 1] = syy[p] + y[p] * y[p] if p else y[p] * y[p]
         sxy[p + 1] = sxy[p] + x[p] * y[p] if p else x[p] * y[p]
-    # adaptive breakpoints (common.breakpoints) -> clusters, each split depth-first (splitting.split)
+    # adaptive breakpoints -> clusters, each split depth-first; a +inf beam between two points
+    # saw open space (a doorway, beyond range): always a break; up to max_skip - 1 nan beams are bridged
     min_split = max(min_points, 3)
     seg_s = np.empty(2 * n_pts + 2, np.int64)
     seg_e = np.empty(2 * n_pts + 2, np.int64)
@@ -151,7 +203,7 @@ def segment_lines(ranges, bearings, valid, increment, sigma, lam, threshold, mer
             step = idx[p + 1] - idx[p]
             dphi = step * increment
             gap = math.hypot(x[p + 1] - x[p], y[p + 1] - y[p])
-            dmax = r[p] * math.sin(dphi) / math.sin(lam - dphi) + 3.0 * sigma
+            dmax = breakpoint_distance(r[p], dphi, lam, sigma)
             cut = gap > dmax or dmax <= 0 or step > max_skip or no_return[p + 1] > no_return[p]
         if not cut:
             continue
@@ -196,7 +248,7 @@ def segment_lines(ranges, bearings, valid, increment, sigma, lam, threshold, mer
     segs_s = seg_s[:n_seg][order]
     segs_e = seg_e[:n_seg][order]
     m = n_seg
-    # merge collinear neighbours (splitting.merge_collinear), pass by pass
+    # merge collinear neighbours, pass by pass
     if merge_rms > 0:
         rms = np.empty(n_seg)
         pick = np.zeros(n_seg, np.bool_)
@@ -226,7 +278,7 @@ def segment_lines(ranges, bearings, valid, increment, sigma, lam, threshold, mer
                     i += 1
                 w += 1
             m = w
-    # unshare split points (splitting.unshare), drop short segments
+    # a split point shared by two neighbours belongs to neither line's fit; drop short segments
     shared = np.zeros(m, np.bool_)
     for i in range(m - 1):
         shared[i] = segs_s[i + 1] == segs_e[i]
@@ -243,14 +295,14 @@ def segment_lines(ranges, bearings, valid, increment, sigma, lam, threshold, mer
     p1 = np.empty((m, 2))
     cov = np.empty((m, 2, 2))
     s2 = sigma * sigma
-    tol = 3.0 * sigma
+    tol = TRIM_TOL_SIGMA * sigma
     k = 0
     for i in range(m):
         s, e = segs_s[i], segs_e[i]
         if e - s + 1 < min_points:
             continue
         fr, fa, fn, fmx, fmy, falong, _ = fit_range(sx, sy, sxx, syy, sxy, s, e)
-        for _ in range(2):  # drop end points off the fitted line, refit (common.trim_ends)
+        for _ in range(2):  # drop end points off the fitted line, refit
             lo, hi = trim(x, y, s, e, fr, fa, tol, min_points)
             if lo == s and hi == e:
                 break
@@ -286,9 +338,15 @@ def _no_lines():  # noqa: ANN202
 
 
 @kernel
-def corners(rho, alpha, first, last, p0, p1, increment, min_turn, max_gap, max_distance, lam, sigma):  # noqa: ANN001, ANN201, PLR0913
-    """common.corners_from_lines: (x, y, interior angle) and (beam index, line k) of each corner
-    between consecutive lines k, k + 1."""
+def corners(rho, alpha, first, last, p0, p1, increment, c):  # noqa: ANN001, ANN201
+    """The Cartesian corner step (Castellanos et al. 1996): corners where consecutive lines k, k + 1
+    (beam order) meet, at their intersection. A corner needs the lines at most max_gap_beams apart,
+    their facing end points connected in the scan (within the adaptive breakpoint distance, so an
+    occlusion's depth jump is no corner), a turn of at least min_turn (rad) between the segment
+    directions, and the intersection within max_distance (m) plus the end points' gap of both
+    facing ends. ``c`` a CornerParams. Returns (x, y, interior angle in (0, pi)) and (beam index,
+    line k) of each corner."""
+    min_turn, max_gap, max_distance, lam, sigma = c.min_turn, c.max_gap_beams, c.max_distance, c.breakpoint_lambda, c.sigma
     n_lines = rho.size
     out_f = np.empty((max(n_lines - 1, 0), 3))
     out_i = np.empty((max(n_lines - 1, 0), 2), np.int64)
@@ -310,7 +368,7 @@ def corners(rho, alpha, first, last, p0, p1, increment, min_turn, max_gap, max_d
         turn = math.acos(cos_turn)
         cx = (r1 * math.sin(a2) - r2 * math.sin(a1)) / det
         cy = (r2 * math.cos(a1) - r1 * math.cos(a2)) / det
-        connect = math.hypot(p1[k, 0], p1[k, 1]) * math.sin(dphi) / math.sin(lam - dphi) + 3 * sigma
+        connect = breakpoint_distance(math.hypot(p1[k, 0], p1[k, 1]), dphi, lam, sigma)
         dist_a = math.hypot(cx - p1[k, 0], cy - p1[k, 1])
         dist_b = math.hypot(cx - p0[k + 1, 0], cy - p0[k + 1, 1])
         if (step <= max_gap and gap <= connect and connect > 0 and turn >= min_turn

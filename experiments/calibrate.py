@@ -1,0 +1,209 @@
+"""`lmsbench calibrate`: the simulator's sensor model fitted to a real log.
+
+The measurements are :func:`lms200.calibration.calibrate_scans` (from the log alone). They map
+onto :class:`sim.SensorConfig` fields one to one, except two that depend on how the simulator
+produces the effect, which are fitted by simulation (indirect inference, fixed seeds):
+
+- ``beam_width_deg``: the simulator makes a mixed pixel where a beam's spot straddles a depth
+  step, so the share of steps with a mixed pixel grows with the spot's width. The same counter is
+  run on short simulated runs at spot widths of 0-2 beam steps; the width whose share equals the
+  log's is interpolated (capped at 2 beam steps).
+- ``outlier_prob``: the counter of isolated outliers also counts one-beam objects of the world
+  (thin legs far away) and mixed pixels; the rate it reads on the simulated run with the fitted
+  spot width and no outliers is subtracted.
+
+Nothing else is tuned: noise_sigma is the 1-4 m sigma, noise_sigma_per_m the fitted slope,
+dropout_prob the nan rate, no_return_prob the surface no-return rate, max_reading the log's cap.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lms200 import LmsbenchError, read_log
+from lms200.calibration import LogCalibration, calibrate_scans
+
+WIDTH_GRID_STEPS = (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)  # spot widths tried, in beam steps
+FIT_DURATION_S = 30.0  # simulated seconds per spot width
+FIT_RATE_HZ = 5.0  # scans kept per simulated second
+FIT_SEED = 0
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """The log's measurements, the sensor config fitted to them and the simulated share curve."""
+
+    measured: LogCalibration
+    sensor: Any  # sim.SensorConfig
+    width_curve: list[tuple[float, float]]  # (beam_width_deg, simulated mixed share)
+    outlier_baseline: float  # the outlier counter's rate on the simulated run without outliers
+    world: str
+
+
+def _resolution_deg(angle_increment: float) -> float:
+    deg = float(np.rad2deg(angle_increment))
+    for known in (0.25, 0.5, 1.0):
+        if abs(deg - known) < 0.01:
+            return known
+    raise LmsbenchError(f"angular resolution {deg:.4f} deg: the LMS200 model has 0.25, 0.5 or 1 deg")
+
+
+def base_sensor(cal: LogCalibration):
+    """The SensorConfig that the measurements give directly (spot width and outliers not yet fitted)."""
+    from sim import SensorConfig
+
+    res = _resolution_deg(cal.angle_increment)
+    n_beams = min(cal.n_beams, int(round(180.0 / res)) + 1)
+    sigma = cal.noise.sigma_m if np.isfinite(cal.noise.sigma_m) else 0.0
+    slope = cal.noise_slope.value if np.isfinite(cal.noise_slope.value) else 0.0
+    units = cal.units
+    cap = cal.max_reading
+    range_max = 81.83 if units == "cm" else 8.183
+    return SensorConfig(
+        n_beams=n_beams, resolution_deg=res, units=units, noise_sigma=float(sigma), quantise=cal.quantum_m > 0,
+        dropout_prob=float(min(cal.nan_rate.value, 0.5)), mixed_pixels=True, interlaced=res < 1.0,
+        noise_sigma_per_m=float(slope), no_return_prob=float(min(cal.no_return_rate.value, 0.5)),
+        outlier_prob=0.0, max_reading=float(cap) if cap is not None and cap <= range_max else None,
+    )
+
+
+def _simulated_measurement(sensor, world: str):
+    from sim import make_world, simulate_records
+
+    records = simulate_records(make_world(world, FIT_SEED), FIT_SEED, FIT_DURATION_S, sensor, rate_hz=FIT_RATE_HZ)
+    return calibrate_scans(records, seed=FIT_SEED)
+
+
+def fit_sensor(cal: LogCalibration, world: str = "office") -> CalibrationResult:
+    """The SensorConfig fitted to a log's measurements (see the module docstring)."""
+    sensor = base_sensor(cal)
+    curve: list[tuple[float, float]] = []
+    for steps in WIDTH_GRID_STEPS:
+        w = steps * sensor.resolution_deg
+        m = _simulated_measurement(sensor.replace(beam_width_deg=w, mixed_pixels=w > 0), world)
+        curve.append((w, float(m.mixed_share.value)))
+    widths = np.array([c[0] for c in curve])
+    shares = np.maximum.accumulate(np.nan_to_num(np.array([c[1] for c in curve])))  # monotone
+    target = float(cal.mixed_share.value) if np.isfinite(cal.mixed_share.value) else 0.0
+    if target >= shares[-1]:
+        width = float(widths[-1])
+    else:
+        first = int(np.searchsorted(shares, target, side="left"))
+        if first == 0:
+            width = float(widths[0])
+        else:
+            s0, s1 = shares[first - 1], shares[first]
+            t = 0.0 if s1 <= s0 else (target - s0) / (s1 - s0)
+            width = float(widths[first - 1] + t * (widths[first] - widths[first - 1]))
+    width = round(width, 4)
+    with_width = sensor.replace(beam_width_deg=width, mixed_pixels=width > 0)
+    baseline = float(_simulated_measurement(with_width, world).outlier_rate.value)
+    outlier = max(float(cal.outlier_rate.value) - baseline, 0.0) if np.isfinite(cal.outlier_rate.value) else 0.0
+    fitted = with_width.replace(outlier_prob=min(outlier, 0.5))
+    return CalibrationResult(cal, fitted, curve, baseline, world)
+
+
+def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_scans: int | None = None,
+                  **read_options: Any) -> CalibrationResult:
+    """Measure a log (every ``stride``-th scan, at most ``max_scans``) and fit the sensor model;
+    ``read_options`` go to ``lms200.read_log`` (topic, skip_bad_lines, geometry).
+
+    Raises:
+        LmsbenchError: for a log without laser scans or an unsupported resolution.
+    """
+    reader = read_log(path, **read_options)
+
+    def scans():
+        for k, rec in enumerate(reader):
+            if max_scans is not None and k // stride >= max_scans:
+                break
+            if k % stride == 0:
+                yield rec.scan
+
+    try:
+        cal = calibrate_scans(scans())
+    except ValueError as exc:
+        raise LmsbenchError(f"{path}: {exc}") from None
+    return fit_sensor(cal, world)
+
+
+def _est(e) -> dict[str, float]:
+    return {"value": _round(e.value), "std": _round(e.std), "n": int(e.n)}
+
+
+def _round(v: float) -> float | None:
+    return None if v is None or not np.isfinite(v) else float(f"{v:.6g}")
+
+
+def calibration_section(result: CalibrationResult, source: str) -> dict[str, Any]:
+    """The ``calibration`` section of the YAML: every measurement with its standard error."""
+    c = result.measured
+    return {
+        "calibration": {
+            "source": source,
+            "scans": c.n_scans,
+            "beams_per_scan": c.n_beams,
+            "quantum_m": c.quantum_m,
+            "noise_sigma_1_4m": {"value": _round(c.noise.sigma_m), "std": _round(c.noise.sigma_std_m),
+                                 "n": c.noise.n_used, "resolved": c.noise.resolved},
+            "noise_sigma_per_m": _est(c.noise_slope),
+            "noise_by_range": [{k: _round(v) if isinstance(v, float) else v for k, v in row.items()}
+                               for row in c.noise_bins],
+            "nan_rate": _est(c.nan_rate),
+            "inf_rate": _est(c.inf_rate),
+            "max_reading_rate": _est(c.max_reading_rate),
+            "max_reading_m": c.max_reading,
+            "no_return_rate_on_surfaces": _est(c.no_return_rate),
+            "mixed_pixel_share_at_steps": _est(c.mixed_share),
+            "isolated_outlier_rate": _est(c.outlier_rate),
+            "fit_world": result.world,
+            "simulated_mixed_share_by_beam_width_deg": [[_round(w), _round(s)] for w, s in result.width_curve],
+            "simulated_outlier_rate_without_outliers": _round(result.outlier_baseline),
+        }
+    }
+
+
+def format_calibration(result: CalibrationResult) -> list[str]:
+    """Human-readable lines: each measurement with its standard error, and the fitted fields."""
+    c, s = result.measured, result.sensor
+
+    def pm(e, scale: float = 1.0, unit: str = "") -> str:
+        return f"{e.value * scale:.4g} +- {e.std * scale:.2g}{unit}"
+
+    lines = [
+        f"scans {c.n_scans}, {c.n_beams} beams at {np.rad2deg(c.angle_increment):g} deg, quantum {c.quantum_m * 1000:g} mm ({c.units} mode)",
+        f"noise sigma at 1-4 m   {c.noise.sigma_m * 1000:.3f} +- {c.noise.sigma_std_m * 1000:.3f} mm  ({c.noise.n_used} triples)",
+        f"noise growth           {pm(c.noise_slope, 1000, ' mm/m')}",
+        "noise by range         " + ", ".join(f"{b['r_lo']:g}-{b['r_hi']:g} m: {b['sigma'] * 1000:.1f} mm" for b in c.noise_bins),
+        f"nan (invalid) rate     {pm(c.nan_rate, 100, ' %')}",
+        f"+inf (no return) rate  {pm(c.inf_rate, 100, ' %')}",
+        f"max-reading rate       {pm(c.max_reading_rate, 100, ' %')}" + (f"  (cap {c.max_reading:g} m)" if c.max_reading else ""),
+        f"no return on surfaces  {pm(c.no_return_rate, 100, ' %')}",
+        f"mixed pixels at steps  {pm(c.mixed_share, 100, ' %')}  -> beam_width_deg {s.beam_width_deg:g}",
+        f"isolated outliers      {pm(c.outlier_rate, 100, ' %')}  -> outlier_prob {s.outlier_prob:.4g} "
+        f"(simulated world alone: {result.outlier_baseline * 100:.3g} %)",
+    ]
+    return lines
+
+
+def write_sensor_yaml(result: CalibrationResult, path: Path, source: str) -> None:
+    """The sensor config (top-level fields, read by SensorConfig.from_yaml) plus the measurements."""
+    header = (f"lmsbench calibrate {source}\n"
+              "sensor model fitted to the log; read with SensorConfig.from_yaml or --sensor FILE.yaml\n"
+              "the calibration section holds every measurement with its standard error (bootstrap over scans)")
+    result.sensor.to_yaml(path, header=header, extra=calibration_section(result, source))
+
+
+def sensor_from_option(path: str | Path | None, default: Any = None, **changes: Any) -> Any:
+    """The SensorConfig of a ``--sensor FILE.yaml`` option (with ``changes``), or ``default``."""
+    if path is None:
+        return default
+    from sim import SensorConfig
+
+    sensor = SensorConfig.from_yaml(path)
+    return sensor.replace(**changes) if changes else sensor
+

@@ -1,0 +1,50 @@
+"""Constants of a scan's angle grid for the sensor method: the AD / slope window sums (eq. 4, 7)
+and the Log-Hough log-cos template (eq. 5), built once per (k, beam step, subdivision) value."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from .engine import Grid
+
+LOGCOS_FLOOR = float(np.log(1e-6))  # template value where |a - b| >= pi/2 (the beam cannot see the line)
+MAX_TEMPLATE = 1 << 20  # most template entries (8 MB): beam steps finer than ~4 pi / 2^20 rad are refused
+
+
+@lru_cache(maxsize=64)
+def window_sums(k: int, increment: float) -> tuple[float, float]:
+    """(1 + 2 sum_{j=1..k} cos(jD), 2 sum_{m=1..k} sin(mD)) for half-width ``k`` and step D (rad):
+    AD on a straight line (eq. 4) and the slope denominator (NOTES.md, eq. 7)."""
+    j = np.arange(1, k + 1)
+    return float(1.0 + 2.0 * np.cos(j * increment).sum()), float(2.0 * np.sin(j * increment).sum())
+
+
+@lru_cache(maxsize=64)
+def grid_constants(k: int, increment: float, subdiv: int) -> Grid:
+    """The Grid of window half-width ``k`` beams, beam step ``increment`` (rad) and Log-Hough
+    angle step ``increment / subdiv``.
+
+    The template holds log cos(m step) for |m| step up to just past pi/2 and is floored at
+    LOGCOS_FLOOR; a lookup beyond its ends is clipped onto the floor, which is the value there.
+
+    Raises:
+        ValueError: when the angle step is so fine that the template would exceed MAX_TEMPLATE.
+    """
+    ad_line, two_sin_sum = window_sums(k, increment)
+    step = increment / subdiv
+    quarter_turn = 0.5 * np.pi / step if step > 0 else np.inf  # template steps up to pi/2
+    if not 2 * (quarter_turn + 2) + 1 <= MAX_TEMPLATE:
+        raise ValueError(
+            f"angle_increment: {increment:.3g} rad / hough_subdiv {subdiv} is too fine a Log-Hough step for the "
+            f"sensor method (its template would need {2 * (quarter_turn + 2) + 1:.3g} entries, at most "
+            f"{MAX_TEMPLATE}); use a coarser scan or a smaller hough_subdiv"
+        )
+    half = int(np.ceil(quarter_turn)) + 1
+    x = np.arange(-half, half + 1) * step
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(np.abs(x) < np.pi / 2, np.log(np.cos(x)), LOGCOS_FLOOR)
+    t = np.maximum(t, LOGCOS_FLOOR)
+    t.setflags(write=False)
+    return Grid(ad_line, two_sin_sum, float(step), half, t)

@@ -1,0 +1,253 @@
+"""A laser's error model measured from a log alone: noise and its growth with range, the
+quantisation step, no-return / invalid / maximum-range rates, mixed pixels and isolated outliers,
+each with a standard error.
+
+Everything is counted on the scans themselves, without a map or poses (see ``docs`` of
+``lmsbench calibrate``):
+
+- noise: :mod:`lms200.noise` on triples whose beams all lie at 1-4 m, and per range band
+  (0.5-1, 1-2, 2-4, 4-8, 8-16, 16-32 m) for a weighted straight-line fit of sigma against range
+  (bands up to 16 m; farther, beams 14 cm and more apart see the scene's detail, not noise);
+- raw rates: the share of all readings that are nan (invalid), +inf (no return) or the log's
+  maximum reading (a finite cap some loggers write for "nothing", e.g. 50 m);
+- no-return rate of surfaces: among beams whose two neighbours are finite and on one surface
+  (their ranges within 20 %), the share that read +inf or the cap (so far geometry beyond the
+  sensor's range, which gives runs of +inf, is not counted);
+- mixed pixels: at depth steps (neighbours more than ``STEP_M`` apart, each on a locally
+  continuous surface), the share of steps that have a beam lying between the two surfaces, off
+  both by more than ``max(4 sigma, 3 cm)`` and off the line through its neighbours;
+- isolated outliers: among beams whose neighbours lie within half the gap of each other, the
+  share that are off the line through the neighbours by more than the gap
+  ``max(OUTLIER_M, 10 sigma)`` (a one-beam object, such as a thin leg far away, counts too: the
+  data cannot tell them apart).
+
+Standard errors come from a bootstrap over scans (the rates are ratios of per-scan counts).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any, Iterable
+
+import numpy as np
+
+from .codes import METRES_PER_UNIT
+from .noise import (BOOTSTRAP_RESAMPLES, RangeNoise, _bootstrap_scale, _remove_quantisation, estimate_quantum,
+                    estimate_range_noise, line_residuals, robust_scale)
+from .scan import Scan
+
+NOISE_BAND_M = (1.0, 4.0)  # the band whose sigma is the config's noise_sigma
+RANGE_BINS_M = (0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0)  # bands for the noise-against-range fit
+MIN_BIN_TRIPLES = 500  # a band with fewer usable triples is not fitted
+FIT_MAX_RANGE_M = 16.0  # bands beyond this are reported, not fitted (beams 14+ cm apart see scene detail)
+REFERENCE_RANGE_M = 2.5  # the fit's sigma(r) = a + b (r - 2.5 m)
+SURFACE_FRACTION = 0.2  # neighbours within this share of their range lie on one surface
+STEP_M = 0.3  # m: a depth step for the mixed-pixel count
+MIXED_MARGIN_M = 0.03  # m: least distance of a mixed pixel from both surfaces (or 4 sigma)
+OUTLIER_M = 0.1  # m: least distance of an isolated outlier from its neighbours' line (or 10 sigma)
+MAX_READING_SHARE = 1e-3  # a top value read this often (or more) is the logger's cap
+MAX_SCANS = 20_000  # memory bound: scans beyond this many are not read
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A measured quantity: value, standard error (bootstrap over scans) and its count basis."""
+
+    value: float
+    std: float
+    n: int
+
+    def to_dict(self) -> dict[str, float | int]:
+        return {"value": float(self.value), "std": float(self.std), "n": int(self.n)}
+
+
+@dataclass(frozen=True)
+class LogCalibration:
+    """The error model of the laser that recorded some scans (metres, radians).
+
+    Attributes:
+        n_scans, n_beams: scans read and beams per scan (the most common count).
+        angle_increment: bearing step (rad); range_max: the scans' range_max (m).
+        units: "cm" or "mm", from the quantisation step (mm when finer than 1 cm).
+        quantum_m: range quantisation step (0 = continuous).
+        noise: noise sigma over triples at 1-4 m (:class:`lms200.noise.RangeNoise`).
+        noise_bins: per range band: r_lo, r_hi, mean range, sigma, its standard error, triples.
+        noise_slope: fitted growth of sigma with range (m per m).
+        nan_rate, inf_rate, max_reading_rate: shares of all readings.
+        max_reading: the log's cap for no return (m), or None.
+        no_return_rate: share of beams on surfaces that read +inf or the cap.
+        mixed_share: share of depth steps with a beam between the two surfaces.
+        outlier_rate: share of beams on surfaces that are isolated outliers.
+    """
+
+    n_scans: int
+    n_beams: int
+    angle_increment: float
+    range_max: float
+    units: str
+    quantum_m: float
+    noise: RangeNoise
+    noise_bins: list[dict[str, float]] = field(default_factory=list)
+    noise_slope: Estimate = Estimate(0.0, float("nan"), 0)
+    nan_rate: Estimate = Estimate(0.0, 0.0, 0)
+    inf_rate: Estimate = Estimate(0.0, 0.0, 0)
+    max_reading_rate: Estimate = Estimate(0.0, 0.0, 0)
+    max_reading: float | None = None
+    no_return_rate: Estimate = Estimate(0.0, 0.0, 0)
+    mixed_share: Estimate = Estimate(0.0, 0.0, 0)
+    outlier_rate: Estimate = Estimate(0.0, 0.0, 0)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        for k, v in list(d.items()):
+            if isinstance(v, float):
+                d[k] = float(v)
+        return d
+
+
+def _ratio(k: np.ndarray, n: np.ndarray, seed: int) -> Estimate:
+    """sum(k) / sum(n) over scans, with the bootstrap standard error over scans."""
+    k, n = np.asarray(k, float), np.asarray(n, float)
+    total = float(n.sum())
+    if total <= 0:
+        return Estimate(float("nan"), float("nan"), 0)
+    value = float(k.sum()) / total
+    if k.size < 2:
+        return Estimate(value, float("nan"), int(total))
+    rng = np.random.default_rng(seed)
+    pick = rng.integers(0, k.size, size=(BOOTSTRAP_RESAMPLES, k.size))
+    nn = n[pick].sum(1)
+    boot = k[pick].sum(1) / np.where(nn > 0, nn, np.nan)
+    return Estimate(value, float(np.nanstd(boot, ddof=1)), int(total))
+
+
+def _max_reading(scans: list[Scan], quantum: float) -> float | None:
+    """The largest finite reading if it is a cap: read at least MAX_READING_SHARE of the time."""
+    tops = [float(np.max(s.ranges[np.isfinite(s.ranges)])) for s in scans if np.isfinite(s.ranges).any()]
+    if not tops:
+        return None
+    top = max(tops)
+    tol = max(quantum, 1e-6) / 2
+    hits = sum(int(np.count_nonzero(np.abs(s.ranges - top) <= tol)) for s in scans)
+    total = sum(len(s) for s in scans)
+    return top if hits >= MAX_READING_SHARE * total and hits >= 3 else None
+
+
+def _scan_counts(r: np.ndarray, inc: float, sigma: float, cap: float | None, quantum: float) -> np.ndarray:
+    """Counts of one scan: nan, inf, cap, beams, surface trials, surface no-returns, outlier
+    trials, outliers, mixed steps, plain steps."""
+    n = r.size
+    nan = np.isnan(r)
+    at_cap = np.zeros(n, dtype=bool) if cap is None else np.abs(r - cap) <= max(quantum, 1e-6) / 2
+    none = np.isposinf(r) | at_cap  # no return
+    x = np.where(none | nan, np.nan, r)  # finite echoes only
+    out = np.zeros(10)
+    out[:4] = nan.sum(), np.isposinf(r).sum(), at_cap.sum(), n
+    if n < 5:
+        return out
+    a, m, b = x[:-2], x[1:-1], x[2:]
+    gap = max(OUTLIER_M, 10 * sigma)
+    with np.errstate(invalid="ignore"):
+        surface = np.isfinite(a) & np.isfinite(b) & (np.abs(b - a) <= SURFACE_FRACTION * np.minimum(a, b))
+        # outlier trials: neighbours so close that no edge between them can put a beam gap away
+        smooth = surface & (np.abs(b - a) < gap / 2)
+    mid_none, mid_nan = none[1:-1], nan[1:-1]
+    out[4] = np.count_nonzero(surface & ~mid_nan)
+    out[5] = np.count_nonzero(surface & mid_none)
+    c2 = 2.0 * np.cos(inc)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        predicted = c2 * a * b / (a + b)  # the middle beam on the line through its neighbours
+        off = np.abs(m - predicted)
+        trial = smooth & np.isfinite(m)
+        out[6] = np.count_nonzero(trial)
+        out[7] = np.count_nonzero(trial & (off > gap))
+        # mixed pixels: beam i between two surfaces; neighbours anchored on continuous surfaces
+        d = np.abs(np.diff(x))
+        cont = d < STEP_M / 2  # (j, j+1) on one surface
+        i = np.arange(2, n - 2)
+        lo, hi = np.minimum(x[i - 1], x[i + 1]), np.maximum(x[i - 1], x[i + 1])
+        margin = np.maximum(MIXED_MARGIN_M, 4 * sigma)
+        anchored = cont[i - 2] & cont[i + 1]
+        mixed = (anchored & (hi - lo > STEP_M) & (x[i] > lo + margin) & (x[i] < hi - margin)
+                 & (off[i - 1] > margin))
+        step = d > STEP_M  # (j, j+1): a depth step without a beam between
+        j = np.arange(1, n - 2)
+        is_mixed = np.zeros(n, dtype=bool)
+        is_mixed[i[mixed]] = True
+        plain = step[j] & cont[j - 1] & cont[j + 1] & ~is_mixed[j] & ~is_mixed[j + 1]
+    out[8] = np.count_nonzero(mixed)
+    out[9] = np.count_nonzero(plain)
+    return out
+
+
+def _noise_bins(scans: list[Scan], quantum: float, seed: int) -> tuple[list[dict[str, float]], Estimate]:
+    """sigma per range band and the weighted straight-line fit sigma(r) = a + b (r - 2.5 m)."""
+    zs, rs, blocks = [], [], []
+    for k, s in enumerate(scans):
+        z, r0, _ = line_residuals(s.ranges, s.angle_increment, s.range_min, s.range_max)
+        zs.append(z.astype(np.float32))
+        rs.append(r0.astype(np.float32))
+        blocks.append(np.full(z.size, k, dtype=np.int32))
+    if not zs:
+        return [], Estimate(0.0, float("nan"), 0)
+    z, r0, blk = np.concatenate(zs).astype(float), np.concatenate(rs).astype(float), np.concatenate(blocks)
+    rows = []
+    for lo, hi in zip(RANGE_BINS_M[:-1], RANGE_BINS_M[1:]):
+        sel = (r0 >= lo) & (r0 < hi)
+        if np.count_nonzero(sel) < MIN_BIN_TRIPLES:
+            continue
+        _, s_obs, keep = robust_scale(z[sel])
+        sigma = _remove_quantisation(s_obs, quantum)
+        se = _bootstrap_scale(z[sel][keep], blk[sel][keep], seed)
+        se = s_obs * se / sigma if sigma > 0 else se
+        rows.append(dict(r_lo=lo, r_hi=hi, r_mean=float(r0[sel].mean()), sigma=float(sigma), std=float(se),
+                         n=int(keep.sum())))
+    fit = [row for row in rows if row["r_hi"] <= FIT_MAX_RANGE_M]
+    if len(fit) < 2:
+        return rows, Estimate(0.0, float("nan"), len(fit))
+    x = np.array([row["r_mean"] for row in fit]) - REFERENCE_RANGE_M
+    y = np.array([row["sigma"] for row in fit])
+    w = 1.0 / np.maximum(np.array([row["std"] for row in fit]), 1e-6) ** 2
+    A = np.column_stack((np.ones_like(x), x))
+    cov = np.linalg.inv(A.T @ (A * w[:, None]))
+    coef = cov @ (A.T @ (w * y))
+    resid = y - A @ coef
+    dof = max(len(fit) - 2, 1)
+    scale = max(float((w * resid**2).sum()) / dof, 1.0)  # widen by the misfit between bands
+    return rows, Estimate(float(coef[1]), float(np.sqrt(cov[1, 1] * scale)), len(fit))
+
+
+def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
+    """Measure the error model of the laser behind ``scans`` (Scans or records with ``.scan``).
+
+    Raises:
+        ValueError: when there is no scan.
+    """
+    kept: list[Scan] = []
+    for s in scans:
+        kept.append(getattr(s, "scan", s))
+        if len(kept) >= MAX_SCANS:
+            break
+    if not kept:
+        raise ValueError("scans: there is no scan to calibrate on")
+    counts_n = np.bincount([len(s) for s in kept])
+    n_beams = int(np.argmax(counts_n))
+    inc = float(np.median([s.angle_increment for s in kept]))
+    sample = np.concatenate([s.ranges[np.isfinite(s.ranges)][::5] for s in kept])
+    quantum = estimate_quantum(sample)
+    units = "cm" if quantum >= METRES_PER_UNIT["cm"] - 1e-12 else "mm"
+    noise = estimate_range_noise(kept, *NOISE_BAND_M, seed=seed)
+    sigma = noise.sigma_m if np.isfinite(noise.sigma_m) else 0.0
+    bins, slope = _noise_bins(kept, quantum, seed)
+    cap = _max_reading(kept, quantum)
+    c = np.array([_scan_counts(s.ranges, s.angle_increment, max(sigma, quantum / np.sqrt(12)), cap, quantum)
+                  for s in kept])
+    beams = c[:, 3]
+    return LogCalibration(
+        n_scans=len(kept), n_beams=n_beams, angle_increment=inc, range_max=float(kept[0].range_max),
+        units=units, quantum_m=quantum, noise=noise, noise_bins=bins, noise_slope=slope,
+        nan_rate=_ratio(c[:, 0], beams, seed), inf_rate=_ratio(c[:, 1], beams, seed),
+        max_reading_rate=_ratio(c[:, 2], beams, seed), max_reading=cap,
+        no_return_rate=_ratio(c[:, 5], c[:, 4], seed), outlier_rate=_ratio(c[:, 7], c[:, 6], seed),
+        mixed_share=_ratio(c[:, 8], c[:, 8] + c[:, 9], seed),
+    )

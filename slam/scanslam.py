@@ -1,0 +1,245 @@
+"""The default pipeline: motion measured from the scan, a keyframe pose graph with loop closures.
+
+Per scan: predict the pose from the last two poses (constant velocity, no odometry), match the
+scan's points against the local map of the newest keyframes (:mod:`slam.icp`), and take the
+matched pose. A scan far enough from the current keyframe becomes a keyframe: a factor between it
+and the previous keyframe enters the gtsam graph, and every ``loop_closure.every`` keyframes the
+earlier keyframes near the estimate are matched for a loop closure. The output trajectory is the
+graph's: every scan's pose relative to its keyframe, composed with the keyframe's optimised pose.
+Pure: no I/O, no clocks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .config import AlignmentConfig, KeyframeConfig, LoopClosureConfig
+from .geometry import between, compose
+from .icp import Match, Reference, chord_normals, match
+from .keyframes import Keyframe, LoopClosure, find_closure, local_map
+from .posegraph import PoseGraph, robust_noise
+
+
+@dataclass
+class ScanStep:
+    """What one scan did (diagnostics)."""
+
+    keyframe: int  # key of the keyframe the pose is stored against
+    inliers: float = float("nan")  # fraction of the scan's points explained by the local map
+    rms: float = float("nan")  # m
+    hypothesis: int = 0  # ICP start that won (0 = the prediction)
+    matched: bool = False  # the match was used (else the pose follows the prediction)
+    new_keyframe: bool = False
+    loop: LoopClosure | None = None
+
+
+@dataclass
+class ScanPoints:
+    """A scan's points in the sensor frame: all valid ones with normals (for the map), and the
+    thinned subset that is matched."""
+
+    points: np.ndarray
+    normals: np.ndarray
+    matched: np.ndarray
+
+    @classmethod
+    def from_points(cls, points: np.ndarray, cfg: AlignmentConfig) -> "ScanPoints":
+        p = np.asarray(points, float).reshape(-1, 2)
+        p = p[np.isfinite(p[:, 0]) & (np.hypot(p[:, 0], p[:, 1]) <= cfg.max_range)]
+        n, ok = chord_normals(p, cfg.normal_step, cfg.normal_gap, cfg.normal_gap_per_range)
+        # normals point towards the sensor, so the map's two faces of a thin wall differ
+        flip = np.einsum("ij,ij->i", n, p) > 0
+        n[flip] *= -1
+        return cls(p[ok], n[ok], p[:: cfg.stride])
+
+
+@dataclass
+class ScanSlam:
+    """Keyframe scan-matching SLAM; call :meth:`step` once per scan, then :meth:`trajectory`."""
+
+    alignment: AlignmentConfig = field(default_factory=AlignmentConfig)
+    keyframes_cfg: KeyframeConfig = field(default_factory=KeyframeConfig)
+    loop_cfg: LoopClosureConfig = field(default_factory=LoopClosureConfig)
+
+    def __post_init__(self) -> None:
+        self.keyframes: list[Keyframe] = []
+        self.graph: PoseGraph | None = None
+        self.ref: Reference | None = None
+        self.pose = np.zeros(3)
+        self.last: list[tuple[float, np.ndarray]] = []  # (stamp, pose) of the last two scans
+        self.anchors: list[tuple[int, np.ndarray]] = []  # per scan: keyframe key, pose in its frame
+        self.covariances: list[np.ndarray] = []  # per scan: covariance of the match (world frame)
+        self.loops: list[LoopClosure] = []
+        self.travelled = 0.0
+        self._since_search = 0
+        self._closed_at = 0.0  # path length (m) at the last loop closure
+        self.predict_velocity = True
+
+    # -- one scan -------------------------------------------------------------------------------
+    def predict(self, stamp: float) -> np.ndarray:
+        """Constant-velocity prediction from the last two poses (the previous pose if fewer)."""
+        if not self.last:
+            return np.zeros(3)
+        t1, p1 = self.last[-1]
+        if len(self.last) < 2:
+            return p1.copy()
+        t0, p0 = self.last[-2]
+        if t1 - t0 <= 0:
+            return p1.copy()
+        f = (stamp - t1) / (t1 - t0)
+        d = between(p0, p1) * f
+        return compose(p1, d)
+
+    def step(self, stamp: float, points: np.ndarray) -> ScanStep:
+        """Process the scan taken at ``stamp`` (s) with points (n, 2) in the sensor frame, in beam
+        order (invalid beams as nan rows)."""
+        sp = ScanPoints.from_points(points, self.alignment)
+        if self.graph is None:
+            return self._first(stamp, sp)
+        pred = self.predict(stamp)
+        info = ScanStep(keyframe=self.keyframes[-1].key)
+        m: Match | None = None
+        if sp.matched.shape[0] >= 10 and self.ref is not None:
+            starts = [pred, self.last[-1][1]] if self.predict_velocity else [self.last[-1][1], pred]
+            m = match(sp.matched, self.ref, starts, self.alignment)
+            info.inliers, info.rms, info.hypothesis = m.inliers, m.rms, m.start
+        if m is not None and m.inliers >= self.alignment.min_inliers:
+            pose, cov = m.pose, m.covariance
+            info.matched = True
+        else:
+            pose, cov = pred, np.diag([0.1, 0.1, 0.03]) ** 2
+        self.travelled += float(np.hypot(*(pose[:2] - self.last[-1][1][:2])))
+        kf = self.keyframes[-1]
+        rel = between(kf.pose, pose)
+        kc = self.keyframes_cfg
+        if np.hypot(rel[0], rel[1]) >= kc.distance or abs(rel[2]) >= kc.angle or (
+                info.matched and info.inliers < kc.min_inliers):
+            pose = self._new_keyframe(stamp, sp, pose, rel, cov, info)
+        self.pose = pose
+        self.anchors.append((self.keyframes[-1].key, between(self.keyframes[-1].pose, pose)))
+        self.covariances.append(cov)
+        self.last = [self.last[-1], (stamp, pose)]
+        return info
+
+    def _first(self, stamp: float, sp: ScanPoints) -> ScanStep:
+        self.graph = PoseGraph(np.zeros(3), self.loop_cfg.prior_sigma)
+        self.keyframes.append(Keyframe(0, 0, stamp, np.zeros(3), sp.points, sp.normals, 0.0))
+        self.ref = local_map(self.keyframes, self.keyframes_cfg.voxel)
+        self.anchors.append((0, np.zeros(3)))
+        self.covariances.append(np.zeros((3, 3)))
+        self.last = [(stamp, np.zeros(3))]
+        return ScanStep(keyframe=0, new_keyframe=True)
+
+    def _new_keyframe(self, stamp: float, sp: ScanPoints, pose: np.ndarray, rel: np.ndarray, cov: np.ndarray,
+                      info: ScanStep) -> np.ndarray:
+        """Add the scan as a keyframe (and perhaps close a loop); returns its pose after optimisation."""
+        assert self.graph is not None
+        c, s = np.cos(pose[2]), np.sin(pose[2])
+        A = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # world perturbation -> frame of pose
+        key = self.graph.add(rel, A @ cov @ A.T, pose)
+        kf = Keyframe(key, len(self.anchors), stamp, pose.copy(), sp.points, sp.normals, self.travelled)
+        self.keyframes.append(kf)
+        info.new_keyframe = True
+        info.keyframe = key
+        self._since_search += 1
+        lc = self.loop_cfg
+        if lc.enabled and self._since_search >= lc.every and sp.matched.shape[0] >= 10:
+            self._since_search = 0
+            loop = find_closure(kf, sp.matched, self.keyframes[:-1], lc, self.alignment, self.keyframes_cfg.voxel,
+                                self.travelled - self._closed_at)
+            if loop is not None:
+                self._closed_at = self.travelled
+                noise = robust_noise(np.array([lc.sigma_xy, lc.sigma_xy, lc.sigma_theta]), lc.kernel, lc.kernel_width)
+                self.graph.close(loop.old, loop.new, loop.relative, noise)
+                self.loops.append(loop)
+                info.loop = loop
+                for k, p in enumerate(self.graph.poses()):
+                    self.keyframes[k].pose = p
+        self.ref = local_map(self.keyframes[-self.keyframes_cfg.local_map:], self.keyframes_cfg.voxel)
+        return self.keyframes[-1].pose.copy()
+
+    # -- output ---------------------------------------------------------------------------------
+    def keyframe_poses(self) -> np.ndarray:
+        assert self.graph is not None
+        return self.graph.poses()
+
+    def trajectory(self) -> np.ndarray:
+        """(n, 3) world pose of every scan: its keyframe's optimised pose composed with the scan's
+        pose relative to that keyframe."""
+        kp = self.keyframe_poses()
+        return np.array([compose(kp[k], rel) for k, rel in self.anchors]).reshape(-1, 3)
+
+
+def run_scan_slam(steps, config) -> "SlamResult":
+    """The default pipeline over (stamp s, scan, true pose or None) steps; see :func:`slam.run_slam`.
+
+    The trajectory and the keyframes come from the optimised pose graph; the map is the lines
+    extracted on the keyframes, placed by their optimised poses and merged (:mod:`slam.linemap`).
+    """
+    from .linemap import merge_lines
+    from .run import SlamInputError, SlamResult, pose_nees
+
+    from features import extract
+
+    slam = ScanSlam(config.alignment, config.keyframes, config.loop_closure)
+    stamps: list[float] = []
+    truths: list = []
+    infos: list[ScanStep] = []
+    kf_lines: dict[int, np.ndarray] = {}
+    previous = None
+    for k, (t, scan, truth) in enumerate(steps):
+        t = float(t)
+        if previous is not None and t < previous:
+            raise SlamInputError(f"scan {k}: timestamp {t} is earlier than the previous one ({previous})")
+        previous = t
+        info = slam.step(t, scan.points)
+        if info.new_keyframe:
+            fs = extract(scan, method=config.extractor, **config.extractor_params)
+            kf_lines[info.keyframe] = _segments(fs, config)
+        stamps.append(t)
+        truths.append(truth)
+        infos.append(info)
+    if not stamps:
+        raise SlamInputError("no scans in the input")
+    poses = slam.trajectory()
+    kposes = slam.keyframe_poses()
+    traj = np.column_stack((stamps, poses))
+    covs = np.array(slam.covariances).reshape(-1, 3, 3)
+    segs = [_place(kposes[key], seg) for key, seg in kf_lines.items() if seg.size]
+    lines = merge_lines(np.concatenate(segs) if segs else np.zeros((0, 4)))
+    inliers = np.array([i.inliers for i in infos])
+    matched = np.array([i.matched for i in infos])
+    nees = pose_nees(traj, covs, truths)
+    window = config.nis_window
+    lost = ~matched[1:]
+    run = np.convolve(lost.astype(float), np.ones(window), "valid") if lost.size >= window else np.zeros(0)
+    diverged_at = float(stamps[1 + int(np.argmax(run >= window)) + window - 1]) if run.size and run.max() >= window else None
+    finite = nees[np.isfinite(nees)]
+    diag = {
+        "inliers": inliers, "matched": matched, "nees": nees,
+        "keyframe": np.array([i.keyframe for i in infos]), "hypothesis": np.array([i.hypothesis for i in infos]),
+        "n_keyframes": len(slam.keyframes), "n_loops": len(slam.loops),
+        "loops": [{"old": lp.old, "new": lp.new, "inliers": lp.inliers, "rms": lp.rms, "correction": lp.correction,
+                   "old_stamp": slam.keyframes[lp.old].stamp, "new_stamp": slam.keyframes[lp.new].stamp}
+                  for lp in slam.loops],
+        "keyframes": np.column_stack(([kf.stamp for kf in slam.keyframes], kposes)),
+        "diverged": diverged_at is not None, "diverged_at": diverged_at, "healthy": bool(np.all(np.isfinite(poses))),
+        "mean_nis_per_dof": float("nan"), "mean_nees": float(finite.mean()) if finite.size else float("nan"),
+        "matched_fraction": float(matched[1:].mean()) if matched.size > 1 else 1.0,
+    }
+    return SlamResult(traj, covs, lines, np.zeros((0, 3)), diag)
+
+
+def _segments(fs, config) -> np.ndarray:
+    """(k, 4) sensor-frame segments of the extracted lines long and well supported enough."""
+    out = [(*ln.start, *ln.end) for ln in fs.lines
+           if ln.length >= config.min_line_length and not (ln.n_points and ln.n_points < config.min_line_points)]
+    return np.array(out, float).reshape(-1, 4)
+
+
+def _place(pose: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    from .geometry import to_world
+
+    return np.column_stack((to_world(pose, seg[:, :2]), to_world(pose, seg[:, 2:])))

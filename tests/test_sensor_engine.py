@@ -1,0 +1,82 @@
+"""The one implementation of the sensor method against the independent oracle (``sensor_oracle``):
+per-beam signals on simulated worlds, noisy rooms with dropouts, other resolutions and any scan
+a Scan accepts; and the engine's handling of degenerate scans."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import sensor_oracle
+from features import extract
+from features.sensor import signals
+from lms200 import Scan
+from sensor_geometry import room
+from test_sensor_props import scans
+
+
+def assert_signals_match(scan: Scan, k: int) -> int:
+    """The engine's signals of ``scan`` equal the oracle's (nan in the same places); returns how
+    many beams have a finite AD."""
+    got = signals(scan, k=k)
+    ref = sensor_oracle.signals(scan.ranges, scan.angles, scan.angle_increment, k, max(scan.range_min, 0.02),
+                                scan.range_max)
+    for name, key in (("ad", "AD"), ("ad_slope", "ad")):
+        np.testing.assert_array_equal(np.isnan(got[name]), np.isnan(ref[key]), err_msg=name)
+        np.testing.assert_allclose(got[name], ref[key], rtol=1e-9, atol=1e-9, equal_nan=True, err_msg=name)
+    on = np.isfinite(ref["theta"])
+    np.testing.assert_array_equal(np.isfinite(got["theta"]), on)
+    err = np.angle(np.exp(1j * (got["theta"][on] - ref["theta"][on])))
+    assert np.abs(err).max(initial=0.0) < 1e-9
+    fin = np.isfinite(ref["psi"])
+    np.testing.assert_array_equal(np.isfinite(got["psi"]), fin)
+    assert np.abs(np.angle(np.exp(1j * (got["psi"][fin] - ref["psi"][fin])))).max(initial=0.0) < 1e-9
+    assert got["ad_line"] == pytest.approx(ref["ad_line"], abs=1e-12)
+    return int(np.isfinite(got["ad"]).sum())
+
+
+@pytest.mark.parametrize("world", ["office", "angles", "pillars"])
+def test_signals_on_simulated_worlds(world: str) -> None:
+    sim = pytest.importorskip("sim")
+    records = sim.simulate_records(world=world, seed=3, duration=20.0, rate_hz=1.0)
+    assert sum(assert_signals_match(rec.scan, 3) for rec in records) > 100 * len(records)
+
+
+@pytest.mark.parametrize("n, increment_deg", [(361, 0.5), (181, 1.0), (401, 0.25), (180, 1.0)])
+@pytest.mark.parametrize("k", [1, 3, 10])
+def test_signals_on_noisy_rooms_with_dropouts(n: int, increment_deg: float, k: int) -> None:
+    rng = np.random.default_rng(n + k)
+    for seed in range(5):
+        scan = room(seed, n, np.deg2rad(increment_deg))
+        ranges = scan.ranges.copy()
+        ranges[rng.random(n) < 0.03] = np.nan
+        ranges[rng.random(n) < 0.02] = np.inf
+        assert_signals_match(scan.replace(ranges=ranges), k)
+
+
+@settings(max_examples=100, deadline=None)
+@given(scans(), st.integers(1, 12))
+def test_signals_of_any_scan(scan: Scan, k: int) -> None:
+    assert_signals_match(scan, k)
+
+
+@pytest.mark.parametrize(
+    "ranges",
+    [
+        np.full(361, np.inf),
+        np.full(361, np.nan),
+        np.zeros(361),
+        np.full(361, 1e300),
+        np.where(np.arange(361) == 180, 2.0, np.inf),
+        np.array([2.0]),
+        np.full(7, 2.0),
+        np.where(np.arange(361) % 2 == 0, 2.0, np.nan),
+        np.full(361, 2.0),
+    ],
+    ids=["inf", "nan", "zeros", "huge", "one-valid", "one-beam", "seven-beams", "alternating", "circle"],
+)
+def test_degenerate_inputs_give_no_features(ranges: np.ndarray) -> None:
+    got = extract(Scan(ranges, -np.pi / 2, np.deg2rad(0.5), 0.0, 8.183), method="sensor")
+    assert got.lines == [] and got.corners == []

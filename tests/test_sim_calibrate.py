@@ -1,0 +1,176 @@
+"""Sensor calibration: the extended LMS200 model's statistics, sensor YAML round trips, and the
+recovery test: `lmsbench calibrate` on simulated logs of known parameters gets them back."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from lms200 import LmsbenchError, read_log
+from lms200.carmen import write_carmen
+from lms200.calibration import calibrate_scans
+from sim import SensorConfig, make_world, simulate_records
+from sim.lidar import LMS200Sim
+
+from experiments.calibrate import calibrate_log, write_sensor_yaml
+
+
+def _cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "experiments.cli", *args], capture_output=True, text=True, cwd=cwd)
+
+
+# -- the sensor model's new terms ------------------------------------------------------------
+def _static_scans(sensor: SensorConfig, n: int = 200) -> tuple[np.ndarray, np.ndarray]:
+    """(exact, measured) ranges of n scans from one pose in the corridor world."""
+    world = make_world("corridor", seed=0)
+    pose = (3.0, 1.0, 0.2)
+    with LMS200Sim(world, SensorConfig.ideal(n_beams=sensor.n_beams, resolution_deg=sensor.resolution_deg,
+                                             units=sensor.units)) as ideal:
+        exact = ideal.scan_at(pose).ranges
+    with LMS200Sim(world, sensor, seed=1) as lidar:
+        measured = np.array([lidar.scan_at(pose).ranges for _ in range(n)])
+    return exact, measured
+
+
+def test_noise_grows_with_range_as_configured() -> None:
+    sensor = SensorConfig.ideal(noise_sigma=0.01, noise_sigma_per_m=0.002)
+    exact, measured = _static_scans(sensor)
+    with np.errstate(invalid="ignore"):
+        err = measured - exact
+    ok = np.isfinite(exact)
+    for lo, hi in ((0.5, 2.0), (2.0, 4.0), (4.0, 8.0)):
+        sel = ok & (exact >= lo) & (exact < hi)
+        expected = np.sqrt(np.mean(sensor.sigma_at(exact[sel]) ** 2))
+        assert np.std(err[:, sel]) == pytest.approx(expected, rel=0.05)
+
+
+def test_no_returns_outliers_and_cap() -> None:
+    sensor = SensorConfig.ideal(units="cm", no_return_prob=0.05, outlier_prob=0.03, max_reading=50.0)
+    exact, measured = _static_scans(sensor, 300)
+    hit = np.isfinite(exact)
+    capped = measured[:, hit] == 50.0
+    assert capped.mean() == pytest.approx(0.05, rel=0.1)
+    nearer = measured[:, hit] < exact[hit] * 0.9 + 1e-9
+    assert nearer.mean() == pytest.approx(0.03 * (1 - 0.05), rel=0.1)
+    assert np.all(measured[:, hit][nearer] >= exact[hit][None, :].repeat(len(measured), 0)[nearer] * 0.1 - 1e-9)
+    assert not np.isinf(measured).any()  # every no-return is logged as the cap
+
+
+def test_datasheet_model_draws_unchanged() -> None:
+    """The new terms draw random numbers only when switched on: old seeds give old scans."""
+    a = simulate_records("office", seed=2, duration=1.0, sensor=SensorConfig())
+    b = simulate_records("office", seed=2, duration=1.0, sensor=SensorConfig(no_return_prob=0.0, outlier_prob=0.0))
+    assert all(x.scan == y.scan for x, y in zip(a, b))
+
+
+# -- YAML ------------------------------------------------------------------------------------
+def test_sensor_yaml_round_trip_and_errors(tmp_path: Path) -> None:
+    s = SensorConfig(units="cm", noise_sigma=0.007, noise_sigma_per_m=0.0005, dropout_prob=0.02, max_reading=50.0)
+    s.to_yaml(tmp_path / "s.yaml", header="test", extra={"calibration": {"anything": 1}})
+    assert SensorConfig.from_yaml(tmp_path / "s.yaml") == s
+    (tmp_path / "run.yaml").write_text(yaml.safe_dump({"world": "office", "sensor": s.to_dict()}))
+    assert SensorConfig.from_yaml(tmp_path / "run.yaml") == s
+    (tmp_path / "bad.yaml").write_text("noise_sigma: 0.01\nnoise_sigmaa: 0.02\n")
+    with pytest.raises(LmsbenchError, match="unknown sensor field.*noise_sigmaa"):
+        SensorConfig.from_yaml(tmp_path / "bad.yaml")
+    (tmp_path / "neg.yaml").write_text("dropout_prob: 1.5\n")
+    with pytest.raises(LmsbenchError, match="dropout_prob"):
+        SensorConfig.from_yaml(tmp_path / "neg.yaml")
+    with pytest.raises(LmsbenchError, match="no such sensor file"):
+        SensorConfig.from_yaml(tmp_path / "missing.yaml")
+    (tmp_path / "list.yaml").write_text("- 1\n- 2\n")
+    with pytest.raises(LmsbenchError, match="mapping"):
+        SensorConfig.from_yaml(tmp_path / "list.yaml")
+
+
+# -- recovery --------------------------------------------------------------------------------
+RECOVERY_CASES = {
+    "cm_0.5deg": SensorConfig(units="cm", noise_sigma=0.008, noise_sigma_per_m=0.001, dropout_prob=0.03,
+                              no_return_prob=0.01, outlier_prob=0.01, beam_width_deg=0.25),
+    "mm_0.5deg": SensorConfig(units="mm", noise_sigma=0.005, dropout_prob=0.01, no_return_prob=0.02,
+                              outlier_prob=0.004, beam_width_deg=0.4),
+    "cm_1deg_cap": SensorConfig.lms200_1deg(units="cm", noise_sigma=0.012, dropout_prob=0.005, no_return_prob=0.015,
+                                            outlier_prob=0.008, beam_width_deg=0.5, max_reading=50.0),
+}
+
+
+@pytest.mark.parametrize("case", sorted(RECOVERY_CASES))
+def test_calibrate_recovers_known_parameters_from_a_simulated_log(case: str, tmp_path: Path) -> None:
+    """The independent check of the issue: noise sigma within 10 %, rates within 20 % relative."""
+    truth = RECOVERY_CASES[case]
+    records = simulate_records("office", seed=11, duration=80.0, sensor=truth, rate_hz=4.0)
+    write_carmen(tmp_path / "log.clf", records)
+    result = calibrate_log(tmp_path / "log.clf")
+    got = result.sensor
+    assert got.units == truth.units and got.n_beams == truth.n_beams and got.resolution_deg == truth.resolution_deg
+    assert result.measured.quantum_m == truth.unit_m
+    assert got.noise_sigma == pytest.approx(truth.noise_sigma, rel=0.10)
+    for name in ("dropout_prob", "no_return_prob", "outlier_prob", "beam_width_deg"):
+        assert getattr(got, name) == pytest.approx(getattr(truth, name), rel=0.20), name
+    assert got.max_reading == truth.max_reading
+    if truth.noise_sigma_per_m:
+        assert got.noise_sigma_per_m == pytest.approx(truth.noise_sigma_per_m, rel=0.5)
+    else:
+        assert abs(got.noise_sigma_per_m) < 0.03 * truth.noise_sigma  # under 3 % of sigma per metre
+    # every estimate carries a standard error that is small against its value
+    m = result.measured
+    for est in (m.nan_rate, m.no_return_rate, m.outlier_rate, m.mixed_share):
+        assert 0 < est.std < 0.25 * est.value
+    assert 0 < m.noise.sigma_std_m < 0.05 * m.noise.sigma_m
+
+
+def test_clean_datasheet_log_has_no_spurious_terms() -> None:
+    records = simulate_records("office", seed=4, duration=40.0, sensor=SensorConfig(), rate_hz=4.0)
+    m = calibrate_scans(records)
+    assert m.noise.sigma_m == pytest.approx(0.005, rel=0.10)
+    assert m.nan_rate.value == pytest.approx(0.001, rel=0.5)
+    assert m.no_return_rate.value < 5e-4 and m.max_reading is None
+
+
+# -- command line ----------------------------------------------------------------------------
+def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -> None:
+    truth = RECOVERY_CASES["cm_0.5deg"]
+    write_carmen(tmp_path / "log.clf", simulate_records("office", seed=3, duration=20.0, sensor=truth, rate_hz=4.0))
+    run = _cli("calibrate", str(tmp_path / "log.clf"), "--out", str(tmp_path / "sensor.yaml"))
+    assert run.returncode == 0, run.stderr
+    assert "noise sigma at 1-4 m" in run.stdout and "wrote" in run.stdout
+    sensor = SensorConfig.from_yaml(tmp_path / "sensor.yaml")
+    doc = yaml.safe_load((tmp_path / "sensor.yaml").read_text())
+    assert doc["calibration"]["noise_sigma_1_4m"]["std"] > 0 and doc["units"] == "cm"
+    sim_run = _cli("simulate", "--duration", "2", "--sensor", str(tmp_path / "sensor.yaml"), "--out", str(tmp_path / "s"))
+    assert sim_run.returncode == 0, sim_run.stderr
+    cfg = yaml.safe_load((tmp_path / "s" / "config.yaml").read_text())
+    assert SensorConfig.from_dict(cfg["sensor"]) == sensor
+    assert read_log(tmp_path / "s" / "scans.clf") is not None
+
+
+@pytest.mark.parametrize("args, message", [
+    (["calibrate", "missing.clf"], "no such log"),
+    (["calibrate", "log.clf", "--stride", "0"], "--stride"),
+    (["calibrate", "log.clf", "--out", "."], "is a folder"),
+    (["calibrate", "log.clf", "--world", "moon"], "unknown world"),
+    (["calibrate", "empty.clf"], "no scan"),
+    (["simulate", "--sensor", "nope.yaml", "--out", "x"], "no such sensor file"),
+    (["compare", "office", "--sensor", "nope.yaml"], "no such sensor file"),
+])
+def test_calibrate_errors_are_one_line(args: list[str], message: str, tmp_path: Path) -> None:
+    write_carmen(tmp_path / "log.clf", simulate_records("office", seed=0, duration=0.5, sensor=SensorConfig()))
+    (tmp_path / "empty.clf").write_text("# nothing\n")
+    run = _cli(*args, cwd=tmp_path)
+    assert run.returncode == 2 and message in run.stderr and "Traceback" not in run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.shared_data
+def test_calibrate_real_logs(shared_data: Path) -> None:
+    """MIT CSAIL (cm mode, 0.5 deg, code 8191 = nan): what the log's own numbers say."""
+    m = calibrate_scans(read_log(shared_data / "mit-csail.clf.gz"))
+    assert m.quantum_m == 0.01 and m.units == "cm" and m.n_beams == 361
+    assert 0.003 < m.noise.sigma_m < 0.006 and m.noise.resolved
+    assert m.nan_rate.value == pytest.approx(0.033, abs=0.002)
+    assert m.inf_rate.value == 0.0
