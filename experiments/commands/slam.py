@@ -90,9 +90,6 @@ def run(args: argparse.Namespace) -> int:
         check_file(args.relations, "a relations file")
     check_out(args.out)
     config = _config(args)
-    from experiments.progress import warm_up_kernels
-
-    warm_up_kernels()
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz)
     stamps = [r.scan.stamp for r in data.records]
     back = next((k for k in range(1, len(stamps)) if stamps[k] < stamps[k - 1]), None)
@@ -101,6 +98,9 @@ def run(args: argparse.Namespace) -> int:
                          f"(stamp {stamps[back]:.6f} s after {stamps[back - 1]:.6f} s); SLAM needs scans in time order")
     if config.use_odometry and data.odometry is None:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
+    from experiments.progress import warm_up_kernels
+
+    warm_up_kernels()
     result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
                       out=args.out, paper_baseline=not args.no_paper_baseline)
     write_outputs(args.out, data, config, result)

@@ -35,6 +35,13 @@ def run(args: argparse.Namespace) -> int:
     out = args.out or Path("results/sweeps") / spec.name
     check_out(out)
     executor = "inprocess" if args.inprocess else (args.scheduler or "local")
+    from experiments.sweep.runner import check_executor, check_spec
+
+    check_executor(executor, args.workers)
+    try:
+        check_spec(spec)
+    except SweepSpecError as exc:  # an unknown kind or parameter name
+        raise SweepSpecError(f"{args.sweep}: {exc}") from exc
     if spec.kind in ("extract", "slam"):  # compile once here, not in every worker at the same time
         from experiments.progress import warm_up_kernels
 

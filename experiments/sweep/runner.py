@@ -67,12 +67,9 @@ def run_sweep(
         A :class:`SweepResult`; ``out/results.parquet`` and ``out/results.csv`` hold its table.
     """
     out = Path(out)
-    _check_executor(executor, workers)
-    fn = resolve_kind(spec.kind)  # fail early on an unknown kind
+    check_executor(executor, workers)
+    fn = check_spec(spec)
     cells = spec.cells()
-    check = getattr(fn, "check_params", None)  # a kind may check parameter names before any cell runs
-    if check is not None:
-        check(cells)
     store = CellStore(out)
     (out / "sweep.yaml").write_text(yaml.safe_dump(spec.to_dict(), sort_keys=False))
     keys = [cell_key(spec.kind, params) for params in cells]
@@ -194,13 +191,23 @@ def _lost_result(future) -> dict[str, Any]:
 SCHEMES = ("tcp://", "tls://", "inproc://", "ucx://", "ws://", "wss://")
 
 
-def _check_executor(executor: Any, workers: int) -> None:
+def check_executor(executor: Any, workers: int) -> None:
     """A known executor, before anything is written."""
     if executor == "local" and not (isinstance(workers, int) and workers >= 1):
         raise LmsbenchError(f"workers: a local cluster needs at least 1 worker process, got {workers}")
     if isinstance(executor, str) and executor not in ("local", "inprocess") and not executor.startswith(SCHEMES):
         raise LmsbenchError(f"scheduler: {executor!r} is not a Dask scheduler address (tcp://HOST:PORT), "
                             "nor 'local' or 'inprocess'")
+
+
+def check_spec(spec: SweepSpec):
+    """The cell function of ``spec``'s kind, after checking the kind and every cell's parameter
+    names (a kind may check them before any cell runs)."""
+    fn = resolve_kind(spec.kind)
+    check = getattr(fn, "check_params", None)
+    if check is not None:
+        check(spec.cells())
+    return fn
 
 
 def quiet_dask() -> None:
