@@ -2,7 +2,12 @@
 ground truth where the source has it, and a summary per source and method.
 
 Sources: simulated worlds (``sim.simulate_records`` with the truth of ``sim.visible_truth`` at each
-record's true pose) or a real log (``lms200.read_log``; scored by ``explained_fraction`` only).
+record's true pose) or a real log (``lms200.read_log``). Every source is also scored without ground
+truth (``features.realdata``: explained fractions at 3 cm and at 3 sigma of the range noise, ray
+RMSE, mean segment length, and repeatability between consecutive compared scans where the source
+has poses to trust: the true poses of a simulation, the corrected poses of a Radish ``*-corrected``
+log). The range noise is the sensor model's for simulated sources and estimated from the log itself
+(``lms200.noise.estimate_range_noise``) for logs.
 Timing wraps only the method's function (``time.perf_counter_ns``); on each scan the methods run
 in an order rotated by one per scan, so no method always runs first (cold caches) or last.
 """
@@ -19,8 +24,9 @@ import numpy as np
 import pandas as pd
 
 from features.registry import available_methods, backend_of, get_method, make_config
+from features.realdata import RealDataConfig, repeat_counts, scan_measures
 from features.scoring import ScoreConfig, explained_fraction, prf, score_scan
-from lms200 import LmsbenchError, Record, read_log
+from lms200 import LmsbenchError, Pose2D, Record, read_log
 
 WORLD_NAMES = ("office", "corridor", "angles", "pillars", "random")
 
@@ -35,6 +41,10 @@ class Source:
     records: Iterable[Record]
     truth_of: Callable[[Record], Any] | None = None
     total: int | None = None
+    sigma_r: float | None = None  # range noise, 1 sigma (m): the sensor model's, or estimated (logs)
+    pose_of: Callable[[Record], Pose2D | None] | None = None  # world pose to trust, for repeatability
+    estimate_sigma: Callable[[], float] | None = None  # how to estimate sigma_r when it is not known
+    reader: Any = None  # the log reader (its ``stats`` say what was skipped)
     settings: dict[str, Any] = dataclasses.field(default_factory=dict)  # what produced the scans (saved beside results)
 
     @classmethod
@@ -49,7 +59,8 @@ class Source:
         if len(truths) != len(records):
             raise LmsbenchError(f"{len(records)} records but {len(truths)} truths")
         by_index = {id(r): t for r, t in zip(records, truths)}
-        return cls(name, "sim", seed, records, lambda rec: by_index[id(rec)], len(records))
+        return cls(name, "sim", seed, records, lambda rec: by_index[id(rec)], len(records),
+                   pose_of=lambda rec: rec.truth)
 
 
 def sim_source(world: str, seed: int = 0, duration: float = 30.0, rate_hz: float | None = 2.0,
@@ -66,7 +77,8 @@ def sim_source(world: str, seed: int = 0, duration: float = 30.0, rate_hz: float
     w = sim.make_world(world, seed=seed)
     records = sim.simulate_records(world=w, seed=seed, duration=duration, sensor=sensor, rate_hz=rate_hz)
     settings = dict(world=world, seed=seed, duration=duration, rate_hz=rate_hz, sensor=dataclasses.asdict(sensor))
-    return Source(world, "sim", seed, records, _truth_in(w, sensor), len(records), settings)
+    return Source(world, "sim", seed, records, _truth_in(w, sensor), len(records), sigma_r=sensor.noise_sigma,
+                  pose_of=lambda rec: rec.truth, settings=settings)
 
 
 def _truth_in(world: Any, sensor: Any) -> Callable[[Record], Any]:
@@ -107,32 +119,61 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
         sensor = sim.SensorConfig(**(cfg.get("sensor") or {}))
         settings.update({k: cfg.get(k) for k in ("world", "seed", "duration", "rate_hz")})
     settings["sensor"] = dataclasses.asdict(sensor)
-    inner = log_source(p / "scans.clf", stride, max_scans)
+    inner = log_source(p / "scans.clf", stride, max_scans, poses="none")
     seed = settings.get("seed")
     return Source(p.name, "sim", int(seed) if seed is not None else None, inner.records, _truth_in(world, sensor),
-                  max_scans, settings)
+                  max_scans, sigma_r=sensor.noise_sigma, pose_of=lambda rec: rec.truth, reader=inner.reader,
+                  settings=settings)
 
 
-def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None) -> Source:
-    """Every ``stride``-th scan of a real log (CARMEN or bag); no ground truth."""
+POSES = ("auto", "corrected", "none")
+DATASHEET_SIGMA_M = 0.005  # LMS200 statistical error, 1 sigma (m): for a source whose noise cannot be had
+
+
+def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
+               read_options: dict[str, Any] | None = None, poses: str = "auto") -> Source:
+    """Every ``stride``-th scan of a real log (CARMEN or bag); no ground truth.
+
+    Args:
+        read_options: keywords of ``lms200.read_log`` (topic, skip_bad_lines, geometry).
+        poses: "corrected" when the log's poses are SLAM-corrected (repeatability is measured with
+            them), "none" when they are raw odometry, "auto": corrected when the file name says
+            so (Radish names its corrected logs ``*-corrected*``).
+    """
     if stride < 1:
         raise LmsbenchError(f"stride: must be >= 1, got {stride}")
-    reader = read_log(path)
+    if poses not in POSES:
+        raise LmsbenchError(f"poses: must be one of {', '.join(POSES)}, got {poses!r}")
+    options = dict(read_options or {})
+    reader = read_log(path, **options)
+    corrected = poses == "corrected" or (poses == "auto" and "corrected" in Path(path).name.lower())
 
     def records() -> Iterable[Record]:
         for k, rec in enumerate(reader):
             if k % stride == 0:
                 yield rec
 
-    return Source(Path(path).name, "log", None, records(), None, max_scans, {"log": str(path), "stride": stride})
+    def estimate_sigma() -> float:
+        from lms200.noise import estimate_range_noise
+
+        noise = estimate_range_noise(read_log(path, **options))
+        if not np.isfinite(noise.sigma_m):
+            raise LmsbenchError(f"{path}: too few straight runs of beams to estimate the range noise; give --sigma")
+        return float(noise.sigma_m)
+
+    return Source(Path(path).name, "log", None, records(), None, max_scans, sigma_r=None,
+                  pose_of=(lambda rec: rec.odom) if corrected else None, estimate_sigma=estimate_sigma,
+                  reader=reader, settings={"log": str(path), "stride": stride, "poses": poses, **options})
 
 
 def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: float = 30.0,
                   rate_hz: float | None = 2.0, stride: int = 1, max_scans: int | None = None,
+                  read_options: dict[str, Any] | None = None, poses: str = "auto",
                   sensor: Any = None) -> list[Source]:
     """Sources from command-line words: a world name (one source per seed), ``world:seed``, a
-    ``lmsbench simulate`` folder, or the path of a log. ``sensor`` (a ``sim.SensorConfig``) is the
-    simulated worlds' sensor model (a simulate folder has its own, in its config.yaml).
+    ``lmsbench simulate`` folder, or the path of a log (read with ``read_options``, see
+    :func:`log_source`). ``sensor`` (a ``sim.SensorConfig``) is the simulated worlds' sensor model
+    (a simulate folder has its own, in its config.yaml).
 
     Raises:
         LmsbenchError: a word that is none of these, a bad seed, or a log of the wrong kind.
@@ -151,11 +192,11 @@ def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: f
             if not Path(spec).exists():
                 raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}), a simulate folder "
                                     "nor an existing log")
-            out.append(log_source(spec, stride, max_scans))
+            out.append(log_source(spec, stride, max_scans, read_options, poses))
     return out
 
 
-def check_sources(specs: Sequence[str]) -> None:
+def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = None) -> None:
     """Check command-line source words before any work: world names and seeds, simulate folders
     (world.json loads), logs (their kind, and at least one laser scan)."""
     from experiments.options import check_log
@@ -182,7 +223,7 @@ def check_sources(specs: Sequence[str]) -> None:
             raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}){hint}, a simulate folder "
                                 "nor an existing log")
         check_log(spec)
-        if next(iter(read_log(spec)), None) is None:
+        if next(iter(read_log(spec, **(read_options or {}))), None) is None:
             raise LmsbenchError(f"{spec}: no laser messages found (not a CARMEN log with FLASER / ROBOTLASER1 "
                                 "lines, nor a bag with LaserScan messages)")
 
@@ -229,10 +270,11 @@ def compare(
     *,
     params: dict[str, dict[str, Any]] | None = None,
     score_config: ScoreConfig | None = None,
-    sigma: float = 0.005,
+    sigma: float | str = "auto",
     max_scans: int | None = None,
     progress: bool = False,
     matches: list[dict[str, Any]] | None = None,
+    realdata_config: RealDataConfig | None = None,
 ) -> pd.DataFrame:
     """Run ``methods`` (default: every available one) on every scan of ``sources``.
 
@@ -241,18 +283,23 @@ def compare(
         methods: extractor names; the order does not matter (it is rotated per scan).
         params: per-method overrides of config fields, ``{"hough": {"rho_step": 0.01}}``.
         score_config: line / corner matching tolerances.
-        sigma: range noise (m) for the explained fraction (3 sigma band).
+        sigma: range noise, 1 sigma (m), for the noise-scaled explained fractions, or "auto": the
+            sensor model's for simulated sources, estimated from the data for logs.
         max_scans: at most this many scans per source.
         progress: show a tqdm progress bar.
         matches: if a list, one dict per matched line is appended to it (method, source, seed,
             scan, face, rho_err, alpha_err): see :func:`common_errors`.
+        realdata_config: tolerances of the measures without ground truth (``features.realdata``).
 
     Returns:
         A tidy table, one row per method x scan: method, backend ("numba" or "numpy", see
         ``features.registry.backend_of``: speed ratios are fair only between equal backends), source, kind, seed, scan, stamp, n_valid,
         n_lines, n_corners, microseconds (wall, ``perf_counter_ns``), time_ms (the same in ms), cpu_microseconds (this
         thread's CPU time, ``thread_time_ns``: what a pre-empted call really used), explained,
-        range_rms (m) and, for simulated sources,
+        range_rms (m) (3 sigma band), sigma_r (m, the noise used), explained_3cm,
+        explained_3sigma, n_explained_3cm, ray_rmse (m, of the beams explained at 3 cm),
+        mean_segment_m, repeat_found / repeat_in_view (lines of the previous compared scan found
+        again / still in view; nan without trusted poses) and, for simulated sources,
         n_truth, tp, fp, fn, precision, recall, f1, rho_err_mean / rho_err_rms (m),
         alpha_err_mean / alpha_err_rms (rad), endpoint_err_mean (m), n_truth_corners, corner_tp,
         corner_fp, corner_fn, corner_err_mean (m).
@@ -270,7 +317,10 @@ def compare(
         bar = tqdm(total=total, unit="scan", desc="compare")
     rows: list[dict[str, Any]] = []
     warmed = False
+    rd_cfg = realdata_config or RealDataConfig()
     for src in srcs:
+        sigma_r = _source_sigma(src, sigma)
+        previous: dict[str, tuple[np.ndarray, Pose2D]] = {}  # method -> lines and pose of the last scan
         for k, rec in enumerate(src.records):
             if max_scans is not None and k >= max_scans:
                 break
@@ -287,11 +337,12 @@ def compare(
                 fs = fn(scan, cfg)
                 c1, t1 = time.thread_time_ns(), time.perf_counter_ns()
                 elapsed, cpu = t1 - t0, c1 - c0
-                explained, range_rms = explained_fraction(fs, scan, sigma)
+                explained, range_rms = explained_fraction(fs, scan, sigma_r)
                 row = dict(method=name, backend=backends[name], source=src.name, kind=src.kind, seed=src.seed, scan=k,
                            stamp=scan.stamp, n_valid=n_valid, n_lines=len(fs.lines),
                            n_corners=len(fs.corners), microseconds=elapsed / 1e3, cpu_microseconds=cpu / 1e3,
                            explained=explained, range_rms=range_rms)
+                row.update(_realdata_row(fs, rec, src, sigma_r, rd_cfg, previous, name))
                 if truth is not None:
                     score = score_scan(fs, truth, score_config)
                     row.update(_score_row(score))
@@ -309,6 +360,42 @@ def compare(
     if not table.empty:
         table.insert(table.columns.get_loc("microseconds") + 1, "time_ms", table["microseconds"] / 1e3)
     return table
+
+
+def _source_sigma(src: Source, sigma: float | str) -> float:
+    """The range noise (m) a source is scored with: ``sigma`` if a number, else the source's own."""
+    if sigma != "auto":
+        value = float(sigma)
+        if not np.isfinite(value) or value <= 0:
+            raise LmsbenchError(f"sigma: must be a number > 0 or 'auto', got {sigma!r}")
+        return value
+    if src.sigma_r is None and src.estimate_sigma is not None:
+        src.sigma_r = src.estimate_sigma()
+    if src.sigma_r is None and isinstance(src.records, Sequence):  # re-iterable: estimate from it
+        from lms200.noise import estimate_range_noise
+
+        estimate = estimate_range_noise(src.records).sigma_m
+        src.sigma_r = float(estimate) if np.isfinite(estimate) else None
+    if src.sigma_r is None:
+        src.sigma_r = DATASHEET_SIGMA_M
+    return max(float(src.sigma_r), 1e-6)
+
+
+def _realdata_row(fs: Any, rec: Record, src: Source, sigma_r: float, cfg: RealDataConfig,
+                  previous: dict[str, tuple[np.ndarray, Pose2D]], method: str) -> dict[str, Any]:
+    """The measures without ground truth of one method on one scan (see :func:`compare`)."""
+    lines = fs.line_array()
+    m = scan_measures(lines, rec.scan, sigma_r, cfg)
+    found = in_view = float("nan")
+    pose = src.pose_of(rec) if src.pose_of is not None else None
+    if pose is not None:
+        if method in previous:
+            prev_lines, prev_pose = previous[method]
+            found, in_view = repeat_counts(prev_lines, prev_pose, lines, pose, rec.scan, cfg)
+        previous[method] = (lines, pose)
+    return dict(sigma_r=sigma_r, explained_3cm=m.explained_tol, explained_3sigma=m.explained_sigma,
+                n_explained_3cm=m.n_explained_tol, ray_rmse=m.ray_rmse_m, mean_segment_m=m.mean_segment_m,
+                repeat_found=found, repeat_in_view=in_view)
 
 
 def _score_row(s) -> dict[str, Any]:
@@ -363,6 +450,8 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
             )
         row.update(explained=g["explained"].mean(), range_rms_mm=1e3 * g["range_rms"].mean(),
                    us_mean=g["microseconds"].mean(), us_median=g["microseconds"].median())
+        if "explained_3cm" in g:
+            row.update(_realdata_summary(g))
         if "cpu_microseconds" in g:
             row["cpu_us_median"] = g["cpu_microseconds"].median()
         row["scans_per_s"] = 1e6 / row["us_median"]
@@ -379,6 +468,23 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
         ref = summary[summary["method"] == reference].set_index("source")["cpu_us_median"]
         summary["cpu_speed_vs_sensor"] = summary["source"].map(ref) / summary["cpu_us_median"]
     return summary
+
+
+def _realdata_summary(g: pd.DataFrame) -> dict[str, Any]:
+    """Pooled measures without ground truth of one source x method: mean explained fractions over
+    scans, ray RMSE pooled over the explained beams (mm), mean segment length over all lines (m),
+    repeatability = lines found again / lines still in view (nan without trusted poses)."""
+    w = g["n_explained_3cm"].astype(float)
+    ok = g["ray_rmse"].notna() & (w > 0)
+    ray = float(np.sqrt((g["ray_rmse"][ok] ** 2 * w[ok]).sum() / w[ok].sum())) if ok.any() else float("nan")
+    lines = g["n_lines"].astype(float)
+    seg_ok = g["mean_segment_m"].notna() & (lines > 0)
+    seg = float((g["mean_segment_m"][seg_ok] * lines[seg_ok]).sum() / lines[seg_ok].sum()) if seg_ok.any() else float("nan")
+    in_view = g["repeat_in_view"].sum(min_count=1)
+    repeat = float(g["repeat_found"].sum() / in_view) if pd.notna(in_view) and in_view > 0 else float("nan")
+    return dict(sigma_r_mm=1e3 * g["sigma_r"].iloc[0], explained_3cm=g["explained_3cm"].mean(),
+                explained_3sigma=g["explained_3sigma"].mean(), ray_rmse_mm=1e3 * ray, mean_segment_m=seg,
+                repeatability=repeat)
 
 
 def common_errors(matches: pd.DataFrame) -> pd.DataFrame:
@@ -406,7 +512,8 @@ def format_summary(summary: pd.DataFrame) -> str:
     """The summary as a fixed-width text table (the columns that exist)."""
     cols = ["source", "method", "backend", "scans", "f1", "precision", "recall", "rho_bias_mm", "rho_rms_mm",
             "alpha_bias_deg", "alpha_rms_deg", "rho_rms_common_mm", "alpha_rms_common_deg", "corner_precision", "corner_recall", "corner_err_mm",
-            "explained", "range_rms_mm", "us_median", "scans_per_s", "speed_vs_sensor", "cpu_us_median",
+            "explained", "range_rms_mm", "sigma_r_mm", "explained_3cm", "explained_3sigma", "ray_rmse_mm",
+            "lines_per_scan", "mean_segment_m", "repeatability", "us_median", "scans_per_s", "speed_vs_sensor", "cpu_us_median",
             "cpu_speed_vs_sensor"]
     cols = [c for c in cols if c in summary]
     text = summary[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}", na_rep="-")

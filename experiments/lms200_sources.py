@@ -7,7 +7,7 @@ from __future__ import annotations
 import itertools
 import math
 from pathlib import Path
-from typing import Iterator
+from typing import Any, Iterator
 
 import numpy as np
 
@@ -61,9 +61,10 @@ def simulator_scans(world: str = "office", seed: int = 0) -> Iterator[Scan]:
     return (lidar.scan_at(pose) for pose in poses)
 
 
-def log_scans(path: str | Path, loop: bool = True) -> Iterator[Scan]:
-    """The scans of a log (CARMEN or bag), in order, replayed endlessly when ``loop``."""
-    scans = [rec.scan for rec in read_log(path)]
+def log_scans(path: str | Path, loop: bool = True, read_options: dict[str, Any] | None = None) -> Iterator[Scan]:
+    """The scans of a log (CARMEN or bag), in order, replayed endlessly when ``loop``;
+    ``read_options``: keywords of ``lms200.read_log`` (topic, skip_bad_lines, geometry)."""
+    scans = [rec.scan for rec in read_log(path, **(read_options or {}))]
     if not scans:
         raise LmsbenchError(f"{path} holds no scans to replay")
     return itertools.cycle(scans) if loop else iter(scans)

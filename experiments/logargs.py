@@ -61,6 +61,24 @@ def read_log_options(args: argparse.Namespace) -> dict[str, Any]:
     return dict(topic=topic, skip_bad_lines=bool(getattr(args, "skip_bad_lines", False)), geometry=geometry)
 
 
+def plain_log_options(options: dict[str, Any]) -> dict[str, Any]:
+    """``read_log`` keywords as plain data (for a config saved beside results): geometry as a dict."""
+    out = dict(options)
+    geometry = out.get("geometry")
+    out["geometry"] = {k: v for k, v in vars(geometry).items() if v is not None} if geometry is not None else None
+    return out
+
+
+def log_options_from_plain(plain: dict[str, Any] | None) -> dict[str, Any]:
+    """The inverse of :func:`plain_log_options`: ``read_log`` keywords."""
+    out = dict(plain or {})
+    if out.get("geometry"):
+        out["geometry"] = LaserGeometry(**out["geometry"])
+    else:
+        out.pop("geometry", None)
+    return out
+
+
 def report_skipped(reader: Any, stream: IO[str] | None = None, show: int = 3) -> int:
     """Print what the last pass over ``reader`` skipped (count, the first ``show`` reasons) and why it
     stopped early, if it did; returns the number of skipped lines / messages."""

@@ -56,11 +56,13 @@ def _relations_beside(path: Path) -> Path | None:
 
 
 def load_input(path: str | Path, relations: str | Path | None = None, every: int = 1,
-               max_scans: int | None = None, rate_hz: float | None = None) -> SlamInput:
+               max_scans: int | None = None, rate_hz: float | None = None,
+               read_options: dict[str, Any] | None = None) -> SlamInput:
     """Read a simulator output folder (scans.clf, groundtruth.tum, world.json), a CARMEN log or a
     bag; keep every ``every``-th scan (or, with ``rate_hz``, the first scan at least 1/rate_hz s
     after the last one kept), at most ``max_scans``. Relations come from ``relations`` or a
-    ``NAME.relations`` file beside a log.
+    ``NAME.relations`` file beside a log. ``read_options``: keywords of ``lms200.read_log``
+    (topic, skip_bad_lines, geometry).
 
     Raises:
         FileNotFoundError: the input does not exist.
@@ -97,7 +99,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if rate_hz is not None and not rate_hz > 0:
         raise LmsbenchError(f"--rate-hz must be > 0, got {rate_hz}")
     records: list[Record] = []
-    for k, rec in enumerate(read_log(log)):
+    reader = read_log(log, **(read_options or {}))
+    for k, rec in enumerate(reader):
         if rate_hz is not None:
             keep = not records or rec.scan.stamp >= records[-1].scan.stamp + 1.0 / rate_hz - 1e-9
         else:
@@ -106,6 +109,10 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
             records.append(rec)
             if max_scans is not None and len(records) >= max_scans:
                 break
+    if getattr(reader, "stats", None) is not None and (reader.stats.skipped or reader.stats.stopped):
+        from experiments.logargs import report_skipped
+
+        report_skipped(reader)
     if not records:
         raise LmsbenchError(f"{log}: no laser scans found")
     if truth is None and all(r.truth is not None for r in records):

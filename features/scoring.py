@@ -38,6 +38,7 @@ from scipy.optimize import linear_sum_assignment
 from lms200 import Scan
 
 from .angles import wrap
+from .realdata import ray_residuals
 from .types import FeatureSet
 
 _BIG = 1e6
@@ -238,26 +239,10 @@ def explained_fraction(fs: FeatureSet, scan: Scan, sigma: float = 0.005) -> tupl
     inlier RMS, as Open3D's ``fitness`` / ``inlier_rmse`` pair). A beam is explained by the lines
     whose beam span [first, last] covers it; where spans overlap the closest line counts.
     nan where undefined (no valid beam; no explained beam for the RMS)."""
-    valid = scan.valid
-    n_valid = int(np.count_nonzero(valid))
+    n_valid = int(np.count_nonzero(scan.valid))
     if n_valid == 0:
         return float("nan"), float("nan")
-    if not fs.lines:
-        return 0.0, float("nan")
-    arr = np.array([(l.rho, l.alpha, l.first, l.last) for l in fs.lines], dtype=float)
-    first = np.clip(arr[:, 2].astype(int), 0, len(scan) - 1)
-    last = np.clip(arr[:, 3].astype(int), 0, len(scan) - 1)
-    length = np.maximum(last - first + 1, 0)
-    labels = np.repeat(np.arange(arr.shape[0]), length)
-    beam = np.arange(int(length.sum())) - np.repeat(np.cumsum(length) - length - first, length)
-    cos = np.cos(scan.angles[beam] - arr[labels, 1])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        predicted = np.where(cos > 1e-6, arr[labels, 0] / cos, np.inf)
-    residual = scan.ranges[beam] - predicted
-    use = valid[beam] & np.isfinite(residual)
-    beam, residual = beam[use], np.abs(residual[use])
-    best = np.full(len(scan), np.inf)
-    np.minimum.at(best, beam, residual)
+    best = ray_residuals(fs, scan)  # inf where no line covers a valid beam
     inlier = best <= 3.0 * sigma
     explained = int(np.count_nonzero(inlier))
     rms = float(np.sqrt(np.mean(best[inlier] ** 2))) if explained else float("nan")

@@ -12,6 +12,7 @@ import yaml
 
 from lms200 import LmsbenchError
 
+from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
 from experiments.options import DURATION, SEED, check_methods, check_out, check_yaml, count, positive
 
 
@@ -38,7 +39,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate", type=positive("scans/s"), default=2.0, help="simulated scans per second kept (default 2)")
     p.add_argument("--stride", type=count(1), default=1, help="logs: use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=count(1), help="at most this many scans per source")
-    p.add_argument("--sigma", type=positive("m"), default=0.005, help="range noise (m) for the explained fraction")
+    p.add_argument("--sigma", type=_sigma, default="auto",
+                   help="range noise, 1 sigma (m), for the 3-sigma explained fraction; 'auto' (default): the "
+                        "sensor model's for worlds, estimated from the data for logs")
+    p.add_argument("--poses", choices=("auto", "corrected", "none"), default="auto",
+                   help="logs: are the log's poses SLAM-corrected (then repeatability is measured)? "
+                        "auto (default): when the file name says 'corrected'")
     p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
                    help="sensor model of the simulated sources, as written (e.g. from `lmsbench calibrate`)")
     p.add_argument("--set", dest="params", action="append", type=_param, default=[], metavar="extractor.[METHOD.]FIELD=VALUE",
@@ -46,7 +52,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, default=Path("results/compare"), help="output folder")
     p.add_argument("--format", choices=("parquet", "csv"), default="parquet", help="format of the tidy table")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_log_options(p)
     p.set_defaults(func=run)
+
+
+def _sigma(text: str) -> float | str:
+    if text == "auto":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--sigma takes metres or 'auto', got {text!r}") from None
+    if not value > 0 or value == float("inf"):  # also nan
+        raise argparse.ArgumentTypeError(f"--sigma must be > 0 m, got {text!r}")
+    return value
 
 
 def run(args: argparse.Namespace) -> int:
@@ -55,13 +74,14 @@ def run(args: argparse.Namespace) -> int:
     from experiments.compare import (check_sources, common_errors, compare, format_summary, parse_sources,
                                      resolved_configs, summarise)
     from experiments.overrides import extractor_overrides
+    from experiments.progress import warm_up_kernels
     from features.scoring import ScoreConfig
 
     methods = check_methods(args.methods)
     params = extractor_overrides(dict(args.params), methods)
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
     check_out(args.out)
-    check_sources(args.sources)
+    check_sources(args.sources, read_log_options(args))
     sensor = None
     if args.sensor is not None:
         import sim
@@ -73,15 +93,16 @@ def run(args: argparse.Namespace) -> int:
             raise
         except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
             raise LmsbenchError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
-    from experiments.progress import warm_up_kernels
-
     warm_up_kernels()
     sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans,
-                            sensor=sensor)
+                            read_options=read_log_options(args), poses=args.poses, sensor=sensor)
     score_config = ScoreConfig()
     matches: list = []
     table = compare(sources, methods, params=params, score_config=score_config, sigma=args.sigma,
                     max_scans=args.max_scans, progress=not args.no_progress, matches=matches)
+    for src in sources:
+        if src.reader is not None:
+            report_skipped(src.reader)
     if table.empty:
         raise LmsbenchError("no scans in the given sources")
     summary = summarise(table)
@@ -98,10 +119,21 @@ def run(args: argparse.Namespace) -> int:
     (args.out / "summary.txt").write_text(text + "\n")
     resolved = dict(
         sources=args.sources, seeds=args.seeds, duration=args.duration, rate_hz=args.rate, stride=args.stride,
-        max_scans=args.max_scans, sigma=args.sigma, methods=configs, scoring=dataclasses.asdict(score_config),
+        max_scans=args.max_scans, sigma=args.sigma, poses=args.poses,
+        log_options=plain_log_options(read_log_options(args)),
+        sigma_r={src.name: src.sigma_r for src in sources}, methods=configs, scoring=dataclasses.asdict(score_config),
     )
+    # what produced each source's scans: the sensor that was simulated (interlaced or not), the log read
     resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
     (args.out / "config.yaml").write_text(yaml.safe_dump(resolved, sort_keys=False))
+    figures = []
+    for src in sources:
+        if src.kind == "log" and src.name in set(summary["source"]):
+            from experiments.figures.realdata import fig_explained_vs_lines, figure_stem
+
+            figures += [str(p) for p in fig_explained_vs_lines(summary, src.name, figure_stem(args.out, src.name))
+                        if p.suffix == ".png"]
     print(text)
-    print(f"wrote {path}, {args.out / 'summary.csv'}, {args.out / 'summary.txt'}, {args.out / 'config.yaml'}")
+    print(f"wrote {path}, {args.out / 'summary.csv'}, {args.out / 'summary.txt'}, {args.out / 'config.yaml'}"
+          + "".join(f", {f}" for f in figures))
     return 0

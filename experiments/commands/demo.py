@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from experiments.logargs import add_log_options, plain_log_options, read_log_options
 from experiments.options import DURATION, SEED, WORLDS, check_log, check_out, positive, world_name
 
 
@@ -19,6 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--log", help="real CARMEN log or bag for Fig. 9 (default: the Intel log where present)")
     p.add_argument("--no-sweep", action="store_true", help="skip the small Dask sweep")
     p.add_argument("--inprocess", action="store_true", help="run the sweep in this process instead of on Dask")
+    add_log_options(p)  # for the real log of Fig. 9
     p.set_defaults(func=run)
 
 
@@ -30,6 +32,7 @@ def run(args: argparse.Namespace) -> int:
     cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz)
     if args.log:
         cfg.intel_log = str(check_log(args.log))
+    cfg.log_options = plain_log_options(read_log_options(args))
     executor = None if args.no_sweep else ("inprocess" if args.inprocess else "local")
     run_demo(args.out, cfg, sweep_executor=executor)
     return 0

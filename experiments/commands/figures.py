@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from experiments.logargs import add_log_options, plain_log_options, read_log_options
 from experiments.options import (DURATION, SEED, WORLDS, check_log, check_methods, check_out, check_study_tables,
                                  check_sweep_results, positive, world_name)
 
@@ -23,6 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--methods", nargs="+", help="extractors to compare (default: all five)")
     p.add_argument("--intel", help="Intel CARMEN log for Fig. 9 (default ../shared/data/carmen/intel-corrected.log.gz)")
     p.add_argument("--no-slam", action="store_true", help="skip the SLAM run and Fig. 10")
+    add_log_options(p)  # for the real log of Fig. 9
     p.set_defaults(func=run)
 
 
@@ -43,6 +45,7 @@ def run(args: argparse.Namespace) -> int:
             cfg.methods = tuple(check_methods(args.methods))
         if args.intel:
             cfg.intel_log = str(check_log(args.intel))
+        cfg.log_options = plain_log_options(read_log_options(args))
         tables, notes = run_study(cfg)
         save_tables(tables, cfg, notes, args.out / "tables")
     written = draw_figures(tables, args.out, signals_k=cfg.signals_k, world=cfg.world)

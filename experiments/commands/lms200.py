@@ -16,6 +16,7 @@ from lms200.driver import LMS200
 from lms200.protocol import BAUD_MODES
 
 from experiments.lms200_sources import log_scans, simulator_scans
+from experiments.logargs import add_log_options, read_log_options
 from experiments.options import PORT, SEED, WORLDS, InputError, check_log, count, positive, world_name
 
 
@@ -33,6 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (the LMS200 ships in cm)")
     e.add_argument("--time-scale", type=positive(), default=1.0, help="multiplies every byte time and device delay (0.01 = 100x faster)")
     e.add_argument("--duration", type=positive("s"), help="stop after this many seconds (default: until Ctrl-C)")
+    add_log_options(e)  # with --log
     e.set_defaults(func=run_emulate)
 
     r = cmds.add_parser("record", help="record an LMS200 to a CARMEN log (.clf, .log, .gz) or a ROS bag (.bag)")
@@ -57,7 +59,7 @@ def run_emulate(args: argparse.Namespace) -> int:
         raise InputError("--rfc2217 needs --tcp PORT")
     if args.log:
         check_log(args.log)
-        scans = log_scans(args.log)
+        scans = log_scans(args.log, read_options=read_log_options(args))
         what = f"scans of {args.log} in a loop"
     else:
         scans = simulator_scans(args.world, args.seed)

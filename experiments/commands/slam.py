@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from experiments.logargs import add_log_options, read_log_options
 from experiments.options import InputError, check_file, check_log, check_methods, check_out, check_yaml, count, positive
 
 
@@ -30,6 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate-hz", type=positive("scans/s"), help="decimate to about this many scans/s (by the stamps)")
     p.add_argument("--max-scans", type=count(1), help="stop after this many scans")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_log_options(p)
     p.set_defaults(func=run)
 
 
@@ -90,7 +92,8 @@ def run(args: argparse.Namespace) -> int:
         check_file(args.relations, "a relations file")
     check_out(args.out)
     config = _config(args)
-    data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz)
+    data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
+                      read_options=read_log_options(args))
     stamps = [r.scan.stamp for r in data.records]
     back = next((k for k in range(1, len(stamps)) if stamps[k] < stamps[k - 1]), None)
     if back is not None:

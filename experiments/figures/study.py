@@ -42,6 +42,7 @@ class StudyConfig:
     # the paper's extractor on the Intel log: cm-mode ranges (1 cm codes), so a larger range noise
     intel_sensor_params: dict = field(default_factory=lambda: {"sigma_r": 0.02})
     sensor: dict = field(default_factory=dict)  # SensorConfig overrides
+    log_options: dict = field(default_factory=dict)  # read_log keywords for intel_log (plain data, see logargs)
 
     def to_dict(self) -> dict:
         d = dataclasses.asdict(self)
@@ -84,7 +85,7 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
     intel = Path(cfg.intel_log) if cfg.intel_log else None
     if intel is not None and intel.exists():
         tables.update(_intel_panels(intel, cfg.panels, panel_method,
-                                    cfg.intel_sensor_params if panel_method == "sensor" else None))
+                                    cfg.intel_sensor_params if panel_method == "sensor" else None, cfg.log_options))
         say(f"Intel log: {cfg.panels} scans with features")
     else:
         notes.append(f"Fig. 9 (Intel log) skipped: {intel} is not present on this machine.")
@@ -127,10 +128,19 @@ def load_tables(folder: Path) -> tuple[dict[str, pd.DataFrame], list[str]]:
     return tables, notes
 
 
-def _intel_panels(path: Path, n: int, method: str, params: dict | None) -> dict[str, pd.DataFrame]:
+def _intel_panels(path: Path, n: int, method: str, params: dict | None,
+                  log_options: dict | None = None) -> dict[str, pd.DataFrame]:
     from lms200 import read_log
 
-    records = list(read_log(path))
+    from experiments.logargs import log_options_from_plain, report_skipped
+
+    reader = read_log(path, **log_options_from_plain(log_options))
+    records = list(reader)
+    report_skipped(reader)
+    if not records:
+        from lms200 import LmsbenchError
+
+        raise LmsbenchError(f"{path}: no laser scans found")
     picks = pick_evenly(len(records), n)
     scans = [records[i].scan for i in picks]
     fsets, _ = extract_timed(scans, method, params)
