@@ -86,7 +86,6 @@ def run(args: argparse.Namespace) -> int:
     if args.sensor is not None:
         import sim
 
-        check_yaml(args.sensor, "a sensor YAML")
         try:
             sensor = sim.SensorConfig.from_yaml(args.sensor)
         except LmsbenchError:

@@ -63,7 +63,6 @@ def _config(args: argparse.Namespace):
     if args.sensor is not None:
         if args.ideal:
             raise InputError("--sensor and --ideal exclude each other (the file holds the whole sensor model)")
-        check_yaml(args.sensor, "a sensor YAML")
         try:
             sensor = SensorConfig.from_yaml(args.sensor)
         except LmsbenchError:
