@@ -1,12 +1,13 @@
 """Line and corner extraction: the paper's sensor-coordinate method, Cartesian baselines, scoring."""
 
 from .errors import ConfigError
-from .registry import available_methods, extract, get_method, make_config, register
-from .types import Corner, FeatureSet, Line
+from .registry import available_methods, extract, extract_many, get_method, make_config, register
+from .types import Corner, Corners, FeatureSet, Line, Lines
 
 __all__ = [
     "ConfigError",
     "extract",
+    "extract_many",
     "available_methods",
     "get_method",
     "make_config",
@@ -14,4 +15,6 @@ __all__ = [
     "FeatureSet",
     "Line",
     "Corner",
+    "Lines",
+    "Corners",
 ]

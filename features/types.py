@@ -1,16 +1,23 @@
-"""Feature types shared by every extractor: lines, corners and the FeatureSet they come in.
+"""Feature types shared by every extractor: a FeatureSet holds a scan's lines and corners as arrays
+(``Lines``, ``Corners``); ``fs.lines[i]`` and ``fs.corners[i]`` are ``Line`` / ``Corner`` records
+built from them on access.
 
 All geometry is in the sensor frame of the scan (x ahead, y left, metres, radians CCW).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
+LINE_COLUMNS = ("rho", "alpha", "x0", "y0", "x1", "y1", "cov_rr", "cov_ra", "cov_ar", "cov_aa")
+CORNER_COLUMNS = ("x", "y", "angle")
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, eq=False)
 class Line:
     """A line segment ``x cos(alpha) + y sin(alpha) = rho``.
 
@@ -40,17 +47,6 @@ class Line:
         return float(np.hypot(self.end[0] - self.start[0], self.end[1] - self.start[1]))
 
 
-def new_line(rho: float, alpha: float, start: tuple[float, float], end: tuple[float, float], first: int,
-             last: int, cov: np.ndarray, n_points: int) -> Line:
-    """``Line(...)`` built without the frozen dataclass' per-field setattr (the same object, ~3x
-    faster): for extractors that build many Lines per scan from values already of the right types."""
-    line = object.__new__(Line)
-    line.__dict__.update(
-        rho=rho, alpha=alpha, start=start, end=end, first=first, last=last, cov=cov, n_points=n_points
-    )
-    return line
-
-
 @dataclass(frozen=True)
 class Corner:
     """A corner where two extracted lines meet.
@@ -69,24 +65,201 @@ class Corner:
     lines: tuple[int, int]
 
 
-@dataclass(frozen=True)
-class FeatureSet:
-    """The features extracted from one scan."""
+class Lines(Sequence):
+    """The lines of one scan as arrays, in beam order; ``lines[i]`` is the ``Line`` of row i.
 
-    lines: list[Line] = field(default_factory=list)
-    corners: list[Corner] = field(default_factory=list)
-    method: str = ""
+    Attributes:
+        values: (L, 10) float64, columns ``LINE_COLUMNS``: rho (m), alpha (rad), start x0, y0 and
+            end x1, y1 (m), covariance of (rho, alpha) row by row (m^2, m rad, m rad, rad^2).
+        beams: (L, 3) int64: first beam, last beam (inclusive), number of supporting points.
+    """
+
+    __slots__ = ("values", "beams")
+
+    def __init__(self, values: np.ndarray, beams: np.ndarray) -> None:
+        self.values = values
+        self.beams = beams
+
+    @classmethod
+    def empty(cls) -> Lines:
+        return cls(np.empty((0, 10)), np.empty((0, 3), np.int64))
+
+    @classmethod
+    def from_arrays(cls, rho: np.ndarray, alpha: np.ndarray, start: np.ndarray, end: np.ndarray,
+                    cov: np.ndarray, first: np.ndarray, last: np.ndarray, n_points: np.ndarray) -> Lines:
+        """Lines from per-line arrays: rho, alpha (L,), start, end (L, 2), cov (L, 2, 2), first,
+        last, n_points (L,)."""
+        n = len(rho)
+        values = np.empty((n, 10))
+        values[:, 0], values[:, 1] = rho, alpha
+        values[:, 2:4], values[:, 4:6] = start, end
+        values[:, 6:10] = np.asarray(cov, dtype=float).reshape(n, 4)
+        beams = np.empty((n, 3), np.int64)
+        beams[:, 0], beams[:, 1], beams[:, 2] = first, last, n_points
+        return cls(values, beams)
+
+    @classmethod
+    def from_lines(cls, lines: Sequence[Line]) -> Lines:
+        """Lines from ``Line`` records."""
+        if not lines:
+            return cls.empty()
+        return cls.from_arrays(
+            [l.rho for l in lines], [l.alpha for l in lines], [l.start for l in lines], [l.end for l in lines],
+            np.array([np.asarray(l.cov, dtype=float).reshape(2, 2) for l in lines]),
+            [l.first for l in lines], [l.last for l in lines], [l.n_points for l in lines],
+        )
+
+    rho = property(lambda self: self.values[:, 0], doc="(L,) distance of each line from the origin (m)")
+    alpha = property(lambda self: self.values[:, 1], doc="(L,) normal angle (rad, (-pi, pi])")
+    start = property(lambda self: self.values[:, 2:4], doc="(L, 2) endpoint at the first beam (m)")
+    end = property(lambda self: self.values[:, 4:6], doc="(L, 2) endpoint at the last beam (m)")
+    first = property(lambda self: self.beams[:, 0], doc="(L,) first beam (inclusive)")
+    last = property(lambda self: self.beams[:, 1], doc="(L,) last beam (inclusive)")
+    n_points = property(lambda self: self.beams[:, 2], doc="(L,) number of supporting valid beams")
+
+    @property
+    def cov(self) -> np.ndarray:
+        """(L, 2, 2) covariance of (rho, alpha) of each line (a view)."""
+        return self.values[:, 6:10].reshape(-1, 2, 2)
+
+    @property
+    def length(self) -> np.ndarray:
+        """(L,) length of each segment (m)."""
+        d = self.values[:, 4:6] - self.values[:, 2:4]
+        return np.hypot(d[:, 0], d[:, 1])
+
+    def __len__(self) -> int:
+        return self.values.shape[0]
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, slice):
+            return Lines(self.values[i], self.beams[i])
+        v = self.values[i].tolist()
+        b = self.beams[i].tolist()
+        line = object.__new__(Line)  # the frozen dataclass without its per-field setattr
+        line.__dict__.update(rho=v[0], alpha=v[1], start=(v[2], v[3]), end=(v[4], v[5]), first=b[0], last=b[1],
+                             cov=self.values[i, 6:10].reshape(2, 2), n_points=b[2])
+        return line
+
+    def __iter__(self) -> Iterator[Line]:
+        return (self[i] for i in range(len(self)))
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Sequence) and not isinstance(other, Lines):
+            other = Lines.from_lines(list(other)) if len(other) else Lines.empty()
+        if not isinstance(other, Lines):
+            return NotImplemented
+        return np.array_equal(self.values, other.values, equal_nan=True) and np.array_equal(self.beams, other.beams)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return f"Lines({len(self)})"
+
+
+class Corners(Sequence):
+    """The corners of one scan as arrays; ``corners[i]`` is the ``Corner`` of row i.
+
+    Attributes:
+        values: (C, 3) float64: x, y (m), interior angle (rad, in (0, pi)).
+        beams: (C, 3) int64: beam index of the corner, indices of its two lines (line i, i + 1).
+    """
+
+    __slots__ = ("values", "beams")
+
+    def __init__(self, values: np.ndarray, beams: np.ndarray) -> None:
+        self.values = values
+        self.beams = beams
+
+    @classmethod
+    def empty(cls) -> Corners:
+        return cls(np.empty((0, 3)), np.empty((0, 3), np.int64))
+
+    @classmethod
+    def from_corners(cls, corners: Sequence[Corner]) -> Corners:
+        """Corners from ``Corner`` records."""
+        if not corners:
+            return cls.empty()
+        values = np.array([(c.x, c.y, c.angle) for c in corners], dtype=float)
+        beams = np.array([(c.index, *c.lines) for c in corners], dtype=np.int64)
+        return cls(values, beams)
+
+    x = property(lambda self: self.values[:, 0], doc="(C,) x of each corner (m)")
+    y = property(lambda self: self.values[:, 1], doc="(C,) y of each corner (m)")
+    angle = property(lambda self: self.values[:, 2], doc="(C,) interior angle (rad, (0, pi))")
+    beam = property(lambda self: self.beams[:, 0], doc="(C,) beam index of each corner")
+    line_pair = property(lambda self: self.beams[:, 1:3], doc="(C, 2) indices of the two lines of each corner")
+
+    def __len__(self) -> int:
+        return self.values.shape[0]
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, slice):
+            return Corners(self.values[i], self.beams[i])
+        x, y, angle = self.values[i].tolist()
+        index, a, b = self.beams[i].tolist()
+        return Corner(x, y, angle, index, (a, b))
+
+    def __iter__(self) -> Iterator[Corner]:
+        return (self[i] for i in range(len(self)))
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Sequence) and not isinstance(other, Corners):
+            other = Corners.from_corners(list(other))
+        if not isinstance(other, Corners):
+            return NotImplemented
+        return np.array_equal(self.values, other.values, equal_nan=True) and np.array_equal(self.beams, other.beams)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return f"Corners({len(self)})"
+
+
+class FeatureSet:
+    """The features extracted from one scan: ``lines`` (``Lines``) and ``corners`` (``Corners``),
+    arrays in the scan's sensor frame, and the ``method`` that found them.
+
+    Built from ``Lines`` / ``Corners`` (what the extractors do) or from sequences of ``Line`` /
+    ``Corner`` records.
+    """
+
+    __slots__ = ("lines", "corners", "method")
+
+    def __init__(self, lines: Lines | Sequence[Line] = (), corners: Corners | Sequence[Corner] = (),
+                 method: str = "") -> None:
+        self.lines = lines if isinstance(lines, Lines) else Lines.from_lines(list(lines))
+        self.corners = corners if isinstance(corners, Corners) else Corners.from_corners(list(corners))
+        self.method = method
+
+    @classmethod
+    def of(cls, lines: Lines, corners: Corners, method: str) -> FeatureSet:
+        """The FeatureSet of ready arrays, without checks (the extractors' fast path)."""
+        fs = object.__new__(cls)
+        fs.lines, fs.corners, fs.method = lines, corners, method
+        return fs
 
     def line_array(self) -> np.ndarray:
         """(n, 8) array: rho, alpha, x0, y0, x1, y1, first, last (for tables and plots)."""
-        if not self.lines:
-            return np.empty((0, 8))
-        return np.array(
-            [(l.rho, l.alpha, *l.start, *l.end, l.first, l.last) for l in self.lines], dtype=float
-        )
+        return np.column_stack((self.lines.values[:, :6], self.lines.beams[:, :2]))
 
     def corner_array(self) -> np.ndarray:
         """(m, 4) array: x, y, angle, index."""
-        if not self.corners:
-            return np.empty((0, 4))
-        return np.array([(c.x, c.y, c.angle, c.index) for c in self.corners], dtype=float)
+        return np.column_stack((self.corners.values, self.corners.beams[:, 0]))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, FeatureSet):
+            return NotImplemented
+        return self.method == other.method and self.lines == other.lines and self.corners == other.corners
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __getstate__(self) -> tuple:
+        return (self.lines.values, self.lines.beams, self.corners.values, self.corners.beams, self.method)
+
+    def __setstate__(self, state: tuple) -> None:
+        lv, lb, cv, cb, method = state
+        self.lines, self.corners, self.method = Lines(lv, lb), Corners(cv, cb), method
+
+    def __repr__(self) -> str:
+        return f"FeatureSet({len(self.lines)} lines, {len(self.corners)} corners, method={self.method!r})"

@@ -47,29 +47,19 @@ def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) 
     positive definite) plus the floor ``diag(sigma_rho^2, sigma_alpha_obs^2)``. With ``scan``, its
     valid points (every ``point_stride``-th) come along for checking pre-alignments."""
     floor = np.diag([config.sigma_rho**2, config.sigma_alpha_obs**2])
-    lines, covs, ends = [], [], []
-    for ln in fs.lines:
-        if ln.n_points and ln.n_points < config.min_line_points:
-            continue
-        if ln.length < config.min_line_length:
-            continue
-        c = np.asarray(ln.cov, dtype=float)
-        if c.shape != (2, 2) or not np.all(np.isfinite(c)) or np.linalg.eigvalsh(0.5 * (c + c.T)).min() < 0:
-            c = np.zeros((2, 2))
-        lines.append((ln.rho, ln.alpha))
-        covs.append(0.5 * (c + c.T) + floor)
-        ends.append((*ln.start, *ln.end))
-    corners, ccov = [], []
-    if config.use_corners:
-        for cn in fs.corners:
-            corners.append((cn.x, cn.y))
-            ccov.append(np.eye(2) * config.sigma_corner**2)
+    ln = fs.lines
+    keep = ~((ln.n_points > 0) & (ln.n_points < config.min_line_points)) & ~(ln.length < config.min_line_length)
+    c = ln.cov[keep]
+    sym = 0.5 * (c + c.transpose(0, 2, 1))
+    good = np.isfinite(c).all(axis=(1, 2))  # finite and positive semi-definite, else the floor alone
+    good[good] = np.linalg.eigvalsh(sym[good]).min(axis=1) >= 0
+    covs = np.where(good[:, None, None], sym, 0.0) + floor
+    lines = np.column_stack((ln.rho[keep], ln.alpha[keep]))
+    ends = ln.values[keep, 2:6]
+    corners = fs.corners.values[:, :2] if config.use_corners else np.zeros((0, 2))
+    ccov = np.broadcast_to(np.eye(2) * config.sigma_corner**2, (corners.shape[0], 2, 2)).copy()
     return Observations(
-        np.array(lines, float).reshape(-1, 2),
-        np.array(covs, float).reshape(-1, 2, 2),
-        np.array(ends, float).reshape(-1, 4),
-        np.array(corners, float).reshape(-1, 2),
-        np.array(ccov, float).reshape(-1, 2, 2),
+        lines, covs, ends.copy(), corners.copy(), ccov,
         scan_points(scan, config.point_stride) if scan is not None else np.zeros((0, 2)),
     )
 

@@ -26,9 +26,8 @@ def signals(ranges: np.ndarray, bearings: np.ndarray, increment: float, k: int, 
         sin_sum = sum(np.sin(m * increment) for m in range(1, k + 1))
         theta = bearings + np.arctan((ad - 1.0) / (2.0 * sin_sum))  # eq. 7, corrected
         psi = np.full(n, np.nan)
-        if n > k:  # psi needs a beam k further on
-            d = theta[: n - k] - theta[k:]
-            psi[: n - k] = np.angle(np.exp(1j * d))
+        if n > k:
+            psi[: n - k] = np.angle(np.exp(1j * (theta[: n - k] - theta[k:])))
     return {"AD": AD, "ad": ad, "theta": theta, "psi": psi,
             "ad_line": 1.0 + 2.0 * sum(np.cos(j * increment) for j in range(1, k + 1))}
 

@@ -1,15 +1,19 @@
-"""Benchmark of the sensor-coordinate extractor: scans per second through the public
-``features.extract(scan, method="sensor")`` call, one scan at a time, on 361-beam office scans
-from the simulator (or, where ``sim`` is absent, analytic scans of a furnished rectangular room)."""
+"""Benchmark of every extractor (``lmsbench bench features``): scans per second of single
+``features.extract`` calls and of one ``features.extract_many`` call, on 361-beam office scans
+from the simulator (or, where ``sim`` is absent, analytic scans of a furnished rectangular room)
+and on MIT CSAIL scans where the shared data is present; process CPU time, best of repeats,
+methods interleaved. ``accuracy`` scores the sensor method on simulated tours."""
 
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import numpy as np
 
 from experiments.synthetic import cast
-from features import extract
+from features import available_methods, extract, extract_many, make_config
+from features.registry import backend_of
 from lms200 import Scan
 
 NAME = "features"
@@ -48,50 +52,75 @@ def room_scans(count: int, seed: int = 0) -> list[Scan]:
     return scans
 
 
-def time_sensor(scans: list[Scan], repeats: int) -> dict:
-    """Per-scan times of extract(scan, method="sensor") over ``repeats`` passes."""
-    for s in scans[:50]:  # warm caches (templates) and load the compiled kernels
-        extract(s, method="sensor")
-    times = np.empty((repeats, len(scans)))
-    cpu = np.empty(repeats)
-    n_lines = n_corners = 0
+MIT_LOG = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "carmen" / "mit-csail.clf.gz"
+
+
+def mit_scans(count: int) -> list[Scan]:
+    """Up to ``count`` scans of the MIT CSAIL log (every 4th), where the shared data is present."""
+    if not MIT_LOG.exists():
+        return []
+    from lms200 import read_log
+
+    out = []
+    for k, rec in enumerate(read_log(MIT_LOG)):
+        if k % 4 == 0:
+            out.append(rec.scan)
+            if len(out) == count:
+                break
+    return out
+
+
+def time_methods(scans: list[Scan], methods: list[str], repeats: int) -> dict[str, dict[str, float]]:
+    """CPU seconds per scan of each method over ``scans``: ``single`` (one ``extract`` call per
+    scan) and ``batch`` (one ``extract_many`` call for all), the best (least disturbed) of
+    ``repeats`` passes; the methods and the two modes interleaved within every repeat, so that
+    load on a shared machine falls on all alike. Also the lines and corners per scan."""
+    configs = {m: make_config(m) for m in methods}
+    for m in methods:  # load the compiled kernels (and compile them in a fresh checkout): not timed
+        extract_many(scans[:2], m, configs[m])
+        extract(scans[0], m, configs[m])
+    best = {m: {"single": np.inf, "batch": np.inf} for m in methods}
+    counts = {}
     for rep in range(repeats):
-        c0 = time.process_time_ns()
-        for i, s in enumerate(scans):
-            t0 = time.perf_counter_ns()
-            fs = extract(s, method="sensor")
-            times[rep, i] = time.perf_counter_ns() - t0
-            n_lines += len(fs.lines)
-            n_corners += len(fs.corners)
-        cpu[rep] = (time.process_time_ns() - c0) / len(scans)
-    us = times.ravel() / 1e3
-    best_us = times.min(axis=0) / 1e3  # per scan, the least disturbed of the repeats
-    return {
-        "scans_per_s": float(1e6 / us.mean()),
-        "mean_us": float(us.mean()),
-        "cpu_us": float(cpu.min() / 1e3),
-        "best_of_repeats_us": float(best_us.mean()),
-        "scans_per_s_best": float(1e6 / best_us.mean()),
-        "scans_per_s_cpu": float(1e9 / cpu.min()),
-        "median_us": float(np.median(us)),
-        "p95_us": float(np.percentile(us, 95)),
-        "lines_per_scan": n_lines / (repeats * len(scans)),
-        "corners_per_scan": n_corners / (repeats * len(scans)),
-    }
+        order = methods[rep % len(methods):] + methods[: rep % len(methods)]
+        for m in order:
+            cfg = configs[m]
+            c0 = time.process_time()
+            for s in scans:
+                extract(s, m, cfg)
+            c1 = time.process_time()
+            many = extract_many(scans, m, cfg)
+            c2 = time.process_time()
+            best[m]["single"] = min(best[m]["single"], (c1 - c0) / len(scans))
+            best[m]["batch"] = min(best[m]["batch"], (c2 - c1) / len(scans))
+            counts[m] = (sum(len(f.lines) for f in many) / len(scans), sum(len(f.corners) for f in many) / len(scans))
+    return {m: {**best[m], "lines": counts[m][0], "corners": counts[m][1]} for m in methods}
 
 
 def run(quick: bool = False) -> list[dict]:
-    """One row: scans/s and per-scan time of extract(scan, method="sensor"), wall clock over all
-    repeats (``scans_per_s``, ``mean_us``), the mean over scans of each scan's fastest repeat
-    (``best_of_repeats_us``, ``scans_per_s_best``: on a shared machine the least disturbed
-    figure), and the process CPU time per scan of the least disturbed pass (``cpu_us``,
-    ``scans_per_s_cpu``)."""
-    count = 200 if quick else 1500
-    scans, source = office_scans(count)
+    """One row per method x scan set (simulated office, 361 beams; MIT CSAIL, where present):
+    scans/s of single ``extract`` calls and of one ``extract_many`` call (process CPU time, best
+    of the repeats, methods interleaved), per-scan microseconds, and the ratios to the sensor
+    method (> 1: faster than sensor)."""
+    count = 100 if quick else 600
     repeats = 2 if quick else 5
-    row = {"benchmark": "extract_sensor", "backend": "numba", "source": source, "scans": len(scans)}
-    row.update(time_sensor(scans, repeats))
-    return [row]
+    office, source = office_scans(count)
+    methods = available_methods()
+    rows = []
+    for name, scans in ((source, office), ("mit csail", mit_scans(count))):
+        if not scans:
+            continue
+        t = time_methods(scans, methods, repeats)
+        ref = t.get("sensor", t[methods[0]])
+        for m in methods:
+            rows.append({
+                "benchmark": "extract", "method": m, "backend": backend_of(m), "source": name, "scans": len(scans),
+                "single_scans_per_s": 1.0 / t[m]["single"], "batch_scans_per_s": 1.0 / t[m]["batch"],
+                "single_us": 1e6 * t[m]["single"], "batch_us": 1e6 * t[m]["batch"],
+                "single_vs_sensor": ref["single"] / t[m]["single"], "batch_vs_sensor": ref["batch"] / t[m]["batch"],
+                "lines_per_scan": t[m]["lines"], "corners_per_scan": t[m]["corners"],
+            })
+    return rows
 
 
 def accuracy(world: str, duration: float = 300.0, rate_hz: float = 0.4, sensor=None, **params) -> dict:

@@ -1,5 +1,5 @@
 """Shared pieces of the vectorised Cartesian baselines (``hough``, ``ransac``): points, batched
-least-squares line fits, Line objects, and the FeatureSet with the Cartesian corner step
+least-squares line fits, Lines, and the FeatureSet with the Cartesian corner step
 (``engine.corners``, shared with split_merge and iepf).
 
 Everything works on the compacted arrays of valid beams (``idx`` = beam indices, ``x``, ``y`` in the
@@ -17,7 +17,7 @@ import numpy as np
 from lms200 import Scan
 
 from ..angles import wrap
-from ..types import Corner, FeatureSet, Line
+from ..types import Corners, FeatureSet, Lines
 from . import checks, engine
 
 
@@ -173,8 +173,8 @@ def build_lines(
     my: np.ndarray,
     along: np.ndarray,
     sigma: float,
-) -> list[Line]:
-    """Line objects for fitted ranges ``start..end`` (positions into ``pts``), sorted by beam.
+) -> Lines:
+    """The Lines (arrays) of fitted ranges ``start..end`` (positions into ``pts``), sorted by beam.
 
     Endpoints are the projections of the first and last points on the line. The (rho, alpha)
     covariance is that of a total-least-squares fit under isotropic noise ``sigma`` (m):
@@ -182,7 +182,7 @@ def build_lines(
     coordinate along the line and S the scatter along it.
     """
     if start.size == 0:
-        return []
+        return Lines.empty()
     order = np.argsort(pts.idx[start], kind="stable")
     c, s = np.cos(alpha), np.sin(alpha)
     # projections of the first / last points onto their lines
@@ -197,24 +197,10 @@ def build_lines(
     var_a = s2 / along
     var_r = s2 / n + t * t * var_a
     cov_ra = t * var_a
-    first = pts.idx[start]
-    last = pts.idx[end]
-    lines = []
-    for k in order.tolist():
-        cov = np.array([[var_r[k], cov_ra[k]], [cov_ra[k], var_a[k]]])
-        lines.append(
-            Line(
-                float(rho[k]),
-                float(alpha[k]),
-                (float(px0[k]), float(py0[k])),
-                (float(px1[k]), float(py1[k])),
-                int(first[k]),
-                int(last[k]),
-                cov,
-                int(n[k]),
-            )
-        )
-    return lines
+    o = order
+    cov = np.column_stack((var_r[o], cov_ra[o], cov_ra[o], var_a[o]))
+    return Lines.from_arrays(rho[o], alpha[o], np.column_stack((px0[o], py0[o])), np.column_stack((px1[o], py1[o])),
+                             cov, pts.idx[start][o], pts.idx[end][o], n[o])
 
 
 @dataclass(frozen=True)
@@ -256,16 +242,9 @@ class CornerConfig:
         return self._params
 
 
-def feature_set(lines: list[Line], corner_cfg: CornerConfig, method: str, angle_increment: float) -> FeatureSet:
-    """FeatureSet of beam-ordered lines plus the shared corner step."""
-    if len(lines) < 2:
-        return FeatureSet(lines, [], method)
-    rho = np.array([l.rho for l in lines])
-    alpha = np.array([l.alpha for l in lines])
-    first = np.array([l.first for l in lines], dtype=np.int64)
-    last = np.array([l.last for l in lines], dtype=np.int64)
-    p0 = np.array([l.start for l in lines], dtype=float)
-    p1 = np.array([l.end for l in lines], dtype=float)
-    cf, ci = engine.corners(rho, alpha, first, last, p0, p1, angle_increment, corner_cfg.params)
-    corners = [Corner(x, y, a, index, (k, k + 1)) for (x, y, a), (index, k) in zip(cf.tolist(), ci.tolist())]
-    return FeatureSet(lines, corners, method)
+def feature_set(rows: Lines, corner_cfg: CornerConfig, method: str, angle_increment: float) -> FeatureSet:
+    """FeatureSet of beam-ordered lines plus the shared corner step (``engine.corners``)."""
+    if len(rows) < 2:
+        return FeatureSet.of(rows, Corners.empty(), method)
+    cv, cb = engine.corners(rows.values, rows.beams, angle_increment, corner_cfg.params)
+    return FeatureSet.of(rows, Corners(cv, cb), method)

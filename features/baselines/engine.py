@@ -25,6 +25,7 @@ import numpy as np
 
 from ..angles import TWO_PI
 from ..jit import kernel
+from ..rows import append_rows, finish_rows, new_rows
 
 TRIM_TOL_SIGMA = 3.0  # end points farther than this many sigma from the fitted line are trimmed
 BREAK_SIGMA = 3.0  # the adaptive breakpoint distance's noise margin, in sigma
@@ -149,14 +150,18 @@ def straight_enough(x, y, s, e, rho, alpha, z_min, dead_zone) -> bool:  # noqa: 
 
 
 @kernel
-def segment_lines(ranges, bearings, valid, increment, p):  # noqa: ANN001, ANN201
-    """The lines of one scan (sensor frame) in beam order, as arrays (rho, alpha, n, first, last,
-    start (L, 2), end (L, 2), cov (L, 2, 2)); ``p`` a SplitParams. The (rho, alpha) covariance is
+def segment_lines(ranges, bearings, range_lo, range_hi, increment, p):  # noqa: ANN001, ANN201
+    """The lines of one scan (sensor frame) in beam order, as the rows of ``features.types.Lines``
+    (values (L, 10), beams (L, 3)); beams with a range in [range_lo, range_hi] (m) are valid;
+    ``p`` a SplitParams. The (rho, alpha) covariance is
     that of a total-least-squares fit under isotropic noise sigma: var(alpha) = s^2/S,
     var(rho) = s^2/n + t^2 s^2/S, cov = t s^2/S (t: the centroid's coordinate along the line,
     S: the scatter along it)."""
     sigma, lam, threshold, merge_rms = p.sigma, p.breakpoint_lambda, p.split_threshold, p.merge_rms
     min_points, min_length, max_skip, runs_z, chord = p.min_points, p.min_length, p.max_skip, p.runs_z, p.chord
+    valid = np.empty(ranges.size, np.bool_)
+    for i in range(ranges.size):
+        valid[i] = ranges[i] >= range_lo and ranges[i] <= range_hi
     idx = np.flatnonzero(valid)
     n_pts = idx.size
     x = np.empty(n_pts)
@@ -176,7 +181,7 @@ def segment_lines(ranges, bearings, valid, increment, p):  # noqa: ANN001, ANN20
         x[p] = r[p] * math.cos(b)
         y[p] = r[p] * math.sin(b)
     if n_pts < 2:
-        return _no_lines()
+        return np.empty((0, 10)), np.empty((0, 3), np.int64)
     sx = np.zeros(n_pts + 1)
     sy = np.zeros(n_pts + 1)
     sxx = np.zeros(n_pts + 1)
@@ -286,14 +291,8 @@ def segment_lines(ranges, bearings, valid, increment, p):  # noqa: ANN001, ANN20
         if shared[i]:
             segs_e[i] -= 1
             segs_s[i + 1] += 1
-    rho = np.empty(m)
-    alpha = np.empty(m)
-    cnt = np.empty(m)
-    first = np.empty(m, np.int64)
-    last = np.empty(m, np.int64)
-    p0 = np.empty((m, 2))
-    p1 = np.empty((m, 2))
-    cov = np.empty((m, 2, 2))
+    lv = np.empty((m, 10))  # the rows of features.types.Lines
+    lb = np.empty((m, 3), np.int64)
     s2 = sigma * sigma
     tol = TRIM_TOL_SIGMA * sigma
     k = 0
@@ -319,37 +318,33 @@ def segment_lines(ranges, bearings, valid, increment, p):  # noqa: ANN001, ANN20
             continue
         t = -fmx * si + fmy * c
         var_a = s2 / falong
-        rho[k], alpha[k], cnt[k] = fr, fa, fn
-        first[k], last[k] = idx[s], idx[e]
-        p0[k, 0], p0[k, 1], p1[k, 0], p1[k, 1] = ax, ay, bx, by
-        cov[k, 0, 0] = s2 / fn + t * t * var_a
-        cov[k, 0, 1] = t * var_a
-        cov[k, 1, 0] = t * var_a
-        cov[k, 1, 1] = var_a
+        lv[k, 0], lv[k, 1] = fr, fa
+        lv[k, 2], lv[k, 3], lv[k, 4], lv[k, 5] = ax, ay, bx, by
+        lv[k, 6] = s2 / fn + t * t * var_a
+        lv[k, 7] = t * var_a
+        lv[k, 8] = t * var_a
+        lv[k, 9] = var_a
+        lb[k, 0], lb[k, 1], lb[k, 2] = idx[s], idx[e], np.int64(fn)
         k += 1
-    return rho[:k], alpha[:k], cnt[:k], first[:k], last[:k], p0[:k], p1[:k], cov[:k]
+    return lv[:k], lb[:k]
 
 
 @kernel
-def _no_lines():  # noqa: ANN202
-    e = np.empty(0)
-    ei = np.empty(0, np.int64)
-    return e, e, e, ei, ei, np.empty((0, 2)), np.empty((0, 2)), np.empty((0, 2, 2))
-
-
-@kernel
-def corners(rho, alpha, first, last, p0, p1, increment, c):  # noqa: ANN001, ANN201
+def corners(lv, lb, increment, c):  # noqa: ANN001, ANN201
     """The Cartesian corner step (Castellanos et al. 1996): corners where consecutive lines k, k + 1
     (beam order) meet, at their intersection. A corner needs the lines at most max_gap_beams apart,
     their facing end points connected in the scan (within the adaptive breakpoint distance, so an
     occlusion's depth jump is no corner), a turn of at least min_turn (rad) between the segment
     directions, and the intersection within max_distance (m) plus the end points' gap of both
-    facing ends. ``c`` a CornerParams. Returns (x, y, interior angle in (0, pi)) and (beam index,
-    line k) of each corner."""
+    facing ends. ``lv``, ``lb``: the rows of the lines (``features.types.Lines``); ``c`` a
+    CornerParams. Returns the rows of ``features.types.Corners``: (x, y, interior angle in
+    (0, pi)) and (beam index, line k, line k + 1) of each corner."""
+    rho, alpha, first, last = lv[:, 0], lv[:, 1], lb[:, 0], lb[:, 1]
+    p0, p1 = lv[:, 2:4], lv[:, 4:6]
     min_turn, max_gap, max_distance, lam, sigma = c.min_turn, c.max_gap_beams, c.max_distance, c.breakpoint_lambda, c.sigma
     n_lines = rho.size
     out_f = np.empty((max(n_lines - 1, 0), 3))
-    out_i = np.empty((max(n_lines - 1, 0), 2), np.int64)
+    out_i = np.empty((max(n_lines - 1, 0), 3), np.int64)
     m = 0
     for k in range(n_lines - 1):
         a1, a2 = alpha[k], alpha[k + 1]
@@ -374,6 +369,28 @@ def corners(rho, alpha, first, last, p0, p1, increment, c):  # noqa: ANN001, ANN
         if (step <= max_gap and gap <= connect and connect > 0 and turn >= min_turn
                 and dist_a <= max_distance + gap and dist_b <= max_distance + gap and np.isfinite(cx)):
             out_f[m, 0], out_f[m, 1], out_f[m, 2] = cx, cy, math.pi - turn
-            out_i[m, 0], out_i[m, 1] = last[k], k
+            out_i[m, 0], out_i[m, 1], out_i[m, 2] = last[k], k, k + 1
             m += 1
     return out_f[:m], out_i[:m]
+
+
+@kernel
+def extract_scan(ranges, bearings, range_lo, range_hi, increment, p, c):  # noqa: ANN001, ANN201
+    """Lines (``segment_lines``) and corners (``corners``) of one scan: the rows of
+    ``features.types.Lines`` and ``Corners``."""
+    lv, lb = segment_lines(ranges, bearings, range_lo, range_hi, increment, p)
+    if lv.shape[0] > 1:
+        cv, cb = corners(lv, lb, increment, c)
+    else:
+        cv, cb = np.empty((0, 3)), np.empty((0, 3), np.int64)
+    return lv, lb, cv, cb
+
+
+@kernel
+def extract_batch(ranges, bearings, range_lo, range_hi, increment, p, c):  # noqa: ANN001, ANN201
+    """``extract_scan`` of every row of ``ranges`` (S, n), scans of one geometry, in one call: the
+    rows of all scans concatenated, and the (S + 1,) offsets of each scan's lines and corners."""
+    rows = new_rows(ranges.shape[0])
+    for s in range(ranges.shape[0]):
+        rows = append_rows(rows, s, extract_scan(ranges[s], bearings, range_lo, range_hi, increment, p, c))
+    return finish_rows(rows)

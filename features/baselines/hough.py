@@ -22,7 +22,7 @@ import numpy as np
 from lms200 import Scan
 
 from ..registry import register
-from ..types import FeatureSet
+from ..types import FeatureSet, Lines
 from . import checks
 from .common import CornerConfig, feature_set, valid_points
 from .runs import collect, refine, segments_of
@@ -74,7 +74,7 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
     """Extract lines and corners from ``scan`` (sensor frame) with the full Hough transform."""
     pts = valid_points(scan)
     if pts.idx.size < cfg.min_points:
-        return feature_set([], cfg.corners, "hough", scan.angle_increment)
+        return feature_set(Lines.empty(), cfg.corners, "hough", scan.angle_increment)
     n_alpha = int(round(np.pi / cfg.alpha_step))
     theta = np.arange(n_alpha) * cfg.alpha_step
     r_ext = float(pts.r.max()) + cfg.rho_step

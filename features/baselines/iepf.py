@@ -7,6 +7,7 @@ merged before the refit.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -16,7 +17,7 @@ from lms200 import Scan
 from ..registry import register
 from ..types import FeatureSet
 from .common import CornerConfig
-from .split_merge import check_split_fields, run_pipeline
+from .split_merge import check_split_fields, run_pipeline, run_pipeline_many
 
 
 @dataclass(frozen=True)
@@ -50,4 +51,9 @@ def run(scan: Scan, cfg: IepfConfig) -> FeatureSet:
     return run_pipeline(scan, cfg, "iepf", chord=True)
 
 
-register("iepf", IepfConfig, run, backend="numba")
+def run_many(scans: Sequence[Scan], cfg: IepfConfig) -> list[FeatureSet]:
+    """``run`` of every scan of a batch of one geometry, in one kernel call."""
+    return run_pipeline_many(scans, cfg, "iepf", chord=True)
+
+
+register("iepf", IepfConfig, run, backend="numba", run_many=run_many)

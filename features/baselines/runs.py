@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..types import FeatureSet
+from ..types import FeatureSet, Lines
 from .common import (CornerConfig, Points, build_lines, contiguous_runs, feature_set, fit_groups, fit_moments,
                      point_line_distance, straight_enough, trim_ends)
 
@@ -63,7 +63,7 @@ def collect(pts: Points, starts: list, ends: list, fits: list, sigma: float, cor
     """The FeatureSet of the segments ``segments_of`` found, one (start, end, fit) per found line
     (lists in the order found): beam-ordered Lines plus the shared corner step."""
     if not starts:
-        return feature_set([], corners, method, angle_increment)
+        return feature_set(Lines.empty(), corners, method, angle_increment)
     s, e = np.concatenate(starts), np.concatenate(ends)
     rho, alpha, n, mx, my, along = (np.concatenate(f) for f in zip(*fits))
     lines = build_lines(pts, s, e, rho, alpha, n, mx, my, along, sigma)

@@ -11,7 +11,7 @@ length becomes a Line; corners come from the shared Cartesian corner step.
 
 from __future__ import annotations
 
-import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,7 +19,8 @@ import numpy as np
 from lms200 import Scan
 
 from ..registry import register
-from ..types import Corner, FeatureSet, new_line
+from ..batch import common_geometry, split_rows, stacked_ranges
+from ..types import Corners, FeatureSet, Lines
 from . import checks, engine
 from .common import CornerConfig
 
@@ -85,23 +86,19 @@ def split_params(cfg: object, chord: bool) -> engine.SplitParams:
 def run_pipeline(scan: Scan, cfg, method: str, chord: bool) -> FeatureSet:  # noqa: ANN001
     """Lines and corners of ``scan`` (sensor frame) by the split / merge pipeline, splitting at the
     least-squares fit (``chord=False``, split_merge) or the chord (``chord=True``, iepf)."""
-    rho, alpha, n, first, last, p0, p1, cov = engine.segment_lines(
-        scan.ranges, scan.angles, scan.valid, scan.angle_increment, split_params(cfg, chord)
-    )
-    rho_l, alpha_l = rho.tolist(), alpha.tolist()
-    n_l = n.astype(np.int64).tolist()
-    first_l, last_l = first.tolist(), last.tolist()
-    start = list(map(tuple, p0.tolist()))
-    end = list(map(tuple, p1.tolist()))
-    lines = [
-        new_line(rho_l[m], alpha_l[m], start[m], end[m], first_l[m], last_l[m], cov[m], n_l[m])
-        for m in range(len(rho_l))
-    ]
-    found: list[Corner] = []
-    if len(lines) > 1:
-        cf, ci = engine.corners(rho, alpha, first, last, p0, p1, scan.angle_increment, cfg.corners.params)
-        found = [Corner(x, y, a, index, (k, k + 1)) for (x, y, a), (index, k) in zip(cf.tolist(), ci.tolist())]
-    return FeatureSet(lines, found, method)
+    lv, lb, cv, cb = engine.extract_scan(scan.ranges, scan.angles, scan.range_min, scan.range_max,
+                                         scan.angle_increment, split_params(cfg, chord), cfg.corners.params)
+    return FeatureSet.of(Lines(lv, lb), Corners(cv, cb), method)
+
+
+def run_pipeline_many(scans: Sequence[Scan], cfg, method: str, chord: bool) -> list[FeatureSet]:  # noqa: ANN001
+    """``run_pipeline`` of every scan (one geometry, checked), in one kernel call."""
+    if not scans:
+        return []
+    scan = common_geometry(scans)
+    rows = engine.extract_batch(stacked_ranges(scans), scan.angles, scan.range_min, scan.range_max,
+                                scan.angle_increment, split_params(cfg, chord), cfg.corners.params)
+    return split_rows(*rows, method)
 
 
 def run(scan: Scan, cfg: SplitMergeConfig) -> FeatureSet:
@@ -109,4 +106,9 @@ def run(scan: Scan, cfg: SplitMergeConfig) -> FeatureSet:
     return run_pipeline(scan, cfg, "split_merge", chord=False)
 
 
-register("split_merge", SplitMergeConfig, run, backend="numba")
+def run_many(scans: Sequence[Scan], cfg: SplitMergeConfig) -> list[FeatureSet]:
+    """``run`` of every scan of a batch of one geometry, in one kernel call."""
+    return run_pipeline_many(scans, cfg, "split_merge", chord=False)
+
+
+register("split_merge", SplitMergeConfig, run, backend="numba", run_many=run_many)

@@ -8,17 +8,20 @@ two segments meet. ``signals`` gives the per-beam signals of the paper's figures
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from lms200 import Scan
 
 from ..registry import register
-from ..types import Corner, FeatureSet, new_line
+from ..batch import common_geometry, split_rows, stacked_ranges
+from ..types import Corners, FeatureSet, Lines
 from . import engine
 from .config import SensorMethodConfig
 from .grid import grid_constants, window_sums
 
-__all__ = ["SensorMethodConfig", "extract_sensor", "signals"]
+__all__ = ["SensorMethodConfig", "extract_sensor", "extract_sensor_many", "signals"]
 
 METHOD = "sensor"
 
@@ -27,22 +30,25 @@ def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
     """Lines and corners of ``scan`` in its sensor frame (the registered run function)."""
     p = cfg.params
     grid = grid_constants(p.k, scan.angle_increment, p.hough_subdiv)
-    rho, alpha, cov, first, last, npts, p0, p1, cf, ci = engine.extract_scan(
+    lv, lb, cv, cb = engine.extract_scan(
         scan.ranges, scan.angles, scan.angle_min, scan.angle_increment, max(scan.range_min, cfg.min_range),
         scan.range_max, cfg.sigma_for(scan.range_max), grid, p,
     )
-    if rho.size == 0:
-        return FeatureSet([], [], METHOD)
-    rho_l, alpha_l = rho.tolist(), alpha.tolist()
-    first_l, last_l, n_l = first.tolist(), last.tolist(), npts.tolist()
-    start = list(map(tuple, p0.tolist()))
-    end = list(map(tuple, p1.tolist()))
-    lines = [
-        new_line(rho_l[m], alpha_l[m], start[m], end[m], first_l[m], last_l[m], cov[m], n_l[m])
-        for m in range(len(rho_l))
-    ]
-    found = [Corner(x, y, a, index, (i, i + 1)) for (x, y, a), (index, i) in zip(cf.tolist(), ci.tolist())]
-    return FeatureSet(lines, found, METHOD)
+    return FeatureSet.of(Lines(lv, lb), Corners(cv, cb), METHOD)
+
+
+def extract_sensor_many(scans: Sequence[Scan], cfg: SensorMethodConfig) -> list[FeatureSet]:
+    """``extract_sensor`` of every scan (one geometry, checked), in one kernel call."""
+    if not scans:
+        return []
+    scan = common_geometry(scans)
+    p = cfg.params
+    grid = grid_constants(p.k, scan.angle_increment, p.hough_subdiv)
+    rows = engine.extract_batch(
+        stacked_ranges(scans), scan.angles, scan.angle_min, scan.angle_increment, max(scan.range_min, cfg.min_range),
+        scan.range_max, cfg.sigma_for(scan.range_max), grid, p,
+    )
+    return split_rows(*rows, METHOD)
 
 
 def signals(scan: Scan, k: int = 3, sigma_r: float = 0.005, min_range: float = 0.02) -> dict:
@@ -83,4 +89,4 @@ def signals(scan: Scan, k: int = 3, sigma_r: float = 0.005, min_range: float = 0
     }
 
 
-register(METHOD, SensorMethodConfig, extract_sensor, backend="numba")
+register(METHOD, SensorMethodConfig, extract_sensor, backend="numba", run_many=extract_sensor_many)

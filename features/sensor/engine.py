@@ -34,6 +34,7 @@ import numpy as np
 
 from ..angles import TWO_PI
 from ..jit import kernel
+from ..rows import append_rows, finish_rows, new_rows
 
 PW_BLOCKSIZE = 128  # numpy's pairwise-summation block (numpy/_core/src/umath/loops_utils.h.src)
 N_BINS = 13  # log-range cells of a run's Log-Hough accumulator around its middle vote
@@ -820,11 +821,30 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
 
 
 @kernel
+def pack(rho, alpha, cov, first, last, npts, p0, p1, cf, ci):  # noqa: ANN001, ANN201
+    """The rows of ``features.types.Lines`` and ``Corners``: line values (L, 10) rho, alpha, x0,
+    y0, x1, y1, cov (row by row), line beams (L, 3) first, last, n_points; corner values (C, 3)
+    x, y, angle, corner beams (C, 3) beam, line i, line i + 1."""
+    n = rho.size
+    lv = np.empty((n, 10))
+    lb = np.empty((n, 3), np.int64)
+    for m in range(n):
+        lv[m, 0], lv[m, 1] = rho[m], alpha[m]
+        lv[m, 2], lv[m, 3], lv[m, 4], lv[m, 5] = p0[m, 0], p0[m, 1], p1[m, 0], p1[m, 1]
+        lv[m, 6], lv[m, 7], lv[m, 8], lv[m, 9] = cov[m, 0, 0], cov[m, 0, 1], cov[m, 1, 0], cov[m, 1, 1]
+        lb[m, 0], lb[m, 1], lb[m, 2] = first[m], last[m], npts[m]
+    nc = cf.shape[0]
+    cb = np.empty((nc, 3), np.int64)
+    for m in range(nc):
+        cb[m, 0], cb[m, 1], cb[m, 2] = ci[m, 0], ci[m, 1], ci[m, 1] + 1
+    return lv, lb, cf.copy(), cb
+
+
+@kernel
 def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p):  # noqa: ANN001, ANN201
     """Lines and corners of one scan (sensor frame): steps 1-6. ``range_lo``, ``range_hi``: valid
     range limits (m); ``sigma_r``: the range noise std for this scan's units (m).
-    Returns (rho, alpha, cov, first, last, n_points, start, end, corner (C, 3) x, y, angle,
-    corner (C, 2) beam, first line)."""
+    Returns the packed rows (``pack``): line values, line beams, corner values, corner beams."""
     valid, _, AD, AD_var, _, theta, theta_var, psi, psi_var = beam_signals(
         ranges, bearings, p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum
     )
@@ -836,4 +856,15 @@ def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sig
         cf, ci = corners(rho, alpha, first, last, p0, p1, psi, ranges, valid, angle_min, increment, sigma_r, p)
     else:
         cf, ci = np.empty((0, 3)), np.empty((0, 2), np.int64)
-    return rho, alpha, cov, first, last, npts, p0, p1, cf, ci
+    return pack(rho, alpha, cov, first, last, npts, p0, p1, cf, ci)
+
+
+@kernel
+def extract_batch(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p):  # noqa: ANN001, ANN201
+    """``extract_scan`` of every row of ``ranges`` (S, n), scans of one geometry, in one call.
+    Returns the packed rows of all scans, concatenated, and the (S + 1,) offsets of each scan's
+    lines and corners in them."""
+    rows = new_rows(ranges.shape[0])
+    for s in range(ranges.shape[0]):
+        rows = append_rows(rows, s, extract_scan(ranges[s], bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p))
+    return finish_rows(rows)

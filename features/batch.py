@@ -1,0 +1,43 @@
+"""Helpers of ``features.extract_many``: the one geometry of a batch of scans, the stacked ranges,
+and the per-scan FeatureSets cut from a batch kernel's concatenated rows."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from lms200 import Scan
+
+from .types import Corners, FeatureSet, Lines
+
+
+def common_geometry(scans: Sequence[Scan]) -> Scan:
+    """The first scan, after checking that every scan has its geometry: beam count, angle_min,
+    angle_increment, range_min and range_max. Raises ValueError naming the first that differs."""
+    first = scans[0]
+    key = (len(first), first.angle_min, first.angle_increment, first.range_min, first.range_max)
+    for i, s in enumerate(scans):
+        if not isinstance(s, Scan):
+            raise TypeError(f"scans[{i}]: must be an lms200.Scan, got {type(s).__name__}")
+        if (len(s), s.angle_min, s.angle_increment, s.range_min, s.range_max) != key:
+            raise ValueError(
+                f"scans[{i}]: geometry (beams, angle_min, angle_increment, range_min, range_max) = "
+                f"{(len(s), s.angle_min, s.angle_increment, s.range_min, s.range_max)} differs from scans[0]'s {key}; "
+                "extract_many needs scans of one geometry (group them first)"
+            )
+    return first
+
+
+def stacked_ranges(scans: Sequence[Scan]) -> np.ndarray:
+    """(S, n) C-contiguous ranges of the scans (m)."""
+    return np.stack([s.ranges for s in scans])
+
+
+def split_rows(lv: np.ndarray, lb: np.ndarray, cv: np.ndarray, cb: np.ndarray, line_off: np.ndarray,
+               corner_off: np.ndarray, method: str) -> list[FeatureSet]:
+    """One FeatureSet per scan from a batch's concatenated line and corner rows and their offsets."""
+    lo, co = line_off.tolist(), corner_off.tolist()
+    of = FeatureSet.of
+    return [of(Lines(lv[lo[s] : lo[s + 1]], lb[lo[s] : lo[s + 1]]), Corners(cv[co[s] : co[s + 1]], cb[co[s] : co[s + 1]]),
+               method) for s in range(len(lo) - 1)]

@@ -1,0 +1,91 @@
+"""The batch API and the array FeatureSet: ``extract_many`` equals ``extract`` scan by scan for
+every method (to 1e-12), refuses mixed geometries, and ``fs.lines[i]`` / ``fs.corners[i]`` are the
+rows of the arrays with the record field names."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+
+from features import ConfigError, Corner, FeatureSet, Line, available_methods, extract, extract_many, make_config
+from lms200 import Scan
+from sensor_geometry import room
+
+
+def batch(n: int = 12) -> list[Scan]:
+    scans = [room(seed) for seed in range(n)]
+    ranges = scans[3].ranges.copy()
+    ranges[::7] = np.nan
+    scans[3] = scans[3].replace(ranges=ranges)
+    scans[5] = scans[5].replace(ranges=np.full(361, np.inf))  # no features at all
+    return scans
+
+
+def assert_equal_sets(a: FeatureSet, b: FeatureSet) -> None:
+    assert a.method == b.method
+    np.testing.assert_array_equal(a.lines.beams, b.lines.beams)
+    np.testing.assert_array_equal(a.corners.beams, b.corners.beams)
+    np.testing.assert_allclose(a.lines.values, b.lines.values, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.corners.values, b.corners.values, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("method", ["sensor", "split_merge", "iepf", "hough", "ransac"])
+def test_extract_many_equals_extract_on_each_scan(method: str) -> None:
+    scans = batch()
+    many = extract_many(scans, method=method)
+    assert len(many) == len(scans)
+    found = 0
+    for scan, fs in zip(scans, many):
+        assert_equal_sets(fs, extract(scan, method=method))
+        found += len(fs.lines)
+    assert found > len(scans)
+    assert extract_many([], method=method) == []
+
+
+def test_extract_many_takes_a_config_or_params() -> None:
+    scans = batch(6)
+    cfg = make_config("sensor", k=5, corners=False)
+    for fs, scan in zip(extract_many(scans, config=cfg), scans):
+        assert_equal_sets(fs, extract(scan, k=5, corners=False))
+        assert len(fs.corners) == 0
+    for fs, scan in zip(extract_many(scans, "split_merge", split_threshold=0.05), scans):
+        assert_equal_sets(fs, extract(scan, "split_merge", split_threshold=0.05))
+    with pytest.raises(ConfigError, match="no_such"):
+        extract_many(scans, no_such=1)
+    with pytest.raises(ConfigError, match="config"):
+        extract_many(scans, "iepf", config=cfg)
+
+
+def test_extract_many_refuses_mixed_geometry() -> None:
+    scans = batch(6)[:3] + [room(9, n=181, increment=np.deg2rad(1.0))]
+    for method in available_methods():
+        with pytest.raises(ValueError, match=r"scans\[3\]: geometry"):
+            extract_many(scans, method=method)
+    with pytest.raises(ValueError, match=r"scans\[1\]"):
+        extract_many([scans[0], scans[0].replace(range_max=81.83)])
+
+
+def test_feature_set_arrays_and_record_views() -> None:
+    fs = extract(room(2))
+    lines, corners = fs.lines, fs.corners
+    assert len(lines) >= 3 and len(corners) >= 1
+    assert lines.values.shape == (len(lines), 10) and lines.beams.shape == (len(lines), 3)
+    for i, line in enumerate(lines):
+        assert isinstance(line, Line)
+        assert (line.rho, line.alpha) == (lines.rho[i], lines.alpha[i])
+        assert line.start == tuple(lines.start[i]) and line.end == tuple(lines.end[i])
+        assert (line.first, line.last, line.n_points) == tuple(lines.beams[i])
+        np.testing.assert_array_equal(line.cov, lines.cov[i])
+        assert line.length == pytest.approx(lines.length[i])
+        assert -np.pi < line.alpha <= np.pi
+    for i, c in enumerate(corners):
+        assert isinstance(c, Corner)
+        assert (c.x, c.y, c.angle) == (corners.x[i], corners.y[i], corners.angle[i])
+        assert c.index == corners.beam[i] and c.lines == tuple(corners.line_pair[i])
+    np.testing.assert_array_equal(fs.line_array()[:, 6:], lines.beams[:, :2])
+    # built from records, the same arrays; pickled, the same set
+    again = FeatureSet(list(lines), list(corners), fs.method)
+    assert again == fs and pickle.loads(pickle.dumps(fs)) == fs
+    assert FeatureSet().lines == [] and len(FeatureSet().corners) == 0
