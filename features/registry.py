@@ -121,7 +121,19 @@ def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: An
         The FeatureSet, geometry in the scan's sensor frame.
     """
     m = _REGISTRY.get(method) or get_method(method)
-    return m.run(scan, _config(m, config, params))
+    cfg = _config(m, config, params)
+    if len(scan) > MAX_BEAMS:
+        raise ValueError(too_many_beams(len(scan)))
+    return m.run(scan, cfg)
+
+
+MAX_BEAMS = 1 << 14  # most beams of a scan the extractors take (bounds the memory of one call)
+
+
+def too_many_beams(n: int) -> str:
+    """The message of a scan with more than MAX_BEAMS beams."""
+    return (f"scan: {n} beams is more than the extractors handle ({MAX_BEAMS}, a 0.022 deg step over 360 deg); "
+            "split the scan into sectors")
 
 
 def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = None, **params: Any) -> list[FeatureSet]:
@@ -135,6 +147,8 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
     m = _REGISTRY.get(method) or get_method(method)
     cfg = _config(m, config, params)
     scans = list(scans)
+    if scans and len(scans[0]) > MAX_BEAMS:
+        raise ValueError(too_many_beams(len(scans[0])))
     if m.run_many is not None:
         return m.run_many(scans, cfg)
     if scans:

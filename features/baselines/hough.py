@@ -28,6 +28,9 @@ from .common import CornerConfig, feature_set, valid_points
 from .runs import collect, refine, segments_of
 
 
+MAX_ANGLES = 1 << 14  # most alpha bins over [0, pi)
+
+
 @dataclass(frozen=True)
 class HoughConfig:
     """Defaults:
@@ -62,12 +65,49 @@ class HoughConfig:
     def __post_init__(self) -> None:
         """Raise ConfigError naming the field when a value cannot work."""
         checks.angle("alpha_step", self.alpha_step, np.pi)
+        if self.alpha_step < np.pi / MAX_ANGLES:
+            checks.fail("alpha_step", f"must be at least pi / {MAX_ANGLES} rad", self.alpha_step)
         checks.positive("rho_step", self.rho_step, "m")
         checks.positive("band_coarse", self.band_coarse, "m")
         checks.positive("band_fine", self.band_fine, "m")
         checks.shared_fields(self)
         checks.integer("max_lines", self.max_lines, 1)
         checks.integer("max_failures", self.max_failures, 1)
+
+
+MAX_CELLS = 1 << 21  # most accumulator cells (16 MB of counts)
+CHUNK_VOTES = 1 << 16  # votes computed at once (bounds the temporaries)
+SMALL_ACC = 1 << 18  # accumulators up to this many cells take the votes by bincount
+
+
+class Votes:
+    """The accumulator cells the points vote for: one per (point, alpha), computed in float32 on
+    the rho-step grid (|rho| / step stays below ~1e5 at MAX_CELLS, where float32 places every
+    vote exactly enough), chunk by chunk so that memory stays bounded whatever the scan."""
+
+    def __init__(self, pts, theta: np.ndarray, n_rho: int, r_ext: float, rho_step: float) -> None:  # noqa: ANN001
+        self.xs = (pts.x / rho_step).astype(np.float32)
+        self.ys = (pts.y / rho_step).astype(np.float32)
+        self.cos = np.cos(theta).astype(np.float32)
+        self.sin = np.sin(theta).astype(np.float32)
+        self.shift = np.float32(r_ext / rho_step)
+        self.base = (np.arange(theta.size) * n_rho).astype(np.int32)
+
+    def cells(self, rows: np.ndarray) -> np.ndarray:
+        """(len(rows), A) flat accumulator index of the votes of the points ``rows``."""
+        cells = (self.xs[rows, None] * self.cos + self.ys[rows, None] * self.sin + self.shift).astype(np.int32)
+        cells += self.base
+        return cells
+
+    def add(self, acc: np.ndarray, rows: np.ndarray, sign: int) -> None:
+        """Add (sign 1) or withdraw (-1) the votes of the points ``rows`` to / from ``acc``, in place."""
+        step = max(CHUNK_VOTES // self.cos.size, 1)
+        for lo in range(0, rows.size, step):
+            cells = self.cells(rows[lo : lo + step]).ravel()
+            if acc.size <= SMALL_ACC:  # one bincount is faster than ufunc.at, and its temporary small
+                acc += sign * np.bincount(cells, minlength=acc.size)
+            else:
+                np.add.at(acc, cells, sign)
 
 
 def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
@@ -78,15 +118,16 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
     n_alpha = int(round(np.pi / cfg.alpha_step))
     theta = np.arange(n_alpha) * cfg.alpha_step
     r_ext = float(pts.r.max()) + cfg.rho_step
-    n_rho = int(np.ceil(2 * r_ext / cfg.rho_step)) + 1
-    # votes: cell of every (point, alpha) pair, in float32 on the rho-step grid (|rho| / step < 1e4,
-    # so float32 places every vote exactly enough), one bincount for the whole accumulator
-    xs = (pts.x / cfg.rho_step).astype(np.float32)[:, None]
-    ys = (pts.y / cfg.rho_step).astype(np.float32)[:, None]
-    shift = np.float32(r_ext / cfg.rho_step)
-    cells = (xs * np.cos(theta).astype(np.float32) + ys * np.sin(theta).astype(np.float32) + shift).astype(np.int32)
-    cells += (np.arange(n_alpha) * n_rho).astype(np.int32)
-    acc = np.bincount(cells.ravel(), minlength=n_alpha * n_rho)
+    n_rho = int(np.ceil(2 * r_ext / cfg.rho_step)) + 1 if r_ext / cfg.rho_step < MAX_CELLS else MAX_CELLS + 1
+    if n_alpha * n_rho > MAX_CELLS:
+        raise ValueError(
+            f"hough: the accumulator for the largest valid range {pts.r.max():.6g} m at rho_step {cfg.rho_step:g} m "
+            f"and {n_alpha} angles needs more than {MAX_CELLS} cells; raise rho_step or alpha_step, or lower the "
+            "scan's range_max so that such returns are not valid"
+        )
+    votes = Votes(pts, theta, n_rho, r_ext, cfg.rho_step)
+    acc = np.zeros(n_alpha * n_rho, np.int64)
+    votes.add(acc, np.arange(pts.idx.size), 1)
     remaining = np.ones(pts.idx.size, dtype=bool)
     lam = cfg.breakpoint_lambda
     starts, ends, fits = [], [], []
@@ -115,7 +156,7 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
         ends.append(e)
         fits.append(fit)
         remaining[used] = False
-        acc -= np.bincount(cells[used].ravel(), minlength=acc.size)
+        votes.add(acc, used, -1)
     return collect(pts, starts, ends, fits, cfg.sigma, cfg.corners, "hough", scan.angle_increment)
 
 

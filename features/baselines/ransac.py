@@ -26,6 +26,9 @@ from .common import CornerConfig, valid_points
 from .runs import collect, refine, segments_of
 
 
+MAX_HYPOTHESES = 1 << 16  # most point pairs drawn per round (bounds the draws' memory)
+
+
 @dataclass(frozen=True)
 class RansacConfig:
     """Defaults:
@@ -57,12 +60,30 @@ class RansacConfig:
     def __post_init__(self) -> None:
         """Raise ConfigError naming the field when a value cannot work."""
         checks.integer("hypotheses", self.hypotheses, 1)
+        if self.hypotheses > MAX_HYPOTHESES:
+            checks.fail("hypotheses", f"must be an integer in [1, {MAX_HYPOTHESES}]", self.hypotheses)
         checks.integer("window", self.window, 0)
         checks.positive("inlier_band", self.inlier_band, "m")
         checks.shared_fields(self)
         checks.integer("max_failures", self.max_failures, 1)
         checks.integer("max_lines", self.max_lines, 1)
         checks.integer("seed", self.seed, 0)
+
+
+CHUNK = 1 << 18  # (hypothesis, point) distances computed at once (bounds the temporaries)
+
+
+def inlier_counts(nx: np.ndarray, ny: np.ndarray, rho: np.ndarray, x: np.ndarray, y: np.ndarray,
+                  band: float) -> np.ndarray:
+    """For each hypothesis line (unit normal nx, ny, distance rho), how many points (x, y) lie
+    within ``band`` (m) of it; computed a block of hypotheses at a time."""
+    step = max(CHUNK // max(x.size, 1), 1)
+    counts = np.empty(nx.size, np.int64)
+    for lo in range(0, nx.size, step):
+        sl = slice(lo, lo + step)
+        dist = np.abs(np.outer(nx[sl], x) + np.outer(ny[sl], y) - rho[sl, None])
+        counts[sl] = np.count_nonzero(dist <= band, axis=1)
+    return counts
 
 
 def run(scan: Scan, cfg: RansacConfig) -> FeatureSet:
@@ -93,8 +114,7 @@ def run(scan: Scan, cfg: RansacConfig) -> FeatureSet:
             failures += 1
             continue
         rho = nx * pts.x[pi[good]] + ny * pts.y[pi[good]]
-        dist = np.abs(np.outer(nx, pts.x[cand]) + np.outer(ny, pts.y[cand]) - rho[:, None])
-        counts = np.count_nonzero(dist <= cfg.inlier_band, axis=1)
+        counts = inlier_counts(nx, ny, rho, pts.x[cand], pts.y[cand], cfg.inlier_band)
         best = int(np.argmax(counts))
         if counts[best] < cfg.min_points:
             failures += 1
