@@ -42,7 +42,8 @@ def run(args: argparse.Namespace) -> int:
         check_spec(spec)
     except SweepSpecError as exc:  # an unknown kind or parameter name
         raise SweepSpecError(f"{args.sweep}: {exc}") from exc
-    if spec.kind in ("extract", "slam"):  # compile once here, not in every worker at the same time
+    if spec.kind in ("extract", "slam") and executor in ("local", "inprocess"):
+        # compile once here (the workers then load the cache), not in every worker at the same time
         from experiments.progress import warm_up_kernels
 
         warm_up_kernels()
