@@ -28,7 +28,7 @@ from features.realdata import RealDataConfig, repeat_counts, scan_measures
 from features.scoring import ScoreConfig, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
 
-WORLD_NAMES = ("office", "corridor", "angles", "pillars", "random")
+WORLD_NAMES = ("office", "corridor", "angles", "pillars", "random", "cluttered", "mit")  # == sim.WORLD_NAMES (sim loads lazily)
 
 
 @dataclass

@@ -17,7 +17,13 @@ from typing import Callable, Sequence
 
 from lms200 import LmsbenchError
 
-WORLDS = ("office", "corridor", "angles", "pillars", "random")
+
+
+def known_worlds() -> tuple[str, ...]:
+    """The built-in worlds of the simulator (``sim.WORLD_NAMES``)."""
+    from sim.worlds import WORLD_NAMES
+
+    return tuple(WORLD_NAMES)
 
 
 class InputError(LmsbenchError, ValueError):
@@ -77,8 +83,8 @@ PORT = count(0, 65535)
 
 def world_name(text: str) -> str:
     """A built-in world's name."""
-    if text not in WORLDS:
-        raise argparse.ArgumentTypeError(f"unknown world {text!r}; known worlds: {', '.join(WORLDS)}")
+    if text not in known_worlds():
+        raise argparse.ArgumentTypeError(f"unknown world {text!r}; known worlds: {', '.join(known_worlds())}")
     return text
 
 

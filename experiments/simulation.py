@@ -37,6 +37,7 @@ class SimulationConfig:
     sensor: SensorConfig = SensorConfig()
     odometry: OdometryConfig | None = None
     robot: RobotLimits = RobotLimits()
+    clutter: float | None = None  # clutter level of a named world (None: the name's default)
 
     def to_dict(self) -> dict:
         return {
@@ -47,6 +48,7 @@ class SimulationConfig:
             "sensor": self.sensor.to_dict(),
             "odometry": None if self.odometry is None else self.odometry.to_dict(),
             "robot": {k: list(v) if isinstance(v, tuple) else v for k, v in self.robot.to_dict().items()},
+            **({} if self.clutter is None else {"clutter": float(self.clutter)}),
         }
 
     @classmethod
@@ -58,13 +60,14 @@ class SimulationConfig:
                    duration=float(d.get("duration", 120.0)), rate_hz=d.get("rate_hz"),
                    sensor=SensorConfig(**(d.get("sensor") or {})),
                    odometry=OdometryConfig(**d["odometry"]) if d.get("odometry") else None,
-                   robot=RobotLimits(**robot))
+                   robot=RobotLimits(**robot),
+                   clutter=None if d.get("clutter") is None else float(d["clutter"]))
 
 
 def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> list[Record]:
     """Simulate ``cfg`` and write scans.clf, groundtruth.tum, world.json, config.yaml, map.png
     (with a progress bar on stderr when ``progress``)."""
-    world = World.from_json(cfg.world) if cfg.world.endswith(".json") else make_world(cfg.world, cfg.seed)
+    world = World.from_json(cfg.world) if cfg.world.endswith(".json") else make_world(cfg.world, cfg.seed, cfg.clutter)
     bar = None
 
     def step(done: int, total: int) -> None:
@@ -110,6 +113,9 @@ def draw_map(world: World, records: list[Record], path: Path) -> None:
     ax.add_collection(LineCollection(world.walls.reshape(-1, 2, 2), colors="k", linewidths=0.8))
     for cx, cy, r in world.circles:
         ax.add_patch(Circle((cx, cy), r, fill=False, color="k", lw=0.8))
+    if len(world.glass):
+        ax.add_collection(LineCollection(world.glass.reshape(-1, 2, 2), colors="tab:cyan", linewidths=2.0,
+                                         label="glass (no return)"))
     if records:
         truth = np.array([r.truth for r in records])
         ax.plot(truth[:, 0], truth[:, 1], "-", color="tab:blue", lw=1.0, label="path")

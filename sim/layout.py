@@ -114,9 +114,10 @@ class Layout:
         for a, b in zip(chain, chain[1:]):
             self.edges.append((a, b))
 
-    def build(self, scan_height: float = SCAN_HEIGHT_M) -> World:
+    def build(self, scan_height: float = SCAN_HEIGHT_M, glass: list[list[float]] | None = None) -> World:
         return World(self.name, self.seed, np.array(self.boxes), np.array(self.cylinders).reshape(-1, 5),
-                     scan_height, np.array(self.nodes), np.array(self.edges), np.array(self.targets))
+                     scan_height, np.array(self.nodes), np.array(self.edges), np.array(self.targets),
+                     np.array(glass or [], dtype=float).reshape(-1, 4))
 
 
 def distance_to_rects(points: np.ndarray, rects: list[np.ndarray]) -> np.ndarray:

@@ -159,7 +159,12 @@ class LMS200Sim:
             bx, c, s = self._boxes[k], self._box_cos[k], self._box_sin[k]
             dx, dy = pos[on_box, 0] - bx[:, 0], pos[on_box, 1] - bx[:, 1]
             outside = (np.abs(c * dx + s * dy) > bx[:, 3] + _BOX_TOL_M) | (np.abs(-s * dx + c * dy) > bx[:, 4] + _BOX_TOL_M)
-            again[on_box[outside]] = True
+            if outside.any():  # the ray may still meet that box just beside the false hit: exact entry
+                out = on_box[outside]
+                entry = _ray_box_entry(origins[out], ux[out], uy[out], bx[outside], c[outside], s[outside])
+                meets = np.isfinite(entry)
+                ranges[out[meets]] = entry[meets]
+                again[out[~meets]] = True
         on_cyl = np.flatnonzero(kind == 1)
         if on_cyl.size:  # move onto the exact circle; grazing the prism but missing the circle: again
             circle = self._circles[index[on_cyl]]
@@ -177,6 +182,8 @@ class LMS200Sim:
                 skip = ranges[redo] + _RECAST_STEP_M
                 u = np.column_stack((ux[redo], uy[redo]))
                 ranges[redo] = skip + self.cast(origins[redo] + skip[:, None] * u, headings[redo], _depth + 1)
+        if _depth == 0 and len(self.world.glass):
+            ranges = np.where(_glass_range(origins, ux, uy, self.world.glass) < ranges, np.inf, ranges)
         ranges[ranges > self.sensor.range_max] = np.inf
         return ranges
 
@@ -275,6 +282,33 @@ class LMS200Sim:
         split = (n_far > 0) & np.isfinite(near)
         out[idx[split]] = mixed[split]
         return out
+
+
+def _ray_box_entry(origins: np.ndarray, ux: np.ndarray, uy: np.ndarray, boxes: np.ndarray, c: np.ndarray,
+                   s: np.ndarray) -> np.ndarray:
+    """Distance (m) at which each ray enters its box (slab method, box frame); +inf if it misses."""
+    ox, oy = origins[:, 0] - boxes[:, 0], origins[:, 1] - boxes[:, 1]
+    lo_x, lo_y = c * ox + s * oy, -s * ox + c * oy
+    dx, dy = c * ux + s * uy, -s * ux + c * uy
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tx1, tx2 = (-boxes[:, 3] - lo_x) / dx, (boxes[:, 3] - lo_x) / dx
+        ty1, ty2 = (-boxes[:, 4] - lo_y) / dy, (boxes[:, 4] - lo_y) / dy
+    t_in = np.maximum(np.fmin(tx1, tx2), np.fmin(ty1, ty2))
+    t_out = np.minimum(np.fmax(tx1, tx2), np.fmax(ty1, ty2))
+    return np.where((t_in <= t_out) & (t_in > 0), t_in, np.inf)
+
+
+def _glass_range(origins: np.ndarray, ux: np.ndarray, uy: np.ndarray, glass: np.ndarray) -> np.ndarray:
+    """Distance (m) along each ray to the nearest glass segment it crosses (+inf for none)."""
+    ax, ay = glass[:, 0], glass[:, 1]
+    ex, ey = glass[:, 2] - ax, glass[:, 3] - ay
+    wx, wy = ax[None, :] - origins[:, 0:1], ay[None, :] - origins[:, 1:2]
+    den = ux[:, None] * ey[None, :] - uy[:, None] * ex[None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (wx * ey[None, :] - wy * ex[None, :]) / den  # along the ray
+        s = (wx * uy[:, None] - wy * ux[:, None]) / den  # along the glass, 0..1
+    hit = (np.abs(den) > 1e-12) & (t > 0) & (s >= 0) & (s <= 1)
+    return np.where(hit, t, np.inf).min(axis=1)
 
 
 _PRISM_TOLERANCE_M = 2e-4  # largest gap between a cylinder and its circumscribed prism

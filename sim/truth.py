@@ -94,16 +94,21 @@ def visible_truth(world: World, pose: tuple[float, float, float], sensor: Sensor
     a_min, inc, n = s.angle_min, s.angle_increment, s.n_beams
     a_max = a_min + (n - 1) * inc
     walls = world.walls
-    p, q = to_sensor_frame(walls[:, :2], pose), to_sensor_frame(walls[:, 2:], pose)
+    n_faces = len(walls)
+    glass = world.glass
+    both = np.vstack((walls, glass)) if len(glass) else walls  # glass: occluders, never faces
+    p, q = to_sensor_frame(both[:, :2], pose), to_sensor_frame(both[:, 2:], pose)
     d = q - p
     front = d[:, 0] * (-p[:, 1]) - d[:, 1] * (-p[:, 0]) < -1e-12  # sensor on the free (right) side
-    seg = np.full((len(walls), 4), np.nan)
+    front[n_faces:] = np.abs(d[n_faces:, 0] * p[n_faces:, 1] - d[n_faces:, 1] * p[n_faces:, 0]) > 1e-12
+    seg = np.full((len(both), 4), np.nan)
     seg[front] = np.column_stack((p[front], q[front]))
     for normal in (np.array([-np.sin(a_min), np.cos(a_min)]), np.array([np.sin(a_max), -np.cos(a_max)])):
         seg = _clip_halfplane(seg[:, :2], seg[:, 2:], normal)
     seg = _clip_disc(seg[:, :2], seg[:, 2:], s.range_max)
     live = np.flatnonzero(np.isfinite(seg[:, 0]))
     seg = seg[live]
+    is_glass = live >= n_faces
     phi1 = np.arctan2(seg[:, 1], seg[:, 0])
     phi2 = np.arctan2(seg[:, 3], seg[:, 2])
     lo, hi = np.minimum(phi1, phi2), np.maximum(phi1, phi2)
@@ -124,7 +129,7 @@ def visible_truth(world: World, pose: tuple[float, float, float], sensor: Sensor
 
     out_seg, out_beams, out_face, vis_ends = [], [], [], {}
     for k in range(len(seg)):
-        if hi[k] - lo[k] < _ANGLE_TOL:
+        if is_glass[k] or hi[k] - lo[k] < _ANGLE_TOL:
             continue
         shadows = []
         o_lo, o_hi = np.maximum(lo, lo[k]), np.minimum(hi, hi[k])

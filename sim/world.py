@@ -41,6 +41,9 @@ class World:
         route_nodes: (p, 2) free-space points the robot may drive between; route_edges: (e, 2)
             int pairs of nodes joined by a collision-free straight drive; route_targets: node
             indices worth visiting (room centres).
+        glass: (g, 4) x1, y1, x2, y2: glass panels at scan height. Not solids: a beam that meets
+            one first reads no return (+inf); the visible truth counts them as occluders, never as
+            faces.
     """
 
     name: str
@@ -51,6 +54,7 @@ class World:
     route_nodes: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     route_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=int))
     route_targets: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    glass: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
     walls: np.ndarray = field(init=False)
     circles: np.ndarray = field(init=False)
     corners: np.ndarray = field(init=False)
@@ -62,6 +66,7 @@ class World:
         self.route_nodes = np.asarray(self.route_nodes, dtype=float).reshape(-1, 2)
         self.route_edges = np.asarray(self.route_edges, dtype=int).reshape(-1, 2)
         self.route_targets = np.asarray(self.route_targets, dtype=int).reshape(-1)
+        self.glass = np.asarray(self.glass, dtype=float).reshape(-1, 4)
         h = self.scan_height
         cut_boxes = self.boxes[(self.boxes[:, 5] <= h) & (self.boxes[:, 6] >= h)]
         cut_cyl = self.cylinders[(self.cylinders[:, 3] <= h) & (self.cylinders[:, 4] >= h)]
@@ -86,6 +91,7 @@ class World:
             "route_nodes": _rows(self.route_nodes),
             "route_edges": self.route_edges.tolist(),
             "route_targets": self.route_targets.tolist(),
+            **({"glass": _rows(self.glass)} if len(self.glass) else {}),
         }
 
     def to_json(self, path: str | Path) -> None:
@@ -127,6 +133,7 @@ class World:
             route_nodes=d.get("route_nodes", []),
             route_edges=d.get("route_edges", []),
             route_targets=d.get("route_targets", []),
+            glass=d.get("glass", []),
         )
         bad = unreproduced(walls, world.walls, FACE_BOX_THICKNESS_M) if walls_only else None
         if bad is not None:

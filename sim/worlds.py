@@ -17,36 +17,65 @@ from __future__ import annotations
 
 import numpy as np
 
+from .clutter import ClutterConfig, add_clutter
 from .geometry import rectangle_corners
 from .layout import Layout, WALL_THICKNESS_M, distance_to_rects
 from .world import World
 
 ROBOT_RADIUS_M = 0.25
 CLEARANCE_M = ROBOT_RADIUS_M + 0.15  # furniture keeps this far from the route
-WORLD_NAMES = ("office", "corridor", "angles", "pillars", "random")
+WORLD_NAMES = ("office", "corridor", "angles", "pillars", "random", "cluttered", "mit")
 _STREAM_WORLD = 1  # numpy seed-sequence stream for world generation
+_STREAM_CLUTTER = 3  # numpy seed-sequence stream for clutter (and the angles of clutter's door leaves)
+DEFAULT_CLUTTER = {"cluttered": 1.0}  # clutter level of each world name (0 when not listed)
+# The MIT-CSAIL-like preset (see docs/simulator.md: parameters fixed from the log's range
+# histogram, segment lengths and share of beams on long walls, then frozen).
+# Grid searched (two seeds, 40 s each, MIT CSAIL every 5th scan): room_w 3.6 / 5.0, room_d 4.2 / 6.0,
+# corridor_w 1.8 / 2.4, clutter 1.5 / 3 / 4.5 at a glass rate of 0.1; the distance (range and
+# segment-length histograms, long-wall share) ran 0.26-0.39; this is its minimum.
+MIT_PRESET = dict(n_per_side=6, room_w=5.0, room_d=6.0, corridor_w=1.8, door_w=1.0, chamfer=False,
+                  corridor_extension=14.0, clutter=3.0, glass_per_10m=0.1)
 
 
-def make_world(name: str = "office", seed: int = 0) -> World:
+def make_world(name: str = "office", seed: int = 0, clutter: float | None = None) -> World:
     """Build a named world; every random choice comes from ``seed``.
 
+    Args:
+        name: one of WORLD_NAMES ("cluttered" = the office at clutter level 1; "mit" = the
+            MIT-CSAIL-like preset, MIT_PRESET).
+        seed: seed of every random choice (the clutter has its own stream of it).
+        clutter: clutter level (0 none, 1 a furnished office, 2-3 busy; see ``sim.clutter``);
+            None = the name's default. Level 0 gives the world without clutter, bit for bit.
+
     Raises:
-        ValueError: for an unknown name (listing the known ones).
+        ValueError: for an unknown name (listing the known ones) or a negative clutter level.
     """
     rng = np.random.default_rng([int(seed), _STREAM_WORLD])
-    if name == "office":
-        return office(rng, name, seed)
-    if name == "random":
-        return office(rng, name, seed, n_per_side=int(rng.integers(2, 5)), room_w=float(rng.uniform(3.2, 5.0)),
-                      room_d=float(rng.uniform(3.5, 5.0)), corridor_w=float(rng.uniform(1.6, 2.6)),
-                      chamfer=bool(rng.random() < 0.5))
-    if name == "corridor":
-        return corridor(rng, seed)
-    if name == "angles":
-        return angles(rng, seed)
-    if name == "pillars":
-        return pillars(rng, seed)
-    raise ValueError(f"name: unknown world {name!r}; known worlds: {', '.join(WORLD_NAMES)}")
+    crng = np.random.default_rng([int(seed), _STREAM_CLUTTER])
+    level = float(MIT_PRESET["clutter"] if name == "mit" else DEFAULT_CLUTTER.get(name, 0.0)) if clutter is None else float(clutter)
+    if not level >= 0:
+        raise ValueError(f"clutter: must be >= 0, got {clutter}")
+    leaf_rng = crng if level > 0 else None
+    if name in ("office", "cluttered"):
+        lay = office(rng, name, seed, leaf_rng=leaf_rng)
+    elif name == "random":
+        lay = office(rng, name, seed, n_per_side=int(rng.integers(2, 5)), room_w=float(rng.uniform(3.2, 5.0)),
+                     room_d=float(rng.uniform(3.5, 5.0)), corridor_w=float(rng.uniform(1.6, 2.6)),
+                     chamfer=bool(rng.random() < 0.5), leaf_rng=leaf_rng)
+    elif name == "mit":
+        preset = {k: v for k, v in MIT_PRESET.items() if k not in ("clutter", "glass_per_10m")}
+        lay = office(rng, name, seed, leaf_rng=leaf_rng, **preset)  # type: ignore[arg-type]
+    elif name == "corridor":
+        lay = corridor(rng, seed)
+    elif name == "angles":
+        lay = angles(rng, seed)
+    elif name == "pillars":
+        lay = pillars(rng, seed)
+    else:
+        raise ValueError(f"name: unknown world {name!r}; known worlds: {', '.join(WORLD_NAMES)}")
+    config = ClutterConfig(glass=float(MIT_PRESET["glass_per_10m"])) if name == "mit" else None
+    glass = add_clutter(lay, crng, level, config)
+    return lay.build(glass=glass)
 
 
 def _walls_with_doors(lay: Layout, y: float, length: float, doors: list[float], door_w: float) -> None:
@@ -60,12 +89,21 @@ def _walls_with_doors(lay: Layout, y: float, length: float, doors: list[float], 
 
 
 def office(rng: np.random.Generator, name: str, seed: int, n_per_side: int = 3, room_w: float = 4.0,
-           room_d: float = 4.0, corridor_w: float = 2.0, door_w: float = 1.0, chamfer: bool = True) -> World:
-    """Rooms on both sides of a corridor along x (corridor centre line y = corridor_w / 2)."""
+           room_d: float = 4.0, corridor_w: float = 2.0, door_w: float = 1.0, chamfer: bool = True,
+           corridor_extension: float = 0.0, leaf_rng: np.random.Generator | None = None) -> Layout:
+    """Rooms on both sides of a corridor along x (corridor centre line y = corridor_w / 2).
+
+    ``corridor_extension`` (m) runs the corridor on past the last rooms (a long, bare corridor);
+    ``leaf_rng`` draws each door leaf's opening angle (75-170 deg; None: 90 deg)."""
     lay = Layout(name, seed)
     t, cw, rw, rd = WALL_THICKNESS_M, corridor_w, room_w, room_d
     length = n_per_side * rw
-    lay.wall([(0, -rd), (length, -rd), (length, cw + rd), (0, cw + rd)], closed=True)
+    if corridor_extension > 0:  # the outline runs out along the corridor, past the rooms
+        ext = length + corridor_extension
+        lay.wall([(0, -rd), (length, -rd), (length, 0.0), (ext, 0.0), (ext, cw), (length, cw), (length, cw + rd),
+                  (0, cw + rd)], closed=True)
+    else:
+        lay.wall([(0, -rd), (length, -rd), (length, cw + rd), (0, cw + rd)], closed=True)
     slack = rw / 2 - door_w / 2 - 0.35
     doors = {side: [k * rw + rw / 2 + float(rng.uniform(-slack, slack)) for k in range(n_per_side)]
              for side in (1, -1)}
@@ -81,6 +119,9 @@ def office(rng: np.random.Generator, name: str, seed: int, n_per_side: int = 3, 
     corridor_nodes = {x: lay.node(x, cw / 2) for x in sorted(doors[1] + doors[-1])}
     west, east = lay.node(0.8, cw / 2), lay.node(length - 0.8 - (0.4 if chamfer else 0.0), cw / 2)
     lay.link(west, *corridor_nodes.values(), east)
+    if corridor_extension > 0:
+        far = lay.node(length + corridor_extension - 0.8, cw / 2, target=True)
+        lay.link(east, far)
     for side in (1, -1):
         for k, xd in enumerate(doors[side]):
             face_y = cw + t / 2 if side == 1 else -t / 2  # the room side of the corridor wall
@@ -90,12 +131,12 @@ def office(rng: np.random.Generator, name: str, seed: int, n_per_side: int = 3, 
             room = (k * rw + t / 2, (k + 1) * rw - t / 2,
                     (cw + t / 2, cw + rd - t / 2) if side == 1 else (-rd + t / 2, -t / 2))
             route = np.array([lay.nodes[inside], lay.nodes[centre]])
-            _furnish_room(lay, rng, room, xd, door_w, side, route)
-    return lay.build()
+            _furnish_room(lay, rng, room, xd, door_w, side, route, leaf_rng)
+    return lay
 
 
 def _furnish_room(lay: Layout, rng: np.random.Generator, room: tuple, xd: float, door_w: float,
-                  side: int, route: np.ndarray) -> None:
+                  side: int, route: np.ndarray, leaf_rng: np.random.Generator | None = None) -> None:
     """Furniture against the walls of one room, an open door leaf, maybe a pillar; nothing comes
     within CLEARANCE_M of the room's route (door -> centre)."""
     x0, x1, (y0, y1) = room
@@ -105,9 +146,26 @@ def _furnish_room(lay: Layout, rng: np.random.Generator, room: tuple, xd: float,
     # open door leaf: hinged at the jamb away from the room's centre, swung 90 deg into the room
     hinge_side = 1.0 if route[1][0] < xd else -1.0
     leaf_x = xd + hinge_side * (door_w / 2 - 0.04)
-    leaf_c = np.array([leaf_x, door_face_y + side * (0.45 - 0.01)])
-    lay.box(leaf_c[0], leaf_c[1], 0.0, 0.02, 0.45, 0.0, 2.0)
-    occupied = {"far": [], "west": [], "east": [], "door": [(xd - door_w / 2 - 0.15, xd + door_w / 2 + 0.15)]}
+    door_span = (xd - door_w / 2 - 0.15, xd + door_w / 2 + 0.15)
+    if leaf_rng is None:
+        leaf_c = np.array([leaf_x, door_face_y + side * (0.45 - 0.01)])
+        lay.box(leaf_c[0], leaf_c[1], 0.0, 0.02, 0.45, 0.0, 2.0)
+    else:  # open at any angle that leaves the doorway clear: 75-170 deg from the closed position
+        hinge = np.array([leaf_x, door_face_y])
+        for _ in range(20):
+            theta = np.deg2rad(float(leaf_rng.uniform(75.0, 170.0)))
+            d = np.array([-hinge_side * np.cos(theta), side * np.sin(theta)])
+            c = hinge + d * (0.45 - 0.01)
+            rect = rectangle_corners(c[0], c[1], float(np.arctan2(d[1], d[0])), 0.45, 0.02)
+            if distance_to_rects(pts, [rect]).min() >= CLEARANCE_M:
+                break
+        else:
+            theta, d = np.pi / 2, np.array([0.0, float(side)])
+            c = hinge + d * (0.45 - 0.01)
+        lay.box(c[0], c[1], float(np.arctan2(d[1], d[0])), 0.45, 0.02, 0.0, 2.0)
+        reach = 0.9 * max(-np.cos(theta), 0.0)  # swung back past the jamb along the wall
+        door_span = (min(door_span[0], leaf_x - reach - 0.15), max(door_span[1], leaf_x + reach + 0.15))
+    occupied = {"far": [], "west": [], "east": [], "door": [door_span]}
     walls = {  # name: (point at start of usable span, direction along, inward normal, span length)
         "far": (np.array([x0, far_face_y]), np.array([1.0, 0.0]), np.array([0.0, -side]), x1 - x0),
         "door": (np.array([x0, door_face_y]), np.array([1.0, 0.0]), np.array([0.0, side]), x1 - x0),
@@ -185,7 +243,7 @@ def _angled_screen(lay: Layout, rng: np.random.Generator, walls: dict, occupied:
         return
 
 
-def corridor(rng: np.random.Generator, seed: int, length: float = 30.0, width: float = 1.8) -> World:
+def corridor(rng: np.random.Generator, seed: int, length: float = 30.0, width: float = 1.8) -> Layout:
     """A long corridor: door recesses (0.3 m deep) and half-sunk round columns along both walls."""
     lay = Layout("corridor", seed)
     for side, y in ((1, width), (-1, 0.0)):
@@ -205,7 +263,7 @@ def corridor(rng: np.random.Generator, seed: int, length: float = 30.0, width: f
     a = lay.node(0.8, width / 2, target=True)
     b = lay.node(length - 0.8, width / 2, target=True)
     lay.link(a, b)
-    return lay.build()
+    return lay
 
 
 def _v_screen(lay: Layout, apex: np.ndarray, heading: float, opening_deg: float, arm: float) -> None:
@@ -216,7 +274,7 @@ def _v_screen(lay: Layout, apex: np.ndarray, heading: float, opening_deg: float,
     lay.wall([tuple(a), tuple(apex), tuple(b)], thickness=0.05, extend_ends=(False, False), z1=1.6)
 
 
-def angles(rng: np.random.Generator, seed: int) -> World:
+def angles(rng: np.random.Generator, seed: int) -> Layout:
     """A hall with an acute (about 50 deg) corner, obtuse (130-135 deg) corners and V screens."""
     lay = Layout("angles", seed)
     jitter = float(rng.uniform(-0.3, 0.3))
@@ -227,10 +285,10 @@ def angles(rng: np.random.Generator, seed: int) -> World:
     nodes = [lay.node(*p, target=True) for p in ((2.4, 1.0), (4.5, 0.8), (8.6, 1.4), (8.8, 4.8),
                                                  (6.0, 5.2), (4.2, 3.6))]
     lay.link(*nodes, nodes[0])
-    return lay.build()
+    return lay
 
 
-def pillars(rng: np.random.Generator, seed: int) -> World:
+def pillars(rng: np.random.Generator, seed: int) -> Layout:
     """A 12 x 8 m hall with round pillars of radius 0.1-0.5 m and a curved wall (r = 2 m)."""
     lay = Layout("pillars", seed)
     lay.wall([(0.0, 0.0), (12.0, 0.0), (12.0, 8.0), (0.0, 8.0)], closed=True)
@@ -245,4 +303,4 @@ def pillars(rng: np.random.Generator, seed: int) -> World:
     lay.link(*nodes, nodes[0])
     middle = lay.node(6.0, 4.0, target=True)
     lay.link(nodes[7], middle, nodes[3])
-    return lay.build()
+    return lay

@@ -47,3 +47,19 @@ def free_poses(world, rng: np.random.Generator, n: int) -> np.ndarray:
     f = rng.random(n)[:, None]
     xy = world.route_nodes[edges[:, 0]] * (1 - f) + world.route_nodes[edges[:, 1]] * f
     return np.column_stack((xy, rng.uniform(-np.pi, np.pi, n)))
+
+
+def oracle_glass(glass: np.ndarray, origin: np.ndarray, headings: np.ndarray) -> np.ndarray:
+    """Distance along each ray to the nearest glass segment it crosses (+inf if none)."""
+    ux, uy = np.cos(headings), np.sin(headings)
+    best = np.full(len(headings), np.inf)
+    for ax, ay, bx, by in np.asarray(glass, dtype=float).reshape(-1, 4):
+        ex, ey = bx - ax, by - ay
+        den = ux * ey - uy * ex
+        wx, wy = ax - origin[0], ay - origin[1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (wx * ey - wy * ex) / den
+            u = (wx * uy - wy * ux) / den
+        hit = (np.abs(den) > 1e-12) & (t > 0) & (u >= 0) & (u <= 1)
+        best = np.where(hit & (t < best), t, best)
+    return best

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import DURATION, SEED, WORLDS, check_log, check_out, positive, world_name
+from experiments.options import DURATION, SEED, check_log, check_out, positive, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -14,7 +14,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                     "figures and results/demo/report.md")
     p.add_argument("--out", type=Path, default=Path("results/demo"), help="output folder")
     p.add_argument("--seed", type=SEED, default=0, help="world and run seed")
-    p.add_argument("--world", type=world_name, default="office", help=f"simulated world: {', '.join(WORLDS)}")
+    p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them")
     p.add_argument("--duration", type=DURATION, default=40.0, help="simulated run, s (default 40)")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=10.0, help="scans kept per second of the run (default 10)")
     p.add_argument("--log", help="real CARMEN log or bag for Fig. 9 (default: the Intel log where present)")

@@ -17,7 +17,7 @@ from lms200.protocol import BAUD_MODES
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import PORT, SEED, WORLDS, InputError, check_log, count, positive, world_name
+from experiments.options import PORT, SEED, InputError, check_log, count, positive, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     cmds = p.add_subparsers(dest="lms200_command", metavar="ACTION", required=True)
 
     e = cmds.add_parser("emulate", help="serve a virtual LMS200 on a pseudo-terminal (or TCP); prints its path / URL")
-    e.add_argument("--world", type=world_name, default="office", help=f"simulator world to scan ({', '.join(WORLDS)})")
+    e.add_argument("--world", type=world_name, default="office", help="simulator world to scan (a built-in world name; lmsbench simulate --help lists them)")
     e.add_argument("--seed", type=SEED, default=0, help="seed of the world and the sensor noise")
     e.add_argument("--log", type=Path, help="replay this log (CARMEN or bag) instead of the simulator, in a loop")
     e.add_argument("--tcp", type=PORT, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")

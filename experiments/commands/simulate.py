@@ -5,15 +5,19 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from experiments.options import (DURATION, MAX_DURATION_S, SEED, WORLDS, InputError, check_file, check_out, check_yaml,
-                                 positive)
+from experiments.options import (DURATION, MAX_DURATION_S, SEED, InputError, check_file, check_out, check_yaml,
+                                 known_worlds, number, positive)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("simulate", help="simulate an LMS200 run through an office world (scans.clf, "
                                         "groundtruth.tum, world.json, config.yaml, map.png)")
     p.add_argument("--world", default="office",
-                   help=f"{', '.join(WORLDS)}, or a world.json (default office)")
+                   help="office, corridor, angles, pillars, random, cluttered (office with clutter 1), "
+                        "mit (the MIT-CSAIL-like preset), or a world.json (default office)")
+    p.add_argument("--clutter", type=number(0.0), default=None,
+                   help="clutter level of a named world: 0 none, 1 a furnished office, 2-3 busy "
+                        "(chair and table legs, people, plants, bins, glass, doors at any angle; default: the world's own)")
     p.add_argument("--seed", type=SEED, default=0, help="seed of the world, tour and sensor noise (>= 0)")
     p.add_argument("--duration", type=DURATION, default=120.0,
                    help=f"simulated time, s (default 120, at most {MAX_DURATION_S:g})")
@@ -49,15 +53,18 @@ def _config(args: argparse.Namespace):
             cfg = SimulationConfig.from_dict(raw)
         except (yaml.YAMLError, TypeError, ValueError) as exc:
             raise InputError(f"{args.config}: not a simulate config ({' '.join(str(exc).split())})") from None
-        if cfg.world not in WORLDS and not cfg.world.endswith(".json"):
-            raise InputError(f"{args.config}: unknown world {cfg.world!r}; known worlds: {', '.join(WORLDS)}")
+        if cfg.world not in known_worlds() and not cfg.world.endswith(".json"):
+            raise InputError(f"{args.config}: unknown world {cfg.world!r}; known worlds: {', '.join(known_worlds())}")
         if not (0 < cfg.duration <= MAX_DURATION_S) or (cfg.rate_hz is not None and not cfg.rate_hz > 0):
             raise InputError(f"{args.config}: duration must be in (0, {MAX_DURATION_S:g}] s and rate_hz > 0")
         return cfg
-    if args.world not in WORLDS and not args.world.endswith(".json"):
-        raise InputError(f"--world: unknown world {args.world!r}; known worlds: {', '.join(WORLDS)} or a world.json")
+    worlds = known_worlds()
+    if args.world not in worlds and not args.world.endswith(".json"):
+        raise InputError(f"--world: unknown world {args.world!r}; known worlds: {', '.join(worlds)} or a world.json")
     if args.world.endswith(".json"):
         check_file(args.world, "a world.json")
+    if args.clutter is not None and args.world.endswith(".json"):
+        raise InputError("--clutter applies to named worlds; a world.json holds its own solids")
     beams = {0.5: 361, 1.0: 181, 0.25: 401}[args.resolution]
     base = SensorConfig.ideal if args.ideal else SensorConfig
     if args.sensor is not None:
@@ -73,7 +80,8 @@ def _config(args: argparse.Namespace):
         sensor = base(n_beams=beams, resolution_deg=args.resolution, units=args.units,
                       **({} if args.ideal or args.units == "mm" else {"noise_sigma": 0.01}))
     return SimulationConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz,
-                            sensor=sensor, odometry=OdometryConfig() if args.odometry else None)
+                            sensor=sensor, odometry=OdometryConfig() if args.odometry else None,
+                            clutter=args.clutter)
 
 
 def _world(cfg) -> None:

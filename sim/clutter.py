@@ -1,0 +1,256 @@
+"""Clutter that real offices have, added to any world built on a :class:`sim.layout.Layout`:
+clusters of chair and table legs, standing and walking people (leg pairs), plants (irregular
+polygons of many short faces), bins, and glass panels in walls that give no return.
+
+Every item is made of the world's exact solids (boxes, cylinders, mitred rings of boxes), so the
+ground truth (faces, circles, corners) stays exact; glass is a segment (``World.glass``) that the
+ray caster reads as no return and the visible truth treats as an occluder. Items stand in free
+space next to the route (reached by a clear line from it), keep CLEARANCE_M plus their size from
+the route and 0.1 m from every solid and each other. Counts are Poisson draws with means per 10 m
+of route times the clutter level, all from the clutter's own random stream, so a world with
+clutter 0 is the world without clutter, bit for bit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .geometry import distance_to_segments, rectangle_corners
+from .layout import Layout, distance_to_rects
+from .world import SCAN_HEIGHT_M
+
+ROUTE_CLEARANCE_M = 0.40  # sim.worlds.CLEARANCE_M: robot radius 0.25 m + 0.15 m
+ITEM_GAP_M = 0.10  # least gap between an item and any other solid
+REACH_M = 3.0  # items stand at most this far from the route
+GLASS_MIN_WALL_M = 2.5  # walls at least this long may get a glass panel
+GLASS_END_MARGIN_M = 0.5  # a glass panel keeps this far from a wall box's ends
+
+
+@dataclass(frozen=True)
+class ClutterConfig:
+    """Mean counts per 10 m of route at clutter level 1 (a furnished office)."""
+
+    tables: float = 0.6  # a small table (4 legs) with 1-3 chairs pushed in
+    chairs: float = 1.0  # a chair standing alone (4 legs, or an office chair's central column)
+    people: float = 0.8  # a person standing (legs 0.1-0.25 m apart) or walking (0.3-0.6 m)
+    plants: float = 0.5  # an irregular polygon of 10-16 short faces, 0.15-0.35 m across
+    bins: float = 0.6  # a round or square bin
+    glass: float = 0.4  # a glass panel of 1-2.5 m in a wall
+
+
+def _route_points(lay: Layout, step: float = 0.1) -> tuple[np.ndarray, float]:
+    nodes = np.asarray(lay.nodes, dtype=float).reshape(-1, 2)
+    pts, length = [], 0.0
+    for a, b in lay.edges:
+        p, q = nodes[a], nodes[b]
+        d = float(np.hypot(*(q - p)))
+        length += d
+        n = max(2, int(np.ceil(d / step)) + 1)
+        pts.append(p + np.linspace(0, 1, n)[:, None] * (q - p))
+    return (np.vstack(pts) if pts else nodes), length
+
+
+class _Space:
+    """What is already solid at scan height: rectangles and circles (footprints of items too)."""
+
+    def __init__(self, lay: Layout, route: np.ndarray, h: float) -> None:
+        rects = [rectangle_corners(*b[:5]) for b in lay.boxes if b[5] <= h <= b[6]]
+        self.corners = np.array(rects, dtype=float).reshape(-1, 4, 2)  # CCW
+        self.circles = [(c[0], c[1], c[2]) for c in lay.cylinders if c[3] <= h <= c[4]]
+        self.route = route
+
+    def distance(self, pts: np.ndarray) -> np.ndarray:
+        """Distance (m) from (n, 2) points to the nearest solid (0 inside a box)."""
+        pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+        d = np.full(len(pts), np.inf)
+        if len(self.corners):
+            a = self.corners.reshape(-1, 2)
+            b = np.roll(self.corners, -1, axis=1).reshape(-1, 2)
+            d = distance_to_segments(pts, a, b).min(axis=1)
+            ab, rel = b - a, pts[:, None, :] - a[None]
+            cross = (ab[None, :, 0] * rel[..., 1] - ab[None, :, 1] * rel[..., 0]).reshape(len(pts), -1, 4)
+            d = np.where(np.all(cross > 0, axis=2).any(axis=1), 0.0, d)
+        if self.circles:
+            c = np.array(self.circles)
+            d = np.minimum(d, (np.hypot(pts[:, None, 0] - c[:, 0], pts[:, None, 1] - c[:, 1]) - c[:, 2]).min(axis=1))
+        return d
+
+    def free(self, c: np.ndarray, radius: float, start: np.ndarray) -> bool:
+        """A disc of ``radius`` at c is clear of the route and solids, and c is seen from start."""
+        if np.hypot(*(self.route - c).T).min() < ROUTE_CLEARANCE_M + radius:
+            return False
+        if self.distance(c[None])[0] < radius + ITEM_GAP_M:
+            return False
+        line = start + np.linspace(0, 1, 30)[:, None] * (c - start)
+        return bool(self.distance(line).min() > 0.0)
+
+    def take(self, c: np.ndarray, radius: float) -> None:
+        self.circles.append((float(c[0]), float(c[1]), float(radius)))
+
+
+def _spot(rng: np.random.Generator, space: _Space, radius: float, tries: int = 60) -> np.ndarray | None:
+    for _ in range(tries):
+        start = space.route[int(rng.integers(len(space.route)))]
+        ang = rng.uniform(-np.pi, np.pi)
+        dist = rng.uniform(ROUTE_CLEARANCE_M + radius, REACH_M)
+        c = start + dist * np.array([np.cos(ang), np.sin(ang)])
+        if space.free(c, radius, start):
+            space.take(c, radius)
+            return c
+    return None
+
+
+def _chair_legs(rng: np.random.Generator, c: np.ndarray, yaw: float) -> list[tuple[float, float, float]]:
+    """Cylinders (x, y, r) of a chair at scan height: four legs on a 0.40-0.45 m square, or an
+    office chair's central column (its star base lies below the scan plane)."""
+    if rng.random() < 0.5:
+        half = float(rng.uniform(0.20, 0.225))
+        r = float(rng.uniform(0.011, 0.018))
+        ca, sa = np.cos(yaw), np.sin(yaw)
+        return [(float(c[0] + ca * sx * half - sa * sy * half), float(c[1] + sa * sx * half + ca * sy * half), r)
+                for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+    return [(float(c[0]), float(c[1]), float(rng.uniform(0.025, 0.035)))]
+
+
+def _table_plan(rng: np.random.Generator) -> tuple:
+    """A small table (4 square legs, top above the scan plane) with 1-3 chairs pushed in, around
+    the origin: (leg boxes, chair cylinders, footprint radius)."""
+    yaw = float(rng.uniform(-np.pi, np.pi))
+    hx, hy = float(rng.uniform(0.25, 0.35)), float(rng.uniform(0.25, 0.32))
+    leg = float(rng.uniform(0.02, 0.03))
+    ca, sa = np.cos(yaw), np.sin(yaw)
+
+    def at(ox: float, oy: float) -> np.ndarray:
+        return np.array([ca * ox - sa * oy, sa * ox + ca * oy])
+
+    legs = [(*at(sx * (hx - 0.04), sy * (hy - 0.04)), yaw, leg, leg) for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+    chairs: list[tuple[float, float, float]] = []
+    for k in rng.permutation(4)[: int(rng.integers(1, 4))]:
+        side = [(1, 0), (-1, 0), (0, 1), (0, -1)][int(k)]
+        chairs += _chair_legs(rng, at(side[0] * (hx + 0.1), side[1] * (hy + 0.1)), yaw + float(rng.normal(0, 0.3)))
+    radius = max([np.hypot(x, y) + leg * np.sqrt(2) for x, y, *_ in legs] + [np.hypot(x, y) + r for x, y, r in chairs])
+    return legs, chairs, float(radius), (yaw, hx, hy)
+
+
+def _place_table(lay: Layout, c: np.ndarray, plan: tuple) -> None:
+    legs, chairs, _, (yaw, hx, hy) = plan
+    for x, y, lyaw, lx, ly in legs:
+        lay.box(c[0] + x, c[1] + y, lyaw, lx, ly, 0.0, 0.72)
+    lay.box(c[0], c[1], yaw, hx, hy, 0.72, 0.75)  # the top: above the scan plane
+    for x, y, r in chairs:
+        lay.cylinder(c[0] + x, c[1] + y, r, 0.0, 0.45)
+
+
+def _chair(lay: Layout, rng: np.random.Generator, c: np.ndarray, yaw: float) -> None:
+    for x, y, r in _chair_legs(rng, c, yaw):
+        lay.cylinder(x, y, r, 0.0, 0.45)
+
+
+def _person(lay: Layout, rng: np.random.Generator, c: np.ndarray) -> None:
+    heading = float(rng.uniform(-np.pi, np.pi))
+    walking = rng.random() < 0.5
+    r = float(rng.uniform(0.05, 0.07))  # a leg (or trouser) at knee height
+    if walking:  # legs apart along the heading
+        apart = float(rng.uniform(0.30, 0.60))
+        u = np.array([np.cos(heading), np.sin(heading)])
+    else:  # side by side
+        apart = float(rng.uniform(0.10, 0.25)) + 2 * r
+        u = np.array([-np.sin(heading), np.cos(heading)])
+    for s in (-0.5, 0.5):
+        p = c + s * apart * u
+        lay.cylinder(p[0], p[1], r, 0.0, 0.9)
+
+
+def _plant(lay: Layout, rng: np.random.Generator, c: np.ndarray, radius: float) -> None:
+    """A closed ring of short mitred faces (10-16 vertices, radius jittered by up to 20 %)."""
+    n = int(rng.integers(10, 17))
+    step = 2 * np.pi / n
+    ang = np.arange(n) * step + rng.uniform(-0.3, 0.3, n) * step  # stays in order: gaps >= 0.4 step
+    rad = radius * (1 + rng.uniform(-0.2, 0.2, n))
+    pts = [(float(c[0] + r * np.cos(a)), float(c[1] + r * np.sin(a))) for a, r in zip(ang, rad)]
+    lay.wall(pts, closed=True, thickness=0.03, z1=1.0)
+
+
+def _bin(lay: Layout, rng: np.random.Generator, c: np.ndarray) -> None:
+    if rng.random() < 0.6:
+        lay.cylinder(c[0], c[1], float(rng.uniform(0.12, 0.2)), 0.0, 0.5)
+    else:
+        lay.box(c[0], c[1], float(rng.uniform(-np.pi, np.pi)), float(rng.uniform(0.12, 0.18)),
+                float(rng.uniform(0.1, 0.15)), 0.0, 0.5)
+
+
+def _glass_panel(lay: Layout, rng: np.random.Generator, h: float) -> list[float] | None:
+    """Cut a 1-2.5 m gap into a long wall box and put glass in it; returns the glass segment."""
+    walls = [k for k, b in enumerate(lay.boxes) if b[6] >= 2.0 and b[5] <= h and 2 * b[3] >= GLASS_MIN_WALL_M
+             and b[4] <= 0.08]
+    for _ in range(10):
+        if not walls:
+            return None
+        k = walls[int(rng.integers(len(walls)))]
+        cx, cy, yaw, hx, hy, z0, z1 = lay.boxes[k]
+        width = float(rng.uniform(1.0, min(2.5, 2 * hx - 2 * GLASS_END_MARGIN_M)))
+        if width < 1.0:
+            continue
+        s0 = float(rng.uniform(-hx + GLASS_END_MARGIN_M, hx - GLASS_END_MARGIN_M - width))
+        s1 = s0 + width
+        u = np.array([np.cos(yaw), np.sin(yaw)])
+        c = np.array([cx, cy])
+        gap = rectangle_corners(*(c + u * (s0 + s1) / 2), yaw, width / 2, hy)
+        others = [rectangle_corners(*b[:5]) for j, b in enumerate(lay.boxes) if j != k and b[5] <= h <= b[6]]
+        samples = gap[0] + np.linspace(0, 1, 25)[:, None, None] * (gap[1:] - gap[0])[None]
+        samples = np.vstack([samples.reshape(-1, 2), gap])
+        if others and distance_to_rects(samples, others).min() < 0.05:
+            continue  # something stands against or meets the wall there
+        cyls = [cl for cl in lay.cylinders if cl[3] <= h <= cl[4]]
+        if any(np.hypot(*(samples - cl[:2]).T).min() < cl[2] + 0.05 for cl in cyls):
+            continue
+        del lay.boxes[k]
+        for a, b in ((-hx, s0), (s1, hx)):
+            m = c + u * (a + b) / 2
+            lay.box(m[0], m[1], yaw, (b - a) / 2, hy, z0, z1)
+        p, q = c + u * s0, c + u * s1
+        walls = [j for j, b in enumerate(lay.boxes) if b[6] >= 2.0 and b[5] <= h and 2 * b[3] >= GLASS_MIN_WALL_M
+                 and b[4] <= 0.08]
+        return [float(p[0]), float(p[1]), float(q[0]), float(q[1])]
+    return None
+
+
+def add_clutter(lay: Layout, rng: np.random.Generator, level: float, config: ClutterConfig | None = None,
+                scan_height: float = SCAN_HEIGHT_M) -> list[list[float]]:
+    """Add clutter to a layout (its route must be in place); returns the glass segments."""
+    if level <= 0:
+        return []
+    cfg = config if config is not None else ClutterConfig()
+    route, length = _route_points(lay)
+    if len(route) == 0:
+        return []
+    scale = level * length / 10.0
+    glass = []
+    for _ in range(int(rng.poisson(cfg.glass * scale))):
+        seg = _glass_panel(lay, rng, scan_height)
+        if seg is not None:
+            glass.append(seg)
+    space = _Space(lay, route, scan_height)
+    plan = ([("table", 0.0)] * int(rng.poisson(cfg.tables * scale)) + [("chair", 0.3)] * int(rng.poisson(cfg.chairs * scale))
+            + [("person", 0.4)] * int(rng.poisson(cfg.people * scale)) + [("plant", 0.42)] * int(rng.poisson(cfg.plants * scale))
+            + [("bin", 0.22)] * int(rng.poisson(cfg.bins * scale)))
+    order = rng.permutation(len(plan))
+    for k in order:
+        kind, radius = plan[int(k)]
+        table = _table_plan(rng) if kind == "table" else None
+        c = _spot(rng, space, table[2] if table is not None else radius)
+        if c is None:
+            continue
+        if table is not None:
+            _place_table(lay, c, table)
+        elif kind == "chair":
+            _chair(lay, rng, c, float(rng.uniform(-np.pi, np.pi)))
+        elif kind == "person":
+            _person(lay, rng, c)
+        elif kind == "plant":
+            _plant(lay, rng, c, float(rng.uniform(0.15, 0.3)))
+        else:
+            _bin(lay, rng, c)
+    return glass

@@ -1,0 +1,128 @@
+"""Clutter worlds (chair and table legs, people, plants, bins, glass, doors at any angle) and the
+MIT-like preset: exact ranges and visible truth against the independent ray caster (which reads
+glass as no return), clear routes, clutter 0 = no clutter, and world.json round trips."""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sim import SensorConfig, World, make_world, visible_truth
+from sim.layout import Layout
+from sim.lidar import LMS200Sim
+
+from sim_oracle import free_poses, oracle_glass, oracle_ranges
+
+CLUTTERED = [("cluttered", 0), ("cluttered", 5), ("mit", 1), ("corridor", 2)]
+
+
+@functools.lru_cache(maxsize=None)
+def _world(name: str, seed: int) -> World:
+    """Worlds are built once per test run (the MIT preset takes seconds)."""
+    return make_world(name, seed, clutter=2.0 if name == "corridor" else None)
+
+
+def _reference(world: World, pose: np.ndarray, sensor: SensorConfig) -> tuple[np.ndarray, np.ndarray]:
+    headings = pose[2] + sensor.angles
+    ref, grazing = oracle_ranges(world.boxes, world.cylinders, world.scan_height, pose[:2], headings,
+                                 sensor.range_max)
+    ref = np.where(oracle_glass(world.glass, pose[:2], headings) < ref, np.inf, ref)
+    return ref, grazing
+
+
+def test_clutter_zero_is_the_world_without_clutter() -> None:
+    for name in ("office", "random", "corridor"):
+        a, b = make_world(name, 3), make_world(name, 3, clutter=0.0)
+        assert np.array_equal(a.boxes, b.boxes) and np.array_equal(a.cylinders, b.cylinders)
+        assert len(a.glass) == 0
+    with pytest.raises(ValueError, match="clutter"):
+        make_world("office", 0, clutter=-1.0)
+
+
+def test_cluttered_worlds_hold_every_kind_of_clutter() -> None:
+    worlds = [_world("cluttered", s) for s in range(6)] + [_world("mit", 1)]
+    cyl = np.vstack([w.cylinders for w in worlds])
+    boxes = np.vstack([w.boxes for w in worlds])
+    assert np.any(cyl[:, 2] < 0.02)  # chair legs
+    assert np.any((cyl[:, 2] >= 0.05) & (cyl[:, 2] <= 0.07) & (cyl[:, 4] == 0.9))  # people's legs
+    assert np.any(np.isclose(boxes[:, 4], 0.015) & (boxes[:, 6] == 1.0))  # plants: rings of short faces
+    assert np.any((boxes[:, 6] == 0.72) & (boxes[:, 3] < 0.031))  # table legs
+    assert sum(len(w.glass) for w in worlds) >= 2
+    leaves = boxes[np.isclose(boxes[:, 3], 0.45) & np.isclose(boxes[:, 4], 0.02)]
+    off_axis = np.abs(np.sin(2 * leaves[:, 2])) > 0.05  # door leaves not at 0 / 90 deg
+    assert off_axis.sum() >= 3
+    mit = _world("mit", 1)
+    assert mit.bounds[2] - mit.bounds[0] > SensorConfig().range_max  # a corridor beyond the mm-mode range
+
+
+@pytest.mark.parametrize("name, seed", CLUTTERED)
+def test_ideal_ranges_match_exact_ray_caster_with_glass(name: str, seed: int) -> None:
+    world = _world(name, seed)
+    sensor = SensorConfig.ideal()
+    rng = np.random.default_rng(5)
+    with LMS200Sim(world, sensor) as lidar:
+        for pose in free_poses(world, rng, 8):
+            got = lidar.scan_at(tuple(pose)).ranges.copy()
+            ref, grazing = _reference(world, pose, sensor)
+            ref[grazing] = got[grazing] = np.nan
+            both = np.isfinite(ref) & np.isfinite(got)
+            edge = np.abs(np.where(np.isfinite(ref), ref, sensor.range_max) - sensor.range_max) < 1e-3
+            assert np.array_equal(np.isfinite(ref) | edge | grazing, np.isfinite(got) | edge | grazing)
+            assert np.max(np.abs(got[both] - ref[both]), initial=0.0) < 1e-3
+
+
+@pytest.mark.parametrize("name, seed", CLUTTERED[:3])
+def test_visible_truth_is_exact_in_clutter(name: str, seed: int) -> None:
+    world = _world(name, seed)
+    sensor = SensorConfig.ideal()
+    rng = np.random.default_rng(9)
+    for pose in free_poses(world, rng, 8):
+        truth = visible_truth(world, tuple(pose), sensor)
+        ref, grazing = _reference(world, pose, sensor)
+        r = np.where(np.isfinite(ref), ref, np.nan)
+        hits = np.column_stack((r * np.cos(sensor.angles), r * np.sin(sensor.angles)))
+        covered = np.zeros(sensor.n_beams, dtype=bool)
+        for (x1, y1, x2, y2), (first, last) in zip(truth.segments, truth.segment_beams):
+            u = np.array([x2 - x1, y2 - y1]) / np.hypot(x2 - x1, y2 - y1)
+            rel = hits[first:last + 1] - (x1, y1)
+            ok = ~grazing[first:last + 1]
+            # every beam of a span hits its segment (not glass in front of it, nothing else)
+            assert np.all(np.abs(rel[ok] @ np.array([-u[1], u[0]])) < 1e-6)
+            covered[first:last + 1] = True
+        world_hits = pose[:2] + r[:, None] * np.column_stack((np.cos(pose[2] + sensor.angles),
+                                                              np.sin(pose[2] + sensor.angles)))
+        on_circle = np.zeros(sensor.n_beams, dtype=bool)
+        for cx, cy, rad in world.circles:
+            on_circle |= np.abs(np.hypot(world_hits[:, 0] - cx, world_hits[:, 1] - cy) - rad) < 1e-6
+        assert np.all(covered[np.isfinite(ref) & ~on_circle & ~grazing])
+
+
+@pytest.mark.parametrize("name, seed", [("cluttered", 0), ("cluttered", 1), ("cluttered", 5), ("mit", 1)])
+def test_routes_keep_clear_of_clutter(name: str, seed: int) -> None:
+    w = _world(name, seed)
+    for a, b in w.route_edges:
+        pts = w.route_nodes[a] + np.linspace(0, 1, 60)[:, None] * (w.route_nodes[b] - w.route_nodes[a])
+        assert w.clearance(pts).min() >= 0.4
+
+
+def test_glass_gives_no_return_and_hides_what_is_behind(tmp_path: Path) -> None:
+    lay = Layout("glass", 0)
+    lay.wall([(0, 0), (6, 0), (6, 4), (0, 4)], closed=True)
+    lay.box(4.5, 2.0, 0.0, 0.2, 0.2)  # a box behind the glass
+    world = lay.build(glass=[[3.0, 1.0, 3.0, 3.0]])
+    sensor = SensorConfig.ideal()
+    pose = (1.0, 2.0, 0.0)
+    with LMS200Sim(world, sensor) as lidar:
+        r = lidar.scan_at(pose).ranges
+    edge = np.arctan2(1.0, 2.0)  # the glass spans bearings -edge..edge
+    ahead = np.abs(sensor.angles) < edge - 0.01
+    assert np.all(np.isposinf(r[ahead])) and np.all(np.isfinite(r[np.abs(sensor.angles) > edge + 0.01]))
+    truth = visible_truth(world, pose, sensor)
+    for first, last in truth.segment_beams:
+        assert not ahead[first:last + 1].any()  # nothing behind the glass is visible truth
+    world.to_json(tmp_path / "w.json")
+    again = World.from_json(tmp_path / "w.json")
+    assert np.array_equal(again.glass, world.glass) and np.array_equal(again.boxes, world.boxes)
