@@ -21,8 +21,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-paper-baseline", action="store_true",
                    help="with the default preset, do not also run the paper preset for the comparison table")
     p.add_argument("--extractor", help="feature extraction method (default: the config's, 'sensor')")
-    p.add_argument("--association", choices=("nn", "jcbb"), help="data association (default: the config's)")
-    p.add_argument("--corners", action="store_true", help="add corner landmarks")
+    p.add_argument("--association", choices=("nn", "jcbb"), help="paper preset: data association (default: the config's)")
+    p.add_argument("--corners", action="store_true", help="paper preset: add corner landmarks")
     p.add_argument("--odometry", action="store_true", help="use the input's odometry as the motion input")
     p.add_argument("--no-odometry-baseline", action="store_true",
                    help="do not also run the filter with odometry for the comparison table")
@@ -59,13 +59,13 @@ def _config(args: argparse.Namespace):
     if args.extractor:
         changes["extractor"] = check_methods([args.extractor])[0]
     if args.association:
-        changes["association"] = args.association
+        changes["association"] = dataclasses.replace(cfg.association, method=args.association)
     if args.corners:
-        changes["use_corners"] = True
+        changes["observations"] = dataclasses.replace(cfg.observations, use_corners=True)
     if args.odometry:
-        changes["use_odometry"] = True
+        changes["motion"] = dataclasses.replace(cfg.motion, use_odometry=True)
     cfg = dataclasses.replace(cfg, **changes)
-    if cfg.use_odometry and cfg.preset != "paper":
+    if cfg.motion.use_odometry and cfg.preset != "paper":
         raise LmsbenchError("--odometry drives the paper preset's filter: add --preset paper (the default pipeline uses no odometry)")
     return cfg
 
@@ -99,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
     if back is not None:
         raise InputError(f"{data.sources.get('scans', args.input)}: time goes backwards at scan {back} "
                          f"(stamp {stamps[back]:.6f} s after {stamps[back - 1]:.6f} s); SLAM needs scans in time order")
-    if config.use_odometry and data.odometry is None:
+    if config.motion.use_odometry and data.odometry is None:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
     from experiments.progress import warm_up_kernels
 
