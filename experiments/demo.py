@@ -30,9 +30,18 @@ DEMO_SWEEP = {
 
 def run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None = "local",
              log: Callable[[str], None] = print) -> Path:
-    """Run everything and write ``out/report.md`` (returned) and ``out/report.html``."""
+    """Run everything and write ``out/report.md`` (returned) and ``out/report.html``; a line at
+    least every 4 s while it works."""
+    from experiments.progress import Heartbeat
+
+    with Heartbeat(log, "demo") as beat:
+        return _run_demo(out, cfg, sweep_executor, beat)
+
+
+def _run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None, beat) -> Path:
     from experiments.sweep import SweepSpec, run_sweep
 
+    log = beat.say
     t0 = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
     log(f"== lmsbench demo -> {out}")
@@ -44,9 +53,11 @@ def run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None = "local",
         log(f"== sweep {spec.name}: {len(spec.cells())} cells on {sweep_executor}")
         folder = out / "sweeps" / spec.name
         shutil.rmtree(folder, ignore_errors=True)  # the demo recomputes everything, like the rest of it
-        result = run_sweep(spec, folder, sweep_executor)
+        beat.label = f"sweep {spec.name}"
+        result = run_sweep(spec, folder, sweep_executor, progress=False)
         sweep_table = result.table
         log(f"   {result.computed} computed, {result.skipped} already done, {result.failed} failed")
+    beat.label = "figures"
     log("== figures")
     figs = draw_figures(tables, out / "figures", signals_k=cfg.signals_k, world=cfg.world)
     if sweep_table is not None:

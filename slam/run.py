@@ -7,6 +7,7 @@ from typing import Any, Iterable
 
 import numpy as np
 
+from lms200.errors import LmsbenchError
 from lms200.records import Record
 
 from .config import SlamConfig
@@ -15,7 +16,7 @@ from .models import wrap
 from .observations import Observations, from_features
 
 
-class SlamInputError(ValueError):
+class SlamInputError(LmsbenchError, ValueError):
     """The records cannot be processed (no scans, time going backwards)."""
 
 

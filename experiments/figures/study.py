@@ -59,6 +59,9 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
     say = lambda msg: log(f"[{time.perf_counter() - t0:6.1f} s] {msg}")  # noqa: E731
     tables: dict[str, pd.DataFrame] = {}
     notes: list[str] = []
+    from experiments.progress import warm_up_kernels
+
+    warm_up_kernels(log=say)
     sensor = sensor_config(cfg.sensor)
     world, records = simulate_run(cfg.world, cfg.seed, cfg.duration, sensor, cfg.rate_hz)
     say(f"simulated {cfg.world} (seed {cfg.seed}): {len(records)} scans over {cfg.duration:g} s at {cfg.rate_hz:g} Hz")
