@@ -1,0 +1,48 @@
+"""What a result needs beside it to be reproduced: the versions of the code and libraries that
+made it, and a fresh timestamped run folder (with a ``latest`` link) when no ``--out`` is given."""
+
+from __future__ import annotations
+
+import datetime
+import os
+import platform
+import sys
+from importlib import metadata
+from pathlib import Path
+
+#: Distributions whose version can change a result.
+PACKAGES = ("lmsbench", "numpy", "scipy", "numba", "pybullet", "pandas", "filterpy", "gtsam", "matplotlib")
+
+
+def versions() -> dict[str, str]:
+    """Python, the platform and the installed version of every package in PACKAGES (absent ones
+    are left out)."""
+    out = {"python": platform.python_version(), "platform": f"{sys.platform}-{platform.machine()}"}
+    for name in PACKAGES:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            continue
+    return out
+
+
+def new_run_folder(base: str | os.PathLike, now: datetime.datetime | None = None) -> Path:
+    """A new folder ``base/YYYY-MM-DD_HH-MM-SS`` (``-2``, ``-3``, ... when taken) and a symlink
+    ``base/latest`` pointing at it, so runs never overwrite each other."""
+    base = Path(base)
+    base.mkdir(parents=True, exist_ok=True)
+    stamp = (now or datetime.datetime.now()).strftime("%Y-%m-%d_%H-%M-%S")
+    folder, n = base / stamp, 1
+    while True:
+        try:
+            folder.mkdir()
+            break
+        except FileExistsError:
+            n += 1
+            folder = base / f"{stamp}-{n}"
+    latest = base / "latest"
+    tmp = base / f".latest.{os.getpid()}"
+    tmp.unlink(missing_ok=True)
+    tmp.symlink_to(folder.name)
+    os.replace(tmp, latest)  # atomic: `latest` always names a whole run
+    return folder
