@@ -8,7 +8,7 @@ import pytest
 from functools import partial
 
 from slam import Observations, SlamConfig, SlamConfigError, SlamFilter, SlamInputError, run_observations
-from slam.config import AssociationConfig, MotionConfig, ObservationConfig, PrealignConfig
+from slam.config import AssociationConfig, LandmarkConfig, MotionConfig, ObservationConfig, PrealignConfig
 from slam.metrics import ate
 from slam.models import wrap
 from slam.synthetic import CONVEX_ROOM, circle_path, observe_walls
@@ -204,3 +204,32 @@ def test_a_stop_in_a_corridor_is_seen_by_the_points():
     # the lines alone cannot: the constant-velocity prediction carries on along the corridor
     old, _ = _corridor_stop(SlamConfig())
     assert np.abs(old[:, 1] - truth[:, 0]).max() > 2.0
+
+
+def test_an_observation_outside_a_lone_landmarks_extent_is_never_paired():
+    """MIT CSAIL scan 453: a corridor's first cross line, 6.5 m beyond the only landmark on its
+    infinite line, was paired (the extent check was skipped for a sole candidate)."""
+    cfg = P(prealign=PrealignConfig(enabled=False), landmarks=LandmarkConfig(confirm_hits=1))
+    f = SlamFilter(cfg)
+    cov = np.diag([0.01**2, 0.005**2])
+    # a wall x = 2 seen from the origin between y = -1 and y = 1 (sensor frame = world frame)
+    wall = Observations(np.array([[2.0, 0.0]]), cov[None], np.array([[2.0, -1.0, 2.0, 1.0]]))
+    f.step(0.0, wall)
+    assert len(f.landmarks) == 1 and f.landmarks[0].extent == pytest.approx((-1.0, 1.0))
+    # the same infinite line, seen 6.5 m beyond the extent: a different wall, never this landmark
+    far = Observations(np.array([[2.0, 0.0]]), cov[None], np.array([[2.0, 7.5, 2.0, 9.0]]))
+    info = f.step(0.1, far)
+    assert info.n_matched == 0
+    # within the extent plus the margin it is the landmark
+    near = Observations(np.array([[2.0, 0.0]]), cov[None], np.array([[2.0, 0.5, 2.0, 1.8]]))
+    assert f.step(0.2, near).n_matched == 1
+
+
+def test_a_filter_whose_scans_leave_the_map_reports_divergence():
+    from slam.config import ConsistencyConfig
+    from slam.run import lost_against_scan
+
+    cfg = ConsistencyConfig(point_window=3, point_min_score=0.3)
+    assert not lost_against_scan([0.9, 0.1, 0.1], cfg)
+    assert lost_against_scan([0.9, 0.1, 0.1, 0.2], cfg)
+    assert not lost_against_scan([0.1, 0.1, float("nan")], cfg)  # no reference is not evidence

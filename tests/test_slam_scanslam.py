@@ -95,7 +95,7 @@ def test_a_revisit_closes_a_loop_that_agrees_with_the_truth(office_run):
     # spacing; the robust kernel keeps it from bending the graph, see the test below)
     assert np.mean(np.array(errors) < 0.05) >= 0.8
     pos, head = relative_errors(slam.trajectory(), truth)
-    assert np.sqrt(np.mean(pos**2)) < 0.15
+    assert np.sqrt(np.mean(pos**2)) < 0.05
 
 
 def test_a_false_loop_is_rejected_by_the_geometric_check():
