@@ -119,7 +119,7 @@ def motion_limits(records: Sequence[Record]):
     a = np.array(odo, dtype=float)
     dt = np.diff(a[:, 0])
     ok = (dt > 0) & (dt < MIN_SCAN_DT_S)
-    if np.count_nonzero(ok) < 10:
+    if np.count_nonzero(ok) < 10 or np.mean(ok) < 0.5:  # mostly long gaps: a subsampled log
         return RobotLimits()
     v = np.hypot(np.diff(a[:, 1]), np.diff(a[:, 2]))[ok] / dt[ok]
     w = np.abs(np.angle(np.exp(1j * np.diff(a[:, 3]))))[ok] / dt[ok]
