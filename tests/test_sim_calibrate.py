@@ -17,7 +17,7 @@ from lms200.calibration import calibrate_scans
 from sim import SensorConfig, make_world, simulate_records
 from sim.lidar import LMS200Sim
 
-from experiments.calibrate import calibrate_log, write_sensor_yaml
+from experiments.calibrate import calibrate_log
 
 
 def _cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
