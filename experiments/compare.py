@@ -45,6 +45,7 @@ class Source:
     pose_of: Callable[[Record], Pose2D | None] | None = None  # world pose to trust, for repeatability
     estimate_sigma: Callable[[], float] | None = None  # how to estimate sigma_r when it is not known
     reader: Any = None  # the log reader (its ``stats`` say what was skipped)
+    settings: dict[str, Any] = dataclasses.field(default_factory=dict)  # what produced the scans (saved beside results)
 
     @classmethod
     def from_records(cls, records: Sequence[Record], truths: Sequence[Any] | None = None, name: str = "sim",
@@ -75,14 +76,54 @@ def sim_source(world: str, seed: int = 0, duration: float = 30.0, rate_hz: float
     sensor = sensor if sensor is not None else sim.SensorConfig(interlaced=False)
     w = sim.make_world(world, seed=seed)
     records = sim.simulate_records(world=w, seed=seed, duration=duration, sensor=sensor, rate_hz=rate_hz)
+    settings = dict(world=world, seed=seed, duration=duration, rate_hz=rate_hz, sensor=dataclasses.asdict(sensor))
+    return Source(world, "sim", seed, records, _truth_in(w, sensor), len(records), sigma_r=sensor.noise_sigma,
+                  pose_of=lambda rec: rec.truth, settings=settings)
+
+
+def _truth_in(world: Any, sensor: Any) -> Callable[[Record], Any]:
+    import sim
 
     def truth_of(rec: Record) -> Any:
         if rec.truth is None:
             raise LmsbenchError(f"simulated record at t={rec.scan.stamp} has no true pose")
-        return sim.visible_truth(w, rec.truth, sensor)
+        return sim.visible_truth(world, rec.truth, sensor)
 
-    return Source(world, "sim", seed, records, truth_of, len(records), sigma_r=sensor.noise_sigma,
-                  pose_of=lambda rec: rec.truth)
+    return truth_of
+
+
+def is_simulation_folder(path: str | Path) -> bool:
+    """A ``lmsbench simulate`` output folder (scans.clf and world.json)."""
+    p = Path(path)
+    return p.is_dir() and (p / "scans.clf").is_file() and (p / "world.json").is_file()
+
+
+def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = None) -> Source:
+    """The scans of a ``lmsbench simulate`` folder, scored against the visible truth of its
+    world.json at each scan's true pose (its TRUEPOS lines), for the sensor of its config.yaml.
+
+    The truth is that of the pose at the scan's stamp: a folder simulated with the default
+    interlaced sensor charges the robot's motion within a scan (up to 1.2 deg) to the extractor."""
+    import yaml
+
+    import sim
+
+    p = Path(path)
+    world = sim.World.from_json(p / "world.json")
+    settings: dict[str, Any] = {"folder": str(p)}
+    sensor = sim.SensorConfig()
+    if (p / "config.yaml").is_file():
+        cfg = yaml.safe_load((p / "config.yaml").read_text()) or {}
+        if not isinstance(cfg, dict):
+            raise LmsbenchError(f"{p / 'config.yaml'}: not a simulate config")
+        sensor = sim.SensorConfig(**(cfg.get("sensor") or {}))
+        settings.update({k: cfg.get(k) for k in ("world", "seed", "duration", "rate_hz")})
+    settings["sensor"] = dataclasses.asdict(sensor)
+    inner = log_source(p / "scans.clf", stride, max_scans, poses="none")
+    seed = settings.get("seed")
+    return Source(p.name, "sim", int(seed) if seed is not None else None, inner.records, _truth_in(world, sensor),
+                  max_scans, sigma_r=sensor.noise_sigma, pose_of=lambda rec: rec.truth, reader=inner.reader,
+                  settings=settings)
 
 
 POSES = ("auto", "corrected", "none")
@@ -100,9 +141,9 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
             so (Radish names its corrected logs ``*-corrected*``).
     """
     if stride < 1:
-        raise ValueError(f"stride: must be >= 1, got {stride}")
+        raise LmsbenchError(f"stride: must be >= 1, got {stride}")
     if poses not in POSES:
-        raise ValueError(f"poses: must be one of {', '.join(POSES)}, got {poses!r}")
+        raise LmsbenchError(f"poses: must be one of {', '.join(POSES)}, got {poses!r}")
     options = dict(read_options or {})
     reader = read_log(path, **options)
     corrected = poses == "corrected" or (poses == "auto" and "corrected" in Path(path).name.lower())
@@ -122,27 +163,99 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
 
     return Source(Path(path).name, "log", None, records(), None, max_scans, sigma_r=None,
                   pose_of=(lambda rec: rec.odom) if corrected else None, estimate_sigma=estimate_sigma,
-                  reader=reader)
+                  reader=reader, settings={"log": str(path), "stride": stride, "poses": poses, **options})
 
 
 def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: float = 30.0,
                   rate_hz: float | None = 2.0, stride: int = 1, max_scans: int | None = None,
                   read_options: dict[str, Any] | None = None, poses: str = "auto",
                   sensor: Any = None) -> list[Source]:
-    """Sources from command-line words: a world name (one source per seed), ``world:seed``, or the
-    path of a log (read with ``read_options``, see :func:`log_source`). ``sensor`` (a
-    ``sim.SensorConfig``) is the simulated sources' sensor model."""
+    """Sources from command-line words: a world name (one source per seed), ``world:seed``, a
+    ``lmsbench simulate`` folder, or the path of a log (read with ``read_options``, see
+    :func:`log_source`). ``sensor`` (a ``sim.SensorConfig``) is the simulated worlds' sensor model
+    (a simulate folder has its own, in its config.yaml).
+
+    Raises:
+        LmsbenchError: a word that is none of these, a bad seed, or a log of the wrong kind.
+    """
     out: list[Source] = []
     for spec in specs:
-        name, _, seed = spec.partition(":")
+        name, colon, seed = spec.partition(":")
         if name in WORLD_NAMES:
-            for s in ([int(seed)] if seed else seeds):
+            if colon and not (seed.isdigit() and int(seed) < 2**32):
+                raise LmsbenchError(f"{spec}: the seed after the colon must be a whole number >= 0, got {seed!r}")
+            for s in ([int(seed)] if colon else seeds):
                 out.append(sim_source(name, s, duration, rate_hz, sensor))
+        elif is_simulation_folder(spec):
+            out.append(folder_source(spec, stride, max_scans))
         else:
             if not Path(spec).exists():
-                raise FileNotFoundError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}) nor an existing log")
+                raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}), a simulate folder "
+                                    "nor an existing log")
             out.append(log_source(spec, stride, max_scans, read_options, poses))
     return out
+
+
+def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = None) -> None:
+    """Check command-line source words before any work: world names and seeds, simulate folders
+    (world.json loads), logs (their kind, and at least one laser scan)."""
+    from experiments.options import check_log
+
+    for spec in specs:
+        name, colon, seed = spec.partition(":")
+        if name in WORLD_NAMES:
+            if colon and not (seed.isdigit() and int(seed) < 2**32):
+                raise LmsbenchError(f"{spec}: the seed after the colon must be a whole number >= 0, got {seed!r}")
+            continue
+        if is_simulation_folder(spec):
+            import sim
+
+            try:
+                sim.World.from_json(Path(spec) / "world.json")
+            except LmsbenchError:
+                raise
+            except (ValueError, KeyError, TypeError) as exc:
+                raise LmsbenchError(f"{spec}/world.json: not a world ({type(exc).__name__}: {exc})") from None
+            spec = str(Path(spec) / "scans.clf")
+        elif not Path(spec).exists():
+            close = [w for w in WORLD_NAMES if _close(w, name)]
+            hint = f" (did you mean {close[0]}?)" if close else ""
+            raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}){hint}, a simulate folder "
+                                "nor an existing log")
+        check_log(spec)
+        if next(iter(read_log(spec, **(read_options or {}))), None) is None:
+            raise LmsbenchError(f"{spec}: no laser messages found (not a CARMEN log with FLASER / ROBOTLASER1 "
+                                "lines, nor a bag with LaserScan messages)")
+
+
+def _check_types(method: str, overrides: dict[str, Any]) -> None:
+    """An override has the kind of its field's default: a number for a number, true/false for a
+    flag, text for text (configs check ranges, not types)."""
+    default = dataclasses.asdict(make_config(method))
+    for name, value in overrides.items():
+        if name not in default:
+            continue  # make_config names unknown fields
+        d = default[name]
+        number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if isinstance(d, bool):
+            ok = isinstance(value, bool)
+            kind = "true or false"
+        elif isinstance(d, (int, float)):
+            ok = number and (isinstance(d, float) or float(value).is_integer())
+            kind = "a whole number" if isinstance(d, int) else "a number"
+        elif isinstance(d, str):
+            ok = isinstance(value, str)
+            kind = "text"
+        else:
+            continue
+        if not ok:
+            raise LmsbenchError(f"{method}: {name} must be {kind} (default {d!r}), got {value!r}")
+
+
+def _close(a: str, b: str) -> bool:
+    import difflib
+
+    return difflib.SequenceMatcher(None, a, b).ratio() >= 0.75
 
 
 def _errors(values: np.ndarray) -> tuple[float, float]:
@@ -412,6 +525,18 @@ def format_summary(summary: pd.DataFrame) -> str:
 
 
 def resolved_configs(methods: Sequence[str], params: dict[str, dict[str, Any]] | None = None) -> dict[str, Any]:
-    """Each method's full config as plain data (saved beside the results)."""
+    """Each method's full config as plain data (saved beside the results).
+
+    Raises:
+        LmsbenchError: an override of a value that cannot work (``rho_step=0``, ``k="abc"``)."""
     params = params or {}
-    return {m: dataclasses.asdict(make_config(m, **params.get(m, {}))) for m in methods}
+    out = {}
+    for m in methods:
+        _check_types(m, params.get(m, {}))
+        try:
+            out[m] = dataclasses.asdict(make_config(m, **params.get(m, {})))
+        except LmsbenchError:
+            raise
+        except (ValueError, TypeError) as exc:
+            raise LmsbenchError(f"{m}: {' '.join(str(exc).split())}") from None
+    return out

@@ -64,11 +64,29 @@ class SimulationConfig:
                    clutter=None if d.get("clutter") is None else float(d["clutter"]))
 
 
-def run_simulation(cfg: SimulationConfig, out: Path) -> list[Record]:
-    """Simulate ``cfg`` and write scans.clf, groundtruth.tum, world.json, config.yaml, map.png."""
-    out.mkdir(parents=True, exist_ok=True)
+def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> list[Record]:
+    """Simulate ``cfg`` and write scans.clf, groundtruth.tum, world.json, config.yaml, map.png
+    (with a progress bar on stderr when ``progress``)."""
     world = World.from_json(cfg.world) if cfg.world.endswith(".json") else make_world(cfg.world, cfg.seed, cfg.clutter)
-    records = simulate_records(world, cfg.seed, cfg.duration, cfg.sensor, cfg.odometry, cfg.rate_hz, cfg.robot)
+    bar = None
+
+    def step(done: int, total: int) -> None:
+        nonlocal bar
+        if not progress:
+            return
+        if bar is None:
+            from tqdm import tqdm
+
+            bar = tqdm(total=total, unit="scan", desc="simulate", mininterval=1.0)
+        bar.update(done - bar.n)
+
+    try:
+        records = simulate_records(world, cfg.seed, cfg.duration, cfg.sensor, cfg.odometry, cfg.rate_hz, cfg.robot,
+                                   progress=step)
+    finally:
+        if bar is not None:
+            bar.close()
+    out.mkdir(parents=True, exist_ok=True)
     write_carmen(out / "scans.clf", records)
     stamps = np.array([r.scan.stamp for r in records], dtype=float)
     write_tum(out / "groundtruth.tum", stamps, np.array([r.truth for r in records]).reshape(-1, 3))

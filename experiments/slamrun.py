@@ -158,7 +158,7 @@ class SlamRun:
 
 def _source_name(config: SlamConfig) -> str:
     if config.preset == "paper":
-        return "paper preset (odometry)" if config.use_odometry else "paper preset"
+        return "paper preset (odometry)" if config.motion.use_odometry else "paper preset"
     return "slam"
 
 
@@ -190,8 +190,8 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     odo = data.odometry
     if odo is not None:
         table.append({"source": "raw odometry", **_flat(score(odo, data))})
-        if odometry_baseline and not config.use_odometry:
-            with_odo = run_slam(data.records, dataclasses.replace(config, preset="paper", use_odometry=True))
+        if odometry_baseline and not config.motion.use_odometry:
+            with_odo = run_slam(data.records, dataclasses.replace(config, preset="paper", motion=dataclasses.replace(config.motion, use_odometry=True)))
             table.append({"source": "paper preset (odometry)", **_flat(score(with_odo.trajectory, data, with_odo))})
     consistency = {
         "diverged": bool(d["diverged"]),

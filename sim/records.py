@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -66,8 +67,10 @@ def scan_stamps(sensor: SensorConfig, duration: float, rate_hz: float | None = N
 
 
 def simulate_tour(world: World, tour: Tour, stamps: np.ndarray, sensor: SensorConfig, seed: int = 0,
-                  odometry: OdometryConfig | None = None) -> list[Record]:
-    """Scan ``world`` along ``tour`` at ``stamps``; each beam from the pose at its own time."""
+                  odometry: OdometryConfig | None = None,
+                  progress: Callable[[int, int], None] | None = None) -> list[Record]:
+    """Scan ``world`` along ``tour`` at ``stamps``; each beam from the pose at its own time.
+    ``progress(done, total)`` is called after each scan (a driver's progress bar)."""
     truth = tour.pose_at(stamps)
     odom = odometry_poses(truth, odometry, np.random.default_rng([int(seed), _STREAM_ODOMETRY])) if odometry else None
     offsets = sensor.beam_time_offsets if sensor.interlaced else np.zeros(sensor.n_beams)
@@ -77,19 +80,22 @@ def simulate_tour(world: World, tour: Tour, stamps: np.ndarray, sensor: SensorCo
             scan = sim.scan_from_beam_poses(tour.pose_at(t + offsets), float(t))
             records.append(Record(scan=scan, odom=tuple(map(float, odom[j])) if odom is not None else None,
                                   truth=(float(truth[j, 0]), float(truth[j, 1]), float(truth[j, 2]))))
+            if progress is not None:
+                progress(j + 1, len(stamps))
     return records
 
 
 def simulate_records(world: str | World = "office", seed: int = 0, duration: float = 120.0,
                      sensor: SensorConfig | None = None, odometry: OdometryConfig | None = None,
-                     rate_hz: float | None = None, limits: RobotLimits | None = None) -> list[Record]:
+                     rate_hz: float | None = None, limits: RobotLimits | None = None,
+                     progress: Callable[[int, int], None] | None = None) -> list[Record]:
     """A simulated run as Records: the robot tours ``world`` (a name, built with ``seed``, or a
     World) for ``duration`` s and the LMS200 scans at its rate (decimated to ``rate_hz``).
 
     Every record has the true scanner pose at its stamp (the time of its first beam); odometry
-    only when ``odometry`` is given.
+    only when ``odometry`` is given. ``progress(done, total)`` is called after each scan.
     """
     w = world if isinstance(world, World) else make_world(world, seed)
     s = sensor if sensor is not None else SensorConfig()
     tour = robot_tour(w, seed, duration, limits)
-    return simulate_tour(w, tour, scan_stamps(s, duration, rate_hz), s, seed, odometry)
+    return simulate_tour(w, tour, scan_stamps(s, duration, rate_hz), s, seed, odometry, progress)

@@ -18,6 +18,11 @@ from .pointalign import align_to_previous, beam_normals, point_to_line_translati
 from .prealign import align
 
 
+_MIN_DT = 1e-3  # s: a turn-rate widening never divides by a shorter interval
+_INFORMATION_FLOOR = 1e-3  # 1/m^2: keeps a corridor's information invertible (no direction fixed)
+_MIN_REFERENCE_POINTS = 10  # a scan with fewer valid points is no reference for the next one
+
+
 @dataclass
 class Landmark:
     """Bookkeeping of one landmark; its value lives in the filter state."""
@@ -41,6 +46,7 @@ class StepInfo:
     prealign_used: bool = False
     prealign_shift: float = 0.0  # rad, heading change the alignment applied to the prediction
     scan_velocity: float = float("nan")  # m/s, forward speed measured against the previous scan
+    point_score: float = float("nan")  # fraction of the scan's points on the previous scan's at the estimate
 
 
 class SlamFilter:
@@ -53,8 +59,8 @@ class SlamFilter:
         self.scan_no = -1
         self.stamp: float | None = None
         self.odom: tuple[float, float, float] | None = None
-        self.gate = float(chi2_quantile(config.gate_probability, 2))
-        self.new_gate = float(chi2_quantile(config.new_landmark_probability, 2))
+        self.gate = float(chi2_quantile(config.association.gate_probability, 2))
+        self.new_gate = float(chi2_quantile(config.association.new_landmark_probability, 2))
         self._previous_points: cKDTree | None = None
         self._previous_world = np.zeros((0, 2))
         # reference scans of the scan velocity: (stamp s, pose, tree, world points, normals), oldest first
@@ -85,9 +91,9 @@ class SlamFilter:
         self.stamp = stamp
         if odom is not None:
             self.odom = odom
-        if cfg.prealign and self.scan_no > 0:
+        if cfg.prealign.enabled and self.scan_no > 0:
             self._prealign(obs, info)
-        if cfg.scan_velocity and self.scan_no > 0 and not cfg.use_odometry:
+        if cfg.prealign.scan_velocity and self.scan_no > 0 and not cfg.motion.use_odometry:
             self._scan_velocity(obs, info)
         pairs_l, new_l = self._associate_lines(obs)
         pairs_c, new_c = self._associate_corners(obs)
@@ -99,6 +105,9 @@ class SlamFilter:
             self._add("corner", obs.corners[o], obs.corner_cov[o], None)
         info.n_new = len(new_l) + len(new_c)
         self._manage()
+        verify = self._verifier(obs.points)
+        if verify is not None:
+            info.point_score = verify(self.ekf.x[:3, 0])
         self._remember_points(obs.points)
         return info
 
@@ -106,18 +115,18 @@ class SlamFilter:
         cfg = self.config
         dt = max(float(dt), 0.0)
         self._dt = dt
-        if cfg.use_odometry and odom is not None and self.odom is not None:
+        if cfg.motion.use_odometry and odom is not None and self.odom is not None:
             delta = models.odometry_delta(self.odom, odom)
             dist = float(np.hypot(delta[0], delta[1]))
-            a_t, a_r, a_rt = cfg.odom_noise
+            a_t, a_r, a_rt = cfg.motion.odom_noise
             var_t = (a_t * dist) ** 2 + 1e-6
             var_r = (a_r * abs(delta[2]) + a_rt * dist) ** 2 + 1e-6
             self.ekf.set_odometry(delta, dt, np.diag([var_t, var_t, var_r]))
             self.ekf.predict()
             return
-        n = max(1, int(np.ceil(dt / cfg.max_dt)))
+        n = max(1, int(np.ceil(dt / cfg.motion.max_dt)))
         for _ in range(n):
-            self.ekf.set_motion(dt / n, cfg.sigma_accel, cfg.sigma_alpha, cfg.sigma_lateral)
+            self.ekf.set_motion(dt / n, cfg.motion.sigma_accel, cfg.motion.sigma_alpha, cfg.motion.sigma_lateral)
             self.ekf.predict()
 
     def _prealign(self, obs: Observations, info: StepInfo) -> None:
@@ -125,22 +134,22 @@ class SlamFilter:
         for a scan with too few lines, against the previous scan's points."""
         cfg = self.config
         x = self.ekf.x[:, 0].copy()
-        max_turn = cfg.max_turn_rate * self._dt + np.radians(10.0)
+        max_turn = cfg.prealign.max_turn_rate * self._dt + cfg.prealign.turn_margin
         a = self._line_alignment(obs, x, max_turn) if obs.lines.shape[0] else None
-        if a is not None and a.matched_length > 0 and a.matched_length >= cfg.prealign_min_fraction * a.total_length:
+        if a is not None and a.matched_length > 0 and a.matched_length >= cfg.prealign.min_fraction * a.total_length:
             self._apply_alignment(a.pose, a.information, x, info)
             return
-        if not cfg.point_fallback or self._previous_points is None or obs.points.shape[0] < 20:
+        if not cfg.prealign.point_fallback or self._previous_points is None or obs.points.shape[0] < cfg.prealign.min_points:
             return
         cands = align_to_previous(obs.points, self._previous_world, self._previous_points, x[:3],
-                                  self._heading_before, max_turn, cfg.verify_tolerance)
-        near = [c for c in cands if abs(wrap(c[1][2] - x[2])) <= np.radians(10.0)]
-        far = [c for c in cands if abs(wrap(c[1][2] - x[2])) > np.radians(10.0)]
+                                  self._heading_before, max_turn, cfg.prealign.verify_tolerance)
+        near = [c for c in cands if abs(wrap(c[1][2] - x[2])) <= cfg.prealign.near_heading]
+        far = [c for c in cands if abs(wrap(c[1][2] - x[2])) > cfg.prealign.near_heading]
         chosen = near[0] if near else None
-        if far and (chosen is None or far[0][0] > chosen[0] + cfg.verify_margin):
+        if far and (chosen is None or far[0][0] > chosen[0] + cfg.prealign.verify_margin):
             chosen = far[0]
-        if chosen is not None and chosen[0] >= cfg.point_min_score:
-            self._apply_alignment(chosen[1], np.eye(2) if cfg.point_xy else None, x, info, always_xy=cfg.point_xy)
+        if chosen is not None and chosen[0] >= cfg.prealign.point_min_score:
+            self._apply_alignment(chosen[1], np.eye(2) if cfg.prealign.point_xy else None, x, info, always_xy=cfg.prealign.point_xy)
 
     def _line_alignment(self, obs: Observations, x: np.ndarray, max_turn: float):
         pos, idx = self._indices("line")
@@ -148,14 +157,14 @@ class SlamFilter:
             return None
         R, th = x[idx], x[idx + 1]
         ends = self._extent_points(R, th, pos)
-        near = _point_segment_distance(x[:2], ends) <= self.config.prealign_radius
+        near = _point_segment_distance(x[:2], ends) <= self.config.prealign.radius
         if not near.any():
             return None
         lengths = np.hypot(ends[:, 2] - ends[:, 0], ends[:, 3] - ends[:, 1])
         return align(obs.lines[:, 0], obs.lines[:, 1], obs.line_lengths, R[near], th[near],
-                     np.maximum(lengths[near], 0.3), x[:3], scan_ends=obs.line_ends, map_ends=ends[near],
+                     np.maximum(lengths[near], self.config.prealign.min_map_line_length), x[:3], scan_ends=obs.line_ends, map_ends=ends[near],
                      reference_heading=self._heading_before, max_turn=max_turn,
-                     verify=self._verifier(obs.points), verify_margin=self.config.verify_margin)
+                     verify=self._verifier(obs.points), verify_margin=self.config.prealign.verify_margin)
 
     def _apply_alignment(self, pose: np.ndarray, information: np.ndarray | None, x: np.ndarray, info: StepInfo,
                          always_xy: bool = False) -> None:
@@ -165,19 +174,19 @@ class SlamFilter:
         nu = pose - x[:3]
         nu[2] = wrap(nu[2])
         P = self.ekf.P
-        var_phi = cfg.prealign_sigma_phi**2
-        if nu[2] ** 2 > chi2_quantile(0.999, 1) * (P[2, 2] + var_phi):
+        var_phi = cfg.prealign.sigma_phi**2
+        if nu[2] ** 2 > chi2_quantile(cfg.prealign.widen_probability, 1) * (P[2, 2] + var_phi):
             # the constant-velocity prior cannot explain the turn the scan shows: widen it
             P[2, 2] += nu[2] ** 2
-            P[4, 4] += 0.25 * (nu[2] / max(self._dt, 1e-3)) ** 2
+            P[4, 4] += cfg.prealign.turn_rate_widening * (nu[2] / max(self._dt, _MIN_DT)) ** 2
         rows = [2]
         if information is not None:
             # position: only along the normals of the matched lines (a corridor fixes one direction);
             # the line update fixes the position once the heading is right, so the alignment's
             # position is used only after a turn the prediction missed (it double-counts the lines)
-            R_xy = cfg.prealign_sigma_xy**2 * np.linalg.inv(information + 1e-3 * np.eye(2))
+            R_xy = cfg.prealign.sigma_xy**2 * np.linalg.inv(information + _INFORMATION_FLOOR * np.eye(2))
             S_xy = P[:2, :2] + R_xy
-            if (always_xy or abs(nu[2]) > cfg.prealign_xy_turn) and nu[:2] @ np.linalg.solve(S_xy, nu[:2]) < chi2_quantile(0.999, 2):
+            if (always_xy or abs(nu[2]) > cfg.prealign.xy_turn) and nu[:2] @ np.linalg.solve(S_xy, nu[:2]) < chi2_quantile(cfg.prealign.xy_probability, 2):
                 rows = [0, 1, 2]
         Rm = np.zeros((len(rows), len(rows)))
         Rm[-1, -1] = var_phi
@@ -194,9 +203,9 @@ class SlamFilter:
         """``verify(pose)``: fraction of this scan's points within ``verify_tolerance`` of the
         previous scan's points (world frame); None without points on either side."""
         tree = self._previous_points
-        if tree is None or points.shape[0] < 10:
+        if tree is None or points.shape[0] < _MIN_REFERENCE_POINTS:
             return None
-        tol = self.config.verify_tolerance
+        tol = self.config.prealign.verify_tolerance
 
         def verify(pose: np.ndarray) -> float:
             c, s = np.cos(pose[2]), np.sin(pose[2])
@@ -208,22 +217,22 @@ class SlamFilter:
 
     def _remember_points(self, points: np.ndarray) -> None:
         X, Y, Phi = self.ekf.x[:3, 0]
-        if points.shape[0] < 10:
+        if points.shape[0] < _MIN_REFERENCE_POINTS:
             self._previous_points = None
             self._references = []
             return
         c, s = np.cos(Phi), np.sin(Phi)
         self._previous_world = points @ np.array([[c, s], [-s, c]]) + (X, Y)
         self._previous_points = cKDTree(self._previous_world)
-        if self.config.scan_velocity:
+        if self.config.prealign.scan_velocity:
             normals, ok = beam_normals(self._previous_world)
-            if ok.sum() < 10:
+            if ok.sum() < _MIN_REFERENCE_POINTS:
                 self._references = []
                 return
             ref = (float(self.stamp), np.array([X, Y, Phi]), cKDTree(self._previous_world[ok]), self._previous_world[ok], normals[ok])
             self._references.append(ref)
             # the next scan picks the newest reference at least scan_velocity_baseline before it
-            while len(self._references) > 1 and self._references[1][0] <= self.stamp - self.config.scan_velocity_baseline + 1e-9:
+            while len(self._references) > 1 and self._references[1][0] <= self.stamp - self.config.prealign.scan_velocity_baseline + 1e-9:
                 self._references.pop(0)
 
     def _scan_velocity(self, obs: Observations, info: StepInfo) -> None:
@@ -232,9 +241,9 @@ class SlamFilter:
         used only when the matched points' normals constrain the forward direction (a wall ahead, a
         door frame): in a corridor the lines fix only the sideways position."""
         cfg = self.config
-        if not self._references or self._dt <= 0 or obs.points.shape[0] < 20:
+        if not self._references or self._dt <= 0 or obs.points.shape[0] < cfg.prealign.min_points:
             return
-        old_enough = [r for r in self._references if r[0] <= self.stamp - cfg.scan_velocity_baseline + 1e-9]
+        old_enough = [r for r in self._references if r[0] <= self.stamp - cfg.prealign.scan_velocity_baseline + 1e-9]
         ref_stamp, ref_pose, tree, prev, normals = old_enough[-1] if old_enough else self._references[0]
         interval = float(self.stamp) - ref_stamp
         if interval <= 0:
@@ -244,22 +253,22 @@ class SlamFilter:
         rotated = obs.points @ np.array([[c, s], [-s, c]])
         best = None
         for start in (x[:2], ref_pose[:2]):  # the prediction, and standing still
-            t, score, A = point_to_line_translation(rotated, tree, prev, normals, start, cfg.verify_tolerance)
+            t, score, A = point_to_line_translation(rotated, tree, prev, normals, start, cfg.prealign.verify_tolerance)
             if best is None or score > best[1] + 1e-9:
                 best = (t, score, A)
         t, score, A = best
-        if score < cfg.scan_velocity_min_score:
+        if score < cfg.prealign.scan_velocity_min_score:
             return
         phi_mid = ref_pose[2] + 0.5 * wrap(x[2] - ref_pose[2])
         u = np.array([np.cos(phi_mid), np.sin(phi_mid)])
         n_matched = max(np.trace(A), 1.0)
         fraction = float(u @ A @ u) / n_matched
-        if fraction < cfg.scan_velocity_min_fraction:
+        if fraction < cfg.prealign.scan_velocity_min_fraction:
             return
         v = float((t - ref_pose[:2]) @ u) / interval
-        var = (cfg.scan_velocity_sigma**2 / fraction) / interval**2 + cfg.scan_velocity_floor**2
+        var = (cfg.prealign.scan_velocity_sigma**2 / fraction) / interval**2 + cfg.prealign.scan_velocity_floor**2
         P = self.ekf.P
-        if (v - x[3]) ** 2 > chi2_quantile(0.9999, 1) * (P[3, 3] + var):
+        if (v - x[3]) ** 2 > chi2_quantile(cfg.prealign.scan_velocity_prior_probability, 1) * (P[3, 3] + var):
             # the prior is far off (a missed stop or start): widen it rather than fight it
             P[3, 3] += (v - x[3]) ** 2
         H = np.zeros((1, self.ekf.dim_x))
@@ -298,14 +307,11 @@ class SlamFilter:
         cand = assoc.candidates(z, Rz, zhat, HPH, 1 if kind == "line" else None)
         d2 = cand.d2.copy()
         if extra_mask is not None:
-            # extents disambiguate: they veto a pairing only when another landmark could take the
-            # observation; a line that gates with exactly one landmark is that landmark seen
-            # along a part of it not seen before
-            in_gate = cand.d2 < self.gate
-            sole = in_gate.sum(axis=1) == 1
-            keep = extra_mask | (sole[:, None] & in_gate)
-            d2[~keep] = np.inf
-        if self.config.association == "jcbb":
+            # extents veto every pairing outside the landmark's extent grown by the margin and the
+            # pose uncertainty, also when the landmark is the only one in the gate (MIT CSAIL scan
+            # 453: a corridor's first cross line paired 6.5 m outside a lone candidate's extent)
+            d2[~extra_mask] = np.inf
+        if self.config.association.method == "jcbb":
             def nu_fn(o, l):
                 return cand.nu[o, l]
 
@@ -317,17 +323,19 @@ class SlamFilter:
                     S[2 * k : 2 * k + 2, 2 * k : 2 * k + 2] += Rz[o]
                 return S
 
-            pairs = assoc.jcbb(d2, self.gate, nu_fn, S_fn, self.config.gate_probability)
+            pairs = assoc.jcbb(d2, self.gate, nu_fn, S_fn, self.config.association.gate_probability)
         else:
-            pairs = assoc.nearest_neighbour(d2, self.gate, self.config.reject_ambiguous)
+            pairs = assoc.nearest_neighbour(d2, self.gate, self.config.association.reject_ambiguous)
         paired = {p[0] for p in pairs}
-        new = [o for o in range(z.shape[0]) if np.min(cand.d2[o]) > self.new_gate and o not in paired]
+        # new: far from every landmark it could be (a line outside every collinear landmark's
+        # extent is another wall on the same infinite line, e.g. beyond a door)
+        new = [o for o in range(z.shape[0]) if np.min(d2[o]) > self.new_gate and o not in paired]
         return [(o, int(pos[l])) for o, l in pairs], new
 
     def _associate_lines(self, obs: Observations):
         pos, idx = self._indices("line")
         mask = None
-        if pos.size and obs.lines.shape[0] and np.isfinite(self.config.extent_margin):
+        if pos.size and obs.lines.shape[0] and np.isfinite(self.config.association.extent_margin):
             x = self.ekf.x[:, 0]
             th = x[idx + 1]
             d = np.column_stack((-np.sin(th), np.cos(th)))  # (L, 2) line directions
@@ -335,12 +343,14 @@ class SlamFilter:
             s0 = w[:, :2] @ d.T
             s1 = w[:, 2:] @ d.T  # (m, L)
             ext = np.array([self.landmarks[k].extent for k in pos]).reshape(-1, 2)
-            m = self.config.extent_margin
+            a = self.config.association
+            sigma_xy = float(np.sqrt(max(np.linalg.eigvalsh(self.ekf.P[:2, :2]).max(), 0.0)))
+            m = a.extent_margin + a.extent_sigmas * sigma_xy
             mask = (np.maximum(s0, s1) >= ext[None, :, 0] - m) & (np.minimum(s0, s1) <= ext[None, :, 1] + m)
         return self._associate("line", obs.lines, obs.line_cov, mask)
 
     def _associate_corners(self, obs: Observations):
-        if not self.config.use_corners:
+        if not self.config.observations.use_corners:
             return [], []
         return self._associate("corner", obs.corners, obs.corner_cov)
 
@@ -383,7 +393,7 @@ class SlamFilter:
         pose = self.ekf.x[:3, 0]
         value, Gp, Gz = (models.init_line if kind == "line" else models.init_corner)(pose, z)
         self.ekf.add_landmark(value, Gp, Gz, Rz)
-        lm = Landmark(kind, born=self.scan_no, confirmed=self.config.confirm_hits <= 1)
+        lm = Landmark(kind, born=self.scan_no, confirmed=self.config.landmarks.confirm_hits <= 1)
         if ends is not None:
             w = self._world_ends(ends.reshape(1, 4))[0]
             d = np.array([-np.sin(value[1]), np.cos(value[1])])
@@ -397,9 +407,9 @@ class SlamFilter:
         for k, lm in enumerate(self.landmarks):
             if lm.confirmed:
                 continue
-            if lm.hits >= cfg.confirm_hits:
+            if lm.hits >= cfg.landmarks.confirm_hits:
                 lm.confirmed = True
-            elif self.scan_no - lm.born >= cfg.tentative_window:
+            elif self.scan_no - lm.born >= cfg.landmarks.tentative_window:
                 drop.append(k)
         if drop:
             self.ekf.remove_landmarks([ROBOT_DIM + 2 * k for k in drop])

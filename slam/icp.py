@@ -1,7 +1,7 @@
 """Robust point-to-line ICP of a scan against a reference point set (a keyframe or a local map).
 
-Pure numpy + ``scipy.spatial.cKDTree``, vectorised over the points: one tree query and one 3x3
-solve per iteration. Frames: scan points are in the sensor frame; the reference, its normals and
+The search and the Gauss-Newton steps are compiled (:mod:`slam.icpkernel`): a uniform grid finds
+each point's nearest map point, one pass over the points builds the 3x3 normal equations. Frames: scan points are in the sensor frame; the reference, its normals and
 every pose are in one parent frame (the world, or a keyframe's frame).
 """
 
@@ -10,11 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
+from . import icpkernel
 from .config import AlignmentConfig
-from .geometry import to_world
-from .models import wrap
 
 
 _EYE3 = np.eye(3)
@@ -22,15 +20,36 @@ _EYE3 = np.eye(3)
 
 @dataclass(frozen=True)
 class Reference:
-    """Points (m, 2) with unit normals (m, 2), in the parent frame, and their k-d tree."""
+    """Points (m, 2) with unit normals (m, 2), in the parent frame, and their search grid
+    (:func:`slam.icpkernel.build_grid`, cells of ``cell`` m)."""
 
     points: np.ndarray
     normals: np.ndarray
-    tree: cKDTree
+    cell: float
+    order: np.ndarray
+    start: np.ndarray
+    origin: np.ndarray
+    shape: np.ndarray
+
+    def __post_init__(self) -> None:
+        xy = np.ascontiguousarray(self.points.T)
+        nn = np.ascontiguousarray(self.normals.T)
+        object.__setattr__(self, "_grid", (xy[0], xy[1], self.order, self.start, float(self.origin[0]),
+                                           float(self.origin[1]), float(self.cell), int(self.shape[0]), int(self.shape[1])))
+        object.__setattr__(self, "_normals", (nn[0], nn[1]))
 
     @property
     def size(self) -> int:
         return int(self.points.shape[0])
+
+    def grid(self) -> tuple:
+        """The arguments of the kernels that describe the reference."""
+        return self._grid  # type: ignore[attr-defined]
+
+    def nearest(self, queries: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
+        """Index (-1 beyond ``reach`` m) and distance (inf) of the nearest point of each query (q, 2)."""
+        q = np.asarray(queries, float).reshape(-1, 2)
+        return icpkernel.nearest_many(q[:, 0].copy(), q[:, 1].copy(), *self.grid(), float(reach))
 
 
 @dataclass(frozen=True)
@@ -88,63 +107,41 @@ def voxel_filter(points: np.ndarray, size: float) -> np.ndarray:
     return np.sort(first)
 
 
-def make_reference(points: np.ndarray, normals: np.ndarray, voxel: float = 0.0) -> Reference:
-    """A :class:`Reference` of points and normals (same frame), thinned to one per ``voxel`` m cell."""
+def make_reference(points: np.ndarray, normals: np.ndarray, voxel: float = 0.0, cell: float = 0.5) -> Reference:
+    """A :class:`Reference` of points and normals (same frame), thinned to one per ``voxel`` m
+    cell; its search grid has cells of ``cell`` m (at least the widest reach of a search)."""
     keep = voxel_filter(points, voxel)
-    p, n = np.ascontiguousarray(points[keep]), np.ascontiguousarray(normals[keep])
-    return Reference(p, n, cKDTree(p))
+    p, n = np.ascontiguousarray(points[keep], float), np.ascontiguousarray(normals[keep], float)
+    if p.shape[0] == 0:
+        p, n = np.zeros((1, 2)) + 1e9, np.array([[1.0, 0.0]])  # far away: nothing within reach
+    return Reference(p, n, float(cell), *icpkernel.build_grid(p, cell))
 
 
 def refine(points: np.ndarray, ref: Reference, pose: np.ndarray, cfg: AlignmentConfig) -> Match:
     """Gauss-Newton point-to-line ICP from ``pose`` with Huber weights (``huber`` m) on the
-    residuals and correspondences within ``max_correspondence`` m, then, once converged, within
-    ``fine_correspondence`` m."""
-    pose = np.array(pose, float)
-    n = points.shape[0]
-    H = np.zeros((3, 3))
-    r = np.zeros(0)
-    reach = cfg.max_correspondence
-    for it in range(cfg.max_iterations):
-        w = to_world(pose, points)
-        d, j = ref.tree.query(w, distance_upper_bound=reach)
-        ok = np.isfinite(d)
-        if ok.sum() < 3:
-            return Match(pose, np.zeros((3, 3)), 0.0, np.inf, n)
-        wk, jk = w[ok], j[ok]
-        nk = ref.normals[jk]
-        r = np.einsum("ij,ij->i", wk - ref.points[jk], nk)
-        a = np.abs(r)
-        weight = np.where(a <= cfg.huber, 1.0, cfg.huber / np.maximum(a, 1e-12))
-        J = np.column_stack((nk[:, 0], nk[:, 1], nk[:, 1] * (wk[:, 0] - pose[0]) - nk[:, 0] * (wk[:, 1] - pose[1])))
-        Jw = J * weight[:, None]
-        H = Jw.T @ J
-        g = Jw.T @ r
-        # Levenberg damping: an unconstrained direction (a corridor's axis) stays where it started
-        step = -np.linalg.solve(H + (cfg.damping * np.trace(H) / 3.0 + 1e-12) * _EYE3, g)
-        pose = pose + step
-        pose[2] = wrap(pose[2])
-        if abs(step[0]) + abs(step[1]) < cfg.tolerance_xy and abs(step[2]) < cfg.tolerance_theta:
-            if reach == cfg.fine_correspondence:
-                break
-            # converged with the wide reach: finish with the narrow one, so points without a
-            # counterpart (a partial overlap) no longer pull the pose
-            reach = cfg.fine_correspondence
-    w = to_world(pose, points)
-    d, j = ref.tree.query(w, distance_upper_bound=cfg.inlier_distance)
-    inl = np.isfinite(d)
-    if inl.sum() >= 3:
-        res = np.einsum("ij,ij->i", w[inl] - ref.points[j[inl]], ref.normals[j[inl]])
-        rms = float(np.sqrt(np.mean(res**2)))
-    else:
-        rms = np.inf
+    residuals: up to ``max_iterations`` steps with correspondences within ``max_correspondence``
+    m, then up to ``fine_iterations`` within ``fine_correspondence`` m (points without a
+    counterpart in a partial overlap no longer pull the pose). Compiled: :mod:`slam.icpkernel`."""
+    if max(cfg.max_correspondence, cfg.fine_correspondence) > ref.cell + 1e-12:
+        raise ValueError(f"a reach of {cfg.max_correspondence} m needs grid cells at least as wide (have {ref.cell} m)")
+    p = np.asarray(points, float)
+    n = p.shape[0]
+    pose_out, H, inliers, ss = icpkernel.gauss_newton(
+        p[:, 0].copy(), p[:, 1].copy(), np.asarray(pose, float), *ref.grid()[:2], *ref._normals, *ref.grid()[2:],
+        np.array([cfg.max_correspondence, cfg.fine_correspondence]), np.array([cfg.max_iterations, cfg.fine_iterations]),
+        cfg.huber, cfg.damping, cfg.tolerance_xy, cfg.tolerance_theta, min(cfg.inlier_distance, cfg.fine_correspondence))
+    rms = float(np.sqrt(ss / inliers)) if inliers >= 3 else np.inf
     info = H / cfg.sigma_point**2 / cfg.covariance_inflation
-    return Match(pose, 0.5 * (info + info.T), float(inl.sum()) / max(n, 1), rms, n)
+    return Match(pose_out, 0.5 * (info + info.T), float(inliers) / max(n, 1), rms, n)
 
 
 def score(points: np.ndarray, ref: Reference, pose: np.ndarray, distance: float) -> float:
     """Fraction of the scan's points within ``distance`` m of a reference point at ``pose``."""
-    d, _ = ref.tree.query(to_world(pose, points), distance_upper_bound=distance)
-    return float(np.mean(np.isfinite(d))) if d.size else 0.0
+    p = np.asarray(points, float)
+    if p.shape[0] == 0:
+        return 0.0
+    return icpkernel.count_within(p[:, 0].copy(), p[:, 1].copy(), np.asarray(pose, float), *ref.grid(),
+                                  float(distance)) / p.shape[0]
 
 
 def match(points: np.ndarray, ref: Reference, starts: list[np.ndarray], cfg: AlignmentConfig) -> Match:

@@ -79,25 +79,18 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
         lo = max(0, cand.key - cfg.submap)
         sub = [kf for kf in keyframes[lo: cand.key + cfg.submap + 1] if new.travelled - kf.travelled >= cfg.min_travel]
         ref = local_map(sub, voxel)
-        forced = _always_retry(alignment)
-        m = match(scan_points, ref, [new.pose], forced)
-        if not _verified(m, cfg):
+        m = match(scan_points, ref, [new.pose], alignment)
+        if not _verified(m, cfg, alignment.covariance_inflation):
             continue
         return LoopClosure(cand.key, new.key, between(cand.pose, m.pose), m.inliers, m.rms,
                            float(np.hypot(*(m.pose[:2] - new.pose[:2]))))
     return None
 
 
-def _always_retry(cfg: AlignmentConfig) -> AlignmentConfig:
-    from dataclasses import replace
-
-    return replace(cfg, retry_inliers=1.01)
-
-
-def _verified(m: Match, cfg: LoopClosureConfig) -> bool:
+def _verified(m: Match, cfg: LoopClosureConfig, inflation: float) -> bool:
     """Geometric checks of a closure: enough points explained, small residual, and a position
-    fixed in every direction."""
+    fixed in every direction (by the match's geometry: the covariance before inflation)."""
     if m.inliers < cfg.min_inliers or not m.rms <= cfg.max_rms:
         return False
-    cov = m.covariance
+    cov = m.covariance / inflation
     return bool(np.sqrt(np.linalg.eigvalsh(cov[:2, :2]).max()) <= cfg.max_sigma_xy)

@@ -22,38 +22,37 @@ def merge_lines(segments: np.ndarray, max_angle: float = np.radians(3.0), max_of
     rad and ``max_offset`` m and that overlap or lie within ``max_gap`` m along the line; returns
     (m, 7) R, theta, x0, y0, x1, y1, count (segments merged), longest first."""
     seg = np.asarray(segments, float).reshape(-1, 4)
-    if seg.shape[0] == 0:
+    n = seg.shape[0]
+    if n == 0:
         return np.zeros((0, 7))
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
-    order = np.argsort(-length)
     R, th = normal_form(seg)
-    groups: list[dict] = []
-    for i in order:
-        placed = False
-        for g in groups:
-            if abs(wrap(th[i] - g["theta"])) > max_angle:
+    # groups, grown in place: line (R, theta), extent [lo, hi] along (-sin, cos)(theta), count
+    gR, gth, glo, ghi, gn = (np.zeros(n) for _ in range(5))
+    gc, gs = np.zeros(n), np.zeros(n)
+    m = 0
+    for i in np.argsort(-length):
+        x0, y0, x1, y1 = seg[i]
+        if m:
+            c, s_ = gc[:m], gs[:m]
+            dth = np.abs(np.mod(th[i] - gth[:m] + np.pi, 2 * np.pi) - np.pi)
+            off0, off1 = x0 * c + y0 * s_ - gR[:m], x1 * c + y1 * s_ - gR[:m]
+            s0, s1 = -x0 * s_ + y0 * c, -x1 * s_ + y1 * c
+            lo, hi = np.minimum(s0, s1), np.maximum(s0, s1)
+            ok = ((dth <= max_angle) & (np.maximum(np.abs(off0), np.abs(off1)) <= max_offset)
+                  & (hi >= glo[:m] - max_gap) & (lo <= ghi[:m] + max_gap))
+            hit = np.flatnonzero(ok)
+            if hit.size:
+                g = hit[0]
+                glo[g], ghi[g] = min(glo[g], lo[g]), max(ghi[g], hi[g])
+                gn[g] += 1
                 continue
-            u = np.array([-np.sin(g["theta"]), np.cos(g["theta"])])
-            nrm = np.array([np.cos(g["theta"]), np.sin(g["theta"])])
-            ends = seg[i].reshape(2, 2)
-            if np.max(np.abs(ends @ nrm - g["R"])) > max_offset:
-                continue
-            s = ends @ u
-            if s.max() < g["lo"] - max_gap or s.min() > g["hi"] + max_gap:
-                continue
-            g["lo"], g["hi"] = min(g["lo"], s.min()), max(g["hi"], s.max())
-            g["n"] += 1
-            placed = True
-            break
-        if not placed:
-            u = np.array([-np.sin(th[i]), np.cos(th[i])])
-            s = seg[i].reshape(2, 2) @ u
-            groups.append({"R": R[i], "theta": th[i], "lo": s.min(), "hi": s.max(), "n": 1})
-    out = []
-    for g in groups:
-        c, s_ = np.cos(g["theta"]), np.sin(g["theta"])
-        p = np.array([g["R"] * c, g["R"] * s_])
-        u = np.array([-s_, c])
-        a, b = p + g["lo"] * u, p + g["hi"] * u
-        out.append((g["R"], g["theta"], a[0], a[1], b[0], b[1], g["n"]))
-    return np.array(out, float).reshape(-1, 7)
+        gR[m], gth[m] = R[i], th[i]
+        gc[m], gs[m] = np.cos(th[i]), np.sin(th[i])
+        s0, s1 = -x0 * gs[m] + y0 * gc[m], -x1 * gs[m] + y1 * gc[m]
+        glo[m], ghi[m], gn[m] = min(s0, s1), max(s0, s1), 1
+        m += 1
+    c, s_ = gc[:m], gs[:m]
+    ax, ay = gR[:m] * c - glo[:m] * s_, gR[:m] * s_ + glo[:m] * c
+    bx, by = gR[:m] * c - ghi[:m] * s_, gR[:m] * s_ + ghi[:m] * c
+    return np.column_stack((gR[:m], gth[:m], ax, ay, bx, by, gn[:m]))

@@ -46,9 +46,9 @@ def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) 
     """Keep the lines with enough support; their covariance is the extractor's (where finite and
     positive definite) plus the floor ``diag(sigma_rho^2, sigma_alpha_obs^2)``. With ``scan``, its
     valid points (every ``point_stride``-th) come along for checking pre-alignments."""
-    floor = np.diag([config.sigma_rho**2, config.sigma_alpha_obs**2])
+    floor = np.diag([config.observations.sigma_rho**2, config.observations.sigma_alpha_obs**2])
     ln = fs.lines
-    keep = ~((ln.n_points > 0) & (ln.n_points < config.min_line_points)) & ~(ln.length < config.min_line_length)
+    keep = ~((ln.n_points > 0) & (ln.n_points < config.observations.min_line_points)) & ~(ln.length < config.observations.min_line_length)
     c = ln.cov[keep]
     sym = 0.5 * (c + c.transpose(0, 2, 1))
     good = np.isfinite(c).all(axis=(1, 2))  # finite and positive semi-definite, else the floor alone
@@ -56,11 +56,11 @@ def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) 
     covs = np.where(good[:, None, None], sym, 0.0) + floor
     lines = np.column_stack((ln.rho[keep], ln.alpha[keep]))
     ends = ln.values[keep, 2:6]
-    corners = fs.corners.values[:, :2] if config.use_corners else np.zeros((0, 2))
-    ccov = np.broadcast_to(np.eye(2) * config.sigma_corner**2, (corners.shape[0], 2, 2)).copy()
+    corners = fs.corners.values[:, :2] if config.observations.use_corners else np.zeros((0, 2))
+    ccov = np.broadcast_to(np.eye(2) * config.observations.sigma_corner**2, (corners.shape[0], 2, 2)).copy()
     return Observations(
         lines, covs, ends.copy(), corners.copy(), ccov,
-        scan_points(scan, config.point_stride) if scan is not None else np.zeros((0, 2)),
+        scan_points(scan, config.observations.point_stride) if scan is not None else np.zeros((0, 2)),
     )
 
 

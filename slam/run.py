@@ -7,6 +7,7 @@ from typing import Any, Iterable
 
 import numpy as np
 
+from lms200.errors import LmsbenchError
 from lms200.records import Record
 
 from .config import SlamConfig
@@ -15,7 +16,7 @@ from .models import wrap
 from .observations import Observations, from_features
 
 
-class SlamInputError(ValueError):
+class SlamInputError(LmsbenchError, ValueError):
     """The records cannot be processed (no scans, time going backwards)."""
 
 
@@ -29,8 +30,12 @@ class SlamResult:
         map_lines: (k, 7) confirmed line landmarks: R, theta, x0, y0, x1, y1, hits.
         map_corners: (c, 3) confirmed corner landmarks: x, y, hits.
         diagnostics: per-scan arrays ``nis``, ``nis_dof``, ``nees`` (nan without truth),
-            ``n_landmarks``, ``n_matched``, ``n_lines``, ``prealign_used``; scalars ``diverged``,
-            ``diverged_at`` (stamp or None), ``mean_nis_per_dof``, ``mean_nees``, ``healthy``.
+            ``n_landmarks``, ``n_matched``, ``n_lines``, ``prealign_used``, ``point_score``
+            (paper preset; the default pipeline: ``inliers``, ``matched``, ``keyframe``, the
+            ``keyframes`` (t, x, y, theta) and the ``loops`` closed); scalars ``diverged``,
+            ``diverged_at`` (stamp or None: NIS too high, or the scan's points off the map at
+            the estimate for ``consistency.point_window`` scans), ``mean_nis_per_dof``,
+            ``mean_nees``, ``healthy``.
     """
 
     trajectory: np.ndarray
@@ -78,7 +83,8 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
     """
     slam = SlamFilter(config)
     traj, covs = [], []
-    keys = ("nis", "nis_dof", "nees", "n_landmarks", "n_matched", "n_lines", "prealign_used", "prealign_shift")
+    keys = ("nis", "nis_dof", "nees", "n_landmarks", "n_matched", "n_lines", "prealign_used", "prealign_shift",
+            "point_score")
     diag: dict[str, list] = {k: [] for k in keys}
     diverged_at = None
     anchor = None
@@ -89,7 +95,7 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
         if previous is not None and t < previous:
             raise SlamInputError(f"scan {k}: timestamp {t} is earlier than the previous one ({previous})")
         previous = t
-        info = slam.step(t, obs, odom if config.use_odometry else None)
+        info = slam.step(t, obs, odom if config.motion.use_odometry else None)
         pose = slam.pose
         P = slam.ekf.P[:3, :3].copy()
         traj.append((t, *pose))
@@ -112,14 +118,15 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
         for key, value in (("nis", info.nis), ("nis_dof", info.nis_dof), ("nees", nees),
                            ("n_landmarks", len(slam.landmarks)), ("n_matched", info.n_matched),
                            ("n_lines", info.n_lines), ("prealign_used", info.prealign_used),
-                           ("prealign_shift", info.prealign_shift)):
+                           ("prealign_shift", info.prealign_shift), ("point_score", info.point_score)):
             diag[key].append(value)
         ok = slam.healthy(full=(k % 50 == 0))
         healthy &= ok
-        window = config.nis_window
+        window = config.consistency.nis_window
         nis_w = np.sum(diag["nis"][-window:])
         dof_w = np.sum(diag["nis_dof"][-window:])
-        if diverged_at is None and (not ok or (len(diag["nis"]) >= window and dof_w > 0 and nis_w / dof_w > config.nis_divergence)):
+        if diverged_at is None and (not ok or (len(diag["nis"]) >= window and dof_w > 0 and nis_w / dof_w > config.consistency.nis_divergence)
+                                    or lost_against_scan(diag["point_score"], config.consistency)):
             diverged_at = t
     if not traj:
         raise SlamInputError("no scans in the input")
@@ -135,6 +142,16 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
     )
     return SlamResult(np.array(traj, float).reshape(-1, 4), np.array(covs).reshape(-1, 3, 3),
                       slam.map_lines(), slam.map_corners(), out)
+
+
+def lost_against_scan(scores: list[float], cfg) -> bool:
+    """The NEES-like check against the scan itself: the last ``cfg.point_window`` scans all put
+    fewer than ``cfg.point_min_score`` of their points on the map (nan scores, no reference, are
+    not counted as bad)."""
+    if len(scores) < cfg.point_window:
+        return False
+    last = np.asarray(scores[-cfg.point_window:], float)
+    return bool(np.all(last < cfg.point_min_score))
 
 
 def pose_nees(traj: np.ndarray, covs: np.ndarray, truths: list) -> np.ndarray:
@@ -166,24 +183,48 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
 
     ``config.preset == "default"``: motion measured by scan matching, keyframe pose graph with
     loop closures (:func:`slam.scanslam.run_scan_slam`); the trajectory is the optimised graph's.
-    ``"paper"``: the paper's EKF (section 4.1) with line (and, with ``config.use_corners``,
-    corner) observations from ``features.extract(scan, method=config.extractor,
-    **config.extractor_params)``. The records' odometry is used only with
-    ``config.use_odometry`` (paper preset); true poses only for the NEES diagnostic.
+    ``"paper"``: the paper's EKF (section 4.1) with line (and, with ``config.observations.use_corners``,
+    corner) observations from ``features.extract_many(scans, method=config.extractor,
+    **config.extractor_params)`` in batches of ``EXTRACT_BATCH`` scans. The records' odometry is used only with
+    ``config.motion.use_odometry`` (paper preset); true poses only for the NEES diagnostic.
 
     Returns:
         SlamResult with one pose per record, stamped with the record's ``scan.stamp``.
     """
-    from features import extract  # the extractor registry (methods load lazily)
-
     if config.preset == "default":
         from .scanslam import run_scan_slam
 
         return run_scan_slam(((rec.scan.stamp, rec.scan, rec.truth) for rec in records), config)
 
     def steps():
+        batch: list[Record] = []
         for rec in records:
-            fs = extract(rec.scan, method=config.extractor, **config.extractor_params)
-            yield rec.scan.stamp, from_features(fs, config, rec.scan), rec.odom, rec.truth
+            batch.append(rec)
+            if len(batch) == EXTRACT_BATCH:
+                yield from _observed(batch, config)
+                batch = []
+        yield from _observed(batch, config)
 
     return run_steps(steps(), config)
+
+
+#: scans extracted in one ``features.extract_many`` call (bounds the memory of a long log)
+EXTRACT_BATCH = 256
+
+
+def extract_all(scans: list, config: SlamConfig) -> list:
+    """``features.extract_many`` over scans of one geometry (one compiled call), or
+    ``features.extract`` scan by scan where the geometry changes within the batch."""
+    from features import extract, extract_many
+
+    if not scans:
+        return []
+    try:
+        return extract_many(scans, method=config.extractor, **config.extractor_params)
+    except ValueError:  # scans of different geometries: one call each
+        return [extract(s, method=config.extractor, **config.extractor_params) for s in scans]
+
+
+def _observed(batch: list, config: SlamConfig):
+    for rec, fs in zip(batch, extract_all([r.scan for r in batch], config)):
+        yield rec.scan.stamp, from_features(fs, config, rec.scan), rec.odom, rec.truth

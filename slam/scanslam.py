@@ -15,9 +15,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .config import AlignmentConfig, KeyframeConfig, LoopClosureConfig
-from .geometry import between, compose
-from .icp import Match, Reference, chord_normals, match
+from dataclasses import replace
+
+from .config import AlignmentConfig, KeyframeConfig, LoopClosureConfig, MotionConfig
+from .models import chi2_quantile
+from .geometry import between, compose, rotation
+from .icp import Match, Reference, chord_normals, match, refine
 from .keyframes import Keyframe, LoopClosure, find_closure, local_map
 from .posegraph import PoseGraph, robust_noise
 
@@ -32,27 +35,41 @@ class ScanStep:
     hypothesis: int = 0  # ICP start that won (0 = the prediction)
     matched: bool = False  # the match was used (else the pose follows the prediction)
     new_keyframe: bool = False
+    jump_rejected: bool = False  # the match jumped from the prediction and failed the point check
     loop: LoopClosure | None = None
 
 
 @dataclass
 class ScanPoints:
-    """A scan's points in the sensor frame: all valid ones with normals (for the map), and the
+    """A scan's points in the sensor frame: all valid ones in beam order (for the map), and the
     thinned subset that is matched."""
 
-    points: np.ndarray
-    normals: np.ndarray
+    valid: np.ndarray
     matched: np.ndarray
+    cfg: AlignmentConfig
 
     @classmethod
     def from_points(cls, points: np.ndarray, cfg: AlignmentConfig) -> "ScanPoints":
         p = np.asarray(points, float).reshape(-1, 2)
-        p = p[np.isfinite(p[:, 0]) & (np.hypot(p[:, 0], p[:, 1]) <= cfg.max_range)]
-        n, ok = chord_normals(p, cfg.normal_step, cfg.normal_gap, cfg.normal_gap_per_range)
+        p = p[np.isfinite(p[:, 0]) & (p[:, 0] ** 2 + p[:, 1] ** 2 <= cfg.max_range**2)]
+        return cls(p, p[:: cfg.stride], cfg)
+
+    def surface(self) -> tuple[np.ndarray, np.ndarray]:
+        """The points that lie on a surface and their unit normals (towards the sensor), (p, 2) each."""
+        cfg = self.cfg
+        n, ok = chord_normals(self.valid, cfg.normal_step, cfg.normal_gap, cfg.normal_gap_per_range)
         # normals point towards the sensor, so the map's two faces of a thin wall differ
-        flip = np.einsum("ij,ij->i", n, p) > 0
+        flip = np.einsum("ij,ij->i", n, self.valid) > 0
         n[flip] *= -1
-        return cls(p[ok], n[ok], p[:: cfg.stride])
+        return self.valid[ok], n[ok]
+
+    @property
+    def points(self) -> np.ndarray:
+        return self.surface()[0]
+
+    @property
+    def normals(self) -> np.ndarray:
+        return self.surface()[1]
 
 
 @dataclass
@@ -60,6 +77,7 @@ class ScanSlam:
     """Keyframe scan-matching SLAM; call :meth:`step` once per scan, then :meth:`trajectory`."""
 
     alignment: AlignmentConfig = field(default_factory=AlignmentConfig)
+    motion: MotionConfig = field(default_factory=MotionConfig)
     keyframes_cfg: KeyframeConfig = field(default_factory=KeyframeConfig)
     loop_cfg: LoopClosureConfig = field(default_factory=LoopClosureConfig)
 
@@ -75,6 +93,8 @@ class ScanSlam:
         self.travelled = 0.0
         self._since_search = 0
         self._closed_at = 0.0  # path length (m) at the last loop closure
+        self._jump_gate = chi2_quantile(self.motion.jump_probability, 3)
+        self._narrow = replace(self.alignment, max_iterations=0)
         self.predict_velocity = True
 
     # -- one scan -------------------------------------------------------------------------------
@@ -104,6 +124,7 @@ class ScanSlam:
         if sp.matched.shape[0] >= 10 and self.ref is not None:
             starts = [pred, self.last[-1][1]] if self.predict_velocity else [self.last[-1][1], pred]
             m = match(sp.matched, self.ref, starts, self.alignment)
+            m = self._check_jump(sp.matched, m, pred, stamp - self.last[-1][0], info)
             info.inliers, info.rms, info.hypothesis = m.inliers, m.rms, m.start
         if m is not None and m.inliers >= self.alignment.min_inliers:
             pose, cov = m.pose, m.covariance
@@ -123,9 +144,27 @@ class ScanSlam:
         self.last = [self.last[-1], (stamp, pose)]
         return info
 
+    def _check_jump(self, points: np.ndarray, m: Match, pred: np.ndarray, dt: float, info: ScanStep) -> Match:
+        """The point check: a match further from the prediction than the motion's uncertainty is
+        compared with a narrow-reach match started at the prediction (which cannot slide to an
+        aliased place along a corridor); the jump stands unless that one explains clearly more
+        of the scan's points."""
+        mc = self.motion
+        dt2 = max(dt, 0.0) ** 2
+        sxy, sth = mc.sigma_accel * dt2 + mc.sigma_floor_xy, mc.sigma_alpha * dt2 + mc.sigma_floor_theta
+        e = m.pose - pred
+        e[2] = np.arctan2(np.sin(e[2]), np.cos(e[2]))
+        if (e[0] ** 2 + e[1] ** 2) / sxy**2 + e[2] ** 2 / sth**2 <= self._jump_gate:
+            return m
+        near = refine(points, self.ref, pred, self._narrow)
+        if near.inliers <= m.inliers + mc.jump_margin:
+            return m
+        info.jump_rejected = True
+        return near
+
     def _first(self, stamp: float, sp: ScanPoints) -> ScanStep:
         self.graph = PoseGraph(np.zeros(3), self.loop_cfg.prior_sigma)
-        self.keyframes.append(Keyframe(0, 0, stamp, np.zeros(3), sp.points, sp.normals, 0.0))
+        self.keyframes.append(Keyframe(0, 0, stamp, np.zeros(3), *sp.surface(), 0.0))
         self.ref = local_map(self.keyframes, self.keyframes_cfg.voxel)
         self.anchors.append((0, np.zeros(3)))
         self.covariances.append(np.zeros((3, 3)))
@@ -139,7 +178,7 @@ class ScanSlam:
         c, s = np.cos(pose[2]), np.sin(pose[2])
         A = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # world perturbation -> frame of pose
         key = self.graph.add(rel, A @ cov @ A.T, pose)
-        kf = Keyframe(key, len(self.anchors), stamp, pose.copy(), sp.points, sp.normals, self.travelled)
+        kf = Keyframe(key, len(self.anchors), stamp, pose.copy(), *sp.surface(), self.travelled)
         self.keyframes.append(kf)
         info.new_keyframe = True
         info.keyframe = key
@@ -165,6 +204,24 @@ class ScanSlam:
         assert self.graph is not None
         return self.graph.poses()
 
+    def pose_covariances(self) -> np.ndarray:
+        """(n, 3, 3) world-frame covariance of every scan's pose in :meth:`trajectory`: its
+        keyframe's marginal from the graph (relative to the first keyframe) composed with the
+        scan's match covariance against the local map."""
+        assert self.graph is not None
+        kp = self.keyframe_poses()
+        kcov = []
+        for k in range(len(kp)):
+            A = np.eye(3)
+            A[:2, :2] = rotation(kp[k][2])
+            kcov.append(A @ self.graph.covariance(k) @ A.T)
+        out = np.empty((len(self.anchors), 3, 3))
+        for i, ((k, rel), cov) in enumerate(zip(self.anchors, self.covariances)):
+            p = compose(kp[k], rel)
+            J = np.array([[1.0, 0.0, -(p[1] - kp[k][1])], [0.0, 1.0, p[0] - kp[k][0]], [0.0, 0.0, 1.0]])
+            out[i] = J @ kcov[k] @ J.T + (cov if rel.any() else 0.0)
+        return out
+
     def trajectory(self) -> np.ndarray:
         """(n, 3) world pose of every scan: its keyframe's optimised pose composed with the scan's
         pose relative to that keyframe."""
@@ -176,18 +233,17 @@ def run_scan_slam(steps, config) -> "SlamResult":
     """The default pipeline over (stamp s, scan, true pose or None) steps; see :func:`slam.run_slam`.
 
     The trajectory and the keyframes come from the optimised pose graph; the map is the lines
-    extracted on the keyframes, placed by their optimised poses and merged (:mod:`slam.linemap`).
+    extracted on the keyframes (``features.extract_many``, once at the end), placed by their
+    optimised poses and merged (:mod:`slam.linemap`).
     """
     from .linemap import merge_lines
-    from .run import SlamInputError, SlamResult, pose_nees
+    from .run import SlamInputError, SlamResult, extract_all, lost_against_scan, pose_nees
 
-    from features import extract
-
-    slam = ScanSlam(config.alignment, config.keyframes, config.loop_closure)
+    slam = ScanSlam(config.alignment, config.motion, config.keyframes, config.loop_closure)
     stamps: list[float] = []
     truths: list = []
     infos: list[ScanStep] = []
-    kf_lines: dict[int, np.ndarray] = {}
+    kf_scans: dict[int, object] = {}  # keyframe key -> its scan, for the map's lines
     previous = None
     for k, (t, scan, truth) in enumerate(steps):
         t = float(t)
@@ -196,8 +252,7 @@ def run_scan_slam(steps, config) -> "SlamResult":
         previous = t
         info = slam.step(t, scan.points)
         if info.new_keyframe:
-            fs = extract(scan, method=config.extractor, **config.extractor_params)
-            kf_lines[info.keyframe] = _segments(fs, config)
+            kf_scans[info.keyframe] = scan
         stamps.append(t)
         truths.append(truth)
         infos.append(info)
@@ -206,16 +261,21 @@ def run_scan_slam(steps, config) -> "SlamResult":
     poses = slam.trajectory()
     kposes = slam.keyframe_poses()
     traj = np.column_stack((stamps, poses))
-    covs = np.array(slam.covariances).reshape(-1, 3, 3)
-    segs = [_place(kposes[key], seg) for key, seg in kf_lines.items() if seg.size]
+    covs = slam.pose_covariances()
+    keys = list(kf_scans)
+    fsets = extract_all([kf_scans[k] for k in keys], config)  # one compiled call over the keyframes
+    segs = [_place(kposes[key], seg) for key, fs in zip(keys, fsets) if (seg := _segments(fs, config)).size]
     lines = merge_lines(np.concatenate(segs) if segs else np.zeros((0, 4)))
     inliers = np.array([i.inliers for i in infos])
     matched = np.array([i.matched for i in infos])
     nees = pose_nees(traj, covs, truths)
-    window = config.nis_window
-    lost = ~matched[1:]
-    run = np.convolve(lost.astype(float), np.ones(window), "valid") if lost.size >= window else np.zeros(0)
-    diverged_at = float(stamps[1 + int(np.argmax(run >= window)) + window - 1]) if run.size and run.max() >= window else None
+    diverged_at = None
+    scores: list[float] = []
+    for t, i in zip(stamps, infos):
+        scores.append(i.inliers)
+        if lost_against_scan(scores, config.consistency):
+            diverged_at = float(t)
+            break
     finite = nees[np.isfinite(nees)]
     diag = {
         "inliers": inliers, "matched": matched, "nees": nees,
@@ -234,9 +294,9 @@ def run_scan_slam(steps, config) -> "SlamResult":
 
 def _segments(fs, config) -> np.ndarray:
     """(k, 4) sensor-frame segments of the extracted lines long and well supported enough."""
-    out = [(*ln.start, *ln.end) for ln in fs.lines
-           if ln.length >= config.min_line_length and not (ln.n_points and ln.n_points < config.min_line_points)]
-    return np.array(out, float).reshape(-1, 4)
+    ln, obs = fs.lines, config.observations
+    keep = ~((ln.n_points > 0) & (ln.n_points < obs.min_line_points)) & ~(ln.length < obs.min_line_length)
+    return np.asarray(ln.values[keep, 2:6], float).reshape(-1, 4)
 
 
 def _place(pose: np.ndarray, seg: np.ndarray) -> np.ndarray:

@@ -102,7 +102,7 @@ def test_cli_errors_are_one_line(tmp_path):
     res = _cli("no_such_world_or_log", "--out", str(tmp_path))
     assert res.returncode == 2 and "neither a world" in res.stderr
     res = _cli("office", "--methods", "nonexistent", "--out", str(tmp_path))
-    assert res.returncode == 2 and "unknown extraction method" in res.stderr
+    assert res.returncode == 2 and "unknown method(s) nonexistent; known: sensor" in res.stderr
 
 
 def test_compare_on_a_simulated_world():

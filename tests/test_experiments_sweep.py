@@ -328,8 +328,8 @@ def test_misspelled_parameters_fail_before_any_cell_runs(tmp_path, param, messag
 
 
 def test_misspelled_slam_parameters_fail_before_any_cell_runs(tmp_path):
-    spec = SweepSpec.from_dict({"kind": "slam", "grid": {"slam.sigma_acel": [0.1]}})
-    with pytest.raises(SweepSpecError, match=r"\['slam.sigma_acel'\]: not fields of slam.SlamConfig.*'sigma_accel'"):
+    spec = SweepSpec.from_dict({"kind": "slam", "grid": {"slam.motion.sigma_acel": [0.1]}})
+    with pytest.raises(SweepSpecError, match=r"\['slam.motion.sigma_acel'\]: not fields of slam.SlamConfig.*'motion.sigma_accel'"):
         run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
     spec = SweepSpec.from_dict({"kind": "slam", "fixed": {"slam.extractor": "split_merge"},
                                 "grid": {"slam.extractor_params.kk": [1]}})

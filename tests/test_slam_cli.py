@@ -36,13 +36,16 @@ def test_slam_command_writes_every_output(sim_folder, tmp_path):
     proc = subprocess.run([sys.executable, "-m", "experiments.cli", "slam", str(sim_folder), "--out", str(out), "--quiet"],
                           capture_output=True, text=True, env=env, cwd=ROOT, timeout=300)
     assert proc.returncode == 0, proc.stderr
-    for name in ("trajectory.tum", "map.json", "metrics.json", "config.yaml", "slam.png"):
+    for name in ("trajectory.tum", "keyframes.tum", "map.json", "metrics.json", "config.yaml", "slam.png"):
         assert (out / name).is_file(), name
+    assert "loop closures over" in proc.stdout and "default preset" in proc.stdout
     stamps, poses = read_tum(out / "trajectory.tum")
     true_stamps, _ = read_tum(sim_folder / "groundtruth.tum")
     np.testing.assert_allclose(stamps, true_stamps, atol=1e-6)  # one pose per scan, the input's stamps
     m = json.loads((out / "metrics.json").read_text())
-    assert m["n_scans"] == stamps.size
+    assert m["n_scans"] == stamps.size and m["preset"] == "default"
+    assert m["loop_closures"]["n_keyframes"] >= 2 and m["loop_closures"]["n"] == len(m["loop_closures"]["closed"])
+    assert [row["source"] for row in m["table"]][:2] == ["slam", "paper preset"]
     assert m["ate"]["rmse"] < 0.1  # a short run in the simulated office stays on track
     assert not m["consistency"]["diverged"]
     lines = json.loads((out / "map.json").read_text())["lines"]
@@ -59,6 +62,13 @@ def test_slam_command_errors_are_one_line(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "experiments.cli", "slam", str(tmp_path / "empty"), "--out", str(tmp_path / "o")],
                           capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
     assert proc.returncode == 2 and "scans.clf" in proc.stderr
+
+
+def test_odometry_is_refused_outside_the_paper_preset(sim_folder, tmp_path, capsys):
+    from experiments.cli import main
+
+    assert main(["slam", str(sim_folder), "--out", str(tmp_path / "o"), "--odometry", "--quiet"]) == 2
+    assert "--preset paper" in capsys.readouterr().err
 
 
 def test_decimated_input_and_odometry_rows(sim_folder):

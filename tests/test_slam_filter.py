@@ -5,10 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from functools import partial
+
 from slam import Observations, SlamConfig, SlamConfigError, SlamFilter, SlamInputError, run_observations
+from slam.config import AssociationConfig, LandmarkConfig, MotionConfig, ObservationConfig, PrealignConfig
 from slam.metrics import ate
 from slam.models import wrap
 from slam.synthetic import CONVEX_ROOM, circle_path, observe_walls
+
+P = partial(SlamConfig, preset="paper")  # the paper's EKF (run_observations always runs it)
 
 
 def _run(config: SlamConfig, n: int = 250, rate: float = 10.0, seed: int = 0, corners: bool = False, odometry=None):
@@ -45,7 +50,7 @@ def test_map_lines_lie_on_the_true_walls():
 
 
 def test_jcbb_and_corners_give_the_same_quality():
-    res, truth = _run(SlamConfig(association="jcbb", use_corners=True), n=150, corners=True)
+    res, truth = _run(P(association=AssociationConfig(method="jcbb"), observations=ObservationConfig(use_corners=True)), n=150, corners=True)
     assert ate(res.trajectory, truth).rmse < 0.03
     assert res.map_corners.shape[0] >= 4  # room vertices seen often enough to be confirmed
     assert res.map_lines.shape[0] == len(CONVEX_ROOM)
@@ -57,7 +62,7 @@ def _turn_run(prealign: bool, turn_deg: float) -> tuple[np.ndarray, np.ndarray]:
     poses = [np.array([4.5, 3.5, 0.3])] * 8 + [np.array([4.5, 3.5, wrap(0.3 + np.radians(turn_deg))])] * 6
     t = 0.2 * np.arange(len(poses))
     obs = [observe_walls(CONVEX_ROOM, p, rng=rng, max_range=20.0) for p in poses]
-    res = run_observations(t, obs, SlamConfig(prealign=prealign))
+    res = run_observations(t, obs, P(prealign=PrealignConfig(enabled=prealign)))
     return res.trajectory, np.array(poses)
 
 
@@ -95,7 +100,7 @@ def test_spurious_lines_are_pruned():
 def test_odometry_mode_uses_the_increments():
     t, poses = circle_path(120, 10.0)
     odometry = [tuple(p) for p in poses]  # perfect odometry
-    res, truth = _run(SlamConfig(use_odometry=True, prealign=False), n=120, odometry=odometry)
+    res, truth = _run(P(motion=MotionConfig(use_odometry=True), prealign=PrealignConfig(enabled=False)), n=120, odometry=odometry)
     assert ate(res.trajectory, truth).rmse < 0.02
     # with odometry the speed state follows the increments
     assert abs(res.trajectory.shape[0] - 120) == 0
@@ -109,21 +114,21 @@ def test_divergence_is_reported_not_hidden():
     for p in poses:
         o = observe_walls(CONVEX_ROOM, p, sigma_rho=0.1, sigma_alpha=0.05, rng=rng)
         obs.append(Observations(o.lines, np.tile(np.diag([1e-3, 1e-3]) ** 2, (len(o.lines), 1, 1)), o.line_ends))
-    res = run_observations(t, obs, SlamConfig(prealign=False))
+    res = run_observations(t, obs, P(prealign=PrealignConfig(enabled=False)))
     assert res.diagnostics["diverged"]
     assert res.diagnostics["mean_nis_per_dof"] > 5.0
 
 
 def test_bad_input_raises_clear_errors():
     with pytest.raises(SlamConfigError, match="association"):
-        SlamConfig(association="magic")
+        P(association=AssociationConfig(method="magic"))
     with pytest.raises(SlamConfigError, match="unknown SLAM config"):
         SlamConfig.from_dict({"sigma_acel": 1.0})
     with pytest.raises(SlamInputError, match="earlier"):
         run_observations([0.0, 1.0, 0.5], [Observations()] * 3)
     with pytest.raises(SlamInputError, match="no scans"):
         run_observations([], [])
-    cfg = SlamConfig(sigma_accel=2.0)
+    cfg = P(motion=MotionConfig(sigma_accel=2.0))
     assert SlamConfig.from_dict(cfg.to_dict()) == cfg
 
 
@@ -162,7 +167,7 @@ def test_a_turn_in_a_scan_without_lines_is_followed_by_its_points():
     traj = run_steps(steps, SlamConfig()).trajectory
     assert abs(wrap(traj[6, 3] + poses[0][2] - poses[6][2])) < np.radians(2.0)
     assert abs(wrap(traj[7, 3] + poses[0][2] - poses[7][2])) < np.radians(1.0)
-    off = run_steps(steps, SlamConfig(point_fallback=False)).trajectory
+    off = run_steps(steps, P(prealign=PrealignConfig(point_fallback=False))).trajectory
     assert abs(wrap(off[6, 3] + poses[0][2] - poses[6][2])) > np.radians(20.0)
 
 
@@ -193,10 +198,39 @@ def _corridor_stop(config: SlamConfig, rate: float = 5.0):
 
 
 def test_a_stop_in_a_corridor_is_seen_by_the_points():
-    traj, truth = _corridor_stop(SlamConfig(scan_velocity=True))
+    traj, truth = _corridor_stop(P(prealign=PrealignConfig(scan_velocity=True)))
     along = np.abs(traj[:, 1] - truth[:, 0])
     assert along.max() < 0.4  # ~5 m driven, then 4.4 s standing: the points see the robot stop
     assert np.abs(traj[:, 2] - truth[:, 1]).max() < 0.1
     # the lines alone cannot: the constant-velocity prediction carries on along the corridor
     old, _ = _corridor_stop(SlamConfig())
     assert np.abs(old[:, 1] - truth[:, 0]).max() > 2.0
+
+
+def test_an_observation_outside_a_lone_landmarks_extent_is_never_paired():
+    """MIT CSAIL scan 453: a corridor's first cross line, 6.5 m beyond the only landmark on its
+    infinite line, was paired (the extent check was skipped for a sole candidate)."""
+    cfg = P(prealign=PrealignConfig(enabled=False), landmarks=LandmarkConfig(confirm_hits=1))
+    f = SlamFilter(cfg)
+    cov = np.diag([0.01**2, 0.005**2])
+    # a wall x = 2 seen from the origin between y = -1 and y = 1 (sensor frame = world frame)
+    wall = Observations(np.array([[2.0, 0.0]]), cov[None], np.array([[2.0, -1.0, 2.0, 1.0]]))
+    f.step(0.0, wall)
+    assert len(f.landmarks) == 1 and f.landmarks[0].extent == pytest.approx((-1.0, 1.0))
+    # the same infinite line, seen 6.5 m beyond the extent: a different wall, never this landmark
+    far = Observations(np.array([[2.0, 0.0]]), cov[None], np.array([[2.0, 7.5, 2.0, 9.0]]))
+    info = f.step(0.1, far)
+    assert info.n_matched == 0
+    # within the extent plus the margin it is the landmark
+    near = Observations(np.array([[2.0, 0.0]]), cov[None], np.array([[2.0, 0.5, 2.0, 1.8]]))
+    assert f.step(0.2, near).n_matched == 1
+
+
+def test_a_filter_whose_scans_leave_the_map_reports_divergence():
+    from slam.config import ConsistencyConfig
+    from slam.run import lost_against_scan
+
+    cfg = ConsistencyConfig(point_window=3, point_min_score=0.3)
+    assert not lost_against_scan([0.9, 0.1, 0.1], cfg)
+    assert lost_against_scan([0.9, 0.1, 0.1, 0.2], cfg)
+    assert not lost_against_scan([0.1, 0.1, float("nan")], cfg)  # no reference is not evidence

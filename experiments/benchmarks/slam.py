@@ -23,7 +23,7 @@ def _filter_only(n: int) -> dict:
     t, poses = circle_path(n, 10.0)
     obs = [observe_walls(CONVEX_ROOM, p, rng=rng) for p in poses]
     t0 = time.perf_counter_ns()
-    run_observations(t, obs, SlamConfig())
+    run_observations(t, obs, SlamConfig(preset="paper"))
     s = (time.perf_counter_ns() - t0) / 1e9
     return {"case": "filter only, analytic room", "scans": n, "seconds": s, "scans_per_s": n / s}
 
@@ -36,9 +36,12 @@ def _mit(n: int | None, use_odometry: bool = False) -> dict | None:
 
     records = list(read_log(MIT_LOG))[:n]
     t0 = time.perf_counter_ns()
-    run_slam(records, SlamConfig(use_odometry=use_odometry))
+    from slam.config import MotionConfig
+
+    config = SlamConfig(preset="paper", motion=MotionConfig(use_odometry=True)) if use_odometry else SlamConfig()
+    run_slam(records, config)
     s = (time.perf_counter_ns() - t0) / 1e9
-    label = "end to end MIT CSAIL" + (" (odometry)" if use_odometry else "")
+    label = "end to end MIT CSAIL" + (" (paper preset, odometry)" if use_odometry else " (default preset)")
     return {"case": label, "scans": len(records), "seconds": s, "scans_per_s": len(records) / s}
 
 

@@ -13,6 +13,7 @@ import yaml
 from lms200 import LmsbenchError
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
+from experiments.options import DURATION, SEED, check_methods, check_out, check_yaml, count, positive
 
 
 def _param(text: str) -> tuple[str, Any]:
@@ -30,14 +31,14 @@ def _param(text: str) -> tuple[str, Any]:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("compare", help="every extractor on identical scans: accuracy, corners and speed")
     p.add_argument("sources", nargs="+",
-                   help="world names (office, corridor, angles, pillars, random; WORLD:SEED for one seed) "
-                        "or paths of real logs")
+                   help="world names (office, corridor, angles, pillars, random; WORLD:SEED for one seed), "
+                        "`lmsbench simulate` folders, or paths of real logs")
     p.add_argument("--methods", nargs="+", help="extractors (default: every available one)")
-    p.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2], help="seeds of each world (default 0 1 2)")
-    p.add_argument("--duration", type=float, default=30.0, help="simulated seconds per world and seed (default 30)")
-    p.add_argument("--rate", type=float, default=2.0, help="simulated scans per second kept (default 2)")
-    p.add_argument("--stride", type=int, default=1, help="logs: use every STRIDE-th scan (default 1)")
-    p.add_argument("--max-scans", type=int, help="at most this many scans per source")
+    p.add_argument("--seeds", nargs="+", type=SEED, default=[0, 1, 2], help="seeds of each world (default 0 1 2)")
+    p.add_argument("--duration", type=DURATION, default=30.0, help="simulated seconds per world and seed (default 30)")
+    p.add_argument("--rate", type=positive("scans/s"), default=2.0, help="simulated scans per second kept (default 2)")
+    p.add_argument("--stride", type=count(1), default=1, help="logs: use every STRIDE-th scan (default 1)")
+    p.add_argument("--max-scans", type=count(1), help="at most this many scans per source")
     p.add_argument("--sigma", type=_sigma, default="auto",
                    help="range noise, 1 sigma (m), for the 3-sigma explained fraction; 'auto' (default): the "
                         "sensor model's for worlds, estimated from the data for logs")
@@ -62,7 +63,7 @@ def _sigma(text: str) -> float | str:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"--sigma takes metres or 'auto', got {text!r}") from None
-    if not value > 0 or value == float("inf"):
+    if not value > 0 or value == float("inf"):  # also nan
         raise argparse.ArgumentTypeError(f"--sigma must be > 0 m, got {text!r}")
     return value
 
@@ -70,22 +71,28 @@ def _sigma(text: str) -> float | str:
 def run(args: argparse.Namespace) -> int:
     import pandas as pd
 
+    from experiments.compare import (check_sources, common_errors, compare, format_summary, parse_sources,
+                                     resolved_configs, summarise)
     from experiments.overrides import extractor_overrides
-    from experiments.compare import (common_errors, compare, format_summary, parse_sources, resolved_configs,
-                                     summarise)
-    from features.registry import available_methods
+    from experiments.progress import warm_up_kernels
     from features.scoring import ScoreConfig
 
-    methods = args.methods or available_methods()
+    methods = check_methods(args.methods)
     params = extractor_overrides(dict(args.params), methods)
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
-    if args.max_scans is not None and args.max_scans < 1:
-        raise LmsbenchError(f"--max-scans must be >= 1, got {args.max_scans}")
+    check_out(args.out)
+    check_sources(args.sources, read_log_options(args))
     sensor = None
     if args.sensor is not None:
         import sim
 
-        sensor = sim.SensorConfig.from_yaml(args.sensor)
+        try:
+            sensor = sim.SensorConfig.from_yaml(args.sensor)
+        except LmsbenchError:
+            raise
+        except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
+            raise LmsbenchError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
+    warm_up_kernels()
     sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans,
                             read_options=read_log_options(args), poses=args.poses, sensor=sensor)
     score_config = ScoreConfig()
@@ -115,11 +122,8 @@ def run(args: argparse.Namespace) -> int:
         log_options=plain_log_options(read_log_options(args)),
         sigma_r={src.name: src.sigma_r for src in sources}, methods=configs, scoring=dataclasses.asdict(score_config),
     )
-    if any(src.kind == "sim" for src in sources):
-        import sim
-
-        # what parse_sources simulated (sim_source's default: the model without interlaced timing)
-        resolved["sensor"] = dataclasses.asdict(sensor if sensor is not None else sim.SensorConfig(interlaced=False))
+    # what produced each source's scans: the sensor that was simulated (interlaced or not), the log read
+    resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
     (args.out / "config.yaml").write_text(yaml.safe_dump(resolved, sort_keys=False))
     figures = []
     for src in sources:

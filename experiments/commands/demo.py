@@ -6,16 +6,17 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
+from experiments.options import DURATION, SEED, check_log, check_out, positive, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("demo", help="simulate an office run, compare every extractor, run SLAM, a sweep, "
                                     "figures and results/demo/report.md")
     p.add_argument("--out", type=Path, default=Path("results/demo"), help="output folder")
-    p.add_argument("--seed", type=int, default=0, help="world and run seed")
-    p.add_argument("--world", default="office", help="simulated world: office, corridor, angles, pillars, random")
-    p.add_argument("--duration", type=float, default=40.0, help="simulated run, s (default 40)")
-    p.add_argument("--rate-hz", type=float, default=10.0, help="scans kept per second of the run (default 10)")
+    p.add_argument("--seed", type=SEED, default=0, help="world and run seed")
+    p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them")
+    p.add_argument("--duration", type=DURATION, default=40.0, help="simulated run, s (default 40)")
+    p.add_argument("--rate-hz", type=positive("scans/s"), default=10.0, help="scans kept per second of the run (default 10)")
     p.add_argument("--log", help="real CARMEN log or bag for Fig. 9 (default: the Intel log where present)")
     p.add_argument("--no-sweep", action="store_true", help="skip the small Dask sweep")
     p.add_argument("--inprocess", action="store_true", help="run the sweep in this process instead of on Dask")
@@ -27,11 +28,10 @@ def run(args: argparse.Namespace) -> int:
     from experiments.demo import run_demo
     from experiments.figures.study import StudyConfig
 
+    check_out(args.out)
     cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz)
     if args.log:
-        if not Path(args.log).exists():
-            raise FileNotFoundError(f"no such log: {args.log}")
-        cfg.intel_log = args.log
+        cfg.intel_log = str(check_log(args.log))
     cfg.log_options = plain_log_options(read_log_options(args))
     executor = None if args.no_sweep else ("inprocess" if args.inprocess else "local")
     run_demo(args.out, cfg, sweep_executor=executor)

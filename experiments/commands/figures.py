@@ -6,6 +6,8 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
+from experiments.options import (DURATION, SEED, check_log, check_methods, check_out, check_study_tables,
+                                 check_sweep_results, positive, world_name)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -15,10 +17,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="redraw from the tables in this folder (from an earlier run) instead of computing them")
     p.add_argument("--sweep", type=Path, action="append", default=[], metavar="DIR",
                    help="also plot this sweep folder (with results.parquet); repeatable")
-    p.add_argument("--duration", type=float, default=40.0, help="simulated run, s (default 40)")
-    p.add_argument("--rate-hz", type=float, default=10.0, help="scans kept per second of the run (default 10)")
-    p.add_argument("--seed", type=int, default=0, help="world and run seed")
-    p.add_argument("--world", default="office", help="simulated world: office, corridor, angles, pillars, random")
+    p.add_argument("--duration", type=DURATION, default=40.0, help="simulated run, s (default 40)")
+    p.add_argument("--rate-hz", type=positive("scans/s"), default=10.0, help="scans kept per second of the run (default 10)")
+    p.add_argument("--seed", type=SEED, default=0, help="world and run seed")
+    p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them")
     p.add_argument("--methods", nargs="+", help="extractors to compare (default: all five)")
     p.add_argument("--intel", help="Intel CARMEN log for Fig. 9 (default ../shared/data/carmen/intel-corrected.log.gz)")
     p.add_argument("--no-slam", action="store_true", help="skip the SLAM run and Fig. 10")
@@ -30,24 +32,24 @@ def run(args: argparse.Namespace) -> int:
     from experiments.figures.make import draw_figures, draw_sweep
     from experiments.figures.study import StudyConfig, load_config, load_tables, run_study, save_tables
 
+    check_out(args.out)
+    for folder in args.sweep:
+        check_sweep_results(folder)
     if args.tables:
-        if not args.tables.is_dir():
-            raise FileNotFoundError(f"no tables folder {args.tables}")
+        check_study_tables(args.tables)
         tables, notes = load_tables(args.tables)
         cfg = load_config(args.tables)
     else:
         cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz, slam=not args.no_slam)
         if args.methods:
-            cfg.methods = tuple(args.methods)
+            cfg.methods = tuple(check_methods(args.methods))
         if args.intel:
-            cfg.intel_log = args.intel
+            cfg.intel_log = str(check_log(args.intel))
         cfg.log_options = plain_log_options(read_log_options(args))
         tables, notes = run_study(cfg)
         save_tables(tables, cfg, notes, args.out / "tables")
     written = draw_figures(tables, args.out, signals_k=cfg.signals_k, world=cfg.world)
     for folder in args.sweep:
-        if not (folder / "results.parquet").exists():
-            raise FileNotFoundError(f"{folder} has no results.parquet (run `lmsbench sweep` first)")
         written.update(draw_sweep(folder, args.out))
     for name, paths in written.items():
         print(f"{name:32s} " + " ".join(p.name for p in paths))

@@ -9,6 +9,7 @@ from lms200 import LogFormatError, read_log
 
 from experiments.logargs import add_log_options, read_log_options, report_skipped
 from experiments.loginfo import summarise
+from experiments.options import check_log
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -20,6 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_log(args.log)
     reader = read_log(args.log, **read_log_options(args))
     summary = summarise(reader)
     stats = reader.stats

@@ -17,6 +17,7 @@ from lms200.protocol import BAUD_MODES
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, read_log_options
+from experiments.options import PORT, SEED, InputError, check_log, count, positive, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -24,15 +25,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     cmds = p.add_subparsers(dest="lms200_command", metavar="ACTION", required=True)
 
     e = cmds.add_parser("emulate", help="serve a virtual LMS200 on a pseudo-terminal (or TCP); prints its path / URL")
-    e.add_argument("--world", default="office", help="simulator world to scan (office, corridor, angles, pillars, random)")
-    e.add_argument("--seed", type=int, default=0, help="seed of the world and the sensor noise")
+    e.add_argument("--world", type=world_name, default="office", help="simulator world to scan (a built-in world name; lmsbench simulate --help lists them)")
+    e.add_argument("--seed", type=SEED, default=0, help="seed of the world and the sensor noise")
     e.add_argument("--log", type=Path, help="replay this log (CARMEN or bag) instead of the simulator, in a loop")
-    e.add_argument("--tcp", type=int, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")
+    e.add_argument("--tcp", type=PORT, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")
     e.add_argument("--rfc2217", action="store_true", help="with --tcp: speak RFC 2217 (rfc2217://HOST:PORT), so the host sets the baud")
     e.add_argument("--host", default="127.0.0.1", help="address to listen on with --tcp")
     e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (the LMS200 ships in cm)")
-    e.add_argument("--time-scale", type=float, default=1.0, help="multiplies every byte time and device delay (0.01 = 100x faster)")
-    e.add_argument("--duration", type=float, help="stop after this many seconds (default: until Ctrl-C)")
+    e.add_argument("--time-scale", type=positive(), default=1.0, help="multiplies every byte time and device delay (0.01 = 100x faster)")
+    e.add_argument("--duration", type=positive("s"), help="stop after this many seconds (default: until Ctrl-C)")
     add_log_options(e)  # with --log
     e.set_defaults(func=run_emulate)
 
@@ -43,9 +44,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--units", choices=("mm", "cm"), default="mm", help="range unit: mm (8.18 m) or cm (81.8 m)")
     r.add_argument("--fov", type=int, default=180, choices=(180, 100), help="field of view (deg)")
     r.add_argument("--resolution", type=float, default=0.5, choices=(1.0, 0.5, 0.25), help="angular resolution (deg)")
-    r.add_argument("--max-scans", type=int, help="stop after this many scans")
-    r.add_argument("--duration", type=float, help="stop after this many seconds")
-    r.add_argument("--timeout", type=float, default=0.5, help="seconds to wait for a reply, on top of the line time")
+    r.add_argument("--max-scans", type=count(1), help="stop after this many scans")
+    r.add_argument("--duration", type=positive("s"), help="stop after this many seconds")
+    r.add_argument("--timeout", type=positive("s"), default=0.5, help="seconds to wait for a reply, on top of the line time")
     r.set_defaults(func=run_record)
 
 
@@ -54,17 +55,16 @@ def run_emulate(args: argparse.Namespace) -> int:
     from lms200.adapters import PtyAdapter, TcpServer
     from lms200.virtual import VirtualLMS200
 
-    if args.time_scale <= 0:
-        raise LmsbenchError(f"--time-scale must be > 0, got {args.time_scale}")
+    if args.rfc2217 and args.tcp is None:
+        raise InputError("--rfc2217 needs --tcp PORT")
     if args.log:
+        check_log(args.log)
         scans = log_scans(args.log, read_options=read_log_options(args))
         what = f"scans of {args.log} in a loop"
     else:
         scans = simulator_scans(args.world, args.seed)
         what = f"simulated scans of world {args.world} (seed {args.seed}) along its route graph"
     device = VirtualLMS200(scans, time_scale=args.time_scale, units=args.units)
-    if args.rfc2217 and args.tcp is None:
-        raise LmsbenchError("--rfc2217 needs --tcp PORT")
     adapter = TcpServer(device, args.host, args.tcp, rfc2217=args.rfc2217) if args.tcp is not None else PtyAdapter(device)
     where = adapter.url if args.tcp is not None else adapter.path
     print(where, flush=True)
@@ -126,11 +126,19 @@ def _write(out: Path, records: Iterable[Record]) -> int:
     return write_carmen(out, records, flush=True)
 
 
+RECORD_SUFFIXES = (".clf", ".log", ".gz", ".bag")
+
+
 def run_record(args: argparse.Namespace) -> int:
+    if args.out.suffix not in RECORD_SUFFIXES:
+        raise InputError(f"--out {args.out}: unknown kind {args.out.suffix or '(no suffix)'!r}; "
+                         f"write a CARMEN log (.clf, .log, .gz) or a ROS 1 bag (.bag)")
     if args.out.suffix == ".bag" and args.out.exists():
-        raise LmsbenchError(f"{args.out} exists; bags are not overwritten")
+        raise InputError(f"{args.out} exists; bags are not overwritten")
+    if args.out.is_dir():
+        raise InputError(f"--out {args.out} is a folder; give a file name")
     if not args.out.parent.is_dir():
-        raise LmsbenchError(f"--out: folder {args.out.parent} does not exist")
+        raise InputError(f"--out: folder {args.out.parent} does not exist")
     stop = {"now": False}
     previous = signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))
     try:

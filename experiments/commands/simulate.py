@@ -5,6 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from experiments.options import (DURATION, MAX_DURATION_S, SEED, InputError, check_file, check_out, check_yaml,
+                                 known_worlds, number, positive)
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("simulate", help="simulate an LMS200 run through an office world (scans.clf, "
@@ -12,13 +15,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--world", default="office",
                    help="office, corridor, angles, pillars, random, cluttered (office with clutter 1), "
                         "mit (the MIT-CSAIL-like preset), or a world.json (default office)")
-    p.add_argument("--clutter", type=float, default=None,
+    p.add_argument("--clutter", type=number(0.0), default=None,
                    help="clutter level of a named world: 0 none, 1 a furnished office, 2-3 busy "
                         "(chair and table legs, people, plants, bins, glass, doors at any angle; default: the world's own)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the world, tour and sensor noise")
-    p.add_argument("--duration", type=float, default=120.0, help="simulated time, s (default 120)")
+    p.add_argument("--seed", type=SEED, default=0, help="seed of the world, tour and sensor noise (>= 0)")
+    p.add_argument("--duration", type=DURATION, default=120.0,
+                   help=f"simulated time, s (default 120, at most {MAX_DURATION_S:g})")
     p.add_argument("--out", type=Path, required=True, help="output folder")
-    p.add_argument("--rate-hz", type=float, default=None, help="keep about this many scans/s (default all)")
+    p.add_argument("--rate-hz", type=positive("scans/s"), default=None, help="keep about this many scans/s (default all)")
     p.add_argument("--resolution", type=float, choices=(0.25, 0.5, 1.0), default=0.5,
                    help="angular resolution, deg: 0.5 (361 beams), 1 (181), 0.25 (401 over 100 deg)")
     p.add_argument("--units", choices=("mm", "cm"), default="mm", help="range unit mode (default mm)")
@@ -27,46 +31,81 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="sensor model from a YAML (e.g. from `lmsbench calibrate`); replaces --resolution and --units")
     p.add_argument("--odometry", action="store_true", help="add noisy wheel odometry to the scans")
     p.add_argument("--config", type=Path, help="rerun a config.yaml written by an earlier run")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
 
-def run(args: argparse.Namespace) -> int:
+def _config(args: argparse.Namespace):
     import yaml
 
     from lms200 import LmsbenchError
-    from sim import WORLD_NAMES, SensorConfig
+    from sim import SensorConfig
     from sim.records import OdometryConfig
 
-    from experiments.simulation import SimulationConfig, run_simulation
+    from experiments.simulation import SimulationConfig
 
     if args.config:
+        check_yaml(args.config, "a simulate config.yaml")
         try:
-            cfg = SimulationConfig.from_dict(yaml.safe_load(args.config.read_text()))
+            raw = yaml.safe_load(args.config.read_text())
+            if not isinstance(raw, dict):
+                raise TypeError("expected a mapping of world, seed, duration, sensor, ...")
+            cfg = SimulationConfig.from_dict(raw)
         except (yaml.YAMLError, TypeError, ValueError) as exc:
-            raise LmsbenchError(f"{args.config}: not a simulate config ({exc})") from None
-    else:
-        if args.world not in WORLD_NAMES and not args.world.endswith(".json"):
-            raise LmsbenchError(f"unknown world {args.world!r}; known worlds: {', '.join(WORLD_NAMES)} or a world.json")
-        if args.world.endswith(".json") and not Path(args.world).is_file():
-            raise FileNotFoundError(f"no such world file: {args.world}")
-        if args.clutter is not None and not args.clutter >= 0:
-            raise LmsbenchError(f"--clutter must be >= 0, got {args.clutter}")
-        if args.clutter is not None and args.world.endswith(".json"):
-            raise LmsbenchError("--clutter applies to named worlds; a world.json holds its own solids")
-        if args.duration <= 0:
-            raise LmsbenchError(f"--duration must be > 0, got {args.duration}")
-        beams = {0.5: 361, 1.0: 181, 0.25: 401}[args.resolution]
-        base = SensorConfig.ideal if args.ideal else SensorConfig
-        if args.sensor is not None:
-            if args.ideal:
-                raise LmsbenchError("--sensor and --ideal exclude each other (the file holds the whole sensor model)")
+            raise InputError(f"{args.config}: not a simulate config ({' '.join(str(exc).split())})") from None
+        if cfg.world not in known_worlds() and not cfg.world.endswith(".json"):
+            raise InputError(f"{args.config}: unknown world {cfg.world!r}; known worlds: {', '.join(known_worlds())}")
+        if not (0 < cfg.duration <= MAX_DURATION_S) or (cfg.rate_hz is not None and not cfg.rate_hz > 0):
+            raise InputError(f"{args.config}: duration must be in (0, {MAX_DURATION_S:g}] s and rate_hz > 0")
+        return cfg
+    worlds = known_worlds()
+    if args.world not in worlds and not args.world.endswith(".json"):
+        raise InputError(f"--world: unknown world {args.world!r}; known worlds: {', '.join(worlds)} or a world.json")
+    if args.world.endswith(".json"):
+        check_file(args.world, "a world.json")
+    if args.clutter is not None and args.world.endswith(".json"):
+        raise InputError("--clutter applies to named worlds; a world.json holds its own solids")
+    beams = {0.5: 361, 1.0: 181, 0.25: 401}[args.resolution]
+    base = SensorConfig.ideal if args.ideal else SensorConfig
+    if args.sensor is not None:
+        if args.ideal:
+            raise InputError("--sensor and --ideal exclude each other (the file holds the whole sensor model)")
+        try:
             sensor = SensorConfig.from_yaml(args.sensor)
-        else:
-            sensor = base(n_beams=beams, resolution_deg=args.resolution, units=args.units,
-                          **({} if args.ideal or args.units == "mm" else {"noise_sigma": 0.01}))
-        cfg = SimulationConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz,
-                               sensor=sensor, odometry=OdometryConfig() if args.odometry else None,
-                               clutter=args.clutter)
-    records = run_simulation(cfg, args.out)
+        except LmsbenchError:
+            raise
+        except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
+            raise InputError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
+    else:
+        sensor = base(n_beams=beams, resolution_deg=args.resolution, units=args.units,
+                      **({} if args.ideal or args.units == "mm" else {"noise_sigma": 0.01}))
+    return SimulationConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz,
+                            sensor=sensor, odometry=OdometryConfig() if args.odometry else None,
+                            clutter=args.clutter)
+
+
+def _world(cfg) -> None:
+    """Load a world.json now, so that a bad one is an error before anything is simulated."""
+    if not cfg.world.endswith(".json"):
+        return
+    from lms200 import LmsbenchError
+    from sim import World
+
+    check_file(cfg.world, "a world.json")
+    try:
+        World.from_json(cfg.world)
+    except LmsbenchError:
+        raise
+    except (ValueError, KeyError, TypeError) as exc:
+        raise InputError(f"{cfg.world}: not a world.json ({type(exc).__name__}: {' '.join(str(exc).split())})") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    from experiments.simulation import run_simulation
+
+    check_out(args.out)
+    cfg = _config(args)
+    _world(cfg)
+    records = run_simulation(cfg, args.out, progress=not args.quiet)
     print(f"simulated {len(records)} scans of world {cfg.world} (seed {cfg.seed}, {cfg.duration:g} s) into {args.out}")
     return 0

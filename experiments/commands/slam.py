@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, read_log_options
+from experiments.options import InputError, check_file, check_log, check_methods, check_out, check_yaml, count, positive
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -20,15 +21,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-paper-baseline", action="store_true",
                    help="with the default preset, do not also run the paper preset for the comparison table")
     p.add_argument("--extractor", help="feature extraction method (default: the config's, 'sensor')")
-    p.add_argument("--association", choices=("nn", "jcbb"), help="data association (default: the config's)")
-    p.add_argument("--corners", action="store_true", help="add corner landmarks")
+    p.add_argument("--association", choices=("nn", "jcbb"), help="paper preset: data association (default: the config's)")
+    p.add_argument("--corners", action="store_true", help="paper preset: add corner landmarks")
     p.add_argument("--odometry", action="store_true", help="use the input's odometry as the motion input")
     p.add_argument("--no-odometry-baseline", action="store_true",
                    help="do not also run the filter with odometry for the comparison table")
     p.add_argument("--relations", type=Path, help="relations file (default: NAME.relations beside a log)")
-    p.add_argument("--every", type=int, default=1, help="keep every N-th scan (decimation)")
-    p.add_argument("--rate-hz", type=float, help="decimate to about this many scans/s (by the stamps)")
-    p.add_argument("--max-scans", type=int, help="stop after this many scans")
+    p.add_argument("--every", type=count(1), default=1, help="keep every N-th scan (decimation)")
+    p.add_argument("--rate-hz", type=positive("scans/s"), help="decimate to about this many scans/s (by the stamps)")
+    p.add_argument("--max-scans", type=count(1), help="stop after this many scans")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_log_options(p)
     p.set_defaults(func=run)
@@ -44,6 +45,7 @@ def _config(args: argparse.Namespace):
 
     cfg = SlamConfig()
     if args.config:
+        check_yaml(args.config, "a SLAM config.yaml")
         try:
             raw = yaml.safe_load(args.config.read_text()) or {}
         except yaml.YAMLError as exc:
@@ -55,17 +57,29 @@ def _config(args: argparse.Namespace):
     if args.preset:
         changes["preset"] = args.preset
     if args.extractor:
-        changes["extractor"] = args.extractor
+        changes["extractor"] = check_methods([args.extractor])[0]
     if args.association:
-        changes["association"] = args.association
+        changes["association"] = dataclasses.replace(cfg.association, method=args.association)
     if args.corners:
-        changes["use_corners"] = True
+        changes["observations"] = dataclasses.replace(cfg.observations, use_corners=True)
     if args.odometry:
-        changes["use_odometry"] = True
+        changes["motion"] = dataclasses.replace(cfg.motion, use_odometry=True)
     cfg = dataclasses.replace(cfg, **changes)
-    if cfg.use_odometry and cfg.preset != "paper":
+    if cfg.motion.use_odometry and cfg.preset != "paper":
         raise LmsbenchError("--odometry drives the paper preset's filter: add --preset paper (the default pipeline uses no odometry)")
     return cfg
+
+
+def _check_input(path: Path) -> None:
+    """A simulator folder (scans.clf), a ROS 2 bag folder, or a log file of a known kind."""
+    if not path.exists():
+        raise InputError(f"no such input: {path}")
+    if path.is_dir() and (path / "scans.clf").is_file():
+        check_log(path / "scans.clf")
+    elif path.is_dir() and not (path / "metadata.yaml").is_file():
+        raise InputError(f"{path}: a folder input must hold scans.clf (a simulator output) or be a ROS 2 bag")
+    else:
+        check_log(path)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -73,11 +87,23 @@ def run(args: argparse.Namespace) -> int:
 
     from experiments.slamrun import load_input, run as run_slam, write_outputs
 
+    _check_input(Path(args.input))
+    if args.relations is not None:
+        check_file(args.relations, "a relations file")
+    check_out(args.out)
     config = _config(args)
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
                       read_options=read_log_options(args))
-    if config.use_odometry and data.odometry is None:
+    stamps = [r.scan.stamp for r in data.records]
+    back = next((k for k in range(1, len(stamps)) if stamps[k] < stamps[k - 1]), None)
+    if back is not None:
+        raise InputError(f"{data.sources.get('scans', args.input)}: time goes backwards at scan {back} "
+                         f"(stamp {stamps[back]:.6f} s after {stamps[back - 1]:.6f} s); SLAM needs scans in time order")
+    if config.motion.use_odometry and data.odometry is None:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
+    from experiments.progress import warm_up_kernels
+
+    warm_up_kernels()
     result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
                       out=args.out, paper_baseline=not args.no_paper_baseline)
     write_outputs(args.out, data, config, result)

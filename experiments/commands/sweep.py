@@ -10,6 +10,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from experiments.options import check_out, check_yaml, count
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sweep", help="run a parameter sweep (grid or random) on Dask; resumable")
@@ -18,7 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use this running Dask scheduler")
     where.add_argument("--inprocess", "--local", dest="inprocess", action="store_true",
                        help="run in this process, without Dask (default: a local Dask cluster)")
-    p.add_argument("--workers", type=int, default=2, help="worker processes of the local cluster (default 2)")
+    p.add_argument("--workers", type=count(1, 64), default=2, help="worker processes of the local cluster (default 2)")
     p.add_argument("--out", type=Path, help="sweep folder (default results/sweeps/NAME)")
     p.add_argument("--retry-failed", action="store_true", help="compute again the cells that failed before")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -28,9 +30,23 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from experiments.sweep import SweepSpecError, load_sweep, run_sweep
 
+    check_yaml(args.sweep, "a sweep file")
     spec = load_sweep(args.sweep)
     out = args.out or Path("results/sweeps") / spec.name
+    check_out(out)
     executor = "inprocess" if args.inprocess else (args.scheduler or "local")
+    from experiments.sweep.runner import check_executor, check_spec
+
+    check_executor(executor, args.workers)
+    try:
+        check_spec(spec)
+    except SweepSpecError as exc:  # an unknown kind or parameter name
+        raise SweepSpecError(f"{args.sweep}: {exc}") from exc
+    if spec.kind in ("extract", "slam") and executor in ("local", "inprocess"):
+        # compile once here (the workers then load the cache), not in every worker at the same time
+        from experiments.progress import warm_up_kernels
+
+        warm_up_kernels()
     try:
         result = run_sweep(spec, out, executor, workers=args.workers, retry_failed=args.retry_failed,
                            progress=not args.no_progress)

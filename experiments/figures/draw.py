@@ -102,28 +102,32 @@ def fig_scans(points: pd.DataFrame, lines: pd.DataFrame, corners: pd.DataFrame, 
 
 
 def fig_slam(trajectory: pd.DataFrame, map_lines: pd.DataFrame, stem: Path, title: str) -> list[Path]:
-    """Fig. 10: SLAM trajectory and line map against ground truth (world frame, equal axes).
+    """Fig. 10: SLAM trajectory and line map against ground truth (world frame, equal axes), one
+    panel per estimate: the paper preset (if present) beside the default pipeline ("slam").
 
-    ``trajectory``: source (slam / truth / ...), t, x, y, theta; ``map_lines``: source
-    (slam / truth), x1, y1, x2, y2.
+    ``trajectory``: source (slam / paper preset / truth / ...), t, x, y, theta; ``map_lines``:
+    source (slam / paper preset / truth), x1, y1, x2, y2.
     """
-    fig, ax = new_figure(width=6.4, height=5.6)
+    estimates = [s for s in ("paper preset", "slam") if s in set(trajectory["source"])]
+    fig, axes = new_figure(1, len(estimates), width=5.6 * len(estimates), height=5.6, squeeze=False)
     truth_map = map_lines[map_lines["source"] == "truth"]
-    for i, row in enumerate(truth_map.itertuples()):
-        ax.plot([row.x1, row.x2], [row.y1, row.y2], "-", lw=3.0, color="#d0d0d0",
-                label="true walls" if i == 0 else None)
-    est_map = map_lines[map_lines["source"] == "slam"]
-    for i, row in enumerate(est_map.itertuples()):
-        ax.plot([row.x1, row.x2], [row.y1, row.y2], "-", lw=1.2, color=LINE_COLOR,
-                label="SLAM map lines" if i == 0 else None)
-    for source, group in trajectory.groupby("source", sort=False):
-        style = "--" if source == "truth" else "-"
-        ax.plot(group["x"], group["y"], style, lw=1.4, color=method_color(source), label=f"{source} trajectory")
-    first = trajectory[trajectory["source"] == "truth"].head(1)
-    ax.plot(first["x"], first["y"], "ko", ms=5, label="start")
-    equal_axes(ax)
-    ax.set_title(title)
-    ax.legend(loc="best")
+    truth = trajectory[trajectory["source"] == "truth"]
+    for ax, source in zip(axes.ravel(), estimates):
+        for i, row in enumerate(truth_map.itertuples()):
+            ax.plot([row.x1, row.x2], [row.y1, row.y2], "-", lw=3.0, color="#d0d0d0",
+                    label="true walls" if i == 0 else None)
+        for i, row in enumerate(map_lines[map_lines["source"] == source].itertuples()):
+            ax.plot([row.x1, row.x2], [row.y1, row.y2], "-", lw=1.2, color=LINE_COLOR,
+                    label="SLAM map lines" if i == 0 else None)
+        est = trajectory[trajectory["source"] == source]
+        ax.plot(truth["x"], truth["y"], "--", lw=1.4, color=method_color("truth"), label="true trajectory")
+        ax.plot(est["x"], est["y"], "-", lw=1.4, color=method_color(source), label=f"{source} trajectory")
+        ax.plot(truth["x"].head(1), truth["y"].head(1), "ko", ms=5, label="start")
+        equal_axes(ax)
+        ax.set_title("paper preset (EKF, constant velocity)" if source == "paper preset"
+                     else "default (scan matching + pose graph)", fontsize=9)
+        ax.legend(loc="best", fontsize=7)
+    fig.suptitle(title)
     return save_figure(fig, stem, data={"trajectory": trajectory, "map": map_lines})
 
 

@@ -64,11 +64,15 @@ def feature_panels(scans: Sequence[Scan], labels: Sequence[str], feature_sets: S
             pd.concat(corners, ignore_index=True))
 
 
-def trajectory_table(result_trajectory: np.ndarray, records: Sequence[Record]) -> pd.DataFrame:
-    """SLAM (t, x, y, theta) rows and the true poses of the records, as one table by source."""
+def trajectory_table(result_trajectory: np.ndarray, records: Sequence[Record],
+                     extra: dict[str, np.ndarray] | None = None) -> pd.DataFrame:
+    """SLAM (t, x, y, theta) rows and the true poses of the records, as one table by source;
+    ``extra`` adds more estimates by source name (e.g. ``{"paper preset": trajectory}``)."""
     est = np.asarray(result_trajectory, dtype=float).reshape(-1, 4)
     truth = np.array([[r.scan.stamp, *r.truth] for r in records if r.truth is not None], dtype=float).reshape(-1, 4)
     frames = [pd.DataFrame(est, columns=["t", "x", "y", "theta"]).assign(source="slam"),
+              *(pd.DataFrame(np.asarray(tr, float).reshape(-1, 4), columns=["t", "x", "y", "theta"]).assign(source=name)
+                for name, tr in (extra or {}).items()),
               pd.DataFrame(truth, columns=["t", "x", "y", "theta"]).assign(source="truth")]
     odom = [[r.scan.stamp, *r.odom] for r in records if r.odom is not None]
     if odom:
@@ -77,12 +81,15 @@ def trajectory_table(result_trajectory: np.ndarray, records: Sequence[Record]) -
     return table[["source", "t", "x", "y", "theta"]]
 
 
-def map_table(slam_segments: np.ndarray, true_walls: np.ndarray) -> pd.DataFrame:
-    """Estimated map segments and the true walls (x1, y1, x2, y2, world frame) by source."""
+def map_table(slam_segments: np.ndarray, true_walls: np.ndarray, extra: dict[str, np.ndarray] | None = None) -> pd.DataFrame:
+    """Estimated map segments and the true walls (x1, y1, x2, y2, world frame) by source;
+    ``extra`` adds more maps by source name."""
     cols = ["x1", "y1", "x2", "y2"]
     est = pd.DataFrame(np.asarray(slam_segments, float).reshape(-1, 4), columns=cols).assign(source="slam")
+    more = [pd.DataFrame(np.asarray(seg, float).reshape(-1, 4), columns=cols).assign(source=name)
+            for name, seg in (extra or {}).items()]
     true = pd.DataFrame(np.asarray(true_walls, float).reshape(-1, 4), columns=cols).assign(source="truth")
-    return pd.concat([est, true], ignore_index=True)[["source", *cols]]
+    return pd.concat([est, *more, true], ignore_index=True)[["source", *cols]]
 
 
 def pick_evenly(n_items: int, n_pick: int, skip_ends: bool = True) -> list[int]:

@@ -73,7 +73,14 @@ def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
     slam_params = {k: v for k, v in slam_params.items() if not k.startswith("extractor_params.")}
     if extractor_params:
         slam_params["extractor_params"] = extractor_params
-    result = run_slam(records, SlamConfig.from_dict(slam_params))
+    nested: dict[str, Any] = {}
+    for key, value in slam_params.items():  # slam.SECTION.FIELD -> {"SECTION": {"FIELD": value}}
+        section, _, name = key.partition(".")
+        if name:
+            nested.setdefault(section, {})[name] = value
+        else:
+            nested[key] = value
+    result = run_slam(records, SlamConfig.from_dict(nested))
     return slam_metrics(result, records)
 
 
@@ -168,13 +175,17 @@ def check_extract_params(cells: list[dict[str, Any]]) -> None:
 
 
 def check_slam_params(cells: list[dict[str, Any]]) -> None:
-    """Every ``sensor.*``, ``slam.*`` and ``slam.extractor_params.*`` name is a field of its config."""
+    """Every ``sensor.*``, ``slam.*`` (``slam.SECTION.FIELD`` for the nested sections) and
+    ``slam.extractor_params.*`` name is a field of its config."""
     from slam import SlamConfig
 
     _check_sensor_files(cells)
     _unknown(cells, "sensor", _sensor_fields)
     slam_cells = [{k: v for k, v in c.items() if not k.startswith("slam.extractor_params.")} for c in cells]
-    _unknown(slam_cells, "slam", lambda c: (_fields(SlamConfig), "slam.SlamConfig"))
+    from slam.config import SECTIONS
+
+    known = (_fields(SlamConfig) - set(SECTIONS)) | {f"{sec}.{f}" for sec, cls in SECTIONS.items() for f in _fields(cls)}
+    _unknown(slam_cells, "slam", lambda c: (known, "slam.SlamConfig"))
     default = SlamConfig().extractor
     _unknown(cells, "slam.extractor_params", lambda c: _extractor_fields(str(c.get("slam.extractor", default))))
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import signal
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +20,8 @@ from typing import Any, Iterator
 import pandas as pd
 import yaml
 from tqdm import tqdm
+
+from lms200 import LmsbenchError
 
 from .cells import resolve_kind, run_cell
 from .spec import Scalar, SweepSpec, cell_key
@@ -64,11 +67,9 @@ def run_sweep(
         A :class:`SweepResult`; ``out/results.parquet`` and ``out/results.csv`` hold its table.
     """
     out = Path(out)
-    fn = resolve_kind(spec.kind)  # fail early on an unknown kind
+    check_executor(executor, workers)
+    fn = check_spec(spec)
     cells = spec.cells()
-    check = getattr(fn, "check_params", None)  # a kind may check parameter names before any cell runs
-    if check is not None:
-        check(cells)
     store = CellStore(out)
     (out / "sweep.yaml").write_text(yaml.safe_dump(spec.to_dict(), sort_keys=False))
     keys = [cell_key(spec.kind, params) for params in cells]
@@ -187,6 +188,41 @@ def _lost_result(future) -> dict[str, Any]:
     return {"status": "error", "error": text, "elapsed_s": float("nan")}
 
 
+SCHEMES = ("tcp://", "tls://", "inproc://", "ucx://", "ws://", "wss://")
+
+
+def check_executor(executor: Any, workers: int) -> None:
+    """A known executor, before anything is written."""
+    if executor == "local" and not (isinstance(workers, int) and workers >= 1):
+        raise LmsbenchError(f"workers: a local cluster needs at least 1 worker process, got {workers}")
+    if isinstance(executor, str) and executor not in ("local", "inprocess") and not executor.startswith(SCHEMES):
+        raise LmsbenchError(f"scheduler: {executor!r} is not a Dask scheduler address (tcp://HOST:PORT), "
+                            "nor 'local' or 'inprocess'")
+
+
+def check_spec(spec: SweepSpec):
+    """The cell function of ``spec``'s kind, after checking the kind and every cell's parameter
+    names (a kind may check them before any cell runs)."""
+    fn = resolve_kind(spec.kind)
+    check = getattr(fn, "check_params", None)
+    if check is not None:
+        check(spec.cells())
+    return fn
+
+
+def quiet_dask() -> None:
+    """Silence Dask's and Tornado's loggers in this process (closed connections at shutdown are
+    logged with tracebacks that say nothing to a user; cell errors are in the table)."""
+    for name in ("distributed", "tornado", "asyncio", "bokeh"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+
+
+def _main_thread() -> bool:
+    import threading
+
+    return threading.current_thread() is threading.main_thread()
+
+
 @contextlib.contextmanager
 def _client(executor: Any, workers: int) -> Iterator[Any]:
     """A Dask client for ``executor``: a new LocalCluster, a scheduler address, or a given client."""
@@ -194,16 +230,25 @@ def _client(executor: Any, workers: int) -> Iterator[Any]:
     from distributed import Client, LocalCluster
 
     if executor == "local":
+        quiet_dask()
         # a cell that kills its worker fails after one retry instead of three
         with dask.config.set({"distributed.scheduler.allowed-failures": 1}):
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR)
+            # the worker processes start with Ctrl-C ignored (an ignored signal stays ignored in a
+            # spawned Python): Ctrl-C stops the driver, which cancels the cells and closes the cluster
+            previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if _main_thread() else None
+            try:
+                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                       dashboard_address=None, silence_logs=logging.CRITICAL)
+            finally:
+                if previous is not None:
+                    signal.signal(signal.SIGINT, previous)
             try:
                 with Client(cluster) as client:
                     yield client
             finally:
                 cluster.close()
     elif isinstance(executor, str):
+        quiet_dask()
         with Client(executor, timeout="10s") as client:
             yield client
     else:

@@ -18,8 +18,9 @@ import numpy as np
 
 from lms200 import Scan
 
-from ..registry import register
 from ..batch import common_geometry, split_rows, stacked_ranges
+from ..jit import FixedTypeCall
+from ..registry import register
 from ..types import Corners, FeatureSet, Lines
 from . import checks, engine
 from .common import CornerConfig
@@ -75,6 +76,9 @@ def check_split_fields(cfg: object) -> None:
         checks.fail("corners", "must be a CornerConfig", cfg.corners)
 
 
+_extract_scan = FixedTypeCall(engine.extract_scan)  # a Scan's types: read-only float64 arrays, floats
+
+
 def split_params(cfg: object, chord: bool) -> engine.SplitParams:
     """The kernels' record of a SplitMergeConfig or IepfConfig."""
     return engine.SplitParams(
@@ -86,8 +90,8 @@ def split_params(cfg: object, chord: bool) -> engine.SplitParams:
 def run_pipeline(scan: Scan, cfg, method: str, chord: bool) -> FeatureSet:  # noqa: ANN001
     """Lines and corners of ``scan`` (sensor frame) by the split / merge pipeline, splitting at the
     least-squares fit (``chord=False``, split_merge) or the chord (``chord=True``, iepf)."""
-    lv, lb, cv, cb = engine.extract_scan(scan.ranges, scan.angles, scan.range_min, scan.range_max,
-                                         scan.angle_increment, split_params(cfg, chord), cfg.corners.params)
+    lv, lb, cv, cb = _extract_scan(scan.ranges, scan.angles, scan.range_min, scan.range_max, scan.angle_increment,
+                                   split_params(cfg, chord), cfg.corners.params)
     return FeatureSet.of(Lines(lv, lb), Corners(cv, cb), method)
 
 

@@ -17,22 +17,25 @@ from lms200 import Scan
 from ..registry import register
 from ..batch import common_geometry, split_rows, stacked_ranges
 from ..types import Corners, FeatureSet, Lines
+from ..jit import FixedTypeCall
 from . import engine
 from .config import SensorMethodConfig
-from .grid import grid_constants, window_sums
+from .grid import bearings_of, grid_constants, window_sums
 
 __all__ = ["SensorMethodConfig", "extract_sensor", "extract_sensor_many", "signals"]
 
 METHOD = "sensor"
+_extract_scan = FixedTypeCall(engine.extract_scan)  # a Scan's types: read-only float64 arrays, floats
 
 
 def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
     """Lines and corners of ``scan`` in its sensor frame (the registered run function)."""
     p = cfg.params
     grid = grid_constants(p.k, scan.angle_increment, p.hough_subdiv)
-    lv, lb, cv, cb = engine.extract_scan(
-        scan.ranges, scan.angles, scan.angle_min, scan.angle_increment, max(scan.range_min, cfg.min_range),
-        scan.range_max, cfg.sigma_for(scan.range_max), grid, p,
+    lv, lb, cv, cb = _extract_scan(
+        scan.ranges, bearings_of(scan.angle_min, scan.angle_increment, len(scan)), scan.angle_min,
+        scan.angle_increment, float(max(scan.range_min, cfg.min_range)), scan.range_max,
+        float(cfg.sigma_for(scan.range_max)), grid, p,
     )
     return FeatureSet.of(Lines(lv, lb), Corners(cv, cb), METHOD)
 
@@ -45,8 +48,9 @@ def extract_sensor_many(scans: Sequence[Scan], cfg: SensorMethodConfig) -> list[
     p = cfg.params
     grid = grid_constants(p.k, scan.angle_increment, p.hough_subdiv)
     rows = engine.extract_batch(
-        stacked_ranges(scans), scan.angles, scan.angle_min, scan.angle_increment, max(scan.range_min, cfg.min_range),
-        scan.range_max, cfg.sigma_for(scan.range_max), grid, p,
+        stacked_ranges(scans), bearings_of(scan.angle_min, scan.angle_increment, len(scan)), scan.angle_min,
+        scan.angle_increment, float(max(scan.range_min, cfg.min_range)), scan.range_max,
+        float(cfg.sigma_for(scan.range_max)), grid, p,
     )
     return split_rows(*rows, METHOD)
 

@@ -78,6 +78,14 @@ class Params(NamedTuple):
     acute_min_var: float  # in sigma_r**2
 
 
+class Bearings(NamedTuple):
+    """The bearings of a scan's beams and their cosines and sines (built once per geometry)."""
+
+    b: np.ndarray  # angle_min + i D, rad
+    cos: np.ndarray
+    sin: np.ndarray
+
+
 class Grid(NamedTuple):
     """Constants of a scan's angle grid for window half-width k and beam step D."""
 
@@ -225,7 +233,8 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
             tan_psi = ad1 / two_sin_sum
             theta[i] = bearings[i] + math.atan(tan_psi)
             tan_sd = math.sqrt(other + ad1 * ad1 * u2) * (sigma_r / two_sin_sum)
-            theta_sd = 0.5 * (math.atan(tan_psi + tan_sd) - math.atan(tan_psi - tan_sd))
+            # (arctan(T + s) - arctan(T - s)) / 2, as one arctangent of the difference
+            theta_sd = 0.5 * math.atan2(2.0 * tan_sd, 1.0 + (tan_psi + tan_sd) * (tan_psi - tan_sd))
             theta_var[i] = theta_sd * theta_sd
     for i in range(n - k):
         dpsi = theta[i] - theta[i + k]  # the corner signal psi_i = theta_i - theta_{i+k}
@@ -398,8 +407,9 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
 
 
 @kernel
-def gauss_newton(d, b, starts, counts, mask, rho, alpha, sigma_r, inlier_tau, buf):  # noqa: ANN001, ANN201
-    """One Gauss-Newton step of every run's (rho, alpha) on its beams (range d, bearing b).
+def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_tau, buf):  # noqa: ANN001, ANN201
+    """One Gauss-Newton step of every run's (rho, alpha) on its beams (range d, bearing b given by
+    its cosine cb and sine sb).
 
     Beam j on x cos(alpha) + y sin(alpha) = rho has residual r_j = d_j cos(b_j - alpha) - rho;
     range noise moves it by e_j cos(b_j - alpha), so its weight is 1 / (sigma_r cos)^2 and
@@ -417,11 +427,11 @@ def gauss_newton(d, b, starts, counts, mask, rho, alpha, sigma_r, inlier_tau, bu
     s2 = sigma_r * sigma_r
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
+        ca, sa = math.cos(alpha[r]), math.sin(alpha[r])
         for row in range(s, s + cnt):
-            phi = b[row] - alpha[r]
-            c = math.cos(phi)
+            c = cb[row] * ca + sb[row] * sa  # cos(b - alpha)
             res = d[row] * c - rho[r]  # d res / d rho = -1
-            g = d[row] * math.sin(phi)  # d res / d alpha
+            g = d[row] * (sb[row] * ca - cb[row] * sa)  # d res / d alpha = d sin(b - alpha)
             use = c > MIN_COS and mask[row]
             if inlier_tau > 0.0:
                 zz = res / (sigma_r * c)
@@ -463,7 +473,8 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
     n_runs = starts.size
     ok = np.empty(n, np.bool_)
     d = np.empty(n)
-    b = np.empty(n)
+    cb = np.empty(n)
+    sb = np.empty(n)
     m0 = np.empty(n, np.bool_)
     first_max = 0
     for r in range(n_runs):
@@ -472,11 +483,12 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
         j = beam[row]
         ok[row] = valid[j]
         d[row] = ranges[j] if valid[j] else 0.0
-        b[row] = bearings[j]
+        cb[row] = bearings.cos[j]
+        sb[row] = bearings.sin[j]
         m0[row] = ok[row] and inlier0[row]
     buf = np.empty((5, n))
-    rho1, alpha1, _, _, _ = gauss_newton(d, b, starts, counts, m0, rho0, alpha0, sigma_r, -1.0, buf)
-    rho, alpha, cov, z, w = gauss_newton(d, b, starts, counts, ok, rho1, alpha1, sigma_r, p.inlier_tau, buf)
+    rho1, alpha1, _, _, _ = gauss_newton(d, cb, sb, starts, counts, m0, rho0, alpha0, sigma_r, -1.0, buf)
+    rho, alpha, cov, z, w = gauss_newton(d, cb, sb, starts, counts, ok, rho1, alpha1, sigma_r, p.inlier_tau, buf)
     first_in = np.empty(n_runs, np.int64)
     last_in = np.empty(n_runs, np.int64)
     n_in = np.empty(n_runs, np.int64)
@@ -548,12 +560,13 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
     n = ranges.size
     lim = inlier_tau * sigma_r
     for m in range(rho.size):
+        ca, sa = math.cos(alpha[m]), math.sin(alpha[m])
         grow0 = 0
         for s in range(1, reach + 1):
             j = last[m] + s
             if j >= n:
                 break
-            c = math.cos(bearings[j] - alpha[m])
+            c = bearings.cos[j] * ca + bearings.sin[j] * sa  # cos(b - alpha)
             if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= lim * c):
                 break
             grow0 += 1
@@ -562,7 +575,7 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
             j = first[m] - s
             if j < 0:
                 break
-            c = math.cos(bearings[j] - alpha[m])
+            c = bearings.cos[j] * ca + bearings.sin[j] * sa  # cos(b - alpha)
             if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= lim * c):
                 break
             grow1 += 1
@@ -599,7 +612,7 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
         for t in range(counts[r]):
             beam[starts[r] + t] = first[r] + t
             log_d[starts[r] + t] = math.log(ranges[first[r] + t])
-    centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, ranges, bearings, increment, sigma_r, k, p)
+    centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, ranges, bearings.b, increment, sigma_r, k, p)
     alpha0, rho0, inlier0 = band_search(
         beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
     )
@@ -714,8 +727,7 @@ def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p):  #
         for e in range(2):
             j = first[m] if e == 0 else last[m]
             d = ranges[j]
-            bb = bearings[j]
-            x, y = d * math.cos(bb), d * math.sin(bb)
+            x, y = d * bearings.cos[j], d * bearings.sin[j]
             off = x * c + y * s - rho[m]
             ends[e, m, 0] = x - off * c
             ends[e, m, 1] = y - off * s
@@ -842,11 +854,12 @@ def pack(rho, alpha, cov, first, last, npts, p0, p1, cf, ci):  # noqa: ANN001, A
 
 @kernel
 def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p):  # noqa: ANN001, ANN201
-    """Lines and corners of one scan (sensor frame): steps 1-6. ``range_lo``, ``range_hi``: valid
-    range limits (m); ``sigma_r``: the range noise std for this scan's units (m).
+    """Lines and corners of one scan (sensor frame): steps 1-6. ``bearings``: a Bearings record;
+    ``range_lo``, ``range_hi``: valid range limits (m); ``sigma_r``: the range noise std for this
+    scan's units (m).
     Returns the packed rows (``pack``): line values, line beams, corner values, corner beams."""
     valid, _, AD, AD_var, _, theta, theta_var, psi, psi_var = beam_signals(
-        ranges, bearings, p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum
+        ranges, bearings.b, p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum
     )
     rho, alpha, cov, first, last, npts = find_lines(
         ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_var, angle_min, increment, sigma_r, grid, p

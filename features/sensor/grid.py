@@ -7,7 +7,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .engine import Grid
+from .engine import Bearings, Grid
 
 LOGCOS_FLOOR = float(np.log(1e-6))  # template value where |a - b| >= pi/2 (the beam cannot see the line)
 MAX_TEMPLATE = 1 << 20  # most template entries (8 MB): beam steps finer than ~4 pi / 2^20 rad are refused
@@ -48,3 +48,14 @@ def grid_constants(k: int, increment: float, subdiv: int) -> Grid:
     t = np.maximum(t, LOGCOS_FLOOR)
     t.setflags(write=False)
     return Grid(ad_line, two_sin_sum, float(step), half, t)
+
+
+@lru_cache(maxsize=16)
+def bearings_of(angle_min: float, increment: float, n: int) -> Bearings:
+    """The Bearings of n beams from ``angle_min`` in steps of ``increment`` (rad), as
+    ``lms200.Scan.angles`` computes them."""
+    b = angle_min + np.arange(n) * increment
+    c, s = np.cos(b), np.sin(b)
+    for a in (b, c, s):
+        a.setflags(write=False)
+    return Bearings(b, c, s)

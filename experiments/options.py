@@ -1,0 +1,215 @@
+"""Checks of command-line options and input files, run before any work starts.
+
+Each ``argparse`` type here turns a bad value into a one-line error naming the option, its range
+and what was given (``argument --duration: must be a finite number > 0 s, got 'inf'``); the
+``check_*`` functions raise :class:`InputError` for files that are missing, unreadable or of the
+wrong kind. ``experiments.cli`` prints either as ``lmsbench CMD: error: ...`` with exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gzip
+import math
+import os
+from pathlib import Path
+from typing import Callable, Sequence
+
+from lms200 import LmsbenchError
+
+
+
+def known_worlds() -> tuple[str, ...]:
+    """The built-in worlds of the simulator (``sim.WORLD_NAMES``)."""
+    from sim.worlds import WORLD_NAMES
+
+    return tuple(WORLD_NAMES)
+
+
+class InputError(LmsbenchError, ValueError):
+    """A bad option value or input file (the message says which and what is expected)."""
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors are one line, ``PROG: error: MESSAGE``, exit status 2
+    (argparse's own prints the usage first)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = False, unit: str = "",
+           integer: bool = False) -> Callable[[str], float]:
+    """An argparse type: a finite number in [lo, hi] (lo excluded with ``lo_open``)."""
+    parts = []
+    if lo is not None:
+        parts.append(f"{'>' if lo_open else '>='} {lo:g}")
+    if hi is not None:
+        parts.append(f"<= {hi:g}")
+    what = ("a whole number" if integer else "a finite number") + (" " + " and ".join(parts) if parts else "")
+    what += f" {unit}" if unit else ""
+
+    def parse(text: str):
+        try:
+            value = int(text) if integer else float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}") from None
+        bad = not math.isfinite(value) or (lo is not None and (value <= lo if lo_open else value < lo)) \
+            or (hi is not None and value > hi)
+        if bad:
+            raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}")
+        return value
+
+    parse.__name__ = "integer" if integer else "number"  # argparse names the type in some messages
+    return parse
+
+
+def positive(unit: str = "") -> Callable[[str], float]:
+    """A finite number > 0 (durations, rates, noise)."""
+    return number(0.0, lo_open=True, unit=unit)
+
+
+def count(lo: int = 1, hi: int | None = None) -> Callable[[str], float]:
+    """A whole number >= lo (scan counts, strides, workers)."""
+    return number(lo, hi, integer=True)
+
+
+SEED = count(0, 2**32 - 1)
+#: Longest simulated run of one command (s): the scans are held in memory (~1 GB an hour at 37.5 scans/s).
+MAX_DURATION_S = 3600.0
+DURATION = number(0.0, MAX_DURATION_S, lo_open=True, unit="s")
+PORT = count(0, 65535)
+
+
+def world_name(text: str) -> str:
+    """A built-in world's name."""
+    if text not in known_worlds():
+        raise argparse.ArgumentTypeError(f"unknown world {text!r}; known worlds: {', '.join(known_worlds())}")
+    return text
+
+
+def _head(path: Path, n: int = 4096) -> bytes:
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(n)
+    except PermissionError:
+        raise InputError(f"{path}: not readable (permission denied)") from None
+    except IsADirectoryError:
+        raise InputError(f"{path} is a folder, not a file") from None
+
+
+def _text_head(path: Path, what: str) -> None:
+    """Raise InputError unless the file starts with text (not binary, not a mislabelled gzip)."""
+    head = _head(path)
+    if path.suffix == ".gz" or head[:2] == b"\x1f\x8b":
+        if head[:2] != b"\x1f\x8b":
+            raise InputError(f"{path}: named .gz but not gzip-compressed")
+        try:
+            with gzip.open(path, "rb") as fh:
+                head = fh.read(4096)
+        except (OSError, EOFError) as exc:
+            raise InputError(f"{path}: broken gzip file ({exc})") from None
+    if b"\x00" in head:
+        raise InputError(f"{path}: a binary file, not {what}")
+    try:
+        head.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        if exc.start < len(head) - 4:  # a multi-byte character cut at the end of the block is fine
+            raise InputError(f"{path}: not text (byte {exc.start} is not UTF-8), not {what}") from None
+
+
+def check_file(path: str | os.PathLike, what: str = "a file") -> Path:
+    """An existing, readable regular file."""
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"{p}: no such file")
+    if p.is_dir():
+        raise InputError(f"{p} is a folder, not {what}")
+    _head(p, 1)
+    return p
+
+
+def check_yaml(path: str | os.PathLike, what: str = "a YAML file") -> Path:
+    """An existing, readable text file (YAML is parsed by the caller, which names its errors)."""
+    p = check_file(path, what)
+    _text_head(p, what)
+    return p
+
+
+def check_log(path: str | os.PathLike) -> Path:
+    """A CARMEN log (plain text or gzip), a ROS 1 ``.bag`` or a ROS 2 bag folder, by its content:
+    a binary file, a plain file named ``.gz``, a folder without ``metadata.yaml`` are errors."""
+    p = Path(path)
+    what = "a CARMEN log, ROS 1 .bag or ROS 2 bag folder"
+    if not p.exists():
+        raise InputError(f"{p}: no such log")
+    if p.is_dir():
+        if not (p / "metadata.yaml").is_file():
+            raise InputError(f"{p} is a folder but not a ROS 2 bag (no metadata.yaml)")
+        return p
+    head = _head(p)
+    if p.suffix == ".bag":
+        if not head.startswith(b"#ROSBAG V2.0"):
+            raise InputError(f"{p}: named .bag but not a ROS 1 bag (no #ROSBAG V2.0 header)")
+        return p
+    if not head:
+        raise InputError(f"{p}: empty file, not {what}")
+    _text_head(p, what)
+    return p
+
+
+def check_out(path: str | os.PathLike) -> Path:
+    """An output folder: absent (created later) or a folder; its nearest existing parent writable."""
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise InputError(f"--out {p}: exists and is not a folder")
+    parent = p
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"--out {p}: {parent} is not a writable folder")
+    return p
+
+
+def check_methods(methods: Sequence[str] | None) -> list[str]:
+    """Known extractor names (all of them when None)."""
+    from features.registry import available_methods
+
+    known = available_methods()
+    if not methods:
+        return known
+    bad = [m for m in methods if m not in known]
+    if bad:
+        raise InputError(f"unknown method(s) {', '.join(bad)}; known: {', '.join(known)}")
+    if len(set(methods)) != len(methods):
+        raise InputError(f"a method is named twice in {' '.join(methods)}")
+    return list(methods)
+
+
+def check_study_tables(folder: str | os.PathLike) -> Path:
+    """A folder of tables saved by an earlier ``lmsbench figures`` / ``demo`` (study.yaml and Parquet)."""
+    p = Path(folder)
+    if not p.is_dir():
+        raise InputError(f"--tables {p}: no such folder")
+    if not (p / "study.yaml").is_file() or not any(p.glob("*.parquet")):
+        raise InputError(f"--tables {p}: no study.yaml and tables (*.parquet) from an earlier "
+                         "`lmsbench figures` or `lmsbench demo` (they are in its tables/ folder)")
+    return p
+
+
+def check_sweep_results(folder: str | os.PathLike) -> Path:
+    """A sweep folder with results.parquet holding at least one successful cell."""
+    import pandas as pd
+
+    p = Path(folder)
+    path = p / "results.parquet"
+    if not path.is_file():
+        raise InputError(f"--sweep {p}: no results.parquet (run `lmsbench sweep` first)")
+    try:
+        table = pd.read_parquet(path)
+    except Exception as exc:  # noqa: BLE001 - pyarrow raises several types for a broken file
+        raise InputError(f"--sweep {path}: not a Parquet table ({type(exc).__name__})") from None
+    if "status" not in table or not (table["status"] == "ok").any():
+        raise InputError(f"--sweep {p}: no successful cell to plot ({len(table)} cells, all failed; "
+                         "their `error` column says why)")
+    return p

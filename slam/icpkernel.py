@@ -1,0 +1,156 @@
+"""Compiled inner loops of the ICP (numba): a uniform-grid nearest-neighbour search and the
+Gauss-Newton point-to-line iterations. One implementation; tests check the search against
+``scipy.spatial.cKDTree`` and the solver against exact synthetic poses.
+
+Grid: reference points sorted by cell (cell side = the widest reach, so the 3x3 cells around a
+query hold every point within reach); ``start[c]:start[c + 1]`` indexes cell ``c = i * ny + j``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+kernel = numba.njit(cache=True, error_model="numpy", fastmath=False)
+
+
+def build_grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(order, start, origin (2,), shape (2,)) of a grid of ``cell`` m over points (m, 2)."""
+    lo = points.min(axis=0) - cell
+    ij = np.floor((points - lo) / cell).astype(np.int64)
+    shape = ij.max(axis=0) + 2
+    key = ij[:, 0] * shape[1] + ij[:, 1]
+    order = np.argsort(key, kind="stable").astype(np.int64)
+    start = np.searchsorted(key[order], np.arange(shape[0] * shape[1] + 1)).astype(np.int64)
+    return order, start, lo.astype(float), shape.astype(np.int64)
+
+
+@kernel
+def _nearest(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2):
+    """Index (-1 if none) and squared distance of the reference point nearest (qx, qy) within reach."""
+    ci = int(math.floor((qx - lox) / cell))
+    cj = int(math.floor((qy - loy) / cell))
+    best = -1
+    bd = reach2
+    for i in range(max(ci - 1, 0), min(ci + 2, nx)):
+        for j in range(max(cj - 1, 0), min(cj + 2, ny)):
+            c = i * ny + j
+            for k in range(start[c], start[c + 1]):
+                m = order[k]
+                dx = rx[m] - qx
+                dy = ry[m] - qy
+                d = dx * dx + dy * dy
+                if d < bd:
+                    bd = d
+                    best = m
+    return best, bd
+
+
+@kernel
+def nearest_many(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach):
+    """Nearest reference index (-1 beyond ``reach`` m) and distance (inf) for every query point."""
+    n = qx.shape[0]
+    idx = np.empty(n, np.int64)
+    dist = np.empty(n)
+    for q in range(n):
+        m, d = _nearest(qx[q], qy[q], rx, ry, order, start, lox, loy, cell, nx, ny, reach * reach)
+        idx[q] = m
+        dist[q] = math.sqrt(d) if m >= 0 else np.inf
+    return idx, dist
+
+
+@kernel
+def count_within(px, py, pose, rx, ry, order, start, lox, loy, cell, nx, ny, reach):
+    """Number of points (sensor frame) at ``pose`` within ``reach`` m of a reference point."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    count = 0
+    for q in range(px.shape[0]):
+        wx = c * px[q] - s * py[q] + pose[0]
+        wy = s * px[q] + c * py[q] + pose[1]
+        m, _ = _nearest(wx, wy, rx, ry, order, start, lox, loy, cell, nx, ny, reach * reach)
+        if m >= 0:
+            count += 1
+    return count
+
+
+@kernel
+def _solve3(A, b):
+    """x = A^-1 b for a symmetric 3x3 A (Cramer's rule); zeros if singular."""
+    a00, a01, a02, a11, a12, a22 = A[0, 0], A[0, 1], A[0, 2], A[1, 1], A[1, 2], A[2, 2]
+    c00 = a11 * a22 - a12 * a12
+    c01 = a02 * a12 - a01 * a22
+    c02 = a01 * a12 - a02 * a11
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    x = np.zeros(3)
+    if abs(det) < 1e-300:
+        return x
+    c11 = a00 * a22 - a02 * a02
+    c12 = a01 * a02 - a00 * a12
+    c22 = a00 * a11 - a01 * a01
+    x[0] = (c00 * b[0] + c01 * b[1] + c02 * b[2]) / det
+    x[1] = (c01 * b[0] + c11 * b[1] + c12 * b[2]) / det
+    x[2] = (c02 * b[0] + c12 * b[1] + c22 * b[2]) / det
+    return x
+
+
+@kernel
+def gauss_newton(px, py, pose0, rx, ry, nrx, nry, order, start, lox, loy, cell, nx, ny,
+                 reaches, iterations, huber, damping, tol_xy, tol_theta, inlier_distance):
+    """Point-to-line ICP stages (reach m, iterations); returns pose (3,), Hessian (3, 3) of the
+    last step, inlier count and sum of squared inlier residuals (m^2) at the last correspondences."""
+    pose = pose0.copy()
+    H = np.zeros((3, 3))
+    g = np.zeros(3)
+    n = px.shape[0]
+    inliers = 0
+    ss = 0.0
+    for stage in range(reaches.shape[0]):
+        reach2 = reaches[stage] * reaches[stage]
+        for _ in range(iterations[stage]):
+            c, s = math.cos(pose[2]), math.sin(pose[2])
+            H[:, :] = 0.0
+            g[:] = 0.0
+            used = 0
+            inliers = 0
+            ss = 0.0
+            for q in range(n):
+                wx = c * px[q] - s * py[q] + pose[0]
+                wy = s * px[q] + c * py[q] + pose[1]
+                m, d2 = _nearest(wx, wy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2)
+                if m < 0:
+                    continue
+                used += 1
+                ux, uy = nrx[m], nry[m]
+                r = (wx - rx[m]) * ux + (wy - ry[m]) * uy
+                a = abs(r)
+                w = 1.0 if a <= huber else huber / a
+                if d2 < inlier_distance * inlier_distance:
+                    inliers += 1
+                    ss += r * r
+                j0, j1, j2 = ux, uy, uy * (wx - pose[0]) - ux * (wy - pose[1])
+                H[0, 0] += w * j0 * j0
+                H[0, 1] += w * j0 * j1
+                H[0, 2] += w * j0 * j2
+                H[1, 1] += w * j1 * j1
+                H[1, 2] += w * j1 * j2
+                H[2, 2] += w * j2 * j2
+                g[0] += w * j0 * r
+                g[1] += w * j1 * r
+                g[2] += w * j2 * r
+            H[1, 0], H[2, 0], H[2, 1] = H[0, 1], H[0, 2], H[1, 2]
+            if used < 3:
+                return pose, np.zeros((3, 3)), 0, np.inf
+            A = H.copy()
+            lam = damping * (H[0, 0] + H[1, 1] + H[2, 2]) / 3.0 + 1e-12
+            for k in range(3):
+                A[k, k] += lam
+            step = _solve3(A, g)
+            pose[0] -= step[0]
+            pose[1] -= step[1]
+            pose[2] = pose[2] - step[2]
+            pose[2] = math.atan2(math.sin(pose[2]), math.cos(pose[2]))
+            if abs(step[0]) + abs(step[1]) < tol_xy and abs(step[2]) < tol_theta:
+                break
+    return pose, H, inliers, ss

@@ -1,0 +1,235 @@
+"""Every bad input to every command: exit status 2, exactly one line on stderr naming the problem,
+no traceback, no hang, no output written. The cases of issue 16 and more of the same kinds.
+
+Each case runs ``experiments.cli.main`` in this process under a 20 s alarm (a hang fails the
+case instead of the suite); validation runs before any work, so a passing case takes
+milliseconds. The Ctrl-C and Dask cases run in subprocesses.
+"""
+
+from __future__ import annotations
+
+import gzip
+import signal
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from experiments.cli import main
+from lms200 import Record, Scan, write_log
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+class Hang(Exception):
+    pass
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """Inputs of every kind, good and bad."""
+    d = tmp_path_factory.mktemp("inputs")
+    f = {"dir": d}
+    (d / "binary.bin").write_bytes(bytes(range(256)) * 8)
+    (d / "binary.clf").write_bytes(bytes(range(256)) * 8)
+    (d / "binary.yaml").write_bytes(b"\x00\x01\x02" * 100)
+    (d / "binary.json").write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(200))
+    (d / "plain.gz").write_text("FLASER 3 1.0 1.0 1.0 0 0 0 0 0 0 1.0 host 1.0\n")
+    (d / "fake.bag").write_text("not a bag\n")
+    (d / "empty.clf").write_text("")
+    (d / "notalog.clf").write_text("hello\nworld\n")
+    (d / "empty_dir").mkdir()
+    (d / "a_file").write_text("x")
+    ranges = np.full(361, 3.0)
+    good = [Record(Scan.lms200(ranges, stamp=0.1 * k)) for k in range(5)]
+    write_log(d / "good.clf", good)
+    backwards = [Record(Scan.lms200(ranges, stamp=s)) for s in (0.0, 0.1, 0.2, 0.15, 0.3)]
+    write_log(d / "backwards.clf", backwards)
+    with gzip.open(d / "good.clf.gz", "wt") as fh:
+        fh.write((d / "good.clf").read_text())
+    # a simulator-like folder: scans.clf and its truth
+    (d / "simrun").mkdir()
+    write_log(d / "simrun" / "scans.clf", good)
+    # sweep files
+    (d / "sweep.yaml").write_text(yaml.safe_dump({"name": "t", "kind": "extract", "fixed": {"duration": 0.5},
+                                                  "grid": {"extractor.k": [3]}}))
+    (d / "list.yaml").write_text("- 1\n- 2\n")
+    (d / "badyaml.yaml").write_text("a: [1, 2\n")
+    # a sweep folder whose every cell failed
+    (d / "failed_sweep").mkdir()
+    pd.DataFrame({"x": [1, 2], "status": ["error", "error"], "error": ["E", "E"], "cell": ["a", "b"]}).to_parquet(
+        d / "failed_sweep" / "results.parquet")
+    (d / "sweep_no_results").mkdir()
+    for name in list(d.iterdir()):
+        f[name.name] = str(name)
+    return f
+
+
+def run_main(argv: list[str], seconds: float = 20.0) -> int:
+    def alarm(*_):
+        raise Hang(f"lmsbench {' '.join(argv)} ran for more than {seconds} s")
+
+    previous = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        return main(argv)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+O = "{out}"  # placeholder: a fresh output folder of the case
+
+CASES = [
+    # simulate
+    (["simulate", "--duration", "nan", "--out", O], "--duration"),
+    (["simulate", "--duration", "inf", "--out", O], "--duration"),
+    (["simulate", "--duration", "-5", "--out", O], "--duration"),
+    (["simulate", "--duration", "1e9", "--out", O], "--duration"),
+    (["simulate", "--seed", "-1", "--out", O], "--seed"),
+    (["simulate", "--seed", "1.5", "--out", O], "--seed"),
+    (["simulate", "--rate-hz", "-3", "--out", O], "--rate-hz"),
+    (["simulate", "--rate-hz", "0", "--out", O], "--rate-hz"),
+    (["simulate", "--rate-hz", "nan", "--out", O], "--rate-hz"),
+    (["simulate", "--world", "offfice", "--out", O], "offfice"),
+    (["simulate", "--world", "{missing.json}", "--out", O], "missing.json"),
+    (["simulate", "--world", "{binary.json}", "--out", O], "binary.json"),
+    (["simulate", "--config", "{binary.yaml}", "--out", O], "binary.yaml"),
+    (["simulate", "--config", "{list.yaml}", "--out", O], "list.yaml"),
+    (["simulate", "--config", "{missing.yaml}", "--out", O], "missing.yaml"),
+    (["simulate", "--out", "{a_file}"], "not a folder"),
+    (["simulate", "--resolution", "2", "--out", O], "--resolution"),
+    # compare
+    (["compare", "office:x", "--out", O], "office:x"),
+    (["compare", "office:-1", "--out", O], "office:-1"),
+    (["compare", "offfice", "--out", O], "offfice"),
+    (["compare", "office", "--rate", "0", "--out", O], "--rate"),
+    (["compare", "office", "--rate", "inf", "--out", O], "--rate"),
+    (["compare", "office", "--seeds", "-1", "--out", O], "--seeds"),
+    (["compare", "office", "--duration", "inf", "--out", O], "--duration"),
+    (["compare", "office", "--duration", "0", "--out", O], "--duration"),
+    (["compare", "{good.clf}", "--stride", "-1", "--out", O], "--stride"),
+    (["compare", "{good.clf}", "--stride", "0", "--out", O], "--stride"),
+    (["compare", "{good.clf}", "--max-scans", "0", "--out", O], "--max-scans"),
+    (["compare", "office", "--sigma", "-1", "--out", O], "--sigma"),
+    (["compare", "office", "--sigma", "nan", "--out", O], "--sigma"),
+    (["compare", "office", "--set", "extractor.k=abc", "--out", O], "k"),
+    (["compare", "office", "--set", "extractor.hough.rho_step=0", "--out", O], "rho_step"),
+    (["compare", "office", "--set", "extractor.kk=3", "--out", O], "kk"),
+    (["compare", "office", "--set", "sensor.k=3", "--out", O], "extractor.sensor.k"),
+    (["compare", "office", "--set", "novalue", "--out", O], "--set"),
+    (["compare", "office", "--methods", "nosuch", "--out", O], "nosuch"),
+    (["compare", "{binary.clf}", "--out", O], "binary"),
+    (["compare", "{plain.gz}", "--out", O], "gzip"),
+    (["compare", "{empty_dir}", "--out", O], "empty_dir"),
+    (["compare", "{notalog.clf}", "--out", O], "no laser"),
+    (["compare", "office", "--format", "xls", "--out", O], "--format"),
+    # slam
+    (["slam", "{simrun}", "--max-scans", "0", "--out", O], "--max-scans"),
+    (["slam", "{simrun}", "--every", "0", "--out", O], "--every"),
+    (["slam", "{simrun}", "--rate-hz", "0", "--out", O], "--rate-hz"),
+    (["slam", "{simrun}", "--rate-hz", "nan", "--out", O], "--rate-hz"),
+    (["slam", "{simrun}", "--config", "{binary.yaml}", "--out", O], "binary.yaml"),
+    (["slam", "{simrun}", "--config", "{badyaml.yaml}", "--out", O], "badyaml.yaml"),
+    (["slam", "{simrun}", "--config", "{missing.yaml}", "--out", O], "missing.yaml"),
+    (["slam", "{simrun}", "--extractor", "nosuch", "--out", O], "nosuch"),
+    (["slam", "{backwards.clf}", "--out", O], "backwards"),
+    (["slam", "{binary.clf}", "--out", O], "binary"),
+    (["slam", "{missing.clf}", "--out", O], "missing.clf"),
+    (["slam", "{empty_dir}", "--out", O], "empty_dir"),
+    (["slam", "{simrun}", "--relations", "{missing.relations}", "--out", O], "missing.relations"),
+    # sweep
+    (["sweep", "{binary.yaml}", "--out", O], "binary.yaml"),
+    (["sweep", "{missing.yaml}", "--out", O], "missing.yaml"),
+    (["sweep", "{list.yaml}", "--out", O], "list.yaml"),
+    (["sweep", "{badyaml.yaml}", "--out", O], "badyaml.yaml"),
+    (["sweep", "{sweep.yaml}", "--scheduler", "foo", "--out", O], "foo"),
+    (["sweep", "{sweep.yaml}", "--workers", "0", "--out", O], "--workers"),
+    (["sweep", "{sweep.yaml}", "--workers", "-1", "--out", O], "--workers"),
+    (["sweep", "{sweep.yaml}", "--out", "{a_file}"], "not a folder"),
+    # figures
+    (["figures", "--world", "offfice", "--out", O], "offfice"),
+    (["figures", "--duration", "-5", "--out", O], "--duration"),
+    (["figures", "--rate-hz", "0", "--out", O], "--rate-hz"),
+    (["figures", "--seed", "-1", "--out", O], "--seed"),
+    (["figures", "--methods", "nosuch", "--out", O], "nosuch"),
+    (["figures", "--intel", "{missing.log}", "--out", O], "missing.log"),
+    (["figures", "--intel", "{binary.clf}", "--out", O], "binary"),
+    (["figures", "--tables", "{empty_dir}", "--out", O], "empty_dir"),
+    (["figures", "--tables", "{missing_dir}", "--out", O], "missing_dir"),
+    (["figures", "--sweep", "{failed_sweep}", "--out", O], "no successful cell"),
+    (["figures", "--sweep", "{sweep_no_results}", "--out", O], "results.parquet"),
+    # demo
+    (["demo", "--world", "offfice", "--out", O], "offfice"),
+    (["demo", "--duration", "-5", "--out", O], "--duration"),
+    (["demo", "--rate-hz", "0", "--out", O], "--rate-hz"),
+    (["demo", "--seed", "-1", "--out", O], "--seed"),
+    (["demo", "--log", "{binary.clf}", "--out", O], "binary"),
+    (["demo", "--log", "{missing.clf}", "--out", O], "missing.clf"),
+    # lms200
+    (["lms200", "emulate", "--world", "offfice"], "offfice"),
+    (["lms200", "emulate", "--tcp", "70000"], "--tcp"),
+    (["lms200", "emulate", "--tcp", "-1"], "--tcp"),
+    (["lms200", "emulate", "--duration", "-5"], "--duration"),
+    (["lms200", "emulate", "--time-scale", "0"], "--time-scale"),
+    (["lms200", "emulate", "--seed", "-1"], "--seed"),
+    (["lms200", "emulate", "--log", "{binary.clf}"], "binary"),
+    (["lms200", "emulate", "--log", "{missing.clf}"], "missing.clf"),
+    (["lms200", "emulate", "--rfc2217"], "--tcp"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--duration", "-5"], "--duration"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--max-scans", "0"], "--max-scans"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--timeout", "0"], "--timeout"),
+    (["lms200", "record", "--port", "loop://", "--out", "{missing_dir}/x.clf"], "missing_dir"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.txt"], ".txt"),
+    (["lms200", "record", "--port", "loop://", "--out", "{a_file}/x.clf"], "a_file"),
+    # info
+    (["info", "{plain.gz}"], "gzip"),
+    (["info", "{binary.clf}"], "binary"),
+    (["info", "{missing.clf}"], "missing.clf"),
+    (["info", "{empty_dir}"], "empty_dir"),
+    (["info", "{empty.clf}"], "empty"),
+    (["info", "{fake.bag}"], "fake.bag"),
+    (["info", "{notalog.clf}"], "no laser"),
+    # bench, the top level
+    (["bench", "nosuch"], "nosuch"),
+    (["nosuch"], "nosuch"),
+]
+
+
+def _fill(argv: list[str], files: dict, out: Path) -> list[str]:
+    def one(word: str) -> str:
+        word = word.replace("{out}", str(out))
+        if word.startswith("{") and word.endswith("}"):
+            return files.get(word[1:-1], str(files["dir"] / word[1:-1]))
+        return word
+    return [one(w) for w in argv]
+
+
+@pytest.mark.parametrize("argv, expected", CASES, ids=[" ".join(c[0]) for c in CASES])
+def test_bad_input_is_one_line_exit_2_and_writes_nothing(argv, expected, files, tmp_path, capsys):
+    out = tmp_path / "out"
+    args = _fill(argv, files, out)
+    before = sorted(p.name for p in files["dir"].iterdir())
+    status = run_main(args)
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert status == 2, f"exit {status}, stderr: {err}"
+    assert len(lines) == 1, f"expected one line on stderr, got: {err}"
+    assert lines[0].startswith("lmsbench") and ": error: " in lines[0], lines[0]
+    assert "Traceback" not in err and "internal error" not in err
+    assert expected in lines[0], lines[0]
+    assert not out.exists() or not any(out.iterdir()), f"wrote {list(out.iterdir())}"
+    assert sorted(p.name for p in files["dir"].iterdir()) == before
+
+
+def test_the_issue_cases_are_all_here():
+    """The issue's list, by command, is covered (and more of each kind)."""
+    by_command = {}
+    for argv, _ in CASES:
+        by_command[argv[0]] = by_command.get(argv[0], 0) + 1
+    assert all(by_command[c] >= 4 for c in ("simulate", "compare", "slam", "sweep", "figures", "demo", "lms200", "info"))
+    assert len(CASES) >= 100

@@ -1,0 +1,72 @@
+"""Ctrl-C and Dask's shutdown seen from a terminal: a sweep on the local cluster stops on SIGINT
+to its process group with exit status 130, one line on stderr, no traceback from the driver or
+its workers, and no worker left running; a normal sweep prints nothing from Dask."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import psutil
+import pytest
+import yaml
+
+REPO = Path(__file__).resolve().parents[1]
+KIND = f"{Path(__file__).stem}:slow"
+
+
+def slow(params: dict) -> dict:
+    """Marks its start in a file, then sleeps ``sleep`` s."""
+    Path(params["marks"], f"{params['x']}").write_text("started")
+    time.sleep(float(params["sleep"]))
+    return {"y": float(params["x"])}
+
+
+def _sweep(tmp_path: Path, sleep: float, xs: int) -> list[str]:
+    marks = tmp_path / "marks"
+    marks.mkdir()
+    spec = {"name": "slow", "kind": KIND, "fixed": {"sleep": sleep, "marks": str(marks)}, "grid": {"x": list(range(xs))}}
+    path = tmp_path / "slow.yaml"
+    path.write_text(yaml.safe_dump(spec))
+    return [sys.executable, "-m", "experiments.cli", "sweep", str(path), "--workers", "2", "--out", str(tmp_path / "out")]
+
+
+def _env() -> dict:
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "tests"), str(REPO)])}
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_the_sweep_and_its_workers_with_one_line(tmp_path):
+    cmd = _sweep(tmp_path, sleep=30.0, xs=6) + ["--no-progress"]
+    proc = subprocess.Popen(cmd, cwd=REPO, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 90
+        while not list((tmp_path / "marks").iterdir()):
+            assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()[1]
+            time.sleep(0.2)
+        children = psutil.Process(proc.pid).children(recursive=True)
+        assert children, "no worker processes"
+        os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does: the whole process group
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert lines == ["lmsbench sweep: interrupted"], err
+    gone, alive = psutil.wait_procs(children, timeout=20)
+    assert not alive, f"workers left running: {alive}"
+
+
+@pytest.mark.slow
+def test_a_sweep_on_the_local_cluster_says_nothing_from_dask(tmp_path):
+    cmd = _sweep(tmp_path, sleep=0.0, xs=4) + ["--no-progress"]
+    run = subprocess.run(cmd, cwd=REPO, env=_env(), capture_output=True, text=True, timeout=180)
+    assert run.returncode == 0, run.stderr
+    assert run.stderr.strip() == "", run.stderr
+    assert "4 cells, 4 computed" in run.stdout
