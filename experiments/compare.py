@@ -44,6 +44,8 @@ class Source:
     sigma_r: float | None = None  # range noise, 1 sigma (m): the sensor model's, or estimated (logs)
     pose_of: Callable[[Record], Pose2D | None] | None = None  # world pose to trust, for repeatability
     estimate_sigma: Callable[[], float] | None = None  # how to estimate sigma_r when it is not known
+    extractor_sigma: float | None = None  # noise for the extractors' thresholds (m); None: as sigma_r
+    estimate_extractor_sigma: Callable[[], float] | None = None  # its estimate (logs: neighbour scatter)
     reader: Any = None  # the log reader (its ``stats`` say what was skipped)
     settings: dict[str, Any] = dataclasses.field(default_factory=dict)  # what produced the scans (saved beside results)
 
@@ -130,6 +132,12 @@ POSES = ("auto", "corrected", "none")
 DATASHEET_SIGMA_M = 0.005  # LMS200 statistical error, 1 sigma (m): for a source whose noise cannot be had
 
 
+def _plain(options: dict[str, Any]) -> dict[str, Any]:
+    from experiments.logargs import plain_log_options
+
+    return plain_log_options(options)
+
+
 def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
                read_options: dict[str, Any] | None = None, poses: str = "auto") -> Source:
     """Every ``stride``-th scan of a real log (CARMEN or bag); no ground truth.
@@ -161,9 +169,15 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
             raise LmsbenchError(f"{path}: too few straight runs of beams to estimate the range noise; give --sigma")
         return float(noise.sigma_m)
 
+    def estimate_extractor_sigma() -> float:
+        from features.noise_estimate import neighbour_sigma
+
+        return neighbour_sigma(read_log(path, **options))
+
     return Source(Path(path).name, "log", None, records(), None, max_scans, sigma_r=None,
                   pose_of=(lambda rec: rec.odom) if corrected else None, estimate_sigma=estimate_sigma,
-                  reader=reader, settings={"log": str(path), "stride": stride, "poses": poses, **options})
+                  reader=reader, estimate_extractor_sigma=estimate_extractor_sigma,
+                  settings={"log": str(path), "stride": stride, "poses": poses, **_plain(options)})
 
 
 def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: float = 30.0,
@@ -320,6 +334,7 @@ def compare(
     rd_cfg = realdata_config or RealDataConfig()
     for src in srcs:
         sigma_r = _source_sigma(src, sigma)
+        src_runs = _with_noise(runs, params, _extractor_noise(src, sigma_r))
         previous: dict[str, tuple[np.ndarray, Pose2D]] = {}  # method -> lines and pose of the last scan
         for k, rec in enumerate(src.records):
             if max_scans is not None and k >= max_scans:
@@ -329,10 +344,10 @@ def compare(
             n_valid = int(np.count_nonzero(scan.valid))
             shift = k % len(runs)
             if not warmed:  # first calls load compiled kernels and fill caches: not timed
-                for _, fn, cfg in runs:
+                for _, fn, cfg in src_runs:
                     fn(scan, cfg)
                 warmed = True
-            for name, fn, cfg in runs[shift:] + runs[:shift]:
+            for name, fn, cfg in src_runs[shift:] + src_runs[:shift]:
                 t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
                 fs = fn(scan, cfg)
                 c1, t1 = time.thread_time_ns(), time.perf_counter_ns()
@@ -379,6 +394,30 @@ def _source_sigma(src: Source, sigma: float | str) -> float:
     if src.sigma_r is None:
         src.sigma_r = DATASHEET_SIGMA_M
     return max(float(src.sigma_r), 1e-6)
+
+
+NOISE_FIELDS = ("sigma_r", "sigma_r_cm", "sigma")  # extractor config fields holding the range noise (m)
+
+
+def _extractor_noise(src: Source, sigma_r: float) -> float:
+    """The range noise (m) the extractors are given on ``src``: the simulator's known noise, or for
+    a log the scatter of neighbouring beams estimated from the log (``features.noise_estimate``,
+    what ``sigma_r="auto"`` means), resolved once per source."""
+    if src.extractor_sigma is None and src.estimate_extractor_sigma is not None:
+        src.extractor_sigma = src.estimate_extractor_sigma()
+    return float(src.extractor_sigma) if src.extractor_sigma is not None else sigma_r
+
+
+def _with_noise(runs: list, params: dict[str, dict[str, Any]], noise: float) -> list:
+    """``runs`` with every extractor's noise fields set to ``noise`` (m), except those the caller
+    set in ``params``."""
+    out = []
+    for name, fn, cfg in runs:
+        fields = {f.name for f in dataclasses.fields(cfg)}
+        given = params.get(name, {})
+        noise_params = {f: noise for f in NOISE_FIELDS if f in fields and f not in given}
+        out.append((name, fn, dataclasses.replace(cfg, **noise_params) if noise_params else cfg))
+    return out
 
 
 def _realdata_row(fs: Any, rec: Record, src: Source, sigma_r: float, cfg: RealDataConfig,

@@ -327,9 +327,7 @@ class SlamFilter:
         else:
             pairs = assoc.nearest_neighbour(d2, self.gate, self.config.association.reject_ambiguous)
         paired = {p[0] for p in pairs}
-        # new: far from every landmark it could be (a line outside every collinear landmark's
-        # extent is another wall on the same infinite line, e.g. beyond a door)
-        new = [o for o in range(z.shape[0]) if np.min(d2[o]) > self.new_gate and o not in paired]
+        new = [o for o in range(z.shape[0]) if np.min(cand.d2[o]) > self.new_gate and o not in paired]
         return [(o, int(pos[l])) for o, l in pairs], new
 
     def _associate_lines(self, obs: Observations):

@@ -73,10 +73,25 @@ def test_signals_of_any_scan(scan: Scan, k: int) -> None:
         np.array([2.0]),
         np.full(7, 2.0),
         np.where(np.arange(361) % 2 == 0, 2.0, np.nan),
-        np.full(361, 2.0),
+        np.full(361, 0.5),
     ],
     ids=["inf", "nan", "zeros", "huge", "one-valid", "one-beam", "seven-beams", "alternating", "circle"],
 )
 def test_degenerate_inputs_give_no_features(ranges: np.ndarray) -> None:
     got = extract(Scan(ranges, -np.pi / 2, np.deg2rad(0.5), 0.0, 8.183), method="sensor")
     assert got.lines == [] and got.corners == []
+
+
+def test_wide_circle_pieces_are_chords_within_the_noise() -> None:
+    """The sensor at the centre of a round room of radius 2 m: the run that spans it bends, so it
+    is split (at the beam farthest from its chord) until its pieces fit lines. A piece of 0.4 m lies
+    within 1 cm of its chord (the pillars world's curved wall makes the same point), so the pieces
+    are lines within two noise sigmas of every beam they hold, and no corners."""
+    scan = Scan(np.full(361, 2.0), -np.pi / 2, np.deg2rad(0.5), 0.0, 8.183)
+    got = extract(scan, method="sensor")
+    assert got.corners == []
+    for line in got.lines:
+        beams = np.arange(line.first, line.last + 1)
+        predicted = line.rho / np.cos(scan.angles[beams] - line.alpha)
+        assert np.abs(scan.ranges[beams] - predicted).max() < 2 * 0.005
+        assert line.length < 0.6

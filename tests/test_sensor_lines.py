@@ -219,11 +219,21 @@ def test_acute_remedy_is_switchable_and_measures_range_variance() -> None:
 
 
 def test_cm_mode_scans_use_their_own_noise() -> None:
-    """A scan with range_max > 10 m (SICK cm codes) is treated with sigma_r_cm: the reported
-    covariance scales with the square of the noise std."""
-    mm = extract(cast(ROOM)).lines[0]  # range_max 8.183 m: mm codes
-    cm = extract(cast(ROOM, range_max=81.83)).lines[0]
-    assert cm.rho == pytest.approx(mm.rho, abs=1e-5)
-    np.testing.assert_allclose(cm.cov, mm.cov * (0.02 / 0.005) ** 2, rtol=1e-3)
+    """A scan with range_max > 10 m (SICK cm codes: the real logs) uses sigma_r_cm, by default
+    "auto": the scatter of its neighbouring beams (features.noise_estimate); a given number is used
+    as it is, and the reported covariance scales with the square of the noise std."""
+    from features.noise_estimate import neighbour_sigma
+    from features.registry import make_config
+
+    mm = extract(cast(ROOM)).lines[0]  # range_max 8.183 m: mm codes, the known 5 mm
     same = extract(cast(ROOM, range_max=81.83), sigma_r_cm=0.005).lines[0]
-    np.testing.assert_allclose(same.cov, mm.cov, rtol=1e-3)
+    assert same.rho == pytest.approx(mm.rho, abs=1e-9)
+    np.testing.assert_allclose(same.cov, mm.cov, rtol=1e-9)
+    noisy = cast(ROOM, range_max=81.83, sigma=0.01, seed=4)
+    cfg = make_config("sensor")
+    assert cfg.sigma_r_cm == "auto" and cfg.sigma_of(noisy) == neighbour_sigma(noisy)
+    assert cfg.sigma_of(noisy) == pytest.approx(0.01, rel=0.2)
+    assert make_config("sensor", sigma_r="auto").sigma_of(cast(ROOM, sigma=0.003, seed=5)) == pytest.approx(0.003, rel=0.25)
+    auto = extract(noisy).lines
+    fixed = extract(noisy, sigma_r_cm=cfg.sigma_of(noisy)).lines
+    assert [(l.first, l.last) for l in auto] == [(l.first, l.last) for l in fixed]

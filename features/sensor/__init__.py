@@ -35,13 +35,14 @@ def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
     lv, lb, cv, cb = _extract_scan(
         scan.ranges, bearings_of(scan.angle_min, scan.angle_increment, len(scan)), scan.angle_min,
         scan.angle_increment, float(max(scan.range_min, cfg.min_range)), scan.range_max,
-        float(cfg.sigma_for(scan.range_max)), grid, p,
+        cfg.sigma_of(scan), grid, p,
     )
     return FeatureSet.of(Lines(lv, lb), Corners(cv, cb), METHOD)
 
 
 def extract_sensor_many(scans: Sequence[Scan], cfg: SensorMethodConfig) -> list[FeatureSet]:
-    """``extract_sensor`` of every scan (one geometry, checked), in one kernel call."""
+    """``extract_sensor`` of every scan (one geometry, checked), in one kernel call; a noise of
+    "auto" is estimated once from all of them (pooled, as ``lmsbench compare`` does per log)."""
     if not scans:
         return []
     scan = common_geometry(scans)
@@ -50,7 +51,7 @@ def extract_sensor_many(scans: Sequence[Scan], cfg: SensorMethodConfig) -> list[
     rows = engine.extract_batch(
         stacked_ranges(scans), bearings_of(scan.angle_min, scan.angle_increment, len(scan)), scan.angle_min,
         scan.angle_increment, float(max(scan.range_min, cfg.min_range)), scan.range_max,
-        float(cfg.sigma_for(scan.range_max)), grid, p,
+        cfg.sigma_of(scans), grid, p,
     )
     return split_rows(*rows, METHOD)
 

@@ -4,9 +4,13 @@ when it is built."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
+from lms200 import Scan
+
 from ..baselines import checks
+from ..noise_estimate import AUTO, neighbour_sigma
 from .engine import Params
 
 CM_MODE_RANGE_MAX = 10.0  # m: a scan with a larger range_max comes in SICK cm codes (1 cm steps)
@@ -19,15 +23,20 @@ class SensorMethodConfig:
 
     Windows and counts are in beams, distances in metres, angles in radians. The noise-scaled
     thresholds (``*_tau``) are in standard deviations of the quantity they test, derived from the
-    range noise ``sigma_r``.
+    range noise ``sigma_r``. ``"auto"`` estimates that noise from the scan itself
+    (:func:`features.noise_estimate.neighbour_sigma`: the scatter of neighbouring beams about
+    straight faces, with the cm codes' quantisation and the interlaced sweeps' offset); it is the
+    default for cm-mode scans (range_max > 10 m, the real CARMEN logs), while mm-mode scans (the
+    simulator, the LMS200 in mm mode) keep the known 5 mm. ``lmsbench compare`` resolves "auto"
+    once per log (pooled over the log's scans) and the simulator's known noise for its runs.
 
     Raises:
         ConfigError: naming the field, when a value cannot work.
     """
 
     k: int = 3  # half-width of the AD / slope window (eq. 4, 6), beams
-    sigma_r: float = 0.005  # range noise std of the sensor, m (SICK mm mode: range_max <= 10 m)
-    sigma_r_cm: float = 0.02  # range noise std used instead when range_max > 10 m (SICK cm mode, 1 cm codes), m
+    sigma_r: float | str = 0.005  # range noise std, m (SICK mm mode: range_max <= 10 m), or "auto"
+    sigma_r_cm: float | str = "auto"  # ... used instead when range_max > 10 m (SICK cm mode: the real logs), m
     min_range: float = 0.02  # ranges below this (or below the scan's range_min) are invalid, m
     ad_tau: float = 4.0  # |AD - (1 + 2 sum cos jD)| <= ad_tau * sigma_AD(beam) marks a line beam
     psi_split: float = 0.2  # a slope change |psi| above this splits a run (rad) ...
@@ -42,7 +51,7 @@ class SensorMethodConfig:
     min_inlier_fraction: float = 0.7  # fraction of a run's beams the line must explain
     curvature_tau: float = 4.0  # reject a line whose residuals bend (parabola t-statistic) more
     min_points: int = 8  # fewest supporting beams of a line
-    min_length: float = 0.3  # shortest line segment kept, m
+    min_length: float = 0.3  # shortest line segment kept, m (shorter pieces of round pillars pass for lines)
     merge_gap: int = 4  # neighbouring lines at most this many beams apart may merge ...
     merge_tau: float = 3.0  # ... when their (rho, alpha) agree within merge_tau std
     bridge_invalid: int = 0  # invalid (+inf, nan) beams a merge may bridge; 0: they break segments
@@ -57,7 +66,8 @@ class SensorMethodConfig:
     def __post_init__(self) -> None:
         checks.integer("k", self.k, 1)
         for name in ("sigma_r", "sigma_r_cm"):
-            checks.positive(name, getattr(self, name), "m")
+            if getattr(self, name) != AUTO:
+                checks.positive(name, getattr(self, name), "m")
         checks.non_negative("min_range", self.min_range, "m")
         for name in ("ad_tau", "psi_tau", "band_tau", "bin_tau", "inlier_tau", "max_chi2", "curvature_tau",
                      "merge_tau"):
@@ -94,7 +104,15 @@ class SensorMethodConfig:
         """The kernels' typed record of this config (built once, in ``__post_init__``)."""
         return self._params
 
-    def sigma_for(self, range_max: float) -> float:
+    def sigma_for(self, range_max: float) -> float | str:
         """The range noise std (m) for a scan with this ``range_max`` (m): ``sigma_r_cm`` for the
-        SICK cm codes (range_max > 10 m), else ``sigma_r``."""
+        SICK cm codes (range_max > 10 m), else ``sigma_r``; either may be "auto"."""
         return self.sigma_r_cm if range_max > CM_MODE_RANGE_MAX else self.sigma_r
+
+    def sigma_of(self, scans: Scan | Sequence[Scan]) -> float:
+        """The range noise std (m) the thresholds use on a scan (or a batch of one geometry):
+        :meth:`sigma_for`, with "auto" estimated from the data
+        (:func:`features.noise_estimate.neighbour_sigma`, pooled over a batch)."""
+        first = scans if isinstance(scans, Scan) else scans[0]
+        sigma = self.sigma_for(first.range_max)
+        return neighbour_sigma(scans) if sigma == AUTO else float(sigma)
