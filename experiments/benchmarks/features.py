@@ -1,8 +1,8 @@
 """Benchmark of every extractor (``lmsbench bench features``): scans per second of single
 ``features.extract`` calls and of one ``features.extract_many`` call, on 361-beam office scans
 from the simulator (or, where ``sim`` is absent, analytic scans of a furnished rectangular room)
-and on MIT CSAIL scans where the shared data is present; process CPU time, best of repeats,
-methods interleaved. ``accuracy`` scores the sensor method on simulated tours."""
+and on MIT CSAIL scans where the shared data is present; process CPU time, best of repeats per
+chunk of 50 scans, methods interleaved. ``accuracy`` scores the sensor method on simulated tours."""
 
 from __future__ import annotations
 
@@ -70,40 +70,50 @@ def mit_scans(count: int) -> list[Scan]:
     return out
 
 
+CHUNK = 50  # scans timed together; each chunk's best repeat counts (robust to bursts of load)
+
+
 def time_methods(scans: list[Scan], methods: list[str], repeats: int) -> dict[str, dict[str, float]]:
     """CPU seconds per scan of each method over ``scans``: ``single`` (one ``extract`` call per
-    scan) and ``batch`` (one ``extract_many`` call for all), the best (least disturbed) of
-    ``repeats`` passes; the methods and the two modes interleaved within every repeat, so that
-    load on a shared machine falls on all alike. Also the lines and corners per scan."""
+    scan) and ``batch`` (one ``extract_many`` call per chunk of CHUNK scans), each chunk's best
+    (least disturbed) of ``repeats`` passes, summed over the chunks; the methods and the two modes
+    interleaved within every repeat, so that load on a shared machine falls on all alike. Also
+    the lines and corners per scan."""
     configs = {m: make_config(m) for m in methods}
     for m in methods:  # load the compiled kernels (and compile them in a fresh checkout): not timed
         extract_many(scans[:2], m, configs[m])
         extract(scans[0], m, configs[m])
-    best = {m: {"single": np.inf, "batch": np.inf} for m in methods}
+    chunks = [scans[i : i + CHUNK] for i in range(0, len(scans), CHUNK)]
+    best = {m: {"single": np.full(len(chunks), np.inf), "batch": np.full(len(chunks), np.inf)} for m in methods}
     counts = {}
     for rep in range(repeats):
         order = methods[rep % len(methods):] + methods[: rep % len(methods)]
         for m in order:
             cfg = configs[m]
-            c0 = time.process_time()
-            for s in scans:
-                extract(s, m, cfg)
-            c1 = time.process_time()
-            many = extract_many(scans, m, cfg)
-            c2 = time.process_time()
-            best[m]["single"] = min(best[m]["single"], (c1 - c0) / len(scans))
-            best[m]["batch"] = min(best[m]["batch"], (c2 - c1) / len(scans))
-            counts[m] = (sum(len(f.lines) for f in many) / len(scans), sum(len(f.corners) for f in many) / len(scans))
-    return {m: {**best[m], "lines": counts[m][0], "corners": counts[m][1]} for m in methods}
+            n_lines = n_corners = 0
+            for c, chunk in enumerate(chunks):
+                c0 = time.process_time()
+                for s in chunk:
+                    extract(s, m, cfg)
+                c1 = time.process_time()
+                many = extract_many(chunk, m, cfg)
+                c2 = time.process_time()
+                best[m]["single"][c] = min(best[m]["single"][c], c1 - c0)
+                best[m]["batch"][c] = min(best[m]["batch"][c], c2 - c1)
+                n_lines += sum(len(f.lines) for f in many)
+                n_corners += sum(len(f.corners) for f in many)
+            counts[m] = (n_lines / len(scans), n_corners / len(scans))
+    return {m: {"single": float(best[m]["single"].sum()) / len(scans), "batch": float(best[m]["batch"].sum()) / len(scans),
+                "lines": counts[m][0], "corners": counts[m][1]} for m in methods}
 
 
 def run(quick: bool = False) -> list[dict]:
     """One row per method x scan set (simulated office, 361 beams; MIT CSAIL, where present):
-    scans/s of single ``extract`` calls and of one ``extract_many`` call (process CPU time, best
-    of the repeats, methods interleaved), per-scan microseconds, and the ratios to the sensor
-    method (> 1: faster than sensor)."""
+    scans/s of single ``extract`` calls and of ``extract_many`` batches (process CPU time, each
+    chunk's best of the repeats, methods interleaved), per-scan microseconds, and the ratios to
+    the sensor method (> 1: faster than sensor)."""
     count = 100 if quick else 600
-    repeats = 2 if quick else 5
+    repeats = 2 if quick else 7
     office, source = office_scans(count)
     methods = available_methods()
     rows = []
