@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test setup clean bench
+.PHONY: demo test check setup clean bench
 
 $(BIN)/python:
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; lmsbench needs CPython 3.11 (set PYTHON=/path/to/python3.11)"; exit 1; }
@@ -20,7 +20,12 @@ setup: $(STAMP)
 demo: $(STAMP)
 	$(BIN)/lmsbench demo
 
-test: $(STAMP)
+# static checks: ruff on everything, mypy on the packages listed in pyproject.toml ([tool.mypy] files)
+check: $(STAMP)
+	$(BIN)/ruff check --no-cache .
+	$(BIN)/mypy
+
+test: check
 	$(BIN)/python -m pytest -q -rs
 
 bench: $(STAMP)

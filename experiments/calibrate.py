@@ -28,6 +28,7 @@ from lms200 import LmsbenchError, read_log
 from lms200.calibration import LogCalibration, calibrate_scans
 
 WIDTH_GRID_STEPS = (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)  # spot widths tried, in beam steps
+TAIL_GRID = (0.0, 0.1, 0.3)  # noise_tail_prob values tried
 FIT_DURATION_S = 30.0  # simulated seconds per spot width
 FIT_RATE_HZ = 5.0  # scans kept per simulated second
 FIT_SEED = 0
@@ -42,6 +43,21 @@ class CalibrationResult:
     width_curve: list[tuple[float, float]]  # (beam_width_deg, simulated mixed share)
     outlier_baseline: float  # the outlier counter's rate on the simulated run without outliers
     world: str
+    tail_curve: list[tuple[float, float]] = ()  # type: ignore[assignment]  # (noise_tail_prob, simulated tail share)
+
+
+def _interpolate(xs: list[float], ys: list[float], target: float) -> float:
+    """The y at which the (made monotone) curve x(y) reaches ``target``, clipped to the grid."""
+    x = np.maximum.accumulate(np.nan_to_num(np.asarray(xs, dtype=float)))
+    y = np.asarray(ys, dtype=float)
+    if not np.isfinite(target) or target <= x[0]:
+        return float(y[0])
+    if target >= x[-1]:
+        return float(y[-1])
+    k = int(np.searchsorted(x, target, side="left"))
+    x0, x1 = x[k - 1], x[k]
+    t = 0.0 if x1 <= x0 else (target - x0) / (x1 - x0)
+    return float(y[k - 1] + t * (y[k] - y[k - 1]))
 
 
 def _resolution_deg(angle_increment: float) -> float:
@@ -71,20 +87,21 @@ def base_sensor(cal: LogCalibration):
     )
 
 
-def _simulated_measurement(sensor, world: str):
+def _simulated_measurement(sensor, world: str, duration: float = FIT_DURATION_S):
     from sim import make_world, simulate_records
 
-    records = simulate_records(make_world(world, FIT_SEED), FIT_SEED, FIT_DURATION_S, sensor, rate_hz=FIT_RATE_HZ)
+    records = simulate_records(make_world(world, FIT_SEED), FIT_SEED, duration, sensor, rate_hz=FIT_RATE_HZ)
     return calibrate_scans(records, seed=FIT_SEED)
 
 
-def fit_sensor(cal: LogCalibration, world: str = "office") -> CalibrationResult:
-    """The SensorConfig fitted to a log's measurements (see the module docstring)."""
+def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT_DURATION_S) -> CalibrationResult:
+    """The SensorConfig fitted to a log's measurements (see the module docstring); ``duration``:
+    simulated seconds per spot width (shorter is faster and noisier)."""
     sensor = base_sensor(cal)
     curve: list[tuple[float, float]] = []
     for steps in WIDTH_GRID_STEPS:
         w = steps * sensor.resolution_deg
-        m = _simulated_measurement(sensor.replace(beam_width_deg=w, mixed_pixels=w > 0), world)
+        m = _simulated_measurement(sensor.replace(beam_width_deg=w, mixed_pixels=w > 0), world, duration)
         curve.append((w, float(m.mixed_share.value)))
     widths = np.array([c[0] for c in curve])
     shares = np.maximum.accumulate(np.nan_to_num(np.array([c[1] for c in curve])))  # monotone
@@ -101,14 +118,24 @@ def fit_sensor(cal: LogCalibration, world: str = "office") -> CalibrationResult:
             width = float(widths[first - 1] + t * (widths[first] - widths[first - 1]))
     width = round(width, 4)
     with_width = sensor.replace(beam_width_deg=width, mixed_pixels=width > 0)
-    baseline = float(_simulated_measurement(with_width, world).outlier_rate.value)
+    tail_sigma = float(cal.tail_sigma_m * np.sqrt(1.5))  # a beam's sigma: residuals mix three beams
+    tail_curve: list[tuple[float, float]] = []
+    baseline = 0.0
+    for eps in TAIL_GRID:
+        m = _simulated_measurement(with_width.replace(noise_tail_prob=eps, noise_tail_sigma=tail_sigma), world, duration)
+        tail_curve.append((eps, float(m.tail_share.value)))
+        if eps == 0.0:
+            baseline = float(m.outlier_rate.value)
+    tail_prob = _interpolate([c[1] for c in tail_curve], [c[0] for c in tail_curve], float(cal.tail_share.value))
+    with_width = with_width.replace(noise_tail_prob=round(tail_prob, 4),
+                                    noise_tail_sigma=round(tail_sigma, 5) if tail_prob > 0 else 0.0)
     outlier = max(float(cal.outlier_rate.value) - baseline, 0.0) if np.isfinite(cal.outlier_rate.value) else 0.0
     fitted = with_width.replace(outlier_prob=min(outlier, 0.5))
-    return CalibrationResult(cal, fitted, curve, baseline, world)
+    return CalibrationResult(cal, fitted, curve, baseline, world, tail_curve)
 
 
 def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_scans: int | None = None,
-                  **read_options: Any) -> CalibrationResult:
+                  fit_duration: float = FIT_DURATION_S, **read_options: Any) -> CalibrationResult:
     """Measure a log (every ``stride``-th scan, at most ``max_scans``) and fit the sensor model;
     ``read_options`` go to ``lms200.read_log`` (topic, skip_bad_lines, geometry).
 
@@ -128,7 +155,7 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
         cal = calibrate_scans(scans())
     except ValueError as exc:
         raise LmsbenchError(f"{path}: {exc}") from None
-    return fit_sensor(cal, world)
+    return fit_sensor(cal, world, fit_duration)
 
 
 def _est(e) -> dict[str, float]:
@@ -163,6 +190,9 @@ def calibration_section(result: CalibrationResult, source: str) -> dict[str, Any
             "fit_world": result.world,
             "simulated_mixed_share_by_beam_width_deg": [[_round(w), _round(s)] for w, s in result.width_curve],
             "simulated_outlier_rate_without_outliers": _round(result.outlier_baseline),
+            "residual_tail_share": _est(c.tail_share),
+            "residual_tail_sigma_m": _round(c.tail_sigma_m),
+            "simulated_tail_share_by_noise_tail_prob": [[_round(e), _round(s)] for e, s in result.tail_curve],
         }
     }
 
@@ -186,6 +216,8 @@ def format_calibration(result: CalibrationResult) -> list[str]:
         f"mixed pixels at steps  {pm(c.mixed_share, 100, ' %')}  -> beam_width_deg {s.beam_width_deg:g}",
         f"isolated outliers      {pm(c.outlier_rate, 100, ' %')}  -> outlier_prob {s.outlier_prob:.4g} "
         f"(simulated world alone: {result.outlier_baseline * 100:.3g} %)",
+        f"residual tail           {pm(c.tail_share, 100, ' %')} at {c.tail_sigma_m * 1000:.1f} mm  -> noise_tail_prob "
+        f"{s.noise_tail_prob:.4g} at {s.noise_tail_sigma * 1000:.1f} mm",
     ]
     return lines
 

@@ -318,7 +318,11 @@ def compare(
         alpha_err_mean / alpha_err_rms (rad), endpoint_err_mean (m), n_truth_corners, corner_tp,
         corner_fp, corner_fn, corner_err_mean (m).
     """
+    from experiments.user_methods import ensure_method
+
     methods = list(methods) if methods else available_methods()
+    for m in methods:
+        ensure_method(m)
     params = params or {}
     runs = [(m, get_method(m).run, make_config(m, **params.get(m, {}))) for m in methods]
     backends = {name: backend_of(name, cfg) for name, _, cfg in runs}

@@ -158,8 +158,11 @@ def check_log(path: str | os.PathLike) -> Path:
     return p
 
 
-def check_out(path: str | os.PathLike) -> Path:
-    """An output folder: absent (created later) or a folder; its nearest existing parent writable."""
+def check_out(path: str | os.PathLike | None) -> Path | None:
+    """An output folder: absent (created later) or a folder; its nearest existing parent writable.
+    None (no --out: a new timestamped folder will be made) passes."""
+    if path is None:
+        return None
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise InputError(f"--out {p}: exists and is not a folder")
@@ -175,12 +178,18 @@ def check_methods(methods: Sequence[str] | None) -> list[str]:
     """Known extractor names (all of them when None)."""
     from features.registry import available_methods
 
+    from experiments.user_methods import ensure_method, is_user_method
+
     known = available_methods()
     if not methods:
         return known
-    bad = [m for m in methods if m not in known]
+    for m in methods:
+        if is_user_method(m):
+            ensure_method(m)  # raises naming what is wrong with MODULE:FUNCTION
+    bad = [m for m in methods if m not in known and not is_user_method(m)]
     if bad:
-        raise InputError(f"unknown method(s) {', '.join(bad)}; known: {', '.join(known)}")
+        raise InputError(f"unknown method(s) {', '.join(bad)}; known: {', '.join(known)}, or MODULE:FUNCTION "
+                         "(your own extractor)")
     if len(set(methods)) != len(methods):
         raise InputError(f"a method is named twice in {' '.join(methods)}")
     return list(methods)

@@ -21,6 +21,9 @@ class OverrideError(LmsbenchError, ValueError):
 def _fields(method: str) -> list[str]:
     from features.registry import get_method
 
+    from experiments.user_methods import ensure_method
+
+    ensure_method(method)
     return [f.name for f in dataclasses.fields(get_method(method).config_type)]
 
 

@@ -5,6 +5,7 @@ Only formatting lives here: every number comes from the tables it is given.
 
 from __future__ import annotations
 
+import functools
 import html
 import math
 import re
@@ -57,18 +58,22 @@ def write_report(folder: Path, title: str, sections: list[Section]) -> tuple[Pat
     md_path = folder / "report.md"
     md_path.write_text("\n".join(md))
     html_path = folder / "report.html"
-    html_path.write_text(markdown_to_html("\n".join(md), title))
+    html_path.write_text(markdown_to_html("\n".join(md), title, images=folder))
     return md_path, html_path
 
 
 _CSS = """body{font-family:system-ui,sans-serif;max-width:60rem;margin:2rem auto;padding:0 1rem;color:#222}
 table{border-collapse:collapse;margin:0.5rem 0;font-size:0.9rem}th,td{border:1px solid #ccc;padding:0.2rem 0.5rem;
-text-align:right}th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}img{max-width:100%}
-code,pre{background:#f6f6f6}pre{padding:0.5rem;overflow-x:auto}em{color:#555}"""
+text-align:right}th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}img{max-width:100%;height:auto}
+code,pre{background:#f6f6f6}pre{padding:0.5rem;overflow-x:auto}em{color:#555}.wide{overflow-x:auto;max-width:100%}
+p,li{overflow-wrap:anywhere}"""
 
 
-def markdown_to_html(text: str, title: str) -> str:
-    """The small Markdown subset the report uses (headings, tables, images, lists, code, emphasis)."""
+def markdown_to_html(text: str, title: str, images: Path | None = None) -> str:
+    """The small Markdown subset the report uses (headings, tables, images, lists, code, emphasis).
+    With ``images`` (the folder image paths are relative to), PNG / SVG / JPEG images are embedded
+    as data URIs, so the page is one self-contained file; wide tables scroll inside the page."""
+    inline = functools.partial(_inline, images=images)
     out = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
            f"<style>{_CSS}</style></head><body>"]
     lines = text.splitlines()
@@ -88,31 +93,47 @@ def markdown_to_html(text: str, title: str) -> str:
                 rows.append([c.strip() for c in lines[i].strip().strip("|").split("|")])
                 i += 1
             head, body = rows[0], [r for r in rows[2:]]
-            out.append("<table><tr>" + "".join(f"<th>{_inline(c)}</th>" for c in head) + "</tr>"
-                       + "".join("<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in r) + "</tr>" for r in body)
-                       + "</table>")
+            out.append("<div class='wide'><table><tr>" + "".join(f"<th>{inline(c)}</th>" for c in head) + "</tr>"
+                       + "".join("<tr>" + "".join(f"<td>{inline(c)}</td>" for c in r) + "</tr>" for r in body)
+                       + "</table></div>")
             continue
         m = re.match(r"^(#{1,4}) (.*)$", line)
         if m:
             n = len(m.group(1))
-            out.append(f"<h{n}>{_inline(m.group(2))}</h{n}>")
+            out.append(f"<h{n}>{inline(m.group(2))}</h{n}>")
         elif line.startswith("- "):
             items = []
             while i < len(lines) and lines[i].startswith("- "):
-                items.append(f"<li>{_inline(lines[i][2:])}</li>")
+                items.append(f"<li>{inline(lines[i][2:])}</li>")
                 i += 1
             out.append("<ul>" + "".join(items) + "</ul>")
             continue
         elif line.strip():
-            out.append(f"<p>{_inline(line)}</p>")
+            out.append(f"<p>{inline(line)}</p>")
         i += 1
     out.append("</body></html>")
     return "\n".join(out)
 
 
-def _inline(text: str) -> str:
+_MIME = {".png": "image/png", ".svg": "image/svg+xml", ".jpg": "image/jpeg", ".jpeg": "image/jpeg"}
+
+
+def _src(path: str, images: Path | None) -> str:
+    """A data URI of an image file below the report's folder ``images``, else the path as given."""
+    import base64
+
+    if images is None:
+        return path
+    file = (images / html.unescape(path)).resolve()
+    mime = _MIME.get(file.suffix.lower())
+    if mime is None or not file.is_file():
+        return path
+    return f"data:{mime};base64," + base64.b64encode(file.read_bytes()).decode("ascii")
+
+
+def _inline(text: str, images: Path | None = None) -> str:
     text = html.escape(text, quote=False)
-    text = re.sub(r"!\[([^\]]*)\]\(([^)]+)\)", r"<img src='\2' alt='\1'>", text)
+    text = re.sub(r"!\[([^\]]*)\]\(([^)]+)\)", lambda m: f"<img src='{_src(m.group(2), images)}' alt='{m.group(1)}'>", text)
     text = re.sub(r"\[([^\]]+)\]\(([^)]+)\)", r"<a href='\2'>\1</a>", text)
     text = re.sub(r"`([^`]+)`", r"<code>\1</code>", text)
     text = re.sub(r"\*\*([^*]+)\*\*", r"<b>\1</b>", text)

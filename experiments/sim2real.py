@@ -119,7 +119,7 @@ def motion_limits(records: Sequence[Record]):
     a = np.array(odo, dtype=float)
     dt = np.diff(a[:, 0])
     ok = (dt > 0) & (dt < MIN_SCAN_DT_S)
-    if np.count_nonzero(ok) < 10:
+    if np.count_nonzero(ok) < 10 or np.mean(ok) < 0.5:  # mostly long gaps: a subsampled log
         return RobotLimits()
     v = np.hypot(np.diff(a[:, 1]), np.diff(a[:, 2]))[ok] / dt[ok]
     w = np.abs(np.angle(np.exp(1j * np.diff(a[:, 3]))))[ok] / dt[ok]
@@ -147,33 +147,39 @@ class Sim2RealResult:
 
 def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = (0, 1), duration: float = 60.0,
              rate_hz: float = 3.0, stride: int = 5, max_scans: int | None = 400,
-             methods: Sequence[str] = METHODS, sensor: Any = None, read_options: dict | None = None) -> Sim2RealResult:
+             methods: Sequence[str] = METHODS, sensor: Any = None, read_options: dict | None = None,
+             fit_duration: float | None = None) -> Sim2RealResult:
     """Compare a real log with the calibrated simulation (see the module docstring).
 
     Args:
         log: CARMEN log or bag. world: simulated world name. seeds: simulated runs.
         duration, rate_hz: each simulated run. stride, max_scans: the real scans used.
         sensor: a SensorConfig to use instead of calibrating on the log.
+        fit_duration: simulated seconds per spot width of the calibration's fit (default its own).
 
     Raises:
         LmsbenchError: for a log without scans or an unknown world.
     """
-    from experiments.calibrate import calibrate_log
+    from experiments.calibrate import FIT_DURATION_S, calibrate_log
     from experiments.compare import Source, compare, summarise
     from sim import WORLD_NAMES, make_world, simulate_records
 
     if world not in WORLD_NAMES:
         raise LmsbenchError(f"world: unknown world {world!r}; known worlds: {', '.join(WORLD_NAMES)}")
     opts = read_options or {}
-    real = [rec for k, rec in enumerate(read_log(log, **opts)) if k % stride == 0]
-    if max_scans is not None:
-        real = real[:max_scans]
+    span = None if max_scans is None else max_scans * stride
+    every: list[Record] = []
+    for rec in read_log(log, **opts):  # the scans used, and every scan between them (for the motion)
+        every.append(rec)
+        if span is not None and len(every) >= span:
+            break
+    real = every[::stride]
     if not real:
         raise LmsbenchError(f"{log}: no laser scans")
     if sensor is None:
         sensor = calibrate_log(log, world=world if world in ("office", "cluttered", "mit") else "office",
-                               stride=max(1, stride // 2), **opts).sensor
-    limits = motion_limits(real)
+                               stride=max(1, stride // 2), fit_duration=fit_duration or FIT_DURATION_S, **opts).sensor
+    limits = motion_limits(every)
     simulated: list[Record] = []
     for seed in seeds:
         simulated += simulate_records(make_world(world, seed), seed, duration, sensor, rate_hz=rate_hz, limits=limits)

@@ -127,7 +127,8 @@ def score(traj: np.ndarray, data: SlamInput, result: SlamResult | None = None) -
     if data.truth is not None:
         a = ate(traj, data.truth)
         out["ate"] = a.as_dict()
-        out["rpe_1m"] = rpe(traj, data.truth, 1.0).as_dict()
+        out["rpe_1m"] = rpe(traj, data.truth, 1.0).as_dict()  # every pose paired (docs/slam.md)
+        out["rpe_1m_evo"] = rpe(traj, data.truth, 1.0, pairs="evo").as_dict()  # evo_rpe's pairing
         if result is not None and data.walls is not None:
             out["map"] = map_error(result.map_lines[:, 2:6], data.walls, Alignment2D(a.rotation, a.translation)).as_dict()
     if data.relations is not None:

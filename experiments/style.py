@@ -88,6 +88,76 @@ def new_figure(nrows: int = 1, ncols: int = 1, width: float | None = None, heigh
     return plt.subplots(nrows, ncols, figsize=size, **kwargs)
 
 
+def log_axis(ax, which: str = "x") -> None:
+    """A readable log axis: plain decimal tick labels (0.05, 0.1, 2, 50), never scientific
+    notation; minor ticks labelled (at 2 and 5 x a power of ten) only when the axis spans less than
+    two decades, so labels never run into each other."""
+    import math
+
+    from matplotlib.ticker import FuncFormatter, LogLocator
+
+    axis = ax.xaxis if which == "x" else ax.yaxis
+    (ax.set_xscale if which == "x" else ax.set_yscale)("log")
+
+    def plain(value: float, _pos: int | None = None) -> str:
+        return f"{value:.6g}" if value > 0 else ""
+
+    def minor(value: float, _pos: int | None = None) -> str:
+        lo, hi = sorted(ax.get_xlim() if which == "x" else ax.get_ylim())
+        if lo <= 0 or math.log10(hi / lo) >= 2:
+            return ""
+        mantissa = round(value / 10 ** math.floor(math.log10(value) + 1e-9), 6)
+        return plain(value) if mantissa in (2.0, 5.0) else ""
+
+    axis.set_major_locator(LogLocator(base=10))
+    axis.set_minor_locator(LogLocator(base=10, subs=tuple(range(2, 10))))
+    axis.set_major_formatter(FuncFormatter(plain))
+    axis.set_minor_formatter(FuncFormatter(minor))
+
+
+#: Axis labels (with units) of the parameters and metrics of sweeps and comparisons.
+LABELS: dict[str, str] = {
+    "sensor.noise_sigma": "range noise, 1 sigma (m)",
+    "sensor.resolution_deg": "angular resolution (deg)",
+    "sensor.n_beams": "beams per scan",
+    "sensor.dropout_prob": "dropout probability",
+    "extractor.k": "window half-width k (beams)",
+    "extractor.ad_tau": "AD threshold ad_tau (noise std)",
+    "extractor.psi_split": "psi split threshold (rad)",
+    "extractor.band_tau": "Log-Hough band half-width band_tau (std)",
+    "extractor.sigma_r": "extractor's range noise sigma_r (m)",
+    "method": "extractor",
+    "seed": "seed",
+    "duration": "simulated run (s)",
+    "rate_hz": "scans kept per second (scans/s)",
+    "f1": "line F1 against ground truth",
+    "precision": "line precision",
+    "recall": "line recall",
+    "corner_f1": "corner F1 against ground truth",
+    "rho_rms_mm": "rho RMS error of matched lines (mm)",
+    "alpha_rms_deg": "alpha RMS error of matched lines (deg)",
+    "time_ms_median": "time per scan, median (ms)",
+    "us_median": "time per scan, median (us)",
+    "ate_rms": "ATE RMS after 2-D alignment (m)",
+    "ate_max": "largest ATE after 2-D alignment (m)",
+    "final_error_m": "final position error (m)",
+    "heading_rms": "heading RMS error (rad)",
+    "lines_per_scan": "lines per scan",
+}
+
+
+def label_of(name: str) -> str:
+    """The axis label of a parameter or metric: a known one with its unit, else the name with the
+    unit its suffix says (``_m``, ``_mm``, ``_deg``, ``_s``, ``_hz``), else the name itself."""
+    if name in LABELS:
+        return LABELS[name]
+    for suffix, unit in (("_mm", "mm"), ("_m", "m"), ("_deg", "deg"), ("_rad", "rad"), ("_ms", "ms"),
+                         ("_s", "s"), ("_hz", "scans/s"), ("_sigma", "m")):
+        if name.endswith(suffix):
+            return f"{name} ({unit})"
+    return name
+
+
 def equal_axes(ax, xlabel: str = "x (m)", ylabel: str = "y (m)") -> None:
     """Make a map axis metric: equal scale on x and y, labelled in metres."""
     ax.set_aspect("equal", adjustable="datalim")

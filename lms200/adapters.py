@@ -228,7 +228,7 @@ class TcpServer(_Adapter):
                 if data == b"":  # the host hung up: wait for the next one
                     client.close()
                     client, data, self._manager = None, None, None
-                else:
+                elif data is not None:
                     data = self._from_host(data)
             host_baud = self._line.baudrate if self._manager is not None else None
             self._exchange(data, host_baud, self._send(client) if client is not None else None)

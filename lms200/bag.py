@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Iterator
+from typing import Any, Iterable, Iterator
 
 import numpy as np
 
@@ -64,14 +64,15 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
     PoseStamped, Pose = T["geometry_msgs/msg/PoseStamped"], T["geometry_msgs/msg/Pose"]
     Point, Quaternion = T["geometry_msgs/msg/Point"], T["geometry_msgs/msg/Quaternion"]
     serialize = ts.serialize_ros1 if ros1 else ts.serialize_cdr
+    writer: Any
     if ros1:
-        from rosbags.rosbag1 import Writer
+        from rosbags.rosbag1 import Writer as Writer1
 
-        writer = Writer(path)
+        writer = Writer1(path)
     else:
-        from rosbags.rosbag2 import Writer
+        from rosbags.rosbag2 import Writer as Writer2
 
-        writer = Writer(path, version=8)
+        writer = Writer2(path, version=8)
     count = 0
     with writer:
         kw = {"typestore": ts}

@@ -47,6 +47,7 @@ MIXED_MARGIN_M = 0.03  # m: least distance of a mixed pixel from both surfaces (
 OUTLIER_M = 0.1  # m: least distance of an isolated outlier from its neighbours' line (or 10 sigma)
 MAX_READING_SHARE = 1e-3  # a top value read this often (or more) is the logger's cap
 MAX_SCANS = 20_000  # memory bound: scans beyond this many are not read
+TAIL_WINDOW = 20.0  # the tail fit uses residuals within this many core sigmas
 
 
 @dataclass(frozen=True)
@@ -78,6 +79,9 @@ class LogCalibration:
         no_return_rate: share of beams on surfaces that read +inf or the cap.
         mixed_share: share of depth steps with a beam between the two surfaces.
         outlier_rate: share of beams on surfaces that are isolated outliers.
+        tail_share, tail_sigma_m: weight and sigma (m) of the wide component of a two-Gaussian fit
+            (core sigma fixed) to the residuals of triples at 1-4 m within 20 core sigmas: the
+            heavy tail beyond the Gaussian core (from the scene's geometry as well as the sensor).
     """
 
     n_scans: int
@@ -96,6 +100,8 @@ class LogCalibration:
     no_return_rate: Estimate = Estimate(0.0, 0.0, 0)
     mixed_share: Estimate = Estimate(0.0, 0.0, 0)
     outlier_rate: Estimate = Estimate(0.0, 0.0, 0)
+    tail_share: Estimate = Estimate(0.0, 0.0, 0)
+    tail_sigma_m: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -217,6 +223,39 @@ def _noise_bins(scans: list[Scan], quantum: float, seed: int) -> tuple[list[dict
     return rows, Estimate(float(coef[1]), float(np.sqrt(cov[1, 1] * scale)), len(fit))
 
 
+def _tail_fit(scans: list[Scan], core: float, seed: int) -> tuple[Estimate, float]:
+    """EM for the weight and sigma of the wide component of residuals z ~ (1 - w) N(0, core^2) +
+    w N(0, wide^2), on triples at 1-4 m with |z| < TAIL_WINDOW core; bootstrap over scans for w."""
+    zs, blk = [], []
+    for k, s in enumerate(scans):
+        z, _, _ = line_residuals(s.ranges, s.angle_increment, max(s.range_min, NOISE_BAND_M[0]),
+                                 min(s.range_max, NOISE_BAND_M[1]))
+        zs.append(z)
+        blk.append(np.full(z.size, k))
+    if not zs or core <= 0:
+        return Estimate(0.0, float("nan"), 0), 0.0
+    z, b = np.concatenate(zs), np.concatenate(blk)
+    keep = np.abs(z - np.median(z)) < TAIL_WINDOW * core
+    z, b = z[keep] - np.median(z[keep]), b[keep]
+    if z.size < 100:
+        return Estimate(0.0, float("nan"), int(z.size)), 0.0
+    w, wide = 0.1, 3.0 * core
+    for _ in range(100):
+        p_core = (1 - w) * np.exp(-0.5 * (z / core) ** 2) / core
+        p_wide = w * np.exp(-0.5 * (z / wide) ** 2) / wide
+        resp = p_wide / np.maximum(p_core + p_wide, 1e-300)
+        w_new = float(resp.mean())
+        wide_new = float(np.sqrt((resp * z * z).sum() / max(resp.sum(), 1e-12)))
+        done = abs(w_new - w) < 1e-6 and abs(wide_new - wide) < 1e-9
+        w, wide = w_new, max(wide_new, core)
+        if done:
+            break
+    ids, inv = np.unique(b, return_inverse=True)
+    per_scan = np.bincount(inv, weights=resp), np.bincount(inv).astype(float)
+    std = _ratio(per_scan[0], per_scan[1], seed).std
+    return Estimate(w, std, int(z.size)), wide
+
+
 def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
     """Measure the error model of the laser behind ``scans`` (Scans or records with ``.scan``).
 
@@ -239,6 +278,8 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
     noise = estimate_range_noise(kept, *NOISE_BAND_M, seed=seed)
     sigma = noise.sigma_m if np.isfinite(noise.sigma_m) else 0.0
     bins, slope = _noise_bins(kept, quantum, seed)
+    core = noise.sigma_observed_m if np.isfinite(noise.sigma_observed_m) else 0.0
+    tail, tail_sigma = _tail_fit(kept, core, seed)
     cap = _max_reading(kept, quantum)
     c = np.array([_scan_counts(s.ranges, s.angle_increment, max(sigma, quantum / np.sqrt(12)), cap, quantum)
                   for s in kept])
@@ -250,4 +291,5 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
         max_reading_rate=_ratio(c[:, 2], beams, seed), max_reading=cap,
         no_return_rate=_ratio(c[:, 5], c[:, 4], seed), outlier_rate=_ratio(c[:, 7], c[:, 6], seed),
         mixed_share=_ratio(c[:, 8], c[:, 8] + c[:, 9], seed),
+        tail_share=tail, tail_sigma_m=float(tail_sigma),
     )

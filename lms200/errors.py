@@ -3,6 +3,8 @@
 The command line turns these into one-line messages (exit status 2) instead of tracebacks.
 """
 
+import os
+
 
 class LmsbenchError(Exception):
     """A known error whose message says what went wrong and what to do about it."""
@@ -11,7 +13,7 @@ class LmsbenchError(Exception):
 class LogFormatError(LmsbenchError, ValueError):
     """A log file that cannot be read: the message names the file and the line number."""
 
-    def __init__(self, path: str, line_no: int, reason: str) -> None:
+    def __init__(self, path: str | os.PathLike[str], line_no: int, reason: str) -> None:
         self.path = str(path)
         self.line_no = line_no
         self.reason = reason

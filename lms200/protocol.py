@@ -69,8 +69,8 @@ VARIANT_OF_COUNT = {n: v for v, n in VARIANTS.items()}
 # reads and rewrites the byte below and treats the rest of the block as opaque.
 CONFIG_BYTES = 32
 CONFIG_UNITS_OFFSET = 5  # after WORD blanking, BYTE sensitivity, BYTE availability, BYTE mode
-UNITS_CODES = {"cm": 0x00, "mm": 0x01}
-CODE_UNITS = {v: k for k, v in UNITS_CODES.items()}
+UNITS_CODES: dict[Units, int] = {"cm": 0x00, "mm": 0x01}
+CODE_UNITS: dict[int, Units] = {v: k for k, v in UNITS_CODES.items()}
 
 
 # ---------------------------------------------------------------------------------------------

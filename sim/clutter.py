@@ -197,8 +197,9 @@ def _glass_panel(lay: Layout, rng: np.random.Generator, h: float) -> list[float]
         s1 = s0 + width
         u = np.array([np.cos(yaw), np.sin(yaw)])
         c = np.array([cx, cy])
-        gap = rectangle_corners(*(c + u * (s0 + s1) / 2), yaw, width / 2, hy)
-        others = [rectangle_corners(*b[:5]) for j, b in enumerate(lay.boxes) if j != k and b[5] <= h <= b[6]]
+        mid = c + u * (s0 + s1) / 2
+        gap = rectangle_corners(float(mid[0]), float(mid[1]), yaw, width / 2, hy)
+        others = [rectangle_corners(b[0], b[1], b[2], b[3], b[4]) for j, b in enumerate(lay.boxes) if j != k and b[5] <= h <= b[6]]
         samples = gap[0] + np.linspace(0, 1, 25)[:, None, None] * (gap[1:] - gap[0])[None]
         samples = np.vstack([samples.reshape(-1, 2), gap])
         if others and distance_to_rects(samples, others).min() < 0.05:

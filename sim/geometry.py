@@ -126,7 +126,7 @@ def union_faces(rects: list[np.ndarray], circles: np.ndarray) -> np.ndarray:
                     iv = _inside_interval_convex(p, q, other)
                     if iv:
                         cut.append(iv)
-                    cut += _shared_boundary(p, q, other, drop_same_side=j < i)
+                    cut += _shared_boundary(p, q, other, drop_same_side=bool(j < i))
             for cx, cy, r in circles:
                 iv = _inside_interval_circle(p, q, np.array([cx, cy]), r)
                 if iv:

@@ -22,6 +22,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from lms200 import Scan
+
 from .lidar import LMS200Sim
 from .robot import RobotLimits, robot_tour, wrap
 from .sensor import SensorConfig
@@ -62,7 +64,7 @@ class OfficeEnv(gym.Env):
         self.pose = np.zeros(3)
         self.progress = 0.0
         self.steps = 0
-        self._scan = None
+        self._scan: Scan | None = None
 
     # -- helpers ------------------------------------------------------------------------------
     def _project(self, xy: np.ndarray, near: float) -> float:
@@ -76,8 +78,10 @@ class OfficeEnv(gym.Env):
         return float(s[int(np.argmin(dist))]) if np.isfinite(dist).any() else near
 
     def _observe(self, twist: tuple[float, float] | None) -> np.ndarray:
-        self._scan = self.sim.scan_at(tuple(self.pose), stamp=self.steps * self.control_period, twist=twist)
-        r = np.where(np.isfinite(self._scan.ranges), self._scan.ranges, self.sensor.range_max)
+        x, y, th = (float(v) for v in self.pose)
+        scan = self.sim.scan_at((x, y, th), stamp=self.steps * self.control_period, twist=twist)
+        self._scan = scan
+        r = np.where(np.isfinite(scan.ranges), scan.ranges, self.sensor.range_max)
         return np.minimum(r, self.sensor.range_max).astype(np.float32)
 
     def _info(self) -> dict[str, Any]:
@@ -95,7 +99,9 @@ class OfficeEnv(gym.Env):
         return self._observe(None), self._info()
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
-        v, w = np.clip(np.asarray(action, dtype=float), self.action_space.low, self.action_space.high)
+        space = self.action_space
+        assert isinstance(space, spaces.Box)
+        v, w = np.clip(np.asarray(action, dtype=float), space.low, space.high)
         dt = self.control_period
         x, y, th = self.pose
         if abs(w) < 1e-9:
@@ -128,7 +134,7 @@ class OfficeEnv(gym.Env):
         from matplotlib.collections import LineCollection
 
         fig, ax = plt.subplots(figsize=(4, 4), dpi=80)
-        ax.add_collection(LineCollection(self.world.walls.reshape(-1, 2, 2), colors="k", linewidths=0.6))
+        ax.add_collection(LineCollection(list(self.world.walls.reshape(-1, 2, 2)), colors="k", linewidths=0.6))
         ax.plot(self.path[:, 0], self.path[:, 1], "-", color="tab:blue", lw=0.6)
         if self._scan is not None:
             p = self._scan.points
@@ -139,7 +145,7 @@ class OfficeEnv(gym.Env):
         ax.set_aspect("equal")
         ax.autoscale_view()
         fig.canvas.draw()
-        image = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+        image = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()  # type: ignore[attr-defined]  # Agg canvas
         plt.close(fig)
         return image
 

@@ -232,6 +232,8 @@ class LMS200Sim:
             lo, hi = OUTLIER_RANGE_SHARE
             r = np.where(spurious, r * self.rng.uniform(lo, hi, s.n_beams), r)
         sigma = s.sigma_at(r) if s.noise_sigma_per_m else s.noise_sigma
+        if s.noise_tail_prob > 0:
+            sigma = np.where(self.rng.random(s.n_beams) < s.noise_tail_prob, s.noise_tail_sigma, sigma)
         r = r + sigma * noise
         if s.quantise:
             r = np.rint(r / s.unit_m) * s.unit_m

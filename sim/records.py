@@ -78,7 +78,8 @@ def simulate_tour(world: World, tour: Tour, stamps: np.ndarray, sensor: SensorCo
     with LMS200Sim(world, sensor, seed) as sim:
         for j, t in enumerate(stamps):
             scan = sim.scan_from_beam_poses(tour.pose_at(t + offsets), float(t))
-            records.append(Record(scan=scan, odom=tuple(map(float, odom[j])) if odom is not None else None,
+            pose = (float(odom[j, 0]), float(odom[j, 1]), float(odom[j, 2])) if odom is not None else None
+            records.append(Record(scan=scan, odom=pose,
                                   truth=(float(truth[j, 0]), float(truth[j, 1]), float(truth[j, 2]))))
             if progress is not None:
                 progress(j + 1, len(stamps))

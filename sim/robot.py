@@ -33,7 +33,7 @@ class RobotLimits:
         return asdict(self)
 
 
-def _trapezoid(amount: np.ndarray, vmax: float, amax: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _trapezoid(amount: np.ndarray, vmax: np.ndarray | float, amax: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(accel time, cruise time, peak rate) covering |amount| from rest to rest."""
     a = np.abs(amount)
     t_acc = np.minimum(vmax / amax, np.sqrt(a / amax))
@@ -69,7 +69,7 @@ class Tour:
     def end_time(self) -> float:
         return float(self.start[-1] + self.duration[-1])
 
-    def _phase(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def _phase(self, t: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         t = np.atleast_1d(np.asarray(t, dtype=float))
         k = np.clip(np.searchsorted(self.start, t, side="right") - 1, 0, len(self.start) - 1)
         tau = np.clip(t - self.start[k], 0.0, self.duration[k])

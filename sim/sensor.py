@@ -48,8 +48,11 @@ class SensorConfig:
             echo nearer than the surface (uniform in 10-90 % of its range: dust, stray light).
         max_reading: when set (m), no-returns are logged as this finite range instead of +inf
             (loggers that write their cap, e.g. 50 m, for "nothing").
+        noise_tail_prob, noise_tail_sigma: with this probability a beam's range error is drawn
+            from a wider Gaussian of this sigma (m) instead of the core: the heavy tail real scans
+            show (surfaces rougher than the worlds' planes, the spot's footprint).
 
-    The last four fields default to the datasheet model (none of these effects);
+    The last six fields default to the datasheet model (none of these effects);
     ``lmsbench calibrate`` fits all of them to a real log.
     """
 
@@ -67,6 +70,8 @@ class SensorConfig:
     no_return_prob: float = 0.0
     outlier_prob: float = 0.0
     max_reading: float | None = None
+    noise_tail_prob: float = 0.0
+    noise_tail_sigma: float = 0.0
 
     def __post_init__(self) -> None:
         if self.units not in ("mm", "cm"):
@@ -87,6 +92,10 @@ class SensorConfig:
             raise ValueError(f"beam_width_deg: must be >= 0, got {self.beam_width_deg}")
         if not np.isfinite(self.noise_sigma_per_m):
             raise ValueError(f"noise_sigma_per_m: must be finite, got {self.noise_sigma_per_m}")
+        if not 0 <= self.noise_tail_prob < 1:
+            raise ValueError(f"noise_tail_prob: must be in [0, 1), got {self.noise_tail_prob}")
+        if self.noise_tail_sigma < 0:
+            raise ValueError(f"noise_tail_sigma: must be >= 0, got {self.noise_tail_sigma}")
         if self.max_reading is not None and not 0 < self.max_reading <= self.range_max:
             raise ValueError(f"max_reading: must be in (0, range_max = {self.range_max}], got {self.max_reading}")
 

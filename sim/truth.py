@@ -127,7 +127,10 @@ def visible_truth(world: World, pose: tuple[float, float, float], sensor: Sensor
     cbeta = np.arctan2(cc[:, 1], cc[:, 0])
     chalf = np.arcsin(np.clip(cr / np.maximum(cd, 1e-12), 0, 1))
 
-    out_seg, out_beams, out_face, vis_ends = [], [], [], {}
+    out_seg: list = []
+    out_beams: list = []
+    out_face: list = []
+    vis_ends: dict = {}
     for k in range(len(seg)):
         if is_glass[k] or hi[k] - lo[k] < _ANGLE_TOL:
             continue

@@ -91,7 +91,7 @@ def orient_walls(walls: np.ndarray, free_points: np.ndarray) -> np.ndarray:
     # (d even) == unbounded_free; the inside of a loop at depth k is at depth k + 1
     if len(hints):
         votes_free = np.count_nonzero(hint_depth % 2 == 0)
-        unbounded_free = votes_free > len(hints) - votes_free
+        unbounded_free = bool(votes_free > len(hints) - votes_free)
     else:
         # drawn by the rule with free space around solids: inside solid (CCW) at even loop depth
         consistent = np.array_equal(ccw, loop_depth % 2 == 0)

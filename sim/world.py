@@ -121,7 +121,7 @@ class World:
             route = np.asarray(d.get("route_nodes", []), dtype=float).reshape(-1, 2)
             walls = orient_walls(walls, np.vstack([circles[:, :2], route]))
             boxes = boxes_behind_faces(walls, h)
-            cylinders = [[cx, cy, r, 0.0, 2.0] for cx, cy, r in circles]
+            cylinders = np.array([[cx, cy, r, 0.0, 2.0] for cx, cy, r in circles], dtype=float).reshape(-1, 5)
         else:
             boxes, cylinders = d["boxes"], d.get("cylinders", [])
         world = cls(

@@ -131,16 +131,46 @@ class RpeResult:
         return asdict(self)
 
 
-def rpe(estimate: np.ndarray, truth: np.ndarray, delta: float = 1.0) -> RpeResult:
-    """RPE over pose pairs (i, j) where j is the first pose at least ``delta`` m of true travel
-    after i; needs no alignment."""
+#: Pairing rules of :func:`rpe`.
+RPE_PAIRS = ("every", "evo")
+
+
+def rpe(estimate: np.ndarray, truth: np.ndarray, delta: float = 1.0, pairs: str = "every") -> RpeResult:
+    """Relative pose error over ``delta`` m of true travel; needs no alignment. The truth is
+    interpolated at the estimate's stamps (poses outside its time span are dropped).
+
+    Pairing rule ``pairs``:
+
+    - ``"every"`` (default): every pose i is paired with the first pose j whose true travel since
+      i is at least ``delta``: overlapping pairs, one per pose that has such a j.
+    - ``"evo"``: evo_rpe's rule for ``--delta D --delta_unit m`` (its defaults: consecutive
+      pairs, pairs from the estimate): walking along the *estimated* path from the first pose, a
+      pose is kept whenever the path travelled since the last kept pose reaches ``delta``;
+      consecutive kept poses are paired, a chain of non-overlapping pairs (so far fewer pairs,
+      each spanning a little more than delta).
+
+    Either way the error of a pair is E = (T_i^-1 T_j)^-1 (P_i^-1 P_j) (T truth, P estimate):
+    translation |t(E)| (m, evo's ``translation_part``), rotation |theta(E)| (rad).
+    """
+    if pairs not in RPE_PAIRS:
+        raise ValueError(f"pairs: must be one of {', '.join(RPE_PAIRS)}, got {pairs!r}")
     est = np.asarray(estimate, float).reshape(-1, 4)
     tru, inside = interpolate_poses(truth, est[:, 0])
     est, tru = est[inside, 1:], tru[inside]
-    travelled = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(tru[:, :2], axis=0).T))))
-    j = np.searchsorted(travelled, travelled + delta)
-    ok = j < travelled.size
-    i, j = np.nonzero(ok)[0], j[ok]
+    steps = np.hypot(*np.diff(tru[:, :2], axis=0).T)
+    if pairs == "evo":
+        kept, path = [0], 0.0
+        for k, step in enumerate(np.hypot(*np.diff(est[:, :2], axis=0).T).tolist(), start=1):
+            path += step
+            if path >= delta:
+                kept.append(k)
+                path = 0.0
+        i, j = np.asarray(kept[:-1], dtype=int), np.asarray(kept[1:], dtype=int)
+    else:
+        travelled = np.concatenate(([0.0], np.cumsum(steps)))
+        j = np.searchsorted(travelled, travelled + delta)
+        ok = j < travelled.size
+        i, j = np.nonzero(ok)[0], j[ok]
     if i.size == 0:
         return RpeResult(delta, np.nan, np.nan, np.nan, np.nan, np.nan, 0)
     de, dt = relative(est[i], est[j]), relative(tru[i], tru[j])

@@ -12,6 +12,7 @@ Pure: no I/O, no clocks.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,6 +24,9 @@ from .geometry import between, compose, rotation
 from .icp import Match, Reference, chord_normals, match, refine
 from .keyframes import Keyframe, LoopClosure, find_closure, local_map
 from .posegraph import PoseGraph, robust_noise
+
+if TYPE_CHECKING:
+    from .run import SlamResult
 
 
 @dataclass

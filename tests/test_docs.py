@@ -45,12 +45,20 @@ def test_the_tour_and_the_api_pages_have_code() -> None:
 def test_python_blocks_run(page: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     import matplotlib
 
+    from features import registry
+
+    user = [n for n in registry._REGISTRY if ":" in n]
+
     matplotlib.use("Agg")
     monkeypatch.chdir(tmp_path)
     blocks = python_blocks(page.read_text())
     namespace: dict = {"__name__": f"doc_{page.stem}"}
-    for line, code in blocks:
-        try:
-            exec(compile(code, f"{page.name}:{line}", "exec"), namespace)
-        except Exception as exc:  # noqa: BLE001 - reported with its place in the page
-            pytest.fail(f"{page.relative_to(ROOT)}, block at line {line}: {type(exc).__name__}: {exc}")
+    try:
+        for line, code in blocks:
+            try:
+                exec(compile(code, f"{page.name}:{line}", "exec"), namespace)
+            except Exception as exc:  # noqa: BLE001 - reported with its place in the page
+                pytest.fail(f"{page.relative_to(ROOT)}, block at line {line}: {type(exc).__name__}: {exc}")
+    finally:  # a page's own MODULE:FUNCTION extractors do not stay registered for other tests
+        for name in [n for n in registry._REGISTRY if ":" in n and n not in user]:
+            del registry._REGISTRY[name]

@@ -84,5 +84,7 @@ def test_the_demo_writes_a_report_whose_figures_exist(tmp_path):
         assert re.search(rf"^\| {method} \|", report, re.M), method
     html = (out / "report.html").read_text()
     assert html.count("<img ") == len(images) and "<table>" in html
+    # self-contained: every figure embedded, nothing linked
+    assert html.count("<img src='data:image/png;base64,") == len(images) and "src='figures/" not in html
     sweep = pd.read_parquet(out / "sweeps" / "demo_k_vs_noise" / "results.parquet")
     assert len(sweep) == 9 and (sweep["status"] == "ok").all()

@@ -17,7 +17,7 @@ from lms200.calibration import calibrate_scans
 from sim import SensorConfig, make_world, simulate_records
 from sim.lidar import LMS200Sim
 
-from experiments.calibrate import calibrate_log, write_sensor_yaml
+from experiments.calibrate import calibrate_log
 
 
 def _cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
@@ -113,6 +113,7 @@ def test_calibrate_recovers_known_parameters_from_a_simulated_log(case: str, tmp
     for name in ("dropout_prob", "no_return_prob", "outlier_prob", "beam_width_deg"):
         assert getattr(got, name) == pytest.approx(getattr(truth, name), rel=0.20), name
     assert got.max_reading == truth.max_reading
+    assert got.noise_tail_prob < 0.01  # no heavy tail in, none out
     if truth.noise_sigma_per_m:
         assert got.noise_sigma_per_m == pytest.approx(truth.noise_sigma_per_m, rel=0.5)
     else:
@@ -198,3 +199,12 @@ def test_sim2real_of_a_simulated_log_agrees_with_itself(tmp_path: Path) -> None:
     assert SensorConfig.from_yaml(tmp_path / "out" / "sensor.yaml").units == "cm"
     bad = _cli("sim2real", str(tmp_path / "log.clf"), "--world", "moon")
     assert bad.returncode == 2 and "unknown world" in bad.stderr
+
+
+def test_noise_tail_draws_a_share_of_beams_from_the_wide_gaussian() -> None:
+    sensor = SensorConfig.ideal(noise_sigma=0.002, noise_tail_prob=0.2, noise_tail_sigma=0.05)
+    exact, measured = _static_scans(sensor, 200)
+    ok = np.isfinite(exact) & (exact < 7.5)
+    err = np.abs(measured[:, ok] - exact[ok])
+    # the core (2 mm) never reaches 2 cm; the tail does with probability 2 (1 - Phi(0.4)) = 0.689
+    assert np.mean(err > 0.02) == pytest.approx(0.2 * 0.6892, rel=0.1)

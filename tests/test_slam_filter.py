@@ -86,7 +86,6 @@ def test_spurious_lines_are_pruned():
     for k, p in enumerate(poses):
         o = observe_walls(CONVEX_ROOM, p, rng=rng)
         if k % 7 == 3:  # a one-off ghost line (a person walking by)
-            ghost = np.array([[1.0 + 0.01 * k, 2.0]])
             o = Observations(np.vstack((o.lines, [[1.0, 0.2 + k]])), np.vstack((o.line_cov, o.line_cov[:1])),
                              np.vstack((o.line_ends, [[1.0, -0.5, 1.0, 0.5]])), o.corners, o.corner_cov)
         obs.append(o)

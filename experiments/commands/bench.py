@@ -26,7 +26,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("bench", help="run the speed benchmarks and save a table of rates")
     p.add_argument("names", nargs="*", help="benchmark areas to run (default: all)")
     p.add_argument("--quick", action="store_true", help="fewer repetitions, for a smoke run")
-    p.add_argument("--out", type=Path, default=Path("results/bench"), help="output folder")
+    p.add_argument("--out", type=Path, help="output folder (default: a new results/bench/DATE_TIME, "
+                                            "linked as results/bench/latest)")
     p.set_defaults(func=run)
 
 
@@ -45,6 +46,9 @@ def run(args: argparse.Namespace) -> int:
             print("   " + ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()), flush=True)
     import pandas as pd  # here, not at import: every `lmsbench` start (even --help) loads this module
 
+    from experiments.provenance import new_run_folder
+
+    args.out = args.out or new_run_folder("results/bench")
     args.out.mkdir(parents=True, exist_ok=True)
     table = pd.DataFrame(rows)
     table.to_csv(args.out / "bench.csv", index=False)

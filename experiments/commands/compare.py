@@ -13,7 +13,7 @@ import yaml
 from lms200 import LmsbenchError
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
-from experiments.options import DURATION, SEED, check_methods, check_out, check_yaml, count, positive
+from experiments.options import DURATION, SEED, check_methods, check_out, count, positive
 
 
 def _param(text: str) -> tuple[str, Any]:
@@ -49,7 +49,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="sensor model of the simulated sources, as written (e.g. from `lmsbench calibrate`)")
     p.add_argument("--set", dest="params", action="append", type=_param, default=[], metavar="extractor.[METHOD.]FIELD=VALUE",
                    help="override a config field of every extractor that has it, or of METHOD only (repeatable)")
-    p.add_argument("--out", type=Path, default=Path("results/compare"), help="output folder")
+    p.add_argument("--out", type=Path, help="output folder (default: a new results/compare/DATE_TIME, "
+                                            "linked as results/compare/latest)")
     p.add_argument("--format", choices=("parquet", "csv"), default="parquet", help="format of the tidy table")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_log_options(p)
@@ -107,6 +108,9 @@ def run(args: argparse.Namespace) -> int:
     summary = summarise(table)
     if matches:
         summary = summary.merge(common_errors(pd.DataFrame(matches)), on=["source", "method"], how="left")
+    from experiments.provenance import new_run_folder, versions
+
+    args.out = args.out or new_run_folder("results/compare")
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / f"compare.{args.format}"
     if args.format == "parquet":
@@ -124,6 +128,7 @@ def run(args: argparse.Namespace) -> int:
     )
     # what produced each source's scans: the sensor that was simulated (interlaced or not), the log read
     resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
+    resolved["versions"] = versions()
     (args.out / "config.yaml").write_text(yaml.safe_dump(resolved, sort_keys=False))
     figures = []
     for src in sources:

@@ -12,7 +12,8 @@ from experiments.options import DURATION, SEED, check_log, check_out, positive, 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("demo", help="simulate an office run, compare every extractor, run SLAM, a sweep, "
                                     "figures and results/demo/report.md")
-    p.add_argument("--out", type=Path, default=Path("results/demo"), help="output folder")
+    p.add_argument("--out", type=Path, help="output folder (default: a new results/demo/DATE_TIME, "
+                                            "linked as results/demo/latest)")
     p.add_argument("--seed", type=SEED, default=0, help="world and run seed")
     p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them")
     p.add_argument("--duration", type=DURATION, default=40.0, help="simulated run, s (default 40)")
@@ -34,5 +35,7 @@ def run(args: argparse.Namespace) -> int:
         cfg.intel_log = str(check_log(args.log))
     cfg.log_options = plain_log_options(read_log_options(args))
     executor = None if args.no_sweep else ("inprocess" if args.inprocess else "local")
-    run_demo(args.out, cfg, sweep_executor=executor)
+    from experiments.provenance import new_run_folder
+
+    run_demo(args.out or new_run_folder("results/demo"), cfg, sweep_executor=executor)
     return 0

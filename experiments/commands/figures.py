@@ -12,7 +12,8 @@ from experiments.options import (DURATION, SEED, check_log, check_methods, check
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("figures", help="draw the paper's figures (4-7, 9, 10), accuracy vs speed, sweep plots")
-    p.add_argument("--out", type=Path, default=Path("results/figures"), help="output folder")
+    p.add_argument("--out", type=Path, help="output folder (default: a new results/figures/DATE_TIME, "
+                                            "linked as results/figures/latest)")
     p.add_argument("--tables", type=Path,
                    help="redraw from the tables in this folder (from an earlier run) instead of computing them")
     p.add_argument("--sweep", type=Path, action="append", default=[], metavar="DIR",
@@ -30,6 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from experiments.figures.make import draw_figures, draw_sweep
+    from experiments.provenance import new_run_folder
     from experiments.figures.study import StudyConfig, load_config, load_tables, run_study, save_tables
 
     check_out(args.out)
@@ -47,7 +49,9 @@ def run(args: argparse.Namespace) -> int:
             cfg.intel_log = str(check_log(args.intel))
         cfg.log_options = plain_log_options(read_log_options(args))
         tables, notes = run_study(cfg)
+        args.out = args.out or new_run_folder("results/figures")
         save_tables(tables, cfg, notes, args.out / "tables")
+    args.out = args.out or new_run_folder("results/figures")
     written = draw_figures(tables, args.out, signals_k=cfg.signals_k, world=cfg.world)
     for folder in args.sweep:
         written.update(draw_sweep(folder, args.out))

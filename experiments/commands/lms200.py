@@ -10,7 +10,7 @@ import time
 from pathlib import Path
 from typing import Iterable, Iterator
 
-from lms200 import LmsbenchError, Record
+from lms200 import Record
 from lms200.carmen import write_carmen
 from lms200.driver import LMS200
 from lms200.protocol import BAUD_MODES

@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import matplotlib.pyplot as plt
-from matplotlib.ticker import FormatStrFormatter
 
-from experiments.style import (CORNER_COLOR, LINE_COLOR, SCAN_COLOR, TRUTH_COLOR, equal_axes, method_color,
+from experiments.style import (CORNER_COLOR, LINE_COLOR, SCAN_COLOR, TRUTH_COLOR, equal_axes, label_of, log_axis,
+                               method_color,
                                new_figure, save_figure)
 
 
@@ -62,10 +62,8 @@ def fig_timing(timing: pd.DataFrame, stem: Path) -> list[Path]:
         med = group["time_ms"].median()
         ax.plot(group["scan"], group["time_ms"], lw=0.9, color=method_color(method),
                 label=f"{method} (median {med:.2f} ms)")
-    ax.set_yscale("log")
-    ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
-    ax.yaxis.set_minor_formatter(FormatStrFormatter("%g"))
-    ax.set_xlabel("scan")
+    log_axis(ax, "y")
+    ax.set_xlabel("scan (index in the run)")
     ax.set_ylabel("processing time per scan (ms)")
     ax.set_title("Processing time for successive scans")
     ax.legend(loc="upper right", ncol=2)
@@ -92,9 +90,15 @@ def fig_scans(points: pd.DataFrame, lines: pd.DataFrame, corners: pd.DataFrame, 
         ax.plot((ln["x1"] + ln["x2"]) / 2, (ln["y1"] + ln["y2"]) / 2, "*", ms=5, color=LINE_COLOR)
         cr = corners[corners["panel"] == panel]
         ax.plot(cr["x"], cr["y"], "D", ms=5, mfc="none", mew=1.2, color=CORNER_COLOR)
-        ax.set_title(f"{pts['label'].iloc[0]}: {len(ln)} lines, {len(cr)} corner{'s' if len(cr) != 1 else ''}",
-                     fontsize=8)
+        ax.set_title(f"{pts['label'].iloc[0]}: {len(ln)} line{'s' if len(ln) != 1 else ''}, "
+                     f"{len(cr)} corner{'s' if len(cr) != 1 else ''}", fontsize=8)
         equal_axes(ax, "x (m, ahead)", "y (m, left)")
+    first = axes.ravel()[0]
+    method = str(lines["method"].iloc[0]) if "method" in lines and len(lines) else "the extractor"
+    first.plot([], [], ".", color=SCAN_COLOR, label="scan points")
+    first.plot([], [], "-*", color=LINE_COLOR, label=f"lines ({method})")
+    first.plot([], [], "D", mfc="none", color=CORNER_COLOR, label=f"corners ({method})")
+    first.legend(loc="lower left", fontsize=7)
     for ax in axes.ravel()[len(panels):]:
         ax.set_visible(False)
     fig.suptitle(title)
@@ -145,11 +149,11 @@ def fig_accuracy_speed(summary: pd.DataFrame, stem: Path) -> list[Path]:
                         color=method_color(row.method))
             ax.annotate(row.method, (x, y), textcoords="offset points", xytext=(5, 5 if i % 2 == 0 else -12),
                         fontsize=8)  # alternate above / below so neighbours do not overwrite each other
-        ax.set_xscale("log")
-        ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
-        ax.xaxis.set_minor_formatter(FormatStrFormatter("%g"))
-        ax.set_xlabel("time per scan (ms; median, 25-75 %)")
+        log_axis(ax, "x")
+        ax.set_xlabel("time per scan (ms; median, bars 25-75 %)")
         ax.set_ylabel(label)
+        if column == "f1":
+            ax.set_ylim(0.0, 1.02)  # the whole scale: differences of 0.01 are not drawn as chasms
     fig.suptitle("Accuracy versus speed, every extractor")
     return save_figure(fig, stem, data=summary)
 
@@ -161,6 +165,7 @@ def fig_sweep(table: pd.DataFrame, x: str, y: str, stem: Path, hue: str | None =
     ok = table[table["status"] == "ok"] if "status" in table else table
     keys = [c for c in (facet, hue, x) if c]
     stats = ok.groupby(keys, dropna=False)[y].agg(["mean", "std", "count"]).reset_index()
+    seeds = int(stats["count"].max()) if len(stats) else 0
     panels = list(stats.groupby(facet, sort=True)) if facet else [(None, stats)]
     fig, axes = new_figure(1, len(panels), width=min(4.2 * len(panels), 13), height=3.6, squeeze=False,
                            sharey=True)
@@ -175,15 +180,17 @@ def fig_sweep(table: pd.DataFrame, x: str, y: str, stem: Path, hue: str | None =
                 color = cmap(hue_values.index(value) / max(1, len(hue_values) - 1))
             else:
                 color = None
-            ax.errorbar(group[x], group["mean"], yerr=group["std"].fillna(0.0), fmt="o-", ms=4, capsize=2,
-                        lw=1.0, label=f"{value}" if hue else y, color=color)
-        ax.set_xlabel(x)
+            yerr = group["std"].fillna(0.0) if seeds > 1 else None  # no spread from a single seed
+            ax.errorbar(group[x], group["mean"], yerr=yerr, fmt="o-", ms=4, capsize=2,
+                        lw=1.0, label=f"{value}" if hue else label_of(y), color=color)
+        ax.set_xlabel(label_of(x))
         if facet:
             ax.set_title(f"{facet} = {facet_value}", fontsize=9)
-    axes.ravel()[0].set_ylabel(f"{y} (mean +/- std over seeds)")
+    spread = f"mean +/- std over {seeds} seeds" if seeds > 1 else "one seed"
+    axes.ravel()[0].set_ylabel(f"{label_of(y)}\n({spread})")
     if hue:
-        axes.ravel()[-1].legend(title=hue, loc="best", fontsize=7, title_fontsize=7)
-    fig.suptitle(title or f"{y} against {x}")
+        axes.ravel()[-1].legend(title=label_of(hue), loc="best", fontsize=7, title_fontsize=7)
+    fig.suptitle(title or f"{label_of(y)} against {label_of(x)}")
     return save_figure(fig, stem, data=stats)
 
 
@@ -192,8 +199,9 @@ def fig_sweep_scatter(table: pd.DataFrame, params: list[str], y: str, stem: Path
     ok = table[table["status"] == "ok"] if "status" in table else table
     fig, axes = new_figure(1, len(params), width=min(3.6 * len(params), 14), height=3.4, squeeze=False, sharey=True)
     for ax, name in zip(axes.ravel(), params):
-        ax.plot(ok[name], ok[y], "o", ms=4, color=method_color("sensor"), alpha=0.8)
-        ax.set_xlabel(name)
-    axes.ravel()[0].set_ylabel(y)
-    fig.suptitle(title or f"{y} against the sampled parameters")
+        ax.plot(ok[name], ok[y], "o", ms=4, color=method_color("sensor"), alpha=0.8, label="one cell")
+        ax.set_xlabel(label_of(name))
+    axes.ravel()[0].set_ylabel(label_of(y))
+    axes.ravel()[0].legend(loc="best")
+    fig.suptitle(title or f"{label_of(y)} against the sampled parameters")
     return save_figure(fig, stem, data=ok[[*params, y]])

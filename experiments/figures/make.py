@@ -28,6 +28,10 @@ PAPER_FIGURES = ("fig3_scan", "fig4_ad", "fig5_theta", "fig6_psi", "fig7_timing"
                  "fig10_slam", "accuracy_speed")
 
 
+def _article(word: str) -> str:
+    return "an" if word[:1].lower() in "aeiou" else "a"
+
+
 def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10,
                  angle_increment: float | None = None, world: str = "office") -> dict[str, list[Path]]:
     """Every paper figure whose tables are present; returns name -> files written. ``world`` names
@@ -38,7 +42,7 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
         sig = tables["signals"]
         inc = angle_increment or float(pd.Series(sig["bearing_deg"]).diff().median() * 3.141592653589793 / 180)
         written["fig3_scan"] = draw.fig_scan(sig, out / "fig3_scan", f"Fig. 3: a {len(sig)}-beam scan of the {world}")
-        written["fig4_ad"] = draw.fig_signal(sig, "ad", f"AD_i{signals_k}", f"Fig. 4: AD_i{signals_k} of a {world} scan",
+        written["fig4_ad"] = draw.fig_signal(sig, "ad", f"AD_i{signals_k}", f"Fig. 4: AD_i{signals_k} of {_article(world)} {world} scan",
                                              out / "fig4_ad", reference=ad_reference(signals_k, inc))
         written["fig5_theta"] = draw.fig_signal(sig, "theta_deg", "theta_i (deg)",
                                                 "Fig. 5: theta_i (line normal angle) of the scan", out / "fig5_theta")
@@ -46,9 +50,12 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
                                               f"Fig. 6: psi_i = theta_i - theta_(i+{signals_k})", out / "fig6_psi")
     if "timing" in tables:
         written["fig7_timing"] = draw.fig_timing(tables["timing"], out / "fig7_timing")
-    for source, title in (("office", f"Fig. 9: extracted features, simulated {world}"),
-                          ("intel", "Fig. 9: extracted features, Intel Research Lab (real log)")):
+    for source, title in (("office", "Fig. 9: features extracted by {method}, simulated " + world),
+                          ("intel", "Fig. 9: features extracted by {method}, Intel Research Lab (real log)")):
         if f"{source}_points" in tables:
+            lines = tables[f"{source}_lines"]
+            method = str(lines["method"].iloc[0]) if "method" in lines and len(lines) else "the extractor"
+            title = title.format(method=method)
             written[f"fig9_{source}"] = draw.fig_scans(tables[f"{source}_points"], tables[f"{source}_lines"],
                                                        tables[f"{source}_corners"], out / f"fig9_{source}", title)
     if "trajectory" in tables and "map" in tables:

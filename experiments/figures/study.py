@@ -80,7 +80,7 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
     picks = pick_evenly(len(records), cfg.panels)
     fsets, _ = extract_timed([records[i].scan for i in picks], panel_method)
     pts, lns, crs = feature_panels([records[i].scan for i in picks], [f"{cfg.world} scan {i}" for i in picks], fsets)
-    tables.update(office_points=pts, office_lines=lns, office_corners=crs)
+    tables.update(office_points=pts, office_lines=lns.assign(method=panel_method), office_corners=crs)
 
     intel = Path(cfg.intel_log) if cfg.intel_log else None
     if intel is not None and intel.exists():
@@ -119,7 +119,17 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
     folder.mkdir(parents=True, exist_ok=True)
     for name, table in tables.items():
         table.to_parquet(folder / f"{name}.parquet", index=False)
-    (folder / "study.yaml").write_text(yaml.safe_dump(cfg.to_dict(), sort_keys=False))
+    from experiments.compare import resolved_configs
+    from experiments.provenance import versions
+
+    settings = cfg.to_dict()
+    settings["resolved"] = {"sensor": dataclasses.asdict(sensor_config(cfg.sensor)),
+                            "extractors": resolved_configs(cfg.methods), "versions": versions()}
+    if cfg.slam:
+        from slam import SlamConfig
+
+        settings["resolved"]["slam"] = dataclasses.asdict(SlamConfig())
+    (folder / "study.yaml").write_text(yaml.safe_dump(settings, sort_keys=False))
     (folder / "notes.txt").write_text("\n".join(notes) + ("\n" if notes else ""))
 
 
@@ -148,7 +158,7 @@ def _intel_panels(path: Path, n: int, method: str, params: dict | None,
     scans = [records[i].scan for i in picks]
     fsets, _ = extract_timed(scans, method, params)
     pts, lns, crs = feature_panels(scans, [f"Intel scan {i}" for i in picks], fsets)
-    return {"intel_points": pts, "intel_lines": lns, "intel_corners": crs}
+    return {"intel_points": pts, "intel_lines": lns.assign(method=method), "intel_corners": crs}
 
 
 def _slam_in_world(result, records) -> tuple[np.ndarray, np.ndarray]:

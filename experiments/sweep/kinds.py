@@ -141,11 +141,16 @@ def _sensor_fields(cell: dict[str, Any]) -> tuple[set[str], str]:
 def _extractor_fields(method: str) -> tuple[set[str], str]:
     from features.registry import UnknownMethodError, get_method
 
+    from experiments.user_methods import ensure_method
+
     from .spec import SweepSpecError
 
+    from lms200 import LmsbenchError
+
     try:
+        ensure_method(method)
         m = get_method(method)
-    except UnknownMethodError as exc:
+    except (UnknownMethodError, LmsbenchError) as exc:
         raise SweepSpecError(str(exc)) from None
     return _fields(m.config_type), f"the {method!r} extractor's {m.config_type.__name__}"
 

@@ -72,6 +72,9 @@ def run_sweep(
     cells = spec.cells()
     store = CellStore(out)
     (out / "sweep.yaml").write_text(yaml.safe_dump(spec.to_dict(), sort_keys=False))
+    from experiments.provenance import versions
+
+    (out / "versions.yaml").write_text(yaml.safe_dump(versions(), sort_keys=False))  # of the last run into `out`
     keys = [cell_key(spec.kind, params) for params in cells]
     done = store.done()
     if retry_failed:

@@ -51,6 +51,7 @@ class CellStore:
         table = _tidy(pd.DataFrame([row]))
         fd, tmp = tempfile.mkstemp(dir=self.cells, prefix=f".{key}.", suffix=".tmp")
         try:
+            os.fchmod(fd, user_mode())  # mkstemp makes 0600; a result file gets the user's umask
             with os.fdopen(fd, "wb") as handle:
                 table.to_parquet(handle, index=False)
                 handle.flush()
@@ -71,10 +72,18 @@ class CellStore:
         return _tidy(pd.concat(frames, ignore_index=True, sort=False).reindex(columns=columns))
 
 
+def user_mode() -> int:
+    """The mode a plain ``open(path, "w")`` would give a new file: 0666 less the umask."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
 def write_atomic(table: pd.DataFrame, path: Path) -> None:
     """Write a table as Parquet (or CSV for a .csv path) via a temporary file and a rename."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.fchmod(fd, user_mode())  # mkstemp makes 0600; a result file gets the user's umask
     os.close(fd)
     try:
         if path.suffix == ".csv":

@@ -1,0 +1,131 @@
+"""Outputs that reproduce and figures without defects: run folders with a `latest` link, the
+user's umask on result files, readable log axes, honest sweep error bars, a self-contained report."""
+
+from __future__ import annotations
+
+import datetime
+import os
+
+import numpy as np
+import pandas as pd
+
+from experiments.figures.draw import fig_sweep
+from experiments.provenance import new_run_folder, versions
+from experiments.report import markdown_to_html
+from experiments.style import label_of, log_axis, new_figure
+from experiments.sweep.store import write_atomic
+
+
+def test_runs_without_out_never_overwrite_each_other(tmp_path):
+    now = datetime.datetime(2026, 12, 1, 22, 0, 0)
+    a = new_run_folder(tmp_path / "compare", now)
+    b = new_run_folder(tmp_path / "compare", now)  # the same second: a suffix
+    assert a.name == "2026-12-01_22-00-00" and b.name == "2026-12-01_22-00-00-2" and a.is_dir() and b.is_dir()
+    latest = tmp_path / "compare" / "latest"
+    assert latest.is_symlink() and latest.resolve() == b.resolve()
+
+
+def test_versions_name_python_and_the_numeric_libraries():
+    v = versions()
+    assert v["python"].startswith("3.11") and "numpy" in v and "lmsbench" in v
+
+
+def test_result_files_get_the_users_umask(tmp_path):
+    old = os.umask(0o022)
+    try:
+        write_atomic(pd.DataFrame({"a": [1]}), tmp_path / "t.parquet")
+        write_atomic(pd.DataFrame({"a": [1]}), tmp_path / "t.csv")
+    finally:
+        os.umask(old)
+    for name in ("t.parquet", "t.csv"):
+        assert (tmp_path / name).stat().st_mode & 0o777 == 0o644, name
+
+
+def _labels(ax, which: str) -> list:
+    fig = ax.figure
+    fig.canvas.draw()
+    axis = ax.xaxis if which == "x" else ax.yaxis
+    ticks = [t for t in axis.get_major_ticks() + axis.get_minor_ticks()
+             if t.label1.get_visible() and t.label1.get_text()]
+    lo, hi = sorted(ax.get_xlim() if which == "x" else ax.get_ylim())
+    return [t for t in ticks if lo <= t.get_loc() <= hi]
+
+
+def test_log_axes_have_plain_decimal_labels_that_do_not_overlap():
+    for lo, hi in ((0.055, 0.95), (0.08, 3.0), (0.05, 300.0)):
+        fig, ax = new_figure()
+        ax.plot([lo, hi], [1, 2], "o")
+        log_axis(ax, "x")
+        ticks = _labels(ax, "x")
+        texts = [t.label1.get_text() for t in ticks]
+        assert texts and all("e" not in s and "$" not in s for s in texts), texts
+        for s in texts:
+            float(s)  # plain decimals
+        renderer = fig.canvas.get_renderer()
+        boxes = sorted((t.label1.get_window_extent(renderer) for t in ticks), key=lambda b: b.x0)
+        for left, right in zip(boxes, boxes[1:]):
+            assert left.x1 <= right.x0 + 0.5, (lo, hi, texts)
+
+
+def test_a_sweep_with_one_seed_has_no_error_bars_and_says_so(tmp_path):
+    table = pd.DataFrame({"extractor.k": [3, 5, 10], "f1": [0.9, 0.95, 0.8], "seed": [0, 0, 0], "status": "ok"})
+    paths = fig_sweep(table, "extractor.k", "f1", tmp_path / "s")
+    stats = pd.read_csv([p for p in paths if p.suffix == ".csv"][0])
+    assert stats["count"].max() == 1
+    assert label_of("extractor.k") == "window half-width k (beams)" and label_of("rho_rms_mm").endswith("(mm)")
+    two = pd.concat([table, table.assign(seed=1, f1=table["f1"] - 0.02)])
+    fig_sweep(two, "extractor.k", "f1", tmp_path / "t")
+    assert np.allclose(pd.read_csv(tmp_path / "t.csv")["std"], np.std([0.0, 0.02], ddof=1))
+
+
+def test_the_html_report_embeds_its_images_and_fits_the_page(tmp_path):
+    (tmp_path / "figures").mkdir()
+    fig, ax = new_figure()
+    ax.plot([0, 1], [0, 1])
+    fig.savefig(tmp_path / "figures" / "x.png")
+    html = markdown_to_html("# T\n\n![cap](figures/x.png)\n\n| a | b |\n|---|---|\n| 1 | 2 |\n", "T", images=tmp_path)
+    assert "src='data:image/png;base64,iVBOR" in html and "figures/x.png" not in html
+    assert "max-width:100%" in html and "<div class='wide'><table>" in html
+    linked = markdown_to_html("![cap](figures/x.png)", "T")  # without a folder: links, as before
+    assert "<img src='figures/x.png' alt='cap'>" in linked
+
+
+class _UserMethodsDropped(dict):
+    """The registry during a test: the built-in methods it loads stay registered afterwards (their
+    modules register once), the MODULE:FUNCTION ones registered here do not."""
+
+    def __init__(self, real: dict) -> None:
+        super().__init__(real)
+        self.real = real
+
+    def __setitem__(self, key, value) -> None:
+        super().__setitem__(key, value)
+        if ":" not in key:
+            self.real[key] = value
+
+
+def test_compare_runs_a_users_extractor_by_module_and_function(tmp_path, monkeypatch, capsys):
+    from experiments.cli import main
+    from features import registry
+
+    monkeypatch.setattr(registry, "_REGISTRY", _UserMethodsDropped(registry._REGISTRY))
+
+    (tmp_path / "frontdoor_ext.py").write_text(
+        "from features import extract\n"
+        "def lines(scan):\n"
+        "    return extract(scan, method='split_merge')  # a user's method: here the baseline, renamed\n"
+        "def wrong(scan):\n"
+        "    return 42\n")
+    monkeypatch.chdir(tmp_path)
+    assert main(["compare", "office:0", "--duration", "2", "--rate", "2", "--methods", "split_merge", "frontdoor_ext:lines",
+                 "--out", str(tmp_path / "out"), "--no-progress", "--format", "csv"]) == 0
+    summary = pd.read_csv(tmp_path / "out" / "summary.csv").set_index("method")
+    assert summary.loc["frontdoor_ext:lines", "f1"] == summary.loc["split_merge", "f1"]  # same features, same scoring
+    assert summary.loc["frontdoor_ext:lines", "tp"] == summary.loc["split_merge", "tp"] > 0
+    capsys.readouterr()
+    for argv, message in ((["frontdoor_ext:nosuch"], "has no 'nosuch'"), (["nomodule:f"], "cannot import module"),
+                          (["frontdoor_ext:wrong"], "returned int, not a features.FeatureSet")):
+        assert main(["compare", "office:0", "--duration", "1", "--methods", *argv, "--out", str(tmp_path / "o2"),
+                     "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, err
