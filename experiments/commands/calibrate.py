@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, read_log_options
+from experiments.options import check_log, count, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -13,10 +14,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                                          "max-range rates, mixed pixels and outliers; write a sensor YAML")
     p.add_argument("log", help="CARMEN log (plain or .gz), ROS 1 .bag or ROS 2 bag folder")
     p.add_argument("--out", type=Path, help="write the sensor config here (default: print it)")
-    p.add_argument("--world", default="office",
+    p.add_argument("--world", default="office", type=world_name,
                    help="simulated world used to fit the spot width and the outlier baseline (default office)")
-    p.add_argument("--stride", type=int, default=1, help="use every STRIDE-th scan (default 1)")
-    p.add_argument("--max-scans", type=int, help="use at most this many scans")
+    p.add_argument("--stride", type=count(1), default=1, help="use every STRIDE-th scan (default 1)")
+    p.add_argument("--max-scans", type=count(1), help="use at most this many scans")
     add_log_options(p)
     p.set_defaults(func=run)
 
@@ -25,19 +26,11 @@ def run(args: argparse.Namespace) -> int:
     import tempfile
 
     from lms200 import LmsbenchError
-    from sim import WORLD_NAMES
 
     from experiments.calibrate import calibrate_log, format_calibration, write_sensor_yaml
 
     read_options = read_log_options(args)
-    if not Path(args.log).exists():
-        raise FileNotFoundError(f"no such log: {args.log}")
-    if args.stride < 1:
-        raise LmsbenchError(f"--stride must be >= 1, got {args.stride}")
-    if args.max_scans is not None and args.max_scans < 1:
-        raise LmsbenchError(f"--max-scans must be >= 1, got {args.max_scans}")
-    if args.world not in WORLD_NAMES:
-        raise LmsbenchError(f"--world: unknown world {args.world!r}; known worlds: {', '.join(WORLD_NAMES)}")
+    check_log(args.log)
     if args.out is not None and args.out.is_dir():
         raise LmsbenchError(f"--out {args.out} is a folder; give a file name such as sensor.yaml")
     if args.out is not None and not args.out.parent.exists():

@@ -6,42 +6,33 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, read_log_options
+from experiments.options import SEED, check_log, count, positive, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sim2real", help="a real log against its calibrated simulation: explained fraction, ray RMSE, "
                                         "lines per scan, range / residual / segment histograms (table and figure)")
     p.add_argument("log", help="CARMEN log (plain or .gz), ROS 1 .bag or ROS 2 bag folder")
-    p.add_argument("--world", default="mit", help="simulated world (default mit, the MIT-CSAIL-like preset)")
+    p.add_argument("--world", default="mit", type=world_name, help="simulated world (default mit, the MIT-CSAIL-like preset)")
     p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
                    help="use this sensor model instead of calibrating on the log")
-    p.add_argument("--seeds", nargs="+", type=int, default=[0, 1], help="simulated runs (default 0 1)")
-    p.add_argument("--duration", type=float, default=60.0, help="simulated seconds per seed (default 60)")
-    p.add_argument("--rate-hz", type=float, default=3.0, help="simulated scans kept per second (default 3)")
-    p.add_argument("--stride", type=int, default=5, help="use every STRIDE-th real scan (default 5)")
-    p.add_argument("--max-scans", type=int, default=400, help="at most this many real scans (default 400)")
+    p.add_argument("--seeds", nargs="+", type=SEED, default=[0, 1], help="simulated runs (default 0 1)")
+    p.add_argument("--duration", type=positive("s"), default=60.0, help="simulated seconds per seed (default 60)")
+    p.add_argument("--rate-hz", type=positive("scans/s"), default=3.0, help="simulated scans kept per second (default 3)")
+    p.add_argument("--stride", type=count(1), default=5, help="use every STRIDE-th real scan (default 5)")
+    p.add_argument("--max-scans", type=count(1), default=400, help="at most this many real scans (default 400)")
     p.add_argument("--out", type=Path, default=Path("results/sim2real"), help="output folder")
     add_log_options(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from lms200 import LmsbenchError
-    from sim import WORLD_NAMES, SensorConfig
+    from sim import SensorConfig
 
     from experiments.sim2real import format_report, sim2real, write_outputs
 
     read_options = read_log_options(args)
-    if not Path(args.log).exists():
-        raise FileNotFoundError(f"no such log: {args.log}")
-    if args.world not in WORLD_NAMES:
-        raise LmsbenchError(f"--world: unknown world {args.world!r}; known worlds: {', '.join(WORLD_NAMES)}")
-    for flag, value in (("--duration", args.duration), ("--rate-hz", args.rate_hz)):
-        if not value > 0:
-            raise LmsbenchError(f"{flag} must be > 0, got {value}")
-    for flag, value in (("--stride", args.stride), ("--max-scans", args.max_scans)):
-        if value < 1:
-            raise LmsbenchError(f"{flag} must be >= 1, got {value}")
+    check_log(args.log)
     sensor = SensorConfig.from_yaml(args.sensor) if args.sensor is not None else None
     result = sim2real(args.log, world=args.world, seeds=args.seeds, duration=args.duration, rate_hz=args.rate_hz,
                       stride=args.stride, max_scans=args.max_scans, sensor=sensor, read_options=read_options)
