@@ -1,7 +1,11 @@
 """The emulated LMS200: PyBullet ray casting against a world's solids plus the sensor model.
 
-One PyBullet DIRECT client per simulator object; every PyBullet call names it. Ranges come from
-the hit positions (not ``hitFraction * length``).
+One PyBullet DIRECT client per simulator object; every PyBullet call names it. Bullet's ray test
+says which solid a ray meets first; the range is then the exact distance to that solid (the ray's
+entry into the box, or onto the cylinder's circle; ``sim.hits``), not ``hitFraction * length``, so
+it does not depend on how far the ray was cast. Rays are cast to 3 m first and only those that
+meet nothing there on to the maximum range: most beams indoors end within 3 m, and Bullet's cost
+grows with a ray's length.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ import numpy as np
 from lms200 import Scan
 
 from .geometry import rectangle_corners
+from .hits import depth_steps, finish_ranges, mix_samples, resolve_hits
 from .sensor import OUTLIER_RANGE_SHARE, SensorConfig
 from .world import World
 
@@ -88,7 +93,7 @@ class LMS200Sim:
         off by up to 2 cm near edges). Cylinders are prisms circumscribing the circle; a hit on
         one is moved onto the exact circle, and a hit Bullet accepts just outside a box's edge
         (its ray-triangle test tolerates 1e-4 x the triangle's width) is rejected (see
-        :meth:`cast`)."""
+        :meth:`cast` and :func:`sim.hits.resolve_hits`)."""
         cid = self.client
         bodies: list[tuple[int, int, int]] = []  # body id, kind (0 box, 1 cylinder), index
         for k, box in enumerate(world.boxes):
@@ -108,7 +113,8 @@ class LMS200Sim:
             self._kind_of_body[body], self._index_of_body[body] = kind, k
         self._boxes = np.asarray(world.boxes, dtype=float)
         self._box_cos, self._box_sin = np.cos(self._boxes[:, 2]), np.sin(self._boxes[:, 2])
-        self._circles = np.asarray(world.cylinders[:, :3], dtype=float)
+        self._circles = np.ascontiguousarray(world.cylinders[:, :3], dtype=float)
+        self._glass = np.ascontiguousarray(np.asarray(world.glass, dtype=float).reshape(-1, 4))
 
     # -- lifetime -----------------------------------------------------------------------------
     def close(self) -> None:
@@ -142,50 +148,36 @@ class LMS200Sim:
         start[:, :2] = origins
         start[:, 2] = self.world.scan_height
         ux, uy = np.cos(headings), np.sin(headings)
-        end = start.copy()
-        end[:, 0] += self._ray_length * ux
-        end[:, 1] += self._ray_length * uy
-        hits = pb.rayTestBatch(start, end, physicsClientId=self.client)
-        body = np.fromiter(map(_FIRST, hits), dtype=np.int64, count=n)
-        pos = np.fromiter(chain.from_iterable(map(_POSITION, hits)), dtype=float, count=3 * n).reshape(n, 3)
-        ranges = np.hypot(pos[:, 0] - start[:, 0], pos[:, 1] - start[:, 1])
-        kind = self._kind_of_body[body]  # body -1 reads the last slot: -1
-        ranges[kind < 0] = np.inf
-        index = self._index_of_body[body]
-        again = np.zeros(n, dtype=bool)
-        on_box = np.flatnonzero(kind == 0)
-        if on_box.size:  # reject hits outside the true box (Bullet's edge tolerance)
-            k = index[on_box]
-            bx, c, s = self._boxes[k], self._box_cos[k], self._box_sin[k]
-            dx, dy = pos[on_box, 0] - bx[:, 0], pos[on_box, 1] - bx[:, 1]
-            outside = (np.abs(c * dx + s * dy) > bx[:, 3] + _BOX_TOL_M) | (np.abs(-s * dx + c * dy) > bx[:, 4] + _BOX_TOL_M)
-            if outside.any():  # the ray may still meet that box just beside the false hit: exact entry
-                out = on_box[outside]
-                entry = _ray_box_entry(origins[out], ux[out], uy[out], bx[outside], c[outside], s[outside])
-                meets = np.isfinite(entry)
-                ranges[out[meets]] = entry[meets]
-                again[out[~meets]] = True
-        on_cyl = np.flatnonzero(kind == 1)
-        if on_cyl.size:  # move onto the exact circle; grazing the prism but missing the circle: again
-            circle = self._circles[index[on_cyl]]
-            fx, fy = origins[on_cyl, 0] - circle[:, 0], origins[on_cyl, 1] - circle[:, 1]
-            b = fx * ux[on_cyl] + fy * uy[on_cyl]
-            disc = b * b - (fx * fx + fy * fy - circle[:, 2] ** 2)
-            hit = disc >= 0
-            ranges[on_cyl[hit]] = -b[hit] - np.sqrt(disc[hit])
-            again[on_cyl[~hit]] = True
+        u = np.column_stack((ux, uy))
+        body, pos = self._ray_test(start, u, 0.0, min(_FIRST_STAGE_M, self._ray_length))
+        if _FIRST_STAGE_M < self._ray_length:  # beams that meet nothing near: the rest of the ray
+            far = np.flatnonzero(body < 0)
+            if far.size:
+                body[far], pos[far] = self._ray_test(start[far], u[far], _FIRST_STAGE_M - _STAGE_OVERLAP_M,
+                                                     self._ray_length)
+        ranges, again = resolve_hits(body, pos, start, ux, uy, self._kind_of_body, self._index_of_body,
+                                     self._boxes, self._box_cos, self._box_sin, self._circles, _BOX_TOL_M)
         redo = np.flatnonzero(again)
         if redo.size:
             if _depth >= _MAX_RECASTS:
                 ranges[redo] = np.inf
             else:  # go on from just past the false hit
                 skip = ranges[redo] + _RECAST_STEP_M
-                u = np.column_stack((ux[redo], uy[redo]))
-                ranges[redo] = skip + self.cast(origins[redo] + skip[:, None] * u, headings[redo], _depth + 1)
-        if _depth == 0 and len(self.world.glass):
-            ranges = np.where(_glass_range(origins, ux, uy, self.world.glass) < ranges, np.inf, ranges)
-        ranges[ranges > self.sensor.range_max] = np.inf
+                ranges[redo] = skip + self.cast(origins[redo] + skip[:, None] * u[redo], headings[redo], _depth + 1)
+        finish_ranges(ranges, start, ux, uy, self._glass if _depth == 0 else _NO_GLASS, self.sensor.range_max)
         return ranges
+
+    def _ray_test(self, start: np.ndarray, u: np.ndarray, near: float, far: float) -> tuple[np.ndarray, np.ndarray]:
+        """Bullet's first hit on each ray from ``start`` (n, 3) along the horizontal unit vectors
+        ``u`` (n, 2) between ``near`` and ``far`` m: (n,) body ids (-1 for none), (n, 3) positions."""
+        n = len(start)
+        a, b = start.copy(), start.copy()
+        a[:, :2] += near * u
+        b[:, :2] += far * u
+        hits = pb.rayTestBatch(a, b, physicsClientId=self.client)
+        body = np.fromiter(map(_FIRST, hits), dtype=np.int64, count=n)
+        pos = np.fromiter(chain.from_iterable(map(_POSITION, hits)), dtype=float, count=3 * n).reshape(n, 3)
+        return body, pos
 
     def beam_poses(self, pose: tuple[float, float, float], twist: tuple[float, float] | None = None) -> np.ndarray:
         """(n_beams, 3) scanner pose at each beam's time for a scan starting at ``pose`` and moving
@@ -255,9 +247,7 @@ class LMS200Sim:
         far group, the beam returns their mean (with a far group at no return, the near mean when
         the near group holds the larger share, else no return)."""
         gap = self.sensor.mixed_gap
-        with np.errstate(invalid="ignore"):
-            step = np.abs(np.diff(ranges))
-        g = np.flatnonzero((step > gap) | (np.isfinite(ranges[1:]) != np.isfinite(ranges[:-1])))
+        g = depth_steps(ranges, gap)
         if g.size == 0:
             return ranges
         hw = self._half_width
@@ -266,51 +256,7 @@ class LMS200Sim:
         origins = np.vstack((np.repeat(bp[g, :2], 2, axis=0), np.repeat(bp[g + 1, :2], 2, axis=0)))
         heads = np.concatenate((((bp[g, 2] + self._angles[g])[:, None] + right).ravel(),
                                 ((bp[g + 1, 2] + self._angles[g + 1])[:, None] + left).ravel()))
-        sub = self.cast(origins, heads)
-        samples = np.repeat(ranges[:, None], 5, axis=1)
-        samples[g, 3:5] = sub[: 2 * g.size].reshape(-1, 2)
-        samples[g + 1, 0:2] = sub[2 * g.size :].reshape(-1, 2)
-        idx = np.union1d(g, g + 1)
-        smp = samples[idx]
-        near = smp.min(axis=1)
-        far = ~(smp <= (near + gap)[:, None])  # +inf counts as far
-        n_far = far.sum(axis=1)
-        finite = np.isfinite(smp).all(axis=1)
-        with np.errstate(invalid="ignore"):
-            near_mean = np.where(far, 0.0, smp).sum(axis=1) / np.maximum(5 - n_far, 1)
-            mixed = np.where(finite, smp.mean(axis=1) if finite.any() else 0.0,
-                             np.where(2 * n_far > 5, np.inf, near_mean))
-        out = ranges.copy()
-        split = (n_far > 0) & np.isfinite(near)
-        out[idx[split]] = mixed[split]
-        return out
-
-
-def _ray_box_entry(origins: np.ndarray, ux: np.ndarray, uy: np.ndarray, boxes: np.ndarray, c: np.ndarray,
-                   s: np.ndarray) -> np.ndarray:
-    """Distance (m) at which each ray enters its box (slab method, box frame); +inf if it misses."""
-    ox, oy = origins[:, 0] - boxes[:, 0], origins[:, 1] - boxes[:, 1]
-    lo_x, lo_y = c * ox + s * oy, -s * ox + c * oy
-    dx, dy = c * ux + s * uy, -s * ux + c * uy
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tx1, tx2 = (-boxes[:, 3] - lo_x) / dx, (boxes[:, 3] - lo_x) / dx
-        ty1, ty2 = (-boxes[:, 4] - lo_y) / dy, (boxes[:, 4] - lo_y) / dy
-    t_in = np.maximum(np.fmin(tx1, tx2), np.fmin(ty1, ty2))
-    t_out = np.minimum(np.fmax(tx1, tx2), np.fmax(ty1, ty2))
-    return np.where((t_in <= t_out) & (t_in > 0), t_in, np.inf)
-
-
-def _glass_range(origins: np.ndarray, ux: np.ndarray, uy: np.ndarray, glass: np.ndarray) -> np.ndarray:
-    """Distance (m) along each ray to the nearest glass segment it crosses (+inf for none)."""
-    ax, ay = glass[:, 0], glass[:, 1]
-    ex, ey = glass[:, 2] - ax, glass[:, 3] - ay
-    wx, wy = ax[None, :] - origins[:, 0:1], ay[None, :] - origins[:, 1:2]
-    den = ux[:, None] * ey[None, :] - uy[:, None] * ex[None, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (wx * ey[None, :] - wy * ex[None, :]) / den  # along the ray
-        s = (wx * uy[:, None] - wy * ux[:, None]) / den  # along the glass, 0..1
-    hit = (np.abs(den) > 1e-12) & (t > 0) & (s >= 0) & (s <= 1)
-    return np.where(hit, t, np.inf).min(axis=1)
+        return mix_samples(ranges, g, self.cast(origins, heads), gap)
 
 
 _PRISM_TOLERANCE_M = 2e-4  # largest gap between a cylinder and its circumscribed prism
@@ -323,6 +269,9 @@ def _prism_sides(r: np.ndarray | float) -> np.ndarray:
 
 
 _MAX_TRIANGLE_WIDTH_M = np.inf  # side faces are two triangles each (false hits are rejected)
+_NO_GLASS = np.zeros((0, 4))
+_FIRST_STAGE_M = 3.0  # rays are cast to this range first, and only those meeting nothing on to range_max
+_STAGE_OVERLAP_M = 1e-3  # the second stage starts this far before the first one's end
 _BOX_TOL_M = 1e-7  # a box hit farther than this outside the box is Bullet's edge tolerance
 _RECAST_STEP_M = 1e-4  # a rejected hit's ray goes on from this far past it
 _MAX_RECASTS = 4
