@@ -28,6 +28,7 @@ from .sensor import OUTLIER_RANGE_SHARE, SensorConfig
 from .world import World
 
 _STREAM_SENSOR = 2
+_STREAM_SURFACE = 3  # the rough cells' grid offset and hash key (apart from the noise stream)
 _FIRST, _POSITION = itemgetter(0), itemgetter(3)  # rayTestBatch result: body id, hit position
 
 
@@ -86,6 +87,9 @@ class LMS200Sim:
         self._offsets = s.beam_time_offsets
         self._ray_length = s.range_max + 0.01
         self._half_width = np.deg2rad(s.beam_width_deg) / 2
+        surface = np.random.default_rng([int(seed), _STREAM_SURFACE])
+        self._cell_offset = surface.uniform(0.0, 1.0, 2) * s.noise_tail_patch_m
+        self._cell_key = np.uint64(surface.integers(0, 2**63))
 
     def _load(self, world: World) -> None:
         """Load each solid as a static triangle-mesh body (Bullet's ray test against meshes is
@@ -225,7 +229,9 @@ class LMS200Sim:
             r = np.where(spurious, r * self.rng.uniform(lo, hi, s.n_beams), r)
         sigma = s.sigma_at(r) if s.noise_sigma_per_m else s.noise_sigma
         if s.noise_tail_prob > 0:
-            sigma = np.where(self.rng.random(s.n_beams) < s.noise_tail_prob, s.noise_tail_sigma, sigma)
+            rough = (self._rough_cells(bp, r) if s.noise_tail_patch_m > 0
+                     else self.rng.random(s.n_beams) < s.noise_tail_prob)
+            sigma = np.where(rough, s.noise_tail_sigma, sigma)
         r = r + sigma * noise
         if s.quantise:
             r = np.rint(r / s.unit_m) * s.unit_m
@@ -238,6 +244,14 @@ class LMS200Sim:
             with np.errstate(invalid="ignore"):
                 r[np.isposinf(r) | (r > s.max_reading)] = s.max_reading
         return Scan(r, s.angle_min, s.angle_increment, 0.0, s.range_max, stamp)
+
+    def _rough_cells(self, bp: np.ndarray, ranges: np.ndarray) -> np.ndarray:
+        """Which beams end in a rough cell of the surface grid (see SensorConfig.noise_tail_patch_m)."""
+        s = self.sensor
+        heading = bp[:, 2] + self._angles
+        cell = np.floor((bp[:, :2] + ranges[:, None] * np.column_stack((np.cos(heading), np.sin(heading)))
+                         - self._cell_offset) / s.noise_tail_patch_m).astype(np.int64).view(np.uint64)
+        return _unit_hash(cell[:, 0], cell[:, 1], self._cell_key) < s.noise_tail_prob
 
     def _mix_edges(self, bp: np.ndarray, ranges: np.ndarray) -> np.ndarray:
         """Mixed pixels. Each beam's spot is sampled at 5 bearings (-w/2, -w/4, 0, +w/4, +w/2 of
@@ -257,6 +271,16 @@ class LMS200Sim:
         heads = np.concatenate((((bp[g, 2] + self._angles[g])[:, None] + right).ravel(),
                                 ((bp[g + 1, 2] + self._angles[g + 1])[:, None] + left).ravel()))
         return mix_samples(ranges, g, self.cast(origins, heads), gap)
+
+
+def _unit_hash(a: np.ndarray, b: np.ndarray, key: np.uint64) -> np.ndarray:
+    """A uniform number in [0, 1) for each pair of 64-bit integers (splitmix64 of a mix of both)."""
+    with np.errstate(over="ignore"):
+        z = a * np.uint64(0x9E3779B97F4A7C15) + b * np.uint64(0xC2B2AE3D27D4EB4F) + key
+        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        z = z ^ (z >> np.uint64(31))
+    return (z >> np.uint64(11)).astype(np.float64) * 2.0 ** -53
 
 
 _PRISM_TOLERANCE_M = 2e-4  # largest gap between a cylinder and its circumscribed prism
