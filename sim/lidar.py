@@ -275,12 +275,13 @@ class LMS200Sim:
 
 def _unit_hash(a: np.ndarray, b: np.ndarray, key: np.uint64) -> np.ndarray:
     """A uniform number in [0, 1) for each pair of 64-bit integers (splitmix64 of a mix of both)."""
+    z: np.ndarray
     with np.errstate(over="ignore"):
         z = a * np.uint64(0x9E3779B97F4A7C15) + b * np.uint64(0xC2B2AE3D27D4EB4F) + key
-        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-        z = z ^ (z >> np.uint64(31))
-    return (z >> np.uint64(11)).astype(np.float64) * 2.0 ** -53
+        z = np.bitwise_xor(z, np.right_shift(z, np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = np.bitwise_xor(z, np.right_shift(z, np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        z = np.bitwise_xor(z, np.right_shift(z, np.uint64(31)))
+    return np.right_shift(z, np.uint64(11)).astype(np.float64) * 2.0 ** -53
 
 
 _PRISM_TOLERANCE_M = 2e-4  # largest gap between a cylinder and its circumscribed prism
