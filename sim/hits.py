@@ -75,14 +75,14 @@ def box_entry(ox: float, oy: float, ux: float, uy: float, cx: float, cy: float, 
 
 
 @_kernel
-def resolve_hits(body: np.ndarray, pos: np.ndarray, origins: np.ndarray, ux: np.ndarray, uy: np.ndarray,
+def resolve_hits(body: np.ndarray, dist: np.ndarray, origins: np.ndarray, ux: np.ndarray, uy: np.ndarray,
                  kind_of_body: np.ndarray, index_of_body: np.ndarray, boxes: np.ndarray, box_cos: np.ndarray,
                  box_sin: np.ndarray, circles: np.ndarray, box_tol: float) -> tuple[np.ndarray, np.ndarray]:
     """Ranges (m) of Bullet's hits and which rays must be cast again.
 
     Args:
-        body: (n,) hit body id (-1 for none); pos: (n, 3) hit positions; origins: (n, 2) ray
-            starts; ux, uy: (n,) ray directions.
+        body: (n,) hit body id (-1 for none); dist: (n,) Bullet's distance of the hit (m);
+            origins: (n, 2) ray starts; ux, uy: (n,) ray directions.
         kind_of_body, index_of_body: by body id (the last slot for -1): 0 box, 1 cylinder, -1
             nothing; the solid's row in ``boxes`` (cx, cy, yaw, hx, hy, ...) or ``circles``
             (cx, cy, r).
@@ -103,7 +103,7 @@ def resolve_hits(body: np.ndarray, pos: np.ndarray, origins: np.ndarray, ux: np.
         if kind < 0:
             ranges[i] = np.inf
             continue
-        r = math.hypot(pos[i, 0] - origins[i, 0], pos[i, 1] - origins[i, 1])
+        r = dist[i]
         k = index_of_body[b]
         if kind == 0:  # the exact entry into the box Bullet hit (none: its hit lies outside the box)
             c, s = box_cos[k], box_sin[k]
@@ -112,7 +112,8 @@ def resolve_hits(body: np.ndarray, pos: np.ndarray, origins: np.ndarray, ux: np.
             if math.isfinite(entry):
                 r = entry
             else:
-                dx, dy = pos[i, 0] - boxes[k, 0], pos[i, 1] - boxes[k, 1]
+                dx = origins[i, 0] + r * ux[i] - boxes[k, 0]
+                dy = origins[i, 1] + r * uy[i] - boxes[k, 1]
                 if abs(c * dx + s * dy) > boxes[k, 3] + box_tol or abs(-s * dx + c * dy) > boxes[k, 4] + box_tol:
                     again[i] = True
         else:

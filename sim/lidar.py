@@ -13,7 +13,6 @@ from __future__ import annotations
 import ctypes
 import os
 import sys
-from itertools import chain
 from operator import itemgetter
 from contextlib import contextmanager
 from typing import Iterator
@@ -29,7 +28,7 @@ from .world import World
 
 _STREAM_SENSOR = 2
 _STREAM_SURFACE = 3  # the rough cells' grid offset and hash key (apart from the noise stream)
-_FIRST, _POSITION = itemgetter(0), itemgetter(3)  # rayTestBatch result: body id, hit position
+_FIRST, _FRACTION = itemgetter(0), itemgetter(2)  # rayTestBatch result: body id, hit fraction
 
 
 def _flush_c_stdout() -> None:
@@ -147,19 +146,16 @@ class LMS200Sim:
     def cast(self, origins: np.ndarray, headings: np.ndarray, _depth: int = 0) -> np.ndarray:
         """Exact ranges (m) of horizontal rays at scan height from (n, 2) origins along (n,)
         world headings (rad); +inf where nothing is hit within range_max."""
-        n = len(headings)
-        start = np.empty((n, 3))
-        start[:, :2] = origins
-        start[:, 2] = self.world.scan_height
+        origins = np.ascontiguousarray(origins, dtype=float)
         ux, uy = np.cos(headings), np.sin(headings)
-        u = np.column_stack((ux, uy))
-        body, pos = self._ray_test(start, u, 0.0, min(_FIRST_STAGE_M, self._ray_length))
-        if _FIRST_STAGE_M < self._ray_length:  # beams that meet nothing near: the rest of the ray
+        first = min(_FIRST_STAGE_M, self._ray_length)
+        body, dist = self._ray_test(origins, ux, uy, 0.0, first)
+        if first < self._ray_length:  # beams that meet nothing near: the rest of the ray
             far = np.flatnonzero(body < 0)
             if far.size:
-                body[far], pos[far] = self._ray_test(start[far], u[far], _FIRST_STAGE_M - _STAGE_OVERLAP_M,
-                                                     self._ray_length)
-        ranges, again = resolve_hits(body, pos, start, ux, uy, self._kind_of_body, self._index_of_body,
+                body[far], dist[far] = self._ray_test(origins[far], ux[far], uy[far], first - _STAGE_OVERLAP_M,
+                                                      self._ray_length)
+        ranges, again = resolve_hits(body, dist, origins, ux, uy, self._kind_of_body, self._index_of_body,
                                      self._boxes, self._box_cos, self._box_sin, self._circles, _BOX_TOL_M)
         redo = np.flatnonzero(again)
         if redo.size:
@@ -167,21 +163,24 @@ class LMS200Sim:
                 ranges[redo] = np.inf
             else:  # go on from just past the false hit
                 skip = ranges[redo] + _RECAST_STEP_M
-                ranges[redo] = skip + self.cast(origins[redo] + skip[:, None] * u[redo], headings[redo], _depth + 1)
-        finish_ranges(ranges, start, ux, uy, self._glass if _depth == 0 else _NO_GLASS, self.sensor.range_max)
+                ahead = origins[redo] + skip[:, None] * np.column_stack((ux[redo], uy[redo]))
+                ranges[redo] = skip + self.cast(ahead, headings[redo], _depth + 1)
+        finish_ranges(ranges, origins, ux, uy, self._glass if _depth == 0 else _NO_GLASS, self.sensor.range_max)
         return ranges
 
-    def _ray_test(self, start: np.ndarray, u: np.ndarray, near: float, far: float) -> tuple[np.ndarray, np.ndarray]:
-        """Bullet's first hit on each ray from ``start`` (n, 3) along the horizontal unit vectors
-        ``u`` (n, 2) between ``near`` and ``far`` m: (n,) body ids (-1 for none), (n, 3) positions."""
-        n = len(start)
-        a, b = start.copy(), start.copy()
-        a[:, :2] += near * u
-        b[:, :2] += far * u
+    def _ray_test(self, origins: np.ndarray, ux: np.ndarray, uy: np.ndarray, near: float,
+                  far: float) -> tuple[np.ndarray, np.ndarray]:
+        """Bullet's first hit on each ray from ``origins`` (n, 2) along (ux, uy) between ``near``
+        and ``far`` m: (n,) body ids (-1 for none) and distances from the origin (m)."""
+        n = len(ux)
+        a, b = np.empty((n, 3)), np.empty((n, 3))
+        a[:, 2] = b[:, 2] = self.world.scan_height
+        a[:, 0], a[:, 1] = origins[:, 0] + near * ux, origins[:, 1] + near * uy
+        b[:, 0], b[:, 1] = origins[:, 0] + far * ux, origins[:, 1] + far * uy
         hits = pb.rayTestBatch(a, b, physicsClientId=self.client)
         body = np.fromiter(map(_FIRST, hits), dtype=np.int64, count=n)
-        pos = np.fromiter(chain.from_iterable(map(_POSITION, hits)), dtype=float, count=3 * n).reshape(n, 3)
-        return body, pos
+        fraction = np.fromiter(map(_FRACTION, hits), dtype=float, count=n)
+        return body, near + fraction * (far - near)
 
     def beam_poses(self, pose: tuple[float, float, float], twist: tuple[float, float] | None = None) -> np.ndarray:
         """(n_beams, 3) scanner pose at each beam's time for a scan starting at ``pose`` and moving
