@@ -96,21 +96,26 @@ def base_sensor(cal: LogCalibration):
     )
 
 
-def _simulated_measurement(sensor, world: str, duration: float = FIT_DURATION_S):
+def _simulated_measurement(sensor, world: Any, duration: float = FIT_DURATION_S):
+    """The log measurements of a simulated run of ``world`` (a name or a built sim.World)."""
     from sim import make_world, simulate_records
 
-    records = simulate_records(make_world(world, FIT_SEED), FIT_SEED, duration, sensor, rate_hz=FIT_RATE_HZ)
+    w = make_world(world, FIT_SEED) if isinstance(world, str) else world
+    records = simulate_records(w, FIT_SEED, duration, sensor, rate_hz=FIT_RATE_HZ)
     return calibrate_scans(records, seed=FIT_SEED)
 
 
 def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT_DURATION_S) -> CalibrationResult:
     """The SensorConfig fitted to a log's measurements (see the module docstring); ``duration``:
     simulated seconds per spot width (shorter is faster and noisier)."""
+    from sim import make_world
+
     sensor = base_sensor(cal)
+    built = make_world(world, FIT_SEED)  # once: every fit run goes through the same world
     curve: list[tuple[float, float]] = []
     for steps in WIDTH_GRID_STEPS:
         w = steps * sensor.resolution_deg
-        m = _simulated_measurement(sensor.replace(beam_width_deg=w, mixed_pixels=w > 0), world, duration)
+        m = _simulated_measurement(sensor.replace(beam_width_deg=w, mixed_pixels=w > 0), built, duration)
         curve.append((w, float(m.mixed_share.value)))
     widths = np.array([c[0] for c in curve])
     shares = np.maximum.accumulate(np.nan_to_num(np.array([c[1] for c in curve])))  # monotone
@@ -131,7 +136,7 @@ def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT
     tail_curve: list[tuple[float, float]] = []
     baseline = 0.0
     for eps in TAIL_GRID:
-        m = _simulated_measurement(with_width.replace(noise_tail_prob=eps, noise_tail_sigma=tail_sigma), world, duration)
+        m = _simulated_measurement(with_width.replace(noise_tail_prob=eps, noise_tail_sigma=tail_sigma), built, duration)
         tail_curve.append((eps, float(m.tail_share.value)))
         if eps == 0.0:
             baseline = float(m.outlier_rate.value)
@@ -141,7 +146,7 @@ def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT
     patch_curve: list[tuple[float, float]] = []
     if with_width.noise_tail_prob > 0 and np.isfinite(cal.tail_clustering.value):
         for size in PATCH_GRID_M:
-            m = _simulated_measurement(with_width.replace(noise_tail_patch_m=size), world, duration)
+            m = _simulated_measurement(with_width.replace(noise_tail_patch_m=size), built, duration)
             patch_curve.append((size, float(m.tail_clustering.value)))
         patch = _interpolate([c[1] for c in patch_curve], [c[0] for c in patch_curve], float(cal.tail_clustering.value))
         with_width = with_width.replace(noise_tail_patch_m=round(patch, 3))
