@@ -615,17 +615,55 @@ def chord_split(first, last, ranges, bearings):  # noqa: ANN001, ANN201
 
 
 @kernel
+def tls_clipped(f, l, ranges, bearings, valid, sigma_r, lim) -> float:  # noqa: ANN001
+    """Sum of the squared normalised residuals (each clipped at ``lim``) of the valid beams f..l
+    about their total-least-squares line."""
+    n = 0
+    mx = my = 0.0
+    for j in range(f, l + 1):
+        if valid[j]:
+            mx += ranges[j] * bearings.cos[j]
+            my += ranges[j] * bearings.sin[j]
+            n += 1
+    if n < 3:
+        return 0.0
+    mx /= n
+    my /= n
+    cxx = cyy = cxy = 0.0
+    for j in range(f, l + 1):
+        if valid[j]:
+            u = ranges[j] * bearings.cos[j] - mx
+            v = ranges[j] * bearings.sin[j] - my
+            cxx += u * u
+            cyy += v * v
+            cxy += u * v
+    a = 0.5 * math.atan2(-2.0 * cxy, cyy - cxx)
+    ca, sa = math.cos(a), math.sin(a)
+    out = 0.0
+    for j in range(f, l + 1):
+        if valid[j]:
+            z = ((ranges[j] * bearings.cos[j] - mx) * ca + (ranges[j] * bearings.sin[j] - my) * sa) / sigma_r
+            out += min(z * z, lim)
+    return out
+
+
+@kernel
 def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p) -> bool:  # noqa: ANN001
-    """Is the line (lrho, lalpha) on beams lf..ll a chord of a round surface that its neighbourhood
-    f..l (lf..ll and the beams past its ends) traces? True when one circle (algebraic Kasa fit,
-    then ARC_GN_STEPS geometric Gauss-Newton steps) fits f..l as the line checks ask of a line
-    (min_inlier_fraction of the beams within inlier_tau sigma_r, chi^2 per dof <= max_chi2), the
-    surface turns along it by at least corner_min_turn (a smooth turn a polyline would break into
-    false corners), the circle explains the line's own beams as well as the line does (chi^2 no
-    more than ARC_TAU std of the difference above), and fits the whole neighbourhood as tightly
-    as the line fits its own beams (mean squared residual within ARC_TAU std of the line's: at a
-    real corner the circle is a compromise whose residuals are far larger; this comparison holds
-    whatever the actual scatter, e.g. the interlaced sweeps of 0.5 deg logs)."""
+    """Do the valid beams f..l trace one round surface? One circle (algebraic Kasa fit, then
+    ARC_GN_STEPS geometric Gauss-Newton steps) must fit them as the line checks ask of a line
+    (min_inlier_fraction of the beams within inlier_tau sigma_r, chi^2 per dof <= max_chi2), and
+    the surface must turn along them by at least corner_min_turn (a smooth turn that a polyline
+    would break into false corners; a gently bent wall is no round surface). Then:
+
+    - a span that failed the line checks (``lf`` < 0): the circle must fit it better than two
+      lines split at its chord would (its summed squared residuals, each clipped at inlier_tau^2,
+      no larger: a kink or a step between two faces is fitted better by the two lines);
+    - a line (rho ``lrho``, alpha ``lalpha``) on beams lf..ll inside f..l, its neighbourhood: the
+      circle must explain the line's own beams as well as the line does (chi^2 no more than
+      ARC_TAU std of the difference above) and fit the neighbourhood as tightly as the line fits
+      its own beams (mean squared residual within ARC_TAU std of the line's chi^2 per dof: at a
+      real corner the circle is a compromise with far larger residuals; this comparison holds
+      whatever the actual scatter, e.g. of the interlaced sweeps of 0.5 deg logs)."""
     n = 0
     mx = 0.0
     my = 0.0
@@ -710,6 +748,10 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
                 ni += 1
     if not (ni >= p.min_inlier_fraction * n and chi <= p.max_chi2 * max(ni - 3, 1)):
         return False
+    if lf < 0:  # a span without a line: the circle must fit it better than two lines split at its chord
+        at = chord_split(np.array([f]), np.array([l]), ranges, bearings)[0]
+        two = tls_clipped(f, at, ranges, bearings, valid, sigma_r, lim) + tls_clipped(at + 1, l, ranges, bearings, valid, sigma_r, lim)
+        return clipped <= two
     ca, sa = math.cos(lalpha), math.sin(lalpha)
     c_chi = 0.0
     l_chi = 0.0
@@ -820,6 +862,11 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
                 o_f[m], o_l[m], o_n[m] = f_in[r], l_in[r], n_in[r]
                 m += 1
         bad = np.flatnonzero(~good & (last - first + 1 >= 2 * min_span))
+        if p.arc_check:  # a failing span that is one circle is a round surface: not cut into chords
+            arc = np.zeros(bad.size, np.bool_)
+            for t in range(bad.size):
+                arc[t] = circle_fits(first[bad[t]], last[bad[t]], -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r, p)
+            bad = bad[~arc]
         at = chord_split(first[bad], last[bad], ranges, bearings)
         nf = np.empty(2 * bad.size, np.int64)
         nl = np.empty(2 * bad.size, np.int64)
@@ -828,7 +875,7 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
         q = 0
         for t in range(bad.size):
             r = bad[t]
-            for f, l, a, b in ((first[r], at[t], shrink0[r], k), (at[t] + 1, last[r], k, shrink1[r])):
+            for f, l, a, b in ((first[r], at[t] - 1, shrink0[r], k), (at[t] + 1, last[r], k, shrink1[r])):
                 if l - f + 1 >= min_span:
                     nf[q], nl[q], s0[q], s1[q] = f, l, a, b
                     q += 1
