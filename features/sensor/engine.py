@@ -648,6 +648,31 @@ def tls_clipped(f, l, ranges, bearings, valid, sigma_r, lim) -> float:  # noqa: 
 
 
 @kernel
+def theta_turn(a, b, theta) -> float:  # noqa: ANN001
+    """How far the slope estimate theta (rad) turns between the first and the last beam of a..b
+    where it is known (inf where it is known at fewer than two): a cheap first look at whether
+    the surface there turns at all."""
+    i = a
+    while i <= b and not np.isfinite(theta[i]):
+        i += 1
+    j = b
+    while j > i and not np.isfinite(theta[j]):
+        j -= 1
+    if j <= i:
+        return np.inf
+    return abs(wrap(theta[j] - theta[i]))
+
+
+@kernel
+def surface_turn(f, l, cx, cy, ranges, bearings) -> float:  # noqa: ANN001
+    """The angle (rad) beams f and l subtend at the centre (cx, cy): how far a circle about it
+    turns between them."""
+    ax, ay = ranges[f] * bearings.cos[f] - cx, ranges[f] * bearings.sin[f] - cy
+    bx, by = ranges[l] * bearings.cos[l] - cx, ranges[l] * bearings.sin[l] - cy
+    return abs(math.atan2(ax * by - ay * bx, ax * bx + ay * by))
+
+
+@kernel
 def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p) -> bool:  # noqa: ANN001
     """Do the valid beams f..l trace one round surface? One circle (algebraic Kasa fit, then
     ARC_GN_STEPS geometric Gauss-Newton steps) must fit them as the line checks ask of a line
@@ -697,6 +722,8 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
     vc = (suu * b2 - suv * b1) / det
     rad = math.sqrt(uc * uc + vc * vc + (suu + svv) / n)
     cx, cy = uc + mx, vc + my
+    if not surface_turn(f, l, cx, cy, ranges, bearings) >= 0.5 * p.corner_min_turn:
+        return False  # nearly straight (most lines): no geometric fit needed
     for _ in range(ARC_GN_STEPS):  # geometric residual e_j = |x_j - c| - R; J = [-(x - c) / |x - c|, -1]
         h00 = h01 = h02 = h11 = h12 = h22 = g0 = g1 = g2 = 0.0
         for j in range(f, l + 1):
@@ -728,11 +755,7 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
         cx -= (a00 * g0 + a01 * g1 + a02 * g2) / dt
         cy -= (a01 * g0 + a11 * g1 + a12 * g2) / dt
         rad -= (a02 * g0 + a12 * g1 + a22 * g2) / dt
-    if not rad > 0.0:
-        return False
-    ax, ay = ranges[f] * bearings.cos[f] - cx, ranges[f] * bearings.sin[f] - cy
-    bx, by = ranges[l] * bearings.cos[l] - cx, ranges[l] * bearings.sin[l] - cy
-    if not abs(math.atan2(ax * by - ay * bx, ax * bx + ay * by)) >= p.corner_min_turn:
+    if not (rad > 0.0 and surface_turn(f, l, cx, cy, ranges, bearings) >= p.corner_min_turn):
         return False
     lim = p.inlier_tau * p.inlier_tau
     chi = 0.0  # the circle's chi^2 over the inliers of the neighbourhood, and clipped over all of it
@@ -771,7 +794,7 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
 
 
 @kernel
-def on_arcs(rho, alpha, first, last, ranges, bearings, valid, increment, sigma_r, p):  # noqa: ANN001, ANN201
+def on_arcs(rho, alpha, first, last, ranges, bearings, valid, theta, increment, sigma_r, p):  # noqa: ANN001, ANN201
     """Which lines [first, last] are chords of a round surface (``circle_fits``): the neighbourhood
     is the line and as many beams again past each end (at least k), while the surface goes on
     without a depth jump (Borges & Aldon's adaptive breakpoint, BREAK_LAMBDA, plus 3 sigma_r).
@@ -788,7 +811,7 @@ def on_arcs(rho, alpha, first, last, ranges, bearings, valid, increment, sigma_r
         while (b < n - 1 and b - last[m] < reach and valid[b + 1]
                and abs(ranges[b + 1] - ranges[b]) <= ranges[b] * ratio + 3.0 * sigma_r):
             b += 1
-        if (first[m] - a) + (b - last[m]) >= p.k:
+        if (first[m] - a) + (b - last[m]) >= p.k and theta_turn(a, b, theta) >= 0.5 * p.corner_min_turn:
             out[m] = circle_fits(a, b, first[m], last[m], rho[m], alpha[m], ranges, bearings, valid, sigma_r, p)
     return out
 
@@ -861,11 +884,13 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
                 o_rho[m], o_alpha[m], o_cov[m] = rho[r], alpha[r], cov[r]
                 o_f[m], o_l[m], o_n[m] = f_in[r], l_in[r], n_in[r]
                 m += 1
-        bad = np.flatnonzero(~good & (last - first + 1 >= 2 * min_span))
+        bad = np.flatnonzero(~good & (last - first >= min_span))  # a part of min_span beams may remain
         if p.arc_check:  # a failing span that is one circle is a round surface: not cut into chords
             arc = np.zeros(bad.size, np.bool_)
             for t in range(bad.size):
-                arc[t] = circle_fits(first[bad[t]], last[bad[t]], -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r, p)
+                if theta_turn(first[bad[t]], last[bad[t]], theta) >= 0.5 * p.corner_min_turn:
+                    arc[t] = circle_fits(first[bad[t]], last[bad[t]], -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r,
+                                         p)
             bad = bad[~arc]
         at = chord_split(first[bad], last[bad], ranges, bearings)
         nf = np.empty(2 * bad.size, np.int64)
@@ -885,7 +910,7 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     f_in, l_in, n_in = o_f[:m][order], o_l[:m][order], o_n[:m][order]
     extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r)
     if p.arc_check and m:
-        line = ~on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, increment, sigma_r, p)
+        line = ~on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, theta, increment, sigma_r, p)
         return rho[line], alpha[line], cov[line], f_in[line], l_in[line], n_in[line]
     return rho, alpha, cov, f_in, l_in, n_in
 
