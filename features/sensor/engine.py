@@ -8,7 +8,9 @@ Every step works in range-bearing space, on the beams of one scan, in the order 
 3. the Log-Hough transform (eq. 5) searched in a narrow band of normal angles around each run's
    mean slope (``band_search``): every vote is a lookup in one log-cos template;
 4. two weighted Gauss-Newton steps on the range residuals, with the covariance of (rho, alpha)
-   implied by the range noise, and the acceptance checks (``fit_runs``);
+   implied by the range noise, and the acceptance checks (``fit_runs``); a run that fails is
+   split at its chord's farthest beam and fitted again, unless it is one circle, and lines on a
+   round surface are dropped (``find_lines``, ``circle_fits``);
 5. lines grown over the beams past their ends, neighbours merged, overlaps split, endpoints
    projected, short segments dropped (``extend_ends``, ``merge_neighbours``, ``segments``);
 6. corners where two segments meet and psi shows the turn, with the paper's remedy against
