@@ -48,17 +48,31 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except (LmsbenchError, OSError) as exc:  # OSError: missing files, bad paths, unreachable hosts, timeouts
+        _end_progress_bars()
         print(f"lmsbench {name}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        _end_progress_bars()
         print(f"lmsbench {name}: interrupted", file=sys.stderr)
         return 130
     except Exception as exc:  # a bug, not a user error: say so in one line
         if os.environ.get("LMSBENCH_TRACEBACK"):
             raise
+        _end_progress_bars()
         print(f"lmsbench {name}: internal error: {type(exc).__name__}: {_one_line(exc)} "
               "(a bug in lmsbench; LMSBENCH_TRACEBACK=1 shows where)", file=sys.stderr)
         return 1
+
+
+def _end_progress_bars() -> None:
+    """Close the progress bars an error left open, so that the error starts a line of its own."""
+    if "tqdm" not in sys.modules:
+        return
+    from tqdm import tqdm
+
+    for bar in list(getattr(tqdm, "_instances", ())):
+        bar.leave = False  # clear the bar's line: the error replaces it
+        bar.close()
 
 
 def _one_line(exc: BaseException) -> str:

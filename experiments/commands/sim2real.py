@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import SEED, check_log, check_out, check_yaml, count, positive, world_name
+from experiments.options import SEED, check_log, check_out, check_seeds, check_yaml, count, positive, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -36,6 +36,7 @@ def run(args: argparse.Namespace) -> int:
     read_options = read_log_options(args)
     check_log(args.log)
     check_out(args.out)
+    check_seeds(args.seeds)
     sensor = None
     if args.sensor is not None:
         check_yaml(args.sensor, "a sensor YAML")
