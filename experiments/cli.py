@@ -58,17 +58,23 @@ class _Interrupt:
         raise KeyboardInterrupt
 
     def hard_stop(self) -> None:
-        try:
-            import psutil  # a dependency of dask.distributed
-
-            for child in psutil.Process().children(recursive=True):
-                child.kill()
-        except Exception:  # noqa: BLE001 - exiting anyway
-            pass
+        _kill_children()
         if not self.reported:
             sys.stderr.write(f"lmsbench {self.name}: interrupted\n")
             sys.stderr.flush()
         os._exit(130)
+
+
+def _kill_children() -> None:
+    """Kill this process's child processes (after Ctrl-C: Dask workers a cluster's close left
+    behind would keep running their cells, and keep the terminal's pipes open)."""
+    try:
+        import psutil  # a dependency of dask.distributed
+
+        for child in psutil.Process().children(recursive=True):
+            child.kill()
+    except Exception:  # noqa: BLE001 - exiting anyway
+        pass
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -92,6 +98,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt:
         _end_progress_bars()
+        _kill_children()
         interrupt.reported = True
         print(f"lmsbench {name}: interrupted", file=sys.stderr)
         return 130
