@@ -22,9 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
-
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -154,8 +152,8 @@ class Sim2RealResult:
     checks: dict[str, Any]
 
 
-def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT_SEEDS, duration: float = DEFAULT_DURATION_S,
-             rate_hz: float = 3.0, stride: int = 5, max_scans: int | None = 400,
+def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT_SEEDS,
+             duration: float = DEFAULT_DURATION_S, rate_hz: float = 3.0, stride: int = 5, max_scans: int | None = 400,
              methods: Sequence[str] = METHODS, sensor: Any = None, read_options: dict | None = None,
              fit_duration: float | None = None) -> Sim2RealResult:
     """Compare a real log with the calibrated simulation (see the module docstring).
@@ -193,8 +191,13 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     for seed in seeds:
         simulated += simulate_records(make_world(world, seed), seed, duration, sensor, rate_hz=rate_hz, limits=limits)
     name = Path(log).name
-    sources = [Source(name, "log", None, real, None, len(real)),
-               Source(f"sim:{world}", "log", None, simulated, None, len(simulated))]
+    from features.noise_estimate import neighbour_sigma  # noqa: PLC0415
+
+    # the extractors get what sigma_r="auto" means on a log (as `compare LOG` gives them): the
+    # neighbour scatter of each source's own scans, with the interlaced sweeps' offset
+    sources = [Source(name, "log", None, real, None, len(real), estimate_extractor_sigma=lambda: neighbour_sigma(real)),
+               Source(f"sim:{world}", "log", None, simulated, None, len(simulated),
+                      estimate_extractor_sigma=lambda: neighbour_sigma(simulated))]
     summary = summarise(compare(sources, list(methods), sigma="auto"))
     table = _table(summary, name, f"sim:{world}", list(methods))
     result = Sim2RealResult(table, scene_statistics(real), scene_statistics(simulated), sensor, limits, world,
