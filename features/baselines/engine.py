@@ -150,49 +150,116 @@ def straight_enough(x, y, s, e, rho, alpha, z_min, dead_zone) -> bool:  # noqa: 
 
 
 @kernel
-def segment_lines(ranges, bearings, range_lo, range_hi, increment, p):  # noqa: ANN001, ANN201
+def bearing_table(bearings):  # noqa: ANN001, ANN201
+    """(cos, sin) of every beam's bearing (rad), computed once per scan geometry with the libm
+    calls a kernel would make per beam (so the points are the same to the last bit)."""
+    c = np.empty(bearings.size)
+    s = np.empty(bearings.size)
+    for i in range(bearings.size):
+        c[i] = math.cos(bearings[i])
+        s[i] = math.sin(bearings[i])
+    return c, s
+
+
+@kernel
+def gap_exceeds(dx: float, dy: float, limit: float) -> bool:
+    """hypot(dx, dy) > limit, decided as math.hypot decides it: from sqrt(dx^2 + dy^2) (a few
+    times cheaper; within 3 ulp of hypot) unless that lies within 1e-12 of the limit, overflows,
+    or the limit is nan, where hypot itself decides."""
+    gap = math.sqrt(dx * dx + dy * dy)
+    if not abs(gap - limit) > 1e-12 * abs(limit) or gap == np.inf:
+        gap = math.hypot(dx, dy)
+    return gap > limit
+
+
+@kernel
+def split_at(x, y, s, e, threshold, cf, sf, rho_f, chord):  # noqa: ANN001, ANN201
+    """Where points s..e (e - s >= 2) split: the interior point farthest from the chord between the
+    end points (the first of equal ones) when some point lies farther than ``threshold`` (m) from
+    the chord (``chord``: iepf) or from the fitted line x cf + y sf = rho_f (split_merge; end
+    points included); -1 when none does, or when a distance is nan."""
+    dx, dy = x[e] - x[s], y[e] - y[s]
+    norm = npmax(math.hypot(dx, dy), 1e-12)
+    nx, ny = -dy / norm, dx / norm
+    rho_c = nx * x[s] + ny * y[s]
+    cmax = -1.0  # the end points count as -1 from the chord
+    at = s
+    if chord:
+        dmax = -1.0
+    else:
+        d_s = abs(x[s] * cf + y[s] * sf - rho_f)
+        d_e = abs(x[e] * cf + y[e] * sf - rho_f)
+        dmax = max(d_s, d_e)
+        if d_s != d_s or d_e != d_e:
+            return -1
+    nan = False
+    for q in range(s + 1, e):
+        dc = abs(x[q] * nx + y[q] * ny - rho_c)
+        if dc > cmax:
+            cmax = dc
+            at = q
+        d = dc if chord else abs(x[q] * cf + y[q] * sf - rho_f)
+        if d > dmax:
+            dmax = d
+        nan = nan or dc != dc or d != d
+    if nan or not dmax > threshold:
+        return -1
+    return at
+
+
+@kernel
+def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p):  # noqa: ANN001, ANN201
     """The lines of one scan (sensor frame) in beam order, as the rows of ``features.types.Lines``
     (values (L, 10), beams (L, 3)); beams with a range in [range_lo, range_hi] (m) are valid;
-    ``p`` a SplitParams. The (rho, alpha) covariance is
+    ``cos_b``, ``sin_b`` the beams' bearing cosines and sines (``bearing_table``); ``p`` a
+    SplitParams. The (rho, alpha) covariance is
     that of a total-least-squares fit under isotropic noise sigma: var(alpha) = s^2/S,
     var(rho) = s^2/n + t^2 s^2/S, cov = t s^2/S (t: the centroid's coordinate along the line,
     S: the scatter along it)."""
     sigma, lam, threshold, merge_rms = p.sigma, p.breakpoint_lambda, p.split_threshold, p.merge_rms
     min_points, min_length, max_skip, runs_z, chord = p.min_points, p.min_length, p.max_skip, p.runs_z, p.chord
-    valid = np.empty(ranges.size, np.bool_)
-    for i in range(ranges.size):
-        valid[i] = ranges[i] >= range_lo and ranges[i] <= range_hi
-    idx = np.flatnonzero(valid)
-    n_pts = idx.size
-    x = np.empty(n_pts)
-    y = np.empty(n_pts)
-    r = np.empty(n_pts)
-    no_return = np.empty(n_pts, np.int64)  # +inf (no-return) beams before each point
+    n_beams = ranges.size
+    # the valid points (Cartesian), the +inf (no-return) beams before each, and the prefix sums
+    # of the fits (np.cumsum order), in one pass over the beams
+    idx = np.empty(n_beams, np.int64)
+    x = np.empty(n_beams)
+    y = np.empty(n_beams)
+    r = np.empty(n_beams)
+    no_return = np.empty(n_beams, np.int64)
+    sx = np.zeros(n_beams + 1)
+    sy = np.zeros(n_beams + 1)
+    sxx = np.zeros(n_beams + 1)
+    syy = np.zeros(n_beams + 1)
+    sxy = np.zeros(n_beams + 1)
     n_inf = 0
-    beam = 0
-    for p in range(n_pts):
-        while beam < idx[p]:
-            if ranges[beam] == np.inf:
-                n_inf += 1
-            beam += 1
-        no_return[p] = n_inf
-        r[p] = ranges[idx[p]]
-        b = bearings[idx[p]]
-        x[p] = r[p] * math.cos(b)
-        y[p] = r[p] * math.sin(b)
+    n_pts = 0
+    for i in range(n_beams):
+        d = ranges[i]
+        if d >= range_lo and d <= range_hi:
+            q = n_pts
+            xq, yq = d * cos_b[i], d * sin_b[i]
+            idx[q], r[q], x[q], y[q], no_return[q] = i, d, xq, yq, n_inf
+            if q:
+                sx[q + 1] = sx[q] + xq
+                sy[q + 1] = sy[q] + yq
+                sxx[q + 1] = sxx[q] + xq * xq
+                syy[q + 1] = syy[q] + yq * yq
+                sxy[q + 1] = sxy[q] + xq * yq
+            else:
+                sx[1], sy[1], sxx[1], syy[1], sxy[1] = xq, yq, xq * xq, yq * yq, xq * yq
+            n_pts += 1
+        elif d == np.inf:
+            n_inf += 1
     if n_pts < 2:
         return np.empty((0, 10)), np.empty((0, 3), np.int64)
-    sx = np.zeros(n_pts + 1)
-    sy = np.zeros(n_pts + 1)
-    sxx = np.zeros(n_pts + 1)
-    syy = np.zeros(n_pts + 1)
-    sxy = np.zeros(n_pts + 1)
-    for p in range(n_pts):  # np.cumsum: sequential
-        sx[p + 1] = sx[p] + x[p] if p else x[p]
-        sy[p + 1] = sy[p] + y[p] if p else y[p]
-        sxx[p + 1] = sxx[p] + x[p] * x[p] if p else x[p] * x[p]
-        syy[p + 1] = syy[p] + y[p] * y[p] if p else y[p] * y[p]
-        sxy[p + 1] = sxy[p] + x[p] * y[p] if p else x[p] * y[p]
+    # the bearing steps a cluster may bridge (1 .. max_skip beams): the sines of the breakpoint distance
+    n_steps = min(max_skip, n_beams) + 1
+    sin_step = np.empty(n_steps)
+    sin_rest = np.empty(n_steps)
+    for step in range(1, n_steps):
+        dphi = step * increment
+        sin_step[step] = math.sin(dphi)
+        sin_rest[step] = math.sin(lam - dphi)
     # adaptive breakpoints -> clusters, each split depth-first; a +inf beam between two points
     # saw open space (a doorway, beyond range): always a break; up to max_skip - 1 nan beams are bridged
     min_split = max(min_points, 3)
@@ -206,10 +273,11 @@ def segment_lines(ranges, bearings, range_lo, range_hi, increment, p):  # noqa: 
         cut = p == n_pts - 1
         if not cut:
             step = idx[p + 1] - idx[p]
-            dphi = step * increment
-            gap = math.hypot(x[p + 1] - x[p], y[p + 1] - y[p])
-            dmax = breakpoint_distance(r[p], dphi, lam, sigma)
-            cut = gap > dmax or dmax <= 0 or step > max_skip or no_return[p + 1] > no_return[p]
+            if step > max_skip or no_return[p + 1] > no_return[p]:
+                cut = True
+            else:  # the adaptive breakpoint distance (``breakpoint_distance``) with the step's sines
+                dmax = r[p] * sin_step[step] / sin_rest[step] + BREAK_SIGMA * sigma
+                cut = gap_exceeds(x[p + 1] - x[p], y[p + 1] - y[p], dmax) or dmax <= 0
         if not cut:
             continue
         sp = 0
@@ -223,26 +291,12 @@ def segment_lines(ranges, bearings, range_lo, range_hi, increment, p):  # noqa: 
                 seg_s[n_seg], seg_e[n_seg] = s, e
                 n_seg += 1
                 continue
-            dx, dy = x[e] - x[s], y[e] - y[s]
-            norm = npmax(math.hypot(dx, dy), 1e-12)
-            nx, ny = -dy / norm, dx / norm
-            rho_c = nx * x[s] + ny * y[s]
-            if not chord:
+            if chord:
+                at = split_at(x, y, s, e, threshold, 0.0, 0.0, 0.0, True)
+            else:
                 rho_f, alpha_f, _, _, _, _, _ = fit_range(sx, sy, sxx, syy, sxy, s, e)
-                cf, sf = math.cos(alpha_f), math.sin(alpha_f)
-            dmax_seg = -np.inf
-            cmax = -np.inf
-            at = -1
-            for q in range(s, e + 1):
-                dc = -1.0 if (q == s or q == e) else abs(x[q] * nx + y[q] * ny - rho_c)
-                d = dc if chord else abs(x[q] * cf + y[q] * sf - rho_f)
-                dmax_seg = npmax(dmax_seg, d)
-                if dc != dc or cmax != cmax:
-                    cmax = np.nan
-                elif dc > cmax:
-                    cmax = dc
-                    at = q
-            if not (dmax_seg > threshold) or cmax != cmax:
+                at = split_at(x, y, s, e, threshold, math.cos(alpha_f), math.sin(alpha_f), rho_f, False)
+            if at < 0:
                 seg_s[n_seg], seg_e[n_seg] = s, e
                 n_seg += 1
                 continue
@@ -375,10 +429,10 @@ def corners(lv, lb, increment, c):  # noqa: ANN001, ANN201
 
 
 @kernel
-def extract_scan(ranges, bearings, range_lo, range_hi, increment, p, c):  # noqa: ANN001, ANN201
+def extract_scan(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, c):  # noqa: ANN001, ANN201
     """Lines (``segment_lines``) and corners (``corners``) of one scan: the rows of
     ``features.types.Lines`` and ``Corners``."""
-    lv, lb = segment_lines(ranges, bearings, range_lo, range_hi, increment, p)
+    lv, lb = segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p)
     if lv.shape[0] > 1:
         cv, cb = corners(lv, lb, increment, c)
     else:
@@ -387,10 +441,10 @@ def extract_scan(ranges, bearings, range_lo, range_hi, increment, p, c):  # noqa
 
 
 @kernel
-def extract_batch(ranges, bearings, range_lo, range_hi, increment, p, c):  # noqa: ANN001, ANN201
+def extract_batch(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, c):  # noqa: ANN001, ANN201
     """``extract_scan`` of every row of ``ranges`` (S, n), scans of one geometry, in one call: the
     rows of all scans concatenated, and the (S + 1,) offsets of each scan's lines and corners."""
     rows = new_rows(ranges.shape[0])
     for s in range(ranges.shape[0]):
-        rows = append_rows(rows, s, extract_scan(ranges[s], bearings, range_lo, range_hi, increment, p, c))
+        rows = append_rows(rows, s, extract_scan(ranges[s], cos_b, sin_b, range_lo, range_hi, increment, p, c))
     return finish_rows(rows)
