@@ -56,8 +56,10 @@ class CornerParams(NamedTuple):
 
 @kernel
 def wrap(a: float) -> float:
-    """An angle wrapped to (-pi, pi] (rad)."""
-    w = math.pi - (math.pi - a) % TWO_PI
+    """An angle wrapped to (-pi, pi] (rad): pi - (pi - a) mod 2 pi, the modulo skipped where it
+    changes nothing (0 <= pi - a < 2 pi, the common case)."""
+    t = math.pi - a
+    w = math.pi - t if 0.0 <= t < TWO_PI else math.pi - t % TWO_PI
     return w + TWO_PI if w <= -math.pi else w
 
 
@@ -187,6 +189,23 @@ def gap_exceeds(dx: float, dy: float, limit: float) -> bool:
 
 
 @kernel
+def disconnected(dx, dy, r_prev, sin_step, sin_rest, ratio, margin) -> bool:  # noqa: ANN001
+    """Whether two neighbouring points (dx, dy) apart (m) are not connected: farther apart than the
+    adaptive breakpoint distance D = r_prev sin_step / sin_rest + margin (``breakpoint_distance``),
+    or D <= 0 or nan. Decided from squares and ``ratio`` = sin_step / sin_rest (no square root, no
+    division; both sides within 1e-14 of hypot's and the quotient's) except within 1e-9 of the
+    limit or outside the normal range of squares, where ``gap_exceeds`` and D itself decide: the
+    decisions are those of ``math.hypot(dx, dy) > D or D <= 0``."""
+    g2 = dx * dx + dy * dy
+    lim = r_prev * ratio + margin
+    lim2 = lim * lim
+    if lim > 0 and 1e-280 < lim2 < np.inf and g2 < np.inf and abs(g2 - lim2) > 1e-9 * lim2:
+        return g2 > lim2
+    dmax = r_prev * sin_step / sin_rest + margin
+    return gap_exceeds(dx, dy, dmax) or dmax <= 0
+
+
+@kernel
 def split_at(x, y, s, e, threshold, cf, sf, rho_f, chord):  # noqa: ANN001, ANN201
     """Where points s..e (e - s >= 2) split: the interior point farthest from the chord between the
     end points (the first of equal ones) when some point lies farther than ``threshold`` (m) from
@@ -236,6 +255,7 @@ class Workspace(NamedTuple):
     stack_s: np.ndarray  # (2n + 2,) the depth-first split stack
     stack_e: np.ndarray
     rms: np.ndarray  # (2n + 2,) merged RMS residual of each neighbour pair
+    src: np.ndarray  # (2n + 2,) the segment of the previous merge pass each one is (-1: merged)
     pick: np.ndarray  # (2n + 2,) bool
     lv: np.ndarray  # (n + 1, 10) the rows of features.types.Lines
     lb: np.ndarray  # (n + 1, 3)
@@ -250,7 +270,7 @@ def workspace(n):  # noqa: ANN001, ANN201
     return Workspace(
         np.empty(n, np.int64), np.empty(n), np.empty(n), np.empty(n), np.empty(n, np.int64), np.zeros((5, n + 1)),
         np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m),
-        np.zeros(m, np.bool_), np.empty((n + 1, 10)), np.empty((n + 1, 3), np.int64), np.empty((n + 1, 3)),
+        np.empty(m, np.int64), np.zeros(m, np.bool_), np.empty((n + 1, 10)), np.empty((n + 1, 3), np.int64), np.empty((n + 1, 3)),
         np.empty((n + 1, 3), np.int64),
     )
 
@@ -295,10 +315,13 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  
     n_steps = min(max_skip, n_beams) + 1
     sin_step = np.empty(n_steps)
     sin_rest = np.empty(n_steps)
+    ratio = np.empty(n_steps)
     for step in range(1, n_steps):
         dphi = step * increment
         sin_step[step] = math.sin(dphi)
         sin_rest[step] = math.sin(lam - dphi)
+        ratio[step] = sin_step[step] / sin_rest[step]
+    margin = BREAK_SIGMA * sigma
     # adaptive breakpoints -> clusters, each split depth-first; a +inf beam between two points
     # saw open space (a doorway, beyond range): always a break; up to max_skip - 1 nan beams are bridged
     min_split = max(min_points, 3)
@@ -311,9 +334,9 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  
             step = idx[p + 1] - idx[p]
             if step > max_skip or no_return[p + 1] > no_return[p]:
                 cut = True
-            else:  # the adaptive breakpoint distance (``breakpoint_distance``) with the step's sines
-                dmax = r[p] * sin_step[step] / sin_rest[step] + BREAK_SIGMA * sigma
-                cut = gap_exceeds(x[p + 1] - x[p], y[p + 1] - y[p], dmax) or dmax <= 0
+            else:
+                cut = disconnected(x[p + 1] - x[p], y[p + 1] - y[p], r[p], sin_step[step], sin_rest[step], ratio[step],
+                                   margin)
         if not cut:
             continue
         sp = 0
@@ -343,11 +366,14 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  
     m = n_seg
     # merge collinear neighbours, pass by pass
     if merge_rms > 0:
-        rms, pick = ws.rms, ws.pick
+        rms, pick, src = ws.rms, ws.pick, ws.src
+        first_pass = True
         while m > 1:
             any_ok = False
             for i in range(m - 1):
-                if segs_s[i + 1] == segs_e[i]:
+                if not first_pass and src[i] >= 0 and src[i + 1] >= 0:  # both unchanged: as before
+                    rms[i] = rms[src[i]]
+                elif segs_s[i + 1] == segs_e[i]:
                     f = fit_range(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1])
                     rms[i] = math.sqrt(f.across / f.n)
                 else:
@@ -364,12 +390,15 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  
             while i < m:
                 if i < m - 1 and pick[i]:
                     segs_s[w], segs_e[w] = segs_s[i], segs_e[i + 1]
+                    src[w] = -1
                     i += 2
                 else:
                     segs_s[w], segs_e[w] = segs_s[i], segs_e[i]
+                    src[w] = i
                     i += 1
                 w += 1
             m = w
+            first_pass = False
     # a split point shared by two neighbours belongs to neither line's fit; drop short segments
     for i in range(m - 1):
         if segs_s[i + 1] == segs_e[i]:

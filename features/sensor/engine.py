@@ -99,8 +99,10 @@ class Grid(NamedTuple):
 
 @kernel
 def wrap(a: float) -> float:
-    """An angle wrapped to (-pi, pi] (rad)."""
-    w = math.pi - (math.pi - a) % TWO_PI
+    """An angle wrapped to (-pi, pi] (rad): pi - (pi - a) mod 2 pi, the modulo skipped where it
+    changes nothing (0 <= pi - a < 2 pi, the common case)."""
+    t = math.pi - a
+    w = math.pi - t if 0.0 <= t < TWO_PI else math.pi - t % TWO_PI
     return w + TWO_PI if w <= -math.pi else w
 
 
