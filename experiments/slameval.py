@@ -68,16 +68,23 @@ def long_run(seed: int, duration: float, rate: float) -> pd.DataFrame:
                           "cpu_scans_per_s": len(records) / cpu}])
 
 
-def mit_rows(path: Path, presets: list[str]) -> pd.DataFrame:
-    """Relations error (mean, std, median, long > 200 s) per preset on MIT CSAIL."""
+def mit_rows(path: Path, presets: list[str], inflations: tuple[float, ...] = (1.0, 10.0)) -> pd.DataFrame:
+    """Relations error (mean, std, median, long > 200 s) per preset on MIT CSAIL, and of the
+    default preset with other ``alignment.covariance_inflation`` values (robustness: the keyframe
+    and closure factors both take their noise from their matches, so one global factor should not
+    move the result)."""
     from experiments.slamrun import load_input
     from slam import SlamConfig
     from slam.metrics import interpolate_poses, relative
 
     data = load_input(path)
     rows = []
-    for preset in presets:
-        cfg = SlamConfig(preset=preset, extractor_params={"sigma_r": 0.02})  # cm-mode ranges
+    runs = [(preset, SlamConfig(preset=preset, extractor_params={"sigma_r": 0.02})) for preset in presets]  # cm-mode ranges
+    if "default" in presets:
+        runs += [(f"default, covariance_inflation {f:g}",
+                  SlamConfig.from_dict({"extractor_params": {"sigma_r": 0.02}, "alignment": {"covariance_inflation": f}}))
+                 for f in inflations]
+    for preset, cfg in runs:
         result, cpu = _timed(data.records, cfg)
         rel = data.relations
         p1, _ = interpolate_poses(result.trajectory, rel[:, 0])

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 from lms200 import LmsbenchError
 
@@ -41,6 +41,10 @@ class AlignmentConfig:
         refine_hypotheses: how many of the retry starts (best first by their initial score) are refined.
         hypothesis_margin: a retry wins only with this much larger inlier fraction.
         min_inliers: a match explaining fewer points is not used (the pose follows the prediction).
+        motion_prior: the match from the prediction is a MAP estimate with the prediction's
+            std (``motion``: ``sigma_accel dt^2`` + floor, ``sigma_alpha dt^2`` + floor) as a
+            prior: the prediction holds the directions the scan barely fixes (a corridor's axis),
+            where the few points that constrain them would otherwise set the pose alone.
         normal_step, normal_gap, normal_gap_per_range: point normals from the chord
             ``normal_step`` beams either side, shorter than ``normal_gap`` m plus
             ``normal_gap_per_range`` m per m of range (beams spread apart with range).
@@ -67,6 +71,7 @@ class AlignmentConfig:
     normal_step: int = 2
     normal_gap: float = 0.3
     normal_gap_per_range: float = 0.05
+    motion_prior: bool = False
 
 
 @dataclass(frozen=True)
@@ -274,9 +279,15 @@ class LoopClosureConfig:
         max_sigma_xy: ...and fix the position to this std (m, from ``alignment.sigma_point``
             before the inflation) in every direction (a bare corridor does not fix its axis and
             cannot close a loop).
+        gate_probability: ...and move the new keyframe by no more than the drift since the
+            candidate allows: the correction's Mahalanobis distance against the graph's marginal
+            covariances of the two keyframes plus the match's own covariance within this
+            chi-square quantile (3 dof); only heading hypotheses inside that gate are tried (an
+            aliased place half a turn or a door's spacing away is refused).
         kernel: robust loss of the closure factors, "cauchy" or "huber"...
-        kernel_width: ...its width in whitened units (std of the closure's own noise).
-        sigma_xy, sigma_theta: noise of a closure (m, rad) in the graph.
+        kernel_width: ...its width in whitened units (std of the closure's own noise, which is
+            the closure match's covariance: its Hessian over its residual variance, as for the
+            keyframe factors, so no global factor sets the balance between the two).
         prior_sigma: std of the first keyframe's prior (m and rad).
     """
 
@@ -291,10 +302,9 @@ class LoopClosureConfig:
     min_inliers: float = 0.65
     max_rms: float = 0.04
     max_sigma_xy: float = 0.016
-    kernel: str = "cauchy"
+    gate_probability: float = 0.999
+    kernel: str = "huber"
     kernel_width: float = 1.0
-    sigma_xy: float = 0.03
-    sigma_theta: float = 0.01
     prior_sigma: float = 1e-4
 
 
@@ -341,8 +351,7 @@ class SlamConfig:
                 raise SlamConfigError(f"{sec}.{name}: must be >= 1, got {getattr(getattr(self, sec), name)}")
         for sec, name in (("alignment", "max_correspondence"), ("alignment", "huber"), ("alignment", "sigma_point"),
                           ("alignment", "covariance_inflation"), ("alignment", "inlier_distance"),
-                          ("keyframes", "distance"), ("keyframes", "angle"), ("loop_closure", "sigma_xy"),
-                          ("loop_closure", "sigma_theta"), ("loop_closure", "kernel_width"),
+                          ("keyframes", "distance"), ("keyframes", "angle"), ("loop_closure", "kernel_width"),
                           ("loop_closure", "prior_sigma")):
             if not getattr(getattr(self, sec), name) > 0:
                 raise SlamConfigError(f"{sec}.{name}: must be > 0, got {getattr(getattr(self, sec), name)}")
@@ -357,13 +366,16 @@ class SlamConfig:
         for name in ("gate_probability", "new_landmark_probability"):
             if not 0 < getattr(a, name) < 1:
                 raise SlamConfigError(f"association.{name}: must be in (0, 1), got {getattr(a, name)}")
+        if not 0 < self.loop_closure.gate_probability < 1:
+            raise SlamConfigError(f"loop_closure.gate_probability: must be in (0, 1), got {self.loop_closure.gate_probability}")
         if a.new_landmark_probability < a.gate_probability:
             raise SlamConfigError("association.new_landmark_probability: must be >= gate_probability")
         if lm.confirm_hits < 1 or lm.tentative_window < 1:
             raise SlamConfigError("landmarks.confirm_hits and landmarks.tentative_window: must be >= 1")
         if o.point_stride < 1 or pa.min_points < 1:
             raise SlamConfigError("observations.point_stride and prealign.min_points: must be >= 1")
-        object.__setattr__(self, "motion", dataclasses.replace(m, odom_noise=tuple(float(v) for v in m.odom_noise)))
+        noise = cast(tuple[float, float, float], tuple(float(v) for v in m.odom_noise))
+        object.__setattr__(self, "motion", dataclasses.replace(m, odom_noise=noise))
 
     def to_dict(self) -> dict[str, Any]:
         """Plain nested mappings and lists (for YAML)."""

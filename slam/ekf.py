@@ -26,6 +26,9 @@ class SlamEKF(ExtendedKalmanFilter):
     """EKF-SLAM filter. ``x`` is (n, 1), ``P`` (n, n); landmarks are addressed by the index of their
     first state entry (``ROBOT_DIM + 2 k``)."""
 
+    F: np.ndarray  # filterpy's state transition and process noise, resized with the state
+    Q: np.ndarray
+
     def __init__(self, pose: tuple[float, float, float] = (0.0, 0.0, 0.0), pose_sigma: float = 0.0,
                  velocity_sigma: tuple[float, float] = (0.5, 0.5)) -> None:
         super().__init__(dim_x=ROBOT_DIM, dim_z=2)
@@ -49,7 +52,8 @@ class SlamEKF(ExtendedKalmanFilter):
         k = min(old, n, ROBOT_DIM)
         F[:k, :k] = self.F[:k, :k]
         Q[:k, :k] = self.Q[:k, :k]
-        self.F, self.Q = F, Q
+        self.F = F
+        self.Q = Q
         self.dim_x = n
         self._I = np.eye(n)
         self.K = np.zeros((n, self.dim_z))

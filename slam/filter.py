@@ -224,7 +224,7 @@ class SlamFilter:
         c, s = np.cos(Phi), np.sin(Phi)
         self._previous_world = points @ np.array([[c, s], [-s, c]]) + (X, Y)
         self._previous_points = cKDTree(self._previous_world)
-        if self.config.prealign.scan_velocity:
+        if self.config.prealign.scan_velocity and self.stamp is not None:
             normals, ok = beam_normals(self._previous_world)
             if ok.sum() < _MIN_REFERENCE_POINTS:
                 self._references = []
@@ -241,7 +241,7 @@ class SlamFilter:
         used only when the matched points' normals constrain the forward direction (a wall ahead, a
         door frame): in a corridor the lines fix only the sideways position."""
         cfg = self.config
-        if not self._references or self._dt <= 0 or obs.points.shape[0] < cfg.prealign.min_points:
+        if not self._references or self._dt <= 0 or obs.points.shape[0] < cfg.prealign.min_points or self.stamp is None:
             return
         old_enough = [r for r in self._references if r[0] <= self.stamp - cfg.prealign.scan_velocity_baseline + 1e-9]
         ref_stamp, ref_pose, tree, prev, normals = old_enough[-1] if old_enough else self._references[0]
@@ -251,11 +251,12 @@ class SlamFilter:
         x = self.ekf.x[:, 0]
         c, s = np.cos(x[2]), np.sin(x[2])
         rotated = obs.points @ np.array([[c, s], [-s, c]])
-        best = None
+        best: tuple[np.ndarray, float, np.ndarray] | None = None
         for start in (x[:2], ref_pose[:2]):  # the prediction, and standing still
             t, score, A = point_to_line_translation(rotated, tree, prev, normals, start, cfg.prealign.verify_tolerance)
             if best is None or score > best[1] + 1e-9:
                 best = (t, score, A)
+        assert best is not None
         t, score, A = best
         if score < cfg.prealign.scan_velocity_min_score:
             return

@@ -7,7 +7,7 @@ every pose are in one parent frame (the world, or a keyframe's frame).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -16,6 +16,9 @@ from .config import AlignmentConfig
 
 
 _EYE3 = np.eye(3)
+#: the kernels' description of a reference: x, y, order, start, origin x, origin y, cell, nx, ny
+Grid = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float, float, int, int]
+_NO_PRIOR = np.zeros((3, 3))
 
 
 @dataclass(frozen=True)
@@ -30,6 +33,8 @@ class Reference:
     start: np.ndarray
     origin: np.ndarray
     shape: np.ndarray
+    _grid: Grid = field(init=False, repr=False, compare=False)
+    _normals: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         xy = np.ascontiguousarray(self.points.T)
@@ -42,9 +47,9 @@ class Reference:
     def size(self) -> int:
         return int(self.points.shape[0])
 
-    def grid(self) -> tuple:
+    def grid(self) -> Grid:
         """The arguments of the kernels that describe the reference."""
-        return self._grid  # type: ignore[attr-defined]
+        return self._grid
 
     def nearest(self, queries: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
         """Index (-1 beyond ``reach`` m) and distance (inf) of the nearest point of each query (q, 2)."""
@@ -58,11 +63,14 @@ class Match:
 
     Attributes:
         pose: (3,) sensor pose in the reference's frame (m, m, rad).
-        information: (3, 3) information of the pose (inverse covariance), from the point-to-line
-            Hessian over ``sigma_point``; near-singular along a corridor.
+        information: (3, 3) information of the pose (inverse covariance): the point-to-line
+            Hessian over the match's residual variance (:func:`residual_variance`) and
+            ``covariance_inflation``; near-singular along a corridor.
         inliers: fraction of the scan's points within ``inlier_distance`` of a reference point.
         rms: rms point-to-line residual of the inliers (m).
         n_points: scan points used.
+        hessian: (3, 3) point-to-line Hessian (sum of the Huber-weighted squared Jacobians, m^-2
+            units of the residuals): the match's geometry alone.
         start: index of the starting hypothesis that won (0 = the given initial pose).
     """
 
@@ -71,6 +79,7 @@ class Match:
     inliers: float
     rms: float
     n_points: int
+    hessian: np.ndarray
     start: int = 0
 
     @property
@@ -117,11 +126,15 @@ def make_reference(points: np.ndarray, normals: np.ndarray, voxel: float = 0.0, 
     return Reference(p, n, float(cell), *icpkernel.build_grid(p, cell))
 
 
-def refine(points: np.ndarray, ref: Reference, pose: np.ndarray, cfg: AlignmentConfig) -> Match:
+def refine(points: np.ndarray, ref: Reference, pose: np.ndarray, cfg: AlignmentConfig,
+           prior: np.ndarray | None = None) -> Match:
     """Gauss-Newton point-to-line ICP from ``pose`` with Huber weights (``huber`` m) on the
     residuals: up to ``max_iterations`` steps with correspondences within ``max_correspondence``
     m, then up to ``fine_iterations`` within ``fine_correspondence`` m (points without a
-    counterpart in a partial overlap no longer pull the pose). Compiled: :mod:`slam.icpkernel`."""
+    counterpart in a partial overlap no longer pull the pose). ``prior`` (3, 3), an information
+    matrix (1/m^2, 1/rad^2) about ``pose``, makes it a MAP estimate: the motion's prediction holds
+    the directions the scan does not fix (a corridor's axis). The returned information is the
+    scan's alone. Compiled: :mod:`slam.icpkernel`."""
     if max(cfg.max_correspondence, cfg.fine_correspondence) > ref.cell + 1e-12:
         raise ValueError(f"a reach of {cfg.max_correspondence} m needs grid cells at least as wide (have {ref.cell} m)")
     p = np.asarray(points, float)
@@ -129,10 +142,19 @@ def refine(points: np.ndarray, ref: Reference, pose: np.ndarray, cfg: AlignmentC
     pose_out, H, inliers, ss = icpkernel.gauss_newton(
         p[:, 0].copy(), p[:, 1].copy(), np.asarray(pose, float), *ref.grid()[:2], *ref._normals, *ref.grid()[2:],
         np.array([cfg.max_correspondence, cfg.fine_correspondence]), np.array([cfg.max_iterations, cfg.fine_iterations]),
-        cfg.huber, cfg.damping, cfg.tolerance_xy, cfg.tolerance_theta, min(cfg.inlier_distance, cfg.fine_correspondence))
+        cfg.huber, cfg.damping, cfg.tolerance_xy, cfg.tolerance_theta, min(cfg.inlier_distance, cfg.fine_correspondence),
+        np.asarray(pose, float).copy(), _NO_PRIOR if prior is None else np.asarray(prior, float) * cfg.sigma_point**2)
     rms = float(np.sqrt(ss / inliers)) if inliers >= 3 else np.inf
-    info = H / cfg.sigma_point**2 / cfg.covariance_inflation
-    return Match(pose_out, 0.5 * (info + info.T), float(inliers) / max(n, 1), rms, n)
+    info = H / residual_variance(ss, int(inliers), cfg) / cfg.covariance_inflation
+    return Match(pose_out, 0.5 * (info + info.T), float(inliers) / max(n, 1), rms, n, 0.5 * (H + H.T))
+
+
+def residual_variance(ss: float, inliers: int, cfg: AlignmentConfig) -> float:
+    """Variance (m^2) of one point-to-line residual of a match: the match's own residuals
+    (``ss`` m^2 over ``inliers`` points, 3 degrees of freedom spent on the pose), never below
+    ``cfg.sigma_point`` squared (the floor: a near-perfect fit does not make a pose exact)."""
+    own = ss / (inliers - 3) if inliers > 3 else np.inf
+    return float(max(own, cfg.sigma_point**2))
 
 
 def score(points: np.ndarray, ref: Reference, pose: np.ndarray, distance: float) -> float:
@@ -144,20 +166,23 @@ def score(points: np.ndarray, ref: Reference, pose: np.ndarray, distance: float)
                                   float(distance)) / p.shape[0]
 
 
-def match(points: np.ndarray, ref: Reference, starts: list[np.ndarray], cfg: AlignmentConfig) -> Match:
+def match(points: np.ndarray, ref: Reference, starts: list[np.ndarray], cfg: AlignmentConfig,
+          max_heading: float = np.inf, prior: np.ndarray | None = None) -> Match:
     """ICP from the first start; when it explains fewer than ``retry_inliers`` of the points, also
-    from every other start and from heading offsets ``heading_hypotheses`` (rad) about the first;
-    the start with most inliers wins (ties keep the earlier start)."""
-    best = refine(points, ref, starts[0], cfg)
+    from every other start and from heading offsets ``heading_hypotheses`` (rad) about the first
+    (those up to ``max_heading`` rad: a loop closure tries only headings its drift allows); the
+    start with most inliers wins (ties keep the earlier start). ``prior`` (information, see
+    :func:`refine`) holds the first start only: a retry is a different motion."""
+    best = refine(points, ref, starts[0], cfg, prior)
     if best.inliers >= cfg.retry_inliers:
         return best
     first = np.asarray(starts[0], float)
-    extra = list(starts[1:]) + [first + (0.0, 0.0, dh) for dh in cfg.heading_hypotheses]
+    extra = list(starts[1:]) + [first + (0.0, 0.0, dh) for dh in cfg.heading_hypotheses if abs(dh) <= max_heading]
     # cheap screening: refine only the few starts that already explain most points
     scored = sorted(((score(points, ref, s, cfg.max_correspondence), k + 1, s) for k, s in enumerate(extra)),
                     key=lambda t: -t[0])
     for _, k, s in scored[: cfg.refine_hypotheses]:
         m = refine(points, ref, s, cfg)
         if m.inliers > best.inliers + cfg.hypothesis_margin:
-            best = Match(m.pose, m.information, m.inliers, m.rms, m.n_points, k)
+            best = Match(m.pose, m.information, m.inliers, m.rms, m.n_points, m.hessian, k)
     return best

@@ -9,11 +9,18 @@ query hold every point within reach); ``start[c]:start[c + 1]`` indexes cell ``c
 from __future__ import annotations
 
 import math
+from typing import Any, Callable, TypeVar, cast
 
 import numba
 import numpy as np
 
-kernel = numba.njit(cache=True, error_model="numpy", fastmath=False)
+_F = TypeVar("_F", bound=Callable[..., Any])
+_njit = numba.njit(cache=True, error_model="numpy", fastmath=False)
+
+
+def kernel(fn: _F) -> _F:
+    """Compile ``fn`` with numba (nopython, cached), keeping its signature for the type checker."""
+    return cast(_F, _njit(fn))
 
 
 def build_grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -97,9 +104,11 @@ def _solve3(A, b):
 
 @kernel
 def gauss_newton(px, py, pose0, rx, ry, nrx, nry, order, start, lox, loy, cell, nx, ny,
-                 reaches, iterations, huber, damping, tol_xy, tol_theta, inlier_distance):
+                 reaches, iterations, huber, damping, tol_xy, tol_theta, inlier_distance, prior, prior_info):
     """Point-to-line ICP stages (reach m, iterations); returns pose (3,), Hessian (3, 3) of the
-    last step, inlier count and sum of squared inlier residuals (m^2) at the last correspondences."""
+    last step, inlier count and sum of squared inlier residuals (m^2) at the last correspondences.
+    ``prior`` (3,) with ``prior_info`` (3, 3, in the units of the Hessian: information times the
+    residual variance; zeros for none) is a Gaussian prior on the pose (MAP estimate)."""
     pose = pose0.copy()
     H = np.zeros((3, 3))
     g = np.zeros(3)
@@ -142,11 +151,14 @@ def gauss_newton(px, py, pose0, rx, ry, nrx, nry, order, start, lox, loy, cell, 
             H[1, 0], H[2, 0], H[2, 1] = H[0, 1], H[0, 2], H[1, 2]
             if used < 3:
                 return pose, np.zeros((3, 3)), 0, np.inf
-            A = H.copy()
-            lam = damping * (H[0, 0] + H[1, 1] + H[2, 2]) / 3.0 + 1e-12
+            A = H + prior_info
+            e = pose - prior
+            e[2] = math.atan2(math.sin(e[2]), math.cos(e[2]))
+            b = g + prior_info @ e
+            lam = damping * (A[0, 0] + A[1, 1] + A[2, 2]) / 3.0 + 1e-12
             for k in range(3):
                 A[k, k] += lam
-            step = _solve3(A, g)
+            step = _solve3(A, b)
             pose[0] -= step[0]
             pose[1] -= step[1]
             pose[2] = pose[2] - step[2]

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from .config import AlignmentConfig, LoopClosureConfig
-from .geometry import between, to_world
+from .geometry import between, rotation, to_world
+from .models import chi2_quantile
 from .icp import Match, Reference, make_reference, match
 
 
@@ -43,6 +45,8 @@ class LoopClosure:
     inliers: float
     rms: float
     correction: float  # m, how far the closure moves the new keyframe from its estimate
+    covariance: np.ndarray  # (3, 3) of ``relative``, in the frame of the new keyframe (the match's)
+    distance: float  # Mahalanobis distance^2 of the correction against the drift the graph allows
 
 
 def local_map(keyframes: list[Keyframe], voxel: float) -> Reference:
@@ -57,10 +61,17 @@ def local_map(keyframes: list[Keyframe], voxel: float) -> Reference:
 
 
 def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyframe], cfg: LoopClosureConfig,
-                 alignment: AlignmentConfig, voxel: float, since_closure: float = 0.0) -> LoopClosure | None:
+                 alignment: AlignmentConfig, voxel: float, since_closure: float = 0.0,
+                 drift: Callable[[Keyframe], np.ndarray] | None = None) -> LoopClosure | None:
     """Match ``scan_points`` (the new keyframe's matching points, sensor frame) against the submaps
     of the nearest earlier keyframes within ``search_radius`` of the new one's estimate and at
-    least ``min_travel`` of path behind it; the first match that passes every check is returned."""
+    least ``min_travel`` of path behind it; the first match that passes every check is returned.
+
+    ``drift(candidate)`` is the (3, 3) world-frame covariance of the new keyframe's estimate
+    relative to the candidate's (from the graph's marginals); a closure whose correction lies
+    outside its ``gate_probability`` chi-square gate (3 dof, with the match's own covariance
+    added) is refused, and only heading hypotheses inside that gate are tried. Without
+    ``drift`` the gate is not applied (any correction, any heading hypothesis)."""
     old = [kf for kf in keyframes if new.travelled - kf.travelled >= cfg.min_travel]
     if not old:
         return None
@@ -68,6 +79,7 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
     dist = np.hypot(*(xy - new.pose[:2]).T)
     radius = cfg.search_radius + cfg.search_growth * since_closure
     order = [int(k) for k in np.argsort(dist) if dist[k] <= radius]
+    gate = chi2_quantile(cfg.gate_probability, 3)
     tried: list[int] = []
     for k in order:
         if len(tried) >= cfg.candidates:
@@ -79,18 +91,28 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
         lo = max(0, cand.key - cfg.submap)
         sub = [kf for kf in keyframes[lo: cand.key + cfg.submap + 1] if new.travelled - kf.travelled >= cfg.min_travel]
         ref = local_map(sub, voxel)
-        m = match(scan_points, ref, [new.pose], alignment)
-        if not _verified(m, cfg, alignment.covariance_inflation):
+        prior = drift(cand) if drift is not None else None
+        max_heading = np.inf if prior is None else float(np.sqrt(gate * max(prior[2, 2], 0.0)))
+        m = match(scan_points, ref, [new.pose], alignment, max_heading)
+        d = m.pose - new.pose
+        d[2] = np.arctan2(np.sin(d[2]), np.cos(d[2]))
+        d2 = float(d @ np.linalg.solve(prior + m.covariance, d)) if prior is not None else 0.0
+        if not _verified(m, cfg, alignment):
             continue
+        if d2 > gate:
+            continue  # further than the drift since the candidate allows: an aliased place
+        A = np.eye(3)
+        A[:2, :2] = rotation(-m.pose[2])  # world perturbation -> frame of the new keyframe
         return LoopClosure(cand.key, new.key, between(cand.pose, m.pose), m.inliers, m.rms,
-                           float(np.hypot(*(m.pose[:2] - new.pose[:2]))))
+                           float(np.hypot(*(m.pose[:2] - new.pose[:2]))), A @ m.covariance @ A.T, d2)
     return None
 
 
-def _verified(m: Match, cfg: LoopClosureConfig, inflation: float) -> bool:
+def _verified(m: Match, cfg: LoopClosureConfig, alignment: AlignmentConfig) -> bool:
     """Geometric checks of a closure: enough points explained, small residual, and a position
-    fixed in every direction (by the match's geometry: the covariance before inflation)."""
+    fixed in every direction (by the match's geometry: the point-to-line Hessian over the floor
+    ``alignment.sigma_point`` squared, before the match's residual variance and the inflation)."""
     if m.inliers < cfg.min_inliers or not m.rms <= cfg.max_rms:
         return False
-    cov = m.covariance / inflation
+    cov = np.linalg.inv(m.hessian + 1e-9 * np.eye(3)) * alignment.sigma_point**2
     return bool(np.sqrt(np.linalg.eigvalsh(cov[:2, :2]).max()) <= cfg.max_sigma_xy)

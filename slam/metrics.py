@@ -110,7 +110,7 @@ def ate(estimate: np.ndarray, truth: np.ndarray, align: bool = True) -> AteResul
     he = wrap(est[:, 3] + al.rotation - tru[:, 2])
     rmse = float(np.sqrt(np.mean(e**2)))
     return AteResult(rmse, float(e.mean()), float(np.median(e)), float(e.max()), float(np.sqrt(np.mean(he**2))),
-                     int(e.size), al.rotation, tuple(float(v) for v in al.translation), mirror,
+                     int(e.size), al.rotation, (float(al.translation[0]), float(al.translation[1])), mirror,
                      bool(mirror < 0.5 * rmse))
 
 

@@ -19,9 +19,15 @@ def _array(p: gtsam.Pose2) -> np.ndarray:
     return np.array([p.x(), p.y(), p.theta()])
 
 
-def robust_noise(sigmas: np.ndarray, kernel: str, width: float) -> gtsam.noiseModel.Base:
-    """Diagonal noise (sigmas m, m, rad) under a Cauchy or Huber kernel of ``width`` (whitened)."""
-    base = gtsam.noiseModel.Diagonal.Sigmas(np.asarray(sigmas, float))
+def robust_noise(noise: np.ndarray, kernel: str, width: float) -> gtsam.noiseModel.Base:
+    """Gaussian noise under a Cauchy or Huber kernel of ``width`` (whitened units): ``noise`` is a
+    (3, 3) covariance, or (3,) sigmas (m, m, rad) of a diagonal one."""
+    noise = np.asarray(noise, float)
+    base: gtsam.noiseModel.Base
+    if noise.ndim == 1:
+        base = gtsam.noiseModel.Diagonal.Sigmas(noise)
+    else:
+        base = gtsam.noiseModel.Gaussian.Covariance(0.5 * (noise + noise.T) + 1e-12 * np.eye(3))
     est = (gtsam.noiseModel.mEstimator.Cauchy if kernel == "cauchy" else gtsam.noiseModel.mEstimator.Huber).Create(width)
     return gtsam.noiseModel.Robust.Create(est, base)
 

@@ -127,7 +127,9 @@ class ScanSlam:
         m: Match | None = None
         if sp.matched.shape[0] >= 10 and self.ref is not None:
             starts = [pred, self.last[-1][1]] if self.predict_velocity else [self.last[-1][1], pred]
-            m = match(sp.matched, self.ref, starts, self.alignment)
+            sxy, sth = self._motion_sigma(stamp - self.last[-1][0])
+            prior = np.diag([sxy**-2, sxy**-2, sth**-2]) if self.alignment.motion_prior else None
+            m = match(sp.matched, self.ref, starts, self.alignment, prior=prior)
             m = self._check_jump(sp.matched, m, pred, stamp - self.last[-1][0], info)
             info.inliers, info.rms, info.hypothesis = m.inliers, m.rms, m.start
         if m is not None and m.inliers >= self.alignment.min_inliers:
@@ -154,17 +156,23 @@ class ScanSlam:
         aliased place along a corridor); the jump stands unless that one explains clearly more
         of the scan's points."""
         mc = self.motion
-        dt2 = max(dt, 0.0) ** 2
-        sxy, sth = mc.sigma_accel * dt2 + mc.sigma_floor_xy, mc.sigma_alpha * dt2 + mc.sigma_floor_theta
+        sxy, sth = self._motion_sigma(dt)
         e = m.pose - pred
         e[2] = np.arctan2(np.sin(e[2]), np.cos(e[2]))
         if (e[0] ** 2 + e[1] ** 2) / sxy**2 + e[2] ** 2 / sth**2 <= self._jump_gate:
             return m
+        assert self.ref is not None
         near = refine(points, self.ref, pred, self._narrow)
         if near.inliers <= m.inliers + mc.jump_margin:
             return m
         info.jump_rejected = True
         return near
+
+    def _motion_sigma(self, dt: float) -> tuple[float, float]:
+        """Std (m, rad) of the constant-velocity prediction over ``dt`` s."""
+        mc = self.motion
+        dt2 = max(dt, 0.0) ** 2
+        return mc.sigma_accel * dt2 + mc.sigma_floor_xy, mc.sigma_alpha * dt2 + mc.sigma_floor_theta
 
     def _first(self, stamp: float, sp: ScanPoints) -> ScanStep:
         self.graph = PoseGraph(np.zeros(3), self.loop_cfg.prior_sigma)
@@ -191,10 +199,10 @@ class ScanSlam:
         if lc.enabled and self._since_search >= lc.every and sp.matched.shape[0] >= 10:
             self._since_search = 0
             loop = find_closure(kf, sp.matched, self.keyframes[:-1], lc, self.alignment, self.keyframes_cfg.voxel,
-                                self.travelled - self._closed_at)
+                                self.travelled - self._closed_at, self._drift(kf))
             if loop is not None:
                 self._closed_at = self.travelled
-                noise = robust_noise(np.array([lc.sigma_xy, lc.sigma_xy, lc.sigma_theta]), lc.kernel, lc.kernel_width)
+                noise = robust_noise(loop.covariance, lc.kernel, lc.kernel_width)
                 self.graph.close(loop.old, loop.new, loop.relative, noise)
                 self.loops.append(loop)
                 info.loop = loop
@@ -202,6 +210,23 @@ class ScanSlam:
                     self.keyframes[k].pose = p
         self.ref = local_map(self.keyframes[-self.keyframes_cfg.local_map:], self.keyframes_cfg.voxel)
         return self.keyframes[-1].pose.copy()
+
+    def _drift(self, new: Keyframe):
+        """``drift(candidate)``: world-frame covariance (3, 3) of the error of ``new``'s estimate
+        relative to the candidate's, from the graph's marginals of both (their correlation left
+        out, which can only widen the gate)."""
+        assert self.graph is not None
+        graph = self.graph
+        own: list[np.ndarray] = []  # computed at the first candidate (most searches have none)
+
+        def drift(cand: Keyframe) -> np.ndarray:
+            if not own:
+                own.append(_world(graph.covariance(new.key), new.pose[2]))
+            dx, dy = new.pose[0] - cand.pose[0], new.pose[1] - cand.pose[1]
+            J = np.array([[1.0, 0.0, -dy], [0.0, 1.0, dx], [0.0, 0.0, 1.0]])  # the candidate's heading error moves new
+            return own[0] + J @ _world(graph.covariance(cand.key), cand.pose[2]) @ J.T
+
+        return drift
 
     # -- output ---------------------------------------------------------------------------------
     def keyframe_poses(self) -> np.ndarray:
@@ -231,6 +256,13 @@ class ScanSlam:
         pose relative to that keyframe."""
         kp = self.keyframe_poses()
         return np.array([compose(kp[k], rel) for k, rel in self.anchors]).reshape(-1, 3)
+
+
+def _world(cov: np.ndarray, theta: float) -> np.ndarray:
+    """A pose covariance (3, 3) in the pose's own frame (gtsam's tangent) in the world frame."""
+    A = np.eye(3)
+    A[:2, :2] = rotation(theta)
+    return A @ cov @ A.T
 
 
 def run_scan_slam(steps, config) -> "SlamResult":

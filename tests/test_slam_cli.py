@@ -53,15 +53,16 @@ def test_slam_command_writes_every_output(sim_folder, tmp_path):
     assert m["map"]["distance_mean"] < 0.1
 
 
-def test_slam_command_errors_are_one_line(tmp_path):
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    proc = subprocess.run([sys.executable, "-m", "experiments.cli", "slam", str(tmp_path / "nothing"), "--out", str(tmp_path / "o")],
-                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
-    assert proc.returncode == 2 and "no such input" in proc.stderr
+def test_slam_command_errors_are_one_line(tmp_path, capsys):
+    from experiments.cli import main  # in process: the subprocess test above covers the real command line
+
+    assert main(["slam", str(tmp_path / "nothing"), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "no such input" in err and len(err.strip().splitlines()) == 1
     (tmp_path / "empty").mkdir()
-    proc = subprocess.run([sys.executable, "-m", "experiments.cli", "slam", str(tmp_path / "empty"), "--out", str(tmp_path / "o")],
-                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
-    assert proc.returncode == 2 and "scans.clf" in proc.stderr
+    assert main(["slam", str(tmp_path / "empty"), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "scans.clf" in err and len(err.strip().splitlines()) == 1
 
 
 def test_odometry_is_refused_outside_the_paper_preset(sim_folder, tmp_path, capsys):

@@ -149,3 +149,21 @@ def test_merge_lines_joins_collinear_overlapping_segments_only():
     first = out[np.argmax(out[:, 6])]
     assert first[6] == 2 and np.allclose(sorted([first[2], first[4]]), [0.0, 3.0], atol=1e-9)
     assert np.allclose(first[:2], [0.0, -np.pi / 2], atol=0.02) or np.allclose(first[:2], [0.0, np.pi / 2], atol=0.02)
+
+
+def test_a_closure_beyond_the_drift_the_graph_allows_is_refused():
+    """The same room seen again, but the estimate is 0.2 m off: accepted when the graph's drift
+    allows 0.2 m (the closure then corrects the estimate), refused when it allows only 1 cm."""
+    cfg = AlignmentConfig()
+    room = ScanPoints.from_points(room_scan(walls("office"), (2.0, 1.0, 0.3), sigma=0.005, seed=1)[0].points, cfg)
+    old = Keyframe(0, 0, 0.0, np.zeros(3), room.points, room.normals, 0.0)
+    new = Keyframe(50, 500, 60.0, np.array([0.2, 0.0, 0.0]), room.points, room.normals, 40.0)
+
+    def closure(sigma: float):
+        return find_closure(new, room.matched, [old], LoopClosureConfig(), cfg, KeyframeConfig().voxel,
+                            drift=lambda cand: np.diag([sigma, sigma, sigma / 10]) ** 2)
+
+    loop = closure(0.1)
+    assert loop is not None and np.hypot(*loop.relative[:2]) < 0.01 and loop.correction > 0.19
+    assert np.all(np.linalg.eigvalsh(loop.covariance) > 0)  # the closure's noise is its match's
+    assert closure(0.01) is None
