@@ -74,15 +74,22 @@ def base_sensor(cal: LogCalibration):
 
     res = _resolution_deg(cal.angle_increment)
     n_beams = min(cal.n_beams, int(round(180.0 / res)) + 1)
-    sigma = cal.noise.sigma_m if np.isfinite(cal.noise.sigma_m) else 0.0
+    if not np.isfinite(cal.noise.sigma_m):
+        raise LmsbenchError(f"too few straight runs of beams in {cal.n_scans} scan(s) to estimate the range noise "
+                            f"({cal.noise.n_used} beam triples); calibrate needs a log of real surfaces")
+    sigma = cal.noise.sigma_m
+
+    def rate(estimate) -> float:  # a rate with nothing to count (no beams of that kind): none seen
+        return float(min(estimate.value, 0.5)) if np.isfinite(estimate.value) else 0.0
+
     slope = cal.noise_slope.value if np.isfinite(cal.noise_slope.value) else 0.0
     units = cal.units
     cap = cal.max_reading
     range_max = 81.83 if units == "cm" else 8.183
     return SensorConfig(
         n_beams=n_beams, resolution_deg=res, units=units, noise_sigma=float(sigma), quantise=cal.quantum_m > 0,
-        dropout_prob=float(min(cal.nan_rate.value, 0.5)), mixed_pixels=True, interlaced=res < 1.0,
-        noise_sigma_per_m=float(slope), no_return_prob=float(min(cal.no_return_rate.value, 0.5)),
+        dropout_prob=rate(cal.nan_rate), mixed_pixels=True, interlaced=res < 1.0,
+        noise_sigma_per_m=float(slope), no_return_prob=rate(cal.no_return_rate),
         outlier_prob=0.0, max_reading=float(cap) if cap is not None and cap <= range_max else None,
     )
 

@@ -3,7 +3,8 @@
 
 Known errors (``lms200.LmsbenchError``, any ``OSError``: missing files, bad paths, unreachable
 schedulers or devices) and bad options become one-line messages ``lmsbench CMD: error: ...`` with
-exit status 2; Ctrl-C exits with 130 and one line. Anything else is a bug: one line saying so,
+exit status 2; Ctrl-C exits with 130 and one line, within INTERRUPT_GRACE_S even when a cleanup
+(closing a Dask cluster whose workers are in the middle of cells) would take longer. Anything else is a bug: one line saying so,
 exit status 1 (``LMSBENCH_TRACEBACK=1`` shows the traceback).
 """
 
@@ -13,8 +14,10 @@ import argparse
 import importlib
 import os
 import pkgutil
+import signal
 import sys
-from typing import Sequence
+import threading
+from typing import Any, Sequence
 
 from lms200 import LmsbenchError
 
@@ -35,6 +38,45 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+INTERRUPT_GRACE_S = 15.0  # s after Ctrl-C for cleanup; then child processes are killed and the process exits 130
+
+
+class _Interrupt:
+    """Ctrl-C: raise KeyboardInterrupt for an orderly stop, and start a timer that ends the
+    process (children killed, exit 130, the one line) if that stop has not finished in
+    INTERRUPT_GRACE_S (a Dask cluster waiting for its workers' running cells, an exit handler)."""
+
+    def __init__(self, name: str) -> None:
+        self.name, self.reported = name, False
+        self.timer: threading.Timer | None = None
+
+    def handler(self, signum: int, frame: Any) -> None:
+        if self.timer is None:
+            self.timer = threading.Timer(INTERRUPT_GRACE_S, self.hard_stop)
+            self.timer.daemon = True
+            self.timer.start()
+        raise KeyboardInterrupt
+
+    def hard_stop(self) -> None:
+        _kill_children()
+        if not self.reported:
+            sys.stderr.write(f"lmsbench {self.name}: interrupted\n")
+            sys.stderr.flush()
+        os._exit(130)
+
+
+def _kill_children() -> None:
+    """Kill this process's child processes (after Ctrl-C: Dask workers a cluster's close left
+    behind would keep running their cells, and keep the terminal's pipes open)."""
+    try:
+        import psutil  # a dependency of dask.distributed
+
+        for child in psutil.Process().children(recursive=True):
+            child.kill()
+    except Exception:  # noqa: BLE001 - exiting anyway
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     try:
@@ -45,20 +87,42 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         return 1
     name = " ".join(filter(None, (args.command, getattr(args, "lms200_command", None))))
+    interrupt = _Interrupt(name)
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, interrupt.handler) if main_thread else None
     try:
         return int(args.func(args) or 0)
     except (LmsbenchError, OSError) as exc:  # OSError: missing files, bad paths, unreachable hosts, timeouts
+        _end_progress_bars()
         print(f"lmsbench {name}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        _end_progress_bars()
+        _kill_children()
+        interrupt.reported = True
         print(f"lmsbench {name}: interrupted", file=sys.stderr)
         return 130
     except Exception as exc:  # a bug, not a user error: say so in one line
         if os.environ.get("LMSBENCH_TRACEBACK"):
             raise
+        _end_progress_bars()
         print(f"lmsbench {name}: internal error: {type(exc).__name__}: {_one_line(exc)} "
               "(a bug in lmsbench; LMSBENCH_TRACEBACK=1 shows where)", file=sys.stderr)
         return 1
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+
+
+def _end_progress_bars() -> None:
+    """Close the progress bars an error left open, so that the error starts a line of its own."""
+    if "tqdm" not in sys.modules:
+        return
+    from tqdm import tqdm
+
+    for bar in list(getattr(tqdm, "_instances", ())):
+        bar.leave = False  # clear the bar's line: the error replaces it
+        bar.close()
 
 
 def _one_line(exc: BaseException) -> str:

@@ -81,6 +81,14 @@ DURATION = number(0.0, MAX_DURATION_S, lo_open=True, unit="s")
 PORT = count(0, 65535)
 
 
+def check_seeds(seeds: Sequence[int], flag: str = "--seeds") -> list[int]:
+    """Seeds given once each (a repeated seed would count the same run twice in every mean)."""
+    seen = sorted({s for s in seeds if list(seeds).count(s) > 1})
+    if seen:
+        raise InputError(f"{flag}: seed(s) {', '.join(map(str, seen))} given more than once")
+    return list(seeds)
+
+
 def world_name(text: str) -> str:
     """A built-in world's name."""
     if text not in known_worlds():

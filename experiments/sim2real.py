@@ -184,8 +184,13 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = (0, 1),
     for seed in seeds:
         simulated += simulate_records(make_world(world, seed), seed, duration, sensor, rate_hz=rate_hz, limits=limits)
     name = Path(log).name
-    sources = [Source(name, "log", None, real, None, len(real)),
-               Source(f"sim:{world}", "log", None, simulated, None, len(simulated))]
+    from features.noise_estimate import neighbour_sigma  # noqa: PLC0415
+
+    # the extractors get what sigma_r="auto" means on a log (as `compare LOG` gives them): the
+    # neighbour scatter of each source's own scans, with the interlaced sweeps' offset
+    sources = [Source(name, "log", None, real, None, len(real), estimate_extractor_sigma=lambda: neighbour_sigma(real)),
+               Source(f"sim:{world}", "log", None, simulated, None, len(simulated),
+                      estimate_extractor_sigma=lambda: neighbour_sigma(simulated))]
     summary = summarise(compare(sources, list(methods), sigma="auto"))
     table = _table(summary, name, f"sim:{world}", list(methods))
     result = Sim2RealResult(table, scene_statistics(real), scene_statistics(simulated), sensor, limits, world,

@@ -66,7 +66,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
 
     Raises:
         FileNotFoundError: the input does not exist.
-        LmsbenchError: a folder without scans.clf, or an input without scans.
+        LmsbenchError: a folder without scans.clf, an input without scans, or none with a valid beam.
     """
     p = Path(path)
     if not p.exists():
@@ -115,6 +115,9 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         report_skipped(reader)
     if not records:
         raise LmsbenchError(f"{log}: no laser scans found")
+    if not any(r.scan.valid.any() for r in records):
+        raise LmsbenchError(f"{log}: none of its {len(records)} scans has a valid beam (all +inf or nan): "
+                            "nothing to localise against")
     if truth is None and all(r.truth is not None for r in records):
         truth = np.array([(r.scan.stamp, *r.truth) for r in records], float)
         sources["truth"] = f"{log} (TRUEPOS)"

@@ -21,6 +21,7 @@ import numpy as np
 from .errors import LmsbenchError
 from .records import Pose2D, Record
 from .scan import Scan, snap_angle
+from .timing import mirror_time_increment, scan_period, smallest_range
 
 SCAN_TOPIC = "/scan"
 ODOM_TOPIC = "/odom"
@@ -53,6 +54,10 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
     """Write Records to a ROS 1 (``*.bag``) or ROS 2 (folder) bag; returns the number of scans.
 
     Ranges are stored as float32 (the message type), +inf / nan kept as they are (REP-117).
+    The fields a Scan does not carry come from the LMS200 (``lms200.timing``): ``time_increment``
+    the mirror's time per beam step (0.5 deg: 18.5 us), ``scan_time`` the sensor's scan period
+    (0.5 deg: 26.7 ms), ``range_min`` the scan's own, or one code unit (1 mm, or 1 cm for cm-mode
+    scans) where that is 0.
     """
     path = Path(path)
     ros1 = path.suffix == ".bag"
@@ -103,14 +108,16 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
                 )
                 c = conn(name, "geometry_msgs/msg/PoseStamped")
                 writer.write(c, ns, serialize(msg, "geometry_msgs/msg/PoseStamped"))
+            time_increment = mirror_time_increment(scan.angle_increment)
+            scan_time = scan_period(scan.angle_increment)
             msg = LaserScan(
                 header=Header(**header_kw),
                 angle_min=scan.angle_min,
                 angle_max=scan.angle_max,
                 angle_increment=scan.angle_increment,
-                time_increment=0.0,
-                scan_time=0.0,
-                range_min=scan.range_min,
+                time_increment=time_increment,
+                scan_time=scan_time,
+                range_min=max(scan.range_min, smallest_range(scan.range_max)),
                 range_max=scan.range_max,
                 ranges=scan.ranges.astype(np.float32),
                 intensities=np.zeros(0, dtype=np.float32),

@@ -18,8 +18,8 @@ import numpy as np
 
 from lms200 import LmsbenchError
 from lms200.codes import LMS200_MAX_RANGE, metres_per_unit
+from lms200.timing import MIRROR_TURN_S
 
-MIRROR_TURN_S = 1.0 / 75.0  # s: one mirror revolution (75 Hz)
 NOISE_REFERENCE_RANGE_M = 2.5  # m: noise_sigma holds at this range (the middle of 1-4 m)
 OUTLIER_RANGE_SHARE = (0.1, 0.9)  # an outlier reads this share of the true range (uniform)
 

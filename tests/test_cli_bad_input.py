@@ -47,6 +47,7 @@ def files(tmp_path_factory):
     write_log(d / "good.clf", good)
     backwards = [Record(Scan.lms200(ranges, stamp=s)) for s in (0.0, 0.1, 0.2, 0.15, 0.3)]
     write_log(d / "backwards.clf", backwards)
+    write_log(d / "no_returns.clf", [Record(Scan.lms200(np.full(361, np.inf), stamp=0.1 * k)) for k in range(5)])
     with gzip.open(d / "good.clf.gz", "wt") as fh:
         fh.write((d / "good.clf").read_text())
     # a simulator-like folder: scans.clf and its truth
@@ -55,6 +56,15 @@ def files(tmp_path_factory):
     # sweep files
     (d / "sweep.yaml").write_text(yaml.safe_dump({"name": "t", "kind": "extract", "fixed": {"duration": 0.5},
                                                   "grid": {"extractor.k": [3]}}))
+    base = {"name": "t", "kind": "extract", "fixed": {"duration": 0.5}, "grid": {"extractor.k": [3]}}
+    bad_sweeps = {"sweep_seed": {"seeds": [-1]}, "sweep_dup_seed": {"seeds": [0, 0]},
+                  "sweep_k": {"grid": {"extractor.k": [-3]}}, "sweep_noise": {"grid": {"sensor.noise_sigma": [-0.01]}},
+                  "sweep_plain": {"fixed": {"duration": 0.5, "bogus": 1}}, "sweep_name": {"name": "../../x"},
+                  "sweep_world": {"fixed": {"duration": 0.5, "world": "offfice"}},
+                  "sweep_duration": {"fixed": {"duration": -1.0}},
+                  "sweep_slam": {"kind": "slam", "grid": {"slam.association.gate_probability": [1.5]}}}
+    for name, change in bad_sweeps.items():
+        (d / f"{name}.yaml").write_text(yaml.safe_dump({**base, **change}))
     (d / "list.yaml").write_text("- 1\n- 2\n")
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
     # a sweep folder whose every cell failed
@@ -111,6 +121,7 @@ CASES = [
     (["compare", "office", "--rate", "inf", "--out", O], "--rate"),
     (["compare", "office", "--seeds", "-1", "--out", O], "--seeds"),
     (["compare", "office", "--duration", "inf", "--out", O], "--duration"),
+    (["compare", "office", "--seeds", "0", "0", "--out", O], "--seeds"),
     (["compare", "office", "--duration", "0", "--out", O], "--duration"),
     (["compare", "{good.clf}", "--stride", "-1", "--out", O], "--stride"),
     (["compare", "{good.clf}", "--stride", "0", "--out", O], "--stride"),
@@ -139,6 +150,8 @@ CASES = [
     (["slam", "{simrun}", "--extractor", "nosuch", "--out", O], "nosuch"),
     (["slam", "{backwards.clf}", "--out", O], "backwards"),
     (["slam", "{binary.clf}", "--out", O], "binary"),
+    (["slam", "{no_returns.clf}", "--out", O], "no_returns.clf"),
+    (["calibrate", "{no_returns.clf}"], "too few straight runs"),
     (["slam", "{missing.clf}", "--out", O], "missing.clf"),
     (["slam", "{empty_dir}", "--out", O], "empty_dir"),
     (["slam", "{simrun}", "--relations", "{missing.relations}", "--out", O], "missing.relations"),
@@ -151,6 +164,15 @@ CASES = [
     (["sweep", "{sweep.yaml}", "--workers", "0", "--out", O], "--workers"),
     (["sweep", "{sweep.yaml}", "--workers", "-1", "--out", O], "--workers"),
     (["sweep", "{sweep.yaml}", "--out", "{a_file}"], "not a folder"),
+    (["sweep", "{sweep_seed.yaml}", "--out", O], "seeds"),
+    (["sweep", "{sweep_dup_seed.yaml}", "--out", O], "seeds"),
+    (["sweep", "{sweep_k.yaml}", "--out", O], "k: must be"),
+    (["sweep", "{sweep_noise.yaml}", "--out", O], "noise_sigma"),
+    (["sweep", "{sweep_plain.yaml}", "--out", O], "bogus"),
+    (["sweep", "{sweep_name.yaml}", "--out", O], "plain folder name"),
+    (["sweep", "{sweep_world.yaml}", "--out", O], "offfice"),
+    (["sweep", "{sweep_duration.yaml}", "--out", O], "duration"),
+    (["sweep", "{sweep_slam.yaml}", "--out", O], "gate_probability"),
     # figures
     (["figures", "--world", "offfice", "--out", O], "offfice"),
     (["figures", "--duration", "-5", "--out", O], "--duration"),
@@ -194,6 +216,30 @@ CASES = [
     (["info", "{empty.clf}"], "empty"),
     (["info", "{fake.bag}"], "fake.bag"),
     (["info", "{notalog.clf}"], "no laser"),
+    # calibrate
+    (["calibrate", "{missing.clf}"], "missing.clf"),
+    (["calibrate", "{binary.clf}"], "binary"),
+    (["calibrate", "{plain.gz}"], "gzip"),
+    (["calibrate", "{empty_dir}"], "empty_dir"),
+    (["calibrate", "{good.clf}", "--stride", "0"], "--stride"),
+    (["calibrate", "{good.clf}", "--max-scans", "-3"], "--max-scans"),
+    (["calibrate", "{good.clf}", "--world", "offfice"], "offfice"),
+    (["calibrate", "{good.clf}", "--out", "{empty_dir}"], "is a folder"),
+    (["calibrate", "{good.clf}", "--out", "{missing_dir}/s.yaml"], "missing_dir"),
+    (["calibrate", "{good.clf}", "--laser-resolution-deg", "-1"], "--laser-resolution-deg"),
+    # sim2real
+    (["sim2real", "{missing.clf}", "--out", O], "missing.clf"),
+    (["sim2real", "{binary.clf}", "--out", O], "binary"),
+    (["sim2real", "{good.clf}", "--world", "offfice", "--out", O], "offfice"),
+    (["sim2real", "{good.clf}", "--seeds", "-1", "--out", O], "--seeds"),
+    (["sim2real", "{good.clf}", "--duration", "inf", "--out", O], "--duration"),
+    (["sim2real", "{good.clf}", "--seeds", "1", "1", "--out", O], "--seeds"),
+    (["sim2real", "{good.clf}", "--rate-hz", "0", "--out", O], "--rate-hz"),
+    (["sim2real", "{good.clf}", "--stride", "0", "--out", O], "--stride"),
+    (["sim2real", "{good.clf}", "--sensor", "{missing.yaml}", "--out", O], "missing.yaml"),
+    (["sim2real", "{good.clf}", "--sensor", "{binary.yaml}", "--out", O], "binary.yaml"),
+    (["sim2real", "{good.clf}", "--sensor", "{list.yaml}", "--out", O], "list.yaml"),
+    (["sim2real", "{good.clf}", "--out", "{a_file}"], "a_file"),
     # bench, the top level
     (["bench", "nosuch"], "nosuch"),
     (["nosuch"], "nosuch"),
@@ -231,5 +277,6 @@ def test_the_issue_cases_are_all_here():
     by_command = {}
     for argv, _ in CASES:
         by_command[argv[0]] = by_command.get(argv[0], 0) + 1
-    assert all(by_command[c] >= 4 for c in ("simulate", "compare", "slam", "sweep", "figures", "demo", "lms200", "info"))
+    assert all(by_command[c] >= 4 for c in ("simulate", "compare", "slam", "sweep", "figures", "demo", "lms200", "info",
+                                                 "calibrate", "sim2real"))
     assert len(CASES) >= 100

@@ -144,6 +144,28 @@ def test_bag_round_trip(tmp_path: Path, fmt: str, name: str) -> None:
     assert recs[1].truth is None and back[1].truth is None
 
 
+@pytest.mark.parametrize("beams,increment_deg,range_max,turns,unit", [
+    (361, 0.5, 8.183, 2, 0.001), (181, 1.0, 81.83, 1, 0.01), (401, 0.25, 8.183, 4, 0.001)])
+def test_written_laserscans_carry_the_lms200_timing_and_range_min(tmp_path: Path, beams: int, increment_deg: float,
+                                                                   range_max: float, turns: int, unit: float) -> None:
+    """time_increment = the mirror's time per beam step (75 rev/s), scan_time = 1/75 s per interlaced turn,
+    range_min = one code unit; read back with rosbags itself, not our reader."""
+    from rosbags.rosbag1 import Reader
+    from rosbags.typesys import Stores, get_typestore
+
+    inc = np.deg2rad(increment_deg)
+    scan = Scan(np.full(beams, 2.0), -(beams - 1) / 2 * inc, inc, 0.0, range_max, stamp=1.0)
+    write_log(tmp_path / "t.bag", [Record(scan)])
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    with Reader(tmp_path / "t.bag") as reader:
+        (conn, _, raw), = list(reader.messages())
+        msg = ts.deserialize_ros1(raw, conn.msgtype)
+    assert msg.time_increment == pytest.approx((1 / 75) * increment_deg / 360, rel=1e-6)  # 0.5 deg: 18.5 us
+    assert msg.scan_time == pytest.approx(turns / 75, rel=1e-6)
+    assert msg.range_min == pytest.approx(unit)
+    assert len(msg.ranges) == beams
+
+
 def test_bag_pose_tolerance_is_half_the_median_scan_period() -> None:
     from lms200.bag import STAMP_EPS_S, pose_tolerance
 

@@ -237,3 +237,35 @@ def test_cm_mode_scans_use_their_own_noise() -> None:
     auto = extract(noisy).lines
     fixed = extract(noisy, sigma_r_cm=cfg.sigma_of(noisy)).lines
     assert [(l.first, l.last) for l in auto] == [(l.first, l.last) for l in fixed]
+
+
+def on_circle_share(scan, line, circles) -> float:
+    """Share of a line's valid beams within 2 cm of one of the circles (cx, cy, r)."""
+    p = scan.points[line.first : line.last + 1]
+    p = p[np.isfinite(p).all(axis=1)]
+    c = np.asarray(circles, dtype=float)
+    dist = np.abs(np.hypot(p[:, None, 0] - c[:, 0], p[:, None, 1] - c[:, 1]) - c[:, 2]).min(axis=1)
+    return float((dist < 0.02).mean())
+
+
+def test_arc_check_keeps_lines_off_round_pillars_and_keeps_short_faces() -> None:
+    """Round pillars (r 0.1-0.5 m) in front of a wall: splitting their failing runs would give
+    chords that pass the line checks; the arc check drops them (arc_check=False shows they are
+    there), while the wall and the two 0.4 m faces of a box turned 45 deg stay lines."""
+    c, u, v = np.array([1.6, -1.0]), np.array([-0.848, 0.530]), np.array([0.530, 0.848])  # u: to the sensor
+    box = polygon([tuple(c + 0.28 * d) for d in (u, v, -u, -v)])  # a square, 0.4 m faces, corner to the sensor
+    wall = [(4.0, -6.0, 4.0, 6.0)]
+    on, off = 0, 0
+    for seed in range(6):
+        rng = np.random.default_rng(seed)
+        circles = [(rng.uniform(1.0, 2.5), rng.uniform(0.2, 1.5), rng.uniform(0.1, 0.5)) for _ in range(2)]
+        scan = cast(np.vstack([box, wall]), circles, sigma=0.005, seed=seed)
+        fs = extract(scan, method="sensor")
+        assert all(on_circle_share(scan, line, circles) < 0.5 for line in fs.lines), fs.lines
+        assert any(abs(l.rho - 4.0) < 0.02 and abs(angle_diff(l.alpha, 0.0)) < 0.02 for l in fs.lines)  # the wall
+        faces = [l for l in fs.lines if np.hypot(*(np.subtract(l.end, l.start))) > 0.3 and l.rho < 2.0]
+        assert len(faces) >= 2, fs.lines  # both faces of the box
+        unchecked = extract(scan, method="sensor", arc_check=False)
+        on += sum(on_circle_share(scan, line, circles) >= 0.5 for line in unchecked.lines)
+        off += len(fs.lines)
+    assert on > 0 and off > 0

@@ -13,7 +13,7 @@ import yaml
 from lms200 import LmsbenchError
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
-from experiments.options import DURATION, SEED, check_methods, check_out, count, positive
+from experiments.options import DURATION, SEED, check_methods, check_out, check_seeds, count, positive
 
 
 def _param(text: str) -> tuple[str, Any]:
@@ -82,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
     params = extractor_overrides(dict(args.params), methods)
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
     check_out(args.out)
+    check_seeds(args.seeds)
     check_sources(args.sources, read_log_options(args))
     sensor = None
     if args.sensor is not None:

@@ -42,8 +42,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--out", type=Path, required=True, help="output: FILE.clf / .log / .gz (CARMEN) or FILE.bag (ROS 1)")
     r.add_argument("--baud", type=int, default=38400, choices=sorted(BAUD_MODES), help="line speed to switch to")
     r.add_argument("--units", choices=("mm", "cm"), default="mm", help="range unit: mm (8.18 m) or cm (81.8 m)")
-    r.add_argument("--fov", type=int, default=180, choices=(180, 100), help="field of view (deg)")
-    r.add_argument("--resolution", type=float, default=0.5, choices=(1.0, 0.5, 0.25), help="angular resolution (deg)")
+    r.add_argument("--fov-deg", "--fov", dest="fov_deg", type=int, default=180, choices=(180, 100),
+                   help="field of view, deg (--fov is the old spelling)")
+    r.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=float, default=0.5,
+                   choices=(1.0, 0.5, 0.25), help="angular resolution, deg (--resolution is the old spelling)")
     r.add_argument("--max-scans", type=count(1), help="stop after this many scans")
     r.add_argument("--duration", type=positive("s"), help="stop after this many seconds")
     r.add_argument("--timeout", type=positive("s"), default=0.5, help="seconds to wait for a reply, on top of the line time")
@@ -143,7 +145,7 @@ def run_record(args: argparse.Namespace) -> int:
     previous = signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))
     try:
         print(f"opening {args.port} ...", file=sys.stderr, flush=True)
-        with LMS200(args.port, baud=args.baud, fov_deg=args.fov, resolution_deg=args.resolution,
+        with LMS200(args.port, baud=args.baud, fov_deg=args.fov_deg, resolution_deg=args.resolution_deg,
                     units=args.units, timeout=args.timeout) as dev:
             print(f"{dev.type_string.strip()} at {dev.baud} baud, {args.units}; recording to {args.out} "
                   f"(Ctrl-C stops)", file=sys.stderr, flush=True)

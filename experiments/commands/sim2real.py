@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import SEED, check_log, count, positive, world_name
+from experiments.options import SEED, check_log, check_out, check_seeds, check_yaml, count, positive, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -21,7 +21,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate-hz", type=positive("scans/s"), default=3.0, help="simulated scans kept per second (default 3)")
     p.add_argument("--stride", type=count(1), default=5, help="use every STRIDE-th real scan (default 5)")
     p.add_argument("--max-scans", type=count(1), default=400, help="at most this many real scans (default 400)")
-    p.add_argument("--out", type=Path, default=Path("results/sim2real"), help="output folder")
+    p.add_argument("--out", type=Path, help="output folder (default: a new results/sim2real/DATE_TIME, linked as "
+                                            "results/sim2real/latest)")
     add_log_options(p)
     p.set_defaults(func=run)
 
@@ -29,15 +30,23 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from sim import SensorConfig
 
+    from experiments.provenance import new_run_folder, versions
     from experiments.sim2real import format_report, sim2real, write_outputs
 
     read_options = read_log_options(args)
     check_log(args.log)
-    sensor = SensorConfig.from_yaml(args.sensor) if args.sensor is not None else None
+    check_out(args.out)
+    check_seeds(args.seeds)
+    sensor = None
+    if args.sensor is not None:
+        check_yaml(args.sensor, "a sensor YAML")
+        sensor = SensorConfig.from_yaml(args.sensor)
     result = sim2real(args.log, world=args.world, seeds=args.seeds, duration=args.duration, rate_hz=args.rate_hz,
                       stride=args.stride, max_scans=args.max_scans, sensor=sensor, read_options=read_options)
     config = dict(log=str(args.log), duration=args.duration, rate_hz=args.rate_hz, stride=args.stride,
-                  max_scans=args.max_scans, sensor_file=None if args.sensor is None else str(args.sensor))
+                  max_scans=args.max_scans, sensor_file=None if args.sensor is None else str(args.sensor),
+                  versions=versions())
+    args.out = args.out or new_run_folder("results/sim2real")
     paths = write_outputs(result, args.out, str(args.log), config)
     print(format_report(result, str(args.log)), end="")
     print("wrote " + ", ".join(str(p) for p in paths))

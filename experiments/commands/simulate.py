@@ -23,12 +23,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"simulated time, s (default 120, at most {MAX_DURATION_S:g})")
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=None, help="keep about this many scans/s (default all)")
-    p.add_argument("--resolution", type=float, choices=(0.25, 0.5, 1.0), default=0.5,
-                   help="angular resolution, deg: 0.5 (361 beams), 1 (181), 0.25 (401 over 100 deg)")
+    p.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=float, choices=(0.25, 0.5, 1.0),
+                   default=0.5, help="angular resolution, deg: 0.5 (361 beams), 1 (181), 0.25 (401 over 100 deg); "
+                   "--resolution is the old spelling")
     p.add_argument("--units", choices=("mm", "cm"), default="mm", help="range unit mode (default mm)")
     p.add_argument("--ideal", action="store_true", help="exact ranges: no noise, quantisation, dropouts, ...")
     p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
-                   help="sensor model from a YAML (e.g. from `lmsbench calibrate`); replaces --resolution and --units")
+                   help="sensor model from a YAML (e.g. from `lmsbench calibrate`); replaces --resolution-deg and --units")
     p.add_argument("--odometry", action="store_true", help="add noisy wheel odometry to the scans")
     p.add_argument("--config", type=Path, help="rerun a config.yaml written by an earlier run")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -65,7 +66,7 @@ def _config(args: argparse.Namespace):
         check_file(args.world, "a world.json")
     if args.clutter is not None and args.world.endswith(".json"):
         raise InputError("--clutter applies to named worlds; a world.json holds its own solids")
-    beams = {0.5: 361, 1.0: 181, 0.25: 401}[args.resolution]
+    beams = {0.5: 361, 1.0: 181, 0.25: 401}[args.resolution_deg]
     base = SensorConfig.ideal if args.ideal else SensorConfig
     if args.sensor is not None:
         if args.ideal:
@@ -77,7 +78,7 @@ def _config(args: argparse.Namespace):
         except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
             raise InputError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
     else:
-        sensor = base(n_beams=beams, resolution_deg=args.resolution, units=args.units,
+        sensor = base(n_beams=beams, resolution_deg=args.resolution_deg, units=args.units,
                       **({} if args.ideal or args.units == "mm" else {"noise_sigma": 0.01}))
     return SimulationConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz,
                             sensor=sensor, odometry=OdometryConfig() if args.odometry else None,

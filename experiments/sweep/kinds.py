@@ -68,7 +68,14 @@ def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
 
     p = {**SLAM_DEFAULTS, **params}
     _, records, _ = _records(p, SLAM_DEFAULTS, with_truth=False)
-    slam_params = split_params(p, "slam")
+    result = run_slam(records, SlamConfig.from_dict(slam_config_dict(p)))
+    return slam_metrics(result, records)
+
+
+def slam_config_dict(params: dict[str, Any]) -> dict[str, Any]:
+    """The nested dict of ``SlamConfig.from_dict`` from a cell's flat ``slam.*`` parameters
+    (``slam.SECTION.FIELD`` -> ``{SECTION: {FIELD: value}}``, ``slam.extractor_params.NAME``)."""
+    slam_params = split_params(params, "slam")
     extractor_params = split_params(slam_params, "extractor_params")  # slam.extractor_params.NAME
     slam_params = {k: v for k, v in slam_params.items() if not k.startswith("extractor_params.")}
     if extractor_params:
@@ -80,8 +87,7 @@ def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
             nested.setdefault(section, {})[name] = value
         else:
             nested[key] = value
-    result = run_slam(records, SlamConfig.from_dict(nested))
-    return slam_metrics(result, records)
+    return nested
 
 
 def slam_metrics(result, records) -> dict[str, float]:
@@ -163,20 +169,81 @@ def _check_sensor_files(cells: Iterable[dict[str, Any]]) -> None:
         SensorConfig.from_yaml(path)
 
 
-def check_extract_params(cells: list[dict[str, Any]]) -> None:
-    """Every ``sensor.*`` and ``extractor.*`` name of every cell is a field of its config (checked
-    before any cell runs, so a misspelled name fails at once instead of in every cell)."""
-    _check_sensor_files(cells)
-    _unknown(cells, "sensor", _sensor_fields)
+def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: set[str]) -> None:
+    """Plain (unprefixed) names are known ones, and world, duration and rate_hz have usable values."""
+    from experiments.options import known_worlds
+
     from .spec import SweepSpecError
 
+    known = set(defaults) | extra | {"seed", "sensor_file"}
+    for cell in cells:
+        plain = {k for k in cell if "." not in k}
+        bad = sorted(plain - known)
+        if bad:
+            raise SweepSpecError(f"unknown parameter(s) {bad}; known plain names: {sorted(known)} "
+                                 "(and sensor.*, extractor.*, slam.* fields)")
+        p = {**defaults, **cell}
+        world = str(p["world"])
+        if world not in known_worlds() and not world.endswith(".json"):
+            raise SweepSpecError(f"world: unknown world {world!r}; known worlds: {', '.join(known_worlds())}")
+        duration = p["duration"]
+        if isinstance(duration, bool) or not isinstance(duration, (int, float)) or not 0 < duration < math.inf:
+            raise SweepSpecError(f"duration: must be a number of seconds > 0, got {duration!r}")
+        rate = p.get("rate_hz")
+        if rate is not None and (isinstance(rate, bool) or not isinstance(rate, (int, float)) or not 0 < rate < math.inf):
+            raise SweepSpecError(f"rate_hz: must be a number of scans/s > 0 or null, got {rate!r}")
+
+
+def _check_sensors(cells: list[dict[str, Any]]) -> None:
+    """Every distinct sensor of the cells builds (a bad value fails before any cell runs)."""
+    from lms200 import LmsbenchError
+
+    from .spec import SweepSpecError
+
+    seen = set()
+    for cell in cells:
+        items = tuple(sorted(split_params(cell, "sensor").items()))
+        key = (items, cell.get("sensor_file"))
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            sensor_config(dict(items), cell.get("sensor_file"))
+        except (LmsbenchError, TypeError, ValueError) as exc:
+            raise SweepSpecError(f"sensor {dict(items)}: {exc}") from None
+
+
+def check_extract_params(cells: list[dict[str, Any]]) -> None:
+    """Every ``sensor.*`` and ``extractor.*`` name of every cell is a field of its config, every
+    distinct sensor and extractor config builds, and the plain names are known with usable values
+    (checked before any cell runs, so a misspelled name or a bad value fails at once instead of in
+    every cell)."""
+    from features.registry import make_config
+
+    from lms200 import LmsbenchError
+
+    _check_sensor_files(cells)
+    _unknown(cells, "sensor", _sensor_fields)
+    _check_plain(cells, EXTRACT_DEFAULTS, set())
+    _check_sensors(cells)
+    from .spec import SweepSpecError
+
+    seen = set()
     for cell in cells:
         method = str({**EXTRACT_DEFAULTS, **cell}["method"])
         _extractor_fields(method)  # an unknown method, listing the known ones
         try:
-            extractor_overrides(cell, [method], other_methods=True)
+            overrides = extractor_overrides(cell, [method], other_methods=True).get(method, {})
         except OverrideError as exc:
             raise SweepSpecError(str(exc)) from None
+        key = (method, tuple(sorted(overrides.items(), key=lambda kv: kv[0])))
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            make_config(method, **overrides)
+        except (LmsbenchError, TypeError, ValueError) as exc:
+            raise SweepSpecError(f"extractor {method} {overrides}: {exc}") from None
 
 
 def check_slam_params(cells: list[dict[str, Any]]) -> None:
@@ -193,6 +260,23 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
     _unknown(slam_cells, "slam", lambda c: (known, "slam.SlamConfig"))
     default = SlamConfig().extractor
     _unknown(cells, "slam.extractor_params", lambda c: _extractor_fields(str(c.get("slam.extractor", default))))
+    _check_plain(cells, SLAM_DEFAULTS, set())
+    _check_sensors(cells)
+    from lms200 import LmsbenchError
+
+    from .spec import SweepSpecError
+
+    seen = set()
+    for cell in cells:
+        nested = slam_config_dict(cell)
+        key = repr(sorted(nested.items(), key=lambda kv: kv[0]))
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            SlamConfig.from_dict(nested)
+        except (LmsbenchError, TypeError, ValueError, KeyError) as exc:
+            raise SweepSpecError(f"slam {nested}: {exc}") from None
 
 
 extract_cell.check_params = check_extract_params  # type: ignore[attr-defined]

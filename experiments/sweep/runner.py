@@ -240,8 +240,11 @@ def _client(executor: Any, workers: int) -> Iterator[Any]:
             # spawned Python): Ctrl-C stops the driver, which cancels the cells and closes the cluster
             previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if _main_thread() else None
             try:
+                # no dashboard, and its HTTP server on a free port: the default 8787 of another
+                # cluster on the machine made Dask warn on stderr
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                       dashboard_address=None, silence_logs=logging.CRITICAL)
+                                       dashboard_address=":0", scheduler_kwargs={"dashboard": False},
+                                       silence_logs=logging.CRITICAL)
             finally:
                 if previous is not None:
                     signal.signal(signal.SIGINT, previous)

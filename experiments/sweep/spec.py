@@ -32,6 +32,7 @@ import hashlib
 import itertools
 import json
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -92,7 +93,7 @@ class SweepSpec:
             random=dict(raw.get("random") or {}),
             samples=int(raw.get("samples", 0)),
             sample_seed=int(raw.get("sample_seed", 0)),
-            seeds=[int(s) for s in seeds],
+            seeds=_seeds(seeds),
             description=str(raw.get("description", "")),
         )
 
@@ -139,6 +140,13 @@ def load_sweep(path: str | Path) -> SweepSpec:
         raise SweepSpecError(f"{path}: {exc}") from exc
 
 
+def _seeds(raw: Any) -> list[int]:
+    """The ``seeds:`` list: whole numbers (an int alone is a list of one)."""
+    if not isinstance(raw, (list, tuple)) or not all(isinstance(s, int) and not isinstance(s, bool) for s in raw):
+        raise SweepSpecError(f"`seeds:` must be a list of whole numbers >= 0, got {raw!r}")
+    return list(raw)
+
+
 def cell_key(kind: str, params: dict[str, Scalar]) -> str:
     """A stable 16-hex-digit hash of the cell kind and its parameters (key order does not matter)."""
     text = json.dumps({"kind": kind, "params": params}, sort_keys=True, separators=(",", ":"))
@@ -151,6 +159,9 @@ def _names(key: str) -> list[str]:
 
 
 def _check(spec: SweepSpec) -> None:
+    if not re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", spec.name):
+        raise SweepSpecError(f"name: {spec.name!r} must be a plain folder name (letters, digits, _ . -), "
+                             "as it names the output folder results/sweeps/NAME")
     names = [*spec.fixed, *(n for key in spec.grid for n in _names(key)), *spec.random]
     clashes = sorted({n for n in names if names.count(n) > 1} | ({"seed"} & set(names)))
     if clashes:
@@ -183,6 +194,8 @@ def _check(spec: SweepSpec) -> None:
         raise SweepSpecError("`random:` needs `samples:` >= 1 (the number of draws)")
     if not spec.seeds:
         raise SweepSpecError("`seeds:` is empty; give at least one seed")
+    if any(s < 0 for s in spec.seeds) or len(set(spec.seeds)) != len(spec.seeds):
+        raise SweepSpecError(f"`seeds:` must be distinct integers >= 0, got {spec.seeds}")
 
 
 def _check_scalar(where: str, value: Any) -> None:

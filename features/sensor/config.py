@@ -51,7 +51,7 @@ class SensorMethodConfig:
     min_inlier_fraction: float = 0.7  # fraction of a run's beams the line must explain
     curvature_tau: float = 4.0  # reject a line whose residuals bend (parabola t-statistic) more
     min_points: int = 8  # fewest supporting beams of a line
-    min_length: float = 0.3  # shortest line segment kept, m (shorter pieces of round pillars pass for lines)
+    min_length: float = 0.15  # shortest line segment kept, m (the baselines' value)
     merge_gap: int = 4  # neighbouring lines at most this many beams apart may merge ...
     merge_tau: float = 3.0  # ... when their (rho, alpha) agree within merge_tau std
     bridge_invalid: int = 0  # invalid (+inf, nan) beams a merge may bridge; 0: they break segments
@@ -62,6 +62,7 @@ class SensorMethodConfig:
     corner_max_dist: float = 0.15  # the intersection must lie this close to both facing ends, m
     acute_check: bool = True  # the paper's remedy: reject a corner when the variance of the ranges
     acute_min_var: float = 1.0  # of the beams within k of it is below acute_min_var * sigma_r**2
+    arc_check: bool = True  # drop lines whose neighbourhood is one circle turning >= corner_min_turn (round surfaces)
 
     def __post_init__(self) -> None:
         checks.integer("k", self.k, 1)
@@ -85,6 +86,7 @@ class SensorMethodConfig:
             checks.non_negative(name, getattr(self, name), "beams")
         checks.flag("corners", self.corners)
         checks.flag("acute_check", self.acute_check)
+        checks.flag("arc_check", self.arc_check)
         checks.between("corner_min_turn", self.corner_min_turn, 0.0, math.pi / 2, "rad")
         checks.non_negative("corner_psi", self.corner_psi)
         checks.non_negative("corner_max_dist", self.corner_max_dist, "m")
@@ -96,7 +98,7 @@ class SensorMethodConfig:
             math.ceil(self.min_points), float(self.min_length), math.floor(self.merge_gap), float(self.merge_tau),
             math.floor(self.bridge_invalid), bool(self.corners), float(self.corner_min_turn), float(self.corner_psi),
             math.floor(self.corner_max_gap), float(self.corner_max_dist), bool(self.acute_check),
-            float(self.acute_min_var),
+            float(self.acute_min_var), bool(self.arc_check),
         ))
 
     @property

@@ -8,7 +8,9 @@ Every step works in range-bearing space, on the beams of one scan, in the order 
 3. the Log-Hough transform (eq. 5) searched in a narrow band of normal angles around each run's
    mean slope (``band_search``): every vote is a lookup in one log-cos template;
 4. two weighted Gauss-Newton steps on the range residuals, with the covariance of (rho, alpha)
-   implied by the range noise, and the acceptance checks (``fit_runs``);
+   implied by the range noise, and the acceptance checks (``fit_runs``); a run that fails is
+   split at its chord's farthest beam and fitted again, unless it is one circle, and lines on a
+   round surface are dropped (``find_lines``, ``circle_fits``);
 5. lines grown over the beams past their ends, neighbours merged, overlaps split, endpoints
    projected, short segments dropped (``extend_ends``, ``merge_neighbours``, ``segments``);
 6. corners where two segments meet and psi shows the turn, with the paper's remedy against
@@ -44,7 +46,9 @@ TAN_SPAN_CAP = 40.0  # cap on |tan(b - a)| differences across a run (grazing run
 TIE_BREAK = 1e-3  # votes a band angle loses per step from the band centre (prefers the centre on ties)
 MERGE_FLOOR_RHO_VAR = 0.005**2  # model-error floor added to the merge test's (rho) variance, m^2
 MERGE_FLOOR_ALPHA_VAR = 0.005**2  # ... and (alpha) variance, rad^2
-MAX_SPLIT_ROUNDS = 1  # times a run that fails the line checks is split and fitted again (more cut arcs into chords)
+ARC_TAU = 3.0  # the arc test's chi^2 comparisons, in std of the chi^2 difference
+ARC_GN_STEPS = 3  # geometric Gauss-Newton steps of a circle fit after the algebraic (Kasa) start
+BREAK_LAMBDA = math.radians(10.0)  # adaptive breakpoint angle of a smooth surface (Borges & Aldon 2004)
 SUM_RESYNC = 32  # beams between fresh window sums (``beam_signals``) ...
 SUM_RATIO = 16.0  # ... or sooner, when a term that entered them exceeds them this many times; and
 # a window whose sum exceeds its centre's 1/d this many times is summed term by term
@@ -80,6 +84,7 @@ class Params(NamedTuple):
     corner_max_dist: float  # m
     acute_check: bool
     acute_min_var: float  # in sigma_r**2
+    arc_check: bool  # drop lines that are chords of a round surface (``on_arcs``)
 
 
 class Bearings(NamedTuple):
@@ -728,6 +733,208 @@ def chord_split(first, last, ranges, bearings):  # noqa: ANN001, ANN201
 
 
 @kernel
+def tls_clipped(f, l, ranges, bearings, valid, sigma_r, lim) -> float:  # noqa: ANN001
+    """Sum of the squared normalised residuals (each clipped at ``lim``) of the valid beams f..l
+    about their total-least-squares line."""
+    n = 0
+    mx = my = 0.0
+    for j in range(f, l + 1):
+        if valid[j]:
+            mx += ranges[j] * bearings.cos[j]
+            my += ranges[j] * bearings.sin[j]
+            n += 1
+    if n < 3:
+        return 0.0
+    mx /= n
+    my /= n
+    cxx = cyy = cxy = 0.0
+    for j in range(f, l + 1):
+        if valid[j]:
+            u = ranges[j] * bearings.cos[j] - mx
+            v = ranges[j] * bearings.sin[j] - my
+            cxx += u * u
+            cyy += v * v
+            cxy += u * v
+    a = 0.5 * math.atan2(-2.0 * cxy, cyy - cxx)
+    ca, sa = math.cos(a), math.sin(a)
+    out = 0.0
+    for j in range(f, l + 1):
+        if valid[j]:
+            z = ((ranges[j] * bearings.cos[j] - mx) * ca + (ranges[j] * bearings.sin[j] - my) * sa) / sigma_r
+            out += min(z * z, lim)
+    return out
+
+
+@kernel
+def theta_turn(a, b, theta) -> float:  # noqa: ANN001
+    """How far the slope estimate theta (rad) turns between the first and the last beam of a..b
+    where it is known (inf where it is known at fewer than two): a cheap first look at whether
+    the surface there turns at all."""
+    i = a
+    while i <= b and not np.isfinite(theta[i]):
+        i += 1
+    j = b
+    while j > i and not np.isfinite(theta[j]):
+        j -= 1
+    if j <= i:
+        return np.inf
+    return abs(wrap(theta[j] - theta[i]))
+
+
+@kernel
+def surface_turn(f, l, cx, cy, ranges, bearings) -> float:  # noqa: ANN001
+    """The angle (rad) beams f and l subtend at the centre (cx, cy): how far a circle about it
+    turns between them."""
+    ax, ay = ranges[f] * bearings.cos[f] - cx, ranges[f] * bearings.sin[f] - cy
+    bx, by = ranges[l] * bearings.cos[l] - cx, ranges[l] * bearings.sin[l] - cy
+    return abs(math.atan2(ax * by - ay * bx, ax * bx + ay * by))
+
+
+@kernel
+def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p) -> bool:  # noqa: ANN001
+    """Do the valid beams f..l trace one round surface? One circle (algebraic Kasa fit, then
+    ARC_GN_STEPS geometric Gauss-Newton steps) must fit them as the line checks ask of a line
+    (min_inlier_fraction of the beams within inlier_tau sigma_r, chi^2 per dof <= max_chi2), and
+    the surface must turn along them by at least corner_min_turn (a smooth turn that a polyline
+    would break into false corners; a gently bent wall is no round surface). Then:
+
+    - a span that failed the line checks (``lf`` < 0): the circle must fit it better than two
+      lines split at its chord would (its summed squared residuals, each clipped at inlier_tau^2,
+      no larger: a kink or a step between two faces is fitted better by the two lines);
+    - a line (rho ``lrho``, alpha ``lalpha``) on beams lf..ll inside f..l, its neighbourhood: the
+      circle must explain the line's own beams as well as the line does (chi^2 no more than
+      ARC_TAU std of the difference above) and fit the neighbourhood as tightly as the line fits
+      its own beams (mean squared residual within ARC_TAU std of the line's chi^2 per dof: at a
+      real corner the circle is a compromise with far larger residuals; this comparison holds
+      whatever the actual scatter, e.g. of the interlaced sweeps of 0.5 deg logs)."""
+    n = 0
+    mx = 0.0
+    my = 0.0
+    for j in range(f, l + 1):
+        if valid[j]:
+            mx += ranges[j] * bearings.cos[j]
+            my += ranges[j] * bearings.sin[j]
+            n += 1
+    if n < 5:
+        return False
+    mx /= n
+    my /= n
+    suu = suv = svv = suuu = svvv = suvv = svuu = 0.0
+    for j in range(f, l + 1):
+        if valid[j]:
+            u = ranges[j] * bearings.cos[j] - mx
+            v = ranges[j] * bearings.sin[j] - my
+            suu += u * u
+            suv += u * v
+            svv += v * v
+            suuu += u * u * u
+            svvv += v * v * v
+            suvv += u * v * v
+            svuu += v * u * u
+    det = suu * svv - suv * suv
+    if not abs(det) > 1e-18:
+        return False
+    b1 = 0.5 * (suuu + suvv)  # Kasa: the centre (uc, vc) solves the 2x2 normal equations
+    b2 = 0.5 * (svvv + svuu)
+    uc = (b1 * svv - b2 * suv) / det
+    vc = (suu * b2 - suv * b1) / det
+    rad = math.sqrt(uc * uc + vc * vc + (suu + svv) / n)
+    cx, cy = uc + mx, vc + my
+    if not surface_turn(f, l, cx, cy, ranges, bearings) >= 0.5 * p.corner_min_turn:
+        return False  # nearly straight (most lines): no geometric fit needed
+    for _ in range(ARC_GN_STEPS):  # geometric residual e_j = |x_j - c| - R; J = [-(x - c) / |x - c|, -1]
+        h00 = h01 = h02 = h11 = h12 = h22 = g0 = g1 = g2 = 0.0
+        for j in range(f, l + 1):
+            if valid[j]:
+                dx = ranges[j] * bearings.cos[j] - cx
+                dy = ranges[j] * bearings.sin[j] - cy
+                dist = max(math.hypot(dx, dy), 1e-12)
+                e = dist - rad
+                j0, j1 = -dx / dist, -dy / dist
+                h00 += j0 * j0
+                h01 += j0 * j1
+                h02 -= j0
+                h11 += j1 * j1
+                h12 -= j1
+                h22 += 1.0
+                g0 += j0 * e
+                g1 += j1 * e
+                g2 -= e
+        # H d = -g with H's adjugate (H symmetric: [[h00, h01, h02], [h01, h11, h12], [h02, h12, h22]])
+        a00 = h11 * h22 - h12 * h12
+        a01 = h02 * h12 - h01 * h22
+        a02 = h01 * h12 - h02 * h11
+        a11 = h00 * h22 - h02 * h02
+        a12 = h01 * h02 - h00 * h12
+        a22 = h00 * h11 - h01 * h01
+        dt = h00 * a00 + h01 * a01 + h02 * a02
+        if not abs(dt) > 1e-18:
+            break
+        cx -= (a00 * g0 + a01 * g1 + a02 * g2) / dt
+        cy -= (a01 * g0 + a11 * g1 + a12 * g2) / dt
+        rad -= (a02 * g0 + a12 * g1 + a22 * g2) / dt
+    if not (rad > 0.0 and surface_turn(f, l, cx, cy, ranges, bearings) >= p.corner_min_turn):
+        return False
+    lim = p.inlier_tau * p.inlier_tau
+    chi = 0.0  # the circle's chi^2 over the inliers of the neighbourhood, and clipped over all of it
+    clipped = 0.0
+    ni = 0
+    for j in range(f, l + 1):
+        if valid[j]:
+            zz = (math.hypot(ranges[j] * bearings.cos[j] - cx, ranges[j] * bearings.sin[j] - cy) - rad) / sigma_r
+            z2 = zz * zz
+            clipped += min(z2, lim)
+            if z2 <= lim:
+                chi += z2
+                ni += 1
+    if not (ni >= p.min_inlier_fraction * n and chi <= p.max_chi2 * max(ni - 3, 1)):
+        return False
+    if lf < 0:  # a span without a line: the circle must fit it better than two lines split at its chord
+        at = chord_split(np.array([f]), np.array([l]), ranges, bearings)[0]
+        two = tls_clipped(f, at, ranges, bearings, valid, sigma_r, lim) + tls_clipped(at + 1, l, ranges, bearings, valid, sigma_r, lim)
+        return clipped <= two
+    ca, sa = math.cos(lalpha), math.sin(lalpha)
+    c_chi = 0.0
+    l_chi = 0.0
+    nl = 0
+    for j in range(lf, ll + 1):
+        if valid[j]:
+            x, y = ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]
+            zc = (math.hypot(x - cx, y - cy) - rad) / sigma_r
+            zl = (x * ca + y * sa - lrho) / sigma_r
+            c_chi += zc * zc
+            l_chi += zl * zl
+            nl += 1
+    if not c_chi <= l_chi + ARC_TAU * math.sqrt(2.0 * nl):
+        return False
+    dof = max(nl - 2, 1)
+    return clipped / n <= (l_chi / dof) * (1.0 + ARC_TAU * math.sqrt(2.0 / dof))
+
+
+@kernel
+def on_arcs(rho, alpha, first, last, ranges, bearings, valid, theta, increment, sigma_r, p):  # noqa: ANN001, ANN201
+    """Which lines [first, last] are chords of a round surface (``circle_fits``): the neighbourhood
+    is the line and as many beams again past each end (at least k), while the surface goes on
+    without a depth jump (Borges & Aldon's adaptive breakpoint, BREAK_LAMBDA, plus 3 sigma_r).
+    Lines that do not reach past their ends by k beams in all are not tested (nothing to compare)."""
+    n = ranges.size
+    out = np.zeros(first.size, np.bool_)
+    ratio = math.sin(increment) / math.sin(BREAK_LAMBDA - increment)
+    for m in range(first.size):
+        a, b = first[m], last[m]
+        reach = max(p.k, b - a + 1)
+        while (a > 0 and first[m] - a < reach and valid[a - 1]
+               and abs(ranges[a - 1] - ranges[a]) <= ranges[a] * ratio + 3.0 * sigma_r):
+            a -= 1
+        while (b < n - 1 and b - last[m] < reach and valid[b + 1]
+               and abs(ranges[b + 1] - ranges[b]) <= ranges[b] * ratio + 3.0 * sigma_r):
+            b += 1
+        if (first[m] - a) + (b - last[m]) >= p.k and theta_turn(a, b, theta) >= 0.5 * p.corner_min_turn:
+            out[m] = circle_fits(a, b, first[m], last[m], rho[m], alpha[m], ranges, bearings, valid, sigma_r, p)
+    return out
+
+
+@kernel
 def fit_spans(first, last, shrink0, shrink1, ranges, bearings, valid, theta, theta_var, angle_min, increment,  # noqa: ANN001, ANN201
               sigma_r, grid, p):
     """Steps 3-4 on spans of valid beams [first, last] (each at least 2k + 1 beams): the band of
@@ -766,10 +973,10 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
                sigma_r, grid, p):
     """Steps 2-4 and the end growth: the line table (rho, alpha, cov, first, last, n_points)
     before merging. A run whose line fails the checks (it bends, or holds two faces the AD test
-    did not part) is split at the beam farthest from its chord and each part is fitted again,
-    ``MAX_SPLIT_ROUNDS`` times, while the parts keep min_points beams (and 2k + 1). More rounds
-    explain more of real scans but cut curved walls into chords that pass for lines (on the
-    simulated pillars world, precision 0.89 at one round, 0.83 at two, 0.79 at three)."""
+    did not part) is split at the beam farthest from its chord and each part is fitted again, as
+    IEPF splits, for as long as the parts keep min_points beams (and 2k + 1). Splitting cuts a
+    round surface into chords short enough to pass the line checks, so lines whose neighbourhood
+    is one circle are dropped (``on_arcs``, when arc_check)."""
     k = p.k
     c0, c1 = candidate_runs(AD, AD_var, psi, psi_var, k, grid.ad_line, sigma_r, p)
     keep = (c1 - c0 + 2 * k + 1) >= p.min_points
@@ -778,7 +985,7 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     shrink0 = np.zeros(first.size, np.int64)
     shrink1 = np.zeros(first.size, np.int64)
     min_span = max(p.min_points, 2 * k + 1)
-    n_max = 4 * max(first.size, 1) * (MAX_SPLIT_ROUNDS + 1)
+    n_max = ranges.size // min_span + 1  # accepted spans are disjoint, each of min_span beams or more
     o_rho = np.empty(n_max)
     o_alpha = np.empty(n_max)
     o_cov = np.empty((n_max, 2, 2))
@@ -786,9 +993,7 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     o_l = np.empty(n_max, np.int64)
     o_n = np.empty(n_max, np.int64)
     m = 0
-    for rnd in range(MAX_SPLIT_ROUNDS + 1):
-        if first.size == 0:
-            break
+    while first.size:
         rho, alpha, cov, f_in, l_in, n_in, good = fit_spans(
             first, last, shrink0, shrink1, ranges, bearings, valid, theta, theta_var, angle_min, increment,
             sigma_r, grid, p)
@@ -797,9 +1002,14 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
                 o_rho[m], o_alpha[m], o_cov[m] = rho[r], alpha[r], cov[r]
                 o_f[m], o_l[m], o_n[m] = f_in[r], l_in[r], n_in[r]
                 m += 1
-        if rnd == MAX_SPLIT_ROUNDS:
-            break
-        bad = np.flatnonzero(~good & (last - first + 1 >= 2 * min_span))
+        bad = np.flatnonzero(~good & (last - first >= min_span))  # a part of min_span beams may remain
+        if p.arc_check:  # a failing span that is one circle is a round surface: not cut into chords
+            arc = np.zeros(bad.size, np.bool_)
+            for t in range(bad.size):
+                if theta_turn(first[bad[t]], last[bad[t]], theta) >= 0.5 * p.corner_min_turn:
+                    arc[t] = circle_fits(first[bad[t]], last[bad[t]], -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r,
+                                         p)
+            bad = bad[~arc]
         at = chord_split(first[bad], last[bad], ranges, bearings)
         nf = np.empty(2 * bad.size, np.int64)
         nl = np.empty(2 * bad.size, np.int64)
@@ -808,7 +1018,7 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
         q = 0
         for t in range(bad.size):
             r = bad[t]
-            for f, l, a, b in ((first[r], at[t], shrink0[r], k), (at[t] + 1, last[r], k, shrink1[r])):
+            for f, l, a, b in ((first[r], at[t] - 1, shrink0[r], k), (at[t] + 1, last[r], k, shrink1[r])):
                 if l - f + 1 >= min_span:
                     nf[q], nl[q], s0[q], s1[q] = f, l, a, b
                     q += 1
@@ -817,6 +1027,9 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     rho, alpha, cov = o_rho[:m][order], o_alpha[:m][order], o_cov[:m][order]
     f_in, l_in, n_in = o_f[:m][order], o_l[:m][order], o_n[:m][order]
     extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r)
+    if p.arc_check and m:
+        line = ~on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, theta, increment, sigma_r, p)
+        return rho[line], alpha[line], cov[line], f_in[line], l_in[line], n_in[line]
     return rho, alpha, cov, f_in, l_in, n_in
 
 

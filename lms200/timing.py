@@ -1,0 +1,46 @@
+"""LMS200 timing and the LaserScan fields a Scan does not carry (time_increment, scan_time, range_min).
+
+Source: SICK LMS200/211/221/291 Technical Description (8008970, 2006): the mirror turns at 75 rev/s
+(13.33 ms a turn) and one turn sweeps the 180 deg field at 1 deg; a 0.5 deg scan is two interlaced
+1 deg turns offset by 0.5 deg, a 0.25 deg scan four. Distance codes count 1 mm or 1 cm units, so
+the smallest reading that is a distance is one unit.
+
+ROS ``sensor_msgs/LaserScan`` cannot describe interlacing: its ``time_increment`` is the time
+between consecutive measurements along one mirror sweep. We write the mirror's own rate,
+``angle_increment / (2 pi) / 75 s`` (exact for 1 deg scans; for interlaced scans the time along one
+turn, the best a LaserScan can say), and ``scan_time`` as the sensor's scan period (1/75 s times
+the turns per scan). The simulator's ``SensorConfig.beam_time_offsets`` is the true interlaced timing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+MIRROR_TURN_S = 1.0 / 75.0  # s: one mirror revolution (75 Hz)
+ONE_TURN_RESOLUTION_RAD = float(np.deg2rad(1.0))  # one mirror turn measures every 1 deg
+CM_MODE_MIN_RANGE_MAX_M = 10.0  # m: a scan whose range_max exceeds this holds cm codes (81.83 m max)
+
+
+def turns_per_scan(angle_increment: float) -> int:
+    """Interlaced mirror turns per scan: 1 at 1 deg (or coarser), 2 at 0.5 deg, 4 at 0.25 deg."""
+    if not (np.isfinite(angle_increment) and angle_increment > 0):
+        raise ValueError(f"angle_increment: must be finite and > 0 rad, got {angle_increment}")
+    return max(1, int(round(ONE_TURN_RESOLUTION_RAD / angle_increment)))
+
+
+def scan_period(angle_increment: float) -> float:
+    """Seconds between scans of the sensor: 1/75 s per interlaced turn (0.5 deg: 26.7 ms, 37.5/s)."""
+    return turns_per_scan(angle_increment) * MIRROR_TURN_S
+
+
+def mirror_time_increment(angle_increment: float) -> float:
+    """Seconds the mirror takes to turn by ``angle_increment`` rad (0.5 deg: 18.5 us)."""
+    if not (np.isfinite(angle_increment) and angle_increment > 0):
+        raise ValueError(f"angle_increment: must be finite and > 0 rad, got {angle_increment}")
+    return float(angle_increment / (2.0 * np.pi) * MIRROR_TURN_S)
+
+
+def smallest_range(range_max: float) -> float:
+    """The smallest reading that is a distance (m): one code unit, 1 cm for cm-mode scans
+    (range_max > 10 m) and 1 mm otherwise. A code of 0 is no measurement."""
+    return 0.01 if range_max > CM_MODE_MIN_RANGE_MAX_M else 0.001
