@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -33,6 +33,15 @@ class Keyframe:
     points: np.ndarray
     normals: np.ndarray
     travelled: float
+    _world: tuple[bytes, np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
+
+    def world(self) -> tuple[np.ndarray, np.ndarray]:
+        """Its points and normals in the world frame at its current pose (kept until the pose changes)."""
+        key = np.asarray(self.pose, float).tobytes()
+        if self._world is None or self._world[0] != key:
+            c, s = np.cos(self.pose[2]), np.sin(self.pose[2])
+            self._world = (key, to_world(self.pose, self.points), self.normals @ np.array([[c, s], [-s, c]]))
+        return self._world[1], self._world[2]
 
 
 @dataclass(frozen=True)
@@ -54,15 +63,16 @@ def local_map(keyframes: list[Keyframe], voxel: float) -> Reference:
     (newest keyframe first, so its points win a cell)."""
     pts, nrm = [], []
     for kf in reversed(keyframes):
-        pts.append(to_world(kf.pose, kf.points))
-        c, s = np.cos(kf.pose[2]), np.sin(kf.pose[2])
-        nrm.append(kf.normals @ np.array([[c, s], [-s, c]]))
+        p, n = kf.world()
+        pts.append(p)
+        nrm.append(n)
     return make_reference(np.concatenate(pts), np.concatenate(nrm), voxel)
 
 
 def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyframe], cfg: LoopClosureConfig,
                  alignment: AlignmentConfig, voxel: float, since_closure: float = 0.0,
-                 drift: Callable[[Keyframe], np.ndarray] | None = None) -> LoopClosure | None:
+                 drift: Callable[[Keyframe], np.ndarray] | None = None, positions: np.ndarray | None = None,
+                 travelled: np.ndarray | None = None) -> LoopClosure | None:
     """Match ``scan_points`` (the new keyframe's matching points, sensor frame) against the submaps
     of the nearest earlier keyframes within ``search_radius`` of the new one's estimate and at
     least ``min_travel`` of path behind it; the first match that passes every check is returned.
@@ -71,14 +81,20 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
     relative to the candidate's (from the graph's marginals); a closure whose correction lies
     outside its ``gate_probability`` chi-square gate (3 dof, with the match's own covariance
     added) is refused, and only heading hypotheses inside that gate are tried. Without
-    ``drift`` the gate is not applied (any correction, any heading hypothesis)."""
-    old = [kf for kf in keyframes if new.travelled - kf.travelled >= cfg.min_travel]
-    if not old:
+    ``drift`` the gate is not applied (any correction, any heading hypothesis). ``positions``
+    (n, 2) and ``travelled`` (n,) are the keyframes' positions and path lengths when the caller
+    keeps them as arrays (else they are gathered here)."""
+    if travelled is None:
+        travelled = np.array([kf.travelled for kf in keyframes], float)
+    if positions is None:
+        positions = np.array([kf.pose[:2] for kf in keyframes], float).reshape(-1, 2)
+    idx = np.flatnonzero(new.travelled - travelled >= cfg.min_travel)
+    if not idx.size:
         return None
-    xy = np.array([kf.pose[:2] for kf in old])
-    dist = np.hypot(*(xy - new.pose[:2]).T)
+    dist = np.hypot(*(positions[idx] - new.pose[:2]).T)
     radius = cfg.search_radius + cfg.search_growth * since_closure
-    order = [int(k) for k in np.argsort(dist) if dist[k] <= radius]
+    old = keyframes
+    order = [int(idx[k]) for k in np.argsort(dist) if dist[k] <= radius]
     gate = chi2_quantile(cfg.gate_probability, 3)
     tried: list[int] = []
     for k in order:

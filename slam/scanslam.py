@@ -94,6 +94,8 @@ class ScanSlam:
         self.anchors: list[tuple[int, np.ndarray]] = []  # per scan: keyframe key, pose in its frame
         self.covariances: list[np.ndarray] = []  # per scan: covariance of the match (world frame)
         self.loops: list[LoopClosure] = []
+        self._kf_xy = np.zeros((0, 2))  # keyframe positions (current estimates) and path lengths, as arrays
+        self._kf_travel = np.zeros(0)
         self.travelled = 0.0
         self._since_search = 0
         self._closed_at = 0.0  # path length (m) at the last loop closure
@@ -177,6 +179,7 @@ class ScanSlam:
     def _first(self, stamp: float, sp: ScanPoints) -> ScanStep:
         self.graph = PoseGraph(np.zeros(3), self.loop_cfg.prior_sigma)
         self.keyframes.append(Keyframe(0, 0, stamp, np.zeros(3), *sp.surface(), 0.0))
+        self._kf_xy, self._kf_travel = np.zeros((1, 2)), np.zeros(1)
         self.ref = local_map(self.keyframes, self.keyframes_cfg.voxel)
         self.anchors.append((0, np.zeros(3)))
         self.covariances.append(np.zeros((3, 3)))
@@ -192,6 +195,8 @@ class ScanSlam:
         key = self.graph.add(rel, A @ cov @ A.T, pose)
         kf = Keyframe(key, len(self.anchors), stamp, pose.copy(), *sp.surface(), self.travelled)
         self.keyframes.append(kf)
+        self._kf_xy = np.vstack((self._kf_xy, pose[:2]))
+        self._kf_travel = np.append(self._kf_travel, self.travelled)
         info.new_keyframe = True
         info.keyframe = key
         self._since_search += 1
@@ -199,15 +204,17 @@ class ScanSlam:
         if lc.enabled and self._since_search >= lc.every and sp.matched.shape[0] >= 10:
             self._since_search = 0
             loop = find_closure(kf, sp.matched, self.keyframes[:-1], lc, self.alignment, self.keyframes_cfg.voxel,
-                                self.travelled - self._closed_at, self._drift(kf))
+                                self.travelled - self._closed_at, self._drift(kf), self._kf_xy[:-1], self._kf_travel[:-1])
             if loop is not None:
                 self._closed_at = self.travelled
                 noise = robust_noise(loop.covariance, lc.kernel, lc.kernel_width)
                 self.graph.close(loop.old, loop.new, loop.relative, noise)
                 self.loops.append(loop)
                 info.loop = loop
-                for k, p in enumerate(self.graph.poses()):
+                poses = self.graph.poses()
+                for k, p in enumerate(poses):
                     self.keyframes[k].pose = p
+                self._kf_xy = poses[:, :2].copy()
         self.ref = local_map(self.keyframes[-self.keyframes_cfg.local_map:], self.keyframes_cfg.voxel)
         return self.keyframes[-1].pose.copy()
 
