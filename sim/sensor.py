@@ -74,6 +74,10 @@ class SensorConfig:
     noise_tail_sigma: float = 0.0
 
     def __post_init__(self) -> None:
+        for f in fields(self):  # nan passes every comparison below: refuse it (and inf) first
+            value = getattr(self, f.name)
+            if isinstance(value, float) and not np.isfinite(value):
+                raise ValueError(f"{f.name}: must be finite, got {value}")
         if self.units not in ("mm", "cm"):
             raise ValueError(f"units: must be 'mm' or 'cm', got {self.units!r}")
         if self.n_beams < 2:
