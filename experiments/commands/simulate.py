@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from lms200.yamlio import load as load_yaml
+
 import argparse
 from pathlib import Path
 
@@ -48,7 +50,7 @@ def _config(args: argparse.Namespace):
     if args.config:
         check_yaml(args.config, "a simulate config.yaml")
         try:
-            raw = yaml.safe_load(args.config.read_text())
+            raw = load_yaml(args.config.read_text())
             if not isinstance(raw, dict):
                 raise TypeError("expected a mapping of world, seed, duration, sensor, ...")
             cfg = SimulationConfig.from_dict(raw)
