@@ -121,6 +121,7 @@ CASES = [
     (["simulate", "--config", "{missing.yaml}", "--out", O], "missing.yaml"),
     (["simulate", "--out", "{a_file}"], "not a folder"),
     (["simulate", "--resolution", "2", "--out", O], "--resolution"),
+    (["simulate", "--clutter", "1e9", "--out", O], "--clutter"),
     (["simulate", "--sensor", "{sensor_text.yaml}", "--out", O], "mixed_gap: must be a number"),
     (["simulate", "--sensor", "{sensor_flag.yaml}", "--out", O], "quantise: must be true or false"),
     # compare

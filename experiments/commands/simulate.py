@@ -19,7 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "mit (the MIT-CSAIL-like preset), or a world.json (default office)")
     p.add_argument("--clutter", type=number(0.0), default=None,
                    help="clutter level of a named world: 0 none, 1 a furnished office, 2-3 busy "
-                        "(chair and table legs, people, plants, bins, glass, doors at any angle; default: the world's own)")
+                        "(chair and table legs, people, plants, bins, glass, doors at any angle; at most 10; default: the world's own)")
     p.add_argument("--seed", type=SEED, default=0, help="seed of the world, tour and sensor noise (>= 0)")
     p.add_argument("--duration", type=DURATION, default=120.0,
                    help=f"simulated time, s (default 120, at most {MAX_DURATION_S:g})")
@@ -68,6 +68,10 @@ def _config(args: argparse.Namespace):
         check_file(args.world, "a world.json")
     if args.clutter is not None and args.world.endswith(".json"):
         raise InputError("--clutter applies to named worlds; a world.json holds its own solids")
+    from sim.worlds import MAX_CLUTTER
+
+    if args.clutter is not None and args.clutter > MAX_CLUTTER:
+        raise InputError(f"--clutter: must be at most {MAX_CLUTTER:g} (10x a furnished office), got {args.clutter:g}")
     beams = {0.5: 361, 1.0: 181, 0.25: 401}[args.resolution_deg]
     base = SensorConfig.ideal if args.ideal else SensorConfig
     if args.sensor is not None:
