@@ -60,6 +60,14 @@ def _config(args: argparse.Namespace):
             raise InputError(f"{args.config}: unknown world {cfg.world!r}; known worlds: {', '.join(known_worlds())}")
         if not (0 < cfg.duration <= MAX_DURATION_S) or (cfg.rate_hz is not None and not cfg.rate_hz > 0):
             raise InputError(f"{args.config}: duration must be in (0, {MAX_DURATION_S:g}] s and rate_hz > 0")
+        from sim.worlds import MAX_CLUTTER, check_seed
+
+        try:
+            check_seed(cfg.seed)
+        except ValueError as exc:
+            raise InputError(f"{args.config}: {exc}") from None
+        if cfg.clutter is not None and not 0 <= cfg.clutter <= MAX_CLUTTER:
+            raise InputError(f"{args.config}: clutter must be in [0, {MAX_CLUTTER:g}], got {cfg.clutter}")
         return cfg
     worlds = known_worlds()
     if args.world not in worlds and not args.world.endswith(".json"):
