@@ -255,6 +255,8 @@ CASES = [
     (["sim2real", "{good.clf}", "--out", "{a_file}"], "a_file"),
     # bench, the top level
     (["bench", "nosuch"], "nosuch"),
+    (["bench", "lms200", "lms200"], "more than once"),
+    (["bench", "lms200", "--out", "{a_file}"], "a_file"),
     (["nosuch"], "nosuch"),
 ]
 

@@ -10,6 +10,7 @@ from pathlib import Path
 from lms200 import LmsbenchError
 
 from experiments import benchmarks
+from experiments.options import check_out
 
 
 def discover() -> dict[str, object]:
@@ -37,6 +38,10 @@ def run(args: argparse.Namespace) -> int:
     missing = [n for n in names if n not in found]
     if missing:
         raise LmsbenchError(f"unknown benchmark(s) {missing}; available: {list(found)}")
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise LmsbenchError(f"benchmark(s) {twice} named more than once")
+    check_out(args.out)
     rows = []
     for name in names:
         print(f"== {name}", flush=True)
@@ -46,11 +51,15 @@ def run(args: argparse.Namespace) -> int:
             print("   " + ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()), flush=True)
     import pandas as pd  # here, not at import: every `lmsbench` start (even --help) loads this module
 
-    from experiments.provenance import new_run_folder
+    import yaml
+
+    from experiments.provenance import new_run_folder, versions
 
     args.out = args.out or new_run_folder("results/bench")
     args.out.mkdir(parents=True, exist_ok=True)
     table = pd.DataFrame(rows)
     table.to_csv(args.out / "bench.csv", index=False)
-    print(f"wrote {args.out / 'bench.csv'}")
+    (args.out / "versions.yaml").write_text(yaml.safe_dump(dict(benchmarks=names, quick=args.quick, versions=versions()),
+                                                           sort_keys=False))
+    print(f"wrote {args.out / 'bench.csv'}, {args.out / 'versions.yaml'}")
     return 0
