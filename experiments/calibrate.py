@@ -11,6 +11,13 @@ produces the effect, which are fitted by simulation (indirect inference, fixed s
 - ``outlier_prob``: the counter of isolated outliers also counts one-beam objects of the world
   (thin legs far away) and mixed pixels; the rate it reads on the simulated run with the fitted
   spot width and no outliers is subtracted.
+- ``noise_tail_prob``: the residual tail's weight includes the scene's own; the simulated weight at
+  a few tail probabilities is interpolated to the log's.
+- ``noise_tail_patch_m``: whether the tail comes beam by beam or in rough stretches of surface:
+  the tail's clustering along the scan (``LogCalibration.tail_clustering``) simulated with rough
+  cells of 0-2 m, interpolated to the log's. A real log's tail gathers in stretches (MIT CSAIL,
+  Intel); spread over single beams it breaks every wall into short pieces, which split-and-merge
+  drops and Hough / RANSAC do not.
 
 Nothing else is tuned: noise_sigma is the 1-4 m sigma, noise_sigma_per_m the fitted slope,
 dropout_prob the nan rate, no_return_prob the surface no-return rate, max_reading the log's cap.
@@ -29,6 +36,7 @@ from lms200.calibration import LogCalibration, calibrate_scans
 
 WIDTH_GRID_STEPS = (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)  # spot widths tried, in beam steps
 TAIL_GRID = (0.0, 0.1, 0.3)  # noise_tail_prob values tried
+PATCH_GRID_M = (0.0, 0.1, 0.3, 1.0, 2.0)  # noise_tail_patch_m values tried (m)
 FIT_DURATION_S = 30.0  # simulated seconds per spot width
 FIT_RATE_HZ = 5.0  # scans kept per simulated second
 FIT_SEED = 0
@@ -44,6 +52,7 @@ class CalibrationResult:
     outlier_baseline: float  # the outlier counter's rate on the simulated run without outliers
     world: str
     tail_curve: list[tuple[float, float]] = ()  # type: ignore[assignment]  # (noise_tail_prob, simulated tail share)
+    patch_curve: list[tuple[float, float]] = ()  # type: ignore[assignment]  # (noise_tail_patch_m, simulated clustering)
 
 
 def _interpolate(xs: list[float], ys: list[float], target: float) -> float:
@@ -94,21 +103,26 @@ def base_sensor(cal: LogCalibration):
     )
 
 
-def _simulated_measurement(sensor, world: str, duration: float = FIT_DURATION_S):
+def _simulated_measurement(sensor, world: Any, duration: float = FIT_DURATION_S):
+    """The log measurements of a simulated run of ``world`` (a name or a built sim.World)."""
     from sim import make_world, simulate_records
 
-    records = simulate_records(make_world(world, FIT_SEED), FIT_SEED, duration, sensor, rate_hz=FIT_RATE_HZ)
+    w = make_world(world, FIT_SEED) if isinstance(world, str) else world
+    records = simulate_records(w, FIT_SEED, duration, sensor, rate_hz=FIT_RATE_HZ)
     return calibrate_scans(records, seed=FIT_SEED)
 
 
 def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT_DURATION_S) -> CalibrationResult:
     """The SensorConfig fitted to a log's measurements (see the module docstring); ``duration``:
     simulated seconds per spot width (shorter is faster and noisier)."""
+    from sim import make_world
+
     sensor = base_sensor(cal)
+    built = make_world(world, FIT_SEED)  # once: every fit run goes through the same world
     curve: list[tuple[float, float]] = []
     for steps in WIDTH_GRID_STEPS:
         w = steps * sensor.resolution_deg
-        m = _simulated_measurement(sensor.replace(beam_width_deg=w, mixed_pixels=w > 0), world, duration)
+        m = _simulated_measurement(sensor.replace(beam_width_deg=w, mixed_pixels=w > 0), built, duration)
         curve.append((w, float(m.mixed_share.value)))
     widths = np.array([c[0] for c in curve])
     shares = np.maximum.accumulate(np.nan_to_num(np.array([c[1] for c in curve])))  # monotone
@@ -129,16 +143,23 @@ def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT
     tail_curve: list[tuple[float, float]] = []
     baseline = 0.0
     for eps in TAIL_GRID:
-        m = _simulated_measurement(with_width.replace(noise_tail_prob=eps, noise_tail_sigma=tail_sigma), world, duration)
+        m = _simulated_measurement(with_width.replace(noise_tail_prob=eps, noise_tail_sigma=tail_sigma), built, duration)
         tail_curve.append((eps, float(m.tail_share.value)))
         if eps == 0.0:
             baseline = float(m.outlier_rate.value)
     tail_prob = _interpolate([c[1] for c in tail_curve], [c[0] for c in tail_curve], float(cal.tail_share.value))
     with_width = with_width.replace(noise_tail_prob=round(tail_prob, 4),
                                     noise_tail_sigma=round(tail_sigma, 5) if tail_prob > 0 else 0.0)
+    patch_curve: list[tuple[float, float]] = []
+    if with_width.noise_tail_prob > 0 and np.isfinite(cal.tail_clustering.value):
+        for size in PATCH_GRID_M:
+            m = _simulated_measurement(with_width.replace(noise_tail_patch_m=size), built, duration)
+            patch_curve.append((size, float(m.tail_clustering.value)))
+        patch = _interpolate([c[1] for c in patch_curve], [c[0] for c in patch_curve], float(cal.tail_clustering.value))
+        with_width = with_width.replace(noise_tail_patch_m=round(patch, 3))
     outlier = max(float(cal.outlier_rate.value) - baseline, 0.0) if np.isfinite(cal.outlier_rate.value) else 0.0
     fitted = with_width.replace(outlier_prob=min(outlier, 0.5))
-    return CalibrationResult(cal, fitted, curve, baseline, world, tail_curve)
+    return CalibrationResult(cal, fitted, curve, baseline, world, tail_curve, patch_curve)
 
 
 def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_scans: int | None = None,
@@ -200,6 +221,8 @@ def calibration_section(result: CalibrationResult, source: str) -> dict[str, Any
             "residual_tail_share": _est(c.tail_share),
             "residual_tail_sigma_m": _round(c.tail_sigma_m),
             "simulated_tail_share_by_noise_tail_prob": [[_round(e), _round(s)] for e, s in result.tail_curve],
+            "residual_tail_clustering": _est(c.tail_clustering),
+            "simulated_tail_clustering_by_noise_tail_patch_m": [[_round(e), _round(s)] for e, s in result.patch_curve],
         }
     }
 
@@ -225,6 +248,7 @@ def format_calibration(result: CalibrationResult) -> list[str]:
         f"(simulated world alone: {result.outlier_baseline * 100:.3g} %)",
         f"residual tail           {pm(c.tail_share, 100, ' %')} at {c.tail_sigma_m * 1000:.1f} mm  -> noise_tail_prob "
         f"{s.noise_tail_prob:.4g} at {s.noise_tail_sigma * 1000:.1f} mm",
+        f"tail clustering        {pm(c.tail_clustering)}  -> noise_tail_patch_m {s.noise_tail_patch_m:g}",
     ]
     return lines
 

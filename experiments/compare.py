@@ -245,12 +245,16 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
 def _check_types(method: str, overrides: dict[str, Any]) -> None:
     """An override has the kind of its field's default: a number for a number, true/false for a
     flag, text for text (configs check ranges, not types)."""
-    default = dataclasses.asdict(make_config(method))
+    config = make_config(method)
+    default = dataclasses.asdict(config)
+    annotations = {f.name: str(f.type) for f in dataclasses.fields(config)}
     for name, value in overrides.items():
         if name not in default:
             continue  # make_config names unknown fields
         d = default[name]
         number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if "|" in annotations[name] and (number or isinstance(value, str)):
+            continue  # a field that takes a number or a word (sigma_r: metres or "auto"): the config checks it
         if isinstance(d, bool):
             ok = isinstance(value, bool)
             kind = "true or false"

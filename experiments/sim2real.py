@@ -22,12 +22,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
-import pandas as pd
 
 from lms200 import LmsbenchError, Record, read_log
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 RANGE_EDGES_M = (0.0, 1.0, 2.0, 4.0, 8.0, 16.0, np.inf)
 SEGMENT_EDGES_M = (0.0, 0.25, 0.5, 1.0, 2.0, 4.0, np.inf)
@@ -37,6 +39,11 @@ STATS_METHOD = "split_merge"  # the extractor whose segments the scene statistic
 MIN_SCAN_DT_S = 1.5  # odometry steps longer than this (s) say nothing of the motion within a scan
 METHODS = ("sensor", "split_merge", "iepf", "hough", "ransac")
 ORDER_MARGIN = 0.03  # two methods this far apart on the real log must keep their order in sim
+# Simulated runs: many short runs rather than a few long ones, since worlds differ more than
+# stretches of one run do (on `mit` with the MIT CSAIL sensor, one seed's explained fraction
+# spreads by 0.03 (1 sd) between seeds; six seeds bring the mean's spread to about 0.013).
+DEFAULT_SEEDS = (0, 1, 2, 3, 4, 5)
+DEFAULT_DURATION_S = 20.0  # simulated seconds per seed
 
 
 @dataclass
@@ -145,8 +152,8 @@ class Sim2RealResult:
     checks: dict[str, Any]
 
 
-def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = (0, 1), duration: float = 60.0,
-             rate_hz: float = 3.0, stride: int = 5, max_scans: int | None = 400,
+def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT_SEEDS,
+             duration: float = DEFAULT_DURATION_S, rate_hz: float = 3.0, stride: int = 5, max_scans: int | None = 400,
              methods: Sequence[str] = METHODS, sensor: Any = None, read_options: dict | None = None,
              fit_duration: float | None = None) -> Sim2RealResult:
     """Compare a real log with the calibrated simulation (see the module docstring).
@@ -213,6 +220,8 @@ def _table(summary: pd.DataFrame, real: str, sim: str, methods: list[str]) -> pd
         row["explained_diff"] = row["explained_3cm_sim"] - row["explained_3cm_real"]
         row["lines_ratio"] = row["lines_per_scan_sim"] / row["lines_per_scan_real"]
         rows.append(row)
+    import pandas as pd
+
     return pd.DataFrame(rows)
 
 
@@ -291,6 +300,8 @@ def scene_table(result: Sim2RealResult) -> pd.DataFrame:
                                ("ray_residual", [f"{v:.3f}" for v in RESIDUAL_EDGES_M[:-1]] + ["outside"],
                                 result.real_stats.residual_hist, result.sim_stats.residual_hist)):
         rows += [dict(statistic=stat, bin=lab, real=float(x), sim=float(y)) for lab, x, y in zip(labels, a, b)]
+    import pandas as pd
+
     rows.append(dict(statistic="long_wall_share", bin=f">= {LONG_WALL_M:g} m", real=result.real_stats.long_wall_share,
                      sim=result.sim_stats.long_wall_share))
     return pd.DataFrame(rows)

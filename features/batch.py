@@ -9,7 +9,7 @@ import numpy as np
 
 from lms200 import Scan
 
-from .types import Corners, FeatureSet, Lines
+from .types import BatchFeatureSet, FeatureSet
 
 
 def common_geometry(scans: Sequence[Scan]) -> Scan:
@@ -30,14 +30,14 @@ def common_geometry(scans: Sequence[Scan]) -> Scan:
 
 
 def stacked_ranges(scans: Sequence[Scan]) -> np.ndarray:
-    """(S, n) C-contiguous ranges of the scans (m)."""
-    return np.stack([s.ranges for s in scans])
+    """(S, n) C-contiguous ranges of the scans (m), which have n beams each."""
+    return np.concatenate([s.ranges for s in scans]).reshape(len(scans), -1)
 
 
 def split_rows(lv: np.ndarray, lb: np.ndarray, cv: np.ndarray, cb: np.ndarray, line_off: np.ndarray,
                corner_off: np.ndarray, method: str) -> list[FeatureSet]:
-    """One FeatureSet per scan from a batch's concatenated line and corner rows and their offsets."""
-    lo, co = line_off.tolist(), corner_off.tolist()
-    of = FeatureSet.of
-    return [of(Lines(lv[lo[s] : lo[s + 1]], lb[lo[s] : lo[s + 1]]), Corners(cv[co[s] : co[s + 1]], cb[co[s] : co[s + 1]]),
-               method) for s in range(len(lo) - 1)]
+    """One FeatureSet per scan from a batch's concatenated line and corner rows and their offsets
+    (``BatchFeatureSet``: each scan's rows are cut from the batch's when first read)."""
+    rows = (lv, lb, cv, cb, line_off.tolist(), corner_off.tolist())
+    cut = BatchFeatureSet.cut
+    return [cut(rows, s, method) for s in range(len(line_off) - 1)]

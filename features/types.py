@@ -263,3 +263,57 @@ class FeatureSet:
 
     def __repr__(self) -> str:
         return f"FeatureSet({len(self.lines)} lines, {len(self.corners)} corners, method={self.method!r})"
+
+
+_LINES_SLOT = FeatureSet.__dict__["lines"]  # the base class's slots, where BatchFeatureSet caches its views
+_CORNERS_SLOT = FeatureSet.__dict__["corners"]
+
+
+class BatchFeatureSet(FeatureSet):
+    """The FeatureSet of scan ``s`` of an ``extract_many`` batch: built without per-scan work, its
+    ``lines`` and ``corners`` become views of the batch's concatenated rows on first access (then
+    kept). Equal to, and used as, a FeatureSet; pickles and copies as one."""
+
+    __slots__ = ("_rows", "_s")
+
+    @classmethod
+    def cut(cls, rows: tuple, s: int, method: str) -> BatchFeatureSet:
+        """Scan ``s``'s FeatureSet of ``rows`` = (line values, line beams, corner values, corner
+        beams, line offsets, corner offsets) as Python lists of offsets (the batch's rows)."""
+        fs = object.__new__(cls)
+        fs._rows, fs._s, fs.method = rows, s, method
+        return fs
+
+    @property  # type: ignore[override]
+    def lines(self) -> Lines:
+        try:
+            return _LINES_SLOT.__get__(self, FeatureSet)  # type: ignore[no-any-return]
+        except AttributeError:
+            lv, lb, _, _, lo, _ = self._rows
+            a, b = lo[self._s], lo[self._s + 1]
+            lines = Lines(lv[a:b], lb[a:b])
+            _LINES_SLOT.__set__(self, lines)
+            return lines
+
+    @lines.setter
+    def lines(self, value: Lines) -> None:
+        _LINES_SLOT.__set__(self, value)
+
+    @property  # type: ignore[override]
+    def corners(self) -> Corners:
+        try:
+            return _CORNERS_SLOT.__get__(self, FeatureSet)  # type: ignore[no-any-return]
+        except AttributeError:
+            _, _, cv, cb, _, co = self._rows
+            a, b = co[self._s], co[self._s + 1]
+            corners = Corners(cv[a:b], cb[a:b])
+            _CORNERS_SLOT.__set__(self, corners)
+            return corners
+
+    @corners.setter
+    def corners(self, value: Corners) -> None:
+        _CORNERS_SLOT.__set__(self, value)
+
+    def __reduce__(self) -> tuple:
+        return FeatureSet, (self.lines, self.corners, self.method)
+

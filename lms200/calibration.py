@@ -16,6 +16,8 @@ Everything is counted on the scans themselves, without a map or poses (see ``doc
 - mixed pixels: at depth steps (neighbours more than ``STEP_M`` apart, each on a locally
   continuous surface), the share of steps that have a beam lying between the two surfaces, off
   both by more than ``max(4 sigma, 3 cm)`` and off the line through its neighbours;
+- the residual tail: a two-Gaussian fit to the triples' residuals at 1-4 m (weight and sigma of
+  the wide part), and how it clusters along the scan (``LogCalibration.tail_clustering``);
 - isolated outliers: among beams whose neighbours lie within half the gap of each other, the
   share that are off the line through the neighbours by more than the gap
   ``max(OUTLIER_M, 10 sigma)`` (a one-beam object, such as a thin leg far away, counts too: the
@@ -33,7 +35,7 @@ import numpy as np
 
 from .codes import METRES_PER_UNIT
 from .noise import (BOOTSTRAP_RESAMPLES, RangeNoise, _bootstrap_scale, _remove_quantisation, estimate_quantum,
-                    estimate_range_noise, line_residuals, robust_scale)
+                    estimate_range_noise, interlace_stride, line_residuals, robust_scale)
 from .scan import Scan
 
 NOISE_BAND_M = (1.0, 4.0)  # the band whose sigma is the config's noise_sigma
@@ -48,6 +50,8 @@ OUTLIER_M = 0.1  # m: least distance of an isolated outlier from its neighbours'
 MAX_READING_SHARE = 1e-3  # a top value read this often (or more) is the logger's cap
 MAX_SCANS = 20_000  # memory bound: scans beyond this many are not read
 TAIL_WINDOW = 20.0  # the tail fit uses residuals within this many core sigmas
+TAIL_CLUSTER_SIGMAS = 5.0  # a triple whose residual exceeds this many core sigmas is in the tail
+TAIL_CLUSTER_STEP = 3  # the tail's clustering pairs triples this many strides apart (no beam shared)
 
 
 @dataclass(frozen=True)
@@ -82,6 +86,10 @@ class LogCalibration:
         tail_share, tail_sigma_m: weight and sigma (m) of the wide component of a two-Gaussian fit
             (core sigma fixed) to the residuals of triples at 1-4 m within 20 core sigmas: the
             heavy tail beyond the Gaussian core (from the scene's geometry as well as the sensor).
+        tail_clustering: how the tail gathers along a scan: of the triples at 1-4 m whose
+            residual exceeds TAIL_CLUSTER_SIGMAS core sigmas, the share whose neighbour triple
+            TAIL_CLUSTER_STEP strides on (sharing no beam with it) does too. A tail of independent
+            beams gives about the tail's own share; rough stretches of surface give more.
     """
 
     n_scans: int
@@ -102,6 +110,7 @@ class LogCalibration:
     outlier_rate: Estimate = Estimate(0.0, 0.0, 0)
     tail_share: Estimate = Estimate(0.0, 0.0, 0)
     tail_sigma_m: float = 0.0
+    tail_clustering: Estimate = Estimate(float("nan"), float("nan"), 0)
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -256,6 +265,27 @@ def _tail_fit(scans: list[Scan], core: float, seed: int) -> tuple[Estimate, floa
     return Estimate(w, std, int(z.size)), wide
 
 
+def _tail_clustering(scans: list[Scan], core: float, seed: int) -> Estimate:
+    """P(a triple TAIL_CLUSTER_STEP strides on is in the tail | this one is), over scans (see
+    LogCalibration.tail_clustering)."""
+    if core <= 0:
+        return Estimate(float("nan"), float("nan"), 0)
+    both, first = np.zeros(len(scans)), np.zeros(len(scans))
+    for k, s in enumerate(scans):
+        z, _, centre = line_residuals(s.ranges, s.angle_increment, max(s.range_min, NOISE_BAND_M[0]),
+                                      min(s.range_max, NOISE_BAND_M[1]))
+        if z.size == 0:
+            continue
+        d = TAIL_CLUSTER_STEP * interlace_stride(s.angle_increment)
+        usable, tail = np.zeros(len(s), dtype=bool), np.zeros(len(s), dtype=bool)
+        usable[centre] = True
+        tail[centre] = np.abs(z) > TAIL_CLUSTER_SIGMAS * core
+        pair = tail[:-d] & usable[d:]
+        first[k] = np.count_nonzero(pair)
+        both[k] = np.count_nonzero(pair & tail[d:])
+    return _ratio(both, first, seed)
+
+
 def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
     """Measure the error model of the laser behind ``scans`` (Scans or records with ``.scan``).
 
@@ -280,6 +310,7 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
     bins, slope = _noise_bins(kept, quantum, seed)
     core = noise.sigma_observed_m if np.isfinite(noise.sigma_observed_m) else 0.0
     tail, tail_sigma = _tail_fit(kept, core, seed)
+    clustering = _tail_clustering(kept, core, seed)
     cap = _max_reading(kept, quantum)
     c = np.array([_scan_counts(s.ranges, s.angle_increment, max(sigma, quantum / np.sqrt(12)), cap, quantum)
                   for s in kept])
@@ -291,5 +322,5 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
         max_reading_rate=_ratio(c[:, 2], beams, seed), max_reading=cap,
         no_return_rate=_ratio(c[:, 5], c[:, 4], seed), outlier_rate=_ratio(c[:, 7], c[:, 6], seed),
         mixed_share=_ratio(c[:, 8], c[:, 8] + c[:, 9], seed),
-        tail_share=tail, tail_sigma_m=float(tail_sigma),
+        tail_share=tail, tail_sigma_m=float(tail_sigma), tail_clustering=clustering,
     )

@@ -48,7 +48,7 @@ from .codes import (
     metres_per_unit,
 )
 from . import laser_geometry
-from .errors import LogFormatError
+from .errors import LmsbenchError, LogFormatError
 from .laser_geometry import LaserGeometry
 from .records import Pose2D, Record
 from .scan import Scan, snap_angle
@@ -152,6 +152,15 @@ class CarmenReader:
             raise LogFormatError(self.path, line_no, f"malformed {kind} line: {exc}") from None
         self.stats.skipped.append((line_no, f"{kind}: {exc}"))
 
+    def _check_override(self, kind: str) -> None:
+        """A beam-geometry override for a log whose laser lines carry their own geometry is an
+        error (it would be ignored): only range_max applies to ROBOTLASER lines."""
+        g = self.geometry
+        given = [name for name in ("fov", "resolution", "angle_min") if getattr(g, name) is not None]
+        if kind.startswith("ROBOTLASER") and given:
+            raise LmsbenchError(f"{self.path}: its {kind} lines carry their own beam geometry; the override of "
+                                f"{', '.join(given)} (--laser-*-deg) applies to FLASER / RLASER lines only")
+
     def __iter__(self) -> Iterator[Record]:
         self.stats = stats = ReadStats(laser=self.topic)
         units: Units | None = None
@@ -177,6 +186,7 @@ class CarmenReader:
                 elif kind in LASER_KINDS:
                     if stats.laser is None:
                         stats.laser = kind
+                        self._check_override(kind)
                     if kind != stats.laser:
                         continue
                     if kind in ("FLASER", "RLASER"):

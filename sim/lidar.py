@@ -1,7 +1,11 @@
 """The emulated LMS200: PyBullet ray casting against a world's solids plus the sensor model.
 
-One PyBullet DIRECT client per simulator object; every PyBullet call names it. Ranges come from
-the hit positions (not ``hitFraction * length``).
+One PyBullet DIRECT client per simulator object; every PyBullet call names it. Bullet's ray test
+says which solid a ray meets first; the range is then the exact distance to that solid (the ray's
+entry into the box, or onto the cylinder's circle; ``sim.hits``), not ``hitFraction * length``, so
+it does not depend on how far the ray was cast. Rays are cast to 3 m first and only those that
+meet nothing there on to the maximum range: most beams indoors end within 3 m, and Bullet's cost
+grows with a ray's length.
 """
 
 from __future__ import annotations
@@ -9,7 +13,6 @@ from __future__ import annotations
 import ctypes
 import os
 import sys
-from itertools import chain
 from operator import itemgetter
 from contextlib import contextmanager
 from typing import Iterator
@@ -19,11 +22,13 @@ import numpy as np
 from lms200 import Scan
 
 from .geometry import rectangle_corners
+from .hits import depth_steps, finish_ranges, mix_samples, resolve_hits
 from .sensor import OUTLIER_RANGE_SHARE, SensorConfig
 from .world import World
 
 _STREAM_SENSOR = 2
-_FIRST, _POSITION = itemgetter(0), itemgetter(3)  # rayTestBatch result: body id, hit position
+_STREAM_SURFACE = 3  # the rough cells' grid offset and hash key (apart from the noise stream)
+_FIRST, _FRACTION = itemgetter(0), itemgetter(2)  # rayTestBatch result: body id, hit fraction
 
 
 def _flush_c_stdout() -> None:
@@ -81,6 +86,9 @@ class LMS200Sim:
         self._offsets = s.beam_time_offsets
         self._ray_length = s.range_max + 0.01
         self._half_width = np.deg2rad(s.beam_width_deg) / 2
+        surface = np.random.default_rng([int(seed), _STREAM_SURFACE])
+        self._cell_offset = surface.uniform(0.0, 1.0, 2) * s.noise_tail_patch_m
+        self._cell_key = np.uint64(surface.integers(0, 2**63))
 
     def _load(self, world: World) -> None:
         """Load each solid as a static triangle-mesh body (Bullet's ray test against meshes is
@@ -88,7 +96,7 @@ class LMS200Sim:
         off by up to 2 cm near edges). Cylinders are prisms circumscribing the circle; a hit on
         one is moved onto the exact circle, and a hit Bullet accepts just outside a box's edge
         (its ray-triangle test tolerates 1e-4 x the triangle's width) is rejected (see
-        :meth:`cast`)."""
+        :meth:`cast` and :func:`sim.hits.resolve_hits`)."""
         cid = self.client
         bodies: list[tuple[int, int, int]] = []  # body id, kind (0 box, 1 cylinder), index
         for k, box in enumerate(world.boxes):
@@ -108,7 +116,8 @@ class LMS200Sim:
             self._kind_of_body[body], self._index_of_body[body] = kind, k
         self._boxes = np.asarray(world.boxes, dtype=float)
         self._box_cos, self._box_sin = np.cos(self._boxes[:, 2]), np.sin(self._boxes[:, 2])
-        self._circles = np.asarray(world.cylinders[:, :3], dtype=float)
+        self._circles = np.ascontiguousarray(world.cylinders[:, :3], dtype=float)
+        self._glass = np.ascontiguousarray(np.asarray(world.glass, dtype=float).reshape(-1, 4))
 
     # -- lifetime -----------------------------------------------------------------------------
     def close(self) -> None:
@@ -137,55 +146,41 @@ class LMS200Sim:
     def cast(self, origins: np.ndarray, headings: np.ndarray, _depth: int = 0) -> np.ndarray:
         """Exact ranges (m) of horizontal rays at scan height from (n, 2) origins along (n,)
         world headings (rad); +inf where nothing is hit within range_max."""
-        n = len(headings)
-        start = np.empty((n, 3))
-        start[:, :2] = origins
-        start[:, 2] = self.world.scan_height
+        origins = np.ascontiguousarray(origins, dtype=float)
         ux, uy = np.cos(headings), np.sin(headings)
-        end = start.copy()
-        end[:, 0] += self._ray_length * ux
-        end[:, 1] += self._ray_length * uy
-        hits = pb.rayTestBatch(start, end, physicsClientId=self.client)
-        body = np.fromiter(map(_FIRST, hits), dtype=np.int64, count=n)
-        pos = np.fromiter(chain.from_iterable(map(_POSITION, hits)), dtype=float, count=3 * n).reshape(n, 3)
-        ranges = np.hypot(pos[:, 0] - start[:, 0], pos[:, 1] - start[:, 1])
-        kind = self._kind_of_body[body]  # body -1 reads the last slot: -1
-        ranges[kind < 0] = np.inf
-        index = self._index_of_body[body]
-        again = np.zeros(n, dtype=bool)
-        on_box = np.flatnonzero(kind == 0)
-        if on_box.size:  # reject hits outside the true box (Bullet's edge tolerance)
-            k = index[on_box]
-            bx, c, s = self._boxes[k], self._box_cos[k], self._box_sin[k]
-            dx, dy = pos[on_box, 0] - bx[:, 0], pos[on_box, 1] - bx[:, 1]
-            outside = (np.abs(c * dx + s * dy) > bx[:, 3] + _BOX_TOL_M) | (np.abs(-s * dx + c * dy) > bx[:, 4] + _BOX_TOL_M)
-            if outside.any():  # the ray may still meet that box just beside the false hit: exact entry
-                out = on_box[outside]
-                entry = _ray_box_entry(origins[out], ux[out], uy[out], bx[outside], c[outside], s[outside])
-                meets = np.isfinite(entry)
-                ranges[out[meets]] = entry[meets]
-                again[out[~meets]] = True
-        on_cyl = np.flatnonzero(kind == 1)
-        if on_cyl.size:  # move onto the exact circle; grazing the prism but missing the circle: again
-            circle = self._circles[index[on_cyl]]
-            fx, fy = origins[on_cyl, 0] - circle[:, 0], origins[on_cyl, 1] - circle[:, 1]
-            b = fx * ux[on_cyl] + fy * uy[on_cyl]
-            disc = b * b - (fx * fx + fy * fy - circle[:, 2] ** 2)
-            hit = disc >= 0
-            ranges[on_cyl[hit]] = -b[hit] - np.sqrt(disc[hit])
-            again[on_cyl[~hit]] = True
+        first = min(_FIRST_STAGE_M, self._ray_length)
+        body, dist = self._ray_test(origins, ux, uy, 0.0, first)
+        if first < self._ray_length:  # beams that meet nothing near: the rest of the ray
+            far = np.flatnonzero(body < 0)
+            if far.size:
+                body[far], dist[far] = self._ray_test(origins[far], ux[far], uy[far], first - _STAGE_OVERLAP_M,
+                                                      self._ray_length)
+        ranges, again = resolve_hits(body, dist, origins, ux, uy, self._kind_of_body, self._index_of_body,
+                                     self._boxes, self._box_cos, self._box_sin, self._circles, _BOX_TOL_M)
         redo = np.flatnonzero(again)
         if redo.size:
             if _depth >= _MAX_RECASTS:
                 ranges[redo] = np.inf
             else:  # go on from just past the false hit
                 skip = ranges[redo] + _RECAST_STEP_M
-                u = np.column_stack((ux[redo], uy[redo]))
-                ranges[redo] = skip + self.cast(origins[redo] + skip[:, None] * u, headings[redo], _depth + 1)
-        if _depth == 0 and len(self.world.glass):
-            ranges = np.where(_glass_range(origins, ux, uy, self.world.glass) < ranges, np.inf, ranges)
-        ranges[ranges > self.sensor.range_max] = np.inf
+                ahead = origins[redo] + skip[:, None] * np.column_stack((ux[redo], uy[redo]))
+                ranges[redo] = skip + self.cast(ahead, headings[redo], _depth + 1)
+        finish_ranges(ranges, origins, ux, uy, self._glass if _depth == 0 else _NO_GLASS, self.sensor.range_max)
         return ranges
+
+    def _ray_test(self, origins: np.ndarray, ux: np.ndarray, uy: np.ndarray, near: float,
+                  far: float) -> tuple[np.ndarray, np.ndarray]:
+        """Bullet's first hit on each ray from ``origins`` (n, 2) along (ux, uy) between ``near``
+        and ``far`` m: (n,) body ids (-1 for none) and distances from the origin (m)."""
+        n = len(ux)
+        a, b = np.empty((n, 3)), np.empty((n, 3))
+        a[:, 2] = b[:, 2] = self.world.scan_height
+        a[:, 0], a[:, 1] = origins[:, 0] + near * ux, origins[:, 1] + near * uy
+        b[:, 0], b[:, 1] = origins[:, 0] + far * ux, origins[:, 1] + far * uy
+        hits = pb.rayTestBatch(a, b, physicsClientId=self.client)
+        body = np.fromiter(map(_FIRST, hits), dtype=np.int64, count=n)
+        fraction = np.fromiter(map(_FRACTION, hits), dtype=float, count=n)
+        return body, near + fraction * (far - near)
 
     def beam_poses(self, pose: tuple[float, float, float], twist: tuple[float, float] | None = None) -> np.ndarray:
         """(n_beams, 3) scanner pose at each beam's time for a scan starting at ``pose`` and moving
@@ -233,7 +228,9 @@ class LMS200Sim:
             r = np.where(spurious, r * self.rng.uniform(lo, hi, s.n_beams), r)
         sigma = s.sigma_at(r) if s.noise_sigma_per_m else s.noise_sigma
         if s.noise_tail_prob > 0:
-            sigma = np.where(self.rng.random(s.n_beams) < s.noise_tail_prob, s.noise_tail_sigma, sigma)
+            rough = (self._rough_cells(bp, r) if s.noise_tail_patch_m > 0
+                     else self.rng.random(s.n_beams) < s.noise_tail_prob)
+            sigma = np.where(rough, s.noise_tail_sigma, sigma)
         r = r + sigma * noise
         if s.quantise:
             r = np.rint(r / s.unit_m) * s.unit_m
@@ -247,6 +244,14 @@ class LMS200Sim:
                 r[np.isposinf(r) | (r > s.max_reading)] = s.max_reading
         return Scan(r, s.angle_min, s.angle_increment, 0.0, s.range_max, stamp)
 
+    def _rough_cells(self, bp: np.ndarray, ranges: np.ndarray) -> np.ndarray:
+        """Which beams end in a rough cell of the surface grid (see SensorConfig.noise_tail_patch_m)."""
+        s = self.sensor
+        heading = bp[:, 2] + self._angles
+        cell = np.floor((bp[:, :2] + ranges[:, None] * np.column_stack((np.cos(heading), np.sin(heading)))
+                         - self._cell_offset) / s.noise_tail_patch_m).astype(np.int64).view(np.uint64)
+        return _unit_hash(cell[:, 0], cell[:, 1], self._cell_key) < s.noise_tail_prob
+
     def _mix_edges(self, bp: np.ndarray, ranges: np.ndarray) -> np.ndarray:
         """Mixed pixels. Each beam's spot is sampled at 5 bearings (-w/2, -w/4, 0, +w/4, +w/2 of
         beam width w): the centre is the beam's own ray; the half facing a neighbour across a
@@ -255,9 +260,7 @@ class LMS200Sim:
         far group, the beam returns their mean (with a far group at no return, the near mean when
         the near group holds the larger share, else no return)."""
         gap = self.sensor.mixed_gap
-        with np.errstate(invalid="ignore"):
-            step = np.abs(np.diff(ranges))
-        g = np.flatnonzero((step > gap) | (np.isfinite(ranges[1:]) != np.isfinite(ranges[:-1])))
+        g = depth_steps(ranges, gap)
         if g.size == 0:
             return ranges
         hw = self._half_width
@@ -266,51 +269,18 @@ class LMS200Sim:
         origins = np.vstack((np.repeat(bp[g, :2], 2, axis=0), np.repeat(bp[g + 1, :2], 2, axis=0)))
         heads = np.concatenate((((bp[g, 2] + self._angles[g])[:, None] + right).ravel(),
                                 ((bp[g + 1, 2] + self._angles[g + 1])[:, None] + left).ravel()))
-        sub = self.cast(origins, heads)
-        samples = np.repeat(ranges[:, None], 5, axis=1)
-        samples[g, 3:5] = sub[: 2 * g.size].reshape(-1, 2)
-        samples[g + 1, 0:2] = sub[2 * g.size :].reshape(-1, 2)
-        idx = np.union1d(g, g + 1)
-        smp = samples[idx]
-        near = smp.min(axis=1)
-        far = ~(smp <= (near + gap)[:, None])  # +inf counts as far
-        n_far = far.sum(axis=1)
-        finite = np.isfinite(smp).all(axis=1)
-        with np.errstate(invalid="ignore"):
-            near_mean = np.where(far, 0.0, smp).sum(axis=1) / np.maximum(5 - n_far, 1)
-            mixed = np.where(finite, smp.mean(axis=1) if finite.any() else 0.0,
-                             np.where(2 * n_far > 5, np.inf, near_mean))
-        out = ranges.copy()
-        split = (n_far > 0) & np.isfinite(near)
-        out[idx[split]] = mixed[split]
-        return out
+        return mix_samples(ranges, g, self.cast(origins, heads), gap)
 
 
-def _ray_box_entry(origins: np.ndarray, ux: np.ndarray, uy: np.ndarray, boxes: np.ndarray, c: np.ndarray,
-                   s: np.ndarray) -> np.ndarray:
-    """Distance (m) at which each ray enters its box (slab method, box frame); +inf if it misses."""
-    ox, oy = origins[:, 0] - boxes[:, 0], origins[:, 1] - boxes[:, 1]
-    lo_x, lo_y = c * ox + s * oy, -s * ox + c * oy
-    dx, dy = c * ux + s * uy, -s * ux + c * uy
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tx1, tx2 = (-boxes[:, 3] - lo_x) / dx, (boxes[:, 3] - lo_x) / dx
-        ty1, ty2 = (-boxes[:, 4] - lo_y) / dy, (boxes[:, 4] - lo_y) / dy
-    t_in = np.maximum(np.fmin(tx1, tx2), np.fmin(ty1, ty2))
-    t_out = np.minimum(np.fmax(tx1, tx2), np.fmax(ty1, ty2))
-    return np.where((t_in <= t_out) & (t_in > 0), t_in, np.inf)
-
-
-def _glass_range(origins: np.ndarray, ux: np.ndarray, uy: np.ndarray, glass: np.ndarray) -> np.ndarray:
-    """Distance (m) along each ray to the nearest glass segment it crosses (+inf for none)."""
-    ax, ay = glass[:, 0], glass[:, 1]
-    ex, ey = glass[:, 2] - ax, glass[:, 3] - ay
-    wx, wy = ax[None, :] - origins[:, 0:1], ay[None, :] - origins[:, 1:2]
-    den = ux[:, None] * ey[None, :] - uy[:, None] * ex[None, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (wx * ey[None, :] - wy * ex[None, :]) / den  # along the ray
-        s = (wx * uy[:, None] - wy * ux[:, None]) / den  # along the glass, 0..1
-    hit = (np.abs(den) > 1e-12) & (t > 0) & (s >= 0) & (s <= 1)
-    return np.where(hit, t, np.inf).min(axis=1)
+def _unit_hash(a: np.ndarray, b: np.ndarray, key: np.uint64) -> np.ndarray:
+    """A uniform number in [0, 1) for each pair of 64-bit integers (splitmix64 of a mix of both)."""
+    z: np.ndarray
+    with np.errstate(over="ignore"):
+        z = a * np.uint64(0x9E3779B97F4A7C15) + b * np.uint64(0xC2B2AE3D27D4EB4F) + key
+        z = np.bitwise_xor(z, np.right_shift(z, np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = np.bitwise_xor(z, np.right_shift(z, np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        z = np.bitwise_xor(z, np.right_shift(z, np.uint64(31)))
+    return np.right_shift(z, np.uint64(11)).astype(np.float64) * 2.0 ** -53
 
 
 _PRISM_TOLERANCE_M = 2e-4  # largest gap between a cylinder and its circumscribed prism
@@ -323,6 +293,9 @@ def _prism_sides(r: np.ndarray | float) -> np.ndarray:
 
 
 _MAX_TRIANGLE_WIDTH_M = np.inf  # side faces are two triangles each (false hits are rejected)
+_NO_GLASS = np.zeros((0, 4))
+_FIRST_STAGE_M = 3.0  # rays are cast to this range first, and only those meeting nothing on to range_max
+_STAGE_OVERLAP_M = 1e-3  # the second stage starts this far before the first one's end
 _BOX_TOL_M = 1e-7  # a box hit farther than this outside the box is Bullet's edge tolerance
 _RECAST_STEP_M = 1e-4  # a rejected hit's ray goes on from this far past it
 _MAX_RECASTS = 4

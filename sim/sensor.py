@@ -51,8 +51,14 @@ class SensorConfig:
         noise_tail_prob, noise_tail_sigma: with this probability a beam's range error is drawn
             from a wider Gaussian of this sigma (m) instead of the core: the heavy tail real scans
             show (surfaces rougher than the worlds' planes, the spot's footprint).
+        noise_tail_patch_m: 0: each beam draws the wide Gaussian on its own (probability
+            ``noise_tail_prob``); > 0: the world's surfaces are cut into square cells of this size
+            (m, world frame, a grid at a random offset) of which a share ``noise_tail_prob`` is
+            rough (a hash of the cell and the simulator's seed), and every beam ending in a rough
+            cell draws from the wide Gaussian: rough stretches of surface (shelves, radiators,
+            curtains, clutter against walls) that stay where they are from scan to scan.
 
-    The last six fields default to the datasheet model (none of these effects);
+    The last seven fields default to the datasheet model (none of these effects);
     ``lmsbench calibrate`` fits all of them to a real log.
     """
 
@@ -72,6 +78,7 @@ class SensorConfig:
     max_reading: float | None = None
     noise_tail_prob: float = 0.0
     noise_tail_sigma: float = 0.0
+    noise_tail_patch_m: float = 0.0
 
     def __post_init__(self) -> None:
         if self.units not in ("mm", "cm"):
@@ -96,6 +103,8 @@ class SensorConfig:
             raise ValueError(f"noise_tail_prob: must be in [0, 1), got {self.noise_tail_prob}")
         if self.noise_tail_sigma < 0:
             raise ValueError(f"noise_tail_sigma: must be >= 0, got {self.noise_tail_sigma}")
+        if not (np.isfinite(self.noise_tail_patch_m) and self.noise_tail_patch_m >= 0):
+            raise ValueError(f"noise_tail_patch_m: must be >= 0, got {self.noise_tail_patch_m}")
         if self.max_reading is not None and not 0 < self.max_reading <= self.range_max:
             raise ValueError(f"max_reading: must be in (0, range_max = {self.range_max}], got {self.max_reading}")
 

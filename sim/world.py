@@ -111,30 +111,37 @@ class World:
         """
         try:
             d = json.loads(Path(path).read_text(encoding="ascii"))
+            if not isinstance(d, dict):
+                raise TypeError(f"the top level is a {type(d).__name__}, not a mapping of walls, boxes, ...")
             walls = np.asarray(d.get("walls", []), dtype=float).reshape(-1, 4)
             circles = np.asarray(d.get("circles", []), dtype=float).reshape(-1, 3)
+            if not (np.isfinite(walls).all() and np.isfinite(circles).all()):
+                raise ValueError("walls and circles must be finite numbers")
         except (ValueError, TypeError, UnicodeDecodeError) as exc:
             raise LmsbenchError(f"{path}: not a world.json ({exc})") from None
-        h = float(d.get("scan_height", SCAN_HEIGHT_M))
-        walls_only = "boxes" not in d
-        if walls_only:
-            route = np.asarray(d.get("route_nodes", []), dtype=float).reshape(-1, 2)
-            walls = orient_walls(walls, np.vstack([circles[:, :2], route]))
-            boxes = boxes_behind_faces(walls, h)
-            cylinders = np.array([[cx, cy, r, 0.0, 2.0] for cx, cy, r in circles], dtype=float).reshape(-1, 5)
-        else:
-            boxes, cylinders = d["boxes"], d.get("cylinders", [])
-        world = cls(
-            name=str(d.get("name", Path(path).stem)),
-            seed=int(d.get("seed", 0)),
-            boxes=boxes,
-            cylinders=cylinders,
-            scan_height=h,
-            route_nodes=d.get("route_nodes", []),
-            route_edges=d.get("route_edges", []),
-            route_targets=d.get("route_targets", []),
-            glass=d.get("glass", []),
-        )
+        try:
+            h = float(d.get("scan_height", SCAN_HEIGHT_M))
+            walls_only = "boxes" not in d
+            if walls_only:
+                route = np.asarray(d.get("route_nodes", []), dtype=float).reshape(-1, 2)
+                walls = orient_walls(walls, np.vstack([circles[:, :2], route]))
+                boxes = boxes_behind_faces(walls, h)
+                cylinders = np.array([[cx, cy, r, 0.0, 2.0] for cx, cy, r in circles], dtype=float).reshape(-1, 5)
+            else:
+                boxes, cylinders = d["boxes"], d.get("cylinders", [])
+            world = cls(
+                name=str(d.get("name", Path(path).stem)),
+                seed=int(d.get("seed", 0)),
+                boxes=boxes,
+                cylinders=cylinders,
+                scan_height=h,
+                route_nodes=d.get("route_nodes", []),
+                route_edges=d.get("route_edges", []),
+                route_targets=d.get("route_targets", []),
+                glass=d.get("glass", []),
+            )
+        except (ValueError, TypeError, KeyError, IndexError) as exc:
+            raise LmsbenchError(f"{path}: not a world.json ({type(exc).__name__}: {exc})") from None
         bad = unreproduced(walls, world.walls, FACE_BOX_THICKNESS_M) if walls_only else None
         if bad is not None:
             x1, y1, x2, y2 = walls[bad]

@@ -36,6 +36,9 @@ def files(tmp_path_factory):
     (d / "binary.clf").write_bytes(bytes(range(256)) * 8)
     (d / "binary.yaml").write_bytes(b"\x00\x01\x02" * 100)
     (d / "binary.json").write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(200))
+    (d / "list.json").write_text("[1, 2]")
+    (d / "nan_walls.json").write_text('{"walls": [[0, 0, NaN, 1]]}')
+    (d / "bad_boxes.json").write_text('{"boxes": [[1, 2]]}')
     (d / "plain.gz").write_text("FLASER 3 1.0 1.0 1.0 0 0 0 0 0 0 1.0 host 1.0\n")
     (d / "fake.bag").write_text("not a bag\n")
     (d / "empty.clf").write_text("")
@@ -108,6 +111,9 @@ CASES = [
     (["simulate", "--world", "offfice", "--out", O], "offfice"),
     (["simulate", "--world", "{missing.json}", "--out", O], "missing.json"),
     (["simulate", "--world", "{binary.json}", "--out", O], "binary.json"),
+    (["simulate", "--world", "{list.json}", "--out", O], "list.json"),
+    (["simulate", "--world", "{nan_walls.json}", "--out", O], "finite"),
+    (["simulate", "--world", "{bad_boxes.json}", "--out", O], "bad_boxes.json"),
     (["simulate", "--config", "{binary.yaml}", "--out", O], "binary.yaml"),
     (["simulate", "--config", "{list.yaml}", "--out", O], "list.yaml"),
     (["simulate", "--config", "{missing.yaml}", "--out", O], "missing.yaml"),
@@ -216,6 +222,8 @@ CASES = [
     (["info", "{empty.clf}"], "empty"),
     (["info", "{fake.bag}"], "fake.bag"),
     (["info", "{notalog.clf}"], "no laser"),
+    (["info", "{good.clf}", "--laser-fov-deg", "90", "--laser-resolution-deg", "0.5"], "own beam geometry"),
+    (["compare", "{good.clf}", "--laser-resolution-deg", "1", "--out", O], "own beam geometry"),
     # calibrate
     (["calibrate", "{missing.clf}"], "missing.clf"),
     (["calibrate", "{binary.clf}"], "binary"),

@@ -4,6 +4,7 @@ rows of the arrays with the record field names."""
 
 from __future__ import annotations
 
+import copy
 import pickle
 
 import numpy as np
@@ -42,6 +43,9 @@ def test_extract_many_equals_extract_on_each_scan(method: str) -> None:
         found += len(fs.lines)
     assert found > len(scans)
     assert extract_many([], method=method) == []
+    # a batch's FeatureSet (views cut from the batch rows on first read) pickles and copies as a FeatureSet
+    again = pickle.loads(pickle.dumps(many[2]))
+    assert type(again) is FeatureSet and again == many[2] == copy.deepcopy(many[2])
 
 
 def test_extract_many_takes_a_config_or_params() -> None:

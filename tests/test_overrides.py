@@ -39,3 +39,21 @@ def test_a_sweep_cell_ignores_another_methods_fields_but_checks_them():
     assert extractor_overrides({"extractor.hough.rho_step": 0.01}, ["sensor"], other_methods=True) == {}
     with pytest.raises(OverrideError, match="rho_stp"):
         extractor_overrides({"extractor.hough.rho_stp": 0.01}, ["sensor"], other_methods=True)
+
+
+@pytest.mark.parametrize("name", ["sigma_r", "sigma_r_cm"])
+def test_a_noise_field_takes_metres_or_auto_and_nothing_else(name):
+    """sigma_r / sigma_r_cm are `float | str`: a number of metres or "auto" (the docs' promise), while the
+    config, not the type check, refuses other words and bad numbers."""
+    from experiments.compare import _check_types
+    from features.registry import make_config
+
+    for value in ("auto", 0.01):
+        _check_types("sensor", {name: value})
+        assert getattr(make_config("sensor", **{name: value}), name) == value
+    for value in ("autox", -1.0):
+        _check_types("sensor", {name: value})
+        with pytest.raises(LmsbenchError, match=name):
+            make_config("sensor", **{name: value})
+    with pytest.raises(LmsbenchError, match="k must be a whole number"):
+        _check_types("sensor", {"k": 2.5})

@@ -208,3 +208,24 @@ def test_noise_tail_draws_a_share_of_beams_from_the_wide_gaussian() -> None:
     err = np.abs(measured[:, ok] - exact[ok])
     # the core (2 mm) never reaches 2 cm; the tail does with probability 2 (1 - Phi(0.4)) = 0.689
     assert np.mean(err > 0.02) == pytest.approx(0.2 * 0.6892, rel=0.1)
+
+
+def test_rough_patches_stay_in_the_world_and_gather_the_tail() -> None:
+    """noise_tail_patch_m > 0: the wide Gaussian comes from rough cells of the surfaces, so from
+    one pose the same beams draw it scan after scan, in runs; the calibration's clustering of the
+    tail reads more than for beams drawn one by one (the statistic the patch size is fitted on)."""
+    sensor = SensorConfig.ideal(noise_sigma=0.002, noise_tail_prob=0.3, noise_tail_sigma=0.05, noise_tail_patch_m=0.5)
+    exact, measured = _static_scans(sensor, 60)
+    ok = np.isfinite(exact) & (exact < 7.5)
+    share = np.mean(np.abs(measured[:, ok] - exact[ok]) > 0.02, axis=0)  # per beam over the scans
+    rough = share > 0.35  # a rough beam exceeds 2 cm with probability 0.69, a smooth one never
+    assert np.all((share < 0.05) | (share > 0.45))  # each beam is rough in every scan or in none
+    assert 0.05 < rough.mean() < 0.8
+    runs = np.count_nonzero(np.diff(rough.astype(int)) == 1) + int(rough[0])
+    assert runs < 0.25 * np.count_nonzero(rough)  # rough beams come in stretches, not one by one
+
+    def clustering(s: SensorConfig) -> float:
+        return calibrate_scans(simulate_records("office", seed=6, duration=12.0, sensor=s, rate_hz=5.0)).tail_clustering.value
+
+    white = SensorConfig(noise_sigma=0.004, noise_tail_prob=0.2, noise_tail_sigma=0.05)
+    assert clustering(white) < 0.2 < 0.4 < clustering(white.replace(noise_tail_patch_m=0.7))

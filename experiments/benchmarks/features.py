@@ -8,15 +8,18 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from experiments.synthetic import cast
 from features import available_methods, extract, extract_many, make_config
+from features.noise_estimate import AUTO, neighbour_sigma
 from features.registry import backend_of
 from lms200 import Scan
 
 NAME = "features"
+NOISE_GIVEN = "sensor (noise given)"  # the sensor method with a cm-mode log's noise estimated once
 ANGLES = -np.pi / 2 + np.arange(361) * np.deg2rad(0.5)  # LMS200 beam bearings (rad), sensor frame
 
 
@@ -73,30 +76,35 @@ def mit_scans(count: int) -> list[Scan]:
 CHUNK = 50  # scans timed together; each chunk's best repeat counts (robust to bursts of load)
 
 
-def time_methods(scans: list[Scan], methods: list[str], repeats: int) -> dict[str, dict[str, float]]:
+def time_methods(scans: list[Scan], methods: list[str], repeats: int,
+                 variants: dict[str, tuple[str, Any]] | None = None) -> dict[str, dict[str, float]]:
     """CPU seconds per scan of each method over ``scans``: ``single`` (one ``extract`` call per
     scan) and ``batch`` (one ``extract_many`` call per chunk of CHUNK scans), each chunk's best
     (least disturbed) of ``repeats`` passes, summed over the chunks; the methods and the two modes
     interleaved within every repeat, so that load on a shared machine falls on all alike. Also
-    the lines and corners per scan."""
-    configs = {m: make_config(m) for m in methods}
+    the lines and corners per scan. ``variants``: more rows, label -> (method, config)."""
+    runs = {m: (m, make_config(m)) for m in methods}
+    runs.update(variants or {})
+    methods = list(runs)
+    configs = {label: cfg for label, (_, cfg) in runs.items()}
+    names = {label: m for label, (m, _) in runs.items()}
     for m in methods:  # load the compiled kernels (and compile them in a fresh checkout): not timed
-        extract_many(scans[:2], m, configs[m])
-        extract(scans[0], m, configs[m])
+        extract_many(scans[:2], names[m], configs[m])
+        extract(scans[0], names[m], configs[m])
     chunks = [scans[i : i + CHUNK] for i in range(0, len(scans), CHUNK)]
     best = {m: {"single": np.full(len(chunks), np.inf), "batch": np.full(len(chunks), np.inf)} for m in methods}
     counts = {}
     for rep in range(repeats):
         order = methods[rep % len(methods):] + methods[: rep % len(methods)]
         for m in order:
-            cfg = configs[m]
+            cfg, name = configs[m], names[m]
             n_lines = n_corners = 0
             for c, chunk in enumerate(chunks):
                 c0 = time.process_time()
                 for s in chunk:
-                    extract(s, m, cfg)
+                    extract(s, name, cfg)
                 c1 = time.process_time()
-                many = extract_many(chunk, m, cfg)
+                many = extract_many(chunk, name, cfg)
                 c2 = time.process_time()
                 best[m]["single"][c] = min(best[m]["single"][c], c1 - c0)
                 best[m]["batch"][c] = min(best[m]["batch"][c], c2 - c1)
@@ -111,7 +119,9 @@ def run(quick: bool = False) -> list[dict]:
     """One row per method x scan set (simulated office, 361 beams; MIT CSAIL, where present):
     scans/s of single ``extract`` calls and of ``extract_many`` batches (process CPU time, each
     chunk's best of the repeats, methods interleaved), per-scan microseconds, and the ratios to
-    the sensor method (> 1: faster than sensor)."""
+    the sensor method (> 1: faster than sensor). Where the sensor method estimates the noise from
+    the scans (``sigma_r_cm="auto"``, SICK cm mode: MIT CSAIL), a row "sensor (noise given)" runs
+    it with that noise estimated once from all the scans, as ``lmsbench compare`` does per log."""
     count = 100 if quick else 600
     repeats = 2 if quick else 7
     office, source = office_scans(count)
@@ -120,11 +130,15 @@ def run(quick: bool = False) -> list[dict]:
     for name, scans in ((source, office), ("mit csail", mit_scans(count))):
         if not scans:
             continue
-        t = time_methods(scans, methods, repeats)
+        variants = {}
+        if "sensor" in methods and make_config("sensor").sigma_for(scans[0].range_max) == AUTO:
+            variants[NOISE_GIVEN] = ("sensor", make_config("sensor", sigma_r_cm=neighbour_sigma(scans)))
+        t = time_methods(scans, methods, repeats, variants)
         ref = t.get("sensor", t[methods[0]])
-        for m in methods:
+        for m in t:
             rows.append({
-                "benchmark": "extract", "method": m, "backend": backend_of(m), "source": name, "scans": len(scans),
+                "benchmark": "extract", "method": m, "backend": backend_of(m if m != NOISE_GIVEN else "sensor"),
+                "source": name, "scans": len(scans),
                 "single_scans_per_s": 1.0 / t[m]["single"], "batch_scans_per_s": 1.0 / t[m]["batch"],
                 "single_us": 1e6 * t[m]["single"], "batch_us": 1e6 * t[m]["batch"],
                 "single_vs_sensor": ref["single"] / t[m]["single"], "batch_vs_sensor": ref["batch"] / t[m]["batch"],

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from experiments.logargs import add_log_options, read_log_options
 from experiments.options import SEED, check_log, check_out, check_seeds, check_yaml, count, positive, world_name
+from experiments.sim2real import DEFAULT_DURATION_S, DEFAULT_SEEDS
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -16,8 +17,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--world", default="mit", type=world_name, help="simulated world (default mit, the MIT-CSAIL-like preset)")
     p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
                    help="use this sensor model instead of calibrating on the log")
-    p.add_argument("--seeds", nargs="+", type=SEED, default=[0, 1], help="simulated runs (default 0 1)")
-    p.add_argument("--duration", type=positive("s"), default=60.0, help="simulated seconds per seed (default 60)")
+    p.add_argument("--seeds", nargs="+", type=SEED, default=list(DEFAULT_SEEDS),
+                   help="simulated runs, one world each (default 0 1 2 3 4 5)")
+    p.add_argument("--duration", type=positive("s"), default=DEFAULT_DURATION_S,
+                   help="simulated seconds per seed (default 20)")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=3.0, help="simulated scans kept per second (default 3)")
     p.add_argument("--stride", type=count(1), default=5, help="use every STRIDE-th real scan (default 5)")
     p.add_argument("--max-scans", type=count(1), default=400, help="at most this many real scans (default 400)")

@@ -56,8 +56,10 @@ class CornerParams(NamedTuple):
 
 @kernel
 def wrap(a: float) -> float:
-    """An angle wrapped to (-pi, pi] (rad)."""
-    w = math.pi - (math.pi - a) % TWO_PI
+    """An angle wrapped to (-pi, pi] (rad): pi - (pi - a) mod 2 pi, the modulo skipped where it
+    changes nothing (0 <= pi - a < 2 pi, the common case)."""
+    t = math.pi - a
+    w = math.pi - t if 0.0 <= t < TWO_PI else math.pi - t % TWO_PI
     return w + TWO_PI if w <= -math.pi else w
 
 
@@ -79,11 +81,24 @@ def npmax(a: float, b: float) -> float:
     return a if a >= b else b
 
 
+class Fit(NamedTuple):
+    """A total-least-squares line fit of a range of points (``fit_range``)."""
+
+    rho: float  # m, >= 0
+    alpha: float  # rad, (-pi, pi]
+    cos: float  # cos(alpha)
+    sin: float  # sin(alpha)
+    n: float  # points
+    mx: float  # centroid, m
+    my: float
+    along: float  # scatter along the line, m^2
+    across: float  # residual sum of squares across it, m^2
+
+
 @kernel
 def fit_range(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     """Total-least-squares line ``x cos(alpha) + y sin(alpha) = rho`` of points s..e (inclusive)
-    from prefix sums (Arras & Siegwart 1997): (rho >= 0, alpha in (-pi, pi], n, centroid x, y,
-    scatter along the line, residual sum of squares across it)."""
+    from prefix sums (Arras & Siegwart 1997), a Fit."""
     lo, hi = s, e + 1
     n = float(hi - lo)
     mx = (sx[hi] - sx[lo]) / n
@@ -92,23 +107,25 @@ def fit_range(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     cyy = (syy[hi] - syy[lo]) - n * my * my
     cxy = (sxy[hi] - sxy[lo]) - n * mx * my
     alpha = 0.5 * math.atan2(-2.0 * cxy, cyy - cxx)
-    rho = mx * math.cos(alpha) + my * math.sin(alpha)
-    if rho < 0:
-        alpha = alpha + math.pi
-    alpha = wrap(alpha)
-    rho = abs(rho)
     c, si = math.cos(alpha), math.sin(alpha)
+    rho = mx * c + my * si
+    turned = rho < 0
+    if turned:
+        alpha = alpha + math.pi
+    wrapped = wrap(alpha)
+    if turned or wrapped != alpha:  # else cos and sin are those of alpha already
+        c, si = math.cos(wrapped), math.sin(wrapped)
+    rho = abs(rho)
     across = npmax(cxx * c * c + cyy * si * si + 2 * cxy * si * c, 0.0)
     along = npmax(cxx + cyy - across, 1e-12)
-    return rho, alpha, n, mx, my, along, across
+    return Fit(rho, wrapped, c, si, n, mx, my, along, across)
 
 
 @kernel
-def trim(x, y, s, e, rho, alpha, tol, keep):  # noqa: ANN001, ANN201
+def trim(x, y, s, e, rho, c, si, tol, keep):  # noqa: ANN001, ANN201
     """The range s..e left after dropping the leading and trailing points farther than ``tol``
-    (m) from the line (a small neighbouring face the split threshold let in); never below ``keep``
-    points (then s..e whole)."""
-    c, si = math.cos(alpha), math.sin(alpha)
+    (m) from the line x c + y si = rho (a small neighbouring face the split threshold let in);
+    never below ``keep`` points (then s..e whole)."""
     lo = -1
     hi = -1
     for p in range(s, e + 1):
@@ -122,11 +139,10 @@ def trim(x, y, s, e, rho, alpha, tol, keep):  # noqa: ANN001, ANN201
 
 
 @kernel
-def straight_enough(x, y, s, e, rho, alpha, z_min, dead_zone) -> bool:  # noqa: ANN001
-    """Wald-Wolfowitz runs test on the signs of the residuals of points s..e from their line:
-    False when the runs are ``z_min`` std fewer than noise would give (an arc); residuals within
-    ``dead_zone`` (m) carry no sign."""
-    c, si = math.cos(alpha), math.sin(alpha)
+def straight_enough(x, y, s, e, rho, c, si, z_min, dead_zone) -> bool:  # noqa: ANN001
+    """Wald-Wolfowitz runs test on the signs of the residuals of points s..e from their line
+    x c + y si = rho: False when the runs are ``z_min`` std fewer than noise would give (an arc);
+    residuals within ``dead_zone`` (m) carry no sign."""
     n_signed = 0
     n_pos = 0.0
     changes = 0.0
@@ -150,66 +166,177 @@ def straight_enough(x, y, s, e, rho, alpha, z_min, dead_zone) -> bool:  # noqa: 
 
 
 @kernel
-def segment_lines(ranges, bearings, range_lo, range_hi, increment, p):  # noqa: ANN001, ANN201
-    """The lines of one scan (sensor frame) in beam order, as the rows of ``features.types.Lines``
-    (values (L, 10), beams (L, 3)); beams with a range in [range_lo, range_hi] (m) are valid;
-    ``p`` a SplitParams. The (rho, alpha) covariance is
+def bearing_table(bearings):  # noqa: ANN001, ANN201
+    """(cos, sin) of every beam's bearing (rad), computed once per scan geometry with the libm
+    calls a kernel would make per beam (so the points are the same to the last bit)."""
+    c = np.empty(bearings.size)
+    s = np.empty(bearings.size)
+    for i in range(bearings.size):
+        c[i] = math.cos(bearings[i])
+        s[i] = math.sin(bearings[i])
+    return c, s
+
+
+@kernel
+def gap_exceeds(dx: float, dy: float, limit: float) -> bool:
+    """hypot(dx, dy) > limit, decided as math.hypot decides it: from sqrt(dx^2 + dy^2) (a few
+    times cheaper; within 3 ulp of hypot) unless that lies within 1e-12 of the limit, overflows,
+    or the limit is nan, where hypot itself decides."""
+    gap = math.sqrt(dx * dx + dy * dy)
+    if not abs(gap - limit) > 1e-12 * abs(limit) or gap == np.inf:
+        gap = math.hypot(dx, dy)
+    return gap > limit
+
+
+@kernel
+def disconnected(dx, dy, r_prev, sin_step, sin_rest, ratio, margin) -> bool:  # noqa: ANN001
+    """Whether two neighbouring points (dx, dy) apart (m) are not connected: farther apart than the
+    adaptive breakpoint distance D = r_prev sin_step / sin_rest + margin (``breakpoint_distance``),
+    or D <= 0 or nan. Decided from squares and ``ratio`` = sin_step / sin_rest (no square root, no
+    division; both sides within 1e-14 of hypot's and the quotient's) except within 1e-9 of the
+    limit or outside the normal range of squares, where ``gap_exceeds`` and D itself decide: the
+    decisions are those of ``math.hypot(dx, dy) > D or D <= 0``."""
+    g2 = dx * dx + dy * dy
+    lim = r_prev * ratio + margin
+    lim2 = lim * lim
+    if lim > 0 and 1e-280 < lim2 < np.inf and g2 < np.inf and abs(g2 - lim2) > 1e-9 * lim2:
+        return g2 > lim2
+    dmax = r_prev * sin_step / sin_rest + margin
+    return gap_exceeds(dx, dy, dmax) or dmax <= 0
+
+
+@kernel
+def split_at(x, y, s, e, threshold, cf, sf, rho_f, chord):  # noqa: ANN001, ANN201
+    """Where points s..e (e - s >= 2) split: the interior point farthest from the chord between the
+    end points (the first of equal ones) when some point lies farther than ``threshold`` (m) from
+    the chord (``chord``: iepf) or from the fitted line x cf + y sf = rho_f (split_merge; end
+    points included); -1 when none does, or when a distance is nan."""
+    dx, dy = x[e] - x[s], y[e] - y[s]
+    norm = npmax(math.hypot(dx, dy), 1e-12)
+    nx, ny = -dy / norm, dx / norm
+    rho_c = nx * x[s] + ny * y[s]
+    cmax = -1.0  # the end points count as -1 from the chord
+    at = s
+    if chord:
+        dmax = -1.0
+    else:
+        d_s = abs(x[s] * cf + y[s] * sf - rho_f)
+        d_e = abs(x[e] * cf + y[e] * sf - rho_f)
+        dmax = max(d_s, d_e)
+        if d_s != d_s or d_e != d_e:
+            return -1
+    nan = False
+    for q in range(s + 1, e):
+        dc = abs(x[q] * nx + y[q] * ny - rho_c)
+        if dc > cmax:
+            cmax = dc
+            at = q
+        d = dc if chord else abs(x[q] * cf + y[q] * sf - rho_f)
+        if d > dmax:
+            dmax = d
+        nan = nan or dc != dc or d != d
+    if nan or not dmax > threshold:
+        return -1
+    return at
+
+
+class Workspace(NamedTuple):
+    """Scratch arrays of ``segment_lines`` and ``corners`` for scans of up to n beams, allocated once
+    per call of ``extract_scan`` / ``extract_batch`` (``workspace``) and overwritten per scan."""
+
+    idx: np.ndarray  # (n,) beam index of each valid point
+    x: np.ndarray  # (n,) m
+    y: np.ndarray  # (n,) m
+    r: np.ndarray  # (n,) range, m
+    no_return: np.ndarray  # (n,) +inf beams before each point
+    sums: np.ndarray  # (5, n + 1) prefix sums of x, y, x^2, y^2, xy
+    seg_s: np.ndarray  # (2n + 2,) first and last point of each segment
+    seg_e: np.ndarray
+    stack_s: np.ndarray  # (2n + 2,) the depth-first split stack
+    stack_e: np.ndarray
+    rms: np.ndarray  # (2n + 2,) merged RMS residual of each neighbour pair
+    src: np.ndarray  # (2n + 2,) the segment of the previous merge pass each one is (-1: merged)
+    pick: np.ndarray  # (2n + 2,) bool
+    lv: np.ndarray  # (n + 1, 10) the rows of features.types.Lines
+    lb: np.ndarray  # (n + 1, 3)
+    cv: np.ndarray  # (n + 1, 3) the rows of features.types.Corners
+    cb: np.ndarray  # (n + 1, 3)
+
+
+@kernel
+def workspace(n):  # noqa: ANN001, ANN201
+    """The Workspace of scans of n beams."""
+    m = 2 * n + 2
+    return Workspace(
+        np.empty(n, np.int64), np.empty(n), np.empty(n), np.empty(n), np.empty(n, np.int64), np.zeros((5, n + 1)),
+        np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m),
+        np.empty(m, np.int64), np.zeros(m, np.bool_), np.empty((n + 1, 10)), np.empty((n + 1, 3), np.int64), np.empty((n + 1, 3)),
+        np.empty((n + 1, 3), np.int64),
+    )
+
+
+@kernel
+def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  # noqa: ANN001, ANN201
+    """The lines of one scan (sensor frame) in beam order, written as the rows of
+    ``features.types.Lines`` into ``ws.lv`` (values) and ``ws.lb`` (beams); returns their number.
+    Beams with a range in [range_lo, range_hi] (m) are valid; ``cos_b``, ``sin_b`` the beams'
+    bearing cosines and sines (``bearing_table``); ``p`` a SplitParams; ``ws`` a Workspace of at
+    least the scan's beams. The (rho, alpha) covariance is
     that of a total-least-squares fit under isotropic noise sigma: var(alpha) = s^2/S,
     var(rho) = s^2/n + t^2 s^2/S, cov = t s^2/S (t: the centroid's coordinate along the line,
     S: the scatter along it)."""
     sigma, lam, threshold, merge_rms = p.sigma, p.breakpoint_lambda, p.split_threshold, p.merge_rms
     min_points, min_length, max_skip, runs_z, chord = p.min_points, p.min_length, p.max_skip, p.runs_z, p.chord
-    valid = np.empty(ranges.size, np.bool_)
-    for i in range(ranges.size):
-        valid[i] = ranges[i] >= range_lo and ranges[i] <= range_hi
-    idx = np.flatnonzero(valid)
-    n_pts = idx.size
-    x = np.empty(n_pts)
-    y = np.empty(n_pts)
-    r = np.empty(n_pts)
-    no_return = np.empty(n_pts, np.int64)  # +inf (no-return) beams before each point
+    n_beams = ranges.size
+    # the valid points (Cartesian), the +inf (no-return) beams before each, and the prefix sums
+    # of the fits (np.cumsum order), in one pass over the beams
+    idx, x, y, r, no_return = ws.idx, ws.x, ws.y, ws.r, ws.no_return
+    sx, sy, sxx, syy, sxy = ws.sums[0], ws.sums[1], ws.sums[2], ws.sums[3], ws.sums[4]  # [0] stays 0
     n_inf = 0
-    beam = 0
-    for p in range(n_pts):
-        while beam < idx[p]:
-            if ranges[beam] == np.inf:
-                n_inf += 1
-            beam += 1
-        no_return[p] = n_inf
-        r[p] = ranges[idx[p]]
-        b = bearings[idx[p]]
-        x[p] = r[p] * math.cos(b)
-        y[p] = r[p] * math.sin(b)
+    n_pts = 0
+    ax = ay = axx = ayy = axy = 0.0  # the running sums
+    for i in range(n_beams):
+        d = ranges[i]
+        if d >= range_lo and d <= range_hi:
+            q = n_pts
+            xq, yq = d * cos_b[i], d * sin_b[i]
+            idx[q], r[q], x[q], y[q], no_return[q] = i, d, xq, yq, n_inf
+            if q:
+                ax, ay, axx, ayy, axy = ax + xq, ay + yq, axx + xq * xq, ayy + yq * yq, axy + xq * yq
+            else:
+                ax, ay, axx, ayy, axy = xq, yq, xq * xq, yq * yq, xq * yq
+            sx[q + 1], sy[q + 1], sxx[q + 1], syy[q + 1], sxy[q + 1] = ax, ay, axx, ayy, axy
+            n_pts += 1
+        elif d == np.inf:
+            n_inf += 1
     if n_pts < 2:
-        return np.empty((0, 10)), np.empty((0, 3), np.int64)
-    sx = np.zeros(n_pts + 1)
-    sy = np.zeros(n_pts + 1)
-    sxx = np.zeros(n_pts + 1)
-    syy = np.zeros(n_pts + 1)
-    sxy = np.zeros(n_pts + 1)
-    for p in range(n_pts):  # np.cumsum: sequential
-        sx[p + 1] = sx[p] + x[p] if p else x[p]
-        sy[p + 1] = sy[p] + y[p] if p else y[p]
-        sxx[p + 1] = sxx[p] + x[p] * x[p] if p else x[p] * x[p]
-        syy[p + 1] = syy[p] + y[p] * y[p] if p else y[p] * y[p]
-        sxy[p + 1] = sxy[p] + x[p] * y[p] if p else x[p] * y[p]
+        return 0
+    # the bearing steps a cluster may bridge (1 .. max_skip beams): the sines of the breakpoint distance
+    n_steps = min(max_skip, n_beams) + 1
+    sin_step = np.empty(n_steps)
+    sin_rest = np.empty(n_steps)
+    ratio = np.empty(n_steps)
+    for step in range(1, n_steps):
+        dphi = step * increment
+        sin_step[step] = math.sin(dphi)
+        sin_rest[step] = math.sin(lam - dphi)
+        ratio[step] = sin_step[step] / sin_rest[step]
+    margin = BREAK_SIGMA * sigma
     # adaptive breakpoints -> clusters, each split depth-first; a +inf beam between two points
     # saw open space (a doorway, beyond range): always a break; up to max_skip - 1 nan beams are bridged
     min_split = max(min_points, 3)
-    seg_s = np.empty(2 * n_pts + 2, np.int64)
-    seg_e = np.empty(2 * n_pts + 2, np.int64)
+    segs_s, segs_e, stack_s, stack_e = ws.seg_s, ws.seg_e, ws.stack_s, ws.stack_e
     n_seg = 0
-    stack_s = np.empty(2 * n_pts + 2, np.int64)
-    stack_e = np.empty(2 * n_pts + 2, np.int64)
     start = 0
     for p in range(n_pts):
         cut = p == n_pts - 1
         if not cut:
             step = idx[p + 1] - idx[p]
-            dphi = step * increment
-            gap = math.hypot(x[p + 1] - x[p], y[p + 1] - y[p])
-            dmax = breakpoint_distance(r[p], dphi, lam, sigma)
-            cut = gap > dmax or dmax <= 0 or step > max_skip or no_return[p + 1] > no_return[p]
+            if step > max_skip or no_return[p + 1] > no_return[p]:
+                cut = True
+            else:
+                cut = disconnected(x[p + 1] - x[p], y[p + 1] - y[p], r[p], sin_step[step], sin_rest[step], ratio[step],
+                                   margin)
         if not cut:
             continue
         sp = 0
@@ -220,49 +347,35 @@ def segment_lines(ranges, bearings, range_lo, range_hi, increment, p):  # noqa: 
             sp -= 1
             s, e = stack_s[sp], stack_e[sp]
             if e - s + 1 < min_split:
-                seg_s[n_seg], seg_e[n_seg] = s, e
+                segs_s[n_seg], segs_e[n_seg] = s, e
                 n_seg += 1
                 continue
-            dx, dy = x[e] - x[s], y[e] - y[s]
-            norm = npmax(math.hypot(dx, dy), 1e-12)
-            nx, ny = -dy / norm, dx / norm
-            rho_c = nx * x[s] + ny * y[s]
-            if not chord:
-                rho_f, alpha_f, _, _, _, _, _ = fit_range(sx, sy, sxx, syy, sxy, s, e)
-                cf, sf = math.cos(alpha_f), math.sin(alpha_f)
-            dmax_seg = -np.inf
-            cmax = -np.inf
-            at = -1
-            for q in range(s, e + 1):
-                dc = -1.0 if (q == s or q == e) else abs(x[q] * nx + y[q] * ny - rho_c)
-                d = dc if chord else abs(x[q] * cf + y[q] * sf - rho_f)
-                dmax_seg = npmax(dmax_seg, d)
-                if dc != dc or cmax != cmax:
-                    cmax = np.nan
-                elif dc > cmax:
-                    cmax = dc
-                    at = q
-            if not (dmax_seg > threshold) or cmax != cmax:
-                seg_s[n_seg], seg_e[n_seg] = s, e
+            if chord:
+                at = split_at(x, y, s, e, threshold, 0.0, 0.0, 0.0, True)
+            else:
+                f = fit_range(sx, sy, sxx, syy, sxy, s, e)
+                at = split_at(x, y, s, e, threshold, f.cos, f.sin, f.rho, False)
+            if at < 0:
+                segs_s[n_seg], segs_e[n_seg] = s, e
                 n_seg += 1
                 continue
             stack_s[sp], stack_e[sp] = at, e
             stack_s[sp + 1], stack_e[sp + 1] = s, at
             sp += 2
-    order = np.argsort(seg_s[:n_seg] * (n_pts + 1) + seg_e[:n_seg])
-    segs_s = seg_s[:n_seg][order]
-    segs_e = seg_e[:n_seg][order]
+    # the segments come in beam order (each cluster's left part is split first)
     m = n_seg
     # merge collinear neighbours, pass by pass
     if merge_rms > 0:
-        rms = np.empty(n_seg)
-        pick = np.zeros(n_seg, np.bool_)
+        rms, pick, src = ws.rms, ws.pick, ws.src
+        first_pass = True
         while m > 1:
             any_ok = False
             for i in range(m - 1):
-                if segs_s[i + 1] == segs_e[i]:
-                    _, _, nn, _, _, _, across = fit_range(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1])
-                    rms[i] = math.sqrt(across / nn)
+                if not first_pass and src[i] >= 0 and src[i + 1] >= 0:  # both unchanged: as before
+                    rms[i] = rms[src[i]]
+                elif segs_s[i + 1] == segs_e[i]:
+                    f = fit_range(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1])
+                    rms[i] = math.sqrt(f.across / f.n)
                 else:
                     rms[i] = np.inf
                 any_ok = any_ok or rms[i] <= merge_rms
@@ -277,22 +390,21 @@ def segment_lines(ranges, bearings, range_lo, range_hi, increment, p):  # noqa: 
             while i < m:
                 if i < m - 1 and pick[i]:
                     segs_s[w], segs_e[w] = segs_s[i], segs_e[i + 1]
+                    src[w] = -1
                     i += 2
                 else:
                     segs_s[w], segs_e[w] = segs_s[i], segs_e[i]
+                    src[w] = i
                     i += 1
                 w += 1
             m = w
+            first_pass = False
     # a split point shared by two neighbours belongs to neither line's fit; drop short segments
-    shared = np.zeros(m, np.bool_)
     for i in range(m - 1):
-        shared[i] = segs_s[i + 1] == segs_e[i]
-    for i in range(m - 1):
-        if shared[i]:
+        if segs_s[i + 1] == segs_e[i]:
             segs_e[i] -= 1
             segs_s[i + 1] += 1
-    lv = np.empty((m, 10))  # the rows of features.types.Lines
-    lb = np.empty((m, 3), np.int64)
+    lv, lb = ws.lv, ws.lb
     s2 = sigma * sigma
     tol = TRIM_TOL_SIGMA * sigma
     k = 0
@@ -300,33 +412,33 @@ def segment_lines(ranges, bearings, range_lo, range_hi, increment, p):  # noqa: 
         s, e = segs_s[i], segs_e[i]
         if e - s + 1 < min_points:
             continue
-        fr, fa, fn, fmx, fmy, falong, _ = fit_range(sx, sy, sxx, syy, sxy, s, e)
+        f = fit_range(sx, sy, sxx, syy, sxy, s, e)
         for _ in range(2):  # drop end points off the fitted line, refit
-            lo, hi = trim(x, y, s, e, fr, fa, tol, min_points)
+            lo, hi = trim(x, y, s, e, f.rho, f.cos, f.sin, tol, min_points)
             if lo == s and hi == e:
                 break
             s, e = lo, hi
-            fr, fa, fn, fmx, fmy, falong, _ = fit_range(sx, sy, sxx, syy, sxy, s, e)
-        if runs_z > 0 and not straight_enough(x, y, s, e, fr, fa, runs_z, 0.5 * sigma):
+            f = fit_range(sx, sy, sxx, syy, sxy, s, e)
+        if runs_z > 0 and not straight_enough(x, y, s, e, f.rho, f.cos, f.sin, runs_z, 0.5 * sigma):
             continue
-        c, si = math.cos(fa), math.sin(fa)
+        fr, fa, c, si = f.rho, f.alpha, f.cos, f.sin
         d0 = x[s] * c + y[s] * si - fr
         d1 = x[e] * c + y[e] * si - fr
         ax, ay = x[s] - d0 * c, y[s] - d0 * si
         bx, by = x[e] - d1 * c, y[e] - d1 * si
         if not math.hypot(bx - ax, by - ay) >= min_length:
             continue
-        t = -fmx * si + fmy * c
-        var_a = s2 / falong
+        t = -f.mx * si + f.my * c
+        var_a = s2 / f.along
         lv[k, 0], lv[k, 1] = fr, fa
         lv[k, 2], lv[k, 3], lv[k, 4], lv[k, 5] = ax, ay, bx, by
-        lv[k, 6] = s2 / fn + t * t * var_a
+        lv[k, 6] = s2 / f.n + t * t * var_a
         lv[k, 7] = t * var_a
         lv[k, 8] = t * var_a
         lv[k, 9] = var_a
-        lb[k, 0], lb[k, 1], lb[k, 2] = idx[s], idx[e], np.int64(fn)
+        lb[k, 0], lb[k, 1], lb[k, 2] = idx[s], idx[e], np.int64(f.n)
         k += 1
-    return lv[:k], lb[:k]
+    return k
 
 
 @kernel
@@ -339,58 +451,77 @@ def corners(lv, lb, increment, c):  # noqa: ANN001, ANN201
     facing ends. ``lv``, ``lb``: the rows of the lines (``features.types.Lines``); ``c`` a
     CornerParams. Returns the rows of ``features.types.Corners``: (x, y, interior angle in
     (0, pi)) and (beam index, line k, line k + 1) of each corner."""
-    rho, alpha, first, last = lv[:, 0], lv[:, 1], lb[:, 0], lb[:, 1]
-    p0, p1 = lv[:, 2:4], lv[:, 4:6]
-    min_turn, max_gap, max_distance, lam, sigma = c.min_turn, c.max_gap_beams, c.max_distance, c.breakpoint_lambda, c.sigma
-    n_lines = rho.size
-    out_f = np.empty((max(n_lines - 1, 0), 3))
-    out_i = np.empty((max(n_lines - 1, 0), 3), np.int64)
-    m = 0
-    for k in range(n_lines - 1):
-        a1, a2 = alpha[k], alpha[k + 1]
-        r1, r2 = rho[k], rho[k + 1]
-        det = math.sin(a2 - a1)
-        d1x, d1y = p1[k, 0] - p0[k, 0], p1[k, 1] - p0[k, 1]
-        d2x, d2y = p1[k + 1, 0] - p0[k + 1, 0], p1[k + 1, 1] - p0[k + 1, 1]
-        n1 = math.sqrt(d1x * d1x + d1y * d1y)
-        n2 = math.sqrt(d2x * d2x + d2y * d2y)
-        step = float(first[k + 1] - last[k])
-        gap = math.hypot(p0[k + 1, 0] - p1[k, 0], p0[k + 1, 1] - p1[k, 1])
-        dphi = max(step, 1.0) * increment
-        cos_turn = (d1x * d2x + d1y * d2y) / (n1 * n2)
-        if cos_turn == cos_turn:
-            cos_turn = min(max(cos_turn, -1.0), 1.0)
-        turn = math.acos(cos_turn)
-        cx = (r1 * math.sin(a2) - r2 * math.sin(a1)) / det
-        cy = (r2 * math.cos(a1) - r1 * math.cos(a2)) / det
-        connect = breakpoint_distance(math.hypot(p1[k, 0], p1[k, 1]), dphi, lam, sigma)
-        dist_a = math.hypot(cx - p1[k, 0], cy - p1[k, 1])
-        dist_b = math.hypot(cx - p0[k + 1, 0], cy - p0[k + 1, 1])
-        if (step <= max_gap and gap <= connect and connect > 0 and turn >= min_turn
-                and dist_a <= max_distance + gap and dist_b <= max_distance + gap and np.isfinite(cx)):
-            out_f[m, 0], out_f[m, 1], out_f[m, 2] = cx, cy, math.pi - turn
-            out_i[m, 0], out_i[m, 1], out_i[m, 2] = last[k], k, k + 1
-            m += 1
+    n_out = max(lv.shape[0] - 1, 0)
+    out_f = np.empty((n_out, 3))
+    out_i = np.empty((n_out, 3), np.int64)
+    m = corners_into(lv, lb, lv.shape[0], increment, c, out_f, out_i)
     return out_f[:m], out_i[:m]
 
 
 @kernel
-def extract_scan(ranges, bearings, range_lo, range_hi, increment, p, c):  # noqa: ANN001, ANN201
-    """Lines (``segment_lines``) and corners (``corners``) of one scan: the rows of
-    ``features.types.Lines`` and ``Corners``."""
-    lv, lb = segment_lines(ranges, bearings, range_lo, range_hi, increment, p)
-    if lv.shape[0] > 1:
-        cv, cb = corners(lv, lb, increment, c)
-    else:
-        cv, cb = np.empty((0, 3)), np.empty((0, 3), np.int64)
-    return lv, lb, cv, cb
+def corners_into(lv, lb, n_lines, increment, c, out_f, out_i):  # noqa: ANN001, ANN201
+    """``corners`` of the first ``n_lines`` rows of ``lv``, ``lb``, written into ``out_f``, ``out_i``
+    (at least n_lines - 1 rows); returns their number. The tests run cheapest first."""
+    min_turn, max_gap, max_distance, lam, sigma = c.min_turn, c.max_gap_beams, c.max_distance, c.breakpoint_lambda, c.sigma
+    m = 0
+    for k in range(n_lines - 1):
+        step = float(lb[k + 1, 0] - lb[k, 1])
+        if not step <= max_gap:
+            continue
+        ex, ey = lv[k, 4], lv[k, 5]  # the facing end points: end of line k, start of line k + 1
+        sx, sy = lv[k + 1, 2], lv[k + 1, 3]
+        gap = math.hypot(sx - ex, sy - ey)
+        connect = breakpoint_distance(math.hypot(ex, ey), max(step, 1.0) * increment, lam, sigma)
+        if not (gap <= connect and connect > 0):
+            continue
+        d1x, d1y = ex - lv[k, 2], ey - lv[k, 3]
+        d2x, d2y = lv[k + 1, 4] - sx, lv[k + 1, 5] - sy
+        n1 = math.sqrt(d1x * d1x + d1y * d1y)
+        n2 = math.sqrt(d2x * d2x + d2y * d2y)
+        cos_turn = (d1x * d2x + d1y * d2y) / (n1 * n2)
+        if cos_turn == cos_turn:
+            cos_turn = min(max(cos_turn, -1.0), 1.0)
+        turn = math.acos(cos_turn)
+        if not turn >= min_turn:
+            continue
+        a1, a2 = lv[k, 1], lv[k + 1, 1]
+        r1, r2 = lv[k, 0], lv[k + 1, 0]
+        det = math.sin(a2 - a1)
+        cx = (r1 * math.sin(a2) - r2 * math.sin(a1)) / det
+        cy = (r2 * math.cos(a1) - r1 * math.cos(a2)) / det
+        dist_a = math.hypot(cx - ex, cy - ey)
+        dist_b = math.hypot(cx - sx, cy - sy)
+        if dist_a <= max_distance + gap and dist_b <= max_distance + gap and np.isfinite(cx):
+            out_f[m, 0], out_f[m, 1], out_f[m, 2] = cx, cy, math.pi - turn
+            out_i[m, 0], out_i[m, 1], out_i[m, 2] = lb[k, 1], k, k + 1
+            m += 1
+    return m
 
 
 @kernel
-def extract_batch(ranges, bearings, range_lo, range_hi, increment, p, c):  # noqa: ANN001, ANN201
+def extract_into(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, c, ws):  # noqa: ANN001, ANN201
+    """Lines (``segment_lines``) and corners (``corners_into``) of one scan, written into the rows of
+    ``ws`` (lv, lb; cv, cb); returns (lines, corners)."""
+    n_lines = segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws)
+    n_corners = corners_into(ws.lv, ws.lb, n_lines, increment, c, ws.cv, ws.cb) if n_lines > 1 else 0
+    return n_lines, n_corners
+
+
+@kernel
+def extract_scan(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, c):  # noqa: ANN001, ANN201
+    """Lines and corners of one scan: the rows of ``features.types.Lines`` and ``Corners``."""
+    ws = workspace(ranges.size)
+    nl, nc = extract_into(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, c, ws)
+    return ws.lv[:nl].copy(), ws.lb[:nl].copy(), ws.cv[:nc].copy(), ws.cb[:nc].copy()
+
+
+@kernel
+def extract_batch(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, c):  # noqa: ANN001, ANN201
     """``extract_scan`` of every row of ``ranges`` (S, n), scans of one geometry, in one call: the
     rows of all scans concatenated, and the (S + 1,) offsets of each scan's lines and corners."""
     rows = new_rows(ranges.shape[0])
+    ws = workspace(ranges.shape[1])
     for s in range(ranges.shape[0]):
-        rows = append_rows(rows, s, extract_scan(ranges[s], bearings, range_lo, range_hi, increment, p, c))
+        nl, nc = extract_into(ranges[s], cos_b, sin_b, range_lo, range_hi, increment, p, c, ws)
+        rows = append_rows(rows, s, (ws.lv[:nl], ws.lb[:nl], ws.cv[:nc], ws.cb[:nc]))
     return finish_rows(rows)

@@ -17,6 +17,7 @@ from lms200 import Scan
 from ..registry import register
 from ..types import FeatureSet
 from .common import CornerConfig
+from .engine import SplitParams
 from .split_merge import check_split_fields, run_pipeline, run_pipeline_many
 
 
@@ -43,17 +44,22 @@ class IepfConfig:
 
     def __post_init__(self) -> None:
         """Raise ConfigError naming the field when a value cannot work."""
-        check_split_fields(self)
+        check_split_fields(self, chord=True)
+
+    @property
+    def params(self) -> SplitParams:
+        """The kernels' typed record of this config (built once, in ``__post_init__``)."""
+        return self._params  # type: ignore[attr-defined, no-any-return]
 
 
 def run(scan: Scan, cfg: IepfConfig) -> FeatureSet:
     """Extract lines and corners from ``scan`` (sensor frame) by iterative end-point fit."""
-    return run_pipeline(scan, cfg, "iepf", chord=True)
+    return run_pipeline(scan, cfg, "iepf")
 
 
 def run_many(scans: Sequence[Scan], cfg: IepfConfig) -> list[FeatureSet]:
     """``run`` of every scan of a batch of one geometry, in one kernel call."""
-    return run_pipeline_many(scans, cfg, "iepf", chord=True)
+    return run_pipeline_many(scans, cfg, "iepf")
 
 
 register("iepf", IepfConfig, run, backend="numba", run_many=run_many)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 
@@ -64,16 +65,23 @@ class SplitMergeConfig:
     corners: CornerConfig = field(default_factory=CornerConfig)
 
     def __post_init__(self) -> None:
-        check_split_fields(self)
+        check_split_fields(self, chord=False)
+
+    @property
+    def params(self) -> engine.SplitParams:
+        """The kernels' typed record of this config (built once, in ``__post_init__``)."""
+        return self._params  # type: ignore[attr-defined, no-any-return]
 
 
-def check_split_fields(cfg: object) -> None:
-    """The checks of a SplitMergeConfig or IepfConfig (ConfigError naming the field)."""
+def check_split_fields(cfg: object, chord: bool) -> None:
+    """The checks of a SplitMergeConfig or IepfConfig (ConfigError naming the field), then its
+    kernels' record (``split_params``) kept on it as ``_params``."""
     checks.shared_fields(cfg)
     checks.positive("split_threshold", cfg.split_threshold, "m")
     checks.non_negative("merge_rms", cfg.merge_rms, "m")
     if not isinstance(cfg.corners, CornerConfig):
         checks.fail("corners", "must be a CornerConfig", cfg.corners)
+    object.__setattr__(cfg, "_params", split_params(cfg, chord))
 
 
 _extract_scan = FixedTypeCall(engine.extract_scan)  # a Scan's types: read-only float64 arrays, floats
@@ -87,32 +95,43 @@ def split_params(cfg: object, chord: bool) -> engine.SplitParams:
     )
 
 
-def run_pipeline(scan: Scan, cfg, method: str, chord: bool) -> FeatureSet:  # noqa: ANN001
-    """Lines and corners of ``scan`` (sensor frame) by the split / merge pipeline, splitting at the
-    least-squares fit (``chord=False``, split_merge) or the chord (``chord=True``, iepf)."""
-    lv, lb, cv, cb = _extract_scan(scan.ranges, scan.angles, scan.range_min, scan.range_max, scan.angle_increment,
-                                   split_params(cfg, chord), cfg.corners.params)
+@lru_cache(maxsize=16)
+def bearing_table(angle_min: float, increment: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(cos, sin) of the bearings of n beams from ``angle_min`` in steps of ``increment`` (rad,
+    as ``lms200.Scan.angles``), read-only, computed once per geometry (``engine.bearing_table``)."""
+    cos_b, sin_b = engine.bearing_table(angle_min + np.arange(n) * increment)
+    cos_b.setflags(write=False)
+    sin_b.setflags(write=False)
+    return cos_b, sin_b
+
+
+def run_pipeline(scan: Scan, cfg, method: str) -> FeatureSet:  # noqa: ANN001
+    """Lines and corners of ``scan`` (sensor frame) by the split / merge pipeline of ``cfg``:
+    splitting at the least-squares fit (a SplitMergeConfig) or the chord (an IepfConfig)."""
+    lv, lb, cv, cb = _extract_scan(scan.ranges, *bearing_table(scan.angle_min, scan.angle_increment, scan.ranges.size),
+                                   scan.range_min, scan.range_max, scan.angle_increment, cfg.params,
+                                   cfg.corners.params)
     return FeatureSet.of(Lines(lv, lb), Corners(cv, cb), method)
 
 
-def run_pipeline_many(scans: Sequence[Scan], cfg, method: str, chord: bool) -> list[FeatureSet]:  # noqa: ANN001
+def run_pipeline_many(scans: Sequence[Scan], cfg, method: str) -> list[FeatureSet]:  # noqa: ANN001
     """``run_pipeline`` of every scan (one geometry, checked), in one kernel call."""
     if not scans:
         return []
     scan = common_geometry(scans)
-    rows = engine.extract_batch(stacked_ranges(scans), scan.angles, scan.range_min, scan.range_max,
-                                scan.angle_increment, split_params(cfg, chord), cfg.corners.params)
+    rows = engine.extract_batch(stacked_ranges(scans), *bearing_table(scan.angle_min, scan.angle_increment, len(scan)),
+                                scan.range_min, scan.range_max, scan.angle_increment, cfg.params, cfg.corners.params)
     return split_rows(*rows, method)
 
 
 def run(scan: Scan, cfg: SplitMergeConfig) -> FeatureSet:
     """Extract lines and corners from ``scan`` (sensor frame) by split-and-merge."""
-    return run_pipeline(scan, cfg, "split_merge", chord=False)
+    return run_pipeline(scan, cfg, "split_merge")
 
 
 def run_many(scans: Sequence[Scan], cfg: SplitMergeConfig) -> list[FeatureSet]:
     """``run`` of every scan of a batch of one geometry, in one kernel call."""
-    return run_pipeline_many(scans, cfg, "split_merge", chord=False)
+    return run_pipeline_many(scans, cfg, "split_merge")
 
 
 register("split_merge", SplitMergeConfig, run, backend="numba", run_many=run_many)

@@ -49,6 +49,9 @@ MERGE_FLOOR_ALPHA_VAR = 0.005**2  # ... and (alpha) variance, rad^2
 ARC_TAU = 3.0  # the arc test's chi^2 comparisons, in std of the chi^2 difference
 ARC_GN_STEPS = 3  # geometric Gauss-Newton steps of a circle fit after the algebraic (Kasa) start
 BREAK_LAMBDA = math.radians(10.0)  # adaptive breakpoint angle of a smooth surface (Borges & Aldon 2004)
+SUM_RESYNC = 32  # beams between fresh window sums (``beam_signals``) ...
+SUM_RATIO = 16.0  # ... or sooner, when a term that entered them exceeds them this many times; and
+# a window whose sum exceeds its centre's 1/d this many times is summed term by term
 SPACING_CAP = 1.0  # largest point spacing (grazing incidence) allowed for in the corner contact test, m
 
 
@@ -104,8 +107,10 @@ class Grid(NamedTuple):
 
 @kernel
 def wrap(a: float) -> float:
-    """An angle wrapped to (-pi, pi] (rad)."""
-    w = math.pi - (math.pi - a) % TWO_PI
+    """An angle wrapped to (-pi, pi] (rad): pi - (pi - a) mod 2 pi, the modulo skipped where it
+    changes nothing (0 <= pi - a < 2 pi, the common case)."""
+    t = math.pi - a
+    w = math.pi - t if 0.0 <= t < TWO_PI else math.pi - t % TWO_PI
     return w + TWO_PI if w <= -math.pi else w
 
 
@@ -187,6 +192,68 @@ def segment_sum(a: np.ndarray, lo: int, n: int) -> float:
 
 # -- 1. per-beam signals --------------------------------------------------------------------------
 
+# arctan(x) = x + x^3 P(x^2) / Q(x^2) on |x| <= 0.66 (S. L. Moshier's Cephes atan.c, relative error
+# ~1e-16: within an ulp or two of libm's), the rest reduced onto it
+ATAN_P = (-8.750608600031904122785e-1, -1.615753718733365076637e1, -7.500855792314704667340e1,
+          -1.228866684490136173410e2, -6.485021904942025371773e1)
+ATAN_Q = (2.485846490142306297962e1, 1.650270098316988542046e2, 4.328810604912902668951e2,
+          4.853903996359136964868e2, 1.945506571482613964425e2)
+TAN_3PI_8 = 2.41421356237309504880  # tan(3 pi / 8)
+PI_2_LOW = 6.123233995736765886130e-17  # pi/2 - float(pi/2)
+
+
+@kernel
+def arctan(x: float) -> float:
+    """arctan(x) (rad) as Cephes computes it, without a libm call, so that a loop of it vectorises
+    (the per-beam slope theta and its noise need two a beam: two libm calls took ~8 us a scan)."""
+    ax = abs(x)
+    big = ax > TAN_3PI_8
+    mid = not big and ax > 0.66
+    t = -1.0 / ax if big else ((ax - 1.0) / (ax + 1.0) if mid else ax)
+    y0 = 0.5 * math.pi if big else (0.25 * math.pi if mid else 0.0)
+    extra = PI_2_LOW if big else (0.5 * PI_2_LOW if mid else 0.0)
+    z = t * t
+    p = (((ATAN_P[0] * z + ATAN_P[1]) * z + ATAN_P[2]) * z + ATAN_P[3]) * z + ATAN_P[4]
+    q = ((((z + ATAN_Q[0]) * z + ATAN_Q[1]) * z + ATAN_Q[2]) * z + ATAN_Q[3]) * z + ATAN_Q[4]
+    r = y0 + ((t * (z * p / q) + t) + extra)
+    return math.copysign(r, x)
+
+
+@kernel
+def direct_sums(u, i, k):  # noqa: ANN001, ANN201
+    """The window sums of beam i term by term, j = i - k .. i + k: (sum_j u_j, sum_{m=0..k} u_{i+m}
+    - sum_{m=1..k} u_{i-m}, sum_j u_j^4); nan or inf where the window holds such a u."""
+    s1 = 0.0
+    sd = 0.0
+    s4 = 0.0
+    for j in range(i - k, i + k + 1):
+        uj = u[j]
+        u2j = uj * uj
+        s1 += uj
+        sd += uj if j >= i else -uj
+        s4 += u2j * u2j
+    return s1, sd, s4
+
+
+@kernel
+def window_sums(u, i, k):  # noqa: ANN001, ANN201
+    """The window sums of beam i over the finite u: (sum_{m=1..k} u_{i-m}, sum_{m=0..k} u_{i+m},
+    sum_{j=-k..k} u_{i+j}^4, number of non-finite u in the window)."""
+    left = right = quad = 0.0
+    n_bad = 0
+    for j in range(i - k, i + k + 1):
+        uj = u[j]
+        if not math.isfinite(uj):
+            n_bad += 1
+            continue
+        if j < i:
+            left += uj
+        else:
+            right += uj
+        u2 = uj * uj
+        quad += u2 * u2
+    return left, right, quad, n_bad
+
 
 @kernel
 def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):  # noqa: ANN001, ANN201
@@ -207,25 +274,51 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
         if d >= range_lo and d <= range_hi:
             valid[i] = True
             u[i] = 1.0 / d
-    AD = np.full(n, np.nan)
-    AD_var = np.full(n, np.nan)
-    ad = np.full(n, np.nan)
-    theta = np.full(n, np.nan)
-    theta_var = np.full(n, np.nan)
-    psi = np.full(n, np.nan)
-    psi_var = np.full(n, np.nan)
+    out = np.full((9, n), np.nan)  # one allocation for the seven signals and two scratch rows
+    AD, AD_var, ad, theta, theta_var, psi, psi_var = out[0], out[1], out[2], out[3], out[4], out[5], out[6]
+    tan_t, tan_s = out[7], out[8]
     if n >= 2 * k + 1:
+        # the window sums s1 = sum_{j=-k..k} u_{i+j}, sd = right - left and s4 = sum_j u_{i+j}^4
+        # from sums that slide along the scan: left = sum_{m=1..k} u_{i-m}, right = sum_{m=0..k}
+        # u_{i+m} and quad = s4, over the finite u (all > 0). They start afresh every SUM_RESYNC
+        # windows, and whenever a term that entered them since (``peak``, ``peak_q``) exceeds
+        # SUM_RATIO times their value, so their rounding stays within ~1e-13 of the sums
+        # themselves. A window that holds a nan (invalid beam) or an inf (its signals are nan, or
+        # inf at a zero range), or whose sum exceeds SUM_RATIO times the centre's u (a beam far
+        # behind its neighbours, where ad = sd / u_i magnifies any rounding), is summed term by
+        # term as before (``direct_sums``)
+        left = right = quad = peak = peak_q = 0.0
+        n_bad = 0  # non-finite u in the window
         for i in range(k, n - k):
-            s1 = 0.0  # sum_{j=-k..k} u_{i+j}
-            sd = 0.0  # sum_{m=0..k} u_{i+m} - sum_{m=1..k} u_{i-m}
-            s4 = 0.0  # sum_{j=-k..k} u_{i+j}^4 (noise)
-            for j in range(i - k, i + k + 1):
-                uj = u[j]
-                u2j = uj * uj
-                s1 += uj
-                sd += uj if j >= i else -uj
-                s4 += u2j * u2j
+            fresh = (i - k) % SUM_RESYNC == 0
+            if not fresh:  # slide by one beam: u_{i+k} enters, u_{i-1} moves left, u_{i-k-1} leaves
+                enter, move, leave = u[i + k], u[i - 1], u[i - k - 1]
+                if math.isfinite(enter):
+                    right += enter
+                    e2 = enter * enter
+                    quad += e2 * e2
+                    peak = max(peak, enter)
+                    peak_q = max(peak_q, e2 * e2)
+                else:
+                    n_bad += 1
+                if math.isfinite(move):
+                    right -= move
+                    left += move
+                if math.isfinite(leave):
+                    left -= leave
+                    l2 = leave * leave
+                    quad -= l2 * l2
+                else:
+                    n_bad -= 1
+                fresh = peak > SUM_RATIO * (left + right) or peak_q > SUM_RATIO * quad
+            if fresh:
+                left, right, quad, n_bad = window_sums(u, i, k)
+                peak, peak_q = left + right, quad
             ui = u[i]
+            if n_bad == 0 and left + right <= SUM_RATIO * ui:
+                s1, sd, s4 = left + right, right - left, quad
+            else:
+                s1, sd, s4 = direct_sums(u, i, k)
             u2 = ui * ui
             a = s1 / ui  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
             ad_i = sd / ui  # eq. 6: ad_ik
@@ -235,16 +328,29 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
             AD[i] = a
             AD_var[i] = other + a1 * a1 * u2
             ad[i] = ad_i
-            # eq. 7 as corrected in NOTES.md: ad - 1 = 2 tan(a - b_i) sum_{m=1..k} sin(mD)
-            tan_psi = ad1 / two_sin_sum
-            theta[i] = bearings[i] + math.atan(tan_psi)
-            tan_sd = math.sqrt(other + ad1 * ad1 * u2) * (sigma_r / two_sin_sum)
-            # (arctan(T + s) - arctan(T - s)) / 2, as one arctangent of the difference
-            theta_sd = 0.5 * math.atan2(2.0 * tan_sd, 1.0 + (tan_psi + tan_sd) * (tan_psi - tan_sd))
+            # eq. 7 as corrected in NOTES.md: ad - 1 = 2 tan(a - b_i) sum_{m=1..k} sin(mD): the
+            # slope T = tan(a - b_i) and its std s here, their arctangents in the next loop
+            tan_t[i] = ad1 / two_sin_sum
+            tan_s[i] = math.sqrt(other + ad1 * ad1 * u2) * (sigma_r / two_sin_sum)
+        for i in range(k, n - k):
+            t, sd = tan_t[i], tan_s[i]
+            theta[i] = bearings[i] + arctan(t)
+            # (arctan(T + s) - arctan(T - s)) / 2 = atan2(2 s, 1 + (T + s)(T - s)) / 2, as
+            # arctan(2 s / x) for x > 0 and pi - arctan(2 s / -x) for x < 0 (s >= 0)
+            x = 1.0 + (t + sd) * (t - sd)
+            h = arctan(2.0 * sd / abs(x))
+            theta_sd = 0.5 * (h if x > 0.0 else math.pi - h)
             theta_var[i] = theta_sd * theta_sd
+        for i in range(k, n - k):  # where that form does not hold (x = 0, an inf, nan): atan2
+            t, sd = tan_t[i], tan_s[i]
+            x = 1.0 + (t + sd) * (t - sd)
+            if not (x != 0.0 and math.isfinite(x) and math.isfinite(sd)):
+                theta_sd = 0.5 * math.atan2(2.0 * sd, x)
+                theta_var[i] = theta_sd * theta_sd
     for i in range(n - k):
         dpsi = theta[i] - theta[i + k]  # the corner signal psi_i = theta_i - theta_{i+k}
-        psi[i] = dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
+        # wrapped to [-pi, pi]: dpsi - 2 pi rint(dpsi / 2 pi), where rint gives +-0 for |dpsi| < pi
+        psi[i] = dpsi + 0.0 if abs(dpsi) < math.pi else dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
         psi_var[i] = theta_var[i] + theta_var[i + k]
     return valid, u, AD, AD_var, ad, theta, theta_var, psi, psi_var
 
@@ -369,7 +475,8 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
     inlier = np.zeros(beam.size, np.bool_)
     a_idx = np.empty(n_angles, np.int64)
     ref = np.empty(n_angles)
-    acc = np.zeros((n_angles, N_BINS + 2), np.int64)  # cells 1..N_BINS; 0 and N_BINS + 1 outside
+    # two banks of cells, even and odd rows, so that a vote need not wait for the last one's count
+    acc = np.zeros((n_angles, 2, N_BINS + 2), np.int64)  # cells 1..N_BINS; 0 and N_BINS + 1 outside
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         centre_idx = np.int64(np.rint((centre[r] - angle_min) / step))
@@ -378,30 +485,39 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
         # cells are laid out around the median vote of the beams at 1/4, 1/2 and 3/4 of the run
         # (a mean would be dragged off by neighbour-line beams at its ends; one beam can be a spike)
         row1, row2, row3 = s + cnt // 4, s + cnt // 2, s + (3 * cnt) // 4
+        lo_beam = hi_beam = beam[s]
+        for row in range(s, s + cnt):
+            lo_beam = min(lo_beam, beam[row])
+            hi_beam = max(hi_beam, beam[row])
         for a in range(n_angles):
             a_idx[a] = centre_idx + stride * (a - h2)
             q1 = template[min(max(a_idx[a] + zero - beam[row1] * subdiv, 0), n_tmpl - 1)] + log_d[row1]
             q2 = template[min(max(a_idx[a] + zero - beam[row2] * subdiv, 0), n_tmpl - 1)] + log_d[row2]
             q3 = template[min(max(a_idx[a] + zero - beam[row3] * subdiv, 0), n_tmpl - 1)] + log_d[row3]
             ref[a] = max(min(q1, q2), min(max(q1, q2), q3))  # median of three
-        acc[:, :] = 0
+        acc[:, :, :] = 0
         for a in range(n_angles):
             offset = (N_BINS / 2.0 + 1.0) - ref[a] * inv_width
+            base = a_idx[a] + zero
+            # eq. 5: log p = log d + log cos(a - b), a lookup at a - b in the template; the
+            # lookup is clipped onto the template's ends only where the run reaches them
+            inside = base - hi_beam * subdiv >= 0 and base - lo_beam * subdiv <= n_tmpl - 1
             for row in range(s, s + cnt):
-                # eq. 5: log p = log d + log cos(a - b), a lookup at a - b in the template
-                idx = min(max(a_idx[a] + zero - beam[row] * subdiv, 0), n_tmpl - 1)
+                idx = base - beam[row] * subdiv
+                if not inside:
+                    idx = min(max(idx, 0), n_tmpl - 1)
                 rel = (template[idx] + log_d[row]) * inv_width + offset
                 if not rel >= 0.0:  # nan votes go to the outside cell 0
                     rel = 0.0
                 rel = min(rel, N_BINS + 1.0)
-                acc[a, np.int64(rel)] += 1
+                acc[a, row & 1, np.int64(rel)] += 1
         best = -np.inf
         best_a = 0
         best_c = 0
         for a in range(n_angles):
             tie = -TIE_BREAK * abs(a - h2)
             for c in range(N_BINS - 1):
-                v = (acc[a, c + 1] + acc[a, c + 2]) + tie  # votes in two adjacent cells
+                v = ((acc[a, 0, c + 1] + acc[a, 1, c + 1]) + (acc[a, 0, c + 2] + acc[a, 1, c + 2])) + tie  # two adjacent cells
                 if v > best:
                     best, best_a, best_c = v, a, c
         # the pair (c, c+1) covers (log p - ref) / width in [c - N_BINS/2, c + 2 - N_BINS/2)
