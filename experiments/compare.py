@@ -14,6 +14,8 @@ in an order rotated by one per scan, so no method always runs first (cold caches
 
 from __future__ import annotations
 
+from lms200.yamlio import load as load_yaml
+
 import dataclasses
 import time
 from dataclasses import dataclass
@@ -106,7 +108,6 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
 
     The truth is that of the pose at the scan's stamp: a folder simulated with the default
     interlaced sensor charges the robot's motion within a scan (up to 1.2 deg) to the extractor."""
-    import yaml
 
     import sim
 
@@ -115,7 +116,7 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
     settings: dict[str, Any] = {"folder": str(p)}
     sensor = sim.SensorConfig()
     if (p / "config.yaml").is_file():
-        cfg = yaml.safe_load((p / "config.yaml").read_text()) or {}
+        cfg = load_yaml((p / "config.yaml").read_text()) or {}
         if not isinstance(cfg, dict):
             raise LmsbenchError(f"{p / 'config.yaml'}: not a simulate config")
         sensor = sim.SensorConfig(**(cfg.get("sensor") or {}))

@@ -15,6 +15,7 @@ from typing import Any, Callable
 
 from lms200 import Scan
 
+from .baselines.checks import MAX_BEAMS
 from .batch import common_geometry
 from .errors import ConfigError
 from .types import FeatureSet
@@ -127,7 +128,6 @@ def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: An
     return m.run(scan, cfg)
 
 
-MAX_BEAMS = 1 << 14  # most beams of a scan the extractors take (bounds the memory of one call)
 
 
 def too_many_beams(n: int) -> str:

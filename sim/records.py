@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 from typing import Callable
 
@@ -13,7 +14,7 @@ from .lidar import LMS200Sim
 from .robot import RobotLimits, Tour, robot_tour, wrap
 from .sensor import SensorConfig
 from .world import World
-from .worlds import make_world
+from .worlds import check_seed, make_world
 
 _STREAM_ODOMETRY = 4
 
@@ -95,7 +96,17 @@ def simulate_records(world: str | World = "office", seed: int = 0, duration: flo
 
     Every record has the true scanner pose at its stamp (the time of its first beam); odometry
     only when ``odometry`` is given. ``progress(done, total)`` is called after each scan.
+
+    Raises:
+        ValueError: naming the argument, for a duration that is not a finite number of seconds > 0,
+            a rate that is not > 0, a seed that is not a whole number >= 0, or an unknown world.
     """
+    check_seed(seed)
+    if isinstance(duration, bool) or not isinstance(duration, (int, float)) or not 0 < duration < math.inf:
+        raise ValueError(f"duration: must be a finite number of seconds > 0, got {duration!r}")
+    if rate_hz is not None and (isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float))
+                                or not 0 < rate_hz < math.inf):
+        raise ValueError(f"rate_hz: must be a finite number of scans/s > 0 or None, got {rate_hz!r}")
     w = world if isinstance(world, World) else make_world(world, seed)
     s = sensor if sensor is not None else SensorConfig()
     tour = robot_tour(w, seed, duration, limits)

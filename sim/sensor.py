@@ -10,6 +10,8 @@ laser scanner for mobile robot obstacle negotiation", ICRA 2002 - mixed pixels a
 
 from __future__ import annotations
 
+from lms200.yamlio import load as load_yaml
+
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -81,6 +83,18 @@ class SensorConfig:
     noise_tail_patch_m: float = 0.0
 
     def __post_init__(self) -> None:
+        for f in fields(self):  # each value of its field's type (a YAML "abc" failed deep in the simulation)
+            value, kind = getattr(self, f.name), str(f.type)
+            is_bool = isinstance(value, (bool, np.bool_))
+            if kind == "bool" and not is_bool:
+                raise ValueError(f"{f.name}: must be true or false, got {value!r}")
+            if kind == "int" and (is_bool or not isinstance(value, (int, np.integer))):
+                raise ValueError(f"{f.name}: must be a whole number, got {value!r}")
+            if kind.startswith("float") and not (value is None and "None" in kind):
+                if is_bool or not isinstance(value, (int, float, np.integer, np.floating)):
+                    raise ValueError(f"{f.name}: must be a number, got {value!r}")
+                if not np.isfinite(value):  # nan passes every comparison below: refuse it (and inf) first
+                    raise ValueError(f"{f.name}: must be finite, got {value}")
         if self.units not in ("mm", "cm"):
             raise ValueError(f"units: must be 'mm' or 'cm', got {self.units!r}")
         if self.n_beams < 2:
@@ -165,7 +179,7 @@ class SensorConfig:
         if not p.is_file():
             raise LmsbenchError(f"{p}: no such sensor file")
         try:
-            d = yaml.safe_load(p.read_text(encoding="utf-8"))
+            d = load_yaml(p.read_text(encoding="utf-8"))
         except (yaml.YAMLError, UnicodeDecodeError) as exc:
             raise LmsbenchError(f"{p}: not a YAML file ({exc})") from None
         if isinstance(d, dict) and isinstance(d.get("sensor"), dict):

@@ -37,6 +37,15 @@ MIT_PRESET = dict(n_per_side=6, room_w=5.0, room_d=6.0, corridor_w=1.8, door_w=1
                   corridor_extension=14.0, clutter=3.0, glass_per_10m=0.1)
 
 
+MAX_CLUTTER = 10.0  # densest clutter level (10x a furnished office); the object count grows with it
+
+
+def check_seed(seed: object) -> None:
+    """A seed is a whole number >= 0 (numpy's Generators take no other); ValueError naming it."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed: must be a whole number >= 0, got {seed!r}")
+
+
 def make_world(name: str = "office", seed: int = 0, clutter: float | None = None) -> World:
     """Build a named world; every random choice comes from ``seed``.
 
@@ -45,16 +54,19 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
             MIT-CSAIL-like preset, MIT_PRESET).
         seed: seed of every random choice (the clutter has its own stream of it).
         clutter: clutter level (0 none, 1 a furnished office, 2-3 busy; see ``sim.clutter``);
-            None = the name's default. Level 0 gives the world without clutter, bit for bit.
+            None = the name's default. Level 0 gives the world without clutter, bit for bit; at
+            most MAX_CLUTTER.
 
     Raises:
-        ValueError: for an unknown name (listing the known ones) or a negative clutter level.
+        ValueError: for an unknown name (listing the known ones), a seed that is not a whole number
+            >= 0, or a clutter level outside [0, MAX_CLUTTER].
     """
+    check_seed(seed)
     rng = np.random.default_rng([int(seed), _STREAM_WORLD])
     crng = np.random.default_rng([int(seed), _STREAM_CLUTTER])
     level = float(MIT_PRESET["clutter"] if name == "mit" else DEFAULT_CLUTTER.get(name, 0.0)) if clutter is None else float(clutter)
-    if not level >= 0:
-        raise ValueError(f"clutter: must be >= 0, got {clutter}")
+    if not 0 <= level <= MAX_CLUTTER:
+        raise ValueError(f"clutter: must be in [0, {MAX_CLUTTER:g}], got {clutter}")
     leaf_rng = crng if level > 0 else None
     if name in ("office", "cluttered"):
         lay = office(rng, name, seed, leaf_rng=leaf_rng)

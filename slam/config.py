@@ -355,6 +355,17 @@ class SlamConfig:
                           ("loop_closure", "prior_sigma")):
             if not getattr(getattr(self, sec), name) > 0:
                 raise SlamConfigError(f"{sec}.{name}: must be > 0, got {getattr(getattr(self, sec), name)}")
+        al = self.alignment
+        for name in ("max_correspondence", "fine_correspondence"):
+            if not 0 < getattr(al, name) <= SEARCH_CELL_M:
+                raise SlamConfigError(f"alignment.{name}: must be in (0, {SEARCH_CELL_M}] m (the cell of the "
+                                      f"scan matcher's search grid), got {getattr(al, name)}")
+        if not self.loop_closure.prior_sigma <= MAX_PRIOR_SIGMA:
+            raise SlamConfigError(f"loop_closure.prior_sigma: must be <= {MAX_PRIOR_SIGMA} (m, rad; a looser prior "
+                                  f"leaves the graph without an anchor), got {self.loop_closure.prior_sigma}")
+        if not self.motion.max_dt >= MIN_MAX_DT_S:
+            raise SlamConfigError(f"motion.max_dt: must be >= {MIN_MAX_DT_S} s (a gap is integrated in steps of at "
+                                  f"most max_dt), got {self.motion.max_dt}")
         a, m, o, lm, pa = self.association, self.motion, self.observations, self.landmarks, self.prealign
         if a.method not in ("nn", "jcbb"):
             raise SlamConfigError(f"association.method: must be 'nn' or 'jcbb', got {a.method!r}")
@@ -395,6 +406,9 @@ class SlamConfig:
 
 
 PRESETS = ("default", "paper")
+SEARCH_CELL_M = 0.5  # m: cell of the scan matcher's search grid, the farthest a correspondence can reach
+MAX_PRIOR_SIGMA = 1.0  # m and rad: loosest prior on the first keyframe that still anchors the graph
+MIN_MAX_DT_S = 1e-3  # s: finest prediction step of the paper preset (a 10 s gap: at most 10,000 steps)
 SECTIONS: dict[str, type] = {"motion": MotionConfig, "observations": ObservationConfig, "alignment": AlignmentConfig,
                              "keyframes": KeyframeConfig, "loop_closure": LoopClosureConfig,
                              "association": AssociationConfig, "landmarks": LandmarkConfig,

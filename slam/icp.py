@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import icpkernel
-from .config import AlignmentConfig
+from .config import SEARCH_CELL_M, AlignmentConfig
 
 
 _EYE3 = np.eye(3)
@@ -116,7 +116,8 @@ def voxel_filter(points: np.ndarray, size: float) -> np.ndarray:
     return np.sort(first)
 
 
-def make_reference(points: np.ndarray, normals: np.ndarray, voxel: float = 0.0, cell: float = 0.5) -> Reference:
+def make_reference(points: np.ndarray, normals: np.ndarray, voxel: float = 0.0,
+                   cell: float = SEARCH_CELL_M) -> Reference:
     """A :class:`Reference` of points and normals (same frame), thinned to one per ``voxel`` m
     cell; its search grid has cells of ``cell`` m (at least the widest reach of a search)."""
     keep = voxel_filter(points, voxel)
@@ -135,8 +136,9 @@ def refine(points: np.ndarray, ref: Reference, pose: np.ndarray, cfg: AlignmentC
     matrix (1/m^2, 1/rad^2) about ``pose``, makes it a MAP estimate: the motion's prediction holds
     the directions the scan does not fix (a corridor's axis). The returned information is the
     scan's alone. Compiled: :mod:`slam.icpkernel`."""
-    if max(cfg.max_correspondence, cfg.fine_correspondence) > ref.cell + 1e-12:
-        raise ValueError(f"a reach of {cfg.max_correspondence} m needs grid cells at least as wide (have {ref.cell} m)")
+    reach = max(cfg.max_correspondence, cfg.fine_correspondence)
+    if reach > ref.cell + 1e-12:
+        raise ValueError(f"a reach of {reach} m needs grid cells at least as wide (have {ref.cell} m)")
     p = np.asarray(points, float)
     n = p.shape[0]
     pose_out, H, inliers, ss = icpkernel.gauss_newton(

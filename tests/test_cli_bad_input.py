@@ -69,6 +69,8 @@ def files(tmp_path_factory):
     for name, change in bad_sweeps.items():
         (d / f"{name}.yaml").write_text(yaml.safe_dump({**base, **change}))
     (d / "list.yaml").write_text("- 1\n- 2\n")
+    (d / "sensor_text.yaml").write_text("mixed_gap: abc\n")
+    (d / "sensor_flag.yaml").write_text("quantise: 3\n")
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
     # a sweep folder whose every cell failed
     (d / "failed_sweep").mkdir()
@@ -119,6 +121,9 @@ CASES = [
     (["simulate", "--config", "{missing.yaml}", "--out", O], "missing.yaml"),
     (["simulate", "--out", "{a_file}"], "not a folder"),
     (["simulate", "--resolution", "2", "--out", O], "--resolution"),
+    (["simulate", "--clutter", "1e9", "--out", O], "--clutter"),
+    (["simulate", "--sensor", "{sensor_text.yaml}", "--out", O], "mixed_gap: must be a number"),
+    (["simulate", "--sensor", "{sensor_flag.yaml}", "--out", O], "quantise: must be true or false"),
     # compare
     (["compare", "office:x", "--out", O], "office:x"),
     (["compare", "office:-1", "--out", O], "office:-1"),

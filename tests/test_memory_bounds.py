@@ -90,3 +90,13 @@ def test_alpha_is_never_minus_pi() -> None:
     for m in available_methods():
         a = extract(scan, m).lines.alpha
         assert a.size and np.all((a > -np.pi) & (a <= np.pi)), (m, a)
+
+
+def test_a_window_wider_than_any_scan_is_a_config_error_not_an_allocation():
+    """k sized the window-sum tables: k = 10**9 asked for 8 GB and the process was killed."""
+    from features.errors import ConfigError
+    from features.registry import MAX_BEAMS, make_config
+
+    assert make_config("sensor", k=MAX_BEAMS // 2).k == MAX_BEAMS // 2
+    with pytest.raises(ConfigError, match=r"^k: must be an integer >= 1 and <= 8192"):
+        make_config("sensor", k=10**9)

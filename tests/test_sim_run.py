@@ -169,3 +169,24 @@ def test_simulate_command_errors(tmp_path: Path, capsys: pytest.CaptureFixture) 
     assert main(["simulate", "--world", "office", "--duration", "0", "--out", str(tmp_path)]) == 2
     assert "argument --duration: must be a finite number > 0" in capsys.readouterr().err
     assert main(["simulate", "--world", str(tmp_path / "none.json"), "--out", str(tmp_path)]) == 2
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"duration": -1.0}, "duration"), ({"duration": float("nan")}, "duration"), ({"duration": float("inf")}, "duration"),
+    ({"rate_hz": 0.0}, "rate_hz"), ({"rate_hz": -2.0}, "rate_hz"), ({"seed": -1}, "seed"), ({"seed": 1.5}, "seed")])
+def test_simulate_records_refuses_bad_arguments_by_name(kwargs, name):
+    """The Python API checks what the CLI checks (a negative duration gave an empty run, a rate of 0
+    a ZeroDivisionError, a negative seed numpy's own message)."""
+    from sim import simulate_records
+
+    with pytest.raises(ValueError, match=f"^{name}: "):
+        simulate_records("office", **{"seed": 0, "duration": 1.0, **kwargs})
+
+
+def test_a_sensor_config_refuses_nan_and_inf():
+    from sim import SensorConfig
+
+    for name in ("noise_sigma", "dropout_prob", "beam_width_deg", "noise_sigma_per_m"):
+        for bad in (float("nan"), float("inf")):
+            with pytest.raises(ValueError, match=f"^{name}: must be finite"):
+                SensorConfig(**{name: bad})

@@ -123,6 +123,12 @@ def test_bad_input_raises_clear_errors():
         P(association=AssociationConfig(method="magic"))
     with pytest.raises(SlamConfigError, match="unknown SLAM config"):
         SlamConfig.from_dict({"sigma_acel": 1.0})
+    # values that used to fail deep in a run: a reach beyond the search grid (ValueError in the
+    # matcher), an unanchored graph (gtsam's indeterminate system), a step that split a gap forever
+    for section, name, bad in (("alignment", "max_correspondence", 1e9), ("alignment", "fine_correspondence", 0.6),
+                               ("loop_closure", "prior_sigma", 1e9), ("motion", "max_dt", 1e-12)):
+        with pytest.raises(SlamConfigError, match=f"^{section}.{name}: must be"):
+            SlamConfig.from_dict({section: {name: bad}})
     with pytest.raises(SlamInputError, match="earlier"):
         run_observations([0.0, 1.0, 0.5], [Observations()] * 3)
     with pytest.raises(SlamInputError, match="no scans"):

@@ -3,6 +3,8 @@ interleaved in one process; a tidy table, a summary (printed and saved) and the 
 
 from __future__ import annotations
 
+from lms200.yamlio import load as load_yaml
+
 import argparse
 import dataclasses
 from pathlib import Path
@@ -23,7 +25,7 @@ def _param(text: str) -> tuple[str, Any]:
         raise argparse.ArgumentTypeError(f"--set takes extractor.FIELD=VALUE or extractor.METHOD.FIELD=VALUE, "
                                          f"got {text!r}{hint}")
     try:
-        return key, yaml.safe_load(value)
+        return key, load_yaml(value)
     except yaml.YAMLError:
         raise argparse.ArgumentTypeError(f"--set {key}: {value!r} is not a value") from None
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from lms200.yamlio import load as load_yaml
+
 import argparse
 from pathlib import Path
 
@@ -17,7 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "mit (the MIT-CSAIL-like preset), or a world.json (default office)")
     p.add_argument("--clutter", type=number(0.0), default=None,
                    help="clutter level of a named world: 0 none, 1 a furnished office, 2-3 busy "
-                        "(chair and table legs, people, plants, bins, glass, doors at any angle; default: the world's own)")
+                        "(chair and table legs, people, plants, bins, glass, doors at any angle; at most 10; default: the world's own)")
     p.add_argument("--seed", type=SEED, default=0, help="seed of the world, tour and sensor noise (>= 0)")
     p.add_argument("--duration", type=DURATION, default=120.0,
                    help=f"simulated time, s (default 120, at most {MAX_DURATION_S:g})")
@@ -48,7 +50,7 @@ def _config(args: argparse.Namespace):
     if args.config:
         check_yaml(args.config, "a simulate config.yaml")
         try:
-            raw = yaml.safe_load(args.config.read_text())
+            raw = load_yaml(args.config.read_text())
             if not isinstance(raw, dict):
                 raise TypeError("expected a mapping of world, seed, duration, sensor, ...")
             cfg = SimulationConfig.from_dict(raw)
@@ -58,6 +60,14 @@ def _config(args: argparse.Namespace):
             raise InputError(f"{args.config}: unknown world {cfg.world!r}; known worlds: {', '.join(known_worlds())}")
         if not (0 < cfg.duration <= MAX_DURATION_S) or (cfg.rate_hz is not None and not cfg.rate_hz > 0):
             raise InputError(f"{args.config}: duration must be in (0, {MAX_DURATION_S:g}] s and rate_hz > 0")
+        from sim.worlds import MAX_CLUTTER, check_seed
+
+        try:
+            check_seed(cfg.seed)
+        except ValueError as exc:
+            raise InputError(f"{args.config}: {exc}") from None
+        if cfg.clutter is not None and not 0 <= cfg.clutter <= MAX_CLUTTER:
+            raise InputError(f"{args.config}: clutter must be in [0, {MAX_CLUTTER:g}], got {cfg.clutter}")
         return cfg
     worlds = known_worlds()
     if args.world not in worlds and not args.world.endswith(".json"):
@@ -66,6 +76,10 @@ def _config(args: argparse.Namespace):
         check_file(args.world, "a world.json")
     if args.clutter is not None and args.world.endswith(".json"):
         raise InputError("--clutter applies to named worlds; a world.json holds its own solids")
+    from sim.worlds import MAX_CLUTTER
+
+    if args.clutter is not None and args.clutter > MAX_CLUTTER:
+        raise InputError(f"--clutter: must be at most {MAX_CLUTTER:g} (10x a furnished office), got {args.clutter:g}")
     beams = {0.5: 361, 1.0: 181, 0.25: 401}[args.resolution_deg]
     base = SensorConfig.ideal if args.ideal else SensorConfig
     if args.sensor is not None:

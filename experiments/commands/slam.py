@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from lms200.yamlio import load as load_yaml
+
 import argparse
 from pathlib import Path
 
@@ -47,7 +49,7 @@ def _config(args: argparse.Namespace):
     if args.config:
         check_yaml(args.config, "a SLAM config.yaml")
         try:
-            raw = yaml.safe_load(args.config.read_text()) or {}
+            raw = load_yaml(args.config.read_text()) or {}
         except yaml.YAMLError as exc:
             raise LmsbenchError(f"{args.config}: not YAML ({exc})") from None
         if not isinstance(raw, dict):

@@ -13,10 +13,11 @@ Figure names (files ``NAME.png``, ``NAME.pdf`` and the data ``NAME*.csv`` in the
 
 from __future__ import annotations
 
+from lms200.yamlio import load as load_yaml
+
 from pathlib import Path
 
 import pandas as pd
-import yaml
 
 from . import draw
 from .tables import ad_reference
@@ -71,7 +72,7 @@ def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
     of the second, a panel per value of the third (or combination of the rest); mean +/- std over
     seeds and random draws. A linked grid key "a,b" counts as its first name."""
     table = pd.read_parquet(folder / "results.parquet")
-    spec = yaml.safe_load((folder / "sweep.yaml").read_text())
+    spec = load_yaml((folder / "sweep.yaml").read_text())
     name = spec.get("name", folder.name)
     # one name per grid key: parameters linked to it ("a,b") follow it and need no line of their own
     varied = [key.split(",")[0].strip() for key in spec.get("grid", {})]

@@ -7,6 +7,8 @@ figures are then drawn from those files alone (:mod:`experiments.figures.make`).
 
 from __future__ import annotations
 
+from lms200.yamlio import load as load_yaml
+
 import dataclasses
 import time
 from dataclasses import dataclass, field
@@ -180,7 +182,7 @@ def _slam_in_world(result, records) -> tuple[np.ndarray, np.ndarray]:
 def load_config(folder: Path) -> StudyConfig:
     """The settings saved beside the tables (defaults where there is no study.yaml)."""
     path = folder / "study.yaml"
-    raw = yaml.safe_load(path.read_text()) if path.exists() else {}
+    raw = load_yaml(path.read_text()) if path.exists() else {}
     known = {f.name for f in dataclasses.fields(StudyConfig)}
     cfg = StudyConfig(**{k: v for k, v in (raw or {}).items() if k in known})
     cfg.methods = tuple(cfg.methods)

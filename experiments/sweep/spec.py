@@ -28,6 +28,8 @@ parameter becomes a column of the result table, under the name written here.
 
 from __future__ import annotations
 
+from lms200.yamlio import load as load_yaml
+
 import hashlib
 import itertools
 import json
@@ -131,7 +133,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     """Read and check a sweep YAML file."""
     path = Path(path)
     try:
-        raw = yaml.safe_load(path.read_text())
+        raw = load_yaml(path.read_text())
     except yaml.YAMLError as exc:
         raise SweepSpecError(f"{path}: not valid YAML: {exc}") from exc
     try:

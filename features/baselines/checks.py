@@ -10,6 +10,8 @@ import numpy as np
 
 from ..errors import ConfigError
 
+MAX_BEAMS = 1 << 14  # most beams of a scan the extractors take (bounds the memory of one call)
+
 
 def fail(name: str, requirement: str, value: object) -> None:
     """Raise the ConfigError ``"<name>: <requirement>, got <value>"``."""
@@ -21,10 +23,11 @@ def is_real(value: object) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
 
-def integer(name: str, value: object, minimum: int) -> None:
-    """``value`` must be an integer (not a bool) >= ``minimum``."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < minimum:
-        fail(name, f"must be an integer >= {minimum}", value)
+def integer(name: str, value: object, minimum: int, maximum: int | None = None) -> None:
+    """``value`` must be an integer (not a bool) >= ``minimum`` (and <= ``maximum``, if given)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < minimum \
+            or (maximum is not None and value > maximum):
+        fail(name, f"must be an integer >= {minimum}" + (f" and <= {maximum}" if maximum is not None else ""), value)
 
 
 def positive(name: str, value: object, unit: str) -> None:

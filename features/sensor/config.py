@@ -65,7 +65,7 @@ class SensorMethodConfig:
     arc_check: bool = True  # drop lines whose neighbourhood is one circle turning >= corner_min_turn (round surfaces)
 
     def __post_init__(self) -> None:
-        checks.integer("k", self.k, 1)
+        checks.integer("k", self.k, 1, checks.MAX_BEAMS // 2)  # a window wider than any scan taken: no line
         for name in ("sigma_r", "sigma_r_cm"):
             if getattr(self, name) != AUTO:
                 checks.positive(name, getattr(self, name), "m")
