@@ -6,13 +6,20 @@ STAMP  := $(VENV)/.installed
 
 .PHONY: demo test check setup clean bench
 
+# HEARTBEAT: run a quiet command, saying every 3 s that it still runs (setup stays silent otherwise)
+HEARTBEAT = sh -c 'label="$$1"; shift; "$$@" & pid=$$!; n=0; \
+	while kill -0 $$pid 2>/dev/null; do sleep 1; n=$$((n + 1)); \
+	if [ $$((n % 3)) -eq 0 ] && kill -0 $$pid 2>/dev/null; then echo "  $$label ... $$n s"; fi; done; wait $$pid' heartbeat
+
 $(BIN)/python:
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; lmsbench needs CPython 3.11 (set PYTHON=/path/to/python3.11)"; exit 1; }
-	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
+	@echo "creating $(VENV) with $(PYTHON) ..."
+	@$(HEARTBEAT) "creating $(VENV)" $(PYTHON) -m venv $(VENV)
+	@$(HEARTBEAT) "upgrading pip" $(BIN)/python -m pip install --quiet --upgrade pip
 
 $(STAMP): $(BIN)/python pyproject.toml
-	$(BIN)/python -m pip install --quiet -e ".[test]"
+	@echo "installing lmsbench and its dependencies into $(VENV) (once; about a minute) ..."
+	@$(HEARTBEAT) "installing" $(BIN)/python -m pip install --quiet -e ".[test]"
 	@touch $(STAMP)
 
 setup: $(STAMP)
