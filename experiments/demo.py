@@ -191,7 +191,7 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
     sig = Section("The paper's signals (Figs. 3-6)", [])
     for name, caption in (("fig3_scan", f"Fig. 3: the {cfg.world} scan of Figs. 4-6, in the sensor frame and in "
                                         f"sensor coordinates (range over beam index)."),
-                          ("fig4_ad", f"Fig. 4: AD_i{cfg.signals_k} of a {cfg.world} scan; the dashed line is "
+                          ("fig4_ad", f"Fig. 4: AD_i{cfg.signals_k} of {_article(cfg.world)} {cfg.world} scan; the dashed line is "
                                       f"its value on any straight line, 1 + 2 Σ cos(jΔ)."),
                           ("fig5_theta", "Fig. 5: θ_i, the line normal angle estimated at each beam."),
                           ("fig6_psi", f"Fig. 6: ψ_i = θ_i − θ_(i+{cfg.signals_k}), large at corners.")):
@@ -202,7 +202,7 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
     for name, caption in (("fig9_office", "Fig. 9: lines (red, a star at the midpoint) and corners (diamonds), "
                                           f"simulated {cfg.world}, sensor frame."),
                           ("fig9_intel", "Fig. 9: the same on scans of the Intel Research Lab log (real data, "
-                                         "180 beams at 1°, cm-mode ranges: the extractor is given sigma_r = 2 cm).")):
+                                         "180 beams at 1°, cm-mode ranges: the extractor's defaults, its range noise estimated from each scan).")):
         if name in figs:
             f9.text.append(figure(f"figures/{name}.png", caption))
     sections.append(f9)
@@ -235,3 +235,8 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
     if notes:
         sections.append(Section("Notes", [f"- {n}" for n in notes]))
     return sections
+
+
+def _article(word: str) -> str:
+    """'an' before a vowel sound, else 'a' (captions name the world: an office, a corridor)."""
+    return "an" if word[:1].lower() in "aeiou" else "a"

@@ -42,7 +42,7 @@ class StudyConfig:
     slam: bool = True
     intel_log: str | None = str(INTEL_LOG)  # skipped with a note where absent
     # the paper's extractor on the Intel log: cm-mode ranges (1 cm codes), so a larger range noise
-    intel_sensor_params: dict = field(default_factory=lambda: {"sigma_r": 0.02})
+    intel_sensor_params: dict = field(default_factory=dict)  # extractor overrides for the Intel panels (default: none)
     sensor: dict = field(default_factory=dict)  # SensorConfig overrides
     log_options: dict = field(default_factory=dict)  # read_log keywords for intel_log (plain data, see logargs)
 
