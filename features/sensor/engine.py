@@ -733,20 +733,30 @@ def chord_split(first, last, ranges, bearings):  # noqa: ANN001, ANN201
 
 
 @kernel
-def tls_clipped(f, l, ranges, bearings, valid, sigma_r, lim) -> float:  # noqa: ANN001
-    """Sum of the squared normalised residuals (each clipped at ``lim``) of the valid beams f..l
-    about their total-least-squares line."""
+def valid_centroid(f, l, ranges, bearings, valid):  # noqa: ANN001, ANN201
+    """(x, y, n): the mean point (m, sensor frame) of the valid beams f..l and their count (x = y =
+    0 when there is none)."""
     n = 0
-    mx = my = 0.0
+    mx = 0.0
+    my = 0.0
     for j in range(f, l + 1):
         if valid[j]:
             mx += ranges[j] * bearings.cos[j]
             my += ranges[j] * bearings.sin[j]
             n += 1
+    if n > 0:
+        mx /= n
+        my /= n
+    return mx, my, n
+
+
+@kernel
+def tls_clipped(f, l, ranges, bearings, valid, sigma_r, lim) -> float:  # noqa: ANN001
+    """Sum of the squared normalised residuals (each clipped at ``lim``) of the valid beams f..l
+    about their total-least-squares line."""
+    mx, my, n = valid_centroid(f, l, ranges, bearings, valid)
     if n < 3:
         return 0.0
-    mx /= n
-    my /= n
     cxx = cyy = cxy = 0.0
     for j in range(f, l + 1):
         if valid[j]:
@@ -807,18 +817,9 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
       its own beams (mean squared residual within ARC_TAU std of the line's chi^2 per dof: at a
       real corner the circle is a compromise with far larger residuals; this comparison holds
       whatever the actual scatter, e.g. of the interlaced sweeps of 0.5 deg logs)."""
-    n = 0
-    mx = 0.0
-    my = 0.0
-    for j in range(f, l + 1):
-        if valid[j]:
-            mx += ranges[j] * bearings.cos[j]
-            my += ranges[j] * bearings.sin[j]
-            n += 1
+    mx, my, n = valid_centroid(f, l, ranges, bearings, valid)
     if n < 5:
         return False
-    mx /= n
-    my /= n
     suu = suv = svv = suuu = svvv = suvv = svuu = 0.0
     for j in range(f, l + 1):
         if valid[j]:
