@@ -20,7 +20,7 @@ import numpy as np
 
 from lms200 import LmsbenchError
 from lms200.codes import LMS200_MAX_RANGE, metres_per_unit
-from lms200.timing import MIRROR_TURN_S
+from lms200.timing import MIRROR_TURN_S, scan_period, turns_per_scan
 
 NOISE_REFERENCE_RANGE_M = 2.5  # m: noise_sigma holds at this range (the middle of 1-4 m)
 OUTLIER_RANGE_SHARE = (0.1, 0.9)  # an outlier reads this share of the true range (uniform)
@@ -235,12 +235,12 @@ class SensorConfig:
     @property
     def turns_per_scan(self) -> int:
         """Interlaced mirror turns per scan: 1 at 1 deg, 2 at 0.5 deg, 4 at 0.25 deg."""
-        return max(1, int(round(1.0 / self.resolution_deg)))
+        return turns_per_scan(self.angle_increment)
 
     @property
     def scan_period(self) -> float:
         """Seconds between scans: 1/75 s a turn times the turns per scan (0.5 deg: 37.5 scans/s)."""
-        return self.turns_per_scan * MIRROR_TURN_S
+        return scan_period(self.angle_increment)
 
     @property
     def beam_time_offsets(self) -> np.ndarray:
