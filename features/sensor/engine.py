@@ -996,7 +996,7 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
             if valid[j]:
                 dx = ranges[j] * bearings.cos[j] - cx
                 dy = ranges[j] * bearings.sin[j] - cy
-                dist = max(math.hypot(dx, dy), 1e-12)
+                dist = max(math.sqrt(dx * dx + dy * dy), 1e-12)  # not hypot: a libm call a beam
                 e = dist - rad
                 j0, j1 = -dx / dist, -dy / dist
                 h00 += j0 * j0
@@ -1029,7 +1029,9 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
     ni = 0
     for j in range(f, l + 1):
         if valid[j]:
-            zz = (math.hypot(ranges[j] * bearings.cos[j] - cx, ranges[j] * bearings.sin[j] - cy) - rad) / sigma_r
+            dx = ranges[j] * bearings.cos[j] - cx
+            dy = ranges[j] * bearings.sin[j] - cy
+            zz = (math.sqrt(dx * dx + dy * dy) - rad) / sigma_r
             z2 = zz * zz
             clipped += min(z2, lim)
             if z2 <= lim:
@@ -1048,7 +1050,7 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
     for j in range(lf, ll + 1):
         if valid[j]:
             x, y = ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]
-            zc = (math.hypot(x - cx, y - cy) - rad) / sigma_r
+            zc = (math.sqrt((x - cx) * (x - cx) + (y - cy) * (y - cy)) - rad) / sigma_r
             zl = (x * ca + y * sa - lrho) / sigma_r
             c_chi += zc * zc
             l_chi += zl * zl
