@@ -334,7 +334,7 @@ def clipped_scale(z) -> float:  # noqa: ANN001
             s = 1e-12
     keep = np.ones(n, np.bool_)
     new_keep = np.empty(n, np.bool_)
-    for _ in range(50):
+    for it in range(50):
         lim = CLIP_SIGMAS * s
         nk = 0
         same = True
@@ -345,6 +345,8 @@ def clipped_scale(z) -> float:  # noqa: ANN001
             kz[nk] = z[i]
             nk += inside
         if nk < 2:
+            break
+        if same and it > 0:  # the residuals of the last step again: the same centre and scale, converged
             break
         m, s_new = mean_std(kz, nk, scratch)
         s_new = s_new / CLIP_STD_FACTOR
@@ -1071,7 +1073,8 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
                 dy = ranges[j] * bearings.sin[j] - cy
                 dist = max(math.sqrt(dx * dx + dy * dy), 1e-12)  # not hypot: a libm call a beam
                 e = dist - rad
-                j0, j1 = -dx / dist, -dy / dist
+                inv = 1.0 / dist  # one division a beam, not two
+                j0, j1 = -dx * inv, -dy * inv
                 h00 += j0 * j0
                 h01 += j0 * j1
                 h02 -= j0
