@@ -1,8 +1,8 @@
 """Clutter that real offices have, added to any world built on a :class:`sim.layout.Layout`:
 clusters of chair and table legs, standing and walking people (leg pairs), plants (irregular
 polygons of many short faces), bins, glass panels in walls that give no return, and runs of
-things standing along a wall (:func:`_wall_run`: boxes, bags, computers, bins side by side, a
-little turned, with gaps), which cover stretches of wall with short faces, depth steps and
+things standing along a wall (:func:`_wall_run`: boxes, computers, bags, round bins side by side,
+turned, with gaps), which cover stretches of wall with short faces, depth steps and
 recesses (the scan plane is at knee height, where offices keep such things).
 
 Every item is made of the world's exact solids (boxes, cylinders, mitred rings of boxes), so the
@@ -42,7 +42,7 @@ class ClutterConfig:
     plants: float = 0.5  # an irregular polygon of 10-16 short faces, 0.15-0.35 m across
     bins: float = 0.6  # a round or square bin
     glass: float = 0.4  # a glass panel of 1-2.5 m in a wall
-    wall_runs: float = 0.0  # a 0.8-2.4 m run of things (boxes, bags, computers) along a wall
+    wall_runs: float = 0.0  # a 0.8-2.4 m run of things (boxes, computers, bags, bins) along a wall
 
 
 def _route_points(lay: Layout, step: float = 0.1) -> tuple[np.ndarray, float]:
@@ -231,6 +231,8 @@ def _glass_panel(lay: Layout, rng: np.random.Generator, h: float) -> list[float]
 
 WALL_RUN_M = (0.8, 2.4)  # length of a run of wall-side stuff
 FLOOR_ITEM_M = (0.15, 0.5)  # width and depth of a box, bag or computer on the floor
+ROUND_SHARE = 0.4  # share of the things along walls that are round (bags, rolls, round bins)
+TURN_MAX_RAD = 0.4  # the others (boxes) stand turned by up to this from the wall's line
 
 
 def _wall_faces(lay: Layout, h: float) -> list[tuple[int, np.ndarray, np.ndarray, np.ndarray, float]]:
@@ -247,17 +249,21 @@ def _wall_faces(lay: Layout, h: float) -> list[tuple[int, np.ndarray, np.ndarray
     return out
 
 
-def _run_items(rng: np.random.Generator, length: float) -> list[tuple[float, float, float, float]]:
+def _run_items(rng: np.random.Generator, length: float) -> list[tuple[float, float, float, float, bool]]:
     """The solids of one run along a wall, in the run's frame (s along the wall from the run's
-    start, d out from the wall face): (s centre, half width, depth, yaw offset): things of
-    FLOOR_ITEM_M width and depth, turned by up to 0.2 rad, 0-0.3 m apart."""
+    start, d out from the wall face): (s centre, half width, depth, yaw offset, round): things of
+    FLOOR_ITEM_M width and depth, 0-0.3 m apart; a share ROUND_SHARE of them round (bags, rolls,
+    round bins: depth = width), the others boxes turned by up to TURN_MAX_RAD."""
     items = []
     s = 0.0
     while True:
         w, d = float(rng.uniform(*FLOOR_ITEM_M)), float(rng.uniform(*FLOOR_ITEM_M))
         if s + w > length:
             break
-        items.append((s + w / 2, w / 2, d, float(rng.uniform(-0.2, 0.2))))
+        if rng.random() < ROUND_SHARE:
+            items.append((s + w / 2, w / 2, w, 0.0, True))
+        else:
+            items.append((s + w / 2, w / 2, d, float(rng.uniform(-TURN_MAX_RAD, TURN_MAX_RAD)), False))
         s += w + float(rng.uniform(0.0, 0.3))
     return items
 
@@ -277,8 +283,8 @@ def _wall_run(lay: Layout, rng: np.random.Generator, space: _Space, faces: list,
         items = _run_items(rng, length)
         if not items:
             continue
-        depth = max(d * abs(np.cos(j)) + 2 * w * abs(np.sin(j)) for _, w, d, j in items)  # out from the face
-        overhang = max(d / 2 * abs(np.sin(j)) for _, w, d, j in items)  # turned things reach past the ends
+        depth = max(d * abs(np.cos(j)) + 2 * w * abs(np.sin(j)) for _, w, d, j, _ in items)  # out from the face
+        overhang = max(d / 2 * abs(np.sin(j)) for _, w, d, j, _ in items)  # turned things reach past the ends
         start = p0 + u * s0
         mid = start + u * length / 2 + n * (depth / 2 + 0.005)
         hull = rectangle_corners(float(mid[0]), float(mid[1]), float(np.arctan2(u[1], u[0])), length / 2 + overhang,
@@ -298,12 +304,17 @@ def _wall_run(lay: Layout, rng: np.random.Generator, space: _Space, faces: list,
         line = near + np.linspace(0, 1, steps)[:, None] * (front - near)
         if space.distance(line).min() <= 0.0:
             continue  # the far side of a wall, or behind something
-        for sc, hw, d, j in items:
+        for sc, hw, d, j, round_ in items:
+            top = float(rng.uniform(0.5, 2.0))
+            if round_:
+                c = start + u * sc + n * (hw - EMBED_M)
+                lay.cylinder(float(c[0]), float(c[1]), hw, 0.0, top)
+                continue
             hd = d / 2
             reach = hd * abs(np.cos(j)) + hw * abs(np.sin(j))  # half extent out from the wall
             c = start + u * sc + n * (reach - EMBED_M)
             yaw = float(np.arctan2(n[1], n[0])) + j
-            lay.box(float(c[0]), float(c[1]), yaw, hd, hw, 0.0, float(rng.uniform(0.5, 2.0)))
+            lay.box(float(c[0]), float(c[1]), yaw, hd, hw, 0.0, top)
         space.take_rect(hull)
         return True
     return False

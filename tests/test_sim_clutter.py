@@ -154,6 +154,10 @@ def test_wall_runs_stand_on_the_inside_of_walls_clear_of_the_route() -> None:
         c = np.array(_corners(b))
         gap = np.min(np.minimum.reduce([c[:, 0] - 0.05, 7.95 - c[:, 0], c[:, 1] - 0.05, 4.95 - c[:, 1]]))
         assert abs(gap + EMBED_M) < 1e-9
+    cyl = np.array(lay.cylinders)
+    assert len(cyl) >= 5  # round things: sunk EMBED_M into a face too
+    gap = np.minimum.reduce([cyl[:, 0] - 0.05, 7.95 - cyl[:, 0], cyl[:, 1] - 0.05, 4.95 - cyl[:, 1]]) - cyl[:, 2]
+    assert np.allclose(gap, -EMBED_M, atol=1e-9)
     world = lay.build()
     pts = np.array([1.5, 2.5]) + np.linspace(0, 1, 60)[:, None] * np.array([5.0, 0.0])
     assert world.clearance(pts).min() >= 0.4
