@@ -7,6 +7,7 @@ import pytest
 from sensor_geometry import ROOM, cast, line_scan, polygon
 
 from features import FeatureSet, extract
+from lms200 import Scan
 from features.registry import UnknownMethodError
 from features.sensor import engine
 from features.sensor.grid import LOGCOS_FLOOR, grid_constants
@@ -237,6 +238,45 @@ def test_cm_mode_scans_use_their_own_noise() -> None:
     auto = extract(noisy).lines
     fixed = extract(noisy, sigma_r_cm=cfg.sigma_of(noisy)).lines
     assert [(l.first, l.last) for l in auto] == [(l.first, l.last) for l in fixed]
+
+
+def numpy_neighbour_sigma(scans: list[Scan], fallback: float = 0.005) -> float:
+    """The oracle of the compiled "auto" noise: lms200.noise's numpy estimator at stride 1, pooled."""
+    from lms200.noise import estimate_quantum, line_residuals, robust_scale
+
+    z = np.concatenate([line_residuals(s.ranges, s.angle_increment, s.range_min, s.range_max, stride=1)[0]
+                        for s in scans])
+    if z.size < 20:
+        return fallback
+    scale = robust_scale(z)[1]
+    quantum = estimate_quantum(np.concatenate([s.ranges[np.isfinite(s.ranges)][::5] for s in scans]))
+    return max(scale, quantum / np.sqrt(12.0), 0.001) if np.isfinite(scale) else fallback
+
+
+def test_compiled_noise_estimate_equals_the_numpy_estimator() -> None:
+    """neighbour_sigma (compiled, run on every cm-mode scan) is lms200.noise's estimator bit for
+    bit: on cm-coded rooms, rooms with dropouts and depth steps, flat (zero-MAD) and tiny scans,
+    one scan and pooled."""
+    from features.noise_estimate import neighbour_sigma, stacked_sigma
+
+    rng = np.random.default_rng(7)
+    scans = [cast(ROOM, range_max=81.83, sigma=0.01, seed=1)]
+    for t in range(40):
+        r = rng.uniform(0.01, 30.0, int(rng.integers(1, 400)))
+        r[rng.random(r.size) < 0.2] = np.inf
+        r[rng.random(r.size) < 0.1] = np.nan
+        if t % 3 == 0:
+            r = np.round(r, 2)
+        if t % 5 == 0:
+            r[: r.size // 2] = 3.0
+        scans.append(Scan(ranges=r, angle_min=-1.0, angle_increment=float(rng.uniform(0.001, 0.05)), range_min=0.0,
+                          range_max=float(rng.choice([8.0, 80.0]))))
+    for s in scans:
+        assert neighbour_sigma(s) == numpy_neighbour_sigma([s])
+    same = [s for s in scans if s.angle_increment == scans[0].angle_increment] + scans[:1] * 3
+    assert neighbour_sigma(same) == numpy_neighbour_sigma(same)
+    batch = [cast(ROOM, range_max=81.83, sigma=0.01, seed=seed) for seed in range(4)]  # extract_many's path
+    assert stacked_sigma(np.stack([s.ranges for s in batch]), batch[0]) == numpy_neighbour_sigma(batch)
 
 
 def on_circle_share(scan, line, circles) -> float:

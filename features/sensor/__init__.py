@@ -18,6 +18,7 @@ from ..registry import register
 from ..batch import common_geometry, split_rows, stacked_ranges
 from ..types import Corners, FeatureSet, Lines
 from ..jit import FixedTypeCall
+from ..noise_estimate import AUTO, stacked_sigma
 from . import engine
 from .config import SensorMethodConfig
 from .grid import bearings_of, grid_constants, window_sums
@@ -48,10 +49,12 @@ def extract_sensor_many(scans: Sequence[Scan], cfg: SensorMethodConfig) -> list[
     scan = common_geometry(scans)
     p = cfg.params
     grid = grid_constants(p.k, scan.angle_increment, p.hough_subdiv)
+    ranges = stacked_ranges(scans)
+    sigma = cfg.sigma_for(scan.range_max)
     rows = engine.extract_batch(
-        stacked_ranges(scans), bearings_of(scan.angle_min, scan.angle_increment, len(scan)), scan.angle_min,
+        ranges, bearings_of(scan.angle_min, scan.angle_increment, len(scan)), scan.angle_min,
         scan.angle_increment, float(max(scan.range_min, cfg.min_range)), scan.range_max,
-        cfg.sigma_of(scans), grid, p,
+        stacked_sigma(ranges, scan) if sigma == AUTO else float(sigma), grid, p,
     )
     return split_rows(*rows, METHOD)
 

@@ -34,7 +34,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from lms200.noise import JUMP_FRACTION
+from lms200.noise import CLIP_SIGMAS, JUMP_FRACTION, MIN_RANGE_M, QUANTUM_CANDIDATES_M, QUANTUM_SHARE
+from lms200.noise import _CLIP_STD_FACTOR as CLIP_STD_FACTOR
 
 from ..angles import TWO_PI
 from ..jit import kernel
@@ -196,6 +197,150 @@ def segment_sum(a: np.ndarray, lo: int, n: int) -> float:
     """The sum of one segment as ``np.add.reduceat`` forms it: the first element plus the
     pairwise sum of the rest."""
     return a[lo] + pairwise_sum(a, lo + 1, n - 1)
+
+
+# -- 0. the range noise of sigma_r = "auto" (``features.noise_estimate``) -------------------------
+
+SIGMA_FLOOR_M = 0.001  # smallest noise assumed (m): noiseless synthetic scans still get finite thresholds
+MIN_TRIPLES = 20  # fewer usable triples than this: the scale cannot be had (the caller's fallback)
+MAX_TRIPLES = 1_000_000  # memory bound when pooling many scans: no scan is read past this many triples
+SAMPLE_STEP = 5  # every 5th finite range of a scan enters the quantisation step's sample
+
+
+@kernel
+def neighbour_residuals(ranges, c2, lo, hi, z, m):  # noqa: ANN001, ANN201
+    """``lms200.noise.line_residuals`` at stride 1 written to z[m:] (room for ranges.size - 2):
+    the normalised collinearity residual (m) of each triple of neighbouring beams in [lo, hi)
+    (lo >= MIN_RANGE_M) without a depth step; ``c2`` = 2 cos(D). Returns the new end of z."""
+    for i in range(ranges.size - 2):
+        rm, r0, rp = ranges[i], ranges[i + 1], ranges[i + 2]
+        if not (lo <= rm < hi and lo <= r0 < hi and lo <= rp < hi):  # False on nan, inf < inf
+            continue
+        if not abs(rp - rm) <= JUMP_FRACTION * r0:
+            continue
+        s = rm + rp
+        s2 = s * s
+        wm = c2 * (rp * rp) / s2
+        wp = c2 * (rm * rm) / s2
+        z[m] = (r0 - c2 * rm * rp / s) / math.sqrt(1.0 + wm * wm + wp * wp)
+        m += 1
+    return m
+
+
+@kernel
+def finite_sample(ranges, out, m):  # noqa: ANN001, ANN201
+    """Every SAMPLE_STEP-th finite range (from the first) appended to out[m:]; the new end."""
+    t = 0
+    for i in range(ranges.size):
+        if math.isfinite(ranges[i]):
+            if t % SAMPLE_STEP == 0:
+                out[m] = ranges[i]
+                m += 1
+            t += 1
+    return m
+
+
+@kernel
+def quantum_step(sample) -> float:  # noqa: ANN001
+    """``lms200.noise.estimate_quantum``: the largest step of QUANTUM_CANDIDATES_M (m) on whose grid
+    QUANTUM_SHARE of the positive finite ``sample`` lie, 0.0 when none does."""
+    v = sample[np.isfinite(sample) & (sample > 0)]
+    if v.size == 0:
+        return 0.0
+    for q in QUANTUM_CANDIDATES_M:
+        near = 0
+        for x in v:
+            if abs(x - np.rint(x / q) * q) < q / 20:
+                near += 1
+        if near / v.size >= QUANTUM_SHARE:
+            return q
+    return 0.0
+
+
+@kernel
+def mean_std(x, n, scratch):  # noqa: ANN001, ANN201
+    """numpy's x[:n].mean() and x[:n].std() (pairwise sums), with ``scratch`` (>= n) for the squares."""
+    mean = pairwise_sum(x, 0, n) / n
+    for i in range(n):
+        d = x[i] - mean
+        scratch[i] = d * d
+    return mean, math.sqrt(pairwise_sum(scratch, 0, n) / n)
+
+
+@kernel
+def clipped_scale(z) -> float:  # noqa: ANN001
+    """``lms200.noise.robust_scale``'s scale of the residuals z (nan when empty): the median absolute
+    deviation, then the standard deviation of those within CLIP_SIGMAS scales of the centre,
+    iterated and corrected for the clipping."""
+    n = z.size
+    if n == 0:
+        return np.nan
+    m = np.median(z)
+    s = 1.4826 * np.median(np.abs(z - m))
+    kz = np.empty(n)
+    scratch = np.empty(n)
+    if s <= 0:  # more than half the residuals identical (coarse quantisation): start from the spread
+        s = mean_std(z, n, scratch)[1]
+        if s == 0:
+            s = 1e-12
+    keep = np.ones(n, np.bool_)
+    new_keep = np.empty(n, np.bool_)
+    for _ in range(50):
+        lim = CLIP_SIGMAS * s
+        nk = 0
+        same = True
+        for i in range(n):
+            inside = abs(z[i] - m) <= lim
+            new_keep[i] = inside
+            same = same and inside == keep[i]
+            if inside:
+                kz[nk] = z[i]
+                nk += 1
+        if nk < 2:
+            break
+        m, s_new = mean_std(kz, nk, scratch)
+        s_new = s_new / CLIP_STD_FACTOR
+        converged = same and abs(s_new - s) <= 1e-9 * max(s, 1e-12)
+        keep, new_keep = new_keep, keep
+        s = s_new
+        if converged:
+            break
+    return s
+
+
+@kernel
+def sigma_of_residuals(z, sample, fallback) -> float:  # noqa: ANN001
+    """The noise (m) from pooled residuals z and range sample: their clipped scale, at least the
+    quantisation's q / sqrt(12) and SIGMA_FLOOR_M; ``fallback`` below MIN_TRIPLES residuals."""
+    if z.size < MIN_TRIPLES:
+        return fallback
+    scale = clipped_scale(z)
+    floor = max(quantum_step(sample) / math.sqrt(12.0), SIGMA_FLOOR_M)
+    return max(scale, floor) if math.isfinite(scale) else fallback
+
+
+@kernel
+def pooled_sigma(ranges, c2, range_min, range_max, fallback) -> float:  # noqa: ANN001
+    """``features.noise_estimate.neighbour_sigma`` of the scans of one geometry (rows of ``ranges``
+    (S, n), beam step D with c2 = 2 cos(D), valid range limits in m), pooled in row order until
+    MAX_TRIPLES residuals."""
+    n_scans, n = ranges.shape
+    lo = max(range_min, MIN_RANGE_M)
+    z = np.empty(min(n_scans * max(n - 2, 0), MAX_TRIPLES + n))
+    per_scan = n // SAMPLE_STEP + 1
+    sample = np.empty(min(n_scans, 64) * per_scan)
+    m = 0
+    ms = 0
+    for s in range(n_scans):
+        m = neighbour_residuals(ranges[s], c2, lo, range_max, z, m)
+        if ms + per_scan > sample.size:
+            more = np.empty(2 * sample.size)
+            more[:ms] = sample[:ms]
+            sample = more
+        ms = finite_sample(ranges[s], sample, ms)
+        if m >= MAX_TRIPLES:
+            break
+    return sigma_of_residuals(z[:m], sample[:ms], fallback)
 
 
 # -- 1. per-beam signals --------------------------------------------------------------------------
