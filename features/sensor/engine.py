@@ -901,32 +901,28 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
 @kernel
 def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # noqa: ANN001
     """In place: each line (rho, alpha) refitted on the valid beams first..last by ROBUST_STEPS
-    iteratively reweighted steps of Tukey's biweight M-estimator (tuning 4.685 scales) on the ray
-    residuals z = r - rho / cos(b - alpha), the scale the median absolute deviation of the line's
-    own residuals (at least SIGMA_FLOOR_RAY). Real residuals are heavy-tailed (a chair leg before a
-    wall, mixed pixels, a stretch of rough surface) and their scatter varies along a scan, so the
-    least-squares line over the 3 sigma_r inliers is pulled off the bulk of its beams; the
-    biweight keeps to the bulk. The covariance stays the least-squares one (the biweight's
+    iteratively reweighted steps of Tukey's biweight M-estimator (tuning TUKEY_C scales) on the ray
+    residuals z = r - rho / cos(b - alpha), the scale 1.4826 median |z| about the line as it comes
+    in (at least SIGMA_FLOOR_RAY). Real residuals are heavy-tailed (a chair leg before a wall,
+    mixed pixels, a stretch of rough surface) and their scatter varies along a scan, so the
+    least-squares line over the inlier_tau sigma_r inliers is pulled off the bulk of its beams;
+    the biweight keeps to the bulk. The covariance stays the least-squares one (the biweight's
     efficiency under Gaussian noise is 95 %)."""
-    n = ranges.size
-    z = np.empty(n)
-    dev = np.empty(n)
+    z = np.empty(ranges.size)
     for m in range(rho.size):
         r_m, a_m = rho[m], alpha[m]
+        ca, sa = math.cos(a_m), math.sin(a_m)
+        k = 0
+        for j in range(first[m], last[m] + 1):
+            c = bearings.cos[j] * ca + bearings.sin[j] * sa
+            if valid[j] and c > MIN_COS:
+                z[k] = abs(ranges[j] - r_m / c)
+                k += 1
+        if k < 3:
+            continue
+        cut = TUKEY_C * max(MAD_TO_SIGMA * np.median(z[:k]), SIGMA_FLOOR_RAY)
         for _ in range(ROBUST_STEPS):
             ca, sa = math.cos(a_m), math.sin(a_m)
-            k = 0
-            for j in range(first[m], last[m] + 1):
-                c = bearings.cos[j] * ca + bearings.sin[j] * sa
-                if valid[j] and c > MIN_COS:
-                    z[k] = ranges[j] - r_m / c
-                    k += 1
-            if k < 3:
-                break
-            med = np.median(z[:k])
-            for t in range(k):
-                dev[t] = abs(z[t] - med)
-            cut = TUKEY_C * max(MAD_TO_SIGMA * np.median(dev[:k]), SIGMA_FLOOR_RAY)
             sw = swg = swgg = swr = swgr = 0.0
             for j in range(first[m], last[m] + 1):
                 c = bearings.cos[j] * ca + bearings.sin[j] * sa
