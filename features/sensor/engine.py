@@ -11,8 +11,9 @@ Every step works in range-bearing space, on the beams of one scan, in the order 
    implied by the range noise, and the acceptance checks (``fit_runs``); a run that fails is
    split at its chord's farthest beam and fitted again, unless it is one circle, and lines on a
    round surface are dropped (``find_lines``, ``circle_fits``);
-5. lines grown over the beams past their ends, neighbours merged, overlaps split, endpoints
-   projected, short segments dropped (``extend_ends``, ``merge_neighbours``, ``segments``);
+5. lines grown over the beams past their ends and refitted with Tukey's biweight, neighbours
+   merged, overlaps split, endpoints projected, short segments dropped (``extend_ends``,
+   ``robust_refit``, ``merge_neighbours``, ``segments``);
 6. corners where two segments meet and psi shows the turn, with the paper's remedy against
    false acute corners (``corners``).
 
