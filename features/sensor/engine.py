@@ -57,7 +57,8 @@ SUM_RESYNC = 32  # beams between fresh window sums (``beam_signals``) ...
 SUM_RATIO = 16.0  # ... or sooner, when a term that entered them exceeds them this many times; and
 # a window whose sum exceeds its centre's 1/d this many times is summed term by term
 ONE_DEG = math.radians(1.0)  # an LMS200 mirror turn's beam step (finer scans interlace such turns)
-ROBUST_STEPS = 3  # reweighted steps of the final biweight refit of each line (``robust_refit``)
+ROBUST_STEPS = 1  # reweighted steps of the final biweight refit (``robust_refit``): one step from the
+# least-squares line is Bickel's (1975) one-step M-estimator, as efficient as the iterated one
 TUKEY_C = 4.685  # biweight tuning constant, in robust scales (95 % efficiency under Gaussian noise)
 MAD_TO_SIGMA = 1.4826  # median absolute deviation -> std of a Gaussian
 SIGMA_FLOOR_RAY = 0.001  # smallest robust scale of a line's residuals (m): noiseless scans
@@ -904,12 +905,17 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
     """In place: each line (rho, alpha) refitted on the valid beams first..last by ROBUST_STEPS
     iteratively reweighted steps of Tukey's biweight M-estimator (tuning TUKEY_C scales) on the ray
     residuals z = r - rho / cos(b - alpha), the scale 1.4826 median |z| about the line as it comes
-    in (at least SIGMA_FLOOR_RAY). Real residuals are heavy-tailed (a chair leg before a wall,
-    mixed pixels, a stretch of rough surface) and their scatter varies along a scan, so the
-    least-squares line over the inlier_tau sigma_r inliers is pulled off the bulk of its beams;
-    the biweight keeps to the bulk. The covariance stays the least-squares one (the biweight's
-    efficiency under Gaussian noise is 95 %)."""
-    z = np.empty(ranges.size)
+    in (at least SIGMA_FLOOR_RAY). The ray normalisation 1 / cos(b - alpha) is taken at the
+    incoming line (the steps move alpha by far less than a beam step). Real residuals are
+    heavy-tailed (a chair leg before a wall, mixed pixels, a stretch of rough surface) and their
+    scatter varies along a scan, so the least-squares line over the inlier_tau sigma_r inliers is
+    pulled off the bulk of its beams; the biweight keeps to the bulk. The covariance stays the
+    least-squares one (the biweight's efficiency under Gaussian noise is 95 %)."""
+    n = ranges.size
+    x = np.empty(n)
+    y = np.empty(n)
+    inv_c = np.empty(n)
+    z = np.empty(n)
     for m in range(rho.size):
         r_m, a_m = rho[m], alpha[m]
         ca, sa = math.cos(a_m), math.sin(a_m)
@@ -917,30 +923,32 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
         for j in range(first[m], last[m] + 1):
             c = bearings.cos[j] * ca + bearings.sin[j] * sa
             if valid[j] and c > MIN_COS:
-                z[k] = abs(ranges[j] - r_m / c)
+                xj = ranges[j] * bearings.cos[j]
+                yj = ranges[j] * bearings.sin[j]
+                x[k] = xj
+                y[k] = yj
+                inv_c[k] = 1.0 / c
+                z[k] = abs(xj * ca + yj * sa - r_m) / c
                 k += 1
         if k < 3:
             continue
-        cut = TUKEY_C * max(MAD_TO_SIGMA * np.median(z[:k]), SIGMA_FLOOR_RAY)
+        scale = max(MAD_TO_SIGMA * np.median(z[:k]), SIGMA_FLOOR_RAY)
+        inv_cut = 1.0 / (TUKEY_C * scale)
         for _ in range(ROBUST_STEPS):
             ca, sa = math.cos(a_m), math.sin(a_m)
             sw = swg = swgg = swr = swgr = 0.0
-            for j in range(first[m], last[m] + 1):
-                c = bearings.cos[j] * ca + bearings.sin[j] * sa
-                if not (valid[j] and c > MIN_COS):
-                    continue
-                res = ranges[j] * c - r_m
-                u = res / (c * cut)
-                if abs(u) >= 1.0:
-                    continue
-                b = 1.0 - u * u
-                wr = b * b / (c * c)
-                g = ranges[j] * (bearings.sin[j] * ca - bearings.cos[j] * sa)
+            for t in range(k):  # biweight (1 - u^2)^2 for |u| < 1, else 0; weight 1 / cos^2 (ray residual)
+                res = x[t] * ca + y[t] * sa - r_m
+                u = res * inv_c[t] * inv_cut
+                bw = max(1.0 - u * u, 0.0) * inv_c[t]
+                wr = bw * bw
+                g = y[t] * ca - x[t] * sa  # d res / d alpha = r sin(b - alpha)
+                wg = wr * g
                 sw += wr
-                swg += wr * g
-                swgg += wr * g * g
+                swg += wg
+                swgg += wg * g
                 swr += wr * res
-                swgr += wr * g * res
+                swgr += wg * res
             det = sw * swgg - swg * swg
             if not det > 0.0:
                 break
