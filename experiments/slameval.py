@@ -75,7 +75,7 @@ def long_run(seed: int, duration: float, rate: float) -> pd.DataFrame:
                           "cpu_scans_per_s": len(records) / cpu}])
 
 
-def mit_rows(path: Path, presets: list[str], inflations: tuple[float, ...] = (1.0, 10.0)) -> pd.DataFrame:
+def mit_rows(path: Path, presets: list[str], inflations: tuple[float, ...] = (3.0, 10.0)) -> pd.DataFrame:
     """Relations error (mean, std, median, long > 200 s) per preset on MIT CSAIL, and of the
     default preset with other ``alignment.covariance_inflation`` values (robustness: the keyframe
     and closure factors both take their noise from their matches, so one global factor should not

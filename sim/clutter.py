@@ -1,6 +1,9 @@
 """Clutter that real offices have, added to any world built on a :class:`sim.layout.Layout`:
 clusters of chair and table legs, standing and walking people (leg pairs), plants (irregular
-polygons of many short faces), bins, and glass panels in walls that give no return.
+polygons of many short faces), bins, glass panels in walls that give no return, and runs of
+things standing along a wall (:func:`_wall_run`: boxes, computers, bags, round bins side by side,
+turned, with gaps), which cover stretches of wall with short faces, depth steps and
+recesses (the scan plane is at knee height, where offices keep such things).
 
 Every item is made of the world's exact solids (boxes, cylinders, mitred rings of boxes), so the
 ground truth (faces, circles, corners) stays exact; glass is a segment (``World.glass``) that the
@@ -18,10 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .geometry import distance_to_segments, rectangle_corners
-from .layout import Layout, distance_to_rects
+from .layout import EMBED_M, Layout, distance_to_rects
 from .world import SCAN_HEIGHT_M
 
 ROUTE_CLEARANCE_M = 0.40  # sim.worlds.CLEARANCE_M: robot radius 0.25 m + 0.15 m
+ROUTE_SAMPLING_SLACK_M = 0.005  # the route is sampled every 0.1 m: between samples it comes ~3 mm nearer
 ITEM_GAP_M = 0.10  # least gap between an item and any other solid
 REACH_M = 3.0  # items stand at most this far from the route
 GLASS_MIN_WALL_M = 2.5  # walls at least this long may get a glass panel
@@ -38,6 +42,7 @@ class ClutterConfig:
     plants: float = 0.5  # an irregular polygon of 10-16 short faces, 0.15-0.35 m across
     bins: float = 0.6  # a round or square bin
     glass: float = 0.4  # a glass panel of 1-2.5 m in a wall
+    wall_runs: float = 0.0  # a 0.8-2.4 m run of things (boxes, computers, bags, bins) along a wall
 
 
 def _route_points(lay: Layout, step: float = 0.1) -> tuple[np.ndarray, float]:
@@ -56,18 +61,21 @@ class _Space:
     """What is already solid at scan height: rectangles and circles (footprints of items too)."""
 
     def __init__(self, lay: Layout, route: np.ndarray, h: float) -> None:
-        rects = [rectangle_corners(*b[:5]) for b in lay.boxes if b[5] <= h <= b[6]]
+        self.box_index = np.array([k for k, b in enumerate(lay.boxes) if b[5] <= h <= b[6]], dtype=int)
+        rects = [rectangle_corners(*lay.boxes[k][:5]) for k in self.box_index]
         self.corners = np.array(rects, dtype=float).reshape(-1, 4, 2)  # CCW
         self.circles = [(c[0], c[1], c[2]) for c in lay.cylinders if c[3] <= h <= c[4]]
         self.route = route
 
-    def distance(self, pts: np.ndarray) -> np.ndarray:
-        """Distance (m) from (n, 2) points to the nearest solid (0 inside a box)."""
+    def distance(self, pts: np.ndarray, exclude: int = -1) -> np.ndarray:
+        """Distance (m) from (n, 2) points to the nearest solid (0 inside a box), leaving out the
+        layout's box ``exclude``."""
         pts = np.asarray(pts, dtype=float).reshape(-1, 2)
         d = np.full(len(pts), np.inf)
-        if len(self.corners):
-            a = self.corners.reshape(-1, 2)
-            b = np.roll(self.corners, -1, axis=1).reshape(-1, 2)
+        corners = self.corners[np.append(self.box_index, np.full(len(self.corners) - len(self.box_index), -2)) != exclude]
+        if len(corners):
+            a = corners.reshape(-1, 2)
+            b = np.roll(corners, -1, axis=1).reshape(-1, 2)
             d = distance_to_segments(pts, a, b).min(axis=1)
             ab, rel = b - a, pts[:, None, :] - a[None]
             cross = (ab[None, :, 0] * rel[..., 1] - ab[None, :, 1] * rel[..., 0]).reshape(len(pts), -1, 4)
@@ -79,7 +87,7 @@ class _Space:
 
     def free(self, c: np.ndarray, radius: float, start: np.ndarray) -> bool:
         """A disc of ``radius`` at c is clear of the route and solids, and c is seen from start."""
-        if np.hypot(*(self.route - c).T).min() < ROUTE_CLEARANCE_M + radius:
+        if np.hypot(*(self.route - c).T).min() < ROUTE_CLEARANCE_M + radius + ROUTE_SAMPLING_SLACK_M:
             return False
         if self.distance(c[None])[0] < radius + ITEM_GAP_M:
             return False
@@ -88,6 +96,9 @@ class _Space:
 
     def take(self, c: np.ndarray, radius: float) -> None:
         self.circles.append((float(c[0]), float(c[1]), float(radius)))
+
+    def take_rect(self, corners: np.ndarray) -> None:
+        self.corners = np.concatenate((self.corners, np.asarray(corners, dtype=float).reshape(1, 4, 2)))
 
 
 def _spot(rng: np.random.Generator, space: _Space, radius: float, tries: int = 60) -> np.ndarray | None:
@@ -218,6 +229,97 @@ def _glass_panel(lay: Layout, rng: np.random.Generator, h: float) -> list[float]
     return None
 
 
+WALL_RUN_M = (0.8, 2.4)  # length of a run of wall-side stuff
+FLOOR_ITEM_M = (0.15, 0.5)  # width and depth of a box, bag or computer on the floor
+ROUND_SHARE = 0.4  # share of the things along walls that are round (bags, rolls, round bins)
+TURN_MAX_RAD = 0.4  # the others (boxes) stand turned by up to this from the wall's line
+
+
+def _wall_faces(lay: Layout, h: float) -> list[tuple[int, np.ndarray, np.ndarray, np.ndarray, float]]:
+    """Both long faces of every wall box (full height, thin) at scan height: (box index, start
+    point, unit direction, unit outward normal, length)."""
+    out = []
+    for k, (cx, cy, yaw, hx, hy, z0, z1) in enumerate(lay.boxes):
+        if z1 < 2.0 or z0 > h or hy > 0.08 or 2 * hx < WALL_RUN_M[0] + 0.4:
+            continue
+        u = np.array([np.cos(yaw), np.sin(yaw)])
+        for side in (1.0, -1.0):
+            n = side * np.array([-u[1], u[0]])
+            out.append((k, np.array([cx, cy]) + n * hy - u * hx, u, n, 2 * hx))
+    return out
+
+
+def _run_items(rng: np.random.Generator, length: float) -> list[tuple[float, float, float, float, bool]]:
+    """The solids of one run along a wall, in the run's frame (s along the wall from the run's
+    start, d out from the wall face): (s centre, half width, depth, yaw offset, round): things of
+    FLOOR_ITEM_M width and depth, 0-0.3 m apart; a share ROUND_SHARE of them round (bags, rolls,
+    round bins: depth = width), the others boxes turned by up to TURN_MAX_RAD."""
+    items = []
+    s = 0.0
+    while True:
+        w, d = float(rng.uniform(*FLOOR_ITEM_M)), float(rng.uniform(*FLOOR_ITEM_M))
+        if s + w > length:
+            break
+        if rng.random() < ROUND_SHARE:
+            items.append((s + w / 2, w / 2, w, 0.0, True))
+        else:
+            items.append((s + w / 2, w / 2, d, float(rng.uniform(-TURN_MAX_RAD, TURN_MAX_RAD)), False))
+        s += w + float(rng.uniform(0.0, 0.3))
+    return items
+
+
+def _wall_run(lay: Layout, rng: np.random.Generator, space: _Space, faces: list, h: float) -> bool:
+    """Put one run of wall-side stuff along a free stretch of some wall face (tried 30 times);
+    every solid's back sinks EMBED_M into the wall, so the run and the wall are one solid."""
+    if not faces:
+        return False
+    weights = np.array([f[4] for f in faces])
+    for _ in range(30):
+        k, p0, u, n, span = faces[int(rng.choice(len(faces), p=weights / weights.sum()))]
+        length = float(rng.uniform(*WALL_RUN_M))
+        if span - 0.4 < length:
+            continue
+        s0 = float(rng.uniform(0.2, span - 0.2 - length))
+        items = _run_items(rng, length)
+        if not items:
+            continue
+        depth = max(d * abs(np.cos(j)) + 2 * w * abs(np.sin(j)) for _, w, d, j, _ in items)  # out from the face
+        overhang = max(d / 2 * abs(np.sin(j)) for _, w, d, j, _ in items)  # turned things reach past the ends
+        start = p0 + u * s0
+        mid = start + u * length / 2 + n * (depth / 2 + 0.005)
+        hull = rectangle_corners(float(mid[0]), float(mid[1]), float(np.arctan2(u[1], u[0])), length / 2 + overhang,
+                                 depth / 2 - 0.005)
+        steps = int(np.ceil(length / 0.05)) + 1
+        samples = hull[0] + np.linspace(0, 1, steps)[:, None, None] * (hull[1:] - hull[0])[None]
+        samples = np.vstack([samples.reshape(-1, 2), hull])
+        if distance_to_rects(space.route, [hull]).min() < ROUTE_CLEARANCE_M + ROUTE_SAMPLING_SLACK_M:
+            continue
+        if space.distance(samples, exclude=k).min() < ITEM_GAP_M / 2:
+            continue
+        front = start + u * length / 2 + n * (depth + 0.05)
+        near = space.route[int(np.argmin(np.hypot(*(space.route - front).T)))]
+        if np.hypot(*(near - front)) > REACH_M + 3.0:
+            continue
+        steps = int(np.ceil(np.hypot(*(front - near)) / 0.02)) + 1  # finer than the thinnest wall
+        line = near + np.linspace(0, 1, steps)[:, None] * (front - near)
+        if space.distance(line).min() <= 0.0:
+            continue  # the far side of a wall, or behind something
+        for sc, hw, d, j, round_ in items:
+            top = float(rng.uniform(0.5, 2.0))
+            if round_:
+                c = start + u * sc + n * (hw - EMBED_M)
+                lay.cylinder(float(c[0]), float(c[1]), hw, 0.0, top)
+                continue
+            hd = d / 2
+            reach = hd * abs(np.cos(j)) + hw * abs(np.sin(j))  # half extent out from the wall
+            c = start + u * sc + n * (reach - EMBED_M)
+            yaw = float(np.arctan2(n[1], n[0])) + j
+            lay.box(float(c[0]), float(c[1]), yaw, hd, hw, 0.0, top)
+        space.take_rect(hull)
+        return True
+    return False
+
+
 def add_clutter(lay: Layout, rng: np.random.Generator, level: float, config: ClutterConfig | None = None,
                 scan_height: float = SCAN_HEIGHT_M) -> list[list[float]]:
     """Add clutter to a layout (its route must be in place); returns the glass segments."""
@@ -234,6 +336,10 @@ def add_clutter(lay: Layout, rng: np.random.Generator, level: float, config: Clu
         if seg is not None:
             glass.append(seg)
     space = _Space(lay, route, scan_height)
+    if cfg.wall_runs > 0:  # (no draw at all otherwise: worlds without runs stay bit for bit)
+        faces = _wall_faces(lay, scan_height)
+        for _ in range(int(rng.poisson(cfg.wall_runs * scale))):
+            _wall_run(lay, rng, space, faces, scan_height)
     plan = ([("table", 0.0)] * int(rng.poisson(cfg.tables * scale)) + [("chair", 0.3)] * int(rng.poisson(cfg.chairs * scale))
             + [("person", 0.4)] * int(rng.poisson(cfg.people * scale)) + [("plant", 0.42)] * int(rng.poisson(cfg.plants * scale))
             + [("bin", 0.22)] * int(rng.poisson(cfg.bins * scale)))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from typing import Any, cast
 
@@ -28,12 +29,15 @@ class AlignmentConfig:
         damping: Levenberg damping, a fraction of the Hessian's mean eigenvalue: an unconstrained
             direction (a corridor's axis) stays at the prediction.
         inlier_distance: a point this close (m) to a map point counts as explained.
-        sigma_point: std of one point-to-line residual (m) in the covariance...
-        covariance_inflation: ...whose variance is multiplied by this: neighbouring points of a
-            scan and the map are not independent. Set once on simulated office runs (seeds
-            100-102, 300 s at 10 scans/s, never the evaluation's seeds or logs), where 1, 2 and 4
-            gave mean pose NEES of 2.3, 1.3 and 0.8 (3 dof): 3 keeps the NEES inside the 95 % band
-            while leaving margin for real scans, whose errors are larger than the simulator's.
+        sigma_point: floor (m) of one point's point-to-line residual in the covariance (a
+            near-perfect fit does not make a pose exact)...
+        covariance_inflation: ...the match's covariance is the sandwich of its own residuals
+            (``slam.icp.sandwich_information``) times this. Set once on simulated office runs
+            (tuning seeds 100-102, 300 s at 10 scans/s, never the evaluation's seeds or logs):
+            with the scans de-skewed and the normal check, 3, 1.5 and 1 gave mean pose NEES of
+            0.3-0.4, 0.5-0.7 and 0.8-1.1 (3 dof; 3 is consistent): 1, no inflation (below 1 the
+            floor above would no longer be a floor). Before the de-skew, 3 compensated for the
+            scan's own motion distortion.
         retry_inliers: when the ICP from the prediction explains fewer than this fraction of the
             points, it is also run from standing still and from ``heading_hypotheses``.
         heading_hypotheses: heading offsets (rad) about the prediction tried on a retry (15, 30,
@@ -45,6 +49,15 @@ class AlignmentConfig:
             std (``motion``: ``sigma_accel dt^2`` + floor, ``sigma_alpha dt^2`` + floor) as a
             prior: the prediction holds the directions the scan barely fixes (a corridor's axis),
             where the few points that constrain them would otherwise set the pose alone.
+        deskew: undo the sensor's motion during a scan (13 ms a mirror turn; a 0.5 deg scan is two
+            interlaced turns, 27 ms) with the constant-velocity twist of the last two poses, so
+            that the match estimates the pose at the scan's stamp (its first beam). At 1 rad/s a
+            point 8 m away moves 10-20 cm during a scan.
+        normal_agreement: a scan point (with a normal) is paired only with map points whose normal
+            lies within this angle (rad) of its own: a point near a corner is not pulled onto the
+            perpendicular wall (90 degrees off; along a corridor such pairs set the axis from a
+            few points), while a chord normal blended across a corner (at most 45 degrees off
+            either wall) still pairs: 67.5 degrees, halfway.
         normal_step, normal_gap, normal_gap_per_range: point normals from the chord
             ``normal_step`` beams either side, shorter than ``normal_gap`` m plus
             ``normal_gap_per_range`` m per m of range (beams spread apart with range).
@@ -62,7 +75,7 @@ class AlignmentConfig:
     damping: float = 1e-8
     inlier_distance: float = 0.1
     sigma_point: float = 0.02
-    covariance_inflation: float = 3.0
+    covariance_inflation: float = 1.0
     retry_inliers: float = 0.7
     heading_hypotheses: tuple[float, ...] = (0.26, -0.26, 0.52, -0.52, 1.05, -1.05, 1.57, -1.57, 3.14)
     refine_hypotheses: int = 3
@@ -72,6 +85,8 @@ class AlignmentConfig:
     normal_gap: float = 0.3
     normal_gap_per_range: float = 0.05
     motion_prior: bool = False
+    deskew: bool = True
+    normal_agreement: float = 1.178
 
 
 @dataclass(frozen=True)
@@ -360,6 +375,9 @@ class SlamConfig:
             if not 0 < getattr(al, name) <= SEARCH_CELL_M:
                 raise SlamConfigError(f"alignment.{name}: must be in (0, {SEARCH_CELL_M}] m (the cell of the "
                                       f"scan matcher's search grid), got {getattr(al, name)}")
+        if not 0 < al.normal_agreement <= math.pi:
+            raise SlamConfigError(f"alignment.normal_agreement: must be in (0, pi] rad (pi: no normal check), "
+                                  f"got {al.normal_agreement}")
         if not self.loop_closure.prior_sigma <= MAX_PRIOR_SIGMA:
             raise SlamConfigError(f"loop_closure.prior_sigma: must be <= {MAX_PRIOR_SIGMA} (m, rad; a looser prior "
                                   f"leaves the graph without an anchor), got {self.loop_closure.prior_sigma}")

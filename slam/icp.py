@@ -64,7 +64,7 @@ class Match:
     Attributes:
         pose: (3,) sensor pose in the reference's frame (m, m, rad).
         information: (3, 3) information of the pose (inverse covariance): the point-to-line
-            Hessian over the match's residual variance (:func:`residual_variance`) and
+            sandwich of the match's own residuals (:func:`sandwich_information`) over
             ``covariance_inflation``; near-singular along a corridor.
         inliers: fraction of the scan's points within ``inlier_distance`` of a reference point.
         rms: rms point-to-line residual of the inliers (m).
@@ -98,13 +98,19 @@ def chord_normals(points: np.ndarray, step: int = 2, max_gap: float = 0.3,
     ok = np.zeros(p.shape[0], bool)
     if p.shape[0] < 2 * step + 1:
         return n, ok
-    d = p[2 * step:] - p[:-2 * step]
-    length = np.hypot(d[:, 0], d[:, 1])
-    rng = np.hypot(p[step:-step, 0], p[step:-step, 1])
-    good = (length > 1e-3) & (length < max_gap + gap_per_range * rng)
-    n[step:-step] = np.column_stack((d[:, 1], -d[:, 0])) / np.maximum(length, 1e-12)[:, None]
-    ok[step:-step] = good
+    i = np.arange(step, p.shape[0] - step)
+    n[step:-step], ok[step:-step] = chord_normals_at(p, i, step, max_gap, gap_per_range)
     return n, ok
+
+
+def chord_normals_at(points: np.ndarray, index: np.ndarray, step: int, max_gap: float,
+                     gap_per_range: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`chord_normals` at the points ``index`` (each at least ``step`` from either end)."""
+    d = points[index + step] - points[index - step]
+    length = np.hypot(d[:, 0], d[:, 1])
+    rng = np.hypot(points[index, 0], points[index, 1])
+    good = (length > 1e-3) & (length < max_gap + gap_per_range * rng)
+    return np.column_stack((d[:, 1], -d[:, 0])) / np.maximum(length, 1e-12)[:, None], good
 
 
 def voxel_filter(points: np.ndarray, size: float) -> np.ndarray:
@@ -128,7 +134,7 @@ def make_reference(points: np.ndarray, normals: np.ndarray, voxel: float = 0.0,
 
 
 def refine(points: np.ndarray, ref: Reference, pose: np.ndarray, cfg: AlignmentConfig,
-           prior: np.ndarray | None = None) -> Match:
+           prior: np.ndarray | None = None, normals: np.ndarray | None = None) -> Match:
     """Gauss-Newton point-to-line ICP from ``pose`` with Huber weights (``huber`` m) on the
     residuals: up to ``max_iterations`` steps with correspondences within ``max_correspondence``
     m, then up to ``fine_iterations`` within ``fine_correspondence`` m (points without a
@@ -141,22 +147,33 @@ def refine(points: np.ndarray, ref: Reference, pose: np.ndarray, cfg: AlignmentC
         raise ValueError(f"a reach of {reach} m needs grid cells at least as wide (have {ref.cell} m)")
     p = np.asarray(points, float)
     n = p.shape[0]
-    pose_out, H, inliers, ss = icpkernel.gauss_newton(
+    pose_out, H, inliers, ss, B, used = icpkernel.gauss_newton(
         p[:, 0].copy(), p[:, 1].copy(), np.asarray(pose, float), *ref.grid()[:2], *ref._normals, *ref.grid()[2:],
         np.array([cfg.max_correspondence, cfg.fine_correspondence]), np.array([cfg.max_iterations, cfg.fine_iterations]),
         cfg.huber, cfg.damping, cfg.tolerance_xy, cfg.tolerance_theta, min(cfg.inlier_distance, cfg.fine_correspondence),
-        np.asarray(pose, float).copy(), _NO_PRIOR if prior is None else np.asarray(prior, float) * cfg.sigma_point**2)
+        np.asarray(pose, float).copy(), _NO_PRIOR if prior is None else np.asarray(prior, float) * cfg.sigma_point**2,
+        cfg.sigma_point**2, *_query_normals(normals, n), float(np.cos(cfg.normal_agreement)))
     rms = float(np.sqrt(ss / inliers)) if inliers >= 3 else np.inf
-    info = H / residual_variance(ss, int(inliers), cfg) / cfg.covariance_inflation
-    return Match(pose_out, 0.5 * (info + info.T), float(inliers) / max(n, 1), rms, n, 0.5 * (H + H.T))
+    info = sandwich_information(H, B, int(used)) / cfg.covariance_inflation
+    return Match(pose_out, info, float(inliers) / max(n, 1), rms, n, 0.5 * (H + H.T))
 
 
-def residual_variance(ss: float, inliers: int, cfg: AlignmentConfig) -> float:
-    """Variance (m^2) of one point-to-line residual of a match: the match's own residuals
-    (``ss`` m^2 over ``inliers`` points, 3 degrees of freedom spent on the pose), never below
-    ``cfg.sigma_point`` squared (the floor: a near-perfect fit does not make a pose exact)."""
-    own = ss / (inliers - 3) if inliers > 3 else np.inf
-    return float(max(own, cfg.sigma_point**2))
+def _query_normals(normals: np.ndarray | None, n: int) -> tuple[np.ndarray, np.ndarray]:
+    if normals is None:
+        z = np.zeros(n)
+        return z, z
+    q = np.asarray(normals, float).reshape(n, 2)
+    return q[:, 0].copy(), q[:, 1].copy()
+
+
+def sandwich_information(H: np.ndarray, B: np.ndarray, used: int) -> np.ndarray:
+    """Information (3, 3) of an M-estimate from its own residuals: the covariance is the sandwich
+    ``H^-1 B H^-1`` (``H`` the Huber-weighted Hessian, ``B`` the sum of each point's squared
+    weighted residual, floored, times its squared Jacobian), times ``used / (used - 3)`` for the 3
+    degrees of freedom spent on the pose. Unlike one pooled residual variance, it follows the
+    points that fix each direction: along a corridor the few door edges that fix the axis, with
+    their own residuals, set its variance. Zero information with 3 points or fewer."""
+    return icpkernel.sandwich(np.ascontiguousarray(H, float), np.ascontiguousarray(B, float), int(used))
 
 
 def score(points: np.ndarray, ref: Reference, pose: np.ndarray, distance: float) -> float:
@@ -169,13 +186,13 @@ def score(points: np.ndarray, ref: Reference, pose: np.ndarray, distance: float)
 
 
 def match(points: np.ndarray, ref: Reference, starts: list[np.ndarray], cfg: AlignmentConfig,
-          max_heading: float = np.inf, prior: np.ndarray | None = None) -> Match:
+          max_heading: float = np.inf, prior: np.ndarray | None = None, normals: np.ndarray | None = None) -> Match:
     """ICP from the first start; when it explains fewer than ``retry_inliers`` of the points, also
     from every other start and from heading offsets ``heading_hypotheses`` (rad) about the first
     (those up to ``max_heading`` rad: a loop closure tries only headings its drift allows); the
     start with most inliers wins (ties keep the earlier start). ``prior`` (information, see
     :func:`refine`) holds the first start only: a retry is a different motion."""
-    best = refine(points, ref, starts[0], cfg, prior)
+    best = refine(points, ref, starts[0], cfg, prior, normals)
     if best.inliers >= cfg.retry_inliers:
         return best
     first = np.asarray(starts[0], float)
@@ -184,7 +201,7 @@ def match(points: np.ndarray, ref: Reference, starts: list[np.ndarray], cfg: Ali
     scored = sorted(((score(points, ref, s, cfg.max_correspondence), k + 1, s) for k, s in enumerate(extra)),
                     key=lambda t: -t[0])
     for _, k, s in scored[: cfg.refine_hypotheses]:
-        m = refine(points, ref, s, cfg)
+        m = refine(points, ref, s, cfg, normals=normals)
         if m.inliers > best.inliers + cfg.hypothesis_margin:
             best = Match(m.pose, m.information, m.inliers, m.rms, m.n_points, m.hessian, k)
     return best

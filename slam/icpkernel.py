@@ -56,6 +56,30 @@ def _nearest(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2):
 
 
 @kernel
+def _nearest_facing(qx, qy, qnx, qny, rx, ry, nrx, nry, order, start, lox, loy, cell, nx, ny, reach2, min_cos):
+    """As :func:`_nearest`, among the reference points whose normal lies within ``acos(min_cos)``
+    of the query's normal (qnx, qny); a query without a normal (0, 0) takes the nearest point."""
+    if qnx == 0.0 and qny == 0.0:
+        return _nearest(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2)
+    ci = int(math.floor((qx - lox) / cell))
+    cj = int(math.floor((qy - loy) / cell))
+    best = -1
+    bd = reach2
+    for i in range(max(ci - 1, 0), min(ci + 2, nx)):
+        for j in range(max(cj - 1, 0), min(cj + 2, ny)):
+            c = i * ny + j
+            for k in range(start[c], start[c + 1]):
+                m = order[k]
+                dx = rx[m] - qx
+                dy = ry[m] - qy
+                d = dx * dx + dy * dy
+                if d < bd and qnx * nrx[m] + qny * nry[m] >= min_cos:
+                    bd = d
+                    best = m
+    return best, bd
+
+
+@kernel
 def nearest_many(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach):
     """Nearest reference index (-1 beyond ``reach`` m) and distance (inf) for every query point."""
     n = qx.shape[0]
@@ -103,23 +127,56 @@ def _solve3(A, b):
 
 
 @kernel
+def sandwich(H, B, used):
+    """``H (B used / (used - 3))^-1 H``, symmetrised (zeros for 3 points or fewer, or a singular B)."""
+    out = np.zeros((3, 3))
+    if used <= 3:
+        return out
+    f = used / (used - 3.0)
+    Bs = np.empty((3, 3))
+    eps = 1e-12 * (B[0, 0] + B[1, 1] + B[2, 2]) * f + 1e-30
+    for i in range(3):
+        for j in range(3):
+            Bs[i, j] = 0.5 * (B[i, j] + B[j, i]) * f
+        Bs[i, i] += eps
+    X = np.empty((3, 3))  # Bs^-1 H, column by column
+    for j in range(3):
+        X[:, j] = _solve3(Bs, H[:, j].copy())
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for k in range(3):
+                acc += H[i, k] * X[k, j]
+            out[i, j] = acc
+    for i in range(3):
+        for j in range(i + 1, 3):
+            m = 0.5 * (out[i, j] + out[j, i])
+            out[i, j] = m
+            out[j, i] = m
+    return out
+
+
+@kernel
 def gauss_newton(px, py, pose0, rx, ry, nrx, nry, order, start, lox, loy, cell, nx, ny,
-                 reaches, iterations, huber, damping, tol_xy, tol_theta, inlier_distance, prior, prior_info):
+                 reaches, iterations, huber, damping, tol_xy, tol_theta, inlier_distance, prior, prior_info, floor2, qnx, qny, min_cos):
     """Point-to-line ICP stages (reach m, iterations); returns pose (3,), Hessian (3, 3) of the
     last step, inlier count and sum of squared inlier residuals (m^2) at the last correspondences.
     ``prior`` (3,) with ``prior_info`` (3, 3, in the units of the Hessian: information times the
     residual variance; zeros for none) is a Gaussian prior on the pose (MAP estimate)."""
     pose = pose0.copy()
     H = np.zeros((3, 3))
+    B = np.zeros((3, 3))
     g = np.zeros(3)
     n = px.shape[0]
     inliers = 0
+    used = 0
     ss = 0.0
     for stage in range(reaches.shape[0]):
         reach2 = reaches[stage] * reaches[stage]
         for _ in range(iterations[stage]):
             c, s = math.cos(pose[2]), math.sin(pose[2])
             H[:, :] = 0.0
+            B[:, :] = 0.0
             g[:] = 0.0
             used = 0
             inliers = 0
@@ -127,7 +184,8 @@ def gauss_newton(px, py, pose0, rx, ry, nrx, nry, order, start, lox, loy, cell, 
             for q in range(n):
                 wx = c * px[q] - s * py[q] + pose[0]
                 wy = s * px[q] + c * py[q] + pose[1]
-                m, d2 = _nearest(wx, wy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2)
+                m, d2 = _nearest_facing(wx, wy, c * qnx[q] - s * qny[q], s * qnx[q] + c * qny[q], rx, ry, nrx, nry,
+                                        order, start, lox, loy, cell, nx, ny, reach2, min_cos)
                 if m < 0:
                     continue
                 used += 1
@@ -145,12 +203,20 @@ def gauss_newton(px, py, pose0, rx, ry, nrx, nry, order, start, lox, loy, cell, 
                 H[1, 1] += w * j1 * j1
                 H[1, 2] += w * j1 * j2
                 H[2, 2] += w * j2 * j2
+                v = w * w * max(r * r, floor2)
+                B[0, 0] += v * j0 * j0
+                B[0, 1] += v * j0 * j1
+                B[0, 2] += v * j0 * j2
+                B[1, 1] += v * j1 * j1
+                B[1, 2] += v * j1 * j2
+                B[2, 2] += v * j2 * j2
                 g[0] += w * j0 * r
                 g[1] += w * j1 * r
                 g[2] += w * j2 * r
             H[1, 0], H[2, 0], H[2, 1] = H[0, 1], H[0, 2], H[1, 2]
+            B[1, 0], B[2, 0], B[2, 1] = B[0, 1], B[0, 2], B[1, 2]
             if used < 3:
-                return pose, np.zeros((3, 3)), 0, np.inf
+                return pose, np.zeros((3, 3)), 0, np.inf, np.zeros((3, 3)), 0
             A = H + prior_info
             e = pose - prior
             e[2] = math.atan2(math.sin(e[2]), math.cos(e[2]))
@@ -165,4 +231,4 @@ def gauss_newton(px, py, pose0, rx, ry, nrx, nry, order, start, lox, loy, cell, 
             pose[2] = math.atan2(math.sin(pose[2]), math.cos(pose[2]))
             if abs(step[0]) + abs(step[1]) < tol_xy and abs(step[2]) < tol_theta:
                 break
-    return pose, H, inliers, ss
+    return pose, H, inliers, ss, B, used

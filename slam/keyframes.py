@@ -72,7 +72,7 @@ def local_map(keyframes: list[Keyframe], voxel: float) -> Reference:
 def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyframe], cfg: LoopClosureConfig,
                  alignment: AlignmentConfig, voxel: float, since_closure: float = 0.0,
                  drift: Callable[[Keyframe], np.ndarray] | None = None, positions: np.ndarray | None = None,
-                 travelled: np.ndarray | None = None) -> LoopClosure | None:
+                 travelled: np.ndarray | None = None, normals: np.ndarray | None = None) -> LoopClosure | None:
     """Match ``scan_points`` (the new keyframe's matching points, sensor frame) against the submaps
     of the nearest earlier keyframes within ``search_radius`` of the new one's estimate and at
     least ``min_travel`` of path behind it; the first match that passes every check is returned.
@@ -83,7 +83,8 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
     added) is refused, and only heading hypotheses inside that gate are tried. Without
     ``drift`` the gate is not applied (any correction, any heading hypothesis). ``positions``
     (n, 2) and ``travelled`` (n,) are the keyframes' positions and path lengths when the caller
-    keeps them as arrays (else they are gathered here)."""
+    keeps them as arrays (else they are gathered here); ``normals`` (n, 2) are the scan points'
+    own normals (sensor frame, (0, 0) for none) for the matcher's normal check."""
     if travelled is None:
         travelled = np.array([kf.travelled for kf in keyframes], float)
     if positions is None:
@@ -109,7 +110,7 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
         ref = local_map(sub, voxel)
         prior = drift(cand) if drift is not None else None
         max_heading = np.inf if prior is None else float(np.sqrt(gate * max(prior[2, 2], 0.0)))
-        m = match(scan_points, ref, [new.pose], alignment, max_heading)
+        m = match(scan_points, ref, [new.pose], alignment, max_heading, normals=normals)
         d = m.pose - new.pose
         d[2] = np.arctan2(np.sin(d[2]), np.cos(d[2]))
         d2 = float(d @ np.linalg.solve(prior + m.covariance, d)) if prior is not None else 0.0

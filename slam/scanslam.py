@@ -12,6 +12,7 @@ Pure: no I/O, no clocks.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -21,7 +22,7 @@ from dataclasses import replace
 from .config import AlignmentConfig, KeyframeConfig, LoopClosureConfig, MotionConfig
 from .models import chi2_quantile
 from .geometry import between, compose, rotation
-from .icp import Match, Reference, chord_normals, match, refine
+from .icp import Match, Reference, chord_normals, chord_normals_at, match, refine
 from .keyframes import Keyframe, LoopClosure, find_closure, local_map
 from .posegraph import PoseGraph, robust_noise
 
@@ -58,14 +59,39 @@ class ScanPoints:
         p = p[np.isfinite(p[:, 0]) & (p[:, 0] ** 2 + p[:, 1] ** 2 <= cfg.max_range**2)]
         return cls(p, p[:: cfg.stride], cfg)
 
-    def surface(self) -> tuple[np.ndarray, np.ndarray]:
-        """The points that lie on a surface and their unit normals (towards the sensor), (p, 2) each."""
+    @cached_property
+    def _normals(self) -> tuple[np.ndarray, np.ndarray]:
+        """Chord normals of the valid points (towards the sensor, so the map's two faces of a thin
+        wall differ) and the mask of those on a surface (computed once per scan)."""
         cfg = self.cfg
         n, ok = chord_normals(self.valid, cfg.normal_step, cfg.normal_gap, cfg.normal_gap_per_range)
-        # normals point towards the sensor, so the map's two faces of a thin wall differ
         flip = np.einsum("ij,ij->i", n, self.valid) > 0
         n[flip] *= -1
+        return n, ok
+
+    def surface(self) -> tuple[np.ndarray, np.ndarray]:
+        """The points that lie on a surface and their unit normals (towards the sensor), (p, 2) each."""
+        n, ok = self._normals
         return self.valid[ok], n[ok]
+
+    @cached_property
+    def matched_normals(self) -> np.ndarray:
+        """Unit normals (towards the sensor) of the matched points, (0, 0) where a point has none
+        (its chord spans a depth jump): the chord normals of :meth:`surface`, at the matched
+        beams only."""
+        cfg = self.cfg
+        p, k = self.valid, cfg.normal_step
+        out = np.zeros_like(self.matched)
+        idx = np.arange(0, p.shape[0], cfg.stride)
+        inner = (idx >= k) & (idx < p.shape[0] - k)
+        i = idx[inner]
+        if i.size:
+            n, ok = chord_normals_at(p, i, k, cfg.normal_gap, cfg.normal_gap_per_range)
+            flip = np.einsum("ij,ij->i", n, p[i]) > 0
+            n[flip] *= -1
+            n[~ok] = 0.0
+            out[inner] = n
+        return out
 
     @property
     def points(self) -> np.ndarray:
@@ -118,9 +144,31 @@ class ScanSlam:
         d = between(p0, p1) * f
         return compose(p1, d)
 
-    def step(self, stamp: float, points: np.ndarray) -> ScanStep:
-        """Process the scan taken at ``stamp`` (s) with points (n, 2) in the sensor frame, in beam
-        order (invalid beams as nan rows)."""
+    def velocity(self) -> np.ndarray:
+        """(3,) twist (m/s, m/s, rad/s) in the sensor frame from the last two poses (zeros if fewer)."""
+        if len(self.last) < 2 or self.last[1][0] <= self.last[0][0]:
+            return np.zeros(3)
+        (t0, p0), (t1, p1) = self.last
+        return between(p0, p1) / (t1 - t0)
+
+    def deskew(self, points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+        """The scan's points (n, 2) in the sensor frame at the stamp (its first beam): beam i was
+        measured ``offsets[i]`` s later, from where the constant-velocity motion had moved the
+        sensor by then (first order in the motion over the scan's 13-27 ms)."""
+        v = self.velocity()
+        tau = np.asarray(offsets, float)
+        a = v[2] * tau
+        c, s = np.cos(a), np.sin(a)
+        x, y = points[:, 0], points[:, 1]
+        return np.column_stack((c * x - s * y + v[0] * tau, s * x + c * y + v[1] * tau))
+
+    def step(self, stamp: float, points: np.ndarray, offsets: np.ndarray | None = None) -> ScanStep:
+        """Process the scan taken at ``stamp`` (s, its first beam) with points (n, 2) in the sensor
+        frame, in beam order (invalid beams as nan rows); ``offsets`` (n,), each beam's time (s)
+        after the first (:func:`lms200.timing.beam_time_offsets`), undoes the motion during the
+        scan when ``alignment.deskew`` is on."""
+        if offsets is not None and self.alignment.deskew and len(self.last) >= 2:
+            points = self.deskew(np.asarray(points, float).reshape(-1, 2), offsets)
         sp = ScanPoints.from_points(points, self.alignment)
         if self.graph is None:
             return self._first(stamp, sp)
@@ -131,8 +179,9 @@ class ScanSlam:
             starts = [pred, self.last[-1][1]] if self.predict_velocity else [self.last[-1][1], pred]
             sxy, sth = self._motion_sigma(stamp - self.last[-1][0])
             prior = np.diag([sxy**-2, sxy**-2, sth**-2]) if self.alignment.motion_prior else None
-            m = match(sp.matched, self.ref, starts, self.alignment, prior=prior)
-            m = self._check_jump(sp.matched, m, pred, stamp - self.last[-1][0], info)
+            qn = sp.matched_normals if self.alignment.normal_agreement < np.pi else None
+            m = match(sp.matched, self.ref, starts, self.alignment, prior=prior, normals=qn)
+            m = self._check_jump(sp.matched, m, pred, stamp - self.last[-1][0], info, qn)
             info.inliers, info.rms, info.hypothesis = m.inliers, m.rms, m.start
         if m is not None and m.inliers >= self.alignment.min_inliers:
             pose, cov = m.pose, m.covariance
@@ -152,7 +201,8 @@ class ScanSlam:
         self.last = [self.last[-1], (stamp, pose)]
         return info
 
-    def _check_jump(self, points: np.ndarray, m: Match, pred: np.ndarray, dt: float, info: ScanStep) -> Match:
+    def _check_jump(self, points: np.ndarray, m: Match, pred: np.ndarray, dt: float, info: ScanStep,
+                    normals: np.ndarray | None = None) -> Match:
         """The point check: a match further from the prediction than the motion's uncertainty is
         compared with a narrow-reach match started at the prediction (which cannot slide to an
         aliased place along a corridor); the jump stands unless that one explains clearly more
@@ -164,7 +214,7 @@ class ScanSlam:
         if (e[0] ** 2 + e[1] ** 2) / sxy**2 + e[2] ** 2 / sth**2 <= self._jump_gate:
             return m
         assert self.ref is not None
-        near = refine(points, self.ref, pred, self._narrow)
+        near = refine(points, self.ref, pred, self._narrow, normals=normals)
         if near.inliers <= m.inliers + mc.jump_margin:
             return m
         info.jump_rejected = True
@@ -204,7 +254,8 @@ class ScanSlam:
         if lc.enabled and self._since_search >= lc.every and sp.matched.shape[0] >= 10:
             self._since_search = 0
             loop = find_closure(kf, sp.matched, self.keyframes[:-1], lc, self.alignment, self.keyframes_cfg.voxel,
-                                self.travelled - self._closed_at, self._drift(kf), self._kf_xy[:-1], self._kf_travel[:-1])
+                                self.travelled - self._closed_at, self._drift(kf), self._kf_xy[:-1], self._kf_travel[:-1],
+                                sp.matched_normals if self.alignment.normal_agreement < np.pi else None)
             if loop is not None:
                 self._closed_at = self.travelled
                 noise = robust_noise(loop.covariance, lc.kernel, lc.kernel_width)
@@ -293,7 +344,7 @@ def run_scan_slam(steps, config) -> "SlamResult":
         if previous is not None and t < previous:
             raise SlamInputError(f"scan {k}: timestamp {t} is earlier than the previous one ({previous})")
         previous = t
-        info = slam.step(t, scan.points)
+        info = slam.step(t, scan.points, _offsets(scan))
         if info.new_keyframe:
             kf_scans[info.keyframe] = scan
         stamps.append(t)
@@ -333,6 +384,19 @@ def run_scan_slam(steps, config) -> "SlamResult":
         "matched_fraction": float(matched[1:].mean()) if matched.size > 1 else 1.0,
     }
     return SlamResult(traj, covs, lines, np.zeros((0, 3)), diag)
+
+
+def _offsets(scan) -> np.ndarray:
+    """Each beam's time after the scan's first beam (s), from the LMS200's mirror timing."""
+    from lms200.timing import beam_time_offsets
+
+    key = (scan.ranges.shape[0], float(scan.angle_increment))
+    if key not in _OFFSETS:
+        _OFFSETS[key] = beam_time_offsets(*key)
+    return _OFFSETS[key]
+
+
+_OFFSETS: dict[tuple[int, float], np.ndarray] = {}
 
 
 def _segments(fs, config) -> np.ndarray:

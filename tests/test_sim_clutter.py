@@ -126,3 +126,46 @@ def test_glass_gives_no_return_and_hides_what_is_behind(tmp_path: Path) -> None:
     world.to_json(tmp_path / "w.json")
     again = World.from_json(tmp_path / "w.json")
     assert np.array_equal(again.glass, world.glass) and np.array_equal(again.boxes, world.boxes)
+
+
+def test_wall_runs_stand_on_the_inside_of_walls_clear_of_the_route() -> None:
+    """Runs of things along walls: every solid's back sinks into a wall face inside the room (none
+    outside it, none floating), they keep the route clear, and the runs change nothing else."""
+    from sim.clutter import ClutterConfig, add_clutter
+    from sim.layout import EMBED_M
+
+    def room() -> Layout:
+        lay = Layout("runs", 0)
+        lay.wall([(0, 0), (8, 0), (8, 5), (0, 5)], closed=True)
+        a, b = lay.node(1.5, 2.5, target=True), lay.node(6.5, 2.5, target=True)
+        lay.link(a, b)
+        return lay
+
+    lay = room()
+    walls = len(lay.boxes)
+    add_clutter(lay, np.random.default_rng(4), 1.0, ClutterConfig(0, 0, 0, 0, 0, 0, wall_runs=20.0))
+    items = np.array(lay.boxes[walls:])
+    assert len(items) >= 20
+    corners = np.vstack([np.array(_corners(b)) for b in items])
+    inside = 0.05 - EMBED_M - 1e-9  # the inner wall faces are at 0.05 and 8 - 0.05 / 5 - 0.05
+    assert np.all((corners[:, 0] >= inside) & (corners[:, 0] <= 8 - inside))
+    assert np.all((corners[:, 1] >= inside) & (corners[:, 1] <= 5 - inside))
+    for b in items:  # each stands against a face: its nearest corner is sunk EMBED_M into the wall
+        c = np.array(_corners(b))
+        gap = np.min(np.minimum.reduce([c[:, 0] - 0.05, 7.95 - c[:, 0], c[:, 1] - 0.05, 4.95 - c[:, 1]]))
+        assert abs(gap + EMBED_M) < 1e-9
+    cyl = np.array(lay.cylinders)
+    assert len(cyl) >= 5  # round things: sunk EMBED_M into a face too
+    gap = np.minimum.reduce([cyl[:, 0] - 0.05, 7.95 - cyl[:, 0], cyl[:, 1] - 0.05, 4.95 - cyl[:, 1]]) - cyl[:, 2]
+    assert np.allclose(gap, -EMBED_M, atol=1e-9)
+    world = lay.build()
+    pts = np.array([1.5, 2.5]) + np.linspace(0, 1, 60)[:, None] * np.array([5.0, 0.0])
+    assert world.clearance(pts).min() >= 0.4
+    bare = room()
+    add_clutter(bare, np.random.default_rng(4), 1.0, ClutterConfig(0, 0, 0, 0, 0, 0))
+    assert len(bare.boxes) == walls
+
+
+def _corners(box) -> list:
+    from sim.geometry import rectangle_corners
+    return rectangle_corners(*box[:5]).tolist()

@@ -81,11 +81,19 @@ def office_run():
 
 
 def test_a_revisit_closes_a_loop_that_agrees_with_the_truth(office_run):
+    from slam.run import pose_nees
+    from slam.scanslam import _offsets
+
     slam = ScanSlam()
     for rec in office_run:
-        slam.step(rec.scan.stamp, rec.scan.points)
+        slam.step(rec.scan.stamp, rec.scan.points, _offsets(rec.scan))
     assert len(slam.loops) >= 1
     truth = np.array([r.truth for r in office_run])
+    # the covariances are honest on a short run too: mean pose NEES inside the 95 % chi-square
+    # interval of one 3-dof sample (consistent: 3)
+    traj = np.column_stack(([r.scan.stamp for r in office_run], slam.trajectory()))
+    nees = pose_nees(traj, slam.pose_covariances(), list(truth))
+    assert 0.216 < np.nanmean(nees) < 9.35
     errors = []
     for loop in slam.loops:
         old, new = slam.keyframes[loop.old], slam.keyframes[loop.new]
@@ -167,3 +175,57 @@ def test_a_closure_beyond_the_drift_the_graph_allows_is_refused():
     assert loop is not None and np.hypot(*loop.relative[:2]) < 0.01 and loop.correction > 0.19
     assert np.all(np.linalg.eigvalsh(loop.covariance) > 0)  # the closure's noise is its match's
     assert closure(0.01) is None
+
+
+def test_beam_times_are_the_simulators():
+    from lms200.timing import beam_time_offsets
+    from sim import SensorConfig
+
+    for s in (SensorConfig(), SensorConfig.lms200_1deg(), SensorConfig.lms200_quarter_deg()):
+        np.testing.assert_allclose(beam_time_offsets(s.n_beams, s.angle_increment), s.beam_time_offsets, atol=1e-15)
+
+
+def test_deskew_undoes_the_motion_during_an_interlaced_scan():
+    """A 0.5 deg scan (two mirror turns, 27 ms) taken while turning at 1 rad/s and moving at 1 m/s,
+    matched against the same place scanned standing: de-skewed with the twist, the match finds the
+    pose at the first beam; raw, the heading is off by the turn during the scan."""
+    from lms200.timing import beam_time_offsets
+    from sim import LMS200Sim, SensorConfig, make_world
+    from slam.icp import make_reference, refine
+    from slam.scanslam import _offsets
+
+    world = make_world("office")
+    pose = (world.route_nodes[0][0], world.route_nodes[0][1], 0.2)
+    cfg = AlignmentConfig()
+    with LMS200Sim(world, SensorConfig.ideal(interlaced=True)) as sim:
+        still = ScanPoints.from_points(sim.scan_at(pose).points, cfg)
+        moving = sim.scan_at(pose, twist=(1.0, 1.0))
+    ref = make_reference(still.points, still.normals, 0.0)
+    slam = ScanSlam()
+    slam.last = [(0.0, np.zeros(3)), (0.1, np.array([0.1, 0.0, 0.1]))]  # 1 m/s ahead, 1 rad/s
+    assert np.array_equal(_offsets(moving), beam_time_offsets(361, moving.angle_increment))
+    errors = []
+    for pts in (slam.deskew(moving.points, _offsets(moving)), moving.points):
+        m = refine(ScanPoints.from_points(pts, cfg).matched, ref, np.zeros(3), cfg)
+        errors.append((np.hypot(*m.pose[:2]), abs(m.pose[2])))
+    (dxy, dth), (raw_xy, raw_th) = errors
+    assert dxy < 0.003 and dth < 0.001
+    assert raw_th > 0.005  # about half the 27 ms turn
+
+
+def test_the_normal_check_pairs_a_point_with_a_surface_facing_the_same_way():
+    """Near a corner the nearest map point lies on the other wall; the normal check skips it."""
+    from slam import icpkernel
+    from slam.icp import make_reference
+
+    wall = np.column_stack((np.linspace(0, 2, 41), np.zeros(41)))       # y = 0, normal +y
+    side = np.column_stack((np.full(41, 2.0), np.linspace(0, 2, 41)))   # x = 2, normal -x
+    ref = make_reference(np.vstack((wall, side)), np.vstack((np.tile([0.0, 1.0], (41, 1)),
+                                                             np.tile([-1.0, 0.0], (41, 1)))))
+    q = (1.97, 0.1)  # nearest: the side wall (3 cm), but the query lies on the floor wall
+    x, y, order, start, lox, loy, cell, nx, ny = ref.grid()
+    m, _ = icpkernel._nearest(q[0], q[1], x, y, order, start, lox, loy, cell, nx, ny, 0.25)
+    assert ref.normals[m][0] == -1.0
+    m, _ = icpkernel._nearest_facing(q[0], q[1], 0.0, 1.0, x, y, *ref._normals, order, start, lox, loy,
+                                     cell, nx, ny, 0.25, np.cos(AlignmentConfig().normal_agreement))
+    assert ref.normals[m][1] == 1.0

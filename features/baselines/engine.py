@@ -225,17 +225,38 @@ def split_at(x, y, s, e, threshold, cf, sf, rho_f, chord):  # noqa: ANN001, ANN2
         dmax = max(d_s, d_e)
         if d_s != d_s or d_e != d_e:
             return -1
+    # two interleaved scans of the interior points (even and odd offsets), so that consecutive
+    # points do not wait on each other's maximum; the first farthest point is the smaller index of
+    # the two scans' on a tie; a nan distance (never a maximum) makes the whole answer -1
+    cmax2, at2, dmax2 = cmax, at, dmax
     nan = False
-    for q in range(s + 1, e):
+    q = s + 1
+    while q + 1 < e:
         dc = abs(x[q] * nx + y[q] * ny - rho_c)
+        dc2 = abs(x[q + 1] * nx + y[q + 1] * ny - rho_c)
+        d = dc if chord else abs(x[q] * cf + y[q] * sf - rho_f)
+        d2 = dc2 if chord else abs(x[q + 1] * cf + y[q + 1] * sf - rho_f)
         if dc > cmax:
             cmax = dc
             at = q
+        if dc2 > cmax2:
+            cmax2 = dc2
+            at2 = q + 1
+        dmax = d if d > dmax else dmax
+        dmax2 = d2 if d2 > dmax2 else dmax2
+        nan |= (dc != dc) | (d != d) | (dc2 != dc2) | (d2 != d2)
+        q += 2
+    if q < e:
+        dc = abs(x[q] * nx + y[q] * ny - rho_c)
         d = dc if chord else abs(x[q] * cf + y[q] * sf - rho_f)
-        if d > dmax:
-            dmax = d
-        nan = nan or dc != dc or d != d
-    if nan or not dmax > threshold:
+        if dc > cmax:
+            cmax = dc
+            at = q
+        dmax = d if d > dmax else dmax
+        nan |= (dc != dc) | (d != d)
+    if cmax2 > cmax or (cmax2 == cmax and at2 < at):
+        at = at2
+    if nan or not max(dmax, dmax2) > threshold:
         return -1
     return at
 

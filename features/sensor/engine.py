@@ -260,6 +260,59 @@ def quantum_step(sample) -> float:  # noqa: ANN001
 
 
 @kernel
+def select(a, n, k) -> float:  # noqa: ANN001
+    """The k-th smallest of a[:n] (0-based; no nan), reordering a[:n] so that a[:k] <= a[k] <= a[k+1:n]
+    (quickselect, median-of-three pivots)."""
+    lo, hi = 0, n - 1
+    while hi > lo:
+        mid = (lo + hi) // 2
+        if a[mid] < a[lo]:
+            a[mid], a[lo] = a[lo], a[mid]
+        if a[hi] < a[lo]:
+            a[hi], a[lo] = a[lo], a[hi]
+        if a[hi] < a[mid]:
+            a[hi], a[mid] = a[mid], a[hi]
+        pivot = a[mid]
+        i, j = lo, hi
+        while i <= j:
+            while a[i] < pivot:
+                i += 1
+            while pivot < a[j]:
+                j -= 1
+            if i <= j:
+                a[i], a[j] = a[j], a[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            hi = j
+        elif k >= i:
+            lo = i
+        else:
+            break
+    return a[k]
+
+
+@kernel
+def median(x, scratch) -> float:  # noqa: ANN001
+    """np.median(x) (nan when x holds a nan or is empty), with ``scratch`` (>= x.size) for the selection:
+    the middle value, or the mean of the two middle ones."""
+    n = x.size
+    if n == 0:
+        return np.nan
+    for i in range(n):
+        if x[i] != x[i]:
+            return np.nan
+        scratch[i] = x[i]
+    hi = select(scratch, n, n // 2)
+    if n % 2:
+        return hi
+    lo = scratch[0]
+    for i in range(1, n // 2):
+        lo = max(lo, scratch[i])
+    return (lo + hi) / 2.0
+
+
+@kernel
 def mean_std(x, n, scratch):  # noqa: ANN001, ANN201
     """numpy's x[:n].mean() and x[:n].std() (pairwise sums), with ``scratch`` (>= n) for the squares."""
     mean = pairwise_sum(x, 0, n) / n
@@ -277,10 +330,12 @@ def clipped_scale(z) -> float:  # noqa: ANN001
     n = z.size
     if n == 0:
         return np.nan
-    m = np.median(z)
-    s = 1.4826 * np.median(np.abs(z - m))
     kz = np.empty(n)
     scratch = np.empty(n)
+    m = median(z, scratch)
+    for i in range(n):
+        kz[i] = abs(z[i] - m)
+    s = 1.4826 * median(kz, scratch)
     if s <= 0:  # more than half the residuals identical (coarse quantisation): start from the spread
         s = mean_std(z, n, scratch)[1]
         if s == 0:
@@ -291,13 +346,12 @@ def clipped_scale(z) -> float:  # noqa: ANN001
         lim = CLIP_SIGMAS * s
         nk = 0
         same = True
-        for i in range(n):
+        for i in range(n):  # without branches: which residuals stay is data, not predictable
             inside = abs(z[i] - m) <= lim
             new_keep[i] = inside
-            same = same and inside == keep[i]
-            if inside:
-                kz[nk] = z[i]
-                nk += 1
+            same &= inside == keep[i]
+            kz[nk] = z[i]
+            nk += inside
         if nk < 2:
             break
         m, s_new = mean_std(kz, nk, scratch)
@@ -569,14 +623,11 @@ def candidate_runs(AD, AD_var, psi, psi_var, k, ad_line, sigma_r, p):  # noqa: A
 
 
 @kernel
-def band_of_runs(c0, c1, theta, theta_var, ranges, bearings, increment, sigma_r, k, p):  # noqa: ANN001, ANN201
-    """Each run's band of normal angles: its slope estimate (the mean of theta over its centres,
-    continuous along a run), the band half-width (band_tau std of that mean, at least band_min)
-    and the half-width of the peak's log-range window: range noise at the nearest beam plus the
-    spread an angle error of half a band step causes over the run (d log p / d a = -tan(a - b))."""
+def slope_sums(theta, theta_var):  # noqa: ANN001, ANN201
+    """(2, n) cumulative sums of theta and theta_var as np.cumsum forms them, nan counted as 0
+    (``band_of_runs``' means over runs of centres; once per scan)."""
     n = theta.size
-    cs_t = np.empty(n)  # cumulative sums as np.cumsum, nan counted as 0
-    cs_v = np.empty(n)
+    cs = np.empty((2, n))
     acc_t = 0.0
     acc_v = 0.0
     for i in range(n):
@@ -584,13 +635,23 @@ def band_of_runs(c0, c1, theta, theta_var, ranges, bearings, increment, sigma_r,
         tv = theta_var[i]
         acc_t += 0.0 if np.isnan(th) else th
         acc_v += 0.0 if np.isnan(tv) else tv
-        cs_t[i] = acc_t
-        cs_v[i] = acc_v
+        cs[0, i] = acc_t
+        cs[1, i] = acc_v
+    return cs
+
+
+@kernel
+def band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings, increment, sigma_r, k, p):  # noqa: ANN001, ANN201
+    """Each run's band of normal angles: its slope estimate (the mean of theta over its centres,
+    continuous along a run), the band half-width (band_tau std of that mean, at least band_min)
+    and the half-width of the peak's log-range window: range noise at the nearest beam plus the
+    spread an angle error of half a band step causes over the run (d log p / d a = -tan(a - b)).
+    ``cs``: the cumulative sums of theta and theta_var (``slope_sums``)."""
+    cs_t, cs_v = cs[0], cs[1]
     h = max((p.hough_angles - 1) // 2, 1)
     n_runs = c0.size
-    centre = np.empty(n_runs)
-    half_width = np.empty(n_runs)
-    bin_half = np.empty(n_runs)
+    out = np.empty((3, n_runs))
+    centre, half_width, bin_half = out[0], out[1], out[2]
     for r in range(n_runs):
         a, e = c0[r], c1[r]
         n_c = e - a + 1
@@ -689,7 +750,7 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
 
 
 @kernel
-def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_tau, buf):  # noqa: ANN001, ANN201
+def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_tau, buf, out, final):  # noqa: ANN001, ANN201
     """One Gauss-Newton step of every run's (rho, alpha) on its beams (range d, bearing b given by
     its cosine cb and sine sb).
 
@@ -697,15 +758,10 @@ def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_ta
     range noise moves it by e_j cos(b_j - alpha), so its weight is 1 / (sigma_r cos)^2 and
     (J^T W J)^-1 is the covariance of (rho, alpha). Beams in ``mask`` are used, and when
     ``inlier_tau`` > 0 only those within inlier_tau sigma_r (range residual) of the estimate.
-    Returns (rho, alpha, cov (R, 2, 2), z = r / (sigma_r cos) (N,), weights w (N,)); ``buf`` is
-    (5, N) scratch."""
+    Writes into ``out`` (a FitOut; ``buf`` is (5, N) scratch) the new rho, alpha (R,) and, when
+    ``final``, cov (R, 2, 2), z = r / (sigma_r cos) (N,; nan unless inlier_tau > 0) and the weights w (N,)."""
     n_runs = starts.size
-    n = d.size
-    z = np.full(n, np.nan)
-    w = np.empty(n)
-    new_rho = np.empty(n_runs)
-    new_alpha = np.empty(n_runs)
-    cov = np.empty((n_runs, 2, 2))
+    new_rho, new_alpha, cov, z, w = out.rho, out.alpha, out.cov, out.z, out.w
     s2 = sigma_r * sigma_r
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
@@ -717,10 +773,14 @@ def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_ta
             use = c > MIN_COS and mask[row]
             if inlier_tau > 0.0:
                 zz = res / (sigma_r * c)
-                z[row] = zz
+                if final:
+                    z[row] = zz
                 use = use and abs(zz) <= inlier_tau
+            elif final:
+                z[row] = np.nan
             wr = (1.0 if use else 0.0) / (c * c)
-            w[row] = wr
+            if final:
+                w[row] = wr
             wg = wr * g
             buf[0, row] = wr
             buf[1, row] = wg
@@ -735,12 +795,23 @@ def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_ta
         inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
         new_rho[r] = rho[r] + (swgg * swr - swg * swgr) * inv_det
         new_alpha[r] = alpha[r] + (swg * swr - sw * swgr) * inv_det
-        var = s2 * inv_det
-        cov[r, 0, 0] = swgg * var
-        cov[r, 0, 1] = swg * var
-        cov[r, 1, 0] = swg * var
-        cov[r, 1, 1] = sw * var
-    return new_rho, new_alpha, cov, z, w
+        if final:
+            var = s2 * inv_det
+            cov[r, 0, 0] = swgg * var
+            cov[r, 0, 1] = swg * var
+            cov[r, 1, 0] = swg * var
+            cov[r, 1, 1] = sw * var
+
+
+class FitOut(NamedTuple):
+    """Outputs of a ``gauss_newton`` step: per run rho, alpha, cov; per row z, w (views of blocks
+    allocated once per ``fit_runs``)."""
+
+    rho: np.ndarray
+    alpha: np.ndarray
+    cov: np.ndarray
+    z: np.ndarray
+    w: np.ndarray
 
 
 @kernel
@@ -779,11 +850,14 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
     (-pi, pi]) with cov, first / last inlier beam, inlier count, and the mask of those that pass."""
     n = beam.size
     n_runs = starts.size
-    ok = np.empty(n, np.bool_)
-    d = np.empty(n)
-    cb = np.empty(n)
-    sb = np.empty(n)
-    m0 = np.empty(n, np.bool_)
+    rows = np.empty((10, n))  # one block: the steps' sums (5), d, cb, sb, z, w
+    buf, d, cb, sb = rows[:5], rows[5], rows[6], rows[7]
+    flags = np.empty((2, n), np.bool_)
+    ok, m0 = flags[0], flags[1]
+    runs = np.empty((4, n_runs))
+    cov = np.empty((n_runs, 2, 2))
+    step1 = FitOut(runs[0], runs[1], cov, rows[8], rows[9])  # cov, z, w: not written by the first step
+    step2 = FitOut(runs[2], runs[3], cov, rows[8], rows[9])
     first_max = 0
     for r in range(n_runs):
         first_max = max(first_max, beam[starts[r]])
@@ -794,12 +868,11 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
         cb[row] = bearings.cos[j]
         sb[row] = bearings.sin[j]
         m0[row] = ok[row] and inlier0[row]
-    buf = np.empty((5, n))
-    rho1, alpha1, _, _, _ = gauss_newton(d, cb, sb, starts, counts, m0, rho0, alpha0, sigma_r, -1.0, buf)
-    rho, alpha, cov, z, w = gauss_newton(d, cb, sb, starts, counts, ok, rho1, alpha1, sigma_r, p.inlier_tau, buf)
-    first_in = np.empty(n_runs, np.int64)
-    last_in = np.empty(n_runs, np.int64)
-    n_in = np.empty(n_runs, np.int64)
+    gauss_newton(d, cb, sb, starts, counts, m0, rho0, alpha0, sigma_r, -1.0, buf, step1, False)
+    gauss_newton(d, cb, sb, starts, counts, ok, step1.rho, step1.alpha, sigma_r, p.inlier_tau, buf, step2, True)
+    rho, alpha, z, w = step2.rho, step2.alpha, step2.z, step2.w
+    ints = np.empty((3, n_runs), np.int64)
+    first_in, last_in, n_in = ints[0], ints[1], ints[2]
     good = np.zeros(n_runs, np.bool_)
     curv2 = p.curvature_tau * p.curvature_tau
     step = bearings.b[1] - bearings.b[0] if bearings.b.size > 1 else 1.0
@@ -1102,7 +1175,7 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
             if valid[j]:
                 dx = ranges[j] * bearings.cos[j] - cx
                 dy = ranges[j] * bearings.sin[j] - cy
-                dist = max(math.hypot(dx, dy), 1e-12)
+                dist = max(math.sqrt(dx * dx + dy * dy), 1e-12)  # not hypot: a libm call a beam
                 e = dist - rad
                 j0, j1 = -dx / dist, -dy / dist
                 h00 += j0 * j0
@@ -1135,7 +1208,9 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
     ni = 0
     for j in range(f, l + 1):
         if valid[j]:
-            zz = (math.hypot(ranges[j] * bearings.cos[j] - cx, ranges[j] * bearings.sin[j] - cy) - rad) / sigma_r
+            dx = ranges[j] * bearings.cos[j] - cx
+            dy = ranges[j] * bearings.sin[j] - cy
+            zz = (math.sqrt(dx * dx + dy * dy) - rad) / sigma_r
             z2 = zz * zz
             clipped += min(z2, lim)
             if z2 <= lim:
@@ -1154,7 +1229,7 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
     for j in range(lf, ll + 1):
         if valid[j]:
             x, y = ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]
-            zc = (math.hypot(x - cx, y - cy) - rad) / sigma_r
+            zc = (math.sqrt((x - cx) * (x - cx) + (y - cy) * (y - cy)) - rad) / sigma_r
             zl = (x * ca + y * sa - lrho) / sigma_r
             c_chi += zc * zc
             l_chi += zl * zl
@@ -1189,7 +1264,7 @@ def on_arcs(rho, alpha, first, last, ranges, bearings, valid, theta, increment, 
 
 
 @kernel
-def fit_spans(first, last, shrink0, shrink1, ranges, bearings, valid, theta, theta_var, angle_min, increment,  # noqa: ANN001, ANN201
+def fit_spans(first, last, shrink0, shrink1, ranges, bearings, valid, theta, theta_var, cs, angle_min, increment,  # noqa: ANN001, ANN201
               sigma_r, grid, p):
     """Steps 3-4 on spans of valid beams [first, last] (each at least 2k + 1 beams): the band of
     normal angles from theta over the window centres first + k .. last - k (less ``shrink0`` /
@@ -1215,7 +1290,7 @@ def fit_spans(first, last, shrink0, shrink1, ranges, bearings, valid, theta, the
         if c1[r] - c0[r] >= shrink0[r] + shrink1[r]:
             c0[r] += shrink0[r]
             c1[r] -= shrink1[r]
-    centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, ranges, bearings.b, increment, sigma_r, k, p)
+    centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings.b, increment, sigma_r, k, p)
     alpha0, rho0, inlier0 = band_search(
         beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
     )
@@ -1247,9 +1322,10 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     o_l = np.empty(n_max, np.int64)
     o_n = np.empty(n_max, np.int64)
     m = 0
+    cs = slope_sums(theta, theta_var)
     while first.size:
         rho, alpha, cov, f_in, l_in, n_in, good = fit_spans(
-            first, last, shrink0, shrink1, ranges, bearings, valid, theta, theta_var, angle_min, increment,
+            first, last, shrink0, shrink1, ranges, bearings, valid, theta, theta_var, cs, angle_min, increment,
             sigma_r, grid, p)
         for r in range(first.size):
             if good[r] and m < n_max:
