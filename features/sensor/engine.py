@@ -294,8 +294,9 @@ def select(a, n, k) -> float:  # noqa: ANN001
 
 @kernel
 def median(x, scratch) -> float:  # noqa: ANN001
-    """np.median(x) (nan when x holds a nan or is empty), with ``scratch`` (>= x.size) for the selection:
-    the middle value, or the mean of the two middle ones."""
+    """np.median(x) (nan when x holds a nan or is empty), with ``scratch`` (>= x.size; may be x's own
+    buffer, which the selection then reorders) for the selection: the middle value, or the mean of
+    the two middle ones."""
     n = x.size
     if n == 0:
         return np.nan
@@ -835,7 +836,7 @@ def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
             m += 1
     if m < LOCAL_MIN_TRIPLES:
         return 0.0
-    return MAD_TO_SIGMA * np.median(buf[:m])
+    return MAD_TO_SIGMA * median(buf[:m], buf)  # selected in place (np.median copies)
 
 
 @kernel
@@ -1005,7 +1006,7 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
                 k += 1
         if k < 3:
             continue
-        scale = max(MAD_TO_SIGMA * np.median(z[:k]), SIGMA_FLOOR_RAY)
+        scale = max(MAD_TO_SIGMA * median(z[:k], z), SIGMA_FLOOR_RAY)  # z selected in place: not read again
         inv_cut = 1.0 / (TUKEY_C * scale)
         for _ in range(ROBUST_STEPS):
             ca, sa = math.cos(a_m), math.sin(a_m)
