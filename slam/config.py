@@ -36,7 +36,7 @@ class AlignmentConfig:
             (tuning seeds 100-102, 300 s at 10 scans/s, never the evaluation's seeds or logs):
             with the scans de-skewed and a 45-degree normal check, 3, 1.5 and 1 gave mean pose
             NEES of 0.3-0.4, 0.5-0.7 and 0.8-1.1 (3 dof; 3 is consistent): 1, no inflation (below
-            1 the floor above would no longer be a floor); with the final 67.5 degrees, 1.3-1.6.
+            1 the floor above would no longer be a floor); on the final code (67.5 degrees), 0.9-1.7.
             Before the de-skew, 3 compensated for the scan's own motion distortion.
         retry_inliers: when the ICP from the prediction explains fewer than this fraction of the
             points, it is also run from standing still and from ``heading_hypotheses``.
