@@ -151,6 +151,34 @@ def split_line(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
 
 
 @kernel
+def exact_rms(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
+    """The RMS residual (m) of the total-least-squares line of points s..e (``fit_range``)."""
+    f = fit_range(sx, sy, sxx, syy, sxy, s, e)
+    return math.sqrt(f.across / f.n)
+
+
+@kernel
+def merged_rms(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
+    """(``exact_rms`` of points s..e to rounding, a bound of its difference to it), for finite
+    coordinates: the residual sum of squares as the smaller eigenvalue of the scatter matrix,
+    (cxx + cyy) / 2 - sqrt(((cxx - cyy) / 2)^2 + cxy^2), without fit_range's arctangent, cosine
+    and sine. Both sums of squares come from the same moments and round within ~10 ulp of
+    |cxx| + |cyy| + 2 |cxy| (the angle's error enters squared), far within the 1e-12 of it
+    allowed; |sqrt(a) - sqrt(b)| <= sqrt(|a - b|) carries that to the root."""
+    lo, hi = s, e + 1
+    n = float(hi - lo)
+    mx = (sx[hi] - sx[lo]) / n
+    my = (sy[hi] - sy[lo]) / n
+    cxx = (sxx[hi] - sxx[lo]) - n * mx * mx
+    cyy = (syy[hi] - syy[lo]) - n * my * my
+    cxy = (sxy[hi] - sxy[lo]) - n * mx * my
+    h = 0.5 * (cxx - cyy)
+    across = npmax(0.5 * (cxx + cyy) - math.sqrt(h * h + cxy * cxy), 0.0)
+    rms = math.sqrt(across / n)
+    return rms, math.sqrt(1e-12 * (abs(cxx) + abs(cyy) + 2.0 * abs(cxy)) / n) + 1e-12 * rms + 1e-300
+
+
+@kernel
 def trim(x, y, s, e, rho, c, si, tol, keep):  # noqa: ANN001, ANN201
     """The range s..e left after dropping the leading and trailing points farther than ``tol``
     (m) from the line x c + y si = rho (a small neighbouring face the split threshold let in);
@@ -308,6 +336,7 @@ class Workspace(NamedTuple):
     stack_s: np.ndarray  # (2n + 2,) the depth-first split stack
     stack_e: np.ndarray
     rms: np.ndarray  # (2n + 2,) merged RMS residual of each neighbour pair
+    slack: np.ndarray  # (2n + 2,) its bound of the difference to fit_range's (0: fit_range's)
     src: np.ndarray  # (2n + 2,) the segment of the previous merge pass each one is (-1: merged)
     pick: np.ndarray  # (2n + 2,) bool
     sin_step: np.ndarray  # (min(max_skip, n) + 1,) sin(k increment) of the bearing steps k = 1 .. max_skip
@@ -337,7 +366,7 @@ def workspace(n, increment, p):  # noqa: ANN001, ANN201
     return Workspace(
         np.empty(n, np.int64), np.empty(n), np.empty(n), np.empty(n), np.empty(n, np.int64), np.zeros((5, n + 1)),
         np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m),
-        np.empty(m, np.int64), np.zeros(m, np.bool_), sin_step, sin_rest, ratio, np.empty((n + 1, 10)),
+        np.empty(m), np.empty(m, np.int64), np.zeros(m, np.bool_), sin_step, sin_rest, ratio, np.empty((n + 1, 10)),
         np.empty((n + 1, 3), np.int64), np.empty((n + 1, 3)), np.empty((n + 1, 3), np.int64),
     )
 
@@ -427,21 +456,33 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  
     m = n_seg
     # merge collinear neighbours, pass by pass
     if merge_rms > 0:
-        rms, pick, src = ws.rms, ws.pick, ws.src
+        rms, slack, pick, src = ws.rms, ws.slack, ws.pick, ws.src
         first_pass = True
         while m > 1:
+            # each pair's merged RMS residual, from the eigenvalue formula where every coordinate is
+            # finite (no arctangent, cosine or sine; within slack[i] of fit_range's), from fit_range
+            # where that margin leaves a decision open: every decision is fit_range's
             any_ok = False
             for i in range(m - 1):
                 if not first_pass and src[i] >= 0 and src[i + 1] >= 0:  # both unchanged: as before
-                    rms[i] = rms[src[i]]
-                elif segs_s[i + 1] == segs_e[i]:
-                    f = fit_range(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1])
-                    rms[i] = math.sqrt(f.across / f.n)
+                    rms[i], slack[i] = rms[src[i]], slack[src[i]]
+                elif segs_s[i + 1] != segs_e[i]:
+                    rms[i], slack[i] = np.inf, 0.0
+                elif finite:
+                    rms[i], slack[i] = merged_rms(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1])
                 else:
-                    rms[i] = np.inf
+                    rms[i], slack[i] = exact_rms(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1]), 0.0
+                if slack[i] > 0 and not abs(rms[i] - merge_rms) > slack[i]:
+                    rms[i], slack[i] = exact_rms(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1]), 0.0
                 any_ok = any_ok or rms[i] <= merge_rms
             if not any_ok:
                 break
+            for i in range(m - 2):  # neighbours' residuals within their margins: both exact
+                if (slack[i] > 0 or slack[i + 1] > 0) and not abs(rms[i] - rms[i + 1]) > slack[i] + slack[i + 1]:
+                    if slack[i] > 0:
+                        rms[i], slack[i] = exact_rms(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1]), 0.0
+                    if slack[i + 1] > 0:
+                        rms[i + 1], slack[i + 1] = exact_rms(sx, sy, sxx, syy, sxy, segs_s[i + 1], segs_e[i + 2]), 0.0
             for i in range(m - 1):
                 left = np.inf if i == 0 else rms[i - 1]
                 right = np.inf if i == m - 2 else rms[i + 1]
