@@ -117,9 +117,7 @@ def voxel_filter(points: np.ndarray, size: float) -> np.ndarray:
     """Indices of one point per ``size`` m square cell (the first in the input's order)."""
     if points.shape[0] == 0 or size <= 0:
         return np.arange(points.shape[0])
-    cells = np.floor(points / size).astype(np.int64)
-    _, first = np.unique(cells[:, 0] * 1_000_003 + cells[:, 1], return_index=True)
-    return np.sort(first)
+    return icpkernel.first_per_cell(points, size)
 
 
 def make_reference(points: np.ndarray, normals: np.ndarray, voxel: float = 0.0,

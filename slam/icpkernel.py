@@ -24,14 +24,78 @@ def kernel(fn: _F) -> _F:
 
 
 def build_grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(order, start, origin (2,), shape (2,)) of a grid of ``cell`` m over points (m, 2)."""
-    lo = points.min(axis=0) - cell
-    ij = np.floor((points - lo) / cell).astype(np.int64)
-    shape = ij.max(axis=0) + 2
-    key = ij[:, 0] * shape[1] + ij[:, 1]
-    order = np.argsort(key, kind="stable").astype(np.int64)
-    start = np.searchsorted(key[order], np.arange(shape[0] * shape[1] + 1)).astype(np.int64)
-    return order, start, lo.astype(float), shape.astype(np.int64)
+    """(order, start, origin (2,), shape (2,)) of a grid of ``cell`` m over points (m, 2): ``order``
+    lists the points by cell (in input order within a cell), ``start`` the first slot of every cell."""
+    p = np.asarray(points, float)
+    return _grid(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), float(cell))
+
+
+@kernel
+def _grid(px, py, cell):
+    """:func:`build_grid`, compiled: one counting sort of the cells (stable, as an argsort by cell)."""
+    lox, loy = px.min() - cell, py.min() - cell
+    n = px.shape[0]
+    ci = np.empty(n, np.int64)
+    cj = np.empty(n, np.int64)
+    for k in range(n):
+        ci[k] = int(math.floor((px[k] - lox) / cell))
+        cj[k] = int(math.floor((py[k] - loy) / cell))
+    nx, ny = ci.max() + 2, cj.max() + 2
+    start = np.zeros(nx * ny + 1, np.int64)
+    for k in range(n):
+        start[ci[k] * ny + cj[k] + 1] += 1
+    for c in range(nx * ny):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    order = np.empty(n, np.int64)
+    for k in range(n):
+        c = ci[k] * ny + cj[k]
+        order[fill[c]] = k
+        fill[c] += 1
+    return order, start, np.array([lox, loy]), np.array([nx, ny], np.int64)
+
+
+def first_per_cell(points: np.ndarray, size: float) -> np.ndarray:
+    """Sorted indices of the first of points (p, 2) to fall in each distinct ``size`` m square."""
+    p = np.asarray(points, float)
+    keep, ok = _first_dense(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), float(size), _DENSE_CELLS)
+    if ok:
+        return keep
+    cells = np.floor(p / size).astype(np.int64)  # too wide for a table of every cell: sort instead
+    cells -= cells.min(axis=0)
+    key = cells[:, 0] * (cells[:, 1].max() + 1) + cells[:, 1]
+    return np.sort(np.unique(key, return_index=True)[1])
+
+
+_DENSE_CELLS = 1 << 24
+
+
+@kernel
+def _first_dense(px, py, size, max_cells):
+    """:func:`first_per_cell` with a table of every cell over the points' extent (not ok: wider
+    than ``max_cells`` cells)."""
+    n = px.shape[0]
+    keep = np.empty(n, np.int64)
+    if n == 0:
+        return keep, True
+    ci = np.empty(n, np.int64)
+    cj = np.empty(n, np.int64)
+    for k in range(n):
+        ci[k] = int(math.floor(px[k] / size))
+        cj[k] = int(math.floor(py[k] / size))
+    lo_i, lo_j = ci.min(), cj.min()
+    nx, ny = ci.max() - lo_i + 1, cj.max() - lo_j + 1
+    if nx * ny > max_cells:
+        return keep[:0], False
+    seen = np.zeros(nx * ny, np.bool_)
+    m = 0
+    for k in range(n):
+        c = (ci[k] - lo_i) * ny + cj[k] - lo_j
+        if not seen[c]:
+            seen[c] = True
+            keep[m] = k
+            m += 1
+    return keep[:m], True
 
 
 @kernel
