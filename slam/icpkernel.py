@@ -99,6 +99,27 @@ def _first_dense(px, py, size, max_cells):
 
 
 @kernel
+def chord_normals(px, py, index, step, max_gap, gap_per_range, toward_sensor):
+    """Unit normals (n, 2) at the points ``index`` from the chord between the points ``step``
+    before and after, and whether that chord is short enough to be a surface (see
+    :func:`slam.icp.chord_normals`)."""
+    n = index.shape[0]
+    out = np.empty((n, 2))
+    good = np.empty(n, np.bool_)
+    for k in range(n):
+        i = index[k]
+        dx, dy = px[i + step] - px[i - step], py[i + step] - py[i - step]
+        length = math.hypot(dx, dy)
+        good[k] = length > 1e-3 and length < max_gap + gap_per_range * math.hypot(px[i], py[i])
+        scale = max(length, 1e-12)
+        nx, ny = dy / scale, -dx / scale
+        if toward_sensor and nx * px[i] + ny * py[i] > 0:
+            nx, ny = -nx, -ny
+        out[k, 0], out[k, 1] = nx, ny
+    return out, good
+
+
+@kernel
 def _nearest(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2):
     """Index (-1 if none) and squared distance of the reference point nearest (qx, qy) within reach."""
     ci = int(math.floor((qx - lox) / cell))
