@@ -2,8 +2,9 @@
 Gauss-Newton point-to-line iterations. One implementation; tests check the search against
 ``scipy.spatial.cKDTree`` and the solver against exact synthetic poses.
 
-Grid: reference points sorted by cell (cell side = the widest reach, so the 3x3 cells around a
-query hold every point within reach); ``start[c]:start[c + 1]`` indexes cell ``c = i * ny + j``.
+Grid: reference points sorted by cell (cell side = the widest reach, so the cells that overlap the
+square of the reach about a query, at most 3x3 and often one, hold every point within reach);
+``start[c]:start[c + 1]`` indexes cell ``c = i * ny + j``.
 """
 
 from __future__ import annotations
@@ -120,14 +121,25 @@ def chord_normals(px, py, index, step, max_gap, gap_per_range, toward_sensor):
 
 
 @kernel
+def _cells_within(qx, qy, lox, loy, cell, nx, ny, reach2):
+    """Cell ranges [i0, i1) x [j0, j1) that overlap the square of half-side ``sqrt(reach2)``
+    (at most the cell) about (qx, qy): the cells that can hold a point within reach."""
+    r = math.sqrt(reach2)
+    i0 = max(int(math.floor((qx - r - lox) / cell)), 0)
+    i1 = min(int(math.floor((qx + r - lox) / cell)) + 1, nx)
+    j0 = max(int(math.floor((qy - r - loy) / cell)), 0)
+    j1 = min(int(math.floor((qy + r - loy) / cell)) + 1, ny)
+    return i0, i1, j0, j1
+
+
+@kernel
 def _nearest(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2):
     """Index (-1 if none) and squared distance of the reference point nearest (qx, qy) within reach."""
-    ci = int(math.floor((qx - lox) / cell))
-    cj = int(math.floor((qy - loy) / cell))
+    i0, i1, j0, j1 = _cells_within(qx, qy, lox, loy, cell, nx, ny, reach2)
     best = -1
     bd = reach2
-    for i in range(max(ci - 1, 0), min(ci + 2, nx)):
-        for j in range(max(cj - 1, 0), min(cj + 2, ny)):
+    for i in range(i0, i1):
+        for j in range(j0, j1):
             c = i * ny + j
             for k in range(start[c], start[c + 1]):
                 m = order[k]
@@ -146,12 +158,11 @@ def _nearest_facing(qx, qy, qnx, qny, rx, ry, nrx, nry, order, start, lox, loy, 
     of the query's normal (qnx, qny); a query without a normal (0, 0) takes the nearest point."""
     if qnx == 0.0 and qny == 0.0:
         return _nearest(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2)
-    ci = int(math.floor((qx - lox) / cell))
-    cj = int(math.floor((qy - loy) / cell))
+    i0, i1, j0, j1 = _cells_within(qx, qy, lox, loy, cell, nx, ny, reach2)
     best = -1
     bd = reach2
-    for i in range(max(ci - 1, 0), min(ci + 2, nx)):
-        for j in range(max(cj - 1, 0), min(cj + 2, ny)):
+    for i in range(i0, i1):
+        for j in range(j0, j1):
             c = i * ny + j
             for k in range(start[c], start[c + 1]):
                 m = order[k]

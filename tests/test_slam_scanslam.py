@@ -261,3 +261,20 @@ def test_voxel_filter_and_search_grid_against_plain_python(monkeypatch, dense_ce
     assert start[0] == 0 and start[-1] == len(p) and np.all(np.diff(start) >= 0)
     for c in range(shape[0] * shape[1]):
         assert order[start[c]:start[c + 1]].tolist() == cells.get(c, [])
+
+
+@pytest.mark.parametrize("reach", [0.15, 0.5])
+def test_grid_search_finds_the_nearest_point_within_reach_as_a_kd_tree(reach):
+    from scipy.spatial import cKDTree
+
+    from slam.icp import make_reference
+
+    rng = np.random.default_rng(8)
+    ref = make_reference(rng.uniform(-3.0, 3.0, (2000, 2)), np.tile([1.0, 0.0], (2000, 1)))
+    q = rng.uniform(-4.0, 4.0, (3000, 2))  # some beyond the grid
+    idx, dist = ref.nearest(q, reach)
+    d, k = cKDTree(ref.points).query(q, distance_upper_bound=reach)
+    within = np.isfinite(d) & (d < reach)
+    assert np.array_equal(idx >= 0, within)
+    assert np.array_equal(idx[within], k[within])
+    np.testing.assert_allclose(dist[within], d[within], atol=1e-12)
