@@ -34,10 +34,10 @@ class AlignmentConfig:
         covariance_inflation: ...the match's covariance is the sandwich of its own residuals
             (``slam.icp.sandwich_information``) times this. Set once on simulated office runs
             (tuning seeds 100-102, 300 s at 10 scans/s, never the evaluation's seeds or logs):
-            with the scans de-skewed and the normal check, 3, 1.5 and 1 gave mean pose NEES of
-            0.3-0.4, 0.5-0.7 and 0.8-1.1 (3 dof; 3 is consistent): 1, no inflation (below 1 the
-            floor above would no longer be a floor). Before the de-skew, 3 compensated for the
-            scan's own motion distortion.
+            with the scans de-skewed and a 45-degree normal check, 3, 1.5 and 1 gave mean pose
+            NEES of 0.3-0.4, 0.5-0.7 and 0.8-1.1 (3 dof; 3 is consistent): 1, no inflation (below
+            1 the floor above would no longer be a floor); on the final code (67.5 degrees), 0.9-1.7.
+            Before the de-skew, 3 compensated for the scan's own motion distortion.
         retry_inliers: when the ICP from the prediction explains fewer than this fraction of the
             points, it is also run from standing still and from ``heading_hypotheses``.
         heading_hypotheses: heading offsets (rad) about the prediction tried on a retry (15, 30,

@@ -194,7 +194,11 @@ class ScanSlam:
         kc = self.keyframes_cfg
         if np.hypot(rel[0], rel[1]) >= kc.distance or abs(rel[2]) >= kc.angle or (
                 info.matched and info.inliers < kc.min_inliers):
-            pose = self._new_keyframe(stamp, sp, pose, rel, cov, info)
+            moved = self._new_keyframe(stamp, sp, pose, rel, cov, info)
+            if info.loop is not None:  # the closure moved the graph: move the previous pose along with
+                t_prev, p_prev = self.last[-1]  # this one, so that the velocity has no jump
+                self.last[-1] = (t_prev, compose(moved, between(pose, p_prev)))
+            pose = moved
         self.pose = pose
         self.anchors.append((self.keyframes[-1].key, between(self.keyframes[-1].pose, pose)))
         self.covariances.append(cov)

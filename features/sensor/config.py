@@ -39,7 +39,7 @@ class SensorMethodConfig:
     sigma_r_cm: float | str = "auto"  # ... used instead when range_max > 10 m (SICK cm mode: the real logs), m
     min_range: float = 0.02  # ranges below this (or below the scan's range_min) are invalid, m
     ad_tau: float = 4.0  # |AD - (1 + 2 sum cos jD)| <= ad_tau * sigma_AD(beam) marks a line beam
-    psi_split: float = 0.2  # a slope change |psi| above this splits a run (rad) ...
+    psi_split: float = 0.35  # a slope change |psi| above this splits a run (rad; corner_min_turn) ...
     psi_tau: float = 4.0  # ... when it also exceeds psi_tau * its noise std
     hough_subdiv: int = 4  # Log-Hough angle step = angle_increment / hough_subdiv
     hough_angles: int = 7  # number of normal angles searched in each run's band (odd)

@@ -11,8 +11,9 @@ Every step works in range-bearing space, on the beams of one scan, in the order 
    implied by the range noise, and the acceptance checks (``fit_runs``); a run that fails is
    split at its chord's farthest beam and fitted again, unless it is one circle, and lines on a
    round surface are dropped (``find_lines``, ``circle_fits``);
-5. lines grown over the beams past their ends, neighbours merged, overlaps split, endpoints
-   projected, short segments dropped (``extend_ends``, ``merge_neighbours``, ``segments``);
+5. lines grown over the beams past their ends and refitted with Tukey's biweight, neighbours
+   merged, overlaps split, endpoints projected, short segments dropped (``extend_ends``,
+   ``robust_refit``, ``merge_neighbours``, ``segments``);
 6. corners where two segments meet and psi shows the turn, with the paper's remedy against
    false acute corners (``corners``).
 
@@ -55,6 +56,13 @@ BREAK_LAMBDA = math.radians(10.0)  # adaptive breakpoint angle of a smooth surfa
 SUM_RESYNC = 32  # beams between fresh window sums (``beam_signals``) ...
 SUM_RATIO = 16.0  # ... or sooner, when a term that entered them exceeds them this many times; and
 # a window whose sum exceeds its centre's 1/d this many times is summed term by term
+ONE_DEG = math.radians(1.0)  # an LMS200 mirror turn's beam step (finer scans interlace such turns)
+ROBUST_STEPS = 1  # reweighted steps of the final biweight refit (``robust_refit``): one step from the
+# least-squares line is Bickel's (1975) one-step M-estimator, as efficient as the iterated one
+TUKEY_C = 4.685  # biweight tuning constant, in robust scales (95 % efficiency under Gaussian noise)
+MAD_TO_SIGMA = 1.4826  # median absolute deviation -> std of a Gaussian
+SIGMA_FLOOR_RAY = 0.001  # smallest robust scale of a line's residuals (m): noiseless scans
+LOCAL_MIN_TRIPLES = 6  # fewest triples of a run's own beams that give its local noise scale
 SPACING_CAP = 1.0  # largest point spacing (grazing incidence) allowed for in the corner contact test, m
 
 
@@ -807,10 +815,36 @@ class FitOut(NamedTuple):
 
 
 @kernel
+def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
+    """Robust scale (m, 1.4826 x the median absolute value) of the collinearity residuals of the
+    triples (j - t, j, j + t) of valid beams in f..l without a depth step (``lms200.noise.line_residuals``;
+    c2 = 2 cos(t D)), 0 when there are fewer than LOCAL_MIN_TRIPLES; ``buf`` is scratch of l - f + 1 or more."""
+    m = 0
+    for j in range(f + t, l - t + 1):
+        if valid[j - t] and valid[j] and valid[j + t]:
+            rm, r0, rp = ranges[j - t], ranges[j], ranges[j + t]
+            if not abs(rp - rm) <= JUMP_FRACTION * r0:  # a depth step, as lms200.noise skips it
+                continue
+            s = rm + rp
+            s2 = s * s
+            wm = c2 * (rp * rp) / s2
+            wp = c2 * (rm * rm) / s2
+            buf[m] = abs(r0 - c2 * rm * rp / s) / math.sqrt(1.0 + wm * wm + wp * wp)
+            m += 1
+    if m < LOCAL_MIN_TRIPLES:
+        return 0.0
+    return MAD_TO_SIGMA * np.median(buf[:m])
+
+
+@kernel
 def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, sigma_r, p):  # noqa: ANN001, ANN201
     """Refine every run's line: a Gauss-Newton step on the Log-Hough inliers, then one on the beams
     within inlier_tau sigma_r of that (which gives the covariance), and the checks: enough inliers,
-    most of the run explained, chi^2 of the inliers, and curvature (the t-statistic of the
+    most of the run explained, chi^2 of the inliers (per dof at most max_chi2 times sigma_r^2, or
+    times the run's own noise^2 where that is larger: ``local_scale`` of its beams within one
+    mirror turn, so that the interlaced sweeps' offset, already in sigma_r, does not count twice;
+    real noise grows with range and varies with the surface: Intel's 4.3 mm within 1 m, 7.9 mm
+    beyond 8 m, around the log's 5.3 mm), and curvature (the t-statistic of the
     residuals against a parabola in the beam index, orthogonal to 1 and t over the inliers:
     ~N(0, 1) on a line, large on an arc). Returns the lines in normal form (rho >= 0, alpha in
     (-pi, pi]) with cov, first / last inlier beam, inlier count, and the mask of those that pass."""
@@ -841,6 +875,10 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
     first_in, last_in, n_in = ints[0], ints[1], ints[2]
     good = np.zeros(n_runs, np.bool_)
     curv2 = p.curvature_tau * p.curvature_tau
+    step = bearings.b[1] - bearings.b[0] if bearings.b.size > 1 else 1.0
+    sweep = max(1, np.int64(np.rint(ONE_DEG / step))) if step < 0.99 * ONE_DEG else 1  # lms200.noise.interlace_stride
+    c2 = 2.0 * math.cos(sweep * step)
+    scratch = np.empty(valid.size)
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         b0 = beam[s]
@@ -884,10 +922,14 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
         first_in[r] = lo
         last_in[r] = hi
         n_in[r] = ni
+        chi_max = p.max_chi2 * max(ni - 2, 1)
+        if chi > chi_max:  # the run's own noise, where it exceeds sigma_r
+            loc = local_scale(ranges, valid, beam[s], beam[s + cnt - 1], sweep, c2, scratch) / sigma_r
+            chi_max *= max(1.0, loc * loc)
         good[r] = (
             ni >= p.min_points
             and ni >= p.min_inlier_fraction * core[r]
-            and chi <= p.max_chi2 * max(ni - 2, 1)
+            and chi <= chi_max
             and zq * zq <= curv2 * qq
             and np.isfinite(rho[r] + alpha[r] + cov[r, 0, 0] + cov[r, 1, 1])
         )
@@ -929,6 +971,70 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
         first[m] -= grow1
         last[m] += grow0
         n_points[m] += grow0 + grow1
+
+
+@kernel
+def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # noqa: ANN001
+    """In place: each line (rho, alpha) refitted on the valid beams first..last by ROBUST_STEPS
+    iteratively reweighted steps of Tukey's biweight M-estimator (tuning TUKEY_C scales) on the ray
+    residuals z = r - rho / cos(b - alpha), the scale 1.4826 median |z| about the line as it comes
+    in (at least SIGMA_FLOOR_RAY). The ray normalisation 1 / cos(b - alpha) is taken at the
+    incoming line (the steps move alpha by far less than a beam step). Real residuals are
+    heavy-tailed (a chair leg before a wall, mixed pixels, a stretch of rough surface) and their
+    scatter varies along a scan, so the least-squares line over the inlier_tau sigma_r inliers is
+    pulled off the bulk of its beams; the biweight keeps to the bulk. The covariance stays the
+    least-squares one (the biweight's efficiency under Gaussian noise is 95 %)."""
+    n = ranges.size
+    x = np.empty(n)
+    y = np.empty(n)
+    inv_c = np.empty(n)
+    z = np.empty(n)
+    for m in range(rho.size):
+        r_m, a_m = rho[m], alpha[m]
+        ca, sa = math.cos(a_m), math.sin(a_m)
+        k = 0
+        for j in range(first[m], last[m] + 1):
+            c = bearings.cos[j] * ca + bearings.sin[j] * sa
+            if valid[j] and c > MIN_COS:
+                xj = ranges[j] * bearings.cos[j]
+                yj = ranges[j] * bearings.sin[j]
+                x[k] = xj
+                y[k] = yj
+                inv_c[k] = 1.0 / c
+                z[k] = abs(xj * ca + yj * sa - r_m) / c
+                k += 1
+        if k < 3:
+            continue
+        scale = max(MAD_TO_SIGMA * np.median(z[:k]), SIGMA_FLOOR_RAY)
+        inv_cut = 1.0 / (TUKEY_C * scale)
+        for _ in range(ROBUST_STEPS):
+            ca, sa = math.cos(a_m), math.sin(a_m)
+            sw = swg = swgg = swr = swgr = 0.0
+            for t in range(k):  # biweight (1 - u^2)^2 for |u| < 1, else 0; weight 1 / cos^2 (ray residual)
+                res = x[t] * ca + y[t] * sa - r_m
+                u = res * inv_c[t] * inv_cut
+                bw = max(1.0 - u * u, 0.0) * inv_c[t]
+                wr = bw * bw
+                g = y[t] * ca - x[t] * sa  # d res / d alpha = r sin(b - alpha)
+                wg = wr * g
+                sw += wr
+                swg += wg
+                swgg += wg * g
+                swr += wr * res
+                swgr += wg * res
+            det = sw * swgg - swg * swg
+            if not det > 0.0:
+                break
+            r_new = r_m + (swgg * swr - swg * swgr) / det
+            a_new = a_m + (swg * swr - sw * swgr) / det
+            if not (math.isfinite(r_new) and math.isfinite(a_new)):
+                break
+            r_m, a_m = r_new, a_new
+        if r_m < 0:
+            r_m = -r_m
+            a_m += math.pi
+        rho[m] = r_m
+        alpha[m] = wrap(a_m)
 
 
 @kernel
@@ -1251,6 +1357,7 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     rho, alpha, cov = o_rho[:m][order], o_alpha[:m][order], o_cov[:m][order]
     f_in, l_in, n_in = o_f[:m][order], o_l[:m][order], o_n[:m][order]
     extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r)
+    robust_refit(rho, alpha, f_in, l_in, ranges, bearings, valid)
     if p.arc_check and m:
         line = ~on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, theta, increment, sigma_r, p)
         return rho[line], alpha[line], cov[line], f_in[line], l_in[line], n_in[line]
