@@ -16,11 +16,11 @@ def common_geometry(scans: Sequence[Scan]) -> Scan:
     """The first scan, after checking that every scan has its geometry: beam count, angle_min,
     angle_increment, range_min and range_max. Raises ValueError naming the first that differs."""
     first = scans[0]
-    key = (len(first), first.angle_min, first.angle_increment, first.range_min, first.range_max)
-    for i, s in enumerate(scans):
+    key = (first.ranges.size, first.angle_min, first.angle_increment, first.range_min, first.range_max)
+    for i, s in enumerate(scans):  # ranges.size, not len(s): a Python call a scan fewer
         if not isinstance(s, Scan):
             raise TypeError(f"scans[{i}]: must be an lms200.Scan, got {type(s).__name__}")
-        if (len(s), s.angle_min, s.angle_increment, s.range_min, s.range_max) != key:
+        if (s.ranges.size, s.angle_min, s.angle_increment, s.range_min, s.range_max) != key:
             raise ValueError(
                 f"scans[{i}]: geometry (beams, angle_min, angle_increment, range_min, range_max) = "
                 f"{(len(s), s.angle_min, s.angle_increment, s.range_min, s.range_max)} differs from scans[0]'s {key}; "

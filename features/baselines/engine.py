@@ -122,6 +122,35 @@ def fit_range(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
 
 
 @kernel
+def split_line(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
+    """(cos, sin, rho) of the total-least-squares line of points s..e: ``fit_range``'s line to
+    rounding, without its arctangent, cosine and sine (the split test needs only distances to
+    it): alpha = atan2(-2 cxy, cyy - cxx) / 2 by the half-angle formulas, each in its stable form."""
+    lo, hi = s, e + 1
+    n = float(hi - lo)
+    mx = (sx[hi] - sx[lo]) / n
+    my = (sy[hi] - sy[lo]) / n
+    cxx = (sxx[hi] - sxx[lo]) - n * mx * mx
+    cyy = (syy[hi] - syy[lo]) - n * my * my
+    cxy = (sxy[hi] - sxy[lo]) - n * mx * my
+    y2 = -2.0 * cxy  # r (sin 2 alpha, cos 2 alpha)
+    x2 = cyy - cxx
+    r = math.sqrt(x2 * x2 + y2 * y2)
+    if not r > 0.0:  # no direction (atan2(0, 0) = 0), or nan
+        c, si = 1.0, 0.0
+    elif x2 >= 0.0:  # |alpha| <= pi / 4: cos from 1 + cos 2 alpha, sin from sin 2 alpha / (2 cos)
+        c = math.sqrt((r + x2) / (2.0 * r))
+        si = y2 / (2.0 * r * c)
+    else:  # the other way round (alpha in (-pi/2, pi/2], cos >= 0, sin with the sign of sin 2 alpha)
+        si = math.copysign(math.sqrt((r - x2) / (2.0 * r)), y2)
+        c = y2 / (2.0 * r * si)
+    rho = mx * c + my * si
+    if rho < 0:
+        return -c, -si, -rho
+    return c, si, rho
+
+
+@kernel
 def trim(x, y, s, e, rho, c, si, tol, keep):  # noqa: ANN001, ANN201
     """The range s..e left after dropping the leading and trailing points farther than ``tol``
     (m) from the line x c + y si = rho (a small neighbouring face the split threshold let in);
@@ -374,8 +403,8 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  
             if chord:
                 at = split_at(x, y, s, e, threshold, 0.0, 0.0, 0.0, True)
             else:
-                f = fit_range(sx, sy, sxx, syy, sxy, s, e)
-                at = split_at(x, y, s, e, threshold, f.cos, f.sin, f.rho, False)
+                c, si, rho = split_line(sx, sy, sxx, syy, sxy, s, e)
+                at = split_at(x, y, s, e, threshold, c, si, rho, False)
             if at < 0:
                 segs_s[n_seg], segs_e[n_seg] = s, e
                 n_seg += 1

@@ -294,8 +294,9 @@ def select(a, n, k) -> float:  # noqa: ANN001
 
 @kernel
 def median(x, scratch) -> float:  # noqa: ANN001
-    """np.median(x) (nan when x holds a nan or is empty), with ``scratch`` (>= x.size) for the selection:
-    the middle value, or the mean of the two middle ones."""
+    """np.median(x) (nan when x holds a nan or is empty), with ``scratch`` (>= x.size; may be x's own
+    buffer, which the selection then reorders) for the selection: the middle value, or the mean of
+    the two middle ones."""
     n = x.size
     if n == 0:
         return np.nan
@@ -342,7 +343,7 @@ def clipped_scale(z) -> float:  # noqa: ANN001
             s = 1e-12
     keep = np.ones(n, np.bool_)
     new_keep = np.empty(n, np.bool_)
-    for _ in range(50):
+    for it in range(50):
         lim = CLIP_SIGMAS * s
         nk = 0
         same = True
@@ -353,6 +354,8 @@ def clipped_scale(z) -> float:  # noqa: ANN001
             kz[nk] = z[i]
             nk += inside
         if nk < 2:
+            break
+        if same and it > 0:  # the residuals of the last step again: the same centre and scale, converged
             break
         m, s_new = mean_std(kz, nk, scratch)
         s_new = s_new / CLIP_STD_FACTOR
@@ -833,7 +836,7 @@ def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
             m += 1
     if m < LOCAL_MIN_TRIPLES:
         return 0.0
-    return MAD_TO_SIGMA * np.median(buf[:m])
+    return MAD_TO_SIGMA * median(buf[:m], buf)  # selected in place (np.median copies)
 
 
 @kernel
@@ -884,27 +887,25 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
         b0 = beam[s]
         lo = n + first_max
         hi = -1
+        # the inliers' count and sums of t, t^2, t^3 (t the beam offset) are integers: summed as
+        # integers they equal the float sums in any order (below 2^53, runs under ~13,000 beams)
+        ni = 0
+        i_t = i_t2 = i_t3 = 0
         for row in range(s, s + cnt):
             inl = w[row] > 0
             zi = z[row] if inl else 0.0
-            wi = 1.0 if inl else 0.0
-            t = float(beam[row] - b0)
-            t2 = t * t
-            wt = wi * t
-            buf[0, row] = wi
             buf[1, row] = zi * zi
-            buf[2, row] = wt
-            buf[3, row] = wi * t2
-            buf[4, row] = wt * t2
             if inl:
+                ti = beam[row] - b0
+                ni += 1
+                i_t += ti
+                i_t2 += ti * ti
+                i_t3 += ti * ti * ti
                 lo = min(lo, beam[row])
                 hi = max(hi, beam[row])
-        n_f = segment_sum(buf[0], s, cnt)
         chi = segment_sum(buf[1], s, cnt)
-        s_t = segment_sum(buf[2], s, cnt)
-        s_t2 = segment_sum(buf[3], s, cnt)
-        s_t3 = segment_sum(buf[4], s, cnt)
-        ni = np.int64(n_f)
+        n_f = float(ni)
+        s_t, s_t2, s_t3 = float(i_t), float(i_t2), float(i_t3)
         n_f = max(n_f, 1.0)
         m1, m2, m3 = s_t / n_f, s_t2 / n_f, s_t3 / n_f
         b_lin = (m3 - m1 * m2) / max(m2 - m1 * m1, 1e-12)
@@ -1005,7 +1006,7 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
                 k += 1
         if k < 3:
             continue
-        scale = max(MAD_TO_SIGMA * np.median(z[:k]), SIGMA_FLOOR_RAY)
+        scale = max(MAD_TO_SIGMA * median(z[:k], z), SIGMA_FLOOR_RAY)  # z selected in place: not read again
         inv_cut = 1.0 / (TUKEY_C * scale)
         for _ in range(ROBUST_STEPS):
             ca, sa = math.cos(a_m), math.sin(a_m)
@@ -1177,7 +1178,8 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
                 dy = ranges[j] * bearings.sin[j] - cy
                 dist = max(math.sqrt(dx * dx + dy * dy), 1e-12)  # not hypot: a libm call a beam
                 e = dist - rad
-                j0, j1 = -dx / dist, -dy / dist
+                inv = 1.0 / dist  # one division a beam, not two
+                j0, j1 = -dx * inv, -dy * inv
                 h00 += j0 * j0
                 h01 += j0 * j1
                 h02 -= j0
