@@ -7,7 +7,9 @@ Steps, all with fixed settings (nothing is tuned to the log beyond what is said 
    speed and the 95th of turn rate between scans, which set how much the interlaced 0.5 deg
    turns shear a scan); the simulator's defaults where the log has no usable odometry;
 3. a simulated run in the world (default ``mit``, the MIT-CSAIL-like preset) with that sensor
-   and robot, over several seeds;
+   and robot, over several seeds; the world's glass panels (which read as no return) follow the
+   log's no-return readings in the ``mit`` preset (:func:`glass_rate`): a log without any has no
+   glass the laser fails on, so its world gets none;
 4. every extractor on the real and the simulated scans (``experiments.compare.compare`` with the
    real-data measures of ``features.realdata``: explained fraction at 3 cm and 3 sigma, ray RMSE,
    lines per scan, mean segment length), plus the scene statistics of :func:`scene_statistics`.
@@ -44,6 +46,11 @@ ORDER_MARGIN = 0.03  # two methods this far apart on the real log must keep thei
 # spreads by 0.03 (1 sd) between seeds; six seeds bring the mean's spread to about 0.013).
 DEFAULT_SEEDS = (0, 1, 2, 3, 4, 5)
 DEFAULT_DURATION_S = 20.0  # simulated seconds per seed
+# Share of no-return readings that the mit preset's glass (0.1 panels per 10 m and clutter level)
+# gives: 3.1 % in `lmsbench sim2real` of MIT CSAIL at glass 0.1 (six seeds; the sensor there has no
+# other no-return: no_return_prob 0, cm mode, nothing beyond 81 m), rounded. Glass per 10 m
+# scales with the log's no-return share against it (glass_rate).
+GLASS_NO_RETURN_SHARE = 0.03
 
 
 @dataclass
@@ -150,6 +157,34 @@ class Sim2RealResult:
     n_real: int
     n_sim: int
     checks: dict[str, Any]
+    glass: float | None = None  # the mit worlds' glass panels per 10 m and clutter level (glass_rate)
+
+
+def no_return_share(records: Sequence[Record], max_reading: float | None = None) -> float:
+    """Share of all readings that are no return: +inf, or the logger's cap ``max_reading``."""
+    n = k = 0
+    for rec in records:
+        r = rec.scan.ranges
+        none = np.isposinf(r)
+        if max_reading is not None:
+            none |= np.abs(np.nan_to_num(r) - max_reading) <= 1e-6
+        k += int(np.count_nonzero(none))
+        n += r.size
+    return k / n if n else 0.0
+
+
+def glass_rate(world: str, log_no_return: float) -> float | None:
+    """Glass panels per 10 m (and clutter level) for the ``mit`` preset matched to a log: the
+    preset's rate scaled by the log's no-return share against GLASS_NO_RETURN_SHARE, at most the
+    preset's. A world calibrated to a log should not read no return where the real laser never does
+    (MIT CSAIL has no +inf reading; the preset's glass gave 3 % of simulated readings). Other worlds
+    keep their own glass (None)."""
+    from sim.worlds import MIT_PRESET
+
+    if world != "mit":
+        return None
+    default = float(MIT_PRESET["glass_per_10m"])
+    return round(default * min(1.0, max(log_no_return, 0.0) / GLASS_NO_RETURN_SHARE), 4)
 
 
 def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT_SEEDS,
@@ -187,9 +222,11 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
         sensor = calibrate_log(log, world=world if world in ("office", "cluttered", "mit") else "office",
                                stride=max(1, stride // 2), fit_duration=fit_duration or FIT_DURATION_S, **opts).sensor
     limits = motion_limits(every)
+    glass = glass_rate(world, no_return_share(real, sensor.max_reading))
     simulated: list[Record] = []
     for seed in seeds:
-        simulated += simulate_records(make_world(world, seed), seed, duration, sensor, rate_hz=rate_hz, limits=limits)
+        simulated += simulate_records(make_world(world, seed, glass=glass), seed, duration, sensor, rate_hz=rate_hz,
+                                      limits=limits)
     name = Path(log).name
     from features.noise_estimate import neighbour_sigma  # noqa: PLC0415
 
@@ -201,7 +238,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     summary = summarise(compare(sources, list(methods), sigma="auto"))
     table = _table(summary, name, f"sim:{world}", list(methods))
     result = Sim2RealResult(table, scene_statistics(real), scene_statistics(simulated), sensor, limits, world,
-                            list(seeds), len(real), len(simulated), {})
+                            list(seeds), len(real), len(simulated), {}, glass)
     result.checks = targets(table)
     return result
 
@@ -253,7 +290,8 @@ def format_report(result: Sim2RealResult, log: str) -> str:
              f"real scans {result.n_real}, simulated scans {result.n_sim}; robot limits v_max "
              f"{result.limits.v_max:.2f} m/s, w_max {result.limits.w_max:.2f} rad/s; sensor: noise "
              f"{result.sensor.noise_sigma * 1000:.2f} mm, dropout {result.sensor.dropout_prob:.4f}, "
-             f"spot {result.sensor.beam_width_deg:g} deg, outliers {result.sensor.outlier_prob:.4f}", "",
+             f"spot {result.sensor.beam_width_deg:g} deg, outliers {result.sensor.outlier_prob:.4f}"
+             + ("" if result.glass is None else f"; glass {result.glass:g} panels per 10 m and clutter level"), "",
              "| method | explained 3 cm real | sim | diff | ray RMSE mm real | sim | lines/scan real | sim | ratio | mean segment m real | sim |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for _, r in t.iterrows():

@@ -15,6 +15,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .clutter import ClutterConfig, add_clutter
@@ -52,7 +54,7 @@ def check_seed(seed: object) -> None:
         raise ValueError(f"seed: must be a whole number >= 0, got {seed!r}")
 
 
-def make_world(name: str = "office", seed: int = 0, clutter: float | None = None) -> World:
+def make_world(name: str = "office", seed: int = 0, clutter: float | None = None, glass: float | None = None) -> World:
     """Build a named world; every random choice comes from ``seed``.
 
     Args:
@@ -62,10 +64,13 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
         clutter: clutter level (0 none, 1 a furnished office, 2-3 busy; see ``sim.clutter``);
             None = the name's default. Level 0 gives the world without clutter, bit for bit; at
             most MAX_CLUTTER.
+        glass: glass panels per 10 m of route and clutter level (None = the name's default:
+            ``ClutterConfig.glass``, 0.1 in the mit preset); ``lmsbench sim2real`` sets it from a
+            log's no-return readings, since a glass panel reads as no return.
 
     Raises:
         ValueError: for an unknown name (listing the known ones), a seed that is not a whole number
-            >= 0, or a clutter level outside [0, MAX_CLUTTER].
+            >= 0, a clutter level outside [0, MAX_CLUTTER] or a negative glass rate.
     """
     check_seed(seed)
     rng = np.random.default_rng([int(seed), _STREAM_WORLD])
@@ -73,6 +78,8 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
     level = float(MIT_PRESET["clutter"] if name == "mit" else DEFAULT_CLUTTER.get(name, 0.0)) if clutter is None else float(clutter)
     if not 0 <= level <= MAX_CLUTTER:
         raise ValueError(f"clutter: must be in [0, {MAX_CLUTTER:g}], got {clutter}")
+    if glass is not None and not (np.isfinite(glass) and glass >= 0):
+        raise ValueError(f"glass: must be a rate >= 0 (panels per 10 m), got {glass}")
     leaf_rng = crng if level > 0 else None
     if name in ("office", "cluttered"):
         lay = office(rng, name, seed, leaf_rng=leaf_rng)
@@ -93,8 +100,10 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
         raise ValueError(f"name: unknown world {name!r}; known worlds: {', '.join(WORLD_NAMES)}")
     config = (ClutterConfig(glass=float(MIT_PRESET["glass_per_10m"]), wall_runs=float(MIT_PRESET["wall_runs_per_10m"]))
               if name == "mit" else None)
-    glass = add_clutter(lay, crng, level, config)
-    return lay.build(glass=glass)
+    if glass is not None:
+        config = replace(config if config is not None else ClutterConfig(), glass=float(glass))
+    panels = add_clutter(lay, crng, level, config)
+    return lay.build(glass=panels)
 
 
 def _walls_with_doors(lay: Layout, y: float, length: float, doors: list[float], door_w: float) -> None:

@@ -89,9 +89,10 @@ class Match:
 
 
 def chord_normals(points: np.ndarray, step: int = 2, max_gap: float = 0.3,
-                  gap_per_range: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+                  gap_per_range: float = 0.05, toward_sensor: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Unit normals (p, 2) of points (p, 2) given in beam order, from the chord between the points
-    ``step`` beams before and after; and the mask of points whose chord is shorter than
+    ``step`` beams before and after (turned to face the sensor at the origin if
+    ``toward_sensor``); and the mask of points whose chord is shorter than
     ``max_gap + gap_per_range * range`` m (a surface, not a depth jump; beams spread with range)."""
     p = np.asarray(points, float).reshape(-1, 2)
     n = np.zeros_like(p)
@@ -99,27 +100,24 @@ def chord_normals(points: np.ndarray, step: int = 2, max_gap: float = 0.3,
     if p.shape[0] < 2 * step + 1:
         return n, ok
     i = np.arange(step, p.shape[0] - step)
-    n[step:-step], ok[step:-step] = chord_normals_at(p, i, step, max_gap, gap_per_range)
+    n[step:-step], ok[step:-step] = chord_normals_at(p, i, step, max_gap, gap_per_range, toward_sensor)
     return n, ok
 
 
 def chord_normals_at(points: np.ndarray, index: np.ndarray, step: int, max_gap: float,
-                     gap_per_range: float) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`chord_normals` at the points ``index`` (each at least ``step`` from either end)."""
-    d = points[index + step] - points[index - step]
-    length = np.hypot(d[:, 0], d[:, 1])
-    rng = np.hypot(points[index, 0], points[index, 1])
-    good = (length > 1e-3) & (length < max_gap + gap_per_range * rng)
-    return np.column_stack((d[:, 1], -d[:, 0])) / np.maximum(length, 1e-12)[:, None], good
+                     gap_per_range: float, toward_sensor: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`chord_normals` at the points ``index`` (each at least ``step`` from either end); compiled."""
+    p = np.asarray(points, float)
+    return icpkernel.chord_normals(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]),
+                                   np.asarray(index, np.int64), int(step), float(max_gap), float(gap_per_range),
+                                   bool(toward_sensor))
 
 
 def voxel_filter(points: np.ndarray, size: float) -> np.ndarray:
     """Indices of one point per ``size`` m square cell (the first in the input's order)."""
     if points.shape[0] == 0 or size <= 0:
         return np.arange(points.shape[0])
-    cells = np.floor(points / size).astype(np.int64)
-    _, first = np.unique(cells[:, 0] * 1_000_003 + cells[:, 1], return_index=True)
-    return np.sort(first)
+    return icpkernel.first_per_cell(points, size)
 
 
 def make_reference(points: np.ndarray, normals: np.ndarray, voxel: float = 0.0,

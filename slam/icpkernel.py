@@ -2,8 +2,9 @@
 Gauss-Newton point-to-line iterations. One implementation; tests check the search against
 ``scipy.spatial.cKDTree`` and the solver against exact synthetic poses.
 
-Grid: reference points sorted by cell (cell side = the widest reach, so the 3x3 cells around a
-query hold every point within reach); ``start[c]:start[c + 1]`` indexes cell ``c = i * ny + j``.
+Grid: reference points sorted by cell (cell side = the widest reach, so the cells that overlap the
+square of the reach about a query, at most 3x3 and often one, hold every point within reach);
+``start[c]:start[c + 1]`` indexes cell ``c = i * ny + j``.
 """
 
 from __future__ import annotations
@@ -24,25 +25,121 @@ def kernel(fn: _F) -> _F:
 
 
 def build_grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(order, start, origin (2,), shape (2,)) of a grid of ``cell`` m over points (m, 2)."""
-    lo = points.min(axis=0) - cell
-    ij = np.floor((points - lo) / cell).astype(np.int64)
-    shape = ij.max(axis=0) + 2
-    key = ij[:, 0] * shape[1] + ij[:, 1]
-    order = np.argsort(key, kind="stable").astype(np.int64)
-    start = np.searchsorted(key[order], np.arange(shape[0] * shape[1] + 1)).astype(np.int64)
-    return order, start, lo.astype(float), shape.astype(np.int64)
+    """(order, start, origin (2,), shape (2,)) of a grid of ``cell`` m over points (m, 2): ``order``
+    lists the points by cell (in input order within a cell), ``start`` the first slot of every cell."""
+    p = np.asarray(points, float)
+    return _grid(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), float(cell))
+
+
+@kernel
+def _grid(px, py, cell):
+    """:func:`build_grid`, compiled: one counting sort of the cells (stable, as an argsort by cell)."""
+    lox, loy = px.min() - cell, py.min() - cell
+    n = px.shape[0]
+    ci = np.empty(n, np.int64)
+    cj = np.empty(n, np.int64)
+    for k in range(n):
+        ci[k] = int(math.floor((px[k] - lox) / cell))
+        cj[k] = int(math.floor((py[k] - loy) / cell))
+    nx, ny = ci.max() + 2, cj.max() + 2
+    start = np.zeros(nx * ny + 1, np.int64)
+    for k in range(n):
+        start[ci[k] * ny + cj[k] + 1] += 1
+    for c in range(nx * ny):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    order = np.empty(n, np.int64)
+    for k in range(n):
+        c = ci[k] * ny + cj[k]
+        order[fill[c]] = k
+        fill[c] += 1
+    return order, start, np.array([lox, loy]), np.array([nx, ny], np.int64)
+
+
+def first_per_cell(points: np.ndarray, size: float) -> np.ndarray:
+    """Sorted indices of the first of points (p, 2) to fall in each distinct ``size`` m square."""
+    p = np.asarray(points, float)
+    keep, ok = _first_dense(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), float(size), _DENSE_CELLS)
+    if ok:
+        return keep
+    cells = np.floor(p / size).astype(np.int64)  # too wide for a table of every cell: sort instead
+    cells -= cells.min(axis=0)
+    key = cells[:, 0] * (cells[:, 1].max() + 1) + cells[:, 1]
+    return np.sort(np.unique(key, return_index=True)[1])
+
+
+_DENSE_CELLS = 1 << 24
+
+
+@kernel
+def _first_dense(px, py, size, max_cells):
+    """:func:`first_per_cell` with a table of every cell over the points' extent (not ok: wider
+    than ``max_cells`` cells)."""
+    n = px.shape[0]
+    keep = np.empty(n, np.int64)
+    if n == 0:
+        return keep, True
+    ci = np.empty(n, np.int64)
+    cj = np.empty(n, np.int64)
+    for k in range(n):
+        ci[k] = int(math.floor(px[k] / size))
+        cj[k] = int(math.floor(py[k] / size))
+    lo_i, lo_j = ci.min(), cj.min()
+    nx, ny = ci.max() - lo_i + 1, cj.max() - lo_j + 1
+    if nx * ny > max_cells:
+        return keep[:0], False
+    seen = np.zeros(nx * ny, np.bool_)
+    m = 0
+    for k in range(n):
+        c = (ci[k] - lo_i) * ny + cj[k] - lo_j
+        if not seen[c]:
+            seen[c] = True
+            keep[m] = k
+            m += 1
+    return keep[:m], True
+
+
+@kernel
+def chord_normals(px, py, index, step, max_gap, gap_per_range, toward_sensor):
+    """Unit normals (n, 2) at the points ``index`` from the chord between the points ``step``
+    before and after, and whether that chord is short enough to be a surface (see
+    :func:`slam.icp.chord_normals`)."""
+    n = index.shape[0]
+    out = np.empty((n, 2))
+    good = np.empty(n, np.bool_)
+    for k in range(n):
+        i = index[k]
+        dx, dy = px[i + step] - px[i - step], py[i + step] - py[i - step]
+        length = math.hypot(dx, dy)
+        good[k] = length > 1e-3 and length < max_gap + gap_per_range * math.hypot(px[i], py[i])
+        scale = max(length, 1e-12)
+        nx, ny = dy / scale, -dx / scale
+        if toward_sensor and nx * px[i] + ny * py[i] > 0:
+            nx, ny = -nx, -ny
+        out[k, 0], out[k, 1] = nx, ny
+    return out, good
+
+
+@kernel
+def _cells_within(qx, qy, lox, loy, cell, nx, ny, reach2):
+    """Cell ranges [i0, i1) x [j0, j1) that overlap the square of half-side ``sqrt(reach2)``
+    (at most the cell) about (qx, qy): the cells that can hold a point within reach."""
+    r = math.sqrt(reach2)
+    i0 = max(int(math.floor((qx - r - lox) / cell)), 0)
+    i1 = min(int(math.floor((qx + r - lox) / cell)) + 1, nx)
+    j0 = max(int(math.floor((qy - r - loy) / cell)), 0)
+    j1 = min(int(math.floor((qy + r - loy) / cell)) + 1, ny)
+    return i0, i1, j0, j1
 
 
 @kernel
 def _nearest(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2):
     """Index (-1 if none) and squared distance of the reference point nearest (qx, qy) within reach."""
-    ci = int(math.floor((qx - lox) / cell))
-    cj = int(math.floor((qy - loy) / cell))
+    i0, i1, j0, j1 = _cells_within(qx, qy, lox, loy, cell, nx, ny, reach2)
     best = -1
     bd = reach2
-    for i in range(max(ci - 1, 0), min(ci + 2, nx)):
-        for j in range(max(cj - 1, 0), min(cj + 2, ny)):
+    for i in range(i0, i1):
+        for j in range(j0, j1):
             c = i * ny + j
             for k in range(start[c], start[c + 1]):
                 m = order[k]
@@ -61,12 +158,11 @@ def _nearest_facing(qx, qy, qnx, qny, rx, ry, nrx, nry, order, start, lox, loy, 
     of the query's normal (qnx, qny); a query without a normal (0, 0) takes the nearest point."""
     if qnx == 0.0 and qny == 0.0:
         return _nearest(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2)
-    ci = int(math.floor((qx - lox) / cell))
-    cj = int(math.floor((qy - loy) / cell))
+    i0, i1, j0, j1 = _cells_within(qx, qy, lox, loy, cell, nx, ny, reach2)
     best = -1
     bd = reach2
-    for i in range(max(ci - 1, 0), min(ci + 2, nx)):
-        for j in range(max(cj - 1, 0), min(cj + 2, ny)):
+    for i in range(i0, i1):
+        for j in range(j0, j1):
             c = i * ny + j
             for k in range(start[c], start[c + 1]):
                 m = order[k]

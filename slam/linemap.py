@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .icpkernel import kernel
 from .models import wrap
 
 
@@ -27,32 +28,44 @@ def merge_lines(segments: np.ndarray, max_angle: float = np.radians(3.0), max_of
         return np.zeros((0, 7))
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
     R, th = normal_form(seg)
-    # groups, grown in place: line (R, theta), extent [lo, hi] along (-sin, cos)(theta), count
-    gR, gth, glo, ghi, gn = (np.zeros(n) for _ in range(5))
+    gR, gth, glo, ghi, gn, gc, gs, m = _merge(seg, R, th, np.argsort(-length), max_angle, max_offset, max_gap)
+    c, s_ = gc[:m], gs[:m]
+    ax, ay = gR[:m] * c - glo[:m] * s_, gR[:m] * s_ + glo[:m] * c
+    bx, by = gR[:m] * c - ghi[:m] * s_, gR[:m] * s_ + ghi[:m] * c
+    return np.column_stack((gR[:m], gth[:m], ax, ay, bx, by, gn[:m]))
+
+
+@kernel
+def _merge(seg, R, th, order, max_angle, max_offset, max_gap):
+    """The greedy merge (compiled): each segment, longest first, joins the first group it fits,
+    else starts one. Groups: line (R, theta), cos/sin theta, extent [lo, hi] along (-sin, cos), count."""
+    n = seg.shape[0]
+    gR, gth, glo, ghi, gn = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     gc, gs = np.zeros(n), np.zeros(n)
     m = 0
-    for i in np.argsort(-length):
-        x0, y0, x1, y1 = seg[i]
-        if m:
-            c, s_ = gc[:m], gs[:m]
-            dth = np.abs(np.mod(th[i] - gth[:m] + np.pi, 2 * np.pi) - np.pi)
-            off0, off1 = x0 * c + y0 * s_ - gR[:m], x1 * c + y1 * s_ - gR[:m]
-            s0, s1 = -x0 * s_ + y0 * c, -x1 * s_ + y1 * c
-            lo, hi = np.minimum(s0, s1), np.maximum(s0, s1)
-            ok = ((dth <= max_angle) & (np.maximum(np.abs(off0), np.abs(off1)) <= max_offset)
-                  & (hi >= glo[:m] - max_gap) & (lo <= ghi[:m] + max_gap))
-            hit = np.flatnonzero(ok)
-            if hit.size:
-                g = hit[0]
-                glo[g], ghi[g] = min(glo[g], lo[g]), max(ghi[g], hi[g])
-                gn[g] += 1
+    for i in order:
+        x0, y0, x1, y1 = seg[i, 0], seg[i, 1], seg[i, 2], seg[i, 3]
+        joined = False
+        for g in range(m):
+            c, s_ = gc[g], gs[g]
+            dth = abs(np.mod(th[i] - gth[g] + np.pi, 2 * np.pi) - np.pi)
+            if dth > max_angle:
                 continue
+            off0, off1 = x0 * c + y0 * s_ - gR[g], x1 * c + y1 * s_ - gR[g]
+            if max(abs(off0), abs(off1)) > max_offset:
+                continue
+            s0, s1 = -x0 * s_ + y0 * c, -x1 * s_ + y1 * c
+            lo, hi = min(s0, s1), max(s0, s1)
+            if hi >= glo[g] - max_gap and lo <= ghi[g] + max_gap:
+                glo[g], ghi[g] = min(glo[g], lo), max(ghi[g], hi)
+                gn[g] += 1
+                joined = True
+                break
+        if joined:
+            continue
         gR[m], gth[m] = R[i], th[i]
         gc[m], gs[m] = np.cos(th[i]), np.sin(th[i])
         s0, s1 = -x0 * gs[m] + y0 * gc[m], -x1 * gs[m] + y1 * gc[m]
         glo[m], ghi[m], gn[m] = min(s0, s1), max(s0, s1), 1
         m += 1
-    c, s_ = gc[:m], gs[:m]
-    ax, ay = gR[:m] * c - glo[:m] * s_, gR[:m] * s_ + glo[:m] * c
-    bx, by = gR[:m] * c - ghi[:m] * s_, gR[:m] * s_ + ghi[:m] * c
-    return np.column_stack((gR[:m], gth[:m], ax, ay, bx, by, gn[:m]))
+    return gR, gth, glo, ghi, gn, gc, gs, m

@@ -64,10 +64,7 @@ class ScanPoints:
         """Chord normals of the valid points (towards the sensor, so the map's two faces of a thin
         wall differ) and the mask of those on a surface (computed once per scan)."""
         cfg = self.cfg
-        n, ok = chord_normals(self.valid, cfg.normal_step, cfg.normal_gap, cfg.normal_gap_per_range)
-        flip = np.einsum("ij,ij->i", n, self.valid) > 0
-        n[flip] *= -1
-        return n, ok
+        return chord_normals(self.valid, cfg.normal_step, cfg.normal_gap, cfg.normal_gap_per_range, True)
 
     def surface(self) -> tuple[np.ndarray, np.ndarray]:
         """The points that lie on a surface and their unit normals (towards the sensor), (p, 2) each."""
@@ -86,9 +83,7 @@ class ScanPoints:
         inner = (idx >= k) & (idx < p.shape[0] - k)
         i = idx[inner]
         if i.size:
-            n, ok = chord_normals_at(p, i, k, cfg.normal_gap, cfg.normal_gap_per_range)
-            flip = np.einsum("ij,ij->i", n, p[i]) > 0
-            n[flip] *= -1
+            n, ok = chord_normals_at(p, i, k, cfg.normal_gap, cfg.normal_gap_per_range, True)
             n[~ok] = 0.0
             out[inner] = n
         return out

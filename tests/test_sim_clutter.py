@@ -169,3 +169,27 @@ def test_wall_runs_stand_on_the_inside_of_walls_clear_of_the_route() -> None:
 def _corners(box) -> list:
     from sim.geometry import rectangle_corners
     return rectangle_corners(*box[:5]).tolist()
+
+
+def test_glass_rate_sets_the_worlds_glass_panels() -> None:
+    worlds = [make_world("cluttered", s, glass=0.0) for s in range(3)]
+    assert all(len(w.glass) == 0 for w in worlds)
+    many = [make_world("cluttered", s, glass=2.0) for s in range(3)]
+    assert sum(len(w.glass) for w in many) > sum(len(_world("cluttered", s).glass) for s in range(3))
+    with pytest.raises(ValueError, match="glass"):
+        make_world("office", 0, glass=-0.1)
+
+
+def test_sim2real_glass_follows_the_logs_no_returns() -> None:
+    from lms200 import Record, Scan
+    from experiments.sim2real import GLASS_NO_RETURN_SHARE, glass_rate, no_return_share
+    from sim.worlds import MIT_PRESET
+
+    assert glass_rate("mit", 0.0) == 0.0  # a log that never reads no return: no glass
+    assert glass_rate("cluttered", 0.0) is None  # other worlds keep their own glass
+    assert glass_rate("mit", 1.0) == MIT_PRESET["glass_per_10m"]  # never more than the preset
+    assert glass_rate("mit", GLASS_NO_RETURN_SHARE / 2) == pytest.approx(MIT_PRESET["glass_per_10m"] / 2, abs=1e-4)
+    r = np.array([1.0, np.inf, 50.0, np.nan, 2.0, 50.0, 3.0, 4.0])
+    recs = [Record(Scan(r, -0.1, 0.01, 0.0, 81.83, 0.0))]
+    assert no_return_share(recs) == pytest.approx(1 / 8)
+    assert no_return_share(recs, max_reading=50.0) == pytest.approx(3 / 8)

@@ -235,3 +235,46 @@ def test_the_normal_check_pairs_a_point_with_a_surface_facing_the_same_way():
     m, _ = icpkernel._nearest_facing(q[0], q[1], 0.0, 1.0, x, y, *ref._normals, order, start, lox, loy,
                                      cell, nx, ny, 0.25, np.cos(AlignmentConfig().normal_agreement))
     assert ref.normals[m][1] == 1.0
+
+
+@pytest.mark.parametrize("dense_cells", [1 << 24, 10])
+def test_voxel_filter_and_search_grid_against_plain_python(monkeypatch, dense_cells):
+    """The voxel filter keeps the first point of every cell in input order (with a table of the
+    cells and, for wide extents, by sorting); the grid lists every point under its own cell, in
+    input order within a cell."""
+    from slam import icpkernel
+    from slam.icp import voxel_filter
+
+    monkeypatch.setattr(icpkernel, "_DENSE_CELLS", dense_cells)
+    rng = np.random.default_rng(5)
+    p = np.vstack((rng.normal(0.0, 2.0, (400, 2)), rng.uniform(-0.3, 0.3, (300, 2)) + 7.0))
+    first: dict[tuple[int, int], int] = {}
+    for k, (x, y) in enumerate(p):
+        first.setdefault((int(np.floor(x / 0.1)), int(np.floor(y / 0.1))), k)
+    assert voxel_filter(p, 0.1).tolist() == sorted(first.values())
+    order, start, lo, shape = icpkernel.build_grid(p, 0.5)
+    cells: dict[int, list[int]] = {}
+    for k, (x, y) in enumerate(p):
+        i, j = int(np.floor((x - lo[0]) / 0.5)), int(np.floor((y - lo[1]) / 0.5))
+        assert 0 <= i < shape[0] - 1 and 0 <= j < shape[1] - 1
+        cells.setdefault(i * shape[1] + j, []).append(k)
+    assert start[0] == 0 and start[-1] == len(p) and np.all(np.diff(start) >= 0)
+    for c in range(shape[0] * shape[1]):
+        assert order[start[c]:start[c + 1]].tolist() == cells.get(c, [])
+
+
+@pytest.mark.parametrize("reach", [0.15, 0.5])
+def test_grid_search_finds_the_nearest_point_within_reach_as_a_kd_tree(reach):
+    from scipy.spatial import cKDTree
+
+    from slam.icp import make_reference
+
+    rng = np.random.default_rng(8)
+    ref = make_reference(rng.uniform(-3.0, 3.0, (2000, 2)), np.tile([1.0, 0.0], (2000, 1)))
+    q = rng.uniform(-4.0, 4.0, (3000, 2))  # some beyond the grid
+    idx, dist = ref.nearest(q, reach)
+    d, k = cKDTree(ref.points).query(q, distance_upper_bound=reach)
+    within = np.isfinite(d) & (d < reach)
+    assert np.array_equal(idx >= 0, within)
+    assert np.array_equal(idx[within], k[within])
+    np.testing.assert_allclose(dist[within], d[within], atol=1e-12)

@@ -48,6 +48,7 @@ def run(args: argparse.Namespace) -> int:
                       stride=args.stride, max_scans=args.max_scans, sensor=sensor, read_options=read_options)
     config = dict(log=str(args.log), duration=args.duration, rate_hz=args.rate_hz, stride=args.stride,
                   max_scans=args.max_scans, sensor_file=None if args.sensor is None else str(args.sensor),
+                  world=args.world, glass_per_10m=result.glass,
                   versions=versions())
     args.out = args.out or new_run_folder("results/sim2real")
     paths = write_outputs(result, args.out, str(args.log), config)
