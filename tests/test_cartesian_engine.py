@@ -116,3 +116,29 @@ def test_no_return_beams_break_and_invalid_beams_are_bridged(beams: list, value:
     ranges = wall.ranges.copy()
     ranges[beams] = value
     assert check(wall.replace(ranges=ranges)) == len(METHODS) * lines_per_method
+
+
+def test_merged_rms_within_its_slack_of_fit_range() -> None:
+    """The merge pass's cheap residual (eigenvalue formula) stays within its stated bound of
+    fit_range's on noisy, rounded and far-off segments, so every merge decision is fit_range's."""
+    from features.baselines import engine
+
+    rng = np.random.default_rng(1)
+    worst = 0.0
+    for trial in range(300):
+        n = 120
+        t = np.linspace(0.0, rng.uniform(0.1, 5.0), n)
+        a = rng.uniform(-np.pi, np.pi)
+        off = rng.uniform(-1.0, 1.0, 2) * 10 ** rng.uniform(0, 6)
+        x = off[0] + t * np.cos(a) + rng.normal(0, 10 ** rng.uniform(-9, -1), n)
+        y = off[1] + t * np.sin(a) + rng.normal(0, 10 ** rng.uniform(-9, -1), n)
+        if trial % 2:
+            x, y = np.round(x, 3), np.round(y, 3)
+        sums = [np.concatenate([[0.0], np.cumsum(v)]) for v in (x, y, x * x, y * y, x * y)]
+        for _ in range(5):
+            s = int(rng.integers(0, n - 3))
+            e = int(rng.integers(s + 2, n))
+            approx, slack = engine.merged_rms(*sums, s, e)
+            exact = engine.exact_rms(*sums, s, e)
+            worst = max(worst, abs(approx - exact) / slack)
+    assert worst < 0.01

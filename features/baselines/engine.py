@@ -151,6 +151,34 @@ def split_line(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
 
 
 @kernel
+def exact_rms(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
+    """The RMS residual (m) of the total-least-squares line of points s..e (``fit_range``)."""
+    f = fit_range(sx, sy, sxx, syy, sxy, s, e)
+    return math.sqrt(f.across / f.n)
+
+
+@kernel
+def merged_rms(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
+    """(``exact_rms`` of points s..e to rounding, a bound of its difference to it), for finite
+    coordinates: the residual sum of squares as the smaller eigenvalue of the scatter matrix,
+    (cxx + cyy) / 2 - sqrt(((cxx - cyy) / 2)^2 + cxy^2), without fit_range's arctangent, cosine
+    and sine. Both sums of squares come from the same moments and round within ~10 ulp of
+    |cxx| + |cyy| + 2 |cxy| (the angle's error enters squared), far within the 1e-12 of it
+    allowed; |sqrt(a) - sqrt(b)| <= sqrt(|a - b|) carries that to the root."""
+    lo, hi = s, e + 1
+    n = float(hi - lo)
+    mx = (sx[hi] - sx[lo]) / n
+    my = (sy[hi] - sy[lo]) / n
+    cxx = (sxx[hi] - sxx[lo]) - n * mx * mx
+    cyy = (syy[hi] - syy[lo]) - n * my * my
+    cxy = (sxy[hi] - sxy[lo]) - n * mx * my
+    h = 0.5 * (cxx - cyy)
+    across = npmax(0.5 * (cxx + cyy) - math.sqrt(h * h + cxy * cxy), 0.0)
+    rms = math.sqrt(across / n)
+    return rms, math.sqrt(1e-12 * (abs(cxx) + abs(cyy) + 2.0 * abs(cxy)) / n) + 1e-12 * rms + 1e-300
+
+
+@kernel
 def trim(x, y, s, e, rho, c, si, tol, keep):  # noqa: ANN001, ANN201
     """The range s..e left after dropping the leading and trailing points farther than ``tol``
     (m) from the line x c + y si = rho (a small neighbouring face the split threshold let in);
@@ -235,11 +263,12 @@ def disconnected(dx, dy, r_prev, sin_step, sin_rest, ratio, margin) -> bool:  # 
 
 
 @kernel
-def split_at(x, y, s, e, threshold, cf, sf, rho_f, chord):  # noqa: ANN001, ANN201
+def split_at(x, y, s, e, threshold, cf, sf, rho_f, chord, finite):  # noqa: ANN001, ANN201
     """Where points s..e (e - s >= 2) split: the interior point farthest from the chord between the
     end points (the first of equal ones) when some point lies farther than ``threshold`` (m) from
     the chord (``chord``: iepf) or from the fitted line x cf + y sf = rho_f (split_merge; end
-    points included); -1 when none does, or when a distance is nan."""
+    points included); -1 when none does, or when a distance is nan (``finite``: none can be, the
+    checks are skipped)."""
     dx, dy = x[e] - x[s], y[e] - y[s]
     norm = npmax(math.hypot(dx, dy), 1e-12)
     nx, ny = -dy / norm, dx / norm
@@ -252,7 +281,7 @@ def split_at(x, y, s, e, threshold, cf, sf, rho_f, chord):  # noqa: ANN001, ANN2
         d_s = abs(x[s] * cf + y[s] * sf - rho_f)
         d_e = abs(x[e] * cf + y[e] * sf - rho_f)
         dmax = max(d_s, d_e)
-        if d_s != d_s or d_e != d_e:
+        if not finite and (d_s != d_s or d_e != d_e):
             return -1
     # two interleaved scans of the interior points (even and odd offsets), so that consecutive
     # points do not wait on each other's maximum; the first farthest point is the smaller index of
@@ -273,7 +302,8 @@ def split_at(x, y, s, e, threshold, cf, sf, rho_f, chord):  # noqa: ANN001, ANN2
             at2 = q + 1
         dmax = d if d > dmax else dmax
         dmax2 = d2 if d2 > dmax2 else dmax2
-        nan |= (dc != dc) | (d != d) | (dc2 != dc2) | (d2 != d2)
+        if not finite:
+            nan |= (dc != dc) | (d != d) | (dc2 != dc2) | (d2 != d2)
         q += 2
     if q < e:
         dc = abs(x[q] * nx + y[q] * ny - rho_c)
@@ -282,7 +312,8 @@ def split_at(x, y, s, e, threshold, cf, sf, rho_f, chord):  # noqa: ANN001, ANN2
             cmax = dc
             at = q
         dmax = d if d > dmax else dmax
-        nan |= (dc != dc) | (d != d)
+        if not finite:
+            nan |= (dc != dc) | (d != d)
     if cmax2 > cmax or (cmax2 == cmax and at2 < at):
         at = at2
     if nan or not max(dmax, dmax2) > threshold:
@@ -305,8 +336,12 @@ class Workspace(NamedTuple):
     stack_s: np.ndarray  # (2n + 2,) the depth-first split stack
     stack_e: np.ndarray
     rms: np.ndarray  # (2n + 2,) merged RMS residual of each neighbour pair
+    slack: np.ndarray  # (2n + 2,) its bound of the difference to fit_range's (0: fit_range's)
     src: np.ndarray  # (2n + 2,) the segment of the previous merge pass each one is (-1: merged)
     pick: np.ndarray  # (2n + 2,) bool
+    sin_step: np.ndarray  # (min(max_skip, n) + 1,) sin(k increment) of the bearing steps k = 1 .. max_skip
+    sin_rest: np.ndarray  # sin(lambda - k increment)
+    ratio: np.ndarray  # sin_step / sin_rest: the breakpoint distance per metre of range
     lv: np.ndarray  # (n + 1, 10) the rows of features.types.Lines
     lb: np.ndarray  # (n + 1, 3)
     cv: np.ndarray  # (n + 1, 3) the rows of features.types.Corners
@@ -314,14 +349,25 @@ class Workspace(NamedTuple):
 
 
 @kernel
-def workspace(n):  # noqa: ANN001, ANN201
-    """The Workspace of scans of n beams."""
+def workspace(n, increment, p):  # noqa: ANN001, ANN201
+    """The Workspace of scans of n beams, ``increment`` (rad) apart, extracted with the SplitParams
+    ``p``: scratch arrays, and the sines of the breakpoint distance (``breakpoint_distance``) of the
+    bearing steps a cluster may bridge (1 .. max_skip beams), computed once per call."""
     m = 2 * n + 2
+    n_steps = min(p.max_skip, n) + 1
+    sin_step = np.empty(n_steps)
+    sin_rest = np.empty(n_steps)
+    ratio = np.empty(n_steps)
+    for step in range(1, n_steps):
+        dphi = step * increment
+        sin_step[step] = math.sin(dphi)
+        sin_rest[step] = math.sin(p.breakpoint_lambda - dphi)
+        ratio[step] = sin_step[step] / sin_rest[step]
     return Workspace(
         np.empty(n, np.int64), np.empty(n), np.empty(n), np.empty(n), np.empty(n, np.int64), np.zeros((5, n + 1)),
         np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m),
-        np.empty(m, np.int64), np.zeros(m, np.bool_), np.empty((n + 1, 10)), np.empty((n + 1, 3), np.int64), np.empty((n + 1, 3)),
-        np.empty((n + 1, 3), np.int64),
+        np.empty(m), np.empty(m, np.int64), np.zeros(m, np.bool_), sin_step, sin_rest, ratio, np.empty((n + 1, 10)),
+        np.empty((n + 1, 3), np.int64), np.empty((n + 1, 3)), np.empty((n + 1, 3), np.int64),
     )
 
 
@@ -335,7 +381,7 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  
     that of a total-least-squares fit under isotropic noise sigma: var(alpha) = s^2/S,
     var(rho) = s^2/n + t^2 s^2/S, cov = t s^2/S (t: the centroid's coordinate along the line,
     S: the scatter along it)."""
-    sigma, lam, threshold, merge_rms = p.sigma, p.breakpoint_lambda, p.split_threshold, p.merge_rms
+    sigma, threshold, merge_rms = p.sigma, p.split_threshold, p.merge_rms
     min_points, min_length, max_skip, runs_z, chord = p.min_points, p.min_length, p.max_skip, p.runs_z, p.chord
     n_beams = ranges.size
     # the valid points (Cartesian), the +inf (no-return) beams before each, and the prefix sums
@@ -361,16 +407,10 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  
             n_inf += 1
     if n_pts < 2:
         return 0
-    # the bearing steps a cluster may bridge (1 .. max_skip beams): the sines of the breakpoint distance
-    n_steps = min(max_skip, n_beams) + 1
-    sin_step = np.empty(n_steps)
-    sin_rest = np.empty(n_steps)
-    ratio = np.empty(n_steps)
-    for step in range(1, n_steps):
-        dphi = step * increment
-        sin_step[step] = math.sin(dphi)
-        sin_rest[step] = math.sin(lam - dphi)
-        ratio[step] = sin_step[step] / sin_rest[step]
+    sin_step, sin_rest, ratio = ws.sin_step, ws.sin_rest, ws.ratio  # of the bearing steps a cluster may bridge
+    # no distance of the split test can be nan when every coordinate is below 1e70 m in size
+    # (squares, their sums and the fit's moments stay finite): then the test skips its nan checks
+    finite = abs(range_lo) < 1e70 and abs(range_hi) < 1e70
     margin = BREAK_SIGMA * sigma
     # adaptive breakpoints -> clusters, each split depth-first; a +inf beam between two points
     # saw open space (a doorway, beyond range): always a break; up to max_skip - 1 nan beams are bridged
@@ -401,10 +441,10 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  
                 n_seg += 1
                 continue
             if chord:
-                at = split_at(x, y, s, e, threshold, 0.0, 0.0, 0.0, True)
+                at = split_at(x, y, s, e, threshold, 0.0, 0.0, 0.0, True, finite)
             else:
                 c, si, rho = split_line(sx, sy, sxx, syy, sxy, s, e)
-                at = split_at(x, y, s, e, threshold, c, si, rho, False)
+                at = split_at(x, y, s, e, threshold, c, si, rho, False, finite)
             if at < 0:
                 segs_s[n_seg], segs_e[n_seg] = s, e
                 n_seg += 1
@@ -416,21 +456,33 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  
     m = n_seg
     # merge collinear neighbours, pass by pass
     if merge_rms > 0:
-        rms, pick, src = ws.rms, ws.pick, ws.src
+        rms, slack, pick, src = ws.rms, ws.slack, ws.pick, ws.src
         first_pass = True
         while m > 1:
+            # each pair's merged RMS residual, from the eigenvalue formula where every coordinate is
+            # finite (no arctangent, cosine or sine; within slack[i] of fit_range's), from fit_range
+            # where that margin leaves a decision open: every decision is fit_range's
             any_ok = False
             for i in range(m - 1):
                 if not first_pass and src[i] >= 0 and src[i + 1] >= 0:  # both unchanged: as before
-                    rms[i] = rms[src[i]]
-                elif segs_s[i + 1] == segs_e[i]:
-                    f = fit_range(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1])
-                    rms[i] = math.sqrt(f.across / f.n)
+                    rms[i], slack[i] = rms[src[i]], slack[src[i]]
+                elif segs_s[i + 1] != segs_e[i]:
+                    rms[i], slack[i] = np.inf, 0.0
+                elif finite:
+                    rms[i], slack[i] = merged_rms(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1])
                 else:
-                    rms[i] = np.inf
+                    rms[i], slack[i] = exact_rms(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1]), 0.0
+                if slack[i] > 0 and not abs(rms[i] - merge_rms) > slack[i]:
+                    rms[i], slack[i] = exact_rms(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1]), 0.0
                 any_ok = any_ok or rms[i] <= merge_rms
             if not any_ok:
                 break
+            for i in range(m - 2):  # neighbours' residuals within their margins: both exact
+                if (slack[i] > 0 or slack[i + 1] > 0) and not abs(rms[i] - rms[i + 1]) > slack[i] + slack[i + 1]:
+                    if slack[i] > 0:
+                        rms[i], slack[i] = exact_rms(sx, sy, sxx, syy, sxy, segs_s[i], segs_e[i + 1]), 0.0
+                    if slack[i + 1] > 0:
+                        rms[i + 1], slack[i + 1] = exact_rms(sx, sy, sxx, syy, sxy, segs_s[i + 1], segs_e[i + 2]), 0.0
             for i in range(m - 1):
                 left = np.inf if i == 0 else rms[i - 1]
                 right = np.inf if i == m - 2 else rms[i + 1]
@@ -560,7 +612,7 @@ def extract_into(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, c, ws):
 @kernel
 def extract_scan(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, c):  # noqa: ANN001, ANN201
     """Lines and corners of one scan: the rows of ``features.types.Lines`` and ``Corners``."""
-    ws = workspace(ranges.size)
+    ws = workspace(ranges.size, increment, p)
     nl, nc = extract_into(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, c, ws)
     return ws.lv[:nl].copy(), ws.lb[:nl].copy(), ws.cv[:nc].copy(), ws.cb[:nc].copy()
 
@@ -570,7 +622,7 @@ def extract_batch(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, c):  #
     """``extract_scan`` of every row of ``ranges`` (S, n), scans of one geometry, in one call: the
     rows of all scans concatenated, and the (S + 1,) offsets of each scan's lines and corners."""
     rows = new_rows(ranges.shape[0])
-    ws = workspace(ranges.shape[1])
+    ws = workspace(ranges.shape[1], increment, p)
     for s in range(ranges.shape[0]):
         nl, nc = extract_into(ranges[s], cos_b, sin_b, range_lo, range_hi, increment, p, c, ws)
         rows = append_rows(rows, s, (ws.lv[:nl], ws.lb[:nl], ws.cv[:nc], ws.cb[:nc]))

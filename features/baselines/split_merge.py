@@ -85,6 +85,7 @@ def check_split_fields(cfg: object, chord: bool) -> None:
 
 
 _extract_scan = FixedTypeCall(engine.extract_scan)  # a Scan's types: read-only float64 arrays, floats
+_extract_batch = FixedTypeCall(engine.extract_batch)  # stacked_ranges: a C-contiguous float64 (S, n) array
 
 
 def split_params(cfg: object, chord: bool) -> engine.SplitParams:
@@ -119,7 +120,7 @@ def run_pipeline_many(scans: Sequence[Scan], cfg, method: str) -> list[FeatureSe
     if not scans:
         return []
     scan = common_geometry(scans)
-    rows = engine.extract_batch(stacked_ranges(scans), *bearing_table(scan.angle_min, scan.angle_increment, len(scan)),
+    rows = _extract_batch(stacked_ranges(scans), *bearing_table(scan.angle_min, scan.angle_increment, len(scan)),
                                 scan.range_min, scan.range_max, scan.angle_increment, cfg.params, cfg.corners.params)
     return split_rows(*rows, method)
 
