@@ -133,8 +133,11 @@ def _cells_within(qx, qy, lox, loy, cell, nx, ny, reach2):
 
 
 @kernel
-def _nearest(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2):
-    """Index (-1 if none) and squared distance of the reference point nearest (qx, qy) within reach."""
+def _nearest_facing(qx, qy, qnx, qny, rx, ry, nrx, nry, order, start, lox, loy, cell, nx, ny, reach2, min_cos):
+    """Index (-1 if none) and squared distance of the reference point nearest (qx, qy) within reach,
+    among those whose normal (nrx, nry) lies within ``acos(min_cos)`` of the query's normal
+    (qnx, qny); a query without a normal (0, 0) takes the nearest point."""
+    facing = qnx != 0.0 or qny != 0.0
     i0, i1, j0, j1 = _cells_within(qx, qy, lox, loy, cell, nx, ny, reach2)
     best = -1
     bd = reach2
@@ -146,33 +149,16 @@ def _nearest(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2):
                 dx = rx[m] - qx
                 dy = ry[m] - qy
                 d = dx * dx + dy * dy
-                if d < bd:
+                if d < bd and (not facing or qnx * nrx[m] + qny * nry[m] >= min_cos):
                     bd = d
                     best = m
     return best, bd
 
 
 @kernel
-def _nearest_facing(qx, qy, qnx, qny, rx, ry, nrx, nry, order, start, lox, loy, cell, nx, ny, reach2, min_cos):
-    """As :func:`_nearest`, among the reference points whose normal lies within ``acos(min_cos)``
-    of the query's normal (qnx, qny); a query without a normal (0, 0) takes the nearest point."""
-    if qnx == 0.0 and qny == 0.0:
-        return _nearest(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2)
-    i0, i1, j0, j1 = _cells_within(qx, qy, lox, loy, cell, nx, ny, reach2)
-    best = -1
-    bd = reach2
-    for i in range(i0, i1):
-        for j in range(j0, j1):
-            c = i * ny + j
-            for k in range(start[c], start[c + 1]):
-                m = order[k]
-                dx = rx[m] - qx
-                dy = ry[m] - qy
-                d = dx * dx + dy * dy
-                if d < bd and qnx * nrx[m] + qny * nry[m] >= min_cos:
-                    bd = d
-                    best = m
-    return best, bd
+def _nearest(qx, qy, rx, ry, order, start, lox, loy, cell, nx, ny, reach2):
+    """Index (-1 if none) and squared distance of the reference point nearest (qx, qy) within reach."""
+    return _nearest_facing(qx, qy, 0.0, 0.0, rx, ry, rx, ry, order, start, lox, loy, cell, nx, ny, reach2, 0.0)
 
 
 @kernel
