@@ -328,8 +328,7 @@ class Workspace(NamedTuple):
     idx: np.ndarray  # (n,) beam index of each valid point
     x: np.ndarray  # (n,) m
     y: np.ndarray  # (n,) m
-    r: np.ndarray  # (n,) range, m
-    no_return: np.ndarray  # (n,) +inf beams before each point
+    ends: np.ndarray  # (n,) the last point of each cluster
     sums: np.ndarray  # (5, n + 1) prefix sums of x, y, x^2, y^2, xy
     seg_s: np.ndarray  # (2n + 2,) first and last point of each segment
     seg_e: np.ndarray
@@ -364,7 +363,7 @@ def workspace(n, increment, p):  # noqa: ANN001, ANN201
         sin_rest[step] = math.sin(p.breakpoint_lambda - dphi)
         ratio[step] = sin_step[step] / sin_rest[step]
     return Workspace(
-        np.empty(n, np.int64), np.empty(n), np.empty(n), np.empty(n), np.empty(n, np.int64), np.zeros((5, n + 1)),
+        np.empty(n, np.int64), np.empty(n), np.empty(n), np.empty(n, np.int64), np.zeros((5, n + 1)),
         np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m),
         np.empty(m), np.empty(m, np.int64), np.zeros(m, np.bool_), sin_step, sin_rest, ratio, np.empty((n + 1, 10)),
         np.empty((n + 1, 3), np.int64), np.empty((n + 1, 3)), np.empty((n + 1, 3), np.int64),
@@ -384,51 +383,59 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  
     sigma, threshold, merge_rms = p.sigma, p.split_threshold, p.merge_rms
     min_points, min_length, max_skip, runs_z, chord = p.min_points, p.min_length, p.max_skip, p.runs_z, p.chord
     n_beams = ranges.size
-    # the valid points (Cartesian), the +inf (no-return) beams before each, and the prefix sums
-    # of the fits (np.cumsum order), in one pass over the beams
-    idx, x, y, r, no_return = ws.idx, ws.x, ws.y, ws.r, ws.no_return
+    # the valid points (Cartesian), the prefix sums of the fits (np.cumsum order) and the clusters'
+    # ends, in one pass over the beams
+    idx, x, y = ws.idx, ws.x, ws.y
     sx, sy, sxx, syy, sxy = ws.sums[0], ws.sums[1], ws.sums[2], ws.sums[3], ws.sums[4]  # [0] stays 0
+    # the adaptive breakpoints in the same pass: a +inf beam between two points saw open space (a
+    # doorway, beyond range): always a break; up to max_skip - 1 nan beams are bridged; ends[k]:
+    # the last point of cluster k
+    sin_step, sin_rest, ratio = ws.sin_step, ws.sin_rest, ws.ratio  # of the bearing steps a cluster may bridge
+    margin = BREAK_SIGMA * sigma
+    ends = ws.ends
+    n_clusters = 0
     n_inf = 0
     n_pts = 0
     ax = ay = axx = ayy = axy = 0.0  # the running sums
+    px = py = pr = 0.0  # the previous point and its range
+    p_idx = p_inf = 0
     for i in range(n_beams):
         d = ranges[i]
         if d >= range_lo and d <= range_hi:
             q = n_pts
             xq, yq = d * cos_b[i], d * sin_b[i]
-            idx[q], r[q], x[q], y[q], no_return[q] = i, d, xq, yq, n_inf
+            idx[q], x[q], y[q] = i, xq, yq
             if q:
                 ax, ay, axx, ayy, axy = ax + xq, ay + yq, axx + xq * xq, ayy + yq * yq, axy + xq * yq
+                step = i - p_idx
+                if step > max_skip or n_inf > p_inf:
+                    cut = True
+                else:
+                    cut = disconnected(xq - px, yq - py, pr, sin_step[step], sin_rest[step], ratio[step], margin)
+                if cut:
+                    ends[n_clusters] = q - 1
+                    n_clusters += 1
             else:
                 ax, ay, axx, ayy, axy = xq, yq, xq * xq, yq * yq, xq * yq
             sx[q + 1], sy[q + 1], sxx[q + 1], syy[q + 1], sxy[q + 1] = ax, ay, axx, ayy, axy
+            px, py, pr, p_idx, p_inf = xq, yq, d, i, n_inf
             n_pts += 1
         elif d == np.inf:
             n_inf += 1
     if n_pts < 2:
         return 0
-    sin_step, sin_rest, ratio = ws.sin_step, ws.sin_rest, ws.ratio  # of the bearing steps a cluster may bridge
+    ends[n_clusters] = n_pts - 1
+    n_clusters += 1
     # no distance of the split test can be nan when every coordinate is below 1e70 m in size
     # (squares, their sums and the fit's moments stay finite): then the test skips its nan checks
     finite = abs(range_lo) < 1e70 and abs(range_hi) < 1e70
-    margin = BREAK_SIGMA * sigma
-    # adaptive breakpoints -> clusters, each split depth-first; a +inf beam between two points
-    # saw open space (a doorway, beyond range): always a break; up to max_skip - 1 nan beams are bridged
+    # each cluster split depth-first
     min_split = max(min_points, 3)
     segs_s, segs_e, stack_s, stack_e = ws.seg_s, ws.seg_e, ws.stack_s, ws.stack_e
     n_seg = 0
     start = 0
-    for p in range(n_pts):
-        cut = p == n_pts - 1
-        if not cut:
-            step = idx[p + 1] - idx[p]
-            if step > max_skip or no_return[p + 1] > no_return[p]:
-                cut = True
-            else:
-                cut = disconnected(x[p + 1] - x[p], y[p + 1] - y[p], r[p], sin_step[step], sin_rest[step], ratio[step],
-                                   margin)
-        if not cut:
-            continue
+    for k in range(n_clusters):
+        p = ends[k]
         sp = 0
         stack_s[0], stack_e[0] = start, p
         sp = 1
