@@ -96,9 +96,9 @@ class Fit(NamedTuple):
 
 
 @kernel
-def fit_range(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
-    """Total-least-squares line ``x cos(alpha) + y sin(alpha) = rho`` of points s..e (inclusive)
-    from prefix sums (Arras & Siegwart 1997), a Fit."""
+def moments(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
+    """(n, mean x, mean y, cxx, cyy, cxy) of points s..e (inclusive) from prefix sums: the count,
+    centroid (m) and central second moments (m^2) every fit below starts from."""
     lo, hi = s, e + 1
     n = float(hi - lo)
     mx = (sx[hi] - sx[lo]) / n
@@ -106,6 +106,14 @@ def fit_range(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     cxx = (sxx[hi] - sxx[lo]) - n * mx * mx
     cyy = (syy[hi] - syy[lo]) - n * my * my
     cxy = (sxy[hi] - sxy[lo]) - n * mx * my
+    return n, mx, my, cxx, cyy, cxy
+
+
+@kernel
+def fit_range(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
+    """Total-least-squares line ``x cos(alpha) + y sin(alpha) = rho`` of points s..e (inclusive)
+    from prefix sums (Arras & Siegwart 1997), a Fit."""
+    n, mx, my, cxx, cyy, cxy = moments(sx, sy, sxx, syy, sxy, s, e)
     alpha = 0.5 * math.atan2(-2.0 * cxy, cyy - cxx)
     c, si = math.cos(alpha), math.sin(alpha)
     rho = mx * c + my * si
@@ -126,13 +134,7 @@ def split_line(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     """(cos, sin, rho) of the total-least-squares line of points s..e: ``fit_range``'s line to
     rounding, without its arctangent, cosine and sine (the split test needs only distances to
     it): alpha = atan2(-2 cxy, cyy - cxx) / 2 by the half-angle formulas, each in its stable form."""
-    lo, hi = s, e + 1
-    n = float(hi - lo)
-    mx = (sx[hi] - sx[lo]) / n
-    my = (sy[hi] - sy[lo]) / n
-    cxx = (sxx[hi] - sxx[lo]) - n * mx * mx
-    cyy = (syy[hi] - syy[lo]) - n * my * my
-    cxy = (sxy[hi] - sxy[lo]) - n * mx * my
+    n, mx, my, cxx, cyy, cxy = moments(sx, sy, sxx, syy, sxy, s, e)
     y2 = -2.0 * cxy  # r (sin 2 alpha, cos 2 alpha)
     x2 = cyy - cxx
     r = math.sqrt(x2 * x2 + y2 * y2)
@@ -165,13 +167,7 @@ def merged_rms(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     and sine. Both sums of squares come from the same moments and round within ~10 ulp of
     |cxx| + |cyy| + 2 |cxy| (the angle's error enters squared), far within the 1e-12 of it
     allowed; |sqrt(a) - sqrt(b)| <= sqrt(|a - b|) carries that to the root."""
-    lo, hi = s, e + 1
-    n = float(hi - lo)
-    mx = (sx[hi] - sx[lo]) / n
-    my = (sy[hi] - sy[lo]) / n
-    cxx = (sxx[hi] - sxx[lo]) - n * mx * mx
-    cyy = (syy[hi] - syy[lo]) - n * my * my
-    cxy = (sxy[hi] - sxy[lo]) - n * mx * my
+    n, mx, my, cxx, cyy, cxy = moments(sx, sy, sxx, syy, sxy, s, e)
     h = 0.5 * (cxx - cyy)
     across = npmax(0.5 * (cxx + cyy) - math.sqrt(h * h + cxy * cxy), 0.0)
     rms = math.sqrt(across / n)
