@@ -11,3 +11,7 @@ class ConfigError(LmsbenchError, ValueError):
 
 class NumbaUnavailableError(LmsbenchError, ImportError):
     """numba, which compiles the extractors, is not installed or cannot be loaded."""
+
+
+class ScanTypeError(LmsbenchError, TypeError):
+    """An extractor was given something other than an ``lms200.Scan`` (a log record, a bare array)."""

@@ -6,11 +6,12 @@ from __future__ import annotations
 
 import copy
 import pickle
+import re
 
 import numpy as np
 import pytest
 
-from features import ConfigError, Corner, FeatureSet, Line, available_methods, extract, extract_many, make_config
+from features import ConfigError, Corner, ScanTypeError, FeatureSet, Line, available_methods, extract, extract_many, make_config
 from lms200 import Scan
 from sensor_geometry import room
 
@@ -69,6 +70,25 @@ def test_extract_many_refuses_mixed_geometry() -> None:
             extract_many(scans, method=method)
     with pytest.raises(ValueError, match=r"scans\[1\]"):
         extract_many([scans[0], scans[0].replace(range_max=81.83)])
+
+
+def test_something_other_than_a_scan_is_refused_with_the_fix() -> None:
+    from types import SimpleNamespace
+
+    from lms200 import LmsbenchError
+
+    scan = room(0)
+    record = SimpleNamespace(scan=scan, timestamp=0.0)  # what read_log yields carries .scan
+    cases = [
+        (lambda: extract(record), "extract: expected an lms200.Scan, got SimpleNamespace (a log record: pass record.scan)"),
+        (lambda: extract(scan.ranges), "got ndarray (build one with lms200.Scan.lms200(ranges)"),
+        (lambda: extract_many([scan, record]), "extract_many: scans[1]: expected an lms200.Scan"),
+        (lambda: extract_many(scan), "got one Scan (use extract, or [scan])"),
+    ]
+    for call, text in cases:
+        with pytest.raises(ScanTypeError, match=re.escape(text)) as info:
+            call()
+        assert isinstance(info.value, LmsbenchError) and isinstance(info.value, TypeError)
 
 
 def test_feature_set_arrays_and_record_views() -> None:
