@@ -63,7 +63,8 @@ def stacked_sigma(ranges: np.ndarray, scan: Scan, fallback: float = 0.005) -> fl
 def neighbour_sigma(scans: Scan | Iterable[Any], fallback: float = 0.005) -> float:
     """Range scatter (m, 1 sigma) of neighbouring beams about straight faces, pooled over ``scans``
     (one Scan, or Scans or records with ``.scan``), at least the quantisation's q / sqrt(12) and
-    ``SIGMA_FLOOR_M``; ``fallback`` when fewer than ``MIN_TRIPLES`` triples are usable."""
+    ``features.sensor.engine.SIGMA_FLOOR_M`` (1 mm); ``fallback`` when fewer than
+    ``features.sensor.engine.MIN_TRIPLES`` (20) triples are usable."""
     if isinstance(scans, Scan):
         return scan_sigma(scans, fallback)
     engine = _engine()[0]

@@ -43,7 +43,8 @@ def mirror_time_increment(angle_increment: float) -> float:
 def beam_time_offsets(n_beams: int, angle_increment: float) -> np.ndarray:
     """Time (s) of each of ``n_beams`` beams after the scan's first beam: an interlaced scan
     measures beam i in mirror turn ``i mod turns`` at its bearing's share of the turn (a 1 deg scan:
-    one sweep of 13.3 ms; 0.5 deg: the even beams in the first turn, the odd ones 13.3 ms later)."""
+    one 180 deg sweep, 6.7 ms; 0.5 deg: the even beams in the first turn, the odd ones 13.3 ms later,
+    the last at 20 ms)."""
     turns = turns_per_scan(angle_increment)
     i = np.arange(int(n_beams))
     return ((i % turns) + i * angle_increment / (2.0 * np.pi)) * MIRROR_TURN_S

@@ -49,10 +49,14 @@ class AlignmentConfig:
             std (``motion``: ``sigma_accel dt^2`` + floor, ``sigma_alpha dt^2`` + floor) as a
             prior: the prediction holds the directions the scan barely fixes (a corridor's axis),
             where the few points that constrain them would otherwise set the pose alone.
-        deskew: undo the sensor's motion during a scan (13 ms a mirror turn; a 0.5 deg scan is two
-            interlaced turns, 27 ms) with the constant-velocity twist of the last two poses, so
-            that the match estimates the pose at the scan's stamp (its first beam). At 1 rad/s a
-            point 8 m away moves 10-20 cm during a scan.
+        deskew: undo the sensor's motion during a scan with the constant-velocity twist of the
+            last two poses, so that the match estimates the pose at the scan's stamp (its first
+            beam). Beam times are the LMS200's (``lms200.timing.beam_time_offsets``): a 1 deg scan
+            is one 180 deg sweep (6.7 ms), a 0.5 deg scan two interlaced turns (odd beams 13.3 ms
+            after the even ones; last beam at 20 ms). At 1 rad/s a point 8 m away moves up to
+            16 cm during a 0.5 deg scan. Turn it off for scans taken at one instant (the
+            simulator's ``SensorConfig(interlaced=False)`` / ``.ideal()``), where it would add
+            that motion instead of removing it.
         normal_agreement: a scan point (with a normal) is paired only with map points whose normal
             lies within this angle (rad) of its own: a point near a corner is not pulled onto the
             perpendicular wall (90 degrees off; along a corridor such pairs set the axis from a

@@ -149,7 +149,7 @@ class ScanSlam:
     def deskew(self, points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
         """The scan's points (n, 2) in the sensor frame at the stamp (its first beam): beam i was
         measured ``offsets[i]`` s later, from where the constant-velocity motion had moved the
-        sensor by then (first order in the motion over the scan's 13-27 ms)."""
+        sensor by then (first order in the motion over the scan's 6.7-20 ms)."""
         v = self.velocity()
         tau = np.asarray(offsets, float)
         a = v[2] * tau

@@ -95,11 +95,13 @@ def test_a_revisit_closes_a_loop_that_agrees_with_the_truth(office_run):
     assert len(slam.loops) >= 1
     assert np.max(velocity_errors) < 0.1  # m/s and rad/s
     truth = np.array([r.truth for r in office_run])
-    # the covariances are honest on a short run too: mean pose NEES inside the 95 % chi-square
-    # interval of one 3-dof sample (consistent: 3)
+    # the covariances are honest on a short run too (consistent: mean pose NEES 3 for 3 dof): at
+    # most 2x over-confident, the failure that lets wrong closures in (the 900 s run's 7.9 before
+    # de-skew); on the cautious side the (2 cm)^2 residual floor, above the simulator's noise,
+    # keeps short runs low (this run: 0.84), so the bound there is looser
     traj = np.column_stack(([r.scan.stamp for r in office_run], slam.trajectory()))
     nees = pose_nees(traj, slam.pose_covariances(), list(truth))
-    assert 0.216 < np.nanmean(nees) < 9.35
+    assert 0.4 < np.nanmean(nees) < 6.0
     errors = []
     for loop in slam.loops:
         old, new = slam.keyframes[loop.old], slam.keyframes[loop.new]
@@ -192,8 +194,8 @@ def test_beam_times_are_the_simulators():
 
 
 def test_deskew_undoes_the_motion_during_an_interlaced_scan():
-    """A 0.5 deg scan (two mirror turns, 27 ms) taken while turning at 1 rad/s and moving at 1 m/s,
-    matched against the same place scanned standing: de-skewed with the twist, the match finds the
+    """A 0.5 deg scan (two interlaced mirror turns, last beam 20 ms after the first) taken while
+    turning at 1 rad/s and moving at 1 m/s, matched against the same place scanned standing: de-skewed with the twist, the match finds the
     pose at the first beam; raw, the heading is off by the turn during the scan."""
     from lms200.timing import beam_time_offsets
     from sim import LMS200Sim, SensorConfig, make_world
@@ -216,7 +218,7 @@ def test_deskew_undoes_the_motion_during_an_interlaced_scan():
         errors.append((np.hypot(*m.pose[:2]), abs(m.pose[2])))
     (dxy, dth), (raw_xy, raw_th) = errors
     assert dxy < 0.003 and dth < 0.001
-    assert raw_th > 0.005  # about half the 27 ms turn
+    assert raw_th > 0.005  # the odd beams' 13.3 ms of turning
 
 
 def test_the_normal_check_pairs_a_point_with_a_surface_facing_the_same_way():

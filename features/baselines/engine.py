@@ -367,12 +367,13 @@ def workspace(n, increment, p):  # noqa: ANN001, ANN201
 
 
 @kernel
-def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws):  # noqa: ANN001, ANN201
+def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, p, ws):  # noqa: ANN001, ANN201
     """The lines of one scan (sensor frame) in beam order, written as the rows of
     ``features.types.Lines`` into ``ws.lv`` (values) and ``ws.lb`` (beams); returns their number.
     Beams with a range in [range_lo, range_hi] (m) are valid; ``cos_b``, ``sin_b`` the beams'
-    bearing cosines and sines (``bearing_table``); ``p`` a SplitParams; ``ws`` a Workspace of at
-    least the scan's beams. The (rho, alpha) covariance is
+    bearing cosines and sines (``bearing_table``); ``p`` a SplitParams; ``ws`` the Workspace of
+    ``workspace(n, increment, p)`` with at least the scan's beams and the same increment and ``p``
+    (its breakpoint sines hold them). The (rho, alpha) covariance is
     that of a total-least-squares fit under isotropic noise sigma: var(alpha) = s^2/S,
     var(rho) = s^2/n + t^2 s^2/S, cov = t s^2/S (t: the centroid's coordinate along the line,
     S: the scatter along it)."""
@@ -607,7 +608,7 @@ def corners_into(lv, lb, n_lines, increment, c, out_f, out_i):  # noqa: ANN001, 
 def extract_into(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, c, ws):  # noqa: ANN001, ANN201
     """Lines (``segment_lines``) and corners (``corners_into``) of one scan, written into the rows of
     ``ws`` (lv, lb; cv, cb); returns (lines, corners)."""
-    n_lines = segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, increment, p, ws)
+    n_lines = segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, p, ws)
     n_corners = corners_into(ws.lv, ws.lb, n_lines, increment, c, ws.cv, ws.cb) if n_lines > 1 else 0
     return n_lines, n_corners
 

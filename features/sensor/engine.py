@@ -58,7 +58,8 @@ SUM_RATIO = 16.0  # ... or sooner, when a term that entered them exceeds them th
 # a window whose sum exceeds its centre's 1/d this many times is summed term by term
 ONE_DEG = math.radians(1.0)  # an LMS200 mirror turn's beam step (finer scans interlace such turns)
 ROBUST_STEPS = 1  # reweighted steps of the final biweight refit (``robust_refit``): one step from the
-# least-squares line is Bickel's (1975) one-step M-estimator, as efficient as the iterated one
+# least-squares line is one iteratively-reweighted step, not the fixed point (nor Bickel's Newton
+# step): it removes most, not all, of the least-squares line's pull towards outliers
 TUKEY_C = 4.685  # biweight tuning constant, in robust scales (95 % efficiency under Gaussian noise)
 MAD_TO_SIGMA = 1.4826  # median absolute deviation -> std of a Gaussian
 SIGMA_FLOOR_RAY = 0.001  # smallest robust scale of a line's residuals (m): noiseless scans
