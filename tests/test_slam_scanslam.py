@@ -280,3 +280,22 @@ def test_grid_search_finds_the_nearest_point_within_reach_as_a_kd_tree(reach):
     assert np.array_equal(idx >= 0, within)
     assert np.array_equal(idx[within], k[within])
     np.testing.assert_allclose(dist[within], d[within], atol=1e-12)
+
+
+def test_sandwich_information_equals_its_formula_and_the_gaussian_limit():
+    """``icpkernel.sandwich`` against numpy: H (B n / (n - 3))^-1 H for the M-estimator's sandwich;
+    with unit weights and Gaussian residuals of std sigma (B = sum r^2 J J^T) it is close to the
+    least-squares information H / sigma^2; 3 residuals or fewer give no information."""
+    from slam import icpkernel
+
+    rng = np.random.default_rng(3)
+    n, sigma = 400, 0.01
+    J = rng.normal(size=(n, 3)) * [1.0, 1.0, 3.0]
+    r = rng.normal(0.0, sigma, n)
+    H = J.T @ J
+    B = (J * (r**2)[:, None]).T @ J
+    got = icpkernel.sandwich(H, B, n)
+    np.testing.assert_allclose(got, H @ np.linalg.inv(B * n / (n - 3)) @ H, rtol=1e-9)
+    ratio = np.linalg.eigvals(np.linalg.solve(H / sigma**2, got)).real
+    assert np.all(np.abs(ratio - 1.0) < 0.25)
+    assert not icpkernel.sandwich(H, B, 3).any()
