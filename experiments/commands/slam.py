@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
     from experiments.progress import warm_up_kernels
 
-    warm_up_kernels()
+    warm_up_kernels(slam=config.preset == "default")
     result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
                       out=args.out, paper_baseline=not args.no_paper_baseline)
     write_outputs(args.out, data, config, result)
