@@ -19,6 +19,7 @@ import numpy as np
 
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.records import Record
+from lms200.yamlio import load as load_yaml
 from slam import SlamConfig, SlamResult, run_slam
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
 
@@ -53,6 +54,31 @@ def _relations_beside(path: Path) -> Path | None:
             stem = stem[: -len(suffix)]
     candidate = path.with_name(stem + ".relations")
     return candidate if candidate.is_file() else None
+
+
+def deskew_for_sensor(config: SlamConfig, interlaced: bool) -> SlamConfig:
+    """``config`` with ``alignment.deskew`` off when the scans were taken at one instant (a
+    simulator sensor with ``interlaced=False``, e.g. ``--ideal``): de-skewing by the LMS200's beam
+    times would add the motion it is meant to remove (60 s ideal office run: ATE 7.4 mm with it,
+    3.9 mm without)."""
+    if interlaced or not config.alignment.deskew:
+        return config
+    return dataclasses.replace(config, alignment=dataclasses.replace(config.alignment, deskew=False))
+
+
+def simulated_interlaced(path: str | Path) -> bool | None:
+    """The ``sensor.interlaced`` of a simulator output folder's config.yaml (None: not a simulator
+    folder, or the file does not say)."""
+    cfg = Path(path) / "config.yaml"
+    if not (Path(path).is_dir() and (Path(path) / "scans.clf").is_file() and cfg.is_file()):
+        return None
+    try:
+        raw = load_yaml(cfg.read_text())
+    except Exception:  # noqa: BLE001 - a damaged config.yaml only loses this hint
+        return None
+    sensor = raw.get("sensor") if isinstance(raw, dict) else None
+    value = sensor.get("interlaced") if isinstance(sensor, dict) else None
+    return value if isinstance(value, bool) else None
 
 
 def load_input(path: str | Path, relations: str | Path | None = None, every: int = 1,

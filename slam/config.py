@@ -54,9 +54,9 @@ class AlignmentConfig:
             beam). Beam times are the LMS200's (``lms200.timing.beam_time_offsets``): a 1 deg scan
             is one 180 deg sweep (6.7 ms), a 0.5 deg scan two interlaced turns (odd beams 13.3 ms
             after the even ones; last beam at 20 ms). At 1 rad/s a point 8 m away moves up to
-            16 cm during a 0.5 deg scan. Turn it off for scans taken at one instant (the
-            simulator's ``SensorConfig(interlaced=False)`` / ``.ideal()``), where it would add
-            that motion instead of removing it.
+            16 cm during a 0.5 deg scan. Off for scans taken at one instant (the simulator's
+            ``SensorConfig(interlaced=False)`` / ``.ideal()``), where it would add that motion
+            instead of removing it (``lmsbench slam`` and sweeps switch it off there themselves).
         normal_agreement: a scan point (with a normal) is paired only with map points whose normal
             lies within this angle (rad) of its own: a point near a corner is not pulled onto the
             perpendicular wall (90 degrees off; along a corridor such pairs set the axis from a

@@ -96,3 +96,22 @@ def test_mit_relations_of_raw_odometry_match_the_published_anchor(shared_data):
     r = relations_error(data.odometry, data.relations)
     assert r.n == 1172 and r.n_skipped == 0
     assert r.trans_mean == pytest.approx(1.70, abs=0.05)  # Kummerle et al.'s raw odometry on this log
+
+
+def test_a_simulator_folder_without_interlacing_turns_deskew_off(tmp_path):
+    """De-skew moves beams by the LMS200's beam times; a folder simulated with interlaced=False
+    (every beam from one pose, e.g. --ideal) must not be de-skewed (it would add that motion)."""
+    from experiments.slamrun import deskew_for_sensor, simulated_interlaced
+    from slam import SlamConfig
+
+    (tmp_path / "scans.clf").write_text("")
+    assert simulated_interlaced(tmp_path) is None  # no config.yaml: nothing known
+    for flag in (False, True):
+        (tmp_path / "config.yaml").write_text(f"world: office\nsensor:\n  n_beams: 361\n  interlaced: {str(flag).lower()}\n")
+        assert simulated_interlaced(tmp_path) is flag
+    assert simulated_interlaced(tmp_path / "scans.clf") is None  # a log file, not a folder
+    cfg = SlamConfig()
+    assert cfg.alignment.deskew
+    assert deskew_for_sensor(cfg, interlaced=True) is cfg
+    off = deskew_for_sensor(cfg, interlaced=False)
+    assert not off.alignment.deskew and off.alignment.normal_agreement == cfg.alignment.normal_agreement

@@ -5,6 +5,7 @@ from __future__ import annotations
 from lms200.yamlio import load as load_yaml
 
 import argparse
+import sys
 from pathlib import Path
 
 from experiments.logargs import add_log_options, read_log_options
@@ -87,7 +88,7 @@ def _check_input(path: Path) -> None:
 def run(args: argparse.Namespace) -> int:
     from lms200 import LmsbenchError
 
-    from experiments.slamrun import load_input, run as run_slam, write_outputs
+    from experiments.slamrun import deskew_for_sensor, load_input, run as run_slam, simulated_interlaced, write_outputs
 
     _check_input(Path(args.input))
     if args.relations is not None:
@@ -103,6 +104,10 @@ def run(args: argparse.Namespace) -> int:
                          f"(stamp {stamps[back]:.6f} s after {stamps[back - 1]:.6f} s); SLAM needs scans in time order")
     if config.motion.use_odometry and data.odometry is None:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
+    if simulated_interlaced(args.input) is False and config.preset == "default" and config.alignment.deskew:
+        config = deskew_for_sensor(config, interlaced=False)
+        print(f"{args.input}: simulated with interlaced=False (every beam from one pose): alignment.deskew off",
+              file=sys.stderr)
     from experiments.progress import warm_up_kernels
 
     warm_up_kernels(slam=config.preset == "default")

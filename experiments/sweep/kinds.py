@@ -64,11 +64,14 @@ def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
 
 def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
     """The odometry-free SLAM over a simulated run: trajectory error against the true poses."""
+    from experiments.slamrun import deskew_for_sensor
     from slam import SlamConfig, run_slam
 
     p = {**SLAM_DEFAULTS, **params}
     _, records, _ = _records(p, SLAM_DEFAULTS, with_truth=False)
-    result = run_slam(records, SlamConfig.from_dict(slam_config_dict(p)))
+    sensor = sensor_config(split_params(p, "sensor"), p.get("sensor_file"))
+    config = deskew_for_sensor(SlamConfig.from_dict(slam_config_dict(p)), bool(sensor.interlaced))
+    result = run_slam(records, config)
     return slam_metrics(result, records)
 
 
