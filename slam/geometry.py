@@ -36,6 +36,15 @@ def between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.array([c * dx + s * dy, -s * dx + c * dy, wrap(b[2] - a[2])])
 
 
+def rotate_covariance(cov: np.ndarray, theta: float) -> np.ndarray:
+    """A pose covariance (3, 3) turned by ``theta`` rad: its (x, y) block rotated, heading kept.
+    From a pose's own frame (gtsam's tangent) to the world with the pose's heading; back with
+    minus it."""
+    A = np.eye(3)
+    A[:2, :2] = rotation(theta)
+    return A @ cov @ A.T
+
+
 def adjoint(pose: np.ndarray) -> np.ndarray:
     """3x3 matrix that moves a covariance of a small pose change in the frame of ``pose`` into the
     parent frame (``Ad P Ad^T``)."""

@@ -8,7 +8,7 @@ from typing import Callable
 import numpy as np
 
 from .config import AlignmentConfig, LoopClosureConfig
-from .geometry import between, rotation, to_world
+from .geometry import between, rotate_covariance, to_world
 from .models import chi2_quantile
 from .icp import Match, Reference, make_reference, match
 
@@ -94,17 +94,16 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
         return None
     dist = np.hypot(*(positions[idx] - new.pose[:2]).T)
     radius = cfg.search_radius + cfg.search_growth * since_closure
-    old = keyframes
     order = [int(idx[k]) for k in np.argsort(dist) if dist[k] <= radius]
     gate = chi2_quantile(cfg.gate_probability, 3)
     tried: list[int] = []
     for k in order:
         if len(tried) >= cfg.candidates:
             break
-        if any(abs(old[k].key - t) <= cfg.visit_gap for t in tried):
+        if any(abs(keyframes[k].key - t) <= cfg.visit_gap for t in tried):
             continue  # the same visit as a candidate already matched: try other visits of the place
-        tried.append(old[k].key)
-        cand = old[k]
+        tried.append(keyframes[k].key)
+        cand = keyframes[k]
         lo = max(0, cand.key - cfg.submap)
         sub = [kf for kf in keyframes[lo: cand.key + cfg.submap + 1] if new.travelled - kf.travelled >= cfg.min_travel]
         ref = local_map(sub, voxel)
@@ -118,10 +117,9 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
             continue
         if d2 > gate:
             continue  # further than the drift since the candidate allows: an aliased place
-        A = np.eye(3)
-        A[:2, :2] = rotation(-m.pose[2])  # world perturbation -> frame of the new keyframe
         return LoopClosure(cand.key, new.key, between(cand.pose, m.pose), m.inliers, m.rms,
-                           float(np.hypot(*(m.pose[:2] - new.pose[:2]))), A @ m.covariance @ A.T, d2)
+                           float(np.hypot(*(m.pose[:2] - new.pose[:2]))),
+                           rotate_covariance(m.covariance, -m.pose[2]), d2)  # world -> frame of the new keyframe
     return None
 
 

@@ -12,7 +12,7 @@ Pure: no I/O, no clocks.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -21,7 +21,7 @@ from dataclasses import replace
 
 from .config import AlignmentConfig, KeyframeConfig, LoopClosureConfig, MotionConfig
 from .models import chi2_quantile
-from .geometry import between, compose, rotation
+from .geometry import between, compose, rotate_covariance
 from .icp import Match, Reference, chord_normals, chord_normals_at, match, refine
 from .keyframes import Keyframe, LoopClosure, find_closure, local_map
 from .posegraph import PoseGraph, robust_noise
@@ -239,9 +239,7 @@ class ScanSlam:
                       info: ScanStep) -> np.ndarray:
         """Add the scan as a keyframe (and perhaps close a loop); returns its pose after optimisation."""
         assert self.graph is not None
-        c, s = np.cos(pose[2]), np.sin(pose[2])
-        A = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # world perturbation -> frame of pose
-        key = self.graph.add(rel, A @ cov @ A.T, pose)
+        key = self.graph.add(rel, rotate_covariance(cov, -pose[2]), pose)  # world -> frame of pose
         kf = Keyframe(key, len(self.anchors), stamp, pose.copy(), *sp.surface(), self.travelled)
         self.keyframes.append(kf)
         self._kf_xy = np.vstack((self._kf_xy, pose[:2]))
@@ -278,10 +276,10 @@ class ScanSlam:
 
         def drift(cand: Keyframe) -> np.ndarray:
             if not own:
-                own.append(_world(graph.covariance(new.key), new.pose[2]))
+                own.append(rotate_covariance(graph.covariance(new.key), new.pose[2]))
             dx, dy = new.pose[0] - cand.pose[0], new.pose[1] - cand.pose[1]
             J = np.array([[1.0, 0.0, -dy], [0.0, 1.0, dx], [0.0, 0.0, 1.0]])  # the candidate's heading error moves new
-            return own[0] + J @ _world(graph.covariance(cand.key), cand.pose[2]) @ J.T
+            return own[0] + J @ rotate_covariance(graph.covariance(cand.key), cand.pose[2]) @ J.T
 
         return drift
 
@@ -296,11 +294,7 @@ class ScanSlam:
         scan's match covariance against the local map."""
         assert self.graph is not None
         kp = self.keyframe_poses()
-        kcov = []
-        for k in range(len(kp)):
-            A = np.eye(3)
-            A[:2, :2] = rotation(kp[k][2])
-            kcov.append(A @ self.graph.covariance(k) @ A.T)
+        kcov = [rotate_covariance(self.graph.covariance(k), kp[k][2]) for k in range(len(kp))]
         out = np.empty((len(self.anchors), 3, 3))
         for i, ((k, rel), cov) in enumerate(zip(self.anchors, self.covariances)):
             p = compose(kp[k], rel)
@@ -313,13 +307,6 @@ class ScanSlam:
         pose relative to that keyframe."""
         kp = self.keyframe_poses()
         return np.array([compose(kp[k], rel) for k, rel in self.anchors]).reshape(-1, 3)
-
-
-def _world(cov: np.ndarray, theta: float) -> np.ndarray:
-    """A pose covariance (3, 3) in the pose's own frame (gtsam's tangent) in the world frame."""
-    A = np.eye(3)
-    A[:2, :2] = rotation(theta)
-    return A @ cov @ A.T
 
 
 def run_scan_slam(steps, config) -> "SlamResult":
@@ -387,15 +374,14 @@ def run_scan_slam(steps, config) -> "SlamResult":
 
 def _offsets(scan) -> np.ndarray:
     """Each beam's time after the scan's first beam (s), from the LMS200's mirror timing."""
+    return _beam_times(scan.ranges.shape[0], float(scan.angle_increment))
+
+
+@lru_cache(maxsize=8)
+def _beam_times(n_beams: int, angle_increment: float) -> np.ndarray:
     from lms200.timing import beam_time_offsets
 
-    key = (scan.ranges.shape[0], float(scan.angle_increment))
-    if key not in _OFFSETS:
-        _OFFSETS[key] = beam_time_offsets(*key)
-    return _OFFSETS[key]
-
-
-_OFFSETS: dict[tuple[int, float], np.ndarray] = {}
+    return beam_time_offsets(n_beams, angle_increment)
 
 
 def _segments(fs, config) -> np.ndarray:
