@@ -9,17 +9,21 @@ import numpy as np
 
 from lms200 import Scan
 
+from .errors import not_a_scan
 from .types import BatchFeatureSet, FeatureSet
 
 
 def common_geometry(scans: Sequence[Scan]) -> Scan:
     """The first scan, after checking that every scan has its geometry: beam count, angle_min,
-    angle_increment, range_min and range_max. Raises ValueError naming the first that differs."""
+    angle_increment, range_min and range_max. Raises ValueError naming the first that differs,
+    and ``ScanTypeError`` naming the first item that is not a Scan."""
     first = scans[0]
+    if not isinstance(first, Scan):
+        raise not_a_scan(first, "scans[0]")
     key = (first.ranges.size, first.angle_min, first.angle_increment, first.range_min, first.range_max)
     for i, s in enumerate(scans):  # ranges.size, not len(s): a Python call a scan fewer
         if not isinstance(s, Scan):
-            raise TypeError(f"scans[{i}]: must be an lms200.Scan, got {type(s).__name__}")
+            raise not_a_scan(s, f"scans[{i}]")
         if (s.ranges.size, s.angle_min, s.angle_increment, s.range_min, s.range_max) != key:
             raise ValueError(
                 f"scans[{i}]: geometry (beams, angle_min, angle_increment, range_min, range_max) = "

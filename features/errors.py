@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from lms200 import LmsbenchError
 
 
@@ -15,3 +17,15 @@ class NumbaUnavailableError(LmsbenchError, ImportError):
 
 class ScanTypeError(LmsbenchError, TypeError):
     """An extractor was given something other than an ``lms200.Scan`` (a log record, a bare array)."""
+
+
+def not_a_scan(obj: Any, where: str) -> ScanTypeError:
+    """The error for ``obj`` given where a Scan belongs, with the fix for the common cases."""
+    from lms200 import Scan
+
+    hint = ""
+    if isinstance(getattr(obj, "scan", None), Scan):
+        hint = " (a log record: pass record.scan)"
+    elif hasattr(obj, "__array__") or isinstance(obj, (list, tuple)):
+        hint = " (build one with lms200.Scan.lms200(ranges) or lms200.Scan(...))"
+    return ScanTypeError(f"{where}: expected an lms200.Scan, got {type(obj).__name__}{hint}")

@@ -17,7 +17,7 @@ from lms200 import Scan
 
 from .baselines.checks import MAX_BEAMS
 from .batch import common_geometry
-from .errors import ConfigError, ScanTypeError
+from .errors import ConfigError, ScanTypeError, not_a_scan
 from .types import FeatureSet
 
 # name -> module that registers it on import (kept lazy so `import features` stays cheap)
@@ -127,7 +127,7 @@ def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: An
     m = _REGISTRY.get(method) or get_method(method)
     cfg = _config(m, config, params)
     if not isinstance(scan, Scan):
-        raise _not_a_scan(scan, "extract")
+        raise not_a_scan(scan, "extract")
     if len(scan) > MAX_BEAMS:
         raise ValueError(too_many_beams(len(scan)))
     return m.run(scan, cfg)
@@ -139,16 +139,6 @@ def too_many_beams(n: int) -> str:
     """The message of a scan with more than MAX_BEAMS beams."""
     return (f"scan: {n} beams is more than the extractors handle ({MAX_BEAMS}, a 0.022 deg step over 360 deg); "
             "split the scan into sectors")
-
-
-def _not_a_scan(obj: Any, where: str) -> ScanTypeError:
-    """The error for ``obj`` given where a Scan belongs, with the fix for the common cases."""
-    hint = ""
-    if isinstance(getattr(obj, "scan", None), Scan):
-        hint = " (a log record: pass record.scan)"
-    elif hasattr(obj, "__array__") or isinstance(obj, (list, tuple)):
-        hint = " (build one with lms200.Scan.lms200(ranges) or lms200.Scan(...))"
-    return ScanTypeError(f"{where}: expected an lms200.Scan, got {type(obj).__name__}{hint}")
 
 
 def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = None, **params: Any) -> list[FeatureSet]:
@@ -164,11 +154,8 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
     cfg = _config(m, config, params)
     if isinstance(scans, Scan):
         raise ScanTypeError("extract_many: expected a sequence of lms200.Scan, got one Scan (use extract, or [scan])")
-    scans = list(scans)
-    for i, s in enumerate(scans):
-        if not isinstance(s, Scan):
-            raise _not_a_scan(s, f"extract_many: scans[{i}]")
-    if scans and len(scans[0]) > MAX_BEAMS:
+    scans = list(scans)  # its items are checked to be Scans by common_geometry, on every path below
+    if scans and isinstance(scans[0], Scan) and len(scans[0]) > MAX_BEAMS:
         raise ValueError(too_many_beams(len(scans[0])))
     if m.run_many is not None:
         return m.run_many(scans, cfg)

@@ -82,7 +82,7 @@ def test_something_other_than_a_scan_is_refused_with_the_fix() -> None:
     cases = [
         (lambda: extract(record), "extract: expected an lms200.Scan, got SimpleNamespace (a log record: pass record.scan)"),
         (lambda: extract(scan.ranges), "got ndarray (build one with lms200.Scan.lms200(ranges)"),
-        (lambda: extract_many([scan, record]), "extract_many: scans[1]: expected an lms200.Scan"),
+        (lambda: extract_many([scan, record]), "scans[1]: expected an lms200.Scan, got SimpleNamespace (a log record"),
         (lambda: extract_many(scan), "got one Scan (use extract, or [scan])"),
     ]
     for call, text in cases:
