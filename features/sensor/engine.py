@@ -158,11 +158,52 @@ def block_sum(a: np.ndarray, lo: int, n: int) -> float:
 
 
 @kernel
-def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
-    """Sum of a[lo : lo + n] in numpy's pairwise order (blocks of 128 halved at multiples of 8),
-    walking numpy's recursion tree with an explicit stack (numba cannot cache recursive functions)."""
+def pairwise_halves(n: int):  # noqa: ANN201
+    """numpy's split of a pairwise sum of n > 128 terms: the left half rounded down to a multiple of 8."""
+    n2 = n // 2
+    n2 -= n2 % 8
+    return n2, n - n2
+
+
+@kernel
+def pairwise_248(a: np.ndarray, lo: int, n: int) -> float:
+    """``pairwise_sum`` for n <= 248 (both halves of one split are blocks)."""
     if n <= PW_BLOCKSIZE:
         return block_sum(a, lo, n)
+    n2, n3 = pairwise_halves(n)
+    return block_sum(a, lo, n2) + block_sum(a, lo + n2, n3)
+
+
+@kernel
+def pairwise_488(a: np.ndarray, lo: int, n: int) -> float:
+    """``pairwise_sum`` for n <= 488 (halves of at most 248)."""
+    if n <= PW_BLOCKSIZE:
+        return block_sum(a, lo, n)
+    n2, n3 = pairwise_halves(n)
+    return pairwise_248(a, lo, n2) + pairwise_248(a, lo + n2, n3)
+
+
+@kernel
+def pairwise_1928(a: np.ndarray, lo: int, n: int) -> float:
+    """``pairwise_sum`` for n <= 1928 (two levels of halves of at most 488)."""
+    if n <= PW_BLOCKSIZE:
+        return block_sum(a, lo, n)
+    n2, n3 = pairwise_halves(n)
+    if n <= 968:
+        return pairwise_488(a, lo, n2) + pairwise_488(a, lo + n2, n3)
+    n4, n5 = pairwise_halves(n2)
+    n6, n7 = pairwise_halves(n3)
+    return ((pairwise_488(a, lo, n4) + pairwise_488(a, lo + n4, n5))
+            + (pairwise_488(a, lo + n2, n6) + pairwise_488(a, lo + n2 + n6, n7)))
+
+
+@kernel
+def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
+    """Sum of a[lo : lo + n] in numpy's pairwise order (blocks of 128 halved at multiples of 8):
+    up to 1928 terms by the fixed levels above (no allocation), beyond by walking numpy's
+    recursion tree with an explicit stack (numba cannot cache recursive functions)."""
+    if n <= 1928:
+        return pairwise_1928(a, lo, n)
     st_lo = np.empty(64, np.int64)
     st_n = np.empty(64, np.int64)
     st_state = np.empty(64, np.int64)
@@ -173,13 +214,12 @@ def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
     while sp > 0:
         top = sp - 1
         l, m = st_lo[top], st_n[top]
-        if m <= PW_BLOCKSIZE:
-            vals[nv] = block_sum(a, l, m)
+        if m <= 1928:
+            vals[nv] = pairwise_1928(a, l, m)
             nv += 1
             sp -= 1
             continue
-        n2 = m // 2
-        n2 -= n2 % 8
+        n2, _ = pairwise_halves(m)
         if st_state[top] == 0:  # left half first
             st_state[top] = 1
             st_lo[sp], st_n[sp], st_state[sp] = l, n2, 0
@@ -261,35 +301,51 @@ def quantum_step(sample) -> float:  # noqa: ANN001
 
 
 @kernel
+def median3(x: float, y: float, z: float) -> float:
+    """The middle one of three values (no nan)."""
+    return max(min(x, y), min(max(x, y), z))
+
+
+@kernel
+def partition(a, lo, hi, pivot, strict) -> int:  # noqa: ANN001
+    """Move the values of a[lo:hi] below ``pivot`` (at most ``pivot`` when not ``strict``) to its
+    front, the others behind them; returns where the others start. Without branches (Lomuto's
+    scheme, every value swapped with the front's next slot or with itself): which side a value
+    takes is data, not predictable."""
+    s = lo
+    for i in range(lo, hi):
+        x = a[i]
+        y = a[s]
+        c = x < pivot if strict else x <= pivot
+        a[i] = y if c else x
+        a[s] = x if c else y
+        s += c
+    return s
+
+
+@kernel
 def select(a, n, k) -> float:  # noqa: ANN001
     """The k-th smallest of a[:n] (0-based; no nan), reordering a[:n] so that a[:k] <= a[k] <= a[k+1:n]
-    (quickselect, median-of-three pivots)."""
-    lo, hi = 0, n - 1
-    while hi > lo:
-        mid = (lo + hi) // 2
-        if a[mid] < a[lo]:
-            a[mid], a[lo] = a[lo], a[mid]
-        if a[hi] < a[lo]:
-            a[hi], a[lo] = a[lo], a[hi]
-        if a[hi] < a[mid]:
-            a[hi], a[mid] = a[mid], a[hi]
-        pivot = a[mid]
-        i, j = lo, hi
-        while i <= j:
-            while a[i] < pivot:
-                i += 1
-            while pivot < a[j]:
-                j -= 1
-            if i <= j:
-                a[i], a[j] = a[j], a[i]
-                i += 1
-                j -= 1
-        if k <= j:
-            hi = j
-        elif k >= i:
-            lo = i
+    (quickselect: pivots the median of three, of three medians of three on long ranges)."""
+    lo, hi = 0, n  # a[:lo] <= a[lo:hi] <= a[hi:], k in [lo, hi)
+    while hi - lo > 1:
+        m = hi - lo
+        if m > 64:
+            st = m // 9
+            b = lo + st // 2
+            pivot = median3(median3(a[b], a[b + st], a[b + 2 * st]), median3(a[b + 3 * st], a[b + 4 * st], a[b + 5 * st]),
+                            median3(a[b + 6 * st], a[b + 7 * st], a[b + 8 * st]))
         else:
-            break
+            pivot = median3(a[lo], a[(lo + hi) // 2], a[hi - 1])
+        s = partition(a, lo, hi, pivot, True)
+        if k < s:
+            hi = s
+            continue
+        if s == lo:  # the pivot is the least value here: split off its copies
+            s = partition(a, lo, hi, pivot, False)
+            if k < s:
+                return pivot
+        lo = s
     return a[k]
 
 
