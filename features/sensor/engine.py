@@ -115,6 +115,7 @@ class Grid(NamedTuple):
     step: float  # Log-Hough angle step D / hough_subdiv, rad
     zero: int  # index of angle 0 in the template
     template: np.ndarray  # log cos(m step) for |m| <= zero, floored (eq. 5)
+    twice_cos: float  # 2 cos(D), as numpy computes it: the noise estimate's collinearity residuals
 
 
 @kernel
@@ -525,6 +526,14 @@ def window_sums(u, i, k):  # noqa: ANN001, ANN201
 
 
 @kernel
+def fix_slope_sd(x: float, sd: float) -> bool:
+    """Whether the arctangent form of the slope's std (``beam_signals``) does not hold, at x = 1 +
+    (T + s)(T - s) = 0 or an infinite x or s; not at a nan x (a window with an invalid beam), where
+    both forms give nan."""
+    return x == x and not (x != 0.0 and math.isfinite(x) and math.isfinite(sd))
+
+
+@kernel
 def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):  # noqa: ANN001, ANN201
     """Per-beam signals of one scan (nan where a window is incomplete or holds an invalid beam):
     valid, u = 1/d, AD (eq. 4), its variance per sigma_r**2, ad (eq. 6), theta (rad, unwrapped)
@@ -536,13 +545,13 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
     right at grazing incidence.
     """
     n = ranges.size
-    valid = np.zeros(n, np.bool_)
-    u = np.full(n, np.nan)
-    for i in range(n):
+    valid = np.empty(n, np.bool_)
+    u = np.empty(n)
+    for i in range(n):  # without branches, so that it vectorises
         d = ranges[i]
-        if d >= range_lo and d <= range_hi:
-            valid[i] = True
-            u[i] = 1.0 / d
+        ok = d >= range_lo and d <= range_hi
+        valid[i] = ok
+        u[i] = 1.0 / d if ok else np.nan
     out = np.full((9, n), np.nan)  # one allocation for the seven signals and two scratch rows
     AD, AD_var, ad, theta, theta_var, psi, psi_var = out[0], out[1], out[2], out[3], out[4], out[5], out[6]
     tan_t, tan_s = out[7], out[8]
@@ -555,7 +564,8 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
         # themselves. A window that holds a nan (invalid beam) or an inf (its signals are nan, or
         # inf at a zero range), or whose sum exceeds SUM_RATIO times the centre's u (a beam far
         # behind its neighbours, where ad = sd / u_i magnifies any rounding), is summed term by
-        # term as before (``direct_sums``)
+        # term as before (``direct_sums``). The sums go to the rows of AD, ad and AD_var, which
+        # the next loop turns into the signals in place
         left = right = quad = peak = peak_q = 0.0
         n_bad = 0  # non-finite u in the window
         for i in range(k, n - k):
@@ -583,44 +593,57 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
             if fresh:
                 left, right, quad, n_bad = window_sums(u, i, k)
                 peak, peak_q = left + right, quad
-            ui = u[i]
-            if n_bad == 0 and left + right <= SUM_RATIO * ui:
-                s1, sd, s4 = left + right, right - left, quad
+            if n_bad == 0 and left + right <= SUM_RATIO * u[i]:
+                AD[i], ad[i], AD_var[i] = left + right, right - left, quad
             else:
-                s1, sd, s4 = direct_sums(u, i, k)
+                AD[i], ad[i], AD_var[i] = direct_sums(u, i, k)
+        m = n - 2 * k  # the window centres k .. n - k - 1, as slices: the loops below vectorise
+        uc, s1, sd, s4, tt, ts = u[k:n - k], AD[k:n - k], ad[k:n - k], AD_var[k:n - k], tan_t[k:n - k], tan_s[k:n - k]
+        s_scale = sigma_r / two_sin_sum
+        for i in range(m):
+            ui = uc[i]
             u2 = ui * ui
-            a = s1 / ui  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
-            ad_i = sd / ui  # eq. 6: ad_ik
-            other = s4 / u2 - u2  # sum over j != i of u_j^4 / u_i^2
+            a = s1[i] / ui  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
+            ad_i = sd[i] / ui  # eq. 6: ad_ik
+            other = s4[i] / u2 - u2  # sum over j != i of u_j^4 / u_i^2
             ad1 = ad_i - 1.0
             a1 = a - 1.0
-            AD[i] = a
-            AD_var[i] = other + a1 * a1 * u2
-            ad[i] = ad_i
+            s1[i] = a
+            s4[i] = other + a1 * a1 * u2
+            sd[i] = ad_i
             # eq. 7 as corrected in NOTES.md: ad - 1 = 2 tan(a - b_i) sum_{m=1..k} sin(mD): the
             # slope T = tan(a - b_i) and its std s here, their arctangents in the next loop
-            tan_t[i] = ad1 / two_sin_sum
-            tan_s[i] = math.sqrt(other + ad1 * ad1 * u2) * (sigma_r / two_sin_sum)
-        for i in range(k, n - k):
-            t, sd = tan_t[i], tan_s[i]
-            theta[i] = bearings[i] + arctan(t)
+            tt[i] = ad1 / two_sin_sum
+            ts[i] = math.sqrt(other + ad1 * ad1 * u2) * s_scale
+        bc, th, tv = bearings[k:n - k], theta[k:n - k], theta_var[k:n - k]
+        n_fix = 0
+        for i in range(m):
+            t, sd_i = tt[i], ts[i]
+            th[i] = bc[i] + arctan(t)
             # (arctan(T + s) - arctan(T - s)) / 2 = atan2(2 s, 1 + (T + s)(T - s)) / 2, as
             # arctan(2 s / x) for x > 0 and pi - arctan(2 s / -x) for x < 0 (s >= 0)
-            x = 1.0 + (t + sd) * (t - sd)
-            h = arctan(2.0 * sd / abs(x))
+            x = 1.0 + (t + sd_i) * (t - sd_i)
+            h = arctan(2.0 * sd_i / abs(x))
             theta_sd = 0.5 * (h if x > 0.0 else math.pi - h)
-            theta_var[i] = theta_sd * theta_sd
-        for i in range(k, n - k):  # where that form does not hold (x = 0, an inf, nan): atan2
-            t, sd = tan_t[i], tan_s[i]
-            x = 1.0 + (t + sd) * (t - sd)
-            if not (x != 0.0 and math.isfinite(x) and math.isfinite(sd)):
-                theta_sd = 0.5 * math.atan2(2.0 * sd, x)
-                theta_var[i] = theta_sd * theta_sd
-    for i in range(n - k):
-        dpsi = theta[i] - theta[i + k]  # the corner signal psi_i = theta_i - theta_{i+k}
-        # wrapped to [-pi, pi]: dpsi - 2 pi rint(dpsi / 2 pi), where rint gives +-0 for |dpsi| < pi
-        psi[i] = dpsi + 0.0 if abs(dpsi) < math.pi else dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
-        psi_var[i] = theta_var[i] + theta_var[i + k]
+            tv[i] = theta_sd * theta_sd
+            n_fix += fix_slope_sd(x, sd_i)
+        i = 0
+        while n_fix > 0:  # where that form does not hold: atan2 (a loop that cannot vectorise, so
+            # that the libm call is made for these few beams only, not speculated for all)
+            t, sd_i = tt[i], ts[i]
+            x = 1.0 + (t + sd_i) * (t - sd_i)
+            if fix_slope_sd(x, sd_i):
+                theta_sd = 0.5 * math.atan2(2.0 * sd_i, x)
+                tv[i] = theta_sd * theta_sd
+                n_fix -= 1
+            i += 1
+    if n > k:
+        t0, t1, v0, v1, ps, pv = theta[:n - k], theta[k:], theta_var[:n - k], theta_var[k:], psi[:n - k], psi_var[:n - k]
+        for i in range(n - k):
+            dpsi = t0[i] - t1[i]  # the corner signal psi_i = theta_i - theta_{i+k}
+            # wrapped to [-pi, pi]: dpsi - 2 pi rint(dpsi / 2 pi), where rint gives +-0 for |dpsi| < pi
+            ps[i] = dpsi + 0.0 if abs(dpsi) < math.pi else dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
+            pv[i] = v0[i] + v1[i]
     return valid, u, AD, AD_var, ad, theta, theta_var, psi, psi_var
 
 
@@ -1666,6 +1689,16 @@ def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sig
     else:
         cf, ci = np.empty((0, 3)), np.empty((0, 2), np.int64)
     return pack(rho, alpha, cov, first, last, npts, p0, p1, cf, ci)
+
+
+@kernel
+def extract_scan_auto(ranges, bearings, angle_min, increment, range_lo, range_hi, range_min, fallback, grid, p):  # noqa: ANN001, ANN201
+    """``extract_scan`` with the range noise sigma_r = "auto" estimated from the scan itself
+    (``pooled_sigma`` of its one row: ``features.noise_estimate.scan_sigma`` of valid range limits
+    ``range_min`` (the scan's own) and ``range_hi``, ``fallback`` m when too few triples), in the
+    same compiled call."""
+    sigma_r = pooled_sigma(ranges.reshape((1, ranges.size)), grid.twice_cos, range_min, range_hi, fallback)
+    return extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p)
 
 
 @kernel
