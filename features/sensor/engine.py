@@ -774,8 +774,7 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
     inlier = np.zeros(beam.size, np.bool_)
     a_idx = np.empty(n_angles, np.int64)
     ref = np.empty(n_angles)
-    # two banks of cells, even and odd rows, so that a vote need not wait for the last one's count
-    acc = np.zeros((n_angles, 2, N_BINS + 2), np.int64)  # cells 1..N_BINS; 0 and N_BINS + 1 outside
+    counts_a = np.empty((n_angles, N_BINS + 2), np.int64)  # cells 1..N_BINS; 0 and N_BINS + 1 outside
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         centre_idx = np.int64(np.rint((centre[r] - angle_min) / step))
@@ -784,39 +783,41 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
         # cells are laid out around the median vote of the beams at 1/4, 1/2 and 3/4 of the run
         # (a mean would be dragged off by neighbour-line beams at its ends; one beam can be a spike)
         row1, row2, row3 = s + cnt // 4, s + cnt // 2, s + (3 * cnt) // 4
-        lo_beam = hi_beam = beam[s]
-        for row in range(s, s + cnt):
-            lo_beam = min(lo_beam, beam[row])
-            hi_beam = max(hi_beam, beam[row])
         for a in range(n_angles):
             a_idx[a] = centre_idx + stride * (a - h2)
             q1 = template[min(max(a_idx[a] + zero - beam[row1] * subdiv, 0), n_tmpl - 1)] + log_d[row1]
             q2 = template[min(max(a_idx[a] + zero - beam[row2] * subdiv, 0), n_tmpl - 1)] + log_d[row2]
             q3 = template[min(max(a_idx[a] + zero - beam[row3] * subdiv, 0), n_tmpl - 1)] + log_d[row3]
             ref[a] = max(min(q1, q2), min(max(q1, q2), q3))  # median of three
-        acc[:, :, :] = 0
+        bm, ld = beam[s:s + cnt], log_d[s:s + cnt]
         for a in range(n_angles):
             offset = (N_BINS / 2.0 + 1.0) - ref[a] * inv_width
             base = a_idx[a] + zero
-            # eq. 5: log p = log d + log cos(a - b), a lookup at a - b in the template; the
-            # lookup is clipped onto the template's ends only where the run reaches them
-            inside = base - hi_beam * subdiv >= 0 and base - lo_beam * subdiv <= n_tmpl - 1
-            for row in range(s, s + cnt):
-                idx = base - beam[row] * subdiv
-                if not inside:
-                    idx = min(max(idx, 0), n_tmpl - 1)
-                rel = (template[idx] + log_d[row]) * inv_width + offset
-                if not rel >= 0.0:  # nan votes go to the outside cell 0
-                    rel = 0.0
-                rel = min(rel, N_BINS + 1.0)
-                acc[a, row & 1, np.int64(rel)] += 1
+            # eq. 5: log p = log d + log cos(a - b), a lookup at a - b in the template (clipped
+            # onto its ends, where it holds the floor). The votes are counted in 16-bit fields
+            # of four words (cells 4w .. 4w + 3 in word w; a run has fewer than 2^16 beams), a
+            # loop without stores that vectorises
+            w0 = w1 = w2 = w3 = np.uint64(0)
+            for t in range(cnt):
+                rel = (template[min(max(base - bm[t] * subdiv, 0), n_tmpl - 1)] + ld[t]) * inv_width + offset
+                rel = rel if rel >= 0.0 else 0.0  # nan votes go to the outside cell 0
+                cell = np.uint64(min(rel, N_BINS + 1.0))
+                one = np.uint64(1) << ((cell & np.uint64(3)) * np.uint64(16))
+                word = cell >> np.uint64(2)
+                w0 += one if word == 0 else np.uint64(0)
+                w1 += one if word == 1 else np.uint64(0)
+                w2 += one if word == 2 else np.uint64(0)
+                w3 += one if word == 3 else np.uint64(0)
+            for c in range(N_BINS + 2):
+                w = w0 if c < 4 else (w1 if c < 8 else (w2 if c < 12 else w3))
+                counts_a[a, c] = np.int64((w >> np.uint64(16 * (c % 4))) & np.uint64(0xFFFF))
         best = -np.inf
         best_a = 0
         best_c = 0
         for a in range(n_angles):
             tie = -TIE_BREAK * abs(a - h2)
             for c in range(N_BINS - 1):
-                v = ((acc[a, 0, c + 1] + acc[a, 1, c + 1]) + (acc[a, 0, c + 2] + acc[a, 1, c + 2])) + tie  # two adjacent cells
+                v = (counts_a[a, c + 1] + counts_a[a, c + 2]) + tie  # two adjacent cells
                 if v > best:
                     best, best_a, best_c = v, a, c
         # the pair (c, c+1) covers (log p - ref) / width in [c - N_BINS/2, c + 2 - N_BINS/2)
