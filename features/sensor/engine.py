@@ -1225,14 +1225,30 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
       its own beams (mean squared residual within ARC_TAU std of the line's chi^2 per dof: at a
       real corner the circle is a compromise with far larger residuals; this comparison holds
       whatever the actual scatter, e.g. of the interlaced sweeps of 0.5 deg logs)."""
-    mx, my, n = valid_centroid(f, l, ranges, bearings, valid)
+    m = l - f + 1
+    work = np.empty((5, m))  # the beams' points, then per-beam terms of each pass over them
+    xs, ys, w0, w1, w2 = work[0], work[1], work[2], work[3], work[4]
+    for t in range(m):
+        xs[t] = ranges[f + t] * bearings.cos[f + t]
+        ys[t] = ranges[f + t] * bearings.sin[f + t]
+    ok = valid[f:l + 1]
+    n = 0
+    mx = 0.0
+    my = 0.0
+    for t in range(m):  # the centroid of the valid beams (``valid_centroid``)
+        if ok[t]:
+            mx += xs[t]
+            my += ys[t]
+            n += 1
     if n < 5:
         return False
+    mx /= n
+    my /= n
     suu = suv = svv = suuu = svvv = suvv = svuu = 0.0
-    for j in range(f, l + 1):
-        if valid[j]:
-            u = ranges[j] * bearings.cos[j] - mx
-            v = ranges[j] * bearings.sin[j] - my
+    for t in range(m):
+        if ok[t]:
+            u = xs[t] - mx
+            v = ys[t] - my
             suu += u * u
             suv += u * v
             svv += v * v
@@ -1252,15 +1268,18 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
     if not surface_turn(f, l, cx, cy, ranges, bearings) >= 0.5 * p.corner_min_turn:
         return False  # nearly straight (most lines): no geometric fit needed
     for _ in range(ARC_GN_STEPS):  # geometric residual e_j = |x_j - c| - R; J = [-(x - c) / |x - c|, -1]
+        for t in range(m):  # the square roots and divisions of all beams in a loop that vectorises
+            dx = xs[t] - cx
+            dy = ys[t] - cy
+            dist = max(math.sqrt(dx * dx + dy * dy), 1e-12)  # not hypot: a libm call a beam
+            inv = 1.0 / dist  # one division a beam, not two
+            w0[t] = -dx * inv
+            w1[t] = -dy * inv
+            w2[t] = dist - rad
         h00 = h01 = h02 = h11 = h12 = h22 = g0 = g1 = g2 = 0.0
-        for j in range(f, l + 1):
-            if valid[j]:
-                dx = ranges[j] * bearings.cos[j] - cx
-                dy = ranges[j] * bearings.sin[j] - cy
-                dist = max(math.sqrt(dx * dx + dy * dy), 1e-12)  # not hypot: a libm call a beam
-                e = dist - rad
-                inv = 1.0 / dist  # one division a beam, not two
-                j0, j1 = -dx * inv, -dy * inv
+        for t in range(m):  # the sums in beam order
+            if ok[t]:
+                j0, j1, e = w0[t], w1[t], w2[t]
                 h00 += j0 * j0
                 h01 += j0 * j1
                 h02 -= j0
@@ -1285,15 +1304,17 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
         rad -= (a02 * g0 + a12 * g1 + a22 * g2) / dt
     if not (rad > 0.0 and surface_turn(f, l, cx, cy, ranges, bearings) >= p.corner_min_turn):
         return False
+    for t in range(m):  # the circle's normalised residuals
+        dx = xs[t] - cx
+        dy = ys[t] - cy
+        w2[t] = (math.sqrt(dx * dx + dy * dy) - rad) / sigma_r
     lim = p.inlier_tau * p.inlier_tau
     chi = 0.0  # the circle's chi^2 over the inliers of the neighbourhood, and clipped over all of it
     clipped = 0.0
     ni = 0
-    for j in range(f, l + 1):
-        if valid[j]:
-            dx = ranges[j] * bearings.cos[j] - cx
-            dy = ranges[j] * bearings.sin[j] - cy
-            zz = (math.sqrt(dx * dx + dy * dy) - rad) / sigma_r
+    for t in range(m):
+        if ok[t]:
+            zz = w2[t]
             z2 = zz * zz
             clipped += min(z2, lim)
             if z2 <= lim:
@@ -1306,14 +1327,15 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
         two = tls_clipped(f, at, ranges, bearings, valid, sigma_r, lim) + tls_clipped(at + 1, l, ranges, bearings, valid, sigma_r, lim)
         return clipped <= two
     ca, sa = math.cos(lalpha), math.sin(lalpha)
+    for t in range(lf - f, ll - f + 1):  # the line's beams: the circle's residuals (in w2) and the line's
+        w1[t] = (xs[t] * ca + ys[t] * sa - lrho) / sigma_r
     c_chi = 0.0
     l_chi = 0.0
     nl = 0
-    for j in range(lf, ll + 1):
-        if valid[j]:
-            x, y = ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]
-            zc = (math.sqrt((x - cx) * (x - cx) + (y - cy) * (y - cy)) - rad) / sigma_r
-            zl = (x * ca + y * sa - lrho) / sigma_r
+    for t in range(lf - f, ll - f + 1):
+        if ok[t]:
+            zc = w2[t]
+            zl = w1[t]
             c_chi += zc * zc
             l_chi += zl * zl
             nl += 1
