@@ -255,20 +255,30 @@ SAMPLE_STEP = 5  # every 5th finite range of a scan enters the quantisation step
 def neighbour_residuals(ranges, c2, lo, hi, z, m):  # noqa: ANN001, ANN201
     """``lms200.noise.line_residuals`` at stride 1 written to z[m:] (room for ranges.size - 2):
     the normalised collinearity residual (m) of each triple of neighbouring beams in [lo, hi)
-    (lo >= MIN_RANGE_M) without a depth step; ``c2`` = 2 cos(D). Returns the new end of z."""
-    for i in range(ranges.size - 2):
-        rm, r0, rp = ranges[i], ranges[i + 1], ranges[i + 2]
-        if not (lo <= rm < hi and lo <= r0 < hi and lo <= rp < hi):  # False on nan, inf < inf
-            continue
-        if not abs(rp - rm) <= JUMP_FRACTION * r0:
-            continue
+    (lo >= MIN_RANGE_M) without a depth step; ``c2`` = 2 cos(D). Returns the new end of z.
+    Every triple's residual first (nan where it is not used; a used one is finite), in a loop that
+    vectorises, then the used ones moved to the front."""
+    n = ranges.size - 2
+    if n <= 0:
+        return m
+    zz = z[m:m + n]
+    rm_, r0_, rp_ = ranges[:n], ranges[1:n + 1], ranges[2:n + 2]
+    for i in range(n):
+        rm, r0, rp = rm_[i], r0_[i], rp_[i]
         s = rm + rp
         s2 = s * s
         wm = c2 * (rp * rp) / s2
         wp = c2 * (rm * rm) / s2
-        z[m] = (r0 - c2 * rm * rp / s) / math.sqrt(1.0 + wm * wm + wp * wp)
-        m += 1
-    return m
+        res = (r0 - c2 * rm * rp / s) / math.sqrt(1.0 + wm * wm + wp * wp)
+        # in range (False on nan, inf < inf) and no depth step
+        use = lo <= rm < hi and lo <= r0 < hi and lo <= rp < hi and abs(rp - rm) <= JUMP_FRACTION * r0
+        zz[i] = res if use else np.nan
+    q = m
+    for i in range(n):
+        v = zz[i]
+        z[q] = v
+        q += v == v
+    return q
 
 
 @kernel
