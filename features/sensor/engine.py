@@ -1490,44 +1490,39 @@ def inv2(a: float, b: float, d: float):  # noqa: ANN201
 
 
 @kernel
-def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p):  # noqa: ANN001, ANN201
-    """Merge neighbouring lines that are one line: at most merge_gap beams apart, at most
-    bridge_invalid invalid beams between (none by default: +inf and nan beams break segments),
-    and (rho, alpha) equal within merge_tau std (plus a model-error floor). The merged line is the
-    information-weighted combination of the pieces (independent fits of one line)."""
+def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p) -> int:  # noqa: ANN001
+    """In place: merge neighbouring lines that are one line: at most merge_gap beams apart, at
+    most bridge_invalid invalid beams between (none by default: +inf and nan beams break
+    segments), and (rho, alpha) equal within merge_tau std (plus a model-error floor). The merged
+    line is the information-weighted combination of the pieces (independent fits of one line).
+    The lines left move to the front of the arrays (alpha wrapped when any merged); returns how
+    many there are."""
     n = rho.size
     if n < 2:
-        return rho, alpha, cov, first, last, npts
-    invalid_cum = np.zeros(valid.size + 1, np.int64)
-    for i in range(valid.size):
-        invalid_cum[i + 1] = invalid_cum[i] + (0 if valid[i] else 1)
-    rho = rho.copy()
-    alpha = alpha.copy()
-    c = cov.reshape(n, 4).copy()
-    last = last.copy()
-    npts = npts.copy()
+        return n
     tau2 = p.merge_tau**2
-    out = np.empty(n, np.int64)
-    out[0] = 0
-    n_out = 1
     cur = 0
     for i in range(1, n):
         gap = first[i] - last[cur] - 1
-        if gap > p.merge_gap or (gap > 0 and invalid_cum[first[i]] - invalid_cum[last[cur] + 1] > p.bridge_invalid):
-            out[n_out] = i
-            n_out += 1
-            cur = i
+        apart = gap > p.merge_gap
+        if not apart and gap > 0:
+            n_invalid = 0
+            for j in range(last[cur] + 1, first[i]):
+                n_invalid += 0 if valid[j] else 1
+            apart = n_invalid > p.bridge_invalid
+        if apart:
+            cur += 1
+            move_line(rho, alpha, cov, first, last, npts, i, cur)
             continue
         dr = rho[i] - rho[cur]
         da = (alpha[i] - alpha[cur] + math.pi) % (2 * math.pi) - math.pi
-        a00, a01, a11 = c[cur, 0], c[cur, 1], c[cur, 3]
-        b00, b01, b11 = c[i, 0], c[i, 1], c[i, 3]
+        a00, a01, a11 = cov[cur, 0, 0], cov[cur, 0, 1], cov[cur, 1, 1]
+        b00, b01, b11 = cov[i, 0, 0], cov[i, 0, 1], cov[i, 1, 1]
         s00, s01, s11 = a00 + b00 + MERGE_FLOOR_RHO_VAR, a01 + b01, a11 + b11 + MERGE_FLOOR_ALPHA_VAR
         det = s00 * s11 - s01 * s01
         if not det > 0 or (s11 * dr * dr - 2 * s01 * dr * da + s00 * da * da) > tau2 * det:
-            out[n_out] = i
-            n_out += 1
-            cur = i
+            cur += 1
+            move_line(rho, alpha, cov, first, last, npts, i, cur)
             continue
         # information-weighted fusion (alpha of i unwrapped next to cur's)
         pa0, pa1, pa2 = inv2(a00, a01, a11)
@@ -1538,57 +1533,61 @@ def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p):  # noqa: ANN
         q00, q01, q11 = inv2(p00, p01, p11)
         rho[cur] = q00 * va0 + q01 * va1
         alpha[cur] = q01 * va0 + q11 * va1
-        c[cur, 0] = q00
-        c[cur, 1] = q01
-        c[cur, 2] = q01
-        c[cur, 3] = q11
+        cov[cur, 0, 0] = q00
+        cov[cur, 0, 1] = q01
+        cov[cur, 1, 0] = q01
+        cov[cur, 1, 1] = q11
         last[cur] = max(last[cur], last[i])
         npts[cur] += npts[i]
-    if n_out == n:
-        return rho, alpha, cov, first, last, npts
-    idx = out[:n_out]
-    alpha_o = alpha[idx]
-    for m in range(n_out):
-        alpha_o[m] = wrap(alpha_o[m])
-    return rho[idx], alpha_o, c[idx].reshape(n_out, 2, 2), first[idx], last[idx], npts[idx]
+    n_out = cur + 1
+    if n_out < n:
+        for m in range(n_out):
+            alpha[m] = wrap(alpha[m])
+    return n_out
+
+
+@kernel
+def move_line(rho, alpha, cov, first, last, npts, i, to) -> None:  # noqa: ANN001
+    """Line i of the table copied to row ``to`` (<= i)."""
+    if to != i:
+        rho[to], alpha[to], first[to], last[to], npts[to] = rho[i], alpha[i], first[i], last[i], npts[i]
+        cov[to, 0, 0], cov[to, 0, 1], cov[to, 1, 0], cov[to, 1, 1] = cov[i, 0, 0], cov[i, 0, 1], cov[i, 1, 0], cov[i, 1, 1]
 
 
 @kernel
 def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p):  # noqa: ANN001, ANN201
     """Merge neighbours, split the beams two neighbours both claim (around a corner) at the middle,
-    project the end beams' points on the lines, drop segments shorter than min_length.
-    Returns (rho, alpha, cov, first, last, n_points, start (L, 2), end (L, 2))."""
-    if rho.size > 1:
-        rho, alpha, cov, first, last, npts = merge_neighbours(rho, alpha, cov, first, last, npts, valid, p)
-    first = first.copy()
-    last = last.copy()
-    n_lines = rho.size
-    over = np.empty(n_lines, np.bool_)  # overlaps found before any change
-    for i in range(n_lines - 1):
-        over[i] = last[i] >= first[i + 1]
-    for i in range(n_lines - 1):
-        if over[i]:
-            mid = (first[i + 1] + last[i]) // 2
-            last[i] = max(mid, first[i])
-            first[i + 1] = min(mid + 1, last[i + 1])
-    ends = np.empty((2, n_lines, 2))
-    keep = np.zeros(n_lines, np.bool_)
+    project the end beams' points on the lines, drop segments shorter than min_length; the line
+    table (which find_lines made for this) is changed in place.
+    Returns the rows of ``features.types.Lines``: line values (L, 10) rho, alpha, x0, y0, x1, y1,
+    cov (row by row), line beams (L, 3) first, last, n_points."""
+    n_lines = merge_neighbours(rho, alpha, cov, first, last, npts, valid, p)
+    lv = np.empty((n_lines, 10))
+    lb = np.empty((n_lines, 3), np.int64)
     min_len2 = p.min_length * p.min_length
+    q = 0
     for m in range(n_lines):
+        if m + 1 < n_lines and last[m] >= first[m + 1]:  # overlap (of the lines as they came)
+            mid = (first[m + 1] + last[m]) // 2
+            last[m] = max(mid, first[m])
+            first[m + 1] = min(mid + 1, last[m + 1])
         c, s = math.cos(alpha[m]), math.sin(alpha[m])
         for e in range(2):
             j = first[m] if e == 0 else last[m]
             d = ranges[j]
             x, y = d * bearings.cos[j], d * bearings.sin[j]
             off = x * c + y * s - rho[m]
-            ends[e, m, 0] = x - off * c
-            ends[e, m, 1] = y - off * s
-        dx = ends[1, m, 0] - ends[0, m, 0]
-        dy = ends[1, m, 1] - ends[0, m, 1]
-        keep[m] = dx * dx + dy * dy >= min_len2  # nan -> dropped
-    idx = np.flatnonzero(keep)
-    n_pts = np.minimum(npts, last - first + 1)
-    return (rho[idx], alpha[idx], cov[idx], first[idx], last[idx], n_pts[idx], ends[0][idx], ends[1][idx])
+            lv[q, 2 + 2 * e] = x - off * c
+            lv[q, 3 + 2 * e] = y - off * s
+        dx = lv[q, 4] - lv[q, 2]
+        dy = lv[q, 5] - lv[q, 3]
+        if not dx * dx + dy * dy >= min_len2:  # nan -> dropped
+            continue
+        lv[q, 0], lv[q, 1] = rho[m], alpha[m]
+        lv[q, 6], lv[q, 7], lv[q, 8], lv[q, 9] = cov[m, 0, 0], cov[m, 0, 1], cov[m, 1, 0], cov[m, 1, 1]
+        lb[q, 0], lb[q, 1], lb[q, 2] = first[m], last[m], min(npts[m], last[m] - first[m] + 1)
+        q += 1
+    return lv[:q], lb[:q]
 
 
 # -- 6. corners -----------------------------------------------------------------------------------
@@ -1614,27 +1613,30 @@ def neighbourhood_var(ranges, valid, lo, hi) -> float:  # noqa: ANN001
 
 
 @kernel
-def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, increment, sigma_r, p):  # noqa: ANN001, ANN201
-    """Corners between consecutive lines i, i + 1 (beam order): (x, y, angle) and (beam, i) each.
+def corners(lv, lb, psi, ranges, valid, angle_min, increment, sigma_r, p):  # noqa: ANN001, ANN201
+    """Corners between consecutive lines i, i + 1 (beam order) of the rows ``segments`` made: the
+    rows of ``features.types.Corners``, corner values (C, 3) x, y, angle and corner beams (C, 3)
+    beam, line i, line i + 1.
 
     A corner needs the two lines' facing ends within corner_max_gap beams, a turn of the line
     direction in [corner_min_turn, pi - corner_min_turn], their intersection near both facing
     ends, psi_i (the paper's corner signal) reaching corner_psi of the turn there, and (the
     paper's remedy against false acute corners, when acute_check) a range variance of the beams
     within k of it of at least acute_min_var sigma_r^2. ``angle`` is the interior angle (0, pi)."""
-    n_lines = rho.size
+    n_lines = lv.shape[0]
     n = ranges.size
     k = p.k
     min_turn = p.corner_min_turn
     acute_var = p.acute_min_var * (sigma_r * sigma_r)
     out_f = np.empty((max(n_lines - 1, 0), 3))
-    out_i = np.empty((max(n_lines - 1, 0), 2), np.int64)
+    out_i = np.empty((max(n_lines - 1, 0), 3), np.int64)
     m = 0
     for i in range(n_lines - 1):
         j = i + 1
-        if first[j] - last[i] - 1 > p.corner_max_gap:
+        last_i, first_j = lb[i, 1], lb[j, 0]
+        if first_j - last_i - 1 > p.corner_max_gap:
             continue
-        a1, a2 = alpha[i], alpha[j]
+        a1, a2 = lv[i, 1], lv[j, 1]
         s = math.sin(a2 - a1)
         if math.cos(a2 - a1) >= 0:
             turn = math.asin(min(1.0, abs(s)))
@@ -1642,18 +1644,18 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
             turn = math.pi - math.asin(min(1.0, abs(s)))
         if turn < min_turn or turn > math.pi - min_turn:
             continue
-        x = (rho[i] * math.sin(a2) - rho[j] * math.sin(a1)) / s  # x cos a + y sin a = rho for both
-        y = (rho[j] * math.cos(a1) - rho[i] * math.cos(a2)) / s
+        x = (lv[i, 0] * math.sin(a2) - lv[j, 0] * math.sin(a1)) / s  # x cos a + y sin a = rho for both
+        y = (lv[j, 0] * math.cos(a1) - lv[i, 0] * math.cos(a2)) / s
         # near both facing ends: within corner_max_dist plus the point spacing there (one beam
         # step projected on each line, large at grazing incidence)
         b = math.atan2(y, x)
         spacing = math.hypot(x, y) * increment / max(min(math.cos(b - a1), math.cos(b - a2)), 0.1)
         reach = p.corner_max_dist + 1.5 * min(spacing, SPACING_CAP)
-        if math.hypot(x - end[i, 0], y - end[i, 1]) > reach:
+        if math.hypot(x - lv[i, 4], y - lv[i, 5]) > reach:  # the end of line i
             continue
-        if math.hypot(x - start[j, 0], y - start[j, 1]) > reach:
+        if math.hypot(x - lv[j, 2], y - lv[j, 3]) > reach:  # the start of line j
             continue
-        lo, hi = max(0, last[i] - k), min(n - 1, first[j])
+        lo, hi = max(0, last_i - k), min(n - 1, first_j)
         peak = -1.0  # largest |psi| between the two segments
         for t in range(lo, hi + 1):
             if np.isfinite(psi[t]):
@@ -1661,13 +1663,13 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
         if peak < 0.0 or peak < p.corner_psi * turn:
             continue
         index = np.int64(np.rint((b - angle_min) / increment))
-        index = min(max(index, last[i]), first[j])
+        index = min(max(index, last_i), first_j)
         if p.acute_check:
             var = neighbourhood_var(ranges, valid, max(0, index - k), min(n - 1, index + k))
             if var < acute_var:
                 continue
-        v1x, v1y = start[i, 0] - x, start[i, 1] - y
-        v2x, v2y = end[j, 0] - x, end[j, 1] - y
+        v1x, v1y = lv[i, 2] - x, lv[i, 3] - y
+        v2x, v2y = lv[j, 4] - x, lv[j, 5] - y
         cos_angle = (v1x * v2x + v1y * v2y) / max(math.hypot(v1x, v1y) * math.hypot(v2x, v2y), 1e-300)
         angle = math.acos(min(1.0, max(-1.0, cos_angle)))
         if not (0.0 < angle < math.pi) or not (np.isfinite(x) and np.isfinite(y)):
@@ -1677,6 +1679,7 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
         out_f[m, 2] = angle
         out_i[m, 0] = index
         out_i[m, 1] = i
+        out_i[m, 2] = j
         m += 1
     return out_f[:m], out_i[:m]
 
@@ -1685,43 +1688,22 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
 
 
 @kernel
-def pack(rho, alpha, cov, first, last, npts, p0, p1, cf, ci):  # noqa: ANN001, ANN201
-    """The rows of ``features.types.Lines`` and ``Corners``: line values (L, 10) rho, alpha, x0,
-    y0, x1, y1, cov (row by row), line beams (L, 3) first, last, n_points; corner values (C, 3)
-    x, y, angle, corner beams (C, 3) beam, line i, line i + 1."""
-    n = rho.size
-    lv = np.empty((n, 10))
-    lb = np.empty((n, 3), np.int64)
-    for m in range(n):
-        lv[m, 0], lv[m, 1] = rho[m], alpha[m]
-        lv[m, 2], lv[m, 3], lv[m, 4], lv[m, 5] = p0[m, 0], p0[m, 1], p1[m, 0], p1[m, 1]
-        lv[m, 6], lv[m, 7], lv[m, 8], lv[m, 9] = cov[m, 0, 0], cov[m, 0, 1], cov[m, 1, 0], cov[m, 1, 1]
-        lb[m, 0], lb[m, 1], lb[m, 2] = first[m], last[m], npts[m]
-    nc = cf.shape[0]
-    cb = np.empty((nc, 3), np.int64)
-    for m in range(nc):
-        cb[m, 0], cb[m, 1], cb[m, 2] = ci[m, 0], ci[m, 1], ci[m, 1] + 1
-    return lv, lb, cf.copy(), cb
-
-
-@kernel
 def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p):  # noqa: ANN001, ANN201
     """Lines and corners of one scan (sensor frame): steps 1-6. ``bearings``: a Bearings record;
     ``range_lo``, ``range_hi``: valid range limits (m); ``sigma_r``: the range noise std for this
     scan's units (m).
-    Returns the packed rows (``pack``): line values, line beams, corner values, corner beams."""
+    Returns the rows of ``features.types.Lines`` and ``Corners``: line values, line beams
+    (``segments``), corner values, corner beams (``corners``)."""
     valid, _, AD, AD_var, _, theta, theta_var, psi, psi_var = beam_signals(
         ranges, bearings.b, p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum
     )
     rho, alpha, cov, first, last, npts = find_lines(
         ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_var, angle_min, increment, sigma_r, grid, p
     )
-    rho, alpha, cov, first, last, npts, p0, p1 = segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p)
-    if p.corners and rho.size > 1:
-        cf, ci = corners(rho, alpha, first, last, p0, p1, psi, ranges, valid, angle_min, increment, sigma_r, p)
-    else:
-        cf, ci = np.empty((0, 3)), np.empty((0, 2), np.int64)
-    return pack(rho, alpha, cov, first, last, npts, p0, p1, cf, ci)
+    lv, lb = segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p)
+    if p.corners and lv.shape[0] > 1:
+        return (lv, lb) + corners(lv, lb, psi, ranges, valid, angle_min, increment, sigma_r, p)
+    return lv, lb, np.empty((0, 3)), np.empty((0, 3), np.int64)
 
 
 @kernel
