@@ -132,29 +132,32 @@ def wrap(a: float) -> float:
 
 @kernel
 def block_sum(a: np.ndarray, lo: int, n: int) -> float:
-    """numpy's pairwise sum of a[lo : lo + n] for n <= 128: sequential below 8, else 8 accumulators."""
+    """numpy's pairwise sum of a[lo : lo + n] for n <= 128: sequential below 8, else 8 accumulators
+    (indexed unsigned: numba then adds no negative-index wraparound, and the loop vectorises)."""
     if n < 8:
         res = 0.0
         for i in range(n):
             res += a[lo + i]
         return res
-    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
-    i = 8
-    while i < n - (n % 8):
-        r0 += a[lo + i]
-        r1 += a[lo + i + 1]
-        r2 += a[lo + i + 2]
-        r3 += a[lo + i + 3]
-        r4 += a[lo + i + 4]
-        r5 += a[lo + i + 5]
-        r6 += a[lo + i + 6]
-        r7 += a[lo + i + 7]
-        i += 8
+    b = a[lo:lo + n]
+    r0, r1, r2, r3 = b[0], b[1], b[2], b[3]
+    r4, r5, r6, r7 = b[4], b[5], b[6], b[7]
+    m = np.uint64(n - (n % 8))
+    i = np.uint64(8)
+    while i < m:
+        r0 += b[i]
+        r1 += b[i + np.uint64(1)]
+        r2 += b[i + np.uint64(2)]
+        r3 += b[i + np.uint64(3)]
+        r4 += b[i + np.uint64(4)]
+        r5 += b[i + np.uint64(5)]
+        r6 += b[i + np.uint64(6)]
+        r7 += b[i + np.uint64(7)]
+        i += np.uint64(8)
     res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += a[lo + i]
-        i += 1
+    while i < np.uint64(n):
+        res += b[i]
+        i += np.uint64(1)
     return res
 
 
