@@ -51,6 +51,13 @@ DEFAULT_DURATION_S = 20.0  # simulated seconds per seed
 # other no-return: no_return_prob 0, cm mode, nothing beyond 81 m), rounded. Glass per 10 m
 # scales with the log's no-return share against it (glass_rate).
 GLASS_NO_RETURN_SHARE = 0.03
+# The rough fill of the mit worlds' rooms (sim.clutter, make_world(rough=...)) is fitted to each log
+# (fit_rough): the share of valid beams at NEAR_M that STATS_METHOD's lines leave unexplained (3 cm),
+# on the log and on probe runs at the ROUGH_PROBES covers (ROUGH_PROBE_SEEDS, other seeds than the
+# report's), interpolated linearly.
+NEAR_M = (1.0, 4.0)
+ROUGH_PROBES = (0.0, 1.0)
+ROUGH_PROBE_SEEDS = (100, 101, 102, 103)
 
 
 @dataclass
@@ -158,6 +165,7 @@ class Sim2RealResult:
     n_sim: int
     checks: dict[str, Any]
     glass: float | None = None  # the mit worlds' glass panels per 10 m and clutter level (glass_rate)
+    rough: RoughFit | None = None  # the mit worlds' rough fill fitted to the log (fit_rough)
 
 
 def no_return_share(records: Sequence[Record], max_reading: float | None = None) -> float:
@@ -185,6 +193,71 @@ def glass_rate(world: str, log_no_return: float) -> float | None:
         return None
     default = float(MIT_PRESET["glass_per_10m"])
     return round(default * min(1.0, max(log_no_return, 0.0) / GLASS_NO_RETURN_SHARE), 4)
+
+
+def near_unexplained(records: Sequence[Record], method: str = STATS_METHOD) -> float:
+    """Share of the valid beams at NEAR_M (m) that ``method``'s lines leave unexplained at 3 cm; the
+    extractor gets the neighbour scatter of these scans as its noise (what ``sigma_r="auto"``
+    gives it in ``compare``)."""
+    import dataclasses
+
+    from experiments.compare import NOISE_FIELDS
+    from features.noise_estimate import neighbour_sigma
+    from features.realdata import RealDataConfig, ray_residuals
+    from features.registry import get_method, make_config
+
+    if not records:
+        return float("nan")
+    sigma = neighbour_sigma(records)
+    cfg = make_config(method)
+    fields = {f.name for f in dataclasses.fields(cfg)}
+    cfg = dataclasses.replace(cfg, **{f: sigma for f in NOISE_FIELDS if f in fields})
+    run, tol = get_method(method).run, RealDataConfig().tolerance_m
+    near = missed = 0
+    for rec in records:
+        scan = rec.scan
+        r = np.where(scan.valid, scan.ranges, np.nan)
+        inside = scan.valid & (r >= NEAR_M[0]) & (r < NEAR_M[1])
+        if not inside.any():
+            continue
+        explained = ray_residuals(run(scan, cfg).line_array(), scan) <= tol
+        near += int(np.count_nonzero(inside))
+        missed += int(np.count_nonzero(inside & ~explained))
+    return missed / near if near else float("nan")
+
+
+@dataclass
+class RoughFit:
+    """The mit worlds' rough fill fitted to a log: the log's near-unexplained share, the probes'."""
+
+    cover: float
+    log_share: float
+    probe_covers: tuple[float, ...]
+    probe_shares: tuple[float, ...]
+
+
+def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = DEFAULT_DURATION_S,
+              rate_hz: float = 3.0, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS)) -> RoughFit:
+    """The rough-fill cover (share of the rooms' wall length, 0-1) that makes the simulated ``mit``
+    worlds leave as many beams at NEAR_M unexplained as the log does (:func:`near_unexplained`):
+    probe runs at ROUGH_PROBES (the first ``n_probe_seeds`` of ROUGH_PROBE_SEEDS), the log's share interpolated linearly
+    between them and clipped to [0, 1]."""
+    from sim import make_world, simulate_records
+
+    target = near_unexplained(real)
+    shares = []
+    for cover in ROUGH_PROBES:
+        recs: list[Record] = []
+        for seed in ROUGH_PROBE_SEEDS[:max(1, n_probe_seeds)]:
+            recs += simulate_records(make_world("mit", seed, glass=glass, rough=cover), seed, duration, sensor,
+                                     rate_hz=rate_hz, limits=limits)
+        shares.append(near_unexplained(recs))
+    (c0, c1), (s0, s1) = ROUGH_PROBES, shares
+    if not np.isfinite(target) or not s1 > s0:
+        cover = c0 if not np.isfinite(target) or target <= s0 else c1
+    else:
+        cover = c0 + (target - s0) / (s1 - s0) * (c1 - c0)
+    return RoughFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(ROUGH_PROBES), tuple(shares))
 
 
 def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT_SEEDS,
@@ -223,10 +296,11 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
                                stride=max(1, stride // 2), fit_duration=fit_duration or FIT_DURATION_S, **opts).sensor
     limits = motion_limits(every)
     glass = glass_rate(world, no_return_share(real, sensor.max_reading))
+    rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, len(seeds)) if world == "mit" else None
     simulated: list[Record] = []
     for seed in seeds:
-        simulated += simulate_records(make_world(world, seed, glass=glass), seed, duration, sensor, rate_hz=rate_hz,
-                                      limits=limits)
+        simulated += simulate_records(make_world(world, seed, glass=glass, rough=None if rough is None else rough.cover),
+                                      seed, duration, sensor, rate_hz=rate_hz, limits=limits)
     name = Path(log).name
     from features.noise_estimate import neighbour_sigma  # noqa: PLC0415
 
@@ -238,7 +312,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     summary = summarise(compare(sources, list(methods), sigma="auto"))
     table = _table(summary, name, f"sim:{world}", list(methods))
     result = Sim2RealResult(table, scene_statistics(real), scene_statistics(simulated), sensor, limits, world,
-                            list(seeds), len(real), len(simulated), {}, glass)
+                            list(seeds), len(real), len(simulated), {}, glass, rough)
     result.checks = targets(table)
     return result
 
@@ -291,7 +365,12 @@ def format_report(result: Sim2RealResult, log: str) -> str:
              f"{result.limits.v_max:.2f} m/s, w_max {result.limits.w_max:.2f} rad/s; sensor: noise "
              f"{result.sensor.noise_sigma * 1000:.2f} mm, dropout {result.sensor.dropout_prob:.4f}, "
              f"spot {result.sensor.beam_width_deg:g} deg, outliers {result.sensor.outlier_prob:.4f}"
-             + ("" if result.glass is None else f"; glass {result.glass:g} panels per 10 m and clutter level"), "",
+             + ("" if result.glass is None else f"; glass {result.glass:g} panels per 10 m and clutter level")
+             + ("" if result.rough is None else
+                f"; rough fill {result.rough.cover:.2f} of the rooms' walls (beams at {NEAR_M[0]:g}-{NEAR_M[1]:g} m "
+                f"unexplained by {STATS_METHOD}: log {result.rough.log_share:.3f}, probes "
+                + ", ".join(f"{s:.3f} at {c:g}" for c, s in zip(result.rough.probe_covers, result.rough.probe_shares))
+                + ")"), "",
              "| method | explained 3 cm real | sim | diff | ray RMSE mm real | sim | lines/scan real | sim | ratio | mean segment m real | sim |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for _, r in t.iterrows():
@@ -408,7 +487,7 @@ def write_outputs(result: Sim2RealResult, out: Path, log: str, config: dict[str,
     draw(result, paths[3], log)
     result.sensor.to_yaml(paths[4], header=f"sensor model used by lmsbench sim2real {log}")
     resolved = dict(config, world=result.world, seeds=result.seeds, robot=dataclasses.asdict(result.limits),
-                    checks=result.checks)
+                    checks=result.checks, rough=None if result.rough is None else dataclasses.asdict(result.rough))
     resolved["robot"]["pause_s"] = list(resolved["robot"]["pause_s"])
     paths[5].write_text(yaml.safe_dump(resolved, sort_keys=False))
     return paths

@@ -27,6 +27,7 @@ from .world import SCAN_HEIGHT_M
 ROUTE_CLEARANCE_M = 0.40  # sim.worlds.CLEARANCE_M: robot radius 0.25 m + 0.15 m
 ROUTE_SAMPLING_SLACK_M = 0.005  # the route is sampled every 0.1 m: between samples it comes ~3 mm nearer
 ITEM_GAP_M = 0.10  # least gap between an item and any other solid
+HORIZON_M = 1.0  # _Space.distance is exact up to this (every test it makes is at 0.5 m or less)
 REACH_M = 3.0  # items stand at most this far from the route
 GLASS_MIN_WALL_M = 2.5  # walls at least this long may get a glass panel
 GLASS_END_MARGIN_M = 0.5  # a glass panel keeps this far from a wall box's ends
@@ -43,6 +44,7 @@ class ClutterConfig:
     bins: float = 0.6  # a round or square bin
     glass: float = 0.4  # a glass panel of 1-2.5 m in a wall
     wall_runs: float = 0.0  # a 0.8-2.4 m run of things (boxes, computers, bags, bins) along a wall
+    rough_cover: float = 0.0  # share of the rooms' free wall length behind rough fill (not scaled by level)
 
 
 def _route_points(lay: Layout, step: float = 0.1) -> tuple[np.ndarray, float]:
@@ -69,10 +71,14 @@ class _Space:
 
     def distance(self, pts: np.ndarray, exclude: int = -1) -> np.ndarray:
         """Distance (m) from (n, 2) points to the nearest solid (0 inside a box), leaving out the
-        layout's box ``exclude``."""
+        layout's box ``exclude``; exact up to HORIZON_M, and at least HORIZON_M (maybe inf) beyond."""
         pts = np.asarray(pts, dtype=float).reshape(-1, 2)
         d = np.full(len(pts), np.inf)
-        corners = self.corners[np.append(self.box_index, np.full(len(self.corners) - len(self.box_index), -2)) != exclude]
+        keep = np.append(self.box_index, np.full(len(self.corners) - len(self.box_index), -2)) != exclude
+        if len(pts) and len(self.corners):  # only boxes within HORIZON_M of the points' bounding box
+            lo, hi = pts.min(axis=0) - HORIZON_M, pts.max(axis=0) + HORIZON_M
+            keep &= np.all((self.corners.max(axis=1) >= lo) & (self.corners.min(axis=1) <= hi), axis=1)
+        corners = self.corners[keep]
         if len(corners):
             a = corners.reshape(-1, 2)
             b = np.roll(corners, -1, axis=1).reshape(-1, 2)
@@ -233,6 +239,14 @@ WALL_RUN_M = (0.8, 2.4)  # length of a run of wall-side stuff
 FLOOR_ITEM_M = (0.15, 0.5)  # width and depth of a box, bag or computer on the floor
 ROUND_SHARE = 0.4  # share of the things along walls that are round (bags, rolls, round bins)
 TURN_MAX_RAD = 0.4  # the others (boxes) stand turned by up to this from the wall's line
+ROUGH_RUN_M = (0.3, 2.0)  # length of a stretch of rough fill
+ROUGH_ITEM_M = (0.03, 0.12)  # width of one thing in it
+ROUGH_DEPTH_M = (0.05, 0.40)  # its depth
+ROUGH_GAP_M = 0.06  # most space between two things
+ROUGH_ROUND_SHARE = 0.3
+ROUGH_TURN_MAX_RAD = 0.6
+ROUGH_SIGHTS = 4  # route points a stretch of rough fill may be seen from (a room's walls, from its route)
+ROUGH_STEP_M = 0.1  # where a stretch of rough fill does not fit, the walk along the wall moves on this far
 
 
 def _wall_faces(lay: Layout, h: float) -> list[tuple[int, np.ndarray, np.ndarray, np.ndarray, float]]:
@@ -268,56 +282,130 @@ def _run_items(rng: np.random.Generator, length: float) -> list[tuple[float, flo
     return items
 
 
+def _rough_items(rng: np.random.Generator, length: float) -> list[tuple[float, float, float, float, bool]]:
+    """The solids of one stretch of rough fill (as :func:`_run_items`): things ROUGH_ITEM_M wide
+    and ROUGH_DEPTH_M deep (binders, files, cables, shoes, the folds of bags), 0-ROUGH_GAP_M
+    apart; a share ROUGH_ROUND_SHARE round, the others turned by up to ROUGH_TURN_MAX_RAD. Each
+    face is shorter than a line extractor's shortest line (8 beams: 0.14 m at 2 m) and the fronts
+    step in depth by more than the 3 cm a line may explain."""
+    items = []
+    s = 0.0
+    while True:
+        w, d = float(rng.uniform(*ROUGH_ITEM_M)), float(rng.uniform(*ROUGH_DEPTH_M))
+        if s + w > length:
+            break
+        if rng.random() < ROUGH_ROUND_SHARE:
+            items.append((s + w / 2, w / 2, w, 0.0, True))
+        else:
+            items.append((s + w / 2, w / 2, d, float(rng.uniform(-ROUGH_TURN_MAX_RAD, ROUGH_TURN_MAX_RAD)), False))
+        s += w + float(rng.uniform(0.0, ROUGH_GAP_M))
+    return items
+
+
+def _in_room(lay: Layout, p: np.ndarray) -> bool:
+    """Whether a point lies in one of the layout's rooms (``Layout.rooms``; anywhere when it has none)."""
+    return not lay.rooms or any(x0 <= p[0] <= x1 and y0 <= p[1] <= y1 for x0, x1, y0, y1 in lay.rooms)
+
+
+def _seen(space: _Space, front: np.ndarray, sights: int) -> bool:
+    """Whether a clear straight line joins ``front`` to one of ``sights`` route points within
+    REACH_M + 3 m of it: the nearest, then points at even steps down the list by distance."""
+    dist = np.hypot(*(space.route - front).T)
+    order = np.argsort(dist, kind="stable")
+    order = order[dist[order] <= REACH_M + 3.0]
+    for rank in np.unique((np.arange(sights) * len(order)) // max(sights, 1)):
+        if rank >= len(order):
+            break
+        near = space.route[int(order[rank])]
+        steps = int(np.ceil(np.hypot(*(front - near)) / 0.02)) + 1  # finer than the thinnest wall
+        line = near + np.linspace(0, 1, steps)[:, None] * (front - near)
+        if space.distance(line).min() > 0.0:
+            return True
+    return False
+
+
 def _wall_run(lay: Layout, rng: np.random.Generator, space: _Space, faces: list, h: float) -> bool:
-    """Put one run of wall-side stuff along a free stretch of some wall face (tried 30 times);
-    every solid's back sinks EMBED_M into the wall, so the run and the wall are one solid."""
+    """Put one run of wall-side stuff (:func:`_run_items`) along a free stretch of some wall face,
+    drawn by length (tried 30 times)."""
     if not faces:
         return False
     weights = np.array([f[4] for f in faces])
     for _ in range(30):
-        k, p0, u, n, span = faces[int(rng.choice(len(faces), p=weights / weights.sum()))]
+        face = faces[int(rng.choice(len(faces), p=weights / weights.sum()))]
         length = float(rng.uniform(*WALL_RUN_M))
-        if span - 0.4 < length:
+        if face[4] - 0.4 < length:
             continue
-        s0 = float(rng.uniform(0.2, span - 0.2 - length))
-        items = _run_items(rng, length)
-        if not items:
-            continue
-        depth = max(d * abs(np.cos(j)) + 2 * w * abs(np.sin(j)) for _, w, d, j, _ in items)  # out from the face
-        overhang = max(d / 2 * abs(np.sin(j)) for _, w, d, j, _ in items)  # turned things reach past the ends
-        start = p0 + u * s0
-        mid = start + u * length / 2 + n * (depth / 2 + 0.005)
-        hull = rectangle_corners(float(mid[0]), float(mid[1]), float(np.arctan2(u[1], u[0])), length / 2 + overhang,
-                                 depth / 2 - 0.005)
-        steps = int(np.ceil(length / 0.05)) + 1
-        samples = hull[0] + np.linspace(0, 1, steps)[:, None, None] * (hull[1:] - hull[0])[None]
-        samples = np.vstack([samples.reshape(-1, 2), hull])
-        if distance_to_rects(space.route, [hull]).min() < ROUTE_CLEARANCE_M + ROUTE_SAMPLING_SLACK_M:
-            continue
-        if space.distance(samples, exclude=k).min() < ITEM_GAP_M / 2:
-            continue
-        front = start + u * length / 2 + n * (depth + 0.05)
-        near = space.route[int(np.argmin(np.hypot(*(space.route - front).T)))]
-        if np.hypot(*(near - front)) > REACH_M + 3.0:
-            continue
-        steps = int(np.ceil(np.hypot(*(front - near)) / 0.02)) + 1  # finer than the thinnest wall
-        line = near + np.linspace(0, 1, steps)[:, None] * (front - near)
-        if space.distance(line).min() <= 0.0:
-            continue  # the far side of a wall, or behind something
-        for sc, hw, d, j, round_ in items:
-            top = float(rng.uniform(0.5, 2.0))
-            if round_:
-                c = start + u * sc + n * (hw - EMBED_M)
-                lay.cylinder(float(c[0]), float(c[1]), hw, 0.0, top)
-                continue
-            hd = d / 2
-            reach = hd * abs(np.cos(j)) + hw * abs(np.sin(j))  # half extent out from the wall
-            c = start + u * sc + n * (reach - EMBED_M)
-            yaw = float(np.arctan2(n[1], n[0])) + j
-            lay.box(float(c[0]), float(c[1]), yaw, hd, hw, 0.0, top)
-        space.take_rect(hull)
-        return True
+        s0 = float(rng.uniform(0.2, face[4] - 0.2 - length))
+        if _place_run(lay, rng, space, face, s0, length, _run_items):
+            return True
     return False
+
+
+def _place_run(lay: Layout, rng: np.random.Generator, space: _Space, face: tuple, s0: float, length: float,
+               make_items=_run_items, sights: int = 1) -> bool:
+    """Put the things ``make_items`` draws along ``length`` m of a wall face from ``s0`` (m along
+    it), if their hull keeps clear of the route and of every other solid and its front is seen
+    from the route (:func:`_seen`, from up to ``sights`` route points). Every solid's back sinks
+    EMBED_M into the wall, so the run and the wall are one solid."""
+    k, p0, u, n, _ = face
+    items = make_items(rng, length)
+    if not items:
+        return False
+    depth = max(d * abs(np.cos(j)) + 2 * w * abs(np.sin(j)) for _, w, d, j, _ in items)  # out from the face
+    overhang = max(d / 2 * abs(np.sin(j)) for _, w, d, j, _ in items)  # turned things reach past the ends
+    start = p0 + u * s0
+    mid = start + u * length / 2 + n * (depth / 2 + 0.005)
+    hull = rectangle_corners(float(mid[0]), float(mid[1]), float(np.arctan2(u[1], u[0])), length / 2 + overhang,
+                             depth / 2 - 0.005)
+    steps = int(np.ceil(length / 0.05)) + 1
+    samples = hull[0] + np.linspace(0, 1, steps)[:, None, None] * (hull[1:] - hull[0])[None]
+    samples = np.vstack([samples.reshape(-1, 2), hull])
+    if distance_to_rects(space.route, [hull]).min() < ROUTE_CLEARANCE_M + ROUTE_SAMPLING_SLACK_M:
+        return False
+    if space.distance(samples, exclude=k).min() < ITEM_GAP_M / 2:
+        return False
+    front = start + u * length / 2 + n * (depth + 0.05)
+    if not _seen(space, front, sights):
+        return False  # the far side of a wall, or behind something
+    for sc, hw, d, j, round_ in items:
+        top = float(rng.uniform(0.5, 2.0))
+        if round_:
+            c = start + u * sc + n * (hw - EMBED_M)
+            lay.cylinder(float(c[0]), float(c[1]), hw, 0.0, top)
+            continue
+        hd = d / 2
+        reach = hd * abs(np.cos(j)) + hw * abs(np.sin(j))  # half extent out from the wall
+        c = start + u * sc + n * (reach - EMBED_M)
+        yaw = float(np.arctan2(n[1], n[0])) + j
+        lay.box(float(c[0]), float(c[1]), yaw, hd, hw, 0.0, top)
+    space.take_rect(hull)
+    return True
+
+
+def _rough_fill(lay: Layout, rng: np.random.Generator, space: _Space, h: float, cover: float) -> float:
+    """Rough fill along the rooms' walls (the parts of wall faces in a room, :func:`_in_room`; the
+    faces in random order): each face is walked from one end in stretches of ROUGH_RUN_M, each filled with probability ``cover``
+    (:func:`_place_run`; where it does not fit, the walk moves on ROUGH_STEP_M and tries again)
+    and left bare otherwise. Returns the length filled (m)."""
+    faces = _wall_faces(lay, h)
+    done = 0.0
+    for f in rng.permutation(len(faces)):
+        face = faces[int(f)]
+        s, end = 0.2, face[4] - 0.2
+        while end - s >= ROUGH_RUN_M[0]:
+            if not _in_room(lay, face[1] + face[2] * (s + ROUGH_RUN_M[0] / 2) + face[3] * 0.2):
+                s += ROUGH_STEP_M  # this part of the face is not in a room (a corridor's side)
+                continue
+            length = min(float(rng.uniform(*ROUGH_RUN_M)), end - s)
+            if rng.random() >= cover:
+                s += length
+                continue
+            while end - s >= length and not _place_run(lay, rng, space, face, s, length, _rough_items, ROUGH_SIGHTS):
+                s += ROUGH_STEP_M
+            if end - s >= length:
+                done += length
+            s += length + ITEM_GAP_M
+    return done
 
 
 def add_clutter(lay: Layout, rng: np.random.Generator, level: float, config: ClutterConfig | None = None,
@@ -360,4 +448,6 @@ def add_clutter(lay: Layout, rng: np.random.Generator, level: float, config: Clu
             _plant(lay, rng, c, float(rng.uniform(0.15, 0.3)))
         else:
             _bin(lay, rng, c)
+    if cfg.rough_cover > 0:  # last, and no draw without it: the rest of the clutter is the same at any cover
+        _rough_fill(lay, rng, space, scan_height, min(cfg.rough_cover, 1.0))
     return glass

@@ -114,6 +114,8 @@ def union_faces(rects: list[np.ndarray], circles: np.ndarray) -> np.ndarray:
     faces = []
     lo = np.array([r.min(axis=0) for r in rects]).reshape(-1, 2) - 1e-6
     hi = np.array([r.max(axis=0) for r in rects]).reshape(-1, 2) + 1e-6
+    circles = np.asarray(circles, dtype=float).reshape(-1, 3)
+    c_lo, c_hi = circles[:, :2] - circles[:, 2:] - 1e-6, circles[:, :2] + circles[:, 2:] + 1e-6
     for i, poly in enumerate(rects):
         for k in range(4):
             p, q = poly[k], poly[(k + 1) % 4]
@@ -127,7 +129,8 @@ def union_faces(rects: list[np.ndarray], circles: np.ndarray) -> np.ndarray:
                     if iv:
                         cut.append(iv)
                     cut += _shared_boundary(p, q, other, drop_same_side=bool(j < i))
-            for cx, cy, r in circles:
+            # only circles whose bounding box meets the edge's can cut it
+            for cx, cy, r in circles[np.all((c_lo <= seg_hi) & (c_hi >= seg_lo), axis=1)]:
                 iv = _inside_interval_circle(p, q, np.array([cx, cy]), r)
                 if iv:
                     cut.append(iv)

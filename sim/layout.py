@@ -23,6 +23,7 @@ class Layout:
         self.nodes: list[tuple[float, float]] = []
         self.edges: list[tuple[int, int]] = []
         self.targets: list[int] = []
+        self.rooms: list[tuple[float, float, float, float]] = []  # x0, x1, y0, y1 of each room (clutter's rough fill)
 
     # -- solids -------------------------------------------------------------------------------
     def box(self, cx: float, cy: float, yaw: float, hx: float, hy: float,

@@ -42,7 +42,8 @@ DEFAULT_CLUTTER = {"cluttered": 1.0}  # clutter level of each world name (0 when
 # 0.75 comes nearest on both together. Every rate lowers the long-wall share (MIT 0.15 -> 0.10
 # against the log's 0.22): runs stand along any wall, where real clutter gathers in places.
 MIT_PRESET = dict(n_per_side=6, room_w=5.0, room_d=6.0, corridor_w=1.8, door_w=1.0, chamfer=False,
-                  corridor_extension=14.0, clutter=3.0, glass_per_10m=0.1, wall_runs_per_10m=0.75)
+                  corridor_extension=14.0, clutter=3.0, glass_per_10m=0.1, wall_runs_per_10m=0.75,
+                  rough_cover=1.0)
 
 
 MAX_CLUTTER = 10.0  # densest clutter level (10x a furnished office); the object count grows with it
@@ -54,7 +55,8 @@ def check_seed(seed: object) -> None:
         raise ValueError(f"seed: must be a whole number >= 0, got {seed!r}")
 
 
-def make_world(name: str = "office", seed: int = 0, clutter: float | None = None, glass: float | None = None) -> World:
+def make_world(name: str = "office", seed: int = 0, clutter: float | None = None, glass: float | None = None,
+               rough: float | None = None) -> World:
     """Build a named world; every random choice comes from ``seed``.
 
     Args:
@@ -67,10 +69,14 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
         glass: glass panels per 10 m of route and clutter level (None = the name's default:
             ``ClutterConfig.glass``, 0.1 in the mit preset); ``lmsbench sim2real`` sets it from a
             log's no-return readings, since a glass panel reads as no return.
+        rough: share of the rooms' wall length behind rough fill (``sim.clutter``; None = the
+            name's default: none, MIT_PRESET["rough_cover"] in the mit preset); needs a clutter
+            level > 0. ``lmsbench sim2real`` fits it to a log (``experiments.sim2real.fit_rough``).
 
     Raises:
         ValueError: for an unknown name (listing the known ones), a seed that is not a whole number
-            >= 0, a clutter level outside [0, MAX_CLUTTER] or a negative glass rate.
+            >= 0, a clutter level outside [0, MAX_CLUTTER], a negative glass rate or a rough
+            share outside [0, 1].
     """
     check_seed(seed)
     rng = np.random.default_rng([int(seed), _STREAM_WORLD])
@@ -80,6 +86,8 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
         raise ValueError(f"clutter: must be in [0, {MAX_CLUTTER:g}], got {clutter}")
     if glass is not None and not (np.isfinite(glass) and glass >= 0):
         raise ValueError(f"glass: must be a rate >= 0 (panels per 10 m), got {glass}")
+    if rough is not None and not (np.isfinite(rough) and 0 <= rough <= 1):
+        raise ValueError(f"rough: must be a share in [0, 1] of the rooms' wall length, got {rough}")
     leaf_rng = crng if level > 0 else None
     if name in ("office", "cluttered"):
         lay = office(rng, name, seed, leaf_rng=leaf_rng)
@@ -88,7 +96,7 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
                      room_d=float(rng.uniform(3.5, 5.0)), corridor_w=float(rng.uniform(1.6, 2.6)),
                      chamfer=bool(rng.random() < 0.5), leaf_rng=leaf_rng)
     elif name == "mit":
-        preset = {k: v for k, v in MIT_PRESET.items() if k not in ("clutter", "glass_per_10m", "wall_runs_per_10m")}
+        preset = {k: v for k, v in MIT_PRESET.items() if k not in ("clutter", "glass_per_10m", "wall_runs_per_10m", "rough_cover")}
         lay = office(rng, name, seed, leaf_rng=leaf_rng, **preset)  # type: ignore[arg-type]
     elif name == "corridor":
         lay = corridor(rng, seed)
@@ -98,10 +106,13 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
         lay = pillars(rng, seed)
     else:
         raise ValueError(f"name: unknown world {name!r}; known worlds: {', '.join(WORLD_NAMES)}")
-    config = (ClutterConfig(glass=float(MIT_PRESET["glass_per_10m"]), wall_runs=float(MIT_PRESET["wall_runs_per_10m"]))
+    config = (ClutterConfig(glass=float(MIT_PRESET["glass_per_10m"]), wall_runs=float(MIT_PRESET["wall_runs_per_10m"]),
+                            rough_cover=float(MIT_PRESET["rough_cover"]))
               if name == "mit" else None)
     if glass is not None:
         config = replace(config if config is not None else ClutterConfig(), glass=float(glass))
+    if rough is not None:
+        config = replace(config if config is not None else ClutterConfig(), rough_cover=float(rough))
     panels = add_clutter(lay, crng, level, config)
     return lay.build(glass=panels)
 
@@ -158,6 +169,7 @@ def office(rng: np.random.Generator, name: str, seed: int, n_per_side: int = 3, 
             lay.link(corridor_nodes[xd], inside, centre)
             room = (k * rw + t / 2, (k + 1) * rw - t / 2,
                     (cw + t / 2, cw + rd - t / 2) if side == 1 else (-rd + t / 2, -t / 2))
+            lay.rooms.append((room[0], room[1], *room[2]))
             route = np.array([lay.nodes[inside], lay.nodes[centre]])
             _furnish_room(lay, rng, room, xd, door_w, side, route, leaf_rng)
     return lay

@@ -193,3 +193,58 @@ def test_sim2real_glass_follows_the_logs_no_returns() -> None:
     recs = [Record(Scan(r, -0.1, 0.01, 0.0, 81.83, 0.0))]
     assert no_return_share(recs) == pytest.approx(1 / 8)
     assert no_return_share(recs, max_reading=50.0) == pytest.approx(3 / 8)
+
+
+def test_rough_fill_lines_the_rooms_walls_only_with_exact_truth() -> None:
+    """Rough fill (make_world(rough=...)): things 3-12 cm wide, each sunk into a wall face inside
+    the room (none along the corridor), the route kept clear, the world's faces short, and ideal
+    ranges equal to the independent ray caster's."""
+    from sim.clutter import ROUGH_ITEM_M, ClutterConfig, add_clutter
+    from sim.layout import EMBED_M
+
+    def floor() -> Layout:  # a 8 x 4.9 m room (y 0.05-4.95) behind a 1 m door off a corridor (y 5.05-6.95)
+        lay = Layout("rough", 0)
+        lay.wall([(0, 0), (8, 0), (8, 7), (0, 7)], closed=True)
+        lay.wall([(0, 5), (3.5, 5)])
+        lay.wall([(4.5, 5), (8, 5)])
+        lay.rooms.append((0.05, 7.95, 0.05, 4.95))
+        a, b, c, d = lay.node(1.0, 6.0), lay.node(4.0, 6.0), lay.node(7.0, 6.0), lay.node(4.0, 2.5, target=True)
+        lay.link(a, b, c)
+        lay.link(b, d)
+        return lay
+
+    lay = floor()
+    walls = len(lay.boxes)
+    add_clutter(lay, np.random.default_rng(2), 1.0, ClutterConfig(0, 0, 0, 0, 0, 0, rough_cover=1.0))
+    items = np.array(lay.boxes[walls:])
+    assert len(items) >= 60 and np.all(2 * items[:, 4] <= ROUGH_ITEM_M[1] + 1e-9)
+    corners = np.vstack([np.array(_corners(b)) for b in items])
+    inside = 0.05 - EMBED_M - 1e-9
+    assert np.all((corners[:, 0] >= inside) & (corners[:, 0] <= 8 - inside))
+    assert np.all((corners[:, 1] >= inside) & (corners[:, 1] <= 4.95 + EMBED_M + 1e-9))  # none in the corridor
+    for b in items:  # each stands against a room face: its nearest corner is sunk EMBED_M into the wall
+        c = np.array(_corners(b))
+        gap = np.min(np.minimum.reduce([c[:, 0] - 0.05, 7.95 - c[:, 0], c[:, 1] - 0.05, 4.95 - c[:, 1]]))
+        assert abs(gap + EMBED_M) < 1e-9
+    world = lay.build()
+    for a, b in world.route_edges:
+        pts = world.route_nodes[a] + np.linspace(0, 1, 60)[:, None] * (world.route_nodes[b] - world.route_nodes[a])
+        assert world.clearance(pts).min() >= 0.4
+    lengths = np.hypot(world.walls[:, 2] - world.walls[:, 0], world.walls[:, 3] - world.walls[:, 1])
+    assert np.median(lengths) < 0.14  # shorter than a line extractor's shortest line at 2 m (8 beams)
+    sensor = SensorConfig.ideal()
+    with LMS200Sim(world, sensor) as lidar:
+        for pose in ([4.0, 2.5, 0.3], [2.0, 2.0, 2.5], [6.5, 3.5, -1.2]):
+            got = lidar.scan_at(tuple(pose)).ranges.copy()
+            ref, grazing = _reference(world, np.array(pose), sensor)
+            both = np.isfinite(ref) & np.isfinite(got) & ~grazing
+            assert np.count_nonzero(both) > 300
+            assert np.max(np.abs(got[both] - ref[both])) < 1e-3
+    bare = floor()
+    add_clutter(bare, np.random.default_rng(2), 1.0, ClutterConfig(0, 0, 0, 0, 0, 0, rough_cover=0.0))
+    assert len(bare.boxes) == walls
+    mit, bare_mit = _world("mit", 1), make_world("mit", 1, rough=0.0)  # the preset has MIT CSAIL's fit: 1
+    n = len(bare_mit.boxes)  # the fill comes last: the rest of the world is the same
+    assert len(mit.boxes) > n + 50 and np.array_equal(mit.boxes[:n], bare_mit.boxes)
+    with pytest.raises(ValueError, match="rough"):
+        make_world("mit", 0, rough=1.5)

@@ -1234,10 +1234,14 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
       no larger: a kink or a step between two faces is fitted better by the two lines);
     - a line (rho ``lrho``, alpha ``lalpha``) on beams lf..ll inside f..l, its neighbourhood: the
       circle must explain the line's own beams as well as the line does (chi^2 no more than
-      ARC_TAU std of the difference above) and fit the neighbourhood as tightly as the line fits
-      its own beams (mean squared residual within ARC_TAU std of the line's chi^2 per dof: at a
-      real corner the circle is a compromise with far larger residuals; this comparison holds
-      whatever the actual scatter, e.g. of the interlaced sweeps of 0.5 deg logs)."""
+      ARC_TAU std of the difference above), fit the neighbourhood better than one line does
+      (by more than ARC_TAU^2, a likelihood-ratio test at ARC_TAU std for the circle's one more
+      parameter: on a straight wall the circle's turn is noise) and fit it as tightly as the line
+      fits its own beams (mean squared residual within ARC_TAU std of the line's chi^2 per dof: at
+      a real corner the circle is a compromise with far larger residuals; this comparison holds
+      whatever the actual scatter, e.g. of the interlaced sweeps of 0.5 deg logs). Every chi^2
+      here is clipped at inlier_tau^2 a beam, as the checks see a line (its inliers): unclipped,
+      two stray beams on a line (mixed pixels, clutter) made it look as loose as a circle."""
     m = l - f + 1
     work = np.empty((5, m))  # the beams' points, then per-beam terms of each pass over them
     xs, ys, w0, w1, w2 = work[0], work[1], work[2], work[3], work[4]
@@ -1349,11 +1353,13 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
         if ok[t]:
             zc = w2[t]
             zl = w1[t]
-            c_chi += zc * zc
-            l_chi += zl * zl
+            c_chi += min(zc * zc, lim)
+            l_chi += min(zl * zl, lim)
             nl += 1
     if not c_chi <= l_chi + ARC_TAU * math.sqrt(2.0 * nl):
         return False
+    if not clipped <= tls_clipped(f, l, ranges, bearings, valid, sigma_r, lim) - ARC_TAU * ARC_TAU:
+        return False  # one line fits the neighbourhood about as well: a straight wall, its turn noise
     dof = max(nl - 2, 1)
     return clipped / n <= (l_chi / dof) * (1.0 + ARC_TAU * math.sqrt(2.0 / dof))
 
