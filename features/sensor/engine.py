@@ -1135,35 +1135,41 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
 @kernel
 def chord_split(first, last, ranges, bearings):  # noqa: ANN001, ANN201
     """The beam of each span [first, last] farthest from the chord between the span's end points
-    (Cartesian, sensor frame): where a span that does not fit one line bends (IEPF's split point)."""
+    (``farthest_from_chord``): where a span that does not fit one line bends (IEPF's split point)."""
     out = np.empty(first.size, np.int64)
     for r in range(first.size):
-        f, l = first[r], last[r]
-        x0, y0 = ranges[f] * bearings.cos[f], ranges[f] * bearings.sin[f]
-        x1, y1 = ranges[l] * bearings.cos[l], ranges[l] * bearings.sin[l]
-        dx, dy = x1 - x0, y1 - y0
-        norm = max(math.hypot(dx, dy), 1e-12)
-        best, at = -1.0, (f + l) // 2
-        for j in range(f + 1, l):
-            x, y = ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]
-            dist = abs((x - x0) * dy - (y - y0) * dx) / norm
-            if dist > best:
-                best, at = dist, j
-        out[r] = at
+        out[r] = farthest_from_chord(first[r], last[r], ranges, bearings)
     return out
 
 
 @kernel
-def valid_centroid(f, l, ranges, bearings, valid):  # noqa: ANN001, ANN201
-    """(x, y, n): the mean point (m, sensor frame) of the valid beams f..l and their count (x = y =
-    0 when there is none)."""
+def farthest_from_chord(f, l, ranges, bearings) -> int:  # noqa: ANN001
+    """The beam of f..l farthest from the chord between the end points of beams f and l
+    (Cartesian, sensor frame); the middle one when none is off it."""
+    x0, y0 = ranges[f] * bearings.cos[f], ranges[f] * bearings.sin[f]
+    x1, y1 = ranges[l] * bearings.cos[l], ranges[l] * bearings.sin[l]
+    dx, dy = x1 - x0, y1 - y0
+    norm = max(math.hypot(dx, dy), 1e-12)
+    best, at = -1.0, (f + l) // 2
+    for j in range(f + 1, l):
+        x, y = ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]
+        dist = abs((x - x0) * dy - (y - y0) * dx) / norm
+        if dist > best:
+            best, at = dist, j
+    return at
+
+
+@kernel
+def valid_centroid(xs, ys, ok):  # noqa: ANN001, ANN201
+    """(x, y, n): the mean of the points (xs, ys) (m, sensor frame) where ``ok`` (valid beams) and
+    their count (x = y = 0 when there is none)."""
     n = 0
     mx = 0.0
     my = 0.0
-    for j in range(f, l + 1):
-        if valid[j]:
-            mx += ranges[j] * bearings.cos[j]
-            my += ranges[j] * bearings.sin[j]
+    for t in range(xs.size):
+        if ok[t]:
+            mx += xs[t]
+            my += ys[t]
             n += 1
     if n > 0:
         mx /= n
@@ -1172,26 +1178,26 @@ def valid_centroid(f, l, ranges, bearings, valid):  # noqa: ANN001, ANN201
 
 
 @kernel
-def tls_clipped(f, l, ranges, bearings, valid, sigma_r, lim) -> float:  # noqa: ANN001
-    """Sum of the squared normalised residuals (each clipped at ``lim``) of the valid beams f..l
-    about their total-least-squares line."""
-    mx, my, n = valid_centroid(f, l, ranges, bearings, valid)
+def tls_clipped(xs, ys, ok, sigma_r, lim) -> float:  # noqa: ANN001
+    """Sum of the squared normalised residuals (each clipped at ``lim``) of the points (xs, ys)
+    where ``ok`` (valid beams) about their total-least-squares line."""
+    mx, my, n = valid_centroid(xs, ys, ok)
     if n < 3:
         return 0.0
     cxx = cyy = cxy = 0.0
-    for j in range(f, l + 1):
-        if valid[j]:
-            u = ranges[j] * bearings.cos[j] - mx
-            v = ranges[j] * bearings.sin[j] - my
+    for t in range(xs.size):
+        if ok[t]:
+            u = xs[t] - mx
+            v = ys[t] - my
             cxx += u * u
             cyy += v * v
             cxy += u * v
     a = 0.5 * math.atan2(-2.0 * cxy, cyy - cxx)
     ca, sa = math.cos(a), math.sin(a)
     out = 0.0
-    for j in range(f, l + 1):
-        if valid[j]:
-            z = ((ranges[j] * bearings.cos[j] - mx) * ca + (ranges[j] * bearings.sin[j] - my) * sa) / sigma_r
+    for t in range(xs.size):
+        if ok[t]:
+            z = ((xs[t] - mx) * ca + (ys[t] - my) * sa) / sigma_r
             out += min(z * z, lim)
     return out
 
@@ -1249,18 +1255,9 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
         xs[t] = ranges[f + t] * bearings.cos[f + t]
         ys[t] = ranges[f + t] * bearings.sin[f + t]
     ok = valid[f:l + 1]
-    n = 0
-    mx = 0.0
-    my = 0.0
-    for t in range(m):  # the centroid of the valid beams (``valid_centroid``)
-        if ok[t]:
-            mx += xs[t]
-            my += ys[t]
-            n += 1
+    mx, my, n = valid_centroid(xs, ys, ok)
     if n < 5:
         return False
-    mx /= n
-    my /= n
     suu = suv = svv = suuu = svvv = suvv = svuu = 0.0
     for t in range(m):
         if ok[t]:
@@ -1340,8 +1337,8 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
     if not (ni >= p.min_inlier_fraction * n and chi <= p.max_chi2 * max(ni - 3, 1)):
         return False
     if lf < 0:  # a span without a line: the circle must fit it better than two lines split at its chord
-        at = chord_split(np.array([f]), np.array([l]), ranges, bearings)[0]
-        two = tls_clipped(f, at, ranges, bearings, valid, sigma_r, lim) + tls_clipped(at + 1, l, ranges, bearings, valid, sigma_r, lim)
+        c = farthest_from_chord(f, l, ranges, bearings) - f + 1  # the two lines' beams: :c and c:
+        two = tls_clipped(xs[:c], ys[:c], ok[:c], sigma_r, lim) + tls_clipped(xs[c:], ys[c:], ok[c:], sigma_r, lim)
         return clipped <= two
     ca, sa = math.cos(lalpha), math.sin(lalpha)
     for t in range(lf - f, ll - f + 1):  # the line's beams: the circle's residuals (in w2) and the line's
@@ -1358,7 +1355,7 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
             nl += 1
     if not c_chi <= l_chi + ARC_TAU * math.sqrt(2.0 * nl):
         return False
-    if not clipped <= tls_clipped(f, l, ranges, bearings, valid, sigma_r, lim) - ARC_TAU * ARC_TAU:
+    if not clipped <= tls_clipped(xs, ys, ok, sigma_r, lim) - ARC_TAU * ARC_TAU:
         return False  # one line fits the neighbourhood about as well: a straight wall, its turn noise
     dof = max(nl - 2, 1)
     return clipped / n <= (l_chi / dof) * (1.0 + ARC_TAU * math.sqrt(2.0 / dof))
