@@ -58,6 +58,12 @@ GLASS_NO_RETURN_SHARE = 0.03
 NEAR_M = (1.0, 4.0)
 ROUGH_PROBES = (0.0, 0.5, 1.0)
 ROUGH_PROBE_SEEDS = (100, 101, 102, 103)
+# The size of the mit worlds' rooms (make_world(scale=...)) is fitted to each log first (fit_scale):
+# of the valid readings at MID_M-MAX_M, the share at FAR_M or more (the far surfaces), on the log
+# and on probe runs at the SCALE_PROBES room sizes (ROUGH_PROBE_SEEDS, the fitted rough fill),
+# interpolated piecewise linearly and clipped to the probes' range.
+MID_M, FAR_M, MAX_M = 2.0, 4.0, 8.0
+SCALE_PROBES = (1.0, 1.5, 2.0)
 
 
 @dataclass
@@ -166,6 +172,7 @@ class Sim2RealResult:
     checks: dict[str, Any]
     glass: float | None = None  # the mit worlds' glass panels per 10 m and clutter level (glass_rate)
     rough: RoughFit | None = None  # the mit worlds' rough fill fitted to the log (fit_rough)
+    scale: ScaleFit | None = None  # the mit worlds' room size fitted to the log (fit_scale)
 
 
 def no_return_share(records: Sequence[Record], max_reading: float | None = None) -> float:
@@ -226,6 +233,52 @@ def near_unexplained(records: Sequence[Record], method: str = STATS_METHOD) -> f
     return missed / near if near else float("nan")
 
 
+def far_share(records: Sequence[Record]) -> float:
+    """Of the valid readings at MID_M to MAX_M (m), the share at FAR_M or more: how far the rooms'
+    surfaces are where the scanner sees past its surroundings (readings under MID_M come from the
+    clutter and the corridor around the robot, those beyond MAX_M from long corridors)."""
+    far = mid = 0
+    for rec in records:
+        scan = rec.scan
+        r = scan.ranges[scan.valid]
+        inside = (r >= MID_M) & (r < MAX_M)
+        mid += int(np.count_nonzero(inside))
+        far += int(np.count_nonzero(inside & (r >= FAR_M)))
+    return far / mid if mid else float("nan")
+
+
+@dataclass
+class ScaleFit:
+    """The mit worlds' room size fitted to a log: the log's far share, the probes'."""
+
+    scale: float
+    log_share: float
+    probe_scales: tuple[float, ...]
+    probe_shares: tuple[float, ...]
+
+
+def fit_scale(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = DEFAULT_DURATION_S,
+              rate_hz: float = 3.0, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS), rough: float | None = None) -> ScaleFit:
+    """The room size (``make_world(scale=...)``, a multiple of the preset's rooms) that makes the
+    simulated ``mit`` worlds see as much at FAR_M or more as the log does (:func:`far_share`):
+    probe runs at SCALE_PROBES, the log's share interpolated piecewise linearly on the probes'
+    curve (made monotone), clipped to the probes' range. Ranges only: no extractor runs.
+    ``rough``: the rough fill of the probes (fit_rough's, fitted on the preset's rooms first)."""
+    from experiments.calibrate import _interpolate
+    from sim import make_world, simulate_records
+
+    target = far_share(real)
+    shares = []
+    for scale in SCALE_PROBES:
+        recs: list[Record] = []
+        for seed in ROUGH_PROBE_SEEDS[:max(1, n_probe_seeds)]:
+            recs += simulate_records(make_world("mit", seed, glass=glass, rough=rough, scale=scale), seed, duration, sensor,
+                                     rate_hz=rate_hz, limits=limits)
+        shares.append(far_share(recs))
+    fitted = _interpolate(shares, list(SCALE_PROBES), float(target)) if np.isfinite(target) else SCALE_PROBES[0]
+    return ScaleFit(round(float(fitted), 3), float(target), tuple(SCALE_PROBES), tuple(shares))
+
+
 @dataclass
 class RoughFit:
     """The mit worlds' rough fill fitted to a log: the log's near-unexplained share, the probes'."""
@@ -237,12 +290,12 @@ class RoughFit:
 
 
 def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = DEFAULT_DURATION_S,
-              rate_hz: float = 3.0, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS)) -> RoughFit:
+              rate_hz: float = 3.0, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS), scale: float | None = None) -> RoughFit:
     """The rough-fill cover (share of the rooms' wall length, 0-1) that makes the simulated ``mit``
     worlds leave as many beams at NEAR_M unexplained as the log does (:func:`near_unexplained`):
     probe runs at ROUGH_PROBES (the first ``n_probe_seeds`` of ROUGH_PROBE_SEEDS), the log's share
     interpolated piecewise linearly on the probes' curve (made monotone), clipped to its ends: the
-    fill's effect saturates as the rooms' free wall runs out."""
+    fill's effect saturates as the rooms' free wall runs out. ``scale``: the rooms' size (fit_scale)."""
     from sim import make_world, simulate_records
 
     target = near_unexplained(real)
@@ -250,7 +303,7 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     for cover in ROUGH_PROBES:
         recs: list[Record] = []
         for seed in ROUGH_PROBE_SEEDS[:max(1, n_probe_seeds)]:
-            recs += simulate_records(make_world("mit", seed, glass=glass, rough=cover), seed, duration, sensor,
+            recs += simulate_records(make_world("mit", seed, glass=glass, rough=cover, scale=scale), seed, duration, sensor,
                                      rate_hz=rate_hz, limits=limits)
         shares.append(near_unexplained(recs))
     from experiments.calibrate import _interpolate
@@ -262,7 +315,7 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
 def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT_SEEDS,
              duration: float = DEFAULT_DURATION_S, rate_hz: float = 3.0, stride: int = 5, max_scans: int | None = 400,
              methods: Sequence[str] = METHODS, sensor: Any = None, read_options: dict | None = None,
-             fit_duration: float | None = None) -> Sim2RealResult:
+             fit_duration: float | None = None, fit_rooms: bool = False) -> Sim2RealResult:
     """Compare a real log with the calibrated simulation (see the module docstring).
 
     Args:
@@ -270,6 +323,8 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
         duration, rate_hz: each simulated run. stride, max_scans: the real scans used.
         sensor: a SensorConfig to use instead of calibrating on the log.
         fit_duration: simulated seconds per spot width of the calibration's fit (default its own).
+        fit_rooms: also fit the mit worlds' room size to the log (:func:`fit_scale`, after the rough
+            fill); off by default: see docs/simulator.md for what it did to the four logs.
 
     Raises:
         LmsbenchError: for a log without scans or an unknown world.
@@ -296,10 +351,13 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     limits = motion_limits(every)
     glass = glass_rate(world, no_return_share(real, sensor.max_reading))
     rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, len(seeds)) if world == "mit" else None
+    scale = (fit_scale(real, sensor, limits, glass, duration, rate_hz, len(seeds), rough.cover)
+             if rough is not None and fit_rooms else None)
+    size = None if scale is None else scale.scale
     simulated: list[Record] = []
     for seed in seeds:
-        simulated += simulate_records(make_world(world, seed, glass=glass, rough=None if rough is None else rough.cover),
-                                      seed, duration, sensor, rate_hz=rate_hz, limits=limits)
+        simulated += simulate_records(make_world(world, seed, glass=glass, rough=None if rough is None else rough.cover,
+                                                 scale=size), seed, duration, sensor, rate_hz=rate_hz, limits=limits)
     name = Path(log).name
     from features.noise_estimate import neighbour_sigma  # noqa: PLC0415
 
@@ -311,7 +369,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     summary = summarise(compare(sources, list(methods), sigma="auto"))
     table = _table(summary, name, f"sim:{world}", list(methods))
     result = Sim2RealResult(table, scene_statistics(real), scene_statistics(simulated), sensor, limits, world,
-                            list(seeds), len(real), len(simulated), {}, glass, rough)
+                            list(seeds), len(real), len(simulated), {}, glass, rough, scale)
     result.checks = targets(table)
     return result
 
@@ -365,6 +423,11 @@ def format_report(result: Sim2RealResult, log: str) -> str:
              f"{result.sensor.noise_sigma * 1000:.2f} mm, dropout {result.sensor.dropout_prob:.4f}, "
              f"spot {result.sensor.beam_width_deg:g} deg, outliers {result.sensor.outlier_prob:.4f}"
              + ("" if result.glass is None else f"; glass {result.glass:g} panels per 10 m and clutter level")
+             + ("" if result.scale is None else
+                f"; rooms x{result.scale.scale:.2f} (share of valid readings at {MID_M:g}-{MAX_M:g} m that reach {FAR_M:g} m: "
+                f"log {result.scale.log_share:.3f}, "
+                "probes " + ", ".join(f"{s:.3f} at x{c:g}" for c, s in zip(result.scale.probe_scales, result.scale.probe_shares))
+                + ")")
              + ("" if result.rough is None else
                 f"; rough fill {result.rough.cover:.2f} of the rooms' walls (beams at {NEAR_M[0]:g}-{NEAR_M[1]:g} m "
                 f"unexplained by {STATS_METHOD}: log {result.rough.log_share:.3f}, probes "
@@ -486,7 +549,8 @@ def write_outputs(result: Sim2RealResult, out: Path, log: str, config: dict[str,
     draw(result, paths[3], log)
     result.sensor.to_yaml(paths[4], header=f"sensor model used by lmsbench sim2real {log}")
     resolved = dict(config, world=result.world, seeds=result.seeds, robot=dataclasses.asdict(result.limits),
-                    checks=result.checks, rough=None if result.rough is None else dataclasses.asdict(result.rough))
+                    checks=result.checks, rough=None if result.rough is None else dataclasses.asdict(result.rough),
+                    scale=None if result.scale is None else dataclasses.asdict(result.scale))
     resolved["robot"]["pause_s"] = list(resolved["robot"]["pause_s"])
     paths[5].write_text(yaml.safe_dump(resolved, sort_keys=False))
     return paths

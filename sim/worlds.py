@@ -46,6 +46,7 @@ MIT_PRESET = dict(n_per_side=6, room_w=5.0, room_d=6.0, corridor_w=1.8, door_w=1
                   rough_cover=1.0)
 
 
+MIN_SCALE, MAX_SCALE = 0.5, 3.0  # the rooms' size factor (make_world(scale=...))
 MAX_CLUTTER = 10.0  # densest clutter level (10x a furnished office); the object count grows with it
 
 
@@ -56,7 +57,7 @@ def check_seed(seed: object) -> None:
 
 
 def make_world(name: str = "office", seed: int = 0, clutter: float | None = None, glass: float | None = None,
-               rough: float | None = None) -> World:
+               rough: float | None = None, scale: float | None = None) -> World:
     """Build a named world; every random choice comes from ``seed``.
 
     Args:
@@ -72,11 +73,15 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
         rough: share of the rooms' wall length behind rough fill (``sim.clutter``; None = the
             name's default: none, MIT_PRESET["rough_cover"] in the mit preset); needs a clutter
             level > 0. ``lmsbench sim2real`` fits it to a log (``experiments.sim2real.fit_rough``).
+        scale: the rooms' size (width and depth) as a multiple of the world's own, in the office
+            generator's worlds (office, cluttered, random, mit; None or 1 = as they are, bit for bit);
+            furniture attempts per room grow with the room's perimeter. ``lmsbench sim2real`` fits it
+            to a log's share of readings beyond 4 m (``experiments.sim2real.fit_scale``).
 
     Raises:
         ValueError: for an unknown name (listing the known ones), a seed that is not a whole number
             >= 0, a clutter level outside [0, MAX_CLUTTER], a negative glass rate or a rough
-            share outside [0, 1].
+            share outside [0, 1] or a scale outside [MIN_SCALE, MAX_SCALE].
     """
     check_seed(seed)
     rng = np.random.default_rng([int(seed), _STREAM_WORLD])
@@ -88,16 +93,21 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
         raise ValueError(f"glass: must be a rate >= 0 (panels per 10 m), got {glass}")
     if rough is not None and not (np.isfinite(rough) and 0 <= rough <= 1):
         raise ValueError(f"rough: must be a share in [0, 1] of the rooms' wall length, got {rough}")
+    if scale is not None and not (np.isfinite(scale) and MIN_SCALE <= scale <= MAX_SCALE):
+        raise ValueError(f"scale: must be in [{MIN_SCALE:g}, {MAX_SCALE:g}] (the rooms' size as a multiple), got {scale}")
+    size = 1.0 if scale is None else float(scale)
     leaf_rng = crng if level > 0 else None
     if name in ("office", "cluttered"):
-        lay = office(rng, name, seed, leaf_rng=leaf_rng)
+        lay = office(rng, name, seed, room_w=4.0 * size, room_d=4.0 * size, leaf_rng=leaf_rng, furniture_scale=size)
     elif name == "random":
-        lay = office(rng, name, seed, n_per_side=int(rng.integers(2, 5)), room_w=float(rng.uniform(3.2, 5.0)),
-                     room_d=float(rng.uniform(3.5, 5.0)), corridor_w=float(rng.uniform(1.6, 2.6)),
-                     chamfer=bool(rng.random() < 0.5), leaf_rng=leaf_rng)
+        lay = office(rng, name, seed, n_per_side=int(rng.integers(2, 5)), room_w=float(rng.uniform(3.2, 5.0)) * size,
+                     room_d=float(rng.uniform(3.5, 5.0)) * size, corridor_w=float(rng.uniform(1.6, 2.6)),
+                     chamfer=bool(rng.random() < 0.5), leaf_rng=leaf_rng, furniture_scale=size)
     elif name == "mit":
         preset = {k: v for k, v in MIT_PRESET.items() if k not in ("clutter", "glass_per_10m", "wall_runs_per_10m", "rough_cover")}
-        lay = office(rng, name, seed, leaf_rng=leaf_rng, **preset)  # type: ignore[arg-type]
+        preset["room_w"] = float(preset["room_w"]) * size
+        preset["room_d"] = float(preset["room_d"]) * size
+        lay = office(rng, name, seed, leaf_rng=leaf_rng, furniture_scale=size, **preset)  # type: ignore[arg-type]
     elif name == "corridor":
         lay = corridor(rng, seed)
     elif name == "angles":
@@ -129,11 +139,13 @@ def _walls_with_doors(lay: Layout, y: float, length: float, doors: list[float], 
 
 def office(rng: np.random.Generator, name: str, seed: int, n_per_side: int = 3, room_w: float = 4.0,
            room_d: float = 4.0, corridor_w: float = 2.0, door_w: float = 1.0, chamfer: bool = True,
-           corridor_extension: float = 0.0, leaf_rng: np.random.Generator | None = None) -> Layout:
+           corridor_extension: float = 0.0, leaf_rng: np.random.Generator | None = None,
+           furniture_scale: float = 1.0) -> Layout:
     """Rooms on both sides of a corridor along x (corridor centre line y = corridor_w / 2).
 
     ``corridor_extension`` (m) runs the corridor on past the last rooms (a long, bare corridor);
-    ``leaf_rng`` draws each door leaf's opening angle (75-170 deg; None: 90 deg)."""
+    ``leaf_rng`` draws each door leaf's opening angle (75-170 deg; None: 90 deg); rooms scaled by
+    ``furniture_scale`` get that many times more furniture attempts (their perimeter grows so)."""
     lay = Layout(name, seed)
     t, cw, rw, rd = WALL_THICKNESS_M, corridor_w, room_w, room_d
     length = n_per_side * rw
@@ -171,14 +183,16 @@ def office(rng: np.random.Generator, name: str, seed: int, n_per_side: int = 3, 
                     (cw + t / 2, cw + rd - t / 2) if side == 1 else (-rd + t / 2, -t / 2))
             lay.rooms.append((room[0], room[1], *room[2]))
             route = np.array([lay.nodes[inside], lay.nodes[centre]])
-            _furnish_room(lay, rng, room, xd, door_w, side, route, leaf_rng)
+            _furnish_room(lay, rng, room, xd, door_w, side, route, leaf_rng, furniture_scale)
     return lay
 
 
 def _furnish_room(lay: Layout, rng: np.random.Generator, room: tuple, xd: float, door_w: float,
-                  side: int, route: np.ndarray, leaf_rng: np.random.Generator | None = None) -> None:
+                  side: int, route: np.ndarray, leaf_rng: np.random.Generator | None = None,
+                  furniture_scale: float = 1.0) -> None:
     """Furniture against the walls of one room, an open door leaf, maybe a pillar; nothing comes
-    within CLEARANCE_M of the room's route (door -> centre)."""
+    within CLEARANCE_M of the room's route (door -> centre). ``furniture_scale`` multiplies the
+    number of pieces tried (2-5)."""
     x0, x1, (y0, y1) = room
     pts = route[0] + np.linspace(0, 1, 40)[:, None] * (route[1] - route[0])
     door_face_y = y0 if side == 1 else y1
@@ -214,7 +228,7 @@ def _furnish_room(lay: Layout, rng: np.random.Generator, room: tuple, xd: float,
     }
     kinds = {"cabinet": ((0.8, 1.2), 0.45), "desk": ((1.2, 1.6), 0.7), "shelf": ((0.8, 1.0), 0.4)}
     placed: list[np.ndarray] = []
-    for _ in range(int(rng.integers(2, 6))):
+    for _ in range(int(round(int(rng.integers(2, 6)) * furniture_scale))):
         kind = str(rng.choice(list(kinds)))
         wall = str(rng.choice(list(walls)))
         (wlo, whi), depth = kinds[kind]

@@ -266,3 +266,43 @@ def test_near_unexplained_counts_beams_at_1_4_m_off_every_line() -> None:
     assert near_unexplained(walls) < 0.02
     assert near_unexplained(noise) > 0.95
     assert np.isnan(near_unexplained([]))
+
+
+def test_scaled_rooms_keep_exact_truth_and_scale_one_is_the_world() -> None:
+    """make_world(scale=...): the rooms' width and depth times the scale (the corridor as it is), more
+    furniture in bigger rooms, clear routes, ideal ranges equal to the independent ray caster's;
+    scale 1 is the world bit for bit."""
+    base, big = make_world("cluttered", 4), make_world("cluttered", 4, scale=1.5)
+    assert np.array_equal(make_world("cluttered", 4, scale=1.0).boxes, base.boxes)
+    (x0, y0, x1, y1), (bx0, by0, bx1, by1) = base.bounds, big.bounds
+    t = 0.1  # the outer walls' thickness
+    assert bx1 - bx0 - t == pytest.approx(1.5 * (x1 - x0 - t))  # three rooms of 4 m -> 6 m a side
+    assert by1 - by0 - t - 2.0 == pytest.approx(1.5 * (y1 - y0 - t - 2.0))  # rooms 4 -> 6 m deep, corridor 2 m
+    furniture = [np.count_nonzero(w.boxes[:, 6] == h) for w in (base, big) for h in (1.2, 2.0)]
+    assert furniture[2] + furniture[3] > furniture[0] + furniture[1]  # cabinets and shelves: more in bigger rooms
+    for a, b in big.route_edges:
+        pts = big.route_nodes[a] + np.linspace(0, 1, 60)[:, None] * (big.route_nodes[b] - big.route_nodes[a])
+        assert big.clearance(pts).min() >= 0.25
+    sensor = SensorConfig.ideal()
+    with LMS200Sim(big, sensor) as lidar:
+        for pose in free_poses(big, np.random.default_rng(3), 4):
+            got = lidar.scan_at(tuple(pose)).ranges.copy()
+            ref, grazing = _reference(big, pose, sensor)
+            both = np.isfinite(ref) & np.isfinite(got) & ~grazing
+            assert np.count_nonzero(both) > 200
+            assert np.max(np.abs(got[both] - ref[both])) < 1e-3
+    with pytest.raises(ValueError, match="scale"):
+        make_world("mit", 0, scale=5.0)
+
+
+def test_far_share_counts_readings_at_4_8_m_among_those_at_2_8_m() -> None:
+    """The statistic the rooms' size is fitted on: of the valid readings at 2-8 m, the share at 4 m
+    or more; nearer and farther readings and invalid ones do not count."""
+    from lms200 import Record, Scan
+    from experiments.sim2real import far_share
+
+    inc = np.deg2rad(1.0)
+    r = np.array([0.5] * 40 + [3.0] * 60 + [5.0] * 20 + [12.0] * 30 + [np.nan] * 10 + [np.inf] * 21)
+    recs = [Record(Scan(r.copy(), -np.pi / 2, inc, 0.0, 81.83, float(k))) for k in range(3)]
+    assert far_share(recs) == pytest.approx(20 / 80)
+    assert np.isnan(far_share([]))

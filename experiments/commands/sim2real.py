@@ -24,6 +24,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate-hz", type=positive("scans/s"), default=3.0, help="simulated scans kept per second (default 3)")
     p.add_argument("--stride", type=count(1), default=5, help="use every STRIDE-th real scan (default 5)")
     p.add_argument("--max-scans", type=count(1), default=400, help="at most this many real scans (default 400)")
+    p.add_argument("--fit-rooms", action="store_true",
+                   help="mit world: also fit the rooms' size to the log's share of readings at 2-8 m that reach 4 m "
+                        "(off by default: docs/simulator.md)")
     p.add_argument("--out", type=Path, help="output folder (default: a new results/sim2real/DATE_TIME, linked as "
                                             "results/sim2real/latest)")
     add_log_options(p)
@@ -45,10 +48,11 @@ def run(args: argparse.Namespace) -> int:
         check_yaml(args.sensor, "a sensor YAML")
         sensor = SensorConfig.from_yaml(args.sensor)
     result = sim2real(args.log, world=args.world, seeds=args.seeds, duration=args.duration, rate_hz=args.rate_hz,
-                      stride=args.stride, max_scans=args.max_scans, sensor=sensor, read_options=read_options)
+                      stride=args.stride, max_scans=args.max_scans, sensor=sensor, read_options=read_options,
+                      fit_rooms=args.fit_rooms)
     config = dict(log=str(args.log), duration=args.duration, rate_hz=args.rate_hz, stride=args.stride,
                   max_scans=args.max_scans, sensor_file=None if args.sensor is None else str(args.sensor),
-                  world=args.world, glass_per_10m=result.glass,
+                  world=args.world, glass_per_10m=result.glass, fit_rooms=args.fit_rooms,
                   versions=versions())
     args.out = args.out or new_run_folder("results/sim2real")
     paths = write_outputs(result, args.out, str(args.log), config)
