@@ -671,37 +671,36 @@ def candidate_runs(AD, AD_var, psi, psi_var, k, ad_line, sigma_r, p):  # noqa: A
     ad_c = p.ad_tau * p.ad_tau * (sigma_r * sigma_r)
     psi_split2 = p.psi_split * p.psi_split
     psi_tau2 = p.psi_tau * p.psi_tau
-    ok = np.zeros(n, np.bool_)
+    ok = np.empty(n, np.bool_)
     for i in range(n):
         dev = AD[i] - ad_line
         ok[i] = dev * dev <= ad_c * AD_var[i]  # nan -> False
-    mag = np.zeros(n)
-    big = np.zeros(n, np.bool_)
+    mag = np.zeros(n)  # psi^2 where it marks a slope break, else 0 (no allocation for big)
     any_big = False
-    for i in range(n - k):
-        # a slope break between two straight windows (both pass the AD test): where either window
-        # fails, the AD test already ends the run, and theta there is not a line's normal (a window
-        # across a depth jump), so its psi would cut the neighbouring straight run short
-        if not (ok[i] and ok[i + k]):
-            continue
-        p2 = psi[i] * psi[i]
-        if p2 > psi_split2 and p2 > psi_tau2 * psi_var[i]:  # > max(.,.) (False on nan)
-            big[i] = True
-            mag[i] = p2
-            any_big = True
+    if n > k:
+        ok0, ok1, ps, pv = ok[:n - k], ok[k:], psi[:n - k], psi_var[:n - k]
+        for i in range(n - k):  # without branches, so that it vectorises
+            # a slope break between two straight windows (both pass the AD test): where either
+            # window fails, the AD test already ends the run, and theta there is not a line's
+            # normal (a window across a depth jump), so its psi would cut the neighbouring
+            # straight run short
+            p2 = ps[i] * ps[i]
+            big = ok0[i] & ok1[i] & (p2 > psi_split2) & (p2 > psi_tau2 * pv[i])  # > max(.,.) (False on nan)
+            mag[i] = p2 if big else 0.0
+            any_big |= big
     if any_big:
         # a slope break between the windows at i and i+k peaks near i + k/2: drop the centres
         # whose windows reach it (those within k), as the AD test does at sharp corners
         hit = np.zeros(n, np.bool_)
         for i in range(n):
-            if big[i] and (i == 0 or mag[i] >= mag[i - 1]) and (i == n - 1 or mag[i] >= mag[i + 1]):
+            if mag[i] > 0.0 and (i == 0 or mag[i] >= mag[i - 1]) and (i == n - 1 or mag[i] >= mag[i + 1]):
                 hit[min(i + k // 2, n - 1)] = True
         for i in range(n):
             if hit[i]:
                 for j in range(max(0, i - k), min(n, i + k + 1)):
                     ok[j] = False
-    c0 = np.empty(n, np.int64)
-    c1 = np.empty(n, np.int64)
+    runs = np.empty((2, n), np.int64)
+    c0, c1 = runs[0], runs[1]
     m = 0
     i = 0
     while i < n:
