@@ -781,12 +781,13 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
     h2 = (n_angles - 1) // 2
     h = max(h2, 1)
     n_tmpl = template.size
-    alpha = np.empty(n_runs)
-    rho = np.empty(n_runs)
+    out = np.empty((2, n_runs))
+    alpha, rho = out[0], out[1]
     inlier = np.zeros(beam.size, np.bool_)
-    a_idx = np.empty(n_angles, np.int64)
     ref = np.empty(n_angles)
-    counts_a = np.empty((n_angles, N_BINS + 2), np.int64)  # cells 1..N_BINS; 0 and N_BINS + 1 outside
+    # per angle: its index, then the vote counts of cells 1..N_BINS (0 and N_BINS + 1 outside)
+    angle_counts = np.empty((n_angles, N_BINS + 3), np.int64)
+    a_idx, counts_a = angle_counts[:, 0], angle_counts[:, 1:]
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         centre_idx = np.int64(np.rint((centre[r] - angle_min) / step))
@@ -1392,24 +1393,26 @@ def fit_spans(first, last, shrink0, shrink1, ranges, bearings, valid, theta, the
     in it and the refined, checked line. Returns fit_runs' outputs."""
     k = p.k
     n_runs = first.size
-    counts = last - first + 1
-    starts = np.empty(n_runs, np.int64)
+    ints = np.empty((4, n_runs), np.int64)  # one block: counts, starts, first and last centres
+    counts, starts, c0, c1 = ints[0], ints[1], ints[2], ints[3]
     total = 0
     for r in range(n_runs):
+        counts[r] = last[r] - first[r] + 1
         starts[r] = total
         total += counts[r]
-    beam = np.empty(total, np.int64)
-    log_d = np.empty(total)
-    for r in range(n_runs):
-        for t in range(counts[r]):
-            beam[starts[r] + t] = first[r] + t
-            log_d[starts[r] + t] = math.log(ranges[first[r] + t])
-    c0 = first + k
-    c1 = last - k
-    for r in range(n_runs):
+        c0[r] = first[r] + k
+        c1[r] = last[r] - k
         if c1[r] - c0[r] >= shrink0[r] + shrink1[r]:
             c0[r] += shrink0[r]
             c1[r] -= shrink1[r]
+    beam = np.empty(total, np.int64)
+    log_d = np.empty(total)
+    for r in range(n_runs):
+        f, s = first[r], starts[r]
+        br, lr, dr = beam[s:s + counts[r]], log_d[s:s + counts[r]], ranges[f:f + counts[r]]
+        for t in range(counts[r]):
+            br[t] = f + t
+            lr[t] = math.log(dr[t])
     centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings.b, increment, sigma_r, k, p)
     alpha0, rho0, inlier0 = band_search(
         beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
