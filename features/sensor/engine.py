@@ -1133,19 +1133,10 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
 
 
 @kernel
-def chord_split(first, last, ranges, bearings):  # noqa: ANN001, ANN201
-    """The beam of each span [first, last] farthest from the chord between the span's end points
-    (``farthest_from_chord``): where a span that does not fit one line bends (IEPF's split point)."""
-    out = np.empty(first.size, np.int64)
-    for r in range(first.size):
-        out[r] = farthest_from_chord(first[r], last[r], ranges, bearings)
-    return out
-
-
-@kernel
 def farthest_from_chord(f, l, ranges, bearings) -> int:  # noqa: ANN001
     """The beam of f..l farthest from the chord between the end points of beams f and l
-    (Cartesian, sensor frame); the middle one when none is off it."""
+    (Cartesian, sensor frame; the middle one when none is off it): where a span that does not fit
+    one line bends (IEPF's split point)."""
     x0, y0 = ranges[f] * bearings.cos[f], ranges[f] * bearings.sin[f]
     x1, y1 = ranges[l] * bearings.cos[l], ranges[l] * bearings.sin[l]
     dx, dy = x1 - x0, y1 - y0
@@ -1455,27 +1446,20 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
                 o_rho[m], o_alpha[m], o_cov[m] = rho[r], alpha[r], cov[r]
                 o_f[m], o_l[m], o_n[m] = f_in[r], l_in[r], n_in[r]
                 m += 1
-        bad = np.flatnonzero(~good & (last - first >= min_span))  # a part of min_span beams may remain
-        if p.arc_check:  # a failing span that is one circle is a round surface: not cut into chords
-            arc = np.zeros(bad.size, np.bool_)
-            for t in range(bad.size):
-                if theta_turn(first[bad[t]], last[bad[t]], theta) >= 0.5 * p.corner_min_turn:
-                    arc[t] = circle_fits(first[bad[t]], last[bad[t]], -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r,
-                                         p)
-            bad = bad[~arc]
-        at = chord_split(first[bad], last[bad], ranges, bearings)
-        nf = np.empty(2 * bad.size, np.int64)
-        nl = np.empty(2 * bad.size, np.int64)
-        s0 = np.empty(2 * bad.size, np.int64)
-        s1 = np.empty(2 * bad.size, np.int64)
+        parts = np.empty((4, 2 * first.size), np.int64)  # the next pass's spans: first, last, shrink0, shrink1
         q = 0
-        for t in range(bad.size):
-            r = bad[t]
-            for f, l, a, b in ((first[r], at[t] - 1, shrink0[r], k), (at[t] + 1, last[r], k, shrink1[r])):
+        for r in range(first.size):
+            if good[r] or last[r] - first[r] < min_span:  # a part of min_span beams may remain
+                continue
+            if p.arc_check and theta_turn(first[r], last[r], theta) >= 0.5 * p.corner_min_turn:
+                if circle_fits(first[r], last[r], -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r, p):
+                    continue  # a failing span that is one circle is a round surface: not cut into chords
+            at = farthest_from_chord(first[r], last[r], ranges, bearings)
+            for f, l, a, b in ((first[r], at - 1, shrink0[r], k), (at + 1, last[r], k, shrink1[r])):
                 if l - f + 1 >= min_span:
-                    nf[q], nl[q], s0[q], s1[q] = f, l, a, b
+                    parts[0, q], parts[1, q], parts[2, q], parts[3, q] = f, l, a, b
                     q += 1
-        first, last, shrink0, shrink1 = nf[:q], nl[:q], s0[:q], s1[:q]
+        first, last, shrink0, shrink1 = parts[0, :q], parts[1, :q], parts[2, :q], parts[3, :q]
     order = np.argsort(o_f[:m], kind="mergesort")
     rho, alpha, cov = o_rho[:m][order], o_alpha[:m][order], o_cov[:m][order]
     f_in, l_in, n_in = o_f[:m][order], o_l[:m][order], o_n[:m][order]
