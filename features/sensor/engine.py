@@ -975,7 +975,7 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
     step = bearings.b[1] - bearings.b[0] if bearings.b.size > 1 else 1.0
     sweep = max(1, np.int64(np.rint(ONE_DEG / step))) if step < 0.99 * ONE_DEG else 1  # lms200.noise.interlace_stride
     c2 = 2.0 * math.cos(sweep * step)
-    scratch = np.empty(valid.size)
+    scratch = rows[5]  # local_scale's scratch (a run's rows at most): the ranges d are not read after the steps
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         b0 = beam[s]
