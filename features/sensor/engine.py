@@ -325,16 +325,19 @@ def partition(a, lo, hi, pivot, strict) -> int:  # noqa: ANN001
     """Move the values of a[lo:hi] below ``pivot`` (at most ``pivot`` when not ``strict``) to its
     front, the others behind them; returns where the others start. Without branches (Lomuto's
     scheme, every value swapped with the front's next slot or with itself): which side a value
-    takes is data, not predictable."""
-    s = lo
-    for i in range(lo, hi):
+    takes is data, not predictable. Indexed unsigned: numba then adds no negative-index wraparound."""
+    s = np.uint64(lo)
+    i = np.uint64(lo)
+    end = np.uint64(hi)
+    while i < end:
         x = a[i]
         y = a[s]
         c = x < pivot if strict else x <= pivot
         a[i] = y if c else x
         a[s] = x if c else y
-        s += c
-    return s
+        s += np.uint64(c)
+        i += np.uint64(1)
+    return np.int64(s)
 
 
 @kernel
