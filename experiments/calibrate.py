@@ -13,6 +13,13 @@ produces the effect, which are fitted by simulation (indirect inference, fixed s
   spot width and no outliers is subtracted.
 - ``noise_tail_prob``: the residual tail's weight includes the scene's own; the simulated weight at
   a few tail probabilities is interpolated to the log's.
+- ``dropout_patch_m``: whether nan readings come beam by beam or in dark stretches of surface:
+  the share of nan beams whose next beam is nan too (``LogCalibration.nan_clustering``)
+  simulated with dark cells of 0-0.8 m, interpolated to the log's (only where the clustering,
+  less 3 standard errors, exceeds twice the nan rate and 0.1: beams dropped one by one give
+  about the nan rate). MIT CSAIL's nans come in
+  stretches (0.9); dropped beam by beam they cut every wall, which the paper's extractor does
+  not bridge.
 - ``noise_tail_patch_m``: whether the tail comes beam by beam or in rough stretches of surface:
   the tail's clustering along the scan (``LogCalibration.tail_clustering``) simulated with rough
   cells of 0-2 m, interpolated to the log's. A real log's tail gathers in stretches (MIT CSAIL,
@@ -37,6 +44,8 @@ from lms200.calibration import LogCalibration, calibrate_scans
 WIDTH_GRID_STEPS = (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)  # spot widths tried, in beam steps
 TAIL_GRID = (0.0, 0.1, 0.3)  # noise_tail_prob values tried
 PATCH_GRID_M = (0.0, 0.1, 0.3, 1.0, 2.0)  # noise_tail_patch_m values tried (m)
+DARK_GRID_M = (0.0, 0.1, 0.2, 0.4, 0.8)  # dropout_patch_m values tried (m)
+NAN_CLUSTER_MIN = 0.1  # nan clustering (less 3 std) above this and twice the nan rate: nans gather, fit cells
 FIT_DURATION_S = 30.0  # simulated seconds per spot width
 FIT_RATE_HZ = 5.0  # scans kept per simulated second
 FIT_SEED = 0
@@ -53,6 +62,7 @@ class CalibrationResult:
     world: str
     tail_curve: list[tuple[float, float]] = ()  # type: ignore[assignment]  # (noise_tail_prob, simulated tail share)
     patch_curve: list[tuple[float, float]] = ()  # type: ignore[assignment]  # (noise_tail_patch_m, simulated clustering)
+    dark_curve: list[tuple[float, float]] = ()  # type: ignore[assignment]  # (dropout_patch_m, simulated nan clustering)
 
 
 def _interpolate(xs: list[float], ys: list[float], target: float) -> float:
@@ -157,9 +167,18 @@ def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT
             patch_curve.append((size, float(m.tail_clustering.value)))
         patch = _interpolate([c[1] for c in patch_curve], [c[0] for c in patch_curve], float(cal.tail_clustering.value))
         with_width = with_width.replace(noise_tail_patch_m=round(patch, 3))
+    dark_curve: list[tuple[float, float]] = []
+    nc = cal.nan_clustering
+    if with_width.dropout_prob > 0 and np.isfinite(nc.value) and nc.value - 3 * nc.std > max(2 * with_width.dropout_prob,
+                                                                                          NAN_CLUSTER_MIN):
+        for size in DARK_GRID_M:
+            m = _simulated_measurement(with_width.replace(dropout_patch_m=size), built, duration)
+            dark_curve.append((size, float(m.nan_clustering.value)))
+        dark = _interpolate([c[1] for c in dark_curve], [c[0] for c in dark_curve], float(cal.nan_clustering.value))
+        with_width = with_width.replace(dropout_patch_m=round(dark, 3))
     outlier = max(float(cal.outlier_rate.value) - baseline, 0.0) if np.isfinite(cal.outlier_rate.value) else 0.0
     fitted = with_width.replace(outlier_prob=min(outlier, 0.5))
-    return CalibrationResult(cal, fitted, curve, baseline, world, tail_curve, patch_curve)
+    return CalibrationResult(cal, fitted, curve, baseline, world, tail_curve, patch_curve, dark_curve)
 
 
 def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_scans: int | None = None,
@@ -223,6 +242,8 @@ def calibration_section(result: CalibrationResult, source: str) -> dict[str, Any
             "simulated_tail_share_by_noise_tail_prob": [[_round(e), _round(s)] for e, s in result.tail_curve],
             "residual_tail_clustering": _est(c.tail_clustering),
             "simulated_tail_clustering_by_noise_tail_patch_m": [[_round(e), _round(s)] for e, s in result.patch_curve],
+            "nan_clustering": _est(c.nan_clustering),
+            "simulated_nan_clustering_by_dropout_patch_m": [[_round(e), _round(s)] for e, s in result.dark_curve],
         }
     }
 
@@ -249,6 +270,7 @@ def format_calibration(result: CalibrationResult) -> list[str]:
         f"residual tail           {pm(c.tail_share, 100, ' %')} at {c.tail_sigma_m * 1000:.1f} mm  -> noise_tail_prob "
         f"{s.noise_tail_prob:.4g} at {s.noise_tail_sigma * 1000:.1f} mm",
         f"tail clustering        {pm(c.tail_clustering)}  -> noise_tail_patch_m {s.noise_tail_patch_m:g}",
+        f"nan clustering         {pm(c.nan_clustering)}  -> dropout_patch_m {s.dropout_patch_m:g}",
     ]
     return lines
 

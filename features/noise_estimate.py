@@ -31,6 +31,7 @@ from lms200.noise import MIN_RANGE_M
 from .jit import FixedTypeCall
 
 AUTO = "auto"
+AUTO_FALLBACK = 0.005  # m: the noise assumed when a scan has too few usable triples
 
 
 @lru_cache(maxsize=1)
@@ -48,19 +49,19 @@ def twice_cos(increment: float) -> float:
     return float(2.0 * np.cos(increment))
 
 
-def scan_sigma(scan: Scan, fallback: float = 0.005) -> float:
+def scan_sigma(scan: Scan, fallback: float = AUTO_FALLBACK) -> float:
     """:func:`neighbour_sigma` of one scan (the sensor method's per-scan "auto"), in one compiled call."""
     return _engine()[1](scan.ranges.reshape(1, -1), twice_cos(scan.angle_increment), float(scan.range_min),
                          float(scan.range_max), float(fallback))
 
 
-def stacked_sigma(ranges: np.ndarray, scan: Scan, fallback: float = 0.005) -> float:
+def stacked_sigma(ranges: np.ndarray, scan: Scan, fallback: float = AUTO_FALLBACK) -> float:
     """:func:`neighbour_sigma` of scans of ``scan``'s geometry stacked as rows of ``ranges`` (S, n)."""
     return _engine()[0].pooled_sigma(ranges, twice_cos(scan.angle_increment), float(scan.range_min), float(scan.range_max),
                         float(fallback))
 
 
-def neighbour_sigma(scans: Scan | Iterable[Any], fallback: float = 0.005) -> float:
+def neighbour_sigma(scans: Scan | Iterable[Any], fallback: float = AUTO_FALLBACK) -> float:
     """Range scatter (m, 1 sigma) of neighbouring beams about straight faces, pooled over ``scans``
     (one Scan, or Scans or records with ``.scan``), at least the quantisation's q / sqrt(12) and
     ``features.sensor.engine.SIGMA_FLOOR_M`` (1 mm); ``fallback`` when fewer than

@@ -90,6 +90,8 @@ class LogCalibration:
             residual exceeds TAIL_CLUSTER_SIGMAS core sigmas, the share whose neighbour triple
             TAIL_CLUSTER_STEP strides on (sharing no beam with it) does too. A tail of independent
             beams gives about the tail's own share; rough stretches of surface give more.
+        nan_clustering: how nan readings gather along a scan: of the nan beams, the share whose
+            next beam is nan too (about nan_rate for beams dropped one by one; MIT CSAIL: 0.9).
     """
 
     n_scans: int
@@ -111,6 +113,7 @@ class LogCalibration:
     tail_share: Estimate = Estimate(0.0, 0.0, 0)
     tail_sigma_m: float = 0.0
     tail_clustering: Estimate = Estimate(float("nan"), float("nan"), 0)
+    nan_clustering: Estimate = Estimate(float("nan"), float("nan"), 0)
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -286,6 +289,16 @@ def _tail_clustering(scans: list[Scan], core: float, seed: int) -> Estimate:
     return _ratio(both, first, seed)
 
 
+def _nan_clustering(scans: list[Scan], seed: int) -> Estimate:
+    """P(the next beam is nan | this one is), over scans (see LogCalibration.nan_clustering)."""
+    both, first = np.zeros(len(scans)), np.zeros(len(scans))
+    for k, s in enumerate(scans):
+        nan = np.isnan(s.ranges)
+        first[k] = np.count_nonzero(nan[:-1])
+        both[k] = np.count_nonzero(nan[:-1] & nan[1:])
+    return _ratio(both, first, seed)
+
+
 def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
     """Measure the error model of the laser behind ``scans`` (Scans or records with ``.scan``).
 
@@ -323,4 +336,5 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
         no_return_rate=_ratio(c[:, 5], c[:, 4], seed), outlier_rate=_ratio(c[:, 7], c[:, 6], seed),
         mixed_share=_ratio(c[:, 8], c[:, 8] + c[:, 9], seed),
         tail_share=tail, tail_sigma_m=float(tail_sigma), tail_clustering=clustering,
+        nan_clustering=_nan_clustering(kept, seed),
     )

@@ -89,6 +89,8 @@ class LMS200Sim:
         surface = np.random.default_rng([int(seed), _STREAM_SURFACE])
         self._cell_offset = surface.uniform(0.0, 1.0, 2) * s.noise_tail_patch_m
         self._cell_key = np.uint64(surface.integers(0, 2**63))
+        self._dark_offset = surface.uniform(0.0, 1.0, 2) * s.dropout_patch_m  # drawn after: the rest is unchanged
+        self._dark_key = np.uint64(surface.integers(0, 2**63))
 
     def _load(self, world: World) -> None:
         """Load each solid as a static triangle-mesh body (Bullet's ray test against meshes is
@@ -226,6 +228,9 @@ class LMS200Sim:
             spurious = finite & (self.rng.random(s.n_beams) < s.outlier_prob)
             lo, hi = OUTLIER_RANGE_SHARE
             r = np.where(spurious, r * self.rng.uniform(lo, hi, s.n_beams), r)
+        if s.dropout_patch_m > 0:  # dark cells of the surfaces; the draw above still made (same stream)
+            dropped = np.where(finite, self._cells(bp, r, s.dropout_patch_m, self._dark_offset, self._dark_key,
+                                                   s.dropout_prob), dropped)
         sigma = s.sigma_at(r) if s.noise_sigma_per_m else s.noise_sigma
         if s.noise_tail_prob > 0:
             rough = (self._rough_cells(bp, r) if s.noise_tail_patch_m > 0
@@ -247,10 +252,16 @@ class LMS200Sim:
     def _rough_cells(self, bp: np.ndarray, ranges: np.ndarray) -> np.ndarray:
         """Which beams end in a rough cell of the surface grid (see SensorConfig.noise_tail_patch_m)."""
         s = self.sensor
+        return self._cells(bp, ranges, s.noise_tail_patch_m, self._cell_offset, self._cell_key, s.noise_tail_prob)
+
+    def _cells(self, bp: np.ndarray, ranges: np.ndarray, size: float, offset: np.ndarray, key: np.uint64,
+               share: float) -> np.ndarray:
+        """Which beams end in a marked cell of a surface grid of ``size`` (m) at ``offset``: a
+        share ``share`` of the cells, by a hash of the cell and ``key``."""
         heading = bp[:, 2] + self._angles
         cell = np.floor((bp[:, :2] + ranges[:, None] * np.column_stack((np.cos(heading), np.sin(heading)))
-                         - self._cell_offset) / s.noise_tail_patch_m).astype(np.int64).view(np.uint64)
-        return _unit_hash(cell[:, 0], cell[:, 1], self._cell_key) < s.noise_tail_prob
+                         - offset) / size).astype(np.int64).view(np.uint64)
+        return _unit_hash(cell[:, 0], cell[:, 1], key) < share
 
     def _mix_edges(self, bp: np.ndarray, ranges: np.ndarray) -> np.ndarray:
         """Mixed pixels. Each beam's spot is sampled at 5 bearings (-w/2, -w/4, 0, +w/4, +w/2 of

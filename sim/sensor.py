@@ -59,6 +59,12 @@ class SensorConfig:
             rough (a hash of the cell and the simulator's seed), and every beam ending in a rough
             cell draws from the wide Gaussian: rough stretches of surface (shelves, radiators,
             curtains, clutter against walls) that stay where they are from scan to scan.
+        dropout_patch_m: 0: each beam reads nan on its own with probability ``dropout_prob``;
+            > 0: beams that meet a surface read nan where they end in a dark cell of a grid of
+            this size (world frame, its own random offset and hash; a share ``dropout_prob`` of
+            the cells), so no-returns come in stretches of surface (dark or shiny things) that
+            stay from scan to scan, as in real logs; beams that meet nothing still drop one by
+            one.
 
     The last seven fields default to the datasheet model (none of these effects);
     ``lmsbench calibrate`` fits all of them to a real log.
@@ -81,6 +87,7 @@ class SensorConfig:
     noise_tail_prob: float = 0.0
     noise_tail_sigma: float = 0.0
     noise_tail_patch_m: float = 0.0
+    dropout_patch_m: float = 0.0
 
     def __post_init__(self) -> None:
         for f in fields(self):  # each value of its field's type (a YAML "abc" failed deep in the simulation)
@@ -119,6 +126,8 @@ class SensorConfig:
             raise ValueError(f"noise_tail_sigma: must be >= 0, got {self.noise_tail_sigma}")
         if not (np.isfinite(self.noise_tail_patch_m) and self.noise_tail_patch_m >= 0):
             raise ValueError(f"noise_tail_patch_m: must be >= 0, got {self.noise_tail_patch_m}")
+        if not (np.isfinite(self.dropout_patch_m) and self.dropout_patch_m >= 0):
+            raise ValueError(f"dropout_patch_m: must be >= 0, got {self.dropout_patch_m}")
         if self.max_reading is not None and not 0 < self.max_reading <= self.range_max:
             raise ValueError(f"max_reading: must be in (0, range_max = {self.range_max}], got {self.max_reading}")
 

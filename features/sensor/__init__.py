@@ -18,7 +18,7 @@ from ..registry import register
 from ..batch import common_geometry, split_rows, stacked_ranges
 from ..types import Corners, FeatureSet, Lines
 from ..jit import FixedTypeCall
-from ..noise_estimate import AUTO, stacked_sigma
+from ..noise_estimate import AUTO, AUTO_FALLBACK, stacked_sigma
 from . import engine
 from .config import SensorMethodConfig
 from .grid import bearings_of, grid_constants, window_sums
@@ -27,17 +27,23 @@ __all__ = ["SensorMethodConfig", "extract_sensor", "extract_sensor_many", "signa
 
 METHOD = "sensor"
 _extract_scan = FixedTypeCall(engine.extract_scan)  # a Scan's types: read-only float64 arrays, floats
+_extract_scan_auto = FixedTypeCall(engine.extract_scan_auto)
 
 
 def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
-    """Lines and corners of ``scan`` in its sensor frame (the registered run function)."""
+    """Lines and corners of ``scan`` in its sensor frame (the registered run function); a noise of
+    "auto" is estimated from the scan in the same compiled call."""
     p = cfg.params
     grid = grid_constants(p.k, scan.angle_increment, p.hough_subdiv)
-    lv, lb, cv, cb = _extract_scan(
-        scan.ranges, bearings_of(scan.angle_min, scan.angle_increment, len(scan)), scan.angle_min,
-        scan.angle_increment, float(max(scan.range_min, cfg.min_range)), scan.range_max,
-        cfg.sigma_of(scan), grid, p,
-    )
+    bearings = bearings_of(scan.angle_min, scan.angle_increment, len(scan))
+    range_lo = float(max(scan.range_min, cfg.min_range))
+    sigma = cfg.sigma_for(scan.range_max)
+    if sigma == AUTO:
+        lv, lb, cv, cb = _extract_scan_auto(scan.ranges, bearings, scan.angle_min, scan.angle_increment, range_lo,
+                                            scan.range_max, float(scan.range_min), AUTO_FALLBACK, grid, p)
+    else:
+        lv, lb, cv, cb = _extract_scan(scan.ranges, bearings, scan.angle_min, scan.angle_increment, range_lo,
+                                       scan.range_max, float(sigma), grid, p)
     return FeatureSet.of(Lines(lv, lb), Corners(cv, cb), METHOD)
 
 

@@ -115,6 +115,7 @@ class Grid(NamedTuple):
     step: float  # Log-Hough angle step D / hough_subdiv, rad
     zero: int  # index of angle 0 in the template
     template: np.ndarray  # log cos(m step) for |m| <= zero, floored (eq. 5)
+    twice_cos: float  # 2 cos(D), as numpy computes it: the noise estimate's collinearity residuals
 
 
 @kernel
@@ -131,38 +132,82 @@ def wrap(a: float) -> float:
 
 @kernel
 def block_sum(a: np.ndarray, lo: int, n: int) -> float:
-    """numpy's pairwise sum of a[lo : lo + n] for n <= 128: sequential below 8, else 8 accumulators."""
+    """numpy's pairwise sum of a[lo : lo + n] for n <= 128: sequential below 8, else 8 accumulators
+    (indexed unsigned: numba then adds no negative-index wraparound, and the loop vectorises)."""
     if n < 8:
         res = 0.0
         for i in range(n):
             res += a[lo + i]
         return res
-    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
-    i = 8
-    while i < n - (n % 8):
-        r0 += a[lo + i]
-        r1 += a[lo + i + 1]
-        r2 += a[lo + i + 2]
-        r3 += a[lo + i + 3]
-        r4 += a[lo + i + 4]
-        r5 += a[lo + i + 5]
-        r6 += a[lo + i + 6]
-        r7 += a[lo + i + 7]
-        i += 8
+    b = a[lo:lo + n]
+    r0, r1, r2, r3 = b[0], b[1], b[2], b[3]
+    r4, r5, r6, r7 = b[4], b[5], b[6], b[7]
+    m = np.uint64(n - (n % 8))
+    i = np.uint64(8)
+    while i < m:
+        r0 += b[i]
+        r1 += b[i + np.uint64(1)]
+        r2 += b[i + np.uint64(2)]
+        r3 += b[i + np.uint64(3)]
+        r4 += b[i + np.uint64(4)]
+        r5 += b[i + np.uint64(5)]
+        r6 += b[i + np.uint64(6)]
+        r7 += b[i + np.uint64(7)]
+        i += np.uint64(8)
     res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += a[lo + i]
-        i += 1
+    while i < np.uint64(n):
+        res += b[i]
+        i += np.uint64(1)
     return res
 
 
 @kernel
-def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
-    """Sum of a[lo : lo + n] in numpy's pairwise order (blocks of 128 halved at multiples of 8),
-    walking numpy's recursion tree with an explicit stack (numba cannot cache recursive functions)."""
+def pairwise_halves(n: int):  # noqa: ANN201
+    """numpy's split of a pairwise sum of n > 128 terms: the left half rounded down to a multiple of 8."""
+    n2 = n // 2
+    n2 -= n2 % 8
+    return n2, n - n2
+
+
+@kernel
+def pairwise_248(a: np.ndarray, lo: int, n: int) -> float:
+    """``pairwise_sum`` for n <= 248 (both halves of one split are blocks)."""
     if n <= PW_BLOCKSIZE:
         return block_sum(a, lo, n)
+    n2, n3 = pairwise_halves(n)
+    return block_sum(a, lo, n2) + block_sum(a, lo + n2, n3)
+
+
+@kernel
+def pairwise_488(a: np.ndarray, lo: int, n: int) -> float:
+    """``pairwise_sum`` for n <= 488 (halves of at most 248)."""
+    if n <= PW_BLOCKSIZE:
+        return block_sum(a, lo, n)
+    n2, n3 = pairwise_halves(n)
+    return pairwise_248(a, lo, n2) + pairwise_248(a, lo + n2, n3)
+
+
+@kernel
+def pairwise_1928(a: np.ndarray, lo: int, n: int) -> float:
+    """``pairwise_sum`` for n <= 1928 (two levels of halves of at most 488)."""
+    if n <= PW_BLOCKSIZE:
+        return block_sum(a, lo, n)
+    n2, n3 = pairwise_halves(n)
+    if n <= 968:
+        return pairwise_488(a, lo, n2) + pairwise_488(a, lo + n2, n3)
+    n4, n5 = pairwise_halves(n2)
+    n6, n7 = pairwise_halves(n3)
+    return ((pairwise_488(a, lo, n4) + pairwise_488(a, lo + n4, n5))
+            + (pairwise_488(a, lo + n2, n6) + pairwise_488(a, lo + n2 + n6, n7)))
+
+
+@kernel
+def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
+    """Sum of a[lo : lo + n] in numpy's pairwise order (blocks of 128 halved at multiples of 8):
+    up to 1928 terms by the fixed levels above (no allocation), beyond by walking numpy's
+    recursion tree with an explicit stack (numba cannot cache recursive functions)."""
+    if n <= 1928:
+        return pairwise_1928(a, lo, n)
     st_lo = np.empty(64, np.int64)
     st_n = np.empty(64, np.int64)
     st_state = np.empty(64, np.int64)
@@ -173,13 +218,12 @@ def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
     while sp > 0:
         top = sp - 1
         l, m = st_lo[top], st_n[top]
-        if m <= PW_BLOCKSIZE:
-            vals[nv] = block_sum(a, l, m)
+        if m <= 1928:
+            vals[nv] = pairwise_1928(a, l, m)
             nv += 1
             sp -= 1
             continue
-        n2 = m // 2
-        n2 -= n2 % 8
+        n2, _ = pairwise_halves(m)
         if st_state[top] == 0:  # left half first
             st_state[top] = 1
             st_lo[sp], st_n[sp], st_state[sp] = l, n2, 0
@@ -214,20 +258,30 @@ SAMPLE_STEP = 5  # every 5th finite range of a scan enters the quantisation step
 def neighbour_residuals(ranges, c2, lo, hi, z, m):  # noqa: ANN001, ANN201
     """``lms200.noise.line_residuals`` at stride 1 written to z[m:] (room for ranges.size - 2):
     the normalised collinearity residual (m) of each triple of neighbouring beams in [lo, hi)
-    (lo >= MIN_RANGE_M) without a depth step; ``c2`` = 2 cos(D). Returns the new end of z."""
-    for i in range(ranges.size - 2):
-        rm, r0, rp = ranges[i], ranges[i + 1], ranges[i + 2]
-        if not (lo <= rm < hi and lo <= r0 < hi and lo <= rp < hi):  # False on nan, inf < inf
-            continue
-        if not abs(rp - rm) <= JUMP_FRACTION * r0:
-            continue
+    (lo >= MIN_RANGE_M) without a depth step; ``c2`` = 2 cos(D). Returns the new end of z.
+    Every triple's residual first (nan where it is not used; a used one is finite), in a loop that
+    vectorises, then the used ones moved to the front."""
+    n = ranges.size - 2
+    if n <= 0:
+        return m
+    zz = z[m:m + n]
+    rm_, r0_, rp_ = ranges[:n], ranges[1:n + 1], ranges[2:n + 2]
+    for i in range(n):
+        rm, r0, rp = rm_[i], r0_[i], rp_[i]
         s = rm + rp
         s2 = s * s
         wm = c2 * (rp * rp) / s2
         wp = c2 * (rm * rm) / s2
-        z[m] = (r0 - c2 * rm * rp / s) / math.sqrt(1.0 + wm * wm + wp * wp)
-        m += 1
-    return m
+        res = (r0 - c2 * rm * rp / s) / math.sqrt(1.0 + wm * wm + wp * wp)
+        # in range (False on nan, inf < inf) and no depth step
+        use = lo <= rm < hi and lo <= r0 < hi and lo <= rp < hi and abs(rp - rm) <= JUMP_FRACTION * r0
+        zz[i] = res if use else np.nan
+    q = m
+    for i in range(n):
+        v = zz[i]
+        z[q] = v
+        q += v == v
+    return q
 
 
 @kernel
@@ -261,35 +315,51 @@ def quantum_step(sample) -> float:  # noqa: ANN001
 
 
 @kernel
+def median3(x: float, y: float, z: float) -> float:
+    """The middle one of three values (no nan)."""
+    return max(min(x, y), min(max(x, y), z))
+
+
+@kernel
+def partition(a, lo, hi, pivot, strict) -> int:  # noqa: ANN001
+    """Move the values of a[lo:hi] below ``pivot`` (at most ``pivot`` when not ``strict``) to its
+    front, the others behind them; returns where the others start. Without branches (Lomuto's
+    scheme, every value swapped with the front's next slot or with itself): which side a value
+    takes is data, not predictable."""
+    s = lo
+    for i in range(lo, hi):
+        x = a[i]
+        y = a[s]
+        c = x < pivot if strict else x <= pivot
+        a[i] = y if c else x
+        a[s] = x if c else y
+        s += c
+    return s
+
+
+@kernel
 def select(a, n, k) -> float:  # noqa: ANN001
     """The k-th smallest of a[:n] (0-based; no nan), reordering a[:n] so that a[:k] <= a[k] <= a[k+1:n]
-    (quickselect, median-of-three pivots)."""
-    lo, hi = 0, n - 1
-    while hi > lo:
-        mid = (lo + hi) // 2
-        if a[mid] < a[lo]:
-            a[mid], a[lo] = a[lo], a[mid]
-        if a[hi] < a[lo]:
-            a[hi], a[lo] = a[lo], a[hi]
-        if a[hi] < a[mid]:
-            a[hi], a[mid] = a[mid], a[hi]
-        pivot = a[mid]
-        i, j = lo, hi
-        while i <= j:
-            while a[i] < pivot:
-                i += 1
-            while pivot < a[j]:
-                j -= 1
-            if i <= j:
-                a[i], a[j] = a[j], a[i]
-                i += 1
-                j -= 1
-        if k <= j:
-            hi = j
-        elif k >= i:
-            lo = i
+    (quickselect: pivots the median of three, of three medians of three on long ranges)."""
+    lo, hi = 0, n  # a[:lo] <= a[lo:hi] <= a[hi:], k in [lo, hi)
+    while hi - lo > 1:
+        m = hi - lo
+        if m > 64:
+            st = m // 9
+            b = lo + st // 2
+            pivot = median3(median3(a[b], a[b + st], a[b + 2 * st]), median3(a[b + 3 * st], a[b + 4 * st], a[b + 5 * st]),
+                            median3(a[b + 6 * st], a[b + 7 * st], a[b + 8 * st]))
         else:
-            break
+            pivot = median3(a[lo], a[(lo + hi) // 2], a[hi - 1])
+        s = partition(a, lo, hi, pivot, True)
+        if k < s:
+            hi = s
+            continue
+        if s == lo:  # the pivot is the least value here: split off its copies
+            s = partition(a, lo, hi, pivot, False)
+            if k < s:
+                return pivot
+        lo = s
     return a[k]
 
 
@@ -469,6 +539,14 @@ def window_sums(u, i, k):  # noqa: ANN001, ANN201
 
 
 @kernel
+def fix_slope_sd(x: float, sd: float) -> bool:
+    """Whether the arctangent form of the slope's std (``beam_signals``) does not hold, at x = 1 +
+    (T + s)(T - s) = 0 or an infinite x or s; not at a nan x (a window with an invalid beam), where
+    both forms give nan."""
+    return x == x and not (x != 0.0 and math.isfinite(x) and math.isfinite(sd))
+
+
+@kernel
 def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):  # noqa: ANN001, ANN201
     """Per-beam signals of one scan (nan where a window is incomplete or holds an invalid beam):
     valid, u = 1/d, AD (eq. 4), its variance per sigma_r**2, ad (eq. 6), theta (rad, unwrapped)
@@ -480,13 +558,13 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
     right at grazing incidence.
     """
     n = ranges.size
-    valid = np.zeros(n, np.bool_)
-    u = np.full(n, np.nan)
-    for i in range(n):
+    valid = np.empty(n, np.bool_)
+    u = np.empty(n)
+    for i in range(n):  # without branches, so that it vectorises
         d = ranges[i]
-        if d >= range_lo and d <= range_hi:
-            valid[i] = True
-            u[i] = 1.0 / d
+        ok = d >= range_lo and d <= range_hi
+        valid[i] = ok
+        u[i] = 1.0 / d if ok else np.nan
     out = np.full((9, n), np.nan)  # one allocation for the seven signals and two scratch rows
     AD, AD_var, ad, theta, theta_var, psi, psi_var = out[0], out[1], out[2], out[3], out[4], out[5], out[6]
     tan_t, tan_s = out[7], out[8]
@@ -499,7 +577,8 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
         # themselves. A window that holds a nan (invalid beam) or an inf (its signals are nan, or
         # inf at a zero range), or whose sum exceeds SUM_RATIO times the centre's u (a beam far
         # behind its neighbours, where ad = sd / u_i magnifies any rounding), is summed term by
-        # term as before (``direct_sums``)
+        # term as before (``direct_sums``). The sums go to the rows of AD, ad and AD_var, which
+        # the next loop turns into the signals in place
         left = right = quad = peak = peak_q = 0.0
         n_bad = 0  # non-finite u in the window
         for i in range(k, n - k):
@@ -527,44 +606,57 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
             if fresh:
                 left, right, quad, n_bad = window_sums(u, i, k)
                 peak, peak_q = left + right, quad
-            ui = u[i]
-            if n_bad == 0 and left + right <= SUM_RATIO * ui:
-                s1, sd, s4 = left + right, right - left, quad
+            if n_bad == 0 and left + right <= SUM_RATIO * u[i]:
+                AD[i], ad[i], AD_var[i] = left + right, right - left, quad
             else:
-                s1, sd, s4 = direct_sums(u, i, k)
+                AD[i], ad[i], AD_var[i] = direct_sums(u, i, k)
+        m = n - 2 * k  # the window centres k .. n - k - 1, as slices: the loops below vectorise
+        uc, s1, sd, s4, tt, ts = u[k:n - k], AD[k:n - k], ad[k:n - k], AD_var[k:n - k], tan_t[k:n - k], tan_s[k:n - k]
+        s_scale = sigma_r / two_sin_sum
+        for i in range(m):
+            ui = uc[i]
             u2 = ui * ui
-            a = s1 / ui  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
-            ad_i = sd / ui  # eq. 6: ad_ik
-            other = s4 / u2 - u2  # sum over j != i of u_j^4 / u_i^2
+            a = s1[i] / ui  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
+            ad_i = sd[i] / ui  # eq. 6: ad_ik
+            other = s4[i] / u2 - u2  # sum over j != i of u_j^4 / u_i^2
             ad1 = ad_i - 1.0
             a1 = a - 1.0
-            AD[i] = a
-            AD_var[i] = other + a1 * a1 * u2
-            ad[i] = ad_i
+            s1[i] = a
+            s4[i] = other + a1 * a1 * u2
+            sd[i] = ad_i
             # eq. 7 as corrected in NOTES.md: ad - 1 = 2 tan(a - b_i) sum_{m=1..k} sin(mD): the
             # slope T = tan(a - b_i) and its std s here, their arctangents in the next loop
-            tan_t[i] = ad1 / two_sin_sum
-            tan_s[i] = math.sqrt(other + ad1 * ad1 * u2) * (sigma_r / two_sin_sum)
-        for i in range(k, n - k):
-            t, sd = tan_t[i], tan_s[i]
-            theta[i] = bearings[i] + arctan(t)
+            tt[i] = ad1 / two_sin_sum
+            ts[i] = math.sqrt(other + ad1 * ad1 * u2) * s_scale
+        bc, th, tv = bearings[k:n - k], theta[k:n - k], theta_var[k:n - k]
+        n_fix = 0
+        for i in range(m):
+            t, sd_i = tt[i], ts[i]
+            th[i] = bc[i] + arctan(t)
             # (arctan(T + s) - arctan(T - s)) / 2 = atan2(2 s, 1 + (T + s)(T - s)) / 2, as
             # arctan(2 s / x) for x > 0 and pi - arctan(2 s / -x) for x < 0 (s >= 0)
-            x = 1.0 + (t + sd) * (t - sd)
-            h = arctan(2.0 * sd / abs(x))
+            x = 1.0 + (t + sd_i) * (t - sd_i)
+            h = arctan(2.0 * sd_i / abs(x))
             theta_sd = 0.5 * (h if x > 0.0 else math.pi - h)
-            theta_var[i] = theta_sd * theta_sd
-        for i in range(k, n - k):  # where that form does not hold (x = 0, an inf, nan): atan2
-            t, sd = tan_t[i], tan_s[i]
-            x = 1.0 + (t + sd) * (t - sd)
-            if not (x != 0.0 and math.isfinite(x) and math.isfinite(sd)):
-                theta_sd = 0.5 * math.atan2(2.0 * sd, x)
-                theta_var[i] = theta_sd * theta_sd
-    for i in range(n - k):
-        dpsi = theta[i] - theta[i + k]  # the corner signal psi_i = theta_i - theta_{i+k}
-        # wrapped to [-pi, pi]: dpsi - 2 pi rint(dpsi / 2 pi), where rint gives +-0 for |dpsi| < pi
-        psi[i] = dpsi + 0.0 if abs(dpsi) < math.pi else dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
-        psi_var[i] = theta_var[i] + theta_var[i + k]
+            tv[i] = theta_sd * theta_sd
+            n_fix += fix_slope_sd(x, sd_i)
+        i = 0
+        while n_fix > 0:  # where that form does not hold: atan2 (a loop that cannot vectorise, so
+            # that the libm call is made for these few beams only, not speculated for all)
+            t, sd_i = tt[i], ts[i]
+            x = 1.0 + (t + sd_i) * (t - sd_i)
+            if fix_slope_sd(x, sd_i):
+                theta_sd = 0.5 * math.atan2(2.0 * sd_i, x)
+                tv[i] = theta_sd * theta_sd
+                n_fix -= 1
+            i += 1
+    if n > k:
+        t0, t1, v0, v1, ps, pv = theta[:n - k], theta[k:], theta_var[:n - k], theta_var[k:], psi[:n - k], psi_var[:n - k]
+        for i in range(n - k):
+            dpsi = t0[i] - t1[i]  # the corner signal psi_i = theta_i - theta_{i+k}
+            # wrapped to [-pi, pi]: dpsi - 2 pi rint(dpsi / 2 pi), where rint gives +-0 for |dpsi| < pi
+            ps[i] = dpsi + 0.0 if abs(dpsi) < math.pi else dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
+            pv[i] = v0[i] + v1[i]
     return valid, u, AD, AD_var, ad, theta, theta_var, psi, psi_var
 
 
@@ -695,8 +787,7 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
     inlier = np.zeros(beam.size, np.bool_)
     a_idx = np.empty(n_angles, np.int64)
     ref = np.empty(n_angles)
-    # two banks of cells, even and odd rows, so that a vote need not wait for the last one's count
-    acc = np.zeros((n_angles, 2, N_BINS + 2), np.int64)  # cells 1..N_BINS; 0 and N_BINS + 1 outside
+    counts_a = np.empty((n_angles, N_BINS + 2), np.int64)  # cells 1..N_BINS; 0 and N_BINS + 1 outside
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         centre_idx = np.int64(np.rint((centre[r] - angle_min) / step))
@@ -705,39 +796,41 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
         # cells are laid out around the median vote of the beams at 1/4, 1/2 and 3/4 of the run
         # (a mean would be dragged off by neighbour-line beams at its ends; one beam can be a spike)
         row1, row2, row3 = s + cnt // 4, s + cnt // 2, s + (3 * cnt) // 4
-        lo_beam = hi_beam = beam[s]
-        for row in range(s, s + cnt):
-            lo_beam = min(lo_beam, beam[row])
-            hi_beam = max(hi_beam, beam[row])
         for a in range(n_angles):
             a_idx[a] = centre_idx + stride * (a - h2)
             q1 = template[min(max(a_idx[a] + zero - beam[row1] * subdiv, 0), n_tmpl - 1)] + log_d[row1]
             q2 = template[min(max(a_idx[a] + zero - beam[row2] * subdiv, 0), n_tmpl - 1)] + log_d[row2]
             q3 = template[min(max(a_idx[a] + zero - beam[row3] * subdiv, 0), n_tmpl - 1)] + log_d[row3]
             ref[a] = max(min(q1, q2), min(max(q1, q2), q3))  # median of three
-        acc[:, :, :] = 0
+        bm, ld = beam[s:s + cnt], log_d[s:s + cnt]
         for a in range(n_angles):
             offset = (N_BINS / 2.0 + 1.0) - ref[a] * inv_width
             base = a_idx[a] + zero
-            # eq. 5: log p = log d + log cos(a - b), a lookup at a - b in the template; the
-            # lookup is clipped onto the template's ends only where the run reaches them
-            inside = base - hi_beam * subdiv >= 0 and base - lo_beam * subdiv <= n_tmpl - 1
-            for row in range(s, s + cnt):
-                idx = base - beam[row] * subdiv
-                if not inside:
-                    idx = min(max(idx, 0), n_tmpl - 1)
-                rel = (template[idx] + log_d[row]) * inv_width + offset
-                if not rel >= 0.0:  # nan votes go to the outside cell 0
-                    rel = 0.0
-                rel = min(rel, N_BINS + 1.0)
-                acc[a, row & 1, np.int64(rel)] += 1
+            # eq. 5: log p = log d + log cos(a - b), a lookup at a - b in the template (clipped
+            # onto its ends, where it holds the floor). The votes are counted in 16-bit fields
+            # of four words (cells 4w .. 4w + 3 in word w; a run has fewer than 2^16 beams), a
+            # loop without stores that vectorises
+            w0 = w1 = w2 = w3 = np.uint64(0)
+            for t in range(cnt):
+                rel = (template[min(max(base - bm[t] * subdiv, 0), n_tmpl - 1)] + ld[t]) * inv_width + offset
+                rel = rel if rel >= 0.0 else 0.0  # nan votes go to the outside cell 0
+                cell = np.uint64(min(rel, N_BINS + 1.0))
+                one = np.uint64(1) << ((cell & np.uint64(3)) * np.uint64(16))
+                word = cell >> np.uint64(2)
+                w0 += one if word == 0 else np.uint64(0)
+                w1 += one if word == 1 else np.uint64(0)
+                w2 += one if word == 2 else np.uint64(0)
+                w3 += one if word == 3 else np.uint64(0)
+            for c in range(N_BINS + 2):
+                w = w0 if c < 4 else (w1 if c < 8 else (w2 if c < 12 else w3))
+                counts_a[a, c] = np.int64((w >> np.uint64(16 * (c % 4))) & np.uint64(0xFFFF))
         best = -np.inf
         best_a = 0
         best_c = 0
         for a in range(n_angles):
             tie = -TIE_BREAK * abs(a - h2)
             for c in range(N_BINS - 1):
-                v = ((acc[a, 0, c + 1] + acc[a, 1, c + 1]) + (acc[a, 0, c + 2] + acc[a, 1, c + 2])) + tie  # two adjacent cells
+                v = (counts_a[a, c + 1] + counts_a[a, c + 2]) + tie  # two adjacent cells
                 if v > best:
                     best, best_a, best_c = v, a, c
         # the pair (c, c+1) covers (log p - ref) / width in [c - N_BINS/2, c + 2 - N_BINS/2)
@@ -1043,35 +1136,41 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
 @kernel
 def chord_split(first, last, ranges, bearings):  # noqa: ANN001, ANN201
     """The beam of each span [first, last] farthest from the chord between the span's end points
-    (Cartesian, sensor frame): where a span that does not fit one line bends (IEPF's split point)."""
+    (``farthest_from_chord``): where a span that does not fit one line bends (IEPF's split point)."""
     out = np.empty(first.size, np.int64)
     for r in range(first.size):
-        f, l = first[r], last[r]
-        x0, y0 = ranges[f] * bearings.cos[f], ranges[f] * bearings.sin[f]
-        x1, y1 = ranges[l] * bearings.cos[l], ranges[l] * bearings.sin[l]
-        dx, dy = x1 - x0, y1 - y0
-        norm = max(math.hypot(dx, dy), 1e-12)
-        best, at = -1.0, (f + l) // 2
-        for j in range(f + 1, l):
-            x, y = ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]
-            dist = abs((x - x0) * dy - (y - y0) * dx) / norm
-            if dist > best:
-                best, at = dist, j
-        out[r] = at
+        out[r] = farthest_from_chord(first[r], last[r], ranges, bearings)
     return out
 
 
 @kernel
-def valid_centroid(f, l, ranges, bearings, valid):  # noqa: ANN001, ANN201
-    """(x, y, n): the mean point (m, sensor frame) of the valid beams f..l and their count (x = y =
-    0 when there is none)."""
+def farthest_from_chord(f, l, ranges, bearings) -> int:  # noqa: ANN001
+    """The beam of f..l farthest from the chord between the end points of beams f and l
+    (Cartesian, sensor frame); the middle one when none is off it."""
+    x0, y0 = ranges[f] * bearings.cos[f], ranges[f] * bearings.sin[f]
+    x1, y1 = ranges[l] * bearings.cos[l], ranges[l] * bearings.sin[l]
+    dx, dy = x1 - x0, y1 - y0
+    norm = max(math.hypot(dx, dy), 1e-12)
+    best, at = -1.0, (f + l) // 2
+    for j in range(f + 1, l):
+        x, y = ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]
+        dist = abs((x - x0) * dy - (y - y0) * dx) / norm
+        if dist > best:
+            best, at = dist, j
+    return at
+
+
+@kernel
+def valid_centroid(xs, ys, ok):  # noqa: ANN001, ANN201
+    """(x, y, n): the mean of the points (xs, ys) (m, sensor frame) where ``ok`` (valid beams) and
+    their count (x = y = 0 when there is none)."""
     n = 0
     mx = 0.0
     my = 0.0
-    for j in range(f, l + 1):
-        if valid[j]:
-            mx += ranges[j] * bearings.cos[j]
-            my += ranges[j] * bearings.sin[j]
+    for t in range(xs.size):
+        if ok[t]:
+            mx += xs[t]
+            my += ys[t]
             n += 1
     if n > 0:
         mx /= n
@@ -1080,26 +1179,26 @@ def valid_centroid(f, l, ranges, bearings, valid):  # noqa: ANN001, ANN201
 
 
 @kernel
-def tls_clipped(f, l, ranges, bearings, valid, sigma_r, lim) -> float:  # noqa: ANN001
-    """Sum of the squared normalised residuals (each clipped at ``lim``) of the valid beams f..l
-    about their total-least-squares line."""
-    mx, my, n = valid_centroid(f, l, ranges, bearings, valid)
+def tls_clipped(xs, ys, ok, sigma_r, lim) -> float:  # noqa: ANN001
+    """Sum of the squared normalised residuals (each clipped at ``lim``) of the points (xs, ys)
+    where ``ok`` (valid beams) about their total-least-squares line."""
+    mx, my, n = valid_centroid(xs, ys, ok)
     if n < 3:
         return 0.0
     cxx = cyy = cxy = 0.0
-    for j in range(f, l + 1):
-        if valid[j]:
-            u = ranges[j] * bearings.cos[j] - mx
-            v = ranges[j] * bearings.sin[j] - my
+    for t in range(xs.size):
+        if ok[t]:
+            u = xs[t] - mx
+            v = ys[t] - my
             cxx += u * u
             cyy += v * v
             cxy += u * v
     a = 0.5 * math.atan2(-2.0 * cxy, cyy - cxx)
     ca, sa = math.cos(a), math.sin(a)
     out = 0.0
-    for j in range(f, l + 1):
-        if valid[j]:
-            z = ((ranges[j] * bearings.cos[j] - mx) * ca + (ranges[j] * bearings.sin[j] - my) * sa) / sigma_r
+    for t in range(xs.size):
+        if ok[t]:
+            z = ((xs[t] - mx) * ca + (ys[t] - my) * sa) / sigma_r
             out += min(z * z, lim)
     return out
 
@@ -1150,14 +1249,21 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
       whatever the actual scatter, e.g. of the interlaced sweeps of 0.5 deg logs). Every chi^2
       here is clipped at inlier_tau^2 a beam, as the checks see a line (its inliers): unclipped,
       two stray beams on a line (mixed pixels, clutter) made it look as loose as a circle."""
-    mx, my, n = valid_centroid(f, l, ranges, bearings, valid)
+    m = l - f + 1
+    work = np.empty((5, m))  # the beams' points, then per-beam terms of each pass over them
+    xs, ys, w0, w1, w2 = work[0], work[1], work[2], work[3], work[4]
+    for t in range(m):
+        xs[t] = ranges[f + t] * bearings.cos[f + t]
+        ys[t] = ranges[f + t] * bearings.sin[f + t]
+    ok = valid[f:l + 1]
+    mx, my, n = valid_centroid(xs, ys, ok)
     if n < 5:
         return False
     suu = suv = svv = suuu = svvv = suvv = svuu = 0.0
-    for j in range(f, l + 1):
-        if valid[j]:
-            u = ranges[j] * bearings.cos[j] - mx
-            v = ranges[j] * bearings.sin[j] - my
+    for t in range(m):
+        if ok[t]:
+            u = xs[t] - mx
+            v = ys[t] - my
             suu += u * u
             suv += u * v
             svv += v * v
@@ -1177,15 +1283,18 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
     if not surface_turn(f, l, cx, cy, ranges, bearings) >= 0.5 * p.corner_min_turn:
         return False  # nearly straight (most lines): no geometric fit needed
     for _ in range(ARC_GN_STEPS):  # geometric residual e_j = |x_j - c| - R; J = [-(x - c) / |x - c|, -1]
+        for t in range(m):  # the square roots and divisions of all beams in a loop that vectorises
+            dx = xs[t] - cx
+            dy = ys[t] - cy
+            dist = max(math.sqrt(dx * dx + dy * dy), 1e-12)  # not hypot: a libm call a beam
+            inv = 1.0 / dist  # one division a beam, not two
+            w0[t] = -dx * inv
+            w1[t] = -dy * inv
+            w2[t] = dist - rad
         h00 = h01 = h02 = h11 = h12 = h22 = g0 = g1 = g2 = 0.0
-        for j in range(f, l + 1):
-            if valid[j]:
-                dx = ranges[j] * bearings.cos[j] - cx
-                dy = ranges[j] * bearings.sin[j] - cy
-                dist = max(math.sqrt(dx * dx + dy * dy), 1e-12)  # not hypot: a libm call a beam
-                e = dist - rad
-                inv = 1.0 / dist  # one division a beam, not two
-                j0, j1 = -dx * inv, -dy * inv
+        for t in range(m):  # the sums in beam order
+            if ok[t]:
+                j0, j1, e = w0[t], w1[t], w2[t]
                 h00 += j0 * j0
                 h01 += j0 * j1
                 h02 -= j0
@@ -1210,15 +1319,17 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
         rad -= (a02 * g0 + a12 * g1 + a22 * g2) / dt
     if not (rad > 0.0 and surface_turn(f, l, cx, cy, ranges, bearings) >= p.corner_min_turn):
         return False
+    for t in range(m):  # the circle's normalised residuals
+        dx = xs[t] - cx
+        dy = ys[t] - cy
+        w2[t] = (math.sqrt(dx * dx + dy * dy) - rad) / sigma_r
     lim = p.inlier_tau * p.inlier_tau
     chi = 0.0  # the circle's chi^2 over the inliers of the neighbourhood, and clipped over all of it
     clipped = 0.0
     ni = 0
-    for j in range(f, l + 1):
-        if valid[j]:
-            dx = ranges[j] * bearings.cos[j] - cx
-            dy = ranges[j] * bearings.sin[j] - cy
-            zz = (math.sqrt(dx * dx + dy * dy) - rad) / sigma_r
+    for t in range(m):
+        if ok[t]:
+            zz = w2[t]
             z2 = zz * zz
             clipped += min(z2, lim)
             if z2 <= lim:
@@ -1227,24 +1338,25 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
     if not (ni >= p.min_inlier_fraction * n and chi <= p.max_chi2 * max(ni - 3, 1)):
         return False
     if lf < 0:  # a span without a line: the circle must fit it better than two lines split at its chord
-        at = chord_split(np.array([f]), np.array([l]), ranges, bearings)[0]
-        two = tls_clipped(f, at, ranges, bearings, valid, sigma_r, lim) + tls_clipped(at + 1, l, ranges, bearings, valid, sigma_r, lim)
+        c = farthest_from_chord(f, l, ranges, bearings) - f + 1  # the two lines' beams: :c and c:
+        two = tls_clipped(xs[:c], ys[:c], ok[:c], sigma_r, lim) + tls_clipped(xs[c:], ys[c:], ok[c:], sigma_r, lim)
         return clipped <= two
     ca, sa = math.cos(lalpha), math.sin(lalpha)
+    for t in range(lf - f, ll - f + 1):  # the line's beams: the circle's residuals (in w2) and the line's
+        w1[t] = (xs[t] * ca + ys[t] * sa - lrho) / sigma_r
     c_chi = 0.0
     l_chi = 0.0
     nl = 0
-    for j in range(lf, ll + 1):
-        if valid[j]:
-            x, y = ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]
-            zc = (math.sqrt((x - cx) * (x - cx) + (y - cy) * (y - cy)) - rad) / sigma_r
-            zl = (x * ca + y * sa - lrho) / sigma_r
+    for t in range(lf - f, ll - f + 1):
+        if ok[t]:
+            zc = w2[t]
+            zl = w1[t]
             c_chi += min(zc * zc, lim)
             l_chi += min(zl * zl, lim)
             nl += 1
     if not c_chi <= l_chi + ARC_TAU * math.sqrt(2.0 * nl):
         return False
-    if not clipped <= tls_clipped(f, l, ranges, bearings, valid, sigma_r, lim) - ARC_TAU * ARC_TAU:
+    if not clipped <= tls_clipped(xs, ys, ok, sigma_r, lim) - ARC_TAU * ARC_TAU:
         return False  # one line fits the neighbourhood about as well: a straight wall, its turn noise
     dof = max(nl - 2, 1)
     return clipped / n <= (l_chi / dof) * (1.0 + ARC_TAU * math.sqrt(2.0 / dof))
@@ -1388,44 +1500,39 @@ def inv2(a: float, b: float, d: float):  # noqa: ANN201
 
 
 @kernel
-def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p):  # noqa: ANN001, ANN201
-    """Merge neighbouring lines that are one line: at most merge_gap beams apart, at most
-    bridge_invalid invalid beams between (none by default: +inf and nan beams break segments),
-    and (rho, alpha) equal within merge_tau std (plus a model-error floor). The merged line is the
-    information-weighted combination of the pieces (independent fits of one line)."""
+def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p) -> int:  # noqa: ANN001
+    """In place: merge neighbouring lines that are one line: at most merge_gap beams apart, at
+    most bridge_invalid invalid beams between (none by default: +inf and nan beams break
+    segments), and (rho, alpha) equal within merge_tau std (plus a model-error floor). The merged
+    line is the information-weighted combination of the pieces (independent fits of one line).
+    The lines left move to the front of the arrays (alpha wrapped when any merged); returns how
+    many there are."""
     n = rho.size
     if n < 2:
-        return rho, alpha, cov, first, last, npts
-    invalid_cum = np.zeros(valid.size + 1, np.int64)
-    for i in range(valid.size):
-        invalid_cum[i + 1] = invalid_cum[i] + (0 if valid[i] else 1)
-    rho = rho.copy()
-    alpha = alpha.copy()
-    c = cov.reshape(n, 4).copy()
-    last = last.copy()
-    npts = npts.copy()
+        return n
     tau2 = p.merge_tau**2
-    out = np.empty(n, np.int64)
-    out[0] = 0
-    n_out = 1
     cur = 0
     for i in range(1, n):
         gap = first[i] - last[cur] - 1
-        if gap > p.merge_gap or (gap > 0 and invalid_cum[first[i]] - invalid_cum[last[cur] + 1] > p.bridge_invalid):
-            out[n_out] = i
-            n_out += 1
-            cur = i
+        apart = gap > p.merge_gap
+        if not apart and gap > 0:
+            n_invalid = 0
+            for j in range(last[cur] + 1, first[i]):
+                n_invalid += 0 if valid[j] else 1
+            apart = n_invalid > p.bridge_invalid
+        if apart:
+            cur += 1
+            move_line(rho, alpha, cov, first, last, npts, i, cur)
             continue
         dr = rho[i] - rho[cur]
         da = (alpha[i] - alpha[cur] + math.pi) % (2 * math.pi) - math.pi
-        a00, a01, a11 = c[cur, 0], c[cur, 1], c[cur, 3]
-        b00, b01, b11 = c[i, 0], c[i, 1], c[i, 3]
+        a00, a01, a11 = cov[cur, 0, 0], cov[cur, 0, 1], cov[cur, 1, 1]
+        b00, b01, b11 = cov[i, 0, 0], cov[i, 0, 1], cov[i, 1, 1]
         s00, s01, s11 = a00 + b00 + MERGE_FLOOR_RHO_VAR, a01 + b01, a11 + b11 + MERGE_FLOOR_ALPHA_VAR
         det = s00 * s11 - s01 * s01
         if not det > 0 or (s11 * dr * dr - 2 * s01 * dr * da + s00 * da * da) > tau2 * det:
-            out[n_out] = i
-            n_out += 1
-            cur = i
+            cur += 1
+            move_line(rho, alpha, cov, first, last, npts, i, cur)
             continue
         # information-weighted fusion (alpha of i unwrapped next to cur's)
         pa0, pa1, pa2 = inv2(a00, a01, a11)
@@ -1436,59 +1543,63 @@ def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p):  # noqa: ANN
         q00, q01, q11 = inv2(p00, p01, p11)
         rho[cur] = q00 * va0 + q01 * va1
         alpha[cur] = q01 * va0 + q11 * va1
-        c[cur, 0] = q00
-        c[cur, 1] = q01
-        c[cur, 2] = q01
-        c[cur, 3] = q11
+        cov[cur, 0, 0] = q00
+        cov[cur, 0, 1] = q01
+        cov[cur, 1, 0] = q01
+        cov[cur, 1, 1] = q11
         last[cur] = max(last[cur], last[i])
         npts[cur] += npts[i]
-    if n_out == n:
-        return rho, alpha, cov, first, last, npts
-    idx = out[:n_out]
-    alpha_o = alpha[idx]
-    for m in range(n_out):
-        alpha_o[m] = wrap(alpha_o[m])
-    return rho[idx], alpha_o, c[idx].reshape(n_out, 2, 2), first[idx], last[idx], npts[idx]
+    n_out = cur + 1
+    if n_out < n:
+        for m in range(n_out):
+            alpha[m] = wrap(alpha[m])
+    return n_out
+
+
+@kernel
+def move_line(rho, alpha, cov, first, last, npts, i, to) -> None:  # noqa: ANN001
+    """Line i of the table copied to row ``to`` (<= i)."""
+    if to != i:
+        rho[to], alpha[to], first[to], last[to], npts[to] = rho[i], alpha[i], first[i], last[i], npts[i]
+        cov[to, 0, 0], cov[to, 0, 1], cov[to, 1, 0], cov[to, 1, 1] = cov[i, 0, 0], cov[i, 0, 1], cov[i, 1, 0], cov[i, 1, 1]
 
 
 @kernel
 def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p):  # noqa: ANN001, ANN201
     """Merge neighbours, split the beams two neighbours both claim (around a corner) at the middle,
     project the end beams' points on the lines, drop segments shorter than min_length and those
-    left with fewer than min_points beams (min_points counts the beams of the reported line).
-    Returns (rho, alpha, cov, first, last, n_points, start (L, 2), end (L, 2))."""
-    if rho.size > 1:
-        rho, alpha, cov, first, last, npts = merge_neighbours(rho, alpha, cov, first, last, npts, valid, p)
-    first = first.copy()
-    last = last.copy()
-    n_lines = rho.size
-    over = np.empty(n_lines, np.bool_)  # overlaps found before any change
-    for i in range(n_lines - 1):
-        over[i] = last[i] >= first[i + 1]
-    for i in range(n_lines - 1):
-        if over[i]:
-            mid = (first[i + 1] + last[i]) // 2
-            last[i] = max(mid, first[i])
-            first[i + 1] = min(mid + 1, last[i + 1])
-    ends = np.empty((2, n_lines, 2))
-    keep = np.zeros(n_lines, np.bool_)
+    left with fewer than min_points beams (min_points counts the beams of the reported line); the
+    line table (which find_lines made for this) is changed in place.
+    Returns the rows of ``features.types.Lines``: line values (L, 10) rho, alpha, x0, y0, x1, y1,
+    cov (row by row), line beams (L, 3) first, last, n_points."""
+    n_lines = merge_neighbours(rho, alpha, cov, first, last, npts, valid, p)
+    lv = np.empty((n_lines, 10))
+    lb = np.empty((n_lines, 3), np.int64)
     min_len2 = p.min_length * p.min_length
+    q = 0
     for m in range(n_lines):
+        if m + 1 < n_lines and last[m] >= first[m + 1]:  # overlap (of the lines as they came)
+            mid = (first[m + 1] + last[m]) // 2
+            last[m] = max(mid, first[m])
+            first[m + 1] = min(mid + 1, last[m + 1])
         c, s = math.cos(alpha[m]), math.sin(alpha[m])
         for e in range(2):
             j = first[m] if e == 0 else last[m]
             d = ranges[j]
             x, y = d * bearings.cos[j], d * bearings.sin[j]
             off = x * c + y * s - rho[m]
-            ends[e, m, 0] = x - off * c
-            ends[e, m, 1] = y - off * s
-        dx = ends[1, m, 0] - ends[0, m, 0]
-        dy = ends[1, m, 1] - ends[0, m, 1]
-        keep[m] = dx * dx + dy * dy >= min_len2  # nan -> dropped
-    n_pts = np.minimum(npts, last - first + 1)
-    keep &= n_pts >= p.min_points  # also after the split of shared beams: the reported line's beams
-    idx = np.flatnonzero(keep)
-    return (rho[idx], alpha[idx], cov[idx], first[idx], last[idx], n_pts[idx], ends[0][idx], ends[1][idx])
+            lv[q, 2 + 2 * e] = x - off * c
+            lv[q, 3 + 2 * e] = y - off * s
+        dx = lv[q, 4] - lv[q, 2]
+        dy = lv[q, 5] - lv[q, 3]
+        n_pts = min(npts[m], last[m] - first[m] + 1)
+        if not (dx * dx + dy * dy >= min_len2 and n_pts >= p.min_points):  # nan -> dropped; min_points
+            continue  # also after the split of shared beams: the reported line's beams
+        lv[q, 0], lv[q, 1] = rho[m], alpha[m]
+        lv[q, 6], lv[q, 7], lv[q, 8], lv[q, 9] = cov[m, 0, 0], cov[m, 0, 1], cov[m, 1, 0], cov[m, 1, 1]
+        lb[q, 0], lb[q, 1], lb[q, 2] = first[m], last[m], n_pts
+        q += 1
+    return lv[:q], lb[:q]
 
 
 # -- 6. corners -----------------------------------------------------------------------------------
@@ -1514,27 +1625,30 @@ def neighbourhood_var(ranges, valid, lo, hi) -> float:  # noqa: ANN001
 
 
 @kernel
-def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, increment, sigma_r, p):  # noqa: ANN001, ANN201
-    """Corners between consecutive lines i, i + 1 (beam order): (x, y, angle) and (beam, i) each.
+def corners(lv, lb, psi, ranges, valid, angle_min, increment, sigma_r, p):  # noqa: ANN001, ANN201
+    """Corners between consecutive lines i, i + 1 (beam order) of the rows ``segments`` made: the
+    rows of ``features.types.Corners``, corner values (C, 3) x, y, angle and corner beams (C, 3)
+    beam, line i, line i + 1.
 
     A corner needs the two lines' facing ends within corner_max_gap beams, a turn of the line
     direction in [corner_min_turn, pi - corner_min_turn], their intersection near both facing
     ends, psi_i (the paper's corner signal) reaching corner_psi of the turn there, and (the
     paper's remedy against false acute corners, when acute_check) a range variance of the beams
     within k of it of at least acute_min_var sigma_r^2. ``angle`` is the interior angle (0, pi)."""
-    n_lines = rho.size
+    n_lines = lv.shape[0]
     n = ranges.size
     k = p.k
     min_turn = p.corner_min_turn
     acute_var = p.acute_min_var * (sigma_r * sigma_r)
     out_f = np.empty((max(n_lines - 1, 0), 3))
-    out_i = np.empty((max(n_lines - 1, 0), 2), np.int64)
+    out_i = np.empty((max(n_lines - 1, 0), 3), np.int64)
     m = 0
     for i in range(n_lines - 1):
         j = i + 1
-        if first[j] - last[i] - 1 > p.corner_max_gap:
+        last_i, first_j = lb[i, 1], lb[j, 0]
+        if first_j - last_i - 1 > p.corner_max_gap:
             continue
-        a1, a2 = alpha[i], alpha[j]
+        a1, a2 = lv[i, 1], lv[j, 1]
         s = math.sin(a2 - a1)
         if math.cos(a2 - a1) >= 0:
             turn = math.asin(min(1.0, abs(s)))
@@ -1542,18 +1656,18 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
             turn = math.pi - math.asin(min(1.0, abs(s)))
         if turn < min_turn or turn > math.pi - min_turn:
             continue
-        x = (rho[i] * math.sin(a2) - rho[j] * math.sin(a1)) / s  # x cos a + y sin a = rho for both
-        y = (rho[j] * math.cos(a1) - rho[i] * math.cos(a2)) / s
+        x = (lv[i, 0] * math.sin(a2) - lv[j, 0] * math.sin(a1)) / s  # x cos a + y sin a = rho for both
+        y = (lv[j, 0] * math.cos(a1) - lv[i, 0] * math.cos(a2)) / s
         # near both facing ends: within corner_max_dist plus the point spacing there (one beam
         # step projected on each line, large at grazing incidence)
         b = math.atan2(y, x)
         spacing = math.hypot(x, y) * increment / max(min(math.cos(b - a1), math.cos(b - a2)), 0.1)
         reach = p.corner_max_dist + 1.5 * min(spacing, SPACING_CAP)
-        if math.hypot(x - end[i, 0], y - end[i, 1]) > reach:
+        if math.hypot(x - lv[i, 4], y - lv[i, 5]) > reach:  # the end of line i
             continue
-        if math.hypot(x - start[j, 0], y - start[j, 1]) > reach:
+        if math.hypot(x - lv[j, 2], y - lv[j, 3]) > reach:  # the start of line j
             continue
-        lo, hi = max(0, last[i] - k), min(n - 1, first[j])
+        lo, hi = max(0, last_i - k), min(n - 1, first_j)
         peak = -1.0  # largest |psi| between the two segments
         for t in range(lo, hi + 1):
             if np.isfinite(psi[t]):
@@ -1561,13 +1675,13 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
         if peak < 0.0 or peak < p.corner_psi * turn:
             continue
         index = np.int64(np.rint((b - angle_min) / increment))
-        index = min(max(index, last[i]), first[j])
+        index = min(max(index, last_i), first_j)
         if p.acute_check:
             var = neighbourhood_var(ranges, valid, max(0, index - k), min(n - 1, index + k))
             if var < acute_var:
                 continue
-        v1x, v1y = start[i, 0] - x, start[i, 1] - y
-        v2x, v2y = end[j, 0] - x, end[j, 1] - y
+        v1x, v1y = lv[i, 2] - x, lv[i, 3] - y
+        v2x, v2y = lv[j, 4] - x, lv[j, 5] - y
         cos_angle = (v1x * v2x + v1y * v2y) / max(math.hypot(v1x, v1y) * math.hypot(v2x, v2y), 1e-300)
         angle = math.acos(min(1.0, max(-1.0, cos_angle)))
         if not (0.0 < angle < math.pi) or not (np.isfinite(x) and np.isfinite(y)):
@@ -1577,6 +1691,7 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
         out_f[m, 2] = angle
         out_i[m, 0] = index
         out_i[m, 1] = i
+        out_i[m, 2] = j
         m += 1
     return out_f[:m], out_i[:m]
 
@@ -1585,43 +1700,32 @@ def corners(rho, alpha, first, last, start, end, psi, ranges, valid, angle_min, 
 
 
 @kernel
-def pack(rho, alpha, cov, first, last, npts, p0, p1, cf, ci):  # noqa: ANN001, ANN201
-    """The rows of ``features.types.Lines`` and ``Corners``: line values (L, 10) rho, alpha, x0,
-    y0, x1, y1, cov (row by row), line beams (L, 3) first, last, n_points; corner values (C, 3)
-    x, y, angle, corner beams (C, 3) beam, line i, line i + 1."""
-    n = rho.size
-    lv = np.empty((n, 10))
-    lb = np.empty((n, 3), np.int64)
-    for m in range(n):
-        lv[m, 0], lv[m, 1] = rho[m], alpha[m]
-        lv[m, 2], lv[m, 3], lv[m, 4], lv[m, 5] = p0[m, 0], p0[m, 1], p1[m, 0], p1[m, 1]
-        lv[m, 6], lv[m, 7], lv[m, 8], lv[m, 9] = cov[m, 0, 0], cov[m, 0, 1], cov[m, 1, 0], cov[m, 1, 1]
-        lb[m, 0], lb[m, 1], lb[m, 2] = first[m], last[m], npts[m]
-    nc = cf.shape[0]
-    cb = np.empty((nc, 3), np.int64)
-    for m in range(nc):
-        cb[m, 0], cb[m, 1], cb[m, 2] = ci[m, 0], ci[m, 1], ci[m, 1] + 1
-    return lv, lb, cf.copy(), cb
-
-
-@kernel
 def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p):  # noqa: ANN001, ANN201
     """Lines and corners of one scan (sensor frame): steps 1-6. ``bearings``: a Bearings record;
     ``range_lo``, ``range_hi``: valid range limits (m); ``sigma_r``: the range noise std for this
     scan's units (m).
-    Returns the packed rows (``pack``): line values, line beams, corner values, corner beams."""
+    Returns the rows of ``features.types.Lines`` and ``Corners``: line values, line beams
+    (``segments``), corner values, corner beams (``corners``)."""
     valid, _, AD, AD_var, _, theta, theta_var, psi, psi_var = beam_signals(
         ranges, bearings.b, p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum
     )
     rho, alpha, cov, first, last, npts = find_lines(
         ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_var, angle_min, increment, sigma_r, grid, p
     )
-    rho, alpha, cov, first, last, npts, p0, p1 = segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p)
-    if p.corners and rho.size > 1:
-        cf, ci = corners(rho, alpha, first, last, p0, p1, psi, ranges, valid, angle_min, increment, sigma_r, p)
-    else:
-        cf, ci = np.empty((0, 3)), np.empty((0, 2), np.int64)
-    return pack(rho, alpha, cov, first, last, npts, p0, p1, cf, ci)
+    lv, lb = segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p)
+    if p.corners and lv.shape[0] > 1:
+        return (lv, lb) + corners(lv, lb, psi, ranges, valid, angle_min, increment, sigma_r, p)
+    return lv, lb, np.empty((0, 3)), np.empty((0, 3), np.int64)
+
+
+@kernel
+def extract_scan_auto(ranges, bearings, angle_min, increment, range_lo, range_hi, range_min, fallback, grid, p):  # noqa: ANN001, ANN201
+    """``extract_scan`` with the range noise sigma_r = "auto" estimated from the scan itself
+    (``pooled_sigma`` of its one row: ``features.noise_estimate.scan_sigma`` of valid range limits
+    ``range_min`` (the scan's own) and ``range_hi``, ``fallback`` m when too few triples), in the
+    same compiled call."""
+    sigma_r = pooled_sigma(ranges.reshape((1, ranges.size)), grid.twice_cos, range_min, range_hi, fallback)
+    return extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p)
 
 
 @kernel

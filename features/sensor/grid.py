@@ -7,6 +7,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..noise_estimate import twice_cos
 from .engine import Bearings, Grid
 
 LOGCOS_FLOOR = float(np.log(1e-6))  # template value where |a - b| >= pi/2 (the beam cannot see the line)
@@ -47,7 +48,7 @@ def grid_constants(k: int, increment: float, subdiv: int) -> Grid:
         t = np.where(np.abs(x) < np.pi / 2, np.log(np.cos(x)), LOGCOS_FLOOR)
     t = np.maximum(t, LOGCOS_FLOOR)
     t.setflags(write=False)
-    return Grid(ad_line, two_sin_sum, float(step), half, t)
+    return Grid(ad_line, two_sin_sum, float(step), half, t, twice_cos(increment))
 
 
 @lru_cache(maxsize=16)
