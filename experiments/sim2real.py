@@ -54,9 +54,9 @@ GLASS_NO_RETURN_SHARE = 0.03
 # The rough fill of the mit worlds' rooms (sim.clutter, make_world(rough=...)) is fitted to each log
 # (fit_rough): the share of valid beams at NEAR_M that STATS_METHOD's lines leave unexplained (3 cm),
 # on the log and on probe runs at the ROUGH_PROBES covers (ROUGH_PROBE_SEEDS, other seeds than the
-# report's), interpolated linearly.
+# report's), interpolated piecewise linearly.
 NEAR_M = (1.0, 4.0)
-ROUGH_PROBES = (0.0, 1.0)
+ROUGH_PROBES = (0.0, 0.5, 1.0)
 ROUGH_PROBE_SEEDS = (100, 101, 102, 103)
 
 
@@ -240,8 +240,9 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
               rate_hz: float = 3.0, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS)) -> RoughFit:
     """The rough-fill cover (share of the rooms' wall length, 0-1) that makes the simulated ``mit``
     worlds leave as many beams at NEAR_M unexplained as the log does (:func:`near_unexplained`):
-    probe runs at ROUGH_PROBES (the first ``n_probe_seeds`` of ROUGH_PROBE_SEEDS), the log's share interpolated linearly
-    between them and clipped to [0, 1]."""
+    probe runs at ROUGH_PROBES (the first ``n_probe_seeds`` of ROUGH_PROBE_SEEDS), the log's share
+    interpolated piecewise linearly on the probes' curve (made monotone), clipped to its ends: the
+    fill's effect saturates as the rooms' free wall runs out."""
     from sim import make_world, simulate_records
 
     target = near_unexplained(real)
@@ -252,11 +253,9 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
             recs += simulate_records(make_world("mit", seed, glass=glass, rough=cover), seed, duration, sensor,
                                      rate_hz=rate_hz, limits=limits)
         shares.append(near_unexplained(recs))
-    (c0, c1), (s0, s1) = ROUGH_PROBES, shares
-    if not np.isfinite(target) or not s1 > s0:
-        cover = c0 if not np.isfinite(target) or target <= s0 else c1
-    else:
-        cover = c0 + (target - s0) / (s1 - s0) * (c1 - c0)
+    from experiments.calibrate import _interpolate
+
+    cover = _interpolate(shares, list(ROUGH_PROBES), float(target)) if np.isfinite(target) else 0.0
     return RoughFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(ROUGH_PROBES), tuple(shares))
 
 

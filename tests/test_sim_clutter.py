@@ -248,3 +248,21 @@ def test_rough_fill_lines_the_rooms_walls_only_with_exact_truth() -> None:
     assert len(mit.boxes) > n + 50 and np.array_equal(mit.boxes[:n], bare_mit.boxes)
     with pytest.raises(ValueError, match="rough"):
         make_world("mit", 0, rough=1.5)
+
+
+def test_near_unexplained_counts_beams_at_1_4_m_off_every_line() -> None:
+    """The statistic the rough fill is fitted on: beams at 1-4 m on a straight wall are explained
+    (share 0), beams scattered at random depths are not (share 1), beams outside 1-4 m don't count."""
+    from lms200 import Record, Scan
+    from experiments.sim2real import near_unexplained
+
+    rng = np.random.default_rng(0)
+    inc = np.deg2rad(0.5)
+    b = -np.pi / 2 + inc * np.arange(361)
+    wall = np.where(np.abs(b) <= np.deg2rad(60), 2.0 / np.cos(b) + rng.normal(0, 0.002, 361), 0.5)  # x = 2 m; 0.5 m aside
+    scattered = np.where(np.abs(b) <= np.deg2rad(60), rng.uniform(1.2, 3.8, 361), 6.0)
+    walls = [Record(Scan(wall.copy(), -np.pi / 2, inc, 0.0, 81.83, float(k))) for k in range(5)]
+    noise = [Record(Scan(scattered.copy(), -np.pi / 2, inc, 0.0, 81.83, float(k))) for k in range(5)]
+    assert near_unexplained(walls) < 0.02
+    assert near_unexplained(noise) > 0.95
+    assert np.isnan(near_unexplained([]))

@@ -939,7 +939,8 @@ def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
 @kernel
 def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, sigma_r, p):  # noqa: ANN001, ANN201
     """Refine every run's line: a Gauss-Newton step on the Log-Hough inliers, then one on the beams
-    within inlier_tau sigma_r of that (which gives the covariance), and the checks: enough inliers,
+    within inlier_tau sigma_r of that (which gives the covariance), and the checks: enough inliers
+    (min(min_points, 2k + 1): min_points is asked of the line once ``extend_ends`` has grown it),
     most of the run explained, chi^2 of the inliers (per dof at most max_chi2 times sigma_r^2, or
     times the run's own noise^2 where that is larger: ``local_scale`` of its beams within one
     mirror turn, so that the interlaced sweeps' offset, already in sigma_r, does not count twice;
@@ -1025,7 +1026,7 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
             loc = local_scale(ranges, valid, beam[s], beam[s + cnt - 1], sweep, c2, scratch) / sigma_r
             chi_max *= max(1.0, loc * loc)
         good[r] = (
-            ni >= p.min_points
+            ni >= min(p.min_points, 2 * p.k + 1)  # min_points is asked of the grown line (find_lines)
             and ni >= p.min_inlier_fraction * core[r]
             and chi <= chi_max
             and zq * zq <= curv2 * qq
@@ -1420,18 +1421,21 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     """Steps 2-4 and the end growth: the line table (rho, alpha, cov, first, last, n_points)
     before merging. A run whose line fails the checks (it bends, or holds two faces the AD test
     did not part) is split at the beam farthest from its chord and each part is fitted again, as
-    IEPF splits, for as long as the parts keep min_points beams (and 2k + 1). Splitting cuts a
-    round surface into chords short enough to pass the line checks, so lines whose neighbourhood
-    is one circle are dropped (``on_arcs``, when arc_check)."""
+    IEPF splits, for as long as the parts keep min_points beams (and 2k + 1). A run's line needs
+    2k + 1 inliers; it must have min_points beams once grown over its ends (the AD windows stop
+    short of a face's ends, so asking min_points of the run asked more of a face than the
+    baselines' min_points). Splitting cuts a round surface into chords short enough to pass the
+    line checks, so lines whose neighbourhood is one circle are dropped (``on_arcs``, when arc_check)."""
     k = p.k
     c0, c1 = candidate_runs(AD, AD_var, psi, psi_var, k, grid.ad_line, sigma_r, p)
-    keep = (c1 - c0 + 2 * k + 1) >= p.min_points
+    min_core = min(p.min_points, 2 * k + 1)  # a run's line may grow to min_points past its ends
+    keep = (c1 - c0 + 2 * k + 1) >= min_core
     first = c0[keep] - k
     last = c1[keep] + k
     shrink0 = np.zeros(first.size, np.int64)
     shrink1 = np.zeros(first.size, np.int64)
     min_span = max(p.min_points, 2 * k + 1)
-    n_max = ranges.size // min_span + 1  # accepted spans are disjoint, each of min_span beams or more
+    n_max = ranges.size // min_core + 1  # accepted spans are disjoint, each of min_core beams or more
     o_rho = np.empty(n_max)
     o_alpha = np.empty(n_max)
     o_cov = np.empty((n_max, 2, 2))
@@ -1468,10 +1472,10 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     f_in, l_in, n_in = o_f[:m][order], o_l[:m][order], o_n[:m][order]
     extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r)
     robust_refit(rho, alpha, f_in, l_in, ranges, bearings, valid)
+    line = n_in >= p.min_points
     if p.arc_check and m:
-        line = ~on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, theta, increment, sigma_r, p)
-        return rho[line], alpha[line], cov[line], f_in[line], l_in[line], n_in[line]
-    return rho, alpha, cov, f_in, l_in, n_in
+        line &= ~on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, theta, increment, sigma_r, p)
+    return rho[line], alpha[line], cov[line], f_in[line], l_in[line], n_in[line]
 
 
 # -- 5. segments ----------------------------------------------------------------------------------
@@ -1552,8 +1556,9 @@ def move_line(rho, alpha, cov, first, last, npts, i, to) -> None:  # noqa: ANN00
 @kernel
 def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p):  # noqa: ANN001, ANN201
     """Merge neighbours, split the beams two neighbours both claim (around a corner) at the middle,
-    project the end beams' points on the lines, drop segments shorter than min_length; the line
-    table (which find_lines made for this) is changed in place.
+    project the end beams' points on the lines, drop segments shorter than min_length and those
+    left with fewer than min_points beams (min_points counts the beams of the reported line); the
+    line table (which find_lines made for this) is changed in place.
     Returns the rows of ``features.types.Lines``: line values (L, 10) rho, alpha, x0, y0, x1, y1,
     cov (row by row), line beams (L, 3) first, last, n_points."""
     n_lines = merge_neighbours(rho, alpha, cov, first, last, npts, valid, p)
@@ -1576,11 +1581,12 @@ def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p):  #
             lv[q, 3 + 2 * e] = y - off * s
         dx = lv[q, 4] - lv[q, 2]
         dy = lv[q, 5] - lv[q, 3]
-        if not dx * dx + dy * dy >= min_len2:  # nan -> dropped
-            continue
+        n_pts = min(npts[m], last[m] - first[m] + 1)
+        if not (dx * dx + dy * dy >= min_len2 and n_pts >= p.min_points):  # nan -> dropped; min_points
+            continue  # also after the split of shared beams: the reported line's beams
         lv[q, 0], lv[q, 1] = rho[m], alpha[m]
         lv[q, 6], lv[q, 7], lv[q, 8], lv[q, 9] = cov[m, 0, 0], cov[m, 0, 1], cov[m, 1, 0], cov[m, 1, 1]
-        lb[q, 0], lb[q, 1], lb[q, 2] = first[m], last[m], min(npts[m], last[m] - first[m] + 1)
+        lb[q, 0], lb[q, 1], lb[q, 2] = first[m], last[m], n_pts
         q += 1
     return lv[:q], lb[:q]
 
