@@ -863,12 +863,16 @@ def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_ta
     n_runs = starts.size
     new_rho, new_alpha, cov, z, w = out.rho, out.alpha, out.cov, out.z, out.w
     s2 = sigma_r * sigma_r
+    b0, b1, b2, b3, b4 = buf[0], buf[1], buf[2], buf[3], buf[4]
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         ca, sa = math.cos(alpha[r]), math.sin(alpha[r])
-        for row in range(s, s + cnt):
+        rho_r = rho[r]
+        row = np.uint64(s)  # rows indexed unsigned: numba then adds no negative-index wraparound
+        end = np.uint64(s + cnt)
+        while row < end:
             c = cb[row] * ca + sb[row] * sa  # cos(b - alpha)
-            res = d[row] * c - rho[r]  # d res / d rho = -1
+            res = d[row] * c - rho_r  # d res / d rho = -1
             g = d[row] * (sb[row] * ca - cb[row] * sa)  # d res / d alpha = d sin(b - alpha)
             use = c > MIN_COS and mask[row]
             if inlier_tau > 0.0:
@@ -882,11 +886,12 @@ def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_ta
             if final:
                 w[row] = wr
             wg = wr * g
-            buf[0, row] = wr
-            buf[1, row] = wg
-            buf[2, row] = wg * g
-            buf[3, row] = wr * res
-            buf[4, row] = wg * res
+            b0[row] = wr
+            b1[row] = wg
+            b2[row] = wg * g
+            b3[row] = wr * res
+            b4[row] = wg * res
+            row += np.uint64(1)
         sw = segment_sum(buf[0], s, cnt)
         swg = segment_sum(buf[1], s, cnt)
         swgg = segment_sum(buf[2], s, cnt)
@@ -989,10 +994,13 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
         # integers they equal the float sums in any order (below 2^53, runs under ~13,000 beams)
         ni = 0
         i_t = i_t2 = i_t3 = 0
-        for row in range(s, s + cnt):
+        b_sq = buf[1]
+        row = np.uint64(s)  # rows indexed unsigned: numba then adds no negative-index wraparound
+        end = np.uint64(s + cnt)
+        while row < end:
             inl = w[row] > 0
             zi = z[row] if inl else 0.0
-            buf[1, row] = zi * zi
+            b_sq[row] = zi * zi
             if inl:
                 ti = beam[row] - b0
                 ni += 1
@@ -1001,6 +1009,7 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
                 i_t3 += ti * ti * ti
                 lo = min(lo, beam[row])
                 hi = max(hi, beam[row])
+            row += np.uint64(1)
         chi = segment_sum(buf[1], s, cnt)
         n_f = float(ni)
         s_t, s_t2, s_t3 = float(i_t), float(i_t2), float(i_t3)
@@ -1008,14 +1017,17 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
         m1, m2, m3 = s_t / n_f, s_t2 / n_f, s_t3 / n_f
         b_lin = (m3 - m1 * m2) / max(m2 - m1 * m1, 1e-12)
         a_lin = m2 - b_lin * m1
-        for row in range(s, s + cnt):
+        b_zq = buf[0]
+        row = np.uint64(s)
+        while row < end:
             inl = w[row] > 0
             zi = z[row] if inl else 0.0
             wi = 1.0 if inl else 0.0
             t = float(beam[row] - b0)
             q = t * t - a_lin - b_lin * t
-            buf[0, row] = zi * q
-            buf[1, row] = (wi * q) * q
+            b_zq[row] = zi * q
+            b_sq[row] = (wi * q) * q
+            row += np.uint64(1)
         zq = segment_sum(buf[0], s, cnt)
         qq = segment_sum(buf[1], s, cnt)
         first_in[r] = lo
@@ -1084,24 +1096,26 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
     pulled off the bulk of its beams; the biweight keeps to the bulk. The covariance stays the
     least-squares one (the biweight's efficiency under Gaussian noise is 95 %)."""
     n = ranges.size
-    x = np.empty(n)
-    y = np.empty(n)
-    inv_c = np.empty(n)
-    z = np.empty(n)
+    work = np.empty((4, n))  # one block: the used beams' x, y, 1 / cos(b - alpha), |z|
+    x, y, inv_c, z = work[0], work[1], work[2], work[3]
+    cos_b, sin_b = bearings.cos, bearings.sin
     for m in range(rho.size):
         r_m, a_m = rho[m], alpha[m]
         ca, sa = math.cos(a_m), math.sin(a_m)
         k = 0
-        for j in range(first[m], last[m] + 1):
-            c = bearings.cos[j] * ca + bearings.sin[j] * sa
+        j = np.uint64(first[m])  # beams indexed unsigned: numba then adds no negative-index wraparound
+        end = np.uint64(last[m] + 1)
+        while j < end:
+            c = cos_b[j] * ca + sin_b[j] * sa
             if valid[j] and c > MIN_COS:
-                xj = ranges[j] * bearings.cos[j]
-                yj = ranges[j] * bearings.sin[j]
+                xj = ranges[j] * cos_b[j]
+                yj = ranges[j] * sin_b[j]
                 x[k] = xj
                 y[k] = yj
                 inv_c[k] = 1.0 / c
                 z[k] = abs(xj * ca + yj * sa - r_m) / c
                 k += 1
+            j += np.uint64(1)
         if k < 3:
             continue
         scale = max(MAD_TO_SIGMA * median(z[:k], z), SIGMA_FLOOR_RAY)  # z selected in place: not read again
