@@ -1443,19 +1443,20 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     k = p.k
     c0, c1 = candidate_runs(AD, AD_var, psi, psi_var, k, grid.ad_line, sigma_r, p)
     min_core = min(p.min_points, 2 * k + 1)  # a run's line may grow to min_points past its ends
-    keep = (c1 - c0 + 2 * k + 1) >= min_core
-    first = c0[keep] - k
-    last = c1[keep] + k
-    shrink0 = np.zeros(first.size, np.int64)
-    shrink1 = np.zeros(first.size, np.int64)
+    spans = np.zeros((4, c0.size), np.int64)  # the first pass's spans: first, last, shrink0, shrink1
+    n_spans = 0
+    for r in range(c0.size):
+        if c1[r] - c0[r] + 2 * k + 1 >= min_core:
+            spans[0, n_spans], spans[1, n_spans] = c0[r] - k, c1[r] + k
+            n_spans += 1
+    first, last, shrink0, shrink1 = spans[0, :n_spans], spans[1, :n_spans], spans[2, :n_spans], spans[3, :n_spans]
     min_span = max(p.min_points, 2 * k + 1)
     n_max = ranges.size // min_core + 1  # accepted spans are disjoint, each of min_core beams or more
-    o_rho = np.empty(n_max)
-    o_alpha = np.empty(n_max)
+    o_vals = np.empty((2, n_max))  # the accepted lines: rho, alpha; cov; first, last, n_points
+    o_rho, o_alpha = o_vals[0], o_vals[1]
     o_cov = np.empty((n_max, 2, 2))
-    o_f = np.empty(n_max, np.int64)
-    o_l = np.empty(n_max, np.int64)
-    o_n = np.empty(n_max, np.int64)
+    o_ints = np.empty((3, n_max), np.int64)
+    o_f, o_l, o_n = o_ints[0], o_ints[1], o_ints[2]
     m = 0
     cs = slope_sums(theta, theta_var)
     while first.size:
@@ -1481,15 +1482,26 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
                     parts[0, q], parts[1, q], parts[2, q], parts[3, q] = f, l, a, b
                     q += 1
         first, last, shrink0, shrink1 = parts[0, :q], parts[1, :q], parts[2, :q], parts[3, :q]
-    order = np.argsort(o_f[:m], kind="mergesort")
-    rho, alpha, cov = o_rho[:m][order], o_alpha[:m][order], o_cov[:m][order]
-    f_in, l_in, n_in = o_f[:m][order], o_l[:m][order], o_n[:m][order]
+    order = np.argsort(o_f[:m], kind="mergesort")  # the lines in beam order
+    vals = np.empty((2, m))
+    rho, alpha = vals[0], vals[1]
+    cov = np.empty((m, 2, 2))
+    ints = np.empty((3, m), np.int64)
+    f_in, l_in, n_in = ints[0], ints[1], ints[2]
+    for t in range(m):
+        o = order[t]
+        rho[t], alpha[t], f_in[t], l_in[t], n_in[t] = o_rho[o], o_alpha[o], o_f[o], o_l[o], o_n[o]
+        cov[t, 0, 0], cov[t, 0, 1], cov[t, 1, 0], cov[t, 1, 1] = o_cov[o, 0, 0], o_cov[o, 0, 1], o_cov[o, 1, 0], o_cov[o, 1, 1]
     extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r)
     robust_refit(rho, alpha, f_in, l_in, ranges, bearings, valid)
-    line = n_in >= p.min_points
-    if p.arc_check and m:
-        line &= ~on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, theta, increment, sigma_r, p)
-    return rho[line], alpha[line], cov[line], f_in[line], l_in[line], n_in[line]
+    arc = on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, theta, increment, sigma_r, p) if p.arc_check and m else np.zeros(m, np.bool_)
+    q = 0  # the lines kept (min_points beams once grown, not a chord of a round surface) moved to the front
+    for t in range(m):
+        if n_in[t] >= p.min_points and not arc[t]:
+            rho[q], alpha[q], f_in[q], l_in[q], n_in[q] = rho[t], alpha[t], f_in[t], l_in[t], n_in[t]
+            cov[q, 0, 0], cov[q, 0, 1], cov[q, 1, 0], cov[q, 1, 1] = cov[t, 0, 0], cov[t, 0, 1], cov[t, 1, 0], cov[t, 1, 1]
+            q += 1
+    return rho[:q], alpha[:q], cov[:q], f_in[:q], l_in[:q], n_in[:q]
 
 
 # -- 5. segments ----------------------------------------------------------------------------------
