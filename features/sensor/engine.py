@@ -1394,12 +1394,13 @@ def on_arcs(rho, alpha, first, last, ranges, bearings, valid, theta, increment, 
 
 
 @kernel
-def fit_spans(first, last, shrink0, shrink1, ranges, bearings, valid, theta, theta_var, cs, angle_min, increment,  # noqa: ANN001, ANN201
-              sigma_r, grid, p):
+def fit_spans(first, last, shrink0, shrink1, ranges, log_r, bearings, valid, theta, theta_var, cs, angle_min,  # noqa: ANN001, ANN201
+              increment, sigma_r, grid, p):
     """Steps 3-4 on spans of valid beams [first, last] (each at least 2k + 1 beams): the band of
     normal angles from theta over the window centres first + k .. last - k (less ``shrink0`` /
     ``shrink1`` centres at each end: those whose windows reach across a split), the Log-Hough peak
-    in it and the refined, checked line. Returns fit_runs' outputs."""
+    in it and the refined, checked line. ``log_r``: log of the ranges (at least of the spans' beams).
+    Returns fit_runs' outputs."""
     k = p.k
     n_runs = first.size
     ints = np.empty((4, n_runs), np.int64)  # one block: counts, starts, first and last centres
@@ -1418,10 +1419,10 @@ def fit_spans(first, last, shrink0, shrink1, ranges, bearings, valid, theta, the
     log_d = np.empty(total)
     for r in range(n_runs):
         f, s = first[r], starts[r]
-        br, lr, dr = beam[s:s + counts[r]], log_d[s:s + counts[r]], ranges[f:f + counts[r]]
+        br, lr, dr = beam[s:s + counts[r]], log_d[s:s + counts[r]], log_r[f:f + counts[r]]
         for t in range(counts[r]):
             br[t] = f + t
-            lr[t] = math.log(dr[t])
+            lr[t] = dr[t]
     centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings.b, increment, sigma_r, k, p)
     alpha0, rho0, inlier0 = band_search(
         beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
@@ -1450,6 +1451,11 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
             spans[0, n_spans], spans[1, n_spans] = c0[r] - k, c1[r] + k
             n_spans += 1
     first, last, shrink0, shrink1 = spans[0, :n_spans], spans[1, :n_spans], spans[2, :n_spans], spans[3, :n_spans]
+    log_r = np.empty(ranges.size)  # log of the ranges of the spans' beams, once (later spans are parts of these)
+    for r in range(n_spans):
+        lr, dr = log_r[first[r]:last[r] + 1], ranges[first[r]:last[r] + 1]
+        for t in range(lr.size):
+            lr[t] = math.log(dr[t])
     min_span = max(p.min_points, 2 * k + 1)
     n_max = ranges.size // min_core + 1  # accepted spans are disjoint, each of min_core beams or more
     o_vals = np.empty((2, n_max))  # the accepted lines: rho, alpha; cov; first, last, n_points
@@ -1461,7 +1467,7 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     cs = slope_sums(theta, theta_var)
     while first.size:
         rho, alpha, cov, f_in, l_in, n_in, good = fit_spans(
-            first, last, shrink0, shrink1, ranges, bearings, valid, theta, theta_var, cs, angle_min, increment,
+            first, last, shrink0, shrink1, ranges, log_r, bearings, valid, theta, theta_var, cs, angle_min, increment,
             sigma_r, grid, p)
         for r in range(first.size):
             if good[r] and m < n_max:
