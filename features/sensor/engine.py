@@ -301,15 +301,17 @@ def finite_sample(ranges, out, m):  # noqa: ANN001, ANN201
 def quantum_step(sample) -> float:  # noqa: ANN001
     """``lms200.noise.estimate_quantum``: the largest step of QUANTUM_CANDIDATES_M (m) on whose grid
     QUANTUM_SHARE of the positive finite ``sample`` lie, 0.0 when none does."""
-    v = sample[np.isfinite(sample) & (sample > 0)]
-    if v.size == 0:
+    n_pos = 0
+    for x in sample:
+        n_pos += math.isfinite(x) and x > 0
+    if n_pos == 0:
         return 0.0
     for q in QUANTUM_CANDIDATES_M:
         near = 0
-        for x in v:
-            if abs(x - np.rint(x / q) * q) < q / 20:
+        for x in sample:
+            if math.isfinite(x) and x > 0 and abs(x - np.rint(x / q) * q) < q / 20:
                 near += 1
-        if near / v.size >= QUANTUM_SHARE:
+        if near / n_pos >= QUANTUM_SHARE:
             return q
     return 0.0
 
@@ -405,8 +407,8 @@ def clipped_scale(z) -> float:  # noqa: ANN001
     n = z.size
     if n == 0:
         return np.nan
-    kz = np.empty(n)
-    scratch = np.empty(n)
+    work = np.empty((2, n))
+    kz, scratch = work[0], work[1]
     m = median(z, scratch)
     for i in range(n):
         kz[i] = abs(z[i] - m)
@@ -415,8 +417,8 @@ def clipped_scale(z) -> float:  # noqa: ANN001
         s = mean_std(z, n, scratch)[1]
         if s == 0:
             s = 1e-12
-    keep = np.ones(n, np.bool_)
-    new_keep = np.empty(n, np.bool_)
+    flags = np.ones((2, n), np.bool_)
+    keep, new_keep = flags[0], flags[1]
     for it in range(50):
         lim = CLIP_SIGMAS * s
         nk = 0
