@@ -876,12 +876,12 @@ def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_ta
             c = cb[row] * ca + sb[row] * sa  # cos(b - alpha)
             res = d[row] * c - rho_r  # d res / d rho = -1
             g = d[row] * (sb[row] * ca - cb[row] * sa)  # d res / d alpha = d sin(b - alpha)
-            use = c > MIN_COS and mask[row]
+            use = (c > MIN_COS) & mask[row]  # & not and: no branch on data
             if inlier_tau > 0.0:
                 zz = res / (sigma_r * c)
                 if final:
                     z[row] = zz
-                use = use and abs(zz) <= inlier_tau
+                use &= abs(zz) <= inlier_tau
             elif final:
                 z[row] = np.nan
             wr = (1.0 if use else 0.0) / (c * c)
@@ -999,18 +999,17 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
         b_sq = buf[1]
         row = np.uint64(s)  # rows indexed unsigned: numba then adds no negative-index wraparound
         end = np.uint64(s + cnt)
-        while row < end:
+        while row < end:  # without branches on which rows are inliers
             inl = w[row] > 0
             zi = z[row] if inl else 0.0
             b_sq[row] = zi * zi
-            if inl:
-                ti = beam[row] - b0
-                ni += 1
-                i_t += ti
-                i_t2 += ti * ti
-                i_t3 += ti * ti * ti
-                lo = min(lo, beam[row])
-                hi = max(hi, beam[row])
+            ti = beam[row] - b0 if inl else 0
+            ni += inl
+            i_t += ti
+            i_t2 += ti * ti
+            i_t3 += ti * ti * ti
+            lo = min(lo, beam[row] if inl else lo)
+            hi = max(hi, beam[row] if inl else hi)
             row += np.uint64(1)
         chi = segment_sum(buf[1], s, cnt)
         n_f = float(ni)
@@ -1107,16 +1106,15 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
         k = 0
         j = np.uint64(first[m])  # beams indexed unsigned: numba then adds no negative-index wraparound
         end = np.uint64(last[m] + 1)
-        while j < end:
+        while j < end:  # every beam written at k, k moved on past the used ones: no branch on data
             c = cos_b[j] * ca + sin_b[j] * sa
-            if valid[j] and c > MIN_COS:
-                xj = ranges[j] * cos_b[j]
-                yj = ranges[j] * sin_b[j]
-                x[k] = xj
-                y[k] = yj
-                inv_c[k] = 1.0 / c
-                z[k] = abs(xj * ca + yj * sa - r_m) / c
-                k += 1
+            xj = ranges[j] * cos_b[j]
+            yj = ranges[j] * sin_b[j]
+            x[k] = xj
+            y[k] = yj
+            inv_c[k] = 1.0 / c
+            z[k] = abs(xj * ca + yj * sa - r_m) / c
+            k += valid[j] & (c > MIN_COS)
             j += np.uint64(1)
         if k < 3:
             continue
