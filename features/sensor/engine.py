@@ -325,16 +325,19 @@ def partition(a, lo, hi, pivot, strict) -> int:  # noqa: ANN001
     """Move the values of a[lo:hi] below ``pivot`` (at most ``pivot`` when not ``strict``) to its
     front, the others behind them; returns where the others start. Without branches (Lomuto's
     scheme, every value swapped with the front's next slot or with itself): which side a value
-    takes is data, not predictable."""
-    s = lo
-    for i in range(lo, hi):
+    takes is data, not predictable. Indexed unsigned: numba then adds no negative-index wraparound."""
+    s = np.uint64(lo)
+    i = np.uint64(lo)
+    end = np.uint64(hi)
+    while i < end:
         x = a[i]
         y = a[s]
         c = x < pivot if strict else x <= pivot
         a[i] = y if c else x
         a[s] = x if c else y
-        s += c
-    return s
+        s += np.uint64(c)
+        i += np.uint64(1)
+    return np.int64(s)
 
 
 @kernel
@@ -671,37 +674,36 @@ def candidate_runs(AD, AD_var, psi, psi_var, k, ad_line, sigma_r, p):  # noqa: A
     ad_c = p.ad_tau * p.ad_tau * (sigma_r * sigma_r)
     psi_split2 = p.psi_split * p.psi_split
     psi_tau2 = p.psi_tau * p.psi_tau
-    ok = np.zeros(n, np.bool_)
+    ok = np.empty(n, np.bool_)
     for i in range(n):
         dev = AD[i] - ad_line
         ok[i] = dev * dev <= ad_c * AD_var[i]  # nan -> False
-    mag = np.zeros(n)
-    big = np.zeros(n, np.bool_)
+    mag = np.zeros(n)  # psi^2 where it marks a slope break, else 0 (no allocation for big)
     any_big = False
-    for i in range(n - k):
-        # a slope break between two straight windows (both pass the AD test): where either window
-        # fails, the AD test already ends the run, and theta there is not a line's normal (a window
-        # across a depth jump), so its psi would cut the neighbouring straight run short
-        if not (ok[i] and ok[i + k]):
-            continue
-        p2 = psi[i] * psi[i]
-        if p2 > psi_split2 and p2 > psi_tau2 * psi_var[i]:  # > max(.,.) (False on nan)
-            big[i] = True
-            mag[i] = p2
-            any_big = True
+    if n > k:
+        ok0, ok1, ps, pv = ok[:n - k], ok[k:], psi[:n - k], psi_var[:n - k]
+        for i in range(n - k):  # without branches, so that it vectorises
+            # a slope break between two straight windows (both pass the AD test): where either
+            # window fails, the AD test already ends the run, and theta there is not a line's
+            # normal (a window across a depth jump), so its psi would cut the neighbouring
+            # straight run short
+            p2 = ps[i] * ps[i]
+            big = ok0[i] & ok1[i] & (p2 > psi_split2) & (p2 > psi_tau2 * pv[i])  # > max(.,.) (False on nan)
+            mag[i] = p2 if big else 0.0
+            any_big |= big
     if any_big:
         # a slope break between the windows at i and i+k peaks near i + k/2: drop the centres
         # whose windows reach it (those within k), as the AD test does at sharp corners
         hit = np.zeros(n, np.bool_)
         for i in range(n):
-            if big[i] and (i == 0 or mag[i] >= mag[i - 1]) and (i == n - 1 or mag[i] >= mag[i + 1]):
+            if mag[i] > 0.0 and (i == 0 or mag[i] >= mag[i - 1]) and (i == n - 1 or mag[i] >= mag[i + 1]):
                 hit[min(i + k // 2, n - 1)] = True
         for i in range(n):
             if hit[i]:
                 for j in range(max(0, i - k), min(n, i + k + 1)):
                     ok[j] = False
-    c0 = np.empty(n, np.int64)
-    c1 = np.empty(n, np.int64)
+    runs = np.empty((2, n), np.int64)
+    c0, c1 = runs[0], runs[1]
     m = 0
     i = 0
     while i < n:
@@ -782,12 +784,13 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
     h2 = (n_angles - 1) // 2
     h = max(h2, 1)
     n_tmpl = template.size
-    alpha = np.empty(n_runs)
-    rho = np.empty(n_runs)
+    out = np.empty((2, n_runs))
+    alpha, rho = out[0], out[1]
     inlier = np.zeros(beam.size, np.bool_)
-    a_idx = np.empty(n_angles, np.int64)
     ref = np.empty(n_angles)
-    counts_a = np.empty((n_angles, N_BINS + 2), np.int64)  # cells 1..N_BINS; 0 and N_BINS + 1 outside
+    # per angle: its index, then the vote counts of cells 1..N_BINS (0 and N_BINS + 1 outside)
+    angle_counts = np.empty((n_angles, N_BINS + 3), np.int64)
+    a_idx, counts_a = angle_counts[:, 0], angle_counts[:, 1:]
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         centre_idx = np.int64(np.rint((centre[r] - angle_min) / step))
@@ -860,12 +863,16 @@ def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_ta
     n_runs = starts.size
     new_rho, new_alpha, cov, z, w = out.rho, out.alpha, out.cov, out.z, out.w
     s2 = sigma_r * sigma_r
+    b0, b1, b2, b3, b4 = buf[0], buf[1], buf[2], buf[3], buf[4]
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         ca, sa = math.cos(alpha[r]), math.sin(alpha[r])
-        for row in range(s, s + cnt):
+        rho_r = rho[r]
+        row = np.uint64(s)  # rows indexed unsigned: numba then adds no negative-index wraparound
+        end = np.uint64(s + cnt)
+        while row < end:
             c = cb[row] * ca + sb[row] * sa  # cos(b - alpha)
-            res = d[row] * c - rho[r]  # d res / d rho = -1
+            res = d[row] * c - rho_r  # d res / d rho = -1
             g = d[row] * (sb[row] * ca - cb[row] * sa)  # d res / d alpha = d sin(b - alpha)
             use = c > MIN_COS and mask[row]
             if inlier_tau > 0.0:
@@ -879,11 +886,12 @@ def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_ta
             if final:
                 w[row] = wr
             wg = wr * g
-            buf[0, row] = wr
-            buf[1, row] = wg
-            buf[2, row] = wg * g
-            buf[3, row] = wr * res
-            buf[4, row] = wg * res
+            b0[row] = wr
+            b1[row] = wg
+            b2[row] = wg * g
+            b3[row] = wr * res
+            b4[row] = wg * res
+            row += np.uint64(1)
         sw = segment_sum(buf[0], s, cnt)
         swg = segment_sum(buf[1], s, cnt)
         swgg = segment_sum(buf[2], s, cnt)
@@ -976,7 +984,7 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
     step = bearings.b[1] - bearings.b[0] if bearings.b.size > 1 else 1.0
     sweep = max(1, np.int64(np.rint(ONE_DEG / step))) if step < 0.99 * ONE_DEG else 1  # lms200.noise.interlace_stride
     c2 = 2.0 * math.cos(sweep * step)
-    scratch = np.empty(valid.size)
+    scratch = rows[5]  # local_scale's scratch (a run's rows at most): the ranges d are not read after the steps
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         b0 = beam[s]
@@ -986,10 +994,13 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
         # integers they equal the float sums in any order (below 2^53, runs under ~13,000 beams)
         ni = 0
         i_t = i_t2 = i_t3 = 0
-        for row in range(s, s + cnt):
+        b_sq = buf[1]
+        row = np.uint64(s)  # rows indexed unsigned: numba then adds no negative-index wraparound
+        end = np.uint64(s + cnt)
+        while row < end:
             inl = w[row] > 0
             zi = z[row] if inl else 0.0
-            buf[1, row] = zi * zi
+            b_sq[row] = zi * zi
             if inl:
                 ti = beam[row] - b0
                 ni += 1
@@ -998,6 +1009,7 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
                 i_t3 += ti * ti * ti
                 lo = min(lo, beam[row])
                 hi = max(hi, beam[row])
+            row += np.uint64(1)
         chi = segment_sum(buf[1], s, cnt)
         n_f = float(ni)
         s_t, s_t2, s_t3 = float(i_t), float(i_t2), float(i_t3)
@@ -1005,14 +1017,17 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
         m1, m2, m3 = s_t / n_f, s_t2 / n_f, s_t3 / n_f
         b_lin = (m3 - m1 * m2) / max(m2 - m1 * m1, 1e-12)
         a_lin = m2 - b_lin * m1
-        for row in range(s, s + cnt):
+        b_zq = buf[0]
+        row = np.uint64(s)
+        while row < end:
             inl = w[row] > 0
             zi = z[row] if inl else 0.0
             wi = 1.0 if inl else 0.0
             t = float(beam[row] - b0)
             q = t * t - a_lin - b_lin * t
-            buf[0, row] = zi * q
-            buf[1, row] = (wi * q) * q
+            b_zq[row] = zi * q
+            b_sq[row] = (wi * q) * q
+            row += np.uint64(1)
         zq = segment_sum(buf[0], s, cnt)
         qq = segment_sum(buf[1], s, cnt)
         first_in[r] = lo
@@ -1081,24 +1096,26 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
     pulled off the bulk of its beams; the biweight keeps to the bulk. The covariance stays the
     least-squares one (the biweight's efficiency under Gaussian noise is 95 %)."""
     n = ranges.size
-    x = np.empty(n)
-    y = np.empty(n)
-    inv_c = np.empty(n)
-    z = np.empty(n)
+    work = np.empty((4, n))  # one block: the used beams' x, y, 1 / cos(b - alpha), |z|
+    x, y, inv_c, z = work[0], work[1], work[2], work[3]
+    cos_b, sin_b = bearings.cos, bearings.sin
     for m in range(rho.size):
         r_m, a_m = rho[m], alpha[m]
         ca, sa = math.cos(a_m), math.sin(a_m)
         k = 0
-        for j in range(first[m], last[m] + 1):
-            c = bearings.cos[j] * ca + bearings.sin[j] * sa
+        j = np.uint64(first[m])  # beams indexed unsigned: numba then adds no negative-index wraparound
+        end = np.uint64(last[m] + 1)
+        while j < end:
+            c = cos_b[j] * ca + sin_b[j] * sa
             if valid[j] and c > MIN_COS:
-                xj = ranges[j] * bearings.cos[j]
-                yj = ranges[j] * bearings.sin[j]
+                xj = ranges[j] * cos_b[j]
+                yj = ranges[j] * sin_b[j]
                 x[k] = xj
                 y[k] = yj
                 inv_c[k] = 1.0 / c
                 z[k] = abs(xj * ca + yj * sa - r_m) / c
                 k += 1
+            j += np.uint64(1)
         if k < 3:
             continue
         scale = max(MAD_TO_SIGMA * median(z[:k], z), SIGMA_FLOOR_RAY)  # z selected in place: not read again
@@ -1134,19 +1151,10 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
 
 
 @kernel
-def chord_split(first, last, ranges, bearings):  # noqa: ANN001, ANN201
-    """The beam of each span [first, last] farthest from the chord between the span's end points
-    (``farthest_from_chord``): where a span that does not fit one line bends (IEPF's split point)."""
-    out = np.empty(first.size, np.int64)
-    for r in range(first.size):
-        out[r] = farthest_from_chord(first[r], last[r], ranges, bearings)
-    return out
-
-
-@kernel
 def farthest_from_chord(f, l, ranges, bearings) -> int:  # noqa: ANN001
     """The beam of f..l farthest from the chord between the end points of beams f and l
-    (Cartesian, sensor frame); the middle one when none is off it."""
+    (Cartesian, sensor frame; the middle one when none is off it): where a span that does not fit
+    one line bends (IEPF's split point)."""
     x0, y0 = ranges[f] * bearings.cos[f], ranges[f] * bearings.sin[f]
     x1, y1 = ranges[l] * bearings.cos[l], ranges[l] * bearings.sin[l]
     dx, dy = x1 - x0, y1 - y0
@@ -1394,24 +1402,26 @@ def fit_spans(first, last, shrink0, shrink1, ranges, bearings, valid, theta, the
     in it and the refined, checked line. Returns fit_runs' outputs."""
     k = p.k
     n_runs = first.size
-    counts = last - first + 1
-    starts = np.empty(n_runs, np.int64)
+    ints = np.empty((4, n_runs), np.int64)  # one block: counts, starts, first and last centres
+    counts, starts, c0, c1 = ints[0], ints[1], ints[2], ints[3]
     total = 0
     for r in range(n_runs):
+        counts[r] = last[r] - first[r] + 1
         starts[r] = total
         total += counts[r]
-    beam = np.empty(total, np.int64)
-    log_d = np.empty(total)
-    for r in range(n_runs):
-        for t in range(counts[r]):
-            beam[starts[r] + t] = first[r] + t
-            log_d[starts[r] + t] = math.log(ranges[first[r] + t])
-    c0 = first + k
-    c1 = last - k
-    for r in range(n_runs):
+        c0[r] = first[r] + k
+        c1[r] = last[r] - k
         if c1[r] - c0[r] >= shrink0[r] + shrink1[r]:
             c0[r] += shrink0[r]
             c1[r] -= shrink1[r]
+    beam = np.empty(total, np.int64)
+    log_d = np.empty(total)
+    for r in range(n_runs):
+        f, s = first[r], starts[r]
+        br, lr, dr = beam[s:s + counts[r]], log_d[s:s + counts[r]], ranges[f:f + counts[r]]
+        for t in range(counts[r]):
+            br[t] = f + t
+            lr[t] = math.log(dr[t])
     centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings.b, increment, sigma_r, k, p)
     alpha0, rho0, inlier0 = band_search(
         beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
@@ -1457,27 +1467,20 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
                 o_rho[m], o_alpha[m], o_cov[m] = rho[r], alpha[r], cov[r]
                 o_f[m], o_l[m], o_n[m] = f_in[r], l_in[r], n_in[r]
                 m += 1
-        bad = np.flatnonzero(~good & (last - first >= min_span))  # a part of min_span beams may remain
-        if p.arc_check:  # a failing span that is one circle is a round surface: not cut into chords
-            arc = np.zeros(bad.size, np.bool_)
-            for t in range(bad.size):
-                if theta_turn(first[bad[t]], last[bad[t]], theta) >= 0.5 * p.corner_min_turn:
-                    arc[t] = circle_fits(first[bad[t]], last[bad[t]], -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r,
-                                         p)
-            bad = bad[~arc]
-        at = chord_split(first[bad], last[bad], ranges, bearings)
-        nf = np.empty(2 * bad.size, np.int64)
-        nl = np.empty(2 * bad.size, np.int64)
-        s0 = np.empty(2 * bad.size, np.int64)
-        s1 = np.empty(2 * bad.size, np.int64)
+        parts = np.empty((4, 2 * first.size), np.int64)  # the next pass's spans: first, last, shrink0, shrink1
         q = 0
-        for t in range(bad.size):
-            r = bad[t]
-            for f, l, a, b in ((first[r], at[t] - 1, shrink0[r], k), (at[t] + 1, last[r], k, shrink1[r])):
+        for r in range(first.size):
+            if good[r] or last[r] - first[r] < min_span:  # a part of min_span beams may remain
+                continue
+            if p.arc_check and theta_turn(first[r], last[r], theta) >= 0.5 * p.corner_min_turn:
+                if circle_fits(first[r], last[r], -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r, p):
+                    continue  # a failing span that is one circle is a round surface: not cut into chords
+            at = farthest_from_chord(first[r], last[r], ranges, bearings)
+            for f, l, a, b in ((first[r], at - 1, shrink0[r], k), (at + 1, last[r], k, shrink1[r])):
                 if l - f + 1 >= min_span:
-                    nf[q], nl[q], s0[q], s1[q] = f, l, a, b
+                    parts[0, q], parts[1, q], parts[2, q], parts[3, q] = f, l, a, b
                     q += 1
-        first, last, shrink0, shrink1 = nf[:q], nl[:q], s0[:q], s1[:q]
+        first, last, shrink0, shrink1 = parts[0, :q], parts[1, :q], parts[2, :q], parts[3, :q]
     order = np.argsort(o_f[:m], kind="mergesort")
     rho, alpha, cov = o_rho[:m][order], o_alpha[:m][order], o_cov[:m][order]
     f_in, l_in, n_in = o_f[:m][order], o_l[:m][order], o_n[:m][order]
