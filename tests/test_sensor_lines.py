@@ -334,6 +334,25 @@ def test_arc_check_leaves_straight_walls_with_stray_beams() -> None:
     assert unchecked >= 30 and checked == unchecked, (checked, unchecked)
 
 
+@pytest.mark.shared_data
+def test_min_points_is_asked_of_the_reported_line(shared_data) -> None:
+    """min_points (8) counts the beams of the line as reported, as the baselines count theirs:
+    on a real 1 deg scan (the even sweep of CSAIL ROBOTLASER1 scan 424) a 10-beam face between a
+    5 cm step and a depth jump, whose AD run is shorter (the windows stop short of its ends), is a
+    line once grown over its ends (it was asked of the run and the face had none); and no line
+    keeps fewer than min_points beams after neighbours split the beams they share."""
+    import itertools
+
+    from lms200 import read_log
+
+    rec = next(itertools.islice(read_log(shared_data / "csail-robotlaser1.log.gz"), 424, None))
+    s = rec.scan
+    sweep = Scan(s.ranges[0::2], s.angle_min, 2 * s.angle_increment, s.range_min, s.range_max)
+    fs = extract(sweep, sigma_r_cm=0.0052)  # the sweeps' neighbour scatter
+    assert any(l.first <= 64 and l.last >= 71 and abs(l.rho - 5.76) < 0.02 for l in fs.lines), fs.lines
+    assert all(l.n_points >= 8 for l in fs.lines)
+
+
 def test_biweight_refit_keeps_to_the_wall_against_clutter_in_front_of_it() -> None:
     """``robust_refit`` against the truth: a wall at rho 3 m (alpha 0) seen over +-30 deg with
     5 mm noise, every tenth beam hitting clutter 2.5 cm in front (inside a 3 cm gate, so the

@@ -301,15 +301,17 @@ def finite_sample(ranges, out, m):  # noqa: ANN001, ANN201
 def quantum_step(sample) -> float:  # noqa: ANN001
     """``lms200.noise.estimate_quantum``: the largest step of QUANTUM_CANDIDATES_M (m) on whose grid
     QUANTUM_SHARE of the positive finite ``sample`` lie, 0.0 when none does."""
-    v = sample[np.isfinite(sample) & (sample > 0)]
-    if v.size == 0:
+    n_pos = 0
+    for x in sample:
+        n_pos += math.isfinite(x) and x > 0
+    if n_pos == 0:
         return 0.0
     for q in QUANTUM_CANDIDATES_M:
         near = 0
-        for x in v:
-            if abs(x - np.rint(x / q) * q) < q / 20:
+        for x in sample:
+            if math.isfinite(x) and x > 0 and abs(x - np.rint(x / q) * q) < q / 20:
                 near += 1
-        if near / v.size >= QUANTUM_SHARE:
+        if near / n_pos >= QUANTUM_SHARE:
             return q
     return 0.0
 
@@ -325,16 +327,19 @@ def partition(a, lo, hi, pivot, strict) -> int:  # noqa: ANN001
     """Move the values of a[lo:hi] below ``pivot`` (at most ``pivot`` when not ``strict``) to its
     front, the others behind them; returns where the others start. Without branches (Lomuto's
     scheme, every value swapped with the front's next slot or with itself): which side a value
-    takes is data, not predictable."""
-    s = lo
-    for i in range(lo, hi):
+    takes is data, not predictable. Indexed unsigned: numba then adds no negative-index wraparound."""
+    s = np.uint64(lo)
+    i = np.uint64(lo)
+    end = np.uint64(hi)
+    while i < end:
         x = a[i]
         y = a[s]
         c = x < pivot if strict else x <= pivot
         a[i] = y if c else x
         a[s] = x if c else y
-        s += c
-    return s
+        s += np.uint64(c)
+        i += np.uint64(1)
+    return np.int64(s)
 
 
 @kernel
@@ -402,8 +407,8 @@ def clipped_scale(z) -> float:  # noqa: ANN001
     n = z.size
     if n == 0:
         return np.nan
-    kz = np.empty(n)
-    scratch = np.empty(n)
+    work = np.empty((2, n))
+    kz, scratch = work[0], work[1]
     m = median(z, scratch)
     for i in range(n):
         kz[i] = abs(z[i] - m)
@@ -412,8 +417,8 @@ def clipped_scale(z) -> float:  # noqa: ANN001
         s = mean_std(z, n, scratch)[1]
         if s == 0:
             s = 1e-12
-    keep = np.ones(n, np.bool_)
-    new_keep = np.empty(n, np.bool_)
+    flags = np.ones((2, n), np.bool_)
+    keep, new_keep = flags[0], flags[1]
     for it in range(50):
         lim = CLIP_SIGMAS * s
         nk = 0
@@ -671,37 +676,36 @@ def candidate_runs(AD, AD_var, psi, psi_var, k, ad_line, sigma_r, p):  # noqa: A
     ad_c = p.ad_tau * p.ad_tau * (sigma_r * sigma_r)
     psi_split2 = p.psi_split * p.psi_split
     psi_tau2 = p.psi_tau * p.psi_tau
-    ok = np.zeros(n, np.bool_)
+    ok = np.empty(n, np.bool_)
     for i in range(n):
         dev = AD[i] - ad_line
         ok[i] = dev * dev <= ad_c * AD_var[i]  # nan -> False
-    mag = np.zeros(n)
-    big = np.zeros(n, np.bool_)
+    mag = np.zeros(n)  # psi^2 where it marks a slope break, else 0 (no allocation for big)
     any_big = False
-    for i in range(n - k):
-        # a slope break between two straight windows (both pass the AD test): where either window
-        # fails, the AD test already ends the run, and theta there is not a line's normal (a window
-        # across a depth jump), so its psi would cut the neighbouring straight run short
-        if not (ok[i] and ok[i + k]):
-            continue
-        p2 = psi[i] * psi[i]
-        if p2 > psi_split2 and p2 > psi_tau2 * psi_var[i]:  # > max(.,.) (False on nan)
-            big[i] = True
-            mag[i] = p2
-            any_big = True
+    if n > k:
+        ok0, ok1, ps, pv = ok[:n - k], ok[k:], psi[:n - k], psi_var[:n - k]
+        for i in range(n - k):  # without branches, so that it vectorises
+            # a slope break between two straight windows (both pass the AD test): where either
+            # window fails, the AD test already ends the run, and theta there is not a line's
+            # normal (a window across a depth jump), so its psi would cut the neighbouring
+            # straight run short
+            p2 = ps[i] * ps[i]
+            big = ok0[i] & ok1[i] & (p2 > psi_split2) & (p2 > psi_tau2 * pv[i])  # > max(.,.) (False on nan)
+            mag[i] = p2 if big else 0.0
+            any_big |= big
     if any_big:
         # a slope break between the windows at i and i+k peaks near i + k/2: drop the centres
         # whose windows reach it (those within k), as the AD test does at sharp corners
         hit = np.zeros(n, np.bool_)
         for i in range(n):
-            if big[i] and (i == 0 or mag[i] >= mag[i - 1]) and (i == n - 1 or mag[i] >= mag[i + 1]):
+            if mag[i] > 0.0 and (i == 0 or mag[i] >= mag[i - 1]) and (i == n - 1 or mag[i] >= mag[i + 1]):
                 hit[min(i + k // 2, n - 1)] = True
         for i in range(n):
             if hit[i]:
                 for j in range(max(0, i - k), min(n, i + k + 1)):
                     ok[j] = False
-    c0 = np.empty(n, np.int64)
-    c1 = np.empty(n, np.int64)
+    runs = np.empty((2, n), np.int64)
+    c0, c1 = runs[0], runs[1]
     m = 0
     i = 0
     while i < n:
@@ -782,12 +786,13 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
     h2 = (n_angles - 1) // 2
     h = max(h2, 1)
     n_tmpl = template.size
-    alpha = np.empty(n_runs)
-    rho = np.empty(n_runs)
+    out = np.empty((2, n_runs))
+    alpha, rho = out[0], out[1]
     inlier = np.zeros(beam.size, np.bool_)
-    a_idx = np.empty(n_angles, np.int64)
     ref = np.empty(n_angles)
-    counts_a = np.empty((n_angles, N_BINS + 2), np.int64)  # cells 1..N_BINS; 0 and N_BINS + 1 outside
+    # per angle: its index, then the vote counts of cells 1..N_BINS (0 and N_BINS + 1 outside)
+    angle_counts = np.empty((n_angles, N_BINS + 3), np.int64)
+    a_idx, counts_a = angle_counts[:, 0], angle_counts[:, 1:]
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         centre_idx = np.int64(np.rint((centre[r] - angle_min) / step))
@@ -860,30 +865,35 @@ def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_ta
     n_runs = starts.size
     new_rho, new_alpha, cov, z, w = out.rho, out.alpha, out.cov, out.z, out.w
     s2 = sigma_r * sigma_r
+    b0, b1, b2, b3, b4 = buf[0], buf[1], buf[2], buf[3], buf[4]
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         ca, sa = math.cos(alpha[r]), math.sin(alpha[r])
-        for row in range(s, s + cnt):
+        rho_r = rho[r]
+        row = np.uint64(s)  # rows indexed unsigned: numba then adds no negative-index wraparound
+        end = np.uint64(s + cnt)
+        while row < end:
             c = cb[row] * ca + sb[row] * sa  # cos(b - alpha)
-            res = d[row] * c - rho[r]  # d res / d rho = -1
+            res = d[row] * c - rho_r  # d res / d rho = -1
             g = d[row] * (sb[row] * ca - cb[row] * sa)  # d res / d alpha = d sin(b - alpha)
-            use = c > MIN_COS and mask[row]
+            use = (c > MIN_COS) & mask[row]  # & not and: no branch on data
             if inlier_tau > 0.0:
                 zz = res / (sigma_r * c)
                 if final:
                     z[row] = zz
-                use = use and abs(zz) <= inlier_tau
+                use &= abs(zz) <= inlier_tau
             elif final:
                 z[row] = np.nan
             wr = (1.0 if use else 0.0) / (c * c)
             if final:
                 w[row] = wr
             wg = wr * g
-            buf[0, row] = wr
-            buf[1, row] = wg
-            buf[2, row] = wg * g
-            buf[3, row] = wr * res
-            buf[4, row] = wg * res
+            b0[row] = wr
+            b1[row] = wg
+            b2[row] = wg * g
+            b3[row] = wr * res
+            b4[row] = wg * res
+            row += np.uint64(1)
         sw = segment_sum(buf[0], s, cnt)
         swg = segment_sum(buf[1], s, cnt)
         swgg = segment_sum(buf[2], s, cnt)
@@ -936,7 +946,8 @@ def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
 @kernel
 def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, sigma_r, p):  # noqa: ANN001, ANN201
     """Refine every run's line: a Gauss-Newton step on the Log-Hough inliers, then one on the beams
-    within inlier_tau sigma_r of that (which gives the covariance), and the checks: enough inliers,
+    within inlier_tau sigma_r of that (which gives the covariance), and the checks: enough inliers
+    (min(min_points, 2k + 1): min_points is asked of the line once ``extend_ends`` has grown it),
     most of the run explained, chi^2 of the inliers (per dof at most max_chi2 times sigma_r^2, or
     times the run's own noise^2 where that is larger: ``local_scale`` of its beams within one
     mirror turn, so that the interlaced sweeps' offset, already in sigma_r, does not count twice;
@@ -975,7 +986,7 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
     step = bearings.b[1] - bearings.b[0] if bearings.b.size > 1 else 1.0
     sweep = max(1, np.int64(np.rint(ONE_DEG / step))) if step < 0.99 * ONE_DEG else 1  # lms200.noise.interlace_stride
     c2 = 2.0 * math.cos(sweep * step)
-    scratch = np.empty(valid.size)
+    scratch = rows[5]  # local_scale's scratch (a run's rows at most): the ranges d are not read after the steps
     for r in range(n_runs):
         s, cnt = starts[r], counts[r]
         b0 = beam[s]
@@ -985,18 +996,21 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
         # integers they equal the float sums in any order (below 2^53, runs under ~13,000 beams)
         ni = 0
         i_t = i_t2 = i_t3 = 0
-        for row in range(s, s + cnt):
+        b_sq = buf[1]
+        row = np.uint64(s)  # rows indexed unsigned: numba then adds no negative-index wraparound
+        end = np.uint64(s + cnt)
+        while row < end:  # without branches on which rows are inliers
             inl = w[row] > 0
             zi = z[row] if inl else 0.0
-            buf[1, row] = zi * zi
-            if inl:
-                ti = beam[row] - b0
-                ni += 1
-                i_t += ti
-                i_t2 += ti * ti
-                i_t3 += ti * ti * ti
-                lo = min(lo, beam[row])
-                hi = max(hi, beam[row])
+            b_sq[row] = zi * zi
+            ti = beam[row] - b0 if inl else 0
+            ni += inl
+            i_t += ti
+            i_t2 += ti * ti
+            i_t3 += ti * ti * ti
+            lo = min(lo, beam[row] if inl else lo)
+            hi = max(hi, beam[row] if inl else hi)
+            row += np.uint64(1)
         chi = segment_sum(buf[1], s, cnt)
         n_f = float(ni)
         s_t, s_t2, s_t3 = float(i_t), float(i_t2), float(i_t3)
@@ -1004,14 +1018,17 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
         m1, m2, m3 = s_t / n_f, s_t2 / n_f, s_t3 / n_f
         b_lin = (m3 - m1 * m2) / max(m2 - m1 * m1, 1e-12)
         a_lin = m2 - b_lin * m1
-        for row in range(s, s + cnt):
+        b_zq = buf[0]
+        row = np.uint64(s)
+        while row < end:
             inl = w[row] > 0
             zi = z[row] if inl else 0.0
             wi = 1.0 if inl else 0.0
             t = float(beam[row] - b0)
             q = t * t - a_lin - b_lin * t
-            buf[0, row] = zi * q
-            buf[1, row] = (wi * q) * q
+            b_zq[row] = zi * q
+            b_sq[row] = (wi * q) * q
+            row += np.uint64(1)
         zq = segment_sum(buf[0], s, cnt)
         qq = segment_sum(buf[1], s, cnt)
         first_in[r] = lo
@@ -1022,7 +1039,7 @@ def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, vali
             loc = local_scale(ranges, valid, beam[s], beam[s + cnt - 1], sweep, c2, scratch) / sigma_r
             chi_max *= max(1.0, loc * loc)
         good[r] = (
-            ni >= p.min_points
+            ni >= min(p.min_points, 2 * p.k + 1)  # min_points is asked of the grown line (find_lines)
             and ni >= p.min_inlier_fraction * core[r]
             and chi <= chi_max
             and zq * zq <= curv2 * qq
@@ -1080,24 +1097,25 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
     pulled off the bulk of its beams; the biweight keeps to the bulk. The covariance stays the
     least-squares one (the biweight's efficiency under Gaussian noise is 95 %)."""
     n = ranges.size
-    x = np.empty(n)
-    y = np.empty(n)
-    inv_c = np.empty(n)
-    z = np.empty(n)
+    work = np.empty((4, n))  # one block: the used beams' x, y, 1 / cos(b - alpha), |z|
+    x, y, inv_c, z = work[0], work[1], work[2], work[3]
+    cos_b, sin_b = bearings.cos, bearings.sin
     for m in range(rho.size):
         r_m, a_m = rho[m], alpha[m]
         ca, sa = math.cos(a_m), math.sin(a_m)
         k = 0
-        for j in range(first[m], last[m] + 1):
-            c = bearings.cos[j] * ca + bearings.sin[j] * sa
-            if valid[j] and c > MIN_COS:
-                xj = ranges[j] * bearings.cos[j]
-                yj = ranges[j] * bearings.sin[j]
-                x[k] = xj
-                y[k] = yj
-                inv_c[k] = 1.0 / c
-                z[k] = abs(xj * ca + yj * sa - r_m) / c
-                k += 1
+        j = np.uint64(first[m])  # beams indexed unsigned: numba then adds no negative-index wraparound
+        end = np.uint64(last[m] + 1)
+        while j < end:  # every beam written at k, k moved on past the used ones: no branch on data
+            c = cos_b[j] * ca + sin_b[j] * sa
+            xj = ranges[j] * cos_b[j]
+            yj = ranges[j] * sin_b[j]
+            x[k] = xj
+            y[k] = yj
+            inv_c[k] = 1.0 / c
+            z[k] = abs(xj * ca + yj * sa - r_m) / c
+            k += valid[j] & (c > MIN_COS)
+            j += np.uint64(1)
         if k < 3:
             continue
         scale = max(MAD_TO_SIGMA * median(z[:k], z), SIGMA_FLOOR_RAY)  # z selected in place: not read again
@@ -1133,19 +1151,10 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
 
 
 @kernel
-def chord_split(first, last, ranges, bearings):  # noqa: ANN001, ANN201
-    """The beam of each span [first, last] farthest from the chord between the span's end points
-    (``farthest_from_chord``): where a span that does not fit one line bends (IEPF's split point)."""
-    out = np.empty(first.size, np.int64)
-    for r in range(first.size):
-        out[r] = farthest_from_chord(first[r], last[r], ranges, bearings)
-    return out
-
-
-@kernel
 def farthest_from_chord(f, l, ranges, bearings) -> int:  # noqa: ANN001
     """The beam of f..l farthest from the chord between the end points of beams f and l
-    (Cartesian, sensor frame); the middle one when none is off it."""
+    (Cartesian, sensor frame; the middle one when none is off it): where a span that does not fit
+    one line bends (IEPF's split point)."""
     x0, y0 = ranges[f] * bearings.cos[f], ranges[f] * bearings.sin[f]
     x1, y1 = ranges[l] * bearings.cos[l], ranges[l] * bearings.sin[l]
     dx, dy = x1 - x0, y1 - y0
@@ -1385,32 +1394,35 @@ def on_arcs(rho, alpha, first, last, ranges, bearings, valid, theta, increment, 
 
 
 @kernel
-def fit_spans(first, last, shrink0, shrink1, ranges, bearings, valid, theta, theta_var, cs, angle_min, increment,  # noqa: ANN001, ANN201
-              sigma_r, grid, p):
+def fit_spans(first, last, shrink0, shrink1, ranges, log_r, bearings, valid, theta, theta_var, cs, angle_min,  # noqa: ANN001, ANN201
+              increment, sigma_r, grid, p):
     """Steps 3-4 on spans of valid beams [first, last] (each at least 2k + 1 beams): the band of
     normal angles from theta over the window centres first + k .. last - k (less ``shrink0`` /
     ``shrink1`` centres at each end: those whose windows reach across a split), the Log-Hough peak
-    in it and the refined, checked line. Returns fit_runs' outputs."""
+    in it and the refined, checked line. ``log_r``: log of the ranges (at least of the spans' beams).
+    Returns fit_runs' outputs."""
     k = p.k
     n_runs = first.size
-    counts = last - first + 1
-    starts = np.empty(n_runs, np.int64)
+    ints = np.empty((4, n_runs), np.int64)  # one block: counts, starts, first and last centres
+    counts, starts, c0, c1 = ints[0], ints[1], ints[2], ints[3]
     total = 0
     for r in range(n_runs):
+        counts[r] = last[r] - first[r] + 1
         starts[r] = total
         total += counts[r]
-    beam = np.empty(total, np.int64)
-    log_d = np.empty(total)
-    for r in range(n_runs):
-        for t in range(counts[r]):
-            beam[starts[r] + t] = first[r] + t
-            log_d[starts[r] + t] = math.log(ranges[first[r] + t])
-    c0 = first + k
-    c1 = last - k
-    for r in range(n_runs):
+        c0[r] = first[r] + k
+        c1[r] = last[r] - k
         if c1[r] - c0[r] >= shrink0[r] + shrink1[r]:
             c0[r] += shrink0[r]
             c1[r] -= shrink1[r]
+    beam = np.empty(total, np.int64)
+    log_d = np.empty(total)
+    for r in range(n_runs):
+        f, s = first[r], starts[r]
+        br, lr, dr = beam[s:s + counts[r]], log_d[s:s + counts[r]], log_r[f:f + counts[r]]
+        for t in range(counts[r]):
+            br[t] = f + t
+            lr[t] = dr[t]
     centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings.b, increment, sigma_r, k, p)
     alpha0, rho0, inlier0 = band_search(
         beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
@@ -1424,65 +1436,78 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     """Steps 2-4 and the end growth: the line table (rho, alpha, cov, first, last, n_points)
     before merging. A run whose line fails the checks (it bends, or holds two faces the AD test
     did not part) is split at the beam farthest from its chord and each part is fitted again, as
-    IEPF splits, for as long as the parts keep min_points beams (and 2k + 1). Splitting cuts a
-    round surface into chords short enough to pass the line checks, so lines whose neighbourhood
-    is one circle are dropped (``on_arcs``, when arc_check)."""
+    IEPF splits, for as long as the parts keep min_points beams (and 2k + 1). A run's line needs
+    2k + 1 inliers; it must have min_points beams once grown over its ends (the AD windows stop
+    short of a face's ends, so asking min_points of the run asked more of a face than the
+    baselines' min_points). Splitting cuts a round surface into chords short enough to pass the
+    line checks, so lines whose neighbourhood is one circle are dropped (``on_arcs``, when arc_check)."""
     k = p.k
     c0, c1 = candidate_runs(AD, AD_var, psi, psi_var, k, grid.ad_line, sigma_r, p)
-    keep = (c1 - c0 + 2 * k + 1) >= p.min_points
-    first = c0[keep] - k
-    last = c1[keep] + k
-    shrink0 = np.zeros(first.size, np.int64)
-    shrink1 = np.zeros(first.size, np.int64)
+    min_core = min(p.min_points, 2 * k + 1)  # a run's line may grow to min_points past its ends
+    spans = np.zeros((4, c0.size), np.int64)  # the first pass's spans: first, last, shrink0, shrink1
+    n_spans = 0
+    for r in range(c0.size):
+        if c1[r] - c0[r] + 2 * k + 1 >= min_core:
+            spans[0, n_spans], spans[1, n_spans] = c0[r] - k, c1[r] + k
+            n_spans += 1
+    first, last, shrink0, shrink1 = spans[0, :n_spans], spans[1, :n_spans], spans[2, :n_spans], spans[3, :n_spans]
+    log_r = np.empty(ranges.size)  # log of the ranges of the spans' beams, once (later spans are parts of these)
+    for r in range(n_spans):
+        lr, dr = log_r[first[r]:last[r] + 1], ranges[first[r]:last[r] + 1]
+        for t in range(lr.size):
+            lr[t] = math.log(dr[t])
     min_span = max(p.min_points, 2 * k + 1)
-    n_max = ranges.size // min_span + 1  # accepted spans are disjoint, each of min_span beams or more
-    o_rho = np.empty(n_max)
-    o_alpha = np.empty(n_max)
+    n_max = ranges.size // min_core + 1  # accepted spans are disjoint, each of min_core beams or more
+    o_vals = np.empty((2, n_max))  # the accepted lines: rho, alpha; cov; first, last, n_points
+    o_rho, o_alpha = o_vals[0], o_vals[1]
     o_cov = np.empty((n_max, 2, 2))
-    o_f = np.empty(n_max, np.int64)
-    o_l = np.empty(n_max, np.int64)
-    o_n = np.empty(n_max, np.int64)
+    o_ints = np.empty((3, n_max), np.int64)
+    o_f, o_l, o_n = o_ints[0], o_ints[1], o_ints[2]
     m = 0
     cs = slope_sums(theta, theta_var)
     while first.size:
         rho, alpha, cov, f_in, l_in, n_in, good = fit_spans(
-            first, last, shrink0, shrink1, ranges, bearings, valid, theta, theta_var, cs, angle_min, increment,
+            first, last, shrink0, shrink1, ranges, log_r, bearings, valid, theta, theta_var, cs, angle_min, increment,
             sigma_r, grid, p)
         for r in range(first.size):
             if good[r] and m < n_max:
                 o_rho[m], o_alpha[m], o_cov[m] = rho[r], alpha[r], cov[r]
                 o_f[m], o_l[m], o_n[m] = f_in[r], l_in[r], n_in[r]
                 m += 1
-        bad = np.flatnonzero(~good & (last - first >= min_span))  # a part of min_span beams may remain
-        if p.arc_check:  # a failing span that is one circle is a round surface: not cut into chords
-            arc = np.zeros(bad.size, np.bool_)
-            for t in range(bad.size):
-                if theta_turn(first[bad[t]], last[bad[t]], theta) >= 0.5 * p.corner_min_turn:
-                    arc[t] = circle_fits(first[bad[t]], last[bad[t]], -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r,
-                                         p)
-            bad = bad[~arc]
-        at = chord_split(first[bad], last[bad], ranges, bearings)
-        nf = np.empty(2 * bad.size, np.int64)
-        nl = np.empty(2 * bad.size, np.int64)
-        s0 = np.empty(2 * bad.size, np.int64)
-        s1 = np.empty(2 * bad.size, np.int64)
+        parts = np.empty((4, 2 * first.size), np.int64)  # the next pass's spans: first, last, shrink0, shrink1
         q = 0
-        for t in range(bad.size):
-            r = bad[t]
-            for f, l, a, b in ((first[r], at[t] - 1, shrink0[r], k), (at[t] + 1, last[r], k, shrink1[r])):
+        for r in range(first.size):
+            if good[r] or last[r] - first[r] < min_span:  # a part of min_span beams may remain
+                continue
+            if p.arc_check and theta_turn(first[r], last[r], theta) >= 0.5 * p.corner_min_turn:
+                if circle_fits(first[r], last[r], -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r, p):
+                    continue  # a failing span that is one circle is a round surface: not cut into chords
+            at = farthest_from_chord(first[r], last[r], ranges, bearings)
+            for f, l, a, b in ((first[r], at - 1, shrink0[r], k), (at + 1, last[r], k, shrink1[r])):
                 if l - f + 1 >= min_span:
-                    nf[q], nl[q], s0[q], s1[q] = f, l, a, b
+                    parts[0, q], parts[1, q], parts[2, q], parts[3, q] = f, l, a, b
                     q += 1
-        first, last, shrink0, shrink1 = nf[:q], nl[:q], s0[:q], s1[:q]
-    order = np.argsort(o_f[:m], kind="mergesort")
-    rho, alpha, cov = o_rho[:m][order], o_alpha[:m][order], o_cov[:m][order]
-    f_in, l_in, n_in = o_f[:m][order], o_l[:m][order], o_n[:m][order]
+        first, last, shrink0, shrink1 = parts[0, :q], parts[1, :q], parts[2, :q], parts[3, :q]
+    order = np.argsort(o_f[:m], kind="mergesort")  # the lines in beam order
+    vals = np.empty((2, m))
+    rho, alpha = vals[0], vals[1]
+    cov = np.empty((m, 2, 2))
+    ints = np.empty((3, m), np.int64)
+    f_in, l_in, n_in = ints[0], ints[1], ints[2]
+    for t in range(m):
+        o = order[t]
+        rho[t], alpha[t], f_in[t], l_in[t], n_in[t] = o_rho[o], o_alpha[o], o_f[o], o_l[o], o_n[o]
+        cov[t, 0, 0], cov[t, 0, 1], cov[t, 1, 0], cov[t, 1, 1] = o_cov[o, 0, 0], o_cov[o, 0, 1], o_cov[o, 1, 0], o_cov[o, 1, 1]
     extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r)
     robust_refit(rho, alpha, f_in, l_in, ranges, bearings, valid)
-    if p.arc_check and m:
-        line = ~on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, theta, increment, sigma_r, p)
-        return rho[line], alpha[line], cov[line], f_in[line], l_in[line], n_in[line]
-    return rho, alpha, cov, f_in, l_in, n_in
+    arc = on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, theta, increment, sigma_r, p) if p.arc_check and m else np.zeros(m, np.bool_)
+    q = 0  # the lines kept (min_points beams once grown, not a chord of a round surface) moved to the front
+    for t in range(m):
+        if n_in[t] >= p.min_points and not arc[t]:
+            rho[q], alpha[q], f_in[q], l_in[q], n_in[q] = rho[t], alpha[t], f_in[t], l_in[t], n_in[t]
+            cov[q, 0, 0], cov[q, 0, 1], cov[q, 1, 0], cov[q, 1, 1] = cov[t, 0, 0], cov[t, 0, 1], cov[t, 1, 0], cov[t, 1, 1]
+            q += 1
+    return rho[:q], alpha[:q], cov[:q], f_in[:q], l_in[:q], n_in[:q]
 
 
 # -- 5. segments ----------------------------------------------------------------------------------
@@ -1563,8 +1588,9 @@ def move_line(rho, alpha, cov, first, last, npts, i, to) -> None:  # noqa: ANN00
 @kernel
 def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p):  # noqa: ANN001, ANN201
     """Merge neighbours, split the beams two neighbours both claim (around a corner) at the middle,
-    project the end beams' points on the lines, drop segments shorter than min_length; the line
-    table (which find_lines made for this) is changed in place.
+    project the end beams' points on the lines, drop segments shorter than min_length and those
+    left with fewer than min_points beams (min_points counts the beams of the reported line); the
+    line table (which find_lines made for this) is changed in place.
     Returns the rows of ``features.types.Lines``: line values (L, 10) rho, alpha, x0, y0, x1, y1,
     cov (row by row), line beams (L, 3) first, last, n_points."""
     n_lines = merge_neighbours(rho, alpha, cov, first, last, npts, valid, p)
@@ -1587,11 +1613,12 @@ def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p):  #
             lv[q, 3 + 2 * e] = y - off * s
         dx = lv[q, 4] - lv[q, 2]
         dy = lv[q, 5] - lv[q, 3]
-        if not dx * dx + dy * dy >= min_len2:  # nan -> dropped
-            continue
+        n_pts = min(npts[m], last[m] - first[m] + 1)
+        if not (dx * dx + dy * dy >= min_len2 and n_pts >= p.min_points):  # nan -> dropped; min_points
+            continue  # also after the split of shared beams: the reported line's beams
         lv[q, 0], lv[q, 1] = rho[m], alpha[m]
         lv[q, 6], lv[q, 7], lv[q, 8], lv[q, 9] = cov[m, 0, 0], cov[m, 0, 1], cov[m, 1, 0], cov[m, 1, 1]
-        lb[q, 0], lb[q, 1], lb[q, 2] = first[m], last[m], min(npts[m], last[m] - first[m] + 1)
+        lb[q, 0], lb[q, 1], lb[q, 2] = first[m], last[m], n_pts
         q += 1
     return lv[:q], lb[:q]
 
