@@ -27,7 +27,8 @@ def warm_up_kernels(log: Log = stderr, slam: bool = False) -> float:
     scans/s measure the run, not the compiler. When that takes more than a second (a compile, not
     a cache load) it says "compiling kernels, once" and then a line every few seconds until done.
     Returns the seconds it took."""
-    from features import extract
+    from features import extract, extract_many
+    from features.noise_estimate import neighbour_sigma
     from lms200 import Scan
 
     # a room-like scan: two walls meeting in a corner, so every kernel (lines, merging, corners) runs
@@ -35,13 +36,19 @@ def warm_up_kernels(log: Log = stderr, slam: bool = False) -> float:
     ranges = np.minimum(2.0 / np.maximum(np.cos(bearings), 1e-9), 3.0 / np.maximum(np.sin(bearings), 1e-9))
     ranges = np.where(ranges > 8.0, np.inf, ranges)
     scan = Scan.lms200(ranges + 0.002 * np.random.default_rng(0).standard_normal(361))
+    # and the same scan in cm mode (range_max > 10 m), whose noise the sensor method estimates ("auto")
+    scans = (scan, scan.replace(range_max=81.83))
     start = time.perf_counter()
     first = "compiling kernels, once (about 20-60 s; cached beside the code for every later run) ..."
     with Heartbeat(log, "compiling kernels", first=first, first_after=1.0) as beat:
-        for method in COMPILED_METHODS:
-            extract(scan, method=method)
+        for sample in scans:  # single calls, batches and the pooled noise estimate take different kernels
+            for method in COMPILED_METHODS:
+                extract(sample, method=method)
+                extract_many([sample, sample], method=method)
+        neighbour_sigma(list(scans))
         if slam:
-            _warm_up_slam(scan)
+            for sample in scans:
+                _warm_up_slam(sample)
     seconds = time.perf_counter() - start
     if beat.announced:
         log(f"kernels compiled in {seconds:.0f} s")
