@@ -18,7 +18,7 @@ produces the effect, which are fitted by simulation (indirect inference, fixed s
   simulated with dark cells of 0-0.8 m, interpolated to the log's (only where the clustering,
   less 3 standard errors, exceeds twice the nan rate and 0.1: beams dropped one by one give
   about the nan rate). MIT CSAIL's nans come in
-  stretches (0.9); dropped beam by beam they cut every wall, which the paper's extractor does
+  stretches (0.82); dropped beam by beam they cut every wall, which the paper's extractor does
   not bridge.
 - ``noise_tail_patch_m``: whether the tail comes beam by beam or in rough stretches of surface:
   the tail's clustering along the scan (``LogCalibration.tail_clustering``) simulated with rough

@@ -91,7 +91,7 @@ class LogCalibration:
             TAIL_CLUSTER_STEP strides on (sharing no beam with it) does too. A tail of independent
             beams gives about the tail's own share; rough stretches of surface give more.
         nan_clustering: how nan readings gather along a scan: of the nan beams, the share whose
-            next beam is nan too (about nan_rate for beams dropped one by one; MIT CSAIL: 0.9).
+            next beam is nan too (about nan_rate for beams dropped one by one; MIT CSAIL: 0.82).
     """
 
     n_scans: int

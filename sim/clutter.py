@@ -286,8 +286,9 @@ def _rough_items(rng: np.random.Generator, length: float) -> list[tuple[float, f
     """The solids of one stretch of rough fill (as :func:`_run_items`): things ROUGH_ITEM_M wide
     and ROUGH_DEPTH_M deep (binders, files, cables, shoes, the folds of bags), 0-ROUGH_GAP_M
     apart; a share ROUGH_ROUND_SHARE round, the others turned by up to ROUGH_TURN_MAX_RAD. Each
-    face is shorter than a line extractor's shortest line (8 beams: 0.14 m at 2 m) and the fronts
-    step in depth by more than the 3 cm a line may explain."""
+    front is shorter than a line extractor's shortest line (8 beams: 0.14 m at 2 m) and most
+    neighbouring fronts step in depth by more than the 3 cm a line may explain; a turned item's
+    side face can be as long as its depth."""
     items = []
     s = 0.0
     while True:

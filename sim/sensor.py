@@ -66,7 +66,7 @@ class SensorConfig:
             stay from scan to scan, as in real logs; beams that meet nothing still drop one by
             one.
 
-    The last seven fields default to the datasheet model (none of these effects);
+    The last eight fields default to the datasheet model (none of these effects);
     ``lmsbench calibrate`` fits all of them to a real log.
     """
 

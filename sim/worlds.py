@@ -47,6 +47,7 @@ MIT_PRESET = dict(n_per_side=6, room_w=5.0, room_d=6.0, corridor_w=1.8, door_w=1
 
 
 MIN_SCALE, MAX_SCALE = 0.5, 3.0  # the rooms' size factor (make_world(scale=...))
+ROOMED_WORLDS = ("office", "cluttered", "random", "mit")  # the office generator's worlds, whose rooms scale
 MAX_CLUTTER = 10.0  # densest clutter level (10x a furnished office); the object count grows with it
 
 
@@ -81,7 +82,8 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
     Raises:
         ValueError: for an unknown name (listing the known ones), a seed that is not a whole number
             >= 0, a clutter level outside [0, MAX_CLUTTER], a negative glass rate or a rough
-            share outside [0, 1] or a scale outside [MIN_SCALE, MAX_SCALE].
+            share outside [0, 1] (or > 0 at clutter level 0), or a scale outside [MIN_SCALE, MAX_SCALE]
+            (or other than 1 for a world without rooms).
     """
     check_seed(seed)
     rng = np.random.default_rng([int(seed), _STREAM_WORLD])
@@ -95,6 +97,12 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
         raise ValueError(f"rough: must be a share in [0, 1] of the rooms' wall length, got {rough}")
     if scale is not None and not (np.isfinite(scale) and MIN_SCALE <= scale <= MAX_SCALE):
         raise ValueError(f"scale: must be in [{MIN_SCALE:g}, {MAX_SCALE:g}] (the rooms' size as a multiple), got {scale}")
+    if scale is not None and float(scale) != 1.0 and name in WORLD_NAMES and name not in ROOMED_WORLDS:
+        raise ValueError(f"scale: the {name!r} world has no rooms to scale (scale applies to office, cluttered, "
+                         f"random and mit), got {scale}")
+    if rough is not None and rough > 0 and level == 0:
+        raise ValueError(f"rough: rough fill is clutter, so it needs a clutter level > 0 (the {name!r} world at "
+                         f"clutter {level:g}), got {rough}")
     size = 1.0 if scale is None else float(scale)
     leaf_rng = crng if level > 0 else None
     if name in ("office", "cluttered"):

@@ -245,6 +245,7 @@ CASES = [
     (["sim2real", "{binary.clf}", "--out", O], "binary"),
     (["sim2real", "{good.clf}", "--world", "offfice", "--out", O], "offfice"),
     (["sim2real", "{good.clf}", "--seeds", "-1", "--out", O], "--seeds"),
+    (["sim2real", "{good.clf}", "--world", "office", "--fit-rooms", "--out", O], "--fit-rooms"),
     (["sim2real", "{good.clf}", "--duration", "inf", "--out", O], "--duration"),
     (["sim2real", "{good.clf}", "--seeds", "1", "1", "--out", O], "--seeds"),
     (["sim2real", "{good.clf}", "--rate-hz", "0", "--out", O], "--rate-hz"),

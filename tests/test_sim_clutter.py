@@ -293,6 +293,10 @@ def test_scaled_rooms_keep_exact_truth_and_scale_one_is_the_world() -> None:
             assert np.max(np.abs(got[both] - ref[both])) < 1e-3
     with pytest.raises(ValueError, match="scale"):
         make_world("mit", 0, scale=5.0)
+    with pytest.raises(ValueError, match="no rooms to scale"):  # not silently ignored
+        make_world("pillars", 0, scale=2.0)
+    with pytest.raises(ValueError, match="needs a clutter level"):
+        make_world("office", 0, rough=0.5)
 
 
 def test_far_share_counts_readings_at_4_8_m_among_those_at_2_8_m() -> None:

@@ -6,7 +6,17 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import SEED, check_log, check_out, check_seeds, check_yaml, count, positive, world_name
+from experiments.options import (
+    SEED,
+    InputError,
+    check_log,
+    check_out,
+    check_seeds,
+    check_yaml,
+    count,
+    positive,
+    world_name,
+)
 from experiments.sim2real import DEFAULT_DURATION_S, DEFAULT_SEEDS
 
 
@@ -43,6 +53,8 @@ def run(args: argparse.Namespace) -> int:
     check_log(args.log)
     check_out(args.out)
     check_seeds(args.seeds)
+    if args.fit_rooms and args.world != "mit":
+        raise InputError(f"--fit-rooms fits the mit world's room size; it does nothing for --world {args.world}")
     sensor = None
     if args.sensor is not None:
         check_yaml(args.sensor, "a sensor YAML")

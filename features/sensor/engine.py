@@ -646,7 +646,7 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
             tv[i] = theta_sd * theta_sd
             n_fix += fix_slope_sd(x, sd_i)
         i = 0
-        while n_fix > 0:  # where that form does not hold: atan2 (a loop that cannot vectorise, so
+        while n_fix > 0 and i < m:  # where that form does not hold: atan2 (a loop that cannot vectorise, so
             # that the libm call is made for these few beams only, not speculated for all)
             t, sd_i = tt[i], ts[i]
             x = 1.0 + (t + sd_i) * (t - sd_i)
@@ -813,8 +813,9 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
             base = a_idx[a] + zero
             # eq. 5: log p = log d + log cos(a - b), a lookup at a - b in the template (clipped
             # onto its ends, where it holds the floor). The votes are counted in 16-bit fields
-            # of four words (cells 4w .. 4w + 3 in word w; a run has fewer than 2^16 beams), a
-            # loop without stores that vectorises
+            # of four words (cells 4w .. 4w + 3 in word w; a run has fewer than 2^16 beams, as
+            # the registry takes scans of at most MAX_BEAMS = 16,384), a loop without stores that
+            # vectorises
             w0 = w1 = w2 = w3 = np.uint64(0)
             for t in range(cnt):
                 rel = (template[min(max(base - bm[t] * subdiv, 0), n_tmpl - 1)] + ld[t]) * inv_width + offset
