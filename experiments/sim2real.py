@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
@@ -247,6 +247,23 @@ def far_share(records: Sequence[Record]) -> float:
     return far / mid if mid else float("nan")
 
 
+def _probe_shares(statistic: Callable[[Sequence[Record]], float], vary: str, probes: Sequence[float],
+                  fixed: dict[str, Any], glass: float | None, sensor: Any, limits: Any, duration: float, rate_hz: float,
+                  n_probe_seeds: int) -> list[float]:
+    """``statistic`` of the simulated ``mit`` runs (the first ``n_probe_seeds`` of
+    ROUGH_PROBE_SEEDS) with ``make_world``'s ``vary`` at each of ``probes`` and ``fixed`` as given."""
+    from sim import make_world, simulate_records
+
+    shares = []
+    for value in probes:
+        recs: list[Record] = []
+        for seed in ROUGH_PROBE_SEEDS[:max(1, n_probe_seeds)]:
+            world = make_world("mit", seed, glass=glass, **{**fixed, vary: value})
+            recs += simulate_records(world, seed, duration, sensor, rate_hz=rate_hz, limits=limits)
+        shares.append(statistic(recs))
+    return shares
+
+
 @dataclass
 class ScaleFit:
     """The mit worlds' room size fitted to a log: the log's far share, the probes'."""
@@ -265,16 +282,10 @@ def fit_scale(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     curve (made monotone), clipped to the probes' range. Ranges only: no extractor runs.
     ``rough``: the rough fill of the probes (fit_rough's, fitted on the preset's rooms first)."""
     from experiments.calibrate import _interpolate
-    from sim import make_world, simulate_records
 
     target = far_share(real)
-    shares = []
-    for scale in SCALE_PROBES:
-        recs: list[Record] = []
-        for seed in ROUGH_PROBE_SEEDS[:max(1, n_probe_seeds)]:
-            recs += simulate_records(make_world("mit", seed, glass=glass, rough=rough, scale=scale), seed, duration, sensor,
-                                     rate_hz=rate_hz, limits=limits)
-        shares.append(far_share(recs))
+    shares = _probe_shares(far_share, "scale", SCALE_PROBES, dict(rough=rough), glass, sensor, limits, duration, rate_hz,
+                           n_probe_seeds)
     fitted = _interpolate(shares, list(SCALE_PROBES), float(target)) if np.isfinite(target) else SCALE_PROBES[0]
     return ScaleFit(round(float(fitted), 3), float(target), tuple(SCALE_PROBES), tuple(shares))
 
@@ -296,17 +307,11 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     probe runs at ROUGH_PROBES (the first ``n_probe_seeds`` of ROUGH_PROBE_SEEDS), the log's share
     interpolated piecewise linearly on the probes' curve (made monotone), clipped to its ends: the
     fill's effect saturates as the rooms' free wall runs out. ``scale``: the rooms' size (fit_scale)."""
-    from sim import make_world, simulate_records
+    from experiments.calibrate import _interpolate
 
     target = near_unexplained(real)
-    shares = []
-    for cover in ROUGH_PROBES:
-        recs: list[Record] = []
-        for seed in ROUGH_PROBE_SEEDS[:max(1, n_probe_seeds)]:
-            recs += simulate_records(make_world("mit", seed, glass=glass, rough=cover, scale=scale), seed, duration, sensor,
-                                     rate_hz=rate_hz, limits=limits)
-        shares.append(near_unexplained(recs))
-    from experiments.calibrate import _interpolate
+    shares = _probe_shares(near_unexplained, "rough", ROUGH_PROBES, dict(scale=scale), glass, sensor, limits, duration,
+                           rate_hz, n_probe_seeds)
 
     cover = _interpolate(shares, list(ROUGH_PROBES), float(target)) if np.isfinite(target) else 0.0
     return RoughFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(ROUGH_PROBES), tuple(shares))
