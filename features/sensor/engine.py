@@ -47,6 +47,7 @@ N_BINS = 13  # log-range cells of a run's Log-Hough accumulator around its middl
 MIN_COS = 0.05  # beams within ~3 deg of grazing a line get no weight and do not extend it
 BAND_MAX = 0.5  # largest half-width of a run's band of normal angles, rad
 TAN_SPAN_CAP = 40.0  # cap on |tan(b - a)| differences across a run (grazing runs), dimensionless
+VOTE_BLOCK = 16  # beams a run's vote loop takes at a time (its vectorised width); runs are padded to it
 TIE_BREAK = 1e-3  # votes a band angle loses per step from the band centre (prefers the centre on ties)
 MERGE_FLOOR_RHO_VAR = 0.005**2  # model-error floor added to the merge test's (rho) variance, m^2
 MERGE_FLOOR_ALPHA_VAR = 0.005**2  # ... and (alpha) variance, rad^2
@@ -116,6 +117,7 @@ class Grid(NamedTuple):
     zero: int  # index of angle 0 in the template
     template: np.ndarray  # log cos(m step) for |m| <= zero, floored (eq. 5)
     twice_cos: float  # 2 cos(D), as numpy computes it: the noise estimate's collinearity residuals
+    phases: np.ndarray  # (subdiv, L): template[r + subdiv q] at [r, L - 1 - q] (the floor past its end)
 
 
 @kernel
@@ -773,55 +775,86 @@ def band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings, increment, sigm
 
 
 @kernel
-def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, subdiv, n_angles, grid):  # noqa: ANN001, ANN201
+def template_at(template, idx) -> float:  # noqa: ANN001
+    """template[idx], clipped onto its ends (which hold the floor: beyond them the beam cannot see the line)."""
+    return template[min(max(idx, 0), template.size - 1)]
+
+
+@kernel
+def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angle_min, subdiv, n_angles, grid):  # noqa: ANN001, ANN201
     """The Log-Hough peak of every run in its band of normal angles, and the beams that voted in it.
 
-    Args: stacked beams of the runs (``beam`` index, ``log_d`` log range; run r holds rows
-    starts[r] .. starts[r] + counts[r] - 1); per run the band ``centre`` and ``half_width`` (rad)
-    and ``bin_half``, the half-width of a log-range cell; the scan's ``angle_min`` (rad).
+    Args: the runs' beams, consecutive: run r holds beams first[r] .. first[r] + counts[r] - 1,
+    whose log ranges are ``log_d`` rows starts[r] .. starts[r] + counts[r] - 1; per run the band
+    ``centre`` and ``half_width`` (rad) and ``bin_half``, the half-width of a log-range cell; the
+    scan's ``angle_min`` (rad).
     Returns alpha (rad, not wrapped), rho (m) of each run's peak and the inlier mask of the rows.
     """
-    template, zero, step = grid.template, grid.zero, grid.step
+    template, zero, step, phases = grid.template, grid.zero, grid.step, grid.phases
     n_runs = starts.size
     h2 = (n_angles - 1) // 2
     h = max(h2, 1)
     n_tmpl = template.size
+    n_phase = phases.shape[1]
     out = np.empty((2, n_runs))
     alpha, rho = out[0], out[1]
-    inlier = np.zeros(beam.size, np.bool_)
+    inlier = np.zeros(log_d.size, np.bool_)
     ref = np.empty(n_angles)
+    max_cnt = 0
+    for r in range(n_runs):
+        max_cnt = max(max_cnt, counts[r])
+    votes = np.empty(max_cnt + VOTE_BLOCK)  # one run's votes at one angle (the generic path), padded
+    votes[max_cnt:] = 0.0
     # per angle: its index, then the vote counts of cells 1..N_BINS (0 and N_BINS + 1 outside)
     angle_counts = np.empty((n_angles, N_BINS + 3), np.int64)
     a_idx, counts_a = angle_counts[:, 0], angle_counts[:, 1:]
     for r in range(n_runs):
-        s, cnt = starts[r], counts[r]
+        s, cnt, f = starts[r], counts[r], first[r]
         centre_idx = np.int64(np.rint((centre[r] - angle_min) / step))
         stride = np.int64(max(np.rint(half_width[r] / (h * step)), 1.0))
         inv_width = 1.0 / bin_half[r]
         # cells are laid out around the median vote of the beams at 1/4, 1/2 and 3/4 of the run
         # (a mean would be dragged off by neighbour-line beams at its ends; one beam can be a spike)
-        row1, row2, row3 = s + cnt // 4, s + cnt // 2, s + (3 * cnt) // 4
+        t1, t2, t3 = cnt // 4, cnt // 2, (3 * cnt) // 4
         for a in range(n_angles):
             a_idx[a] = centre_idx + stride * (a - h2)
-            q1 = template[min(max(a_idx[a] + zero - beam[row1] * subdiv, 0), n_tmpl - 1)] + log_d[row1]
-            q2 = template[min(max(a_idx[a] + zero - beam[row2] * subdiv, 0), n_tmpl - 1)] + log_d[row2]
-            q3 = template[min(max(a_idx[a] + zero - beam[row3] * subdiv, 0), n_tmpl - 1)] + log_d[row3]
+            base = a_idx[a] + zero - f * subdiv
+            q1 = template_at(template, base - t1 * subdiv) + log_d[s + t1]
+            q2 = template_at(template, base - t2 * subdiv) + log_d[s + t2]
+            q3 = template_at(template, base - t3 * subdiv) + log_d[s + t3]
             ref[a] = max(min(q1, q2), min(max(q1, q2), q3))  # median of three
-        bm, ld = beam[s:s + cnt], log_d[s:s + cnt]
+        # the template entries of beams f + t at angle a: template[base - t subdiv], base = a_idx +
+        # zero - f subdiv; inside the template (no clipping) for every angle of the band, they are
+        # phases[base % subdiv, L - 1 - base // subdiv + t], contiguous in t
+        lo_base = a_idx[0] + zero - f * subdiv
+        hi_base = a_idx[n_angles - 1] + zero - f * subdiv
+        inside = lo_base - (cnt - 1) * subdiv >= 0 and hi_base <= n_tmpl - 1
+        ld = log_d[s:s + cnt]
+        n_pad = (cnt + VOTE_BLOCK - 1) // VOTE_BLOCK * VOTE_BLOCK
         for a in range(n_angles):
             offset = (N_BINS / 2.0 + 1.0) - ref[a] * inv_width
-            base = a_idx[a] + zero
+            base = a_idx[a] + zero - f * subdiv
             # eq. 5: log p = log d + log cos(a - b), a lookup at a - b in the template (clipped
-            # onto its ends, where it holds the floor). The votes are counted in 16-bit fields
-            # of four words (cells 4w .. 4w + 3 in word w; a run has fewer than 2^16 beams, as
-            # the registry takes scans of at most MAX_BEAMS = 16,384), a loop without stores that
-            # vectorises
+            # onto its ends, where it holds the floor)
+            if inside:  # slices indexed from 0: numba's negative-index wraparound folds away, the loop vectorises
+                o = n_phase - 1 - base // subdiv
+                row = phases[base % subdiv, o:o + cnt]
+                for t in range(cnt):
+                    votes[t] = row[t] + ld[t]
+            else:
+                for t in range(cnt):
+                    votes[t] = template_at(template, base - t * subdiv) + ld[t]
+            # the votes counted in cells rel = (log p - ref) / width + N_BINS / 2 + 1, floored and
+            # clipped onto 0 .. N_BINS + 1, as 16-bit fields of four words (cells 4w .. 4w + 3 in
+            # word w; a run has fewer than 2^16 beams, as the registry takes scans of at most
+            # MAX_BEAMS = 16,384). The loop runs over whole VOTE_BLOCKs (``votes`` is padded, the
+            # padding counts nowhere) without stores: it vectorises, without a scalar remainder
             w0 = w1 = w2 = w3 = np.uint64(0)
-            for t in range(cnt):
-                rel = (template[min(max(base - bm[t] * subdiv, 0), n_tmpl - 1)] + ld[t]) * inv_width + offset
+            for t in range(n_pad):
+                rel = votes[t] * inv_width + offset
                 rel = rel if rel >= 0.0 else 0.0  # nan votes go to the outside cell 0
                 cell = np.uint64(min(rel, N_BINS + 1.0))
-                one = np.uint64(1) << ((cell & np.uint64(3)) * np.uint64(16))
+                one = (np.uint64(1) if t < cnt else np.uint64(0)) << ((cell & np.uint64(3)) * np.uint64(16))
                 word = cell >> np.uint64(2)
                 w0 += one if word == 0 else np.uint64(0)
                 w1 += one if word == 1 else np.uint64(0)
@@ -843,83 +876,20 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
         peak_log_p = ref[best_a] + (best_c + 1 - N_BINS / 2.0) * bin_half[r]
         alpha[r] = angle_min + a_idx[best_a] * step
         rho[r] = math.exp(peak_log_p)
-        for row in range(s, s + cnt):
-            idx = min(max(a_idx[best_a] + zero - beam[row] * subdiv, 0), n_tmpl - 1)
-            inlier[row] = abs((template[idx] + log_d[row]) - peak_log_p) <= bin_half[r]
+        base = a_idx[best_a] + zero - f * subdiv
+        inl = inlier[s:s + cnt]
+        if inside:
+            o = n_phase - 1 - base // subdiv
+            row = phases[base % subdiv, o:o + cnt]
+            for t in range(cnt):
+                inl[t] = abs((row[t] + ld[t]) - peak_log_p) <= bin_half[r]
+        else:
+            for t in range(cnt):
+                inl[t] = abs((template_at(template, base - t * subdiv) + ld[t]) - peak_log_p) <= bin_half[r]
     return alpha, rho, inlier
 
 
 # -- 4. weighted refinement -----------------------------------------------------------------------
-
-
-@kernel
-def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_tau, buf, out, final):  # noqa: ANN001, ANN201
-    """One Gauss-Newton step of every run's (rho, alpha) on its beams (range d, bearing b given by
-    its cosine cb and sine sb).
-
-    Beam j on x cos(alpha) + y sin(alpha) = rho has residual r_j = d_j cos(b_j - alpha) - rho;
-    range noise moves it by e_j cos(b_j - alpha), so its weight is 1 / (sigma_r cos)^2 and
-    (J^T W J)^-1 is the covariance of (rho, alpha). Beams in ``mask`` are used, and when
-    ``inlier_tau`` > 0 only those within inlier_tau sigma_r (range residual) of the estimate.
-    Writes into ``out`` (a FitOut; ``buf`` is (5, N) scratch) the new rho, alpha (R,) and, when
-    ``final``, cov (R, 2, 2), z = r / (sigma_r cos) (N,; nan unless inlier_tau > 0) and the weights w (N,)."""
-    n_runs = starts.size
-    new_rho, new_alpha, cov, z, w = out.rho, out.alpha, out.cov, out.z, out.w
-    s2 = sigma_r * sigma_r
-    b0, b1, b2, b3, b4 = buf[0], buf[1], buf[2], buf[3], buf[4]
-    for r in range(n_runs):
-        s, cnt = starts[r], counts[r]
-        ca, sa = math.cos(alpha[r]), math.sin(alpha[r])
-        rho_r = rho[r]
-        row = np.uint64(s)  # rows indexed unsigned: numba then adds no negative-index wraparound
-        end = np.uint64(s + cnt)
-        while row < end:
-            c = cb[row] * ca + sb[row] * sa  # cos(b - alpha)
-            res = d[row] * c - rho_r  # d res / d rho = -1
-            g = d[row] * (sb[row] * ca - cb[row] * sa)  # d res / d alpha = d sin(b - alpha)
-            use = (c > MIN_COS) & mask[row]  # & not and: no branch on data
-            if inlier_tau > 0.0:
-                zz = res / (sigma_r * c)
-                if final:
-                    z[row] = zz
-                use &= abs(zz) <= inlier_tau
-            elif final:
-                z[row] = np.nan
-            wr = (1.0 if use else 0.0) / (c * c)
-            if final:
-                w[row] = wr
-            wg = wr * g
-            b0[row] = wr
-            b1[row] = wg
-            b2[row] = wg * g
-            b3[row] = wr * res
-            b4[row] = wg * res
-            row += np.uint64(1)
-        sw = segment_sum(buf[0], s, cnt)
-        swg = segment_sum(buf[1], s, cnt)
-        swgg = segment_sum(buf[2], s, cnt)
-        swr = segment_sum(buf[3], s, cnt)
-        swgr = segment_sum(buf[4], s, cnt)
-        inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
-        new_rho[r] = rho[r] + (swgg * swr - swg * swgr) * inv_det
-        new_alpha[r] = alpha[r] + (swg * swr - sw * swgr) * inv_det
-        if final:
-            var = s2 * inv_det
-            cov[r, 0, 0] = swgg * var
-            cov[r, 0, 1] = swg * var
-            cov[r, 1, 0] = swg * var
-            cov[r, 1, 1] = sw * var
-
-
-class FitOut(NamedTuple):
-    """Outputs of a ``gauss_newton`` step: per run rho, alpha, cov; per row z, w (views of blocks
-    allocated once per ``fit_runs``)."""
-
-    rho: np.ndarray
-    alpha: np.ndarray
-    cov: np.ndarray
-    z: np.ndarray
-    w: np.ndarray
 
 
 @kernel
@@ -945,113 +915,146 @@ def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
 
 
 @kernel
-def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, sigma_r, p):  # noqa: ANN001, ANN201
-    """Refine every run's line: a Gauss-Newton step on the Log-Hough inliers, then one on the beams
-    within inlier_tau sigma_r of that (which gives the covariance), and the checks: enough inliers
-    (min(min_points, 2k + 1): min_points is asked of the line once ``extend_ends`` has grown it),
-    most of the run explained, chi^2 of the inliers (per dof at most max_chi2 times sigma_r^2, or
-    times the run's own noise^2 where that is larger: ``local_scale`` of its beams within one
-    mirror turn, so that the interlaced sweeps' offset, already in sigma_r, does not count twice;
-    real noise grows with range and varies with the surface: Intel's 4.3 mm within 1 m, 7.9 mm
-    beyond 8 m, around the log's 5.3 mm), and curvature (the t-statistic of the
-    residuals against a parabola in the beam index, orthogonal to 1 and t over the inliers:
-    ~N(0, 1) on a line, large on an arc). Returns the lines in normal form (rho >= 0, alpha in
-    (-pi, pi]) with cov, first / last inlier beam, inlier count, and the mask of those that pass."""
-    n = beam.size
+def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, sigma_r, p):  # noqa: ANN001, ANN201
+    """Refine every run's line (run r: beams first[r] .. first[r] + counts[r] - 1, its rows of
+    ``inlier0`` from starts[r]) by two weighted Gauss-Newton steps, one on the Log-Hough inliers,
+    then one on the beams within inlier_tau sigma_r of that (which gives the covariance), and
+    check it: enough inliers (min(min_points, 2k + 1): min_points is asked of the line once
+    ``extend_ends`` has grown it), most of the run explained, chi^2 of the inliers (per dof at
+    most max_chi2 times sigma_r^2, or times the run's own noise^2 where that is larger:
+    ``local_scale`` of its beams within one mirror turn, so that the interlaced sweeps' offset,
+    already in sigma_r, does not count twice; real noise grows with range and varies with the
+    surface: Intel's 4.3 mm within 1 m, 7.9 mm beyond 8 m, around the log's 5.3 mm), and
+    curvature (the t-statistic of the residuals against a parabola in the beam index, orthogonal
+    to 1 and t over the inliers: ~N(0, 1) on a line, large on an arc).
+
+    A Gauss-Newton step: beam j (range d, bearing b) on x cos(alpha) + y sin(alpha) = rho has
+    residual r_j = d_j cos(b_j - alpha) - rho; range noise moves it by e_j cos(b_j - alpha), so
+    its weight is 1 / (sigma_r cos)^2 and (J^T W J)^-1 is the covariance of (rho, alpha). Beams
+    within MIN_COS of grazing get no weight. Each step is one pass over the run's beams, its
+    sums accumulated as it goes; the second also marks the inliers and sums what the checks
+    need, so that a run's beams are read twice and, for the curvature, a third time.
+
+    Returns the lines in normal form (rho >= 0, alpha in (-pi, pi]) with cov, first / last inlier
+    beam, inlier count, and the mask of those that pass."""
     n_runs = starts.size
-    rows = np.empty((10, n))  # one block: the steps' sums (5), d, cb, sb, z, w
-    buf, d, cb, sb = rows[:5], rows[5], rows[6], rows[7]
-    flags = np.empty((2, n), np.bool_)
-    ok, m0 = flags[0], flags[1]
-    runs = np.empty((4, n_runs))
-    cov = np.empty((n_runs, 2, 2))
-    step1 = FitOut(runs[0], runs[1], cov, rows[8], rows[9])  # cov, z, w: not written by the first step
-    step2 = FitOut(runs[2], runs[3], cov, rows[8], rows[9])
-    first_max = 0
+    cos_b, sin_b = bearings.cos, bearings.sin
+    max_cnt = 0
     for r in range(n_runs):
-        first_max = max(first_max, beam[starts[r]])
-    for row in range(n):
-        j = beam[row]
-        ok[row] = valid[j]
-        d[row] = ranges[j] if valid[j] else 0.0
-        cb[row] = bearings.cos[j]
-        sb[row] = bearings.sin[j]
-        m0[row] = ok[row] and inlier0[row]
-    gauss_newton(d, cb, sb, starts, counts, m0, rho0, alpha0, sigma_r, -1.0, buf, step1, False)
-    gauss_newton(d, cb, sb, starts, counts, ok, step1.rho, step1.alpha, sigma_r, p.inlier_tau, buf, step2, True)
-    rho, alpha, z, w = step2.rho, step2.alpha, step2.z, step2.w
+        max_cnt = max(max_cnt, counts[r])
+    zs = np.empty((2, max_cnt))  # a run's normalised residuals z and (after the checks' sums) local_scale's scratch
+    z_run, scratch = zs[0], zs[1]
+    inl_run = np.empty(max_cnt, np.bool_)
+    vals = np.empty((2, n_runs))
+    rho, alpha = vals[0], vals[1]
+    cov = np.empty((n_runs, 2, 2))
     ints = np.empty((3, n_runs), np.int64)
     first_in, last_in, n_in = ints[0], ints[1], ints[2]
     good = np.zeros(n_runs, np.bool_)
     curv2 = p.curvature_tau * p.curvature_tau
+    tau = p.inlier_tau
+    inv_sigma = 1.0 / sigma_r
+    s2 = sigma_r * sigma_r
     step = bearings.b[1] - bearings.b[0] if bearings.b.size > 1 else 1.0
     sweep = max(1, np.int64(np.rint(ONE_DEG / step))) if step < 0.99 * ONE_DEG else 1  # lms200.noise.interlace_stride
     c2 = 2.0 * math.cos(sweep * step)
-    scratch = rows[5]  # local_scale's scratch (a run's rows at most): the ranges d are not read after the steps
     for r in range(n_runs):
-        s, cnt = starts[r], counts[r]
-        b0 = beam[s]
-        lo = n + first_max
-        hi = -1
-        # the inliers' count and sums of t, t^2, t^3 (t the beam offset) are integers: summed as
-        # integers they equal the float sums in any order (below 2^53, runs under ~13,000 beams)
+        s, cnt, f = starts[r], counts[r], first[r]
+        # the run's beams as slices indexed from 0 (numba's negative-index wraparound then folds away)
+        dr, cr, sr, vr, hr = ranges[f:f + cnt], cos_b[f:f + cnt], sin_b[f:f + cnt], valid[f:f + cnt], inlier0[s:s + cnt]
+        zr, ir = z_run[:cnt], inl_run[:cnt]
+        # step 1, on the Log-Hough inliers
+        ca, sa = math.cos(alpha0[r]), math.sin(alpha0[r])
+        sw = swg = swgg = swr = swgr = 0.0
+        for t in range(cnt):  # without branches on data
+            c = cr[t] * ca + sr[t] * sa  # cos(b - alpha)
+            d = dr[t] if vr[t] else 0.0  # an invalid beam's range is inf or nan
+            res = d * c - rho0[r]  # d res / d rho = -1
+            g = d * (sr[t] * ca - cr[t] * sa)  # d res / d alpha = d sin(b - alpha)
+            ic = 1.0 / c
+            wr = ic * ic if (c > MIN_COS) & vr[t] & hr[t] else 0.0
+            wg = wr * g
+            sw += wr
+            swg += wg
+            swgg += wg * g
+            swr += wr * res
+            swgr += wg * res
+        inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
+        rho1 = rho0[r] + (swgg * swr - swg * swgr) * inv_det
+        alpha1 = alpha0[r] + (swg * swr - sw * swgr) * inv_det
+        # step 2, on the beams within inlier_tau sigma_r of step 1's line (z = r / (sigma_r cos)),
+        # with the checks' sums over those inliers: chi^2, their count and (t the beam offset in
+        # the run, exact as integers in any order below 2^53: runs under ~13,000 beams) sums of
+        # t, t^2, t^3, the first and last
+        ca, sa = math.cos(alpha1), math.sin(alpha1)
+        sw = swg = swgg = swr = swgr = 0.0
+        chi = 0.0
         ni = 0
         i_t = i_t2 = i_t3 = 0
-        b_sq = buf[1]
-        row = np.uint64(s)  # rows indexed unsigned: numba then adds no negative-index wraparound
-        end = np.uint64(s + cnt)
-        while row < end:  # without branches on which rows are inliers
-            inl = w[row] > 0
-            zi = z[row] if inl else 0.0
-            b_sq[row] = zi * zi
-            ti = beam[row] - b0 if inl else 0
+        lo = cnt
+        hi = -1
+        for t in range(cnt):
+            c = cr[t] * ca + sr[t] * sa
+            d = dr[t] if vr[t] else 0.0
+            res = d * c - rho1
+            g = d * (sr[t] * ca - cr[t] * sa)
+            ic = 1.0 / c
+            zt = res * ic * inv_sigma
+            inl = (c > MIN_COS) & vr[t] & (abs(zt) <= tau)
+            wr = ic * ic if inl else 0.0
+            wg = wr * g
+            sw += wr
+            swg += wg
+            swgg += wg * g
+            swr += wr * res
+            swgr += wg * res
+            zr[t] = zt
+            ir[t] = inl
+            chi += zt * zt if inl else 0.0
+            ti = t if inl else 0
             ni += inl
             i_t += ti
             i_t2 += ti * ti
             i_t3 += ti * ti * ti
-            lo = min(lo, beam[row] if inl else lo)
-            hi = max(hi, beam[row] if inl else hi)
-            row += np.uint64(1)
-        chi = segment_sum(buf[1], s, cnt)
-        n_f = float(ni)
-        s_t, s_t2, s_t3 = float(i_t), float(i_t2), float(i_t3)
-        n_f = max(n_f, 1.0)
-        m1, m2, m3 = s_t / n_f, s_t2 / n_f, s_t3 / n_f
+            lo = min(lo, t if inl else lo)
+            hi = max(hi, t if inl else hi)
+        inv_det = 1.0 / (sw * swgg - swg * swg)
+        rho_r = rho1 + (swgg * swr - swg * swgr) * inv_det
+        alpha_r = alpha1 + (swg * swr - sw * swgr) * inv_det
+        var = s2 * inv_det
+        c00, c01, c11 = swgg * var, swg * var, sw * var
+        # curvature: the residuals against q = t^2 - a - b t, orthogonal to 1 and t over the inliers
+        n_f = max(float(ni), 1.0)
+        m1, m2, m3 = float(i_t) / n_f, float(i_t2) / n_f, float(i_t3) / n_f
         b_lin = (m3 - m1 * m2) / max(m2 - m1 * m1, 1e-12)
         a_lin = m2 - b_lin * m1
-        b_zq = buf[0]
-        row = np.uint64(s)
-        while row < end:
-            inl = w[row] > 0
-            zi = z[row] if inl else 0.0
-            wi = 1.0 if inl else 0.0
-            t = float(beam[row] - b0)
-            q = t * t - a_lin - b_lin * t
-            b_zq[row] = zi * q
-            b_sq[row] = (wi * q) * q
-            row += np.uint64(1)
-        zq = segment_sum(buf[0], s, cnt)
-        qq = segment_sum(buf[1], s, cnt)
-        first_in[r] = lo
-        last_in[r] = hi
+        zq = qq = 0.0
+        for t in range(cnt):
+            tf = float(t)
+            q = tf * tf - a_lin - b_lin * tf
+            zq += zr[t] * q if ir[t] else 0.0
+            qq += q * q if ir[t] else 0.0
+        first_in[r] = f + lo
+        last_in[r] = f + hi
         n_in[r] = ni
         chi_max = p.max_chi2 * max(ni - 2, 1)
         if chi > chi_max:  # the run's own noise, where it exceeds sigma_r
-            loc = local_scale(ranges, valid, beam[s], beam[s + cnt - 1], sweep, c2, scratch) / sigma_r
+            loc = local_scale(ranges, valid, f, f + cnt - 1, sweep, c2, scratch) / sigma_r
             chi_max *= max(1.0, loc * loc)
         good[r] = (
             ni >= min(p.min_points, 2 * p.k + 1)  # min_points is asked of the grown line (find_lines)
             and ni >= p.min_inlier_fraction * core[r]
             and chi <= chi_max
             and zq * zq <= curv2 * qq
-            and np.isfinite(rho[r] + alpha[r] + cov[r, 0, 0] + cov[r, 1, 1])
+            and np.isfinite(rho_r + alpha_r + c00 + c11)
         )
-        if rho[r] < 0:
-            rho[r] = abs(rho[r])
-            alpha[r] = alpha[r] + math.pi
-            cov[r, 0, 1] *= -1.0
-            cov[r, 1, 0] *= -1.0
-        alpha[r] = wrap(alpha[r])
+        if rho_r < 0:
+            rho_r = -rho_r
+            alpha_r = alpha_r + math.pi
+            c01 = -c01
+        rho[r] = rho_r
+        alpha[r] = wrap(alpha_r)
+        cov[r, 0, 0], cov[r, 0, 1], cov[r, 1, 0], cov[r, 1, 1] = c00, c01, c01, c11
     return rho, alpha, cov, first_in, last_in, n_in, good
 
 
@@ -1416,19 +1419,17 @@ def fit_spans(first, last, shrink0, shrink1, ranges, log_r, bearings, valid, the
         if c1[r] - c0[r] >= shrink0[r] + shrink1[r]:
             c0[r] += shrink0[r]
             c1[r] -= shrink1[r]
-    beam = np.empty(total, np.int64)
     log_d = np.empty(total)
     for r in range(n_runs):
         f, s = first[r], starts[r]
-        br, lr, dr = beam[s:s + counts[r]], log_d[s:s + counts[r]], log_r[f:f + counts[r]]
+        lr, dr = log_d[s:s + counts[r]], log_r[f:f + counts[r]]
         for t in range(counts[r]):
-            br[t] = f + t
             lr[t] = dr[t]
     centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings.b, increment, sigma_r, k, p)
     alpha0, rho0, inlier0 = band_search(
-        beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
+        first, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
     )
-    return fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, counts, sigma_r, p)
+    return fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, counts, sigma_r, p)
 
 
 @kernel
