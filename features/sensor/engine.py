@@ -39,7 +39,7 @@ from lms200.noise import CLIP_SIGMAS, JUMP_FRACTION, MIN_RANGE_M, QUANTUM_CANDID
 from lms200.noise import _CLIP_STD_FACTOR as CLIP_STD_FACTOR
 
 from ..angles import TWO_PI
-from ..jit import kernel
+from ..jit import kernel, sum_kernel
 from ..rows import append_rows, finish_rows, new_rows
 
 PW_BLOCKSIZE = 128  # numpy's pairwise-summation block (numpy/_core/src/umath/loops_utils.h.src)
@@ -54,9 +54,6 @@ MERGE_FLOOR_ALPHA_VAR = 0.005**2  # ... and (alpha) variance, rad^2
 ARC_TAU = 3.0  # the arc test's chi^2 comparisons, in std of the chi^2 difference
 ARC_GN_STEPS = 3  # geometric Gauss-Newton steps of a circle fit after the algebraic (Kasa) start
 BREAK_LAMBDA = math.radians(10.0)  # adaptive breakpoint angle of a smooth surface (Borges & Aldon 2004)
-SUM_RESYNC = 32  # beams between fresh window sums (``beam_signals``) ...
-SUM_RATIO = 16.0  # ... or sooner, when a term that entered them exceeds them this many times; and
-# a window whose sum exceeds its centre's 1/d this many times is summed term by term
 ONE_DEG = math.radians(1.0)  # an LMS200 mirror turn's beam step (finer scans interlace such turns)
 ROBUST_STEPS = 1  # reweighted steps of the final biweight refit (``robust_refit``): one step from the
 # least-squares line is one iteratively-reweighted step, not the fixed point (nor Bickel's Newton
@@ -510,42 +507,6 @@ def arctan(x: float) -> float:
 
 
 @kernel
-def direct_sums(u, i, k):  # noqa: ANN001, ANN201
-    """The window sums of beam i term by term, j = i - k .. i + k: (sum_j u_j, sum_{m=0..k} u_{i+m}
-    - sum_{m=1..k} u_{i-m}, sum_j u_j^4); nan or inf where the window holds such a u."""
-    s1 = 0.0
-    sd = 0.0
-    s4 = 0.0
-    for j in range(i - k, i + k + 1):
-        uj = u[j]
-        u2j = uj * uj
-        s1 += uj
-        sd += uj if j >= i else -uj
-        s4 += u2j * u2j
-    return s1, sd, s4
-
-
-@kernel
-def window_sums(u, i, k):  # noqa: ANN001, ANN201
-    """The window sums of beam i over the finite u: (sum_{m=1..k} u_{i-m}, sum_{m=0..k} u_{i+m},
-    sum_{j=-k..k} u_{i+j}^4, number of non-finite u in the window)."""
-    left = right = quad = 0.0
-    n_bad = 0
-    for j in range(i - k, i + k + 1):
-        uj = u[j]
-        if not math.isfinite(uj):
-            n_bad += 1
-            continue
-        if j < i:
-            left += uj
-        else:
-            right += uj
-        u2 = uj * uj
-        quad += u2 * u2
-    return left, right, quad, n_bad
-
-
-@kernel
 def fix_slope_sd(x: float, sd: float) -> bool:
     """Whether the arctangent form of the slope's std (``beam_signals``) does not hold, at x = 1 +
     (T + s)(T - s) = 0 or an infinite x or s; not at a nan x (a window with an invalid beam), where
@@ -572,60 +533,51 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
         ok = d >= range_lo and d <= range_hi
         valid[i] = ok
         u[i] = 1.0 / d if ok else np.nan
-    out = np.full((9, n), np.nan)  # one allocation for the seven signals and two scratch rows
+    out = np.full((10, n), np.nan)  # one allocation for the seven signals and three scratch rows
     AD, AD_var, ad, theta, theta_var, psi, psi_var = out[0], out[1], out[2], out[3], out[4], out[5], out[6]
-    tan_t, tan_s = out[7], out[8]
+    tan_t, tan_s, u4 = out[7], out[8], out[9]
     if n >= 2 * k + 1:
-        # the window sums s1 = sum_{j=-k..k} u_{i+j}, sd = right - left and s4 = sum_j u_{i+j}^4
-        # from sums that slide along the scan: left = sum_{m=1..k} u_{i-m}, right = sum_{m=0..k}
-        # u_{i+m} and quad = s4, over the finite u (all > 0). They start afresh every SUM_RESYNC
-        # windows, and whenever a term that entered them since (``peak``, ``peak_q``) exceeds
-        # SUM_RATIO times their value, so their rounding stays within ~1e-13 of the sums
-        # themselves. A window that holds a nan (invalid beam) or an inf (its signals are nan, or
-        # inf at a zero range), or whose sum exceeds SUM_RATIO times the centre's u (a beam far
-        # behind its neighbours, where ad = sd / u_i magnifies any rounding), is summed term by
-        # term as before (``direct_sums``). The sums go to the rows of AD, ad and AD_var, which
-        # the next loop turns into the signals in place
-        left = right = quad = peak = peak_q = 0.0
-        n_bad = 0  # non-finite u in the window
-        for i in range(k, n - k):
-            fresh = (i - k) % SUM_RESYNC == 0
-            if not fresh:  # slide by one beam: u_{i+k} enters, u_{i-1} moves left, u_{i-k-1} leaves
-                enter, move, leave = u[i + k], u[i - 1], u[i - k - 1]
-                if math.isfinite(enter):
-                    right += enter
-                    e2 = enter * enter
-                    quad += e2 * e2
-                    peak = max(peak, enter)
-                    peak_q = max(peak_q, e2 * e2)
-                else:
-                    n_bad += 1
-                if math.isfinite(move):
-                    right -= move
-                    left += move
-                if math.isfinite(leave):
-                    left -= leave
-                    l2 = leave * leave
-                    quad -= l2 * l2
-                else:
-                    n_bad -= 1
-                fresh = peak > SUM_RATIO * (left + right) or peak_q > SUM_RATIO * quad
-            if fresh:
-                left, right, quad, n_bad = window_sums(u, i, k)
-                peak, peak_q = left + right, quad
-            if n_bad == 0 and left + right <= SUM_RATIO * u[i]:
-                AD[i], ad[i], AD_var[i] = left + right, right - left, quad
-            else:
-                AD[i], ad[i], AD_var[i] = direct_sums(u, i, k)
-        m = n - 2 * k  # the window centres k .. n - k - 1, as slices: the loops below vectorise
-        uc, s1, sd, s4, tt, ts = u[k:n - k], AD[k:n - k], ad[k:n - k], AD_var[k:n - k], tan_t[k:n - k], tan_s[k:n - k]
-        s_scale = sigma_r / two_sin_sum
+        # the window sums of the centres i = k .. n - k - 1: left = sum_{m=1..k} u_{i-m} (in
+        # tan_t), right = sum_{m=0..k} u_{i+m} (in tan_s) and quad = sum_{j=-k..k} u_{i+j}^4 (in
+        # AD_var), each summed term by term in beam order, one shifted slice of u (or u^4) at a
+        # time: passes over the scan that vectorise. A window that holds an invalid beam (u nan)
+        # gets nan sums; then s1 = left + right, sd = right - left and s4 = quad go to the rows
+        # of AD, ad and AD_var, which the next loop turns into the signals in place
+        m = n - 2 * k  # k >= 1 (the config's check)
+        left, right, quad, s1_, sd_ = tan_t[k:n - k], tan_s[k:n - k], AD_var[k:n - k], AD[k:n - k], ad[k:n - k]
+        for i in range(n):
+            u2 = u[i] * u[i]
+            u4[i] = u2 * u2
+        lu, ru, qu = u[:m], u[k:k + m], u4[:m]
         for i in range(m):
+            left[i] = lu[i]
+            right[i] = ru[i]
+            quad[i] = qu[i]
+        for j in range(1, 2 * k + 1):
+            uj, qj = u[j:j + m], u4[j:j + m]
+            if j < k:
+                for i in range(m):
+                    left[i] += uj[i]
+            elif j > k:
+                for i in range(m):
+                    right[i] += uj[i]
+            for i in range(m):
+                quad[i] += qj[i]
+        for i in range(m):
+            s1_[i] = left[i] + right[i]
+            sd_[i] = right[i] - left[i]
+        # the window centres k .. n - k - 1, as slices: the loops below vectorise
+        uc, dc = u[k:n - k], ranges[k:n - k]
+        s1, sd, s4, tt, ts = AD[k:n - k], ad[k:n - k], AD_var[k:n - k], tan_t[k:n - k], tan_s[k:n - k]
+        s_scale = sigma_r / two_sin_sum
+        inv_sin_sum = 1.0 / two_sin_sum
+        for i in range(m):  # dividing by u_i = 1 / d_i is multiplying by d_i (an invalid centre's sums are nan)
             ui = uc[i]
+            di = dc[i]
             u2 = ui * ui
-            a = s1[i] / ui  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
-            ad_i = sd[i] / ui  # eq. 6: ad_ik
-            other = s4[i] / u2 - u2  # sum over j != i of u_j^4 / u_i^2
+            a = s1[i] * di  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
+            ad_i = sd[i] * di  # eq. 6: ad_ik
+            other = s4[i] * (di * di) - u2  # sum over j != i of u_j^4 / u_i^2
             ad1 = ad_i - 1.0
             a1 = a - 1.0
             s1[i] = a
@@ -633,7 +585,7 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
             sd[i] = ad_i
             # eq. 7 as corrected in NOTES.md: ad - 1 = 2 tan(a - b_i) sum_{m=1..k} sin(mD): the
             # slope T = tan(a - b_i) and its std s here, their arctangents in the next loop
-            tt[i] = ad1 / two_sin_sum
+            tt[i] = ad1 * inv_sin_sum
             ts[i] = math.sqrt(other + ad1 * ad1 * u2) * s_scale
         bc, th, tv = bearings[k:n - k], theta[k:n - k], theta_var[k:n - k]
         n_fix = 0
@@ -914,6 +866,82 @@ def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
     return MAD_TO_SIGMA * median(buf[:m], buf)  # selected in place (np.median copies)
 
 
+@sum_kernel
+def gn_sums(d, cb, sb, valid, use, ca, sa, rho):  # noqa: ANN001, ANN201
+    """The weighted normal equations of a Gauss-Newton step of a line (rho, alpha = atan2(sa, ca))
+    on the beams where ``valid`` and ``use`` (range d, bearing b given by cb = cos(b), sb = sin(b)):
+    (sum w, sum w g, sum w g^2, sum w r, sum w g r) with residual r = d cos(b - alpha) - rho,
+    g = d r / d alpha = d sin(b - alpha) and weight w = 1 / cos(b - alpha)^2 (0 within MIN_COS of
+    grazing). Without branches on data: the loop runs in vector lanes."""
+    sw = swg = swgg = swr = swgr = 0.0
+    for t in range(d.size):
+        c = cb[t] * ca + sb[t] * sa  # cos(b - alpha)
+        dt = d[t] if valid[t] else 0.0  # an invalid beam's range is inf or nan
+        res = dt * c - rho  # d res / d rho = -1
+        g = dt * (sb[t] * ca - cb[t] * sa)
+        ic = 1.0 / c
+        wr = ic * ic if (c > MIN_COS) & valid[t] & use[t] else 0.0
+        wg = wr * g
+        sw += wr
+        swg += wg
+        swgg += wg * g
+        swr += wr * res
+        swgr += wg * res
+    return sw, swg, swgg, swr, swgr
+
+
+@sum_kernel
+def gn_sums_inliers(d, cb, sb, valid, ca, sa, rho, inv_sigma, tau, z, inl):  # noqa: ANN001, ANN201
+    """``gn_sums`` on the beams within ``tau`` sigma_r of the line (|z| <= tau, z = r / (sigma_r
+    cos(b - alpha)), written to ``z``; the inliers to ``inl``), with the line checks' sums over
+    the inliers: chi^2 = sum z^2, their count, sums of t, t^2, t^3 (t the beam's offset in the
+    run, integers: exact in any order below 2^53, runs under ~13,000 beams) and the first and
+    last inlier's t (len(d) and -1 when there is none)."""
+    n = d.size
+    sw = swg = swgg = swr = swgr = chi = 0.0
+    ni = i_t = i_t2 = i_t3 = 0
+    lo = n
+    hi = -1
+    for t in range(n):
+        c = cb[t] * ca + sb[t] * sa
+        dt = d[t] if valid[t] else 0.0
+        res = dt * c - rho
+        g = dt * (sb[t] * ca - cb[t] * sa)
+        ic = 1.0 / c
+        zt = res * ic * inv_sigma
+        use = (c > MIN_COS) & valid[t] & (abs(zt) <= tau)
+        wr = ic * ic if use else 0.0
+        wg = wr * g
+        sw += wr
+        swg += wg
+        swgg += wg * g
+        swr += wr * res
+        swgr += wg * res
+        z[t] = zt
+        inl[t] = use
+        chi += zt * zt if use else 0.0
+        ti = t if use else 0
+        ni += use
+        i_t += ti
+        i_t2 += ti * ti
+        i_t3 += ti * ti * ti
+        lo = min(lo, t if use else n)
+        hi = max(hi, t if use else -1)
+    return sw, swg, swgg, swr, swgr, chi, ni, i_t, i_t2, i_t3, lo, hi
+
+
+@sum_kernel
+def curvature_sums(z, inl, a_lin, b_lin):  # noqa: ANN001, ANN201
+    """(sum z q, sum q^2) over the inliers ``inl``, q = t^2 - a_lin - b_lin t (t the beam's offset)."""
+    zq = qq = 0.0
+    for t in range(z.size):
+        tf = float(t)
+        q = tf * tf - a_lin - b_lin * tf
+        zq += z[t] * q if inl[t] else 0.0
+        qq += q * q if inl[t] else 0.0
+    return zq, qq
+
+
 @kernel
 def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, sigma_r, p):  # noqa: ANN001, ANN201
     """Refine every run's line (run r: beams first[r] .. first[r] + counts[r] - 1, its rows of
@@ -932,8 +960,9 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
     residual r_j = d_j cos(b_j - alpha) - rho; range noise moves it by e_j cos(b_j - alpha), so
     its weight is 1 / (sigma_r cos)^2 and (J^T W J)^-1 is the covariance of (rho, alpha). Beams
     within MIN_COS of grazing get no weight. Each step is one pass over the run's beams, its
-    sums accumulated as it goes; the second also marks the inliers and sums what the checks
-    need, so that a run's beams are read twice and, for the curvature, a third time.
+    sums accumulated as it goes (``gn_sums``); the second also marks the inliers and sums what the
+    checks need (``gn_sums_inliers``), so that a run's beams are read twice and, for the
+    curvature, a third time.
 
     Returns the lines in normal form (rho >= 0, alpha in (-pi, pi]) with cov, first / last inlier
     beam, inlier count, and the mask of those that pass."""
@@ -964,60 +993,13 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
         dr, cr, sr, vr, hr = ranges[f:f + cnt], cos_b[f:f + cnt], sin_b[f:f + cnt], valid[f:f + cnt], inlier0[s:s + cnt]
         zr, ir = z_run[:cnt], inl_run[:cnt]
         # step 1, on the Log-Hough inliers
-        ca, sa = math.cos(alpha0[r]), math.sin(alpha0[r])
-        sw = swg = swgg = swr = swgr = 0.0
-        for t in range(cnt):  # without branches on data
-            c = cr[t] * ca + sr[t] * sa  # cos(b - alpha)
-            d = dr[t] if vr[t] else 0.0  # an invalid beam's range is inf or nan
-            res = d * c - rho0[r]  # d res / d rho = -1
-            g = d * (sr[t] * ca - cr[t] * sa)  # d res / d alpha = d sin(b - alpha)
-            ic = 1.0 / c
-            wr = ic * ic if (c > MIN_COS) & vr[t] & hr[t] else 0.0
-            wg = wr * g
-            sw += wr
-            swg += wg
-            swgg += wg * g
-            swr += wr * res
-            swgr += wg * res
+        sw, swg, swgg, swr, swgr = gn_sums(dr, cr, sr, vr, hr, math.cos(alpha0[r]), math.sin(alpha0[r]), rho0[r])
         inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
         rho1 = rho0[r] + (swgg * swr - swg * swgr) * inv_det
         alpha1 = alpha0[r] + (swg * swr - sw * swgr) * inv_det
-        # step 2, on the beams within inlier_tau sigma_r of step 1's line (z = r / (sigma_r cos)),
-        # with the checks' sums over those inliers: chi^2, their count and (t the beam offset in
-        # the run, exact as integers in any order below 2^53: runs under ~13,000 beams) sums of
-        # t, t^2, t^3, the first and last
-        ca, sa = math.cos(alpha1), math.sin(alpha1)
-        sw = swg = swgg = swr = swgr = 0.0
-        chi = 0.0
-        ni = 0
-        i_t = i_t2 = i_t3 = 0
-        lo = cnt
-        hi = -1
-        for t in range(cnt):
-            c = cr[t] * ca + sr[t] * sa
-            d = dr[t] if vr[t] else 0.0
-            res = d * c - rho1
-            g = d * (sr[t] * ca - cr[t] * sa)
-            ic = 1.0 / c
-            zt = res * ic * inv_sigma
-            inl = (c > MIN_COS) & vr[t] & (abs(zt) <= tau)
-            wr = ic * ic if inl else 0.0
-            wg = wr * g
-            sw += wr
-            swg += wg
-            swgg += wg * g
-            swr += wr * res
-            swgr += wg * res
-            zr[t] = zt
-            ir[t] = inl
-            chi += zt * zt if inl else 0.0
-            ti = t if inl else 0
-            ni += inl
-            i_t += ti
-            i_t2 += ti * ti
-            i_t3 += ti * ti * ti
-            lo = min(lo, t if inl else lo)
-            hi = max(hi, t if inl else hi)
+        # step 2, on the beams within inlier_tau sigma_r of step 1's line, with the checks' sums
+        sw, swg, swgg, swr, swgr, chi, ni, i_t, i_t2, i_t3, lo, hi = gn_sums_inliers(
+            dr, cr, sr, vr, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, tau, zr, ir)
         inv_det = 1.0 / (sw * swgg - swg * swg)
         rho_r = rho1 + (swgg * swr - swg * swgr) * inv_det
         alpha_r = alpha1 + (swg * swr - sw * swgr) * inv_det
@@ -1028,12 +1010,7 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
         m1, m2, m3 = float(i_t) / n_f, float(i_t2) / n_f, float(i_t3) / n_f
         b_lin = (m3 - m1 * m2) / max(m2 - m1 * m1, 1e-12)
         a_lin = m2 - b_lin * m1
-        zq = qq = 0.0
-        for t in range(cnt):
-            tf = float(t)
-            q = tf * tf - a_lin - b_lin * tf
-            zq += zr[t] * q if ir[t] else 0.0
-            qq += q * q if ir[t] else 0.0
+        zq, qq = curvature_sums(zr, ir, a_lin, b_lin)
         first_in[r] = f + lo
         last_in[r] = f + hi
         n_in[r] = ni
@@ -1089,6 +1066,29 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
         n_points[m] += grow0 + grow1
 
 
+@sum_kernel
+def biweight_sums(x, y, inv_c, ca, sa, rho, inv_cut):  # noqa: ANN001, ANN201
+    """The normal equations of one reweighted step of Tukey's biweight on the points (x, y) (m)
+    about the line (rho, alpha = atan2(sa, ca)): (sum w, sum w g, sum w g^2, sum w r, sum w g r)
+    with r the normal residual, g = d r / d alpha and w = ((1 - u^2)^2 / cos(b - alpha))^2 for
+    |u| < 1 (else 0), u = r / cos(b - alpha) * inv_cut the ray residual in cut-offs
+    (``inv_c`` = 1 / cos(b - alpha))."""
+    sw = swg = swgg = swr = swgr = 0.0
+    for t in range(x.size):
+        res = x[t] * ca + y[t] * sa - rho
+        u = res * inv_c[t] * inv_cut
+        bw = max(1.0 - u * u, 0.0) * inv_c[t]
+        wr = bw * bw
+        g = y[t] * ca - x[t] * sa  # d res / d alpha = r sin(b - alpha)
+        wg = wr * g
+        sw += wr
+        swg += wg
+        swgg += wg * g
+        swr += wr * res
+        swgr += wg * res
+    return sw, swg, swgg, swr, swgr
+
+
 @kernel
 def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # noqa: ANN001
     """In place: each line (rho, alpha) refitted on the valid beams first..last by ROBUST_STEPS
@@ -1116,8 +1116,9 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
             yj = ranges[j] * sin_b[j]
             x[k] = xj
             y[k] = yj
-            inv_c[k] = 1.0 / c
-            z[k] = abs(xj * ca + yj * sa - r_m) / c
+            ic = 1.0 / c
+            inv_c[k] = ic
+            z[k] = abs(xj * ca + yj * sa - r_m) * ic
             k += valid[j] & (c > MIN_COS)
             j += np.uint64(1)
         if k < 3:
@@ -1125,20 +1126,7 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
         scale = max(MAD_TO_SIGMA * median(z[:k], z), SIGMA_FLOOR_RAY)  # z selected in place: not read again
         inv_cut = 1.0 / (TUKEY_C * scale)
         for _ in range(ROBUST_STEPS):
-            ca, sa = math.cos(a_m), math.sin(a_m)
-            sw = swg = swgg = swr = swgr = 0.0
-            for t in range(k):  # biweight (1 - u^2)^2 for |u| < 1, else 0; weight 1 / cos^2 (ray residual)
-                res = x[t] * ca + y[t] * sa - r_m
-                u = res * inv_c[t] * inv_cut
-                bw = max(1.0 - u * u, 0.0) * inv_c[t]
-                wr = bw * bw
-                g = y[t] * ca - x[t] * sa  # d res / d alpha = r sin(b - alpha)
-                wg = wr * g
-                sw += wr
-                swg += wg
-                swgg += wg * g
-                swr += wr * res
-                swgr += wg * res
+            sw, swg, swgg, swr, swgr = biweight_sums(x[:k], y[:k], inv_c[:k], math.cos(a_m), math.sin(a_m), r_m, inv_cut)
             det = sw * swgg - swg * swg
             if not det > 0.0:
                 break
