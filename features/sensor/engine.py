@@ -748,6 +748,7 @@ def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angl
     h = max(h2, 1)
     n_tmpl = template.size
     n_phase = phases.shape[1]
+    flat = phases.reshape(phases.size)  # row r of phases from r * n_phase
     out = np.empty((2, n_runs))
     alpha, rho = out[0], out[1]
     inlier = np.zeros(log_d.size, np.bool_)
@@ -777,25 +778,25 @@ def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angl
             ref[a] = max(min(q1, q2), min(max(q1, q2), q3))  # median of three
         # the template entries of beams f + t at angle a: template[base - t subdiv], base = a_idx +
         # zero - f subdiv; inside the template (no clipping) for every angle of the band, they are
-        # phases[base % subdiv, L - 1 - base // subdiv + t], contiguous in t
+        # phases[base % subdiv, L - 1 - base // subdiv + t], contiguous in t (``flat``)
         lo_base = a_idx[0] + zero - f * subdiv
         hi_base = a_idx[n_angles - 1] + zero - f * subdiv
         inside = lo_base - (cnt - 1) * subdiv >= 0 and hi_base <= n_tmpl - 1
-        ld = log_d[s:s + cnt]
+        s_u = np.uint64(s)
         n_pad = (cnt + VOTE_BLOCK - 1) // VOTE_BLOCK * VOTE_BLOCK
         for a in range(n_angles):
             offset = (N_BINS / 2.0 + 1.0) - ref[a] * inv_width
             base = a_idx[a] + zero - f * subdiv
             # eq. 5: log p = log d + log cos(a - b), a lookup at a - b in the template (clipped
             # onto its ends, where it holds the floor)
-            if inside:  # slices indexed from 0: numba's negative-index wraparound folds away, the loop vectorises
-                o = n_phase - 1 - base // subdiv
-                row = phases[base % subdiv, o:o + cnt]
+            if inside:  # indexed unsigned (no negative-index wraparound, no slice to count references of): the loop vectorises
+                o = np.uint64((base % subdiv) * n_phase + n_phase - 1 - base // subdiv)
                 for t in range(cnt):
-                    votes[t] = row[t] + ld[t]
+                    tu = np.uint64(t)
+                    votes[t] = flat[o + tu] + log_d[s_u + tu]
             else:
                 for t in range(cnt):
-                    votes[t] = template_at(template, base - t * subdiv) + ld[t]
+                    votes[t] = template_at(template, base - t * subdiv) + log_d[s + t]
             # the votes counted in cells rel = (log p - ref) / width + N_BINS / 2 + 1, floored and
             # clipped onto 0 .. N_BINS + 1, as 16-bit fields of four words (cells 4w .. 4w + 3 in
             # word w; a run has fewer than 2^16 beams, as the registry takes scans of at most
@@ -829,15 +830,14 @@ def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angl
         alpha[r] = angle_min + a_idx[best_a] * step
         rho[r] = math.exp(peak_log_p)
         base = a_idx[best_a] + zero - f * subdiv
-        inl = inlier[s:s + cnt]
         if inside:
-            o = n_phase - 1 - base // subdiv
-            row = phases[base % subdiv, o:o + cnt]
+            o = np.uint64((base % subdiv) * n_phase + n_phase - 1 - base // subdiv)
             for t in range(cnt):
-                inl[t] = abs((row[t] + ld[t]) - peak_log_p) <= bin_half[r]
+                tu = np.uint64(t)
+                inlier[s_u + tu] = abs((flat[o + tu] + log_d[s_u + tu]) - peak_log_p) <= bin_half[r]
         else:
             for t in range(cnt):
-                inl[t] = abs((template_at(template, base - t * subdiv) + ld[t]) - peak_log_p) <= bin_half[r]
+                inlier[s + t] = abs((template_at(template, base - t * subdiv) + log_d[s + t]) - peak_log_p) <= bin_half[r]
     return alpha, rho, inlier
 
 
@@ -867,20 +867,25 @@ def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
 
 
 @sum_kernel
-def gn_sums(d, cb, sb, valid, use, ca, sa, rho):  # noqa: ANN001, ANN201
+def gn_sums(d, cb, sb, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN201
     """The weighted normal equations of a Gauss-Newton step of a line (rho, alpha = atan2(sa, ca))
-    on the beams where ``valid`` and ``use`` (range d, bearing b given by cb = cos(b), sb = sin(b)):
-    (sum w, sum w g, sum w g^2, sum w r, sum w g r) with residual r = d cos(b - alpha) - rho,
-    g = d r / d alpha = d sin(b - alpha) and weight w = 1 / cos(b - alpha)^2 (0 within MIN_COS of
-    grazing). Without branches on data: the loop runs in vector lanes."""
+    on the beams j = f .. f + cnt - 1 where valid[j] and use[s + j - f] (range d, bearing b given
+    by cb = cos(b), sb = sin(b)): (sum w, sum w g, sum w g^2, sum w r, sum w g r) with residual
+    r = d cos(b - alpha) - rho, g = d r / d alpha = d sin(b - alpha) and weight
+    w = 1 / cos(b - alpha)^2 (0 within MIN_COS of grazing). Without branches on data: the loop
+    runs in vector lanes. Offsets into whole arrays, not slices (a slice a run is two atomic
+    reference counts)."""
     sw = swg = swgg = swr = swgr = 0.0
-    for t in range(d.size):
-        c = cb[t] * ca + sb[t] * sa  # cos(b - alpha)
-        dt = d[t] if valid[t] else 0.0  # an invalid beam's range is inf or nan
+    if f < 0 or s < 0:
+        return sw, swg, swgg, swr, swgr
+    for t in range(cnt):
+        j = f + t
+        c = cb[j] * ca + sb[j] * sa  # cos(b - alpha)
+        dt = d[j] if valid[j] else 0.0  # an invalid beam's range is inf or nan
         res = dt * c - rho  # d res / d rho = -1
-        g = dt * (sb[t] * ca - cb[t] * sa)
+        g = dt * (sb[j] * ca - cb[j] * sa)
         ic = 1.0 / c
-        wr = ic * ic if (c > MIN_COS) & valid[t] & use[t] else 0.0
+        wr = ic * ic if (c > MIN_COS) & valid[j] & use[s + t] else 0.0
         wg = wr * g
         sw += wr
         swg += wg
@@ -891,25 +896,27 @@ def gn_sums(d, cb, sb, valid, use, ca, sa, rho):  # noqa: ANN001, ANN201
 
 
 @sum_kernel
-def gn_sums_inliers(d, cb, sb, valid, ca, sa, rho, inv_sigma, tau, z, inl):  # noqa: ANN001, ANN201
-    """``gn_sums`` on the beams within ``tau`` sigma_r of the line (|z| <= tau, z = r / (sigma_r
-    cos(b - alpha)), written to ``z``; the inliers to ``inl``), with the line checks' sums over
-    the inliers: chi^2 = sum z^2, their count, sums of t, t^2, t^3 (t the beam's offset in the
-    run, integers: exact in any order below 2^53, runs under ~13,000 beams) and the first and
-    last inlier's t (len(d) and -1 when there is none)."""
-    n = d.size
+def gn_sums_inliers(d, cb, sb, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, inl):  # noqa: ANN001, ANN201
+    """``gn_sums`` on the beams j = f .. f + cnt - 1 within ``tau`` sigma_r of the line (|z| <=
+    tau, z = r / (sigma_r cos(b - alpha)), written to z[j - f]; the inliers to inl[j - f]), with
+    the line checks' sums over the inliers: chi^2 = sum z^2, their count, sums of t, t^2, t^3
+    (t = j - f, integers: exact in any order below 2^53, runs under ~13,000 beams) and the first
+    and last inlier's t (cnt and -1 when there is none)."""
     sw = swg = swgg = swr = swgr = chi = 0.0
     ni = i_t = i_t2 = i_t3 = 0
-    lo = n
+    lo = cnt
     hi = -1
-    for t in range(n):
-        c = cb[t] * ca + sb[t] * sa
-        dt = d[t] if valid[t] else 0.0
+    if f < 0:
+        return sw, swg, swgg, swr, swgr, chi, ni, i_t, i_t2, i_t3, lo, hi
+    for t in range(cnt):
+        j = f + t
+        c = cb[j] * ca + sb[j] * sa
+        dt = d[j] if valid[j] else 0.0
         res = dt * c - rho
-        g = dt * (sb[t] * ca - cb[t] * sa)
+        g = dt * (sb[j] * ca - cb[j] * sa)
         ic = 1.0 / c
         zt = res * ic * inv_sigma
-        use = (c > MIN_COS) & valid[t] & (abs(zt) <= tau)
+        use = (c > MIN_COS) & valid[j] & (abs(zt) <= tau)
         wr = ic * ic if use else 0.0
         wg = wr * g
         sw += wr
@@ -925,16 +932,16 @@ def gn_sums_inliers(d, cb, sb, valid, ca, sa, rho, inv_sigma, tau, z, inl):  # n
         i_t += ti
         i_t2 += ti * ti
         i_t3 += ti * ti * ti
-        lo = min(lo, t if use else n)
+        lo = min(lo, t if use else cnt)
         hi = max(hi, t if use else -1)
     return sw, swg, swgg, swr, swgr, chi, ni, i_t, i_t2, i_t3, lo, hi
 
 
 @sum_kernel
-def curvature_sums(z, inl, a_lin, b_lin):  # noqa: ANN001, ANN201
-    """(sum z q, sum q^2) over the inliers ``inl``, q = t^2 - a_lin - b_lin t (t the beam's offset)."""
+def curvature_sums(z, inl, cnt, a_lin, b_lin):  # noqa: ANN001, ANN201
+    """(sum z q, sum q^2) over the inliers inl[:cnt], q = t^2 - a_lin - b_lin t (t the beam's offset)."""
     zq = qq = 0.0
-    for t in range(z.size):
+    for t in range(cnt):
         tf = float(t)
         q = tf * tf - a_lin - b_lin * tf
         zq += z[t] * q if inl[t] else 0.0
@@ -989,17 +996,15 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
     c2 = 2.0 * math.cos(sweep * step)
     for r in range(n_runs):
         s, cnt, f = starts[r], counts[r], first[r]
-        # the run's beams as slices indexed from 0 (numba's negative-index wraparound then folds away)
-        dr, cr, sr, vr, hr = ranges[f:f + cnt], cos_b[f:f + cnt], sin_b[f:f + cnt], valid[f:f + cnt], inlier0[s:s + cnt]
-        zr, ir = z_run[:cnt], inl_run[:cnt]
         # step 1, on the Log-Hough inliers
-        sw, swg, swgg, swr, swgr = gn_sums(dr, cr, sr, vr, hr, math.cos(alpha0[r]), math.sin(alpha0[r]), rho0[r])
+        sw, swg, swgg, swr, swgr = gn_sums(ranges, cos_b, sin_b, valid, inlier0, f, s, cnt, math.cos(alpha0[r]),
+                                           math.sin(alpha0[r]), rho0[r])
         inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
         rho1 = rho0[r] + (swgg * swr - swg * swgr) * inv_det
         alpha1 = alpha0[r] + (swg * swr - sw * swgr) * inv_det
         # step 2, on the beams within inlier_tau sigma_r of step 1's line, with the checks' sums
         sw, swg, swgg, swr, swgr, chi, ni, i_t, i_t2, i_t3, lo, hi = gn_sums_inliers(
-            dr, cr, sr, vr, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, tau, zr, ir)
+            ranges, cos_b, sin_b, valid, f, cnt, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, tau, z_run, inl_run)
         inv_det = 1.0 / (sw * swgg - swg * swg)
         rho_r = rho1 + (swgg * swr - swg * swgr) * inv_det
         alpha_r = alpha1 + (swg * swr - sw * swgr) * inv_det
@@ -1010,7 +1015,7 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
         m1, m2, m3 = float(i_t) / n_f, float(i_t2) / n_f, float(i_t3) / n_f
         b_lin = (m3 - m1 * m2) / max(m2 - m1 * m1, 1e-12)
         a_lin = m2 - b_lin * m1
-        zq, qq = curvature_sums(zr, ir, a_lin, b_lin)
+        zq, qq = curvature_sums(z_run, inl_run, cnt, a_lin, b_lin)
         first_in[r] = f + lo
         last_in[r] = f + hi
         n_in[r] = ni
@@ -1228,6 +1233,29 @@ def surface_turn(f, l, cx, cy, ranges, bearings) -> float:  # noqa: ANN001
     return abs(math.atan2(ax * by - ay * bx, ax * bx + ay * by))
 
 
+@sum_kernel
+def circle_gn_sums(j0, j1, e, ok):  # noqa: ANN001, ANN201
+    """The normal equations of a geometric Gauss-Newton step of a circle over the beams where
+    ``ok``, from the Jacobian rows [j0, j1, -1] and residuals e: (H00, H01, H02, H11, H12, H22,
+    g0, g1, g2), H = J^T J, g = J^T e."""
+    h00 = h01 = h02 = h11 = h12 = h22 = g0 = g1 = g2 = 0.0
+    for t in range(e.size):
+        w = 1.0 if ok[t] else 0.0
+        a = j0[t] if ok[t] else 0.0  # an invalid beam's terms may be nan: selected, not multiplied
+        b = j1[t] if ok[t] else 0.0
+        c = e[t] if ok[t] else 0.0
+        h00 += a * a
+        h01 += a * b
+        h02 -= a
+        h11 += b * b
+        h12 -= b
+        h22 += w
+        g0 += a * c
+        g1 += b * c
+        g2 -= c
+    return h00, h01, h02, h11, h12, h22, g0, g1, g2
+
+
 @kernel
 def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p) -> bool:  # noqa: ANN001
     """Do the valid beams f..l trace one round surface? One circle (algebraic Kasa fit, then
@@ -1291,19 +1319,7 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
             w0[t] = -dx * inv
             w1[t] = -dy * inv
             w2[t] = dist - rad
-        h00 = h01 = h02 = h11 = h12 = h22 = g0 = g1 = g2 = 0.0
-        for t in range(m):  # the sums in beam order
-            if ok[t]:
-                j0, j1, e = w0[t], w1[t], w2[t]
-                h00 += j0 * j0
-                h01 += j0 * j1
-                h02 -= j0
-                h11 += j1 * j1
-                h12 -= j1
-                h22 += 1.0
-                g0 += j0 * e
-                g1 += j1 * e
-                g2 -= e
+        h00, h01, h02, h11, h12, h22, g0, g1, g2 = circle_gn_sums(w0, w1, w2, ok)
         # H d = -g with H's adjugate (H symmetric: [[h00, h01, h02], [h01, h11, h12], [h02, h12, h22]])
         a00 = h11 * h22 - h12 * h12
         a01 = h02 * h12 - h01 * h22
