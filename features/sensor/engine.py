@@ -17,8 +17,11 @@ Every step works in range-bearing space, on the beams of one scan, in the order 
 6. corners where two segments meet and psi shows the turn, with the paper's remedy against
    false acute corners (``corners``).
 
-Beam i has bearing b_i = angle_min + i D. Sums over beams follow numpy's pairwise order
-(``pairwise_sum``), so that results do not depend on how a sum is split. Parameters come in as a
+Beam i has bearing b_i = angle_min + i D. The noise estimate and the range variance of the
+acute-corner remedy sum in numpy's pairwise order (``pairwise_sum``), as the numpy estimators they
+equal; the fits' sums over a run's beams (``gn_sums``, ``biweight_sums``, ``circle_gn_sums``, ...)
+are ``sum_kernel``s, whose additions may be regrouped into vector lanes (rounding only, ~1e-16
+of a sum). Parameters come in as a
 typed record (``Params``, built once per config by ``features.sensor.config``), the scan's grid
 constants as another (``Grid``, built once per beam step by ``features.sensor.grid``).
 Importing this module imports numba (``features.jit``).
