@@ -46,3 +46,55 @@ def test_scan_geometry_is_lms200() -> None:
         assert scan.angle_max - scan.angle_min == pytest.approx(np.deg2rad((n - 1) * inc))
         assert 1 / sensor.scan_period == pytest.approx(rate)
     assert SensorConfig(units="cm").range_max == 81.83 and SensorConfig().range_max == 8.183
+
+
+def _repeated_scans(sensor: SensorConfig, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(exact, measured (n, beams)) ranges of n scans from one pose in the office world: the
+    surface cells are the simulator's (one seed), only the per-scan draws change."""
+    world = make_world("office", seed=0)
+    pose = tuple(free_poses(world, np.random.default_rng(4), 1)[0])
+    with LMS200Sim(world, SensorConfig.ideal()) as ideal:
+        exact = ideal.scan_at(pose).ranges
+    with LMS200Sim(world, sensor, seed=5) as lidar:
+        measured = np.array([lidar.scan_at(pose).ranges for _ in range(n)])
+    return exact, measured
+
+
+def _spurious(exact: np.ndarray, measured: np.ndarray) -> np.ndarray:
+    """Readings that are a noise-free spurious echo: 10-90 % of the exact range (OUTLIER_RANGE_SHARE)."""
+    with np.errstate(invalid="ignore"):
+        share = measured / exact
+    return (share >= 0.1 - 1e-12) & (share <= 0.9 + 1e-12)
+
+
+def test_a_spurious_echo_in_front_of_a_dark_cell_is_read_and_elsewhere_never_drops() -> None:
+    """Dark cells are a property of the surface a beam meets: a beam reads nan in every scan in
+    which its reading would be the surface's echo, or in none, whatever its spurious echoes do (a
+    spurious echo's point in mid-air is no surface); a spurious echo (dust, stray light) comes
+    back before the surface, so it is read even in front of a dark cell."""
+    sensor = SensorConfig.ideal(dropout_prob=0.3, dropout_patch_m=0.3, outlier_prob=0.3)
+    exact, measured = _repeated_scans(sensor, 40)
+    hit = np.isfinite(exact)
+    exact, measured = exact[hit], measured[:, hit]
+    nan, spurious = np.isnan(measured), _spurious(exact, measured)
+    surface = measured == exact
+    assert np.all(nan | spurious | surface)  # nothing else in this noise-free model
+    dark = nan.mean(axis=0) > 0.25  # a dark beam reads nan unless its echo is spurious (30 %)
+    assert 0.1 < dark.mean() < 0.6
+    assert not np.any(surface[:, dark])  # a dark beam never reads its surface ...
+    assert not np.any(nan[:, ~dark])  # ... and a beam on a lit cell never reads nan
+    assert spurious[:, dark].mean() == pytest.approx(0.3, abs=0.06)  # spurious echoes are read in front of dark cells
+
+
+def test_a_spurious_echo_carries_the_core_noise_not_its_surfaces_roughness() -> None:
+    """Rough cells, like dark ones, belong to the surface: a beam ending on a smooth cell reads
+    its exact range or a noise-free spurious echo (core sigma 0), never the 1 m tail."""
+    sensor = SensorConfig.ideal(noise_tail_prob=0.5, noise_tail_sigma=1.0, noise_tail_patch_m=0.3, outlier_prob=0.3)
+    exact, measured = _repeated_scans(sensor, 40)
+    hit = np.isfinite(exact)
+    exact, measured = exact[hit], measured[:, hit]
+    spurious, surface = _spurious(exact, measured), measured == exact
+    smooth = surface.any(axis=0)  # a rough beam reads its exact range with probability 0
+    assert 0.2 < smooth.mean() < 0.8
+    assert np.all((surface | spurious)[:, smooth])
+    assert spurious[:, smooth].mean() == pytest.approx(0.3, abs=0.06)
