@@ -111,3 +111,21 @@ def test_medians_and_pairwise_sums_equal_numpys() -> None:
     a = rng.standard_normal(8000) * np.exp(rng.standard_normal(8000) * 4)
     for n in (0, 7, 8, 127, 128, 129, 248, 249, 488, 489, 968, 969, 1928, 1929, 3848, 3849, 7999):
         assert engine.pairwise_sum(a, 1, n) == (np.add.reduce(a[1:1 + n]) if n else 0.0)
+
+
+def test_no_extractor_kernel_is_compiled_with_fast_math() -> None:
+    """Fast-math (even reassociation alone) lets LLVM group sums by the CPU's vector width, so the
+    same scan gave other bits on another machine (109 of 120 MIT CSAIL scans between an AVX-512
+    build and a generic x86-64 one); outputs must not depend on the machine."""
+    import numba
+
+    import features.baselines.engine as cartesian
+    import features.sensor.engine as sensor
+    import sim.hits
+    import slam.icpkernel
+
+    kernels = [(mod.__name__, name, obj) for mod in (sensor, cartesian, sim.hits, slam.icpkernel)
+               for name, obj in vars(mod).items() if isinstance(obj, numba.core.registry.CPUDispatcher)]
+    assert len(kernels) > 40
+    fast = [f"{m}.{n}" for m, n, k in kernels if k.targetoptions.get("fastmath")]
+    assert fast == []

@@ -20,8 +20,9 @@ Every step works in range-bearing space, on the beams of one scan, in the order 
 Beam i has bearing b_i = angle_min + i D. The noise estimate and the range variance of the
 acute-corner remedy sum in numpy's pairwise order (``pairwise_sum``), as the numpy estimators they
 equal; the fits' sums over a run's beams (``gn_sums``, ``biweight_sums``, ``circle_gn_sums``, ...)
-are ``sum_kernel``s, whose additions may be regrouped into vector lanes (rounding only, ~1e-16
-of a sum). Parameters come in as a
+add beam after beam. No kernel is compiled with fast-math: a regrouped sum's order would follow
+the CPU's vector width, and so would the rare beam whose inlier test sits on the threshold.
+Parameters come in as a
 typed record (``Params``, built once per config by ``features.sensor.config``), the scan's grid
 constants as another (``Grid``, built once per beam step by ``features.sensor.grid``).
 Importing this module imports numba (``features.jit``).
@@ -42,7 +43,7 @@ from lms200.noise import CLIP_SIGMAS, JUMP_FRACTION, MIN_RANGE_M, QUANTUM_CANDID
 from lms200.noise import _CLIP_STD_FACTOR as CLIP_STD_FACTOR
 
 from ..angles import TWO_PI
-from ..jit import kernel, sum_kernel
+from ..jit import kernel
 from ..rows import append_rows, finish_rows, new_rows
 
 PW_BLOCKSIZE = 128  # numpy's pairwise-summation block (numpy/_core/src/umath/loops_utils.h.src)
@@ -869,7 +870,7 @@ def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
     return MAD_TO_SIGMA * median(buf[:m], buf)  # selected in place (np.median copies)
 
 
-@sum_kernel
+@kernel
 def gn_sums(d, cb, sb, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN201
     """The weighted normal equations of a Gauss-Newton step of a line (rho, alpha = atan2(sa, ca))
     on the beams j = f .. f + cnt - 1 where valid[j] and use[s + j - f] (range d, bearing b given
@@ -898,7 +899,7 @@ def gn_sums(d, cb, sb, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN
     return sw, swg, swgg, swr, swgr
 
 
-@sum_kernel
+@kernel
 def gn_sums_inliers(d, cb, sb, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, inl):  # noqa: ANN001, ANN201
     """``gn_sums`` on the beams j = f .. f + cnt - 1 within ``tau`` sigma_r of the line (|z| <=
     tau, z = r / (sigma_r cos(b - alpha)), written to z[j - f]; the inliers to inl[j - f]), with
@@ -940,7 +941,7 @@ def gn_sums_inliers(d, cb, sb, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, in
     return sw, swg, swgg, swr, swgr, chi, ni, i_t, i_t2, i_t3, lo, hi
 
 
-@sum_kernel
+@kernel
 def curvature_sums(z, inl, cnt, a_lin, b_lin):  # noqa: ANN001, ANN201
     """(sum z q, sum q^2) over the inliers inl[:cnt], q = t^2 - a_lin - b_lin t (t the beam's offset)."""
     zq = qq = 0.0
@@ -1074,7 +1075,7 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
         n_points[m] += grow0 + grow1
 
 
-@sum_kernel
+@kernel
 def biweight_sums(x, y, inv_c, ca, sa, rho, inv_cut):  # noqa: ANN001, ANN201
     """The normal equations of one reweighted step of Tukey's biweight on the points (x, y) (m)
     about the line (rho, alpha = atan2(sa, ca)): (sum w, sum w g, sum w g^2, sum w r, sum w g r)
@@ -1236,7 +1237,7 @@ def surface_turn(f, l, cx, cy, ranges, bearings) -> float:  # noqa: ANN001
     return abs(math.atan2(ax * by - ay * bx, ax * bx + ay * by))
 
 
-@sum_kernel
+@kernel
 def circle_gn_sums(j0, j1, e, ok):  # noqa: ANN001, ANN201
     """The normal equations of a geometric Gauss-Newton step of a circle over the beams where
     ``ok``, from the Jacobian rows [j0, j1, -1] and residuals e: (H00, H01, H02, H11, H12, H22,
