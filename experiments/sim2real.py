@@ -427,7 +427,7 @@ def fit_relief(real: Sequence[Record], sensor: Any, limits: Any, glass: float | 
 def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT_SEEDS,
              duration: float = DEFAULT_DURATION_S, rate_hz: float = 3.0, stride: int = 5, max_scans: int | None = 400,
              methods: Sequence[str] = METHODS, sensor: Any = None, read_options: dict | None = None,
-             fit_duration: float | None = None, fit_rooms: bool = False) -> Sim2RealResult:
+             fit_duration: float | None = None, fit_rooms: bool = False, wall_relief: bool = True) -> Sim2RealResult:
     """Compare a real log with the calibrated simulation (see the module docstring).
 
     Args:
@@ -437,6 +437,8 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
         fit_duration: simulated seconds per spot width of the calibration's fit (default its own).
         fit_rooms: also fit the mit worlds' room size to the log (:func:`fit_scale`, after the rough
             fill); off by default: see docs/simulator.md for what it did to the four logs.
+        wall_relief: fit the mit worlds' wall relief to the log (:func:`fit_relief`, after the rough
+            fill and room size); False: no relief (the demo, to spare its three probe worlds).
 
     Raises:
         LmsbenchError: for a log without scans or an unknown world.
@@ -467,7 +469,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
              if rough is not None and fit_rooms else None)
     size = None if scale is None else scale.scale
     relief = (fit_relief(real, sensor, limits, glass, duration, rate_hz, len(seeds), rough.cover, size)
-              if rough is not None else None)
+              if rough is not None and wall_relief else None)
     simulated: list[Record] = []
     for seed in seeds:
         simulated += simulate_records(make_world(world, seed, glass=glass, rough=None if rough is None else rough.cover,
