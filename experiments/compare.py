@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from features.registry import available_methods, backend_of, get_method, make_config
-from features.realdata import RealDataConfig, repeat_counts, scan_measures
+from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
 from features.scoring import ScoreConfig, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
 
@@ -351,6 +351,7 @@ def compare(
             scan = rec.scan
             truth = src.truth_of(rec) if src.truth_of else None
             n_valid = int(np.count_nonzero(scan.valid))
+            exact = _truth_row(truth, scan, sigma_r, rd_cfg) if truth is not None else {}
             shift = k % len(runs)
             if not warmed:  # first calls load compiled kernels and fill caches: not timed
                 for _, fn, cfg in src_runs:
@@ -367,6 +368,7 @@ def compare(
                            n_corners=len(fs.corners), microseconds=elapsed / 1e3, cpu_microseconds=cpu / 1e3,
                            explained=explained, range_rms=range_rms)
                 row.update(_realdata_row(fs, rec, src, sigma_r, rd_cfg, previous, name))
+                row.update(exact)
                 if truth is not None:
                     score = score_scan(fs, truth, score_config)
                     row.update(_score_row(score))
@@ -446,6 +448,15 @@ def _realdata_row(fs: Any, rec: Record, src: Source, sigma_r: float, cfg: RealDa
                 repeat_found=found, repeat_in_view=in_view)
 
 
+def _truth_row(truth: Any, scan: Any, sigma_r: float, cfg: RealDataConfig) -> dict[str, Any]:
+    """The measures without ground truth of the exact lines of a simulated scan (its visible
+    faces, :func:`features.realdata.truth_lines`): what an extractor that found every face exactly
+    would score, the reference for the methods' explained fraction and ray RMSE."""
+    m = scan_measures(truth_lines(truth), scan, sigma_r, cfg)
+    return dict(truth_explained_3cm=m.explained_tol, n_truth_explained_3cm=m.n_explained_tol,
+                truth_ray_rmse=m.ray_rmse_m)
+
+
 def _score_row(s) -> dict[str, Any]:
     rho_mean, rho_rms = _errors(s.rho_errors)
     alpha_mean, alpha_rms = _errors(s.alpha_errors)
@@ -521,18 +532,29 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
 def _realdata_summary(g: pd.DataFrame) -> dict[str, Any]:
     """Pooled measures without ground truth of one source x method: mean explained fractions over
     scans, ray RMSE pooled over the explained beams (mm), mean segment length over all lines (m),
-    repeatability = lines found again / lines still in view (nan without trusted poses)."""
-    w = g["n_explained_3cm"].astype(float)
-    ok = g["ray_rmse"].notna() & (w > 0)
-    ray = float(np.sqrt((g["ray_rmse"][ok] ** 2 * w[ok]).sum() / w[ok].sum())) if ok.any() else float("nan")
+    repeatability = lines found again / lines still in view (nan without trusted poses); on
+    simulated sources also the exact lines' explained fraction and ray RMSE (``truth_explained_3cm``,
+    ``truth_ray_rmse_mm``, the same for every method of a source)."""
+    ray = _pooled_rms(g["ray_rmse"], g["n_explained_3cm"])
     lines = g["n_lines"].astype(float)
     seg_ok = g["mean_segment_m"].notna() & (lines > 0)
     seg = float((g["mean_segment_m"][seg_ok] * lines[seg_ok]).sum() / lines[seg_ok].sum()) if seg_ok.any() else float("nan")
     in_view = g["repeat_in_view"].sum(min_count=1)
     repeat = float(g["repeat_found"].sum() / in_view) if pd.notna(in_view) and in_view > 0 else float("nan")
-    return dict(sigma_r_mm=1e3 * g["sigma_r"].iloc[0], explained_3cm=g["explained_3cm"].mean(),
-                explained_3sigma=g["explained_3sigma"].mean(), ray_rmse_mm=1e3 * ray, mean_segment_m=seg,
-                repeatability=repeat)
+    out = dict(sigma_r_mm=1e3 * g["sigma_r"].iloc[0], explained_3cm=g["explained_3cm"].mean(),
+               explained_3sigma=g["explained_3sigma"].mean(), ray_rmse_mm=1e3 * ray, mean_segment_m=seg,
+               repeatability=repeat)
+    if "truth_ray_rmse" in g and g["truth_ray_rmse"].notna().any():  # simulated: the exact lines' scores
+        out.update(truth_explained_3cm=g["truth_explained_3cm"].mean(),
+                   truth_ray_rmse_mm=1e3 * _pooled_rms(g["truth_ray_rmse"], g["n_truth_explained_3cm"]))
+    return out
+
+
+def _pooled_rms(rms: pd.Series, weights: pd.Series) -> float:
+    """The RMS of the pooled values whose per-scan RMS and counts are given (nan when none)."""
+    w = weights.astype(float)
+    ok = rms.notna() & (w > 0)
+    return float(np.sqrt((rms[ok] ** 2 * w[ok]).sum() / w[ok].sum())) if ok.any() else float("nan")
 
 
 def common_errors(matches: pd.DataFrame) -> pd.DataFrame:
@@ -561,6 +583,7 @@ def format_summary(summary: pd.DataFrame) -> str:
     cols = ["source", "method", "backend", "scans", "f1", "precision", "recall", "rho_bias_mm", "rho_rms_mm",
             "alpha_bias_deg", "alpha_rms_deg", "rho_rms_common_mm", "alpha_rms_common_deg", "corner_precision", "corner_recall", "corner_err_mm",
             "explained", "range_rms_mm", "sigma_r_mm", "explained_3cm", "explained_3sigma", "ray_rmse_mm",
+            "truth_explained_3cm", "truth_ray_rmse_mm",
             "lines_per_scan", "mean_segment_m", "repeatability", "us_median", "scans_per_s", "speed_vs_sensor", "cpu_us_median",
             "cpu_speed_vs_sensor"]
     cols = [c for c in cols if c in summary]

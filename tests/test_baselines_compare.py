@@ -136,3 +136,22 @@ def test_common_errors_use_only_faces_every_method_matched():
     assert c.loc["a", "rho_rms_common_mm"] == pytest.approx(np.sqrt((9 + 16) / 2))
     assert c.loc["b", "rho_rms_common_mm"] == pytest.approx(np.sqrt(16 / 2))
     assert c.loc["b", "alpha_rms_common_deg"] == pytest.approx(np.rad2deg(np.sqrt(0.01**2 / 2)))
+
+
+def test_simulated_sources_carry_the_exact_lines_scores():
+    """The truth columns score the visible faces themselves: noiseless, they explain every beam they
+    cover with no ray error; under 25 mm noise their ray RMSE is the truncated normal's (15.7 mm),
+    the reference the methods' ray RMSE is read against (the same in every method's row)."""
+    from features.realdata import truncated_normal_rms
+
+    exact = compare([room_source(sigma=0.0)], ["split_merge"])
+    assert np.allclose(exact["truth_ray_rmse"], 0.0, atol=1e-9)
+    assert (exact["truth_explained_3cm"] > 0.95).all()
+    noisy = compare([room_source(sigma=0.025)], ["split_merge", "iepf"])
+    for col in ("truth_explained_3cm", "truth_ray_rmse", "n_truth_explained_3cm"):
+        assert (noisy.groupby("scan")[col].nunique() == 1).all()  # one value per scan, whatever the method
+    s = summarise(noisy)
+    assert s["truth_ray_rmse_mm"].iloc[0] == pytest.approx(1e3 * truncated_normal_rms(0.025, 0.03), rel=0.08)
+    assert (s["truth_ray_rmse_mm"] == s["truth_ray_rmse_mm"].iloc[0]).all()
+    assert "truth_ray_rmse_mm" not in summarise(compare([room_source()], ["split_merge"]).drop(
+        columns=["truth_explained_3cm", "n_truth_explained_3cm", "truth_ray_rmse"]))

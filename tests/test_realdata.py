@@ -7,7 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from features.realdata import RealDataConfig, ray_residuals, repeat_counts, scan_measures
+from features.realdata import (
+    RealDataConfig,
+    ray_residuals,
+    repeat_counts,
+    scan_measures,
+    truncated_normal_rms,
+    truth_lines,
+)
 from features.types import FeatureSet, Line
 from lms200 import Scan
 
@@ -78,3 +85,51 @@ def test_repeatability_finds_the_same_wall_from_a_moved_pose() -> None:
     assert repeat_counts(fa, pose_a, fb, (1.0, 0.5, 1.2), sb) == (0, 0)
     cfg = RealDataConfig(repeat_angle_rad=math.radians(5))
     assert repeat_counts(fa, pose_a, fb_off, pose_b, sb, cfg) == (1, 1)
+
+
+def test_truncated_normal_rms_is_the_rms_of_sampled_noise_within_the_tolerance() -> None:
+    z = np.random.default_rng(7).normal(0.0, 0.025, 400_000)
+    inside = z[np.abs(z) <= 0.03]
+    assert truncated_normal_rms(0.025, 0.03) == pytest.approx(np.sqrt(np.mean(inside**2)), rel=0.005)
+    assert truncated_normal_rms(0.025, 0.03) == pytest.approx(0.0157, abs=0.0001)  # 0.63 sigma at 1.2 sigma
+    assert truncated_normal_rms(0.005, 1.0) == pytest.approx(0.005)  # a tolerance far out: sigma itself
+    with pytest.raises(ValueError):
+        truncated_normal_rms(0.0, 0.03)
+
+
+def test_truth_lines_of_a_simulated_scan_lie_on_its_beams() -> None:
+    import sim
+
+    sensor = sim.SensorConfig(interlaced=False, noise_sigma=1e-6, quantise=False)
+    world = sim.make_world("office", seed=0)
+    rec = sim.simulate_records(world=world, seed=0, duration=0.5, sensor=sensor, rate_hz=2.0)[0]
+    truth = sim.visible_truth(world, rec.truth, sensor)
+    lines = truth_lines(truth)
+    assert lines.shape == (len(truth.segments), 8) and np.all(lines[:, 0] >= 0)
+    for x, y in ((lines[:, 2], lines[:, 3]), (lines[:, 4], lines[:, 5])):  # both end points on the line
+        np.testing.assert_allclose(x * np.cos(lines[:, 1]) + y * np.sin(lines[:, 1]), lines[:, 0], atol=1e-9)
+    res = ray_residuals(lines, rec.scan)
+    covered = np.isfinite(res)
+    assert covered.sum() >= 0.9 * np.count_nonzero(rec.scan.valid & np.isfinite(rec.scan.ranges))
+    assert np.median(res[covered]) < 1e-4  # beams on their face, up to the noiseless sensor's 1 um
+
+
+def test_exact_lines_score_the_noise_and_a_split_at_the_tolerance_scores_below_them() -> None:
+    """Under 25 mm noise (3 cm = 1.2 sigma, as on ACES) the exact wall scores the truncated
+    normal's RMS, and split_merge (3 cm split threshold) less: its lines keep to the beams whose
+    noise happened to be small, a selection, not a better line (it covers fewer beams)."""
+    from features.registry import extract
+
+    exact_sq = exact_n = sm_sq = sm_n = 0.0
+    for seed in range(6):
+        scan = wall_scan(noise=0.025, seed=seed)
+        covered = np.flatnonzero(scan.valid)
+        exact = scan_measures(FeatureSet([line(3.0, 0.0, covered[0], covered[-1], scan)]), scan, 0.025)
+        sm = scan_measures(extract(scan, "split_merge", sigma=0.025), scan, 0.025)
+        exact_sq += exact.ray_rmse_m**2 * exact.n_explained_tol
+        exact_n += exact.n_explained_tol
+        sm_sq += sm.ray_rmse_m**2 * sm.n_explained_tol
+        sm_n += sm.n_explained_tol
+    exact_rmse, sm_rmse = math.sqrt(exact_sq / exact_n), math.sqrt(sm_sq / sm_n)
+    assert exact_rmse == pytest.approx(truncated_normal_rms(0.025, 0.03), rel=0.04)
+    assert sm_rmse < exact_rmse - 0.0005 and sm_n < exact_n
