@@ -9,7 +9,8 @@ Steps, all with fixed settings (nothing is tuned to the log beyond what is said 
 3. a simulated run in the world (default ``mit``, the MIT-CSAIL-like preset) with that sensor
    and robot, over several seeds; the world's glass panels (which read as no return) follow the
    log's no-return readings in the ``mit`` preset (:func:`glass_rate`): a log without any has no
-   glass the laser fails on, so its world gets none;
+   glass the laser fails on, so its world gets none; its rough fill (:func:`fit_rough`) and wall
+   relief (:func:`fit_relief`) are fitted to statistics of the log's scans by probe runs;
 4. every extractor on the real and the simulated scans (``experiments.compare.compare`` with the
    real-data measures of ``features.realdata``: explained fraction at 3 cm and 3 sigma, ray RMSE,
    lines per scan, mean segment length), plus the scene statistics of :func:`scene_statistics`.
@@ -66,14 +67,14 @@ MID_M, FAR_M, MAX_M = 2.0, 4.0, 8.0
 SCALE_PROBES = (1.0, 1.5, 2.0)
 # The wall relief of the mit worlds (flat panels 1-6 cm proud of the walls, make_world(relief=...))
 # is fitted to each log after the rough fill (fit_relief): the share of joints between two straight
-# stretches that step (relief_share; no extractor), on the log and on probe runs at RELIEF_PROBES.
+# stretches that step or bend (relief_share; no extractor), on the log and on probe runs at RELIEF_PROBES.
 RELIEF_PROBES = (0.0, 0.5, 1.0)
 RELIEF_WINDOW = 10  # beams in each straight stretch either side of a joint
 RELIEF_RANGE_M = (0.5, 4.0)  # beams used (m)
 RELIEF_STRAIGHT_TAU = 2.0  # a stretch is straight when its points' rms off their line is at most this x sigma
 RELIEF_PARALLEL_RAD = 0.15  # the two stretches' directions differ by less than this
-RELIEF_STEP_M = (0.01, 0.08)  # offset of the next stretch off the first one's line that is a step (m) ...
-RELIEF_STEP_TAU = 3.0  # ... and at least this many standard errors of the offset (noise alone rarely makes it)
+RELIEF_STEP_M = (0.01, 0.08)  # offset of the next stretch off the first one's line that is a step (m; beyond: apart) ...
+RELIEF_STEP_TAU = 3.0  # ... and at least this many standard errors of it; a bend: a turn of this many standard errors
 
 
 @dataclass
@@ -348,15 +349,16 @@ def _window_lines(x: np.ndarray, y: np.ndarray, k: int) -> tuple[np.ndarray, ...
 def relief_counts(records: Sequence[Record], sigma: float) -> tuple[int, int]:
     """Joints between two straight stretches of RELIEF_WINDOW consecutive valid beams each (beams at
     RELIEF_RANGE_M; straight: rms off the stretch's own line at most RELIEF_STRAIGHT_TAU x ``sigma``,
-    the range noise in m) whose directions differ by less than RELIEF_PARALLEL_RAD: (steps, flat).
-    A step: the second stretch's centroid lies off the first one's line by at least the larger of
-    RELIEF_STEP_M[0] and RELIEF_STEP_TAU standard errors of that offset, and less than
-    RELIEF_STEP_M[1]; flat: nearer. The standard error, for points of noise ``sigma`` across the
-    lines: sigma sqrt(2 / k + d^2 / (k s)), from the two centroids and the first line's direction
-    (d: the centroids' distance, s: the first stretch's mean squared spread along its line). No
-    extractor is involved."""
+    the range noise in m) whose directions differ by less than RELIEF_PARALLEL_RAD and whose
+    second centroid lies within RELIEF_STEP_M[1] of the first one's line: (breaks, flat). A break
+    is a step (that offset at least the larger of RELIEF_STEP_M[0] and RELIEF_STEP_TAU standard
+    errors of it) or a bend (the directions differ by RELIEF_STEP_TAU standard errors); flat
+    otherwise. Standard errors for points of noise ``sigma`` across the lines: offset
+    sigma sqrt(2 / k + d^2 / (k s_1)), from the two centroids and the first line's direction, and
+    turn sigma sqrt(1 / (k s_1) + 1 / (k s_2)) (d: the centroids' distance, s: a stretch's mean
+    squared spread along its line). No extractor is involved."""
     k = RELIEF_WINDOW
-    steps = flat = 0
+    breaks = flat = 0
     for rec in records:
         scan = rec.scan
         r = np.where(scan.valid, scan.ranges, np.nan)
@@ -377,22 +379,22 @@ def relief_counts(records: Sequence[Record], sigma: float) -> tuple[int, int]:
             se_turn = sigma * np.sqrt(1.0 / (k * spread[a]) + 1.0 / (k * spread[b]))
         ok &= offset < RELIEF_STEP_M[1]
         broken = (offset >= np.maximum(RELIEF_STEP_M[0], RELIEF_STEP_TAU * se)) | (turn >= RELIEF_STEP_TAU * se_turn)
-        steps += int(np.count_nonzero(ok & broken))
+        breaks += int(np.count_nonzero(ok & broken))
         flat += int(np.count_nonzero(ok & ~broken))
-    return steps, flat
+    return breaks, flat
 
 
 def relief_share(records: Sequence[Record], sigma: float | None = None) -> float:
-    """Share of the joints between parallel straight stretches that step by 1-8 cm
-    (:func:`relief_counts`): how often a real wall at knee height is broken by things standing a few
-    cm proud of it. ``sigma``: the range noise (m; default the records' own neighbour scatter, as the
+    """Share of the joints between nearly parallel straight stretches that step or bend beyond the
+    noise (:func:`relief_counts`): how often a wall at knee height is broken by things standing a
+    few cm proud of it. ``sigma``: the range noise (m; default the records' own neighbour scatter, as the
     extractors get it). nan without any joint."""
     from features.noise_estimate import neighbour_sigma
 
     if not records:
         return float("nan")
-    steps, flat = relief_counts(records, neighbour_sigma(records) if sigma is None else sigma)
-    return steps / (steps + flat) if steps + flat else float("nan")
+    breaks, flat = relief_counts(records, neighbour_sigma(records) if sigma is None else sigma)
+    return breaks / (breaks + flat) if breaks + flat else float("nan")
 
 
 @dataclass
@@ -410,7 +412,7 @@ def fit_relief(real: Sequence[Record], sensor: Any, limits: Any, glass: float | 
                scale: float | None = None, world: str = "mit",
                seeds: Sequence[int] = ROUGH_PROBE_SEEDS) -> ReliefFit:
     """The wall-relief cover (share of the free wall length under panels 1-6 cm proud, 0-1) that
-    makes the simulated worlds' walls step as often as the log's (:func:`relief_share`): probe runs
+    makes the simulated worlds' walls break as often as the log's (:func:`relief_share`): probe runs
     at RELIEF_PROBES (the first ``n_probe_seeds`` of ``seeds``) with the fitted rough fill
     ``rough`` and rooms ``scale``, the log's share interpolated piecewise linearly on the probes'
     curve (made monotone), clipped to [0, 1]."""
@@ -552,7 +554,7 @@ def format_report(result: Sim2RealResult, log: str) -> str:
                 + ")")
              + ("" if result.relief is None else
                 f"; wall relief {result.relief.cover:.2f} of the free wall length (joints of straight stretches "
-                f"that step: log {result.relief.log_share:.4f}, probes "
+                f"that break: log {result.relief.log_share:.4f}, probes "
                 + ", ".join(f"{s:.4f} at {c:g}" for c, s in zip(result.relief.probe_covers, result.relief.probe_shares))
                 + ")"), "",
              "| method | explained 3 cm real | sim | diff | ray RMSE mm real | sim | lines/scan real | sim | ratio | mean segment m real | sim |",

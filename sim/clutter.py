@@ -3,7 +3,9 @@ clusters of chair and table legs, standing and walking people (leg pairs), plant
 polygons of many short faces), bins, glass panels in walls that give no return, and runs of
 things standing along a wall (:func:`_wall_run`: boxes, computers, bags, round bins side by side,
 turned, with gaps), which cover stretches of wall with short faces, depth steps and
-recesses (the scan plane is at knee height, where offices keep such things).
+recesses (the scan plane is at knee height, where offices keep such things); rough fill along
+the rooms' walls (:func:`_rough_fill`) and wall relief (:func:`_relief`: flat panels standing
+1-6 cm proud of a wall, as closed doors, boards and flush cabinets do).
 
 Every item is made of the world's exact solids (boxes, cylinders, mitred rings of boxes), so the
 ground truth (faces, circles, corners) stays exact; glass is a segment (``World.glass``) that the
