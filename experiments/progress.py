@@ -24,9 +24,13 @@ def stderr(msg: str) -> None:
 def warm_up_kernels(log: Log = stderr, slam: bool = False) -> float:
     """Load (or compile, the first time in a checkout) the extractors' numba kernels now, and with
     ``slam`` the default SLAM pipeline's (scan matching, pose graph, map merge), so that a run's
-    scans/s measure the run, not the compiler. When that takes more than a second (a compile, not
-    a cache load) it says "compiling kernels, once" and then a line every few seconds until done.
-    Returns the seconds it took."""
+    scans/s measure the run, not the compiler. When numba compiles (a fresh checkout, or code that
+    changed) and that takes more than a second, it says "compiling kernels, once" and then a line
+    every few seconds until done; loading the cached machine code says nothing, however long it
+    takes. Returns the seconds it took."""
+    from numba.core import event
+
+    compiles = _compile_watch()
     from features import extract, extract_many
     from features.noise_estimate import neighbour_sigma
     from lms200 import Scan
@@ -40,19 +44,40 @@ def warm_up_kernels(log: Log = stderr, slam: bool = False) -> float:
     scans = (scan, scan.replace(range_max=81.83))
     start = time.perf_counter()
     first = "compiling kernels, once (about 20-60 s; cached beside the code for every later run) ..."
-    with Heartbeat(log, "compiling kernels", first=first, first_after=1.0) as beat:
-        for sample in scans:  # single calls, batches and the pooled noise estimate take different kernels
-            for method in COMPILED_METHODS:
-                extract(sample, method=method)
-                extract_many([sample, sample], method=method)
-        neighbour_sigma(list(scans))
-        if slam:
-            for sample in scans:
-                _warm_up_slam(sample)
+    event.register("numba:compile", compiles)  # numba raises this event for compiles only, not cache loads
+    try:
+        with Heartbeat(log, "compiling kernels", first=first, first_after=1.0, when=lambda: compiles.compiled) as beat:
+            for sample in scans:  # single calls, batches and the pooled noise estimate take different kernels
+                for method in COMPILED_METHODS:
+                    extract(sample, method=method)
+                    extract_many([sample, sample], method=method)
+            neighbour_sigma(list(scans))
+            if slam:
+                for sample in scans:
+                    _warm_up_slam(sample)
+    finally:
+        event.unregister("numba:compile", compiles)
     seconds = time.perf_counter() - start
     if beat.announced:
         log(f"kernels compiled in {seconds:.0f} s")
     return seconds
+
+
+def _compile_watch() -> Any:
+    """A numba event listener whose ``compiled`` turns True once a kernel starts compiling (numba
+    raises "numba:compile" for compiles, not for loads from its on-disk cache)."""
+    from numba.core import event
+
+    class CompileWatch(event.Listener):
+        compiled = False
+
+        def on_start(self, ev: Any) -> None:
+            self.compiled = True
+
+        def on_end(self, ev: Any) -> None:
+            pass
+
+    return CompileWatch()
 
 
 def _warm_up_slam(scan: Any) -> None:
@@ -67,14 +92,15 @@ def _warm_up_slam(scan: Any) -> None:
 
 class Heartbeat:
     """While active, prints ``... LABEL: N s`` whenever nothing was said for ``every`` seconds
-    (with ``first``: that line after ``first_after`` s, and nothing at all before it).
+    (with ``first``: that line after ``first_after`` s, and nothing at all before it; with ``when``
+    as well, not before ``when()`` is true: the slow part has started).
 
     Use ``beat.say(msg)`` for the step's own messages (they reset the timer) and ``beat.label =``
     to name the current step."""
 
     def __init__(self, log: Log = stderr, label: str = "working", every: float = 4.0, first: str | None = None,
-                 first_after: float = 0.0) -> None:
-        self.log, self.label, self.every = log, label, every
+                 first_after: float = 0.0, when: Callable[[], bool] | None = None) -> None:
+        self.log, self.label, self.every, self.when = log, label, every, when
         self.first, self.first_after, self.announced = first, first_after, first is None
         self.last = self.start = time.monotonic()
         self._stop = threading.Event()
@@ -88,7 +114,7 @@ class Heartbeat:
         while not self._stop.wait(0.25):
             now = time.monotonic()
             if not self.announced:  # the opening line, only once the step has proved slow
-                if now - self.start >= self.first_after:
+                if now - self.start >= self.first_after and (self.when is None or self.when()):
                     self.announced, self.last = True, now
                     self.log(str(self.first))
                 continue

@@ -34,8 +34,12 @@ def common_geometry(scans: Sequence[Scan]) -> Scan:
 
 
 def stacked_ranges(scans: Sequence[Scan]) -> np.ndarray:
-    """(S, n) C-contiguous ranges of the scans (m), which have n beams each."""
-    return np.concatenate([s.ranges for s in scans]).reshape(len(scans), -1)
+    """(S, n) C-contiguous ranges of the scans (m), which have n beams each; read-only, like a Scan's
+    ranges, so that the batch kernels' per-scan rows have the types of a single call's ranges and
+    reuse its compiled code instead of compiling the whole extractor a second time."""
+    out = np.concatenate([s.ranges for s in scans]).reshape(len(scans), -1)
+    out.flags.writeable = False
+    return out
 
 
 def split_rows(lv: np.ndarray, lb: np.ndarray, cv: np.ndarray, cb: np.ndarray, line_off: np.ndarray,

@@ -113,3 +113,17 @@ def test_feature_set_arrays_and_record_views() -> None:
     again = FeatureSet(list(lines), list(corners), fs.method)
     assert again == fs and pickle.loads(pickle.dumps(fs)) == fs
     assert FeatureSet().lines == [] and len(FeatureSet().corners) == 0
+
+
+def test_a_batch_row_has_the_numba_type_of_a_scans_ranges() -> None:
+    """The batch kernels call the single-scan kernel on each row of the stacked ranges; a row typed
+    like a Scan's (read-only) ranges reuses the single call's machine code, where a writable row
+    made numba compile the whole extractor a second time (~30 s of a fresh checkout's first run)."""
+    import numba
+
+    from features.batch import stacked_ranges
+
+    scans = batch(6)
+    rows = stacked_ranges(scans)
+    assert numba.typeof(rows[1]) == numba.typeof(scans[1].ranges)
+    np.testing.assert_array_equal(rows[1], scans[1].ranges)

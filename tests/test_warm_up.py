@@ -48,3 +48,54 @@ def test_warm_up_leaves_nothing_to_compile_for_cm_mode_logs() -> None:
     out = subprocess.run([sys.executable, "-c", CHILD], cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout
+
+
+def test_a_warm_up_from_the_cache_says_nothing() -> None:
+    """Once the kernels are cached (the test above compiled them), a new process's warm-up loads
+    them without a word: "compiling kernels, once" is for compiles only, however long a load takes."""
+    child = ("from experiments.progress import warm_up_kernels\n"
+             "said = []\n"
+             "warm_up_kernels(log=said.append, slam=True)\n"
+             "print(said)\n")
+    out = subprocess.run([sys.executable, "-c", child], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout
+
+
+def test_the_compile_watch_sees_compiles_and_not_calls() -> None:
+    import numba
+
+    from experiments.progress import _compile_watch
+    from numba.core import event
+
+    def plus_one(x: float) -> float:
+        return x + 1.0
+
+    fn = numba.njit(plus_one)  # not cached: this process compiles it
+    watch, again = _compile_watch(), _compile_watch()
+    event.register("numba:compile", watch)
+    try:
+        assert not watch.compiled
+        assert fn(1.0) == 2.0 and watch.compiled
+    finally:
+        event.unregister("numba:compile", watch)
+    event.register("numba:compile", again)
+    try:
+        assert fn(2.0) == 3.0 and not again.compiled  # compiled already: a call, no compile
+    finally:
+        event.unregister("numba:compile", again)
+
+
+def test_the_heartbeat_waits_for_its_condition() -> None:
+    import time
+
+    from experiments.progress import Heartbeat
+
+    said: list[str] = []
+    started = [False]
+    with Heartbeat(said.append, "step", first="slow step ...", first_after=0.0, when=lambda: started[0]):
+        time.sleep(0.6)
+        assert said == []  # past first_after, but the slow part has not begun
+        started[0] = True
+        time.sleep(0.6)
+    assert said == ["slow step ..."]
