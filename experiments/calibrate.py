@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -65,10 +65,20 @@ class CalibrationResult:
     dark_curve: list[tuple[float, float]] = ()  # type: ignore[assignment]  # (dropout_patch_m, simulated nan clustering)
 
 
-def _interpolate(xs: list[float], ys: list[float], target: float) -> float:
-    """The y at which the (made monotone) curve x(y) reaches ``target``, clipped to the grid."""
-    x = np.maximum.accumulate(np.nan_to_num(np.asarray(xs, dtype=float)))
-    y = np.asarray(ys, dtype=float)
+def invert_probe_curve(values: Sequence[float], probes: Sequence[float], target: float) -> float:
+    """The simulator parameter at which a simulated statistic reaches a log's (indirect inference).
+
+    ``values[i]`` is the statistic measured on probe runs at parameter ``probes[i]`` (``probes``
+    ascending, in the parameter's own units). The curve values(probes) is made non-decreasing
+    (running maximum; nan counts as 0) and interpolated piecewise linearly: for a target between
+    its first and last values the result is the parameter at which it first reaches ``target``;
+    ``probes[0]`` for a target at or below the first value or not finite, ``probes[-1]`` for one
+    at or above the last (so the result stays within the probes).
+    Used by :func:`fit_sensor` (tail, rough cells, dark cells) and by
+    ``experiments.sim2real.fit_rough`` / ``fit_scale`` (the mit worlds' rough fill and room size).
+    """
+    x = np.maximum.accumulate(np.nan_to_num(np.asarray(values, dtype=float)))
+    y = np.asarray(probes, dtype=float)
     if not np.isfinite(target) or target <= x[0]:
         return float(y[0])
     if target >= x[-1]:
@@ -157,7 +167,7 @@ def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT
         tail_curve.append((eps, float(m.tail_share.value)))
         if eps == 0.0:
             baseline = float(m.outlier_rate.value)
-    tail_prob = _interpolate([c[1] for c in tail_curve], [c[0] for c in tail_curve], float(cal.tail_share.value))
+    tail_prob = invert_probe_curve([c[1] for c in tail_curve], [c[0] for c in tail_curve], float(cal.tail_share.value))
     with_width = with_width.replace(noise_tail_prob=round(tail_prob, 4),
                                     noise_tail_sigma=round(tail_sigma, 5) if tail_prob > 0 else 0.0)
     patch_curve: list[tuple[float, float]] = []
@@ -165,7 +175,7 @@ def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT
         for size in PATCH_GRID_M:
             m = _simulated_measurement(with_width.replace(noise_tail_patch_m=size), built, duration)
             patch_curve.append((size, float(m.tail_clustering.value)))
-        patch = _interpolate([c[1] for c in patch_curve], [c[0] for c in patch_curve], float(cal.tail_clustering.value))
+        patch = invert_probe_curve([c[1] for c in patch_curve], [c[0] for c in patch_curve], float(cal.tail_clustering.value))
         with_width = with_width.replace(noise_tail_patch_m=round(patch, 3))
     dark_curve: list[tuple[float, float]] = []
     nc = cal.nan_clustering
@@ -174,7 +184,7 @@ def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT
         for size in DARK_GRID_M:
             m = _simulated_measurement(with_width.replace(dropout_patch_m=size), built, duration)
             dark_curve.append((size, float(m.nan_clustering.value)))
-        dark = _interpolate([c[1] for c in dark_curve], [c[0] for c in dark_curve], float(cal.nan_clustering.value))
+        dark = invert_probe_curve([c[1] for c in dark_curve], [c[0] for c in dark_curve], float(cal.nan_clustering.value))
         with_width = with_width.replace(dropout_patch_m=round(dark, 3))
     outlier = max(float(cal.outlier_rate.value) - baseline, 0.0) if np.isfinite(cal.outlier_rate.value) else 0.0
     fitted = with_width.replace(outlier_prob=min(outlier, 0.5))

@@ -294,7 +294,7 @@ def fit_scale(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     probe runs at SCALE_PROBES, the log's share interpolated piecewise linearly on the probes'
     curve (made monotone), clipped to the probes' range. Ranges only: no extractor runs.
     ``rough``: the rough fill of the probes (fit_rough's, fitted on the preset's rooms first)."""
-    from experiments.calibrate import _interpolate
+    from experiments.calibrate import invert_probe_curve as _interpolate
 
     target = far_share(real)
     shares = _probe_shares(far_share, "scale", SCALE_PROBES, dict(rough=rough), glass, sensor, limits, duration, rate_hz,
@@ -320,7 +320,7 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     probe runs at ROUGH_PROBES (the first ``n_probe_seeds`` of ROUGH_PROBE_SEEDS), the log's share
     interpolated piecewise linearly on the probes' curve (made monotone), clipped to its ends: the
     fill's effect saturates as the rooms' free wall runs out. ``scale``: the rooms' size (fit_scale)."""
-    from experiments.calibrate import _interpolate
+    from experiments.calibrate import invert_probe_curve as _interpolate
 
     target = near_unexplained(real)
     shares = _probe_shares(near_unexplained, "rough", ROUGH_PROBES, dict(scale=scale), glass, sensor, limits, duration,

@@ -22,42 +22,6 @@ _kernel = numba.njit(cache=True, error_model="numpy")
 
 
 @_kernel
-def _fmin(a: float, b: float) -> float:
-    """np.fmin: the smaller, ignoring a nan."""
-    if a != a:
-        return b
-    if b != b:
-        return a
-    return a if a <= b else b
-
-
-@_kernel
-def _fmax(a: float, b: float) -> float:
-    """np.fmax: the larger, ignoring a nan."""
-    if a != a:
-        return b
-    if b != b:
-        return a
-    return a if a >= b else b
-
-
-@_kernel
-def _nan_max(a: float, b: float) -> float:
-    """np.maximum: the larger, a nan if either is."""
-    if a != a or b != b:
-        return np.nan
-    return a if a >= b else b
-
-
-@_kernel
-def _nan_min(a: float, b: float) -> float:
-    """np.minimum: the smaller, a nan if either is."""
-    if a != a or b != b:
-        return np.nan
-    return a if a <= b else b
-
-
-@_kernel
 def box_entry(ox: float, oy: float, ux: float, uy: float, cx: float, cy: float, hx: float, hy: float, c: float,
               s: float) -> float:
     """Distance (m) at which a ray from (ox, oy) along (ux, uy) enters the box of centre (cx, cy),
@@ -67,8 +31,11 @@ def box_entry(ox: float, oy: float, ux: float, uy: float, cx: float, cy: float, 
     dx, dy = c * ux + s * uy, -s * ux + c * uy
     tx1, tx2 = (-hx - lo_x) / dx, (hx - lo_x) / dx
     ty1, ty2 = (-hy - lo_y) / dy, (hy - lo_y) / dy
-    t_in = _nan_max(_fmin(tx1, tx2), _fmin(ty1, ty2))
-    t_out = _nan_min(_fmax(tx1, tx2), _fmax(ty1, ty2))
+    # np.fmin / np.fmax drop the nan of a ray lying in a slab's plane (0 / 0), np.maximum /
+    # np.minimum keep a nan (no entry then); Python's min / max would not: their nan handling
+    # depends on the argument order
+    t_in = np.maximum(np.fmin(tx1, tx2), np.fmin(ty1, ty2))
+    t_out = np.minimum(np.fmax(tx1, tx2), np.fmax(ty1, ty2))
     if t_in <= t_out and t_in > 0:
         return t_in
     return np.inf

@@ -223,17 +223,20 @@ class LMS200Sim:
         noise = self.rng.standard_normal(s.n_beams)
         dropped = self.rng.random(s.n_beams) < s.dropout_prob
         finite = np.isfinite(ranges)
-        r = np.where(finite, ranges, 0.0)
+        surface = np.where(finite, ranges, 0.0)  # where each beam meets its surface (m)
+        r = surface
+        from_surface = finite  # beams whose echo is the surface's (dark and rough cells apply to them)
         if s.outlier_prob > 0:  # extra draws only when asked for: the datasheet model's stream is unchanged
             spurious = finite & (self.rng.random(s.n_beams) < s.outlier_prob)
             lo, hi = OUTLIER_RANGE_SHARE
             r = np.where(spurious, r * self.rng.uniform(lo, hi, s.n_beams), r)
+            from_surface = finite & ~spurious  # a spurious echo comes back before the surface: read whatever it is
         if s.dropout_patch_m > 0:  # dark cells of the surfaces; the draw above still made (same stream)
-            dropped = np.where(finite, self._cells(bp, r, s.dropout_patch_m, self._dark_offset, self._dark_key,
-                                                   s.dropout_prob), dropped)
+            dark = self._cells(bp, surface, s.dropout_patch_m, self._dark_offset, self._dark_key, s.dropout_prob)
+            dropped = np.where(finite, dark & from_surface, dropped)
         sigma = s.sigma_at(r) if s.noise_sigma_per_m else s.noise_sigma
         if s.noise_tail_prob > 0:
-            rough = (self._rough_cells(bp, r) if s.noise_tail_patch_m > 0
+            rough = (self._rough_cells(bp, surface) & from_surface if s.noise_tail_patch_m > 0
                      else self.rng.random(s.n_beams) < s.noise_tail_prob)
             sigma = np.where(rough, s.noise_tail_sigma, sigma)
         r = r + sigma * noise

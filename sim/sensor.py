@@ -47,7 +47,10 @@ class SensorConfig:
             sigma ``max(0, noise_sigma + noise_sigma_per_m * (r - 2.5 m))``.
         no_return_prob: probability that a beam which hits a surface returns no echo (+inf).
         outlier_prob: probability that a beam which hits a surface returns an isolated spurious
-            echo nearer than the surface (uniform in 10-90 % of its range: dust, stray light).
+            echo nearer than the surface (uniform in 10-90 % of its range: dust, stray light);
+            the echo is not the surface's, so it is read in front of a dark cell too and carries
+            the core noise in front of a rough one (those cells are looked up where the beam
+            meets its surface).
         max_reading: when set (m), no-returns are logged as this finite range instead of +inf
             (loggers that write their cap, e.g. 50 m, for "nothing").
         noise_tail_prob, noise_tail_sigma: with this probability a beam's range error is drawn

@@ -341,3 +341,41 @@ def test_misspelled_slam_parameters_fail_before_any_cell_runs(tmp_path):
     check_extract_params([{"method": "hough", "extractor.rho_step": 0.01, "sensor.noise_sigma": 0.0}])
     with pytest.raises(SweepSpecError, match=r"extractor.k: no extractor of this run \(hough\) has a field 'k'"):
         check_extract_params([{"method": "hough", "extractor.k": 5}])  # sensor's k is not hough's
+
+
+def test_a_sensor_file_is_read_once_per_check_and_once_per_run(tmp_path, monkeypatch):
+    """A sweep's ``sensor_file`` is read once when the cells are checked (whatever the number of
+    distinct ``sensor.*`` overrides on it) and once when a cell simulates, and its fields, with
+    the cell's overrides on top, are the sensor the run uses."""
+    from sim import SensorConfig
+
+    from experiments.sweep import kinds
+
+    path = tmp_path / "sensor.yaml"
+    SensorConfig(noise_sigma=0.0123, interlaced=False, dropout_prob=0.02).to_yaml(path)
+    reads = []
+    real = SensorConfig.from_yaml.__func__
+
+    def counting(cls, p):
+        reads.append(str(p))
+        return real(cls, p)
+
+    monkeypatch.setattr(SensorConfig, "from_yaml", classmethod(counting))
+    cells = [{"method": "split_merge", "sensor_file": str(path), "sensor.dropout_prob": q} for q in (0.0, 0.01, 0.02)]
+    kinds.check_extract_params(cells)
+    kinds.check_slam_params([{k: v for k, v in c.items() if k != "method"} for c in cells])
+    assert reads == [str(path)] * 2
+    with pytest.raises(SweepSpecError, match="dropout_prob"):  # the overrides still go on top and are checked
+        kinds.check_extract_params([{**cells[0], "sensor.dropout_prob": 2.0}])
+
+    reads.clear()
+    kinds._run.cache_clear()
+    seen = []
+    monkeypatch.setattr(kinds, "compare", lambda sources, methods, params, sigma: seen.append(sigma) or
+                        pd.DataFrame({"source": ["s"], "method": ["split_merge"]}))
+    monkeypatch.setattr(kinds, "summarise", lambda table, reference: pd.DataFrame({"f1": [1.0]}))
+    row = kinds.extract_cell({**cells[1], "duration": 0.5, "rate_hz": 2.0})
+    assert row == {"f1": 1.0} and seen == [0.0123] and reads == [str(path)]
+    world, sensor, records, _ = kinds._run("office", 0, 0.5, 2.0, (("dropout_prob", 0.01),), True, str(path))
+    assert reads == [str(path)]  # the cached run: not read again
+    assert (sensor.noise_sigma, sensor.dropout_prob, sensor.interlaced) == (0.0123, 0.01, False)

@@ -232,12 +232,18 @@ def test_cm_mode_scans_use_their_own_noise() -> None:
     np.testing.assert_allclose(same.cov, mm.cov, rtol=1e-9)
     noisy = cast(ROOM, range_max=81.83, sigma=0.01, seed=4)
     cfg = make_config("sensor")
-    assert cfg.sigma_r_cm == "auto" and cfg.sigma_of(noisy) == neighbour_sigma(noisy)
-    assert cfg.sigma_of(noisy) == pytest.approx(0.01, rel=0.2)
-    assert make_config("sensor", sigma_r="auto").sigma_of(cast(ROOM, sigma=0.003, seed=5)) == pytest.approx(0.003, rel=0.25)
+    assert cfg.sigma_r_cm == "auto" and cfg.sigma_for(noisy.range_max) == "auto"
+    sigma = neighbour_sigma(noisy)
+    assert sigma == pytest.approx(0.01, rel=0.2)
     auto = extract(noisy).lines
-    fixed = extract(noisy, sigma_r_cm=cfg.sigma_of(noisy)).lines
+    fixed = extract(noisy, sigma_r_cm=sigma).lines
     assert [(l.first, l.last) for l in auto] == [(l.first, l.last) for l in fixed]
+    np.testing.assert_allclose([l.cov for l in auto], [l.cov for l in fixed], rtol=1e-12)
+    quiet = cast(ROOM, sigma=0.003, seed=5)  # mm mode with sigma_r "auto": the same estimate
+    assert neighbour_sigma(quiet) == pytest.approx(0.003, rel=0.25)
+    auto, fixed = extract(quiet, sigma_r="auto").lines, extract(quiet, sigma_r=neighbour_sigma(quiet)).lines
+    assert len(auto) >= 3 and [(l.first, l.last) for l in auto] == [(l.first, l.last) for l in fixed]
+    np.testing.assert_allclose([l.cov for l in auto], [l.cov for l in fixed], rtol=1e-12)
 
 
 def numpy_neighbour_sigma(scans: list[Scan], fallback: float = 0.005) -> float:

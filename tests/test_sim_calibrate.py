@@ -253,3 +253,40 @@ def test_dark_cells_gather_the_nans_and_calibrate_finds_their_size(tmp_path: Pat
     iid = calibrate_scans(simulate_records("office", seed=3, duration=20.0, sensor=truth.replace(dropout_patch_m=0.0),
                                            rate_hz=4.0))
     assert iid.nan_clustering.value < 0.1
+
+
+def test_invert_probe_curve_reads_the_parameter_off_the_monotone_probe_curve() -> None:
+    """The public helper of the fits (calibrate's tail and cell sizes, sim2real's rough fill and
+    room size): hand-worked values on a curve with a dip and a nan, which count as the running
+    maximum and 0."""
+    from experiments.calibrate import invert_probe_curve
+
+    probes = [0.0, 0.1, 0.3, 1.0, 2.0]
+    values = [0.1, 0.3, 0.2, float("nan"), 0.7]  # made monotone: 0.1, 0.3, 0.3, 0.3, 0.7
+    assert invert_probe_curve(values, probes, 0.2) == pytest.approx(0.05)  # halfway from 0.1 to 0.3
+    assert invert_probe_curve(values, probes, 0.3) == pytest.approx(0.1)  # first reached at 0.1
+    assert invert_probe_curve(values, probes, 0.5) == pytest.approx(1.5)  # 0.3 -> 0.7 over 1 -> 2
+    assert invert_probe_curve(values, probes, 0.05) == 0.0 == invert_probe_curve(values, probes, float("nan"))
+    assert invert_probe_curve(values, probes, 0.9) == 2.0
+
+
+def test_sim2real_fits_read_their_probe_curves_with_invert_probe_curve(monkeypatch) -> None:
+    """fit_scale and fit_rough take the log's share off their probes' curve with the public
+    helper (probe runs replaced by a known curve: no simulation)."""
+    from experiments import sim2real
+    from experiments.calibrate import invert_probe_curve
+
+    def curve(statistic, vary, probes, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
+        return [0.1 * (i + 1) for i in range(len(probes))]
+
+    monkeypatch.setattr(sim2real, "_probe_shares", curve)
+    monkeypatch.setattr(sim2real, "far_share", lambda real: 0.15)
+    monkeypatch.setattr(sim2real, "near_unexplained", lambda real: 0.25)
+    scale = sim2real.fit_scale([], None, None, None)
+    rough = sim2real.fit_rough([], None, None, None)
+    shares = curve(None, None, sim2real.SCALE_PROBES)
+    assert scale.scale == round(invert_probe_curve(shares, sim2real.SCALE_PROBES, 0.15), 3)
+    assert scale.scale == pytest.approx((sim2real.SCALE_PROBES[0] + sim2real.SCALE_PROBES[1]) / 2, abs=1e-3)
+    shares = curve(None, None, sim2real.ROUGH_PROBES)
+    assert rough.cover == round(invert_probe_curve(shares, sim2real.ROUGH_PROBES, 0.25), 3)
+    assert rough.cover == pytest.approx((sim2real.ROUGH_PROBES[1] + sim2real.ROUGH_PROBES[2]) / 2, abs=1e-3)

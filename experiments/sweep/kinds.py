@@ -27,12 +27,13 @@ SLAM_DEFAULTS = {"world": "office", "duration": 30.0, "rate_hz": None}
 @functools.lru_cache(maxsize=4)
 def _run(world: str, seed: int, duration: float, rate_hz: float | None, sensor_items: tuple, with_truth: bool,
          sensor_file: str | None = None):
-    """Simulated records (and their visible truths), cached per worker: a grid over extractor
-    parameters simulates each (world, seed, sensor) once per worker process."""
+    """The world, the sensor (``sensor_file`` read here, once), the simulated records and their
+    visible truths, cached per worker: a grid over extractor parameters simulates each (world,
+    seed, sensor) once per worker process."""
     sensor = sensor_config(dict(sensor_items), sensor_file)
     world_obj, records = simulate_run(world, seed, duration, sensor, rate_hz)
     truths = truths_for(world_obj, records, sensor) if with_truth else None
-    return world_obj, records, truths
+    return world_obj, sensor, records, truths
 
 
 def _records(params: dict[str, Any], defaults: dict[str, Any], with_truth: bool):
@@ -50,9 +51,8 @@ def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
     (``experiments.compare``): the pooled summary row (f1, precision, recall, rho_rms_mm,
     alpha_rms_deg, corner_*, explained, us_median, time_ms_median, lines_per_scan, ...)."""
     p = {**EXTRACT_DEFAULTS, **params}
-    _, records, truths = _records(p, EXTRACT_DEFAULTS, with_truth=True)
+    _, sensor, records, truths = _records(p, EXTRACT_DEFAULTS, with_truth=True)
     method = str(p["method"])
-    sensor = sensor_config(split_params(p, "sensor"), p.get("sensor_file"))
     noise = float(sensor.noise_sigma)
     source = Source.from_records(records, truths, seed=int(p.get("seed", 0)))
     params = extractor_overrides(p, [method], other_methods=True)
@@ -68,8 +68,7 @@ def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
     from slam import SlamConfig, run_slam
 
     p = {**SLAM_DEFAULTS, **params}
-    _, records, _ = _records(p, SLAM_DEFAULTS, with_truth=False)
-    sensor = sensor_config(split_params(p, "sensor"), p.get("sensor_file"))
+    _, sensor, records, _ = _records(p, SLAM_DEFAULTS, with_truth=False)
     config = deskew_for_sensor(SlamConfig.from_dict(slam_config_dict(p)), bool(sensor.interlaced))
     result = run_slam(records, config)
     return slam_metrics(result, records)
@@ -164,12 +163,13 @@ def _extractor_fields(method: str) -> tuple[set[str], str]:
     return _fields(m.config_type), f"the {method!r} extractor's {m.config_type.__name__}"
 
 
-def _check_sensor_files(cells: Iterable[dict[str, Any]]) -> None:
-    """Every ``sensor_file`` reads as a sensor config (raises LmsbenchError naming the file)."""
+def _read_sensor_files(cells: Iterable[dict[str, Any]]) -> dict[str, Any]:
+    """Every ``sensor_file`` of the cells, each read once: path -> its ``sim.SensorConfig``
+    (raises LmsbenchError naming a file that does not read as one)."""
     from sim import SensorConfig
 
-    for path in sorted({str(c["sensor_file"]) for c in cells if c.get("sensor_file") is not None}):
-        SensorConfig.from_yaml(path)
+    paths = sorted({str(c["sensor_file"]) for c in cells if c.get("sensor_file") is not None})
+    return {path: SensorConfig.from_yaml(path) for path in paths}
 
 
 def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: set[str]) -> None:
@@ -197,8 +197,9 @@ def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: s
             raise SweepSpecError(f"rate_hz: must be a number of scans/s > 0 or null, got {rate!r}")
 
 
-def _check_sensors(cells: list[dict[str, Any]]) -> None:
-    """Every distinct sensor of the cells builds (a bad value fails before any cell runs)."""
+def _check_sensors(cells: list[dict[str, Any]], files: dict[str, Any]) -> None:
+    """Every distinct sensor of the cells builds (a bad value fails before any cell runs); a
+    cell's ``sensor_file`` is taken from ``files`` (read once, by :func:`_read_sensor_files`)."""
     from lms200 import LmsbenchError
 
     from .spec import SweepSpecError
@@ -210,8 +211,12 @@ def _check_sensors(cells: list[dict[str, Any]]) -> None:
         if key in seen:
             continue
         seen.add(key)
+        sensor_file = cell.get("sensor_file")
         try:
-            sensor_config(dict(items), cell.get("sensor_file"))
+            if sensor_file is None:
+                sensor_config(dict(items))
+            else:  # the file's config with the overrides on top, as sensor_config builds it
+                dataclasses.replace(files[str(sensor_file)], **dict(items))
         except (LmsbenchError, TypeError, ValueError) as exc:
             raise SweepSpecError(f"sensor {dict(items)}: {exc}") from None
 
@@ -225,10 +230,10 @@ def check_extract_params(cells: list[dict[str, Any]]) -> None:
 
     from lms200 import LmsbenchError
 
-    _check_sensor_files(cells)
+    files = _read_sensor_files(cells)
     _unknown(cells, "sensor", _sensor_fields)
     _check_plain(cells, EXTRACT_DEFAULTS, set())
-    _check_sensors(cells)
+    _check_sensors(cells, files)
     from .spec import SweepSpecError
 
     seen = set()
@@ -254,7 +259,7 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
     ``slam.extractor_params.*`` name is a field of its config."""
     from slam import SlamConfig
 
-    _check_sensor_files(cells)
+    files = _read_sensor_files(cells)
     _unknown(cells, "sensor", _sensor_fields)
     slam_cells = [{k: v for k, v in c.items() if not k.startswith("slam.extractor_params.")} for c in cells]
     from slam.config import SECTIONS
@@ -264,7 +269,7 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
     default = SlamConfig().extractor
     _unknown(cells, "slam.extractor_params", lambda c: _extractor_fields(str(c.get("slam.extractor", default))))
     _check_plain(cells, SLAM_DEFAULTS, set())
-    _check_sensors(cells)
+    _check_sensors(cells, files)
     from lms200 import LmsbenchError
 
     from .spec import SweepSpecError

@@ -4,13 +4,10 @@ when it is built."""
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 
-from lms200 import Scan
-
 from ..baselines import checks
-from ..noise_estimate import AUTO, neighbour_sigma
+from ..noise_estimate import AUTO
 from .engine import Params
 
 CM_MODE_RANGE_MAX = 10.0  # m: a scan with a larger range_max comes in SICK cm codes (1 cm steps)
@@ -110,11 +107,3 @@ class SensorMethodConfig:
         """The range noise std (m) for a scan with this ``range_max`` (m): ``sigma_r_cm`` for the
         SICK cm codes (range_max > 10 m), else ``sigma_r``; either may be "auto"."""
         return self.sigma_r_cm if range_max > CM_MODE_RANGE_MAX else self.sigma_r
-
-    def sigma_of(self, scans: Scan | Sequence[Scan]) -> float:
-        """The range noise std (m) the thresholds use on a scan (or a batch of one geometry):
-        :meth:`sigma_for`, with "auto" estimated from the data
-        (:func:`features.noise_estimate.neighbour_sigma`, pooled over a batch)."""
-        first = scans if isinstance(scans, Scan) else scans[0]
-        sigma = self.sigma_for(first.range_max)
-        return neighbour_sigma(scans) if sigma == AUTO else float(sigma)
