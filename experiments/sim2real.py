@@ -416,13 +416,13 @@ def fit_relief(real: Sequence[Record], sensor: Any, limits: Any, glass: float | 
     at RELIEF_PROBES (the first ``n_probe_seeds`` of ``seeds``) with the fitted rough fill
     ``rough`` and rooms ``scale``, the log's share interpolated piecewise linearly on the probes'
     curve (made monotone), clipped to [0, 1]."""
-    from experiments.calibrate import _interpolate
+    from experiments.calibrate import invert_probe_curve
 
     target = relief_share(real)
     fixed: dict[str, Any] = {} if world != "mit" else dict(rough=rough, scale=scale)
     shares = _probe_shares(relief_share, "relief", RELIEF_PROBES, fixed, glass, sensor, limits, duration, rate_hz,
                            n_probe_seeds, world, seeds)
-    cover = _interpolate(shares, list(RELIEF_PROBES), float(target)) if np.isfinite(target) else 0.0
+    cover = invert_probe_curve(shares, list(RELIEF_PROBES), float(target)) if np.isfinite(target) else 0.0
     return ReliefFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(RELIEF_PROBES), tuple(shares))
 
 
