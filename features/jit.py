@@ -16,6 +16,14 @@ except Exception as exc:  # ImportError, or a broken install (llvmlite / numpy m
 
 kernel = numba.njit(cache=True, error_model="numpy")
 
+# A kernel whose sums may be reassociated: its floating-point additions may be regrouped, so that
+# a loop that accumulates sums over a run of beams runs in vector lanes (partial sums added at the
+# end) instead of one addition after another. Only the order of additions changes (rounding, ~1e-16
+# of the sums); no other fast-math licence (nan and inf keep their meaning, no approximate
+# functions). For small loops that only accumulate: every kernel with sums that must not depend on
+# how they are split stays a ``kernel``.
+sum_kernel = numba.njit(cache=True, error_model="numpy", fastmath={"reassoc"})
+
 
 class FixedTypeCall:
     """A compiled kernel called at one call site whose argument types never change (the

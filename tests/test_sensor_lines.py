@@ -169,7 +169,7 @@ def test_log_hough_band_search_finds_the_line_and_rejects_outliers() -> None:
     d = p / np.cos(b - a)
     d[[5, 20, 33]] *= 1.2
     alpha, rho, inlier = engine.band_search(
-        beam, np.log(d), np.array([0]), np.array([40]), np.array([a + 0.02]),
+        beam[:1], np.log(d), np.array([0]), np.array([40]), np.array([a + 0.02]),
         np.array([0.05]), np.array([0.003]), -np.pi / 2, 4, 11, grid,
     )
     assert abs(alpha[0] - a) <= 5 * step + 1e-12  # one band step: 0.05 rad / 5 on the grid
@@ -192,7 +192,7 @@ def test_log_hough_vote_equals_the_oracle(seed: int) -> None:
     d[rng.random(count) < 0.1] *= rng.uniform(0.7, 1.3)
     half_width, bin_half = rng.uniform(0.004, 0.3), rng.uniform(0.002, 0.02)
     centre = a_true + rng.normal(0, half_width / 3)
-    alpha, rho, inlier = engine.band_search(beam, np.log(d), np.array([0]), np.array([count]), np.array([centre]),
+    alpha, rho, inlier = engine.band_search(beam[:1], np.log(d), np.array([0]), np.array([count]), np.array([centre]),
                                             np.array([half_width]), np.array([bin_half]), angle_min, subdiv, n_angles, grid)
     h = (n_angles - 1) // 2
     stride = max(np.rint(half_width / (max(h, 1) * grid.step)), 1.0)

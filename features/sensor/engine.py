@@ -17,8 +17,11 @@ Every step works in range-bearing space, on the beams of one scan, in the order 
 6. corners where two segments meet and psi shows the turn, with the paper's remedy against
    false acute corners (``corners``).
 
-Beam i has bearing b_i = angle_min + i D. Sums over beams follow numpy's pairwise order
-(``pairwise_sum``), so that results do not depend on how a sum is split. Parameters come in as a
+Beam i has bearing b_i = angle_min + i D. The noise estimate and the range variance of the
+acute-corner remedy sum in numpy's pairwise order (``pairwise_sum``), as the numpy estimators they
+equal; the fits' sums over a run's beams (``gn_sums``, ``biweight_sums``, ``circle_gn_sums``, ...)
+are ``sum_kernel``s, whose additions may be regrouped into vector lanes (rounding only, ~1e-16
+of a sum). Parameters come in as a
 typed record (``Params``, built once per config by ``features.sensor.config``), the scan's grid
 constants as another (``Grid``, built once per beam step by ``features.sensor.grid``).
 Importing this module imports numba (``features.jit``).
@@ -39,7 +42,7 @@ from lms200.noise import CLIP_SIGMAS, JUMP_FRACTION, MIN_RANGE_M, QUANTUM_CANDID
 from lms200.noise import _CLIP_STD_FACTOR as CLIP_STD_FACTOR
 
 from ..angles import TWO_PI
-from ..jit import kernel
+from ..jit import kernel, sum_kernel
 from ..rows import append_rows, finish_rows, new_rows
 
 PW_BLOCKSIZE = 128  # numpy's pairwise-summation block (numpy/_core/src/umath/loops_utils.h.src)
@@ -47,15 +50,13 @@ N_BINS = 13  # log-range cells of a run's Log-Hough accumulator around its middl
 MIN_COS = 0.05  # beams within ~3 deg of grazing a line get no weight and do not extend it
 BAND_MAX = 0.5  # largest half-width of a run's band of normal angles, rad
 TAN_SPAN_CAP = 40.0  # cap on |tan(b - a)| differences across a run (grazing runs), dimensionless
+VOTE_BLOCK = 16  # beams a run's vote loop takes at a time (its vectorised width); runs are padded to it
 TIE_BREAK = 1e-3  # votes a band angle loses per step from the band centre (prefers the centre on ties)
 MERGE_FLOOR_RHO_VAR = 0.005**2  # model-error floor added to the merge test's (rho) variance, m^2
 MERGE_FLOOR_ALPHA_VAR = 0.005**2  # ... and (alpha) variance, rad^2
 ARC_TAU = 3.0  # the arc test's chi^2 comparisons, in std of the chi^2 difference
 ARC_GN_STEPS = 3  # geometric Gauss-Newton steps of a circle fit after the algebraic (Kasa) start
 BREAK_LAMBDA = math.radians(10.0)  # adaptive breakpoint angle of a smooth surface (Borges & Aldon 2004)
-SUM_RESYNC = 32  # beams between fresh window sums (``beam_signals``) ...
-SUM_RATIO = 16.0  # ... or sooner, when a term that entered them exceeds them this many times; and
-# a window whose sum exceeds its centre's 1/d this many times is summed term by term
 ONE_DEG = math.radians(1.0)  # an LMS200 mirror turn's beam step (finer scans interlace such turns)
 ROBUST_STEPS = 1  # reweighted steps of the final biweight refit (``robust_refit``): one step from the
 # least-squares line is one iteratively-reweighted step, not the fixed point (nor Bickel's Newton
@@ -116,6 +117,7 @@ class Grid(NamedTuple):
     zero: int  # index of angle 0 in the template
     template: np.ndarray  # log cos(m step) for |m| <= zero, floored (eq. 5)
     twice_cos: float  # 2 cos(D), as numpy computes it: the noise estimate's collinearity residuals
+    phases: np.ndarray  # (subdiv, L): template[r + subdiv q] at [r, L - 1 - q] (the floor past its end)
 
 
 @kernel
@@ -508,42 +510,6 @@ def arctan(x: float) -> float:
 
 
 @kernel
-def direct_sums(u, i, k):  # noqa: ANN001, ANN201
-    """The window sums of beam i term by term, j = i - k .. i + k: (sum_j u_j, sum_{m=0..k} u_{i+m}
-    - sum_{m=1..k} u_{i-m}, sum_j u_j^4); nan or inf where the window holds such a u."""
-    s1 = 0.0
-    sd = 0.0
-    s4 = 0.0
-    for j in range(i - k, i + k + 1):
-        uj = u[j]
-        u2j = uj * uj
-        s1 += uj
-        sd += uj if j >= i else -uj
-        s4 += u2j * u2j
-    return s1, sd, s4
-
-
-@kernel
-def window_sums(u, i, k):  # noqa: ANN001, ANN201
-    """The window sums of beam i over the finite u: (sum_{m=1..k} u_{i-m}, sum_{m=0..k} u_{i+m},
-    sum_{j=-k..k} u_{i+j}^4, number of non-finite u in the window)."""
-    left = right = quad = 0.0
-    n_bad = 0
-    for j in range(i - k, i + k + 1):
-        uj = u[j]
-        if not math.isfinite(uj):
-            n_bad += 1
-            continue
-        if j < i:
-            left += uj
-        else:
-            right += uj
-        u2 = uj * uj
-        quad += u2 * u2
-    return left, right, quad, n_bad
-
-
-@kernel
 def fix_slope_sd(x: float, sd: float) -> bool:
     """Whether the arctangent form of the slope's std (``beam_signals``) does not hold, at x = 1 +
     (T + s)(T - s) = 0 or an infinite x or s; not at a nan x (a window with an invalid beam), where
@@ -570,60 +536,51 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
         ok = d >= range_lo and d <= range_hi
         valid[i] = ok
         u[i] = 1.0 / d if ok else np.nan
-    out = np.full((9, n), np.nan)  # one allocation for the seven signals and two scratch rows
+    out = np.full((10, n), np.nan)  # one allocation for the seven signals and three scratch rows
     AD, AD_var, ad, theta, theta_var, psi, psi_var = out[0], out[1], out[2], out[3], out[4], out[5], out[6]
-    tan_t, tan_s = out[7], out[8]
+    tan_t, tan_s, u4 = out[7], out[8], out[9]
     if n >= 2 * k + 1:
-        # the window sums s1 = sum_{j=-k..k} u_{i+j}, sd = right - left and s4 = sum_j u_{i+j}^4
-        # from sums that slide along the scan: left = sum_{m=1..k} u_{i-m}, right = sum_{m=0..k}
-        # u_{i+m} and quad = s4, over the finite u (all > 0). They start afresh every SUM_RESYNC
-        # windows, and whenever a term that entered them since (``peak``, ``peak_q``) exceeds
-        # SUM_RATIO times their value, so their rounding stays within ~1e-13 of the sums
-        # themselves. A window that holds a nan (invalid beam) or an inf (its signals are nan, or
-        # inf at a zero range), or whose sum exceeds SUM_RATIO times the centre's u (a beam far
-        # behind its neighbours, where ad = sd / u_i magnifies any rounding), is summed term by
-        # term as before (``direct_sums``). The sums go to the rows of AD, ad and AD_var, which
-        # the next loop turns into the signals in place
-        left = right = quad = peak = peak_q = 0.0
-        n_bad = 0  # non-finite u in the window
-        for i in range(k, n - k):
-            fresh = (i - k) % SUM_RESYNC == 0
-            if not fresh:  # slide by one beam: u_{i+k} enters, u_{i-1} moves left, u_{i-k-1} leaves
-                enter, move, leave = u[i + k], u[i - 1], u[i - k - 1]
-                if math.isfinite(enter):
-                    right += enter
-                    e2 = enter * enter
-                    quad += e2 * e2
-                    peak = max(peak, enter)
-                    peak_q = max(peak_q, e2 * e2)
-                else:
-                    n_bad += 1
-                if math.isfinite(move):
-                    right -= move
-                    left += move
-                if math.isfinite(leave):
-                    left -= leave
-                    l2 = leave * leave
-                    quad -= l2 * l2
-                else:
-                    n_bad -= 1
-                fresh = peak > SUM_RATIO * (left + right) or peak_q > SUM_RATIO * quad
-            if fresh:
-                left, right, quad, n_bad = window_sums(u, i, k)
-                peak, peak_q = left + right, quad
-            if n_bad == 0 and left + right <= SUM_RATIO * u[i]:
-                AD[i], ad[i], AD_var[i] = left + right, right - left, quad
-            else:
-                AD[i], ad[i], AD_var[i] = direct_sums(u, i, k)
-        m = n - 2 * k  # the window centres k .. n - k - 1, as slices: the loops below vectorise
-        uc, s1, sd, s4, tt, ts = u[k:n - k], AD[k:n - k], ad[k:n - k], AD_var[k:n - k], tan_t[k:n - k], tan_s[k:n - k]
-        s_scale = sigma_r / two_sin_sum
+        # the window sums of the centres i = k .. n - k - 1: left = sum_{m=1..k} u_{i-m} (in
+        # tan_t), right = sum_{m=0..k} u_{i+m} (in tan_s) and quad = sum_{j=-k..k} u_{i+j}^4 (in
+        # AD_var), each summed term by term in beam order, one shifted slice of u (or u^4) at a
+        # time: passes over the scan that vectorise. A window that holds an invalid beam (u nan)
+        # gets nan sums; then s1 = left + right, sd = right - left and s4 = quad go to the rows
+        # of AD, ad and AD_var, which the next loop turns into the signals in place
+        m = n - 2 * k  # k >= 1 (the config's check)
+        left, right, quad, s1_, sd_ = tan_t[k:n - k], tan_s[k:n - k], AD_var[k:n - k], AD[k:n - k], ad[k:n - k]
+        for i in range(n):
+            u2 = u[i] * u[i]
+            u4[i] = u2 * u2
+        lu, ru, qu = u[:m], u[k:k + m], u4[:m]
         for i in range(m):
+            left[i] = lu[i]
+            right[i] = ru[i]
+            quad[i] = qu[i]
+        for j in range(1, 2 * k + 1):
+            uj, qj = u[j:j + m], u4[j:j + m]
+            if j < k:
+                for i in range(m):
+                    left[i] += uj[i]
+            elif j > k:
+                for i in range(m):
+                    right[i] += uj[i]
+            for i in range(m):
+                quad[i] += qj[i]
+        for i in range(m):
+            s1_[i] = left[i] + right[i]
+            sd_[i] = right[i] - left[i]
+        # the window centres k .. n - k - 1, as slices: the loops below vectorise
+        uc, dc = u[k:n - k], ranges[k:n - k]
+        s1, sd, s4, tt, ts = AD[k:n - k], ad[k:n - k], AD_var[k:n - k], tan_t[k:n - k], tan_s[k:n - k]
+        s_scale = sigma_r / two_sin_sum
+        inv_sin_sum = 1.0 / two_sin_sum
+        for i in range(m):  # dividing by u_i = 1 / d_i is multiplying by d_i (an invalid centre's sums are nan)
             ui = uc[i]
+            di = dc[i]
             u2 = ui * ui
-            a = s1[i] / ui  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
-            ad_i = sd[i] / ui  # eq. 6: ad_ik
-            other = s4[i] / u2 - u2  # sum over j != i of u_j^4 / u_i^2
+            a = s1[i] * di  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
+            ad_i = sd[i] * di  # eq. 6: ad_ik
+            other = s4[i] * (di * di) - u2  # sum over j != i of u_j^4 / u_i^2
             ad1 = ad_i - 1.0
             a1 = a - 1.0
             s1[i] = a
@@ -631,7 +588,7 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
             sd[i] = ad_i
             # eq. 7 as corrected in NOTES.md: ad - 1 = 2 tan(a - b_i) sum_{m=1..k} sin(mD): the
             # slope T = tan(a - b_i) and its std s here, their arctangents in the next loop
-            tt[i] = ad1 / two_sin_sum
+            tt[i] = ad1 * inv_sin_sum
             ts[i] = math.sqrt(other + ad1 * ad1 * u2) * s_scale
         bc, th, tv = bearings[k:n - k], theta[k:n - k], theta_var[k:n - k]
         n_fix = 0
@@ -773,55 +730,87 @@ def band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings, increment, sigm
 
 
 @kernel
-def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, subdiv, n_angles, grid):  # noqa: ANN001, ANN201
+def template_at(template, idx) -> float:  # noqa: ANN001
+    """template[idx], clipped onto its ends (which hold the floor: beyond them the beam cannot see the line)."""
+    return template[min(max(idx, 0), template.size - 1)]
+
+
+@kernel
+def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angle_min, subdiv, n_angles, grid):  # noqa: ANN001, ANN201
     """The Log-Hough peak of every run in its band of normal angles, and the beams that voted in it.
 
-    Args: stacked beams of the runs (``beam`` index, ``log_d`` log range; run r holds rows
-    starts[r] .. starts[r] + counts[r] - 1); per run the band ``centre`` and ``half_width`` (rad)
-    and ``bin_half``, the half-width of a log-range cell; the scan's ``angle_min`` (rad).
+    Args: the runs' beams, consecutive: run r holds beams first[r] .. first[r] + counts[r] - 1,
+    whose log ranges are ``log_d`` rows starts[r] .. starts[r] + counts[r] - 1; per run the band
+    ``centre`` and ``half_width`` (rad) and ``bin_half``, the half-width of a log-range cell; the
+    scan's ``angle_min`` (rad).
     Returns alpha (rad, not wrapped), rho (m) of each run's peak and the inlier mask of the rows.
     """
-    template, zero, step = grid.template, grid.zero, grid.step
+    template, zero, step, phases = grid.template, grid.zero, grid.step, grid.phases
     n_runs = starts.size
     h2 = (n_angles - 1) // 2
     h = max(h2, 1)
     n_tmpl = template.size
+    n_phase = phases.shape[1]
+    flat = phases.reshape(phases.size)  # row r of phases from r * n_phase
     out = np.empty((2, n_runs))
     alpha, rho = out[0], out[1]
-    inlier = np.zeros(beam.size, np.bool_)
+    inlier = np.zeros(log_d.size, np.bool_)
     ref = np.empty(n_angles)
+    max_cnt = 0
+    for r in range(n_runs):
+        max_cnt = max(max_cnt, counts[r])
+    votes = np.empty(max_cnt + VOTE_BLOCK)  # one run's votes at one angle (the generic path), padded
+    votes[max_cnt:] = 0.0
     # per angle: its index, then the vote counts of cells 1..N_BINS (0 and N_BINS + 1 outside)
     angle_counts = np.empty((n_angles, N_BINS + 3), np.int64)
     a_idx, counts_a = angle_counts[:, 0], angle_counts[:, 1:]
     for r in range(n_runs):
-        s, cnt = starts[r], counts[r]
+        s, cnt, f = starts[r], counts[r], first[r]
         centre_idx = np.int64(np.rint((centre[r] - angle_min) / step))
         stride = np.int64(max(np.rint(half_width[r] / (h * step)), 1.0))
         inv_width = 1.0 / bin_half[r]
         # cells are laid out around the median vote of the beams at 1/4, 1/2 and 3/4 of the run
         # (a mean would be dragged off by neighbour-line beams at its ends; one beam can be a spike)
-        row1, row2, row3 = s + cnt // 4, s + cnt // 2, s + (3 * cnt) // 4
+        t1, t2, t3 = cnt // 4, cnt // 2, (3 * cnt) // 4
         for a in range(n_angles):
             a_idx[a] = centre_idx + stride * (a - h2)
-            q1 = template[min(max(a_idx[a] + zero - beam[row1] * subdiv, 0), n_tmpl - 1)] + log_d[row1]
-            q2 = template[min(max(a_idx[a] + zero - beam[row2] * subdiv, 0), n_tmpl - 1)] + log_d[row2]
-            q3 = template[min(max(a_idx[a] + zero - beam[row3] * subdiv, 0), n_tmpl - 1)] + log_d[row3]
+            base = a_idx[a] + zero - f * subdiv
+            q1 = template_at(template, base - t1 * subdiv) + log_d[s + t1]
+            q2 = template_at(template, base - t2 * subdiv) + log_d[s + t2]
+            q3 = template_at(template, base - t3 * subdiv) + log_d[s + t3]
             ref[a] = max(min(q1, q2), min(max(q1, q2), q3))  # median of three
-        bm, ld = beam[s:s + cnt], log_d[s:s + cnt]
+        # the template entries of beams f + t at angle a: template[base - t subdiv], base = a_idx +
+        # zero - f subdiv; inside the template (no clipping) for every angle of the band, they are
+        # phases[base % subdiv, L - 1 - base // subdiv + t], contiguous in t (``flat``)
+        lo_base = a_idx[0] + zero - f * subdiv
+        hi_base = a_idx[n_angles - 1] + zero - f * subdiv
+        inside = lo_base - (cnt - 1) * subdiv >= 0 and hi_base <= n_tmpl - 1
+        s_u = np.uint64(s)
+        n_pad = (cnt + VOTE_BLOCK - 1) // VOTE_BLOCK * VOTE_BLOCK
         for a in range(n_angles):
             offset = (N_BINS / 2.0 + 1.0) - ref[a] * inv_width
-            base = a_idx[a] + zero
+            base = a_idx[a] + zero - f * subdiv
             # eq. 5: log p = log d + log cos(a - b), a lookup at a - b in the template (clipped
-            # onto its ends, where it holds the floor). The votes are counted in 16-bit fields
-            # of four words (cells 4w .. 4w + 3 in word w; a run has fewer than 2^16 beams, as
-            # the registry takes scans of at most MAX_BEAMS = 16,384), a loop without stores that
-            # vectorises
+            # onto its ends, where it holds the floor)
+            if inside:  # indexed unsigned (no negative-index wraparound, no slice to count references of): the loop vectorises
+                o = np.uint64((base % subdiv) * n_phase + n_phase - 1 - base // subdiv)
+                for t in range(cnt):
+                    tu = np.uint64(t)
+                    votes[t] = flat[o + tu] + log_d[s_u + tu]
+            else:
+                for t in range(cnt):
+                    votes[t] = template_at(template, base - t * subdiv) + log_d[s + t]
+            # the votes counted in cells rel = (log p - ref) / width + N_BINS / 2 + 1, floored and
+            # clipped onto 0 .. N_BINS + 1, as 16-bit fields of four words (cells 4w .. 4w + 3 in
+            # word w; a run has fewer than 2^16 beams, as the registry takes scans of at most
+            # MAX_BEAMS = 16,384). The loop runs over whole VOTE_BLOCKs (``votes`` is padded, the
+            # padding counts nowhere) without stores: it vectorises, without a scalar remainder
             w0 = w1 = w2 = w3 = np.uint64(0)
-            for t in range(cnt):
-                rel = (template[min(max(base - bm[t] * subdiv, 0), n_tmpl - 1)] + ld[t]) * inv_width + offset
+            for t in range(n_pad):
+                rel = votes[t] * inv_width + offset
                 rel = rel if rel >= 0.0 else 0.0  # nan votes go to the outside cell 0
                 cell = np.uint64(min(rel, N_BINS + 1.0))
-                one = np.uint64(1) << ((cell & np.uint64(3)) * np.uint64(16))
+                one = (np.uint64(1) if t < cnt else np.uint64(0)) << ((cell & np.uint64(3)) * np.uint64(16))
                 word = cell >> np.uint64(2)
                 w0 += one if word == 0 else np.uint64(0)
                 w1 += one if word == 1 else np.uint64(0)
@@ -843,83 +832,19 @@ def band_search(beam, log_d, starts, counts, centre, half_width, bin_half, angle
         peak_log_p = ref[best_a] + (best_c + 1 - N_BINS / 2.0) * bin_half[r]
         alpha[r] = angle_min + a_idx[best_a] * step
         rho[r] = math.exp(peak_log_p)
-        for row in range(s, s + cnt):
-            idx = min(max(a_idx[best_a] + zero - beam[row] * subdiv, 0), n_tmpl - 1)
-            inlier[row] = abs((template[idx] + log_d[row]) - peak_log_p) <= bin_half[r]
+        base = a_idx[best_a] + zero - f * subdiv
+        if inside:
+            o = np.uint64((base % subdiv) * n_phase + n_phase - 1 - base // subdiv)
+            for t in range(cnt):
+                tu = np.uint64(t)
+                inlier[s_u + tu] = abs((flat[o + tu] + log_d[s_u + tu]) - peak_log_p) <= bin_half[r]
+        else:
+            for t in range(cnt):
+                inlier[s + t] = abs((template_at(template, base - t * subdiv) + log_d[s + t]) - peak_log_p) <= bin_half[r]
     return alpha, rho, inlier
 
 
 # -- 4. weighted refinement -----------------------------------------------------------------------
-
-
-@kernel
-def gauss_newton(d, cb, sb, starts, counts, mask, rho, alpha, sigma_r, inlier_tau, buf, out, final):  # noqa: ANN001, ANN201
-    """One Gauss-Newton step of every run's (rho, alpha) on its beams (range d, bearing b given by
-    its cosine cb and sine sb).
-
-    Beam j on x cos(alpha) + y sin(alpha) = rho has residual r_j = d_j cos(b_j - alpha) - rho;
-    range noise moves it by e_j cos(b_j - alpha), so its weight is 1 / (sigma_r cos)^2 and
-    (J^T W J)^-1 is the covariance of (rho, alpha). Beams in ``mask`` are used, and when
-    ``inlier_tau`` > 0 only those within inlier_tau sigma_r (range residual) of the estimate.
-    Writes into ``out`` (a FitOut; ``buf`` is (5, N) scratch) the new rho, alpha (R,) and, when
-    ``final``, cov (R, 2, 2), z = r / (sigma_r cos) (N,; nan unless inlier_tau > 0) and the weights w (N,)."""
-    n_runs = starts.size
-    new_rho, new_alpha, cov, z, w = out.rho, out.alpha, out.cov, out.z, out.w
-    s2 = sigma_r * sigma_r
-    b0, b1, b2, b3, b4 = buf[0], buf[1], buf[2], buf[3], buf[4]
-    for r in range(n_runs):
-        s, cnt = starts[r], counts[r]
-        ca, sa = math.cos(alpha[r]), math.sin(alpha[r])
-        rho_r = rho[r]
-        row = np.uint64(s)  # rows indexed unsigned: numba then adds no negative-index wraparound
-        end = np.uint64(s + cnt)
-        while row < end:
-            c = cb[row] * ca + sb[row] * sa  # cos(b - alpha)
-            res = d[row] * c - rho_r  # d res / d rho = -1
-            g = d[row] * (sb[row] * ca - cb[row] * sa)  # d res / d alpha = d sin(b - alpha)
-            use = (c > MIN_COS) & mask[row]  # & not and: no branch on data
-            if inlier_tau > 0.0:
-                zz = res / (sigma_r * c)
-                if final:
-                    z[row] = zz
-                use &= abs(zz) <= inlier_tau
-            elif final:
-                z[row] = np.nan
-            wr = (1.0 if use else 0.0) / (c * c)
-            if final:
-                w[row] = wr
-            wg = wr * g
-            b0[row] = wr
-            b1[row] = wg
-            b2[row] = wg * g
-            b3[row] = wr * res
-            b4[row] = wg * res
-            row += np.uint64(1)
-        sw = segment_sum(buf[0], s, cnt)
-        swg = segment_sum(buf[1], s, cnt)
-        swgg = segment_sum(buf[2], s, cnt)
-        swr = segment_sum(buf[3], s, cnt)
-        swgr = segment_sum(buf[4], s, cnt)
-        inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
-        new_rho[r] = rho[r] + (swgg * swr - swg * swgr) * inv_det
-        new_alpha[r] = alpha[r] + (swg * swr - sw * swgr) * inv_det
-        if final:
-            var = s2 * inv_det
-            cov[r, 0, 0] = swgg * var
-            cov[r, 0, 1] = swg * var
-            cov[r, 1, 0] = swg * var
-            cov[r, 1, 1] = sw * var
-
-
-class FitOut(NamedTuple):
-    """Outputs of a ``gauss_newton`` step: per run rho, alpha, cov; per row z, w (views of blocks
-    allocated once per ``fit_runs``)."""
-
-    rho: np.ndarray
-    alpha: np.ndarray
-    cov: np.ndarray
-    z: np.ndarray
-    w: np.ndarray
 
 
 @kernel
@@ -944,114 +869,177 @@ def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
     return MAD_TO_SIGMA * median(buf[:m], buf)  # selected in place (np.median copies)
 
 
+@sum_kernel
+def gn_sums(d, cb, sb, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN201
+    """The weighted normal equations of a Gauss-Newton step of a line (rho, alpha = atan2(sa, ca))
+    on the beams j = f .. f + cnt - 1 where valid[j] and use[s + j - f] (range d, bearing b given
+    by cb = cos(b), sb = sin(b)): (sum w, sum w g, sum w g^2, sum w r, sum w g r) with residual
+    r = d cos(b - alpha) - rho, g = d r / d alpha = d sin(b - alpha) and weight
+    w = 1 / cos(b - alpha)^2 (0 within MIN_COS of grazing). Without branches on data: the loop
+    runs in vector lanes. Offsets into whole arrays, not slices (a slice a run is two atomic
+    reference counts)."""
+    sw = swg = swgg = swr = swgr = 0.0
+    if f < 0 or s < 0:
+        return sw, swg, swgg, swr, swgr
+    for t in range(cnt):
+        j = f + t
+        c = cb[j] * ca + sb[j] * sa  # cos(b - alpha)
+        dt = d[j] if valid[j] else 0.0  # an invalid beam's range is inf or nan
+        res = dt * c - rho  # d res / d rho = -1
+        g = dt * (sb[j] * ca - cb[j] * sa)
+        ic = 1.0 / c
+        wr = ic * ic if (c > MIN_COS) & valid[j] & use[s + t] else 0.0
+        wg = wr * g
+        sw += wr
+        swg += wg
+        swgg += wg * g
+        swr += wr * res
+        swgr += wg * res
+    return sw, swg, swgg, swr, swgr
+
+
+@sum_kernel
+def gn_sums_inliers(d, cb, sb, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, inl):  # noqa: ANN001, ANN201
+    """``gn_sums`` on the beams j = f .. f + cnt - 1 within ``tau`` sigma_r of the line (|z| <=
+    tau, z = r / (sigma_r cos(b - alpha)), written to z[j - f]; the inliers to inl[j - f]), with
+    the line checks' sums over the inliers: chi^2 = sum z^2, their count, sums of t, t^2, t^3
+    (t = j - f, integers: exact in any order below 2^53, runs under ~13,000 beams) and the first
+    and last inlier's t (cnt and -1 when there is none)."""
+    sw = swg = swgg = swr = swgr = chi = 0.0
+    ni = i_t = i_t2 = i_t3 = 0
+    lo = cnt
+    hi = -1
+    if f < 0:
+        return sw, swg, swgg, swr, swgr, chi, ni, i_t, i_t2, i_t3, lo, hi
+    for t in range(cnt):
+        j = f + t
+        c = cb[j] * ca + sb[j] * sa
+        dt = d[j] if valid[j] else 0.0
+        res = dt * c - rho
+        g = dt * (sb[j] * ca - cb[j] * sa)
+        ic = 1.0 / c
+        zt = res * ic * inv_sigma
+        use = (c > MIN_COS) & valid[j] & (abs(zt) <= tau)
+        wr = ic * ic if use else 0.0
+        wg = wr * g
+        sw += wr
+        swg += wg
+        swgg += wg * g
+        swr += wr * res
+        swgr += wg * res
+        z[t] = zt
+        inl[t] = use
+        chi += zt * zt if use else 0.0
+        ti = t if use else 0
+        ni += use
+        i_t += ti
+        i_t2 += ti * ti
+        i_t3 += ti * ti * ti
+        lo = min(lo, t if use else cnt)
+        hi = max(hi, t if use else -1)
+    return sw, swg, swgg, swr, swgr, chi, ni, i_t, i_t2, i_t3, lo, hi
+
+
+@sum_kernel
+def curvature_sums(z, inl, cnt, a_lin, b_lin):  # noqa: ANN001, ANN201
+    """(sum z q, sum q^2) over the inliers inl[:cnt], q = t^2 - a_lin - b_lin t (t the beam's offset)."""
+    zq = qq = 0.0
+    for t in range(cnt):
+        tf = float(t)
+        q = tf * tf - a_lin - b_lin * tf
+        zq += z[t] * q if inl[t] else 0.0
+        qq += q * q if inl[t] else 0.0
+    return zq, qq
+
+
 @kernel
-def fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, sigma_r, p):  # noqa: ANN001, ANN201
-    """Refine every run's line: a Gauss-Newton step on the Log-Hough inliers, then one on the beams
-    within inlier_tau sigma_r of that (which gives the covariance), and the checks: enough inliers
-    (min(min_points, 2k + 1): min_points is asked of the line once ``extend_ends`` has grown it),
-    most of the run explained, chi^2 of the inliers (per dof at most max_chi2 times sigma_r^2, or
-    times the run's own noise^2 where that is larger: ``local_scale`` of its beams within one
-    mirror turn, so that the interlaced sweeps' offset, already in sigma_r, does not count twice;
-    real noise grows with range and varies with the surface: Intel's 4.3 mm within 1 m, 7.9 mm
-    beyond 8 m, around the log's 5.3 mm), and curvature (the t-statistic of the
-    residuals against a parabola in the beam index, orthogonal to 1 and t over the inliers:
-    ~N(0, 1) on a line, large on an arc). Returns the lines in normal form (rho >= 0, alpha in
-    (-pi, pi]) with cov, first / last inlier beam, inlier count, and the mask of those that pass."""
-    n = beam.size
+def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, sigma_r, p):  # noqa: ANN001, ANN201
+    """Refine every run's line (run r: beams first[r] .. first[r] + counts[r] - 1, its rows of
+    ``inlier0`` from starts[r]) by two weighted Gauss-Newton steps, one on the Log-Hough inliers,
+    then one on the beams within inlier_tau sigma_r of that (which gives the covariance), and
+    check it: enough inliers (min(min_points, 2k + 1): min_points is asked of the line once
+    ``extend_ends`` has grown it), most of the run explained, chi^2 of the inliers (per dof at
+    most max_chi2 times sigma_r^2, or times the run's own noise^2 where that is larger:
+    ``local_scale`` of its beams within one mirror turn, so that the interlaced sweeps' offset,
+    already in sigma_r, does not count twice; real noise grows with range and varies with the
+    surface: Intel's 4.3 mm within 1 m, 7.9 mm beyond 8 m, around the log's 5.3 mm), and
+    curvature (the t-statistic of the residuals against a parabola in the beam index, orthogonal
+    to 1 and t over the inliers: ~N(0, 1) on a line, large on an arc).
+
+    A Gauss-Newton step: beam j (range d, bearing b) on x cos(alpha) + y sin(alpha) = rho has
+    residual r_j = d_j cos(b_j - alpha) - rho; range noise moves it by e_j cos(b_j - alpha), so
+    its weight is 1 / (sigma_r cos)^2 and (J^T W J)^-1 is the covariance of (rho, alpha). Beams
+    within MIN_COS of grazing get no weight. Each step is one pass over the run's beams, its
+    sums accumulated as it goes (``gn_sums``); the second also marks the inliers and sums what the
+    checks need (``gn_sums_inliers``), so that a run's beams are read twice and, for the
+    curvature, a third time.
+
+    Returns the lines in normal form (rho >= 0, alpha in (-pi, pi]) with cov, first / last inlier
+    beam, inlier count, and the mask of those that pass."""
     n_runs = starts.size
-    rows = np.empty((10, n))  # one block: the steps' sums (5), d, cb, sb, z, w
-    buf, d, cb, sb = rows[:5], rows[5], rows[6], rows[7]
-    flags = np.empty((2, n), np.bool_)
-    ok, m0 = flags[0], flags[1]
-    runs = np.empty((4, n_runs))
-    cov = np.empty((n_runs, 2, 2))
-    step1 = FitOut(runs[0], runs[1], cov, rows[8], rows[9])  # cov, z, w: not written by the first step
-    step2 = FitOut(runs[2], runs[3], cov, rows[8], rows[9])
-    first_max = 0
+    cos_b, sin_b = bearings.cos, bearings.sin
+    max_cnt = 0
     for r in range(n_runs):
-        first_max = max(first_max, beam[starts[r]])
-    for row in range(n):
-        j = beam[row]
-        ok[row] = valid[j]
-        d[row] = ranges[j] if valid[j] else 0.0
-        cb[row] = bearings.cos[j]
-        sb[row] = bearings.sin[j]
-        m0[row] = ok[row] and inlier0[row]
-    gauss_newton(d, cb, sb, starts, counts, m0, rho0, alpha0, sigma_r, -1.0, buf, step1, False)
-    gauss_newton(d, cb, sb, starts, counts, ok, step1.rho, step1.alpha, sigma_r, p.inlier_tau, buf, step2, True)
-    rho, alpha, z, w = step2.rho, step2.alpha, step2.z, step2.w
+        max_cnt = max(max_cnt, counts[r])
+    zs = np.empty((2, max_cnt))  # a run's normalised residuals z and (after the checks' sums) local_scale's scratch
+    z_run, scratch = zs[0], zs[1]
+    inl_run = np.empty(max_cnt, np.bool_)
+    vals = np.empty((2, n_runs))
+    rho, alpha = vals[0], vals[1]
+    cov = np.empty((n_runs, 2, 2))
     ints = np.empty((3, n_runs), np.int64)
     first_in, last_in, n_in = ints[0], ints[1], ints[2]
     good = np.zeros(n_runs, np.bool_)
     curv2 = p.curvature_tau * p.curvature_tau
+    tau = p.inlier_tau
+    inv_sigma = 1.0 / sigma_r
+    s2 = sigma_r * sigma_r
     step = bearings.b[1] - bearings.b[0] if bearings.b.size > 1 else 1.0
     sweep = max(1, np.int64(np.rint(ONE_DEG / step))) if step < 0.99 * ONE_DEG else 1  # lms200.noise.interlace_stride
     c2 = 2.0 * math.cos(sweep * step)
-    scratch = rows[5]  # local_scale's scratch (a run's rows at most): the ranges d are not read after the steps
     for r in range(n_runs):
-        s, cnt = starts[r], counts[r]
-        b0 = beam[s]
-        lo = n + first_max
-        hi = -1
-        # the inliers' count and sums of t, t^2, t^3 (t the beam offset) are integers: summed as
-        # integers they equal the float sums in any order (below 2^53, runs under ~13,000 beams)
-        ni = 0
-        i_t = i_t2 = i_t3 = 0
-        b_sq = buf[1]
-        row = np.uint64(s)  # rows indexed unsigned: numba then adds no negative-index wraparound
-        end = np.uint64(s + cnt)
-        while row < end:  # without branches on which rows are inliers
-            inl = w[row] > 0
-            zi = z[row] if inl else 0.0
-            b_sq[row] = zi * zi
-            ti = beam[row] - b0 if inl else 0
-            ni += inl
-            i_t += ti
-            i_t2 += ti * ti
-            i_t3 += ti * ti * ti
-            lo = min(lo, beam[row] if inl else lo)
-            hi = max(hi, beam[row] if inl else hi)
-            row += np.uint64(1)
-        chi = segment_sum(buf[1], s, cnt)
-        n_f = float(ni)
-        s_t, s_t2, s_t3 = float(i_t), float(i_t2), float(i_t3)
-        n_f = max(n_f, 1.0)
-        m1, m2, m3 = s_t / n_f, s_t2 / n_f, s_t3 / n_f
+        s, cnt, f = starts[r], counts[r], first[r]
+        # step 1, on the Log-Hough inliers
+        sw, swg, swgg, swr, swgr = gn_sums(ranges, cos_b, sin_b, valid, inlier0, f, s, cnt, math.cos(alpha0[r]),
+                                           math.sin(alpha0[r]), rho0[r])
+        inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
+        rho1 = rho0[r] + (swgg * swr - swg * swgr) * inv_det
+        alpha1 = alpha0[r] + (swg * swr - sw * swgr) * inv_det
+        # step 2, on the beams within inlier_tau sigma_r of step 1's line, with the checks' sums
+        sw, swg, swgg, swr, swgr, chi, ni, i_t, i_t2, i_t3, lo, hi = gn_sums_inliers(
+            ranges, cos_b, sin_b, valid, f, cnt, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, tau, z_run, inl_run)
+        inv_det = 1.0 / (sw * swgg - swg * swg)
+        rho_r = rho1 + (swgg * swr - swg * swgr) * inv_det
+        alpha_r = alpha1 + (swg * swr - sw * swgr) * inv_det
+        var = s2 * inv_det
+        c00, c01, c11 = swgg * var, swg * var, sw * var
+        # curvature: the residuals against q = t^2 - a - b t, orthogonal to 1 and t over the inliers
+        n_f = max(float(ni), 1.0)
+        m1, m2, m3 = float(i_t) / n_f, float(i_t2) / n_f, float(i_t3) / n_f
         b_lin = (m3 - m1 * m2) / max(m2 - m1 * m1, 1e-12)
         a_lin = m2 - b_lin * m1
-        b_zq = buf[0]
-        row = np.uint64(s)
-        while row < end:
-            inl = w[row] > 0
-            zi = z[row] if inl else 0.0
-            wi = 1.0 if inl else 0.0
-            t = float(beam[row] - b0)
-            q = t * t - a_lin - b_lin * t
-            b_zq[row] = zi * q
-            b_sq[row] = (wi * q) * q
-            row += np.uint64(1)
-        zq = segment_sum(buf[0], s, cnt)
-        qq = segment_sum(buf[1], s, cnt)
-        first_in[r] = lo
-        last_in[r] = hi
+        zq, qq = curvature_sums(z_run, inl_run, cnt, a_lin, b_lin)
+        first_in[r] = f + lo
+        last_in[r] = f + hi
         n_in[r] = ni
         chi_max = p.max_chi2 * max(ni - 2, 1)
         if chi > chi_max:  # the run's own noise, where it exceeds sigma_r
-            loc = local_scale(ranges, valid, beam[s], beam[s + cnt - 1], sweep, c2, scratch) / sigma_r
+            loc = local_scale(ranges, valid, f, f + cnt - 1, sweep, c2, scratch) / sigma_r
             chi_max *= max(1.0, loc * loc)
         good[r] = (
             ni >= min(p.min_points, 2 * p.k + 1)  # min_points is asked of the grown line (find_lines)
             and ni >= p.min_inlier_fraction * core[r]
             and chi <= chi_max
             and zq * zq <= curv2 * qq
-            and np.isfinite(rho[r] + alpha[r] + cov[r, 0, 0] + cov[r, 1, 1])
+            and np.isfinite(rho_r + alpha_r + c00 + c11)
         )
-        if rho[r] < 0:
-            rho[r] = abs(rho[r])
-            alpha[r] = alpha[r] + math.pi
-            cov[r, 0, 1] *= -1.0
-            cov[r, 1, 0] *= -1.0
-        alpha[r] = wrap(alpha[r])
+        if rho_r < 0:
+            rho_r = -rho_r
+            alpha_r = alpha_r + math.pi
+            c01 = -c01
+        rho[r] = rho_r
+        alpha[r] = wrap(alpha_r)
+        cov[r, 0, 0], cov[r, 0, 1], cov[r, 1, 0], cov[r, 1, 1] = c00, c01, c01, c11
     return rho, alpha, cov, first_in, last_in, n_in, good
 
 
@@ -1086,6 +1074,29 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
         n_points[m] += grow0 + grow1
 
 
+@sum_kernel
+def biweight_sums(x, y, inv_c, ca, sa, rho, inv_cut):  # noqa: ANN001, ANN201
+    """The normal equations of one reweighted step of Tukey's biweight on the points (x, y) (m)
+    about the line (rho, alpha = atan2(sa, ca)): (sum w, sum w g, sum w g^2, sum w r, sum w g r)
+    with r the normal residual, g = d r / d alpha and w = ((1 - u^2)^2 / cos(b - alpha))^2 for
+    |u| < 1 (else 0), u = r / cos(b - alpha) * inv_cut the ray residual in cut-offs
+    (``inv_c`` = 1 / cos(b - alpha))."""
+    sw = swg = swgg = swr = swgr = 0.0
+    for t in range(x.size):
+        res = x[t] * ca + y[t] * sa - rho
+        u = res * inv_c[t] * inv_cut
+        bw = max(1.0 - u * u, 0.0) * inv_c[t]
+        wr = bw * bw
+        g = y[t] * ca - x[t] * sa  # d res / d alpha = r sin(b - alpha)
+        wg = wr * g
+        sw += wr
+        swg += wg
+        swgg += wg * g
+        swr += wr * res
+        swgr += wg * res
+    return sw, swg, swgg, swr, swgr
+
+
 @kernel
 def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # noqa: ANN001
     """In place: each line (rho, alpha) refitted on the valid beams first..last by ROBUST_STEPS
@@ -1113,8 +1124,9 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
             yj = ranges[j] * sin_b[j]
             x[k] = xj
             y[k] = yj
-            inv_c[k] = 1.0 / c
-            z[k] = abs(xj * ca + yj * sa - r_m) / c
+            ic = 1.0 / c
+            inv_c[k] = ic
+            z[k] = abs(xj * ca + yj * sa - r_m) * ic
             k += valid[j] & (c > MIN_COS)
             j += np.uint64(1)
         if k < 3:
@@ -1122,20 +1134,7 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
         scale = max(MAD_TO_SIGMA * median(z[:k], z), SIGMA_FLOOR_RAY)  # z selected in place: not read again
         inv_cut = 1.0 / (TUKEY_C * scale)
         for _ in range(ROBUST_STEPS):
-            ca, sa = math.cos(a_m), math.sin(a_m)
-            sw = swg = swgg = swr = swgr = 0.0
-            for t in range(k):  # biweight (1 - u^2)^2 for |u| < 1, else 0; weight 1 / cos^2 (ray residual)
-                res = x[t] * ca + y[t] * sa - r_m
-                u = res * inv_c[t] * inv_cut
-                bw = max(1.0 - u * u, 0.0) * inv_c[t]
-                wr = bw * bw
-                g = y[t] * ca - x[t] * sa  # d res / d alpha = r sin(b - alpha)
-                wg = wr * g
-                sw += wr
-                swg += wg
-                swgg += wg * g
-                swr += wr * res
-                swgr += wg * res
+            sw, swg, swgg, swr, swgr = biweight_sums(x[:k], y[:k], inv_c[:k], math.cos(a_m), math.sin(a_m), r_m, inv_cut)
             det = sw * swgg - swg * swg
             if not det > 0.0:
                 break
@@ -1237,6 +1236,29 @@ def surface_turn(f, l, cx, cy, ranges, bearings) -> float:  # noqa: ANN001
     return abs(math.atan2(ax * by - ay * bx, ax * bx + ay * by))
 
 
+@sum_kernel
+def circle_gn_sums(j0, j1, e, ok):  # noqa: ANN001, ANN201
+    """The normal equations of a geometric Gauss-Newton step of a circle over the beams where
+    ``ok``, from the Jacobian rows [j0, j1, -1] and residuals e: (H00, H01, H02, H11, H12, H22,
+    g0, g1, g2), H = J^T J, g = J^T e."""
+    h00 = h01 = h02 = h11 = h12 = h22 = g0 = g1 = g2 = 0.0
+    for t in range(e.size):
+        w = 1.0 if ok[t] else 0.0
+        a = j0[t] if ok[t] else 0.0  # an invalid beam's terms may be nan: selected, not multiplied
+        b = j1[t] if ok[t] else 0.0
+        c = e[t] if ok[t] else 0.0
+        h00 += a * a
+        h01 += a * b
+        h02 -= a
+        h11 += b * b
+        h12 -= b
+        h22 += w
+        g0 += a * c
+        g1 += b * c
+        g2 -= c
+    return h00, h01, h02, h11, h12, h22, g0, g1, g2
+
+
 @kernel
 def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p) -> bool:  # noqa: ANN001
     """Do the valid beams f..l trace one round surface? One circle (algebraic Kasa fit, then
@@ -1300,19 +1322,7 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
             w0[t] = -dx * inv
             w1[t] = -dy * inv
             w2[t] = dist - rad
-        h00 = h01 = h02 = h11 = h12 = h22 = g0 = g1 = g2 = 0.0
-        for t in range(m):  # the sums in beam order
-            if ok[t]:
-                j0, j1, e = w0[t], w1[t], w2[t]
-                h00 += j0 * j0
-                h01 += j0 * j1
-                h02 -= j0
-                h11 += j1 * j1
-                h12 -= j1
-                h22 += 1.0
-                g0 += j0 * e
-                g1 += j1 * e
-                g2 -= e
+        h00, h01, h02, h11, h12, h22, g0, g1, g2 = circle_gn_sums(w0, w1, w2, ok)
         # H d = -g with H's adjugate (H symmetric: [[h00, h01, h02], [h01, h11, h12], [h02, h12, h22]])
         a00 = h11 * h22 - h12 * h12
         a01 = h02 * h12 - h01 * h22
@@ -1416,19 +1426,17 @@ def fit_spans(first, last, shrink0, shrink1, ranges, log_r, bearings, valid, the
         if c1[r] - c0[r] >= shrink0[r] + shrink1[r]:
             c0[r] += shrink0[r]
             c1[r] -= shrink1[r]
-    beam = np.empty(total, np.int64)
     log_d = np.empty(total)
     for r in range(n_runs):
         f, s = first[r], starts[r]
-        br, lr, dr = beam[s:s + counts[r]], log_d[s:s + counts[r]], log_r[f:f + counts[r]]
+        lr, dr = log_d[s:s + counts[r]], log_r[f:f + counts[r]]
         for t in range(counts[r]):
-            br[t] = f + t
             lr[t] = dr[t]
     centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings.b, increment, sigma_r, k, p)
     alpha0, rho0, inlier0 = band_search(
-        beam, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
+        first, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
     )
-    return fit_runs(beam, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, counts, sigma_r, p)
+    return fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, counts, sigma_r, p)
 
 
 @kernel

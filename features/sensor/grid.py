@@ -48,7 +48,22 @@ def grid_constants(k: int, increment: float, subdiv: int) -> Grid:
         t = np.where(np.abs(x) < np.pi / 2, np.log(np.cos(x)), LOGCOS_FLOOR)
     t = np.maximum(t, LOGCOS_FLOOR)
     t.setflags(write=False)
-    return Grid(ad_line, two_sin_sum, float(step), half, t, twice_cos(increment))
+    return Grid(ad_line, two_sin_sum, float(step), half, t, twice_cos(increment), phase_rows(t, subdiv))
+
+
+def phase_rows(template: np.ndarray, subdiv: int) -> np.ndarray:
+    """The template split by index modulo ``subdiv`` and reversed: row r holds template[r + subdiv q]
+    at column L - 1 - q (L = ceil(size / subdiv); the floor where r + subdiv q is past the end). The
+    entries a run's consecutive beams look up at one angle, template[base - subdiv t], are then
+    contiguous in t (``engine.band_search``)."""
+    n = template.size
+    cols = -(-n // subdiv)
+    rows = np.full((subdiv, cols), LOGCOS_FLOOR)
+    for r in range(subdiv):
+        part = template[r::subdiv]
+        rows[r, cols - part.size:] = part[::-1]
+    rows.setflags(write=False)
+    return rows
 
 
 @lru_cache(maxsize=16)
