@@ -75,7 +75,8 @@ def invert_probe_curve(values: Sequence[float], probes: Sequence[float], target:
     ``probes[0]`` for a target at or below the first value or not finite, ``probes[-1]`` for one
     at or above the last (so the result stays within the probes).
     Used by :func:`fit_sensor` (tail, rough cells, dark cells) and by
-    ``experiments.sim2real.fit_rough`` / ``fit_scale`` (the mit worlds' rough fill and room size).
+    ``experiments.sim2real.fit_rough`` / ``fit_scale`` / ``fit_relief`` (the mit worlds' rough fill,
+    room size and wall relief).
     """
     x = np.maximum.accumulate(np.nan_to_num(np.asarray(values, dtype=float)))
     y = np.asarray(probes, dtype=float)

@@ -9,7 +9,8 @@ Steps, all with fixed settings (nothing is tuned to the log beyond what is said 
 3. a simulated run in the world (default ``mit``, the MIT-CSAIL-like preset) with that sensor
    and robot, over several seeds; the world's glass panels (which read as no return) follow the
    log's no-return readings in the ``mit`` preset (:func:`glass_rate`): a log without any has no
-   glass the laser fails on, so its world gets none;
+   glass the laser fails on, so its world gets none; its rough fill (:func:`fit_rough`) and wall
+   relief (:func:`fit_relief`) are fitted to statistics of the log's scans by probe runs;
 4. every extractor on the real and the simulated scans (``experiments.compare.compare`` with the
    real-data measures of ``features.realdata``: explained fraction at 3 cm and 3 sigma, ray RMSE,
    lines per scan, mean segment length), plus the scene statistics of :func:`scene_statistics`.
@@ -64,6 +65,16 @@ ROUGH_PROBE_SEEDS = (100, 101, 102, 103)
 # interpolated piecewise linearly and clipped to the probes' range.
 MID_M, FAR_M, MAX_M = 2.0, 4.0, 8.0
 SCALE_PROBES = (1.0, 1.5, 2.0)
+# The wall relief of the mit worlds (flat panels 1-6 cm proud of the walls, make_world(relief=...))
+# is fitted to each log after the rough fill (fit_relief): the share of joints between two straight
+# stretches that step or bend (relief_share; no extractor), on the log and on probe runs at RELIEF_PROBES.
+RELIEF_PROBES = (0.0, 0.5, 1.0)
+RELIEF_WINDOW = 10  # beams in each straight stretch either side of a joint
+RELIEF_RANGE_M = (0.5, 4.0)  # beams used (m)
+RELIEF_STRAIGHT_TAU = 2.0  # a stretch is straight when its points' rms off their line is at most this x sigma
+RELIEF_PARALLEL_RAD = 0.15  # the two stretches' directions differ by less than this
+RELIEF_STEP_M = (0.01, 0.08)  # offset of the next stretch off the first one's line that is a step (m; beyond: apart) ...
+RELIEF_STEP_TAU = 3.0  # ... and at least this many standard errors of it; a bend: a turn of this many standard errors
 
 
 @dataclass
@@ -173,6 +184,7 @@ class Sim2RealResult:
     glass: float | None = None  # the mit worlds' glass panels per 10 m and clutter level (glass_rate)
     rough: RoughFit | None = None  # the mit worlds' rough fill fitted to the log (fit_rough)
     scale: ScaleFit | None = None  # the mit worlds' room size fitted to the log (fit_scale)
+    relief: ReliefFit | None = None  # the mit worlds' wall relief fitted to the log (fit_relief)
 
 
 def no_return_share(records: Sequence[Record], max_reading: float | None = None) -> float:
@@ -249,16 +261,17 @@ def far_share(records: Sequence[Record]) -> float:
 
 def _probe_shares(statistic: Callable[[Sequence[Record]], float], vary: str, probes: Sequence[float],
                   fixed: dict[str, Any], glass: float | None, sensor: Any, limits: Any, duration: float, rate_hz: float,
-                  n_probe_seeds: int) -> list[float]:
-    """``statistic`` of the simulated ``mit`` runs (the first ``n_probe_seeds`` of
-    ROUGH_PROBE_SEEDS) with ``make_world``'s ``vary`` at each of ``probes`` and ``fixed`` as given."""
+                  n_probe_seeds: int, world_name: str = "mit",
+                  seeds: Sequence[int] = ROUGH_PROBE_SEEDS) -> list[float]:
+    """``statistic`` of the simulated ``world_name`` runs (the first ``n_probe_seeds`` of
+    ``seeds``) with ``make_world``'s ``vary`` at each of ``probes`` and ``fixed`` as given."""
     from sim import make_world, simulate_records
 
     shares = []
     for value in probes:
         recs: list[Record] = []
-        for seed in ROUGH_PROBE_SEEDS[:max(1, n_probe_seeds)]:
-            world = make_world("mit", seed, glass=glass, **{**fixed, vary: value})
+        for seed in seeds[:max(1, n_probe_seeds)]:
+            world = make_world(world_name, seed, glass=glass, **{**fixed, vary: value})
             recs += simulate_records(world, seed, duration, sensor, rate_hz=rate_hz, limits=limits)
         shares.append(statistic(recs))
     return shares
@@ -317,10 +330,106 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     return RoughFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(ROUGH_PROBES), tuple(shares))
 
 
+def _window_lines(x: np.ndarray, y: np.ndarray, k: int) -> tuple[np.ndarray, ...]:
+    """Total-least-squares lines of every run of ``k`` consecutive points: centroid x, y (m),
+    direction angle (rad), rms distance of the points from the line (m) and mean squared spread of
+    the points along it (m^2)."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    wx, wy = sliding_window_view(x, k), sliding_window_view(y, k)
+    cx, cy = wx.mean(axis=1), wy.mean(axis=1)
+    dx, dy = wx - cx[:, None], wy - cy[:, None]
+    sxx, syy, sxy = (dx * dx).mean(axis=1), (dy * dy).mean(axis=1), (dx * dy).mean(axis=1)
+    theta = 0.5 * np.arctan2(2 * sxy, sxx - syy)
+    root = np.sqrt(((sxx - syy) / 2) ** 2 + sxy ** 2)
+    minor, major = (sxx + syy) / 2 - root, (sxx + syy) / 2 + root
+    return cx, cy, theta, np.sqrt(np.maximum(minor, 0.0)), major
+
+
+def relief_counts(records: Sequence[Record], sigma: float) -> tuple[int, int]:
+    """Joints between two straight stretches of RELIEF_WINDOW consecutive valid beams each (beams at
+    RELIEF_RANGE_M; straight: rms off the stretch's own line at most RELIEF_STRAIGHT_TAU x ``sigma``,
+    the range noise in m) whose directions differ by less than RELIEF_PARALLEL_RAD and whose
+    second centroid lies within RELIEF_STEP_M[1] of the first one's line: (breaks, flat). A break
+    is a step (that offset at least the larger of RELIEF_STEP_M[0] and RELIEF_STEP_TAU standard
+    errors of it) or a bend (the directions differ by RELIEF_STEP_TAU standard errors); flat
+    otherwise. Standard errors for points of noise ``sigma`` across the lines: offset
+    sigma sqrt(2 / k + d^2 / (k s_1)), from the two centroids and the first line's direction, and
+    turn sigma sqrt(1 / (k s_1) + 1 / (k s_2)) (d: the centroids' distance, s: a stretch's mean
+    squared spread along its line). No extractor is involved."""
+    k = RELIEF_WINDOW
+    breaks = flat = 0
+    for rec in records:
+        scan = rec.scan
+        r = np.where(scan.valid, scan.ranges, np.nan)
+        if r.size < 2 * k:
+            continue
+        use = (r >= RELIEF_RANGE_M[0]) & (r < RELIEF_RANGE_M[1])
+        x, y = np.where(use, r * np.cos(scan.angles), np.nan), np.where(use, r * np.sin(scan.angles), np.nan)
+        cx, cy, theta, rms, spread = _window_lines(x, y, k)
+        straight = rms <= RELIEF_STRAIGHT_TAU * sigma  # nan (a beam out of use) is not straight
+        a, b = np.arange(len(cx) - k), np.arange(k, len(cx))  # the stretch ending at beam i and the one after it
+        ok = straight[a] & straight[b]
+        turn = np.abs(np.angle(np.exp(2j * (theta[b] - theta[a])))) / 2  # lines have no sense: mod pi
+        ok &= turn < RELIEF_PARALLEL_RAD
+        ddx, ddy = cx[b] - cx[a], cy[b] - cy[a]
+        offset = np.abs(ddx * -np.sin(theta[a]) + ddy * np.cos(theta[a]))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            se = sigma * np.sqrt(2.0 / k + (ddx ** 2 + ddy ** 2) / (k * spread[a]))
+            se_turn = sigma * np.sqrt(1.0 / (k * spread[a]) + 1.0 / (k * spread[b]))
+        ok &= offset < RELIEF_STEP_M[1]
+        broken = (offset >= np.maximum(RELIEF_STEP_M[0], RELIEF_STEP_TAU * se)) | (turn >= RELIEF_STEP_TAU * se_turn)
+        breaks += int(np.count_nonzero(ok & broken))
+        flat += int(np.count_nonzero(ok & ~broken))
+    return breaks, flat
+
+
+def relief_share(records: Sequence[Record], sigma: float | None = None) -> float:
+    """Share of the joints between nearly parallel straight stretches that step or bend beyond the
+    noise (:func:`relief_counts`): how often a wall at knee height is broken by things standing a
+    few cm proud of it. ``sigma``: the range noise (m; default the records' own neighbour scatter, as the
+    extractors get it). nan without any joint."""
+    from features.noise_estimate import neighbour_sigma
+
+    if not records:
+        return float("nan")
+    breaks, flat = relief_counts(records, neighbour_sigma(records) if sigma is None else sigma)
+    return breaks / (breaks + flat) if breaks + flat else float("nan")
+
+
+@dataclass
+class ReliefFit:
+    """The mit worlds' wall relief fitted to a log: the log's relief share, the probes'."""
+
+    cover: float
+    log_share: float
+    probe_covers: tuple[float, ...]
+    probe_shares: tuple[float, ...]
+
+
+def fit_relief(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = DEFAULT_DURATION_S,
+               rate_hz: float = 3.0, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS), rough: float | None = None,
+               scale: float | None = None, world: str = "mit",
+               seeds: Sequence[int] = ROUGH_PROBE_SEEDS) -> ReliefFit:
+    """The wall-relief cover (share of the free wall length under panels 1-6 cm proud, 0-1) that
+    makes the simulated worlds' walls break as often as the log's (:func:`relief_share`): probe runs
+    at RELIEF_PROBES (the first ``n_probe_seeds`` of ``seeds``) with the fitted rough fill
+    ``rough`` and rooms ``scale``, the log's share interpolated piecewise linearly on the probes'
+    curve (made monotone), clipped to [0, 1]."""
+    from experiments.calibrate import invert_probe_curve
+
+    target = relief_share(real)
+    fixed: dict[str, Any] = {} if world != "mit" else dict(rough=rough, scale=scale)
+    shares = _probe_shares(relief_share, "relief", RELIEF_PROBES, fixed, glass, sensor, limits, duration, rate_hz,
+                           n_probe_seeds, world, seeds)
+    cover = invert_probe_curve(shares, list(RELIEF_PROBES), float(target)) if np.isfinite(target) else 0.0
+    return ReliefFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(RELIEF_PROBES), tuple(shares))
+
+
 def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT_SEEDS,
              duration: float = DEFAULT_DURATION_S, rate_hz: float = 3.0, stride: int = 5, max_scans: int | None = 400,
              methods: Sequence[str] = METHODS, sensor: Any = None, read_options: dict | None = None,
-             fit_duration: float | None = None, fit_rooms: bool = False) -> Sim2RealResult:
+             fit_duration: float | None = None, fit_rooms: bool = False, wall_relief: bool = True) -> Sim2RealResult:
     """Compare a real log with the calibrated simulation (see the module docstring).
 
     Args:
@@ -330,6 +439,8 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
         fit_duration: simulated seconds per spot width of the calibration's fit (default its own).
         fit_rooms: also fit the mit worlds' room size to the log (:func:`fit_scale`, after the rough
             fill); off by default: see docs/simulator.md for what it did to the four logs.
+        wall_relief: fit the mit worlds' wall relief to the log (:func:`fit_relief`, after the rough
+            fill and room size); False: no relief (the demo, to spare its three probe worlds).
 
     Raises:
         LmsbenchError: for a log without scans or an unknown world.
@@ -359,10 +470,13 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     scale = (fit_scale(real, sensor, limits, glass, duration, rate_hz, len(seeds), rough.cover)
              if rough is not None and fit_rooms else None)
     size = None if scale is None else scale.scale
+    relief = (fit_relief(real, sensor, limits, glass, duration, rate_hz, len(seeds), rough.cover, size)
+              if rough is not None and wall_relief else None)
     simulated: list[Record] = []
     for seed in seeds:
         simulated += simulate_records(make_world(world, seed, glass=glass, rough=None if rough is None else rough.cover,
-                                                 scale=size), seed, duration, sensor, rate_hz=rate_hz, limits=limits)
+                                                 scale=size, relief=None if relief is None else relief.cover),
+                                      seed, duration, sensor, rate_hz=rate_hz, limits=limits)
     name = Path(log).name
     from features.noise_estimate import neighbour_sigma  # noqa: PLC0415
 
@@ -374,7 +488,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     summary = summarise(compare(sources, list(methods), sigma="auto"))
     table = _table(summary, name, f"sim:{world}", list(methods))
     result = Sim2RealResult(table, scene_statistics(real), scene_statistics(simulated), sensor, limits, world,
-                            list(seeds), len(real), len(simulated), {}, glass, rough, scale)
+                            list(seeds), len(real), len(simulated), {}, glass, rough, scale, relief)
     result.checks = targets(table)
     return result
 
@@ -437,6 +551,11 @@ def format_report(result: Sim2RealResult, log: str) -> str:
                 f"; rough fill {result.rough.cover:.2f} of the rooms' walls (beams at {NEAR_M[0]:g}-{NEAR_M[1]:g} m "
                 f"unexplained by {STATS_METHOD}: log {result.rough.log_share:.3f}, probes "
                 + ", ".join(f"{s:.3f} at {c:g}" for c, s in zip(result.rough.probe_covers, result.rough.probe_shares))
+                + ")")
+             + ("" if result.relief is None else
+                f"; wall relief {result.relief.cover:.2f} of the free wall length (joints of straight stretches "
+                f"that break: log {result.relief.log_share:.4f}, probes "
+                + ", ".join(f"{s:.4f} at {c:g}" for c, s in zip(result.relief.probe_covers, result.relief.probe_shares))
                 + ")"), "",
              "| method | explained 3 cm real | sim | diff | ray RMSE mm real | sim | lines/scan real | sim | ratio | mean segment m real | sim |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -555,7 +674,8 @@ def write_outputs(result: Sim2RealResult, out: Path, log: str, config: dict[str,
     result.sensor.to_yaml(paths[4], header=f"sensor model used by lmsbench sim2real {log}")
     resolved = dict(config, world=result.world, seeds=result.seeds, robot=dataclasses.asdict(result.limits),
                     checks=result.checks, rough=None if result.rough is None else dataclasses.asdict(result.rough),
-                    scale=None if result.scale is None else dataclasses.asdict(result.scale))
+                    scale=None if result.scale is None else dataclasses.asdict(result.scale),
+                    relief=None if result.relief is None else dataclasses.asdict(result.relief))
     resolved["robot"]["pause_s"] = list(resolved["robot"]["pause_s"])
     paths[5].write_text(yaml.safe_dump(resolved, sort_keys=False))
     return paths

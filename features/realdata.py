@@ -13,7 +13,7 @@ approach to extracting polylines from 2-D laser range scans", report the ray-pat
 - **Lines per scan** and **mean segment length** (m, end point to end point).
 - **References for the ray RMSE**: the ray RMSE depends on the range noise as much as on the
   lines: under Gaussian noise of std sigma, exact lines score :func:`truncated_normal_rms` (the RMS
-  of the noise within the tolerance: 0.64 sigma at sigma = 25 mm and 3 cm). In simulation the exact
+  of the noise within the tolerance: 0.63 sigma at sigma = 25 mm and 3 cm). In simulation the exact
   lines themselves can be scored (:func:`truth_lines`): a method that scores well below them covers
   only the beams whose noise happened to be small.
 - **Repeatability**, where a log carries corrected poses (Radish's ``*-corrected`` logs): the share

@@ -3,7 +3,9 @@ clusters of chair and table legs, standing and walking people (leg pairs), plant
 polygons of many short faces), bins, glass panels in walls that give no return, and runs of
 things standing along a wall (:func:`_wall_run`: boxes, computers, bags, round bins side by side,
 turned, with gaps), which cover stretches of wall with short faces, depth steps and
-recesses (the scan plane is at knee height, where offices keep such things).
+recesses (the scan plane is at knee height, where offices keep such things); rough fill along
+the rooms' walls (:func:`_rough_fill`) and wall relief (:func:`_relief`: flat panels standing
+1-6 cm proud of a wall, as closed doors, boards and flush cabinets do).
 
 Every item is made of the world's exact solids (boxes, cylinders, mitred rings of boxes), so the
 ground truth (faces, circles, corners) stays exact; glass is a segment (``World.glass``) that the
@@ -45,6 +47,7 @@ class ClutterConfig:
     glass: float = 0.4  # a glass panel of 1-2.5 m in a wall
     wall_runs: float = 0.0  # a 0.8-2.4 m run of things (boxes, computers, bags, bins) along a wall
     rough_cover: float = 0.0  # share of the rooms' free wall length behind rough fill (not scaled by level)
+    relief: float = 0.0  # share of the free wall length under flat panels 1-6 cm proud of it (not scaled by level)
 
 
 def _route_points(lay: Layout, step: float = 0.1) -> tuple[np.ndarray, float]:
@@ -303,6 +306,44 @@ def _rough_items(rng: np.random.Generator, length: float) -> list[tuple[float, f
     return items
 
 
+RELIEF_PANEL_M = (0.4, 1.5)  # width of one flat panel on a wall (a closed door, a board, a radiator, a cabinet's front)
+RELIEF_PROUD_M = (0.01, 0.06)  # how far its front stands proud of the wall face
+
+
+def _relief_items(rng: np.random.Generator, length: float) -> list[tuple[float, float, float, float, bool]]:
+    """One flat panel filling ``length`` m of wall (as :func:`_run_items`): parallel to the wall,
+    its front RELIEF_PROUD_M proud of the face (its depth includes the EMBED_M sunk into the wall)."""
+    return [(length / 2, length / 2, float(rng.uniform(*RELIEF_PROUD_M)) + EMBED_M, 0.0, False)]
+
+
+def _relief(lay: Layout, rng: np.random.Generator, space: _Space, h: float, cover: float) -> float:
+    """Wall relief along every wall face (rooms and corridors): each face is walked from one end in
+    slots of a panel's width (RELIEF_PANEL_M) and a bare stretch after it (as wide again, drawn the
+    same way); a slot gets its flat panel with probability ``cover`` where it keeps clear of the
+    route and of every other solid by 5 cm and is seen from the nearest route point
+    (:func:`_place_run`). Every slot's draws come from its own stream (one seed drawn from ``rng``,
+    then the face and slot numbers), so the slots and panels do not depend on ``cover``: a world's
+    panels at one cover are those at any higher cover with some left out. Real walls at knee height
+    are not one plane: closed doors in their frames, boards, radiators, cabinets flush with the
+    wall stand a few cm proud of it, and a line extractor sees the steps. Returns the length
+    covered (m)."""
+    faces = _wall_faces(lay, h)
+    base = int(rng.integers(2 ** 32))
+    done = 0.0
+    for f, face in enumerate(faces):
+        s, end = 0.2, face[4] - 0.2
+        for slot in range(int(face[4] / RELIEF_PANEL_M[0]) + 1):
+            srng = np.random.default_rng([base, f, slot])
+            length, bare = (float(v) for v in srng.uniform(*RELIEF_PANEL_M, 2))
+            length = min(length, end - s)
+            if length < RELIEF_PANEL_M[0]:
+                break
+            if srng.random() < cover and _place_run(lay, srng, space, face, s, length, _relief_items):
+                done += length
+            s += length + bare
+    return done
+
+
 def _in_room(lay: Layout, p: np.ndarray) -> bool:
     """Whether a point lies in one of the layout's rooms (``Layout.rooms``; anywhere when it has none)."""
     return not lay.rooms or any(x0 <= p[0] <= x1 and y0 <= p[1] <= y1 for x0, x1, y0, y1 in lay.rooms)
@@ -451,4 +492,6 @@ def add_clutter(lay: Layout, rng: np.random.Generator, level: float, config: Clu
             _bin(lay, rng, c)
     if cfg.rough_cover > 0:  # last, and no draw without it: the rest of the clutter is the same at any cover
         _rough_fill(lay, rng, space, scan_height, min(cfg.rough_cover, 1.0))
+    if cfg.relief > 0:  # after the rough fill, and no draw without it: the rest is the same at any relief
+        _relief(lay, rng, space, scan_height, min(cfg.relief, 1.0))
     return glass

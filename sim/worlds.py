@@ -58,7 +58,7 @@ def check_seed(seed: object) -> None:
 
 
 def make_world(name: str = "office", seed: int = 0, clutter: float | None = None, glass: float | None = None,
-               rough: float | None = None, scale: float | None = None) -> World:
+               rough: float | None = None, scale: float | None = None, relief: float | None = None) -> World:
     """Build a named world; every random choice comes from ``seed``.
 
     Args:
@@ -78,10 +78,13 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
             generator's worlds (office, cluttered, random, mit; None or 1 = as they are, bit for bit);
             furniture attempts per room grow with the room's perimeter. ``lmsbench sim2real`` fits it
             to a log's share of readings beyond 4 m (``experiments.sim2real.fit_scale``).
+        relief: share of the free wall length (rooms and corridors) under flat panels standing
+            1-6 cm proud of the wall (``sim.clutter``; None = none); needs a clutter level > 0.
+            ``lmsbench sim2real`` fits it to a log (``experiments.sim2real.fit_relief``).
 
     Raises:
         ValueError: for an unknown name (listing the known ones), a seed that is not a whole number
-            >= 0, a clutter level outside [0, MAX_CLUTTER], a negative glass rate or a rough
+            >= 0, a clutter level outside [0, MAX_CLUTTER], a negative glass rate, a rough or relief
             share outside [0, 1] (or > 0 at clutter level 0), or a scale outside [MIN_SCALE, MAX_SCALE]
             (or other than 1 for a world without rooms).
     """
@@ -95,6 +98,11 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
         raise ValueError(f"glass: must be a rate >= 0 (panels per 10 m), got {glass}")
     if rough is not None and not (np.isfinite(rough) and 0 <= rough <= 1):
         raise ValueError(f"rough: must be a share in [0, 1] of the rooms' wall length, got {rough}")
+    if relief is not None and not (np.isfinite(relief) and 0 <= relief <= 1):
+        raise ValueError(f"relief: must be a share in [0, 1] of the free wall length, got {relief}")
+    if relief is not None and relief > 0 and level == 0:
+        raise ValueError(f"relief: wall relief is clutter, so it needs a clutter level > 0 (the {name!r} world at "
+                         f"clutter {level:g}), got {relief}")
     if scale is not None and not (np.isfinite(scale) and MIN_SCALE <= scale <= MAX_SCALE):
         raise ValueError(f"scale: must be in [{MIN_SCALE:g}, {MAX_SCALE:g}] (the rooms' size as a multiple), got {scale}")
     if scale is not None and float(scale) != 1.0 and name in WORLD_NAMES and name not in ROOMED_WORLDS:
@@ -131,6 +139,8 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
         config = replace(config if config is not None else ClutterConfig(), glass=float(glass))
     if rough is not None:
         config = replace(config if config is not None else ClutterConfig(), rough_cover=float(rough))
+    if relief is not None:
+        config = replace(config if config is not None else ClutterConfig(), relief=float(relief))
     panels = add_clutter(lay, crng, level, config)
     return lay.build(glass=panels)
 

@@ -310,3 +310,116 @@ def test_far_share_counts_readings_at_4_8_m_among_those_at_2_8_m() -> None:
     recs = [Record(Scan(r.copy(), -np.pi / 2, inc, 0.0, 81.83, float(k))) for k in range(3)]
     assert far_share(recs) == pytest.approx(20 / 80)
     assert np.isnan(far_share([]))
+
+
+def test_wall_relief_panels_stand_proud_of_walls_with_exact_truth() -> None:
+    """make_world(relief=...): flat panels parallel to a wall, their fronts 1-6 cm proud of its face
+    and their backs sunk into it; each front is a face of World.walls; ideal ranges equal the
+    independent ray caster's and the visible truth covers every beam off a circle; relief 0 (or
+    none) is the world bit for bit, and the panels come last (the rest of the world is the same)."""
+    from sim.clutter import RELIEF_PANEL_M, RELIEF_PROUD_M
+    from sim.layout import EMBED_M
+
+    base, world = make_world("cluttered", 2), make_world("cluttered", 2, relief=1.0)
+    assert np.array_equal(make_world("cluttered", 2, relief=0.0).boxes, base.boxes)
+    n = len(base.boxes)
+    assert np.array_equal(world.boxes[:n], base.boxes) and np.array_equal(world.cylinders, base.cylinders)
+    panels = world.boxes[n:]
+    assert len(panels) >= 8
+    walls = base.boxes[(base.boxes[:, 6] >= 2.0) & (base.boxes[:, 4] <= 0.08)]
+    faces = {tuple(np.round(f, 9)) for f in world.walls}
+    for cx, cy, yaw, hx, hy, *_ in panels:  # hx: half depth out from the wall, hy: half width along it
+        assert RELIEF_PANEL_M[0] - 1e-9 <= 2 * hy <= RELIEF_PANEL_M[1] + 1e-9
+        proud = 2 * hx - EMBED_M
+        assert RELIEF_PROUD_M[0] - 1e-9 <= proud <= RELIEF_PROUD_M[1] + 1e-9
+        normal = np.array([np.cos(yaw), np.sin(yaw)])
+        back = np.array([cx, cy]) - normal * hx
+        # the back lies EMBED_M inside a wall box parallel to the panel
+        parallel = walls[np.abs(np.sin(walls[:, 2] - yaw + np.pi / 2)) < 1e-9]
+        depth = np.abs((back[0] - parallel[:, 0]) * normal[0] + (back[1] - parallel[:, 1]) * normal[1])
+        assert np.any(np.isclose(depth, parallel[:, 4] - EMBED_M, atol=1e-9))
+        front = np.array([cx, cy]) + normal * hx
+        along = np.array([-normal[1], normal[0]])
+        a, b = front - along * hy, front + along * hy  # the front face, oriented with the solid on its left
+        assert (*np.round(np.r_[b, a], 9),) in faces or (*np.round(np.r_[a, b], 9),) in faces
+    sensor = SensorConfig.ideal()
+    rng = np.random.default_rng(4)
+    with LMS200Sim(world, sensor) as lidar:
+        for pose in free_poses(world, rng, 6):
+            got = lidar.scan_at(tuple(pose)).ranges.copy()
+            ref, grazing = _reference(world, pose, sensor)
+            both = np.isfinite(ref) & np.isfinite(got) & ~grazing
+            assert np.max(np.abs(got[both] - ref[both])) < 1e-3
+            truth = visible_truth(world, tuple(pose), sensor)
+            r = np.where(np.isfinite(ref), ref, np.nan)
+            hits = np.column_stack((r * np.cos(sensor.angles), r * np.sin(sensor.angles)))
+            covered = np.zeros(sensor.n_beams, dtype=bool)
+            for (x1, y1, x2, y2), (first, last) in zip(truth.segments, truth.segment_beams):
+                u = np.array([x2 - x1, y2 - y1]) / np.hypot(x2 - x1, y2 - y1)
+                rel = hits[first:last + 1] - (x1, y1)
+                ok = ~grazing[first:last + 1]
+                assert np.all(np.abs(rel[ok] @ np.array([-u[1], u[0]])) < 1e-6)
+                covered[first:last + 1] = True
+            wh = pose[:2] + r[:, None] * np.column_stack((np.cos(pose[2] + sensor.angles), np.sin(pose[2] + sensor.angles)))
+            on_circle = np.zeros(sensor.n_beams, dtype=bool)
+            for cx, cy, rad in world.circles:
+                on_circle |= np.abs(np.hypot(wh[:, 0] - cx, wh[:, 1] - cy) - rad) < 1e-6
+            assert np.all(covered[np.isfinite(ref) & ~on_circle & ~grazing])
+    for a, b in world.route_edges:
+        pts = world.route_nodes[a] + np.linspace(0, 1, 60)[:, None] * (world.route_nodes[b] - world.route_nodes[a])
+        assert world.clearance(pts).min() >= 0.4
+    with pytest.raises(ValueError, match="relief"):
+        make_world("cluttered", 0, relief=1.5)
+    with pytest.raises(ValueError, match="needs a clutter level"):
+        make_world("office", 0, relief=0.5)
+
+
+def _wall_scans(step_m: float, noise_m: float, n: int = 4, bend_rad: float = 0.0) -> list:
+    """Scans of a wall 2 m ahead (x = 2) at 0.5 deg, beams within 54.8 deg of it, its half at y > 0
+    ``step_m`` nearer (a panel proud of it) or turned by ``bend_rad`` about the point (2, 0); the
+    other beams read 0.3 m (not used: under 0.5 m)."""
+    from lms200 import Record, Scan
+
+    rng = np.random.default_rng(1)
+    inc = np.deg2rad(0.5)
+    b = -np.pi / 2 + inc * np.arange(361)
+    # the line x = 2 - step (y > 0) turned by bend about (2, 0): range along the beam at bearing b
+    x = np.where(b > 0, (2.0 - step_m) * np.cos(bend_rad) / np.cos(b - bend_rad), 2.0 / np.cos(b))
+    r = np.where(np.abs(b) <= np.deg2rad(54.8), x, 0.3)
+    return [Record(Scan(r + rng.normal(0, noise_m, 361) * (noise_m > 0), -np.pi / 2, inc, 0.0, 81.83, float(k)))
+            for k in range(n)]
+
+
+def test_relief_share_counts_steps_between_straight_parallel_stretches() -> None:
+    """The statistic the wall relief is fitted on (no extractor): a 3 cm step or a 5 deg bend in a
+    straight wall is one break per scan among the joints of straight stretches; a plain wall has
+    none, nor a 20 cm step (an object in front); at 2 cm noise a plain wall's joints rarely count."""
+    from experiments.sim2real import RELIEF_WINDOW, relief_counts, relief_share
+
+    steps, flat = relief_counts(_wall_scans(0.03, 0.0), 0.002)
+    on_wall = 2 * 109 + 1  # beams within 54.8 deg (109 a side at 0.5 deg, and the one at 0)
+    assert steps == 4  # the one joint between the stretch ending before the step and the one after it
+    # every joint whose two stretches lie on one side of the step (2 window lengths: 2 * 5 beams)
+    assert flat == 4 * (on_wall - 2 * RELIEF_WINDOW + 1 - (2 * RELIEF_WINDOW - 1))
+    assert relief_counts(_wall_scans(0.0, 0.0), 0.002) == (0, 4 * (on_wall - 2 * RELIEF_WINDOW + 1))
+    assert relief_counts(_wall_scans(0.20, 0.0), 0.002)[0] == 0
+    bent = relief_counts(_wall_scans(0.0, 0.0, bend_rad=np.deg2rad(5.0)), 0.002)
+    assert 4 <= bent[0] <= 4 * 2 * RELIEF_WINDOW  # joints near the bend see it too
+    steps, flat = relief_counts(_wall_scans(0.0, 0.02), 0.02)  # 2 cm noise: a step must be 7 cm (3 standard errors)
+    assert flat > 400 and steps < 0.1 * flat  # so noise alone makes few
+    assert relief_share(_wall_scans(0.03, 0.002)) == pytest.approx(1 / (1 + flat / 4), rel=0.5)
+    assert np.isnan(relief_share([]))
+
+
+def test_fit_relief_recovers_a_known_cover_on_a_simulated_log() -> None:
+    """fit_relief on a simulated log of known wall relief (the cluttered office at cover 0.75, the
+    probes' seed): the fitted cover lies within 0.15 of it, between the probes at 0.5 and 1."""
+    from experiments.sim2real import fit_relief
+    from sim import simulate_records
+
+    sensor, seeds = SensorConfig(), (7,)
+    log = simulate_records(make_world("cluttered", 7, relief=0.75), 7, 12.0, sensor, rate_hz=3.0)
+    fit = fit_relief(log, sensor, None, None, duration=12.0, rate_hz=3.0, n_probe_seeds=1, world="cluttered", seeds=seeds)
+    assert fit.probe_shares[0] < fit.probe_shares[1] < fit.probe_shares[2]  # more relief, more breaks
+    assert fit.probe_shares[1] < fit.log_share < fit.probe_shares[2]
+    assert fit.cover == pytest.approx(0.75, abs=0.15)

@@ -87,15 +87,22 @@ def test_the_compile_watch_sees_compiles_and_not_calls() -> None:
 
 
 def test_the_heartbeat_waits_for_its_condition() -> None:
+    import threading
     import time
 
     from experiments.progress import Heartbeat
 
     said: list[str] = []
-    started = [False]
-    with Heartbeat(said.append, "step", first="slow step ...", first_after=0.0, when=lambda: started[0]):
-        time.sleep(0.6)
-        assert said == []  # past first_after, but the slow part has not begun
-        started[0] = True
-        time.sleep(0.6)
+    spoke = threading.Event()
+    started = threading.Event()
+
+    def log(msg: str) -> None:
+        said.append(msg)
+        spoke.set()
+
+    with Heartbeat(log, "step", first="slow step ...", first_after=0.0, when=started.is_set):
+        time.sleep(0.6)  # the heartbeat polls every 0.25 s: past first_after, but the slow part has not begun
+        assert said == []
+        started.set()
+        assert spoke.wait(10.0)  # generous: a loaded machine may run the polling thread late
     assert said == ["slow step ..."]

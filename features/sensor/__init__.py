@@ -18,7 +18,7 @@ from ..registry import register
 from ..batch import common_geometry, split_rows, stacked_ranges
 from ..types import Corners, FeatureSet, Lines
 from ..jit import FixedTypeCall
-from ..noise_estimate import AUTO, AUTO_FALLBACK, stacked_sigma
+from ..noise_estimate import AUTO, AUTO_FALLBACK
 from . import engine
 from .config import SensorMethodConfig
 from .grid import bearings_of, grid_constants, window_sums
@@ -48,8 +48,10 @@ def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
 
 
 def extract_sensor_many(scans: Sequence[Scan], cfg: SensorMethodConfig) -> list[FeatureSet]:
-    """``extract_sensor`` of every scan (one geometry, checked), in one kernel call; a noise of
-    "auto" is estimated once from all of them (pooled, as ``lmsbench compare`` does per log)."""
+    """``extract_sensor`` of every scan (one geometry, checked), in one kernel call: the same
+    lines and corners, scan by scan; a noise of "auto" is estimated from each scan itself, as a
+    single call does (to use one noise for a whole log, as ``lmsbench compare`` does, pass it:
+    ``sigma_r_cm=features.noise_estimate.neighbour_sigma(scans)``)."""
     if not scans:
         return []
     scan = common_geometry(scans)
@@ -60,7 +62,7 @@ def extract_sensor_many(scans: Sequence[Scan], cfg: SensorMethodConfig) -> list[
     rows = engine.extract_batch(
         ranges, bearings_of(scan.angle_min, scan.angle_increment, len(scan)), scan.angle_min,
         scan.angle_increment, float(max(scan.range_min, cfg.min_range)), scan.range_max,
-        stacked_sigma(ranges, scan) if sigma == AUTO else float(sigma), grid, p,
+        0.0 if sigma == AUTO else float(sigma), sigma == AUTO, float(scan.range_min), AUTO_FALLBACK, grid, p,
     )
     return split_rows(*rows, METHOD)
 

@@ -1760,11 +1760,17 @@ def extract_scan_auto(ranges, bearings, angle_min, increment, range_lo, range_hi
 
 
 @kernel
-def extract_batch(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p):  # noqa: ANN001, ANN201
-    """``extract_scan`` of every row of ``ranges`` (S, n), scans of one geometry, in one call.
-    Returns the packed rows of all scans, concatenated, and the (S + 1,) offsets of each scan's
-    lines and corners in them."""
+def extract_batch(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, auto, range_min, fallback, grid, p):  # noqa: ANN001, ANN201
+    """``extract_scan`` of every row of ``ranges`` (S, n), scans of one geometry, in one call; with
+    ``auto``, ``extract_scan_auto`` of every row instead (each scan's own noise estimate, as a
+    single call makes it; ``sigma_r`` is then unused). Returns the packed rows of all scans,
+    concatenated, and the (S + 1,) offsets of each scan's lines and corners in them."""
     rows = new_rows(ranges.shape[0])
     for s in range(ranges.shape[0]):
-        rows = append_rows(rows, s, extract_scan(ranges[s], bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p))
+        if auto:
+            scan_rows = extract_scan_auto(ranges[s], bearings, angle_min, increment, range_lo, range_hi, range_min,
+                                          fallback, grid, p)
+        else:
+            scan_rows = extract_scan(ranges[s], bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p)
+        rows = append_rows(rows, s, scan_rows)
     return finish_rows(rows)
