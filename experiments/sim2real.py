@@ -10,7 +10,8 @@ Steps, all with fixed settings (nothing is tuned to the log beyond what is said 
    and robot, over several seeds; the world's glass panels (which read as no return) follow the
    log's no-return readings in the ``mit`` preset (:func:`glass_rate`): a log without any has no
    glass the laser fails on, so its world gets none; its rough fill (:func:`fit_rough`) and wall
-   relief (:func:`fit_relief`) are fitted to statistics of the log's scans by probe runs;
+   relief (:func:`fit_relief`) are fitted to statistics of the log's scans by probe runs, the fill
+   again once the relief is known (:func:`fit_world`);
 4. every extractor on the real and the simulated scans (``experiments.compare.compare`` with the
    real-data measures of ``features.realdata``: explained fraction at 3 cm and 3 sigma, ray RMSE,
    lines per scan, mean segment length), plus the scene statistics of :func:`scene_statistics`.
