@@ -11,6 +11,7 @@ grows with a ray's length.
 from __future__ import annotations
 
 import ctypes
+import functools
 import os
 import sys
 from operator import itemgetter
@@ -101,14 +102,14 @@ class LMS200Sim:
         :meth:`cast` and :func:`sim.hits.resolve_hits`)."""
         cid = self.client
         bodies: list[tuple[int, int, int]] = []  # body id, kind (0 box, 1 cylinder), index
-        for k, box in enumerate(world.boxes):
-            verts, faces = _box_mesh(box[None, :])
-            shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=verts.tolist(), indices=faces.ravel().tolist(),
-                                            physicsClientId=cid)
+        verts, tris = _box_meshes(world.boxes)
+        indices = tris.ravel().tolist()
+        for k, box_verts in enumerate(verts.tolist()):
+            shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=box_verts, indices=indices, physicsClientId=cid)
             bodies.append((pb.createMultiBody(0.0, shape, -1, [0, 0, 0], physicsClientId=cid), 0, k))
         for k, (cx, cy, r, z0, z1) in enumerate(world.cylinders):
-            verts, faces = _prism_mesh(cx, cy, r, z0, z1)
-            shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=verts.tolist(), indices=faces.ravel().tolist(),
+            prism, prism_tris = _prism_mesh(cx, cy, r, z0, z1)
+            shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=prism.tolist(), indices=prism_tris,
                                             physicsClientId=cid)
             bodies.append((pb.createMultiBody(0.0, shape, -1, [0, 0, 0], physicsClientId=cid), 1, k))
         size = max([b[0] for b in bodies], default=-1) + 2
@@ -306,7 +307,6 @@ def _prism_sides(r: np.ndarray | float) -> np.ndarray:
     return np.maximum(12, np.ceil(np.pi / np.arccos(r / (r + _PRISM_TOLERANCE_M)))).astype(int)
 
 
-_MAX_TRIANGLE_WIDTH_M = np.inf  # side faces are two triangles each (false hits are rejected)
 _NO_GLASS = np.zeros((0, 4))
 _FIRST_STAGE_M = 3.0  # rays are cast to this range first, and only those meeting nothing on to range_max
 _STAGE_OVERLAP_M = 1e-3  # the second stage starts this far before the first one's end
@@ -315,39 +315,47 @@ _RECAST_STEP_M = 1e-4  # a rejected hit's ray goes on from this far past it
 _MAX_RECASTS = 4
 
 
-def _box_mesh(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices and triangles of boxes (n, 7: cx, cy, yaw, hx, hy, z0, z1): side faces cut into
-    columns at most _MAX_TRIANGLE_WIDTH_M wide, plus top and bottom."""
-    verts: list[tuple[float, float, float]] = []
-    tris: list[tuple[int, int, int]] = []
-    for cx, cy, yaw, hx, hy, z0, z1 in boxes:
-        xy = rectangle_corners(cx, cy, yaw, hx, hy)
-        for k in range(4):
-            a, b = xy[k], xy[(k + 1) % 4]
-            cols = max(1, int(np.ceil(np.hypot(*(b - a)) / _MAX_TRIANGLE_WIDTH_M)))
-            ring = a + np.linspace(0, 1, cols + 1)[:, None] * (b - a)
-            base = len(verts)
-            verts += [(x, y, z0) for x, y in ring] + [(x, y, z1) for x, y in ring]
-            top = cols + 1
-            for i in range(cols):
-                tris += [(base + i, base + i + 1, base + top + i + 1), (base + i, base + top + i + 1, base + top + i)]
-        base = len(verts)
-        verts += [(x, y, z0) for x, y in xy] + [(x, y, z1) for x, y in xy]
-        tris += [(base + 3, base + 2, base + 1), (base + 3, base + 1, base), (base + 4, base + 5, base + 6),
-                 (base + 4, base + 6, base + 7)]
-    return np.array(verts, dtype=float), np.array(tris, dtype=int)
+# the 12 triangles of a box's 24 vertices (_box_meshes): two per side face (vertices 4k .. 4k + 3
+# are side k's bottom start, bottom end, top start, top end), then the bottom and the top
+_BOX_TRIANGLES = np.array([t for k in range(0, 16, 4) for t in ((k, k + 1, k + 3), (k, k + 3, k + 2))]
+                          + [(19, 18, 17), (19, 17, 16), (20, 21, 22), (20, 22, 23)], dtype=int)
 
 
-def _prism_mesh(cx: float, cy: float, r: float, z0: float, z1: float) -> tuple[np.ndarray, np.ndarray]:
-    """A regular prism circumscribing the cylinder (its faces touch the circle)."""
+def _box_meshes(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (n, 24, 3) of boxes (n, 7: cx, cy, yaw, hx, hy, z0, z1) and the triangles (12, 3)
+    every box shares: each side face as two triangles, its corners for each side (the end as
+    start + 1.0 * (end - start)), then the corners at the bottom and at the top."""
+    boxes = np.asarray(boxes, dtype=float).reshape(-1, 7)
+    n = len(boxes)
+    xy = np.array([rectangle_corners(cx, cy, yaw, hx, hy) for cx, cy, yaw, hx, hy in boxes[:, :5]]).reshape(n, 4, 2)
+    step = np.roll(xy, -1, axis=1) - xy
+    start, end = xy + 0.0 * step, xy + 1.0 * step  # (n, 4, 2): the two ends of each side
+    verts = np.empty((n, 24, 3))
+    z0, z1 = boxes[:, 5, None], boxes[:, 6, None]
+    for corner, (ends, z) in enumerate(((start, z0), (end, z0), (start, z1), (end, z1))):
+        verts[:, corner:16:4, :2], verts[:, corner:16:4, 2] = ends, z
+    verts[:, 16:20, :2], verts[:, 16:20, 2] = xy, z0
+    verts[:, 20:24, :2], verts[:, 20:24, 2] = xy, z1
+    return verts, _BOX_TRIANGLES
+
+
+def _prism_mesh(cx: float, cy: float, r: float, z0: float, z1: float) -> tuple[np.ndarray, tuple[int, ...]]:
+    """A regular prism circumscribing the cylinder (its faces touch the circle): vertices (2n + 2, 3)
+    and the flat list of its triangles' vertex indices (shared by every prism of n sides)."""
     n = int(_prism_sides(r))
     rc = r / np.cos(np.pi / n)
     a = 2 * np.pi * np.arange(n) / n
     ring = np.column_stack((cx + rc * np.cos(a), cy + rc * np.sin(a)))
     verts = np.vstack([np.column_stack((ring, np.full(n, z0))), np.column_stack((ring, np.full(n, z1))),
                        [[cx, cy, z0], [cx, cy, z1]]])
-    tris = []
+    return verts, _prism_triangles(n)
+
+
+@functools.lru_cache(maxsize=None)
+def _prism_triangles(n: int) -> tuple[int, ...]:
+    """The flat vertex indices of an n-sided prism's triangles (_prism_mesh's vertex order)."""
+    tris: list[int] = []
     for i in range(n):
         j = (i + 1) % n
-        tris += [(i, j, n + j), (i, n + j, n + i), (2 * n, j, i), (2 * n + 1, n + i, n + j)]
-    return verts, np.array(tris, dtype=int)
+        tris += [i, j, n + j, i, n + j, n + i, 2 * n, j, i, 2 * n + 1, n + i, n + j]
+    return tuple(tris)
