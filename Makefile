@@ -33,7 +33,7 @@ check: $(STAMP)
 	$(BIN)/mypy
 
 test: check
-	$(BIN)/python -m pytest -q -rs
+	$(BIN)/python -m pytest -q -rs --durations=30
 
 bench: $(STAMP)
 	$(BIN)/lmsbench bench

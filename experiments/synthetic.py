@@ -70,7 +70,8 @@ def truth_from_hits(walls: np.ndarray, pose, angles, exact, wall) -> SyntheticTr
     ends = np.concatenate((change - 1, [wall.size - 1]))
     keep = wall[starts] >= 0
     starts, ends = starts[keep], ends[keep]
-    xs, ys = exact * np.cos(angles), exact * np.sin(angles)
+    seen = np.where(np.isfinite(exact), exact, 0.0)  # no-return beams are never a run's end: no inf * 0
+    xs, ys = seen * np.cos(angles), seen * np.sin(angles)
     segments = np.column_stack((xs[starts], ys[starts], xs[ends], ys[ends]))
     c, s = np.cos(-th), np.sin(-th)
     corners, corner_beams = [], []

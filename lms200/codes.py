@@ -90,7 +90,7 @@ def decode_logged_ranges(ranges: np.ndarray, units: Units | None = None) -> np.n
     """
     values = np.array(ranges, dtype=np.float64)
     scale = metres_per_unit(units or infer_units(values))
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", over="ignore"):  # 1e308 m / 1 cm is inf: not a code, kept as it is
         code_float = values / scale
         code = np.rint(code_float)
         special = (np.abs(code_float - code) < 1e-3) & np.isin(code, _SPECIAL_CODES)

@@ -22,8 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .geometry import distance_to_segments, rectangle_corners
+from .geometry import rectangle_corners
 from .layout import EMBED_M, Layout, distance_to_rects
+from .nearest import nearest_solid
 from .world import SCAN_HEIGHT_M
 
 ROUTE_CLEARANCE_M = 0.40  # sim.worlds.CLEARANCE_M: robot radius 0.25 m + 0.15 m
@@ -71,28 +72,17 @@ class _Space:
         self.corners = np.array(rects, dtype=float).reshape(-1, 4, 2)  # CCW
         self.circles = [(c[0], c[1], c[2]) for c in lay.cylinders if c[3] <= h <= c[4]]
         self.route = route
+        self._ids = self.box_index.astype(np.int64)  # the layout's box index; -2 for footprints taken
+        self._lo, self._hi = self.corners.min(axis=1), self.corners.max(axis=1)
+        self._circle_rows = np.array(self.circles, dtype=float).reshape(-1, 3)
 
     def distance(self, pts: np.ndarray, exclude: int = -1) -> np.ndarray:
         """Distance (m) from (n, 2) points to the nearest solid (0 inside a box), leaving out the
-        layout's box ``exclude``; exact up to HORIZON_M, and at least HORIZON_M (maybe inf) beyond."""
-        pts = np.asarray(pts, dtype=float).reshape(-1, 2)
-        d = np.full(len(pts), np.inf)
-        keep = np.append(self.box_index, np.full(len(self.corners) - len(self.box_index), -2)) != exclude
-        if len(pts) and len(self.corners):  # only boxes within HORIZON_M of the points' bounding box
-            lo, hi = pts.min(axis=0) - HORIZON_M, pts.max(axis=0) + HORIZON_M
-            keep &= np.all((self.corners.max(axis=1) >= lo) & (self.corners.min(axis=1) <= hi), axis=1)
-        corners = self.corners[keep]
-        if len(corners):
-            a = corners.reshape(-1, 2)
-            b = np.roll(corners, -1, axis=1).reshape(-1, 2)
-            d = distance_to_segments(pts, a, b).min(axis=1)
-            ab, rel = b - a, pts[:, None, :] - a[None]
-            cross = (ab[None, :, 0] * rel[..., 1] - ab[None, :, 1] * rel[..., 0]).reshape(len(pts), -1, 4)
-            d = np.where(np.all(cross > 0, axis=2).any(axis=1), 0.0, d)
-        if self.circles:
-            c = np.array(self.circles)
-            d = np.minimum(d, (np.hypot(pts[:, None, 0] - c[:, 0], pts[:, None, 1] - c[:, 1]) - c[:, 2]).min(axis=1))
-        return d
+        layout's box ``exclude``; exact up to HORIZON_M, and at least HORIZON_M (maybe inf) beyond
+        (``sim.nearest``)."""
+        pts = np.ascontiguousarray(pts, dtype=float).reshape(-1, 2)
+        return nearest_solid(pts, self.corners, self._lo, self._hi, self._ids, int(exclude), self._circle_rows,
+                             HORIZON_M)
 
     def free(self, c: np.ndarray, radius: float, start: np.ndarray) -> bool:
         """A disc of ``radius`` at c is clear of the route and solids, and c is seen from start."""
@@ -103,11 +93,22 @@ class _Space:
         line = start + np.linspace(0, 1, 30)[:, None] * (c - start)
         return bool(self.distance(line).min() > 0.0)
 
+    def clear_of_route(self, rect: np.ndarray, gap: float) -> bool:
+        """Whether every route point keeps at least ``gap`` (m) from the CCW rectangle ``rect``
+        (4, 2); only the points within ``gap`` of its bounds are measured (the others keep more)."""
+        lo, hi = rect.min(axis=0) - gap, rect.max(axis=0) + gap
+        near = self.route[np.all((self.route >= lo) & (self.route <= hi), axis=1)]
+        return not (len(near) and distance_to_rects(near, [rect]).min() < gap)
+
     def take(self, c: np.ndarray, radius: float) -> None:
         self.circles.append((float(c[0]), float(c[1]), float(radius)))
+        self._circle_rows = np.array(self.circles, dtype=float).reshape(-1, 3)
 
     def take_rect(self, corners: np.ndarray) -> None:
-        self.corners = np.concatenate((self.corners, np.asarray(corners, dtype=float).reshape(1, 4, 2)))
+        rect = np.asarray(corners, dtype=float).reshape(1, 4, 2)
+        self.corners = np.concatenate((self.corners, rect))
+        self._ids = np.append(self._ids, -2)
+        self._lo, self._hi = np.vstack((self._lo, rect.min(axis=1))), np.vstack((self._hi, rect.max(axis=1)))
 
 
 def _spot(rng: np.random.Generator, space: _Space, radius: float, tries: int = 60) -> np.ndarray | None:
@@ -402,7 +403,7 @@ def _place_run(lay: Layout, rng: np.random.Generator, space: _Space, face: tuple
     steps = int(np.ceil(length / 0.05)) + 1
     samples = hull[0] + np.linspace(0, 1, steps)[:, None, None] * (hull[1:] - hull[0])[None]
     samples = np.vstack([samples.reshape(-1, 2), hull])
-    if distance_to_rects(space.route, [hull]).min() < ROUTE_CLEARANCE_M + ROUTE_SAMPLING_SLACK_M:
+    if not space.clear_of_route(hull, ROUTE_CLEARANCE_M + ROUTE_SAMPLING_SLACK_M):
         return False
     if space.distance(samples, exclude=k).min() < ITEM_GAP_M / 2:
         return False

@@ -141,6 +141,9 @@ def union_faces(rects: list[np.ndarray], circles: np.ndarray) -> np.ndarray:
     return _merge_collinear(np.array(faces, dtype=float).reshape(-1, 4))
 
 
+_JOIN_GAP_M = 1e-7  # one face's end and the next one's start this close are one point
+
+
 def _merge_collinear(faces: np.ndarray) -> np.ndarray:
     """Join faces where one ends exactly where the next, collinear and pointing the same way,
     begins (pieces of one straight face split by a solid that only touched it)."""
@@ -149,12 +152,21 @@ def _merge_collinear(faces: np.ndarray) -> np.ndarray:
         return faces
     d = faces[:, 2:] - faces[:, :2]
     length = np.hypot(d[:, 0], d[:, 1])
-    gap = np.hypot(faces[:, None, 2] - faces[None, :, 0], faces[:, None, 3] - faces[None, :, 1])
-    cross = d[:, None, 0] * d[None, :, 1] - d[:, None, 1] * d[None, :, 0]
-    dot = d[:, None, 0] * d[None, :, 0] + d[:, None, 1] * d[None, :, 1]
-    joins = (gap < 1e-7) & (np.abs(cross) < 1e-9 * length[:, None] * length[None, :]) & (dot > 0)
-    np.fill_diagonal(joins, False)
-    following = np.where(joins.any(axis=1), joins.argmax(axis=1), -1)
+    # candidate pairs (face i ends where face j starts): the starts within 2 _JOIN_GAP_M in x of
+    # i's end, looked up in the starts sorted by x; each pair then takes the full test. (An n x n
+    # test took 0.8 s for the 2,400 faces of a ``mit`` world.)
+    by_x = np.argsort(faces[:, 0], kind="stable")
+    first = np.searchsorted(faces[by_x, 0], faces[:, 2] - 2 * _JOIN_GAP_M, side="left")
+    counts = np.searchsorted(faces[by_x, 0], faces[:, 2] + 2 * _JOIN_GAP_M, side="right") - first
+    i = np.repeat(np.arange(n), counts)
+    j = by_x[np.repeat(first, counts) + np.arange(len(i)) - np.repeat(np.cumsum(counts) - counts, counts)]
+    gap = np.hypot(faces[i, 2] - faces[j, 0], faces[i, 3] - faces[j, 1])
+    cross = d[i, 0] * d[j, 1] - d[i, 1] * d[j, 0]
+    dot = d[i, 0] * d[j, 0] + d[i, 1] * d[j, 1]
+    joins = (gap < _JOIN_GAP_M) & (np.abs(cross) < 1e-9 * length[i] * length[j]) & (dot > 0) & (i != j)
+    nearest = np.full(n, n)
+    np.minimum.at(nearest, i[joins], j[joins])  # the lowest-numbered face that follows i
+    following = np.where(nearest < n, nearest, -1)
     is_next = np.zeros(n, dtype=bool)
     is_next[following[following >= 0]] = True
     out, used = [], np.zeros(n, dtype=bool)

@@ -106,3 +106,10 @@ def test_snap_angle() -> None:
     assert snap_angle(0.008727) == np.deg2rad(0.5)
     assert snap_angle(-1.570796) == -np.pi / 2
     assert snap_angle(0.0123) == 0.0123  # not near the 0.05 deg grid: unchanged
+
+
+def test_decoding_a_huge_logged_range_keeps_it_without_a_warning():
+    """1e308 m divided by the 1 cm unit overflows to inf: no special code, the value is kept, and
+    numpy's overflow warning is not printed to the user (pytest turns RuntimeWarnings into errors)."""
+    out = decode_logged_ranges(np.array([1e308, 81.83, 1.5]), units="cm")
+    assert out[0] == 1e308 and np.isposinf(out[1]) and out[2] == 1.5

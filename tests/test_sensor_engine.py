@@ -122,9 +122,10 @@ def test_no_extractor_kernel_is_compiled_with_fast_math() -> None:
     import features.baselines.engine as cartesian
     import features.sensor.engine as sensor
     import sim.hits
+    import sim.nearest
     import slam.icpkernel
 
-    kernels = [(mod.__name__, name, obj) for mod in (sensor, cartesian, sim.hits, slam.icpkernel)
+    kernels = [(mod.__name__, name, obj) for mod in (sensor, cartesian, sim.hits, sim.nearest, slam.icpkernel)
                for name, obj in vars(mod).items() if isinstance(obj, numba.core.registry.CPUDispatcher)]
     assert len(kernels) > 40
     fast = [f"{m}.{n}" for m, n, k in kernels if k.targetoptions.get("fastmath")]

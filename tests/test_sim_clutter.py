@@ -426,3 +426,48 @@ def test_fit_relief_recovers_a_known_cover_on_worlds_other_than_its_probes() -> 
     fit = fit_relief(log, sensor, None, 0.0, rough=rough)
     assert fit.probe_shares[0] < fit.probe_shares[1] < fit.probe_shares[2]  # more relief, more breaks
     assert fit.cover == pytest.approx(0.75, abs=0.1)
+
+
+def _nearest_solid_oracle(pts: np.ndarray, corners: np.ndarray, keep: np.ndarray, circles: np.ndarray) -> np.ndarray:
+    """Every point against every edge of every kept box and every circle, in numpy (no pruning)."""
+    from sim.geometry import distance_to_segments
+
+    d = np.full(len(pts), np.inf)
+    for rect in corners[keep]:
+        a, b = rect, np.roll(rect, -1, axis=0)
+        ab, rel = b - a, pts[:, None, :] - a
+        inside = np.all(ab[:, 0] * rel[..., 1] - ab[:, 1] * rel[..., 0] > 0, axis=1)
+        d = np.minimum(d, np.where(inside, 0.0, distance_to_segments(pts, a, b).min(axis=1)))
+    for cx, cy, r in circles:
+        d = np.minimum(d, np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) - r)
+    return d
+
+
+def test_space_distance_is_the_numpy_distance_bit_for_bit_within_its_horizon() -> None:
+    """The compiled nearest-solid distance that placing clutter asks (sim.nearest) against every
+    edge in numpy: equal bit for bit below HORIZON_M, at least HORIZON_M beyond; the excluded box
+    left out, footprints taken later counted."""
+    from sim.clutter import HORIZON_M, _Space
+    from sim.geometry import rectangle_corners
+
+    rng = np.random.default_rng(7)
+    lay = Layout("t", 0)
+    for _ in range(60):
+        lay.box(*rng.uniform(0, 12, 2), rng.uniform(-np.pi, np.pi), *rng.uniform(0.01, 0.8, 2), 0.0,
+                float(rng.choice([0.2, 2.5])))
+    for _ in range(15):
+        lay.cylinder(*rng.uniform(0, 12, 2), rng.uniform(0.02, 0.4), 0.0, 1.0)
+    space = _Space(lay, np.zeros((1, 2)), 0.35)
+    for _ in range(5):
+        space.take_rect(rectangle_corners(*rng.uniform(0, 12, 2), rng.uniform(-np.pi, np.pi), *rng.uniform(0.05, 0.5, 2)))
+        space.take(rng.uniform(0, 12, 2), float(rng.uniform(0.05, 0.3)))
+    pts = np.vstack([rng.uniform(-2, 14, (4000, 2)), space.corners[:, 0] + rng.normal(0, 1e-9, (len(space.corners), 2))])
+    ids = np.append(space.box_index, np.full(len(space.corners) - len(space.box_index), -2))
+    circles = np.array(space.circles)
+    for exclude in (-1, int(space.box_index[3])):
+        got = space.distance(pts, exclude=exclude)
+        ref = _nearest_solid_oracle(pts, space.corners, ids != exclude, circles)
+        near = ref < HORIZON_M
+        assert 1000 < near.sum() < len(pts) and (ref == 0).sum() > 100 and (ref < 0).sum() > 10
+        assert np.array_equal(got[near], ref[near])
+        assert np.all(got[~near] >= HORIZON_M)
