@@ -26,8 +26,7 @@ from .grid import bearings_of, grid_constants, window_sums
 __all__ = ["SensorMethodConfig", "extract_sensor", "extract_sensor_many", "signals"]
 
 METHOD = "sensor"
-_extract_scan = FixedTypeCall(engine.extract_scan)  # a Scan's types: read-only float64 arrays, floats
-_extract_scan_auto = FixedTypeCall(engine.extract_scan_auto)
+_extract_scan = FixedTypeCall(engine.extract_scan)  # a Scan's types: read-only float64 arrays, floats, a bool
 
 
 def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
@@ -38,12 +37,9 @@ def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
     bearings = bearings_of(scan.angle_min, scan.angle_increment, len(scan))
     range_lo = float(max(scan.range_min, cfg.min_range))
     sigma = cfg.sigma_for(scan.range_max)
-    if sigma == AUTO:
-        lv, lb, cv, cb = _extract_scan_auto(scan.ranges, bearings, scan.angle_min, scan.angle_increment, range_lo,
-                                            scan.range_max, float(scan.range_min), AUTO_FALLBACK, grid, p)
-    else:
-        lv, lb, cv, cb = _extract_scan(scan.ranges, bearings, scan.angle_min, scan.angle_increment, range_lo,
-                                       scan.range_max, float(sigma), grid, p)
+    auto = sigma == AUTO
+    lv, lb, cv, cb = _extract_scan(scan.ranges, bearings, scan.angle_min, scan.angle_increment, range_lo, scan.range_max,
+                                   0.0 if auto else float(sigma), auto, float(scan.range_min), AUTO_FALLBACK, grid, p)
     return FeatureSet.of(Lines(lv, lb), Corners(cv, cb), METHOD)
 
 

@@ -43,7 +43,7 @@ from lms200.noise import CLIP_SIGMAS, JUMP_FRACTION, MIN_RANGE_M, QUANTUM_CANDID
 from lms200.noise import _CLIP_STD_FACTOR as CLIP_STD_FACTOR
 
 from ..angles import TWO_PI
-from ..jit import kernel
+from ..jit import inline_kernel, kernel
 from ..rows import append_rows, finish_rows, new_rows
 
 PW_BLOCKSIZE = 128  # numpy's pairwise-summation block (numpy/_core/src/umath/loops_utils.h.src)
@@ -325,7 +325,7 @@ def median3(x: float, y: float, z: float) -> float:
     return max(min(x, y), min(max(x, y), z))
 
 
-@kernel
+@inline_kernel
 def partition(a, lo, hi, pivot, strict) -> int:  # noqa: ANN001
     """Move the values of a[lo:hi] below ``pivot`` (at most ``pivot`` when not ``strict``) to its
     front, the others behind them; returns where the others start. Without branches (Lomuto's
@@ -377,18 +377,26 @@ def median(x, scratch) -> float:  # noqa: ANN001
     buffer, which the selection then reorders) for the selection: the middle value, or the mean of
     the two middle ones."""
     n = x.size
+    for i in range(n):
+        scratch[i] = x[i]
+    return median_in_place(scratch, n)
+
+
+@kernel
+def median_in_place(a, n) -> float:  # noqa: ANN001
+    """np.median(a[:n]) (nan when it holds a nan or n is 0), reordering a[:n]: ``median`` without the
+    copy and without a view of a (a view is two atomic reference counts)."""
     if n == 0:
         return np.nan
     for i in range(n):
-        if x[i] != x[i]:
+        if a[i] != a[i]:
             return np.nan
-        scratch[i] = x[i]
-    hi = select(scratch, n, n // 2)
+    hi = select(a, n, n // 2)
     if n % 2:
         return hi
-    lo = scratch[0]
+    lo = a[0]
     for i in range(1, n // 2):
-        lo = max(lo, scratch[i])
+        lo = max(lo, a[i])
     return (lo + hi) / 2.0
 
 
@@ -415,7 +423,7 @@ def clipped_scale(z) -> float:  # noqa: ANN001
     m = median(z, scratch)
     for i in range(n):
         kz[i] = abs(z[i] - m)
-    s = 1.4826 * median(kz, scratch)
+    s = 1.4826 * median_in_place(kz, n)
     if s <= 0:  # more than half the residuals identical (coarse quantisation): start from the spread
         s = mean_std(z, n, scratch)[1]
         if s == 0:
@@ -730,7 +738,7 @@ def band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings, increment, sigm
 # -- 3. the Log-Hough transform in a band ---------------------------------------------------------
 
 
-@kernel
+@inline_kernel
 def template_at(template, idx) -> float:  # noqa: ANN001
     """template[idx], clipped onto its ends (which hold the floor: beyond them the beam cannot see the line)."""
     return template[min(max(idx, 0), template.size - 1)]
@@ -867,10 +875,20 @@ def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
             m += 1
     if m < LOCAL_MIN_TRIPLES:
         return 0.0
-    return MAD_TO_SIGMA * median(buf[:m], buf)  # selected in place (np.median copies)
+    return MAD_TO_SIGMA * median_in_place(buf, m)  # selected in place (np.median copies)
 
 
 @kernel
+def add_normal_terms(sums, wr, g, res):  # noqa: ANN001, ANN201
+    """The normal-equation sums (sum w, sum w g, sum w g^2, sum w r, sum w g r) of a line fit with
+    one more beam: weight ``wr``, residual ``res`` and its derivative ``g`` by alpha (the one
+    accumulation of ``gn_sums``, ``gn_sums_inliers`` and ``biweight_sums``; added beam after beam)."""
+    sw, swg, swgg, swr, swgr = sums
+    wg = wr * g
+    return sw + wr, swg + wg, swgg + wg * g, swr + wr * res, swgr + wg * res
+
+
+@inline_kernel
 def gn_sums(d, cb, sb, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN201
     """The weighted normal equations of a Gauss-Newton step of a line (rho, alpha = atan2(sa, ca))
     on the beams j = f .. f + cnt - 1 where valid[j] and use[s + j - f] (range d, bearing b given
@@ -879,9 +897,9 @@ def gn_sums(d, cb, sb, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN
     w = 1 / cos(b - alpha)^2 (0 within MIN_COS of grazing). Without branches on data: the loop
     runs in vector lanes. Offsets into whole arrays, not slices (a slice a run is two atomic
     reference counts)."""
-    sw = swg = swgg = swr = swgr = 0.0
+    sums = (0.0, 0.0, 0.0, 0.0, 0.0)
     if f < 0 or s < 0:
-        return sw, swg, swgg, swr, swgr
+        return sums
     for t in range(cnt):
         j = f + t
         c = cb[j] * ca + sb[j] * sa  # cos(b - alpha)
@@ -890,28 +908,24 @@ def gn_sums(d, cb, sb, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN
         g = dt * (sb[j] * ca - cb[j] * sa)
         ic = 1.0 / c
         wr = ic * ic if (c > MIN_COS) & valid[j] & use[s + t] else 0.0
-        wg = wr * g
-        sw += wr
-        swg += wg
-        swgg += wg * g
-        swr += wr * res
-        swgr += wg * res
-    return sw, swg, swgg, swr, swgr
+        sums = add_normal_terms(sums, wr, g, res)
+    return sums
 
 
-@kernel
+@inline_kernel
 def gn_sums_inliers(d, cb, sb, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, inl):  # noqa: ANN001, ANN201
     """``gn_sums`` on the beams j = f .. f + cnt - 1 within ``tau`` sigma_r of the line (|z| <=
     tau, z = r / (sigma_r cos(b - alpha)), written to z[j - f]; the inliers to inl[j - f]), with
     the line checks' sums over the inliers: chi^2 = sum z^2, their count, sums of t, t^2, t^3
     (t = j - f, integers: exact in any order below 2^53, runs under ~13,000 beams) and the first
     and last inlier's t (cnt and -1 when there is none)."""
-    sw = swg = swgg = swr = swgr = chi = 0.0
+    sums = (0.0, 0.0, 0.0, 0.0, 0.0)
+    chi = 0.0
     ni = i_t = i_t2 = i_t3 = 0
     lo = cnt
     hi = -1
     if f < 0:
-        return sw, swg, swgg, swr, swgr, chi, ni, i_t, i_t2, i_t3, lo, hi
+        return sums, chi, ni, i_t, i_t2, i_t3, lo, hi
     for t in range(cnt):
         j = f + t
         c = cb[j] * ca + sb[j] * sa
@@ -922,12 +936,7 @@ def gn_sums_inliers(d, cb, sb, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, in
         zt = res * ic * inv_sigma
         use = (c > MIN_COS) & valid[j] & (abs(zt) <= tau)
         wr = ic * ic if use else 0.0
-        wg = wr * g
-        sw += wr
-        swg += wg
-        swgg += wg * g
-        swr += wr * res
-        swgr += wg * res
+        sums = add_normal_terms(sums, wr, g, res)
         z[t] = zt
         inl[t] = use
         chi += zt * zt if use else 0.0
@@ -938,10 +947,10 @@ def gn_sums_inliers(d, cb, sb, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, in
         i_t3 += ti * ti * ti
         lo = min(lo, t if use else cnt)
         hi = max(hi, t if use else -1)
-    return sw, swg, swgg, swr, swgr, chi, ni, i_t, i_t2, i_t3, lo, hi
+    return sums, chi, ni, i_t, i_t2, i_t3, lo, hi
 
 
-@kernel
+@inline_kernel
 def curvature_sums(z, inl, cnt, a_lin, b_lin):  # noqa: ANN001, ANN201
     """(sum z q, sum q^2) over the inliers inl[:cnt], q = t^2 - a_lin - b_lin t (t the beam's offset)."""
     zq = qq = 0.0
@@ -1007,7 +1016,7 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
         rho1 = rho0[r] + (swgg * swr - swg * swgr) * inv_det
         alpha1 = alpha0[r] + (swg * swr - sw * swgr) * inv_det
         # step 2, on the beams within inlier_tau sigma_r of step 1's line, with the checks' sums
-        sw, swg, swgg, swr, swgr, chi, ni, i_t, i_t2, i_t3, lo, hi = gn_sums_inliers(
+        (sw, swg, swgg, swr, swgr), chi, ni, i_t, i_t2, i_t3, lo, hi = gn_sums_inliers(
             ranges, cos_b, sin_b, valid, f, cnt, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, tau, z_run, inl_run)
         inv_det = 1.0 / (sw * swgg - swg * swg)
         rho_r = rho1 + (swgg * swr - swg * swgr) * inv_det
@@ -1075,27 +1084,21 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
         n_points[m] += grow0 + grow1
 
 
-@kernel
-def biweight_sums(x, y, inv_c, ca, sa, rho, inv_cut):  # noqa: ANN001, ANN201
-    """The normal equations of one reweighted step of Tukey's biweight on the points (x, y) (m)
+@inline_kernel
+def biweight_sums(x, y, inv_c, n, ca, sa, rho, inv_cut):  # noqa: ANN001, ANN201
+    """The normal equations of one reweighted step of Tukey's biweight on the points (x, y)[:n] (m)
     about the line (rho, alpha = atan2(sa, ca)): (sum w, sum w g, sum w g^2, sum w r, sum w g r)
     with r the normal residual, g = d r / d alpha and w = ((1 - u^2)^2 / cos(b - alpha))^2 for
     |u| < 1 (else 0), u = r / cos(b - alpha) * inv_cut the ray residual in cut-offs
-    (``inv_c`` = 1 / cos(b - alpha))."""
-    sw = swg = swgg = swr = swgr = 0.0
-    for t in range(x.size):
+    (``inv_c`` = 1 / cos(b - alpha)). A count, not views: a view is two atomic reference counts."""
+    sums = (0.0, 0.0, 0.0, 0.0, 0.0)
+    for t in range(n):
         res = x[t] * ca + y[t] * sa - rho
         u = res * inv_c[t] * inv_cut
         bw = max(1.0 - u * u, 0.0) * inv_c[t]
-        wr = bw * bw
         g = y[t] * ca - x[t] * sa  # d res / d alpha = r sin(b - alpha)
-        wg = wr * g
-        sw += wr
-        swg += wg
-        swgg += wg * g
-        swr += wr * res
-        swgr += wg * res
-    return sw, swg, swgg, swr, swgr
+        sums = add_normal_terms(sums, bw * bw, g, res)
+    return sums
 
 
 @kernel
@@ -1132,10 +1135,10 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
             j += np.uint64(1)
         if k < 3:
             continue
-        scale = max(MAD_TO_SIGMA * median(z[:k], z), SIGMA_FLOOR_RAY)  # z selected in place: not read again
+        scale = max(MAD_TO_SIGMA * median_in_place(z, k), SIGMA_FLOOR_RAY)  # z selected in place: not read again
         inv_cut = 1.0 / (TUKEY_C * scale)
         for _ in range(ROBUST_STEPS):
-            sw, swg, swgg, swr, swgr = biweight_sums(x[:k], y[:k], inv_c[:k], math.cos(a_m), math.sin(a_m), r_m, inv_cut)
+            sw, swg, swgg, swr, swgr = biweight_sums(x, y, inv_c, k, math.cos(a_m), math.sin(a_m), r_m, inv_cut)
             det = sw * swgg - swg * swg
             if not det > 0.0:
                 break
@@ -1169,7 +1172,7 @@ def farthest_from_chord(f, l, ranges, bearings) -> int:  # noqa: ANN001
     return at
 
 
-@kernel
+@inline_kernel
 def valid_centroid(xs, ys, ok):  # noqa: ANN001, ANN201
     """(x, y, n): the mean of the points (xs, ys) (m, sensor frame) where ``ok`` (valid beams) and
     their count (x = y = 0 when there is none)."""
@@ -1212,7 +1215,7 @@ def tls_clipped(xs, ys, ok, sigma_r, lim) -> float:  # noqa: ANN001
     return out
 
 
-@kernel
+@inline_kernel
 def theta_turn(a, b, theta) -> float:  # noqa: ANN001
     """How far the slope estimate theta (rad) turns between the first and the last beam of a..b
     where it is known (inf where it is known at fewer than two): a cheap first look at whether
@@ -1228,7 +1231,7 @@ def theta_turn(a, b, theta) -> float:  # noqa: ANN001
     return abs(wrap(theta[j] - theta[i]))
 
 
-@kernel
+@inline_kernel
 def surface_turn(f, l, cx, cy, ranges, bearings) -> float:  # noqa: ANN001
     """The angle (rad) beams f and l subtend at the centre (cx, cy): how far a circle about it
     turns between them."""
@@ -1237,7 +1240,7 @@ def surface_turn(f, l, cx, cy, ranges, bearings) -> float:  # noqa: ANN001
     return abs(math.atan2(ax * by - ay * bx, ax * bx + ay * by))
 
 
-@kernel
+@inline_kernel
 def circle_gn_sums(j0, j1, e, ok):  # noqa: ANN001, ANN201
     """The normal equations of a geometric Gauss-Newton step of a circle over the beams where
     ``ok``, from the Jacobian rows [j0, j1, -1] and residuals e: (H00, H01, H02, H11, H12, H22,
@@ -1587,7 +1590,7 @@ def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p) -> int:  # no
     return n_out
 
 
-@kernel
+@inline_kernel
 def move_line(rho, alpha, cov, first, last, npts, i, to) -> None:  # noqa: ANN001
     """Line i of the table copied to row ``to`` (<= i)."""
     if to != i:
@@ -1731,12 +1734,18 @@ def corners(lv, lb, psi, ranges, valid, angle_min, increment, sigma_r, p):  # no
 
 
 @kernel
-def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p):  # noqa: ANN001, ANN201
+def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, auto, range_min, fallback, grid, p):  # noqa: ANN001, ANN201
     """Lines and corners of one scan (sensor frame): steps 1-6. ``bearings``: a Bearings record;
     ``range_lo``, ``range_hi``: valid range limits (m); ``sigma_r``: the range noise std for this
-    scan's units (m).
+    scan's units (m), or with ``auto`` estimated from the scan itself in the same call (step 0:
+    ``pooled_sigma`` of its one row, ``features.noise_estimate.scan_sigma`` of valid range limits
+    ``range_min`` (the scan's own) and ``range_hi``, ``fallback`` m when too few triples; ``sigma_r``
+    is then unused). One kernel for both (the switch a parameter): a second entry point compiled
+    the whole pipeline a second time (~9 s in a fresh checkout).
     Returns the rows of ``features.types.Lines`` and ``Corners``: line values, line beams
     (``segments``), corner values, corner beams (``corners``)."""
+    if auto:
+        sigma_r = pooled_sigma(ranges.reshape((1, ranges.size)), grid.twice_cos, range_min, range_hi, fallback)
     valid, _, AD, AD_var, _, theta, theta_var, psi, psi_var = beam_signals(
         ranges, bearings.b, p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum
     )
@@ -1750,27 +1759,13 @@ def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sig
 
 
 @kernel
-def extract_scan_auto(ranges, bearings, angle_min, increment, range_lo, range_hi, range_min, fallback, grid, p):  # noqa: ANN001, ANN201
-    """``extract_scan`` with the range noise sigma_r = "auto" estimated from the scan itself
-    (``pooled_sigma`` of its one row: ``features.noise_estimate.scan_sigma`` of valid range limits
-    ``range_min`` (the scan's own) and ``range_hi``, ``fallback`` m when too few triples), in the
-    same compiled call."""
-    sigma_r = pooled_sigma(ranges.reshape((1, ranges.size)), grid.twice_cos, range_min, range_hi, fallback)
-    return extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p)
-
-
-@kernel
 def extract_batch(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, auto, range_min, fallback, grid, p):  # noqa: ANN001, ANN201
-    """``extract_scan`` of every row of ``ranges`` (S, n), scans of one geometry, in one call; with
-    ``auto``, ``extract_scan_auto`` of every row instead (each scan's own noise estimate, as a
-    single call makes it; ``sigma_r`` is then unused). Returns the packed rows of all scans,
-    concatenated, and the (S + 1,) offsets of each scan's lines and corners in them."""
+    """``extract_scan`` of every row of ``ranges`` (S, n), scans of one geometry, in one call (with
+    ``auto``, each scan's own noise estimate, as a single call makes it). Returns the packed rows
+    of all scans, concatenated, and the (S + 1,) offsets of each scan's lines and corners in them."""
     rows = new_rows(ranges.shape[0])
     for s in range(ranges.shape[0]):
-        if auto:
-            scan_rows = extract_scan_auto(ranges[s], bearings, angle_min, increment, range_lo, range_hi, range_min,
-                                          fallback, grid, p)
-        else:
-            scan_rows = extract_scan(ranges[s], bearings, angle_min, increment, range_lo, range_hi, sigma_r, grid, p)
+        scan_rows = extract_scan(ranges[s], bearings, angle_min, increment, range_lo, range_hi, sigma_r, auto, range_min,
+                                 fallback, grid, p)
         rows = append_rows(rows, s, scan_rows)
     return finish_rows(rows)
