@@ -90,7 +90,8 @@ def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -
     log(f"== sim2real: {path.name} against the calibrated mit preset")
     max_scans = max(20, int(cfg.duration * cfg.rate_hz))
     result = sim2real(path, world="mit", seeds=(cfg.seed,), duration=cfg.duration, rate_hz=3.0, stride=10,
-                      max_scans=max_scans, fit_duration=min(30.0, cfg.duration), wall_relief=False)
+                      max_scans=max_scans, fit_duration=min(30.0, cfg.duration), wall_relief=False,
+                      probe_duration=cfg.duration)
     write_outputs(result, out / "sim2real", str(path), dict(log=str(path), duration=cfg.duration, stride=10,
                                                            max_scans=max_scans))
     body = format_report(result, path.name).split("\n", 2)[2]  # the tables, without the title

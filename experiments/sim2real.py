@@ -10,7 +10,8 @@ Steps, all with fixed settings (nothing is tuned to the log beyond what is said 
    and robot, over several seeds; the world's glass panels (which read as no return) follow the
    log's no-return readings in the ``mit`` preset (:func:`glass_rate`): a log without any has no
    glass the laser fails on, so its world gets none; its rough fill (:func:`fit_rough`) and wall
-   relief (:func:`fit_relief`) are fitted to statistics of the log's scans by probe runs;
+   relief (:func:`fit_relief`) are fitted to statistics of the log's scans by probe runs, the fill
+   again once the relief is known (:func:`fit_world`);
 4. every extractor on the real and the simulated scans (``experiments.compare.compare`` with the
    real-data measures of ``features.realdata``: explained fraction at 3 cm and 3 sigma, ray RMSE,
    lines per scan, mean segment length), plus the scene statistics of :func:`scene_statistics`.
@@ -69,6 +70,12 @@ SCALE_PROBES = (1.0, 1.5, 2.0)
 # is fitted to each log after the rough fill (fit_relief): the share of joints between two straight
 # stretches that step or bend (relief_share; no extractor), on the log and on probe runs at RELIEF_PROBES.
 RELIEF_PROBES = (0.0, 0.5, 1.0)
+# Simulated seconds of each probe run (every fit). A mit world takes about 1.6 s of CPU to build and
+# 120 s of scans at 3 Hz about 1.6 s to simulate, so long runs cost little, and a 20 s run sees
+# one or two rooms: whether the robot lingers before a relief panel moved a world's break share at
+# relief 0.5 from 0.004 to 0.19 (Intel's sensor, seeds 8 and 100). At 120 s, four probe worlds
+# fit a log of two other worlds at relief 0.5 / 0.75 to 0.31-0.51 / 0.66-0.86.
+PROBE_DURATION_S = 120.0
 RELIEF_WINDOW = 10  # beams in each straight stretch either side of a joint
 RELIEF_RANGE_M = (0.5, 4.0)  # beams used (m)
 RELIEF_STRAIGHT_TAU = 2.0  # a stretch is straight when its points' rms off their line is at most this x sigma
@@ -287,7 +294,7 @@ class ScaleFit:
     probe_shares: tuple[float, ...]
 
 
-def fit_scale(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = DEFAULT_DURATION_S,
+def fit_scale(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
               rate_hz: float = 3.0, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS), rough: float | None = None) -> ScaleFit:
     """The room size (``make_world(scale=...)``, a multiple of the preset's rooms) that makes the
     simulated ``mit`` worlds see as much at FAR_M or more as the log does (:func:`far_share`):
@@ -305,29 +312,35 @@ def fit_scale(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
 
 @dataclass
 class RoughFit:
-    """The mit worlds' rough fill fitted to a log: the log's near-unexplained share, the probes'."""
+    """The mit worlds' rough fill fitted to a log: the log's near-unexplained share, the probes'
+    (run at wall relief ``relief``: None for none)."""
 
     cover: float
     log_share: float
     probe_covers: tuple[float, ...]
     probe_shares: tuple[float, ...]
+    relief: float | None = None
 
 
-def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = DEFAULT_DURATION_S,
-              rate_hz: float = 3.0, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS), scale: float | None = None) -> RoughFit:
+def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
+              rate_hz: float = 3.0, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS), scale: float | None = None,
+              relief: float | None = None) -> RoughFit:
     """The rough-fill cover (share of the rooms' wall length, 0-1) that makes the simulated ``mit``
     worlds leave as many beams at NEAR_M unexplained as the log does (:func:`near_unexplained`):
     probe runs at ROUGH_PROBES (the first ``n_probe_seeds`` of ROUGH_PROBE_SEEDS), the log's share
     interpolated piecewise linearly on the probes' curve (made monotone), clipped to its ends: the
-    fill's effect saturates as the rooms' free wall runs out. ``scale``: the rooms' size (fit_scale)."""
+    fill's effect saturates as the rooms' free wall runs out. ``scale``: the rooms' size (fit_scale);
+    ``relief``: the wall relief the probes carry (fit_relief's; the relief's steps leave beams
+    unexplained too, so a fill fitted without it and then given it leaves more than the log)."""
     from experiments.calibrate import invert_probe_curve as _interpolate
 
     target = near_unexplained(real)
-    shares = _probe_shares(near_unexplained, "rough", ROUGH_PROBES, dict(scale=scale), glass, sensor, limits, duration,
-                           rate_hz, n_probe_seeds)
+    shares = _probe_shares(near_unexplained, "rough", ROUGH_PROBES, dict(scale=scale, relief=relief), glass, sensor,
+                           limits, duration, rate_hz, n_probe_seeds)
 
     cover = _interpolate(shares, list(ROUGH_PROBES), float(target)) if np.isfinite(target) else 0.0
-    return RoughFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(ROUGH_PROBES), tuple(shares))
+    return RoughFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(ROUGH_PROBES), tuple(shares),
+                    relief)
 
 
 def _window_lines(x: np.ndarray, y: np.ndarray, k: int) -> tuple[np.ndarray, ...]:
@@ -407,7 +420,7 @@ class ReliefFit:
     probe_shares: tuple[float, ...]
 
 
-def fit_relief(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = DEFAULT_DURATION_S,
+def fit_relief(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
                rate_hz: float = 3.0, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS), rough: float | None = None,
                scale: float | None = None, world: str = "mit",
                seeds: Sequence[int] = ROUGH_PROBE_SEEDS) -> ReliefFit:
@@ -426,10 +439,30 @@ def fit_relief(real: Sequence[Record], sensor: Any, limits: Any, glass: float | 
     return ReliefFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(RELIEF_PROBES), tuple(shares))
 
 
+def fit_world(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
+              rate_hz: float = 3.0, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS), fit_rooms: bool = False,
+              wall_relief: bool = True) -> tuple[RoughFit, ScaleFit | None, ReliefFit | None]:
+    """The mit worlds' amounts fitted to a log, in order: the rough fill (no relief), the room size
+    (``fit_rooms``), the wall relief (``wall_relief``; with that fill and size), then the rough fill
+    again with the fitted relief in its probes. The relief's panels step by 1-6 cm, which leaves
+    beams unexplained as the fill does; a fill fitted without them and then given them left more
+    unexplained than the log (Intel: the relief cost every method about 0.02 of explained fraction).
+    The relief statistic involves no extractor and is fitted once."""
+    rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds)
+    scale = fit_scale(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, rough.cover) if fit_rooms else None
+    size = None if scale is None else scale.scale
+    relief = (fit_relief(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, rough.cover, size)
+              if wall_relief else None)
+    if relief is not None and relief.cover > 0:
+        rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, size, relief.cover)
+    return rough, scale, relief
+
+
 def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT_SEEDS,
              duration: float = DEFAULT_DURATION_S, rate_hz: float = 3.0, stride: int = 5, max_scans: int | None = 400,
              methods: Sequence[str] = METHODS, sensor: Any = None, read_options: dict | None = None,
-             fit_duration: float | None = None, fit_rooms: bool = False, wall_relief: bool = True) -> Sim2RealResult:
+             fit_duration: float | None = None, fit_rooms: bool = False, wall_relief: bool = True,
+             probe_duration: float = PROBE_DURATION_S) -> Sim2RealResult:
     """Compare a real log with the calibrated simulation (see the module docstring).
 
     Args:
@@ -441,6 +474,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
             fill); off by default: see docs/simulator.md for what it did to the four logs.
         wall_relief: fit the mit worlds' wall relief to the log (:func:`fit_relief`, after the rough
             fill and room size); False: no relief (the demo, to spare its three probe worlds).
+        probe_duration: simulated seconds of each probe run of the mit worlds' fits (PROBE_DURATION_S).
 
     Raises:
         LmsbenchError: for a log without scans or an unknown world.
@@ -466,12 +500,9 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
                                stride=max(1, stride // 2), fit_duration=fit_duration or FIT_DURATION_S, **opts).sensor
     limits = motion_limits(every)
     glass = glass_rate(world, no_return_share(real, sensor.max_reading))
-    rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, len(seeds)) if world == "mit" else None
-    scale = (fit_scale(real, sensor, limits, glass, duration, rate_hz, len(seeds), rough.cover)
-             if rough is not None and fit_rooms else None)
+    rough, scale, relief = (fit_world(real, sensor, limits, glass, probe_duration, rate_hz, len(seeds), fit_rooms, wall_relief)
+                            if world == "mit" else (None, None, None))
     size = None if scale is None else scale.scale
-    relief = (fit_relief(real, sensor, limits, glass, duration, rate_hz, len(seeds), rough.cover, size)
-              if rough is not None and wall_relief else None)
     simulated: list[Record] = []
     for seed in seeds:
         simulated += simulate_records(make_world(world, seed, glass=glass, rough=None if rough is None else rough.cover,
@@ -551,7 +582,7 @@ def format_report(result: Sim2RealResult, log: str) -> str:
                 f"; rough fill {result.rough.cover:.2f} of the rooms' walls (beams at {NEAR_M[0]:g}-{NEAR_M[1]:g} m "
                 f"unexplained by {STATS_METHOD}: log {result.rough.log_share:.3f}, probes "
                 + ", ".join(f"{s:.3f} at {c:g}" for c, s in zip(result.rough.probe_covers, result.rough.probe_shares))
-                + ")")
+                + ("" if result.rough.relief is None else f", the probes at wall relief {result.rough.relief:.2f}") + ")")
              + ("" if result.relief is None else
                 f"; wall relief {result.relief.cover:.2f} of the free wall length (joints of straight stretches "
                 f"that break: log {result.relief.log_share:.4f}, probes "

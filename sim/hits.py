@@ -48,9 +48,9 @@ def resolve_hits(body: np.ndarray, dist: np.ndarray, origins: np.ndarray, ux: np
     """Ranges (m) of Bullet's hits and which rays must be cast again.
 
     Args:
-        body: (n,) hit body id (-1 for none); dist: (n,) Bullet's distance of the hit (m);
+        body: (n,) the solid hit (-1 for none); dist: (n,) Bullet's distance of the hit (m);
             origins: (n, 2) ray starts; ux, uy: (n,) ray directions.
-        kind_of_body, index_of_body: by body id (the last slot for -1): 0 box, 1 cylinder, -1
+        kind_of_body, index_of_body: by solid (the last slot for -1): 0 box, 1 cylinder, -1
             nothing; the solid's row in ``boxes`` (cx, cy, yaw, hx, hy, ...) or ``circles``
             (cx, cy, r).
         box_tol: a box hit farther than this (m) outside the box is Bullet's edge tolerance.

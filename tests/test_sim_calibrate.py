@@ -290,3 +290,35 @@ def test_sim2real_fits_read_their_probe_curves_with_invert_probe_curve(monkeypat
     shares = curve(None, None, sim2real.ROUGH_PROBES)
     assert rough.cover == round(invert_probe_curve(shares, sim2real.ROUGH_PROBES, 0.25), 3)
     assert rough.cover == pytest.approx((sim2real.ROUGH_PROBES[1] + sim2real.ROUGH_PROBES[2]) / 2, abs=1e-3)
+
+
+def test_fit_world_fits_the_rough_fill_with_the_fitted_relief_in_its_probes(monkeypatch) -> None:
+    """Both the rough fill and the wall relief leave beams unexplained. A log made with fill 0.4 and
+    relief 0.6 (a known linear model of both statistics replaces the probe runs) gives back 0.4 and
+    0.6; fitting the fill with probes that have no relief (the code before) gave 0.7."""
+    from experiments import sim2real
+
+    def near(recs):  # noqa: ANN001, ANN202
+        return 0.2 + 0.1 * 0.4 + 0.05 * 0.6  # the log
+
+    def breaks(recs):  # noqa: ANN001, ANN202
+        return 0.01 + 0.05 * 0.6
+
+    def probes(statistic, vary, values, fixed, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
+        out = []
+        for v in values:
+            p = {**fixed, vary: v}
+            rough, relief = p.get("rough") or 0.0, p.get("relief") or 0.0
+            out.append(0.2 + 0.1 * rough + 0.05 * relief if statistic is near else 0.01 + 0.05 * relief)
+        return out
+
+    monkeypatch.setattr(sim2real, "_probe_shares", probes)
+    monkeypatch.setattr(sim2real, "near_unexplained", near)
+    monkeypatch.setattr(sim2real, "relief_share", breaks)
+    rough, scale, relief = sim2real.fit_world([], None, None, None)
+    assert scale is None
+    assert relief is not None and relief.cover == pytest.approx(0.6, abs=1e-3)
+    assert rough.cover == pytest.approx(0.4, abs=1e-3)
+    assert rough.relief == pytest.approx(0.6, abs=1e-3)
+    first = sim2real.fit_rough([], None, None, None)  # no relief in the probes: too much fill
+    assert first.cover == pytest.approx(0.7, abs=1e-3)

@@ -411,18 +411,21 @@ def test_relief_share_counts_steps_between_straight_parallel_stretches() -> None
     assert np.isnan(relief_share([]))
 
 
-def test_fit_relief_recovers_a_known_cover_on_a_simulated_log() -> None:
-    """fit_relief on a simulated log of known wall relief (the cluttered office at cover 0.75, the
-    probes' seed): the fitted cover lies within 0.15 of it, between the probes at 0.5 and 1."""
-    from experiments.sim2real import fit_relief
+def test_fit_relief_recovers_a_known_cover_on_worlds_other_than_its_probes() -> None:
+    """fit_relief at its defaults (four probe worlds, seeds 100-103, of PROBE_DURATION_S each) on
+    a simulated log of two other mit worlds (seeds 8, 9, 120 s each) at wall relief 0.75: fitted
+    at 0.735. With the probes of 20 s that the fit used before: 0.627 (a 20 s probe world's break
+    share hangs on whether the robot lingers before a panel)."""
+    from experiments.sim2real import PROBE_DURATION_S, fit_relief
     from sim import simulate_records
 
-    sensor, seeds = SensorConfig(), (7,)
-    log = simulate_records(make_world("cluttered", 7, relief=0.75), 7, 12.0, sensor, rate_hz=3.0)
-    fit = fit_relief(log, sensor, None, None, duration=12.0, rate_hz=3.0, n_probe_seeds=1, world="cluttered", seeds=seeds)
+    sensor, rough = SensorConfig(), 0.14
+    log = [rec for seed in (8, 9)
+           for rec in simulate_records(make_world("mit", seed, glass=0.0, rough=rough, relief=0.75), seed,
+                                       PROBE_DURATION_S, sensor, rate_hz=3.0)]
+    fit = fit_relief(log, sensor, None, 0.0, rough=rough)
     assert fit.probe_shares[0] < fit.probe_shares[1] < fit.probe_shares[2]  # more relief, more breaks
-    assert fit.probe_shares[1] < fit.log_share < fit.probe_shares[2]
-    assert fit.cover == pytest.approx(0.75, abs=0.15)
+    assert fit.cover == pytest.approx(0.75, abs=0.1)
 
 
 def _nearest_solid_oracle(pts: np.ndarray, corners: np.ndarray, keep: np.ndarray, circles: np.ndarray) -> np.ndarray:

@@ -17,7 +17,7 @@ from experiments.options import (
     positive,
     world_name,
 )
-from experiments.sim2real import DEFAULT_DURATION_S, DEFAULT_SEEDS
+from experiments.sim2real import DEFAULT_DURATION_S, DEFAULT_SEEDS, PROBE_DURATION_S
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,6 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="simulated runs, one world each (default 0 1 2 3 4 5)")
     p.add_argument("--duration", type=positive("s"), default=DEFAULT_DURATION_S,
                    help="simulated seconds per seed (default 20)")
+    p.add_argument("--probe-duration", type=positive("s"), default=PROBE_DURATION_S,
+                   help="simulated seconds of each probe run of the mit world's fits (default %(default)g)")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=3.0, help="simulated scans kept per second (default 3)")
     p.add_argument("--stride", type=count(1), default=5, help="use every STRIDE-th real scan (default 5)")
     p.add_argument("--max-scans", type=count(1), default=400, help="at most this many real scans (default 400)")
@@ -61,8 +63,9 @@ def run(args: argparse.Namespace) -> int:
         sensor = SensorConfig.from_yaml(args.sensor)
     result = sim2real(args.log, world=args.world, seeds=args.seeds, duration=args.duration, rate_hz=args.rate_hz,
                       stride=args.stride, max_scans=args.max_scans, sensor=sensor, read_options=read_options,
-                      fit_rooms=args.fit_rooms)
-    config = dict(log=str(args.log), duration=args.duration, rate_hz=args.rate_hz, stride=args.stride,
+                      fit_rooms=args.fit_rooms, probe_duration=args.probe_duration)
+    config = dict(log=str(args.log), duration=args.duration, probe_duration=args.probe_duration, rate_hz=args.rate_hz,
+                  stride=args.stride,
                   max_scans=args.max_scans, sensor_file=None if args.sensor is None else str(args.sensor),
                   world=args.world, glass_per_10m=result.glass, fit_rooms=args.fit_rooms,
                   versions=versions())
