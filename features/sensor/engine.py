@@ -1431,11 +1431,10 @@ def fit_spans(first, last, shrink0, shrink1, ranges, log_r, bearings, valid, the
             c0[r] += shrink0[r]
             c1[r] -= shrink1[r]
     log_d = np.empty(total)
-    for r in range(n_runs):
-        f, s = first[r], starts[r]
-        lr, dr = log_d[s:s + counts[r]], log_r[f:f + counts[r]]
-        for t in range(counts[r]):
-            lr[t] = dr[t]
+    for r in range(n_runs):  # by offsets, unsigned: a view a run was two atomic reference counts
+        f, s = np.uint64(first[r]), np.uint64(starts[r])
+        for t in range(np.uint64(counts[r])):
+            log_d[s + t] = log_r[f + t]
     centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings.b, increment, sigma_r, k, p)
     alpha0, rho0, inlier0 = band_search(
         first, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
@@ -1465,10 +1464,9 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
             n_spans += 1
     first, last, shrink0, shrink1 = spans[0, :n_spans], spans[1, :n_spans], spans[2, :n_spans], spans[3, :n_spans]
     log_r = np.empty(ranges.size)  # log of the ranges of the spans' beams, once (later spans are parts of these)
-    for r in range(n_spans):
-        lr, dr = log_r[first[r]:last[r] + 1], ranges[first[r]:last[r] + 1]
-        for t in range(lr.size):
-            lr[t] = math.log(dr[t])
+    for r in range(n_spans):  # by beam index, not views of a span (two atomic reference counts each)
+        for j in range(np.uint64(first[r]), np.uint64(last[r] + 1)):
+            log_r[j] = math.log(ranges[j])
     min_span = max(p.min_points, 2 * k + 1)
     n_max = ranges.size // min_core + 1  # accepted spans are disjoint, each of min_core beams or more
     o_vals = np.empty((2, n_max))  # the accepted lines: rho, alpha; cov; first, last, n_points
