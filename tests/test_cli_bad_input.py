@@ -247,6 +247,9 @@ CASES = [
     (["sim2real", "{good.clf}", "--seeds", "-1", "--out", O], "--seeds"),
     (["sim2real", "{good.clf}", "--world", "office", "--fit-rooms", "--out", O], "--fit-rooms"),
     (["sim2real", "{good.clf}", "--duration", "inf", "--out", O], "--duration"),
+    (["sim2real", "{good.clf}", "--duration", "1e300", "--out", O], "--duration"),  # a tour that long never ends
+    (["sim2real", "{good.clf}", "--probe-duration", "1e7", "--out", O], "--probe-duration"),
+    (["sim2real", "{good.clf}", "--world", "office", "--probe-duration", "60", "--out", O], "--probe-duration"),
     (["sim2real", "{good.clf}", "--seeds", "1", "1", "--out", O], "--seeds"),
     (["sim2real", "{good.clf}", "--rate-hz", "0", "--out", O], "--rate-hz"),
     (["sim2real", "{good.clf}", "--stride", "0", "--out", O], "--stride"),

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from experiments.logargs import add_log_options, read_log_options
 from experiments.options import (
+    DURATION,
     SEED,
     InputError,
     check_log,
@@ -29,10 +30,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="use this sensor model instead of calibrating on the log")
     p.add_argument("--seeds", nargs="+", type=SEED, default=list(DEFAULT_SEEDS),
                    help="simulated runs, one world each (default 0 1 2 3 4 5)")
-    p.add_argument("--duration", type=positive("s"), default=DEFAULT_DURATION_S,
+    p.add_argument("--duration", type=DURATION, default=DEFAULT_DURATION_S,
                    help="simulated seconds per seed (default 20)")
-    p.add_argument("--probe-duration", type=positive("s"), default=PROBE_DURATION_S,
-                   help="simulated seconds of each probe run of the mit world's fits (default %(default)g)")
+    p.add_argument("--probe-duration", type=DURATION,
+                   help=f"simulated seconds of each probe run of the mit world's fits (default {PROBE_DURATION_S:g})")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=3.0, help="simulated scans kept per second (default 3)")
     p.add_argument("--stride", type=count(1), default=5, help="use every STRIDE-th real scan (default 5)")
     p.add_argument("--max-scans", type=count(1), default=400, help="at most this many real scans (default 400)")
@@ -57,6 +58,9 @@ def run(args: argparse.Namespace) -> int:
     check_seeds(args.seeds)
     if args.fit_rooms and args.world != "mit":
         raise InputError(f"--fit-rooms fits the mit world's room size; it does nothing for --world {args.world}")
+    if args.probe_duration is not None and args.world != "mit":
+        raise InputError(f"--probe-duration sets the mit world's fits; it does nothing for --world {args.world}")
+    args.probe_duration = PROBE_DURATION_S if args.probe_duration is None else args.probe_duration
     sensor = None
     if args.sensor is not None:
         check_yaml(args.sensor, "a sensor YAML")
