@@ -477,16 +477,16 @@ def test_the_smallest_scale_builds_every_roomed_world_with_exact_ranges() -> Non
     """scale = MIN_SCALE (the office's rooms 2 m a side) failed in every roomed world ("high - low <
     0": a leaning screen's or a pillar's place drawn in a room too small for it); such a room now
     goes without. Ideal ranges equal the independent ray caster's. Routes keep the robot's radius
-    from every solid from scale 0.7 on; at 0.5 they come within 0.17 m (docs/simulator.md)."""
-    from sim.worlds import MIN_SCALE, ROOMED_WORLDS
+    from every solid at MIN_SCALE (at 0.5 they came within 0.17 m, docs/simulator.md)."""
+    from sim.worlds import MIN_SCALE, ROBOT_RADIUS_M, ROOMED_WORLDS
 
     for name in ROOMED_WORLDS:
         for seed in (0, 4):
-            assert len(make_world(name, seed, scale=MIN_SCALE).walls) > 20
-            world = make_world(name, seed, scale=0.7)
+            world = make_world(name, seed, scale=MIN_SCALE)
+            assert len(world.walls) > 20
             for a, b in world.route_edges:
                 pts = world.route_nodes[a] + np.linspace(0, 1, 60)[:, None] * (world.route_nodes[b] - world.route_nodes[a])
-                assert world.clearance(pts).min() >= 0.25, (name, seed)
+                assert world.clearance(pts).min() >= ROBOT_RADIUS_M, (name, seed)
     small, sensor = make_world("office", 0, scale=MIN_SCALE), SensorConfig.ideal()
     with LMS200Sim(small, sensor) as lidar:
         for pose in free_poses(small, np.random.default_rng(5), 4):
