@@ -447,7 +447,8 @@ def fit_world(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     again with the fitted relief in its probes. The relief's panels step by 1-6 cm, which leaves
     beams unexplained as the fill does; a fill fitted without them and then given them left more
     unexplained than the log (Intel: the relief cost every method about 0.02 of explained fraction).
-    The relief statistic involves no extractor and is fitted once."""
+    The relief statistic involves no extractor and is fitted once, with the first fill in its probes
+    (not refitted at the final fill; how far that would move it was not measured)."""
     rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds)
     scale = fit_scale(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, rough.cover) if fit_rooms else None
     size = None if scale is None else scale.scale
