@@ -271,7 +271,8 @@ def _furnish_room(lay: Layout, rng: np.random.Generator, room: tuple, xd: float,
         lay.against_wall(kind, at, inward, width, depth)
     if rng.random() < 0.6:  # a screen leaning off a wall: acute (45-60 deg) and obtuse corners
         _angled_screen(lay, rng, walls, occupied, placed, pts)
-    if rng.random() < 0.4:  # a round pillar somewhere free
+    roomy = x1 - 0.9 >= x0 + 0.9 and y1 - 0.9 >= y0 + 0.9  # (small rooms, scale near MIN_SCALE, have no middle)
+    if rng.random() < 0.4 and roomy:  # a round pillar somewhere free
         for _ in range(20):
             r = float(rng.uniform(0.12, 0.3))
             c = np.array([rng.uniform(x0 + 0.9, x1 - 0.9), rng.uniform(y0 + 0.9, y1 - 0.9)])
@@ -295,7 +296,10 @@ def _angled_screen(lay: Layout, rng: np.random.Generator, walls: dict, occupied:
         lean = float(rng.choice([-1.0, 1.0]))
         direction = np.cos(phi) * lean * along + np.sin(phi) * inward
         reach = length * np.cos(phi)  # extent along the wall
-        s = float(rng.uniform(0.9 + max(0.0, -lean * reach), span - 0.9 - max(0.0, lean * reach)))
+        s_min, s_max = 0.9 + max(0.0, -lean * reach), span - 0.9 - max(0.0, lean * reach)
+        if s_max < s_min:
+            continue  # the wall is too short for this screen (small rooms: scale near MIN_SCALE)
+        s = float(rng.uniform(s_min, s_max))
         at = start + along * s
         tip = at + direction * length
         foot = at - direction * (0.04 / np.sin(phi))
