@@ -5,14 +5,11 @@ from __future__ import annotations
 from typing import Any
 
 from lms200 import LmsbenchError
+from lms200.errors import NumbaUnavailableError as NumbaUnavailableError  # re-exported: its home before sim and slam used it
 
 
 class ConfigError(LmsbenchError, ValueError):
     """A config field whose value cannot work; the message starts with the field's name."""
-
-
-class NumbaUnavailableError(LmsbenchError, ImportError):
-    """numba, which compiles the extractors, is not installed or cannot be loaded."""
 
 
 class ScanTypeError(LmsbenchError, TypeError):

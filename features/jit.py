@@ -4,15 +4,12 @@ inf or nan, as in numpy, never an exception)."""
 
 from __future__ import annotations
 
-from .errors import NumbaUnavailableError
+from lms200.errors import numba_unavailable
 
 try:
     import numba
 except Exception as exc:  # ImportError, or a broken install (llvmlite / numpy mismatch)
-    raise NumbaUnavailableError(
-        f"the extractors are compiled with numba, which cannot be loaded ({type(exc).__name__}: {exc}); "
-        "install it with: pip install 'numba>=0.61'"
-    ) from exc
+    raise numba_unavailable(exc, "the extractors are") from exc
 
 kernel = numba.njit(cache=True, error_model="numpy")
 # a small helper called per run, per line or per partition round: inlined into its callers in

@@ -15,8 +15,14 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
+
+from lms200.errors import numba_unavailable
+
+try:
+    import numba
+except Exception as exc:  # ImportError, or a broken install (llvmlite / numpy mismatch)
+    raise numba_unavailable(exc, "the simulator's ray caster is") from exc
 
 _kernel = numba.njit(cache=True, error_model="numpy")
 

@@ -12,8 +12,14 @@ from __future__ import annotations
 import math
 from typing import Any, Callable, TypeVar, cast
 
-import numba
 import numpy as np
+
+from lms200.errors import numba_unavailable
+
+try:
+    import numba
+except Exception as exc:  # ImportError, or a broken install (llvmlite / numpy mismatch)
+    raise numba_unavailable(exc, "the scan matcher is") from exc
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 _njit = numba.njit(cache=True, error_model="numpy", fastmath=False)
