@@ -87,14 +87,16 @@ def signals(scan: Scan, k: int = 3, sigma_r: float = 0.005, min_range: float = 0
     )
     from ..angles import wrap  # noqa: PLC0415
 
+    with np.errstate(invalid="ignore"):  # a variance rounded below 0 on a degenerate window reads nan, as before
+        ad_sigma, theta_sigma, psi_sigma = sigma_r * np.sqrt(AD_var), np.sqrt(theta_var), np.sqrt(psi_var)
     return {
         "ad": AD,
         "theta": wrap(theta),
         "psi": psi,
         "ad_slope": ad,
-        "ad_sigma": sigma_r * np.sqrt(AD_var),
-        "theta_sigma": np.sqrt(theta_var),
-        "psi_sigma": np.sqrt(psi_var),
+        "ad_sigma": ad_sigma,
+        "theta_sigma": theta_sigma,
+        "psi_sigma": psi_sigma,
         "bearing": np.asarray(scan.angles, dtype=float),
         "valid": valid,
         "ad_line": ad_line,
