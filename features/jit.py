@@ -4,12 +4,7 @@ inf or nan, as in numpy, never an exception)."""
 
 from __future__ import annotations
 
-from lms200.errors import numba_unavailable
-
-try:
-    import numba
-except Exception as exc:  # ImportError, or a broken install (llvmlite / numpy mismatch)
-    raise numba_unavailable(exc, "the extractors are") from exc
+from lms200.numba_required import numba
 
 kernel = numba.njit(cache=True, error_model="numpy")
 # a small helper called per run, per line or per partition round: inlined into its callers in

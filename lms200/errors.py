@@ -15,14 +15,6 @@ class NumbaUnavailableError(LmsbenchError, ImportError):
     installed or cannot be loaded."""
 
 
-def numba_unavailable(exc: BaseException, what: str) -> NumbaUnavailableError:
-    """The error for a failed ``import numba`` (``exc``) in the module that compiles ``what``."""
-    return NumbaUnavailableError(
-        f"{what} compiled with numba, which cannot be loaded ({type(exc).__name__}: {exc}); "
-        "install it with: pip install 'numba>=0.61'"
-    )
-
-
 class LogFormatError(LmsbenchError, ValueError):
     """A log file that cannot be read: the message names the file and the line number."""
 

@@ -17,12 +17,7 @@ import math
 
 import numpy as np
 
-from lms200.errors import numba_unavailable
-
-try:
-    import numba
-except Exception as exc:  # ImportError, or a broken install (llvmlite / numpy mismatch)
-    raise numba_unavailable(exc, "the simulator's ray caster is") from exc
+from lms200.numba_required import numba
 
 _kernel = numba.njit(cache=True, error_model="numpy")
 

@@ -14,12 +14,7 @@ from typing import Any, Callable, TypeVar, cast
 
 import numpy as np
 
-from lms200.errors import numba_unavailable
-
-try:
-    import numba
-except Exception as exc:  # ImportError, or a broken install (llvmlite / numpy mismatch)
-    raise numba_unavailable(exc, "the scan matcher is") from exc
+from lms200.numba_required import numba
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 _njit = numba.njit(cache=True, error_model="numpy", fastmath=False)
