@@ -33,6 +33,25 @@ def _reference(world: World, pose: np.ndarray, sensor: SensorConfig) -> tuple[np
     return ref, grazing
 
 
+def _route_clearance(world: World) -> float:
+    """The smallest distance (m) from the route's edges, sampled 60 points an edge, to any solid."""
+    return min(float(world.clearance(world.route_nodes[a] + np.linspace(0, 1, 60)[:, None]
+                                     * (world.route_nodes[b] - world.route_nodes[a])).min())
+               for a, b in world.route_edges)
+
+
+def _assert_ideal_ranges_match_reference(world: World, rng: np.random.Generator, n_poses: int) -> None:
+    """Noise-free ranges at ``n_poses`` free poses equal the independent ray caster's to 1 mm."""
+    sensor = SensorConfig.ideal()
+    with LMS200Sim(world, sensor) as lidar:
+        for pose in free_poses(world, rng, n_poses):
+            got = lidar.scan_at(tuple(pose)).ranges.copy()
+            ref, grazing = _reference(world, pose, sensor)
+            both = np.isfinite(ref) & np.isfinite(got) & ~grazing
+            assert np.count_nonzero(both) > 200
+            assert np.max(np.abs(got[both] - ref[both])) < 1e-3
+
+
 def test_clutter_zero_is_the_world_without_clutter() -> None:
     for name in ("office", "random", "corridor"):
         a, b = make_world(name, 3), make_world(name, 3, clutter=0.0)
@@ -103,9 +122,7 @@ def test_visible_truth_is_exact_in_clutter(name: str, seed: int) -> None:
 @pytest.mark.parametrize("name, seed", [("cluttered", 0), ("cluttered", 1), ("cluttered", 5), ("mit", 1)])
 def test_routes_keep_clear_of_clutter(name: str, seed: int) -> None:
     w = _world(name, seed)
-    for a, b in w.route_edges:
-        pts = w.route_nodes[a] + np.linspace(0, 1, 60)[:, None] * (w.route_nodes[b] - w.route_nodes[a])
-        assert w.clearance(pts).min() >= 0.4
+    assert _route_clearance(w) >= 0.4
 
 
 def test_glass_gives_no_return_and_hides_what_is_behind(tmp_path: Path) -> None:
@@ -227,9 +244,7 @@ def test_rough_fill_lines_the_rooms_walls_only_with_exact_truth() -> None:
         gap = np.min(np.minimum.reduce([c[:, 0] - 0.05, 7.95 - c[:, 0], c[:, 1] - 0.05, 4.95 - c[:, 1]]))
         assert abs(gap + EMBED_M) < 1e-9
     world = lay.build()
-    for a, b in world.route_edges:
-        pts = world.route_nodes[a] + np.linspace(0, 1, 60)[:, None] * (world.route_nodes[b] - world.route_nodes[a])
-        assert world.clearance(pts).min() >= 0.4
+    assert _route_clearance(world) >= 0.4
     lengths = np.hypot(world.walls[:, 2] - world.walls[:, 0], world.walls[:, 3] - world.walls[:, 1])
     assert np.median(lengths) < 0.14  # shorter than a line extractor's shortest line at 2 m (8 beams)
     sensor = SensorConfig.ideal()
@@ -280,17 +295,8 @@ def test_scaled_rooms_keep_exact_truth_and_scale_one_is_the_world() -> None:
     assert by1 - by0 - t - 2.0 == pytest.approx(1.5 * (y1 - y0 - t - 2.0))  # rooms 4 -> 6 m deep, corridor 2 m
     furniture = [np.count_nonzero(w.boxes[:, 6] == h) for w in (base, big) for h in (1.2, 2.0)]
     assert furniture[2] + furniture[3] > furniture[0] + furniture[1]  # cabinets and shelves: more in bigger rooms
-    for a, b in big.route_edges:
-        pts = big.route_nodes[a] + np.linspace(0, 1, 60)[:, None] * (big.route_nodes[b] - big.route_nodes[a])
-        assert big.clearance(pts).min() >= 0.25
-    sensor = SensorConfig.ideal()
-    with LMS200Sim(big, sensor) as lidar:
-        for pose in free_poses(big, np.random.default_rng(3), 4):
-            got = lidar.scan_at(tuple(pose)).ranges.copy()
-            ref, grazing = _reference(big, pose, sensor)
-            both = np.isfinite(ref) & np.isfinite(got) & ~grazing
-            assert np.count_nonzero(both) > 200
-            assert np.max(np.abs(got[both] - ref[both])) < 1e-3
+    assert _route_clearance(big) >= 0.25
+    _assert_ideal_ranges_match_reference(big, np.random.default_rng(3), 4)
     with pytest.raises(ValueError, match="scale"):
         make_world("mit", 0, scale=5.0)
     with pytest.raises(ValueError, match="no rooms to scale"):  # not silently ignored
@@ -365,9 +371,7 @@ def test_wall_relief_panels_stand_proud_of_walls_with_exact_truth() -> None:
             for cx, cy, rad in world.circles:
                 on_circle |= np.abs(np.hypot(wh[:, 0] - cx, wh[:, 1] - cy) - rad) < 1e-6
             assert np.all(covered[np.isfinite(ref) & ~on_circle & ~grazing])
-    for a, b in world.route_edges:
-        pts = world.route_nodes[a] + np.linspace(0, 1, 60)[:, None] * (world.route_nodes[b] - world.route_nodes[a])
-        assert world.clearance(pts).min() >= 0.4
+    assert _route_clearance(world) >= 0.4
     with pytest.raises(ValueError, match="relief"):
         make_world("cluttered", 0, relief=1.5)
     with pytest.raises(ValueError, match="needs a clutter level"):
@@ -488,14 +492,5 @@ def test_the_smallest_scale_builds_every_roomed_world_with_exact_ranges() -> Non
         for seed in (0, 4):
             world = make_world(name, seed, scale=MIN_SCALE)
             assert len(world.walls) > 20
-            for a, b in world.route_edges:
-                pts = world.route_nodes[a] + np.linspace(0, 1, 60)[:, None] * (world.route_nodes[b] - world.route_nodes[a])
-                assert world.clearance(pts).min() >= ROBOT_RADIUS_M, (name, seed)
-    small, sensor = make_world("office", 0, scale=MIN_SCALE), SensorConfig.ideal()
-    with LMS200Sim(small, sensor) as lidar:
-        for pose in free_poses(small, np.random.default_rng(5), 4):
-            got = lidar.scan_at(tuple(pose)).ranges.copy()
-            ref, grazing = _reference(small, pose, sensor)
-            both = np.isfinite(ref) & np.isfinite(got) & ~grazing
-            assert np.count_nonzero(both) > 200
-            assert np.max(np.abs(got[both] - ref[both])) < 1e-3
+            assert _route_clearance(world) >= ROBOT_RADIUS_M, (name, seed)
+    _assert_ideal_ranges_match_reference(make_world("office", 0, scale=MIN_SCALE), np.random.default_rng(5), 4)
