@@ -79,8 +79,6 @@ def check_split_fields(cfg: object, chord: bool) -> None:
     checks.shared_fields(cfg)
     checks.positive("split_threshold", cfg.split_threshold, "m")
     checks.non_negative("merge_rms", cfg.merge_rms, "m")
-    if not isinstance(cfg.corners, CornerConfig):
-        checks.fail("corners", "must be a CornerConfig", cfg.corners)
     object.__setattr__(cfg, "_params", split_params(cfg, chord))
 
 
