@@ -12,6 +12,7 @@ import argparse
 import gzip
 import math
 import os
+import tempfile
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -177,9 +178,34 @@ def check_out(path: str | os.PathLike | None) -> Path | None:
     parent = p
     while not parent.exists():
         parent = parent.parent
-    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK) or not _can_create_in(parent):
         raise InputError(f"--out {p}: {parent} is not a writable folder")
     return p
+
+
+def check_out_file(path: str | os.PathLike | None, flag: str = "--out") -> Path | None:
+    """An output file: not a folder, in an existing writable folder (checked before any work)."""
+    if path is None:
+        return None
+    p = Path(path)
+    if p.is_dir():
+        raise InputError(f"{flag} {p} is a folder; give a file name")
+    parent = p.parent
+    if not parent.is_dir():
+        raise InputError(f"{flag} {p}: {parent} is not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK) or not _can_create_in(parent):
+        raise InputError(f"{flag} {p}: {parent} is not a writable folder")
+    return p
+
+
+def _can_create_in(folder: Path) -> bool:
+    """Whether a folder can be made in ``folder`` (made and removed at once): os.access says yes to
+    root everywhere, also in /proc or on a read-only mount."""
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".lmsbench-probe-", dir=folder))
+    except OSError:
+        return False
+    return True
 
 
 def check_methods(methods: Sequence[str] | None) -> list[str]:

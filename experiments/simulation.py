@@ -26,6 +26,9 @@ from sim.records import OdometryConfig
 from sim.robot import RobotLimits
 
 
+SIMULATION_KEYS = frozenset({"world", "seed", "duration", "rate_hz", "sensor", "odometry", "robot", "clutter"})
+
+
 @dataclass(frozen=True)
 class SimulationConfig:
     """One simulated run (the content of config.yaml)."""
@@ -53,11 +56,20 @@ class SimulationConfig:
 
     @classmethod
     def from_dict(cls, d: dict) -> "SimulationConfig":
+        """The inverse of :meth:`to_dict`. Raises ValueError for a key this config does not have
+        (a file of another kind would otherwise run the defaults) and for values of the wrong type."""
+        unknown = sorted(set(d) - SIMULATION_KEYS)
+        if unknown:
+            raise ValueError(f"unknown key(s) {unknown}; a simulate config has {sorted(SIMULATION_KEYS)}")
+        seed = d.get("seed", 0)
+        if isinstance(seed, bool) or not isinstance(seed, int):
+            raise ValueError(f"seed: must be a whole number, got {seed!r}")
+        rate_hz = d.get("rate_hz")
         robot = dict(d.get("robot") or {})
         if "pause_s" in robot:
             robot["pause_s"] = tuple(robot["pause_s"])
-        return cls(world=str(d.get("world", "office")), seed=int(d.get("seed", 0)),
-                   duration=float(d.get("duration", 120.0)), rate_hz=d.get("rate_hz"),
+        return cls(world=str(d.get("world", "office")), seed=seed,
+                   duration=float(d.get("duration", 120.0)), rate_hz=None if rate_hz is None else float(rate_hz),
                    sensor=SensorConfig(**(d.get("sensor") or {})),
                    odometry=OdometryConfig(**d["odometry"]) if d.get("odometry") else None,
                    robot=RobotLimits(**robot),

@@ -9,7 +9,7 @@ import numpy as np
 
 from lms200 import Scan
 
-from .errors import not_a_scan
+from .errors import ScanGeometryError, not_a_scan
 from .types import BatchFeatureSet, FeatureSet
 
 
@@ -25,7 +25,7 @@ def common_geometry(scans: Sequence[Scan]) -> Scan:
         if not isinstance(s, Scan):
             raise not_a_scan(s, f"scans[{i}]")
         if (s.ranges.size, s.angle_min, s.angle_increment, s.range_min, s.range_max) != key:
-            raise ValueError(
+            raise ScanGeometryError(
                 f"scans[{i}]: geometry (beams, angle_min, angle_increment, range_min, range_max) = "
                 f"{(len(s), s.angle_min, s.angle_increment, s.range_min, s.range_max)} differs from scans[0]'s {key}; "
                 "extract_many needs scans of one geometry (group them first)"

@@ -12,6 +12,11 @@ class ConfigError(LmsbenchError, ValueError):
     """A config field whose value cannot work; the message starts with the field's name."""
 
 
+class ScanGeometryError(LmsbenchError, ValueError):
+    """A scan (or batch) whose geometry a method cannot handle: too many beams, a Log-Hough template
+    or Hough accumulator beyond its memory bound, scans of different geometry in one batch."""
+
+
 class ScanTypeError(LmsbenchError, TypeError):
     """An extractor was given something other than an ``lms200.Scan`` (a log record, a bare array)."""
 

@@ -17,7 +17,7 @@ from lms200 import Scan
 
 from .baselines.checks import MAX_BEAMS
 from .batch import common_geometry
-from .errors import ConfigError, ScanTypeError, not_a_scan
+from .errors import ConfigError, ScanGeometryError, ScanTypeError, not_a_scan
 from .types import FeatureSet
 
 # name -> module that registers it on import (kept lazy so `import features` stays cheap)
@@ -129,7 +129,7 @@ def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: An
     if not isinstance(scan, Scan):
         raise not_a_scan(scan, "extract")
     if len(scan) > MAX_BEAMS:
-        raise ValueError(too_many_beams(len(scan)))
+        raise ScanGeometryError(too_many_beams(len(scan)))
     return m.run(scan, cfg)
 
 
@@ -156,7 +156,7 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
         raise ScanTypeError("extract_many: expected a sequence of lms200.Scan, got one Scan (use extract, or [scan])")
     scans = list(scans)  # its items are checked to be Scans by common_geometry, on every path below
     if scans and isinstance(scans[0], Scan) and len(scans[0]) > MAX_BEAMS:
-        raise ValueError(too_many_beams(len(scans[0])))
+        raise ScanGeometryError(too_many_beams(len(scans[0])))
     if m.run_many is not None:
         return m.run_many(scans, cfg)
     if scans:

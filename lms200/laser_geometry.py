@@ -38,6 +38,17 @@ from dataclasses import dataclass, replace
 CONVENTION_FOV_DEG = 180.0  # CARMEN's assumed field of view of a FLASER scan without PARAM lines
 FIT_TOLERANCE_BEAMS = 0.25  # a declared fov / resolution must give the count to within this many beams
 
+MAX_RANGE_M = 10_000.0  # m: the largest range_max accepted (long-range 2-D lidars reach ~300 m)
+ANGLE_FIELDS = ("fov", "resolution", "angle_min")
+
+
+def _shown(name: str, value: float) -> str:
+    """A field's value for an error message: angles in rad and deg (the CLI flags take degrees)."""
+    if name in ANGLE_FIELDS and math.isfinite(value):
+        return f"{value:.6g} rad ({math.degrees(value):.6g} deg)"
+    return f"{value:g}" + (" m" if name == "range_max" and math.isfinite(value) else "")
+
+
 # PARAM names per laser message: (resolution deg, fov deg, max range m)
 PARAM_NAMES = {
     "FLASER": ("laser_front_laser_resolution", "laser_front_laser_fov", "robot_front_laser_max"),
@@ -74,12 +85,18 @@ class LaserGeometry:
                 value = float(value)
             except (TypeError, ValueError):
                 raise ValueError(f"{name}: must be a number, got {value!r}") from None
+            shown = _shown(name, value)
             if not math.isfinite(value):
-                raise ValueError(f"{name}: must be finite, got {value}")
+                raise ValueError(f"{name}: must be finite, got {shown}")
             if name != "angle_min" and value <= 0:
-                raise ValueError(f"{name}: must be > 0, got {value}")
+                raise ValueError(f"{name}: must be > 0, got {shown}")
             if name in ("fov", "resolution") and value > 2 * math.pi + 1e-9:
-                raise ValueError(f"{name}: must be at most 2 pi rad (360 deg), got {value} rad")
+                raise ValueError(f"{name}: must be at most 2 pi rad (360 deg), got {shown}")
+            if name == "angle_min" and abs(value) > 2 * math.pi + 1e-9:
+                raise ValueError(f"{name}: a bearing must be within +-2 pi rad (+-360 deg), got {shown}")
+            if name == "range_max" and value > MAX_RANGE_M:
+                raise ValueError(f"{name}: must be at most {MAX_RANGE_M:g} m (no 2-D rangefinder reaches farther), "
+                                 f"got {shown}")
             object.__setattr__(self, name, value)
 
     def merged(self, fallback: "LaserGeometry") -> "LaserGeometry":

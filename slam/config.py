@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import typing
 from dataclasses import dataclass, field
 from typing import Any, cast
+
+import numpy as np
 
 from lms200 import LmsbenchError
 
@@ -356,12 +359,18 @@ class SlamConfig:
     def __post_init__(self) -> None:
         if self.preset not in PRESETS:
             raise SlamConfigError(f"preset: must be one of {list(PRESETS)}, got {self.preset!r}")
+        if not isinstance(self.extractor, str) or not self.extractor.strip():
+            raise SlamConfigError(f"extractor: must be an extraction method's name, got {self.extractor!r}")
+        if not isinstance(self.extractor_params, dict) or not all(isinstance(k, str) for k in self.extractor_params):
+            raise SlamConfigError(f"extractor_params: must be a mapping of the method's config fields, "
+                                  f"got {self.extractor_params!r}")
         for name, cls in SECTIONS.items():
             value = getattr(self, name)
             if isinstance(value, dict):
-                object.__setattr__(self, name, _section(cls, name, value))
+                value = _section(cls, name, value)
             elif not isinstance(value, cls):
                 raise SlamConfigError(f"{name}: expected a mapping of {cls.__name__} fields, got {value!r}")
+            object.__setattr__(self, name, _checked_fields(value, name))
         if self.loop_closure.kernel not in ("cauchy", "huber"):
             raise SlamConfigError(f"loop_closure.kernel: must be 'cauchy' or 'huber', got {self.loop_closure.kernel!r}")
         for sec, name in (("alignment", "stride"), ("alignment", "max_iterations"), ("keyframes", "local_map"),
@@ -407,6 +416,8 @@ class SlamConfig:
             raise SlamConfigError("landmarks.confirm_hits and landmarks.tentative_window: must be >= 1")
         if o.point_stride < 1 or pa.min_points < 1:
             raise SlamConfigError("observations.point_stride and prealign.min_points: must be >= 1")
+        if len(m.odom_noise) != 3:
+            raise SlamConfigError(f"motion.odom_noise: must be 3 numbers (x, y, theta), got {list(m.odom_noise)!r}")
         noise = cast(tuple[float, float, float], tuple(float(v) for v in m.odom_noise))
         object.__setattr__(self, "motion", dataclasses.replace(m, odom_noise=noise))
 
@@ -437,15 +448,64 @@ SECTIONS: dict[str, type] = {"motion": MotionConfig, "observations": Observation
                              "prealign": PrealignConfig, "consistency": ConsistencyConfig}
 
 
+UNIT_FRACTION_SUFFIXES = ("_fraction", "min_inliers", "retry_inliers", "min_score")  # shares of points, in [0, 1]
+SIGNED_TUPLES = ("heading_hypotheses",)  # rad: offsets either way; every other tuple holds sigmas, >= 0
+
+
+def _checked_fields(section: Any, name: str) -> Any:
+    """``section`` with every field checked against its annotated type (SlamConfigError naming
+    ``name.field``): bools are bools, strings strings, ints whole numbers >= 0, floats finite and
+    >= 0 (every scalar is a distance, angle, time, sigma, count or share), shares of points in
+    [0, 1], probabilities in (0, 1), tuples finite numbers; numbers are stored as int / float. Range checks that involve
+    more than one field stay in :class:`SlamConfig`."""
+    hints = typing.get_type_hints(type(section))
+    changes: dict[str, Any] = {}
+    for f in dataclasses.fields(section):
+        where, value, kind = f"{name}.{f.name}", getattr(section, f.name), hints[f.name]
+        origin = typing.get_origin(kind) or kind
+        if kind is bool:
+            if not isinstance(value, (bool, np.bool_)):
+                raise SlamConfigError(f"{where}: must be true or false, got {value!r}")
+            changes[f.name] = bool(value)
+        elif kind is str:
+            if not isinstance(value, str):
+                raise SlamConfigError(f"{where}: must be a string, got {value!r}")
+        elif kind in (int, float):
+            number = _finite_number(where, value)
+            if number < 0:
+                raise SlamConfigError(f"{where}: must be >= 0, got {value!r}")
+            if kind is int:
+                if number != int(number):
+                    raise SlamConfigError(f"{where}: must be a whole number, got {value!r}")
+                number = int(number)
+            elif f.name.endswith(UNIT_FRACTION_SUFFIXES) and number > 1:
+                raise SlamConfigError(f"{where}: a share of points, must be in [0, 1], got {value!r}")
+            elif f.name.endswith("_probability") and not 0 < number < 1:
+                raise SlamConfigError(f"{where}: a probability, must be in (0, 1), got {value!r}")
+            changes[f.name] = number
+        elif origin is tuple:
+            if isinstance(value, (str, bytes, dict)) or not isinstance(value, (tuple, list, np.ndarray)):
+                raise SlamConfigError(f"{where}: must be a list of numbers, got {value!r}")
+            numbers = tuple(_finite_number(where, v) for v in value)
+            if f.name not in SIGNED_TUPLES and any(v < 0 for v in numbers):
+                raise SlamConfigError(f"{where}: must hold numbers >= 0, got {list(value)!r}")
+            changes[f.name] = numbers
+    return dataclasses.replace(section, **changes)
+
+
+def _finite_number(where: str, value: Any) -> float:
+    """``value`` as a finite float, or SlamConfigError naming ``where`` (bools are not numbers)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise SlamConfigError(f"{where}: must be a number, got {value!r}")
+    if not math.isfinite(float(value)):
+        raise SlamConfigError(f"{where}: must be finite, got {value!r}")
+    return float(value)
+
+
 def _section(cls: type, name: str, values: dict[str, Any]) -> Any:
     """A section dataclass from a mapping; unknown keys raise SlamConfigError."""
     known = {f.name for f in dataclasses.fields(cls)}
     unknown = sorted(set(values) - known)
     if unknown:
         raise SlamConfigError(f"unknown field(s) {unknown} in SLAM config section {name!r}; known: {sorted(known)}")
-    values = dict(values)
-    if "odom_noise" in values:
-        values["odom_noise"] = tuple(float(v) for v in values["odom_noise"])
-    if "heading_hypotheses" in values:
-        values["heading_hypotheses"] = tuple(float(v) for v in values["heading_hypotheses"])
-    return cls(**values)
+    return cls(**values)  # types are checked by _checked_fields

@@ -72,6 +72,13 @@ def files(tmp_path_factory):
     (d / "sensor_text.yaml").write_text("mixed_gap: abc\n")
     (d / "sensor_flag.yaml").write_text("quantise: 3\n")
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
+    # SLAM configs: a method's options nested under extractor, unknown / invalid method params, wrong types
+    (d / "slam_nested.yaml").write_text("extractor: {sensor: {band_tau: 3}}\n")
+    (d / "slam_param.yaml").write_text("extractor_params: {bogus: 1}\n")
+    (d / "slam_value.yaml").write_text("extractor: split_merge\nextractor_params: {split_threshold: -1}\n")
+    (d / "slam_type.yaml").write_text("motion: {sigma_accel: fast}\n")
+    (d / "slam_prob.yaml").write_text("slam: {prealign: {widen_probability: 1.5}}\n")
+    (d / "slam_noise.yaml").write_text("motion: {odom_noise: [0.1]}\n")
     # a sweep folder whose every cell failed
     (d / "failed_sweep").mkdir()
     pd.DataFrame({"x": [1, 2], "status": ["error", "error"], "error": ["E", "E"], "cell": ["a", "b"]}).to_parquet(
@@ -119,6 +126,9 @@ CASES = [
     (["simulate", "--config", "{binary.yaml}", "--out", O], "binary.yaml"),
     (["simulate", "--config", "{list.yaml}", "--out", O], "list.yaml"),
     (["simulate", "--config", "{missing.yaml}", "--out", O], "missing.yaml"),
+    (["simulate", "--config", "{slam_param.yaml}", "--out", O], "unknown key(s) ['extractor_params']"),
+    (["simulate", "--config", "{sensor_text.yaml}", "--duration", "2", "--out", O], "--duration cannot be given"),
+    (["simulate", "--config", "{sensor_text.yaml}", "--seed", "3", "--ideal", "--out", O], "--seed, --ideal cannot"),
     (["simulate", "--out", "{a_file}"], "not a folder"),
     (["simulate", "--resolution", "2", "--out", O], "--resolution"),
     (["simulate", "--clutter", "1e9", "--out", O], "--clutter"),
@@ -159,6 +169,12 @@ CASES = [
     (["slam", "{simrun}", "--config", "{badyaml.yaml}", "--out", O], "badyaml.yaml"),
     (["slam", "{simrun}", "--config", "{missing.yaml}", "--out", O], "missing.yaml"),
     (["slam", "{simrun}", "--extractor", "nosuch", "--out", O], "nosuch"),
+    (["slam", "{simrun}", "--config", "{slam_nested.yaml}", "--out", O], "extractor: must be an extraction method's name"),
+    (["slam", "{simrun}", "--config", "{slam_param.yaml}", "--out", O], "slam_param.yaml: unknown parameter(s) ['bogus']"),
+    (["slam", "{simrun}", "--config", "{slam_value.yaml}", "--out", O], "split_threshold"),
+    (["slam", "{simrun}", "--config", "{slam_type.yaml}", "--out", O], "motion.sigma_accel: must be a number"),
+    (["slam", "{simrun}", "--config", "{slam_prob.yaml}", "--out", O], "prealign.widen_probability: a probability"),
+    (["slam", "{simrun}", "--config", "{slam_noise.yaml}", "--out", O], "odom_noise: must be 3 numbers"),
     (["slam", "{backwards.clf}", "--out", O], "backwards"),
     (["slam", "{binary.clf}", "--out", O], "binary"),
     (["slam", "{no_returns.clf}", "--out", O], "no_returns.clf"),
@@ -228,8 +244,16 @@ CASES = [
     (["info", "{fake.bag}"], "fake.bag"),
     (["info", "{notalog.clf}"], "no laser"),
     (["info", "{good.clf}", "--laser-fov-deg", "90", "--laser-resolution-deg", "0.5"], "own beam geometry"),
+    (["info", "{good.clf}", "--laser-angle-min-deg", "1000"], "--laser-angle-min-deg: a bearing must be within"),
+    (["info", "{good.clf}", "--laser-angle-min-deg", "1e308"], "+-360 deg"),
+    (["info", "{good.clf}", "--laser-range-max", "1e308"], "--laser-range-max: must be at most 10000 m"),
+    (["info", "{good.clf}", "--laser-fov-deg", "-5"], "(-5 deg)"),
     (["compare", "{good.clf}", "--laser-resolution-deg", "1", "--out", O], "own beam geometry"),
     # calibrate
+    (["calibrate", "{good.clf}", "--out", "{a_file}/sensor.yaml"], "is not a folder"),
+    (["calibrate", "{good.clf}", "--out", "{empty_dir}"], "is a folder; give a file name"),
+    (["calibrate", "{good.clf}", "--out", "/proc/sensor.yaml"], "not a writable folder"),
+    (["compare", "{good.clf}", "--out", "/proc/lmsbench-out"], "not a writable folder"),
     (["calibrate", "{missing.clf}"], "missing.clf"),
     (["calibrate", "{binary.clf}"], "binary"),
     (["calibrate", "{plain.gz}"], "gzip"),

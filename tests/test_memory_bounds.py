@@ -100,3 +100,26 @@ def test_a_window_wider_than_any_scan_is_a_config_error_not_an_allocation():
     assert make_config("sensor", k=MAX_BEAMS // 2).k == MAX_BEAMS // 2
     with pytest.raises(ConfigError, match=r"^k: must be an integer >= 1 and <= 8192"):
         make_config("sensor", k=10**9)
+
+
+def test_extreme_hough_steps_and_bad_corner_configs_are_clear_errors():
+    """rho_step = 1e308 overflowed the accumulator size (OverflowError); a corners field that is not a
+    CornerConfig reached the extractor of hough / ransac (AttributeError). A geometry beyond a method's
+    bound is a ScanGeometryError: a ValueError (issue 12) and an LmsbenchError (one line on the CLI)."""
+    from features.errors import ConfigError, ScanGeometryError
+    from features.registry import MAX_BEAMS, make_config
+    from lms200 import LmsbenchError
+
+    b = np.deg2rad(0.5) * (np.arange(361) - 180)
+    scan = Scan(np.minimum(3.0 / np.maximum(np.abs(np.cos(b)), 1e-3), 8.0), float(b[0]), np.deg2rad(0.5), 0.0, 8.183)
+    assert len(extract(scan, "hough", config=make_config("hough", rho_step=1e308)).lines) == 0  # one rho cell
+    with pytest.raises(ScanGeometryError, match="accumulator") as info:
+        extract(scan, "hough", config=make_config("hough", rho_step=1e-300))
+    assert isinstance(info.value, ValueError) and isinstance(info.value, LmsbenchError)
+    for method in ("hough", "ransac", "split_merge", "iepf"):
+        for corners in ("abc", None, {}):
+            with pytest.raises(ConfigError, match="^corners: must be a CornerConfig"):
+                make_config(method, corners=corners)
+    wide = Scan(np.full(MAX_BEAMS + 1, 2.0), -1.0, 1e-4, 0.0, 8.0)
+    with pytest.raises(ScanGeometryError, match="beams is more than"):
+        extract(wide, "split_merge")

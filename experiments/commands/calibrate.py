@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import check_log, count, world_name
+from experiments.options import check_log, check_out_file, count, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -25,16 +25,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import tempfile
 
-    from lms200 import LmsbenchError
-
     from experiments.calibrate import calibrate_log, format_calibration, write_sensor_yaml
 
     read_options = read_log_options(args)
     check_log(args.log)
-    if args.out is not None and args.out.is_dir():
-        raise LmsbenchError(f"--out {args.out} is a folder; give a file name such as sensor.yaml")
-    if args.out is not None and not args.out.parent.exists():
-        raise FileNotFoundError(f"--out: no such folder: {args.out.parent}")
+    check_out_file(args.out)
     result = calibrate_log(args.log, world=args.world, stride=args.stride, max_scans=args.max_scans,
                            **read_options)
     for line in format_calibration(result):

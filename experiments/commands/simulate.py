@@ -14,28 +14,35 @@ from experiments.options import (DURATION, MAX_DURATION_S, SEED, InputError, che
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("simulate", help="simulate an LMS200 run through an office world (scans.clf, "
                                         "groundtruth.tum, world.json, config.yaml, map.png)")
-    p.add_argument("--world", default="office",
+    p.add_argument("--world", default=None,
                    help="office, corridor, angles, pillars, random, cluttered (office with clutter 1), "
                         "mit (the MIT-CSAIL-like preset), or a world.json (default office)")
     p.add_argument("--clutter", type=number(0.0), default=None,
                    help="clutter level of a named world: 0 none, 1 a furnished office, 2-3 busy "
                         "(chair and table legs, people, plants, bins, glass, doors at any angle; at most 10; default: the world's own)")
-    p.add_argument("--seed", type=SEED, default=0, help="seed of the world, tour and sensor noise (>= 0)")
-    p.add_argument("--duration", type=DURATION, default=120.0,
+    p.add_argument("--seed", type=SEED, default=None, help="seed of the world, tour and sensor noise (>= 0)")
+    p.add_argument("--duration", type=DURATION, default=None,
                    help=f"simulated time, s (default 120, at most {MAX_DURATION_S:g})")
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=None, help="keep about this many scans/s (default all)")
     p.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=float, choices=(0.25, 0.5, 1.0),
-                   default=0.5, help="angular resolution, deg: 0.5 (361 beams), 1 (181), 0.25 (401 over 100 deg); "
+                   default=None, help="angular resolution, deg: 0.5 (361 beams), 1 (181), 0.25 (401 over 100 deg); "
                    "--resolution is the old spelling")
-    p.add_argument("--units", choices=("mm", "cm"), default="mm", help="range unit mode (default mm)")
+    p.add_argument("--units", choices=("mm", "cm"), default=None, help="range unit mode (default mm)")
     p.add_argument("--ideal", action="store_true", help="exact ranges: no noise, quantisation, dropouts, ...")
     p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
                    help="sensor model from a YAML (e.g. from `lmsbench calibrate`); replaces --resolution-deg and --units")
     p.add_argument("--odometry", action="store_true", help="add noisy wheel odometry to the scans")
-    p.add_argument("--config", type=Path, help="rerun a config.yaml written by an earlier run")
+    p.add_argument("--config", type=Path, help="rerun a config.yaml written by an earlier run (it holds the whole "
+                                               "run: no other option of the run may be given with it)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
+
+
+RUN_FLAGS = (("--world", "world"), ("--clutter", "clutter"), ("--seed", "seed"), ("--duration", "duration"),
+             ("--rate-hz", "rate_hz"), ("--resolution-deg", "resolution_deg"), ("--units", "units"),
+             ("--ideal", "ideal"), ("--sensor", "sensor"), ("--odometry", "odometry"))
+DEFAULTS = {"world": "office", "seed": 0, "duration": 120.0, "resolution_deg": 0.5, "units": "mm"}
 
 
 def _config(args: argparse.Namespace):
@@ -48,6 +55,10 @@ def _config(args: argparse.Namespace):
     from experiments.simulation import SimulationConfig
 
     if args.config:
+        given = [flag for flag, dest in RUN_FLAGS if getattr(args, dest) not in (None, False)]
+        if given:
+            raise InputError(f"--config holds the whole run; {', '.join(given)} cannot be given with it "
+                             "(edit the file, or leave out --config)")
         check_yaml(args.config, "a simulate config.yaml")
         try:
             raw = load_yaml(args.config.read_text())
@@ -69,6 +80,9 @@ def _config(args: argparse.Namespace):
         if cfg.clutter is not None and not 0 <= cfg.clutter <= MAX_CLUTTER:
             raise InputError(f"{args.config}: clutter must be in [0, {MAX_CLUTTER:g}], got {cfg.clutter}")
         return cfg
+    for dest, default in DEFAULTS.items():
+        if getattr(args, dest) is None:
+            setattr(args, dest, default)
     worlds = known_worlds()
     if args.world not in worlds and not args.world.endswith(".json"):
         raise InputError(f"--world: unknown world {args.world!r}; known worlds: {', '.join(worlds)} or a world.json")

@@ -55,7 +55,10 @@ def _config(args: argparse.Namespace):
             raise LmsbenchError(f"{args.config}: not YAML ({exc})") from None
         if not isinstance(raw, dict):
             raise LmsbenchError(f"{args.config}: expected a mapping of SLAM config fields")
-        cfg = SlamConfig.from_dict(raw.get("slam", raw))
+        try:
+            cfg = SlamConfig.from_dict(raw.get("slam", raw))
+        except LmsbenchError as exc:
+            raise InputError(f"{args.config}: {exc}") from None
     changes = {}
     if args.preset:
         changes["preset"] = args.preset
@@ -68,9 +71,29 @@ def _config(args: argparse.Namespace):
     if args.odometry:
         changes["motion"] = dataclasses.replace(cfg.motion, use_odometry=True)
     cfg = dataclasses.replace(cfg, **changes)
+    _check_extractor(cfg, args.config)
     if cfg.motion.use_odometry and cfg.preset != "paper":
         raise LmsbenchError("--odometry drives the paper preset's filter: add --preset paper (the default pipeline uses no odometry)")
     return cfg
+
+
+def _check_extractor(cfg, source: Path | None) -> None:
+    """The config's extractor is a known method (or MODULE:FUNCTION) and its ``extractor_params`` are
+    fields of that method's config with valid values: checked now, before any scan is read."""
+    from features.registry import make_config
+    from lms200 import LmsbenchError
+
+    from experiments.user_methods import is_user_method
+
+    where = f"{source}: " if source is not None else ""
+    try:
+        method = check_methods([cfg.extractor])[0]
+        if not is_user_method(method):
+            make_config(method, **cfg.extractor_params)
+    except LmsbenchError as exc:
+        raise InputError(f"{where}{exc}") from None
+    except (TypeError, ValueError) as exc:  # a user method's own config type
+        raise InputError(f"{where}extractor_params: {' '.join(str(exc).split())}") from None
 
 
 def _check_input(path: Path) -> None:

@@ -75,10 +75,14 @@ def choice(name: str, value: object, allowed: tuple[str, ...]) -> None:
 
 def shared_fields(cfg: object) -> None:
     """The fields every baseline has: sigma, breakpoint_lambda, min_points, min_length, max_skip,
-    runs_z."""
+    runs_z, corners."""
     positive("sigma", cfg.sigma, "m")
     angle("breakpoint_lambda", cfg.breakpoint_lambda, math.pi / 2)
     integer("min_points", cfg.min_points, 2)
     non_negative("min_length", cfg.min_length, "m")
     integer("max_skip", cfg.max_skip, 1)
     non_negative("runs_z", cfg.runs_z)
+    from .common import CornerConfig  # noqa: PLC0415 (common imports this module)
+
+    if not isinstance(cfg.corners, CornerConfig):
+        fail("corners", "must be a CornerConfig", cfg.corners)

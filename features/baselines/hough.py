@@ -21,6 +21,7 @@ import numpy as np
 
 from lms200 import Scan
 
+from ..errors import ScanGeometryError
 from ..registry import register
 from ..types import FeatureSet, Lines
 from . import checks
@@ -118,9 +119,10 @@ def run(scan: Scan, cfg: HoughConfig) -> FeatureSet:
     n_alpha = int(round(np.pi / cfg.alpha_step))
     theta = np.arange(n_alpha) * cfg.alpha_step
     r_ext = float(pts.r.max()) + cfg.rho_step
-    n_rho = int(np.ceil(2 * r_ext / cfg.rho_step)) + 1 if r_ext / cfg.rho_step < MAX_CELLS else MAX_CELLS + 1
+    steps = r_ext / cfg.rho_step  # range in rho steps (2 * r_ext overflows for rho_step near 1e308)
+    n_rho = int(np.ceil(2 * steps)) + 1 if steps < MAX_CELLS else MAX_CELLS + 1
     if n_alpha * n_rho > MAX_CELLS:
-        raise ValueError(
+        raise ScanGeometryError(
             f"hough: the accumulator for the largest valid range {pts.r.max():.6g} m at rho_step {cfg.rho_step:g} m "
             f"and {n_alpha} angles needs more than {MAX_CELLS} cells; raise rho_step or alpha_step, or lower the "
             "scan's range_max so that such returns are not valid"

@@ -104,8 +104,6 @@ def check_split_fields(cfg: object, chord: bool) -> None:
     checks.non_negative("split_sigmas", cfg.split_sigmas)
     checks.non_negative("merge_rms", cfg.merge_rms, "m")
     checks.non_negative("merge_sigmas", cfg.merge_sigmas)
-    if not isinstance(cfg.corners, CornerConfig):
-        checks.fail("corners", "must be a CornerConfig", cfg.corners)
     object.__setattr__(cfg, "_params", split_params(cfg, chord))
 
 

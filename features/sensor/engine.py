@@ -325,79 +325,78 @@ def median3(x: float, y: float, z: float) -> float:
     return max(min(x, y), min(max(x, y), z))
 
 
-@inline_kernel
-def partition(a, lo, hi, pivot, strict) -> int:  # noqa: ANN001
-    """Move the values of a[lo:hi] below ``pivot`` (at most ``pivot`` when not ``strict``) to its
-    front, the others behind them; returns where the others start. Without branches (Lomuto's
-    scheme, every value swapped with the front's next slot or with itself): which side a value
-    takes is data, not predictable. Indexed unsigned: numba then adds no negative-index wraparound."""
-    s = np.uint64(lo)
-    i = np.uint64(lo)
-    end = np.uint64(hi)
-    while i < end:
-        x = a[i]
-        y = a[s]
-        c = x < pivot if strict else x <= pivot
-        a[i] = y if c else x
-        a[s] = x if c else y
-        s += np.uint64(c)
-        i += np.uint64(1)
-    return np.int64(s)
-
-
 @kernel
-def select(a, n, k) -> float:  # noqa: ANN001
-    """The k-th smallest of a[:n] (0-based; no nan), reordering a[:n] so that a[:k] <= a[k] <= a[k+1:n]
-    (quickselect: pivots the median of three, of three medians of three on long ranges)."""
-    lo, hi = 0, n  # a[:lo] <= a[lo:hi] <= a[hi:], k in [lo, hi)
-    while hi - lo > 1:
-        m = hi - lo
-        if m > 64:
-            st = m // 9
-            b = lo + st // 2
-            pivot = median3(median3(a[b], a[b + st], a[b + 2 * st]), median3(a[b + 3 * st], a[b + 4 * st], a[b + 5 * st]),
-                            median3(a[b + 6 * st], a[b + 7 * st], a[b + 8 * st]))
+def select(a, n, k, buf):  # noqa: ANN001, ANN201
+    """The k-th smallest of a[:n] (0-based; no nan) and the (k-1)-th (-inf for k = 0), by
+    quickselect with three-way partitions written to the other of ``a`` and ``buf`` (>= n each;
+    both overwritten): the values below the pivot to its front, those above to its back, the
+    pivot's copies dropped. Both writes are made for every value, without branches: which side a
+    value takes is data, not predictable, and no value is read back from a slot just written (an
+    in-place partition waits on a store to load every next value). The pivot: the median of three,
+    of three medians of three on long ranges. Indexed unsigned: numba then adds no negative-index
+    wraparound."""
+    src, dst = a, buf
+    off = np.uint64(0)  # the candidates: src[off:off + m], k counted from off
+    m = np.uint64(n)
+    kk = np.uint64(k)
+    below = -np.inf  # the largest value known to be below the candidates
+    while m > np.uint64(1):
+        if m > np.uint64(64):
+            st = m // np.uint64(9)
+            b = off + st // np.uint64(2)
+            pivot = median3(median3(src[b], src[b + st], src[b + np.uint64(2) * st]),
+                            median3(src[b + np.uint64(3) * st], src[b + np.uint64(4) * st], src[b + np.uint64(5) * st]),
+                            median3(src[b + np.uint64(6) * st], src[b + np.uint64(7) * st], src[b + np.uint64(8) * st]))
         else:
-            pivot = median3(a[lo], a[(lo + hi) // 2], a[hi - 1])
-        s = partition(a, lo, hi, pivot, True)
-        if k < s:
-            hi = s
-            continue
-        if s == lo:  # the pivot is the least value here: split off its copies
-            s = partition(a, lo, hi, pivot, False)
-            if k < s:
-                return pivot
-        lo = s
-    return a[k]
+            pivot = median3(src[off], src[off + m // np.uint64(2)], src[off + m - np.uint64(1)])
+        nl = np.uint64(0)
+        nh = np.uint64(0)
+        end = off + m - np.uint64(1)
+        for i in range(m):
+            x = src[off + i]
+            dst[off + nl] = x
+            dst[end - nh] = x
+            nl += np.uint64(x < pivot)
+            nh += np.uint64(x > pivot)
+        if kk < nl:
+            m = nl
+        elif kk >= m - nh:  # above the pivot: its copies and the values below it are smaller
+            kk -= m - nh
+            off += m - nh
+            m = nh
+            below = pivot
+        else:  # the pivot's value
+            if kk > nl:
+                return pivot, pivot
+            for i in range(nl):  # kk == nl: the next smaller is the largest value below the pivot
+                below = max(below, dst[off + i])
+            return pivot, below
+        src, dst = dst, src
+    return src[off], below
 
 
 @kernel
-def median(x, scratch) -> float:  # noqa: ANN001
-    """np.median(x) (nan when x holds a nan or is empty), with ``scratch`` (>= x.size; may be x's own
-    buffer, which the selection then reorders) for the selection: the middle value, or the mean of
-    the two middle ones."""
+def median(x, scratch, buf) -> float:  # noqa: ANN001
+    """np.median(x) (nan when x holds a nan or is empty), with ``scratch`` and ``buf`` (>= x.size
+    each; overwritten) for the selection: the middle value, or the mean of the two middle ones."""
     n = x.size
     for i in range(n):
         scratch[i] = x[i]
-    return median_in_place(scratch, n)
+    return median_in_place(scratch, n, buf)
 
 
 @kernel
-def median_in_place(a, n) -> float:  # noqa: ANN001
-    """np.median(a[:n]) (nan when it holds a nan or n is 0), reordering a[:n]: ``median`` without the
-    copy and without a view of a (a view is two atomic reference counts)."""
+def median_in_place(a, n, buf) -> float:  # noqa: ANN001
+    """np.median(a[:n]) (nan when it holds a nan or n is 0), overwriting a[:n] and buf[:n] (the
+    selection's): ``median`` without the copy and without a view of a (a view is two atomic
+    reference counts)."""
     if n == 0:
         return np.nan
     for i in range(n):
         if a[i] != a[i]:
             return np.nan
-    hi = select(a, n, n // 2)
-    if n % 2:
-        return hi
-    lo = a[0]
-    for i in range(1, n // 2):
-        lo = max(lo, a[i])
-    return (lo + hi) / 2.0
+    hi, lo = select(a, n, n // 2, buf)
+    return hi if n % 2 else (lo + hi) / 2.0
 
 
 @kernel
@@ -418,12 +417,12 @@ def clipped_scale(z) -> float:  # noqa: ANN001
     n = z.size
     if n == 0:
         return np.nan
-    work = np.empty((2, n))
-    kz, scratch = work[0], work[1]
-    m = median(z, scratch)
+    work = np.empty((3, n))
+    kz, scratch, buf = work[0], work[1], work[2]
+    m = median(z, scratch, buf)
     for i in range(n):
         kz[i] = abs(z[i] - m)
-    s = 1.4826 * median_in_place(kz, n)
+    s = 1.4826 * median_in_place(kz, n, buf)
     if s <= 0:  # more than half the residuals identical (coarse quantisation): start from the spread
         s = mean_std(z, n, scratch)[1]
         if s == 0:
@@ -857,10 +856,10 @@ def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angl
 
 
 @kernel
-def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
+def local_scale(ranges, valid, f, l, t, c2, buf, buf2) -> float:  # noqa: ANN001
     """Robust scale (m, 1.4826 x the median absolute value) of the collinearity residuals of the
     triples (j - t, j, j + t) of valid beams in f..l without a depth step (``lms200.noise.line_residuals``;
-    c2 = 2 cos(t D)), 0 when there are fewer than LOCAL_MIN_TRIPLES; ``buf`` is scratch of l - f + 1 or more."""
+    c2 = 2 cos(t D)), 0 when there are fewer than LOCAL_MIN_TRIPLES; ``buf`` and ``buf2`` are scratch of l - f + 1 or more."""
     m = 0
     for j in range(f + t, l - t + 1):
         if valid[j - t] and valid[j] and valid[j + t]:
@@ -875,7 +874,7 @@ def local_scale(ranges, valid, f, l, t, c2, buf) -> float:  # noqa: ANN001
             m += 1
     if m < LOCAL_MIN_TRIPLES:
         return 0.0
-    return MAD_TO_SIGMA * median_in_place(buf, m)  # selected in place (np.median copies)
+    return MAD_TO_SIGMA * median_in_place(buf, m, buf2)  # selected in place (np.median copies)
 
 
 @kernel
@@ -1034,7 +1033,7 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
         n_in[r] = ni
         chi_max = p.max_chi2 * max(ni - 2, 1)
         if chi > chi_max:  # the run's own noise, where it exceeds sigma_r
-            loc = local_scale(ranges, valid, f, f + cnt - 1, sweep, c2, scratch) / sigma_r
+            loc = local_scale(ranges, valid, f, f + cnt - 1, sweep, c2, scratch, z_run) / sigma_r  # z_run read no more
             chi_max *= max(1.0, loc * loc)
         good[r] = (
             ni >= min(p.min_points, 2 * p.k + 1)  # min_points is asked of the grown line (find_lines)
@@ -1113,8 +1112,8 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
     pulled off the bulk of its beams; the biweight keeps to the bulk. The covariance stays the
     least-squares one (the biweight's efficiency under Gaussian noise is 95 %)."""
     n = ranges.size
-    work = np.empty((4, n))  # one block: the used beams' x, y, 1 / cos(b - alpha), |z|
-    x, y, inv_c, z = work[0], work[1], work[2], work[3]
+    work = np.empty((5, n))  # one block: the used beams' x, y, 1 / cos(b - alpha), |z|, the median's scratch
+    x, y, inv_c, z, buf = work[0], work[1], work[2], work[3], work[4]
     cos_b, sin_b = bearings.cos, bearings.sin
     for m in range(rho.size):
         r_m, a_m = rho[m], alpha[m]
@@ -1135,7 +1134,7 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
             j += np.uint64(1)
         if k < 3:
             continue
-        scale = max(MAD_TO_SIGMA * median_in_place(z, k), SIGMA_FLOOR_RAY)  # z selected in place: not read again
+        scale = max(MAD_TO_SIGMA * median_in_place(z, k, buf), SIGMA_FLOOR_RAY)  # z selected in place: not read again
         inv_cut = 1.0 / (TUKEY_C * scale)
         for _ in range(ROBUST_STEPS):
             sw, swg, swgg, swr, swgr = biweight_sums(x, y, inv_c, k, math.cos(a_m), math.sin(a_m), r_m, inv_cut)

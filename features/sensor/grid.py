@@ -7,6 +7,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..errors import ScanGeometryError
 from ..noise_estimate import twice_cos
 from .engine import Bearings, Grid
 
@@ -31,13 +32,13 @@ def grid_constants(k: int, increment: float, subdiv: int) -> Grid:
     LOGCOS_FLOOR; a lookup beyond its ends is clipped onto the floor, which is the value there.
 
     Raises:
-        ValueError: when the angle step is so fine that the template would exceed MAX_TEMPLATE.
+        ScanGeometryError (a ValueError): when the angle step is so fine that the template would exceed MAX_TEMPLATE.
     """
     ad_line, two_sin_sum = window_sums(k, increment)
     step = increment / subdiv
     quarter_turn = 0.5 * np.pi / step if step > 0 else np.inf  # template steps up to pi/2
     if not 2 * (quarter_turn + 2) + 1 <= MAX_TEMPLATE:
-        raise ValueError(
+        raise ScanGeometryError(
             f"angle_increment: {increment:.3g} rad / hough_subdiv {subdiv} is too fine a Log-Hough step for the "
             f"sensor method (its template would need {2 * (quarter_turn + 2) + 1:.3g} entries, at most "
             f"{MAX_TEMPLATE}); use a coarser scan or a smaller hough_subdiv"
