@@ -187,7 +187,7 @@ def test_sim2real_of_a_simulated_log_agrees_with_itself(tmp_path: Path) -> None:
     truth = SensorConfig(units="cm", noise_sigma=0.006, dropout_prob=0.01, beam_width_deg=0.2)
     write_carmen(tmp_path / "log.clf", simulate_records("cluttered", seed=7, duration=20.0, sensor=truth, rate_hz=3.0))
     run = _cli("sim2real", str(tmp_path / "log.clf"), "--world", "cluttered", "--seeds", "7", "--duration", "20",
-               "--stride", "1", "--out", str(tmp_path / "out"))
+               "--rate-hz", "3", "--stride", "1", "--out", str(tmp_path / "out"))
     assert run.returncode == 0, run.stderr
     import pandas as pd
 

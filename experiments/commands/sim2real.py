@@ -18,7 +18,7 @@ from experiments.options import (
     positive,
     world_name,
 )
-from experiments.sim2real import DEFAULT_DURATION_S, DEFAULT_SEEDS, PROBE_DURATION_S
+from experiments.sim2real import DEFAULT_DURATION_S, DEFAULT_RATE_HZ, DEFAULT_SEEDS, PROBE_DURATION_S
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,10 +31,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seeds", nargs="+", type=SEED, default=list(DEFAULT_SEEDS),
                    help="simulated runs, one world each (default 0 1 2 3 4 5)")
     p.add_argument("--duration", type=DURATION, default=DEFAULT_DURATION_S,
-                   help="simulated seconds per seed (default 20)")
+                   help=f"simulated seconds per seed (default {DEFAULT_DURATION_S:g}, as the fits' probe runs)")
     p.add_argument("--probe-duration", type=DURATION,
                    help=f"simulated seconds of each probe run of the mit world's fits (default {PROBE_DURATION_S:g})")
-    p.add_argument("--rate-hz", type=positive("scans/s"), default=3.0, help="simulated scans kept per second (default 3)")
+    p.add_argument("--rate-hz", type=positive("scans/s"), default=DEFAULT_RATE_HZ,
+                   help=f"simulated scans kept per second (default {DEFAULT_RATE_HZ:g}; the probe runs keep 3)")
     p.add_argument("--stride", type=count(1), default=5, help="use every STRIDE-th real scan (default 5)")
     p.add_argument("--max-scans", type=count(1), default=400, help="at most this many real scans (default 400)")
     p.add_argument("--fit-rooms", action="store_true",
