@@ -48,6 +48,8 @@ class Source:
     estimate_sigma: Callable[[], float] | None = None  # how to estimate sigma_r when it is not known
     extractor_sigma: float | None = None  # noise for the extractors' thresholds (m); None: as sigma_r
     estimate_extractor_sigma: Callable[[], float] | None = None  # its estimate (logs: neighbour scatter)
+    fit_sigma: float | None = None  # scatter of beams about a fitted line (m), for split / merge tests; None: as extractor noise
+    estimate_fit_sigma: Callable[[], float] | None = None  # its estimate (logs: features.noise_estimate.fit_sigma)
     reader: Any = None  # the log reader (its ``stats`` say what was skipped)
     settings: dict[str, Any] = dataclasses.field(default_factory=dict)  # what produced the scans (saved beside results)
 
@@ -175,9 +177,15 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
 
         return neighbour_sigma(read_log(path, **options))
 
+    def estimate_fit_sigma() -> float:
+        from features.noise_estimate import fit_sigma
+
+        return fit_sigma(read_log(path, **options))
+
     return Source(Path(path).name, "log", None, records(), None, max_scans, sigma_r=None,
                   pose_of=(lambda rec: rec.odom) if corrected else None, estimate_sigma=estimate_sigma,
                   reader=reader, estimate_extractor_sigma=estimate_extractor_sigma,
+                  estimate_fit_sigma=estimate_fit_sigma,
                   settings={"log": str(path), "stride": stride, "poses": poses, **_plain(options)})
 
 
@@ -343,7 +351,7 @@ def compare(
     rd_cfg = realdata_config or RealDataConfig()
     for src in srcs:
         sigma_r = _source_sigma(src, sigma)
-        src_runs = _with_noise(runs, params, _extractor_noise(src, sigma_r))
+        src_runs = _with_noise(runs, params, _extractor_noise(src, sigma_r), _fit_noise(src))
         previous: dict[str, tuple[np.ndarray, Pose2D]] = {}  # method -> lines and pose of the last scan
         for k, rec in enumerate(src.records):
             if max_scans is not None and k >= max_scans:
@@ -408,6 +416,7 @@ def _source_sigma(src: Source, sigma: float | str) -> float:
 
 
 NOISE_FIELDS = ("sigma_r", "sigma_r_cm", "sigma")  # extractor config fields holding the range noise (m)
+FIT_NOISE_FIELDS = ("sigma_fit",)  # fields holding the scatter of beams about a fitted line (m; split_merge, iepf)
 
 
 def _extractor_noise(src: Source, sigma_r: float) -> float:
@@ -419,14 +428,26 @@ def _extractor_noise(src: Source, sigma_r: float) -> float:
     return float(src.extractor_sigma) if src.extractor_sigma is not None else sigma_r
 
 
-def _with_noise(runs: list, params: dict[str, dict[str, Any]], noise: float) -> list:
-    """``runs`` with every extractor's noise fields set to ``noise`` (m), except those the caller
-    set in ``params``."""
+def _fit_noise(src: Source) -> float | None:
+    """The scatter of beams about a fitted line (m) the split / merge tests of ``src``'s extractors
+    allow for: a log's ``features.noise_estimate.fit_sigma`` (below its neighbour scatter where
+    interlaced sweeps are offset), resolved once per source; None (the extractor noise) for
+    simulated sources."""
+    if src.fit_sigma is None and src.estimate_fit_sigma is not None:
+        src.fit_sigma = src.estimate_fit_sigma()
+    return src.fit_sigma
+
+
+def _with_noise(runs: list, params: dict[str, dict[str, Any]], noise: float, fit_noise: float | None = None) -> list:
+    """``runs`` with every extractor's noise fields set to ``noise`` (m) and its fit-scatter fields
+    to ``fit_noise`` (m; when given), except those the caller set in ``params``."""
     out = []
     for name, fn, cfg in runs:
         fields = {f.name for f in dataclasses.fields(cfg)}
         given = params.get(name, {})
-        noise_params = {f: noise for f in NOISE_FIELDS if f in fields and f not in given}
+        noise_params: dict[str, Any] = {f: noise for f in NOISE_FIELDS if f in fields and f not in given}
+        if fit_noise is not None and not any(f in given for f in NOISE_FIELDS):
+            noise_params.update({f: fit_noise for f in FIT_NOISE_FIELDS if f in fields and f not in given})
         out.append((name, fn, dataclasses.replace(cfg, **noise_params) if noise_params else cfg))
     return out
 

@@ -160,6 +160,9 @@ def robot_tour(world: World, seed: int = 0, duration: float = 120.0, limits: Rob
         phases.append((DRIVE, dist, lim.v_max, lim.a_max))
         if is_target[k]:
             phases.append((STILL, float(rng.uniform(*lim.pause_s)), 0.0, 0.0))
+    if not phases:
+        raise LmsbenchError(f"world {world.name!r}: its route graph joins no two route targets, so the robot "
+                            "has nowhere to drive (route_edges must connect route_targets)")
     kind = np.array([p[0] for p in phases], dtype=int)
     amount = np.array([p[1] for p in phases])
     vmax = np.array([p[2] for p in phases])

@@ -7,6 +7,7 @@ All coordinates in metres in the world frame, angles in radians.
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -18,6 +19,7 @@ from .geometry import distance_to_segments, face_corners, rectangle_corners, uni
 from .walls_only import box_thickness, orient_walls, unreproduced
 
 SCAN_HEIGHT_M = 0.35  # height of the scan plane above the floor (LMS200 on a Pioneer-class robot)
+MAX_COORD_M = 1e6  # m: the largest coordinate a world may hold (a building is < 1 km; beyond, float geometry degrades)
 FACE_BOX_THICKNESS_M = 0.05  # thickness of the boxes rebuilt behind faces for a walls-only world.json
 
 
@@ -67,6 +69,7 @@ class World:
         self.route_edges = np.asarray(self.route_edges, dtype=int).reshape(-1, 2)
         self.route_targets = np.asarray(self.route_targets, dtype=int).reshape(-1)
         self.glass = np.asarray(self.glass, dtype=float).reshape(-1, 4)
+        self._check()
         h = self.scan_height
         cut_boxes = self.boxes[(self.boxes[:, 5] <= h) & (self.boxes[:, 6] >= h)]
         cut_cyl = self.cylinders[(self.cylinders[:, 3] <= h) & (self.cylinders[:, 4] >= h)]
@@ -74,6 +77,28 @@ class World:
         rects = [rectangle_corners(*b[:5]) for b in cut_boxes]
         self.walls = union_faces(rects, self.circles)
         self.corners, self.corner_faces = face_corners(self.walls)
+
+    def _check(self) -> None:
+        """Raise ValueError naming the field for values no world can have: non-finite or larger than
+        MAX_COORD_M coordinates, solids of no size or upside down, a route that names nodes it does
+        not have (the robot's tour indexes them)."""
+        for name in ("boxes", "cylinders", "route_nodes", "glass"):
+            a = getattr(self, name)
+            if not np.isfinite(a).all() or (a.size and np.abs(a).max() > MAX_COORD_M):
+                raise ValueError(f"{name}: must be finite numbers within +-{MAX_COORD_M:g} m")
+        if not (math.isfinite(self.scan_height) and 0 <= self.scan_height <= MAX_COORD_M):
+            raise ValueError(f"scan_height: must be a finite height >= 0 m, got {self.scan_height}")
+        b, c = self.boxes, self.cylinders
+        if ((b[:, 3] <= 0) | (b[:, 4] <= 0) | (b[:, 6] <= b[:, 5])).any():
+            raise ValueError("boxes: half sizes hx, hy must be > 0 and the top z1 above the bottom z0")
+        if ((c[:, 2] <= 0) | (c[:, 4] <= c[:, 3])).any():
+            raise ValueError("cylinders: the radius must be > 0 and the top z1 above the bottom z0")
+        n = len(self.route_nodes)
+        for name in ("route_edges", "route_targets"):
+            idx = getattr(self, name)
+            if idx.size and (idx.min() < 0 or idx.max() >= n):
+                raise ValueError(f"{name}: node indices must be in [0, {n}) (route_nodes has {n}), "
+                                 f"got {int(idx.min())}..{int(idx.max())}")
 
     # -- JSON ---------------------------------------------------------------------------------
     def to_dict(self) -> dict:
@@ -140,7 +165,7 @@ class World:
                 route_targets=d.get("route_targets", []),
                 glass=d.get("glass", []),
             )
-        except (ValueError, TypeError, KeyError, IndexError) as exc:
+        except (ValueError, TypeError, KeyError, IndexError, OverflowError) as exc:
             raise LmsbenchError(f"{path}: not a world.json ({type(exc).__name__}: {exc})") from None
         bad = unreproduced(walls, world.walls, FACE_BOX_THICKNESS_M) if walls_only else None
         if bad is not None:

@@ -201,6 +201,10 @@ def test_runs_test_option_drops_lines_on_a_pillar(method):
         ("split_merge", {"min_points": 1}, "min_points"),
         ("split_merge", {"sigma": -0.005}, "sigma"),
         ("split_merge", {"merge_rms": -1.0}, "merge_rms"),
+        ("split_merge", {"split_sigmas": -1.0}, "split_sigmas"),
+        ("split_merge", {"merge_sigmas": float("nan")}, "merge_sigmas"),
+        ("split_merge", {"sigma_fit": 0.0}, "sigma_fit"),
+        ("iepf", {"sigma_fit": float("inf")}, "sigma_fit"),
         ("iepf", {"breakpoint_lambda": 0}, "breakpoint_lambda"),
         ("iepf", {"breakpoint_lambda": 10.0}, "breakpoint_lambda"),
         ("iepf", {"min_length": -0.1}, "min_length"),
@@ -255,3 +259,40 @@ def test_a_no_return_beam_breaks_a_wall_but_an_invalid_one_does_not(method: str)
             assert fs.lines[0].last < 180 < fs.lines[1].first
         for line in fs.lines:
             assert abs(line.rho - 2.0) < 0.01 and abs(line.alpha) < 0.01
+
+
+@pytest.mark.parametrize("method", ["split_merge", "iepf"])
+def test_split_and_merge_follow_the_noise_at_25_mm(method: str) -> None:
+    """Against the exact walls of the L room under 25 mm Gaussian noise (ACES's): with the
+    thresholds following the noise (max(3 cm, 3 sigma) split, 4 sigma for iepf's chord, max(1 cm,
+    2 sigma) merge) every visible wall is one line; with the LMS200's fixed 3-4 cm / 1 cm (the
+    defaults before issue #13's audit) the walls shatter into pieces that miss them (F1 ~0.11)."""
+    tp = fp = fn = fixed_tp = 0
+    for seed in range(4):
+        for pose in POSES:
+            scan, truth = room_scan(L_ROOM, pose, sigma=0.025, seed=seed)
+            s = score_scan(extract(scan, method, sigma=0.025), truth)
+            tp, fp, fn = tp + s.tp, fp + s.fp, fn + s.fn
+            fixed_tp += score_scan(extract(scan, method, sigma=0.025, split_sigmas=0.0, merge_sigmas=0.0), truth).tp
+    assert 2 * tp / (2 * tp + fp + fn) >= 0.95, (tp, fp, fn)
+    assert fixed_tp <= tp // 3
+
+
+@pytest.mark.parametrize("method", ["split_merge", "iepf"])
+def test_thresholds_at_lms200_noise_are_the_fixed_ones(method: str) -> None:
+    """At the LMS200's 5 mm the noise-following thresholds are the fixed 3 cm (iepf 4 cm) and 1 cm,
+    so the lines are those of split_sigmas = merge_sigmas = 0, and exact on the L room's walls."""
+    from features.baselines.split_merge import thresholds
+
+    assert thresholds(make_config(method)) == ((0.03 if method == "split_merge" else 0.04), 0.01)
+    assert thresholds(make_config(method, sigma=0.025)) == pytest.approx(
+        (0.075 if method == "split_merge" else 0.1, 0.05))
+    assert thresholds(make_config(method, sigma=0.025, sigma_fit=0.01)) == pytest.approx(
+        (0.03 if method == "split_merge" else 0.04, 0.02))
+    for seed in range(3):
+        scan, truth = room_scan(L_ROOM, POSES[seed], sigma=0.005, seed=seed)
+        fs = extract(scan, method)
+        fixed = extract(scan, method, split_sigmas=0.0, merge_sigmas=0.0)
+        np.testing.assert_array_equal(fs.line_array(), fixed.line_array())
+        s = score_scan(fs, truth)
+        assert (s.fp, s.fn) == (0, 0)

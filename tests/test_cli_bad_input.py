@@ -9,6 +9,7 @@ milliseconds. The Ctrl-C and Dask cases run in subprocesses.
 from __future__ import annotations
 
 import gzip
+import json
 import signal
 from pathlib import Path
 
@@ -39,6 +40,14 @@ def files(tmp_path_factory):
     (d / "list.json").write_text("[1, 2]")
     (d / "nan_walls.json").write_text('{"walls": [[0, 0, NaN, 1]]}')
     (d / "bad_boxes.json").write_text('{"boxes": [[1, 2]]}')
+    # world.json files whose route or scan plane cannot work (the tour indexed them: IndexError)
+    from sim import make_world
+
+    office = make_world("office", 0).to_dict()
+    for name, change in {"route_index": {"route_targets": [999]}, "route_nodes": {"route_nodes": []},
+                         "scan_height": {"scan_height": float("nan")}, "route_apart": {"route_edges": [[1, 2]]},
+                         "flat_box": {"boxes": [[0, 0, 0, 1, 0, 0, 1]]}}.items():
+        (d / f"world_{name}.json").write_text(json.dumps({**office, **change}))
     (d / "plain.gz").write_text("FLASER 3 1.0 1.0 1.0 0 0 0 0 0 0 1.0 host 1.0\n")
     (d / "fake.bag").write_text("not a bag\n")
     (d / "empty.clf").write_text("")
@@ -123,6 +132,11 @@ CASES = [
     (["simulate", "--world", "{list.json}", "--out", O], "list.json"),
     (["simulate", "--world", "{nan_walls.json}", "--out", O], "finite"),
     (["simulate", "--world", "{bad_boxes.json}", "--out", O], "bad_boxes.json"),
+    (["simulate", "--world", "{world_route_index.json}", "--out", O], "route_targets: node indices must be in [0, 20)"),
+    (["simulate", "--world", "{world_route_nodes.json}", "--out", O], "route_edges: node indices"),
+    (["simulate", "--world", "{world_scan_height.json}", "--out", O], "scan_height: must be a finite height"),
+    (["simulate", "--world", "{world_route_apart.json}", "--out", O], "joins no two route targets"),
+    (["simulate", "--world", "{world_flat_box.json}", "--out", O], "boxes: half sizes"),
     (["simulate", "--config", "{binary.yaml}", "--out", O], "binary.yaml"),
     (["simulate", "--config", "{list.yaml}", "--out", O], "list.yaml"),
     (["simulate", "--config", "{missing.yaml}", "--out", O], "missing.yaml"),

@@ -116,20 +116,27 @@ def test_truth_lines_of_a_simulated_scan_lie_on_its_beams() -> None:
 
 def test_exact_lines_score_the_noise_and_a_split_at_the_tolerance_scores_below_them() -> None:
     """Under 25 mm noise (3 cm = 1.2 sigma, as on ACES) the exact wall scores the truncated
-    normal's RMS, and split_merge (3 cm split threshold) less: its lines keep to the beams whose
-    noise happened to be small, a selection, not a better line (it covers fewer beams)."""
+    normal's RMS. split_merge with the LMS200's fixed thresholds (3 cm split, 1 cm merge: its
+    defaults before issue #13's audit) scores less: its lines keep to the beams whose noise
+    happened to be small, a selection, not a better line (it covers fewer beams). With its
+    noise-following defaults it covers the wall as the exact line does, at the exact line's RMSE."""
     from features.registry import extract
 
-    exact_sq = exact_n = sm_sq = sm_n = 0.0
+    exact_sq = exact_n = 0.0
+    sq = {"fixed": 0.0, "default": 0.0}
+    n = {"fixed": 0.0, "default": 0.0}
     for seed in range(6):
         scan = wall_scan(noise=0.025, seed=seed)
         covered = np.flatnonzero(scan.valid)
         exact = scan_measures(FeatureSet([line(3.0, 0.0, covered[0], covered[-1], scan)]), scan, 0.025)
-        sm = scan_measures(extract(scan, "split_merge", sigma=0.025), scan, 0.025)
         exact_sq += exact.ray_rmse_m**2 * exact.n_explained_tol
         exact_n += exact.n_explained_tol
-        sm_sq += sm.ray_rmse_m**2 * sm.n_explained_tol
-        sm_n += sm.n_explained_tol
-    exact_rmse, sm_rmse = math.sqrt(exact_sq / exact_n), math.sqrt(sm_sq / sm_n)
+        for name, kw in (("fixed", dict(split_sigmas=0.0, merge_sigmas=0.0)), ("default", {})):
+            sm = scan_measures(extract(scan, "split_merge", sigma=0.025, **kw), scan, 0.025)
+            sq[name] += sm.ray_rmse_m**2 * sm.n_explained_tol
+            n[name] += sm.n_explained_tol
+    exact_rmse = math.sqrt(exact_sq / exact_n)
     assert exact_rmse == pytest.approx(truncated_normal_rms(0.025, 0.03), rel=0.04)
-    assert sm_rmse < exact_rmse - 0.0005 and sm_n < exact_n
+    assert math.sqrt(sq["fixed"] / n["fixed"]) < exact_rmse - 0.0005 and n["fixed"] < exact_n
+    assert math.sqrt(sq["default"] / n["default"]) == pytest.approx(exact_rmse, rel=0.02)
+    assert n["default"] >= 0.97 * exact_n

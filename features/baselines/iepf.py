@@ -25,17 +25,23 @@ from .split_merge import check_split_fields, run_pipeline, run_pipeline_many
 class IepfConfig:
     """Defaults, for the LMS200 (sigma = 5 mm in mm mode):
 
-    - split_threshold: 0.04 m = 8 sigma: a chord between two noisy end points is itself off by up to
-      ~3 sigma at each end, so the chord threshold sits above split-and-merge's 6 sigma.
-    - the rest as ``split_merge`` (breakpoint_lambda 10 deg in rad, Borges & Aldon 2004; merge RMS 2 sigma;
+    - split_threshold, split_sigmas: 0.04 m (8 sigma of the LMS200's 5 mm) and 4: the split
+      threshold is max(split_threshold, split_sigmas x sigma_fit), a third above
+      split_merge's (0.03 m, 3), as a chord between two noisy end points is itself off by
+      their noise at each end.
+    - the rest as ``split_merge`` (sigma_fit, None: sigma; breakpoint_lambda 10 deg in rad,
+      Borges & Aldon 2004; merge RMS max(0.01 m, 2 sigma_fit);
       8 points and 0.15 m per line, Nguyen et al. 2007's P_min / L_min; up to two invalid beams
       bridged, none with no return; runs test off, ``runs_z`` = 0).
     """
 
     sigma: float = 0.005
+    sigma_fit: float | None = None  # m; None: sigma
     breakpoint_lambda: float = float(np.deg2rad(10.0))  # rad
-    split_threshold: float = 0.04
-    merge_rms: float = 0.01
+    split_threshold: float = 0.04  # m, least
+    split_sigmas: float = 4.0
+    merge_rms: float = 0.01  # m, least
+    merge_sigmas: float = 2.0
     min_points: int = 8
     min_length: float = 0.15
     max_skip: int = 3
