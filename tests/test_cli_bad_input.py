@@ -107,6 +107,12 @@ def files(tmp_path_factory):
     pd.DataFrame({"x": [1, 2], "status": ["error", "error"], "error": ["E", "E"], "cell": ["a", "b"]}).to_parquet(
         d / "failed_sweep" / "results.parquet")
     (d / "sweep_no_results").mkdir()
+    # damaged tables: a truncated parquet file in a figures tables/ folder and in a sweep folder
+    (d / "tables_broken").mkdir()
+    (d / "tables_broken" / "study.yaml").write_text("world: office\n")
+    (d / "tables_broken" / "summary.parquet").write_bytes(b"PAR1" + bytes(60))
+    (d / "sweep_broken").mkdir()
+    (d / "sweep_broken" / "results.parquet").write_bytes(b"PAR1" + bytes(60))
     for name in list(d.iterdir()):
         f[name.name] = str(name)
     return f
@@ -239,6 +245,8 @@ CASES = [
     (["sweep", "{sweep_cells.yaml}", "--out", O], "150000 cells"),
     (["sweep", "{sweep_long.yaml}", "--out", O], "duration: must be a number of seconds in (0, 3600]"),
     # figures
+    (["figures", "--tables", "{tables_broken}", "--out", O], "summary.parquet: not a readable parquet table"),
+    (["figures", "--tables", "{tables_broken}", "--sweep", "{sweep_broken}", "--out", O], "results.parquet: not a Parquet table"),
     (["figures", "--world", "offfice", "--out", O], "offfice"),
     (["figures", "--duration", "-5", "--out", O], "--duration"),
     (["figures", "--rate-hz", "0", "--out", O], "--rate-hz"),

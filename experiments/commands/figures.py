@@ -52,7 +52,16 @@ def run(args: argparse.Namespace) -> int:
         args.out = args.out or new_run_folder("results/figures")
         save_tables(tables, cfg, notes, args.out / "tables")
     args.out = args.out or new_run_folder("results/figures")
-    written = draw_figures(tables, args.out, signals_k=cfg.signals_k, world=cfg.world)
+    try:
+        written = draw_figures(tables, args.out, signals_k=cfg.signals_k, world=cfg.world)
+    except (KeyError, AttributeError, IndexError, TypeError, ValueError) as exc:
+        if not args.tables:
+            raise
+        from lms200 import LmsbenchError  # tables from the user's folder lack what a figure reads
+
+        raise LmsbenchError(f"--tables {args.tables}: the tables do not hold what the figures read "
+                            f"({type(exc).__name__}: {' '.join(str(exc).split())[:160]}); redraw from a "
+                            "complete tables/ folder of `lmsbench figures` or `lmsbench demo`") from None
     for folder in args.sweep:
         written.update(draw_sweep(folder, args.out))
     for name, paths in written.items():

@@ -71,7 +71,9 @@ def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
     """Plots of one sweep folder: each metric against the first grid parameter, a line per value
     of the second, a panel per value of the third (or combination of the rest); mean +/- std over
     seeds and random draws. A linked grid key "a,b" counts as its first name."""
-    table = pd.read_parquet(folder / "results.parquet")
+    from experiments.figures.study import read_table
+
+    table = read_table(folder / "results.parquet")
     spec = load_yaml((folder / "sweep.yaml").read_text())
     name = spec.get("name", folder.name)
     # one name per grid key: parameters linked to it ("a,b") follow it and need no line of their own

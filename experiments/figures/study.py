@@ -137,10 +137,21 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
 
 def load_tables(folder: Path) -> tuple[dict[str, pd.DataFrame], list[str]]:
     """The tables and notes saved by :func:`save_tables`."""
-    tables = {p.stem: pd.read_parquet(p) for p in sorted(folder.glob("*.parquet"))}
+    tables = {p.stem: read_table(p) for p in sorted(folder.glob("*.parquet"))}
     notes_file = folder / "notes.txt"
     notes = notes_file.read_text().splitlines() if notes_file.exists() else []
     return tables, notes
+
+
+def read_table(path: Path) -> pd.DataFrame:
+    """One saved table; a damaged or foreign file is an LmsbenchError naming it (pyarrow raises
+    ArrowInvalid, an OSError or a ValueError)."""
+    from lms200 import LmsbenchError
+
+    try:
+        return pd.read_parquet(path)
+    except (OSError, ValueError) as exc:
+        raise LmsbenchError(f"{path}: not a readable parquet table ({' '.join(str(exc).split())[:200]})") from None
 
 
 def _intel_panels(path: Path, n: int, method: str, params: dict | None,
@@ -181,9 +192,16 @@ def _slam_in_world(result, records) -> tuple[np.ndarray, np.ndarray]:
 
 def load_config(folder: Path) -> StudyConfig:
     """The settings saved beside the tables (defaults where there is no study.yaml)."""
+    from lms200 import LmsbenchError
+
     path = folder / "study.yaml"
-    raw = load_yaml(path.read_text()) if path.exists() else {}
-    known = {f.name for f in dataclasses.fields(StudyConfig)}
-    cfg = StudyConfig(**{k: v for k, v in (raw or {}).items() if k in known})
-    cfg.methods = tuple(cfg.methods)
+    try:
+        raw = load_yaml(path.read_text()) if path.exists() else {}
+        if not isinstance(raw or {}, dict):
+            raise TypeError("expected a mapping of the study's settings")
+        known = {f.name for f in dataclasses.fields(StudyConfig)}
+        cfg = StudyConfig(**{k: v for k, v in (raw or {}).items() if k in known})
+        cfg.methods = tuple(cfg.methods)
+    except (yaml.YAMLError, TypeError, ValueError, UnicodeDecodeError) as exc:
+        raise LmsbenchError(f"{path}: not the study.yaml of lmsbench figures / demo ({' '.join(str(exc).split())[:200]})") from None
     return cfg
