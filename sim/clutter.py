@@ -123,6 +123,25 @@ def _spot(rng: np.random.Generator, space: _Space, radius: float, tries: int = 6
     return None
 
 
+def _room_faces(lay: Layout, h: float) -> list:
+    """The wall faces (:func:`_wall_faces`) cut to the parts that face into a room (:func:`_in_room`,
+    tested 0.2 m off the face every ROUGH_STEP_M), each part as a face of its own."""
+    out = []
+    rooms = np.array(lay.rooms, dtype=float).reshape(-1, 4)  # x0, x1, y0, y1
+    for k, p0, u, n, length in _wall_faces(lay, h):
+        s = np.arange(0.0, length, ROUGH_STEP_M) + ROUGH_STEP_M / 2
+        pts = p0 + s[:, None] * u + n * 0.2
+        x, y = pts[:, :1], pts[:, 1:]
+        inside = (np.any((x >= rooms[:, 0]) & (x <= rooms[:, 1]) & (y >= rooms[:, 2]) & (y <= rooms[:, 3]), axis=1)
+                  if len(rooms) else np.ones(len(s), dtype=bool))  # as _in_room at each point
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], inside.astype(int), [0]))))
+        for a, b in zip(edges[::2], edges[1::2]):
+            start, stop = a * ROUGH_STEP_M, min(b * ROUGH_STEP_M, length)
+            if stop - start >= 0.5:
+                out.append((k, p0 + u * start, u, n, stop - start))
+    return out
+
+
 def _chair_legs(rng: np.random.Generator, c: np.ndarray, yaw: float) -> list[tuple[float, float, float]]:
     """Cylinders (x, y, r) of a chair at scan height: four legs on a 0.40-0.45 m square, or an
     office chair's central column (its star base lies below the scan plane)."""
@@ -369,7 +388,7 @@ def _seen(space: _Space, front: np.ndarray, sights: int) -> bool:
 
 def _wall_run(lay: Layout, rng: np.random.Generator, space: _Space, faces: list, h: float) -> bool:
     """Put one run of wall-side stuff (:func:`_run_items`) along a free stretch of some wall face,
-    drawn by length (tried 30 times)."""
+    drawn by length, in a room (:func:`_in_room`: corridors are kept clear; tried 30 times)."""
     if not faces:
         return False
     weights = np.array([f[4] for f in faces])
@@ -379,6 +398,8 @@ def _wall_run(lay: Layout, rng: np.random.Generator, space: _Space, faces: list,
         if face[4] - 0.4 < length:
             continue
         s0 = float(rng.uniform(0.2, face[4] - 0.2 - length))
+        if not _in_room(lay, face[1] + face[2] * (s0 + length / 2) + face[3] * 0.2):
+            continue  # corridors are kept clear: their long walls stay plain
         if _place_run(lay, rng, space, face, s0, length, _run_items):
             return True
     return False
@@ -426,24 +447,24 @@ def _place_run(lay: Layout, rng: np.random.Generator, space: _Space, face: tuple
 
 
 def _rough_fill(lay: Layout, rng: np.random.Generator, space: _Space, h: float, cover: float) -> float:
-    """Rough fill along the rooms' walls (the parts of wall faces in a room, :func:`_in_room`; the
-    faces in random order): each face is walked from one end in stretches of ROUGH_RUN_M, each filled with probability ``cover``
-    (:func:`_place_run`; where it does not fit, the walk moves on ROUGH_STEP_M and tries again)
-    and left bare otherwise. Returns the length filled (m)."""
-    faces = _wall_faces(lay, h)
+    """Rough fill along the rooms' walls: each wall of each room (:func:`_room_faces`) is filled
+    with probability ``cover`` (drawn from its own stream: one seed from ``rng``, then the face's
+    number, so the walls chosen at one cover are those chosen at any higher cover with some left out), and
+    then along its length: walked from one end in stretches of ROUGH_RUN_M (:func:`_place_run`; where
+    a stretch does not fit, the walk moves on ROUGH_STEP_M). Real rooms keep their stuff along some
+    walls and leave others plain, which the scanner then sees as long walls. Returns the length
+    filled (m)."""
+    faces = _room_faces(lay, h)
+    base = int(rng.integers(2 ** 32))
     done = 0.0
-    for f in rng.permutation(len(faces)):
-        face = faces[int(f)]
+    for f, face in enumerate(faces):
+        frng = np.random.default_rng([base, f])
+        if frng.random() >= cover:
+            continue
         s, end = 0.2, face[4] - 0.2
         while end - s >= ROUGH_RUN_M[0]:
-            if not _in_room(lay, face[1] + face[2] * (s + ROUGH_RUN_M[0] / 2) + face[3] * 0.2):
-                s += ROUGH_STEP_M  # this part of the face is not in a room (a corridor's side)
-                continue
-            length = min(float(rng.uniform(*ROUGH_RUN_M)), end - s)
-            if rng.random() >= cover:
-                s += length
-                continue
-            while end - s >= length and not _place_run(lay, rng, space, face, s, length, _rough_items, ROUGH_SIGHTS):
+            length = min(float(frng.uniform(*ROUGH_RUN_M)), end - s)
+            while end - s >= length and not _place_run(lay, frng, space, face, s, length, _rough_items, ROUGH_SIGHTS):
                 s += ROUGH_STEP_M
             if end - s >= length:
                 done += length

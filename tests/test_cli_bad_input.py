@@ -48,6 +48,10 @@ def files(tmp_path_factory):
                          "scan_height": {"scan_height": float("nan")}, "route_apart": {"route_edges": [[1, 2]]},
                          "flat_box": {"boxes": [[0, 0, 0, 1, 0, 0, 1]]}}.items():
         (d / f"world_{name}.json").write_text(json.dumps({**office, **change}))
+    # a simulate folder whose config.yaml is damaged (compare scores its scans with that sensor model)
+    (d / "simbroken").mkdir()
+    (d / "simbroken" / "world.json").write_text(json.dumps(office))
+    (d / "simbroken" / "config.yaml").write_text("sensor: {noise_sigma: 0.005, bogus: 1}\n")
     (d / "plain.gz").write_text("FLASER 3 1.0 1.0 1.0 0 0 0 0 0 0 1.0 host 1.0\n")
     (d / "fake.bag").write_text("not a bag\n")
     (d / "empty.clf").write_text("")
@@ -65,6 +69,7 @@ def files(tmp_path_factory):
     # a simulator-like folder: scans.clf and its truth
     (d / "simrun").mkdir()
     write_log(d / "simrun" / "scans.clf", good)
+    write_log(d / "simbroken" / "scans.clf", good)
     # sweep files
     (d / "sweep.yaml").write_text(yaml.safe_dump({"name": "t", "kind": "extract", "fixed": {"duration": 0.5},
                                                   "grid": {"extractor.k": [3]}}))
@@ -74,7 +79,16 @@ def files(tmp_path_factory):
                   "sweep_plain": {"fixed": {"duration": 0.5, "bogus": 1}}, "sweep_name": {"name": "../../x"},
                   "sweep_world": {"fixed": {"duration": 0.5, "world": "offfice"}},
                   "sweep_duration": {"fixed": {"duration": -1.0}},
-                  "sweep_slam": {"kind": "slam", "grid": {"slam.association.gate_probability": [1.5]}}}
+                  "sweep_slam": {"kind": "slam", "grid": {"slam.association.gate_probability": [1.5]}},
+                  "sweep_samples": {"random": {"extractor.ad_tau": {"uniform": [1.0, 2.0]}}, "samples": "abc"},
+                  "sweep_huge": {"random": {"extractor.ad_tau": {"uniform": [1.0, 2.0]}}, "samples": 10**9},
+                  "sweep_sample_seed": {"random": {"extractor.ad_tau": {"uniform": [1.0, 2.0]}}, "samples": 2,
+                                        "sample_seed": -1},
+                  "sweep_text_bounds": {"random": {"extractor.ad_tau": {"uniform": ["a", "b"]}}, "samples": 2},
+                  "sweep_int_bounds": {"random": {"extractor.min_points": {"int": [1.5, 3]}}, "samples": 2},
+                  "sweep_big_seed": {"seeds": [2**40]}, "sweep_name_number": {"name": 5},
+                  "sweep_cells": {"grid": {"extractor.k": list(range(3, 503)), "extractor.ad_tau": list(range(1, 301))}},
+                  "sweep_long": {"fixed": {"duration": 1e9}}}
     for name, change in bad_sweeps.items():
         (d / f"{name}.yaml").write_text(yaml.safe_dump({**base, **change}))
     (d / "list.yaml").write_text("- 1\n- 2\n")
@@ -150,6 +164,7 @@ CASES = [
     (["simulate", "--sensor", "{sensor_flag.yaml}", "--out", O], "quantise: must be true or false"),
     # compare
     (["compare", "office:x", "--out", O], "office:x"),
+    (["compare", "{simbroken}", "--out", O], "config.yaml: not a simulate config"),
     (["compare", "office:-1", "--out", O], "office:-1"),
     (["compare", "offfice", "--out", O], "offfice"),
     (["compare", "office", "--rate", "0", "--out", O], "--rate"),
@@ -214,6 +229,15 @@ CASES = [
     (["sweep", "{sweep_world.yaml}", "--out", O], "offfice"),
     (["sweep", "{sweep_duration.yaml}", "--out", O], "duration"),
     (["sweep", "{sweep_slam.yaml}", "--out", O], "gate_probability"),
+    (["sweep", "{sweep_samples.yaml}", "--out", O], "`samples:` must be a whole number"),
+    (["sweep", "{sweep_huge.yaml}", "--out", O], "`samples:` must be a whole number in [0, 100000]"),
+    (["sweep", "{sweep_sample_seed.yaml}", "--out", O], "`sample_seed:`"),
+    (["sweep", "{sweep_text_bounds.yaml}", "--out", O], "uniform needs [low, high]"),
+    (["sweep", "{sweep_int_bounds.yaml}", "--out", O], "int needs whole-number bounds"),
+    (["sweep", "{sweep_big_seed.yaml}", "--out", O], "`seeds:` must be distinct integers in [0, 4294967295]"),
+    (["sweep", "{sweep_name_number.yaml}", "--out", O], "name: must be a string"),
+    (["sweep", "{sweep_cells.yaml}", "--out", O], "150000 cells"),
+    (["sweep", "{sweep_long.yaml}", "--out", O], "duration: must be a number of seconds in (0, 3600]"),
     # figures
     (["figures", "--world", "offfice", "--out", O], "offfice"),
     (["figures", "--duration", "-5", "--out", O], "--duration"),

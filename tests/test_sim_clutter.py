@@ -258,7 +258,7 @@ def test_rough_fill_lines_the_rooms_walls_only_with_exact_truth() -> None:
     bare = floor()
     add_clutter(bare, np.random.default_rng(2), 1.0, ClutterConfig(0, 0, 0, 0, 0, 0, rough_cover=0.0))
     assert len(bare.boxes) == walls
-    mit, bare_mit = _world("mit", 1), make_world("mit", 1, rough=0.0)  # the preset has MIT CSAIL's fit: 1
+    mit, bare_mit = _world("mit", 1), make_world("mit", 1, rough=0.0)  # the preset has 1 (MIT CSAIL's fit: 0.89)
     n = len(bare_mit.boxes)  # the fill comes last: the rest of the world is the same
     assert len(mit.boxes) > n + 50 and np.array_equal(mit.boxes[:n], bare_mit.boxes)
     with pytest.raises(ValueError, match="rough"):
@@ -494,3 +494,41 @@ def test_the_smallest_scale_builds_every_roomed_world_with_exact_ranges() -> Non
             assert len(world.walls) > 20
             assert _route_clearance(world) >= ROBOT_RADIUS_M, (name, seed)
     _assert_ideal_ranges_match_reference(make_world("office", 0, scale=MIN_SCALE), np.random.default_rng(5), 4)
+
+
+def test_rough_fill_takes_whole_walls_nested_in_its_share() -> None:
+    """The rough fill chooses whole walls of rooms (sim.clutter._room_faces), each with probability
+    cover from its own stream: at cover 0.5 about half the room walls carry fill and the others none
+    (filling each 0.3-2 m stretch of every wall at 0.5, as before, left almost no 4-6 m wall bare), at
+    cover 1 most do (not short pieces by doors and furniture), and the walls chosen at 0.5 are among
+    those chosen at 1."""
+    from sim.clutter import ClutterConfig, _room_faces, add_clutter
+    from sim.worlds import office
+
+    def filled_faces(seed: int, cover: float) -> tuple[set[int], int]:
+        lay = office(np.random.default_rng(seed), "office", seed, n_per_side=3, room_w=5.0, room_d=6.0)
+        faces = _room_faces(lay, 0.35)
+        n = len(lay.boxes)
+        add_clutter(lay, np.random.default_rng([seed, 9]), 1.0, ClutterConfig(0, 0, 0, 0, 0, 0, rough_cover=cover))
+        got = set()
+        for cx, cy, *_ in lay.boxes[n:]:
+            c = np.array([cx, cy])
+            best, arg = np.inf, -1
+            for f, (_, p0, u, nrm, length) in enumerate(faces):
+                s = float(np.clip((c - p0) @ u, 0.0, length))
+                d = float(np.hypot(*(c - p0 - u * s)))
+                if (c - p0) @ nrm > 0 and d < best:
+                    best, arg = d, f
+            assert best < 0.45  # every piece of fill stands against a room wall
+            got.add(arg)
+        return got, len(faces)
+
+    half = full = total = 0
+    for seed in range(3):
+        at_half, n_faces = filled_faces(seed, 0.5)
+        at_full, _ = filled_faces(seed, 1.0)
+        assert at_half <= at_full
+        half, full, total = half + len(at_half), full + len(at_full), total + n_faces
+    assert total >= 30
+    assert full / total >= 0.75  # (short pieces of wall by doors and furniture take no fill)
+    assert 0.3 <= half / full <= 0.7

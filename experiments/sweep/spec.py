@@ -46,6 +46,8 @@ from lms200 import LmsbenchError
 
 Scalar = str | int | float | bool | None
 _DISTRIBUTIONS = ("uniform", "loguniform", "int", "choice")
+MAX_CELLS = 100_000  # cells of one sweep at most: each is a simulated run; the cell list stays small in memory
+MAX_SEED = 2**32 - 1  # as the CLI's --seed (numpy seeds a Generator from any int; worlds take 32 bits)
 _KEYS = {"name", "kind", "fixed", "grid", "random", "samples", "sample_seed", "seeds", "description"}
 
 
@@ -87,14 +89,17 @@ class SweepSpec:
         seeds = raw.get("seeds", [0])
         if isinstance(seeds, int):
             seeds = [seeds]
+        name = raw.get("name", default_name)
+        if not isinstance(name, str):
+            raise SweepSpecError(f"name: must be a string (it names the output folder results/sweeps/NAME), got {name!r}")
         return cls(
-            name=str(raw.get("name", default_name)),
+            name=name,
             kind=str(raw["kind"]),
             fixed=dict(raw.get("fixed") or {}),
             grid={k: list(v) if isinstance(v, (list, tuple)) else [v] for k, v in (raw.get("grid") or {}).items()},
             random=dict(raw.get("random") or {}),
-            samples=int(raw.get("samples", 0)),
-            sample_seed=int(raw.get("sample_seed", 0)),
+            samples=_whole("samples", raw.get("samples", 0), MAX_CELLS),
+            sample_seed=_whole("sample_seed", raw.get("sample_seed", 0), MAX_SEED),
             seeds=_seeds(seeds),
             description=str(raw.get("description", "")),
         )
@@ -142,6 +147,13 @@ def load_sweep(path: str | Path) -> SweepSpec:
         raise SweepSpecError(f"{path}: {exc}") from exc
 
 
+def _whole(name: str, value: Any, maximum: int) -> int:
+    """A whole number in [0, maximum] from the sweep file (not a bool, string or fraction)."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= maximum:
+        raise SweepSpecError(f"`{name}:` must be a whole number in [0, {maximum}], got {value!r}")
+    return value
+
+
 def _seeds(raw: Any) -> list[int]:
     """The ``seeds:`` list: whole numbers (an int alone is a list of one)."""
     if not isinstance(raw, (list, tuple)) or not all(isinstance(s, int) and not isinstance(s, bool) for s in raw):
@@ -186,8 +198,12 @@ def _check(spec: SweepSpec) -> None:
         if not (isinstance(dist, dict) and len(dist) == 1 and next(iter(dist)) in _DISTRIBUTIONS):
             raise SweepSpecError(f"random.{name} must be one of {{{'|'.join(_DISTRIBUTIONS)}: [...]}}, got {dist!r}")
         (law, args), = dist.items()
-        if law != "choice" and (not isinstance(args, list) or len(args) != 2 or not args[0] <= args[1]):
+        numeric = isinstance(args, list) and all(
+            not isinstance(a, bool) and isinstance(a, (int, float)) and math.isfinite(a) for a in args)
+        if law != "choice" and (not numeric or len(args) != 2 or not args[0] <= args[1]):
             raise SweepSpecError(f"random.{name}: {law} needs [low, high] with low <= high, got {args!r}")
+        if law == "int" and not all(isinstance(a, int) for a in args):
+            raise SweepSpecError(f"random.{name}: int needs whole-number bounds [low, high], got {args!r}")
         if law == "loguniform" and args[0] <= 0:
             raise SweepSpecError(f"random.{name}: loguniform needs low > 0, got {args!r}")
         if law == "choice" and (not isinstance(args, list) or not args):
@@ -196,8 +212,12 @@ def _check(spec: SweepSpec) -> None:
         raise SweepSpecError("`random:` needs `samples:` >= 1 (the number of draws)")
     if not spec.seeds:
         raise SweepSpecError("`seeds:` is empty; give at least one seed")
-    if any(s < 0 for s in spec.seeds) or len(set(spec.seeds)) != len(spec.seeds):
-        raise SweepSpecError(f"`seeds:` must be distinct integers >= 0, got {spec.seeds}")
+    if any(not 0 <= s <= MAX_SEED for s in spec.seeds) or len(set(spec.seeds)) != len(spec.seeds):
+        raise SweepSpecError(f"`seeds:` must be distinct integers in [0, {MAX_SEED}], got {spec.seeds}")
+    n_cells = math.prod(len(v) for v in spec.grid.values()) * (spec.samples if spec.random else 1) * len(spec.seeds)
+    if n_cells > MAX_CELLS:
+        raise SweepSpecError(f"the sweep has {n_cells} cells (grid x samples x seeds), more than {MAX_CELLS}; "
+                             "split it into several sweeps")
 
 
 def _check_scalar(where: str, value: Any) -> None:
