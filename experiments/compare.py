@@ -24,6 +24,7 @@ from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 import pandas as pd
+import yaml
 
 from features.registry import available_methods, backend_of, get_method, make_config
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
@@ -117,15 +118,23 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
     world = sim.World.from_json(p / "world.json")
     settings: dict[str, Any] = {"folder": str(p)}
     sensor = sim.SensorConfig()
+    seed = None
     if (p / "config.yaml").is_file():
-        cfg = load_yaml((p / "config.yaml").read_text()) or {}
-        if not isinstance(cfg, dict):
-            raise LmsbenchError(f"{p / 'config.yaml'}: not a simulate config")
-        sensor = sim.SensorConfig(**(cfg.get("sensor") or {}))
+        try:  # the simulate config the folder was made with: its sensor model scores the scans
+            cfg = load_yaml((p / "config.yaml").read_text()) or {}
+            if not isinstance(cfg, dict):
+                raise TypeError("expected a mapping of world, seed, duration, sensor, ...")
+            sensor = sim.SensorConfig(**(cfg.get("sensor") or {}))
+            seed = cfg.get("seed")
+            if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
+                raise TypeError(f"seed: must be a whole number, got {seed!r}")
+        except LmsbenchError as exc:
+            raise LmsbenchError(f"{p / 'config.yaml'}: {exc}") from None
+        except (yaml.YAMLError, TypeError, ValueError, UnicodeDecodeError) as exc:
+            raise LmsbenchError(f"{p / 'config.yaml'}: not a simulate config ({' '.join(str(exc).split())})") from None
         settings.update({k: cfg.get(k) for k in ("world", "seed", "duration", "rate_hz")})
     settings["sensor"] = dataclasses.asdict(sensor)
     inner = log_source(p / "scans.clf", stride, max_scans, poses="none")
-    seed = settings.get("seed")
     return Source(p.name, "sim", int(seed) if seed is not None else None, inner.records, _truth_in(world, sensor),
                   max_scans, sigma_r=sensor.noise_sigma, pose_of=lambda rec: rec.truth, reader=inner.reader,
                   settings=settings)

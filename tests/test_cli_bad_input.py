@@ -48,6 +48,10 @@ def files(tmp_path_factory):
                          "scan_height": {"scan_height": float("nan")}, "route_apart": {"route_edges": [[1, 2]]},
                          "flat_box": {"boxes": [[0, 0, 0, 1, 0, 0, 1]]}}.items():
         (d / f"world_{name}.json").write_text(json.dumps({**office, **change}))
+    # a simulate folder whose config.yaml is damaged (compare scores its scans with that sensor model)
+    (d / "simbroken").mkdir()
+    (d / "simbroken" / "world.json").write_text(json.dumps(office))
+    (d / "simbroken" / "config.yaml").write_text("sensor: {noise_sigma: 0.005, bogus: 1}\n")
     (d / "plain.gz").write_text("FLASER 3 1.0 1.0 1.0 0 0 0 0 0 0 1.0 host 1.0\n")
     (d / "fake.bag").write_text("not a bag\n")
     (d / "empty.clf").write_text("")
@@ -65,6 +69,7 @@ def files(tmp_path_factory):
     # a simulator-like folder: scans.clf and its truth
     (d / "simrun").mkdir()
     write_log(d / "simrun" / "scans.clf", good)
+    write_log(d / "simbroken" / "scans.clf", good)
     # sweep files
     (d / "sweep.yaml").write_text(yaml.safe_dump({"name": "t", "kind": "extract", "fixed": {"duration": 0.5},
                                                   "grid": {"extractor.k": [3]}}))
@@ -159,6 +164,7 @@ CASES = [
     (["simulate", "--sensor", "{sensor_flag.yaml}", "--out", O], "quantise: must be true or false"),
     # compare
     (["compare", "office:x", "--out", O], "office:x"),
+    (["compare", "{simbroken}", "--out", O], "config.yaml: not a simulate config"),
     (["compare", "office:-1", "--out", O], "office:-1"),
     (["compare", "offfice", "--out", O], "offfice"),
     (["compare", "office", "--rate", "0", "--out", O], "--rate"),
