@@ -6,7 +6,7 @@ import importlib
 from typing import Any
 
 from .codes import codes_to_ranges, decode_logged_ranges, ranges_to_codes
-from .errors import LmsbenchError, LogFormatError
+from .errors import InputError, LmsbenchError, LogFormatError, ScanError
 from .records import Pose2D, Record
 from .scan import Scan
 
@@ -36,6 +36,8 @@ __all__ = [
     "Pose2D",
     "LmsbenchError",
     "LogFormatError",
+    "ScanError",
+    "InputError",
     "codes_to_ranges",
     "ranges_to_codes",
     "decode_logged_ranges",

@@ -48,7 +48,7 @@ from .codes import (
     metres_per_unit,
 )
 from . import laser_geometry
-from .errors import LmsbenchError, LogFormatError
+from .errors import InputError, LmsbenchError, LogFormatError
 from .laser_geometry import LaserGeometry
 from .records import Pose2D, Record
 from .scan import Scan, snap_angle
@@ -114,7 +114,8 @@ class CarmenReader:
                  geometry: LaserGeometry | None = None) -> None:
         self.path = Path(path)
         if not self.path.is_file():
-            raise FileNotFoundError(f"no such log file: {self.path}")
+            what = "is not a regular file (a device or a pipe)" if self.path.exists() else "does not exist"
+            raise FileNotFoundError(f"no such log file: {self.path} {what}")
         if topic is not None and topic not in LASER_KINDS:
             raise LogFormatError(self.path, 0, f"topic: a CARMEN log's laser topics are message kinds "
                                                f"({', '.join(LASER_KINDS)}), got {topic!r}")
@@ -369,7 +370,7 @@ def write_carmen(
     Returns the number of scans written.
     """
     if fmt not in ("robotlaser1", "flaser"):
-        raise ValueError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
+        raise InputError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
     path = Path(path)
     opener = gzip.open if path.suffix == ".gz" else open
     count = 0
@@ -387,7 +388,7 @@ def write_carmen(
                 units = u
                 f.write(f"PARAM {UNITS_PARAM} {units} {hostname} 0\n")
             elif u != units:
-                raise ValueError(f"records: scan at {scan.stamp} is in {u} mode, earlier scans in {units}")
+                raise InputError(f"records: scan at {scan.stamp} is in {u} mode, earlier scans in {units}")
             if odometry is None or odometry != (rec.odom is not None):
                 odometry = rec.odom is not None
                 f.write(f"PARAM {ODOMETRY_PARAM} {'present' if odometry else 'absent'} {hostname} 0\n")

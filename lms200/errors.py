@@ -25,6 +25,14 @@ class LogFormatError(LmsbenchError, ValueError):
         super().__init__(f"{self.path}:{line_no}: {reason}")
 
 
+class ScanError(LmsbenchError, ValueError):
+    """A Scan whose fields cannot make one: the message starts with the field's name."""
+
+
+class InputError(LmsbenchError, ValueError):
+    """An argument of a public call that cannot work: the message starts with the argument's name."""
+
+
 class LmsDeviceError(LmsbenchError):
     """A problem talking to an LMS200 (real or virtual): the message says what was asked and what came back."""
 

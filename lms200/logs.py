@@ -6,11 +6,15 @@ name; both yield :class:`lms200.Record` objects.
 
 from __future__ import annotations
 
+import os
+import shutil
+import tempfile
 from pathlib import Path
-from typing import Iterable
+from typing import Iterable, Iterator
 
 from .bag import BagError, BagReader, is_bag, write_bag
 from .carmen import CarmenReader, write_carmen
+from .errors import InputError
 from .laser_geometry import LaserGeometry
 from .records import Record
 
@@ -35,11 +39,21 @@ def read_log(
             PARAM lines and the convention from the beam count (see :mod:`lms200.laser_geometry`).
 
     Raises:
-        FileNotFoundError: when the path does not exist.
+        InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument, for a path that
+            is not a str / PathLike, ``skip_bad_lines`` that is not a bool, ``topic`` that is not a
+            str, ``geometry`` that is not a LaserGeometry.
+        FileNotFoundError: when the path does not exist, or is a folder that is not a ROS 2 bag or
+            not a regular file (a device, a pipe).
         LogFormatError: (while iterating) a CARMEN line that cannot be read, naming file and line.
         BagError: (while iterating) a bag that cannot be read, naming the topic and message index.
     """
-    p = Path(path)
+    p = _path(path)
+    if not isinstance(skip_bad_lines, bool):
+        raise InputError(f"skip_bad_lines: must be True or False, got {skip_bad_lines!r}")
+    if topic is not None and not isinstance(topic, str):
+        raise InputError(f"topic: must be a topic name (str) or None, got {topic!r}")
+    if geometry is not None and not isinstance(geometry, LaserGeometry):
+        raise InputError(f"geometry: must be an lms200.laser_geometry.LaserGeometry or None, got {geometry!r}")
     if not p.exists():
         raise FileNotFoundError(f"no such log: {p}")
     if is_bag(p):
@@ -56,14 +70,71 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
 
     ``fmt``: "robotlaser1" (default for CARMEN) or "flaser" for CARMEN text (``.gz`` compresses),
     "bag" for a ROS 1 bag (default for ``*.bag``), "bag2" for a ROS 2 bag folder.
+
+    A CARMEN log is written to a temporary file beside ``path`` and renamed onto it once every
+    record is written, so an error part-way (an item that is not a Record, scans of mixed units, a
+    full disk) leaves an existing file at ``path`` as it was; a bag, which is never written over,
+    is removed again.
+
+    Raises:
+        InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument: a path that is
+            a folder, a device or in a missing folder, an unknown ``fmt``, an item of ``records``
+            that is not an ``lms200.Record`` (naming its index), records that are not iterable.
     """
-    p = Path(path)
+    p = _path(path)
     if fmt is None:
         fmt = "bag" if p.suffix == ".bag" else "robotlaser1"
+    if fmt not in ("robotlaser1", "flaser", "bag", "bag2"):
+        raise InputError(f"fmt: must be 'robotlaser1', 'flaser', 'bag' or 'bag2', got {fmt!r}")
+    if not p.parent.is_dir():
+        raise InputError(f"path: the folder {p.parent} does not exist")
+    try:
+        items = iter(records)
+    except TypeError:
+        raise InputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
+    checked = _checked(items)
     if fmt in ("bag", "bag2"):
         if fmt == "bag" and p.suffix != ".bag":
-            raise ValueError(f"path: a ROS 1 bag must end in .bag, got {p.name}")
+            raise InputError(f"path: a ROS 1 bag must end in .bag, got {p.name}")
         if fmt == "bag2" and p.suffix == ".bag":
-            raise ValueError(f"path: a ROS 2 bag is a folder; do not name it {p.name}")
-        return write_bag(p, records)
-    return write_carmen(p, records, fmt=fmt)
+            raise InputError(f"path: a ROS 2 bag is a folder; do not name it {p.name}")
+        existed = p.exists()
+        try:
+            return write_bag(p, checked)
+        except BaseException:
+            if not existed and p.is_dir():
+                shutil.rmtree(p, ignore_errors=True)
+            elif not existed and p.exists():
+                p.unlink()
+            raise
+    if p.exists() and not p.is_file():
+        raise InputError(f"path: {p} exists and is not a regular file (a folder or a device); "
+                         "name a file to write the log to")
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp" + "".join(p.suffixes[-1:]), dir=p.parent)
+    os.close(fd)
+    os.chmod(tmp, (p.stat().st_mode & 0o777) if p.exists() else 0o644)  # mkstemp's is 0o600
+    try:
+        n = write_carmen(Path(tmp), checked, fmt=fmt)
+        os.replace(tmp, p)
+    except OSError as exc:
+        raise InputError(f"path: cannot write {p}: {exc.strerror or exc}") from None
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return n
+
+
+def _path(path: object) -> Path:
+    """``path`` as a Path; InputError naming it when it is not a str or os.PathLike."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputError(f"path: must be a str or os.PathLike, got {type(path).__name__}")
+    return Path(path)
+
+
+def _checked(records: Iterator[object]) -> Iterator[Record]:
+    """The records, raising InputError naming the index of the first item that is not a Record."""
+    for i, rec in enumerate(records):
+        if not isinstance(rec, Record):
+            hint = " (wrap a Scan as lms200.Record(scan=scan))" if type(rec).__name__ == "Scan" else ""
+            raise InputError(f"records[{i}]: expected an lms200.Record, got {type(rec).__name__}{hint}")
+        yield rec

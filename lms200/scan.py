@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import ScanError
+
 LMS200_BEAMS = 361
 LMS200_RESOLUTION_RAD = np.deg2rad(0.5)
 LMS200_ANGLE_MIN_RAD = -np.pi / 2
@@ -41,7 +43,9 @@ class Scan:
         stamp: time of the first beam in seconds.
 
     Raises:
-        ValueError: naming the field, when the fields are inconsistent.
+        ScanError: (an ``LmsbenchError`` and a ``ValueError``) naming the field, when the fields are
+            inconsistent or ``ranges`` are not real numbers (complex, bool, text, dates are refused;
+            the masked beams of a numpy masked array become nan, invalid).
     """
 
     ranges: np.ndarray
@@ -53,33 +57,30 @@ class Scan:
     _angles: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        try:
-            r = np.array(self.ranges, dtype=np.float64)  # a private copy: the scan is immutable
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"ranges: cannot be read as float64 numbers ({exc})") from None
+        r = _ranges_array(self.ranges)
         if r.ndim != 1:
-            raise ValueError(f"ranges: must be 1-D, got shape {r.shape}")
+            raise ScanError(f"ranges: must be 1-D, got shape {r.shape}")
         if r.size == 0:
-            raise ValueError("ranges: must hold at least one beam")
+            raise ScanError("ranges: must hold at least one beam")
         if np.any(r < 0):  # nan compares False, so nan and +inf pass
-            raise ValueError("ranges: negative ranges are not allowed (use nan for invalid readings)")
+            raise ScanError("ranges: negative ranges are not allowed (use nan for invalid readings)")
         if np.any(r == -np.inf):
-            raise ValueError("ranges: -inf is not allowed (REP-117 uses +inf and nan)")
+            raise ScanError("ranges: -inf is not allowed (REP-117 uses +inf and nan)")
         for name in ("angle_min", "angle_increment", "range_min", "range_max", "stamp"):
             value = getattr(self, name)
             try:
                 value = float(value)
             except (TypeError, ValueError):
-                raise ValueError(f"{name}: must be a number, got {value!r}") from None
+                raise ScanError(f"{name}: must be a number, got {value!r}") from None
             if not np.isfinite(value):
-                raise ValueError(f"{name}: must be finite, got {value}")
+                raise ScanError(f"{name}: must be finite, got {value}")
             object.__setattr__(self, name, value)
         if self.angle_increment <= 0:
-            raise ValueError(f"angle_increment: must be > 0, got {self.angle_increment}")
+            raise ScanError(f"angle_increment: must be > 0, got {self.angle_increment}")
         if self.range_min < 0:
-            raise ValueError(f"range_min: must be >= 0, got {self.range_min}")
+            raise ScanError(f"range_min: must be >= 0, got {self.range_min}")
         if self.range_max <= self.range_min:
-            raise ValueError(
+            raise ScanError(
                 f"range_max: must be > range_min ({self.range_min}), got {self.range_max}"
             )
         r.setflags(write=False)
@@ -98,9 +99,9 @@ class Scan:
         range_min: float = 0.0,
     ) -> "Scan":
         """The LMS200 default: 361 beams at 0.5 deg from -90 deg to +90 deg (mm mode range)."""
-        r = np.asarray(ranges, dtype=np.float64)
+        r = _ranges_array(ranges)
         if r.shape != (LMS200_BEAMS,):
-            raise ValueError(f"ranges: LMS200 default needs {LMS200_BEAMS} beams, got shape {r.shape}")
+            raise ScanError(f"ranges: LMS200 default needs {LMS200_BEAMS} beams, got shape {r.shape}")
         return cls(r, LMS200_ANGLE_MIN_RAD, LMS200_RESOLUTION_RAD, range_min, range_max, stamp)
 
     # -- derived ------------------------------------------------------------------------------
@@ -157,3 +158,22 @@ class Scan:
         )
 
     __hash__ = None  # type: ignore[assignment]
+
+
+def _ranges_array(ranges: object) -> np.ndarray:
+    """A private float64 copy of ``ranges`` (m); ScanError naming ``ranges`` for values that are not
+    real numbers (a bool, complex, text or date array would otherwise be cast silently: 1+1j to
+    1.0, True to 1.0 m). The masked beams of a masked array become nan (invalid)."""
+    if isinstance(ranges, np.ma.MaskedArray):
+        ranges = np.ma.filled(ranges.astype(np.float64), np.nan)
+    try:
+        a = ranges if isinstance(ranges, np.ndarray) else np.asarray(ranges)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ScanError(f"ranges: cannot be read as float64 numbers ({exc})") from None
+    if a.dtype.kind not in "iufO":
+        raise ScanError(f"ranges: must be real numbers (m), got dtype {a.dtype} "
+                        "(bool, complex, text and dates are refused)")
+    try:
+        return np.array(a, dtype=np.float64)  # a private copy: the scan is immutable
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ScanError(f"ranges: cannot be read as float64 numbers ({exc})") from None
