@@ -153,4 +153,5 @@ def fit_sigma(scans: Scan | Iterable[Any], fallback: float = AUTO_FALLBACK, wind
     z_all = np.concatenate(zs) if zs else np.empty(0)
     if z_all.size < 20:
         return float(fallback)
-    return float(robust_scale(z_all)[1])
+    floor = _engine()[0].SIGMA_FLOOR_M  # noiseless scans: finite thresholds, as neighbour_sigma
+    return max(float(robust_scale(z_all)[1]), floor)

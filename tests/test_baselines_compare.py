@@ -96,6 +96,11 @@ def test_cli_on_a_log_writes_table_summary_and_config(tmp_path):
     assert list(summary["method"]) == ["split_merge", "hough"]
     assert "split_merge" in res.stdout and (out / "summary.txt").exists()
     assert "rho_step: 0.01" in (out / "config.yaml").read_text()
+    import yaml
+
+    resolved = yaml.safe_load((out / "config.yaml").read_text())  # the noise the extractors ran with
+    assert 0.004 < resolved["extractor_sigma"]["room.log"] < 0.007  # 5 mm simulated, estimated from the log
+    assert 0.004 < resolved["fit_sigma"]["room.log"] < 0.007
 
 
 def test_cli_errors_are_one_line(tmp_path):

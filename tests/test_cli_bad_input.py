@@ -163,6 +163,7 @@ CASES = [
     (["simulate", "--config", "{slam_param.yaml}", "--out", O], "unknown key(s) ['extractor_params']"),
     (["simulate", "--config", "{sensor_text.yaml}", "--duration", "2", "--out", O], "--duration cannot be given"),
     (["simulate", "--config", "{sensor_text.yaml}", "--seed", "3", "--ideal", "--out", O], "--seed, --ideal cannot"),
+    (["simulate", "--config", "{sensor_text.yaml}", "--seed", "0", "--clutter", "0", "--out", O], "--clutter, --seed cannot"),
     (["simulate", "--out", "{a_file}"], "not a folder"),
     (["simulate", "--resolution", "2", "--out", O], "--resolution"),
     (["simulate", "--clutter", "1e9", "--out", O], "--clutter"),

@@ -94,3 +94,20 @@ def test_record_reports_an_unreachable_port_in_one_line(tmp_path: Path) -> None:
     run = subprocess.run(cli("record", "--port", "socket://127.0.0.1:9", "--out", str(tmp_path / "x.clf")),
                          env=ENV, capture_output=True, text=True, timeout=60)
     assert run.returncode == 2 and "lmsbench lms200 record: error: cannot open socket://127.0.0.1:9" in run.stderr
+
+
+@pytest.mark.parametrize("name", ["rec.clf", "rec.bag"])
+def test_a_device_that_goes_silent_ends_the_file_with_every_scan_before_it(tmp_path: Path, name: str) -> None:
+    """The device sends 8 scans and then nothing: record stops on its timeout with exit 2 and says
+    what it kept. The bag was left unindexed (rosbags aborts a writer left by an exception) and
+    could not be read: all 8 scans lost."""
+    sent = source(8)
+    out = tmp_path / name
+    with TcpServer(VirtualLMS200(sent, time_scale=0.01)) as ad:
+        run = subprocess.run(cli("record", "--port", ad.url, "--out", str(out), "--max-scans", "20", "--baud", "500000",
+                                 "--timeout", "1"), env=ENV, capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2, run.stderr
+    last = run.stderr.strip().splitlines()[-1]
+    assert last.startswith("lmsbench lms200 record: error: no scan from") and f"the 8 scans before it are saved in {out}" in last
+    got = [rec.scan for rec in read_log(out)]
+    assert [codes(s) for s in got] == [codes(s) for s in sent]

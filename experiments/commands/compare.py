@@ -128,6 +128,11 @@ def run(args: argparse.Namespace) -> int:
         max_scans=args.max_scans, sigma=args.sigma, poses=args.poses,
         log_options=plain_log_options(read_log_options(args)),
         sigma_r={src.name: src.sigma_r for src in sources}, methods=configs, scoring=dataclasses.asdict(score_config),
+        # the noise each source's extractors ran with (m; the configs above are before it is set):
+        # sigma_r / sigma_r_cm / sigma fields, and split_merge's / iepf's sigma_fit (None: as the former)
+        extractor_sigma={src.name: _plain_float(src.extractor_sigma if src.extractor_sigma is not None else src.sigma_r)
+                         for src in sources},
+        fit_sigma={src.name: _plain_float(src.fit_sigma) for src in sources},
     )
     # what produced each source's scans: the sensor that was simulated (interlaced or not), the log read
     resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
@@ -144,3 +149,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {path}, {args.out / 'summary.csv'}, {args.out / 'summary.txt'}, {args.out / 'config.yaml'}"
           + "".join(f", {f}" for f in figures))
     return 0
+
+
+def _plain_float(value: float | None) -> float | None:
+    """A float for YAML (numpy scalars are not plain YAML), or None."""
+    return None if value is None else float(value)

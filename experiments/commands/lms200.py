@@ -10,7 +10,7 @@ import time
 from pathlib import Path
 from typing import Iterable, Iterator
 
-from lms200 import Record
+from lms200 import LmsbenchError, Record
 from lms200.carmen import write_carmen
 from lms200.driver import LMS200
 from lms200.protocol import BAUD_MODES
@@ -106,18 +106,24 @@ class _Progress:
 
 def _records(dev: LMS200, progress: _Progress, stop: dict, max_scans: int | None,
              duration: float | None) -> Iterator[Record]:
-    """Records from the device until Ctrl-C, the scan limit or the duration."""
+    """Records from the device until Ctrl-C, the scan limit or the duration. A device error (a
+    timeout, a lost connection) ends the records as a stop does, so the file is closed with every
+    scan before it (a bag that an exception leaves open is not indexed, and unreadable), and is
+    kept in ``stop["error"]`` for the caller to report."""
     def done() -> bool:
         return stop["now"] or (duration is not None and time.monotonic() - progress.start >= duration)
 
     if max_scans is not None and max_scans <= 0:
         return
-    for scan in dev.scans(stop=done):
-        progress.count += 1
-        yield Record(scan)
-        progress.update()
-        if max_scans is not None and progress.count >= max_scans:
-            return
+    try:
+        for scan in dev.scans(stop=done):
+            progress.count += 1
+            yield Record(scan)
+            progress.update()
+            if max_scans is not None and progress.count >= max_scans:
+                return
+    except LmsbenchError as exc:
+        stop["error"] = exc
 
 
 def _write(out: Path, records: Iterable[Record]) -> int:
@@ -157,6 +163,8 @@ def run_record(args: argparse.Namespace) -> int:
             stats = dev.stats
     finally:
         signal.signal(signal.SIGINT, previous)
+    if stop.get("error") is not None:
+        raise LmsbenchError(f"{stop['error']}; the {written} scans before it are saved in {args.out}")
     print(f"recorded {written} scans to {args.out} ({stats.dropped_frames} frames dropped, "
           f"{stats.decode_errors} undecodable); device back in on-request mode at 9600 baud")
     return 0

@@ -55,7 +55,7 @@ def _config(args: argparse.Namespace):
     from experiments.simulation import SimulationConfig
 
     if args.config:
-        given = [flag for flag, dest in RUN_FLAGS if getattr(args, dest) not in (None, False)]
+        given = [flag for flag, dest in RUN_FLAGS if getattr(args, dest) is not None and getattr(args, dest) is not False]
         if given:
             raise InputError(f"--config holds the whole run; {', '.join(given)} cannot be given with it "
                              "(edit the file, or leave out --config)")

@@ -6,6 +6,7 @@ from lms200.yamlio import load as load_yaml
 
 import argparse
 import sys
+from typing import Any
 from pathlib import Path
 
 from experiments.logargs import add_log_options, read_log_options
@@ -77,7 +78,7 @@ def _config(args: argparse.Namespace):
     return cfg
 
 
-def _check_extractor(cfg, source: Path | None) -> None:
+def _check_extractor(cfg: Any, source: Path | None) -> None:
     """The config's extractor is a known method (or MODULE:FUNCTION) and its ``extractor_params`` are
     fields of that method's config with valid values: checked now, before any scan is read."""
     from features.registry import make_config

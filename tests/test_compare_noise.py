@@ -1,0 +1,37 @@
+"""compare gives every extractor the source's noise: the range noise fields of all methods, and for
+split_merge / iepf the scatter about fitted lines (``sigma_fit``) of their split and merge tests;
+a noise the caller gives a method turns both off for it."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from experiments.compare import _with_noise
+from features.noise_estimate import fit_sigma
+from features.registry import get_method, make_config
+from lms200 import Scan
+
+
+def test_the_baselines_get_the_fit_scatter_and_a_given_noise_turns_it_off() -> None:
+    runs = [(m, get_method(m).run, make_config(m)) for m in ("sensor", "split_merge", "iepf")]
+    out = {name: cfg for name, _, cfg in _with_noise(runs, {}, 0.012, 0.0095)}
+    assert out["split_merge"].sigma == 0.012 and out["split_merge"].sigma_fit == 0.0095
+    assert out["iepf"].sigma == 0.012 and out["iepf"].sigma_fit == 0.0095
+    assert out["sensor"].sigma_r == 0.012 and not hasattr(out["sensor"], "sigma_fit")
+    given = {name: cfg for name, _, cfg in _with_noise(runs, {"split_merge": {"sigma": 0.02}}, 0.012, 0.0095)}
+    assert given["split_merge"].sigma == make_config("split_merge").sigma  # the caller's, not the source's
+    assert given["split_merge"].sigma_fit is None
+    assert given["iepf"].sigma_fit == 0.0095
+    assert {n: c.sigma_fit for n, c in out.items() if n != "sensor"} != {"split_merge": None, "iepf": None}
+
+
+def test_fit_sigma_of_noiseless_scans_is_floored_at_1_mm() -> None:
+    """An L room without noise: the residuals are rounding (~1e-16 m); the thresholds built from the
+    estimate must stay finite and > 0, as with neighbour_sigma's floor."""
+    b = np.deg2rad(0.5) * (np.arange(361) - 180)
+    r = np.minimum(3.0 / np.maximum(np.abs(np.cos(b)), 1e-9), 2.5 / np.maximum(np.abs(np.sin(b)), 1e-9))
+    scan = Scan(np.minimum(r, 8.0), float(b[0]), np.deg2rad(0.5), 0.0, 8.183)
+    assert fit_sigma([scan] * 3) == 0.001
+    noisy = Scan(scan.ranges + 0.01 * np.random.default_rng(0).standard_normal(361), scan.angle_min,
+                 scan.angle_increment, 0.0, 8.183)
+    assert 0.008 < fit_sigma([noisy] * 3) < 0.012
