@@ -60,6 +60,9 @@ def register(name: str, config_type: type, run: Callable[[Scan, Any], FeatureSet
 
 def get_method(name: str) -> Method:
     """The registered method ``name``; raises UnknownMethodError listing the known ones."""
+    if not isinstance(name, str):
+        raise UnknownMethodError(f"method: must be a method name (str), got {name!r}; available: "
+                                 f"{', '.join(available_methods())}")
     if name not in _REGISTRY and name in _METHOD_MODULES:
         try:
             importlib.import_module(_METHOD_MODULES[name])
@@ -124,7 +127,7 @@ def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: An
     Raises:
         ScanTypeError: ``scan`` is not an ``lms200.Scan`` (an ``LmsbenchError`` and a ``TypeError``).
     """
-    m = _REGISTRY.get(method) or get_method(method)
+    m = (_REGISTRY.get(method) if type(method) is str else None) or get_method(method)
     cfg = _config(m, config, params)
     if not isinstance(scan, Scan):
         raise not_a_scan(scan, "extract")
@@ -150,11 +153,14 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
         ValueError: naming the first scan whose geometry differs from the first's.
         ScanTypeError: naming the first item that is not an ``lms200.Scan``.
     """
-    m = _REGISTRY.get(method) or get_method(method)
+    m = (_REGISTRY.get(method) if type(method) is str else None) or get_method(method)
     cfg = _config(m, config, params)
     if isinstance(scans, Scan):
         raise ScanTypeError("extract_many: expected a sequence of lms200.Scan, got one Scan (use extract, or [scan])")
-    scans = list(scans)  # its items are checked to be Scans by common_geometry, on every path below
+    try:
+        scans = list(scans)
+    except TypeError:
+        raise ScanTypeError(f"extract_many: expected a sequence of lms200.Scan, got {type(scans).__name__}") from None  # its items are checked to be Scans by common_geometry, on every path below
     if scans and isinstance(scans[0], Scan) and len(scans[0]) > MAX_BEAMS:
         raise ScanGeometryError(too_many_beams(len(scans[0])))
     if m.run_many is not None:

@@ -141,6 +141,9 @@ class Scan:
             range_max=self.range_max,
             stamp=self.stamp,
         )
+        unknown = sorted(set(changes) - set(kw))
+        if unknown:
+            raise ScanError(f"{unknown[0]}: not a Scan field (fields: {', '.join(kw)})")
         kw.update(changes)
         return Scan(**kw)  # type: ignore[arg-type]
 

@@ -23,6 +23,7 @@ import numpy as np
 from gymnasium import spaces
 
 from lms200 import Scan
+from lms200.errors import InputError
 
 from .lidar import LMS200Sim
 from .robot import RobotLimits, robot_tour, wrap
@@ -101,7 +102,7 @@ class OfficeEnv(gym.Env):
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
         space = self.action_space
         assert isinstance(space, spaces.Box)
-        v, w = np.clip(np.asarray(action, dtype=float), space.low, space.high)
+        v, w = np.clip(_action(action), space.low, space.high)
         dt = self.control_period
         x, y, th = self.pose
         if abs(w) < 1e-9:
@@ -151,3 +152,16 @@ class OfficeEnv(gym.Env):
 
     def close(self) -> None:
         self.sim.close()
+
+
+def _action(action: object) -> np.ndarray:
+    """``action`` as a float64 (v m/s, w rad/s) pair; InputError naming it when it is not two finite
+    real numbers (a nan drove the pose to nan, and a scalar or a 1-element array was broadcast to
+    both v and w; out-of-bounds values are clipped to the action space, as before)."""
+    try:
+        a = np.asarray(action)
+    except (TypeError, ValueError):
+        a = np.asarray(None)
+    if a.shape != (2,) or a.dtype.kind not in "iuf" or not np.all(np.isfinite(a)):
+        raise InputError(f"action: must be two finite numbers (v m/s, w rad/s), shape (2,), got {action!r}")
+    return a.astype(np.float64)

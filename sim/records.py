@@ -9,6 +9,7 @@ from typing import Callable
 import numpy as np
 
 from lms200 import Record
+from lms200.errors import InputError
 
 from .lidar import LMS200Sim
 from .robot import RobotLimits, Tour, robot_tour, wrap
@@ -87,6 +88,11 @@ def simulate_tour(world: World, tour: Tour, stamps: np.ndarray, sensor: SensorCo
     return records
 
 
+#: longest simulated run (s), as on the command line: 135,000 scans at 37.5 scans/s (~0.4 GB of
+#: ranges); a duration of 1e9 s planned a tour for 35 minutes and more before running out of memory
+MAX_DURATION_S = 3600.0
+
+
 def simulate_records(world: str | World = "office", seed: int = 0, duration: float = 120.0,
                      sensor: SensorConfig | None = None, odometry: OdometryConfig | None = None,
                      rate_hz: float | None = None, limits: RobotLimits | None = None,
@@ -98,15 +104,16 @@ def simulate_records(world: str | World = "office", seed: int = 0, duration: flo
     only when ``odometry`` is given. ``progress(done, total)`` is called after each scan.
 
     Raises:
-        ValueError: naming the argument, for a duration that is not a finite number of seconds > 0,
+        InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument, for a duration
+            that is not a number of seconds in (0, MAX_DURATION_S],
             a rate that is not > 0, a seed that is not a whole number >= 0, or an unknown world.
     """
     check_seed(seed)
-    if isinstance(duration, bool) or not isinstance(duration, (int, float)) or not 0 < duration < math.inf:
-        raise ValueError(f"duration: must be a finite number of seconds > 0, got {duration!r}")
+    if isinstance(duration, bool) or not isinstance(duration, (int, float)) or not 0 < duration <= MAX_DURATION_S:
+        raise InputError(f"duration: must be a number of seconds in (0, {MAX_DURATION_S:g}], got {duration!r}")
     if rate_hz is not None and (isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float))
                                 or not 0 < rate_hz < math.inf):
-        raise ValueError(f"rate_hz: must be a finite number of scans/s > 0 or None, got {rate_hz!r}")
+        raise InputError(f"rate_hz: must be a finite number of scans/s > 0 or None, got {rate_hz!r}")
     w = world if isinstance(world, World) else make_world(world, seed)
     s = sensor if sensor is not None else SensorConfig()
     tour = robot_tour(w, seed, duration, limits)

@@ -19,6 +19,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from lms200.errors import InputError
+
 from .clutter import ClutterConfig, add_clutter
 from .geometry import rectangle_corners
 from .layout import Layout, WALL_THICKNESS_M, distance_to_rects
@@ -55,7 +57,7 @@ MAX_CLUTTER = 10.0  # densest clutter level (10x a furnished office); the object
 def check_seed(seed: object) -> None:
     """A seed is a whole number >= 0 (numpy's Generators take no other); ValueError naming it."""
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed: must be a whole number >= 0, got {seed!r}")
+        raise InputError(f"seed: must be a whole number >= 0, got {seed!r}")
 
 
 def make_world(name: str = "office", seed: int = 0, clutter: float | None = None, glass: float | None = None,
@@ -84,7 +86,7 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
             ``lmsbench sim2real`` fits it to a log (``experiments.sim2real.fit_relief``).
 
     Raises:
-        ValueError: for an unknown name (listing the known ones), a seed that is not a whole number
+        InputError: (an ``LmsbenchError`` and a ``ValueError``) for an unknown name (listing the known ones), a seed that is not a whole number
             >= 0, a clutter level outside [0, MAX_CLUTTER], a negative glass rate, a rough or relief
             share outside [0, 1] (or > 0 at clutter level 0), or a scale outside [MIN_SCALE, MAX_SCALE]
             (or other than 1 for a world without rooms).
@@ -92,25 +94,30 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
     check_seed(seed)
     rng = np.random.default_rng([int(seed), _STREAM_WORLD])
     crng = np.random.default_rng([int(seed), _STREAM_CLUTTER])
+    if not isinstance(name, str):
+        raise InputError(f"name: unknown world {name!r}; known worlds: {', '.join(WORLD_NAMES)}")
+    for arg, value in (("clutter", clutter), ("glass", glass), ("rough", rough), ("scale", scale), ("relief", relief)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating))):
+            raise InputError(f"{arg}: must be a number or None, got {value!r}")
     level = float(MIT_PRESET["clutter"] if name == "mit" else DEFAULT_CLUTTER.get(name, 0.0)) if clutter is None else float(clutter)
     if not 0 <= level <= MAX_CLUTTER:
-        raise ValueError(f"clutter: must be in [0, {MAX_CLUTTER:g}], got {clutter}")
+        raise InputError(f"clutter: must be in [0, {MAX_CLUTTER:g}], got {clutter}")
     if glass is not None and not (np.isfinite(glass) and glass >= 0):
-        raise ValueError(f"glass: must be a rate >= 0 (panels per 10 m), got {glass}")
+        raise InputError(f"glass: must be a rate >= 0 (panels per 10 m), got {glass}")
     if rough is not None and not (np.isfinite(rough) and 0 <= rough <= 1):
-        raise ValueError(f"rough: must be a share in [0, 1] of the rooms' wall length, got {rough}")
+        raise InputError(f"rough: must be a share in [0, 1] of the rooms' wall length, got {rough}")
     if relief is not None and not (np.isfinite(relief) and 0 <= relief <= 1):
-        raise ValueError(f"relief: must be a share in [0, 1] of the free wall length, got {relief}")
+        raise InputError(f"relief: must be a share in [0, 1] of the free wall length, got {relief}")
     if relief is not None and relief > 0 and level == 0:
-        raise ValueError(f"relief: wall relief is clutter, so it needs a clutter level > 0 (the {name!r} world at "
+        raise InputError(f"relief: wall relief is clutter, so it needs a clutter level > 0 (the {name!r} world at "
                          f"clutter {level:g}), got {relief}")
     if scale is not None and not (np.isfinite(scale) and MIN_SCALE <= scale <= MAX_SCALE):
-        raise ValueError(f"scale: must be in [{MIN_SCALE:g}, {MAX_SCALE:g}] (the rooms' size as a multiple), got {scale}")
+        raise InputError(f"scale: must be in [{MIN_SCALE:g}, {MAX_SCALE:g}] (the rooms' size as a multiple), got {scale}")
     if scale is not None and float(scale) != 1.0 and name in WORLD_NAMES and name not in ROOMED_WORLDS:
-        raise ValueError(f"scale: the {name!r} world has no rooms to scale (scale applies to office, cluttered, "
+        raise InputError(f"scale: the {name!r} world has no rooms to scale (scale applies to office, cluttered, "
                          f"random and mit), got {scale}")
     if rough is not None and rough > 0 and level == 0:
-        raise ValueError(f"rough: rough fill is clutter, so it needs a clutter level > 0 (the {name!r} world at "
+        raise InputError(f"rough: rough fill is clutter, so it needs a clutter level > 0 (the {name!r} world at "
                          f"clutter {level:g}), got {rough}")
     size = 1.0 if scale is None else float(scale)
     leaf_rng = crng if level > 0 else None
@@ -132,7 +139,7 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
     elif name == "pillars":
         lay = pillars(rng, seed)
     else:
-        raise ValueError(f"name: unknown world {name!r}; known worlds: {', '.join(WORLD_NAMES)}")
+        raise InputError(f"name: unknown world {name!r}; known worlds: {', '.join(WORLD_NAMES)}")
     config = (ClutterConfig(glass=float(MIT_PRESET["glass_per_10m"]), wall_runs=float(MIT_PRESET["wall_runs_per_10m"]),
                             rough_cover=float(MIT_PRESET["rough_cover"]))
               if name == "mit" else None)

@@ -119,3 +119,148 @@ def test_write_log_bad_paths_and_arguments(tmp_path, path_of, records, fmt, mess
     recs = _records(2) if records == "good" else records
     with pytest.raises(InputError, match=message):
         write_log(path_of(tmp_path), recs, fmt=fmt)
+
+
+# -- extract / extract_many ---------------------------------------------------------------------------
+@pytest.mark.parametrize("scans", [None, 5])
+def test_extract_many_of_something_not_iterable(scans: object) -> None:
+    from features import extract_many
+    from features.errors import ScanTypeError
+
+    with pytest.raises(ScanTypeError, match="^extract_many: expected a sequence of lms200.Scan"):  # was TypeError
+        extract_many(scans)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("method", [["sensor"], 5])
+def test_extract_method_that_is_not_a_name(method: object) -> None:
+    from features import extract
+    from features.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="^method: must be a method name") as info:  # ["sensor"] was "unhashable type"
+        extract(Scan.lms200(np.full(361, 3.0)), method=method)  # type: ignore[arg-type]
+    assert "sensor" in str(info.value)
+
+
+@pytest.mark.parametrize("field", ["min_points", "merge_gap", "bridge_invalid", "corner_max_gap"])
+def test_sensor_beam_counts_beyond_any_scan(field: str) -> None:
+    """1e300 beams was an OverflowError building the kernels' int64 record; it means the same as
+    any count above the scan's beams: min_points=1e300 finds no line, the gaps join every run."""
+    from features import extract
+
+    rng = np.random.default_rng(3)
+    ang = np.deg2rad(np.arange(361) * 0.5 - 90.0)
+    ranges = 2.0 / np.maximum(np.cos(ang - 0.2), 0.05) + rng.normal(0, 0.005, 361)  # a wall 2 m away
+    scan = Scan.lms200(np.where(ranges < 8.0, ranges, np.inf))
+    huge = extract(scan, **{field: 1e300})
+    big = extract(scan, **{field: 10**6})  # already more than any scan's beams
+    assert repr(list(huge.lines)) == repr(list(big.lines))
+    if field == "min_points":
+        assert len(huge.lines) == 0 and len(extract(scan).lines) >= 1
+
+
+# -- sim ----------------------------------------------------------------------------------------------
+def test_simulate_records_duration_is_bounded() -> None:
+    """duration=1e9 planned a tour for over 30 s and then ran out of memory; now refused at once."""
+    from sim import simulate_records
+    from sim.records import MAX_DURATION_S
+
+    assert MAX_DURATION_S == 3600.0  # the command line's bound (experiments.options.MAX_DURATION_S)
+    with pytest.raises(InputError, match=r"^duration: must be a number of seconds in \(0, 3600\]"):
+        simulate_records("office", seed=0, duration=1e9)
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(seed=-1), "^seed: must be a whole number"),
+    (dict(clutter="x"), "^clutter: must be a number or None"),   # was "could not convert string to float"
+    (dict(name=None), "^name: unknown world None"),
+])
+def test_make_world_errors_are_lmsbench_errors(kw: dict, message: str) -> None:
+    from sim import make_world
+
+    args: dict = dict(name="office", seed=0)
+    args.update(kw)
+    with pytest.raises(InputError, match=message):
+        make_world(**args)
+
+
+@pytest.mark.parametrize("action", [
+    np.array([np.nan, 0.0]),     # drove the pose to (nan, nan)
+    None,                        # the same
+    np.array([0.1]),             # broadcast to v = w = 0.1
+    0.3,                         # the same
+    np.array([0.1, 0.1, 0.1]),   # numpy broadcast error
+    np.array([1 + 1j, 0.0]),     # imaginary part dropped
+    "ab",
+])
+def test_gym_step_refuses_actions_that_are_not_two_finite_numbers(action: object) -> None:
+    from sim.gym_env import OfficeEnv
+
+    env = OfficeEnv()
+    env.reset(seed=0)
+    pose = env.pose.copy()
+    with pytest.raises(InputError, match=r"^action: must be two finite numbers"):
+        env.step(action)  # type: ignore[arg-type]
+    assert np.array_equal(env.pose, pose) and env.steps == 0  # the episode is as it was
+    obs, *_ = env.step(np.array([0.1, 0.0]))
+    assert np.all(np.isfinite(env.pose)) and env.observation_space.contains(obs)
+
+
+def test_gym_out_of_bounds_action_is_clipped() -> None:
+    """Out-of-bounds actions are clipped to the action space (v in [0, v_max], |w| <= w_max)."""
+    from sim.gym_env import OfficeEnv
+
+    a, b = OfficeEnv(), OfficeEnv()
+    a.reset(seed=0)
+    b.reset(seed=0)
+    a.step(np.array([100.0, -100.0]))
+    b.step(b.action_space.high * np.array([1.0, -1.0], dtype=np.float32))
+    assert np.allclose(a.pose, b.pose)
+
+
+# -- run_slam -----------------------------------------------------------------------------------------
+@pytest.mark.parametrize("records, message", [
+    (None, "^records: must be an iterable of lms200.Record"),                # was TypeError
+    ([Scan.lms200(np.full(361, 3.0))], r"^records\[0\]: expected an lms200.Record, got Scan"),  # was AttributeError
+    ([1, 2], r"^records\[0\]: expected an lms200.Record, got int"),
+])
+@pytest.mark.parametrize("preset", ["default", "paper"])
+def test_run_slam_records_of_the_wrong_type(records: object, message: str, preset: str) -> None:
+    from slam import SlamConfig, run_slam
+    from slam.run import SlamInputError
+
+    with pytest.raises(SlamInputError, match=message):
+        run_slam(records, SlamConfig(preset=preset))  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("config", [None, {}])
+def test_run_slam_config_of_the_wrong_type(config: object) -> None:
+    from slam import run_slam
+    from slam.run import SlamInputError
+
+    with pytest.raises(SlamInputError, match="^config: must be a slam.SlamConfig"):  # was AttributeError
+        run_slam([Record(scan=Scan.lms200(np.full(361, 3.0)))], config)  # type: ignore[arg-type]
+
+
+# -- Record -------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("kw, message", [
+    (dict(scan=5), "^scan: must be an lms200.Scan"),                       # write_log: AttributeError
+    (dict(odom="abc"), "^odom: must be None or three numbers"),            # write_log: "Unknown format code"
+    (dict(truth=(1.0, 2.0)), "^truth: must be None or three numbers"),     # write_log: "not enough values"
+    (dict(odom=(np.nan, 0.0, 0.0)), "^odom: must be finite"),               # written, then refused by read_log
+    (dict(truth=(np.inf, 0.0, 0.0)), "^truth: must be finite"),
+])
+def test_record_fields_are_checked(kw: dict, message: str) -> None:
+    args: dict = dict(scan=Scan.lms200(np.full(361, 3.0)))
+    args.update(kw)
+    with pytest.raises(InputError, match=message):
+        Record(**args)
+
+
+def test_record_poses_are_float_tuples() -> None:
+    rec = Record(scan=Scan.lms200(np.full(361, 3.0)), odom=np.array([1.0, 2.0, 0.5]), truth=[1, 2, 0])
+    assert rec.odom == (1.0, 2.0, 0.5) and type(rec.odom) is tuple and rec.truth == (1.0, 2.0, 0.0)
+
+
+def test_scan_replace_unknown_field() -> None:
+    with pytest.raises(ScanError, match="^foo: not a Scan field"):  # was TypeError from __init__
+        Scan.lms200(np.full(361, 3.0)).replace(foo=1)

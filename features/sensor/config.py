@@ -92,9 +92,9 @@ class SensorMethodConfig:
             int(self.k), float(self.ad_tau), float(self.psi_split), float(self.psi_tau), int(self.hough_subdiv),
             int(self.hough_angles), float(self.band_tau), float(self.band_min), float(self.bin_tau),
             float(self.inlier_tau), float(self.max_chi2), float(self.min_inlier_fraction), float(self.curvature_tau),
-            math.ceil(self.min_points), float(self.min_length), math.floor(self.merge_gap), float(self.merge_tau),
-            math.floor(self.bridge_invalid), bool(self.corners), float(self.corner_min_turn), float(self.corner_psi),
-            math.floor(self.corner_max_gap), float(self.corner_max_dist), bool(self.acute_check),
+            _beams(math.ceil(self.min_points)), float(self.min_length), _beams(math.floor(self.merge_gap)),
+            float(self.merge_tau), _beams(math.floor(self.bridge_invalid)), bool(self.corners),
+            float(self.corner_min_turn), float(self.corner_psi), _beams(math.floor(self.corner_max_gap)), float(self.corner_max_dist), bool(self.acute_check),
             float(self.acute_min_var), bool(self.arc_check),
         ))
 
@@ -107,3 +107,13 @@ class SensorMethodConfig:
         """The range noise std (m) for a scan with this ``range_max`` (m): ``sigma_r_cm`` for the
         SICK cm codes (range_max > 10 m), else ``sigma_r``; either may be "auto"."""
         return self.sigma_r_cm if range_max > CM_MODE_RANGE_MAX else self.sigma_r
+
+
+#: beam counts are capped here before the kernels' int64 fields: every count beyond any scan's
+#: beams (MAX_BEAMS, 16,384) means the same, and 1e300 beams no longer overflows (OverflowError)
+BEAM_COUNT_CAP = 2**31
+
+
+def _beams(n: int) -> int:
+    """A beam count for the kernels: ``n`` capped at BEAM_COUNT_CAP."""
+    return min(n, BEAM_COUNT_CAP)
