@@ -44,6 +44,7 @@ class OfficeEnv(gym.Env):
     def __init__(self, world: str = "office", world_seed: int = 0, sensor: SensorConfig | None = None,
                  control_period: float = 0.1, max_steps: int = 500, path_length_m: float = 60.0,
                  render_mode: str | None = None) -> None:
+        _check_env_args(control_period, max_steps, path_length_m, render_mode)
         self.world = make_world(world, world_seed)
         self.sensor = sensor if sensor is not None else SensorConfig()
         self.limits = RobotLimits()
@@ -165,3 +166,23 @@ def _action(action: object) -> np.ndarray:
     if a.shape != (2,) or a.dtype.kind not in "iuf" or not np.all(np.isfinite(a)):
         raise InputError(f"action: must be two finite numbers (v m/s, w rad/s), shape (2,), got {action!r}")
     return a.astype(np.float64)
+
+
+def _check_env_args(control_period: object, max_steps: object, path_length_m: object, render_mode: object) -> None:
+    """InputError naming the first argument of OfficeEnv that cannot work (a nan control_period was a
+    ScanError about a 'stamp', a negative one ran time backwards, path_length_m=1e9 planned a tour for
+    minutes before running out of memory)."""
+    from .records import MAX_DURATION_S
+
+    def real(v: object) -> bool:
+        return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, (bool, np.bool_))
+
+    if not real(control_period) or not 0 < control_period <= 10.0:  # type: ignore[operator]
+        raise InputError(f"control_period: must be a number of seconds in (0, 10], got {control_period!r}")
+    if isinstance(max_steps, (bool, np.bool_)) or not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
+        raise InputError(f"max_steps: must be a whole number >= 1, got {max_steps!r}")
+    longest = MAX_DURATION_S * RobotLimits().v_max
+    if not real(path_length_m) or not 0 < path_length_m <= longest:  # type: ignore[operator]
+        raise InputError(f"path_length_m: must be a number of metres in (0, {longest:g}], got {path_length_m!r}")
+    if render_mode not in (None, "rgb_array"):
+        raise InputError(f"render_mode: must be None or 'rgb_array', got {render_mode!r}")

@@ -108,7 +108,8 @@ class MotionConfig:
             ``sigma_floor_theta`` rad).
         sigma_lateral: (paper preset) white sideways velocity noise (m/s): covers a scanner
             mounted off the turning axis and the arc that the Euler step leaves out.
-        max_dt: (paper preset) longest step integrated at once (s); longer gaps are split.
+        max_dt: (paper preset) longest step integrated at once (s); longer gaps are split, in at most
+            ``slam.filter.MAX_PREDICT_STEPS`` (10,000) steps.
         use_odometry: (paper preset) the log's odometry increments drive the prediction instead
             (a comparison row, never the default); ``odom_noise``: (trans m/m, rot rad/rad,
             rot rad/m) odometry error factors.

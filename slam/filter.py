@@ -124,7 +124,7 @@ class SlamFilter:
             self.ekf.set_odometry(delta, dt, np.diag([var_t, var_t, var_r]))
             self.ekf.predict()
             return
-        n = max(1, int(np.ceil(dt / cfg.motion.max_dt)))
+        n = max(1, min(int(np.ceil(dt / cfg.motion.max_dt)), MAX_PREDICT_STEPS))
         for _ in range(n):
             self.ekf.set_motion(dt / n, cfg.motion.sigma_accel, cfg.motion.sigma_alpha, cfg.motion.sigma_lateral)
             self.ekf.predict()
@@ -467,3 +467,9 @@ def _point_segment_distance(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
     t = np.clip(t, 0.0, 1.0)
     q = a + t[:, None] * ab
     return np.hypot(*(p - q).T)
+
+
+#: most constant-velocity steps a time gap is integrated in (paper preset): a gap longer than
+#: MAX_PREDICT_STEPS * max_dt (5,000 s at the default 0.5 s) takes steps longer than max_dt; a 1e9 s
+#: gap in a log's stamps was 2e9 steps, a hang
+MAX_PREDICT_STEPS = 10_000

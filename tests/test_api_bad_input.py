@@ -264,3 +264,38 @@ def test_record_poses_are_float_tuples() -> None:
 def test_scan_replace_unknown_field() -> None:
     with pytest.raises(ScanError, match="^foo: not a Scan field"):  # was TypeError from __init__
         Scan.lms200(np.full(361, 3.0)).replace(foo=1)
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(control_period=np.nan), r"^control_period: must be a number of seconds in \(0, 10\]"),  # was ScanError "stamp"
+    (dict(control_period=-1.0), r"^control_period: must be"),         # time ran backwards
+    (dict(max_steps="x"), "^max_steps: must be a whole number"),       # was int() ValueError
+    (dict(max_steps=-1), "^max_steps: must be a whole number"),
+    (dict(path_length_m=1e9), r"^path_length_m: must be a number of metres in \(0, 1800\]"),  # was a hang
+    (dict(path_length_m=-5.0), "^path_length_m: must be"),             # was "route graph joins no two route targets"
+    (dict(render_mode="human"), "^render_mode: must be None or 'rgb_array'"),
+])
+def test_gym_env_arguments(kw: dict, message: str) -> None:
+    from sim.gym_env import OfficeEnv
+
+    with pytest.raises(InputError, match=message):
+        OfficeEnv(**kw)
+
+
+def test_paper_slam_over_a_long_gap_in_the_stamps() -> None:
+    """A 1e9 s gap between two scans was 2e9 prediction steps of the paper preset (a hang); it is
+    now at most MAX_PREDICT_STEPS, and the poses before the gap are those of the run without it."""
+    import dataclasses
+
+    from sim import simulate_records
+    from slam import SlamConfig, run_slam
+    from slam.filter import MAX_PREDICT_STEPS
+
+    assert MAX_PREDICT_STEPS == 10_000
+    recs = simulate_records("office", seed=0, duration=1.0, rate_hz=10)
+    gap = [dataclasses.replace(r, scan=r.scan.replace(stamp=r.scan.stamp + (1e9 if i >= 6 else 0.0)))
+           for i, r in enumerate(recs)]
+    cfg = SlamConfig(preset="paper")
+    with_gap, plain = run_slam(gap, cfg).trajectory, run_slam(recs, cfg).trajectory
+    assert with_gap.shape == plain.shape and with_gap[-1, 0] == gap[-1].scan.stamp
+    assert np.array_equal(with_gap[:6], plain[:6]) and np.all(np.isfinite(with_gap))
