@@ -18,7 +18,7 @@ from typing import Any, Iterable, Iterator
 
 import numpy as np
 
-from .errors import LmsbenchError
+from .errors import LmsbenchError, LogNotFoundError
 from .records import Pose2D, Record
 from .scan import Scan, snap_angle
 from .timing import mirror_time_increment, scan_period, smallest_range
@@ -201,7 +201,7 @@ class BagReader:
     def __init__(self, path: str | Path, topic: str | None = None, skip_bad_lines: bool = False) -> None:
         self.path = Path(path)
         if not self.path.exists():
-            raise FileNotFoundError(f"no such bag: {self.path}")
+            raise LogNotFoundError(f"no such bag: {self.path}")
         self.topic = topic
         self.skip_bad_lines = skip_bad_lines
         self.stats = BagReadStats()

@@ -48,7 +48,7 @@ from .codes import (
     metres_per_unit,
 )
 from . import laser_geometry
-from .errors import InputError, LmsbenchError, LogFormatError
+from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
 from .laser_geometry import LaserGeometry
 from .records import Pose2D, Record
 from .scan import Scan, snap_angle
@@ -115,7 +115,7 @@ class CarmenReader:
         self.path = Path(path)
         if not self.path.is_file():
             what = "is not a regular file (a device or a pipe)" if self.path.exists() else "does not exist"
-            raise FileNotFoundError(f"no such log file: {self.path} {what}")
+            raise LogNotFoundError(f"no such log file: {self.path} {what}")
         if topic is not None and topic not in LASER_KINDS:
             raise LogFormatError(self.path, 0, f"topic: a CARMEN log's laser topics are message kinds "
                                                f"({', '.join(LASER_KINDS)}), got {topic!r}")

@@ -33,6 +33,10 @@ class InputError(LmsbenchError, ValueError):
     """An argument of a public call that cannot work: the message starts with the argument's name."""
 
 
+class LogNotFoundError(LmsbenchError, FileNotFoundError):
+    """A log path that does not exist, or is a folder that is not a ROS 2 bag, or a device or pipe."""
+
+
 class LmsDeviceError(LmsbenchError):
     """A problem talking to an LMS200 (real or virtual): the message says what was asked and what came back."""
 

@@ -14,7 +14,7 @@ from typing import Iterable, Iterator
 
 from .bag import BagError, BagReader, is_bag, write_bag
 from .carmen import CarmenReader, write_carmen
-from .errors import InputError
+from .errors import InputError, LogNotFoundError
 from .laser_geometry import LaserGeometry
 from .records import Record
 
@@ -42,7 +42,7 @@ def read_log(
         InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument, for a path that
             is not a str / PathLike, ``skip_bad_lines`` that is not a bool, ``topic`` that is not a
             str, ``geometry`` that is not a LaserGeometry.
-        FileNotFoundError: when the path does not exist, or is a folder that is not a ROS 2 bag or
+        LogNotFoundError: (an ``LmsbenchError`` and a ``FileNotFoundError``) when the path does not exist, or is a folder that is not a ROS 2 bag or
             not a regular file (a device, a pipe).
         LogFormatError: (while iterating) a CARMEN line that cannot be read, naming file and line.
         BagError: (while iterating) a bag that cannot be read, naming the topic and message index.
@@ -55,13 +55,13 @@ def read_log(
     if geometry is not None and not isinstance(geometry, LaserGeometry):
         raise InputError(f"geometry: must be an lms200.laser_geometry.LaserGeometry or None, got {geometry!r}")
     if not p.exists():
-        raise FileNotFoundError(f"no such log: {p}")
+        raise LogNotFoundError(f"no such log: {p}")
     if is_bag(p):
         if geometry is not None and geometry != LaserGeometry():
             raise BagError(f"{p}: a bag's LaserScan messages carry their geometry; no geometry override")
         return BagReader(p, topic=topic, skip_bad_lines=skip_bad_lines)
     if p.is_dir():
-        raise FileNotFoundError(f"{p} is a folder but not a ROS 2 bag (no metadata.yaml)")
+        raise LogNotFoundError(f"{p} is a folder but not a ROS 2 bag (no metadata.yaml)")
     return CarmenReader(p, skip_bad_lines=skip_bad_lines, topic=topic, geometry=geometry)
 
 

@@ -19,6 +19,7 @@ from typing import Any, Literal
 import numpy as np
 
 from lms200 import LmsbenchError
+from lms200.errors import InputError
 from lms200.codes import LMS200_MAX_RANGE, metres_per_unit
 from lms200.timing import MIRROR_TURN_S, scan_period, turns_per_scan
 
@@ -97,42 +98,42 @@ class SensorConfig:
             value, kind = getattr(self, f.name), str(f.type)
             is_bool = isinstance(value, (bool, np.bool_))
             if kind == "bool" and not is_bool:
-                raise ValueError(f"{f.name}: must be true or false, got {value!r}")
+                raise InputError(f"{f.name}: must be true or false, got {value!r}")
             if kind == "int" and (is_bool or not isinstance(value, (int, np.integer))):
-                raise ValueError(f"{f.name}: must be a whole number, got {value!r}")
+                raise InputError(f"{f.name}: must be a whole number, got {value!r}")
             if kind.startswith("float") and not (value is None and "None" in kind):
                 if is_bool or not isinstance(value, (int, float, np.integer, np.floating)):
-                    raise ValueError(f"{f.name}: must be a number, got {value!r}")
+                    raise InputError(f"{f.name}: must be a number, got {value!r}")
                 if not np.isfinite(value):  # nan passes every comparison below: refuse it (and inf) first
-                    raise ValueError(f"{f.name}: must be finite, got {value}")
+                    raise InputError(f"{f.name}: must be finite, got {value}")
         if self.units not in ("mm", "cm"):
-            raise ValueError(f"units: must be 'mm' or 'cm', got {self.units!r}")
+            raise InputError(f"units: must be 'mm' or 'cm', got {self.units!r}")
         if self.n_beams < 2:
-            raise ValueError(f"n_beams: must be >= 2, got {self.n_beams}")
+            raise InputError(f"n_beams: must be >= 2, got {self.n_beams}")
         if not 0 < self.resolution_deg <= 1.0:
-            raise ValueError(f"resolution_deg: must be in (0, 1], got {self.resolution_deg}")
+            raise InputError(f"resolution_deg: must be in (0, 1], got {self.resolution_deg}")
         if self.fov_deg > 180.0 + 1e-9:
-            raise ValueError(f"n_beams, resolution_deg: field of view {self.fov_deg} deg exceeds 180 deg")
+            raise InputError(f"n_beams, resolution_deg: field of view {self.fov_deg} deg exceeds 180 deg")
         if self.noise_sigma < 0:
-            raise ValueError(f"noise_sigma: must be >= 0, got {self.noise_sigma}")
+            raise InputError(f"noise_sigma: must be >= 0, got {self.noise_sigma}")
         for name in ("dropout_prob", "no_return_prob", "outlier_prob"):
             value = getattr(self, name)
             if not 0 <= value < 1:
-                raise ValueError(f"{name}: must be in [0, 1), got {value}")
+                raise InputError(f"{name}: must be in [0, 1), got {value}")
         if self.beam_width_deg < 0:
-            raise ValueError(f"beam_width_deg: must be >= 0, got {self.beam_width_deg}")
+            raise InputError(f"beam_width_deg: must be >= 0, got {self.beam_width_deg}")
         if not np.isfinite(self.noise_sigma_per_m):
-            raise ValueError(f"noise_sigma_per_m: must be finite, got {self.noise_sigma_per_m}")
+            raise InputError(f"noise_sigma_per_m: must be finite, got {self.noise_sigma_per_m}")
         if not 0 <= self.noise_tail_prob < 1:
-            raise ValueError(f"noise_tail_prob: must be in [0, 1), got {self.noise_tail_prob}")
+            raise InputError(f"noise_tail_prob: must be in [0, 1), got {self.noise_tail_prob}")
         if self.noise_tail_sigma < 0:
-            raise ValueError(f"noise_tail_sigma: must be >= 0, got {self.noise_tail_sigma}")
+            raise InputError(f"noise_tail_sigma: must be >= 0, got {self.noise_tail_sigma}")
         if not (np.isfinite(self.noise_tail_patch_m) and self.noise_tail_patch_m >= 0):
-            raise ValueError(f"noise_tail_patch_m: must be >= 0, got {self.noise_tail_patch_m}")
+            raise InputError(f"noise_tail_patch_m: must be >= 0, got {self.noise_tail_patch_m}")
         if not (np.isfinite(self.dropout_patch_m) and self.dropout_patch_m >= 0):
-            raise ValueError(f"dropout_patch_m: must be >= 0, got {self.dropout_patch_m}")
+            raise InputError(f"dropout_patch_m: must be >= 0, got {self.dropout_patch_m}")
         if self.max_reading is not None and not 0 < self.max_reading <= self.range_max:
-            raise ValueError(f"max_reading: must be in (0, range_max = {self.range_max}], got {self.max_reading}")
+            raise InputError(f"max_reading: must be in (0, range_max = {self.range_max}], got {self.max_reading}")
 
     # -- presets ------------------------------------------------------------------------------
     @classmethod

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from lms200 import LmsbenchError
+from lms200.errors import InputError
 
 from .geometry import distance_to_segments, face_corners, rectangle_corners, union_faces
 from .walls_only import box_thickness, orient_walls, unreproduced
@@ -79,25 +80,25 @@ class World:
         self.corners, self.corner_faces = face_corners(self.walls)
 
     def _check(self) -> None:
-        """Raise ValueError naming the field for values no world can have: non-finite or larger than
+        """Raise InputError (a ValueError) naming the field for values no world can have: non-finite or larger than
         MAX_COORD_M coordinates, solids of no size or upside down, a route that names nodes it does
         not have (the robot's tour indexes them)."""
         for name in ("boxes", "cylinders", "route_nodes", "glass"):
             a = getattr(self, name)
             if not np.isfinite(a).all() or (a.size and np.abs(a).max() > MAX_COORD_M):
-                raise ValueError(f"{name}: must be finite numbers within +-{MAX_COORD_M:g} m")
+                raise InputError(f"{name}: must be finite numbers within +-{MAX_COORD_M:g} m")
         if not (math.isfinite(self.scan_height) and 0 <= self.scan_height <= MAX_COORD_M):
-            raise ValueError(f"scan_height: must be a finite height >= 0 m, got {self.scan_height}")
+            raise InputError(f"scan_height: must be a finite height >= 0 m, got {self.scan_height}")
         b, c = self.boxes, self.cylinders
         if ((b[:, 3] <= 0) | (b[:, 4] <= 0) | (b[:, 6] <= b[:, 5])).any():
-            raise ValueError("boxes: half sizes hx, hy must be > 0 and the top z1 above the bottom z0")
+            raise InputError("boxes: half sizes hx, hy must be > 0 and the top z1 above the bottom z0")
         if ((c[:, 2] <= 0) | (c[:, 4] <= c[:, 3])).any():
-            raise ValueError("cylinders: the radius must be > 0 and the top z1 above the bottom z0")
+            raise InputError("cylinders: the radius must be > 0 and the top z1 above the bottom z0")
         n = len(self.route_nodes)
         for name in ("route_edges", "route_targets"):
             idx = getattr(self, name)
             if idx.size and (idx.min() < 0 or idx.max() >= n):
-                raise ValueError(f"{name}: node indices must be in [0, {n}) (route_nodes has {n}), "
+                raise InputError(f"{name}: node indices must be in [0, {n}) (route_nodes has {n}), "
                                  f"got {int(idx.min())}..{int(idx.max())}")
 
     # -- JSON ---------------------------------------------------------------------------------
@@ -141,7 +142,7 @@ class World:
             walls = np.asarray(d.get("walls", []), dtype=float).reshape(-1, 4)
             circles = np.asarray(d.get("circles", []), dtype=float).reshape(-1, 3)
             if not (np.isfinite(walls).all() and np.isfinite(circles).all()):
-                raise ValueError("walls and circles must be finite numbers")
+                raise InputError("walls and circles must be finite numbers")
         except (ValueError, TypeError, UnicodeDecodeError) as exc:
             raise LmsbenchError(f"{path}: not a world.json ({exc})") from None
         try:

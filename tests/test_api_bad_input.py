@@ -80,10 +80,18 @@ def test_read_log_path_of_the_wrong_type(path: object) -> None:
         read_log(path)  # type: ignore[arg-type]
 
 
-def test_read_log_of_a_device_is_refused_at_once() -> None:
-    """/dev/zero exists but is no file: refused by name, not read (no hang, no memory)."""
-    with pytest.raises(FileNotFoundError, match="/dev/zero is not a regular file"):
-        read_log("/dev/zero")
+@pytest.mark.parametrize("path, message", [
+    ("/dev/zero", "/dev/zero is not a regular file"),  # exists but is no file: refused by name, not read
+    ("/no/such.log", "no such log: /no/such.log"),
+    ("/tmp", "is a folder but not a ROS 2 bag"),
+])
+def test_read_log_of_a_device_folder_or_nothing(path: str, message: str) -> None:
+    """A LogNotFoundError: an LmsbenchError (was a bare FileNotFoundError) and still a FileNotFoundError."""
+    from lms200.errors import LogNotFoundError
+
+    with pytest.raises(LogNotFoundError, match=message) as info:
+        read_log(path)
+    assert isinstance(info.value, FileNotFoundError)
 
 
 def test_write_log_with_a_bad_record_keeps_the_existing_file(tmp_path) -> None:
@@ -299,3 +307,15 @@ def test_paper_slam_over_a_long_gap_in_the_stamps() -> None:
     with_gap, plain = run_slam(gap, cfg).trajectory, run_slam(recs, cfg).trajectory
     assert with_gap.shape == plain.shape and with_gap[-1, 0] == gap[-1].scan.stamp
     assert np.array_equal(with_gap[:6], plain[:6]) and np.all(np.isfinite(with_gap))
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(noise_sigma="x"), "^noise_sigma: must be a number"),
+    (dict(units="m"), "^units: must be 'mm' or 'cm'"),
+    (dict(resolution_deg=-1.0), r"^resolution_deg: must be in \(0, 1\]"),
+])
+def test_sensor_config_errors_are_lmsbench_errors(kw: dict, message: str) -> None:
+    from sim.sensor import SensorConfig
+
+    with pytest.raises(InputError, match=message):  # were bare ValueErrors
+        SensorConfig(**kw)
