@@ -92,7 +92,7 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
         items = iter(records)
     except TypeError:
         raise InputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
-    checked = _checked(items)
+    checked = checked_records(items)
     if fmt in ("bag", "bag2"):
         if fmt == "bag" and p.suffix != ".bag":
             raise InputError(f"path: a ROS 1 bag must end in .bag, got {p.name}")
@@ -131,10 +131,11 @@ def _path(path: object) -> Path:
     return Path(path)
 
 
-def _checked(records: Iterator[object]) -> Iterator[Record]:
-    """The records, raising InputError naming the index of the first item that is not a Record."""
+def checked_records(records: Iterable[object], error: type[Exception] = InputError) -> Iterator[Record]:
+    """The records, raising ``error`` naming the index of the first item that is not a Record (lazily:
+    a log's records are checked as they are written or used)."""
     for i, rec in enumerate(records):
         if not isinstance(rec, Record):
             hint = " (wrap a Scan as lms200.Record(scan=scan))" if type(rec).__name__ == "Scan" else ""
-            raise InputError(f"records[{i}]: expected an lms200.Record, got {type(rec).__name__}{hint}")
+            raise error(f"records[{i}]: expected an lms200.Record, got {type(rec).__name__}{hint}")
         yield rec

@@ -8,6 +8,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from lms200.errors import LmsbenchError
+from lms200.logs import checked_records
 from lms200.records import Record
 
 from .config import SlamConfig
@@ -194,7 +195,7 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
     if not isinstance(config, SlamConfig):
         raise SlamInputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
     try:
-        records = _checked_records(iter(records))
+        records = checked_records(iter(records), SlamInputError)
     except TypeError:
         raise SlamInputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
     if config.preset == "default":
@@ -212,15 +213,6 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
         yield from _observed(batch, config)
 
     return run_steps(steps(), config)
-
-
-def _checked_records(records: Iterable[object]) -> Iterable[Record]:
-    """The records, raising SlamInputError naming the index of the first item that is not a Record."""
-    for i, rec in enumerate(records):
-        if not isinstance(rec, Record):
-            hint = " (wrap a Scan as lms200.Record(scan=scan))" if type(rec).__name__ == "Scan" else ""
-            raise SlamInputError(f"records[{i}]: expected an lms200.Record, got {type(rec).__name__}{hint}")
-        yield rec
 
 
 #: scans extracted in one ``features.extract_many`` call (bounds the memory of a long log)
