@@ -16,7 +16,7 @@ import tempfile
 from pathlib import Path
 from typing import Callable, Sequence
 
-from lms200 import LmsbenchError
+from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
 
 
 
@@ -25,10 +25,6 @@ def known_worlds() -> tuple[str, ...]:
     from sim.worlds import WORLD_NAMES
 
     return tuple(WORLD_NAMES)
-
-
-class InputError(LmsbenchError, ValueError):
-    """A bad option value or input file (the message says which and what is expected)."""
 
 
 class OneLineParser(argparse.ArgumentParser):
