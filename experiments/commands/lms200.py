@@ -17,7 +17,7 @@ from lms200.protocol import BAUD_MODES
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import PORT, SEED, InputError, check_log, count, positive, world_name
+from experiments.options import PORT, SEED, InputError, check_log, check_out_file, count, positive, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -143,10 +143,7 @@ def run_record(args: argparse.Namespace) -> int:
                          f"write a CARMEN log (.clf, .log, .gz) or a ROS 1 bag (.bag)")
     if args.out.suffix == ".bag" and args.out.exists():
         raise InputError(f"{args.out} exists; bags are not overwritten")
-    if args.out.is_dir():
-        raise InputError(f"--out {args.out} is a folder; give a file name")
-    if not args.out.parent.is_dir():
-        raise InputError(f"--out: folder {args.out.parent} does not exist")
+    check_out_file(args.out)
     stop = {"now": False}
     previous = signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))
     try:
