@@ -139,7 +139,7 @@ def fit_sigma(scans: Scan | Iterable[Any], fallback: float = AUTO_FALLBACK, wind
     then clipped standard deviation, so corners, depth steps and curves are outliers) of
     :func:`fit_residuals`. What a split test and a merge test must allow for, the residuals of a
     true face's beams about its fitted line: the sensor noise, the quantisation and the interlaced
-    sweeps' offset. ``fallback`` with fewer than 20 residuals."""
+    sweeps' offset. ``fallback`` with fewer than ``features.sensor.engine.MIN_TRIPLES`` (20) residuals."""
     from lms200.noise import MAX_TRIPLES, robust_scale  # noqa: PLC0415
 
     zs: list[np.ndarray] = []
@@ -151,7 +151,7 @@ def fit_sigma(scans: Scan | Iterable[Any], fallback: float = AUTO_FALLBACK, wind
         if total >= MAX_TRIPLES:
             break
     z_all = np.concatenate(zs) if zs else np.empty(0)
-    if z_all.size < 20:
+    engine = _engine()[0]  # the bounds neighbour_sigma applies: fewest residuals, noise floor
+    if z_all.size < engine.MIN_TRIPLES:
         return float(fallback)
-    floor = _engine()[0].SIGMA_FLOOR_M  # noiseless scans: finite thresholds, as neighbour_sigma
-    return max(float(robust_scale(z_all)[1]), floor)
+    return max(float(robust_scale(z_all)[1]), engine.SIGMA_FLOOR_M)  # noiseless scans: finite thresholds
