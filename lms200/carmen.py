@@ -22,15 +22,18 @@ for FLASER logs without it, from the values themselves (see :func:`infer_units`)
 
 One laser is read per pass (``topic``: a message kind); by default the first laser kind in the log.
 Every failure while reading (a malformed line, a count that is not a finite non-negative integer,
-gzip data that cannot be decompressed, a line over ``MAX_LINE_CHARS``) is a ``LogFormatError`` naming
+compressed data that cannot be decompressed, a line over ``MAX_LINE_CHARS``) is a ``LogFormatError`` naming
 file and line; ``skip_bad_lines`` records it in ``stats.skipped`` and goes on.
 """
 
 from __future__ import annotations
 
+import bz2
 import gzip
 import io
+import lzma
 import math
+import tarfile
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -58,7 +61,10 @@ ODOMETRY_PARAM = "lmsbench_odometry"  # "absent": the pose fields of the scans t
 LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages read (one kind per pass)
 ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
 MAX_LINE_CHARS = 1 << 20  # a longer line is malformed (bounds memory on damaged files)
-_READ_ERRORS = (OSError, EOFError, zlib.error)  # what a damaged or truncated gzip stream raises
+_READ_ERRORS = (OSError, EOFError, zlib.error, lzma.LZMAError)  # what damaged or truncated compressed data raises
+# compressed logs are read in place, told apart by their first bytes (not their names)
+COMPRESSIONS = {"gzip": (b"\x1f\x8b", gzip.open), "bzip2": (b"BZh", bz2.open), "xz": (b"\xfd7zXZ\x00", lzma.open)}
+COMPRESSION_SUFFIXES = {".gz": "gzip", ".bz2": "bzip2", ".xz": "xz"}
 
 
 @dataclass
@@ -82,21 +88,57 @@ class ReadStats:
         return {k: n for k, n in self.messages.items() if k in LASER_KINDS and k != self.laser}
 
 
-def open_text(path: str | Path) -> IO[str]:
-    """Open a plain or gzip-compressed text file for reading (by magic bytes, not the name)."""
-    path = Path(path)
+def compression(head: bytes) -> str | None:
+    """The compression ("gzip", "bzip2", "xz") a file's first bytes announce, or None (plain)."""
+    return next((name for name, (magic, _) in COMPRESSIONS.items() if head.startswith(magic)), None)
+
+
+def open_bytes(path: str | Path) -> IO[bytes]:
+    """Open a plain, gzip-, bzip2- or xz-compressed file for reading its (decompressed) bytes."""
     with open(path, "rb") as f:
-        magic = f.read(2)
-    if magic == b"\x1f\x8b":
-        return io.TextIOWrapper(gzip.open(path, "rb"), encoding="ascii", errors="replace")
-    return open(path, encoding="ascii", errors="replace")
+        kind = compression(f.read(6))
+    return COMPRESSIONS[kind][1](path, "rb") if kind else open(path, "rb")  # type: ignore[operator, return-value]
+
+
+def archive_kind(head: bytes) -> str | None:
+    """"a tar archive (first member ...)" or "a zip archive" when the (decompressed) first bytes
+    (4096 name a tar's first member) are an archive's, else None: a log packed in an archive must be extracted first."""
+    if head.startswith(b"PK\x03\x04"):
+        return "a zip archive"
+    if len(head) >= 262 and head[257:262] == b"ustar":
+        try:  # the first member's header (and a pax header before it) lies in the first blocks
+            with tarfile.open(fileobj=io.BytesIO(head), mode="r:") as tar:
+                member = tar.next()
+        except (tarfile.TarError, EOFError, OSError):
+            member = None
+        return f"a tar archive (first member {member.name!r})" if member else "a tar archive"
+    return None
+
+
+def open_text(path: str | Path) -> IO[str]:
+    """Open a plain or compressed (gzip, bzip2, xz) text file for reading, by magic bytes, not
+    the name.
+
+    Raises:
+        LogFormatError: for an archive (tar, zip): the log must be extracted from it first.
+    """
+    path = Path(path)
+    with open_bytes(path) as f:
+        try:
+            head = f.read(4096)
+        except _READ_ERRORS:
+            head = b""  # damaged data: reported with its line by the reader
+    what = archive_kind(head)
+    if what:
+        raise LogFormatError(path, 0, f"{what}, not a log: extract the log from it first")
+    return io.TextIOWrapper(open_bytes(path), encoding="ascii", errors="replace")
 
 
 class CarmenReader:
     """Iterate a CARMEN log's laser messages as Records; iterable several times.
 
     Args:
-        path: plain or ``.gz`` CARMEN log.
+        path: CARMEN log, plain or compressed (gzip, bzip2 or xz, told by the first bytes).
         skip_bad_lines: skip malformed lines (recorded in ``stats.skipped``) instead of raising; a
             gzip stream that cannot be decompressed further ends the pass (``stats.stopped``).
         topic: the laser message kind to read (FLASER, RLASER, ROBOTLASER1, ROBOTLASER2); by
@@ -358,7 +400,7 @@ def write_carmen(
     hostname: str = "lmsbench",
     flush: bool = False,
 ) -> int:
-    """Write Records as a CARMEN log (plain, or gzip when the name ends in ``.gz``).
+    """Write Records as a CARMEN log (plain, or compressed when the name ends in ``.gz``, ``.bz2`` or ``.xz``).
 
     Each scan becomes one FLASER or ROBOTLASER1 line (``fmt``), preceded by a TRUEPOS line when the
     record has a true pose. FLASER logs get ``PARAM laser_front_laser_resolution / _fov`` and
@@ -372,7 +414,8 @@ def write_carmen(
     if fmt not in ("robotlaser1", "flaser"):
         raise InputError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
     path = Path(path)
-    opener = gzip.open if path.suffix == ".gz" else open
+    kind = COMPRESSION_SUFFIXES.get(path.suffix)
+    opener = COMPRESSIONS[kind][1] if kind else open
     count = 0
     units: Units | None = None
     odometry: bool | None = None

@@ -215,6 +215,63 @@ def test_truncated_gzip_with_skip_bad_lines_keeps_what_was_read(tmp_path: Path) 
     assert [r.scan.stamp for r in recs] == list(range(len(recs)))
 
 
+@pytest.mark.parametrize("suffix", [".gz", ".bz2", ".xz"])
+def test_compressed_logs_are_read_in_place_and_written_by_suffix(tmp_path: Path, suffix: str) -> None:
+    """A log compressed with gzip, bzip2 or xz reads as its plain text does (told by its first bytes,
+    whatever its name); write_log compresses by the suffix; a cut stream names the file."""
+    import bz2
+    import lzma
+
+    rng = np.random.default_rng(5)
+    lines = [flaser(361, value=float(v), stamp=float(t)) for t, v in enumerate(rng.uniform(1, 5, 60).round(2))]
+    text = ("\n".join(lines) + "\n").encode()
+    pack = {".gz": gzip.compress, ".bz2": bz2.compress, ".xz": lzma.compress}[suffix]
+    plain, packed, unnamed = tmp_path / "a.log", tmp_path / f"b.log{suffix}", tmp_path / "c.log"
+    plain.write_bytes(text)
+    packed.write_bytes(pack(text))
+    unnamed.write_bytes(pack(text))
+    want = [(r.scan.stamp, r.scan.ranges.tolist(), r.scan.angle_min, r.odom) for r in read_log(plain)]
+    assert len(want) == 60
+    for path in (packed, unnamed):
+        assert [(r.scan.stamp, r.scan.ranges.tolist(), r.scan.angle_min, r.odom) for r in read_log(path)] == want
+    out = tmp_path / f"w.log{suffix}"
+    assert write_log(out, read_log(plain), fmt="flaser") == 60
+    assert out.read_bytes()[:3] == pack(b"x")[:3]  # really compressed, by the suffix
+    assert [r.scan.ranges.tolist() for r in read_log(out)] == [w[1] for w in want]
+    cut = tmp_path / f"cut.log{suffix}"
+    cut.write_bytes(packed.read_bytes()[: len(packed.read_bytes()) // 2])
+    with pytest.raises(LogFormatError, match=f"^{cut}:[0-9]+: cannot read on"):
+        list(read_log(cut))
+    reader = read_log(cut, skip_bad_lines=True)
+    kept = len(list(reader))  # bzip2 gives nothing of a 900 kB block that is cut
+    assert (0 <= kept if suffix == ".bz2" else 0 < kept) and kept < 60 and "cannot read on" in reader.stats.stopped
+
+
+@pytest.mark.parametrize("kind", ["tar", "tar.gz", "zip"])
+def test_a_log_in_an_archive_is_refused_with_what_to_do(tmp_path: Path, kind: str,
+                                                        capsys: pytest.CaptureFixture) -> None:
+    import tarfile
+    import zipfile
+
+    from experiments.cli import main
+
+    log = write(tmp_path, "fr.log", [flaser(360, stamp=float(t)) for t in range(5)])
+    path = tmp_path / f"fr.{kind}"
+    if kind == "zip":
+        with zipfile.ZipFile(path, "w") as z:
+            z.write(log, "fr.log")
+    else:
+        with tarfile.open(path, "w:gz" if kind.endswith("gz") else "w") as t:
+            t.add(log, "fr.log")
+    with pytest.raises(LogFormatError, match="archive.*extract"):
+        list(read_log(path))
+    assert main(["info", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "archive" in err and "extract" in err
+    if kind != "zip":
+        assert "'fr.log'" in err  # names the member to extract
+
+
 # --- bags ------------------------------------------------------------------------------------------
 def _two_topic_bag(path: Path, n: int = 4) -> None:
     """A ROS 1 bag with LaserScans on /scan_front and /scan_rear (rosbags' own writer)."""
