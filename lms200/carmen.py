@@ -10,6 +10,8 @@ Formats (one message a line, ``#`` comments, unknown messages skipped):
   side_safety turn_axis ipc_timestamp hostname logger_timestamp`` (ROBOTLASER2: the rear laser);
   the declared field of view must hold the count at the declared resolution (fov = n x res, or
   (n - 1) x res), and lines with the same declared geometry must carry the same count.
+- ``RAWLASER1`` .. ``RAWLASER4`` (CARMEN 0.7 loggers): the ROBOTLASER1 fields up to the remissions,
+  then ``ipc_timestamp hostname logger_timestamp``; no poses (``.odom`` is None), same checks.
 - ``ODOM x y theta tv rv accel ipc_timestamp hostname logger_timestamp``
 - ``TRUEPOS true_x true_y true_theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp``
 
@@ -20,7 +22,9 @@ cm mode, 8.183 / 8.191 m in mm mode) map to +inf / nan (REP-117). The range unit
 ROBOTLASER1 accuracy field, a ``PARAM lmsbench_range_units mm|cm`` line (which this writer emits), or,
 for FLASER logs without it, from the values themselves (see :func:`infer_units`).
 
-One laser is read per pass (``topic``: a message kind); by default the first laser kind in the log.
+One laser is read per pass (``topic``: a message kind); by default the first kind that carries
+poses (FLASER, RLASER, ROBOTLASER1 / 2) among the first ``DEFAULT_TOPIC_LINES`` lines, else the first
+RAWLASER kind: CARMEN 0.7 loggers write each reading twice, as RAWLASER1 and as ROBOTLASER1.
 Every failure while reading (a malformed line, a count that is not a finite non-negative integer,
 compressed data that cannot be decompressed, a line over ``MAX_LINE_CHARS``) is a ``LogFormatError`` naming
 file and line; ``skip_bad_lines`` records it in ``stats.skipped`` and goes on.
@@ -58,7 +62,10 @@ from .scan import Scan, snap_angle
 
 UNITS_PARAM = "lmsbench_range_units"
 ODOMETRY_PARAM = "lmsbench_odometry"  # "absent": the pose fields of the scans that follow are not odometry
-LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages read (one kind per pass)
+POSED_LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages that carry poses
+RAW_LASER_KINDS = ("RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4")  # laser messages without poses
+LASER_KINDS = POSED_LASER_KINDS + RAW_LASER_KINDS  # laser messages read (one kind per pass)
+DEFAULT_TOPIC_LINES = 10_000  # lines looked at to choose the default laser kind
 ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
 MAX_LINE_CHARS = 1 << 20  # a longer line is malformed (bounds memory on damaged files)
 _READ_ERRORS = (OSError, EOFError, zlib.error, lzma.LZMAError)  # what damaged or truncated compressed data raises
@@ -141,8 +148,9 @@ class CarmenReader:
         path: CARMEN log, plain or compressed (gzip, bzip2 or xz, told by the first bytes).
         skip_bad_lines: skip malformed lines (recorded in ``stats.skipped``) instead of raising; a
             gzip stream that cannot be decompressed further ends the pass (``stats.stopped``).
-        topic: the laser message kind to read (FLASER, RLASER, ROBOTLASER1, ROBOTLASER2); by
-            default the first kind met in the log (the others are counted in ``stats.messages``).
+        topic: the laser message kind to read (FLASER, RLASER, ROBOTLASER1 / 2, RAWLASER1 .. 4); by
+            default the first kind with poses met in the log, else the first RAWLASER kind (see
+            the module docstring; the others are counted in ``stats.messages``).
         geometry: FLASER / RLASER beam geometry that overrides the log's PARAM lines and the
             convention from the count (see :mod:`lms200.laser_geometry`); ROBOTLASER lines carry
             their own, except ``range_max``, which an override replaces there too.
@@ -200,12 +208,33 @@ class CarmenReader:
         error (it would be ignored): only range_max applies to ROBOTLASER lines."""
         g = self.geometry
         given = [name for name in ("fov", "resolution", "angle_min") if getattr(g, name) is not None]
-        if kind.startswith("ROBOTLASER") and given:
+        if kind not in ("FLASER", "RLASER") and given:
             raise LmsbenchError(f"{self.path}: its {kind} lines carry their own beam geometry; the override of "
                                 f"{', '.join(given)} (--laser-*-deg) applies to FLASER / RLASER lines only")
 
+    def _default_topic(self) -> str | None:
+        """The laser kind read by default: the first with poses among the first
+        ``DEFAULT_TOPIC_LINES`` lines, else the first RAWLASER kind, else None (the first met)."""
+        raw = None
+        try:
+            with open_text(self.path) as f:
+                for _ in range(DEFAULT_TOPIC_LINES):
+                    line = f.readline(4096)  # the first word is enough; a longer line goes on as pieces
+                    if not line:
+                        break
+                    words = line[:16].split(None, 1)
+                    kind = words[0] if words else ""
+                    if kind in POSED_LASER_KINDS:
+                        return kind
+                    raw = raw or (kind if kind in RAW_LASER_KINDS else None)
+        except (*_READ_ERRORS, UnicodeError):
+            pass  # damage is reported, with its line, by the pass itself
+        return raw
+
     def __iter__(self) -> Iterator[Record]:
-        self.stats = stats = ReadStats(laser=self.topic)
+        self.stats = stats = ReadStats(laser=self.topic or self._default_topic())
+        if stats.laser is not None:
+            self._check_override(stats.laser)
         units: Units | None = None
         truth: Pose2D | None = None
         has_odometry = True
@@ -232,6 +261,7 @@ class CarmenReader:
                         self._check_override(kind)
                     if kind != stats.laser:
                         continue
+                    odom: Pose2D | None
                     if kind in ("FLASER", "RLASER"):
                         geometry = self.geometry.merged(laser_geometry.from_params(kind, params))
                         scan, odom = _parse_flaser(words, units, geometry)
@@ -326,15 +356,18 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     return scan, _pose(words, 2 + n + 3, f"{kind} odometry")
 
 
-def _parse_robotlaser(words: list[str], units: Units | None, range_max_override: float | None) -> tuple[Scan, Pose2D]:
+def _parse_robotlaser(words: list[str], units: Units | None,
+                      range_max_override: float | None) -> tuple[Scan, Pose2D | None]:
+    """A ROBOTLASER1 / 2 line (robot pose as odometry) or a RAWLASER1 .. 4 line (no pose)."""
     kind = words[0]
+    tail_fields = 3 if kind.startswith("RAWLASER") else 14  # (poses, speeds, safety,) timestamps, host
     _require(len(words) >= 10, f"{kind} is too short")
     head = _floats(words[1:8], f"{kind} header")
     start, fov, resolution, max_range, accuracy = (float(v) for v in head[1:6])
     n = _count(words[8], "beam count")
     _require(n > 0 and len(words) > 9 + n, f"{kind} announces {n} beams but has fewer fields")
     m = _count(words[9 + n], "remission count")
-    expected = 10 + n + m + 14
+    expected = 10 + n + m + tail_fields
     _require(len(words) == expected, f"{kind} with {n} ranges and {m} remissions needs {expected} fields, got {len(words)}")
     _require(bool(np.all(np.isfinite(head))), f"{kind} header is not finite")
     _require(resolution > 0, f"angular resolution must be > 0, got {resolution}")
@@ -346,12 +379,17 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     if units is None and accuracy in (0.01, 0.001):
         units = "cm" if accuracy == 0.01 else "mm"
     ranges, _ = _ranges(_floats(words[9 : 9 + n], f"{kind} ranges"), units, kind)
-    tail = _floats(words[10 + n + m : 10 + n + m + 12], f"{kind} poses and timestamp")
+    if kind.startswith("RAWLASER"):
+        stamp = float(_floats(words[10 + n + m : 11 + n + m], f"{kind} timestamp")[0])
+    else:
+        stamp = float(_floats(words[10 + n + m : 10 + n + m + 12], f"{kind} poses and timestamp")[11])
     if range_max_override is not None:
         range_max = range_max_override
     else:
         range_max = max_range if max_range > 0 else LMS200_MAX_RANGE["cm"]
-    scan = Scan(ranges, snap_angle(start), snap_angle(resolution), 0.0, range_max, float(tail[11]))
+    scan = Scan(ranges, snap_angle(start), snap_angle(resolution), 0.0, range_max, stamp)
+    if kind.startswith("RAWLASER"):
+        return scan, None
     return scan, _pose(words, 10 + n + m + 3, f"{kind} robot pose")
 
 

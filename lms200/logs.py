@@ -33,8 +33,8 @@ def read_log(
             raising; what was skipped is in ``reader.stats.skipped`` as (line or message index,
             reason), and ``reader.stats.stopped`` says why a pass ended early, if it did.
         topic: the laser to read: a bag's LaserScan topic (needed when the bag has several), or a
-            CARMEN laser message kind (FLASER, RLASER, ROBOTLASER1, ROBOTLASER2; default: the first
-            kind in the log).
+            CARMEN laser message kind (FLASER, RLASER, ROBOTLASER1 / 2, RAWLASER1 .. 4; default: the
+            first kind with poses in the log, else the first RAWLASER kind).
         geometry: CARMEN FLASER / RLASER only: beam geometry (rad, m) that overrides the log's
             PARAM lines and the convention from the beam count (see :mod:`lms200.laser_geometry`).
 

@@ -157,6 +157,37 @@ def test_robotlaser1_fov_must_fit_the_count(tmp_path: Path) -> None:
 
 
 # --- damage ----------------------------------------------------------------------------------------
+def rawlaser(n: int, fov: float, res: float, stamp: float = 10.0, kind: str = "RAWLASER1") -> str:
+    ranges = " ".join(f"{2.0 + 0.01 * i:.2f}" for i in range(n))
+    return f"{kind} 0 {-fov / 2:.6f} {fov:.6f} {res:.6f} 80.0 0.01 0 {n} {ranges} 0 {stamp} host {stamp}"
+
+
+def test_rawlaser_lines_read_without_poses_and_robotlaser_is_preferred(tmp_path: Path) -> None:
+    """CARMEN 0.7 logs: RAWLASER1 alone reads (geometry from its header, no odometry); beside
+    ROBOTLASER1 (the same readings with poses), ROBOTLASER1 is read by default even when RAWLASER1
+    comes first; --topic RAWLASER1 chooses it; a RAWLASER line one beam short names its line."""
+    res = math.radians(0.5)
+    raw = write(tmp_path, "raw.log", ["ODOM 0 0 0 0 0 0 1 host 1"] + [rawlaser(361, 360 * res, res, stamp=t)
+                                                                    for t in range(3)])
+    recs = list(read_log(raw))
+    assert len(recs) == 3 and all(r.odom is None for r in recs)
+    assert [r.scan.stamp for r in recs] == [0.0, 1.0, 2.0]
+    np.testing.assert_allclose(recs[0].scan.angles[[0, 180, 360]], [-math.pi / 2, 0.0, math.pi / 2], atol=1e-9)
+    np.testing.assert_allclose(recs[0].scan.ranges[:3], [2.0, 2.01, 2.02])
+    both = write(tmp_path, "both.log", [line for t in range(4) for line in
+                                        (rawlaser(361, 360 * res, res, stamp=t),
+                                         robotlaser(181, math.pi, math.radians(1.0), stamp=t))])
+    reader = read_log(both)
+    assert [len(r.scan) for r in reader] == [181] * 4 and reader.stats.laser == "ROBOTLASER1"
+    assert all(r.odom == (1.0, 2.0, 0.5) for r in read_log(both))
+    assert reader.stats.other_lasers() == {"RAWLASER1": 4}
+    assert [len(r.scan) for r in read_log(both, topic="RAWLASER1")] == [361] * 4
+    short = write(tmp_path, "short.log", [rawlaser(361, 360 * res, res), rawlaser(361, 360 * res, res)
+                                          .replace("RAWLASER1 0", "RAWLASER1 0", 1).replace(" 361 ", " 360 ", 1)])
+    with pytest.raises(LogFormatError, match=r"short.log:2: malformed RAWLASER1 line"):
+        list(read_log(short))
+
+
 def test_inf_count_does_not_stop_skip_bad_lines(tmp_path: Path) -> None:
     lines = [flaser(180, stamp=t) for t in range(5)]
     lines[2] = lines[2].replace("FLASER 180", "FLASER inf", 1)
