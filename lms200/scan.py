@@ -82,10 +82,10 @@ class Scan:
             raise ScanError(f"angle_min: a bearing within +-2 pi rad (+-360 deg), got {self.angle_min:g} rad"
                             f"{_degrees_hint(self.angle_min, abs(np.deg2rad(self.angle_min)) <= MAX_BEARING_RAD)}")
         span = (r.size - 1) * self.angle_increment
-        if span > MAX_SPAN_RAD:
+        if span > MAX_SPAN_RAD + self.angle_increment:  # one beam more: some 360 deg drivers repeat the first
             raise ScanError(f"angle_increment: {r.size} beams {self.angle_increment:g} rad apart span {span:g} rad, "
                             f"more than a full turn (2 pi rad)"
-                            f"{_degrees_hint(self.angle_increment, np.deg2rad(span) <= MAX_SPAN_RAD)}")
+                            f"{_degrees_hint(self.angle_increment, np.deg2rad(span) <= 2 * np.pi)}")
         if self.range_min < 0:
             raise ScanError(f"range_min: must be >= 0, got {self.range_min}")
         if self.range_max <= self.range_min:
@@ -173,7 +173,7 @@ class Scan:
 
 
 MAX_BEARING_RAD = 2 * np.pi + 1e-9  # |angle_min| at most one full turn
-MAX_SPAN_RAD = 2 * np.pi * (1 + 1e-9)  # first to last beam: at most one full turn (a 360 deg lidar)
+MAX_SPAN_RAD = 2 * np.pi * (1 + 1e-6)  # first to last beam: a full turn (a 360 deg lidar; float32 increments)
 
 
 def _degrees_hint(value: float, fits_as_degrees: bool) -> str:
