@@ -188,6 +188,23 @@ def test_rawlaser_lines_read_without_poses_and_robotlaser_is_preferred(tmp_path:
         list(read_log(short))
 
 
+def test_nan_and_inf_written_as_text_keep_their_rep117_meaning(tmp_path: Path) -> None:
+    """A log converted from ROS may write nan / inf ranges as text: one invalid beam no longer
+    makes the whole scan malformed; a negative range still does."""
+    good = flaser(181, value=2.0).split()
+    good[2 + 10], good[2 + 20], good[2 + 30] = "nan", "inf", "NaN"
+    bad = flaser(181, value=2.0).split()
+    bad[2 + 5] = "-1.5"
+    path = write(tmp_path, "rep117.log", [" ".join(good), " ".join(bad)])
+    with pytest.raises(LogFormatError, match=r"rep117.log:2: .*negative range -1.5"):
+        list(read_log(path))
+    recs = list(read_log(path, skip_bad_lines=True))
+    assert len(recs) == 1
+    r = recs[0].scan.ranges
+    assert np.isnan(r[10]) and np.isnan(r[30]) and np.isposinf(r[20])
+    assert np.count_nonzero(r == 2.0) == 178
+
+
 def test_inf_count_does_not_stop_skip_bad_lines(tmp_path: Path) -> None:
     lines = [flaser(180, stamp=t) for t in range(5)]
     lines[2] = lines[2].replace("FLASER 180", "FLASER inf", 1)
