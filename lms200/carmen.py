@@ -37,6 +37,7 @@ import gzip
 import io
 import lzma
 import math
+import re
 import tarfile
 import zlib
 from dataclasses import dataclass, field
@@ -65,7 +66,8 @@ ODOMETRY_PARAM = "lmsbench_odometry"  # "absent": the pose fields of the scans t
 POSED_LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages that carry poses
 RAW_LASER_KINDS = ("RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4")  # laser messages without poses
 LASER_KINDS = POSED_LASER_KINDS + RAW_LASER_KINDS  # laser messages read (one kind per pass)
-DEFAULT_TOPIC_LINES = 10_000  # lines looked at to choose the default laser kind
+DEFAULT_TOPIC_LINES = 10_000  # lines looked at to choose the default laser kind (and to tell junk from a log)
+_MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]*")  # how every CARMEN message line starts
 ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
 MAX_LINE_CHARS = 1 << 20  # a longer line is malformed (bounds memory on damaged files)
 _READ_ERRORS = (OSError, EOFError, zlib.error, lzma.LZMAError)  # what damaged or truncated compressed data raises
@@ -212,27 +214,41 @@ class CarmenReader:
             raise LmsbenchError(f"{self.path}: its {kind} lines carry their own beam geometry; the override of "
                                 f"{', '.join(given)} (--laser-*-deg) applies to FLASER / RLASER lines only")
 
-    def _default_topic(self) -> str | None:
+    def _survey(self) -> str | None:
         """The laser kind read by default: the first with poses among the first
-        ``DEFAULT_TOPIC_LINES`` lines, else the first RAWLASER kind, else None (the first met)."""
-        raw = None
+        ``DEFAULT_TOPIC_LINES`` lines, else the first RAWLASER kind, else None (the first met).
+
+        Raises:
+            LogFormatError: when none of the first ``DEFAULT_TOPIC_LINES`` lines (comments aside)
+                starts with a message name: a text file that is no CARMEN log is refused in
+                bounded time instead of being read to its end for nothing.
+        """
+        raw, named, looked = None, False, 0
         try:
             with open_text(self.path) as f:
-                for _ in range(DEFAULT_TOPIC_LINES):
+                while looked < DEFAULT_TOPIC_LINES:
                     line = f.readline(4096)  # the first word is enough; a longer line goes on as pieces
                     if not line:
                         break
-                    words = line[:16].split(None, 1)
+                    words = line[:24].split(None, 1)
                     kind = words[0] if words else ""
-                    if kind in POSED_LASER_KINDS:
-                        return kind
+                    if not kind or kind.startswith("#"):
+                        continue
+                    looked += 1
+                    named = named or _MESSAGE_NAME.fullmatch(kind) is not None
+                    if kind in POSED_LASER_KINDS or (named and self.topic is not None):
+                        return kind  # (a given topic is read whatever this returns)
                     raw = raw or (kind if kind in RAW_LASER_KINDS else None)
         except (*_READ_ERRORS, UnicodeError):
-            pass  # damage is reported, with its line, by the pass itself
+            return raw  # damage is reported, with its line, by the pass itself
+        if looked >= DEFAULT_TOPIC_LINES and not named:
+            raise LogFormatError(self.path, 1, f"not a CARMEN log: none of its first {DEFAULT_TOPIC_LINES:,} lines "
+                                               "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
         return raw
 
     def __iter__(self) -> Iterator[Record]:
-        self.stats = stats = ReadStats(laser=self.topic or self._default_topic())
+        default = self._survey()
+        self.stats = stats = ReadStats(laser=self.topic or default)
         if stats.laser is not None:
             self._check_override(stats.laser)
         units: Units | None = None

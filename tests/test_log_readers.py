@@ -205,6 +205,21 @@ def test_nan_and_inf_written_as_text_keep_their_rep117_meaning(tmp_path: Path) -
     assert np.count_nonzero(r == 2.0) == 178
 
 
+def test_a_large_text_file_that_is_no_log_is_refused_after_its_first_lines(tmp_path: Path) -> None:
+    """A 300 MB text file without one CARMEN message was read to its end (75 s) for 0 scans; it is
+    refused after 10,000 lines. A log whose laser lines start late (after 12,000 ODOM lines) reads."""
+    from lms200.carmen import DEFAULT_TOPIC_LINES
+
+    rng = np.random.default_rng(3)
+    words = ["".join(rng.choice(list("abcdefgh0123"), 6)) for _ in range(50)]
+    junk = write(tmp_path, "junk.txt", [" ".join(rng.choice(words, 8)) for _ in range(DEFAULT_TOPIC_LINES + 5)])
+    for skip in (False, True):
+        with pytest.raises(LogFormatError, match="junk.txt:1: not a CARMEN log"):
+            list(read_log(junk, skip_bad_lines=skip))
+    late = write(tmp_path, "late.log", ["ODOM 0 0 0 0 0 0 1 host 1"] * 12_000 + [flaser(181)])
+    assert len(list(read_log(late))) == 1
+
+
 def test_inf_count_does_not_stop_skip_bad_lines(tmp_path: Path) -> None:
     lines = [flaser(180, stamp=t) for t in range(5)]
     lines[2] = lines[2].replace("FLASER 180", "FLASER inf", 1)
