@@ -371,6 +371,35 @@ def _records(n: int = 30) -> list[Record]:
             for i in range(n)]
 
 
+def test_a_bag_of_a_clockwise_laser_reads_with_every_beam_on_its_bearing(tmp_path: Path) -> None:
+    """A laser mounted upside down publishes angle_increment < 0; every message was refused (a
+    Scan's increment must be > 0). Now the beams are put in ascending order: each keeps its bearing."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    T = ts.types
+    beams = np.linspace(1.0, 3.0, 181).astype(np.float32)  # beam k at bearing +90 - k deg
+    path = tmp_path / "flipped.bag"
+    with Writer(path) as w:
+        conn = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts)
+        msg = T["sensor_msgs/msg/LaserScan"](
+            header=T["std_msgs/msg/Header"](seq=0, stamp=T["builtin_interfaces/msg/Time"](sec=5, nanosec=0),
+                                            frame_id="laser"),
+            angle_min=math.pi / 2, angle_max=-math.pi / 2, angle_increment=-math.radians(1.0),
+            time_increment=0.0, scan_time=0.0, range_min=0.0, range_max=30.0,
+            ranges=beams, intensities=np.zeros(0, np.float32))
+        w.write(conn, 5_000_000_000, ts.serialize_ros1(msg, "sensor_msgs/msg/LaserScan"))
+    (rec,) = list(read_log(path))
+    scan = rec.scan
+    assert scan.angle_increment > 0
+    np.testing.assert_allclose(scan.angle_min, -math.pi / 2, atol=1e-6)
+    bearings = np.pi / 2 - np.radians(np.arange(181))  # where the message put each beam
+    order = np.argsort(bearings)
+    np.testing.assert_allclose(scan.angles, bearings[order], atol=1e-6)
+    np.testing.assert_array_equal(scan.ranges, beams[order].astype(np.float64))
+
+
 def test_damaged_bag_raises_bag_error_only(tmp_path: Path) -> None:
     path = tmp_path / "good.bag"
     write_log(path, _records())
