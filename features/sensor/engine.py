@@ -2,7 +2,7 @@
 
 Every step works in range-bearing space, on the beams of one scan, in the order of the paper:
 
-1. per-beam signals (``beam_signals``): the invariant AD_ik (eq. 4), the slope estimate theta_i
+1. per-beam signals (``signal_block``): the invariant AD_ik (eq. 4), the slope estimate theta_i
    (eq. 6-7 as corrected in NOTES.md) and psi_i = theta_i - theta_{i+k}, with their noise std;
 2. runs of beams on straight lines (``candidate_runs``): the AD test, broken where psi peaks;
 3. the Log-Hough transform (eq. 5) searched in a narrow band of normal angles around each run's
@@ -525,109 +525,126 @@ def fix_slope_sd(x: float, sd: float) -> bool:
     return x == x and not (x != 0.0 and math.isfinite(x) and math.isfinite(sd))
 
 
+# rows of ``signal_block``'s (11, n) block: the seven signals, three scratch rows and u = 1/d
+S_AD, S_AD_VAR, S_AD_SLOPE, S_THETA, S_THETA_VAR, S_PSI, S_PSI_VAR, S_TAN_T, S_TAN_S, S_U4, S_U = range(11)
+N_SIGNAL_ROWS = 11
+
+
 @kernel
-def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):  # noqa: ANN001, ANN201
+def signal_block(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):  # noqa: ANN001, ANN201
     """Per-beam signals of one scan (nan where a window is incomplete or holds an invalid beam):
-    valid, u = 1/d, AD (eq. 4), its variance per sigma_r**2, ad (eq. 6), theta (rad, unwrapped)
-    and its variance, psi = theta_i - theta_{i+k} (wrapped) and its variance.
+    ``valid`` and one (N_SIGNAL_ROWS, n) block whose rows (``S_*``) hold AD (eq. 4), its variance
+    per sigma_r**2, ad (eq. 6), theta (rad, unwrapped) and its variance, psi = theta_i - theta_{i+k}
+    (wrapped) and its variance, three scratch rows and u = 1/d.
 
     Noise, first order in the range noise e_j (std sigma_r): u_j = 1/(d_j + e_j) ~ u_j - u_j^2 e_j,
     so var(AD) / sigma_r^2 = (sum_j u_j^4 - u_i^4) / u_i^2 + (AD - 1)^2 u_i^2, the same for ad.
     The std of theta = b + arctan(T) is the half-difference of arctan over T +- std(T), which stays
     right at grazing incidence.
+
+    Rows are indexed in the block (``out[row, i]``, beams unsigned), never cut out as views: a view
+    that outlives a loop is two atomic reference counts, and views of rows and shifted windows
+    were ~0.35 us of this kernel's ~2.7 us a scan (numba prunes counts within a block, not across
+    loops). Unsigned indices: numba then adds no negative-index wraparound and the loops vectorise.
     """
     n = ranges.size
     valid = np.empty(n, np.bool_)
-    u = np.empty(n)
+    out = np.full((N_SIGNAL_ROWS, n), np.nan)
     for i in range(n):  # without branches, so that it vectorises
         d = ranges[i]
         ok = d >= range_lo and d <= range_hi
         valid[i] = ok
-        u[i] = 1.0 / d if ok else np.nan
-    out = np.full((10, n), np.nan)  # one allocation for the seven signals and three scratch rows
-    AD, AD_var, ad, theta, theta_var, psi, psi_var = out[0], out[1], out[2], out[3], out[4], out[5], out[6]
-    tan_t, tan_s, u4 = out[7], out[8], out[9]
+        out[S_U, i] = 1.0 / d if ok else np.nan
     if n >= 2 * k + 1:
-        # the window sums of the centres i = k .. n - k - 1: left = sum_{m=1..k} u_{i-m} (in
-        # tan_t), right = sum_{m=0..k} u_{i+m} (in tan_s) and quad = sum_{j=-k..k} u_{i+j}^4 (in
-        # AD_var), each summed term by term in beam order, one shifted slice of u (or u^4) at a
-        # time: passes over the scan that vectorise. A window that holds an invalid beam (u nan)
-        # gets nan sums; then s1 = left + right, sd = right - left and s4 = quad go to the rows
-        # of AD, ad and AD_var, which the next loop turns into the signals in place
-        m = n - 2 * k  # k >= 1 (the config's check)
-        left, right, quad, s1_, sd_ = tan_t[k:n - k], tan_s[k:n - k], AD_var[k:n - k], AD[k:n - k], ad[k:n - k]
-        for i in range(n):
-            u2 = u[i] * u[i]
-            u4[i] = u2 * u2
-        lu, ru, qu = u[:m], u[k:k + m], u4[:m]
+        # the window sums of the centres c = k .. n - k - 1: left = sum_{m=1..k} u_{c-m} (in
+        # S_TAN_T), right = sum_{m=0..k} u_{c+m} (in S_TAN_S) and quad = sum_{j=-k..k} u_{c+j}^4
+        # (in S_AD_VAR), each summed term by term in beam order, one shifted window of u (or u^4)
+        # at a time: passes over the scan that vectorise. A window that holds an invalid beam (u
+        # nan) gets nan sums; then s1 = left + right, sd = right - left and s4 = quad go to the
+        # rows of AD, ad and AD_var, which the next loop turns into the signals in place
+        m = np.uint64(n - 2 * k)  # k >= 1 (the config's check)
+        ku = np.uint64(k)
+        for i in range(np.uint64(n)):
+            u2 = out[S_U, i] * out[S_U, i]
+            out[S_U4, i] = u2 * u2
         for i in range(m):
-            left[i] = lu[i]
-            right[i] = ru[i]
-            quad[i] = qu[i]
+            out[S_TAN_T, ku + i] = out[S_U, i]
+            out[S_TAN_S, ku + i] = out[S_U, ku + i]
+            out[S_AD_VAR, ku + i] = out[S_U4, i]
         for j in range(1, 2 * k + 1):
-            uj, qj = u[j:j + m], u4[j:j + m]
+            ju = np.uint64(j)
             if j < k:
                 for i in range(m):
-                    left[i] += uj[i]
+                    out[S_TAN_T, ku + i] += out[S_U, ju + i]
             elif j > k:
                 for i in range(m):
-                    right[i] += uj[i]
+                    out[S_TAN_S, ku + i] += out[S_U, ju + i]
             for i in range(m):
-                quad[i] += qj[i]
+                out[S_AD_VAR, ku + i] += out[S_U4, ju + i]
         for i in range(m):
-            s1_[i] = left[i] + right[i]
-            sd_[i] = right[i] - left[i]
-        # the window centres k .. n - k - 1, as slices: the loops below vectorise
-        uc, dc = u[k:n - k], ranges[k:n - k]
-        s1, sd, s4, tt, ts = AD[k:n - k], ad[k:n - k], AD_var[k:n - k], tan_t[k:n - k], tan_s[k:n - k]
+            c = ku + i
+            out[S_AD, c] = out[S_TAN_T, c] + out[S_TAN_S, c]
+            out[S_AD_SLOPE, c] = out[S_TAN_S, c] - out[S_TAN_T, c]
         s_scale = sigma_r / two_sin_sum
         inv_sin_sum = 1.0 / two_sin_sum
-        for i in range(m):  # dividing by u_i = 1 / d_i is multiplying by d_i (an invalid centre's sums are nan)
-            ui = uc[i]
-            di = dc[i]
-            u2 = ui * ui
-            a = s1[i] * di  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
-            ad_i = sd[i] * di  # eq. 6: ad_ik
-            other = s4[i] * (di * di) - u2  # sum over j != i of u_j^4 / u_i^2
-            ad1 = ad_i - 1.0
+        for i in range(m):  # dividing by u_c = 1 / d_c is multiplying by d_c (an invalid centre's sums are nan)
+            c = ku + i
+            uc = out[S_U, c]
+            dc = ranges[c]
+            u2 = uc * uc
+            a = out[S_AD, c] * dc  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
+            ad_c = out[S_AD_SLOPE, c] * dc  # eq. 6: ad_ik
+            other = out[S_AD_VAR, c] * (dc * dc) - u2  # sum over j != i of u_j^4 / u_i^2
+            ad1 = ad_c - 1.0
             a1 = a - 1.0
-            s1[i] = a
-            s4[i] = other + a1 * a1 * u2
-            sd[i] = ad_i
+            out[S_AD, c] = a
+            out[S_AD_VAR, c] = other + a1 * a1 * u2
+            out[S_AD_SLOPE, c] = ad_c
             # eq. 7 as corrected in NOTES.md: ad - 1 = 2 tan(a - b_i) sum_{m=1..k} sin(mD): the
             # slope T = tan(a - b_i) and its std s here, their arctangents in the next loop
-            tt[i] = ad1 * inv_sin_sum
-            ts[i] = math.sqrt(other + ad1 * ad1 * u2) * s_scale
-        bc, th, tv = bearings[k:n - k], theta[k:n - k], theta_var[k:n - k]
+            out[S_TAN_T, c] = ad1 * inv_sin_sum
+            out[S_TAN_S, c] = math.sqrt(other + ad1 * ad1 * u2) * s_scale
         n_fix = 0
         for i in range(m):
-            t, sd_i = tt[i], ts[i]
-            th[i] = bc[i] + arctan(t)
+            c = ku + i
+            t, sd_c = out[S_TAN_T, c], out[S_TAN_S, c]
+            out[S_THETA, c] = bearings[c] + arctan(t)
             # (arctan(T + s) - arctan(T - s)) / 2 = atan2(2 s, 1 + (T + s)(T - s)) / 2, as
             # arctan(2 s / x) for x > 0 and pi - arctan(2 s / -x) for x < 0 (s >= 0)
-            x = 1.0 + (t + sd_i) * (t - sd_i)
-            h = arctan(2.0 * sd_i / abs(x))
+            x = 1.0 + (t + sd_c) * (t - sd_c)
+            h = arctan(2.0 * sd_c / abs(x))
             theta_sd = 0.5 * (h if x > 0.0 else math.pi - h)
-            tv[i] = theta_sd * theta_sd
-            n_fix += fix_slope_sd(x, sd_i)
-        i = 0
+            out[S_THETA_VAR, c] = theta_sd * theta_sd
+            n_fix += fix_slope_sd(x, sd_c)
+        i = np.uint64(0)
         while n_fix > 0 and i < m:  # where that form does not hold: atan2 (a loop that cannot vectorise, so
             # that the libm call is made for these few beams only, not speculated for all)
-            t, sd_i = tt[i], ts[i]
-            x = 1.0 + (t + sd_i) * (t - sd_i)
-            if fix_slope_sd(x, sd_i):
-                theta_sd = 0.5 * math.atan2(2.0 * sd_i, x)
-                tv[i] = theta_sd * theta_sd
+            c = ku + i
+            t, sd_c = out[S_TAN_T, c], out[S_TAN_S, c]
+            x = 1.0 + (t + sd_c) * (t - sd_c)
+            if fix_slope_sd(x, sd_c):
+                theta_sd = 0.5 * math.atan2(2.0 * sd_c, x)
+                out[S_THETA_VAR, c] = theta_sd * theta_sd
                 n_fix -= 1
-            i += 1
+            i += np.uint64(1)
     if n > k:
-        t0, t1, v0, v1, ps, pv = theta[:n - k], theta[k:], theta_var[:n - k], theta_var[k:], psi[:n - k], psi_var[:n - k]
-        for i in range(n - k):
-            dpsi = t0[i] - t1[i]  # the corner signal psi_i = theta_i - theta_{i+k}
+        ku = np.uint64(k)
+        for i in range(np.uint64(n - k)):
+            dpsi = out[S_THETA, i] - out[S_THETA, ku + i]  # the corner signal psi_i = theta_i - theta_{i+k}
             # wrapped to [-pi, pi]: dpsi - 2 pi rint(dpsi / 2 pi), where rint gives +-0 for |dpsi| < pi
-            ps[i] = dpsi + 0.0 if abs(dpsi) < math.pi else dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
-            pv[i] = v0[i] + v1[i]
-    return valid, u, AD, AD_var, ad, theta, theta_var, psi, psi_var
+            out[S_PSI, i] = dpsi + 0.0 if abs(dpsi) < math.pi else dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
+            out[S_PSI_VAR, i] = out[S_THETA_VAR, i] + out[S_THETA_VAR, ku + i]
+    return valid, out
+
+
+@kernel
+def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):  # noqa: ANN001, ANN201
+    """``signal_block``'s signals as separate arrays: valid, u = 1/d, AD (eq. 4), its variance per
+    sigma_r**2, ad (eq. 6), theta (rad, unwrapped) and its variance, psi = theta_i - theta_{i+k}
+    (wrapped) and its variance (``features.sensor.signals``, the paper's figures 4-6)."""
+    valid, out = signal_block(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum)
+    return (valid, out[S_U], out[S_AD], out[S_AD_VAR], out[S_AD_SLOPE], out[S_THETA], out[S_THETA_VAR], out[S_PSI],
+            out[S_PSI_VAR])
 
 
 # -- 2. runs of line beams ------------------------------------------------------------------------
@@ -1743,9 +1760,9 @@ def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sig
     (``segments``), corner values, corner beams (``corners``)."""
     if auto:
         sigma_r = pooled_sigma(ranges.reshape((1, ranges.size)), grid.twice_cos, range_min, range_hi, fallback)
-    valid, _, AD, AD_var, _, theta, theta_var, psi, psi_var = beam_signals(
-        ranges, bearings.b, p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum
-    )
+    valid, sig = signal_block(ranges, bearings.b, p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum)
+    AD, AD_var, theta, theta_var, psi, psi_var = (sig[S_AD], sig[S_AD_VAR], sig[S_THETA], sig[S_THETA_VAR], sig[S_PSI],
+                                                  sig[S_PSI_VAR])
     rho, alpha, cov, first, last, npts = find_lines(
         ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_var, angle_min, increment, sigma_r, grid, p
     )
