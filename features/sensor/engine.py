@@ -101,12 +101,11 @@ class Params(NamedTuple):
     arc_check: bool  # drop lines that are chords of a round surface (``on_arcs``)
 
 
-class Bearings(NamedTuple):
-    """The bearings of a scan's beams and their cosines and sines (built once per geometry)."""
-
-    b: np.ndarray  # angle_min + i D, rad
-    cos: np.ndarray
-    sin: np.ndarray
+# rows of a scan's bearing table (``features.sensor.grid.bearings_of``, (3, n), built once per
+# geometry): the bearings b_i = angle_min + i D (rad), their cosines and sines. One array, not a
+# record of three: every call of a kernel that takes an array costs two atomic reference counts
+# per array (~12 ns; a record's arrays count one by one)
+B_ANGLE, B_COS, B_SIN = 0, 1, 2
 
 
 class Grid(NamedTuple):
@@ -743,7 +742,7 @@ def band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings, increment, sigm
         cvar = (cs_v[e] - cs_v[a] + v0) / (n_c * (1.0 + n_c / (2 * k + 1)))
         half_width[r] = min(max(p.band_tau * math.sqrt(cvar), p.band_min), BAND_MAX)
         angle_step = max(half_width[r] / h, increment / p.hough_subdiv)
-        tan_span = abs(math.tan(bearings[e + k] - centre[r]) - math.tan(bearings[a - k] - centre[r]))
+        tan_span = abs(math.tan(bearings[B_ANGLE, e + k] - centre[r]) - math.tan(bearings[B_ANGLE, a - k] - centre[r]))
         d_min = np.inf
         for j in range(a - k, e + k + 1):
             d_min = min(d_min, ranges[j])
@@ -905,10 +904,10 @@ def add_normal_terms(sums, wr, g, res):  # noqa: ANN001, ANN201
 
 
 @inline_kernel
-def gn_sums(d, cb, sb, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN201
+def gn_sums(d, bt, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN201
     """The weighted normal equations of a Gauss-Newton step of a line (rho, alpha = atan2(sa, ca))
-    on the beams j = f .. f + cnt - 1 where valid[j] and use[s + j - f] (range d, bearing b given
-    by cb = cos(b), sb = sin(b)): (sum w, sum w g, sum w g^2, sum w r, sum w g r) with residual
+    on the beams j = f .. f + cnt - 1 where valid[j] and use[s + j - f] (range d, bearing b with
+    cos(b), sin(b) in rows B_COS, B_SIN of ``bt``): (sum w, sum w g, sum w g^2, sum w r, sum w g r) with residual
     r = d cos(b - alpha) - rho, g = d r / d alpha = d sin(b - alpha) and weight
     w = 1 / cos(b - alpha)^2 (0 within MIN_COS of grazing). Without branches on data: the loop
     runs in vector lanes. Offsets into whole arrays, not slices (a slice a run is two atomic
@@ -918,10 +917,10 @@ def gn_sums(d, cb, sb, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN
         return sums
     for t in range(cnt):
         j = f + t
-        c = cb[j] * ca + sb[j] * sa  # cos(b - alpha)
+        c = bt[B_COS, j] * ca + bt[B_SIN, j] * sa  # cos(b - alpha)
         dt = d[j] if valid[j] else 0.0  # an invalid beam's range is inf or nan
         res = dt * c - rho  # d res / d rho = -1
-        g = dt * (sb[j] * ca - cb[j] * sa)
+        g = dt * (bt[B_SIN, j] * ca - bt[B_COS, j] * sa)
         ic = 1.0 / c
         wr = ic * ic if (c > MIN_COS) & valid[j] & use[s + t] else 0.0
         sums = add_normal_terms(sums, wr, g, res)
@@ -929,7 +928,7 @@ def gn_sums(d, cb, sb, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN
 
 
 @inline_kernel
-def gn_sums_inliers(d, cb, sb, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, inl):  # noqa: ANN001, ANN201
+def gn_sums_inliers(d, bt, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, inl):  # noqa: ANN001, ANN201
     """``gn_sums`` on the beams j = f .. f + cnt - 1 within ``tau`` sigma_r of the line (|z| <=
     tau, z = r / (sigma_r cos(b - alpha)), written to z[j - f]; the inliers to inl[j - f]), with
     the line checks' sums over the inliers: chi^2 = sum z^2, their count, sums of t, t^2, t^3
@@ -944,10 +943,10 @@ def gn_sums_inliers(d, cb, sb, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, in
         return sums, chi, ni, i_t, i_t2, i_t3, lo, hi
     for t in range(cnt):
         j = f + t
-        c = cb[j] * ca + sb[j] * sa
+        c = bt[B_COS, j] * ca + bt[B_SIN, j] * sa
         dt = d[j] if valid[j] else 0.0
         res = dt * c - rho
-        g = dt * (sb[j] * ca - cb[j] * sa)
+        g = dt * (bt[B_SIN, j] * ca - bt[B_COS, j] * sa)
         ic = 1.0 / c
         zt = res * ic * inv_sigma
         use = (c > MIN_COS) & valid[j] & (abs(zt) <= tau)
@@ -1003,7 +1002,6 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
     Returns the lines in normal form (rho >= 0, alpha in (-pi, pi]) with cov, first / last inlier
     beam, inlier count, and the mask of those that pass."""
     n_runs = starts.size
-    cos_b, sin_b = bearings.cos, bearings.sin
     max_cnt = 0
     for r in range(n_runs):
         max_cnt = max(max_cnt, counts[r])
@@ -1020,20 +1018,20 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
     tau = p.inlier_tau
     inv_sigma = 1.0 / sigma_r
     s2 = sigma_r * sigma_r
-    step = bearings.b[1] - bearings.b[0] if bearings.b.size > 1 else 1.0
+    step = bearings[B_ANGLE, 1] - bearings[B_ANGLE, 0] if bearings.shape[1] > 1 else 1.0
     sweep = max(1, np.int64(np.rint(ONE_DEG / step))) if step < 0.99 * ONE_DEG else 1  # lms200.noise.interlace_stride
     c2 = 2.0 * math.cos(sweep * step)
     for r in range(n_runs):
         s, cnt, f = starts[r], counts[r], first[r]
         # step 1, on the Log-Hough inliers
-        sw, swg, swgg, swr, swgr = gn_sums(ranges, cos_b, sin_b, valid, inlier0, f, s, cnt, math.cos(alpha0[r]),
+        sw, swg, swgg, swr, swgr = gn_sums(ranges, bearings, valid, inlier0, f, s, cnt, math.cos(alpha0[r]),
                                            math.sin(alpha0[r]), rho0[r])
         inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
         rho1 = rho0[r] + (swgg * swr - swg * swgr) * inv_det
         alpha1 = alpha0[r] + (swg * swr - sw * swgr) * inv_det
         # step 2, on the beams within inlier_tau sigma_r of step 1's line, with the checks' sums
         (sw, swg, swgg, swr, swgr), chi, ni, i_t, i_t2, i_t3, lo, hi = gn_sums_inliers(
-            ranges, cos_b, sin_b, valid, f, cnt, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, tau, z_run, inl_run)
+            ranges, bearings, valid, f, cnt, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, tau, z_run, inl_run)
         inv_det = 1.0 / (sw * swgg - swg * swg)
         rho_r = rho1 + (swgg * swr - swg * swgr) * inv_det
         alpha_r = alpha1 + (swg * swr - sw * swgr) * inv_det
@@ -1082,7 +1080,7 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
             j = last[m] + s
             if j >= n:
                 break
-            c = bearings.cos[j] * ca + bearings.sin[j] * sa  # cos(b - alpha)
+            c = bearings[B_COS, j] * ca + bearings[B_SIN, j] * sa  # cos(b - alpha)
             if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= lim * c):
                 break
             grow0 += 1
@@ -1091,7 +1089,7 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
             j = first[m] - s
             if j < 0:
                 break
-            c = bearings.cos[j] * ca + bearings.sin[j] * sa  # cos(b - alpha)
+            c = bearings[B_COS, j] * ca + bearings[B_SIN, j] * sa  # cos(b - alpha)
             if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= lim * c):
                 break
             grow1 += 1
@@ -1131,7 +1129,6 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
     n = ranges.size
     work = np.empty((5, n))  # one block: the used beams' x, y, 1 / cos(b - alpha), |z|, the median's scratch
     x, y, inv_c, z, buf = work[0], work[1], work[2], work[3], work[4]
-    cos_b, sin_b = bearings.cos, bearings.sin
     for m in range(rho.size):
         r_m, a_m = rho[m], alpha[m]
         ca, sa = math.cos(a_m), math.sin(a_m)
@@ -1139,9 +1136,9 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
         j = np.uint64(first[m])  # beams indexed unsigned: numba then adds no negative-index wraparound
         end = np.uint64(last[m] + 1)
         while j < end:  # every beam written at k, k moved on past the used ones: no branch on data
-            c = cos_b[j] * ca + sin_b[j] * sa
-            xj = ranges[j] * cos_b[j]
-            yj = ranges[j] * sin_b[j]
+            c = bearings[B_COS, j] * ca + bearings[B_SIN, j] * sa
+            xj = ranges[j] * bearings[B_COS, j]
+            yj = ranges[j] * bearings[B_SIN, j]
             x[k] = xj
             y[k] = yj
             ic = 1.0 / c
@@ -1175,13 +1172,13 @@ def farthest_from_chord(f, l, ranges, bearings) -> int:  # noqa: ANN001
     """The beam of f..l farthest from the chord between the end points of beams f and l
     (Cartesian, sensor frame; the middle one when none is off it): where a span that does not fit
     one line bends (IEPF's split point)."""
-    x0, y0 = ranges[f] * bearings.cos[f], ranges[f] * bearings.sin[f]
-    x1, y1 = ranges[l] * bearings.cos[l], ranges[l] * bearings.sin[l]
+    x0, y0 = ranges[f] * bearings[B_COS, f], ranges[f] * bearings[B_SIN, f]
+    x1, y1 = ranges[l] * bearings[B_COS, l], ranges[l] * bearings[B_SIN, l]
     dx, dy = x1 - x0, y1 - y0
     norm = max(math.hypot(dx, dy), 1e-12)
     best, at = -1.0, (f + l) // 2
     for j in range(f + 1, l):
-        x, y = ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]
+        x, y = ranges[j] * bearings[B_COS, j], ranges[j] * bearings[B_SIN, j]
         dist = abs((x - x0) * dy - (y - y0) * dx) / norm
         if dist > best:
             best, at = dist, j
@@ -1251,8 +1248,8 @@ def theta_turn(a, b, theta) -> float:  # noqa: ANN001
 def surface_turn(f, l, cx, cy, ranges, bearings) -> float:  # noqa: ANN001
     """The angle (rad) beams f and l subtend at the centre (cx, cy): how far a circle about it
     turns between them."""
-    ax, ay = ranges[f] * bearings.cos[f] - cx, ranges[f] * bearings.sin[f] - cy
-    bx, by = ranges[l] * bearings.cos[l] - cx, ranges[l] * bearings.sin[l] - cy
+    ax, ay = ranges[f] * bearings[B_COS, f] - cx, ranges[f] * bearings[B_SIN, f] - cy
+    bx, by = ranges[l] * bearings[B_COS, l] - cx, ranges[l] * bearings[B_SIN, l] - cy
     return abs(math.atan2(ax * by - ay * bx, ax * bx + ay * by))
 
 
@@ -1304,8 +1301,8 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
     work = np.empty((5, m))  # the beams' points, then per-beam terms of each pass over them
     xs, ys, w0, w1, w2 = work[0], work[1], work[2], work[3], work[4]
     for t in range(m):
-        xs[t] = ranges[f + t] * bearings.cos[f + t]
-        ys[t] = ranges[f + t] * bearings.sin[f + t]
+        xs[t] = ranges[f + t] * bearings[B_COS, f + t]
+        ys[t] = ranges[f + t] * bearings[B_SIN, f + t]
     ok = valid[f:l + 1]
     mx, my, n = valid_centroid(xs, ys, ok)
     if n < 5:
@@ -1451,7 +1448,7 @@ def fit_spans(first, last, shrink0, shrink1, ranges, log_r, bearings, valid, the
         f, s = np.uint64(first[r]), np.uint64(starts[r])
         for t in range(np.uint64(counts[r])):
             log_d[s + t] = log_r[f + t]
-    centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings.b, increment, sigma_r, k, p)
+    centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings, increment, sigma_r, k, p)
     alpha0, rho0, inlier0 = band_search(
         first, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
     )
@@ -1634,7 +1631,7 @@ def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p):  #
         for e in range(2):
             j = first[m] if e == 0 else last[m]
             d = ranges[j]
-            x, y = d * bearings.cos[j], d * bearings.sin[j]
+            x, y = d * bearings[B_COS, j], d * bearings[B_SIN, j]
             off = x * c + y * s - rho[m]
             lv[q, 2 + 2 * e] = x - off * c
             lv[q, 3 + 2 * e] = y - off * s
@@ -1749,7 +1746,7 @@ def corners(lv, lb, psi, ranges, valid, angle_min, increment, sigma_r, p):  # no
 
 @kernel
 def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, auto, range_min, fallback, grid, p):  # noqa: ANN001, ANN201
-    """Lines and corners of one scan (sensor frame): steps 1-6. ``bearings``: a Bearings record;
+    """Lines and corners of one scan (sensor frame): steps 1-6. ``bearings``: the (3, n) bearing table (rows B_ANGLE, B_COS, B_SIN);
     ``range_lo``, ``range_hi``: valid range limits (m); ``sigma_r``: the range noise std for this
     scan's units (m), or with ``auto`` estimated from the scan itself in the same call (step 0:
     ``pooled_sigma`` of its one row, ``features.noise_estimate.scan_sigma`` of valid range limits
@@ -1760,7 +1757,7 @@ def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sig
     (``segments``), corner values, corner beams (``corners``)."""
     if auto:
         sigma_r = pooled_sigma(ranges.reshape((1, ranges.size)), grid.twice_cos, range_min, range_hi, fallback)
-    valid, sig = signal_block(ranges, bearings.b, p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum)
+    valid, sig = signal_block(ranges, bearings[B_ANGLE], p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum)
     AD, AD_var, theta, theta_var, psi, psi_var = (sig[S_AD], sig[S_AD_VAR], sig[S_THETA], sig[S_THETA_VAR], sig[S_PSI],
                                                   sig[S_PSI_VAR])
     rho, alpha, cov, first, last, npts = find_lines(
