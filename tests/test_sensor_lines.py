@@ -275,7 +275,9 @@ def test_compiled_noise_estimate_equals_the_numpy_estimator() -> None:
             r = np.round(r, 2)
         if t % 5 == 0:
             r[: r.size // 2] = 3.0
-        scans.append(Scan(ranges=r, angle_min=-1.0, angle_increment=float(rng.uniform(0.001, 0.05)), range_min=0.0,
+        inc = float(rng.uniform(0.001, 0.05))
+        r = r[: int(2 * np.pi / inc) + 1]  # a Scan spans at most a full turn
+        scans.append(Scan(ranges=r, angle_min=-1.0, angle_increment=inc, range_min=0.0,
                           range_max=float(rng.choice([8.0, 80.0]))))
     for s in scans:
         assert neighbour_sigma(s) == numpy_neighbour_sigma([s])
