@@ -58,15 +58,15 @@ def walls_found(scan: Scan, **params: float) -> int:
 @pytest.mark.parametrize("offset", [0.008, 0.012])
 def test_bearing_sigma_reads_the_sweeps_offset(offset: float) -> None:
     """Sweeps off by +-offset / 2 about the nominal bearings: a bearing noise of about offset / 2
-    (the smallest bin's estimate reads 1.0-1.4x: a 7-beam fit does not take all of an
-    alternating error); exact bearings read under 1 mrad."""
+    (it reads 1.15-1.2x: a 7-beam fit takes an alternating error as a little more than its size);
+    exact bearings read under 1 mrad."""
     scans = [interlaced(OFFICE, offset, 0.005, seed) for seed in range(12)]
     assert 0.9 * offset / 2 <= bearing_sigma(scans) <= 1.5 * offset / 2
     assert bearing_sigma([interlaced(OFFICE, 0.0, 0.005, seed) for seed in range(12)]) < 0.001
 
 
 def test_oblique_walls_are_found_with_the_bearing_noise() -> None:
-    """12 mm between the sweeps' bearings (MIT CSAIL's logs read 6 mrad of bearing noise): with
+    """12 mm between the sweeps' bearings (MIT CSAIL's log reads 5.2 mrad of bearing noise): with
     the estimated bearing noise all six walls are found in every scan; with the range noise
     alone (sigma_bearing 0, the method before it) the oblique ones fail the chi^2 test in most
     scans. Exact bearings: the same six walls either way."""
