@@ -264,7 +264,10 @@ def format_calibration(result: CalibrationResult) -> list[str]:
     c, s = result.measured, result.sensor
 
     def pm(e, scale: float = 1.0, unit: str = "") -> str:
-        return f"{e.value * scale:.4g} +- {e.std * scale:.2g}{unit}"
+        if not np.isfinite(e.value):
+            return "n/a (nothing to measure in this log)"
+        std = f"{e.std * scale:.2g}" if np.isfinite(e.std) else "n/a"
+        return f"{e.value * scale:.4g} +- {std}{unit}"
 
     lines = [
         f"scans {c.n_scans}, {c.n_beams} beams at {np.rad2deg(c.angle_increment):g} deg, quantum {c.quantum_m * 1000:g} mm ({c.units} mode)",

@@ -256,7 +256,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
                                 "nor an existing log")
         check_log(spec)
         if next(iter(read_log(spec, **(read_options or {}))), None) is None:
-            raise LmsbenchError(f"{spec}: no laser messages found (not a CARMEN log with FLASER / ROBOTLASER1 "
+            raise LmsbenchError(f"{spec}: no laser messages found (not a CARMEN log with FLASER / ROBOTLASER / RAWLASER "
                                 "lines, nor a bag with LaserScan messages)")
 
 

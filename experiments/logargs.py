@@ -24,8 +24,8 @@ def add_log_options(parser: argparse.ArgumentParser) -> None:
     """Add the shared log-reading options to a command's parser."""
     g = parser.add_argument_group("reading logs")
     g.add_argument("--topic", help="the laser to read: a bag's LaserScan topic (needed when the bag has several) "
-                                   "or a CARMEN laser message kind (FLASER, RLASER, ROBOTLASER1, ROBOTLASER2; "
-                                   "default: the first in the log)")
+                                   "or a CARMEN laser message kind (FLASER, RLASER, ROBOTLASER1/2, RAWLASER1..4; "
+                                   "default: the first with poses in the log, else the first RAWLASER)")
     g.add_argument("--skip-bad-lines", action="store_true",
                    help="skip malformed log lines / unreadable bag messages (reported on stderr) instead of stopping")
     g.add_argument("--laser-fov-deg", type=float, metavar="DEG",

@@ -9,13 +9,15 @@ wrong kind. ``experiments.cli`` prints either as ``lmsbench CMD: error: ...`` wi
 from __future__ import annotations
 
 import argparse
-import gzip
+import lzma
 import math
 import os
 import tempfile
+import zlib
 from pathlib import Path
 from typing import Callable, Sequence
 
+from lms200.carmen import COMPRESSION_SUFFIXES, archive_kind, compression, open_bytes
 from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
 
 
@@ -104,16 +106,22 @@ def _head(path: Path, n: int = 4096) -> bytes:
 
 
 def _text_head(path: Path, what: str) -> None:
-    """Raise InputError unless the file starts with text (not binary, not a mislabelled gzip)."""
+    """Raise InputError unless the file starts with text (not binary, not a mislabelled or broken
+    compressed file, not an archive), read through gzip / bzip2 / xz where compressed."""
     head = _head(path)
-    if path.suffix == ".gz" or head[:2] == b"\x1f\x8b":
-        if head[:2] != b"\x1f\x8b":
-            raise InputError(f"{path}: named .gz but not gzip-compressed")
+    kind = compression(head)
+    named = COMPRESSION_SUFFIXES.get(path.suffix)
+    if named and kind != named:
+        raise InputError(f"{path}: named {path.suffix} but not {named}-compressed")
+    if kind:
         try:
-            with gzip.open(path, "rb") as fh:
+            with open_bytes(path) as fh:
                 head = fh.read(4096)
-        except (OSError, EOFError) as exc:
-            raise InputError(f"{path}: broken gzip file ({exc})") from None
+        except (OSError, EOFError, zlib.error, lzma.LZMAError) as exc:
+            raise InputError(f"{path}: broken {kind} file ({exc})") from None
+    archive = archive_kind(head)
+    if archive:
+        raise InputError(f"{path}: {archive}, not {what}; extract it first")
     if b"\x00" in head:
         raise InputError(f"{path}: a binary file, not {what}")
     try:
@@ -142,8 +150,8 @@ def check_yaml(path: str | os.PathLike, what: str = "a YAML file") -> Path:
 
 
 def check_log(path: str | os.PathLike) -> Path:
-    """A CARMEN log (plain text or gzip), a ROS 1 ``.bag`` or a ROS 2 bag folder, by its content:
-    a binary file, a plain file named ``.gz``, a folder without ``metadata.yaml`` are errors."""
+    """A CARMEN log (plain text, or compressed with gzip, bzip2 or xz), a ROS 1 ``.bag`` or a ROS 2 bag folder, by its content:
+    a binary file, an archive, a plain file named ``.gz``, a folder without ``metadata.yaml`` are errors."""
     p = Path(path)
     what = "a CARMEN log, ROS 1 .bag or ROS 2 bag folder"
     if not p.exists():

@@ -142,10 +142,13 @@ def _scan_of(msg) -> Scan:  # noqa: ANN001
     """A LaserScan message as a Scan; raises ValueError for fields a scan cannot have."""
     ranges = np.asarray(msg.ranges, dtype=np.float64)
     ranges[ranges < 0] = np.nan  # some drivers mark invalid beams with negative values
+    angle_min, increment = float(msg.angle_min), float(msg.angle_increment)
+    if increment < 0 and ranges.size > 0:  # a laser mounted upside down sweeps clockwise: same bearings, ascending
+        ranges, angle_min, increment = ranges[::-1].copy(), angle_min + (ranges.size - 1) * increment, -increment
     return Scan(
         ranges,
-        snap_angle(float(msg.angle_min)),  # float32 in the message: back onto the 0.05 deg grid
-        snap_angle(float(msg.angle_increment)),
+        snap_angle(angle_min),  # float32 in the message: back onto the 0.05 deg grid
+        snap_angle(increment),
         float(msg.range_min),
         float(msg.range_max),
         _stamp_of(msg),

@@ -48,6 +48,7 @@ STEP_M = 0.3  # m: a depth step for the mixed-pixel count
 MIXED_MARGIN_M = 0.03  # m: least distance of a mixed pixel from both surfaces (or 4 sigma)
 OUTLIER_M = 0.1  # m: least distance of an isolated outlier from its neighbours' line (or 10 sigma)
 MAX_READING_SHARE = 1e-3  # a top value read this often (or more) is the logger's cap
+MIN_SCANS = 2  # a bootstrap over scans needs two
 MAX_SCANS = 20_000  # memory bound: scans beyond this many are not read
 TAIL_WINDOW = 20.0  # the tail fit uses residuals within this many core sigmas
 TAIL_CLUSTER_SIGMAS = 5.0  # a triple whose residual exceeds this many core sigmas is in the tail
@@ -303,15 +304,16 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
     """Measure the error model of the laser behind ``scans`` (Scans or records with ``.scan``).
 
     Raises:
-        ValueError: when there is no scan.
+        ValueError: for fewer than ``MIN_SCANS`` scans.
     """
     kept: list[Scan] = []
     for s in scans:
         kept.append(getattr(s, "scan", s))
         if len(kept) >= MAX_SCANS:
             break
-    if not kept:
-        raise ValueError("scans: there is no scan to calibrate on")
+    if len(kept) < MIN_SCANS:
+        raise ValueError(f"scans: calibrating needs at least {MIN_SCANS} scans (standard errors are a bootstrap "
+                         f"over scans), got {len(kept)}")
     counts_n = np.bincount([len(s) for s in kept])
     n_beams = int(np.argmax(counts_n))
     inc = float(np.median([s.angle_increment for s in kept]))

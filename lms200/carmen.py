@@ -10,6 +10,8 @@ Formats (one message a line, ``#`` comments, unknown messages skipped):
   side_safety turn_axis ipc_timestamp hostname logger_timestamp`` (ROBOTLASER2: the rear laser);
   the declared field of view must hold the count at the declared resolution (fov = n x res, or
   (n - 1) x res), and lines with the same declared geometry must carry the same count.
+- ``RAWLASER1`` .. ``RAWLASER4`` (CARMEN 0.7 loggers): the ROBOTLASER1 fields up to the remissions,
+  then ``ipc_timestamp hostname logger_timestamp``; no poses (``.odom`` is None), same checks.
 - ``ODOM x y theta tv rv accel ipc_timestamp hostname logger_timestamp``
 - ``TRUEPOS true_x true_y true_theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp``
 
@@ -20,17 +22,23 @@ cm mode, 8.183 / 8.191 m in mm mode) map to +inf / nan (REP-117). The range unit
 ROBOTLASER1 accuracy field, a ``PARAM lmsbench_range_units mm|cm`` line (which this writer emits), or,
 for FLASER logs without it, from the values themselves (see :func:`infer_units`).
 
-One laser is read per pass (``topic``: a message kind); by default the first laser kind in the log.
+One laser is read per pass (``topic``: a message kind); by default the first kind that carries
+poses (FLASER, RLASER, ROBOTLASER1 / 2) among the first ``DEFAULT_TOPIC_LINES`` lines, else the first
+RAWLASER kind: CARMEN 0.7 loggers write each reading twice, as RAWLASER1 and as ROBOTLASER1.
 Every failure while reading (a malformed line, a count that is not a finite non-negative integer,
-gzip data that cannot be decompressed, a line over ``MAX_LINE_CHARS``) is a ``LogFormatError`` naming
+compressed data that cannot be decompressed, a line over ``MAX_LINE_CHARS``) is a ``LogFormatError`` naming
 file and line; ``skip_bad_lines`` records it in ``stats.skipped`` and goes on.
 """
 
 from __future__ import annotations
 
+import bz2
 import gzip
 import io
+import lzma
 import math
+import re
+import tarfile
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,10 +63,17 @@ from .scan import Scan, snap_angle
 
 UNITS_PARAM = "lmsbench_range_units"
 ODOMETRY_PARAM = "lmsbench_odometry"  # "absent": the pose fields of the scans that follow are not odometry
-LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages read (one kind per pass)
+POSED_LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages that carry poses
+RAW_LASER_KINDS = ("RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4")  # laser messages without poses
+LASER_KINDS = POSED_LASER_KINDS + RAW_LASER_KINDS  # laser messages read (one kind per pass)
+DEFAULT_TOPIC_LINES = 10_000  # lines looked at to choose the default laser kind (and to tell junk from a log)
+_MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]*")  # how every CARMEN message line starts
 ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
 MAX_LINE_CHARS = 1 << 20  # a longer line is malformed (bounds memory on damaged files)
-_READ_ERRORS = (OSError, EOFError, zlib.error)  # what a damaged or truncated gzip stream raises
+_READ_ERRORS = (OSError, EOFError, zlib.error, lzma.LZMAError)  # what damaged or truncated compressed data raises
+# compressed logs are read in place, told apart by their first bytes (not their names)
+COMPRESSIONS = {"gzip": (b"\x1f\x8b", gzip.open), "bzip2": (b"BZh", bz2.open), "xz": (b"\xfd7zXZ\x00", lzma.open)}
+COMPRESSION_SUFFIXES = {".gz": "gzip", ".bz2": "bzip2", ".xz": "xz"}
 
 
 @dataclass
@@ -82,25 +97,62 @@ class ReadStats:
         return {k: n for k, n in self.messages.items() if k in LASER_KINDS and k != self.laser}
 
 
-def open_text(path: str | Path) -> IO[str]:
-    """Open a plain or gzip-compressed text file for reading (by magic bytes, not the name)."""
-    path = Path(path)
+def compression(head: bytes) -> str | None:
+    """The compression ("gzip", "bzip2", "xz") a file's first bytes announce, or None (plain)."""
+    return next((name for name, (magic, _) in COMPRESSIONS.items() if head.startswith(magic)), None)
+
+
+def open_bytes(path: str | Path) -> IO[bytes]:
+    """Open a plain, gzip-, bzip2- or xz-compressed file for reading its (decompressed) bytes."""
     with open(path, "rb") as f:
-        magic = f.read(2)
-    if magic == b"\x1f\x8b":
-        return io.TextIOWrapper(gzip.open(path, "rb"), encoding="ascii", errors="replace")
-    return open(path, encoding="ascii", errors="replace")
+        kind = compression(f.read(6))
+    return COMPRESSIONS[kind][1](path, "rb") if kind else open(path, "rb")  # type: ignore[operator, return-value]
+
+
+def archive_kind(head: bytes) -> str | None:
+    """"a tar archive (first member ...)" or "a zip archive" when the (decompressed) first bytes
+    (4096 name a tar's first member) are an archive's, else None: a log packed in an archive must be extracted first."""
+    if head.startswith(b"PK\x03\x04"):
+        return "a zip archive"
+    if len(head) >= 262 and head[257:262] == b"ustar":
+        try:  # the first member's header (and a pax header before it) lies in the first blocks
+            with tarfile.open(fileobj=io.BytesIO(head), mode="r:") as tar:
+                member = tar.next()
+        except (tarfile.TarError, EOFError, OSError):
+            member = None
+        return f"a tar archive (first member {member.name!r})" if member else "a tar archive"
+    return None
+
+
+def open_text(path: str | Path) -> IO[str]:
+    """Open a plain or compressed (gzip, bzip2, xz) text file for reading, by magic bytes, not
+    the name.
+
+    Raises:
+        LogFormatError: for an archive (tar, zip): the log must be extracted from it first.
+    """
+    path = Path(path)
+    with open_bytes(path) as f:
+        try:
+            head = f.read(4096)
+        except _READ_ERRORS:
+            head = b""  # damaged data: reported with its line by the reader
+    what = archive_kind(head)
+    if what:
+        raise LogFormatError(path, 0, f"{what}, not a log: extract the log from it first")
+    return io.TextIOWrapper(open_bytes(path), encoding="ascii", errors="replace")
 
 
 class CarmenReader:
     """Iterate a CARMEN log's laser messages as Records; iterable several times.
 
     Args:
-        path: plain or ``.gz`` CARMEN log.
+        path: CARMEN log, plain or compressed (gzip, bzip2 or xz, told by the first bytes).
         skip_bad_lines: skip malformed lines (recorded in ``stats.skipped``) instead of raising; a
             gzip stream that cannot be decompressed further ends the pass (``stats.stopped``).
-        topic: the laser message kind to read (FLASER, RLASER, ROBOTLASER1, ROBOTLASER2); by
-            default the first kind met in the log (the others are counted in ``stats.messages``).
+        topic: the laser message kind to read (FLASER, RLASER, ROBOTLASER1 / 2, RAWLASER1 .. 4); by
+            default the first kind with poses met in the log, else the first RAWLASER kind (see
+            the module docstring; the others are counted in ``stats.messages``).
         geometry: FLASER / RLASER beam geometry that overrides the log's PARAM lines and the
             convention from the count (see :mod:`lms200.laser_geometry`); ROBOTLASER lines carry
             their own, except ``range_max``, which an override replaces there too.
@@ -158,12 +210,47 @@ class CarmenReader:
         error (it would be ignored): only range_max applies to ROBOTLASER lines."""
         g = self.geometry
         given = [name for name in ("fov", "resolution", "angle_min") if getattr(g, name) is not None]
-        if kind.startswith("ROBOTLASER") and given:
+        if kind not in ("FLASER", "RLASER") and given:
             raise LmsbenchError(f"{self.path}: its {kind} lines carry their own beam geometry; the override of "
                                 f"{', '.join(given)} (--laser-*-deg) applies to FLASER / RLASER lines only")
 
+    def _survey(self) -> str | None:
+        """The laser kind read by default: the first with poses among the first
+        ``DEFAULT_TOPIC_LINES`` lines, else the first RAWLASER kind, else None (the first met).
+
+        Raises:
+            LogFormatError: when none of the first ``DEFAULT_TOPIC_LINES`` lines (comments aside)
+                starts with a message name: a text file that is no CARMEN log is refused in
+                bounded time instead of being read to its end for nothing.
+        """
+        raw, named, looked = None, False, 0
+        try:
+            with open_text(self.path) as f:
+                while looked < DEFAULT_TOPIC_LINES:
+                    line = f.readline(4096)  # the first word is enough; a longer line goes on as pieces
+                    if not line:
+                        break
+                    words = line[:24].split(None, 1)
+                    kind = words[0] if words else ""
+                    if not kind or kind.startswith("#"):
+                        continue
+                    looked += 1
+                    named = named or _MESSAGE_NAME.fullmatch(kind) is not None
+                    if kind in POSED_LASER_KINDS or (named and self.topic is not None):
+                        return kind  # (a given topic is read whatever this returns)
+                    raw = raw or (kind if kind in RAW_LASER_KINDS else None)
+        except (*_READ_ERRORS, UnicodeError):
+            return raw  # damage is reported, with its line, by the pass itself
+        if looked >= DEFAULT_TOPIC_LINES and not named:
+            raise LogFormatError(self.path, 1, f"not a CARMEN log: none of its first {DEFAULT_TOPIC_LINES:,} lines "
+                                               "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
+        return raw
+
     def __iter__(self) -> Iterator[Record]:
-        self.stats = stats = ReadStats(laser=self.topic)
+        default = self._survey()
+        self.stats = stats = ReadStats(laser=self.topic or default)
+        if stats.laser is not None:
+            self._check_override(stats.laser)
         units: Units | None = None
         truth: Pose2D | None = None
         has_odometry = True
@@ -190,6 +277,7 @@ class CarmenReader:
                         self._check_override(kind)
                     if kind != stats.laser:
                         continue
+                    odom: Pose2D | None
                     if kind in ("FLASER", "RLASER"):
                         geometry = self.geometry.merged(laser_geometry.from_params(kind, params))
                         scan, odom = _parse_flaser(words, units, geometry)
@@ -265,8 +353,10 @@ def _pose(words: list[str], start: int, what: str) -> Pose2D:
 
 
 def _ranges(values: np.ndarray, units: Units | None, what: str) -> tuple[np.ndarray, Units]:
-    if np.any(values < 0) or np.any(np.isnan(values)):
-        raise ValueError(f"{what}: negative or nan range in the log")
+    """Logged ranges (m) in REP-117 form: SICK codes decoded; ``nan`` / ``inf`` written as text
+    (logs converted from ROS) keep their REP-117 meaning; negative or -inf ranges are malformed."""
+    if np.any(values < 0):
+        raise ValueError(f"{what}: negative range {values[values < 0][0]:g} in the log")
     u = units or infer_units(values)
     return decode_logged_ranges(values, u), u
 
@@ -284,15 +374,18 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     return scan, _pose(words, 2 + n + 3, f"{kind} odometry")
 
 
-def _parse_robotlaser(words: list[str], units: Units | None, range_max_override: float | None) -> tuple[Scan, Pose2D]:
+def _parse_robotlaser(words: list[str], units: Units | None,
+                      range_max_override: float | None) -> tuple[Scan, Pose2D | None]:
+    """A ROBOTLASER1 / 2 line (robot pose as odometry) or a RAWLASER1 .. 4 line (no pose)."""
     kind = words[0]
+    tail_fields = 3 if kind.startswith("RAWLASER") else 14  # (poses, speeds, safety,) timestamps, host
     _require(len(words) >= 10, f"{kind} is too short")
     head = _floats(words[1:8], f"{kind} header")
     start, fov, resolution, max_range, accuracy = (float(v) for v in head[1:6])
     n = _count(words[8], "beam count")
     _require(n > 0 and len(words) > 9 + n, f"{kind} announces {n} beams but has fewer fields")
     m = _count(words[9 + n], "remission count")
-    expected = 10 + n + m + 14
+    expected = 10 + n + m + tail_fields
     _require(len(words) == expected, f"{kind} with {n} ranges and {m} remissions needs {expected} fields, got {len(words)}")
     _require(bool(np.all(np.isfinite(head))), f"{kind} header is not finite")
     _require(resolution > 0, f"angular resolution must be > 0, got {resolution}")
@@ -304,12 +397,17 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     if units is None and accuracy in (0.01, 0.001):
         units = "cm" if accuracy == 0.01 else "mm"
     ranges, _ = _ranges(_floats(words[9 : 9 + n], f"{kind} ranges"), units, kind)
-    tail = _floats(words[10 + n + m : 10 + n + m + 12], f"{kind} poses and timestamp")
+    if kind.startswith("RAWLASER"):
+        stamp = float(_floats(words[10 + n + m : 11 + n + m], f"{kind} timestamp")[0])
+    else:
+        stamp = float(_floats(words[10 + n + m : 10 + n + m + 12], f"{kind} poses and timestamp")[11])
     if range_max_override is not None:
         range_max = range_max_override
     else:
         range_max = max_range if max_range > 0 else LMS200_MAX_RANGE["cm"]
-    scan = Scan(ranges, snap_angle(start), snap_angle(resolution), 0.0, range_max, float(tail[11]))
+    scan = Scan(ranges, snap_angle(start), snap_angle(resolution), 0.0, range_max, stamp)
+    if kind.startswith("RAWLASER"):
+        return scan, None
     return scan, _pose(words, 10 + n + m + 3, f"{kind} robot pose")
 
 
@@ -358,7 +456,7 @@ def write_carmen(
     hostname: str = "lmsbench",
     flush: bool = False,
 ) -> int:
-    """Write Records as a CARMEN log (plain, or gzip when the name ends in ``.gz``).
+    """Write Records as a CARMEN log (plain, or compressed when the name ends in ``.gz``, ``.bz2`` or ``.xz``).
 
     Each scan becomes one FLASER or ROBOTLASER1 line (``fmt``), preceded by a TRUEPOS line when the
     record has a true pose. FLASER logs get ``PARAM laser_front_laser_resolution / _fov`` and
@@ -372,7 +470,8 @@ def write_carmen(
     if fmt not in ("robotlaser1", "flaser"):
         raise InputError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
     path = Path(path)
-    opener = gzip.open if path.suffix == ".gz" else open
+    kind = COMPRESSION_SUFFIXES.get(path.suffix)
+    opener = COMPRESSIONS[kind][1] if kind else open
     count = 0
     units: Units | None = None
     odometry: bool | None = None

@@ -28,13 +28,13 @@ def read_log(
     """Open a log for iteration: ``for rec in read_log(path): rec.scan, rec.odom, rec.truth``.
 
     Args:
-        path: a CARMEN log (plain or gzip), a ROS 1 ``.bag`` file or a ROS 2 bag folder.
+        path: a CARMEN log (plain, or compressed with gzip, bzip2 or xz), a ROS 1 ``.bag`` file or a ROS 2 bag folder.
         skip_bad_lines: skip malformed lines (CARMEN) or unreadable messages (bags) instead of
             raising; what was skipped is in ``reader.stats.skipped`` as (line or message index,
             reason), and ``reader.stats.stopped`` says why a pass ended early, if it did.
         topic: the laser to read: a bag's LaserScan topic (needed when the bag has several), or a
-            CARMEN laser message kind (FLASER, RLASER, ROBOTLASER1, ROBOTLASER2; default: the first
-            kind in the log).
+            CARMEN laser message kind (FLASER, RLASER, ROBOTLASER1 / 2, RAWLASER1 .. 4; default: the
+            first kind with poses in the log, else the first RAWLASER kind).
         geometry: CARMEN FLASER / RLASER only: beam geometry (rad, m) that overrides the log's
             PARAM lines and the convention from the beam count (see :mod:`lms200.laser_geometry`).
 
@@ -68,7 +68,7 @@ def read_log(
 def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = None) -> int:
     """Write Records to ``path``; returns the number of scans written.
 
-    ``fmt``: "robotlaser1" (default for CARMEN) or "flaser" for CARMEN text (``.gz`` compresses),
+    ``fmt``: "robotlaser1" (default for CARMEN) or "flaser" for CARMEN text (``.gz``, ``.bz2``, ``.xz`` compress),
     "bag" for a ROS 1 bag (default for ``*.bag``), "bag2" for a ROS 2 bag folder.
 
     A CARMEN log is written to a temporary file beside ``path`` and renamed onto it once every

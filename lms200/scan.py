@@ -36,8 +36,9 @@ class Scan:
 
     Args:
         ranges: 1-D float64 array of ranges in metres; +inf beyond range, nan invalid.
-        angle_min: bearing of beam 0 in radians (sensor frame, CCW, 0 = ahead).
-        angle_increment: bearing step between beams in radians, > 0.
+        angle_min: bearing of beam 0 in radians (sensor frame, CCW, 0 = ahead), within +-2 pi.
+        angle_increment: bearing step between beams in radians, > 0; the beams span at most 2 pi
+            (a full turn), so degrees given as radians are refused.
         range_min: smallest valid range in metres.
         range_max: largest valid range in metres.
         stamp: time of the first beam in seconds.
@@ -77,6 +78,14 @@ class Scan:
             object.__setattr__(self, name, value)
         if self.angle_increment <= 0:
             raise ScanError(f"angle_increment: must be > 0, got {self.angle_increment}")
+        if abs(self.angle_min) > MAX_BEARING_RAD:
+            raise ScanError(f"angle_min: a bearing within +-2 pi rad (+-360 deg), got {self.angle_min:g} rad"
+                            f"{_degrees_hint(self.angle_min, abs(np.deg2rad(self.angle_min)) <= MAX_BEARING_RAD)}")
+        span = (r.size - 1) * self.angle_increment
+        if span > MAX_SPAN_RAD + self.angle_increment:  # one beam more: some 360 deg drivers repeat the first
+            raise ScanError(f"angle_increment: {r.size} beams {self.angle_increment:g} rad apart span {span:g} rad, "
+                            f"more than a full turn (2 pi rad)"
+                            f"{_degrees_hint(self.angle_increment, np.deg2rad(span) <= 2 * np.pi)}")
         if self.range_min < 0:
             raise ScanError(f"range_min: must be >= 0, got {self.range_min}")
         if self.range_max <= self.range_min:
@@ -161,6 +170,17 @@ class Scan:
         )
 
     __hash__ = None  # type: ignore[assignment]
+
+
+MAX_BEARING_RAD = 2 * np.pi + 1e-9  # |angle_min| at most one full turn
+MAX_SPAN_RAD = 2 * np.pi * (1 + 1e-6)  # first to last beam: a full turn (a 360 deg lidar; float32 increments)
+
+
+def _degrees_hint(value: float, fits_as_degrees: bool) -> str:
+    """A hint, where the value would fit read as degrees, that degrees were given as radians."""
+    if not fits_as_degrees:
+        return ""
+    return f" (degrees given as radians? {value:g} deg is {np.deg2rad(value):.6g} rad)"
 
 
 def _ranges_array(ranges: object) -> np.ndarray:

@@ -28,7 +28,7 @@ from lms200.errors import InputError
 from .lidar import LMS200Sim
 from .robot import RobotLimits, robot_tour, wrap
 from .sensor import SensorConfig
-from .worlds import make_world
+from .worlds import check_seed, make_world
 
 ENV_ID = "lmsbench/Office-v0"
 COLLISION_REWARD = -10.0
@@ -91,6 +91,8 @@ class OfficeEnv(gym.Env):
 
     # -- Gymnasium API ------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        if seed is not None:
+            check_seed(seed)  # Gymnasium's own error otherwise (and a numpy one for 2**64)
         super().reset(seed=seed)
         self.sim.reseed(int(self.np_random.integers(2**62)))
         d = self.path[1] - self.path[0]

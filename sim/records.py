@@ -58,6 +58,19 @@ def odometry_poses(truth: np.ndarray, config: OdometryConfig, rng: np.random.Gen
     return out
 
 
+def check_rate(rate_hz: object, sensor: SensorConfig) -> None:
+    """``rate_hz`` (scans/s kept) is None (every scan) or a number in (0, the sensor's scan rate]:
+    a higher rate cannot be kept (37.5 scans/s at 0.5 deg); InputError naming it otherwise."""
+    if rate_hz is None:
+        return
+    if isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float)) or not 0 < rate_hz < math.inf:
+        raise InputError(f"rate_hz: must be a finite number of scans/s > 0 or None, got {rate_hz!r}")
+    most = 1.0 / sensor.scan_period
+    if rate_hz > most * (1 + 1e-9):
+        raise InputError(f"rate_hz: {rate_hz:g} scans/s is more than the sensor gives ({most:g} scans/s at "
+                         f"{math.degrees(sensor.angle_increment):g} deg); omit it to keep every scan")
+
+
 def scan_stamps(sensor: SensorConfig, duration: float, rate_hz: float | None = None) -> np.ndarray:
     """Times (s) of the first beam of each scan kept: every scan of the sensor (37.5/s at 0.5 deg)
     whose last beam falls within ``duration``, decimated to about ``rate_hz`` when given."""
@@ -106,15 +119,13 @@ def simulate_records(world: str | World = "office", seed: int = 0, duration: flo
     Raises:
         InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument, for a duration
             that is not a number of seconds in (0, MAX_DURATION_S],
-            a rate that is not > 0, a seed that is not a whole number >= 0, or an unknown world.
+            a rate that is not in (0, the sensor's scan rate], a seed that is not a whole number >= 0, or an unknown world.
     """
     check_seed(seed)
     if isinstance(duration, bool) or not isinstance(duration, (int, float)) or not 0 < duration <= MAX_DURATION_S:
         raise InputError(f"duration: must be a number of seconds in (0, {MAX_DURATION_S:g}], got {duration!r}")
-    if rate_hz is not None and (isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float))
-                                or not 0 < rate_hz < math.inf):
-        raise InputError(f"rate_hz: must be a finite number of scans/s > 0 or None, got {rate_hz!r}")
-    w = world if isinstance(world, World) else make_world(world, seed)
     s = sensor if sensor is not None else SensorConfig()
+    check_rate(rate_hz, s)
+    w = world if isinstance(world, World) else make_world(world, seed)
     tour = robot_tour(w, seed, duration, limits)
     return simulate_tour(w, tour, scan_stamps(s, duration, rate_hz), s, seed, odometry, progress)

@@ -177,6 +177,21 @@ def test_simulate_records_duration_is_bounded() -> None:
         simulate_records("office", seed=0, duration=1e9)
 
 
+def test_simulate_records_rate_above_the_sensors_is_refused() -> None:
+    """rate_hz=1e9 silently kept the sensor's 37.5 scans/s; the bound is the sensor's scan rate."""
+    from sim import SensorConfig, simulate_records
+    from sim.records import check_rate
+
+    with pytest.raises(InputError, match=r"^rate_hz: 1e\+09 scans/s is more than the sensor gives \(37.5 scans/s"):
+        simulate_records("office", seed=0, duration=1.0, rate_hz=1e9)
+    one_deg = SensorConfig(n_beams=181, resolution_deg=1.0)
+    check_rate(75.0, one_deg)  # the 1 deg sweep's rate is allowed
+    with pytest.raises(InputError, match=r"\(75 scans/s at 1 deg\)"):
+        check_rate(76.0, one_deg)
+    recs = simulate_records("office", seed=0, duration=1.0, rate_hz=37.5)
+    assert len(recs) == len(simulate_records("office", seed=0, duration=1.0))  # every scan, as without a rate
+
+
 @pytest.mark.parametrize("kw, message", [
     (dict(seed=-1), "^seed: must be a whole number"),
     (dict(clutter="x"), "^clutter: must be a number or None"),   # was "could not convert string to float"
@@ -211,6 +226,30 @@ def test_gym_step_refuses_actions_that_are_not_two_finite_numbers(action: object
     assert np.array_equal(env.pose, pose) and env.steps == 0  # the episode is as it was
     obs, *_ = env.step(np.array([0.1, 0.0]))
     assert np.all(np.isfinite(env.pose)) and env.observation_space.contains(obs)
+
+
+@pytest.mark.parametrize("seed", [-1, 1.5, "a"])
+def test_gym_reset_seed_must_be_a_whole_number(seed: object) -> None:
+    """reset(seed=-1) raised Gymnasium's own error, not an LmsbenchError."""
+    from sim.gym_env import OfficeEnv
+
+    with pytest.raises(InputError, match="^seed: must be a whole number >= 0"):
+        OfficeEnv().reset(seed=seed)  # type: ignore[arg-type]
+
+
+def test_calibration_of_too_few_scans_says_so_and_prints_no_nan() -> None:
+    """A 1-scan log printed '+- nan' for every rate; a log without nan readings printed 'nan +- nan'."""
+    from experiments.calibrate import fit_sensor, format_calibration
+    from lms200.calibration import calibrate_scans
+    from sim import simulate_records
+
+    scans = [r.scan for r in simulate_records("office", seed=0, duration=1.0, rate_hz=4)]
+    with pytest.raises(ValueError, match="^scans: calibrating needs at least 2 scans"):
+        calibrate_scans(scans[:1])
+    cal = calibrate_scans([s.replace(ranges=np.where(np.isnan(s.ranges), 5.0, s.ranges)) for s in scans[:3]])
+    assert np.isnan(cal.nan_clustering.value)  # no nan reading: nothing to measure
+    text = "\n".join(format_calibration(fit_sensor(cal, "office", 2.0)))
+    assert "nan clustering         n/a" in text and "nan +-" not in text and "+- nan" not in text
 
 
 def test_gym_out_of_bounds_action_is_clipped() -> None:

@@ -157,6 +157,69 @@ def test_robotlaser1_fov_must_fit_the_count(tmp_path: Path) -> None:
 
 
 # --- damage ----------------------------------------------------------------------------------------
+def rawlaser(n: int, fov: float, res: float, stamp: float = 10.0, kind: str = "RAWLASER1") -> str:
+    ranges = " ".join(f"{2.0 + 0.01 * i:.2f}" for i in range(n))
+    return f"{kind} 0 {-fov / 2:.6f} {fov:.6f} {res:.6f} 80.0 0.01 0 {n} {ranges} 0 {stamp} host {stamp}"
+
+
+def test_rawlaser_lines_read_without_poses_and_robotlaser_is_preferred(tmp_path: Path) -> None:
+    """CARMEN 0.7 logs: RAWLASER1 alone reads (geometry from its header, no odometry); beside
+    ROBOTLASER1 (the same readings with poses), ROBOTLASER1 is read by default even when RAWLASER1
+    comes first; --topic RAWLASER1 chooses it; a RAWLASER line one beam short names its line."""
+    res = math.radians(0.5)
+    raw = write(tmp_path, "raw.log", ["ODOM 0 0 0 0 0 0 1 host 1"] + [rawlaser(361, 360 * res, res, stamp=t)
+                                                                    for t in range(3)])
+    recs = list(read_log(raw))
+    assert len(recs) == 3 and all(r.odom is None for r in recs)
+    assert [r.scan.stamp for r in recs] == [0.0, 1.0, 2.0]
+    np.testing.assert_allclose(recs[0].scan.angles[[0, 180, 360]], [-math.pi / 2, 0.0, math.pi / 2], atol=1e-9)
+    np.testing.assert_allclose(recs[0].scan.ranges[:3], [2.0, 2.01, 2.02])
+    both = write(tmp_path, "both.log", [line for t in range(4) for line in
+                                        (rawlaser(361, 360 * res, res, stamp=t),
+                                         robotlaser(181, math.pi, math.radians(1.0), stamp=t))])
+    reader = read_log(both)
+    assert [len(r.scan) for r in reader] == [181] * 4 and reader.stats.laser == "ROBOTLASER1"
+    assert all(r.odom == (1.0, 2.0, 0.5) for r in read_log(both))
+    assert reader.stats.other_lasers() == {"RAWLASER1": 4}
+    assert [len(r.scan) for r in read_log(both, topic="RAWLASER1")] == [361] * 4
+    short = write(tmp_path, "short.log", [rawlaser(361, 360 * res, res), rawlaser(361, 360 * res, res)
+                                          .replace("RAWLASER1 0", "RAWLASER1 0", 1).replace(" 361 ", " 360 ", 1)])
+    with pytest.raises(LogFormatError, match=r"short.log:2: malformed RAWLASER1 line"):
+        list(read_log(short))
+
+
+def test_nan_and_inf_written_as_text_keep_their_rep117_meaning(tmp_path: Path) -> None:
+    """A log converted from ROS may write nan / inf ranges as text: one invalid beam no longer
+    makes the whole scan malformed; a negative range still does."""
+    good = flaser(181, value=2.0).split()
+    good[2 + 10], good[2 + 20], good[2 + 30] = "nan", "inf", "NaN"
+    bad = flaser(181, value=2.0).split()
+    bad[2 + 5] = "-1.5"
+    path = write(tmp_path, "rep117.log", [" ".join(good), " ".join(bad)])
+    with pytest.raises(LogFormatError, match=r"rep117.log:2: .*negative range -1.5"):
+        list(read_log(path))
+    recs = list(read_log(path, skip_bad_lines=True))
+    assert len(recs) == 1
+    r = recs[0].scan.ranges
+    assert np.isnan(r[10]) and np.isnan(r[30]) and np.isposinf(r[20])
+    assert np.count_nonzero(r == 2.0) == 178
+
+
+def test_a_large_text_file_that_is_no_log_is_refused_after_its_first_lines(tmp_path: Path) -> None:
+    """A 300 MB text file without one CARMEN message was read to its end (75 s) for 0 scans; it is
+    refused after 10,000 lines. A log whose laser lines start late (after 12,000 ODOM lines) reads."""
+    from lms200.carmen import DEFAULT_TOPIC_LINES
+
+    rng = np.random.default_rng(3)
+    words = ["".join(rng.choice(list("abcdefgh0123"), 6)) for _ in range(50)]
+    junk = write(tmp_path, "junk.txt", [" ".join(rng.choice(words, 8)) for _ in range(DEFAULT_TOPIC_LINES + 5)])
+    for skip in (False, True):
+        with pytest.raises(LogFormatError, match="junk.txt:1: not a CARMEN log"):
+            list(read_log(junk, skip_bad_lines=skip))
+    late = write(tmp_path, "late.log", ["ODOM 0 0 0 0 0 0 1 host 1"] * 12_000 + [flaser(181)])
+    assert len(list(read_log(late))) == 1
+
+
 def test_inf_count_does_not_stop_skip_bad_lines(tmp_path: Path) -> None:
     lines = [flaser(180, stamp=t) for t in range(5)]
     lines[2] = lines[2].replace("FLASER 180", "FLASER inf", 1)
@@ -215,6 +278,63 @@ def test_truncated_gzip_with_skip_bad_lines_keeps_what_was_read(tmp_path: Path) 
     assert [r.scan.stamp for r in recs] == list(range(len(recs)))
 
 
+@pytest.mark.parametrize("suffix", [".gz", ".bz2", ".xz"])
+def test_compressed_logs_are_read_in_place_and_written_by_suffix(tmp_path: Path, suffix: str) -> None:
+    """A log compressed with gzip, bzip2 or xz reads as its plain text does (told by its first bytes,
+    whatever its name); write_log compresses by the suffix; a cut stream names the file."""
+    import bz2
+    import lzma
+
+    rng = np.random.default_rng(5)
+    lines = [flaser(361, value=float(v), stamp=float(t)) for t, v in enumerate(rng.uniform(1, 5, 60).round(2))]
+    text = ("\n".join(lines) + "\n").encode()
+    pack = {".gz": gzip.compress, ".bz2": bz2.compress, ".xz": lzma.compress}[suffix]
+    plain, packed, unnamed = tmp_path / "a.log", tmp_path / f"b.log{suffix}", tmp_path / "c.log"
+    plain.write_bytes(text)
+    packed.write_bytes(pack(text))
+    unnamed.write_bytes(pack(text))
+    want = [(r.scan.stamp, r.scan.ranges.tolist(), r.scan.angle_min, r.odom) for r in read_log(plain)]
+    assert len(want) == 60
+    for path in (packed, unnamed):
+        assert [(r.scan.stamp, r.scan.ranges.tolist(), r.scan.angle_min, r.odom) for r in read_log(path)] == want
+    out = tmp_path / f"w.log{suffix}"
+    assert write_log(out, read_log(plain), fmt="flaser") == 60
+    assert out.read_bytes()[:3] == pack(b"x")[:3]  # really compressed, by the suffix
+    assert [r.scan.ranges.tolist() for r in read_log(out)] == [w[1] for w in want]
+    cut = tmp_path / f"cut.log{suffix}"
+    cut.write_bytes(packed.read_bytes()[: len(packed.read_bytes()) // 2])
+    with pytest.raises(LogFormatError, match=f"^{cut}:[0-9]+: cannot read on"):
+        list(read_log(cut))
+    reader = read_log(cut, skip_bad_lines=True)
+    kept = len(list(reader))  # bzip2 gives nothing of a 900 kB block that is cut
+    assert (0 <= kept if suffix == ".bz2" else 0 < kept) and kept < 60 and "cannot read on" in reader.stats.stopped
+
+
+@pytest.mark.parametrize("kind", ["tar", "tar.gz", "zip"])
+def test_a_log_in_an_archive_is_refused_with_what_to_do(tmp_path: Path, kind: str,
+                                                        capsys: pytest.CaptureFixture) -> None:
+    import tarfile
+    import zipfile
+
+    from experiments.cli import main
+
+    log = write(tmp_path, "fr.log", [flaser(360, stamp=float(t)) for t in range(5)])
+    path = tmp_path / f"fr.{kind}"
+    if kind == "zip":
+        with zipfile.ZipFile(path, "w") as z:
+            z.write(log, "fr.log")
+    else:
+        with tarfile.open(path, "w:gz" if kind.endswith("gz") else "w") as t:
+            t.add(log, "fr.log")
+    with pytest.raises(LogFormatError, match="archive.*extract"):
+        list(read_log(path))
+    assert main(["info", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "archive" in err and "extract" in err
+    if kind != "zip":
+        assert "'fr.log'" in err  # names the member to extract
+
+
 # --- bags ------------------------------------------------------------------------------------------
 def _two_topic_bag(path: Path, n: int = 4) -> None:
     """A ROS 1 bag with LaserScans on /scan_front and /scan_rear (rosbags' own writer)."""
@@ -249,6 +369,35 @@ def test_bag_with_two_laser_topics_is_refused_unless_one_is_chosen(tmp_path: Pat
 def _records(n: int = 30) -> list[Record]:
     return [Record(Scan.lms200(np.full(361, 2.0 + 0.001 * i), stamp=1.0 + 0.1 * i), odom=(0.1 * i, 0.0, 0.0))
             for i in range(n)]
+
+
+def test_a_bag_of_a_clockwise_laser_reads_with_every_beam_on_its_bearing(tmp_path: Path) -> None:
+    """A laser mounted upside down publishes angle_increment < 0; every message was refused (a
+    Scan's increment must be > 0). Now the beams are put in ascending order: each keeps its bearing."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    T = ts.types
+    beams = np.linspace(1.0, 3.0, 181).astype(np.float32)  # beam k at bearing +90 - k deg
+    path = tmp_path / "flipped.bag"
+    with Writer(path) as w:
+        conn = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts)
+        msg = T["sensor_msgs/msg/LaserScan"](
+            header=T["std_msgs/msg/Header"](seq=0, stamp=T["builtin_interfaces/msg/Time"](sec=5, nanosec=0),
+                                            frame_id="laser"),
+            angle_min=math.pi / 2, angle_max=-math.pi / 2, angle_increment=-math.radians(1.0),
+            time_increment=0.0, scan_time=0.0, range_min=0.0, range_max=30.0,
+            ranges=beams, intensities=np.zeros(0, np.float32))
+        w.write(conn, 5_000_000_000, ts.serialize_ros1(msg, "sensor_msgs/msg/LaserScan"))
+    (rec,) = list(read_log(path))
+    scan = rec.scan
+    assert scan.angle_increment > 0
+    np.testing.assert_allclose(scan.angle_min, -math.pi / 2, atol=1e-6)
+    bearings = np.pi / 2 - np.radians(np.arange(181))  # where the message put each beam
+    order = np.argsort(bearings)
+    np.testing.assert_allclose(scan.angles, bearings[order], atol=1e-6)
+    np.testing.assert_array_equal(scan.ranges, beams[order].astype(np.float64))
 
 
 def test_damaged_bag_raises_bag_error_only(tmp_path: Path) -> None:

@@ -64,6 +64,20 @@ def test_inconsistent_fields_raise_naming_the_field(kwargs: dict, field: str) ->
         Scan(**base)
 
 
+def test_degrees_given_as_radians_are_refused_and_a_full_turn_is_kept() -> None:
+    with pytest.raises(ValueError, match=r"^angle_increment: 361 beams 0.5 rad apart span 180 rad.*degrees given"):
+        Scan(np.ones(361), -1.5, 0.5, 0.0, 8.0)  # a SICK sweep written in degrees
+    with pytest.raises(ValueError, match=r"^angle_min: .*-90 deg is -1.5708 rad"):
+        Scan(np.ones(361), -90.0, np.deg2rad(0.5), 0.0, 8.0)
+    full = Scan(np.ones(720), -np.pi, 2 * np.pi / 720, 0.0, 8.0)  # a 360 deg lidar: 719 steps < 2 pi
+    assert full.angle_max < np.pi
+    Scan(np.ones(721), -np.pi, 2 * np.pi / 720, 0.0, 8.0)  # first and last beam on the same bearing
+    inc32 = float(np.float32(2 * np.pi / 360) * np.float32(1 + 1e-7))  # a ROS float32 increment, rounded up
+    Scan(np.ones(362), -np.pi, inc32, 0.0, 8.0)  # a driver that repeats the first beam at the end
+    with pytest.raises(ValueError, match="^angle_increment: 364 beams"):
+        Scan(np.ones(364), -np.pi, inc32, 0.0, 8.0)
+
+
 def test_lms200_constructor_checks_beam_count() -> None:
     with pytest.raises(ValueError, match="ranges"):
         Scan.lms200(np.ones(180))

@@ -31,6 +31,7 @@ def scans(draw: st.DrawFn) -> Scan:
             r[hits] = rng.choice(SPECIAL, hits.sum())
     inc = draw(st.sampled_from([np.deg2rad(0.25), np.deg2rad(0.5), np.deg2rad(1.0), 2 * np.pi / 360, 1e-4, 0.3]))
     amin = draw(st.floats(-np.pi, np.pi))
+    r = r[: int(2 * np.pi / inc) + 1]  # a Scan spans at most a full turn
     range_max = draw(st.sampled_from([8.183, 81.83, 1e308]))
     return Scan(r, amin, inc, 0.0, range_max)
 

@@ -156,7 +156,7 @@ def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -
     (["calibrate", "log.clf", "--stride", "0"], "--stride"),
     (["calibrate", "log.clf", "--out", "."], "is a folder"),
     (["calibrate", "log.clf", "--world", "moon"], "unknown world"),
-    (["calibrate", "empty.clf"], "no scan"),
+    (["calibrate", "empty.clf"], "needs at least 2 scans"),
     (["simulate", "--sensor", "nope.yaml", "--out", "x"], "no such sensor file"),
     (["compare", "office", "--sensor", "nope.yaml"], "no such sensor file"),
 ])

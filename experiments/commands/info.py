@@ -28,7 +28,7 @@ def run(args: argparse.Namespace) -> int:
     if summary.scans == 0:
         met = getattr(stats, "messages", {})
         seen = f" (other lines: {sum(met.values())})" if met else ""
-        raise LogFormatError(args.log, 1, "no laser messages found: not a CARMEN log (FLASER/RLASER/ROBOTLASER "
+        raise LogFormatError(args.log, 1, "no laser messages found: not a CARMEN log (FLASER/RLASER/ROBOTLASER/RAWLASER "
                                           f"lines) nor a bag with LaserScan messages{seen}")
     others = stats.other_lasers() if hasattr(stats, "other_lasers") else {}
     report_skipped(reader)
