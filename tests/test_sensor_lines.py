@@ -372,11 +372,12 @@ def test_biweight_refit_keeps_to_the_wall_against_clutter_in_front_of_it() -> No
     rng = np.random.default_rng(7)
     n = 121
     bearings = bearings_of(-np.pi / 6, np.deg2rad(0.5), n)
-    exact = 3.0 / np.cos(bearings.b)
+    b, cos_b, sin_b = bearings  # rows: bearing (rad), its cosine and sine
+    exact = 3.0 / np.cos(b)
     for clutter in (True, False):
         offset = np.where(np.arange(n) % 10 == 5, 0.025, 0.0) if clutter else np.zeros(n)  # 2.5 cm closer
-        ranges = exact + rng.normal(0.0, 0.005, n) - offset / np.cos(bearings.b)
-        x, y = ranges * bearings.cos, ranges * bearings.sin
+        ranges = exact + rng.normal(0.0, 0.005, n) - offset / np.cos(b)
+        x, y = ranges * cos_b, ranges * sin_b
         # least-squares line x cos(a) + y sin(a) = rho, the refit's starting point
         a_ls = 0.5 * np.arctan2(-2 * np.cov(x, y)[0, 1], np.var(y) - np.var(x))
         rho_ls = np.mean(x) * np.cos(a_ls) + np.mean(y) * np.sin(a_ls)

@@ -2,7 +2,7 @@
 
 Every step works in range-bearing space, on the beams of one scan, in the order of the paper:
 
-1. per-beam signals (``beam_signals``): the invariant AD_ik (eq. 4), the slope estimate theta_i
+1. per-beam signals (``signal_block``): the invariant AD_ik (eq. 4), the slope estimate theta_i
    (eq. 6-7 as corrected in NOTES.md) and psi_i = theta_i - theta_{i+k}, with their noise std;
 2. runs of beams on straight lines (``candidate_runs``): the AD test, broken where psi peaks;
 3. the Log-Hough transform (eq. 5) searched in a narrow band of normal angles around each run's
@@ -99,14 +99,14 @@ class Params(NamedTuple):
     acute_check: bool
     acute_min_var: float  # in sigma_r**2
     arc_check: bool  # drop lines that are chords of a round surface (``on_arcs``)
+    sigma_bearing: float  # bearing noise std, rad (``ray_sd``)
 
 
-class Bearings(NamedTuple):
-    """The bearings of a scan's beams and their cosines and sines (built once per geometry)."""
-
-    b: np.ndarray  # angle_min + i D, rad
-    cos: np.ndarray
-    sin: np.ndarray
+# rows of a scan's bearing table (``features.sensor.grid.bearings_of``, (3, n), built once per
+# geometry): the bearings b_i = angle_min + i D (rad), their cosines and sines. One array, not a
+# record of three: every call of a kernel that takes an array costs two atomic reference counts
+# per array (~12 ns; a record's arrays count one by one)
+B_ANGLE, B_COS, B_SIN = 0, 1, 2
 
 
 class Grid(NamedTuple):
@@ -525,109 +525,126 @@ def fix_slope_sd(x: float, sd: float) -> bool:
     return x == x and not (x != 0.0 and math.isfinite(x) and math.isfinite(sd))
 
 
+# rows of ``signal_block``'s (11, n) block: the seven signals, three scratch rows and u = 1/d
+S_AD, S_AD_VAR, S_AD_SLOPE, S_THETA, S_THETA_VAR, S_PSI, S_PSI_VAR, S_TAN_T, S_TAN_S, S_U4, S_U = range(11)
+N_SIGNAL_ROWS = 11
+
+
 @kernel
-def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):  # noqa: ANN001, ANN201
+def signal_block(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):  # noqa: ANN001, ANN201
     """Per-beam signals of one scan (nan where a window is incomplete or holds an invalid beam):
-    valid, u = 1/d, AD (eq. 4), its variance per sigma_r**2, ad (eq. 6), theta (rad, unwrapped)
-    and its variance, psi = theta_i - theta_{i+k} (wrapped) and its variance.
+    ``valid`` and one (N_SIGNAL_ROWS, n) block whose rows (``S_*``) hold AD (eq. 4), its variance
+    per sigma_r**2, ad (eq. 6), theta (rad, unwrapped) and its variance, psi = theta_i - theta_{i+k}
+    (wrapped) and its variance, three scratch rows and u = 1/d.
 
     Noise, first order in the range noise e_j (std sigma_r): u_j = 1/(d_j + e_j) ~ u_j - u_j^2 e_j,
     so var(AD) / sigma_r^2 = (sum_j u_j^4 - u_i^4) / u_i^2 + (AD - 1)^2 u_i^2, the same for ad.
     The std of theta = b + arctan(T) is the half-difference of arctan over T +- std(T), which stays
     right at grazing incidence.
+
+    Rows are indexed in the block (``out[row, i]``, beams unsigned), never cut out as views: a view
+    that outlives a loop is two atomic reference counts, and views of rows and shifted windows
+    were ~0.35 us of this kernel's ~2.7 us a scan (numba prunes counts within a block, not across
+    loops). Unsigned indices: numba then adds no negative-index wraparound and the loops vectorise.
     """
     n = ranges.size
     valid = np.empty(n, np.bool_)
-    u = np.empty(n)
+    out = np.full((N_SIGNAL_ROWS, n), np.nan)
     for i in range(n):  # without branches, so that it vectorises
         d = ranges[i]
         ok = d >= range_lo and d <= range_hi
         valid[i] = ok
-        u[i] = 1.0 / d if ok else np.nan
-    out = np.full((10, n), np.nan)  # one allocation for the seven signals and three scratch rows
-    AD, AD_var, ad, theta, theta_var, psi, psi_var = out[0], out[1], out[2], out[3], out[4], out[5], out[6]
-    tan_t, tan_s, u4 = out[7], out[8], out[9]
+        out[S_U, i] = 1.0 / d if ok else np.nan
     if n >= 2 * k + 1:
-        # the window sums of the centres i = k .. n - k - 1: left = sum_{m=1..k} u_{i-m} (in
-        # tan_t), right = sum_{m=0..k} u_{i+m} (in tan_s) and quad = sum_{j=-k..k} u_{i+j}^4 (in
-        # AD_var), each summed term by term in beam order, one shifted slice of u (or u^4) at a
-        # time: passes over the scan that vectorise. A window that holds an invalid beam (u nan)
-        # gets nan sums; then s1 = left + right, sd = right - left and s4 = quad go to the rows
-        # of AD, ad and AD_var, which the next loop turns into the signals in place
-        m = n - 2 * k  # k >= 1 (the config's check)
-        left, right, quad, s1_, sd_ = tan_t[k:n - k], tan_s[k:n - k], AD_var[k:n - k], AD[k:n - k], ad[k:n - k]
-        for i in range(n):
-            u2 = u[i] * u[i]
-            u4[i] = u2 * u2
-        lu, ru, qu = u[:m], u[k:k + m], u4[:m]
+        # the window sums of the centres c = k .. n - k - 1: left = sum_{m=1..k} u_{c-m} (in
+        # S_TAN_T), right = sum_{m=0..k} u_{c+m} (in S_TAN_S) and quad = sum_{j=-k..k} u_{c+j}^4
+        # (in S_AD_VAR), each summed term by term in beam order, one shifted window of u (or u^4)
+        # at a time: passes over the scan that vectorise. A window that holds an invalid beam (u
+        # nan) gets nan sums; then s1 = left + right, sd = right - left and s4 = quad go to the
+        # rows of AD, ad and AD_var, which the next loop turns into the signals in place
+        m = np.uint64(n - 2 * k)  # k >= 1 (the config's check)
+        ku = np.uint64(k)
+        for i in range(np.uint64(n)):
+            u2 = out[S_U, i] * out[S_U, i]
+            out[S_U4, i] = u2 * u2
         for i in range(m):
-            left[i] = lu[i]
-            right[i] = ru[i]
-            quad[i] = qu[i]
+            out[S_TAN_T, ku + i] = out[S_U, i]
+            out[S_TAN_S, ku + i] = out[S_U, ku + i]
+            out[S_AD_VAR, ku + i] = out[S_U4, i]
         for j in range(1, 2 * k + 1):
-            uj, qj = u[j:j + m], u4[j:j + m]
+            ju = np.uint64(j)
             if j < k:
                 for i in range(m):
-                    left[i] += uj[i]
+                    out[S_TAN_T, ku + i] += out[S_U, ju + i]
             elif j > k:
                 for i in range(m):
-                    right[i] += uj[i]
+                    out[S_TAN_S, ku + i] += out[S_U, ju + i]
             for i in range(m):
-                quad[i] += qj[i]
+                out[S_AD_VAR, ku + i] += out[S_U4, ju + i]
         for i in range(m):
-            s1_[i] = left[i] + right[i]
-            sd_[i] = right[i] - left[i]
-        # the window centres k .. n - k - 1, as slices: the loops below vectorise
-        uc, dc = u[k:n - k], ranges[k:n - k]
-        s1, sd, s4, tt, ts = AD[k:n - k], ad[k:n - k], AD_var[k:n - k], tan_t[k:n - k], tan_s[k:n - k]
+            c = ku + i
+            out[S_AD, c] = out[S_TAN_T, c] + out[S_TAN_S, c]
+            out[S_AD_SLOPE, c] = out[S_TAN_S, c] - out[S_TAN_T, c]
         s_scale = sigma_r / two_sin_sum
         inv_sin_sum = 1.0 / two_sin_sum
-        for i in range(m):  # dividing by u_i = 1 / d_i is multiplying by d_i (an invalid centre's sums are nan)
-            ui = uc[i]
-            di = dc[i]
-            u2 = ui * ui
-            a = s1[i] * di  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
-            ad_i = sd[i] * di  # eq. 6: ad_ik
-            other = s4[i] * (di * di) - u2  # sum over j != i of u_j^4 / u_i^2
-            ad1 = ad_i - 1.0
+        for i in range(m):  # dividing by u_c = 1 / d_c is multiplying by d_c (an invalid centre's sums are nan)
+            c = ku + i
+            uc = out[S_U, c]
+            dc = ranges[c]
+            u2 = uc * uc
+            a = out[S_AD, c] * dc  # eq. 4: AD_ik = sum_j (1/d_{i+j}) / (1/d_i)
+            ad_c = out[S_AD_SLOPE, c] * dc  # eq. 6: ad_ik
+            other = out[S_AD_VAR, c] * (dc * dc) - u2  # sum over j != i of u_j^4 / u_i^2
+            ad1 = ad_c - 1.0
             a1 = a - 1.0
-            s1[i] = a
-            s4[i] = other + a1 * a1 * u2
-            sd[i] = ad_i
+            out[S_AD, c] = a
+            out[S_AD_VAR, c] = other + a1 * a1 * u2
+            out[S_AD_SLOPE, c] = ad_c
             # eq. 7 as corrected in NOTES.md: ad - 1 = 2 tan(a - b_i) sum_{m=1..k} sin(mD): the
             # slope T = tan(a - b_i) and its std s here, their arctangents in the next loop
-            tt[i] = ad1 * inv_sin_sum
-            ts[i] = math.sqrt(other + ad1 * ad1 * u2) * s_scale
-        bc, th, tv = bearings[k:n - k], theta[k:n - k], theta_var[k:n - k]
+            out[S_TAN_T, c] = ad1 * inv_sin_sum
+            out[S_TAN_S, c] = math.sqrt(other + ad1 * ad1 * u2) * s_scale
         n_fix = 0
         for i in range(m):
-            t, sd_i = tt[i], ts[i]
-            th[i] = bc[i] + arctan(t)
+            c = ku + i
+            t, sd_c = out[S_TAN_T, c], out[S_TAN_S, c]
+            out[S_THETA, c] = bearings[c] + arctan(t)
             # (arctan(T + s) - arctan(T - s)) / 2 = atan2(2 s, 1 + (T + s)(T - s)) / 2, as
             # arctan(2 s / x) for x > 0 and pi - arctan(2 s / -x) for x < 0 (s >= 0)
-            x = 1.0 + (t + sd_i) * (t - sd_i)
-            h = arctan(2.0 * sd_i / abs(x))
+            x = 1.0 + (t + sd_c) * (t - sd_c)
+            h = arctan(2.0 * sd_c / abs(x))
             theta_sd = 0.5 * (h if x > 0.0 else math.pi - h)
-            tv[i] = theta_sd * theta_sd
-            n_fix += fix_slope_sd(x, sd_i)
-        i = 0
+            out[S_THETA_VAR, c] = theta_sd * theta_sd
+            n_fix += fix_slope_sd(x, sd_c)
+        i = np.uint64(0)
         while n_fix > 0 and i < m:  # where that form does not hold: atan2 (a loop that cannot vectorise, so
             # that the libm call is made for these few beams only, not speculated for all)
-            t, sd_i = tt[i], ts[i]
-            x = 1.0 + (t + sd_i) * (t - sd_i)
-            if fix_slope_sd(x, sd_i):
-                theta_sd = 0.5 * math.atan2(2.0 * sd_i, x)
-                tv[i] = theta_sd * theta_sd
+            c = ku + i
+            t, sd_c = out[S_TAN_T, c], out[S_TAN_S, c]
+            x = 1.0 + (t + sd_c) * (t - sd_c)
+            if fix_slope_sd(x, sd_c):
+                theta_sd = 0.5 * math.atan2(2.0 * sd_c, x)
+                out[S_THETA_VAR, c] = theta_sd * theta_sd
                 n_fix -= 1
-            i += 1
+            i += np.uint64(1)
     if n > k:
-        t0, t1, v0, v1, ps, pv = theta[:n - k], theta[k:], theta_var[:n - k], theta_var[k:], psi[:n - k], psi_var[:n - k]
-        for i in range(n - k):
-            dpsi = t0[i] - t1[i]  # the corner signal psi_i = theta_i - theta_{i+k}
+        ku = np.uint64(k)
+        for i in range(np.uint64(n - k)):
+            dpsi = out[S_THETA, i] - out[S_THETA, ku + i]  # the corner signal psi_i = theta_i - theta_{i+k}
             # wrapped to [-pi, pi]: dpsi - 2 pi rint(dpsi / 2 pi), where rint gives +-0 for |dpsi| < pi
-            ps[i] = dpsi + 0.0 if abs(dpsi) < math.pi else dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
-            pv[i] = v0[i] + v1[i]
-    return valid, u, AD, AD_var, ad, theta, theta_var, psi, psi_var
+            out[S_PSI, i] = dpsi + 0.0 if abs(dpsi) < math.pi else dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
+            out[S_PSI_VAR, i] = out[S_THETA_VAR, i] + out[S_THETA_VAR, ku + i]
+    return valid, out
+
+
+@kernel
+def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):  # noqa: ANN001, ANN201
+    """``signal_block``'s signals as separate arrays: valid, u = 1/d, AD (eq. 4), its variance per
+    sigma_r**2, ad (eq. 6), theta (rad, unwrapped) and its variance, psi = theta_i - theta_{i+k}
+    (wrapped) and its variance (``features.sensor.signals``, the paper's figures 4-6)."""
+    valid, out = signal_block(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum)
+    return (valid, out[S_U], out[S_AD], out[S_AD_VAR], out[S_AD_SLOPE], out[S_THETA], out[S_THETA_VAR], out[S_PSI],
+            out[S_PSI_VAR])
 
 
 # -- 2. runs of line beams ------------------------------------------------------------------------
@@ -726,7 +743,7 @@ def band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings, increment, sigm
         cvar = (cs_v[e] - cs_v[a] + v0) / (n_c * (1.0 + n_c / (2 * k + 1)))
         half_width[r] = min(max(p.band_tau * math.sqrt(cvar), p.band_min), BAND_MAX)
         angle_step = max(half_width[r] / h, increment / p.hough_subdiv)
-        tan_span = abs(math.tan(bearings[e + k] - centre[r]) - math.tan(bearings[a - k] - centre[r]))
+        tan_span = abs(math.tan(bearings[B_ANGLE, e + k] - centre[r]) - math.tan(bearings[B_ANGLE, a - k] - centre[r]))
         d_min = np.inf
         for j in range(a - k, e + k + 1):
             d_min = min(d_min, ranges[j])
@@ -888,12 +905,26 @@ def add_normal_terms(sums, wr, g, res):  # noqa: ANN001, ANN201
 
 
 @inline_kernel
-def gn_sums(d, cb, sb, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN201
+def ray_sd(d: float, c: float, sigma_r: float, st2: float) -> float:
+    """Std (m) of a beam's ray residual about a line it meets at cos(b - alpha) = c, range d (m):
+    the range noise sigma_r (m) and the bearing noise st2 (rad^2), which moves the range by
+    d tan(b - alpha) per radian (large at grazing incidence; on interlaced 0.5 deg logs the two
+    sweeps' bearings differ by the robot's turn between them, ``noise_estimate.bearing_sigma``)."""
+    if st2 == 0.0:
+        return sigma_r  # exact bearings: the range noise alone, bit for bit
+    t = d * math.sqrt(max(1.0 - c * c, 0.0)) / c
+    return math.sqrt(sigma_r * sigma_r + t * t * st2)
+
+
+@inline_kernel
+def gn_sums(d, bt, valid, use, f, s, cnt, ca, sa, rho, kb):  # noqa: ANN001, ANN201
     """The weighted normal equations of a Gauss-Newton step of a line (rho, alpha = atan2(sa, ca))
-    on the beams j = f .. f + cnt - 1 where valid[j] and use[s + j - f] (range d, bearing b given
-    by cb = cos(b), sb = sin(b)): (sum w, sum w g, sum w g^2, sum w r, sum w g r) with residual
+    on the beams j = f .. f + cnt - 1 where valid[j] and use[s + j - f] (range d, bearing b with
+    cos(b), sin(b) in rows B_COS, B_SIN of ``bt``): (sum w, sum w g, sum w g^2, sum w r, sum w g r) with residual
     r = d cos(b - alpha) - rho, g = d r / d alpha = d sin(b - alpha) and weight
-    w = 1 / cos(b - alpha)^2 (0 within MIN_COS of grazing). Without branches on data: the loop
+    w = 1 / (cos(b - alpha)^2 + kb g^2) (0 within MIN_COS of grazing): the inverse variance of r in
+    units of sigma_r^2, kb = sigma_bearing^2 / sigma_r^2 (``ray_sd``; 1 / cos^2 exactly at kb = 0).
+    Without branches on data: the loop
     runs in vector lanes. Offsets into whole arrays, not slices (a slice a run is two atomic
     reference counts)."""
     sums = (0.0, 0.0, 0.0, 0.0, 0.0)
@@ -901,20 +932,23 @@ def gn_sums(d, cb, sb, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN
         return sums
     for t in range(cnt):
         j = f + t
-        c = cb[j] * ca + sb[j] * sa  # cos(b - alpha)
+        c = bt[B_COS, j] * ca + bt[B_SIN, j] * sa  # cos(b - alpha)
         dt = d[j] if valid[j] else 0.0  # an invalid beam's range is inf or nan
         res = dt * c - rho  # d res / d rho = -1
-        g = dt * (sb[j] * ca - cb[j] * sa)
+        g = dt * (bt[B_SIN, j] * ca - bt[B_COS, j] * sa)
         ic = 1.0 / c
-        wr = ic * ic if (c > MIN_COS) & valid[j] & use[s + t] else 0.0
+        ic2 = ic * ic
+        wr = ic2 / (1.0 + g * g * ic2 * kb) if (c > MIN_COS) & valid[j] & use[s + t] else 0.0  # 1 / c^2 at kb = 0
         sums = add_normal_terms(sums, wr, g, res)
     return sums
 
 
 @inline_kernel
-def gn_sums_inliers(d, cb, sb, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, inl):  # noqa: ANN001, ANN201
-    """``gn_sums`` on the beams j = f .. f + cnt - 1 within ``tau`` sigma_r of the line (|z| <=
-    tau, z = r / (sigma_r cos(b - alpha)), written to z[j - f]; the inliers to inl[j - f]), with
+def gn_sums_inliers(d, bt, valid, f, cnt, ca, sa, rho, inv_sigma, st2, tau, z, inl):  # noqa: ANN001, ANN201
+    """``gn_sums`` on the beams j = f .. f + cnt - 1 within ``tau`` std of the line (|z| <= tau,
+    z = r / (cos(b - alpha) sd_j) the ray residual in its std sd_j = sqrt(s2 + (d tan(b - alpha))^2
+    st2): range noise sigma_r = 1 / inv_sigma plus bearing noise st2 (rad^2), ``ray_sd``; written
+    to z[j - f], the inliers to inl[j - f]), weighted as in ``gn_sums``, with
     the line checks' sums over the inliers: chi^2 = sum z^2, their count, sums of t, t^2, t^3
     (t = j - f, integers: exact in any order below 2^53, runs under ~13,000 beams) and the first
     and last inlier's t (cnt and -1 when there is none)."""
@@ -925,16 +959,20 @@ def gn_sums_inliers(d, cb, sb, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, in
     hi = -1
     if f < 0:
         return sums, chi, ni, i_t, i_t2, i_t3, lo, hi
+    kb = st2 * inv_sigma * inv_sigma
     for t in range(cnt):
         j = f + t
-        c = cb[j] * ca + sb[j] * sa
+        c = bt[B_COS, j] * ca + bt[B_SIN, j] * sa
         dt = d[j] if valid[j] else 0.0
         res = dt * c - rho
-        g = dt * (sb[j] * ca - cb[j] * sa)
+        g = dt * (bt[B_SIN, j] * ca - bt[B_COS, j] * sa)
         ic = 1.0 / c
-        zt = res * ic * inv_sigma
+        gi = g * ic  # d tan(b - alpha)
+        kg = gi * gi * kb  # (d tan(b - alpha) sigma_bearing / sigma_r)^2
+        zt = res * ic * (inv_sigma if kb == 0.0 else inv_sigma / math.sqrt(1.0 + kg))
         use = (c > MIN_COS) & valid[j] & (abs(zt) <= tau)
-        wr = ic * ic if use else 0.0
+        ic2 = ic * ic
+        wr = ic2 / (1.0 + kg) if use else 0.0  # gn_sums' weight
         sums = add_normal_terms(sums, wr, g, res)
         z[t] = zt
         inl[t] = use
@@ -986,7 +1024,6 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
     Returns the lines in normal form (rho >= 0, alpha in (-pi, pi]) with cov, first / last inlier
     beam, inlier count, and the mask of those that pass."""
     n_runs = starts.size
-    cos_b, sin_b = bearings.cos, bearings.sin
     max_cnt = 0
     for r in range(n_runs):
         max_cnt = max(max_cnt, counts[r])
@@ -1003,20 +1040,21 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
     tau = p.inlier_tau
     inv_sigma = 1.0 / sigma_r
     s2 = sigma_r * sigma_r
-    step = bearings.b[1] - bearings.b[0] if bearings.b.size > 1 else 1.0
+    step = bearings[B_ANGLE, 1] - bearings[B_ANGLE, 0] if bearings.shape[1] > 1 else 1.0
+    st2 = p.sigma_bearing * p.sigma_bearing  # bearing noise variance, rad^2
     sweep = max(1, np.int64(np.rint(ONE_DEG / step))) if step < 0.99 * ONE_DEG else 1  # lms200.noise.interlace_stride
     c2 = 2.0 * math.cos(sweep * step)
     for r in range(n_runs):
         s, cnt, f = starts[r], counts[r], first[r]
         # step 1, on the Log-Hough inliers
-        sw, swg, swgg, swr, swgr = gn_sums(ranges, cos_b, sin_b, valid, inlier0, f, s, cnt, math.cos(alpha0[r]),
-                                           math.sin(alpha0[r]), rho0[r])
+        sw, swg, swgg, swr, swgr = gn_sums(ranges, bearings, valid, inlier0, f, s, cnt, math.cos(alpha0[r]),
+                                           math.sin(alpha0[r]), rho0[r], st2 / s2)
         inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
         rho1 = rho0[r] + (swgg * swr - swg * swgr) * inv_det
         alpha1 = alpha0[r] + (swg * swr - sw * swgr) * inv_det
         # step 2, on the beams within inlier_tau sigma_r of step 1's line, with the checks' sums
         (sw, swg, swgg, swr, swgr), chi, ni, i_t, i_t2, i_t3, lo, hi = gn_sums_inliers(
-            ranges, cos_b, sin_b, valid, f, cnt, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, tau, z_run, inl_run)
+            ranges, bearings, valid, f, cnt, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, st2, tau, z_run, inl_run)
         inv_det = 1.0 / (sw * swgg - swg * swg)
         rho_r = rho1 + (swgg * swr - swg * swgr) * inv_det
         alpha_r = alpha1 + (swg * swr - sw * swgr) * inv_det
@@ -1053,11 +1091,11 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
 
 
 @kernel
-def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reach, inlier_tau, sigma_r):  # noqa: ANN001
+def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reach, inlier_tau, sigma_r, st2):  # noqa: ANN001
     """In place: grow each line over the up to ``reach`` beams past each end that continue it
-    (valid, |range residual| <= inlier_tau sigma_r, no break): the AD windows stop short of corners."""
+    (valid, |ray residual| <= inlier_tau of its std, ``ray_sd`` with the bearing noise st2 (rad^2),
+    no break): the AD windows stop short of corners."""
     n = ranges.size
-    lim = inlier_tau * sigma_r
     for m in range(rho.size):
         ca, sa = math.cos(alpha[m]), math.sin(alpha[m])
         grow0 = 0
@@ -1065,8 +1103,8 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
             j = last[m] + s
             if j >= n:
                 break
-            c = bearings.cos[j] * ca + bearings.sin[j] * sa  # cos(b - alpha)
-            if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= lim * c):
+            c = bearings[B_COS, j] * ca + bearings[B_SIN, j] * sa  # cos(b - alpha)
+            if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= inlier_tau * ray_sd(ranges[j], c, sigma_r, st2) * c):
                 break
             grow0 += 1
         grow1 = 0
@@ -1074,8 +1112,8 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
             j = first[m] - s
             if j < 0:
                 break
-            c = bearings.cos[j] * ca + bearings.sin[j] * sa  # cos(b - alpha)
-            if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= lim * c):
+            c = bearings[B_COS, j] * ca + bearings[B_SIN, j] * sa  # cos(b - alpha)
+            if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= inlier_tau * ray_sd(ranges[j], c, sigma_r, st2) * c):
                 break
             grow1 += 1
         first[m] -= grow1
@@ -1114,7 +1152,6 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
     n = ranges.size
     work = np.empty((5, n))  # one block: the used beams' x, y, 1 / cos(b - alpha), |z|, the median's scratch
     x, y, inv_c, z, buf = work[0], work[1], work[2], work[3], work[4]
-    cos_b, sin_b = bearings.cos, bearings.sin
     for m in range(rho.size):
         r_m, a_m = rho[m], alpha[m]
         ca, sa = math.cos(a_m), math.sin(a_m)
@@ -1122,9 +1159,9 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
         j = np.uint64(first[m])  # beams indexed unsigned: numba then adds no negative-index wraparound
         end = np.uint64(last[m] + 1)
         while j < end:  # every beam written at k, k moved on past the used ones: no branch on data
-            c = cos_b[j] * ca + sin_b[j] * sa
-            xj = ranges[j] * cos_b[j]
-            yj = ranges[j] * sin_b[j]
+            c = bearings[B_COS, j] * ca + bearings[B_SIN, j] * sa
+            xj = ranges[j] * bearings[B_COS, j]
+            yj = ranges[j] * bearings[B_SIN, j]
             x[k] = xj
             y[k] = yj
             ic = 1.0 / c
@@ -1158,13 +1195,13 @@ def farthest_from_chord(f, l, ranges, bearings) -> int:  # noqa: ANN001
     """The beam of f..l farthest from the chord between the end points of beams f and l
     (Cartesian, sensor frame; the middle one when none is off it): where a span that does not fit
     one line bends (IEPF's split point)."""
-    x0, y0 = ranges[f] * bearings.cos[f], ranges[f] * bearings.sin[f]
-    x1, y1 = ranges[l] * bearings.cos[l], ranges[l] * bearings.sin[l]
+    x0, y0 = ranges[f] * bearings[B_COS, f], ranges[f] * bearings[B_SIN, f]
+    x1, y1 = ranges[l] * bearings[B_COS, l], ranges[l] * bearings[B_SIN, l]
     dx, dy = x1 - x0, y1 - y0
     norm = max(math.hypot(dx, dy), 1e-12)
     best, at = -1.0, (f + l) // 2
     for j in range(f + 1, l):
-        x, y = ranges[j] * bearings.cos[j], ranges[j] * bearings.sin[j]
+        x, y = ranges[j] * bearings[B_COS, j], ranges[j] * bearings[B_SIN, j]
         dist = abs((x - x0) * dy - (y - y0) * dx) / norm
         if dist > best:
             best, at = dist, j
@@ -1234,8 +1271,8 @@ def theta_turn(a, b, theta) -> float:  # noqa: ANN001
 def surface_turn(f, l, cx, cy, ranges, bearings) -> float:  # noqa: ANN001
     """The angle (rad) beams f and l subtend at the centre (cx, cy): how far a circle about it
     turns between them."""
-    ax, ay = ranges[f] * bearings.cos[f] - cx, ranges[f] * bearings.sin[f] - cy
-    bx, by = ranges[l] * bearings.cos[l] - cx, ranges[l] * bearings.sin[l] - cy
+    ax, ay = ranges[f] * bearings[B_COS, f] - cx, ranges[f] * bearings[B_SIN, f] - cy
+    bx, by = ranges[l] * bearings[B_COS, l] - cx, ranges[l] * bearings[B_SIN, l] - cy
     return abs(math.atan2(ax * by - ay * bx, ax * bx + ay * by))
 
 
@@ -1287,8 +1324,8 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
     work = np.empty((5, m))  # the beams' points, then per-beam terms of each pass over them
     xs, ys, w0, w1, w2 = work[0], work[1], work[2], work[3], work[4]
     for t in range(m):
-        xs[t] = ranges[f + t] * bearings.cos[f + t]
-        ys[t] = ranges[f + t] * bearings.sin[f + t]
+        xs[t] = ranges[f + t] * bearings[B_COS, f + t]
+        ys[t] = ranges[f + t] * bearings[B_SIN, f + t]
     ok = valid[f:l + 1]
     mx, my, n = valid_centroid(xs, ys, ok)
     if n < 5:
@@ -1434,7 +1471,7 @@ def fit_spans(first, last, shrink0, shrink1, ranges, log_r, bearings, valid, the
         f, s = np.uint64(first[r]), np.uint64(starts[r])
         for t in range(np.uint64(counts[r])):
             log_d[s + t] = log_r[f + t]
-    centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings.b, increment, sigma_r, k, p)
+    centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings, increment, sigma_r, k, p)
     alpha0, rho0, inlier0 = band_search(
         first, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
     )
@@ -1508,7 +1545,8 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
         o = order[t]
         rho[t], alpha[t], f_in[t], l_in[t], n_in[t] = o_rho[o], o_alpha[o], o_f[o], o_l[o], o_n[o]
         cov[t, 0, 0], cov[t, 0, 1], cov[t, 1, 0], cov[t, 1, 1] = o_cov[o, 0, 0], o_cov[o, 0, 1], o_cov[o, 1, 0], o_cov[o, 1, 1]
-    extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r)
+    extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r,
+                p.sigma_bearing * p.sigma_bearing)
     robust_refit(rho, alpha, f_in, l_in, ranges, bearings, valid)
     arc = on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, theta, increment, sigma_r, p) if p.arc_check and m else np.zeros(m, np.bool_)
     q = 0  # the lines kept (min_points beams once grown, not a chord of a round surface) moved to the front
@@ -1617,7 +1655,7 @@ def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p):  #
         for e in range(2):
             j = first[m] if e == 0 else last[m]
             d = ranges[j]
-            x, y = d * bearings.cos[j], d * bearings.sin[j]
+            x, y = d * bearings[B_COS, j], d * bearings[B_SIN, j]
             off = x * c + y * s - rho[m]
             lv[q, 2 + 2 * e] = x - off * c
             lv[q, 3 + 2 * e] = y - off * s
@@ -1732,7 +1770,7 @@ def corners(lv, lb, psi, ranges, valid, angle_min, increment, sigma_r, p):  # no
 
 @kernel
 def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sigma_r, auto, range_min, fallback, grid, p):  # noqa: ANN001, ANN201
-    """Lines and corners of one scan (sensor frame): steps 1-6. ``bearings``: a Bearings record;
+    """Lines and corners of one scan (sensor frame): steps 1-6. ``bearings``: the (3, n) bearing table (rows B_ANGLE, B_COS, B_SIN);
     ``range_lo``, ``range_hi``: valid range limits (m); ``sigma_r``: the range noise std for this
     scan's units (m), or with ``auto`` estimated from the scan itself in the same call (step 0:
     ``pooled_sigma`` of its one row, ``features.noise_estimate.scan_sigma`` of valid range limits
@@ -1743,9 +1781,9 @@ def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sig
     (``segments``), corner values, corner beams (``corners``)."""
     if auto:
         sigma_r = pooled_sigma(ranges.reshape((1, ranges.size)), grid.twice_cos, range_min, range_hi, fallback)
-    valid, _, AD, AD_var, _, theta, theta_var, psi, psi_var = beam_signals(
-        ranges, bearings.b, p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum
-    )
+    valid, sig = signal_block(ranges, bearings[B_ANGLE], p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum)
+    AD, AD_var, theta, theta_var, psi, psi_var = (sig[S_AD], sig[S_AD_VAR], sig[S_THETA], sig[S_THETA_VAR], sig[S_PSI],
+                                                  sig[S_PSI_VAR])
     rho, alpha, cov, first, last, npts = find_lines(
         ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_var, angle_min, increment, sigma_r, grid, p
     )

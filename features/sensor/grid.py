@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import ScanGeometryError
 from ..noise_estimate import twice_cos
-from .engine import Bearings, Grid
+from .engine import B_ANGLE, B_COS, B_SIN, Grid
 
 LOGCOS_FLOOR = float(np.log(1e-6))  # template value where |a - b| >= pi/2 (the beam cannot see the line)
 MAX_TEMPLATE = 1 << 20  # most template entries (8 MB): beam steps finer than ~4 pi / 2^20 rad are refused
@@ -68,11 +68,13 @@ def phase_rows(template: np.ndarray, subdiv: int) -> np.ndarray:
 
 
 @lru_cache(maxsize=16)
-def bearings_of(angle_min: float, increment: float, n: int) -> Bearings:
-    """The Bearings of n beams from ``angle_min`` in steps of ``increment`` (rad), as
-    ``lms200.Scan.angles`` computes them."""
-    b = angle_min + np.arange(n) * increment
-    c, s = np.cos(b), np.sin(b)
-    for a in (b, c, s):
-        a.setflags(write=False)
-    return Bearings(b, c, s)
+def bearings_of(angle_min: float, increment: float, n: int) -> np.ndarray:
+    """The (3, n) bearing table of n beams from ``angle_min`` in steps of ``increment`` (rad): rows
+    ``engine.B_ANGLE`` (the bearings, as ``lms200.Scan.angles`` computes them), ``B_COS`` and
+    ``B_SIN`` (their cosines and sines); read-only."""
+    table = np.empty((3, n))
+    table[B_ANGLE] = angle_min + np.arange(n) * increment
+    table[B_COS] = np.cos(table[B_ANGLE])
+    table[B_SIN] = np.sin(table[B_ANGLE])
+    table.setflags(write=False)
+    return table
