@@ -325,17 +325,18 @@ def median3(x: float, y: float, z: float) -> float:
 
 
 @kernel
-def select(a, n, k, buf):  # noqa: ANN001, ANN201
-    """The k-th smallest of a[:n] (0-based; no nan) and the (k-1)-th (-inf for k = 0), by
-    quickselect with three-way partitions written to the other of ``a`` and ``buf`` (>= n each;
-    both overwritten): the values below the pivot to its front, those above to its back, the
+def select(w, ra, rb, n, k):  # noqa: ANN001, ANN201
+    """The k-th smallest of w[ra, :n] (0-based; no nan) and the (k-1)-th (-inf for k = 0), by
+    quickselect with three-way partitions written to the other of rows ``ra`` and ``rb`` of ``w``
+    (both overwritten; one array, not two: a kernel call costs two atomic reference counts per
+    array it is passed): the values below the pivot to its front, those above to its back, the
     pivot's copies dropped. Both writes are made for every value, without branches: which side a
     value takes is data, not predictable, and no value is read back from a slot just written (an
     in-place partition waits on a store to load every next value). The pivot: the median of three,
     of three medians of three on long ranges. Indexed unsigned: numba then adds no negative-index
     wraparound."""
-    src, dst = a, buf
-    off = np.uint64(0)  # the candidates: src[off:off + m], k counted from off
+    src, dst = ra, rb  # rows of w
+    off = np.uint64(0)  # the candidates: w[src, off:off + m], k counted from off
     m = np.uint64(n)
     kk = np.uint64(k)
     below = -np.inf  # the largest value known to be below the candidates
@@ -343,18 +344,18 @@ def select(a, n, k, buf):  # noqa: ANN001, ANN201
         if m > np.uint64(64):
             st = m // np.uint64(9)
             b = off + st // np.uint64(2)
-            pivot = median3(median3(src[b], src[b + st], src[b + np.uint64(2) * st]),
-                            median3(src[b + np.uint64(3) * st], src[b + np.uint64(4) * st], src[b + np.uint64(5) * st]),
-                            median3(src[b + np.uint64(6) * st], src[b + np.uint64(7) * st], src[b + np.uint64(8) * st]))
+            pivot = median3(median3(w[src, b], w[src, b + st], w[src, b + np.uint64(2) * st]),
+                            median3(w[src, b + np.uint64(3) * st], w[src, b + np.uint64(4) * st], w[src, b + np.uint64(5) * st]),
+                            median3(w[src, b + np.uint64(6) * st], w[src, b + np.uint64(7) * st], w[src, b + np.uint64(8) * st]))
         else:
-            pivot = median3(src[off], src[off + m // np.uint64(2)], src[off + m - np.uint64(1)])
+            pivot = median3(w[src, off], w[src, off + m // np.uint64(2)], w[src, off + m - np.uint64(1)])
         nl = np.uint64(0)
         nh = np.uint64(0)
         end = off + m - np.uint64(1)
         for i in range(m):
-            x = src[off + i]
-            dst[off + nl] = x
-            dst[end - nh] = x
+            x = w[src, off + i]
+            w[dst, off + nl] = x
+            w[dst, end - nh] = x
             nl += np.uint64(x < pivot)
             nh += np.uint64(x > pivot)
         if kk < nl:
@@ -368,33 +369,32 @@ def select(a, n, k, buf):  # noqa: ANN001, ANN201
             if kk > nl:
                 return pivot, pivot
             for i in range(nl):  # kk == nl: the next smaller is the largest value below the pivot
-                below = max(below, dst[off + i])
+                below = max(below, w[dst, off + i])
             return pivot, below
         src, dst = dst, src
-    return src[off], below
+    return w[src, off], below
 
 
 @kernel
-def median(x, scratch, buf) -> float:  # noqa: ANN001
-    """np.median(x) (nan when x holds a nan or is empty), with ``scratch`` and ``buf`` (>= x.size
-    each; overwritten) for the selection: the middle value, or the mean of the two middle ones."""
-    n = x.size
-    for i in range(n):
-        scratch[i] = x[i]
-    return median_in_place(scratch, n, buf)
+def median(x) -> float:  # noqa: ANN001
+    """np.median(x) (nan when x holds a nan or is empty): ``median_rows`` of a copy."""
+    w = np.empty((2, x.size))
+    for i in range(x.size):
+        w[0, i] = x[i]
+    return median_rows(w, 0, 1, x.size)
 
 
 @kernel
-def median_in_place(a, n, buf) -> float:  # noqa: ANN001
-    """np.median(a[:n]) (nan when it holds a nan or n is 0), overwriting a[:n] and buf[:n] (the
-    selection's): ``median`` without the copy and without a view of a (a view is two atomic
-    reference counts)."""
+def median_rows(w, ra, rb, n) -> float:  # noqa: ANN001
+    """np.median(w[ra, :n]) (nan when it holds a nan or n is 0), overwriting w[ra, :n] and
+    w[rb, :n] (the selection's): the middle value, or the mean of the two middle ones. Rows of one
+    block, not views (a view is two atomic reference counts, and so is each array passed)."""
     if n == 0:
         return np.nan
     for i in range(n):
-        if a[i] != a[i]:
+        if w[ra, i] != w[ra, i]:
             return np.nan
-    hi, lo = select(a, n, n // 2, buf)
+    hi, lo = select(w, ra, rb, n, n // 2)
     return hi if n % 2 else (lo + hi) / 2.0
 
 
@@ -417,11 +417,13 @@ def clipped_scale(z) -> float:  # noqa: ANN001
     if n == 0:
         return np.nan
     work = np.empty((3, n))
-    kz, scratch, buf = work[0], work[1], work[2]
-    m = median(z, scratch, buf)
+    kz, scratch = work[0], work[1]  # row 2: the selection's buffer
+    for i in range(n):
+        scratch[i] = z[i]
+    m = median_rows(work, 1, 2, n)  # of the copy in scratch (row 1)
     for i in range(n):
         kz[i] = abs(z[i] - m)
-    s = 1.4826 * median_in_place(kz, n, buf)
+    s = 1.4826 * median_rows(work, 0, 2, n)  # of kz (row 0)
     if s <= 0:  # more than half the residuals identical (coarse quantisation): start from the spread
         s = mean_std(z, n, scratch)[1]
         if s == 0:
@@ -895,10 +897,10 @@ def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angl
 
 
 @kernel
-def local_scale(ranges, valid, f, l, t, c2, buf, buf2) -> float:  # noqa: ANN001
+def local_scale(ranges, valid, f, l, t, c2, w, ra, rb) -> float:  # noqa: ANN001
     """Robust scale (m, 1.4826 x the median absolute value) of the collinearity residuals of the
     triples (j - t, j, j + t) of valid beams in f..l without a depth step (``lms200.noise.line_residuals``;
-    c2 = 2 cos(t D)), 0 when there are fewer than LOCAL_MIN_TRIPLES; ``buf`` and ``buf2`` are scratch of l - f + 1 or more."""
+    c2 = 2 cos(t D)), 0 when there are fewer than LOCAL_MIN_TRIPLES; rows ``ra`` and ``rb`` of ``w`` are scratch of l - f + 1 or more."""
     m = 0
     for j in range(f + t, l - t + 1):
         if valid[j - t] and valid[j] and valid[j + t]:
@@ -909,11 +911,11 @@ def local_scale(ranges, valid, f, l, t, c2, buf, buf2) -> float:  # noqa: ANN001
             s2 = s * s
             wm = c2 * (rp * rp) / s2
             wp = c2 * (rm * rm) / s2
-            buf[m] = abs(r0 - c2 * rm * rp / s) / math.sqrt(1.0 + wm * wm + wp * wp)
+            w[ra, m] = abs(r0 - c2 * rm * rp / s) / math.sqrt(1.0 + wm * wm + wp * wp)
             m += 1
     if m < LOCAL_MIN_TRIPLES:
         return 0.0
-    return MAD_TO_SIGMA * median_in_place(buf, m, buf2)  # selected in place (np.median copies)
+    return MAD_TO_SIGMA * median_rows(w, ra, rb, m)  # selected in place (np.median copies)
 
 
 @kernel
@@ -1030,7 +1032,7 @@ def fit_runs(runs, peaks, inlier0, ranges, bearings, valid, sigma_r, p):  # noqa
     for r in range(n_runs):
         max_cnt = max(max_cnt, runs[R_COUNT, r])
     zs = np.empty((2, max_cnt))  # a run's normalised residuals z and (after the checks' sums) local_scale's scratch
-    z_run, scratch = zs[0], zs[1]
+    z_run = zs[0]  # row 1: local_scale's scratch
     inl_run = np.empty(max_cnt, np.bool_)
     vals = np.empty((2, n_runs))
     rho, alpha = vals[0], vals[1]
@@ -1072,7 +1074,7 @@ def fit_runs(runs, peaks, inlier0, ranges, bearings, valid, sigma_r, p):  # noqa
         n_in[r] = ni
         chi_max = p.max_chi2 * max(ni - 2, 1)
         if chi > chi_max:  # the run's own noise, where it exceeds sigma_r
-            loc = local_scale(ranges, valid, f, f + cnt - 1, sweep, c2, scratch, z_run) / sigma_r  # z_run read no more
+            loc = local_scale(ranges, valid, f, f + cnt - 1, sweep, c2, zs, 1, 0) / sigma_r  # z_run (row 0) read no more
             chi_max *= max(1.0, loc * loc)
         good[r] = (
             ni >= min(p.min_points, 2 * p.k + 1)  # min_points is asked of the grown line (find_lines)
@@ -1152,7 +1154,7 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
     least-squares one (the biweight's efficiency under Gaussian noise is 95 %)."""
     n = ranges.size
     work = np.empty((5, n))  # one block: the used beams' x, y, 1 / cos(b - alpha), |z|, the median's scratch
-    x, y, inv_c, z, buf = work[0], work[1], work[2], work[3], work[4]
+    x, y, inv_c, z = work[0], work[1], work[2], work[3]  # row 4: the median's buffer
     for m in range(rho.size):
         r_m, a_m = rho[m], alpha[m]
         ca, sa = math.cos(a_m), math.sin(a_m)
@@ -1172,7 +1174,7 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
             j += np.uint64(1)
         if k < 3:
             continue
-        scale = max(MAD_TO_SIGMA * median_in_place(z, k, buf), SIGMA_FLOOR_RAY)  # z selected in place: not read again
+        scale = max(MAD_TO_SIGMA * median_rows(work, 3, 4, k), SIGMA_FLOOR_RAY)  # z (row 3) selected in place: not read again
         inv_cut = 1.0 / (TUKEY_C * scale)
         for _ in range(ROBUST_STEPS):
             sw, swg, swgg, swr, swgr = biweight_sums(x, y, inv_c, k, math.cos(a_m), math.sin(a_m), r_m, inv_cut)
