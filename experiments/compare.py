@@ -51,6 +51,8 @@ class Source:
     estimate_extractor_sigma: Callable[[], float] | None = None  # its estimate (logs: neighbour scatter)
     fit_sigma: float | None = None  # scatter of beams about a fitted line (m), for split / merge tests; None: as extractor noise
     estimate_fit_sigma: Callable[[], float] | None = None  # its estimate (logs: features.noise_estimate.fit_sigma)
+    bearing_sigma: float | None = None  # bearing noise (rad) for the sensor method's tests; None: its config's (0)
+    estimate_bearing_sigma: Callable[[], float] | None = None  # its estimate (logs: features.noise_estimate.bearing_sigma)
     reader: Any = None  # the log reader (its ``stats`` say what was skipped)
     settings: dict[str, Any] = dataclasses.field(default_factory=dict)  # what produced the scans (saved beside results)
 
@@ -186,6 +188,11 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
 
         return neighbour_sigma(read_log(path, **options))
 
+    def estimate_bearing_sigma() -> float:
+        from features.noise_estimate import bearing_sigma
+
+        return bearing_sigma(read_log(path, **options))
+
     def estimate_fit_sigma() -> float:
         from features.noise_estimate import fit_sigma
 
@@ -194,7 +201,7 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
     return Source(Path(path).name, "log", None, records(), None, max_scans, sigma_r=None,
                   pose_of=(lambda rec: rec.odom) if corrected else None, estimate_sigma=estimate_sigma,
                   reader=reader, estimate_extractor_sigma=estimate_extractor_sigma,
-                  estimate_fit_sigma=estimate_fit_sigma,
+                  estimate_fit_sigma=estimate_fit_sigma, estimate_bearing_sigma=estimate_bearing_sigma,
                   settings={"log": str(path), "stride": stride, "poses": poses, **_plain(options)})
 
 
@@ -360,7 +367,7 @@ def compare(
     rd_cfg = realdata_config or RealDataConfig()
     for src in srcs:
         sigma_r = _source_sigma(src, sigma)
-        src_runs = _with_noise(runs, params, _extractor_noise(src, sigma_r), _fit_noise(src))
+        src_runs = _with_noise(runs, params, _extractor_noise(src, sigma_r), _fit_noise(src), _bearing_noise(src))
         previous: dict[str, tuple[np.ndarray, Pose2D]] = {}  # method -> lines and pose of the last scan
         for k, rec in enumerate(src.records):
             if max_scans is not None and k >= max_scans:
@@ -426,6 +433,7 @@ def _source_sigma(src: Source, sigma: float | str) -> float:
 
 NOISE_FIELDS = ("sigma_r", "sigma_r_cm", "sigma")  # extractor config fields holding the range noise (m)
 FIT_NOISE_FIELDS = ("sigma_fit",)  # fields holding the scatter of beams about a fitted line (m; split_merge, iepf)
+BEARING_NOISE_FIELDS = ("sigma_bearing",)  # fields holding the bearing noise (rad; sensor)
 
 
 def _extractor_noise(src: Source, sigma_r: float) -> float:
@@ -447,9 +455,20 @@ def _fit_noise(src: Source) -> float | None:
     return src.fit_sigma
 
 
-def _with_noise(runs: list, params: dict[str, dict[str, Any]], noise: float, fit_noise: float | None = None) -> list:
-    """``runs`` with every extractor's noise fields set to ``noise`` (m) and its fit-scatter fields
-    to ``fit_noise`` (m; when given), except those the caller set in ``params``."""
+def _bearing_noise(src: Source) -> float | None:
+    """The bearing noise (rad) the sensor method's line tests allow for on ``src``: a log's
+    ``features.noise_estimate.bearing_sigma`` (the turn between the interlaced sweeps of 0.5 deg
+    logs), resolved once per source; None (the config's 0) for simulated sources."""
+    if src.bearing_sigma is None and src.estimate_bearing_sigma is not None:
+        src.bearing_sigma = src.estimate_bearing_sigma()
+    return src.bearing_sigma
+
+
+def _with_noise(runs: list, params: dict[str, dict[str, Any]], noise: float, fit_noise: float | None = None,
+                bearing_noise: float | None = None) -> list:
+    """``runs`` with every extractor's noise fields set to ``noise`` (m), its fit-scatter fields
+    to ``fit_noise`` (m) and its bearing-noise fields to ``bearing_noise`` (rad; each when given),
+    except those the caller set in ``params``."""
     out = []
     for name, fn, cfg in runs:
         fields = {f.name for f in dataclasses.fields(cfg)}
@@ -457,6 +476,8 @@ def _with_noise(runs: list, params: dict[str, dict[str, Any]], noise: float, fit
         noise_params: dict[str, Any] = {f: noise for f in NOISE_FIELDS if f in fields and f not in given}
         if fit_noise is not None and not any(f in given for f in NOISE_FIELDS):
             noise_params.update({f: fit_noise for f in FIT_NOISE_FIELDS if f in fields and f not in given})
+        if bearing_noise is not None and not any(f in given for f in NOISE_FIELDS):
+            noise_params.update({f: bearing_noise for f in BEARING_NOISE_FIELDS if f in fields and f not in given})
         out.append((name, fn, dataclasses.replace(cfg, **noise_params) if noise_params else cfg))
     return out
 

@@ -532,3 +532,35 @@ def test_rough_fill_takes_whole_walls_nested_in_its_share() -> None:
     assert total >= 30
     assert full / total >= 0.75  # (short pieces of wall by doors and furniture take no fill)
     assert 0.3 <= half / full <= 0.7
+
+
+def test_mit_corridor_turns_at_both_ends_to_end_walls_at_their_exact_distances() -> None:
+    """The mit preset's corridor turns at both ends (an L each, the plan a Z) and each leg ends in a
+    wall: from the corner of a turn the scanner sees the wall across the corridor's end and the
+    leg's end wall head-on, at the distances the preset's sizes give (ideal cm-mode sensor, no
+    clutter, so nothing stands between)."""
+    from dataclasses import replace
+
+    from sim.layout import WALL_THICKNESS_M
+    from sim.worlds import MIT_PRESET
+
+    world = make_world("mit", 3, clutter=0.0)
+    cw, rd, t = float(MIT_PRESET["corridor_w"]), float(MIT_PRESET["room_d"]), WALL_THICKNESS_M
+    length = int(MIT_PRESET["n_per_side"]) * float(MIT_PRESET["room_w"])
+    sensor = replace(SensorConfig.ideal(), units="cm")
+    middle = sensor.n_beams // 2  # the beam straight ahead
+    # (pose, exact distance ahead): east turn, looking on east / up the leg; west turn, looking west / down its leg
+    cases = [((length + cw / 2, cw / 2, 0.0), cw / 2 - t / 2),
+             ((length + cw / 2, cw / 2, np.pi / 2), cw / 2 + rd - t / 2),
+             ((-cw / 2, cw / 2, np.pi), cw / 2 - t / 2),
+             ((-cw / 2, cw / 2, -np.pi / 2), cw / 2 + rd - t / 2),
+             ((length + cw / 2, cw / 2, np.pi), length + 3 * cw / 2 - t / 2)]  # down the whole corridor to the west leg
+    with LMS200Sim(world, sensor) as lidar:
+        for pose, want in cases:
+            got = lidar.scan_at(pose).ranges[middle]
+            assert got == pytest.approx(want, abs=1e-6)
+            ref, _ = _reference(world, np.array(pose), sensor)
+            assert ref[middle] == pytest.approx(want, abs=1e-6)
+    ends = world.route_nodes[world.route_targets]
+    assert np.any(np.all(np.isclose(ends, [length + cw / 2, cw + rd - 0.8]), axis=1))  # the robot drives both legs
+    assert np.any(np.all(np.isclose(ends, [-cw / 2, -rd + 0.8]), axis=1))

@@ -133,6 +133,8 @@ def run(args: argparse.Namespace) -> int:
         extractor_sigma={src.name: _plain_float(src.extractor_sigma if src.extractor_sigma is not None else src.sigma_r)
                          for src in sources},
         fit_sigma={src.name: _plain_float(src.fit_sigma) for src in sources},
+        # the sensor method's sigma_bearing (rad; None: its config's 0)
+        bearing_sigma={src.name: _plain_float(src.bearing_sigma) for src in sources},
     )
     # what produced each source's scans: the sensor that was simulated (interlaced or not), the log read
     resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]

@@ -60,6 +60,7 @@ class SensorMethodConfig:
     acute_check: bool = True  # the paper's remedy: reject a corner when the variance of the ranges
     acute_min_var: float = 1.0  # of the beams within k of it is below acute_min_var * sigma_r**2
     arc_check: bool = True  # drop lines whose neighbourhood is one circle turning >= corner_min_turn (round surfaces)
+    sigma_bearing: float = 0.0  # bearing noise std, rad: the range error it causes grows as d tan(incidence)
 
     def __post_init__(self) -> None:
         checks.integer("k", self.k, 1, checks.MAX_BEAMS // 2)  # a window wider than any scan taken: no line
@@ -88,6 +89,7 @@ class SensorMethodConfig:
         checks.non_negative("corner_psi", self.corner_psi)
         checks.non_negative("corner_max_dist", self.corner_max_dist, "m")
         checks.non_negative("acute_min_var", self.acute_min_var, "sigma_r^2")
+        checks.non_negative("sigma_bearing", self.sigma_bearing, "rad")
         object.__setattr__(self, "_params", Params(
             int(self.k), float(self.ad_tau), float(self.psi_split), float(self.psi_tau), int(self.hough_subdiv),
             int(self.hough_angles), float(self.band_tau), float(self.band_min), float(self.bin_tau),
@@ -95,7 +97,7 @@ class SensorMethodConfig:
             _beams(math.ceil(self.min_points)), float(self.min_length), _beams(math.floor(self.merge_gap)),
             float(self.merge_tau), _beams(math.floor(self.bridge_invalid)), bool(self.corners),
             float(self.corner_min_turn), float(self.corner_psi), _beams(math.floor(self.corner_max_gap)), float(self.corner_max_dist), bool(self.acute_check),
-            float(self.acute_min_var), bool(self.arc_check),
+            float(self.acute_min_var), bool(self.arc_check), float(self.sigma_bearing),
         ))
 
     @property

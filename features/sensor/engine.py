@@ -99,6 +99,7 @@ class Params(NamedTuple):
     acute_check: bool
     acute_min_var: float  # in sigma_r**2
     arc_check: bool  # drop lines that are chords of a round surface (``on_arcs``)
+    sigma_bearing: float  # bearing noise std, rad (``ray_sd``)
 
 
 # rows of a scan's bearing table (``features.sensor.grid.bearings_of``, (3, n), built once per
@@ -929,12 +930,26 @@ def add_normal_terms(sums, wr, g, res):  # noqa: ANN001, ANN201
 
 
 @inline_kernel
-def gn_sums(d, bt, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN201
+def ray_sd(d: float, c: float, sigma_r: float, st2: float) -> float:
+    """Std (m) of a beam's ray residual about a line it meets at cos(b - alpha) = c, range d (m):
+    the range noise sigma_r (m) and the bearing noise st2 (rad^2), which moves the range by
+    d tan(b - alpha) per radian (large at grazing incidence; on interlaced 0.5 deg logs the two
+    sweeps' bearings differ by the robot's turn between them, ``noise_estimate.bearing_sigma``)."""
+    if st2 == 0.0:
+        return sigma_r  # exact bearings: the range noise alone, bit for bit
+    t = d * math.sqrt(max(1.0 - c * c, 0.0)) / c
+    return math.sqrt(sigma_r * sigma_r + t * t * st2)
+
+
+@inline_kernel
+def gn_sums(d, bt, valid, use, f, s, cnt, ca, sa, rho, kb):  # noqa: ANN001, ANN201
     """The weighted normal equations of a Gauss-Newton step of a line (rho, alpha = atan2(sa, ca))
     on the beams j = f .. f + cnt - 1 where valid[j] and use[s + j - f] (range d, bearing b with
     cos(b), sin(b) in rows B_COS, B_SIN of ``bt``): (sum w, sum w g, sum w g^2, sum w r, sum w g r) with residual
     r = d cos(b - alpha) - rho, g = d r / d alpha = d sin(b - alpha) and weight
-    w = 1 / cos(b - alpha)^2 (0 within MIN_COS of grazing). Without branches on data: the loop
+    w = 1 / (cos(b - alpha)^2 + kb g^2) (0 within MIN_COS of grazing): the inverse variance of r in
+    units of sigma_r^2, kb = sigma_bearing^2 / sigma_r^2 (``ray_sd``; 1 / cos^2 exactly at kb = 0).
+    Without branches on data: the loop
     runs in vector lanes. Offsets into whole arrays, not slices (a slice a run is two atomic
     reference counts)."""
     sums = (0.0, 0.0, 0.0, 0.0, 0.0)
@@ -947,15 +962,18 @@ def gn_sums(d, bt, valid, use, f, s, cnt, ca, sa, rho):  # noqa: ANN001, ANN201
         res = dt * c - rho  # d res / d rho = -1
         g = dt * (bt[B_SIN, j] * ca - bt[B_COS, j] * sa)
         ic = 1.0 / c
-        wr = ic * ic if (c > MIN_COS) & valid[j] & use[s + t] else 0.0
+        ic2 = ic * ic
+        wr = ic2 / (1.0 + g * g * ic2 * kb) if (c > MIN_COS) & valid[j] & use[s + t] else 0.0  # 1 / c^2 at kb = 0
         sums = add_normal_terms(sums, wr, g, res)
     return sums
 
 
 @inline_kernel
-def gn_sums_inliers(d, bt, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, inl):  # noqa: ANN001, ANN201
-    """``gn_sums`` on the beams j = f .. f + cnt - 1 within ``tau`` sigma_r of the line (|z| <=
-    tau, z = r / (sigma_r cos(b - alpha)), written to z[j - f]; the inliers to inl[j - f]), with
+def gn_sums_inliers(d, bt, valid, f, cnt, ca, sa, rho, inv_sigma, st2, tau, z, inl):  # noqa: ANN001, ANN201
+    """``gn_sums`` on the beams j = f .. f + cnt - 1 within ``tau`` std of the line (|z| <= tau,
+    z = r / (cos(b - alpha) sd_j) the ray residual in its std sd_j = sqrt(s2 + (d tan(b - alpha))^2
+    st2): range noise sigma_r = 1 / inv_sigma plus bearing noise st2 (rad^2), ``ray_sd``; written
+    to z[j - f], the inliers to inl[j - f]), weighted as in ``gn_sums``, with
     the line checks' sums over the inliers: chi^2 = sum z^2, their count, sums of t, t^2, t^3
     (t = j - f, integers: exact in any order below 2^53, runs under ~13,000 beams) and the first
     and last inlier's t (cnt and -1 when there is none)."""
@@ -966,6 +984,7 @@ def gn_sums_inliers(d, bt, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, inl): 
     hi = -1
     if f < 0:
         return sums, chi, ni, i_t, i_t2, i_t3, lo, hi
+    kb = st2 * inv_sigma * inv_sigma
     for t in range(cnt):
         j = f + t
         c = bt[B_COS, j] * ca + bt[B_SIN, j] * sa
@@ -973,9 +992,12 @@ def gn_sums_inliers(d, bt, valid, f, cnt, ca, sa, rho, inv_sigma, tau, z, inl): 
         res = dt * c - rho
         g = dt * (bt[B_SIN, j] * ca - bt[B_COS, j] * sa)
         ic = 1.0 / c
-        zt = res * ic * inv_sigma
+        gi = g * ic  # d tan(b - alpha)
+        kg = gi * gi * kb  # (d tan(b - alpha) sigma_bearing / sigma_r)^2
+        zt = res * ic * (inv_sigma if kb == 0.0 else inv_sigma / math.sqrt(1.0 + kg))
         use = (c > MIN_COS) & valid[j] & (abs(zt) <= tau)
-        wr = ic * ic if use else 0.0
+        ic2 = ic * ic
+        wr = ic2 / (1.0 + kg) if use else 0.0  # gn_sums' weight
         sums = add_normal_terms(sums, wr, g, res)
         z[t] = zt
         inl[t] = use
@@ -1045,19 +1067,20 @@ def fit_runs(runs, peaks, inlier0, ranges, bearings, valid, sigma_r, p):  # noqa
     inv_sigma = 1.0 / sigma_r
     s2 = sigma_r * sigma_r
     step = bearings[B_ANGLE, 1] - bearings[B_ANGLE, 0] if bearings.shape[1] > 1 else 1.0
+    st2 = p.sigma_bearing * p.sigma_bearing  # bearing noise variance, rad^2
     sweep = max(1, np.int64(np.rint(ONE_DEG / step))) if step < 0.99 * ONE_DEG else 1  # lms200.noise.interlace_stride
     c2 = 2.0 * math.cos(sweep * step)
     for r in range(n_runs):
         s, cnt, f = runs[R_START, r], runs[R_COUNT, r], runs[R_FIRST, r]
         # step 1, on the Log-Hough inliers
         sw, swg, swgg, swr, swgr = gn_sums(ranges, bearings, valid, inlier0, f, s, cnt, math.cos(peaks[0, r]),
-                                           math.sin(peaks[0, r]), peaks[1, r])
+                                           math.sin(peaks[0, r]), peaks[1, r], st2 / s2)
         inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
         rho1 = peaks[1, r] + (swgg * swr - swg * swgr) * inv_det
         alpha1 = peaks[0, r] + (swg * swr - sw * swgr) * inv_det
         # step 2, on the beams within inlier_tau sigma_r of step 1's line, with the checks' sums
         (sw, swg, swgg, swr, swgr), chi, ni, i_t, i_t2, i_t3, lo, hi = gn_sums_inliers(
-            ranges, bearings, valid, f, cnt, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, tau, z_run, inl_run)
+            ranges, bearings, valid, f, cnt, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, st2, tau, z_run, inl_run)
         inv_det = 1.0 / (sw * swgg - swg * swg)
         rho_r = rho1 + (swgg * swr - swg * swgr) * inv_det
         alpha_r = alpha1 + (swg * swr - sw * swgr) * inv_det
@@ -1094,11 +1117,11 @@ def fit_runs(runs, peaks, inlier0, ranges, bearings, valid, sigma_r, p):  # noqa
 
 
 @kernel
-def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reach, inlier_tau, sigma_r):  # noqa: ANN001
+def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reach, inlier_tau, sigma_r, st2):  # noqa: ANN001
     """In place: grow each line over the up to ``reach`` beams past each end that continue it
-    (valid, |range residual| <= inlier_tau sigma_r, no break): the AD windows stop short of corners."""
+    (valid, |ray residual| <= inlier_tau of its std, ``ray_sd`` with the bearing noise st2 (rad^2),
+    no break): the AD windows stop short of corners."""
     n = ranges.size
-    lim = inlier_tau * sigma_r
     for m in range(rho.size):
         ca, sa = math.cos(alpha[m]), math.sin(alpha[m])
         grow0 = 0
@@ -1107,7 +1130,7 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
             if j >= n:
                 break
             c = bearings[B_COS, j] * ca + bearings[B_SIN, j] * sa  # cos(b - alpha)
-            if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= lim * c):
+            if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= inlier_tau * ray_sd(ranges[j], c, sigma_r, st2) * c):
                 break
             grow0 += 1
         grow1 = 0
@@ -1116,7 +1139,7 @@ def extend_ends(rho, alpha, first, last, n_points, ranges, bearings, valid, reac
             if j < 0:
                 break
             c = bearings[B_COS, j] * ca + bearings[B_SIN, j] * sa  # cos(b - alpha)
-            if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= lim * c):
+            if not (valid[j] and c > MIN_COS and abs(ranges[j] * c - rho[m]) <= inlier_tau * ray_sd(ranges[j], c, sigma_r, st2) * c):
                 break
             grow1 += 1
         first[m] -= grow1
@@ -1551,7 +1574,8 @@ def find_lines(ranges, bearings, valid, sig, angle_min, increment,  # noqa: ANN0
         o = order[t]
         rho[t], alpha[t], f_in[t], l_in[t], n_in[t] = o_rho[o], o_alpha[o], o_f[o], o_l[o], o_n[o]
         cov[t, 0, 0], cov[t, 0, 1], cov[t, 1, 0], cov[t, 1, 1] = o_cov[o, 0, 0], o_cov[o, 0, 1], o_cov[o, 1, 0], o_cov[o, 1, 1]
-    extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r)
+    extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r,
+                p.sigma_bearing * p.sigma_bearing)
     robust_refit(rho, alpha, f_in, l_in, ranges, bearings, valid)
     arc = on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, sig, increment, sigma_r, p) if p.arc_check and m else np.zeros(m, np.bool_)
     q = 0  # the lines kept (min_points beams once grown, not a chord of a round surface) moved to the front
