@@ -326,17 +326,18 @@ def median3(x: float, y: float, z: float) -> float:
 
 
 @kernel
-def select(a, n, k, buf):  # noqa: ANN001, ANN201
-    """The k-th smallest of a[:n] (0-based; no nan) and the (k-1)-th (-inf for k = 0), by
-    quickselect with three-way partitions written to the other of ``a`` and ``buf`` (>= n each;
-    both overwritten): the values below the pivot to its front, those above to its back, the
+def select(w, ra, rb, n, k):  # noqa: ANN001, ANN201
+    """The k-th smallest of w[ra, :n] (0-based; no nan) and the (k-1)-th (-inf for k = 0), by
+    quickselect with three-way partitions written to the other of rows ``ra`` and ``rb`` of ``w``
+    (both overwritten; one array, not two: a kernel call costs two atomic reference counts per
+    array it is passed): the values below the pivot to its front, those above to its back, the
     pivot's copies dropped. Both writes are made for every value, without branches: which side a
     value takes is data, not predictable, and no value is read back from a slot just written (an
     in-place partition waits on a store to load every next value). The pivot: the median of three,
     of three medians of three on long ranges. Indexed unsigned: numba then adds no negative-index
     wraparound."""
-    src, dst = a, buf
-    off = np.uint64(0)  # the candidates: src[off:off + m], k counted from off
+    src, dst = ra, rb  # rows of w
+    off = np.uint64(0)  # the candidates: w[src, off:off + m], k counted from off
     m = np.uint64(n)
     kk = np.uint64(k)
     below = -np.inf  # the largest value known to be below the candidates
@@ -344,18 +345,18 @@ def select(a, n, k, buf):  # noqa: ANN001, ANN201
         if m > np.uint64(64):
             st = m // np.uint64(9)
             b = off + st // np.uint64(2)
-            pivot = median3(median3(src[b], src[b + st], src[b + np.uint64(2) * st]),
-                            median3(src[b + np.uint64(3) * st], src[b + np.uint64(4) * st], src[b + np.uint64(5) * st]),
-                            median3(src[b + np.uint64(6) * st], src[b + np.uint64(7) * st], src[b + np.uint64(8) * st]))
+            pivot = median3(median3(w[src, b], w[src, b + st], w[src, b + np.uint64(2) * st]),
+                            median3(w[src, b + np.uint64(3) * st], w[src, b + np.uint64(4) * st], w[src, b + np.uint64(5) * st]),
+                            median3(w[src, b + np.uint64(6) * st], w[src, b + np.uint64(7) * st], w[src, b + np.uint64(8) * st]))
         else:
-            pivot = median3(src[off], src[off + m // np.uint64(2)], src[off + m - np.uint64(1)])
+            pivot = median3(w[src, off], w[src, off + m // np.uint64(2)], w[src, off + m - np.uint64(1)])
         nl = np.uint64(0)
         nh = np.uint64(0)
         end = off + m - np.uint64(1)
         for i in range(m):
-            x = src[off + i]
-            dst[off + nl] = x
-            dst[end - nh] = x
+            x = w[src, off + i]
+            w[dst, off + nl] = x
+            w[dst, end - nh] = x
             nl += np.uint64(x < pivot)
             nh += np.uint64(x > pivot)
         if kk < nl:
@@ -369,33 +370,32 @@ def select(a, n, k, buf):  # noqa: ANN001, ANN201
             if kk > nl:
                 return pivot, pivot
             for i in range(nl):  # kk == nl: the next smaller is the largest value below the pivot
-                below = max(below, dst[off + i])
+                below = max(below, w[dst, off + i])
             return pivot, below
         src, dst = dst, src
-    return src[off], below
+    return w[src, off], below
 
 
 @kernel
-def median(x, scratch, buf) -> float:  # noqa: ANN001
-    """np.median(x) (nan when x holds a nan or is empty), with ``scratch`` and ``buf`` (>= x.size
-    each; overwritten) for the selection: the middle value, or the mean of the two middle ones."""
-    n = x.size
-    for i in range(n):
-        scratch[i] = x[i]
-    return median_in_place(scratch, n, buf)
+def median(x) -> float:  # noqa: ANN001
+    """np.median(x) (nan when x holds a nan or is empty): ``median_rows`` of a copy."""
+    w = np.empty((2, x.size))
+    for i in range(x.size):
+        w[0, i] = x[i]
+    return median_rows(w, 0, 1, x.size)
 
 
 @kernel
-def median_in_place(a, n, buf) -> float:  # noqa: ANN001
-    """np.median(a[:n]) (nan when it holds a nan or n is 0), overwriting a[:n] and buf[:n] (the
-    selection's): ``median`` without the copy and without a view of a (a view is two atomic
-    reference counts)."""
+def median_rows(w, ra, rb, n) -> float:  # noqa: ANN001
+    """np.median(w[ra, :n]) (nan when it holds a nan or n is 0), overwriting w[ra, :n] and
+    w[rb, :n] (the selection's): the middle value, or the mean of the two middle ones. Rows of one
+    block, not views (a view is two atomic reference counts, and so is each array passed)."""
     if n == 0:
         return np.nan
     for i in range(n):
-        if a[i] != a[i]:
+        if w[ra, i] != w[ra, i]:
             return np.nan
-    hi, lo = select(a, n, n // 2, buf)
+    hi, lo = select(w, ra, rb, n, n // 2)
     return hi if n % 2 else (lo + hi) / 2.0
 
 
@@ -418,11 +418,13 @@ def clipped_scale(z) -> float:  # noqa: ANN001
     if n == 0:
         return np.nan
     work = np.empty((3, n))
-    kz, scratch, buf = work[0], work[1], work[2]
-    m = median(z, scratch, buf)
+    kz, scratch = work[0], work[1]  # row 2: the selection's buffer
+    for i in range(n):
+        scratch[i] = z[i]
+    m = median_rows(work, 1, 2, n)  # of the copy in scratch (row 1)
     for i in range(n):
         kz[i] = abs(z[i] - m)
-    s = 1.4826 * median_in_place(kz, n, buf)
+    s = 1.4826 * median_rows(work, 0, 2, n)  # of kz (row 0)
     if s <= 0:  # more than half the residuals identical (coarse quantisation): start from the spread
         s = mean_std(z, n, scratch)[1]
         if s == 0:
@@ -651,28 +653,29 @@ def beam_signals(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
 
 
 @kernel
-def candidate_runs(AD, AD_var, psi, psi_var, k, ad_line, sigma_r, p):  # noqa: ANN001, ANN201
+def candidate_runs(sig, k, ad_line, sigma_r, p):  # noqa: ANN001, ANN201
     """First and last centre of each run of beams whose window passes the AD test (eq. 4, the
-    threshold scaled by the AD noise at that beam) and reaches no slope break (|psi| large)."""
-    n = AD.size
+    threshold scaled by the AD noise at that beam) and reaches no slope break (|psi| large).
+    ``sig``: the scan's signal block (``signal_block``)."""
+    n = sig.shape[1]
     ad_c = p.ad_tau * p.ad_tau * (sigma_r * sigma_r)
     psi_split2 = p.psi_split * p.psi_split
     psi_tau2 = p.psi_tau * p.psi_tau
     ok = np.empty(n, np.bool_)
     for i in range(n):
-        dev = AD[i] - ad_line
-        ok[i] = dev * dev <= ad_c * AD_var[i]  # nan -> False
+        dev = sig[S_AD, i] - ad_line
+        ok[i] = dev * dev <= ad_c * sig[S_AD_VAR, i]  # nan -> False
     mag = np.zeros(n)  # psi^2 where it marks a slope break, else 0 (no allocation for big)
     any_big = False
     if n > k:
-        ok0, ok1, ps, pv = ok[:n - k], ok[k:], psi[:n - k], psi_var[:n - k]
-        for i in range(n - k):  # without branches, so that it vectorises
+        ku = np.uint64(k)
+        for i in range(np.uint64(n - k)):  # without branches, so that it vectorises
             # a slope break between two straight windows (both pass the AD test): where either
             # window fails, the AD test already ends the run, and theta there is not a line's
             # normal (a window across a depth jump), so its psi would cut the neighbouring
             # straight run short
-            p2 = ps[i] * ps[i]
-            big = ok0[i] & ok1[i] & (p2 > psi_split2) & (p2 > psi_tau2 * pv[i])  # > max(.,.) (False on nan)
+            p2 = sig[S_PSI, i] * sig[S_PSI, i]
+            big = ok[i] & ok[ku + i] & (p2 > psi_split2) & (p2 > psi_tau2 * sig[S_PSI_VAR, i])  # > max(.,.) (False on nan)
             mag[i] = p2 if big else 0.0
             any_big |= big
     if any_big:
@@ -705,16 +708,16 @@ def candidate_runs(AD, AD_var, psi, psi_var, k, ad_line, sigma_r, p):  # noqa: A
 
 
 @kernel
-def slope_sums(theta, theta_var):  # noqa: ANN001, ANN201
-    """(2, n) cumulative sums of theta and theta_var as np.cumsum forms them, nan counted as 0
+def slope_sums(sig):  # noqa: ANN001, ANN201
+    """(2, n) cumulative sums of theta and theta_var (rows of the signal block ``sig``) as np.cumsum forms them, nan counted as 0
     (``band_of_runs``' means over runs of centres; once per scan)."""
-    n = theta.size
+    n = sig.shape[1]
     cs = np.empty((2, n))
     acc_t = 0.0
     acc_v = 0.0
     for i in range(n):
-        th = theta[i]
-        tv = theta_var[i]
+        th = sig[S_THETA, i]
+        tv = sig[S_THETA_VAR, i]
         acc_t += 0.0 if np.isnan(th) else th
         acc_v += 0.0 if np.isnan(tv) else tv
         cs[0, i] = acc_t
@@ -722,23 +725,31 @@ def slope_sums(theta, theta_var):  # noqa: ANN001, ANN201
     return cs
 
 
+# rows of a pass's run table (``fit_spans``, int64 (R_ROWS, runs)): each run's first and last beam,
+# beam count, first row in the pass's packed beam arrays, first and last window centre. One block,
+# not six arrays: a kernel call costs two atomic reference counts per array it is passed
+R_FIRST, R_LAST, R_COUNT, R_START, R_C0, R_C1 = range(6)
+R_ROWS = 6
+
+
 @kernel
-def band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings, increment, sigma_r, k, p):  # noqa: ANN001, ANN201
+def band_of_runs(runs, sig, cs, ranges, bearings, increment, sigma_r, k, p):  # noqa: ANN001, ANN201
     """Each run's band of normal angles: its slope estimate (the mean of theta over its centres,
     continuous along a run), the band half-width (band_tau std of that mean, at least band_min)
     and the half-width of the peak's log-range window: range noise at the nearest beam plus the
     spread an angle error of half a band step causes over the run (d log p / d a = -tan(a - b)).
-    ``cs``: the cumulative sums of theta and theta_var (``slope_sums``)."""
+    ``runs``: the run table (``R_*`` rows); ``cs``: the cumulative sums of theta and theta_var
+    (``slope_sums``). Returns one (3, runs) block: centre, half-width, peak window half-width."""
     cs_t, cs_v = cs[0], cs[1]
     h = max((p.hough_angles - 1) // 2, 1)
-    n_runs = c0.size
+    n_runs = runs.shape[1]
     out = np.empty((3, n_runs))
     centre, half_width, bin_half = out[0], out[1], out[2]
     for r in range(n_runs):
-        a, e = c0[r], c1[r]
+        a, e = runs[R_C0, r], runs[R_C1, r]
         n_c = e - a + 1
-        t0 = 0.0 if np.isnan(theta[a]) else theta[a]
-        v0 = 0.0 if np.isnan(theta_var[a]) else theta_var[a]
+        t0 = 0.0 if np.isnan(sig[S_THETA, a]) else sig[S_THETA, a]
+        v0 = 0.0 if np.isnan(sig[S_THETA_VAR, a]) else sig[S_THETA_VAR, a]
         centre[r] = (cs_t[e] - cs_t[a] + t0) / n_c
         cvar = (cs_v[e] - cs_v[a] + v0) / (n_c * (1.0 + n_c / (2 * k + 1)))
         half_width[r] = min(max(p.band_tau * math.sqrt(cvar), p.band_min), BAND_MAX)
@@ -748,7 +759,7 @@ def band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings, increment, sigm
         for j in range(a - k, e + k + 1):
             d_min = min(d_min, ranges[j])
         bin_half[r] = p.bin_tau * sigma_r / d_min + 0.5 * angle_step * min(tan_span, TAN_SPAN_CAP)
-    return centre, half_width, bin_half
+    return out
 
 
 # -- 3. the Log-Hough transform in a band ---------------------------------------------------------
@@ -761,17 +772,18 @@ def template_at(template, idx) -> float:  # noqa: ANN001
 
 
 @kernel
-def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angle_min, subdiv, n_angles, grid):  # noqa: ANN001, ANN201
+def band_peaks(runs, log_d, bands, angle_min, subdiv, n_angles, grid):  # noqa: ANN001, ANN201
     """The Log-Hough peak of every run in its band of normal angles, and the beams that voted in it.
 
-    Args: the runs' beams, consecutive: run r holds beams first[r] .. first[r] + counts[r] - 1,
-    whose log ranges are ``log_d`` rows starts[r] .. starts[r] + counts[r] - 1; per run the band
-    ``centre`` and ``half_width`` (rad) and ``bin_half``, the half-width of a log-range cell; the
-    scan's ``angle_min`` (rad).
-    Returns alpha (rad, not wrapped), rho (m) of each run's peak and the inlier mask of the rows.
+    Args: the run table ``runs`` (``R_*`` rows): run r holds beams f .. f + count - 1 (f its
+    first beam), whose log ranges are ``log_d`` rows start .. start + count - 1; ``bands``
+    (``band_of_runs``): per run the band centre and half-width (rad) and the half-width of a
+    log-range cell; the scan's ``angle_min`` (rad).
+    Returns a (2, runs) block: alpha (rad, not wrapped), rho (m) of each run's peak; and the
+    inlier mask of the rows.
     """
     template, zero, step, phases = grid.template, grid.zero, grid.step, grid.phases
-    n_runs = starts.size
+    n_runs = runs.shape[1]
     h2 = (n_angles - 1) // 2
     h = max(h2, 1)
     n_tmpl = template.size
@@ -783,17 +795,17 @@ def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angl
     ref = np.empty(n_angles)
     max_cnt = 0
     for r in range(n_runs):
-        max_cnt = max(max_cnt, counts[r])
+        max_cnt = max(max_cnt, runs[R_COUNT, r])
     votes = np.empty(max_cnt + VOTE_BLOCK)  # one run's votes at one angle (the generic path), padded
     votes[max_cnt:] = 0.0
     # per angle: its index, then the vote counts of cells 1..N_BINS (0 and N_BINS + 1 outside)
     angle_counts = np.empty((n_angles, N_BINS + 3), np.int64)
     a_idx, counts_a = angle_counts[:, 0], angle_counts[:, 1:]
     for r in range(n_runs):
-        s, cnt, f = starts[r], counts[r], first[r]
-        centre_idx = np.int64(np.rint((centre[r] - angle_min) / step))
-        stride = np.int64(max(np.rint(half_width[r] / (h * step)), 1.0))
-        inv_width = 1.0 / bin_half[r]
+        s, cnt, f = runs[R_START, r], runs[R_COUNT, r], runs[R_FIRST, r]
+        centre_idx = np.int64(np.rint((bands[0, r] - angle_min) / step))
+        stride = np.int64(max(np.rint(bands[1, r] / (h * step)), 1.0))
+        inv_width = 1.0 / bands[2, r]
         # cells are laid out around the median vote of the beams at 1/4, 1/2 and 3/4 of the run
         # (a mean would be dragged off by neighbour-line beams at its ends; one beam can be a spike)
         t1, t2, t3 = cnt // 4, cnt // 2, (3 * cnt) // 4
@@ -854,7 +866,7 @@ def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angl
                 if v > best:
                     best, best_a, best_c = v, a, c
         # the pair (c, c+1) covers (log p - ref) / width in [c - N_BINS/2, c + 2 - N_BINS/2)
-        peak_log_p = ref[best_a] + (best_c + 1 - N_BINS / 2.0) * bin_half[r]
+        peak_log_p = ref[best_a] + (best_c + 1 - N_BINS / 2.0) * bands[2, r]
         alpha[r] = angle_min + a_idx[best_a] * step
         rho[r] = math.exp(peak_log_p)
         base = a_idx[best_a] + zero - f * subdiv
@@ -862,21 +874,34 @@ def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angl
             o = np.uint64((base % subdiv) * n_phase + n_phase - 1 - base // subdiv)
             for t in range(cnt):
                 tu = np.uint64(t)
-                inlier[s_u + tu] = abs((flat[o + tu] + log_d[s_u + tu]) - peak_log_p) <= bin_half[r]
+                inlier[s_u + tu] = abs((flat[o + tu] + log_d[s_u + tu]) - peak_log_p) <= bands[2, r]
         else:
             for t in range(cnt):
-                inlier[s + t] = abs((template_at(template, base - t * subdiv) + log_d[s + t]) - peak_log_p) <= bin_half[r]
-    return alpha, rho, inlier
+                inlier[s + t] = abs((template_at(template, base - t * subdiv) + log_d[s + t]) - peak_log_p) <= bands[2, r]
+    return out, inlier
+
+
+@kernel
+def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angle_min, subdiv, n_angles, grid):  # noqa: ANN001, ANN201
+    """``band_peaks`` of runs given as arrays: first beams, rows of ``log_d`` from ``starts``, beam
+    counts, band centres and half-widths (rad), log-range cell half-widths. Returns alpha (rad,
+    not wrapped), rho (m) of each run's peak and the inlier mask of the rows."""
+    runs = np.zeros((R_ROWS, first.size), np.int64)
+    runs[R_FIRST], runs[R_COUNT], runs[R_START] = first, counts, starts
+    bands = np.empty((3, first.size))
+    bands[0], bands[1], bands[2] = centre, half_width, bin_half
+    out, inlier = band_peaks(runs, log_d, bands, angle_min, subdiv, n_angles, grid)
+    return out[0], out[1], inlier
 
 
 # -- 4. weighted refinement -----------------------------------------------------------------------
 
 
 @kernel
-def local_scale(ranges, valid, f, l, t, c2, buf, buf2) -> float:  # noqa: ANN001
+def local_scale(ranges, valid, f, l, t, c2, w, ra, rb) -> float:  # noqa: ANN001
     """Robust scale (m, 1.4826 x the median absolute value) of the collinearity residuals of the
     triples (j - t, j, j + t) of valid beams in f..l without a depth step (``lms200.noise.line_residuals``;
-    c2 = 2 cos(t D)), 0 when there are fewer than LOCAL_MIN_TRIPLES; ``buf`` and ``buf2`` are scratch of l - f + 1 or more."""
+    c2 = 2 cos(t D)), 0 when there are fewer than LOCAL_MIN_TRIPLES; rows ``ra`` and ``rb`` of ``w`` are scratch of l - f + 1 or more."""
     m = 0
     for j in range(f + t, l - t + 1):
         if valid[j - t] and valid[j] and valid[j + t]:
@@ -887,11 +912,11 @@ def local_scale(ranges, valid, f, l, t, c2, buf, buf2) -> float:  # noqa: ANN001
             s2 = s * s
             wm = c2 * (rp * rp) / s2
             wp = c2 * (rm * rm) / s2
-            buf[m] = abs(r0 - c2 * rm * rp / s) / math.sqrt(1.0 + wm * wm + wp * wp)
+            w[ra, m] = abs(r0 - c2 * rm * rp / s) / math.sqrt(1.0 + wm * wm + wp * wp)
             m += 1
     if m < LOCAL_MIN_TRIPLES:
         return 0.0
-    return MAD_TO_SIGMA * median_in_place(buf, m, buf2)  # selected in place (np.median copies)
+    return MAD_TO_SIGMA * median_rows(w, ra, rb, m)  # selected in place (np.median copies)
 
 
 @kernel
@@ -1000,9 +1025,9 @@ def curvature_sums(z, inl, cnt, a_lin, b_lin):  # noqa: ANN001, ANN201
 
 
 @kernel
-def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, core, sigma_r, p):  # noqa: ANN001, ANN201
-    """Refine every run's line (run r: beams first[r] .. first[r] + counts[r] - 1, its rows of
-    ``inlier0`` from starts[r]) by two weighted Gauss-Newton steps, one on the Log-Hough inliers,
+def fit_runs(runs, peaks, inlier0, ranges, bearings, valid, sigma_r, p):  # noqa: ANN001, ANN201
+    """Refine every run's line (the run table ``runs``: run r holds beams f .. f + count - 1, its
+    rows of ``inlier0`` from start; ``peaks``: its Log-Hough alpha, rho) by two weighted Gauss-Newton steps, one on the Log-Hough inliers,
     then one on the beams within inlier_tau sigma_r of that (which gives the covariance), and
     check it: enough inliers (min(min_points, 2k + 1): min_points is asked of the line once
     ``extend_ends`` has grown it), most of the run explained, chi^2 of the inliers (per dof at
@@ -1021,14 +1046,15 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
     checks need (``gn_sums_inliers``), so that a run's beams are read twice and, for the
     curvature, a third time.
 
-    Returns the lines in normal form (rho >= 0, alpha in (-pi, pi]) with cov, first / last inlier
-    beam, inlier count, and the mask of those that pass."""
-    n_runs = starts.size
+    Returns the lines in normal form: a (2, runs) block rho (>= 0), alpha (in (-pi, pi]); cov
+    (runs, 2, 2); a (3, runs) block first / last inlier beam, inlier count; and the mask of those
+    that pass."""
+    n_runs = runs.shape[1]
     max_cnt = 0
     for r in range(n_runs):
-        max_cnt = max(max_cnt, counts[r])
+        max_cnt = max(max_cnt, runs[R_COUNT, r])
     zs = np.empty((2, max_cnt))  # a run's normalised residuals z and (after the checks' sums) local_scale's scratch
-    z_run, scratch = zs[0], zs[1]
+    z_run = zs[0]  # row 1: local_scale's scratch
     inl_run = np.empty(max_cnt, np.bool_)
     vals = np.empty((2, n_runs))
     rho, alpha = vals[0], vals[1]
@@ -1045,13 +1071,13 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
     sweep = max(1, np.int64(np.rint(ONE_DEG / step))) if step < 0.99 * ONE_DEG else 1  # lms200.noise.interlace_stride
     c2 = 2.0 * math.cos(sweep * step)
     for r in range(n_runs):
-        s, cnt, f = starts[r], counts[r], first[r]
+        s, cnt, f = runs[R_START, r], runs[R_COUNT, r], runs[R_FIRST, r]
         # step 1, on the Log-Hough inliers
-        sw, swg, swgg, swr, swgr = gn_sums(ranges, bearings, valid, inlier0, f, s, cnt, math.cos(alpha0[r]),
-                                           math.sin(alpha0[r]), rho0[r], st2 / s2)
+        sw, swg, swgg, swr, swgr = gn_sums(ranges, bearings, valid, inlier0, f, s, cnt, math.cos(peaks[0, r]),
+                                           math.sin(peaks[0, r]), peaks[1, r], st2 / s2)
         inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
-        rho1 = rho0[r] + (swgg * swr - swg * swgr) * inv_det
-        alpha1 = alpha0[r] + (swg * swr - sw * swgr) * inv_det
+        rho1 = peaks[1, r] + (swgg * swr - swg * swgr) * inv_det
+        alpha1 = peaks[0, r] + (swg * swr - sw * swgr) * inv_det
         # step 2, on the beams within inlier_tau sigma_r of step 1's line, with the checks' sums
         (sw, swg, swgg, swr, swgr), chi, ni, i_t, i_t2, i_t3, lo, hi = gn_sums_inliers(
             ranges, bearings, valid, f, cnt, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, st2, tau, z_run, inl_run)
@@ -1071,11 +1097,11 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
         n_in[r] = ni
         chi_max = p.max_chi2 * max(ni - 2, 1)
         if chi > chi_max:  # the run's own noise, where it exceeds sigma_r
-            loc = local_scale(ranges, valid, f, f + cnt - 1, sweep, c2, scratch, z_run) / sigma_r  # z_run read no more
+            loc = local_scale(ranges, valid, f, f + cnt - 1, sweep, c2, zs, 1, 0) / sigma_r  # z_run (row 0) read no more
             chi_max *= max(1.0, loc * loc)
         good[r] = (
             ni >= min(p.min_points, 2 * p.k + 1)  # min_points is asked of the grown line (find_lines)
-            and ni >= p.min_inlier_fraction * core[r]
+            and ni >= p.min_inlier_fraction * cnt
             and chi <= chi_max
             and zq * zq <= curv2 * qq
             and np.isfinite(rho_r + alpha_r + c00 + c11)
@@ -1087,7 +1113,7 @@ def fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, val
         rho[r] = rho_r
         alpha[r] = wrap(alpha_r)
         cov[r, 0, 0], cov[r, 0, 1], cov[r, 1, 0], cov[r, 1, 1] = c00, c01, c01, c11
-    return rho, alpha, cov, first_in, last_in, n_in, good
+    return vals, cov, ints, good
 
 
 @kernel
@@ -1151,7 +1177,7 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
     least-squares one (the biweight's efficiency under Gaussian noise is 95 %)."""
     n = ranges.size
     work = np.empty((5, n))  # one block: the used beams' x, y, 1 / cos(b - alpha), |z|, the median's scratch
-    x, y, inv_c, z, buf = work[0], work[1], work[2], work[3], work[4]
+    x, y, inv_c, z = work[0], work[1], work[2], work[3]  # row 4: the median's buffer
     for m in range(rho.size):
         r_m, a_m = rho[m], alpha[m]
         ca, sa = math.cos(a_m), math.sin(a_m)
@@ -1171,7 +1197,7 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
             j += np.uint64(1)
         if k < 3:
             continue
-        scale = max(MAD_TO_SIGMA * median_in_place(z, k, buf), SIGMA_FLOOR_RAY)  # z selected in place: not read again
+        scale = max(MAD_TO_SIGMA * median_rows(work, 3, 4, k), SIGMA_FLOOR_RAY)  # z (row 3) selected in place: not read again
         inv_cut = 1.0 / (TUKEY_C * scale)
         for _ in range(ROBUST_STEPS):
             sw, swg, swgg, swr, swgr = biweight_sums(x, y, inv_c, k, math.cos(a_m), math.sin(a_m), r_m, inv_cut)
@@ -1208,17 +1234,24 @@ def farthest_from_chord(f, l, ranges, bearings) -> int:  # noqa: ANN001
     return at
 
 
+# rows of ``circle_fits``' per-beam block: the points x, y (m, sensor frame), then each pass's
+# terms (the Jacobian's two centre columns, the residual); indexed in the block, not cut into views
+C_X, C_Y, C_J0, C_J1, C_E = range(5)
+C_ROWS = 5
+
+
 @inline_kernel
-def valid_centroid(xs, ys, ok):  # noqa: ANN001, ANN201
-    """(x, y, n): the mean of the points (xs, ys) (m, sensor frame) where ``ok`` (valid beams) and
-    their count (x = y = 0 when there is none)."""
+def valid_centroid(work, valid, f, lo, hi):  # noqa: ANN001, ANN201
+    """(x, y, n): the mean of the points t = lo .. hi - 1 of ``work`` (rows C_X, C_Y: m, sensor
+    frame; point t is beam f + t) whose beams are valid, and their count (x = y = 0 when there is
+    none)."""
     n = 0
     mx = 0.0
     my = 0.0
-    for t in range(xs.size):
-        if ok[t]:
-            mx += xs[t]
-            my += ys[t]
+    for t in range(lo, hi):
+        if valid[f + t]:
+            mx += work[C_X, t]
+            my += work[C_Y, t]
             n += 1
     if n > 0:
         mx /= n
@@ -1227,44 +1260,44 @@ def valid_centroid(xs, ys, ok):  # noqa: ANN001, ANN201
 
 
 @kernel
-def tls_clipped(xs, ys, ok, sigma_r, lim) -> float:  # noqa: ANN001
-    """Sum of the squared normalised residuals (each clipped at ``lim``) of the points (xs, ys)
-    where ``ok`` (valid beams) about their total-least-squares line."""
-    mx, my, n = valid_centroid(xs, ys, ok)
+def tls_clipped(work, valid, f, lo, hi, sigma_r, lim) -> float:  # noqa: ANN001
+    """Sum of the squared normalised residuals (each clipped at ``lim``) of the points t = lo ..
+    hi - 1 of ``work`` (``valid_centroid``) of valid beams about their total-least-squares line."""
+    mx, my, n = valid_centroid(work, valid, f, lo, hi)
     if n < 3:
         return 0.0
     cxx = cyy = cxy = 0.0
-    for t in range(xs.size):
-        if ok[t]:
-            u = xs[t] - mx
-            v = ys[t] - my
+    for t in range(lo, hi):
+        if valid[f + t]:
+            u = work[C_X, t] - mx
+            v = work[C_Y, t] - my
             cxx += u * u
             cyy += v * v
             cxy += u * v
     a = 0.5 * math.atan2(-2.0 * cxy, cyy - cxx)
     ca, sa = math.cos(a), math.sin(a)
     out = 0.0
-    for t in range(xs.size):
-        if ok[t]:
-            z = ((xs[t] - mx) * ca + (ys[t] - my) * sa) / sigma_r
+    for t in range(lo, hi):
+        if valid[f + t]:
+            z = ((work[C_X, t] - mx) * ca + (work[C_Y, t] - my) * sa) / sigma_r
             out += min(z * z, lim)
     return out
 
 
 @inline_kernel
-def theta_turn(a, b, theta) -> float:  # noqa: ANN001
+def theta_turn(a, b, sig) -> float:  # noqa: ANN001
     """How far the slope estimate theta (rad) turns between the first and the last beam of a..b
     where it is known (inf where it is known at fewer than two): a cheap first look at whether
     the surface there turns at all."""
     i = a
-    while i <= b and not np.isfinite(theta[i]):
+    while i <= b and not np.isfinite(sig[S_THETA, i]):
         i += 1
     j = b
-    while j > i and not np.isfinite(theta[j]):
+    while j > i and not np.isfinite(sig[S_THETA, j]):
         j -= 1
     if j <= i:
         return np.inf
-    return abs(wrap(theta[j] - theta[i]))
+    return abs(wrap(sig[S_THETA, j] - sig[S_THETA, i]))
 
 
 @inline_kernel
@@ -1277,16 +1310,17 @@ def surface_turn(f, l, cx, cy, ranges, bearings) -> float:  # noqa: ANN001
 
 
 @inline_kernel
-def circle_gn_sums(j0, j1, e, ok):  # noqa: ANN001, ANN201
+def circle_gn_sums(work, valid, f, m):  # noqa: ANN001, ANN201
     """The normal equations of a geometric Gauss-Newton step of a circle over the beams where
-    ``ok``, from the Jacobian rows [j0, j1, -1] and residuals e: (H00, H01, H02, H11, H12, H22,
-    g0, g1, g2), H = J^T J, g = J^T e."""
+    valid (point t of ``work`` is beam f + t, t < m), from the Jacobian rows [C_J0, C_J1, -1]
+    and residuals C_E of ``work``: (H00, H01, H02, H11, H12, H22, g0, g1, g2), H = J^T J, g = J^T e."""
     h00 = h01 = h02 = h11 = h12 = h22 = g0 = g1 = g2 = 0.0
-    for t in range(e.size):
-        w = 1.0 if ok[t] else 0.0
-        a = j0[t] if ok[t] else 0.0  # an invalid beam's terms may be nan: selected, not multiplied
-        b = j1[t] if ok[t] else 0.0
-        c = e[t] if ok[t] else 0.0
+    for t in range(m):
+        ok = valid[f + t]
+        w = 1.0 if ok else 0.0
+        a = work[C_J0, t] if ok else 0.0  # an invalid beam's terms may be nan: selected, not multiplied
+        b = work[C_J1, t] if ok else 0.0
+        c = work[C_E, t] if ok else 0.0
         h00 += a * a
         h01 += a * b
         h02 -= a
@@ -1321,20 +1355,18 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
       here is clipped at inlier_tau^2 a beam, as the checks see a line (its inliers): unclipped,
       two stray beams on a line (mixed pixels, clutter) made it look as loose as a circle."""
     m = l - f + 1
-    work = np.empty((5, m))  # the beams' points, then per-beam terms of each pass over them
-    xs, ys, w0, w1, w2 = work[0], work[1], work[2], work[3], work[4]
+    work = np.empty((C_ROWS, m))  # the beams' points, then per-beam terms of each pass over them
     for t in range(m):
-        xs[t] = ranges[f + t] * bearings[B_COS, f + t]
-        ys[t] = ranges[f + t] * bearings[B_SIN, f + t]
-    ok = valid[f:l + 1]
-    mx, my, n = valid_centroid(xs, ys, ok)
+        work[C_X, t] = ranges[f + t] * bearings[B_COS, f + t]
+        work[C_Y, t] = ranges[f + t] * bearings[B_SIN, f + t]
+    mx, my, n = valid_centroid(work, valid, f, 0, m)
     if n < 5:
         return False
     suu = suv = svv = suuu = svvv = suvv = svuu = 0.0
     for t in range(m):
-        if ok[t]:
-            u = xs[t] - mx
-            v = ys[t] - my
+        if valid[f + t]:
+            u = work[C_X, t] - mx
+            v = work[C_Y, t] - my
             suu += u * u
             suv += u * v
             svv += v * v
@@ -1355,14 +1387,14 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
         return False  # nearly straight (most lines): no geometric fit needed
     for _ in range(ARC_GN_STEPS):  # geometric residual e_j = |x_j - c| - R; J = [-(x - c) / |x - c|, -1]
         for t in range(m):  # the square roots and divisions of all beams in a loop that vectorises
-            dx = xs[t] - cx
-            dy = ys[t] - cy
+            dx = work[C_X, t] - cx
+            dy = work[C_Y, t] - cy
             dist = max(math.sqrt(dx * dx + dy * dy), 1e-12)  # not hypot: a libm call a beam
             inv = 1.0 / dist  # one division a beam, not two
-            w0[t] = -dx * inv
-            w1[t] = -dy * inv
-            w2[t] = dist - rad
-        h00, h01, h02, h11, h12, h22, g0, g1, g2 = circle_gn_sums(w0, w1, w2, ok)
+            work[C_J0, t] = -dx * inv
+            work[C_J1, t] = -dy * inv
+            work[C_E, t] = dist - rad
+        h00, h01, h02, h11, h12, h22, g0, g1, g2 = circle_gn_sums(work, valid, f, m)
         # H d = -g with H's adjugate (H symmetric: [[h00, h01, h02], [h01, h11, h12], [h02, h12, h22]])
         a00 = h11 * h22 - h12 * h12
         a01 = h02 * h12 - h01 * h22
@@ -1379,16 +1411,16 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
     if not (rad > 0.0 and surface_turn(f, l, cx, cy, ranges, bearings) >= p.corner_min_turn):
         return False
     for t in range(m):  # the circle's normalised residuals
-        dx = xs[t] - cx
-        dy = ys[t] - cy
-        w2[t] = (math.sqrt(dx * dx + dy * dy) - rad) / sigma_r
+        dx = work[C_X, t] - cx
+        dy = work[C_Y, t] - cy
+        work[C_E, t] = (math.sqrt(dx * dx + dy * dy) - rad) / sigma_r
     lim = p.inlier_tau * p.inlier_tau
     chi = 0.0  # the circle's chi^2 over the inliers of the neighbourhood, and clipped over all of it
     clipped = 0.0
     ni = 0
     for t in range(m):
-        if ok[t]:
-            zz = w2[t]
+        if valid[f + t]:
+            zz = work[C_E, t]
             z2 = zz * zz
             clipped += min(z2, lim)
             if z2 <= lim:
@@ -1398,31 +1430,31 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
         return False
     if lf < 0:  # a span without a line: the circle must fit it better than two lines split at its chord
         c = farthest_from_chord(f, l, ranges, bearings) - f + 1  # the two lines' beams: :c and c:
-        two = tls_clipped(xs[:c], ys[:c], ok[:c], sigma_r, lim) + tls_clipped(xs[c:], ys[c:], ok[c:], sigma_r, lim)
+        two = tls_clipped(work, valid, f, 0, c, sigma_r, lim) + tls_clipped(work, valid, f, c, m, sigma_r, lim)
         return clipped <= two
     ca, sa = math.cos(lalpha), math.sin(lalpha)
-    for t in range(lf - f, ll - f + 1):  # the line's beams: the circle's residuals (in w2) and the line's
-        w1[t] = (xs[t] * ca + ys[t] * sa - lrho) / sigma_r
+    for t in range(lf - f, ll - f + 1):  # the line's beams: the circle's residuals (in C_E) and the line's
+        work[C_J1, t] = (work[C_X, t] * ca + work[C_Y, t] * sa - lrho) / sigma_r
     c_chi = 0.0
     l_chi = 0.0
     nl = 0
     for t in range(lf - f, ll - f + 1):
-        if ok[t]:
-            zc = w2[t]
-            zl = w1[t]
+        if valid[f + t]:
+            zc = work[C_E, t]
+            zl = work[C_J1, t]
             c_chi += min(zc * zc, lim)
             l_chi += min(zl * zl, lim)
             nl += 1
     if not c_chi <= l_chi + ARC_TAU * math.sqrt(2.0 * nl):
         return False
-    if not clipped <= tls_clipped(xs, ys, ok, sigma_r, lim) - ARC_TAU * ARC_TAU:
+    if not clipped <= tls_clipped(work, valid, f, 0, m, sigma_r, lim) - ARC_TAU * ARC_TAU:
         return False  # one line fits the neighbourhood about as well: a straight wall, its turn noise
     dof = max(nl - 2, 1)
     return clipped / n <= (l_chi / dof) * (1.0 + ARC_TAU * math.sqrt(2.0 / dof))
 
 
 @kernel
-def on_arcs(rho, alpha, first, last, ranges, bearings, valid, theta, increment, sigma_r, p):  # noqa: ANN001, ANN201
+def on_arcs(rho, alpha, first, last, ranges, bearings, valid, sig, increment, sigma_r, p):  # noqa: ANN001, ANN201
     """Which lines [first, last] are chords of a round surface (``circle_fits``): the neighbourhood
     is the line and as many beams again past each end (at least k), while the surface goes on
     without a depth jump (Borges & Aldon's adaptive breakpoint, BREAK_LAMBDA, plus 3 sigma_r).
@@ -1439,47 +1471,44 @@ def on_arcs(rho, alpha, first, last, ranges, bearings, valid, theta, increment, 
         while (b < n - 1 and b - last[m] < reach and valid[b + 1]
                and abs(ranges[b + 1] - ranges[b]) <= ranges[b] * ratio + 3.0 * sigma_r):
             b += 1
-        if (first[m] - a) + (b - last[m]) >= p.k and theta_turn(a, b, theta) >= 0.5 * p.corner_min_turn:
+        if (first[m] - a) + (b - last[m]) >= p.k and theta_turn(a, b, sig) >= 0.5 * p.corner_min_turn:
             out[m] = circle_fits(a, b, first[m], last[m], rho[m], alpha[m], ranges, bearings, valid, sigma_r, p)
     return out
 
 
 @kernel
-def fit_spans(first, last, shrink0, shrink1, ranges, log_r, bearings, valid, theta, theta_var, cs, angle_min,  # noqa: ANN001, ANN201
-              increment, sigma_r, grid, p):
-    """Steps 3-4 on spans of valid beams [first, last] (each at least 2k + 1 beams): the band of
-    normal angles from theta over the window centres first + k .. last - k (less ``shrink0`` /
-    ``shrink1`` centres at each end: those whose windows reach across a split), the Log-Hough peak
-    in it and the refined, checked line. ``log_r``: log of the ranges (at least of the spans' beams).
-    Returns fit_runs' outputs."""
+def fit_spans(spans, n_runs, ranges, log_r, bearings, valid, sig, cs, angle_min, increment, sigma_r, grid, p):  # noqa: ANN001, ANN201
+    """Steps 3-4 on the first ``n_runs`` spans of valid beams (``spans`` rows first, last, shrink0,
+    shrink1; each at least 2k + 1 beams): the band of normal angles from theta over the window
+    centres first + k .. last - k (less ``shrink0`` / ``shrink1`` centres at each end: those whose
+    windows reach across a split), the Log-Hough peak in it and the refined, checked line.
+    ``log_r``: log of the ranges (at least of the spans' beams). Returns fit_runs' outputs."""
     k = p.k
-    n_runs = first.size
-    ints = np.empty((4, n_runs), np.int64)  # one block: counts, starts, first and last centres
-    counts, starts, c0, c1 = ints[0], ints[1], ints[2], ints[3]
+    runs = np.empty((R_ROWS, n_runs), np.int64)
     total = 0
     for r in range(n_runs):
-        counts[r] = last[r] - first[r] + 1
-        starts[r] = total
-        total += counts[r]
-        c0[r] = first[r] + k
-        c1[r] = last[r] - k
-        if c1[r] - c0[r] >= shrink0[r] + shrink1[r]:
-            c0[r] += shrink0[r]
-            c1[r] -= shrink1[r]
+        f, l, sh0, sh1 = spans[0, r], spans[1, r], spans[2, r], spans[3, r]
+        runs[R_FIRST, r], runs[R_LAST, r] = f, l
+        runs[R_COUNT, r] = l - f + 1
+        runs[R_START, r] = total
+        total += l - f + 1
+        c0, c1 = f + k, l - k
+        if c1 - c0 >= sh0 + sh1:
+            c0 += sh0
+            c1 -= sh1
+        runs[R_C0, r], runs[R_C1, r] = c0, c1
     log_d = np.empty(total)
     for r in range(n_runs):  # by offsets, unsigned: a view a run was two atomic reference counts
-        f, s = np.uint64(first[r]), np.uint64(starts[r])
-        for t in range(np.uint64(counts[r])):
+        f, s = np.uint64(runs[R_FIRST, r]), np.uint64(runs[R_START, r])
+        for t in range(np.uint64(runs[R_COUNT, r])):
             log_d[s + t] = log_r[f + t]
-    centre, half_width, bin_half = band_of_runs(c0, c1, theta, theta_var, cs, ranges, bearings, increment, sigma_r, k, p)
-    alpha0, rho0, inlier0 = band_search(
-        first, log_d, starts, counts, centre, half_width, bin_half, angle_min, p.hough_subdiv, p.hough_angles, grid
-    )
-    return fit_runs(first, starts, counts, rho0, alpha0, inlier0, ranges, bearings, valid, counts, sigma_r, p)
+    bands = band_of_runs(runs, sig, cs, ranges, bearings, increment, sigma_r, k, p)
+    peaks, inlier0 = band_peaks(runs, log_d, bands, angle_min, p.hough_subdiv, p.hough_angles, grid)
+    return fit_runs(runs, peaks, inlier0, ranges, bearings, valid, sigma_r, p)
 
 
 @kernel
-def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_var, angle_min, increment,  # noqa: ANN001, ANN201
+def find_lines(ranges, bearings, valid, sig, angle_min, increment,  # noqa: ANN001, ANN201
                sigma_r, grid, p):
     """Steps 2-4 and the end growth: the line table (rho, alpha, cov, first, last, n_points)
     before merging. A run whose line fails the checks (it bends, or holds two faces the AD test
@@ -1490,7 +1519,7 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     baselines' min_points). Splitting cuts a round surface into chords short enough to pass the
     line checks, so lines whose neighbourhood is one circle are dropped (``on_arcs``, when arc_check)."""
     k = p.k
-    c0, c1 = candidate_runs(AD, AD_var, psi, psi_var, k, grid.ad_line, sigma_r, p)
+    c0, c1 = candidate_runs(sig, k, grid.ad_line, sigma_r, p)
     min_core = min(p.min_points, 2 * k + 1)  # a run's line may grow to min_points past its ends
     spans = np.zeros((4, c0.size), np.int64)  # the first pass's spans: first, last, shrink0, shrink1
     n_spans = 0
@@ -1498,10 +1527,9 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
         if c1[r] - c0[r] + 2 * k + 1 >= min_core:
             spans[0, n_spans], spans[1, n_spans] = c0[r] - k, c1[r] + k
             n_spans += 1
-    first, last, shrink0, shrink1 = spans[0, :n_spans], spans[1, :n_spans], spans[2, :n_spans], spans[3, :n_spans]
     log_r = np.empty(ranges.size)  # log of the ranges of the spans' beams, once (later spans are parts of these)
     for r in range(n_spans):  # by beam index, not views of a span (two atomic reference counts each)
-        for j in range(np.uint64(first[r]), np.uint64(last[r] + 1)):
+        for j in range(np.uint64(spans[0, r]), np.uint64(spans[1, r] + 1)):
             log_r[j] = math.log(ranges[j])
     min_span = max(p.min_points, 2 * k + 1)
     n_max = ranges.size // min_core + 1  # accepted spans are disjoint, each of min_core beams or more
@@ -1511,30 +1539,31 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     o_ints = np.empty((3, n_max), np.int64)
     o_f, o_l, o_n = o_ints[0], o_ints[1], o_ints[2]
     m = 0
-    cs = slope_sums(theta, theta_var)
-    while first.size:
-        rho, alpha, cov, f_in, l_in, n_in, good = fit_spans(
-            first, last, shrink0, shrink1, ranges, log_r, bearings, valid, theta, theta_var, cs, angle_min, increment,
-            sigma_r, grid, p)
-        for r in range(first.size):
+    cs = slope_sums(sig)
+    while n_spans:
+        vals, cov, ints, good = fit_spans(spans, n_spans, ranges, log_r, bearings, valid, sig, cs, angle_min, increment,
+                                          sigma_r, grid, p)
+        for r in range(n_spans):
             if good[r] and m < n_max:
-                o_rho[m], o_alpha[m], o_cov[m] = rho[r], alpha[r], cov[r]
-                o_f[m], o_l[m], o_n[m] = f_in[r], l_in[r], n_in[r]
+                o_rho[m], o_alpha[m] = vals[0, r], vals[1, r]
+                o_cov[m, 0, 0], o_cov[m, 0, 1], o_cov[m, 1, 0], o_cov[m, 1, 1] = cov[r, 0, 0], cov[r, 0, 1], cov[r, 1, 0], cov[r, 1, 1]
+                o_f[m], o_l[m], o_n[m] = ints[0, r], ints[1, r], ints[2, r]
                 m += 1
-        parts = np.empty((4, 2 * first.size), np.int64)  # the next pass's spans: first, last, shrink0, shrink1
+        parts = np.empty((4, 2 * n_spans), np.int64)  # the next pass's spans: first, last, shrink0, shrink1
         q = 0
-        for r in range(first.size):
-            if good[r] or last[r] - first[r] < min_span:  # a part of min_span beams may remain
+        for r in range(n_spans):
+            f0, l0 = spans[0, r], spans[1, r]
+            if good[r] or l0 - f0 < min_span:  # a part of min_span beams may remain
                 continue
-            if p.arc_check and theta_turn(first[r], last[r], theta) >= 0.5 * p.corner_min_turn:
-                if circle_fits(first[r], last[r], -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r, p):
+            if p.arc_check and theta_turn(f0, l0, sig) >= 0.5 * p.corner_min_turn:
+                if circle_fits(f0, l0, -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r, p):
                     continue  # a failing span that is one circle is a round surface: not cut into chords
-            at = farthest_from_chord(first[r], last[r], ranges, bearings)
-            for f, l, a, b in ((first[r], at - 1, shrink0[r], k), (at + 1, last[r], k, shrink1[r])):
+            at = farthest_from_chord(f0, l0, ranges, bearings)
+            for f, l, a, b in ((f0, at - 1, spans[2, r], k), (at + 1, l0, k, spans[3, r])):
                 if l - f + 1 >= min_span:
                     parts[0, q], parts[1, q], parts[2, q], parts[3, q] = f, l, a, b
                     q += 1
-        first, last, shrink0, shrink1 = parts[0, :q], parts[1, :q], parts[2, :q], parts[3, :q]
+        spans, n_spans = parts, q
     order = np.argsort(o_f[:m], kind="mergesort")  # the lines in beam order
     vals = np.empty((2, m))
     rho, alpha = vals[0], vals[1]
@@ -1548,7 +1577,7 @@ def find_lines(ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_v
     extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r,
                 p.sigma_bearing * p.sigma_bearing)
     robust_refit(rho, alpha, f_in, l_in, ranges, bearings, valid)
-    arc = on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, theta, increment, sigma_r, p) if p.arc_check and m else np.zeros(m, np.bool_)
+    arc = on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, sig, increment, sigma_r, p) if p.arc_check and m else np.zeros(m, np.bool_)
     q = 0  # the lines kept (min_points beams once grown, not a chord of a round surface) moved to the front
     for t in range(m):
         if n_in[t] >= p.min_points and not arc[t]:
@@ -1694,7 +1723,7 @@ def neighbourhood_var(ranges, valid, lo, hi) -> float:  # noqa: ANN001
 
 
 @kernel
-def corners(lv, lb, psi, ranges, valid, angle_min, increment, sigma_r, p):  # noqa: ANN001, ANN201
+def corners(lv, lb, sig, ranges, valid, angle_min, increment, sigma_r, p):  # noqa: ANN001, ANN201
     """Corners between consecutive lines i, i + 1 (beam order) of the rows ``segments`` made: the
     rows of ``features.types.Corners``, corner values (C, 3) x, y, angle and corner beams (C, 3)
     beam, line i, line i + 1.
@@ -1739,8 +1768,8 @@ def corners(lv, lb, psi, ranges, valid, angle_min, increment, sigma_r, p):  # no
         lo, hi = max(0, last_i - k), min(n - 1, first_j)
         peak = -1.0  # largest |psi| between the two segments
         for t in range(lo, hi + 1):
-            if np.isfinite(psi[t]):
-                peak = max(peak, abs(psi[t]))
+            if np.isfinite(sig[S_PSI, t]):
+                peak = max(peak, abs(sig[S_PSI, t]))
         if peak < 0.0 or peak < p.corner_psi * turn:
             continue
         index = np.int64(np.rint((b - angle_min) / increment))
@@ -1782,14 +1811,12 @@ def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sig
     if auto:
         sigma_r = pooled_sigma(ranges.reshape((1, ranges.size)), grid.twice_cos, range_min, range_hi, fallback)
     valid, sig = signal_block(ranges, bearings[B_ANGLE], p.k, range_lo, range_hi, sigma_r, grid.two_sin_sum)
-    AD, AD_var, theta, theta_var, psi, psi_var = (sig[S_AD], sig[S_AD_VAR], sig[S_THETA], sig[S_THETA_VAR], sig[S_PSI],
-                                                  sig[S_PSI_VAR])
     rho, alpha, cov, first, last, npts = find_lines(
-        ranges, bearings, valid, theta, theta_var, AD, AD_var, psi, psi_var, angle_min, increment, sigma_r, grid, p
+        ranges, bearings, valid, sig, angle_min, increment, sigma_r, grid, p
     )
     lv, lb = segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p)
     if p.corners and lv.shape[0] > 1:
-        return (lv, lb) + corners(lv, lb, psi, ranges, valid, angle_min, increment, sigma_r, p)
+        return (lv, lb) + corners(lv, lb, sig, ranges, valid, angle_min, increment, sigma_r, p)
     return lv, lb, np.empty((0, 3)), np.empty((0, 3), np.int64)
 
 
