@@ -235,6 +235,8 @@ def test_gym_reset_seed_must_be_a_whole_number(seed: object) -> None:
 
     with pytest.raises(InputError, match="^seed: must be a whole number >= 0"):
         OfficeEnv().reset(seed=seed)  # type: ignore[arg-type]
+    a, b = OfficeEnv(), OfficeEnv()
+    assert np.array_equal(a.reset(seed=np.int64(3))[0], b.reset(seed=3)[0])  # numpy ints are seeds too
 
 
 def test_calibration_of_too_few_scans_says_so_and_prints_no_nan() -> None:
