@@ -360,3 +360,14 @@ def test_sensor_config_errors_are_lmsbench_errors(kw: dict, message: str) -> Non
 
     with pytest.raises(InputError, match=message):  # were bare ValueErrors
         SensorConfig(**kw)
+
+
+@pytest.mark.parametrize("value", [0.5, 1e300, float("nan"), -1e-3, float("inf")])
+def test_sigma_bearing_is_a_bearing_error_of_radians(value: float) -> None:
+    """sigma_bearing took any value >= 0: 1000 rad gave 103 lines, 1e160 none, both silently."""
+    from features.errors import ConfigError
+    from features.registry import make_config
+
+    with pytest.raises(ConfigError, match=r"^sigma_bearing: must be a number in \[0, 0.1\] rad"):
+        make_config("sensor", sigma_bearing=value)
+    assert make_config("sensor", sigma_bearing=0.005).sigma_bearing == 0.005
