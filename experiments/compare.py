@@ -60,10 +60,17 @@ class Source:
     def from_records(cls, records: Sequence[Record], truths: Sequence[Any] | None = None, name: str = "sim",
                      seed: int | None = None) -> "Source":
         """Records already in memory (a simulated run, a log read once), with their visible truths
-        (one per record, sensor frame) when known: scored against them, else like a log."""
+        (one per record, sensor frame) when known: scored against them; else like a log, with the
+        noise the extractors get on a log (``sigma_r="auto"``) estimated from these records as
+        :func:`log_source` estimates it from its file."""
         records = list(records)
         if truths is None:
-            return cls(name, "log", seed, records, None, len(records))
+            from features.noise_estimate import bearing_sigma, fit_sigma, neighbour_sigma
+
+            return cls(name, "log", seed, records, None, len(records),
+                       estimate_extractor_sigma=lambda: neighbour_sigma(records),
+                       estimate_fit_sigma=lambda: fit_sigma(records),
+                       estimate_bearing_sigma=lambda: bearing_sigma(records))
         truths = list(truths)
         if len(truths) != len(records):
             raise LmsbenchError(f"{len(records)} records but {len(truths)} truths")

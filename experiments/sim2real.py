@@ -543,16 +543,10 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
                                                  scale=size, relief=None if relief is None else relief.cover),
                                       seed, duration, sensor, rate_hz=rate_hz, limits=limits)
     name = Path(log).name
-    from features.noise_estimate import fit_sigma, neighbour_sigma  # noqa: PLC0415
-
-    # the extractors get what sigma_r="auto" means on a log (as `compare LOG` gives them): the
-    # neighbour scatter of each source's own scans, with the interlaced sweeps' offset, and for the
-    # split / merge tests of split_merge and iepf the scatter about fitted lines
-    sources = [Source(name, "log", None, real, None, len(real), estimate_extractor_sigma=lambda: neighbour_sigma(real),
-                      estimate_fit_sigma=lambda: fit_sigma(real)),
-               Source(f"sim:{world}", "log", None, simulated, None, len(simulated),
-                      estimate_extractor_sigma=lambda: neighbour_sigma(simulated),
-                      estimate_fit_sigma=lambda: fit_sigma(simulated))]
+    # the extractors get what sigma_r="auto" means on a log (as `compare LOG` gives them), each
+    # source from its own scans: the neighbour scatter (with the interlaced sweeps' offset), the
+    # scatter about fitted lines for split_merge / iepf, the bearing noise for the sensor method
+    sources = [Source.from_records(real, name=name), Source.from_records(simulated, name=f"sim:{world}")]
     summary = summarise(compare(sources, list(methods), sigma="auto"))
     table = _table(summary, name, f"sim:{world}", list(methods))
     result = Sim2RealResult(table, scene_statistics(real), scene_statistics(simulated), sensor, limits, world,

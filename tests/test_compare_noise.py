@@ -35,3 +35,30 @@ def test_fit_sigma_of_noiseless_scans_is_floored_at_1_mm() -> None:
     noisy = Scan(scan.ranges + 0.01 * np.random.default_rng(0).standard_normal(361), scan.angle_min,
                  scan.angle_increment, 0.0, 8.183)
     assert 0.008 < fit_sigma([noisy] * 3) < 0.012
+
+
+def test_records_in_memory_get_the_noise_a_log_gets(tmp_path) -> None:
+    """sim2real scores a log's records and a simulated run as logs: Source.from_records must estimate
+    every noise log_source estimates (sim2real once gave the sensor method no bearing noise on the
+    real log, so its 'real' figures were not compare's), from the same scans to the same values."""
+    import dataclasses
+
+    from experiments.compare import Source, log_source
+    from features.noise_estimate import bearing_sigma, neighbour_sigma
+    from lms200 import read_log, write_log
+    from sim import SensorConfig, simulate_records
+
+    recs = simulate_records("office", seed=3, duration=3.0, rate_hz=5, sensor=SensorConfig(units="cm", noise_sigma=0.008))
+    path = tmp_path / "run.clf"
+    write_log(path, recs)
+    from_log, in_memory = log_source(path), Source.from_records(list(read_log(path)), name="run.clf")
+    estimates = [f.name for f in dataclasses.fields(Source) if f.name.startswith("estimate_")]
+    for name in estimates:
+        if name == "estimate_sigma":  # sigma_r: compare estimates it from any re-iterable records
+            continue
+        assert getattr(from_log, name) is not None, name
+        assert getattr(in_memory, name) is not None, name
+        assert getattr(in_memory, name)() == getattr(from_log, name)(), name
+    assert in_memory.estimate_bearing_sigma() == bearing_sigma(read_log(path))
+    assert in_memory.estimate_extractor_sigma() == neighbour_sigma(read_log(path))
+    assert 0.006 < in_memory.estimate_extractor_sigma() < 0.012  # the 8 mm of the run, cm-rounded
