@@ -269,7 +269,10 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
             raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}){hint}, a simulate folder "
                                 "nor an existing log")
         check_log(spec)
-        if next(iter(read_log(spec, **(read_options or {}))), None) is None:
+        reader = read_log(spec, **(read_options or {}))
+        if next(iter(reader), None) is None:
+            if reader.stats.stopped:  # damage before the first scan (read under --skip-bad-lines)
+                raise LmsbenchError(f"{spec}: no scan read: the file stops being readable at {reader.stats.stopped}")
             raise LmsbenchError(f"{spec}: no laser messages found (not a CARMEN log with FLASER / ROBOTLASER / RAWLASER "
                                 "lines, nor a bag with LaserScan messages)")
 

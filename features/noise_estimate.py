@@ -175,55 +175,78 @@ SLOPE_EDGES = (0.0, 1.0, 2.0, 4.0, 8.0)
 #: seen farther on average, so slopes are compared within a band only
 RANGE_EDGES = (0.0, 2.0, 4.0, 8.0, np.inf)
 MIN_BIN = 200  # fewest residuals of a (range, slope) bin that enters the estimate
+SCALE_FLOOR_M = 0.001  # m: the least scale a bin's weight assumes (noiseless scans: finite weights)
+
+
+def spread_residuals(scans: Scan | Iterable[Any], window: int = FIT_WINDOW) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`fit_residuals_and_slopes` (residuals m, |dr / db| m/rad, ranges m) of scans spread
+    evenly over all of ``scans`` (one Scan, or Scans or records with ``.scan``; read once), within
+    ``lms200.noise.MAX_TRIPLES`` residuals: every scan while they fit, else every k-th (k a power of
+    2: when the kept residuals reach the bound, every other kept scan is dropped and k doubles), so
+    the sample spans the whole log, not a prefix of it. Deterministic."""
+    from lms200.noise import MAX_TRIPLES  # noqa: PLC0415
+
+    kept: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = []
+    stride, total = 1, 0
+    for i, item in enumerate([scans] if isinstance(scans, Scan) else scans):
+        if i % stride:
+            continue
+        z, t, d = fit_residuals_and_slopes(getattr(item, "scan", item), window)
+        kept.append((i, z, t, d))
+        total += z.size
+        while total >= MAX_TRIPLES and len(kept) > 1:
+            stride *= 2
+            kept = [k for k in kept if k[0] % stride == 0]
+            total = sum(k[1].size for k in kept)
+    if not kept:
+        return np.empty(0), np.empty(0), np.empty(0)
+    return (np.concatenate([k[1] for k in kept]), np.concatenate([k[2] for k in kept]),
+            np.concatenate([k[3] for k in kept]))
 
 
 def bearing_sigma(scans: Scan | Iterable[Any], window: int = FIT_WINDOW) -> float:
     """Bearing noise (rad, 1 sigma) of ``scans`` (one Scan, or Scans or records with ``.scan``):
-    how the scatter of beams about fitted lines (:func:`fit_residuals_and_slopes`) grows with
-    |dr / db| = d |tan(incidence)|, the factor that turns a bearing error into a range error.
+    how the scatter of beams about fitted lines (:func:`fit_residuals_and_slopes`, of scans spread
+    over the whole of ``scans``: :func:`spread_residuals`) grows with |dr / db| = d |tan(incidence)|,
+    the factor that turns a bearing error into a range error.
 
     Within each range band (RANGE_EDGES), binned by |dr / db| (SLOPE_EDGES), each bin's robust
-    scale s_b (``lms200.noise.robust_scale``) against the band's head-on bin's s_0 gives
-    sqrt(s_b^2 - s_0^2) / t_b (t_b the bin's median slope); the estimate is the smallest of these
-    over all bands (0 when negative): clutter, corners and curves within a window only inflate a
-    bin's scale, so the smallest is the one least polluted. 0.0 without a band holding a head-on
-    and an oblique bin of MIN_BIN residuals each.
+    scale s_b (``lms200.noise.robust_scale``) of n_b residuals at median slope t_b follows
+    s_b^2 = s_0^2 + t_b^2 sigma^2 (s_0 the band's head-on bin). One weighted least-squares sigma^2
+    over every oblique bin of every band, y_b = s_b^2 - s_0^2 against x_b = t_b^2 with weights
+    1 / var(y_b) = 1 / (s_b^4 / n_b + s_0^4 / n_0) (the variance of a squared scale, up to a common
+    factor), clipped at 0: every bin counts by its information, so no single bin (the smallest of
+    twelve noisy values, as before) decides. 0.0 without a band holding a head-on and an oblique bin
+    of MIN_BIN residuals each.
 
-    The logs of ../shared/data: MIT CSAIL 5.2 mrad and CSAIL ROBOTLASER1 5.0 (0.5 deg: the two
-    interlaced 1 deg sweeps' bearings are offset, and the scatter on oblique faces grows with
-    d tan(incidence) in every range band; MIT cut to one 1 deg sweep 0.9), Intel 0.7, ACES 0 (its
-    scatter grows with range, not with the slope within a band; over all ranges at once it read
-    4.0). Simulated sweeps offset by 8 / 12 mrad read 4.7 / 7.0 (1.15-1.2x the offset / 2), exact
-    bearings under 1 mrad; noise growing with range (4 mm per m) still reads 2.2 mrad (the bands
-    are a factor 2 wide)."""
-    from lms200.noise import MAX_TRIPLES, robust_scale  # noqa: PLC0415
+    The logs of ../shared/data (whole log; halves; quarters, mrad): MIT CSAIL 6.0; 4.5, 6.5;
+    7.6, 2.7, 6.1, 6.5 (the smallest-bin form before: 5.2; 0.1, 4.4; 0, 0, 4.8, 4.1), CSAIL
+    ROBOTLASER1 5.8; 4.9, 6.6; 6.9, 3.1, 6.0, 7.1, Intel 0.9 (0.7-1.0 on every part), ACES 2.8
+    (2.1-3.7: its 0-2 m band's scatter grows with the slope, 23.5 -> 31.4 mm at 0.5 -> 2.9 m/rad),
+    MIT cut to one 1 deg sweep 1.0. Simulated sweeps offset by 8 / 12 mrad read 4.7 / 7.0 (1.15-1.2x
+    the offset / 2), exact bearings under 1 mrad. Weak spot: weights from a bin's own scale favour
+    a bin whose scale is low by accident (an office of 8 exact scans and 24 offset by 12 mrad reads
+    1.0 mrad through one bin of 202 residuals)."""
+    from lms200.noise import robust_scale  # noqa: PLC0415
 
-    zs: list[np.ndarray] = []
-    ts: list[np.ndarray] = []
-    ds: list[np.ndarray] = []
-    total = 0
-    for item in [scans] if isinstance(scans, Scan) else scans:
-        z, t, d = fit_residuals_and_slopes(getattr(item, "scan", item), window)
-        zs.append(z)
-        ts.append(t)
-        ds.append(d)
-        total += z.size
-        if total >= MAX_TRIPLES:
-            break
-    if not zs:
-        return 0.0
-    z_all, t_all, d_all = np.concatenate(zs), np.concatenate(ts), np.concatenate(ds)
-    estimates: list[float] = []
+    z_all, t_all, d_all = spread_residuals(scans, window)
+    sxy = sxx = 0.0
     for near, far in zip(RANGE_EDGES[:-1], RANGE_EDGES[1:]):
         band = (d_all >= near) & (d_all < far)
-        bins: list[tuple[float, float]] = []
+        bins: list[tuple[float, float, int]] = []
         for lo, hi in zip(SLOPE_EDGES[:-1], SLOPE_EDGES[1:]):
             inside = band & (t_all >= lo) & (t_all < hi)
-            if np.count_nonzero(inside) >= MIN_BIN:
-                bins.append((float(np.median(t_all[inside])), float(robust_scale(z_all[inside])[1])))
+            n = int(np.count_nonzero(inside))
+            if n >= MIN_BIN:
+                bins.append((float(np.median(t_all[inside])), float(robust_scale(z_all[inside])[1]), n))
             elif lo == 0.0:
                 break  # no head-on reference in this band
-        if len(bins) >= 2:
-            s0 = bins[0][1]
-            estimates += [float(np.sqrt(max(s * s - s0 * s0, 0.0))) / t for t, s in bins[1:]]
-    return min(estimates) if estimates else 0.0
+        if len(bins) < 2:
+            continue
+        _, s0, n0 = bins[0]
+        for t, s, n in bins[1:]:
+            weight = 1.0 / (max(s, SCALE_FLOOR_M) ** 4 / n + max(s0, SCALE_FLOOR_M) ** 4 / n0)
+            x, y = t * t, s * s - s0 * s0
+            sxy += weight * x * y
+            sxx += weight * x * x
+    return float(np.sqrt(max(sxy / sxx, 0.0))) if sxx > 0.0 else 0.0

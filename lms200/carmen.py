@@ -23,8 +23,8 @@ ROBOTLASER1 accuracy field, a ``PARAM lmsbench_range_units mm|cm`` line (which t
 for FLASER logs without it, from the values themselves (see :func:`infer_units`).
 
 One laser is read per pass (``topic``: a message kind); by default the first kind that carries
-poses (FLASER, RLASER, ROBOTLASER1 / 2) among the first ``DEFAULT_TOPIC_LINES`` lines, else the first
-RAWLASER kind: CARMEN 0.7 loggers write each reading twice, as RAWLASER1 and as ROBOTLASER1.
+poses (FLASER, RLASER, ROBOTLASER1 / 2) up to ``DEFAULT_TOPIC_LINES`` lines after the first laser
+line, else the first RAWLASER kind: CARMEN 0.7 loggers write each reading twice, as RAWLASER1 and as ROBOTLASER1.
 Every failure while reading (a malformed line, a count that is not a finite non-negative integer,
 compressed data that cannot be decompressed, a line over ``MAX_LINE_CHARS``) is a ``LogFormatError`` naming
 file and line; ``skip_bad_lines`` records it in ``stats.skipped`` and goes on.
@@ -215,18 +215,20 @@ class CarmenReader:
                                 f"{', '.join(given)} (--laser-*-deg) applies to FLASER / RLASER lines only")
 
     def _survey(self) -> str | None:
-        """The laser kind read by default: the first with poses among the first
-        ``DEFAULT_TOPIC_LINES`` lines, else the first RAWLASER kind, else None (the first met).
+        """The laser kind read by default: the first with poses up to ``DEFAULT_TOPIC_LINES`` lines
+        after the first laser line, else the first RAWLASER kind, else None (no laser line).
 
         Raises:
             LogFormatError: when none of the first ``DEFAULT_TOPIC_LINES`` lines (comments aside)
                 starts with a message name: a text file that is no CARMEN log is refused in
                 bounded time instead of being read to its end for nothing.
         """
-        raw, named, looked = None, False, 0
+        raw, named, looked, since_raw = None, False, 0, 0
         try:
             with open_text(self.path) as f:
-                while looked < DEFAULT_TOPIC_LINES:
+                # junk is told after DEFAULT_TOPIC_LINES lines; a log is looked at until its first laser
+                # line and DEFAULT_TOPIC_LINES lines beyond it (a kind with poses may follow RAWLASER)
+                while (named or looked < DEFAULT_TOPIC_LINES) and since_raw < DEFAULT_TOPIC_LINES:
                     line = f.readline(4096)  # the first word is enough; a longer line goes on as pieces
                     if not line:
                         break
@@ -235,6 +237,7 @@ class CarmenReader:
                     if not kind or kind.startswith("#"):
                         continue
                     looked += 1
+                    since_raw += raw is not None
                     named = named or _MESSAGE_NAME.fullmatch(kind) is not None
                     if kind in POSED_LASER_KINDS or (named and self.topic is not None):
                         return kind  # (a given topic is read whatever this returns)

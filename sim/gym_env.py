@@ -93,6 +93,7 @@ class OfficeEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
         if seed is not None:
             check_seed(seed)  # Gymnasium's own error otherwise (and a numpy one for 2**64)
+            seed = int(seed)  # Gymnasium takes Python ints only (numpy's are refused)
         super().reset(seed=seed)
         self.sim.reseed(int(self.np_random.integers(2**62)))
         d = self.path[1] - self.path[0]

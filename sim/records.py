@@ -10,6 +10,7 @@ import numpy as np
 
 from lms200 import Record
 from lms200.errors import InputError
+from lms200.timing import check_scan_rate
 
 from .lidar import LMS200Sim
 from .robot import RobotLimits, Tour, robot_tour, wrap
@@ -59,16 +60,12 @@ def odometry_poses(truth: np.ndarray, config: OdometryConfig, rng: np.random.Gen
 
 
 def check_rate(rate_hz: object, sensor: SensorConfig) -> None:
-    """``rate_hz`` (scans/s kept) is None (every scan) or a number in (0, the sensor's scan rate]:
-    a higher rate cannot be kept (37.5 scans/s at 0.5 deg); InputError naming it otherwise."""
-    if rate_hz is None:
-        return
-    if isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float)) or not 0 < rate_hz < math.inf:
+    """``rate_hz`` (scans/s kept) is None (every scan) or a number in (0, the sensor's scan rate]
+    (:func:`lms200.timing.check_scan_rate`); InputError naming it otherwise."""
+    if rate_hz is not None and (isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float))
+                                or not 0 < rate_hz < math.inf):
         raise InputError(f"rate_hz: must be a finite number of scans/s > 0 or None, got {rate_hz!r}")
-    most = 1.0 / sensor.scan_period
-    if rate_hz > most * (1 + 1e-9):
-        raise InputError(f"rate_hz: {rate_hz:g} scans/s is more than the sensor gives ({most:g} scans/s at "
-                         f"{math.degrees(sensor.angle_increment):g} deg); omit it to keep every scan")
+    check_scan_rate(rate_hz, sensor.angle_increment)
 
 
 def scan_stamps(sensor: SensorConfig, duration: float, rate_hz: float | None = None) -> np.ndarray:

@@ -235,6 +235,8 @@ def test_gym_reset_seed_must_be_a_whole_number(seed: object) -> None:
 
     with pytest.raises(InputError, match="^seed: must be a whole number >= 0"):
         OfficeEnv().reset(seed=seed)  # type: ignore[arg-type]
+    a, b = OfficeEnv(), OfficeEnv()
+    assert np.array_equal(a.reset(seed=np.int64(3))[0], b.reset(seed=3)[0])  # numpy ints are seeds too
 
 
 def test_calibration_of_too_few_scans_says_so_and_prints_no_nan() -> None:
@@ -358,3 +360,14 @@ def test_sensor_config_errors_are_lmsbench_errors(kw: dict, message: str) -> Non
 
     with pytest.raises(InputError, match=message):  # were bare ValueErrors
         SensorConfig(**kw)
+
+
+@pytest.mark.parametrize("value", [0.5, 1e300, float("nan"), -1e-3, float("inf")])
+def test_sigma_bearing_is_a_bearing_error_of_radians(value: float) -> None:
+    """sigma_bearing took any value >= 0: 1000 rad gave 103 lines, 1e160 none, both silently."""
+    from features.errors import ConfigError
+    from features.registry import make_config
+
+    with pytest.raises(ConfigError, match=r"^sigma_bearing: must be a number in \[0, 0.1\] rad"):
+        make_config("sensor", sigma_bearing=value)
+    assert make_config("sensor", sigma_bearing=0.005).sigma_bearing == 0.005

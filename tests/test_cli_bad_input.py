@@ -146,6 +146,7 @@ CASES = [
     (["simulate", "--rate-hz", "-3", "--out", O], "--rate-hz"),
     (["simulate", "--rate-hz", "0", "--out", O], "--rate-hz"),
     (["simulate", "--rate-hz", "nan", "--out", O], "--rate-hz"),
+    (["simulate", "--rate-hz", "40", "--out", O], "--rate-hz: 40 scans/s is more than the sensor gives (37.5"),
     (["simulate", "--world", "offfice", "--out", O], "offfice"),
     (["simulate", "--world", "{missing.json}", "--out", O], "missing.json"),
     (["simulate", "--world", "{binary.json}", "--out", O], "binary.json"),
@@ -196,6 +197,7 @@ CASES = [
     (["compare", "{empty_dir}", "--out", O], "empty_dir"),
     (["compare", "{notalog.clf}", "--out", O], "no laser"),
     (["compare", "office", "--format", "xls", "--out", O], "--format"),
+    (["compare", "office", "--rate", "40", "--out", O], "--rate: 40 scans/s is more than the sensor gives (37.5"),
     # slam
     (["slam", "{simrun}", "--max-scans", "0", "--out", O], "--max-scans"),
     (["slam", "{simrun}", "--every", "0", "--out", O], "--every"),
@@ -316,6 +318,7 @@ CASES = [
     (["sim2real", "{binary.clf}", "--out", O], "binary"),
     (["sim2real", "{good.clf}", "--world", "offfice", "--out", O], "offfice"),
     (["sim2real", "{good.clf}", "--seeds", "-1", "--out", O], "--seeds"),
+    (["sim2real", "{good.clf}", "--rate-hz", "1e9", "--out", O], "--rate-hz: 1e+09 scans/s is more than"),
     (["sim2real", "{good.clf}", "--world", "office", "--fit-rooms", "--out", O], "--fit-rooms"),
     (["sim2real", "{good.clf}", "--duration", "inf", "--out", O], "--duration"),
     (["sim2real", "{good.clf}", "--duration", "1e300", "--out", O], "--duration"),  # a tour that long never ends

@@ -182,6 +182,8 @@ def test_rawlaser_lines_read_without_poses_and_robotlaser_is_preferred(tmp_path:
     assert all(r.odom == (1.0, 2.0, 0.5) for r in read_log(both))
     assert reader.stats.other_lasers() == {"RAWLASER1": 4}
     assert [len(r.scan) for r in read_log(both, topic="RAWLASER1")] == [361] * 4
+    late = write(tmp_path, "late.log", ["PARAM x 1 host 0"] * 12_000 + both.read_text().splitlines())
+    assert read_log(late)._survey() == "ROBOTLASER1"  # lasers that start late: the same choice
     short = write(tmp_path, "short.log", [rawlaser(361, 360 * res, res), rawlaser(361, 360 * res, res)
                                           .replace("RAWLASER1 0", "RAWLASER1 0", 1).replace(" 361 ", " 360 ", 1)])
     with pytest.raises(LogFormatError, match=r"short.log:2: malformed RAWLASER1 line"):
@@ -308,6 +310,25 @@ def test_compressed_logs_are_read_in_place_and_written_by_suffix(tmp_path: Path,
     reader = read_log(cut, skip_bad_lines=True)
     kept = len(list(reader))  # bzip2 gives nothing of a 900 kB block that is cut
     assert (0 <= kept if suffix == ".bz2" else 0 < kept) and kept < 60 and "cannot read on" in reader.stats.stopped
+
+
+def test_damage_before_the_first_scan_is_reported_as_damage(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """info / compare --skip-bad-lines on a log whose compressed stream breaks before its first scan
+    said "no laser messages found: not a CARMEN log"; they now say where it stops being readable."""
+    from experiments.cli import main
+
+    rng = np.random.default_rng(2)
+    odom = [f"ODOM {x:.6f} {y:.6f} 0 0 0 0 {t} host {t}" for t, (x, y) in enumerate(rng.uniform(0, 9, (2000, 2)))]
+    text = ("\n".join(odom + [flaser(181)] * 50) + "\n").encode()
+    path = tmp_path / "cut.log.gz"
+    data = gzip.compress(text)
+    path.write_bytes(data[: len(data) // 3])  # cut inside the ODOM lines
+    for argv in (["info", str(path), "--skip-bad-lines"],
+                 ["compare", str(path), "--skip-bad-lines", "--methods", "sensor", "--out", str(tmp_path / "o")]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "no scan read: the file stops being readable at line" in err, err
+        assert "not a CARMEN log" not in err
 
 
 @pytest.mark.parametrize("kind", ["tar", "tar.gz", "zip"])

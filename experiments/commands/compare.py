@@ -13,6 +13,7 @@ from typing import Any
 import yaml
 
 from lms200 import LmsbenchError
+from lms200.timing import check_scan_rate
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
 from experiments.options import DURATION, SEED, check_methods, check_out, check_seeds, count, positive
@@ -96,6 +97,10 @@ def run(args: argparse.Namespace) -> int:
             raise
         except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
             raise LmsbenchError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
+    if any(not Path(spec).exists() for spec in args.sources):  # a world is simulated at --rate
+        import sim
+
+        check_scan_rate(args.rate, (sensor or sim.SensorConfig()).angle_increment, "--rate")
     warm_up_kernels()
     sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans,
                             read_options=read_log_options(args), poses=args.poses, sensor=sensor)

@@ -5,6 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from lms200 import read_log
+from lms200.timing import check_scan_rate
+
 from experiments.logargs import add_log_options, read_log_options
 from experiments.options import (
     DURATION,
@@ -66,6 +69,9 @@ def run(args: argparse.Namespace) -> int:
     if args.sensor is not None:
         check_yaml(args.sensor, "a sensor YAML")
         sensor = SensorConfig.from_yaml(args.sensor)
+    first = next(iter(read_log(args.log, **read_options)), None)  # the log's resolution, before any work
+    if first is not None:
+        check_scan_rate(args.rate_hz, sensor.angle_increment if sensor else first.scan.angle_increment, "--rate-hz")
     result = sim2real(args.log, world=args.world, seeds=args.seeds, duration=args.duration, rate_hz=args.rate_hz,
                       stride=args.stride, max_scans=args.max_scans, sensor=sensor, read_options=read_options,
                       fit_rooms=args.fit_rooms, probe_duration=args.probe_duration)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from lms200.timing import check_scan_rate
 from lms200.yamlio import load as load_yaml
 
 import argparse
@@ -79,12 +80,7 @@ def _config(args: argparse.Namespace):
             raise InputError(f"{args.config}: {exc}") from None
         if cfg.clutter is not None and not 0 <= cfg.clutter <= MAX_CLUTTER:
             raise InputError(f"{args.config}: clutter must be in [0, {MAX_CLUTTER:g}], got {cfg.clutter}")
-        from sim.records import check_rate
-
-        try:
-            check_rate(cfg.rate_hz, cfg.sensor)
-        except InputError as exc:
-            raise InputError(f"{args.config}: {exc}") from None
+        check_scan_rate(cfg.rate_hz, cfg.sensor.angle_increment, f"{args.config}: rate_hz")
         return cfg
     for dest, default in DEFAULTS.items():
         if getattr(args, dest) is None:
@@ -114,12 +110,7 @@ def _config(args: argparse.Namespace):
     else:
         sensor = base(n_beams=beams, resolution_deg=args.resolution_deg, units=args.units,
                       **({} if args.ideal or args.units == "mm" else {"noise_sigma": 0.01}))
-    from sim.records import check_rate
-
-    try:
-        check_rate(args.rate_hz, sensor)
-    except InputError as exc:
-        raise InputError(f"--{exc}".replace("rate_hz:", "rate-hz:", 1)) from None
+    check_scan_rate(args.rate_hz, sensor.angle_increment, "--rate-hz")
     return SimulationConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz,
                             sensor=sensor, odometry=OdometryConfig() if args.odometry else None,
                             clutter=args.clutter)

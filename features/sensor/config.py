@@ -12,6 +12,7 @@ from .engine import Params
 
 CM_MODE_RANGE_MAX = 10.0  # m: a scan with a larger range_max comes in SICK cm codes (1 cm steps)
 MAX_HOUGH_ANGLES = 1001  # most normal angles searched per band (bounds the accumulator)
+MAX_SIGMA_BEARING = 0.1  # rad (5.7 deg): ten beam steps at 0.5 deg; the logs read 0-5 mrad
 
 
 @dataclass(frozen=True)
@@ -60,7 +61,7 @@ class SensorMethodConfig:
     acute_check: bool = True  # the paper's remedy: reject a corner when the variance of the ranges
     acute_min_var: float = 1.0  # of the beams within k of it is below acute_min_var * sigma_r**2
     arc_check: bool = True  # drop lines whose neighbourhood is one circle turning >= corner_min_turn (round surfaces)
-    sigma_bearing: float = 0.0  # bearing noise std, rad: the range error it causes grows as d tan(incidence)
+    sigma_bearing: float = 0.0  # bearing noise std, rad (<= MAX_SIGMA_BEARING): the range error grows as d tan(incidence)
 
     def __post_init__(self) -> None:
         checks.integer("k", self.k, 1, checks.MAX_BEAMS // 2)  # a window wider than any scan taken: no line
@@ -89,7 +90,8 @@ class SensorMethodConfig:
         checks.non_negative("corner_psi", self.corner_psi)
         checks.non_negative("corner_max_dist", self.corner_max_dist, "m")
         checks.non_negative("acute_min_var", self.acute_min_var, "sigma_r^2")
-        checks.non_negative("sigma_bearing", self.sigma_bearing, "rad")
+        checks.between("sigma_bearing", self.sigma_bearing, 0.0, MAX_SIGMA_BEARING,
+                       "rad (a bearing error of a few mrad; degrees given as radians?)")
         object.__setattr__(self, "_params", Params(
             int(self.k), float(self.ad_tau), float(self.psi_split), float(self.psi_tau), int(self.hough_subdiv),
             int(self.hough_angles), float(self.band_tau), float(self.band_min), float(self.bin_tau),
