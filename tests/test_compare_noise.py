@@ -62,3 +62,29 @@ def test_records_in_memory_get_the_noise_a_log_gets(tmp_path) -> None:
     assert in_memory.estimate_bearing_sigma() == bearing_sigma(read_log(path))
     assert in_memory.estimate_extractor_sigma() == neighbour_sigma(read_log(path))
     assert 0.006 < in_memory.estimate_extractor_sigma() < 0.012  # the 8 mm of the run, cm-rounded
+
+
+def test_compare_runs_the_sensor_method_with_the_sources_bearing_noise() -> None:
+    """compare hands a log-like source's bearing-noise estimate to the sensor method (issue #13):
+    its rows equal extract() given that noise, and differ from extract() without it; a range noise
+    the caller sets for the sensor method turns the estimate off for it, as for the fit scatter."""
+    from experiments.compare import NOISE_FIELDS, Source, _with_noise, compare
+    from features import extract
+    from features.registry import get_method
+    from sim import SensorConfig, simulate_records
+
+    recs = simulate_records("office", seed=5, duration=4.0, rate_hz=4, sensor=SensorConfig(noise_sigma=0.008))
+    src = Source.from_records(recs, name="run")
+    src.estimate_extractor_sigma = lambda: 0.01
+    src.estimate_bearing_sigma = lambda: 0.02
+    table = compare([src], ["sensor"])
+    noise = {f: 0.01 for f in NOISE_FIELDS if f in ("sigma_r", "sigma_r_cm")}
+    with_b = [len(extract(r.scan, "sensor", sigma_bearing=0.02, **noise).lines) for r in recs]
+    without = [len(extract(r.scan, "sensor", **noise).lines) for r in recs]
+    assert table["n_lines"].tolist() == with_b
+    assert with_b != without  # the bearing noise changes the lines: the test can fail
+    runs = [("sensor", get_method("sensor").run, get_method("sensor").config_type())]
+    (_, _, given), = _with_noise(runs, {"sensor": {"sigma_r": 0.02}}, 0.01, None, 0.02)
+    assert given.sigma_bearing == 0.0  # the caller's noise: no estimate
+    (_, _, estimated), = _with_noise(runs, {}, 0.01, None, 0.02)
+    assert estimated.sigma_bearing == 0.02 and estimated.sigma_r == 0.01
