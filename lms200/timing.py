@@ -47,7 +47,7 @@ def check_scan_rate(rate_hz: object, angle_increment: float, name: str = "rate_h
     if rate_hz is None:
         return
     if isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float)) or not 0 < rate_hz < math.inf:
-        raise InputError(f"{name}: must be a finite number of scans/s > 0, got {rate_hz!r}")
+        raise InputError(f"{name}: must be a finite number of scans/s > 0 (or None: every scan), got {rate_hz!r}")
     most = 1.0 / scan_period(angle_increment)
     if rate_hz > most * (1 + 1e-9):
         raise InputError(f"{name}: {rate_hz:g} scans/s is more than the sensor gives ({most:g} scans/s at "
