@@ -9,15 +9,13 @@ wrong kind. ``experiments.cli`` prints either as ``lmsbench CMD: error: ...`` wi
 from __future__ import annotations
 
 import argparse
-import lzma
 import math
 import os
 import tempfile
-import zlib
 from pathlib import Path
 from typing import Callable, Sequence
 
-from lms200.carmen import COMPRESSION_SUFFIXES, archive_kind, compression, open_bytes
+from lms200.carmen import COMPRESSION_SUFFIXES, READ_ERRORS, archive_kind, compression, open_bytes
 from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
 
 
@@ -117,7 +115,7 @@ def _text_head(path: Path, what: str) -> None:
         try:
             with open_bytes(path) as fh:
                 head = fh.read(4096)
-        except (OSError, EOFError, zlib.error, lzma.LZMAError) as exc:
+        except READ_ERRORS as exc:
             raise InputError(f"{path}: broken {kind} file ({exc})") from None
     archive = archive_kind(head)
     if archive:

@@ -70,7 +70,7 @@ DEFAULT_TOPIC_LINES = 10_000  # lines looked at to choose the default laser kind
 _MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]*")  # how every CARMEN message line starts
 ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
 MAX_LINE_CHARS = 1 << 20  # a longer line is malformed (bounds memory on damaged files)
-_READ_ERRORS = (OSError, EOFError, zlib.error, lzma.LZMAError)  # what damaged or truncated compressed data raises
+READ_ERRORS = (OSError, EOFError, zlib.error, lzma.LZMAError)  # what damaged or truncated compressed data raises
 # compressed logs are read in place, told apart by their first bytes (not their names)
 COMPRESSIONS = {"gzip": (b"\x1f\x8b", gzip.open), "bzip2": (b"BZh", bz2.open), "xz": (b"\xfd7zXZ\x00", lzma.open)}
 COMPRESSION_SUFFIXES = {".gz": "gzip", ".bz2": "bzip2", ".xz": "xz"}
@@ -135,7 +135,7 @@ def open_text(path: str | Path) -> IO[str]:
     with open_bytes(path) as f:
         try:
             head = f.read(4096)
-        except _READ_ERRORS:
+        except READ_ERRORS:
             head = b""  # damaged data: reported with its line by the reader
     what = archive_kind(head)
     if what:
@@ -186,7 +186,7 @@ class CarmenReader:
                     too_long = len(line) > MAX_LINE_CHARS
                     while too_long and line and not line.endswith("\n"):  # skip to the end of the line
                         line = f.readline(MAX_LINE_CHARS)
-                except _READ_ERRORS as exc:  # corrupt or truncated gzip data
+                except READ_ERRORS as exc:  # corrupt or truncated gzip data
                     reason = f"cannot read on (damaged or truncated file): {type(exc).__name__}: {exc}"
                     if not self.skip_bad_lines:
                         raise LogFormatError(self.path, line_no + 1, reason) from None
@@ -242,7 +242,7 @@ class CarmenReader:
                     if kind in POSED_LASER_KINDS or (named and self.topic is not None):
                         return kind  # (a given topic is read whatever this returns)
                     raw = raw or (kind if kind in RAW_LASER_KINDS else None)
-        except (*_READ_ERRORS, UnicodeError):
+        except (*READ_ERRORS, UnicodeError):
             return raw  # damage is reported, with its line, by the pass itself
         if looked >= DEFAULT_TOPIC_LINES and not named:
             raise LogFormatError(self.path, 1, f"not a CARMEN log: none of its first {DEFAULT_TOPIC_LINES:,} lines "
