@@ -65,12 +65,7 @@ class Source:
         :func:`log_source` estimates it from its file."""
         records = list(records)
         if truths is None:
-            from features.noise_estimate import bearing_sigma, fit_sigma, neighbour_sigma
-
-            return cls(name, "log", seed, records, None, len(records),
-                       estimate_extractor_sigma=lambda: neighbour_sigma(records),
-                       estimate_fit_sigma=lambda: fit_sigma(records),
-                       estimate_bearing_sigma=lambda: bearing_sigma(records))
+            return cls(name, "log", seed, records, None, len(records), **log_noise_estimates(lambda: records))
         truths = list(truths)
         if len(truths) != len(records):
             raise LmsbenchError(f"{len(records)} records but {len(truths)} truths")
@@ -190,26 +185,22 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
             raise LmsbenchError(f"{path}: too few straight runs of beams to estimate the range noise; give --sigma")
         return float(noise.sigma_m)
 
-    def estimate_extractor_sigma() -> float:
-        from features.noise_estimate import neighbour_sigma
-
-        return neighbour_sigma(read_log(path, **options))
-
-    def estimate_bearing_sigma() -> float:
-        from features.noise_estimate import bearing_sigma
-
-        return bearing_sigma(read_log(path, **options))
-
-    def estimate_fit_sigma() -> float:
-        from features.noise_estimate import fit_sigma
-
-        return fit_sigma(read_log(path, **options))
-
     return Source(Path(path).name, "log", None, records(), None, max_scans, sigma_r=None,
                   pose_of=(lambda rec: rec.odom) if corrected else None, estimate_sigma=estimate_sigma,
-                  reader=reader, estimate_extractor_sigma=estimate_extractor_sigma,
-                  estimate_fit_sigma=estimate_fit_sigma, estimate_bearing_sigma=estimate_bearing_sigma,
+                  reader=reader, **log_noise_estimates(lambda: read_log(path, **options)),
                   settings={"log": str(path), "stride": stride, "poses": poses, **_plain(options)})
+
+
+def log_noise_estimates(scans: Callable[[], Iterable[Any]]) -> dict[str, Callable[[], float]]:
+    """The ``estimate_*`` fields of a log-like Source (what ``sigma_r="auto"`` gives the extractors
+    on a log), each from a fresh pass over ``scans()`` (the whole log, not its stride): the
+    neighbour scatter for every method's range noise, the scatter about fitted lines for the split
+    / merge tests of split_merge and iepf, the bearing noise for the sensor method's line tests."""
+    from features.noise_estimate import bearing_sigma, fit_sigma, neighbour_sigma
+
+    return dict(estimate_extractor_sigma=lambda: neighbour_sigma(scans()),
+                estimate_fit_sigma=lambda: fit_sigma(scans()),
+                estimate_bearing_sigma=lambda: bearing_sigma(scans()))
 
 
 def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: float = 30.0,
