@@ -69,9 +69,12 @@ def run(args: argparse.Namespace) -> int:
     if args.sensor is not None:
         check_yaml(args.sensor, "a sensor YAML")
         sensor = SensorConfig.from_yaml(args.sensor)
-    first = next(iter(read_log(args.log, **read_options)), None)  # the log's resolution, before any work
-    if first is not None:
-        check_scan_rate(args.rate_hz, sensor.angle_increment if sensor else first.scan.angle_increment, "--rate-hz")
+    if sensor is not None:
+        check_scan_rate(args.rate_hz, sensor.angle_increment, "--rate-hz")
+    else:  # the sensor is calibrated to the log: its resolution, read before any work
+        first = next(iter(read_log(args.log, **read_options)), None)
+        if first is not None:
+            check_scan_rate(args.rate_hz, first.scan.angle_increment, "--rate-hz")
     result = sim2real(args.log, world=args.world, seeds=args.seeds, duration=args.duration, rate_hz=args.rate_hz,
                       stride=args.stride, max_scans=args.max_scans, sensor=sensor, read_options=read_options,
                       fit_rooms=args.fit_rooms, probe_duration=args.probe_duration)
