@@ -43,6 +43,7 @@ from lms200.noise import CLIP_SIGMAS, JUMP_FRACTION, MIN_RANGE_M, QUANTUM_CANDID
 from lms200.noise import _CLIP_STD_FACTOR as CLIP_STD_FACTOR
 
 from ..angles import TWO_PI
+from ..angles import wrap_one as wrap  # one compiled wrap for both engines
 from ..jit import inline_kernel, kernel
 from ..rows import append_rows, finish_rows, new_rows
 
@@ -119,15 +120,6 @@ class Grid(NamedTuple):
     template: np.ndarray  # log cos(m step) for |m| <= zero, floored (eq. 5)
     twice_cos: float  # 2 cos(D), as numpy computes it: the noise estimate's collinearity residuals
     phases: np.ndarray  # (subdiv, L): template[r + subdiv q] at [r, L - 1 - q] (the floor past its end)
-
-
-@kernel
-def wrap(a: float) -> float:
-    """An angle wrapped to (-pi, pi] (rad): pi - (pi - a) mod 2 pi, the modulo skipped where it
-    changes nothing (0 <= pi - a < 2 pi, the common case)."""
-    t = math.pi - a
-    w = math.pi - t if 0.0 <= t < TWO_PI else math.pi - t % TWO_PI
-    return w + TWO_PI if w <= -math.pi else w
 
 
 # -- sums in numpy's pairwise order ---------------------------------------------------------------
