@@ -17,6 +17,7 @@ from typing import Callable, Sequence
 
 from lms200.carmen import COMPRESSION_SUFFIXES, READ_ERRORS, archive_kind, compression, open_bytes
 from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
+from lms200.timing import MAX_DURATION_S  # longest simulated run (s): the simulator's own bound
 
 
 
@@ -72,8 +73,6 @@ def count(lo: int = 1, hi: int | None = None) -> Callable[[str], float]:
 
 
 SEED = count(0, 2**32 - 1)
-#: Longest simulated run of one command (s): the scans are held in memory (~1 GB an hour at 37.5 scans/s).
-MAX_DURATION_S = 3600.0
 DURATION = number(0.0, MAX_DURATION_S, lo_open=True, unit="s")
 PORT = count(0, 65535)
 

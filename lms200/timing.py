@@ -23,6 +23,10 @@ from .errors import InputError
 MIRROR_TURN_S = 1.0 / 75.0  # s: one mirror revolution (75 Hz)
 ONE_TURN_RESOLUTION_RAD = float(np.deg2rad(1.0))  # one mirror turn measures every 1 deg
 CM_MODE_MIN_RANGE_MAX_M = 10.0  # m: a scan whose range_max exceeds this holds cm codes (81.83 m max)
+#: longest simulated run (s) of one call or command: 135,000 scans at 37.5 scans/s (~0.4 GB of ranges,
+#: held in memory); a duration of 1e9 s planned a tour for 35 minutes and more before running out of
+#: memory. Here, beside the scan rate, so that the simulator and the light command-line options share it.
+MAX_DURATION_S = 3600.0
 
 
 def turns_per_scan(angle_increment: float) -> int:

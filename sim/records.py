@@ -9,6 +9,7 @@ import numpy as np
 
 from lms200 import Record
 from lms200.errors import InputError
+from lms200.timing import MAX_DURATION_S as MAX_DURATION_S  # re-exported: sim's bound
 from lms200.timing import check_scan_rate
 
 from .lidar import LMS200Sim
@@ -94,9 +95,6 @@ def simulate_tour(world: World, tour: Tour, stamps: np.ndarray, sensor: SensorCo
     return records
 
 
-#: longest simulated run (s), as on the command line: 135,000 scans at 37.5 scans/s (~0.4 GB of
-#: ranges); a duration of 1e9 s planned a tour for 35 minutes and more before running out of memory
-MAX_DURATION_S = 3600.0
 
 
 def simulate_records(world: str | World = "office", seed: int = 0, duration: float = 120.0,

@@ -170,9 +170,10 @@ def test_sensor_beam_counts_beyond_any_scan(field: str) -> None:
 def test_simulate_records_duration_is_bounded() -> None:
     """duration=1e9 planned a tour for over 30 s and then ran out of memory; now refused at once."""
     from sim import simulate_records
+    from experiments import options
     from sim.records import MAX_DURATION_S
 
-    assert MAX_DURATION_S == 3600.0  # the command line's bound (experiments.options.MAX_DURATION_S)
+    assert MAX_DURATION_S == 3600.0 and options.MAX_DURATION_S == MAX_DURATION_S  # one bound for both
     with pytest.raises(InputError, match=r"^duration: must be a number of seconds in \(0, 3600\]"):
         simulate_records("office", seed=0, duration=1e9)
 

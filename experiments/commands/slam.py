@@ -5,6 +5,7 @@ from __future__ import annotations
 from lms200.yamlio import load as load_yaml
 
 import argparse
+import bisect
 import sys
 from typing import Any
 from pathlib import Path
@@ -97,6 +98,28 @@ def _check_extractor(cfg: Any, source: Path | None) -> None:
         raise InputError(f"{where}extractor_params: {' '.join(str(exc).split())}") from None
 
 
+def in_time_order(stamps: list[float]) -> list[int]:
+    """Indices of the longest run of scans, in log order, whose stamps (s) never decrease: the
+    fewest scans dropped to leave the rest in time order (a stamp that jumps ahead costs that one
+    scan, not every scan after it). O(n log n)."""
+    tails: list[float] = []  # tails[j]: the least last stamp of a kept run of length j + 1
+    tail_at: list[int] = []  # its scan index
+    before = [-1] * len(stamps)  # the scan kept before scan k in the longest run ending at k
+    for k, t in enumerate(stamps):
+        j = bisect.bisect_right(tails, t)
+        if j == len(tails):
+            tails.append(t)
+            tail_at.append(k)
+        else:
+            tails[j], tail_at[j] = t, k
+        before[k] = tail_at[j - 1] if j else -1
+    keep, k = [], tail_at[-1] if tail_at else -1
+    while k >= 0:
+        keep.append(k)
+        k = before[k]
+    return keep[::-1]
+
+
 def _check_input(path: Path) -> None:
     """A simulator folder (scans.clf), a ROS 2 bag folder, or a log file of a known kind."""
     if not path.exists():
@@ -124,8 +147,16 @@ def run(args: argparse.Namespace) -> int:
     stamps = [r.scan.stamp for r in data.records]
     back = next((k for k in range(1, len(stamps)) if stamps[k] < stamps[k - 1]), None)
     if back is not None:
-        raise InputError(f"{data.sources.get('scans', args.input)}: time goes backwards at scan {back} "
-                         f"(stamp {stamps[back]:.6f} s after {stamps[back - 1]:.6f} s); SLAM needs scans in time order")
+        where = data.sources.get("scans", args.input)
+        if not args.skip_bad_lines:
+            raise InputError(f"{where}: time goes backwards at scan {back} (stamp {stamps[back]:.6f} s after "
+                             f"{stamps[back - 1]:.6f} s); SLAM needs scans in time order (--skip-bad-lines "
+                             "skips the fewest scans that leave the rest in order)")
+        keep = in_time_order(stamps)
+        kept = set(keep)
+        for k in (k for k in range(len(stamps)) if k not in kept):
+            print(f"{where}: skipped scan {k} (stamp {stamps[k]:.6f} s): out of time order", file=sys.stderr)
+        data.records = [data.records[k] for k in keep]
     if config.motion.use_odometry and data.odometry is None:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
     if simulated_interlaced(args.input) is False and config.preset == "default" and config.alignment.deskew:

@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..angles import TWO_PI
+from ..angles import wrap_one as wrap  # one compiled wrap for both engines
 from ..jit import kernel
 from ..rows import append_rows, finish_rows, new_rows
 
@@ -53,15 +53,6 @@ class CornerParams(NamedTuple):
     max_distance: float  # m
     breakpoint_lambda: float  # rad
     sigma: float  # m
-
-@kernel
-def wrap(a: float) -> float:
-    """An angle wrapped to (-pi, pi] (rad): pi - (pi - a) mod 2 pi, the modulo skipped where it
-    changes nothing (0 <= pi - a < 2 pi, the common case)."""
-    t = math.pi - a
-    w = math.pi - t if 0.0 <= t < TWO_PI else math.pi - t % TWO_PI
-    return w + TWO_PI if w <= -math.pi else w
-
 
 @kernel
 def breakpoint_distance(r_prev: float, dphi: float, lam: float, sigma: float) -> float:

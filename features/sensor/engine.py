@@ -43,6 +43,7 @@ from lms200.noise import CLIP_SIGMAS, JUMP_FRACTION, MIN_RANGE_M, QUANTUM_CANDID
 from lms200.noise import _CLIP_STD_FACTOR as CLIP_STD_FACTOR
 
 from ..angles import TWO_PI
+from ..angles import wrap_one as wrap  # one compiled wrap for both engines
 from ..jit import inline_kernel, kernel
 from ..rows import append_rows, finish_rows, new_rows
 
@@ -119,15 +120,6 @@ class Grid(NamedTuple):
     template: np.ndarray  # log cos(m step) for |m| <= zero, floored (eq. 5)
     twice_cos: float  # 2 cos(D), as numpy computes it: the noise estimate's collinearity residuals
     phases: np.ndarray  # (subdiv, L): template[r + subdiv q] at [r, L - 1 - q] (the floor past its end)
-
-
-@kernel
-def wrap(a: float) -> float:
-    """An angle wrapped to (-pi, pi] (rad): pi - (pi - a) mod 2 pi, the modulo skipped where it
-    changes nothing (0 <= pi - a < 2 pi, the common case)."""
-    t = math.pi - a
-    w = math.pi - t if 0.0 <= t < TWO_PI else math.pi - t % TWO_PI
-    return w + TWO_PI if w <= -math.pi else w
 
 
 # -- sums in numpy's pairwise order ---------------------------------------------------------------
@@ -811,11 +803,6 @@ def band_peaks(runs, log_d, bands, angle_min, subdiv, n_angles, grid):  # noqa: 
         t1, t2, t3 = cnt // 4, cnt // 2, (3 * cnt) // 4
         for a in range(n_angles):
             a_idx[a] = centre_idx + stride * (a - h2)
-            base = a_idx[a] + zero - f * subdiv
-            q1 = template_at(template, base - t1 * subdiv) + log_d[s + t1]
-            q2 = template_at(template, base - t2 * subdiv) + log_d[s + t2]
-            q3 = template_at(template, base - t3 * subdiv) + log_d[s + t3]
-            ref[a] = max(min(q1, q2), min(max(q1, q2), q3))  # median of three
         # the template entries of beams f + t at angle a: template[base - t subdiv], base = a_idx +
         # zero - f subdiv; inside the template (no clipping) for every angle of the band, they are
         # phases[base % subdiv, L - 1 - base // subdiv + t], contiguous in t (``flat``)
@@ -824,9 +811,18 @@ def band_peaks(runs, log_d, bands, angle_min, subdiv, n_angles, grid):  # noqa: 
         inside = lo_base - (cnt - 1) * subdiv >= 0 and hi_base <= n_tmpl - 1
         s_u = np.uint64(s)
         n_pad = (cnt + VOTE_BLOCK - 1) // VOTE_BLOCK * VOTE_BLOCK
-        for a in range(n_angles):
-            offset = (N_BINS / 2.0 + 1.0) - ref[a] * inv_width
+        # the band centre first: where its best pair of cells holds all cnt votes, no other angle can
+        # beat it (at most cnt votes, less the tie-break), and the other angles are not searched
+        # (the same peak as searching them all: 56 % of the office scans' runs, 48 % on MIT CSAIL)
+        n_done = n_angles
+        for ai in range(n_angles):
+            a = h2 if ai == 0 else (ai - 1 if ai <= h2 else ai)
             base = a_idx[a] + zero - f * subdiv
+            q1 = template_at(template, base - t1 * subdiv) + log_d[s + t1]
+            q2 = template_at(template, base - t2 * subdiv) + log_d[s + t2]
+            q3 = template_at(template, base - t3 * subdiv) + log_d[s + t3]
+            ref[a] = max(min(q1, q2), min(max(q1, q2), q3))  # median of three
+            offset = (N_BINS / 2.0 + 1.0) - ref[a] * inv_width
             # eq. 5: log p = log d + log cos(a - b), a lookup at a - b in the template (clipped
             # onto its ends, where it holds the floor)
             if inside:  # indexed unsigned (no negative-index wraparound, no slice to count references of): the loop vectorises
@@ -856,10 +852,19 @@ def band_peaks(runs, log_d, bands, angle_min, subdiv, n_angles, grid):  # noqa: 
             for c in range(N_BINS + 2):
                 w = w0 if c < 4 else (w1 if c < 8 else (w2 if c < 12 else w3))
                 counts_a[a, c] = np.int64((w >> np.uint64(16 * (c % 4))) & np.uint64(0xFFFF))
+            if ai == 0:
+                full = False
+                for c in range(N_BINS - 1):
+                    full |= counts_a[a, c + 1] + counts_a[a, c + 2] == cnt
+                if full:
+                    n_done = 1
+                    break
         best = -np.inf
         best_a = 0
         best_c = 0
         for a in range(n_angles):
+            if n_done == 1 and a != h2:
+                continue
             tie = -TIE_BREAK * abs(a - h2)
             for c in range(N_BINS - 1):
                 v = (counts_a[a, c + 1] + counts_a[a, c + 2]) + tie  # two adjacent cells
@@ -963,7 +968,10 @@ def gn_sums(d, bt, valid, use, f, s, cnt, ca, sa, rho, kb):  # noqa: ANN001, ANN
         g = dt * (bt[B_SIN, j] * ca - bt[B_COS, j] * sa)
         ic = 1.0 / c
         ic2 = ic * ic
-        wr = ic2 / (1.0 + g * g * ic2 * kb) if (c > MIN_COS) & valid[j] & use[s + t] else 0.0  # 1 / c^2 at kb = 0
+        # 1 / c^2 at kb = 0, where the division by 1 + 0 is skipped (a used beam's g and 1 / c are finite: the
+        # same value; one division a beam fewer)
+        wb = ic2 if kb == 0.0 else ic2 / (1.0 + g * g * ic2 * kb)
+        wr = wb if (c > MIN_COS) & valid[j] & use[s + t] else 0.0
         sums = add_normal_terms(sums, wr, g, res)
     return sums
 
@@ -997,7 +1005,7 @@ def gn_sums_inliers(d, bt, valid, f, cnt, ca, sa, rho, inv_sigma, st2, tau, z, i
         zt = res * ic * (inv_sigma if kb == 0.0 else inv_sigma / math.sqrt(1.0 + kg))
         use = (c > MIN_COS) & valid[j] & (abs(zt) <= tau)
         ic2 = ic * ic
-        wr = ic2 / (1.0 + kg) if use else 0.0  # gn_sums' weight
+        wr = (ic2 if kb == 0.0 else ic2 / (1.0 + kg)) if use else 0.0  # gn_sums' weight (its division skipped at kb = 0)
         sums = add_normal_terms(sums, wr, g, res)
         z[t] = zt
         inl[t] = use
