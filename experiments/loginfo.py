@@ -25,6 +25,7 @@ class LogSummary:
     invalid_fraction: float
     odometry: bool
     truth: bool
+    stamps_back: int = 0  # scans stamped before the previous scan of the log
 
     def as_dict(self) -> dict:
         """The fields as JSON-ready values, numbers as numbers: ``beams`` is the beam count (int)
@@ -47,6 +48,8 @@ class LogSummary:
             f"invalid (nan)   {100 * self.invalid_fraction:.2f} % of readings",
             f"odometry        {'yes' if self.odometry else 'no'}",
             f"true poses      {'yes' if self.truth else 'no'}",
+            "time order      " + (f"{self.stamps_back} scan{'s' * (self.stamps_back != 1)} stamped before the previous one "
+                                  "(slam needs --skip-bad-lines)" if self.stamps_back else "yes"),
         ]
 
 
@@ -57,12 +60,14 @@ def summarise(records: Iterable[Record]) -> LogSummary:
     stamps: list[float] = []
     readings = inf = nan = 0
     odom = truth = False
+    back = 0
     first = None
     for rec in records:
         s = rec.scan
         first = first or s
         n += 1
         sizes.add(len(s))
+        back += bool(stamps) and s.stamp < stamps[-1]
         stamps.append(s.stamp)
         readings += len(s)
         inf += int(np.isposinf(s.ranges).sum())
@@ -86,4 +91,5 @@ def summarise(records: Iterable[Record]) -> LogSummary:
         invalid_fraction=nan / readings,
         odometry=odom,
         truth=truth,
+        stamps_back=back,
     )

@@ -43,10 +43,13 @@ STATS_METHOD = "split_merge"  # the extractor whose segments the scene statistic
 MIN_SCAN_DT_S = 1.5  # odometry steps longer than this (s) say nothing of the motion within a scan
 METHODS = ("sensor", "split_merge", "iepf", "hough", "ransac")
 ORDER_MARGIN = 0.03  # two methods this far apart on the real log must keep their order in sim
-# Simulated runs: one per seed, since worlds differ more than stretches of one run do (on `mit`
-# with the MIT CSAIL sensor, one seed's explained fraction spreads by 0.03 (1 sd) between seeds;
-# six seeds bring the mean's spread to about 0.013).
-DEFAULT_SEEDS = (0, 1, 2, 3, 4, 5)
+# Simulated runs: one per seed (a world each). Worlds differ far more than stretches of one tour:
+# over 36 worlds (seeds 0-35, fits on seeds 100-103) one world's explained fraction spreads by
+# 0.041-0.059 (1 sd, per method; MIT CSAIL's and Intel's sensors), while thinning each 120 s tour
+# from 60 scans to 30 leaves that spread as it was (0.044-0.058). Six worlds of 60 scans left the
+# mean's sd at 0.017-0.024, so seed sets 0-5 and 18-23 read up to 0.066 apart; 24 worlds of 30
+# scans bring it to 0.009-0.012 at twice the extractor work.
+DEFAULT_SEEDS = tuple(range(24))
 # Share of no-return readings that the mit preset's glass (0.1 panels per 10 m and clutter level)
 # gives: 3.1 % in `lmsbench sim2real` of MIT CSAIL at glass 0.1 (six seeds; the sensor there has no
 # other no-return: no_return_prob 0, cm mode, nothing beyond 81 m), rounded. Glass per 10 m
@@ -54,14 +57,19 @@ DEFAULT_SEEDS = (0, 1, 2, 3, 4, 5)
 GLASS_NO_RETURN_SHARE = 0.03
 # The rough fill of the mit worlds' rooms (sim.clutter, make_world(rough=...)) is fitted to each log
 # (fit_rough): the share of valid beams at NEAR_M that STATS_METHOD's lines leave unexplained (3 cm),
-# on the log and on probe runs at the ROUGH_PROBES covers (ROUGH_PROBE_SEEDS, other seeds than the
+# on the log and on probe runs at the ROUGH_PROBES covers (PROBE_SEEDS, other seeds than the
 # report's), interpolated piecewise linearly.
 NEAR_M = (1.0, 4.0)
 ROUGH_PROBES = (0.0, 0.5, 1.0)
-ROUGH_PROBE_SEEDS = (100, 101, 102, 103)
+# The probe worlds of every fit (other seeds than the report's). Four worlds fitted Intel's fill and
+# relief at 0.32 / 0.34 (seeds 100-103), 0 / 0.56 (104-107) and 0 / 0.47 (108-111): one probe
+# world's split_merge share unexplained at 1-4 m spreads by 0.044 (1 sd), as much as the whole fill
+# moves it (0.26-0.33). Twelve worlds halve the fits' spread (the report's explained fractions moved
+# less than the fits: 36-world means 0.006 apart over those three fits; lines per scan 0.05).
+PROBE_SEEDS = tuple(range(100, 112))
 # The size of the mit worlds' rooms (make_world(scale=...)) is fitted to each log first (fit_scale):
 # of the valid readings at MID_M-MAX_M, the share at FAR_M or more (the far surfaces), on the log
-# and on probe runs at the SCALE_PROBES room sizes (ROUGH_PROBE_SEEDS, the fitted rough fill),
+# and on probe runs at the SCALE_PROBES room sizes (PROBE_SEEDS, the fitted rough fill),
 # interpolated piecewise linearly and clipped to the probes' range.
 MID_M, FAR_M, MAX_M = 2.0, 4.0, 8.0
 SCALE_PROBES = (1.0, 1.5, 2.0)
@@ -69,21 +77,24 @@ SCALE_PROBES = (1.0, 1.5, 2.0)
 # is fitted to each log after the rough fill (fit_relief): the share of joints between two straight
 # stretches that step or bend (relief_share; no extractor), on the log and on probe runs at RELIEF_PROBES.
 RELIEF_PROBES = (0.0, 0.5, 1.0)
-# Simulated seconds of each probe run (every fit). A mit world takes about 1.6 s of CPU to build and
-# 120 s of scans at 3 Hz about 1.6 s to simulate, so long runs cost little, and a 20 s run sees
+# Simulated seconds of each probe run (every fit). A mit world takes about 0.6 s of CPU to build and
+# 120 s of scans at 1 Hz about 0.4 s to simulate, so long runs cost little, and a 20 s run sees
 # one or two rooms: whether the robot lingers before a relief panel moved a world's break share at
 # relief 0.5 from 0.004 to 0.19 (Intel's sensor, seeds 8 and 100). At 120 s, four probe worlds
 # fit a log of two other worlds at relief 0.5 / 0.75 to 0.31-0.51 / 0.66-0.86.
 PROBE_DURATION_S = 120.0
-PROBE_RATE_HZ = 3.0  # scans kept per simulated second in the probe runs
+# Scans kept per simulated second in the probe runs: 1 (it was 3) keeps each world's statistics (12
+# worlds, Intel's sensor, rough 0.5, relief 0.5: split_merge's share unexplained at 1-4 m 0.328 at
+# 3 Hz and 1 Hz, sd 0.043 both; break share 0.079 both) and takes a probe run from 1.4 s of CPU to
+# 1.0 s (building the world: 0.55 s), so twelve probe worlds cost twice four.
+PROBE_RATE_HZ = 1.0
 # The report's runs sample each tour as the probes do: the same PROBE_DURATION_S of it, so the
-# fitted amounts and the report see the same rooms; thinned to DEFAULT_RATE_HZ (every 75th scan
-# of the sensor's 37.5 Hz), which keeps the extractors' work where the 20 s runs at 3 Hz had it
-# (60 scans a seed). A report over the tour's first 20 s saw one or two rooms and left fewer
-# beams unexplained than the probes the fill was fitted on (MIT CSAIL's probes at fill 0-1: 0.27-0.34
-# of the beams at 1-4 m over 120 s, 0.22-0.26 over 20 s).
+# fitted amounts and the report see the same rooms; thinned to DEFAULT_RATE_HZ (30 scans a world;
+# see DEFAULT_SEEDS). A report over the tour's first 20 s saw one or two rooms and left fewer beams
+# unexplained than the probes the fill was fitted on (MIT CSAIL's probes at fill 0-1: 0.27-0.34 of
+# the beams at 1-4 m over 120 s, 0.22-0.26 over 20 s).
 DEFAULT_DURATION_S = PROBE_DURATION_S  # simulated seconds per seed
-DEFAULT_RATE_HZ = 0.5  # simulated scans kept per second in the report's runs
+DEFAULT_RATE_HZ = 0.25  # simulated scans kept per second in the report's runs
 RELIEF_WINDOW = 10  # beams in each straight stretch either side of a joint
 RELIEF_RANGE_M = (0.5, 4.0)  # beams used (m)
 RELIEF_STRAIGHT_TAU = 2.0  # a stretch is straight when its points' rms off their line is at most this x sigma
@@ -219,6 +230,7 @@ class Sim2RealResult:
     rough: RoughFit | None = None  # the mit worlds' rough fill fitted to the log (fit_rough)
     scale: ScaleFit | None = None  # the mit worlds' room size fitted to the log (fit_scale)
     relief: ReliefFit | None = None  # the mit worlds' wall relief fitted to the log (fit_relief)
+    probe_seeds: list[int] = field(default_factory=list)  # the worlds of the fits' probe runs (none: no fit)
 
 
 def no_return_share(records: Sequence[Record], max_reading: float | None = None) -> float:
@@ -299,7 +311,7 @@ def far_share(records: Sequence[Record]) -> float:
 def _probe_shares(statistic: Callable[[Sequence[Record]], float], vary: str, probes: Sequence[float],
                   fixed: dict[str, Any], glass: float | None, sensor: Any, limits: Any, duration: float, rate_hz: float,
                   n_probe_seeds: int, world_name: str = "mit",
-                  seeds: Sequence[int] = ROUGH_PROBE_SEEDS) -> list[float]:
+                  seeds: Sequence[int] = PROBE_SEEDS) -> list[float]:
     """``statistic`` of the simulated ``world_name`` runs (the first ``n_probe_seeds`` of
     ``seeds``) with ``make_world``'s ``vary`` at each of ``probes`` and ``fixed`` as given."""
     from sim import make_world, simulate_records
@@ -325,7 +337,8 @@ class ScaleFit:
 
 
 def fit_scale(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
-              rate_hz: float = PROBE_RATE_HZ, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS), rough: float | None = None) -> ScaleFit:
+              rate_hz: float = PROBE_RATE_HZ, n_probe_seeds: int = len(PROBE_SEEDS), rough: float | None = None,
+              seeds: Sequence[int] = PROBE_SEEDS) -> ScaleFit:
     """The room size (``make_world(scale=...)``, a multiple of the preset's rooms) that makes the
     simulated ``mit`` worlds see as much at FAR_M or more as the log does (:func:`far_share`):
     probe runs at SCALE_PROBES, the log's share interpolated piecewise linearly on the probes'
@@ -335,7 +348,7 @@ def fit_scale(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
 
     target = far_share(real)
     shares = _probe_shares(far_share, "scale", SCALE_PROBES, dict(rough=rough), glass, sensor, limits, duration, rate_hz,
-                           n_probe_seeds)
+                           n_probe_seeds, seeds=seeds)
     fitted = _interpolate(shares, list(SCALE_PROBES), float(target)) if np.isfinite(target) else SCALE_PROBES[0]
     return ScaleFit(round(float(fitted), 3), float(target), tuple(SCALE_PROBES), tuple(shares))
 
@@ -353,11 +366,11 @@ class RoughFit:
 
 
 def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
-              rate_hz: float = PROBE_RATE_HZ, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS), scale: float | None = None,
-              relief: float | None = None) -> RoughFit:
+              rate_hz: float = PROBE_RATE_HZ, n_probe_seeds: int = len(PROBE_SEEDS), scale: float | None = None,
+              relief: float | None = None, seeds: Sequence[int] = PROBE_SEEDS) -> RoughFit:
     """The rough-fill cover (share of the rooms' wall length, 0-1) that makes the simulated ``mit``
     worlds leave as many beams at NEAR_M unexplained as the log does (:func:`near_unexplained`):
-    probe runs at ROUGH_PROBES (the first ``n_probe_seeds`` of ROUGH_PROBE_SEEDS), the log's share
+    probe runs at ROUGH_PROBES (the first ``n_probe_seeds`` of PROBE_SEEDS), the log's share
     interpolated piecewise linearly on the probes' curve (made monotone), clipped to its ends: the
     fill's effect saturates as the rooms' free wall runs out. ``scale``: the rooms' size (fit_scale);
     ``relief``: the wall relief the probes carry (fit_relief's; the relief's steps leave beams
@@ -366,7 +379,7 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
 
     target = near_unexplained(real)
     shares = _probe_shares(near_unexplained, "rough", ROUGH_PROBES, dict(scale=scale, relief=relief), glass, sensor,
-                           limits, duration, rate_hz, n_probe_seeds)
+                           limits, duration, rate_hz, n_probe_seeds, seeds=seeds)
 
     cover = _interpolate(shares, list(ROUGH_PROBES), float(target)) if np.isfinite(target) else 0.0
     return RoughFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(ROUGH_PROBES), tuple(shares),
@@ -451,9 +464,9 @@ class ReliefFit:
 
 
 def fit_relief(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
-               rate_hz: float = PROBE_RATE_HZ, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS), rough: float | None = None,
+               rate_hz: float = PROBE_RATE_HZ, n_probe_seeds: int = len(PROBE_SEEDS), rough: float | None = None,
                scale: float | None = None, world: str = "mit",
-               seeds: Sequence[int] = ROUGH_PROBE_SEEDS) -> ReliefFit:
+               seeds: Sequence[int] = PROBE_SEEDS) -> ReliefFit:
     """The wall-relief cover (share of the free wall length under panels 1-6 cm proud, 0-1) that
     makes the simulated worlds' walls break as often as the log's (:func:`relief_share`): probe runs
     at RELIEF_PROBES (the first ``n_probe_seeds`` of ``seeds``) with the fitted rough fill
@@ -470,8 +483,8 @@ def fit_relief(real: Sequence[Record], sensor: Any, limits: Any, glass: float | 
 
 
 def fit_world(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
-              rate_hz: float = PROBE_RATE_HZ, n_probe_seeds: int = len(ROUGH_PROBE_SEEDS), fit_rooms: bool = False,
-              wall_relief: bool = True) -> tuple[RoughFit, ScaleFit | None, ReliefFit | None]:
+              rate_hz: float = PROBE_RATE_HZ, n_probe_seeds: int = len(PROBE_SEEDS), fit_rooms: bool = False,
+              wall_relief: bool = True, seeds: Sequence[int] = PROBE_SEEDS) -> tuple[RoughFit, ScaleFit | None, ReliefFit | None]:
     """The mit worlds' amounts fitted to a log, in order: the rough fill (no relief), the room size
     (``fit_rooms``), the wall relief (``wall_relief``; with that fill and size), then the rough fill
     again with the fitted relief in its probes. The relief's panels step by 1-6 cm, which leaves
@@ -479,13 +492,14 @@ def fit_world(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     unexplained than the log (Intel: the relief cost every method about 0.02 of explained fraction).
     The relief statistic involves no extractor and is fitted once, with the first fill in its probes
     (not refitted at the final fill; how far that would move it was not measured)."""
-    rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds)
-    scale = fit_scale(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, rough.cover) if fit_rooms else None
+    rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, seeds=seeds)
+    scale = (fit_scale(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, rough.cover, seeds=seeds)
+             if fit_rooms else None)
     size = None if scale is None else scale.scale
-    relief = (fit_relief(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, rough.cover, size)
+    relief = (fit_relief(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, rough.cover, size, seeds=seeds)
               if wall_relief else None)
     if relief is not None and relief.cover > 0:
-        rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, size, relief.cover)
+        rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, size, relief.cover, seeds=seeds)
     return rough, scale, relief
 
 
@@ -493,7 +507,8 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
              duration: float = DEFAULT_DURATION_S, rate_hz: float = DEFAULT_RATE_HZ, stride: int = 5, max_scans: int | None = 400,
              methods: Sequence[str] = METHODS, sensor: Any = None, read_options: dict | None = None,
              fit_duration: float | None = None, fit_rooms: bool = False, wall_relief: bool = True,
-             probe_duration: float = PROBE_DURATION_S, probe_rate_hz: float = PROBE_RATE_HZ) -> Sim2RealResult:
+             probe_duration: float = PROBE_DURATION_S, probe_rate_hz: float = PROBE_RATE_HZ,
+             probe_seeds: Sequence[int] | None = None) -> Sim2RealResult:
     """Compare a real log with the calibrated simulation (see the module docstring).
 
     Args:
@@ -508,6 +523,8 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
             fill and room size); False: no relief (the demo, to spare its three probe worlds).
         probe_duration, probe_rate_hz: simulated seconds of each probe run of the mit worlds' fits and
             the scans kept per second (PROBE_DURATION_S, PROBE_RATE_HZ).
+        probe_seeds: the worlds of the mit fits' probe runs (each probe value runs on all of them);
+            default the first ``len(seeds)`` of PROBE_SEEDS (all of them for the default seeds).
 
     Raises:
         LmsbenchError: for a log without scans or an unknown world.
@@ -518,6 +535,9 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
 
     if world not in WORLD_NAMES:
         raise LmsbenchError(f"world: unknown world {world!r}; known worlds: {', '.join(WORLD_NAMES)}")
+    probes = list(PROBE_SEEDS[:max(1, len(seeds))] if probe_seeds is None else probe_seeds)
+    if not probes:
+        raise LmsbenchError("probe_seeds: give at least one seed")
     opts = read_options or {}
     span = None if max_scans is None else max_scans * stride
     every: list[Record] = []
@@ -533,8 +553,8 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
                                stride=max(1, stride // 2), fit_duration=fit_duration or FIT_DURATION_S, **opts).sensor
     limits = motion_limits(every)
     glass = glass_rate(world, no_return_share(real, sensor.max_reading))
-    rough, scale, relief = (fit_world(real, sensor, limits, glass, probe_duration, probe_rate_hz, len(seeds), fit_rooms,
-                                      wall_relief)
+    rough, scale, relief = (fit_world(real, sensor, limits, glass, probe_duration, probe_rate_hz, len(probes), fit_rooms,
+                                      wall_relief, probes)
                             if world == "mit" else (None, None, None))
     size = None if scale is None else scale.scale
     simulated: list[Record] = []
@@ -550,7 +570,8 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     summary = summarise(compare(sources, list(methods), sigma="auto"))
     table = _table(summary, name, f"sim:{world}", list(methods))
     result = Sim2RealResult(table, scene_statistics(real), scene_statistics(simulated), sensor, limits, world,
-                            list(seeds), len(real), len(simulated), {}, glass, rough, scale, relief)
+                            list(seeds), len(real), len(simulated), {}, glass, rough, scale, relief,
+                            probes if world == "mit" else [])
     result.checks = targets(table)
     return result
 
@@ -598,7 +619,8 @@ def targets(table: pd.DataFrame) -> dict[str, Any]:
 def format_report(result: Sim2RealResult, log: str) -> str:
     """Markdown: the per-method table, the scene statistics and the targets."""
     t = result.table
-    lines = [f"# sim2real: {log} against `{result.world}` (seeds {', '.join(map(str, result.seeds))})", "",
+    lines = [f"# sim2real: {log} against `{result.world}` (seeds {_seed_list(result.seeds)}"
+             + (f"; probe seeds {_seed_list(result.probe_seeds)}" if result.probe_seeds else "") + ")", "",
              f"real scans {result.n_real}, simulated scans {result.n_sim}; robot limits v_max "
              f"{result.limits.v_max:.2f} m/s, w_max {result.limits.w_max:.2f} rad/s; sensor: noise "
              f"{result.sensor.noise_sigma * 1000:.2f} mm, dropout {result.sensor.dropout_prob:.4f}, "
@@ -646,6 +668,20 @@ def format_report(result: Sim2RealResult, log: str) -> str:
               "| real | " + " | ".join(f"{v:.3f}" for v in rs.segment_hist) + " |",
               "| sim | " + " | ".join(f"{v:.3f}" for v in ss.segment_hist) + " |"]
     return "\n".join(lines) + "\n"
+
+
+def _seed_list(seeds: Sequence[int]) -> str:
+    """Seeds as text, a run of consecutive ones as first-last."""
+    parts, run = [], [seeds[0]] if seeds else []
+    for s in list(seeds[1:]):
+        if s == run[-1] + 1:
+            run.append(s)
+            continue
+        parts.append(str(run[0]) if len(run) == 1 else f"{run[0]}-{run[-1]}")
+        run = [s]
+    if run:
+        parts.append(str(run[0]) if len(run) == 1 else f"{run[0]}-{run[-1]}")
+    return ", ".join(parts)
 
 
 def _range_labels() -> list[str]:
@@ -738,7 +774,7 @@ def write_outputs(result: Sim2RealResult, out: Path, log: str, config: dict[str,
     paths[2].write_text(format_report(result, log))
     draw(result, paths[3], log)
     result.sensor.to_yaml(paths[4], header=f"sensor model used by lmsbench sim2real {log}")
-    resolved = dict(config, world=result.world, seeds=result.seeds, robot=dataclasses.asdict(result.limits),
+    resolved = dict(config, world=result.world, seeds=result.seeds, probe_seeds=result.probe_seeds, robot=dataclasses.asdict(result.limits),
                     checks=result.checks, rough=None if result.rough is None else dataclasses.asdict(result.rough),
                     scale=None if result.scale is None else dataclasses.asdict(result.scale),
                     relief=None if result.relief is None else dataclasses.asdict(result.relief))

@@ -331,6 +331,10 @@ CASES = [
     (["sim2real", "{good.clf}", "--sensor", "{binary.yaml}", "--out", O], "binary.yaml"),
     (["sim2real", "{good.clf}", "--sensor", "{list.yaml}", "--out", O], "list.yaml"),
     (["sim2real", "{good.clf}", "--out", "{a_file}"], "a_file"),
+    (["sim2real", "{good.clf}", "--seeds", "3", "4", "--probe-seeds", "4", "--out", O], "--probe-seeds: seed(s) 4 also in --seeds"),
+    (["sim2real", "{good.clf}", "--probe-seeds", "100", "100", "--out", O], "--probe-seeds: seed(s) 100 given more than once"),
+    (["sim2real", "{good.clf}", "--probe-seeds", "-1", "--out", O], "--probe-seeds"),
+    (["sim2real", "{good.clf}", "--world", "office", "--probe-seeds", "100", "--out", O], "--probe-seeds sets the mit"),
     # bench, the top level
     (["bench", "nosuch"], "nosuch"),
     (["bench", "lms200", "lms200"], "more than once"),

@@ -21,6 +21,7 @@ def test_info_json_on_intel(shared_data: Path, capsys: pytest.CaptureFixture[str
     assert info["scan_rate_hz"] == pytest.approx(909 / 2650.8632, rel=1e-6)
     assert 0.02 < info["no_return_fraction"] < 0.03 and info["invalid_fraction"] == 0.0
     assert info["odometry"] is True and info["truth"] is False
+    assert info["stamps_back"] == 4  # scans 294, 600, 626, 724 are stamped 0.05-0.86 s before the previous scan
 
 
 def test_info_errors_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -55,6 +56,10 @@ def test_info_json_numbers_are_numbers(tmp_path: Path, capsys: pytest.CaptureFix
     info = json.loads(capsys.readouterr().out)
     assert info["scans"] == 4 and info["beams"] is None and (info["beams_min"], info["beams_max"]) == (181, 361)
     assert info["duration_s"] == pytest.approx(1.5) and info["scan_rate_hz"] == pytest.approx(2.0)
+    assert info["stamps_back"] == 0
+    write_log(tmp_path / "back.clf", [Record(s.replace(stamp=t)) for s, t in zip(scans[:3], (0.0, 1.0, 0.5))])
+    assert main(["info", str(tmp_path / "back.clf")]) == 0
+    assert "time order      1 scan stamped before the previous one (slam needs --skip-bad-lines)" in capsys.readouterr().out
     write_log(tmp_path / "one.clf", [Record(s) for s in scans[:3]])
     assert main(["info", str(tmp_path / "one.clf"), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)

@@ -322,3 +322,27 @@ def test_fit_world_fits_the_rough_fill_with_the_fitted_relief_in_its_probes(monk
     assert rough.relief == pytest.approx(0.6, abs=1e-3)
     first = sim2real.fit_rough([], None, None, None)  # no relief in the probes: too much fill
     assert first.cover == pytest.approx(0.7, abs=1e-3)
+
+
+def test_fit_world_runs_every_probe_on_the_probe_seeds_given(monkeypatch) -> None:
+    """Every fit's probe runs use the seeds given to fit_world (the report's --probe-seeds), all of
+    them, at each probe value; by default the twelve PROBE_SEEDS, none of them a default report seed."""
+    from experiments import sim2real
+
+    calls: list[tuple[str, tuple[int, ...]]] = []
+
+    def probes(statistic, vary, values, fixed, glass, sensor, limits, duration, rate_hz, n_probe_seeds,  # noqa: ANN001
+               world_name="mit", seeds=sim2real.PROBE_SEEDS):  # noqa: ANN001, ANN202
+        calls.append((vary, tuple(seeds[:max(1, n_probe_seeds)])))
+        return [0.1 * (i + 1) for i in range(len(values))]
+
+    monkeypatch.setattr(sim2real, "_probe_shares", probes)
+    monkeypatch.setattr(sim2real, "near_unexplained", lambda recs: 0.25)
+    monkeypatch.setattr(sim2real, "relief_share", lambda recs: 0.15)
+    monkeypatch.setattr(sim2real, "far_share", lambda recs: 0.15)
+    sim2real.fit_world([], None, None, None, n_probe_seeds=3, fit_rooms=True, seeds=(7, 9, 11))
+    assert [c[0] for c in calls] == ["rough", "scale", "relief", "rough"]
+    assert all(c[1] == (7, 9, 11) for c in calls)
+    assert len(sim2real.PROBE_SEEDS) == 12 and not set(sim2real.PROBE_SEEDS) & set(sim2real.DEFAULT_SEEDS)
+    with pytest.raises(LmsbenchError, match="probe_seeds"):
+        sim2real.sim2real(Path("unused.clf"), probe_seeds=[])

@@ -21,7 +21,7 @@ from experiments.options import (
     positive,
     world_name,
 )
-from experiments.sim2real import DEFAULT_DURATION_S, DEFAULT_RATE_HZ, DEFAULT_SEEDS, PROBE_DURATION_S
+from experiments.sim2real import DEFAULT_DURATION_S, DEFAULT_RATE_HZ, DEFAULT_SEEDS, PROBE_DURATION_S, PROBE_SEEDS
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -37,6 +37,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"simulated seconds per seed (default {DEFAULT_DURATION_S:g}, as the fits' probe runs)")
     p.add_argument("--probe-duration", type=DURATION,
                    help=f"simulated seconds of each probe run of the mit world's fits (default {PROBE_DURATION_S:g})")
+    p.add_argument("--probe-seeds", nargs="+", type=SEED, metavar="SEED",
+                   help=f"worlds of the mit world's fits' probe runs, none of them in --seeds (default "
+                        f"{PROBE_SEEDS[0]}-{PROBE_SEEDS[-1]}, the first as many as --seeds gives)")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=DEFAULT_RATE_HZ,
                    help=f"simulated scans kept per second (default {DEFAULT_RATE_HZ:g}; the probe runs keep 3)")
     p.add_argument("--stride", type=count(1), default=5, help="use every STRIDE-th real scan (default 5)")
@@ -64,6 +67,14 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--fit-rooms fits the mit world's room size; it does nothing for --world {args.world}")
     if args.probe_duration is not None and args.world != "mit":
         raise InputError(f"--probe-duration sets the mit world's fits; it does nothing for --world {args.world}")
+    if args.probe_seeds is not None:
+        if args.world != "mit":
+            raise InputError(f"--probe-seeds sets the mit world's fits; it does nothing for --world {args.world}")
+        check_seeds(args.probe_seeds, "--probe-seeds")
+        shared = sorted(set(args.probe_seeds) & set(args.seeds))
+        if shared:
+            raise InputError(f"--probe-seeds: seed(s) {', '.join(map(str, shared))} also in --seeds: the fits' "
+                             "probe worlds must be other worlds than the report's")
     args.probe_duration = PROBE_DURATION_S if args.probe_duration is None else args.probe_duration
     sensor = None
     if args.sensor is not None:
@@ -77,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
             check_scan_rate(args.rate_hz, first.scan.angle_increment, "--rate-hz")
     result = sim2real(args.log, world=args.world, seeds=args.seeds, duration=args.duration, rate_hz=args.rate_hz,
                       stride=args.stride, max_scans=args.max_scans, sensor=sensor, read_options=read_options,
-                      fit_rooms=args.fit_rooms, probe_duration=args.probe_duration)
+                      fit_rooms=args.fit_rooms, probe_duration=args.probe_duration, probe_seeds=args.probe_seeds)
     config = dict(log=str(args.log), duration=args.duration, probe_duration=args.probe_duration, rate_hz=args.rate_hz,
                   stride=args.stride,
                   max_scans=args.max_scans, sensor_file=None if args.sensor is None else str(args.sensor),
