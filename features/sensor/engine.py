@@ -430,16 +430,19 @@ def clipped_scale(z) -> float:  # noqa: ANN001
         lim = CLIP_SIGMAS * s
         nk = 0
         same = True
-        for i in range(n):  # without branches: which residuals stay is data, not predictable
+        for i in range(n):  # no store at a place an earlier value found: the loop vectorises
             inside = abs(z[i] - m) <= lim
             new_keep[i] = inside
             same &= inside == keep[i]
-            kz[nk] = z[i]
             nk += inside
         if nk < 2:
             break
         if same and it > 0:  # the residuals of the last step again: the same centre and scale, converged
             break
+        q = 0
+        for i in range(n):  # only then the kept residuals to the front of kz, without branches (which stay is data)
+            kz[q] = z[i]
+            q += new_keep[i]
         m, s_new = mean_std(kz, nk, scratch)
         s_new = s_new / CLIP_STD_FACTOR
         converged = same and abs(s_new - s) <= 1e-9 * max(s, 1e-12)
