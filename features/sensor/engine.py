@@ -384,9 +384,12 @@ def median_rows(w, ra, rb, n) -> float:  # noqa: ANN001
     block, not views (a view is two atomic reference counts, and so is each array passed)."""
     if n == 0:
         return np.nan
-    for i in range(n):
-        if w[ra, i] != w[ra, i]:
-            return np.nan
+    bad = False
+    for i in range(n):  # without an early exit: the loop vectorises
+        x = w[ra, i]
+        bad |= x != x
+    if bad:
+        return np.nan
     hi, lo = select(w, ra, rb, n, n // 2)
     return hi if n % 2 else (lo + hi) / 2.0
 
