@@ -232,8 +232,9 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     }
     if "prealign_used" in d:
         consistency["prealign_fraction"] = float(np.mean(d["prealign_used"]))
-    if "matched_fraction" in d:
-        consistency["matched_fraction"] = d["matched_fraction"]
+    for key in ("matched_fraction", "searched_fraction", "ambiguous_fraction"):
+        if key in d:
+            consistency[key] = d[key]
     metrics = {
         "input": data.sources,
         "preset": config.preset,

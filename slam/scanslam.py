@@ -22,12 +22,17 @@ from dataclasses import replace
 from .config import AlignmentConfig, KeyframeConfig, LoopClosureConfig, MotionConfig
 from .models import chi2_quantile
 from .geometry import between, compose, rotate_covariance
+from .correlative import Field, fit, make_field, search
 from .icp import Match, Reference, chord_normals, chord_normals_at, match, refine
 from .keyframes import Keyframe, LoopClosure, find_closure, local_map
 from .posegraph import PoseGraph, robust_noise
 
 if TYPE_CHECKING:
     from .run import SlamResult
+
+#: poses this far apart (m, rad) are distinct: the search's candidates, and the rivals of an ambiguous step
+DISTINCT_XY = 0.3
+DISTINCT_THETA = 0.1
 
 
 @dataclass
@@ -41,6 +46,9 @@ class ScanStep:
     matched: bool = False  # the match was used (else the pose follows the prediction)
     new_keyframe: bool = False
     jump_rejected: bool = False  # the match jumped from the prediction and failed the point check
+    searched: bool = False  # the correlative search ran (the motion may lie beyond the ICP's reach)
+    fit: float = float("nan")  # the chosen pose's fit (slam.correlative.fit) when searched
+    ambiguous: bool = False  # the search found a distinct pose that fits as well, which the prior barely tells apart
     loop: LoopClosure | None = None
 
 
@@ -123,6 +131,7 @@ class ScanSlam:
         self._jump_gate = chi2_quantile(self.motion.jump_probability, 3)
         self._narrow = replace(self.alignment, max_iterations=0)
         self.predict_velocity = True
+        self._field_cache: tuple[Reference, Field] | None = None
 
     # -- one scan -------------------------------------------------------------------------------
     def predict(self, stamp: float) -> np.ndarray:
@@ -177,6 +186,8 @@ class ScanSlam:
             qn = sp.matched_normals if self.alignment.normal_agreement < np.pi else None
             m = match(sp.matched, self.ref, starts, self.alignment, prior=prior, normals=qn)
             m = self._check_jump(sp.matched, m, pred, stamp - self.last[-1][0], info, qn)
+            if self.alignment.search and (self._beyond_reach(sxy) or m.inliers < self.alignment.retry_inliers):
+                m = self._search(sp, m, pred, sxy, sth, info, qn)
             info.inliers, info.rms, info.hypothesis = m.inliers, m.rms, m.start
         if m is not None and m.inliers >= self.alignment.min_inliers:
             pose, cov = m.pose, m.covariance
@@ -218,6 +229,75 @@ class ScanSlam:
             return m
         info.jump_rejected = True
         return near
+
+    def _beyond_reach(self, sxy: float) -> bool:
+        """The prediction's position std ``sxy`` (m) times ``search_sigmas`` exceeds the ICP's reach."""
+        return self.alignment.search_sigmas * sxy > self.alignment.max_correspondence
+
+    def _search(self, sp: ScanPoints, m: Match, pred: np.ndarray, sxy: float, sth: float, info: ScanStep,
+                normals: np.ndarray | None) -> Match:
+        """The correlative search (:mod:`slam.correlative`) about the prediction, and about the
+        last pose when that lies outside the window: its best distinct poses, each refined by the
+        ICP held near it (a prior of the window's step: the ICP does not slide along a corridor),
+        compete with ``m``. The pose that fits best (:func:`slam.correlative.fit`) wins; among
+        those within ``fit_margin`` of it, the one nearest the prediction or the last pose
+        (Mahalanobis, the prediction's std truncated to the window: a half turn costs 9, a metre
+        at most 2.25). ``info.ambiguous``: a pose ``DISTINCT_XY`` m or ``DISTINCT_THETA`` rad from
+        the chosen one fits as well and the prior prefers the chosen one by less than
+        ``ambiguity_sigmas`` std."""
+        al = self.alignment
+        assert self.ref is not None
+        info.searched = True
+        half_xy = min(al.search_sigmas * sxy, al.search_xy)
+        half_th = min(al.search_sigmas * sth, np.pi)
+        last = self.last[-1][1]
+        centres = [pred]
+        if np.any(np.abs(last[:2] - pred[:2]) > half_xy):
+            centres.append(last)
+        field = self._field(pred, al.max_range + half_xy + float(np.hypot(*(last[:2] - pred[:2]))))
+        pts = sp.valid[:: max(1, -(-sp.valid.shape[0] // al.search_points))]
+        hold = np.diag([al.search_step**-2, al.search_step**-2, al.search_step_theta**-2])
+        results = [m]
+        for c in centres:
+            for cand in search(pts, field, c, half_xy, half_th, al.search_step, al.search_step_theta,
+                               al.search_candidates, DISTINCT_XY, DISTINCT_THETA):
+                r = refine(sp.matched, self.ref, cand.pose, al, prior=hold, normals=normals)
+                results.append(Match(r.pose, r.information, r.inliers, r.rms, r.n_points, r.hessian, -1))
+        min_cos = float(np.cos(al.normal_agreement))
+        fits = [fit(sp.matched, normals, self.ref, r.pose, al.fine_correspondence, al.fit_sigma, min_cos)
+                for r in results]
+        best = max(fits)
+        close = [i for i, f in enumerate(fits) if f >= best - al.fit_margin]
+        wxy, wth = half_xy / al.search_sigmas, half_th / al.search_sigmas  # the prior, truncated to the window
+
+        def distance(r: Match) -> float:
+            out = np.inf
+            for c in (pred, last):
+                e = r.pose - c
+                e[2] = np.arctan2(np.sin(e[2]), np.cos(e[2]))
+                out = min(out, float((e[0] ** 2 + e[1] ** 2) / wxy**2 + e[2] ** 2 / wth**2))
+            return out
+
+        prior = {i: distance(results[i]) for i in close}
+        k = min(close, key=prior.__getitem__)
+        chosen = results[k]
+        info.fit = fits[k]
+        for i in close:
+            r = results[i]
+            dth = abs(float(np.arctan2(np.sin(r.pose[2] - chosen.pose[2]), np.cos(r.pose[2] - chosen.pose[2]))))
+            if (np.hypot(*(r.pose[:2] - chosen.pose[:2])) > DISTINCT_XY or dth > DISTINCT_THETA) and \
+                    prior[i] - prior[k] < al.ambiguity_sigmas**2:
+                info.ambiguous = True
+        return chosen
+
+    def _field(self, centre: np.ndarray, radius: float) -> Field:
+        """The likelihood field of the local map about ``centre`` (kept while the map is unchanged)."""
+        al = self.alignment
+        assert self.ref is not None
+        if self._field_cache is None or self._field_cache[0] is not self.ref:
+            self._field_cache = (self.ref, make_field(self.ref.points, al.search_resolution, al.search_sigma,
+                                                      centre, radius))
+        return self._field_cache[1]
 
     def _motion_sigma(self, dt: float) -> tuple[float, float]:
         """Std (m, rad) of the constant-velocity prediction over ``dt`` s."""
@@ -357,6 +437,8 @@ def run_scan_slam(steps, config) -> "SlamResult":
             diverged_at = float(t)
             break
     finite = nees[np.isfinite(nees)]
+    ambiguous = np.array([i.ambiguous for i in infos])
+    ambiguous_fraction = float(ambiguous[1:].mean()) if ambiguous.size > 1 else 0.0
     diag = {
         "inliers": inliers, "matched": matched, "nees": nees,
         "keyframe": np.array([i.keyframe for i in infos]), "hypothesis": np.array([i.hypothesis for i in infos]),
@@ -365,7 +447,11 @@ def run_scan_slam(steps, config) -> "SlamResult":
                    "old_stamp": slam.keyframes[lp.old].stamp, "new_stamp": slam.keyframes[lp.new].stamp}
                   for lp in slam.loops],
         "keyframes": np.column_stack(([kf.stamp for kf in slam.keyframes], kposes)),
-        "diverged": diverged_at is not None, "diverged_at": diverged_at, "healthy": bool(np.all(np.isfinite(poses))),
+        "diverged": diverged_at is not None, "diverged_at": diverged_at,
+        "healthy": bool(np.all(np.isfinite(poses))) and ambiguous_fraction <= config.consistency.max_ambiguous,
+        "searched": np.array([i.searched for i in infos]), "ambiguous": ambiguous, "fit": np.array([i.fit for i in infos]),
+        "searched_fraction": float(np.mean([i.searched for i in infos[1:]])) if len(infos) > 1 else 0.0,
+        "ambiguous_fraction": ambiguous_fraction,
         "mean_nis_per_dof": float("nan"), "mean_nees": float(finite.mean()) if finite.size else float("nan"),
         "matched_fraction": float(matched[1:].mean()) if matched.size > 1 else 1.0,
     }

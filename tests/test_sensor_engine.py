@@ -108,6 +108,13 @@ def test_medians_and_pairwise_sums_equal_numpys() -> None:
         for data in (rng.standard_normal(n), np.round(rng.standard_normal(n), 1), np.full(n, 0.25),
                      np.sort(rng.standard_normal(n)), np.sort(rng.standard_normal(n))[::-1].copy()):
             assert engine.median(data) == np.median(data)
+    for n in (1, 2, 7, 64, 361):  # a nan anywhere (the check has no early exit) gives nan, as numpy's does
+        for at in {0, n // 2, n - 1}:
+            data = rng.standard_normal(n)
+            data[at] = np.nan
+            assert np.isnan(engine.median(data)) and np.isnan(np.median(data))
+            data[at] = np.inf  # infinities are values, not nan
+            assert engine.median(data) == np.median(data)
     a = rng.standard_normal(8000) * np.exp(rng.standard_normal(8000) * 4)
     for n in (0, 7, 8, 127, 128, 129, 248, 249, 488, 489, 968, 969, 1928, 1929, 3848, 3849, 7999):
         assert engine.pairwise_sum(a, 1, n) == (np.add.reduce(a[1:1 + n]) if n else 0.0)

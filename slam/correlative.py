@@ -1,0 +1,165 @@
+"""A guess-free search of a scan's pose against the local map: an exhaustive correlative search
+(Olson 2009) over a window of positions and headings, for scans whose motion since the last is
+beyond the reach of the ICP (seconds between scans, a metre and tens of degrees of motion).
+
+The map's points become a likelihood field: a raster of ``exp(-d^2 / 2 sigma^2)``, d the distance
+(m) from the cell to the nearest map point. Every pose of the window (positions ``step`` m apart,
+headings ``step_theta`` rad apart) scores the mean field value under the scan's points; the best
+few distinct poses are the candidates the ICP then refines. Frames: scan points in the sensor
+frame, the map and every pose in the world frame. Pure; the inner loop is compiled.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import distance_transform_edt
+
+from .icp import Reference
+from .icpkernel import _nearest_facing, kernel
+
+
+@dataclass(frozen=True)
+class Field:
+    """A likelihood raster: ``values[i, j]`` at world (origin[0] + i res, origin[1] + j res)."""
+
+    values: np.ndarray  # (nx, ny), in [0, 1]
+    origin: np.ndarray  # (2,) m, world position of cell (0, 0)
+    resolution: float  # m
+
+
+def make_field(points: np.ndarray, resolution: float, sigma: float, centre: np.ndarray | None = None,
+               radius: float = np.inf) -> Field:
+    """The likelihood field of map points (m, 2; world frame) with cells of ``resolution`` m and a
+    Gaussian of ``sigma`` m about each point, over the points within ``radius`` m (a square) of
+    ``centre`` (all points when no centre), with a margin of 3 sigma."""
+    p = np.asarray(points, float).reshape(-1, 2)
+    if centre is not None and np.isfinite(radius):
+        p = p[np.all(np.abs(p - np.asarray(centre, float)[:2]) <= radius, axis=1)]
+    if p.shape[0] == 0:
+        return Field(np.zeros((1, 1)), np.zeros(2), float(resolution))
+    margin = 3.0 * sigma + resolution
+    lo = p.min(axis=0) - margin
+    shape = np.ceil((p.max(axis=0) + margin - lo) / resolution).astype(int) + 1
+    free = np.ones(tuple(shape), bool)
+    idx = np.rint((p - lo) / resolution).astype(int)
+    free[idx[:, 0], idx[:, 1]] = False
+    d = distance_transform_edt(free, sampling=resolution)
+    return Field(np.exp(-0.5 * (d / sigma) ** 2), lo, float(resolution))
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A pose of the window (world frame, m, m, rad) and its score (mean field value, in [0, 1])."""
+
+    pose: np.ndarray
+    score: float
+
+
+def search(points: np.ndarray, field: Field, centre: np.ndarray, half_xy: float, half_theta: float,
+           step: float, step_theta: float, count: int, min_xy: float, min_theta: float) -> list[Candidate]:
+    """The ``count`` best poses of the window ``centre`` +- ``half_xy`` m (x and y, ``step`` m
+    apart, rounded to whole cells of the field) and +- ``half_theta`` rad (``step_theta`` apart;
+    the full turn when ``half_theta`` >= pi), best first; each at least ``min_xy`` m or
+    ``min_theta`` rad from every better one (distinct local maxima, not neighbours of one)."""
+    p = np.asarray(points, float).reshape(-1, 2)
+    if p.shape[0] == 0:
+        return []
+    res = field.resolution
+    k = max(1, int(round(step / res)))  # cells per translation step
+    n = int(math.floor(half_xy / (k * res)))
+    if half_theta >= math.pi:
+        m = int(math.ceil(2 * math.pi / step_theta))
+        thetas = centre[2] + (np.arange(m) - m // 2) * (2 * math.pi / m)
+    else:
+        m = int(math.floor(half_theta / step_theta))
+        thetas = centre[2] + np.arange(-m, m + 1) * step_theta
+    scores = _scores(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), field.values,
+                     float(field.origin[0]), float(field.origin[1]), res, float(centre[0]), float(centre[1]),
+                     thetas, n, k)
+    flat = scores.ravel()
+    top = min(flat.size, max(64, 32 * count))
+    order = np.argpartition(-flat, top - 1)[:top]
+    order = order[np.argsort(-flat[order], kind="stable")]
+    side = 2 * n + 1
+    out: list[Candidate] = []
+    for f in order:
+        a, rest = divmod(int(f), side * side)
+        i, j = divmod(rest, side)
+        pose = np.array([centre[0] + (i - n) * k * res, centre[1] + (j - n) * k * res,
+                         math.atan2(math.sin(thetas[a]), math.cos(thetas[a]))])
+        if all(np.hypot(*(pose[:2] - c.pose[:2])) >= min_xy
+               or abs(math.remainder(pose[2] - c.pose[2], 2 * math.pi)) >= min_theta for c in out):
+            out.append(Candidate(pose, float(flat[f])))
+            if len(out) == count:
+                break
+    return out
+
+
+@kernel
+def _scores(px, py, values, ox, oy, res, cx, cy, thetas, n, k):
+    """(headings, 2n+1, 2n+1) mean field value of the points at every pose of the window
+    (positions k cells apart about (cx, cy)); points off the raster score 0."""
+    nx, ny = values.shape
+    side = 2 * n + 1
+    npts = px.shape[0]
+    out = np.zeros((thetas.shape[0], side, side))
+    gi = np.empty(npts, np.int64)
+    gj = np.empty(npts, np.int64)
+    for a in range(thetas.shape[0]):
+        c, s = math.cos(thetas[a]), math.sin(thetas[a])
+        for q in range(npts):  # cell of each point at the window's centre
+            gi[q] = int(math.floor((cx + c * px[q] - s * py[q] - ox) / res + 0.5))
+            gj[q] = int(math.floor((cy + s * px[q] + c * py[q] - oy) / res + 0.5))
+        for i in range(side):
+            di = (i - n) * k
+            for j in range(side):
+                dj = (j - n) * k
+                acc = 0.0
+                for q in range(npts):
+                    u = gi[q] + di
+                    v = gj[q] + dj
+                    if u >= 0 and u < nx and v >= 0 and v < ny:
+                        acc += values[u, v]
+                out[a, i, j] = acc / npts
+    return out
+
+
+def fit(points: np.ndarray, normals: np.ndarray | None, ref: Reference, pose: np.ndarray, reach: float, sigma: float,
+        min_cos: float) -> float:
+    """How well the scan's points (p, 2, sensor frame; ``normals`` (p, 2) or None) lie on the
+    reference at ``pose``: the mean over the points of
+    ``exp(-r^2 / 2 sigma^2)``, r the point-to-line residual (m) to the nearest reference point
+    within ``reach`` m whose normal agrees within ``acos(min_cos)`` (0 for a point without one).
+    Unlike the inlier fraction (points within a distance) it tells a tight fit from a loose one:
+    a corridor seen half a turn the wrong way puts most points near a wall, but not on it."""
+    p = np.asarray(points, float).reshape(-1, 2)
+    if p.shape[0] == 0:
+        return 0.0
+    if normals is None:
+        qn = np.zeros_like(p)
+    else:
+        qn = np.asarray(normals, float).reshape(-1, 2)
+    rx, ry, order, start, lox, loy, cell, nx, ny = ref.grid()
+    nrx, nry = ref._normals
+    return float(_fit(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), np.ascontiguousarray(qn[:, 0]),
+                      np.ascontiguousarray(qn[:, 1]), np.asarray(pose, float), rx, ry, nrx, nry, order, start, lox,
+                      loy, cell, nx, ny, float(reach) ** 2, float(sigma), float(min_cos)))
+
+
+@kernel
+def _fit(px, py, qnx, qny, pose, rx, ry, nrx, nry, order, start, lox, loy, cell, nx, ny, reach2, sigma, min_cos):
+    """:func:`fit`, compiled."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    acc = 0.0
+    for q in range(px.shape[0]):
+        wx = c * px[q] - s * py[q] + pose[0]
+        wy = s * px[q] + c * py[q] + pose[1]
+        m, _ = _nearest_facing(wx, wy, c * qnx[q] - s * qny[q], s * qnx[q] + c * qny[q], rx, ry, nrx, nry,
+                               order, start, lox, loy, cell, nx, ny, reach2, min_cos)
+        if m >= 0:
+            r = (wx - rx[m]) * nrx[m] + (wy - ry[m]) * nry[m]
+            acc += math.exp(-0.5 * (r / sigma) ** 2)
+    return acc / px.shape[0]
