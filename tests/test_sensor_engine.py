@@ -120,6 +120,32 @@ def test_medians_and_pairwise_sums_equal_numpys() -> None:
         assert engine.pairwise_sum(a, 1, n) == (np.add.reduce(a[1:1 + n]) if n else 0.0)
 
 
+def test_quantum_step_equals_lms200s() -> None:
+    """The engine's quantisation step (a step given up at the first value off its grid that decides
+    it) equals lms200.noise.estimate_quantum: every candidate grid and continuous values, with off-grid
+    counts either side of the 99 % share (sizes 1-1000), nan and non-positive values among them."""
+    from features.sensor import engine
+    from lms200.noise import QUANTUM_CANDIDATES_M, estimate_quantum
+
+    rng = np.random.default_rng(13)
+    found = set()
+    for n in (1, 2, 50, 72, 100, 101, 199, 200, 201, 1000):
+        for q in (*QUANTUM_CANDIDATES_M, 0.0):
+            for off in sorted({0, 1, 2, n // 100, n // 100 + 1, n // 50}):
+                x = rng.uniform(0.05, 30.0, n)
+                if q:
+                    x = np.rint(x / q) * q
+                at = rng.choice(n, min(off, n), replace=False)
+                x[at] += 1.3e-4 + rng.uniform(0.0, 1e-3, at.size)
+                x[rng.random(n) < 0.05] = np.nan
+                if n > 3:
+                    x[0] = -1.0
+                got = engine.quantum_step(x)
+                assert got == estimate_quantum(x)
+                found.add(got)
+    assert found == {*QUANTUM_CANDIDATES_M, 0.0}  # every outcome occurs
+
+
 def test_no_extractor_kernel_is_compiled_with_fast_math() -> None:
     """Fast-math (even reassociation alone) lets LLVM group sums by the CPU's vector width, so the
     same scan gave other bits on another machine (109 of 120 MIT CSAIL scans between an AVX-512

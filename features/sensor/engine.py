@@ -295,18 +295,26 @@ def finite_sample(ranges, out, m):  # noqa: ANN001, ANN201
 @kernel
 def quantum_step(sample) -> float:  # noqa: ANN001
     """``lms200.noise.estimate_quantum``: the largest step of QUANTUM_CANDIDATES_M (m) on whose grid
-    QUANTUM_SHARE of the positive finite ``sample`` lie, 0.0 when none does."""
+    QUANTUM_SHARE of the positive finite ``sample`` lie, 0.0 when none does. A step is given up at
+    the first value off its grid that decides it (at 99 %, of a scan's ~72 values the first)."""
     n_pos = 0
     for x in sample:
         n_pos += math.isfinite(x) and x > 0
     if n_pos == 0:
         return 0.0
+    need = min(int(math.ceil(QUANTUM_SHARE * n_pos)), n_pos)  # the fewest values on a grid that pass:
+    while need > 0 and (need - 1) / n_pos >= QUANTUM_SHARE:  # near / n_pos >= QUANTUM_SHARE exactly
+        need -= 1  # when near >= need (the division rises with near)
+    while need <= n_pos and need / n_pos < QUANTUM_SHARE:
+        need += 1
     for q in QUANTUM_CANDIDATES_M:
-        near = 0
+        miss = 0  # a step has failed once more than n_pos - need values are off its grid: stop there
         for x in sample:
-            if math.isfinite(x) and x > 0 and abs(x - np.rint(x / q) * q) < q / 20:
-                near += 1
-        if near / n_pos >= QUANTUM_SHARE:
+            if math.isfinite(x) and x > 0 and not abs(x - np.rint(x / q) * q) < q / 20:
+                miss += 1
+                if miss > n_pos - need:
+                    break
+        if miss <= n_pos - need:
             return q
     return 0.0
 
