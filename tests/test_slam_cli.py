@@ -81,6 +81,10 @@ def test_slam_skips_the_fewest_scans_out_of_time_order(sim_folder, tmp_path, cap
     stamps, _ = read_tum(out / "trajectory.tum")
     assert stamps.size == len(records) - 1
     assert json.loads((out / "metrics.json").read_text())["ate"]["rmse"] < 0.1
+    # the same log read alone: its truth is its TRUEPOS lines, a pose per scan, skipped with the scan
+    assert main(["slam", str(folder / "scans.clf"), "--out", str(tmp_path / "alone"), "--quiet", "--skip-bad-lines"]) == 0
+    assert json.loads((tmp_path / "alone" / "metrics.json").read_text())["ate"]["rmse"] < 0.1
+    capsys.readouterr()
     assert in_time_order([938.408, 940.654, 940.54, 954.436]) in ([0, 1, 3], [0, 2, 3])  # Intel's scans 293-296
     assert in_time_order([3.0, 2.0, 1.0]) == [2] and in_time_order([]) == []
 

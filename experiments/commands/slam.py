@@ -10,6 +10,8 @@ import sys
 from typing import Any
 from pathlib import Path
 
+import numpy as np
+
 from experiments.logargs import add_log_options, read_log_options
 from experiments.options import InputError, check_file, check_log, check_methods, check_out, check_yaml, count, positive
 
@@ -157,6 +159,8 @@ def run(args: argparse.Namespace) -> int:
         for k in (k for k in range(len(stamps)) if k not in kept):
             print(f"{where}: skipped scan {k} (stamp {stamps[k]:.6f} s): out of time order", file=sys.stderr)
         data.records = [data.records[k] for k in keep]
+        if data.truth is not None and np.array_equal(data.truth[:, 0], stamps):  # a pose per scan (TRUEPOS)
+            data.truth = data.truth[keep]
     if config.motion.use_odometry and data.odometry is None:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
     if simulated_interlaced(args.input) is False and config.preset == "default" and config.alignment.deskew:
