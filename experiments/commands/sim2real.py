@@ -21,7 +21,8 @@ from experiments.options import (
     positive,
     world_name,
 )
-from experiments.sim2real import DEFAULT_DURATION_S, DEFAULT_RATE_HZ, DEFAULT_SEEDS, PROBE_DURATION_S, PROBE_SEEDS
+from experiments.sim2real import (DEFAULT_DURATION_S, DEFAULT_RATE_HZ, DEFAULT_SEEDS, PROBE_DURATION_S, PROBE_RATE_HZ,
+                                  PROBE_SEEDS)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,7 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
                    help="use this sensor model instead of calibrating on the log")
     p.add_argument("--seeds", nargs="+", type=SEED, default=list(DEFAULT_SEEDS),
-                   help="simulated runs, one world each (default 0 1 2 3 4 5)")
+                   help=f"simulated runs, one world each (default {DEFAULT_SEEDS[0]}-{DEFAULT_SEEDS[-1]})")
     p.add_argument("--duration", type=DURATION, default=DEFAULT_DURATION_S,
                    help=f"simulated seconds per seed (default {DEFAULT_DURATION_S:g}, as the fits' probe runs)")
     p.add_argument("--probe-duration", type=DURATION,
@@ -41,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"worlds of the mit world's fits' probe runs, none of them in --seeds (default "
                         f"{PROBE_SEEDS[0]}-{PROBE_SEEDS[-1]}, the first as many as --seeds gives)")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=DEFAULT_RATE_HZ,
-                   help=f"simulated scans kept per second (default {DEFAULT_RATE_HZ:g}; the probe runs keep 3)")
+                   help=f"simulated scans kept per second (default {DEFAULT_RATE_HZ:g}; the probe runs keep {PROBE_RATE_HZ:g})")
     p.add_argument("--stride", type=count(1), default=5, help="use every STRIDE-th real scan (default 5)")
     p.add_argument("--max-scans", type=count(1), default=400, help="at most this many real scans (default 400)")
     p.add_argument("--fit-rooms", action="store_true",
