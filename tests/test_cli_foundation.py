@@ -64,6 +64,13 @@ def test_info_json_numbers_are_numbers(tmp_path: Path, capsys: pytest.CaptureFix
     assert main(["info", str(tmp_path / "one.clf"), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
     assert info["beams"] == 361 and isinstance(info["fov_deg"], float) and info["fov_deg"] == pytest.approx(180.0)
+    # invalid readings: nan, 0 m (a logger's missing reading) and finite ones out of limits, not +inf
+    r = np.full(361, 2.0)
+    r[:10], r[10:30], r[30:31], r[31:36] = np.nan, 0.0, 9.0, np.inf
+    write_log(tmp_path / "bad.clf", [Record(scans[0].replace(ranges=r))])
+    assert main(["info", str(tmp_path / "bad.clf"), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["invalid_fraction"] == pytest.approx(31 / 361) and info["no_return_fraction"] == pytest.approx(5 / 361)
 
 
 def test_os_errors_are_one_line_with_exit_status_2(tmp_path: Path, capsys: pytest.CaptureFixture[str],
