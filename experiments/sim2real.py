@@ -78,14 +78,14 @@ SCALE_PROBES = (1.0, 1.5, 2.0)
 # stretches that step or bend (relief_share; no extractor), on the log and on probe runs at RELIEF_PROBES.
 RELIEF_PROBES = (0.0, 0.5, 1.0)
 # The mit worlds' clutter level (make_world(clutter=...); the preset's 3: chairs, tables, people,
-# plants, bins, glass, runs along walls per 10 m of route) continues the rough fill's fit past its
-# ends (fit_rough): a log whose 1-4 m beams are explained better than the preset's worlds with no
-# fill leave them gets less clutter (probes at CLUTTER_PROBES_LOW, no fill), one worse than with
-# full fill more (CLUTTER_PROBES_HIGH, full fill). Intel (six probe worlds, its relief of 0.43, no
-# fill): split_merge's unexplained share at 1-4 m 0.290 at level 3, 0.233 at 1.5, 0.179 at 0.5.
+# plants, bins, glass, runs along walls per 10 m of route) continues the rough fill's fit below its
+# start (fit_rough): a log whose 1-4 m beams are explained better than the preset's worlds with no
+# fill leave them gets less clutter (probes at CLUTTER_PROBES, no fill). Intel (its sensor, six
+# probe worlds, relief 0.43, no fill): split_merge's unexplained share at 1-4 m 0.290 at level 3,
+# 0.280 at 2, 0.233 at 1.5, 0.203 at 1, 0.179 at 0.5 (log 0.280). Not above the fill's end: with full
+# fill, MIT CSAIL's sensor and relief 0.17, level 4.5 leaves 0.307 against 0.306 at 3 (log 0.319).
 PRESET_CLUTTER = 3.0  # sim.worlds.MIT_PRESET["clutter"]
-CLUTTER_PROBES_LOW = (1.0, 2.0)
-CLUTTER_PROBES_HIGH = (4.5, 6.0)
+CLUTTER_PROBES = (1.0, 2.0)
 # Simulated seconds of each probe run (every fit). A mit world takes about 0.6 s of CPU to build and
 # 120 s of scans at 1 Hz about 0.4 s to simulate, so long runs cost little, and a 20 s run sees
 # one or two rooms: whether the robot lingers before a relief panel moved a world's break share at
@@ -371,9 +371,9 @@ def fit_scale(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
 @dataclass
 class RoughFit:
     """The mit worlds' rough fill fitted to a log: the log's near-unexplained share, the probes'
-    (run at wall relief ``relief``: None for none), and the clutter level where the fill's curve
-    did not reach the log's share (``clutter``: the preset's otherwise; the level probes at fill 0
-    or 1 with their shares, empty when not run)."""
+    (run at wall relief ``relief``: None for none), and the clutter level where the log's share lies
+    below the fill's curve (``clutter``: the preset's otherwise; the level probes, at no fill, with
+    their shares, empty when not run)."""
 
     cover: float
     log_share: float
@@ -394,10 +394,11 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     interpolated piecewise linearly on the probes' curve (made monotone). ``scale``: the rooms'
     size (fit_scale); ``relief``: the wall relief the probes carry (fit_relief's; the relief's
     steps leave beams unexplained too, so a fill fitted without it and then given it leaves more
-    than the log). Where the log's share lies beyond the curve's ends (``clutter``), the fit goes
-    on in the clutter level (the preset's PRESET_CLUTTER at the curve): below it, probes at
-    CLUTTER_PROBES_LOW with no fill, above it, at CLUTTER_PROBES_HIGH with full fill, and the share
-    is read off the joined curve; only then clipped to the probes' ends."""
+    than the log). Where the log's share lies below the curve's start (``clutter``: fewer beams
+    unexplained than the worlds leave with no fill), the fit goes on in the clutter level (the
+    preset's PRESET_CLUTTER at the curve's start): probes at CLUTTER_PROBES with no fill, the share
+    read off the joined curve, clipped to its ends. Above the curve's end the fill stays at 1 (more
+    clutter does not leave more beams unexplained there: see CLUTTER_PROBES)."""
     from experiments.calibrate import invert_probe_curve as _interpolate
 
     target = near_unexplained(real)
@@ -406,16 +407,11 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
                            limits, duration, rate_hz, n_probe_seeds, seeds=seeds)
     cover = _interpolate(shares, list(ROUGH_PROBES), float(target)) if np.isfinite(target) else 0.0
     level, levels, level_shares = PRESET_CLUTTER, (), []
-    curve = np.maximum.accumulate(np.nan_to_num(np.asarray(shares, dtype=float)))
-    if clutter and np.isfinite(target) and (target < curve[0] or target > curve[-1]):
-        low = bool(target < curve[0])
-        levels = CLUTTER_PROBES_LOW if low else CLUTTER_PROBES_HIGH
-        level_shares = _probe_shares(near_unexplained, "clutter", levels, {**fixed, "rough": ROUGH_PROBES[0 if low else -1]},
+    if clutter and np.isfinite(target) and target < np.nan_to_num(shares[0]):
+        levels = CLUTTER_PROBES
+        level_shares = _probe_shares(near_unexplained, "clutter", levels, {**fixed, "rough": ROUGH_PROBES[0]},
                                      glass, sensor, limits, duration, rate_hz, n_probe_seeds, seeds=seeds)
-        if low:
-            level = _interpolate([*level_shares, float(curve[0])], [*levels, PRESET_CLUTTER], float(target))
-        else:
-            level = _interpolate([float(curve[-1]), *level_shares], [PRESET_CLUTTER, *levels], float(target))
+        level = _interpolate([*level_shares, float(np.nan_to_num(shares[0]))], [*levels, PRESET_CLUTTER], float(target))
     return RoughFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(ROUGH_PROBES), tuple(shares),
                     relief, round(float(level), 3), tuple(levels), tuple(level_shares))
 
@@ -539,7 +535,7 @@ def fit_world(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
               if wall_relief else None)
     if relief is not None:  # (at relief 0 again, for the clutter level, when the first fill is at an end)
         curve = np.maximum.accumulate(np.nan_to_num(np.asarray(rough.probe_shares, dtype=float)))
-        if relief.cover > 0 or not curve[0] <= rough.log_share <= curve[-1]:
+        if relief.cover > 0 or rough.log_share < curve[0]:
             rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, size, relief.cover,
                               seeds=seeds)
     return rough, scale, relief
@@ -717,7 +713,7 @@ def format_report(result: Sim2RealResult, log: str) -> str:
                 + ("" if result.rough.relief is None else f", the probes at wall relief {result.rough.relief:.2f}") + ")"
                 + f"; clutter level {result.rough.clutter:.2f}"
                 + ("" if not result.rough.clutter_probes else
-                   " (fill " + ("0" if result.rough.clutter < PRESET_CLUTTER else "1") + ": probes "
+                   " (no fill: probes "
                    + ", ".join(f"{s:.3f} at {c:g}" for c, s in zip(result.rough.clutter_probes, result.rough.clutter_shares))
                    + ")"))
              + ("" if result.relief is None else
