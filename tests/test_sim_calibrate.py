@@ -367,9 +367,10 @@ def test_fit_world_fits_the_rough_fill_with_the_fitted_relief_in_its_probes(monk
 
 def test_fit_rough_goes_on_in_the_clutter_level_past_the_fills_ends(monkeypatch) -> None:
     """A known model of the near statistic replaces the probe runs: 0.2 + 0.1 fill + 0.03 (level -
-    3). A log made at level 2 with no fill gets that back (the fill's curve alone stopped at 0); one
-    at level 1.5 is clipped to the lowest level probe (1); logs inside the fill's curve or above its
-    end keep the preset's level 3 and run no level probe."""
+    3). A log made at level 2 with no fill gets that back (the fill's curve alone stopped at 0), one
+    at level 1 (the lowest probe) too; one at level 0.5, below the joined curve, keeps the preset's
+    level 3 after its level probes; logs inside the fill's curve or above its end keep level 3 and
+    run no level probe."""
     from experiments import sim2real
     from sim.worlds import MIT_PRESET
 
@@ -388,7 +389,8 @@ def test_fit_rough_goes_on_in_the_clutter_level_past_the_fills_ends(monkeypatch)
 
     monkeypatch.setattr(sim2real, "_probe_shares", probes)
     for log_share, cover, level, runs in ((0.2 - 0.03, 0.0, 2.0, ["rough", "clutter"]),
-                                          (0.2 - 0.03 * 2.5, 0.0, 1.0, ["rough", "clutter"]),
+                                          (0.2 - 0.03 * 2.0, 0.0, 1.0, ["rough", "clutter"]),
+                                          (0.2 - 0.03 * 2.5, 0.0, 3.0, ["rough", "clutter"]),
                                           (0.2 + 0.1 + 0.03 * 1.5, 1.0, 3.0, ["rough"]),
                                           (0.25, 0.5, 3.0, ["rough"])):
         calls.clear()
