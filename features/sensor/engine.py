@@ -1426,12 +1426,22 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
       two stray beams on a line (mixed pixels, clutter) made it look as loose as a circle."""
     m = l - f + 1
     work = np.empty((C_ROWS, m))  # the beams' points, then per-beam terms of each pass over them
+    n = 0  # the points and the centroid of the valid ones in one pass (``valid_centroid``'s sums, in its order)
+    mx = 0.0
+    my = 0.0
     for t in range(m):
-        work[C_X, t] = ranges[f + t] * bearings[B_COS, f + t]
-        work[C_Y, t] = ranges[f + t] * bearings[B_SIN, f + t]
-    mx, my, n = valid_centroid(work, valid, f, 0, m)
+        x = ranges[f + t] * bearings[B_COS, f + t]
+        y = ranges[f + t] * bearings[B_SIN, f + t]
+        work[C_X, t] = x
+        work[C_Y, t] = y
+        if valid[f + t]:
+            mx += x
+            my += y
+            n += 1
     if n < 5:
         return False
+    mx /= n
+    my /= n
     suu = suv = svv = suuu = svvv = suvv = svuu = 0.0
     for t in range(m):
         if valid[f + t]:
