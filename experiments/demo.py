@@ -81,7 +81,7 @@ MIT_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "carmen" / "
 def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -> Section:
     """A calibrated simulation of the MIT-like preset next to the MIT CSAIL log (demo size:
     the study's duration and seed; at most duration x rate scans of the log), or a note."""
-    from experiments.sim2real import format_report, sim2real, write_outputs
+    from experiments.sim2real import PROBE_RATE_HZ, PROBE_SEEDS, format_report, sim2real, write_outputs
 
     path = Path(cfg.sim2real_log) if getattr(cfg, "sim2real_log", None) else MIT_LOG
     if not path.exists():
@@ -89,9 +89,12 @@ def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -
             f"Skipped: {path} is not present on this machine (`lmsbench sim2real LOG` runs it on any log)."])
     log(f"== sim2real: {path.name} against the calibrated mit preset")
     max_scans = max(20, int(cfg.duration * cfg.rate_hz))
+    # the rough fill's probe runs: the tour's duration on one world other than the report's, at
+    # sim2real's PROBE_RATE_HZ (1 scan/s), as `lmsbench sim2real` runs them on twelve worlds
     result = sim2real(path, world="mit", seeds=(cfg.seed,), duration=cfg.duration, rate_hz=3.0, stride=10,
                       max_scans=max_scans, fit_duration=min(30.0, cfg.duration), wall_relief=False,
-                      probe_duration=cfg.duration)
+                      probe_duration=cfg.duration, probe_rate_hz=PROBE_RATE_HZ,
+                      probe_seeds=[next(s for s in PROBE_SEEDS if s != cfg.seed)])
     write_outputs(result, out / "sim2real", str(path), dict(log=str(path), duration=cfg.duration, stride=10,
                                                            max_scans=max_scans))
     body = format_report(result, path.name).split("\n", 2)[2]  # the tables, without the title
@@ -99,8 +102,10 @@ def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -
         f"`lmsbench calibrate` fitted the sensor model to {path.name}; the `mit` preset (generator parameters "
         f"fixed from MIT CSAIL's range histogram, segment lengths and long-wall share) was then simulated with "
         f"that sensor and the log's robot speeds, and every extractor ran on both (real-data measures of "
-        f"`features.realdata`). Demo size: {result.n_real} real and {result.n_sim} simulated scans, no wall "
-        f"relief fitted; `lmsbench sim2real {path.name}` runs the full comparison.", body,
+        f"`features.realdata`). Demo size: {result.n_real} real and {result.n_sim} simulated scans (world "
+        f"{cfg.seed}), the rough fill fitted on probe runs of {cfg.duration:g} s at {PROBE_RATE_HZ:g} scan/s on "
+        f"world {', '.join(map(str, result.probe_seeds))}, no wall relief fitted; `lmsbench sim2real {path.name}` "
+        "runs the full comparison.", body,
         figure("sim2real/sim2real.png", "Real against calibrated simulation: readings by range, ray residuals "
                                         "around split-and-merge lines, lines per scan, segment lengths, "
                                         "explained fraction by method.")])

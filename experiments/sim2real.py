@@ -95,6 +95,11 @@ PROBE_RATE_HZ = 1.0
 # the beams at 1-4 m over 120 s, 0.22-0.26 over 20 s).
 DEFAULT_DURATION_S = PROBE_DURATION_S  # simulated seconds per seed
 DEFAULT_RATE_HZ = 0.25  # simulated scans kept per second in the report's runs
+# Fewer scans than this on a side (the real scans used, the report's simulated scans, the probe
+# scans behind each probe value of a fit) and the figures are not worth comparing: the report's
+# worlds keep 30 scans each, and one world's explained fraction already spreads by 0.04-0.06 (1 sd)
+# from seed to seed (DEFAULT_SEEDS). sim2real still reports, with a warning (Sim2RealResult.warnings).
+MIN_SCANS = 30
 RELIEF_WINDOW = 10  # beams in each straight stretch either side of a joint
 RELIEF_RANGE_M = (0.5, 4.0)  # beams used (m)
 RELIEF_STRAIGHT_TAU = 2.0  # a stretch is straight when its points' rms off their line is at most this x sigma
@@ -231,6 +236,7 @@ class Sim2RealResult:
     scale: ScaleFit | None = None  # the mit worlds' room size fitted to the log (fit_scale)
     relief: ReliefFit | None = None  # the mit worlds' wall relief fitted to the log (fit_relief)
     probe_seeds: list[int] = field(default_factory=list)  # the worlds of the fits' probe runs (none: no fit)
+    warnings: list[str] = field(default_factory=list)  # one line each: samples too small to mean much (MIN_SCANS)
 
 
 def no_return_share(records: Sequence[Record], max_reading: float | None = None) -> float:
@@ -503,6 +509,26 @@ def fit_world(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     return rough, scale, relief
 
 
+def resolve_probe_seeds(seeds: Sequence[int], probe_seeds: Sequence[int] | None = None,
+                        names: tuple[str, str] = ("seeds", "probe_seeds")) -> list[int]:
+    """The worlds of the mit fits' probe runs: ``probe_seeds``, or by default the first
+    ``len(seeds)`` of PROBE_SEEDS. A fit on the report's own worlds would be tuned to them, so a
+    probe seed that is also a report seed is an error, given or default (``names``: the two
+    arguments' names in the message, e.g. the command line's options).
+
+    Raises:
+        LmsbenchError: no probe seed, or a probe seed among ``seeds``."""
+    probes = list(PROBE_SEEDS[:max(1, len(seeds))] if probe_seeds is None else probe_seeds)
+    if not probes:
+        raise LmsbenchError(f"{names[1]}: give at least one seed")
+    shared = sorted(set(int(s) for s in probes) & set(int(s) for s in seeds))
+    if shared:
+        which = "" if probe_seeds is not None else f" (by default seeds {_seed_list(probes)})"
+        raise LmsbenchError(f"{names[1]}: seed(s) {', '.join(map(str, shared))} also in {names[0]}: the fits' probe "
+                            f"worlds{which} must be other worlds than the report's; give other {names[1]}")
+    return probes
+
+
 def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT_SEEDS,
              duration: float = DEFAULT_DURATION_S, rate_hz: float = DEFAULT_RATE_HZ, stride: int = 5, max_scans: int | None = 400,
              methods: Sequence[str] = METHODS, sensor: Any = None, read_options: dict | None = None,
@@ -532,12 +558,11 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     from experiments.calibrate import FIT_DURATION_S, calibrate_log
     from experiments.compare import Source, compare, summarise
     from sim import WORLD_NAMES, make_world, simulate_records
+    from sim.records import scan_stamps
 
     if world not in WORLD_NAMES:
         raise LmsbenchError(f"world: unknown world {world!r}; known worlds: {', '.join(WORLD_NAMES)}")
-    probes = list(PROBE_SEEDS[:max(1, len(seeds))] if probe_seeds is None else probe_seeds)
-    if not probes:
-        raise LmsbenchError("probe_seeds: give at least one seed")
+    probes = resolve_probe_seeds(seeds, probe_seeds) if world == "mit" else []
     opts = read_options or {}
     span = None if max_scans is None else max_scans * stride
     every: list[Record] = []
@@ -548,6 +573,8 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     real = every[::stride]
     if not real:
         raise LmsbenchError(f"{log}: no laser scans")
+    if not any(rec.scan.valid.any() for rec in real):
+        raise LmsbenchError(f"{log}: nothing to compare: none of the {len(real)} scans used has a valid reading")
     if sensor is None:
         sensor = calibrate_log(log, world=world if world in ("office", "cluttered", "mit") else "office",
                                stride=max(1, stride // 2), fit_duration=fit_duration or FIT_DURATION_S, **opts).sensor
@@ -572,8 +599,23 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     result = Sim2RealResult(table, scene_statistics(real), scene_statistics(simulated), sensor, limits, world,
                             list(seeds), len(real), len(simulated), {}, glass, rough, scale, relief,
                             probes if world == "mit" else [])
+    if table.empty or not np.isfinite(table[["explained_3cm_real", "explained_3cm_sim"]].to_numpy()).all():
+        raise LmsbenchError(f"{log}: nothing to compare: no method measured an explained fraction on both sources")
     result.checks = targets(table)
+    n_probe = (len(scan_stamps(sensor, probe_duration, probe_rate_hz)) * len(probes)) if result.probe_seeds else None
+    result.warnings = small_sample_warnings(len(real), len(simulated), n_probe)
     return result
+
+
+def small_sample_warnings(n_real: int, n_sim: int, n_probe: int | None = None) -> list[str]:
+    """One line when a side has fewer than MIN_SCANS scans (real, simulated, probe scans per probe
+    value; None: no fit), else none."""
+    few = [f"{n} {what}" for n, what in ((n_real, "real scans"), (n_sim, "simulated scans"),
+                                         (n_probe, "probe scans per probe value")) if n is not None and n < MIN_SCANS]
+    if not few:
+        return []
+    return [f"only {' and '.join(few)} (fewer than {MIN_SCANS}): the figures are too noisy to compare real and simulated "
+            "(more with --max-scans / --stride, --seeds / --duration, --probe-duration / --probe-seeds)"]
 
 
 def _table(summary: pd.DataFrame, real: str, sim: str, methods: list[str]) -> pd.DataFrame:
@@ -650,6 +692,8 @@ def format_report(result: Sim2RealResult, log: str) -> str:
                      f"{r['mean_segment_m_real']:.2f} | {r['mean_segment_m_sim']:.2f} |")
     c = result.checks
     rs, ss = result.real_stats, result.sim_stats
+    if result.warnings:
+        lines += ["", *(f"Warning: {w}" for w in result.warnings)]
     lines += ["", f"Targets: explained within 0.05 for {c['explained_within_0.05']} of {c['methods']} methods "
               f"(largest gap {c['max_abs_explained_diff']:.3f}); order kept for {c['order_kept']} of "
               f"{c['order_pairs']} pairs more than {ORDER_MARGIN} apart on the real log; lines per scan "

@@ -333,6 +333,7 @@ CASES = [
     (["sim2real", "{good.clf}", "--out", "{a_file}"], "a_file"),
     (["sim2real", "{good.clf}", "--seeds", "3", "4", "--probe-seeds", "4", "--out", O], "--probe-seeds: seed(s) 4 also in --seeds"),
     (["sim2real", "{good.clf}", "--probe-seeds", "100", "100", "--out", O], "--probe-seeds: seed(s) 100 given more than once"),
+    (["sim2real", "{good.clf}", "--seeds", "100", "101", "--out", O], "--probe-seeds: seed(s) 100, 101 also in --seeds"),
     (["sim2real", "{good.clf}", "--probe-seeds", "-1", "--out", O], "--probe-seeds"),
     (["sim2real", "{good.clf}", "--world", "office", "--probe-seeds", "100", "--out", O], "--probe-seeds sets the mit"),
     # bench, the top level

@@ -202,6 +202,47 @@ def test_sim2real_of_a_simulated_log_agrees_with_itself(tmp_path: Path) -> None:
     assert bad.returncode == 2 and "unknown world" in bad.stderr
 
 
+def test_sim2real_warns_on_tiny_samples_and_refuses_a_log_with_nothing_to_measure(tmp_path: Path) -> None:
+    """--max-scans 1 and --duration 0.1: one real scan and one simulated scan (a world's first)
+    still give a report, with one warning line on stderr naming both counts; a log whose scans hold
+    no valid reading (every beam +inf) is refused: exit 2, one line."""
+    import dataclasses
+
+    from experiments.sim2real import MIN_SCANS, small_sample_warnings
+
+    recs = simulate_records("cluttered", seed=7, duration=2.0, sensor=SensorConfig(units="cm"), rate_hz=3.0)
+    write_carmen(tmp_path / "log.clf", recs)
+    run = _cli("sim2real", str(tmp_path / "log.clf"), "--world", "cluttered", "--seeds", "7", "--duration", "0.1",
+               "--max-scans", "1", "--out", str(tmp_path / "out"))
+    assert run.returncode == 0, run.stderr
+    warned = [line for line in run.stderr.splitlines() if "warning" in line]
+    assert len(warned) == 1 and "only 1 real scans and 1 simulated scans" in warned[0], run.stderr
+    assert "Warning: only 1 real scans" in (tmp_path / "out" / "sim2real.md").read_text()
+    assert small_sample_warnings(MIN_SCANS, MIN_SCANS, MIN_SCANS) == []
+    assert small_sample_warnings(400, 720, None) == []
+    assert "12 probe scans per probe value" in small_sample_warnings(400, 720, 12)[0]
+    dark = [dataclasses.replace(r, scan=dataclasses.replace(r.scan, ranges=np.full_like(r.scan.ranges, np.inf)))
+            for r in recs]
+    write_carmen(tmp_path / "dark.clf", dark)
+    bad = _cli("sim2real", str(tmp_path / "dark.clf"), "--world", "cluttered", "--seeds", "7", "--out",
+               str(tmp_path / "out2"))
+    assert bad.returncode == 2 and "nothing to compare" in bad.stderr and len(bad.stderr.splitlines()) == 1, bad.stderr
+
+
+def test_sim2real_probe_seeds_may_not_be_report_seeds_given_or_default() -> None:
+    """The fits' probe worlds must not be the report's: the default probe seeds (PROBE_SEEDS[:n])
+    are checked against the seeds as a given --probe-seeds is, before the log is read."""
+    from experiments.sim2real import PROBE_SEEDS, resolve_probe_seeds, sim2real
+
+    with pytest.raises(LmsbenchError, match=r"probe_seeds: seed\(s\) 100, 101 also in seeds"):
+        sim2real(Path("unused.clf"), seeds=[100, 101])
+    with pytest.raises(LmsbenchError, match=r"probe_seeds: seed\(s\) 5 also in seeds"):
+        sim2real(Path("unused.clf"), seeds=[5, 6], probe_seeds=[5, 200])
+    assert resolve_probe_seeds([0, 1, 2]) == list(PROBE_SEEDS[:3])
+    assert resolve_probe_seeds([100], [7]) == [7]
+    assert resolve_probe_seeds(list(range(24))) == list(PROBE_SEEDS)
+
+
 def test_noise_tail_draws_a_share_of_beams_from_the_wide_gaussian() -> None:
     sensor = SensorConfig.ideal(noise_sigma=0.002, noise_tail_prob=0.2, noise_tail_sigma=0.05)
     exact, measured = _static_scans(sensor, 200)

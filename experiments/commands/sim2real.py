@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from lms200 import read_log
@@ -22,7 +23,7 @@ from experiments.options import (
     world_name,
 )
 from experiments.sim2real import (DEFAULT_DURATION_S, DEFAULT_RATE_HZ, DEFAULT_SEEDS, PROBE_DURATION_S, PROBE_RATE_HZ,
-                                  PROBE_SEEDS)
+                                  PROBE_SEEDS, resolve_probe_seeds)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -72,10 +73,8 @@ def run(args: argparse.Namespace) -> int:
         if args.world != "mit":
             raise InputError(f"--probe-seeds sets the mit world's fits; it does nothing for --world {args.world}")
         check_seeds(args.probe_seeds, "--probe-seeds")
-        shared = sorted(set(args.probe_seeds) & set(args.seeds))
-        if shared:
-            raise InputError(f"--probe-seeds: seed(s) {', '.join(map(str, shared))} also in --seeds: the fits' "
-                             "probe worlds must be other worlds than the report's")
+    if args.world == "mit":  # before any work: given or default, the probe worlds are not the report's
+        resolve_probe_seeds(args.seeds, args.probe_seeds, ("--seeds", "--probe-seeds"))
     args.probe_duration = PROBE_DURATION_S if args.probe_duration is None else args.probe_duration
     sensor = None
     if args.sensor is not None:
@@ -98,5 +97,7 @@ def run(args: argparse.Namespace) -> int:
     args.out = args.out or new_run_folder("results/sim2real")
     paths = write_outputs(result, args.out, str(args.log), config)
     print(format_report(result, str(args.log)), end="")
+    for warning in result.warnings:
+        print(f"lmsbench sim2real: warning: {warning}", file=sys.stderr)
     print("wrote " + ", ".join(str(p) for p in paths))
     return 0
