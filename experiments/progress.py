@@ -82,11 +82,14 @@ def _compile_watch() -> Any:
 
 def _warm_up_slam(scan: Any) -> None:
     """The default SLAM pipeline over a few copies of ``scan`` taken 2 cm apart (every per-scan
-    kernel, the keyframe map and the final line merge run; the result is discarded)."""
+    kernel, the keyframe map and the final line merge run; the result is discarded): three 0.1 s
+    apart, then one 2 s later, so that the correlative search (``slam.correlative``: likelihood
+    field, window scores, fit) runs too (the prediction's 3 std then exceed the ICP's reach)."""
     from lms200 import Record
     from slam import SlamConfig, run_slam
 
-    records = [Record(scan=scan.replace(stamp=0.1 * k, ranges=scan.ranges - 0.02 * k)) for k in range(4)]
+    stamps = (0.0, 0.1, 0.2, 2.2)
+    records = [Record(scan=scan.replace(stamp=t, ranges=scan.ranges - 0.02 * k)) for k, t in enumerate(stamps)]
     run_slam(records, SlamConfig())
 
 

@@ -97,6 +97,9 @@ class ReadStats:
         return {k: n for k, n in self.messages.items() if k in LASER_KINDS and k != self.laser}
 
 
+UTF8_BOM = b"\xef\xbb\xbf"  # byte-order mark some editors put before a text file's first line
+
+
 def compression(head: bytes) -> str | None:
     """The compression ("gzip", "bzip2", "xz") a file's first bytes announce, or None (plain)."""
     return next((name for name, (magic, _) in COMPRESSIONS.items() if head.startswith(magic)), None)
@@ -126,7 +129,7 @@ def archive_kind(head: bytes) -> str | None:
 
 def open_text(path: str | Path) -> IO[str]:
     """Open a plain or compressed (gzip, bzip2, xz) text file for reading, by magic bytes, not
-    the name.
+    the name; a leading UTF-8 byte-order mark is skipped.
 
     Raises:
         LogFormatError: for an archive (tar, zip): the log must be extracted from it first.
@@ -140,7 +143,10 @@ def open_text(path: str | Path) -> IO[str]:
     what = archive_kind(head)
     if what:
         raise LogFormatError(path, 0, f"{what}, not a log: extract the log from it first")
-    return io.TextIOWrapper(open_bytes(path), encoding="ascii", errors="replace")
+    raw = open_bytes(path)
+    if head.startswith(UTF8_BOM):  # a log saved by a Windows editor: the mark would hide line 1's message name
+        raw.read(len(UTF8_BOM))
+    return io.TextIOWrapper(raw, encoding="ascii", errors="replace")
 
 
 class CarmenReader:

@@ -39,7 +39,8 @@ class Scan:
         angle_min: bearing of beam 0 in radians (sensor frame, CCW, 0 = ahead), within +-2 pi.
         angle_increment: bearing step between beams in radians, > 0; the beams span at most 2 pi
             (a full turn), so degrees given as radians are refused.
-        range_min: smallest valid range in metres.
+        range_min: smallest valid range in metres (a range of 0 is never a measurement: loggers
+            write 0 for a missing one, so it is invalid whatever range_min says).
         range_max: largest valid range in metres.
         stamp: time of the first beam in seconds.
 
@@ -129,10 +130,10 @@ class Scan:
 
     @property
     def valid(self) -> np.ndarray:
-        """Mask of beams with a finite return inside [range_min, range_max]."""
+        """Mask of beams with a finite return inside [range_min, range_max], and > 0 m."""
         r = self.ranges
         with np.errstate(invalid="ignore"):
-            return np.isfinite(r) & (r >= self.range_min) & (r <= self.range_max)
+            return np.isfinite(r) & (r >= self.range_min) & (r > 0.0) & (r <= self.range_max)
 
     @property
     def points(self) -> np.ndarray:

@@ -74,14 +74,26 @@ class AlignmentConfig:
             from the prediction (and its retries) explains fewer than ``retry_inliers`` of the
             points. Its window is the prediction +- ``search_sigmas`` std, at most
             ``search_xy`` m in x and y (and the whole turn at most); the ``search_candidates``
-            best distinct poses are refined by the ICP and compete with the prediction's match.
+            best distinct poses are refined by the ICP and compete with the prediction's match,
+            which stays unless one of them fits better by more than ``fit_margin``.
         search_sigmas, search_xy: see ``search`` (3 std; 2 m, twice the 1 m/s of an indoor
-            robot over a second of prediction error).
+            robot over a second of prediction error; at most 10 m).
+        max_turn_rate: headings are searched only within this turn rate (rad/s) times the time
+            since the last scan of the last pose's heading. The prediction's heading std grows
+            with dt^2 (``motion.sigma_alpha``: 3 std pass half a turn from 0.5 s between scans
+            on), a robot's turn does not: without the bound, a corridor seen half a turn the
+            wrong way could win (csail-robotlaser1, 0.64 s apart, flipped twice: ATE 10 m). Half
+            a turn a second (pi), above the fastest turns of the logs' corrected poses
+            (csail-robotlaser1 2.1 rad/s, ACES 1.1, MIT CSAIL 1.9 at the 99th percentile); from
+            1 s between scans on it allows the whole turn.
         search_step, search_step_theta: the window's grid (m, rad): 0.2 m and 1 degree, well
-            inside the ICP's 0.5 m reach (1 degree moves a point 10 m away by 0.17 m).
-        search_resolution, search_sigma: the likelihood field's cells (m) and the std (m) of
-            its Gaussian about each map point (the window's step: a pose off by half a step
-            still scores).
+            inside the ICP's 0.5 m reach (1 degree moves a point 10 m away by 0.17 m); at least
+            1e-3 rad, and a window of at most 4 million poses (headings x positions: 32 MB of
+            scores; the default's 159,201).
+        search_resolution, search_sigma: the likelihood field's cells (m, 0.01-1) and the std (m,
+            at most 1) of its Gaussian about each map point (the window's step: a pose off by
+            half a step still scores). The field covers at most 2,000 x 2,000 cells about the
+            prediction (100 m square at 5 cm), whatever the map's extent.
         search_points: at most this many of the scan's valid points (evenly spread) are scored.
         search_candidates: how many distinct window poses (0.3 m or 0.1 rad apart) are refined.
         fit_sigma: a searched step's candidates are ranked by their fit, the mean over the points of
@@ -131,6 +143,7 @@ class AlignmentConfig:
     fit_sigma: float = 0.03
     fit_margin: float = 0.05
     ambiguity_sigmas: float = 3.0
+    max_turn_rate: float = 3.14159
 
 
 @dataclass(frozen=True)
@@ -437,6 +450,7 @@ class SlamConfig:
             if not 0 < getattr(al, name) <= SEARCH_CELL_M:
                 raise SlamConfigError(f"alignment.{name}: must be in (0, {SEARCH_CELL_M}] m (the cell of the "
                                       f"scan matcher's search grid), got {getattr(al, name)}")
+        _check_search(al)
         if not 0 < al.normal_agreement <= math.pi:
             raise SlamConfigError(f"alignment.normal_agreement: must be in (0, pi] rad (pi: no normal check), "
                                   f"got {al.normal_agreement}")
@@ -487,7 +501,48 @@ class SlamConfig:
         return cls(**values)
 
 
+def _check_search(al: AlignmentConfig) -> None:
+    """The correlative search's fields (``slam.correlative``), whose memory grows as the inverse
+    square of the steps: each within its bounds, and the window within ``MAX_SEARCH_POSES``."""
+    for name, lo, hi, unit in (("search_sigmas", 0.0, math.inf, "std"), ("max_turn_rate", 0.0, math.inf, "rad/s"),
+                               ("search_xy", 0.0, MAX_SEARCH_XY_M, "m"),
+                               ("search_step", 0.0, MAX_SEARCH_XY_M, "m"),
+                               ("search_sigma", 0.0, MAX_SEARCH_SIGMA_M, "m")):
+        value = getattr(al, name)
+        if not lo < value <= hi:
+            bound = f"> {lo:g} {unit}" if hi == math.inf else f"in ({lo:g}, {hi:g}] {unit}"
+            raise SlamConfigError(f"alignment.{name}: must be {bound}, got {value}")
+    for name, lo, hi, unit in (("search_step_theta", MIN_SEARCH_STEP_THETA, math.pi, "rad"),
+                               ("search_resolution", MIN_SEARCH_RESOLUTION_M, MAX_SEARCH_RESOLUTION_M, "m")):
+        value = getattr(al, name)
+        if not lo <= value <= hi:
+            raise SlamConfigError(f"alignment.{name}: must be in [{lo:g}, {hi:g}] {unit} (finer needs more memory "
+                                  f"than the search is worth), got {value}")
+    poses = search_window_poses(al)
+    if poses > MAX_SEARCH_POSES:
+        raise SlamConfigError(f"alignment.search_xy / search_step / search_step_theta: the search window would hold "
+                              f"{poses:,} poses (headings x positions), more than {MAX_SEARCH_POSES:,} (memory); make "
+                              f"the steps coarser or search_xy smaller")
+
+
+def search_window_poses(al: AlignmentConfig) -> int:
+    """The most poses a correlative search window of ``al`` scores: headings (the whole turn at
+    ``search_step_theta``) times positions (``search_xy`` either side at ``search_step``, in whole
+    cells of ``search_resolution``); as ``slam.correlative.search`` lays them out."""
+    cells = max(1, int(round(al.search_step / al.search_resolution)))
+    side = 2 * int(math.floor(al.search_xy / (cells * al.search_resolution))) + 1
+    headings = max(int(math.ceil(2 * math.pi / al.search_step_theta)),
+                   2 * int(math.floor(math.pi / al.search_step_theta)) + 1)
+    return headings * side * side
+
+
 PRESETS = ("default", "paper")
+MIN_SEARCH_STEP_THETA = 1e-3  # rad: at most 6,284 headings in a window
+MIN_SEARCH_RESOLUTION_M = 0.01  # m: the likelihood field's finest cell (its raster is capped, slam.correlative)
+MAX_SEARCH_RESOLUTION_M = 1.0  # m: twice the ICP's reach; coarser cells cannot place a candidate
+MAX_SEARCH_XY_M = 10.0  # m: the window's widest half-side (10 m/s for a second)
+MAX_SEARCH_SIGMA_M = 1.0  # m: the field's widest Gaussian (the field grows by 3 of it on every side)
+MAX_SEARCH_POSES = 4_000_000  # poses of one window: 32 MB of scores (the default: 159,201)
 SEARCH_CELL_M = 0.5  # m: cell of the scan matcher's search grid, the farthest a correspondence can reach
 MAX_PRIOR_SIGMA = 1.0  # m and rad: loosest prior on the first keyframe that still anchors the graph
 MIN_MAX_DT_S = 1e-3  # s: finest prediction step of the paper preset (a 10 s gap: at most 10,000 steps)

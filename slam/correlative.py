@@ -21,6 +21,9 @@ from .icp import Reference
 from .icpkernel import _nearest_facing, kernel
 
 
+MAX_FIELD_SIDE = 2000  # cells: a field about a centre is at most 2,000 x 2,000 cells (32 MB of float64)
+
+
 @dataclass(frozen=True)
 class Field:
     """A likelihood raster: ``values[i, j]`` at world (origin[0] + i res, origin[1] + j res)."""
@@ -34,13 +37,15 @@ def make_field(points: np.ndarray, resolution: float, sigma: float, centre: np.n
                radius: float = np.inf) -> Field:
     """The likelihood field of map points (m, 2; world frame) with cells of ``resolution`` m and a
     Gaussian of ``sigma`` m about each point, over the points within ``radius`` m (a square) of
-    ``centre`` (all points when no centre), with a margin of 3 sigma."""
+    ``centre`` (all points when no centre), with a margin of 3 sigma; about a centre, the radius
+    is cut to keep the raster within ``MAX_FIELD_SIDE`` cells a side."""
     p = np.asarray(points, float).reshape(-1, 2)
-    if centre is not None and np.isfinite(radius):
+    margin = 3.0 * sigma + resolution
+    if centre is not None:  # at most MAX_FIELD_SIDE cells a side
+        radius = min(radius, 0.5 * (MAX_FIELD_SIDE - 2) * resolution - margin)
         p = p[np.all(np.abs(p - np.asarray(centre, float)[:2]) <= radius, axis=1)]
     if p.shape[0] == 0:
         return Field(np.zeros((1, 1)), np.zeros(2), float(resolution))
-    margin = 3.0 * sigma + resolution
     lo = p.min(axis=0) - margin
     shape = np.ceil((p.max(axis=0) + margin - lo) / resolution).astype(int) + 1
     free = np.ones(tuple(shape), bool)
@@ -59,11 +64,14 @@ class Candidate:
 
 
 def search(points: np.ndarray, field: Field, centre: np.ndarray, half_xy: float, half_theta: float,
-           step: float, step_theta: float, count: int, min_xy: float, min_theta: float) -> list[Candidate]:
+           step: float, step_theta: float, count: int, min_xy: float, min_theta: float,
+           turn: tuple[float, float] | None = None) -> list[Candidate]:
     """The ``count`` best poses of the window ``centre`` +- ``half_xy`` m (x and y, ``step`` m
     apart, rounded to whole cells of the field) and +- ``half_theta`` rad (``step_theta`` apart;
     the full turn when ``half_theta`` >= pi), best first; each at least ``min_xy`` m or
-    ``min_theta`` rad from every better one (distinct local maxima, not neighbours of one)."""
+    ``min_theta`` rad from every better one (distinct local maxima, not neighbours of one).
+    ``turn`` = (heading rad, max_turn rad): only headings within ``max_turn`` of that heading
+    (the last pose's: the turn a robot can make since) are scored (none left: no candidates)."""
     p = np.asarray(points, float).reshape(-1, 2)
     if p.shape[0] == 0:
         return []
@@ -76,6 +84,11 @@ def search(points: np.ndarray, field: Field, centre: np.ndarray, half_xy: float,
     else:
         m = int(math.floor(half_theta / step_theta))
         thetas = centre[2] + np.arange(-m, m + 1) * step_theta
+    if turn is not None and turn[1] < math.pi:
+        off = np.abs(np.remainder(thetas - turn[0] + math.pi, 2 * math.pi) - math.pi)
+        thetas = thetas[off <= turn[1]]
+        if thetas.size == 0:
+            return []
     scores = _scores(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), field.values,
                      float(field.origin[0]), float(field.origin[1]), res, float(centre[0]), float(centre[1]),
                      thetas, n, k)

@@ -187,7 +187,7 @@ class ScanSlam:
             m = match(sp.matched, self.ref, starts, self.alignment, prior=prior, normals=qn)
             m = self._check_jump(sp.matched, m, pred, stamp - self.last[-1][0], info, qn)
             if self.alignment.search and (self._beyond_reach(sxy) or m.inliers < self.alignment.retry_inliers):
-                m = self._search(sp, m, pred, sxy, sth, info, qn)
+                m = self._search(sp, m, pred, sxy, sth, stamp - self.last[-1][0], info, qn)
             info.inliers, info.rms, info.hypothesis = m.inliers, m.rms, m.start
         if m is not None and m.inliers >= self.alignment.min_inliers:
             pose, cov = m.pose, m.covariance
@@ -234,16 +234,22 @@ class ScanSlam:
         """The prediction's position std ``sxy`` (m) times ``search_sigmas`` exceeds the ICP's reach."""
         return self.alignment.search_sigmas * sxy > self.alignment.max_correspondence
 
-    def _search(self, sp: ScanPoints, m: Match, pred: np.ndarray, sxy: float, sth: float, info: ScanStep,
+    def _search(self, sp: ScanPoints, m: Match, pred: np.ndarray, sxy: float, sth: float, dt: float, info: ScanStep,
                 normals: np.ndarray | None) -> Match:
         """The correlative search (:mod:`slam.correlative`) about the prediction, and about the
         last pose when that lies outside the window: its best distinct poses, each refined by the
         ICP held near it (a prior of the window's step: the ICP does not slide along a corridor),
-        compete with ``m``. The pose that fits best (:func:`slam.correlative.fit`) wins; among
-        those within ``fit_margin`` of it, the one nearest the prediction or the last pose
-        (Mahalanobis, the prediction's std truncated to the window: a half turn costs 9, a metre
-        at most 2.25). ``info.ambiguous``: a pose ``DISTINCT_XY`` m or ``DISTINCT_THETA`` rad from
-        the chosen one fits as well and the prior prefers the chosen one by less than
+        compete with ``m``, the match from the prediction.
+
+        Headings are searched only within ``max_turn_rate * dt`` rad of the last pose's (``dt``
+        s since it): the constant-velocity prediction's std grows with dt^2 (3 std of heading
+        pass half a turn from 0.5 s on), a robot's turn rate does not. ``m`` stays unless a
+        search pose fits (:func:`slam.correlative.fit`) better by more than ``fit_margin``;
+        then, among the search poses within ``fit_margin`` of the best fit, the one nearest the
+        prediction or the last pose wins (Mahalanobis, the prediction's std truncated to the
+        window: a half turn costs 9, a metre at most 2.25). ``info.ambiguous``: a pose
+        ``DISTINCT_XY`` m or ``DISTINCT_THETA`` rad from the chosen one fits within
+        ``fit_margin`` of the best and the prior prefers the chosen one by less than
         ``ambiguity_sigmas`` std."""
         al = self.alignment
         assert self.ref is not None
@@ -251,6 +257,8 @@ class ScanSlam:
         half_xy = min(al.search_sigmas * sxy, al.search_xy)
         half_th = min(al.search_sigmas * sth, np.pi)
         last = self.last[-1][1]
+        max_turn = al.max_turn_rate * max(dt, 0.0)
+        turn = (float(last[2]), max_turn) if max_turn < np.pi else None
         centres = [pred]
         if np.any(np.abs(last[:2] - pred[:2]) > half_xy):
             centres.append(last)
@@ -260,8 +268,10 @@ class ScanSlam:
         results = [m]
         for c in centres:
             for cand in search(pts, field, c, half_xy, half_th, al.search_step, al.search_step_theta,
-                               al.search_candidates, DISTINCT_XY, DISTINCT_THETA):
+                               al.search_candidates, DISTINCT_XY, DISTINCT_THETA, turn):
                 r = refine(sp.matched, self.ref, cand.pose, al, prior=hold, normals=normals)
+                if turn is not None and abs(_wrap(r.pose[2] - last[2])) > max_turn + DISTINCT_THETA:
+                    continue  # the refinement turned it beyond reach
                 results.append(Match(r.pose, r.information, r.inliers, r.rms, r.n_points, r.hessian, -1))
         min_cos = float(np.cos(al.normal_agreement))
         fits = [fit(sp.matched, normals, self.ref, r.pose, al.fine_correspondence, al.fit_sigma, min_cos)
@@ -274,19 +284,17 @@ class ScanSlam:
             out = np.inf
             for c in (pred, last):
                 e = r.pose - c
-                e[2] = np.arctan2(np.sin(e[2]), np.cos(e[2]))
-                out = min(out, float((e[0] ** 2 + e[1] ** 2) / wxy**2 + e[2] ** 2 / wth**2))
+                out = min(out, float((e[0] ** 2 + e[1] ** 2) / wxy**2 + _wrap(e[2]) ** 2 / wth**2))
             return out
 
         prior = {i: distance(results[i]) for i in close}
-        k = min(close, key=prior.__getitem__)
+        k = 0 if 0 in close else min(close, key=prior.__getitem__)  # the prediction's match unless clearly beaten
         chosen = results[k]
         info.fit = fits[k]
         for i in close:
             r = results[i]
-            dth = abs(float(np.arctan2(np.sin(r.pose[2] - chosen.pose[2]), np.cos(r.pose[2] - chosen.pose[2]))))
-            if (np.hypot(*(r.pose[:2] - chosen.pose[:2])) > DISTINCT_XY or dth > DISTINCT_THETA) and \
-                    prior[i] - prior[k] < al.ambiguity_sigmas**2:
+            if (np.hypot(*(r.pose[:2] - chosen.pose[:2])) > DISTINCT_XY or abs(_wrap(r.pose[2] - chosen.pose[2])) >
+                    DISTINCT_THETA) and prior[i] - prior[k] < al.ambiguity_sigmas**2:
                 info.ambiguous = True
         return chosen
 
@@ -456,6 +464,11 @@ def run_scan_slam(steps, config) -> "SlamResult":
         "matched_fraction": float(matched[1:].mean()) if matched.size > 1 else 1.0,
     }
     return SlamResult(traj, covs, lines, np.zeros((0, 3)), diag)
+
+
+def _wrap(angle: float) -> float:
+    """``angle`` (rad) wrapped to [-pi, pi]."""
+    return float(np.arctan2(np.sin(angle), np.cos(angle)))
 
 
 def _offsets(scan) -> np.ndarray:

@@ -21,7 +21,7 @@ def test_info_json_on_intel(shared_data: Path, capsys: pytest.CaptureFixture[str
     assert info["scan_rate_hz"] == pytest.approx(909 / 2650.8632, rel=1e-6)
     assert 0.02 < info["no_return_fraction"] < 0.03 and info["invalid_fraction"] == 0.0
     assert info["odometry"] is True and info["truth"] is False
-    assert info["stamps_back"] == 4  # scans 294, 600, 626, 724 are stamped 0.05-0.86 s before the previous scan
+    assert info["stamps_back"] == 4  # scans 295, 601, 627, 725 are stamped 0.05-0.86 s before the previous one (slam --skip-bad-lines skips 294, 600, 626, 724)
 
 
 def test_info_errors_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -64,6 +64,13 @@ def test_info_json_numbers_are_numbers(tmp_path: Path, capsys: pytest.CaptureFix
     assert main(["info", str(tmp_path / "one.clf"), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
     assert info["beams"] == 361 and isinstance(info["fov_deg"], float) and info["fov_deg"] == pytest.approx(180.0)
+    # invalid readings: nan, 0 m (a logger's missing reading) and finite ones out of limits, not +inf
+    r = np.full(361, 2.0)
+    r[:10], r[10:30], r[30:31], r[31:36] = np.nan, 0.0, 9.0, np.inf
+    write_log(tmp_path / "bad.clf", [Record(scans[0].replace(ranges=r))])
+    assert main(["info", str(tmp_path / "bad.clf"), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["invalid_fraction"] == pytest.approx(31 / 361) and info["no_return_fraction"] == pytest.approx(5 / 361)
 
 
 def test_os_errors_are_one_line_with_exit_status_2(tmp_path: Path, capsys: pytest.CaptureFixture[str],

@@ -525,3 +525,18 @@ def test_geometry_flags(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     assert "90.00 deg (from -45.00 deg)" in out and "0.500 deg" in out
     assert main(["info", str(path), "--laser-resolution-deg", "-1"]) == 2
     assert "--laser-resolution-deg: must be > 0" in capsys.readouterr().err
+
+
+def test_a_byte_order_mark_before_the_first_line_is_skipped(tmp_path: Path) -> None:
+    """A log saved by a Windows editor starts with a UTF-8 BOM; its first scan was silently lost
+    (the mark made line 1 an unknown message)."""
+    lines = [flaser(361, 2.0 + i / 10, stamp=10.0 + i) for i in range(3)]
+    plain = write(tmp_path, "plain.clf", lines)
+    marked = tmp_path / "marked.clf"
+    marked.write_bytes(b"\xef\xbb\xbf" + plain.read_bytes())
+    packed = tmp_path / "marked.clf.gz"
+    packed.write_bytes(gzip.compress(marked.read_bytes()))
+    want = [r.scan for r in read_log(plain)]
+    for path in (marked, packed):
+        got = [r.scan for r in read_log(path)]
+        assert len(got) == 3 and all(a == b for a, b in zip(got, want))

@@ -140,3 +140,25 @@ def test_exact_lines_score_the_noise_and_a_split_at_the_tolerance_scores_below_t
     assert math.sqrt(sq["fixed"] / n["fixed"]) < exact_rmse - 0.0005 and n["fixed"] < exact_n
     assert math.sqrt(sq["default"] / n["default"]) == pytest.approx(exact_rmse, rel=0.02)
     assert n["default"] >= 0.97 * exact_n
+
+
+def test_zero_ranges_count_as_invalid_like_nan_for_every_extractor_and_the_explained_fraction() -> None:
+    """A wall with 0 m readings where a logger lost beams reads as the same wall with nan there:
+    the same lines from split_merge / iepf / sensor (bit for bit) and the same explained fraction
+    (0 m readings once counted as valid beams nobody explains: 20 % of a log's 0s cost 20 %)."""
+    from features import extract
+
+    base = wall_scan(noise=0.005, seed=3)
+    lost = np.zeros(base.ranges.size, bool)
+    lost[np.flatnonzero(np.isfinite(base.ranges))[::25]] = True  # every 25th beam on the wall
+    as_nan = Scan.lms200(np.where(lost, np.nan, base.ranges), range_max=80.0)
+    as_zero = Scan.lms200(np.where(lost, 0.0, base.ranges), range_max=80.0)
+    assert as_zero.range_min == 0.0 and not as_zero.valid[lost].any()
+    for method in ("sensor", "split_merge", "iepf"):
+        a, b = extract(as_nan, method=method), extract(as_zero, method=method)
+        assert len(a.lines) >= 1
+        np.testing.assert_array_equal(a.lines.values, b.lines.values)
+        np.testing.assert_array_equal(a.lines.beams, b.lines.beams)
+        ma, mb = scan_measures(a, as_nan, 0.005), scan_measures(b, as_zero, 0.005)
+        assert ma.n_valid == mb.n_valid == np.count_nonzero(np.isfinite(base.ranges) & ~lost)
+        assert ma.explained_tol == mb.explained_tol > 0.9

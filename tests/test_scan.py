@@ -28,6 +28,13 @@ def test_points_and_valid_follow_rep117() -> None:
     np.testing.assert_allclose(s.points[0], [1.0, 0.0])
 
 
+def test_a_zero_range_is_never_valid() -> None:
+    """Loggers write 0 for a missing reading: with range_min 0 (CARMEN scans) it is still invalid."""
+    s = Scan(np.array([0.0, 1e-9, 1.0, 0.0]), 0.0, 0.1, 0.0, 8.0)
+    np.testing.assert_array_equal(s.valid, [False, True, True, False])
+    assert np.isnan(s.points[[0, 3]]).all()
+
+
 def test_scan_is_immutable_and_copies_its_input() -> None:
     r = np.ones(5)
     s = Scan(r, 0.0, 0.1, 0.0, 10.0)

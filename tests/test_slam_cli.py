@@ -33,7 +33,9 @@ def test_slam_command_writes_every_output(sim_folder, tmp_path, capsys):
 
     out = tmp_path / "run"
     assert main(["slam", str(sim_folder), "--out", str(out), "--quiet"]) == 0
-    stdout = capsys.readouterr().out
+    captured = capsys.readouterr()
+    stdout = captured.out
+    assert "warning" not in captured.err  # healthy (asserted below): no warning
     for name in ("trajectory.tum", "keyframes.tum", "map.json", "metrics.json", "config.yaml", "slam.png"):
         assert (out / name).is_file(), name
     assert "loop closures over" in stdout and "default preset" in stdout
@@ -45,7 +47,7 @@ def test_slam_command_writes_every_output(sim_folder, tmp_path, capsys):
     assert m["loop_closures"]["n_keyframes"] >= 2 and m["loop_closures"]["n"] == len(m["loop_closures"]["closed"])
     assert [row["source"] for row in m["table"]][:2] == ["slam", "paper preset"]
     assert m["ate"]["rmse"] < 0.1  # a short run in the simulated office stays on track
-    assert not m["consistency"]["diverged"]
+    assert not m["consistency"]["diverged"] and m["consistency"]["healthy"]
     lines = json.loads((out / "map.json").read_text())["lines"]
     assert len(lines) == m["landmarks"]["lines"] > 3
     assert m["map"]["distance_mean"] < 0.1
@@ -153,3 +155,76 @@ def test_a_simulator_folder_without_interlacing_turns_deskew_off(tmp_path):
     assert deskew_for_sensor(cfg, interlaced=True) is cfg
     off = deskew_for_sensor(cfg, interlaced=False)
     assert not off.alignment.deskew and off.alignment.normal_agreement == cfg.alignment.normal_agreement
+
+
+@pytest.mark.parametrize("field, value, expected", [
+    ("search_sigmas", 0, "alignment.search_sigmas: must be > 0"),  # was a ZeroDivisionError mid-run
+    ("search_step_theta", 1e-9, "alignment.search_step_theta: must be in [0.001"),  # was a MemoryError
+    ("search_resolution", 1e-6, "alignment.search_resolution: must be in [0.01"),  # was a MemoryError
+    ("search_xy", 1e9, "alignment.search_xy: must be in (0, 10]"),
+    ("search_sigma", 1e6, "alignment.search_sigma: must be in (0, 1]"),
+    ("max_turn_rate", 0, "alignment.max_turn_rate: must be > 0"),
+    ("search_step", "0.01, search_resolution: 0.01", "the search window would hold 58,049,161 poses"),  # 361 x 401^2
+])
+def test_search_fields_out_of_bounds_are_one_line_exit_2(sim_folder, tmp_path, capsys, field, value, expected):
+    """Every field of the correlative search is checked when the config is built: one line on
+    stderr naming the field, exit status 2, nothing run."""
+    from experiments.cli import main
+
+    cfg = tmp_path / "bad.yaml"
+    cfg.write_text(f"alignment: {{{field}: {value}}}\n")
+    out = tmp_path / "o"
+    assert main(["slam", str(sim_folder), "--config", str(cfg), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and expected in err[0], err
+    assert not (out / "metrics.json").exists()
+
+
+def test_search_window_bound_counts_the_poses_the_search_scores(monkeypatch):
+    """``search_window_poses`` is the size of the score array ``slam.correlative.search`` fills
+    for a whole-turn window of the config's half-side (counted from the kernel's own output)."""
+    import slam.correlative as corr
+    from slam import SlamConfig
+    from slam.config import search_window_poses
+
+    sizes: list[int] = []
+    kernel = corr._scores
+
+    def counting(*args):
+        out = kernel(*args)
+        sizes.append(out.size)
+        return out
+
+    monkeypatch.setattr(corr, "_scores", counting)
+    field = corr.make_field(np.array([[0.0, 0.0], [3.0, 1.0], [-2.0, 4.0]]), 0.1, 0.2)
+    for al in (SlamConfig().alignment,
+               SlamConfig.from_dict({"alignment": {"search_step": 0.3, "search_step_theta": 0.05,
+                                                   "search_xy": 1.25}}).alignment):
+        corr.search(np.array([[1.0, 0.5], [2.0, -1.0]]), field, np.zeros(3), al.search_xy, np.pi, al.search_step,
+                    al.search_step_theta, 1, 0.3, 0.1)
+        assert sizes[-1] == search_window_poses(al)
+    assert sizes[0] == 361 * 21 * 21
+
+
+def test_an_unhealthy_run_warns_on_stderr(tmp_path, capsys):
+    """Office seed 1 at 0.5 scans/s slides along a bare corridor (ATE 2.3 m) with 1 of its 44
+    steps ambiguous (tests/test_slam_keyframe_logs.py): the command says so in one line on stderr,
+    naming the share that metrics.json gives, and still exits 0 (the run finished)."""
+    from experiments.cli import main
+    from sim import simulate_records
+
+    folder = tmp_path / "sparse"
+    folder.mkdir()
+    records = simulate_records("office", seed=1, duration=90.0, rate_hz=0.5)
+    write_log(folder / "scans.clf", records)
+    truth = np.array([(r.scan.stamp, *r.truth) for r in records])
+    write_tum(folder / "groundtruth.tum", truth[:, 0], truth[:, 1:])
+    out = tmp_path / "run"
+    assert main(["slam", str(folder), "--out", str(out), "--quiet", "--no-paper-baseline"]) == 0
+    m = json.loads((out / "metrics.json").read_text())
+    assert not m["consistency"]["healthy"] and m["ate"]["rmse"] > 0.5
+    steps = m["n_scans"] - 1
+    assert round(m["consistency"]["ambiguous_fraction"] * steps) == 1
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and "not healthy" in warnings[0]
+    assert f"1 of {steps} steps ({100 / steps:.1f} %) were ambiguous" in warnings[0]

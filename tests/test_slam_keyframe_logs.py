@@ -42,12 +42,65 @@ def test_scans_two_seconds_apart_are_tracked(sparse_runs, seed):
 
 
 def test_a_run_the_scans_do_not_fix_is_not_healthy(sparse_runs):
-    """Seed 1 slides 1.3 m along a bare corridor (ATE 2.2 m, measured): 3 of its 44 steps had a
+    """Seed 1 slides along a bare corridor (ATE 2.3 m, measured): 1 of its 44 steps had a
     distinct pose that fitted as well, which only the motion model told apart."""
     err, diag = _ate(sparse_runs[1], SlamConfig())
     assert err > 0.5
-    assert diag["ambiguous_fraction"] > 0.05 and np.sum(diag["ambiguous"]) == 3
+    assert diag["ambiguous_fraction"] > 0.0 and np.sum(diag["ambiguous"]) == 1
     assert not diag["healthy"]
+
+
+def _heading_steps_error(trajectory: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """(n - 1,) rad: how far each step's turn of the estimate (stamp, x, y, theta rows) is from the truth's."""
+    d = np.diff(trajectory[:, 3]) - np.diff(truth[:, 3])
+    return np.abs(np.remainder(d + np.pi, 2 * np.pi) - np.pi)
+
+
+def test_a_corridor_seen_half_a_turn_the_wrong_way_does_not_win():
+    """Scans 0.64 s apart (csail-robotlaser1's interval) along the simulated corridor: the
+    prediction's 3 std of heading span the whole turn (``motion.sigma_alpha`` 4 rad/s^2 x dt^2),
+    and the corridor looks alike both ways. Before the turn bound and the keep rule the search
+    took the half-turn pose (measured: ATE 3.17 m, a 180-degree step); now ATE 0.025 m and no
+    step turns more than 0.6 degrees off the truth's."""
+    from sim import simulate_records
+
+    records = simulate_records("corridor", seed=0, duration=45.0, rate_hz=1.5625)
+    result = run_slam(records, SlamConfig())
+    truth = np.array([(r.scan.stamp, *r.truth) for r in records])
+    assert ate(result.trajectory, truth).rmse < 0.1
+    assert np.degrees(_heading_steps_error(result.trajectory, truth).max()) < 10.0
+    assert result.diagnostics["searched_fraction"] > 0.9  # 3 std of 0.42 m exceed the ICP's 0.5 m reach
+
+
+def test_the_search_keeps_to_the_turn_a_robot_can_make():
+    """``turn`` = (heading, max turn): every candidate's heading lies within the bound of that
+    heading, even where the best pose of the whole turn lies outside it (the room seen from a
+    pose 2 rad from the reference)."""
+    world = _room()[0]
+    true = np.array([1.5, 1.2, 2.0])
+    c, s = np.cos(true[2]), np.sin(true[2])
+    scan = (world[::7] - true[:2]) @ np.array([[c, -s], [s, c]])
+    field = make_field(world, 0.1, 0.2)
+    free = search(scan, field, true, 1.0, np.pi, 0.2, np.radians(1.0), 4, 0.3, 0.1)
+    assert abs(free[0].pose[2] - true[2]) <= np.radians(1.5)  # unbounded: the true heading wins
+    bounded = search(scan, field, true, 1.0, np.pi, 0.2, np.radians(1.0), 4, 0.3, 0.1, turn=(0.0, 1.0))
+    assert bounded and all(abs(np.arctan2(np.sin(b.pose[2]), np.cos(b.pose[2]))) <= 1.0 + 1e-9 for b in bounded)
+    assert search(scan, field, true, 1.0, 0.2, 0.2, np.radians(1.0), 4, 0.3, 0.1, turn=(0.0, 1.0)) == []
+
+
+@pytest.mark.shared_data
+def test_csail_robotlaser1_does_not_flip(shared_data):
+    """csail-robotlaser1, scans 500-599 (0.64 s apart, a corridor and a turn in place): before the
+    turn bound and the keep rule the search flipped the pose half a turn at scans 553 and 559 of
+    the whole log (ATE 9.97 m against the log's own poses, 0.347 m without the search); on this
+    slice ATE 0.96 m then, 0.083 m now (measured)."""
+    from lms200 import read_log
+
+    records = list(read_log(shared_data / "csail-robotlaser1.log.gz"))[500:600]
+    truth = np.array([(r.scan.stamp, *r.odom) for r in records])
+    result = run_slam(records, SlamConfig())
+    assert ate(result.trajectory, truth).rmse < 0.3
+    assert np.degrees(_heading_steps_error(result.trajectory, truth).max()) < 20.0
 
 
 def _room() -> tuple[np.ndarray, np.ndarray]:

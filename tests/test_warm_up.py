@@ -1,8 +1,9 @@
 """The commands' kernel warm-up (experiments.progress.warm_up_kernels) leaves nothing to compile
 for a real log's run: after it, extracting from cm-mode scans (whose noise the sensor method
 estimates, "auto") one by one and in a batch, and the default SLAM over them, add no numba
-signature. Otherwise a first run on a fresh checkout times the compiler (MIT CSAIL's SLAM
-reported 375 scans/s instead of ~1,000 when the auto-noise kernels were left out)."""
+signature, nor scans 2 s apart (the correlative search's kernels). Otherwise a first run on a
+fresh checkout times the compiler (MIT CSAIL's SLAM reported 375 scans/s instead of ~1,000 when
+the auto-noise kernels were left out)."""
 
 from __future__ import annotations
 
@@ -39,6 +40,8 @@ for m in ("sensor", "split_merge", "iepf"):
     extract(scans[0], m)
     extract_many(scans, m)
 run_slam([Record(scan=s) for s in scans], SlamConfig())
+sparse = run_slam([Record(scan=s.replace(stamp=2.0 * k)) for k, s in enumerate(scans)], SlamConfig())
+assert sparse.diagnostics["searched_fraction"] == 1.0  # 2 s apart: the correlative search on every step
 after = signatures()
 print(sorted(f"{n}.{a}" for (n, a), c in after.items() if c != before.get((n, a), 0)))
 """

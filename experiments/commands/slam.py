@@ -7,10 +7,13 @@ from lms200.yamlio import load as load_yaml
 import argparse
 import bisect
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from pathlib import Path
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from slam import SlamConfig
 
 from experiments.logargs import add_log_options, read_log_options
 from experiments.options import InputError, check_file, check_log, check_methods, check_out, check_yaml, count, positive
@@ -183,8 +186,25 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {lc['n']} loop closures over {lc['n_keyframes']} keyframes" + (f" ({shown}{more})" if lc["n"] else ""))
     if m["consistency"]["diverged"]:
         print(f"  warning: the estimate diverged at t={m['consistency']['diverged_at']}")
+    if not m["consistency"]["healthy"]:
+        print(f"warning: {args.input}: the run is not healthy: {_unhealthy_reason(m, config)} "
+              f"(metrics.json: consistency.healthy false)", file=sys.stderr)
     if "note" in m.get("relations", {}):
         print(f"  relations: {m['relations']['note']}")
     if "anchors_relations_trans_mean_m" in m:
         print("  published relations error (m): " + ", ".join(f"{k} {v}" for k, v in m["anchors_relations_trans_mean_m"].items()))
     return 0
+
+
+def _unhealthy_reason(m: dict[str, Any], config: "SlamConfig") -> str:
+    """Why ``m`` (metrics.json's mapping) says the run is not healthy, in one phrase."""
+    c = m["consistency"]
+    share = c.get("ambiguous_fraction")
+    if share is not None and share > config.consistency.max_ambiguous:
+        steps = max(int(m["n_scans"]) - 1, 1)
+        return (f"{round(share * steps)} of {steps} steps ({100 * share:.1f} %) were ambiguous (a distinct pose fitted "
+                f"the scan as well and only the motion model chose; consistency.max_ambiguous "
+                f"{config.consistency.max_ambiguous:g})")
+    if config.preset == "paper":
+        return "the filter's state is not finite or its covariance is not positive definite"
+    return "the trajectory is not finite"

@@ -361,7 +361,7 @@ def workspace(n, increment, p):  # noqa: ANN001, ANN201
 def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, p, ws):  # noqa: ANN001, ANN201
     """The lines of one scan (sensor frame) in beam order, written as the rows of
     ``features.types.Lines`` into ``ws.lv`` (values) and ``ws.lb`` (beams); returns their number.
-    Beams with a range in [range_lo, range_hi] (m) are valid; ``cos_b``, ``sin_b`` the beams'
+    Beams with a range in [range_lo, range_hi] (m) and > 0 are valid; ``cos_b``, ``sin_b`` the beams'
     bearing cosines and sines (``bearing_table``); ``p`` a SplitParams; ``ws`` the Workspace of
     ``workspace(n, increment, p)`` with at least the scan's beams and the same increment and ``p``
     (its breakpoint sines hold them). The (rho, alpha) covariance is
@@ -389,7 +389,7 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, p, ws):  # noqa: ANN
     p_idx = p_inf = 0
     for i in range(n_beams):
         d = ranges[i]
-        if d >= range_lo and d <= range_hi:
+        if d >= range_lo and d > 0.0 and d <= range_hi:  # 0 is no measurement (lms200.Scan.valid)
             q = n_pts
             xq, yq = d * cos_b[i], d * sin_b[i]
             idx[q], x[q], y[q] = i, xq, yq
