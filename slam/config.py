@@ -95,7 +95,8 @@ class AlignmentConfig:
             half a step still scores). The field covers at most 2,000 x 2,000 cells about the
             prediction (100 m square at 5 cm), whatever the map's extent.
         search_points: at most this many of the scan's valid points (evenly spread) are scored.
-        search_candidates: how many distinct window poses (0.3 m or 0.1 rad apart) are refined.
+        search_candidates: how many distinct window poses (0.3 m or 0.1 rad apart) are refined
+            (at most 32: each is an ICP run on every searched step).
         fit_sigma: a searched step's candidates are ranked by their fit, the mean over the points of
             ``exp(-r^2 / 2 fit_sigma^2)`` (r the point-to-line residual, m; 0 beyond
             ``fine_correspondence``): 3 cm, 1.5 ``sigma_point``. Unlike the inlier fraction
@@ -518,6 +519,9 @@ def _check_search(al: AlignmentConfig) -> None:
         if not lo <= value <= hi:
             raise SlamConfigError(f"alignment.{name}: must be in [{lo:g}, {hi:g}] {unit} (finer needs more memory "
                                   f"than the search is worth), got {value}")
+    if not 1 <= al.search_candidates <= MAX_SEARCH_CANDIDATES:
+        raise SlamConfigError(f"alignment.search_candidates: must be in [1, {MAX_SEARCH_CANDIDATES}] (each is refined by "
+                              f"the ICP on every searched step), got {al.search_candidates}")
     poses = search_window_poses(al)
     if poses > MAX_SEARCH_POSES:
         raise SlamConfigError(f"alignment.search_xy / search_step / search_step_theta: the search window would hold "
@@ -542,6 +546,7 @@ MIN_SEARCH_RESOLUTION_M = 0.01  # m: the likelihood field's finest cell (its ras
 MAX_SEARCH_RESOLUTION_M = 1.0  # m: twice the ICP's reach; coarser cells cannot place a candidate
 MAX_SEARCH_XY_M = 10.0  # m: the window's widest half-side (10 m/s for a second)
 MAX_SEARCH_SIGMA_M = 1.0  # m: the field's widest Gaussian (the field grows by 3 of it on every side)
+MAX_SEARCH_CANDIDATES = 32  # distinct poses refined per searched step (each an ICP run; the default 4)
 MAX_SEARCH_POSES = 4_000_000  # poses of one window: 32 MB of scores (the default: 159,201)
 SEARCH_CELL_M = 0.5  # m: cell of the scan matcher's search grid, the farthest a correspondence can reach
 MAX_PRIOR_SIGMA = 1.0  # m and rad: loosest prior on the first keyframe that still anchors the graph

@@ -164,6 +164,7 @@ def test_a_simulator_folder_without_interlacing_turns_deskew_off(tmp_path):
     ("search_xy", 1e9, "alignment.search_xy: must be in (0, 10]"),
     ("search_sigma", 1e6, "alignment.search_sigma: must be in (0, 1]"),
     ("max_turn_rate", 0, "alignment.max_turn_rate: must be > 0"),
+    ("search_candidates", 1000000000, "alignment.search_candidates: must be in [1, 32]"),  # was an ICP per window pose
     ("search_step", "0.01, search_resolution: 0.01", "the search window would hold 58,049,161 poses"),  # 361 x 401^2
 ])
 def test_search_fields_out_of_bounds_are_one_line_exit_2(sim_folder, tmp_path, capsys, field, value, expected):
