@@ -77,6 +77,15 @@ SCALE_PROBES = (1.0, 1.5, 2.0)
 # is fitted to each log after the rough fill (fit_relief): the share of joints between two straight
 # stretches that step or bend (relief_share; no extractor), on the log and on probe runs at RELIEF_PROBES.
 RELIEF_PROBES = (0.0, 0.5, 1.0)
+# The mit worlds' clutter level (make_world(clutter=...); the preset's 3: chairs, tables, people,
+# plants, bins, glass, runs along walls per 10 m of route) continues the rough fill's fit below its
+# start (fit_rough): a log whose 1-4 m beams are explained better than the preset's worlds with no
+# fill leave them gets less clutter (probes at CLUTTER_PROBES, no fill). Intel (its sensor, six
+# probe worlds, relief 0.43, no fill): split_merge's unexplained share at 1-4 m 0.290 at level 3,
+# 0.280 at 2, 0.233 at 1.5, 0.203 at 1, 0.179 at 0.5 (log 0.280). Not above the fill's end: with full
+# fill, MIT CSAIL's sensor and relief 0.17, level 4.5 leaves 0.307 against 0.306 at 3 (log 0.319).
+PRESET_CLUTTER = 3.0  # sim.worlds.MIT_PRESET["clutter"]
+CLUTTER_PROBES = (1.0, 2.0)
 # Simulated seconds of each probe run (every fit). A mit world takes about 0.6 s of CPU to build and
 # 120 s of scans at 1 Hz about 0.4 s to simulate, so long runs cost little, and a 20 s run sees
 # one or two rooms: whether the robot lingers before a relief panel moved a world's break share at
@@ -362,34 +371,55 @@ def fit_scale(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
 @dataclass
 class RoughFit:
     """The mit worlds' rough fill fitted to a log: the log's near-unexplained share, the probes'
-    (run at wall relief ``relief``: None for none)."""
+    (run at wall relief ``relief``: None for none), and the clutter level where the log's share lies
+    below the fill's curve (``clutter``: the preset's otherwise; the level probes, at no fill, with
+    their shares, empty when not run)."""
 
     cover: float
     log_share: float
     probe_covers: tuple[float, ...]
     probe_shares: tuple[float, ...]
     relief: float | None = None
+    clutter: float = PRESET_CLUTTER
+    clutter_probes: tuple[float, ...] = ()
+    clutter_shares: tuple[float, ...] = ()
 
 
 def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
               rate_hz: float = PROBE_RATE_HZ, n_probe_seeds: int = len(PROBE_SEEDS), scale: float | None = None,
-              relief: float | None = None, seeds: Sequence[int] = PROBE_SEEDS) -> RoughFit:
+              relief: float | None = None, seeds: Sequence[int] = PROBE_SEEDS, clutter: bool = True) -> RoughFit:
     """The rough-fill cover (share of the rooms' wall length, 0-1) that makes the simulated ``mit``
     worlds leave as many beams at NEAR_M unexplained as the log does (:func:`near_unexplained`):
     probe runs at ROUGH_PROBES (the first ``n_probe_seeds`` of PROBE_SEEDS), the log's share
-    interpolated piecewise linearly on the probes' curve (made monotone), clipped to its ends: the
-    fill's effect saturates as the rooms' free wall runs out. ``scale``: the rooms' size (fit_scale);
-    ``relief``: the wall relief the probes carry (fit_relief's; the relief's steps leave beams
-    unexplained too, so a fill fitted without it and then given it leaves more than the log)."""
+    interpolated piecewise linearly on the probes' curve (made monotone). ``scale``: the rooms'
+    size (fit_scale); ``relief``: the wall relief the probes carry (fit_relief's; the relief's
+    steps leave beams unexplained too, so a fill fitted without it and then given it leaves more
+    than the log). Where the log's share lies below the curve's start (``clutter``: fewer beams
+    unexplained than the worlds leave with no fill), the fit goes on in the clutter level (the
+    preset's PRESET_CLUTTER at the curve's start): probes at CLUTTER_PROBES with no fill, the share
+    read off the joined curve. Below the joined curve's start too the level stays the preset's:
+    the worlds at the lowest level probe still leave more beams unexplained than the log, so the
+    level is not what they lack (ACES: 0.655 at level 1 against the log's 0.603, and its worlds at
+    level 1 explained 0.026-0.052 more than the log with every method). Above the fill curve's end
+    the fill stays at 1 (more clutter does not leave more beams unexplained there: see
+    CLUTTER_PROBES)."""
     from experiments.calibrate import invert_probe_curve as _interpolate
 
     target = near_unexplained(real)
-    shares = _probe_shares(near_unexplained, "rough", ROUGH_PROBES, dict(scale=scale, relief=relief), glass, sensor,
+    fixed: dict[str, Any] = dict(scale=scale, relief=relief)
+    shares = _probe_shares(near_unexplained, "rough", ROUGH_PROBES, fixed, glass, sensor,
                            limits, duration, rate_hz, n_probe_seeds, seeds=seeds)
-
     cover = _interpolate(shares, list(ROUGH_PROBES), float(target)) if np.isfinite(target) else 0.0
+    level, levels, level_shares = PRESET_CLUTTER, (), []
+    if clutter and np.isfinite(target) and target < np.nan_to_num(shares[0]):
+        levels = CLUTTER_PROBES
+        level_shares = _probe_shares(near_unexplained, "clutter", levels, {**fixed, "rough": ROUGH_PROBES[0]},
+                                     glass, sensor, limits, duration, rate_hz, n_probe_seeds, seeds=seeds)
+        joined = np.maximum.accumulate(np.nan_to_num(np.asarray([*level_shares, shares[0]], dtype=float)))
+        if target >= joined[0]:  # within the joined curve; below it the level is not what the worlds lack
+            level = _interpolate(list(joined), [*levels, PRESET_CLUTTER], float(target))
     return RoughFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(ROUGH_PROBES), tuple(shares),
-                    relief)
+                    relief, round(float(level), 3), tuple(levels), tuple(level_shares))
 
 
 def _window_lines(x: np.ndarray, y: np.ndarray, k: int) -> tuple[np.ndarray, ...]:
@@ -472,16 +502,16 @@ class ReliefFit:
 def fit_relief(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
                rate_hz: float = PROBE_RATE_HZ, n_probe_seeds: int = len(PROBE_SEEDS), rough: float | None = None,
                scale: float | None = None, world: str = "mit",
-               seeds: Sequence[int] = PROBE_SEEDS) -> ReliefFit:
+               seeds: Sequence[int] = PROBE_SEEDS, clutter: float | None = None) -> ReliefFit:
     """The wall-relief cover (share of the free wall length under panels 1-6 cm proud, 0-1) that
     makes the simulated worlds' walls break as often as the log's (:func:`relief_share`): probe runs
     at RELIEF_PROBES (the first ``n_probe_seeds`` of ``seeds``) with the fitted rough fill
-    ``rough`` and rooms ``scale``, the log's share interpolated piecewise linearly on the probes'
+    ``rough``, rooms ``scale`` and clutter level ``clutter`` (None: the preset's), the log's share interpolated piecewise linearly on the probes'
     curve (made monotone), clipped to [0, 1]."""
     from experiments.calibrate import invert_probe_curve
 
     target = relief_share(real)
-    fixed: dict[str, Any] = {} if world != "mit" else dict(rough=rough, scale=scale)
+    fixed: dict[str, Any] = {} if world != "mit" else dict(rough=rough, scale=scale, clutter=clutter)
     shares = _probe_shares(relief_share, "relief", RELIEF_PROBES, fixed, glass, sensor, limits, duration, rate_hz,
                            n_probe_seeds, world, seeds)
     cover = invert_probe_curve(shares, list(RELIEF_PROBES), float(target)) if np.isfinite(target) else 0.0
@@ -497,15 +527,23 @@ def fit_world(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     beams unexplained as the fill does; a fill fitted without them and then given them left more
     unexplained than the log (Intel: the relief cost every method about 0.02 of explained fraction).
     The relief statistic involves no extractor and is fitted once, with the first fill in its probes
-    (not refitted at the final fill; how far that would move it was not measured)."""
-    rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, seeds=seeds)
+    (not refitted at the final fill; how far that would move it was not measured), at the preset's
+    clutter level: the clutter level (fit_rough's continuation past the fill's ends) is fitted in
+    the last fill fit only (with a relief, else in the first), since the relief statistic hardly
+    follows it (Intel's sensor, six probe worlds, relief 0.43, no fill: break share 0.063 / 0.058 /
+    0.064 at levels 3 / 1.5 / 0.5)."""
+    rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, seeds=seeds,
+                      clutter=not wall_relief)
     scale = (fit_scale(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, rough.cover, seeds=seeds)
              if fit_rooms else None)
     size = None if scale is None else scale.scale
     relief = (fit_relief(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, rough.cover, size, seeds=seeds)
               if wall_relief else None)
-    if relief is not None and relief.cover > 0:
-        rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, size, relief.cover, seeds=seeds)
+    if relief is not None:  # (at relief 0 again, for the clutter level, when the first fill is at an end)
+        curve = np.maximum.accumulate(np.nan_to_num(np.asarray(rough.probe_shares, dtype=float)))
+        if relief.cover > 0 or rough.log_share < curve[0]:
+            rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, size, relief.cover,
+                              seeds=seeds)
     return rough, scale, relief
 
 
@@ -587,6 +625,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     simulated: list[Record] = []
     for seed in seeds:
         simulated += simulate_records(make_world(world, seed, glass=glass, rough=None if rough is None else rough.cover,
+                                                 clutter=None if rough is None else rough.clutter,
                                                  scale=size, relief=None if relief is None else relief.cover),
                                       seed, duration, sensor, rate_hz=rate_hz, limits=limits)
     name = Path(log).name
@@ -677,7 +716,12 @@ def format_report(result: Sim2RealResult, log: str) -> str:
                 f"; rough fill {result.rough.cover:.2f} of the rooms' walls (beams at {NEAR_M[0]:g}-{NEAR_M[1]:g} m "
                 f"unexplained by {STATS_METHOD}: log {result.rough.log_share:.3f}, probes "
                 + ", ".join(f"{s:.3f} at {c:g}" for c, s in zip(result.rough.probe_covers, result.rough.probe_shares))
-                + ("" if result.rough.relief is None else f", the probes at wall relief {result.rough.relief:.2f}") + ")")
+                + ("" if result.rough.relief is None else f", the probes at wall relief {result.rough.relief:.2f}") + ")"
+                + f"; clutter level {result.rough.clutter:.2f}"
+                + ("" if not result.rough.clutter_probes else
+                   " (no fill: probes "
+                   + ", ".join(f"{s:.3f} at {c:g}" for c, s in zip(result.rough.clutter_probes, result.rough.clutter_shares))
+                   + ")"))
              + ("" if result.relief is None else
                 f"; wall relief {result.relief.cover:.2f} of the free wall length (joints of straight stretches "
                 f"that break: log {result.relief.log_share:.4f}, probes "

@@ -365,6 +365,45 @@ def test_fit_world_fits_the_rough_fill_with_the_fitted_relief_in_its_probes(monk
     assert first.cover == pytest.approx(0.7, abs=1e-3)
 
 
+def test_fit_rough_goes_on_in_the_clutter_level_past_the_fills_ends(monkeypatch) -> None:
+    """A known model of the near statistic replaces the probe runs: 0.2 + 0.1 fill + 0.03 (level -
+    3). A log made at level 2 with no fill gets that back (the fill's curve alone stopped at 0), one
+    at level 1 (the lowest probe) too; one at level 0.5, below the joined curve, keeps the preset's
+    level 3 after its level probes; logs inside the fill's curve or above its end keep level 3 and
+    run no level probe."""
+    from experiments import sim2real
+    from sim.worlds import MIT_PRESET
+
+    assert sim2real.PRESET_CLUTTER == MIT_PRESET["clutter"]
+    calls: list[str] = []
+
+    def probes(statistic, vary, values, fixed, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
+        calls.append(vary)
+        out = []
+        for v in values:
+            p = {**fixed, vary: v}
+            rough = 1.0 if p.get("rough") is None else p["rough"]  # None: the preset's full fill
+            level = sim2real.PRESET_CLUTTER if p.get("clutter") is None else p["clutter"]
+            out.append(0.2 + 0.1 * rough + 0.03 * (level - 3.0))
+        return out
+
+    monkeypatch.setattr(sim2real, "_probe_shares", probes)
+    for log_share, cover, level, runs in ((0.2 - 0.03, 0.0, 2.0, ["rough", "clutter"]),
+                                          (0.2 - 0.03 * 2.0, 0.0, 1.0, ["rough", "clutter"]),
+                                          (0.2 - 0.03 * 2.5, 0.0, 3.0, ["rough", "clutter"]),
+                                          (0.2 + 0.1 + 0.03 * 1.5, 1.0, 3.0, ["rough"]),
+                                          (0.25, 0.5, 3.0, ["rough"])):
+        calls.clear()
+        monkeypatch.setattr(sim2real, "near_unexplained", lambda recs, v=log_share: v)  # noqa: ANN001
+        fit = sim2real.fit_rough([], None, None, None)
+        assert (fit.cover, fit.clutter) == (pytest.approx(cover, abs=1e-3), pytest.approx(level, abs=1e-3))
+        assert calls == runs
+    monkeypatch.setattr(sim2real, "near_unexplained", lambda recs: 0.17)
+    calls.clear()
+    alone = sim2real.fit_rough([], None, None, None, clutter=False)  # the fill alone: clipped at 0
+    assert (alone.cover, alone.clutter, calls) == (0.0, 3.0, ["rough"])
+
+
 def test_fit_world_runs_every_probe_on_the_probe_seeds_given(monkeypatch) -> None:
     """Every fit's probe runs use the seeds given to fit_world (the report's --probe-seeds), all of
     them, at each probe value; by default the twelve PROBE_SEEDS, none of them a default report seed."""
