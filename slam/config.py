@@ -76,8 +76,8 @@ class AlignmentConfig:
             ``search_xy`` m in x and y (and the whole turn at most); the ``search_candidates``
             best distinct poses are refined by the ICP and compete with the prediction's match,
             which stays unless one of them fits better by more than ``fit_margin``.
-        search_sigmas, search_xy: see ``search`` (3 std; 2 m, twice the 1 m/s of an indoor
-            robot over a second of prediction error; at most 10 m).
+        search_sigmas, search_xy: see ``search`` (3 std, in [1, 10]; 2 m, twice the 1 m/s of an
+            indoor robot over a second of prediction error; at most 10 m).
         max_turn_rate: headings are searched only within this turn rate (rad/s) times the time
             since the last scan of the last pose's heading. The prediction's heading std grows
             with dt^2 (``motion.sigma_alpha``: 3 std pass half a turn from 0.5 s between scans
@@ -95,7 +95,8 @@ class AlignmentConfig:
             half a step still scores). The field covers at most 2,000 x 2,000 cells about the
             prediction (100 m square at 5 cm), whatever the map's extent.
         search_points: at most this many of the scan's valid points (evenly spread) are scored.
-        search_candidates: how many distinct window poses (0.3 m or 0.1 rad apart) are refined.
+        search_candidates: how many distinct window poses (0.3 m or 0.1 rad apart) are refined
+            (at most 32: each is an ICP run on every searched step).
         fit_sigma: a searched step's candidates are ranked by their fit, the mean over the points of
             ``exp(-r^2 / 2 fit_sigma^2)`` (r the point-to-line residual, m; 0 beyond
             ``fine_correspondence``): 3 cm, 1.5 ``sigma_point``. Unlike the inlier fraction
@@ -464,6 +465,7 @@ class SlamConfig:
         if a.method not in ("nn", "jcbb"):
             raise SlamConfigError(f"association.method: must be 'nn' or 'jcbb', got {a.method!r}")
         for sec, name in (("motion", "sigma_accel"), ("motion", "sigma_alpha"), ("motion", "sigma_lateral"),
+                          ("motion", "sigma_floor_xy"), ("motion", "sigma_floor_theta"),
                           ("motion", "max_dt"), ("observations", "sigma_rho"), ("observations", "sigma_alpha_obs"),
                           ("observations", "sigma_corner"), ("prealign", "sigma_xy"), ("prealign", "sigma_phi")):
             if not getattr(getattr(self, sec), name) > 0:
@@ -504,7 +506,10 @@ class SlamConfig:
 def _check_search(al: AlignmentConfig) -> None:
     """The correlative search's fields (``slam.correlative``), whose memory grows as the inverse
     square of the steps: each within its bounds, and the window within ``MAX_SEARCH_POSES``."""
-    for name, lo, hi, unit in (("search_sigmas", 0.0, math.inf, "std"), ("max_turn_rate", 0.0, math.inf, "rad/s"),
+    if not 1 <= al.search_sigmas <= MAX_SEARCH_SIGMAS:
+        raise SlamConfigError(f"alignment.search_sigmas: must be in [1, {MAX_SEARCH_SIGMAS:g}] std of the prediction, "
+                              f"got {al.search_sigmas}")
+    for name, lo, hi, unit in (("max_turn_rate", 0.0, math.inf, "rad/s"),
                                ("search_xy", 0.0, MAX_SEARCH_XY_M, "m"),
                                ("search_step", 0.0, MAX_SEARCH_XY_M, "m"),
                                ("search_sigma", 0.0, MAX_SEARCH_SIGMA_M, "m")):
@@ -518,6 +523,9 @@ def _check_search(al: AlignmentConfig) -> None:
         if not lo <= value <= hi:
             raise SlamConfigError(f"alignment.{name}: must be in [{lo:g}, {hi:g}] {unit} (finer needs more memory "
                                   f"than the search is worth), got {value}")
+    if not 1 <= al.search_candidates <= MAX_SEARCH_CANDIDATES:
+        raise SlamConfigError(f"alignment.search_candidates: must be in [1, {MAX_SEARCH_CANDIDATES}] (each is refined by "
+                              f"the ICP on every searched step), got {al.search_candidates}")
     poses = search_window_poses(al)
     if poses > MAX_SEARCH_POSES:
         raise SlamConfigError(f"alignment.search_xy / search_step / search_step_theta: the search window would hold "
@@ -542,6 +550,8 @@ MIN_SEARCH_RESOLUTION_M = 0.01  # m: the likelihood field's finest cell (its ras
 MAX_SEARCH_RESOLUTION_M = 1.0  # m: twice the ICP's reach; coarser cells cannot place a candidate
 MAX_SEARCH_XY_M = 10.0  # m: the window's widest half-side (10 m/s for a second)
 MAX_SEARCH_SIGMA_M = 1.0  # m: the field's widest Gaussian (the field grows by 3 of it on every side)
+MAX_SEARCH_SIGMAS = 10.0  # std: the window's half-width is search_sigmas std, its prior that width / search_sigmas
+MAX_SEARCH_CANDIDATES = 32  # distinct poses refined per searched step (each an ICP run; the default 4)
 MAX_SEARCH_POSES = 4_000_000  # poses of one window: 32 MB of scores (the default: 159,201)
 SEARCH_CELL_M = 0.5  # m: cell of the scan matcher's search grid, the farthest a correspondence can reach
 MAX_PRIOR_SIGMA = 1.0  # m and rad: loosest prior on the first keyframe that still anchors the graph

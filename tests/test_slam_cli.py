@@ -158,12 +158,15 @@ def test_a_simulator_folder_without_interlacing_turns_deskew_off(tmp_path):
 
 
 @pytest.mark.parametrize("field, value, expected", [
-    ("search_sigmas", 0, "alignment.search_sigmas: must be > 0"),  # was a ZeroDivisionError mid-run
+    ("search_sigmas", 0, "alignment.search_sigmas: must be in [1, 10]"),  # was a ZeroDivisionError mid-run
+    ("search_sigmas", 1e300, "alignment.search_sigmas: must be in [1, 10]"),  # so was this (the prior's std underflowed)
     ("search_step_theta", 1e-9, "alignment.search_step_theta: must be in [0.001"),  # was a MemoryError
     ("search_resolution", 1e-6, "alignment.search_resolution: must be in [0.01"),  # was a MemoryError
     ("search_xy", 1e9, "alignment.search_xy: must be in (0, 10]"),
     ("search_sigma", 1e6, "alignment.search_sigma: must be in (0, 1]"),
     ("max_turn_rate", 0, "alignment.max_turn_rate: must be > 0"),
+    ("sigma_floor_xy", 0, "motion.sigma_floor_xy: must be > 0"),  # a repeated stamp divided by a zero std
+    ("search_candidates", 1000000000, "alignment.search_candidates: must be in [1, 32]"),  # was an ICP per window pose
     ("search_step", "0.01, search_resolution: 0.01", "the search window would hold 58,049,161 poses"),  # 361 x 401^2
 ])
 def test_search_fields_out_of_bounds_are_one_line_exit_2(sim_folder, tmp_path, capsys, field, value, expected):
@@ -172,7 +175,8 @@ def test_search_fields_out_of_bounds_are_one_line_exit_2(sim_folder, tmp_path, c
     from experiments.cli import main
 
     cfg = tmp_path / "bad.yaml"
-    cfg.write_text(f"alignment: {{{field}: {value}}}\n")
+    section = "motion" if field.startswith("sigma_floor") else "alignment"
+    cfg.write_text(f"{section}: {{{field}: {value}}}\n")
     out = tmp_path / "o"
     assert main(["slam", str(sim_folder), "--config", str(cfg), "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
