@@ -314,6 +314,10 @@ class ConsistencyConfig:
             (ATE 0.56-2.7 m) had 1-3 ambiguous steps each (a share of 2.3-6.8 %, so a 5 % bound
             missed two of them); of the 5 that tracked (ATE 0.6-1.7 cm), 2 had one ambiguous step
             (flagged though right) and 3 none. Set after these measurements.
+        min_matched_fraction: (default pipeline) not healthy when fewer than this share of the
+            steps were matched (an unmatched step's pose is the motion model's guess): the four
+            shared logs match 0.98-1.0 of their steps; a log of 3-beam scans matched none and was
+            reported healthy.
     """
 
     nis_window: int = 20
@@ -321,6 +325,7 @@ class ConsistencyConfig:
     point_window: int = 10
     point_min_score: float = 0.3
     max_ambiguous: float = 0.0
+    min_matched_fraction: float = 0.9
 
 
 @dataclass(frozen=True)

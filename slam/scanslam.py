@@ -447,6 +447,7 @@ def run_scan_slam(steps, config) -> "SlamResult":
     finite = nees[np.isfinite(nees)]
     ambiguous = np.array([i.ambiguous for i in infos])
     ambiguous_fraction = float(ambiguous[1:].mean()) if ambiguous.size > 1 else 0.0
+    matched_fraction = float(matched[1:].mean()) if matched.size > 1 else 1.0
     diag = {
         "inliers": inliers, "matched": matched, "nees": nees,
         "keyframe": np.array([i.keyframe for i in infos]), "hypothesis": np.array([i.hypothesis for i in infos]),
@@ -456,12 +457,14 @@ def run_scan_slam(steps, config) -> "SlamResult":
                   for lp in slam.loops],
         "keyframes": np.column_stack(([kf.stamp for kf in slam.keyframes], kposes)),
         "diverged": diverged_at is not None, "diverged_at": diverged_at,
-        "healthy": bool(np.all(np.isfinite(poses))) and ambiguous_fraction <= config.consistency.max_ambiguous,
+        "healthy": (bool(np.all(np.isfinite(poses))) and diverged_at is None
+                    and ambiguous_fraction <= config.consistency.max_ambiguous
+                    and matched_fraction >= config.consistency.min_matched_fraction),
         "searched": np.array([i.searched for i in infos]), "ambiguous": ambiguous, "fit": np.array([i.fit for i in infos]),
         "searched_fraction": float(np.mean([i.searched for i in infos[1:]])) if len(infos) > 1 else 0.0,
         "ambiguous_fraction": ambiguous_fraction,
         "mean_nis_per_dof": float("nan"), "mean_nees": float(finite.mean()) if finite.size else float("nan"),
-        "matched_fraction": float(matched[1:].mean()) if matched.size > 1 else 1.0,
+        "matched_fraction": matched_fraction,
     }
     return SlamResult(traj, covs, lines, np.zeros((0, 3)), diag)
 

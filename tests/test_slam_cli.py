@@ -232,3 +232,27 @@ def test_an_unhealthy_run_warns_on_stderr(tmp_path, capsys):
     warnings = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
     assert len(warnings) == 1 and "not healthy" in warnings[0]
     assert f"1 of {steps} steps ({100 / steps:.1f} %) were ambiguous" in warnings[0]
+
+
+def test_a_run_whose_steps_were_not_matched_is_not_healthy(tmp_path, capsys):
+    """Scans with 7 valid beams each give the matcher nothing (it needs 10 points), so every pose
+    is the motion model's guess; such a run was reported healthy, silently. Now it is not, and the
+    command names the share of matched steps (0 of 9)."""
+    from experiments.cli import main
+    from lms200 import Record
+    from sim import simulate_records
+
+    records = simulate_records("office", seed=1, duration=2.0, rate_hz=5.0)
+    sparse = []
+    for r in records:
+        ranges = np.full(r.scan.ranges.size, np.nan)
+        ranges[::60] = r.scan.ranges[::60]
+        sparse.append(Record(r.scan.replace(ranges=ranges), truth=r.truth))
+    write_log(tmp_path / "sparse.clf", sparse)
+    out = tmp_path / "run"
+    assert main(["slam", str(tmp_path / "sparse.clf"), "--out", str(out), "--quiet", "--no-paper-baseline"]) == 0
+    m = json.loads((out / "metrics.json").read_text())
+    steps = m["n_scans"] - 1
+    assert steps == 9 and m["consistency"]["matched_fraction"] == 0.0 and not m["consistency"]["healthy"]
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and f"only 0 of {steps} steps (0.0 %) were matched to the map" in warnings[0]

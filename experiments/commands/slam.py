@@ -207,4 +207,13 @@ def _unhealthy_reason(m: dict[str, Any], config: "SlamConfig") -> str:
                 f"{config.consistency.max_ambiguous:g})")
     if config.preset == "paper":
         return "the filter's state is not finite or its covariance is not positive definite"
+    if c.get("diverged"):
+        return (f"the estimate diverged at t={c['diverged_at']} ({config.consistency.point_window} scans in a row put "
+                f"fewer than {config.consistency.point_min_score:g} of their points on the map)")
+    matched = c.get("matched_fraction")
+    if matched is not None and matched < config.consistency.min_matched_fraction:
+        steps = max(int(m["n_scans"]) - 1, 1)
+        return (f"only {round(matched * steps)} of {steps} steps ({100 * matched:.1f} %) were matched to the map "
+                f"(the others are the motion model's guess; consistency.min_matched_fraction "
+                f"{config.consistency.min_matched_fraction:g})")
     return "the trajectory is not finite"
