@@ -166,8 +166,10 @@ def scene_statistics(records: Sequence[Record], method: str = STATS_METHOD) -> S
         r = scan.ranges
         valid = scan.valid
         rng_counts[:-2] += np.histogram(r[valid], bins=RANGE_EDGES_M)[0]
-        rng_counts[-2] += np.count_nonzero(np.isposinf(r) | (~valid & np.isfinite(r)))
-        rng_counts[-1] += np.count_nonzero(np.isnan(r))
+        with np.errstate(invalid="ignore"):
+            missing = np.isnan(r) | (r <= 0.0)  # nan, and the 0 m loggers write for a missing reading
+        rng_counts[-2] += np.count_nonzero(~valid & ~missing)  # no return, or finite out of limits
+        rng_counts[-1] += np.count_nonzero(missing)
         lines = run(scan, cfg).line_array()
         per_scan.append(len(lines))
         lengths = np.hypot(lines[:, 4] - lines[:, 2], lines[:, 5] - lines[:, 3])

@@ -77,7 +77,7 @@ class AlignmentConfig:
             best distinct poses are refined by the ICP and compete with the prediction's match,
             which stays unless one of them fits better by more than ``fit_margin``.
         search_sigmas, search_xy: see ``search`` (3 std, in [1, 10]; 2 m, twice the 1 m/s of an
-            indoor robot over a second of prediction error; at most 10 m).
+            indoor robot over a second of prediction error; at least ``search_step``, at most 10 m).
         max_turn_rate: headings are searched only within this turn rate (rad/s) times the time
             since the last scan of the last pose's heading. The prediction's heading std grows
             with dt^2 (``motion.sigma_alpha``: 3 std pass half a turn from 0.5 s between scans
@@ -88,10 +88,10 @@ class AlignmentConfig:
             1 s between scans on it allows the whole turn.
         search_step, search_step_theta: the window's grid (m, rad): 0.2 m and 1 degree, well
             inside the ICP's 0.5 m reach (1 degree moves a point 10 m away by 0.17 m); at least
-            1e-3 rad, and a window of at most 4 million poses (headings x positions: 32 MB of
-            scores; the default's 159,201).
+            1e-3 rad, a step at least ``search_resolution``, and a window of at most 4 million
+            poses (headings x positions: 32 MB of scores; the default's 159,201).
         search_resolution, search_sigma: the likelihood field's cells (m, 0.01-1) and the std (m,
-            at most 1) of its Gaussian about each map point (the window's step: a pose off by
+            1e-4 to 1) of its Gaussian about each map point (the window's step: a pose off by
             half a step still scores). The field covers at most 2,000 x 2,000 cells about the
             prediction (100 m square at 5 cm), whatever the map's extent.
         search_points: at most this many of the scan's valid points (evenly spread) are scored.
@@ -99,13 +99,13 @@ class AlignmentConfig:
             (at most 32: each is an ICP run on every searched step).
         fit_sigma: a searched step's candidates are ranked by their fit, the mean over the points of
             ``exp(-r^2 / 2 fit_sigma^2)`` (r the point-to-line residual, m; 0 beyond
-            ``fine_correspondence``): 3 cm, 1.5 ``sigma_point``. Unlike the inlier fraction
+            ``fine_correspondence``): 3 cm, 1.5 ``sigma_point`` (1e-4 to 1 m). Unlike the inlier fraction
             (points within ``inlier_distance``) it tells a corridor seen half a turn the wrong way,
             its points near a wall, from the right pose, its points on it.
-        fit_margin: candidates within this of the best fit are told apart by the prior (below).
+        fit_margin: candidates within this of the best fit are told apart by the prior (below; in [0, 1]).
         ambiguity_sigmas: a searched step is ambiguous when a distinct pose (0.3 m or 0.1 rad
             away) fits within ``fit_margin`` as well and the prior prefers the chosen pose
-            by less than this many std (``consistency.max_ambiguous`` bounds their share).
+            by less than this many std (``consistency.max_ambiguous`` bounds their share; at most 100).
     """
 
     stride: int = 3
@@ -156,7 +156,8 @@ class MotionConfig:
         sigma_accel: std of the white forward acceleration (m/s^2) of the constant-velocity model...
         sigma_alpha: ...and of the angular acceleration (rad/s^2). Default pipeline: over a scan
             interval dt the prediction's std is ``sigma * dt^2`` (+ ``sigma_floor_xy`` m,
-            ``sigma_floor_theta`` rad).
+            ``sigma_floor_theta`` rad; floors in [1e-6, 1000], sigmas at most 1000, so that the std
+            and its inverse square stay finite).
         sigma_lateral: (paper preset) white sideways velocity noise (m/s): covers a scanner
             mounted off the turning axis and the arc that the Euler step leaves out.
         max_dt: (paper preset) longest step integrated at once (s); longer gaps are split, in at most
@@ -475,6 +476,13 @@ class SlamConfig:
                           ("observations", "sigma_corner"), ("prealign", "sigma_xy"), ("prealign", "sigma_phi")):
             if not getattr(getattr(self, sec), name) > 0:
                 raise SlamConfigError(f"{sec}.{name}: must be > 0, got {getattr(getattr(self, sec), name)}")
+        for name, lo, hi, unit in (("sigma_floor_xy", MIN_SIGMA_FLOOR, MAX_SIGMA_FLOOR, "m"),
+                                   ("sigma_floor_theta", MIN_SIGMA_FLOOR, MAX_SIGMA_FLOOR, "rad"),
+                                   ("sigma_accel", 0.0, MAX_SIGMA_MOTION, "m/s^2"),
+                                   ("sigma_alpha", 0.0, MAX_SIGMA_MOTION, "rad/s^2")):
+            if not lo <= getattr(m, name) <= hi:  # (> 0 checked above) the prediction's information stays finite
+                raise SlamConfigError(f"motion.{name}: must be in [{lo:g}, {hi:g}] {unit} (the prediction's std and "
+                                      f"its inverse square stay finite), got {getattr(m, name)}")
         for name in ("gate_probability", "new_landmark_probability"):
             if not 0 < getattr(a, name) < 1:
                 raise SlamConfigError(f"association.{name}: must be in (0, 1), got {getattr(a, name)}")
@@ -514,20 +522,29 @@ def _check_search(al: AlignmentConfig) -> None:
     if not 1 <= al.search_sigmas <= MAX_SEARCH_SIGMAS:
         raise SlamConfigError(f"alignment.search_sigmas: must be in [1, {MAX_SEARCH_SIGMAS:g}] std of the prediction, "
                               f"got {al.search_sigmas}")
-    for name, lo, hi, unit in (("max_turn_rate", 0.0, math.inf, "rad/s"),
-                               ("search_xy", 0.0, MAX_SEARCH_XY_M, "m"),
-                               ("search_step", 0.0, MAX_SEARCH_XY_M, "m"),
-                               ("search_sigma", 0.0, MAX_SEARCH_SIGMA_M, "m")):
-        value = getattr(al, name)
-        if not lo < value <= hi:
-            bound = f"> {lo:g} {unit}" if hi == math.inf else f"in ({lo:g}, {hi:g}] {unit}"
-            raise SlamConfigError(f"alignment.{name}: must be {bound}, got {value}")
-    for name, lo, hi, unit in (("search_step_theta", MIN_SEARCH_STEP_THETA, math.pi, "rad"),
-                               ("search_resolution", MIN_SEARCH_RESOLUTION_M, MAX_SEARCH_RESOLUTION_M, "m")):
+    if not 0 < al.max_turn_rate:
+        raise SlamConfigError(f"alignment.max_turn_rate: must be > 0 rad/s, got {al.max_turn_rate}")
+    for name, lo, hi, unit, why in (
+            ("search_step_theta", MIN_SEARCH_STEP_THETA, math.pi, "rad", ("finer needs more memory than the search "
+                                                                           "is worth", "at most half a turn")),
+            ("search_resolution", MIN_SEARCH_RESOLUTION_M, MAX_SEARCH_RESOLUTION_M, "m",
+             ("finer needs more memory than the search is worth", "coarser cells cannot place a candidate")),
+            ("search_sigma", MIN_FIELD_SIGMA_M, MAX_SEARCH_SIGMA_M, "m",
+             ("narrower, the field's d / sigma overflows", "the field grows by 3 of it on every side")),
+            ("fit_sigma", MIN_FIELD_SIGMA_M, MAX_FIT_SIGMA_M, "m",
+             ("narrower, r / sigma overflows", "wider, it cannot tell a loose fit from a tight one")),
+            ("search_step", al.search_resolution, MAX_SEARCH_XY_M, "m",
+             ("the window's step is at least one cell of search_resolution", "the window's widest half-side")),
+            ("search_xy", al.search_step, MAX_SEARCH_XY_M, "m",
+             ("the window's half-side is at least one search_step", "10 m/s for a second")),
+            ("fit_margin", 0.0, 1.0, "", ("", "a fit is a share of points, in [0, 1]")),
+            ("ambiguity_sigmas", 0.0, MAX_AMBIGUITY_SIGMAS, "std",
+             ("", f"the prior tells poses apart by a few times search_sigmas (<= {MAX_SEARCH_SIGMAS:g}) std at most"))):
         value = getattr(al, name)
         if not lo <= value <= hi:
-            raise SlamConfigError(f"alignment.{name}: must be in [{lo:g}, {hi:g}] {unit} (finer needs more memory "
-                                  f"than the search is worth), got {value}")
+            reason = why[0] if value < lo else why[1]
+            unit_s = f" {unit}" if unit else ""
+            raise SlamConfigError(f"alignment.{name}: must be in [{lo:g}, {hi:g}]{unit_s} ({reason}), got {value}")
     if not 1 <= al.search_candidates <= MAX_SEARCH_CANDIDATES:
         raise SlamConfigError(f"alignment.search_candidates: must be in [1, {MAX_SEARCH_CANDIDATES}] (each is refined by "
                               f"the ICP on every searched step), got {al.search_candidates}")
@@ -555,6 +572,12 @@ MIN_SEARCH_RESOLUTION_M = 0.01  # m: the likelihood field's finest cell (its ras
 MAX_SEARCH_RESOLUTION_M = 1.0  # m: twice the ICP's reach; coarser cells cannot place a candidate
 MAX_SEARCH_XY_M = 10.0  # m: the window's widest half-side (10 m/s for a second)
 MAX_SEARCH_SIGMA_M = 1.0  # m: the field's widest Gaussian (the field grows by 3 of it on every side)
+MIN_FIELD_SIGMA_M = 1e-4  # m: the narrowest Gaussian of the likelihood field and of the fit (0.1 mm)
+MAX_FIT_SIGMA_M = 1.0  # m: the fit's widest Gaussian (twice the ICP's reach)
+MAX_AMBIGUITY_SIGMAS = 100.0  # std: the prior's window is at most search_sigmas (10) std wide
+MIN_SIGMA_FLOOR = 1e-6  # m and rad: the prediction's std floor (its information, sigma^-2, stays finite)
+MAX_SIGMA_FLOOR = 1e3  # m and rad: a floor this wide leaves no motion model
+MAX_SIGMA_MOTION = 1e3  # m/s^2 and rad/s^2: the constant-velocity model's widest acceleration std
 MAX_SEARCH_SIGMAS = 10.0  # std: the window's half-width is search_sigmas std, its prior that width / search_sigmas
 MAX_SEARCH_CANDIDATES = 32  # distinct poses refined per searched step (each an ICP run; the default 4)
 MAX_SEARCH_POSES = 4_000_000  # poses of one window: 32 MB of scores (the default: 159,201)
@@ -568,6 +591,7 @@ SECTIONS: dict[str, type] = {"motion": MotionConfig, "observations": Observation
 
 
 UNIT_FRACTION_SUFFIXES = ("_fraction", "min_inliers", "retry_inliers", "min_score")  # shares of points, in [0, 1]
+STEP_SHARES = ("max_ambiguous", "min_matched_fraction")  # consistency: shares of a run's steps, in [0, 1]
 SIGNED_TUPLES = ("heading_hypotheses",)  # rad: offsets either way; every other tuple holds sigmas, >= 0
 
 
@@ -597,6 +621,8 @@ def _checked_fields(section: Any, name: str) -> Any:
                 if number != int(number):
                     raise SlamConfigError(f"{where}: must be a whole number, got {value!r}")
                 number = int(number)
+            elif f.name in STEP_SHARES and number > 1:
+                raise SlamConfigError(f"{where}: a share of steps, must be in [0, 1], got {value!r}")
             elif f.name.endswith(UNIT_FRACTION_SUFFIXES) and number > 1:
                 raise SlamConfigError(f"{where}: a share of points, must be in [0, 1], got {value!r}")
             elif f.name.endswith("_probability") and not 0 < number < 1:

@@ -135,6 +135,17 @@ def test_clean_datasheet_log_has_no_spurious_terms() -> None:
     assert m.no_return_rate.value < 5e-4 and m.max_reading is None
 
 
+def test_zero_readings_are_measured_as_the_dropouts_they_are() -> None:
+    """A log that writes its lost beams as 0 m (as many loggers do) calibrates like the same log
+    with nan there: the same nan rate and clustering (0 m readings read as no dropout at all)."""
+    records = simulate_records("office", seed=4, duration=10.0, sensor=SensorConfig(dropout_prob=0.02), rate_hz=4.0)
+    zeros = [r.scan.replace(ranges=np.where(np.isnan(r.scan.ranges), 0.0, r.scan.ranges)) for r in records]
+    a, b = calibrate_scans(records), calibrate_scans(zeros)
+    assert a.nan_rate.value == pytest.approx(0.02, rel=0.2)
+    assert (b.nan_rate.value, b.nan_clustering.value) == (a.nan_rate.value, a.nan_clustering.value)
+    assert b.noise.sigma_m == a.noise.sigma_m
+
+
 # -- command line ----------------------------------------------------------------------------
 def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -> None:
     truth = RECOVERY_CASES["cm_0.5deg"]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -157,31 +158,93 @@ def test_a_simulator_folder_without_interlacing_turns_deskew_off(tmp_path):
     assert not off.alignment.deskew and off.alignment.normal_agreement == cfg.alignment.normal_agreement
 
 
-@pytest.mark.parametrize("field, value, expected", [
-    ("search_sigmas", 0, "alignment.search_sigmas: must be in [1, 10]"),  # was a ZeroDivisionError mid-run
-    ("search_sigmas", 1e300, "alignment.search_sigmas: must be in [1, 10]"),  # so was this (the prior's std underflowed)
-    ("search_step_theta", 1e-9, "alignment.search_step_theta: must be in [0.001"),  # was a MemoryError
-    ("search_resolution", 1e-6, "alignment.search_resolution: must be in [0.01"),  # was a MemoryError
-    ("search_xy", 1e9, "alignment.search_xy: must be in (0, 10]"),
-    ("search_sigma", 1e6, "alignment.search_sigma: must be in (0, 1]"),
-    ("max_turn_rate", 0, "alignment.max_turn_rate: must be > 0"),
-    ("sigma_floor_xy", 0, "motion.sigma_floor_xy: must be > 0"),  # a repeated stamp divided by a zero std
-    ("search_candidates", 1000000000, "alignment.search_candidates: must be in [1, 32]"),  # was an ICP per window pose
-    ("search_step", "0.01, search_resolution: 0.01", "the search window would hold 58,049,161 poses"),  # 361 x 401^2
+@pytest.fixture(scope="module")
+def sparse_log(tmp_path_factory) -> Path:
+    """Office seed 1, 16 s at 0.5 scans/s (the search runs on every step), with scan 3 repeated
+    (a zero interval: the prediction's std is its floor alone)."""
+    from sim import simulate_records
+
+    records = simulate_records("office", seed=1, duration=16.0, rate_hz=0.5)
+    path = tmp_path_factory.mktemp("sparse") / "scans.clf"
+    write_log(path, records[:4] + [records[3]] + records[4:])
+    return path
+
+
+@pytest.mark.parametrize("config, expected", [
+    ("alignment: {search_sigmas: 0}", "alignment.search_sigmas: must be in [1, 10]"),  # was a ZeroDivisionError mid-run
+    ("alignment: {search_sigmas: 1e300}", "alignment.search_sigmas: must be in [1, 10]"),  # the prior's std underflowed
+    ("alignment: {search_step_theta: 1e-9}", "alignment.search_step_theta: must be in [0.001, 3.14159] rad (finer "
+                                             "needs more memory"),  # was a MemoryError
+    ("alignment: {search_step_theta: 4}", "alignment.search_step_theta: must be in [0.001, 3.14159] rad (at most "
+                                          "half a turn)"),  # said "finer needs more memory"
+    ("alignment: {search_resolution: 1e-6}", "alignment.search_resolution: must be in [0.01, 1] m (finer"),  # MemoryError
+    ("alignment: {search_resolution: 2}", "alignment.search_resolution: must be in [0.01, 1] m (coarser cells"),
+    ("alignment: {search_xy: 1e9}", "alignment.search_xy: must be in [0.2, 10] m"),
+    ("alignment: {search_xy: 1.0e-300}", "alignment.search_xy: must be in [0.2, 10] m"),  # a divide-by-zero warning
+    ("alignment: {search_sigma: 1e6}", "alignment.search_sigma: must be in [0.0001, 1] m"),
+    ("alignment: {search_sigma: 5.0e-324}", "alignment.search_sigma: must be in [0.0001, 1] m"),  # numpy overflow warnings
+    ("alignment: {fit_sigma: 1.0e-320}", "alignment.fit_sigma: must be in [0.0001, 1] m"),
+    ("alignment: {search_step: 1.0e-160}", "alignment.search_step: must be in [0.1, 10] m"),  # OverflowError: step**-2
+    ("alignment: {ambiguity_sigmas: 1.0e300}", "alignment.ambiguity_sigmas: must be in [0, 100] std"),  # OverflowError
+    ("alignment: {ambiguity_sigmas: 1.0e300, fit_margin: 1.0e300}", "alignment.fit_margin: must be in [0, 1]"),
+    ("alignment: {max_turn_rate: 0}", "alignment.max_turn_rate: must be > 0"),
+    ("motion: {sigma_floor_xy: 0}", "motion.sigma_floor_xy: must be > 0"),  # a repeated stamp divided by a zero std
+    ("motion: {sigma_floor_xy: 1.0e160}", "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # OverflowError: sxy**2
+    ("motion: {sigma_floor_theta: 1.0e300}", "motion.sigma_floor_theta: must be in [1e-06, 1000] rad"),  # OverflowError
+    ("motion: {sigma_floor_xy: 1.0e-160, sigma_floor_theta: 1.0e-160}\nalignment: {motion_prior: true}",
+     "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # OverflowError: sxy**-2 at the repeated stamp
+    ("motion: {sigma_floor_xy: 0.01, sigma_floor_theta: 1.0e-160}", "motion.sigma_floor_theta: must be in [1e-06"),
+    ("motion: {sigma_accel: 1.0e200}", "motion.sigma_accel: must be in [0, 1000] m/s^2"),  # sxy**2 overflowed
+    ("consistency: {max_ambiguous: 2}", "consistency.max_ambiguous: a share of steps, must be in [0, 1]"),
+    ("consistency: {min_matched_fraction: 2}", "consistency.min_matched_fraction: a share of steps, must be in [0, 1]"),
+    ("alignment: {search_candidates: 1000000000}", "alignment.search_candidates: must be in [1, 32]"),  # an ICP per pose
+    ("alignment: {search_step: 0.01, search_resolution: 0.01}",
+     "the search window would hold 58,049,161 poses"),  # 361 x 401^2
 ])
-def test_search_fields_out_of_bounds_are_one_line_exit_2(sim_folder, tmp_path, capsys, field, value, expected):
-    """Every field of the correlative search is checked when the config is built: one line on
-    stderr naming the field, exit status 2, nothing run."""
+def test_search_fields_out_of_bounds_are_one_line_exit_2(sparse_log, tmp_path, capsys, config, expected):
+    """Every field of the correlative search and of the prediction's std is checked when the
+    config is built, against physical bounds: one line on stderr naming the field and the bound
+    that failed, exit status 2, nothing run (no traceback, no numpy warning). On a log that
+    searches every step, each of these crashed (OverflowError, exit 1) or printed warnings."""
     from experiments.cli import main
 
     cfg = tmp_path / "bad.yaml"
-    section = "motion" if field.startswith("sigma_floor") else "alignment"
-    cfg.write_text(f"{section}: {{{field}: {value}}}\n")
+    cfg.write_text(config + "\n")
     out = tmp_path / "o"
-    assert main(["slam", str(sim_folder), "--config", str(cfg), "--out", str(out), "--quiet"]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        code = main(["slam", str(sparse_log), "--config", str(cfg), "--out", str(out), "--quiet",
+                     "--no-paper-baseline"])
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert code == 2
     assert len(err) == 1 and expected in err[0], err
+    assert "Traceback" not in captured.err and "Warning" not in captured.err
     assert not (out / "metrics.json").exists()
+
+
+@pytest.mark.parametrize("config, searched", [
+    ("motion: {sigma_floor_xy: 1.0e-6, sigma_floor_theta: 1.0e-6}\nalignment: {motion_prior: true}", 7),
+    ("motion: {sigma_floor_xy: 1000, sigma_floor_theta: 1000, sigma_accel: 1000, sigma_alpha: 1000}\n"
+     "alignment: {search_sigma: 1.0e-4, fit_sigma: 1.0e-4, ambiguity_sigmas: 100, fit_margin: 1}", 8),
+])
+def test_search_fields_at_their_bounds_run_without_warnings(sparse_log, tmp_path, capsys, config, searched):
+    """The bounds are not too loose: the extreme values allowed run through (the repeated scan
+    included) with every warning an error, and search every step 2 s after the last (7 of the
+    8), and with a floor of 1000 std also the repeated one."""
+    from experiments.cli import main
+
+    cfg = tmp_path / "edge.yaml"
+    cfg.write_text(config + "\n")
+    out = tmp_path / "o"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        code = main(["slam", str(sparse_log), "--config", str(cfg), "--out", str(out), "--quiet",
+                     "--no-paper-baseline"])
+    assert code == 0
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["n_scans"] == 9 and m["consistency"]["searched_fraction"] == searched / 8
+    assert "Traceback" not in capsys.readouterr().err
 
 
 def test_search_window_bound_counts_the_poses_the_search_scores(monkeypatch):
