@@ -343,14 +343,27 @@ def _probe_shares(statistic: Callable[[Sequence[Record]], float], vary: str, pro
     return shares
 
 
+def outside_probes(shares: Sequence[float], target: float) -> str | None:
+    """Where a log's statistic ``target`` lies against the probes' curve ``shares`` (made monotone as
+    ``invert_probe_curve`` makes it: running maximum, nan as 0): "below" its first value, "above"
+    its last, None within it (ends included) or for a target that is not finite. A fit whose target
+    lies outside is clipped to the end probe: at its bound, the simulated worlds do not reach the log."""
+    if not np.isfinite(target) or not len(shares):
+        return None
+    x = np.maximum.accumulate(np.nan_to_num(np.asarray(shares, dtype=float)))
+    return "below" if target < x[0] else "above" if target > x[-1] else None
+
+
 @dataclass
 class ScaleFit:
-    """The mit worlds' room size fitted to a log: the log's far share, the probes'."""
+    """The mit worlds' room size fitted to a log: the log's far share, the probes', and whether the
+    size sits at a bound (the log's share outside the probes' range, :func:`outside_probes`)."""
 
     scale: float
     log_share: float
     probe_scales: tuple[float, ...]
     probe_shares: tuple[float, ...]
+    at_bound: bool = False
 
 
 def fit_scale(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
@@ -367,7 +380,8 @@ def fit_scale(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     shares = _probe_shares(far_share, "scale", SCALE_PROBES, dict(rough=rough), glass, sensor, limits, duration, rate_hz,
                            n_probe_seeds, seeds=seeds)
     fitted = _interpolate(shares, list(SCALE_PROBES), float(target)) if np.isfinite(target) else SCALE_PROBES[0]
-    return ScaleFit(round(float(fitted), 3), float(target), tuple(SCALE_PROBES), tuple(shares))
+    return ScaleFit(round(float(fitted), 3), float(target), tuple(SCALE_PROBES), tuple(shares),
+                    outside_probes(shares, float(target)) is not None)
 
 
 @dataclass
@@ -375,7 +389,10 @@ class RoughFit:
     """The mit worlds' rough fill fitted to a log: the log's near-unexplained share, the probes'
     (run at wall relief ``relief``: None for none), and the clutter level where the log's share lies
     below the fill's curve (``clutter``: the preset's otherwise; the level probes, at no fill, with
-    their shares, empty when not run)."""
+    their shares, empty when not run). ``at_bound``: the fill sits at 0 or 1 because the log's share
+    lies outside the fill's probes (below them only when the clutter level did not take the fit on);
+    ``clutter_at_bound``: the level probes ran and the log's share lies below all of them, so the
+    level is left at the preset's."""
 
     cover: float
     log_share: float
@@ -385,6 +402,8 @@ class RoughFit:
     clutter: float = PRESET_CLUTTER
     clutter_probes: tuple[float, ...] = ()
     clutter_shares: tuple[float, ...] = ()
+    at_bound: bool = False
+    clutter_at_bound: bool = False
 
 
 def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
@@ -402,9 +421,10 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     read off the joined curve. Below the joined curve's start too the level stays the preset's:
     the worlds at the lowest level probe still leave more beams unexplained than the log, so the
     level is not what they lack (ACES: 0.655 at level 1 against the log's 0.603, and its worlds at
-    level 1 explained 0.026-0.052 more than the log with every method). Above the fill curve's end
-    the fill stays at 1 (more clutter does not leave more beams unexplained there: see
-    CLUTTER_PROBES)."""
+    level 1 explained 0.026-0.052 more than the log with every method); the lowest level probe runs
+    first and the others only when the log's share reaches it. Above the fill curve's end the fill
+    stays at 1 (more clutter does not leave more beams unexplained there: see CLUTTER_PROBES).
+    Either end is flagged (``at_bound``, ``clutter_at_bound``)."""
     from experiments.calibrate import invert_probe_curve as _interpolate
 
     target = near_unexplained(real)
@@ -412,16 +432,26 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     shares = _probe_shares(near_unexplained, "rough", ROUGH_PROBES, fixed, glass, sensor,
                            limits, duration, rate_hz, n_probe_seeds, seeds=seeds)
     cover = _interpolate(shares, list(ROUGH_PROBES), float(target)) if np.isfinite(target) else 0.0
-    level, levels, level_shares = PRESET_CLUTTER, (), []
-    if clutter and np.isfinite(target) and target < np.nan_to_num(shares[0]):
-        levels = CLUTTER_PROBES
-        level_shares = _probe_shares(near_unexplained, "clutter", levels, {**fixed, "rough": ROUGH_PROBES[0]},
-                                     glass, sensor, limits, duration, rate_hz, n_probe_seeds, seeds=seeds)
-        joined = np.maximum.accumulate(np.nan_to_num(np.asarray([*level_shares, shares[0]], dtype=float)))
-        if target >= joined[0]:  # within the joined curve; below it the level is not what the worlds lack
+    side = outside_probes(shares, float(target))
+    level, level_bound = PRESET_CLUTTER, False
+    levels: tuple[float, ...] = ()
+    level_shares: list[float] = []
+    if clutter and side == "below":
+        level_fixed = {**fixed, "rough": ROUGH_PROBES[0]}
+        # the lowest level first: a log below it keeps the preset's level, and the others would be discarded
+        levels = CLUTTER_PROBES[:1]
+        level_shares = _probe_shares(near_unexplained, "clutter", levels, level_fixed, glass, sensor, limits, duration,
+                                     rate_hz, n_probe_seeds, seeds=seeds)
+        level_bound = outside_probes([*level_shares, shares[0]], float(target)) == "below"
+        if not level_bound:  # within the joined curve; below it the level is not what the worlds lack
+            levels = CLUTTER_PROBES
+            level_shares += _probe_shares(near_unexplained, "clutter", CLUTTER_PROBES[1:], level_fixed, glass, sensor,
+                                          limits, duration, rate_hz, n_probe_seeds, seeds=seeds)
+            joined = np.maximum.accumulate(np.nan_to_num(np.asarray([*level_shares, shares[0]], dtype=float)))
             level = _interpolate(list(joined), [*levels, PRESET_CLUTTER], float(target))
+    fill_bound = side == "above" or (side == "below" and (not levels or level_bound))
     return RoughFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(ROUGH_PROBES), tuple(shares),
-                    relief, round(float(level), 3), tuple(levels), tuple(level_shares))
+                    relief, round(float(level), 3), tuple(levels), tuple(level_shares), fill_bound, level_bound)
 
 
 def _window_lines(x: np.ndarray, y: np.ndarray, k: int) -> tuple[np.ndarray, ...]:
@@ -493,12 +523,14 @@ def relief_share(records: Sequence[Record], sigma: float | None = None) -> float
 
 @dataclass
 class ReliefFit:
-    """The mit worlds' wall relief fitted to a log: the log's relief share, the probes'."""
+    """The mit worlds' wall relief fitted to a log: the log's relief share, the probes', and whether
+    the relief sits at a bound (the log's share outside the probes' range, :func:`outside_probes`)."""
 
     cover: float
     log_share: float
     probe_covers: tuple[float, ...]
     probe_shares: tuple[float, ...]
+    at_bound: bool = False
 
 
 def fit_relief(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
@@ -517,7 +549,8 @@ def fit_relief(real: Sequence[Record], sensor: Any, limits: Any, glass: float | 
     shares = _probe_shares(relief_share, "relief", RELIEF_PROBES, fixed, glass, sensor, limits, duration, rate_hz,
                            n_probe_seeds, world, seeds)
     cover = invert_probe_curve(shares, list(RELIEF_PROBES), float(target)) if np.isfinite(target) else 0.0
-    return ReliefFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(RELIEF_PROBES), tuple(shares))
+    return ReliefFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(RELIEF_PROBES), tuple(shares),
+                     outside_probes(shares, float(target)) is not None)
 
 
 def fit_world(real: Sequence[Record], sensor: Any, limits: Any, glass: float | None, duration: float = PROBE_DURATION_S,
@@ -644,8 +677,41 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
         raise LmsbenchError(f"{log}: nothing to compare: no method measured an explained fraction on both sources")
     result.checks = targets(table)
     n_probe = (len(scan_stamps(sensor, probe_duration, probe_rate_hz)) * len(probes)) if result.probe_seeds else None
-    result.warnings = small_sample_warnings(len(real), len(simulated), n_probe)
+    result.warnings = small_sample_warnings(len(real), len(simulated), n_probe) + bound_warnings(rough, scale, relief)
     return result
+
+
+def _bound_note(at_bound: bool, log_share: float, probe_shares: Sequence[float]) -> str:
+    """" (at its bound: ...)" for a fitted amount clipped to its end probe, else ""."""
+    if not at_bound:
+        return ""
+    side = outside_probes(probe_shares, log_share) or "outside"
+    return f" (at its bound: the log's share lies {side} the probes' range)"
+
+
+def fits_at_bound(rough: RoughFit | None, scale: ScaleFit | None = None,
+                  relief: ReliefFit | None = None) -> list[str]:
+    """The fitted amounts that sit at a bound (the log outside their probes' range), as "name value"."""
+    out = []
+    if rough is not None and rough.at_bound:
+        out.append(f"rough fill {rough.cover:.2f}")
+    if rough is not None and rough.clutter_at_bound:
+        out.append(f"clutter level {rough.clutter:.2f}")
+    if scale is not None and scale.at_bound:
+        out.append(f"rooms x{scale.scale:.2f}")
+    if relief is not None and relief.at_bound:
+        out.append(f"wall relief {relief.cover:.2f}")
+    return out
+
+
+def bound_warnings(rough: RoughFit | None, scale: ScaleFit | None = None,
+                   relief: ReliefFit | None = None) -> list[str]:
+    """One line when any fitted amount sits at a bound (:func:`fits_at_bound`), else none."""
+    at = fits_at_bound(rough, scale, relief)
+    if not at:
+        return []
+    return [f"fitted at a bound: {', '.join(at)} (the log lies outside the probes' range: the simulated worlds "
+            "do not reach it there; see the report's first lines)"]
 
 
 def small_sample_warnings(n_real: int, n_sim: int, n_probe: int | None = None) -> list[str]:
@@ -710,22 +776,30 @@ def format_report(result: Sim2RealResult, log: str) -> str:
              f"spot {result.sensor.beam_width_deg:g} deg, outliers {result.sensor.outlier_prob:.4f}"
              + ("" if result.glass is None else f"; glass {result.glass:g} panels per 10 m and clutter level")
              + ("" if result.scale is None else
-                f"; rooms x{result.scale.scale:.2f} (share of valid readings at {MID_M:g}-{MAX_M:g} m that reach {FAR_M:g} m: "
+                f"; rooms x{result.scale.scale:.2f}"
+                + _bound_note(result.scale.at_bound, result.scale.log_share, result.scale.probe_shares)
+                + f" (share of valid readings at {MID_M:g}-{MAX_M:g} m that reach {FAR_M:g} m: "
                 f"log {result.scale.log_share:.3f}, "
                 "probes " + ", ".join(f"{s:.3f} at x{c:g}" for c, s in zip(result.scale.probe_scales, result.scale.probe_shares))
                 + ")")
              + ("" if result.rough is None else
-                f"; rough fill {result.rough.cover:.2f} of the rooms' walls (beams at {NEAR_M[0]:g}-{NEAR_M[1]:g} m "
+                f"; rough fill {result.rough.cover:.2f}"
+                + _bound_note(result.rough.at_bound, result.rough.log_share, result.rough.probe_shares)
+                + f" of the rooms' walls (beams at {NEAR_M[0]:g}-{NEAR_M[1]:g} m "
                 f"unexplained by {STATS_METHOD}: log {result.rough.log_share:.3f}, probes "
                 + ", ".join(f"{s:.3f} at {c:g}" for c, s in zip(result.rough.probe_covers, result.rough.probe_shares))
                 + ("" if result.rough.relief is None else f", the probes at wall relief {result.rough.relief:.2f}") + ")"
                 + f"; clutter level {result.rough.clutter:.2f}"
+                + _bound_note(result.rough.clutter_at_bound, result.rough.log_share,
+                              [*result.rough.clutter_shares, *result.rough.probe_shares[:1]])
                 + ("" if not result.rough.clutter_probes else
                    " (no fill: probes "
                    + ", ".join(f"{s:.3f} at {c:g}" for c, s in zip(result.rough.clutter_probes, result.rough.clutter_shares))
                    + ")"))
              + ("" if result.relief is None else
-                f"; wall relief {result.relief.cover:.2f} of the free wall length (joints of straight stretches "
+                f"; wall relief {result.relief.cover:.2f}"
+                + _bound_note(result.relief.at_bound, result.relief.log_share, result.relief.probe_shares)
+                + " of the free wall length (joints of straight stretches "
                 f"that break: log {result.relief.log_share:.4f}, probes "
                 + ", ".join(f"{s:.4f} at {c:g}" for c, s in zip(result.relief.probe_covers, result.relief.probe_shares))
                 + ")"), "",

@@ -162,3 +162,9 @@ def test_zero_ranges_count_as_invalid_like_nan_for_every_extractor_and_the_expla
         ma, mb = scan_measures(a, as_nan, 0.005), scan_measures(b, as_zero, 0.005)
         assert ma.n_valid == mb.n_valid == np.count_nonzero(np.isfinite(base.ranges) & ~lost)
         assert ma.explained_tol == mb.explained_tol > 0.9
+    # the sensor method's own floor may be 0 (min_range=0): a 0 m reading still is no reading
+    # (it entered the runs, and its log range, -714 for log(0), moved the Log-Hough votes)
+    a, b = extract(as_nan, method="sensor", min_range=0.0), extract(as_zero, method="sensor", min_range=0.0)
+    assert len(a.lines) >= 1
+    np.testing.assert_array_equal(a.lines.values, b.lines.values)
+    np.testing.assert_array_equal(a.lines.beams, b.lines.beams)

@@ -3,6 +3,7 @@ recovery test: `lmsbench calibrate` on simulated logs of known parameters gets t
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -217,7 +218,6 @@ def test_sim2real_warns_on_tiny_samples_and_refuses_a_log_with_nothing_to_measur
     """--max-scans 1 and --duration 0.1: one real scan and one simulated scan (a world's first)
     still give a report, with one warning line on stderr naming both counts; a log whose scans hold
     no valid reading (every beam +inf) is refused: exit 2, one line."""
-    import dataclasses
 
     from experiments.sim2real import MIN_SCANS, small_sample_warnings
 
@@ -399,20 +399,78 @@ def test_fit_rough_goes_on_in_the_clutter_level_past_the_fills_ends(monkeypatch)
         return out
 
     monkeypatch.setattr(sim2real, "_probe_shares", probes)
-    for log_share, cover, level, runs in ((0.2 - 0.03, 0.0, 2.0, ["rough", "clutter"]),
-                                          (0.2 - 0.03 * 2.0, 0.0, 1.0, ["rough", "clutter"]),
-                                          (0.2 - 0.03 * 2.5, 0.0, 3.0, ["rough", "clutter"]),
-                                          (0.2 + 0.1 + 0.03 * 1.5, 1.0, 3.0, ["rough"]),
-                                          (0.25, 0.5, 3.0, ["rough"])):
+    # log share, fill, level, probe runs, fill at its bound, level at its bound
+    for log_share, cover, level, runs, fill_bound, level_bound in (
+            (0.2 - 0.03, 0.0, 2.0, ["rough", "clutter", "clutter"], False, False),  # the level takes the fit on
+            (0.2 - 0.03 * 2.0, 0.0, 1.0, ["rough", "clutter", "clutter"], False, False),  # on the lowest probe
+            (0.2 - 0.03 * 2.5, 0.0, 3.0, ["rough", "clutter"], True, True),  # below level 1: level 2 not run
+            (0.2 + 0.1 + 0.03 * 1.5, 1.0, 3.0, ["rough"], True, False),  # above the fill's end
+            (0.2 + 0.1, 1.0, 3.0, ["rough"], False, False),  # on the fill's last probe
+            (0.25, 0.5, 3.0, ["rough"], False, False)):
         calls.clear()
         monkeypatch.setattr(sim2real, "near_unexplained", lambda recs, v=log_share: v)  # noqa: ANN001
         fit = sim2real.fit_rough([], None, None, None)
         assert (fit.cover, fit.clutter) == (pytest.approx(cover, abs=1e-3), pytest.approx(level, abs=1e-3))
         assert calls == runs
+        assert (fit.at_bound, fit.clutter_at_bound) == (fill_bound, level_bound), log_share
+        assert len(fit.clutter_probes) == len(fit.clutter_shares) == runs.count("clutter")
     monkeypatch.setattr(sim2real, "near_unexplained", lambda recs: 0.17)
     calls.clear()
     alone = sim2real.fit_rough([], None, None, None, clutter=False)  # the fill alone: clipped at 0
     assert (alone.cover, alone.clutter, calls) == (0.0, 3.0, ["rough"])
+    assert (alone.at_bound, alone.clutter_at_bound) == (True, False)
+
+
+def test_fits_outside_their_probes_range_are_flagged_at_their_bound(monkeypatch) -> None:
+    """fit_relief and fit_scale on a known probe curve (0.1, 0.2, 0.3; no simulation): a log share
+    inside it (ends included) is not at a bound, one below or above is, clipped to the end probe."""
+    from experiments import sim2real
+
+    def curve(statistic, vary, probes, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
+        return [0.1 * (i + 1) for i in range(len(probes))]
+
+    monkeypatch.setattr(sim2real, "_probe_shares", curve)
+    for share, relief, scale, bound in ((0.15, 0.25, 1.25, False), (0.1, 0.0, 1.0, False), (0.3, 1.0, 2.0, False),
+                                        (0.05, 0.0, 1.0, True), (0.45, 1.0, 2.0, True)):
+        monkeypatch.setattr(sim2real, "relief_share", lambda recs, v=share: v)  # noqa: ANN001
+        monkeypatch.setattr(sim2real, "far_share", lambda recs, v=share: v)  # noqa: ANN001
+        fit = sim2real.fit_relief([], None, None, None)
+        rooms = sim2real.fit_scale([], None, None, None)
+        assert (fit.cover, fit.at_bound) == (pytest.approx(relief, abs=1e-3), bound), share
+        assert (rooms.scale, rooms.at_bound) == (pytest.approx(scale, abs=1e-3), bound), share
+    assert sim2real.outside_probes([0.3, 0.2, float("nan"), 0.5], 0.25) == "below"  # monotone: 0.3, 0.3, 0.3, 0.5
+    assert sim2real.outside_probes([0.3, 0.2, float("nan"), 0.5], 0.51) == "above"
+    assert sim2real.outside_probes([0.3, 0.5], 0.3) is None is sim2real.outside_probes([0.3, 0.5], float("nan"))
+
+
+def test_sim2real_reports_fits_at_a_bound_with_one_warning_line(tmp_path: Path, monkeypatch, capsys) -> None:
+    """The mit world's fits replaced by fits at their bounds (ACES-like: fill 0 and level 3 below
+    every probe, relief 1 above): the report names each bound, stderr carries one warning line for
+    them (and one for the small sample); fits inside their range add no warning."""
+    from experiments import sim2real
+    from experiments.cli import main
+
+    low = sim2real.RoughFit(0.0, 0.603, (0.0, 0.5, 1.0), (0.70, 0.72, 0.75), 1.0, 3.0, (1.0,), (0.655,), True, True)
+    high = sim2real.ReliefFit(1.0, 0.2, (0.0, 0.5, 1.0), (0.01, 0.05, 0.1), True)
+    monkeypatch.setattr(sim2real, "fit_world", lambda *args, **kwargs: (low, None, high))  # noqa: ANN002, ANN003
+    write_carmen(tmp_path / "log.clf", simulate_records("cluttered", seed=7, duration=4.0,
+                                                        sensor=SensorConfig(units="cm"), rate_hz=3.0))
+    SensorConfig(units="cm").to_yaml(tmp_path / "sensor.yaml")
+    code = main(["sim2real", str(tmp_path / "log.clf"), "--seeds", "0", "--duration", "4", "--rate-hz", "1",
+                 "--stride", "1", "--sensor", str(tmp_path / "sensor.yaml"), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    warned = [line for line in err.splitlines() if "warning" in line]
+    assert len(warned) == 2 and "only 13 real scans" in warned[0], err
+    assert warned[1] == ("lmsbench sim2real: warning: fitted at a bound: rough fill 0.00, clutter level 3.00, "
+                         "wall relief 1.00 (the log lies outside the probes' range: the simulated worlds do not "
+                         "reach it there; see the report's first lines)")
+    report = (tmp_path / "out" / "sim2real.md").read_text()
+    assert "rough fill 0.00 (at its bound: the log's share lies below the probes' range) of the rooms' walls" in report
+    assert "clutter level 3.00 (at its bound: the log's share lies below the probes' range) (no fill: probes 0.655 at 1)" in report
+    assert "wall relief 1.00 (at its bound: the log's share lies above the probes' range)" in report
+    assert sim2real.bound_warnings(dataclasses.replace(low, at_bound=False, clutter_at_bound=False), None,
+                                   dataclasses.replace(high, at_bound=False)) == []
 
 
 def test_fit_world_runs_every_probe_on_the_probe_seeds_given(monkeypatch) -> None:

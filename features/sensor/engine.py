@@ -570,7 +570,7 @@ def signal_block(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
         out[:] = np.nan
     for i in range(n):  # without branches, so that it vectorises
         d = ranges[i]
-        ok = d >= range_lo and d <= range_hi
+        ok = d >= range_lo and d > 0.0 and d <= range_hi  # 0 m is no reading (lms200.Scan.valid)
         valid[i] = ok
         out[S_U, i] = 1.0 / d if ok else np.nan
     if n >= 2 * k + 1:
