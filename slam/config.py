@@ -144,7 +144,7 @@ class AlignmentConfig:
     fit_sigma: float = 0.03
     fit_margin: float = 0.05
     ambiguity_sigmas: float = 3.0
-    max_turn_rate: float = 3.14159
+    max_turn_rate: float = math.pi
 
 
 @dataclass(frozen=True)

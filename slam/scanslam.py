@@ -239,12 +239,13 @@ class ScanSlam:
         """The correlative search (:mod:`slam.correlative`) about the prediction, and about the
         last pose when that lies outside the window: its best distinct poses, each refined by the
         ICP held near it (a prior of the window's step: the ICP does not slide along a corridor),
-        compete with ``m``, the match from the prediction.
+        compete with ``m``, the match from the prediction (or from one of its heading hypotheses).
 
         Headings are searched only within ``max_turn_rate * dt`` rad of the last pose's (``dt``
         s since it): the constant-velocity prediction's std grows with dt^2 (3 std of heading
         pass half a turn from 0.5 s on), a robot's turn rate does not. ``m`` stays unless a
-        search pose fits (:func:`slam.correlative.fit`) better by more than ``fit_margin``;
+        search pose fits (:func:`slam.correlative.fit`) better by more than ``fit_margin``, or it
+        turned beyond that bound (plus ``DISTINCT_THETA``);
         then, among the search poses within ``fit_margin`` of the best fit, the one nearest the
         prediction or the last pose wins (Mahalanobis, the prediction's std truncated to the
         window: a half turn costs 9, a metre at most 2.25). ``info.ambiguous``: a pose
@@ -288,7 +289,10 @@ class ScanSlam:
             return out
 
         prior = {i: distance(results[i]) for i in close}
-        k = 0 if 0 in close else min(close, key=prior.__getitem__)  # the prediction's match unless clearly beaten
+        # the prediction's match unless clearly beaten, and only within the turn bound (it may come
+        # from a heading hypothesis up to half a turn off, which the search's candidates may not)
+        keep = 0 in close and not (turn is not None and abs(_wrap(m.pose[2] - last[2])) > max_turn + DISTINCT_THETA)
+        k = 0 if keep else min(close, key=prior.__getitem__)
         chosen = results[k]
         info.fit = fits[k]
         for i in close:

@@ -292,8 +292,10 @@ def test_an_unhealthy_run_warns_on_stderr(tmp_path, capsys):
     assert not m["consistency"]["healthy"] and m["ate"]["rmse"] > 0.5
     steps = m["n_scans"] - 1
     assert round(m["consistency"]["ambiguous_fraction"] * steps) == 1
-    warnings = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
-    assert len(warnings) == 1 and "not healthy" in warnings[0]
+    captured = capsys.readouterr()
+    warnings = [line for line in captured.err.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and "warning" not in captured.out
+    assert warnings[0].startswith(f"lmsbench slam: warning: {folder}: the run is not healthy: ")  # as sim2real's
     assert f"1 of {steps} steps ({100 / steps:.1f} %) were ambiguous" in warnings[0]
 
 
@@ -319,3 +321,49 @@ def test_a_run_whose_steps_were_not_matched_is_not_healthy(tmp_path, capsys):
     assert steps == 9 and m["consistency"]["matched_fraction"] == 0.0 and not m["consistency"]["healthy"]
     warnings = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
     assert len(warnings) == 1 and f"only 0 of {steps} steps (0.0 %) were matched to the map" in warnings[0]
+
+
+def test_a_diverged_run_warns_once_naming_every_reason(tmp_path, capsys):
+    """14 scans of uniform random ranges (0.5-8 m) at 5 scans/s: nothing matches (0 of 13 steps),
+    10 scans in a row put fewer than 30 % of their points on the map (diverged at the 11th scan,
+    t = 2.133 s) and 11 of the 13 searched steps are ambiguous. The divergence used to be printed
+    twice (a stdout 'warning:' line and the stderr line) and the stderr line named only the first
+    reason; now one stderr line names all three."""
+    from experiments.cli import main
+    from lms200 import Record
+    from sim import simulate_records
+
+    records = simulate_records("office", seed=1, duration=3.0, rate_hz=5.0)
+    rng = np.random.default_rng(0)
+    junk = [Record(r.scan.replace(ranges=rng.uniform(0.5, 8.0, r.scan.ranges.size)), truth=r.truth) for r in records]
+    write_log(tmp_path / "junk.clf", junk)
+    out = tmp_path / "run"
+    assert main(["slam", str(tmp_path / "junk.clf"), "--out", str(out), "--quiet", "--no-paper-baseline"]) == 0
+    c = json.loads((out / "metrics.json").read_text())["consistency"]
+    assert c["diverged"] and c["diverged_at"] == pytest.approx(records[10].scan.stamp, abs=1e-6)
+    assert c["matched_fraction"] == 0.0 and round(c["ambiguous_fraction"] * 13) == 11 and not c["healthy"]
+    captured = capsys.readouterr()
+    assert "warning" not in captured.out
+    (line,) = [line for line in captured.err.splitlines() if "warning" in line]
+    assert line.startswith(f"lmsbench slam: warning: {tmp_path / 'junk.clf'}: the run is not healthy: the estimate "
+                           f"diverged at t={c['diverged_at']} (10 scans in a row put fewer than 0.3 of their points")
+    assert "; only 0 of 13 steps (0.0 %) were matched to the map" in line
+    assert "; 11 of 13 steps (84.6 %) were ambiguous" in line and line.endswith("(metrics.json: consistency.healthy false)")
+
+
+def test_a_paper_run_that_diverged_but_stayed_healthy_warns_of_the_divergence():
+    """The paper preset's health is its filter's state: a divergence (NIS or the point check)
+    alone leaves it healthy, and the warning names the divergence (no 'not healthy')."""
+    from experiments.commands.slam import _health_warning
+    from slam import SlamConfig
+
+    paper = SlamConfig(preset="paper")
+    m = {"n_scans": 11, "consistency": {"diverged": True, "diverged_at": 4.5, "healthy": True}}
+    assert _health_warning(m, paper) == ("the estimate diverged at t=4.5 (the filter's state broke, the mean NIS per "
+                                         "dof over 20 scans exceeded 5, or 10 scans in a row put fewer than 0.3 of "
+                                         "their points on the map)")
+    m["consistency"]["healthy"] = False
+    assert _health_warning(m, paper).startswith("the run is not healthy: the estimate diverged at t=4.5 (")
+    assert _health_warning(m, paper).endswith("; the filter's state is not finite or its covariance is not positive "
+                                              "definite (metrics.json: consistency.healthy false)")
+    assert _health_warning({"n_scans": 11, "consistency": {"diverged": False, "healthy": True}}, paper) == ""

@@ -170,3 +170,39 @@ def test_at_five_scans_a_second_the_search_stays_off():
     assert diag["searched_fraction"] == 0.0 and diag["ambiguous_fraction"] == 0.0 and diag["healthy"]
     assert err == pytest.approx(old, abs=1e-12) and err < 0.02
     assert diag["n_loops"] == old_diag["n_loops"]
+
+
+def test_a_match_beyond_the_turn_bound_does_not_keep_its_place():
+    """The keep rule (the prediction's match stays unless clearly beaten) must not keep a match
+    that a heading hypothesis turned half a turn: in a corridor symmetric under a half turn the
+    flipped pose fits as well as the right one (0.2 s after the last scan, the bound is
+    pi x 0.2 = 0.63 rad). The search's own candidates keep to the bound; the flipped match
+    used to win the tie and the step turned by pi. Now the pose nearest the prediction wins."""
+    import dataclasses
+
+    from experiments.synthetic import room_scan
+    from slam.icp import refine
+    from slam.scanslam import ScanPoints, ScanSlam, ScanStep
+
+    corridor = np.array([[-20.0, -1.0, 20.0, -1.0], [-20.0, 1.0, 20.0, 1.0]])  # walls (x0, y0, x1, y1), m
+    slam = ScanSlam()
+    first, _ = room_scan(corridor, (0.0, 0.0, 0.0))
+    slam.step(0.0, first.points)
+    x = np.arange(-10.0, 10.0, 0.02)  # the local map: both walls both ways (normals towards the axis)
+    slam.ref = make_reference(np.concatenate([np.column_stack((x, np.full_like(x, y))) for y in (-1.0, 1.0)]),
+                              np.concatenate([np.tile([0.0, -y], (x.size, 1)) for y in (-1.0, 1.0)]), 0.05)
+    true = np.array([0.1, 0.0, 0.0])
+    scan, _ = room_scan(corridor, tuple(true))
+    sp = ScanPoints.from_points(scan.points, slam.alignment)
+    assert slam.ref is not None
+    flipped = refine(sp.matched, slam.ref, np.array([0.1, 0.0, np.pi]), slam.alignment)
+    m = dataclasses.replace(flipped, start=9)  # the 3.14 rad heading hypothesis won the match
+    info = ScanStep(keyframe=0)
+    chosen = slam._search(sp, m, true.copy(), 0.1, 1.0, 0.2, info, None)
+    assert info.searched
+    assert abs(np.arctan2(np.sin(chosen.pose[2]), np.cos(chosen.pose[2]))) < 0.02  # was pi: the flipped match kept
+    assert np.hypot(chosen.pose[0] - true[0], chosen.pose[1] - true[1]) < 0.3
+    # within the bound (1 s: the whole turn) the same match keeps its place, as before
+    info = ScanStep(keyframe=0)
+    kept = slam._search(sp, m, true.copy(), 0.1, 1.0, 1.0, info, None)
+    assert abs(abs(kept.pose[2]) - np.pi) < 0.02

@@ -184,11 +184,9 @@ def run(args: argparse.Namespace) -> int:
         shown = ", ".join(f"{c['new_stamp'] - t0:.1f} s -> {c['old_stamp'] - t0:.1f} s" for c in lc["closed"][:6])
         more = ", ..." if lc["n"] > 6 else ""
         print(f"  {lc['n']} loop closures over {lc['n_keyframes']} keyframes" + (f" ({shown}{more})" if lc["n"] else ""))
-    if m["consistency"]["diverged"]:
-        print(f"  warning: the estimate diverged at t={m['consistency']['diverged_at']}")
-    if not m["consistency"]["healthy"]:
-        print(f"warning: {args.input}: the run is not healthy: {_unhealthy_reason(m, config)} "
-              f"(metrics.json: consistency.healthy false)", file=sys.stderr)
+    warning = _health_warning(m, config)
+    if warning:
+        print(f"lmsbench slam: warning: {args.input}: {warning}", file=sys.stderr)
     if "note" in m.get("relations", {}):
         print(f"  relations: {m['relations']['note']}")
     if "anchors_relations_trans_mean_m" in m:
@@ -196,24 +194,42 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _unhealthy_reason(m: dict[str, Any], config: "SlamConfig") -> str:
-    """Why ``m`` (metrics.json's mapping) says the run is not healthy, in one phrase."""
+def _health_warning(m: dict[str, Any], config: "SlamConfig") -> str:
+    """The warning (one line, no prefix) for a run that is not healthy or diverged, naming every
+    reason that holds; "" when there is none."""
     c = m["consistency"]
-    share = c.get("ambiguous_fraction")
-    if share is not None and share > config.consistency.max_ambiguous:
-        steps = max(int(m["n_scans"]) - 1, 1)
-        return (f"{round(share * steps)} of {steps} steps ({100 * share:.1f} %) were ambiguous (a distinct pose fitted "
-                f"the scan as well and only the motion model chose; consistency.max_ambiguous "
-                f"{config.consistency.max_ambiguous:g})")
-    if config.preset == "paper":
-        return "the filter's state is not finite or its covariance is not positive definite"
+    reasons = _unhealthy_reasons(m, config)
+    if not c["healthy"]:
+        return (f"the run is not healthy: {'; '.join(reasons or ['the trajectory is not finite'])} "
+                f"(metrics.json: consistency.healthy false)")
+    return "; ".join(reasons)  # the paper preset stays healthy when its estimate diverged
+
+
+def _unhealthy_reasons(m: dict[str, Any], config: "SlamConfig") -> list[str]:
+    """Every reason ``m`` (metrics.json's mapping) gives against the run, one phrase each: a
+    divergence, too few matched steps, too many ambiguous steps, a broken filter state."""
+    c = m["consistency"]
+    steps = max(int(m["n_scans"]) - 1, 1)
+    cc = config.consistency
+    out = []
     if c.get("diverged"):
-        return (f"the estimate diverged at t={c['diverged_at']} ({config.consistency.point_window} scans in a row put "
-                f"fewer than {config.consistency.point_min_score:g} of their points on the map)")
+        if config.preset == "paper":
+            out.append(f"the estimate diverged at t={c['diverged_at']} (the filter's state broke, the mean NIS per "
+                       f"dof over {cc.nis_window} scans exceeded {cc.nis_divergence:g}, or {cc.point_window} scans "
+                       f"in a row put fewer than {cc.point_min_score:g} of their points on the map)")
+        else:
+            out.append(f"the estimate diverged at t={c['diverged_at']} ({cc.point_window} scans in a row put fewer "
+                       f"than {cc.point_min_score:g} of their points on the map)")
     matched = c.get("matched_fraction")
-    if matched is not None and matched < config.consistency.min_matched_fraction:
-        steps = max(int(m["n_scans"]) - 1, 1)
-        return (f"only {round(matched * steps)} of {steps} steps ({100 * matched:.1f} %) were matched to the map "
-                f"(the others are the motion model's guess; consistency.min_matched_fraction "
-                f"{config.consistency.min_matched_fraction:g})")
-    return "the trajectory is not finite"
+    if matched is not None and matched < cc.min_matched_fraction:
+        out.append(f"only {round(matched * steps)} of {steps} steps ({100 * matched:.1f} %) were matched to the map "
+                   f"(the others are the motion model's guess; consistency.min_matched_fraction "
+                   f"{cc.min_matched_fraction:g})")
+    share = c.get("ambiguous_fraction")
+    if share is not None and share > cc.max_ambiguous:
+        out.append(f"{round(share * steps)} of {steps} steps ({100 * share:.1f} %) were ambiguous (a distinct pose "
+                   f"fitted the scan as well and only the motion model chose; consistency.max_ambiguous "
+                   f"{cc.max_ambiguous:g})")
+    if config.preset == "paper" and not c["healthy"]:
+        out.append("the filter's state is not finite or its covariance is not positive definite")
+    return out
