@@ -362,7 +362,7 @@ def compare(
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=total, unit="scan", desc="compare")
+        bar = tqdm(total=total, unit="scan", desc="compare", disable=None)  # None: on a terminal only
     rows: list[dict[str, Any]] = []
     warmed = False
     rd_cfg = realdata_config or RealDataConfig()

@@ -89,7 +89,7 @@ def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> 
         if bar is None:
             from tqdm import tqdm
 
-            bar = tqdm(total=total, unit="scan", desc="simulate", mininterval=1.0)
+            bar = tqdm(total=total, unit="scan", desc="simulate", mininterval=1.0, disable=None)  # terminal only
         bar.update(done - bar.n)
 
     try:

@@ -203,7 +203,7 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     if progress:
         from tqdm import tqdm
 
-        records = tqdm(data.records, desc="slam", unit="scan", leave=False)
+        records = tqdm(data.records, desc="slam", unit="scan", leave=False, disable=None)  # terminal only
     t0, c0 = time.perf_counter(), time.process_time()
     result = run_slam(records, config)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0

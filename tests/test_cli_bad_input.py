@@ -378,3 +378,20 @@ def test_the_issue_cases_are_all_here():
     assert all(by_command[c] >= 4 for c in ("simulate", "compare", "slam", "sweep", "figures", "demo", "lms200", "info",
                                                  "calibrate", "sim2real"))
     assert len(CASES) >= 100
+
+
+def test_an_error_found_mid_run_is_still_stderr_s_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A log whose line 31 is cut short is found out after 30 scans were compared: the progress
+    bar's carriage-return frames before it made stderr several lines for anything that splits on
+    them (Python's splitlines, a text-mode pipe); off a terminal there is no bar now."""
+    scans = [Scan.lms200(np.full(361, 2.0 + 0.01 * k), stamp=0.2 * k) for k in range(40)]
+    write_log(tmp_path / "log.clf", [Record(s) for s in scans])
+    lines = (tmp_path / "log.clf").read_text().splitlines(keepends=True)
+    laser = [i for i, line in enumerate(lines) if line.startswith("ROBOTLASER1")]
+    lines[laser[30]] = " ".join(lines[laser[30]].split()[:100]) + "\n"
+    (tmp_path / "cut.clf").write_text("".join(lines))
+    assert main(["compare", str(tmp_path / "cut.clf"), "--methods", "hough", "--sigma", "0.01",
+                 "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.strip().splitlines() == [err.strip()] and "ROBOTLASER1" in err
+    assert f":{laser[30] + 1}:" in err

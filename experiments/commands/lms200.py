@@ -147,11 +147,15 @@ def run_record(args: argparse.Namespace) -> int:
     stop = {"now": False}
     previous = signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))
     try:
-        print(f"opening {args.port} ...", file=sys.stderr, flush=True)
+        # a status the next line overwrites, on a terminal only (like the progress bars), so that
+        # a port that cannot be opened leaves the error as stderr's one line
+        status = f"opening {args.port} ..." if sys.stderr.isatty() else ""
+        print(status, end="\r" if status else "", file=sys.stderr, flush=True)
         with LMS200(args.port, baud=args.baud, fov_deg=args.fov_deg, resolution_deg=args.resolution_deg,
                     units=args.units, timeout=args.timeout) as dev:
-            print(f"{dev.type_string.strip()} at {dev.baud} baud, {args.units}; recording to {args.out} "
-                  f"(Ctrl-C stops)", file=sys.stderr, flush=True)
+            opened = (f"{dev.type_string.strip()} at {dev.baud} baud, {args.units}; recording to {args.out} "
+                      f"(Ctrl-C stops)")
+            print(f"{opened:<{len(status)}}", file=sys.stderr, flush=True)
             progress = _Progress(dev)
             try:
                 written = _write(args.out, _records(dev, progress, stop, args.max_scans, args.duration))

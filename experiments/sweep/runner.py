@@ -85,7 +85,7 @@ def run_sweep(
     counts = {"computed": 0, "failed": 0}
 
     bar = tqdm(total=len(set(keys)), initial=skipped, desc=spec.name, unit="cell", file=sys.stderr,
-               disable=not progress, dynamic_ncols=True)
+               disable=True if not progress else None, dynamic_ncols=True)  # None: on a terminal only
 
     def record(key: str, params: dict[str, Scalar], result: dict[str, Any]) -> None:
         store.write(key, _row(params, result, key))
