@@ -65,6 +65,11 @@ class CalibrationResult:
     dark_curve: list[tuple[float, float]] = ()  # type: ignore[assignment]  # (dropout_patch_m, simulated nan clustering)
 
 
+def monotone_curve(values: Sequence[float]) -> np.ndarray:
+    """A probe curve made non-decreasing: running maximum, nan counted as 0."""
+    return np.maximum.accumulate(np.nan_to_num(np.asarray(values, dtype=float)))
+
+
 def invert_probe_curve(values: Sequence[float], probes: Sequence[float], target: float) -> float:
     """The simulator parameter at which a simulated statistic reaches a log's (indirect inference).
 
@@ -78,7 +83,7 @@ def invert_probe_curve(values: Sequence[float], probes: Sequence[float], target:
     ``experiments.sim2real.fit_rough`` / ``fit_scale`` / ``fit_relief`` (the mit worlds' rough fill,
     room size and wall relief).
     """
-    x = np.maximum.accumulate(np.nan_to_num(np.asarray(values, dtype=float)))
+    x = monotone_curve(values)
     y = np.asarray(probes, dtype=float)
     if not np.isfinite(target) or target <= x[0]:
         return float(y[0])

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 
 from lms200 import LmsbenchError, Record, read_log
+from lms200.calibration import missing_readings
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -166,8 +167,7 @@ def scene_statistics(records: Sequence[Record], method: str = STATS_METHOD) -> S
         r = scan.ranges
         valid = scan.valid
         rng_counts[:-2] += np.histogram(r[valid], bins=RANGE_EDGES_M)[0]
-        with np.errstate(invalid="ignore"):
-            missing = np.isnan(r) | (r <= 0.0)  # nan, and the 0 m loggers write for a missing reading
+        missing = missing_readings(r)  # nan, and the 0 m loggers write for a missing reading
         rng_counts[-2] += np.count_nonzero(~valid & ~missing)  # no return, or finite out of limits
         rng_counts[-1] += np.count_nonzero(missing)
         lines = run(scan, cfg).line_array()
@@ -348,9 +348,11 @@ def outside_probes(shares: Sequence[float], target: float) -> str | None:
     ``invert_probe_curve`` makes it: running maximum, nan as 0): "below" its first value, "above"
     its last, None within it (ends included) or for a target that is not finite. A fit whose target
     lies outside is clipped to the end probe: at its bound, the simulated worlds do not reach the log."""
+    from experiments.calibrate import monotone_curve
+
     if not np.isfinite(target) or not len(shares):
         return None
-    x = np.maximum.accumulate(np.nan_to_num(np.asarray(shares, dtype=float)))
+    x = monotone_curve(shares)
     return "below" if target < x[0] else "above" if target > x[-1] else None
 
 
@@ -447,8 +449,7 @@ def fit_rough(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
             levels = CLUTTER_PROBES
             level_shares += _probe_shares(near_unexplained, "clutter", CLUTTER_PROBES[1:], level_fixed, glass, sensor,
                                           limits, duration, rate_hz, n_probe_seeds, seeds=seeds)
-            joined = np.maximum.accumulate(np.nan_to_num(np.asarray([*level_shares, shares[0]], dtype=float)))
-            level = _interpolate(list(joined), [*levels, PRESET_CLUTTER], float(target))
+            level = _interpolate([*level_shares, shares[0]], [*levels, PRESET_CLUTTER], float(target))
     fill_bound = side == "above" or (side == "below" and (not levels or level_bound))
     return RoughFit(round(float(np.clip(cover, 0.0, 1.0)), 3), float(target), tuple(ROUGH_PROBES), tuple(shares),
                     relief, round(float(level), 3), tuple(levels), tuple(level_shares), fill_bound, level_bound)
@@ -575,8 +576,7 @@ def fit_world(real: Sequence[Record], sensor: Any, limits: Any, glass: float | N
     relief = (fit_relief(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, rough.cover, size, seeds=seeds)
               if wall_relief else None)
     if relief is not None:  # (at relief 0 again, for the clutter level, when the first fill is at an end)
-        curve = np.maximum.accumulate(np.nan_to_num(np.asarray(rough.probe_shares, dtype=float)))
-        if relief.cover > 0 or rough.log_share < curve[0]:
+        if relief.cover > 0 or outside_probes(rough.probe_shares, rough.log_share) == "below":
             rough = fit_rough(real, sensor, limits, glass, duration, rate_hz, n_probe_seeds, size, relief.cover,
                               seeds=seeds)
     return rough, scale, relief

@@ -152,7 +152,7 @@ def _max_reading(scans: list[Scan], quantum: float) -> float | None:
     return top if hits >= MAX_READING_SHARE * total and hits >= 3 else None
 
 
-def _missing(r: np.ndarray) -> np.ndarray:
+def missing_readings(r: np.ndarray) -> np.ndarray:
     """Readings that are no measurement: nan, and 0 m (or less), which loggers write for a missing
     reading (``Scan.valid`` never takes them); the simulator renders both as its nan dropouts."""
     with np.errstate(invalid="ignore"):
@@ -163,7 +163,7 @@ def _scan_counts(r: np.ndarray, inc: float, sigma: float, cap: float | None, qua
     """Counts of one scan: nan, inf, cap, beams, surface trials, surface no-returns, outlier
     trials, outliers, mixed steps, plain steps."""
     n = r.size
-    nan = _missing(r)
+    nan = missing_readings(r)
     at_cap = np.zeros(n, dtype=bool) if cap is None else np.abs(r - cap) <= max(quantum, 1e-6) / 2
     none = np.isposinf(r) | at_cap  # no return
     x = np.where(none | nan, np.nan, r)  # finite echoes only
@@ -301,7 +301,7 @@ def _nan_clustering(scans: list[Scan], seed: int) -> Estimate:
     """P(the next beam is nan | this one is), over scans (see LogCalibration.nan_clustering)."""
     both, first = np.zeros(len(scans)), np.zeros(len(scans))
     for k, s in enumerate(scans):
-        nan = _missing(s.ranges)
+        nan = missing_readings(s.ranges)
         first[k] = np.count_nonzero(nan[:-1])
         both[k] = np.count_nonzero(nan[:-1] & nan[1:])
     return _ratio(both, first, seed)
