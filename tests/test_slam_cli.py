@@ -206,21 +206,26 @@ def test_search_fields_out_of_bounds_are_one_line_exit_2(sparse_log, tmp_path, c
     config is built, against physical bounds: one line on stderr naming the field and the bound
     that failed, exit status 2, nothing run (no traceback, no numpy warning). On a log that
     searches every step, each of these crashed (OverflowError, exit 1) or printed warnings."""
-    from experiments.cli import main
-
-    cfg = tmp_path / "bad.yaml"
-    cfg.write_text(config + "\n")
     out = tmp_path / "o"
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        code = main(["slam", str(sparse_log), "--config", str(cfg), "--out", str(out), "--quiet",
-                     "--no-paper-baseline"])
+    code = _slam_with_config(sparse_log, config, out)
     captured = capsys.readouterr()
     err = captured.err.strip().splitlines()
     assert code == 2
     assert len(err) == 1 and expected in err[0], err
     assert "Traceback" not in captured.err and "Warning" not in captured.err
     assert not (out / "metrics.json").exists()
+
+
+def _slam_with_config(log: Path, config: str, out: Path) -> int:
+    """``lmsbench slam LOG --config FILE`` (the YAML ``config`` written beside ``out``) in this
+    process with every warning an error; its exit status."""
+    from experiments.cli import main
+
+    cfg = out.parent / "config_under_test.yaml"
+    cfg.write_text(config + "\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        return main(["slam", str(log), "--config", str(cfg), "--out", str(out), "--quiet", "--no-paper-baseline"])
 
 
 @pytest.mark.parametrize("config, searched", [
@@ -232,15 +237,8 @@ def test_search_fields_at_their_bounds_run_without_warnings(sparse_log, tmp_path
     """The bounds are not too loose: the extreme values allowed run through (the repeated scan
     included) with every warning an error, and search every step 2 s after the last (7 of the
     8), and with a floor of 1000 std also the repeated one."""
-    from experiments.cli import main
-
-    cfg = tmp_path / "edge.yaml"
-    cfg.write_text(config + "\n")
     out = tmp_path / "o"
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        code = main(["slam", str(sparse_log), "--config", str(cfg), "--out", str(out), "--quiet",
-                     "--no-paper-baseline"])
+    code = _slam_with_config(sparse_log, config, out)
     assert code == 0
     m = json.loads((out / "metrics.json").read_text())
     assert m["n_scans"] == 9 and m["consistency"]["searched_fraction"] == searched / 8
