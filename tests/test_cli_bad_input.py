@@ -94,6 +94,9 @@ def files(tmp_path_factory):
     (d / "list.yaml").write_text("- 1\n- 2\n")
     (d / "sensor_text.yaml").write_text("mixed_gap: abc\n")
     (d / "sensor_flag.yaml").write_text("quantise: 3\n")
+    (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
+    (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
+    (d / "sensor_fine.yaml").write_text("n_beams: 100000000\nresolution_deg: 1.0e-6\n")  # 10^8 beams: a hang
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
     # SLAM configs: a method's options nested under extractor, unknown / invalid method params, wrong types
     (d / "slam_nested.yaml").write_text("extractor: {sensor: {band_tau: 3}}\n")
@@ -170,6 +173,10 @@ CASES = [
     (["simulate", "--clutter", "1e9", "--out", O], "--clutter"),
     (["simulate", "--sensor", "{sensor_text.yaml}", "--out", O], "mixed_gap: must be a number"),
     (["simulate", "--sensor", "{sensor_flag.yaml}", "--out", O], "quantise: must be true or false"),
+    (["simulate", "--sensor", "{sensor_dup.yaml}", "--out", O], "found duplicate key 'noise_sigma'"),
+    (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 1] m"),
+    (["compare", "office", "--sensor", "{sensor_fine.yaml}", "--out", O], "sensor_fine.yaml: resolution_deg"),
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_dup.yaml}", "--out", O], "sensor_dup.yaml: not a YAML file"),
     # compare
     (["compare", "office:x", "--out", O], "office:x"),
     (["compare", "{simbroken}", "--out", O], "config.yaml: not a simulate config"),
