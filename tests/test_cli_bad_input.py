@@ -64,6 +64,11 @@ def files(tmp_path_factory):
     backwards = [Record(Scan.lms200(ranges, stamp=s)) for s in (0.0, 0.1, 0.2, 0.15, 0.3)]
     write_log(d / "backwards.clf", backwards)
     write_log(d / "no_returns.clf", [Record(Scan.lms200(np.full(361, np.inf), stamp=0.1 * k)) for k in range(5)])
+    # one log of two geometries (181 beams at 1 deg between 361 at 0.5 deg): calibrate averaged them to 0.75 deg
+    wide = [Record(Scan(np.full(181, 3.0), -np.pi / 2, np.pi / 180, 0.0, 8.183, 0.1 * k)) for k in range(5)]
+    write_log(d / "mixed.clf", [r for pair in zip(good, wide) for r in pair])
+    write_log(d / "far.clf", [Record(Scan.lms200(np.full(361, 6.0), stamp=0.1 * k)) for k in range(5)])
+    (d / "zero_beams.clf").write_text("FLASER 0 0 0 0 0 0 0 0.0 host 0.0\n")  # was "needs 11 fields, got 11"
     with gzip.open(d / "good.clf.gz", "wt") as fh:
         fh.write((d / "good.clf").read_text())
     # a simulator-like folder: scans.clf and its truth
@@ -320,6 +325,9 @@ CASES = [
     (["calibrate", "{good.clf}", "--out", "{empty_dir}"], "is a folder"),
     (["calibrate", "{good.clf}", "--out", "{missing_dir}/s.yaml"], "missing_dir"),
     (["calibrate", "{good.clf}", "--laser-resolution-deg", "-1"], "--laser-resolution-deg"),
+    (["calibrate", "{mixed.clf}"], "mixed.clf: scan 2 has 181 beams at 1 deg, scan 1 361 at 0.5 deg"),
+    (["calibrate", "{far.clf}"], "far.clf: too few straight runs of beams at 1-4 m"),  # named no file
+    (["calibrate", "{zero_beams.clf}"], "zero_beams.clf:1: malformed FLASER line: FLASER needs at least one beam"),
     # sim2real
     (["sim2real", "{missing.clf}", "--out", O], "missing.clf"),
     (["sim2real", "{binary.clf}", "--out", O], "binary"),
