@@ -93,7 +93,7 @@ def files(tmp_path_factory):
                   "sweep_int_bounds": {"random": {"extractor.min_points": {"int": [1.5, 3]}}, "samples": 2},
                   "sweep_big_seed": {"seeds": [2**40]}, "sweep_name_number": {"name": 5},
                   "sweep_cells": {"grid": {"extractor.k": list(range(3, 503)), "extractor.ad_tau": list(range(1, 301))}},
-                  "sweep_long": {"fixed": {"duration": 1e9}}}
+                  "sweep_long": {"fixed": {"duration": 1e9}}, "sweep_short": {"fixed": {"duration": 0.001}}}
     for name, change in bad_sweeps.items():
         (d / f"{name}.yaml").write_text(yaml.safe_dump({**base, **change}))
     (d / "list.yaml").write_text("- 1\n- 2\n")
@@ -258,7 +258,16 @@ CASES = [
     (["sweep", "{sweep_big_seed.yaml}", "--out", O], "`seeds:` must be distinct integers in [0, 4294967295]"),
     (["sweep", "{sweep_name_number.yaml}", "--out", O], "name: must be a string"),
     (["sweep", "{sweep_cells.yaml}", "--out", O], "150000 cells"),
-    (["sweep", "{sweep_long.yaml}", "--out", O], "duration: must be a number of seconds in (0, 3600]"),
+    (["sweep", "{sweep_long.yaml}", "--out", O], "duration: must be a number of seconds in [0.1, 3600]"),
+    (["sweep", "{sweep_short.yaml}", "--out", O], "duration: must be a number of seconds in [0.1, 3600], got 0.001"),
+    # runs too short to hold a scan: simulate wrote an empty run, figures raised IndexError (exit 1),
+    # compare and sim2real failed only after the work before (15 s of calibration)
+    (["simulate", "--duration", "0.001", "--out", O], "--duration: must be a finite number >= 0.1 and <= 3600 s"),
+    (["figures", "--duration", "0.001", "--no-slam", "--out", O], "--duration"),
+    (["compare", "office", "--duration", "0.01", "--out", O], "--duration"),
+    (["sim2real", "{good.clf}", "--duration", "0.001", "--out", O], "--duration"),
+    (["sim2real", "{good.clf}", "--probe-duration", "0.05", "--out", O], "--probe-duration"),
+    (["demo", "--duration", "0.01", "--out", O], "--duration"),
     # figures
     (["figures", "--tables", "{tables_broken}", "--out", O], "summary.parquet: not a readable parquet table"),
     (["figures", "--tables", "{tables_broken}", "--sweep", "{sweep_broken}", "--out", O], "results.parquet: not a Parquet table"),
