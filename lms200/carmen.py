@@ -302,6 +302,10 @@ class CarmenReader:
                     yield rec
             except (ValueError, OverflowError, ArithmeticError) as exc:
                 self._bad(line_no, kind, exc)
+        if self.topic is not None and not stats.messages.get(self.topic) and stats.other_lasers():
+            # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
+            others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())
+            raise InputError(f"topic: {self.path} has no {self.topic} lines; its laser lines: {others}")
 
 
 def _param(words: list[str], params: dict[str, float], units: Units | None,

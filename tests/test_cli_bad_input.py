@@ -314,6 +314,10 @@ CASES = [
     (["info", "{fake.bag}"], "fake.bag"),
     (["info", "{notalog.clf}"], "no laser"),
     (["info", "{good.clf}", "--laser-fov-deg", "90", "--laser-resolution-deg", "0.5"], "own beam geometry"),
+    # a laser kind the log lacks: "no laser messages found: not a CARMEN log" (info, compare), "got 0 scans"
+    (["info", "{good.clf}", "--topic", "FLASER"], "good.clf has no FLASER lines; its laser lines: ROBOTLASER1 (5)"),
+    (["calibrate", "{good.clf}", "--topic", "RLASER"], "good.clf has no RLASER lines; its laser lines: ROBOTLASER1"),
+    (["slam", "{good.clf}", "--topic", "FLASER", "--out", O], "good.clf has no FLASER lines"),
     (["info", "{good.clf}", "--laser-angle-min-deg", "1000"], "--laser-angle-min-deg: a bearing must be within"),
     (["info", "{good.clf}", "--laser-angle-min-deg", "1e308"], "+-360 deg"),
     (["info", "{good.clf}", "--laser-range-max", "1e308"], "--laser-range-max: must be at most 10000 m"),
