@@ -215,7 +215,7 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
                 break
             if k % stride == 0:
                 first = first or (k, rec.scan)
-                _same_geometry(rec.scan, first[1], f"scan {k + 1}", f"scan {first[0] + 1}")
+                same_geometry(rec.scan, first[1], f"scan {k + 1}", f"scan {first[0] + 1}")
                 yield rec.scan
 
     try:
@@ -228,14 +228,14 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
         raise LmsbenchError(f"{path}: {exc}") from None
 
 
-def _same_geometry(scan: Any, first: Any, name: str, first_name: str) -> None:
+def same_geometry(scan: Any, first: Any, name: str, first_name: str) -> None:
     """A log mixing scan geometries (two lasers, or a 0.5 and a 1 deg mode) cannot be one sensor
     model: its beam counts and steps were averaged (181 and 361 beams read as 0.75 deg)."""
     if len(scan) != len(first) or not np.isclose(scan.angle_increment, first.angle_increment, rtol=1e-6, atol=0.0):
         raise LmsbenchError(
             f"{name} has {len(scan)} beams at {np.rad2deg(scan.angle_increment):g} deg, {first_name} "
-            f"{len(first)} at {np.rad2deg(first.angle_increment):g} deg: calibrate fits one sensor, so every scan "
-            "used must have one geometry (a log of two lasers: choose one with --topic)")
+            f"{len(first)} at {np.rad2deg(first.angle_increment):g} deg: a sensor model has one geometry, so every scan "
+            "used must have it (a log of two lasers: choose one with --topic)")
 
 
 def _est(e) -> dict[str, float]:

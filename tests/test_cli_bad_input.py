@@ -101,6 +101,7 @@ def files(tmp_path_factory):
     (d / "sensor_flag.yaml").write_text("quantise: 3\n")
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
     (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
+    (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
     (d / "sensor_fine.yaml").write_text("n_beams: 100000000\nresolution_deg: 1.0e-6\n")  # 10^8 beams: a hang
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
     # SLAM configs: a method's options nested under extractor, unknown / invalid method params, wrong types
@@ -363,6 +364,9 @@ CASES = [
     (["sim2real", "{good.clf}", "--probe-seeds", "100", "100", "--out", O], "--probe-seeds: seed(s) 100 given more than once"),
     (["sim2real", "{good.clf}", "--seeds", "100", "101", "--out", O], "--probe-seeds: seed(s) 100, 101 also in --seeds"),
     (["sim2real", "{good.clf}", "--probe-seeds", "-1", "--out", O], "--probe-seeds"),
+    # its scans of 181 and 361 beams were compared with one simulated sensor (calibrated on every 2nd scan)
+    (["sim2real", "{mixed.clf}", "--sensor", "{sensor_ok.yaml}", "--out", O], "mixed.clf: scan 6 has 181 beams"),
+    (["sim2real", "{mixed.clf}", "--stride", "1", "--out", O], "mixed.clf: scan 2 has 181 beams at 1 deg"),
     (["sim2real", "{good.clf}", "--world", "office", "--probe-seeds", "100", "--out", O], "--probe-seeds sets the mit"),
     # bench, the top level
     (["bench", "nosuch"], "nosuch"),
