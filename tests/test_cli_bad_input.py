@@ -111,6 +111,12 @@ def files(tmp_path_factory):
     (d / "slam_type.yaml").write_text("motion: {sigma_accel: fast}\n")
     (d / "slam_prob.yaml").write_text("slam: {prealign: {widen_probability: 1.5}}\n")
     (d / "slam_noise.yaml").write_text("motion: {odom_noise: [0.1]}\n")
+    # values that reached the run: internal errors (voxel's grid size, a 0-beam chord, max_range**2
+    # overflowing) or a hypothesis of 1e300 rad tried as a heading
+    (d / "slam_voxel.yaml").write_text("slam: {keyframes: {voxel: 1.0e-12}}\n")
+    (d / "slam_normal.yaml").write_text("slam: {alignment: {normal_step: 0}}\n")
+    (d / "slam_range.yaml").write_text("slam: {alignment: {max_range: 1.0e300}}\n")
+    (d / "slam_turn.yaml").write_text("slam: {alignment: {heading_hypotheses: [0.5, 1.0e300]}}\n")
     # a sweep folder whose every cell failed
     (d / "failed_sweep").mkdir()
     pd.DataFrame({"x": [1, 2], "status": ["error", "error"], "error": ["E", "E"], "cell": ["a", "b"]}).to_parquet(
@@ -226,6 +232,10 @@ CASES = [
     (["slam", "{simrun}", "--config", "{slam_type.yaml}", "--out", O], "motion.sigma_accel: must be a number"),
     (["slam", "{simrun}", "--config", "{slam_prob.yaml}", "--out", O], "prealign.widen_probability: a probability"),
     (["slam", "{simrun}", "--config", "{slam_noise.yaml}", "--out", O], "odom_noise: must be 3 numbers"),
+    (["slam", "{simrun}", "--config", "{slam_voxel.yaml}", "--out", O], "slam_voxel.yaml: keyframes.voxel: must be 0"),
+    (["slam", "{simrun}", "--config", "{slam_normal.yaml}", "--out", O], "alignment.normal_step: must be >= 1"),
+    (["slam", "{simrun}", "--config", "{slam_range.yaml}", "--out", O], "alignment.max_range: must be in (0, 10000] m"),
+    (["slam", "{simrun}", "--config", "{slam_turn.yaml}", "--out", O], "alignment.heading_hypotheses: offsets"),
     (["slam", "{backwards.clf}", "--out", O], "backwards"),
     (["slam", "{binary.clf}", "--out", O], "binary"),
     (["slam", "{no_returns.clf}", "--out", O], "no_returns.clf"),
