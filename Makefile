@@ -32,8 +32,10 @@ check: $(STAMP)
 	$(BIN)/ruff check --no-cache .
 	$(BIN)/mypy
 
+# the tests on every core (pytest-xdist; the numba kernels are compiled once, before the workers start:
+# tests/conftest.py); `-n 0` in PYTEST_ARGS runs them in this process, one by one
 test: check
-	$(BIN)/python -m pytest -q -rs --durations=30
+	$(BIN)/python -m pytest -q -rs --durations=30 -n auto $(PYTEST_ARGS)
 
 bench: $(STAMP)
 	$(BIN)/lmsbench bench

@@ -116,8 +116,9 @@ def base_sensor(cal: LogCalibration):
     res = _resolution_deg(cal.angle_increment)
     n_beams = min(cal.n_beams, int(round(180.0 / res)) + 1)
     if not np.isfinite(cal.noise.sigma_m):
-        raise LmsbenchError(f"too few straight runs of beams in {cal.n_scans} scan(s) to estimate the range noise "
-                            f"({cal.noise.n_used} beam triples); calibrate needs a log of real surfaces")
+        raise LmsbenchError(f"too few straight runs of beams at 1-4 m in {cal.n_scans} scan(s) to estimate the range "
+                            f"noise ({cal.noise.n_used} beam triples); calibrate needs a log of real surfaces within "
+                            "1-4 m of the laser")
     sigma = cal.noise.sigma_m
 
     def rate(estimate) -> float:  # a rate with nothing to count (no beams of that kind): none seen
@@ -215,17 +216,33 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
     reader = read_log(path, **read_options)
 
     def scans():
+        first = None
         for k, rec in enumerate(reader):
             if max_scans is not None and k // stride >= max_scans:
                 break
             if k % stride == 0:
+                first = first or (k, rec.scan)
+                same_geometry(rec.scan, first[1], f"scan {k + 1}", f"scan {first[0] + 1}")
                 yield rec.scan
 
     try:
         cal = calibrate_scans(scans())
+        return fit_sensor(cal, world, fit_duration)
+    except LmsbenchError as exc:  # the reader's errors name the file already
+        text = str(exc)
+        raise LmsbenchError(text if text.startswith(str(path)) else f"{path}: {text}") from None
     except ValueError as exc:
         raise LmsbenchError(f"{path}: {exc}") from None
-    return fit_sensor(cal, world, fit_duration)
+
+
+def same_geometry(scan: Any, first: Any, name: str, first_name: str) -> None:
+    """A log mixing scan geometries (two lasers, or a 0.5 and a 1 deg mode) cannot be one sensor
+    model: its beam counts and steps were averaged (181 and 361 beams read as 0.75 deg)."""
+    if len(scan) != len(first) or not np.isclose(scan.angle_increment, first.angle_increment, rtol=1e-6, atol=0.0):
+        raise LmsbenchError(
+            f"{name} has {len(scan)} beams at {np.rad2deg(scan.angle_increment):g} deg, {first_name} "
+            f"{len(first)} at {np.rad2deg(first.angle_increment):g} deg: a sensor model has one geometry, so every scan "
+            "used must have it (a log of two lasers: choose one with --topic)")
 
 
 def _est(e) -> dict[str, float]:

@@ -17,7 +17,7 @@ from typing import Callable, Sequence
 
 from lms200.carmen import COMPRESSION_SUFFIXES, READ_ERRORS, archive_kind, compression, open_bytes
 from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
-from lms200.timing import MAX_DURATION_S  # longest simulated run (s): the simulator's own bound
+from lms200.timing import MAX_DURATION_S, MIN_DURATION_S  # a simulated run's bounds (s)
 
 
 
@@ -73,7 +73,7 @@ def count(lo: int = 1, hi: int | None = None) -> Callable[[str], float]:
 
 
 SEED = count(0, 2**32 - 1)
-DURATION = number(0.0, MAX_DURATION_S, lo_open=True, unit="s")
+DURATION = number(MIN_DURATION_S, MAX_DURATION_S, unit="s")  # a simulated run: at least one scan
 PORT = count(0, 65535)
 
 

@@ -628,7 +628,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     Raises:
         LmsbenchError: for a log without scans or an unknown world.
     """
-    from experiments.calibrate import FIT_DURATION_S, calibrate_log
+    from experiments.calibrate import FIT_DURATION_S, calibrate_log, same_geometry
     from experiments.compare import Source, compare, summarise
     from sim import WORLD_NAMES, make_world, simulate_records
     from sim.records import scan_stamps
@@ -646,6 +646,11 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     real = every[::stride]
     if not real:
         raise LmsbenchError(f"{log}: no laser scans")
+    for k, rec in enumerate(real):  # one sensor is simulated: a log of two geometries compared half its scans
+        try:
+            same_geometry(rec.scan, real[0].scan, f"scan {k * stride + 1}", "scan 1")
+        except LmsbenchError as exc:
+            raise LmsbenchError(f"{log}: {exc}") from None
     if not any(rec.scan.valid.any() for rec in real):
         raise LmsbenchError(f"{log}: nothing to compare: none of the {len(real)} scans used has a valid reading")
     if sensor is None:

@@ -302,6 +302,10 @@ class CarmenReader:
                     yield rec
             except (ValueError, OverflowError, ArithmeticError) as exc:
                 self._bad(line_no, kind, exc)
+        if self.topic is not None and not stats.messages.get(self.topic) and stats.other_lasers():
+            # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
+            others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())
+            raise InputError(f"topic: {self.path} has no {self.topic} lines; its laser lines: {others}")
 
 
 def _param(words: list[str], params: dict[str, float], units: Units | None,
@@ -374,7 +378,8 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     kind = words[0]
     _require(len(words) >= 2, f"{kind} needs a beam count")
     n = _count(words[1], "beam count")
-    _require(n > 0 and len(words) == n + 11, f"{kind} with {n} beams needs {n + 11} fields, got {len(words)}")
+    _require(n > 0, f"{kind} needs at least one beam, got a beam count of {n}")  # was "needs 11 fields, got 11"
+    _require(len(words) == n + 11, f"{kind} with {n} beams needs {n + 11} fields, got {len(words)}")
     ranges, u = _ranges(_floats(words[2 : 2 + n], f"{kind} ranges"), units, kind)
     tail = _floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
@@ -392,7 +397,8 @@ def _parse_robotlaser(words: list[str], units: Units | None,
     head = _floats(words[1:8], f"{kind} header")
     start, fov, resolution, max_range, accuracy = (float(v) for v in head[1:6])
     n = _count(words[8], "beam count")
-    _require(n > 0 and len(words) > 9 + n, f"{kind} announces {n} beams but has fewer fields")
+    _require(n > 0, f"{kind} needs at least one beam, got a beam count of {n}")
+    _require(len(words) > 9 + n, f"{kind} announces {n} beams but has fewer fields")
     m = _count(words[9 + n], "remission count")
     expected = 10 + n + m + tail_fields
     _require(len(words) == expected, f"{kind} with {n} ranges and {m} remissions needs {expected} fields, got {len(words)}")

@@ -27,6 +27,10 @@ CM_MODE_MIN_RANGE_MAX_M = 10.0  # m: a scan whose range_max exceeds this holds c
 #: held in memory); a duration of 1e9 s planned a tour for 35 minutes and more before running out of
 #: memory. Here, beside the scan rate, so that the simulator and the light command-line options share it.
 MAX_DURATION_S = 3600.0
+#: shortest simulated run (s): one that holds a scan in every LMS200 mode (a 0.25 deg scan's last beam
+#: comes 43.7 ms after its first); 0.001 s simulated no scan and then wrote an empty run (simulate),
+#: failed after 15 s of calibration (sim2real) or with an IndexError (figures).
+MIN_DURATION_S = 0.1
 
 
 def turns_per_scan(angle_increment: float) -> int:

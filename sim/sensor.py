@@ -25,6 +25,10 @@ from lms200.timing import MIRROR_TURN_S, scan_period, turns_per_scan
 
 NOISE_REFERENCE_RANGE_M = 2.5  # m: noise_sigma holds at this range (the middle of 1-4 m)
 OUTLIER_RANGE_SHARE = (0.1, 0.9)  # an outlier reads this share of the true range (uniform)
+MIN_RESOLUTION_DEG = 0.25  # the LMS200's finest angular step (deg)
+MAX_NOISE_SIGMA_M = 1.0  # largest noise_sigma / noise_tail_sigma (m) and |noise_sigma_per_m| (m per m)
+MAX_BEAM_WIDTH_DEG = 10.0  # widest laser spot (deg); the LMS200's diverges by about 0.25 deg
+MIN_PATCH_M = 1e-3  # smallest rough / dark cell (m): one range code in mm mode
 
 
 @dataclass(frozen=True)
@@ -72,6 +76,12 @@ class SensorConfig:
 
     The last eight fields default to the datasheet model (none of these effects);
     ``lmsbench calibrate`` fits all of them to a real log.
+
+    Checked when built (an ``InputError`` names the field): every number finite; resolution_deg
+    in [0.25, 1] deg and a field of view of at most 180 deg (so at most 721 beams); noise_sigma
+    and noise_tail_sigma in [0, 1] m and |noise_sigma_per_m| <= 1 (metres: a 5 meant as
+    millimetres is refused, not simulated); mixed_gap >= 0; beam_width_deg in [0, 10] deg;
+    probabilities in [0, 1); the two cell sizes 0 or >= 1 mm.
     """
 
     n_beams: int = 361
@@ -104,7 +114,11 @@ class SensorConfig:
             if kind.startswith("float") and not (value is None and "None" in kind):
                 if is_bool or not isinstance(value, (int, float, np.integer, np.floating)):
                     raise InputError(f"{f.name}: must be a number, got {value!r}")
-                if not np.isfinite(value):  # nan passes every comparison below: refuse it (and inf) first
+                try:  # an int beyond float's range (a YAML 1 followed by 400 zeros) is not finite either
+                    finite = bool(np.isfinite(float(value)))
+                except OverflowError:
+                    finite = False
+                if not finite:  # nan passes every comparison below: refuse it (and inf) first
                     raise InputError(f"{f.name}: must be finite, got {value}")
         if self.units not in ("mm", "cm"):
             raise InputError(f"units: must be 'mm' or 'cm', got {self.units!r}")
@@ -112,26 +126,33 @@ class SensorConfig:
             raise InputError(f"n_beams: must be >= 2, got {self.n_beams}")
         if not 0 < self.resolution_deg <= 1.0:
             raise InputError(f"resolution_deg: must be in (0, 1], got {self.resolution_deg}")
+        if self.resolution_deg < MIN_RESOLUTION_DEG:  # finer steps made 10^8-beam scans (a hang) or overflowed
+            raise InputError(f"resolution_deg: the LMS200's finest step is {MIN_RESOLUTION_DEG} deg, "
+                             f"got {self.resolution_deg}")
         if self.fov_deg > 180.0 + 1e-9:
             raise InputError(f"n_beams, resolution_deg: field of view {self.fov_deg} deg exceeds 180 deg")
-        if self.noise_sigma < 0:
-            raise InputError(f"noise_sigma: must be >= 0, got {self.noise_sigma}")
+        for name in ("noise_sigma", "noise_tail_sigma"):  # metres: 5 meant as mm simulated 5 m of noise
+            value = getattr(self, name)
+            if not 0 <= value <= MAX_NOISE_SIGMA_M:
+                raise InputError(f"{name}: must be in [0, {MAX_NOISE_SIGMA_M:g}] m (a 1-sigma range error in metres; "
+                                 f"the datasheet's is 0.005), got {value}")
+        if abs(self.noise_sigma_per_m) > MAX_NOISE_SIGMA_M:
+            raise InputError(f"noise_sigma_per_m: must be within +-{MAX_NOISE_SIGMA_M:g} m per m of range, "
+                             f"got {self.noise_sigma_per_m}")
+        if self.mixed_gap < 0:
+            raise InputError(f"mixed_gap: must be >= 0 m, got {self.mixed_gap}")
         for name in ("dropout_prob", "no_return_prob", "outlier_prob"):
             value = getattr(self, name)
             if not 0 <= value < 1:
                 raise InputError(f"{name}: must be in [0, 1), got {value}")
-        if self.beam_width_deg < 0:
-            raise InputError(f"beam_width_deg: must be >= 0, got {self.beam_width_deg}")
-        if not np.isfinite(self.noise_sigma_per_m):
-            raise InputError(f"noise_sigma_per_m: must be finite, got {self.noise_sigma_per_m}")
+        if not 0 <= self.beam_width_deg <= MAX_BEAM_WIDTH_DEG:  # 1e300 deg cast sub-rays at meaningless bearings
+            raise InputError(f"beam_width_deg: must be in [0, {MAX_BEAM_WIDTH_DEG:g}] deg, got {self.beam_width_deg}")
         if not 0 <= self.noise_tail_prob < 1:
             raise InputError(f"noise_tail_prob: must be in [0, 1), got {self.noise_tail_prob}")
-        if self.noise_tail_sigma < 0:
-            raise InputError(f"noise_tail_sigma: must be >= 0, got {self.noise_tail_sigma}")
-        if not (np.isfinite(self.noise_tail_patch_m) and self.noise_tail_patch_m >= 0):
-            raise InputError(f"noise_tail_patch_m: must be >= 0, got {self.noise_tail_patch_m}")
-        if not (np.isfinite(self.dropout_patch_m) and self.dropout_patch_m >= 0):
-            raise InputError(f"dropout_patch_m: must be >= 0, got {self.dropout_patch_m}")
+        for name in ("noise_tail_patch_m", "dropout_patch_m"):  # 1e-300 m cells overflowed the cell index
+            value = getattr(self, name)
+            if not (value == 0 or value >= MIN_PATCH_M):
+                raise InputError(f"{name}: must be 0 (beam by beam) or a cell size >= {MIN_PATCH_M:g} m, got {value}")
         if self.max_reading is not None and not 0 < self.max_reading <= self.range_max:
             raise InputError(f"max_reading: must be in (0, range_max = {self.range_max}], got {self.max_reading}")
 

@@ -464,6 +464,17 @@ class SlamConfig:
         if not self.loop_closure.prior_sigma <= MAX_PRIOR_SIGMA:
             raise SlamConfigError(f"loop_closure.prior_sigma: must be <= {MAX_PRIOR_SIGMA} (m, rad; a looser prior "
                                   f"leaves the graph without an anchor), got {self.loop_closure.prior_sigma}")
+        if not 0 < al.max_range <= MAX_MATCH_RANGE_M:  # 1e300: its square overflowed (internal error)
+            raise SlamConfigError(f"alignment.max_range: must be in (0, {MAX_MATCH_RANGE_M:g}] m, got {al.max_range}")
+        if al.normal_step < 1:  # 0: an empty chord, an internal error on the first scan
+            raise SlamConfigError(f"alignment.normal_step: must be >= 1 beam, got {al.normal_step}")
+        if any(abs(h) > math.pi for h in al.heading_hypotheses):
+            raise SlamConfigError(f"alignment.heading_hypotheses: offsets must be within +-pi rad, "
+                                  f"got {list(al.heading_hypotheses)!r}")
+        voxel = self.keyframes.voxel
+        if not (voxel == 0 or MIN_VOXEL_M <= voxel <= MAX_VOXEL_M):  # 1e-12: the cell grid's size overflowed
+            raise SlamConfigError(f"keyframes.voxel: must be 0 (no thinning) or in [{MIN_VOXEL_M:g}, {MAX_VOXEL_M:g}] m, "
+                                  f"got {voxel}")
         if not self.motion.max_dt >= MIN_MAX_DT_S:
             raise SlamConfigError(f"motion.max_dt: must be >= {MIN_MAX_DT_S} s (a gap is integrated in steps of at "
                                   f"most max_dt), got {self.motion.max_dt}")
@@ -583,6 +594,8 @@ MAX_SEARCH_CANDIDATES = 32  # distinct poses refined per searched step (each an 
 MAX_SEARCH_POSES = 4_000_000  # poses of one window: 32 MB of scores (the default: 159,201)
 SEARCH_CELL_M = 0.5  # m: cell of the scan matcher's search grid, the farthest a correspondence can reach
 MAX_PRIOR_SIGMA = 1.0  # m and rad: loosest prior on the first keyframe that still anchors the graph
+MAX_MATCH_RANGE_M = 1e4  # alignment.max_range: at most 10 km (as the command line's --laser-range-max)
+MIN_VOXEL_M, MAX_VOXEL_M = 1e-3, 10.0  # keyframes.voxel: a local map's cells (m), when thinned
 MIN_MAX_DT_S = 1e-3  # s: finest prediction step of the paper preset (a 10 s gap: at most 10,000 steps)
 SECTIONS: dict[str, type] = {"motion": MotionConfig, "observations": ObservationConfig, "alignment": AlignmentConfig,
                              "keyframes": KeyframeConfig, "loop_closure": LoopClosureConfig,

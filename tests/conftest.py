@@ -15,3 +15,19 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip(f"real logs not present at {SHARED_DATA} (only on the project's own machines)")
     return SHARED_DATA
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Under pytest-xdist (`make test` runs ``-n``), compile the numba kernels once, in the
+    controller, before the workers start: each worker then loads them from numba's on-disk cache
+    instead of compiling all of them again (about 40 s each on a fresh checkout), and no test's
+    output carries a "compiling kernels" line that depends on which worker ran first."""
+    if getattr(config, "workerinput", None) is not None or not getattr(config.option, "numprocesses", None):
+        return
+    import sys
+
+    from experiments.progress import warm_up_kernels
+
+    seconds = warm_up_kernels(log=lambda msg: None, slam=True)
+    if seconds > 1.0:
+        print(f"numba kernels compiled once for the workers in {seconds:.0f} s", file=sys.stderr)

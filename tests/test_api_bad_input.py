@@ -355,6 +355,18 @@ def test_paper_slam_over_a_long_gap_in_the_stamps() -> None:
     (dict(noise_sigma="x"), "^noise_sigma: must be a number"),
     (dict(units="m"), "^units: must be 'mm' or 'cm'"),
     (dict(resolution_deg=-1.0), r"^resolution_deg: must be in \(0, 1\]"),
+    # values that were taken and ran: 1e-6 deg (10^8 beams) hung, 1e-300 overflowed (internal error),
+    # the others simulated silently meaningless scans
+    (dict(n_beams=100_000_000, resolution_deg=1e-6), r"^resolution_deg: the LMS200's finest step is 0.25 deg"),
+    (dict(resolution_deg=1e-300), r"^resolution_deg: the LMS200's finest step"),
+    (dict(noise_sigma=5.0), r"^noise_sigma: must be in \[0, 1\] m"),
+    (dict(noise_tail_sigma=1e300), r"^noise_tail_sigma: must be in \[0, 1\] m"),
+    (dict(noise_sigma_per_m=-1e300), r"^noise_sigma_per_m: must be within \+-1 m per m"),
+    (dict(mixed_gap=-1.0), r"^mixed_gap: must be >= 0 m"),
+    (dict(beam_width_deg=1e300), r"^beam_width_deg: must be in \[0, 10\] deg"),
+    (dict(dropout_prob=0.5, dropout_patch_m=1e-300), r"^dropout_patch_m: must be 0 \(beam by beam\) or a cell size"),
+    (dict(noise_tail_patch_m=1e-9), r"^noise_tail_patch_m: must be 0"),
+    (dict(noise_sigma=10**400), r"^noise_sigma: must be finite"),  # was numpy's "ufunc 'isfinite' not supported"
 ])
 def test_sensor_config_errors_are_lmsbench_errors(kw: dict, message: str) -> None:
     from sim.sensor import SensorConfig
@@ -372,3 +384,19 @@ def test_sigma_bearing_is_a_bearing_error_of_radians(value: float) -> None:
     with pytest.raises(ConfigError, match=r"^sigma_bearing: must be a number in \[0, 0.1\] rad"):
         make_config("sensor", sigma_bearing=value)
     assert make_config("sensor", sigma_bearing=0.005).sigma_bearing == 0.005
+
+
+@pytest.mark.parametrize("text, message", [
+    ("noise_sigma: 0.005\nnoise_sigma: 0.5\n", "found duplicate key 'noise_sigma'"),  # the 0.5 ran, silently
+    ("a: {b: 1, b: 2}\n", "found duplicate key 'b'"),
+    ("a: " + "[" * 5000 + "]" * 5000 + "\n", "nested too deeply"),  # was a RecursionError: an internal error
+])
+def test_yaml_refuses_duplicate_keys_and_deep_nesting(text: str, message: str) -> None:
+    import yaml
+
+    from lms200.yamlio import load
+
+    with pytest.raises(yaml.YAMLError, match=message):
+        load(text)
+    # a merge key may still be overridden, and the values are those written
+    assert load("x: &m {a: 1}\ny:\n  <<: *m\n  a: 2\n") == {"x": {"a": 1}, "y": {"a": 2}}

@@ -64,6 +64,11 @@ def files(tmp_path_factory):
     backwards = [Record(Scan.lms200(ranges, stamp=s)) for s in (0.0, 0.1, 0.2, 0.15, 0.3)]
     write_log(d / "backwards.clf", backwards)
     write_log(d / "no_returns.clf", [Record(Scan.lms200(np.full(361, np.inf), stamp=0.1 * k)) for k in range(5)])
+    # one log of two geometries (181 beams at 1 deg between 361 at 0.5 deg): calibrate averaged them to 0.75 deg
+    wide = [Record(Scan(np.full(181, 3.0), -np.pi / 2, np.pi / 180, 0.0, 8.183, 0.1 * k)) for k in range(5)]
+    write_log(d / "mixed.clf", [r for pair in zip(good, wide) for r in pair])
+    write_log(d / "far.clf", [Record(Scan.lms200(np.full(361, 6.0), stamp=0.1 * k)) for k in range(5)])
+    (d / "zero_beams.clf").write_text("FLASER 0 0 0 0 0 0 0 0.0 host 0.0\n")  # was "needs 11 fields, got 11"
     with gzip.open(d / "good.clf.gz", "wt") as fh:
         fh.write((d / "good.clf").read_text())
     # a simulator-like folder: scans.clf and its truth
@@ -88,12 +93,16 @@ def files(tmp_path_factory):
                   "sweep_int_bounds": {"random": {"extractor.min_points": {"int": [1.5, 3]}}, "samples": 2},
                   "sweep_big_seed": {"seeds": [2**40]}, "sweep_name_number": {"name": 5},
                   "sweep_cells": {"grid": {"extractor.k": list(range(3, 503)), "extractor.ad_tau": list(range(1, 301))}},
-                  "sweep_long": {"fixed": {"duration": 1e9}}}
+                  "sweep_long": {"fixed": {"duration": 1e9}}, "sweep_short": {"fixed": {"duration": 0.001}}}
     for name, change in bad_sweeps.items():
         (d / f"{name}.yaml").write_text(yaml.safe_dump({**base, **change}))
     (d / "list.yaml").write_text("- 1\n- 2\n")
     (d / "sensor_text.yaml").write_text("mixed_gap: abc\n")
     (d / "sensor_flag.yaml").write_text("quantise: 3\n")
+    (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
+    (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
+    (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
+    (d / "sensor_fine.yaml").write_text("n_beams: 100000000\nresolution_deg: 1.0e-6\n")  # 10^8 beams: a hang
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
     # SLAM configs: a method's options nested under extractor, unknown / invalid method params, wrong types
     (d / "slam_nested.yaml").write_text("extractor: {sensor: {band_tau: 3}}\n")
@@ -102,6 +111,12 @@ def files(tmp_path_factory):
     (d / "slam_type.yaml").write_text("motion: {sigma_accel: fast}\n")
     (d / "slam_prob.yaml").write_text("slam: {prealign: {widen_probability: 1.5}}\n")
     (d / "slam_noise.yaml").write_text("motion: {odom_noise: [0.1]}\n")
+    # values that reached the run: internal errors (voxel's grid size, a 0-beam chord, max_range**2
+    # overflowing) or a hypothesis of 1e300 rad tried as a heading
+    (d / "slam_voxel.yaml").write_text("slam: {keyframes: {voxel: 1.0e-12}}\n")
+    (d / "slam_normal.yaml").write_text("slam: {alignment: {normal_step: 0}}\n")
+    (d / "slam_range.yaml").write_text("slam: {alignment: {max_range: 1.0e300}}\n")
+    (d / "slam_turn.yaml").write_text("slam: {alignment: {heading_hypotheses: [0.5, 1.0e300]}}\n")
     # a sweep folder whose every cell failed
     (d / "failed_sweep").mkdir()
     pd.DataFrame({"x": [1, 2], "status": ["error", "error"], "error": ["E", "E"], "cell": ["a", "b"]}).to_parquet(
@@ -170,6 +185,10 @@ CASES = [
     (["simulate", "--clutter", "1e9", "--out", O], "--clutter"),
     (["simulate", "--sensor", "{sensor_text.yaml}", "--out", O], "mixed_gap: must be a number"),
     (["simulate", "--sensor", "{sensor_flag.yaml}", "--out", O], "quantise: must be true or false"),
+    (["simulate", "--sensor", "{sensor_dup.yaml}", "--out", O], "found duplicate key 'noise_sigma'"),
+    (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 1] m"),
+    (["compare", "office", "--sensor", "{sensor_fine.yaml}", "--out", O], "sensor_fine.yaml: resolution_deg"),
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_dup.yaml}", "--out", O], "sensor_dup.yaml: not a YAML file"),
     # compare
     (["compare", "office:x", "--out", O], "office:x"),
     (["compare", "{simbroken}", "--out", O], "config.yaml: not a simulate config"),
@@ -213,6 +232,10 @@ CASES = [
     (["slam", "{simrun}", "--config", "{slam_type.yaml}", "--out", O], "motion.sigma_accel: must be a number"),
     (["slam", "{simrun}", "--config", "{slam_prob.yaml}", "--out", O], "prealign.widen_probability: a probability"),
     (["slam", "{simrun}", "--config", "{slam_noise.yaml}", "--out", O], "odom_noise: must be 3 numbers"),
+    (["slam", "{simrun}", "--config", "{slam_voxel.yaml}", "--out", O], "slam_voxel.yaml: keyframes.voxel: must be 0"),
+    (["slam", "{simrun}", "--config", "{slam_normal.yaml}", "--out", O], "alignment.normal_step: must be >= 1"),
+    (["slam", "{simrun}", "--config", "{slam_range.yaml}", "--out", O], "alignment.max_range: must be in (0, 10000] m"),
+    (["slam", "{simrun}", "--config", "{slam_turn.yaml}", "--out", O], "alignment.heading_hypotheses: offsets"),
     (["slam", "{backwards.clf}", "--out", O], "backwards"),
     (["slam", "{binary.clf}", "--out", O], "binary"),
     (["slam", "{no_returns.clf}", "--out", O], "no_returns.clf"),
@@ -246,7 +269,16 @@ CASES = [
     (["sweep", "{sweep_big_seed.yaml}", "--out", O], "`seeds:` must be distinct integers in [0, 4294967295]"),
     (["sweep", "{sweep_name_number.yaml}", "--out", O], "name: must be a string"),
     (["sweep", "{sweep_cells.yaml}", "--out", O], "150000 cells"),
-    (["sweep", "{sweep_long.yaml}", "--out", O], "duration: must be a number of seconds in (0, 3600]"),
+    (["sweep", "{sweep_long.yaml}", "--out", O], "duration: must be a number of seconds in [0.1, 3600]"),
+    (["sweep", "{sweep_short.yaml}", "--out", O], "duration: must be a number of seconds in [0.1, 3600], got 0.001"),
+    # runs too short to hold a scan: simulate wrote an empty run, figures raised IndexError (exit 1),
+    # compare and sim2real failed only after the work before (15 s of calibration)
+    (["simulate", "--duration", "0.001", "--out", O], "--duration: must be a finite number >= 0.1 and <= 3600 s"),
+    (["figures", "--duration", "0.001", "--no-slam", "--out", O], "--duration"),
+    (["compare", "office", "--duration", "0.01", "--out", O], "--duration"),
+    (["sim2real", "{good.clf}", "--duration", "0.001", "--out", O], "--duration"),
+    (["sim2real", "{good.clf}", "--probe-duration", "0.05", "--out", O], "--probe-duration"),
+    (["demo", "--duration", "0.01", "--out", O], "--duration"),
     # figures
     (["figures", "--tables", "{tables_broken}", "--out", O], "summary.parquet: not a readable parquet table"),
     (["figures", "--tables", "{tables_broken}", "--sweep", "{sweep_broken}", "--out", O], "results.parquet: not a Parquet table"),
@@ -293,6 +325,10 @@ CASES = [
     (["info", "{fake.bag}"], "fake.bag"),
     (["info", "{notalog.clf}"], "no laser"),
     (["info", "{good.clf}", "--laser-fov-deg", "90", "--laser-resolution-deg", "0.5"], "own beam geometry"),
+    # a laser kind the log lacks: "no laser messages found: not a CARMEN log" (info, compare), "got 0 scans"
+    (["info", "{good.clf}", "--topic", "FLASER"], "good.clf has no FLASER lines; its laser lines: ROBOTLASER1 (5)"),
+    (["calibrate", "{good.clf}", "--topic", "RLASER"], "good.clf has no RLASER lines; its laser lines: ROBOTLASER1"),
+    (["slam", "{good.clf}", "--topic", "FLASER", "--out", O], "good.clf has no FLASER lines"),
     (["info", "{good.clf}", "--laser-angle-min-deg", "1000"], "--laser-angle-min-deg: a bearing must be within"),
     (["info", "{good.clf}", "--laser-angle-min-deg", "1e308"], "+-360 deg"),
     (["info", "{good.clf}", "--laser-range-max", "1e308"], "--laser-range-max: must be at most 10000 m"),
@@ -313,6 +349,9 @@ CASES = [
     (["calibrate", "{good.clf}", "--out", "{empty_dir}"], "is a folder"),
     (["calibrate", "{good.clf}", "--out", "{missing_dir}/s.yaml"], "missing_dir"),
     (["calibrate", "{good.clf}", "--laser-resolution-deg", "-1"], "--laser-resolution-deg"),
+    (["calibrate", "{mixed.clf}"], "mixed.clf: scan 2 has 181 beams at 1 deg, scan 1 361 at 0.5 deg"),
+    (["calibrate", "{far.clf}"], "far.clf: too few straight runs of beams at 1-4 m"),  # named no file
+    (["calibrate", "{zero_beams.clf}"], "zero_beams.clf:1: malformed FLASER line: FLASER needs at least one beam"),
     # sim2real
     (["sim2real", "{missing.clf}", "--out", O], "missing.clf"),
     (["sim2real", "{binary.clf}", "--out", O], "binary"),
@@ -335,6 +374,9 @@ CASES = [
     (["sim2real", "{good.clf}", "--probe-seeds", "100", "100", "--out", O], "--probe-seeds: seed(s) 100 given more than once"),
     (["sim2real", "{good.clf}", "--seeds", "100", "101", "--out", O], "--probe-seeds: seed(s) 100, 101 also in --seeds"),
     (["sim2real", "{good.clf}", "--probe-seeds", "-1", "--out", O], "--probe-seeds"),
+    # its scans of 181 and 361 beams were compared with one simulated sensor (calibrated on every 2nd scan)
+    (["sim2real", "{mixed.clf}", "--sensor", "{sensor_ok.yaml}", "--out", O], "mixed.clf: scan 6 has 181 beams"),
+    (["sim2real", "{mixed.clf}", "--stride", "1", "--out", O], "mixed.clf: scan 2 has 181 beams at 1 deg"),
     (["sim2real", "{good.clf}", "--world", "office", "--probe-seeds", "100", "--out", O], "--probe-seeds sets the mit"),
     # bench, the top level
     (["bench", "nosuch"], "nosuch"),

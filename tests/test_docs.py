@@ -34,6 +34,16 @@ def test_every_page_is_linked_from_the_readme() -> None:
     assert not missing, f"docs pages not linked from README.md: {missing}"
 
 
+def test_no_documented_command_writes_into_the_source_tree() -> None:
+    """The README's tour said `lmsbench slam run --out slam`: run from the checkout, as the README
+    is, it wrote trajectory.tum, map.json, ... into the slam package's own folder."""
+    for page in PAGES:
+        for out in re.findall(r"`lmsbench [^`]*--out ([^`\s\]]+)", page.read_text()):
+            top = (ROOT / out).resolve()
+            assert not (top.is_dir() and any(top.glob("*.py"))), f"{page.name}: --out {out} is a source folder"
+            assert not (ROOT / out.split("/")[0]).is_dir() or out.split("/")[0] == "results", (page.name, out)
+
+
 WITH_CODE = [p for p in PAGES if python_blocks(p.read_text())]
 
 

@@ -167,7 +167,7 @@ def test_simulate_command_errors(tmp_path: Path, capsys: pytest.CaptureFixture) 
     assert main(["simulate", "--world", "moon", "--out", str(tmp_path)]) == 2
     assert "unknown world 'moon'" in capsys.readouterr().err
     assert main(["simulate", "--world", "office", "--duration", "0", "--out", str(tmp_path)]) == 2
-    assert "argument --duration: must be a finite number > 0" in capsys.readouterr().err
+    assert "argument --duration: must be a finite number >= 0.1" in capsys.readouterr().err
     assert main(["simulate", "--world", str(tmp_path / "none.json"), "--out", str(tmp_path)]) == 2
 
 

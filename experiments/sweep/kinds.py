@@ -174,7 +174,7 @@ def _read_sensor_files(cells: Iterable[dict[str, Any]]) -> dict[str, Any]:
 
 def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: set[str]) -> None:
     """Plain (unprefixed) names are known ones, and world, duration and rate_hz have usable values."""
-    from experiments.options import MAX_DURATION_S, known_worlds
+    from experiments.options import MAX_DURATION_S, MIN_DURATION_S, known_worlds
 
     from .spec import SweepSpecError
 
@@ -190,8 +190,10 @@ def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: s
         if world not in known_worlds() and not world.endswith(".json"):
             raise SweepSpecError(f"world: unknown world {world!r}; known worlds: {', '.join(known_worlds())}")
         duration = p["duration"]
-        if isinstance(duration, bool) or not isinstance(duration, (int, float)) or not 0 < duration <= MAX_DURATION_S:
-            raise SweepSpecError(f"duration: must be a number of seconds in (0, {MAX_DURATION_S:g}], got {duration!r}")
+        if isinstance(duration, bool) or not isinstance(duration, (int, float)) \
+                or not MIN_DURATION_S <= duration <= MAX_DURATION_S:  # shorter: no scan in the cell's run
+            raise SweepSpecError(f"duration: must be a number of seconds in [{MIN_DURATION_S:g}, {MAX_DURATION_S:g}], "
+                                 f"got {duration!r}")
         rate = p.get("rate_hz")
         if rate is not None and (isinstance(rate, bool) or not isinstance(rate, (int, float)) or not 0 < rate < math.inf):
             raise SweepSpecError(f"rate_hz: must be a number of scans/s > 0 or null, got {rate!r}")
