@@ -58,6 +58,8 @@ def files(tmp_path_factory):
     (d / "notalog.clf").write_text("hello\nworld\n")
     (d / "empty_dir").mkdir()
     (d / "a_file").write_text("x")
+    (d / "pkg").mkdir()
+    (d / "pkg" / "__init__.py").write_text("")
     ranges = np.full(361, 3.0)
     good = [Record(Scan.lms200(ranges, stamp=0.1 * k)) for k in range(5)]
     write_log(d / "good.clf", good)
@@ -233,6 +235,10 @@ CASES = [
     (["slam", "{simrun}", "--config", "{slam_prob.yaml}", "--out", O], "prealign.widen_probability: a probability"),
     (["slam", "{simrun}", "--config", "{slam_noise.yaml}", "--out", O], "odom_noise: must be 3 numbers"),
     (["slam", "{simrun}", "--config", "{slam_voxel.yaml}", "--out", O], "slam_voxel.yaml: keyframes.voxel: must be 0"),
+    # an --out holding other things: the README's 'slam run --out slam' wrote into the slam package;
+    # slam into the simulated run's own folder replaced its config.yaml (the sensor compare reads)
+    (["slam", "{simrun}", "--out", "{simrun}"], "holds scans.clf, which this command does not write"),
+    (["simulate", "--duration", "1", "--out", "{pkg}"], "holds __init__.py, which this command does not write"),
     (["slam", "{simrun}", "--config", "{slam_normal.yaml}", "--out", O], "alignment.normal_step: must be >= 1"),
     (["slam", "{simrun}", "--config", "{slam_range.yaml}", "--out", O], "alignment.max_range: must be in (0, 10000] m"),
     (["slam", "{simrun}", "--config", "{slam_turn.yaml}", "--out", O], "alignment.heading_hypotheses: offsets"),

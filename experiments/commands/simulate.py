@@ -8,7 +8,7 @@ from lms200.yamlio import load as load_yaml
 import argparse
 from pathlib import Path
 
-from experiments.options import (DURATION, MAX_DURATION_S, SEED, InputError, check_file, check_out, check_yaml,
+from experiments.options import (DURATION, MAX_DURATION_S, SEED, SIMULATE_OUTPUTS, InputError, check_file, check_out, check_yaml,
                                  known_worlds, number, positive)
 
 
@@ -135,7 +135,7 @@ def _world(cfg) -> None:
 def run(args: argparse.Namespace) -> int:
     from experiments.simulation import run_simulation
 
-    check_out(args.out)
+    check_out(args.out, writes=SIMULATE_OUTPUTS)
     cfg = _config(args)
     _world(cfg)
     records = run_simulation(cfg, args.out, progress=not args.quiet)
