@@ -15,6 +15,7 @@ import yaml
 from lms200 import LmsbenchError, read_log
 from lms200.carmen import write_carmen
 from lms200.calibration import calibrate_scans
+from lms200.scan import Scan
 from sim import SensorConfig, make_world, simulate_records
 from sim.lidar import LMS200Sim
 
@@ -122,7 +123,7 @@ def test_calibrate_recovers_known_parameters_from_a_simulated_log(case: str, tmp
         assert abs(got.noise_sigma_per_m) < 0.03 * truth.noise_sigma  # under 3 % of sigma per metre
     # every estimate carries a standard error that is small against its value
     m = result.measured
-    for est in (m.nan_rate, m.no_return_rate, m.outlier_rate, m.mixed_share):
+    for est in (m.nan_rate, m.no_return_rate, m.outlier_rate, m.outlier_straight_rate, m.mixed_share):
         assert 0 < est.std < 0.25 * est.value
     assert 0 < m.noise.sigma_std_m < 0.05 * m.noise.sigma_m
 
@@ -133,6 +134,43 @@ def test_clean_datasheet_log_has_no_spurious_terms() -> None:
     assert m.noise.sigma_m == pytest.approx(0.005, rel=0.10)
     assert m.nan_rate.value == pytest.approx(0.001, rel=0.5)
     assert m.no_return_rate.value < 5e-4 and m.max_reading is None
+    # no spurious echo in the sensor: none amid straight stretches, while the counter over all
+    # beams reads the scene's one-beam things (edges, legs) as isolated outliers
+    assert m.outlier_straight_rate.value == 0.0 and m.outlier_straight_rate.n > 10_000
+    assert m.outlier_rate.value > 3e-4
+
+
+def test_outliers_amid_straight_stretches_are_counted_apart() -> None:
+    """A wall x = 2 m with five outliers amid it and three within 8 beams of each other: the
+    straight-stretch counter finds the five among the beams whose 8 neighbours each side lie on
+    the wall (counted here by brute force with an SVD line fit), the all-beam counter all eight."""
+    inc = np.deg2rad(0.5)
+    th = -np.pi / 2 + np.arange(361) * inc
+    wall = np.abs(th) < 1.0
+    base = np.where(wall, 2.0 / np.cos(th), np.nan)
+    amid = [110, 140, 170, 200, 230]  # 30 beams apart, far from the wall's ends (beams 66-294)
+    clustered = [255, 261, 267]  # each within 8 beams of another: amid no straight stretch
+    rng = np.random.default_rng(3)
+    scans = []
+    for _ in range(3):
+        r = base + rng.normal(0.0, 0.003, base.size)
+        r[amid + clustered] = 1.0
+        scans.append(Scan(r, float(th[0]), inc, 0.0, 81.83, 0.0))
+    m = calibrate_scans(scans)
+    expected_trials = 0
+    for r in (sc.ranges for sc in scans):
+        x, y = r * np.cos(th), r * np.sin(th)
+        for i in range(8, 353):
+            nb = np.r_[i - 8:i, i + 1:i + 9]
+            if not (np.isfinite(r[nb]).all() and np.isfinite(r[i])):
+                continue
+            pts = np.c_[x[nb], y[nb]]
+            rms = np.linalg.svd(pts - pts.mean(0), compute_uv=False)[-1] / 4.0  # sqrt(16) points
+            if rms <= 0.01 and abs(r[i + 1] - r[i - 1]) < 0.05:
+                expected_trials += 1
+    assert m.outlier_straight_rate.n == expected_trials
+    assert m.outlier_straight_rate.value * expected_trials == pytest.approx(3 * len(amid))
+    assert m.outlier_rate.value * m.outlier_rate.n == pytest.approx(3 * (len(amid) + len(clustered)))
 
 
 def test_zero_readings_are_measured_as_the_dropouts_they_are() -> None:
