@@ -168,14 +168,27 @@ def check_log(path: str | os.PathLike) -> Path:
     return p
 
 
-def check_out(path: str | os.PathLike | None) -> Path | None:
+SIMULATE_OUTPUTS = ("scans.clf", "groundtruth.tum", "world.json", "config.yaml", "map.png")
+SLAM_OUTPUTS = ("trajectory.tum", "keyframes.tum", "map.json", "metrics.json", "config.yaml", "slam.png")
+
+
+def check_out(path: str | os.PathLike | None, writes: Sequence[str] | None = None) -> Path | None:
     """An output folder: absent (created later) or a folder; its nearest existing parent writable.
-    None (no --out: a new timestamped folder will be made) passes."""
+    None (no --out: a new timestamped folder will be made) passes. With ``writes`` (the fixed file
+    names a command writes: SIMULATE_OUTPUTS, SLAM_OUTPUTS), an existing folder may hold only those
+    (a run's own earlier outputs, which it replaces) and hidden files: ``slam run --out slam`` from
+    the checkout wrote into the slam package, ``slam run --out run`` replaced the run's config.yaml."""
     if path is None:
         return None
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise InputError(f"--out {p}: exists and is not a folder")
+    if writes is not None and p.is_dir():
+        others = sorted(e.name for e in p.iterdir() if e.name not in writes and not e.name.startswith("."))
+        if others:
+            shown = ", ".join(others[:3]) + (f" and {len(others) - 3} more" if len(others) > 3 else "")
+            raise InputError(f"--out {p}: holds {shown}, which this command does not write; give a new or empty "
+                             "folder (a folder of this command's own earlier outputs is replaced)")
     parent = p
     while not parent.exists():
         parent = parent.parent

@@ -4,10 +4,11 @@ terminal). Drivers only: algorithm code never prints."""
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import threading
 import time
-from typing import Any, Callable
+from typing import IO, Any, Callable, ContextManager
 
 import numpy as np
 
@@ -132,3 +133,18 @@ class Heartbeat:
     def __exit__(self, *exc: object) -> None:
         self._stop.set()
         self._thread.join()
+
+
+def heartbeat_on_terminal(label: str, first: str, stream: IO[str] | None = None, every: float = 4.0,
+                          first_after: float = 1.0) -> ContextManager[Any]:
+    """A :class:`Heartbeat` on ``stream`` (default stderr) when it is a terminal, else nothing:
+    off a terminal stderr keeps to the one line of an error. For the steps that take minutes
+    without a progress bar of their own (``sim2real``: 2-3 min silent at its defaults; ``calibrate``)."""
+    out = sys.stderr if stream is None else stream
+    if not (hasattr(out, "isatty") and out.isatty()):
+        return contextlib.nullcontext()
+
+    def log(msg: str) -> None:
+        print(msg, file=out, flush=True)
+
+    return Heartbeat(log, label, every=every, first=first, first_after=first_after)

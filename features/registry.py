@@ -144,6 +144,12 @@ def too_many_beams(n: int) -> str:
             "split the scan into sectors")
 
 
+#: scans per compiled batch call: the call stacks its scans' ranges into one array, which for a
+#: 50,000-scan batch was a second 144 MB copy of them (peak RSS +166 MB); chunks of this many
+#: bound that copy to 12 MB at 361 beams (results identical, scan by scan).
+BATCH_CHUNK = 4096
+
+
 def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = None, **params: Any) -> list[FeatureSet]:
     """``extract`` of every scan in ``scans`` (a sequence of ``lms200.Scan`` of one geometry: beam
     count, angle_min, angle_increment, range_min, range_max), in one compiled call for the
@@ -164,7 +170,13 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
     if scans and isinstance(scans[0], Scan) and len(scans[0]) > MAX_BEAMS:
         raise ScanGeometryError(too_many_beams(len(scans[0])))
     if m.run_many is not None:
-        return m.run_many(scans, cfg)
+        if len(scans) <= BATCH_CHUNK:
+            return m.run_many(scans, cfg)
+        common_geometry(scans)  # the whole batch first: an error names the scan's index in it, not in a chunk
+        out: list[FeatureSet] = []
+        for start in range(0, len(scans), BATCH_CHUNK):
+            out += m.run_many(scans[start:start + BATCH_CHUNK], cfg)
+        return out
     if scans:
         common_geometry(scans)
     return [m.run(s, cfg) for s in scans]

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from lms200.yamlio import load as load_yaml
 
+import os
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -209,7 +210,11 @@ class SensorConfig:
         """
         import yaml
 
+        if not isinstance(path, (str, os.PathLike)) or isinstance(path, bytes):  # None raised TypeError from Path
+            raise InputError(f"path: must be a str or os.PathLike naming a sensor YAML, got {type(path).__name__}")
         p = Path(path)
+        if p.is_dir():  # was "no such sensor file"
+            raise InputError(f"{p} is a folder, not a sensor YAML")
         if not p.is_file():
             raise LmsbenchError(f"{p}: no such sensor file")
         try:

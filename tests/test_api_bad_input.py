@@ -400,3 +400,14 @@ def test_yaml_refuses_duplicate_keys_and_deep_nesting(text: str, message: str) -
         load(text)
     # a merge key may still be overridden, and the values are those written
     assert load("x: &m {a: 1}\ny:\n  <<: *m\n  a: 2\n") == {"x": {"a": 1}, "y": {"a": 2}}
+
+
+@pytest.mark.parametrize("path, message", [(None, r"^path: must be a str or os.PathLike"),
+                                           (123, r"^path: must be a str or os.PathLike"),
+                                           (b"sensor.yaml", r"^path: must be"), (".", r"is a folder, not a sensor YAML")])
+def test_sensor_from_yaml_names_a_bad_path(path, message: str) -> None:
+    """None, 123 or bytes raised Path's TypeError (not an LmsbenchError); a folder said "no such sensor file"."""
+    from sim.sensor import SensorConfig
+
+    with pytest.raises(InputError, match=message):
+        SensorConfig.from_yaml(path)

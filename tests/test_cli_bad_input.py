@@ -58,6 +58,8 @@ def files(tmp_path_factory):
     (d / "notalog.clf").write_text("hello\nworld\n")
     (d / "empty_dir").mkdir()
     (d / "a_file").write_text("x")
+    (d / "pkg").mkdir()
+    (d / "pkg" / "__init__.py").write_text("")
     ranges = np.full(361, 3.0)
     good = [Record(Scan.lms200(ranges, stamp=0.1 * k)) for k in range(5)]
     write_log(d / "good.clf", good)
@@ -102,6 +104,7 @@ def files(tmp_path_factory):
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
     (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
     (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
+    (d / "short_run.yaml").write_text("world: office\nseed: 0\nduration: 0.001\n")  # a simulate config: no scan
     (d / "sensor_fine.yaml").write_text("n_beams: 100000000\nresolution_deg: 1.0e-6\n")  # 10^8 beams: a hang
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
     # SLAM configs: a method's options nested under extractor, unknown / invalid method params, wrong types
@@ -186,6 +189,11 @@ CASES = [
     (["simulate", "--sensor", "{sensor_text.yaml}", "--out", O], "mixed_gap: must be a number"),
     (["simulate", "--sensor", "{sensor_flag.yaml}", "--out", O], "quantise: must be true or false"),
     (["simulate", "--sensor", "{sensor_dup.yaml}", "--out", O], "found duplicate key 'noise_sigma'"),
+    # flags that were ignored beside what overrides them: the file's geometry ran, the log had its own sensor
+    (["simulate", "--sensor", "{sensor_ok.yaml}", "--resolution-deg", "1", "--out", O], "--resolution-deg cannot be given"),
+    (["simulate", "--sensor", "{sensor_ok.yaml}", "--units", "cm", "--out", O], "--sensor holds the whole sensor model"),
+    (["compare", "{good.clf}", "--sensor", "{sensor_ok.yaml}", "--out", O], "--sensor sets the sensor of the worlds"),
+    (["simulate", "--config", "{short_run.yaml}", "--out", O], "duration must be in [0.1, 3600] s"),
     (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 1] m"),
     (["compare", "office", "--sensor", "{sensor_fine.yaml}", "--out", O], "sensor_fine.yaml: resolution_deg"),
     (["sim2real", "{good.clf}", "--sensor", "{sensor_dup.yaml}", "--out", O], "sensor_dup.yaml: not a YAML file"),
@@ -233,6 +241,10 @@ CASES = [
     (["slam", "{simrun}", "--config", "{slam_prob.yaml}", "--out", O], "prealign.widen_probability: a probability"),
     (["slam", "{simrun}", "--config", "{slam_noise.yaml}", "--out", O], "odom_noise: must be 3 numbers"),
     (["slam", "{simrun}", "--config", "{slam_voxel.yaml}", "--out", O], "slam_voxel.yaml: keyframes.voxel: must be 0"),
+    # an --out holding other things: the README's 'slam run --out slam' wrote into the slam package;
+    # slam into the simulated run's own folder replaced its config.yaml (the sensor compare reads)
+    (["slam", "{simrun}", "--out", "{simrun}"], "holds scans.clf, which this command does not write"),
+    (["simulate", "--duration", "1", "--out", "{pkg}"], "holds __init__.py, which this command does not write"),
     (["slam", "{simrun}", "--config", "{slam_normal.yaml}", "--out", O], "alignment.normal_step: must be >= 1"),
     (["slam", "{simrun}", "--config", "{slam_range.yaml}", "--out", O], "alignment.max_range: must be in (0, 10000] m"),
     (["slam", "{simrun}", "--config", "{slam_turn.yaml}", "--out", O], "alignment.heading_hypotheses: offsets"),

@@ -143,3 +143,33 @@ def test_extract_many_equals_extract_with_the_noise_estimated_per_scan() -> None
     for a, b in zip(many, singles):
         assert_equal_sets(a, b)
     assert {len(fs.lines) for fs in singles} != {0}
+
+
+@pytest.mark.parametrize("method", ["sensor", "split_merge", "iepf"])
+def test_a_large_batch_runs_in_chunks_with_the_same_result(method: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A batch stacks its scans' ranges into one array: 50,000 scans took a second 144 MB copy of
+    them (peak RSS +166 MB, now +70 MB at BATCH_CHUNK = 4096). Chunked, each compiled call sees at
+    most BATCH_CHUNK scans (here 5), the result is extract's on each scan, in order, and an error
+    names the scan's index in the whole batch."""
+    import features.registry as registry
+
+    monkeypatch.setattr(registry, "BATCH_CHUNK", 5)
+    m = registry.get_method(method)
+    sizes: list[int] = []
+
+    def spy(scans, cfg):
+        sizes.append(len(scans))
+        return m.run_many(scans, cfg)
+
+    monkeypatch.setitem(registry._REGISTRY, method, registry.Method(m.name, m.config_type, m.run, m.default,
+                                                                    m.backend, spy))
+    scans = batch(12)
+    many = extract_many(iter(scans), method=method)  # a generator, as a log's reader gives them
+    assert sizes == [5, 5, 2] and len(many) == 12
+    for scan, fs in zip(scans, many):
+        assert_equal_sets(fs, extract(scan, method=method))
+    odd = scans[:7] + [room(9, n=181, increment=np.deg2rad(1.0))] + scans[8:]
+    with pytest.raises(ValueError, match=r"^scans\[7\]: geometry"):  # in the second chunk: index 7, not 2
+        extract_many(odd, method=method)
+    with pytest.raises(ScanTypeError, match=r"^scans\[9\]"):
+        extract_many(scans[:9] + ["not a scan"], method=method)

@@ -109,3 +109,25 @@ def test_the_heartbeat_waits_for_its_condition() -> None:
         started.set()
         assert spoke.wait(10.0)  # generous: a loaded machine may run the polling thread late
     assert said == ["slow step ..."]
+
+
+def test_sim2real_and_calibrate_beat_on_a_terminal_only() -> None:
+    """sim2real ran 2-3 min at its defaults without a line on a terminal (calibrate 10-15 s); they
+    now beat like the demo there, and stay silent off a terminal (stderr keeps an error's one line)."""
+    import io
+    import time
+
+    from experiments.progress import heartbeat_on_terminal
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    tty, pipe = Terminal(), io.StringIO()
+    for stream in (tty, pipe):
+        with heartbeat_on_terminal("sim2real", "sim2real: starting ...", stream=stream, every=0.3, first_after=0.0):
+            time.sleep(1.0)
+    lines = tty.getvalue().splitlines()
+    assert lines[0] == "sim2real: starting ..." and len(lines) >= 2
+    assert all(line.startswith("   ... sim2real: ") and line.endswith(" s") for line in lines[1:])
+    assert pipe.getvalue() == ""

@@ -26,12 +26,14 @@ def run(args: argparse.Namespace) -> int:
     import tempfile
 
     from experiments.calibrate import calibrate_log, format_calibration, write_sensor_yaml
+    from experiments.progress import heartbeat_on_terminal
 
     read_options = read_log_options(args)
     check_log(args.log)
     check_out_file(args.out)
-    result = calibrate_log(args.log, world=args.world, stride=args.stride, max_scans=args.max_scans,
-                           **read_options)
+    with heartbeat_on_terminal("calibrate", "calibrate: measuring the log and fitting by simulation ..."):
+        result = calibrate_log(args.log, world=args.world, stride=args.stride, max_scans=args.max_scans,
+                               **read_options)
     for line in format_calibration(result):
         print(line)
     if args.out is None:

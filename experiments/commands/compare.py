@@ -16,7 +16,7 @@ from lms200 import LmsbenchError
 from lms200.timing import check_scan_rate
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
-from experiments.options import DURATION, SEED, check_methods, check_out, check_seeds, count, positive
+from experiments.options import DURATION, SEED, InputError, check_methods, check_out, check_seeds, count, positive
 
 
 def _param(text: str) -> tuple[str, Any]:
@@ -97,7 +97,11 @@ def run(args: argparse.Namespace) -> int:
             raise
         except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
             raise LmsbenchError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
-    if any(not Path(spec).exists() for spec in args.sources):  # a world is simulated at --rate
+    worlds = [spec for spec in args.sources if not Path(spec).exists()]  # simulated here, at --rate
+    if args.sensor is not None and not worlds:  # it was ignored: logs and simulate folders carry their own
+        raise InputError("--sensor sets the sensor of the worlds compare simulates (office, office:1, ...); "
+                         f"none of {' '.join(args.sources)} is one (a log or a simulate folder has its own)")
+    if worlds:
         import sim
 
         check_scan_rate(args.rate, (sensor or sim.SensorConfig()).angle_increment, "--rate")

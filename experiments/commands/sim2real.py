@@ -58,6 +58,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from sim import SensorConfig
 
+    from experiments.progress import heartbeat_on_terminal
     from experiments.provenance import new_run_folder, versions
     from experiments.sim2real import format_report, sim2real, write_outputs
 
@@ -86,9 +87,12 @@ def run(args: argparse.Namespace) -> int:
         first = next(iter(read_log(args.log, **read_options)), None)
         if first is not None:
             check_scan_rate(args.rate_hz, first.scan.angle_increment, "--rate-hz")
-    result = sim2real(args.log, world=args.world, seeds=args.seeds, duration=args.duration, rate_hz=args.rate_hz,
-                      stride=args.stride, max_scans=args.max_scans, sensor=sensor, read_options=read_options,
-                      fit_rooms=args.fit_rooms, probe_duration=args.probe_duration, probe_seeds=args.probe_seeds)
+    first = (f"sim2real: calibrating, fitting the world to the log and simulating {len(args.seeds)} world(s) "
+             "(minutes at the defaults; Ctrl-C stops) ...")
+    with heartbeat_on_terminal("sim2real", first):
+        result = sim2real(args.log, world=args.world, seeds=args.seeds, duration=args.duration, rate_hz=args.rate_hz,
+                          stride=args.stride, max_scans=args.max_scans, sensor=sensor, read_options=read_options,
+                          fit_rooms=args.fit_rooms, probe_duration=args.probe_duration, probe_seeds=args.probe_seeds)
     config = dict(log=str(args.log), duration=args.duration, probe_duration=args.probe_duration, rate_hz=args.rate_hz,
                   stride=args.stride,
                   max_scans=args.max_scans, sensor_file=None if args.sensor is None else str(args.sensor),

@@ -8,8 +8,8 @@ from lms200.yamlio import load as load_yaml
 import argparse
 from pathlib import Path
 
-from experiments.options import (DURATION, MAX_DURATION_S, SEED, InputError, check_file, check_out, check_yaml,
-                                 known_worlds, number, positive)
+from experiments.options import (DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, InputError, check_file,
+                                 check_out, check_yaml, known_worlds, number, positive)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -70,8 +70,9 @@ def _config(args: argparse.Namespace):
             raise InputError(f"{args.config}: not a simulate config ({' '.join(str(exc).split())})") from None
         if cfg.world not in known_worlds() and not cfg.world.endswith(".json"):
             raise InputError(f"{args.config}: unknown world {cfg.world!r}; known worlds: {', '.join(known_worlds())}")
-        if not (0 < cfg.duration <= MAX_DURATION_S) or (cfg.rate_hz is not None and not cfg.rate_hz > 0):
-            raise InputError(f"{args.config}: duration must be in (0, {MAX_DURATION_S:g}] s and rate_hz > 0")
+        if not (MIN_DURATION_S <= cfg.duration <= MAX_DURATION_S) or (cfg.rate_hz is not None and not cfg.rate_hz > 0):
+            raise InputError(f"{args.config}: duration must be in [{MIN_DURATION_S:g}, {MAX_DURATION_S:g}] s (shorter "
+                             "holds no scan) and rate_hz > 0")
         from sim.worlds import MAX_CLUTTER, check_seed
 
         try:
@@ -82,6 +83,11 @@ def _config(args: argparse.Namespace):
             raise InputError(f"{args.config}: clutter must be in [0, {MAX_CLUTTER:g}], got {cfg.clutter}")
         check_scan_rate(cfg.rate_hz, cfg.sensor.angle_increment, f"{args.config}: rate_hz")
         return cfg
+    geometry = [flag for flag, dest in (("--resolution-deg", "resolution_deg"), ("--units", "units"))
+                if getattr(args, dest) is not None]
+    if args.sensor is not None and geometry:  # they were ignored: the file's n_beams / resolution / units ran
+        raise InputError(f"--sensor holds the whole sensor model; {', '.join(geometry)} cannot be given with it "
+                         "(edit the file, or leave out --sensor)")
     for dest, default in DEFAULTS.items():
         if getattr(args, dest) is None:
             setattr(args, dest, default)
@@ -135,7 +141,7 @@ def _world(cfg) -> None:
 def run(args: argparse.Namespace) -> int:
     from experiments.simulation import run_simulation
 
-    check_out(args.out)
+    check_out(args.out, writes=SIMULATE_OUTPUTS)
     cfg = _config(args)
     _world(cfg)
     records = run_simulation(cfg, args.out, progress=not args.quiet)

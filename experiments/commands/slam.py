@@ -16,7 +16,8 @@ if TYPE_CHECKING:
     from slam import SlamConfig
 
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import InputError, check_file, check_log, check_methods, check_out, check_yaml, count, positive
+from experiments.options import (SLAM_OUTPUTS, InputError, check_file, check_log, check_methods, check_out, check_yaml,
+                                 count, positive)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -145,7 +146,7 @@ def run(args: argparse.Namespace) -> int:
     _check_input(Path(args.input))
     if args.relations is not None:
         check_file(args.relations, "a relations file")
-    check_out(args.out)
+    check_out(args.out, writes=SLAM_OUTPUTS)
     config = _config(args)
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
                       read_options=read_log_options(args))
