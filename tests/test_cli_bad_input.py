@@ -395,6 +395,9 @@ CASES = [
     (["bench", "lms200", "lms200"], "more than once"),
     (["bench", "lms200", "--out", "{a_file}"], "a_file"),
     (["nosuch"], "nosuch"),
+    # an unknown option was said by the top-level parser ("lmsbench: error: ... see lmsbench --help")
+    (["compare", "office", "--ideal", "--out", O], "lmsbench compare: error: unrecognized arguments: --ideal (see lmsbench compare --help)"),
+    (["lms200", "emulate", "--bogus", "1"], "lmsbench lms200 emulate: error: unrecognized arguments: --bogus 1"),
 ]
 
 
