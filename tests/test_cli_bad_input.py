@@ -104,6 +104,7 @@ def files(tmp_path_factory):
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
     (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
     (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
+    (d / "sensor_1deg.yaml").write_text("n_beams: 181\nresolution_deg: 1.0\n")  # good.clf: 361 at 0.5 deg
     (d / "short_run.yaml").write_text("world: office\nseed: 0\nduration: 0.001\n")  # a simulate config: no scan
     (d / "sensor_fine.yaml").write_text("n_beams: 100000000\nresolution_deg: 1.0e-6\n")  # 10^8 beams: a hang
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
@@ -389,6 +390,7 @@ CASES = [
     # its scans of 181 and 361 beams were compared with one simulated sensor (calibrated on every 2nd scan)
     (["sim2real", "{mixed.clf}", "--sensor", "{sensor_ok.yaml}", "--out", O], "mixed.clf: scan 6 has 181 beams"),
     (["sim2real", "{mixed.clf}", "--stride", "1", "--out", O], "mixed.clf: scan 2 has 181 beams at 1 deg"),
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_1deg.yaml}", "--out", O], "181 beams at 1 deg, but"),
     (["sim2real", "{good.clf}", "--world", "office", "--probe-seeds", "100", "--out", O], "--probe-seeds sets the mit"),
     # bench, the top level
     (["bench", "nosuch"], "nosuch"),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -81,12 +82,17 @@ def run(args: argparse.Namespace) -> int:
     if args.sensor is not None:
         check_yaml(args.sensor, "a sensor YAML")
         sensor = SensorConfig.from_yaml(args.sensor)
+    first = next(iter(read_log(args.log, **read_options)), None)  # the log's geometry, before any work
     if sensor is not None:
         check_scan_rate(args.rate_hz, sensor.angle_increment, "--rate-hz")
-    else:  # the sensor is calibrated to the log: its resolution, read before any work
-        first = next(iter(read_log(args.log, **read_options)), None)
-        if first is not None:
-            check_scan_rate(args.rate_hz, first.scan.angle_increment, "--rate-hz")
+        if first is not None and (len(first.scan) != sensor.n_beams
+                                  or not math.isclose(first.scan.angle_increment, sensor.angle_increment, rel_tol=1e-6)):
+            # it ran: 181-beam worlds against 361-beam real scans, lines per scan compared across resolutions
+            raise InputError(f"--sensor {args.sensor}: {sensor.n_beams} beams at {sensor.resolution_deg:g} deg, but "
+                             f"{args.log} has {len(first.scan)} at {math.degrees(first.scan.angle_increment):g} deg; "
+                             "sim2real compares like with like (calibrate the log, or give a sensor of its geometry)")
+    elif first is not None:  # the sensor is calibrated to the log: its resolution
+        check_scan_rate(args.rate_hz, first.scan.angle_increment, "--rate-hz")
     first = (f"sim2real: calibrating, fitting the world to the log and simulating {len(args.seeds)} world(s) "
              "(minutes at the defaults; Ctrl-C stops) ...")
     with heartbeat_on_terminal("sim2real", first):
