@@ -360,6 +360,8 @@ CASES = [
     (["calibrate", "{good.clf}", "--max-scans", "-3"], "--max-scans"),
     (["calibrate", "{good.clf}", "--world", "offfice"], "offfice"),
     (["calibrate", "{good.clf}", "--out", "{empty_dir}"], "is a folder"),
+    (["calibrate", "{good.clf}", "--out", "{good.clf}"], "calibrate writes a sensor YAML"),  # wrote over the log
+    (["calibrate", "{good.clf}", "--out", "sensor.txt"], "sensor.txt: calibrate writes a sensor YAML; give a file name ending in .yaml"),
     (["calibrate", "{good.clf}", "--out", "{missing_dir}/s.yaml"], "missing_dir"),
     (["calibrate", "{good.clf}", "--laser-resolution-deg", "-1"], "--laser-resolution-deg"),
     (["calibrate", "{mixed.clf}"], "mixed.clf: scan 2 has 181 beams at 1 deg, scan 1 361 at 0.5 deg"),

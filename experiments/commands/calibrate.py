@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import check_log, check_out_file, count, world_name
+from experiments.options import InputError, check_log, check_out_file, count, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,6 +31,11 @@ def run(args: argparse.Namespace) -> int:
     read_options = read_log_options(args)
     check_log(args.log)
     check_out_file(args.out)
+    if args.out is not None:  # 'calibrate LOG --out LOG' wrote the YAML over the log it had just read
+        if args.out.suffix.lower() not in (".yaml", ".yml"):
+            raise InputError(f"--out {args.out}: calibrate writes a sensor YAML; give a file name ending in .yaml")
+        if args.out.exists() and Path(args.log).exists() and args.out.resolve() == Path(args.log).resolve():
+            raise InputError(f"--out {args.out} is the log being calibrated")
     with heartbeat_on_terminal("calibrate", "calibrate: measuring the log and fitting by simulation ..."):
         result = calibrate_log(args.log, world=args.world, stride=args.stride, max_scans=args.max_scans,
                                **read_options)
