@@ -468,8 +468,8 @@ class SlamConfig:
             raise SlamConfigError(f"alignment.max_range: must be in (0, {MAX_MATCH_RANGE_M:g}] m, got {al.max_range}")
         if al.normal_step < 1:  # 0: an empty chord, an internal error on the first scan
             raise SlamConfigError(f"alignment.normal_step: must be >= 1 beam, got {al.normal_step}")
-        if any(abs(h) > math.pi for h in al.heading_hypotheses):
-            raise SlamConfigError(f"alignment.heading_hypotheses: offsets must be within +-pi rad, "
+        if any(abs(h) > 2 * math.pi for h in al.heading_hypotheses):  # 1e300 overflowed; a half turn may read 3.1416
+            raise SlamConfigError(f"alignment.heading_hypotheses: offsets must be within +-2 pi rad, "
                                   f"got {list(al.heading_hypotheses)!r}")
         voxel = self.keyframes.voxel
         if not (voxel == 0 or MIN_VOXEL_M <= voxel <= MAX_VOXEL_M):  # 1e-12: the cell grid's size overflowed

@@ -129,6 +129,10 @@ def test_bad_input_raises_clear_errors():
                                ("loop_closure", "prior_sigma", 1e9), ("motion", "max_dt", 1e-12)):
         with pytest.raises(SlamConfigError, match=f"^{section}.{name}: must be"):
             SlamConfig.from_dict({section: {name: bad}})
+    # a half turn written to four places (3.1416 > pi) is a heading offset; 1e300 is not
+    assert SlamConfig.from_dict({"alignment": {"heading_hypotheses": [3.1416, -3.1416]}}).alignment.heading_hypotheses
+    with pytest.raises(SlamConfigError, match="^alignment.heading_hypotheses: offsets must be within"):
+        SlamConfig.from_dict({"alignment": {"heading_hypotheses": [0.5, 6.3]}})
     with pytest.raises(SlamInputError, match="earlier"):
         run_observations([0.0, 1.0, 0.5], [Observations()] * 3)
     with pytest.raises(SlamInputError, match="no scans"):
