@@ -13,8 +13,8 @@ produces the effect, which are fitted by simulation (indirect inference, fixed s
   puts no one-beam object (thin legs, gaps, edges of small things make most of the isolated
   outliers elsewhere); the rate the same counter reads on the simulated run with the fitted spot
   width and no outliers is subtracted. Counted over all beams instead (``outlier_rate``, kept as a
-  measurement), the log's scene went into the sensor: MIT CSAIL's 1.6 % of all trials against
-  0.016 % amid straight stretches gave ``outlier_prob`` 1.2 %, spurious echoes in the middle of every
+  measurement), the log's scene went into the sensor: MIT CSAIL's 1.71 % of all trials against
+  0.012 % amid straight stretches gave ``outlier_prob`` 1.21 % (in sim2real's fit), spurious echoes in the middle of every
   simulated wall that the log does not have, which cut the worlds' near walls into short lines
   (docs/simulator.md, "The CSAIL logs' lines per scan").
 - ``noise_tail_prob``: the residual tail's weight includes the scene's own; the simulated weight at
