@@ -45,6 +45,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from lms200 import LmsbenchError, read_log
+from lms200.errors import InputError
 from lms200.calibration import LogCalibration, calibrate_scans
 
 WIDTH_GRID_STEPS = (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)  # spot widths tried, in beam steps
@@ -225,14 +226,25 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
                 same_geometry(rec.scan, first[1], f"scan {k + 1}", f"scan {first[0] + 1}")
                 yield rec.scan
 
-    try:
+    try:  # the log's errors (reading it, measuring it) name it; the fit's own errors are not the log's
         cal = calibrate_scans(scans())
-        return fit_sensor(cal, world, fit_duration)
-    except LmsbenchError as exc:  # the reader's errors name the file already
-        text = str(exc)
-        raise LmsbenchError(text if text.startswith(str(path)) else f"{path}: {text}") from None
+        base_sensor(cal)  # what the log gives directly: a log too poor for a sensor model is the log's error
+    except LmsbenchError as exc:
+        if str(path) in str(exc):  # the reader's errors name the file already
+            raise
+        raise _naming(exc, path) from None
     except ValueError as exc:
-        raise LmsbenchError(f"{path}: {exc}") from None
+        raise InputError(f"{path}: {exc}") from None
+    return fit_sensor(cal, world, fit_duration)
+
+
+def _naming(exc: LmsbenchError, path: str | Path) -> LmsbenchError:
+    """``exc`` with the log's path before its message, of the same class where that class takes a
+    message alone (an InputError stays a ValueError for API callers)."""
+    try:
+        return type(exc)(f"{path}: {exc}")
+    except TypeError:
+        return LmsbenchError(f"{path}: {exc}")
 
 
 def same_geometry(scan: Any, first: Any, name: str, first_name: str) -> None:

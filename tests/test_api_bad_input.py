@@ -411,3 +411,27 @@ def test_sensor_from_yaml_names_a_bad_path(path, message: str) -> None:
 
     with pytest.raises(InputError, match=message):
         SensorConfig.from_yaml(path)
+
+
+def test_calibrate_log_names_the_log_once_and_keeps_the_error_class(tmp_path):
+    """calibrate_log puts the log's path before an error about the log, once, keeping its class (an
+    InputError stays a ValueError for API callers); an error that is not the log's (an unknown
+    world for the fit) does not name it."""
+    from experiments.calibrate import calibrate_log
+
+    log = tmp_path / "far.clf"
+    write_log(log, [Record(Scan.lms200(np.full(361, 6.0), stamp=0.1 * k)) for k in range(5)])
+    with pytest.raises(LmsbenchError, match=r"far\.clf: too few straight runs") as far:
+        calibrate_log(log)
+    assert str(far.value).count(str(log)) == 1
+    with pytest.raises(InputError, match="has no RLASER lines") as topic:
+        calibrate_log(log, topic="RLASER")
+    assert isinstance(topic.value, ValueError) and str(topic.value).count(str(log)) == 1
+    room = tmp_path / "room.clf"
+    b = np.deg2rad(np.linspace(-90, 90, 361))
+    walls = np.minimum(2.0 / np.maximum(np.abs(np.cos(b)), 1e-9), 3.0 / np.maximum(np.abs(np.sin(b)), 1e-9))
+    rng = np.random.default_rng(0)
+    write_log(room, [Record(Scan.lms200(walls + 0.005 * rng.standard_normal(361), stamp=0.1 * k)) for k in range(5)])
+    with pytest.raises(LmsbenchError, match="unknown world 'moon'") as world:
+        calibrate_log(room, world="moon")
+    assert str(room) not in str(world.value)
