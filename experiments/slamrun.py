@@ -269,6 +269,8 @@ def write_result(out: Path, res: SlamResult) -> None:
     kf = res.diagnostics.get("keyframes")
     if kf is not None:
         write_tum(out / "keyframes.tum", kf[:, 0], kf[:, 1:])
+    else:  # an earlier default-preset run's into this folder (options.check_out lets a run replace its own)
+        (out / "keyframes.tum").unlink(missing_ok=True)
     (out / "map.json").write_text(json.dumps(res.map_dict(), indent=1) + "\n")
 
 

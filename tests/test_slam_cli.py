@@ -52,6 +52,10 @@ def test_slam_command_writes_every_output(sim_folder, tmp_path, capsys):
     lines = json.loads((out / "map.json").read_text())["lines"]
     assert len(lines) == m["landmarks"]["lines"] > 3
     assert m["map"]["distance_mean"] < 0.1
+    # the same folder again with the paper preset, which writes no keyframes: the folder is that run's alone
+    assert main(["slam", str(sim_folder), "--out", str(out), "--quiet", "--preset", "paper", "--no-paper-baseline"]) == 0
+    assert json.loads((out / "metrics.json").read_text())["preset"] == "paper"
+    assert not (out / "keyframes.tum").exists()
 
 
 def test_slam_skips_the_fewest_scans_out_of_time_order(sim_folder, tmp_path, capsys):
