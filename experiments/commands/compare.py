@@ -49,7 +49,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="logs: are the log's poses SLAM-corrected (then repeatability is measured)? "
                         "auto (default): when the file name says 'corrected'")
     p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
-                   help="sensor model of the simulated sources, as written (e.g. from `lmsbench calibrate`)")
+                   help="sensor model of the simulated sources, as written (e.g. from `lmsbench calibrate`); "
+                   "needs a world among the sources (logs and simulate folders carry their own)")
     p.add_argument("--set", dest="params", action="append", type=_param, default=[], metavar="extractor.[METHOD.]FIELD=VALUE",
                    help="override a config field of every extractor that has it, or of METHOD only (repeatable)")
     p.add_argument("--out", type=Path, help="output folder (default: a new results/compare/DATE_TIME, "

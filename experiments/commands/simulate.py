@@ -32,7 +32,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--units", choices=("mm", "cm"), default=None, help="range unit mode (default mm)")
     p.add_argument("--ideal", action="store_true", help="exact ranges: no noise, quantisation, dropouts, ...")
     p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
-                   help="sensor model from a YAML (e.g. from `lmsbench calibrate`); replaces --resolution-deg and --units")
+                   help="sensor model from a YAML (e.g. from `lmsbench calibrate`), which sets the resolution and units: "
+                   "not to be combined with --resolution-deg, --units or --ideal")
     p.add_argument("--odometry", action="store_true", help="add noisy wheel odometry to the scans")
     p.add_argument("--config", type=Path, help="rerun a config.yaml written by an earlier run (it holds the whole "
                                                "run: no other option of the run may be given with it)")
