@@ -29,6 +29,10 @@ Loader.add_implicit_resolver(
 )
 
 
+class DuplicateKey(yaml.YAMLError):
+    """A mapping that gives one key twice (PyYAML keeps the last silently)."""
+
+
 def _construct_mapping(loader: Loader, node: yaml.MappingNode, deep: bool = False) -> Any:
     """SafeLoader's mapping, refusing a key written twice (merge keys ``<<`` may be overridden)."""
     if isinstance(node, yaml.MappingNode):
@@ -43,9 +47,7 @@ def _construct_mapping(loader: Loader, node: yaml.MappingNode, deep: bool = Fals
             except TypeError:  # an unhashable key: the base constructor says so
                 continue
             if duplicate:
-                raise yaml.constructor.ConstructorError(
-                    "while constructing a mapping", node.start_mark, f"found duplicate key {key!r}",
-                    key_node.start_mark)
+                raise DuplicateKey(f"key {key!r} given twice (again at line {key_node.start_mark.line + 1})")
     return yaml.SafeLoader.construct_mapping(loader, node, deep=deep)
 
 

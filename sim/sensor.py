@@ -220,7 +220,7 @@ class SensorConfig:
         try:
             d = load_yaml(p.read_text(encoding="utf-8"))
         except (yaml.YAMLError, UnicodeDecodeError) as exc:
-            raise LmsbenchError(f"{p}: not a YAML file ({exc})") from None
+            raise LmsbenchError(f"{p}: not valid YAML ({' '.join(str(exc).split())})") from None
         if isinstance(d, dict) and isinstance(d.get("sensor"), dict):
             d = d["sensor"]
         if isinstance(d, dict):

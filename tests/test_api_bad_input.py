@@ -4,6 +4,8 @@ argument, never a raw numpy / Python exception, a silent cast or a lost file (fu
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -387,8 +389,8 @@ def test_sigma_bearing_is_a_bearing_error_of_radians(value: float) -> None:
 
 
 @pytest.mark.parametrize("text, message", [
-    ("noise_sigma: 0.005\nnoise_sigma: 0.5\n", "found duplicate key 'noise_sigma'"),  # the 0.5 ran, silently
-    ("a: {b: 1, b: 2}\n", "found duplicate key 'b'"),
+    ("noise_sigma: 0.005\nnoise_sigma: 0.5\n", "key 'noise_sigma' given twice (again at line 2)"),  # the 0.5 ran, silently
+    ("a: {b: 1, b: 2}\n", "key 'b' given twice"),
     ("a: " + "[" * 5000 + "]" * 5000 + "\n", "nested too deeply"),  # was a RecursionError: an internal error
 ])
 def test_yaml_refuses_duplicate_keys_and_deep_nesting(text: str, message: str) -> None:
@@ -396,7 +398,7 @@ def test_yaml_refuses_duplicate_keys_and_deep_nesting(text: str, message: str) -
 
     from lms200.yamlio import load
 
-    with pytest.raises(yaml.YAMLError, match=message):
+    with pytest.raises(yaml.YAMLError, match=re.escape(message)):
         load(text)
     # a merge key may still be overridden, and the values are those written
     assert load("x: &m {a: 1}\ny:\n  <<: *m\n  a: 2\n") == {"x": {"a": 1}, "y": {"a": 2}}

@@ -189,7 +189,7 @@ CASES = [
     (["simulate", "--clutter", "1e9", "--out", O], "--clutter"),
     (["simulate", "--sensor", "{sensor_text.yaml}", "--out", O], "mixed_gap: must be a number"),
     (["simulate", "--sensor", "{sensor_flag.yaml}", "--out", O], "quantise: must be true or false"),
-    (["simulate", "--sensor", "{sensor_dup.yaml}", "--out", O], "found duplicate key 'noise_sigma'"),
+    (["simulate", "--sensor", "{sensor_dup.yaml}", "--out", O], "key 'noise_sigma' given twice"),
     # flags that were ignored beside what overrides them: the file's geometry ran, the log had its own sensor
     (["simulate", "--sensor", "{sensor_ok.yaml}", "--resolution-deg", "1", "--out", O], "--resolution-deg cannot be given"),
     (["simulate", "--sensor", "{sensor_ok.yaml}", "--units", "cm", "--out", O], "--sensor holds the whole sensor model"),
@@ -197,7 +197,7 @@ CASES = [
     (["simulate", "--config", "{short_run.yaml}", "--out", O], "duration must be in [0.1, 3600] s"),
     (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 1] m"),
     (["compare", "office", "--sensor", "{sensor_fine.yaml}", "--out", O], "sensor_fine.yaml: resolution_deg"),
-    (["sim2real", "{good.clf}", "--sensor", "{sensor_dup.yaml}", "--out", O], "sensor_dup.yaml: not a YAML file"),
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_dup.yaml}", "--out", O], "sensor_dup.yaml: not valid YAML (key 'noise_sigma' given twice"),
     # compare
     (["compare", "office:x", "--out", O], "office:x"),
     (["compare", "{simbroken}", "--out", O], "config.yaml: not a simulate config"),
