@@ -224,7 +224,11 @@ class SensorConfig:
         if isinstance(d, dict) and isinstance(d.get("sensor"), dict):
             d = d["sensor"]
         if isinstance(d, dict):
-            d = {k: v for k, v in d.items() if k != "calibration"}
+            fields = {k: v for k, v in d.items() if k != "calibration"}
+            if not fields and "calibration" in d:  # was the default sensor, silently
+                raise InputError(f"{p}: holds a calibration section but no sensor fields (a YAML from "
+                                 "`lmsbench calibrate` has both)")
+            d = fields
         return cls.from_dict(d, where=str(p))
 
     def to_yaml(self, path: str | Path, header: str = "", extra: dict[str, Any] | None = None) -> None:

@@ -437,3 +437,17 @@ def test_calibrate_log_names_the_log_once_and_keeps_the_error_class(tmp_path):
     with pytest.raises(LmsbenchError, match="unknown world 'moon'") as world:
         calibrate_log(room, world="moon")
     assert str(room) not in str(world.value)
+
+
+def test_a_sensor_yaml_with_only_its_calibration_section_is_refused(tmp_path):
+    """`lmsbench calibrate` writes the sensor's fields and a calibration section; a file left with
+    the calibration section alone gave the default sensor, silently."""
+    from sim import SensorConfig
+
+    cut = tmp_path / "cut.yaml"
+    cut.write_text("calibration:\n  source: real.clf\n  n_scans: 40\n")
+    with pytest.raises(InputError, match=r"cut\.yaml: holds a calibration section but no sensor fields"):
+        SensorConfig.from_yaml(cut)
+    whole = tmp_path / "whole.yaml"
+    SensorConfig(noise_sigma=0.007).to_yaml(whole, extra={"calibration": {"source": "real.clf"}})
+    assert SensorConfig.from_yaml(whole).noise_sigma == 0.007
