@@ -19,6 +19,7 @@ from scipy.ndimage import distance_transform_edt
 
 from .icp import Reference
 from .icpkernel import _nearest_facing, kernel
+from .models import wrap
 
 
 MAX_FIELD_SIDE = 2000  # cells: a field about a centre is at most 2,000 x 2,000 cells (32 MB of float64)
@@ -85,7 +86,7 @@ def search(points: np.ndarray, field: Field, centre: np.ndarray, half_xy: float,
         m = int(math.floor(half_theta / step_theta))
         thetas = centre[2] + np.arange(-m, m + 1) * step_theta
     if turn is not None and turn[1] < math.pi:
-        off = np.abs(np.remainder(thetas - turn[0] + math.pi, 2 * math.pi) - math.pi)
+        off = np.abs(wrap(thetas - turn[0]))
         thetas = thetas[off <= turn[1]]
         if thetas.size == 0:
             return []

@@ -20,7 +20,7 @@ import numpy as np
 from dataclasses import replace
 
 from .config import AlignmentConfig, KeyframeConfig, LoopClosureConfig, MotionConfig
-from .models import chi2_quantile
+from .models import chi2_quantile, wrap
 from .geometry import between, compose, rotate_covariance
 from .correlative import Field, fit, make_field, search
 from .icp import Match, Reference, chord_normals, chord_normals_at, match, refine
@@ -271,7 +271,7 @@ class ScanSlam:
             for cand in search(pts, field, c, half_xy, half_th, al.search_step, al.search_step_theta,
                                al.search_candidates, DISTINCT_XY, DISTINCT_THETA, turn):
                 r = refine(sp.matched, self.ref, cand.pose, al, prior=hold, normals=normals)
-                if turn is not None and abs(_wrap(r.pose[2] - last[2])) > max_turn + DISTINCT_THETA:
+                if turn is not None and abs(wrap(r.pose[2] - last[2])) > max_turn + DISTINCT_THETA:
                     continue  # the refinement turned it beyond reach
                 results.append(Match(r.pose, r.information, r.inliers, r.rms, r.n_points, r.hessian, -1))
         min_cos = float(np.cos(al.normal_agreement))
@@ -285,19 +285,19 @@ class ScanSlam:
             out = np.inf
             for c in (pred, last):
                 e = r.pose - c
-                out = min(out, float((e[0] ** 2 + e[1] ** 2) / wxy**2 + _wrap(e[2]) ** 2 / wth**2))
+                out = min(out, float((e[0] ** 2 + e[1] ** 2) / wxy**2 + wrap(e[2]) ** 2 / wth**2))
             return out
 
         prior = {i: distance(results[i]) for i in close}
         # the prediction's match unless clearly beaten, and only within the turn bound (it may come
         # from a heading hypothesis up to half a turn off, which the search's candidates may not)
-        keep = 0 in close and not (turn is not None and abs(_wrap(m.pose[2] - last[2])) > max_turn + DISTINCT_THETA)
+        keep = 0 in close and not (turn is not None and abs(wrap(m.pose[2] - last[2])) > max_turn + DISTINCT_THETA)
         k = 0 if keep else min(close, key=prior.__getitem__)
         chosen = results[k]
         info.fit = fits[k]
         for i in close:
             r = results[i]
-            if (np.hypot(*(r.pose[:2] - chosen.pose[:2])) > DISTINCT_XY or abs(_wrap(r.pose[2] - chosen.pose[2])) >
+            if (np.hypot(*(r.pose[:2] - chosen.pose[:2])) > DISTINCT_XY or abs(wrap(r.pose[2] - chosen.pose[2])) >
                     DISTINCT_THETA) and prior[i] - prior[k] < al.ambiguity_sigmas**2:
                 info.ambiguous = True
         return chosen
@@ -471,11 +471,6 @@ def run_scan_slam(steps, config) -> "SlamResult":
         "matched_fraction": matched_fraction,
     }
     return SlamResult(traj, covs, lines, np.zeros((0, 3)), diag)
-
-
-def _wrap(angle: float) -> float:
-    """``angle`` (rad) wrapped to [-pi, pi]."""
-    return float(np.arctan2(np.sin(angle), np.cos(angle)))
 
 
 def _offsets(scan) -> np.ndarray:
