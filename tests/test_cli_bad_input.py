@@ -342,6 +342,11 @@ CASES = [
     (["info", "{good.clf}", "--topic", "FLASER"], "good.clf has no FLASER lines; its laser lines: ROBOTLASER1 (5)"),
     (["calibrate", "{good.clf}", "--topic", "RLASER"], "good.clf has no RLASER lines; its laser lines: ROBOTLASER1"),
     (["slam", "{good.clf}", "--topic", "FLASER", "--out", O], "good.clf has no FLASER lines"),
+    # not a laser kind at all: "good.clf:0: topic: ...", a line 0 the log does not have
+    (["info", "{good.clf}", "--topic", "ODOM"], "topic: 'ODOM' is not a CARMEN laser message kind (FLASER, RLASER, "
+                                                "ROBOTLASER1, ROBOTLASER2, RAWLASER1, RAWLASER2, RAWLASER3, RAWLASER4); "),
+    (["slam", "{good.clf}", "--topic", "robotlaser1", "--out", O], "(did you mean ROBOTLASER1?); "),
+    (["sim2real", "{good.clf}", "--topic", "/scan", "--out", O], "good.clf: its laser lines: ROBOTLASER1 (5)"),
     (["info", "{good.clf}", "--laser-angle-min-deg", "1000"], "--laser-angle-min-deg: a bearing must be within"),
     (["info", "{good.clf}", "--laser-angle-min-deg", "1e308"], "+-360 deg"),
     (["info", "{good.clf}", "--laser-range-max", "1e308"], "--laser-range-max: must be at most 10000 m"),
