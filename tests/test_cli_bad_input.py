@@ -108,6 +108,17 @@ def files(tmp_path_factory):
     (d / "short_run.yaml").write_text("world: office\nseed: 0\nduration: 0.001\n")  # a simulate config: no scan
     (d / "sensor_fine.yaml").write_text("n_beams: 100000000\nresolution_deg: 1.0e-6\n")  # 10^8 beams: a hang
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
+    (d / "badcolon.yaml").write_text("noise_sigma: 0.1\n  x: : 3\n")
+    (d / "badalias.yaml").write_text("noise_sigma: *nope\n")
+    (d / "simbadyaml").mkdir()
+    (d / "simbadyaml" / "config.yaml").write_text("sensor: {noise_sigma: 0.005\n")
+    write_log(d / "simbadyaml" / "scans.clf", good)
+    (d / "simbadyaml" / "world.json").write_text((d / "simbroken" / "world.json").read_text())
+    for name, spec in {"sweep_badspec": "a: [1\n", "sweep_listspec": "- 1\n"}.items():
+        (d / name).mkdir()
+        pd.DataFrame({"extractor.k": [3], "status": ["ok"], "error": [""], "cell": ["a"], "seed": [0],
+                      "explained": [0.5]}).to_parquet(d / name / "results.parquet")
+        (d / name / "sweep.yaml").write_text(spec)
     # SLAM configs: a method's options nested under extractor, unknown / invalid method params, wrong types
     (d / "slam_nested.yaml").write_text("extractor: {sensor: {band_tau: 3}}\n")
     (d / "slam_param.yaml").write_text("extractor_params: {bogus: 1}\n")
@@ -399,6 +410,19 @@ CASES = [
     (["sim2real", "{mixed.clf}", "--stride", "1", "--out", O], "mixed.clf: scan 2 has 181 beams at 1 deg"),
     (["sim2real", "{good.clf}", "--sensor", "{sensor_1deg.yaml}", "--out", O], "181 beams at 1 deg, but"),
     (["sim2real", "{good.clf}", "--world", "office", "--probe-seeds", "100", "--out", O], "--probe-seeds sets the mit"),
+    # YAML errors named PyYAML's "<unicode string>" after the file, over several lines with a caret;
+    # figures --sweep read its sweep.yaml only after the study: an internal error (Malformed / AttributeError)
+    (["slam", "{simrun}", "--config", "{badyaml.yaml}", "--out", O], "badyaml.yaml: not valid YAML (line 2, column 1: "
+     "expected ',' or ']', but got '<stream end>' (while parsing a flow sequence at line 1, column 4))"),
+    (["sweep", "{badyaml.yaml}", "--out", O], "badyaml.yaml: not valid YAML: line 2, column 1: expected ',' or ']'"),
+    (["simulate", "--config", "{badyaml.yaml}", "--out", O], "badyaml.yaml: not valid YAML (line 2, column 1: expected"),
+    (["simulate", "--sensor", "{badcolon.yaml}", "--out", O],
+     "badcolon.yaml: not valid YAML (line 2, column 4: mapping values are not allowed here)"),
+    (["sim2real", "{good.clf}", "--sensor", "{badalias.yaml}", "--out", O],
+     "badalias.yaml: not valid YAML (line 1, column 14: found undefined alias 'nope')"),
+    (["compare", "{simbadyaml}", "--out", O], "config.yaml: not a simulate config (line 2, column 1: expected ',' or '}'"),
+    (["figures", "--sweep", "{sweep_badspec}", "--no-slam", "--out", O], "sweep.yaml: not valid YAML (line 2, column 1: "),
+    (["figures", "--sweep", "{sweep_listspec}", "--no-slam", "--out", O], "sweep.yaml: not the sweep.yaml of `lmsbench sweep`"),
     # bench, the top level
     (["bench", "nosuch"], "nosuch"),
     (["bench", "lms200", "lms200"], "more than once"),

@@ -60,7 +60,7 @@ def _config(args: argparse.Namespace):
         try:
             raw = load_yaml(args.config.read_text()) or {}
         except yaml.YAMLError as exc:
-            raise LmsbenchError(f"{args.config}: not YAML ({exc})") from None
+            raise LmsbenchError(f"{args.config}: not valid YAML ({exc})") from None
         if not isinstance(raw, dict):
             raise LmsbenchError(f"{args.config}: expected a mapping of SLAM config fields")
         try:
