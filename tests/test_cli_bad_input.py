@@ -432,6 +432,11 @@ CASES = [
     (["compare", "office", "--ideal", "--out", O], "lmsbench compare: error: unrecognized arguments: --ideal (see lmsbench compare --help)"),
     (["lms200", "emulate", "--bogus", "1"], "lmsbench lms200 emulate: error: unrecognized arguments: --bogus 1"),
     (["simulate", "--world", "office", "--dur", "1", "--out", O], "lmsbench simulate: error: unrecognized arguments: --dur 1"),  # ran as --duration 1
+    # an unknown option before the command was said by the command's parser (or as its missing SOURCES)
+    (["--bogus", "compare", "office", "--out", O], "lmsbench: error: unrecognized arguments: --bogus (see lmsbench --help)"),
+    (["--bogus", "compare"], "lmsbench: error: unrecognized arguments: --bogus (see lmsbench --help)"),
+    (["--out=x", "info", "{good.clf}"], "lmsbench: error: unrecognized arguments: --out=x"),
+    (["lms200", "--port", "loop://", "record", "--out", "{out}/x.clf"], "lmsbench lms200: error: unrecognized arguments: --port"),
 ]
 
 
