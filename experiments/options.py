@@ -178,6 +178,8 @@ def check_log(path: str | os.PathLike) -> Path:
 
 SIMULATE_OUTPUTS = ("scans.clf", "groundtruth.tum", "world.json", "config.yaml", "map.png")
 SLAM_OUTPUTS = ("trajectory.tum", "keyframes.tum", "map.json", "metrics.json", "config.yaml", "slam.png")
+COMPARE_OUTPUTS = ("compare.parquet", "compare.csv", "summary.csv", "summary.txt", "config.yaml")  # and a figure per log
+SIM2REAL_OUTPUTS = ("sim2real.csv", "scene.csv", "sim2real.md", "sim2real.png", "sensor.yaml", "config.yaml")
 
 
 def check_out(path: str | os.PathLike | None, writes: Sequence[str] | None = None) -> Path | None:
@@ -203,6 +205,19 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | None = Non
     if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK) or not _can_create_in(parent):
         raise InputError(f"--out {p}: {parent} is not a writable folder")
     return p
+
+
+def check_out_spares(out: str | os.PathLike | None, writes: Sequence[str], reads: Sequence[str | os.PathLike]) -> None:
+    """No file a run writes into ``out`` (the names ``writes``) is a file it reads (``reads``):
+    ``compare SIMFOLDER --out SIMFOLDER`` replaced the simulate folder's config.yaml, the sensor
+    model compare reads for it, with its own."""
+    if out is None:
+        return
+    targets = {(Path(out) / name).resolve() for name in writes}
+    for f in reads:
+        if Path(f).resolve() in targets:
+            raise InputError(f"--out {out}: the run would write {Path(f).name} over {f}, which it reads; "
+                             "give another folder")
 
 
 def check_out_file(path: str | os.PathLike | None, flag: str = "--out") -> Path | None:

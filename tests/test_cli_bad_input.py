@@ -508,3 +508,23 @@ def test_two_logs_of_one_name_are_refused_before_any_work(files, tmp_path, capsy
                    "'good.clf' (compare names a source by its world, folder or file name): give one of them another "
                    "name, e.g. a link"]
     assert not (tmp_path / "o").exists()
+
+
+def test_out_may_not_write_over_what_the_run_reads(files, tmp_path, capsys):
+    """`compare SIMFOLDER --out SIMFOLDER` replaced the folder's config.yaml (the simulate config
+    whose sensor model compare reads for it) with compare's own, exit 0; sim2real's sensor.yaml
+    likewise over its --sensor. Now refused before any work, the input untouched."""
+    from experiments.cli import main as cli_main
+
+    sim = tmp_path / "sim"
+    assert cli_main(["simulate", "--duration", "2", "--out", str(sim)]) == 0
+    before = {p.name: p.read_bytes() for p in sim.iterdir()}
+    assert run_main(["compare", str(sim), "--methods", "hough", "--out", str(sim)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench compare: error: --out {sim}: the run would write config.yaml over {sim / 'config.yaml'}, which it "
+        "reads; give another folder"]
+    (sim / "sensor.yaml").write_text(Path(files["sensor_ok.yaml"]).read_text())
+    before["sensor.yaml"] = (sim / "sensor.yaml").read_bytes()
+    assert run_main(["sim2real", files["good.clf"], "--sensor", str(sim / "sensor.yaml"), "--out", str(sim)]) == 2
+    assert "the run would write sensor.yaml over" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in sim.iterdir()} == before
