@@ -265,6 +265,10 @@ CASES = [
     (["slam", "{simrun}", "--config", "{slam_range.yaml}", "--out", O], "alignment.max_range: must be in (0, 10000] m"),
     (["slam", "{simrun}", "--config", "{slam_turn.yaml}", "--out", O], "alignment.heading_hypotheses: offsets"),
     (["slam", "{backwards.clf}", "--out", O], "backwards"),
+    # thinned to one scan of several: a "SLAM" of one pose, exit 0
+    (["slam", "{good.clf}", "--rate-hz", "1e-300", "--out", O], "good.clf: --rate-hz 1e-300 keeps 1 of the 5 scans read "
+                                                               "(stamps 0.000000 to 0.400000 s); SLAM needs two or more"),
+    (["slam", "{good.clf}", "--every", "10", "--out", O], "good.clf: --every 10 keeps 1 of the 5 scans read"),
     (["slam", "{binary.clf}", "--out", O], "binary"),
     (["slam", "{no_returns.clf}", "--out", O], "no_returns.clf"),
     (["calibrate", "{no_returns.clf}"], "too few straight runs"),
