@@ -106,6 +106,9 @@ def files(tmp_path_factory):
     (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
     (d / "sensor_1deg.yaml").write_text("n_beams: 181\nresolution_deg: 1.0\n")  # good.clf: 361 at 0.5 deg
     (d / "short_run.yaml").write_text("world: office\nseed: 0\nduration: 0.001\n")  # a simulate config: no scan
+    (d / "run_bool.yaml").write_text("world: office\nseed: 0\nduration: true\n")  # ran 1 s
+    (d / "run_list.yaml").write_text("world: office\nseed: 0\nduration: [2]\n")
+    (d / "run_robot.yaml").write_text("world: office\nseed: 0\nduration: 2\nrobot: 5\n")
     (d / "sensor_fine.yaml").write_text("n_beams: 100000000\nresolution_deg: 1.0e-6\n")  # 10^8 beams: a hang
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
     (d / "badcolon.yaml").write_text("noise_sigma: 0.1\n  x: : 3\n")
@@ -206,6 +209,10 @@ CASES = [
     (["simulate", "--sensor", "{sensor_ok.yaml}", "--units", "cm", "--out", O], "--sensor holds the whole sensor model"),
     (["compare", "{good.clf}", "--sensor", "{sensor_ok.yaml}", "--out", O], "--sensor sets the sensor of the worlds"),
     (["simulate", "--config", "{short_run.yaml}", "--out", O], "duration must be in [0.1, 3600] s"),
+    # values of the wrong type: `duration: true` ran 1 s; a list said "float() argument must be ..."
+    (["simulate", "--config", "{run_bool.yaml}", "--out", O], "run_bool.yaml: not a simulate config (duration: must be a number, got True)"),
+    (["simulate", "--config", "{run_list.yaml}", "--out", O], "(duration: must be a number, got [2])"),
+    (["simulate", "--config", "{run_robot.yaml}", "--out", O], "(robot: must be a mapping of fields, got 5)"),
     (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 1] m"),
     (["compare", "office", "--sensor", "{sensor_fine.yaml}", "--out", O], "sensor_fine.yaml: resolution_deg"),
     (["sim2real", "{good.clf}", "--sensor", "{sensor_dup.yaml}", "--out", O], "sensor_dup.yaml: not valid YAML (key 'noise_sigma' given twice"),
