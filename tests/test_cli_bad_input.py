@@ -57,6 +57,10 @@ def files(tmp_path_factory):
     (d / "empty.clf").write_text("")
     (d / "notalog.clf").write_text("hello\nworld\n")
     (d / "empty_dir").mkdir()
+    (d / "bag_badmeta").mkdir()  # rosbags said "Could not load YAML ... "<unicode string>", line 1, ..."
+    (d / "bag_badmeta" / "metadata.yaml").write_text("rosbag2_bagfile_information: [1\n")
+    (d / "bag_listmeta").mkdir()
+    (d / "bag_listmeta" / "metadata.yaml").write_text("- 1\n")
     (d / "a_file").write_text("x")
     (d / "pkg").mkdir()
     (d / "pkg" / "__init__.py").write_text("")
@@ -363,6 +367,8 @@ CASES = [
     (["info", "{empty.clf}"], "empty"),
     (["info", "{fake.bag}"], "fake.bag"),
     (["info", "{notalog.clf}"], "no laser"),
+    (["info", "{bag_badmeta}"], "bag_badmeta/metadata.yaml: not valid YAML (line 2, column 1: expected ',' or ']'"),
+    (["slam", "{bag_listmeta}", "--out", O], "metadata.yaml: not a ROS 2 bag's metadata.yaml (no rosbag2_bagfile_information"),
     (["info", "{good.clf}", "--laser-fov-deg", "90", "--laser-resolution-deg", "0.5"], "own beam geometry"),
     # a laser kind the log lacks: "no laser messages found: not a CARMEN log" (info, compare), "got 0 scans"
     (["info", "{good.clf}", "--topic", "FLASER"], "good.clf has no FLASER lines; its laser lines: ROBOTLASER1 (5)"),
@@ -539,3 +545,20 @@ def test_out_may_not_write_over_what_the_run_reads(files, tmp_path, capsys):
     assert run_main(["sim2real", files["good.clf"], "--sensor", str(sim / "sensor.yaml"), "--out", str(sim)]) == 2
     assert "the run would write sensor.yaml over" in capsys.readouterr().err
     assert {p.name: p.read_bytes() for p in sim.iterdir()} == before
+
+
+def test_a_latin1_comment_near_the_top_is_read_as_further_down(files, tmp_path, capsys):
+    """A log whose first 4 KB held one byte that is not UTF-8 (a latin-1 comment) was refused as
+    "not text (byte 517 is not UTF-8)", while the same comment further down was read (the reader
+    reads ASCII, other bytes replaced). Now both read alike; a head of mostly such bytes is binary."""
+    lines = Path(files["good.clf"]).read_bytes().split(b"\n")
+    for name, at in (("early.clf", 1), ("late.clf", len(lines) - 2)):
+        (tmp_path / name).write_bytes(b"\n".join(lines[:at] + [b"# commentaire \xe9t\xe9"] + lines[at:]))
+    assert run_main(["info", str(tmp_path / "late.clf"), "--json"]) == 0
+    late = json.loads(capsys.readouterr().out)
+    assert run_main(["info", str(tmp_path / "early.clf"), "--json"]) == 0
+    early = json.loads(capsys.readouterr().out)
+    assert early["scans"] == late["scans"] == 5
+    (tmp_path / "latin.clf").write_bytes(bytes([0xE9]) * 300 + b"FLASER 1 1.0 0 0 0 0 0 0 1.0 h 1.0\n" * 20)
+    assert run_main(["info", str(tmp_path / "latin.clf")]) == 2
+    assert "a binary file (300 of its first 1000 bytes are not ASCII text)" in capsys.readouterr().err
