@@ -79,7 +79,9 @@ def _kill_children() -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
     try:
+        _options_before_commands(parser, argv)
         args, extra = parser.parse_known_args(argv)
         if extra:  # said by the command's own parser: "lmsbench compare: error: ...", not "lmsbench: error:"
             _command_parser(parser, args).error(f"unrecognized arguments: {' '.join(extra)}")
@@ -114,6 +116,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if previous is not None:
             signal.signal(signal.SIGINT, previous)
+
+
+def _subparsers(parser: argparse.ArgumentParser) -> argparse._SubParsersAction | None:
+    return next((a for a in parser._actions if isinstance(a, argparse._SubParsersAction)), None)
+
+
+def _options_before_commands(parser: argparse.ArgumentParser, argv: list[str]) -> None:
+    """An unknown option before a (sub)command word is the error of the parser it was given to:
+    ``lmsbench --bogus compare office`` was said by compare's parser ("lmsbench compare: error:
+    unrecognized arguments: --bogus"), or, without SOURCES, as compare's missing argument. The
+    parsers above the commands take no option with a value (only -h), so every word before the
+    command is an option of theirs or an error."""
+    for word in argv:
+        sub = _subparsers(parser)
+        if sub is None or word == "--":
+            return
+        if word.startswith("-") and len(word) > 1:
+            if word.split("=", 1)[0] not in parser._option_string_actions:
+                parser.error(f"unrecognized arguments: {word}")
+            continue
+        if word not in sub.choices:
+            return  # argparse says "invalid choice", naming the known commands
+        parser = sub.choices[word]
 
 
 def _command_parser(parser: argparse.ArgumentParser, args: argparse.Namespace) -> argparse.ArgumentParser:

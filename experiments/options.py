@@ -15,9 +15,12 @@ import tempfile
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
+import yaml
+
 from lms200.carmen import COMPRESSION_SUFFIXES, READ_ERRORS, archive_kind, compression, open_bytes
 from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
 from lms200.timing import MAX_DURATION_S, MIN_DURATION_S  # a simulated run's bounds (s)
+from lms200.yamlio import load as load_yaml
 
 
 
@@ -274,4 +277,12 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
     if "status" not in table or not (table["status"] == "ok").any():
         raise InputError(f"--sweep {p}: no successful cell to plot ({len(table)} cells, all failed; "
                          "their `error` column says why)")
+    spec_path = check_yaml(p / "sweep.yaml", "the sweep.yaml `lmsbench sweep` writes beside its results")
+    try:  # read for the plots' axes after the study: a damaged one was an internal error after the work
+        spec = load_yaml(spec_path.read_text(encoding="utf-8"))
+    except yaml.YAMLError as exc:
+        raise InputError(f"--sweep {spec_path}: not valid YAML ({exc})") from None
+    if not isinstance(spec, dict) or not all(isinstance(spec.get(k) or {}, dict) for k in ("grid", "random")):
+        raise InputError(f"--sweep {spec_path}: not the sweep.yaml of `lmsbench sweep` (a mapping whose grid: and "
+                         "random: are mappings)")
     return p

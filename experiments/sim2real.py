@@ -24,6 +24,7 @@ lines per scan, segment lengths, explained fraction by method), ``sensor.yaml`` 
 
 from __future__ import annotations
 
+from array import array
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Sequence
@@ -210,12 +211,16 @@ def _signed_residuals(lines: np.ndarray, scan, unsigned: np.ndarray) -> np.ndarr
 
 def motion_limits(records: Sequence[Record]):
     """Robot limits matching a log's odometry (see the module docstring), or the defaults."""
+    return odometry_limits(np.array([(r.scan.stamp, *r.odom) for r in records if r.odom is not None], dtype=float))
+
+
+def odometry_limits(a: np.ndarray):
+    """Robot limits matching odometry ``a`` (n, 4): stamp s, x m, y m, theta rad per record with
+    odometry, in log order (see the module docstring), or the defaults."""
     from sim.robot import RobotLimits
 
-    odo = [(r.scan.stamp, *r.odom) for r in records if r.odom is not None]
-    if len(odo) < 10:
+    if len(a) < 10:
         return RobotLimits()
-    a = np.array(odo, dtype=float)
     dt = np.diff(a[:, 0])
     ok = (dt > 0) & (dt < MIN_SCAN_DT_S)
     if np.count_nonzero(ok) < 10 or np.mean(ok) < 0.5:  # mostly long gaps: a subsampled log
@@ -638,12 +643,15 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     probes = resolve_probe_seeds(seeds, probe_seeds) if world == "mit" else []
     opts = read_options or {}
     span = None if max_scans is None else max_scans * stride
-    every: list[Record] = []
-    for rec in read_log(log, **opts):  # the scans used, and every scan between them (for the motion)
-        every.append(rec)
-        if span is not None and len(every) >= span:
+    real: list[Record] = []  # the scans used: every stride-th of the first span
+    odometry = array("d")  # stamp, x, y, theta of every record read with odometry (the motion): 32 bytes each
+    for k, rec in enumerate(read_log(log, **opts)):
+        if k % stride == 0:
+            real.append(rec)
+        if rec.odom is not None:
+            odometry.extend((rec.scan.stamp, *rec.odom))
+        if span is not None and k + 1 >= span:  # not one record more: its line might be malformed
             break
-    real = every[::stride]
     if not real:
         raise LmsbenchError(f"{log}: no laser scans")
     for k, rec in enumerate(real):  # one sensor is simulated: a log of two geometries compared half its scans
@@ -656,7 +664,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     if sensor is None:
         sensor = calibrate_log(log, world=world if world in ("office", "cluttered", "mit") else "office",
                                stride=max(1, stride // 2), fit_duration=fit_duration or FIT_DURATION_S, **opts).sensor
-    limits = motion_limits(every)
+    limits = odometry_limits(np.frombuffer(odometry, dtype=float).reshape(-1, 4))
     glass = glass_rate(world, no_return_share(real, sensor.max_reading))
     rough, scale, relief = (fit_world(real, sensor, limits, glass, probe_duration, probe_rate_hz, len(probes), fit_rooms,
                                       wall_relief, probes)

@@ -92,7 +92,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
 
     Raises:
         FileNotFoundError: the input does not exist.
-        LmsbenchError: a folder without scans.clf, an input without scans, or none with a valid beam.
+        LmsbenchError: a folder without scans.clf, an input without scans, or none with a valid beam, or
+            more than one scan read and all of one stamp (no time between scans for the motion model).
     """
     p = Path(path)
     if not p.exists():
@@ -126,7 +127,12 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         raise LmsbenchError(f"--rate-hz must be > 0, got {rate_hz}")
     records: list[Record] = []
     reader = read_log(log, **(read_options or {}))
+    first_stamp, n_read, timed = None, 0, False  # timed: some scan read has another stamp than the first
     for k, rec in enumerate(reader):
+        n_read += 1
+        if first_stamp is None:
+            first_stamp = rec.scan.stamp
+        timed = timed or rec.scan.stamp != first_stamp
         if rate_hz is not None:
             keep = not records or rec.scan.stamp >= records[-1].scan.stamp + 1.0 / rate_hz - 1e-9
         else:
@@ -141,6 +147,9 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         report_skipped(reader)
     if not records:
         raise LmsbenchError(f"{log}: no laser scans found")
+    if n_read > 1 and not timed:  # it ran: every step predicted no motion and searched no turn
+        raise LmsbenchError(f"{log}: all {n_read} scans read have the same stamp ({first_stamp:.6f} s); SLAM's "
+                            "motion model needs the time between scans (a log written without a clock?)")
     if not any(r.scan.valid.any() for r in records):
         raise LmsbenchError(f"{log}: none of its {len(records)} scans has a valid beam (all +inf or nan): "
                             "nothing to localise against")

@@ -166,6 +166,7 @@ class CarmenReader:
     Raises:
         LogFormatError: naming the file and line, for a malformed line (unless skipped) or data that
             cannot be decompressed.
+        InputError: a ``topic`` that is no laser kind (the message lists the log's laser lines).
     """
 
     def __init__(self, path: str | Path, skip_bad_lines: bool = False, topic: str | None = None,
@@ -174,13 +175,34 @@ class CarmenReader:
         if not self.path.is_file():
             what = "is not a regular file (a device or a pipe)" if self.path.exists() else "does not exist"
             raise LogNotFoundError(f"no such log file: {self.path} {what}")
-        if topic is not None and topic not in LASER_KINDS:
-            raise LogFormatError(self.path, 0, f"topic: a CARMEN log's laser topics are message kinds "
-                                               f"({', '.join(LASER_KINDS)}), got {topic!r}")
+        if topic is not None and topic not in LASER_KINDS:  # said "LOG:0: topic: ...", a line the log has not
+            counts = self._laser_counts()
+            has = (f"its laser lines: {', '.join(f'{k} ({n})' for k, n in counts.items())}" if counts
+                   else "it has no laser lines")
+            upper = str(topic).strip().upper()
+            hint = f" (did you mean {upper}?)" if upper in counts or (upper in LASER_KINDS and not counts) else ""
+            raise InputError(f"topic: {topic!r} is not a CARMEN laser message kind ({', '.join(LASER_KINDS)})"
+                             f"{hint}; {self.path}: {has}")
         self.skip_bad_lines = skip_bad_lines
         self.topic = topic
         self.geometry = geometry or LaserGeometry()
         self.stats = ReadStats()
+
+    def _laser_counts(self) -> dict[str, int]:
+        """Laser message kind -> lines of it in the log, in the order met (one pass, a line's first
+        4096 characters at a time; damage ends the count where it is)."""
+        counts: dict[str, int] = {}
+        try:
+            with open_text(self.path) as f:
+                start = True  # this piece starts a line
+                for piece in iter(lambda: f.readline(4096), ""):
+                    words = piece[:24].split(None, 1) if start else []
+                    if words and words[0] in LASER_KINDS:
+                        counts[words[0]] = counts.get(words[0], 0) + 1
+                    start = piece.endswith("\n")
+        except (*READ_ERRORS, UnicodeError):
+            pass
+        return counts
 
     def _lines(self) -> Iterator[tuple[int, str]]:
         """(line number, text) of every line; damage in the stream becomes LogFormatError."""

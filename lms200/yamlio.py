@@ -6,7 +6,8 @@ Two more departures from PyYAML's safe loader, both refusals of what it took sil
 on: a key given twice in one mapping (PyYAML kept the last, so ``noise_sigma: 0.005`` followed
 further down by ``noise_sigma: 0.5`` simulated the second without a word; YAML 1.2 forbids it)
 and nesting too deep for Python's recursion limit (a RecursionError, not a YAML error). Both
-raise ``yaml.YAMLError`` with the line, as any malformed YAML does."""
+raise ``yaml.YAMLError`` with the line, as any malformed YAML does; PyYAML's own errors are
+re-raised as :class:`Malformed`, one line that starts with the place ("line 2, column 1: ...")."""
 
 from __future__ import annotations
 
@@ -58,10 +59,50 @@ class TooDeep(yaml.YAMLError):
     """YAML nested deeper than the parser's recursion allows."""
 
 
+class Malformed(yaml.YAMLError):
+    """PyYAML's error in one line, with its place (``line``, ``column``: 1-based, 0 where unknown):
+    "line 2, column 1: expected ',' or ']', but got '<stream end>' (while parsing a flow sequence
+    at line 1, column 4)". PyYAML's own spans lines, quotes the text under a caret, and names the
+    source "<unicode string>", which read as the file's name after the real one."""
+
+    def __init__(self, message: str, line: int = 0, column: int = 0) -> None:
+        super().__init__(message)
+        self.line, self.column = line, column
+
+
+def _malformed(exc: yaml.YAMLError, text: str) -> Malformed:
+    """``exc`` as a :class:`Malformed` (a duplicate key keeps its own message, prefixed the same way)."""
+    if isinstance(exc, yaml.reader.ReaderError):  # a character YAML forbids: a position, not a line
+        pos = max(0, min(int(exc.position), len(text)))
+        line, column = text.count("\n", 0, pos) + 1, pos - (text.rfind("\n", 0, pos) + 1) + 1
+        char = f"#x{exc.character:04x}" if isinstance(exc.character, int) else repr(exc.character)
+        return Malformed(f"line {line}, column {column}: unacceptable character {char}: {exc.reason}", line, column)
+    if isinstance(exc, yaml.MarkedYAMLError):
+        mark = exc.problem_mark or exc.context_mark
+        problem = exc.problem or exc.context or type(exc).__name__
+        if exc.problem and exc.context:
+            at = (f" at line {exc.context_mark.line + 1}, column {exc.context_mark.column + 1}"
+                  if exc.context_mark is not None and exc.context_mark is not mark else "")
+            problem += f" ({exc.context}{at})"
+        if mark is None:
+            return Malformed(problem)
+        return Malformed(f"line {mark.line + 1}, column {mark.column + 1}: {problem}", mark.line + 1, mark.column + 1)
+    return Malformed(" ".join(str(exc).split()))
+
+
 def load(text: str) -> Any:
-    """Parse YAML text with :class:`Loader` (raises ``yaml.YAMLError`` as ``yaml.safe_load`` does,
-    and for a duplicate key or nesting too deep to parse)."""
+    """Parse YAML text with :class:`Loader`.
+
+    Raises:
+        yaml.YAMLError: as ``yaml.safe_load`` does but in one line that starts with the place
+            (:class:`Malformed`, "line L, column C: ..."), and for a duplicate key
+            (:class:`DuplicateKey`) or nesting too deep to parse (:class:`TooDeep`).
+    """
     try:
         return yaml.load(text, Loader=Loader)  # noqa: S506 - Loader is a SafeLoader
     except RecursionError:
         raise TooDeep("nested too deeply to parse") from None
+    except (DuplicateKey, TooDeep):
+        raise
+    except yaml.YAMLError as exc:
+        raise _malformed(exc, text) from None

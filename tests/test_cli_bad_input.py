@@ -108,6 +108,17 @@ def files(tmp_path_factory):
     (d / "short_run.yaml").write_text("world: office\nseed: 0\nduration: 0.001\n")  # a simulate config: no scan
     (d / "sensor_fine.yaml").write_text("n_beams: 100000000\nresolution_deg: 1.0e-6\n")  # 10^8 beams: a hang
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
+    (d / "badcolon.yaml").write_text("noise_sigma: 0.1\n  x: : 3\n")
+    (d / "badalias.yaml").write_text("noise_sigma: *nope\n")
+    (d / "simbadyaml").mkdir()
+    (d / "simbadyaml" / "config.yaml").write_text("sensor: {noise_sigma: 0.005\n")
+    write_log(d / "simbadyaml" / "scans.clf", good)
+    (d / "simbadyaml" / "world.json").write_text((d / "simbroken" / "world.json").read_text())
+    for name, spec in {"sweep_badspec": "a: [1\n", "sweep_listspec": "- 1\n"}.items():
+        (d / name).mkdir()
+        pd.DataFrame({"extractor.k": [3], "status": ["ok"], "error": [""], "cell": ["a"], "seed": [0],
+                      "explained": [0.5]}).to_parquet(d / name / "results.parquet")
+        (d / name / "sweep.yaml").write_text(spec)
     # SLAM configs: a method's options nested under extractor, unknown / invalid method params, wrong types
     (d / "slam_nested.yaml").write_text("extractor: {sensor: {band_tau: 3}}\n")
     (d / "slam_param.yaml").write_text("extractor_params: {bogus: 1}\n")
@@ -342,6 +353,11 @@ CASES = [
     (["info", "{good.clf}", "--topic", "FLASER"], "good.clf has no FLASER lines; its laser lines: ROBOTLASER1 (5)"),
     (["calibrate", "{good.clf}", "--topic", "RLASER"], "good.clf has no RLASER lines; its laser lines: ROBOTLASER1"),
     (["slam", "{good.clf}", "--topic", "FLASER", "--out", O], "good.clf has no FLASER lines"),
+    # not a laser kind at all: "good.clf:0: topic: ...", a line 0 the log does not have
+    (["info", "{good.clf}", "--topic", "ODOM"], "topic: 'ODOM' is not a CARMEN laser message kind (FLASER, RLASER, "
+                                                "ROBOTLASER1, ROBOTLASER2, RAWLASER1, RAWLASER2, RAWLASER3, RAWLASER4); "),
+    (["slam", "{good.clf}", "--topic", "robotlaser1", "--out", O], "(did you mean ROBOTLASER1?); "),
+    (["sim2real", "{good.clf}", "--topic", "/scan", "--out", O], "good.clf: its laser lines: ROBOTLASER1 (5)"),
     (["info", "{good.clf}", "--laser-angle-min-deg", "1000"], "--laser-angle-min-deg: a bearing must be within"),
     (["info", "{good.clf}", "--laser-angle-min-deg", "1e308"], "+-360 deg"),
     (["info", "{good.clf}", "--laser-range-max", "1e308"], "--laser-range-max: must be at most 10000 m"),
@@ -394,6 +410,19 @@ CASES = [
     (["sim2real", "{mixed.clf}", "--stride", "1", "--out", O], "mixed.clf: scan 2 has 181 beams at 1 deg"),
     (["sim2real", "{good.clf}", "--sensor", "{sensor_1deg.yaml}", "--out", O], "181 beams at 1 deg, but"),
     (["sim2real", "{good.clf}", "--world", "office", "--probe-seeds", "100", "--out", O], "--probe-seeds sets the mit"),
+    # YAML errors named PyYAML's "<unicode string>" after the file, over several lines with a caret;
+    # figures --sweep read its sweep.yaml only after the study: an internal error (Malformed / AttributeError)
+    (["slam", "{simrun}", "--config", "{badyaml.yaml}", "--out", O], "badyaml.yaml: not valid YAML (line 2, column 1: "
+     "expected ',' or ']', but got '<stream end>' (while parsing a flow sequence at line 1, column 4))"),
+    (["sweep", "{badyaml.yaml}", "--out", O], "badyaml.yaml: not valid YAML: line 2, column 1: expected ',' or ']'"),
+    (["simulate", "--config", "{badyaml.yaml}", "--out", O], "badyaml.yaml: not valid YAML (line 2, column 1: expected"),
+    (["simulate", "--sensor", "{badcolon.yaml}", "--out", O],
+     "badcolon.yaml: not valid YAML (line 2, column 4: mapping values are not allowed here)"),
+    (["sim2real", "{good.clf}", "--sensor", "{badalias.yaml}", "--out", O],
+     "badalias.yaml: not valid YAML (line 1, column 14: found undefined alias 'nope')"),
+    (["compare", "{simbadyaml}", "--out", O], "config.yaml: not a simulate config (line 2, column 1: expected ',' or '}'"),
+    (["figures", "--sweep", "{sweep_badspec}", "--no-slam", "--out", O], "sweep.yaml: not valid YAML (line 2, column 1: "),
+    (["figures", "--sweep", "{sweep_listspec}", "--no-slam", "--out", O], "sweep.yaml: not the sweep.yaml of `lmsbench sweep`"),
     # bench, the top level
     (["bench", "nosuch"], "nosuch"),
     (["bench", "lms200", "lms200"], "more than once"),
@@ -403,6 +432,11 @@ CASES = [
     (["compare", "office", "--ideal", "--out", O], "lmsbench compare: error: unrecognized arguments: --ideal (see lmsbench compare --help)"),
     (["lms200", "emulate", "--bogus", "1"], "lmsbench lms200 emulate: error: unrecognized arguments: --bogus 1"),
     (["simulate", "--world", "office", "--dur", "1", "--out", O], "lmsbench simulate: error: unrecognized arguments: --dur 1"),  # ran as --duration 1
+    # an unknown option before the command was said by the command's parser (or as its missing SOURCES)
+    (["--bogus", "compare", "office", "--out", O], "lmsbench: error: unrecognized arguments: --bogus (see lmsbench --help)"),
+    (["--bogus", "compare"], "lmsbench: error: unrecognized arguments: --bogus (see lmsbench --help)"),
+    (["--out=x", "info", "{good.clf}"], "lmsbench: error: unrecognized arguments: --out=x"),
+    (["lms200", "--port", "loop://", "record", "--out", "{out}/x.clf"], "lmsbench lms200: error: unrecognized arguments: --port"),
 ]
 
 

@@ -14,6 +14,7 @@ import pytest
 from lms200 import LaserGeometry, LogFormatError, Record, Scan, read_log, write_log
 from lms200.bag import BagError
 from lms200.laser_geometry import beam_angles
+from lms200.errors import InputError
 
 DEG = math.pi / 180
 
@@ -85,8 +86,12 @@ def test_rear_laser_uses_the_rear_params_and_is_read_when_chosen(tmp_path: Path)
     assert reader.stats.laser == "FLASER" and reader.stats.other_lasers() == {"RLASER": 1}
     rear = list(read_log(path, topic="RLASER"))
     assert len(rear) == 1 and rear[0].scan.angle_increment == 0.5 * DEG
-    with pytest.raises(LogFormatError, match="laser topics are message kinds"):
+    # not a laser kind: said "two.log:0: topic: ...", a line the log does not have; now the kinds it has
+    with pytest.raises(InputError, match=r"^topic: '/scan' is not a CARMEN laser message kind \(FLASER, RLASER, "
+                                         r".*\); .*two.log: its laser lines: FLASER \(2\), RLASER \(1\)$"):
         read_log(path, topic="/scan")
+    with pytest.raises(InputError, match=r"\(did you mean RLASER\?\)"):
+        read_log(path, topic="rlaser")
 
 
 def test_param_lines_that_contradict_the_count_name_the_line(tmp_path: Path) -> None:

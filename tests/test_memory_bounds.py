@@ -163,3 +163,44 @@ def test_sensor_grids_kept_between_calls_stay_bounded() -> None:
     assert 0 < kept <= grid.GRID_CACHE_BYTES == 20 << 20 and len(grid._GRIDS) <= grid.GRID_CACHE_SIZE
     g = grid.grid_constants(3, float(inc[-1] / 200), 4)  # a kept one is returned as kept
     assert g is grid.grid_constants(3, float(inc[-1] / 200), 4)
+
+
+class _Stop(Exception):
+    pass
+
+
+def test_sim2real_keeps_only_the_scans_it_uses(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``--stride 100 --max-scans 1000`` on a 300-scan log uses 3 scans, but sim2real held all 300
+    records until the simulation (every record between the scans used, for the odometry): memory
+    grew with the log, up to stride x max-scans records. The motion limits still come from every
+    record's odometry: the same as from the whole list."""
+    import gc
+
+    import sim
+    from experiments import sim2real
+    from lms200 import Record, read_log, write_log
+    from sim import SensorConfig
+
+    rng = np.random.default_rng(3)
+    recs = [Record(Scan.lms200(2.0 + 0.01 * rng.standard_normal(361), stamp=0.1 * k),
+                   odom=(0.05 * k, 0.01 * k, 0.02 * k + 0.01 * rng.standard_normal())) for k in range(300)]
+    write_log(tmp_path / "log.clf", recs)
+    del recs
+    expected = sim2real.motion_limits(list(read_log(tmp_path / "log.clf")))
+    seen: dict = {}
+
+    def stop(*args, **kwargs):
+        gc.collect()
+        seen["scans"] = sum(isinstance(o, Scan) for o in gc.get_objects())
+        seen["limits"] = kwargs["limits"]
+        raise _Stop
+
+    monkeypatch.setattr(sim, "simulate_records", stop)
+    gc.collect()
+    before = sum(isinstance(o, Scan) for o in gc.get_objects())
+    with pytest.raises(_Stop):
+        sim2real.sim2real(tmp_path / "log.clf", world="office", seeds=[1], stride=100, max_scans=1000,
+                          sensor=SensorConfig())
+    assert seen["scans"] - before <= 3, seen  # the 3 scans used (0, 100, 200); was 300
+    assert seen["limits"] == expected
+    assert 0.4 < expected.v_max < 0.6  # 0.05 m per 0.1 s of odometry

@@ -96,6 +96,37 @@ def test_slam_skips_the_fewest_scans_out_of_time_order(sim_folder, tmp_path, cap
     assert in_time_order([3.0, 2.0, 1.0]) == [2] and in_time_order([]) == []
 
 
+def test_slam_refuses_a_log_of_one_stamp_and_warns_of_steps_without_time(sim_folder, tmp_path, capsys):
+    """A log whose stamps are all equal ran (exit 0): every step predicted no motion and searched no
+    turn. Now refused in one line naming the file, with --rate-hz too (which kept one scan of it).
+    A log where only some steps take no time (a coarse clock: pairs of scans per stamp) still runs,
+    and says how many steps on stderr."""
+    import dataclasses
+
+    from experiments.cli import main
+    from lms200 import read_log
+
+    records = list(read_log(sim_folder / "scans.clf"))[:20]
+    flat = [dataclasses.replace(r, scan=r.scan.replace(stamp=7.0)) for r in records]
+    write_log(tmp_path / "flat.clf", flat)
+    for extra in ([], ["--rate-hz", "5"]):
+        assert main(["slam", str(tmp_path / "flat.clf"), "--out", str(tmp_path / "o"), "--quiet", *extra]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert err == [f"lmsbench slam: error: {tmp_path / 'flat.clf'}: all 20 scans read have the same stamp "
+                       "(7.000000 s); SLAM's motion model needs the time between scans (a log written without a clock?)"]
+        assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+    paired = [dataclasses.replace(r, scan=r.scan.replace(stamp=records[k - k % 2].scan.stamp))
+              for k, r in enumerate(records)]
+    write_log(tmp_path / "paired.clf", paired)
+    assert main(["slam", str(tmp_path / "paired.clf"), "--out", str(tmp_path / "p"), "--quiet"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert [line for line in err if "take no time" in line] == [
+        f"lmsbench slam: warning: {tmp_path / 'paired.clf'}: 10 of 19 steps take no time (scan 1 has the stamp of the "
+        f"scan before, {records[0].scan.stamp:.6f} s): the motion model predicts no motion and the search no turn "
+        "over them"]
+    assert read_tum(tmp_path / "p" / "trajectory.tum")[0].size == 20
+
+
 def test_slam_command_errors_are_one_line(tmp_path, capsys):
     from experiments.cli import main  # in process: the subprocess test above covers the real command line
 

@@ -64,10 +64,13 @@ def _config(args: argparse.Namespace):
         check_yaml(args.config, "a simulate config.yaml")
         try:
             raw = load_yaml(args.config.read_text())
+        except yaml.YAMLError as exc:
+            raise InputError(f"{args.config}: not valid YAML ({exc})") from None
+        try:
             if not isinstance(raw, dict):
                 raise TypeError("expected a mapping of world, seed, duration, sensor, ...")
             cfg = SimulationConfig.from_dict(raw)
-        except (yaml.YAMLError, TypeError, ValueError) as exc:
+        except (TypeError, ValueError) as exc:
             raise InputError(f"{args.config}: not a simulate config ({' '.join(str(exc).split())})") from None
         if cfg.world not in known_worlds() and not cfg.world.endswith(".json"):
             raise InputError(f"{args.config}: unknown world {cfg.world!r}; known worlds: {', '.join(known_worlds())}")

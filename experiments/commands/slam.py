@@ -60,7 +60,7 @@ def _config(args: argparse.Namespace):
         try:
             raw = load_yaml(args.config.read_text()) or {}
         except yaml.YAMLError as exc:
-            raise LmsbenchError(f"{args.config}: not YAML ({exc})") from None
+            raise LmsbenchError(f"{args.config}: not valid YAML ({exc})") from None
         if not isinstance(raw, dict):
             raise LmsbenchError(f"{args.config}: expected a mapping of SLAM config fields")
         try:
@@ -165,6 +165,12 @@ def run(args: argparse.Namespace) -> int:
         data.records = [data.records[k] for k in keep]
         if data.truth is not None and np.array_equal(data.truth[:, 0], stamps):  # a pose per scan (TRUEPOS)
             data.truth = data.truth[keep]
+    stamps = [r.scan.stamp for r in data.records]
+    still = [k for k in range(1, len(stamps)) if stamps[k] == stamps[k - 1]]
+    if still:  # each such step predicts no motion and searches no turn: kept (a coarse clock still works), said
+        print(f"lmsbench slam: warning: {data.sources.get('scans', args.input)}: {len(still)} of {len(stamps) - 1} "
+              f"steps take no time (scan {still[0]} has the stamp of the scan before, {stamps[still[0]]:.6f} s): "
+              "the motion model predicts no motion and the search no turn over them", file=sys.stderr)
     if config.motion.use_odometry and data.odometry is None:
         raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
     if simulated_interlaced(args.input) is False and config.preset == "default" and config.alignment.deskew:

@@ -785,35 +785,51 @@ def slope_sums(sig):  # noqa: ANN001, ANN201
 R_FIRST, R_LAST, R_COUNT, R_START, R_C0, R_C1 = range(6)
 R_ROWS = 6
 
+# rows of the scratch blocks ``find_lines`` allocates once a scan and every pass of ``fit_spans``
+# reuses (an allocation is a malloc, a free and reference counts: ~60 ns, and a pass made 14):
+# floats (W_ROWS, n + VOTE_BLOCK): a pass's log ranges, bands (centre, half-width, cell
+# half-width), Log-Hough peaks (alpha, rho), one angle's votes, a run's residuals z and scratch,
+# the refined lines (rho, alpha, covariance 00, 01, 11); the vote reference of each band angle
+W_LOG_D, W_CENTRE, W_HALF, W_BIN, W_ALPHA, W_RHO, W_VOTES, W_Z, W_SCRATCH, W_VRHO, W_VALPHA, W_C00, W_C01, W_C11, W_REF = range(15)
+W_ROWS = 15
+# ints (I_ROWS, n): the run table (``R_*`` rows), the refined lines' first / last inlier beam and
+# inlier count, and two span tables of four rows (first, last, shrink0, shrink1) that alternate
+# between passes (``find_lines``)
+I_FIRST_IN, I_LAST_IN, I_N_IN, I_SPANS_A, I_SPANS_B = 6, 7, 8, 9, 13
+I_ROWS = 17
+# flags (F_ROWS, n): the Log-Hough inliers of a pass's beams, a run's inliers, the runs that pass
+F_INLIER0, F_INL_RUN, F_GOOD = range(3)
+F_ROWS = 3
+
 
 @kernel
-def band_of_runs(runs, sig, cs, ranges, bearings, increment, sigma_r, k, p):  # noqa: ANN001, ANN201
+def band_of_runs(runs, sig, cs, ranges, bearings, increment, sigma_r, k, p, fw):  # noqa: ANN001, ANN201
     """Each run's band of normal angles: its slope estimate (the mean of theta over its centres,
     continuous along a run), the band half-width (band_tau std of that mean, at least band_min)
     and the half-width of the peak's log-range window: range noise at the nearest beam plus the
     spread an angle error of half a band step causes over the run (d log p / d a = -tan(a - b)).
     ``runs``: the run table (``R_*`` rows); ``cs``: the cumulative sums of theta and theta_var
-    (``slope_sums``). Returns one (3, runs) block: centre, half-width, peak window half-width."""
+    (``slope_sums``). Writes rows W_CENTRE, W_HALF, W_BIN of ``fw``: centre, half-width, peak
+    window half-width of each run (column r)."""
     cs_t, cs_v = cs[0], cs[1]
     h = max((p.hough_angles - 1) // 2, 1)
     n_runs = runs.shape[1]
-    out = np.empty((3, n_runs))
-    centre, half_width, bin_half = out[0], out[1], out[2]
     for r in range(n_runs):
         a, e = runs[R_C0, r], runs[R_C1, r]
         n_c = e - a + 1
         t0 = 0.0 if np.isnan(sig[S_THETA, a]) else sig[S_THETA, a]
         v0 = 0.0 if np.isnan(sig[S_THETA_VAR, a]) else sig[S_THETA_VAR, a]
-        centre[r] = (cs_t[e] - cs_t[a] + t0) / n_c
+        centre = (cs_t[e] - cs_t[a] + t0) / n_c
         cvar = (cs_v[e] - cs_v[a] + v0) / (n_c * (1.0 + n_c / (2 * k + 1)))
-        half_width[r] = min(max(p.band_tau * math.sqrt(cvar), p.band_min), BAND_MAX)
-        angle_step = max(half_width[r] / h, increment / p.hough_subdiv)
-        tan_span = abs(math.tan(bearings[B_ANGLE, e + k] - centre[r]) - math.tan(bearings[B_ANGLE, a - k] - centre[r]))
+        half_width = min(max(p.band_tau * math.sqrt(cvar), p.band_min), BAND_MAX)
+        angle_step = max(half_width / h, increment / p.hough_subdiv)
+        tan_span = abs(math.tan(bearings[B_ANGLE, e + k] - centre) - math.tan(bearings[B_ANGLE, a - k] - centre))
         d_min = np.inf
         for j in range(a - k, e + k + 1):
             d_min = min(d_min, ranges[j])
-        bin_half[r] = p.bin_tau * sigma_r / d_min + 0.5 * angle_step * min(tan_span, TAN_SPAN_CAP)
-    return out
+        fw[W_CENTRE, r] = centre
+        fw[W_HALF, r] = half_width
+        fw[W_BIN, r] = p.bin_tau * sigma_r / d_min + 0.5 * angle_step * min(tan_span, TAN_SPAN_CAP)
 
 
 # -- 3. the Log-Hough transform in a band ---------------------------------------------------------
@@ -826,15 +842,16 @@ def template_at(template, idx) -> float:  # noqa: ANN001
 
 
 @kernel
-def band_peaks(runs, log_d, bands, angle_min, subdiv, n_angles, grid):  # noqa: ANN001, ANN201
+def band_peaks(runs, fw, fb, angle_counts, angle_min, subdiv, n_angles, grid):  # noqa: ANN001, ANN201
     """The Log-Hough peak of every run in its band of normal angles, and the beams that voted in it.
 
     Args: the run table ``runs`` (``R_*`` rows): run r holds beams f .. f + count - 1 (f its
-    first beam), whose log ranges are ``log_d`` rows start .. start + count - 1; ``bands``
-    (``band_of_runs``): per run the band centre and half-width (rad) and the half-width of a
-    log-range cell; the scan's ``angle_min`` (rad).
-    Returns a (2, runs) block: alpha (rad, not wrapped), rho (m) of each run's peak; and the
-    inlier mask of the rows.
+    first beam), whose log ranges are row W_LOG_D of the float block ``fw`` (``find_lines``)
+    at columns start .. start + count - 1; per run (column r of rows W_CENTRE, W_HALF, W_BIN,
+    ``band_of_runs``) the band centre and half-width (rad) and the half-width of a log-range cell;
+    ``angle_counts``: (n_angles, N_BINS + 3) int scratch; the scan's ``angle_min`` (rad).
+    Writes rows W_ALPHA, W_RHO of ``fw``: alpha (rad, not wrapped), rho (m) of each run's peak;
+    and row F_INLIER0 of the flag block ``fb``: the inlier mask of the beams (log_d's columns).
     """
     template, zero, step, phases = grid.template, grid.zero, grid.step, grid.phases
     n_runs = runs.shape[1]
@@ -843,23 +860,19 @@ def band_peaks(runs, log_d, bands, angle_min, subdiv, n_angles, grid):  # noqa: 
     n_tmpl = template.size
     n_phase = phases.shape[1]
     flat = phases.reshape(phases.size)  # row r of phases from r * n_phase
-    out = np.empty((2, n_runs))
-    alpha, rho = out[0], out[1]
-    inlier = np.zeros(log_d.size, np.bool_)
-    ref = np.empty(n_angles)
+    log_d, inlier, votes, ref = fw[W_LOG_D], fb[F_INLIER0], fw[W_VOTES], fw[W_REF]  # rows as views: the vote loops as written
     max_cnt = 0
     for r in range(n_runs):
         max_cnt = max(max_cnt, runs[R_COUNT, r])
-    votes = np.empty(max_cnt + VOTE_BLOCK)  # one run's votes at one angle (the generic path), padded
-    votes[max_cnt:] = 0.0
+    votes[max_cnt:max_cnt + VOTE_BLOCK] = 0.0  # one run's votes at one angle (the generic path), padded
     # per angle: its index, then the vote counts of cells 1..N_BINS (0 and N_BINS + 1 outside)
-    angle_counts = np.empty((n_angles, N_BINS + 3), np.int64)
     a_idx, counts_a = angle_counts[:, 0], angle_counts[:, 1:]
     for r in range(n_runs):
         s, cnt, f = runs[R_START, r], runs[R_COUNT, r], runs[R_FIRST, r]
-        centre_idx = np.int64(np.rint((bands[0, r] - angle_min) / step))
-        stride = np.int64(max(np.rint(bands[1, r] / (h * step)), 1.0))
-        inv_width = 1.0 / bands[2, r]
+        centre_idx = np.int64(np.rint((fw[W_CENTRE, r] - angle_min) / step))
+        stride = np.int64(max(np.rint(fw[W_HALF, r] / (h * step)), 1.0))
+        bin_half = fw[W_BIN, r]
+        inv_width = 1.0 / bin_half
         # cells are laid out around the median vote of the beams at 1/4, 1/2 and 3/4 of the run
         # (a mean would be dragged off by neighbour-line beams at its ends; one beam can be a spike)
         t1, t2, t3 = cnt // 4, cnt // 2, (3 * cnt) // 4
@@ -932,19 +945,18 @@ def band_peaks(runs, log_d, bands, angle_min, subdiv, n_angles, grid):  # noqa: 
                 if v > best:
                     best, best_a, best_c = v, a, c
         # the pair (c, c+1) covers (log p - ref) / width in [c - N_BINS/2, c + 2 - N_BINS/2)
-        peak_log_p = ref[best_a] + (best_c + 1 - N_BINS / 2.0) * bands[2, r]
-        alpha[r] = angle_min + a_idx[best_a] * step
-        rho[r] = math.exp(peak_log_p)
+        peak_log_p = ref[best_a] + (best_c + 1 - N_BINS / 2.0) * bin_half
+        fw[W_ALPHA, r] = angle_min + a_idx[best_a] * step
+        fw[W_RHO, r] = math.exp(peak_log_p)
         base = a_idx[best_a] + zero - f * subdiv
         if inside:
             o = np.uint64((base % subdiv) * n_phase + n_phase - 1 - base // subdiv)
             for t in range(cnt):
                 tu = np.uint64(t)
-                inlier[s_u + tu] = abs((flat[o + tu] + log_d[s_u + tu]) - peak_log_p) <= bands[2, r]
+                inlier[s_u + tu] = abs((flat[o + tu] + log_d[s_u + tu]) - peak_log_p) <= bin_half
         else:
             for t in range(cnt):
-                inlier[s + t] = abs((template_at(template, base - t * subdiv) + log_d[s + t]) - peak_log_p) <= bands[2, r]
-    return out, inlier
+                inlier[s + t] = abs((template_at(template, base - t * subdiv) + log_d[s + t]) - peak_log_p) <= bin_half
 
 
 @kernel
@@ -954,10 +966,13 @@ def band_search(first, log_d, starts, counts, centre, half_width, bin_half, angl
     not wrapped), rho (m) of each run's peak and the inlier mask of the rows."""
     runs = np.zeros((R_ROWS, first.size), np.int64)
     runs[R_FIRST], runs[R_COUNT], runs[R_START] = first, counts, starts
-    bands = np.empty((3, first.size))
-    bands[0], bands[1], bands[2] = centre, half_width, bin_half
-    out, inlier = band_peaks(runs, log_d, bands, angle_min, subdiv, n_angles, grid)
-    return out[0], out[1], inlier
+    width = max(log_d.size, first.size, n_angles, 1) + VOTE_BLOCK
+    fw = np.empty((W_ROWS, width))
+    fb = np.zeros((F_ROWS, width), np.bool_)
+    fw[W_LOG_D, :log_d.size] = log_d
+    fw[W_CENTRE, :first.size], fw[W_HALF, :first.size], fw[W_BIN, :first.size] = centre, half_width, bin_half
+    band_peaks(runs, fw, fb, np.empty((n_angles, N_BINS + 3), np.int64), angle_min, subdiv, n_angles, grid)
+    return fw[W_ALPHA, :first.size].copy(), fw[W_RHO, :first.size].copy(), fb[F_INLIER0, :log_d.size].copy()
 
 
 # -- 4. weighted refinement -----------------------------------------------------------------------
@@ -1094,9 +1109,10 @@ def curvature_sums(z, inl, cnt, a_lin, b_lin):  # noqa: ANN001, ANN201
 
 
 @kernel
-def fit_runs(runs, peaks, inlier0, ranges, bearings, valid, sigma_r, p):  # noqa: ANN001, ANN201
+def fit_runs(runs, fw, fb, iw, ranges, bearings, valid, sigma_r, p):  # noqa: ANN001, ANN201
     """Refine every run's line (the run table ``runs``: run r holds beams f .. f + count - 1, its
-    rows of ``inlier0`` from start; ``peaks``: its Log-Hough alpha, rho) by two weighted Gauss-Newton steps, one on the Log-Hough inliers,
+    Log-Hough inliers in row F_INLIER0 of ``fb`` from column start; its Log-Hough alpha, rho in
+    rows W_ALPHA, W_RHO of ``fw``) by two weighted Gauss-Newton steps, one on the Log-Hough inliers,
     then one on the beams within inlier_tau sigma_r of that (which gives the covariance), and
     check it: enough inliers (min(min_points, 2k + 1): min_points is asked of the line once
     ``extend_ends`` has grown it), most of the run explained, chi^2 of the inliers (per dof at
@@ -1115,22 +1131,13 @@ def fit_runs(runs, peaks, inlier0, ranges, bearings, valid, sigma_r, p):  # noqa
     checks need (``gn_sums_inliers``), so that a run's beams are read twice and, for the
     curvature, a third time.
 
-    Returns the lines in normal form: a (2, runs) block rho (>= 0), alpha (in (-pi, pi]); cov
-    (runs, 2, 2); a (3, runs) block first / last inlier beam, inlier count; and the mask of those
-    that pass."""
+    Writes the lines in normal form to column r of the blocks (``find_lines``): rows W_VRHO
+    (rho >= 0), W_VALPHA (alpha in (-pi, pi]), W_C00, W_C01, W_C11 (covariance) of ``fw``; rows
+    I_FIRST_IN, I_LAST_IN, I_N_IN (first / last inlier beam, inlier count) of ``iw``; and row
+    F_GOOD of ``fb``, the mask of those that pass."""
     n_runs = runs.shape[1]
-    max_cnt = 0
-    for r in range(n_runs):
-        max_cnt = max(max_cnt, runs[R_COUNT, r])
-    zs = np.empty((2, max_cnt))  # a run's normalised residuals z and (after the checks' sums) local_scale's scratch
-    z_run = zs[0]  # row 1: local_scale's scratch
-    inl_run = np.empty(max_cnt, np.bool_)
-    vals = np.empty((2, n_runs))
-    rho, alpha = vals[0], vals[1]
-    cov = np.empty((n_runs, 2, 2))
-    ints = np.empty((3, n_runs), np.int64)
-    first_in, last_in, n_in = ints[0], ints[1], ints[2]
-    good = np.zeros(n_runs, np.bool_)
+    # a run's normalised residuals z (row W_Z) and, after the checks' sums, local_scale's scratch (W_SCRATCH)
+    z_run, inl_run, inlier0 = fw[W_Z], fb[F_INL_RUN], fb[F_INLIER0]
     curv2 = p.curvature_tau * p.curvature_tau
     tau = p.inlier_tau
     inv_sigma = 1.0 / sigma_r
@@ -1142,11 +1149,11 @@ def fit_runs(runs, peaks, inlier0, ranges, bearings, valid, sigma_r, p):  # noqa
     for r in range(n_runs):
         s, cnt, f = runs[R_START, r], runs[R_COUNT, r], runs[R_FIRST, r]
         # step 1, on the Log-Hough inliers
-        sw, swg, swgg, swr, swgr = gn_sums(ranges, bearings, valid, inlier0, f, s, cnt, math.cos(peaks[0, r]),
-                                           math.sin(peaks[0, r]), peaks[1, r], st2 / s2)
+        sw, swg, swgg, swr, swgr = gn_sums(ranges, bearings, valid, inlier0, f, s, cnt, math.cos(fw[W_ALPHA, r]),
+                                           math.sin(fw[W_ALPHA, r]), fw[W_RHO, r], st2 / s2)
         inv_det = 1.0 / (sw * swgg - swg * swg)  # normal equations H delta = -J^T W r, J = [-1, g]
-        rho1 = peaks[1, r] + (swgg * swr - swg * swgr) * inv_det
-        alpha1 = peaks[0, r] + (swg * swr - sw * swgr) * inv_det
+        rho1 = fw[W_RHO, r] + (swgg * swr - swg * swgr) * inv_det
+        alpha1 = fw[W_ALPHA, r] + (swg * swr - sw * swgr) * inv_det
         # step 2, on the beams within inlier_tau sigma_r of step 1's line, with the checks' sums
         (sw, swg, swgg, swr, swgr), chi, ni, i_t, i_t2, i_t3, lo, hi = gn_sums_inliers(
             ranges, bearings, valid, f, cnt, math.cos(alpha1), math.sin(alpha1), rho1, inv_sigma, st2, tau, z_run, inl_run)
@@ -1155,9 +1162,9 @@ def fit_runs(runs, peaks, inlier0, ranges, bearings, valid, sigma_r, p):  # noqa
         alpha_r = alpha1 + (swg * swr - sw * swgr) * inv_det
         var = s2 * inv_det
         c00, c01, c11 = swgg * var, swg * var, sw * var
-        first_in[r] = f + lo
-        last_in[r] = f + hi
-        n_in[r] = ni
+        iw[I_FIRST_IN, r] = f + lo
+        iw[I_LAST_IN, r] = f + hi
+        iw[I_N_IN, r] = ni
         # the checks, each only while the ones before pass (a run that fails one needs no other)
         ok = ni >= min(p.min_points, 2 * p.k + 1) and ni >= p.min_inlier_fraction * cnt  # min_points: of the grown line (find_lines)
         if ok:  # curvature: the residuals against q = t^2 - a - b t, orthogonal to 1 and t over the inliers
@@ -1170,18 +1177,17 @@ def fit_runs(runs, peaks, inlier0, ranges, bearings, valid, sigma_r, p):  # noqa
         if ok:
             chi_max = p.max_chi2 * max(ni - 2, 1)
             if chi > chi_max:  # the run's own noise, where it exceeds sigma_r
-                loc = local_scale(ranges, valid, f, f + cnt - 1, sweep, c2, zs, 1, 0) / sigma_r  # z_run (row 0) read no more
+                loc = local_scale(ranges, valid, f, f + cnt - 1, sweep, c2, fw, W_SCRATCH, W_Z) / sigma_r  # z_run read no more
                 chi_max *= max(1.0, loc * loc)
             ok = chi <= chi_max and np.isfinite(rho_r + alpha_r + c00 + c11)
-        good[r] = ok
+        fb[F_GOOD, r] = ok
         if rho_r < 0:
             rho_r = -rho_r
             alpha_r = alpha_r + math.pi
             c01 = -c01
-        rho[r] = rho_r
-        alpha[r] = wrap(alpha_r)
-        cov[r, 0, 0], cov[r, 0, 1], cov[r, 1, 0], cov[r, 1, 1] = c00, c01, c01, c11
-    return vals, cov, ints, good
+        fw[W_VRHO, r] = rho_r
+        fw[W_VALPHA, r] = wrap(alpha_r)
+        fw[W_C00, r], fw[W_C01, r], fw[W_C11, r] = c00, c01, c11
 
 
 @kernel
@@ -1404,7 +1410,7 @@ def circle_gn_sums(work, valid, f, m):  # noqa: ANN001, ANN201
 
 
 @kernel
-def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p) -> bool:  # noqa: ANN001
+def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p, work) -> bool:  # noqa: ANN001
     """Do the valid beams f..l trace one round surface? One circle (algebraic Kasa fit, then
     ARC_GN_STEPS geometric Gauss-Newton steps) must fit them as the line checks ask of a line
     (min_inlier_fraction of the beams within inlier_tau sigma_r, chi^2 per dof <= max_chi2), and
@@ -1423,9 +1429,11 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
       a real corner the circle is a compromise with far larger residuals; this comparison holds
       whatever the actual scatter, e.g. of the interlaced sweeps of 0.5 deg logs). Every chi^2
       here is clipped at inlier_tau^2 a beam, as the checks see a line (its inliers): unclipped,
-      two stray beams on a line (mixed pixels, clutter) made it look as loose as a circle."""
+      two stray beams on a line (mixed pixels, clutter) made it look as loose as a circle.
+
+    ``work``: a (C_ROWS, l - f + 1 or more) scratch block, for the beams' points and then the
+    per-beam terms of each pass over them (the caller's, once a scan: not an allocation a call)."""
     m = l - f + 1
-    work = np.empty((C_ROWS, m))  # the beams' points, then per-beam terms of each pass over them
     n = 0  # the points and the centroid of the valid ones in one pass (``valid_centroid``'s sums, in its order)
     mx = 0.0
     my = 0.0
@@ -1534,11 +1542,12 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p)
 
 
 @kernel
-def on_arcs(rho, alpha, first, last, ranges, bearings, valid, sig, increment, sigma_r, p):  # noqa: ANN001, ANN201
+def on_arcs(rho, alpha, first, last, ranges, bearings, valid, sig, increment, sigma_r, p, work):  # noqa: ANN001, ANN201
     """Which lines [first, last] are chords of a round surface (``circle_fits``): the neighbourhood
     is the line and as many beams again past each end (at least k), while the surface goes on
     without a depth jump (Borges & Aldon's adaptive breakpoint, BREAK_LAMBDA, plus 3 sigma_r).
-    Lines that do not reach past their ends by k beams in all are not tested (nothing to compare)."""
+    Lines that do not reach past their ends by k beams in all are not tested (nothing to compare).
+    ``work``: circle_fits' scratch, (C_ROWS, n)."""
     n = ranges.size
     out = np.zeros(first.size, np.bool_)
     ratio = math.sin(increment) / math.sin(BREAK_LAMBDA - increment)
@@ -1552,22 +1561,24 @@ def on_arcs(rho, alpha, first, last, ranges, bearings, valid, sig, increment, si
                and abs(ranges[b + 1] - ranges[b]) <= ranges[b] * ratio + 3.0 * sigma_r):
             b += 1
         if (first[m] - a) + (b - last[m]) >= p.k and theta_turn(a, b, sig) >= 0.5 * p.corner_min_turn:
-            out[m] = circle_fits(a, b, first[m], last[m], rho[m], alpha[m], ranges, bearings, valid, sigma_r, p)
+            out[m] = circle_fits(a, b, first[m], last[m], rho[m], alpha[m], ranges, bearings, valid, sigma_r, p, work)
     return out
 
 
 @kernel
-def fit_spans(spans, n_runs, ranges, log_r, bearings, valid, sig, cs, angle_min, increment, sigma_r, grid, p):  # noqa: ANN001, ANN201
-    """Steps 3-4 on the first ``n_runs`` spans of valid beams (``spans`` rows first, last, shrink0,
-    shrink1; each at least 2k + 1 beams): the band of normal angles from theta over the window
+def fit_spans(sp, n_runs, ranges, log_r, bearings, valid, sig, cs, angle_min, increment, sigma_r, grid, p, fw, iw, fb,
+              angle_counts):  # noqa: ANN001, ANN201
+    """Steps 3-4 on the first ``n_runs`` spans of valid beams (rows sp .. sp + 3 of ``iw``: first,
+    last, shrink0, shrink1; each at least 2k + 1 beams): the band of normal angles from theta over the window
     centres first + k .. last - k (less ``shrink0`` / ``shrink1`` centres at each end: those whose
     windows reach across a split), the Log-Hough peak in it and the refined, checked line.
-    ``log_r``: log of the ranges (at least of the spans' beams). Returns fit_runs' outputs."""
+    ``log_r``: log of the ranges (at least of the spans' beams). The scratch blocks ``fw``,
+    ``iw``, ``fb`` and ``angle_counts`` are ``find_lines``'; fit_runs' outputs are left in them."""
     k = p.k
-    runs = np.empty((R_ROWS, n_runs), np.int64)
+    runs = iw[:R_ROWS, :n_runs]
     total = 0
     for r in range(n_runs):
-        f, l, sh0, sh1 = spans[0, r], spans[1, r], spans[2, r], spans[3, r]
+        f, l, sh0, sh1 = iw[sp, r], iw[sp + 1, r], iw[sp + 2, r], iw[sp + 3, r]
         runs[R_FIRST, r], runs[R_LAST, r] = f, l
         runs[R_COUNT, r] = l - f + 1
         runs[R_START, r] = total
@@ -1577,14 +1588,14 @@ def fit_spans(spans, n_runs, ranges, log_r, bearings, valid, sig, cs, angle_min,
             c0 += sh0
             c1 -= sh1
         runs[R_C0, r], runs[R_C1, r] = c0, c1
-    log_d = np.empty(total)
+    log_d = fw[W_LOG_D]
     for r in range(n_runs):  # by offsets, unsigned: a view a run was two atomic reference counts
         f, s = np.uint64(runs[R_FIRST, r]), np.uint64(runs[R_START, r])
         for t in range(np.uint64(runs[R_COUNT, r])):
             log_d[s + t] = log_r[f + t]
-    bands = band_of_runs(runs, sig, cs, ranges, bearings, increment, sigma_r, k, p)
-    peaks, inlier0 = band_peaks(runs, log_d, bands, angle_min, p.hough_subdiv, p.hough_angles, grid)
-    return fit_runs(runs, peaks, inlier0, ranges, bearings, valid, sigma_r, p)
+    band_of_runs(runs, sig, cs, ranges, bearings, increment, sigma_r, k, p, fw)
+    band_peaks(runs, fw, fb, angle_counts, angle_min, p.hough_subdiv, p.hough_angles, grid)
+    fit_runs(runs, fw, fb, iw, ranges, bearings, valid, sigma_r, p)
 
 
 @kernel
@@ -1601,11 +1612,27 @@ def find_lines(ranges, bearings, valid, sig, angle_min, increment,  # noqa: ANN0
     k = p.k
     c0, c1 = candidate_runs(sig, k, grid.ad_line, sigma_r, p)
     min_core = min(p.min_points, 2 * k + 1)  # a run's line may grow to min_points past its ends
-    spans = np.zeros((4, c0.size), np.int64)  # the first pass's spans: first, last, shrink0, shrink1
+    # the passes' scratch, once a scan (``W_*``, ``I_*``, ``F_*`` rows), ``cap`` columns: the
+    # first pass's spans (centre runs, which are disjoint, grown by k beams at each end) may
+    # overlap, so their beams may number more than the scan's n (at most (k + 1) n); a later
+    # pass's spans are disjoint parts of the spans before, so no pass has more beams than the
+    # first, nor more spans than n (each of min_span >= 2k + 1 beams)
+    total = 0
+    for r in range(c0.size):
+        if c1[r] - c0[r] + 2 * k + 1 >= min_core:
+            total += c1[r] - c0[r] + 2 * k + 1
+    cap = max(ranges.size, total, p.hough_angles)
+    fw = np.empty((W_ROWS, cap + VOTE_BLOCK))
+    iw = np.empty((I_ROWS, cap), np.int64)
+    fb = np.empty((F_ROWS, cap), np.bool_)
+    angle_counts = np.empty((p.hough_angles, N_BINS + 3), np.int64)
+    circle_work = np.empty((C_ROWS, ranges.size))  # circle_fits' scratch (spans and neighbourhoods lie within the scan)
+    sp = I_SPANS_A  # the first pass's spans (rows first, last, shrink0, shrink1 of iw)
     n_spans = 0
     for r in range(c0.size):
         if c1[r] - c0[r] + 2 * k + 1 >= min_core:
-            spans[0, n_spans], spans[1, n_spans] = c0[r] - k, c1[r] + k
+            iw[sp, n_spans], iw[sp + 1, n_spans] = c0[r] - k, c1[r] + k
+            iw[sp + 2, n_spans], iw[sp + 3, n_spans] = 0, 0
             n_spans += 1
     log_r = log_ranges(ranges)  # log of the ranges (read at the spans' beams), once (later spans are parts of these)
     min_span = max(p.min_points, 2 * k + 1)
@@ -1618,29 +1645,29 @@ def find_lines(ranges, bearings, valid, sig, angle_min, increment,  # noqa: ANN0
     m = 0
     cs = slope_sums(sig)
     while n_spans:
-        vals, cov, ints, good = fit_spans(spans, n_spans, ranges, log_r, bearings, valid, sig, cs, angle_min, increment,
-                                          sigma_r, grid, p)
+        fit_spans(sp, n_spans, ranges, log_r, bearings, valid, sig, cs, angle_min, increment, sigma_r, grid, p, fw, iw, fb,
+                  angle_counts)
         for r in range(n_spans):
-            if good[r] and m < n_max:
-                o_rho[m], o_alpha[m] = vals[0, r], vals[1, r]
-                o_cov[m, 0, 0], o_cov[m, 0, 1], o_cov[m, 1, 0], o_cov[m, 1, 1] = cov[r, 0, 0], cov[r, 0, 1], cov[r, 1, 0], cov[r, 1, 1]
-                o_f[m], o_l[m], o_n[m] = ints[0, r], ints[1, r], ints[2, r]
+            if fb[F_GOOD, r] and m < n_max:
+                o_rho[m], o_alpha[m] = fw[W_VRHO, r], fw[W_VALPHA, r]
+                o_cov[m, 0, 0], o_cov[m, 0, 1], o_cov[m, 1, 0], o_cov[m, 1, 1] = fw[W_C00, r], fw[W_C01, r], fw[W_C01, r], fw[W_C11, r]
+                o_f[m], o_l[m], o_n[m] = iw[I_FIRST_IN, r], iw[I_LAST_IN, r], iw[I_N_IN, r]
                 m += 1
-        parts = np.empty((4, 2 * n_spans), np.int64)  # the next pass's spans: first, last, shrink0, shrink1
+        nxt = I_SPANS_B if sp == I_SPANS_A else I_SPANS_A  # the next pass's spans: first, last, shrink0, shrink1
         q = 0
         for r in range(n_spans):
-            f0, l0 = spans[0, r], spans[1, r]
-            if good[r] or l0 - f0 < min_span:  # a part of min_span beams may remain
+            f0, l0 = iw[sp, r], iw[sp + 1, r]
+            if fb[F_GOOD, r] or l0 - f0 < min_span:  # a part of min_span beams may remain
                 continue
             if p.arc_check and theta_turn(f0, l0, sig) >= 0.5 * p.corner_min_turn:
-                if circle_fits(f0, l0, -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r, p):
+                if circle_fits(f0, l0, -1, -1, 0.0, 0.0, ranges, bearings, valid, sigma_r, p, circle_work):
                     continue  # a failing span that is one circle is a round surface: not cut into chords
             at = farthest_from_chord(f0, l0, ranges, bearings)
-            for f, l, a, b in ((f0, at - 1, spans[2, r], k), (at + 1, l0, k, spans[3, r])):
+            for f, l, a, b in ((f0, at - 1, iw[sp + 2, r], k), (at + 1, l0, k, iw[sp + 3, r])):
                 if l - f + 1 >= min_span:
-                    parts[0, q], parts[1, q], parts[2, q], parts[3, q] = f, l, a, b
+                    iw[nxt, q], iw[nxt + 1, q], iw[nxt + 2, q], iw[nxt + 3, q] = f, l, a, b
                     q += 1
-        spans, n_spans = parts, q
+        sp, n_spans = nxt, q
     order = np.argsort(o_f[:m], kind="mergesort")  # the lines in beam order
     vals = np.empty((2, m))
     rho, alpha = vals[0], vals[1]
@@ -1654,7 +1681,8 @@ def find_lines(ranges, bearings, valid, sig, angle_min, increment,  # noqa: ANN0
     extend_ends(rho, alpha, f_in, l_in, n_in, ranges, bearings, valid, k + 2, p.inlier_tau, sigma_r,
                 p.sigma_bearing * p.sigma_bearing)
     robust_refit(rho, alpha, f_in, l_in, ranges, bearings, valid)
-    arc = on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, sig, increment, sigma_r, p) if p.arc_check and m else np.zeros(m, np.bool_)
+    arc = (on_arcs(rho, alpha, f_in, l_in, ranges, bearings, valid, sig, increment, sigma_r, p, circle_work)
+           if p.arc_check and m else np.zeros(m, np.bool_))
     q = 0  # the lines kept (min_points beams once grown, not a chord of a round surface) moved to the front
     for t in range(m):
         if n_in[t] >= p.min_points and not arc[t]:
