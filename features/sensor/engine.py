@@ -1590,6 +1590,8 @@ def fit_spans(sp, n_runs, ranges, log_r, bearings, valid, sig, cs, angle_min, in
             c0 += sh0
             c1 -= sh1
         runs[R_C0, r], runs[R_C1, r] = c0, c1
+    if total + VOTE_BLOCK > fw.shape[1] or n_runs > iw.shape[1]:  # numba checks no bounds: a smaller block is a bug, not garbage
+        raise ValueError("fit_spans: a pass larger than find_lines' scratch blocks")
     log_d = fw[W_LOG_D]
     for r in range(n_runs):  # by offsets, unsigned: a view a run was two atomic reference counts
         f, s = np.uint64(runs[R_FIRST, r]), np.uint64(runs[R_START, r])
