@@ -97,16 +97,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except (LmsbenchError, OSError) as exc:  # OSError: missing files, bad paths, unreachable hosts, timeouts
+        if interrupt.timer is not None or _from_interrupt(exc):  # what Ctrl-C broke: not the input's error
+            return _interrupted(interrupt, name)
         _end_progress_bars()
         print(f"lmsbench {name}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        _end_progress_bars()
-        _kill_children()
-        interrupt.reported = True
-        print(f"lmsbench {name}: interrupted", file=sys.stderr)
-        return 130
+        return _interrupted(interrupt, name)
     except Exception as exc:  # a bug, not a user error: say so in one line
+        if interrupt.timer is not None or _from_interrupt(exc):
+            # Ctrl-C inside a compiled (numba) call: the KeyboardInterrupt comes out as a SystemError
+            # ("<function _numba_unpickle> returned a result with an exception set"), not a bug
+            return _interrupted(interrupt, name)
         if os.environ.get("LMSBENCH_TRACEBACK"):
             raise
         _end_progress_bars()
@@ -116,6 +118,27 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if previous is not None:
             signal.signal(signal.SIGINT, previous)
+
+
+def _interrupted(interrupt: _Interrupt, name: str) -> int:
+    """Ctrl-C's one line and exit status 130, the children killed."""
+    _end_progress_bars()
+    _kill_children()
+    interrupt.reported = True
+    print(f"lmsbench {name}: interrupted", file=sys.stderr)
+    return 130
+
+
+def _from_interrupt(exc: BaseException) -> bool:
+    """Whether a KeyboardInterrupt is among the causes of ``exc``."""
+    seen: set[int] = set()
+    cur: BaseException | None = exc
+    while cur is not None and id(cur) not in seen:
+        if isinstance(cur, KeyboardInterrupt):
+            return True
+        seen.add(id(cur))
+        cur = cur.__cause__ or cur.__context__
+    return False
 
 
 def _subparsers(parser: argparse.ArgumentParser) -> argparse._SubParsersAction | None:

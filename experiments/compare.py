@@ -233,16 +233,36 @@ def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: f
     return out
 
 
-def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = None) -> None:
+def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = None,
+                  seeds: Sequence[int] = (0,)) -> None:
     """Check command-line source words before any work: world names and seeds, simulate folders
-    (world.json loads), logs (their kind, and at least one laser scan)."""
+    (world.json loads), logs (their kind, and at least one laser scan), and that no two words give
+    the same source or sources of one name (the tables group by name: ``compare a.clf a.clf``
+    counted each scan twice, ``compare x/a.clf y/a.clf`` reported two logs as one); ``seeds``:
+    the seeds of a world given without one."""
     from experiments.options import check_log
 
+    seen: dict[tuple[str, int | None], str] = {}  # (source name, seed or None) -> the word that gave it
+    kinds: dict[str, tuple[str, str]] = {}  # source name -> (a word that gave it, its path or "world")
     for spec in specs:
         name, colon, seed = spec.partition(":")
-        if name in WORLD_NAMES:
-            if colon and not (seed.isdigit() and int(seed) < 2**32):
-                raise LmsbenchError(f"{spec}: the seed after the colon must be a whole number >= 0, got {seed!r}")
+        world = name in WORLD_NAMES  # as parse_sources reads it
+        if world and colon and not (seed.isdigit() and int(seed) < 2**32):
+            raise LmsbenchError(f"{spec}: the seed after the colon must be a whole number >= 0, got {seed!r}")
+        label = name if world else Path(spec).name
+        where = "world" if world else str(Path(spec).resolve())
+        first = kinds.setdefault(label, (spec, where))
+        if first[1] != where:
+            raise LmsbenchError(f"{first[0]} and {spec} would both be reported as {label!r} (compare names a "
+                                "source by its world, folder or file name): give one of them another name, "
+                                "e.g. a link")
+        for s in (([int(seed)] if colon else list(seeds)) if world else [None]):
+            if (label, s) in seen:
+                again = f"{label}:{s}" if world else spec
+                raise LmsbenchError(f"{again} is given twice ({seen[(label, s)]} and {spec}): each source once "
+                                    "(the tables would count its scans twice)")
+            seen[(label, s)] = spec
+        if world:
             continue
         if is_simulation_folder(spec):
             import sim

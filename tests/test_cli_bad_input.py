@@ -237,6 +237,10 @@ CASES = [
     (["compare", "{notalog.clf}", "--out", O], "no laser"),
     (["compare", "office", "--format", "xls", "--out", O], "--format"),
     (["compare", "office", "--rate", "40", "--out", O], "--rate: 40 scans/s is more than the sensor gives (37.5"),
+    # one source twice, or two of one name: the tables group by name (120 scans for a 60-scan log, two logs as one)
+    (["compare", "{good.clf}", "{good.clf}", "--out", O], "good.clf is given twice ("),
+    (["compare", "office", "office:1", "--out", O], "office:1 is given twice (office and office:1): each source once"),
+    (["compare", "{simbroken}", "{simbroken}", "--out", O], "simbroken is given twice"),
     # slam
     (["slam", "{simrun}", "--max-scans", "0", "--out", O], "--max-scans"),
     (["slam", "{simrun}", "--every", "0", "--out", O], "--every"),
@@ -491,3 +495,16 @@ def test_an_error_found_mid_run_is_still_stderr_s_one_line(tmp_path: Path, capsy
     err = capsys.readouterr().err
     assert err.strip().splitlines() == [err.strip()] and "ROBOTLASER1" in err
     assert f":{laser[30] + 1}:" in err
+
+
+def test_two_logs_of_one_name_are_refused_before_any_work(files, tmp_path, capsys):
+    """compare names a log by its file name: two runs' good.clf were summed into one row."""
+    twin = tmp_path / "twin"
+    twin.mkdir()
+    (twin / "good.clf").write_text(Path(files["good.clf"]).read_text())
+    assert run_main(["compare", files["good.clf"], str(twin / "good.clf"), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"lmsbench compare: error: {files['good.clf']} and {twin / 'good.clf'} would both be reported as "
+                   "'good.clf' (compare names a source by its world, folder or file name): give one of them another "
+                   "name, e.g. a link"]
+    assert not (tmp_path / "o").exists()

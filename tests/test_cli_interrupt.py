@@ -70,3 +70,32 @@ def test_a_sweep_on_the_local_cluster_says_nothing_from_dask(tmp_path):
     assert run.returncode == 0, run.stderr
     assert run.stderr.strip() == "", run.stderr
     assert "4 cells, 4 computed" in run.stdout
+
+
+CTRL_C_IN_COMPILED_CODE = r"""
+import signal
+from experiments import cli
+from experiments.commands import info
+
+def run(args):
+    # what Ctrl-C inside a numba call looks like: the handler's KeyboardInterrupt, raised while the
+    # compiled code called back into Python, comes out wrapped in a SystemError
+    try:
+        signal.raise_signal(signal.SIGINT)
+    except KeyboardInterrupt as exc:
+        raise SystemError("<function _numba_unpickle> returned a result with an exception set") from exc
+
+info.run = run
+status = cli.main(["info", "x.clf"])
+print(f"status {status}", flush=True)
+"""
+
+
+def test_ctrl_c_inside_compiled_code_is_an_interruption_not_an_internal_error() -> None:
+    """`lmsbench slam LOG` interrupted in its scan matcher said "internal error: SystemError:
+    CPUDispatcher(<function gauss_newton ...>) returned a result with an exception set", exit 1
+    (1 of 4 tries at 4-7 s). Now the one line "interrupted", exit 130."""
+    out = subprocess.run([sys.executable, "-c", CTRL_C_IN_COMPILED_CODE], capture_output=True, text=True, cwd=REPO,
+                         env=_env(), timeout=120)
+    assert out.stderr.strip().splitlines() == ["lmsbench info: interrupted"], out.stderr
+    assert out.stdout.splitlines() == ["status 130"], out.stdout

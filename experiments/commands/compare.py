@@ -87,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
     check_out(args.out)
     check_seeds(args.seeds)
-    check_sources(args.sources, read_log_options(args))
+    check_sources(args.sources, read_log_options(args), args.seeds)
     sensor = None
     if args.sensor is not None:
         import sim

@@ -1759,6 +1759,11 @@ def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p) -> int:  # no
     n_out = cur + 1
     if n_out < n:
         for m in range(n_out):
+            if rho[m] < 0:  # a fusion of lines near the origin: the same line, rho >= 0 (alpha + pi)
+                rho[m] = -rho[m]
+                alpha[m] += math.pi
+                cov[m, 0, 1] = -cov[m, 0, 1]
+                cov[m, 1, 0] = -cov[m, 1, 0]
             alpha[m] = wrap(alpha[m])
     return n_out
 
