@@ -210,6 +210,10 @@ def test_runs_test_option_drops_lines_on_a_pillar(method):
         ("iepf", {"min_length": -0.1}, "min_length"),
         ("iepf", {"runs_z": float("inf")}, "runs_z"),
         ("iepf", {"max_skip": True}, "max_skip"),
+        ("iepf", {"sigma": 1e300}, "sigma"),          # its covariance was inf (fuzzing: 6 of 4,000 calls)
+        ("hough", {"sigma": 1000.1}, "sigma"),
+        ("ransac", {"max_failures": 101}, "max_failures"),  # 1.7e8 rounds ran for hours
+        ("hough", {"max_failures": 10**6}, "max_failures"),
     ],
 )
 def test_bad_config_values_raise_naming_the_field(method: str, params: dict, field: str) -> None:
@@ -296,3 +300,36 @@ def test_thresholds_at_lms200_noise_are_the_fixed_ones(method: str) -> None:
         np.testing.assert_array_equal(fs.line_array(), fixed.line_array())
         s = score_scan(fs, truth)
         assert (s.fp, s.fn) == (0, 0)
+
+
+@pytest.mark.parametrize("method", ["split_merge", "iepf"])
+def test_beam_counts_beyond_any_scan_mean_what_any_large_count_means(method: str) -> None:
+    """min_points, max_skip or a corner's max_gap_beams of 10**30 was an OverflowError passing the
+    kernels' int64 record (fuzzing: 14 of 4,000 calls); any count above a scan's beams means the same."""
+    from features.baselines.common import CornerConfig
+
+    for s, _ in _box_room_scans(3):
+        for field, huge in (("min_points", 10**30), ("max_skip", 10**30)):
+            a, b = extract(s, method, **{field: huge}), extract(s, method, **{field: 10**6})
+            assert a == b, (field, a, b)
+            assert len(a.lines) == 0 if field == "min_points" else len(a.lines) >= 1
+        a = extract(s, method, corners=CornerConfig(max_gap_beams=10**30))
+        b = extract(s, method, corners=CornerConfig(max_gap_beams=10**6))
+        assert a == b and len(a.lines) >= 2
+
+
+@pytest.mark.parametrize("method", ["split_merge", "iepf"])
+def test_a_merge_threshold_beyond_the_floats_merges_every_neighbour(method: str) -> None:
+    """merge_sigmas x sigma_fit = 1e9 x 1e300 overflowed the merge RMS to inf: the merge pass then
+    counted the non-adjacent pairs' inf RMS as mergeable, picked none and looped forever (fuzzing:
+    3 hangs). The threshold is capped at the largest float: the same lines as merge_rms = 1.79e308
+    (every neighbour whose merged RMS is finite is merged)."""
+    from features.baselines.split_merge import MAX_FLOAT, thresholds
+
+    cfg = make_config(method, merge_sigmas=1e9, sigma_fit=1e300)
+    split = {"split_merge": 3e300, "iepf": 4e300}[method]  # split_sigmas x sigma_fit
+    assert thresholds(cfg) == (split, MAX_FLOAT)
+    ref = make_config(method, merge_rms=MAX_FLOAT, split_threshold=split)  # the same thresholds, given
+    for s, _ in _box_room_scans(3):
+        got = extract(s, method, cfg)
+        assert got == extract(s, method, ref) and len(got.lines) >= 1

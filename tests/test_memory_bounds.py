@@ -125,6 +125,46 @@ def test_extreme_hough_steps_and_bad_corner_configs_are_clear_errors():
         extract(wide, "split_merge")
 
 
+FINE_STEPS = r"""
+import resource
+import numpy as np
+from features import extract
+from lms200 import Scan
+
+extract(Scan.lms200(np.full(361, 2.0)))
+vm = int([l for l in open("/proc/self/status") if l.startswith("VmSize:")][0].split()[1]) * 1024
+resource.setrlimit(resource.RLIMIT_AS, (vm + LIMIT_MB * 2**20, vm + LIMIT_MB * 2**20))
+finest = 4 * (0.5 * np.pi) / ((2**20 - 1) / 2 - 2) * 1.0000001  # the template bound at hough_subdiv 4
+for j in range(6):
+    inc = finest * (1 + 1e-3 * j)
+    b = -1000 * inc + np.arange(2001) * inc
+    try:
+        print(j, "ok", len(extract(Scan(2.0 / np.cos(b), float(b[0]), inc, 0.0, 8.0)).lines))
+    except MemoryError:
+        print(j, "MemoryError")
+"""
+
+
+def test_sensor_grids_kept_between_calls_stay_bounded() -> None:
+    """The sensor method's Log-Hough grids were kept in an lru_cache of 64: up to 16 MB each at the
+    finest beam step allowed, so a process extracting from scans of a few fine steps ran out of a
+    50 MB budget at the third step (71 of 3,000 fuzzed API calls: MemoryError). The kept grids are
+    now bounded in bytes (GRID_CACHE_BYTES), and the template is built in place."""
+    from features.sensor import grid
+
+    out = subprocess.run([sys.executable, "-c", f"LIMIT_MB = {LIMIT_MB}\n" + FINE_STEPS], capture_output=True,
+                         text=True, cwd=ROOT, timeout=600)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split("\n")[:6] == [f"{j} ok 0" for j in range(6)]
+    inc = np.deg2rad(0.5) * (1 + np.arange(40) * 1e-3)
+    for step in np.concatenate((inc, inc / 200)):  # 40 ordinary grids, then 40 of 0.0025 deg steps (4.6 MB each)
+        grid.grid_constants(3, float(step), 4)
+    kept = sum(grid.grid_bytes(g) for g in grid._GRIDS.values())
+    assert 0 < kept <= grid.GRID_CACHE_BYTES == 20 << 20 and len(grid._GRIDS) <= grid.GRID_CACHE_SIZE
+    g = grid.grid_constants(3, float(inc[-1] / 200), 4)  # a kept one is returned as kept
+    assert g is grid.grid_constants(3, float(inc[-1] / 200), 4)
+
+
 class _Stop(Exception):
     pass
 

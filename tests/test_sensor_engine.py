@@ -181,3 +181,37 @@ def test_no_extractor_kernel_is_compiled_with_fast_math() -> None:
     assert len(kernels) > 40
     fast = [f"{m}.{n}" for m, n, k in kernels if k.targetoptions.get("fastmath")]
     assert fast == []
+
+
+def first_pass_beams(scan: Scan, cfg) -> int:  # noqa: ANN001
+    """Beams of find_lines' first pass on ``scan``: its candidate runs of window centres, each
+    grown by k beams at both ends (as find_lines makes its first spans)."""
+    from features.sensor import engine  # noqa: PLC0415
+    from features.sensor.grid import grid_constants  # noqa: PLC0415
+
+    p = cfg.params
+    grid = grid_constants(p.k, scan.angle_increment, p.hough_subdiv)
+    sigma = float(cfg.sigma_for(scan.range_max))
+    _, sig = engine.signal_block(scan.ranges, scan.angles, p.k, max(scan.range_min, cfg.min_range), scan.range_max, sigma,
+                                 grid.two_sin_sum)
+    c0, c1 = engine.candidate_runs(sig, p.k, grid.ad_line, sigma, p)
+    grown = c1 - c0 + 2 * p.k + 1
+    return int(grown[grown >= min(p.min_points, 2 * p.k + 1)].sum())
+
+
+def test_overlapping_first_pass_spans_fit_the_scratch_blocks() -> None:
+    """Centre runs a beam or two apart grow into spans that overlap, so a pass can hold more beams
+    than the scan (366 of 361 on an office scan): find_lines sizes its scratch blocks by the first
+    pass (sized by the scan's beams, the kernel wrote past a row and changed lines by up to 4 mm;
+    fit_spans now refuses a pass larger than its blocks). The lines are those of a single call."""
+    sim = pytest.importorskip("sim")
+    from features import extract_many, make_config  # noqa: PLC0415
+
+    cfg = make_config("sensor")
+    scans = [rec.scan for rec in sim.simulate_records(world="office", seed=0, duration=12.0)][:300]
+    over = [s for s in scans if first_pass_beams(s, cfg) > len(s)]
+    assert len(over) >= 1, "no office scan whose first-pass spans overlap: the test needs a new source of them"
+    for scan, many in zip(over, extract_many(over, "sensor", cfg)):
+        one = extract(scan, "sensor", cfg)
+        np.testing.assert_array_equal(one.lines.values, many.lines.values)
+        assert len(one.lines) >= 3

@@ -52,3 +52,25 @@ def test_never_raises_and_output_is_well_formed(scan: Scan, k: int) -> None:
         assert np.isfinite([c.x, c.y]).all() and 0 < c.angle < np.pi
         assert 0 <= c.lines[0] < c.lines[1] < len(fs.lines)
         assert 0 <= c.index < n
+
+
+def test_merged_lines_near_the_origin_keep_rho_non_negative() -> None:
+    """The information-weighted merge of two pieces of a line near the sensor could give rho < 0
+    (the fused (rho, alpha) crossed the origin): 237 of 3,000 scans of uniform random ranges
+    (0-10 m, 100-3,000 beams) had such a line, e.g. rho = -0.5033 m below. Now the same line is
+    reported as (-rho, alpha + pi), with the covariance's off-diagonal negated."""
+    want_rho = {21: [0.5033415944027233], 115: [0.09959437841423124], 203: [0.23669955924654762],
+                230: [0.5741846243811728]}
+    for seed, rho_abs in want_rho.items():
+        rng = np.random.default_rng(seed)
+        n = int(rng.integers(100, 400))
+        inc = float(np.exp(rng.uniform(np.log(3e-5), np.log(2 * np.pi / n))))
+        scan = Scan(rng.uniform(0.0, 10.0, n), float(rng.uniform(-np.pi, np.pi)), inc, 0.02, 81.83)
+        lines = extract(scan).lines
+        np.testing.assert_allclose(lines.rho, rho_abs, rtol=1e-9)  # was -rho
+        assert np.all((lines.alpha > -np.pi) & (lines.alpha <= np.pi))
+        a = lines.alpha
+        for ends in (lines.start, lines.end):  # the endpoints lie on the reported line
+            np.testing.assert_allclose(ends[:, 0] * np.cos(a) + ends[:, 1] * np.sin(a), lines.rho, atol=1e-12)
+        cov = lines.cov
+        assert np.all(cov[:, 0, 0] > 0) and np.all(cov[:, 0, 0] * cov[:, 1, 1] > cov[:, 0, 1] ** 2)

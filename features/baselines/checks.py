@@ -11,6 +11,20 @@ import numpy as np
 from ..errors import ConfigError
 
 MAX_BEAMS = 1 << 14  # most beams of a scan the extractors take (bounds the memory of one call)
+#: largest range noise sigma (m) a baseline takes: a line's covariance is sigma^2 over the scatter
+#: of its points, and sigma = 1e300 m overflowed it to inf (fuzzing: 6 of 4,000 calls)
+MAX_SIGMA_M = 1000.0
+#: most rounds in a row without a line (hough, ransac max_failures): each is a full search over the
+#: points left, and max_failures = 1.7e8 ran for hours (a 542-beam scan: 34 ms a round at 16,384 beams)
+MAX_FAILURES = 100
+#: beam counts (min_points, max_skip, max_gap_beams) are capped here before the kernels' int64
+#: fields: any count beyond a scan's beams means the same, and 10**30 no longer overflows
+BEAM_COUNT_CAP = 2**31
+
+
+def beams(n: int) -> int:
+    """A beam count for the kernels: ``n`` capped at BEAM_COUNT_CAP."""
+    return min(int(n), BEAM_COUNT_CAP)
 
 
 def fail(name: str, requirement: str, value: object) -> None:
@@ -77,6 +91,8 @@ def shared_fields(cfg: object) -> None:
     """The fields every baseline has: sigma, breakpoint_lambda, min_points, min_length, max_skip,
     runs_z, corners."""
     positive("sigma", cfg.sigma, "m")
+    if cfg.sigma > MAX_SIGMA_M:
+        fail("sigma", f"must be a range noise std in (0, {MAX_SIGMA_M:g}] m", cfg.sigma)
     angle("breakpoint_lambda", cfg.breakpoint_lambda, math.pi / 2)
     integer("min_points", cfg.min_points, 2)
     non_negative("min_length", cfg.min_length, "m")

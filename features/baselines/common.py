@@ -233,7 +233,7 @@ class CornerConfig:
         checks.angle("breakpoint_lambda", self.breakpoint_lambda, np.pi / 2)
         checks.positive("sigma", self.sigma, "m")
         object.__setattr__(self, "_params", engine.CornerParams(
-            float(self.min_turn), int(self.max_gap_beams), float(self.max_distance), float(self.breakpoint_lambda),
+            float(self.min_turn), checks.beams(self.max_gap_beams), float(self.max_distance), float(self.breakpoint_lambda),
             float(self.sigma)))
 
     @property

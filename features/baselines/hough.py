@@ -73,7 +73,7 @@ class HoughConfig:
         checks.positive("band_fine", self.band_fine, "m")
         checks.shared_fields(self)
         checks.integer("max_lines", self.max_lines, 1)
-        checks.integer("max_failures", self.max_failures, 1)
+        checks.integer("max_failures", self.max_failures, 1, checks.MAX_FAILURES)
 
 
 MAX_CELLS = 1 << 21  # most accumulator cells (16 MB of counts)

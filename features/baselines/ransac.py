@@ -65,7 +65,7 @@ class RansacConfig:
         checks.integer("window", self.window, 0)
         checks.positive("inlier_band", self.inlier_band, "m")
         checks.shared_fields(self)
-        checks.integer("max_failures", self.max_failures, 1)
+        checks.integer("max_failures", self.max_failures, 1, checks.MAX_FAILURES)
         checks.integer("max_lines", self.max_lines, 1)
         checks.integer("seed", self.seed, 0)
 

@@ -26,6 +26,8 @@ from ..types import Corners, FeatureSet, Lines
 from . import checks, engine
 from .common import CornerConfig
 
+MAX_FLOAT = float(np.finfo(np.float64).max)
+
 
 @dataclass(frozen=True)
 class SplitMergeConfig:
@@ -116,8 +118,10 @@ def thresholds(cfg: object) -> tuple[float, float]:
     max(split_threshold, split_sigmas x sigma_fit) and max(merge_rms, merge_sigmas x sigma_fit),
     sigma_fit defaulting to sigma."""
     fit = float(cfg.sigma if cfg.sigma_fit is None else cfg.sigma_fit)
-    return (max(float(cfg.split_threshold), float(cfg.split_sigmas) * fit),
-            max(float(cfg.merge_rms), float(cfg.merge_sigmas) * fit))
+    # capped at the largest float: an overflowed merge RMS of inf let the merge pass count the
+    # non-adjacent pairs' inf as mergeable while picking none, and loop forever
+    return (min(max(float(cfg.split_threshold), float(cfg.split_sigmas) * fit), MAX_FLOAT),
+            min(max(float(cfg.merge_rms), float(cfg.merge_sigmas) * fit), MAX_FLOAT))
 
 
 def split_params(cfg: object, chord: bool) -> engine.SplitParams:
@@ -125,7 +129,7 @@ def split_params(cfg: object, chord: bool) -> engine.SplitParams:
     split, merge = thresholds(cfg)
     return engine.SplitParams(
         float(cfg.sigma), float(cfg.breakpoint_lambda), split, merge,
-        int(cfg.min_points), float(cfg.min_length), int(cfg.max_skip), float(cfg.runs_z), bool(chord),
+        checks.beams(cfg.min_points), float(cfg.min_length), checks.beams(cfg.max_skip), float(cfg.runs_z), bool(chord),
     )
 
 

@@ -786,18 +786,20 @@ R_FIRST, R_LAST, R_COUNT, R_START, R_C0, R_C1 = range(6)
 R_ROWS = 6
 
 # rows of the scratch blocks ``find_lines`` allocates once a scan and every pass of ``fit_spans``
-# reuses (an allocation is a malloc, a free and reference counts: ~60 ns, and a pass made 14):
-# floats (W_ROWS, n + VOTE_BLOCK): a pass's log ranges, bands (centre, half-width, cell
-# half-width), Log-Hough peaks (alpha, rho), one angle's votes, a run's residuals z and scratch,
-# the refined lines (rho, alpha, covariance 00, 01, 11); the vote reference of each band angle
+# reuses, ``cap`` columns (``find_lines``: at least the beams of a pass), instead of ~14 arrays a
+# pass (a gain within the machine's noise, docs/features.md's ninth round; kept as the passes'
+# one data layout): floats (W_ROWS, cap + VOTE_BLOCK): a pass's log ranges, bands (centre,
+# half-width, cell half-width), Log-Hough peaks (alpha, rho), one angle's votes, a run's
+# residuals z and scratch, the refined lines (rho, alpha, covariance 00, 01, 11); the vote
+# reference of each band angle
 W_LOG_D, W_CENTRE, W_HALF, W_BIN, W_ALPHA, W_RHO, W_VOTES, W_Z, W_SCRATCH, W_VRHO, W_VALPHA, W_C00, W_C01, W_C11, W_REF = range(15)
 W_ROWS = 15
-# ints (I_ROWS, n): the run table (``R_*`` rows), the refined lines' first / last inlier beam and
+# ints (I_ROWS, cap): the run table (``R_*`` rows), the refined lines' first / last inlier beam and
 # inlier count, and two span tables of four rows (first, last, shrink0, shrink1) that alternate
 # between passes (``find_lines``)
 I_FIRST_IN, I_LAST_IN, I_N_IN, I_SPANS_A, I_SPANS_B = 6, 7, 8, 9, 13
 I_ROWS = 17
-# flags (F_ROWS, n): the Log-Hough inliers of a pass's beams, a run's inliers, the runs that pass
+# flags (F_ROWS, cap): the Log-Hough inliers of a pass's beams, a run's inliers, the runs that pass
 F_INLIER0, F_INL_RUN, F_GOOD = range(3)
 F_ROWS = 3
 
@@ -1588,6 +1590,8 @@ def fit_spans(sp, n_runs, ranges, log_r, bearings, valid, sig, cs, angle_min, in
             c0 += sh0
             c1 -= sh1
         runs[R_C0, r], runs[R_C1, r] = c0, c1
+    if total + VOTE_BLOCK > fw.shape[1] or n_runs > iw.shape[1]:  # numba checks no bounds: a smaller block is a bug, not garbage
+        raise ValueError("fit_spans: a pass larger than find_lines' scratch blocks")
     log_d = fw[W_LOG_D]
     for r in range(n_runs):  # by offsets, unsigned: a view a run was two atomic reference counts
         f, s = np.uint64(runs[R_FIRST, r]), np.uint64(runs[R_START, r])
@@ -1755,6 +1759,11 @@ def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p) -> int:  # no
     n_out = cur + 1
     if n_out < n:
         for m in range(n_out):
+            if rho[m] < 0:  # a fusion of lines near the origin: the same line, rho >= 0 (alpha + pi)
+                rho[m] = -rho[m]
+                alpha[m] += math.pi
+                cov[m, 0, 1] = -cov[m, 0, 1]
+                cov[m, 1, 0] = -cov[m, 1, 0]
             alpha[m] = wrap(alpha[m])
     return n_out
 

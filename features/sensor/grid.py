@@ -13,6 +13,38 @@ from .engine import B_ANGLE, B_COS, B_SIN, Grid
 
 LOGCOS_FLOOR = float(np.log(1e-6))  # template value where |a - b| >= pi/2 (the beam cannot see the line)
 MAX_TEMPLATE = 1 << 20  # most template entries (8 MB): beam steps finer than ~4 pi / 2^20 rad are refused
+#: bytes of templates (and their phase rows) kept between calls: an lru_cache of 64 grids kept up
+#: to 64 x 16 MB = 1 GiB for scans of many fine beam steps, and the third fine step in a process
+#: ran out of a 50 MB address-space budget. A 361-beam 0.5 deg grid is 23 KB.
+GRID_CACHE_BYTES = 20 << 20
+GRID_CACHE_SIZE = 64  # most grids kept
+_GRIDS: dict[tuple[int, float, int], Grid] = {}
+
+
+def grid_constants(k: int, increment: float, subdiv: int) -> Grid:
+    """The Grid of window half-width ``k`` beams, beam step ``increment`` (rad) and Log-Hough
+    angle step ``increment / subdiv``, built once and kept while the kept grids hold at most
+    GRID_CACHE_BYTES (the oldest are dropped first; a larger one is built on every call).
+
+    Raises:
+        ScanGeometryError (a ValueError): when the angle step is so fine that the template would exceed MAX_TEMPLATE.
+    """
+    key = (k, increment, subdiv)
+    grid = _GRIDS.get(key)
+    if grid is None:
+        grid = build_grid(k, increment, subdiv)
+        size = grid_bytes(grid)
+        if size <= GRID_CACHE_BYTES:
+            held = sum(grid_bytes(g) for g in _GRIDS.values())
+            while _GRIDS and (held + size > GRID_CACHE_BYTES or len(_GRIDS) >= GRID_CACHE_SIZE):
+                held -= grid_bytes(_GRIDS.pop(next(iter(_GRIDS))))
+            _GRIDS[key] = grid
+    return grid
+
+
+def grid_bytes(grid: Grid) -> int:
+    """Bytes of a Grid's arrays (its template and phase rows)."""
+    return int(grid.template.nbytes + grid.phases.nbytes)
 
 
 @lru_cache(maxsize=64)
@@ -23,10 +55,8 @@ def window_sums(k: int, increment: float) -> tuple[float, float]:
     return float(1.0 + 2.0 * np.cos(j * increment).sum()), float(2.0 * np.sin(j * increment).sum())
 
 
-@lru_cache(maxsize=64)
-def grid_constants(k: int, increment: float, subdiv: int) -> Grid:
-    """The Grid of window half-width ``k`` beams, beam step ``increment`` (rad) and Log-Hough
-    angle step ``increment / subdiv``.
+def build_grid(k: int, increment: float, subdiv: int) -> Grid:
+    """The Grid of ``grid_constants``, built (not kept).
 
     The template holds log cos(m step) for |m| step up to just past pi/2 and is floored at
     LOGCOS_FLOOR; a lookup beyond its ends is clipped onto the floor, which is the value there.
@@ -44,10 +74,14 @@ def grid_constants(k: int, increment: float, subdiv: int) -> Grid:
             f"{MAX_TEMPLATE}); use a coarser scan or a smaller hough_subdiv"
         )
     half = int(np.ceil(quarter_turn)) + 1
-    x = np.arange(-half, half + 1) * step
+    t = np.arange(-half, half + 1, dtype=np.float64)  # in place below: one template-sized array at a time
+    t *= step
+    beyond = np.abs(t) >= np.pi / 2
+    np.cos(t, out=t)
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(np.abs(x) < np.pi / 2, np.log(np.cos(x)), LOGCOS_FLOOR)
-    t = np.maximum(t, LOGCOS_FLOOR)
+        np.log(t, out=t)
+    t[beyond] = LOGCOS_FLOOR
+    np.maximum(t, LOGCOS_FLOOR, out=t)
     t.setflags(write=False)
     return Grid(ad_line, two_sin_sum, float(step), half, t, twice_cos(increment), phase_rows(t, subdiv))
 
