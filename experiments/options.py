@@ -110,9 +110,16 @@ def _head(path: Path, n: int = 4096) -> bytes:
         raise InputError(f"{path} is a folder, not a file") from None
 
 
-def _text_head(path: Path, what: str) -> None:
+MAX_ODD_BYTES = 0.05  # share of a log's first 4 KB that may be control bytes or >= 0x80 (a latin-1 comment)
+
+
+def _text_head(path: Path, what: str, utf8: bool = True) -> None:
     """Raise InputError unless the file starts with text (not binary, not a mislabelled or broken
-    compressed file, not an archive), read through gzip / bzip2 / xz where compressed."""
+    compressed file, not an archive), read through gzip / bzip2 / xz where compressed. ``utf8``:
+    the text must be UTF-8 (YAML, read as UTF-8); else (a log, read as ASCII with other bytes
+    replaced) a byte that is not UTF-8 is text too, unless control bytes or bytes >= 0x80 make up
+    more than MAX_ODD_BYTES of the head (a latin-1 comment in a log's first 4 KB refused a log
+    that the same comment further down did not)."""
     head = _head(path)
     kind = compression(head)
     named = COMPRESSION_SUFFIXES.get(path.suffix)
@@ -129,6 +136,12 @@ def _text_head(path: Path, what: str) -> None:
         raise InputError(f"{path}: {archive}, not {what}; extract it first")
     if b"\x00" in head:
         raise InputError(f"{path}: a binary file, not {what}")
+    if not utf8:
+        odd = sum(1 for b in head if b >= 0x80 or (b < 0x20 and b not in b"\t\n\r\f\v"))
+        if odd > MAX_ODD_BYTES * len(head):
+            raise InputError(f"{path}: a binary file ({odd} of its first {len(head)} bytes are not ASCII text), "
+                             f"not {what}")
+        return
     try:
         head.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -162,8 +175,16 @@ def check_log(path: str | os.PathLike) -> Path:
     if not p.exists():
         raise InputError(f"{p}: no such log")
     if p.is_dir():
-        if not (p / "metadata.yaml").is_file():
+        meta = p / "metadata.yaml"
+        if not meta.is_file():
             raise InputError(f"{p} is a folder but not a ROS 2 bag (no metadata.yaml)")
+        _text_head(meta, "a ROS 2 bag's metadata.yaml")
+        try:  # rosbags said "Could not load YAML ... in "<unicode string>", line 1, ..." over several lines
+            info = load_yaml(meta.read_text(encoding="utf-8"))
+        except yaml.YAMLError as exc:
+            raise InputError(f"{meta}: not valid YAML ({exc})") from None
+        if not isinstance(info, dict) or not isinstance(info.get("rosbag2_bagfile_information"), dict):
+            raise InputError(f"{meta}: not a ROS 2 bag's metadata.yaml (no rosbag2_bagfile_information mapping)")
         return p
     head = _head(p)
     if p.suffix == ".bag":
@@ -172,12 +193,14 @@ def check_log(path: str | os.PathLike) -> Path:
         return p
     if not head:
         raise InputError(f"{p}: empty file, not {what}")
-    _text_head(p, what)
+    _text_head(p, what, utf8=False)  # the reader reads ASCII, other bytes replaced
     return p
 
 
 SIMULATE_OUTPUTS = ("scans.clf", "groundtruth.tum", "world.json", "config.yaml", "map.png")
 SLAM_OUTPUTS = ("trajectory.tum", "keyframes.tum", "map.json", "metrics.json", "config.yaml", "slam.png")
+COMPARE_OUTPUTS = ("compare.parquet", "compare.csv", "summary.csv", "summary.txt", "config.yaml")  # and a figure per log
+SIM2REAL_OUTPUTS = ("sim2real.csv", "scene.csv", "sim2real.md", "sim2real.png", "sensor.yaml", "config.yaml")
 
 
 def check_out(path: str | os.PathLike | None, writes: Sequence[str] | None = None) -> Path | None:
@@ -203,6 +226,19 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | None = Non
     if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK) or not _can_create_in(parent):
         raise InputError(f"--out {p}: {parent} is not a writable folder")
     return p
+
+
+def check_out_spares(out: str | os.PathLike | None, writes: Sequence[str], reads: Sequence[str | os.PathLike]) -> None:
+    """No file a run writes into ``out`` (the names ``writes``) is a file it reads (``reads``):
+    ``compare SIMFOLDER --out SIMFOLDER`` replaced the simulate folder's config.yaml, the sensor
+    model compare reads for it, with its own."""
+    if out is None:
+        return
+    targets = {(Path(out) / name).resolve() for name in writes}
+    for f in reads:
+        if Path(f).resolve() in targets:
+            raise InputError(f"--out {out}: the run would write {Path(f).name} over {f}, which it reads; "
+                             "give another folder")
 
 
 def check_out_file(path: str | os.PathLike | None, flag: str = "--out") -> Path | None:

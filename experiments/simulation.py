@@ -64,16 +64,38 @@ class SimulationConfig:
         seed = d.get("seed", 0)
         if isinstance(seed, bool) or not isinstance(seed, int):
             raise ValueError(f"seed: must be a whole number, got {seed!r}")
-        rate_hz = d.get("rate_hz")
-        robot = dict(d.get("robot") or {})
+        world = d.get("world", "office")
+        if not isinstance(world, str):
+            raise ValueError(f"world: must be a world's name or a world.json path, got {world!r}")
+        robot = dict(_mapping(d, "robot"))
         if "pause_s" in robot:
             robot["pause_s"] = tuple(robot["pause_s"])
-        return cls(world=str(d.get("world", "office")), seed=seed,
-                   duration=float(d.get("duration", 120.0)), rate_hz=None if rate_hz is None else float(rate_hz),
-                   sensor=SensorConfig(**(d.get("sensor") or {})),
-                   odometry=OdometryConfig(**d["odometry"]) if d.get("odometry") else None,
-                   robot=RobotLimits(**robot),
-                   clutter=None if d.get("clutter") is None else float(d["clutter"]))
+        duration, rate_hz, clutter = (_number(d, key) for key in ("duration", "rate_hz", "clutter"))
+        return cls(world=world, seed=seed, duration=120.0 if duration is None else duration, rate_hz=rate_hz,
+                   sensor=SensorConfig(**_mapping(d, "sensor")),
+                   odometry=OdometryConfig(**d["odometry"]) if _mapping(d, "odometry") else None,
+                   robot=RobotLimits(**robot), clutter=clutter)
+
+
+def _number(d: dict, key: str) -> float | None:
+    """``d[key]`` as a float, None when absent or null; ValueError naming ``key`` for anything but a
+    number (``duration: true`` ran 1 s, ``duration: [2]`` said "float() argument must be ...")."""
+    value = d.get(key)
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{key}: must be a number, got {value!r}")
+    return float(value)
+
+
+def _mapping(d: dict, key: str) -> dict:
+    """``d[key]``, a mapping of fields ({} when absent or null); ValueError naming ``key`` otherwise."""
+    value = d.get(key)
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise ValueError(f"{key}: must be a mapping of fields, got {value!r}")
+    return value
 
 
 def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> list[Record]:

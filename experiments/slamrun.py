@@ -93,7 +93,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     Raises:
         FileNotFoundError: the input does not exist.
         LmsbenchError: a folder without scans.clf, an input without scans, or none with a valid beam, or
-            more than one scan read and all of one stamp (no time between scans for the motion model).
+            more than one scan read and all of one stamp (no time between scans for the motion model), or
+            ``rate_hz`` / ``every`` that keep one scan of several.
     """
     p = Path(path)
     if not p.exists():
@@ -127,12 +128,13 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         raise LmsbenchError(f"--rate-hz must be > 0, got {rate_hz}")
     records: list[Record] = []
     reader = read_log(log, **(read_options or {}))
-    first_stamp, n_read, timed = None, 0, False  # timed: some scan read has another stamp than the first
+    first_stamp, last_stamp, n_read, timed = None, None, 0, False  # timed: some scan read has another stamp than the first
     for k, rec in enumerate(reader):
         n_read += 1
         if first_stamp is None:
             first_stamp = rec.scan.stamp
         timed = timed or rec.scan.stamp != first_stamp
+        last_stamp = rec.scan.stamp
         if rate_hz is not None:
             keep = not records or rec.scan.stamp >= records[-1].scan.stamp + 1.0 / rate_hz - 1e-9
         else:
@@ -150,6 +152,10 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if n_read > 1 and not timed:  # it ran: every step predicted no motion and searched no turn
         raise LmsbenchError(f"{log}: all {n_read} scans read have the same stamp ({first_stamp:.6f} s); SLAM's "
                             "motion model needs the time between scans (a log written without a clock?)")
+    if len(records) == 1 and n_read > 1 and (rate_hz is not None or every > 1):  # it ran: a "SLAM" of one scan
+        flag = f"--rate-hz {rate_hz:g}" if rate_hz is not None else f"--every {every}"
+        raise LmsbenchError(f"{log}: {flag} keeps 1 of the {n_read} scans read (stamps {first_stamp:.6f} to "
+                            f"{last_stamp:.6f} s); SLAM needs two or more")
     if not any(r.scan.valid.any() for r in records):
         raise LmsbenchError(f"{log}: none of its {len(records)} scans has a valid beam (all +inf or nan): "
                             "nothing to localise against")

@@ -57,6 +57,10 @@ def files(tmp_path_factory):
     (d / "empty.clf").write_text("")
     (d / "notalog.clf").write_text("hello\nworld\n")
     (d / "empty_dir").mkdir()
+    (d / "bag_badmeta").mkdir()  # rosbags said "Could not load YAML ... "<unicode string>", line 1, ..."
+    (d / "bag_badmeta" / "metadata.yaml").write_text("rosbag2_bagfile_information: [1\n")
+    (d / "bag_listmeta").mkdir()
+    (d / "bag_listmeta" / "metadata.yaml").write_text("- 1\n")
     (d / "a_file").write_text("x")
     (d / "pkg").mkdir()
     (d / "pkg" / "__init__.py").write_text("")
@@ -106,6 +110,9 @@ def files(tmp_path_factory):
     (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
     (d / "sensor_1deg.yaml").write_text("n_beams: 181\nresolution_deg: 1.0\n")  # good.clf: 361 at 0.5 deg
     (d / "short_run.yaml").write_text("world: office\nseed: 0\nduration: 0.001\n")  # a simulate config: no scan
+    (d / "run_bool.yaml").write_text("world: office\nseed: 0\nduration: true\n")  # ran 1 s
+    (d / "run_list.yaml").write_text("world: office\nseed: 0\nduration: [2]\n")
+    (d / "run_robot.yaml").write_text("world: office\nseed: 0\nduration: 2\nrobot: 5\n")
     (d / "sensor_fine.yaml").write_text("n_beams: 100000000\nresolution_deg: 1.0e-6\n")  # 10^8 beams: a hang
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
     (d / "badcolon.yaml").write_text("noise_sigma: 0.1\n  x: : 3\n")
@@ -206,6 +213,10 @@ CASES = [
     (["simulate", "--sensor", "{sensor_ok.yaml}", "--units", "cm", "--out", O], "--sensor holds the whole sensor model"),
     (["compare", "{good.clf}", "--sensor", "{sensor_ok.yaml}", "--out", O], "--sensor sets the sensor of the worlds"),
     (["simulate", "--config", "{short_run.yaml}", "--out", O], "duration must be in [0.1, 3600] s"),
+    # values of the wrong type: `duration: true` ran 1 s; a list said "float() argument must be ..."
+    (["simulate", "--config", "{run_bool.yaml}", "--out", O], "run_bool.yaml: not a simulate config (duration: must be a number, got True)"),
+    (["simulate", "--config", "{run_list.yaml}", "--out", O], "(duration: must be a number, got [2])"),
+    (["simulate", "--config", "{run_robot.yaml}", "--out", O], "(robot: must be a mapping of fields, got 5)"),
     (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 1] m"),
     (["compare", "office", "--sensor", "{sensor_fine.yaml}", "--out", O], "sensor_fine.yaml: resolution_deg"),
     (["sim2real", "{good.clf}", "--sensor", "{sensor_dup.yaml}", "--out", O], "sensor_dup.yaml: not valid YAML (key 'noise_sigma' given twice"),
@@ -265,6 +276,10 @@ CASES = [
     (["slam", "{simrun}", "--config", "{slam_range.yaml}", "--out", O], "alignment.max_range: must be in (0, 10000] m"),
     (["slam", "{simrun}", "--config", "{slam_turn.yaml}", "--out", O], "alignment.heading_hypotheses: offsets"),
     (["slam", "{backwards.clf}", "--out", O], "backwards"),
+    # thinned to one scan of several: a "SLAM" of one pose, exit 0
+    (["slam", "{good.clf}", "--rate-hz", "1e-300", "--out", O], "good.clf: --rate-hz 1e-300 keeps 1 of the 5 scans read "
+                                                               "(stamps 0.000000 to 0.400000 s); SLAM needs two or more"),
+    (["slam", "{good.clf}", "--every", "10", "--out", O], "good.clf: --every 10 keeps 1 of the 5 scans read"),
     (["slam", "{binary.clf}", "--out", O], "binary"),
     (["slam", "{no_returns.clf}", "--out", O], "no_returns.clf"),
     (["calibrate", "{no_returns.clf}"], "too few straight runs"),
@@ -352,6 +367,8 @@ CASES = [
     (["info", "{empty.clf}"], "empty"),
     (["info", "{fake.bag}"], "fake.bag"),
     (["info", "{notalog.clf}"], "no laser"),
+    (["info", "{bag_badmeta}"], "bag_badmeta/metadata.yaml: not valid YAML (line 2, column 1: expected ',' or ']'"),
+    (["slam", "{bag_listmeta}", "--out", O], "metadata.yaml: not a ROS 2 bag's metadata.yaml (no rosbag2_bagfile_information"),
     (["info", "{good.clf}", "--laser-fov-deg", "90", "--laser-resolution-deg", "0.5"], "own beam geometry"),
     # a laser kind the log lacks: "no laser messages found: not a CARMEN log" (info, compare), "got 0 scans"
     (["info", "{good.clf}", "--topic", "FLASER"], "good.clf has no FLASER lines; its laser lines: ROBOTLASER1 (5)"),
@@ -508,3 +525,40 @@ def test_two_logs_of_one_name_are_refused_before_any_work(files, tmp_path, capsy
                    "'good.clf' (compare names a source by its world, folder or file name): give one of them another "
                    "name, e.g. a link"]
     assert not (tmp_path / "o").exists()
+
+
+def test_out_may_not_write_over_what_the_run_reads(files, tmp_path, capsys):
+    """`compare SIMFOLDER --out SIMFOLDER` replaced the folder's config.yaml (the simulate config
+    whose sensor model compare reads for it) with compare's own, exit 0; sim2real's sensor.yaml
+    likewise over its --sensor. Now refused before any work, the input untouched."""
+    from experiments.cli import main as cli_main
+
+    sim = tmp_path / "sim"
+    assert cli_main(["simulate", "--duration", "2", "--out", str(sim)]) == 0
+    before = {p.name: p.read_bytes() for p in sim.iterdir()}
+    assert run_main(["compare", str(sim), "--methods", "hough", "--out", str(sim)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench compare: error: --out {sim}: the run would write config.yaml over {sim / 'config.yaml'}, which it "
+        "reads; give another folder"]
+    (sim / "sensor.yaml").write_text(Path(files["sensor_ok.yaml"]).read_text())
+    before["sensor.yaml"] = (sim / "sensor.yaml").read_bytes()
+    assert run_main(["sim2real", files["good.clf"], "--sensor", str(sim / "sensor.yaml"), "--out", str(sim)]) == 2
+    assert "the run would write sensor.yaml over" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in sim.iterdir()} == before
+
+
+def test_a_latin1_comment_near_the_top_is_read_as_further_down(files, tmp_path, capsys):
+    """A log whose first 4 KB held one byte that is not UTF-8 (a latin-1 comment) was refused as
+    "not text (byte 517 is not UTF-8)", while the same comment further down was read (the reader
+    reads ASCII, other bytes replaced). Now both read alike; a head of mostly such bytes is binary."""
+    lines = Path(files["good.clf"]).read_bytes().split(b"\n")
+    for name, at in (("early.clf", 1), ("late.clf", len(lines) - 2)):
+        (tmp_path / name).write_bytes(b"\n".join(lines[:at] + [b"# commentaire \xe9t\xe9"] + lines[at:]))
+    assert run_main(["info", str(tmp_path / "late.clf"), "--json"]) == 0
+    late = json.loads(capsys.readouterr().out)
+    assert run_main(["info", str(tmp_path / "early.clf"), "--json"]) == 0
+    early = json.loads(capsys.readouterr().out)
+    assert early["scans"] == late["scans"] == 5
+    (tmp_path / "latin.clf").write_bytes(bytes([0xE9]) * 300 + b"FLASER 1 1.0 0 0 0 0 0 0 1.0 h 1.0\n" * 20)
+    assert run_main(["info", str(tmp_path / "latin.clf")]) == 2
+    assert "a binary file (300 of its first 1000 bytes are not ASCII text)" in capsys.readouterr().err

@@ -16,7 +16,8 @@ from lms200 import LmsbenchError
 from lms200.timing import check_scan_rate
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
-from experiments.options import DURATION, SEED, InputError, check_methods, check_out, check_seeds, count, positive
+from experiments.options import (COMPARE_OUTPUTS, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
+                                 check_out_spares, check_seeds, count, positive)
 
 
 def _param(text: str) -> tuple[str, Any]:
@@ -86,6 +87,9 @@ def run(args: argparse.Namespace) -> int:
     params = extractor_overrides(dict(args.params), methods)
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
     check_out(args.out)
+    reads = [Path(s) / name for s in args.sources if Path(s).is_dir() for name in SIMULATE_OUTPUTS]
+    reads += [Path(s) for s in args.sources if Path(s).is_file()] + ([args.sensor] if args.sensor else [])
+    check_out_spares(args.out, COMPARE_OUTPUTS, reads)
     check_seeds(args.seeds)
     check_sources(args.sources, read_log_options(args), args.seeds)
     sensor = None

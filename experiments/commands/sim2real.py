@@ -14,9 +14,11 @@ from experiments.logargs import add_log_options, read_log_options
 from experiments.options import (
     DURATION,
     SEED,
+    SIM2REAL_OUTPUTS,
     InputError,
     check_log,
     check_out,
+    check_out_spares,
     check_seeds,
     check_yaml,
     count,
@@ -66,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
     read_options = read_log_options(args)
     check_log(args.log)
     check_out(args.out)
+    check_out_spares(args.out, SIM2REAL_OUTPUTS, [args.log] + ([args.sensor] if args.sensor else []))
     check_seeds(args.seeds)
     if args.fit_rooms and args.world != "mit":
         raise InputError(f"--fit-rooms fits the mit world's room size; it does nothing for --world {args.world}")
