@@ -64,10 +64,11 @@ class Scan:
             raise ScanError(f"ranges: must be 1-D, got shape {r.shape}")
         if r.size == 0:
             raise ScanError("ranges: must hold at least one beam")
+        if np.any(r == -np.inf):  # before the negative check, which -inf would meet first
+            raise ScanError("ranges: -inf (REP-117: an object too close to measure) is not taken; "
+                            "write nan (invalid) for such beams")
         if np.any(r < 0):  # nan compares False, so nan and +inf pass
             raise ScanError("ranges: negative ranges are not allowed (use nan for invalid readings)")
-        if np.any(r == -np.inf):
-            raise ScanError("ranges: -inf is not allowed (REP-117 uses +inf and nan)")
         for name in ("angle_min", "angle_increment", "range_min", "range_max", "stamp"):
             value = getattr(self, name)
             try:

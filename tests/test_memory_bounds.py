@@ -160,7 +160,7 @@ def test_sensor_grids_kept_between_calls_stay_bounded() -> None:
     for step in np.concatenate((inc, inc / 200)):  # 40 ordinary grids, then 40 of 0.0025 deg steps (4.6 MB each)
         grid.grid_constants(3, float(step), 4)
     kept = sum(grid.grid_bytes(g) for g in grid._GRIDS.values())
-    assert 0 < kept <= grid.GRID_CACHE_BYTES == 20 << 20 and len(grid._GRIDS) <= grid.GRID_CACHE_SIZE
+    assert 0 < kept <= grid.GRID_CACHE_BYTES == 8 << 20 and len(grid._GRIDS) <= grid.GRID_CACHE_SIZE
     g = grid.grid_constants(3, float(inc[-1] / 200), 4)  # a kept one is returned as kept
     assert g is grid.grid_constants(3, float(inc[-1] / 200), 4)
 

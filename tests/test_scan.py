@@ -134,3 +134,14 @@ def test_decoding_a_huge_logged_range_keeps_it_without_a_warning():
     numpy's overflow warning is not printed to the user (pytest turns RuntimeWarnings into errors)."""
     out = decode_logged_ranges(np.array([1e308, 81.83, 1.5]), units="cm")
     assert out[0] == 1e308 and np.isposinf(out[1]) and out[2] == 1.5
+
+
+def test_minus_inf_is_named_with_its_rep117_meaning() -> None:
+    """-inf met the negative-range check first ("negative ranges are not allowed"), so its own
+    message never showed, and that one said REP-117 has no -inf (it means: too close to measure).
+    Every extractor gives for -inf what it gives for nan (1,765 fuzzed scan-method pairs)."""
+    with pytest.raises(ValueError, match=r"^ranges: -inf \(REP-117: an object too close to measure\) is not taken; "
+                                         r"write nan"):
+        Scan(np.array([1.0, -np.inf, 2.0]), 0.0, 0.01, 0.0, 8.0)
+    with pytest.raises(ValueError, match="^ranges: negative ranges are not allowed"):
+        Scan(np.array([1.0, -1.0, 2.0]), 0.0, 0.01, 0.0, 8.0)
