@@ -138,6 +138,8 @@ def files(tmp_path_factory):
     (d / "slam_type.yaml").write_text("motion: {sigma_accel: fast}\n")
     (d / "slam_prob.yaml").write_text("slam: {prealign: {widen_probability: 1.5}}\n")
     (d / "slam_noise.yaml").write_text("motion: {odom_noise: [0.1]}\n")
+    (d / "slam_beside.yaml").write_text("slam: {preset: paper}\nmotion: {sigma_accel: 9.0}\n")  # ran with 1.0
+    (d / "slam_list.yaml").write_text("slam: [1, 2]\n")  # "unknown SLAM config field(s) [1, 2]"
     # values that reached the run: internal errors (voxel's grid size, a 0-beam chord, max_range**2
     # overflowing) or a hypothesis of 1e300 rad tried as a heading
     (d / "slam_voxel.yaml").write_text("slam: {keyframes: {voxel: 1.0e-12}}\n")
@@ -272,6 +274,10 @@ CASES = [
     (["slam", "{simrun}", "--config", "{slam_type.yaml}", "--out", O], "motion.sigma_accel: must be a number"),
     (["slam", "{simrun}", "--config", "{slam_prob.yaml}", "--out", O], "prealign.widen_probability: a probability"),
     (["slam", "{simrun}", "--config", "{slam_noise.yaml}", "--out", O], "odom_noise: must be 3 numbers"),
+    (["slam", "{simrun}", "--config", "{slam_beside.yaml}", "--out", O],
+     "slam_beside.yaml: key(s) ['motion'] beside the slam: section would be ignored; put them under slam:"),
+    (["slam", "{simrun}", "--config", "{slam_list.yaml}", "--out", O],
+     "slam_list.yaml: slam: must be a mapping of SLAM config fields, got [1, 2]"),
     (["slam", "{simrun}", "--config", "{slam_voxel.yaml}", "--out", O], "slam_voxel.yaml: keyframes.voxel: must be 0"),
     # an --out holding other things: the README's 'slam run --out slam' wrote into the slam package;
     # slam into the simulated run's own folder replaced its config.yaml (the sensor compare reads)

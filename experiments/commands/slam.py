@@ -63,6 +63,13 @@ def _config(args: argparse.Namespace):
             raise LmsbenchError(f"{args.config}: not valid YAML ({exc})") from None
         if not isinstance(raw, dict):
             raise LmsbenchError(f"{args.config}: expected a mapping of SLAM config fields")
+        if "slam" in raw:  # a run's config.yaml: {input: ..., slam: {...}}
+            beside = sorted(str(k) for k in raw if k not in ("slam", "input"))
+            if beside:  # they were ignored: `motion: {sigma_accel: 9}` beside `slam:` ran with 1.0
+                raise InputError(f"{args.config}: key(s) {beside} beside the slam: section would be ignored; "
+                                 "put them under slam:")
+            if not isinstance(raw["slam"], dict):
+                raise InputError(f"{args.config}: slam: must be a mapping of SLAM config fields, got {raw['slam']!r}")
         try:
             cfg = SlamConfig.from_dict(raw.get("slam", raw))
         except LmsbenchError as exc:
