@@ -101,6 +101,10 @@ def world_name(text: str) -> str:
 
 
 def _head(path: Path, n: int = 4096) -> bytes:
+    """The first ``n`` bytes of a regular file. A pipe with no writer (``mkfifo``) hung the command
+    on open(); one with a writer (``<(zcat log.gz)``) would lose these bytes to the check."""
+    if path.exists() and not path.is_dir() and not path.is_file():
+        raise InputError(f"{path}: not a regular file (a pipe, a device or a socket); give the file itself")
     try:
         with open(path, "rb") as fh:
             return fh.read(n)
@@ -108,6 +112,8 @@ def _head(path: Path, n: int = 4096) -> bytes:
         raise InputError(f"{path}: not readable (permission denied)") from None
     except IsADirectoryError:
         raise InputError(f"{path} is a folder, not a file") from None
+    except OSError as exc:  # /proc/self/mem: "[Errno 5] Input/output error", without the file's name
+        raise InputError(f"{path}: cannot be read ({exc.strerror or exc})") from None
 
 
 MAX_ODD_BYTES = 0.05  # share of a log's first 4 KB that may be control bytes or >= 0x80 (a latin-1 comment)
@@ -248,6 +254,8 @@ def check_out_file(path: str | os.PathLike | None, flag: str = "--out") -> Path 
     p = Path(path)
     if p.is_dir():
         raise InputError(f"{flag} {p} is a folder; give a file name")
+    if p.exists() and not p.is_file():  # writing to a pipe with no reader hung the command after its work
+        raise InputError(f"{flag} {p}: not a regular file (a pipe, a device or a socket); give a file name")
     parent = p.parent
     if not parent.is_dir():
         raise InputError(f"{flag} {p}: {parent} is not a folder")

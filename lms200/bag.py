@@ -224,6 +224,10 @@ class BagReader:
         names = sorted({c.topic for c in scans})
         if self.topic is not None:
             scans = [c for c in scans if c.topic == self.topic]
+        other = sorted({c.msgtype for c in reader.connections if c.topic == self.topic}) if self.topic else []
+        if not scans and other:  # said "no topic '/odom'; topics: ['/odom (geometry_msgs/msg/PoseStamped)', ...]"
+            raise BagError(f"{self.path}: topic {self.topic!r} holds {', '.join(other)} messages, not "
+                           f"sensor_msgs/LaserScan; its LaserScan topics: {', '.join(names) or 'none'}")
         if not scans:
             topics = sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections})
             wanted = f"topic {self.topic!r}" if self.topic else "any sensor_msgs/LaserScan topic"

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import gzip
 import json
+import os
 import signal
 from pathlib import Path
 
@@ -57,6 +58,8 @@ def files(tmp_path_factory):
     (d / "empty.clf").write_text("")
     (d / "notalog.clf").write_text("hello\nworld\n")
     (d / "empty_dir").mkdir()
+    for name in ("pipe.clf", "pipe.yaml", "pipe.json"):  # named pipes with no writer: open() waited for ever
+        os.mkfifo(d / name)
     (d / "bag_badmeta").mkdir()  # rosbags said "Could not load YAML ... "<unicode string>", line 1, ..."
     (d / "bag_badmeta" / "metadata.yaml").write_text("rosbag2_bagfile_information: [1\n")
     (d / "bag_listmeta").mkdir()
@@ -73,6 +76,8 @@ def files(tmp_path_factory):
     # one log of two geometries (181 beams at 1 deg between 361 at 0.5 deg): calibrate averaged them to 0.75 deg
     wide = [Record(Scan(np.full(181, 3.0), -np.pi / 2, np.pi / 180, 0.0, 8.183, 0.1 * k)) for k in range(5)]
     write_log(d / "mixed.clf", [r for pair in zip(good, wide) for r in pair])
+    odo = [Record(Scan.lms200(ranges, stamp=0.1 * k), odom=(0.1 * k, 0.0, 0.0)) for k in range(5)]
+    write_log(d / "odo.bag", odo, fmt="bag")  # topics /scan and /odom
     write_log(d / "far.clf", [Record(Scan.lms200(np.full(361, 6.0), stamp=0.1 * k)) for k in range(5)])
     (d / "zero_beams.clf").write_text("FLASER 0 0 0 0 0 0 0 0.0 host 0.0\n")  # was "needs 11 fields, got 11"
     with gzip.open(d / "good.clf.gz", "wt") as fh:
@@ -367,6 +372,16 @@ CASES = [
     (["info", "{empty.clf}"], "empty"),
     (["info", "{fake.bag}"], "fake.bag"),
     (["info", "{notalog.clf}"], "no laser"),
+    # a topic that is not a LaserScan: "no topic '/odom'; topics: ['/odom (geometry_msgs/msg/PoseStamped)', ...]"
+    (["info", "{odo.bag}", "--topic", "/odom"], "odo.bag: topic '/odom' holds geometry_msgs/msg/PoseStamped messages, "
+                                                "not sensor_msgs/LaserScan; its LaserScan topics: /scan"),
+    # a named pipe (or a device) where a file is expected: the check's open() hung (--out: the write, after the work)
+    (["info", "{pipe.clf}"], "pipe.clf: not a regular file (a pipe, a device or a socket); give the file itself"),
+    (["slam", "{good.clf}", "--config", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file (a pipe"),
+    (["simulate", "--world", "{pipe.json}", "--out", O], "pipe.json: not a regular file (a pipe"),
+    (["sweep", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file (a pipe"),
+    (["calibrate", "{good.clf}", "--out", "{pipe.yaml}"], "pipe.yaml: not a regular file (a pipe, a device or a socket); give a file name"),
+    (["info", "/dev/zero"], "/dev/zero: not a regular file"),
     (["info", "{bag_badmeta}"], "bag_badmeta/metadata.yaml: not valid YAML (line 2, column 1: expected ',' or ']'"),
     (["slam", "{bag_listmeta}", "--out", O], "metadata.yaml: not a ROS 2 bag's metadata.yaml (no rosbag2_bagfile_information"),
     (["info", "{good.clf}", "--laser-fov-deg", "90", "--laser-resolution-deg", "0.5"], "own beam geometry"),
