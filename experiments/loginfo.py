@@ -45,7 +45,7 @@ class LogSummary:
             f"scan rate       {self.scan_rate_hz:.2f} scans/s",
             f"duration        {self.duration_s:.2f} s",
             f"no return (inf) {100 * self.no_return_fraction:.2f} % of readings",
-            f"invalid         {100 * self.invalid_fraction:.2f} % of readings (nan, 0 or out of limits)",
+            f"invalid         {100 * self.invalid_fraction:.2f} % of readings (nan, -inf, 0 or out of limits)",
             f"odometry        {'yes' if self.odometry else 'no'}",
             f"true poses      {'yes' if self.truth else 'no'}",
             "time order      " + (f"{self.stamps_back} scan{'s' * (self.stamps_back != 1)} stamped before the previous one "
@@ -71,7 +71,7 @@ def summarise(records: Iterable[Record]) -> LogSummary:
         stamps.append(s.stamp)
         readings += len(s)
         inf += int(np.isposinf(s.ranges).sum())
-        nan += int(np.count_nonzero(~s.valid & ~np.isposinf(s.ranges)))  # nan, 0 and out-of-limits readings
+        nan += int(np.count_nonzero(~s.valid & ~np.isposinf(s.ranges)))  # nan, -inf (too close), 0 and out-of-limits readings
         odom |= rec.odom is not None
         truth |= rec.truth is not None
     if first is None:

@@ -389,9 +389,11 @@ def _pose(words: list[str], start: int, what: str) -> Pose2D:
 
 def _ranges(values: np.ndarray, units: Units | None, what: str) -> tuple[np.ndarray, Units]:
     """Logged ranges (m) in REP-117 form: SICK codes decoded; ``nan`` / ``inf`` written as text
-    (logs converted from ROS) keep their REP-117 meaning; negative or -inf ranges are malformed."""
-    if np.any(values < 0):
-        raise ValueError(f"{what}: negative range {values[values < 0][0]:g} in the log")
+    (logs converted from ROS) keep their REP-117 meaning, ``-inf`` too (an object too close to
+    measure); a finite negative range is malformed."""
+    negative = (values < 0) & np.isfinite(values)
+    if np.any(negative):
+        raise ValueError(f"{what}: negative range {values[negative][0]:g} in the log")
     u = units or infer_units(values)
     return decode_logged_ranges(values, u), u
 

@@ -49,20 +49,22 @@ def codes_to_ranges(codes: np.ndarray, units: Units = "mm") -> np.ndarray:
 def ranges_to_codes(ranges: np.ndarray, units: Units = "mm") -> np.ndarray:
     """Ranges in metres to LMS200 distance codes (uint16), the inverse of :func:`codes_to_ranges`.
 
-    +inf and ranges beyond the largest code -> 8183; nan -> 8191. Ranges are rounded to the unit.
+    +inf and ranges beyond the largest code -> 8183; nan and -inf (REP-117: too close to
+    measure, which the LMS200 has no code for: it reads such an object as not valid) -> 8191.
+    Ranges are rounded to the unit.
 
     Raises:
-        ValueError: for negative ranges.
+        ValueError: for finite negative ranges.
     """
     scale = metres_per_unit(units)
     r = np.asarray(ranges, dtype=np.float64)
-    if np.any(r < 0):
+    if np.any((r < 0) & np.isfinite(r)):
         raise ValueError("ranges: negative ranges have no LMS200 code")
     with np.errstate(invalid="ignore", over="ignore"):
         c = np.rint(np.where(np.isfinite(r), r, 0.0) / scale)
     c = np.where(c > MAX_VALID_CODE, CODE_ABOVE_MAXIMUM, c)
     c = np.where(np.isposinf(r), CODE_ABOVE_MAXIMUM, c)
-    c = np.where(np.isnan(r), CODE_NOT_VALID, c)
+    c = np.where(np.isnan(r) | np.isneginf(r), CODE_NOT_VALID, c)
     return c.astype(np.uint16)
 
 

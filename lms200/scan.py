@@ -35,7 +35,9 @@ class Scan:
     """One laser scan. Fields mirror ROS ``sensor_msgs/LaserScan``.
 
     Args:
-        ranges: 1-D float64 array of ranges in metres; +inf beyond range, nan invalid.
+        ranges: 1-D float64 array of ranges in metres, with REP-117's special values: +inf no
+            return within range, -inf an object too close to measure, nan an invalid reading;
+            none of the three is a valid range (``valid``), and finite negative ranges are refused.
         angle_min: bearing of beam 0 in radians (sensor frame, CCW, 0 = ahead), within +-2 pi.
         angle_increment: bearing step between beams in radians, > 0; the beams span at most 2 pi
             (a full turn), so degrees given as radians are refused.
@@ -64,11 +66,9 @@ class Scan:
             raise ScanError(f"ranges: must be 1-D, got shape {r.shape}")
         if r.size == 0:
             raise ScanError("ranges: must hold at least one beam")
-        if np.any(r == -np.inf):  # before the negative check, which -inf would meet first
-            raise ScanError("ranges: -inf (REP-117: an object too close to measure) is not taken; "
-                            "write nan (invalid) for such beams")
-        if np.any(r < 0):  # nan compares False, so nan and +inf pass
-            raise ScanError("ranges: negative ranges are not allowed (use nan for invalid readings)")
+        if np.any((r < 0) & (r != -np.inf)):  # nan compares False; +inf and -inf (REP-117) pass
+            raise ScanError("ranges: negative ranges are not allowed (use nan for invalid readings, "
+                            "-inf for objects too close to measure)")
         for name in ("angle_min", "angle_increment", "range_min", "range_max", "stamp"):
             value = getattr(self, name)
             try:

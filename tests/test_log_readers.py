@@ -196,10 +196,10 @@ def test_rawlaser_lines_read_without_poses_and_robotlaser_is_preferred(tmp_path:
 
 
 def test_nan_and_inf_written_as_text_keep_their_rep117_meaning(tmp_path: Path) -> None:
-    """A log converted from ROS may write nan / inf ranges as text: one invalid beam no longer
-    makes the whole scan malformed; a negative range still does."""
+    """A log converted from ROS may write nan / inf / -inf ranges as text: one invalid beam no
+    longer makes the whole scan malformed; a finite negative range still does."""
     good = flaser(181, value=2.0).split()
-    good[2 + 10], good[2 + 20], good[2 + 30] = "nan", "inf", "NaN"
+    good[2 + 10], good[2 + 20], good[2 + 30], good[2 + 40] = "nan", "inf", "NaN", "-inf"
     bad = flaser(181, value=2.0).split()
     bad[2 + 5] = "-1.5"
     path = write(tmp_path, "rep117.log", [" ".join(good), " ".join(bad)])
@@ -208,8 +208,8 @@ def test_nan_and_inf_written_as_text_keep_their_rep117_meaning(tmp_path: Path) -
     recs = list(read_log(path, skip_bad_lines=True))
     assert len(recs) == 1
     r = recs[0].scan.ranges
-    assert np.isnan(r[10]) and np.isnan(r[30]) and np.isposinf(r[20])
-    assert np.count_nonzero(r == 2.0) == 178
+    assert np.isnan(r[10]) and np.isnan(r[30]) and np.isposinf(r[20]) and np.isneginf(r[40])  # -inf: too close (REP-117)
+    assert np.count_nonzero(r == 2.0) == 177
 
 
 def test_a_large_text_file_that_is_no_log_is_refused_after_its_first_lines(tmp_path: Path) -> None:

@@ -53,7 +53,6 @@ def test_scan_is_immutable_and_copies_its_input() -> None:
     [
         (dict(ranges=np.ones((2, 3))), "ranges"),
         (dict(ranges=np.array([1.0, -0.5])), "ranges"),
-        (dict(ranges=np.array([1.0, -np.inf])), "ranges"),
         (dict(ranges=np.array([])), "ranges"),
         (dict(ranges=["a", "b"]), "ranges"),
         (dict(angle_increment=0.0), "angle_increment"),
@@ -136,12 +135,30 @@ def test_decoding_a_huge_logged_range_keeps_it_without_a_warning():
     assert out[0] == 1e308 and np.isposinf(out[1]) and out[2] == 1.5
 
 
-def test_minus_inf_is_named_with_its_rep117_meaning() -> None:
-    """-inf met the negative-range check first ("negative ranges are not allowed"), so its own
-    message never showed, and that one said REP-117 has no -inf (it means: too close to measure).
-    Every extractor gives for -inf what it gives for nan (1,765 fuzzed scan-method pairs)."""
-    with pytest.raises(ValueError, match=r"^ranges: -inf \(REP-117: an object too close to measure\) is not taken; "
-                                         r"write nan"):
-        Scan(np.array([1.0, -np.inf, 2.0]), 0.0, 0.01, 0.0, 8.0)
+def test_minus_inf_is_taken_with_its_rep117_meaning() -> None:
+    """-inf is REP-117's "an object too close to measure": a Scan keeps it and no beam with it is
+    valid (it was refused, whole scans of a ROS sensor with it lost); finite negative ranges are
+    still refused. On the LMS200 wire it is "not valid" (8191): the device has no code for it."""
+    s = Scan(np.array([1.0, -np.inf, 2.0, np.inf, np.nan]), 0.0, 0.01, 0.0, 8.0)
+    assert np.isneginf(s.ranges[1])
+    np.testing.assert_array_equal(s.valid, [True, False, True, False, False])
     with pytest.raises(ValueError, match="^ranges: negative ranges are not allowed"):
         Scan(np.array([1.0, -1.0, 2.0]), 0.0, 0.01, 0.0, 8.0)
+    np.testing.assert_array_equal(ranges_to_codes(np.array([1.0, -np.inf, np.nan, np.inf]), "mm"), [1000, 8191, 8191, 8183])
+
+
+def test_minus_inf_beams_extract_as_nan_beams() -> None:
+    """Every method gives for a -inf beam what it gives for an invalid (nan) one: a wall 2 m ahead
+    (x = 2) with a run of beams too close in its middle."""
+    from features import available_methods, extract  # noqa: PLC0415
+
+    angles = -np.pi / 2 + np.arange(361) * np.deg2rad(0.5)
+    ranges = np.where(np.abs(angles) < 1.2, 2.0 / np.cos(angles), np.inf)
+    ranges[170:176] = -np.inf
+    close = Scan(ranges, -np.pi / 2, np.deg2rad(0.5), 0.0, 8.0)
+    invalid = Scan(np.where(np.isneginf(ranges), np.nan, ranges), -np.pi / 2, np.deg2rad(0.5), 0.0, 8.0)
+    for method in available_methods():
+        a, b = extract(close, method), extract(invalid, method)
+        assert len(a.lines) >= 1, method
+        np.testing.assert_array_equal(a.lines.values, b.lines.values, err_msg=method)
+        np.testing.assert_array_equal(a.lines.beams, b.lines.beams, err_msg=method)
