@@ -87,9 +87,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             _command_parser(parser, args).error(f"unrecognized arguments: {' '.join(extra)}")
     except SystemExit as exc:  # --help (0) or a bad option, already printed in one line (2)
         return int(exc.code or 0)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 1
+    if not getattr(args, "func", None):  # "lmsbench" or "lmsbench lms200" alone: a usage error, one line, 2
+        sub = _command_parser(parser, args)
+        try:
+            sub.error("a command is required: " + ", ".join(_commands(sub)))
+        except SystemExit as exc:
+            return int(exc.code or 0)
     name = " ".join(filter(None, (args.command, getattr(args, "lms200_command", None))))
     interrupt = _Interrupt(name)
     main_thread = threading.current_thread() is threading.main_thread()
@@ -162,6 +165,12 @@ def _options_before_commands(parser: argparse.ArgumentParser, argv: list[str]) -
         if word not in sub.choices:
             return  # argparse says "invalid choice", naming the known commands
         parser = sub.choices[word]
+
+
+def _commands(parser: argparse.ArgumentParser) -> list[str]:
+    """The names of ``parser``'s (sub)commands."""
+    actions = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    return list(actions[0].choices) if actions else []
 
 
 def _command_parser(parser: argparse.ArgumentParser, args: argparse.Namespace) -> argparse.ArgumentParser:

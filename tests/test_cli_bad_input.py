@@ -583,3 +583,15 @@ def test_a_latin1_comment_near_the_top_is_read_as_further_down(files, tmp_path, 
     (tmp_path / "latin.clf").write_bytes(bytes([0xE9]) * 300 + b"FLASER 1 1.0 0 0 0 0 0 0 1.0 h 1.0\n" * 20)
     assert run_main(["info", str(tmp_path / "latin.clf")]) == 2
     assert "a binary file (300 of its first 1000 bytes are not ASCII text)" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv, prog", [([], "lmsbench"), (["lms200"], "lmsbench lms200")])
+def test_no_command_is_a_usage_error(argv: list[str], prog: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """``lmsbench`` alone printed the whole help to stdout and exited 1 (the status of an internal
+    error); a missing command is a usage error: one line on stderr that lists the commands, exit 2."""
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1
+    assert err.startswith(f"{prog}: error: ")
+    if not argv:
+        assert "a command is required: bench, calibrate, compare" in err
