@@ -9,6 +9,7 @@ wrong kind. ``experiments.cli`` prints either as ``lmsbench CMD: error: ...`` wi
 from __future__ import annotations
 
 import argparse
+import fnmatch
 import math
 import os
 import tempfile
@@ -206,22 +207,27 @@ def check_log(path: str | os.PathLike) -> Path:
 SIMULATE_OUTPUTS = ("scans.clf", "groundtruth.tum", "world.json", "config.yaml", "map.png")
 SLAM_OUTPUTS = ("trajectory.tum", "keyframes.tum", "map.json", "metrics.json", "config.yaml", "slam.png")
 COMPARE_OUTPUTS = ("compare.parquet", "compare.csv", "summary.csv", "summary.txt", "config.yaml")  # and a figure per log
+COMPARE_FIGURES = ("realdata_*.png", "realdata_*.pdf", "realdata_*.csv")  # a log's figure and its rows (figures.realdata)
 SIM2REAL_OUTPUTS = ("sim2real.csv", "scene.csv", "sim2real.md", "sim2real.png", "sensor.yaml", "config.yaml")
 
 
-def check_out(path: str | os.PathLike | None, writes: Sequence[str] | None = None) -> Path | None:
+def check_out(path: str | os.PathLike | None, writes: Sequence[str] | None = None,
+              patterns: Sequence[str] = ()) -> Path | None:
     """An output folder: absent (created later) or a folder; its nearest existing parent writable.
     None (no --out: a new timestamped folder will be made) passes. With ``writes`` (the fixed file
-    names a command writes: SIMULATE_OUTPUTS, SLAM_OUTPUTS), an existing folder may hold only those
-    (a run's own earlier outputs, which it replaces) and hidden files: ``slam run --out slam`` from
-    the checkout wrote into the slam package, ``slam run --out run`` replaced the run's config.yaml."""
+    names a command writes: SIMULATE_OUTPUTS, SLAM_OUTPUTS, COMPARE_OUTPUTS) and ``patterns``
+    (shell patterns of the names it writes per input: COMPARE_FIGURES), an existing folder may hold
+    only those (a run's own earlier outputs, which it replaces) and hidden files: ``slam run --out
+    slam`` from the checkout wrote into the slam package, ``slam run --out run`` replaced the run's
+    config.yaml, ``compare LOG --out FOLDER`` a config.yaml of the user's."""
     if path is None:
         return None
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise InputError(f"--out {p}: exists and is not a folder")
     if writes is not None and p.is_dir():
-        others = sorted(e.name for e in p.iterdir() if e.name not in writes and not e.name.startswith("."))
+        others = sorted(e.name for e in p.iterdir() if e.name not in writes and not e.name.startswith(".")
+                        and not any(fnmatch.fnmatchcase(e.name, pat) for pat in patterns))
         if others:
             shown = ", ".join(others[:3]) + (f" and {len(others) - 3} more" if len(others) > 3 else "")
             raise InputError(f"--out {p}: holds {shown}, which this command does not write; give a new or empty "

@@ -595,3 +595,23 @@ def test_no_command_is_a_usage_error(argv: list[str], prog: str, capsys: pytest.
     assert err.startswith(f"{prog}: error: ")
     if not argv:
         assert "a command is required: bench, calibrate, compare" in err
+
+
+def test_compare_out_holds_only_compares_own_outputs(files, tmp_path, capsys):
+    """`compare LOG --out FOLDER` replaced any file of FOLDER with one of its output names (a
+    user's config.yaml or summary.csv) silently; a folder holding files compare does not write is
+    now refused, one line, nothing touched. A folder of compare's own earlier outputs (its fixed
+    files and each log's realdata_* figure) is replaced, as before."""
+    out = tmp_path / "o"
+    assert run_main(["compare", files["good.clf"], "--methods", "split_merge", "--out", str(out)]) == 0
+    written = sorted(p.name for p in out.iterdir())
+    assert "config.yaml" in written and any(n.startswith("realdata_") for n in written)
+    assert run_main(["compare", files["good.clf"], "--methods", "split_merge", "--out", str(out)]) == 0  # a rerun
+    capsys.readouterr()
+    (out / "notes.txt").write_text("mine")
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert run_main(["compare", files["good.clf"], "--methods", "split_merge", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"lmsbench compare: error: --out {out}: holds notes.txt, which this command does not write; give a "
+                   "new or empty folder (a folder of this command's own earlier outputs is replaced)"]
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
