@@ -169,18 +169,18 @@ def _options_before_commands(parser: argparse.ArgumentParser, argv: list[str]) -
 
 def _commands(parser: argparse.ArgumentParser) -> list[str]:
     """The names of ``parser``'s (sub)commands."""
-    actions = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
-    return list(actions[0].choices) if actions else []
+    sub = _subparsers(parser)
+    return list(sub.choices) if sub else []
 
 
 def _command_parser(parser: argparse.ArgumentParser, args: argparse.Namespace) -> argparse.ArgumentParser:
     """The innermost (sub)command's parser that ``args`` came through (``lmsbench lms200 record``'s)."""
     while True:
-        actions = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
-        name = getattr(args, actions[0].dest, None) if actions else None
-        if name is None or name not in actions[0].choices:
+        sub = _subparsers(parser)
+        name = getattr(args, sub.dest, None) if sub else None
+        if sub is None or name is None or name not in sub.choices:
             return parser
-        parser = actions[0].choices[name]
+        parser = sub.choices[name]
 
 
 def _end_progress_bars() -> None:
