@@ -209,6 +209,7 @@ SLAM_OUTPUTS = ("trajectory.tum", "keyframes.tum", "map.json", "metrics.json", "
 COMPARE_OUTPUTS = ("compare.parquet", "compare.csv", "summary.csv", "summary.txt", "config.yaml")  # and a figure per log
 COMPARE_FIGURES = ("realdata_*.png", "realdata_*.pdf", "realdata_*.csv")  # a log's figure and its rows (figures.realdata)
 SIM2REAL_OUTPUTS = ("sim2real.csv", "scene.csv", "sim2real.md", "sim2real.png", "sensor.yaml", "config.yaml")
+BENCH_OUTPUTS = ("bench.csv", "versions.yaml")
 
 
 def check_out(path: str | os.PathLike | None, writes: Sequence[str] | None = None,

@@ -615,3 +615,21 @@ def test_compare_out_holds_only_compares_own_outputs(files, tmp_path, capsys):
     assert err == [f"lmsbench compare: error: --out {out}: holds notes.txt, which this command does not write; give a "
                    "new or empty folder (a folder of this command's own earlier outputs is replaced)"]
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+@pytest.mark.parametrize("command, theirs", [(["bench", "features", "--quick"], "bench.csv"), (["sim2real"], "config.yaml")])
+def test_bench_and_sim2real_out_hold_only_their_own_outputs(command, theirs, files, tmp_path, capsys):
+    """`bench --out DIR` and `sim2real LOG --out DIR` replaced a user's files of their outputs'
+    names (bench.csv, config.yaml, sensor.yaml, ...) in DIR silently; a folder holding files the
+    command does not write is refused before any work, one line, nothing touched."""
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / theirs).write_text("mine: 1\n")
+    (out / "notes.txt").write_text("mine")
+    argv = command + ([files["good.clf"]] if command == ["sim2real"] else []) + ["--out", str(out)]
+    assert run_main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"lmsbench {command[0]}: error: --out {out}: holds notes.txt, which this command does not write; "
+                   "give a new or empty folder (a folder of this command's own earlier outputs is replaced)"]
+    assert sorted(p.name for p in out.iterdir()) == sorted([theirs, "notes.txt"])
+    assert (out / theirs).read_text() == "mine: 1\n"

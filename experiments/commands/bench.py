@@ -10,7 +10,7 @@ from pathlib import Path
 from lms200 import LmsbenchError
 
 from experiments import benchmarks
-from experiments.options import check_out
+from experiments.options import BENCH_OUTPUTS, check_out
 
 
 def discover() -> dict[str, object]:
@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise LmsbenchError(f"benchmark(s) {twice} named more than once")
-    check_out(args.out)
+    check_out(args.out, writes=BENCH_OUTPUTS)
     rows = []
     for name in names:
         print(f"== {name}", flush=True)
