@@ -18,6 +18,7 @@ from typing import Any, Iterable, Iterator
 
 import numpy as np
 
+from .codes import finite_negative
 from .errors import LmsbenchError, LogNotFoundError
 from .records import Pose2D, Record
 from .scan import Scan, snap_angle
@@ -141,7 +142,7 @@ def _stamp_of(msg) -> float:  # noqa: ANN001
 def _scan_of(msg) -> Scan:  # noqa: ANN001
     """A LaserScan message as a Scan; raises ValueError for fields a scan cannot have."""
     ranges = np.asarray(msg.ranges, dtype=np.float64)
-    ranges[(ranges < 0) & np.isfinite(ranges)] = np.nan  # some drivers mark invalid beams with negative values; -inf is REP-117's "too close"
+    ranges[finite_negative(ranges)] = np.nan  # some drivers mark invalid beams with negative values; -inf is REP-117's "too close"
     angle_min, increment = float(msg.angle_min), float(msg.angle_increment)
     if increment < 0 and ranges.size > 0:  # a laser mounted upside down sweeps clockwise: same bearings, ascending
         ranges, angle_min, increment = ranges[::-1].copy(), angle_min + (ranges.size - 1) * increment, -increment

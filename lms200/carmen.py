@@ -52,6 +52,7 @@ from .codes import (
     LMS200_MAX_RANGE,
     Units,
     decode_logged_ranges,
+    finite_negative,
     infer_units,
     metres_per_unit,
 )
@@ -391,7 +392,7 @@ def _ranges(values: np.ndarray, units: Units | None, what: str) -> tuple[np.ndar
     """Logged ranges (m) in REP-117 form: SICK codes decoded; ``nan`` / ``inf`` written as text
     (logs converted from ROS) keep their REP-117 meaning, ``-inf`` too (an object too close to
     measure); a finite negative range is malformed."""
-    negative = (values < 0) & np.isfinite(values)
+    negative = finite_negative(values)
     if np.any(negative):
         raise ValueError(f"{what}: negative range {values[negative][0]:g} in the log")
     u = units or infer_units(values)

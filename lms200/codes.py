@@ -46,6 +46,13 @@ def codes_to_ranges(codes: np.ndarray, units: Units = "mm") -> np.ndarray:
     return np.where(c == CODE_ABOVE_MAXIMUM, np.inf, r)
 
 
+def finite_negative(ranges: np.ndarray) -> np.ndarray:
+    """Mask of the ranges that are negative numbers, which no reader or Scan takes (REP-117's
+    -inf, an object too close to measure, is not one of them; nan and +inf neither)."""
+    r = np.asarray(ranges, dtype=np.float64)
+    return np.isfinite(r) & (r < 0)
+
+
 def ranges_to_codes(ranges: np.ndarray, units: Units = "mm") -> np.ndarray:
     """Ranges in metres to LMS200 distance codes (uint16), the inverse of :func:`codes_to_ranges`.
 
@@ -58,7 +65,7 @@ def ranges_to_codes(ranges: np.ndarray, units: Units = "mm") -> np.ndarray:
     """
     scale = metres_per_unit(units)
     r = np.asarray(ranges, dtype=np.float64)
-    if np.any((r < 0) & np.isfinite(r)):
+    if np.any(finite_negative(r)):
         raise ValueError("ranges: negative ranges have no LMS200 code")
     with np.errstate(invalid="ignore", over="ignore"):
         c = np.rint(np.where(np.isfinite(r), r, 0.0) / scale)

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .codes import finite_negative
 from .errors import ScanError
 
 LMS200_BEAMS = 361
@@ -66,7 +67,7 @@ class Scan:
             raise ScanError(f"ranges: must be 1-D, got shape {r.shape}")
         if r.size == 0:
             raise ScanError("ranges: must hold at least one beam")
-        if np.any((r < 0) & (r != -np.inf)):  # nan compares False; +inf and -inf (REP-117) pass
+        if np.any(finite_negative(r)):  # nan, +inf and -inf (REP-117) pass
             raise ScanError("ranges: negative ranges are not allowed (use nan for invalid readings, "
                             "-inf for objects too close to measure)")
         for name in ("angle_min", "angle_increment", "range_min", "range_max", "stamp"):
