@@ -209,11 +209,6 @@ def _signed_residuals(lines: np.ndarray, scan, unsigned: np.ndarray) -> np.ndarr
     return out[np.isfinite(out)]
 
 
-def motion_limits(records: Sequence[Record]):
-    """Robot limits matching a log's odometry (see the module docstring), or the defaults."""
-    return odometry_limits(np.array([(r.scan.stamp, *r.odom) for r in records if r.odom is not None], dtype=float))
-
-
 def odometry_limits(a: np.ndarray):
     """Robot limits matching odometry ``a`` (n, 4): stamp s, x m, y m, theta rad per record with
     odometry, in log order (see the module docstring), or the defaults."""

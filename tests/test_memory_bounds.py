@@ -186,7 +186,9 @@ def test_sim2real_keeps_only_the_scans_it_uses(tmp_path: Path, monkeypatch: pyte
                    odom=(0.05 * k, 0.01 * k, 0.02 * k + 0.01 * rng.standard_normal())) for k in range(300)]
     write_log(tmp_path / "log.clf", recs)
     del recs
-    expected = sim2real.motion_limits(list(read_log(tmp_path / "log.clf")))
+    expected = sim2real.odometry_limits(np.array([(r.scan.stamp, *r.odom) for r in read_log(tmp_path / "log.clf")
+                                                  if r.odom is not None],
+                                                 dtype=float))
     seen: dict = {}
 
     def stop(*args, **kwargs):

@@ -86,7 +86,6 @@ def run(args: argparse.Namespace) -> int:
     methods = check_methods(args.methods)
     params = extractor_overrides(dict(args.params), methods)
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
-    check_out(args.out)
     reads = [Path(s) / name for s in args.sources if Path(s).is_dir() for name in SIMULATE_OUTPUTS]
     reads += [Path(s) for s in args.sources if Path(s).is_file()] + ([args.sensor] if args.sensor else [])
     check_out_spares(args.out, COMPARE_OUTPUTS, reads)

@@ -67,7 +67,6 @@ def run(args: argparse.Namespace) -> int:
 
     read_options = read_log_options(args)
     check_log(args.log)
-    check_out(args.out)
     check_out_spares(args.out, SIM2REAL_OUTPUTS, [args.log] + ([args.sensor] if args.sensor else []))
     check_out(args.out, writes=SIM2REAL_OUTPUTS)  # after: an input in --out is the sharper message
     check_seeds(args.seeds)
