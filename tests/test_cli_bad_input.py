@@ -633,3 +633,30 @@ def test_bench_and_sim2real_out_hold_only_their_own_outputs(command, theirs, fil
                    "give a new or empty folder (a folder of this command's own earlier outputs is replaced)"]
     assert sorted(p.name for p in out.iterdir()) == sorted([theirs, "notes.txt"])
     assert (out / theirs).read_text() == "mine: 1\n"
+
+
+@pytest.mark.parametrize("command, theirs, others", [
+    (["figures", "--no-slam", "--duration", "1", "--rate-hz", "2", "--methods", "sensor"], "fig3_scan.png",
+     "notes.txt, tables/mine.csv"),
+    (["demo", "--no-sweep", "--duration", "1", "--rate-hz", "2"], "report.md",
+     "notes.txt, sweeps/demo_k_vs_noise/mine.csv, tables/mine.csv"),
+])
+def test_figures_and_demo_out_hold_only_their_own_outputs(command, theirs, others, tmp_path, capsys):
+    """`figures --out DIR` and `demo --out DIR` replaced a user's files of their outputs' names
+    (fig3_scan.png, report.md, tables/*.parquet) in DIR silently, and the demo deleted a
+    sweeps/demo_k_vs_noise folder of DIR whole; a folder holding files the command does not write
+    (also in the sub-folders it writes into) is refused before any work, one line, nothing touched."""
+    out = tmp_path / "o"
+    (out / "tables").mkdir(parents=True)
+    (out / "tables" / "mine.csv").write_text("a\n1\n")
+    (out / theirs).write_text("mine")
+    (out / "notes.txt").write_text("mine")
+    if command[0] == "demo":
+        (out / "sweeps" / "demo_k_vs_noise").mkdir(parents=True)
+        (out / "sweeps" / "demo_k_vs_noise" / "mine.csv").write_text("a\n1\n")
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert run_main(command + ["--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"lmsbench {command[0]}: error: --out {out}: holds {others}, which this command does not write; "
+                   "give a new or empty folder (a folder of this command's own earlier outputs is replaced)"]
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import DURATION, SEED, check_log, check_out, positive, world_name
+from experiments.options import DEMO_OUTPUTS, DURATION, SEED, check_log, check_out, positive, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -29,7 +29,7 @@ def run(args: argparse.Namespace) -> int:
     from experiments.demo import run_demo
     from experiments.figures.study import StudyConfig
 
-    check_out(args.out)
+    check_out(args.out, writes=DEMO_OUTPUTS)
     cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz)
     if args.log:
         cfg.intel_log = str(check_log(args.log))

@@ -6,8 +6,8 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import (DURATION, SEED, check_log, check_methods, check_out, check_study_tables,
-                                 check_sweep_results, positive, world_name)
+from experiments.options import (DURATION, FIGURES_OUTPUTS, SEED, STUDY_TABLES, OutTree, check_log, check_methods,
+                                 check_out, check_study_tables, check_sweep_results, positive, world_name)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,7 +34,10 @@ def run(args: argparse.Namespace) -> int:
     from experiments.provenance import new_run_folder
     from experiments.figures.study import StudyConfig, load_config, load_tables, run_study, save_tables
 
-    check_out(args.out)
+    writes = FIGURES_OUTPUTS
+    if args.out is not None and args.tables is not None and args.out.resolve() == args.tables.resolve():
+        writes = OutTree(FIGURES_OUTPUTS.files + STUDY_TABLES.files, FIGURES_OUTPUTS.folders)  # the tables it reads
+    check_out(args.out, writes=writes)
     for folder in args.sweep:
         check_sweep_results(folder)
     if args.tables:
