@@ -91,6 +91,7 @@ def files(tmp_path_factory):
                                                   "grid": {"extractor.k": [3]}}))
     base = {"name": "t", "kind": "extract", "fixed": {"duration": 0.5}, "grid": {"extractor.k": [3]}}
     bad_sweeps = {"sweep_seed": {"seeds": [-1]}, "sweep_dup_seed": {"seeds": [0, 0]},
+                  "sweep_bare_seeds": {"seeds": 3}, "sweep_bare_grid": {"grid": {"extractor.k": "3, 5, 10"}},
                   "sweep_k": {"grid": {"extractor.k": [-3]}}, "sweep_noise": {"grid": {"sensor.noise_sigma": [-0.01]}},
                   "sweep_plain": {"fixed": {"duration": 0.5, "bogus": 1}}, "sweep_name": {"name": "../../x"},
                   "sweep_world": {"fixed": {"duration": 0.5, "world": "offfice"}},
@@ -308,6 +309,11 @@ CASES = [
     (["sweep", "{sweep.yaml}", "--out", "{a_file}"], "not a folder"),
     (["sweep", "{sweep_seed.yaml}", "--out", O], "seeds"),
     (["sweep", "{sweep_dup_seed.yaml}", "--out", O], "seeds"),
+    # `seeds: 3` ran the one seed 3 (three seeds meant); `k: 3, 5, 10` (no brackets) the string '3, 5, 10' in every cell
+    (["sweep", "{sweep_bare_seeds.yaml}", "--out", O], "sweep_bare_seeds.yaml: `seeds: 3` is one number: write a list, "
+                                                       "`seeds: [0, 1, 2]` for 3 seeds, `seeds: [3]` for the one seed 3"),
+    (["sweep", "{sweep_bare_grid.yaml}", "--out", O], "sweep_bare_grid.yaml: grid.extractor.k: '3, 5, 10' is a single "
+                                                      "value: write a list of the values to vary (`[3, 5, 10]`"),
     (["sweep", "{sweep_k.yaml}", "--out", O], "k: must be"),
     (["sweep", "{sweep_noise.yaml}", "--out", O], "noise_sigma"),
     (["sweep", "{sweep_plain.yaml}", "--out", O], "bogus"),

@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="world names (office, corridor, angles, pillars, random; WORLD:SEED for one seed), "
                         "`lmsbench simulate` folders, or paths of real logs")
     p.add_argument("--methods", nargs="+", help="extractors (default: every available one)")
-    p.add_argument("--seeds", nargs="+", type=SEED, default=[0, 1, 2], help="seeds of each world (default 0 1 2)")
+    p.add_argument("--seeds", nargs="+", type=SEED, default=[0, 1, 2], help="seeds of each world, listed (default 0 1 2; `--seeds 3` is the one seed 3)")
     p.add_argument("--duration", type=DURATION, default=30.0, help="simulated seconds per world and seed (default 30)")
     p.add_argument("--rate", type=positive("scans/s"), default=2.0, help="simulated scans per second kept (default 2)")
     p.add_argument("--stride", type=count(1), default=1, help="logs: use every STRIDE-th scan (default 1)")

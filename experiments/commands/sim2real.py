@@ -37,7 +37,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
                    help="use this sensor model instead of calibrating on the log")
     p.add_argument("--seeds", nargs="+", type=SEED, default=list(DEFAULT_SEEDS),
-                   help=f"simulated runs, one world each (default {DEFAULT_SEEDS[0]}-{DEFAULT_SEEDS[-1]})")
+                   help=f"simulated runs, one world each, listed (default {DEFAULT_SEEDS[0]}-{DEFAULT_SEEDS[-1]}; `--seeds 3` is the "
+                        "one world 3)")
     p.add_argument("--duration", type=DURATION, default=DEFAULT_DURATION_S,
                    help=f"simulated seconds per seed (default {DEFAULT_DURATION_S:g}, as the fits' probe runs)")
     p.add_argument("--probe-duration", type=DURATION,
