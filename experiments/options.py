@@ -45,6 +45,26 @@ class OneLineParser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
+    def parse_known_args(self, args: Sequence[str] | None = None, namespace: Any = None) -> Any:  # type: ignore[override]
+        """As argparse, but an option that takes a value given twice is an error: argparse kept the
+        last (``simulate --seed 1 ... --seed 2`` ran seed 2, ``--out a ... --out b`` wrote b).
+        Repeatable options (``action="append"``: ``--set``, ``--sweep``) and flags pass."""
+        import sys
+
+        given: dict[str, list[str]] = {}
+        for arg in (sys.argv[1:] if args is None else list(args)):
+            if arg == "--":
+                break
+            name = arg.split("=", 1)[0] if arg.startswith("--") else arg
+            action = self._option_string_actions.get(name)
+            if action is None or action.nargs == 0 or isinstance(action, (argparse._AppendAction, argparse._CountAction)):
+                continue
+            given.setdefault(action.dest, []).append(name)
+        for names in given.values():
+            if len(names) > 1:
+                self.error(f"argument {names[0]}: given {len(names)} times; give it once")
+        return super().parse_known_args(args, namespace)
+
 
 def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = False, unit: str = "",
            integer: bool = False) -> Callable[[str], float]:
@@ -80,6 +100,14 @@ def positive(unit: str = "") -> Callable[[str], float]:
 def count(lo: int = 1, hi: int | None = None) -> Callable[[str], float]:
     """A whole number >= lo (scan counts, strides, workers)."""
     return number(lo, hi, integer=True)
+
+
+def path_arg(text: str) -> Path:
+    """An argparse type: a path, not empty. Path("") is "." (`--out "$OUT"` with OUT unset wrote
+    into the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"empty path {text!r}; give a file or folder name")
+    return Path(text)
 
 
 SEED = count(0, 2**32 - 1)
@@ -178,6 +206,8 @@ def check_yaml(path: str | os.PathLike, what: str = "a YAML file") -> Path:
 def check_log(path: str | os.PathLike) -> Path:
     """A CARMEN log (plain text, or compressed with gzip, bzip2 or xz), a ROS 1 ``.bag`` or a ROS 2 bag folder, by its content:
     a binary file, an archive, a plain file named ``.gz``, a folder without ``metadata.yaml`` are errors."""
+    if not str(path).strip():  # Path("") is the current folder
+        raise InputError(f"empty path {str(path)!r} given as a log; give {'a CARMEN log, ROS 1 .bag or ROS 2 bag folder'}")
     p = Path(path)
     what = "a CARMEN log, ROS 1 .bag or ROS 2 bag folder"
     if not p.exists():

@@ -485,6 +485,16 @@ CASES = [
     (["--bogus", "compare"], "lmsbench: error: unrecognized arguments: --bogus (see lmsbench --help)"),
     (["--out=x", "info", "{good.clf}"], "lmsbench: error: unrecognized arguments: --out=x"),
     (["lms200", "--port", "loop://", "record", "--out", "{out}/x.clf"], "lmsbench lms200: error: unrecognized arguments: --port"),
+    # an option given twice: argparse kept the last (seed 2 ran, the run went to the second --out)
+    (["simulate", "--seed", "1", "--duration", "0.5", "--seed", "2", "--out", O],
+     "lmsbench simulate: error: argument --seed: given 2 times; give it once"),
+    (["simulate", "--duration", "0.5", "--out", "{out}/a", "--out={out}/b"], "argument --out: given 2 times; give it once"),
+    (["compare", "{good.clf}", "--methods", "sensor", "--methods", "iepf", "--out", O], "argument --methods: given 2 times"),
+    (["info", "{good.clf}", "--laser-fov-deg", "180", "--laser-fov-deg", "100"], "argument --laser-fov-deg: given 2 times"),
+    # an empty path is the current folder to pathlib (`--out "$OUT"` with OUT unset)
+    (["slam", "", "--out", O], "lmsbench slam: error: argument input: empty path ''; give a file or folder name"),
+    (["info", ""], "lmsbench info: error: empty path '' given as a log"),
+    (["compare", "office:1", "--sensor", "", "--out", O], "argument --sensor: empty path ''"),
 ]
 
 
@@ -666,3 +676,24 @@ def test_figures_and_demo_out_hold_only_their_own_outputs(command, theirs, other
     assert err == [f"lmsbench {command[0]}: error: --out {out}: holds {others}, which this command does not write; "
                    "give a new or empty folder (a folder of this command's own earlier outputs is replaced)"]
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+
+
+def test_out_given_as_an_empty_string_is_refused_not_the_current_folder(tmp_path, monkeypatch, capsys):
+    """`simulate --out ""` (a shell variable left unset) wrote the run into the current folder:
+    Path("") is "."; it is refused, the folder left empty."""
+    monkeypatch.chdir(tmp_path)
+    assert run_main(["simulate", "--duration", "0.5", "--out", ""]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "lmsbench simulate: error: argument --out: empty path ''; give a file or folder name (see lmsbench simulate --help)"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_repeatable_options_and_flags_may_still_be_given_twice():
+    """Only options that take one value are refused twice: --set and --sweep collect, a flag
+    given twice means the same."""
+    from experiments.cli import build_parser
+
+    args = build_parser().parse_args(["compare", "office:1", "--set", "extractor.k=3", "--set", "extractor.ad_tau=2"])
+    assert [p[0] for p in args.params] == ["extractor.k", "extractor.ad_tau"]
+    args = build_parser().parse_args(["figures", "--sweep", "a", "--sweep", "b", "--no-slam", "--no-slam"])
+    assert [str(p) for p in args.sweep] == ["a", "b"] and args.no_slam

@@ -10,18 +10,18 @@ import argparse
 import sys
 from pathlib import Path
 
-from experiments.options import check_out, check_yaml, count
+from experiments.options import check_out, check_yaml, count, path_arg
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sweep", help="run a parameter sweep (grid or random) on Dask; resumable")
-    p.add_argument("sweep", type=Path, help="sweep file (YAML; see sweeps/*.yaml)")
+    p.add_argument("sweep", type=path_arg, help="sweep file (YAML; see sweeps/*.yaml)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use this running Dask scheduler")
     where.add_argument("--inprocess", "--local", dest="inprocess", action="store_true",
                        help="run in this process, without Dask (default: a local Dask cluster)")
     p.add_argument("--workers", type=count(1, 64), default=2, help="worker processes of the local cluster (default 2)")
-    p.add_argument("--out", type=Path, help="sweep folder (default results/sweeps/NAME)")
+    p.add_argument("--out", type=path_arg, help="sweep folder (default results/sweeps/NAME)")
     p.add_argument("--retry-failed", action="store_true", help="compute again the cells that failed before")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
