@@ -697,3 +697,29 @@ def test_repeatable_options_and_flags_may_still_be_given_twice():
     assert [p[0] for p in args.params] == ["extractor.k", "extractor.ad_tau"]
     args = build_parser().parse_args(["figures", "--sweep", "a", "--sweep", "b", "--no-slam", "--no-slam"])
     assert [str(p) for p in args.sweep] == ["a", "b"] and args.no_slam
+
+
+def test_sweep_out_holds_only_sweep_outputs_and_not_the_sweep_file(files, tmp_path, capsys):
+    """`sweep DIR/sweep.yaml --out DIR` wrote the resolved spec over the user's file (its comments
+    lost), and `sweep --out DIR` replaced a user's results.csv in DIR; both are refused before any
+    cell runs, nothing touched. Resuming into the sweep's own folder still works."""
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    text = "# k against nothing: my notes\n" + Path(files["sweep.yaml"]).read_text()
+    (mine / "sweep.yaml").write_text(text)
+    assert run_main(["sweep", str(mine / "sweep.yaml"), "--inprocess", "--no-progress", "--out", str(mine)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench sweep: error: --out {mine}: the run would write sweep.yaml over {mine / 'sweep.yaml'}, which it "
+        "reads; give another folder"]
+    assert [p.name for p in mine.iterdir()] == ["sweep.yaml"] and (mine / "sweep.yaml").read_text() == text
+    out = tmp_path / "out"
+    argv = ["sweep", str(files["sweep.yaml"]), "--inprocess", "--no-progress", "--out", str(out)]
+    assert run_main(argv, seconds=120) == 0 and run_main(argv, seconds=120) == 0  # a run, then a resume
+    assert "1 cells, 0 computed, 1 already done" in capsys.readouterr().out
+    (out / "notes.md").write_text("mine")
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert run_main(argv) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench sweep: error: --out {out}: holds notes.md, which this command does not write; give a new or "
+        "empty folder (a folder of this command's own earlier outputs is replaced)"]
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before

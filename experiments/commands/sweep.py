@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from experiments.options import check_out, check_yaml, count, path_arg
+from experiments.options import SWEEP_OUTPUTS, check_out, check_out_spares, check_yaml, count, path_arg
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -33,7 +33,8 @@ def run(args: argparse.Namespace) -> int:
     check_yaml(args.sweep, "a sweep file")
     spec = load_sweep(args.sweep)
     out = args.out or Path("results/sweeps") / spec.name
-    check_out(out)
+    check_out_spares(out, SWEEP_OUTPUTS.files, [args.sweep])  # `sweep DIR/sweep.yaml --out DIR` lost its comments
+    check_out(out, writes=SWEEP_OUTPUTS)
     executor = "inprocess" if args.inprocess else (args.scheduler or "local")
     from experiments.sweep.runner import check_executor, check_spec
 
