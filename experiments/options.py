@@ -185,11 +185,22 @@ def _text_head(path: Path, what: str, utf8: bool = True) -> None:
             raise InputError(f"{path}: not text (byte {exc.start} is not UTF-8), not {what}") from None
 
 
+def _missing(p: Path, what: str) -> str:
+    """Why an input path does not exist: no such file, or a symbolic link to nothing (data moved, a loop)."""
+    if p.is_symlink():
+        try:
+            target = os.readlink(p)
+        except OSError:
+            target = "?"
+        return f"{p}: a symbolic link to {target}, which does not exist (or a loop of links)"
+    return f"{p}: no such {what}"
+
+
 def check_file(path: str | os.PathLike, what: str = "a file") -> Path:
     """An existing, readable regular file."""
     p = Path(path)
     if not p.exists():
-        raise InputError(f"{p}: no such file")
+        raise InputError(_missing(p, "file"))
     if p.is_dir():
         raise InputError(f"{p} is a folder, not {what}")
     _head(p, 1)
@@ -211,7 +222,7 @@ def check_log(path: str | os.PathLike) -> Path:
     p = Path(path)
     what = "a CARMEN log, ROS 1 .bag or ROS 2 bag folder"
     if not p.exists():
-        raise InputError(f"{p}: no such log")
+        raise InputError(_missing(p, "log"))
     if p.is_dir():
         meta = p / "metadata.yaml"
         if not meta.is_file():

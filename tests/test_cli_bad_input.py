@@ -82,6 +82,8 @@ def files(tmp_path_factory):
     (d / "zero_beams.clf").write_text("FLASER 0 0 0 0 0 0 0 0.0 host 0.0\n")  # was "needs 11 fields, got 11"
     with gzip.open(d / "good.clf.gz", "wt") as fh:
         fh.write((d / "good.clf").read_text())
+    (d / "cut_short.clf").write_text((d / "good.clf").read_text()[:-300])  # a recording stopped mid-line
+    os.symlink(d / "moved_away.clf", d / "dangling.clf")  # the data moved: a link to nothing
     # a simulator-like folder: scans.clf and its truth
     (d / "simrun").mkdir()
     write_log(d / "simrun" / "scans.clf", good)
@@ -491,6 +493,13 @@ CASES = [
     (["simulate", "--duration", "0.5", "--out", "{out}/a", "--out={out}/b"], "argument --out: given 2 times; give it once"),
     (["compare", "{good.clf}", "--methods", "sensor", "--methods", "iepf", "--out", O], "argument --methods: given 2 times"),
     (["info", "{good.clf}", "--laser-fov-deg", "180", "--laser-fov-deg", "100"], "argument --laser-fov-deg: given 2 times"),
+    # a log cut short names how to read on; a link to nothing says so ("no such log" named the link)
+    (["info", "{cut_short.clf}"], "cut_short.clf:10: malformed ROBOTLASER1 line: ROBOTLASER1 announces 361 beams but has fewer fields"),
+    (["info", "{cut_short.clf}"], "(--skip-bad-lines skips malformed lines, each reported)"),
+    (["compare", "{dangling.clf}", "--out", O], "dangling.clf: a symbolic link to "),
+    # lms200 record replaced an earlier CARMEN recording silently (bags were refused); a folder was "unknown kind"
+    (["lms200", "record", "--port", "loop://", "--out", "{good.clf}"], "good.clf exists; a recording is not written over a file"),
+    (["lms200", "record", "--port", "loop://", "--out", "{empty_dir}"], "empty_dir is a folder; give a file name"),
     # an empty path is the current folder to pathlib (`--out "$OUT"` with OUT unset)
     (["slam", "", "--out", O], "lmsbench slam: error: argument input: empty path ''; give a file or folder name"),
     (["info", ""], "lmsbench info: error: empty path '' given as a log"),
@@ -723,3 +732,14 @@ def test_sweep_out_holds_only_sweep_outputs_and_not_the_sweep_file(files, tmp_pa
         f"lmsbench sweep: error: --out {out}: holds notes.md, which this command does not write; give a new or "
         "empty folder (a folder of this command's own earlier outputs is replaced)"]
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+
+
+def test_a_system_error_names_its_file_without_errno_clutter():
+    """An OSError with a file name (a file in a folder root may not read: set up as another user)
+    read "[Errno 13] Permission denied: '/data/run/scans.clf'"; now FILE: reason."""
+    from experiments.cli import _one_line
+
+    assert _one_line(PermissionError(13, "Permission denied", "/data/run/scans.clf")) == \
+        "/data/run/scans.clf: permission denied"
+    assert _one_line(OSError(18, "Invalid cross-device link", "/a", None, "/b")) == "/a: invalid cross-device link (/b)"
+    assert _one_line(TimeoutError("timed out")) == "timed out"

@@ -138,11 +138,13 @@ RECORD_SUFFIXES = (".clf", ".log", ".gz", ".bag")
 
 
 def run_record(args: argparse.Namespace) -> int:
+    if args.out.is_dir():  # was "unknown kind '(no suffix)'"
+        raise InputError(f"--out {args.out} is a folder; give a file name (.clf, .log, .gz or .bag)")
     if args.out.suffix not in RECORD_SUFFIXES:
         raise InputError(f"--out {args.out}: unknown kind {args.out.suffix or '(no suffix)'!r}; "
                          f"write a CARMEN log (.clf, .log, .gz) or a ROS 1 bag (.bag)")
-    if args.out.suffix == ".bag" and args.out.exists():
-        raise InputError(f"{args.out} exists; bags are not overwritten")
+    if args.out.exists() or args.out.is_symlink():  # a CARMEN recording replaced an earlier one silently
+        raise InputError(f"--out {args.out} exists; a recording is not written over a file (give a new name)")
     check_out_file(args.out)
     stop = {"now": False}
     previous = signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))
