@@ -43,7 +43,8 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
 def read_tum(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """Read a TUM file: (stamps (n,) s, poses (n, 3) x, y, yaw). Raises LogFormatError with the line
     (a row that is not 8 finite numbers, a stamp before the previous one)."""
-    stamps, poses = [], []
+    stamps: list[float] = []
+    poses: list[tuple[float, float, float]] = []
     with open(path, encoding="ascii", errors="replace") as f:
         for no, line in enumerate(f, 1):
             s = line.strip()
