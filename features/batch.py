@@ -50,37 +50,37 @@ def check_threads(threads: Any) -> int:
     return int(threads)
 
 
-_POOL: tuple[ThreadPoolExecutor, int] | None = None  # the pool and its thread count
-_POOL_LOCK = threading.Lock()
-
-
-def _pool(threads: int) -> ThreadPoolExecutor:
-    """A pool of at least ``threads`` threads, kept between calls (threads started once)."""
-    global _POOL
-    with _POOL_LOCK:
-        if _POOL is None or _POOL[1] < threads:
-            old, _POOL = _POOL, (ThreadPoolExecutor(max_workers=threads, thread_name_prefix="lmsbench-extract"), threads)
-            if old is not None:
-                old[0].shutdown(wait=False)
-        return _POOL[0]
-
-
 def run_pieces(run_many: Callable[[Sequence[Scan], Any], list[FeatureSet]], scans: Sequence[Scan], cfg: Any,
                threads: int, chunk: int) -> list[FeatureSet]:
-    """``run_many(piece, cfg)`` over contiguous pieces of ``scans`` (at most ``chunk`` scans each),
-    on up to ``threads`` threads at once, the FeatureSets in the scans' order. Each scan is
-    extracted by itself, so the result does not depend on the pieces or the threads."""
+    """``run_many(piece, cfg)`` over contiguous pieces of ``scans`` of at most ``chunk`` scans, on
+    ``threads`` threads of this call's own (never more at once; none when one is used), the
+    FeatureSets in the scans' order. Each thread takes one contiguous share of the scans (at
+    least MIN_SCANS_PER_THREAD) and runs it piece by piece; after an error or Ctrl-C the others
+    stop at their next piece and the error is raised. Each scan is extracted by itself, so the
+    result does not depend on the pieces or the threads."""
     n = len(scans)
     use = max(1, min(threads, n // MIN_SCANS_PER_THREAD))  # (read here: a test lowers it)
-    size = min(chunk, -(-n // use)) if n else chunk
-    pieces = [scans[i:i + size] for i in range(0, n, size)]
-    if use == 1 or len(pieces) == 1:
+    share = -(-n // use) if n else 0
+    shares = [(i, min(i + share, n)) for i in range(0, n, share)] if n else []
+    stop = threading.Event()
+
+    def run_share(lo: int, hi: int) -> list[FeatureSet]:
         out: list[FeatureSet] = []
-        for piece in pieces:
-            out += run_many(piece, cfg)
+        for start in range(lo, hi, chunk):
+            if stop.is_set():
+                break
+            out += run_many(scans[start:min(start + chunk, hi)], cfg)
         return out
-    results = _pool(use).map(lambda piece: run_many(piece, cfg), pieces)
-    return [fs for part in results for fs in part]
+
+    if len(shares) <= 1:
+        return [fs for lo, hi in shares for fs in run_share(lo, hi)]
+    with ThreadPoolExecutor(max_workers=len(shares), thread_name_prefix="lmsbench-extract") as pool:
+        futures = [pool.submit(run_share, lo, hi) for lo, hi in shares]
+        try:
+            return [fs for f in futures for fs in f.result()]
+        except BaseException:
+            stop.set()  # the other threads end at their next piece; the pool's exit waits for them
+            raise
 
 
 def common_geometry(scans: Sequence[Scan]) -> Scan:

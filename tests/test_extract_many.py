@@ -288,3 +288,50 @@ def test_thread_counts_are_checked(monkeypatch: pytest.MonkeyPatch) -> None:
         extract_many(scans)
     monkeypatch.delenv(THREADS_ENV)
     assert default_threads() == len(os.sched_getaffinity(0))
+
+
+def test_pieces_run_in_order_on_at_most_the_threads_asked_and_errors_come_through(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``features.batch.run_pieces`` with stand-in scans: every result in the scans' order, pieces
+    of at most ``chunk``, never more threads at once than asked (each call has its own, so a
+    smaller count after a larger one holds), a piece's error raised as itself, and a piece that
+    calls ``run_pieces`` again (nested) finishes instead of waiting on a shared pool."""
+    import threading
+
+    import features.batch as fbatch
+
+    monkeypatch.setattr(fbatch, "MIN_SCANS_PER_THREAD", 4)
+    lock = threading.Lock()
+    active = {"now": 0, "most": 0}
+    idents: set[int] = set()
+
+    def echo(piece, cfg):
+        with lock:
+            active["now"] += 1
+            active["most"] = max(active["most"], active["now"])
+            idents.add(threading.get_ident())
+        assert len(piece) <= 7 and cfg == "cfg"
+        out = [x * 10 for x in piece]
+        with lock:
+            active["now"] -= 1
+        return out
+
+    items = list(range(100))
+    assert fbatch.run_pieces(echo, items, "cfg", 8, 7) == [x * 10 for x in items]
+    assert active["most"] <= 8 and len(idents) <= 8
+    active["most"] = 0
+    idents.clear()
+    assert fbatch.run_pieces(echo, items, "cfg", 2, 7) == [x * 10 for x in items]  # after 8: still 2
+    assert active["most"] <= 2 and len(idents) <= 2
+
+    def fails(piece, cfg):
+        if 50 in piece:
+            raise ZeroDivisionError("piece with 50")
+        return list(piece)
+
+    with pytest.raises(ZeroDivisionError, match="piece with 50"):
+        fbatch.run_pieces(fails, items, "cfg", 4, 10)
+
+    def nested(piece, cfg):
+        return fbatch.run_pieces(echo, list(piece), cfg, 2, 7)
+
+    assert fbatch.run_pieces(nested, items, "cfg", 3, 50) == [x * 10 for x in items]
