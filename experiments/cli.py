@@ -20,7 +20,7 @@ import threading
 from typing import Any, Sequence
 
 from features.batch import default_threads
-from lms200 import LmsbenchError
+from lms200 import LmsbenchError, LogFormatError
 
 from . import commands
 from .options import OneLineParser
@@ -105,7 +105,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if interrupt.timer is not None or _from_interrupt(exc):  # what Ctrl-C broke: not the input's error
             return _interrupted(interrupt, name)
         _end_progress_bars()
-        print(f"lmsbench {name}: error: {_one_line(exc)}", file=sys.stderr)
+        print(f"lmsbench {name}: error: {_one_line(exc)}{_skip_hint(exc, args)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return _interrupted(interrupt, name)
@@ -196,7 +196,25 @@ def _end_progress_bars() -> None:
         bar.close()
 
 
+def _skip_hint(exc: BaseException, args: argparse.Namespace) -> str:
+    """How to read on past a malformed line or a truncated end of a log, where the command takes
+    --skip-bad-lines and it was not given (a recording cut short ends mid-line; a download cut
+    short is a truncated .gz)."""
+    if not isinstance(exc, LogFormatError) or getattr(args, "skip_bad_lines", True):
+        return ""
+    if exc.reason.startswith("malformed"):
+        return " (--skip-bad-lines skips malformed lines, each reported)"
+    if exc.reason.startswith("cannot read on"):
+        return " (--skip-bad-lines keeps the scans before the damage)"
+    return ""
+
+
 def _one_line(exc: BaseException) -> str:
+    if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:  # not "[Errno 13] Permission denied: 'x'"
+        text = f"{exc.filename}: {exc.strerror[:1].lower()}{exc.strerror[1:]}"
+        if exc.filename2 is not None:
+            text += f" ({exc.filename2})"
+        return text
     text = " ".join(str(exc).split()) or type(exc).__name__
     return text if len(text) <= 600 else text[:597] + "..."
 

@@ -274,7 +274,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
             except (ValueError, KeyError, TypeError) as exc:
                 raise LmsbenchError(f"{spec}/world.json: not a world ({type(exc).__name__}: {exc})") from None
             spec = str(Path(spec) / "scans.clf")
-        elif not Path(spec).exists():
+        elif not Path(spec).exists() and not Path(spec).is_symlink():  # a link to nothing: check_log says so
             close = [w for w in WORLD_NAMES if _close(w, name)]
             hint = f" (did you mean {close[0]}?)" if close else ""
             raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}){hint}, a simulate folder "

@@ -14,7 +14,8 @@ import math
 import os
 import tempfile
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping, Sequence
 
 import yaml
 
@@ -43,6 +44,26 @@ class OneLineParser(argparse.ArgumentParser):
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+    def parse_known_args(self, args: Sequence[str] | None = None, namespace: Any = None) -> Any:  # type: ignore[override]
+        """As argparse, but an option that takes a value given twice is an error: argparse kept the
+        last (``simulate --seed 1 ... --seed 2`` ran seed 2, ``--out a ... --out b`` wrote b).
+        Repeatable options (``action="append"``: ``--set``, ``--sweep``) and flags pass."""
+        import sys
+
+        given: dict[str, list[str]] = {}
+        for arg in (sys.argv[1:] if args is None else list(args)):
+            if arg == "--":
+                break
+            name = arg.split("=", 1)[0] if arg.startswith("--") else arg
+            action = self._option_string_actions.get(name)
+            if action is None or action.nargs == 0 or isinstance(action, (argparse._AppendAction, argparse._CountAction)):
+                continue
+            given.setdefault(action.dest, []).append(name)
+        for names in given.values():
+            if len(names) > 1:
+                self.error(f"argument {names[0]}: given {len(names)} times; give it once")
+        return super().parse_known_args(args, namespace)
 
 
 def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = False, unit: str = "",
@@ -79,6 +100,14 @@ def positive(unit: str = "") -> Callable[[str], float]:
 def count(lo: int = 1, hi: int | None = None) -> Callable[[str], float]:
     """A whole number >= lo (scan counts, strides, workers)."""
     return number(lo, hi, integer=True)
+
+
+def path_arg(text: str) -> Path:
+    """An argparse type: a path, not empty. Path("") is "." (`--out "$OUT"` with OUT unset wrote
+    into the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"empty path {text!r}; give a file or folder name")
+    return Path(text)
 
 
 SEED = count(0, 2**32 - 1)
@@ -156,11 +185,22 @@ def _text_head(path: Path, what: str, utf8: bool = True) -> None:
             raise InputError(f"{path}: not text (byte {exc.start} is not UTF-8), not {what}") from None
 
 
+def _missing(p: Path, what: str) -> str:
+    """Why an input path does not exist: no such file, or a symbolic link to nothing (data moved, a loop)."""
+    if p.is_symlink():
+        try:
+            target = os.readlink(p)
+        except OSError:
+            target = "?"
+        return f"{p}: a symbolic link to {target}, which does not exist (or a loop of links)"
+    return f"{p}: no such {what}"
+
+
 def check_file(path: str | os.PathLike, what: str = "a file") -> Path:
     """An existing, readable regular file."""
     p = Path(path)
     if not p.exists():
-        raise InputError(f"{p}: no such file")
+        raise InputError(_missing(p, "file"))
     if p.is_dir():
         raise InputError(f"{p} is a folder, not {what}")
     _head(p, 1)
@@ -177,10 +217,12 @@ def check_yaml(path: str | os.PathLike, what: str = "a YAML file") -> Path:
 def check_log(path: str | os.PathLike) -> Path:
     """A CARMEN log (plain text, or compressed with gzip, bzip2 or xz), a ROS 1 ``.bag`` or a ROS 2 bag folder, by its content:
     a binary file, an archive, a plain file named ``.gz``, a folder without ``metadata.yaml`` are errors."""
+    if not str(path).strip():  # Path("") is the current folder
+        raise InputError(f"empty path {str(path)!r} given as a log; give {'a CARMEN log, ROS 1 .bag or ROS 2 bag folder'}")
     p = Path(path)
     what = "a CARMEN log, ROS 1 .bag or ROS 2 bag folder"
     if not p.exists():
-        raise InputError(f"{p}: no such log")
+        raise InputError(_missing(p, "log"))
     if p.is_dir():
         meta = p / "metadata.yaml"
         if not meta.is_file():
@@ -212,23 +254,67 @@ SIM2REAL_OUTPUTS = ("sim2real.csv", "scene.csv", "sim2real.md", "sim2real.png", 
 BENCH_OUTPUTS = ("bench.csv", "versions.yaml")
 
 
-def check_out(path: str | os.PathLike | None, writes: Sequence[str] | None = None,
+@dataclass(frozen=True)
+class OutTree:
+    """What a command writes into a folder: files (names or shell patterns) and sub-folders, each an
+    OutTree of its own. A file pattern matches files only, a sub-folder's name folders only."""
+
+    files: tuple[str, ...] = ()
+    folders: Mapping[str, "OutTree"] = field(default_factory=dict)
+
+    def foreign(self, folder: Path, prefix: str = "") -> list[str]:
+        """The entries of ``folder`` (recursively, as ``sub/name``) this tree does not write; hidden
+        entries (a temporary file of an atomic write) pass."""
+        others = []
+        for e in sorted(folder.iterdir(), key=lambda e: e.name):
+            if e.name.startswith("."):
+                continue
+            if e.name in self.folders and e.is_dir() and not e.is_symlink():
+                others += self.folders[e.name].foreign(e, f"{prefix}{e.name}/")
+            elif not any(fnmatch.fnmatchcase(e.name, pat) for pat in self.files) or e.is_dir():
+                others.append(f"{prefix}{e.name}" + ("/" if e.is_dir() else ""))
+        return others
+
+
+def _figure_files(stems: Sequence[str]) -> tuple[str, ...]:
+    """The files of experiments.style.save_figure for each stem: STEM.png, STEM.pdf, STEM.csv, STEM_NAME.csv."""
+    return tuple(f"{stem}{end}" for stem in stems for end in (".png", ".pdf", ".csv", "_*.csv"))
+
+
+#: ``figures``: the paper's figures, a figure per sweep and metric, and (unless --tables) the tables
+#: behind them (experiments.figures.make, experiments.figures.study.save_tables).
+STUDY_TABLES = OutTree(("*.parquet", "study.yaml", "notes.txt"))
+FIGURES_OUTPUTS = OutTree(_figure_files(("fig3_scan", "fig4_ad", "fig5_theta", "fig6_psi", "fig7_timing",
+                                         "fig9_office", "fig9_intel", "fig10_slam", "accuracy_speed", "sweep_*")),
+                          {"tables": STUDY_TABLES})
+#: A sweep folder (experiments.sweep.store).
+SWEEP_OUTPUTS = OutTree(("sweep.yaml", "versions.yaml", "results.parquet", "results.csv"),
+                        {"cells": OutTree(("*.parquet",))})
+#: ``demo``: the report, its tables, figures, sim2real outputs and its one sweep (experiments.demo).
+DEMO_OUTPUTS = OutTree(("report.md", "report.html"),
+                       {"tables": STUDY_TABLES, "figures": OutTree(FIGURES_OUTPUTS.files),
+                        "sim2real": OutTree(SIM2REAL_OUTPUTS), "sweeps": OutTree(folders={"demo_k_vs_noise": SWEEP_OUTPUTS})})
+
+
+def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | None = None,
               patterns: Sequence[str] = ()) -> Path | None:
     """An output folder: absent (created later) or a folder; its nearest existing parent writable.
     None (no --out: a new timestamped folder will be made) passes. With ``writes`` (the fixed file
-    names a command writes: SIMULATE_OUTPUTS, SLAM_OUTPUTS, COMPARE_OUTPUTS) and ``patterns``
-    (shell patterns of the names it writes per input: COMPARE_FIGURES), an existing folder may hold
-    only those (a run's own earlier outputs, which it replaces) and hidden files: ``slam run --out
-    slam`` from the checkout wrote into the slam package, ``slam run --out run`` replaced the run's
-    config.yaml, ``compare LOG --out FOLDER`` a config.yaml of the user's."""
+    names a command writes: SIMULATE_OUTPUTS, SLAM_OUTPUTS, COMPARE_OUTPUTS, or an OutTree of
+    files and sub-folders: FIGURES_OUTPUTS, DEMO_OUTPUTS) and ``patterns`` (shell patterns of the
+    names it writes per input: COMPARE_FIGURES), an existing folder may hold only those (a run's
+    own earlier outputs, which it replaces) and hidden files: ``slam run --out slam`` from the
+    checkout wrote into the slam package, ``slam run --out run`` replaced the run's config.yaml,
+    ``compare LOG --out FOLDER`` a config.yaml of the user's, ``demo --out FOLDER`` deleted a
+    folder's sweeps/demo_k_vs_noise."""
     if path is None:
         return None
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise InputError(f"--out {p}: exists and is not a folder")
     if writes is not None and p.is_dir():
-        others = sorted(e.name for e in p.iterdir() if e.name not in writes and not e.name.startswith(".")
-                        and not any(fnmatch.fnmatchcase(e.name, pat) for pat in patterns))
+        tree = writes if isinstance(writes, OutTree) else OutTree(tuple(writes) + tuple(patterns))
+        others = tree.foreign(p)
         if others:
             shown = ", ".join(others[:3]) + (f" and {len(others) - 3} more" if len(others) > 3 else "")
             raise InputError(f"--out {p}: holds {shown}, which this command does not write; give a new or empty "

@@ -6,12 +6,13 @@ Trajectories are (n, 4) arrays ``t s, x m, y m, theta rad``. Pure functions, plu
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
-from lms200 import LogFormatError
+from lms200 import LmsbenchError, LogFormatError
 
 from .models import wrap
 
@@ -258,7 +259,11 @@ def read_relations(path: str | Path) -> np.ndarray:
                 v = [float(w) for w in s]
             except ValueError:
                 raise LogFormatError(path, no, f"relation row has a non-number: {line.strip()[:60]!r}") from None
+            if not all(math.isfinite(x) for x in v):  # a nan made the mean error null, silently
+                raise LogFormatError(path, no, f"relation row has a non-finite number: {line.strip()[:60]!r}")
             rows.append((v[0], v[1], v[2], v[3], v[7]))
+    if not rows:  # an empty file gave "none of the 0 relations falls inside the run" after the run
+        raise LmsbenchError(f"{path}: no relations (t1 t2 x y z roll pitch yaw a line)")
     return np.array(rows, float).reshape(-1, 5)
 
 

@@ -82,6 +82,8 @@ def files(tmp_path_factory):
     (d / "zero_beams.clf").write_text("FLASER 0 0 0 0 0 0 0 0.0 host 0.0\n")  # was "needs 11 fields, got 11"
     with gzip.open(d / "good.clf.gz", "wt") as fh:
         fh.write((d / "good.clf").read_text())
+    (d / "cut_short.clf").write_text((d / "good.clf").read_text()[:-300])  # a recording stopped mid-line
+    os.symlink(d / "moved_away.clf", d / "dangling.clf")  # the data moved: a link to nothing
     # a simulator-like folder: scans.clf and its truth
     (d / "simrun").mkdir()
     write_log(d / "simrun" / "scans.clf", good)
@@ -91,6 +93,7 @@ def files(tmp_path_factory):
                                                   "grid": {"extractor.k": [3]}}))
     base = {"name": "t", "kind": "extract", "fixed": {"duration": 0.5}, "grid": {"extractor.k": [3]}}
     bad_sweeps = {"sweep_seed": {"seeds": [-1]}, "sweep_dup_seed": {"seeds": [0, 0]},
+                  "sweep_bare_seeds": {"seeds": 3}, "sweep_bare_grid": {"grid": {"extractor.k": "3, 5, 10"}},
                   "sweep_k": {"grid": {"extractor.k": [-3]}}, "sweep_noise": {"grid": {"sensor.noise_sigma": [-0.01]}},
                   "sweep_plain": {"fixed": {"duration": 0.5, "bogus": 1}}, "sweep_name": {"name": "../../x"},
                   "sweep_world": {"fixed": {"duration": 0.5, "world": "offfice"}},
@@ -308,6 +311,11 @@ CASES = [
     (["sweep", "{sweep.yaml}", "--out", "{a_file}"], "not a folder"),
     (["sweep", "{sweep_seed.yaml}", "--out", O], "seeds"),
     (["sweep", "{sweep_dup_seed.yaml}", "--out", O], "seeds"),
+    # `seeds: 3` ran the one seed 3 (three seeds meant); `k: 3, 5, 10` (no brackets) the string '3, 5, 10' in every cell
+    (["sweep", "{sweep_bare_seeds.yaml}", "--out", O], "sweep_bare_seeds.yaml: `seeds: 3` is one number: write a list, "
+                                                       "`seeds: [0, 1, 2]` for 3 seeds, `seeds: [3]` for the one seed 3"),
+    (["sweep", "{sweep_bare_grid.yaml}", "--out", O], "sweep_bare_grid.yaml: grid.extractor.k: '3, 5, 10' is a single "
+                                                      "value: write a list of the values to vary (`[3, 5, 10]`"),
     (["sweep", "{sweep_k.yaml}", "--out", O], "k: must be"),
     (["sweep", "{sweep_noise.yaml}", "--out", O], "noise_sigma"),
     (["sweep", "{sweep_plain.yaml}", "--out", O], "bogus"),
@@ -479,6 +487,23 @@ CASES = [
     (["--bogus", "compare"], "lmsbench: error: unrecognized arguments: --bogus (see lmsbench --help)"),
     (["--out=x", "info", "{good.clf}"], "lmsbench: error: unrecognized arguments: --out=x"),
     (["lms200", "--port", "loop://", "record", "--out", "{out}/x.clf"], "lmsbench lms200: error: unrecognized arguments: --port"),
+    # an option given twice: argparse kept the last (seed 2 ran, the run went to the second --out)
+    (["simulate", "--seed", "1", "--duration", "0.5", "--seed", "2", "--out", O],
+     "lmsbench simulate: error: argument --seed: given 2 times; give it once"),
+    (["simulate", "--duration", "0.5", "--out", "{out}/a", "--out={out}/b"], "argument --out: given 2 times; give it once"),
+    (["compare", "{good.clf}", "--methods", "sensor", "--methods", "iepf", "--out", O], "argument --methods: given 2 times"),
+    (["info", "{good.clf}", "--laser-fov-deg", "180", "--laser-fov-deg", "100"], "argument --laser-fov-deg: given 2 times"),
+    # a log cut short names how to read on; a link to nothing says so ("no such log" named the link)
+    (["info", "{cut_short.clf}"], "cut_short.clf:10: malformed ROBOTLASER1 line: ROBOTLASER1 announces 361 beams but has fewer fields"),
+    (["info", "{cut_short.clf}"], "(--skip-bad-lines skips malformed lines, each reported)"),
+    (["compare", "{dangling.clf}", "--out", O], "dangling.clf: a symbolic link to "),
+    # lms200 record replaced an earlier CARMEN recording silently (bags were refused); a folder was "unknown kind"
+    (["lms200", "record", "--port", "loop://", "--out", "{good.clf}"], "good.clf exists; a recording is not written over a file"),
+    (["lms200", "record", "--port", "loop://", "--out", "{empty_dir}"], "empty_dir is a folder; give a file name"),
+    # an empty path is the current folder to pathlib (`--out "$OUT"` with OUT unset)
+    (["slam", "", "--out", O], "lmsbench slam: error: argument input: empty path ''; give a file or folder name"),
+    (["info", ""], "lmsbench info: error: empty path '' given as a log"),
+    (["compare", "office:1", "--sensor", "", "--out", O], "argument --sensor: empty path ''"),
 ]
 
 
@@ -650,3 +675,88 @@ def test_a_bad_thread_count_in_the_environment_is_refused_before_any_work(value,
         assert err.strip().splitlines() == [
             f"lmsbench {argv[0]}: error: LMSBENCH_THREADS: must be a whole number from 1 to 1024, got {value!r}"]
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("command, theirs, others", [
+    (["figures", "--no-slam", "--duration", "1", "--rate-hz", "2", "--methods", "sensor"], "fig3_scan.png",
+     "notes.txt, tables/mine.csv"),
+    (["demo", "--no-sweep", "--duration", "1", "--rate-hz", "2"], "report.md",
+     "notes.txt, sweeps/demo_k_vs_noise/mine.csv, tables/mine.csv"),
+])
+def test_figures_and_demo_out_hold_only_their_own_outputs(command, theirs, others, tmp_path, capsys):
+    """`figures --out DIR` and `demo --out DIR` replaced a user's files of their outputs' names
+    (fig3_scan.png, report.md, tables/*.parquet) in DIR silently, and the demo deleted a
+    sweeps/demo_k_vs_noise folder of DIR whole; a folder holding files the command does not write
+    (also in the sub-folders it writes into) is refused before any work, one line, nothing touched."""
+    out = tmp_path / "o"
+    (out / "tables").mkdir(parents=True)
+    (out / "tables" / "mine.csv").write_text("a\n1\n")
+    (out / theirs).write_text("mine")
+    (out / "notes.txt").write_text("mine")
+    if command[0] == "demo":
+        (out / "sweeps" / "demo_k_vs_noise").mkdir(parents=True)
+        (out / "sweeps" / "demo_k_vs_noise" / "mine.csv").write_text("a\n1\n")
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert run_main(command + ["--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"lmsbench {command[0]}: error: --out {out}: holds {others}, which this command does not write; "
+                   "give a new or empty folder (a folder of this command's own earlier outputs is replaced)"]
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+
+
+def test_out_given_as_an_empty_string_is_refused_not_the_current_folder(tmp_path, monkeypatch, capsys):
+    """`simulate --out ""` (a shell variable left unset) wrote the run into the current folder:
+    Path("") is "."; it is refused, the folder left empty."""
+    monkeypatch.chdir(tmp_path)
+    assert run_main(["simulate", "--duration", "0.5", "--out", ""]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "lmsbench simulate: error: argument --out: empty path ''; give a file or folder name (see lmsbench simulate --help)"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_repeatable_options_and_flags_may_still_be_given_twice():
+    """Only options that take one value are refused twice: --set and --sweep collect, a flag
+    given twice means the same."""
+    from experiments.cli import build_parser
+
+    args = build_parser().parse_args(["compare", "office:1", "--set", "extractor.k=3", "--set", "extractor.ad_tau=2"])
+    assert [p[0] for p in args.params] == ["extractor.k", "extractor.ad_tau"]
+    args = build_parser().parse_args(["figures", "--sweep", "a", "--sweep", "b", "--no-slam", "--no-slam"])
+    assert [str(p) for p in args.sweep] == ["a", "b"] and args.no_slam
+
+
+def test_sweep_out_holds_only_sweep_outputs_and_not_the_sweep_file(files, tmp_path, capsys):
+    """`sweep DIR/sweep.yaml --out DIR` wrote the resolved spec over the user's file (its comments
+    lost), and `sweep --out DIR` replaced a user's results.csv in DIR; both are refused before any
+    cell runs, nothing touched. Resuming into the sweep's own folder still works."""
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    text = "# k against nothing: my notes\n" + Path(files["sweep.yaml"]).read_text()
+    (mine / "sweep.yaml").write_text(text)
+    assert run_main(["sweep", str(mine / "sweep.yaml"), "--inprocess", "--no-progress", "--out", str(mine)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench sweep: error: --out {mine}: the run would write sweep.yaml over {mine / 'sweep.yaml'}, which it "
+        "reads; give another folder"]
+    assert [p.name for p in mine.iterdir()] == ["sweep.yaml"] and (mine / "sweep.yaml").read_text() == text
+    out = tmp_path / "out"
+    argv = ["sweep", str(files["sweep.yaml"]), "--inprocess", "--no-progress", "--out", str(out)]
+    assert run_main(argv, seconds=120) == 0 and run_main(argv, seconds=120) == 0  # a run, then a resume
+    assert "1 cells, 0 computed, 1 already done" in capsys.readouterr().out
+    (out / "notes.md").write_text("mine")
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert run_main(argv) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench sweep: error: --out {out}: holds notes.md, which this command does not write; give a new or "
+        "empty folder (a folder of this command's own earlier outputs is replaced)"]
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+
+
+def test_a_system_error_names_its_file_without_errno_clutter():
+    """An OSError with a file name (a file in a folder root may not read: set up as another user)
+    read "[Errno 13] Permission denied: '/data/run/scans.clf'"; now FILE: reason."""
+    from experiments.cli import _one_line
+
+    assert _one_line(PermissionError(13, "Permission denied", "/data/run/scans.clf")) == \
+        "/data/run/scans.clf: permission denied"
+    assert _one_line(OSError(18, "Invalid cross-device link", "/a", None, "/b")) == "/a: invalid cross-device link (/b)"
+    assert _one_line(TimeoutError("timed out")) == "timed out"

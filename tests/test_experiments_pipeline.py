@@ -68,6 +68,14 @@ def test_the_figure_command_writes_every_named_figure_and_redraws_from_its_table
     for name in expected:
         for csv in sorted(out.glob(f"{name}*.csv")):
             pd.testing.assert_frame_equal(pd.read_csv(again / csv.name), pd.read_csv(csv))
+    # a folder of its own earlier outputs is replaced (here redrawn from its own tables); one with a
+    # file of the user's is refused, untouched
+    (out / "fig4_ad.csv").write_text("stale\n")
+    assert main(["figures", "--tables", str(out / "tables"), "--out", str(out)]) == 0
+    pd.testing.assert_frame_equal(pd.read_csv(out / "fig4_ad.csv"), signals)
+    (out / "tables" / "mine.txt").write_text("mine")
+    assert main(["figures", "--tables", str(out / "tables"), "--out", str(out)]) == 2
+    assert "holds tables/mine.txt, which this command does not write" in capsys.readouterr().err
 
 
 @pytest.mark.slow
@@ -88,3 +96,7 @@ def test_the_demo_writes_a_report_whose_figures_exist(tmp_path):
     assert html.count("<img src='data:image/png;base64,") == len(images) and "src='figures/" not in html
     sweep = pd.read_parquet(out / "sweeps" / "demo_k_vs_noise" / "results.parquet")
     assert len(sweep) == 9 and (sweep["status"] == "ok").all()
+    # the demo's own outputs are every file it leaves: a second demo into the folder may replace them
+    from experiments.options import DEMO_OUTPUTS
+
+    assert DEMO_OUTPUTS.foreign(out) == []

@@ -188,7 +188,14 @@ def test_random_sampling_is_seeded_in_range_and_crossed_with_grid_and_seeds():
         ({"kind": "k", "random": {"u": {"uniform": [2, 1]}}, "samples": 3}, r"low <= high"),
         ({"kind": "k", "random": {"u": {"normal": [0, 1]}}, "samples": 3}, r"random.u must be one of"),
         ({"kind": "k", "random": {"u": {"uniform": [0, 1]}}}, r"needs `samples:`"),
-        ({"kind": "k", "fixed": {"x": [1, 2]}}, r"fixed.x must be a number"),
+        ({"kind": "k", "fixed": {"x": [1, 2]}}, r"fixed.x must be a number, string, bool or null, got \[1, 2\] "
+                                                r"\(to vary it, put it under grid:\)"),
+        # a bare number ran as a list of one: `seeds: 3` the one seed 3, `grid: {x: 5}` the one value
+        ({"kind": "k", "seeds": 3}, r"`seeds: 3` is one number: write a list, `seeds: \[0, 1, 2\]` for 3 seeds, "
+                                    r"`seeds: \[3\]` for the one seed 3"),
+        ({"kind": "k", "seeds": 5}, r"`seeds: \[0, 1, 2, 3, 4\]` for 5 seeds"),
+        ({"kind": "k", "grid": {"x": 5}}, r"grid.x: 5 is a single value: write a list of the values to vary "
+                                          r"\(`\[5\]` for this one, or put it under fixed:\)"),
         ({"kind": "k", "gird": {"x": [1]}}, r"unknown key\(s\) \['gird'\]"),
         ({"kind": "k", "grid": [1, 2]}, r"grid must be a mapping of parameter -> values"),
         ({"kind": "k", "fixed": [1]}, r"fixed must be a mapping of parameter -> value"),

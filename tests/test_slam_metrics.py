@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lms200 import LogFormatError
+from lms200 import LmsbenchError, LogFormatError
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
 
 
@@ -114,6 +114,14 @@ def test_relations_reader_errors_name_the_line(tmp_path):
         read_relations(p)
     p.write_text("0 1 1 0 0\n")
     with pytest.raises(LogFormatError, match="8 numbers"):
+        read_relations(p)
+    # a nan made the mean error null after the run, silently; an empty file said "none of the 0
+    # relations falls inside the run's time span" after it
+    p.write_text("0 1 1 0 0 0 0 0\n# c\n1 2 nan 0 0 0 0 0\n")
+    with pytest.raises(LogFormatError, match=r"bad\.relations:3: relation row has a non-finite number: '1 2 nan"):
+        read_relations(p)
+    p.write_text("# only a comment\n\n")
+    with pytest.raises(LmsbenchError, match=r"bad\.relations: no relations \(t1 t2 x y z roll pitch yaw a line\)"):
         read_relations(p)
 
 

@@ -5,12 +5,11 @@ from __future__ import annotations
 import argparse
 import importlib
 import pkgutil
-from pathlib import Path
 
 from lms200 import LmsbenchError
 
 from experiments import benchmarks
-from experiments.options import BENCH_OUTPUTS, check_out
+from experiments.options import BENCH_OUTPUTS, check_out, path_arg
 
 
 def discover() -> dict[str, object]:
@@ -27,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("bench", help="run the speed benchmarks and save a table of rates")
     p.add_argument("names", nargs="*", help="benchmark areas to run (default: all)")
     p.add_argument("--quick", action="store_true", help="fewer repetitions, for a smoke run")
-    p.add_argument("--out", type=Path, help="output folder (default: a new results/bench/DATE_TIME, "
+    p.add_argument("--out", type=path_arg, help="output folder (default: a new results/bench/DATE_TIME, "
                                             "linked as results/bench/latest)")
     p.set_defaults(func=run)
 

@@ -17,7 +17,7 @@ from lms200.timing import check_scan_rate
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
 from experiments.options import (COMPARE_FIGURES, COMPARE_OUTPUTS, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
-                                 check_out_spares, check_seeds, count, positive)
+                                 check_out_spares, check_seeds, count, positive, path_arg)
 
 
 def _param(text: str) -> tuple[str, Any]:
@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="world names (office, corridor, angles, pillars, random; WORLD:SEED for one seed), "
                         "`lmsbench simulate` folders, or paths of real logs")
     p.add_argument("--methods", nargs="+", help="extractors (default: every available one)")
-    p.add_argument("--seeds", nargs="+", type=SEED, default=[0, 1, 2], help="seeds of each world (default 0 1 2)")
+    p.add_argument("--seeds", nargs="+", type=SEED, default=[0, 1, 2], help="seeds of each world, listed (default 0 1 2; `--seeds 3` is the one seed 3)")
     p.add_argument("--duration", type=DURATION, default=30.0, help="simulated seconds per world and seed (default 30)")
     p.add_argument("--rate", type=positive("scans/s"), default=2.0, help="simulated scans per second kept (default 2)")
     p.add_argument("--stride", type=count(1), default=1, help="logs: use every STRIDE-th scan (default 1)")
@@ -49,12 +49,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--poses", choices=("auto", "corrected", "none"), default="auto",
                    help="logs: are the log's poses SLAM-corrected (then repeatability is measured)? "
                         "auto (default): when the file name says 'corrected'")
-    p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
+    p.add_argument("--sensor", type=path_arg, metavar="FILE.yaml",
                    help="sensor model of the simulated sources, as written (e.g. from `lmsbench calibrate`); "
                    "needs a world among the sources (logs and simulate folders carry their own)")
     p.add_argument("--set", dest="params", action="append", type=_param, default=[], metavar="extractor.[METHOD.]FIELD=VALUE",
                    help="override a config field of every extractor that has it, or of METHOD only (repeatable)")
-    p.add_argument("--out", type=Path, help="output folder (default: a new results/compare/DATE_TIME, "
+    p.add_argument("--out", type=path_arg, help="output folder (default: a new results/compare/DATE_TIME, "
                                             "linked as results/compare/latest)")
     p.add_argument("--format", choices=("parquet", "csv"), default="parquet", help="format of the tidy table")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

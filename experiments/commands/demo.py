@@ -3,16 +3,15 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import DURATION, SEED, check_log, check_out, positive, world_name
+from experiments.options import DEMO_OUTPUTS, DURATION, SEED, check_log, check_out, positive, path_arg, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("demo", help="simulate an office run, compare every extractor, run SLAM, a sweep, "
                                     "figures and results/demo/report.md")
-    p.add_argument("--out", type=Path, help="output folder (default: a new results/demo/DATE_TIME, "
+    p.add_argument("--out", type=path_arg, help="output folder (default: a new results/demo/DATE_TIME, "
                                             "linked as results/demo/latest)")
     p.add_argument("--seed", type=SEED, default=0, help="world and run seed")
     p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them")
@@ -29,7 +28,7 @@ def run(args: argparse.Namespace) -> int:
     from experiments.demo import run_demo
     from experiments.figures.study import StudyConfig
 
-    check_out(args.out)
+    check_out(args.out, writes=DEMO_OUTPUTS)
     cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz)
     if args.log:
         cfg.intel_log = str(check_log(args.log))

@@ -3,20 +3,19 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import (DURATION, SEED, check_log, check_methods, check_out, check_study_tables,
-                                 check_sweep_results, positive, world_name)
+from experiments.options import (DURATION, FIGURES_OUTPUTS, SEED, STUDY_TABLES, OutTree, check_log, check_methods,
+                                 check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("figures", help="draw the paper's figures (4-7, 9, 10), accuracy vs speed, sweep plots")
-    p.add_argument("--out", type=Path, help="output folder (default: a new results/figures/DATE_TIME, "
+    p.add_argument("--out", type=path_arg, help="output folder (default: a new results/figures/DATE_TIME, "
                                             "linked as results/figures/latest)")
-    p.add_argument("--tables", type=Path,
+    p.add_argument("--tables", type=path_arg,
                    help="redraw from the tables in this folder (from an earlier run) instead of computing them")
-    p.add_argument("--sweep", type=Path, action="append", default=[], metavar="DIR",
+    p.add_argument("--sweep", type=path_arg, action="append", default=[], metavar="DIR",
                    help="also plot this sweep folder (with results.parquet); repeatable")
     p.add_argument("--duration", type=DURATION, default=40.0, help="simulated run, s (default 40)")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=10.0, help="scans kept per second of the run (default 10)")
@@ -34,7 +33,10 @@ def run(args: argparse.Namespace) -> int:
     from experiments.provenance import new_run_folder
     from experiments.figures.study import StudyConfig, load_config, load_tables, run_study, save_tables
 
-    check_out(args.out)
+    writes = FIGURES_OUTPUTS
+    if args.out is not None and args.tables is not None and args.out.resolve() == args.tables.resolve():
+        writes = OutTree(FIGURES_OUTPUTS.files + STUDY_TABLES.files, FIGURES_OUTPUTS.folders)  # the tables it reads
+    check_out(args.out, writes=writes)
     for folder in args.sweep:
         check_sweep_results(folder)
     if args.tables:

@@ -17,7 +17,7 @@ from lms200.protocol import BAUD_MODES
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import PORT, SEED, InputError, check_log, check_out_file, count, positive, world_name
+from experiments.options import PORT, SEED, InputError, check_log, check_out_file, count, positive, path_arg, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     e = cmds.add_parser("emulate", help="serve a virtual LMS200 on a pseudo-terminal (or TCP); prints its path / URL")
     e.add_argument("--world", type=world_name, default="office", help="simulator world to scan (a built-in world name; lmsbench simulate --help lists them)")
     e.add_argument("--seed", type=SEED, default=0, help="seed of the world and the sensor noise")
-    e.add_argument("--log", type=Path, help="replay this log (CARMEN or bag) instead of the simulator, in a loop")
+    e.add_argument("--log", type=path_arg, help="replay this log (CARMEN or bag) instead of the simulator, in a loop")
     e.add_argument("--tcp", type=PORT, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")
     e.add_argument("--rfc2217", action="store_true", help="with --tcp: speak RFC 2217 (rfc2217://HOST:PORT), so the host sets the baud")
     e.add_argument("--host", default="127.0.0.1", help="address to listen on with --tcp")
@@ -39,7 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     r = cmds.add_parser("record", help="record an LMS200 to a CARMEN log (.clf, .log, .gz) or a ROS bag (.bag)")
     r.add_argument("--port", required=True, help="serial device or pyserial URL (socket://host:port, rfc2217://, loop://)")
-    r.add_argument("--out", type=Path, required=True, help="output: FILE.clf / .log / .gz (CARMEN) or FILE.bag (ROS 1)")
+    r.add_argument("--out", type=path_arg, required=True, help="output: FILE.clf / .log / .gz (CARMEN) or FILE.bag (ROS 1)")
     r.add_argument("--baud", type=int, default=38400, choices=sorted(BAUD_MODES), help="line speed to switch to")
     r.add_argument("--units", choices=("mm", "cm"), default="mm", help="range unit: mm (8.18 m) or cm (81.8 m)")
     r.add_argument("--fov-deg", "--fov", dest="fov_deg", type=int, default=180, choices=(180, 100),
@@ -138,11 +138,13 @@ RECORD_SUFFIXES = (".clf", ".log", ".gz", ".bag")
 
 
 def run_record(args: argparse.Namespace) -> int:
+    if args.out.is_dir():  # was "unknown kind '(no suffix)'"
+        raise InputError(f"--out {args.out} is a folder; give a file name (.clf, .log, .gz or .bag)")
     if args.out.suffix not in RECORD_SUFFIXES:
         raise InputError(f"--out {args.out}: unknown kind {args.out.suffix or '(no suffix)'!r}; "
                          f"write a CARMEN log (.clf, .log, .gz) or a ROS 1 bag (.bag)")
-    if args.out.suffix == ".bag" and args.out.exists():
-        raise InputError(f"{args.out} exists; bags are not overwritten")
+    if args.out.exists() or args.out.is_symlink():  # a CARMEN recording replaced an earlier one silently
+        raise InputError(f"--out {args.out} exists; a recording is not written over a file (give a new name)")
     check_out_file(args.out)
     stop = {"now": False}
     previous = signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))

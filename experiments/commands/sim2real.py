@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from pathlib import Path
 
 from lms200 import read_log
 from lms200.timing import check_scan_rate
@@ -23,6 +22,7 @@ from experiments.options import (
     check_yaml,
     count,
     positive,
+    path_arg,
     world_name,
 )
 from experiments.sim2real import (DEFAULT_DURATION_S, DEFAULT_RATE_HZ, DEFAULT_SEEDS, PROBE_DURATION_S, PROBE_RATE_HZ,
@@ -34,10 +34,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                                         "lines per scan, range / residual / segment histograms (table and figure)")
     p.add_argument("log", help="CARMEN log (plain or .gz), ROS 1 .bag or ROS 2 bag folder")
     p.add_argument("--world", default="mit", type=world_name, help="simulated world (default mit, the MIT-CSAIL-like preset)")
-    p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
+    p.add_argument("--sensor", type=path_arg, metavar="FILE.yaml",
                    help="use this sensor model instead of calibrating on the log")
     p.add_argument("--seeds", nargs="+", type=SEED, default=list(DEFAULT_SEEDS),
-                   help=f"simulated runs, one world each (default {DEFAULT_SEEDS[0]}-{DEFAULT_SEEDS[-1]})")
+                   help=f"simulated runs, one world each, listed (default {DEFAULT_SEEDS[0]}-{DEFAULT_SEEDS[-1]}; `--seeds 3` is the "
+                        "one world 3)")
     p.add_argument("--duration", type=DURATION, default=DEFAULT_DURATION_S,
                    help=f"simulated seconds per seed (default {DEFAULT_DURATION_S:g}, as the fits' probe runs)")
     p.add_argument("--probe-duration", type=DURATION,
@@ -52,7 +53,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--fit-rooms", action="store_true",
                    help="mit world: also fit the rooms' size to the log's share of readings at 2-8 m that reach 4 m "
                         "(off by default: docs/simulator.md)")
-    p.add_argument("--out", type=Path, help="output folder (default: a new results/sim2real/DATE_TIME, linked as "
+    p.add_argument("--out", type=path_arg, help="output folder (default: a new results/sim2real/DATE_TIME, linked as "
                                             "results/sim2real/latest)")
     add_log_options(p)
     p.set_defaults(func=run)

@@ -6,10 +6,9 @@ from lms200.timing import check_scan_rate
 from lms200.yamlio import load as load_yaml
 
 import argparse
-from pathlib import Path
 
 from experiments.options import (DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, InputError, check_file,
-                                 check_out, check_yaml, known_worlds, number, positive)
+                                 check_out, check_yaml, known_worlds, number, positive, path_arg)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -24,18 +23,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=SEED, default=None, help="seed of the world, tour and sensor noise (>= 0)")
     p.add_argument("--duration", type=DURATION, default=None,
                    help=f"simulated time, s (default 120, at most {MAX_DURATION_S:g})")
-    p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument("--out", type=path_arg, required=True, help="output folder")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=None, help="keep about this many scans/s (default all)")
     p.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=float, choices=(0.25, 0.5, 1.0),
                    default=None, help="angular resolution, deg: 0.5 (361 beams), 1 (181), 0.25 (401 over 100 deg); "
                    "--resolution is the old spelling")
     p.add_argument("--units", choices=("mm", "cm"), default=None, help="range unit mode (default mm)")
     p.add_argument("--ideal", action="store_true", help="exact ranges: no noise, quantisation, dropouts, ...")
-    p.add_argument("--sensor", type=Path, metavar="FILE.yaml",
+    p.add_argument("--sensor", type=path_arg, metavar="FILE.yaml",
                    help="sensor model from a YAML (e.g. from `lmsbench calibrate`), which sets the resolution and units: "
                    "not to be combined with --resolution-deg, --units or --ideal")
     p.add_argument("--odometry", action="store_true", help="add noisy wheel odometry to the scans")
-    p.add_argument("--config", type=Path, help="rerun a config.yaml written by an earlier run (it holds the whole "
+    p.add_argument("--config", type=path_arg, help="rerun a config.yaml written by an earlier run (it holds the whole "
                                                "run: no other option of the run may be given with it)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)

@@ -17,15 +17,15 @@ if TYPE_CHECKING:
 
 from experiments.logargs import add_log_options, read_log_options
 from experiments.options import (SLAM_OUTPUTS, InputError, check_file, check_log, check_methods, check_out, check_yaml,
-                                 count, positive)
+                                 count, positive, path_arg)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("slam", help="odometry-free SLAM (scan matching + pose graph, or the paper's EKF) over a simulator folder, CARMEN log or bag "
                                     "(trajectory.tum, map.json, metrics.json, config.yaml, slam.png)")
-    p.add_argument("input", help="simulator output folder (scans.clf, groundtruth.tum, world.json), CARMEN log or bag")
-    p.add_argument("--out", type=Path, required=True, help="output folder")
-    p.add_argument("--config", type=Path, help="a SLAM config.yaml (its 'slam' section or a flat mapping)")
+    p.add_argument("input", type=path_arg, help="simulator output folder (scans.clf, groundtruth.tum, world.json), CARMEN log or bag")
+    p.add_argument("--out", type=path_arg, required=True, help="output folder")
+    p.add_argument("--config", type=path_arg, help="a SLAM config.yaml (its 'slam' section or a flat mapping)")
     p.add_argument("--preset", choices=("default", "paper"),
                    help="default: scan matching + pose graph with loop closures; paper: the paper's EKF "
                         "(constant velocity, line landmarks). Default: the config's, 'default'")
@@ -37,7 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--odometry", action="store_true", help="use the input's odometry as the motion input")
     p.add_argument("--no-odometry-baseline", action="store_true",
                    help="do not also run the filter with odometry for the comparison table")
-    p.add_argument("--relations", type=Path, help="relations file (default: NAME.relations beside a log)")
+    p.add_argument("--relations", type=path_arg, help="relations file (default: NAME.relations beside a log)")
     p.add_argument("--every", type=count(1), default=1, help="keep every N-th scan (decimation)")
     p.add_argument("--rate-hz", type=positive("scans/s"), help="decimate to about this many scans/s (by the stamps)")
     p.add_argument("--max-scans", type=count(1), help="stop after this many scans")

@@ -10,18 +10,18 @@ import argparse
 import sys
 from pathlib import Path
 
-from experiments.options import check_out, check_yaml, count
+from experiments.options import SWEEP_OUTPUTS, check_out, check_out_spares, check_yaml, count, path_arg
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sweep", help="run a parameter sweep (grid or random) on Dask; resumable")
-    p.add_argument("sweep", type=Path, help="sweep file (YAML; see sweeps/*.yaml)")
+    p.add_argument("sweep", type=path_arg, help="sweep file (YAML; see sweeps/*.yaml)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use this running Dask scheduler")
     where.add_argument("--inprocess", "--local", dest="inprocess", action="store_true",
                        help="run in this process, without Dask (default: a local Dask cluster)")
     p.add_argument("--workers", type=count(1, 64), default=2, help="worker processes of the local cluster (default 2)")
-    p.add_argument("--out", type=Path, help="sweep folder (default results/sweeps/NAME)")
+    p.add_argument("--out", type=path_arg, help="sweep folder (default results/sweeps/NAME)")
     p.add_argument("--retry-failed", action="store_true", help="compute again the cells that failed before")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
@@ -33,7 +33,8 @@ def run(args: argparse.Namespace) -> int:
     check_yaml(args.sweep, "a sweep file")
     spec = load_sweep(args.sweep)
     out = args.out or Path("results/sweeps") / spec.name
-    check_out(out)
+    check_out_spares(out, SWEEP_OUTPUTS.files, [args.sweep])  # `sweep DIR/sweep.yaml --out DIR` lost its comments
+    check_out(out, writes=SWEEP_OUTPUTS)
     executor = "inprocess" if args.inprocess else (args.scheduler or "local")
     from experiments.sweep.runner import check_executor, check_spec
 

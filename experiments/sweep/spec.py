@@ -16,6 +16,9 @@ A sweep file is YAML::
     sample_seed: 0            # seeds the draws (numpy Generator), so the cells are reproducible
     seeds: [0, 1, 2]          # crossed with everything; each cell gets a `seed` column
 
+``seeds:`` and every grid entry are lists: a bare value is refused (``seeds: 3`` ran the one seed 3
+where three seeds were meant; ``extractor.k: 3, 5, 10`` is the one string "3, 5, 10" in YAML).
+
 Parameters that must change together are linked: a grid key of comma-separated names takes
 tuples, e.g. ``"sensor.resolution_deg,sensor.n_beams": [[0.5, 361], [1.0, 181]]``.
 
@@ -87,8 +90,14 @@ class SweepSpec:
                                      f"{'value' if key == 'fixed' else 'values' if key == 'grid' else 'distribution'}, "
                                      f"got {type(raw[key]).__name__} {raw[key]!r:.60}")
         seeds = raw.get("seeds", [0])
-        if isinstance(seeds, int):
-            seeds = [seeds]
+        if isinstance(seeds, int) and not isinstance(seeds, bool):  # `seeds: 3` ran the one seed 3
+            n = seeds if 2 <= seeds <= 10 else 3
+            raise SweepSpecError(f"`seeds: {seeds}` is one number: write a list, `seeds: {list(range(n))}` for {n} "
+                                 f"seeds, `seeds: [{seeds}]` for the one seed {seeds}")
+        for key, values in (raw.get("grid") or {}).items():
+            if not isinstance(values, (list, tuple)):  # `k: 3, 5, 10` is the one string '3, 5, 10' in YAML
+                raise SweepSpecError(f"grid.{key}: {values!r} is a single value: write a list of the values to vary "
+                                     f"(`[{values}]` for this one, or put it under fixed:)")
         name = raw.get("name", default_name)
         if not isinstance(name, str):
             raise SweepSpecError(f"name: must be a string (it names the output folder results/sweeps/NAME), got {name!r}")
@@ -96,7 +105,7 @@ class SweepSpec:
             name=name,
             kind=str(raw["kind"]),
             fixed=dict(raw.get("fixed") or {}),
-            grid={k: list(v) if isinstance(v, (list, tuple)) else [v] for k, v in (raw.get("grid") or {}).items()},
+            grid={k: list(v) for k, v in (raw.get("grid") or {}).items()},
             random=dict(raw.get("random") or {}),
             samples=_whole("samples", raw.get("samples", 0), MAX_CELLS),
             sample_seed=_whole("sample_seed", raw.get("sample_seed", 0), MAX_SEED),
@@ -155,7 +164,7 @@ def _whole(name: str, value: Any, maximum: int) -> int:
 
 
 def _seeds(raw: Any) -> list[int]:
-    """The ``seeds:`` list: whole numbers (an int alone is a list of one)."""
+    """The ``seeds:`` list: whole numbers (a bare number is refused before: ``seeds: 3`` is ambiguous)."""
     if not isinstance(raw, (list, tuple)) or not all(isinstance(s, int) and not isinstance(s, bool) for s in raw):
         raise SweepSpecError(f"`seeds:` must be a list of whole numbers >= 0, got {raw!r}")
     return list(raw)
@@ -222,7 +231,8 @@ def _check(spec: SweepSpec) -> None:
 
 def _check_scalar(where: str, value: Any) -> None:
     if not isinstance(value, (str, int, float, bool, type(None))):
-        raise SweepSpecError(f"{where} must be a number, string, bool or null, got {value!r}")
+        hint = " (to vary it, put it under grid:)" if where.startswith("fixed.") and isinstance(value, list) else ""
+        raise SweepSpecError(f"{where} must be a number, string, bool or null, got {value!r}{hint}")
     if isinstance(value, float) and not math.isfinite(value):
         raise SweepSpecError(f"{where} must be finite, got {value!r}")
 
