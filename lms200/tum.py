@@ -5,6 +5,7 @@ Planar poses (x, y, theta) are written with z = 0 and a rotation about z only.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -40,8 +41,10 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
 
 
 def read_tum(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """Read a TUM file: (stamps (n,) s, poses (n, 3) x, y, yaw). Raises LogFormatError with the line."""
-    stamps, poses = [], []
+    """Read a TUM file: (stamps (n,) s, poses (n, 3) x, y, yaw). Raises LogFormatError with the line
+    (a row that is not 8 finite numbers, a stamp before the previous one)."""
+    stamps: list[float] = []
+    poses: list[tuple[float, float, float]] = []
     with open(path, encoding="ascii", errors="replace") as f:
         for no, line in enumerate(f, 1):
             s = line.strip()
@@ -54,6 +57,10 @@ def read_tum(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
                 v = [float(p) for p in parts]
             except ValueError:
                 raise LogFormatError(path, no, f"TUM row has a non-number: {s[:60]!r}") from None
+            if not all(math.isfinite(x) for x in v):  # slam on a folder with a nan here: "internal error"
+                raise LogFormatError(path, no, f"TUM row has a non-finite number: {s[:60]!r}")
+            if stamps and v[0] < stamps[-1]:
+                raise LogFormatError(path, no, f"TUM stamps go backwards ({v[0]:.6f} s after {stamps[-1]:.6f} s)")
             stamps.append(v[0])
             poses.append((v[1], v[2], float(quaternion_to_yaw(np.array(v[4:8]))[0])))
     return np.array(stamps), np.array(poses).reshape(-1, 3)

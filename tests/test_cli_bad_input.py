@@ -88,6 +88,15 @@ def files(tmp_path_factory):
     (d / "simrun").mkdir()
     write_log(d / "simrun" / "scans.clf", good)
     write_log(d / "simbroken" / "scans.clf", good)
+    # simulate folders whose truth was edited: a nan, a stamp going back (slam: "internal error: ValueError")
+    from lms200 import write_tum
+
+    for name, row in (("sim_nan_truth", "0.2 nan 0 0 0 0 0 1"), ("sim_back_truth", "0.05 0 0 0 0 0 0 1")):
+        (d / name).mkdir()
+        write_log(d / name / "scans.clf", good)
+        write_tum(d / name / "groundtruth.tum", 0.1 * np.arange(5), np.zeros((5, 3)))
+        lines = (d / name / "groundtruth.tum").read_text().splitlines()
+        (d / name / "groundtruth.tum").write_text("\n".join(lines[:4] + [row] + lines[4:]) + "\n")
     # sweep files
     (d / "sweep.yaml").write_text(yaml.safe_dump({"name": "t", "kind": "extract", "fixed": {"duration": 0.5},
                                                   "grid": {"extractor.k": [3]}}))
@@ -493,6 +502,8 @@ CASES = [
     (["simulate", "--duration", "0.5", "--out", "{out}/a", "--out={out}/b"], "argument --out: given 2 times; give it once"),
     (["compare", "{good.clf}", "--methods", "sensor", "--methods", "iepf", "--out", O], "argument --methods: given 2 times"),
     (["info", "{good.clf}", "--laser-fov-deg", "180", "--laser-fov-deg", "100"], "argument --laser-fov-deg: given 2 times"),
+    (["slam", "{sim_nan_truth}", "--out", O], "sim_nan_truth/groundtruth.tum:5: TUM row has a non-finite number: '0.2 nan"),
+    (["slam", "{sim_back_truth}", "--out", O], "sim_back_truth/groundtruth.tum:5: TUM stamps go backwards (0.050000 s after 0.200000 s)"),
     # a log cut short names how to read on; a link to nothing says so ("no such log" named the link)
     (["info", "{cut_short.clf}"], "cut_short.clf:10: malformed ROBOTLASER1 line: ROBOTLASER1 announces 361 beams but has fewer fields"),
     (["info", "{cut_short.clf}"], "(--skip-bad-lines skips malformed lines, each reported)"),
