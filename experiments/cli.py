@@ -19,6 +19,7 @@ import sys
 import threading
 from typing import Any, Sequence
 
+from features.batch import default_threads
 from lms200 import LmsbenchError, LogFormatError
 
 from . import commands
@@ -98,6 +99,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGINT, interrupt.handler) if main_thread else None
     try:
+        default_threads()  # a bad $LMSBENCH_THREADS is refused before any work, by every command
         return int(args.func(args) or 0)
     except (LmsbenchError, OSError) as exc:  # OSError: missing files, bad paths, unreachable hosts, timeouts
         if interrupt.timer is not None or _from_interrupt(exc):  # what Ctrl-C broke: not the input's error

@@ -1,16 +1,17 @@
 """The compiler of the extractors: numba, a required dependency. ``kernel`` compiles a function
 once and caches the machine code on disk between processes; division follows IEEE (x / 0 gives
-inf or nan, as in numpy, never an exception)."""
+inf or nan, as in numpy, never an exception). Compiled code runs without Python's GIL, so that
+``features.extract_many``'s threads extract in parallel (a kernel touches no Python object)."""
 
 from __future__ import annotations
 
 from lms200.numba_required import numba
 
-kernel = numba.njit(cache=True, error_model="numpy")
+kernel = numba.njit(cache=True, error_model="numpy", nogil=True)
 # a small helper called per run, per line or per partition round: inlined into its callers in
 # numba's IR, so that the arrays it is passed are not reference-counted at each call (two atomic
 # operations per array argument: ~11 % of the sensor kernel's time went to NRT_incref / NRT_decref)
-inline_kernel = numba.njit(cache=True, error_model="numpy", inline="always")
+inline_kernel = numba.njit(cache=True, error_model="numpy", nogil=True, inline="always")
 
 
 

@@ -16,7 +16,8 @@ from typing import Any, Callable
 from lms200 import Scan
 
 from .baselines.checks import MAX_BEAMS
-from .batch import common_geometry
+from . import batch
+from .batch import check_threads, common_geometry, run_pieces
 from .errors import ConfigError, ScanGeometryError, ScanTypeError, not_a_scan
 from .types import FeatureSet
 
@@ -41,6 +42,7 @@ class Method:
     default: Any
     backend: str
     run_many: Callable[[Sequence[Scan], Any], list[FeatureSet]] | None = None
+    thread_safe: bool = False  # run_many may run on several threads at once (and releases the GIL)
 
 
 _REGISTRY: dict[str, Method] = {}
@@ -51,11 +53,12 @@ class UnknownMethodError(ConfigError):
 
 
 def register(name: str, config_type: type, run: Callable[[Scan, Any], FeatureSet], backend: str = "numpy",
-             run_many: Callable[[Sequence[Scan], Any], list[FeatureSet]] | None = None) -> None:
+             run_many: Callable[[Sequence[Scan], Any], list[FeatureSet]] | None = None, thread_safe: bool = False) -> None:
     """Register an extractor under ``name`` (called by the method's module on import); ``run_many``
     extracts from a batch of scans of one geometry at once (else ``extract_many`` calls ``run``
-    per scan)."""
-    _REGISTRY[name] = Method(name, config_type, run, config_type(), backend, run_many)
+    per scan); ``thread_safe``: ``extract_many`` may call ``run_many`` on pieces of a batch from
+    several threads at once (it shares no state it writes and its compiled code releases the GIL)."""
+    _REGISTRY[name] = Method(name, config_type, run, config_type(), backend, run_many, thread_safe)
 
 
 def get_method(name: str) -> Method:
@@ -150,17 +153,26 @@ def too_many_beams(n: int) -> str:
 BATCH_CHUNK = 4096
 
 
-def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = None, **params: Any) -> list[FeatureSet]:
+def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = None, *, threads: int | None = None,
+                 **params: Any) -> list[FeatureSet]:
     """``extract`` of every scan in ``scans`` (a sequence of ``lms200.Scan`` of one geometry: beam
-    count, angle_min, angle_increment, range_min, range_max), in one compiled call for the
-    compiled methods (sensor, split_merge, iepf); the result equals calling ``extract`` on each.
+    count, angle_min, angle_increment, range_min, range_max), in compiled calls of up to
+    BATCH_CHUNK scans for the compiled methods (sensor, split_merge, iepf); the result equals
+    calling ``extract`` on each, whatever the thread count.
+
+    ``threads``: pieces of the batch run on this many threads at once (each thread at least
+    MIN_SCANS_PER_THREAD scans) for the compiled methods (registered ``thread_safe``); None:
+    ``$LMSBENCH_THREADS``, else every CPU this process may use. The other methods run scan by scan
+    in the calling thread.
 
     Raises:
         ValueError: naming the first scan whose geometry differs from the first's.
         ScanTypeError: naming the first item that is not an ``lms200.Scan``.
+        ConfigError: a ``threads`` that is not a whole number >= 1.
     """
     m = (_REGISTRY.get(method) if type(method) is str else None) or get_method(method)
     cfg = _config(m, config, params)
+    n_threads = check_threads(threads)
     if isinstance(scans, Scan):
         raise ScanTypeError("extract_many: expected a sequence of lms200.Scan, got one Scan (use extract, or [scan])")
     try:
@@ -170,13 +182,11 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
     if scans and isinstance(scans[0], Scan) and len(scans[0]) > MAX_BEAMS:
         raise ScanGeometryError(too_many_beams(len(scans[0])))
     if m.run_many is not None:
-        if len(scans) <= BATCH_CHUNK:
+        use = n_threads if m.thread_safe else 1
+        if len(scans) <= BATCH_CHUNK and (use == 1 or len(scans) < 2 * batch.MIN_SCANS_PER_THREAD):
             return m.run_many(scans, cfg)
-        common_geometry(scans)  # the whole batch first: an error names the scan's index in it, not in a chunk
-        out: list[FeatureSet] = []
-        for start in range(0, len(scans), BATCH_CHUNK):
-            out += m.run_many(scans[start:start + BATCH_CHUNK], cfg)
-        return out
+        common_geometry(scans)  # the whole batch first: an error names the scan's index in it, not in a piece
+        return run_pieces(m.run_many, scans, cfg, use, BATCH_CHUNK)
     if scans:
         common_geometry(scans)
     return [m.run(s, cfg) for s in scans]

@@ -223,12 +223,13 @@ def extract_all(scans: list, config: SlamConfig) -> list:
     """``features.extract_many`` over scans of one geometry (one compiled call), or
     ``features.extract`` scan by scan where the geometry changes within the batch."""
     from features import extract, extract_many
+    from features.errors import ScanGeometryError
 
     if not scans:
         return []
     try:
         return extract_many(scans, method=config.extractor, **config.extractor_params)
-    except ValueError:  # scans of different geometries: one call each
+    except ScanGeometryError:  # scans of different geometries: one call each
         return [extract(s, method=config.extractor, **config.extractor_params) for s in scans]
 
 

@@ -675,6 +675,23 @@ def test_bench_and_sim2real_out_hold_only_their_own_outputs(command, theirs, fil
     assert (out / theirs).read_text() == "mine: 1\n"
 
 
+@pytest.mark.parametrize("value", ["all", "0", "-2", "1.5", "99999"])
+def test_a_bad_thread_count_in_the_environment_is_refused_before_any_work(value, tmp_path, capsys, monkeypatch):
+    """``$LMSBENCH_THREADS`` (the threads of ``features.extract_many``) is checked by every
+    command before it starts (slam's extraction took the error for a batch of mixed geometry and
+    fell back to one call a scan)."""
+    scans = [Scan.lms200(np.full(361, 2.0 + 0.01 * k), stamp=0.2 * k) for k in range(40)]
+    write_log(tmp_path / "log.clf", [Record(s) for s in scans])
+    monkeypatch.setenv("LMSBENCH_THREADS", value)
+    for argv in (["slam", str(tmp_path / "log.clf"), "--out", str(tmp_path / "o"), "--quiet"],
+                 ["info", str(tmp_path / "log.clf")]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.strip().splitlines() == [
+            f"lmsbench {argv[0]}: error: LMSBENCH_THREADS: must be a whole number from 1 to 1024, got {value!r}"]
+    assert not (tmp_path / "o").exists()
+
+
 @pytest.mark.parametrize("command, theirs, others", [
     (["figures", "--no-slam", "--duration", "1", "--rate-hz", "2", "--methods", "sensor"], "fig3_scan.png",
      "notes.txt, tables/mine.csv"),

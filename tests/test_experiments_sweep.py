@@ -35,7 +35,10 @@ def square(params: dict) -> dict:
         raise ValueError("x = 3 is not allowed")
     if params.get("interrupt_at") == params["x"]:
         raise KeyboardInterrupt
-    return {"y": params["x"] ** 2 + params["seed"], "x_half": params["x"] / 2}
+    from features.batch import default_threads
+
+    # threads: of the cell's batch extraction (features.extract_many): a sweep's own workers use one each
+    return {"y": params["x"] ** 2 + params["seed"], "x_half": params["x"] / 2, "threads": default_threads()}
 
 
 def make_spec(log: Path, xs=range(6), seeds=(0, 1), **fixed) -> SweepSpec:
@@ -217,7 +220,8 @@ def test_the_cli_runs_a_sweep_file_on_its_own_local_cluster(tmp_path):
     spec_path.write_text(yaml.safe_dump(make_spec(log, xs=[0, 1, 2], seeds=[5]).to_dict()))
     assert load_sweep(spec_path).cells()[0] == {"log": str(log), "x": 0, "seed": 5}
     # the cell x = 1 kills its worker process: recorded as an error, the other cells go on
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), str(REPO / "tests")]), "SWEEP_TEST_DIE_AT": "1"}
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), str(REPO / "tests")]), "SWEEP_TEST_DIE_AT": "1",
+           "LMSBENCH_THREADS": "2"}  # the driver's; the workers' is 1
     run = subprocess.run([sys.executable, "-m", "experiments.cli", "sweep", str(spec_path), "--no-progress",
                           "--out", str(tmp_path / "out")], env=env, cwd=REPO, capture_output=True, text=True,
                          timeout=120)
@@ -226,6 +230,7 @@ def test_the_cli_runs_a_sweep_file_on_its_own_local_cluster(tmp_path):
     table = pd.read_parquet(tmp_path / "out" / "results.parquet")
     assert list(table["x"]) == [0, 1, 2] and list(table["status"]) == ["ok", "error", "ok"]
     assert table["y"][0] == 5 and table["y"][2] == 9
+    assert table["threads"][0] == table["threads"][2] == 1  # one extraction thread a worker: the workers are the parallelism
     assert table["error"][1].startswith("KilledWorker")
     assert (tmp_path / "out" / "results.csv").exists() and (tmp_path / "out" / "sweep.yaml").exists()
 

@@ -224,3 +224,114 @@ def test_edge_geometries_give_the_wall_or_a_clear_error_and_batches_agree(method
             assert len(fs.lines) >= 1, name
             np.testing.assert_allclose(fs.lines.rho, 2.0, atol=0.05, err_msg=name)
             np.testing.assert_allclose(fs.lines.alpha, 0.3, atol=0.02, err_msg=name)
+
+
+@pytest.mark.parametrize("method", ["sensor", "split_merge", "iepf"])
+def test_threads_give_the_same_features_bit_for_bit(method: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``extract_many(threads=N)`` runs pieces of the batch on N threads at once; each scan is
+    extracted by itself, so every array equals the one-thread result exactly (not to 1e-12), and
+    the pieces really ran on several threads."""
+    import threading
+
+    import features.batch as fbatch
+    import features.registry as registry
+
+    scans = batch(40)
+    ref = extract_many(scans, method=method, threads=1)
+    monkeypatch.setattr(fbatch, "MIN_SCANS_PER_THREAD", 4)  # 40 scans: pieces of 14, 14, 12 on 3 threads
+    m = registry.get_method(method)
+    assert m.thread_safe
+    threads_seen: set[int] = set()
+    sizes: list[int] = []
+    gate = threading.Barrier(3, timeout=30)  # each piece waits for the other two: they run at once
+
+    def spy(piece, cfg):
+        threads_seen.add(threading.get_ident())
+        sizes.append(len(piece))
+        gate.wait()
+        return m.run_many(piece, cfg)
+
+    monkeypatch.setitem(registry._REGISTRY, method, registry.Method(m.name, m.config_type, m.run, m.default,
+                                                                    m.backend, spy, True))
+    many = extract_many(scans, method=method, threads=3)
+    assert sorted(sizes) == [12, 14, 14] and len(threads_seen) == 3
+    assert len(many) == len(ref)
+    for a, b in zip(many, ref):
+        np.testing.assert_array_equal(a.lines.values, b.lines.values)
+        np.testing.assert_array_equal(a.lines.beams, b.lines.beams)
+        np.testing.assert_array_equal(a.corners.values, b.corners.values)
+        np.testing.assert_array_equal(a.corners.beams, b.corners.beams)
+
+
+def test_the_batch_kernels_release_the_gil() -> None:
+    """Threads only run at once if the compiled batch calls let go of Python's lock."""
+    from features.baselines import engine as baseline_engine
+    from features.sensor import engine as sensor_engine
+
+    assert sensor_engine.extract_batch.targetoptions["nogil"] is True
+    assert baseline_engine.extract_batch.targetoptions["nogil"] is True
+
+
+def test_thread_counts_are_checked(monkeypatch: pytest.MonkeyPatch) -> None:
+    import os
+
+    from features.batch import THREADS_ENV, default_threads
+
+    scans = batch(6)
+    for bad in (0, -1, 1.5, True, "2", 10**6):
+        with pytest.raises(ConfigError, match=r"^threads: must be a whole number from 1 to 1024"):
+            extract_many(scans, threads=bad)
+    monkeypatch.setenv(THREADS_ENV, "3")
+    assert default_threads() == 3
+    monkeypatch.setenv(THREADS_ENV, "all")
+    with pytest.raises(ConfigError, match=r"^LMSBENCH_THREADS: must be a whole number from 1 to 1024, got 'all'"):
+        extract_many(scans)
+    monkeypatch.delenv(THREADS_ENV)
+    assert default_threads() == len(os.sched_getaffinity(0))
+
+
+def test_pieces_run_in_order_on_at_most_the_threads_asked_and_errors_come_through(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``features.batch.run_pieces`` with stand-in scans: every result in the scans' order, pieces
+    of at most ``chunk``, never more threads at once than asked (each call has its own, so a
+    smaller count after a larger one holds), a piece's error raised as itself, and a piece that
+    calls ``run_pieces`` again (nested) finishes instead of waiting on a shared pool."""
+    import threading
+
+    import features.batch as fbatch
+
+    monkeypatch.setattr(fbatch, "MIN_SCANS_PER_THREAD", 4)
+    lock = threading.Lock()
+    active = {"now": 0, "most": 0}
+    idents: set[int] = set()
+
+    def echo(piece, cfg):
+        with lock:
+            active["now"] += 1
+            active["most"] = max(active["most"], active["now"])
+            idents.add(threading.get_ident())
+        assert len(piece) <= 7 and cfg == "cfg"
+        out = [x * 10 for x in piece]
+        with lock:
+            active["now"] -= 1
+        return out
+
+    items = list(range(100))
+    assert fbatch.run_pieces(echo, items, "cfg", 8, 7) == [x * 10 for x in items]
+    assert active["most"] <= 8 and len(idents) <= 8
+    active["most"] = 0
+    idents.clear()
+    assert fbatch.run_pieces(echo, items, "cfg", 2, 7) == [x * 10 for x in items]  # after 8: still 2
+    assert active["most"] <= 2 and len(idents) <= 2
+
+    def fails(piece, cfg):
+        if 50 in piece:
+            raise ZeroDivisionError("piece with 50")
+        return list(piece)
+
+    with pytest.raises(ZeroDivisionError, match="piece with 50"):
+        fbatch.run_pieces(fails, items, "cfg", 4, 10)
+
+    def nested(piece, cfg):
+        return fbatch.run_pieces(echo, list(piece), cfg, 2, 7)
+
+    assert fbatch.run_pieces(nested, items, "cfg", 3, 50) == [x * 10 for x in items]

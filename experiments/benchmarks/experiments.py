@@ -41,9 +41,11 @@ def run(quick: bool = False) -> list[dict]:
 
         from distributed import Client, LocalCluster
 
+        from features.batch import THREADS_ENV
+
         t0 = time.perf_counter()
         with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
-                          silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+                          silence_logs=logging.ERROR, env={THREADS_ENV: "1"}) as cluster, Client(cluster) as client:
             startup = time.perf_counter() - t0
             t0 = time.perf_counter()
             result = run_sweep(_spec(n), Path(tmp) / "dask", client, progress=False)

@@ -14,8 +14,9 @@ import numpy as np
 
 from experiments.synthetic import cast
 from features import available_methods, extract, extract_many, make_config
+from features.batch import MIN_SCANS_PER_THREAD, default_threads
 from features.noise_estimate import AUTO, neighbour_sigma
-from features.registry import backend_of
+from features.registry import backend_of, get_method
 from lms200 import Scan
 
 NAME = "features"
@@ -77,12 +78,15 @@ CHUNK = 50  # scans timed together; each chunk's best repeat counts (robust to b
 
 
 def time_methods(scans: list[Scan], methods: list[str], repeats: int,
-                 variants: dict[str, tuple[str, Any]] | None = None) -> dict[str, dict[str, float]]:
+                 variants: dict[str, tuple[str, Any]] | None = None, threads: int = 1) -> dict[str, dict[str, float]]:
     """CPU seconds per scan of each method over ``scans``: ``single`` (one ``extract`` call per
-    scan) and ``batch`` (one ``extract_many`` call per chunk of CHUNK scans), each chunk's best
-    (least disturbed) of ``repeats`` passes, summed over the chunks; the methods and the two modes
-    interleaved within every repeat, so that load on a shared machine falls on all alike. Also
-    the lines and corners per scan. ``variants``: more rows, label -> (method, config)."""
+    scan) and ``batch`` (one one-thread ``extract_many`` call per chunk of CHUNK scans), each
+    chunk's best (least disturbed) of ``repeats`` passes, summed over the chunks; the methods and
+    the two modes interleaved within every repeat, so that load on a shared machine falls on all
+    alike. ``threaded`` and ``one_thread``: wall seconds per scan of one ``extract_many`` call over
+    all the scans on ``threads`` threads and on one, best of the repeats (on a loaded machine their
+    ratio shows the load, not the threads; nan for the methods that run in one thread, hough and
+    ransac). Also the lines and corners per scan. ``variants``: more rows, label -> (method, config)."""
     runs = {m: (m, make_config(m)) for m in methods}
     runs.update(variants or {})
     methods = list(runs)
@@ -94,6 +98,7 @@ def time_methods(scans: list[Scan], methods: list[str], repeats: int,
     chunks = [scans[i : i + CHUNK] for i in range(0, len(scans), CHUNK)]
     best = {m: {"single": np.full(len(chunks), np.inf), "batch": np.full(len(chunks), np.inf)} for m in methods}
     counts = {}
+    threaded: dict[tuple[str, int], float] = {}
     for rep in range(repeats):
         order = methods[rep % len(methods):] + methods[: rep % len(methods)]
         for m in order:
@@ -104,26 +109,35 @@ def time_methods(scans: list[Scan], methods: list[str], repeats: int,
                 for s in chunk:
                     extract(s, name, cfg)
                 c1 = time.process_time()
-                many = extract_many(chunk, name, cfg)
+                many = extract_many(chunk, name, cfg, threads=1)
                 c2 = time.process_time()
                 best[m]["single"][c] = min(best[m]["single"][c], c1 - c0)
                 best[m]["batch"][c] = min(best[m]["batch"][c], c2 - c1)
                 n_lines += sum(len(f.lines) for f in many)
                 n_corners += sum(len(f.corners) for f in many)
             counts[m] = (n_lines / len(scans), n_corners / len(scans))
+            if get_method(name).thread_safe:  # (the others run scan by scan in one thread: nan)
+                for t in (1, threads):  # all the scans in one call: wall time (CPU time adds the threads up)
+                    w0 = time.perf_counter()
+                    extract_many(scans, name, cfg, threads=t)
+                    threaded[(m, t)] = min(threaded.get((m, t), np.inf), time.perf_counter() - w0)
     return {m: {"single": float(best[m]["single"].sum()) / len(scans), "batch": float(best[m]["batch"].sum()) / len(scans),
-                "lines": counts[m][0], "corners": counts[m][1]} for m in methods}
+                "threaded": threaded.get((m, threads), np.nan) / len(scans),
+                "one_thread": threaded.get((m, 1), np.nan) / len(scans), "lines": counts[m][0], "corners": counts[m][1]}
+            for m in methods}
 
 
 def run(quick: bool = False) -> list[dict]:
     """One row per method x scan set (simulated office, 361 beams; MIT CSAIL, where present):
-    scans/s of single ``extract`` calls and of ``extract_many`` batches (process CPU time, each
-    chunk's best of the repeats, methods interleaved), per-scan microseconds, and the ratios to
-    the sensor method (> 1: faster than sensor). Where the sensor method estimates the noise from
+    scans/s of single ``extract`` calls and of one-thread ``extract_many`` batches (process CPU
+    time, each chunk's best of the repeats, methods interleaved), per-scan microseconds, the
+    ratios to the sensor method (> 1: faster than sensor), and the wall-clock scans/s of
+    ``extract_many`` on ``features.batch.default_threads()`` threads with its ratio to one thread. Where the sensor method estimates the noise from
     the scans (``sigma_r_cm="auto"``, SICK cm mode: MIT CSAIL), a row "sensor (noise given)" runs
     it with that noise estimated once from all the scans, as ``lmsbench compare`` does per log."""
     count = 100 if quick else 600
     repeats = 2 if quick else 7
+    threads = max(1, min(default_threads(), count // MIN_SCANS_PER_THREAD))  # the threads extract_many uses on count scans
     office, source = office_scans(count)
     methods = available_methods()
     rows = []
@@ -133,7 +147,7 @@ def run(quick: bool = False) -> list[dict]:
         variants = {}
         if "sensor" in methods and make_config("sensor").sigma_for(scans[0].range_max) == AUTO:
             variants[NOISE_GIVEN] = ("sensor", make_config("sensor", sigma_r_cm=neighbour_sigma(scans)))
-        t = time_methods(scans, methods, repeats, variants)
+        t = time_methods(scans, methods, repeats, variants, threads)
         ref = t.get("sensor", t[methods[0]])
         for m in t:
             rows.append({
@@ -142,6 +156,8 @@ def run(quick: bool = False) -> list[dict]:
                 "single_scans_per_s": 1.0 / t[m]["single"], "batch_scans_per_s": 1.0 / t[m]["batch"],
                 "single_us": 1e6 * t[m]["single"], "batch_us": 1e6 * t[m]["batch"],
                 "single_vs_sensor": ref["single"] / t[m]["single"], "batch_vs_sensor": ref["batch"] / t[m]["batch"],
+                "threads": threads, "threaded_scans_per_s": 1.0 / t[m]["threaded"],
+                "threaded_vs_one_thread": t[m]["one_thread"] / t[m]["threaded"],
                 "lines_per_scan": t[m]["lines"], "corners_per_scan": t[m]["corners"],
             })
     return rows

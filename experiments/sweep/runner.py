@@ -21,6 +21,7 @@ import pandas as pd
 import yaml
 from tqdm import tqdm
 
+from features.batch import THREADS_ENV
 from lms200 import LmsbenchError
 
 from .cells import resolve_kind, run_cell
@@ -242,9 +243,10 @@ def _client(executor: Any, workers: int) -> Iterator[Any]:
             try:
                 # no dashboard, and its HTTP server on a free port: the default 8787 of another
                 # cluster on the machine made Dask warn on stderr
+                # one extraction thread a worker (``features.extract_many``): the workers are the parallelism
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                        dashboard_address=":0", scheduler_kwargs={"dashboard": False},
-                                       silence_logs=logging.CRITICAL)
+                                       silence_logs=logging.CRITICAL, env={THREADS_ENV: "1"})
             finally:
                 if previous is not None:
                     signal.signal(signal.SIGINT, previous)

@@ -68,4 +68,4 @@ def run_many(scans: Sequence[Scan], cfg: IepfConfig) -> list[FeatureSet]:
     return run_pipeline_many(scans, cfg, "iepf")
 
 
-register("iepf", IepfConfig, run, backend="numba", run_many=run_many)
+register("iepf", IepfConfig, run, backend="numba", run_many=run_many, thread_safe=True)

@@ -172,4 +172,4 @@ def run_many(scans: Sequence[Scan], cfg: SplitMergeConfig) -> list[FeatureSet]:
     return run_pipeline_many(scans, cfg, "split_merge")
 
 
-register("split_merge", SplitMergeConfig, run, backend="numba", run_many=run_many)
+register("split_merge", SplitMergeConfig, run, backend="numba", run_many=run_many, thread_safe=True)

@@ -103,4 +103,4 @@ def signals(scan: Scan, k: int = 3, sigma_r: float = 0.005, min_range: float = 0
     }
 
 
-register(METHOD, SensorMethodConfig, extract_sensor, backend="numba", run_many=extract_sensor_many)
+register(METHOD, SensorMethodConfig, extract_sensor, backend="numba", run_many=extract_sensor_many, thread_safe=True)

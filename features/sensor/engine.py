@@ -29,7 +29,8 @@ Importing this module imports numba (``features.jit``).
 
 One module on purpose: numba's on-disk cache is invalidated by the modification time of the file
 that defines a function, not of the files of the functions it calls, so kernels that call each
-other live in one file.
+other live in one file. Nor does the cache see the compiler's flags (``features.jit``): a change of
+them needs a change of this file. The kernels run without the GIL (``extract_many``'s threads).
 """
 
 from __future__ import annotations

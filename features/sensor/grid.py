@@ -3,6 +3,7 @@ and the Log-Hough log-cos template (eq. 5), built once per (k, beam step, subdiv
 
 from __future__ import annotations
 
+import threading
 from functools import lru_cache
 
 import numpy as np
@@ -21,6 +22,7 @@ MAX_TEMPLATE = 1 << 20  # most template entries (8 MB): beam steps finer than ~4
 GRID_CACHE_BYTES = 8 << 20
 GRID_CACHE_SIZE = 64  # most grids kept
 _GRIDS: dict[tuple[int, float, int], Grid] = {}
+_GRIDS_LOCK = threading.Lock()  # extract_many's threads share the cache
 
 
 def grid_constants(k: int, increment: float, subdiv: int) -> Grid:
@@ -37,10 +39,11 @@ def grid_constants(k: int, increment: float, subdiv: int) -> Grid:
         grid = build_grid(k, increment, subdiv)
         size = grid_bytes(grid)
         if size <= GRID_CACHE_BYTES:
-            held = sum(grid_bytes(g) for g in _GRIDS.values())
-            while _GRIDS and (held + size > GRID_CACHE_BYTES or len(_GRIDS) >= GRID_CACHE_SIZE):
-                held -= grid_bytes(_GRIDS.pop(next(iter(_GRIDS))))
-            _GRIDS[key] = grid
+            with _GRIDS_LOCK:
+                held = sum(grid_bytes(g) for g in _GRIDS.values())
+                while _GRIDS and (held + size > GRID_CACHE_BYTES or len(_GRIDS) >= GRID_CACHE_SIZE):
+                    held -= grid_bytes(_GRIDS.pop(next(iter(_GRIDS))))
+                _GRIDS[key] = grid
     return grid
 
 
