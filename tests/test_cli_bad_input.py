@@ -508,6 +508,12 @@ CASES = [
     (["figures", "--intel", "{no_returns.clf}", "--no-slam", "--duration", "0.5", "--methods", "sensor", "--out", O],
      "no_returns.clf: none of its 5 scans has a valid beam (all +inf, nan or 0): no scan to draw for Fig. 9"),
     (["demo", "--log", "{no_returns.clf}", "--no-sweep", "--duration", "0.5", "--out", O], "no_returns.clf: none of its 5 scans"),
+    # compare options that apply to none of the sources were ignored (office:1 --seeds 4 5 ran seed 1 alone)
+    (["compare", "office:1", "--seeds", "4", "5", "--out", O], "--seeds sets the seeds of the worlds named without one "
+                                                               "(office); none of office:1 is one"),
+    (["compare", "{good.clf}", "--duration", "60", "--out", O], "--duration sets the worlds compare simulates"),
+    (["compare", "{good.clf}", "--rate", "5", "--out", O], "--rate sets the worlds compare simulates"),
+    (["compare", "office", "--stride", "2", "--out", O], "--stride thins logs and simulate folders; none of office is one"),
     # a log cut short names how to read on; a link to nothing says so ("no such log" named the link)
     (["info", "{cut_short.clf}"], "cut_short.clf:10: malformed ROBOTLASER1 line: ROBOTLASER1 announces 361 beams but has fewer fields"),
     (["info", "{cut_short.clf}"], "(--skip-bad-lines skips malformed lines, each reported)"),

@@ -38,10 +38,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="world names (office, corridor, angles, pillars, random; WORLD:SEED for one seed), "
                         "`lmsbench simulate` folders, or paths of real logs")
     p.add_argument("--methods", nargs="+", help="extractors (default: every available one)")
-    p.add_argument("--seeds", nargs="+", type=SEED, default=[0, 1, 2], help="seeds of each world, listed (default 0 1 2; `--seeds 3` is the one seed 3)")
-    p.add_argument("--duration", type=DURATION, default=30.0, help="simulated seconds per world and seed (default 30)")
-    p.add_argument("--rate", type=positive("scans/s"), default=2.0, help="simulated scans per second kept (default 2)")
-    p.add_argument("--stride", type=count(1), default=1, help="logs: use every STRIDE-th scan (default 1)")
+    p.add_argument("--seeds", nargs="+", type=SEED, help="seeds of each world named without one, listed (default 0 1 2; "
+                                                         "`--seeds 3` is the one seed 3)")
+    p.add_argument("--duration", type=DURATION, help="simulated seconds per world and seed (default 30)")
+    p.add_argument("--rate", type=positive("scans/s"), help="simulated scans per second kept (default 2)")
+    p.add_argument("--stride", type=count(1), help="logs and simulate folders: use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=count(1), help="at most this many scans per source")
     p.add_argument("--sigma", type=_sigma, default="auto",
                    help="range noise, 1 sigma (m), for the 3-sigma explained fraction; 'auto' (default): the "
@@ -60,6 +61,29 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_log_options(p)
     p.set_defaults(func=run)
+
+
+DEFAULT_SEEDS, DEFAULT_DURATION_S, DEFAULT_RATE_HZ = (0, 1, 2), 30.0, 2.0  # of the worlds compare simulates
+
+
+def _check_applies(args: argparse.Namespace) -> None:
+    """An option given for sources none of which it applies to was ignored: ``compare office:1
+    --seeds 4 5`` ran seed 1 alone, ``compare LOG --duration 60`` read the log as before."""
+    from experiments.compare import WORLD_NAMES
+
+    bare = [s for s in args.sources if s in WORLD_NAMES]
+    worlds = [s for s in args.sources if s.partition(":")[0] in WORLD_NAMES]  # as parse_sources tells them
+    files = [s for s in args.sources if s not in worlds]
+    if args.seeds is not None and not bare:
+        raise InputError(f"--seeds sets the seeds of the worlds named without one (office); none of "
+                         f"{' '.join(args.sources)} is one (WORLD:SEED names its seed; logs and simulate folders have none)")
+    for flag, value in (("--duration", args.duration), ("--rate", args.rate)):
+        if value is not None and not worlds:
+            raise InputError(f"{flag} sets the worlds compare simulates (office, office:1, ...); none of "
+                             f"{' '.join(args.sources)} is one (a log or a simulate folder has its own scans)")
+    if args.stride is not None and not files:
+        raise InputError(f"--stride thins logs and simulate folders; none of {' '.join(args.sources)} is one "
+                         "(the worlds' scans are set by --rate)")
 
 
 def _sigma(text: str) -> float | str:
@@ -90,6 +114,11 @@ def run(args: argparse.Namespace) -> int:
     reads += [Path(s) for s in args.sources if Path(s).is_file()] + ([args.sensor] if args.sensor else [])
     check_out_spares(args.out, COMPARE_OUTPUTS, reads)
     check_out(args.out, writes=COMPARE_OUTPUTS, patterns=COMPARE_FIGURES)  # after: an input in --out is the sharper message
+    _check_applies(args)
+    args.seeds = args.seeds or list(DEFAULT_SEEDS)
+    args.duration = args.duration or DEFAULT_DURATION_S
+    args.rate = args.rate or DEFAULT_RATE_HZ
+    args.stride = args.stride or 1
     check_seeds(args.seeds)
     check_sources(args.sources, read_log_options(args), args.seeds)
     sensor = None
