@@ -504,6 +504,10 @@ CASES = [
     (["info", "{good.clf}", "--laser-fov-deg", "180", "--laser-fov-deg", "100"], "argument --laser-fov-deg: given 2 times"),
     (["slam", "{sim_nan_truth}", "--out", O], "sim_nan_truth/groundtruth.tum:5: TUM row has a non-finite number: '0.2 nan"),
     (["slam", "{sim_back_truth}", "--out", O], "sim_back_truth/groundtruth.tum:5: TUM stamps go backwards (0.050000 s after 0.200000 s)"),
+    # a real log for Fig. 9 without a valid beam: "internal error: ZeroDivisionError" after the whole study
+    (["figures", "--intel", "{no_returns.clf}", "--no-slam", "--duration", "0.5", "--methods", "sensor", "--out", O],
+     "no_returns.clf: none of its 5 scans has a valid beam (all +inf, nan or 0): no scan to draw for Fig. 9"),
+    (["demo", "--log", "{no_returns.clf}", "--no-sweep", "--duration", "0.5", "--out", O], "no_returns.clf: none of its 5 scans"),
     # a log cut short names how to read on; a link to nothing says so ("no such log" named the link)
     (["info", "{cut_short.clf}"], "cut_short.clf:10: malformed ROBOTLASER1 line: ROBOTLASER1 announces 361 beams but has fewer fields"),
     (["info", "{cut_short.clf}"], "(--skip-bad-lines skips malformed lines, each reported)"),

@@ -53,7 +53,7 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
         written["fig7_timing"] = draw.fig_timing(tables["timing"], out / "fig7_timing")
     for source, title in (("office", "Fig. 9: features extracted by {method}, simulated " + world),
                           ("intel", "Fig. 9: features extracted by {method}, Intel Research Lab (real log)")):
-        if f"{source}_points" in tables:
+        if f"{source}_points" in tables and len(tables[f"{source}_points"]):  # no panel: no figure
             lines = tables[f"{source}_lines"]
             method = str(lines["method"].iloc[0]) if "method" in lines and len(lines) else "the extractor"
             title = title.format(method=method)

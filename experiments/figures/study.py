@@ -64,6 +64,16 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
     from experiments.progress import warm_up_kernels
 
     warm_up_kernels(log=say)
+    panel_method = "sensor" if "sensor" in cfg.methods else cfg.methods[0]
+    # the real log first: one it cannot draw is refused before the simulation and comparison
+    intel = Path(cfg.intel_log) if cfg.intel_log else None
+    if intel is not None and intel.exists():
+        tables.update(_intel_panels(intel, cfg.panels, panel_method,
+                                    cfg.intel_sensor_params if panel_method == "sensor" else None, cfg.log_options))
+        say(f"Intel log: {cfg.panels} scans with features")
+    else:
+        notes.append(f"Fig. 9 (Intel log) skipped: {intel} is not present on this machine.")
+        say(notes[-1])
     sensor = sensor_config(cfg.sensor)
     world, records = simulate_run(cfg.world, cfg.seed, cfg.duration, sensor, cfg.rate_hz)
     say(f"simulated {cfg.world} (seed {cfg.seed}): {len(records)} scans over {cfg.duration:g} s at {cfg.rate_hz:g} Hz")
@@ -78,20 +88,10 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
         say(f"{row.method:12s} median {row.time_ms_median:7.2f} ms/scan, line F1 {row.f1:.3f}, "
             f"{row.lines_per_scan:.1f} lines/scan")
 
-    panel_method = "sensor" if "sensor" in cfg.methods else cfg.methods[0]
     picks = pick_evenly(len(records), cfg.panels)
     fsets, _ = extract_timed([records[i].scan for i in picks], panel_method)
     pts, lns, crs = feature_panels([records[i].scan for i in picks], [f"{cfg.world} scan {i}" for i in picks], fsets)
     tables.update(office_points=pts, office_lines=lns.assign(method=panel_method), office_corners=crs)
-
-    intel = Path(cfg.intel_log) if cfg.intel_log else None
-    if intel is not None and intel.exists():
-        tables.update(_intel_panels(intel, cfg.panels, panel_method,
-                                    cfg.intel_sensor_params if panel_method == "sensor" else None, cfg.log_options))
-        say(f"Intel log: {cfg.panels} scans with features")
-    else:
-        notes.append(f"Fig. 9 (Intel log) skipped: {intel} is not present on this machine.")
-        say(notes[-1])
 
     if cfg.slam:
         from slam import SlamConfig, run_slam
@@ -163,11 +163,15 @@ def _intel_panels(path: Path, n: int, method: str, params: dict | None,
     reader = read_log(path, **log_options_from_plain(log_options))
     records = list(reader)
     report_skipped(reader)
-    if not records:
-        from lms200 import LmsbenchError
+    from lms200 import LmsbenchError
 
+    if not records:
         raise LmsbenchError(f"{path}: no laser scans found")
-    picks = pick_evenly(len(records), n)
+    valid = [i for i, r in enumerate(records) if r.scan.valid.any()]  # an empty panel drew nothing
+    if not valid:  # was "internal error: ZeroDivisionError" when drawing, after the whole study
+        raise LmsbenchError(f"{path}: none of its {len(records)} scans has a valid beam (all +inf, nan or 0): "
+                            "no scan to draw for Fig. 9")
+    picks = [valid[i] for i in pick_evenly(len(valid), n)]
     scans = [records[i].scan for i in picks]
     fsets, _ = extract_timed(scans, method, params)
     pts, lns, crs = feature_panels(scans, [f"Intel scan {i}" for i in picks], fsets)
