@@ -162,7 +162,7 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
 
     ``threads``: pieces of the batch run on this many threads at once (each thread at least
     MIN_SCANS_PER_THREAD scans) for the compiled methods (registered ``thread_safe``); None:
-    ``$LMSBENCH_THREADS``, else every CPU this process may use. The other methods run scan by scan
+    ``$LMSBENCH_THREADS``, else 1 (``features.batch.available_cpus()`` says how many may help). The other methods run scan by scan
     in the calling thread.
 
     Raises:

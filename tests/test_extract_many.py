@@ -275,7 +275,7 @@ def test_the_batch_kernels_release_the_gil() -> None:
 def test_thread_counts_are_checked(monkeypatch: pytest.MonkeyPatch) -> None:
     import os
 
-    from features.batch import THREADS_ENV, default_threads
+    from features.batch import THREADS_ENV, available_cpus, default_threads
 
     scans = batch(6)
     for bad in (0, -1, 1.5, True, "2", 10**6):
@@ -287,7 +287,8 @@ def test_thread_counts_are_checked(monkeypatch: pytest.MonkeyPatch) -> None:
     with pytest.raises(ConfigError, match=r"^LMSBENCH_THREADS: must be a whole number from 1 to 1024, got 'all'"):
         extract_many(scans)
     monkeypatch.delenv(THREADS_ENV)
-    assert default_threads() == len(os.sched_getaffinity(0))
+    assert default_threads() == 1  # asked for, not assumed
+    assert available_cpus() == len(os.sched_getaffinity(0))
 
 
 def test_pieces_run_in_order_on_at_most_the_threads_asked_and_errors_come_through(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -14,7 +14,7 @@ import numpy as np
 
 from experiments.synthetic import cast
 from features import available_methods, extract, extract_many, make_config
-from features.batch import MIN_SCANS_PER_THREAD, default_threads
+from features.batch import MIN_SCANS_PER_THREAD, available_cpus
 from features.noise_estimate import AUTO, neighbour_sigma
 from features.registry import backend_of, get_method
 from lms200 import Scan
@@ -116,7 +116,7 @@ def time_methods(scans: list[Scan], methods: list[str], repeats: int,
                 n_lines += sum(len(f.lines) for f in many)
                 n_corners += sum(len(f.corners) for f in many)
             counts[m] = (n_lines / len(scans), n_corners / len(scans))
-            if get_method(name).thread_safe:  # (the others run scan by scan in one thread: nan)
+            if get_method(name).thread_safe and threads > 1:  # (the others run scan by scan in one thread: nan)
                 for t in (1, threads):  # all the scans in one call: wall time (CPU time adds the threads up)
                     w0 = time.perf_counter()
                     extract_many(scans, name, cfg, threads=t)
@@ -132,12 +132,13 @@ def run(quick: bool = False) -> list[dict]:
     scans/s of single ``extract`` calls and of one-thread ``extract_many`` batches (process CPU
     time, each chunk's best of the repeats, methods interleaved), per-scan microseconds, the
     ratios to the sensor method (> 1: faster than sensor), and the wall-clock scans/s of
-    ``extract_many`` on ``features.batch.default_threads()`` threads with its ratio to one thread. Where the sensor method estimates the noise from
+    ``extract_many`` on as many threads as the process has CPUs (at most one a MIN_SCANS_PER_THREAD
+    scans; none measured on one CPU) with its ratio to one thread. Where the sensor method estimates the noise from
     the scans (``sigma_r_cm="auto"``, SICK cm mode: MIT CSAIL), a row "sensor (noise given)" runs
     it with that noise estimated once from all the scans, as ``lmsbench compare`` does per log."""
     count = 100 if quick else 600
     repeats = 2 if quick else 7
-    threads = max(1, min(default_threads(), count // MIN_SCANS_PER_THREAD))  # the threads extract_many uses on count scans
+    threads = max(1, min(available_cpus(), count // MIN_SCANS_PER_THREAD))  # the threads extract_many can use on count scans
     office, source = office_scans(count)
     methods = available_methods()
     rows = []
