@@ -36,12 +36,17 @@ class LogSummary:
         out["beams_min"], out["beams_max"] = int(low), int(high or low)
         return out
 
+    @property
+    def _first(self) -> str:
+        """Where the log mixes scan sizes, the geometry shown is the first scan's (it read as the log's)."""
+        return ", the first scan's" if "-" in self.beams else ""
+
     def lines(self) -> list[str]:
         return [
             f"scans           {self.scans}",
             f"beams per scan  {self.beams}",
-            f"field of view   {self.fov_deg:.2f} deg (from {self.angle_min_deg:.2f} deg)",
-            f"resolution      {self.resolution_deg:.3f} deg",
+            f"field of view   {self.fov_deg:.2f} deg (from {self.angle_min_deg:.2f} deg){self._first}",
+            f"resolution      {self.resolution_deg:.3f} deg{self._first}",
             f"scan rate       {self.scan_rate_hz:.2f} scans/s",
             f"duration        {self.duration_s:.2f} s",
             f"no return (inf) {100 * self.no_return_fraction:.2f} % of readings",

@@ -82,6 +82,7 @@ def files(tmp_path_factory):
     (d / "zero_beams.clf").write_text("FLASER 0 0 0 0 0 0 0 0.0 host 0.0\n")  # was "needs 11 fields, got 11"
     with gzip.open(d / "good.clf.gz", "wt") as fh:
         fh.write((d / "good.clf").read_text())
+    (d / "empty.yaml").write_text("# nothing set yet\n")
     (d / "cut_short.clf").write_text((d / "good.clf").read_text()[:-300])  # a recording stopped mid-line
     os.symlink(d / "moved_away.clf", d / "dangling.clf")  # the data moved: a link to nothing
     # a simulator-like folder: scans.clf and its truth
@@ -514,6 +515,9 @@ CASES = [
     (["compare", "{good.clf}", "--duration", "60", "--out", O], "--duration sets the worlds compare simulates"),
     (["compare", "{good.clf}", "--rate", "5", "--out", O], "--rate sets the worlds compare simulates"),
     (["compare", "office", "--stride", "2", "--out", O], "--stride thins logs and simulate folders; none of office is one"),
+    # an empty SLAM config ran the defaults silently (simulate --config and sweep refuse theirs)
+    (["slam", "{good.clf}", "--config", "{empty.yaml}", "--out", O], "empty.yaml: no SLAM config field in it (empty, or "
+                                                                     "comments only)"),
     # a log cut short names how to read on; a link to nothing says so ("no such log" named the link)
     (["info", "{cut_short.clf}"], "cut_short.clf:10: malformed ROBOTLASER1 line: ROBOTLASER1 announces 361 beams but has fewer fields"),
     (["info", "{cut_short.clf}"], "(--skip-bad-lines skips malformed lines, each reported)"),
@@ -781,3 +785,14 @@ def test_a_system_error_names_its_file_without_errno_clutter():
         "/data/run/scans.clf: permission denied"
     assert _one_line(OSError(18, "Invalid cross-device link", "/a", None, "/b")) == "/a: invalid cross-device link (/b)"
     assert _one_line(TimeoutError("timed out")) == "timed out"
+
+
+def test_info_on_a_log_of_two_scan_sizes_says_whose_geometry_it_shows(files, capsys):
+    """`info` on a log mixing 361 beams at 0.5 deg and 181 at 1 deg printed the first scan's field
+    of view and resolution as the log's; it now says they are the first scan's."""
+    assert run_main(["info", files["mixed.clf"]]) == 0
+    out = capsys.readouterr().out
+    assert "beams per scan  181-361" in out
+    assert "resolution      0.500 deg, the first scan's" in out and "180.00 deg (from -90.00 deg), the first scan's" in out
+    assert run_main(["info", files["good.clf"]]) == 0
+    assert "resolution      0.500 deg\n" in capsys.readouterr().out

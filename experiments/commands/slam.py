@@ -58,9 +58,12 @@ def _config(args: argparse.Namespace):
     if args.config:
         check_yaml(args.config, "a SLAM config.yaml")
         try:
-            raw = load_yaml(args.config.read_text()) or {}
+            raw = load_yaml(args.config.read_text())
         except yaml.YAMLError as exc:
             raise LmsbenchError(f"{args.config}: not valid YAML ({exc})") from None
+        if raw is None:  # ran the defaults silently (a file saved empty); simulate and sweep refused theirs
+            raise InputError(f"{args.config}: no SLAM config field in it (empty, or comments only); give the fields "
+                             "to change (`{}` for none), or leave --config out for the defaults")
         if not isinstance(raw, dict):
             raise LmsbenchError(f"{args.config}: expected a mapping of SLAM config fields")
         if "slam" in raw:  # a run's config.yaml: {input: ..., slam: {...}}
