@@ -16,9 +16,9 @@ from lms200 import Scan
 from .errors import ConfigError, ScanGeometryError, not_a_scan
 from .types import BatchFeatureSet, FeatureSet
 
-THREADS_ENV = "LMSBENCH_THREADS"  # the default thread count of extract_many (else the CPUs this process may use)
+THREADS_ENV = "LMSBENCH_THREADS"  # the default thread count of extract_many (else 1)
 MAX_THREADS = 1024
-#: fewest scans a thread is given: a hand-over to a pool thread costs ~0.1 ms, four 361-beam scans
+#: fewest scans a thread is given (~1 ms of work): starting a thread costs ~0.1 ms, four 361-beam scans
 MIN_SCANS_PER_THREAD = 32
 
 

@@ -162,8 +162,8 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
 
     ``threads``: pieces of the batch run on this many threads at once (each thread at least
     MIN_SCANS_PER_THREAD scans) for the compiled methods (registered ``thread_safe``); None:
-    ``$LMSBENCH_THREADS``, else 1 (``features.batch.available_cpus()`` says how many may help). The other methods run scan by scan
-    in the calling thread.
+    ``$LMSBENCH_THREADS``, else 1 (``features.batch.available_cpus()`` counts the CPUs that may
+    help). The other methods run scan by scan in the calling thread.
 
     Raises:
         ValueError: naming the first scan whose geometry differs from the first's.
