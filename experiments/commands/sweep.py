@@ -29,11 +29,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from experiments.sweep import SweepSpecError, load_sweep, run_sweep
+    from experiments.sweep.runner import spec_record
 
     check_yaml(args.sweep, "a sweep file")
     spec = load_sweep(args.sweep)
     out = args.out or Path("results/sweeps") / spec.name
-    check_out_spares(out, SWEEP_OUTPUTS.files, [args.sweep])  # `sweep DIR/sweep.yaml --out DIR` lost its comments
+    # `sweep DIR/sweep.yaml --out DIR` lost a user's comments; the sweep.yaml a run wrote, as it wrote it, may
+    # be run again (it is rewritten the same)
+    own = Path(args.sweep).resolve() == (out / "sweep.yaml").resolve() and Path(args.sweep).read_text() == spec_record(spec)
+    check_out_spares(out, SWEEP_OUTPUTS.files, [] if own else [args.sweep])
     check_out(out, writes=SWEEP_OUTPUTS)
     executor = "inprocess" if args.inprocess else (args.scheduler or "local")
     from experiments.sweep.runner import check_executor, check_spec

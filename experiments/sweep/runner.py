@@ -72,7 +72,7 @@ def run_sweep(
     fn = check_spec(spec)
     cells = spec.cells()
     store = CellStore(out)
-    (out / "sweep.yaml").write_text(yaml.safe_dump(spec.to_dict(), sort_keys=False))
+    (out / "sweep.yaml").write_text(spec_record(spec))
     from experiments.provenance import versions
 
     (out / "versions.yaml").write_text(yaml.safe_dump(versions(), sort_keys=False))  # of the last run into `out`
@@ -193,6 +193,11 @@ def _lost_result(future) -> dict[str, Any]:
 
 
 SCHEMES = ("tcp://", "tls://", "inproc://", "ucx://", "ws://", "wss://")
+
+
+def spec_record(spec: SweepSpec) -> str:
+    """The text of the ``sweep.yaml`` a run writes into its folder: the sweep as run."""
+    return yaml.safe_dump(spec.to_dict(), sort_keys=False)
 
 
 def check_executor(executor: Any, workers: int) -> None:
