@@ -17,7 +17,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them")
     p.add_argument("--duration", type=DURATION, default=40.0, help="simulated run, s (default 40)")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=10.0, help="scans kept per second of the run (default 10)")
-    p.add_argument("--log", help="real CARMEN log or bag for Fig. 9 (default: the Intel log where present)")
+    p.add_argument("--log", type=path_arg, help="real CARMEN log or bag for Fig. 9 (default: the Intel log where present)")
     p.add_argument("--no-sweep", action="store_true", help="skip the small Dask sweep")
     p.add_argument("--inprocess", action="store_true", help="run the sweep in this process instead of on Dask")
     add_log_options(p)  # for the real log of Fig. 9
@@ -30,7 +30,7 @@ def run(args: argparse.Namespace) -> int:
 
     check_out(args.out, writes=DEMO_OUTPUTS)
     cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz)
-    if args.log:
+    if args.log is not None:
         cfg.intel_log = str(check_log(args.log))
     cfg.log_options = plain_log_options(read_log_options(args))
     executor = None if args.no_sweep else ("inprocess" if args.inprocess else "local")

@@ -22,7 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=SEED, default=0, help="world and run seed")
     p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them")
     p.add_argument("--methods", nargs="+", help="extractors to compare (default: all five)")
-    p.add_argument("--intel", help="Intel CARMEN log for Fig. 9 (default ../shared/data/carmen/intel-corrected.log.gz)")
+    p.add_argument("--intel", type=path_arg, help="Intel CARMEN log for Fig. 9 (default ../shared/data/carmen/intel-corrected.log.gz)")
     p.add_argument("--no-slam", action="store_true", help="skip the SLAM run and Fig. 10")
     add_log_options(p)  # for the real log of Fig. 9
     p.set_defaults(func=run)
@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
         cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz, slam=not args.no_slam)
         if args.methods:
             cfg.methods = tuple(check_methods(args.methods))
-        if args.intel:
+        if args.intel is not None:
             cfg.intel_log = str(check_log(args.intel))
         cfg.log_options = plain_log_options(read_log_options(args))
         tables, notes = run_study(cfg)
