@@ -47,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sigma", type=_sigma, default="auto",
                    help="range noise, 1 sigma (m), for the 3-sigma explained fraction; 'auto' (default): the "
                         "sensor model's for worlds, estimated from the data for logs")
-    p.add_argument("--poses", choices=("auto", "corrected", "none"), default="auto",
+    p.add_argument("--poses", choices=("auto", "corrected", "none"), default=None,
                    help="logs: are the log's poses SLAM-corrected (then repeatability is measured)? "
                         "auto (default): when the file name says 'corrected'")
     p.add_argument("--sensor", type=path_arg, metavar="FILE.yaml",
@@ -84,6 +84,12 @@ def _check_applies(args: argparse.Namespace) -> None:
     if args.stride is not None and not files:
         raise InputError(f"--stride thins logs and simulate folders; none of {' '.join(args.sources)} is one "
                          "(the worlds' scans are set by --rate)")
+    if args.poses is not None and not files:
+        raise InputError(f"--poses says whether a log's poses are SLAM-corrected; none of {' '.join(args.sources)} "
+                         "is a log (a world's poses are its ground truth)")
+    if args.sensor is not None and not worlds:  # it was ignored: logs and simulate folders carry their own
+        raise InputError("--sensor sets the sensor of the worlds compare simulates (office, office:1, ...); "
+                         f"none of {' '.join(args.sources)} is one (a log or a simulate folder has its own)")
 
 
 def _sigma(text: str) -> float | str:
@@ -101,7 +107,7 @@ def _sigma(text: str) -> float | str:
 def run(args: argparse.Namespace) -> int:
     import pandas as pd
 
-    from experiments.compare import (check_sources, common_errors, compare, format_summary, parse_sources,
+    from experiments.compare import (WORLD_NAMES, check_sources, common_errors, compare, format_summary, parse_sources,
                                      resolved_configs, summarise)
     from experiments.overrides import extractor_overrides
     from experiments.progress import warm_up_kernels
@@ -119,6 +125,7 @@ def run(args: argparse.Namespace) -> int:
     args.duration = args.duration or DEFAULT_DURATION_S
     args.rate = args.rate or DEFAULT_RATE_HZ
     args.stride = args.stride or 1
+    args.poses = args.poses or "auto"
     check_seeds(args.seeds)
     check_sources(args.sources, read_log_options(args), args.seeds)
     sensor = None
@@ -131,11 +138,7 @@ def run(args: argparse.Namespace) -> int:
             raise
         except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
             raise LmsbenchError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
-    worlds = [spec for spec in args.sources if not Path(spec).exists()]  # simulated here, at --rate
-    if args.sensor is not None and not worlds:  # it was ignored: logs and simulate folders carry their own
-        raise InputError("--sensor sets the sensor of the worlds compare simulates (office, office:1, ...); "
-                         f"none of {' '.join(args.sources)} is one (a log or a simulate folder has its own)")
-    if worlds:
+    if any(s.partition(":")[0] in WORLD_NAMES for s in args.sources):  # simulated here, at --rate (as parse_sources tells them)
         import sim
 
         check_scan_rate(args.rate, (sensor or sim.SensorConfig()).angle_increment, "--rate")
