@@ -515,6 +515,8 @@ CASES = [
     (["compare", "{good.clf}", "--duration", "60", "--out", O], "--duration sets the worlds compare simulates"),
     (["compare", "{good.clf}", "--rate", "5", "--out", O], "--rate sets the worlds compare simulates"),
     (["compare", "office", "--stride", "2", "--out", O], "--stride thins logs and simulate folders; none of office is one"),
+    (["compare", "office:1", "--poses", "corrected", "--out", O], "--poses says whether a log's poses are SLAM-corrected; "
+                                                                 "none of office:1 is a log"),
     # an empty SLAM config ran the defaults silently (simulate --config and sweep refuse theirs)
     (["slam", "{good.clf}", "--config", "{empty.yaml}", "--out", O], "empty.yaml: no SLAM config field in it (empty, or "
                                                                      "comments only)"),
@@ -767,6 +769,9 @@ def test_sweep_out_holds_only_sweep_outputs_and_not_the_sweep_file(files, tmp_pa
     argv = ["sweep", str(files["sweep.yaml"]), "--inprocess", "--no-progress", "--out", str(out)]
     assert run_main(argv, seconds=120) == 0 and run_main(argv, seconds=120) == 0  # a run, then a resume
     assert "1 cells, 0 computed, 1 already done" in capsys.readouterr().out
+    record = (out / "sweep.yaml").read_text()  # the sweep as run, in its folder: run again from it (--out implied)
+    assert run_main(["sweep", str(out / "sweep.yaml"), "--inprocess", "--no-progress", "--out", str(out)], seconds=120) == 0
+    assert "1 cells, 0 computed, 1 already done" in capsys.readouterr().out and (out / "sweep.yaml").read_text() == record
     (out / "notes.md").write_text("mine")
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
     assert run_main(argv) == 2
@@ -796,3 +801,28 @@ def test_info_on_a_log_of_two_scan_sizes_says_whose_geometry_it_shows(files, cap
     assert "resolution      0.500 deg, the first scan's" in out and "180.00 deg (from -90.00 deg), the first scan's" in out
     assert run_main(["info", files["good.clf"]]) == 0
     assert "resolution      0.500 deg\n" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv", [["figures", "--intel", ""], ["demo", "--log", ""]])
+def test_an_empty_log_path_is_refused_not_taken_for_the_default_log(argv, tmp_path, capsys):
+    """`figures --intel ""` and `demo --log ""` (a shell variable left unset) ran on the default
+    Intel log: the empty string read as "not given"."""
+    assert run_main(argv + ["--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench {argv[0]}: error: argument {argv[1]}: empty path ''; give a file or folder name "
+        f"(see lmsbench {argv[0]} --help)"]
+    assert not (tmp_path / "o").exists()
+
+
+def test_compare_tells_worlds_from_files_by_name_for_sensor_as_for_seeds(tmp_path, monkeypatch, capsys):
+    """A folder named like a world in the current folder: `compare office --sensor S` was refused
+    ("none of office is one": --sensor told worlds by the path not existing) while --seeds and the
+    run take `office` by its name, as a world."""
+    import sim
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "office").mkdir()
+    sim.SensorConfig().to_yaml(tmp_path / "s.yaml")
+    assert run_main(["compare", "office", "--seeds", "1", "--duration", "0.5", "--methods", "split_merge",
+                     "--sensor", "s.yaml", "--no-progress", "--out", "o"], seconds=120) == 0
+    assert (tmp_path / "o" / "summary.csv").exists()
