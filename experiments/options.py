@@ -62,7 +62,7 @@ class OneLineParser(argparse.ArgumentParser):
             given.setdefault(action.dest, []).append(name)
         for names in given.values():
             if len(names) > 1:
-                self.error(f"argument {names[0]}: given {len(names)} times; give it once")
+                self.error(f"argument {'/'.join(dict.fromkeys(names))}: given {len(names)} times; give it once")  # each spelling used
         return super().parse_known_args(args, namespace)
 
 

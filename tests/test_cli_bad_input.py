@@ -502,6 +502,8 @@ CASES = [
      "lmsbench simulate: error: argument --seed: given 2 times; give it once"),
     (["simulate", "--duration", "0.5", "--out", "{out}/a", "--out={out}/b"], "argument --out: given 2 times; give it once"),
     (["compare", "{good.clf}", "--methods", "sensor", "--methods", "iepf", "--out", O], "argument --methods: given 2 times"),
+    (["simulate", "--duration", "0.5", "--resolution-deg", "1", "--resolution", "0.5", "--out", O],
+     "argument --resolution-deg/--resolution: given 2 times; give it once"),  # an option's two spellings both named
     (["info", "{good.clf}", "--laser-fov-deg", "180", "--laser-fov-deg", "100"], "argument --laser-fov-deg: given 2 times"),
     (["slam", "{sim_nan_truth}", "--out", O], "sim_nan_truth/groundtruth.tum:5: TUM row has a non-finite number: '0.2 nan"),
     (["slam", "{sim_back_truth}", "--out", O], "sim_back_truth/groundtruth.tum:5: TUM stamps go backwards (0.050000 s after 0.200000 s)"),
