@@ -203,6 +203,12 @@ def log_noise_estimates(scans: Callable[[], Iterable[Any]]) -> dict[str, Callabl
                 estimate_bearing_sigma=lambda: bearing_sigma(scans()))
 
 
+def world_words(specs: Sequence[str]) -> list[str]:
+    """The source words that name a simulated world (``office``, ``office:1``), told by name as
+    ``parse_sources`` reads them (a folder named ``office`` does not make ``office`` a file)."""
+    return [s for s in specs if s.partition(":")[0] in WORLD_NAMES]
+
+
 def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: float = 30.0,
                   rate_hz: float | None = 2.0, stride: int = 1, max_scans: int | None = None,
                   read_options: dict[str, Any] | None = None, poses: str = "auto",

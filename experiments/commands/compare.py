@@ -69,10 +69,10 @@ DEFAULT_SEEDS, DEFAULT_DURATION_S, DEFAULT_RATE_HZ = (0, 1, 2), 30.0, 2.0  # of 
 def _check_applies(args: argparse.Namespace) -> None:
     """An option given for sources none of which it applies to was ignored: ``compare office:1
     --seeds 4 5`` ran seed 1 alone, ``compare LOG --duration 60`` read the log as before."""
-    from experiments.compare import WORLD_NAMES
+    from experiments.compare import WORLD_NAMES, world_words
 
     bare = [s for s in args.sources if s in WORLD_NAMES]
-    worlds = [s for s in args.sources if s.partition(":")[0] in WORLD_NAMES]  # as parse_sources tells them
+    worlds = world_words(args.sources)
     files = [s for s in args.sources if s not in worlds]
     if args.seeds is not None and not bare:
         raise InputError(f"--seeds sets the seeds of the worlds named without one (office); none of "
@@ -107,8 +107,8 @@ def _sigma(text: str) -> float | str:
 def run(args: argparse.Namespace) -> int:
     import pandas as pd
 
-    from experiments.compare import (WORLD_NAMES, check_sources, common_errors, compare, format_summary, parse_sources,
-                                     resolved_configs, summarise)
+    from experiments.compare import (check_sources, common_errors, compare, format_summary, parse_sources,
+                                     resolved_configs, summarise, world_words)
     from experiments.overrides import extractor_overrides
     from experiments.progress import warm_up_kernels
     from features.scoring import ScoreConfig
@@ -138,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
             raise
         except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
             raise LmsbenchError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
-    if any(s.partition(":")[0] in WORLD_NAMES for s in args.sources):  # simulated here, at --rate (as parse_sources tells them)
+    if world_words(args.sources):  # simulated here, at --rate
         import sim
 
         check_scan_rate(args.rate, (sensor or sim.SensorConfig()).angle_increment, "--rate")
