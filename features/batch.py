@@ -56,6 +56,12 @@ def check_threads(threads: Any) -> int:
     return int(threads)
 
 
+def threads_used(threads: int, n: int) -> int:
+    """The threads ``run_pieces`` starts for ``n`` scans when ``threads`` are allowed: at least
+    MIN_SCANS_PER_THREAD scans each, at least one thread."""
+    return max(1, min(threads, n // MIN_SCANS_PER_THREAD))
+
+
 def run_pieces(run_many: Callable[[Sequence[Scan], Any], list[FeatureSet]], scans: Sequence[Scan], cfg: Any,
                threads: int, chunk: int) -> list[FeatureSet]:
     """``run_many(piece, cfg)`` over contiguous pieces of ``scans`` of at most ``chunk`` scans, on
@@ -65,7 +71,7 @@ def run_pieces(run_many: Callable[[Sequence[Scan], Any], list[FeatureSet]], scan
     stop at their next piece and the error is raised. Each scan is extracted by itself, so the
     result does not depend on the pieces or the threads."""
     n = len(scans)
-    use = max(1, min(threads, n // MIN_SCANS_PER_THREAD))  # (read here: a test lowers it)
+    use = threads_used(threads, n)
     share = -(-n // use) if n else 0
     shares = [(i, min(i + share, n)) for i in range(0, n, share)] if n else []
     stop = threading.Event()

@@ -16,7 +16,6 @@ from typing import Any, Callable
 from lms200 import Scan
 
 from .baselines.checks import MAX_BEAMS
-from . import batch
 from .batch import check_threads, common_geometry, run_pieces
 from .errors import ConfigError, ScanGeometryError, ScanTypeError, not_a_scan
 from .types import FeatureSet
@@ -183,7 +182,7 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
         raise ScanGeometryError(too_many_beams(len(scans[0])))
     if m.run_many is not None:
         use = n_threads if m.thread_safe else 1
-        if len(scans) <= BATCH_CHUNK and (use == 1 or len(scans) < 2 * batch.MIN_SCANS_PER_THREAD):
+        if len(scans) <= BATCH_CHUNK and use == 1:
             return m.run_many(scans, cfg)
         common_geometry(scans)  # the whole batch first: an error names the scan's index in it, not in a piece
         return run_pieces(m.run_many, scans, cfg, use, BATCH_CHUNK)

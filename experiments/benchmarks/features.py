@@ -14,7 +14,7 @@ import numpy as np
 
 from experiments.synthetic import cast
 from features import available_methods, extract, extract_many, make_config
-from features.batch import MIN_SCANS_PER_THREAD, available_cpus
+from features.batch import available_cpus, threads_used
 from features.noise_estimate import AUTO, neighbour_sigma
 from features.registry import backend_of, get_method
 from lms200 import Scan
@@ -138,7 +138,7 @@ def run(quick: bool = False) -> list[dict]:
     it with that noise estimated once from all the scans, as ``lmsbench compare`` does per log."""
     count = 100 if quick else 600
     repeats = 2 if quick else 7
-    threads = max(1, min(available_cpus(), count // MIN_SCANS_PER_THREAD))  # the threads extract_many can use on count scans
+    threads = threads_used(available_cpus(), count)  # the threads extract_many can use on count scans
     office, source = office_scans(count)
     methods = available_methods()
     rows = []
