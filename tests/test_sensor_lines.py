@@ -287,6 +287,40 @@ def test_compiled_noise_estimate_equals_the_numpy_estimator() -> None:
     assert stacked_sigma(np.stack([s.ranges for s in batch]), batch[0]) == numpy_neighbour_sigma(batch)
 
 
+def test_noise_estimate_seeks_the_quantisation_step_only_below_its_largest_floor() -> None:
+    """The compiled "auto" noise looks for the quantisation step only when the clipped scale is below
+    the largest floor a step can set (1 cm / sqrt(12), ``engine.FLOOR_MAX``): above it the scale is the
+    estimate whatever the step. Scans in 1 cm codes of an arc about the sensor (one code: residuals
+    near 0) beside a wall with 1-6 mm noise, 5 % dropouts (the sample skips non-finite ranges), give
+    clipped scales of 0-6 mm: the compiled estimate equals lms200.noise's numpy estimator scan by scan
+    and pooled, on scans where the 1 cm floor decides (some of them with scales of 2-2.9 mm, which a
+    smaller FLOOR_MAX would return unfloored) and on scans where the scale decides."""
+    from features.noise_estimate import neighbour_sigma, stacked_sigma
+    from lms200.noise import line_residuals, robust_scale
+
+    rng = np.random.default_rng(21)
+    b = np.deg2rad(np.arange(-90.0, 90.01, 0.5))
+    scans = []
+    for _ in range(60):
+        r = 3.0 / np.cos(b / 2) + rng.normal(0.0, rng.uniform(0.001, 0.006), b.size)
+        r[: rng.integers(0, 260)] = 2.0
+        r = np.rint(r / 0.01) * 0.01
+        r[rng.random(b.size) < 0.05] = np.inf
+        scans.append(Scan(ranges=r, angle_min=-np.pi / 2, angle_increment=np.deg2rad(0.5), range_min=0.0,
+                          range_max=81.83))
+    near_floor = scale_decides = 0
+    for s in scans:
+        scale = robust_scale(line_residuals(s.ranges, s.angle_increment, 0.0, s.range_max, stride=1)[0])[1]
+        got = neighbour_sigma(s)
+        assert got == numpy_neighbour_sigma([s])
+        near_floor += 0.002 <= scale < engine.FLOOR_MAX and got == 0.01 / np.sqrt(12.0)
+        scale_decides += scale >= engine.FLOOR_MAX and got == scale
+    assert near_floor >= 2 and scale_decides >= 10
+    for group in (scans[:8], scans[8:16], scans):  # pooled
+        assert stacked_sigma(np.stack([s.ranges for s in group]), group[0]) == numpy_neighbour_sigma(group)
+        assert neighbour_sigma(group) == numpy_neighbour_sigma(group)
+
+
 def on_circle_share(scan, line, circles) -> float:
     """Share of a line's valid beams within 2 cm of one of the circles (cx, cy, r)."""
     p = scan.points[line.first : line.last + 1]

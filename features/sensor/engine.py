@@ -126,7 +126,7 @@ class Grid(NamedTuple):
 # -- sums in numpy's pairwise order ---------------------------------------------------------------
 
 
-@kernel
+@inline_kernel
 def block_sum(a: np.ndarray, lo: int, n: int) -> float:
     """numpy's pairwise sum of a[lo : lo + n] for n <= 128: sequential below 8, else 8 accumulators
     (indexed unsigned: numba then adds no negative-index wraparound, and the loop vectorises)."""
@@ -135,29 +135,30 @@ def block_sum(a: np.ndarray, lo: int, n: int) -> float:
         for i in range(n):
             res += a[lo + i]
         return res
-    b = a[lo:lo + n]
-    r0, r1, r2, r3 = b[0], b[1], b[2], b[3]
-    r4, r5, r6, r7 = b[4], b[5], b[6], b[7]
-    m = np.uint64(n - (n % 8))
-    i = np.uint64(8)
+    b = np.uint64(lo)
+    r0, r1, r2, r3 = a[b], a[b + np.uint64(1)], a[b + np.uint64(2)], a[b + np.uint64(3)]
+    r4, r5, r6, r7 = a[b + np.uint64(4)], a[b + np.uint64(5)], a[b + np.uint64(6)], a[b + np.uint64(7)]
+    m = b + np.uint64(n - (n % 8))
+    i = b + np.uint64(8)
     while i < m:
-        r0 += b[i]
-        r1 += b[i + np.uint64(1)]
-        r2 += b[i + np.uint64(2)]
-        r3 += b[i + np.uint64(3)]
-        r4 += b[i + np.uint64(4)]
-        r5 += b[i + np.uint64(5)]
-        r6 += b[i + np.uint64(6)]
-        r7 += b[i + np.uint64(7)]
+        r0 += a[i]
+        r1 += a[i + np.uint64(1)]
+        r2 += a[i + np.uint64(2)]
+        r3 += a[i + np.uint64(3)]
+        r4 += a[i + np.uint64(4)]
+        r5 += a[i + np.uint64(5)]
+        r6 += a[i + np.uint64(6)]
+        r7 += a[i + np.uint64(7)]
         i += np.uint64(8)
     res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < np.uint64(n):
-        res += b[i]
+    end = b + np.uint64(n)
+    while i < end:
+        res += a[i]
         i += np.uint64(1)
     return res
 
 
-@kernel
+@inline_kernel
 def pairwise_halves(n: int):  # noqa: ANN201
     """numpy's split of a pairwise sum of n > 128 terms: the left half rounded down to a multiple of 8."""
     n2 = n // 2
@@ -165,36 +166,58 @@ def pairwise_halves(n: int):  # noqa: ANN201
     return n2, n - n2
 
 
-@kernel
+# The fixed levels below are inlined into ``pairwise_sum`` (a kernel call costs two atomic reference
+# counts per array passed: ~145 of a 310-term sum's ~150 ns went to the 12 calls and 4 views of
+# the levels). Each level calls the one below at one place, in a loop over its one or two
+# halves, so that the inlined code holds one copy of each level.
+
+
+@inline_kernel
 def pairwise_248(a: np.ndarray, lo: int, n: int) -> float:
-    """``pairwise_sum`` for n <= 248 (both halves of one split are blocks)."""
-    if n <= PW_BLOCKSIZE:
-        return block_sum(a, lo, n)
-    n2, n3 = pairwise_halves(n)
-    return block_sum(a, lo, n2) + block_sum(a, lo + n2, n3)
+    """``pairwise_sum`` for n <= 248 (one block, or both halves of one split are blocks)."""
+    k = 1 if n <= PW_BLOCKSIZE else 2
+    n2 = n if k == 1 else pairwise_halves(n)[0]
+    res = 0.0
+    for j in range(k):
+        v = block_sum(a, lo + j * n2, n2 if j == 0 else n - n2)
+        res = v if j == 0 else res + v
+    return res
 
 
-@kernel
+@inline_kernel
 def pairwise_488(a: np.ndarray, lo: int, n: int) -> float:
-    """``pairwise_sum`` for n <= 488 (halves of at most 248)."""
-    if n <= PW_BLOCKSIZE:
-        return block_sum(a, lo, n)
-    n2, n3 = pairwise_halves(n)
-    return pairwise_248(a, lo, n2) + pairwise_248(a, lo + n2, n3)
+    """``pairwise_sum`` for n <= 488 (``pairwise_248`` of n, or of its halves of at most 248)."""
+    k = 1 if n <= 248 else 2
+    n2 = n if k == 1 else pairwise_halves(n)[0]
+    res = 0.0
+    for j in range(k):
+        v = pairwise_248(a, lo + j * n2, n2 if j == 0 else n - n2)
+        res = v if j == 0 else res + v
+    return res
 
 
-@kernel
+@inline_kernel
+def pairwise_968(a: np.ndarray, lo: int, n: int) -> float:
+    """``pairwise_sum`` for n <= 968 (``pairwise_488`` of n, or of its halves of at most 488)."""
+    k = 1 if n <= 488 else 2
+    n2 = n if k == 1 else pairwise_halves(n)[0]
+    res = 0.0
+    for j in range(k):
+        v = pairwise_488(a, lo + j * n2, n2 if j == 0 else n - n2)
+        res = v if j == 0 else res + v
+    return res
+
+
+@inline_kernel
 def pairwise_1928(a: np.ndarray, lo: int, n: int) -> float:
-    """``pairwise_sum`` for n <= 1928 (two levels of halves of at most 488)."""
-    if n <= PW_BLOCKSIZE:
-        return block_sum(a, lo, n)
-    n2, n3 = pairwise_halves(n)
-    if n <= 968:
-        return pairwise_488(a, lo, n2) + pairwise_488(a, lo + n2, n3)
-    n4, n5 = pairwise_halves(n2)
-    n6, n7 = pairwise_halves(n3)
-    return ((pairwise_488(a, lo, n4) + pairwise_488(a, lo + n4, n5))
-            + (pairwise_488(a, lo + n2, n6) + pairwise_488(a, lo + n2 + n6, n7)))
+    """``pairwise_sum`` for n <= 1928 (``pairwise_968`` of n, or of its halves of at most 968)."""
+    k = 1 if n <= 968 else 2
+    n2 = n if k == 1 else pairwise_halves(n)[0]
+    res = 0.0
+    for j in range(k):
+        v = pairwise_968(a, lo + j * n2, n2 if j == 0 else n - n2)
+        res = v if j == 0 else res + v
+    return res
 
 
 @kernel
@@ -413,53 +436,87 @@ def mean_std(x, n, scratch):  # noqa: ANN001, ANN201
     return mean, math.sqrt(pairwise_sum(scratch, 0, n) / n)
 
 
+# rows of the noise estimate's block (``pooled_sigma``, ``clipped_scale_rows``): the residuals z, then
+# two rows the medians select in and the clipping steps gather the kept residuals and their squares in
+Z_ROW, KZ_ROW, SQ_ROW = 0, 1, 2
+# the largest floor a quantisation step can set (m): a scale at least this large is the estimate
+# whatever the step (``floored``), so the step is not looked for
+FLOOR_MAX = max(max(QUANTUM_CANDIDATES_M) / math.sqrt(12.0), SIGMA_FLOOR_M)
+
+
 @kernel
 def clipped_scale(z) -> float:  # noqa: ANN001
-    """``lms200.noise.robust_scale``'s scale of the residuals z (nan when empty): the median absolute
-    deviation, then the standard deviation of those within CLIP_SIGMAS scales of the centre,
-    iterated and corrected for the clipping."""
-    n = z.size
+    """``lms200.noise.robust_scale``'s scale of the residuals z (nan when empty): ``clipped_scale_rows``
+    of a copy."""
+    w = np.empty((3, z.size))
+    for i in range(z.size):
+        w[Z_ROW, i] = z[i]
+    return clipped_scale_rows(w, z.size)
+
+
+@kernel
+def clipped_scale_rows(w, n) -> float:  # noqa: ANN001
+    """``lms200.noise.robust_scale``'s scale of the residuals z = w[Z_ROW, :n] (nan when n is 0):
+    the median absolute deviation, then the standard deviation of those within CLIP_SIGMAS scales
+    of the centre, iterated and corrected for the clipping. Rows KZ_ROW and SQ_ROW are overwritten.
+    A step's set of residuals is not stored: the last step's is recomputed from its centre and
+    limit (the same comparison, the same result)."""
     if n == 0:
         return np.nan
-    work = np.empty((3, n))
-    kz, scratch = work[0], work[1]  # row 2: the selection's buffer
+    z = w[Z_ROW]
+    kz = w[KZ_ROW]
+    scratch = w[SQ_ROW]
     for i in range(n):
-        scratch[i] = z[i]
-    m = median_rows(work, 1, 2, n)  # of the copy in scratch (row 1)
+        kz[i] = z[i]
+    m = median_rows(w, KZ_ROW, SQ_ROW, n)
     for i in range(n):
         kz[i] = abs(z[i] - m)
-    s = 1.4826 * median_rows(work, 0, 2, n)  # of kz (row 0)
+    s = 1.4826 * median_rows(w, KZ_ROW, SQ_ROW, n)
     if s <= 0:  # more than half the residuals identical (coarse quantisation): start from the spread
         s = mean_std(z, n, scratch)[1]
         if s == 0:
             s = 1e-12
-    flags = np.ones((2, n), np.bool_)
-    keep, new_keep = flags[0], flags[1]
+    pm = m  # the last step's set: |z - pm| <= plim (before the first step: every residual)
+    plim = np.inf
     for it in range(50):
         lim = CLIP_SIGMAS * s
         nk = 0
         same = True
         for i in range(n):  # no store at a place an earlier value found: the loop vectorises
-            inside = abs(z[i] - m) <= lim
-            new_keep[i] = inside
-            same &= inside == keep[i]
+            x = z[i]
+            inside = abs(x - m) <= lim
+            same &= inside == (abs(x - pm) <= plim)
             nk += inside
+        if it == 0:
+            same = nk == n
         if nk < 2:
             break
         if same and it > 0:  # the residuals of the last step again: the same centre and scale, converged
             break
         q = 0
         for i in range(n):  # only then the kept residuals to the front of kz, without branches (which stay is data)
-            kz[q] = z[i]
-            q += new_keep[i]
+            x = z[i]
+            kz[q] = x
+            q += abs(x - m) <= lim
+        pm, plim = m, lim
         m, s_new = mean_std(kz, nk, scratch)
         s_new = s_new / CLIP_STD_FACTOR
         converged = same and abs(s_new - s) <= 1e-9 * max(s, 1e-12)
-        keep, new_keep = new_keep, keep
         s = s_new
         if converged:
             break
     return s
+
+
+@kernel
+def floored(scale, sample, fallback) -> float:  # noqa: ANN001
+    """The noise (m) of a clipped ``scale``: at least the quantisation's q / sqrt(12) (q of the
+    range ``sample``) and SIGMA_FLOOR_M; ``fallback`` when the scale is not finite."""
+    if not math.isfinite(scale):
+        return fallback
+    if scale >= FLOOR_MAX:
+        return scale
+    return max(scale, max(quantum_step(sample) / math.sqrt(12.0), SIGMA_FLOOR_M))
 
 
 @kernel
@@ -468,33 +525,36 @@ def sigma_of_residuals(z, sample, fallback) -> float:  # noqa: ANN001
     quantisation's q / sqrt(12) and SIGMA_FLOOR_M; ``fallback`` below MIN_TRIPLES residuals."""
     if z.size < MIN_TRIPLES:
         return fallback
-    scale = clipped_scale(z)
-    floor = max(quantum_step(sample) / math.sqrt(12.0), SIGMA_FLOOR_M)
-    return max(scale, floor) if math.isfinite(scale) else fallback
+    return floored(clipped_scale(z), sample, fallback)
 
 
 @kernel
 def pooled_sigma(ranges, c2, range_min, range_max, fallback) -> float:  # noqa: ANN001
     """``features.noise_estimate.neighbour_sigma`` of the scans of one geometry (rows of ``ranges``
     (S, n), beam step D with c2 = 2 cos(D), valid range limits in m), pooled in row order until
-    MAX_TRIPLES residuals."""
+    MAX_TRIPLES residuals. The range sample of the quantisation step is taken only when the scale
+    is below FLOOR_MAX."""
     n_scans, n = ranges.shape
     lo = max(range_min, MIN_RANGE_M)
-    z = np.empty(min(n_scans * max(n - 2, 0), MAX_TRIPLES + n))
-    per_scan = n // SAMPLE_STEP + 1
-    sample = np.empty(min(n_scans, 64) * per_scan)
+    w = np.empty((3, max(min(n_scans * max(n - 2, 0), MAX_TRIPLES + n), n // SAMPLE_STEP + 1)))
     m = 0
-    ms = 0
+    read = 0
     for s in range(n_scans):
-        m = neighbour_residuals(ranges[s], c2, lo, range_max, z, m)
-        if ms + per_scan > sample.size:
-            more = np.empty(2 * sample.size)
-            more[:ms] = sample[:ms]
-            sample = more
-        ms = finite_sample(ranges[s], sample, ms)
+        m = neighbour_residuals(ranges[s], c2, lo, range_max, w[Z_ROW], m)
+        read += 1
         if m >= MAX_TRIPLES:
             break
-    return sigma_of_residuals(z[:m], sample[:ms], fallback)
+    if m < MIN_TRIPLES:
+        return fallback
+    scale = clipped_scale_rows(w, m)
+    if not math.isfinite(scale) or scale >= FLOOR_MAX:
+        return floored(scale, w[0, :0], fallback)
+    per_scan = n // SAMPLE_STEP + 1
+    sample = w[Z_ROW] if read * per_scan <= w.shape[1] else np.empty(read * per_scan)
+    ms = 0
+    for s in range(read):
+        ms = finite_sample(ranges[s], sample, ms)
+    return floored(scale, sample[:ms], fallback)
 
 
 # -- 1. per-beam signals --------------------------------------------------------------------------
