@@ -38,6 +38,9 @@ import numpy as np
 
 from lms200 import Scan
 
+from lms200.errors import InputError
+
+from .errors import not_a_scan
 from .types import FeatureSet
 
 
@@ -84,12 +87,42 @@ def truth_lines(truth: Any) -> np.ndarray:
     return np.column_stack((np.abs(rho), alpha, seg, beams))
 
 
+def check_features(fs: object) -> None:
+    """InputError naming ``fs`` unless it is a FeatureSet (was an AttributeError deep inside)."""
+    if not isinstance(fs, FeatureSet):
+        raise InputError(f"fs: expected a features.FeatureSet, got {type(fs).__name__}")
+
+
+def check_measure_args(fs: FeatureSet | np.ndarray, scan: Scan, sigma: object, sigma_name: str) -> None:
+    """The arguments of the real-data measures: ``fs`` a FeatureSet (or its ``line_array()``) of
+    lines within ``scan``'s beams, ``scan`` a Scan, ``sigma`` (m) a finite number >= 0 (0: an ideal
+    sensor's, as ``compare`` passes for a noiseless simulated one).
+
+    Raises:
+        InputError: naming the argument (a nan or negative sigma explained no beam, an infinite
+            one every covered beam; lines past the scan's last beam came from another scan, and
+            were clipped onto its last beam, silently).
+        ScanTypeError: ``scan`` is not an lms200.Scan.
+    """
+    if not isinstance(scan, Scan):
+        raise not_a_scan(scan, "scan")
+    if not isinstance(fs, np.ndarray):
+        check_features(fs)
+    if isinstance(sigma, (bool, np.bool_)) or not isinstance(sigma, (int, float, np.integer, np.floating)) \
+            or not (math.isfinite(sigma) and sigma >= 0):
+        raise InputError(f"{sigma_name}: must be a finite number >= 0 m (the range noise), got {sigma!r}")
+    lines = _lines(fs)
+    if lines.shape[0] and not (np.all(lines[:, 6] >= 0) and np.all(lines[:, 7] < len(scan))):
+        raise InputError(f"fs: its lines span beams {int(lines[:, 6].min())}..{int(lines[:, 7].max())}, "
+                         f"the scan has {len(scan)} (features of another scan?)")
+
+
 def truncated_normal_rms(sigma: float, tolerance: float) -> float:
     """RMS (m) of a zero-mean normal of std ``sigma`` (m) over its values within +-``tolerance``
     (m): the ray RMSE that exact lines score under Gaussian range noise, ``sigma sqrt(1 - 2 c
     phi(c) / (2 Phi(c) - 1))`` with c = tolerance / sigma."""
     if not (sigma > 0 and tolerance > 0):
-        raise ValueError(f"sigma and tolerance must be > 0 m, got {sigma!r} and {tolerance!r}")
+        raise InputError(f"sigma, tolerance: must be > 0 m, got {sigma!r} and {tolerance!r}")
     c = tolerance / sigma
     inside = math.erf(c / math.sqrt(2.0))  # 2 Phi(c) - 1
     density = math.exp(-0.5 * c * c) / math.sqrt(2.0 * math.pi)  # phi(c)
@@ -155,6 +188,7 @@ def scan_measures(fs: FeatureSet | np.ndarray, scan: Scan, sigma_r: float,
         config: tolerances.
     """
     cfg = config or RealDataConfig()
+    check_measure_args(fs, scan, sigma_r, "sigma_r")
     lines = _lines(fs)
     n_valid = int(np.count_nonzero(scan.valid))
     lengths = np.hypot(lines[:, 4] - lines[:, 2], lines[:, 5] - lines[:, 3])

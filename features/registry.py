@@ -45,6 +45,7 @@ class Method:
 
 
 _REGISTRY: dict[str, Method] = {}
+BACKENDS = ("numba", "numpy", "python")  # compiled, vectorised, a user's plain Python (experiments.user_methods)
 
 
 class UnknownMethodError(ConfigError):
@@ -56,8 +57,35 @@ def register(name: str, config_type: type, run: Callable[[Scan, Any], FeatureSet
     """Register an extractor under ``name`` (called by the method's module on import); ``run_many``
     extracts from a batch of scans of one geometry at once (else ``extract_many`` calls ``run``
     per scan); ``thread_safe``: ``extract_many`` may call ``run_many`` on pieces of a batch from
-    several threads at once (it shares no state it writes and its compiled code releases the GIL)."""
-    _REGISTRY[name] = Method(name, config_type, run, config_type(), backend, run_many, thread_safe)
+    several threads at once (it shares no state it writes and its compiled code releases the GIL).
+
+    Raises:
+        ConfigError: naming the argument: a ``name`` that is not a non-empty str or is a built-in
+            method's (whose module alone registers it), a ``config_type`` that is not a dataclass, a
+            ``run`` / ``run_many`` that is not callable, a ``backend`` other than "numba", "numpy" or
+            "python", a ``thread_safe`` that is not a bool. (Each was taken, and failed at the first
+            extract, or silently replaced the built-in method.)
+    """
+    if not isinstance(name, str) or not name.strip():
+        raise ConfigError(f"name: must be a non-empty str, got {name!r}")
+    if name in _METHOD_MODULES and getattr(run, "__module__", None) != _METHOD_MODULES[name]:
+        raise ConfigError(f"name: {name!r} is a built-in method (registered by {_METHOD_MODULES[name]}); "
+                          "register yours under another name")
+    if not (isinstance(config_type, type) and dataclasses.is_dataclass(config_type)):
+        raise ConfigError(f"config_type: must be a dataclass type, got {config_type!r}")
+    if not callable(run):
+        raise ConfigError(f"run: must be callable (scan, config) -> FeatureSet, got {run!r}")
+    if run_many is not None and not callable(run_many):
+        raise ConfigError(f"run_many: must be None or callable (scans, config) -> list of FeatureSet, got {run_many!r}")
+    if backend not in BACKENDS:
+        raise ConfigError(f"backend: must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    if not isinstance(thread_safe, bool):
+        raise ConfigError(f"thread_safe: must be True or False, got {thread_safe!r}")
+    try:
+        default = config_type()
+    except TypeError as exc:  # a field without a default
+        raise ConfigError(f"config_type: {config_type.__name__}() must build the default config ({exc})") from None
+    _REGISTRY[name] = Method(name, config_type, run, default, backend, run_many, thread_safe)
 
 
 def get_method(name: str) -> Method:
@@ -98,13 +126,18 @@ def available_methods() -> list[str]:
 def make_config(method: str, **params: Any) -> Any:
     """The method's default config with ``params`` overriding fields; unknown names raise."""
     m = get_method(method)
+    _check_names(m, params)
+    return m.config_type(**params)
+
+
+def _check_names(m: Method, params: dict[str, Any]) -> None:
+    """UnknownMethodError for a name in ``params`` that is no field of ``m``'s config."""
     known = {f.name for f in dataclasses.fields(m.config_type) if f.init}
     unknown = sorted(set(params) - known)
     if unknown:
         raise UnknownMethodError(
-            f"unknown parameter(s) {unknown} for method {method!r}; known: {sorted(known)}"
+            f"unknown parameter(s) {unknown} for method {m.name!r}; known: {sorted(known)}"
         )
-    return m.config_type(**params)
 
 
 def backend_of(method: str, config: Any = None) -> str:
@@ -197,4 +230,7 @@ def _config(m: Method, config: Any, params: dict[str, Any]) -> Any:
         return make_config(m.name, **params) if params else m.default
     if not isinstance(config, m.config_type):
         raise ConfigError(f"config: must be a {m.config_type.__name__} for method {m.name!r}, got {type(config).__name__}")
-    return dataclasses.replace(config, **params) if params else config
+    if not params:
+        return config
+    _check_names(m, params)  # a name the config lacks was dataclasses.replace's TypeError
+    return dataclasses.replace(config, **params)

@@ -38,7 +38,10 @@ from scipy.optimize import linear_sum_assignment
 from lms200 import Scan
 
 from .angles import wrap
-from .realdata import ray_residuals
+from lms200.errors import InputError
+
+from .baselines import checks
+from .realdata import check_features, check_measure_args, ray_residuals
 from .types import FeatureSet
 
 _BIG = 1e6
@@ -54,6 +57,16 @@ class ScoreConfig:
     min_truth_beams: int = 10
     min_truth_length: float = 0.3
     corner_tol: float = 0.1
+
+    def __post_init__(self) -> None:
+        """ConfigError naming the field: nan, 0 or negative tolerances matched nothing (F1 0.0,
+        silently), an infinite one everything, text failed deep in numpy."""
+        checks.angle("angle_tol", self.angle_tol, np.pi / 2)
+        for name in ("distance_tol", "corner_tol"):
+            checks.positive(name, getattr(self, name), "m")
+        checks.between("min_overlap", self.min_overlap, 0.0, 1.0)
+        checks.integer("min_truth_beams", self.min_truth_beams, 0)
+        checks.non_negative("min_truth_length", self.min_truth_length, "m")
 
 
 @dataclass(frozen=True)
@@ -161,7 +174,11 @@ def _assign(cost: np.ndarray, ok: np.ndarray) -> np.ndarray:
 
 def score_scan(fs: FeatureSet, truth: Any, config: ScoreConfig | None = None) -> ScanScore:
     """Score one scan's features against its visible ground truth (sensor frame, see module doc)."""
+    if config is not None and not isinstance(config, ScoreConfig):
+        raise InputError(f"config: must be a features.scoring.ScoreConfig or None, got {type(config).__name__}")
     cfg = config or ScoreConfig()
+    check_features(fs)
+    _check_truth(truth)
     seg = np.asarray(truth.segments, float).reshape(-1, 4)
     dont = _dont_care(truth, cfg)
     lines = fs.line_array()[:, :6]  # rho, alpha, x0, y0, x1, y1
@@ -206,6 +223,34 @@ def score_scan(fs: FeatureSet, truth: Any, config: ScoreConfig | None = None) ->
     )
 
 
+def _check_truth(truth: Any) -> None:
+    """InputError naming ``truth`` unless it has ``sim.VisibleTruth``'s fields, of consistent
+    shapes and finite: segments (k, 4) with segment_beams (k, 2), corners (m, 4) with corner_beams
+    (m,). (Another object was an AttributeError deep in the scoring; nan faces were counted as
+    missed, silently.)"""
+    need = ("segments", "segment_beams", "corners", "corner_beams")
+    missing = [name for name in need if not hasattr(truth, name)]
+    if missing:
+        raise InputError(f"truth: must have the fields of sim.VisibleTruth ({', '.join(need)}); "
+                         f"{type(truth).__name__} lacks {', '.join(missing)}")
+    try:
+        arrays = {name: np.asarray(getattr(truth, name), dtype=np.float64) for name in need}
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"truth: its fields must be numeric arrays ({exc})") from None
+    for name in ("segments", "corners"):
+        a = arrays[name]
+        if a.size % 4 or (a.ndim == 2 and a.shape[1] != 4) or a.ndim > 2:
+            raise InputError(f"truth.{name}: must be (k, 4) rows, got shape {a.shape}")
+    k, m = arrays["segments"].size // 4, arrays["corners"].size // 4
+    shapes = {"segments": (k, 4), "segment_beams": (k, 2), "corners": (m, 4), "corner_beams": (m,)}
+    for name, shape in shapes.items():
+        a = arrays[name]
+        if a.size != int(np.prod(shape)):
+            raise InputError(f"truth.{name}: must be {shape} to match truth.segments / truth.corners, got shape {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise InputError(f"truth.{name}: must be finite (sim.visible_truth leaves out faces it does not see)")
+
+
 def _score_corners(fs: FeatureSet, truth: Any, dont_faces: np.ndarray, cfg: ScoreConfig):
     tc = np.asarray(truth.corners, float).reshape(-1, 4)
     tb = np.asarray(truth.corner_beams).reshape(-1)
@@ -238,7 +283,14 @@ def explained_fraction(fs: FeatureSet, scan: Scan, sigma: float = 0.005) -> tupl
     range residual (m, measured minus predicted along the beam) of those explained beams (the
     inlier RMS, as Open3D's ``fitness`` / ``inlier_rmse`` pair). A beam is explained by the lines
     whose beam span [first, last] covers it; where spans overlap the closest line counts.
-    nan where undefined (no valid beam; no explained beam for the RMS)."""
+    nan where undefined (no valid beam; no explained beam for the RMS).
+
+    Raises:
+        InputError: a ``sigma`` that is not a finite number >= 0 (nan or a negative one explained
+            no beam, silently; inf every covered one), an ``fs`` that is no FeatureSet or whose lines reach past the scan's
+            beams (features of another scan). ScanTypeError: a ``scan`` that is no lms200.Scan.
+    """
+    check_measure_args(fs, scan, sigma, "sigma")
     n_valid = int(np.count_nonzero(scan.valid))
     if n_valid == 0:
         return float("nan"), float("nan")

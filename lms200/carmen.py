@@ -68,7 +68,7 @@ POSED_LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser 
 RAW_LASER_KINDS = ("RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4")  # laser messages without poses
 LASER_KINDS = POSED_LASER_KINDS + RAW_LASER_KINDS  # laser messages read (one kind per pass)
 DEFAULT_TOPIC_LINES = 10_000  # lines looked at to choose the default laser kind (and to tell junk from a log)
-_MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]*")  # how every CARMEN message line starts
+_MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]{2,}")  # how every CARMEN message line starts (ODOM, PARAM, FLASER, ...; a lone capital in binary junk is none)
 ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
 MAX_LINE_CHARS = 1 << 20  # a longer line is malformed (bounds memory on damaged files)
 READ_ERRORS = (OSError, EOFError, zlib.error, lzma.LZMAError)  # what damaged or truncated compressed data raises
@@ -213,8 +213,9 @@ class CarmenReader:
                 try:
                     line = f.readline(MAX_LINE_CHARS + 1)
                     too_long = len(line) > MAX_LINE_CHARS
-                    while too_long and line and not line.endswith("\n"):  # skip to the end of the line
-                        line = f.readline(MAX_LINE_CHARS)
+                    rest = line  # the overlong line is skipped to its end, which may be the file's
+                    while too_long and rest and not rest.endswith("\n"):
+                        rest = f.readline(MAX_LINE_CHARS)
                 except READ_ERRORS as exc:  # corrupt or truncated gzip data
                     reason = f"cannot read on (damaged or truncated file): {type(exc).__name__}: {exc}"
                     if not self.skip_bad_lines:
@@ -275,6 +276,9 @@ class CarmenReader:
             return raw  # damage is reported, with its line, by the pass itself
         if looked >= DEFAULT_TOPIC_LINES and not named:
             raise LogFormatError(self.path, 1, f"not a CARMEN log: none of its first {DEFAULT_TOPIC_LINES:,} lines "
+                                               "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
+        if looked and not named:  # a shorter file, read to its end: it gave no record, silently (binary junk)
+            raise LogFormatError(self.path, 1, f"not a CARMEN log: none of its {looked:,} lines (comments aside) "
                                                "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
         return raw
 
@@ -474,14 +478,14 @@ def _flaser_params(scan: Scan) -> dict[str, str]:
     """The PARAM lines (CARMEN names, deg and m) that give a FLASER reader this scan's geometry.
 
     Raises:
-        ValueError: for a scan that is not centred on the sensor's x axis (FLASER has no start angle).
+        InputError: for a scan that is not centred on the sensor's x axis (FLASER has no start angle).
     """
     res = math.degrees(scan.angle_increment)
     fov = -2.0 * math.degrees(scan.angle_min)
     n = len(scan)
     centred = abs(fov / res - (n - 1)) < 1e-6 or abs(fov / res - n) < 1e-6
     if not centred:
-        raise ValueError(
+        raise InputError(
             f"records: FLASER cannot carry a {n}-beam scan from {math.degrees(scan.angle_min):.2f} deg "
             f"at {res:.3f} deg (not centred ahead); use fmt='robotlaser1'"
         )

@@ -62,31 +62,21 @@ class Scan:
     _angles: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        r = _ranges_array(self.ranges)
-        if r.ndim != 1:
-            raise ScanError(f"ranges: must be 1-D, got shape {r.shape}")
-        if r.size == 0:
+        a = _ranges_view(self.ranges)  # no copy yet: the shape and span are checked first
+        if a.ndim != 1:
+            raise ScanError(f"ranges: must be 1-D, got shape {a.shape}")
+        if a.size == 0:
             raise ScanError("ranges: must hold at least one beam")
-        if np.any(finite_negative(r)):  # nan, +inf and -inf (REP-117) pass
-            raise ScanError("ranges: negative ranges are not allowed (use nan for invalid readings, "
-                            "-inf for objects too close to measure)")
         for name in ("angle_min", "angle_increment", "range_min", "range_max", "stamp"):
-            value = getattr(self, name)
-            try:
-                value = float(value)
-            except (TypeError, ValueError):
-                raise ScanError(f"{name}: must be a number, got {value!r}") from None
-            if not np.isfinite(value):
-                raise ScanError(f"{name}: must be finite, got {value}")
-            object.__setattr__(self, name, value)
+            object.__setattr__(self, name, _number(name, getattr(self, name)))
         if self.angle_increment <= 0:
             raise ScanError(f"angle_increment: must be > 0, got {self.angle_increment}")
         if abs(self.angle_min) > MAX_BEARING_RAD:
             raise ScanError(f"angle_min: a bearing within +-2 pi rad (+-360 deg), got {self.angle_min:g} rad"
                             f"{_degrees_hint(self.angle_min, abs(np.deg2rad(self.angle_min)) <= MAX_BEARING_RAD)}")
-        span = (r.size - 1) * self.angle_increment
+        span = (a.size - 1) * self.angle_increment
         if span > MAX_SPAN_RAD + self.angle_increment:  # one beam more: some 360 deg drivers repeat the first
-            raise ScanError(f"angle_increment: {r.size} beams {self.angle_increment:g} rad apart span {span:g} rad, "
+            raise ScanError(f"angle_increment: {a.size} beams {self.angle_increment:g} rad apart span {span:g} rad, "
                             f"more than a full turn (2 pi rad)"
                             f"{_degrees_hint(self.angle_increment, np.deg2rad(span) <= 2 * np.pi)}")
         if self.range_min < 0:
@@ -95,6 +85,10 @@ class Scan:
             raise ScanError(
                 f"range_max: must be > range_min ({self.range_min}), got {self.range_max}"
             )
+        r = _ranges_copy(a)
+        if np.any(finite_negative(r)):  # nan, +inf and -inf (REP-117) pass
+            raise ScanError("ranges: negative ranges are not allowed (use nan for invalid readings, "
+                            "-inf for objects too close to measure)")
         r.setflags(write=False)
         object.__setattr__(self, "ranges", r)
         angles = self.angle_min + np.arange(r.size) * self.angle_increment
@@ -186,20 +180,56 @@ def _degrees_hint(value: float, fits_as_degrees: bool) -> str:
     return f" (degrees given as radians? {value:g} deg is {np.deg2rad(value):.6g} rad)"
 
 
-def _ranges_array(ranges: object) -> np.ndarray:
-    """A private float64 copy of ``ranges`` (m); ScanError naming ``ranges`` for values that are not
-    real numbers (a bool, complex, text or date array would otherwise be cast silently: 1+1j to
-    1.0, True to 1.0 m). The masked beams of a masked array become nan (invalid)."""
+def _number(name: str, value: object) -> float:
+    """A scalar field as a finite float; ScanError naming the field for text, bools (True is not
+    1 rad or 1 m), non-numbers, ints beyond float64 (10**400) and nan / inf."""
+    if isinstance(value, (str, bytes, bool, np.bool_)):
+        raise ScanError(f"{name}: must be a number, got {value!r}")
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ScanError(f"{name}: must be a number, got {value!r}") from None
+    except OverflowError:
+        raise ScanError(f"{name}: must be finite, got an integer of {len(str(value))} digits") from None
+    if not np.isfinite(number):
+        raise ScanError(f"{name}: must be finite, got {number}")
+    return number
+
+
+def _ranges_view(ranges: object) -> np.ndarray:
+    """``ranges`` as an array of real numbers, not yet copied; ScanError naming ``ranges`` for
+    values that are not real numbers (a bool, complex, text or date array would otherwise be cast
+    silently: 1+1j to 1.0, True to 1.0 m), a masked array's included. The masked beams of a masked
+    array become nan (invalid)."""
     if isinstance(ranges, np.ma.MaskedArray):
+        _check_kind(ranges.dtype)
         ranges = np.ma.filled(ranges.astype(np.float64), np.nan)
     try:
         a = ranges if isinstance(ranges, np.ndarray) else np.asarray(ranges)
     except (TypeError, ValueError, OverflowError) as exc:
         raise ScanError(f"ranges: cannot be read as float64 numbers ({exc})") from None
-    if a.dtype.kind not in "iufO":
-        raise ScanError(f"ranges: must be real numbers (m), got dtype {a.dtype} "
+    _check_kind(a.dtype)
+    return a
+
+
+def _check_kind(dtype: np.dtype) -> None:
+    if dtype.kind not in "iufO":
+        raise ScanError(f"ranges: must be real numbers (m), got dtype {dtype} "
                         "(bool, complex, text and dates are refused)")
+
+
+def _ranges_copy(a: np.ndarray) -> np.ndarray:
+    """A private float64 copy of the array ``a`` (m); ScanError naming ``ranges`` where it cannot be
+    made (an object item that is no number; more beams than memory holds)."""
     try:
         return np.array(a, dtype=np.float64)  # a private copy: the scan is immutable
     except (TypeError, ValueError, OverflowError) as exc:
         raise ScanError(f"ranges: cannot be read as float64 numbers ({exc})") from None
+    except MemoryError:
+        raise ScanError(f"ranges: {a.size} beams need {a.size * 8 / 2**30:.3g} GiB as float64, "
+                        "more than this machine can allocate") from None
+
+
+def _ranges_array(ranges: object) -> np.ndarray:
+    """A private float64 copy of ``ranges`` (m), checked as ``Scan`` checks it (real numbers)."""
+    return _ranges_copy(_ranges_view(ranges))

@@ -451,3 +451,228 @@ def test_a_sensor_yaml_with_only_its_calibration_section_is_refused(tmp_path):
     whole = tmp_path / "whole.yaml"
     SensorConfig(noise_sigma=0.007).to_yaml(whole, extra={"calibration": {"source": "real.clf"}})
     assert SensorConfig.from_yaml(whole).noise_sigma == 0.007
+
+
+# -- fuzzing of 2026-12-03: the public Python API ------------------------------------------------------
+@pytest.mark.parametrize("field", ["angle_min", "angle_increment", "range_min", "range_max", "stamp"])
+@pytest.mark.parametrize("value, message", [
+    (10**400, "must be finite, got an integer of 401 digits"),  # was OverflowError: int too large to convert to float
+    (True, "must be a number, got True"),                       # was 1.0 (rad, m or s), as bool ranges are refused
+    ("0.5", "must be a number, got '0.5'"),                     # was 0.5, as text ranges are refused
+])
+def test_scan_scalar_fields_refuse_huge_ints_bools_and_text(field: str, value: object, message: str) -> None:
+    kw: dict[str, object] = dict(ranges=np.ones(5), **GEOM)
+    kw[field] = value
+    with pytest.raises(ScanError, match=f"^{field}: {re.escape(message)}"):
+        Scan(**kw)  # type: ignore[arg-type]
+    kw[field] = np.float32(0.5) if field != "range_max" else np.int64(20)  # numpy numbers stay numbers
+    assert isinstance(getattr(Scan(**kw), field), float)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("ranges", [
+    np.ma.array([True, False], mask=[False, False]),  # was [1 m, 0 m]
+    np.ma.array([1 + 1j, 2.0], mask=[False, True]),   # was cast to [1, nan] with a ComplexWarning
+])
+def test_masked_ranges_are_checked_like_arrays(ranges: np.ndarray) -> None:
+    with pytest.raises(ScanError, match="^ranges: must be real numbers"):
+        Scan(ranges, **GEOM)
+
+
+def test_scan_of_too_many_beams_is_refused_before_the_copy() -> None:
+    """10**10 beams (a broadcast view of one value) was a raw MemoryError (74.5 GiB asked); 10**8
+    beams at 0.01 rad copied 800 MB before the span check refused them."""
+    import tracemalloc
+
+    huge = np.broadcast_to(np.float64(2.0), (10**10,))
+    with pytest.raises(ScanError, match=r"^ranges: 10000000000 beams need 74.5 GiB"):
+        Scan(huge, angle_min=-np.pi, angle_increment=2 * np.pi / 10**10, range_min=0.0, range_max=8.0)
+    tracemalloc.start()
+    try:
+        with pytest.raises(ScanError, match="^angle_increment: 100000000 beams"):
+            Scan(np.broadcast_to(np.float64(2.0), (10**8,)), **GEOM)
+        assert tracemalloc.get_traced_memory()[1] < 1e6  # bytes: no copy of the ranges
+    finally:
+        tracemalloc.stop()
+
+
+@pytest.mark.parametrize("method, field", [
+    ("sensor", "sigma_r"), ("sensor", "min_points"), ("sensor", "hough_subdiv"), ("split_merge", "sigma"),
+    ("iepf", "min_length"), ("hough", "rho_step"), ("ransac", "inlier_band"),
+])
+def test_config_fields_refuse_ints_beyond_float64(method: str, field: str) -> None:
+    """10**400 was an OverflowError in the checks (math.isfinite) or, for hough_subdiv, in the
+    Log-Hough template's size at the first extract."""
+    from features import make_config
+    from features.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=f"^{field}: must be"):
+        make_config(method, **{field: 10**400})
+
+
+def test_extract_with_a_config_and_an_unknown_parameter() -> None:
+    """extract(scan, config=cfg, nope=1) was dataclasses.replace's TypeError; now the same
+    UnknownMethodError as without a config, and a known one still overrides the config."""
+    from features import extract, make_config
+    from features.registry import UnknownMethodError
+
+    scan = Scan.lms200(np.full(361, 3.0))
+    for method in ("sensor", "split_merge"):
+        with pytest.raises(UnknownMethodError, match=rf"^unknown parameter\(s\) \['nope'\] for method '{method}'"):
+            extract(scan, method=method, config=make_config(method), nope=1)
+    cfg = make_config("split_merge", min_points=5)
+    assert len(extract(scan, "split_merge", cfg, min_points=10**6).lines) == 0 < len(extract(scan, "split_merge", cfg).lines)
+
+
+@pytest.mark.parametrize("args, message", [
+    (dict(name=5), "^name: must be a non-empty str"),                   # was registered, then unreachable
+    (dict(name="sensor"), "^name: 'sensor' is a built-in method"),      # silently replaced the paper's extractor
+    (dict(config_type=dict), "^config_type: must be a dataclass type"), # make_config failed later (TypeError)
+    (dict(run=None), "^run: must be callable"),                         # extract failed later ('NoneType' ...)
+    (dict(backend="gpu"), "^backend: must be one of numba, numpy, python"),
+    (dict(thread_safe="yes"), "^thread_safe: must be True or False"),
+])
+def test_register_checks_its_arguments(args: dict, message: str) -> None:
+    import dataclasses
+
+    from features import FeatureSet, extract, register
+    from features.errors import ConfigError
+    from features.registry import _REGISTRY
+
+    @dataclasses.dataclass(frozen=True)
+    class Cfg:
+        a: int = 1
+
+    kw: dict = dict(name="fuzz_method", config_type=Cfg, run=lambda scan, cfg: FeatureSet(method="fuzz_method"))
+    kw.update(args)
+    before = dict(_REGISTRY)
+    with pytest.raises(ConfigError, match=message):
+        register(**kw)
+    assert _REGISTRY == before
+    assert extract(Scan.lms200(np.full(361, 3.0))).method == "sensor"
+
+
+# -- scoring ------------------------------------------------------------------------------------------
+def _scored_scene():
+    from features import extract
+    from sim import LMS200Sim, SensorConfig, make_world, visible_truth
+
+    world = make_world("office", seed=0)
+    with LMS200Sim(world, SensorConfig(), seed=0) as lidar:
+        scan = lidar.scan_at((6.0, 5.0, 0.0))
+    return extract(scan), visible_truth(world, (6.0, 5.0, 0.0), SensorConfig()), scan
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(angle_tol=np.nan), r"^angle_tol: must be an angle in \(0, 1.5708\] rad"),  # was F1 0.0, silently
+    (dict(angle_tol=0.0), "^angle_tol: must be an angle"),                         # the same, and a divide-by-zero warning
+    (dict(distance_tol=np.inf), "^distance_tol: must be a finite number > 0 m"),   # matched any line to any face
+    (dict(min_overlap=2.0), r"^min_overlap: must be a number in \[0, 1\]"),        # F1 0.0, silently
+    (dict(min_truth_beams="10"), "^min_truth_beams: must be an integer >= 0"),     # numpy UFuncTypeError
+    (dict(corner_tol=-1.0), "^corner_tol: must be a finite number > 0 m"),
+])
+def test_score_config_is_checked(kw: dict, message: str) -> None:
+    from features.errors import ConfigError
+    from features.scoring import ScoreConfig
+
+    with pytest.raises(ConfigError, match=message):
+        ScoreConfig(**kw)
+
+
+def test_score_scan_refuses_what_is_no_feature_set_or_truth() -> None:
+    """None, a dict or a Scan were AttributeErrors; a truth with nan faces counted them as missed
+    (F1 0.0 instead of 1.0, silently); a segment_beams of another length scored F1 1.0."""
+    import dataclasses
+
+    from features.scoring import score_scan
+
+    fs, truth, scan = _scored_scene()
+    good = score_scan(fs, truth)
+    assert (good.f1, good.tp, good.n_truth, good.n_dont_care) == (1.0, 5, 5, 1) and len(truth.segments) == 6
+    bad = [
+        (None, truth, None, "^fs: expected a features.FeatureSet, got NoneType"),
+        (scan, truth, None, "^fs: expected a features.FeatureSet, got Scan"),
+        (fs, None, None, "^truth: must have the fields of sim.VisibleTruth"),
+        (fs, {"segments": truth.segments}, None, "^truth: must have the fields"),
+        (fs, dataclasses.replace(truth, segments=truth.segments * np.nan), None, "^truth.segments: must be finite"),
+        (fs, dataclasses.replace(truth, segments=truth.segments[:, :3]), None, r"^truth.segments: must be \(k, 4\) rows"),
+        (fs, dataclasses.replace(truth, segment_beams=truth.segment_beams[:1]), None, r"^truth.segment_beams: must be \(6, 2\)"),
+        (fs, truth, {"angle_tol": 0.1}, "^config: must be a features.scoring.ScoreConfig or None"),
+    ]
+    for f, t, c, message in bad:
+        with pytest.raises(InputError, match=message):
+            score_scan(f, t, c)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("sigma", [np.nan, -1.0, np.inf, "0.01", None, True])
+def test_explained_fraction_sigma_must_be_a_range_noise(sigma: object) -> None:
+    """nan and -1 returned (0.0, nan) and inf (1.0, inf), silently; text and None were TypeErrors."""
+    from features.realdata import scan_measures
+    from features.scoring import explained_fraction
+
+    fs, _, scan = _scored_scene()
+    with pytest.raises(InputError, match=r"^sigma: must be a finite number >= 0 m"):
+        explained_fraction(fs, scan, sigma)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match=r"^sigma_r: must be a finite number >= 0 m"):
+        scan_measures(fs, scan, sigma)  # type: ignore[arg-type]
+    frac, rms = explained_fraction(fs, scan, 0.005)
+    assert 0.95 < frac <= 1.0 and 0.0 < rms < 0.005
+
+
+def test_explained_fraction_of_another_scans_features() -> None:
+    """The features of a 361-beam scan against a 10-beam scan scored 0.1, silently (their beam spans
+    were clipped onto the scan's last beam); a record or None for the scan was an AttributeError."""
+    from features.errors import ScanTypeError
+    from features.scoring import explained_fraction
+
+    fs, _, scan = _scored_scene()
+    short = Scan(np.full(10, 2.0), angle_min=0.0, angle_increment=0.01, range_min=0.0, range_max=8.0)
+    with pytest.raises(InputError, match=r"^fs: its lines span beams \d+\.\.\d+, the scan has 10 \(features of another scan\?\)"):
+        explained_fraction(fs, short)
+    with pytest.raises(ScanTypeError, match=r"^scan: expected an lms200.Scan, got Record \(a log record: pass record.scan\)"):
+        explained_fraction(fs, Record(scan))  # type: ignore[arg-type]
+
+
+# -- CARMEN logs ---------------------------------------------------------------------------------------
+def test_a_short_file_of_binary_junk_is_not_a_log(tmp_path) -> None:
+    """5,000 random bytes (43 'lines') read as a log of no scans, silently: the 10,000-line rule only
+    refused longer files; and a lone capital letter ('M') counted as a message name."""
+    from lms200.errors import LogFormatError
+
+    junk = tmp_path / "junk.clf"
+    junk.write_bytes(np.random.default_rng(0).integers(0, 256, 5000, dtype=np.uint8).tobytes())
+    for skip in (False, True):
+        with pytest.raises(LogFormatError, match=r"junk\.clf:1: not a CARMEN log: none of its \d+ lines"):
+            list(read_log(junk, skip_bad_lines=skip))
+    (tmp_path / "empty.clf").write_text("# a log with no message yet\n\n")
+    assert list(read_log(tmp_path / "empty.clf")) == []  # an empty log is still one
+    log = tmp_path / "a.log"
+    write_log(log, _records(2))
+    assert len(list(read_log(log))) == 2
+
+
+def test_an_overlong_last_line_is_malformed(tmp_path) -> None:
+    """A line over 1 MiB with no newline after it (the end of a file) was dropped silently; one
+    followed by a newline was already refused."""
+    import gzip
+
+    from lms200.errors import LogFormatError
+
+    log = tmp_path / "a.clf.gz"
+    good = tmp_path / "good.log"
+    write_log(good, _records(2))
+    log.write_bytes(gzip.compress(good.read_bytes() + b"FLASER 361 " + b"2.0 " * 300_000))
+    with pytest.raises(LogFormatError, match=r"a\.clf\.gz:\d+: malformed line line: line longer than 1048576"):
+        list(read_log(log))
+    reader = read_log(log, skip_bad_lines=True)
+    assert len(list(reader)) == 2 and len(reader.stats.skipped) == 1
+
+
+def test_write_log_flaser_of_a_scan_not_centred_is_an_input_error(tmp_path) -> None:
+    """Was a bare ValueError (not an LmsbenchError); the log at the path is kept."""
+    path = tmp_path / "run.log"
+    write_log(path, _records(2))
+    before = path.read_bytes()
+    odd = Record(Scan(np.array([1.0, 2.0, 3.0]), angle_min=0.3, angle_increment=0.123, range_min=0.0, range_max=8.0))
+    with pytest.raises(InputError, match=r"^records: FLASER cannot carry a 3-beam scan"):
+        write_log(path, [odd], fmt="flaser")
+    assert path.read_bytes() == before

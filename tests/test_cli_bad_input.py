@@ -265,7 +265,7 @@ CASES = [
     (["compare", "{binary.clf}", "--out", O], "binary"),
     (["compare", "{plain.gz}", "--out", O], "gzip"),
     (["compare", "{empty_dir}", "--out", O], "empty_dir"),
-    (["compare", "{notalog.clf}", "--out", O], "no laser"),
+    (["compare", "{notalog.clf}", "--out", O], "not a CARMEN log"),
     (["compare", "office", "--format", "xls", "--out", O], "--format"),
     (["compare", "office", "--rate", "40", "--out", O], "--rate: 40 scans/s is more than the sensor gives (37.5"),
     # one source twice, or two of one name: the tables group by name (120 scans for a 60-scan log, two logs as one)
@@ -395,7 +395,7 @@ CASES = [
     (["info", "{empty_dir}"], "empty_dir"),
     (["info", "{empty.clf}"], "empty"),
     (["info", "{fake.bag}"], "fake.bag"),
-    (["info", "{notalog.clf}"], "no laser"),
+    (["info", "{notalog.clf}"], "not a CARMEN log"),
     # a topic that is not a LaserScan: "no topic '/odom'; topics: ['/odom (geometry_msgs/msg/PoseStamped)', ...]"
     (["info", "{odo.bag}", "--topic", "/odom"], "odo.bag: topic '/odom' holds geometry_msgs/msg/PoseStamped messages, "
                                                 "not sensor_msgs/LaserScan; its LaserScan topics: /scan"),

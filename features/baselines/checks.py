@@ -37,6 +37,14 @@ def is_real(value: object) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
 
+def finite(value: object) -> bool:
+    """``math.isfinite(value)``, False for an int beyond float64 (10**400 raised OverflowError)."""
+    try:
+        return math.isfinite(value)  # type: ignore[arg-type]
+    except OverflowError:
+        return False
+
+
 def integer(name: str, value: object, minimum: int, maximum: int | None = None) -> None:
     """``value`` must be an integer (not a bool) >= ``minimum`` (and <= ``maximum``, if given)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < minimum \
@@ -46,19 +54,19 @@ def integer(name: str, value: object, minimum: int, maximum: int | None = None) 
 
 def positive(name: str, value: object, unit: str) -> None:
     """``value`` must be a finite number > 0 (in ``unit``)."""
-    if not is_real(value) or not (math.isfinite(value) and value > 0):
+    if not is_real(value) or not (finite(value) and value > 0):
         fail(name, f"must be a finite number > 0 {unit}", value)
 
 
 def non_negative(name: str, value: object, unit: str = "") -> None:
     """``value`` must be a finite number >= 0 (in ``unit``)."""
-    if not is_real(value) or not (math.isfinite(value) and value >= 0):
+    if not is_real(value) or not (finite(value) and value >= 0):
         fail(name, f"must be a finite number >= 0{' ' + unit if unit else ''}", value)
 
 
 def real_at_least(name: str, value: object, minimum: float) -> None:
     """``value`` must be a finite number >= ``minimum``."""
-    if not is_real(value) or not (math.isfinite(value) and value >= minimum):
+    if not is_real(value) or not (finite(value) and value >= minimum):
         fail(name, f"must be a finite number >= {minimum:g}", value)
 
 

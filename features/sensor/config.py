@@ -73,7 +73,7 @@ class SensorMethodConfig:
                      "merge_tau"):
             checks.non_negative(name, getattr(self, name), "std")
         checks.non_negative("psi_split", self.psi_split, "rad")
-        checks.integer("hough_subdiv", self.hough_subdiv, 1)
+        checks.integer("hough_subdiv", self.hough_subdiv, 1, checks.BEAM_COUNT_CAP)  # 10**400 overflowed the template size
         checks.integer("hough_angles", self.hough_angles, 1)
         if self.hough_angles % 2 == 0 or self.hough_angles > MAX_HOUGH_ANGLES:
             checks.fail("hough_angles", f"must be an odd integer in [1, {MAX_HOUGH_ANGLES}]", self.hough_angles)
