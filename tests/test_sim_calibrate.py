@@ -208,6 +208,8 @@ def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -
         f"lmsbench calibrate: error: --out {tmp_path / 'mine.yaml'} exists and is not a sensor YAML that calibrate "
         "wrote; give a new file name (calibrate replaces only its own earlier output)"], mine.stderr
     assert (tmp_path / "mine.yaml").read_text() == "units: cm\n# my own settings\n" and mine.stdout == ""
+    (tmp_path / "empty.yaml").write_text("")  # nothing to lose: taken (mktemp's file)
+    assert _cli("calibrate", str(tmp_path / "log.clf"), "--max-scans", "5", "--out", str(tmp_path / "empty.yaml")).returncode == 0
 
 
 @pytest.mark.parametrize("args, message", [

@@ -56,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _written_by_calibrate(path: Path) -> bool:
-    """Whether ``path`` starts with the header line calibrate writes (``write_sensor_yaml``)."""
+    """Whether ``path`` is empty (nothing to lose) or starts with the header line calibrate writes
+    (``write_sensor_yaml``)."""
     from experiments.calibrate import HEADER_START
 
     try:
@@ -64,4 +65,4 @@ def _written_by_calibrate(path: Path) -> bool:
             first = f.readline(200)
     except OSError:
         return False
-    return first.startswith(HEADER_START.encode())
+    return first == b"" or first.startswith(HEADER_START.encode())
