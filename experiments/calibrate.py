@@ -332,9 +332,13 @@ def format_calibration(result: CalibrationResult) -> list[str]:
     return lines
 
 
+#: the first line of every sensor YAML calibrate writes (``calibrate --out`` replaces only such a file)
+HEADER_START = "# lmsbench calibrate "
+
+
 def write_sensor_yaml(result: CalibrationResult, path: Path, source: str) -> None:
     """The sensor config (top-level fields, read by SensorConfig.from_yaml) plus the measurements."""
-    header = (f"lmsbench calibrate {source}\n"
+    header = (f"{HEADER_START[2:]}{source}\n"
               "sensor model fitted to the log; read with SensorConfig.from_yaml or --sensor FILE.yaml\n"
               "the calibration section holds every measurement with its standard error (bootstrap over scans)")
     result.sensor.to_yaml(path, header=header, extra=calibration_section(result, source))

@@ -94,13 +94,16 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         FileNotFoundError: the input does not exist.
         LmsbenchError: a folder without scans.clf, an input without scans, or none with a valid beam, or
             more than one scan read and all of one stamp (no time between scans for the motion model), or
-            ``rate_hz`` / ``every`` that keep one scan of several.
+            one scan to run on (an input of one scan, ``max_scans`` below 2, ``rate_hz`` / ``every`` that
+            keep one scan of several).
     """
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"no such input: {p}")
     if every < 1:
         raise LmsbenchError(f"--every must be >= 1, got {every}")
+    if max_scans is not None and max_scans < 2:
+        raise LmsbenchError(f"--max-scans must be >= 2 (SLAM needs two or more scans), got {max_scans}")
     sources: dict[str, str] = {}
     truth = walls = rel = None
     if p.is_dir() and (p / "scans.clf").is_file():
@@ -156,6 +159,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         flag = f"--rate-hz {rate_hz:g}" if rate_hz is not None else f"--every {every}"
         raise LmsbenchError(f"{log}: {flag} keeps 1 of the {n_read} scans read (stamps {first_stamp:.6f} to "
                             f"{last_stamp:.6f} s); SLAM needs two or more")
+    if len(records) == 1:  # it ran and reported a healthy run of no step (matched fraction 1 of 0 steps)
+        raise LmsbenchError(f"{log}: holds one scan (stamp {first_stamp:.6f} s); SLAM needs two or more")
     if not any(r.scan.valid.any() for r in records):
         raise LmsbenchError(f"{log}: none of its {len(records)} scans has a valid beam (all +inf or nan): "
                             "nothing to localise against")

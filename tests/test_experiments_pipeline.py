@@ -76,6 +76,25 @@ def test_the_figure_command_writes_every_named_figure_and_redraws_from_its_table
     (out / "tables" / "mine.txt").write_text("mine")
     assert main(["figures", "--tables", str(out / "tables"), "--out", str(out)]) == 2
     assert "holds tables/mine.txt, which this command does not write" in capsys.readouterr().err
+    # an empty table (no rows) draws no figure, with a note (the summary's drew empty axes); all
+    # tables empty is refused before any output (it wrote "0 files", exit 0)
+    import shutil
+
+    emptied = tmp_path / "emptied"
+    shutil.copytree(out / "tables", emptied)
+    (emptied / "mine.txt").unlink()
+    summary = pd.read_parquet(emptied / "summary.parquet")
+    summary.iloc[:0].to_parquet(emptied / "summary.parquet")
+    capsys.readouterr()
+    assert main(["figures", "--tables", str(emptied), "--out", str(tmp_path / "e1")]) == 0
+    assert not (tmp_path / "e1" / "accuracy_speed.png").exists() and (tmp_path / "e1" / "fig7_timing.png").exists()
+    assert "note: table summary is empty: the figures that read it are not drawn" in capsys.readouterr().out
+    for table in emptied.glob("*.parquet"):
+        pd.read_parquet(table).iloc[:0].to_parquet(table)
+    assert main(["figures", "--tables", str(emptied), "--out", str(tmp_path / "e2")]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench figures: error: --tables {emptied}: every table in it is empty (no rows); nothing to draw"]
+    assert not (tmp_path / "e2").exists()
 
 
 @pytest.mark.slow

@@ -199,6 +199,17 @@ def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -
     cfg = yaml.safe_load((tmp_path / "s" / "config.yaml").read_text())
     assert SensorConfig.from_dict(cfg["sensor"]) == sensor
     assert read_log(tmp_path / "s" / "scans.clf") is not None
+    # --out replaces calibrate's own earlier output, never another file (a user's YAML was replaced)
+    again = _cli("calibrate", str(tmp_path / "log.clf"), "--max-scans", "5", "--out", str(tmp_path / "sensor.yaml"))
+    assert again.returncode == 0, again.stderr
+    (tmp_path / "mine.yaml").write_text("units: cm\n# my own settings\n")
+    mine = _cli("calibrate", str(tmp_path / "log.clf"), "--out", str(tmp_path / "mine.yaml"))
+    assert mine.returncode == 2 and mine.stderr.splitlines() == [
+        f"lmsbench calibrate: error: --out {tmp_path / 'mine.yaml'} exists and is not a sensor YAML that calibrate "
+        "wrote; give a new file name (calibrate replaces only its own earlier output)"], mine.stderr
+    assert (tmp_path / "mine.yaml").read_text() == "units: cm\n# my own settings\n" and mine.stdout == ""
+    (tmp_path / "empty.yaml").write_text("")  # nothing to lose: taken (mktemp's file)
+    assert _cli("calibrate", str(tmp_path / "log.clf"), "--max-scans", "5", "--out", str(tmp_path / "empty.yaml")).returncode == 0
 
 
 @pytest.mark.parametrize("args, message", [

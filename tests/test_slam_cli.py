@@ -400,3 +400,26 @@ def test_a_paper_run_that_diverged_but_stayed_healthy_warns_of_the_divergence():
     assert _health_warning(m, paper).endswith("; the filter's state is not finite or its covariance is not positive "
                                               "definite (metrics.json: consistency.healthy false)")
     assert _health_warning({"n_scans": 11, "consistency": {"diverged": False, "healthy": True}}, paper) == ""
+
+
+def test_slam_refuses_one_scan(sim_folder, tmp_path, capsys):
+    """A log of one scan, or --max-scans 1, ran a "SLAM" of one pose and reported it healthy
+    (matched fraction 1.0 of no step, exit 0). Both are refused in one line, before any output."""
+    from experiments.cli import main
+    from lms200 import read_log
+
+    records = list(read_log(sim_folder / "scans.clf"))[:1]
+    write_log(tmp_path / "one.clf", records)
+    assert main(["slam", str(tmp_path / "one.clf"), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench slam: error: {tmp_path / 'one.clf'}: holds one scan (stamp {records[0].scan.stamp:.6f} s); "
+        "SLAM needs two or more"]
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+    assert main(["slam", str(sim_folder), "--max-scans", "1", "--out", str(tmp_path / "m"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--max-scans" in err[0] and ">= 2" in err[0]
+    from experiments.slamrun import load_input
+    from lms200 import LmsbenchError
+
+    with pytest.raises(LmsbenchError, match="--max-scans must be >= 2"):
+        load_input(sim_folder, max_scans=1)

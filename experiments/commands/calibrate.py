@@ -36,6 +36,9 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"--out {args.out}: calibrate writes a sensor YAML; give a file name ending in .yaml")
         if args.out.exists() and Path(args.log).exists() and args.out.resolve() == Path(args.log).resolve():
             raise InputError(f"--out {args.out} is the log being calibrated")
+        if args.out.exists() and not _written_by_calibrate(args.out):  # a user's YAML was replaced silently
+            raise InputError(f"--out {args.out} exists and is not a sensor YAML that calibrate wrote; give a new "
+                             "file name (calibrate replaces only its own earlier output)")
     with heartbeat_on_terminal("calibrate", "calibrate: measuring the log and fitting by simulation ..."):
         result = calibrate_log(args.log, world=args.world, stride=args.stride, max_scans=args.max_scans,
                                **read_options)
@@ -50,3 +53,16 @@ def run(args: argparse.Namespace) -> int:
         write_sensor_yaml(result, args.out, str(args.log))
         print(f"wrote {args.out}")
     return 0
+
+
+def _written_by_calibrate(path: Path) -> bool:
+    """Whether ``path`` is empty (nothing to lose) or starts with the header line calibrate writes
+    (``write_sensor_yaml``)."""
+    from experiments.calibrate import HEADER_START
+
+    try:
+        with open(path, "rb") as f:
+            first = f.readline(200)
+    except OSError:
+        return False
+    return first == b"" or first.startswith(HEADER_START.encode())

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import (DURATION, FIGURES_OUTPUTS, SEED, STUDY_TABLES, OutTree, check_log, check_methods,
+from experiments.options import (DURATION, FIGURES_OUTPUTS, SEED, STUDY_TABLES, InputError, OutTree, check_log, check_methods,
                                  check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name)
 
 
@@ -42,6 +42,8 @@ def run(args: argparse.Namespace) -> int:
     if args.tables:
         check_study_tables(args.tables)
         tables, notes = load_tables(args.tables)
+        if not any(len(t) for t in tables.values()) and not args.sweep:  # it wrote "0 files", exit 0
+            raise InputError(f"--tables {args.tables}: every table in it is empty (no rows); nothing to draw")
         cfg = load_config(args.tables)
     else:
         cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz, slam=not args.no_slam)
@@ -70,5 +72,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"{name:32s} " + " ".join(p.name for p in paths))
     for note in notes:
         print(f"note: {note}")
+    for name in sorted(n for n, t in tables.items() if not len(t)):
+        print(f"note: table {name} is empty: the figures that read it are not drawn")
     print(f"wrote {sum(len(p) for p in written.values())} files in {args.out}")
     return 0

@@ -35,10 +35,12 @@ def _article(word: str) -> str:
 
 def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10,
                  angle_increment: float | None = None, world: str = "office") -> dict[str, list[Path]]:
-    """Every paper figure whose tables are present; returns name -> files written. ``world`` names
-    the simulated world in the titles (the files keep the paper's names, e.g. ``fig9_office``)."""
+    """Every paper figure whose tables are present and hold rows (an empty table draws no figure:
+    it drew empty axes); returns name -> files written. ``world`` names the simulated world in the
+    titles (the files keep the paper's names, e.g. ``fig9_office``)."""
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, list[Path]] = {}
+    tables = {name: table for name, table in tables.items() if len(table)}
     if "signals" in tables:
         sig = tables["signals"]
         inc = angle_increment or float(pd.Series(sig["bearing_deg"]).diff().median() * 3.141592653589793 / 180)
