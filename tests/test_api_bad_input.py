@@ -805,3 +805,27 @@ def test_simulate_records_takes_numpy_numbers() -> None:
     plain = simulate_records("office", seed=0, duration=1.0, rate_hz=5.0)
     same = simulate_records("office", seed=0, duration=np.int64(1), rate_hz=np.float32(5.0))
     assert len(plain) == len(same) == 5 and all(a.scan == b.scan for a, b in zip(plain, same))
+
+
+def test_ransac_window_beyond_int64() -> None:
+    """window=2**70 was numpy's 'high is out of bounds for int64' at the first extract; a window past
+    the scan's beams reaches every beam, as 2**62 does."""
+    from features import extract
+
+    rng = np.random.default_rng(3)
+    ang = np.deg2rad(np.arange(361) * 0.5 - 90.0)
+    room = np.minimum(2.0 / np.maximum(np.abs(np.cos(ang)), 1e-9), 3.0 / np.maximum(np.abs(np.sin(ang)), 1e-9))
+    scan = Scan.lms200(np.where(room < 8.0, room + rng.normal(0, 0.005, 361), np.inf))
+    huge, cap = extract(scan, "ransac", window=2**70), extract(scan, "ransac", window=2**62)
+    assert len(huge.lines) == 3 and repr(list(huge.lines)) == repr(list(cap.lines))
+
+
+@pytest.mark.parametrize("obj, hint", [(None, ""), (np.full(361, 3.0), " (build one with"),
+                                       (Record(Scan.lms200(np.full(361, 3.0))), " (a log record: pass record.scan)")])
+def test_signals_of_something_not_a_scan(obj: object, hint: str) -> None:
+    """Was an AttributeError ('... has no attribute angle_increment')."""
+    from features.errors import ScanTypeError
+    from features.sensor import signals
+
+    with pytest.raises(ScanTypeError, match=f"^signals: expected an lms200.Scan, got {type(obj).__name__}{re.escape(hint)}"):
+        signals(obj)  # type: ignore[arg-type]
