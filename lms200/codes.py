@@ -13,6 +13,8 @@ from typing import Literal
 
 import numpy as np
 
+from .errors import InputError
+
 Units = Literal["mm", "cm"]
 
 DISTANCE_MASK = 0x1FFF
@@ -27,23 +29,59 @@ LMS200_MAX_RANGE = {"mm": 8.183, "cm": 81.83}
 
 
 def metres_per_unit(units: Units) -> float:
-    """Size of one distance unit in metres; raises ValueError for an unknown unit."""
+    """Size of one distance unit in metres; raises InputError (a ValueError) for an unknown unit."""
     try:
         return METRES_PER_UNIT[units]
     except KeyError:
-        raise ValueError(f"units: must be 'mm' or 'cm', got {units!r}") from None
+        raise InputError(f"units: must be 'mm' or 'cm', got {units!r}") from None
 
 
 def codes_to_ranges(codes: np.ndarray, units: Units = "mm") -> np.ndarray:
     """Raw LMS200 values (flag bits are masked off) to ranges in metres, the REP-117 way.
 
     8183 -> +inf, 8186/8187/8189/8190/8191 (and any other code above 8182) -> nan.
+
+    Raises:
+        InputError: for codes that are not raw 16-bit values (whole numbers 0..65535: nan became
+            0 m, -1 nan, 1.5 1 mm, True 1 mm, 2**40 0 m, silently) or an unknown unit.
     """
     scale = metres_per_unit(units)
-    c = np.asarray(codes).astype(np.int64) & DISTANCE_MASK
+    c = check_codes(codes).astype(np.int64) & DISTANCE_MASK
     r = c * scale
     r = np.where(c > MAX_VALID_CODE, np.nan, r)
     return np.where(c == CODE_ABOVE_MAXIMUM, np.inf, r)
+
+
+def check_codes(codes: object) -> np.ndarray:
+    """``codes`` as an array of raw 16-bit LMS200 values; InputError naming ``codes`` otherwise."""
+    try:
+        c = np.asarray(codes)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"codes: must be raw LMS200 values (whole numbers 0..65535) ({exc})") from None
+    if c.dtype in (np.uint16, np.uint8):  # what the protocol gives: nothing to check
+        return c
+    if c.dtype.kind not in "iuf":
+        raise InputError(f"codes: must be raw LMS200 values (whole numbers 0..65535), got dtype {c.dtype}")
+    if c.size and not (np.all(np.isfinite(c)) and np.all(c == np.rint(c)) and c.min() >= 0 and c.max() <= 0xFFFF):
+        raise InputError(f"codes: must be raw LMS200 values (whole numbers 0..65535), got values from "
+                         f"{np.nanmin(c) if np.isfinite(c).any() else c.flat[0]!r} to {np.nanmax(c) if np.isfinite(c).any() else c.flat[0]!r}"
+                         f"{' and nan / inf' if not np.all(np.isfinite(c)) else ''}")
+    return c
+
+
+def real_ranges(ranges: object) -> np.ndarray:
+    """``ranges`` (m) as float64; InputError naming ``ranges`` for values that are not real numbers
+    (complex lost its imaginary part with a warning, text was numpy's ValueError)."""
+    try:
+        a = np.asarray(ranges)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"ranges: cannot be read as numbers ({exc})") from None
+    if a.dtype.kind not in "iufO":
+        raise InputError(f"ranges: must be real numbers (m), got dtype {a.dtype}")
+    try:
+        return np.array(a, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(f"ranges: cannot be read as float64 numbers ({exc})") from None
 
 
 def finite_negative(ranges: np.ndarray) -> np.ndarray:
@@ -61,12 +99,12 @@ def ranges_to_codes(ranges: np.ndarray, units: Units = "mm") -> np.ndarray:
     Ranges are rounded to the unit.
 
     Raises:
-        ValueError: for finite negative ranges.
+        InputError: (a ValueError) for finite negative ranges, ranges that are not real numbers, an unknown unit.
     """
     scale = metres_per_unit(units)
-    r = np.asarray(ranges, dtype=np.float64)
+    r = real_ranges(ranges)
     if np.any(finite_negative(r)):
-        raise ValueError("ranges: negative ranges have no LMS200 code")
+        raise InputError("ranges: negative ranges have no LMS200 code")
     with np.errstate(invalid="ignore", over="ignore"):
         c = np.rint(np.where(np.isfinite(r), r, 0.0) / scale)
     c = np.where(c > MAX_VALID_CODE, CODE_ABOVE_MAXIMUM, c)
@@ -97,7 +135,7 @@ def decode_logged_ranges(ranges: np.ndarray, units: Units | None = None) -> np.n
     :func:`infer_units` when None) becomes +inf (8183) or nan (8186, 8187, 8189, 8190, 8191);
     every other range is returned unchanged.
     """
-    values = np.array(ranges, dtype=np.float64)
+    values = real_ranges(ranges)
     scale = metres_per_unit(units or infer_units(values))
     with np.errstate(invalid="ignore", over="ignore"):  # 1e308 m / 1 cm is inf: not a code, kept as it is
         code_float = values / scale

@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Union
 
+from .errors import InputError
 from .protocol import ACK, MAX_LEN, NAK, OVERHEAD_BYTES, REPLY_FLAG, STX, crc16
 
 
@@ -90,7 +91,11 @@ class FrameParser:
         self._buf.clear()
 
     def feed(self, data: bytes) -> list[Event]:
-        """Add received bytes; returns the complete frames and handshake bytes, in stream order."""
+        """Add received bytes; returns the complete frames and handshake bytes, in stream order.
+        ``data`` is bytes, a bytearray or a memoryview (None or text: an InputError naming it; None
+        was taken as no bytes, text a TypeError)."""
+        if not isinstance(data, (bytes, bytearray, memoryview)):
+            raise InputError(f"data: must be the bytes received (bytes, bytearray or memoryview), got {type(data).__name__}")
         if data:
             self._buf += data
         return self._scan(final=False)

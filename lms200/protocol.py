@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .codes import LMS200_MAX_RANGE, Units, codes_to_ranges, ranges_to_codes
-from .errors import LmsProtocolError
+from .codes import LMS200_MAX_RANGE, Units, check_codes, codes_to_ranges, ranges_to_codes
+from .errors import InputError, LmsProtocolError
 from .scan import Scan
 
 STX = 0x02
@@ -113,8 +113,21 @@ _CRC_TABLE = _build_crc_table(_CRC_ROWS)
 _CRC_K = np.arange(_CRC_ROWS - 1, -1, -1)  # distance from the end, for the last n bytes: _CRC_K[-n:]
 
 
+def byte_string(data: object, name: str) -> bytes:
+    """``data`` (bytes, bytearray, memoryview or a uint8 array) as bytes; InputError naming ``name``
+    for anything else (text, None, a list: TypeErrors; a uint8 array's arithmetic overflowed)."""
+    if isinstance(data, bytes):
+        return data
+    if isinstance(data, (bytearray, memoryview)):
+        return bytes(data)
+    if isinstance(data, np.ndarray) and data.dtype == np.uint8 and data.ndim == 1:
+        return data.tobytes()
+    raise InputError(f"{name}: must be bytes (or a bytearray, memoryview, 1-D uint8 array), got {type(data).__name__}")
+
+
 def crc16(data: bytes) -> int:
     """SICK's CRC-16 over ``data`` (for a frame: STX through STATUS); an int in 0..65535."""
+    data = byte_string(data, "data")
     n = len(data)
     if n == 0:
         return 0
@@ -128,15 +141,16 @@ def build_frame(payload: bytes, address: int = HOST_ADDRESS) -> bytes:
     """A whole telegram: STX, address, LEN, payload (command, data[, status]), CRC (low byte first).
 
     Raises:
-        ValueError: for an empty payload, one longer than 812 bytes, or an address beyond a byte.
+        InputError: (a ValueError) for a payload that is not bytes, is empty or longer than 812 bytes,
+            or an address beyond a byte.
     """
-    payload = bytes(payload)
+    payload = byte_string(payload, "payload")
     if not payload:
-        raise ValueError("payload: must hold at least the command byte")
+        raise InputError("payload: must hold at least the command byte")
     if len(payload) > MAX_LEN:
-        raise ValueError(f"payload: at most {MAX_LEN} bytes, got {len(payload)}")
+        raise InputError(f"payload: at most {MAX_LEN} bytes, got {len(payload)}")
     if not 0 <= address <= 0xFF:
-        raise ValueError(f"address: must be 0..255, got {address}")
+        raise InputError(f"address: must be 0..255, got {address}")
     head = struct.pack("<BBH", STX, address, len(payload)) + payload
     return head + struct.pack("<H", crc16(head))
 
@@ -151,10 +165,10 @@ def reset_request() -> bytes:
 def mode_request(sub_command: int, password: bytes = PASSWORD) -> bytes:
     """0x20: switch the operating mode; installation mode (0x00) carries the 8-byte password."""
     if not 0 <= sub_command <= 0xFF:
-        raise ValueError(f"sub_command: must be a byte, got {sub_command}")
+        raise InputError(f"sub_command: must be a byte, got {sub_command}")
     if sub_command == MODE_INSTALLATION:
         if len(password) != 8:
-            raise ValueError(f"password: must be 8 bytes, got {len(password)}")
+            raise InputError(f"password: must be 8 bytes, got {len(password)}")
         return bytes([CMD_MODE, sub_command]) + bytes(password)
     return bytes([CMD_MODE, sub_command])
 
@@ -162,7 +176,7 @@ def mode_request(sub_command: int, password: bytes = PASSWORD) -> bytes:
 def baud_request(baud: int) -> bytes:
     """0x20 with the sub-command that switches to ``baud`` (9600, 19200, 38400, 500000)."""
     if baud not in BAUD_MODES:
-        raise ValueError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {baud}")
+        raise InputError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {baud}")
     return mode_request(BAUD_MODES[baud])
 
 
@@ -184,7 +198,7 @@ def type_request() -> bytes:
 def variant_request(fov_deg: int, resolution_cdeg: int) -> bytes:
     """0x3B: field of view (100 or 180 deg) and resolution (100, 50, 25 hundredths of a deg)."""
     if (fov_deg, resolution_cdeg) not in VARIANTS:
-        raise ValueError(
+        raise InputError(
             f"variant: ({fov_deg} deg, {resolution_cdeg / 100} deg) is not an LMS200 variant; "
             f"choose one of {[(a, r / 100) for a, r in VARIANTS]}"
         )
@@ -204,7 +218,7 @@ def set_config_request(config: bytes) -> bytes:
 def with_units(config: bytes, units: Units) -> bytes:
     """A configuration block with the measured-value unit byte set to ``units``."""
     if units not in UNITS_CODES:
-        raise ValueError(f"units: must be 'mm' or 'cm', got {units!r}")
+        raise InputError(f"units: must be 'mm' or 'cm', got {units!r}")
     if len(config) <= CONFIG_UNITS_OFFSET:
         raise LmsProtocolError(f"configuration block of {len(config)} bytes has no unit byte")
     block = bytearray(config)
@@ -246,7 +260,9 @@ def parse_measurement(payload: bytes) -> Measurement:
     Raises:
         LmsProtocolError: for another reply code, a length that disagrees with the count word,
             or a unit code other than cm / mm.
+        InputError: for a payload that is not bytes.
     """
+    payload = byte_string(payload, "payload")
     if len(payload) < 4 or payload[0] != REPLY_MEASURE:
         raise LmsProtocolError(f"not a 0xB0 measured-value reply: {bytes(payload[:8]).hex(' ')}")
     count = payload[1] | (payload[2] << 8)
@@ -296,10 +312,15 @@ def decode_scan(payload: bytes, stamp: float = 0.0) -> Scan:
 
 
 def encode_measurement(codes: np.ndarray, units: Units, status: int = STATUS_OK) -> bytes:
-    """A 0xB0 payload carrying ``codes`` (uint16, one per beam) in ``units``."""
-    values = np.asarray(codes, dtype="<u2")
+    """A 0xB0 payload carrying ``codes`` (uint16, one per beam) in ``units``; InputError naming the
+    argument for codes that are not 16-bit values, an unknown unit or a status beyond a byte."""
+    values = check_codes(codes).astype("<u2")
+    if units not in UNITS_CODES:
+        raise InputError(f"units: must be 'mm' or 'cm', got {units!r}")
+    if isinstance(status, bool) or not isinstance(status, (int, np.integer)) or not 0 <= status <= 0xFF:
+        raise InputError(f"status: must be a byte 0..255, got {status!r}")
     if values.ndim != 1 or not 0 < values.size <= 0x3FF:
-        raise ValueError(f"codes: must be 1-D with 1..1023 values, got shape {values.shape}")
+        raise InputError(f"codes: must be 1-D with 1..1023 values, got shape {values.shape}")
     count = values.size | (UNITS_CODES[units] << 14)
     return struct.pack("<BH", REPLY_MEASURE, count) + values.tobytes() + bytes([status])
 

@@ -54,8 +54,15 @@ def check_scan_rate(rate_hz: object, angle_increment: float, name: str = "rate_h
     """
     if rate_hz is None:
         return
-    if isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float)) or not 0 < rate_hz < math.inf:
-        raise InputError(f"{name}: must be a finite number of scans/s > 0 (or None: every scan), got {rate_hz!r}")
+    ok = not isinstance(rate_hz, (bool, np.bool_)) and isinstance(rate_hz, (int, float, np.integer, np.floating))
+    try:  # np.float32(5.0) was refused, 10**400 an OverflowError formatting the message
+        value = float(rate_hz) if ok else math.nan  # type: ignore[arg-type]
+    except OverflowError:
+        value = math.inf
+    if not 0 < value < math.inf:
+        shown = rate_hz if value != math.inf or not isinstance(rate_hz, int) else f"an integer of {len(str(rate_hz))} digits"
+        raise InputError(f"{name}: must be a finite number of scans/s > 0 (or None: every scan), got {shown!r}")
+    rate_hz = value
     most = 1.0 / scan_period(angle_increment)
     if rate_hz > most * (1 + 1e-9):
         raise InputError(f"{name}: {rate_hz:g} scans/s is more than the sensor gives ({most:g} scans/s at "

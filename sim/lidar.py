@@ -22,10 +22,12 @@ import numpy as np
 
 from lms200 import Scan
 
+from .checks import check_beam_poses, check_instance, check_pose, check_twist
 from .geometry import rectangle_corners
 from .hits import depth_steps, finish_ranges, mix_samples, resolve_hits
 from .sensor import OUTLIER_RANGE_SHARE, SensorConfig
 from .world import World
+from .worlds import check_seed
 
 _STREAM_SENSOR = 2
 _STREAM_SURFACE = 3  # the rough cells' grid offset and hash key (apart from the noise stream)
@@ -76,6 +78,9 @@ class LMS200Sim:
     """
 
     def __init__(self, world: World, sensor: SensorConfig | None = None, seed: int = 0) -> None:
+        check_instance(world, World, "world", optional=False)
+        check_instance(sensor, SensorConfig, "sensor")
+        check_seed(seed)
         self.world = world
         self.sensor = sensor if sensor is not None else SensorConfig()
         self.rng = np.random.default_rng([int(seed), _STREAM_SENSOR])
@@ -155,6 +160,8 @@ class LMS200Sim:
 
     def reseed(self, seed: int | np.random.Generator) -> None:
         """Restart the noise generator (an int seed, or a Generator to draw from directly)."""
+        if not isinstance(seed, np.random.Generator):
+            check_seed(seed)  # -1 was numpy's own ValueError
         self.rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng([int(seed), _STREAM_SENSOR])
 
     # -- ray casting --------------------------------------------------------------------------
@@ -204,8 +211,10 @@ class LMS200Sim:
 
     def beam_poses(self, pose: tuple[float, float, float], twist: tuple[float, float] | None = None) -> np.ndarray:
         """(n_beams, 3) scanner pose at each beam's time for a scan starting at ``pose`` and moving
-        with a constant twist (v m/s, w rad/s) when interlaced; else ``pose`` for every beam."""
-        x, y, th = (float(v) for v in pose)
+        with a constant twist (v m/s, w rad/s) when interlaced; else ``pose`` for every beam.
+        InputError naming ``pose`` / ``twist`` unless they are 3 / 2 finite numbers."""
+        x, y, th = check_pose(pose)
+        twist = check_twist(twist)
         n = self.sensor.n_beams
         if twist is None or not self.sensor.interlaced or (twist[0] == 0 and twist[1] == 0):
             return np.tile([x, y, th], (n, 1))
@@ -221,7 +230,7 @@ class LMS200Sim:
 
     def exact_ranges(self, beam_poses: np.ndarray) -> np.ndarray:
         """Noise-free ranges (m) of every beam from its own scanner pose ((n_beams, 3))."""
-        bp = np.asarray(beam_poses, dtype=float)
+        bp = check_beam_poses(beam_poses, self.sensor.n_beams)
         return self.cast(bp[:, :2], bp[:, 2] + self._angles)
 
     def scan_at(self, pose: tuple[float, float, float], stamp: float = 0.0,
@@ -232,9 +241,10 @@ class LMS200Sim:
         return self.scan_from_beam_poses(self.beam_poses(pose, twist), stamp)
 
     def scan_from_beam_poses(self, beam_poses: np.ndarray, stamp: float = 0.0) -> Scan:
-        """One emulated scan whose beam i is taken from ``beam_poses[i]`` (x, y, theta)."""
+        """One emulated scan whose beam i is taken from ``beam_poses[i]`` (x, y, theta); InputError
+        unless they are (n_beams, 3) finite numbers."""
         s = self.sensor
-        bp = np.asarray(beam_poses, dtype=float)
+        bp = check_beam_poses(beam_poses, s.n_beams)
         ranges = self.exact_ranges(bp)
         if s.mixed_pixels:
             ranges = self._mix_edges(bp, ranges)

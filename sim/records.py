@@ -13,7 +13,8 @@ from lms200.timing import MAX_DURATION_S as MAX_DURATION_S  # re-exported: sim's
 from lms200.timing import check_scan_rate
 
 from .lidar import LMS200Sim
-from .robot import RobotLimits, Tour, robot_tour, wrap
+from .checks import check_instance
+from .robot import RobotLimits, Tour, check_duration, robot_tour, wrap
 from .sensor import SensorConfig
 from .world import World
 from .worlds import check_seed, make_world
@@ -113,10 +114,19 @@ def simulate_records(world: str | World = "office", seed: int = 0, duration: flo
             a rate that is not in (0, the sensor's scan rate], a seed that is not a whole number >= 0, or an unknown world.
     """
     check_seed(seed)
-    if isinstance(duration, bool) or not isinstance(duration, (int, float)) or not 0 < duration <= MAX_DURATION_S:
-        raise InputError(f"duration: must be a number of seconds in (0, {MAX_DURATION_S:g}], got {duration!r}")
+    check_duration(duration)  # np.float32(0.5) and np.int64(1) were refused, np.float64 taken
+    check_instance(sensor, SensorConfig, "sensor")
+    check_instance(odometry, OdometryConfig, "odometry")
+    check_instance(limits, RobotLimits, "limits")
+    if progress is not None and not callable(progress):
+        raise InputError(f"progress: must be None or callable (done, total), got {progress!r}")
     s = sensor if sensor is not None else SensorConfig()
     check_rate(rate_hz, s)
+    rate = None if rate_hz is None else float(rate_hz)  # np.float32(5) kept in float32 rounds 7.5 scans a step down
+    stamps = scan_stamps(s, float(duration), rate)  # type: ignore[arg-type]
+    if stamps.size == 0:  # 1e-9 s or 1 ms gave an empty list, silently
+        raise InputError(f"duration: {float(duration):g} s is shorter than one scan (its last beam is measured "  # type: ignore[arg-type]
+                         f"{float(s.beam_time_offsets.max()):.4g} s after its first)")
     w = world if isinstance(world, World) else make_world(world, seed)
-    tour = robot_tour(w, seed, duration, limits)
-    return simulate_tour(w, tour, scan_stamps(s, duration, rate_hz), s, seed, odometry, progress)
+    tour = robot_tour(w, seed, float(duration), limits)  # type: ignore[arg-type]
+    return simulate_tour(w, tour, stamps, s, seed, odometry, progress)

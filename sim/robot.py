@@ -11,6 +11,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from lms200 import LmsbenchError
+from lms200.errors import InputError
+from lms200.timing import MAX_DURATION_S
 
 from .world import World
 
@@ -138,8 +140,28 @@ def plan_waypoints(world: World, rng: np.random.Generator, length_m: float) -> t
     return nodes[path], np.array(is_target)
 
 
+def check_duration(duration: object) -> None:
+    """``duration`` is a number of seconds in (0, MAX_DURATION_S] (numpy numbers too); InputError naming it."""
+    ok = not isinstance(duration, (bool, np.bool_)) and isinstance(duration, (int, float, np.integer, np.floating))
+    if not ok or not 0 < duration <= MAX_DURATION_S:  # type: ignore[operator]
+        raise InputError(f"duration: must be a number of seconds in (0, {MAX_DURATION_S:g}], got {duration!r}")
+
+
 def robot_tour(world: World, seed: int = 0, duration: float = 120.0, limits: RobotLimits | None = None) -> Tour:
-    """A collision-free tour of ``world`` lasting at least ``duration`` s (seeded)."""
+    """A collision-free tour of ``world`` lasting at least ``duration`` s (seeded).
+
+    Raises:
+        InputError: naming the argument: a world that is no World, a seed that is not a whole number
+            >= 0, a duration that is not a number of seconds in (0, MAX_DURATION_S] (1e9 s planned
+            for minutes and ran out of memory; -1 s gave a tour, silently), limits that are no RobotLimits.
+    """
+    from .checks import check_instance  # noqa: PLC0415 - sim.checks is light; kept beside its use
+    from .worlds import check_seed  # noqa: PLC0415 - sim.worlds imports this module's users
+
+    check_instance(world, World, "world", optional=False)
+    check_seed(seed)
+    check_duration(duration)
+    check_instance(limits, RobotLimits, "limits")
     lim = limits if limits is not None else RobotLimits()
     rng = np.random.default_rng([int(seed), _STREAM_TOUR])
     # enough path for the duration at cruise speed, then phases until the duration is covered

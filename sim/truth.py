@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .checks import check_instance, check_pose
 from .sensor import SensorConfig
 from .world import World
 
@@ -89,7 +90,12 @@ def _range_on_lines(phi: np.ndarray, rho: np.ndarray, alpha: np.ndarray) -> np.n
 
 
 def visible_truth(world: World, pose: tuple[float, float, float], sensor: SensorConfig | None = None) -> VisibleTruth:
-    """The faces and corners of ``world`` visible from scanner pose (x, y, theta), sensor frame."""
+    """The faces and corners of ``world`` visible from scanner pose (x, y, theta), sensor frame.
+    InputError naming the argument for a world that is no World, a sensor that is no SensorConfig, a
+    pose that is not three finite numbers (a nan pose saw no face, silently)."""
+    check_instance(world, World, "world", optional=False)
+    check_instance(sensor, SensorConfig, "sensor")
+    pose = check_pose(pose)
     s = sensor if sensor is not None else SensorConfig()
     a_min, inc, n = s.angle_min, s.angle_increment, s.n_beams
     a_max = a_min + (n - 1) * inc

@@ -676,3 +676,156 @@ def test_write_log_flaser_of_a_scan_not_centred_is_an_input_error(tmp_path) -> N
     with pytest.raises(InputError, match=r"^records: FLASER cannot carry a 3-beam scan"):
         write_log(path, [odd], fmt="flaser")
     assert path.read_bytes() == before
+
+
+# -- LMS200 codes and telegrams --------------------------------------------------------------------------
+@pytest.mark.parametrize("codes", [
+    np.array([np.nan]),        # was 0 m (a RuntimeWarning from the cast)
+    np.array([-1, 5]),         # was [nan, 5 mm]
+    np.array([1.5]),           # was 1 mm
+    np.array([2**40]),         # was 0 m (masked to 13 bits)
+    np.array([True]),          # was 1 mm
+    "abc",                     # was int()'s ValueError
+])
+def test_codes_to_ranges_takes_raw_16_bit_values_only(codes: object) -> None:
+    from lms200 import codes_to_ranges
+
+    with pytest.raises(InputError, match=r"^codes: must be raw LMS200 values \(whole numbers 0..65535\)"):
+        codes_to_ranges(codes)  # type: ignore[arg-type]
+    assert codes_to_ranges(np.array([3000.0, 8183, 8191]), "mm").tolist()[:2] == [3.0, np.inf]  # whole floats are codes
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: __import__("lms200").codes_to_ranges(np.array([1]), "m"), "^units: must be 'mm' or 'cm', got 'm'"),  # a bare ValueError
+    (lambda: __import__("lms200").ranges_to_codes(np.array([-1.0])), "^ranges: negative ranges have no LMS200 code"),
+    (lambda: __import__("lms200").ranges_to_codes(np.array([1j])), "^ranges: must be real numbers"),  # was code 0, a ComplexWarning
+    (lambda: __import__("lms200").decode_logged_ranges(np.array([1 + 1j])), "^ranges: must be real numbers"),
+])
+def test_code_conversions_are_input_errors(call, message: str) -> None:
+    with pytest.raises(InputError, match=message):
+        call()
+
+
+@pytest.mark.parametrize("payload", ["abc", None, [0xB0, 1, 0x40, 0, 0], 5])
+def test_decode_scan_of_something_not_bytes(payload: object) -> None:
+    """Text, None, a list or an int were TypeErrors from len() or frombuffer."""
+    from lms200.protocol import decode_scan
+
+    with pytest.raises(InputError, match="^payload: must be bytes"):
+        decode_scan(payload)  # type: ignore[arg-type]
+
+
+def test_decode_scan_of_a_uint8_array_is_its_bytes() -> None:
+    """np.frombuffer(payload, np.uint8) was an OverflowError (its count word 1023 out of bounds for uint8)."""
+    from lms200.protocol import decode_scan, encode_scan
+
+    scan = Scan.lms200(np.round(np.linspace(1.0, 3.0, 361), 3))
+    payload = encode_scan(scan)
+    back = decode_scan(np.frombuffer(payload, np.uint8))
+    assert back == decode_scan(payload) and np.allclose(back.ranges, scan.ranges, atol=0.0005)  # mm codes
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda p: p.encode_scan(Scan.lms200(np.full(361, 3.0)), "mm", 300), "^status: must be a byte 0..255"),  # "bytes must be in range(0, 256)"
+    (lambda p: p.encode_measurement(np.ones(3, np.uint16), "m"), "^units: must be 'mm' or 'cm'"),  # KeyError
+    (lambda p: p.encode_measurement("abc", "mm"), "^codes: must be raw LMS200 values"),
+    (lambda p: p.build_frame("abc"), "^payload: must be bytes"),                  # "string argument without an encoding"
+    (lambda p: p.build_frame(b"\x00" * 70000), "^payload: at most 812 bytes"),    # a bare ValueError
+    (lambda p: p.crc16("abc"), "^data: must be bytes"),                           # "unsupported operand type(s)"
+])
+def test_telegram_builders_raise_input_errors(call, message: str) -> None:
+    from lms200 import protocol
+
+    with pytest.raises(InputError, match=message):
+        call(protocol)
+
+
+@pytest.mark.parametrize("data", [None, "abc", 5])
+def test_frame_parser_feed_of_something_not_bytes(data: object) -> None:
+    """None was taken as no bytes, silently; text was 'can't concat str to bytearray'."""
+    from lms200.framing import FrameParser
+    from lms200.protocol import build_frame, encode_scan
+
+    parser = FrameParser()
+    with pytest.raises(InputError, match="^data: must be the bytes received"):
+        parser.feed(data)  # type: ignore[arg-type]
+    frame = build_frame(encode_scan(Scan.lms200(np.full(361, 3.0))), address=0x80)
+    assert len(parser.frames(frame)) == 1 and parser.pending == 0
+
+
+# -- sim ----------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("pose", [(np.nan, 5.0, 0.0), (6.0, 5.0, np.inf), (6.0, 5.0), (6.0, 5.0, 0.0, 1.0), "abc", None])
+def test_simulator_poses_must_be_three_finite_numbers(pose: object) -> None:
+    """A nan pose scanned every beam as +inf and saw no face (an empty VisibleTruth), silently; two
+    or four numbers, text or None were unpacking errors."""
+    from sim import LMS200Sim, SensorConfig, make_world, visible_truth
+
+    world = make_world("office", seed=0)
+    with LMS200Sim(world, SensorConfig(), seed=0) as lidar:
+        with pytest.raises(InputError, match=r"^pose: must be 3 finite numbers \(x m, y m, theta rad\)"):
+            lidar.scan_at(pose)  # type: ignore[arg-type]
+        with pytest.raises(InputError, match=r"^twist: must be 2 finite numbers"):
+            lidar.scan_at((6.0, 5.0, 0.0), twist=(np.nan, 0.0))  # was nan beam poses: every beam +inf
+        with pytest.raises(InputError, match=r"^beam_poses: must be \(361, 3\)"):
+            lidar.scan_from_beam_poses(np.zeros((3, 3)))  # was numpy's broadcast error
+        scan = lidar.scan_at(np.array([6.0, 5.0, 0.0]))
+    with pytest.raises(InputError, match=r"^pose: must be 3 finite numbers"):
+        visible_truth(world, pose)  # type: ignore[arg-type]
+    assert np.count_nonzero(scan.valid) > 300 and len(visible_truth(world, (6.0, 5.0, 0.0)).segments) >= 3
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda sim: sim.LMS200Sim(None), "^world: must be a sim.World, got NoneType"),                 # AttributeError
+    (lambda sim: sim.LMS200Sim(sim.make_world("office", 0), {}), "^sensor: must be a sim.SensorConfig or None"),
+    (lambda sim: sim.LMS200Sim(sim.make_world("office", 0), seed=-1), "^seed: must be a whole number >= 0"),  # numpy's ValueError
+    (lambda sim: sim.visible_truth(None, (0.0, 0.0, 0.0)), "^world: must be a sim.World"),
+    (lambda sim: sim.robot_tour(sim.make_world("office", 0), seed=0, duration=1e9), r"^duration: must be a number of seconds in \(0, 3600\]"),  # 400 MB and > 60 s
+    (lambda sim: sim.robot_tour(sim.make_world("office", 0), seed=0, duration=-1.0), "^duration: must be"),  # a tour, silently
+    (lambda sim: sim.robot_tour(sim.make_world("office", 0), seed=-1), "^seed: must be a whole number"),
+    (lambda sim: sim.simulate_records("office", seed=0, duration=1.0, sensor={}), "^sensor: must be a sim.SensorConfig"),  # AttributeError
+    (lambda sim: sim.simulate_records("office", seed=0, duration=1.0, odometry={}), "^odometry: must be a sim.OdometryConfig"),  # taken as none
+    (lambda sim: sim.simulate_records("office", seed=0, duration=1.0, limits={}), "^limits: must be a sim.RobotLimits"),
+    (lambda sim: sim.simulate_records("office", seed=0, duration=1.0, progress=5), "^progress: must be None or callable"),
+    (lambda sim: sim.simulate_records("office", seed=0, duration=1e-3), r"^duration: 0.001 s is shorter than one scan"),  # [], silently
+    (lambda sim: sim.simulate_records("office", seed=0, duration=1.0, rate_hz=10**400), "^rate_hz: must be a finite number"),  # OverflowError
+    (lambda sim: sim.make_world("office", 0, scale=10**400), "^scale: must be finite"),            # numpy TypeError
+    (lambda sim: sim.make_world("office", 0, clutter=10**400), "^clutter: must be finite"),        # OverflowError
+])
+def test_sim_arguments(call, message: str) -> None:
+    import sim
+
+    with pytest.raises(InputError, match=message):
+        call(sim)
+
+
+def test_simulate_records_takes_numpy_numbers() -> None:
+    """duration=np.float32(0.5) / np.int64(1) and rate_hz=np.float32(5) were refused (np.float64 taken)."""
+    from sim import simulate_records
+
+    plain = simulate_records("office", seed=0, duration=1.0, rate_hz=5.0)
+    same = simulate_records("office", seed=0, duration=np.int64(1), rate_hz=np.float32(5.0))
+    assert len(plain) == len(same) == 5 and all(a.scan == b.scan for a, b in zip(plain, same))
+
+
+def test_ransac_window_beyond_int64() -> None:
+    """window=2**70 was numpy's 'high is out of bounds for int64' at the first extract; a window past
+    the scan's beams reaches every beam, as 2**62 does."""
+    from features import extract
+
+    rng = np.random.default_rng(3)
+    ang = np.deg2rad(np.arange(361) * 0.5 - 90.0)
+    room = np.minimum(2.0 / np.maximum(np.abs(np.cos(ang)), 1e-9), 3.0 / np.maximum(np.abs(np.sin(ang)), 1e-9))
+    scan = Scan.lms200(np.where(room < 8.0, room + rng.normal(0, 0.005, 361), np.inf))
+    huge, cap = extract(scan, "ransac", window=2**70), extract(scan, "ransac", window=2**62)
+    assert len(huge.lines) == 3 and repr(list(huge.lines)) == repr(list(cap.lines))
+
+
+@pytest.mark.parametrize("obj, hint", [(None, ""), (np.full(361, 3.0), " (build one with"),
+                                       (Record(Scan.lms200(np.full(361, 3.0))), " (a log record: pass record.scan)")])
+def test_signals_of_something_not_a_scan(obj: object, hint: str) -> None:
+    """Was an AttributeError ('... has no attribute angle_increment')."""
+    from features.errors import ScanTypeError
+    from features.sensor import signals
+
+    with pytest.raises(ScanTypeError, match=f"^signals: expected an lms200.Scan, got {type(obj).__name__}{re.escape(hint)}"):
+        signals(obj)  # type: ignore[arg-type]

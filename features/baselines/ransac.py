@@ -29,6 +29,11 @@ from .runs import collect, refine, segments_of
 MAX_HYPOTHESES = 1 << 16  # most point pairs drawn per round (bounds the draws' memory)
 
 
+#: most beams a NAPSAC window reaches: numpy draws int64 offsets (window=2**70 was "high is out of
+#: bounds for int64"); any window past the scan's beams already reaches every beam (the pair is clipped)
+MAX_WINDOW = 1 << 62
+
+
 @dataclass(frozen=True)
 class RansacConfig:
     """Defaults:
@@ -101,7 +106,8 @@ def run(scan: Scan, cfg: RansacConfig) -> FeatureSet:
             break
         i = rng.integers(0, m, cfg.hypotheses)
         if cfg.window > 0:
-            j = i + rng.integers(1, cfg.window + 1, cfg.hypotheses) * (2 * rng.integers(0, 2, cfg.hypotheses) - 1)
+            window = min(int(cfg.window), MAX_WINDOW)
+            j = i + rng.integers(1, window + 1, cfg.hypotheses) * (2 * rng.integers(0, 2, cfg.hypotheses) - 1)
             j = np.clip(j, 0, m - 1)
         else:
             j = rng.integers(0, m, cfg.hypotheses)

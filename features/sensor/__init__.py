@@ -16,6 +16,7 @@ from lms200 import Scan
 
 from ..registry import register
 from ..batch import common_geometry, split_rows, stacked_ranges
+from ..errors import not_a_scan
 from ..types import Corners, FeatureSet, Lines
 from ..jit import FixedTypeCall
 from ..noise_estimate import AUTO, AUTO_FALLBACK
@@ -79,6 +80,8 @@ def signals(scan: Scan, k: int = 3, sigma_r: float = 0.005, min_range: float = 0
         (rad, wrapped), ``ad_slope`` = ad_ik (eq. 6), ``ad_sigma``, ``theta_sigma``, ``psi_sigma``
         (noise std), ``bearing`` (rad), ``valid`` (bool); and the float ``ad_line`` = 1 + 2 sum cos(jD).
     """
+    if not isinstance(scan, Scan):  # was an AttributeError ('Record' object has no attribute 'angle_increment')
+        raise not_a_scan(scan, "signals")
     cfg = SensorMethodConfig(k=k, sigma_r=sigma_r, min_range=min_range)  # checks the values
     ad_line, two_sin_sum = window_sums(cfg.params.k, scan.angle_increment)
     valid, _, AD, AD_var, ad, theta, theta_var, psi, psi_var = engine.beam_signals(
