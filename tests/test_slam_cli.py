@@ -403,10 +403,12 @@ def test_a_paper_run_that_diverged_but_stayed_healthy_warns_of_the_divergence():
 
 
 def test_slam_refuses_one_scan(sim_folder, tmp_path, capsys):
-    """A log of one scan, or --max-scans 1, ran a "SLAM" of one pose and reported it healthy
+    """A log of one scan, --max-scans 1, or one scan left in time order, ran a "SLAM" of one pose and reported it healthy
     (matched fraction 1.0 of no step, exit 0). Both are refused in one line, before any output."""
     from experiments.cli import main
     from lms200 import read_log
+
+    import dataclasses
 
     records = list(read_log(sim_folder / "scans.clf"))[:1]
     write_log(tmp_path / "one.clf", records)
@@ -423,3 +425,11 @@ def test_slam_refuses_one_scan(sim_folder, tmp_path, capsys):
 
     with pytest.raises(LmsbenchError, match="--max-scans must be >= 2"):
         load_input(sim_folder, max_scans=1)
+    # two scans, the second stamped before the first: --skip-bad-lines left one and ran it (review)
+    two = [records[0], dataclasses.replace(records[0], scan=records[0].scan.replace(stamp=records[0].scan.stamp - 1.0))]
+    write_log(tmp_path / "back.clf", two)
+    assert main(["slam", str(tmp_path / "back.clf"), "--skip-bad-lines", "--out", str(tmp_path / "b"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == (f"lmsbench slam: error: {tmp_path / 'back.clf'}: 1 of its 2 scans are in time order; "
+                       "SLAM needs two or more")
+    assert not (tmp_path / "b").exists() or not any((tmp_path / "b").iterdir())

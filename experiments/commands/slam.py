@@ -175,6 +175,9 @@ def run(args: argparse.Namespace) -> int:
         data.records = [data.records[k] for k in keep]
         if data.truth is not None and np.array_equal(data.truth[:, 0], stamps):  # a pose per scan (TRUEPOS)
             data.truth = data.truth[keep]
+        if len(data.records) < 2:  # it ran on the one scan left (load_input refuses a one-scan input)
+            raise InputError(f"{where}: {len(data.records)} of its {len(stamps)} scans are in time order; SLAM "
+                             "needs two or more")
     stamps = [r.scan.stamp for r in data.records]
     still = [k for k in range(1, len(stamps)) if stamps[k] == stamps[k - 1]]
     if still:  # each such step predicts no motion and searches no turn: kept (a coarse clock still works), said

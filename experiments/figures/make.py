@@ -33,14 +33,21 @@ def _article(word: str) -> str:
     return "an" if word[:1].lower() in "aeiou" else "a"
 
 
+#: the tables each figure is drawn from (signals, timing, summary, the trajectory, each panel's
+#: points): an empty one draws no figure; the ones beside them (lines, corners, map) may be empty
+DRIVING_TABLES = ("signals", "timing", "summary", "trajectory", "office_points", "intel_points")
+
+
 def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10,
                  angle_increment: float | None = None, world: str = "office") -> dict[str, list[Path]]:
-    """Every paper figure whose tables are present and hold rows (an empty table draws no figure:
-    it drew empty axes); returns name -> files written. ``world`` names the simulated world in the
+    """Every paper figure whose tables are present and whose driving table (``DRIVING_TABLES``)
+    holds rows (an empty one drew empty axes); returns name -> files written. ``world`` names the simulated world in the
     titles (the files keep the paper's names, e.g. ``fig9_office``)."""
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, list[Path]] = {}
-    tables = {name: table for name, table in tables.items() if len(table)}
+    # a figure's driving table without rows draws nothing (the tables beside it, lines, corners, the
+    # map, may be empty: a scan without corners still has its figure)
+    tables = {name: table for name, table in tables.items() if len(table) or name not in DRIVING_TABLES}
     if "signals" in tables:
         sig = tables["signals"]
         inc = angle_increment or float(pd.Series(sig["bearing_deg"]).diff().median() * 3.141592653589793 / 180)
