@@ -655,9 +655,13 @@ def _finite_number(where: str, value: Any) -> float:
     """``value`` as a finite float, or SlamConfigError naming ``where`` (bools are not numbers)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise SlamConfigError(f"{where}: must be a number, got {value!r}")
-    if not math.isfinite(float(value)):
+    try:
+        number = float(value)
+    except OverflowError:  # an int beyond float64 (10**400) was an OverflowError
+        raise SlamConfigError(f"{where}: must be finite, got an integer of {len(str(value))} digits") from None
+    if not math.isfinite(number):
         raise SlamConfigError(f"{where}: must be finite, got {value!r}")
-    return float(value)
+    return number
 
 
 def _section(cls: type, name: str, values: dict[str, Any]) -> Any:

@@ -829,3 +829,15 @@ def test_signals_of_something_not_a_scan(obj: object, hint: str) -> None:
 
     with pytest.raises(ScanTypeError, match=f"^signals: expected an lms200.Scan, got {type(obj).__name__}{re.escape(hint)}"):
         signals(obj)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("section, field", [("motion", "sigma_accel"), ("alignment", "max_iterations"),
+                                            ("observations", "min_line_points")])
+def test_slam_config_numbers_beyond_float64(section: str, field: str) -> None:
+    """10**400 in any numeric field of a SLAM config section was an OverflowError (99 fields)."""
+    from slam import SlamConfig
+    from slam.config import SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=f"{field}: must be finite, got an integer of 401 digits"):
+        SlamConfig(**{section: {field: 10**400}})
+    assert SlamConfig(**{section: {field: 3}}) is not None
