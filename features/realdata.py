@@ -40,6 +40,7 @@ from lms200 import Scan
 
 from lms200.errors import InputError
 
+from .baselines import checks
 from .errors import not_a_scan
 from .types import FeatureSet
 
@@ -95,12 +96,12 @@ def check_features(fs: object) -> None:
 
 def check_measure_args(fs: FeatureSet | np.ndarray, scan: Scan, sigma: object, sigma_name: str) -> None:
     """The arguments of the real-data measures: ``fs`` a FeatureSet (or its ``line_array()``) of
-    lines within ``scan``'s beams, ``scan`` a Scan, ``sigma`` (m) a finite number >= 0 (0: an ideal
-    sensor's, as ``compare`` passes for a noiseless simulated one).
+    lines within ``scan``'s beams, ``scan`` a Scan, ``sigma`` (m) a finite number > 0 (the range noise; 0
+    explained only beams a line predicts to the last bit: (0.0, nan) on any real scan).
 
     Raises:
-        InputError: naming the argument (a nan or negative sigma explained no beam, an infinite
-            one every covered beam; lines past the scan's last beam came from another scan, and
+        InputError: naming the argument (a nan, zero or negative sigma explained no beam, an
+            infinite one every covered beam; lines past the scan's last beam came from another scan, and
             were clipped onto its last beam, silently).
         ScanTypeError: ``scan`` is not an lms200.Scan.
     """
@@ -109,8 +110,8 @@ def check_measure_args(fs: FeatureSet | np.ndarray, scan: Scan, sigma: object, s
     if not isinstance(fs, np.ndarray):
         check_features(fs)
     if isinstance(sigma, (bool, np.bool_)) or not isinstance(sigma, (int, float, np.integer, np.floating)) \
-            or not (math.isfinite(sigma) and sigma >= 0):
-        raise InputError(f"{sigma_name}: must be a finite number >= 0 m (the range noise), got {sigma!r}")
+            or not (checks.finite(sigma) and sigma > 0):  # checks.finite: 10**400 is no OverflowError
+        raise InputError(f"{sigma_name}: must be a finite number > 0 m (the range noise), got {sigma!r}")
     lines = _lines(fs)
     if lines.shape[0] and not (np.all(lines[:, 6] >= 0) and np.all(lines[:, 7] < len(scan))):
         raise InputError(f"fs: its lines span beams {int(lines[:, 6].min())}..{int(lines[:, 7].max())}, "

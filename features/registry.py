@@ -13,6 +13,8 @@ from dataclasses import dataclass
 from collections.abc import Sequence
 from typing import Any, Callable
 
+import numpy as np
+
 from lms200 import Scan
 
 from .baselines.checks import MAX_BEAMS
@@ -79,13 +81,13 @@ def register(name: str, config_type: type, run: Callable[[Scan, Any], FeatureSet
         raise ConfigError(f"run_many: must be None or callable (scans, config) -> list of FeatureSet, got {run_many!r}")
     if backend not in BACKENDS:
         raise ConfigError(f"backend: must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    if not isinstance(thread_safe, bool):
+    if not isinstance(thread_safe, (bool, np.bool_)):
         raise ConfigError(f"thread_safe: must be True or False, got {thread_safe!r}")
     try:
         default = config_type()
     except TypeError as exc:  # a field without a default
         raise ConfigError(f"config_type: {config_type.__name__}() must build the default config ({exc})") from None
-    _REGISTRY[name] = Method(name, config_type, run, default, backend, run_many, thread_safe)
+    _REGISTRY[name] = Method(name, config_type, run, default, backend, run_many, bool(thread_safe))
 
 
 def get_method(name: str) -> Method:
@@ -232,5 +234,8 @@ def _config(m: Method, config: Any, params: dict[str, Any]) -> Any:
         raise ConfigError(f"config: must be a {m.config_type.__name__} for method {m.name!r}, got {type(config).__name__}")
     if not params:
         return config
-    _check_names(m, params)  # a name the config lacks was dataclasses.replace's TypeError
-    return dataclasses.replace(config, **params)
+    try:
+        return dataclasses.replace(config, **params)
+    except TypeError:  # a name the config lacks (dataclasses.replace's TypeError): named, with the known ones
+        _check_names(m, params)
+        raise

@@ -286,8 +286,8 @@ def explained_fraction(fs: FeatureSet, scan: Scan, sigma: float = 0.005) -> tupl
     nan where undefined (no valid beam; no explained beam for the RMS).
 
     Raises:
-        InputError: a ``sigma`` that is not a finite number >= 0 (nan or a negative one explained
-            no beam, silently; inf every covered one), an ``fs`` that is no FeatureSet or whose lines reach past the scan's
+        InputError: a ``sigma`` that is not a finite number > 0 (nan, zero or a negative one
+            explained no beam, silently; inf every covered one), an ``fs`` that is no FeatureSet or whose lines reach past the scan's
             beams (features of another scan). ScanTypeError: a ``scan`` that is no lms200.Scan.
     """
     check_measure_args(fs, scan, sigma, "sigma")

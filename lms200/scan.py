@@ -8,6 +8,8 @@ Conventions (REP-117 and REP-103):
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -189,9 +191,9 @@ def _number(name: str, value: object) -> float:
         number = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
         raise ScanError(f"{name}: must be a number, got {value!r}") from None
-    except OverflowError:
-        raise ScanError(f"{name}: must be finite, got an integer of {len(str(value))} digits") from None
-    if not np.isfinite(number):
+    except OverflowError:  # not str(value): an int of more than 4,300 digits cannot be printed (ValueError)
+        raise ScanError(f"{name}: must be finite, got a {type(value).__name__} beyond float64's range") from None
+    if not math.isfinite(number):  # math, not np: 12 ns against 390 ns a field (review)
         raise ScanError(f"{name}: must be finite, got {number}")
     return number
 

@@ -456,7 +456,8 @@ def test_a_sensor_yaml_with_only_its_calibration_section_is_refused(tmp_path):
 # -- fuzzing of 2026-12-03: the public Python API ------------------------------------------------------
 @pytest.mark.parametrize("field", ["angle_min", "angle_increment", "range_min", "range_max", "stamp"])
 @pytest.mark.parametrize("value, message", [
-    (10**400, "must be finite, got an integer of 401 digits"),  # was OverflowError: int too large to convert to float
+    (10**400, "must be finite, got a int beyond float64's range"),  # was OverflowError: int too large to convert to float
+    pytest.param(10**5000, "must be finite, got a int beyond float64's range", id="10**5000"),  # printed: ValueError
     (True, "must be a number, got True"),                       # was 1.0 (rad, m or s), as bool ranges are refused
     ("0.5", "must be a number, got '0.5'"),                     # was 0.5, as text ranges are refused
 ])
@@ -551,6 +552,24 @@ def test_register_checks_its_arguments(args: dict, message: str) -> None:
     assert extract(Scan.lms200(np.full(361, 3.0))).method == "sensor"
 
 
+def test_register_takes_numpy_bools_for_thread_safe() -> None:
+    """thread_safe=np.True_ was refused while every config flag takes numpy bools (review)."""
+    import dataclasses
+
+    from features import FeatureSet, register
+    from features.registry import _REGISTRY
+
+    @dataclasses.dataclass(frozen=True)
+    class Cfg:
+        a: int = 1
+
+    try:
+        register("fuzz_np_bool", Cfg, lambda scan, cfg: FeatureSet(method="fuzz_np_bool"), thread_safe=np.True_)
+        assert _REGISTRY["fuzz_np_bool"].thread_safe is True
+    finally:
+        _REGISTRY.pop("fuzz_np_bool", None)
+
+
 # -- scoring ------------------------------------------------------------------------------------------
 def _scored_scene():
     from features import extract
@@ -603,16 +622,17 @@ def test_score_scan_refuses_what_is_no_feature_set_or_truth() -> None:
             score_scan(f, t, c)  # type: ignore[arg-type]
 
 
-@pytest.mark.parametrize("sigma", [np.nan, -1.0, np.inf, "0.01", None, True])
+@pytest.mark.parametrize("sigma", [np.nan, -1.0, 0.0, np.inf, 10**400, "0.01", None, True])
 def test_explained_fraction_sigma_must_be_a_range_noise(sigma: object) -> None:
-    """nan and -1 returned (0.0, nan) and inf (1.0, inf), silently; text and None were TypeErrors."""
+    """nan, -1 and 0 returned (0.0, nan) and inf (1.0, inf), silently; 10**400 was an OverflowError
+    (review); text and None were TypeErrors."""
     from features.realdata import scan_measures
     from features.scoring import explained_fraction
 
     fs, _, scan = _scored_scene()
-    with pytest.raises(InputError, match=r"^sigma: must be a finite number >= 0 m"):
+    with pytest.raises(InputError, match=r"^sigma: must be a finite number > 0 m"):
         explained_fraction(fs, scan, sigma)  # type: ignore[arg-type]
-    with pytest.raises(InputError, match=r"^sigma_r: must be a finite number >= 0 m"):
+    with pytest.raises(InputError, match=r"^sigma_r: must be a finite number > 0 m"):
         scan_measures(fs, scan, sigma)  # type: ignore[arg-type]
     frac, rms = explained_fraction(fs, scan, 0.005)
     assert 0.95 < frac <= 1.0 and 0.0 < rms < 0.005
