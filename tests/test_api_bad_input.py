@@ -861,3 +861,18 @@ def test_slam_config_numbers_beyond_float64(section: str, field: str) -> None:
     with pytest.raises(SlamConfigError, match=f"{field}: must be finite, got an integer of 401 digits"):
         SlamConfig(**{section: {field: 10**400}})
     assert SlamConfig(**{section: {field: 3}}) is not None
+
+
+@pytest.mark.parametrize("field", ["sigma_r", "sigma_r_cm"])
+def test_sensor_range_noise_is_capped_like_the_baselines(field: str) -> None:
+    """sigma_r=1e300 built a config whose thresholds found no line on any scan, silently (review of
+    the API hunt); the baselines' sigma was already capped at MAX_SIGMA_M."""
+    from features import extract, make_config
+    from features.baselines.checks import MAX_SIGMA_M
+    from features.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=rf"^{field}: must be a range noise std in \(0, 1000\] m, or 'auto', got 1e\+300"):
+        make_config("sensor", **{field: 1e300})
+    cfg = make_config("sensor", **{field: MAX_SIGMA_M})  # the cap itself is taken
+    assert getattr(cfg, field) == MAX_SIGMA_M
+    assert extract(Scan.lms200(np.full(361, 3.0)), "sensor").method == "sensor"

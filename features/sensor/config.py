@@ -68,6 +68,9 @@ class SensorMethodConfig:
         for name in ("sigma_r", "sigma_r_cm"):
             if getattr(self, name) != AUTO:
                 checks.positive(name, getattr(self, name), "m")
+                if getattr(self, name) > checks.MAX_SIGMA_M:  # 1e300 found no line, silently (the baselines' cap)
+                    checks.fail(name, f"must be a range noise std in (0, {checks.MAX_SIGMA_M:g}] m, or 'auto'",
+                                getattr(self, name))
         checks.non_negative("min_range", self.min_range, "m")
         for name in ("ad_tau", "psi_tau", "band_tau", "bin_tau", "inlier_tau", "max_chi2", "curvature_tau",
                      "merge_tau"):
