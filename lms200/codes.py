@@ -70,18 +70,35 @@ def check_codes(codes: object) -> np.ndarray:
 
 
 def real_ranges(ranges: object) -> np.ndarray:
-    """``ranges`` (m) as float64; InputError naming ``ranges`` for values that are not real numbers
-    (complex lost its imaginary part with a warning, text was numpy's ValueError)."""
+    """``ranges`` (m) as a float64 copy; InputError naming ``ranges`` for values that are not real
+    numbers (complex lost its imaginary part with a warning, text was numpy's ValueError)."""
+    return float64_copy(real_numbers(ranges))
+
+
+def real_numbers(ranges: object, error: type[Exception] = InputError) -> np.ndarray:
+    """``ranges`` as an array (not copied) of real numbers: ints, floats or objects; ``error``
+    naming ``ranges`` for bool, complex, text or dates (cast silently: 1+1j to 1.0, True to 1.0 m)
+    and for what numpy cannot read. ``lms200.Scan`` and the code conversions read ranges by it."""
     try:
-        a = np.asarray(ranges)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"ranges: cannot be read as numbers ({exc})") from None
-    if a.dtype.kind not in "iufO":
-        raise InputError(f"ranges: must be real numbers (m), got dtype {a.dtype}")
+        a = ranges if isinstance(ranges, np.ndarray) else np.asarray(ranges)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise error(f"ranges: cannot be read as float64 numbers ({exc})") from None
+    check_real_kind(a.dtype, error)
+    return a
+
+
+def check_real_kind(dtype: np.dtype, error: type[Exception] = InputError) -> None:
+    """``error`` naming ``ranges`` unless ``dtype`` holds real numbers (int, float or object)."""
+    if dtype.kind not in "iufO":
+        raise error(f"ranges: must be real numbers (m), got dtype {dtype} (bool, complex, text and dates are refused)")
+
+
+def float64_copy(a: np.ndarray, error: type[Exception] = InputError) -> np.ndarray:
+    """A private float64 copy of ``a``; ``error`` naming ``ranges`` for an object item that is no number."""
     try:
         return np.array(a, dtype=np.float64)
     except (TypeError, ValueError, OverflowError) as exc:
-        raise InputError(f"ranges: cannot be read as float64 numbers ({exc})") from None
+        raise error(f"ranges: cannot be read as float64 numbers ({exc})") from None
 
 
 def finite_negative(ranges: np.ndarray) -> np.ndarray:

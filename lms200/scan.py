@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .codes import finite_negative
+from .codes import check_real_kind, finite_negative, float64_copy, real_numbers
 from .errors import ScanError
 
 LMS200_BEAMS = 361
@@ -204,29 +204,16 @@ def _ranges_view(ranges: object) -> np.ndarray:
     silently: 1+1j to 1.0, True to 1.0 m), a masked array's included. The masked beams of a masked
     array become nan (invalid)."""
     if isinstance(ranges, np.ma.MaskedArray):
-        _check_kind(ranges.dtype)
+        check_real_kind(ranges.dtype, ScanError)
         ranges = np.ma.filled(ranges.astype(np.float64), np.nan)
-    try:
-        a = ranges if isinstance(ranges, np.ndarray) else np.asarray(ranges)
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise ScanError(f"ranges: cannot be read as float64 numbers ({exc})") from None
-    _check_kind(a.dtype)
-    return a
-
-
-def _check_kind(dtype: np.dtype) -> None:
-    if dtype.kind not in "iufO":
-        raise ScanError(f"ranges: must be real numbers (m), got dtype {dtype} "
-                        "(bool, complex, text and dates are refused)")
+    return real_numbers(ranges, ScanError)
 
 
 def _ranges_copy(a: np.ndarray) -> np.ndarray:
     """A private float64 copy of the array ``a`` (m); ScanError naming ``ranges`` where it cannot be
     made (an object item that is no number; more beams than memory holds)."""
     try:
-        return np.array(a, dtype=np.float64)  # a private copy: the scan is immutable
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise ScanError(f"ranges: cannot be read as float64 numbers ({exc})") from None
+        return float64_copy(a, ScanError)  # a private copy: the scan is immutable
     except MemoryError:
         raise ScanError(f"ranges: {a.size} beams need {a.size * 8 / 2**30:.3g} GiB as float64, "
                         "more than this machine can allocate") from None
