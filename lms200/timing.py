@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from .errors import InputError
+from .finite import overflow_text
 
 MIRROR_TURN_S = 1.0 / 75.0  # s: one mirror revolution (75 Hz)
 ONE_TURN_RESOLUTION_RAD = float(np.deg2rad(1.0))  # one mirror turn measures every 1 deg
@@ -60,8 +61,8 @@ def check_scan_rate(rate_hz: object, angle_increment: float, name: str = "rate_h
     except OverflowError:
         value = math.inf
     if not 0 < value < math.inf:
-        shown = rate_hz if value != math.inf or not isinstance(rate_hz, int) else f"an integer of {len(str(rate_hz))} digits"
-        raise InputError(f"{name}: must be a finite number of scans/s > 0 (or None: every scan), got {shown!r}")
+        shown = repr(rate_hz) if value != math.inf or not isinstance(rate_hz, int) else overflow_text(rate_hz)
+        raise InputError(f"{name}: must be a finite number of scans/s > 0 (or None: every scan), got {shown}")
     rate_hz = value
     most = 1.0 / scan_period(angle_increment)
     if rate_hz > most * (1 + 1e-9):

@@ -17,11 +17,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import Any
 
 import numpy as np
 
 from lms200.errors import InputError
+from lms200.finite import float_of
 
 from .clutter import ClutterConfig, add_clutter
 from .geometry import rectangle_corners
@@ -58,14 +58,6 @@ MIN_SCALE, MAX_SCALE = 0.7, 3.0  # the rooms' size factor (make_world(scale=...)
 # to a solid than the robot's radius (0.17 m at 0.5, 0.25 at 0.6; >= 0.33 m at 0.7 over 8 seeds of every roomed world)
 ROOMED_WORLDS = ("office", "cluttered", "random", "mit")  # the office generator's worlds, whose rooms scale
 MAX_CLUTTER = 10.0  # densest clutter level (10x a furnished office); the object count grows with it
-
-
-def _float(value: Any, arg: str) -> float:
-    """``float(value)``; an int beyond float64 (10**400: an OverflowError) is an InputError naming ``arg``."""
-    try:
-        return float(value)
-    except OverflowError:
-        raise InputError(f"{arg}: must be finite, got an integer of {len(str(value))} digits") from None
 
 
 def check_seed(seed: object) -> None:
@@ -113,7 +105,7 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
     for arg, value in (("clutter", clutter), ("glass", glass), ("rough", rough), ("scale", scale), ("relief", relief)):
         if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating))):
             raise InputError(f"{arg}: must be a number or None, got {value!r}")
-        if value is not None and not math.isfinite(_float(value, arg)):
+        if value is not None and not math.isfinite(float_of(value, arg, InputError)):
             raise InputError(f"{arg}: must be finite, got {value!r}")
     clutter, glass, rough, scale, relief = (None if v is None else float(v) for v in (clutter, glass, rough, scale, relief))
     level = float(MIT_PRESET["clutter"] if name == "mit" else DEFAULT_CLUTTER.get(name, 0.0)) if clutter is None else float(clutter)

@@ -11,6 +11,7 @@ from typing import Any, cast
 import numpy as np
 
 from lms200 import LmsbenchError
+from lms200.finite import float_of
 
 
 class SlamConfigError(LmsbenchError, ValueError):
@@ -655,10 +656,7 @@ def _finite_number(where: str, value: Any) -> float:
     """``value`` as a finite float, or SlamConfigError naming ``where`` (bools are not numbers)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise SlamConfigError(f"{where}: must be a number, got {value!r}")
-    try:
-        number = float(value)
-    except OverflowError:  # an int beyond float64 (10**400) was an OverflowError
-        raise SlamConfigError(f"{where}: must be finite, got an integer of {len(str(value))} digits") from None
+    number = float_of(value, where, SlamConfigError)  # 10**400 was an OverflowError
     if not math.isfinite(number):
         raise SlamConfigError(f"{where}: must be finite, got {value!r}")
     return number

@@ -810,6 +810,8 @@ def test_simulator_poses_must_be_three_finite_numbers(pose: object) -> None:
     (lambda sim: sim.simulate_records("office", seed=0, duration=1.0, rate_hz=10**400), "^rate_hz: must be a finite number"),  # OverflowError
     (lambda sim: sim.make_world("office", 0, scale=10**400), "^scale: must be finite"),            # numpy TypeError
     (lambda sim: sim.make_world("office", 0, clutter=10**400), "^clutter: must be finite"),        # OverflowError
+    (lambda sim: sim.make_world("office", 0, scale=10**5000), "^scale: must be finite, got a int beyond"),  # its message: ValueError
+    (lambda sim: sim.simulate_records("office", seed=0, duration=1.0, rate_hz=10**5000), "^rate_hz: must be a finite number"),
 ])
 def test_sim_arguments(call, message: str) -> None:
     import sim
@@ -858,8 +860,9 @@ def test_slam_config_numbers_beyond_float64(section: str, field: str) -> None:
     from slam import SlamConfig
     from slam.config import SlamConfigError
 
-    with pytest.raises(SlamConfigError, match=f"{field}: must be finite, got an integer of 401 digits"):
-        SlamConfig(**{section: {field: 10**400}})
+    for huge in (10**400, 10**5000):  # 10**5000: its message printed the int, a ValueError (4,300 digits)
+        with pytest.raises(SlamConfigError, match=f"{field}: must be finite, got a int beyond float64's range"):
+            SlamConfig(**{section: {field: huge}})
     assert SlamConfig(**{section: {field: 3}}) is not None
 
 
