@@ -94,10 +94,11 @@ def check_features(fs: object) -> None:
         raise InputError(f"fs: expected a features.FeatureSet, got {type(fs).__name__}")
 
 
-def check_measure_args(fs: FeatureSet | np.ndarray, scan: Scan, sigma: object, sigma_name: str) -> None:
+def check_measure_args(fs: FeatureSet | np.ndarray, scan: Scan, sigma: object, sigma_name: str) -> np.ndarray:
     """The arguments of the real-data measures: ``fs`` a FeatureSet (or its ``line_array()``) of
     lines within ``scan``'s beams, ``scan`` a Scan, ``sigma`` (m) a finite number > 0 (the range noise; 0
-    explained only beams a line predicts to the last bit: (0.0, nan) on any real scan).
+    explained only beams a line predicts to the last bit: (0.0, nan) on any real scan). Returns the
+    lines as the measures read them (``_lines``), made once.
 
     Raises:
         InputError: naming the argument (a nan, zero or negative sigma explained no beam, an
@@ -116,6 +117,7 @@ def check_measure_args(fs: FeatureSet | np.ndarray, scan: Scan, sigma: object, s
     if lines.shape[0] and not (np.all(lines[:, 6] >= 0) and np.all(lines[:, 7] < len(scan))):
         raise InputError(f"fs: its lines span beams {int(lines[:, 6].min())}..{int(lines[:, 7].max())}, "
                          f"the scan has {len(scan)} (features of another scan?)")
+    return lines
 
 
 def truncated_normal_rms(sigma: float, tolerance: float) -> float:
@@ -189,8 +191,7 @@ def scan_measures(fs: FeatureSet | np.ndarray, scan: Scan, sigma_r: float,
         config: tolerances.
     """
     cfg = config or RealDataConfig()
-    check_measure_args(fs, scan, sigma_r, "sigma_r")
-    lines = _lines(fs)
+    lines = check_measure_args(fs, scan, sigma_r, "sigma_r")
     n_valid = int(np.count_nonzero(scan.valid))
     lengths = np.hypot(lines[:, 4] - lines[:, 2], lines[:, 5] - lines[:, 3])
     mean_len = float(lengths.mean()) if lengths.size else float("nan")

@@ -290,11 +290,11 @@ def explained_fraction(fs: FeatureSet, scan: Scan, sigma: float = 0.005) -> tupl
             explained no beam, silently; inf every covered one), an ``fs`` that is no FeatureSet or whose lines reach past the scan's
             beams (features of another scan). ScanTypeError: a ``scan`` that is no lms200.Scan.
     """
-    check_measure_args(fs, scan, sigma, "sigma")
+    lines = check_measure_args(fs, scan, sigma, "sigma")
     n_valid = int(np.count_nonzero(scan.valid))
     if n_valid == 0:
         return float("nan"), float("nan")
-    best = ray_residuals(fs, scan)  # inf where no line covers a valid beam
+    best = ray_residuals(lines, scan)  # inf where no line covers a valid beam
     inlier = best <= 3.0 * sigma
     explained = int(np.count_nonzero(inlier))
     rms = float(np.sqrt(np.mean(best[inlier] ** 2))) if explained else float("nan")
