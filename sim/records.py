@@ -70,10 +70,13 @@ def scan_stamps(sensor: SensorConfig, duration: float, rate_hz: float | None = N
     """Times (s) of the first beam of each scan kept: every scan of the sensor (37.5/s at 0.5 deg)
     whose last beam falls within ``duration``, decimated to about ``rate_hz`` when given."""
     period = sensor.scan_period
-    step = 1 if rate_hz is None else max(1, int(round(1.0 / (period * rate_hz))))
     last_beam = float(sensor.beam_time_offsets.max())
-    n = int(np.floor((duration - last_beam) / period + 1e-9)) + 1
-    return np.arange(0, max(n, 0), step) * period
+    n = max(int(np.floor((duration - last_beam) / period + 1e-9)) + 1, 0)
+    step = 1
+    if rate_hz is not None:  # keep every step-th scan; a rate this low keeps the first alone
+        kept_share = period * rate_hz  # scans kept per scan made: 1e-320 scans/s made 1 / share inf
+        step = max(n, 1) if kept_share * max(n, 1) <= 1.0 else max(1, int(round(1.0 / kept_share)))
+    return np.arange(0, n, step) * period
 
 
 def simulate_tour(world: World, tour: Tour, stamps: np.ndarray, sensor: SensorConfig, seed: int = 0,

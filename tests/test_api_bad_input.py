@@ -195,6 +195,21 @@ def test_simulate_records_rate_above_the_sensors_is_refused() -> None:
     assert len(recs) == len(simulate_records("office", seed=0, duration=1.0))  # every scan, as without a rate
 
 
+@pytest.mark.parametrize("rate_hz", [1e-320, 5e-324, 1e-300])
+def test_a_rate_near_zero_keeps_the_first_scan_as_any_low_rate_does(rate_hz: float) -> None:
+    """`simulate --rate-hz 1e-320` (also compare --rate, sim2real --rate-hz, sweeps' rate_hz) was
+    "internal error: OverflowError: cannot convert float infinity to integer" (1 / (period * rate)
+    is inf), and 5e-324 a ZeroDivisionError; a rate this low keeps the first scan, as 0.001 does."""
+    from sim import SensorConfig
+    from sim.records import scan_stamps
+
+    sensor = SensorConfig()
+    for duration in (0.5, 10.0, 3600.0):
+        low = scan_stamps(sensor, duration, rate_hz)
+        assert low.tolist() == scan_stamps(sensor, duration, 1e-4).tolist() == [0.0]
+    assert len(scan_stamps(sensor, 10.0, 2.0)) == 20 and len(scan_stamps(sensor, 10.0, None)) == 375  # as before
+
+
 @pytest.mark.parametrize("kw, message", [
     (dict(seed=-1), "^seed: must be a whole number"),
     (dict(clutter="x"), "^clutter: must be a number or None"),   # was "could not convert string to float"
