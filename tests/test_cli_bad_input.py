@@ -351,6 +351,10 @@ CASES = [
     (["sim2real", "{good.clf}", "--duration", "0.001", "--out", O], "--duration"),
     (["sim2real", "{good.clf}", "--probe-duration", "0.05", "--out", O], "--probe-duration"),
     (["demo", "--duration", "0.01", "--out", O], "--duration"),
+    # one scan kept: the whole comparison ran, then "internal error: ValueError: ate: fewer than 2 estimated poses"
+    (["figures", "--duration", "0.5", "--rate-hz", "2", "--out", O], "--duration 0.5 at --rate-hz 2 keeps 1 scan(s) of "
+     "the simulated run; the SLAM (Fig. 10) needs two or more (a longer run or a higher rate, or --no-slam)"),
+    (["demo", "--duration", "1", "--rate-hz", "1", "--no-sweep", "--out", O], "--duration 1 at --rate-hz 1 keeps 1 scan(s)"),
     # figures
     (["figures", "--tables", "{tables_broken}", "--out", O], "summary.parquet: not a readable parquet table"),
     (["figures", "--tables", "{tables_broken}", "--sweep", "{sweep_broken}", "--out", O], "results.parquet: not a Parquet table"),

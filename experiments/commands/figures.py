@@ -31,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from experiments.figures.make import DRIVING_TABLES, draw_figures, draw_sweep
     from experiments.provenance import new_run_folder
-    from experiments.figures.study import StudyConfig, load_config, load_tables, run_study, save_tables
+    from experiments.figures.study import StudyConfig, check_study, load_config, load_tables, run_study, save_tables
 
     writes = FIGURES_OUTPUTS
     if args.out is not None and args.tables is not None and args.out.resolve() == args.tables.resolve():
@@ -52,6 +52,7 @@ def run(args: argparse.Namespace) -> int:
         if args.intel is not None:
             cfg.intel_log = str(check_log(args.intel))
         cfg.log_options = plain_log_options(read_log_options(args))
+        check_study(cfg, hint=", or --no-slam")
         tables, notes = run_study(cfg)
         args.out = args.out or new_run_folder("results/figures")
         save_tables(tables, cfg, notes, args.out / "tables")
