@@ -126,6 +126,10 @@ def files(tmp_path_factory):
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
     (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
     (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
+    laughs = "[" + ", ".join(["&c0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]"] + [f"&c{i} [" + ", ".join([f"*c{i - 1}"] * 10) + "]"
+                                                                    for i in range(1, 9)]) + "]"
+    (d / "sensor_laughs.yaml").write_text(f"noise_sigma: {laughs}\n")  # 10^9 values: the message's repr hung
+    (d / "slam_laughs.yaml").write_text(f"motion: {{sigma_accel: {laughs}}}\n")
     (d / "sensor_1deg.yaml").write_text("n_beams: 181\nresolution_deg: 1.0\n")  # good.clf: 361 at 0.5 deg
     (d / "short_run.yaml").write_text("world: office\nseed: 0\nduration: 0.001\n")  # a simulate config: no scan
     (d / "run_bool.yaml").write_text("world: office\nseed: 0\nduration: true\n")  # ran 1 s
@@ -351,6 +355,11 @@ CASES = [
     (["sim2real", "{good.clf}", "--duration", "0.001", "--out", O], "--duration"),
     (["sim2real", "{good.clf}", "--probe-duration", "0.05", "--out", O], "--probe-duration"),
     (["demo", "--duration", "0.01", "--out", O], "--duration"),
+    # a 'billion laughs' of aliases: the error message's repr of the value hung past the test's alarm
+    (["simulate", "--sensor", "{sensor_laughs.yaml}", "--out", O], "sensor_laughs.yaml: not valid YAML (its aliases "
+     "(*name) expand it to more than 1,000,000 values (a 'billion laughs'); write the values out)"),
+    (["compare", "office:1", "--sensor", "{sensor_laughs.yaml}", "--out", O], "sensor_laughs.yaml: not valid YAML (its"),
+    (["slam", "{simrun}", "--config", "{slam_laughs.yaml}", "--out", O], "slam_laughs.yaml: not valid YAML (its aliases"),
     # one scan kept: the whole comparison ran, then "internal error: ValueError: ate: fewer than 2 estimated poses"
     (["figures", "--duration", "0.5", "--rate-hz", "2", "--out", O], "--duration 0.5 at --rate-hz 2 keeps 1 scan(s) of "
      "the simulated run; the SLAM (Fig. 10) needs two or more (a longer run or a higher rate, or --no-slam)"),
