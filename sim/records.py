@@ -34,6 +34,16 @@ class OdometryConfig:
     alpha3: float = 0.05  # m/m
     alpha4: float = 0.01  # m/rad
 
+    MAX_ALPHA = 10.0  # per unit of motion: ten times the motion itself, far beyond any wheel odometry
+
+    def __post_init__(self) -> None:
+        """Each alpha a finite number in [0, MAX_ALPHA] (``alpha1: x`` was an internal error deep in
+        numpy, ``alpha1: -1`` and ``alpha2: 1e300`` ran, silently)."""
+        from .checks import check_number  # noqa: PLC0415 - sim.checks is light; kept beside its use
+
+        for name in ("alpha1", "alpha2", "alpha3", "alpha4"):
+            object.__setattr__(self, name, check_number(getattr(self, name), name, 0.0, self.MAX_ALPHA))
+
     def to_dict(self) -> dict:
         return asdict(self)
 

@@ -894,3 +894,19 @@ def test_sensor_range_noise_is_capped_like_the_baselines(field: str) -> None:
     cfg = make_config("sensor", **{field: MAX_SIGMA_M})  # the cap itself is taken
     assert getattr(cfg, field) == MAX_SIGMA_M
     assert extract(Scan.lms200(np.full(361, 3.0)), "sensor").method == "sensor"
+
+
+def test_robot_limits_and_odometry_config_check_their_fields() -> None:
+    """RobotLimits and OdometryConfig took any value (v_max=1e300 made robot_tour plan for ever);
+    their numbers are now finite and bounded, and the defaults are as before."""
+    from sim.records import OdometryConfig
+    from sim.robot import RobotLimits
+
+    assert RobotLimits() == RobotLimits(0.5, 0.5, 1.0, 2.0, 0.25, (0.5, 2.0))
+    assert RobotLimits(v_max=2).v_max == 2.0 and RobotLimits(pause_s=[0, 0]).pause_s == (0.0, 0.0)
+    with pytest.raises(InputError, match=r"^w_max: must be a finite number in \(0, 20\] rad/s, got inf"):
+        RobotLimits(w_max=float("inf"))
+    with pytest.raises(InputError, match=r"^radius: must be a finite number in \[0, 2\] m, got a int beyond"):
+        RobotLimits(radius=10**400)
+    with pytest.raises(InputError, match=r"^alpha3: must be a finite number in \[0, 10\], got True"):
+        OdometryConfig(alpha3=True)

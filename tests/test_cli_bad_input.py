@@ -841,3 +841,24 @@ def test_compare_tells_worlds_from_files_by_name_for_sensor_as_for_seeds(tmp_pat
     assert run_main(["compare", "office", "--seeds", "1", "--duration", "0.5", "--methods", "split_merge",
                      "--sensor", "s.yaml", "--no-progress", "--out", "o"], seconds=120) == 0
     assert (tmp_path / "o" / "summary.csv").exists()
+
+
+@pytest.mark.parametrize("section, expected", [
+    ("robot: {v_max: 1.0e300}", "(v_max: must be a finite number in (0, 10] m/s, got 1e+300)"),  # planned for ever
+    ("robot: {v_max: -1}", "(v_max: must be a finite number in (0, 10] m/s, got -1)"),  # ran, silently
+    ("robot: {a_max: 0}", "(a_max: must be a finite number in (0, 100] m/s^2, got 0)"),  # a tour of nan, warnings
+    ("robot: {v_max: [1, 2]}", "(v_max: must be a finite number in (0, 10] m/s, got [1, 2])"),  # internal error
+    ("robot: {pause_s: [5, 1]}", "(pause_s: the shortest pause must not exceed the longest, got [5, 1])"),
+    ("robot: {pause_s: [1, 2, 3]}", "(pause_s: must be two numbers of seconds [shortest, longest], got (1, 2, 3))"),
+    ("odometry: {alpha1: x}", "(alpha1: must be a finite number in [0, 10], got 'x')"),  # internal error (numpy)
+    ("odometry: {alpha2: 1.0e300}", "(alpha2: must be a finite number in [0, 10], got 1e+300)"),  # ran, silently
+])
+def test_simulate_config_robot_and_odometry_values_are_checked(section, expected, tmp_path, capsys):
+    """`simulate --config` checked the run's and the sensor's values but not the robot's limits nor
+    the odometry's noise: v_max 1e300 planned a tour for ever, -1 or a_max 0 ran a tour of no or nan
+    motion, a list, a reversed pause range or text were internal errors. Now refused, one line."""
+    (tmp_path / "run.yaml").write_text(f"world: office\nseed: 0\nduration: 1\n{section}\n")
+    assert run_main(["simulate", "--config", str(tmp_path / "run.yaml"), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"lmsbench simulate: error: {tmp_path / 'run.yaml'}: not a simulate config {expected}"]
+    assert not (tmp_path / "o").exists()
