@@ -110,6 +110,20 @@ def path_arg(text: str) -> Path:
     return Path(text)
 
 
+def text(what: str) -> Callable[[str], str]:
+    """An argparse type: a word that is not empty nor blank, ``what`` naming what to give instead.
+    An empty value read as "not given" (`--extractor "$M"` with M unset ran the default extractor,
+    `--scheduler ""` a local cluster) or as everything (`--host ""` listened on every interface)."""
+
+    def parse(value: str) -> str:
+        if not value.strip():
+            raise argparse.ArgumentTypeError(f"must not be empty, got {value!r}; give {what}")
+        return value
+
+    parse.__name__ = "text"
+    return parse
+
+
 SEED = count(0, 2**32 - 1)
 DURATION = number(MIN_DURATION_S, MAX_DURATION_S, unit="s")  # a simulated run: at least one scan
 PORT = count(0, 65535)

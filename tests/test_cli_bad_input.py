@@ -360,6 +360,16 @@ CASES = [
      "(*name) expand it to more than 1,000,000 values (a 'billion laughs'); write the values out)"),
     (["compare", "office:1", "--sensor", "{sensor_laughs.yaml}", "--out", O], "sensor_laughs.yaml: not valid YAML (its"),
     (["slam", "{simrun}", "--config", "{slam_laughs.yaml}", "--out", O], "slam_laughs.yaml: not valid YAML (its aliases"),
+    # an empty word read as "not given" (the default extractor ran, a local cluster) or as every interface
+    (["slam", "{simrun}", "--extractor", "", "--out", O], "argument --extractor: must not be empty, got ''; give an "
+                                                          "extraction method's name"),
+    (["sweep", "{sweep.yaml}", "--scheduler", "", "--out", O], "argument --scheduler: must not be empty, got ''"),
+    (["lms200", "emulate", "--tcp", "0", "--host", ""], "argument --host: must not be empty, got ''"),  # 0.0.0.0
+    (["lms200", "record", "--port", " ", "--out", "{out}/x.clf"], "argument --port: must not be empty, got ' '"),
+    (["compare", "office:1", "--methods", "sensor", "", "--out", O], "argument --methods: must not be empty, got ''"),
+    # a noise of 1e308 m overflowed in the summary (a RuntimeWarning on stderr, sigma_r_mm inf), exit 0
+    (["compare", "office:1", "--sigma", "1e308", "--out", O], "--sigma must be a range noise std in (0, 1000] m, "
+                                                              "got '1e308'"),
     # one scan kept: the whole comparison ran, then "internal error: ValueError: ate: fewer than 2 estimated poses"
     (["figures", "--duration", "0.5", "--rate-hz", "2", "--out", O], "--duration 0.5 at --rate-hz 2 keeps 1 scan(s) of "
      "the simulated run; the SLAM (Fig. 10) needs two or more (a longer run or a higher rate, or --no-slam)"),

@@ -10,14 +10,14 @@ import argparse
 import sys
 from pathlib import Path
 
-from experiments.options import SWEEP_OUTPUTS, check_out, check_out_spares, check_yaml, count, path_arg
+from experiments.options import SWEEP_OUTPUTS, check_out, check_out_spares, check_yaml, count, path_arg, text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sweep", help="run a parameter sweep (grid or random) on Dask; resumable")
     p.add_argument("sweep", type=path_arg, help="sweep file (YAML; see sweeps/*.yaml)")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use this running Dask scheduler")
+    where.add_argument("--scheduler", metavar="tcp://HOST:PORT", type=text("a scheduler's address tcp://HOST:PORT"), help="use this running Dask scheduler")
     where.add_argument("--inprocess", "--local", dest="inprocess", action="store_true",
                        help="run in this process, without Dask (default: a local Dask cluster)")
     p.add_argument("--workers", type=count(1, 64), default=2, help="worker processes of the local cluster (default 2)")
@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     own = Path(args.sweep).resolve() == (out / "sweep.yaml").resolve() and Path(args.sweep).read_text() == spec_record(spec)
     check_out_spares(out, SWEEP_OUTPUTS.files, [] if own else [args.sweep])
     check_out(out, writes=SWEEP_OUTPUTS)
-    executor = "inprocess" if args.inprocess else (args.scheduler or "local")
+    executor = "inprocess" if args.inprocess else (args.scheduler if args.scheduler is not None else "local")
     from experiments.sweep.runner import check_executor, check_spec
 
     check_executor(executor, args.workers)
