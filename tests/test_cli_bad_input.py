@@ -872,3 +872,22 @@ def test_simulate_config_robot_and_odometry_values_are_checked(section, expected
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"lmsbench simulate: error: {tmp_path / 'run.yaml'}: not a simulate config {expected}"]
     assert not (tmp_path / "o").exists()
+
+
+def test_a_sweep_is_not_written_into_another_sweeps_folder(files, tmp_path, capsys):
+    """`sweep B.yaml --out FOLDER_OF_A` replaced A's sweep.yaml, results.parquet and results.csv
+    with B's, exit 0: A's table and record were gone (its cells stayed). Refused before any cell,
+    nothing touched; A itself still resumes there."""
+    out = tmp_path / "a"
+    argv = ["sweep", files["sweep.yaml"], "--inprocess", "--no-progress", "--out", str(out)]
+    assert run_main(argv, seconds=120) == 0
+    other = tmp_path / "other.yaml"
+    other.write_text(Path(files["sweep.yaml"]).read_text().replace("name: t", "name: other"))
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    capsys.readouterr()
+    assert run_main(["sweep", str(other), "--inprocess", "--no-progress", "--out", str(out)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench sweep: error: --out {out}: holds the sweep 't' (its sweep.yaml), not 'other': its results would be "
+        "replaced; give another folder (a sweep resumes in a folder of its own name)"]
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    assert run_main(argv, seconds=120) == 0 and "1 cells, 0 computed, 1 already done" in capsys.readouterr().out

@@ -39,6 +39,7 @@ def run(args: argparse.Namespace) -> int:
     own = Path(args.sweep).resolve() == (out / "sweep.yaml").resolve() and Path(args.sweep).read_text() == spec_record(spec)
     check_out_spares(out, SWEEP_OUTPUTS.files, [] if own else [args.sweep])
     check_out(out, writes=SWEEP_OUTPUTS)
+    _check_same_sweep(out, spec.name)
     executor = "inprocess" if args.inprocess else (args.scheduler if args.scheduler is not None else "local")
     from experiments.sweep.runner import check_executor, check_spec
 
@@ -68,3 +69,26 @@ def run(args: argparse.Namespace) -> int:
               f"--retry-failed computes them again)", file=sys.stderr)
         return 1
     return 0
+
+
+def _check_same_sweep(out: Path, name: str) -> None:
+    """A sweep folder that holds another sweep (its sweep.yaml names another) is not written over:
+    `sweep B.yaml --out A_folder` replaced A's sweep.yaml, results.parquet and results.csv with B's,
+    exit 0 (A's cells stayed, but its table and record were gone). The same sweep, edited (a value
+    added to its grid), still resumes there."""
+    import yaml
+
+    from experiments.options import InputError
+    from lms200.yamlio import load as load_yaml
+
+    record = out / "sweep.yaml"
+    if not record.is_file():
+        return
+    try:
+        held = load_yaml(record.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return  # not a record of a sweep: check_out's business
+    other = held.get("name") if isinstance(held, dict) else None
+    if isinstance(other, str) and other != name:
+        raise InputError(f"--out {out}: holds the sweep {other!r} (its sweep.yaml), not {name!r}: its results would be "
+                         "replaced; give another folder (a sweep resumes in a folder of its own name)")
