@@ -24,7 +24,7 @@ from features.batch import default_threads
 from lms200 import LmsbenchError, LogFormatError
 
 from . import commands
-from .options import OneLineParser
+from .options import OneLineParser, shorten_quoted
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -230,7 +230,7 @@ def _one_line(exc: BaseException) -> str:
         if exc.filename2 is not None:
             text += f" ({exc.filename2})"
         return text
-    text = " ".join(str(exc).split()) or type(exc).__name__
+    text = shorten_quoted(" ".join(str(exc).split())) or type(exc).__name__
     return text if len(text) <= 600 else text[:597] + "..."
 
 

@@ -12,6 +12,7 @@ import argparse
 import fnmatch
 import math
 import os
+import re
 import tempfile
 from pathlib import Path
 from dataclasses import dataclass, field
@@ -33,6 +34,16 @@ def known_worlds() -> tuple[str, ...]:
     return tuple(WORLD_NAMES)
 
 
+_LONG_QUOTED = re.compile(r"'([^'\n]{%d,})'" % 80)
+
+
+def shorten_quoted(message: str) -> str:
+    """``message`` with every quoted value of 80 characters or more cut to its start and end and its
+    length (`--seed 999...` of 5000 digits, a log line of NUL bytes, echoed whole, made an error
+    line of kilobytes in which the option's name and the hint were lost)."""
+    return _LONG_QUOTED.sub(lambda m: f"'{m[1][:40]}...{m[1][-8:]}' ({len(m[1])} characters)", message)
+
+
 class OneLineParser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line, ``PROG: error: MESSAGE``, exit status 2
     (argparse's own prints the usage first). Options are spelled out: no abbreviations (``--dur 3``
@@ -43,7 +54,7 @@ class OneLineParser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        self.exit(2, f"{self.prog}: error: {shorten_quoted(message)} (see {self.prog} --help)\n")
 
     def parse_known_args(self, args: Sequence[str] | None = None, namespace: Any = None) -> Any:  # type: ignore[override]
         """As argparse, but an option that takes a value given twice is an error: argparse kept the
@@ -70,10 +81,11 @@ def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = 
            integer: bool = False) -> Callable[[str], float]:
     """An argparse type: a finite number in [lo, hi] (lo excluded with ``lo_open``)."""
     parts = []
+    shown = (lambda v: str(int(v))) if integer else (lambda v: f"{v:g}")  # a seed's 2**32 - 1, not 4.29497e+09
     if lo is not None:
-        parts.append(f"{'>' if lo_open else '>='} {lo:g}")
+        parts.append(f"{'>' if lo_open else '>='} {shown(lo)}")
     if hi is not None:
-        parts.append(f"<= {hi:g}")
+        parts.append(f"<= {shown(hi)}")
     what = ("a whole number" if integer else "a finite number") + (" " + " and ".join(parts) if parts else "")
     what += f" {unit}" if unit else ""
 

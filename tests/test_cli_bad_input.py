@@ -891,3 +891,17 @@ def test_a_sweep_is_not_written_into_another_sweeps_folder(files, tmp_path, caps
         "replaced; give another folder (a sweep resumes in a folder of its own name)"]
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
     assert run_main(argv, seconds=120) == 0 and "1 cells, 0 computed, 1 already done" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, expected", [
+    (["simulate", "--seed", "9" * 5000], "lmsbench simulate: error: argument --seed: must be a whole number >= 0 and <= "
+     f"4294967295, got '{'9' * 40}...99999999' (5000 characters) (see lmsbench simulate --help)"),
+    (["simulate", "--world", "w" * 5000, "--duration", "1"], f"lmsbench simulate: error: --world: unknown world "
+     f"'{'w' * 40}...wwwwwwww' (5000 characters); known worlds: office, corridor, angles, pillars, random, cluttered, "
+     "mit or a world.json"),
+])
+def test_a_long_value_is_shortened_in_the_error_line(argv, expected, tmp_path, capsys):
+    """A 5000-digit --seed was echoed whole: an error line of 5 KB, the option's range printed as
+    4.29497e+09 (2**32 - 1 rounded), the --world hint cut off by the 600-character clip."""
+    assert run_main(argv + ["--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [expected]
