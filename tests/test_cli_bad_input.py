@@ -115,7 +115,7 @@ def files(tmp_path_factory):
                                         "sample_seed": -1},
                   "sweep_text_bounds": {"random": {"extractor.ad_tau": {"uniform": ["a", "b"]}}, "samples": 2},
                   "sweep_int_bounds": {"random": {"extractor.min_points": {"int": [1.5, 3]}}, "samples": 2},
-                  "sweep_int_huge": {"random": {"extractor.k": {"int": [3, 10**24]}}, "samples": 2},
+                  "sweep_int_huge": {"random": {"extractor.min_points": {"int": [3, 10**24]}}, "samples": 2},
                   "sweep_uniform_wide": {"random": {"extractor.ad_tau": {"uniform": [-1e308, 1e308]}}, "samples": 2},
                   "sweep_big_seed": {"seeds": [2**40]}, "sweep_name_number": {"name": 5},
                   "sweep_cells": {"grid": {"extractor.k": list(range(3, 503)), "extractor.ad_tau": list(range(1, 301))}},
@@ -345,7 +345,7 @@ CASES = [
     (["sweep", "{sweep_text_bounds.yaml}", "--out", O], "uniform needs [low, high]"),
     (["sweep", "{sweep_int_bounds.yaml}", "--out", O], "int needs whole-number bounds"),
     # bounds numpy cannot draw from: "internal error: ValueError: high is out of bounds for int64" / OverflowError
-    (["sweep", "{sweep_int_huge.yaml}", "--out", O], "random.extractor.k: int needs bounds in [-2**63, 2**63 - 1]"),
+    (["sweep", "{sweep_int_huge.yaml}", "--out", O], "random.extractor.min_points: int needs bounds in [-2**63, 2**63 - 1]"),
     (["sweep", "{sweep_uniform_wide.yaml}", "--out", O], "random.extractor.ad_tau: uniform needs high - low finite"),
     (["sweep", "{sweep_big_seed.yaml}", "--out", O], "`seeds:` must be distinct integers in [0, 4294967295]"),
     (["sweep", "{sweep_name_number.yaml}", "--out", O], "name: must be a string"),
