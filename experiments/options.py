@@ -336,6 +336,7 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
     if path is None:
         return None
     p = Path(path)
+    check_link(p)
     if p.exists() and not p.is_dir():
         raise InputError(f"--out {p}: exists and is not a folder")
     if writes is not None and p.is_dir():
@@ -353,12 +354,21 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
     return p
 
 
+def check_link(p: Path, flag: str = "--out") -> None:
+    """An output path that is a link to nothing or a loop of links: found only when the run wrote
+    (after the work: "dang: file exists"), or by Path.resolve ("internal error: RuntimeError:
+    Symlink loop")."""
+    if p.is_symlink() and not p.exists():
+        raise InputError(f"{flag} {_missing(p, 'folder')}")
+
+
 def check_out_spares(out: str | os.PathLike | None, writes: Sequence[str], reads: Sequence[str | os.PathLike]) -> None:
     """No file a run writes into ``out`` (the names ``writes``) is a file it reads (``reads``):
     ``compare SIMFOLDER --out SIMFOLDER`` replaced the simulate folder's config.yaml, the sensor
     model compare reads for it, with its own."""
     if out is None:
         return
+    check_link(Path(out))
     targets = {(Path(out) / name).resolve() for name in writes}
     for f in reads:
         if Path(f).resolve() in targets:
@@ -371,6 +381,7 @@ def check_out_file(path: str | os.PathLike | None, flag: str = "--out") -> Path 
     if path is None:
         return None
     p = Path(path)
+    check_link(p, flag)
     if p.is_dir():
         raise InputError(f"{flag} {p} is a folder; give a file name")
     if p.exists() and not p.is_file():  # writing to a pipe with no reader hung the command after its work

@@ -910,3 +910,19 @@ def test_a_long_value_is_shortened_in_the_error_line(argv, expected, tmp_path, c
     4.29497e+09 (2**32 - 1 rounded), the --world hint cut off by the 600-character clip."""
     assert run_main(argv + ["--out", str(tmp_path / "o")]) == 2
     assert capsys.readouterr().err.strip().splitlines() == [expected]
+
+
+@pytest.mark.parametrize("command", [["compare", "{good.clf}"], ["sweep", "{sweep.yaml}"], ["simulate", "--duration", "1"],
+                                     ["slam", "{simrun}"], ["figures", "--tables", "{tables_broken}"]])
+@pytest.mark.parametrize("link", ["loop", "dangling"])
+def test_out_a_link_to_nothing_or_a_loop_is_refused_before_the_work(command, link, files, tmp_path, capsys):
+    """`--out LINK` where LINK is a loop of links: compare, sweep and figures said "internal error:
+    RuntimeError: Symlink loop" (Path.resolve); simulate and slam ran the whole work and then failed
+    making the folder ("LINK: file exists"), as with a link to nothing."""
+    out = tmp_path / link
+    out.symlink_to(out if link == "loop" else tmp_path / "nowhere")
+    target = str(out) if link == "loop" else str(tmp_path / "nowhere")
+    argv = [files.get(w[1:-1], w) if w.startswith("{") else w for w in command]
+    assert run_main(argv + ["--out", str(out)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench {command[0]}: error: --out {out}: a symbolic link to {target}, which does not exist (or a loop of links)"]

@@ -6,7 +6,7 @@ import argparse
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
 from experiments.options import (DURATION, FIGURES_OUTPUTS, SEED, STUDY_TABLES, InputError, OutTree, check_log, check_methods,
-                                 check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name, text)
+                                 check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name, text, check_link)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,6 +34,9 @@ def run(args: argparse.Namespace) -> int:
     from experiments.figures.study import StudyConfig, check_study, load_config, load_tables, run_study, save_tables
 
     writes = FIGURES_OUTPUTS
+    for path in (args.out, args.tables):  # a loop of links: Path.resolve below raised RuntimeError
+        if path is not None:
+            check_link(path, "--out" if path is args.out else "--tables")
     if args.out is not None and args.tables is not None and args.out.resolve() == args.tables.resolve():
         writes = OutTree(FIGURES_OUTPUTS.files + STUDY_TABLES.files, FIGURES_OUTPUTS.folders)  # the tables it reads
     check_out(args.out, writes=writes)

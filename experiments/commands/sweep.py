@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from experiments.options import SWEEP_OUTPUTS, check_out, check_out_spares, check_yaml, count, path_arg, text
+from experiments.options import SWEEP_OUTPUTS, check_link, check_out, check_out_spares, check_yaml, count, path_arg, text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,6 +34,7 @@ def run(args: argparse.Namespace) -> int:
     check_yaml(args.sweep, "a sweep file")
     spec = load_sweep(args.sweep)
     out = args.out or Path("results/sweeps") / spec.name
+    check_link(out)  # a loop of links: Path.resolve below raised RuntimeError
     # `sweep DIR/sweep.yaml --out DIR` lost a user's comments; the sweep.yaml a run wrote, as it wrote it, may
     # be run again (it is rewritten the same)
     own = Path(args.sweep).resolve() == (out / "sweep.yaml").resolve() and Path(args.sweep).read_text() == spec_record(spec)
