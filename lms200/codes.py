@@ -63,9 +63,10 @@ def check_codes(codes: object) -> np.ndarray:
     if c.dtype.kind not in "iuf":
         raise InputError(f"codes: must be raw LMS200 values (whole numbers 0..65535), got dtype {c.dtype}")
     if c.size and not (np.all(np.isfinite(c)) and np.all(c == np.rint(c)) and c.min() >= 0 and c.max() <= 0xFFFF):
-        raise InputError(f"codes: must be raw LMS200 values (whole numbers 0..65535), got values from "
-                         f"{np.nanmin(c) if np.isfinite(c).any() else c.flat[0]!r} to {np.nanmax(c) if np.isfinite(c).any() else c.flat[0]!r}"
-                         f"{' and nan / inf' if not np.all(np.isfinite(c)) else ''}")
+        finite = c[np.isfinite(c)]  # .item(): Python numbers, not numpy 2's "np.int64(-1)" in the message
+        got = f"values from {finite.min().item()!r} to {finite.max().item()!r}" if finite.size else "only nan / inf"
+        raise InputError(f"codes: must be raw LMS200 values (whole numbers 0..65535), got {got}"
+                         f"{' and nan / inf' if 0 < finite.size < c.size else ''}")
     return c
 
 

@@ -715,6 +715,21 @@ def test_codes_to_ranges_takes_raw_16_bit_values_only(codes: object) -> None:
     assert codes_to_ranges(np.array([3000.0, 8183, 8191]), "mm").tolist()[:2] == [3.0, np.inf]  # whole floats are codes
 
 
+@pytest.mark.parametrize("codes, got", [
+    (np.array([-1, 5]), "got values from -1 to 5"),
+    (np.array([1.5, np.inf]), "got values from 1.5 to 1.5 and nan / inf"),
+    (np.array([np.nan]), "got only nan / inf"),
+])
+def test_codes_error_names_the_values_as_numbers(codes: np.ndarray, got: str) -> None:
+    """The message printed numpy 2's reprs ("got values from np.int64(-1) to np.int64(5)"; nan alone
+    "from np.float64(nan) to np.float64(nan) and nan / inf"), found trying docs/data.md's codes."""
+    from lms200 import codes_to_ranges
+
+    with pytest.raises(InputError) as info:
+        codes_to_ranges(codes)
+    assert str(info.value).endswith(got) and "np." not in str(info.value)
+
+
 @pytest.mark.parametrize("call, message", [
     (lambda: __import__("lms200").codes_to_ranges(np.array([1]), "m"), "^units: must be 'mm' or 'cm', got 'm'"),  # a bare ValueError
     (lambda: __import__("lms200").ranges_to_codes(np.array([-1.0])), "^ranges: negative ranges have no LMS200 code"),
