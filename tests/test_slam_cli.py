@@ -41,6 +41,11 @@ def test_slam_command_writes_every_output(sim_folder, tmp_path, capsys):
         assert (out / name).is_file(), name
     assert "loop closures over" in stdout and "default preset" in stdout
     stamps, poses = read_tum(out / "trajectory.tum")
+    # the scores of this run and its baseline are printed, as in metrics.json (only the published
+    # relations errors of MIT CSAIL were, and none of the run's own)
+    rows = json.loads((out / "metrics.json").read_text())["table"]
+    assert (f"  ATE RMS (m): this run {rows[0]['ate_rmse']:.3g}, paper preset {rows[1]['ate_rmse']:.3g}"
+            in stdout.splitlines())
     true_stamps, _ = read_tum(sim_folder / "groundtruth.tum")
     np.testing.assert_allclose(stamps, true_stamps, atol=1e-6)  # one pose per scan, the input's stamps
     m = json.loads((out / "metrics.json").read_text())
@@ -433,3 +438,19 @@ def test_slam_refuses_one_scan(sim_folder, tmp_path, capsys):
     assert err[-1] == (f"lmsbench slam: error: {tmp_path / 'back.clf'}: 1 of its 2 scans are in time order; "
                        "SLAM needs two or more")
     assert not (tmp_path / "b").exists() or not any((tmp_path / "b").iterdir())
+
+
+def test_slam_summary_prints_the_runs_relations_error_beside_the_published_ones():
+    """On MIT CSAIL the summary printed 'published relations error (m): scan matching 0.106, ...'
+    and not the run's own 0.0283 (README's table), which was in metrics.json alone."""
+    from experiments.commands.slam import _score_lines
+
+    table = [{"source": "slam", "relations_trans_mean": 0.028251, "cpu_scans_per_s": 853.2},
+             {"source": "paper preset", "relations_trans_mean": 0.58295},
+             {"source": "raw odometry", "relations_trans_mean": 1.68146},
+             {"source": "paper preset (odometry)", "relations_trans_mean": float("nan")}]
+    assert _score_lines({"table": table}) == [
+        "  relations error, mean (m): this run 0.0283, paper preset 0.583, raw odometry 1.68"]
+    # a run whose relations all lie outside it (its note is printed instead) and an input without scores
+    assert _score_lines({"table": [{"source": "slam", "relations_n": 0}, table[1]]}) == []
+    assert _score_lines({"table": [{"source": "slam"}]}) == [] == _score_lines({})

@@ -6,6 +6,7 @@ from lms200.yamlio import load as load_yaml
 
 import argparse
 import bisect
+import math
 import sys
 from typing import TYPE_CHECKING, Any
 from pathlib import Path
@@ -204,6 +205,8 @@ def run(args: argparse.Namespace) -> int:
         shown = ", ".join(f"{c['new_stamp'] - t0:.1f} s -> {c['old_stamp'] - t0:.1f} s" for c in lc["closed"][:6])
         more = ", ..." if lc["n"] > 6 else ""
         print(f"  {lc['n']} loop closures over {lc['n_keyframes']} keyframes" + (f" ({shown}{more})" if lc["n"] else ""))
+    for line in _score_lines(m):
+        print(line)
     warning = _health_warning(m, config)
     if warning:
         print(f"lmsbench slam: warning: {args.input}: {warning}", file=sys.stderr)
@@ -212,6 +215,19 @@ def run(args: argparse.Namespace) -> int:
     if "anchors_relations_trans_mean_m" in m:
         print("  published relations error (m): " + ", ".join(f"{k} {v}" for k, v in m["anchors_relations_trans_mean_m"].items()))
     return 0
+
+
+def _score_lines(m: dict[str, Any]) -> list[str]:
+    """This run's scores beside its baselines' (metrics.json's ``table``, this run first): the ATE
+    against true poses, the relations error against a relations file. The summary printed the
+    published relations errors of MIT CSAIL with none of this run's."""
+    lines = []
+    for key, label in (("ate_rmse", "ATE RMS (m)"), ("relations_trans_mean", "relations error, mean (m)")):
+        rows = [(("this run" if i == 0 else row["source"]), row[key]) for i, row in enumerate(m.get("table", []))
+                if isinstance(row.get(key), (int, float)) and math.isfinite(row[key])]
+        if rows and rows[0][0] == "this run":
+            lines.append(f"  {label}: " + ", ".join(f"{source} {value:.3g}" for source, value in rows))
+    return lines
 
 
 def _health_warning(m: dict[str, Any], config: "SlamConfig") -> str:
