@@ -20,7 +20,7 @@ from pathlib import Path
 import pandas as pd
 
 from . import draw
-from .tables import ad_reference
+from .tables import ad_reference, panels_log_name
 
 #: Metrics plotted for a sweep when its table has them.
 SWEEP_METRICS = ("f1", "corner_f1", "rho_rms_mm", "time_ms_median", "ate_rms", "final_error_m")
@@ -60,8 +60,10 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
                                               f"Fig. 6: psi_i = theta_i - theta_(i+{signals_k})", out / "fig6_psi")
     if "timing" in tables:
         written["fig7_timing"] = draw.fig_timing(tables["timing"], out / "fig7_timing")
+    real = panels_log_name(tables["intel_points"]) if "intel_points" in tables else "Intel"
     for source, title in (("office", "Fig. 9: features extracted by {method}, simulated " + world),
-                          ("intel", "Fig. 9: features extracted by {method}, Intel Research Lab (real log)")):
+                          ("intel", "Fig. 9: features extracted by {method}, "
+                                    + ("Intel Research Lab" if real == "Intel" else real) + " (real log)")):
         if f"{source}_points" in tables and len(tables[f"{source}_points"]):  # no panel: no figure
             lines = tables[f"{source}_lines"]
             method = str(lines["method"].iloc[0]) if "method" in lines and len(lines) else "the extractor"
