@@ -649,6 +649,8 @@ def test_no_command_is_a_usage_error(argv: list[str], prog: str, capsys: pytest.
     assert err.startswith(f"{prog}: error: ")
     if not argv:
         assert "a command is required: bench, calibrate, compare" in err
+    else:  # was "the following arguments are required: ACTION", naming neither action
+        assert err.startswith("lmsbench lms200: error: a command is required: emulate, record (see lmsbench lms200 --help)")
 
 
 def test_compare_out_holds_only_compares_own_outputs(files, tmp_path, capsys):

@@ -22,7 +22,9 @@ from experiments.options import PORT, SEED, InputError, check_log, check_out_fil
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("lms200", help="virtual LMS200 (emulate) and serial recorder (record)")
-    cmds = p.add_subparsers(dest="lms200_command", metavar="ACTION", required=True)
+    # not required=True: argparse then said "the following arguments are required: ACTION"; without
+    # an action, cli.main says "a command is required: emulate, record", as for `lmsbench` alone
+    cmds = p.add_subparsers(dest="lms200_command", metavar="ACTION")
 
     e = cmds.add_parser("emulate", help="serve a virtual LMS200 on a pseudo-terminal (or TCP); prints its path / URL")
     e.add_argument("--world", type=world_name, default="office", help="simulator world to scan (a built-in world name; lmsbench simulate --help lists them)")
