@@ -479,6 +479,35 @@ def test_masked_ranges_are_checked_like_arrays(ranges: np.ndarray) -> None:
         Scan(ranges, **GEOM)
 
 
+@pytest.mark.parametrize("ranges, item", [
+    (np.array([True, 1.0, 2.0], dtype=object), "bool True at index 0"),       # was [1 m, 1 m, 2 m]
+    (np.array([1.0, np.False_, 2.0], dtype=object), "at index 1"),             # was [1 m, 0 m, 2 m]
+    ([1.0, 2.0, True], "bool True at index 2"),                                # a list: float64 [1, 2, 1]
+    ((1.0, True), "bool True at index 1"),
+    (np.array(["1.5", 1.0], dtype=object), "str '1.5' at index 0"),            # was 1.5 m, as text arrays are refused
+    (np.ma.array(np.array([1.0, True], dtype=object), mask=[False, False]), "bool True at index 1"),
+])
+def test_bools_and_text_inside_object_arrays_and_lists_are_refused(ranges: object, item: str) -> None:
+    """A bool array was refused, an object array or list holding the same bools was cast to 1.0 / 0.0
+    m silently (the fuzzing hunt of 2026-12-03 left it open); refused with the bool array's message."""
+    with pytest.raises(ScanError, match=rf"^ranges: must be real numbers \(m\), got .*{re.escape(item)} "
+                                        r"\(bool, complex, text and dates are refused\)$"):
+        Scan(ranges, **GEOM)  # type: ignore[arg-type]
+    from lms200.codes import ranges_to_codes
+    with pytest.raises(InputError, match="^ranges: must be real numbers"):  # the code conversions read ranges alike
+        ranges_to_codes(ranges)  # type: ignore[arg-type]
+
+
+def test_object_arrays_and_lists_of_numbers_still_read() -> None:
+    from decimal import Decimal
+    from fractions import Fraction
+
+    assert Scan(np.array([1, 2.5, Fraction(1, 2), Decimal("3")], dtype=object), **GEOM).ranges.tolist() == [1, 2.5, 0.5, 3]
+    assert Scan([1, 2.5, np.float32(0.5), np.int64(3)], **GEOM).ranges.tolist() == [1, 2.5, 0.5, 3]
+    masked = Scan(np.ma.array(np.array([True, 1.0], dtype=object), mask=[True, False]), **GEOM)  # a masked item is nan
+    assert np.isnan(masked.ranges[0]) and masked.ranges[1] == 1.0
+
+
 def test_scan_of_too_many_beams_is_refused_before_the_copy() -> None:
     """10**10 beams (a broadcast view of one value) was a raw MemoryError (74.5 GiB asked); 10**8
     beams at 0.01 rad copied 800 MB before the span check refused them."""
