@@ -41,7 +41,7 @@ from .angles import wrap
 from lms200.errors import InputError
 
 from .baselines import checks
-from .realdata import check_features, check_measure_args, ray_residuals
+from .realdata import _ray_residuals, check_features, check_measure_args, truth_arrays
 from .types import FeatureSet
 
 _BIG = 1e6
@@ -117,8 +117,22 @@ def prf(tp: int, fp: int, fn: int) -> tuple[float, float, float]:
     return p, r, f
 
 
+def _rows(name: str, a: object, width: int) -> np.ndarray:
+    """``a`` as a float64 array of rows at least ``width`` wide; InputError naming ``name`` otherwise
+    (None was a TypeError, 'NoneType' object is not subscriptable)."""
+    try:
+        rows = np.asarray(a, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name}: must be an array of numbers ({exc})") from None
+    if rows.ndim != 2 or rows.shape[1] < width:
+        what = f"shape {rows.shape}" if isinstance(a, np.ndarray) else f"{type(a).__name__} of shape {rows.shape}"
+        raise InputError(f"{name}: must be (k, {width}) rows of numbers, got {what}")
+    return rows
+
+
 def truth_lines(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Normal form (rho >= 0, alpha) of segments (k,4)."""
+    """Normal form (rho >= 0, alpha) of segments (k,4); InputError naming ``segments`` unless (k, 4) numbers."""
+    segments = _rows("segments", segments, 4)
     dx, dy = segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1]
     norm = np.maximum(np.hypot(dx, dy), 1e-12)
     nx, ny = -dy / norm, dx / norm
@@ -138,7 +152,10 @@ def _dont_care(truth: Any, cfg: ScoreConfig) -> np.ndarray:
 
 def line_compatibility(lines: np.ndarray, seg: np.ndarray, cfg: ScoreConfig) -> tuple[np.ndarray, np.ndarray]:
     """(E, T) compatibility mask and matching cost of extracted lines (rho, alpha, x0, y0, x1, y1)
-    against truth segments (x1, y1, x2, y2)."""
+    against truth segments (x1, y1, x2, y2); InputError naming the argument for other shapes or types."""
+    if not isinstance(cfg, ScoreConfig):
+        raise InputError(f"cfg: must be a features.scoring.ScoreConfig, got {type(cfg).__name__}")
+    lines, seg = _rows("lines", lines, 6), _rows("seg", seg, 4)
     rho_t, alpha_t = truth_lines(seg)
     d_alpha = np.abs(wrap(lines[:, 1:2] - alpha_t[None, :]))
     d_alpha = np.minimum(d_alpha, np.pi - d_alpha)  # a line through the origin has two normals
@@ -228,27 +245,7 @@ def _check_truth(truth: Any) -> None:
     shapes and finite: segments (k, 4) with segment_beams (k, 2), corners (m, 4) with corner_beams
     (m,). (Another object was an AttributeError deep in the scoring; nan faces were counted as
     missed, silently.)"""
-    need = ("segments", "segment_beams", "corners", "corner_beams")
-    missing = [name for name in need if not hasattr(truth, name)]
-    if missing:
-        raise InputError(f"truth: must have the fields of sim.VisibleTruth ({', '.join(need)}); "
-                         f"{type(truth).__name__} lacks {', '.join(missing)}")
-    try:
-        arrays = {name: np.asarray(getattr(truth, name), dtype=np.float64) for name in need}
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"truth: its fields must be numeric arrays ({exc})") from None
-    for name in ("segments", "corners"):
-        a = arrays[name]
-        if a.size % 4 or (a.ndim == 2 and a.shape[1] != 4) or a.ndim > 2:
-            raise InputError(f"truth.{name}: must be (k, 4) rows, got shape {a.shape}")
-    k, m = arrays["segments"].size // 4, arrays["corners"].size // 4
-    shapes = {"segments": (k, 4), "segment_beams": (k, 2), "corners": (m, 4), "corner_beams": (m,)}
-    for name, shape in shapes.items():
-        a = arrays[name]
-        if a.size != int(np.prod(shape)):
-            raise InputError(f"truth.{name}: must be {shape} to match truth.segments / truth.corners, got shape {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise InputError(f"truth.{name}: must be finite (sim.visible_truth leaves out faces it does not see)")
+    truth_arrays(truth)
 
 
 def _score_corners(fs: FeatureSet, truth: Any, dont_faces: np.ndarray, cfg: ScoreConfig):
@@ -294,7 +291,7 @@ def explained_fraction(fs: FeatureSet, scan: Scan, sigma: float = 0.005) -> tupl
     n_valid = int(np.count_nonzero(scan.valid))
     if n_valid == 0:
         return float("nan"), float("nan")
-    best = ray_residuals(lines, scan)  # inf where no line covers a valid beam
+    best = _ray_residuals(lines, scan)  # inf where no line covers a valid beam
     inlier = best <= 3.0 * sigma
     explained = int(np.count_nonzero(inlier))
     rms = float(np.sqrt(np.mean(best[inlier] ** 2))) if explained else float("nan")

@@ -4,7 +4,9 @@ argument, never a raw numpy / Python exception, a silent cast or a lost file (fu
 
 from __future__ import annotations
 
+import dataclasses
 import re
+from typing import Any
 
 import numpy as np
 import pytest
@@ -679,6 +681,55 @@ def test_explained_fraction_of_another_scans_features() -> None:
         explained_fraction(fs, short)
     with pytest.raises(ScanTypeError, match=r"^scan: expected an lms200.Scan, got Record \(a log record: pass record.scan\)"):
         explained_fraction(fs, Record(scan))  # type: ignore[arg-type]
+
+
+def test_the_real_data_and_scoring_helpers_name_a_bad_argument() -> None:
+    """features.realdata / features.scoring functions that take scans or lines, given None or
+    another type: each was an AttributeError or TypeError from deep inside (ray_residuals(None,
+    scan): 'NoneType' object has no attribute 'line_array'; truth_lines(None): ... 'segments';
+    scoring.truth_lines(None): 'NoneType' object is not subscriptable); now an InputError or
+    ScanTypeError (both LmsbenchErrors) naming the argument."""
+    from features.errors import ScanTypeError
+    from features.realdata import RealDataConfig, ray_residuals, repeat_counts, scan_measures, truncated_normal_rms
+    from features.realdata import truth_lines as exact_lines
+    from features.scoring import ScoreConfig, line_compatibility
+    from features.scoring import truth_lines as normal_form
+
+    fs, truth, scan = _scored_scene()
+    lines = fs.line_array()
+    pose = (0.0, 0.0, 0.0)
+    bad: list[tuple[Any, str]] = [
+        (lambda: ray_residuals(None, scan), "^fs: expected a features.FeatureSet, got NoneType$"),
+        (lambda: ray_residuals(lines, None), "^scan: expected an lms200.Scan, got NoneType$"),
+        (lambda: ray_residuals(lines[:, :6], scan), r"^fs: a line array must be \(k, 8\) numbers"),   # was a reshape ValueError
+        (lambda: ray_residuals(lines + [0, 0, 0, 0, 0, 0, 0, 400], scan), "^fs: its lines span beams"),  # clipped, silently
+        (lambda: exact_lines(None), r"^truth: must have the fields of sim.VisibleTruth \(segments, segment_beams\); "
+                                    "NoneType lacks segments, segment_beams$"),
+        (lambda: exact_lines(dataclasses.replace(truth, segment_beams=truth.segment_beams[:1])),
+         r"^truth.segment_beams: must be \(\d+, 2\) to match"),                                      # was a broadcast ValueError
+        (lambda: repeat_counts(None, pose, fs, pose, scan), "^fs_a: expected a features.FeatureSet, got NoneType$"),
+        (lambda: repeat_counts(fs, pose, None, pose, scan), "^fs_b: expected a features.FeatureSet, got NoneType$"),
+        (lambda: repeat_counts(fs, pose, fs, pose, None), "^scan_b: expected an lms200.Scan, got NoneType$"),
+        (lambda: repeat_counts(fs, None, fs, pose, scan), r"^pose_a: must be three numbers \(x m, y m, theta rad\), got None$"),
+        (lambda: repeat_counts(fs, pose, fs, (0.0, np.nan, 0.0), scan), "^pose_b: must be finite"),
+        (lambda: repeat_counts(fs, pose, fs, pose, scan, {"tolerance_m": 1}), "^config: must be a features.realdata.RealDataConfig"),
+        (lambda: scan_measures(fs, scan, 0.005, {"tolerance_m": 1}), "^config: must be a features.realdata.RealDataConfig"),
+        (lambda: scan_measures(None, scan, 0.005), "^fs: expected a features.FeatureSet, got NoneType$"),
+        (lambda: truncated_normal_rms(None, 0.03), "^sigma, tolerance: must be > 0 m, got None and 0.03$"),  # was a TypeError
+        (lambda: normal_form(None), r"^segments: must be \(k, 4\) rows of numbers, got NoneType"),
+        (lambda: normal_form(truth.segments[:, :2]), r"^segments: must be \(k, 4\) rows of numbers, got shape \(\d+, 2\)$"),
+        (lambda: line_compatibility(None, truth.segments, ScoreConfig()), r"^lines: must be \(k, 6\) rows"),
+        (lambda: line_compatibility(lines, None, ScoreConfig()), r"^seg: must be \(k, 4\) rows"),
+        (lambda: line_compatibility(lines, truth.segments, None), "^cfg: must be a features.scoring.ScoreConfig, got NoneType$"),
+    ]
+    for call, message in bad:
+        with pytest.raises((InputError, ScanTypeError), match=message) as info:
+            call()
+        assert isinstance(info.value, LmsbenchError)
+    # the good calls give what they gave
+    assert ray_residuals(fs, scan).tolist() == ray_residuals(lines, scan).tolist()
+    assert repeat_counts(fs, pose, fs, pose, scan, RealDataConfig()) == (len(fs.lines), len(fs.lines))
+    assert exact_lines(truth).shape == (len(truth.segments), 8)
 
 
 # -- CARMEN logs ---------------------------------------------------------------------------------------
