@@ -322,12 +322,13 @@ def repeat_counts(fs_a: FeatureSet | np.ndarray, pose_a: tuple[float, float, flo
 
     Raises:
         InputError: naming the argument: lines that are no FeatureSet or (k, 8) array (None was an
-            AttributeError), ``fs_b`` past ``scan_b``'s beams, a pose that is not three finite numbers.
+            AttributeError), a pose that is not three finite numbers.
         ScanTypeError: a ``scan_b`` that is no lms200.Scan.
     """
     cfg = _config(config)
-    a = _lines(fs_a, "fs_a")
-    b = _checked_lines(fs_b, scan_b, "fs_b", "scan_b")
+    a, b = _lines(fs_a, "fs_a"), _lines(fs_b, "fs_b")  # (their beam spans are not used)
+    if not isinstance(scan_b, Scan):
+        raise not_a_scan(scan_b, "scan_b")
     pose_a, pose_b = _pose("pose_a", pose_a), _pose("pose_b", pose_b)
     if a.shape[0] == 0:
         return 0, 0
