@@ -405,7 +405,9 @@ class SlamConfig:
     preset: "default" (motion from scan matching, keyframe pose graph with loop closures, see
         :mod:`slam.scanslam`) or "paper" (the paper's EKF of section 4.1: constant-velocity model,
         line landmarks, :mod:`slam.filter`).
-    extractor, extractor_params: ``features.extract(scan, method=extractor, **extractor_params)``.
+    extractor, extractor_params: ``features.extract(scan, method=extractor, **extractor_params)``;
+        the method must be registered (``features.available_methods()``) and the params build its
+        config, both checked here.
     motion, observations: both presets. alignment, keyframes, loop_closure: the default pipeline.
     association, landmarks, prealign: the paper preset's EKF. consistency: divergence checks.
     """
@@ -431,6 +433,7 @@ class SlamConfig:
         if not isinstance(self.extractor_params, dict) or not all(isinstance(k, str) for k in self.extractor_params):
             raise SlamConfigError(f"extractor_params: must be a mapping of the method's config fields, "
                                   f"got {self.extractor_params!r}")
+        _check_extractor(self.extractor, self.extractor_params)
         for name, cls in SECTIONS.items():
             value = getattr(self, name)
             if isinstance(value, dict):
@@ -526,6 +529,27 @@ class SlamConfig:
         if unknown:
             raise SlamConfigError(f"unknown SLAM config field(s) {unknown}; known: {sorted(known)}")
         return cls(**values)
+
+
+def _check_extractor(method: str, params: dict[str, Any]) -> None:
+    """``method`` is registered in ``features.registry`` and ``params`` build its config: checked
+    when the SlamConfig is built (``extractor="nope"`` was taken and failed when the run started).
+    A user's ``MODULE:FUNCTION`` extractor must be registered first (the command line does that)."""
+    from features.registry import UnknownMethodError, available_methods, is_method, make_config
+
+    if not is_method(method):
+        raise SlamConfigError(f"extractor: unknown extraction method {method!r}; registered methods "
+                              f"(features.registry): {', '.join(available_methods())}")
+    if not params:  # a method's default config is built and checked when it registers
+        return
+    try:
+        make_config(method, **params)
+    except UnknownMethodError as exc:  # "unknown parameter(s) [...] for method ...; known: [...]"
+        raise SlamConfigError(f"extractor_params: {exc}") from None
+    except LmsbenchError as exc:  # a ConfigError, whose message starts with the field's name
+        raise SlamConfigError(f"extractor_params.{exc}") from None
+    except (TypeError, ValueError) as exc:  # a user method's own config type
+        raise SlamConfigError(f"extractor_params: {' '.join(str(exc).split())}") from None
 
 
 def _check_search(al: AlignmentConfig) -> None:

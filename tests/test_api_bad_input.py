@@ -959,3 +959,41 @@ def test_sensor_range_noise_is_capped_like_the_baselines(field: str) -> None:
     cfg = make_config("sensor", **{field: MAX_SIGMA_M})  # the cap itself is taken
     assert getattr(cfg, field) == MAX_SIGMA_M
     assert extract(Scan.lms200(np.full(361, 3.0)), "sensor").method == "sensor"
+
+
+# -- SLAM config: the extractor ------------------------------------------------------------------------
+@pytest.mark.parametrize("kw, message", [
+    (dict(extractor="nope"), r"^extractor: unknown extraction method 'nope'; registered methods \(features.registry\): "
+                             r"sensor, split_merge, iepf, hough, ransac"),   # was taken; failed when the run started
+    (dict(extractor="Sensor"), "^extractor: unknown extraction method 'Sensor'"),
+    (dict(extractor_params={"bogus": 1}), r"^extractor_params: unknown parameter\(s\) \['bogus'\] for method 'sensor'"),
+    (dict(extractor="hough", extractor_params={"k": 3}), r"^extractor_params: unknown parameter\(s\) \['k'\] for method 'hough'"),
+    (dict(extractor_params={"k": -3}), r"^extractor_params.k: must be an integer >= 1"),
+    (dict(extractor="split_merge", extractor_params={"split_threshold": "x"}), "^extractor_params.split_threshold: must be"),
+])
+def test_slam_config_checks_its_extractor_when_built(kw: dict, message: str) -> None:
+    from slam import SlamConfig, SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=message) as info:
+        SlamConfig(**kw)
+    assert isinstance(info.value, LmsbenchError) and isinstance(info.value, ValueError)
+    with pytest.raises(SlamConfigError, match=message):  # the YAML path (`lmsbench slam --config FILE`)
+        SlamConfig.from_dict(kw)
+
+
+def test_slam_config_takes_registered_extractors_and_their_params() -> None:
+    from features import register
+    from features.registry import _REGISTRY
+    from slam import SlamConfig
+
+    assert SlamConfig(extractor="ransac", extractor_params={"hypotheses": 32}).extractor_params == {"hypotheses": 32}
+
+    @dataclasses.dataclass(frozen=True)
+    class MyConfig:
+        gain: float = 1.0
+
+    register("test_slam_mine", MyConfig, lambda scan, cfg: None)  # type: ignore[arg-type, return-value]
+    try:
+        assert SlamConfig(extractor="test_slam_mine", extractor_params={"gain": 2.0}).extractor == "test_slam_mine"
+    finally:
+        _REGISTRY.pop("test_slam_mine", None)
