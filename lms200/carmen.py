@@ -40,6 +40,7 @@ import io
 import lzma
 import math
 import re
+import stat
 import tarfile
 import zlib
 from dataclasses import dataclass, field
@@ -70,6 +71,10 @@ RANGE_MIN_PARAM = "lmsbench_range_min"  # m: range_min of the scans that follow 
 POSED_LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages that carry poses
 RAW_LASER_KINDS = ("RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4")  # laser messages without poses
 LASER_KINDS = POSED_LASER_KINDS + RAW_LASER_KINDS  # laser messages read (one kind per pass)
+#: why a pipe (``<(zcat LOG)``, a named pipe) is refused: a log is read more than once, which a pipe cannot be
+PIPE_REASON = ("a log is read more than once (its first lines to choose the laser, then every line; compare and "
+               "sim2real read it again, for its noise), which a pipe cannot be: give the log file itself (gzip, "
+               "bzip2 and xz logs are read as they are) or save the stream to a file first (zcat LOG > FILE)")
 DEFAULT_TOPIC_LINES = 10_000  # lines looked at to choose the default laser kind (and to tell junk from a log)
 _MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]{2,}")  # how every CARMEN message line starts (ODOM, PARAM, FLASER, ...; a lone capital in binary junk is none)
 ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
@@ -177,7 +182,9 @@ class CarmenReader:
                  geometry: LaserGeometry | None = None) -> None:
         self.path = Path(path)
         if not self.path.is_file():
-            what = "is not a regular file (a device or a pipe)" if self.path.exists() else "does not exist"
+            if self.path.exists() and stat.S_ISFIFO(self.path.stat().st_mode):
+                raise LogNotFoundError(f"{self.path} is not a regular file but a pipe: {PIPE_REASON}")
+            what = "is not a regular file (a device or a socket)" if self.path.exists() else "does not exist"
             raise LogNotFoundError(f"no such log file: {self.path} {what}")
         if topic is not None and topic not in LASER_KINDS:  # said "LOG:0: topic: ...", a line the log has not
             counts = self._laser_counts()
