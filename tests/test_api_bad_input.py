@@ -997,3 +997,34 @@ def test_slam_config_takes_registered_extractors_and_their_params() -> None:
         assert SlamConfig(extractor="test_slam_mine", extractor_params={"gain": 2.0}).extractor == "test_slam_mine"
     finally:
         _REGISTRY.pop("test_slam_mine", None)
+
+
+# -- SLAM config: ranges a run needs (fuzzing of 2026-12-04: each value built, then run on a 3 s office run) --
+@pytest.mark.parametrize("section, field", [("alignment", "sigma_point"), ("motion", "sigma_lateral"),
+                                            ("observations", "sigma_rho"), ("observations", "sigma_alpha_obs"),
+                                            ("observations", "sigma_corner"), ("prealign", "sigma_xy"),
+                                            ("prealign", "sigma_phi"), ("prealign", "scan_velocity_sigma")])
+@pytest.mark.parametrize("value", [1e300, 1e-300])
+def test_slam_noise_stds_are_bounded_when_built(section: str, field: str, value: float) -> None:
+    """1e300 was taken and the run failed with OverflowError (its square); 1e-300 (its inverse
+    square) likewise, or gtsam's indeterminate system for loop_closure.prior_sigma."""
+    from slam import SlamConfig, SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=rf"^{section}.{field}: must be in \[1e-06, 1000\] .*\(a std whose square "
+                                              rf"and inverse square stay finite\), got {re.escape(f'{value:g}')}"):
+        SlamConfig(**{section: {field: value}})
+    for ok in (1e-6, 1e3):  # the bounds are taken (and run: tests of the fuzzing, not repeated here)
+        assert getattr(getattr(SlamConfig(**{section: {field: ok}}), section), field) == ok
+
+
+def test_slam_prior_sigma_and_icp_iterations_are_bounded_when_built() -> None:
+    """loop_closure.prior_sigma=1e-300 ran into gtsam's 'Indeterminate linear system'; alignment.
+    max_iterations / fine_iterations = 1e300 failed in numba's typing of the compiled ICP."""
+    from slam import SlamConfig, SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=r"^loop_closure.prior_sigma: must be in \[1e-06, 1000\]"):
+        SlamConfig(loop_closure={"prior_sigma": 1e-300})
+    for field in ("max_iterations", "fine_iterations"):
+        with pytest.raises(SlamConfigError, match=rf"^alignment.{field}: must be at most 1000 Gauss-Newton steps, got \d+"):
+            SlamConfig(alignment={field: 1e300})
+        assert getattr(SlamConfig(alignment={field: 1000}).alignment, field) == 1000
