@@ -185,8 +185,9 @@ def truncated_normal_rms(sigma: float, tolerance: float) -> float:
     """RMS (m) of a zero-mean normal of std ``sigma`` (m) over its values within +-``tolerance``
     (m): the ray RMSE that exact lines score under Gaussian range noise, ``sigma sqrt(1 - 2 c
     phi(c) / (2 Phi(c) - 1))`` with c = tolerance / sigma."""
-    if not (checks.is_real(sigma) and checks.is_real(tolerance) and sigma > 0 and tolerance > 0):  # None: TypeError
-        raise InputError(f"sigma, tolerance: must be > 0 m, got {sigma!r} and {tolerance!r}")
+    if not all(checks.is_real(v) and checks.finite(v) and v > 0 for v in (sigma, tolerance)):  # None: TypeError;
+        # inf (or 10**400) sigma: ZeroDivisionError; inf tolerance: nan
+        raise InputError(f"sigma, tolerance: must be finite numbers > 0 m, got {sigma!r} and {tolerance!r}")
     c = tolerance / sigma
     inside = math.erf(c / math.sqrt(2.0))  # 2 Phi(c) - 1
     density = math.exp(-0.5 * c * c) / math.sqrt(2.0 * math.pi)  # phi(c)

@@ -715,7 +715,9 @@ def test_the_real_data_and_scoring_helpers_name_a_bad_argument() -> None:
         (lambda: repeat_counts(fs, pose, fs, pose, scan, {"tolerance_m": 1}), "^config: must be a features.realdata.RealDataConfig"),
         (lambda: scan_measures(fs, scan, 0.005, {"tolerance_m": 1}), "^config: must be a features.realdata.RealDataConfig"),
         (lambda: scan_measures(None, scan, 0.005), "^fs: expected a features.FeatureSet, got NoneType$"),
-        (lambda: truncated_normal_rms(None, 0.03), "^sigma, tolerance: must be > 0 m, got None and 0.03$"),  # was a TypeError
+        (lambda: truncated_normal_rms(None, 0.03), "^sigma, tolerance: must be finite numbers > 0 m, got None and 0.03$"),  # TypeError
+        (lambda: truncated_normal_rms(np.inf, 0.03), "^sigma, tolerance: must be finite numbers > 0 m"),  # ZeroDivisionError
+        (lambda: truncated_normal_rms(0.01, np.inf), "^sigma, tolerance: must be finite numbers > 0 m"),  # was nan, silently
         (lambda: normal_form(None), r"^segments: must be \(k, 4\) rows of numbers, got NoneType"),
         (lambda: normal_form(truth.segments[:, :2]), r"^segments: must be \(k, 4\) rows of numbers, got shape \(\d+, 2\)$"),
         (lambda: line_compatibility(None, truth.segments, ScoreConfig()), r"^lines: must be \(k, 6\) rows"),
