@@ -99,6 +99,18 @@ class Scan:
         angles.setflags(write=False)
         object.__setattr__(self, "_angles", angles)
 
+    def __setstate__(self, state: dict) -> None:
+        """Unpickling and ``copy.deepcopy``: the fields as pickled, the arrays read-only again as
+        ``__post_init__`` left them (pickle restores arrays writable: an unpickled Scan, as a sweep's
+        worker process gets it, could be changed in place, and the extractors' compiled calls saw
+        a second array type)."""
+        for name, value in state.items():
+            object.__setattr__(self, name, value)
+        for name in ("ranges", "_angles"):
+            array = state.get(name)
+            if isinstance(array, np.ndarray):
+                array.setflags(write=False)
+
     # -- constructors -------------------------------------------------------------------------
     @classmethod
     def lms200(
