@@ -144,6 +144,35 @@ def test_slam_command_errors_are_one_line(tmp_path, capsys):
     assert "scans.clf" in err and len(err.strip().splitlines()) == 1
 
 
+def test_slam_config_files_name_a_bad_extractor_and_take_a_users_own(sim_folder, tmp_path, capsys, monkeypatch):
+    """SlamConfig now checks its extractor when built: a config file's `extractor: nope` and
+    `extractor_params` that --extractor's method lacks are one line naming the file; a file's
+    MODULE:FUNCTION extractor is registered before the config is built, so it still runs."""
+    from experiments.cli import main
+    from features.registry import _REGISTRY
+
+    (tmp_path / "nope.yaml").write_text("extractor: nope\n")
+    (tmp_path / "sigma.yaml").write_text("extractor_params: {sigma_r: 0.02}\n")
+    out = str(tmp_path / "o")
+    assert main(["slam", str(sim_folder), "--config", str(tmp_path / "nope.yaml"), "--out", out]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.endswith("nope.yaml: extractor: unknown extraction method 'nope'; registered methods "
+                        "(features.registry): sensor, split_merge, iepf, hough, ransac") and len(err.splitlines()) == 1
+    assert main(["slam", str(sim_folder), "--config", str(tmp_path / "sigma.yaml"), "--extractor", "hough", "--out", out]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "sigma.yaml: extractor_params: unknown parameter(s) ['sigma_r'] for method 'hough'" in err and len(err.splitlines()) == 1
+    (tmp_path / "slam_user_ext.py").write_text("from features import extract\n\n\ndef lines(scan):\n"
+                                               "    return extract(scan, 'split_merge')\n")
+    (tmp_path / "user.yaml").write_text("extractor: slam_user_ext:lines\n")
+    monkeypatch.chdir(tmp_path)
+    try:
+        assert main(["slam", str(sim_folder), "--config", "user.yaml", "--out", out, "--quiet", "--no-paper-baseline",
+                     "--max-scans", "10"]) == 0
+    finally:
+        _REGISTRY.pop("slam_user_ext:lines", None)
+    assert "extractor: slam_user_ext:lines" in (tmp_path / "o" / "config.yaml").read_text()
+
+
 def test_odometry_is_refused_outside_the_paper_preset(sim_folder, tmp_path, capsys):
     from experiments.cli import main
 

@@ -55,6 +55,8 @@ def _config(args: argparse.Namespace):
     from lms200 import LmsbenchError
     from slam import SlamConfig
 
+    from experiments.user_methods import ensure_method, is_user_method
+
     cfg = SlamConfig()
     if args.config:
         check_yaml(args.config, "a SLAM config.yaml")
@@ -74,8 +76,11 @@ def _config(args: argparse.Namespace):
                                  "put them under slam:")
             if not isinstance(raw["slam"], dict):
                 raise InputError(f"{args.config}: slam: must be a mapping of SLAM config fields, got {raw['slam']!r}")
+        fields = raw.get("slam", raw)
         try:
-            cfg = SlamConfig.from_dict(raw.get("slam", raw))
+            if isinstance(fields.get("extractor"), str) and is_user_method(fields["extractor"]):
+                ensure_method(fields["extractor"])  # registered before SlamConfig checks the name
+            cfg = SlamConfig.from_dict(fields)
         except LmsbenchError as exc:
             raise InputError(f"{args.config}: {exc}") from None
     changes = {}
@@ -89,7 +94,10 @@ def _config(args: argparse.Namespace):
         changes["observations"] = dataclasses.replace(cfg.observations, use_corners=True)
     if args.odometry:
         changes["motion"] = dataclasses.replace(cfg.motion, use_odometry=True)
-    cfg = dataclasses.replace(cfg, **changes)
+    try:  # --extractor with the file's extractor_params: SlamConfig checks them against the method
+        cfg = dataclasses.replace(cfg, **changes)
+    except LmsbenchError as exc:
+        raise InputError(f"{args.config}: {exc}" if args.config else str(exc)) from None
     _check_extractor(cfg, args.config)
     if cfg.motion.use_odometry and cfg.preset != "paper":
         raise LmsbenchError("--odometry drives the paper preset's filter: add --preset paper (the default pipeline uses no odometry)")
