@@ -114,10 +114,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     previous = {sig: signal.signal(sig, interrupt.handler) for sig in STOP_SIGNALS} if main_thread else {}
     try:
         default_threads()  # a bad $LMSBENCH_THREADS is refused before any work, by every command
-        return int(args.func(args) or 0)
+        status = int(args.func(args) or 0)
+        sys.stdout.flush()  # here, not at exit: a reader that went away (`| head`) is said below
+        return status
     except (LmsbenchError, OSError) as exc:  # OSError: missing files, bad paths, unreachable hosts, timeouts
         if interrupt.timer is not None or _from_interrupt(exc):  # what Ctrl-C broke: not the input's error
             return _interrupted(interrupt, name)
+        if isinstance(exc, BrokenPipeError) and _stdout_closed():
+            return _stdout_gone()
         _end_progress_bars()
         print(f"lmsbench {name}: error: {_one_line(exc)}{_skip_hint(exc, args)}", file=sys.stderr)
         return 2
@@ -137,6 +141,35 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+
+
+PIPE_CLOSED_STATUS = 141  # 128 + SIGPIPE: what a shell reports for a command whose reader went away
+
+
+def _stdout_closed() -> bool:
+    """Whether stdout is a pipe whose reader has gone (`lmsbench info LOG | head -1`)."""
+    try:
+        import select
+
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+        return any(events & (select.POLLERR | select.POLLHUP) for _, events in poller.poll(0))
+    except (OSError, ValueError, AttributeError):  # no file descriptor (a test's capture), no poll
+        return False
+
+
+def _stdout_gone() -> int:
+    """A reader of stdout that went away is no error of the command: no message (it was 'error:
+    [Errno 32] Broken pipe', exit 2, or with buffered output Python's 'Exception ignored ...
+    BrokenPipeError' at exit, status 120), the status a shell gives for SIGPIPE. What is left in
+    stdout's buffer goes to /dev/null, so the interpreter's last flush does not fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
+    return PIPE_CLOSED_STATUS
 
 
 def _interrupted(interrupt: _Interrupt, name: str) -> int:

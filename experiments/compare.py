@@ -28,7 +28,7 @@ import yaml
 
 from features.registry import available_methods, backend_of, get_method, make_config
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
-from features.scoring import ScoreConfig, explained_fraction, prf, score_scan
+from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
 
 WORLD_NAMES = ("office", "corridor", "angles", "pillars", "random", "cluttered", "mit")  # == sim.WORLD_NAMES (sim loads lazily)
@@ -400,7 +400,7 @@ def compare(
             if max_scans is not None and k >= max_scans:
                 break
             scan = rec.scan
-            truth = src.truth_of(rec) if src.truth_of else None
+            truth = check_truth(src.truth_of(rec)) if src.truth_of else None  # checked once, scored per method
             n_valid = int(np.count_nonzero(scan.valid))
             exact = _truth_row(truth, scan, sigma_r, rd_cfg) if truth is not None else {}
             shift = k % len(runs)

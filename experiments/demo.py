@@ -13,6 +13,7 @@ import pandas as pd
 
 from experiments.figures.make import draw_figures, draw_sweep
 from experiments.figures.study import StudyConfig, run_study, save_tables
+from experiments.figures.tables import panels_log_name
 from experiments.report import Section, figure, markdown_table, write_report
 
 #: The demo's sweep: window size k of the paper's extractor against range noise (a few seconds).
@@ -207,8 +208,7 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
     f9 = Section("Extracted features (Fig. 9)", [])
     for name, caption in (("fig9_office", "Fig. 9: lines (red, a star at the midpoint) and corners (diamonds), "
                                           f"simulated {cfg.world}, sensor frame."),
-                          ("fig9_intel", "Fig. 9: the same on scans of the Intel Research Lab log (real data, "
-                                         "180 beams at 1°, cm-mode ranges: the extractor's defaults, its range noise estimated from each scan).")):
+                          ("fig9_intel", _real_log_caption(tables))):
         if name in figs:
             f9.text.append(figure(f"figures/{name}.png", caption))
     sections.append(f9)
@@ -241,6 +241,17 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
     if notes:
         sections.append(Section("Notes", [f"- {n}" for n in notes]))
     return sections
+
+
+def _real_log_caption(tables: dict[str, pd.DataFrame]) -> str:
+    """Fig. 9's caption for the real log's panels: the Intel log's (the default), else the log's
+    name (`demo --log` takes any log: it was captioned Intel, 180 beams at 1 deg, whatever it was)."""
+    name = panels_log_name(tables["intel_points"]) if "intel_points" in tables else "Intel"
+    if name == "Intel":
+        return ("Fig. 9: the same on scans of the Intel Research Lab log (real data, 180 beams at 1°, cm-mode "
+                "ranges: the extractor's defaults, its range noise estimated from each scan).")
+    return (f"Fig. 9: the same on scans of the real log {name} (the extractor's defaults, its range noise "
+            "estimated from each scan).")
 
 
 def _article(word: str) -> str:

@@ -13,6 +13,7 @@ import fnmatch
 import math
 import os
 import re
+import stat
 import tempfile
 from pathlib import Path
 from dataclasses import dataclass, field
@@ -20,7 +21,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 import yaml
 
-from lms200.carmen import COMPRESSION_SUFFIXES, READ_ERRORS, archive_kind, compression, open_bytes
+from lms200.carmen import COMPRESSION_SUFFIXES, PIPE_REASON, READ_ERRORS, archive_kind, compression, open_bytes
 from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
 from lms200.timing import MAX_DURATION_S, MIN_DURATION_S  # a simulated run's bounds (s)
 from lms200.yamlio import load as load_yaml
@@ -261,6 +262,8 @@ def check_log(path: str | os.PathLike) -> Path:
         if not isinstance(info, dict) or not isinstance(info.get("rosbag2_bagfile_information"), dict):
             raise InputError(f"{meta}: not a ROS 2 bag's metadata.yaml (no rosbag2_bagfile_information mapping)")
         return p
+    if stat.S_ISFIFO(p.stat().st_mode):  # <(zcat LOG): refused as every pipe is, saying why
+        raise InputError(f"{p}: a pipe (such as <(zcat LOG)), not a file: {PIPE_REASON}")
     head = _head(p)
     if p.suffix == ".bag":
         if not head.startswith(b"#ROSBAG V2.0"):

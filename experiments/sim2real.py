@@ -726,12 +726,15 @@ def bound_warnings(rough: RoughFit | None, scale: ScaleFit | None = None,
 def small_sample_warnings(n_real: int, n_sim: int, n_probe: int | None = None) -> list[str]:
     """One line when a side has fewer than MIN_SCANS scans (real, simulated, probe scans per probe
     value; None: no fit), else none."""
-    few = [f"{n} {what}" for n, what in ((n_real, "real scans"), (n_sim, "simulated scans"),
-                                         (n_probe, "probe scans per probe value")) if n is not None and n < MIN_SCANS]
-    if not few:
+    sides = ((n_real, "real scans", "a higher --max-scans or a lower --stride"),
+             (n_sim, "simulated scans", "more --seeds, a longer --duration or a higher --rate-hz"),
+             (n_probe, "probe scans per probe value", "more --probe-seeds or a longer --probe-duration"))
+    short = [(f"{n} {what}", how) for n, what, how in sides if n is not None and n < MIN_SCANS]
+    if not short:
         return []
-    return [f"only {' and '.join(few)} (fewer than {MIN_SCANS}): the figures are too noisy to compare real and simulated "
-            "(more with --max-scans / --stride, --seeds / --duration, --probe-duration / --probe-seeds)"]
+    # the options that raise the short sides' counts only (it named all six whatever was short; not --rate-hz)
+    return [f"only {' and '.join(few for few, _ in short)} (fewer than {MIN_SCANS}): the figures are too noisy to "
+            f"compare real and simulated (more with {'; '.join(how for _, how in short)})"]
 
 
 def _table(summary: pd.DataFrame, real: str, sim: str, methods: list[str]) -> pd.DataFrame:

@@ -99,8 +99,23 @@ def summary(rows: pd.DataFrame) -> pd.DataFrame:
     return out.drop(columns=["ray_ss", "n_explained"]).reset_index()
 
 
+USAGE = "usage: python -m experiments.threshold_audit [WORLD] [OUT.csv]"
+
+
 def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else argv
+    if any(a in ("-h", "--help") for a in args):  # was taken for a world: a traceback, "unknown world '--help'"
+        print(f"{USAGE}\n\n{__doc__}")
+        return 0
+    if len(args) > 2 or any(a.startswith("-") for a in args):
+        print(f"{USAGE}\nthreshold_audit: error: unrecognized arguments: {' '.join(args)}", file=sys.stderr)
+        return 2
+    import sim
+
+    if args and args[0] not in sim.WORLD_NAMES:  # before the first simulation, in one line
+        print(f"{USAGE}\nthreshold_audit: error: unknown world {args[0]!r}; known worlds: {', '.join(sim.WORLD_NAMES)}",
+              file=sys.stderr)
+        return 2
     rows = run(args[0] if args else "office")
     if len(args) > 1:
         rows.to_csv(args[1], index=False)

@@ -45,6 +45,9 @@ from .errors import not_a_scan
 from .types import FeatureSet
 
 
+TRUTH_FIELDS = ("segments", "segment_beams", "corners", "corner_beams")  # sim.VisibleTruth's, as the scoring reads them
+
+
 @dataclass(frozen=True)
 class RealDataConfig:
     """Tolerances of the real-data measures (see the module docstring).
@@ -62,10 +65,49 @@ class RealDataConfig:
     repeat_angle_rad: float = math.radians(2.0)
 
 
-def _lines(fs: FeatureSet | np.ndarray) -> np.ndarray:
-    """(k, 8) rho, alpha, x0, y0, x1, y1, first, last of a FeatureSet (or such an array)."""
-    arr = fs if isinstance(fs, np.ndarray) else fs.line_array()
-    return np.asarray(arr, dtype=np.float64).reshape(-1, 8)
+def _lines(fs: FeatureSet | np.ndarray, name: str = "fs") -> np.ndarray:
+    """(k, 8) rho, alpha, x0, y0, x1, y1, first, last of a FeatureSet (or such an array);
+    InputError naming ``name`` for anything else (None was an AttributeError: no line_array)."""
+    if not isinstance(fs, np.ndarray):
+        check_features(fs, name)
+        return np.asarray(fs.line_array(), dtype=np.float64).reshape(-1, 8)
+    if fs.dtype.kind not in "iuf" or fs.size % 8 or fs.ndim > 2 or (fs.ndim == 2 and fs.shape[1] != 8):
+        raise InputError(f"{name}: a line array must be (k, 8) numbers (rho, alpha, x0, y0, x1, y1, first, last: "
+                         f"FeatureSet.line_array()), got shape {fs.shape} of {fs.dtype}")
+    return np.asarray(fs, dtype=np.float64).reshape(-1, 8)
+
+
+def truth_arrays(truth: Any, need: tuple[str, ...] = TRUTH_FIELDS, finite: bool = True) -> dict[str, np.ndarray]:
+    """The fields ``need`` of a ground truth (``sim.VisibleTruth``'s: segments (k, 4) with
+    segment_beams (k, 2), corners (m, 4) with corner_beams (m,)) as float64 arrays, checked: there,
+    numeric, of consistent shapes and (``finite``) finite. Reshape them as the scoring reads them.
+
+    Raises:
+        InputError: naming ``truth`` or the field (another object, None included, was an
+            AttributeError deep in the scoring; nan faces were counted as missed, silently).
+    """
+    missing = [name for name in need if not hasattr(truth, name)]
+    if missing:
+        raise InputError(f"truth: must have the fields of sim.VisibleTruth ({', '.join(need)}); "
+                         f"{type(truth).__name__} lacks {', '.join(missing)}")
+    try:
+        arrays = {name: np.asarray(getattr(truth, name), dtype=np.float64) for name in need}
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"truth: its fields must be numeric arrays ({exc})") from None
+    for name in ("segments", "corners"):
+        a = arrays.get(name)
+        if a is not None and (a.size % 4 or (a.ndim == 2 and a.shape[1] != 4) or a.ndim > 2):
+            raise InputError(f"truth.{name}: must be (k, 4) rows, got shape {a.shape}")
+    k = arrays["segments"].size // 4 if "segments" in arrays else 0
+    m = arrays["corners"].size // 4 if "corners" in arrays else 0
+    shapes = {"segments": (k, 4), "segment_beams": (k, 2), "corners": (m, 4), "corner_beams": (m,)}
+    for name, a in arrays.items():
+        shape = shapes[name]
+        if a.size != math.prod(shape):  # math.prod: np.prod was 4 us a call, 4 calls a scored scan
+            raise InputError(f"truth.{name}: must be {shape} to match truth.segments / truth.corners, got shape {a.shape}")
+        if finite and not np.isfinite(a).all():
+            raise InputError(f"truth.{name}: must be finite (sim.visible_truth leaves out faces it does not see)")
+    return arrays
 
 
 def truth_lines(truth: Any) -> np.ndarray:
@@ -76,9 +118,12 @@ def truth_lines(truth: Any) -> np.ndarray:
         truth: a ``sim.VisibleTruth`` (its ``segments`` (k, 4) x1, y1, x2, y2 in the sensor frame
             and ``segment_beams`` (k, 2) first and last beam); faces without a visible part (nan
             rows) are left out.
+
+    Raises:
+        InputError: naming ``truth`` or its field, for anything else (None was an AttributeError).
     """
-    seg = np.asarray(truth.segments, dtype=np.float64).reshape(-1, 4)
-    beams = np.asarray(truth.segment_beams, dtype=np.float64).reshape(-1, 2)
+    arrays = truth_arrays(truth, ("segments", "segment_beams"), finite=False)
+    seg, beams = arrays["segments"].reshape(-1, 4), arrays["segment_beams"].reshape(-1, 2)
     keep = np.all(np.isfinite(seg), axis=1) & np.all(np.isfinite(beams), axis=1)
     seg, beams = seg[keep], beams[keep]
     nx, ny = -(seg[:, 3] - seg[:, 1]), seg[:, 2] - seg[:, 0]  # a normal of each face
@@ -88,10 +133,30 @@ def truth_lines(truth: Any) -> np.ndarray:
     return np.column_stack((np.abs(rho), alpha, seg, beams))
 
 
-def check_features(fs: object) -> None:
-    """InputError naming ``fs`` unless it is a FeatureSet (was an AttributeError deep inside)."""
+def check_features(fs: object, name: str = "fs") -> None:
+    """InputError naming ``name`` unless ``fs`` is a FeatureSet (was an AttributeError deep inside)."""
     if not isinstance(fs, FeatureSet):
-        raise InputError(f"fs: expected a features.FeatureSet, got {type(fs).__name__}")
+        raise InputError(f"{name}: expected a features.FeatureSet, got {type(fs).__name__}")
+
+
+def _checked_lines(fs: FeatureSet | np.ndarray, scan: Scan, name: str = "fs", scan_name: str = "scan") -> np.ndarray:
+    """``_lines(fs)`` of lines within ``scan``'s beams; ScanTypeError / InputError naming the argument."""
+    if not isinstance(scan, Scan):
+        raise not_a_scan(scan, scan_name)
+    lines = _lines(fs, name)
+    if lines.shape[0] and not (np.all(lines[:, 6] >= 0) and np.all(lines[:, 7] < len(scan))):
+        raise InputError(f"{name}: its lines span beams {int(lines[:, 6].min())}..{int(lines[:, 7].max())}, "
+                         f"the scan has {len(scan)} (features of another scan?)")
+    return lines
+
+
+def _config(config: object) -> RealDataConfig:
+    """``config`` or the default; InputError naming it unless a RealDataConfig (or None)."""
+    if config is None:
+        return RealDataConfig()
+    if not isinstance(config, RealDataConfig):
+        raise InputError(f"config: must be a features.realdata.RealDataConfig or None, got {type(config).__name__}")
+    return config
 
 
 def check_measure_args(fs: FeatureSet | np.ndarray, scan: Scan, sigma: object, sigma_name: str) -> np.ndarray:
@@ -113,19 +178,16 @@ def check_measure_args(fs: FeatureSet | np.ndarray, scan: Scan, sigma: object, s
     if isinstance(sigma, (bool, np.bool_)) or not isinstance(sigma, (int, float, np.integer, np.floating)) \
             or not (checks.finite(sigma) and sigma > 0):  # checks.finite: 10**400 is no OverflowError
         raise InputError(f"{sigma_name}: must be a finite number > 0 m (the range noise), got {sigma!r}")
-    lines = _lines(fs)
-    if lines.shape[0] and not (np.all(lines[:, 6] >= 0) and np.all(lines[:, 7] < len(scan))):
-        raise InputError(f"fs: its lines span beams {int(lines[:, 6].min())}..{int(lines[:, 7].max())}, "
-                         f"the scan has {len(scan)} (features of another scan?)")
-    return lines
+    return _checked_lines(fs, scan)
 
 
 def truncated_normal_rms(sigma: float, tolerance: float) -> float:
     """RMS (m) of a zero-mean normal of std ``sigma`` (m) over its values within +-``tolerance``
     (m): the ray RMSE that exact lines score under Gaussian range noise, ``sigma sqrt(1 - 2 c
     phi(c) / (2 Phi(c) - 1))`` with c = tolerance / sigma."""
-    if not (sigma > 0 and tolerance > 0):
-        raise InputError(f"sigma, tolerance: must be > 0 m, got {sigma!r} and {tolerance!r}")
+    if not all(checks.is_real(v) and checks.finite(v) and v > 0 for v in (sigma, tolerance)):  # None: TypeError;
+        # inf (or 10**400) sigma: ZeroDivisionError; inf tolerance: nan
+        raise InputError(f"sigma, tolerance: must be finite numbers > 0 m, got {sigma!r} and {tolerance!r}")
     c = tolerance / sigma
     inside = math.erf(c / math.sqrt(2.0))  # 2 Phi(c) - 1
     density = math.exp(-0.5 * c * c) / math.sqrt(2.0 * math.pi)  # phi(c)
@@ -134,8 +196,18 @@ def truncated_normal_rms(sigma: float, tolerance: float) -> float:
 
 def ray_residuals(fs: FeatureSet | np.ndarray, scan: Scan) -> np.ndarray:
     """(n,) ray residual of every beam (m): the smallest ``|r - rho / cos(b - alpha)|`` over the
-    lines whose beam span covers it; inf for beams no line covers and for beams that are not valid."""
-    lines = _lines(fs)
+    lines whose beam span covers it; inf for beams no line covers and for beams that are not valid.
+
+    Raises:
+        InputError: an ``fs`` that is no FeatureSet or (k, 8) line array (None was an
+            AttributeError), or whose lines reach past the scan's beams (features of another scan:
+            they were clipped onto its last beam). ScanTypeError: a ``scan`` that is no lms200.Scan.
+    """
+    return _ray_residuals(_checked_lines(fs, scan), scan)
+
+
+def _ray_residuals(lines: np.ndarray, scan: Scan) -> np.ndarray:
+    """:func:`ray_residuals` of lines already checked (``_checked_lines``)."""
     n = len(scan)
     best = np.full(n, np.inf)
     if lines.shape[0] == 0:
@@ -190,19 +262,30 @@ def scan_measures(fs: FeatureSet | np.ndarray, scan: Scan, sigma_r: float,
         sigma_r: range noise, 1 sigma (m), for the noise-scaled tolerance.
         config: tolerances.
     """
-    cfg = config or RealDataConfig()
+    cfg = _config(config)
     lines = check_measure_args(fs, scan, sigma_r, "sigma_r")
     n_valid = int(np.count_nonzero(scan.valid))
     lengths = np.hypot(lines[:, 4] - lines[:, 2], lines[:, 5] - lines[:, 3])
     mean_len = float(lengths.mean()) if lengths.size else float("nan")
     if n_valid == 0:
         return ScanMeasures(0, float("nan"), float("nan"), 0, float("nan"), lines.shape[0], mean_len)
-    res = ray_residuals(lines, scan)
+    res = _ray_residuals(lines, scan)
     ok = res <= cfg.tolerance_m
     n_ok = int(np.count_nonzero(ok))
     rmse = float(np.sqrt(np.mean(res[ok] ** 2))) if n_ok else float("nan")
     n_sigma = int(np.count_nonzero(res <= cfg.n_sigma * sigma_r))
     return ScanMeasures(n_valid, n_ok / n_valid, n_sigma / n_valid, n_ok, rmse, lines.shape[0], mean_len)
+
+
+def _pose(name: str, pose: object) -> tuple[float, float, float]:
+    """``pose`` as (x m, y m, theta rad) floats; InputError naming ``name`` unless three finite numbers."""
+    try:
+        x, y, th = (float(v) for v in pose)  # type: ignore[attr-defined]
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{name}: must be three numbers (x m, y m, theta rad), got {pose!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(th)):
+        raise InputError(f"{name}: must be finite (x m, y m, theta rad), got {pose!r}")
+    return x, y, th
 
 
 def _to_frame(lines: np.ndarray, pose_from: tuple[float, float, float],
@@ -237,9 +320,17 @@ def repeat_counts(fs_a: FeatureSet | np.ndarray, pose_a: tuple[float, float, flo
         fs_a, fs_b: lines of two scans (sensor frames).
         pose_a, pose_b: the sensor's world poses (x m, y m, theta rad) at the two scans.
         scan_b: the second scan (for the in-view test).
+
+    Raises:
+        InputError: naming the argument: lines that are no FeatureSet or (k, 8) array (None was an
+            AttributeError), a pose that is not three finite numbers.
+        ScanTypeError: a ``scan_b`` that is no lms200.Scan.
     """
-    cfg = config or RealDataConfig()
-    a, b = _lines(fs_a), _lines(fs_b)
+    cfg = _config(config)
+    a, b = _lines(fs_a, "fs_a"), _lines(fs_b, "fs_b")  # (their beam spans are not used)
+    if not isinstance(scan_b, Scan):
+        raise not_a_scan(scan_b, "scan_b")
+    pose_a, pose_b = _pose("pose_a", pose_a), _pose("pose_b", pose_b)
     if a.shape[0] == 0:
         return 0, 0
     rho, alpha, mid = _to_frame(a, pose_a, pose_b)

@@ -108,6 +108,12 @@ def get_method(name: str) -> Method:
     return _REGISTRY[name]
 
 
+def is_method(name: object) -> bool:
+    """``name`` is a registered method or a built-in one (whose module is not imported here: the
+    SLAM config checks its extractor's name at construction, cheaply)."""
+    return isinstance(name, str) and (name in _REGISTRY or name in _METHOD_MODULES)
+
+
 def available_methods() -> list[str]:
     """Names of the methods whose modules are installed."""
     names = []

@@ -20,7 +20,9 @@ message carries (FLASER odom fields, ROBOTLASER1 robot fields); ``.truth`` is th
 line directly preceding the laser message. SICK special codes stored as ranges (81.83 / 81.91 m in
 cm mode, 8.183 / 8.191 m in mm mode) map to +inf / nan (REP-117). The range unit comes from the
 ROBOTLASER1 accuracy field, a ``PARAM lmsbench_range_units mm|cm`` line (which this writer emits), or,
-for FLASER logs without it, from the values themselves (see :func:`infer_units`).
+for FLASER logs without it, from the values themselves (see :func:`infer_units`). No CARMEN laser line
+carries a ``range_min``: a scan's is 0 unless a ``PARAM lmsbench_range_min`` line (which this writer
+emits for scans whose range_min is not 0) gives it for the laser lines that follow.
 
 One laser is read per pass (``topic``: a message kind); by default the first kind that carries
 poses (FLASER, RLASER, ROBOTLASER1 / 2) up to ``DEFAULT_TOPIC_LINES`` lines after the first laser
@@ -38,6 +40,7 @@ import io
 import lzma
 import math
 import re
+import stat
 import tarfile
 import zlib
 from dataclasses import dataclass, field
@@ -64,9 +67,14 @@ from .scan import Scan, snap_angle
 
 UNITS_PARAM = "lmsbench_range_units"
 ODOMETRY_PARAM = "lmsbench_odometry"  # "absent": the pose fields of the scans that follow are not odometry
+RANGE_MIN_PARAM = "lmsbench_range_min"  # m: range_min of the scans that follow (no CARMEN laser line has the field; 0 without it)
 POSED_LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages that carry poses
 RAW_LASER_KINDS = ("RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4")  # laser messages without poses
 LASER_KINDS = POSED_LASER_KINDS + RAW_LASER_KINDS  # laser messages read (one kind per pass)
+#: why a pipe (``<(zcat LOG)``, a named pipe) is refused: a log is read more than once, which a pipe cannot be
+PIPE_REASON = ("a log is read more than once (its first lines to choose the laser, then every line; compare and "
+               "sim2real read it again, for its noise), which a pipe cannot be: give the log file itself (gzip, "
+               "bzip2 and xz logs are read as they are) or save the stream to a file first (zcat LOG > FILE)")
 DEFAULT_TOPIC_LINES = 10_000  # lines looked at to choose the default laser kind (and to tell junk from a log)
 _MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]{2,}")  # how every CARMEN message line starts (ODOM, PARAM, FLASER, ...; a lone capital in binary junk is none)
 ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
@@ -174,7 +182,9 @@ class CarmenReader:
                  geometry: LaserGeometry | None = None) -> None:
         self.path = Path(path)
         if not self.path.is_file():
-            what = "is not a regular file (a device or a pipe)" if self.path.exists() else "does not exist"
+            if self.path.exists() and stat.S_ISFIFO(self.path.stat().st_mode):
+                raise LogNotFoundError(f"{self.path} is not a regular file but a pipe: {PIPE_REASON}")
+            what = "is not a regular file (a device or a socket)" if self.path.exists() else "does not exist"
             raise LogNotFoundError(f"no such log file: {self.path} {what}")
         if topic is not None and topic not in LASER_KINDS:  # said "LOG:0: topic: ...", a line the log has not
             counts = self._laser_counts()
@@ -316,9 +326,10 @@ class CarmenReader:
                     odom: Pose2D | None
                     if kind in ("FLASER", "RLASER"):
                         geometry = self.geometry.merged(laser_geometry.from_params(kind, params))
-                        scan, odom = _parse_flaser(words, units, geometry)
+                        scan, odom = _parse_flaser(words, units, geometry, params.get(RANGE_MIN_PARAM, 0.0))
                     else:
-                        scan, odom = _parse_robotlaser(words, units, self.geometry.range_max)
+                        scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
+                                                       params.get(RANGE_MIN_PARAM, 0.0))
                         header = (words[2], words[3], words[4])  # start, fov, resolution as written
                         first = counts.setdefault(header, (len(scan), line_no))
                         _require(first[0] == len(scan),
@@ -337,7 +348,7 @@ class CarmenReader:
 
 def _param(words: list[str], params: dict[str, float], units: Units | None,
            has_odometry: bool) -> tuple[Units | None, bool]:
-    """Apply a PARAM line: the range unit, odometry flag and laser geometry; returns (units, odometry)."""
+    """Apply a PARAM line: the range unit, odometry flag, range_min and laser geometry; returns (units, odometry)."""
     _require(len(words) >= 3, "PARAM needs a name and a value")
     name, value = words[1], words[2]
     if name == UNITS_PARAM:
@@ -345,6 +356,10 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
         units = value  # type: ignore[assignment]
     elif name == ODOMETRY_PARAM:
         has_odometry = value != "absent"
+    elif name == RANGE_MIN_PARAM:
+        number = float(_floats([value], name)[0])
+        _require(math.isfinite(number) and number >= 0, f"{name} must be a finite number >= 0 (m), got {value!r}")
+        params[name] = number
     elif name in laser_geometry.GEOMETRY_PARAMS:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number > 0, f"{name} must be a finite number > 0, got {value!r}")
@@ -403,7 +418,8 @@ def _ranges(values: np.ndarray, units: Units | None, what: str) -> tuple[np.ndar
     return decode_logged_ranges(values, u), u
 
 
-def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry) -> tuple[Scan, Pose2D]:
+def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry,
+                  range_min: float = 0.0) -> tuple[Scan, Pose2D]:
     kind = words[0]
     _require(len(words) >= 2, f"{kind} needs a beam count")
     n = _count(words[1], "beam count")
@@ -413,12 +429,12 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     tail = _floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
     range_max = geometry.range_max if geometry.range_max is not None else LMS200_MAX_RANGE[u]
-    scan = Scan(ranges, snap_angle(angle_min), snap_angle(increment), 0.0, range_max, float(tail[6]))
+    scan = Scan(ranges, snap_angle(angle_min), snap_angle(increment), range_min, range_max, float(tail[6]))
     return scan, _pose(words, 2 + n + 3, f"{kind} odometry")
 
 
-def _parse_robotlaser(words: list[str], units: Units | None,
-                      range_max_override: float | None) -> tuple[Scan, Pose2D | None]:
+def _parse_robotlaser(words: list[str], units: Units | None, range_max_override: float | None,
+                      range_min: float = 0.0) -> tuple[Scan, Pose2D | None]:
     """A ROBOTLASER1 / 2 line (robot pose as odometry) or a RAWLASER1 .. 4 line (no pose)."""
     kind = words[0]
     tail_fields = 3 if kind.startswith("RAWLASER") else 14  # (poses, speeds, safety,) timestamps, host
@@ -449,7 +465,7 @@ def _parse_robotlaser(words: list[str], units: Units | None,
         range_max = range_max_override
     else:
         range_max = max_range if max_range > 0 else LMS200_MAX_RANGE["cm"]
-    scan = Scan(ranges, snap_angle(start), snap_angle(resolution), 0.0, range_max, stamp)
+    scan = Scan(ranges, snap_angle(start), snap_angle(resolution), range_min, range_max, stamp)
     if kind.startswith("RAWLASER"):
         return scan, None
     return scan, _pose(words, 10 + n + m + 3, f"{kind} robot pose")
@@ -507,7 +523,9 @@ def write_carmen(
     ``robot_front_laser_max`` lines, so any scan centred ahead reads back with its geometry. Ranges
     are written at the sensor unit (mm when range_max <= 8.183 m, else cm), +inf / nan as SICK codes 8183 / 8191; a ``PARAM lmsbench_range_units`` line records
     the unit, and ``PARAM lmsbench_odometry absent|present`` lines mark records without odometry
-    (their pose fields are written as zeros). ``flush=True`` pushes every scan to the file as soon
+    (their pose fields are written as zeros); no CARMEN laser line has a range_min field, so a
+    ``PARAM lmsbench_range_min`` line gives it (exactly, ``repr``) before the first scan whose
+    range_min differs from the one before (0 before the first scan, as the reader assumes). ``flush=True`` pushes every scan to the file as soon
     as it is written (for recorders: a crash or Ctrl-C loses nothing already received).
     Returns the number of scans written.
     """
@@ -519,6 +537,7 @@ def write_carmen(
     count = 0
     units: Units | None = None
     odometry: bool | None = None
+    range_min = 0.0  # what the reader assumes without a PARAM line
     flaser_params: dict[str, str] = {}
     with opener(path, "wt", encoding="ascii") as f:  # type: ignore[operator]
         f.write("# CARMEN log written by lmsbench\n")
@@ -535,6 +554,9 @@ def write_carmen(
             if odometry is None or odometry != (rec.odom is not None):
                 odometry = rec.odom is not None
                 f.write(f"PARAM {ODOMETRY_PARAM} {'present' if odometry else 'absent'} {hostname} 0\n")
+            if scan.range_min != range_min:
+                range_min = scan.range_min
+                f.write(f"PARAM {RANGE_MIN_PARAM} {range_min!r} {hostname} 0\n")
             stamp = f"{scan.stamp:.6f} {hostname} {scan.stamp:.6f}"
             if rec.truth is not None:
                 f.write(f"TRUEPOS {_pose_text(rec.truth)} {_pose_text(rec.odom)} {stamp}\n")

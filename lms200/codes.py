@@ -9,7 +9,7 @@ distance code is 8182.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Iterable, Literal
 
 import numpy as np
 
@@ -63,9 +63,10 @@ def check_codes(codes: object) -> np.ndarray:
     if c.dtype.kind not in "iuf":
         raise InputError(f"codes: must be raw LMS200 values (whole numbers 0..65535), got dtype {c.dtype}")
     if c.size and not (np.all(np.isfinite(c)) and np.all(c == np.rint(c)) and c.min() >= 0 and c.max() <= 0xFFFF):
-        raise InputError(f"codes: must be raw LMS200 values (whole numbers 0..65535), got values from "
-                         f"{np.nanmin(c) if np.isfinite(c).any() else c.flat[0]!r} to {np.nanmax(c) if np.isfinite(c).any() else c.flat[0]!r}"
-                         f"{' and nan / inf' if not np.all(np.isfinite(c)) else ''}")
+        finite = c[np.isfinite(c)]  # .item(): Python numbers, not numpy 2's "np.int64(-1)" in the message
+        got = f"values from {finite.min().item()!r} to {finite.max().item()!r}" if finite.size else "only nan / inf"
+        raise InputError(f"codes: must be raw LMS200 values (whole numbers 0..65535), got {got}"
+                         f"{' and nan / inf' if 0 < finite.size < c.size else ''}")
     return c
 
 
@@ -84,13 +85,31 @@ def real_numbers(ranges: object, error: type[Exception] = InputError) -> np.ndar
     except (TypeError, ValueError, OverflowError) as exc:
         raise error(f"ranges: cannot be read as float64 numbers ({exc})") from None
     check_real_kind(a.dtype, error)
+    if a.dtype.kind == "O":
+        check_real_items(a.flat, error)
+    elif isinstance(ranges, (list, tuple)):  # [True, 1.0] is a float64 array: its True is gone
+        check_real_items(ranges, error)
     return a
+
+
+REFUSED = "(bool, complex, text and dates are refused)"
+_NOT_NUMBER_ITEMS = (bool, np.bool_, str, bytes, np.str_, np.bytes_)  # float() takes them: True as 1.0 m, "2" as 2.0 m
 
 
 def check_real_kind(dtype: np.dtype, error: type[Exception] = InputError) -> None:
     """``error`` naming ``ranges`` unless ``dtype`` holds real numbers (int, float or object)."""
     if dtype.kind not in "iufO":
-        raise error(f"ranges: must be real numbers (m), got dtype {dtype} (bool, complex, text and dates are refused)")
+        raise error(f"ranges: must be real numbers (m), got dtype {dtype} {REFUSED}")
+
+
+def check_real_items(items: Iterable[object], error: type[Exception] = InputError) -> None:
+    """``error`` naming ``ranges`` and the first item that is a bool or text: the items of an
+    object array, or of a list or tuple, which numpy casts to float64 silently (True became 1.0 m,
+    "2" 2.0 m), while a bool or text array is refused by its dtype (:func:`check_real_kind`).
+    Nested lists are left to the shape check."""
+    for i, v in enumerate(items):
+        if isinstance(v, _NOT_NUMBER_ITEMS):
+            raise error(f"ranges: must be real numbers (m), got {type(v).__name__} {v!r} at index {i} {REFUSED}")
 
 
 def float64_copy(a: np.ndarray, error: type[Exception] = InputError) -> np.ndarray:

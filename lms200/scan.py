@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .codes import check_real_kind, finite_negative, float64_copy, real_numbers
+from .codes import check_real_items, check_real_kind, finite_negative, float64_copy, real_numbers
 from .errors import ScanError
 from .finite import overflow_text
 
@@ -52,7 +52,8 @@ class Scan:
 
     Raises:
         ScanError: (an ``LmsbenchError`` and a ``ValueError``) naming the field, when the fields are
-            inconsistent or ``ranges`` are not real numbers (complex, bool, text, dates are refused;
+            inconsistent or ``ranges`` are not real numbers (complex, bool, text, dates are refused,
+            bools and text among the items of an object array or list too;
             the masked beams of a numpy masked array become nan, invalid).
     """
 
@@ -97,6 +98,18 @@ class Scan:
         angles = self.angle_min + np.arange(r.size) * self.angle_increment
         angles.setflags(write=False)
         object.__setattr__(self, "_angles", angles)
+
+    def __setstate__(self, state: dict) -> None:
+        """Unpickling and ``copy.deepcopy``: the fields as pickled, the arrays read-only again as
+        ``__post_init__`` left them (pickle restores arrays writable: an unpickled Scan, as a sweep's
+        worker process gets it, could be changed in place, and the extractors' compiled calls saw
+        a second array type)."""
+        for name, value in state.items():
+            object.__setattr__(self, name, value)
+        for name in ("ranges", "_angles"):
+            array = state.get(name)
+            if isinstance(array, np.ndarray):
+                array.setflags(write=False)
 
     # -- constructors -------------------------------------------------------------------------
     @classmethod
@@ -206,6 +219,8 @@ def _ranges_view(ranges: object) -> np.ndarray:
     array become nan (invalid)."""
     if isinstance(ranges, np.ma.MaskedArray):
         check_real_kind(ranges.dtype, ScanError)
+        if ranges.dtype.kind == "O":
+            check_real_items(ranges.compressed(), ScanError)  # masked items become nan, whatever they hold
         ranges = np.ma.filled(ranges.astype(np.float64), np.nan)
     return real_numbers(ranges, ScanError)
 

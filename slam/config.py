@@ -405,7 +405,9 @@ class SlamConfig:
     preset: "default" (motion from scan matching, keyframe pose graph with loop closures, see
         :mod:`slam.scanslam`) or "paper" (the paper's EKF of section 4.1: constant-velocity model,
         line landmarks, :mod:`slam.filter`).
-    extractor, extractor_params: ``features.extract(scan, method=extractor, **extractor_params)``.
+    extractor, extractor_params: ``features.extract(scan, method=extractor, **extractor_params)``;
+        the method must be registered (``features.available_methods()``) and the params build its
+        config, both checked here.
     motion, observations: both presets. alignment, keyframes, loop_closure: the default pipeline.
     association, landmarks, prealign: the paper preset's EKF. consistency: divergence checks.
     """
@@ -431,6 +433,7 @@ class SlamConfig:
         if not isinstance(self.extractor_params, dict) or not all(isinstance(k, str) for k in self.extractor_params):
             raise SlamConfigError(f"extractor_params: must be a mapping of the method's config fields, "
                                   f"got {self.extractor_params!r}")
+        _check_extractor(self.extractor, self.extractor_params)
         for name, cls in SECTIONS.items():
             value = getattr(self, name)
             if isinstance(value, dict):
@@ -495,6 +498,15 @@ class SlamConfig:
             if not lo <= getattr(m, name) <= hi:  # (> 0 checked above) the prediction's information stays finite
                 raise SlamConfigError(f"motion.{name}: must be in [{lo:g}, {hi:g}] {unit} (the prediction's std and "
                                       f"its inverse square stay finite), got {getattr(m, name)}")
+        for sec, name, unit in NOISE_SIGMAS:  # 1e300 overflowed its square, 1e-300 its inverse square (internal errors)
+            value = getattr(getattr(self, sec), name)
+            if not MIN_NOISE_SIGMA <= value <= MAX_NOISE_SIGMA:
+                raise SlamConfigError(f"{sec}.{name}: must be in [{MIN_NOISE_SIGMA:g}, {MAX_NOISE_SIGMA:g}] {unit} (a std "
+                                      f"whose square and inverse square stay finite), got {value}")
+        for name in ("max_iterations", "fine_iterations"):  # 1e300 failed in the compiled ICP (no int64)
+            if getattr(al, name) > MAX_ICP_ITERATIONS:
+                raise SlamConfigError(f"alignment.{name}: must be at most {MAX_ICP_ITERATIONS} Gauss-Newton steps, "
+                                      f"got {getattr(al, name)}")
         for name in ("gate_probability", "new_landmark_probability"):
             if not 0 < getattr(a, name) < 1:
                 raise SlamConfigError(f"association.{name}: must be in (0, 1), got {getattr(a, name)}")
@@ -526,6 +538,27 @@ class SlamConfig:
         if unknown:
             raise SlamConfigError(f"unknown SLAM config field(s) {unknown}; known: {sorted(known)}")
         return cls(**values)
+
+
+def _check_extractor(method: str, params: dict[str, Any]) -> None:
+    """``method`` is registered in ``features.registry`` and ``params`` build its config: checked
+    when the SlamConfig is built (``extractor="nope"`` was taken and failed when the run started).
+    A user's ``MODULE:FUNCTION`` extractor must be registered first (the command line does that)."""
+    from features.registry import UnknownMethodError, available_methods, is_method, make_config
+
+    if not is_method(method):
+        raise SlamConfigError(f"extractor: unknown extraction method {method!r}; registered methods "
+                              f"(features.registry): {', '.join(available_methods())}")
+    if not params:  # a method's default config is built and checked when it registers
+        return
+    try:
+        make_config(method, **params)
+    except UnknownMethodError as exc:  # "unknown parameter(s) [...] for method ...; known: [...]"
+        raise SlamConfigError(f"extractor_params: {exc}") from None
+    except LmsbenchError as exc:  # a ConfigError, whose message starts with the field's name
+        raise SlamConfigError(f"extractor_params.{exc}") from None
+    except (TypeError, ValueError) as exc:  # a user method's own config type
+        raise SlamConfigError(f"extractor_params: {' '.join(str(exc).split())}") from None
 
 
 def _check_search(al: AlignmentConfig) -> None:
@@ -588,6 +621,15 @@ MIN_FIELD_SIGMA_M = 1e-4  # m: the narrowest Gaussian of the likelihood field an
 MAX_FIT_SIGMA_M = 1.0  # m: the fit's widest Gaussian (twice the ICP's reach)
 MAX_AMBIGUITY_SIGMAS = 100.0  # std: the prior's window is at most search_sigmas (10) std wide
 MIN_SIGMA_FLOOR = 1e-6  # m and rad: the prediction's std floor (its information, sigma^-2, stays finite)
+MIN_NOISE_SIGMA, MAX_NOISE_SIGMA = 1e-6, 1e3  # m and rad: the noise stds below (as the motion floors)
+#: measurement and prior stds (section, field, unit) whose square and inverse square the filter and the
+#: graph take: 1e300 (sigma_point, and the paper preset's six) was an OverflowError, a prior_sigma of
+#: 1e-300 gtsam's "indeterminate linear system" (fuzzing of 2026-12-04, short office runs)
+NOISE_SIGMAS = (("alignment", "sigma_point", "m"), ("motion", "sigma_lateral", "m/s"), ("observations", "sigma_rho", "m"),
+                ("observations", "sigma_alpha_obs", "rad"), ("observations", "sigma_corner", "m"),
+                ("prealign", "sigma_xy", "m"), ("prealign", "sigma_phi", "rad"), ("prealign", "scan_velocity_sigma", "m"),
+                ("loop_closure", "prior_sigma", "m and rad"))
+MAX_ICP_ITERATIONS = 1000  # alignment.max_iterations / fine_iterations (defaults 10 / 5)
 MAX_SIGMA_FLOOR = 1e3  # m and rad: a floor this wide leaves no motion model
 MAX_SIGMA_MOTION = 1e3  # m/s^2 and rad/s^2: the constant-velocity model's widest acceleration std
 MAX_SEARCH_SIGMAS = 10.0  # std: the window's half-width is search_sigmas std, its prior that width / search_sigmas

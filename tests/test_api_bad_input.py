@@ -4,7 +4,9 @@ argument, never a raw numpy / Python exception, a silent cast or a lost file (fu
 
 from __future__ import annotations
 
+import dataclasses
 import re
+from typing import Any
 
 import numpy as np
 import pytest
@@ -494,6 +496,35 @@ def test_masked_ranges_are_checked_like_arrays(ranges: np.ndarray) -> None:
         Scan(ranges, **GEOM)
 
 
+@pytest.mark.parametrize("ranges, item", [
+    (np.array([True, 1.0, 2.0], dtype=object), "bool True at index 0"),       # was [1 m, 1 m, 2 m]
+    (np.array([1.0, np.False_, 2.0], dtype=object), "at index 1"),             # was [1 m, 0 m, 2 m]
+    ([1.0, 2.0, True], "bool True at index 2"),                                # a list: float64 [1, 2, 1]
+    ((1.0, True), "bool True at index 1"),
+    (np.array(["1.5", 1.0], dtype=object), "str '1.5' at index 0"),            # was 1.5 m, as text arrays are refused
+    (np.ma.array(np.array([1.0, True], dtype=object), mask=[False, False]), "bool True at index 1"),
+])
+def test_bools_and_text_inside_object_arrays_and_lists_are_refused(ranges: object, item: str) -> None:
+    """A bool array was refused, an object array or list holding the same bools was cast to 1.0 / 0.0
+    m silently (the fuzzing hunt of 2026-12-03 left it open); refused with the bool array's message."""
+    with pytest.raises(ScanError, match=rf"^ranges: must be real numbers \(m\), got .*{re.escape(item)} "
+                                        r"\(bool, complex, text and dates are refused\)$"):
+        Scan(ranges, **GEOM)  # type: ignore[arg-type]
+    from lms200.codes import ranges_to_codes
+    with pytest.raises(InputError, match="^ranges: must be real numbers"):  # the code conversions read ranges alike
+        ranges_to_codes(ranges)  # type: ignore[arg-type]
+
+
+def test_object_arrays_and_lists_of_numbers_still_read() -> None:
+    from decimal import Decimal
+    from fractions import Fraction
+
+    assert Scan(np.array([1, 2.5, Fraction(1, 2), Decimal("3")], dtype=object), **GEOM).ranges.tolist() == [1, 2.5, 0.5, 3]
+    assert Scan([1, 2.5, np.float32(0.5), np.int64(3)], **GEOM).ranges.tolist() == [1, 2.5, 0.5, 3]
+    masked = Scan(np.ma.array(np.array([True, 1.0], dtype=object), mask=[True, False]), **GEOM)  # a masked item is nan
+    assert np.isnan(masked.ranges[0]) and masked.ranges[1] == 1.0
+
+
 def test_scan_of_too_many_beams_is_refused_before_the_copy() -> None:
     """10**10 beams (a broadcast view of one value) was a raw MemoryError (74.5 GiB asked); 10**8
     beams at 0.01 rad copied 800 MB before the span check refused them."""
@@ -667,6 +698,57 @@ def test_explained_fraction_of_another_scans_features() -> None:
         explained_fraction(fs, Record(scan))  # type: ignore[arg-type]
 
 
+def test_the_real_data_and_scoring_helpers_name_a_bad_argument() -> None:
+    """features.realdata / features.scoring functions that take scans or lines, given None or
+    another type: each was an AttributeError or TypeError from deep inside (ray_residuals(None,
+    scan): 'NoneType' object has no attribute 'line_array'; truth_lines(None): ... 'segments';
+    scoring.truth_lines(None): 'NoneType' object is not subscriptable); now an InputError or
+    ScanTypeError (both LmsbenchErrors) naming the argument."""
+    from features.errors import ScanTypeError
+    from features.realdata import RealDataConfig, ray_residuals, repeat_counts, scan_measures, truncated_normal_rms
+    from features.realdata import truth_lines as exact_lines
+    from features.scoring import ScoreConfig, line_compatibility
+    from features.scoring import truth_lines as normal_form
+
+    fs, truth, scan = _scored_scene()
+    lines = fs.line_array()
+    pose = (0.0, 0.0, 0.0)
+    bad: list[tuple[Any, str]] = [
+        (lambda: ray_residuals(None, scan), "^fs: expected a features.FeatureSet, got NoneType$"),
+        (lambda: ray_residuals(lines, None), "^scan: expected an lms200.Scan, got NoneType$"),
+        (lambda: ray_residuals(lines[:, :6], scan), r"^fs: a line array must be \(k, 8\) numbers"),   # was a reshape ValueError
+        (lambda: ray_residuals(lines + [0, 0, 0, 0, 0, 0, 0, 400], scan), "^fs: its lines span beams"),  # clipped, silently
+        (lambda: exact_lines(None), r"^truth: must have the fields of sim.VisibleTruth \(segments, segment_beams\); "
+                                    "NoneType lacks segments, segment_beams$"),
+        (lambda: exact_lines(dataclasses.replace(truth, segment_beams=truth.segment_beams[:1])),
+         r"^truth.segment_beams: must be \(\d+, 2\) to match"),                                      # was a broadcast ValueError
+        (lambda: repeat_counts(None, pose, fs, pose, scan), "^fs_a: expected a features.FeatureSet, got NoneType$"),
+        (lambda: repeat_counts(fs, pose, None, pose, scan), "^fs_b: expected a features.FeatureSet, got NoneType$"),
+        (lambda: repeat_counts(fs, pose, fs, pose, None), "^scan_b: expected an lms200.Scan, got NoneType$"),
+        (lambda: repeat_counts(fs, None, fs, pose, scan), r"^pose_a: must be three numbers \(x m, y m, theta rad\), got None$"),
+        (lambda: repeat_counts(fs, pose, fs, (0.0, np.nan, 0.0), scan), "^pose_b: must be finite"),
+        (lambda: repeat_counts(fs, pose, fs, pose, scan, {"tolerance_m": 1}), "^config: must be a features.realdata.RealDataConfig"),
+        (lambda: scan_measures(fs, scan, 0.005, {"tolerance_m": 1}), "^config: must be a features.realdata.RealDataConfig"),
+        (lambda: scan_measures(None, scan, 0.005), "^fs: expected a features.FeatureSet, got NoneType$"),
+        (lambda: truncated_normal_rms(None, 0.03), "^sigma, tolerance: must be finite numbers > 0 m, got None and 0.03$"),  # TypeError
+        (lambda: truncated_normal_rms(np.inf, 0.03), "^sigma, tolerance: must be finite numbers > 0 m"),  # ZeroDivisionError
+        (lambda: truncated_normal_rms(0.01, np.inf), "^sigma, tolerance: must be finite numbers > 0 m"),  # was nan, silently
+        (lambda: normal_form(None), r"^segments: must be \(k, 4\) rows of numbers, got NoneType"),
+        (lambda: normal_form(truth.segments[:, :2]), r"^segments: must be \(k, 4\) rows of numbers, got shape \(\d+, 2\)$"),
+        (lambda: line_compatibility(None, truth.segments, ScoreConfig()), r"^lines: must be \(k, 6\) rows"),
+        (lambda: line_compatibility(lines, None, ScoreConfig()), r"^seg: must be \(k, 4\) rows"),
+        (lambda: line_compatibility(lines, truth.segments, None), "^cfg: must be a features.scoring.ScoreConfig, got NoneType$"),
+    ]
+    for call, message in bad:
+        with pytest.raises((InputError, ScanTypeError), match=message) as info:
+            call()
+        assert isinstance(info.value, LmsbenchError)
+    # the good calls give what they gave
+    assert ray_residuals(fs, scan).tolist() == ray_residuals(lines, scan).tolist()
+    assert repeat_counts(fs, pose, fs, pose, scan, RealDataConfig()) == (len(fs.lines), len(fs.lines))
+    assert exact_lines(truth).shape == (len(truth.segments), 8)
+
+
 # -- CARMEN logs ---------------------------------------------------------------------------------------
 def test_a_short_file_of_binary_junk_is_not_a_log(tmp_path) -> None:
     """5,000 random bytes (43 'lines') read as a log of no scans, silently: the 10,000-line rule only
@@ -728,6 +810,21 @@ def test_codes_to_ranges_takes_raw_16_bit_values_only(codes: object) -> None:
     with pytest.raises(InputError, match=r"^codes: must be raw LMS200 values \(whole numbers 0..65535\)"):
         codes_to_ranges(codes)  # type: ignore[arg-type]
     assert codes_to_ranges(np.array([3000.0, 8183, 8191]), "mm").tolist()[:2] == [3.0, np.inf]  # whole floats are codes
+
+
+@pytest.mark.parametrize("codes, got", [
+    (np.array([-1, 5]), "got values from -1 to 5"),
+    (np.array([1.5, np.inf]), "got values from 1.5 to 1.5 and nan / inf"),
+    (np.array([np.nan]), "got only nan / inf"),
+])
+def test_codes_error_names_the_values_as_numbers(codes: np.ndarray, got: str) -> None:
+    """The message printed numpy 2's reprs ("got values from np.int64(-1) to np.int64(5)"; nan alone
+    "from np.float64(nan) to np.float64(nan) and nan / inf"), found trying docs/data.md's codes."""
+    from lms200 import codes_to_ranges
+
+    with pytest.raises(InputError) as info:
+        codes_to_ranges(codes)
+    assert str(info.value).endswith(got) and "np." not in str(info.value)
 
 
 @pytest.mark.parametrize("call, message", [
@@ -894,6 +991,75 @@ def test_sensor_range_noise_is_capped_like_the_baselines(field: str) -> None:
     cfg = make_config("sensor", **{field: MAX_SIGMA_M})  # the cap itself is taken
     assert getattr(cfg, field) == MAX_SIGMA_M
     assert extract(Scan.lms200(np.full(361, 3.0)), "sensor").method == "sensor"
+
+
+# -- SLAM config: the extractor ------------------------------------------------------------------------
+@pytest.mark.parametrize("kw, message", [
+    (dict(extractor="nope"), r"^extractor: unknown extraction method 'nope'; registered methods \(features.registry\): "
+                             r"sensor, split_merge, iepf, hough, ransac"),   # was taken; failed when the run started
+    (dict(extractor="Sensor"), "^extractor: unknown extraction method 'Sensor'"),
+    (dict(extractor_params={"bogus": 1}), r"^extractor_params: unknown parameter\(s\) \['bogus'\] for method 'sensor'"),
+    (dict(extractor="hough", extractor_params={"k": 3}), r"^extractor_params: unknown parameter\(s\) \['k'\] for method 'hough'"),
+    (dict(extractor_params={"k": -3}), r"^extractor_params.k: must be an integer >= 1"),
+    (dict(extractor="split_merge", extractor_params={"split_threshold": "x"}), "^extractor_params.split_threshold: must be"),
+])
+def test_slam_config_checks_its_extractor_when_built(kw: dict, message: str) -> None:
+    from slam import SlamConfig, SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=message) as info:
+        SlamConfig(**kw)
+    assert isinstance(info.value, LmsbenchError) and isinstance(info.value, ValueError)
+    with pytest.raises(SlamConfigError, match=message):  # the YAML path (`lmsbench slam --config FILE`)
+        SlamConfig.from_dict(kw)
+
+
+def test_slam_config_takes_registered_extractors_and_their_params() -> None:
+    from features import register
+    from features.registry import _REGISTRY
+    from slam import SlamConfig
+
+    assert SlamConfig(extractor="ransac", extractor_params={"hypotheses": 32}).extractor_params == {"hypotheses": 32}
+
+    @dataclasses.dataclass(frozen=True)
+    class MyConfig:
+        gain: float = 1.0
+
+    register("test_slam_mine", MyConfig, lambda scan, cfg: None)  # type: ignore[arg-type, return-value]
+    try:
+        assert SlamConfig(extractor="test_slam_mine", extractor_params={"gain": 2.0}).extractor == "test_slam_mine"
+    finally:
+        _REGISTRY.pop("test_slam_mine", None)
+
+
+# -- SLAM config: ranges a run needs (fuzzing of 2026-12-04: each value built, then run on a 3 s office run) --
+@pytest.mark.parametrize("section, field", [("alignment", "sigma_point"), ("motion", "sigma_lateral"),
+                                            ("observations", "sigma_rho"), ("observations", "sigma_alpha_obs"),
+                                            ("observations", "sigma_corner"), ("prealign", "sigma_xy"),
+                                            ("prealign", "sigma_phi"), ("prealign", "scan_velocity_sigma")])
+@pytest.mark.parametrize("value", [1e300, 1e-300])
+def test_slam_noise_stds_are_bounded_when_built(section: str, field: str, value: float) -> None:
+    """1e300 was taken and the run failed with OverflowError (its square); 1e-300 (its inverse
+    square) likewise, or gtsam's indeterminate system for loop_closure.prior_sigma."""
+    from slam import SlamConfig, SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=rf"^{section}.{field}: must be in \[1e-06, 1000\] .*\(a std whose square "
+                                              rf"and inverse square stay finite\), got {re.escape(f'{value:g}')}"):
+        SlamConfig(**{section: {field: value}})
+    for ok in (1e-6, 1e3):  # the bounds are taken (and run: tests of the fuzzing, not repeated here)
+        assert getattr(getattr(SlamConfig(**{section: {field: ok}}), section), field) == ok
+
+
+def test_slam_prior_sigma_and_icp_iterations_are_bounded_when_built() -> None:
+    """loop_closure.prior_sigma=1e-300 ran into gtsam's 'Indeterminate linear system'; alignment.
+    max_iterations / fine_iterations = 1e300 failed in numba's typing of the compiled ICP."""
+    from slam import SlamConfig, SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=r"^loop_closure.prior_sigma: must be in \[1e-06, 1000\]"):
+        SlamConfig(loop_closure={"prior_sigma": 1e-300})
+    for field in ("max_iterations", "fine_iterations"):
+        with pytest.raises(SlamConfigError, match=rf"^alignment.{field}: must be at most 1000 Gauss-Newton steps, got \d+"):
+            SlamConfig(alignment={field: 1e300})
+        assert getattr(SlamConfig(alignment={field: 1000}).alignment, field) == 1000
 
 
 def test_robot_limits_and_odometry_config_check_their_fields() -> None:

@@ -333,3 +333,29 @@ def test_a_merge_threshold_beyond_the_floats_merges_every_neighbour(method: str)
     for s, _ in _box_room_scans(3):
         got = extract(s, method, cfg)
         assert got == extract(s, method, ref) and len(got.lines) >= 1
+
+
+def test_ransac_refuses_more_work_than_its_bound_before_any():
+    """hypotheses=4096 on a 16,384-beam scan ran for about 18 s (4096 x 60 rounds x 16,384 beams =
+    4e9 point-to-line distances at worst) with no sign of progress and no bound; now a
+    ScanGeometryError before any work names the parameters, the bound and the largest hypotheses
+    the scan allows. The defaults and the largest allowed hypotheses pass."""
+    import time
+
+    from features.baselines.ransac import MAX_DISTANCES, RansacConfig, check_work
+    from features.errors import ScanGeometryError
+
+    n = 16384
+    scan = Scan(np.full(n, 3.0), -np.pi, 2 * np.pi / n, 0.0, 81.83)
+    t0 = time.process_time()
+    with pytest.raises(ScanGeometryError, match=r"^ransac: hypotheses 4096 x max_lines 60 x 16384 beams = 4\.03e\+09 "
+                                                r"point-to-line distances at worst, more than the bound of 1,073,741,824 "
+                                                r".*; lower hypotheses to at most 1092 for this scan$"):
+        extract(scan, "ransac", hypotheses=4096)
+    assert time.process_time() - t0 < 1.0  # refused before the work, not after it
+    check_work(RansacConfig(hypotheses=1092), n)  # the largest the message allows passes
+    assert 1092 * 60 * n <= MAX_DISTANCES < 1093 * 60 * n
+    check_work(RansacConfig(), n)  # the default: 6.3e7
+    with pytest.raises(ScanGeometryError, match=r"lower hypotheses to at most 2 for this scan"):
+        check_work(RansacConfig(max_lines=10**6), 361)
+    assert len(extract(Scan.lms200(np.full(361, 3.0)), "ransac", hypotheses=4096).lines) > 0  # a 361-beam scan: 8.9e7

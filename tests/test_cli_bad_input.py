@@ -288,8 +288,8 @@ CASES = [
     (["slam", "{simrun}", "--config", "{missing.yaml}", "--out", O], "missing.yaml"),
     (["slam", "{simrun}", "--extractor", "nosuch", "--out", O], "nosuch"),
     (["slam", "{simrun}", "--config", "{slam_nested.yaml}", "--out", O], "extractor: must be an extraction method's name"),
-    (["slam", "{simrun}", "--config", "{slam_param.yaml}", "--out", O], "slam_param.yaml: unknown parameter(s) ['bogus']"),
-    (["slam", "{simrun}", "--config", "{slam_value.yaml}", "--out", O], "split_threshold"),
+    (["slam", "{simrun}", "--config", "{slam_param.yaml}", "--out", O], "slam_param.yaml: extractor_params: unknown parameter(s) ['bogus']"),
+    (["slam", "{simrun}", "--config", "{slam_value.yaml}", "--out", O], "slam_value.yaml: extractor_params.split_threshold: must be a finite number > 0 m, got -1"),
     (["slam", "{simrun}", "--config", "{slam_type.yaml}", "--out", O], "motion.sigma_accel: must be a number"),
     (["slam", "{simrun}", "--config", "{slam_prob.yaml}", "--out", O], "prealign.widen_probability: a probability"),
     (["slam", "{simrun}", "--config", "{slam_noise.yaml}", "--out", O], "odom_noise: must be 3 numbers"),
@@ -428,7 +428,10 @@ CASES = [
     (["info", "{odo.bag}", "--topic", "/odom"], "odo.bag: topic '/odom' holds geometry_msgs/msg/PoseStamped messages, "
                                                 "not sensor_msgs/LaserScan; its LaserScan topics: /scan"),
     # a named pipe (or a device) where a file is expected: the check's open() hung (--out: the write, after the work)
-    (["info", "{pipe.clf}"], "pipe.clf: not a regular file (a pipe, a device or a socket); give the file itself"),
+    (["info", "{pipe.clf}"], "pipe.clf: a pipe (such as <(zcat LOG)), not a file: a log is read more than once"),
+    (["compare", "{pipe.clf}", "--out", O], "pipe.clf: a pipe (such as <(zcat LOG)), not a file"),
+    (["slam", "{pipe.clf}", "--out", O], "give the log file itself (gzip, bzip2 and xz logs are read as they are) or "
+                                         "save the stream to a file first (zcat LOG > FILE)"),
     (["slam", "{good.clf}", "--config", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file (a pipe"),
     (["simulate", "--world", "{pipe.json}", "--out", O], "pipe.json: not a regular file (a pipe"),
     (["sweep", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file (a pipe"),
@@ -617,6 +620,27 @@ def test_an_error_found_mid_run_is_still_stderr_s_one_line(tmp_path: Path, capsy
     assert f":{laser[30] + 1}:" in err
 
 
+@pytest.mark.parametrize("command", [["info"], ["compare"], ["calibrate"], ["sim2real"], ["slam", "--out", "o"]])
+def test_a_log_through_process_substitution_is_refused_saying_why(files, tmp_path, capsys, command):
+    """`lmsbench info <(zcat LOG.gz)`: the pipe was refused, "not a regular file (a pipe, a device or
+    a socket); give the file itself", without why; a log is read more than once (the reader's first
+    lines to choose the laser, then every line; compare and sim2real again, for the
+    noise), so it needs a file. A pipe with a writer, as bash's <(...) gives, is refused unread."""
+    r, w = os.pipe()
+    os.write(w, Path(files["good.clf"]).read_bytes()[:4096])  # a live writer's first bytes (within the pipe's buffer)
+    try:
+        argv = [command[0], f"/dev/fd/{r}", *[str(tmp_path / a) if a == "o" else a for a in command[1:]]]
+        assert run_main(argv) == 2
+        assert len(os.read(r, 8192)) == 4096  # refused unread
+    finally:
+        os.close(w)
+        os.close(r)
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith(f"lmsbench {command[0]}: error: /dev/fd/{r}: a pipe "
+                                                         "(such as <(zcat LOG)), not a file: a log is read more than once")
+    assert err.endswith("or save the stream to a file first (zcat LOG > FILE)")
+
+
 def test_two_logs_of_one_name_are_refused_before_any_work(files, tmp_path, capsys):
     """compare names a log by its file name: two runs' good.clf were summed into one row."""
     twin = tmp_path / "twin"
@@ -677,6 +701,8 @@ def test_no_command_is_a_usage_error(argv: list[str], prog: str, capsys: pytest.
     assert err.startswith(f"{prog}: error: ")
     if not argv:
         assert "a command is required: bench, calibrate, compare" in err
+    else:  # was "the following arguments are required: ACTION", naming neither action
+        assert err.startswith("lmsbench lms200: error: a command is required: emulate, record (see lmsbench lms200 --help)")
 
 
 def test_compare_out_holds_only_compares_own_outputs(files, tmp_path, capsys):

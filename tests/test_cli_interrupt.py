@@ -11,6 +11,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import psutil
 import pytest
 import yaml
@@ -99,6 +100,27 @@ def test_ctrl_c_inside_compiled_code_is_an_interruption_not_an_internal_error() 
                          env=_env(), timeout=120)
     assert out.stderr.strip().splitlines() == ["lmsbench info: interrupted"], out.stderr
     assert out.stdout.splitlines() == ["status 130"], out.stdout
+
+
+@pytest.mark.parametrize("unbuffered", ["1", ""])
+def test_a_reader_that_goes_away_ends_the_command_quietly(tmp_path, unbuffered):
+    """`lmsbench info LOG | head -1`, run from docs/lms200.md's recording: when head had gone,
+    'lmsbench info: error: [Errno 32] Broken pipe', exit 2 (PYTHONUNBUFFERED set), or Python's
+    'Exception ignored in: <_io.TextIOWrapper name='<stdout>'...> BrokenPipeError', exit 120.
+    Now nothing on stderr and 141, a shell's status for SIGPIPE; a full read is unchanged."""
+    from lms200 import Record, Scan, write_log
+
+    log = tmp_path / "a.clf"
+    write_log(log, [Record(Scan.lms200(np.full(361, 2.0), stamp=0.1 * i)) for i in range(3)])
+    cmd = [sys.executable, "-m", "experiments.cli", "info", str(log)]
+    env = {**_env(), "PYTHONUNBUFFERED": unbuffered}
+    proc = subprocess.Popen(cmd, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # the reader is gone before the first line
+    err = proc.stderr.read().decode()
+    assert (proc.wait(timeout=60), err) == (141, "")
+    full = subprocess.run(cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=60)
+    assert full.returncode == 0 and full.stdout.startswith(f"{log}\n  scans           3\n") and full.stderr == ""
 
 
 SIGTERM_IN_A_COMMAND = r"""

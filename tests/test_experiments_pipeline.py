@@ -123,3 +123,32 @@ def test_the_demo_writes_a_report_whose_figures_exist(tmp_path):
     from experiments.options import DEMO_OUTPUTS
 
     assert DEMO_OUTPUTS.foreign(out) == []
+
+
+def test_fig9_of_another_log_is_named_by_that_log(tmp_path, capsys, monkeypatch):
+    """`demo --log aces-corrected.log.gz` (docs/experiments.md) drew ACES's scans under "Intel log:
+    4 scans with features", panels "Intel scan I", the title "Intel Research Lab (real log)" and the
+    demo's caption "Intel Research Lab log (real data, 180 beams at 1°, ...)". The log is named by
+    its file; the Intel log keeps its names."""
+    from lms200 import write_log
+
+    from experiments.figures import draw
+
+    write_log(tmp_path / "lab.clf", sim.simulate_records("office", seed=2, duration=1.0, rate_hz=4.0))
+    titles = {}
+    scans = draw.fig_scans
+    monkeypatch.setattr(draw, "fig_scans", lambda p, ln, c, path, title: titles.setdefault(path.name, title)
+                        and scans(p, ln, c, path, title))
+    out = tmp_path / "figs"
+    assert main(["figures", "--out", str(out), "--duration", "1", "--rate-hz", "4", "--methods", "split_merge",
+                 "--no-slam", "--intel", str(tmp_path / "lab.clf")]) == 0
+    assert "] lab.clf log: 4 scans with features" in capsys.readouterr().out
+    labels = pd.read_csv(out / "fig9_intel_points.csv")["label"]
+    assert labels.str.startswith("lab.clf scan ").all()
+    assert titles["fig9_intel"] == "Fig. 9: features extracted by split_merge, lab.clf (real log)"
+    from experiments.demo import _real_log_caption
+
+    tables = {"intel_points": pd.DataFrame({"label": labels})}
+    assert _real_log_caption(tables).startswith("Fig. 9: the same on scans of the real log lab.clf (")
+    intel = {"intel_points": pd.DataFrame({"label": ["Intel scan 88"]})}
+    assert "Intel Research Lab log (real data, 180 beams at 1°" in _real_log_caption(intel)

@@ -391,3 +391,18 @@ def test_a_sensor_file_is_read_once_per_check_and_once_per_run(tmp_path, monkeyp
     world, sensor, records, _ = kinds._run("office", 0, 0.5, 2.0, (("dropout_prob", 0.01),), True, str(path))
     assert reads == [str(path)]  # the cached run: not read again
     assert (sensor.noise_sigma, sensor.dropout_prob, sensor.interlaced) == (0.0123, 0.01, False)
+
+
+def test_extract_cell_row_has_no_speed_ratio_to_itself(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An extract cell scores one method with itself as the reference, so compare's
+    ``cpu_speed_vs_sensor`` was 1.0 in every row (split_merge "as fast as sensor"), a column of
+    every sweep's results (found running `lmsbench sweep sweeps/k_vs_noise.yaml` from the README);
+    ``speed_vs_sensor`` was already left out. Neither is in the row; the times are."""
+    from experiments.sweep import kinds
+
+    monkeypatch.setattr(kinds, "compare", lambda sources, methods, params, sigma: pd.DataFrame())
+    monkeypatch.setattr(kinds, "summarise", lambda table, reference: pd.DataFrame(
+        {"source": ["s"], "method": ["split_merge"], "f1": [0.9], "us_median": [40.0], "cpu_us_median": [38.0],
+         "speed_vs_sensor": [1.0], "cpu_speed_vs_sensor": [1.0]}))
+    row = kinds.extract_cell({"method": "split_merge", "duration": 0.5, "rate_hz": 2.0})
+    assert row == {"f1": 0.9, "us_median": 40.0, "cpu_us_median": 38.0}

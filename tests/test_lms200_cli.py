@@ -112,3 +112,32 @@ def test_a_device_that_goes_silent_ends_the_file_with_every_scan_before_it(tmp_p
     assert last.startswith("lmsbench lms200 record: error: no scan from") and f"the 8 scans before it are saved in {out}" in last
     got = [rec.scan for rec in read_log(out)]
     assert [codes(s) for s in got] == [codes(s) for s in sent]
+
+
+def test_record_progress_to_a_file_is_a_line_every_few_seconds(monkeypatch: pytest.MonkeyPatch,
+                                                                capsys: pytest.CaptureFixture[str]) -> None:
+    """`lms200 record` redrew its progress with a carriage return every 0.25 s also when stderr was
+    a file or a pipe (docs/commands.md: progress bars only on a terminal; there, a line every 4 s);
+    found running docs/lms200.md's record with stderr to a file. A terminal still gets the redraws."""
+    from types import SimpleNamespace
+
+    from experiments.commands import lms200 as command
+
+    clock = [100.0]
+    monkeypatch.setattr(command.time, "monotonic", lambda: clock[0])
+    dev = SimpleNamespace(stats=SimpleNamespace(dropped_frames=0))
+    for tty in (False, True):
+        clock[0] = 100.0
+        progress = command._Progress(dev, tty=tty)  # type: ignore[arg-type]
+        for t in (0.3, 1.0, 4.5, 5.0, 9.0):
+            clock[0], progress.count = 100.0 + t, int(t * 10)
+            progress.update()
+        progress.update(final=True)
+        err = capsys.readouterr().err
+        if not tty:
+            assert "\r" not in err and err.splitlines() == [
+                "45 scans   10.0 scans/s  0 dropped frames     4.5 s",
+                "90 scans   10.0 scans/s  0 dropped frames     9.0 s",
+                "90 scans   10.0 scans/s  0 dropped frames     9.0 s"]
+        else:
+            assert err.count("\r") == 6 and err.endswith("9.0 s\n") and err.count("\n") == 1

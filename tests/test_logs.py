@@ -127,6 +127,30 @@ def test_carmen_flaser_round_trip(tmp_path: Path) -> None:
         write_log(tmp_path / "bad.log", [odd], fmt="flaser")
 
 
+@pytest.mark.parametrize("fmt", ["robotlaser1", "flaser"])
+def test_carmen_round_trip_keeps_range_min(tmp_path: Path, fmt: str) -> None:
+    """No CARMEN laser line has a range_min field: written by write_log and read back, a scan's
+    range_min was 0.0 whatever it had been (0.05 m), so beams nearer than it became valid. A PARAM
+    lmsbench_range_min line now carries it, written only where it changes (not for range_min 0)."""
+    ranges = np.array([0.03, 0.5, 1.0, 2.0, 3.0])  # beam 0 lies below 0.05 m: not valid
+    recs = [Record(Scan(ranges, -0.02, 0.01, rmin, 8.183, stamp=1.0 + i)) for i, rmin in enumerate((0.05, 0.05, 0.0, 0.1))]
+    write_log(tmp_path / "r.clf", recs, fmt=fmt)
+    back = list(read_log(tmp_path / "r.clf"))
+    assert [r.scan.range_min for r in back] == [0.05, 0.05, 0.0, 0.1]  # was [0.0, 0.0, 0.0, 0.0]
+    assert [r.scan.valid.tolist() for r in back] == [r.scan.valid.tolist() for r in recs]
+    assert (tmp_path / "r.clf").read_text().count("PARAM lmsbench_range_min") == 3  # 0.05, 0.0, 0.1
+    write_log(tmp_path / "zero.clf", _records(n=2), fmt=fmt)  # range_min 0: no such line, the log as before
+    assert "lmsbench_range_min" not in (tmp_path / "zero.clf").read_text()
+
+
+@pytest.mark.parametrize("value", ["-0.1", "nan", "inf", "abc"])
+def test_a_bad_range_min_param_names_file_and_line(tmp_path: Path, value: str) -> None:
+    path = tmp_path / "bad.log"
+    path.write_text(f"{GOOD}\nPARAM lmsbench_range_min {value} host 0\n{GOOD}\n")
+    with pytest.raises(LogFormatError, match=r"bad\.log:2: malformed PARAM line: .*lmsbench_range_min"):
+        list(read_log(path))
+
+
 @pytest.mark.parametrize("fmt,name", [("bag", "run.bag"), ("bag2", "run_ros2")])
 def test_bag_round_trip(tmp_path: Path, fmt: str, name: str) -> None:
     recs = _records()

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import copy
+import pickle
+
 import numpy as np
 import pytest
 
@@ -46,6 +49,23 @@ def test_scan_is_immutable_and_copies_its_input() -> None:
         s.angle_min = 1.0  # type: ignore[misc]
     assert s.replace(stamp=2.0).stamp == 2.0 and s.replace(stamp=2.0) != s
     assert Scan(np.ones(5), 0.0, 0.1, 0.0, 10.0) == s
+
+
+
+@pytest.mark.parametrize("how", ["pickle", "pickle protocol 0", "deepcopy"])
+def test_a_copied_or_unpickled_scan_stays_immutable(how: str) -> None:
+    """pickle restores arrays writable: an unpickled Scan (a sweep's worker gets its scans so) could
+    be changed in place, and its ranges typed differently in the extractors' compiled calls."""
+    s = Scan(np.array([1.0, 2.0, np.inf, np.nan, 3.0]), -0.2, 0.1, 0.0, 10.0, stamp=4.5)
+    t = {"pickle": lambda: pickle.loads(pickle.dumps(s)),
+         "pickle protocol 0": lambda: pickle.loads(pickle.dumps(s, protocol=0)),
+         "deepcopy": lambda: copy.deepcopy(s)}[how]()
+    with pytest.raises(ValueError, match="read-only"):
+        t.ranges[0] = 3.0
+    with pytest.raises(ValueError, match="read-only"):
+        t.angles[0] = 3.0
+    assert t == s and t.stamp == 4.5 and t.angle_min == -0.2
+    np.testing.assert_array_equal(t.angles, s.angles)
 
 
 @pytest.mark.parametrize(

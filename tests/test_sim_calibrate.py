@@ -281,6 +281,12 @@ def test_sim2real_warns_on_tiny_samples_and_refuses_a_log_with_nothing_to_measur
     assert small_sample_warnings(MIN_SCANS, MIN_SCANS, MIN_SCANS) == []
     assert small_sample_warnings(400, 720, None) == []
     assert "12 probe scans per probe value" in small_sample_warnings(400, 720, 12)[0]
+    # each short side's own options: 8 simulated scans named --max-scans, --stride and the probes' options
+    # (which do not change the report's simulated scans) and not --rate-hz, which does
+    assert small_sample_warnings(60, 8, 30)[0].endswith(
+        "(more with more --seeds, a longer --duration or a higher --rate-hz)")
+    assert small_sample_warnings(5, 720, 12)[0].endswith(
+        "(more with a higher --max-scans or a lower --stride; more --probe-seeds or a longer --probe-duration)")
     dark = [dataclasses.replace(r, scan=dataclasses.replace(r.scan, ranges=np.full_like(r.scan.ranges, np.inf)))
             for r in recs]
     write_carmen(tmp_path / "dark.clf", dark)

@@ -41,6 +41,11 @@ def test_slam_command_writes_every_output(sim_folder, tmp_path, capsys):
         assert (out / name).is_file(), name
     assert "loop closures over" in stdout and "default preset" in stdout
     stamps, poses = read_tum(out / "trajectory.tum")
+    # the scores of this run and its baseline are printed, as in metrics.json (only the published
+    # relations errors of MIT CSAIL were, and none of the run's own)
+    rows = json.loads((out / "metrics.json").read_text())["table"]
+    assert (f"  ATE RMS (m): this run {rows[0]['ate_rmse']:.3g}, paper preset {rows[1]['ate_rmse']:.3g}"
+            in stdout.splitlines())
     true_stamps, _ = read_tum(sim_folder / "groundtruth.tum")
     np.testing.assert_allclose(stamps, true_stamps, atol=1e-6)  # one pose per scan, the input's stamps
     m = json.loads((out / "metrics.json").read_text())
@@ -137,6 +142,35 @@ def test_slam_command_errors_are_one_line(tmp_path, capsys):
     assert main(["slam", str(tmp_path / "empty"), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert "scans.clf" in err and len(err.strip().splitlines()) == 1
+
+
+def test_slam_config_files_name_a_bad_extractor_and_take_a_users_own(sim_folder, tmp_path, capsys, monkeypatch):
+    """SlamConfig now checks its extractor when built: a config file's `extractor: nope` and
+    `extractor_params` that --extractor's method lacks are one line naming the file; a file's
+    MODULE:FUNCTION extractor is registered before the config is built, so it still runs."""
+    from experiments.cli import main
+    from features.registry import _REGISTRY
+
+    (tmp_path / "nope.yaml").write_text("extractor: nope\n")
+    (tmp_path / "sigma.yaml").write_text("extractor_params: {sigma_r: 0.02}\n")
+    out = str(tmp_path / "o")
+    assert main(["slam", str(sim_folder), "--config", str(tmp_path / "nope.yaml"), "--out", out]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.endswith("nope.yaml: extractor: unknown extraction method 'nope'; registered methods "
+                        "(features.registry): sensor, split_merge, iepf, hough, ransac") and len(err.splitlines()) == 1
+    assert main(["slam", str(sim_folder), "--config", str(tmp_path / "sigma.yaml"), "--extractor", "hough", "--out", out]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "sigma.yaml: extractor_params: unknown parameter(s) ['sigma_r'] for method 'hough'" in err and len(err.splitlines()) == 1
+    (tmp_path / "slam_user_ext.py").write_text("from features import extract\n\n\ndef lines(scan):\n"
+                                               "    return extract(scan, 'split_merge')\n")
+    (tmp_path / "user.yaml").write_text("extractor: slam_user_ext:lines\n")
+    monkeypatch.chdir(tmp_path)
+    try:
+        assert main(["slam", str(sim_folder), "--config", "user.yaml", "--out", out, "--quiet", "--no-paper-baseline",
+                     "--max-scans", "10"]) == 0
+    finally:
+        _REGISTRY.pop("slam_user_ext:lines", None)
+    assert "extractor: slam_user_ext:lines" in (tmp_path / "o" / "config.yaml").read_text()
 
 
 def test_odometry_is_refused_outside_the_paper_preset(sim_folder, tmp_path, capsys):
@@ -433,3 +467,19 @@ def test_slam_refuses_one_scan(sim_folder, tmp_path, capsys):
     assert err[-1] == (f"lmsbench slam: error: {tmp_path / 'back.clf'}: 1 of its 2 scans are in time order; "
                        "SLAM needs two or more")
     assert not (tmp_path / "b").exists() or not any((tmp_path / "b").iterdir())
+
+
+def test_slam_summary_prints_the_runs_relations_error_beside_the_published_ones():
+    """On MIT CSAIL the summary printed 'published relations error (m): scan matching 0.106, ...'
+    and not the run's own 0.0283 (README's table), which was in metrics.json alone."""
+    from experiments.commands.slam import _score_lines
+
+    table = [{"source": "slam", "relations_trans_mean": 0.028251, "cpu_scans_per_s": 853.2},
+             {"source": "paper preset", "relations_trans_mean": 0.58295},
+             {"source": "raw odometry", "relations_trans_mean": 1.68146},
+             {"source": "paper preset (odometry)", "relations_trans_mean": float("nan")}]
+    assert _score_lines({"table": table}) == [
+        "  relations error, mean (m): this run 0.0283, paper preset 0.583, raw odometry 1.68"]
+    # a run whose relations all lie outside it (its note is printed instead) and an input without scores
+    assert _score_lines({"table": [{"source": "slam", "relations_n": 0}, table[1]]}) == []
+    assert _score_lines({"table": [{"source": "slam"}]}) == [] == _score_lines({})

@@ -22,7 +22,9 @@ from experiments.options import PORT, SEED, InputError, check_log, check_out_fil
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("lms200", help="virtual LMS200 (emulate) and serial recorder (record)")
-    cmds = p.add_subparsers(dest="lms200_command", metavar="ACTION", required=True)
+    # not required=True: argparse then said "the following arguments are required: ACTION"; without
+    # an action, cli.main says "a command is required: emulate, record", as for `lmsbench` alone
+    cmds = p.add_subparsers(dest="lms200_command", metavar="ACTION")
 
     e = cmds.add_parser("emulate", help="serve a virtual LMS200 on a pseudo-terminal (or TCP); prints its path / URL")
     e.add_argument("--world", type=world_name, default="office", help="simulator world to scan (a built-in world name; lmsbench simulate --help lists them)")
@@ -88,20 +90,31 @@ def run_emulate(args: argparse.Namespace) -> int:
 
 # -- record -------------------------------------------------------------------------------------
 class _Progress:
-    """One status line on stderr, redrawn at most 4 times a second."""
+    """One status line on stderr, redrawn at most 4 times a second on a terminal; to a file or a
+    pipe, where the redraws' carriage returns were clutter (a line every 0.25 s of a recording),
+    one line every HEARTBEAT_S, as sim2real and calibrate do there, and the final count."""
 
-    def __init__(self, dev: LMS200) -> None:
+    HEARTBEAT_S = 4.0  # s between lines when stderr is no terminal
+
+    def __init__(self, dev: LMS200, tty: bool | None = None) -> None:
         self.dev, self.start, self.shown, self.count = dev, time.monotonic(), 0.0, 0
+        self.tty = sys.stderr.isatty() if tty is None else tty
+        if not self.tty:  # the first line after HEARTBEAT_S, not at the first scan
+            self.shown = self.start
 
     def update(self, final: bool = False) -> None:
         now = time.monotonic()
-        if not final and now - self.shown < 0.25:
+        if not final and now - self.shown < (0.25 if self.tty else self.HEARTBEAT_S):
             return
         self.shown = now
         elapsed = max(now - self.start, 1e-9)
         stats = self.dev.stats
-        print(f"\r{self.count} scans  {self.count / elapsed:5.1f} scans/s  {stats.dropped_frames} dropped frames  "
-              f"{elapsed:6.1f} s", end="\n" if final else "", file=sys.stderr, flush=True)
+        text = (f"{self.count} scans  {self.count / elapsed:5.1f} scans/s  {stats.dropped_frames} dropped frames  "
+                f"{elapsed:6.1f} s")
+        if self.tty:
+            print(f"\r{text}", end="\n" if final else "", file=sys.stderr, flush=True)
+        else:
+            print(text, file=sys.stderr, flush=True)
 
 
 def _records(dev: LMS200, progress: _Progress, stop: dict, max_scans: int | None,

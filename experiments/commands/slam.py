@@ -6,6 +6,7 @@ from lms200.yamlio import load as load_yaml
 
 import argparse
 import bisect
+import math
 import sys
 from typing import TYPE_CHECKING, Any
 from pathlib import Path
@@ -54,6 +55,8 @@ def _config(args: argparse.Namespace):
     from lms200 import LmsbenchError
     from slam import SlamConfig
 
+    from experiments.user_methods import ensure_method, is_user_method
+
     cfg = SlamConfig()
     if args.config:
         check_yaml(args.config, "a SLAM config.yaml")
@@ -73,8 +76,11 @@ def _config(args: argparse.Namespace):
                                  "put them under slam:")
             if not isinstance(raw["slam"], dict):
                 raise InputError(f"{args.config}: slam: must be a mapping of SLAM config fields, got {raw['slam']!r}")
+        fields = raw.get("slam", raw)
         try:
-            cfg = SlamConfig.from_dict(raw.get("slam", raw))
+            if isinstance(fields.get("extractor"), str) and is_user_method(fields["extractor"]):
+                ensure_method(fields["extractor"])  # registered before SlamConfig checks the name
+            cfg = SlamConfig.from_dict(fields)
         except LmsbenchError as exc:
             raise InputError(f"{args.config}: {exc}") from None
     changes = {}
@@ -88,7 +94,10 @@ def _config(args: argparse.Namespace):
         changes["observations"] = dataclasses.replace(cfg.observations, use_corners=True)
     if args.odometry:
         changes["motion"] = dataclasses.replace(cfg.motion, use_odometry=True)
-    cfg = dataclasses.replace(cfg, **changes)
+    try:  # --extractor with the file's extractor_params: SlamConfig checks them against the method
+        cfg = dataclasses.replace(cfg, **changes)
+    except LmsbenchError as exc:
+        raise InputError(f"{args.config}: {exc}" if args.config else str(exc)) from None
     _check_extractor(cfg, args.config)
     if cfg.motion.use_odometry and cfg.preset != "paper":
         raise LmsbenchError("--odometry drives the paper preset's filter: add --preset paper (the default pipeline uses no odometry)")
@@ -204,6 +213,8 @@ def run(args: argparse.Namespace) -> int:
         shown = ", ".join(f"{c['new_stamp'] - t0:.1f} s -> {c['old_stamp'] - t0:.1f} s" for c in lc["closed"][:6])
         more = ", ..." if lc["n"] > 6 else ""
         print(f"  {lc['n']} loop closures over {lc['n_keyframes']} keyframes" + (f" ({shown}{more})" if lc["n"] else ""))
+    for line in _score_lines(m):
+        print(line)
     warning = _health_warning(m, config)
     if warning:
         print(f"lmsbench slam: warning: {args.input}: {warning}", file=sys.stderr)
@@ -212,6 +223,19 @@ def run(args: argparse.Namespace) -> int:
     if "anchors_relations_trans_mean_m" in m:
         print("  published relations error (m): " + ", ".join(f"{k} {v}" for k, v in m["anchors_relations_trans_mean_m"].items()))
     return 0
+
+
+def _score_lines(m: dict[str, Any]) -> list[str]:
+    """This run's scores beside its baselines' (metrics.json's ``table``, this run first): the ATE
+    against true poses, the relations error against a relations file. The summary printed the
+    published relations errors of MIT CSAIL with none of this run's."""
+    lines = []
+    for key, label in (("ate_rmse", "ATE RMS (m)"), ("relations_trans_mean", "relations error, mean (m)")):
+        rows = [(("this run" if i == 0 else row["source"]), row[key]) for i, row in enumerate(m.get("table", []))
+                if isinstance(row.get(key), (int, float)) and math.isfinite(row[key])]
+        if rows and rows[0][0] == "this run":
+            lines.append(f"  {label}: " + ", ".join(f"{source} {value:.3g}" for source, value in rows))
+    return lines
 
 
 def _health_warning(m: dict[str, Any], config: "SlamConfig") -> str:

@@ -20,7 +20,7 @@ from pathlib import Path
 import pandas as pd
 
 from . import draw
-from .tables import ad_reference
+from .tables import ad_reference, panels_log_name
 
 #: Metrics plotted for a sweep when its table has them.
 SWEEP_METRICS = ("f1", "corner_f1", "rho_rms_mm", "time_ms_median", "ate_rms", "final_error_m")
@@ -60,8 +60,10 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
                                               f"Fig. 6: psi_i = theta_i - theta_(i+{signals_k})", out / "fig6_psi")
     if "timing" in tables:
         written["fig7_timing"] = draw.fig_timing(tables["timing"], out / "fig7_timing")
+    real = panels_log_name(tables["intel_points"]) if "intel_points" in tables else "Intel"
     for source, title in (("office", "Fig. 9: features extracted by {method}, simulated " + world),
-                          ("intel", "Fig. 9: features extracted by {method}, Intel Research Lab (real log)")):
+                          ("intel", "Fig. 9: features extracted by {method}, "
+                                    + ("Intel Research Lab" if real == "Intel" else real) + " (real log)")):
         if f"{source}_points" in tables and len(tables[f"{source}_points"]):  # no panel: no figure
             lines = tables[f"{source}_lines"]
             method = str(lines["method"].iloc[0]) if "method" in lines and len(lines) else "the extractor"
@@ -89,10 +91,11 @@ def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
     varied = [key.split(",")[0].strip() for key in spec.get("grid", {})]
     varied = [n for n in varied if n in table and table[n].nunique() > 1]
     sampled = [n for n in spec.get("random", {}) if n in table]
+    metrics = sweep_metrics(table, spec)
     if not varied and sampled:  # a random search: each metric against each sampled parameter
         return {f"sweep_{name}_{m}": draw.fig_sweep_scatter(table, sampled, m, out / f"sweep_{name}_{m}",
                                                             title=f"{name}: {m} against the sampled parameters")
-                for m in SWEEP_METRICS if m in table and table[m].notna().any()}
+                for m in metrics}
     if not varied:
         return {}
     x, rest = varied[0], varied[1:]
@@ -105,9 +108,27 @@ def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
         table = table.assign(**{facet: table[rest[1:]].astype(object).apply(
             lambda r: ", ".join(f"{k}={v}" for k, v in r.items()), axis=1)})
     written = {}
-    for metric in SWEEP_METRICS:
-        if metric in table and table[metric].notna().any():
-            stem = f"sweep_{name}_{metric}"
-            written[stem] = draw.fig_sweep(table, x, metric, out / stem, hue=hue, facet=facet,
-                                           title=f"{name}: {metric} against {x}")
+    for metric in metrics:
+        stem = f"sweep_{name}_{metric}"
+        written[stem] = draw.fig_sweep(table, x, metric, out / stem, hue=hue, facet=facet,
+                                       title=f"{name}: {metric} against {x}")
     return written
+
+
+#: a sweep row's columns that are no metric: the runner's own (docs/experiments.md, "Sweep outputs")
+SWEEP_BOOKKEEPING = ("seed", "status", "error", "elapsed_s", "cell")
+
+
+def sweep_metrics(table: pd.DataFrame, spec: dict) -> list[str]:
+    """The metrics of a sweep's plots: those of SWEEP_METRICS the table has values of, else (a
+    user's ``package.module:function`` kind, whose metrics are its own names: nothing was drawn for
+    it) every numeric column with a value that is neither a parameter of the sweep file nor the
+    runner's bookkeeping."""
+    known = [m for m in SWEEP_METRICS if m in table and table[m].notna().any()]
+    if known:
+        return known
+    params = {n.strip() for key in (*spec.get("grid", {}), *spec.get("random", {}), *spec.get("fixed", {}))
+              for n in str(key).split(",")}
+    return [c for c in table.columns if c not in params and c not in SWEEP_BOOKKEEPING
+            and pd.api.types.is_numeric_dtype(table[c]) and not pd.api.types.is_bool_dtype(table[c])
+            and table[c].notna().any()]

@@ -92,7 +92,7 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
     if intel is not None and intel.exists():
         tables.update(_intel_panels(intel, cfg.panels, panel_method,
                                     cfg.intel_sensor_params if panel_method == "sensor" else None, cfg.log_options))
-        say(f"Intel log: {cfg.panels} scans with features")
+        say(f"{log_name(intel)} log: {cfg.panels} scans with features")
     else:
         notes.append(f"Fig. 9 (Intel log) skipped: {intel} is not present on this machine.")
         say(notes[-1])
@@ -196,8 +196,14 @@ def _intel_panels(path: Path, n: int, method: str, params: dict | None,
     picks = [valid[i] for i in pick_evenly(len(valid), n)]
     scans = [records[i].scan for i in picks]
     fsets, _ = extract_timed(scans, method, params)
-    pts, lns, crs = feature_panels(scans, [f"Intel scan {i}" for i in picks], fsets)
+    pts, lns, crs = feature_panels(scans, [f"{log_name(path)} scan {i}" for i in picks], fsets)
     return {"intel_points": pts, "intel_lines": lns.assign(method=method), "intel_corners": crs}
+
+
+def log_name(path: Path) -> str:
+    """How Fig. 9's real-log panels name their log: "Intel" for the Intel log (the default),
+    else the file's name (`demo --log` / `figures --intel` take any log; every label said Intel)."""
+    return "Intel" if Path(path).name == INTEL_LOG.name else Path(path).name
 
 
 def _slam_in_world(result, records) -> tuple[np.ndarray, np.ndarray]:

@@ -64,6 +64,13 @@ def feature_panels(scans: Sequence[Scan], labels: Sequence[str], feature_sets: S
             pd.concat(corners, ignore_index=True))
 
 
+def panels_log_name(points: pd.DataFrame) -> str:
+    """The log of Fig. 9's real-log panels, from their labels ("NAME scan I"): "Intel" for tables
+    written before the labels named other logs."""
+    labels = points["label"] if "label" in points else pd.Series(dtype=object)
+    return str(labels.iloc[0]).rsplit(" scan ", 1)[0] if len(labels) else "Intel"
+
+
 def trajectory_table(result_trajectory: np.ndarray, records: Sequence[Record],
                      extra: dict[str, np.ndarray] | None = None) -> pd.DataFrame:
     """SLAM (t, x, y, theta) rows and the true poses of the records, as one table by source;

@@ -58,7 +58,8 @@ def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
     params = extractor_overrides(p, [method], other_methods=True)
     table = compare([source], [method], params=params, sigma=max(noise, 0.001))
     row = summarise(table, reference=method).iloc[0]
-    skip = {"source", "method", "kind", "seeds", "speed_vs_sensor"}
+    # the speed ratios are against the cell's own method (one method a cell): 1.0 in every row
+    skip = {"source", "method", "kind", "seeds", "speed_vs_sensor", "cpu_speed_vs_sensor"}
     return {k: float(v) for k, v in row.items() if k not in skip and isinstance(v, (int, float, np.number))}
 
 
@@ -67,9 +68,13 @@ def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
     from experiments.slamrun import deskew_for_sensor
     from slam import SlamConfig, run_slam
 
+    from experiments.user_methods import ensure_method
+
     p = {**SLAM_DEFAULTS, **params}
     _, sensor, records, _ = _records(p, SLAM_DEFAULTS, with_truth=False)
-    config = deskew_for_sensor(SlamConfig.from_dict(slam_config_dict(p)), bool(sensor.interlaced))
+    nested = slam_config_dict(p)
+    ensure_method(str(nested.get("extractor", "")))  # a MODULE:FUNCTION extractor, registered in this worker
+    config = deskew_for_sensor(SlamConfig.from_dict(nested), bool(sensor.interlaced))
     result = run_slam(records, config)
     return slam_metrics(result, records)
 
@@ -274,6 +279,8 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
     _check_sensors(cells, files)
     from lms200 import LmsbenchError
 
+    from experiments.user_methods import ensure_method
+
     from .spec import SweepSpecError
 
     seen = set()
@@ -284,6 +291,7 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
             continue
         seen.add(key)
         try:
+            ensure_method(str(nested.get("extractor", "")))  # a MODULE:FUNCTION extractor: registered before the check
             SlamConfig.from_dict(nested)
         except (LmsbenchError, TypeError, ValueError, KeyError) as exc:
             raise SweepSpecError(f"slam {nested}: {exc}") from None
