@@ -375,6 +375,16 @@ CASES = [
     # a noise of 1e308 m overflowed in the summary (a RuntimeWarning on stderr, sigma_r_mm inf), exit 0
     (["compare", "office:1", "--sigma", "1e308", "--out", O], "--sigma must be a range noise std in (0, 1000] m, "
                                                               "got '1e308'"),
+    # options that apply to what the run does not do were ignored, exit 0
+    (["slam", "{simrun}", "--association", "jcbb", "--out", O], "--association set the paper preset's filter: add "
+                                                                "--preset paper"),
+    (["slam", "{simrun}", "--corners", "--out", O], "--corners set the paper preset's filter: add --preset paper"),
+    (["lms200", "emulate", "--log", "{good.clf}", "--world", "corridor", "--seed", "5"],
+     "--world, --seed set the simulated scans; --log replays the log's own"),
+    (["lms200", "emulate", "--host", "0.0.0.0"], "--host needs --tcp PORT (without it the device is a pseudo-terminal)"),
+    (["sweep", "{sweep.yaml}", "--inprocess", "--workers", "3", "--out", O],
+     "--workers sets the processes of the local cluster; --inprocess runs in this process"),
+    (["demo", "--inprocess", "--no-sweep", "--out", O], "--inprocess runs the demo's sweep in this process; --no-sweep"),
     # one scan kept: the whole comparison ran, then "internal error: ValueError: ate: fewer than 2 estimated poses"
     (["figures", "--duration", "0.5", "--rate-hz", "2", "--out", O], "--duration 0.5 at --rate-hz 2 keeps 1 scan(s) of "
      "the simulated run; the SLAM (Fig. 10) needs two or more (a longer run or a higher rate, or --no-slam)"),
