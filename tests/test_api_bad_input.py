@@ -722,8 +722,25 @@ def test_the_real_data_and_scoring_helpers_name_a_bad_argument() -> None:
         (lambda: normal_form(truth.segments[:, :2]), r"^segments: must be \(k, 4\) rows of numbers, got shape \(\d+, 2\)$"),
         (lambda: line_compatibility(None, truth.segments, ScoreConfig()), r"^lines: must be \(k, 6\) rows"),
         (lambda: line_compatibility(lines, None, ScoreConfig()), r"^seg: must be \(k, 4\) rows"),
+        (lambda: line_compatibility(lines, lines, ScoreConfig()), r"^seg: must be \(k, 4\) rows of numbers, got shape \(\d+, 8\)$"),  # 0 pairs, silently
+        (lambda: normal_form(np.zeros((2, 8))), r"^segments: must be \(k, 4\) rows of numbers, got shape \(2, 8\)$"),  # read x0..y1 from line rows
         (lambda: line_compatibility(lines, truth.segments, None), "^cfg: must be a features.scoring.ScoreConfig, got NoneType$"),
     ]
+    from features.scoring import CheckedTruth, check_truth, score_scan
+
+    checked = check_truth(truth)
+    nan_face = checked.segments.copy()
+    nan_face[0] = np.nan
+    bad += [  # a CheckedTruth built by hand is checked as check_truth checks (score_scan trusts it): the nan
+        # face scored recall 1.0 silently, None fields were a TypeError
+        (lambda: CheckedTruth(nan_face, checked.segment_beams, checked.corners, checked.corner_beams), "^truth.segments: must be finite"),
+        (lambda: CheckedTruth(None, None, None, None), "^truth"),
+    ]
+    hand_built = CheckedTruth(truth.segments, truth.segment_beams, truth.corners, truth.corner_beams)
+    scores = [dataclasses.asdict(score_scan(fs, t)) for t in (hand_built, checked, truth)]
+    for name, value in scores[0].items():
+        for other in scores[1:]:
+            np.testing.assert_array_equal(value, other[name], err_msg=name)
     for call, message in bad:
         with pytest.raises((InputError, ScanTypeError), match=message) as info:
             call()
