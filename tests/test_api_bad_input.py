@@ -488,6 +488,7 @@ def test_masked_ranges_are_checked_like_arrays(ranges: np.ndarray) -> None:
     ((1.0, True), "bool True at index 1"),
     (np.array(["1.5", 1.0], dtype=object), "str '1.5' at index 0"),            # was 1.5 m, as text arrays are refused
     (np.ma.array(np.array([1.0, True], dtype=object), mask=[False, False]), "bool True at index 1"),
+    ([np.array(True), 1.0], "bool True at index 0"),                           # a 0-d bool array: was 1 m (review)
 ])
 def test_bools_and_text_inside_object_arrays_and_lists_are_refused(ranges: object, item: str) -> None:
     """A bool array was refused, an object array or list holding the same bools was cast to 1.0 / 0.0
@@ -506,6 +507,7 @@ def test_object_arrays_and_lists_of_numbers_still_read() -> None:
 
     assert Scan(np.array([1, 2.5, Fraction(1, 2), Decimal("3")], dtype=object), **GEOM).ranges.tolist() == [1, 2.5, 0.5, 3]
     assert Scan([1, 2.5, np.float32(0.5), np.int64(3)], **GEOM).ranges.tolist() == [1, 2.5, 0.5, 3]
+    assert Scan([np.array(2.0), 1.0], **GEOM).ranges.tolist() == [2, 1]  # a 0-d array of a number
     masked = Scan(np.ma.array(np.array([True, 1.0], dtype=object), mask=[True, False]), **GEOM)  # a masked item is nan
     assert np.isnan(masked.ranges[0]) and masked.ranges[1] == 1.0
 
