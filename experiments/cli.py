@@ -4,7 +4,8 @@
 Known errors (``lms200.LmsbenchError``, any ``OSError``: missing files, bad paths, unreachable
 schedulers or devices) and bad options become one-line messages ``lmsbench CMD: error: ...`` with
 exit status 2; Ctrl-C exits with 130 and one line, within INTERRUPT_GRACE_S even when a cleanup
-(closing a Dask cluster whose workers are in the middle of cells) would take longer. Anything else is a bug: one line saying so,
+(closing a Dask cluster whose workers are in the middle of cells) would take longer; SIGTERM (``kill``,
+a batch system's time limit) stops the same way, with 143 and "terminated". Anything else is a bug: one line saying so,
 exit status 1 (``LMSBENCH_TRACEBACK=1`` shows the traceback).
 """
 
@@ -23,7 +24,7 @@ from features.batch import default_threads
 from lms200 import LmsbenchError, LogFormatError
 
 from . import commands
-from .options import OneLineParser
+from .options import OneLineParser, shorten_quoted
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -42,17 +43,29 @@ def build_parser() -> argparse.ArgumentParser:
 INTERRUPT_GRACE_S = 15.0  # s after Ctrl-C for cleanup; then child processes are killed and the process exits 130
 
 
+#: The signals that stop a command in order, with the word said and the exit status (128 + signal).
+STOP_SIGNALS = {signal.SIGINT: ("interrupted", 130), signal.SIGTERM: ("terminated", 143)}
+
+
 class _Interrupt:
-    """Ctrl-C: raise KeyboardInterrupt for an orderly stop, and start a timer that ends the
-    process (children killed, exit 130, the one line) if that stop has not finished in
-    INTERRUPT_GRACE_S (a Dask cluster waiting for its workers' running cells, an exit handler)."""
+    """Ctrl-C or SIGTERM: raise KeyboardInterrupt for an orderly stop, and start a timer that ends
+    the process (children killed, exit 130 / 143, the one line) if that stop has not finished in
+    INTERRUPT_GRACE_S (a Dask cluster waiting for its workers' running cells, an exit handler).
+    SIGTERM killed the process at once: no line, exit -15, a multi-line warning of leaked
+    semaphores from multiprocessing, and a local cluster's workers left to notice on their own."""
 
     def __init__(self, name: str) -> None:
         self.name, self.reported = name, False
         self.timer: threading.Timer | None = None
+        self.signum = signal.SIGINT
+
+    @property
+    def word_and_status(self) -> tuple[str, int]:
+        return STOP_SIGNALS.get(signal.Signals(self.signum), STOP_SIGNALS[signal.SIGINT])
 
     def handler(self, signum: int, frame: Any) -> None:
         if self.timer is None:
+            self.signum = signum
             self.timer = threading.Timer(INTERRUPT_GRACE_S, self.hard_stop)
             self.timer.daemon = True
             self.timer.start()
@@ -60,10 +73,11 @@ class _Interrupt:
 
     def hard_stop(self) -> None:
         _kill_children()
+        word, status = self.word_and_status
         if not self.reported:
-            sys.stderr.write(f"lmsbench {self.name}: interrupted\n")
+            sys.stderr.write(f"lmsbench {self.name}: {word}\n")
             sys.stderr.flush()
-        os._exit(130)
+        os._exit(status)
 
 
 def _kill_children() -> None:
@@ -97,13 +111,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     name = " ".join(filter(None, (args.command, getattr(args, "lms200_command", None))))
     interrupt = _Interrupt(name)
     main_thread = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGINT, interrupt.handler) if main_thread else None
+    previous = {sig: signal.signal(sig, interrupt.handler) for sig in STOP_SIGNALS} if main_thread else {}
     try:
         default_threads()  # a bad $LMSBENCH_THREADS is refused before any work, by every command
-        return int(args.func(args) or 0)
+        status = int(args.func(args) or 0)
+        sys.stdout.flush()  # here, not at exit: a reader that went away (`| head`) is said below
+        return status
     except (LmsbenchError, OSError) as exc:  # OSError: missing files, bad paths, unreachable hosts, timeouts
         if interrupt.timer is not None or _from_interrupt(exc):  # what Ctrl-C broke: not the input's error
             return _interrupted(interrupt, name)
+        if isinstance(exc, BrokenPipeError) and _stdout_closed():
+            return _stdout_gone()
         _end_progress_bars()
         print(f"lmsbench {name}: error: {_one_line(exc)}{_skip_hint(exc, args)}", file=sys.stderr)
         return 2
@@ -121,17 +139,47 @@ def main(argv: Sequence[str] | None = None) -> int:
               "(a bug in lmsbench; LMSBENCH_TRACEBACK=1 shows where)", file=sys.stderr)
         return 1
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+PIPE_CLOSED_STATUS = 141  # 128 + SIGPIPE: what a shell reports for a command whose reader went away
+
+
+def _stdout_closed() -> bool:
+    """Whether stdout is a pipe whose reader has gone (`lmsbench info LOG | head -1`)."""
+    try:
+        import select
+
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+        return any(events & (select.POLLERR | select.POLLHUP) for _, events in poller.poll(0))
+    except (OSError, ValueError, AttributeError):  # no file descriptor (a test's capture), no poll
+        return False
+
+
+def _stdout_gone() -> int:
+    """A reader of stdout that went away is no error of the command: no message (it was 'error:
+    [Errno 32] Broken pipe', exit 2, or with buffered output Python's 'Exception ignored ...
+    BrokenPipeError' at exit, status 120), the status a shell gives for SIGPIPE. What is left in
+    stdout's buffer goes to /dev/null, so the interpreter's last flush does not fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
+    return PIPE_CLOSED_STATUS
 
 
 def _interrupted(interrupt: _Interrupt, name: str) -> int:
-    """Ctrl-C's one line and exit status 130, the children killed."""
+    """Ctrl-C's one line and exit status 130 (SIGTERM's: "terminated", 143), the children killed."""
     _end_progress_bars()
     _kill_children()
     interrupt.reported = True
-    print(f"lmsbench {name}: interrupted", file=sys.stderr)
-    return 130
+    word, status = interrupt.word_and_status
+    print(f"lmsbench {name}: {word}", file=sys.stderr)
+    return status
 
 
 def _from_interrupt(exc: BaseException) -> bool:
@@ -215,7 +263,7 @@ def _one_line(exc: BaseException) -> str:
         if exc.filename2 is not None:
             text += f" ({exc.filename2})"
         return text
-    text = " ".join(str(exc).split()) or type(exc).__name__
+    text = shorten_quoted(" ".join(str(exc).split())) or type(exc).__name__
     return text if len(text) <= 600 else text[:597] + "..."
 
 

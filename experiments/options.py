@@ -12,6 +12,7 @@ import argparse
 import fnmatch
 import math
 import os
+import re
 import stat
 import tempfile
 from pathlib import Path
@@ -34,6 +35,16 @@ def known_worlds() -> tuple[str, ...]:
     return tuple(WORLD_NAMES)
 
 
+_LONG_QUOTED = re.compile(r"'([^'\n]{%d,})'" % 80)
+
+
+def shorten_quoted(message: str) -> str:
+    """``message`` with every quoted value of 80 characters or more cut to its start and end and its
+    length (`--seed 999...` of 5000 digits, a log line of NUL bytes, echoed whole, made an error
+    line of kilobytes in which the option's name and the hint were lost)."""
+    return _LONG_QUOTED.sub(lambda m: f"'{m[1][:40]}...{m[1][-8:]}' ({len(m[1])} characters)", message)
+
+
 class OneLineParser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line, ``PROG: error: MESSAGE``, exit status 2
     (argparse's own prints the usage first). Options are spelled out: no abbreviations (``--dur 3``
@@ -44,7 +55,7 @@ class OneLineParser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        self.exit(2, f"{self.prog}: error: {shorten_quoted(message)} (see {self.prog} --help)\n")
 
     def parse_known_args(self, args: Sequence[str] | None = None, namespace: Any = None) -> Any:  # type: ignore[override]
         """As argparse, but an option that takes a value given twice is an error: argparse kept the
@@ -71,10 +82,11 @@ def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = 
            integer: bool = False) -> Callable[[str], float]:
     """An argparse type: a finite number in [lo, hi] (lo excluded with ``lo_open``)."""
     parts = []
+    shown = (lambda v: str(int(v))) if integer else (lambda v: f"{v:g}")  # a seed's 2**32 - 1, not 4.29497e+09
     if lo is not None:
-        parts.append(f"{'>' if lo_open else '>='} {lo:g}")
+        parts.append(f"{'>' if lo_open else '>='} {shown(lo)}")
     if hi is not None:
-        parts.append(f"<= {hi:g}")
+        parts.append(f"<= {shown(hi)}")
     what = ("a whole number" if integer else "a finite number") + (" " + " and ".join(parts) if parts else "")
     what += f" {unit}" if unit else ""
 
@@ -109,6 +121,20 @@ def path_arg(text: str) -> Path:
     if not text.strip():
         raise argparse.ArgumentTypeError(f"empty path {text!r}; give a file or folder name")
     return Path(text)
+
+
+def text(what: str) -> Callable[[str], str]:
+    """An argparse type: a word that is not empty nor blank, ``what`` naming what to give instead.
+    An empty value read as "not given" (`--extractor "$M"` with M unset ran the default extractor,
+    `--scheduler ""` a local cluster) or as everything (`--host ""` listened on every interface)."""
+
+    def parse(value: str) -> str:
+        if not value.strip():
+            raise argparse.ArgumentTypeError(f"must not be empty, got {value!r}; give {what}")
+        return value
+
+    parse.__name__ = "text"
+    return parse
 
 
 SEED = count(0, 2**32 - 1)
@@ -313,6 +339,7 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
     if path is None:
         return None
     p = Path(path)
+    check_link(p)
     if p.exists() and not p.is_dir():
         raise InputError(f"--out {p}: exists and is not a folder")
     if writes is not None and p.is_dir():
@@ -330,12 +357,21 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
     return p
 
 
+def check_link(p: Path, flag: str = "--out") -> None:
+    """An output path that is a link to nothing or a loop of links: found only when the run wrote
+    (after the work: "dang: file exists"), or by Path.resolve ("internal error: RuntimeError:
+    Symlink loop")."""
+    if p.is_symlink() and not p.exists():
+        raise InputError(f"{flag} {_missing(p, 'folder')}")
+
+
 def check_out_spares(out: str | os.PathLike | None, writes: Sequence[str], reads: Sequence[str | os.PathLike]) -> None:
     """No file a run writes into ``out`` (the names ``writes``) is a file it reads (``reads``):
     ``compare SIMFOLDER --out SIMFOLDER`` replaced the simulate folder's config.yaml, the sensor
     model compare reads for it, with its own."""
     if out is None:
         return
+    check_link(Path(out))
     targets = {(Path(out) / name).resolve() for name in writes}
     for f in reads:
         if Path(f).resolve() in targets:
@@ -348,6 +384,7 @@ def check_out_file(path: str | os.PathLike | None, flag: str = "--out") -> Path 
     if path is None:
         return None
     p = Path(path)
+    check_link(p, flag)
     if p.is_dir():
         raise InputError(f"{flag} {p} is a folder; give a file name")
     if p.exists() and not p.is_file():  # writing to a pipe with no reader hung the command after its work

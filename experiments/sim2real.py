@@ -223,9 +223,10 @@ def odometry_limits(a: np.ndarray):
     v = np.hypot(np.diff(a[:, 1]), np.diff(a[:, 2]))[ok] / dt[ok]
     w = np.abs(np.angle(np.exp(1j * np.diff(a[:, 3]))))[ok] / dt[ok]
     v_max, w_max = float(np.quantile(v, 0.75)), float(np.quantile(w, 0.95))
-    base = RobotLimits()
-    return RobotLimits(v_max=max(v_max, 0.1), w_max=max(w_max, 0.2), a_max=max(base.a_max, v_max),
-                       alpha_max=max(base.alpha_max, 2 * w_max))
+    base, top = RobotLimits(), {name: hi for name, (_, hi, _, _) in RobotLimits.BOUNDS.items()}
+    v_max, w_max = min(v_max, top["v_max"]), min(w_max, top["w_max"])  # odometry that jumps: no endless tour
+    return RobotLimits(v_max=max(v_max, 0.1), w_max=max(w_max, 0.2), a_max=min(max(base.a_max, v_max), top["a_max"]),
+                       alpha_max=min(max(base.alpha_max, 2 * w_max), top["alpha_max"]))
 
 
 @dataclass

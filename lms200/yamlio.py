@@ -2,16 +2,19 @@
 ``1E6`` (no dot, or no sign in the exponent) are strings, so a config value ``noise_sigma: 5e-3``
 reached the code as text. :func:`load` reads them as floats, as YAML 1.2 and Python do.
 
-Two more departures from PyYAML's safe loader, both refusals of what it took silently or crashed
+More departures from PyYAML's safe loader, all refusals of what it took silently or crashed
 on: a key given twice in one mapping (PyYAML kept the last, so ``noise_sigma: 0.005`` followed
-further down by ``noise_sigma: 0.5`` simulated the second without a word; YAML 1.2 forbids it)
-and nesting too deep for Python's recursion limit (a RecursionError, not a YAML error). Both
+further down by ``noise_sigma: 0.5`` simulated the second without a word; YAML 1.2 forbids it),
+nesting too deep for Python's recursion limit (a RecursionError, not a YAML error), and aliases
+that expand a document to billions of values or into itself (a "billion laughs": fine to
+PyYAML, which shares the objects, but endless to the ``repr`` of an error message). All
 raise ``yaml.YAMLError`` with the line, as any malformed YAML does; PyYAML's own errors are
 re-raised as :class:`Malformed`, one line that starts with the place ("line 2, column 1: ...")."""
 
 from __future__ import annotations
 
 import re
+import sys
 from typing import Any
 
 import yaml
@@ -59,6 +62,50 @@ class TooDeep(yaml.YAMLError):
     """YAML nested deeper than the parser's recursion allows."""
 
 
+class AliasBomb(yaml.YAMLError):
+    """A document whose aliases (``*name``) expand it far beyond its own text ("billion laughs"):
+    nine lines of ``&a [*b, *b, ...]`` are 10^9 values to anything that walks them (a message's
+    ``repr``, a dataclass's ``asdict``): ``simulate --sensor`` hung, eating memory, on one."""
+
+
+class SelfReference(yaml.YAMLError):
+    """A value that holds itself through an alias (``&a [*a]``): endless to anything that walks it."""
+
+
+#: Values a document may expand to through its aliases beyond the size of its text (each value
+#: written out takes at least a character, so a document without aliases never reaches it).
+MAX_EXPANDED_VALUES = 1_000_000
+
+
+def _check_expansion(doc: Any, text: str) -> None:
+    """Raise AliasBomb / SelfReference for a document too big or endless once its aliases are
+    expanded. Walks each distinct list and mapping once (iteratively: no recursion limit)."""
+    limit = max(MAX_EXPANDED_VALUES, len(text))
+    size: dict[int, int] = {}  # expanded values under each finished list / mapping, by id
+    active: set[int] = set()  # the lists and mappings being walked: the current one's ancestors
+    stack: list[tuple[Any, bool]] = [(doc, False)]
+    while stack:
+        obj, finished = stack.pop()
+        if not isinstance(obj, (list, dict, set)):
+            continue
+        key = id(obj)
+        items = list(obj.values()) + list(obj) if isinstance(obj, dict) else list(obj)
+        if finished:
+            active.discard(key)
+            size[key] = 1 + sum(size.get(id(v), 1) for v in items)
+            if size[key] > limit:
+                raise AliasBomb(f"its aliases (*name) expand it to more than {limit:,} values (a 'billion laughs'); "
+                                "write the values out")
+            continue
+        if key in size:
+            continue
+        if key in active:
+            raise SelfReference("a value holds itself through an alias (&name ... *name inside it)")
+        active.add(key)
+        stack.append((obj, True))
+        stack.extend((v, False) for v in items)
+
+
 class Malformed(yaml.YAMLError):
     """PyYAML's error in one line, with its place (``line``, ``column``: 1-based, 0 where unknown):
     "line 2, column 1: expected ',' or ']', but got '<stream end>' (while parsing a flow sequence
@@ -96,13 +143,21 @@ def load(text: str) -> Any:
     Raises:
         yaml.YAMLError: as ``yaml.safe_load`` does but in one line that starts with the place
             (:class:`Malformed`, "line L, column C: ..."), and for a duplicate key
-            (:class:`DuplicateKey`) or nesting too deep to parse (:class:`TooDeep`).
+            (:class:`DuplicateKey`), nesting too deep to parse (:class:`TooDeep`), aliases that
+            expand the document beyond MAX_EXPANDED_VALUES and its length (:class:`AliasBomb`) or
+            a value that holds itself (:class:`SelfReference`).
     """
     try:
-        return yaml.load(text, Loader=Loader)  # noqa: S506 - Loader is a SafeLoader
+        doc = yaml.load(text, Loader=Loader)  # noqa: S506 - Loader is a SafeLoader
     except RecursionError:
         raise TooDeep("nested too deeply to parse") from None
     except (DuplicateKey, TooDeep):
         raise
     except yaml.YAMLError as exc:
         raise _malformed(exc, text) from None
+    except ValueError as exc:  # int("9" * 5000): Python reads at most 4300 digits (sys.get_int_max_str_digits)
+        if "digits" not in str(exc):
+            raise
+        raise Malformed(f"a whole number of more than {sys.get_int_max_str_digits()} digits") from None
+    _check_expansion(doc, text)
+    return doc

@@ -34,6 +34,16 @@ class OdometryConfig:
     alpha3: float = 0.05  # m/m
     alpha4: float = 0.01  # m/rad
 
+    MAX_ALPHA = 10.0  # per unit of motion: ten times the motion itself, far beyond any wheel odometry
+
+    def __post_init__(self) -> None:
+        """Each alpha a finite number in [0, MAX_ALPHA] (``alpha1: x`` was an internal error deep in
+        numpy, ``alpha1: -1`` and ``alpha2: 1e300`` ran, silently)."""
+        from .checks import check_number  # noqa: PLC0415 - sim.checks is light; kept beside its use
+
+        for name in ("alpha1", "alpha2", "alpha3", "alpha4"):
+            object.__setattr__(self, name, check_number(getattr(self, name), name, 0.0, self.MAX_ALPHA))
+
     def to_dict(self) -> dict:
         return asdict(self)
 
@@ -70,10 +80,13 @@ def scan_stamps(sensor: SensorConfig, duration: float, rate_hz: float | None = N
     """Times (s) of the first beam of each scan kept: every scan of the sensor (37.5/s at 0.5 deg)
     whose last beam falls within ``duration``, decimated to about ``rate_hz`` when given."""
     period = sensor.scan_period
-    step = 1 if rate_hz is None else max(1, int(round(1.0 / (period * rate_hz))))
     last_beam = float(sensor.beam_time_offsets.max())
-    n = int(np.floor((duration - last_beam) / period + 1e-9)) + 1
-    return np.arange(0, max(n, 0), step) * period
+    n = max(int(np.floor((duration - last_beam) / period + 1e-9)) + 1, 0)
+    step = 1
+    if rate_hz is not None:  # keep every step-th scan; a rate this low keeps the first alone
+        kept_share = period * rate_hz  # scans kept per scan made: 1e-320 scans/s made 1 / share inf
+        step = max(n, 1) if kept_share * max(n, 1) <= 1.0 else max(1, int(round(1.0 / kept_share)))
+    return np.arange(0, n, step) * period
 
 
 def simulate_tour(world: World, tour: Tour, stamps: np.ndarray, sensor: SensorConfig, seed: int = 0,

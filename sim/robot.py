@@ -22,7 +22,13 @@ STILL, DRIVE, TURN = 0, 1, 2
 
 @dataclass(frozen=True)
 class RobotLimits:
-    """Limits of a Pioneer-class robot (m, s, rad)."""
+    """Limits of a Pioneer-class robot (m, s, rad), each checked against BOUNDS when made (a
+    ``simulate --config`` with ``robot: {v_max: 1e300}`` planned a tour for ever, ``v_max: -1`` or
+    ``a_max: 0`` drove a tour of nan or no motion silently, ``pause_s: [5, 1]`` was an internal error).
+
+    Raises:
+        InputError: naming the field, for a value that is not a finite number within its bounds.
+    """
 
     v_max: float = 0.5  # m/s forward speed
     a_max: float = 0.5  # m/s^2
@@ -30,6 +36,25 @@ class RobotLimits:
     alpha_max: float = 2.0  # rad/s^2
     radius: float = 0.25  # m, for collision checks
     pause_s: tuple[float, float] = (0.5, 2.0)  # pause at each visited room (uniform range)
+
+    #: (lowest, highest, lowest excluded, unit) of each number: far beyond any indoor robot (a
+    #: Pioneer drives at most 1.5 m/s), yet a tour of MAX_DURATION_S at V_MAX plans in seconds
+    BOUNDS = {"v_max": (0.0, 10.0, True, "m/s"), "a_max": (0.0, 100.0, True, "m/s^2"),
+              "w_max": (0.0, 20.0, True, "rad/s"), "alpha_max": (0.0, 200.0, True, "rad/s^2"),
+              "radius": (0.0, 2.0, False, "m")}
+
+    def __post_init__(self) -> None:
+        from .checks import check_number  # noqa: PLC0415 - sim.checks is light; kept beside its use
+
+        for name, (lo, hi, lo_open, unit) in self.BOUNDS.items():
+            object.__setattr__(self, name, check_number(getattr(self, name), name, lo, hi, lo_open=lo_open, unit=unit))
+        pause = self.pause_s
+        if isinstance(pause, (str, bytes)) or not hasattr(pause, "__len__") or len(pause) != 2:
+            raise InputError(f"pause_s: must be two numbers of seconds [shortest, longest], got {pause!r}")
+        lo, hi = (check_number(p, "pause_s", 0.0, MAX_DURATION_S, unit="s") for p in pause)
+        if lo > hi:
+            raise InputError(f"pause_s: the shortest pause must not exceed the longest, got {list(pause)!r}")
+        object.__setattr__(self, "pause_s", (lo, hi))
 
     def to_dict(self) -> dict:
         return asdict(self)

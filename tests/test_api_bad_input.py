@@ -197,6 +197,21 @@ def test_simulate_records_rate_above_the_sensors_is_refused() -> None:
     assert len(recs) == len(simulate_records("office", seed=0, duration=1.0))  # every scan, as without a rate
 
 
+@pytest.mark.parametrize("rate_hz", [1e-320, 5e-324, 1e-300])
+def test_a_rate_near_zero_keeps_the_first_scan_as_any_low_rate_does(rate_hz: float) -> None:
+    """`simulate --rate-hz 1e-320` (also compare --rate, sim2real --rate-hz, sweeps' rate_hz) was
+    "internal error: OverflowError: cannot convert float infinity to integer" (1 / (period * rate)
+    is inf), and 5e-324 a ZeroDivisionError; a rate this low keeps the first scan, as 0.001 does."""
+    from sim import SensorConfig
+    from sim.records import scan_stamps
+
+    sensor = SensorConfig()
+    for duration in (0.5, 10.0, 3600.0):
+        low = scan_stamps(sensor, duration, rate_hz)
+        assert low.tolist() == scan_stamps(sensor, duration, 1e-4).tolist() == [0.0]
+    assert len(scan_stamps(sensor, 10.0, 2.0)) == 20 and len(scan_stamps(sensor, 10.0, None)) == 375  # as before
+
+
 @pytest.mark.parametrize("kw, message", [
     (dict(seed=-1), "^seed: must be a whole number"),
     (dict(clutter="x"), "^clutter: must be a number or None"),   # was "could not convert string to float"
@@ -1064,3 +1079,19 @@ def test_slam_prior_sigma_and_icp_iterations_are_bounded_when_built() -> None:
         with pytest.raises(SlamConfigError, match=rf"^alignment.{field}: must be at most 1000 Gauss-Newton steps, got \d+"):
             SlamConfig(alignment={field: 1e300})
         assert getattr(SlamConfig(alignment={field: 1000}).alignment, field) == 1000
+
+
+def test_robot_limits_and_odometry_config_check_their_fields() -> None:
+    """RobotLimits and OdometryConfig took any value (v_max=1e300 made robot_tour plan for ever);
+    their numbers are now finite and bounded, and the defaults are as before."""
+    from sim.records import OdometryConfig
+    from sim.robot import RobotLimits
+
+    assert RobotLimits() == RobotLimits(0.5, 0.5, 1.0, 2.0, 0.25, (0.5, 2.0))
+    assert RobotLimits(v_max=2).v_max == 2.0 and RobotLimits(pause_s=[0, 0]).pause_s == (0.0, 0.0)
+    with pytest.raises(InputError, match=r"^w_max: must be a finite number in \(0, 20\] rad/s, got inf"):
+        RobotLimits(w_max=float("inf"))
+    with pytest.raises(InputError, match=r"^radius: must be a finite number in \[0, 2\] m, got a int beyond"):
+        RobotLimits(radius=10**400)
+    with pytest.raises(InputError, match=r"^alpha3: must be a finite number in \[0, 10\], got True"):
+        OdometryConfig(alpha3=True)

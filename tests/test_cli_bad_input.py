@@ -115,6 +115,8 @@ def files(tmp_path_factory):
                                         "sample_seed": -1},
                   "sweep_text_bounds": {"random": {"extractor.ad_tau": {"uniform": ["a", "b"]}}, "samples": 2},
                   "sweep_int_bounds": {"random": {"extractor.min_points": {"int": [1.5, 3]}}, "samples": 2},
+                  "sweep_int_huge": {"random": {"extractor.min_points": {"int": [3, 10**24]}}, "samples": 2},
+                  "sweep_uniform_wide": {"random": {"extractor.ad_tau": {"uniform": [-1e308, 1e308]}}, "samples": 2},
                   "sweep_big_seed": {"seeds": [2**40]}, "sweep_name_number": {"name": 5},
                   "sweep_cells": {"grid": {"extractor.k": list(range(3, 503)), "extractor.ad_tau": list(range(1, 301))}},
                   "sweep_long": {"fixed": {"duration": 1e9}}, "sweep_short": {"fixed": {"duration": 0.001}}}
@@ -126,6 +128,10 @@ def files(tmp_path_factory):
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
     (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
     (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
+    laughs = "[" + ", ".join(["&c0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]"] + [f"&c{i} [" + ", ".join([f"*c{i - 1}"] * 10) + "]"
+                                                                    for i in range(1, 9)]) + "]"
+    (d / "sensor_laughs.yaml").write_text(f"noise_sigma: {laughs}\n")  # 10^9 values: the message's repr hung
+    (d / "slam_laughs.yaml").write_text(f"motion: {{sigma_accel: {laughs}}}\n")
     (d / "sensor_1deg.yaml").write_text("n_beams: 181\nresolution_deg: 1.0\n")  # good.clf: 361 at 0.5 deg
     (d / "short_run.yaml").write_text("world: office\nseed: 0\nduration: 0.001\n")  # a simulate config: no scan
     (d / "run_bool.yaml").write_text("world: office\nseed: 0\nduration: true\n")  # ran 1 s
@@ -338,6 +344,9 @@ CASES = [
     (["sweep", "{sweep_sample_seed.yaml}", "--out", O], "`sample_seed:`"),
     (["sweep", "{sweep_text_bounds.yaml}", "--out", O], "uniform needs [low, high]"),
     (["sweep", "{sweep_int_bounds.yaml}", "--out", O], "int needs whole-number bounds"),
+    # bounds numpy cannot draw from: "internal error: ValueError: high is out of bounds for int64" / OverflowError
+    (["sweep", "{sweep_int_huge.yaml}", "--out", O], "random.extractor.min_points: int needs bounds in [-2**63, 2**63 - 1]"),
+    (["sweep", "{sweep_uniform_wide.yaml}", "--out", O], "random.extractor.ad_tau: uniform needs high - low finite"),
     (["sweep", "{sweep_big_seed.yaml}", "--out", O], "`seeds:` must be distinct integers in [0, 4294967295]"),
     (["sweep", "{sweep_name_number.yaml}", "--out", O], "name: must be a string"),
     (["sweep", "{sweep_cells.yaml}", "--out", O], "150000 cells"),
@@ -351,6 +360,25 @@ CASES = [
     (["sim2real", "{good.clf}", "--duration", "0.001", "--out", O], "--duration"),
     (["sim2real", "{good.clf}", "--probe-duration", "0.05", "--out", O], "--probe-duration"),
     (["demo", "--duration", "0.01", "--out", O], "--duration"),
+    # a 'billion laughs' of aliases: the error message's repr of the value hung past the test's alarm
+    (["simulate", "--sensor", "{sensor_laughs.yaml}", "--out", O], "sensor_laughs.yaml: not valid YAML (its aliases "
+     "(*name) expand it to more than 1,000,000 values (a 'billion laughs'); write the values out)"),
+    (["compare", "office:1", "--sensor", "{sensor_laughs.yaml}", "--out", O], "sensor_laughs.yaml: not valid YAML (its"),
+    (["slam", "{simrun}", "--config", "{slam_laughs.yaml}", "--out", O], "slam_laughs.yaml: not valid YAML (its aliases"),
+    # an empty word read as "not given" (the default extractor ran, a local cluster) or as every interface
+    (["slam", "{simrun}", "--extractor", "", "--out", O], "argument --extractor: must not be empty, got ''; give an "
+                                                          "extraction method's name"),
+    (["sweep", "{sweep.yaml}", "--scheduler", "", "--out", O], "argument --scheduler: must not be empty, got ''"),
+    (["lms200", "emulate", "--tcp", "0", "--host", ""], "argument --host: must not be empty, got ''"),  # 0.0.0.0
+    (["lms200", "record", "--port", " ", "--out", "{out}/x.clf"], "argument --port: must not be empty, got ' '"),
+    (["compare", "office:1", "--methods", "sensor", "", "--out", O], "argument --methods: must not be empty, got ''"),
+    # a noise of 1e308 m overflowed in the summary (a RuntimeWarning on stderr, sigma_r_mm inf), exit 0
+    (["compare", "office:1", "--sigma", "1e308", "--out", O], "--sigma must be a range noise std in (0, 1000] m, "
+                                                              "got '1e308'"),
+    # one scan kept: the whole comparison ran, then "internal error: ValueError: ate: fewer than 2 estimated poses"
+    (["figures", "--duration", "0.5", "--rate-hz", "2", "--out", O], "--duration 0.5 at --rate-hz 2 keeps 1 scan(s) of "
+     "the simulated run; the SLAM (Fig. 10) needs two or more (a longer run or a higher rate, or --no-slam)"),
+    (["demo", "--duration", "1", "--rate-hz", "1", "--no-sweep", "--out", O], "--duration 1 at --rate-hz 1 keeps 1 scan(s)"),
     # figures
     (["figures", "--tables", "{tables_broken}", "--out", O], "summary.parquet: not a readable parquet table"),
     (["figures", "--tables", "{tables_broken}", "--sweep", "{sweep_broken}", "--out", O], "results.parquet: not a Parquet table"),
@@ -854,3 +882,73 @@ def test_compare_tells_worlds_from_files_by_name_for_sensor_as_for_seeds(tmp_pat
     assert run_main(["compare", "office", "--seeds", "1", "--duration", "0.5", "--methods", "split_merge",
                      "--sensor", "s.yaml", "--no-progress", "--out", "o"], seconds=120) == 0
     assert (tmp_path / "o" / "summary.csv").exists()
+
+
+@pytest.mark.parametrize("section, expected", [
+    ("robot: {v_max: 1.0e300}", "(v_max: must be a finite number in (0, 10] m/s, got 1e+300)"),  # planned for ever
+    ("robot: {v_max: -1}", "(v_max: must be a finite number in (0, 10] m/s, got -1)"),  # ran, silently
+    ("robot: {a_max: 0}", "(a_max: must be a finite number in (0, 100] m/s^2, got 0)"),  # a tour of nan, warnings
+    ("robot: {v_max: [1, 2]}", "(v_max: must be a finite number in (0, 10] m/s, got [1, 2])"),  # internal error
+    ("robot: {pause_s: [5, 1]}", "(pause_s: the shortest pause must not exceed the longest, got [5, 1])"),
+    ("robot: {pause_s: [1, 2, 3]}", "(pause_s: must be two numbers of seconds [shortest, longest], got (1, 2, 3))"),
+    ("odometry: {alpha1: x}", "(alpha1: must be a finite number in [0, 10], got 'x')"),  # internal error (numpy)
+    ("odometry: {alpha2: 1.0e300}", "(alpha2: must be a finite number in [0, 10], got 1e+300)"),  # ran, silently
+])
+def test_simulate_config_robot_and_odometry_values_are_checked(section, expected, tmp_path, capsys):
+    """`simulate --config` checked the run's and the sensor's values but not the robot's limits nor
+    the odometry's noise: v_max 1e300 planned a tour for ever, -1 or a_max 0 ran a tour of no or nan
+    motion, a list, a reversed pause range or text were internal errors. Now refused, one line."""
+    (tmp_path / "run.yaml").write_text(f"world: office\nseed: 0\nduration: 1\n{section}\n")
+    assert run_main(["simulate", "--config", str(tmp_path / "run.yaml"), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"lmsbench simulate: error: {tmp_path / 'run.yaml'}: not a simulate config {expected}"]
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_sweep_is_not_written_into_another_sweeps_folder(files, tmp_path, capsys):
+    """`sweep B.yaml --out FOLDER_OF_A` replaced A's sweep.yaml, results.parquet and results.csv
+    with B's, exit 0: A's table and record were gone (its cells stayed). Refused before any cell,
+    nothing touched; A itself still resumes there."""
+    out = tmp_path / "a"
+    argv = ["sweep", files["sweep.yaml"], "--inprocess", "--no-progress", "--out", str(out)]
+    assert run_main(argv, seconds=120) == 0
+    other = tmp_path / "other.yaml"
+    other.write_text(Path(files["sweep.yaml"]).read_text().replace("name: t", "name: other"))
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    capsys.readouterr()
+    assert run_main(["sweep", str(other), "--inprocess", "--no-progress", "--out", str(out)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench sweep: error: --out {out}: holds the sweep 't' (its sweep.yaml), not 'other': its results would be "
+        "replaced; give another folder (a sweep resumes in a folder of its own name)"]
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    assert run_main(argv, seconds=120) == 0 and "1 cells, 0 computed, 1 already done" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, expected", [
+    (["simulate", "--seed", "9" * 5000], "lmsbench simulate: error: argument --seed: must be a whole number >= 0 and <= "
+     f"4294967295, got '{'9' * 40}...99999999' (5000 characters) (see lmsbench simulate --help)"),
+    (["simulate", "--world", "w" * 5000, "--duration", "1"], f"lmsbench simulate: error: --world: unknown world "
+     f"'{'w' * 40}...wwwwwwww' (5000 characters); known worlds: office, corridor, angles, pillars, random, cluttered, "
+     "mit or a world.json"),
+])
+def test_a_long_value_is_shortened_in_the_error_line(argv, expected, tmp_path, capsys):
+    """A 5000-digit --seed was echoed whole: an error line of 5 KB, the option's range printed as
+    4.29497e+09 (2**32 - 1 rounded), the --world hint cut off by the 600-character clip."""
+    assert run_main(argv + ["--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [expected]
+
+
+@pytest.mark.parametrize("command", [["compare", "{good.clf}"], ["sweep", "{sweep.yaml}"], ["simulate", "--duration", "1"],
+                                     ["slam", "{simrun}"], ["figures", "--tables", "{tables_broken}"]])
+@pytest.mark.parametrize("link", ["loop", "dangling"])
+def test_out_a_link_to_nothing_or_a_loop_is_refused_before_the_work(command, link, files, tmp_path, capsys):
+    """`--out LINK` where LINK is a loop of links: compare, sweep and figures said "internal error:
+    RuntimeError: Symlink loop" (Path.resolve); simulate and slam ran the whole work and then failed
+    making the folder ("LINK: file exists"), as with a link to nothing."""
+    out = tmp_path / link
+    out.symlink_to(out if link == "loop" else tmp_path / "nowhere")
+    target = str(out) if link == "loop" else str(tmp_path / "nowhere")
+    argv = [files.get(w[1:-1], w) if w.startswith("{") else w for w in command]
+    assert run_main(argv + ["--out", str(out)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench {command[0]}: error: --out {out}: a symbolic link to {target}, which does not exist (or a loop of links)"]

@@ -11,6 +11,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import psutil
 import pytest
 import yaml
@@ -99,3 +100,77 @@ def test_ctrl_c_inside_compiled_code_is_an_interruption_not_an_internal_error() 
                          env=_env(), timeout=120)
     assert out.stderr.strip().splitlines() == ["lmsbench info: interrupted"], out.stderr
     assert out.stdout.splitlines() == ["status 130"], out.stdout
+
+
+@pytest.mark.parametrize("unbuffered", ["1", ""])
+def test_a_reader_that_goes_away_ends_the_command_quietly(tmp_path, unbuffered):
+    """`lmsbench info LOG | head -1`, run from docs/lms200.md's recording: when head had gone,
+    'lmsbench info: error: [Errno 32] Broken pipe', exit 2 (PYTHONUNBUFFERED set), or Python's
+    'Exception ignored in: <_io.TextIOWrapper name='<stdout>'...> BrokenPipeError', exit 120.
+    Now nothing on stderr and 141, a shell's status for SIGPIPE; a full read is unchanged."""
+    from lms200 import Record, Scan, write_log
+
+    log = tmp_path / "a.clf"
+    write_log(log, [Record(Scan.lms200(np.full(361, 2.0), stamp=0.1 * i)) for i in range(3)])
+    cmd = [sys.executable, "-m", "experiments.cli", "info", str(log)]
+    env = {**_env(), "PYTHONUNBUFFERED": unbuffered}
+    proc = subprocess.Popen(cmd, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # the reader is gone before the first line
+    err = proc.stderr.read().decode()
+    assert (proc.wait(timeout=60), err) == (141, "")
+    full = subprocess.run(cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=60)
+    assert full.returncode == 0 and full.stdout.startswith(f"{log}\n  scans           3\n") and full.stderr == ""
+
+
+SIGTERM_IN_A_COMMAND = r"""
+import signal
+from experiments import cli
+from experiments.commands import info
+
+def run(args):
+    signal.raise_signal(signal.SIGTERM)  # `kill PID`, a batch system's time limit
+    raise AssertionError("the command went on after SIGTERM")
+
+info.run = run
+status = cli.main(["info", "x.clf"])
+print(f"status {status}", flush=True)
+"""
+
+
+def test_sigterm_stops_a_command_with_one_line_and_143() -> None:
+    """SIGTERM killed lmsbench at once: exit -15, no line of its own, a multi-line warning of
+    leaked semaphores from multiprocessing (a sweep on the local cluster), a local cluster's
+    workers left to find out by themselves. Now it stops as Ctrl-C does: one line, 128 + 15."""
+    out = subprocess.run([sys.executable, "-c", SIGTERM_IN_A_COMMAND], capture_output=True, text=True, cwd=REPO,
+                         env=_env(), timeout=120)
+    assert out.stderr.strip().splitlines() == ["lmsbench info: terminated"], out.stderr
+    assert out.stdout.splitlines() == ["status 143"], out.stdout
+
+
+@pytest.mark.slow
+def test_sigterm_stops_a_sweep_whose_cells_resume(tmp_path):
+    """SIGTERM to a sweep's process (not its group: `kill PID`) in the middle of a cell: one line,
+    exit 143, no worker left running; the cells done before it are not computed again."""
+    cmd = _sweep(tmp_path, sleep=2.0, xs=4) + ["--no-progress"]
+    proc = subprocess.Popen(cmd, cwd=REPO, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while len(list((tmp_path / "out" / "cells").glob("*.parquet"))) < 2:
+            assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()[1]
+            time.sleep(0.1)
+        children = psutil.Process(proc.pid).children(recursive=True)
+        proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 143, err
+    assert [line for line in err.splitlines() if line.strip()] == ["lmsbench sweep: terminated"], err
+    gone, alive = psutil.wait_procs(children, timeout=20)
+    assert not alive, f"workers left running: {alive}"
+    done = len(list((tmp_path / "out" / "cells").glob("*.parquet")))
+    again = subprocess.run(cmd, cwd=REPO, env=_env(), capture_output=True, text=True, timeout=180)
+    assert again.returncode == 0, again.stderr
+    assert f"4 cells, {4 - done} computed, {done} already done, 0 failed" in again.stdout

@@ -42,3 +42,38 @@ def test_malformed_yaml_is_one_line_with_its_place(text: str, message: str) -> N
     line, column = (int(v) for v in message.split(":")[0].replace("line ", "").split(", column "))
     assert (info.value.line, info.value.column) == (line, column)
     assert isinstance(info.value, yaml.YAMLError)
+
+
+LAUGHS = "[" + ", ".join(["&c0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]"] + [f"&c{i} [" + ", ".join([f"*c{i - 1}"] * 10) + "]"
+                                                                 for i in range(1, 9)]) + "]"  # 10^9 values, 600 bytes
+
+
+@pytest.mark.parametrize("text, error, message", [
+    (f"noise_sigma: {LAUGHS}\n", "AliasBomb", "its aliases (*name) expand it to more than 1,000,000 values (a 'billion "
+                                              "laughs'); write the values out"),
+    ("a: &a [1, *a]\n", "SelfReference", "a value holds itself through an alias (&name ... *name inside it)"),
+    ("a: &a {b: *a}\n", "SelfReference", "a value holds itself through an alias (&name ... *name inside it)"),
+    (f"a: {'9' * 5000}\n", "Malformed", "a whole number of more than 4300 digits"),  # was a ValueError
+])
+def test_aliases_that_explode_or_loop_and_endless_numbers_are_refused(text: str, error: str, message: str) -> None:
+    """A 'billion laughs' (nine lines of anchors, 10^9 values) loads at once, the objects shared;
+    the first error message that printed the value (``noise_sigma: must be a number, got [[...``)
+    hung `simulate --sensor`, `compare --sensor` and `sim2real --sensor` past 60 s and 500 MB, and
+    a self-referencing value is endless to anything that walks it. A 5000-digit integer raised
+    Python's ValueError (ints of more than 4300 digits), not a YAML error."""
+    with pytest.raises(yaml.YAMLError) as info:
+        load(text)
+    assert type(info.value).__name__ == error and str(info.value) == message
+
+
+def test_aliases_within_bounds_and_long_documents_load(monkeypatch) -> None:
+    """Shared values below the bound load as before; the bound never refuses a document without
+    aliases, however long (its values are at most its characters)."""
+    from lms200 import yamlio
+
+    assert load("a: &a [1, 2]\nb: [*a, *a, *a]\n") == {"a": [1, 2], "b": [[1, 2]] * 3}
+    monkeypatch.setattr(yamlio, "MAX_EXPANDED_VALUES", 10)
+    assert load("a: [" + ", ".join(["1"] * 50) + "]\n") == {"a": [1] * 50}
+    text = "a: &a [1,1,1,1,1,1,1,1,1,1]\nb: [*a, *a, *a]\n"  # 44 characters, 48 values
+    with pytest.raises(yamlio.AliasBomb, match=f"more than {len(text)} values"):
+        load(text)

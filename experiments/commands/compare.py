@@ -17,7 +17,7 @@ from lms200.timing import check_scan_rate
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
 from experiments.options import (COMPARE_FIGURES, COMPARE_OUTPUTS, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
-                                 check_out_spares, check_seeds, count, positive, path_arg)
+                                 check_out_spares, check_seeds, count, positive, path_arg, text)
 
 
 def _param(text: str) -> tuple[str, Any]:
@@ -37,7 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("sources", nargs="+",
                    help="world names (office, corridor, angles, pillars, random; WORLD:SEED for one seed), "
                         "`lmsbench simulate` folders, or paths of real logs")
-    p.add_argument("--methods", nargs="+", help="extractors (default: every available one)")
+    p.add_argument("--methods", nargs="+", type=text("an extractor's name"), help="extractors (default: every available one)")
     p.add_argument("--seeds", nargs="+", type=SEED, help="seeds of each world named without one, listed (default 0 1 2; "
                                                          "`--seeds 3` is the one seed 3)")
     p.add_argument("--duration", type=DURATION, help="simulated seconds per world and seed (default 30)")
@@ -99,8 +99,12 @@ def _sigma(text: str) -> float | str:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"--sigma takes metres or 'auto', got {text!r}") from None
+    from features.baselines.checks import MAX_SIGMA_M
+
     if not value > 0 or value == float("inf"):  # also nan
         raise argparse.ArgumentTypeError(f"--sigma must be > 0 m, got {text!r}")
+    if value > MAX_SIGMA_M:  # 1e308 overflowed in the summary (a RuntimeWarning, sigma_r_mm inf); the extractors' cap
+        raise argparse.ArgumentTypeError(f"--sigma must be a range noise std in (0, {MAX_SIGMA_M:g}] m, got {text!r}")
     return value
 
 

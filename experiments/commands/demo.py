@@ -26,13 +26,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from experiments.demo import run_demo
-    from experiments.figures.study import StudyConfig
+    from experiments.figures.study import StudyConfig, check_study
 
     check_out(args.out, writes=DEMO_OUTPUTS)
     cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz)
     if args.log is not None:
         cfg.intel_log = str(check_log(args.log))
     cfg.log_options = plain_log_options(read_log_options(args))
+    check_study(cfg)
     executor = None if args.no_sweep else ("inprocess" if args.inprocess else "local")
     from experiments.provenance import new_run_folder
 

@@ -6,7 +6,7 @@ import argparse
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
 from experiments.options import (DURATION, FIGURES_OUTPUTS, SEED, STUDY_TABLES, InputError, OutTree, check_log, check_methods,
-                                 check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name)
+                                 check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name, text, check_link)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -21,7 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate-hz", type=positive("scans/s"), default=10.0, help="scans kept per second of the run (default 10)")
     p.add_argument("--seed", type=SEED, default=0, help="world and run seed")
     p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them")
-    p.add_argument("--methods", nargs="+", help="extractors to compare (default: all five)")
+    p.add_argument("--methods", nargs="+", type=text("an extractor's name"), help="extractors to compare (default: all five)")
     p.add_argument("--intel", type=path_arg, help="Intel CARMEN log for Fig. 9 (default ../shared/data/carmen/intel-corrected.log.gz)")
     p.add_argument("--no-slam", action="store_true", help="skip the SLAM run and Fig. 10")
     add_log_options(p)  # for the real log of Fig. 9
@@ -31,9 +31,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from experiments.figures.make import DRIVING_TABLES, draw_figures, draw_sweep
     from experiments.provenance import new_run_folder
-    from experiments.figures.study import StudyConfig, load_config, load_tables, run_study, save_tables
+    from experiments.figures.study import StudyConfig, check_study, load_config, load_tables, run_study, save_tables
 
     writes = FIGURES_OUTPUTS
+    for path in (args.out, args.tables):  # a loop of links: Path.resolve below raised RuntimeError
+        if path is not None:
+            check_link(path, "--out" if path is args.out else "--tables")
     if args.out is not None and args.tables is not None and args.out.resolve() == args.tables.resolve():
         writes = OutTree(FIGURES_OUTPUTS.files + STUDY_TABLES.files, FIGURES_OUTPUTS.folders)  # the tables it reads
     check_out(args.out, writes=writes)
@@ -52,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
         if args.intel is not None:
             cfg.intel_log = str(check_log(args.intel))
         cfg.log_options = plain_log_options(read_log_options(args))
+        check_study(cfg, hint=", or --no-slam")
         tables, notes = run_study(cfg)
         args.out = args.out or new_run_folder("results/figures")
         save_tables(tables, cfg, notes, args.out / "tables")

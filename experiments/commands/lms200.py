@@ -17,7 +17,7 @@ from lms200.protocol import BAUD_MODES
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import PORT, SEED, InputError, check_log, check_out_file, count, positive, path_arg, world_name
+from experiments.options import PORT, SEED, InputError, check_log, check_out_file, count, path_arg, positive, text, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,7 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--log", type=path_arg, help="replay this log (CARMEN or bag) instead of the simulator, in a loop")
     e.add_argument("--tcp", type=PORT, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")
     e.add_argument("--rfc2217", action="store_true", help="with --tcp: speak RFC 2217 (rfc2217://HOST:PORT), so the host sets the baud")
-    e.add_argument("--host", default="127.0.0.1", help="address to listen on with --tcp")
+    e.add_argument("--host", default="127.0.0.1", type=text("an address, e.g. 127.0.0.1 or 0.0.0.0"), help="address to listen on with --tcp")
     e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (the LMS200 ships in cm)")
     e.add_argument("--time-scale", type=positive(), default=1.0, help="multiplies every byte time and device delay (0.01 = 100x faster)")
     e.add_argument("--duration", type=positive("s"), help="stop after this many seconds (default: until Ctrl-C)")
@@ -40,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.set_defaults(func=run_emulate)
 
     r = cmds.add_parser("record", help="record an LMS200 to a CARMEN log (.clf, .log, .gz) or a ROS bag (.bag)")
-    r.add_argument("--port", required=True, help="serial device or pyserial URL (socket://host:port, rfc2217://, loop://)")
+    r.add_argument("--port", required=True, type=text("a serial device or a pyserial URL"), help="serial device or pyserial URL (socket://host:port, rfc2217://, loop://)")
     r.add_argument("--out", type=path_arg, required=True, help="output: FILE.clf / .log / .gz (CARMEN) or FILE.bag (ROS 1)")
     r.add_argument("--baud", type=int, default=38400, choices=sorted(BAUD_MODES), help="line speed to switch to")
     r.add_argument("--units", choices=("mm", "cm"), default="mm", help="range unit: mm (8.18 m) or cm (81.8 m)")

@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 
 from experiments.logargs import add_log_options, read_log_options
 from experiments.options import (SLAM_OUTPUTS, InputError, check_file, check_log, check_methods, check_out, check_yaml,
-                                 count, positive, path_arg)
+                                 count, positive, path_arg, text)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,7 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "(constant velocity, line landmarks). Default: the config's, 'default'")
     p.add_argument("--no-paper-baseline", action="store_true",
                    help="with the default preset, do not also run the paper preset for the comparison table")
-    p.add_argument("--extractor", help="feature extraction method (default: the config's, 'sensor')")
+    p.add_argument("--extractor", type=text("an extraction method's name"), help="feature extraction method (default: the config's, 'sensor')")
     p.add_argument("--association", choices=("nn", "jcbb"), help="paper preset: data association (default: the config's)")
     p.add_argument("--corners", action="store_true", help="paper preset: add corner landmarks")
     p.add_argument("--odometry", action="store_true", help="use the input's odometry as the motion input")
@@ -86,7 +86,7 @@ def _config(args: argparse.Namespace):
     changes = {}
     if args.preset:
         changes["preset"] = args.preset
-    if args.extractor:
+    if args.extractor is not None:
         changes["extractor"] = check_methods([args.extractor])[0]
     if args.association:
         changes["association"] = dataclasses.replace(cfg.association, method=args.association)

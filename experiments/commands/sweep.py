@@ -10,14 +10,14 @@ import argparse
 import sys
 from pathlib import Path
 
-from experiments.options import SWEEP_OUTPUTS, check_out, check_out_spares, check_yaml, count, path_arg
+from experiments.options import SWEEP_OUTPUTS, check_link, check_out, check_out_spares, check_yaml, count, path_arg, text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sweep", help="run a parameter sweep (grid or random) on Dask; resumable")
     p.add_argument("sweep", type=path_arg, help="sweep file (YAML; see sweeps/*.yaml)")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use this running Dask scheduler")
+    where.add_argument("--scheduler", metavar="tcp://HOST:PORT", type=text("a scheduler's address tcp://HOST:PORT"), help="use this running Dask scheduler")
     where.add_argument("--inprocess", "--local", dest="inprocess", action="store_true",
                        help="run in this process, without Dask (default: a local Dask cluster)")
     p.add_argument("--workers", type=count(1, 64), default=2, help="worker processes of the local cluster (default 2)")
@@ -34,12 +34,14 @@ def run(args: argparse.Namespace) -> int:
     check_yaml(args.sweep, "a sweep file")
     spec = load_sweep(args.sweep)
     out = args.out or Path("results/sweeps") / spec.name
+    check_link(out)  # a loop of links: Path.resolve below raised RuntimeError
     # `sweep DIR/sweep.yaml --out DIR` lost a user's comments; the sweep.yaml a run wrote, as it wrote it, may
     # be run again (it is rewritten the same)
     own = Path(args.sweep).resolve() == (out / "sweep.yaml").resolve() and Path(args.sweep).read_text() == spec_record(spec)
     check_out_spares(out, SWEEP_OUTPUTS.files, [] if own else [args.sweep])
     check_out(out, writes=SWEEP_OUTPUTS)
-    executor = "inprocess" if args.inprocess else (args.scheduler or "local")
+    _check_same_sweep(out, spec.name)
+    executor = "inprocess" if args.inprocess else (args.scheduler if args.scheduler is not None else "local")
     from experiments.sweep.runner import check_executor, check_spec
 
     check_executor(executor, args.workers)
@@ -68,3 +70,26 @@ def run(args: argparse.Namespace) -> int:
               f"--retry-failed computes them again)", file=sys.stderr)
         return 1
     return 0
+
+
+def _check_same_sweep(out: Path, name: str) -> None:
+    """A sweep folder that holds another sweep (its sweep.yaml names another) is not written over:
+    `sweep B.yaml --out A_folder` replaced A's sweep.yaml, results.parquet and results.csv with B's,
+    exit 0 (A's cells stayed, but its table and record were gone). The same sweep, edited (a value
+    added to its grid), still resumes there."""
+    import yaml
+
+    from experiments.options import InputError
+    from lms200.yamlio import load as load_yaml
+
+    record = out / "sweep.yaml"
+    if not record.is_file():
+        return
+    try:
+        held = load_yaml(record.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return  # not a record of a sweep: check_out's business
+    other = held.get("name") if isinstance(held, dict) else None
+    if isinstance(other, str) and other != name:
+        raise InputError(f"--out {out}: holds the sweep {other!r} (its sweep.yaml), not {name!r}: its results would be "
+                         "replaced; give another folder (a sweep resumes in a folder of its own name)")

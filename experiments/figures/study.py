@@ -55,8 +55,30 @@ class StudyConfig:
 Log = Callable[[str], None]
 
 
+def check_study(cfg: StudyConfig, flags: tuple[str, str] = ("--duration", "--rate-hz"), hint: str = "") -> None:
+    """Refuse, before any work, a study whose simulated run keeps fewer than the two scans the SLAM
+    (Fig. 10) needs: ``figures --duration 0.5 --rate-hz 2`` (one scan) and the demo ran the whole
+    comparison first, then stopped with "internal error: ValueError: ate: fewer than 2 estimated
+    poses". ``flags``: the options that set the duration and the rate, for the message; ``hint``:
+    another way out (``, or --no-slam``).
+
+    Raises:
+        InputError: naming the options and the scans kept.
+    """
+    from lms200.errors import InputError
+    from sim.records import scan_stamps
+
+    if not cfg.slam:
+        return
+    kept = len(scan_stamps(sensor_config(cfg.sensor), cfg.duration, cfg.rate_hz))
+    if kept < 2:
+        raise InputError(f"{flags[0]} {cfg.duration:g} at {flags[1]} {cfg.rate_hz:g} keeps {kept} scan(s) of the simulated "
+                         f"run; the SLAM (Fig. 10) needs two or more (a longer run or a higher rate{hint})")
+
+
 def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFrame], list[str]]:
     """Every table of the figures and the report; and notes on anything skipped."""
+    check_study(cfg, ("duration", "rate_hz"))
     t0 = time.perf_counter()
     say = lambda msg: log(f"[{time.perf_counter() - t0:6.1f} s] {msg}")  # noqa: E731
     tables: dict[str, pd.DataFrame] = {}

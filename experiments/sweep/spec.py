@@ -213,6 +213,10 @@ def _check(spec: SweepSpec) -> None:
             raise SweepSpecError(f"random.{name}: {law} needs [low, high] with low <= high, got {args!r}")
         if law == "int" and not all(isinstance(a, int) for a in args):
             raise SweepSpecError(f"random.{name}: int needs whole-number bounds [low, high], got {args!r}")
+        if law == "int" and not all(-(2**63) <= a < 2**63 for a in args):  # 10**24: numpy's "high is out of bounds"
+            raise SweepSpecError(f"random.{name}: int needs bounds in [-2**63, 2**63 - 1] (64-bit integers), got {args!r}")
+        if law == "uniform" and not math.isfinite(args[1] - args[0]):  # [-1e308, 1e308]: numpy's OverflowError
+            raise SweepSpecError(f"random.{name}: uniform needs high - low finite, got {args!r}")
         if law == "loguniform" and args[0] <= 0:
             raise SweepSpecError(f"random.{name}: loguniform needs low > 0, got {args!r}")
         if law == "choice" and (not isinstance(args, list) or not args):
