@@ -117,14 +117,15 @@ def prf(tp: int, fp: int, fn: int) -> tuple[float, float, float]:
     return p, r, f
 
 
-def _rows(name: str, a: object, width: int) -> np.ndarray:
-    """``a`` as a float64 array of rows at least ``width`` wide; InputError naming ``name`` otherwise
-    (None was a TypeError, 'NoneType' object is not subscriptable)."""
+def _rows(name: str, a: object, width: int, exact: bool = False) -> np.ndarray:
+    """``a`` as a float64 array of rows at least ``width`` wide (exactly, with ``exact``: segments, whose
+    (k, 8) line rows were read as end points, silently); InputError naming ``name`` otherwise (None was
+    a TypeError, 'NoneType' object is not subscriptable)."""
     try:
         rows = np.asarray(a, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise InputError(f"{name}: must be an array of numbers ({exc})") from None
-    if rows.ndim != 2 or rows.shape[1] < width:
+    if rows.ndim != 2 or rows.shape[1] < width or (exact and rows.shape[1] != width):
         what = f"shape {rows.shape}" if isinstance(a, np.ndarray) else f"{type(a).__name__} of shape {rows.shape}"
         raise InputError(f"{name}: must be (k, {width}) rows of numbers, got {what}")
     return rows
@@ -132,7 +133,7 @@ def _rows(name: str, a: object, width: int) -> np.ndarray:
 
 def truth_lines(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Normal form (rho >= 0, alpha) of segments (k,4); InputError naming ``segments`` unless (k, 4) numbers."""
-    segments = _rows("segments", segments, 4)
+    segments = _rows("segments", segments, 4, exact=True)
     dx, dy = segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1]
     norm = np.maximum(np.hypot(dx, dy), 1e-12)
     nx, ny = -dy / norm, dx / norm
@@ -153,6 +154,21 @@ class CheckedTruth:
     segment_beams: np.ndarray
     corners: np.ndarray
     corner_beams: np.ndarray
+    _checked: object = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        """Built by anything but ``check_truth``: the fields checked as check_truth checks them (a
+        hand-built one with nan faces scored recall 1.0, silently; None fields were a TypeError)."""
+        if self._checked is _CHECKED:
+            return
+        a = truth_arrays(self)
+        object.__setattr__(self, "segments", a["segments"].reshape(-1, 4))
+        object.__setattr__(self, "segment_beams", np.asarray(self.segment_beams).reshape(-1, 2))
+        object.__setattr__(self, "corners", a["corners"].reshape(-1, 4))
+        object.__setattr__(self, "corner_beams", np.asarray(self.corner_beams).reshape(-1))
+
+
+_CHECKED = object()  # check_truth's token: its CheckedTruth is not checked a second time
 
 
 def check_truth(truth: Any) -> CheckedTruth:
@@ -167,7 +183,7 @@ def check_truth(truth: Any) -> CheckedTruth:
         return truth
     a = truth_arrays(truth)  # float64; the beam indices are kept as given
     return CheckedTruth(a["segments"].reshape(-1, 4), np.asarray(truth.segment_beams).reshape(-1, 2),
-                        a["corners"].reshape(-1, 4), np.asarray(truth.corner_beams).reshape(-1))
+                        a["corners"].reshape(-1, 4), np.asarray(truth.corner_beams).reshape(-1), _CHECKED)
 
 
 def _dont_care(truth: CheckedTruth, cfg: ScoreConfig) -> np.ndarray:
@@ -182,7 +198,7 @@ def line_compatibility(lines: np.ndarray, seg: np.ndarray, cfg: ScoreConfig) -> 
     against truth segments (x1, y1, x2, y2); InputError naming the argument for other shapes or types."""
     if not isinstance(cfg, ScoreConfig):
         raise InputError(f"cfg: must be a features.scoring.ScoreConfig, got {type(cfg).__name__}")
-    lines, seg = _rows("lines", lines, 6), _rows("seg", seg, 4)
+    lines, seg = _rows("lines", lines, 6), _rows("seg", seg, 4, exact=True)
     rho_t, alpha_t = truth_lines(seg)
     d_alpha = np.abs(wrap(lines[:, 1:2] - alpha_t[None, :]))
     d_alpha = np.minimum(d_alpha, np.pi - d_alpha)  # a line through the origin has two normals

@@ -22,7 +22,8 @@ cm mode, 8.183 / 8.191 m in mm mode) map to +inf / nan (REP-117). The range unit
 ROBOTLASER1 accuracy field, a ``PARAM lmsbench_range_units mm|cm`` line (which this writer emits), or,
 for FLASER logs without it, from the values themselves (see :func:`infer_units`). No CARMEN laser line
 carries a ``range_min``: a scan's is 0 unless a ``PARAM lmsbench_range_min`` line (which this writer
-emits for scans whose range_min is not 0) gives it for the laser lines that follow.
+emits wherever a scan's range_min differs from the one before, starting from 0: none for scans at 0)
+gives it for the laser lines that follow.
 
 One laser is read per pass (``topic``: a message kind); by default the first kind that carries
 poses (FLASER, RLASER, ROBOTLASER1 / 2) up to ``DEFAULT_TOPIC_LINES`` lines after the first laser

@@ -108,6 +108,8 @@ def check_real_items(items: Iterable[object], error: type[Exception] = InputErro
     "2" 2.0 m), while a bool or text array is refused by its dtype (:func:`check_real_kind`).
     Nested lists are left to the shape check."""
     for i, v in enumerate(items):
+        if isinstance(v, np.ndarray) and v.ndim == 0:  # a 0-d array (np.array(True)) is its one item
+            v = v.item()
         if isinstance(v, _NOT_NUMBER_ITEMS):
             raise error(f"ranges: must be real numbers (m), got {type(v).__name__} {v!r} at index {i} {REFUSED}")
 

@@ -506,7 +506,7 @@ class SlamConfig:
         for name in ("max_iterations", "fine_iterations"):  # 1e300 failed in the compiled ICP (no int64)
             if getattr(al, name) > MAX_ICP_ITERATIONS:
                 raise SlamConfigError(f"alignment.{name}: must be at most {MAX_ICP_ITERATIONS} Gauss-Newton steps, "
-                                      f"got {getattr(al, name)}")
+                                      f"got {float(getattr(al, name)):.4g}")  # a 1e300 taken as an int printed 301 digits
         for name in ("gate_probability", "new_landmark_probability"):
             if not 0 < getattr(a, name) < 1:
                 raise SlamConfigError(f"association.{name}: must be in (0, 1), got {getattr(a, name)}")

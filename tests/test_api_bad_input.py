@@ -503,6 +503,7 @@ def test_masked_ranges_are_checked_like_arrays(ranges: np.ndarray) -> None:
     ((1.0, True), "bool True at index 1"),
     (np.array(["1.5", 1.0], dtype=object), "str '1.5' at index 0"),            # was 1.5 m, as text arrays are refused
     (np.ma.array(np.array([1.0, True], dtype=object), mask=[False, False]), "bool True at index 1"),
+    ([np.array(True), 1.0], "bool True at index 0"),                           # a 0-d bool array: was 1 m (review)
 ])
 def test_bools_and_text_inside_object_arrays_and_lists_are_refused(ranges: object, item: str) -> None:
     """A bool array was refused, an object array or list holding the same bools was cast to 1.0 / 0.0
@@ -521,6 +522,7 @@ def test_object_arrays_and_lists_of_numbers_still_read() -> None:
 
     assert Scan(np.array([1, 2.5, Fraction(1, 2), Decimal("3")], dtype=object), **GEOM).ranges.tolist() == [1, 2.5, 0.5, 3]
     assert Scan([1, 2.5, np.float32(0.5), np.int64(3)], **GEOM).ranges.tolist() == [1, 2.5, 0.5, 3]
+    assert Scan([np.array(2.0), 1.0], **GEOM).ranges.tolist() == [2, 1]  # a 0-d array of a number
     masked = Scan(np.ma.array(np.array([True, 1.0], dtype=object), mask=[True, False]), **GEOM)  # a masked item is nan
     assert np.isnan(masked.ranges[0]) and masked.ranges[1] == 1.0
 
@@ -737,8 +739,25 @@ def test_the_real_data_and_scoring_helpers_name_a_bad_argument() -> None:
         (lambda: normal_form(truth.segments[:, :2]), r"^segments: must be \(k, 4\) rows of numbers, got shape \(\d+, 2\)$"),
         (lambda: line_compatibility(None, truth.segments, ScoreConfig()), r"^lines: must be \(k, 6\) rows"),
         (lambda: line_compatibility(lines, None, ScoreConfig()), r"^seg: must be \(k, 4\) rows"),
+        (lambda: line_compatibility(lines, lines, ScoreConfig()), r"^seg: must be \(k, 4\) rows of numbers, got shape \(\d+, 8\)$"),  # 0 pairs, silently
+        (lambda: normal_form(np.zeros((2, 8))), r"^segments: must be \(k, 4\) rows of numbers, got shape \(2, 8\)$"),  # read x0..y1 from line rows
         (lambda: line_compatibility(lines, truth.segments, None), "^cfg: must be a features.scoring.ScoreConfig, got NoneType$"),
     ]
+    from features.scoring import CheckedTruth, check_truth, score_scan
+
+    checked = check_truth(truth)
+    nan_face = checked.segments.copy()
+    nan_face[0] = np.nan
+    bad += [  # a CheckedTruth built by hand is checked as check_truth checks (score_scan trusts it): the nan
+        # face scored recall 1.0 silently, None fields were a TypeError
+        (lambda: CheckedTruth(nan_face, checked.segment_beams, checked.corners, checked.corner_beams), "^truth.segments: must be finite"),
+        (lambda: CheckedTruth(None, None, None, None), "^truth"),
+    ]
+    hand_built = CheckedTruth(truth.segments, truth.segment_beams, truth.corners, truth.corner_beams)
+    scores = [dataclasses.asdict(score_scan(fs, t)) for t in (hand_built, checked, truth)]
+    for name, value in scores[0].items():
+        for other in scores[1:]:
+            np.testing.assert_array_equal(value, other[name], err_msg=name)
     for call, message in bad:
         with pytest.raises((InputError, ScanTypeError), match=message) as info:
             call()
