@@ -396,6 +396,8 @@ CASES = [
     (["sweep", "{sweep.yaml}", "--inprocess", "--workers", "3", "--out", O],
      "--workers sets the processes of the local cluster; --inprocess runs in this process"),
     (["demo", "--inprocess", "--no-sweep", "--out", O], "--inprocess runs the demo's sweep in this process; --no-sweep"),
+    (["figures", "--tables", "{tables_broken}", "--duration", "5", "--no-slam", "--out", O],
+     "--duration, --no-slam set the study that --tables replaces; redrawing from "),
     # one scan kept: the whole comparison ran, then "internal error: ValueError: ate: fewer than 2 estimated poses"
     (["figures", "--duration", "0.5", "--rate-hz", "2", "--out", O], "--duration 0.5 at --rate-hz 2 keeps 1 scan(s) of "
      "the simulated run; the SLAM (Fig. 10) needs two or more (a longer run or a higher rate, or --no-slam)"),

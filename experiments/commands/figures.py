@@ -17,10 +17,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="redraw from the tables in this folder (from an earlier run) instead of computing them")
     p.add_argument("--sweep", type=path_arg, action="append", default=[], metavar="DIR",
                    help="also plot this sweep folder (with results.parquet); repeatable")
-    p.add_argument("--duration", type=DURATION, default=40.0, help="simulated run, s (default 40)")
-    p.add_argument("--rate-hz", type=positive("scans/s"), default=10.0, help="scans kept per second of the run (default 10)")
-    p.add_argument("--seed", type=SEED, default=0, help="world and run seed")
-    p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them")
+    p.add_argument("--duration", type=DURATION, help="simulated run, s (default 40)")
+    p.add_argument("--rate-hz", type=positive("scans/s"), help="scans kept per second of the run (default 10)")
+    p.add_argument("--seed", type=SEED, help="world and run seed (default 0)")
+    p.add_argument("--world", type=world_name, help="simulated world: a built-in world name; lmsbench simulate --help lists them (default office)")
     p.add_argument("--methods", nargs="+", type=text("an extractor's name"), help="extractors to compare (default: all five)")
     p.add_argument("--intel", type=path_arg, help="Intel CARMEN log for Fig. 9 (default ../shared/data/carmen/intel-corrected.log.gz)")
     p.add_argument("--no-slam", action="store_true", help="skip the SLAM run and Fig. 10")
@@ -42,6 +42,15 @@ def run(args: argparse.Namespace) -> int:
     check_out(args.out, writes=writes)
     for folder in args.sweep:
         check_sweep_results(folder)
+    study = (("--duration", args.duration), ("--rate-hz", args.rate_hz), ("--seed", args.seed), ("--world", args.world),
+             ("--methods", args.methods), ("--intel", args.intel), ("--no-slam", args.no_slam or None))
+    ignored = [flag for flag, value in study if value is not None]
+    if args.tables and ignored:  # they were ignored: the figures were redrawn from the tables as they were
+        raise InputError(f"{', '.join(ignored)} set the study that --tables replaces; redrawing from {args.tables} "
+                         "computes nothing (leave them out, or leave out --tables)")
+    defaults = {"duration": 40.0, "rate_hz": 10.0, "seed": 0, "world": "office"}
+    for name, value in defaults.items():
+        setattr(args, name, value if getattr(args, name) is None else getattr(args, name))
     if args.tables:
         check_study_tables(args.tables)
         tables, notes = load_tables(args.tables)
