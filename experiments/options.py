@@ -188,6 +188,8 @@ def _text_head(path: Path, what: str, utf8: bool = True) -> None:
     named = COMPRESSION_SUFFIXES.get(path.suffix)
     if named and kind != named:
         raise InputError(f"{path}: named {path.suffix} but not {named}-compressed")
+    if kind and utf8:  # YAML is read as plain text: a .gz passed the check, then 'utf-8' codec can't decode 0x8b
+        raise InputError(f"{path}: {kind}-compressed, not {what} (read as plain text); decompress it first")
     if kind:
         try:
             with open_bytes(path) as fh:

@@ -141,8 +141,11 @@ class World:
                 raise TypeError(f"the top level is a {type(d).__name__}, not a mapping of walls, boxes, ...")
             walls = np.asarray(d.get("walls", []), dtype=float).reshape(-1, 4)
             circles = np.asarray(d.get("circles", []), dtype=float).reshape(-1, 3)
-            if not (np.isfinite(walls).all() and np.isfinite(circles).all()):
-                raise InputError("walls and circles must be finite numbers")
+            for name, a in (("walls", walls), ("circles", circles)):  # before the walls-only rebuild, which
+                if not np.isfinite(a).all() or (a.size and np.abs(a).max() > MAX_COORD_M):  # overflowed (warnings)
+                    raise InputError(f"{name}: must be finite numbers within +-{MAX_COORD_M:g} m")
+        except RecursionError:  # [[[[...]]]] 100,000 deep: json's RecursionError was an internal error
+            raise LmsbenchError(f"{path}: not a world.json (nested too deeply to parse)") from None
         except (ValueError, TypeError, UnicodeDecodeError) as exc:
             raise LmsbenchError(f"{path}: not a world.json ({exc})") from None
         try:

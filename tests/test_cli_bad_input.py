@@ -41,6 +41,8 @@ def files(tmp_path_factory):
     (d / "list.json").write_text("[1, 2]")
     (d / "nan_walls.json").write_text('{"walls": [[0, 0, NaN, 1]]}')
     (d / "bad_boxes.json").write_text('{"boxes": [[1, 2]]}')
+    (d / "deep.json").write_text("[" * 100000 + "]" * 100000)  # json's RecursionError: an internal error
+    (d / "far_walls.json").write_text('{"walls": [[0, 0, 1e308, 1e308]]}')  # overflow warnings, then an error
     # world.json files whose route or scan plane cannot work (the tour indexed them: IndexError)
     from sim import make_world
 
@@ -375,6 +377,25 @@ CASES = [
     # a noise of 1e308 m overflowed in the summary (a RuntimeWarning on stderr, sigma_r_mm inf), exit 0
     (["compare", "office:1", "--sigma", "1e308", "--out", O], "--sigma must be a range noise std in (0, 1000] m, "
                                                               "got '1e308'"),
+    # a world.json nested 100,000 deep, walls at 1e308 m (RuntimeWarnings on stderr before the error line)
+    (["simulate", "--world", "{deep.json}", "--out", O], "deep.json: not a world.json (nested too deeply to parse)"),
+    (["simulate", "--world", "{far_walls.json}", "--out", O], "far_walls.json: not a world.json (walls: must be finite "
+                                                              "numbers within +-1e+06 m)"),
+    # a compressed file where YAML is read: passed the check (its text is inside), then "internal error:
+    # UnicodeDecodeError: 'utf-8' codec can't decode byte 0x8b"
+    (["simulate", "--config", "{good.clf.gz}", "--out", O], "good.clf.gz: gzip-compressed, not a simulate config.yaml "
+                                                            "(read as plain text); decompress it first"),
+    (["sweep", "{good.clf.gz}", "--out", O], "good.clf.gz: gzip-compressed, not a sweep file"),
+    # options that apply to what the run does not do were ignored, exit 0
+    (["slam", "{simrun}", "--association", "jcbb", "--out", O], "--association set the paper preset's filter: add "
+                                                                "--preset paper"),
+    (["slam", "{simrun}", "--corners", "--out", O], "--corners set the paper preset's filter: add --preset paper"),
+    (["lms200", "emulate", "--log", "{good.clf}", "--world", "corridor", "--seed", "5"],
+     "--world, --seed set the simulated scans; --log replays the log's own"),
+    (["lms200", "emulate", "--host", "0.0.0.0"], "--host needs --tcp PORT (without it the device is a pseudo-terminal)"),
+    (["sweep", "{sweep.yaml}", "--inprocess", "--workers", "3", "--out", O],
+     "--workers sets the processes of the local cluster; --inprocess runs in this process"),
+    (["demo", "--inprocess", "--no-sweep", "--out", O], "--inprocess runs the demo's sweep in this process; --no-sweep"),
     # one scan kept: the whole comparison ran, then "internal error: ValueError: ate: fewer than 2 estimated poses"
     (["figures", "--duration", "0.5", "--rate-hz", "2", "--out", O], "--duration 0.5 at --rate-hz 2 keeps 1 scan(s) of "
      "the simulated run; the SLAM (Fig. 10) needs two or more (a longer run or a higher rate, or --no-slam)"),

@@ -27,12 +27,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     cmds = p.add_subparsers(dest="lms200_command", metavar="ACTION")
 
     e = cmds.add_parser("emulate", help="serve a virtual LMS200 on a pseudo-terminal (or TCP); prints its path / URL")
-    e.add_argument("--world", type=world_name, default="office", help="simulator world to scan (a built-in world name; lmsbench simulate --help lists them)")
-    e.add_argument("--seed", type=SEED, default=0, help="seed of the world and the sensor noise")
+    e.add_argument("--world", type=world_name, help="simulator world to scan (a built-in world name; lmsbench simulate --help lists them; default office)")
+    e.add_argument("--seed", type=SEED, help="seed of the world and the sensor noise (default 0)")
     e.add_argument("--log", type=path_arg, help="replay this log (CARMEN or bag) instead of the simulator, in a loop")
     e.add_argument("--tcp", type=PORT, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")
     e.add_argument("--rfc2217", action="store_true", help="with --tcp: speak RFC 2217 (rfc2217://HOST:PORT), so the host sets the baud")
-    e.add_argument("--host", default="127.0.0.1", type=text("an address, e.g. 127.0.0.1 or 0.0.0.0"), help="address to listen on with --tcp")
+    e.add_argument("--host", type=text("an address, e.g. 127.0.0.1 or 0.0.0.0"), help="address to listen on with --tcp (default 127.0.0.1)")
     e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (the LMS200 ships in cm)")
     e.add_argument("--time-scale", type=positive(), default=1.0, help="multiplies every byte time and device delay (0.01 = 100x faster)")
     e.add_argument("--duration", type=positive("s"), help="stop after this many seconds (default: until Ctrl-C)")
@@ -61,6 +61,13 @@ def run_emulate(args: argparse.Namespace) -> int:
 
     if args.rfc2217 and args.tcp is None:
         raise InputError("--rfc2217 needs --tcp PORT")
+    if args.host is not None and args.tcp is None:  # it was ignored: a pseudo-terminal has no address
+        raise InputError("--host needs --tcp PORT (without it the device is a pseudo-terminal)")
+    simulated = [flag for flag, value in (("--world", args.world), ("--seed", args.seed)) if value is not None]
+    if args.log and simulated:  # they were ignored: the log's scans were replayed
+        raise InputError(f"{', '.join(simulated)} set the simulated scans; --log replays the log's own")
+    args.world, args.seed = args.world or "office", 0 if args.seed is None else args.seed
+    args.host = args.host or "127.0.0.1"
     if args.log:
         check_log(args.log)
         scans = log_scans(args.log, read_options=read_log_options(args))

@@ -101,6 +101,10 @@ def _config(args: argparse.Namespace):
     _check_extractor(cfg, args.config)
     if cfg.motion.use_odometry and cfg.preset != "paper":
         raise LmsbenchError("--odometry drives the paper preset's filter: add --preset paper (the default pipeline uses no odometry)")
+    paper_only = [flag for flag, given in (("--association", args.association), ("--corners", args.corners)) if given]
+    if paper_only and cfg.preset != "paper":  # they were ignored: the default pipeline ran as without them
+        raise InputError(f"{', '.join(paper_only)} set the paper preset's filter: add --preset paper (the default "
+                         "pipeline has no data association nor corner landmarks)")
     return cfg
 
 

@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from experiments.options import SWEEP_OUTPUTS, check_link, check_out, check_out_spares, check_yaml, count, path_arg, text
+from experiments.options import SWEEP_OUTPUTS, InputError, check_link, check_out, check_out_spares, check_yaml, count, path_arg, text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -20,7 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     where.add_argument("--scheduler", metavar="tcp://HOST:PORT", type=text("a scheduler's address tcp://HOST:PORT"), help="use this running Dask scheduler")
     where.add_argument("--inprocess", "--local", dest="inprocess", action="store_true",
                        help="run in this process, without Dask (default: a local Dask cluster)")
-    p.add_argument("--workers", type=count(1, 64), default=2, help="worker processes of the local cluster (default 2)")
+    p.add_argument("--workers", type=count(1, 64), help="worker processes of the local cluster (default 2)")
     p.add_argument("--out", type=path_arg, help="sweep folder (default results/sweeps/NAME)")
     p.add_argument("--retry-failed", action="store_true", help="compute again the cells that failed before")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -42,6 +42,10 @@ def run(args: argparse.Namespace) -> int:
     check_out(out, writes=SWEEP_OUTPUTS)
     _check_same_sweep(out, spec.name)
     executor = "inprocess" if args.inprocess else (args.scheduler if args.scheduler is not None else "local")
+    if args.workers is not None and executor != "local":  # it was ignored
+        instead = "--inprocess runs in this process" if args.inprocess else "--scheduler has workers of its own"
+        raise InputError(f"--workers sets the processes of the local cluster; {instead}")
+    args.workers = args.workers or 2
     from experiments.sweep.runner import check_executor, check_spec
 
     check_executor(executor, args.workers)
@@ -80,7 +84,6 @@ def _check_same_sweep(out: Path, name: str) -> None:
     added to its grid), still resumes there."""
     import yaml
 
-    from experiments.options import InputError
     from lms200.yamlio import load as load_yaml
 
     record = out / "sweep.yaml"
