@@ -93,6 +93,23 @@ def _kill_children() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    try:
+        return _main(argv)
+    finally:
+        _flush_stdout()
+
+
+def _flush_stdout() -> None:
+    """stdout flushed before the interpreter's exit, where a reader that went away after a Ctrl-C,
+    an error or ``--help`` turned the status into 120 with Python's 'Exception ignored ...
+    BrokenPipeError' (the status the command chose is kept; what is left goes to /dev/null)."""
+    try:
+        sys.stdout.flush()
+    except (OSError, ValueError):
+        _stdout_to_devnull()
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
@@ -112,16 +129,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     interrupt = _Interrupt(name)
     main_thread = threading.current_thread() is threading.main_thread()
     previous = {sig: signal.signal(sig, interrupt.handler) for sig in STOP_SIGNALS} if main_thread else {}
+    done = False  # whether the command's work ended (a reader of stdout that went away then is no loss)
     try:
         default_threads()  # a bad $LMSBENCH_THREADS is refused before any work, by every command
         status = int(args.func(args) or 0)
+        done = True
         sys.stdout.flush()  # here, not at exit: a reader that went away (`| head`) is said below
         return status
     except (LmsbenchError, OSError) as exc:  # OSError: missing files, bad paths, unreachable hosts, timeouts
         if interrupt.timer is not None or _from_interrupt(exc):  # what Ctrl-C broke: not the input's error
             return _interrupted(interrupt, name)
         if isinstance(exc, BrokenPipeError) and _stdout_closed():
-            return _stdout_gone()
+            return _stdout_gone(name, not done and hasattr(args, "out"), getattr(args, "out", None))
         _end_progress_bars()
         print(f"lmsbench {name}: error: {_one_line(exc)}{_skip_hint(exc, args)}", file=sys.stderr)
         return 2
@@ -158,18 +177,29 @@ def _stdout_closed() -> bool:
         return False
 
 
-def _stdout_gone() -> int:
-    """A reader of stdout that went away is no error of the command: no message (it was 'error:
-    [Errno 32] Broken pipe', exit 2, or with buffered output Python's 'Exception ignored ...
-    BrokenPipeError' at exit, status 120), the status a shell gives for SIGPIPE. What is left in
-    stdout's buffer goes to /dev/null, so the interpreter's last flush does not fail again."""
+def _stdout_gone(name: str, stopped: bool, out: object) -> int:
+    """A reader of stdout that went away (`lmsbench info LOG | head -4`): no error message (it was
+    'error: [Errno 32] Broken pipe', exit 2, or with buffered output Python's 'Exception ignored ...
+    BrokenPipeError' at exit, status 120), the status a shell gives for SIGPIPE. A command that
+    writes outputs (an --out option: ``out``, None for its default folder) and was ``stopped`` in its
+    work by it (`lmsbench demo | head -1`) says so in one line on stderr: its outputs are incomplete. What is left in stdout's buffer goes
+    to /dev/null, so the interpreter's last flush does not fail again."""
+    _stdout_to_devnull()
+    if stopped:
+        _end_progress_bars()
+        print(f"lmsbench {name}: stopped: the reader of its standard output went away; "
+              f"{out if out is not None else 'its output folder'} is incomplete", file=sys.stderr)
+    return PIPE_CLOSED_STATUS
+
+
+def _stdout_to_devnull() -> None:
+    """stdout's file descriptor pointed at /dev/null (its reader went away)."""
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         os.close(devnull)
     except (OSError, ValueError, AttributeError):
         pass
-    return PIPE_CLOSED_STATUS
 
 
 def _interrupted(interrupt: _Interrupt, name: str) -> int:

@@ -100,6 +100,7 @@ def summary(rows: pd.DataFrame) -> pd.DataFrame:
 
 
 USAGE = "usage: python -m experiments.threshold_audit [WORLD] [OUT.csv]"
+SEE_HELP = "(see python -m experiments.threshold_audit --help)"  # an error is one line, as lmsbench's
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -108,12 +109,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{USAGE}\n\n{__doc__}")
         return 0
     if len(args) > 2 or any(a.startswith("-") for a in args):
-        print(f"{USAGE}\nthreshold_audit: error: unrecognized arguments: {' '.join(args)}", file=sys.stderr)
+        print(f"threshold_audit: error: unrecognized arguments: {' '.join(args)} {SEE_HELP}", file=sys.stderr)
         return 2
     import sim
 
     if args and args[0] not in sim.WORLD_NAMES:  # before the first simulation, in one line
-        print(f"{USAGE}\nthreshold_audit: error: unknown world {args[0]!r}; known worlds: {', '.join(sim.WORLD_NAMES)}",
+        print(f"threshold_audit: error: unknown world {args[0]!r}; known worlds: {', '.join(sim.WORLD_NAMES)} {SEE_HELP}",
               file=sys.stderr)
         return 2
     rows = run(args[0] if args else "office")

@@ -123,6 +123,45 @@ def test_a_reader_that_goes_away_ends_the_command_quietly(tmp_path, unbuffered):
     assert full.returncode == 0 and full.stdout.startswith(f"{log}\n  scans           3\n") and full.stderr == ""
 
 
+CLOSED_STDOUT = r"""
+import sys
+from lms200 import LmsbenchError
+from experiments import cli
+from experiments.commands import info, simulate
+
+def stopped_in_its_work(args):  # a command with --out whose progress goes to stdout (demo, bench, sweep)
+    for i in range(100000):
+        print(f"progress line {i}", flush=i % 100 == 0)
+    raise AssertionError("writes to a closed stdout went on")
+
+def fails_after_a_line(args):  # an error (exit 2) with a line left in stdout's buffer
+    print("a line")
+    raise LmsbenchError("a user error")
+
+simulate.run, info.run = stopped_in_its_work, fails_after_a_line
+sys.exit(cli.main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.parametrize("argv, status, stderr", [
+    (["simulate", "--out", "DIR"], 141, ["lmsbench simulate: stopped: the reader of its standard output went away; DIR is incomplete"]),
+    (["info", "x.clf"], 2, ["lmsbench info: error: a user error"]),
+    (["--help"], 0, []),
+])
+def test_a_reader_that_goes_away_during_work_or_before_an_error(argv, status, stderr):
+    """Review of the SIGPIPE handling: a command stopped in its work by a closed stdout (`lmsbench
+    demo | head -1`) ended with 141 and no word, its output folder left incomplete (before that,
+    'error: [Errno 32] Broken pipe', exit 2): now one line says so. An error, a Ctrl-C or --help with
+    output left in stdout's buffer ended with Python's 'Exception ignored ... BrokenPipeError' and
+    status 120 at the interpreter's last flush: now the command's own status and line."""
+    proc = subprocess.Popen([sys.executable, "-c", CLOSED_STDOUT, *argv], cwd=REPO, env={**_env(), "PYTHONUNBUFFERED": ""},
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # the reader is gone before the first line
+    err = proc.stderr.read()
+    assert (proc.wait(timeout=120), err.splitlines()) == (status, stderr)
+
+
 SIGTERM_IN_A_COMMAND = r"""
 import signal
 from experiments import cli

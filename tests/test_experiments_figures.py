@@ -187,13 +187,14 @@ def test_sweep_of_a_user_kind_plots_its_own_metrics(tmp_path):
     plot at all with `figures --sweep`, silently: only the built-in kinds' metrics were looked for
     (found with docs/experiments.md's "Any function fn(params) -> dict"). Its numeric metrics are
     plotted; its parameters and the runner's columns are not."""
-    rows = [{"a": a, "gain": 0.5, "seed": s, "score": 2 * a + s, "hits": a, "status": "ok", "error": None,
+    rows = [{"a": a, "gain": 0.5, "seed": s, "score": 2 * a + s, "hits": a, "f1": 0.9, "status": "ok", "error": None,
              "elapsed_s": 0.01, "cell": f"c{a}{s}"} for a in (1, 2, 3) for s in (0, 1)]
     folder = tmp_path / "custom"
     folder.mkdir()
     pd.DataFrame(rows).to_parquet(folder / "results.parquet")
     (folder / "sweep.yaml").write_text("name: custom\nkind: mykind:cell\nfixed: {gain: 0.5}\ngrid:\n  a: [1, 2, 3]\n"
                                        "seeds: [0, 1]\n")
-    assert list(draw_sweep(folder, tmp_path / "figs")) == ["sweep_custom_score", "sweep_custom_hits"]
+    # its own "f1" beside them (a built-in metric's name) drew that alone (review)
+    assert list(draw_sweep(folder, tmp_path / "figs")) == ["sweep_custom_score", "sweep_custom_hits", "sweep_custom_f1"]
     stats = pd.read_csv(tmp_path / "figs" / "sweep_custom_score.csv").set_index("a")
     assert stats["mean"].to_dict() == {1: 2.5, 2: 4.5, 3: 6.5}

@@ -24,4 +24,5 @@ def test_bad_arguments_are_one_error_line_before_any_run(argv: list[str], messag
                                                           capsys: pytest.CaptureFixture[str]) -> None:
     monkeypatch.setattr(threshold_audit, "run", lambda world: pytest.fail("ran the audit"))
     assert threshold_audit.main(argv) == 2
-    assert capsys.readouterr().err.splitlines()[1].startswith(message)
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith(message) and err[0].endswith("(see python -m experiments.threshold_audit --help)")

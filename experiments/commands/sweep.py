@@ -63,6 +63,9 @@ def run(args: argparse.Namespace) -> int:
                            progress=not args.no_progress)
     except SweepSpecError as exc:  # an unknown kind or parameter name, found before any cell ran
         raise SweepSpecError(f"{args.sweep}: {exc}") from exc
+    if result.failed:  # said first on stderr: a stdout whose reader went away stops at the summary below
+        print(f"lmsbench sweep: {result.failed} of {result.total} cells failed (their `error` column says why; "
+              f"--retry-failed computes them again)", file=sys.stderr)
     print(f"{spec.name}: {result.total} cells, {result.computed} computed, {result.skipped} already done, "
           f"{result.failed} failed")
     print(f"wrote {out / 'results.parquet'}")
@@ -70,8 +73,6 @@ def run(args: argparse.Namespace) -> int:
         errors = result.table.loc[result.table["status"] != "ok", "error"].value_counts()
         for text, n in errors.head(5).items():
             print(f"  {n} x {text}")
-        print(f"lmsbench sweep: {result.failed} of {result.total} cells failed (their `error` column says why; "
-              f"--retry-failed computes them again)", file=sys.stderr)
         return 1
     return 0
 

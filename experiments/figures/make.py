@@ -120,12 +120,13 @@ SWEEP_BOOKKEEPING = ("seed", "status", "error", "elapsed_s", "cell")
 
 
 def sweep_metrics(table: pd.DataFrame, spec: dict) -> list[str]:
-    """The metrics of a sweep's plots: those of SWEEP_METRICS the table has values of, else (a
-    user's ``package.module:function`` kind, whose metrics are its own names: nothing was drawn for
-    it) every numeric column with a value that is neither a parameter of the sweep file nor the
-    runner's bookkeeping."""
+    """The metrics of a sweep's plots: for a built-in kind, those of SWEEP_METRICS the table has
+    values of; for a user's ``package.module:function`` kind (whose metrics are its own names:
+    nothing was drawn for it, and one that also returned an "f1" had only that drawn), or a built-in
+    kind without any, every numeric column with a value that is neither a parameter of the sweep
+    file nor the runner's bookkeeping."""
     known = [m for m in SWEEP_METRICS if m in table and table[m].notna().any()]
-    if known:
+    if known and ":" not in str(spec.get("kind", "")):
         return known
     params = {n.strip() for key in (*spec.get("grid", {}), *spec.get("random", {}), *spec.get("fixed", {}))
               for n in str(key).split(",")}
