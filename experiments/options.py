@@ -362,9 +362,10 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
 def check_link(p: Path, flag: str = "--out") -> None:
     """An output path that is a link to nothing or a loop of links: found only when the run wrote
     (after the work: "dang: file exists"), or by Path.resolve ("internal error: RuntimeError:
-    Symlink loop")."""
-    if p.is_symlink() and not p.exists():
-        raise InputError(f"{flag} {_missing(p, 'folder')}")
+    Symlink loop"). The path's folders too (review: --out LOOP/sub, DANGLING/sub were the same)."""
+    for q in (p, *p.parents):
+        if q.is_symlink() and not q.exists():
+            raise InputError(f"{flag} {p}: " + _missing(q, "folder") if q != p else f"{flag} {_missing(p, 'folder')}")
 
 
 def check_out_spares(out: str | os.PathLike | None, writes: Sequence[str], reads: Sequence[str | os.PathLike]) -> None:

@@ -82,15 +82,15 @@ def run_emulate(args: argparse.Namespace) -> int:
     print(f"virtual LMS200 at {where}: {what}, 9600 baud at power-on, "
           f"time scale {args.time_scale:g}; Ctrl-C stops", file=sys.stderr, flush=True)
     stop = {"now": False}
-    previous = signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))
-    signal.signal(signal.SIGTERM, lambda *_: stop.update(now=True))
+    previous = {sig: signal.signal(sig, lambda *_: stop.update(now=True)) for sig in (signal.SIGINT, signal.SIGTERM)}
     start = time.monotonic()
     try:
         while not stop["now"] and (args.duration is None or time.monotonic() - start < args.duration):
             time.sleep(0.05)
     finally:
         adapter.close()
-        signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     print(f"virtual LMS200 stopped: {device.scans_sent} scans sent, {device.requests} requests", file=sys.stderr)
     return 0
 
@@ -167,7 +167,9 @@ def run_record(args: argparse.Namespace) -> int:
         raise InputError(f"--out {args.out} exists; a recording is not written over a file (give a new name)")
     check_out_file(args.out)
     stop = {"now": False}
-    previous = signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))
+    # Ctrl-C and SIGTERM (a batch system's limit) end the recording as asked: the file closed and
+    # readable (SIGTERM went to the CLI's interrupt: a bag cut in its index, "Bag is not indexed")
+    previous = {sig: signal.signal(sig, lambda *_: stop.update(now=True)) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         # a status the next line overwrites, on a terminal only (like the progress bars), so that
         # a port that cannot be opened leaves the error as stderr's one line
@@ -185,7 +187,8 @@ def run_record(args: argparse.Namespace) -> int:
                 progress.update(final=True)
             stats = dev.stats
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     if stop.get("error") is not None:
         raise LmsbenchError(f"{stop['error']}; the {written} scans before it are saved in {args.out}")
     print(f"recorded {written} scans to {args.out} ({stats.dropped_frames} frames dropped, "

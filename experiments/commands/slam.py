@@ -102,9 +102,12 @@ def _config(args: argparse.Namespace):
     if cfg.motion.use_odometry and cfg.preset != "paper":
         raise LmsbenchError("--odometry drives the paper preset's filter: add --preset paper (the default pipeline uses no odometry)")
     paper_only = [flag for flag, given in (("--association", args.association), ("--corners", args.corners)) if given]
-    if paper_only and cfg.preset != "paper":  # they were ignored: the default pipeline ran as without them
-        raise InputError(f"{', '.join(paper_only)} set the paper preset's filter: add --preset paper (the default "
-                         "pipeline has no data association nor corner landmarks)")
+    # with the default preset they set the paper preset's baselines (its run and, with odometry, the
+    # odometry one): ignored only when neither runs
+    if paper_only and cfg.preset != "paper" and args.no_paper_baseline and args.no_odometry_baseline:
+        raise InputError(f"{', '.join(paper_only)} set the paper preset's filter, which this run does not use (the "
+                         "default pipeline, with --no-paper-baseline and --no-odometry-baseline): add --preset paper "
+                         "or drop them")
     return cfg
 
 
