@@ -93,20 +93,24 @@ def _kill_children() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    try:
-        return _main(argv)
-    finally:
-        _flush_stdout()
+    return _flushed(_main(argv))
 
 
-def _flush_stdout() -> None:
-    """stdout flushed before the interpreter's exit, where a reader that went away after a Ctrl-C,
-    an error or ``--help`` turned the status into 120 with Python's 'Exception ignored ...
-    BrokenPipeError' (the status the command chose is kept; what is left goes to /dev/null)."""
+def _flushed(status: int) -> int:
+    """``status`` after stdout is flushed here, not at the interpreter's exit, where a reader that
+    went away after a Ctrl-C, an error or ``--help`` turned it into 120 with Python's 'Exception
+    ignored ... BrokenPipeError' (that status is kept, what is left goes to /dev/null). Output that
+    cannot be written (a full disk under ``> FILE``) is an error line, and 2 where it was 0."""
     try:
         sys.stdout.flush()
-    except (OSError, ValueError):
+    except BrokenPipeError:
         _stdout_to_devnull()
+    except OSError as exc:
+        print(f"lmsbench: error: cannot write the standard output: {exc}", file=sys.stderr)
+        return status or 2
+    except ValueError:  # stdout closed by the caller: nothing left to write
+        pass
+    return status
 
 
 def _main(argv: Sequence[str] | None) -> int:
