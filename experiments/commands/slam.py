@@ -98,7 +98,6 @@ def _config(args: argparse.Namespace):
         cfg = dataclasses.replace(cfg, **changes)
     except LmsbenchError as exc:
         raise InputError(f"{args.config}: {exc}" if args.config else str(exc)) from None
-    _check_extractor(cfg, args.config)
     if cfg.motion.use_odometry and cfg.preset != "paper":
         raise LmsbenchError("--odometry drives the paper preset's filter: add --preset paper (the default pipeline uses no odometry)")
     paper_only = [flag for flag, given in (("--association", args.association), ("--corners", args.corners)) if given]
@@ -109,25 +108,6 @@ def _config(args: argparse.Namespace):
                          "default pipeline, with --no-paper-baseline and --no-odometry-baseline): add --preset paper "
                          "or drop them")
     return cfg
-
-
-def _check_extractor(cfg: Any, source: Path | None) -> None:
-    """The config's extractor is a known method (or MODULE:FUNCTION) and its ``extractor_params`` are
-    fields of that method's config with valid values: checked now, before any scan is read."""
-    from features.registry import make_config
-    from lms200 import LmsbenchError
-
-    from experiments.user_methods import is_user_method
-
-    where = f"{source}: " if source is not None else ""
-    try:
-        method = check_methods([cfg.extractor])[0]
-        if not is_user_method(method):
-            make_config(method, **cfg.extractor_params)
-    except LmsbenchError as exc:
-        raise InputError(f"{where}{exc}") from None
-    except (TypeError, ValueError) as exc:  # a user method's own config type
-        raise InputError(f"{where}extractor_params: {' '.join(str(exc).split())}") from None
 
 
 def in_time_order(stamps: list[float]) -> list[int]:
