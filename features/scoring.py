@@ -41,7 +41,7 @@ from .angles import wrap
 from lms200.errors import InputError
 
 from .baselines import checks
-from .realdata import _ray_residuals, check_features, check_measure_args, truth_arrays
+from .realdata import TRUTH_FIELDS, _ray_residuals, check_features, check_measure_args, truth_arrays
 from .types import FeatureSet
 
 _BIG = 1e6
@@ -154,21 +154,16 @@ class CheckedTruth:
     segment_beams: np.ndarray
     corners: np.ndarray
     corner_beams: np.ndarray
-    _checked: object = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        """Built by anything but ``check_truth``: the fields checked as check_truth checks them (a
-        hand-built one with nan faces scored recall 1.0, silently; None fields were a TypeError)."""
-        if self._checked is _CHECKED:
-            return
-        a = truth_arrays(self)
+        """The fields checked (``realdata.truth_arrays``) and shaped as the scoring reads them, once,
+        however it is built (a hand-built one with nan faces scored recall 1.0, silently; None fields
+        were a TypeError)."""
+        a = truth_arrays(self)  # float64; the beam indices are kept as given
         object.__setattr__(self, "segments", a["segments"].reshape(-1, 4))
         object.__setattr__(self, "segment_beams", np.asarray(self.segment_beams).reshape(-1, 2))
         object.__setattr__(self, "corners", a["corners"].reshape(-1, 4))
         object.__setattr__(self, "corner_beams", np.asarray(self.corner_beams).reshape(-1))
-
-
-_CHECKED = object()  # check_truth's token: its CheckedTruth is not checked a second time
 
 
 def check_truth(truth: Any) -> CheckedTruth:
@@ -181,9 +176,9 @@ def check_truth(truth: Any) -> CheckedTruth:
     """
     if isinstance(truth, CheckedTruth):
         return truth
-    a = truth_arrays(truth)  # float64; the beam indices are kept as given
-    return CheckedTruth(a["segments"].reshape(-1, 4), np.asarray(truth.segment_beams).reshape(-1, 2),
-                        a["corners"].reshape(-1, 4), np.asarray(truth.corner_beams).reshape(-1), _CHECKED)
+    if not all(hasattr(truth, name) for name in TRUTH_FIELDS):
+        truth_arrays(truth)  # the message naming what it lacks
+    return CheckedTruth(*(getattr(truth, name) for name in TRUTH_FIELDS))
 
 
 def _dont_care(truth: CheckedTruth, cfg: ScoreConfig) -> np.ndarray:
