@@ -114,6 +114,18 @@ def real_rows(value: object, name: str, columns: int, what: str, finite: bool = 
     return a
 
 
+def real_vector(value: object, name: str, what: str, finite: bool = True) -> np.ndarray:
+    """``value`` (any shape: a list, a column, a scalar) as a flat float64 array, by
+    :func:`real_rows`'s checks."""
+    column = value
+    if value is not None and not isinstance(value, (str, bytes)):  # those refused by type name
+        try:
+            column = np.reshape(value, (-1, 1))  # type: ignore[call-overload]
+        except (TypeError, ValueError):  # a ragged list: refused by real_rows, naming it
+            pass
+    return real_rows(column, name, 1, what, finite).reshape(-1)
+
+
 REFUSED = "(bool, complex, text and dates are refused)"
 _NOT_NUMBER_ITEMS = (bool, np.bool_, str, bytes, np.str_, np.bytes_)  # float() takes them: True as 1.0 m, "2" as 2.0 m
 

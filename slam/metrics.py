@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from lms200 import InputError, LmsbenchError, LogFormatError
-from lms200.codes import real_rows
+from lms200.codes import real_rows, real_vector
 from lms200.finite import float_of
 
 from .models import wrap
@@ -50,11 +50,7 @@ def interpolate_poses(traj: np.ndarray, stamps: np.ndarray) -> tuple[np.ndarray,
     """Poses (k, 3) of ``traj`` at ``stamps`` (linear in x, y; shortest arc in theta) and a mask of
     the stamps inside the trajectory's time span (poses outside are nan)."""
     traj = checked_trajectory(traj, "trajectory", finite_poses=False)
-    try:
-        column: object = np.reshape(stamps, (-1, 1))
-    except (TypeError, ValueError):  # a ragged list: refused below, naming stamps
-        column = stamps
-    stamps = real_rows(column, "stamps", 1, "s", finite=False).reshape(-1)
+    stamps = real_vector(stamps, "stamps", "s", finite=False)
     t = traj[:, 0]
     inside = (stamps >= t[0] - 1e-9) & (stamps <= t[-1] + 1e-9)
     out = np.full((stamps.size, 3), np.nan)

@@ -1095,3 +1095,38 @@ def test_robot_limits_and_odometry_config_check_their_fields() -> None:
         RobotLimits(radius=10**400)
     with pytest.raises(InputError, match=r"^alpha3: must be a finite number in \[0, 10\], got True"):
         OdometryConfig(alpha3=True)
+
+
+# --- TUM trajectories, found by fuzzing the Python API (session 32) ---------------------------------
+def _tum_path(tmp_path):
+    return tmp_path / "t.tum"
+
+
+@pytest.mark.parametrize("stamps_of, poses_of, message", [
+    # a whole (t, x, y, theta) trajectory of 3k rows passed as poses was written as 4k garbled rows
+    (lambda tr: tr[:, 0], lambda tr: tr, r"poses: must be a \(k, 3\) array \(x m, y m, theta rad\), got shape \(6, 4\)"),
+    (lambda tr: tr[::-1, 0], lambda tr: tr[:, 1:], r"stamps: must not decrease \(stamp 1: 4\.0 s after 5\.0 s\)"),
+    (lambda tr: np.r_[np.nan, tr[1:, 0]], lambda tr: tr[:, 1:], r"stamps: must be finite \(s\); row 0 is not"),
+    (lambda tr: "abc", lambda tr: tr[:, 1:], r"stamps: must be a \(k, 1\) array of real numbers \(s\), got str"),
+    (lambda tr: tr[:3, 0], lambda tr: tr[:, 1:], r"stamps: 3 stamps for 6 poses"),
+    (lambda tr: tr[:, 0], lambda tr: None, r"poses: must be a \(k, 3\) array of real numbers .*got NoneType"),
+    (lambda tr: tr[:, 0], lambda tr: tr[:, 1:] + 1j, r"poses: must be a \(k, 3\) array of real numbers"),  # imaginary part dropped
+])
+def test_write_tum_refuses_what_read_tum_would_not_read_back(tmp_path, stamps_of, poses_of, message: str) -> None:
+    from lms200 import write_tum
+
+    traj = np.column_stack((np.arange(6.0), np.ones(6), np.zeros(6), np.full(6, 0.5)))
+    with pytest.raises(InputError, match=message):
+        write_tum(_tum_path(tmp_path), stamps_of(traj), poses_of(traj))
+    assert not _tum_path(tmp_path).exists()
+
+
+def test_tum_paths_of_the_wrong_type_are_named(tmp_path) -> None:
+    from lms200 import read_tum, write_tum
+
+    with pytest.raises(InputError, match="path: must be a str or os.PathLike, got float"):
+        write_tum(3.5, [0.0], [[0.0, 0.0, 0.0]])  # a TypeError; an int path was written as a file descriptor
+    with pytest.raises(InputError, match="path: must be a str or os.PathLike, got NoneType"):
+        read_tum(None)
+    write_tum(tmp_path / "ok.tum", [0.0, 1.0], [[0.0, 0.0, 0.1], [np.nan, 0.0, 0.2]])  # a lost run's nan pose: written
+    assert "nan" in (tmp_path / "ok.tum").read_text().splitlines()[2]
