@@ -153,7 +153,7 @@ def test_interpolation_takes_the_short_way_round():
     (lambda t: relations_error(t, np.array([[1.0, 2.0, 0.1, 0.0]])), r"relations: must be a \(k, 5\) array"),
     (lambda t: relations_error(t, np.array([[1.0, 2.0, np.nan, 0.0, 0.0]])), r"relations: must be finite .*row 0"),
     (lambda t: relations_error(t, np.array([[100.0, 200.0, 0.1, 0.0, 0.0]])), r"no relation falls inside"),
-    (lambda t: interpolate_poses(t, "abc"), r"stamps: must be a \(k, 1\) array of real numbers \(s\), got ndarray"),
+    (lambda t: interpolate_poses(t, "abc"), r"stamps: must be a \(k, 1\) array of real numbers \(s\), got str"),
     (lambda t: map_error(np.array([[0, 0, 1, 0]]), np.array([[0, 0, 0, 0]])), r"walls: every wall must have two distinct ends"),
     (lambda t: map_error(np.array([[0, 0, 1, 0]]), np.array([[0, 0, 2, 0]]), alignment=0.5),
      r"alignment: must be a slam.metrics.Alignment2D or None, got float"),  # AttributeError
