@@ -1130,3 +1130,58 @@ def test_tum_paths_of_the_wrong_type_are_named(tmp_path) -> None:
         read_tum(None)
     write_tum(tmp_path / "ok.tum", [0.0, 1.0], [[0.0, 0.0, 0.1], [np.nan, 0.0, 0.2]])  # a lost run's nan pose: written
     assert "nan" in (tmp_path / "ok.tum").read_text().splitlines()[2]
+
+
+# --- noise estimators and calibration, found by fuzzing the Python API (session 32) ----------------
+def _noise_scan() -> Scan:
+    rng = np.random.default_rng(0)
+    return Scan.lms200(3.0 / np.cos(np.linspace(-1.0, 1.0, 361)).clip(0.3) + rng.normal(0, 0.005, 361))
+
+
+@pytest.mark.parametrize("name", ["estimate_range_noise", "neighbour_sigma", "fit_sigma", "bearing_sigma",
+                                  "calibrate_scans"])
+@pytest.mark.parametrize("scans, message", [
+    (None, r"scans: must be an lms200.Scan or an iterable of Scans or records, got NoneType"),  # "not iterable"
+    (3.0, r"scans: must be an lms200.Scan or an iterable of Scans or records, got float"),
+    ("log.clf", r"scans: must be an lms200.Scan or an iterable of Scans or records, got str"),  # AttributeError
+    ([np.full(361, 3.0)], r"scans\[0\]: must be an lms200.Scan or a record with .scan, got ndarray"),  # AttributeError
+])
+def test_noise_estimators_name_what_is_no_scan(name: str, scans: object, message: str) -> None:
+    from features import noise_estimate
+    from lms200 import calibration, noise
+
+    fn = getattr(noise, name, None) or getattr(noise_estimate, name, None) or getattr(calibration, name)
+    with pytest.raises(InputError, match=message):
+        fn(scans)
+
+
+@pytest.mark.parametrize("call, error, message", [
+    (lambda ne, s: ne.scan_sigma(None), "ScanTypeError", r"scan_sigma: expected an lms200.Scan, got NoneType"),
+    (lambda ne, s: ne.fit_residuals("scan"), "ScanTypeError", r"fit_residuals: expected an lms200.Scan, got str"),
+    # window 0, -1 or True was numpy's LinAlgError, 2.5 an IndexError, None a TypeError
+    (lambda ne, s: ne.fit_sigma(s, window=0), "ConfigError", r"window: must be an integer >= 3 and <= 16384, got 0"),
+    (lambda ne, s: ne.fit_sigma(s, window=True), "ConfigError", r"window: must be an integer >= 3 .*got True"),
+    (lambda ne, s: ne.bearing_sigma([s], window=2.5), "ConfigError", r"window: must be an integer >= 3 .*got 2\.5"),
+    (lambda ne, s: ne.fit_residuals(s, window=8), "ConfigError", r"window: must be odd .*got 8"),
+    # a nan fallback came back as the noise of a scan with too few triples
+    (lambda ne, s: ne.neighbour_sigma([s], fallback=float("nan")), "ConfigError", r"fallback: must be a finite number > 0 m, got nan"),
+    (lambda ne, s: ne.scan_sigma(s, fallback=None), "ConfigError", r"fallback: must be a finite number > 0 m, got None"),
+    (lambda ne, s: ne.fit_sigma([], fallback="0.005"), "ConfigError", r"fallback: must be a finite number > 0 m, got '0.005'"),
+])
+def test_noise_estimate_arguments_are_named(call, error: str, message: str) -> None:
+    from features import noise_estimate
+
+    with pytest.raises(LmsbenchError, match=message) as info:
+        call(noise_estimate, _noise_scan())
+    assert type(info.value).__name__ == error
+
+
+def test_noise_estimators_still_take_scans_and_records() -> None:
+    from features import noise_estimate
+    from lms200.noise import estimate_range_noise
+
+    s = _noise_scan()
+    records = [Record(s), Record(s.replace(stamp=1.0))]
+    assert noise_estimate.fit_sigma(records) == noise_estimate.fit_sigma([s, s.replace(stamp=1.0)])
+    assert 0.003 < noise_estimate.fit_sigma(s) < 0.008
+    assert 0.003 < estimate_range_noise(iter(records)).sigma_m < 0.008
