@@ -14,7 +14,7 @@ import numpy as np
 
 from lms200 import InputError, LmsbenchError, LogFormatError
 from lms200.codes import real_rows, real_vector
-from lms200.finite import float_of
+from features.baselines.checks import positive
 
 from .models import wrap
 
@@ -35,15 +35,6 @@ def checked_trajectory(traj: object, name: str, finite_poses: bool = True) -> np
     if finite_poses and not np.isfinite(a[:, 1:]).all():
         raise InputError(f"{name}: its poses must be finite; row {int(np.nonzero(~np.isfinite(a[:, 1:]).all(1))[0][0])} is not")
     return a
-
-
-def positive_number(value: object, name: str, unit: str) -> float:
-    """``value`` as a finite float > 0; InputError naming ``name`` otherwise (bools and text too)."""
-    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
-    number = float_of(value, name, InputError) if ok else math.nan
-    if not (math.isfinite(number) and number > 0):
-        raise InputError(f"{name}: must be a finite number > 0 ({unit}), got {value!r}")
-    return number
 
 
 def interpolate_poses(traj: np.ndarray, stamps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -192,7 +183,7 @@ def rpe(estimate: np.ndarray, truth: np.ndarray, delta: float = 1.0, pairs: str 
     """
     if not isinstance(pairs, str) or pairs not in RPE_PAIRS:
         raise InputError(f"pairs: must be one of {', '.join(RPE_PAIRS)}, got {pairs!r}")
-    delta = positive_number(delta, "delta", "m of true travel")  # nan, 0 or -1 paired every pose with itself
+    positive("delta", delta, "m of true travel")  # nan, 0 or -1 paired every pose with itself
     est = checked_trajectory(estimate, "estimate", finite_poses=False)
     tru, inside = interpolate_poses(checked_trajectory(truth, "truth"), est[:, 0])
     est, tru = est[inside, 1:], tru[inside]
@@ -251,8 +242,8 @@ def map_error(map_segments: np.ndarray, walls: np.ndarray, alignment: Alignment2
     walls = real_rows(walls, "walls", 4, "x0, y0, x1, y1 m")
     if alignment is not None and not isinstance(alignment, Alignment2D):
         raise InputError(f"alignment: must be a slam.metrics.Alignment2D or None, got {type(alignment).__name__}")
-    max_angle = positive_number(max_angle, "max_angle", "rad")
-    max_distance = positive_number(max_distance, "max_distance", "m")
+    positive("max_angle", max_angle, "rad")
+    positive("max_distance", max_distance, "m")
     if walls.size and not np.all(np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1]) > 0):
         raise InputError("walls: every wall must have two distinct ends (a wall of zero length has no direction)")
     if alignment is not None and seg.size:
