@@ -255,6 +255,15 @@ class CarmenReader:
             raise LmsbenchError(f"{self.path}: its {kind} lines carry their own beam geometry; the override of "
                                 f"{', '.join(given)} (--laser-*-deg) applies to FLASER / RLASER lines only")
 
+    def _check_range_max(self, line_no: int, range_min: float) -> None:
+        """A range_max override not above the scans' range_min (``PARAM lmsbench_range_min``) is an
+        error of the override, not of every laser line (which it made malformed, one by one)."""
+        rmax = self.geometry.range_max
+        if rmax is not None and rmax <= range_min:
+            raise LmsbenchError(f"{self.path}:{line_no}: the range_max override ({rmax:g} m, --laser-range-max) is "
+                                f"not above this log's range_min ({range_min:g} m, PARAM {RANGE_MIN_PARAM}); "
+                                "give a larger one")
+
     def _survey(self) -> str | None:
         """The laser kind read by default: the first with poses up to ``DEFAULT_TOPIC_LINES`` lines
         after the first laser line, else the first RAWLASER kind, else None (no laser line).
@@ -324,6 +333,7 @@ class CarmenReader:
                         self._check_override(kind)
                     if kind != stats.laser:
                         continue
+                    self._check_range_max(line_no, params.get(RANGE_MIN_PARAM, 0.0))
                     odom: Pose2D | None
                     if kind in ("FLASER", "RLASER"):
                         geometry = self.geometry.merged(laser_geometry.from_params(kind, params))

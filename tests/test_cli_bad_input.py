@@ -80,6 +80,7 @@ def files(tmp_path_factory):
     write_log(d / "mixed.clf", [r for pair in zip(good, wide) for r in pair])
     odo = [Record(Scan.lms200(ranges, stamp=0.1 * k), odom=(0.1 * k, 0.0, 0.0)) for k in range(5)]
     write_log(d / "odo.bag", odo, fmt="bag")  # topics /scan and /odom
+    write_log(d / "range_min_2.clf", [Record(Scan(ranges, -np.pi / 2, np.pi / 360, 2.0, 8.183, 0.1 * k)) for k in range(3)])
     write_log(d / "far.clf", [Record(Scan.lms200(np.full(361, 6.0), stamp=0.1 * k)) for k in range(5)])
     (d / "zero_beams.clf").write_text("FLASER 0 0 0 0 0 0 0 0.0 host 0.0\n")  # was "needs 11 fields, got 11"
     with gzip.open(d / "good.clf.gz", "wt") as fh:
@@ -477,6 +478,12 @@ CASES = [
     (["info", "{good.clf}", "--laser-angle-min-deg", "1000"], "--laser-angle-min-deg: a bearing must be within"),
     (["info", "{good.clf}", "--laser-angle-min-deg", "1e308"], "+-360 deg"),
     (["info", "{good.clf}", "--laser-range-max", "1e308"], "--laser-range-max: must be at most 10000 m"),
+    # a subnormal (or a millimetre) max range: accepted, then every reading was invalid (info: 100 %)
+    (["info", "{good.clf}", "--laser-range-max", "1e-320"], "--laser-range-max: must be at least 0.1 m"),
+    (["slam", "{good.clf}", "--laser-range-max", "0.001", "--out", O], "--laser-range-max: must be at least 0.1 m"),
+    # not above the log's range_min (PARAM lmsbench_range_min 2.0): every laser line was malformed, one by one
+    (["info", "{range_min_2.clf}", "--laser-range-max", "1.5", "--skip-bad-lines"],
+     "range_min_2.clf:7: the range_max override (1.5 m, --laser-range-max) is not above this log's range_min (2 m"),
     (["info", "{good.clf}", "--laser-fov-deg", "-5"], "(-5 deg)"),
     (["compare", "{good.clf}", "--laser-resolution-deg", "1", "--out", O], "own beam geometry"),
     # calibrate

@@ -124,6 +124,10 @@ def test_geometry_override() -> None:
     assert beam_angles(181, LaserGeometry(resolution=1 * DEG, angle_min=-45 * DEG)) == pytest.approx((-45 * DEG, DEG))
     with pytest.raises(ValueError, match="resolution: must be > 0"):
         LaserGeometry(resolution=0.0)
+    for tiny in (1e-320, 0.001):  # a subnormal or a millimetre: no laser's max range (every reading was invalid)
+        with pytest.raises(ValueError, match=r"^range_max: must be at least 0\.1 m .* got "):
+            LaserGeometry(range_max=tiny)
+    assert LaserGeometry(range_max=0.1).range_max == 0.1
     with pytest.raises(ValueError, match="more than 360 deg"):
         beam_angles(1000, LaserGeometry(resolution=1 * DEG))
 
