@@ -401,6 +401,11 @@ CASES = [
     (["demo", "--inprocess", "--no-sweep", "--out", O], "--inprocess runs the demo's sweep in this process; --no-sweep"),
     (["figures", "--tables", "{tables_broken}", "--duration", "5", "--no-slam", "--out", O],
      "--duration, --no-slam set the study that --tables replaces; redrawing from "),
+    # log options with --tables: ignored, the figures redrawn from the tables as they were
+    (["figures", "--tables", "{tables_broken}", "--topic", "FLASER", "--laser-range-max", "50", "--out", O],
+     "--topic, --laser-range-max do not apply to --tables: they say how to read the study's log (Fig. 9's Intel log), "
+     "and redrawing from "),
+    (["figures", "--tables", "{tables_broken}", "--skip-bad-lines", "--out", O], "--skip-bad-lines does not apply to --tables"),
     # one scan kept: the whole comparison ran, then "internal error: ValueError: ate: fewer than 2 estimated poses"
     (["figures", "--duration", "0.5", "--rate-hz", "2", "--out", O], "--duration 0.5 at --rate-hz 2 keeps 1 scan(s) of "
      "the simulated run; the SLAM (Fig. 10) needs two or more (a longer run or a higher rate, or --no-slam)"),
