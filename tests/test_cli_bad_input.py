@@ -437,6 +437,8 @@ CASES = [
     (["lms200", "emulate", "--tcp", "-1"], "--tcp"),
     (["lms200", "emulate", "--duration", "-5"], "--duration"),
     (["lms200", "emulate", "--time-scale", "0"], "--time-scale"),
+    # ran as long as asked: a byte time of days, a reply awaited for 31 years
+    (["lms200", "emulate", "--time-scale", "1e9"], "argument --time-scale: must be a finite number > 0 and <= 100, got '1e9'"),
     (["lms200", "emulate", "--seed", "-1"], "--seed"),
     (["lms200", "emulate", "--log", "{binary.clf}"], "binary"),
     (["lms200", "emulate", "--log", "{missing.clf}"], "missing.clf"),
@@ -444,6 +446,8 @@ CASES = [
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--duration", "-5"], "--duration"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--max-scans", "0"], "--max-scans"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--timeout", "0"], "--timeout"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--timeout", "1e9"],
+     "argument --timeout: must be a finite number > 0 and <= 60 s, got '1e9'"),
     (["lms200", "record", "--port", "loop://", "--out", "{missing_dir}/x.clf"], "missing_dir"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.txt"], ".txt"),
     (["lms200", "record", "--port", "loop://", "--out", "{a_file}/x.clf"], "a_file"),
