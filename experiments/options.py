@@ -157,11 +157,17 @@ def world_name(text: str) -> str:
     return text
 
 
-def _head(path: Path, n: int = 4096) -> bytes:
+def _head(path: Path, n: int = 4096, what: str = "an input") -> bytes:
     """The first ``n`` bytes of a regular file. A pipe with no writer (``mkfifo``) hung the command
-    on open(); one with a writer (``<(zcat log.gz)``) would lose these bytes to the check."""
+    on open(); one with a writer (``<(zcat log.gz)``) would lose these bytes to the check. A pipe
+    (``--config <(cat x.yaml)``, ``--config /dev/stdin`` fed by a pipe) is refused saying why: a
+    file is checked before it is read."""
     if path.exists() and not path.is_dir() and not path.is_file():
-        raise InputError(f"{path}: not a regular file (a pipe, a device or a socket); give the file itself")
+        if stat.S_ISFIFO(path.stat().st_mode):
+            raise InputError(f"{path}: not a regular file but a pipe (<(cat FILE), /dev/stdin fed by a pipe, a FIFO): "
+                             f"{what} must be a regular file, as it is checked before it is read and a pipe's bytes "
+                             "are gone once read; give the file itself (or save the stream to a file first)")
+        raise InputError(f"{path}: not a regular file (a device or a socket); give the file itself")
     try:
         with open(path, "rb") as fh:
             return fh.read(n)
@@ -183,7 +189,7 @@ def _text_head(path: Path, what: str, utf8: bool = True) -> None:
     replaced) a byte that is not UTF-8 is text too, unless control bytes or bytes >= 0x80 make up
     more than MAX_ODD_BYTES of the head (a latin-1 comment in a log's first 4 KB refused a log
     that the same comment further down did not)."""
-    head = _head(path)
+    head = _head(path, what=what)
     kind = compression(head)
     named = COMPRESSION_SUFFIXES.get(path.suffix)
     if named and kind != named:
@@ -232,7 +238,7 @@ def check_file(path: str | os.PathLike, what: str = "a file") -> Path:
         raise InputError(_missing(p, "file"))
     if p.is_dir():
         raise InputError(f"{p} is a folder, not {what}")
-    _head(p, 1)
+    _head(p, 1, what)
     return p
 
 

@@ -467,9 +467,14 @@ CASES = [
     (["compare", "{pipe.clf}", "--out", O], "pipe.clf: a pipe (such as <(zcat LOG)), not a file"),
     (["slam", "{pipe.clf}", "--out", O], "give the log file itself (gzip, bzip2 and xz logs are read as they are) or "
                                          "save the stream to a file first (zcat LOG > FILE)"),
-    (["slam", "{good.clf}", "--config", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file (a pipe"),
-    (["simulate", "--world", "{pipe.json}", "--out", O], "pipe.json: not a regular file (a pipe"),
-    (["sweep", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file (a pipe"),
+    # a config through a pipe: refused, "(a pipe, a device or a socket)", without why
+    (["slam", "{good.clf}", "--config", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file but a pipe (<(cat FILE), "
+     "/dev/stdin fed by a pipe, a FIFO): a SLAM config.yaml must be a regular file, as it is checked before it is read"),
+    (["simulate", "--world", "{pipe.json}", "--out", O], "pipe.json: not a regular file but a pipe (<(cat FILE), "
+     "/dev/stdin fed by a pipe, a FIFO): a world.json must be a regular file"),
+    (["sweep", "{pipe.yaml}", "--out", O], "a sweep file must be a regular file"),
+    (["simulate", "--config", "{pipe.yaml}", "--out", O], "a simulate config.yaml must be a regular file"),
+    (["sim2real", "{good.clf}", "--sensor", "{pipe.yaml}", "--out", O], "a sensor YAML must be a regular file"),
     (["calibrate", "{good.clf}", "--out", "{pipe.yaml}"], "pipe.yaml: not a regular file (a pipe, a device or a socket); give a file name"),
     (["info", "/dev/zero"], "/dev/zero: not a regular file"),
     (["info", "{bag_badmeta}"], "bag_badmeta/metadata.yaml: not valid YAML (line 2, column 1: expected ',' or ']'"),
@@ -680,6 +685,30 @@ def test_a_log_through_process_substitution_is_refused_saying_why(files, tmp_pat
     assert len(err.splitlines()) == 1 and err.startswith(f"lmsbench {command[0]}: error: /dev/fd/{r}: a pipe "
                                                          "(such as <(zcat LOG)), not a file: a log is read more than once")
     assert err.endswith("or save the stream to a file first (zcat LOG > FILE)")
+
+
+@pytest.mark.parametrize("command, what", [(["slam", "{good.clf}", "--config"], "a SLAM config.yaml"),
+                                           (["simulate", "--config"], "a simulate config.yaml"),
+                                           (["sweep"], "a sweep file")])
+def test_a_config_through_process_substitution_is_refused_saying_why(files, tmp_path, capsys, command, what):
+    """`lmsbench slam LOG --config <(cat x.yaml)` (or `--config /dev/stdin` fed by a pipe) said "not a
+    regular file (a pipe, a device or a socket); give the file itself": now that a config must be a
+    regular file and why. Refused unread: the writer's bytes are still in the pipe."""
+    r, w = os.pipe()
+    os.write(w, b"slam: {preset: paper}\n")
+    try:
+        argv = [files.get(a[1:-1], a) if a.startswith("{") else a for a in command] + [f"/dev/fd/{r}", "--out", str(tmp_path / "o")]
+        assert run_main(argv) == 2
+        assert os.read(r, 8192) == b"slam: {preset: paper}\n"
+    finally:
+        os.close(w)
+        os.close(r)
+    err = capsys.readouterr().err.strip()
+    assert err.splitlines() == [f"lmsbench {command[0]}: error: /dev/fd/{r}: not a regular file but a pipe (<(cat FILE), "
+                                f"/dev/stdin fed by a pipe, a FIFO): {what} must be a regular file, as it is checked "
+                                "before it is read and a pipe's bytes are gone once read; give the file itself (or save "
+                                "the stream to a file first)"]
+    assert not (tmp_path / "o").exists()
 
 
 def test_two_logs_of_one_name_are_refused_before_any_work(files, tmp_path, capsys):
