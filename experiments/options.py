@@ -24,7 +24,7 @@ import yaml
 from lms200.carmen import COMPRESSION_SUFFIXES, PIPE_REASON, READ_ERRORS, archive_kind, compression, open_bytes
 from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
 from lms200.timing import MAX_DURATION_S, MIN_DURATION_S  # a simulated run's bounds (s)
-from lms200.yamlio import load as load_yaml
+from lms200.yamlio import load as load_yaml, size_problem
 
 
 
@@ -243,9 +243,13 @@ def check_file(path: str | os.PathLike, what: str = "a file") -> Path:
 
 
 def check_yaml(path: str | os.PathLike, what: str = "a YAML file") -> Path:
-    """An existing, readable text file (YAML is parsed by the caller, which names its errors)."""
+    """An existing, readable text file of at most ``lms200.yamlio.MAX_YAML_BYTES`` (YAML is parsed by
+    the caller, which names its errors)."""
     p = check_file(path, what)
     _text_head(p, what)
+    too_big = size_problem(p.stat().st_size)
+    if too_big:
+        raise InputError(f"{p}: {too_big}")
     return p
 
 

@@ -72,6 +72,21 @@ class SelfReference(yaml.YAMLError):
     """A value that holds itself through an alias (``&a [*a]``): endless to anything that walks it."""
 
 
+#: Largest YAML file read as a config or sweep (bytes), checked before it is parsed: PyYAML's
+#: pure-Python parser takes about 4 s a MiB, and a 1.5 MB sweep file took 81 s to be refused.
+#: The configs and sweeps of this project are a few KB; a grid of the most cells a sweep may have
+#: (100,000 values of one parameter) is 0.7 MB written as a list, ``k: [3, 4, ...]``.
+MAX_YAML_BYTES = 1 << 20
+
+
+def size_problem(size: int) -> str | None:
+    """Why a YAML file of ``size`` bytes is not read as a config or sweep (None: it may be)."""
+    if size <= MAX_YAML_BYTES:
+        return None
+    return (f"{size:,} bytes, more than the {MAX_YAML_BYTES:,} a config or sweep file may hold (refused unread; they "
+            "are a few KB: a sweep's grid lists the values of each parameter, not every cell)")
+
+
 #: Values a document may expand to through its aliases beyond the size of its text (each value
 #: written out takes at least a character, so a document without aliases never reaches it).
 MAX_EXPANDED_VALUES = 1_000_000

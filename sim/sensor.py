@@ -10,7 +10,7 @@ laser scanner for mobile robot obstacle negotiation", ICRA 2002 - mixed pixels a
 
 from __future__ import annotations
 
-from lms200.yamlio import load as load_yaml
+from lms200.yamlio import load as load_yaml, size_problem
 
 import os
 from dataclasses import asdict, dataclass, fields, replace
@@ -215,8 +215,14 @@ class SensorConfig:
         p = Path(path)
         if p.is_dir():  # was "no such sensor file"
             raise InputError(f"{p} is a folder, not a sensor YAML")
+        if p.exists() and not p.is_file():  # a pipe (--sensor <(cat s.yaml)) was "no such sensor file"
+            raise InputError(f"{p}: not a regular file (a pipe, a device or a socket): a sensor YAML must be a regular "
+                             "file; give the file itself (or save the stream to a file first)")
         if not p.is_file():
             raise LmsbenchError(f"{p}: no such sensor file")
+        too_big = size_problem(p.stat().st_size)
+        if too_big:
+            raise InputError(f"{p}: {too_big}")
         try:
             d = load_yaml(p.read_text(encoding="utf-8"))
         except (yaml.YAMLError, UnicodeDecodeError) as exc:

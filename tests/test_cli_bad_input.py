@@ -126,6 +126,7 @@ def files(tmp_path_factory):
     for name, change in bad_sweeps.items():
         (d / f"{name}.yaml").write_text(yaml.safe_dump({**base, **change}))
     (d / "list.yaml").write_text("- 1\n- 2\n")
+    (d / "huge.yaml").write_text("noise_sigma: 0.005\n# " + "x" * (1 << 20) + "\n")  # 1 MiB + 22 bytes: a sweep of it took 81 s
     (d / "sensor_text.yaml").write_text("mixed_gap: abc\n")
     (d / "sensor_flag.yaml").write_text("quantise: 3\n")
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
@@ -467,6 +468,11 @@ CASES = [
     (["compare", "{pipe.clf}", "--out", O], "pipe.clf: a pipe (such as <(zcat LOG)), not a file"),
     (["slam", "{pipe.clf}", "--out", O], "give the log file itself (gzip, bzip2 and xz logs are read as they are) or "
                                          "save the stream to a file first (zcat LOG > FILE)"),
+    # configs and sweep files over 1 MiB: refused unread (a 1.5 MB sweep file took 81 s to be refused)
+    (["sweep", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576 a config or sweep file "
+     "may hold (refused unread"),
+    (["slam", "{good.clf}", "--config", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576"),
+    (["simulate", "--sensor", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576"),
     # a config through a pipe: refused, "(a pipe, a device or a socket)", without why
     (["slam", "{good.clf}", "--config", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file but a pipe (<(cat FILE), "
      "/dev/stdin fed by a pipe, a FIFO): a SLAM config.yaml must be a regular file, as it is checked before it is read"),
@@ -475,6 +481,9 @@ CASES = [
     (["sweep", "{pipe.yaml}", "--out", O], "a sweep file must be a regular file"),
     (["simulate", "--config", "{pipe.yaml}", "--out", O], "a simulate config.yaml must be a regular file"),
     (["sim2real", "{good.clf}", "--sensor", "{pipe.yaml}", "--out", O], "a sensor YAML must be a regular file"),
+    (["simulate", "--sensor", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file (a pipe, a device or a socket): "
+     "a sensor YAML must be a regular file"),  # was "no such sensor file"
+    (["compare", "office:1", "--sensor", "{pipe.yaml}", "--out", O], "a sensor YAML must be a regular file"),
     (["calibrate", "{good.clf}", "--out", "{pipe.yaml}"], "pipe.yaml: not a regular file (a pipe, a device or a socket); give a file name"),
     (["info", "/dev/zero"], "/dev/zero: not a regular file"),
     (["info", "{bag_badmeta}"], "bag_badmeta/metadata.yaml: not valid YAML (line 2, column 1: expected ',' or ']'"),
