@@ -145,6 +145,7 @@ def files(tmp_path_factory):
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
     (d / "badcolon.yaml").write_text("noise_sigma: 0.1\n  x: : 3\n")
     (d / "badalias.yaml").write_text("noise_sigma: *nope\n")
+    (d / "run_date.yaml").write_text("world: office\nseed: 2025-02-30\nduration: 2\n")  # an internal ValueError
     (d / "simbadyaml").mkdir()
     (d / "simbadyaml" / "config.yaml").write_text("sensor: {noise_sigma: 0.005\n")
     write_log(d / "simbadyaml" / "scans.clf", good)
@@ -468,6 +469,11 @@ CASES = [
     (["compare", "{pipe.clf}", "--out", O], "pipe.clf: a pipe (such as <(zcat LOG)), not a file"),
     (["slam", "{pipe.clf}", "--out", O], "give the log file itself (gzip, bzip2 and xz logs are read as they are) or "
                                          "save the stream to a file first (zcat LOG > FILE)"),
+    # an impossible date: "internal error: ValueError: day is out of range for month"
+    (["simulate", "--config", "{run_date.yaml}", "--out", O], "run_date.yaml: not valid YAML (line 2, column 7: "
+     "'2025-02-30' is not a valid date or time (day is out of range for month))"),
+    (["slam", "{good.clf}", "--config", "{run_date.yaml}", "--out", O], "run_date.yaml: not valid YAML (line 2, column 7: "),
+    (["sweep", "{run_date.yaml}", "--out", O], "run_date.yaml: not valid YAML: line 2, column 7: '2025-02-30' is not"),
     # configs and sweep files over 1 MiB: refused unread (a 1.5 MB sweep file took 81 s to be refused)
     (["sweep", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576 a config or sweep file "
      "may hold (refused unread"),
