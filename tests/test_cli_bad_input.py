@@ -970,14 +970,22 @@ def test_compare_tells_worlds_from_files_by_name_for_sensor_as_for_seeds(tmp_pat
 
 
 @pytest.mark.parametrize("section, expected", [
-    ("robot: {v_max: 1.0e300}", "(v_max: must be a finite number in (0, 10] m/s, got 1e+300)"),  # planned for ever
-    ("robot: {v_max: -1}", "(v_max: must be a finite number in (0, 10] m/s, got -1)"),  # ran, silently
-    ("robot: {a_max: 0}", "(a_max: must be a finite number in (0, 100] m/s^2, got 0)"),  # a tour of nan, warnings
-    ("robot: {v_max: [1, 2]}", "(v_max: must be a finite number in (0, 10] m/s, got [1, 2])"),  # internal error
-    ("robot: {pause_s: [5, 1]}", "(pause_s: the shortest pause must not exceed the longest, got [5, 1])"),
-    ("robot: {pause_s: [1, 2, 3]}", "(pause_s: must be two numbers of seconds [shortest, longest], got (1, 2, 3))"),
-    ("odometry: {alpha1: x}", "(alpha1: must be a finite number in [0, 10], got 'x')"),  # internal error (numpy)
-    ("odometry: {alpha2: 1.0e300}", "(alpha2: must be a finite number in [0, 10], got 1e+300)"),  # ran, silently
+    ("robot: {v_max: 1.0e300}", "(robot.v_max: must be a finite number in (0, 10] m/s, got 1e+300)"),  # planned for ever
+    ("robot: {v_max: -1}", "(robot.v_max: must be a finite number in (0, 10] m/s, got -1)"),  # ran, silently
+    ("robot: {a_max: 0}", "(robot.a_max: must be a finite number in (0, 100] m/s^2, got 0)"),  # a tour of nan, warnings
+    ("robot: {v_max: [1, 2]}", "(robot.v_max: must be a finite number in (0, 10] m/s, got [1, 2])"),  # internal error
+    ("robot: {pause_s: [5, 1]}", "(robot.pause_s: the shortest pause must not exceed the longest, got [5, 1])"),
+    ("robot: {pause_s: [1, 2, 3]}", "(robot.pause_s: must be two numbers of seconds [shortest, longest], got (1, 2, 3))"),
+    ("odometry: {alpha1: x}", "(odometry.alpha1: must be a finite number in [0, 10], got 'x')"),  # internal error (numpy)
+    ("odometry: {alpha2: 1.0e300}", "(odometry.alpha2: must be a finite number in [0, 10], got 1e+300)"),  # ran, silently
+    # a misplaced or unknown key: "'int' object is not iterable", "RobotLimits.__init__() got an unexpected keyword
+    # argument 'bogus'"; at the top, the allowed keys but not where the key belongs
+    ("robot: {pause_s: 5}", "(robot.pause_s: must be two numbers of seconds [shortest, longest], got 5)"),
+    ("robot: {bogus: 1}", "(robot: unknown field(s) ['bogus']; robot: has v_max, a_max, w_max, alpha_max, radius, pause_s)"),
+    ("odometry: {alpha5: 1}", "(odometry: unknown field(s) ['alpha5']; odometry: has alpha1, alpha2, alpha3, alpha4)"),
+    ("sensor: {noise: 1}", "(sensor: unknown field(s) ['noise']; sensor: has n_beams, resolution_deg, units, noise_sigma, "),
+    ("pause_s: 5", "(unknown key(s) ['pause_s']; a simulate config has ['clutter', 'duration', 'odometry', 'rate_hz', "
+                   "'robot', 'seed', 'sensor', 'world']; pause_s belongs under robot: (robot: {pause_s: ...}))"),
 ])
 def test_simulate_config_robot_and_odometry_values_are_checked(section, expected, tmp_path, capsys):
     """`simulate --config` checked the run's and the sensor's values but not the robot's limits nor
@@ -986,7 +994,8 @@ def test_simulate_config_robot_and_odometry_values_are_checked(section, expected
     (tmp_path / "run.yaml").write_text(f"world: office\nseed: 0\nduration: 1\n{section}\n")
     assert run_main(["simulate", "--config", str(tmp_path / "run.yaml"), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"lmsbench simulate: error: {tmp_path / 'run.yaml'}: not a simulate config {expected}"]
+    assert len(err) == 1 and err[0].startswith(f"lmsbench simulate: error: {tmp_path / 'run.yaml'}: not a simulate config {expected}")
+    assert err[0].endswith(")")
     assert not (tmp_path / "o").exists()
 
 
