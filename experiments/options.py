@@ -35,7 +35,10 @@ def known_worlds() -> tuple[str, ...]:
     return tuple(WORLD_NAMES)
 
 
-_LONG_QUOTED = re.compile(r"'([^'\n]{%d,})'" % 80)
+#: a quoted value of 80 characters or more: the opening quote not after a letter or digit, the closing
+#: one not before one, so an apostrophe ("don't", "the log's") is not taken for a quote (the text
+#: between it and a value's opening quote was cut instead of the value)
+_LONG_QUOTED = re.compile(r"(?<![\w'])'([^'\n]{%d,})'(?![\w'])" % 80)
 
 
 def shorten_quoted(message: str) -> str:

@@ -1032,6 +1032,19 @@ def test_a_long_value_is_shortened_in_the_error_line(argv, expected, tmp_path, c
     assert capsys.readouterr().err.strip().splitlines() == [expected]
 
 
+def test_an_apostrophe_is_not_taken_for_the_quote_of_a_long_value():
+    """shorten_quoted's pattern ran from the apostrophe of "don't" to the opening quote of the value:
+    it cut the words between them ("a long explana...re, got ' (112 characters)") and left the
+    100-digit value whole."""
+    from experiments.options import shorten_quoted
+
+    words = "don't give " + "a long explanation " * 5 + "here, the log's value: "
+    assert shorten_quoted(f"--x: {words}'{'9' * 100}'; it isn't one") == (
+        f"--x: {words}'{'9' * 40}...99999999' (100 characters); it isn't one")
+    assert shorten_quoted(f"--x: '{'w' * 100}' (the log's)") == f"--x: '{'w' * 40}...wwwwwwww' (100 characters) (the log's)"
+    assert shorten_quoted(words * 3) == words * 3  # apostrophes alone: nothing quoted, nothing cut
+
+
 @pytest.mark.parametrize("command", [["compare", "{good.clf}"], ["sweep", "{sweep.yaml}"], ["simulate", "--duration", "1"],
                                      ["slam", "{simrun}"], ["figures", "--tables", "{tables_broken}"]])
 @pytest.mark.parametrize("link", ["loop", "dangling", "loop/sub", "dangling/sub"])
