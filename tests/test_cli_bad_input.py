@@ -83,6 +83,8 @@ def files(tmp_path_factory):
     write_log(d / "range_min_2.clf", [Record(Scan(ranges, -np.pi / 2, np.pi / 360, 2.0, 8.183, 0.1 * k)) for k in range(3)])
     write_log(d / "far.clf", [Record(Scan.lms200(np.full(361, 6.0), stamp=0.1 * k)) for k in range(5)])
     (d / "zero_beams.clf").write_text("FLASER 0 0 0 0 0 0 0 0.0 host 0.0\n")  # was "needs 11 fields, got 11"
+    with gzip.open(d / "blank.clf.gz", "wb") as fh:  # of 1 GB of them: read to its end twice (> 40 s) for no laser line
+        fh.write(b"\n" * 100_001)
     with gzip.open(d / "good.clf.gz", "wt") as fh:
         fh.write((d / "good.clf").read_text())
     (d / "empty.yaml").write_text("# nothing set yet\n")
@@ -469,6 +471,9 @@ CASES = [
     (["compare", "{pipe.clf}", "--out", O], "pipe.clf: a pipe (such as <(zcat LOG)), not a file"),
     (["slam", "{pipe.clf}", "--out", O], "give the log file itself (gzip, bzip2 and xz logs are read as they are) or "
                                          "save the stream to a file first (zcat LOG > FILE)"),
+    (["info", "{blank.clf.gz}"], "blank.clf.gz:1: more than 100,000 blank or comment lines in a row from here on: not a "
+     "CARMEN log, or a damaged one"),
+    (["compare", "{blank.clf.gz}", "--out", O], "blank.clf.gz:1: more than 100,000 blank or comment lines in a row"),
     # an impossible date: "internal error: ValueError: day is out of range for month"
     (["simulate", "--config", "{run_date.yaml}", "--out", O], "run_date.yaml: not valid YAML (line 2, column 7: "
      "'2025-02-30' is not a valid date or time (day is out of range for month))"),

@@ -231,6 +231,28 @@ def test_a_large_text_file_that_is_no_log_is_refused_after_its_first_lines(tmp_p
     assert len(list(read_log(late))) == 1
 
 
+def test_a_log_of_blank_lines_is_refused_after_a_bounded_run(tmp_path: Path) -> None:
+    """A gzip of 100 MB of blank lines (10^8 of them) was read to its end twice, 48 s, to say it held
+    no laser line: blank and comment lines were not counted by the first lines' check. A run of more
+    than MAX_BLANK_RUN of them is an error at its first line, also after records (0.3 s at 100 MB);
+    a log with comments and blank lines below the bound reads."""
+    from lms200.carmen import MAX_BLANK_RUN
+
+    assert MAX_BLANK_RUN == 100_000
+    with gzip.open(tmp_path / "blank.clf.gz", "wb") as fh:
+        fh.write(b"\n" * (MAX_BLANK_RUN + 1))
+    for skip in (False, True):
+        with pytest.raises(LogFormatError, match=r"blank.clf.gz:1: more than 100,000 blank or comment lines in a row "
+                                                 r"from here on: not a CARMEN log, or a damaged one"):
+            list(read_log(tmp_path / "blank.clf.gz", skip_bad_lines=skip))
+    gap = write(tmp_path, "gap.log", [flaser(181), "# a comment", *[""] * (MAX_BLANK_RUN - 1), flaser(181),
+                                      *["# x"] * (MAX_BLANK_RUN + 1), flaser(181)])
+    got = []
+    with pytest.raises(LogFormatError, match=rf"gap.log:{MAX_BLANK_RUN + 3}: more than 100,000 blank or comment"):
+        got.extend(read_log(gap))
+    assert len(got) == 2  # the two scans before the run
+
+
 def test_inf_count_does_not_stop_skip_bad_lines(tmp_path: Path) -> None:
     lines = [flaser(180, stamp=t) for t in range(5)]
     lines[2] = lines[2].replace("FLASER 180", "FLASER inf", 1)
