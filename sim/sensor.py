@@ -22,6 +22,7 @@ import numpy as np
 from lms200 import LmsbenchError
 from lms200.errors import InputError
 from lms200.codes import LMS200_MAX_RANGE, metres_per_unit
+from lms200.laser_geometry import MIN_RANGE_MAX_M
 from lms200.timing import MIRROR_TURN_S, scan_period, turns_per_scan
 
 NOISE_REFERENCE_RANGE_M = 2.5  # m: noise_sigma holds at this range (the middle of 1-4 m)
@@ -154,8 +155,10 @@ class SensorConfig:
             value = getattr(self, name)
             if not (value == 0 or value >= MIN_PATCH_M):
                 raise InputError(f"{name}: must be 0 (beam by beam) or a cell size >= {MIN_PATCH_M:g} m, got {value}")
-        if self.max_reading is not None and not 0 < self.max_reading <= self.range_max:
-            raise InputError(f"max_reading: must be in (0, range_max = {self.range_max}], got {self.max_reading}")
+        if self.max_reading is not None and not MIN_RANGE_MAX_M <= self.max_reading <= self.range_max:
+            # 1e-320 (a subnormal) logged every reading as 1e-320 m: no laser's cap is under 0.1 m
+            raise InputError(f"max_reading: must be in [{MIN_RANGE_MAX_M:g}, range_max = {self.range_max}] m, "
+                             f"got {self.max_reading}")
 
     # -- presets ------------------------------------------------------------------------------
     @classmethod

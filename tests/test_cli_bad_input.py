@@ -134,6 +134,7 @@ def files(tmp_path_factory):
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
     (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
     (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
+    (d / "sensor_cap.yaml").write_text("max_reading: 1.0e-320\n")  # every reading logged as 1e-320 m
     laughs = "[" + ", ".join(["&c0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]"] + [f"&c{i} [" + ", ".join([f"*c{i - 1}"] * 10) + "]"
                                                                     for i in range(1, 9)]) + "]"
     (d / "sensor_laughs.yaml").write_text(f"noise_sigma: {laughs}\n")  # 10^9 values: the message's repr hung
@@ -514,6 +515,8 @@ CASES = [
     (["info", "{good.clf}", "--laser-range-max", "1e308"], "--laser-range-max: must be at most 10000 m"),
     # a subnormal (or a millimetre) max range: accepted, then every reading was invalid (info: 100 %)
     (["info", "{good.clf}", "--laser-range-max", "1e-320"], "--laser-range-max: must be at least 0.1 m"),
+    (["simulate", "--sensor", "{sensor_cap.yaml}", "--duration", "1", "--out", O],
+     "max_reading: must be in [0.1, range_max = 8.183] m, got 1e-320"),
     (["slam", "{good.clf}", "--laser-range-max", "0.001", "--out", O], "--laser-range-max: must be at least 0.1 m"),
     # not above the log's range_min (PARAM lmsbench_range_min 2.0): every laser line was malformed, one by one
     (["info", "{range_min_2.clf}", "--laser-range-max", "1.5", "--skip-bad-lines"],
