@@ -245,12 +245,13 @@ def check_file(path: str | os.PathLike, what: str = "a file") -> Path:
     return p
 
 
-def check_yaml(path: str | os.PathLike, what: str = "a YAML file") -> Path:
-    """An existing, readable text file of at most ``lms200.yamlio.MAX_YAML_BYTES`` (YAML is parsed by
-    the caller, which names its errors)."""
+def check_yaml(path: str | os.PathLike, what: str = "a YAML file", sized: bool = True) -> Path:
+    """An existing, readable text file, of at most ``lms200.yamlio.MAX_YAML_BYTES`` when ``sized`` (a
+    file the user writes; not the sweep.yaml a sweep wrote, which lists a grid one value a line). YAML
+    is parsed by the caller, which names its errors."""
     p = check_file(path, what)
     _text_head(p, what)
-    too_big = size_problem(p.stat().st_size)
+    too_big = size_problem(p.stat().st_size) if sized else None
     if too_big:
         raise InputError(f"{p}: {too_big}")
     return p
@@ -470,7 +471,7 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
     if "status" not in table or not (table["status"] == "ok").any():
         raise InputError(f"--sweep {p}: no successful cell to plot ({len(table)} cells, all failed; "
                          "their `error` column says why)")
-    spec_path = check_yaml(p / "sweep.yaml", "the sweep.yaml `lmsbench sweep` writes beside its results")
+    spec_path = check_yaml(p / "sweep.yaml", "the sweep.yaml `lmsbench sweep` writes beside its results", sized=False)
     try:  # read for the plots' axes after the study: a damaged one was an internal error after the work
         spec = load_yaml(spec_path.read_text(encoding="utf-8"))
     except yaml.YAMLError as exc:
