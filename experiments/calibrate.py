@@ -47,6 +47,7 @@ import numpy as np
 from lms200 import LmsbenchError, read_log
 from lms200.errors import InputError
 from lms200.calibration import LogCalibration, calibrate_scans
+from lms200.laser_geometry import MIN_RANGE_MAX_M
 
 WIDTH_GRID_STEPS = (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)  # spot widths tried, in beam steps
 TAIL_GRID = (0.0, 0.1, 0.3)  # noise_tail_prob values tried
@@ -133,7 +134,7 @@ def base_sensor(cal: LogCalibration):
         n_beams=n_beams, resolution_deg=res, units=units, noise_sigma=float(sigma), quantise=cal.quantum_m > 0,
         dropout_prob=rate(cal.nan_rate), mixed_pixels=True, interlaced=res < 1.0,
         noise_sigma_per_m=float(slope), no_return_prob=rate(cal.no_return_rate),
-        outlier_prob=0.0, max_reading=float(cap) if cap is not None and cap <= range_max else None,
+        outlier_prob=0.0, max_reading=float(cap) if cap is not None and MIN_RANGE_MAX_M <= cap <= range_max else None,
     )
 
 

@@ -24,7 +24,7 @@ import yaml
 from lms200.carmen import COMPRESSION_SUFFIXES, PIPE_REASON, READ_ERRORS, archive_kind, compression, open_bytes
 from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
 from lms200.timing import MAX_DURATION_S, MIN_DURATION_S  # a simulated run's bounds (s)
-from lms200.yamlio import load as load_yaml
+from lms200.yamlio import load as load_yaml, size_problem
 
 
 
@@ -35,7 +35,10 @@ def known_worlds() -> tuple[str, ...]:
     return tuple(WORLD_NAMES)
 
 
-_LONG_QUOTED = re.compile(r"'([^'\n]{%d,})'" % 80)
+#: a quoted value of 80 characters or more: the opening quote not after a letter or digit, the closing
+#: one not before one, so an apostrophe ("don't", "the log's") is not taken for a quote (the text
+#: between it and a value's opening quote was cut instead of the value)
+_LONG_QUOTED = re.compile(r"(?<![\w'])'([^'\n]{%d,})'(?![\w'])" % 80)
 
 
 def shorten_quoted(message: str) -> str:
@@ -157,11 +160,17 @@ def world_name(text: str) -> str:
     return text
 
 
-def _head(path: Path, n: int = 4096) -> bytes:
+def _head(path: Path, n: int = 4096, what: str = "an input") -> bytes:
     """The first ``n`` bytes of a regular file. A pipe with no writer (``mkfifo``) hung the command
-    on open(); one with a writer (``<(zcat log.gz)``) would lose these bytes to the check."""
+    on open(); one with a writer (``<(zcat log.gz)``) would lose these bytes to the check. A pipe
+    (``--config <(cat x.yaml)``, ``--config /dev/stdin`` fed by a pipe) is refused saying why: a
+    file is checked before it is read."""
     if path.exists() and not path.is_dir() and not path.is_file():
-        raise InputError(f"{path}: not a regular file (a pipe, a device or a socket); give the file itself")
+        if stat.S_ISFIFO(path.stat().st_mode):
+            raise InputError(f"{path}: not a regular file but a pipe (<(cat FILE), /dev/stdin fed by a pipe, a FIFO): "
+                             f"{what} must be a regular file, as it is checked before it is read and a pipe's bytes "
+                             "are gone once read; give the file itself (or save the stream to a file first)")
+        raise InputError(f"{path}: not a regular file (a device or a socket); give the file itself")
     try:
         with open(path, "rb") as fh:
             return fh.read(n)
@@ -183,7 +192,7 @@ def _text_head(path: Path, what: str, utf8: bool = True) -> None:
     replaced) a byte that is not UTF-8 is text too, unless control bytes or bytes >= 0x80 make up
     more than MAX_ODD_BYTES of the head (a latin-1 comment in a log's first 4 KB refused a log
     that the same comment further down did not)."""
-    head = _head(path)
+    head = _head(path, what=what)
     kind = compression(head)
     named = COMPRESSION_SUFFIXES.get(path.suffix)
     if named and kind != named:
@@ -232,14 +241,19 @@ def check_file(path: str | os.PathLike, what: str = "a file") -> Path:
         raise InputError(_missing(p, "file"))
     if p.is_dir():
         raise InputError(f"{p} is a folder, not {what}")
-    _head(p, 1)
+    _head(p, 1, what)
     return p
 
 
-def check_yaml(path: str | os.PathLike, what: str = "a YAML file") -> Path:
-    """An existing, readable text file (YAML is parsed by the caller, which names its errors)."""
+def check_yaml(path: str | os.PathLike, what: str = "a YAML file", sized: bool = True) -> Path:
+    """An existing, readable text file, of at most ``lms200.yamlio.MAX_YAML_BYTES`` when ``sized`` (a
+    file the user writes; not the sweep.yaml a sweep wrote, which lists a grid one value a line). YAML
+    is parsed by the caller, which names its errors."""
     p = check_file(path, what)
     _text_head(p, what)
+    too_big = size_problem(p.stat().st_size) if sized else None
+    if too_big:
+        raise InputError(f"{p}: {too_big}")
     return p
 
 
@@ -457,7 +471,7 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
     if "status" not in table or not (table["status"] == "ok").any():
         raise InputError(f"--sweep {p}: no successful cell to plot ({len(table)} cells, all failed; "
                          "their `error` column says why)")
-    spec_path = check_yaml(p / "sweep.yaml", "the sweep.yaml `lmsbench sweep` writes beside its results")
+    spec_path = check_yaml(p / "sweep.yaml", "the sweep.yaml `lmsbench sweep` writes beside its results", sized=False)
     try:  # read for the plots' axes after the study: a damaged one was an internal error after the work
         spec = load_yaml(spec_path.read_text(encoding="utf-8"))
     except yaml.YAMLError as exc:

@@ -12,8 +12,9 @@ Files in the output folder:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
@@ -58,9 +59,12 @@ class SimulationConfig:
     def from_dict(cls, d: dict) -> "SimulationConfig":
         """The inverse of :meth:`to_dict`. Raises ValueError for a key this config does not have
         (a file of another kind would otherwise run the defaults) and for values of the wrong type."""
-        unknown = sorted(set(d) - SIMULATION_KEYS)
-        if unknown:
-            raise ValueError(f"unknown key(s) {unknown}; a simulate config has {sorted(SIMULATION_KEYS)}")
+        unknown = sorted(set(d) - SIMULATION_KEYS, key=str)
+        if unknown:  # a section's field at the top (`pause_s: 5`) is named with the section it belongs to
+            homes = [f"{key} belongs under {section}: ({section}: {{{key}: ...}})" for key in unknown
+                     for section, cls in SECTIONS.items() if key in {f.name for f in fields(cls)}]
+            raise ValueError(f"unknown key(s) {unknown}; a simulate config has {sorted(SIMULATION_KEYS)}"
+                             + (f"; {', '.join(homes)}" if homes else ""))
         seed = d.get("seed", 0)
         if isinstance(seed, bool) or not isinstance(seed, int):
             raise ValueError(f"seed: must be a whole number, got {seed!r}")
@@ -68,13 +72,32 @@ class SimulationConfig:
         if not isinstance(world, str):
             raise ValueError(f"world: must be a world's name or a world.json path, got {world!r}")
         robot = dict(_mapping(d, "robot"))
-        if "pause_s" in robot:
+        if isinstance(robot.get("pause_s"), list):  # YAML has no tuples; anything else RobotLimits refuses, naming it
             robot["pause_s"] = tuple(robot["pause_s"])
         duration, rate_hz, clutter = (_number(d, key) for key in ("duration", "rate_hz", "clutter"))
         return cls(world=world, seed=seed, duration=120.0 if duration is None else duration, rate_hz=rate_hz,
-                   sensor=SensorConfig(**_mapping(d, "sensor")),
-                   odometry=OdometryConfig(**d["odometry"]) if _mapping(d, "odometry") else None,
-                   robot=RobotLimits(**robot), clutter=clutter)
+                   sensor=_section(d, "sensor"),
+                   odometry=_section(d, "odometry") if _mapping(d, "odometry") else None,
+                   robot=_section({"robot": robot}, "robot"), clutter=clutter)
+
+
+SECTIONS = {"sensor": SensorConfig, "odometry": OdometryConfig, "robot": RobotLimits}  # key -> its config class
+
+
+def _section(d: dict, key: str) -> Any:
+    """The config of section ``key`` from its mapping; ValueError naming ``key.FIELD`` for a field the
+    section does not have (with the fields it has) or a bad value: `robot: {bogus: 1}` said
+    "RobotLimits.__init__() got an unexpected keyword argument 'bogus'", `robot: {pause_s: 5}`
+    "'int' object is not iterable"."""
+    cls, values = SECTIONS[key], _mapping(d, key)
+    known = [f.name for f in fields(cls)]
+    unknown = sorted((k for k in values if k not in known), key=str)
+    if unknown:
+        raise ValueError(f"{key}: unknown field(s) {unknown}; {key}: has {', '.join(known)}")
+    try:
+        return cls(**values)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{key}.{' '.join(str(exc).split())}") from None
 
 
 def _number(d: dict, key: str) -> float | None:

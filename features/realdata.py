@@ -56,13 +56,24 @@ class RealDataConfig:
         tolerance_m: fixed ray-residual tolerance of the explained fraction (m).
         n_sigma: noise-scaled tolerance, in range-noise sigmas.
         repeat_distance_m: rho tolerance of a line found again, and of the in-view test (m).
-        repeat_angle_rad: alpha tolerance of a line found again (rad).
+        repeat_angle_rad: alpha tolerance of a line found again (rad), in (0, pi].
+
+    Raises:
+        ConfigError: (an ``LmsbenchError``) naming the field, for a value that is not a finite
+            number > 0 (an angle in (0, pi] rad for ``repeat_angle_rad``): ``tolerance_m=-1``
+            explained nothing, ``"x"`` was a TypeError deep in the measures, both silently built.
     """
 
     tolerance_m: float = 0.03
     n_sigma: float = 3.0
     repeat_distance_m: float = 0.05
     repeat_angle_rad: float = math.radians(2.0)
+
+    def __post_init__(self) -> None:
+        checks.positive("tolerance_m", self.tolerance_m, "m")
+        checks.positive("n_sigma", self.n_sigma, "range-noise sigmas")
+        checks.positive("repeat_distance_m", self.repeat_distance_m, "m")
+        checks.angle("repeat_angle_rad", self.repeat_angle_rad, math.pi)
 
 
 def _lines(fs: FeatureSet | np.ndarray, name: str = "fs") -> np.ndarray:

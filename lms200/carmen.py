@@ -80,6 +80,9 @@ DEFAULT_TOPIC_LINES = 10_000  # lines looked at to choose the default laser kind
 _MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]{2,}")  # how every CARMEN message line starts (ODOM, PARAM, FLASER, ...; a lone capital in binary junk is none)
 ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
 MAX_LINE_CHARS = 1 << 20  # a longer line is malformed (bounds memory on damaged files)
+#: most blank or comment lines in a row a log may hold: a log's header comments are tens of lines, and a
+#: gzip of 100 MB of blank lines was read twice to its end (48 s) to say it held no laser line
+MAX_BLANK_RUN = 100_000
 READ_ERRORS = (OSError, EOFError, zlib.error, lzma.LZMAError)  # what damaged or truncated compressed data raises
 # compressed logs are read in place, told apart by their first bytes (not their names)
 COMPRESSIONS = {"gzip": (b"\x1f\x8b", gzip.open), "bzip2": (b"BZh", bz2.open), "xz": (b"\xfd7zXZ\x00", lzma.open)}
@@ -207,10 +210,14 @@ class CarmenReader:
         try:
             with open_text(self.path) as f:
                 start = True  # this piece starts a line
+                blank = 0  # blank or comment lines in a row: the count ends after MAX_BLANK_RUN
                 for piece in iter(lambda: f.readline(4096), ""):
                     words = piece[:24].split(None, 1) if start else []
                     if words and words[0] in LASER_KINDS:
                         counts[words[0]] = counts.get(words[0], 0) + 1
+                    blank = blank + 1 if start and (not words or words[0].startswith("#")) else 0
+                    if blank > MAX_BLANK_RUN:
+                        break
                     start = piece.endswith("\n")
         except (*READ_ERRORS, UnicodeError):
             pass
@@ -255,6 +262,15 @@ class CarmenReader:
             raise LmsbenchError(f"{self.path}: its {kind} lines carry their own beam geometry; the override of "
                                 f"{', '.join(given)} (--laser-*-deg) applies to FLASER / RLASER lines only")
 
+    def _check_range_max(self, line_no: int, range_min: float) -> None:
+        """A range_max override not above the scans' range_min (``PARAM lmsbench_range_min``) is an
+        error of the override, not of every laser line (which it made malformed, one by one)."""
+        rmax = self.geometry.range_max
+        if rmax is not None and rmax <= range_min:
+            raise LmsbenchError(f"{self.path}:{line_no}: the range_max override ({rmax:g} m, --laser-range-max) is "
+                                f"not above this log's range_min ({range_min:g} m, PARAM {RANGE_MIN_PARAM}); "
+                                "give a larger one")
+
     def _survey(self) -> str | None:
         """The laser kind read by default: the first with poses up to ``DEFAULT_TOPIC_LINES`` lines
         after the first laser line, else the first RAWLASER kind, else None (no laser line).
@@ -265,6 +281,8 @@ class CarmenReader:
                 bounded time instead of being read to its end for nothing.
         """
         raw, named, looked, since_raw = None, False, 0, 0
+        blank = _BlankRun(self.path)
+        line_no = 0
         try:
             with open_text(self.path) as f:
                 # junk is told after DEFAULT_TOPIC_LINES lines; a log is looked at until its first laser
@@ -273,10 +291,13 @@ class CarmenReader:
                     line = f.readline(4096)  # the first word is enough; a longer line goes on as pieces
                     if not line:
                         break
+                    line_no += 1  # pieces of a long line count as lines here: only a bound's place
                     words = line[:24].split(None, 1)
                     kind = words[0] if words else ""
                     if not kind or kind.startswith("#"):
+                        blank.see(line_no)
                         continue
+                    blank.reset()
                     looked += 1
                     since_raw += raw is not None
                     named = named or _MESSAGE_NAME.fullmatch(kind) is not None
@@ -303,10 +324,13 @@ class CarmenReader:
         has_odometry = True
         params: dict[str, float] = {}
         counts: dict[tuple[str, str, str], tuple[int, int]] = {}  # ROBOTLASER header -> (beams, first line)
+        blank = _BlankRun(self.path)
         for line_no, line in self._lines():
             words = line.split()
             if not words or words[0].startswith("#"):
+                blank.see(line_no)
                 continue
+            blank.reset()
             kind = words[0]
             stats.messages[kind] = stats.messages.get(kind, 0) + 1
             try:
@@ -324,6 +348,7 @@ class CarmenReader:
                         self._check_override(kind)
                     if kind != stats.laser:
                         continue
+                    self._check_range_max(line_no, params.get(RANGE_MIN_PARAM, 0.0))
                     odom: Pose2D | None
                     if kind in ("FLASER", "RLASER"):
                         geometry = self.geometry.merged(laser_geometry.from_params(kind, params))
@@ -345,6 +370,24 @@ class CarmenReader:
             # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
             others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())
             raise InputError(f"topic: {self.path} has no {self.topic} lines; its laser lines: {others}")
+
+
+class _BlankRun:
+    """Blank or comment lines in a row; more than MAX_BLANK_RUN is a LogFormatError at the first of
+    them (a gzip of 100 MB of blank lines was read twice to its end, 48 s, to say it held no laser line)."""
+
+    def __init__(self, path: Path) -> None:
+        self.path, self.first, self.count = path, 0, 0
+
+    def see(self, line_no: int) -> None:
+        self.first = self.first if self.count else line_no
+        self.count += 1
+        if self.count > MAX_BLANK_RUN:
+            raise LogFormatError(self.path, self.first, f"more than {MAX_BLANK_RUN:,} blank or comment lines in a row "
+                                 "from here on: not a CARMEN log, or a damaged one (a log's comments are a few lines)")
+
+    def reset(self) -> None:
+        self.count = 0
 
 
 def _param(words: list[str], params: dict[str, float], units: Units | None,

@@ -58,6 +58,7 @@ from .protocol import (
 from .scan import Scan
 
 PROBE_BAUDS = (9600, 19200, 38400, 500000)
+MAX_TIMEOUT_S = 60.0  # longest wait for a reply (s): a device takes 3 s at most (mode changes); 1e9 waited for ever
 _READ_POLL_S = 0.01  # longest blocking read (s)
 _SHORT_REPLY_BYTES = 64  # every reply but 0xB0 fits (the 0xF7 configuration reply is 41 bytes)
 _READ_CHUNK = 4096  # bytes asked for when the port cannot tell how many are waiting
@@ -119,6 +120,9 @@ class LMS200:
             raise ValueError(f"units: must be 'mm' or 'cm', got {units!r}")
         if retries < 1:
             raise ValueError(f"retries: must be >= 1, got {retries}")
+        for name, value in (("timeout", timeout), ("mode_timeout", mode_timeout)):
+            if not 0 < value <= MAX_TIMEOUT_S:  # also nan
+                raise ValueError(f"{name}: must be in (0, {MAX_TIMEOUT_S:g}] s, got {value}")
         self.port = port_or_url
         self.target_baud = baud
         self.units: Units = units

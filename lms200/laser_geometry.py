@@ -39,6 +39,9 @@ CONVENTION_FOV_DEG = 180.0  # CARMEN's assumed field of view of a FLASER scan wi
 FIT_TOLERANCE_BEAMS = 0.25  # a declared fov / resolution must give the count to within this many beams
 
 MAX_RANGE_M = 10_000.0  # m: the largest range_max accepted (long-range 2-D lidars reach ~300 m)
+#: m: the smallest range_max accepted: no laser rangefinder's maximum range is shorter (the shortest-range
+#: 2-D scanners reach 2-4 m); ``range_max: 1e-320`` (a subnormal) or 0.001 made every reading invalid, silently
+MIN_RANGE_MAX_M = 0.1
 ANGLE_FIELDS = ("fov", "resolution", "angle_min")
 
 
@@ -68,7 +71,7 @@ class LaserGeometry:
             it for the even-count convention (see the module docstring).
         resolution: angle between neighbouring beams (rad), > 0.
         angle_min: bearing of beam 0 (rad, sensor frame, CCW); None = centred on the x axis.
-        range_max: largest valid range (m), > 0.
+        range_max: largest valid range (m), in [MIN_RANGE_MAX_M, MAX_RANGE_M] = [0.1, 10000] m.
     """
 
     fov: float | None = None
@@ -94,6 +97,9 @@ class LaserGeometry:
                 raise ValueError(f"{name}: must be at most 2 pi rad (360 deg), got {shown}")
             if name == "angle_min" and abs(value) > 2 * math.pi + 1e-9:
                 raise ValueError(f"{name}: a bearing must be within +-2 pi rad (+-360 deg), got {shown}")
+            if name == "range_max" and value < MIN_RANGE_MAX_M:
+                raise ValueError(f"{name}: must be at least {MIN_RANGE_MAX_M:g} m (no laser rangefinder's maximum range "
+                                 f"is shorter; with it every reading would be invalid), got {shown}")
             if name == "range_max" and value > MAX_RANGE_M:
                 raise ValueError(f"{name}: must be at most {MAX_RANGE_M:g} m (no 2-D rangefinder reaches farther), "
                                  f"got {shown}")

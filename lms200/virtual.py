@@ -64,6 +64,7 @@ from .protocol import (
 )
 from .scan import Scan
 
+MAX_TIME_SCALE = 100.0  # slowest emulation: 100x slower than the device (1e9 took days a telegram)
 MIRROR_PERIOD_S = 1.0 / 75.0  # one mirror turn: a 1 deg scan every 13.3 ms
 TYPE_STRING = b"LMS200;301063;V02.10 "
 SOURCE_GRID_DEG = (-90.0, 0.5, 361)  # every scan source is resampled onto the 0.5 deg frame
@@ -153,7 +154,8 @@ class VirtualLMS200:
         source: scans to report (any iterable of :class:`Scan`; each is resampled onto the 0.5 deg
             frame). When it runs out, the device reports no more scans.
         address: device address (replies go to address + 0x80).
-        time_scale: multiplies every byte time and device delay (1 = real time, 0.01 = 100x faster).
+        time_scale: multiplies every byte time and device delay (1 = real time, 0.01 = 100x faster), in
+            (0, MAX_TIME_SCALE] = (0, 100].
         timing: device delays; faults: fault injection.
         units, variant: power-on unit mode and (field of view deg, resolution 1/100 deg).
     """
@@ -168,8 +170,8 @@ class VirtualLMS200:
         units: Units = "cm",
         variant: tuple[int, int] = (180, 50),
     ) -> None:
-        if not time_scale > 0:
-            raise ValueError(f"time_scale: must be > 0, got {time_scale}")
+        if not 0 < time_scale <= MAX_TIME_SCALE:  # also nan
+            raise ValueError(f"time_scale: must be in (0, {MAX_TIME_SCALE:g}], got {time_scale}")
         if variant not in VARIANTS:
             raise ValueError(f"variant: {variant} is not an LMS200 variant")
         self._source: Iterator[Scan] = iter(source)

@@ -7,7 +7,9 @@ on: a key given twice in one mapping (PyYAML kept the last, so ``noise_sigma: 0.
 further down by ``noise_sigma: 0.5`` simulated the second without a word; YAML 1.2 forbids it),
 nesting too deep for Python's recursion limit (a RecursionError, not a YAML error), and aliases
 that expand a document to billions of values or into itself (a "billion laughs": fine to
-PyYAML, which shares the objects, but endless to the ``repr`` of an error message). All
+PyYAML, which shares the objects, but endless to the ``repr`` of an error message), and a
+scalar its tag cannot make (an impossible date, ``seed: 2025-02-30``, or ``!!float abc``: Python's
+ValueError, without the file or line). All
 raise ``yaml.YAMLError`` with the line, as any malformed YAML does; PyYAML's own errors are
 re-raised as :class:`Malformed`, one line that starts with the place ("line 2, column 1: ...")."""
 
@@ -31,6 +33,29 @@ Loader.add_implicit_resolver(
                    |[-+]?\.[0-9_]+(?:[eE][-+]?[0-9]+)?)$""", re.X),
     list("-+0123456789."),
 )
+
+
+def _construct_object(loader: Loader, node: yaml.Node, deep: bool = False) -> Any:
+    """SafeLoader's construction, with a scalar that its tag cannot make a YAML error at its line
+    and column: an impossible date (``seed: 2025-02-30``, "day is out of range for month") or an
+    explicit tag's bad value (``!!float abc``) was Python's ValueError, an internal error without
+    the file, line or field; an int of more than 4300 digits says so."""
+    try:
+        return yaml.SafeLoader.construct_object(loader, node, deep=deep)
+    except (ValueError, TypeError, AttributeError, OverflowError) as exc:
+        if not isinstance(node, yaml.ScalarNode):
+            raise
+        kind = str(node.tag).rsplit(":", 1)[-1]
+        shown = node.value if len(node.value) <= 40 else f"{node.value[:30]}...({len(node.value)} characters)"
+        if isinstance(exc, ValueError) and "digits" in str(exc):  # int("9" * 5000): Python's limit
+            problem = f"a whole number of more than {sys.get_int_max_str_digits()} digits"
+        else:
+            why = f" ({' '.join(str(exc).split())})" if isinstance(exc, (ValueError, OverflowError)) else ""
+            problem = f"{shown!r} is not a valid {'date or time' if kind == 'timestamp' else kind}{why}"
+        raise yaml.constructor.ConstructorError(None, None, problem, node.start_mark) from None
+
+
+Loader.construct_object = _construct_object  # type: ignore[method-assign,assignment]
 
 
 class DuplicateKey(yaml.YAMLError):
@@ -70,6 +95,21 @@ class AliasBomb(yaml.YAMLError):
 
 class SelfReference(yaml.YAMLError):
     """A value that holds itself through an alias (``&a [*a]``): endless to anything that walks it."""
+
+
+#: Largest YAML file read as a config or sweep (bytes), checked before it is parsed: PyYAML's
+#: pure-Python parser takes about 4 s a MiB, and a 1.5 MB sweep file took 81 s to be refused.
+#: The configs and sweeps of this project are a few KB; a grid of the most cells a sweep may have
+#: (100,000 values of one parameter) is 0.7 MB written as a list, ``k: [3, 4, ...]``.
+MAX_YAML_BYTES = 1 << 20
+
+
+def size_problem(size: int) -> str | None:
+    """Why a YAML file of ``size`` bytes is not read as a config or sweep (None: it may be)."""
+    if size <= MAX_YAML_BYTES:
+        return None
+    return (f"{size:,} bytes, more than the {MAX_YAML_BYTES:,} a config or sweep file may hold (refused unread; they "
+            "are a few KB: a sweep's grid lists the values of each parameter, not every cell)")
 
 
 #: Values a document may expand to through its aliases beyond the size of its text (each value
@@ -155,9 +195,7 @@ def load(text: str) -> Any:
         raise
     except yaml.YAMLError as exc:
         raise _malformed(exc, text) from None
-    except ValueError as exc:  # int("9" * 5000): Python reads at most 4300 digits (sys.get_int_max_str_digits)
-        if "digits" not in str(exc):
-            raise
-        raise Malformed(f"a whole number of more than {sys.get_int_max_str_digits()} digits") from None
+    except ValueError as exc:  # a scalar's is a YAML error at its place (_construct_object); any other, without one
+        raise Malformed(" ".join(str(exc).split())) from None
     _check_expansion(doc, text)
     return doc

@@ -10,7 +10,7 @@ laser scanner for mobile robot obstacle negotiation", ICRA 2002 - mixed pixels a
 
 from __future__ import annotations
 
-from lms200.yamlio import load as load_yaml
+from lms200.yamlio import load as load_yaml, size_problem
 
 import os
 from dataclasses import asdict, dataclass, fields, replace
@@ -22,6 +22,7 @@ import numpy as np
 from lms200 import LmsbenchError
 from lms200.errors import InputError
 from lms200.codes import LMS200_MAX_RANGE, metres_per_unit
+from lms200.laser_geometry import MIN_RANGE_MAX_M
 from lms200.timing import MIRROR_TURN_S, scan_period, turns_per_scan
 
 NOISE_REFERENCE_RANGE_M = 2.5  # m: noise_sigma holds at this range (the middle of 1-4 m)
@@ -154,8 +155,10 @@ class SensorConfig:
             value = getattr(self, name)
             if not (value == 0 or value >= MIN_PATCH_M):
                 raise InputError(f"{name}: must be 0 (beam by beam) or a cell size >= {MIN_PATCH_M:g} m, got {value}")
-        if self.max_reading is not None and not 0 < self.max_reading <= self.range_max:
-            raise InputError(f"max_reading: must be in (0, range_max = {self.range_max}], got {self.max_reading}")
+        if self.max_reading is not None and not MIN_RANGE_MAX_M <= self.max_reading <= self.range_max:
+            # 1e-320 (a subnormal) logged every reading as 1e-320 m: no laser's cap is under 0.1 m
+            raise InputError(f"max_reading: must be in [{MIN_RANGE_MAX_M:g}, range_max = {self.range_max}] m, "
+                             f"got {self.max_reading}")
 
     # -- presets ------------------------------------------------------------------------------
     @classmethod
@@ -215,8 +218,14 @@ class SensorConfig:
         p = Path(path)
         if p.is_dir():  # was "no such sensor file"
             raise InputError(f"{p} is a folder, not a sensor YAML")
+        if p.exists() and not p.is_file():  # a pipe (--sensor <(cat s.yaml)) was "no such sensor file"
+            raise InputError(f"{p}: not a regular file (a pipe, a device or a socket): a sensor YAML must be a regular "
+                             "file; give the file itself (or save the stream to a file first)")
         if not p.is_file():
             raise LmsbenchError(f"{p}: no such sensor file")
+        too_big = size_problem(p.stat().st_size)
+        if too_big:
+            raise InputError(f"{p}: {too_big}")
         try:
             d = load_yaml(p.read_text(encoding="utf-8"))
         except (yaml.YAMLError, UnicodeDecodeError) as exc:

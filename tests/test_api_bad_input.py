@@ -731,6 +731,12 @@ def test_the_real_data_and_scoring_helpers_name_a_bad_argument() -> None:
         (lambda: repeat_counts(fs, pose, fs, (0.0, np.nan, 0.0), scan), "^pose_b: must be finite"),
         (lambda: repeat_counts(fs, pose, fs, pose, scan, {"tolerance_m": 1}), "^config: must be a features.realdata.RealDataConfig"),
         (lambda: scan_measures(fs, scan, 0.005, {"tolerance_m": 1}), "^config: must be a features.realdata.RealDataConfig"),
+        # RealDataConfig's fields were not checked: -1 explained nothing, "x" was a TypeError in the measures
+        (lambda: RealDataConfig(tolerance_m=-1), r"^tolerance_m: must be a finite number > 0 m, got -1$"),
+        (lambda: RealDataConfig(n_sigma=np.nan), r"^n_sigma: must be a finite number > 0 range-noise sigmas, got nan$"),
+        (lambda: RealDataConfig(repeat_distance_m="x"), r"^repeat_distance_m: must be a finite number > 0 m, got 'x'$"),
+        (lambda: RealDataConfig(repeat_angle_rad=90), r"^repeat_angle_rad: must be an angle in \(0, 3.14159\] rad, got 90$"),
+        (lambda: RealDataConfig(repeat_angle_rad=True), r"^repeat_angle_rad: must be an angle in \(0, 3.14159\] rad, got True$"),
         (lambda: scan_measures(None, scan, 0.005), "^fs: expected a features.FeatureSet, got NoneType$"),
         (lambda: truncated_normal_rms(None, 0.03), "^sigma, tolerance: must be finite numbers > 0 m, got None and 0.03$"),  # TypeError
         (lambda: truncated_normal_rms(np.inf, 0.03), "^sigma, tolerance: must be finite numbers > 0 m"),  # ZeroDivisionError
@@ -758,8 +764,10 @@ def test_the_real_data_and_scoring_helpers_name_a_bad_argument() -> None:
     for name, value in scores[0].items():
         for other in scores[1:]:
             np.testing.assert_array_equal(value, other[name], err_msg=name)
+    from features.errors import ConfigError
+
     for call, message in bad:
-        with pytest.raises((InputError, ScanTypeError), match=message) as info:
+        with pytest.raises((InputError, ScanTypeError, ConfigError), match=message) as info:
             call()
         assert isinstance(info.value, LmsbenchError)
     # the good calls give what they gave

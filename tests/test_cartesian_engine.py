@@ -142,3 +142,31 @@ def test_merged_rms_within_its_slack_of_fit_range() -> None:
             exact = engine.exact_rms(*sums, s, e)
             worst = max(worst, abs(approx - exact) / slack)
     assert worst < 0.01
+
+
+def test_length_at_least_decides_as_hypot() -> None:
+    """The segment length test (sqrt of the squares, hypot only near the limit or outside the
+    normal range of squares) decides as the compiled ``math.hypot(dx, dy) >= limit`` it replaced
+    (libm's hypot; Python's own math.hypot rounds differently in the last ulp) on lengths at the
+    limit to the last ulp, tiny, huge, zero and nan lengths and limits."""
+    import math
+
+    from features.baselines import engine
+    from lms200.numba_required import numba
+
+    hypot_reaches = numba.njit(lambda dx, dy, limit: math.hypot(dx, dy) >= limit)
+
+    rng = np.random.default_rng(7)
+    cases = []
+    for _ in range(3000):
+        limit = float(10 ** rng.uniform(-3, 3))
+        a = rng.uniform(0, 2 * np.pi)
+        length = limit * float(1 + rng.choice([0.0, 1e-16, -1e-16, 3e-16, -3e-16, 1e-13, -1e-13, 1e-9]))
+        cases.append((length * math.cos(a), length * math.sin(a), limit))
+    cases += [(0.0, 0.0, 0.0), (0.0, 0.0, 1e-300), (1e-200, 0.0, 1e-300), (1e-200, 1e-200, 1.5e-200),
+              (1e200, 1e200, 1e200), (1e300, 1e300, np.inf), (np.inf, 0.0, 1.0), (np.nan, 1.0, 1.0),
+              (1.0, 1.0, np.nan), (3.0, 4.0, 5.0), (3.0, 4.0, 5.000000000000001), (3.0, 4.0, -1.0)]
+    got = [engine.length_at_least(dx, dy, lim) for dx, dy, lim in cases]
+    want = [hypot_reaches(dx, dy, lim) for dx, dy, lim in cases]
+    assert got == want
+    assert 0 < sum(want) < len(want)  # both outcomes met

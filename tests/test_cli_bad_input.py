@@ -80,8 +80,11 @@ def files(tmp_path_factory):
     write_log(d / "mixed.clf", [r for pair in zip(good, wide) for r in pair])
     odo = [Record(Scan.lms200(ranges, stamp=0.1 * k), odom=(0.1 * k, 0.0, 0.0)) for k in range(5)]
     write_log(d / "odo.bag", odo, fmt="bag")  # topics /scan and /odom
+    write_log(d / "range_min_2.clf", [Record(Scan(ranges, -np.pi / 2, np.pi / 360, 2.0, 8.183, 0.1 * k)) for k in range(3)])
     write_log(d / "far.clf", [Record(Scan.lms200(np.full(361, 6.0), stamp=0.1 * k)) for k in range(5)])
     (d / "zero_beams.clf").write_text("FLASER 0 0 0 0 0 0 0 0.0 host 0.0\n")  # was "needs 11 fields, got 11"
+    with gzip.open(d / "blank.clf.gz", "wb") as fh:  # of 1 GB of them: read to its end twice (> 40 s) for no laser line
+        fh.write(b"\n" * 100_001)
     with gzip.open(d / "good.clf.gz", "wt") as fh:
         fh.write((d / "good.clf").read_text())
     (d / "empty.yaml").write_text("# nothing set yet\n")
@@ -125,11 +128,13 @@ def files(tmp_path_factory):
     for name, change in bad_sweeps.items():
         (d / f"{name}.yaml").write_text(yaml.safe_dump({**base, **change}))
     (d / "list.yaml").write_text("- 1\n- 2\n")
+    (d / "huge.yaml").write_text("noise_sigma: 0.005\n# " + "x" * (1 << 20) + "\n")  # 1 MiB + 22 bytes: a sweep of it took 81 s
     (d / "sensor_text.yaml").write_text("mixed_gap: abc\n")
     (d / "sensor_flag.yaml").write_text("quantise: 3\n")
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
     (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
     (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
+    (d / "sensor_cap.yaml").write_text("max_reading: 1.0e-320\n")  # every reading logged as 1e-320 m
     laughs = "[" + ", ".join(["&c0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]"] + [f"&c{i} [" + ", ".join([f"*c{i - 1}"] * 10) + "]"
                                                                     for i in range(1, 9)]) + "]"
     (d / "sensor_laughs.yaml").write_text(f"noise_sigma: {laughs}\n")  # 10^9 values: the message's repr hung
@@ -143,6 +148,7 @@ def files(tmp_path_factory):
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
     (d / "badcolon.yaml").write_text("noise_sigma: 0.1\n  x: : 3\n")
     (d / "badalias.yaml").write_text("noise_sigma: *nope\n")
+    (d / "run_date.yaml").write_text("world: office\nseed: 2025-02-30\nduration: 2\n")  # an internal ValueError
     (d / "simbadyaml").mkdir()
     (d / "simbadyaml" / "config.yaml").write_text("sensor: {noise_sigma: 0.005\n")
     write_log(d / "simbadyaml" / "scans.clf", good)
@@ -400,6 +406,11 @@ CASES = [
     (["demo", "--inprocess", "--no-sweep", "--out", O], "--inprocess runs the demo's sweep in this process; --no-sweep"),
     (["figures", "--tables", "{tables_broken}", "--duration", "5", "--no-slam", "--out", O],
      "--duration, --no-slam set the study that --tables replaces; redrawing from "),
+    # log options with --tables: ignored, the figures redrawn from the tables as they were
+    (["figures", "--tables", "{tables_broken}", "--topic", "FLASER", "--laser-range-max", "50", "--out", O],
+     "--topic, --laser-range-max do not apply to --tables: they say how to read the study's log (Fig. 9's Intel log), "
+     "and redrawing from "),
+    (["figures", "--tables", "{tables_broken}", "--skip-bad-lines", "--out", O], "--skip-bad-lines does not apply to --tables"),
     # one scan kept: the whole comparison ran, then "internal error: ValueError: ate: fewer than 2 estimated poses"
     (["figures", "--duration", "0.5", "--rate-hz", "2", "--out", O], "--duration 0.5 at --rate-hz 2 keeps 1 scan(s) of "
      "the simulated run; the SLAM (Fig. 10) needs two or more (a longer run or a higher rate, or --no-slam)"),
@@ -431,6 +442,8 @@ CASES = [
     (["lms200", "emulate", "--tcp", "-1"], "--tcp"),
     (["lms200", "emulate", "--duration", "-5"], "--duration"),
     (["lms200", "emulate", "--time-scale", "0"], "--time-scale"),
+    # ran as long as asked: a byte time of days, a reply awaited for 31 years
+    (["lms200", "emulate", "--time-scale", "1e9"], "argument --time-scale: must be a finite number > 0 and <= 100, got '1e9'"),
     (["lms200", "emulate", "--seed", "-1"], "--seed"),
     (["lms200", "emulate", "--log", "{binary.clf}"], "binary"),
     (["lms200", "emulate", "--log", "{missing.clf}"], "missing.clf"),
@@ -438,6 +451,8 @@ CASES = [
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--duration", "-5"], "--duration"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--max-scans", "0"], "--max-scans"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--timeout", "0"], "--timeout"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--timeout", "1e9"],
+     "argument --timeout: must be a finite number > 0 and <= 60 s, got '1e9'"),
     (["lms200", "record", "--port", "loop://", "--out", "{missing_dir}/x.clf"], "missing_dir"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.txt"], ".txt"),
     (["lms200", "record", "--port", "loop://", "--out", "{a_file}/x.clf"], "a_file"),
@@ -457,9 +472,30 @@ CASES = [
     (["compare", "{pipe.clf}", "--out", O], "pipe.clf: a pipe (such as <(zcat LOG)), not a file"),
     (["slam", "{pipe.clf}", "--out", O], "give the log file itself (gzip, bzip2 and xz logs are read as they are) or "
                                          "save the stream to a file first (zcat LOG > FILE)"),
-    (["slam", "{good.clf}", "--config", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file (a pipe"),
-    (["simulate", "--world", "{pipe.json}", "--out", O], "pipe.json: not a regular file (a pipe"),
-    (["sweep", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file (a pipe"),
+    (["info", "{blank.clf.gz}"], "blank.clf.gz:1: more than 100,000 blank or comment lines in a row from here on: not a "
+     "CARMEN log, or a damaged one"),
+    (["compare", "{blank.clf.gz}", "--out", O], "blank.clf.gz:1: more than 100,000 blank or comment lines in a row"),
+    # an impossible date: "internal error: ValueError: day is out of range for month"
+    (["simulate", "--config", "{run_date.yaml}", "--out", O], "run_date.yaml: not valid YAML (line 2, column 7: "
+     "'2025-02-30' is not a valid date or time (day is out of range for month))"),
+    (["slam", "{good.clf}", "--config", "{run_date.yaml}", "--out", O], "run_date.yaml: not valid YAML (line 2, column 7: "),
+    (["sweep", "{run_date.yaml}", "--out", O], "run_date.yaml: not valid YAML: line 2, column 7: '2025-02-30' is not"),
+    # configs and sweep files over 1 MiB: refused unread (a 1.5 MB sweep file took 81 s to be refused)
+    (["sweep", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576 a config or sweep file "
+     "may hold (refused unread"),
+    (["slam", "{good.clf}", "--config", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576"),
+    (["simulate", "--sensor", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576"),
+    # a config through a pipe: refused, "(a pipe, a device or a socket)", without why
+    (["slam", "{good.clf}", "--config", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file but a pipe (<(cat FILE), "
+     "/dev/stdin fed by a pipe, a FIFO): a SLAM config.yaml must be a regular file, as it is checked before it is read"),
+    (["simulate", "--world", "{pipe.json}", "--out", O], "pipe.json: not a regular file but a pipe (<(cat FILE), "
+     "/dev/stdin fed by a pipe, a FIFO): a world.json must be a regular file"),
+    (["sweep", "{pipe.yaml}", "--out", O], "a sweep file must be a regular file"),
+    (["simulate", "--config", "{pipe.yaml}", "--out", O], "a simulate config.yaml must be a regular file"),
+    (["sim2real", "{good.clf}", "--sensor", "{pipe.yaml}", "--out", O], "a sensor YAML must be a regular file"),
+    (["simulate", "--sensor", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file (a pipe, a device or a socket): "
+     "a sensor YAML must be a regular file"),  # was "no such sensor file"
+    (["compare", "office:1", "--sensor", "{pipe.yaml}", "--out", O], "a sensor YAML must be a regular file"),
     (["calibrate", "{good.clf}", "--out", "{pipe.yaml}"], "pipe.yaml: not a regular file (a pipe, a device or a socket); give a file name"),
     (["info", "/dev/zero"], "/dev/zero: not a regular file"),
     (["info", "{bag_badmeta}"], "bag_badmeta/metadata.yaml: not valid YAML (line 2, column 1: expected ',' or ']'"),
@@ -477,6 +513,14 @@ CASES = [
     (["info", "{good.clf}", "--laser-angle-min-deg", "1000"], "--laser-angle-min-deg: a bearing must be within"),
     (["info", "{good.clf}", "--laser-angle-min-deg", "1e308"], "+-360 deg"),
     (["info", "{good.clf}", "--laser-range-max", "1e308"], "--laser-range-max: must be at most 10000 m"),
+    # a subnormal (or a millimetre) max range: accepted, then every reading was invalid (info: 100 %)
+    (["info", "{good.clf}", "--laser-range-max", "1e-320"], "--laser-range-max: must be at least 0.1 m"),
+    (["simulate", "--sensor", "{sensor_cap.yaml}", "--duration", "1", "--out", O],
+     "max_reading: must be in [0.1, range_max = 8.183] m, got 1e-320"),
+    (["slam", "{good.clf}", "--laser-range-max", "0.001", "--out", O], "--laser-range-max: must be at least 0.1 m"),
+    # not above the log's range_min (PARAM lmsbench_range_min 2.0): every laser line was malformed, one by one
+    (["info", "{range_min_2.clf}", "--laser-range-max", "1.5", "--skip-bad-lines"],
+     "range_min_2.clf:7: the range_max override (1.5 m, --laser-range-max) is not above this log's range_min (2 m"),
     (["info", "{good.clf}", "--laser-fov-deg", "-5"], "(-5 deg)"),
     (["compare", "{good.clf}", "--laser-resolution-deg", "1", "--out", O], "own beam geometry"),
     # calibrate
@@ -664,6 +708,30 @@ def test_a_log_through_process_substitution_is_refused_saying_why(files, tmp_pat
     assert len(err.splitlines()) == 1 and err.startswith(f"lmsbench {command[0]}: error: /dev/fd/{r}: a pipe "
                                                          "(such as <(zcat LOG)), not a file: a log is read more than once")
     assert err.endswith("or save the stream to a file first (zcat LOG > FILE)")
+
+
+@pytest.mark.parametrize("command, what", [(["slam", "{good.clf}", "--config"], "a SLAM config.yaml"),
+                                           (["simulate", "--config"], "a simulate config.yaml"),
+                                           (["sweep"], "a sweep file")])
+def test_a_config_through_process_substitution_is_refused_saying_why(files, tmp_path, capsys, command, what):
+    """`lmsbench slam LOG --config <(cat x.yaml)` (or `--config /dev/stdin` fed by a pipe) said "not a
+    regular file (a pipe, a device or a socket); give the file itself": now that a config must be a
+    regular file and why. Refused unread: the writer's bytes are still in the pipe."""
+    r, w = os.pipe()
+    os.write(w, b"slam: {preset: paper}\n")
+    try:
+        argv = [files.get(a[1:-1], a) if a.startswith("{") else a for a in command] + [f"/dev/fd/{r}", "--out", str(tmp_path / "o")]
+        assert run_main(argv) == 2
+        assert os.read(r, 8192) == b"slam: {preset: paper}\n"
+    finally:
+        os.close(w)
+        os.close(r)
+    err = capsys.readouterr().err.strip()
+    assert err.splitlines() == [f"lmsbench {command[0]}: error: /dev/fd/{r}: not a regular file but a pipe (<(cat FILE), "
+                                f"/dev/stdin fed by a pipe, a FIFO): {what} must be a regular file, as it is checked "
+                                "before it is read and a pipe's bytes are gone once read; give the file itself (or save "
+                                "the stream to a file first)"]
+    assert not (tmp_path / "o").exists()
 
 
 def test_two_logs_of_one_name_are_refused_before_any_work(files, tmp_path, capsys):
@@ -910,14 +978,22 @@ def test_compare_tells_worlds_from_files_by_name_for_sensor_as_for_seeds(tmp_pat
 
 
 @pytest.mark.parametrize("section, expected", [
-    ("robot: {v_max: 1.0e300}", "(v_max: must be a finite number in (0, 10] m/s, got 1e+300)"),  # planned for ever
-    ("robot: {v_max: -1}", "(v_max: must be a finite number in (0, 10] m/s, got -1)"),  # ran, silently
-    ("robot: {a_max: 0}", "(a_max: must be a finite number in (0, 100] m/s^2, got 0)"),  # a tour of nan, warnings
-    ("robot: {v_max: [1, 2]}", "(v_max: must be a finite number in (0, 10] m/s, got [1, 2])"),  # internal error
-    ("robot: {pause_s: [5, 1]}", "(pause_s: the shortest pause must not exceed the longest, got [5, 1])"),
-    ("robot: {pause_s: [1, 2, 3]}", "(pause_s: must be two numbers of seconds [shortest, longest], got (1, 2, 3))"),
-    ("odometry: {alpha1: x}", "(alpha1: must be a finite number in [0, 10], got 'x')"),  # internal error (numpy)
-    ("odometry: {alpha2: 1.0e300}", "(alpha2: must be a finite number in [0, 10], got 1e+300)"),  # ran, silently
+    ("robot: {v_max: 1.0e300}", "(robot.v_max: must be a finite number in (0, 10] m/s, got 1e+300)"),  # planned for ever
+    ("robot: {v_max: -1}", "(robot.v_max: must be a finite number in (0, 10] m/s, got -1)"),  # ran, silently
+    ("robot: {a_max: 0}", "(robot.a_max: must be a finite number in (0, 100] m/s^2, got 0)"),  # a tour of nan, warnings
+    ("robot: {v_max: [1, 2]}", "(robot.v_max: must be a finite number in (0, 10] m/s, got [1, 2])"),  # internal error
+    ("robot: {pause_s: [5, 1]}", "(robot.pause_s: the shortest pause must not exceed the longest, got [5, 1])"),
+    ("robot: {pause_s: [1, 2, 3]}", "(robot.pause_s: must be two numbers of seconds [shortest, longest], got (1, 2, 3))"),
+    ("odometry: {alpha1: x}", "(odometry.alpha1: must be a finite number in [0, 10], got 'x')"),  # internal error (numpy)
+    ("odometry: {alpha2: 1.0e300}", "(odometry.alpha2: must be a finite number in [0, 10], got 1e+300)"),  # ran, silently
+    # a misplaced or unknown key: "'int' object is not iterable", "RobotLimits.__init__() got an unexpected keyword
+    # argument 'bogus'"; at the top, the allowed keys but not where the key belongs
+    ("robot: {pause_s: 5}", "(robot.pause_s: must be two numbers of seconds [shortest, longest], got 5)"),
+    ("robot: {bogus: 1}", "(robot: unknown field(s) ['bogus']; robot: has v_max, a_max, w_max, alpha_max, radius, pause_s)"),
+    ("odometry: {alpha5: 1}", "(odometry: unknown field(s) ['alpha5']; odometry: has alpha1, alpha2, alpha3, alpha4)"),
+    ("sensor: {noise: 1}", "(sensor: unknown field(s) ['noise']; sensor: has n_beams, resolution_deg, units, noise_sigma, "),
+    ("pause_s: 5", "(unknown key(s) ['pause_s']; a simulate config has ['clutter', 'duration', 'odometry', 'rate_hz', "
+                   "'robot', 'seed', 'sensor', 'world']; pause_s belongs under robot: (robot: {pause_s: ...}))"),
 ])
 def test_simulate_config_robot_and_odometry_values_are_checked(section, expected, tmp_path, capsys):
     """`simulate --config` checked the run's and the sensor's values but not the robot's limits nor
@@ -926,7 +1002,8 @@ def test_simulate_config_robot_and_odometry_values_are_checked(section, expected
     (tmp_path / "run.yaml").write_text(f"world: office\nseed: 0\nduration: 1\n{section}\n")
     assert run_main(["simulate", "--config", str(tmp_path / "run.yaml"), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"lmsbench simulate: error: {tmp_path / 'run.yaml'}: not a simulate config {expected}"]
+    assert len(err) == 1 and err[0].startswith(f"lmsbench simulate: error: {tmp_path / 'run.yaml'}: not a simulate config {expected}")
+    assert err[0].endswith(")")
     assert not (tmp_path / "o").exists()
 
 
@@ -963,6 +1040,19 @@ def test_a_long_value_is_shortened_in_the_error_line(argv, expected, tmp_path, c
     assert capsys.readouterr().err.strip().splitlines() == [expected]
 
 
+def test_an_apostrophe_is_not_taken_for_the_quote_of_a_long_value():
+    """shorten_quoted's pattern ran from the apostrophe of "don't" to the opening quote of the value:
+    it cut the words between them ("a long explana...re, got ' (112 characters)") and left the
+    100-digit value whole."""
+    from experiments.options import shorten_quoted
+
+    words = "don't give " + "a long explanation " * 5 + "here, the log's value: "
+    assert shorten_quoted(f"--x: {words}'{'9' * 100}'; it isn't one") == (
+        f"--x: {words}'{'9' * 40}...99999999' (100 characters); it isn't one")
+    assert shorten_quoted(f"--x: '{'w' * 100}' (the log's)") == f"--x: '{'w' * 40}...wwwwwwww' (100 characters) (the log's)"
+    assert shorten_quoted(words * 3) == words * 3  # apostrophes alone: nothing quoted, nothing cut
+
+
 @pytest.mark.parametrize("command", [["compare", "{good.clf}"], ["sweep", "{sweep.yaml}"], ["simulate", "--duration", "1"],
                                      ["slam", "{simrun}"], ["figures", "--tables", "{tables_broken}"]])
 @pytest.mark.parametrize("link", ["loop", "dangling", "loop/sub", "dangling/sub"])
@@ -980,3 +1070,19 @@ def test_out_a_link_to_nothing_or_a_loop_is_refused_before_the_work(command, lin
     said = f"--out {out}: {bad}" if out != bad else f"--out {bad}"
     assert capsys.readouterr().err.strip().splitlines() == [
         f"lmsbench {command[0]}: error: {said}: a symbolic link to {target}, which does not exist (or a loop of links)"]
+
+
+def test_a_sweeps_own_big_sweep_yaml_is_read_for_its_plots(tmp_path):
+    """The 1 MiB bound is for files a user writes: the sweep.yaml a sweep of the most cells writes,
+    one grid value a line, is larger (1.2 MB here) and `figures --sweep DIR` still reads it."""
+    from experiments.options import check_sweep_results
+    from experiments.sweep.runner import spec_record
+    from experiments.sweep.spec import SweepSpec
+    from lms200.yamlio import MAX_YAML_BYTES
+
+    spec = SweepSpec.from_dict({"name": "t", "kind": "extract", "grid": {"extractor.ad_tau": [1.0 + i / 1e5 for i in range(100_000)]}})
+    (tmp_path / "sweep.yaml").write_text(spec_record(spec))
+    assert (tmp_path / "sweep.yaml").stat().st_size > MAX_YAML_BYTES
+    pd.DataFrame({"extractor.ad_tau": [1.0], "status": ["ok"], "error": [""], "cell": ["a"], "seed": [0]}).to_parquet(
+        tmp_path / "results.parquet")
+    assert check_sweep_results(tmp_path) == tmp_path

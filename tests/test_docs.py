@@ -72,3 +72,34 @@ def test_python_blocks_run(page: Path, tmp_path: Path, monkeypatch: pytest.Monke
     finally:  # a page's own MODULE:FUNCTION extractors do not stay registered for other tests
         for name in [n for n in registry._REGISTRY if ":" in n and n not in user]:
             del registry._REGISTRY[name]
+
+
+#: options each command refuses together (experiments.commands: "--workers sets the processes of the
+#: local cluster", "--inprocess runs the demo's sweep ...; --no-sweep skips it", "... that --tables replaces")
+REFUSED_TOGETHER = {
+    "sweep": [("--scheduler", "--inprocess"), ("--inprocess", "--workers"), ("--scheduler", "--workers")],
+    "demo": [("--no-sweep", "--inprocess")],
+    "figures": [("--tables", flag) for flag in ("--duration", "--rate-hz", "--seed", "--world", "--methods", "--intel",
+                                                 "--no-slam")],
+}
+
+
+def test_the_experiments_pages_usage_lines_match_the_parser() -> None:
+    """docs/experiments.md showed `sweep ... [--local] [--workers 2]`, two options the command
+    refuses together, as if they went together. Each usage line's options are the command's own,
+    and options refused together are written as alternatives (`A | B`)."""
+    from experiments.cli import build_parser
+
+    commands = next(a for a in build_parser()._actions if a.dest == "command").choices
+    rows = [line for line in (ROOT / "docs" / "experiments.md").read_text().splitlines() if line.startswith("| `lmsbench ")]
+    assert {row.split()[2] for row in rows} == set(REFUSED_TOGETHER)
+    for row in rows:
+        usage = row.split("`")[1]
+        name = usage.split()[1]
+        known = set(commands[name]._option_string_actions)
+        flags = re.findall(r"--[a-z][a-z0-9-]*", usage)
+        assert set(flags) <= known, (name, set(flags) - known)
+        for a, b in REFUSED_TOGETHER[name]:
+            if a in flags and b in flags:
+                between = usage[min(usage.index(a), usage.index(b)):max(usage.index(a), usage.index(b))]
+                assert "|" in between, f"{name}: {a} and {b} are refused together; the usage line shows them apart: {usage}"

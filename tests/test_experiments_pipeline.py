@@ -65,6 +65,10 @@ def test_the_figure_command_writes_every_named_figure_and_redraws_from_its_table
     # redraw from the saved tables alone: the same data beside the figures
     again = tmp_path / "again"
     assert main(["figures", "--tables", str(out / "tables"), "--out", str(again)]) == 0
+    # a log option with --tables was ignored (the figures redrawn as they were, exit 0): refused
+    capsys.readouterr()
+    assert main(["figures", "--tables", str(out / "tables"), "--laser-range-max", "50", "--out", str(tmp_path / "lr")]) == 2
+    assert "--laser-range-max does not apply to --tables" in capsys.readouterr().err and not (tmp_path / "lr").exists()
     for name in expected:
         for csv in sorted(out.glob(f"{name}*.csv")):
             pd.testing.assert_frame_equal(pd.read_csv(again / csv.name), pd.read_csv(csv))

@@ -180,3 +180,18 @@ def test_lost_baud_change_reply_is_checked_at_the_new_baud() -> None:
             assert dev.lost and dev.baud == 38400 and lms.baud == 38400
             assert len(next(lms.scans())) == 361
         assert dev.baud == 9600
+
+
+def test_a_reply_wait_or_time_scale_beyond_its_bound_is_refused_before_any_io():
+    """``timeout=1e9`` waited 31 years for a silent device, ``time_scale=1e9`` sent a byte every
+    few days: both are refused when built, naming the field and its bound (the CLI's --timeout and
+    --time-scale take the same bounds)."""
+    from lms200.driver import MAX_TIMEOUT_S
+    from lms200.virtual import MAX_TIME_SCALE
+
+    assert (MAX_TIMEOUT_S, MAX_TIME_SCALE) == (60.0, 100.0)
+    for kw in ({"timeout": 1e9}, {"mode_timeout": 61.0}, {"timeout": float("nan")}):
+        with pytest.raises(ValueError, match=rf"^{next(iter(kw))}: must be in \(0, 60\] s, got "):
+            LMS200("loop://", **kw)
+    with pytest.raises(ValueError, match=r"^time_scale: must be in \(0, 100\], got 1000000000"):
+        VirtualLMS200([], time_scale=1e9)

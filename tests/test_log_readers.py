@@ -124,6 +124,10 @@ def test_geometry_override() -> None:
     assert beam_angles(181, LaserGeometry(resolution=1 * DEG, angle_min=-45 * DEG)) == pytest.approx((-45 * DEG, DEG))
     with pytest.raises(ValueError, match="resolution: must be > 0"):
         LaserGeometry(resolution=0.0)
+    for tiny in (1e-320, 0.001):  # a subnormal or a millimetre: no laser's max range (every reading was invalid)
+        with pytest.raises(ValueError, match=r"^range_max: must be at least 0\.1 m .* got "):
+            LaserGeometry(range_max=tiny)
+    assert LaserGeometry(range_max=0.1).range_max == 0.1
     with pytest.raises(ValueError, match="more than 360 deg"):
         beam_angles(1000, LaserGeometry(resolution=1 * DEG))
 
@@ -225,6 +229,28 @@ def test_a_large_text_file_that_is_no_log_is_refused_after_its_first_lines(tmp_p
             list(read_log(junk, skip_bad_lines=skip))
     late = write(tmp_path, "late.log", ["ODOM 0 0 0 0 0 0 1 host 1"] * 12_000 + [flaser(181)])
     assert len(list(read_log(late))) == 1
+
+
+def test_a_log_of_blank_lines_is_refused_after_a_bounded_run(tmp_path: Path) -> None:
+    """A gzip of 100 MB of blank lines (10^8 of them) was read to its end twice, 48 s, to say it held
+    no laser line: blank and comment lines were not counted by the first lines' check. A run of more
+    than MAX_BLANK_RUN of them is an error at its first line, also after records (0.3 s at 100 MB);
+    a log with comments and blank lines below the bound reads."""
+    from lms200.carmen import MAX_BLANK_RUN
+
+    assert MAX_BLANK_RUN == 100_000
+    with gzip.open(tmp_path / "blank.clf.gz", "wb") as fh:
+        fh.write(b"\n" * (MAX_BLANK_RUN + 1))
+    for skip in (False, True):
+        with pytest.raises(LogFormatError, match=r"blank.clf.gz:1: more than 100,000 blank or comment lines in a row "
+                                                 r"from here on: not a CARMEN log, or a damaged one"):
+            list(read_log(tmp_path / "blank.clf.gz", skip_bad_lines=skip))
+    gap = write(tmp_path, "gap.log", [flaser(181), "# a comment", *[""] * (MAX_BLANK_RUN - 1), flaser(181),
+                                      *["# x"] * (MAX_BLANK_RUN + 1), flaser(181)])
+    got = []
+    with pytest.raises(LogFormatError, match=rf"gap.log:{MAX_BLANK_RUN + 3}: more than 100,000 blank or comment"):
+        got.extend(read_log(gap))
+    assert len(got) == 2  # the two scans before the run
 
 
 def test_inf_count_does_not_stop_skip_bad_lines(tmp_path: Path) -> None:

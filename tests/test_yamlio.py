@@ -53,7 +53,15 @@ LAUGHS = "[" + ", ".join(["&c0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]"] + [f"&c{i} [" + 
                                               "laughs'); write the values out"),
     ("a: &a [1, *a]\n", "SelfReference", "a value holds itself through an alias (&name ... *name inside it)"),
     ("a: &a {b: *a}\n", "SelfReference", "a value holds itself through an alias (&name ... *name inside it)"),
-    (f"a: {'9' * 5000}\n", "Malformed", "a whole number of more than 4300 digits"),  # was a ValueError
+    (f"a: {'9' * 5000}\n", "Malformed", "line 1, column 4: a whole number of more than 4300 digits"),  # was a ValueError
+    # a date that cannot be, or a tag's value it cannot make: Python's ValueError, an internal error at yamlio.load
+    ("seed: 2025-02-30\n", "Malformed", "line 1, column 7: '2025-02-30' is not a valid date or time (day is out of "
+                                       "range for month)"),
+    ("a: 1\nb: [2025-01-01, {c: 2025-13-01 10:00:00}]\n", "Malformed",
+     "line 2, column 21: '2025-13-01 10:00:00' is not a valid date or time (month must be in 1..12)"),
+    ("a: !!float abc\n", "Malformed", "line 1, column 4: 'abc' is not a valid float (could not convert string to "
+                                     "float: 'abc')"),
+    ("a: !!timestamp abc\n", "Malformed", "line 1, column 4: 'abc' is not a valid date or time"),  # an AttributeError
 ])
 def test_aliases_that_explode_or_loop_and_endless_numbers_are_refused(text: str, error: str, message: str) -> None:
     """A 'billion laughs' (nine lines of anchors, 10^9 values) loads at once, the objects shared;

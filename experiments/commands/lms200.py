@@ -12,12 +12,14 @@ from typing import Iterable, Iterator
 
 from lms200 import LmsbenchError, Record
 from lms200.carmen import write_carmen
-from lms200.driver import LMS200
+from lms200.driver import LMS200, MAX_TIMEOUT_S
 from lms200.protocol import BAUD_MODES
+from lms200.virtual import MAX_TIME_SCALE
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import PORT, SEED, InputError, check_log, check_out_file, count, path_arg, positive, text, world_name
+from experiments.options import (PORT, SEED, InputError, check_log, check_out_file, count, number, path_arg, positive, text,
+                                 world_name)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,7 +36,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--rfc2217", action="store_true", help="with --tcp: speak RFC 2217 (rfc2217://HOST:PORT), so the host sets the baud")
     e.add_argument("--host", type=text("an address, e.g. 127.0.0.1 or 0.0.0.0"), help="address to listen on with --tcp (default 127.0.0.1)")
     e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (the LMS200 ships in cm)")
-    e.add_argument("--time-scale", type=positive(), default=1.0, help="multiplies every byte time and device delay (0.01 = 100x faster)")
+    e.add_argument("--time-scale", type=number(0.0, MAX_TIME_SCALE, lo_open=True), default=1.0,
+                   help=f"multiplies every byte time and device delay (0.01 = 100x faster; at most {MAX_TIME_SCALE:g})")
     e.add_argument("--duration", type=positive("s"), help="stop after this many seconds (default: until Ctrl-C)")
     add_log_options(e)  # with --log
     e.set_defaults(func=run_emulate)
@@ -50,7 +53,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    choices=(1.0, 0.5, 0.25), help="angular resolution, deg (--resolution is the old spelling)")
     r.add_argument("--max-scans", type=count(1), help="stop after this many scans")
     r.add_argument("--duration", type=positive("s"), help="stop after this many seconds")
-    r.add_argument("--timeout", type=positive("s"), default=0.5, help="seconds to wait for a reply, on top of the line time")
+    r.add_argument("--timeout", type=number(0.0, MAX_TIMEOUT_S, lo_open=True, unit="s"), default=0.5,
+                   help=f"seconds to wait for a reply, on top of the line time (at most {MAX_TIMEOUT_S:g})")
     r.set_defaults(func=run_record)
 
 

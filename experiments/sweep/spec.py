@@ -31,10 +31,11 @@ parameter becomes a column of the result table, under the name written here.
 
 from __future__ import annotations
 
-from lms200.yamlio import load as load_yaml
+from lms200.yamlio import load as load_yaml, size_problem
 
 import hashlib
 import itertools
+from collections import Counter
 import json
 import math
 import re
@@ -146,6 +147,9 @@ class SweepSpec:
 def load_sweep(path: str | Path) -> SweepSpec:
     """Read and check a sweep YAML file."""
     path = Path(path)
+    too_big = size_problem(path.stat().st_size) if path.is_file() else None
+    if too_big:  # refused unread: a 1.5 MB file took 81 s to parse and check
+        raise SweepSpecError(f"{path}: {too_big}")
     try:
         raw = load_yaml(path.read_text())
     except yaml.YAMLError as exc:
@@ -185,8 +189,8 @@ def _check(spec: SweepSpec) -> None:
     if not re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", spec.name):
         raise SweepSpecError(f"name: {spec.name!r} must be a plain folder name (letters, digits, _ . -), "
                              "as it names the output folder results/sweeps/NAME")
-    names = [*spec.fixed, *(n for key in spec.grid for n in _names(key)), *spec.random]
-    clashes = sorted({n for n in names if names.count(n) > 1} | ({"seed"} & set(names)))
+    names = Counter([*spec.fixed, *(n for key in spec.grid for n in _names(key)), *spec.random])
+    clashes = sorted({n for n, times in names.items() if times > 1} | ({"seed"} & set(names)))  # one pass (count() was n^2)
     if clashes:
         raise SweepSpecError(f"parameter(s) {clashes} given twice (fixed/grid/random/seeds); give each once")
     for name, value in spec.fixed.items():

@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..angles import wrap_one as wrap  # one compiled wrap for both engines
-from ..jit import kernel
+from ..jit import inline_kernel, kernel
 from ..rows import append_rows, finish_rows, new_rows
 
 TRIM_TOL_SIGMA = 3.0  # end points farther than this many sigma from the fitted line are trimmed
@@ -87,7 +87,7 @@ class Fit(NamedTuple):
     across: float  # residual sum of squares across it, m^2
 
 
-@kernel
+@inline_kernel
 def moments(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     """(n, mean x, mean y, cxx, cyy, cxy) of points s..e (inclusive) from prefix sums: the count,
     centroid (m) and central second moments (m^2) every fit below starts from."""
@@ -101,7 +101,7 @@ def moments(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     return n, mx, my, cxx, cyy, cxy
 
 
-@kernel
+@inline_kernel
 def fit_range(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     """Total-least-squares line ``x cos(alpha) + y sin(alpha) = rho`` of points s..e (inclusive)
     from prefix sums (Arras & Siegwart 1997), a Fit."""
@@ -121,7 +121,7 @@ def fit_range(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     return Fit(rho, wrapped, c, si, n, mx, my, along, across)
 
 
-@kernel
+@inline_kernel
 def split_line(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     """(cos, sin, rho) of the total-least-squares line of points s..e: ``fit_range``'s line to
     rounding, without its arctangent, cosine and sine (the split test needs only distances to
@@ -144,14 +144,14 @@ def split_line(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     return c, si, rho
 
 
-@kernel
+@inline_kernel
 def exact_rms(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     """The RMS residual (m) of the total-least-squares line of points s..e (``fit_range``)."""
     f = fit_range(sx, sy, sxx, syy, sxy, s, e)
     return math.sqrt(f.across / f.n)
 
 
-@kernel
+@inline_kernel
 def merged_rms(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     """(``exact_rms`` of points s..e to rounding, a bound of its difference to it), for finite
     coordinates: the residual sum of squares as the smaller eigenvalue of the scatter matrix,
@@ -166,7 +166,7 @@ def merged_rms(sx, sy, sxx, syy, sxy, s, e):  # noqa: ANN001, ANN201
     return rms, math.sqrt(1e-12 * (abs(cxx) + abs(cyy) + 2.0 * abs(cxy)) / n) + 1e-12 * rms + 1e-300
 
 
-@kernel
+@inline_kernel
 def trim(x, y, s, e, rho, c, si, tol, keep):  # noqa: ANN001, ANN201
     """The range s..e left after dropping the leading and trailing points farther than ``tol``
     (m) from the line x c + y si = rho (a small neighbouring face the split threshold let in);
@@ -183,7 +183,7 @@ def trim(x, y, s, e, rho, c, si, tol, keep):  # noqa: ANN001, ANN201
     return lo, hi
 
 
-@kernel
+@inline_kernel
 def straight_enough(x, y, s, e, rho, c, si, z_min, dead_zone) -> bool:  # noqa: ANN001
     """Wald-Wolfowitz runs test on the signs of the residuals of points s..e from their line
     x c + y si = rho: False when the runs are ``z_min`` std fewer than noise would give (an arc);
@@ -233,6 +233,19 @@ def gap_exceeds(dx: float, dy: float, limit: float) -> bool:
     return gap > limit
 
 
+@inline_kernel
+def length_at_least(dx: float, dy: float, limit: float) -> bool:
+    """hypot(dx, dy) >= limit, decided as math.hypot decides it: from sqrt(dx^2 + dy^2) (within a
+    few ulp of hypot; a libm call a line was ~3 % of split_merge's time) where dx^2 + dy^2 is a
+    normal number and the root lies farther than 1e-12 of the limit from it; else hypot decides."""
+    g2 = dx * dx + dy * dy
+    if 1e-280 < g2 < np.inf:
+        g = math.sqrt(g2)
+        if abs(g - limit) > 1e-12 * abs(limit):
+            return g >= limit
+    return math.hypot(dx, dy) >= limit
+
+
 @kernel
 def disconnected(dx, dy, r_prev, sin_step, sin_rest, ratio, margin) -> bool:  # noqa: ANN001
     """Whether two neighbouring points (dx, dy) apart (m) are not connected: farther apart than the
@@ -250,7 +263,7 @@ def disconnected(dx, dy, r_prev, sin_step, sin_rest, ratio, margin) -> bool:  # 
     return gap_exceeds(dx, dy, dmax) or dmax <= 0
 
 
-@kernel
+@inline_kernel
 def split_at(x, y, s, e, threshold, cf, sf, rho_f, chord, finite):  # noqa: ANN001, ANN201
     """Where points s..e (e - s >= 2) split: the interior point farthest from the chord between the
     end points (the first of equal ones) when some point lies farther than ``threshold`` (m) from
@@ -524,7 +537,7 @@ def segment_lines(ranges, cos_b, sin_b, range_lo, range_hi, p, ws):  # noqa: ANN
         d1 = x[e] * c + y[e] * si - fr
         ax, ay = x[s] - d0 * c, y[s] - d0 * si
         bx, by = x[e] - d1 * c, y[e] - d1 * si
-        if not math.hypot(bx - ax, by - ay) >= min_length:
+        if not length_at_least(bx - ax, by - ay, min_length):
             continue
         t = -f.mx * si + f.my * c
         var_a = s2 / f.along
