@@ -9,7 +9,8 @@ Formats (one message a line, ``#`` comments, unknown messages skipped):
   m rem1..remm laser_x laser_y laser_theta robot_x robot_y robot_theta tv rv forward_safety
   side_safety turn_axis ipc_timestamp hostname logger_timestamp`` (ROBOTLASER2: the rear laser);
   the declared field of view must hold the count at the declared resolution (fov = n x res, or
-  (n - 1) x res), and lines with the same declared geometry must carry the same count.
+  (n - 1) x res), lines with the same declared geometry must carry the same count, and max_range
+  must lie in [MIN_RANGE_MAX_M, MAX_RANGE_M] (:mod:`lms200.laser_geometry`).
 - ``RAWLASER1`` .. ``RAWLASER4`` (CARMEN 0.7 loggers): the ROBOTLASER1 fields up to the remissions,
   then ``ipc_timestamp hostname logger_timestamp``; no poses (``.odom`` is None), same checks.
 - ``ODOM x y theta tv rv accel ipc_timestamp hostname logger_timestamp``
@@ -505,10 +506,11 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
         stamp = float(_floats(words[10 + n + m : 11 + n + m], f"{kind} timestamp")[0])
     else:
         stamp = float(_floats(words[10 + n + m : 10 + n + m + 12], f"{kind} poses and timestamp")[11])
-    if range_max_override is not None:
-        range_max = range_max_override
-    else:
-        range_max = max_range if max_range > 0 else LMS200_MAX_RANGE["cm"]
+    # max_range 1e-300 made every reading invalid, silently, and -5 became 81.83 m (a review's reproduction)
+    _require(laser_geometry.MIN_RANGE_MAX_M <= max_range <= laser_geometry.MAX_RANGE_M,
+             f"maximum range must be in [{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, "
+             f"got {words[5]}")
+    range_max = range_max_override if range_max_override is not None else max_range
     scan = Scan(ranges, snap_angle(start), snap_angle(resolution), range_min, range_max, stamp)
     if kind.startswith("RAWLASER"):
         return scan, None

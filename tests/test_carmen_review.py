@@ -42,3 +42,27 @@ def test_laser_geometry_refused_with_input_error_naming_the_field(kw, message):
     # was: plain ValueError, raw OverflowError; "3" and True accepted as 3 rad and 1 rad
     with pytest.raises(InputError, match=f"^{message}$"):
         LaserGeometry(**kw)
+
+
+def _write(tmp_path, name: str, text: str):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def _robotlaser(max_range: str = "80", ranges: str = "1 2 3", count: str = "3") -> str:
+    return (f"ROBOTLASER1 0 -1.5707963 3.1415926 1.5707963 {max_range} 0.01 0 {count} {ranges} 0 "
+            "0 0 0 0 0 0 0 0 0 0 0 5 h 5\n")
+
+
+@pytest.mark.parametrize("max_range", ["1e-300", "-5", "0", "0.05"])
+def test_robotlaser_impossible_max_range_is_a_malformed_line(tmp_path, max_range):
+    # was: 1e-300 became range_max (every reading invalid, silently); -5 and 0 became 81.83 m
+    path = _write(tmp_path, "rl.log", "# x\n" + _robotlaser("80") + _robotlaser(max_range))
+    with pytest.raises(LogFormatError) as err:
+        list(read_log(path))
+    assert str(err.value) == (f"{path}:3: malformed ROBOTLASER1 line: maximum range must be in [0.1, 10000] m, "
+                              f"got {max_range}")
+    reader = read_log(path, skip_bad_lines=True)
+    assert [r.scan.range_max for r in reader] == [80.0]
+    assert reader.stats.skipped == [(3, f"ROBOTLASER1: maximum range must be in [0.1, 10000] m, got {max_range}")]
