@@ -418,12 +418,26 @@ def _require(ok: bool, reason: str) -> None:
 
 
 def _floats(words: list[str], what: str) -> np.ndarray:
+    """Numbers as CARMEN's strtod reads them: Python's float() also takes ``1_000`` (read as 1000 m)
+    and turns ``1e400`` into inf, which CARMEN does not: both make the line malformed (a review's
+    reproduction); ``inf`` / ``nan`` written as words keep their meaning (logs converted from ROS)."""
+    if "_" in "".join(words):
+        bad = next(w for w in words if "_" in w)
+        raise ValueError(f"{what}: {bad!r} is not a number (no '_' in a CARMEN number)")
     try:
         values = np.array(words, dtype=np.float64)
     except ValueError:
         bad = next(w for w in words if not _is_number(w))
         raise ValueError(f"{what}: {bad!r} is not a number") from None
+    infinite = np.isinf(values)
+    if infinite.any():
+        for i in np.flatnonzero(infinite):
+            if words[i].lstrip("+-").lower() not in INF_WORDS:
+                raise ValueError(f"{what}: {words[i]!r} is beyond float64's range")
     return values
+
+
+INF_WORDS = ("inf", "infinity")  # how an infinite number is written as text (not 1e400, an overflow)
 
 
 def _is_number(word: str) -> bool:
@@ -431,13 +445,14 @@ def _is_number(word: str) -> bool:
         float(word)
     except ValueError:
         return False
-    return True
+    return "_" not in word
 
 
 def _count(word: str, what: str) -> int:
-    """A count field: a finite non-negative integer (written ``361`` or ``361.0``)."""
+    """A count field: a finite non-negative integer (written ``361`` or ``361.0``; not ``3_0``)."""
     try:
         value = float(word)
+        _require("_" not in word, "")
     except ValueError:
         raise ValueError(f"{what} {word!r} is not a number") from None
     if not math.isfinite(value) or value < 0 or value != math.floor(value):

@@ -66,3 +66,30 @@ def test_robotlaser_impossible_max_range_is_a_malformed_line(tmp_path, max_range
     reader = read_log(path, skip_bad_lines=True)
     assert [r.scan.range_max for r in reader] == [80.0]
     assert reader.stats.skipped == [(3, f"ROBOTLASER1: maximum range must be in [0.1, 10000] m, got {max_range}")]
+
+
+def _flaser(ranges: str = "1.00 2.00 3.00", count: str | None = None, stamp: str = "12.5") -> str:
+    n = count if count is not None else str(len(ranges.split()))
+    return f"FLASER {n} {ranges} 0 0 0 0 0 0 {stamp} host {stamp}\n"
+
+
+@pytest.mark.parametrize("line, reason", [
+    (_flaser("1_000 2.00 3.00"), "FLASER ranges: '1_000' is not a number (no '_' in a CARMEN number)"),
+    (_flaser("1e400 2.00 3.00"), "FLASER ranges: '1e400' is beyond float64's range"),
+    (_flaser("-1e400 2.00 3.00"), "FLASER ranges: '-1e400' is beyond float64's range"),
+    (_flaser(stamp="1e400"), "FLASER poses and timestamp: '1e400' is beyond float64's range"),
+    ("FLASER 3_0 " + " ".join(["1.00"] * 30) + " 0 0 0 0 0 0 1 h 1\n", "beam count '3_0' is not a number"),
+])
+def test_overflowing_numbers_and_underscores_are_malformed(tmp_path, line, reason):
+    # was: 1e400 read as +inf, -1e400 as -inf, 1_000 as 1000 m and a beam count 3_0 as 30 (Python's float())
+    path = _write(tmp_path, "u.log", _flaser() + line)
+    with pytest.raises(LogFormatError) as err:
+        list(read_log(path))
+    assert str(err.value) == f"{path}:2: malformed FLASER line: {reason}"
+    reader = read_log(path, skip_bad_lines=True)
+    assert len(list(reader)) == 1 and reader.stats.skipped == [(2, f"FLASER: {reason}")]
+
+
+def test_inf_written_as_a_word_keeps_its_meaning(tmp_path):
+    path = _write(tmp_path, "w.log", _flaser("Infinity -inf 3.00"))
+    assert np.array_equal(next(iter(read_log(path))).scan.ranges, [np.inf, -np.inf, 3.0])
