@@ -408,6 +408,13 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
     elif name in laser_geometry.GEOMETRY_PARAMS:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number > 0, f"{name} must be a finite number > 0, got {value!r}")
+        # checked here, not when a laser line uses it: `laser_front_laser_fov 720` was blamed on every
+        # FLASER line (all skipped under skip_bad_lines) instead of on itself (a review's reproduction)
+        laser_field = laser_geometry.GEOMETRY_PARAMS[name][1]
+        try:
+            LaserGeometry(**{laser_field: number if laser_field == "range_max" else math.radians(number)})
+        except ValueError as exc:
+            raise ValueError(f"{name} {value}: {exc}") from None
         params[name] = number
     return units, has_odometry
 

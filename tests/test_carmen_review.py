@@ -93,3 +93,16 @@ def test_overflowing_numbers_and_underscores_are_malformed(tmp_path, line, reaso
 def test_inf_written_as_a_word_keeps_its_meaning(tmp_path):
     path = _write(tmp_path, "w.log", _flaser("Infinity -inf 3.00"))
     assert np.array_equal(next(iter(read_log(path))).scan.ranges, [np.inf, -np.inf, 3.0])
+
+
+def test_bad_param_line_is_blamed_not_every_laser_line(tmp_path):
+    # was: "c.log:3: malformed FLASER line: fov ..." for every FLASER line; skip_bad_lines dropped every scan
+    path = _write(tmp_path, "p.log", "# x\nPARAM laser_front_laser_fov 720 h 0\n" + _flaser() + _flaser())
+    reason = "laser_front_laser_fov 720: fov: must be at most 2 pi rad (360 deg), got 12.5664 rad (720 deg)"
+    with pytest.raises(LogFormatError) as err:
+        list(read_log(path))
+    assert str(err.value) == f"{path}:2: malformed PARAM line: {reason}"
+    reader = read_log(path, skip_bad_lines=True)
+    scans = [r.scan for r in reader]
+    assert reader.stats.skipped == [(2, f"PARAM: {reason}")]
+    assert len(scans) == 2 and scans[0].angle_increment == pytest.approx(math.pi / 2)  # the convention: 3 beams, 180 deg
