@@ -496,7 +496,7 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     tail = _floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
     range_max = geometry.range_max if geometry.range_max is not None else LMS200_MAX_RANGE[u]
-    scan = Scan(ranges, snap_angle(angle_min), snap_angle(increment), range_min, range_max, float(tail[6]))
+    scan = Scan(ranges, snap_angle(angle_min), snap_angle(increment, n), range_min, range_max, float(tail[6]))
     return scan, _pose(words, 2 + n + 3, f"{kind} odometry")
 
 
@@ -533,7 +533,7 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
              f"maximum range must be in [{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, "
              f"got {words[5]}")
     range_max = range_max_override if range_max_override is not None else max_range
-    scan = Scan(ranges, snap_angle(start), snap_angle(resolution), range_min, range_max, stamp)
+    scan = Scan(ranges, snap_angle(start), snap_angle(resolution, n), range_min, range_max, stamp)
     if kind.startswith("RAWLASER"):
         return scan, None
     return scan, _pose(words, 10 + n + m + 3, f"{kind} robot pose")

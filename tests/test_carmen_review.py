@@ -106,3 +106,25 @@ def test_bad_param_line_is_blamed_not_every_laser_line(tmp_path):
     scans = [r.scan for r in reader]
     assert reader.stats.skipped == [(2, f"PARAM: {reason}")]
     assert len(scans) == 2 and scans[0].angle_increment == pytest.approx(math.pi / 2)  # the convention: 3 beams, 180 deg
+
+
+def test_snap_angle_keeps_angles_genuinely_off_the_grid():
+    from lms200.scan import snap_angle
+    half = math.radians(0.5)
+    # was: 2 pi / 719 (RPLIDAR style, 720 beams) snapped to 0.5 deg; 0.5 deg + 1.5e-5 rad too
+    assert snap_angle(2 * math.pi / 719, 720) == 2 * math.pi / 719
+    assert snap_angle(half + 1.5e-5, 361) == half + 1.5e-5
+    # what 6 decimals or float32 explain is still snapped (the CSAIL ROBOTLASER1 log writes 0.008727, -1.570796)
+    assert snap_angle(0.008727, 361) == half and snap_angle(-1.570796) == -math.pi / 2
+    assert snap_angle(float(np.float32(math.radians(0.25))), 1081) == math.radians(0.25)
+    # within the text error, but the last of 100,000 beams would move by more than 0.1 beam: kept
+    assert snap_angle(half + 4e-7, 100_000) == half + 4e-7
+
+
+def test_robotlaser_720_beams_at_2pi_over_719_keeps_its_last_bearing(tmp_path):
+    res = 2 * math.pi / 719
+    line = (f"ROBOTLASER1 0 {-math.pi!r} {2 * math.pi!r} {res!r} 12 0.001 0 720 " + " ".join(["1.0"] * 720)
+            + " 0 0 0 0 0 0 0 0 0 0 0 0 5 h 5\n")
+    scan = next(iter(read_log(_write(tmp_path, "rp.log", line)))).scan
+    assert scan.angle_increment == res  # was exactly 0.5 deg
+    assert math.degrees(scan.angle_max) == pytest.approx(180.0, abs=1e-9)  # was 179.50
