@@ -53,8 +53,10 @@ import numpy as np
 
 from .codes import (
     CODE_ABOVE_MAXIMUM,
+    CODE_NOT_VALID,
     CODES_INVALID,
     LMS200_MAX_RANGE,
+    MAX_VALID_CODE,
     Units,
     decode_logged_ranges,
     finite_negative,
@@ -545,10 +547,17 @@ def _units_of(scan: Scan) -> Units:
 
 
 def _format_ranges(scan: Scan, units: Units) -> str:
-    """Ranges rounded to the unit, with +inf / nan written as the SICK codes 8183 / 8191."""
+    """Ranges rounded to the unit, with +inf / nan written as the SICK codes 8183 / 8191; a valid
+    reading that would round onto the special band (8183 .. 8191 units: 8.183 m in mm mode, the
+    Scan.lms200 range_max, read back as +inf) is written as 8182 units, the largest valid code
+    (``MAX_VALID_CODE``, the protocol's largest valid reading), so it reads back valid."""
     scale = metres_per_unit(units)
     decimals = 3 if units == "mm" else 2
-    r = np.where(np.isposinf(scan.ranges), CODE_ABOVE_MAXIMUM * scale, scan.ranges)
+    with np.errstate(invalid="ignore", over="ignore"):
+        code = np.rint(scan.ranges / scale)
+    onto_special = scan.valid & (code > MAX_VALID_CODE) & (code <= CODE_NOT_VALID)
+    r = np.where(onto_special, MAX_VALID_CODE * scale, scan.ranges)
+    r = np.where(np.isposinf(r), CODE_ABOVE_MAXIMUM * scale, r)
     r = np.where(np.isnan(r), CODES_INVALID[-1] * scale, r)
     return " ".join(f"{v:.{decimals}f}" for v in r)
 
@@ -589,7 +598,8 @@ def write_carmen(
     Each scan becomes one FLASER or ROBOTLASER1 line (``fmt``), preceded by a TRUEPOS line when the
     record has a true pose. FLASER logs get ``PARAM laser_front_laser_resolution / _fov`` and
     ``robot_front_laser_max`` lines, so any scan centred ahead reads back with its geometry. Ranges
-    are written at the sensor unit (mm when range_max <= 8.183 m, else cm), +inf / nan as SICK codes 8183 / 8191; a ``PARAM lmsbench_range_units`` line records
+    are written at the sensor unit (mm when range_max <= 8.183 m, else cm), +inf / nan as SICK codes 8183 / 8191
+    (a valid reading that would round onto 8183 .. 8191 units as 8182, so it reads back valid); a ``PARAM lmsbench_range_units`` line records
     the unit, and ``PARAM lmsbench_odometry absent|present`` lines mark records without odometry
     (their pose fields are written as zeros); no CARMEN laser line has a range_min field, so a
     ``PARAM lmsbench_range_min`` line gives it (exactly, ``repr``) before the first scan whose
