@@ -7,7 +7,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from features.types import FeatureSet
-from lms200 import Scan
+from lms200 import InputError, Scan
+from lms200.codes import real_rows
 
 from .config import SlamConfig
 
@@ -35,6 +36,29 @@ class Observations:
     corners: np.ndarray = field(default_factory=lambda: _empty((0, 2)))
     corner_cov: np.ndarray = field(default_factory=lambda: _empty((0, 2, 2)))
     points: np.ndarray = field(default_factory=lambda: _empty((0, 2)))
+
+    def __post_init__(self) -> None:
+        """Every field as a finite float64 array of its shape, covariances one a row of the lines /
+        corners; InputError naming the field otherwise. Found by fuzzing the Python API: text was
+        an AttributeError in the filter, (2, 2) lines with one covariance an IndexError, (1, 3)
+        lines a bare unpacking error, nan covariances a nan trajectory, silently."""
+        rows = {name: real_rows(getattr(self, name), f"observations.{name}", cols, what)
+                for name, cols, what in (("lines", 2, "rho m, alpha rad"), ("line_ends", 4, "x0, y0, x1, y1 m"),
+                                         ("corners", 2, "x m, y m"), ("points", 2, "x m, y m"))}
+        if rows["line_ends"].shape[0] != rows["lines"].shape[0]:
+            raise InputError(f"observations.line_ends: {rows['line_ends'].shape[0]} rows for {rows['lines'].shape[0]} lines")
+        for cov, of in (("line_cov", "lines"), ("corner_cov", "corners")):
+            m = rows[of].shape[0]
+            try:
+                c = np.asarray(getattr(self, cov), dtype=np.float64)
+            except (TypeError, ValueError):
+                c = np.empty(0)
+            if c.shape != (m, 2, 2) or not np.isfinite(c).all():
+                raise InputError(f"observations.{cov}: must be ({m}, 2, 2) finite covariances, one a row of "
+                                 f"observations.{of}, got {'shape ' + str(c.shape) if c.shape != (m, 2, 2) else 'nan / inf'}")
+            rows[cov] = c
+        for name, a in rows.items():
+            object.__setattr__(self, name, a)
 
     @property
     def line_lengths(self) -> np.ndarray:
