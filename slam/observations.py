@@ -6,6 +6,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from features.baselines.checks import integer
+from features.errors import not_a_scan
+from features.realdata import check_features
 from features.types import FeatureSet
 from lms200 import InputError, Scan
 from lms200.codes import real_rows
@@ -69,7 +72,17 @@ class Observations:
 def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) -> Observations:
     """Keep the lines with enough support; their covariance is the extractor's (where finite and
     positive definite) plus the floor ``diag(sigma_rho^2, sigma_alpha_obs^2)``. With ``scan``, its
-    valid points (every ``point_stride``-th) come along for checking pre-alignments."""
+    valid points (every ``point_stride``-th) come along for checking pre-alignments.
+
+    Raises:
+        InputError / ScanTypeError: ``fs`` is no FeatureSet, ``config`` no SlamConfig, ``scan``
+            neither None nor a Scan (each was an AttributeError inside; found by fuzzing).
+    """
+    check_features(fs)
+    if not isinstance(config, SlamConfig):
+        raise InputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
+    if scan is not None and not isinstance(scan, Scan):
+        raise not_a_scan(scan, "from_features")
     floor = np.diag([config.observations.sigma_rho**2, config.observations.sigma_alpha_obs**2])
     ln = fs.lines
     keep = ~((ln.n_points > 0) & (ln.n_points < config.observations.min_line_points)) & ~(ln.length < config.observations.min_line_length)
@@ -89,6 +102,14 @@ def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) 
 
 
 def scan_points(scan: Scan, stride: int = 2) -> np.ndarray:
-    """(p, 2) valid points of the scan in the sensor frame (m), every ``stride``-th beam."""
+    """(p, 2) valid points of the scan in the sensor frame (m), every ``stride``-th beam.
+
+    Raises:
+        ScanTypeError: ``scan`` is no Scan. ConfigError: ``stride`` is no integer >= 1 (0 was
+            Python's "slice step cannot be zero", -1 the points in reverse, 2.5 a TypeError).
+    """
+    if not isinstance(scan, Scan):
+        raise not_a_scan(scan, "scan_points")
+    integer("stride", stride, 1)
     pts = scan.points[::stride]
     return pts[np.isfinite(pts[:, 0])]

@@ -7,7 +7,8 @@ import pytest
 
 from functools import partial
 
-from slam import Observations, SlamConfig, SlamConfigError, SlamFilter, SlamInputError, run_observations
+from slam import Observations, SlamConfig, SlamConfigError, SlamFilter, SlamInputError, from_features, run_observations
+from slam.observations import scan_points
 from slam.config import AssociationConfig, LandmarkConfig, MotionConfig, ObservationConfig, PrealignConfig
 from slam.metrics import ate
 from slam.models import wrap
@@ -290,3 +291,21 @@ def test_observations_of_lists_are_float_arrays_and_run() -> None:
     assert obs.lines.dtype == np.float64 and obs.line_cov.shape == (1, 2, 2)
     res = run_observations([0.0, 0.1], [obs, obs], P())
     assert res.trajectory.shape == (2, 4) and np.isfinite(res.trajectory).all()
+
+
+@pytest.mark.parametrize("call, error, message", [
+    (lambda fs, s: from_features(None, P()), "InputError", r"^fs: expected a features.FeatureSet, got NoneType"),  # AttributeError
+    (lambda fs, s: from_features(fs, "paper"), "InputError", r"^config: must be a slam.SlamConfig, got str"),
+    (lambda fs, s: from_features(fs, P(), scan=s.ranges), "ScanTypeError", r"^from_features: expected an lms200.Scan, got ndarray"),
+    (lambda fs, s: scan_points(s, stride=0), "ConfigError", r"^stride: must be an integer >= 1, got 0"),  # "slice step cannot be zero"
+    (lambda fs, s: scan_points(s, stride=-1), "ConfigError", r"^stride: must be an integer >= 1, got -1"),  # points in reverse
+    (lambda fs, s: scan_points(s, stride=2.5), "ConfigError", r"^stride: must be an integer >= 1, got 2.5"),
+    (lambda fs, s: scan_points(None), "ScanTypeError", r"^scan_points: expected an lms200.Scan, got NoneType"),
+])
+def test_from_features_and_scan_points_name_a_bad_argument(call, error: str, message: str) -> None:
+    from features import FeatureSet
+    from lms200 import LmsbenchError, Scan
+
+    with pytest.raises(LmsbenchError, match=message) as info:
+        call(FeatureSet(), Scan.lms200(np.full(361, 2.0)))
+    assert type(info.value).__name__ == error
