@@ -1193,3 +1193,41 @@ def test_noise_estimators_still_take_scans_and_records() -> None:
     assert noise_estimate.fit_sigma(records) == noise_estimate.fit_sigma([s, s.replace(stamp=1.0)])
     assert 0.003 < noise_estimate.fit_sigma(s) < 0.008
     assert 0.003 < estimate_range_noise(iter(records)).sigma_m < 0.008
+
+
+# --- LMS200Sim.cast, found by fuzzing the Python API (session 32) ------------------------------------
+@pytest.mark.parametrize("origins, headings, message", [
+    (np.full((3, 2), np.nan), np.zeros(3), r"^origins: must be finite \(x m, y m\); row 0 is not"),  # every range +inf, silently
+    (np.zeros((3, 3)), np.zeros(3), r"^origins: must be a \(k, 2\) array \(x m, y m\), got shape \(3, 3\)"),  # first 2 columns, silently
+    (np.zeros(2), np.zeros(1), r"^origins: must be a \(k, 2\) array .*got shape \(2,\)"),  # IndexError
+    ("ab", np.zeros(1), r"^origins: must be a \(k, 2\) array of real numbers .*got str"),  # numpy's ValueError
+    (np.zeros((3, 2)), np.zeros(2), r"^headings: 2 headings for 3 origins"),  # numpy's broadcast error
+    (np.zeros((3, 2)), [0.0, np.inf, 0.0], r"^headings: must be finite \(rad\); row 1 is not"),
+])
+def test_cast_names_bad_rays(origins, headings, message: str) -> None:
+    import sim
+
+    lidar = sim.LMS200Sim(sim.make_world("office", 0))
+    try:
+        with pytest.raises(InputError, match=message):
+            lidar.cast(origins, headings)
+    finally:
+        lidar.close()
+
+
+def test_cast_of_more_rays_than_bullets_batch_is_split() -> None:
+    """16,384 rays in one rayTestBatch returned no hits (a ValueError in the caster), more raised
+    pybullet's 'Number of rays exceed the maximum batch size'; now cast splits them, same ranges."""
+    import sim
+    from sim.lidar import _RAY_BATCH
+
+    lidar = sim.LMS200Sim(sim.make_world("office", 0))
+    try:
+        n = _RAY_BATCH + 1001
+        origins = np.tile([[2.0, 2.0]], (n, 1))
+        headings = np.linspace(-3.0, 3.0, n)
+        ranges = lidar.cast(origins, headings)
+        assert ranges.shape == (n,) and np.isfinite(ranges).mean() > 0.9
+        assert np.array_equal(ranges[-1000:], lidar.cast(origins[-1000:], headings[-1000:]))
+    finally:
+        lidar.close()
