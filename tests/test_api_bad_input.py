@@ -1231,3 +1231,64 @@ def test_cast_of_more_rays_than_bullets_batch_is_split() -> None:
         assert np.array_equal(ranges[-1000:], lidar.cast(origins[-1000:], headings[-1000:]))
     finally:
         lidar.close()
+
+
+# --- hand-built FeatureSets, found by fuzzing the Python API (session 32) ----------------------------
+def _wall_features() -> tuple[Scan, Any]:
+    from features import extract
+
+    angles = -np.pi / 2 + np.arange(361) * np.deg2rad(0.5)
+    with np.errstate(divide="ignore"):
+        scan = Scan.lms200(np.where(np.abs(angles) < 1.0, 3.0 / np.cos(angles), np.inf))
+    return scan, extract(scan).lines[0]
+
+
+@pytest.mark.parametrize("change, message", [
+    # each scored a nan ray RMSE / explained fraction, silently
+    ({"rho": float("nan")}, r"^lines: line 0: its values must be finite"),
+    ({"rho": -3.0}, r"^lines: line 0: rho must be >= 0 m \(rho, alpha, x0, y0, x1, y1, first, last = -3, "),
+    ({"end": (float("inf"), 0.0)}, r"^lines: line 0: its values must be finite"),
+    ({"first": 200, "last": 100}, r"^lines: line 0: its beams must be whole numbers with 0 <= first <= last"),
+    ({"first": 2.5}, r"^lines\[0\].first: must be a whole number \(a beam index or count\), got 2.5"),  # truncated to 2
+    # numpy's ValueError, a broadcast error, an OverflowError
+    ({"rho": "abc"}, r"^lines: each Line must hold numbers"),
+    ({"start": (1.0, 2.0, 3.0)}, r"^lines: each Line must hold numbers"),
+    ({"first": 10**30, "last": 10**30}, r"^lines: each Line must hold numbers"),
+])
+def test_feature_sets_of_hand_built_lines_are_checked(change: dict, message: str) -> None:
+    from features import FeatureSet
+
+    _, line = _wall_features()
+    with pytest.raises(InputError, match=message):
+        FeatureSet([dataclasses.replace(line, **change)])
+
+
+@pytest.mark.parametrize("lines, message", [
+    (None, r"^lines: must be a features.Lines or a sequence of features.Line, got NoneType"),  # "not iterable"
+    ("abc", r"^lines: must be a features.Lines or a sequence of features.Line, got str"),    # AttributeError
+    ([3.0], r"^lines\[0\]: must be a features.Line, got float"),
+])
+def test_feature_set_of_something_not_lines(lines: object, message: str) -> None:
+    from features import FeatureSet
+
+    with pytest.raises(InputError, match=message):
+        FeatureSet(lines)
+
+
+def test_line_arrays_given_to_the_real_data_measures_are_checked() -> None:
+    """The (k, 8) array path of scan_measures / ray_residuals: a negative rho or first > last gave
+    nan measures, silently; a FeatureSet of valid lines measures as before."""
+    from features import FeatureSet, realdata
+
+    scan, line = _wall_features()
+    rows = FeatureSet([line]).line_array()
+    m = realdata.scan_measures(rows, scan, 0.005)
+    assert m.n_lines == 1 and m.explained_tol == pytest.approx(1.0) and np.isfinite(m.ray_rmse_m)
+    bad = rows.copy()
+    bad[0, 0] = -bad[0, 0]
+    with pytest.raises(InputError, match=r"^fs: line 0: rho must be >= 0 m"):
+        realdata.scan_measures(bad, scan, 0.005)
+    bad = rows.copy()
+    bad[0, 6], bad[0, 7] = bad[0, 7], bad[0, 6]
+    with pytest.raises(InputError, match=r"^fs: line 0: its beams must be whole numbers with 0 <= first <= last"):
+        realdata.ray_residuals(bad, scan)
