@@ -16,6 +16,8 @@ miss one during a mirror turn); failures raise :class:`LmsTimeoutError`, :class:
 
 from __future__ import annotations
 
+import math
+import numbers
 import time
 from dataclasses import dataclass
 from typing import Callable, Iterator
@@ -23,7 +25,7 @@ from typing import Callable, Iterator
 import serial
 
 from .codes import Units
-from .errors import LmsDeviceError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
+from .errors import InputError, LmsDeviceError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
 from .framing import Frame, FrameParser
 from .protocol import (
     ACK,
@@ -61,7 +63,48 @@ PROBE_BAUDS = (9600, 19200, 38400, 500000)
 MAX_TIMEOUT_S = 60.0  # longest wait for a reply (s): a device takes 3 s at most (mode changes); 1e9 waited for ever
 _READ_POLL_S = 0.01  # longest blocking read (s)
 _SHORT_REPLY_BYTES = 64  # every reply but 0xB0 fits (the 0xF7 configuration reply is 41 bytes)
+MAX_ADDRESS = 0x7F  # the reply address is device address + 0x80, one byte
 _READ_CHUNK = 4096  # bytes asked for when the port cannot tell how many are waiting
+
+
+def _variant_names() -> str:
+    return ", ".join(f"{fov} deg at {res / 100:g} deg" for fov, res in VARIANTS)
+
+
+def _check_arguments(baud: object, fov_deg: object, resolution_deg: object, units: object, address: object,
+                     timeout: object, mode_timeout: object, retries: object) -> tuple[int, int]:
+    """The constructor's arguments, checked before the port is opened: an :class:`InputError`
+    naming the argument and what it may be (a str resolution was a TypeError about ``__round__``,
+    fov 180 at 0.25 deg a plain ValueError the command line called a bug). Returns the variant
+    as (fov deg, resolution 1/100 deg)."""
+
+    def real(name: str, value: object) -> float:
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise InputError(f"{name}: must be a number, got {type(value).__name__} {value!r}")
+        return float(value)
+
+    def integer(name: str, value: object) -> int:
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+            raise InputError(f"{name}: must be an integer, got {type(value).__name__} {value!r}")
+        return int(value)
+
+    if isinstance(baud, bool) or baud not in BAUD_MODES:
+        raise InputError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {baud!r}")
+    fov, res = real("fov_deg", fov_deg), real("resolution_deg", resolution_deg)
+    variant = (int(fov), int(round(res * 100))) if math.isfinite(fov) and math.isfinite(res) else None
+    if variant not in VARIANTS or fov != variant[0] or not math.isclose(res * 100, variant[1], abs_tol=1e-6):
+        raise InputError(f"fov_deg, resolution_deg: ({fov_deg!r} deg, {resolution_deg!r} deg) is not an LMS200 variant; "
+                         f"the variants are {_variant_names()} (0.25 deg only with 100 deg)")
+    if units not in ("mm", "cm"):
+        raise InputError(f"units: must be 'mm' or 'cm', got {units!r}")
+    if not 0 <= integer("address", address) <= MAX_ADDRESS:
+        raise InputError(f"address: must be in 0..{MAX_ADDRESS} (replies come from address + 0x80), got {address}")
+    if integer("retries", retries) < 1:
+        raise InputError(f"retries: must be >= 1, got {retries}")
+    for name, value in (("timeout", timeout), ("mode_timeout", mode_timeout)):
+        if not 0 < real(name, value) <= MAX_TIMEOUT_S:  # also nan
+            raise InputError(f"{name}: must be in (0, {MAX_TIMEOUT_S:g}] s, got {value}")
+    return variant
 
 
 @dataclass
@@ -111,18 +154,7 @@ class LMS200:
         probe: bool = True,
         password: bytes = PASSWORD,
     ) -> None:
-        if baud not in BAUD_MODES:
-            raise ValueError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {baud}")
-        self.variant = (int(fov_deg), int(round(resolution_deg * 100)))
-        if self.variant not in VARIANTS:
-            raise ValueError(f"variant: ({fov_deg} deg, {resolution_deg} deg) is not an LMS200 variant")
-        if units not in ("mm", "cm"):
-            raise ValueError(f"units: must be 'mm' or 'cm', got {units!r}")
-        if retries < 1:
-            raise ValueError(f"retries: must be >= 1, got {retries}")
-        for name, value in (("timeout", timeout), ("mode_timeout", mode_timeout)):
-            if not 0 < value <= MAX_TIMEOUT_S:  # also nan
-                raise ValueError(f"{name}: must be in (0, {MAX_TIMEOUT_S:g}] s, got {value}")
+        self.variant = _check_arguments(baud, fov_deg, resolution_deg, units, address, timeout, mode_timeout, retries)
         self.port = port_or_url
         self.target_baud = baud
         self.units: Units = units

@@ -19,6 +19,7 @@ scan, so a replayed log comes out in order and complete.
 from __future__ import annotations
 
 import math
+import numbers
 import struct
 from collections import deque
 from dataclasses import dataclass
@@ -27,6 +28,7 @@ from typing import Callable, Iterable, Iterator
 import numpy as np
 
 from .codes import Units, ranges_to_codes
+from .errors import InputError
 from .protocol import (
     ACK,
     BAUD_MODES,
@@ -170,10 +172,17 @@ class VirtualLMS200:
         units: Units = "cm",
         variant: tuple[int, int] = (180, 50),
     ) -> None:
+        if isinstance(time_scale, bool) or not isinstance(time_scale, numbers.Real):
+            raise InputError(f"time_scale: must be a number, got {type(time_scale).__name__} {time_scale!r}")
         if not 0 < time_scale <= MAX_TIME_SCALE:  # also nan
-            raise ValueError(f"time_scale: must be in (0, {MAX_TIME_SCALE:g}], got {time_scale}")
-        if variant not in VARIANTS:
-            raise ValueError(f"variant: {variant} is not an LMS200 variant")
+            raise InputError(f"time_scale: must be in (0, {MAX_TIME_SCALE:g}], got {time_scale}")
+        if not isinstance(variant, tuple) or variant not in VARIANTS:
+            raise InputError(f"variant: {variant!r} is not an LMS200 variant; the variants are (fov deg, resolution "
+                             f"1/100 deg) {', '.join(map(str, VARIANTS))} (25 = 0.25 deg only with 100 deg)")
+        if units not in UNITS_CODES:
+            raise InputError(f"units: must be 'mm' or 'cm', got {units!r}")
+        if isinstance(address, bool) or not isinstance(address, numbers.Integral) or not 0 <= address <= 0x7F:
+            raise InputError(f"address: must be an integer in 0..127 (replies come from address + 0x80), got {address!r}")
         self._source: Iterator[Scan] = iter(source)
         self.address = address
         self.time_scale = float(time_scale)

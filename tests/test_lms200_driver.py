@@ -7,6 +7,7 @@ changes take milliseconds; every scan the driver yields is compared with the sca
 from __future__ import annotations
 
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -195,3 +196,33 @@ def test_a_reply_wait_or_time_scale_beyond_its_bound_is_refused_before_any_io():
             LMS200("loop://", **kw)
     with pytest.raises(ValueError, match=r"^time_scale: must be in \(0, 100\], got 1000000000"):
         VirtualLMS200([], time_scale=1e9)
+
+
+def test_bad_arguments_are_input_errors_naming_the_argument_and_the_variants() -> None:
+    """Review 32 (ctor.py): resolution_deg='0.5' raised TypeError "type str doesn't define __round__
+    method", fov 180 at 0.25 deg a plain ValueError that the command line reported as an internal
+    error (a bug, exit 1); the virtual device did the same. Now every one is an InputError (an
+    LmsbenchError) raised before the port is opened, naming the argument."""
+    from lms200.errors import InputError, LmsbenchError
+
+    variants = ("the variants are 180 deg at 1 deg, 180 deg at 0.5 deg, 100 deg at 1 deg, 100 deg at 0.5 deg, "
+                "100 deg at 0.25 deg (0.25 deg only with 100 deg)")
+    cases = [
+        ({"fov_deg": 180, "resolution_deg": 0.25}, f"fov_deg, resolution_deg: (180 deg, 0.25 deg) is not an LMS200 variant; {variants}"),
+        ({"resolution_deg": "0.5"}, "resolution_deg: must be a number, got str '0.5'"),
+        ({"resolution_deg": float("nan")}, "fov_deg, resolution_deg: (180 deg, nan deg) is not an LMS200 variant"),
+        ({"baud": 1234}, "baud: the LMS200 supports [9600, 19200, 38400, 500000], got 1234"),
+        ({"units": "m"}, "units: must be 'mm' or 'cm', got 'm'"),
+        ({"retries": 0}, "retries: must be >= 1, got 0"),
+        ({"address": 200}, "address: must be in 0..127 (replies come from address + 0x80), got 200"),
+        ({"timeout": "1"}, "timeout: must be a number, got str '1'"),
+    ]
+    for kw, message in cases:
+        with pytest.raises(InputError) as info:
+            LMS200("loop://", **kw)
+        assert isinstance(info.value, LmsbenchError) and str(info.value).startswith(message), (kw, str(info.value))
+    for kw, message in [({"variant": (180, 25)}, "variant: (180, 25) is not an LMS200 variant; the variants are"),
+                        ({"time_scale": "1"}, "time_scale: must be a number, got str '1'"),
+                        ({"units": "m"}, "units: must be 'mm' or 'cm', got 'm'")]:
+        with pytest.raises(InputError, match=f"^{re.escape(message)}"):
+            VirtualLMS200([], **kw)
