@@ -11,7 +11,8 @@ stops continuous output, sets the variant, the units (through the configuration 
 when they differ) and the baud; ``scans()`` starts continuous output (0x20 0x24). ``close()``
 returns the device to on-request mode and 9600 baud. Every request is retried (the device can
 miss one during a mirror turn); failures raise :class:`LmsTimeoutError`, :class:`LmsNakError`,
-:class:`LmsModeRefusedError` or :class:`LmsProtocolError`, naming what was asked and what came back.
+:class:`LmsModeRefusedError` or :class:`LmsProtocolError`, naming what was asked and what came back;
+a port or link that fails mid-use raises :class:`LmsLinkError` (pyserial's own exceptions do not escape).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from typing import Callable, Iterator
 import serial
 
 from .codes import Units
-from .errors import InputError, LmsDeviceError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
+from .errors import InputError, LmsDeviceError, LmsLinkError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
 from .framing import Frame, FrameParser
 from .protocol import (
     ACK,
@@ -172,6 +173,8 @@ class LMS200:
         self._retries = 0
         self._last_rx = time.monotonic()
         self._backlog: list = []  # events read past a reply, handed out by the next _pump
+        self._doing = "opening the port"  # for the message of a link that fails mid-use
+        self._lost = False  # the port failed: close() only closes it
         try:
             self._ser = serial.serial_for_url(port_or_url, baudrate=POWER_ON_BAUD, timeout=_READ_POLL_S)
         except (serial.SerialException, ValueError, OSError) as exc:
@@ -183,7 +186,10 @@ class LMS200:
             self._set_units()
             self._switch_baud(baud)
         except BaseException:
-            self._ser.close()
+            try:
+                self._ser.close()
+            except (serial.SerialException, OSError):
+                pass  # the error that ended the opening is the one to report
             raise
 
     # -- context manager -----------------------------------------------------------------------
@@ -206,14 +212,25 @@ class LMS200:
     def _idle_gap(self) -> float:
         return max(0.1, frame_seconds(20, self.baud))
 
+    def _link_lost(self, exc: BaseException) -> LmsLinkError:
+        """The error for a port that failed mid-use (pyserial's SerialException / OSError escaped
+        before): it names the port, the baud and what was being done. The link is marked lost so
+        that :meth:`close` only closes the port."""
+        self._lost = True
+        return LmsLinkError(f"the link to {self.port} at {self.baud} baud failed while {self._doing}: "
+                            f"{exc or type(exc).__name__}")
+
     def _pump(self) -> list:
         """Events left over from the last read, else read what has arrived (blocking at most
         10 ms) and parse it into events."""
         if self._backlog:
             events, self._backlog = self._backlog, []
             return events
-        waiting = self._ser.in_waiting  # exact on serial ports; only 0 / 1 on socket:// and loop://
-        data = self._ser.read(waiting if waiting > 1 else _READ_CHUNK)
+        try:
+            waiting = self._ser.in_waiting  # exact on serial ports; only 0 / 1 on socket:// and loop://
+            data = self._ser.read(waiting if waiting > 1 else _READ_CHUNK)
+        except (serial.SerialException, OSError) as exc:
+            raise self._link_lost(exc) from None
         now = time.monotonic()
         if data:
             self._last_rx = now
@@ -240,8 +257,13 @@ class LMS200:
         for attempt in range(attempts):
             if attempt:
                 self._retries += 1
-            self._ser.write(telegram)
-            self._ser.flush()
+            self._doing = f"{what}: sending {telegram.hex(' ')}"
+            try:
+                self._ser.write(telegram)
+                self._ser.flush()
+            except (serial.SerialException, OSError) as exc:
+                raise self._link_lost(exc) from None
+            self._doing = f"{what}: waiting for the reply"
             deadline = time.monotonic() + budget
             acked = naked = False
             others = 0
@@ -295,9 +317,13 @@ class LMS200:
         raise LmsTimeoutError(f"no LMS200 answered the type request (0x3A) on {self.port} at {list(bauds)} baud")
 
     def _use_baud(self, baud: int) -> None:
-        self._ser.baudrate = baud
-        self.baud = baud
-        self._ser.reset_input_buffer()
+        try:
+            self._ser.baudrate = baud
+            self.baud = baud
+            self._ser.reset_input_buffer()
+        except (serial.SerialException, OSError) as exc:
+            self._doing = f"setting the port to {baud} baud"
+            raise self._link_lost(exc) from None
         self.parser.reset()
         self._backlog = []
 
@@ -356,6 +382,7 @@ class LMS200:
         """
         if not self.streaming:
             self._set_mode(MODE_CONTINUOUS, "start continuous output (0x20 0x24)")
+        self._doing = "reading scans in continuous mode"
         limit = stall_timeout if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
         last = time.monotonic()
         while stop is None or not stop():
@@ -382,15 +409,21 @@ class LMS200:
         """Return the device to on-request mode and 9600 baud, then close the port.
 
         The port is closed even when the device does not answer; the error is raised afterwards.
+        After the link failed (an :class:`LmsLinkError` was raised already) the port is only
+        closed: the device cannot be reached, and the error is not raised a second time.
         """
         ser = getattr(self, "_ser", None)
         if ser is None or not ser.is_open:
             return
         try:
-            self._set_mode(MODE_ON_REQUEST, "stop continuous output (0x20 0x25)")
-            self._switch_baud(POWER_ON_BAUD)
+            if not self._lost:
+                self._set_mode(MODE_ON_REQUEST, "stop continuous output (0x20 0x25)")
+                self._switch_baud(POWER_ON_BAUD)
         finally:
-            ser.close()
+            try:
+                ser.close()
+            except (serial.SerialException, OSError):
+                pass  # a port that failed may fail to close too; it is closed as far as it can be
 
     def __repr__(self) -> str:
         return f"LMS200({self.port!r}, baud={self.baud}, type={self.type_string!r})"

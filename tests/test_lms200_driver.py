@@ -226,3 +226,43 @@ def test_bad_arguments_are_input_errors_naming_the_argument_and_the_variants() -
                         ({"units": "m"}, "units: must be 'mm' or 'cm', got 'm'")]:
         with pytest.raises(InputError, match=f"^{re.escape(message)}"):
             VirtualLMS200([], **kw)
+
+
+def test_a_dropped_link_is_an_lms_link_error_and_close_after_it_is_quiet() -> None:
+    """Review 32 (disc.py): a TCP link that drops mid-stream let pyserial's SerialException "read
+    failed: socket disconnected" escape scans(), and close() raised it a second time."""
+    import serial
+
+    from lms200.errors import LmsDeviceError, LmsLinkError
+
+    srv = TcpServer(VirtualLMS200(source(), time_scale=SCALE))
+    lms = LMS200(srv.url, baud=38400)
+    n = 0
+    with pytest.raises(LmsLinkError) as info:
+        for _ in lms.scans():
+            n += 1
+            if n == 2:
+                srv.close()
+    assert isinstance(info.value, LmsDeviceError) and not isinstance(info.value, serial.SerialException)
+    assert str(info.value).startswith(f"the link to {srv.url} at 38400 baud failed while reading scans in continuous mode: ")
+    assert lms.close() is None and not lms._ser.is_open  # raised once, not again
+
+
+def test_a_write_that_fails_names_the_request_once() -> None:
+    import serial
+
+    from lms200.errors import LmsLinkError
+
+    with TcpServer(VirtualLMS200(source(), time_scale=SCALE)) as ad:
+        lms = LMS200(ad.url, baud=38400)
+
+        def broken(data: bytes) -> int:
+            raise serial.SerialException("write failed: [Errno 5] Input/output error")
+
+        lms._ser.write = broken
+        with pytest.raises(LmsLinkError, match=re.escape(
+                f"the link to {ad.url} at 38400 baud failed while stop continuous output (0x20 0x25): sending "
+                "02 00 02 00 20 25 35 08: write failed: [Errno 5] Input/output error")):
+            lms.close()
+        assert not lms._ser.is_open
+        lms.close()  # closed: nothing more to do, nothing raised
