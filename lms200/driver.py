@@ -65,7 +65,8 @@ MAX_TIMEOUT_S = 60.0  # longest wait for a reply (s): a device takes 3 s at most
 _READ_POLL_S = 0.01  # longest blocking read (s)
 _SHORT_REPLY_BYTES = 64  # every reply but 0xB0 fits (the 0xF7 configuration reply is 41 bytes)
 MAX_ADDRESS = 0x7F  # the reply address is device address + 0x80, one byte
-_READ_CHUNK = 4096  # bytes asked for when the port cannot tell how many are waiting
+_READ_CHUNK = 4096
+_FALSE_START_GAP_S = 0.1  # quiet line after which a false start hiding a good frame is dropped  # bytes asked for when the port cannot tell how many are waiting
 
 
 def _variant_names() -> str:
@@ -209,8 +210,19 @@ class LMS200:
         return DriverStats(self._scans, p.dropped_frames, p.skipped_bytes, self._decode_errors, self._retries)
 
     # -- low level -----------------------------------------------------------------------------
-    def _idle_gap(self) -> float:
-        return max(0.1, frame_seconds(20, self.baud))
+    def _idle_gap(self, hides_frame: bool) -> float:
+        """How long the line must be quiet before held-back bytes are given up (``parser.idle()``).
+
+        The LMS200 sends a telegram without gaps (byte after byte at the baud; the listing's own
+        limit between the bytes of a telegram is 6 ms), so a pause inside a frame is the link's: a
+        USB adapter's latency timer (16 ms) or a TCP retransmission (200 ms and more). A partial
+        frame that is still consistent is therefore kept until the line has been quiet for as
+        long as a reply may take (``timeout`` plus the line time of the longest telegram: 0.71 s
+        at 38400 baud with the default timeout); one proven false by a good frame complete behind
+        it is dropped after 0.1 s (or the line time of 20 bytes, if longer)."""
+        if hides_frame:
+            return max(_FALSE_START_GAP_S, frame_seconds(20, self.baud))
+        return self.timeout + frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
 
     def _link_lost(self, exc: BaseException) -> LmsLinkError:
         """The error for a port that failed mid-use (pyserial's SerialException / OSError escaped
@@ -235,8 +247,10 @@ class LMS200:
         if data:
             self._last_rx = now
             return self.parser.feed(data)
-        if self.parser.pending and now - self._last_rx > self._idle_gap():
-            return self.parser.idle()
+        if self.parser.pending:
+            quiet = now - self._last_rx
+            if quiet > self._idle_gap(False) or (quiet > self._idle_gap(True) and self.parser.hides_frame()):
+                return self.parser.idle()
         return []
 
     def _request(self, payload: bytes, what: str, timeout: float | None = None, retries: int | None = None,

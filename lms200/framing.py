@@ -7,7 +7,8 @@ just before a frame (or ending what has arrived) are reported as handshake event
 order; stray ones amid garbage are skipped with it.
 
 A false start whose LEN reaches beyond the bytes received so far waits for more bytes; call
-:meth:`FrameParser.idle` when the line has gone quiet (a real device sends a frame without gaps),
+:meth:`FrameParser.idle` when the line has gone quiet (a real device sends a frame without gaps;
+links can pause, so :meth:`FrameParser.hides_frame` tells a proven false start from a partial frame),
 which drops such stalled false starts and returns the frames behind them.
 """
 
@@ -107,6 +108,23 @@ class FrameParser:
         yet be complete only because its LEN is false) are resolved; a trailing lone STX is kept.
         """
         return self._scan(final=True)
+
+    def hides_frame(self) -> bool:
+        """Whether the bytes held back contain a complete frame with a good CRC behind their first
+        byte: proof that the candidate they begin with is a false start (a corrupted LEN), which
+        :meth:`idle` may drop at once. Without one the held-back bytes are a consistent partial
+        frame, which a stalled link (TCP, a USB adapter) may still complete."""
+        buf, sync = self._buf, self._sync
+        pos = buf.find(sync, 1)
+        while pos >= 0:
+            if len(buf) - pos >= 4:
+                length = buf[pos + 2] | (buf[pos + 3] << 8)
+                end = pos + length + OVERHEAD_BYTES
+                if 0 < length <= self.max_len and end <= len(buf):
+                    if crc16(bytes(buf[pos : end - 2])) == buf[end - 2] | (buf[end - 1] << 8):
+                        return True
+            pos = buf.find(sync, pos + 1)
+        return False
 
     def frames(self, data: bytes) -> list[Frame]:
         """Like :meth:`feed`, keeping only the frames."""

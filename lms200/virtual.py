@@ -399,7 +399,11 @@ class VirtualLMS200:
             self._queue.popleft()
             if chunk.done is not None:
                 chunk.done()
-            self._fill_continuous(now)
+            if not self._queue:
+                # The next scan is built on the next call (next_wakeup or transmit), after the
+                # bytes due now are handed over: building it here (a simulator's first ray cast
+                # takes 0.3-0.5 s) held back the tail of the reply just sent, a gap no device makes.
+                break
         return [(d, b) for d, b in out if d]
 
     def next_wakeup(self, now: float) -> float | None:

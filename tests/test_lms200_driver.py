@@ -266,3 +266,44 @@ def test_a_write_that_fails_names_the_request_once() -> None:
             lms.close()
         assert not lms._ser.is_open
         lms.close()  # closed: nothing more to do, nothing raised
+
+
+def test_a_reply_stalled_mid_frame_by_the_link_is_kept(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 32 (slowsrc.py): a reply that paused 0.3 s mid-frame (a TCP or USB link; the virtual
+    device did it too) was dropped after 0.1 s of quiet, and the request waited out its timeout
+    and was sent again (retries 1, dropped_frames 1). A consistent partial frame now waits for
+    timeout + the longest telegram's line time (0.5 + 0.85 s at 9600 baud)."""
+    from lms200_fake_port import TYPE_REPLY, answer, fake_port, reply
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload[0] == 0x3A:
+            r = reply(TYPE_REPLY)
+            return [(0.002, b"\x06"), (0.010, r[:7]), (0.310, r[7:])]  # 0.3 s of silence mid-frame
+        return answer(payload)
+
+    port = fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False)
+    assert lms.type_string == "LMS200;301063;V02.10 "
+    assert (lms.stats.retries, lms.stats.dropped_frames, lms.parser.stats.stalled) == (0, 0, 0)
+    assert sum(w[4] == 0x3A for w in port.writes) == 1
+    lms.close()
+
+
+def test_a_false_start_hiding_a_reply_is_still_dropped_after_a_tenth_of_a_second(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The longer wait is for consistent partial frames only: a false start (LEN 512 that never
+    comes) with a good reply complete behind it is given up after 0.1 s of quiet, as before."""
+    import time
+
+    from lms200_fake_port import TYPE_REPLY, answer, fake_port, reply
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload[0] == 0x3A:
+            return [(0.002, b"\x02\x80\x00\x02" + b"\x06" + reply(TYPE_REPLY))]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    t = time.monotonic()
+    lms = LMS200("fake://", baud=9600, probe=False)
+    assert time.monotonic() - t < 1.0  # 0.1 s, not the 1.35 s a consistent partial frame gets
+    assert lms.type_string == "LMS200;301063;V02.10 " and lms.stats.retries == 0 and lms.parser.stats.stalled == 1
+    lms.close()

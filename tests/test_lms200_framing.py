@@ -114,3 +114,13 @@ def test_fuzz_random_noise_never_raises_and_counts_every_byte() -> None:
     s = p.stats
     assert s.frames == 0
     assert s.skipped_bytes + s.acks + s.naks + p.pending == len(noise)
+
+
+def test_hides_frame_tells_a_false_start_from_a_partial_frame() -> None:
+    good = frame(b"\xa0\x00\x10")
+    p = FrameParser()
+    assert p.feed(good[:5]) == [] and p.pending == 5 and not p.hides_frame()  # a reply cut by a stalled link
+    assert p.feed(good[5:]) == [Frame(0x80, b"\xa0\x00\x10")]
+    assert p.feed(bytes([0x02, 0x80, 0x00, 0x02]) + good[:-1]) == [] and not p.hides_frame()  # not yet complete
+    assert p.feed(good[-1:]) == [] and p.hides_frame()  # a good frame behind LEN 512: a false start
+    assert p.idle() == [Frame(0x80, b"\xa0\x00\x10")] and p.stats.stalled == 1
