@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import numbers
 import time
+from collections import deque
 from dataclasses import dataclass
 from typing import Callable, Iterator
 
@@ -63,10 +64,13 @@ from .scan import Scan
 PROBE_BAUDS = (9600, 19200, 38400, 500000)
 MAX_TIMEOUT_S = 60.0  # longest wait for a reply (s): a device takes 3 s at most (mode changes); 1e9 waited for ever
 _READ_POLL_S = 0.01  # longest blocking read (s)
+MIRROR_PERIOD_S = 1.0 / 75.0  # one mirror turn: a scan every 13.3 ms at 1 deg (2 turns at 0.5, 4 at 0.25)
 _SHORT_REPLY_BYTES = 64  # every reply but 0xB0 fits (the 0xF7 configuration reply is 41 bytes)
 MAX_ADDRESS = 0x7F  # the reply address is device address + 0x80, one byte
-_READ_CHUNK = 4096
-_FALSE_START_GAP_S = 0.1  # quiet line after which a false start hiding a good frame is dropped  # bytes asked for when the port cannot tell how many are waiting
+_READ_CHUNK = 4096  # bytes asked for when the port cannot tell how many are waiting
+_DRAIN_READS = 16  # more reads after one while bytes are still waiting (a backlog read as one)
+_READS_KEPT = 256  # reads remembered to stamp frames (a frame held behind a false start may span many)
+_FALSE_START_GAP_S = 0.1  # quiet line after which a false start hiding a good frame is dropped
 
 
 def _variant_names() -> str:
@@ -174,6 +178,9 @@ class LMS200:
         self._retries = 0
         self._last_rx = time.monotonic()
         self._backlog: list = []  # events read past a reply, handed out by the next _pump
+        # (stream offset after a read, host time.time() when the read returned), the newest reads
+        self._reads: deque[tuple[int, float]] = deque(maxlen=_READS_KEPT)
+        self._last_end = -math.inf  # when the last scan telegram stamped ended (time.time())
         self._doing = "opening the port"  # for the message of a link that fails mid-use
         self._lost = False  # the port failed: close() only closes it
         try:
@@ -241,17 +248,64 @@ class LMS200:
         try:
             waiting = self._ser.in_waiting  # exact on serial ports; only 0 / 1 on socket:// and loop://
             data = self._ser.read(waiting if waiting > 1 else _READ_CHUNK)
+            # A backlog larger than one read (a pty hands out 4095 bytes at a time) is read whole,
+            # so that its telegrams are stamped together (see _stamps); a few reads at most.
+            piece = data
+            for _ in range(_DRAIN_READS):
+                if not piece:
+                    break
+                waiting = self._ser.in_waiting
+                if not waiting and len(piece) >= _READ_CHUNK - 1:  # a full read: the kernel may be
+                    time.sleep(0.002)  # moving the rest of the backlog into the port's buffer
+                    waiting = self._ser.in_waiting
+                if not waiting:
+                    break
+                piece = self._ser.read(waiting if waiting > 1 else _READ_CHUNK)
+                data += piece
         except (serial.SerialException, OSError) as exc:
             raise self._link_lost(exc) from None
         now = time.monotonic()
         if data:
             self._last_rx = now
+            self._reads.append((self.parser.received + len(data), time.time()))
             return self.parser.feed(data)
         if self.parser.pending:
             quiet = now - self._last_rx
             if quiet > self._idle_gap(False) or (quiet > self._idle_gap(True) and self.parser.hides_frame()):
                 return self.parser.idle()
         return []
+
+    def _stamps(self, frames: list[Frame]) -> list[float]:
+        """Host time (``time.time()``) when each of ``frames`` (0xB0 telegrams in stream order)
+        began to arrive.
+
+        A frame's last byte arrived before the read that brought it returned, earlier by at least
+        the line time of the bytes after it in that read; and telegrams in continuous mode are at
+        least one line time and one scan period apart (one telegram per scan: 26.7 ms at 0.5 deg).
+        Each frame's end is the latest time that fits those bounds, and no earlier than the
+        previous frame's end plus that spacing; its stamp is that end less its own line time. So
+        scans read together (a backlog left while the consumer was busy) keep their spacing
+        instead of sharing the time they were processed at. What the host cannot see is how long
+        a backlog waited in the port's buffer: its newest scans are stamped by the read."""
+        byte_s = frame_seconds(1, self.baud)
+        period = MIRROR_PERIOD_S * {100: 1, 50: 2, 25: 4}[self.variant[1]]
+        ends, caps = [], []
+        for frame in frames:
+            found = None
+            for end, t in reversed(self._reads):  # the oldest read that reaches the frame's end
+                if end < frame.end:
+                    break
+                found = (end, t)
+            end, t = found if found is not None else (frame.end, time.time())
+            ends.append(t - (end - frame.end) * byte_s)
+            caps.append(t)
+        gaps = [max(len(f) * byte_s, period) for f in frames]
+        for i in range(len(frames) - 2, -1, -1):  # the frames after one took their time to arrive
+            ends[i] = min(ends[i], ends[i + 1] - gaps[i + 1])
+        for i in range(len(frames)):
+            ends[i] = min(max(ends[i], self._last_end + gaps[i]), caps[i])
+            self._last_end = ends[i]
+        return [e - len(f) * byte_s for e, f in zip(ends, frames)]
 
     def _request(self, payload: bytes, what: str, timeout: float | None = None, retries: int | None = None,
                  budget: float | None = None) -> Frame:
@@ -383,7 +437,9 @@ class LMS200:
     def scans(self, stall_timeout: float | None = None, stop: Callable[[], bool] | None = None) -> Iterator[Scan]:
         """Start continuous output and yield every scan the device sends, as it sends them.
 
-        ``scan.stamp`` is the host's clock (``time.time()``, s) when the telegram began to arrive.
+        ``scan.stamp`` is the host's clock (``time.time()``, s) when the telegram began to arrive,
+        from the time of the read that brought it (see :meth:`_stamps`): scans read together
+        keep their spacing.
         Frames with a bad CRC are dropped and counted in :attr:`stats`.
 
         ``stop``: checked between reads (at least every 10 ms); the generator ends when it
@@ -402,17 +458,16 @@ class LMS200:
         while stop is None or not stop():
             events = self._pump()
             now = time.monotonic()
-            for ev in events:
-                if isinstance(ev, Frame) and ev.code == REPLY_MEASURE:
-                    stamp = time.time() - frame_seconds(len(ev), self.baud)
-                    try:
-                        scan = decode_scan(ev.payload, stamp)
-                    except LmsProtocolError:
-                        self._decode_errors += 1
-                        continue
-                    self._scans += 1
-                    last = now
-                    yield scan
+            frames = [ev for ev in events if isinstance(ev, Frame) and ev.code == REPLY_MEASURE]
+            for ev, stamp in zip(frames, self._stamps(frames)):
+                try:
+                    scan = decode_scan(ev.payload, stamp)
+                except LmsProtocolError:
+                    self._decode_errors += 1
+                    continue
+                self._scans += 1
+                last = now
+                yield scan
             if now - last > limit:
                 raise LmsTimeoutError(
                     f"no scan from {self.port} for {now - last:.2f} s in continuous mode at {self.baud} baud "

@@ -14,7 +14,7 @@ which drops such stalled false starts and returns the frames behind them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Union
 
 from .errors import InputError
@@ -27,6 +27,9 @@ class Frame:
 
     address: int
     payload: bytes
+    end: int = field(default=-1, compare=False, repr=False)
+    """Stream offset just past the frame's last byte (bytes fed to the parser before it; -1 when
+    not made by a parser): with the host time of each read, when the frame arrived."""
 
     @property
     def code(self) -> int:
@@ -79,6 +82,8 @@ class FrameParser:
         self._sync = bytes([STX, address])
         self.max_len = max_len
         self._buf = bytearray()
+        self._base = 0  # stream offset of the first byte held back
+        self.received = 0  # bytes fed so far (the stream offset of the next byte)
         self.stats = ParserStats()
 
     @property
@@ -89,6 +94,7 @@ class FrameParser:
     def reset(self) -> None:
         """Forget any buffered bytes (e.g. after a baud change); keeps the counters."""
         self.stats.skipped_bytes += len(self._buf)
+        self._base += len(self._buf)
         self._buf.clear()
 
     def feed(self, data: bytes) -> list[Event]:
@@ -99,6 +105,7 @@ class FrameParser:
             raise InputError(f"data: must be the bytes received (bytes, bytearray or memoryview), got {type(data).__name__}")
         if data:
             self._buf += data
+            self.received += len(data)
         return self._scan(final=False)
 
     def idle(self) -> list[Event]:
@@ -192,8 +199,9 @@ class FrameParser:
                 stats.skipped_bytes += 1
                 pos = start + 1
                 continue
-            events.append(Frame(buf[start + 1], bytes(buf[start + 4 : end - 2])))
+            events.append(Frame(buf[start + 1], bytes(buf[start + 4 : end - 2]), self._base + end))
             stats.frames += 1
             pos = end
         del buf[:pos]
+        self._base += pos
         return events

@@ -307,3 +307,32 @@ def test_a_false_start_hiding_a_reply_is_still_dropped_after_a_tenth_of_a_second
     assert time.monotonic() - t < 1.0  # 0.1 s, not the 1.35 s a consistent partial frame gets
     assert lms.type_string == "LMS200;301063;V02.10 " and lms.stats.retries == 0 and lms.parser.stats.stalled == 1
     lms.close()
+
+
+def test_scans_read_together_are_stamped_by_arrival_not_by_processing(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 32 (stamp.py): every scan was stamped time.time() - its line time when it was
+    processed, so the scans of a backlog read at once (the consumer busy for 0.3 s) got the same
+    stamp: diffs 300.6, 0.2, 0, 0 ... ms instead of the line's spacing. Now each scan's stamp comes
+    from the read that brought its last byte, less the line time of the bytes after it."""
+    import time
+
+    from lms200_fake_port import answer, fake_port, scan_frame
+
+    line_s = 732 * 10 / 9600  # one 361-value telegram at 9600 baud: 762.5 ms
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":  # continuous output: 5 scans waiting at once, then 2 more
+            return [*answer(payload), (0.05, b"".join(scan_frame(1000 + i) for i in range(5))),
+                    (0.15, scan_frame(2000)), (0.25, scan_frame(2001))]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False)
+    stamps = []
+    for scan in itertools.islice(lms.scans(), 7):
+        stamps.append(scan.stamp)
+        time.sleep(0.02)  # the consumer takes its time
+    diffs = np.diff(stamps)
+    np.testing.assert_allclose(diffs[:4], line_s, atol=1e-6)  # old: about 0 s each
+    assert stamps[-1] < time.time() - line_s
+    lms.close()
