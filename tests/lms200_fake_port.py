@@ -16,6 +16,7 @@ from lms200.protocol import ACK, build_frame, encode_measurement
 
 Script = Callable[[bytes, int], list[tuple[float, bytes]]]
 CONFIG_MM = bytes([0, 0, 0, 0, 0x0D, 1]) + bytes(26)  # the configuration block, units mm
+ACK_BYTE = bytes([ACK])
 TYPE_REPLY = b"\xba" + b"LMS200;301063;V02.10 " + b"\x10"
 
 

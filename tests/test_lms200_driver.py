@@ -336,3 +336,39 @@ def test_scans_read_together_are_stamped_by_arrival_not_by_processing(monkeypatc
     np.testing.assert_allclose(diffs[:4], line_s, atol=1e-6)  # old: about 0 s each
     assert stamps[-1] < time.time() - line_s
     lms.close()
+
+
+def test_a_corrupted_telegram_ending_in_0x15_is_no_nak_and_one_ending_in_0x06_hides_no_nak(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 32 (nak.py): while streaming, the stop request's ACK came after a scan telegram whose
+    CRC byte line noise had turned into 0x15: the parser reported a NAK and close() sent the stop
+    request again (retries 1). The other way round, a broken telegram ending in 0x06 before a
+    real NAK passed for an ACK, so the NAK was ignored and the request waited out its timeout."""
+    import time
+
+    from lms200_fake_port import ACK_BYTE, answer, fake_port, reply, scan_frame
+
+    broken = bytearray(scan_frame())
+    plan = {"stop": 0}
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x25" and plan["stop"] == 1:  # close(): a broken scan, then ACK and reply
+            plan["stop"] += 1
+            broken[-1] = 0x15
+            return [(0.0, bytes(broken)), (0.02, ACK_BYTE), (0.03, reply(b"\xa0\x00\x10"))]
+        if payload == b"\x3b\xb4\x00\x32\x00" and plan["stop"] == 0:  # variant: a broken telegram, then NAK
+            plan["stop"] = 1
+            broken[-1] = 0x06
+            return [(0.0, bytes(broken)), (0.02, b"\x15")]
+        return answer(payload)
+
+    port = fake_port(monkeypatch, script)
+    t = time.monotonic()
+    lms = LMS200("fake://", baud=9600, probe=False, timeout=2.0)
+    assert time.monotonic() - t < 1.0  # the NAK is seen: resent at once, not after the 2 s timeout
+    assert lms.stats.retries == 1 and lms.parser.stats.naks == 1
+    assert sum(w[4:9] == b"\x3b\xb4\x00\x32\x00" for w in port.writes) == 2
+    lms.streaming = True
+    lms.close()
+    assert sum(w[4:6] == b"\x20\x25" for w in port.writes) == 2  # once at opening, once at close
+    assert lms.stats.retries == 1 and lms.parser.stats.naks == 1 and lms.parser.stats.bad_crc == 2
