@@ -124,7 +124,8 @@ def resample_to_grid(scan: Scan) -> np.ndarray:
 
 def variant_codes(ranges361: np.ndarray, variant: tuple[int, int], units: Units) -> np.ndarray:
     """Distance codes a variant reports from 0.5 deg ranges: 1 deg takes every other beam, 100 deg
-    the beams from -50 to +50 deg, 0.25 deg adds midpoints (mean of two valid neighbours, else nan)."""
+    the beams from -50 to +50 deg, 0.25 deg adds midpoints: the mean of the two neighbours, so nan
+    (8191, not valid) next to a nan, else +inf (8183, above the maximum) next to a +inf."""
     fov, res = variant
     r = np.asarray(ranges361, dtype=np.float64)
     if fov == 100:
