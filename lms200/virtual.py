@@ -140,6 +140,14 @@ def variant_codes(ranges361: np.ndarray, variant: tuple[int, int], units: Units)
     return ranges_to_codes(r, units)
 
 
+def _is_real(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _is_integer(value: object) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
 @dataclass
 class _Chunk:
     start: float  # when the first bit goes out
@@ -173,7 +181,7 @@ class VirtualLMS200:
         units: Units = "cm",
         variant: tuple[int, int] = (180, 50),
     ) -> None:
-        if isinstance(time_scale, bool) or not isinstance(time_scale, numbers.Real):
+        if not _is_real(time_scale):
             raise InputError(f"time_scale: must be a number, got {type(time_scale).__name__} {time_scale!r}")
         if not 0 < time_scale <= MAX_TIME_SCALE:  # also nan
             raise InputError(f"time_scale: must be in (0, {MAX_TIME_SCALE:g}], got {time_scale}")
@@ -182,7 +190,7 @@ class VirtualLMS200:
                              f"1/100 deg) {', '.join(map(str, VARIANTS))} (25 = 0.25 deg only with 100 deg)")
         if units not in UNITS_CODES:
             raise InputError(f"units: must be 'mm' or 'cm', got {units!r}")
-        if isinstance(address, bool) or not isinstance(address, numbers.Integral) or not 0 <= address <= 0x7F:
+        if not _is_integer(address) or not 0 <= address <= 0x7F:
             raise InputError(f"address: must be an integer in 0..127 (replies come from address + 0x80), got {address!r}")
         self._source: Iterator[Scan] = iter(source)
         self.address = address
