@@ -26,7 +26,10 @@ from typing import Any, Iterable
 import numpy as np
 
 from lms200 import Scan
-from lms200.noise import MIN_RANGE_M
+from lms200.noise import MIN_RANGE_M, scans_of
+
+from .baselines.checks import MAX_BEAMS, fail, integer, positive
+from .errors import not_a_scan
 
 from .jit import FixedTypeCall
 
@@ -51,6 +54,9 @@ def twice_cos(increment: float) -> float:
 
 def scan_sigma(scan: Scan, fallback: float = AUTO_FALLBACK) -> float:
     """:func:`neighbour_sigma` of one scan (the sensor method's per-scan "auto"), in one compiled call."""
+    if not isinstance(scan, Scan):
+        raise not_a_scan(scan, "scan_sigma")
+    positive("fallback", fallback, "m")
     return _engine()[1](scan.ranges.reshape(1, -1), twice_cos(scan.angle_increment), float(scan.range_min),
                          float(scan.range_max), float(fallback))
 
@@ -68,12 +74,12 @@ def neighbour_sigma(scans: Scan | Iterable[Any], fallback: float = AUTO_FALLBACK
     ``features.sensor.engine.MIN_TRIPLES`` (20) triples are usable."""
     if isinstance(scans, Scan):
         return scan_sigma(scans, fallback)
+    positive("fallback", fallback, "m")  # nan came back as the sigma of too few triples
     engine = _engine()[0]
     zs: list[np.ndarray] = []
     sample: list[np.ndarray] = []
     total = 0
-    for item in scans:
-        scan = getattr(item, "scan", item)
+    for scan in scans_of(scans):
         r = scan.ranges
         z = np.empty(max(r.size - 2, 0))
         m = engine.neighbour_residuals(r, twice_cos(scan.angle_increment), max(float(scan.range_min), MIN_RANGE_M),
@@ -112,7 +118,18 @@ def fit_residuals_and_slopes(scan: Scan, window: int = FIT_WINDOW) -> tuple[np.n
 
     Also returns each residual's |dr / db| (m/rad; the run's end ranges' difference over its
     bearings' span): d |tan(b - alpha)| on a face at incidence b - alpha, the factor by which a
-    bearing error becomes a range error (:func:`bearing_sigma`), and the middle beam's range d (m)."""
+    bearing error becomes a range error (:func:`bearing_sigma`), and the middle beam's range d (m).
+
+    Raises:
+        ScanTypeError: ``scan`` is no lms200.Scan. ConfigError: ``window`` is no odd integer in
+            [3, MAX_BEAMS] (fuzzing: 0, -1 or True were numpy's LinAlgError, 2.5 an IndexError,
+            None a TypeError).
+    """
+    if not isinstance(scan, Scan):
+        raise not_a_scan(scan, "fit_residuals")
+    integer("window", window, 3, MAX_BEAMS)
+    if window % 2 == 0:
+        fail("window", "must be odd (the residual is the middle beam's)", window)
     r = np.asarray(scan.ranges, dtype=np.float64)
     if r.size < window:
         return np.empty(0), np.empty(0), np.empty(0)
@@ -152,10 +169,11 @@ def fit_sigma(scans: Scan | Iterable[Any], fallback: float = AUTO_FALLBACK, wind
     sweeps' offset. ``fallback`` with fewer than ``features.sensor.engine.MIN_TRIPLES`` (20) residuals."""
     from lms200.noise import MAX_TRIPLES, robust_scale  # noqa: PLC0415
 
+    positive("fallback", fallback, "m")
     zs: list[np.ndarray] = []
     total = 0
-    for item in [scans] if isinstance(scans, Scan) else scans:
-        z = fit_residuals(getattr(item, "scan", item), window)
+    for scan in scans_of(scans):
+        z = fit_residuals(scan, window)
         zs.append(z)
         total += z.size
         if total >= MAX_TRIPLES:
@@ -188,10 +206,10 @@ def spread_residuals(scans: Scan | Iterable[Any], window: int = FIT_WINDOW) -> t
 
     kept: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = []
     stride, total = 1, 0
-    for i, item in enumerate([scans] if isinstance(scans, Scan) else scans):
+    for i, scan in enumerate(scans_of(scans)):
         if i % stride:
             continue
-        z, t, d = fit_residuals_and_slopes(getattr(item, "scan", item), window)
+        z, t, d = fit_residuals_and_slopes(scan, window)
         kept.append((i, z, t, d))
         total += z.size
         while total >= MAX_TRIPLES and len(kept) > 1:

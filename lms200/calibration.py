@@ -37,7 +37,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from .codes import METRES_PER_UNIT
-from .noise import (BOOTSTRAP_RESAMPLES, RangeNoise, _bootstrap_scale, _remove_quantisation, estimate_quantum,
+from .noise import (BOOTSTRAP_RESAMPLES, RangeNoise, _bootstrap_scale, _remove_quantisation, estimate_quantum, scans_of,
                     estimate_range_noise, interlace_stride, line_residuals, robust_scale)
 from .scan import Scan
 
@@ -352,8 +352,8 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
         ValueError: for fewer than ``MIN_SCANS`` scans.
     """
     kept: list[Scan] = []
-    for s in scans:
-        kept.append(getattr(s, "scan", s))
+    for s in scans_of(scans):
+        kept.append(s)
         if len(kept) >= MAX_SCANS:
             break
     if len(kept) < MIN_SCANS:

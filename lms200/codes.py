@@ -92,6 +92,40 @@ def real_numbers(ranges: object, error: type[Exception] = InputError) -> np.ndar
     return a
 
 
+def real_rows(value: object, name: str, columns: int, what: str, finite: bool = True) -> np.ndarray:
+    """``value`` as a float64 (k, ``columns``) array; InputError naming ``name`` for what is no
+    array of real numbers of that shape, or (``finite``) holds nan / inf. Found by fuzzing the
+    Python API: ``slam.metrics`` read its arrays by ``reshape(-1, 4)``, so a (12, 3) trajectory
+    was scored as nine garbled (t, x, y, theta) rows, silently, and text, None or an (n, 5) array
+    was numpy's bare ValueError; ``write_tum`` wrote (3k, 4) poses as 4k garbled rows."""
+    try:
+        if value is None:  # np.asarray(None).astype(float) is nan
+            raise TypeError
+        a = np.asarray(value)
+        check_real_kind(a.dtype, InputError)
+        a = a.astype(np.float64)
+    except (InputError, TypeError, ValueError, OverflowError):
+        raise InputError(f"{name}: must be a (k, {columns}) array of real numbers ({what}), got "
+                         f"{type(value).__name__}") from None
+    if a.ndim != 2 or a.shape[1] != columns:
+        raise InputError(f"{name}: must be a (k, {columns}) array ({what}), got shape {a.shape}")
+    if finite and not np.isfinite(a).all():
+        raise InputError(f"{name}: must be finite ({what}); row {int(np.nonzero(~np.isfinite(a).all(1))[0][0])} is not")
+    return a
+
+
+def real_vector(value: object, name: str, what: str, finite: bool = True) -> np.ndarray:
+    """``value`` (any shape: a list, a column, a scalar) as a flat float64 array, by
+    :func:`real_rows`'s checks."""
+    column = value
+    if value is not None and not isinstance(value, (str, bytes)):  # those refused by type name
+        try:
+            column = np.reshape(value, (-1, 1))  # type: ignore[call-overload]
+        except (TypeError, ValueError):  # a ragged list: refused by real_rows, naming it
+            pass
+    return real_rows(column, name, 1, what, finite).reshape(-1)
+
+
 REFUSED = "(bool, complex, text and dates are refused)"
 _NOT_NUMBER_ITEMS = (bool, np.bool_, str, bytes, np.str_, np.bytes_)  # float() takes them: True as 1.0 m, "2" as 2.0 m
 

@@ -47,7 +47,7 @@ def read_log(
         LogFormatError: (while iterating) a CARMEN line that cannot be read, naming file and line.
         BagError: (while iterating) a bag that cannot be read, naming the topic and message index.
     """
-    p = _path(path)
+    p = path_of(path)
     if not isinstance(skip_bad_lines, bool):
         raise InputError(f"skip_bad_lines: must be True or False, got {skip_bad_lines!r}")
     if topic is not None and not isinstance(topic, str):
@@ -81,7 +81,7 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
             a folder, a device or in a missing folder, an unknown ``fmt``, an item of ``records``
             that is not an ``lms200.Record`` (naming its index), records that are not iterable.
     """
-    p = _path(path)
+    p = path_of(path)
     if fmt is None:
         fmt = "bag" if p.suffix == ".bag" else "robotlaser1"
     if fmt not in ("robotlaser1", "flaser", "bag", "bag2"):
@@ -124,7 +124,7 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
     return n
 
 
-def _path(path: object) -> Path:
+def path_of(path: object) -> Path:
     """``path`` as a Path; InputError naming it when it is not a str or os.PathLike."""
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(f"path: must be a str or os.PathLike, got {type(path).__name__}")

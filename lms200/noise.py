@@ -25,10 +25,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any, Iterable
+from collections.abc import Iterable, Iterator
+from typing import Any
 
 import numpy as np
 
+from .errors import InputError
 from .scan import Scan
 
 QUANTUM_CANDIDATES_M = (0.01, 0.005, 0.002, 0.001, 0.0005, 0.0002, 0.0001)
@@ -155,10 +157,22 @@ def robust_scale(z: np.ndarray) -> tuple[float, float, np.ndarray]:
     return m, s, keep
 
 
-def _as_scans(scans: Scan | Iterable[Any]) -> Iterable[Scan]:
+def scans_of(scans: Scan | Iterable[Any], name: str = "scans") -> Iterator[Scan]:
+    """The Scans of ``scans`` (one Scan, or an iterable of Scans or of records with ``.scan``),
+    one at a time; InputError naming ``name`` for what is not iterable and the index of an item
+    that is no Scan. Found by fuzzing the Python API: None or a number was Python's "object is not
+    iterable", a text or an array of ranges an AttributeError ("no attribute 'ranges'") deep in
+    the estimators (this module's, ``features.noise_estimate``'s and ``calibrate_scans``)."""
     if isinstance(scans, Scan):
-        return [scans]
-    return (getattr(s, "scan", s) for s in scans)
+        yield scans
+        return
+    if isinstance(scans, (str, bytes)) or not isinstance(scans, Iterable):
+        raise InputError(f"{name}: must be an lms200.Scan or an iterable of Scans or records, got {type(scans).__name__}")
+    for i, item in enumerate(scans):
+        scan = getattr(item, "scan", item)
+        if not isinstance(scan, Scan):
+            raise InputError(f"{name}[{i}]: must be an lms200.Scan or a record with .scan, got {type(item).__name__}")
+        yield scan
 
 
 def estimate_range_noise(scans: Scan | Iterable[Any], min_range: float = 0.0,
@@ -177,7 +191,7 @@ def estimate_range_noise(scans: Scan | Iterable[Any], min_range: float = 0.0,
     zs: list[np.ndarray] = []
     finite: list[np.ndarray] = []
     total = 0
-    for scan in _as_scans(scans):
+    for scan in scans_of(scans):
         z, _, _ = line_residuals(scan.ranges, scan.angle_increment, max(scan.range_min, min_range),
                                  min(scan.range_max, max_range))
         r = scan.ranges

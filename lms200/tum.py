@@ -10,7 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import LogFormatError
+from .codes import real_rows, real_vector
+from .errors import InputError, LogFormatError
+from .logs import path_of
 
 
 def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
@@ -28,11 +30,23 @@ def quaternion_to_yaw(q: np.ndarray) -> np.ndarray:
 
 
 def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
-    """Write planar poses (n, 3: x m, y m, theta rad) stamped in seconds to a TUM file."""
-    stamps = np.asarray(stamps, dtype=float).reshape(-1)
-    poses = np.asarray(poses, dtype=float).reshape(-1, 3)
+    """Write planar poses (n, 3: x m, y m, theta rad) stamped in seconds to a TUM file.
+
+    Raises:
+        InputError: a ``path`` that is no str or os.PathLike; ``stamps`` that are not n finite
+            numbers in non-decreasing order, or ``poses`` that are no (n, 3) array of real numbers
+            (found by fuzzing: (3k, 4) poses, a whole trajectory with its stamps, were written as
+            4k garbled rows, and decreasing or nan stamps made a file ``read_tum`` refuses).
+            Poses that are not finite (a lost SLAM run's) are written as nan.
+    """
+    path = path_of(path)
+    stamps = real_vector(stamps, "stamps", "s")
+    poses = real_rows(poses, "poses", 3, "x m, y m, theta rad", finite=False)
     if stamps.size != poses.shape[0]:
-        raise ValueError(f"stamps: {stamps.size} stamps for {poses.shape[0]} poses")
+        raise InputError(f"stamps: {stamps.size} stamps for {poses.shape[0]} poses")
+    if np.any(np.diff(stamps) < 0):
+        k = int(np.nonzero(np.diff(stamps) < 0)[0][0]) + 1
+        raise InputError(f"stamps: must not decrease (stamp {k}: {stamps[k].item()!r} s after {stamps[k - 1].item()!r} s)")
     q = yaw_to_quaternion(poses[:, 2])
     with open(path, "w", encoding="ascii") as f:
         f.write("# timestamp x y z qx qy qz qw\n")
@@ -45,7 +59,7 @@ def read_tum(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     (a row that is not 8 finite numbers, a stamp before the previous one)."""
     stamps: list[float] = []
     poses: list[tuple[float, float, float]] = []
-    with open(path, encoding="ascii", errors="replace") as f:
+    with open(path_of(path), encoding="ascii", errors="replace") as f:
         for no, line in enumerate(f, 1):
             s = line.strip()
             if not s or s.startswith("#"):

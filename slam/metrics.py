@@ -12,19 +12,37 @@ from pathlib import Path
 
 import numpy as np
 
-from lms200 import LmsbenchError, LogFormatError
+from lms200 import InputError, LmsbenchError, LogFormatError
+from lms200.codes import real_rows, real_vector
+from features.baselines.checks import positive
 
 from .models import wrap
+
+
+def checked_trajectory(traj: object, name: str, finite_poses: bool = True) -> np.ndarray:
+    """``traj`` as a float64 (n >= 1, 4) trajectory (t s, x m, y m, theta rad) whose stamps are
+    finite and do not decrease; with ``finite_poses`` its poses finite too (a reference's must be;
+    an estimate of a lost run may hold nan poses, which its scores then read as nan)."""
+    a = real_rows(traj, name, 4, "t s, x m, y m, theta rad", finite=False)
+    if a.shape[0] == 0:
+        raise InputError(f"{name}: has no poses")
+    t = a[:, 0]
+    if not np.isfinite(t).all():
+        raise InputError(f"{name}: its stamps (column 0) must be finite; row {int(np.nonzero(~np.isfinite(t))[0][0])} is not")
+    if np.any(np.diff(t) < 0):
+        k = int(np.nonzero(np.diff(t) < 0)[0][0]) + 1
+        raise InputError(f"{name}: stamps must not decrease (row {k}: {t[k].item()!r} s after {t[k - 1].item()!r} s)")
+    if finite_poses and not np.isfinite(a[:, 1:]).all():
+        raise InputError(f"{name}: its poses must be finite; row {int(np.nonzero(~np.isfinite(a[:, 1:]).all(1))[0][0])} is not")
+    return a
 
 
 def interpolate_poses(traj: np.ndarray, stamps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Poses (k, 3) of ``traj`` at ``stamps`` (linear in x, y; shortest arc in theta) and a mask of
     the stamps inside the trajectory's time span (poses outside are nan)."""
-    traj = np.asarray(traj, float).reshape(-1, 4)
-    stamps = np.asarray(stamps, float).reshape(-1)
+    traj = checked_trajectory(traj, "trajectory", finite_poses=False)
+    stamps = real_vector(stamps, "stamps", "s", finite=False)
     t = traj[:, 0]
-    if np.any(np.diff(t) < 0):
-        raise ValueError("trajectory: stamps must not decrease")
     inside = (stamps >= t[0] - 1e-9) & (stamps <= t[-1] + 1e-9)
     out = np.full((stamps.size, 3), np.nan)
     if traj.shape[0] == 1:
@@ -96,12 +114,22 @@ class AteResult:
 
 def ate(estimate: np.ndarray, truth: np.ndarray, align: bool = True) -> AteResult:
     """ATE of ``estimate`` against ``truth`` (both (n, 4) t, x, y, theta); the truth is
-    interpolated at the estimate's stamps (stamps outside its span are left out)."""
-    est = np.asarray(estimate, float).reshape(-1, 4)
-    tru, inside = interpolate_poses(truth, est[:, 0])
+    interpolated at the estimate's stamps (stamps outside its span are left out). An estimate
+    with a pose that is not finite (a lost run) scores nan (``n`` counts its poses).
+
+    Raises:
+        InputError: ``estimate`` or ``truth`` is no (n, 4) trajectory with finite stamps that do
+            not decrease (the truth's poses finite too), or fewer than 2 estimated poses fall
+            inside the truth's time span.
+    """
+    est = checked_trajectory(estimate, "estimate", finite_poses=False)
+    tru, inside = interpolate_poses(checked_trajectory(truth, "truth"), est[:, 0])
     est, tru = est[inside], tru[inside]
     if est.shape[0] < 2:
-        raise ValueError("ate: fewer than 2 estimated poses fall inside the ground truth's time span")
+        raise InputError("ate: fewer than 2 estimated poses fall inside the ground truth's time span")
+    if not np.isfinite(est).all():  # the SVD of a nan estimate was numpy's LinAlgError
+        nan = math.nan
+        return AteResult(nan, nan, nan, nan, nan, int(est.shape[0]), nan, (nan, nan), nan, False)
     if align:
         al, mirror = align_2d(est[:, 1:3], tru[:, :2])
     else:
@@ -153,10 +181,11 @@ def rpe(estimate: np.ndarray, truth: np.ndarray, delta: float = 1.0, pairs: str 
     Either way the error of a pair is E = (T_i^-1 T_j)^-1 (P_i^-1 P_j) (T truth, P estimate):
     translation |t(E)| (m, evo's ``translation_part``), rotation |theta(E)| (rad).
     """
-    if pairs not in RPE_PAIRS:
-        raise ValueError(f"pairs: must be one of {', '.join(RPE_PAIRS)}, got {pairs!r}")
-    est = np.asarray(estimate, float).reshape(-1, 4)
-    tru, inside = interpolate_poses(truth, est[:, 0])
+    if not isinstance(pairs, str) or pairs not in RPE_PAIRS:
+        raise InputError(f"pairs: must be one of {', '.join(RPE_PAIRS)}, got {pairs!r}")
+    positive("delta", delta, "m of true travel")  # nan, 0 or -1 paired every pose with itself
+    est = checked_trajectory(estimate, "estimate", finite_poses=False)
+    tru, inside = interpolate_poses(checked_trajectory(truth, "truth"), est[:, 0])
     est, tru = est[inside, 1:], tru[inside]
     steps = np.hypot(*np.diff(tru[:, :2], axis=0).T)
     if pairs == "evo":
@@ -202,9 +231,21 @@ def map_error(map_segments: np.ndarray, walls: np.ndarray, alignment: Alignment2
               max_angle: float = np.radians(10.0), max_distance: float = 0.5) -> MapError:
     """Match each map segment (k, 4: x0, y0, x1, y1, map frame) to the true wall (n, 4) nearest in
     mean endpoint distance among those within ``max_angle`` in direction that it overlaps; the map
-    is first moved into the truth frame by ``alignment`` (e.g. the ATE's)."""
-    seg = np.asarray(map_segments, float).reshape(-1, 4)
-    walls = np.asarray(walls, float).reshape(-1, 4)
+    is first moved into the truth frame by ``alignment`` (e.g. the ATE's).
+
+    Raises:
+        InputError: segments or walls that are no finite (k, 4) arrays, a wall of zero length (its
+            direction was nan), an ``alignment`` that is no Alignment2D, or a ``max_angle`` /
+            ``max_distance`` that is not a finite number > 0.
+    """
+    seg = real_rows(map_segments, "map_segments", 4, "x0, y0, x1, y1 m")
+    walls = real_rows(walls, "walls", 4, "x0, y0, x1, y1 m")
+    if alignment is not None and not isinstance(alignment, Alignment2D):
+        raise InputError(f"alignment: must be a slam.metrics.Alignment2D or None, got {type(alignment).__name__}")
+    positive("max_angle", max_angle, "rad")
+    positive("max_distance", max_distance, "m")
+    if walls.size and not np.all(np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1]) > 0):
+        raise InputError("walls: every wall must have two distinct ends (a wall of zero length has no direction)")
     if alignment is not None and seg.size:
         seg = np.column_stack((alignment.apply(seg[:, :2]), alignment.apply(seg[:, 2:])))
     if seg.shape[0] == 0 or walls.shape[0] == 0:
@@ -284,13 +325,20 @@ class RelationsResult:
 
 def relations_error(trajectory: np.ndarray, relations: np.ndarray) -> RelationsResult:
     """Kummerle et al.'s metric: for each relation (t1, t2, x, y, yaw), the estimated motion from
-    t1 to t2 (poses interpolated at the stamps) against the true one; eps = true^-1 * estimated."""
-    rel = np.asarray(relations, float).reshape(-1, 5)
+    t1 to t2 (poses interpolated at the stamps) against the true one; eps = true^-1 * estimated.
+
+    Raises:
+        InputError: a ``trajectory`` that is no (n, 4) trajectory with finite stamps that do not
+            decrease, ``relations`` that are no finite (m, 5) array (``read_relations``'s), or no
+            relation inside the trajectory's time span.
+    """
+    rel = real_rows(relations, "relations", 5, "t1 s, t2 s, x m, y m, yaw rad")
+    trajectory = checked_trajectory(trajectory, "trajectory", finite_poses=False)
     p1, in1 = interpolate_poses(trajectory, rel[:, 0])
     p2, in2 = interpolate_poses(trajectory, rel[:, 1])
     ok = in1 & in2
     if not ok.any():
-        raise ValueError("relations_error: no relation falls inside the trajectory's time span")
+        raise InputError("relations_error: no relation falls inside the trajectory's time span")
     est = relative(p1[ok], p2[ok])
     err = relative(rel[ok, 2:5], est)
     te = np.hypot(err[:, 0], err[:, 1])

@@ -1103,3 +1103,93 @@ def test_robot_limits_and_odometry_config_check_their_fields() -> None:
         RobotLimits(radius=10**400)
     with pytest.raises(InputError, match=r"^alpha3: must be a finite number in \[0, 10\], got True"):
         OdometryConfig(alpha3=True)
+
+
+# --- TUM trajectories, found by fuzzing the Python API (session 32) ---------------------------------
+def _tum_path(tmp_path):
+    return tmp_path / "t.tum"
+
+
+@pytest.mark.parametrize("stamps_of, poses_of, message", [
+    # a whole (t, x, y, theta) trajectory of 3k rows passed as poses was written as 4k garbled rows
+    (lambda tr: tr[:, 0], lambda tr: tr, r"poses: must be a \(k, 3\) array \(x m, y m, theta rad\), got shape \(6, 4\)"),
+    (lambda tr: tr[::-1, 0], lambda tr: tr[:, 1:], r"stamps: must not decrease \(stamp 1: 4\.0 s after 5\.0 s\)"),
+    (lambda tr: np.r_[np.nan, tr[1:, 0]], lambda tr: tr[:, 1:], r"stamps: must be finite \(s\); row 0 is not"),
+    (lambda tr: "abc", lambda tr: tr[:, 1:], r"stamps: must be a \(k, 1\) array of real numbers \(s\), got str"),
+    (lambda tr: tr[:3, 0], lambda tr: tr[:, 1:], r"stamps: 3 stamps for 6 poses"),
+    (lambda tr: tr[:, 0], lambda tr: None, r"poses: must be a \(k, 3\) array of real numbers .*got NoneType"),
+    (lambda tr: tr[:, 0], lambda tr: tr[:, 1:] + 1j, r"poses: must be a \(k, 3\) array of real numbers"),  # imaginary part dropped
+])
+def test_write_tum_refuses_what_read_tum_would_not_read_back(tmp_path, stamps_of, poses_of, message: str) -> None:
+    from lms200 import write_tum
+
+    traj = np.column_stack((np.arange(6.0), np.ones(6), np.zeros(6), np.full(6, 0.5)))
+    with pytest.raises(InputError, match=message):
+        write_tum(_tum_path(tmp_path), stamps_of(traj), poses_of(traj))
+    assert not _tum_path(tmp_path).exists()
+
+
+def test_tum_paths_of_the_wrong_type_are_named(tmp_path) -> None:
+    from lms200 import read_tum, write_tum
+
+    with pytest.raises(InputError, match="path: must be a str or os.PathLike, got float"):
+        write_tum(3.5, [0.0], [[0.0, 0.0, 0.0]])  # a TypeError; an int path was written as a file descriptor
+    with pytest.raises(InputError, match="path: must be a str or os.PathLike, got NoneType"):
+        read_tum(None)
+    write_tum(tmp_path / "ok.tum", [0.0, 1.0], [[0.0, 0.0, 0.1], [np.nan, 0.0, 0.2]])  # a lost run's nan pose: written
+    assert "nan" in (tmp_path / "ok.tum").read_text().splitlines()[2]
+
+
+# --- noise estimators and calibration, found by fuzzing the Python API (session 32) ----------------
+def _noise_scan() -> Scan:
+    rng = np.random.default_rng(0)
+    return Scan.lms200(3.0 / np.cos(np.linspace(-1.0, 1.0, 361)).clip(0.3) + rng.normal(0, 0.005, 361))
+
+
+@pytest.mark.parametrize("name", ["estimate_range_noise", "neighbour_sigma", "fit_sigma", "bearing_sigma",
+                                  "calibrate_scans"])
+@pytest.mark.parametrize("scans, message", [
+    (None, r"scans: must be an lms200.Scan or an iterable of Scans or records, got NoneType"),  # "not iterable"
+    (3.0, r"scans: must be an lms200.Scan or an iterable of Scans or records, got float"),
+    ("log.clf", r"scans: must be an lms200.Scan or an iterable of Scans or records, got str"),  # AttributeError
+    ([np.full(361, 3.0)], r"scans\[0\]: must be an lms200.Scan or a record with .scan, got ndarray"),  # AttributeError
+])
+def test_noise_estimators_name_what_is_no_scan(name: str, scans: object, message: str) -> None:
+    from features import noise_estimate
+    from lms200 import calibration, noise
+
+    fn = getattr(noise, name, None) or getattr(noise_estimate, name, None) or getattr(calibration, name)
+    with pytest.raises(InputError, match=message):
+        fn(scans)
+
+
+@pytest.mark.parametrize("call, error, message", [
+    (lambda ne, s: ne.scan_sigma(None), "ScanTypeError", r"scan_sigma: expected an lms200.Scan, got NoneType"),
+    (lambda ne, s: ne.fit_residuals("scan"), "ScanTypeError", r"fit_residuals: expected an lms200.Scan, got str"),
+    # window 0, -1 or True was numpy's LinAlgError, 2.5 an IndexError, None a TypeError
+    (lambda ne, s: ne.fit_sigma(s, window=0), "ConfigError", r"window: must be an integer >= 3 and <= 16384, got 0"),
+    (lambda ne, s: ne.fit_sigma(s, window=True), "ConfigError", r"window: must be an integer >= 3 .*got True"),
+    (lambda ne, s: ne.bearing_sigma([s], window=2.5), "ConfigError", r"window: must be an integer >= 3 .*got 2\.5"),
+    (lambda ne, s: ne.fit_residuals(s, window=8), "ConfigError", r"window: must be odd .*got 8"),
+    # a nan fallback came back as the noise of a scan with too few triples
+    (lambda ne, s: ne.neighbour_sigma([s], fallback=float("nan")), "ConfigError", r"fallback: must be a finite number > 0 m, got nan"),
+    (lambda ne, s: ne.scan_sigma(s, fallback=None), "ConfigError", r"fallback: must be a finite number > 0 m, got None"),
+    (lambda ne, s: ne.fit_sigma([], fallback="0.005"), "ConfigError", r"fallback: must be a finite number > 0 m, got '0.005'"),
+])
+def test_noise_estimate_arguments_are_named(call, error: str, message: str) -> None:
+    from features import noise_estimate
+
+    with pytest.raises(LmsbenchError, match=message) as info:
+        call(noise_estimate, _noise_scan())
+    assert type(info.value).__name__ == error
+
+
+def test_noise_estimators_still_take_scans_and_records() -> None:
+    from features import noise_estimate
+    from lms200.noise import estimate_range_noise
+
+    s = _noise_scan()
+    records = [Record(s), Record(s.replace(stamp=1.0))]
+    assert noise_estimate.fit_sigma(records) == noise_estimate.fit_sigma([s, s.replace(stamp=1.0)])
+    assert 0.003 < noise_estimate.fit_sigma(s) < 0.008
+    assert 0.003 < estimate_range_noise(iter(records)).sigma_m < 0.008

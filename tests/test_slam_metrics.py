@@ -130,3 +130,52 @@ def test_interpolation_takes_the_short_way_round():
     pose, inside = interpolate_poses(traj, np.array([0.5, 2.0]))
     assert inside.tolist() == [True, False]
     assert abs(abs(pose[0, 2]) - np.pi) < 1e-9
+
+
+# --- bad input, found by fuzzing the Python API (session 32) ----------------------------------------
+@pytest.mark.parametrize("call, message", [
+    # a (12, 3) trajectory (no stamps) was read by reshape(-1, 4) as nine garbled rows, silently
+    (lambda t: ate(t[:12, 1:], t), r"estimate: must be a \(k, 4\) array \(t s, x m, y m, theta rad\), got shape \(12, 3\)"),
+    (lambda t: rpe(t, t[:12, 1:]), r"truth: must be a \(k, 4\) array .*got shape \(12, 3\)"),
+    (lambda t: ate(t, "abc"), r"truth: must be a \(k, 4\) array of real numbers .*got str"),  # numpy's ValueError
+    (lambda t: ate(t, None), r"truth: must be a \(k, 4\) array of real numbers .*got NoneType"),
+    (lambda t: ate(t, t[:0]), r"truth: has no poses"),  # IndexError
+    (lambda t: ate(t, t[::-1]), r"truth: stamps must not decrease \(row 1: 15\.8 s after 16\.0 s\)"),  # a ValueError
+    (lambda t: rpe(t[::-1], t), r"estimate: stamps must not decrease"),  # paired poses in reverse, silently
+    (lambda t: ate(np.where(np.arange(4) == 0, np.nan, t), t), r"estimate: its stamps \(column 0\) must be finite; row 0"),
+    (lambda t: ate(t, np.where(np.arange(4) == 1, np.nan, t)), r"truth: its poses must be finite; row 0 is not"),
+    (lambda t: ate(t[:1], t), r"ate: fewer than 2 estimated poses"),  # a ValueError, not an LmsbenchError
+    (lambda t: rpe(t, t, delta=0.0), r"delta: must be a finite number > 0 m of true travel, got 0\.0"),
+    (lambda t: rpe(t, t, delta=float("nan")), r"delta: must be a finite number > 0 .*got nan"),
+    (lambda t: rpe(t, t, delta="1"), r"delta: must be a finite number > 0 .*got '1'"),  # numpy's UFuncTypeError
+    (lambda t: rpe(t, t, delta=10**400), r"delta: must be a finite number > 0 m of true travel, got 1000"),  # OverflowError
+    (lambda t: rpe(t, t, pairs=None), r"pairs: must be one of every, evo, got None"),
+    (lambda t: relations_error(t, np.array([[1.0, 2.0, 0.1, 0.0]])), r"relations: must be a \(k, 5\) array"),
+    (lambda t: relations_error(t, np.array([[1.0, 2.0, np.nan, 0.0, 0.0]])), r"relations: must be finite .*row 0"),
+    (lambda t: relations_error(t, np.array([[100.0, 200.0, 0.1, 0.0, 0.0]])), r"no relation falls inside"),
+    (lambda t: interpolate_poses(t, "abc"), r"stamps: must be a \(k, 1\) array of real numbers \(s\), got str"),
+    (lambda t: map_error(np.array([[0, 0, 1, 0]]), np.array([[0, 0, 0, 0]])), r"walls: every wall must have two distinct ends"),
+    (lambda t: map_error(np.array([[0, 0, 1, 0]]), np.array([[0, 0, 2, 0]]), alignment=0.5),
+     r"alignment: must be a slam.metrics.Alignment2D or None, got float"),  # AttributeError
+    (lambda t: map_error(np.array([[0, 0, 1, 0]]), np.array([[0, 0, 2, 0]]), max_distance=None),
+     r"max_distance: must be a finite number > 0 m, got None"),  # TypeError
+    (lambda t: map_error(np.array([[0, 0, 1]]), np.array([[0, 0, 2, 0]])), r"map_segments: must be a \(k, 4\) array"),
+    (lambda t: map_error(np.array([[0, np.nan, 1, 0]]), np.array([[0, 0, 2, 0]])), r"map_segments: must be finite"),
+])
+def test_metrics_name_a_bad_argument(call, message: str) -> None:
+    """InputError, or ConfigError for the numbers (features.baselines.checks.positive): both are
+    LmsbenchErrors and ValueErrors."""
+    with pytest.raises(LmsbenchError, match=message) as info:
+        call(square_path())
+    assert isinstance(info.value, ValueError)
+
+
+def test_ate_of_a_lost_run_is_nan_not_a_linalg_error() -> None:
+    """A run whose estimate went nan (an unhealthy paper-preset run) scores nan; the SVD raised
+    numpy's LinAlgError ("SVD did not converge")."""
+    truth = square_path()
+    est = truth.copy()
+    est[5, 1] = np.nan
+    a = ate(est, truth)
+    assert np.isnan(a.rmse) and np.isnan(a.rotation) and a.n == truth.shape[0] and not a.mirrored
+    assert ate(truth, truth).rmse == pytest.approx(0.0, abs=1e-12)
