@@ -13,6 +13,7 @@ pose gets None, so a record written without odometry or truth reads back without
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from fractions import Fraction
 from pathlib import Path
 from typing import Any, Iterable, Iterator
 
@@ -46,9 +47,15 @@ def _typestore(ros1: bool):  # noqa: ANN202 - rosbags' Typestore
     return get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
 
 
-def _split_stamp(t: float) -> tuple[int, int]:
-    ns = int(round(t * 1e9))
-    return ns // 1_000_000_000, ns % 1_000_000_000
+def _stamp_ns(t: float) -> int:
+    """A float stamp (s) as the nearest integer nanosecond, computed exactly (``round(t * 1e9)``
+    in float64 was off by up to 119 ns for epoch stamps: 1602566218.7060776 stored ...706077696)."""
+    return round(Fraction(t) * 1_000_000_000)
+
+
+def _ns_stamp(ns: int) -> float:
+    """Integer nanoseconds as the float (s) nearest to them (``sec + nanosec * 1e-9`` was not)."""
+    return float(Fraction(ns, 1_000_000_000))
 
 
 def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOPIC) -> int:
@@ -91,8 +98,8 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
 
         for seq, rec in enumerate(records):
             scan = rec.scan
-            sec, nsec = _split_stamp(scan.stamp)
-            ns = sec * 1_000_000_000 + nsec
+            ns = _stamp_ns(scan.stamp)
+            sec, nsec = divmod(ns, 1_000_000_000)
             header_kw = {"stamp": Time(sec=sec, nanosec=nsec), "frame_id": "laser"}
             if ros1:
                 header_kw["seq"] = seq
@@ -136,7 +143,11 @@ def _pose_of(msg) -> Pose2D:  # noqa: ANN001
 
 
 def _stamp_of(msg) -> float:  # noqa: ANN001
-    return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+    return _ns_stamp(_header_ns(msg))
+
+
+def _header_ns(msg) -> int:  # noqa: ANN001
+    return int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
 
 
 def _scan_of(msg) -> Scan:  # noqa: ANN001
