@@ -20,7 +20,7 @@ from typing import Any, Iterable, Iterator
 import numpy as np
 
 from .codes import finite_negative
-from .errors import LmsbenchError, LogNotFoundError
+from .errors import InputError, LmsbenchError, LogNotFoundError
 from .records import Pose2D, Record
 from .scan import Scan, snap_angle
 from .timing import mirror_time_increment, scan_period, smallest_range
@@ -31,8 +31,15 @@ TRUTH_TOPIC = "/ground_truth"
 _POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "nav_msgs/msg/Odometry")
 
 
+MAX_STAMP_NS = 2**31 * 1_000_000_000  # a stamp a bag stores: 0 <= stamp < 2**31 s (int32 seconds in ROS 2)
+
+
 class BagError(LmsbenchError):
     """A bag that cannot be read as laser scans."""
+
+
+class BagExistsError(InputError, FileExistsError):
+    """``write_log`` to a bag path that exists (a bag is never written over)."""
 
 
 def is_bag(path: str | Path) -> bool:
@@ -66,11 +73,15 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
     the mirror's time per beam step (0.5 deg: 18.5 us), ``scan_time`` the sensor's scan period
     (0.5 deg: 26.7 ms), ``range_min`` the scan's own, or one code unit (1 mm, or 1 cm for cm-mode
     scans) where that is 0.
+
+    Raises:
+        BagExistsError: (an ``InputError`` and a ``FileExistsError``) ``path`` exists.
+        InputError: a scan stamp outside 0 <= stamp < 2**31 s (naming the item and the stamp).
     """
     path = Path(path)
     ros1 = path.suffix == ".bag"
-    if path.exists():
-        raise FileExistsError(f"{path} exists; bags are not overwritten")
+    if path.exists() or path.is_symlink():  # was a bare FileExistsError
+        raise BagExistsError(f"path: {path} exists; a bag is never written over: remove it or name another")
     ts = _typestore(ros1)
     T = ts.types
     LaserScan, Header, Time = T["sensor_msgs/msg/LaserScan"], T["std_msgs/msg/Header"], T["builtin_interfaces/msg/Time"]
@@ -99,6 +110,9 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
         for seq, rec in enumerate(records):
             scan = rec.scan
             ns = _stamp_ns(scan.stamp)
+            if scan.stamp < 0 or ns >= MAX_STAMP_NS:  # was struct.error from rosbags' serialiser
+                raise InputError(f"records: item {seq}: stamp {scan.stamp!r} s cannot be stored in a bag "
+                                 f"(0 <= stamp < 2**31 s = {MAX_STAMP_NS // 1_000_000_000} s, a ROS time's range)")
             sec, nsec = divmod(ns, 1_000_000_000)
             header_kw = {"stamp": Time(sec=sec, nanosec=nsec), "frame_id": "laser"}
             if ros1:

@@ -7,6 +7,7 @@ directly, so the reader is checked on bags it did not write itself.
 from __future__ import annotations
 
 import math
+import re
 from fractions import Fraction
 from pathlib import Path
 
@@ -83,3 +84,28 @@ def test_a_stamp_below_2_to_23_s_reads_back_to_the_nearest_nanosecond(tmp_path: 
     back = [r.scan.stamp for r in read_log(tmp_path / "s.bag")]
     assert back == [float(Fraction(round(Fraction(t) * 10**9), 10**9)) for t in stamps]
     assert back[:3] == [0.1, 3.186770618, 1000.026667]
+
+
+# --- what write_log cannot store in a bag -----------------------------------------------------------
+@pytest.mark.parametrize("name", ["s.bag", "s2"])
+@pytest.mark.parametrize("stamp", [-1.5, -1e-10, 2.0**31, 2.0**31 + 0.5, 2.0**32 + 0.5, 1e12])
+def test_a_stamp_a_bag_cannot_hold_is_an_input_error(tmp_path: Path, name: str, stamp: float) -> None:
+    """-1.5 s and >= 2**31 s raised struct.error from rosbags' serialiser (ROS 2 read -1.5 back)."""
+    recs = [Record(_scan(1.0)), Record(_scan(stamp))]
+    with pytest.raises(InputError, match=rf"records: item 1: stamp {re.escape(repr(stamp))} s cannot be stored in a "
+                                         r"bag \(0 <= stamp < 2\*\*31 s = 2147483648 s"):
+        write_log(tmp_path / name, recs, fmt="bag" if name.endswith(".bag") else "bag2")
+    assert not (tmp_path / name).exists()
+    last = np.nextafter(2.0**31, 0)  # the largest stamp a bag holds
+    write_log(tmp_path / name, [Record(_scan(0.0)), Record(_scan(last))], fmt="bag" if name.endswith(".bag") else "bag2")
+    assert [r.scan.stamp for r in read_log(tmp_path / name)] == [0.0, last]
+
+
+@pytest.mark.parametrize("name", ["a.bag", "a2"])
+def test_writing_over_an_existing_bag_is_an_input_error_naming_it(tmp_path: Path, name: str) -> None:
+    fmt = "bag" if name.endswith(".bag") else "bag2"
+    write_log(tmp_path / name, [Record(_scan(1.0))], fmt=fmt)
+    with pytest.raises(InputError, match=rf"path: .*{name} exists; a bag is never written over") as info:
+        write_log(tmp_path / name, [Record(_scan(2.0))], fmt=fmt)
+    assert isinstance(info.value, FileExistsError) and isinstance(info.value, LmsbenchError)
+    assert [r.scan.stamp for r in read_log(tmp_path / name)] == [1.0]  # left as it was
