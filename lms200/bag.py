@@ -23,6 +23,7 @@ from .codes import finite_negative
 from .errors import InputError, LmsbenchError, LogNotFoundError
 from .records import Pose2D, Record
 from .scan import Scan, snap_angle
+from .tum import quaternion_to_yaw
 from .timing import mirror_time_increment, scan_period, smallest_range
 
 SCAN_TOPIC = "/scan"
@@ -150,9 +151,14 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
 
 
 def _pose_of(msg) -> Pose2D:  # noqa: ANN001
+    """A PoseStamped's or Odometry's (x, y, yaw); ValueError for a zero or non-finite quaternion
+    (normalised otherwise: (0, 0, 1, 1) is 90 deg, was 116.57 deg; (0, 0, 0, 0) was yaw 0)."""
     pose = msg.pose.pose if hasattr(msg.pose, "pose") else msg.pose
     q = pose.orientation
-    yaw = float(np.arctan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z)))
+    yaw = float(quaternion_to_yaw(np.array([q.x, q.y, q.z, q.w], dtype=float))[0])
+    if np.isnan(yaw):
+        raise ValueError(f"orientation (x, y, z, w) = ({q.x!r}, {q.y!r}, {q.z!r}, {q.w!r}) is no rotation "
+                         "(a quaternion must have a positive finite norm)")
     return (float(pose.position.x), float(pose.position.y), yaw)
 
 

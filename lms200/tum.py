@@ -1,4 +1,5 @@
-"""TUM trajectory files: one pose a line, ``t x y z qx qy qz qw`` (s, m, unit quaternion).
+"""TUM trajectory files: one pose a line, ``t x y z qx qy qz qw`` (s, m, quaternion; read
+normalised, so any positive norm gives the same yaw).
 
 Planar poses (x, y, theta) are written with z = 0 and a rotation about z only.
 """
@@ -12,7 +13,6 @@ import numpy as np
 
 from .codes import real_rows, real_vector
 from .errors import InputError, LogFormatError
-from .logs import path_of
 
 
 def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
@@ -23,10 +23,17 @@ def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
 
 
 def quaternion_to_yaw(q: np.ndarray) -> np.ndarray:
-    """(n, 4) quaternions (qx, qy, qz, qw) -> (n,) yaw (rad, in (-pi, pi])."""
+    """(n, 4) quaternions (qx, qy, qz, qw) -> (n,) yaw (rad, in (-pi, pi]) of the rotations they
+    stand for. A quaternion of any positive finite norm is normalised first (``(0, 0, 1, 1)`` is
+    90 deg; the unit formula gave 116.57 deg); a zero or non-finite one gives nan (no rotation)."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    qx, qy, qz, qw = q.T
-    return np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    scale = np.max(np.abs(q), axis=1)  # divide by it first: no overflow or underflow in the squares
+    ok = np.isfinite(q).all(axis=1) & (scale > 0)
+    u = q / np.where(ok, scale, 1.0)[:, None]
+    qx, qy, qz, qw = u.T
+    # atan2(2 (wz + xy), 1 - 2 (y^2 + z^2)) for a unit q, written so that it holds for any norm
+    yaw = np.arctan2(2.0 * (qw * qz + qx * qy), qw * qw + qx * qx - qy * qy - qz * qz)
+    return np.where(ok, yaw, np.nan)
 
 
 def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
@@ -39,6 +46,8 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
             4k garbled rows, and decreasing or nan stamps made a file ``read_tum`` refuses).
             Poses that are not finite (a lost SLAM run's) are written as nan.
     """
+    from .logs import path_of  # not at the top: logs imports bag, which imports this module
+
     path = path_of(path)
     stamps = real_vector(stamps, "stamps", "s")
     poses = real_rows(poses, "poses", 3, "x m, y m, theta rad", finite=False)
@@ -55,8 +64,11 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
 
 
 def read_tum(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """Read a TUM file: (stamps (n,) s, poses (n, 3) x, y, yaw). Raises LogFormatError with the line
-    (a row that is not 8 finite numbers, a stamp before the previous one)."""
+    """Read a TUM file: (stamps (n,) s, poses (n, 3) x, y, yaw). A quaternion of any positive norm
+    is normalised (``0 0 0 0 0 0 1 1`` is 90 deg). Raises LogFormatError with the line (a row that
+    is not 8 finite numbers, a zero quaternion, a stamp before the previous one)."""
+    from .logs import path_of  # not at the top: logs imports bag, which imports this module
+
     stamps: list[float] = []
     poses: list[tuple[float, float, float]] = []
     with open(path_of(path), encoding="ascii", errors="replace") as f:
@@ -75,6 +87,9 @@ def read_tum(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
                 raise LogFormatError(path, no, f"TUM row has a non-finite number: {s[:60]!r}")
             if stamps and v[0] < stamps[-1]:
                 raise LogFormatError(path, no, f"TUM stamps go backwards ({v[0]:.6f} s after {stamps[-1]:.6f} s)")
+            yaw = float(quaternion_to_yaw(np.array(v[4:8]))[0])
+            if math.isnan(yaw):  # (0, 0, 0, 0) read as yaw 0
+                raise LogFormatError(path, no, f"TUM row's quaternion (qx qy qz qw) is zero: {s[:60]!r}")
             stamps.append(v[0])
-            poses.append((v[1], v[2], float(quaternion_to_yaw(np.array(v[4:8]))[0])))
+            poses.append((v[1], v[2], yaw))
     return np.array(stamps), np.array(poses).reshape(-1, 3)

@@ -109,3 +109,60 @@ def test_writing_over_an_existing_bag_is_an_input_error_naming_it(tmp_path: Path
         write_log(tmp_path / name, [Record(_scan(2.0))], fmt=fmt)
     assert isinstance(info.value, FileExistsError) and isinstance(info.value, LmsbenchError)
     assert [r.scan.stamp for r in read_log(tmp_path / name)] == [1.0]  # left as it was
+
+
+# --- quaternions: normalised, a zero one refused ---------------------------------------------------
+_POS = (1.0, 2.0)
+
+
+def _pose_bag(path: Path, xy: tuple[float, float], q: tuple[float, float, float, float]) -> Path:
+    """Three scans at 10, 11, 12 s, each with its odometry (x, y, q) just before it, by rosbags."""
+    msgs: list[tuple] = []
+    for i in range(3):
+        msgs += [("/odom", 10 + i, 10 + i, (*xy, *q)), ("/scan", 10 + i, 10 + i, 1.0)]
+    return _ros2_bag(path, msgs)
+
+
+@pytest.mark.parametrize("q, deg", [((0.0, 0.0, 1.0, 1.0), 90.0), ((0.0, 0.0, 3e-200, 3e-200), 90.0),
+                                    ((0.0, 0.0, 1e200, -1e200), -90.0), ((0.0, 0.0, 0.0, 2.0), 0.0),
+                                    ((0.0, 0.0, -1.5 * math.sqrt(3), 1.5), -120.0)])
+def test_a_bag_pose_of_a_non_unit_quaternion_is_normalised(tmp_path: Path, q: tuple, deg: float) -> None:
+    """(0, 0, 1, 1) read as 116.57 deg (the unit formula on a quaternion of norm sqrt 2)."""
+    out = list(read_log(_pose_bag(tmp_path / "b", _POS, q)))
+    assert [r.odom[:2] for r in out] == [_POS] * 3
+    assert [math.degrees(r.odom[2]) for r in out] == pytest.approx([deg] * 3, abs=1e-9)
+
+
+@pytest.mark.parametrize("q", [(0.0, 0.0, 0.0, 0.0), (0.0, 0.0, math.nan, 1.0), (0.0, 0.0, math.inf, 1.0)])
+def test_a_bag_pose_with_a_zero_or_non_finite_quaternion_is_a_bag_error(tmp_path: Path, q: tuple) -> None:
+    """(0, 0, 0, 0) was read as yaw 0."""
+    bag = _pose_bag(tmp_path / "b", _POS, q)
+    with pytest.raises(BagError, match=rf"b: topic /odom message 0: cannot read: orientation \(x, y, z, w\) = "
+                                       rf"\(0\.0, 0\.0, {re.escape(repr(q[2]))}, {re.escape(repr(q[3]))}\) is no rotation"):
+        list(read_log(bag))
+    reader = read_log(bag, skip_bad_lines=True)
+    out = list(reader)
+    assert [r.odom for r in out] == [None] * 3 and [r.scan.stamp for r in out] == [10.0, 11.0, 12.0]
+    assert [i for i, _ in reader.stats.skipped] == [0, 1, 2]
+
+
+def test_a_tum_quaternion_is_normalised_and_a_zero_one_is_refused(tmp_path: Path) -> None:
+    from lms200 import read_tum
+
+    path = tmp_path / "u.tum"
+    path.write_text("0 0 0 0 0 0 1 1\n1 0 0 0 0 0 0.70710678 0.70710678\n2 0 0 0 0 0 -3 3\n3 5 6 0 0 0 0 7\n")
+    stamps, poses = read_tum(path)
+    assert np.degrees(poses[:, 2]) == pytest.approx([90.0, 90.0, -90.0, 0.0], abs=1e-6)  # was 116.57 deg first
+    assert poses[3, :2].tolist() == [5.0, 6.0]
+    path.write_text("0 0 0 0 0 0 1 1\n1 0 0 0 0 0 0 0\n")  # was yaw 0
+    with pytest.raises(LogFormatError, match=r"u\.tum:2: TUM row's quaternion \(qx qy qz qw\) is zero: '1 0 0 0 0 0 0 0'"):
+        read_tum(path)
+
+
+def test_quaternion_to_yaw_normalises_and_gives_nan_for_no_rotation() -> None:
+    from lms200.tum import quaternion_to_yaw
+
+    q = np.array([[0, 0, 1, 1], [0, 0, 0, 0], [0, 0, np.nan, 1], [0, 0, 0, 1], [0, 0, 1, 0]], dtype=float)
+    yaw = quaternion_to_yaw(q)
+    assert yaw[[0, 3, 4]] == pytest.approx([np.pi / 2, 0.0, np.pi])
+    assert np.isnan(yaw[1]) and np.isnan(yaw[2])
