@@ -166,3 +166,45 @@ def test_quaternion_to_yaw_normalises_and_gives_nan_for_no_rotation() -> None:
     yaw = quaternion_to_yaw(q)
     assert yaw[[0, 3, 4]] == pytest.approx([np.pi / 2, 0.0, np.pi])
     assert np.isnan(yaw[1]) and np.isnan(yaw[2])
+
+
+# --- TUM: nan poses, missing paths ------------------------------------------------------------------
+def test_a_lost_pose_write_tum_writes_reads_back_with_allow_nan(tmp_path: Path) -> None:
+    """write_tum wrote nan poses that read_tum refused: now read_tum(path, allow_nan=True) reads them."""
+    from lms200 import read_tum, write_tum
+
+    path = tmp_path / "t.tum"
+    poses = np.array([[1.0, 2.0, 0.5], [np.nan, 0.0, 0.2], [np.nan, np.nan, np.nan], [3.0, -1.0, -3.0]])
+    write_tum(path, [0.0, 1.0, 2.0, 3.0], poses)
+    with pytest.raises(LogFormatError, match=r"t\.tum:3: TUM row has a non-finite number: '1\.000000 nan 0\.000000"):
+        read_tum(path)  # a ground truth must be finite: the default refuses, as slam needs
+    stamps, back = read_tum(path, allow_nan=True)
+    assert stamps.tolist() == [0.0, 1.0, 2.0, 3.0]
+    np.testing.assert_allclose(back, poses, atol=1e-6)  # nan where nan was written (assert_allclose: nan == nan)
+    assert np.isnan(back[1, 0]) and back[1, 1:].tolist() == pytest.approx([0.0, 0.2], abs=1e-6)
+    path.write_text("nan 0 0 0 0 0 0 1\n")  # a stamp must be finite either way
+    with pytest.raises(LogFormatError, match=r"t\.tum:1: TUM row has a non-finite number"):
+        read_tum(path, allow_nan=True)
+    path.write_text("0 inf 0 0 0 0 0 1\n")
+    with pytest.raises(LogFormatError, match=r"t\.tum:1: TUM row has a non-finite number"):
+        read_tum(path, allow_nan=True)
+
+
+def test_write_tum_refuses_an_infinite_pose_read_tum_could_not_read(tmp_path: Path) -> None:
+    from lms200 import write_tum
+
+    with pytest.raises(InputError, match=r"poses: row 1 is infinite \(\[inf, 0\.0, 0\.0\]\); a lost pose is written as nan"):
+        write_tum(tmp_path / "t.tum", [0.0, 1.0], [[0.0, 0.0, 0.0], [np.inf, 0.0, 0.0]])
+    assert not (tmp_path / "t.tum").exists()
+
+
+def test_read_tum_of_a_missing_path_or_a_folder_is_log_not_found(tmp_path: Path) -> None:
+    """Were a raw FileNotFoundError / IsADirectoryError (read_log says LogNotFoundError)."""
+    from lms200 import read_tum
+
+    with pytest.raises(LogNotFoundError, match=r"no such TUM file: .*missing\.tum"):
+        read_tum(tmp_path / "missing.tum")
+    with pytest.raises(LogNotFoundError, match=r"is a folder, not a TUM file"):
+        read_tum(tmp_path)
+    with pytest.raises(InputError, match="allow_nan: must be True or False, got str"):
+        read_tum(tmp_path / "missing.tum", allow_nan="yes")
