@@ -151,15 +151,18 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
 
 
 def _pose_of(msg) -> Pose2D:  # noqa: ANN001
-    """A PoseStamped's or Odometry's (x, y, yaw); ValueError for a zero or non-finite quaternion
-    (normalised otherwise: (0, 0, 1, 1) is 90 deg, was 116.57 deg; (0, 0, 0, 0) was yaw 0)."""
+    """A PoseStamped's or Odometry's (x, y, yaw); ValueError for a position that is not finite or a
+    zero or non-finite quaternion (normalised otherwise: (0, 0, 1, 1) is 90 deg, was 116.57 deg; (0, 0, 0, 0) was yaw 0)."""
     pose = msg.pose.pose if hasattr(msg.pose, "pose") else msg.pose
     q = pose.orientation
     yaw = float(quaternion_to_yaw(np.array([q.x, q.y, q.z, q.w], dtype=float))[0])
     if np.isnan(yaw):
         raise ValueError(f"orientation (x, y, z, w) = ({q.x!r}, {q.y!r}, {q.z!r}, {q.w!r}) is no rotation "
                          "(a quaternion must have a positive finite norm)")
-    return (float(pose.position.x), float(pose.position.y), yaw)
+    x, y = float(pose.position.x), float(pose.position.y)
+    if not (np.isfinite(x) and np.isfinite(y)):  # was Record's "odom: must be finite", without bag, topic or index
+        raise ValueError(f"position (x, y) = ({x!r}, {y!r}) is not finite")
+    return (x, y, yaw)
 
 
 def _stamp_of(msg) -> float:  # noqa: ANN001

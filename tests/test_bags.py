@@ -208,3 +208,19 @@ def test_read_tum_of_a_missing_path_or_a_folder_is_log_not_found(tmp_path: Path)
         read_tum(tmp_path)
     with pytest.raises(InputError, match="allow_nan: must be True or False, got str"):
         read_tum(tmp_path / "missing.tum", allow_nan="yes")
+
+
+# --- a pose that is not finite -------------------------------------------------------------------------
+@pytest.mark.parametrize("xy", [(math.nan, 0.0), (0.0, math.inf)])
+def test_a_bag_pose_that_is_not_finite_is_a_bag_error_naming_the_message(tmp_path: Path, xy: tuple) -> None:
+    """position x = nan raised InputError 'odom: must be finite' (from Record, built outside the try)
+    without bag, topic or index, even with skip_bad_lines=True."""
+    bag = _pose_bag(tmp_path / "b", xy, (0.0, 0.0, 0.0, 1.0))
+    with pytest.raises(BagError, match=rf"b: topic /odom message 0: cannot read: position \(x, y\) = "
+                                       rf"\({re.escape(repr(xy[0]))}, {re.escape(repr(xy[1]))}\) is not finite"):
+        list(read_log(bag))
+    reader = read_log(bag, skip_bad_lines=True)
+    out = list(reader)
+    assert [r.odom for r in out] == [None] * 3 and [r.scan.stamp for r in out] == [10.0, 11.0, 12.0]
+    assert [i for i, _ in reader.stats.skipped] == [0, 1, 2]
+    assert "topic /odom message 2: position" in reader.stats.skipped[2][1]
