@@ -42,7 +42,7 @@ from lms200.errors import InputError
 
 from .baselines import checks
 from .errors import not_a_scan
-from .types import FeatureSet
+from .types import FeatureSet, check_line_rows
 
 
 TRUTH_FIELDS = ("segments", "segment_beams", "corners", "corner_beams")  # sim.VisibleTruth's, as the scoring reads them
@@ -81,11 +81,14 @@ def _lines(fs: FeatureSet | np.ndarray, name: str = "fs") -> np.ndarray:
     InputError naming ``name`` for anything else (None was an AttributeError: no line_array)."""
     if not isinstance(fs, np.ndarray):
         check_features(fs, name)
-        return np.asarray(fs.line_array(), dtype=np.float64).reshape(-1, 8)
-    if fs.dtype.kind not in "iuf" or fs.size % 8 or fs.ndim > 2 or (fs.ndim == 2 and fs.shape[1] != 8):
-        raise InputError(f"{name}: a line array must be (k, 8) numbers (rho, alpha, x0, y0, x1, y1, first, last: "
-                         f"FeatureSet.line_array()), got shape {fs.shape} of {fs.dtype}")
-    return np.asarray(fs, dtype=np.float64).reshape(-1, 8)
+        rows = np.asarray(fs.line_array(), dtype=np.float64).reshape(-1, 8)
+    else:
+        if fs.dtype.kind not in "iuf" or fs.size % 8 or fs.ndim > 2 or (fs.ndim == 2 and fs.shape[1] != 8):
+            raise InputError(f"{name}: a line array must be (k, 8) numbers (rho, alpha, x0, y0, x1, y1, first, last: "
+                             f"FeatureSet.line_array()), got shape {fs.shape} of {fs.dtype}")
+        rows = np.asarray(fs, dtype=np.float64).reshape(-1, 8)
+    check_line_rows(rows, name)
+    return rows
 
 
 def truth_arrays(truth: Any, need: tuple[str, ...] = TRUTH_FIELDS, finite: bool = True) -> dict[str, np.ndarray]:

@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from lms200.errors import InputError
+
 LINE_COLUMNS = ("rho", "alpha", "x0", "y0", "x1", "y1", "cov_rr", "cov_ra", "cov_ar", "cov_aa")
 CORNER_COLUMNS = ("x", "y", "angle")
 
@@ -65,6 +67,30 @@ class Corner:
     lines: tuple[int, int]
 
 
+def check_line_rows(rows: np.ndarray, name: str) -> None:
+    """InputError naming ``name`` and the first bad line of ``rows`` ((k, 8) float: rho, alpha,
+    x0, y0, x1, y1, first, last, ``FeatureSet.line_array()``'s) unless every line has finite
+    values, rho >= 0 m and beams 0 <= first <= last, whole numbers (any finite alpha names a
+    normal; a line through the origin may carry either). Found by fuzzing the Python API: a
+    hand-built Line with a nan, negative or inf rho or first > last scored a nan ray RMSE and
+    explained fraction, silently."""
+    if rows.shape[0] == 0:
+        return
+    rho, first, last = rows[:, 0], rows[:, 6], rows[:, 7]
+    with np.errstate(invalid="ignore"):
+        checks = (
+            (~np.isfinite(rows).all(axis=1), "its values must be finite"),
+            (rho < 0, "rho must be >= 0 m"),
+            ((first < 0) | (first > last) | (first != np.floor(first)) | (last != np.floor(last)),
+             "its beams must be whole numbers with 0 <= first <= last"),
+        )
+    for bad, what in checks:
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            shown = ", ".join(f"{v:g}" for v in rows[i].tolist())
+            raise InputError(f"{name}: line {i}: {what} (rho, alpha, x0, y0, x1, y1, first, last = {shown})")
+
+
 class Lines(Sequence):
     """The lines of one scan as arrays, in beam order; ``lines[i]`` is the ``Line`` of row i.
 
@@ -100,14 +126,33 @@ class Lines(Sequence):
 
     @classmethod
     def from_lines(cls, lines: Sequence[Line]) -> Lines:
-        """Lines from ``Line`` records."""
+        """Lines from ``Line`` records.
+
+        Raises:
+            InputError: an item that is no Line, or a Line whose fields are not numbers of their
+                shapes or fail :func:`check_line_rows` (fuzzing: text was numpy's ValueError, a
+                start of three numbers a broadcast error, first = 10**30 an OverflowError).
+        """
         if not lines:
             return cls.empty()
-        return cls.from_arrays(
-            [l.rho for l in lines], [l.alpha for l in lines], [l.start for l in lines], [l.end for l in lines],
-            np.array([np.asarray(l.cov, dtype=float).reshape(2, 2) for l in lines]),
-            [l.first for l in lines], [l.last for l in lines], [l.n_points for l in lines],
-        )
+        for i, line in enumerate(lines):
+            if not isinstance(line, Line):
+                raise InputError(f"lines[{i}]: must be a features.Line, got {type(line).__name__}")
+            for field_name in ("first", "last", "n_points"):  # the int64 beams array truncated 2.5 to 2
+                v = getattr(line, field_name)
+                if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
+                    raise InputError(f"lines[{i}].{field_name}: must be a whole number (a beam index or count), got {v!r}")
+        try:
+            out = cls.from_arrays(
+                [l.rho for l in lines], [l.alpha for l in lines], [l.start for l in lines], [l.end for l in lines],
+                np.array([np.asarray(l.cov, dtype=float).reshape(2, 2) for l in lines]),
+                [l.first for l in lines], [l.last for l in lines], [l.n_points for l in lines],
+            )
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise InputError(f"lines: each Line must hold numbers: rho, alpha, start and end (x, y), a 2x2 cov, "
+                             f"whole first, last and n_points ({exc})") from None
+        check_line_rows(np.column_stack((out.values[:, :6], out.beams[:, :2])), "lines")
+        return out
 
     rho = property(lambda self: self.values[:, 0], doc="(L,) distance of each line from the origin (m)")
     alpha = property(lambda self: self.values[:, 1], doc="(L,) normal angle (rad, (-pi, pi])")
@@ -228,6 +273,10 @@ class FeatureSet:
 
     def __init__(self, lines: Lines | Sequence[Line] = (), corners: Corners | Sequence[Corner] = (),
                  method: str = "") -> None:
+        for name, value, kind in (("lines", lines, Lines), ("corners", corners, Corners)):
+            if not isinstance(value, (kind, Sequence)) or isinstance(value, (str, bytes)):
+                raise InputError(f"{name}: must be a features.{kind.__name__} or a sequence of "
+                                 f"features.{kind.__name__[:-1]}, got {type(value).__name__}")
         self.lines = lines if isinstance(lines, Lines) else Lines.from_lines(list(lines))
         self.corners = corners if isinstance(corners, Corners) else Corners.from_corners(list(corners))
         self.method = method

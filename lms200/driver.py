@@ -11,19 +11,23 @@ stops continuous output, sets the variant, the units (through the configuration 
 when they differ) and the baud; ``scans()`` starts continuous output (0x20 0x24). ``close()``
 returns the device to on-request mode and 9600 baud. Every request is retried (the device can
 miss one during a mirror turn); failures raise :class:`LmsTimeoutError`, :class:`LmsNakError`,
-:class:`LmsModeRefusedError` or :class:`LmsProtocolError`, naming what was asked and what came back.
+:class:`LmsModeRefusedError` or :class:`LmsProtocolError`, naming what was asked and what came back;
+a port or link that fails mid-use raises :class:`LmsLinkError` (pyserial's own exceptions do not escape).
 """
 
 from __future__ import annotations
 
+import math
+import numbers
 import time
+from collections import deque
 from dataclasses import dataclass
 from typing import Callable, Iterator
 
 import serial
 
 from .codes import Units
-from .errors import LmsDeviceError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
+from .errors import InputError, LmsDeviceError, LmsLinkError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
 from .framing import Frame, FrameParser
 from .protocol import (
     ACK,
@@ -60,8 +64,53 @@ from .scan import Scan
 PROBE_BAUDS = (9600, 19200, 38400, 500000)
 MAX_TIMEOUT_S = 60.0  # longest wait for a reply (s): a device takes 3 s at most (mode changes); 1e9 waited for ever
 _READ_POLL_S = 0.01  # longest blocking read (s)
+MIRROR_PERIOD_S = 1.0 / 75.0  # one mirror turn: a scan every 13.3 ms at 1 deg (2 turns at 0.5, 4 at 0.25)
 _SHORT_REPLY_BYTES = 64  # every reply but 0xB0 fits (the 0xF7 configuration reply is 41 bytes)
+MAX_ADDRESS = 0x7F  # the reply address is device address + 0x80, one byte
 _READ_CHUNK = 4096  # bytes asked for when the port cannot tell how many are waiting
+_DRAIN_READS = 16  # more reads after one while bytes are still waiting (a backlog read as one)
+_READS_KEPT = 256  # reads remembered to stamp frames (a frame held behind a false start may span many)
+_FALSE_START_GAP_S = 0.1  # quiet line after which a false start hiding a good frame is dropped
+
+
+def _variant_names() -> str:
+    return ", ".join(f"{fov} deg at {res / 100:g} deg" for fov, res in VARIANTS)
+
+
+def _check_arguments(baud: object, fov_deg: object, resolution_deg: object, units: object, address: object,
+                     timeout: object, mode_timeout: object, retries: object) -> tuple[int, int]:
+    """The constructor's arguments, checked before the port is opened: an :class:`InputError`
+    naming the argument and what it may be (a str resolution was a TypeError about ``__round__``,
+    fov 180 at 0.25 deg a plain ValueError the command line called a bug). Returns the variant
+    as (fov deg, resolution 1/100 deg)."""
+
+    def real(name: str, value: object) -> float:
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise InputError(f"{name}: must be a number, got {type(value).__name__} {value!r}")
+        return float(value)
+
+    def integer(name: str, value: object) -> int:
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+            raise InputError(f"{name}: must be an integer, got {type(value).__name__} {value!r}")
+        return int(value)
+
+    if isinstance(baud, bool) or baud not in BAUD_MODES:
+        raise InputError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {baud!r}")
+    fov, res = real("fov_deg", fov_deg), real("resolution_deg", resolution_deg)
+    variant = (int(fov), int(round(res * 100))) if math.isfinite(fov) and math.isfinite(res) else None
+    if variant not in VARIANTS or fov != variant[0] or not math.isclose(res * 100, variant[1], abs_tol=1e-6):
+        raise InputError(f"fov_deg, resolution_deg: ({fov_deg!r} deg, {resolution_deg!r} deg) is not an LMS200 variant; "
+                         f"the variants are {_variant_names()} (0.25 deg only with 100 deg)")
+    if units not in ("mm", "cm"):
+        raise InputError(f"units: must be 'mm' or 'cm', got {units!r}")
+    if not 0 <= integer("address", address) <= MAX_ADDRESS:
+        raise InputError(f"address: must be in 0..{MAX_ADDRESS} (replies come from address + 0x80), got {address}")
+    if integer("retries", retries) < 1:
+        raise InputError(f"retries: must be >= 1, got {retries}")
+    for name, value in (("timeout", timeout), ("mode_timeout", mode_timeout)):
+        if not 0 < real(name, value) <= MAX_TIMEOUT_S:  # also nan
+            raise InputError(f"{name}: must be in (0, {MAX_TIMEOUT_S:g}] s, got {value}")
+    return variant
 
 
 @dataclass
@@ -111,18 +160,7 @@ class LMS200:
         probe: bool = True,
         password: bytes = PASSWORD,
     ) -> None:
-        if baud not in BAUD_MODES:
-            raise ValueError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {baud}")
-        self.variant = (int(fov_deg), int(round(resolution_deg * 100)))
-        if self.variant not in VARIANTS:
-            raise ValueError(f"variant: ({fov_deg} deg, {resolution_deg} deg) is not an LMS200 variant")
-        if units not in ("mm", "cm"):
-            raise ValueError(f"units: must be 'mm' or 'cm', got {units!r}")
-        if retries < 1:
-            raise ValueError(f"retries: must be >= 1, got {retries}")
-        for name, value in (("timeout", timeout), ("mode_timeout", mode_timeout)):
-            if not 0 < value <= MAX_TIMEOUT_S:  # also nan
-                raise ValueError(f"{name}: must be in (0, {MAX_TIMEOUT_S:g}] s, got {value}")
+        self.variant = _check_arguments(baud, fov_deg, resolution_deg, units, address, timeout, mode_timeout, retries)
         self.port = port_or_url
         self.target_baud = baud
         self.units: Units = units
@@ -140,6 +178,11 @@ class LMS200:
         self._retries = 0
         self._last_rx = time.monotonic()
         self._backlog: list = []  # events read past a reply, handed out by the next _pump
+        # (stream offset after a read, host time.time() when the read returned), the newest reads
+        self._reads: deque[tuple[int, float]] = deque(maxlen=_READS_KEPT)
+        self._last_end = -math.inf  # when the last scan telegram stamped ended (time.time())
+        self._doing = "opening the port"  # for the message of a link that fails mid-use
+        self._lost = False  # the port failed: close() only closes it
         try:
             self._ser = serial.serial_for_url(port_or_url, baudrate=POWER_ON_BAUD, timeout=_READ_POLL_S)
         except (serial.SerialException, ValueError, OSError) as exc:
@@ -151,7 +194,10 @@ class LMS200:
             self._set_units()
             self._switch_baud(baud)
         except BaseException:
-            self._ser.close()
+            try:
+                self._ser.close()
+            except (serial.SerialException, OSError):
+                pass  # the error that ended the opening is the one to report
             raise
 
     # -- context manager -----------------------------------------------------------------------
@@ -171,8 +217,27 @@ class LMS200:
         return DriverStats(self._scans, p.dropped_frames, p.skipped_bytes, self._decode_errors, self._retries)
 
     # -- low level -----------------------------------------------------------------------------
-    def _idle_gap(self) -> float:
-        return max(0.1, frame_seconds(20, self.baud))
+    def _idle_gap(self, hides_frame: bool) -> float:
+        """How long the line must be quiet before held-back bytes are given up (``parser.idle()``).
+
+        The LMS200 sends a telegram without gaps (byte after byte at the baud; the listing's own
+        limit between the bytes of a telegram is 6 ms), so a pause inside a frame is the link's: a
+        USB adapter's latency timer (16 ms) or a TCP retransmission (200 ms and more). A partial
+        frame that is still consistent is therefore kept until the line has been quiet for as
+        long as a reply may take (``timeout`` plus the line time of the longest telegram: 0.71 s
+        at 38400 baud with the default timeout); one proven false by a good frame complete behind
+        it is dropped after 0.1 s (or the line time of 20 bytes, if longer)."""
+        if hides_frame:
+            return max(_FALSE_START_GAP_S, frame_seconds(20, self.baud))
+        return self.timeout + frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
+
+    def _link_lost(self, exc: BaseException) -> LmsLinkError:
+        """The error for a port that failed mid-use (pyserial's SerialException / OSError escaped
+        before): it names the port, the baud and what was being done. The link is marked lost so
+        that :meth:`close` only closes the port."""
+        self._lost = True
+        return LmsLinkError(f"the link to {self.port} at {self.baud} baud failed while {self._doing}: "
+                            f"{exc or type(exc).__name__}")
 
     def _pump(self) -> list:
         """Events left over from the last read, else read what has arrived (blocking at most
@@ -180,15 +245,67 @@ class LMS200:
         if self._backlog:
             events, self._backlog = self._backlog, []
             return events
-        waiting = self._ser.in_waiting  # exact on serial ports; only 0 / 1 on socket:// and loop://
-        data = self._ser.read(waiting if waiting > 1 else _READ_CHUNK)
+        try:
+            waiting = self._ser.in_waiting  # exact on serial ports; only 0 / 1 on socket:// and loop://
+            data = self._ser.read(waiting if waiting > 1 else _READ_CHUNK)
+            # A backlog larger than one read (a pty hands out 4095 bytes at a time) is read whole,
+            # so that its telegrams are stamped together (see _stamps); a few reads at most.
+            piece = data
+            for _ in range(_DRAIN_READS):
+                if not piece:
+                    break
+                waiting = self._ser.in_waiting
+                if not waiting and len(piece) >= _READ_CHUNK - 1:  # a full read: the kernel may be
+                    time.sleep(0.002)  # moving the rest of the backlog into the port's buffer
+                    waiting = self._ser.in_waiting
+                if not waiting:
+                    break
+                piece = self._ser.read(waiting if waiting > 1 else _READ_CHUNK)
+                data += piece
+        except (serial.SerialException, OSError) as exc:
+            raise self._link_lost(exc) from None
         now = time.monotonic()
         if data:
             self._last_rx = now
+            self._reads.append((self.parser.received + len(data), time.time()))
             return self.parser.feed(data)
-        if self.parser.pending and now - self._last_rx > self._idle_gap():
-            return self.parser.idle()
+        if self.parser.pending:
+            quiet = now - self._last_rx
+            if quiet > self._idle_gap(False) or (quiet > self._idle_gap(True) and self.parser.hides_frame()):
+                return self.parser.idle()
         return []
+
+    def _stamps(self, frames: list[Frame]) -> list[float]:
+        """Host time (``time.time()``) when each of ``frames`` (0xB0 telegrams in stream order)
+        began to arrive.
+
+        A frame's last byte arrived before the read that brought it returned, earlier by at least
+        the line time of the bytes after it in that read; and telegrams in continuous mode are at
+        least one line time and one scan period apart (one telegram per scan: 26.7 ms at 0.5 deg).
+        Each frame's end is the latest time that fits those bounds, and no earlier than the
+        previous frame's end plus that spacing; its stamp is that end less its own line time. So
+        scans read together (a backlog left while the consumer was busy) keep their spacing
+        instead of sharing the time they were processed at. What the host cannot see is how long
+        a backlog waited in the port's buffer: its newest scans are stamped by the read."""
+        byte_s = frame_seconds(1, self.baud)
+        period = MIRROR_PERIOD_S * {100: 1, 50: 2, 25: 4}[self.variant[1]]
+        ends, caps = [], []
+        for frame in frames:
+            found = None
+            for end, t in reversed(self._reads):  # the oldest read that reaches the frame's end
+                if end < frame.end:
+                    break
+                found = (end, t)
+            end, t = found if found is not None else (frame.end, time.time())
+            ends.append(t - (end - frame.end) * byte_s)
+            caps.append(t)
+        gaps = [max(len(f) * byte_s, period) for f in frames]
+        for i in range(len(frames) - 2, -1, -1):  # the frames after one took their time to arrive
+            ends[i] = min(ends[i], ends[i + 1] - gaps[i + 1])
+        for i in range(len(frames)):
+            ends[i] = min(max(ends[i], self._last_end + gaps[i]), caps[i])
+            self._last_end = ends[i]
+        return [e - len(f) * byte_s for e, f in zip(ends, frames)]
 
     def _request(self, payload: bytes, what: str, timeout: float | None = None, retries: int | None = None,
                  budget: float | None = None) -> Frame:
@@ -208,8 +325,13 @@ class LMS200:
         for attempt in range(attempts):
             if attempt:
                 self._retries += 1
-            self._ser.write(telegram)
-            self._ser.flush()
+            self._doing = f"{what}: sending {telegram.hex(' ')}"
+            try:
+                self._ser.write(telegram)
+                self._ser.flush()
+            except (serial.SerialException, OSError) as exc:
+                raise self._link_lost(exc) from None
+            self._doing = f"{what}: waiting for the reply"
             deadline = time.monotonic() + budget
             acked = naked = False
             others = 0
@@ -263,9 +385,13 @@ class LMS200:
         raise LmsTimeoutError(f"no LMS200 answered the type request (0x3A) on {self.port} at {list(bauds)} baud")
 
     def _use_baud(self, baud: int) -> None:
-        self._ser.baudrate = baud
-        self.baud = baud
-        self._ser.reset_input_buffer()
+        try:
+            self._ser.baudrate = baud
+            self.baud = baud
+            self._ser.reset_input_buffer()
+        except (serial.SerialException, OSError) as exc:
+            self._doing = f"setting the port to {baud} baud"
+            raise self._link_lost(exc) from None
         self.parser.reset()
         self._backlog = []
 
@@ -311,7 +437,9 @@ class LMS200:
     def scans(self, stall_timeout: float | None = None, stop: Callable[[], bool] | None = None) -> Iterator[Scan]:
         """Start continuous output and yield every scan the device sends, as it sends them.
 
-        ``scan.stamp`` is the host's clock (``time.time()``, s) when the telegram began to arrive.
+        ``scan.stamp`` is the host's clock (``time.time()``, s) when the telegram began to arrive,
+        from the time of the read that brought it (see :meth:`_stamps`): scans read together
+        keep their spacing.
         Frames with a bad CRC are dropped and counted in :attr:`stats`.
 
         ``stop``: checked between reads (at least every 10 ms); the generator ends when it
@@ -324,22 +452,22 @@ class LMS200:
         """
         if not self.streaming:
             self._set_mode(MODE_CONTINUOUS, "start continuous output (0x20 0x24)")
+        self._doing = "reading scans in continuous mode"
         limit = stall_timeout if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
         last = time.monotonic()
         while stop is None or not stop():
             events = self._pump()
             now = time.monotonic()
-            for ev in events:
-                if isinstance(ev, Frame) and ev.code == REPLY_MEASURE:
-                    stamp = time.time() - frame_seconds(len(ev), self.baud)
-                    try:
-                        scan = decode_scan(ev.payload, stamp)
-                    except LmsProtocolError:
-                        self._decode_errors += 1
-                        continue
-                    self._scans += 1
-                    last = now
-                    yield scan
+            frames = [ev for ev in events if isinstance(ev, Frame) and ev.code == REPLY_MEASURE]
+            for ev, stamp in zip(frames, self._stamps(frames)):
+                try:
+                    scan = decode_scan(ev.payload, stamp)
+                except LmsProtocolError:
+                    self._decode_errors += 1
+                    continue
+                self._scans += 1
+                last = now
+                yield scan
             if now - last > limit:
                 raise LmsTimeoutError(
                     f"no scan from {self.port} for {now - last:.2f} s in continuous mode at {self.baud} baud "
@@ -350,15 +478,21 @@ class LMS200:
         """Return the device to on-request mode and 9600 baud, then close the port.
 
         The port is closed even when the device does not answer; the error is raised afterwards.
+        After the link failed (an :class:`LmsLinkError` was raised already) the port is only
+        closed: the device cannot be reached, and the error is not raised a second time.
         """
         ser = getattr(self, "_ser", None)
         if ser is None or not ser.is_open:
             return
         try:
-            self._set_mode(MODE_ON_REQUEST, "stop continuous output (0x20 0x25)")
-            self._switch_baud(POWER_ON_BAUD)
+            if not self._lost:
+                self._set_mode(MODE_ON_REQUEST, "stop continuous output (0x20 0x25)")
+                self._switch_baud(POWER_ON_BAUD)
         finally:
-            ser.close()
+            try:
+                ser.close()
+            except (serial.SerialException, OSError):
+                pass  # a port that failed may fail to close too; it is closed as far as it can be
 
     def __repr__(self) -> str:
         return f"LMS200({self.port!r}, baud={self.baud}, type={self.type_string!r})"

@@ -53,5 +53,10 @@ class LmsModeRefusedError(LmsDeviceError):
     """The device refused a mode, baud, variant or configuration change."""
 
 
+class LmsLinkError(LmsDeviceError, ConnectionError):
+    """The port or connection failed mid-use (a USB adapter unplugged, a TCP link dropped): the
+    message names the port, the baud and what was being done."""
+
+
 class LmsProtocolError(LmsDeviceError, ValueError):
     """A telegram that does not make sense: wrong reply code, bad length, unknown variant, ..."""

@@ -4,16 +4,18 @@ It resynchronises on garbage the way SICK's listing asks: look for ``STX ADDR`` 
 device 0), read LEN, check LEN <= 812 and the CRC, and drop what fails by skipping that one STX
 byte and searching on, so a frame hidden behind a false start is still found. ACK / NAK bytes
 just before a frame (or ending what has arrived) are reported as handshake events in stream
-order; stray ones amid garbage are skipped with it.
+order; stray ones amid garbage are skipped with it, and so is the rest of a telegram that failed
+its CRC (its last byte is no handshake).
 
 A false start whose LEN reaches beyond the bytes received so far waits for more bytes; call
-:meth:`FrameParser.idle` when the line has gone quiet (a real device sends a frame without gaps),
+:meth:`FrameParser.idle` when the line has gone quiet (a real device sends a frame without gaps;
+links can pause, so :meth:`FrameParser.hides_frame` tells a proven false start from a partial frame),
 which drops such stalled false starts and returns the frames behind them.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Union
 
 from .errors import InputError
@@ -26,6 +28,9 @@ class Frame:
 
     address: int
     payload: bytes
+    end: int = field(default=-1, compare=False, repr=False)
+    """Stream offset just past the frame's last byte (bytes fed to the parser before it; -1 when
+    not made by a parser): with the host time of each read, when the frame arrived."""
 
     @property
     def code(self) -> int:
@@ -78,6 +83,9 @@ class FrameParser:
         self._sync = bytes([STX, address])
         self.max_len = max_len
         self._buf = bytearray()
+        self._base = 0  # stream offset of the first byte held back
+        self._shadow = 0  # held-back bytes that are the rest of a telegram with a bad CRC
+        self.received = 0  # bytes fed so far (the stream offset of the next byte)
         self.stats = ParserStats()
 
     @property
@@ -88,7 +96,9 @@ class FrameParser:
     def reset(self) -> None:
         """Forget any buffered bytes (e.g. after a baud change); keeps the counters."""
         self.stats.skipped_bytes += len(self._buf)
+        self._base += len(self._buf)
         self._buf.clear()
+        self._shadow = 0
 
     def feed(self, data: bytes) -> list[Event]:
         """Add received bytes; returns the complete frames and handshake bytes, in stream order.
@@ -98,6 +108,7 @@ class FrameParser:
             raise InputError(f"data: must be the bytes received (bytes, bytearray or memoryview), got {type(data).__name__}")
         if data:
             self._buf += data
+            self.received += len(data)
         return self._scan(final=False)
 
     def idle(self) -> list[Event]:
@@ -108,19 +119,40 @@ class FrameParser:
         """
         return self._scan(final=True)
 
+    def hides_frame(self) -> bool:
+        """Whether the bytes held back contain a complete frame with a good CRC behind their first
+        byte: proof that the candidate they begin with is a false start (a corrupted LEN), which
+        :meth:`idle` may drop at once. Without one the held-back bytes are a consistent partial
+        frame, which a stalled link (TCP, a USB adapter) may still complete."""
+        buf, sync = self._buf, self._sync
+        pos = buf.find(sync, 1)
+        while pos >= 0:
+            if len(buf) - pos >= 4:
+                length = buf[pos + 2] | (buf[pos + 3] << 8)
+                end = pos + length + OVERHEAD_BYTES
+                if 0 < length <= self.max_len and end <= len(buf):
+                    if crc16(bytes(buf[pos : end - 2])) == buf[end - 2] | (buf[end - 1] << 8):
+                        return True
+            pos = buf.find(sync, pos + 1)
+        return False
+
     def frames(self, data: bytes) -> list[Frame]:
         """Like :meth:`feed`, keeping only the frames."""
         return [e for e in self.feed(data) if isinstance(e, Frame)]
 
     # -----------------------------------------------------------------------------------------
-    def _garbage(self, events: list[Event], garbage: bytes) -> None:
+    def _garbage(self, events: list[Event], garbage: bytes, shadowed: int = 0) -> None:
         """Account for bytes outside frames. ACK / NAK bytes that end the run (just before a frame
         or at the end of what has arrived) are handshakes and become events in order; any other
-        byte, an ACK / NAK value amid garbage included, is skipped garbage."""
+        byte, an ACK / NAK value amid garbage included, is skipped garbage. So are the first
+        ``shadowed`` bytes, the rest of a telegram that failed its CRC: its last byte (the CRC's
+        high byte) is 0x06 or 0x15 once in 128 corrupted telegrams, and was taken for a handshake
+        (a fake NAK made the driver resend, a fake ACK hid a real NAK behind it)."""
         if not garbage:
             return
         cut = len(garbage)
-        while cut and garbage[cut - 1] in (ACK, NAK):
+        floor = min(max(shadowed, 0), cut)
+        while cut > floor and garbage[cut - 1] in (ACK, NAK):
             cut -= 1
         self.stats.skipped_bytes += cut
         for b in garbage[cut:]:
@@ -137,45 +169,51 @@ class FrameParser:
         size = len(buf)
         sync = self._sync
         stats = self.stats
+        shadow = self._shadow  # bytes before this index belong to a telegram that failed its CRC
         while True:
             start = buf.find(sync, pos)
             if start < 0:
                 # Keep a trailing STX: it may be the first byte of the next frame.
                 keep = size - 1 if size > pos and buf[size - 1] == STX else size
-                self._garbage(events, bytes(buf[pos:keep]))
+                self._garbage(events, bytes(buf[pos:keep]), shadow - pos)
                 pos = keep
                 break
-            self._garbage(events, bytes(buf[pos:start]))
-            pos = start
+            # The candidate at `start`: waits for more bytes (None), fails, or is a good frame.
+            verdict, end = None, 0
             if size - start < 4:
-                if final:  # a header cut short by a quiet line
-                    stats.stalled += 1
-                    stats.skipped_bytes += 1
-                    pos = start + 1
-                    continue
+                verdict = "stalled" if final else None  # a header cut short by a quiet line
+            else:
+                length = buf[start + 2] | (buf[start + 3] << 8)
+                end = start + length + OVERHEAD_BYTES
+                if length == 0 or length > self.max_len:
+                    verdict = "bad_length"
+                elif end > size:
+                    verdict = "stalled" if final else None
+                elif crc16(bytes(buf[start : end - 2])) != buf[end - 2] | (buf[end - 1] << 8):
+                    verdict = "bad_crc"
+                else:
+                    verdict = "good"
+            if verdict == "good" and start < shadow:
+                shadow = pos  # a good frame inside the failed one: that was a false start, not a telegram
+            self._garbage(events, bytes(buf[pos:start]), shadow - pos)
+            pos = start
+            if verdict is None:
                 break
-            length = buf[start + 2] | (buf[start + 3] << 8)
-            if length == 0 or length > self.max_len:
-                stats.bad_length += 1
-                stats.skipped_bytes += 1
-                pos = start + 1
+            if verdict == "good":
+                events.append(Frame(buf[start + 1], bytes(buf[start + 4 : end - 2]), self._base + end))
+                stats.frames += 1
+                pos = end
                 continue
-            end = start + length + OVERHEAD_BYTES
-            if end > size:
-                if final:
-                    stats.stalled += 1
-                    stats.skipped_bytes += 1
-                    pos = start + 1
-                    continue
-                break
-            crc = buf[end - 2] | (buf[end - 1] << 8)
-            if crc16(bytes(buf[start : end - 2])) != crc:
+            if verdict == "bad_crc":
                 stats.bad_crc += 1
-                stats.skipped_bytes += 1
-                pos = start + 1
-                continue
-            events.append(Frame(buf[start + 1], bytes(buf[start + 4 : end - 2])))
-            stats.frames += 1
-            pos = end
+                shadow = max(shadow, end)
+            elif verdict == "bad_length":
+                stats.bad_length += 1
+            else:
+                stats.stalled += 1
+            stats.skipped_bytes += 1
+            pos = start + 1
+        self._shadow = max(0, shadow - pos)
         del buf[:pos]
+        self._base += pos
         return events

@@ -35,10 +35,10 @@ class Record:
         for name in ("odom", "truth"):
             pose = getattr(self, name)
             if pose is not None:
-                object.__setattr__(self, name, _pose(name, pose))
+                object.__setattr__(self, name, pose_of(name, pose))
 
 
-def _pose(name: str, pose: object) -> Pose2D:
+def pose_of(name: str, pose: object) -> Pose2D:
     """``pose`` as an (x, y, theta) tuple of floats; InputError naming ``name`` otherwise."""
     try:
         x, y, th = (float(v) for v in pose)  # type: ignore[attr-defined]

@@ -19,6 +19,7 @@ scan, so a replayed log comes out in order and complete.
 from __future__ import annotations
 
 import math
+import numbers
 import struct
 from collections import deque
 from dataclasses import dataclass
@@ -27,6 +28,7 @@ from typing import Callable, Iterable, Iterator
 import numpy as np
 
 from .codes import Units, ranges_to_codes
+from .errors import InputError
 from .protocol import (
     ACK,
     BAUD_MODES,
@@ -122,7 +124,8 @@ def resample_to_grid(scan: Scan) -> np.ndarray:
 
 def variant_codes(ranges361: np.ndarray, variant: tuple[int, int], units: Units) -> np.ndarray:
     """Distance codes a variant reports from 0.5 deg ranges: 1 deg takes every other beam, 100 deg
-    the beams from -50 to +50 deg, 0.25 deg adds midpoints (mean of two valid neighbours, else nan)."""
+    the beams from -50 to +50 deg, 0.25 deg adds midpoints: the mean of the two neighbours, so nan
+    (8191, not valid) next to a nan, else +inf (8183, above the maximum) next to a +inf."""
     fov, res = variant
     r = np.asarray(ranges361, dtype=np.float64)
     if fov == 100:
@@ -135,6 +138,14 @@ def variant_codes(ranges361: np.ndarray, variant: tuple[int, int], units: Units)
         fine[0::2], fine[1::2] = r, mid
         r = fine
     return ranges_to_codes(r, units)
+
+
+def _is_real(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _is_integer(value: object) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
 @dataclass
@@ -170,10 +181,17 @@ class VirtualLMS200:
         units: Units = "cm",
         variant: tuple[int, int] = (180, 50),
     ) -> None:
+        if not _is_real(time_scale):
+            raise InputError(f"time_scale: must be a number, got {type(time_scale).__name__} {time_scale!r}")
         if not 0 < time_scale <= MAX_TIME_SCALE:  # also nan
-            raise ValueError(f"time_scale: must be in (0, {MAX_TIME_SCALE:g}], got {time_scale}")
-        if variant not in VARIANTS:
-            raise ValueError(f"variant: {variant} is not an LMS200 variant")
+            raise InputError(f"time_scale: must be in (0, {MAX_TIME_SCALE:g}], got {time_scale}")
+        if not isinstance(variant, tuple) or variant not in VARIANTS:
+            raise InputError(f"variant: {variant!r} is not an LMS200 variant; the variants are (fov deg, resolution "
+                             f"1/100 deg) {', '.join(map(str, VARIANTS))} (25 = 0.25 deg only with 100 deg)")
+        if units not in UNITS_CODES:
+            raise InputError(f"units: must be 'mm' or 'cm', got {units!r}")
+        if not _is_integer(address) or not 0 <= address <= 0x7F:
+            raise InputError(f"address: must be an integer in 0..127 (replies come from address + 0x80), got {address!r}")
         self._source: Iterator[Scan] = iter(source)
         self.address = address
         self.time_scale = float(time_scale)
@@ -390,7 +408,11 @@ class VirtualLMS200:
             self._queue.popleft()
             if chunk.done is not None:
                 chunk.done()
-            self._fill_continuous(now)
+            if not self._queue:
+                # The next scan is built on the next call (next_wakeup or transmit), after the
+                # bytes due now are handed over: building it here (a simulator's first ray cast
+                # takes 0.3-0.5 s) held back the tail of the reply just sent, a gap no device makes.
+                break
         return [(d, b) for d, b in out if d]
 
     def next_wakeup(self, now: float) -> float | None:

@@ -21,6 +21,8 @@ from typing import Iterator
 import numpy as np
 
 from lms200 import Scan
+from lms200.codes import real_rows, real_vector
+from lms200.errors import InputError
 
 from .checks import check_beam_poses, check_instance, check_pose, check_twist
 from .geometry import rectangle_corners
@@ -167,7 +169,21 @@ class LMS200Sim:
     # -- ray casting --------------------------------------------------------------------------
     def cast(self, origins: np.ndarray, headings: np.ndarray, _depth: int = 0) -> np.ndarray:
         """Exact ranges (m) of horizontal rays at scan height from (n, 2) origins along (n,)
-        world headings (rad); +inf where nothing is hit within range_max."""
+        world headings (rad); +inf where nothing is hit within range_max.
+
+        Raises:
+            InputError: origins that are no finite (n, 2) array or headings no n finite numbers
+                (found by fuzzing: nan origins hit nothing, every range +inf, (n, 3) origins were
+                read by their first two columns, silently; mismatched counts numpy's errors).
+        """
+        if _depth == 0:
+            origins = real_rows(origins, "origins", 2, "x m, y m")
+            headings = real_vector(headings, "headings", "rad")
+            if headings.size != origins.shape[0]:
+                raise InputError(f"headings: {headings.size} headings for {origins.shape[0]} origins")
+            if origins.shape[0] > _RAY_BATCH:  # Bullet's batch limit: more rays were an error, 16,384 no hits at all
+                return np.concatenate([self.cast(origins[i:i + _RAY_BATCH], headings[i:i + _RAY_BATCH])
+                                       for i in range(0, origins.shape[0], _RAY_BATCH)])
         origins = np.ascontiguousarray(origins, dtype=float)
         ux, uy = np.cos(headings), np.sin(headings)
         first = min(_FIRST_STAGE_M, self._ray_length)
@@ -341,6 +357,9 @@ _STAGE_OVERLAP_M = 1e-3  # the second stage starts this far before the first one
 _BOX_TOL_M = 1e-7  # a box hit farther than this outside the box is Bullet's edge tolerance
 _RECAST_STEP_M = 1e-4  # a rejected hit's ray goes on from this far past it
 _MAX_RECASTS = 4
+#: most rays of one ``pb.rayTestBatch`` (pybullet 3.2.7: 16,384 returned no hits, more raised
+#: 'Number of rays exceed the maximum batch size'); :meth:`LMS200Sim.cast` splits larger calls
+_RAY_BATCH = 16383
 
 
 # the 12 triangles of a box's 24 vertices (_box_meshes): two per side face (vertices 4k .. 4k + 3

@@ -6,8 +6,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from features.baselines.checks import integer
+from features.errors import not_a_scan
+from features.realdata import check_features
 from features.types import FeatureSet
-from lms200 import Scan
+from lms200 import InputError, Scan
+from lms200.codes import real_rows
 
 from .config import SlamConfig
 
@@ -36,6 +40,29 @@ class Observations:
     corner_cov: np.ndarray = field(default_factory=lambda: _empty((0, 2, 2)))
     points: np.ndarray = field(default_factory=lambda: _empty((0, 2)))
 
+    def __post_init__(self) -> None:
+        """Every field as a finite float64 array of its shape, covariances one a row of the lines /
+        corners; InputError naming the field otherwise. Found by fuzzing the Python API: text was
+        an AttributeError in the filter, (2, 2) lines with one covariance an IndexError, (1, 3)
+        lines a bare unpacking error, nan covariances a nan trajectory, silently."""
+        rows = {name: real_rows(getattr(self, name), f"observations.{name}", cols, what)
+                for name, cols, what in (("lines", 2, "rho m, alpha rad"), ("line_ends", 4, "x0, y0, x1, y1 m"),
+                                         ("corners", 2, "x m, y m"), ("points", 2, "x m, y m"))}
+        if rows["line_ends"].shape[0] != rows["lines"].shape[0]:
+            raise InputError(f"observations.line_ends: {rows['line_ends'].shape[0]} rows for {rows['lines'].shape[0]} lines")
+        for cov, of in (("line_cov", "lines"), ("corner_cov", "corners")):
+            m = rows[of].shape[0]
+            try:
+                c = np.asarray(getattr(self, cov), dtype=np.float64)
+            except (TypeError, ValueError):
+                c = np.empty(0)
+            if c.shape != (m, 2, 2) or not np.isfinite(c).all():
+                raise InputError(f"observations.{cov}: must be ({m}, 2, 2) finite covariances, one a row of "
+                                 f"observations.{of}, got {'shape ' + str(c.shape) if c.shape != (m, 2, 2) else 'nan / inf'}")
+            rows[cov] = c
+        for name, a in rows.items():
+            object.__setattr__(self, name, a)
+
     @property
     def line_lengths(self) -> np.ndarray:
         e = self.line_ends
@@ -45,7 +72,17 @@ class Observations:
 def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) -> Observations:
     """Keep the lines with enough support; their covariance is the extractor's (where finite and
     positive definite) plus the floor ``diag(sigma_rho^2, sigma_alpha_obs^2)``. With ``scan``, its
-    valid points (every ``point_stride``-th) come along for checking pre-alignments."""
+    valid points (every ``point_stride``-th) come along for checking pre-alignments.
+
+    Raises:
+        InputError / ScanTypeError: ``fs`` is no FeatureSet, ``config`` no SlamConfig, ``scan``
+            neither None nor a Scan (each was an AttributeError inside; found by fuzzing).
+    """
+    check_features(fs)
+    if not isinstance(config, SlamConfig):
+        raise InputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
+    if scan is not None and not isinstance(scan, Scan):
+        raise not_a_scan(scan, "from_features")
     floor = np.diag([config.observations.sigma_rho**2, config.observations.sigma_alpha_obs**2])
     ln = fs.lines
     keep = ~((ln.n_points > 0) & (ln.n_points < config.observations.min_line_points)) & ~(ln.length < config.observations.min_line_length)
@@ -65,6 +102,14 @@ def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) 
 
 
 def scan_points(scan: Scan, stride: int = 2) -> np.ndarray:
-    """(p, 2) valid points of the scan in the sensor frame (m), every ``stride``-th beam."""
+    """(p, 2) valid points of the scan in the sensor frame (m), every ``stride``-th beam.
+
+    Raises:
+        ScanTypeError: ``scan`` is no Scan. ConfigError: ``stride`` is no integer >= 1 (0 was
+            Python's "slice step cannot be zero", -1 the points in reverse, 2.5 a TypeError).
+    """
+    if not isinstance(scan, Scan):
+        raise not_a_scan(scan, "scan_points")
+    integer("stride", stride, 1)
     pts = scan.points[::stride]
     return pts[np.isfinite(pts[:, 0])]

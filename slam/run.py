@@ -7,9 +7,10 @@ from typing import Any, Iterable
 
 import numpy as np
 
-from lms200.errors import LmsbenchError
+from features.baselines.checks import finite, is_real
+from lms200.errors import InputError, LmsbenchError
 from lms200.logs import checked_records
-from lms200.records import Record
+from lms200.records import Record, pose_of
 
 from .config import SlamConfig
 from .filter import SlamFilter
@@ -69,11 +70,43 @@ def run_observations(
     odometry: Iterable[tuple[float, float, float] | None] | None = None,
     truths: Iterable[tuple[float, float, float] | None] | None = None,
 ) -> SlamResult:
-    """Run the filter over ready observations (one per scan); see :func:`run_steps`."""
-    stamps = list(stamps)
-    odometry = list(odometry) if odometry is not None else [None] * len(stamps)
-    truths = list(truths) if truths is not None else [None] * len(stamps)
-    return run_steps(zip(stamps, observations, odometry, truths), config)
+    """Run the filter over ready observations (one per scan); see :func:`run_steps`.
+
+    Raises:
+        SlamInputError: an argument that is not iterable, or ``observations``, ``odometry`` or
+            ``truths`` of another length than ``stamps`` (zip cut them to the shortest, silently:
+            11 stamps and 10 observations gave 10 poses, ``odometry="abc"`` 3).
+    """
+    lists: dict[str, list[Any]] = {}
+    n = 0
+    for name, value in (("stamps", stamps), ("observations", observations), ("odometry", odometry), ("truths", truths)):
+        if value is None and name in ("odometry", "truths"):
+            lists[name] = [None] * n
+            continue
+        if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
+            raise SlamInputError(f"{name}: must be an iterable (one item a scan), got {type(value).__name__}")
+        lists[name] = list(value)
+        if name == "stamps":
+            n = len(lists[name])
+        elif len(lists[name]) != n:
+            raise SlamInputError(f"{name}: {len(lists[name])} items for {n} stamps (one a scan)")
+    return run_steps(zip(lists["stamps"], lists["observations"], lists["odometry"], lists["truths"]), config)
+
+
+def _checked_step(k: int, t: object, obs: object, odom: object, truth: object) -> tuple[float, Any, Any]:
+    """Step ``k``'s stamp as a float, its odometry and true poses as float tuples (or None);
+    SlamInputError naming the scan otherwise. Found by fuzzing the Python API: a nan or inf stamp
+    was "cannot convert float NaN to integer" deep in the filter, text numpy's ValueError, an
+    item that is no Observations an AttributeError, a true pose of text an IndexError."""
+    if not (is_real(t) and finite(t)):
+        raise SlamInputError(f"scan {k}: its stamp must be a finite number (s), got {t!r}")
+    stamp = float(t)  # type: ignore[arg-type]  # a real number: is_real
+    if not isinstance(obs, Observations):
+        raise SlamInputError(f"scan {k}: its observations must be a slam.Observations, got {type(obs).__name__}")
+    try:
+        return stamp, None if odom is None else pose_of("odometry", odom), None if truth is None else pose_of("truth", truth)
+    except InputError as exc:
+        raise SlamInputError(f"scan {k}: {exc}") from None
 
 
 def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: SlamConfig = SlamConfig()) -> SlamResult:
@@ -82,6 +115,8 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
     The filter starts at the origin; with true poses, the pose NEES is computed in the truth frame
     anchored at the first true pose.
     """
+    if not isinstance(config, SlamConfig):
+        raise SlamInputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
     slam = SlamFilter(config)
     traj, covs = [], []
     keys = ("nis", "nis_dof", "nees", "n_landmarks", "n_matched", "n_lines", "prealign_used", "prealign_shift",
@@ -92,7 +127,7 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
     previous = None
     healthy = True
     for k, (t, obs, odom, truth) in enumerate(steps):
-        t = float(t)
+        t, odom, truth = _checked_step(k, t, obs, odom, truth)
         if previous is not None and t < previous:
             raise SlamInputError(f"scan {k}: timestamp {t} is earlier than the previous one ({previous})")
         previous = t

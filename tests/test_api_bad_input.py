@@ -1193,3 +1193,102 @@ def test_noise_estimators_still_take_scans_and_records() -> None:
     assert noise_estimate.fit_sigma(records) == noise_estimate.fit_sigma([s, s.replace(stamp=1.0)])
     assert 0.003 < noise_estimate.fit_sigma(s) < 0.008
     assert 0.003 < estimate_range_noise(iter(records)).sigma_m < 0.008
+
+
+# --- LMS200Sim.cast, found by fuzzing the Python API (session 32) ------------------------------------
+@pytest.mark.parametrize("origins, headings, message", [
+    (np.full((3, 2), np.nan), np.zeros(3), r"^origins: must be finite \(x m, y m\); row 0 is not"),  # every range +inf, silently
+    (np.zeros((3, 3)), np.zeros(3), r"^origins: must be a \(k, 2\) array \(x m, y m\), got shape \(3, 3\)"),  # first 2 columns, silently
+    (np.zeros(2), np.zeros(1), r"^origins: must be a \(k, 2\) array .*got shape \(2,\)"),  # IndexError
+    ("ab", np.zeros(1), r"^origins: must be a \(k, 2\) array of real numbers .*got str"),  # numpy's ValueError
+    (np.zeros((3, 2)), np.zeros(2), r"^headings: 2 headings for 3 origins"),  # numpy's broadcast error
+    (np.zeros((3, 2)), [0.0, np.inf, 0.0], r"^headings: must be finite \(rad\); row 1 is not"),
+])
+def test_cast_names_bad_rays(origins, headings, message: str) -> None:
+    import sim
+
+    lidar = sim.LMS200Sim(sim.make_world("office", 0))
+    try:
+        with pytest.raises(InputError, match=message):
+            lidar.cast(origins, headings)
+    finally:
+        lidar.close()
+
+
+def test_cast_of_more_rays_than_bullets_batch_is_split() -> None:
+    """16,384 rays in one rayTestBatch returned no hits (a ValueError in the caster), more raised
+    pybullet's 'Number of rays exceed the maximum batch size'; now cast splits them, same ranges."""
+    import sim
+    from sim.lidar import _RAY_BATCH
+
+    lidar = sim.LMS200Sim(sim.make_world("office", 0))
+    try:
+        n = _RAY_BATCH + 1001
+        origins = np.tile([[2.0, 2.0]], (n, 1))
+        headings = np.linspace(-3.0, 3.0, n)
+        ranges = lidar.cast(origins, headings)
+        assert ranges.shape == (n,) and np.isfinite(ranges).mean() > 0.9
+        assert np.array_equal(ranges[-1000:], lidar.cast(origins[-1000:], headings[-1000:]))
+    finally:
+        lidar.close()
+
+
+# --- hand-built FeatureSets, found by fuzzing the Python API (session 32) ----------------------------
+def _wall_features() -> tuple[Scan, Any]:
+    from features import extract
+
+    angles = -np.pi / 2 + np.arange(361) * np.deg2rad(0.5)
+    with np.errstate(divide="ignore"):
+        scan = Scan.lms200(np.where(np.abs(angles) < 1.0, 3.0 / np.cos(angles), np.inf))
+    return scan, extract(scan).lines[0]
+
+
+@pytest.mark.parametrize("change, message", [
+    # each scored a nan ray RMSE / explained fraction, silently
+    ({"rho": float("nan")}, r"^lines: line 0: its values must be finite"),
+    ({"rho": -3.0}, r"^lines: line 0: rho must be >= 0 m \(rho, alpha, x0, y0, x1, y1, first, last = -3, "),
+    ({"end": (float("inf"), 0.0)}, r"^lines: line 0: its values must be finite"),
+    ({"first": 200, "last": 100}, r"^lines: line 0: its beams must be whole numbers with 0 <= first <= last"),
+    ({"first": 2.5}, r"^lines\[0\].first: must be a whole number \(a beam index or count\), got 2.5"),  # truncated to 2
+    # numpy's ValueError, a broadcast error, an OverflowError
+    ({"rho": "abc"}, r"^lines: each Line must hold numbers"),
+    ({"start": (1.0, 2.0, 3.0)}, r"^lines: each Line must hold numbers"),
+    ({"first": 10**30, "last": 10**30}, r"^lines: each Line must hold numbers"),
+])
+def test_feature_sets_of_hand_built_lines_are_checked(change: dict, message: str) -> None:
+    from features import FeatureSet
+
+    _, line = _wall_features()
+    with pytest.raises(InputError, match=message):
+        FeatureSet([dataclasses.replace(line, **change)])
+
+
+@pytest.mark.parametrize("lines, message", [
+    (None, r"^lines: must be a features.Lines or a sequence of features.Line, got NoneType"),  # "not iterable"
+    ("abc", r"^lines: must be a features.Lines or a sequence of features.Line, got str"),    # AttributeError
+    ([3.0], r"^lines\[0\]: must be a features.Line, got float"),
+])
+def test_feature_set_of_something_not_lines(lines: object, message: str) -> None:
+    from features import FeatureSet
+
+    with pytest.raises(InputError, match=message):
+        FeatureSet(lines)
+
+
+def test_line_arrays_given_to_the_real_data_measures_are_checked() -> None:
+    """The (k, 8) array path of scan_measures / ray_residuals: a negative rho or first > last gave
+    nan measures, silently; a FeatureSet of valid lines measures as before."""
+    from features import FeatureSet, realdata
+
+    scan, line = _wall_features()
+    rows = FeatureSet([line]).line_array()
+    m = realdata.scan_measures(rows, scan, 0.005)
+    assert m.n_lines == 1 and m.explained_tol == pytest.approx(1.0) and np.isfinite(m.ray_rmse_m)
+    bad = rows.copy()
+    bad[0, 0] = -bad[0, 0]
+    with pytest.raises(InputError, match=r"^fs: line 0: rho must be >= 0 m"):
+        realdata.scan_measures(bad, scan, 0.005)
+    bad = rows.copy()
+    bad[0, 6], bad[0, 7] = bad[0, 7], bad[0, 6]
+    with pytest.raises(InputError, match=r"^fs: line 0: its beams must be whole numbers with 0 <= first <= last"):
+        realdata.ray_residuals(bad, scan)

@@ -144,3 +144,13 @@ def test_record_progress_to_a_file_is_a_line_every_few_seconds(monkeypatch: pyte
                 "90 scans   10.0 scans/s  0 dropped frames     9.0 s"]
         else:
             assert err.count("\r") == 6 and err.endswith("9.0 s\n") and err.count("\n") == 1
+
+
+def test_record_refuses_an_impossible_variant_in_one_line(tmp_path: Path) -> None:
+    """Review 32: fov 180 at 0.25 deg was "internal error: ValueError ... (a bug in lmsbench)", exit 1."""
+    run = subprocess.run(cli("record", "--port", "loop://", "--out", str(tmp_path / "x.clf"), "--fov-deg", "180",
+                             "--resolution-deg", "0.25"), env=ENV, capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2, run.stderr
+    assert run.stderr.startswith("lmsbench lms200 record: error: fov_deg, resolution_deg: (180 deg, 0.25 deg) is not "
+                                 "an LMS200 variant;") and "(0.25 deg only with 100 deg)" in run.stderr
+    assert run.stderr.count("\n") == 1 and not (tmp_path / "x.clf").exists()

@@ -187,3 +187,35 @@ def test_variants_report_the_right_beams() -> None:
     (reply,) = [e for e in host.run(1.0) if isinstance(e, Frame)]
     scan = decode_scan(reply.payload)
     assert len(scan) == 401 and scan.ranges[1] == pytest.approx(np.round((ranges[80] + ranges[81]) / 2, 3), abs=1e-12)
+
+
+def test_a_reply_is_handed_over_before_the_next_scan_is_built() -> None:
+    """Review 32 (slowsrc.py): the tail of the 0xA0 reply that starts continuous output was handed
+    over only after the device had built its first scan (the simulator's first ray cast takes
+    0.3-0.5 s), a gap mid-frame no device makes; the driver dropped the reply and resent after
+    3.5 s. Now the source is asked for a scan only after the due bytes went out."""
+    seen: list[list[object]] = []
+
+    def source():  # noqa: ANN202
+        while True:
+            seen.append([e for _, e in host.events if isinstance(e, Frame)])
+            yield Scan.lms200(np.full(361, 2.0))
+
+    host = Host(VirtualLMS200(source()))
+    host.send(mode_request(0x24))
+    host.run(0.2)
+    assert seen[0] == [Frame(0x80, b"\xa0\x00\x10")]  # the whole reply had arrived
+
+
+def test_quarter_degree_midpoints_follow_nan_then_inf() -> None:
+    """The docstring said "mean of two valid neighbours, else nan"; next to +inf the midpoint is
+    +inf (8183), next to nan it is nan (8191), as the code always did."""
+    from lms200.virtual import variant_codes
+
+    r = np.full(361, 2.0)
+    r[100], r[102], r[103] = np.inf, np.nan, np.inf
+    codes = variant_codes(r, (100, 25), "mm")
+    # 0.5 deg beam b is value 2 * (b - 80) of the 401; between them the midpoints
+    assert codes[2 * 19 + 1 : 2 * 24].tolist() == [8183, 8183, 8183, 2000, 8191, 8191, 8191, 8183, 8183]
+    #                                   mid 99|100, 100 (inf), mid 100|101, 101, mid 101|102 (nan), 102 (nan),
+    #                                   mid 102|103 (nan, inf: nan), 103 (inf), mid 103|104 (inf)

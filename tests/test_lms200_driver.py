@@ -7,6 +7,7 @@ changes take milliseconds; every scan the driver yields is compared with the sca
 from __future__ import annotations
 
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -195,3 +196,179 @@ def test_a_reply_wait_or_time_scale_beyond_its_bound_is_refused_before_any_io():
             LMS200("loop://", **kw)
     with pytest.raises(ValueError, match=r"^time_scale: must be in \(0, 100\], got 1000000000"):
         VirtualLMS200([], time_scale=1e9)
+
+
+def test_bad_arguments_are_input_errors_naming_the_argument_and_the_variants() -> None:
+    """Review 32 (ctor.py): resolution_deg='0.5' raised TypeError "type str doesn't define __round__
+    method", fov 180 at 0.25 deg a plain ValueError that the command line reported as an internal
+    error (a bug, exit 1); the virtual device did the same. Now every one is an InputError (an
+    LmsbenchError) raised before the port is opened, naming the argument."""
+    from lms200.errors import InputError, LmsbenchError
+
+    variants = ("the variants are 180 deg at 1 deg, 180 deg at 0.5 deg, 100 deg at 1 deg, 100 deg at 0.5 deg, "
+                "100 deg at 0.25 deg (0.25 deg only with 100 deg)")
+    cases = [
+        ({"fov_deg": 180, "resolution_deg": 0.25}, f"fov_deg, resolution_deg: (180 deg, 0.25 deg) is not an LMS200 variant; {variants}"),
+        ({"resolution_deg": "0.5"}, "resolution_deg: must be a number, got str '0.5'"),
+        ({"resolution_deg": float("nan")}, "fov_deg, resolution_deg: (180 deg, nan deg) is not an LMS200 variant"),
+        ({"baud": 1234}, "baud: the LMS200 supports [9600, 19200, 38400, 500000], got 1234"),
+        ({"units": "m"}, "units: must be 'mm' or 'cm', got 'm'"),
+        ({"retries": 0}, "retries: must be >= 1, got 0"),
+        ({"address": 200}, "address: must be in 0..127 (replies come from address + 0x80), got 200"),
+        ({"timeout": "1"}, "timeout: must be a number, got str '1'"),
+    ]
+    for kw, message in cases:
+        with pytest.raises(InputError) as info:
+            LMS200("loop://", **kw)
+        assert isinstance(info.value, LmsbenchError) and str(info.value).startswith(message), (kw, str(info.value))
+    for kw, message in [({"variant": (180, 25)}, "variant: (180, 25) is not an LMS200 variant; the variants are"),
+                        ({"time_scale": "1"}, "time_scale: must be a number, got str '1'"),
+                        ({"units": "m"}, "units: must be 'mm' or 'cm', got 'm'")]:
+        with pytest.raises(InputError, match=f"^{re.escape(message)}"):
+            VirtualLMS200([], **kw)
+
+
+def test_a_dropped_link_is_an_lms_link_error_and_close_after_it_is_quiet() -> None:
+    """Review 32 (disc.py): a TCP link that drops mid-stream let pyserial's SerialException "read
+    failed: socket disconnected" escape scans(), and close() raised it a second time."""
+    import serial
+
+    from lms200.errors import LmsDeviceError, LmsLinkError
+
+    srv = TcpServer(VirtualLMS200(source(), time_scale=SCALE))
+    lms = LMS200(srv.url, baud=38400)
+    n = 0
+    with pytest.raises(LmsLinkError) as info:
+        for _ in lms.scans():
+            n += 1
+            if n == 2:
+                srv.close()
+    assert isinstance(info.value, LmsDeviceError) and not isinstance(info.value, serial.SerialException)
+    assert str(info.value).startswith(f"the link to {srv.url} at 38400 baud failed while reading scans in continuous mode: ")
+    assert lms.close() is None and not lms._ser.is_open  # raised once, not again
+
+
+def test_a_write_that_fails_names_the_request_once() -> None:
+    import serial
+
+    from lms200.errors import LmsLinkError
+
+    with TcpServer(VirtualLMS200(source(), time_scale=SCALE)) as ad:
+        lms = LMS200(ad.url, baud=38400)
+
+        def broken(data: bytes) -> int:
+            raise serial.SerialException("write failed: [Errno 5] Input/output error")
+
+        lms._ser.write = broken
+        with pytest.raises(LmsLinkError, match=re.escape(
+                f"the link to {ad.url} at 38400 baud failed while stop continuous output (0x20 0x25): sending "
+                "02 00 02 00 20 25 35 08: write failed: [Errno 5] Input/output error")):
+            lms.close()
+        assert not lms._ser.is_open
+        lms.close()  # closed: nothing more to do, nothing raised
+
+
+def test_a_reply_stalled_mid_frame_by_the_link_is_kept(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 32 (slowsrc.py): a reply that paused 0.3 s mid-frame (a TCP or USB link; the virtual
+    device did it too) was dropped after 0.1 s of quiet, and the request waited out its timeout
+    and was sent again (retries 1, dropped_frames 1). A consistent partial frame now waits for
+    timeout + the longest telegram's line time (0.5 + 0.85 s at 9600 baud)."""
+    from lms200_fake_port import TYPE_REPLY, answer, fake_port, reply
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload[0] == 0x3A:
+            r = reply(TYPE_REPLY)
+            return [(0.002, b"\x06"), (0.010, r[:7]), (0.310, r[7:])]  # 0.3 s of silence mid-frame
+        return answer(payload)
+
+    port = fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False)
+    assert lms.type_string == "LMS200;301063;V02.10 "
+    assert (lms.stats.retries, lms.stats.dropped_frames, lms.parser.stats.stalled) == (0, 0, 0)
+    assert sum(w[4] == 0x3A for w in port.writes) == 1
+    lms.close()
+
+
+def test_a_false_start_hiding_a_reply_is_still_dropped_after_a_tenth_of_a_second(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The longer wait is for consistent partial frames only: a false start (LEN 512 that never
+    comes) with a good reply complete behind it is given up after 0.1 s of quiet, as before."""
+    import time
+
+    from lms200_fake_port import TYPE_REPLY, answer, fake_port, reply
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload[0] == 0x3A:
+            return [(0.002, b"\x02\x80\x00\x02" + b"\x06" + reply(TYPE_REPLY))]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    t = time.monotonic()
+    lms = LMS200("fake://", baud=9600, probe=False)
+    assert time.monotonic() - t < 1.0  # 0.1 s, not the 1.35 s a consistent partial frame gets
+    assert lms.type_string == "LMS200;301063;V02.10 " and lms.stats.retries == 0 and lms.parser.stats.stalled == 1
+    lms.close()
+
+
+def test_scans_read_together_are_stamped_by_arrival_not_by_processing(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 32 (stamp.py): every scan was stamped time.time() - its line time when it was
+    processed, so the scans of a backlog read at once (the consumer busy for 0.3 s) got the same
+    stamp: diffs 300.6, 0.2, 0, 0 ... ms instead of the line's spacing. Now each scan's stamp comes
+    from the read that brought its last byte, less the line time of the bytes after it."""
+    import time
+
+    from lms200_fake_port import answer, fake_port, scan_frame
+
+    line_s = 732 * 10 / 9600  # one 361-value telegram at 9600 baud: 762.5 ms
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":  # continuous output: 5 scans waiting at once, then 2 more
+            return [*answer(payload), (0.05, b"".join(scan_frame(1000 + i) for i in range(5))),
+                    (0.15, scan_frame(2000)), (0.25, scan_frame(2001))]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False)
+    stamps = []
+    for scan in itertools.islice(lms.scans(), 7):
+        stamps.append(scan.stamp)
+        time.sleep(0.02)  # the consumer takes its time
+    diffs = np.diff(stamps)
+    np.testing.assert_allclose(diffs[:4], line_s, atol=1e-6)  # old: about 0 s each
+    assert stamps[-1] < time.time() - line_s
+    lms.close()
+
+
+def test_a_corrupted_telegram_ending_in_0x15_is_no_nak_and_one_ending_in_0x06_hides_no_nak(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 32 (nak.py): while streaming, the stop request's ACK came after a scan telegram whose
+    CRC byte line noise had turned into 0x15: the parser reported a NAK and close() sent the stop
+    request again (retries 1). The other way round, a broken telegram ending in 0x06 before a
+    real NAK passed for an ACK, so the NAK was ignored and the request waited out its timeout."""
+    import time
+
+    from lms200_fake_port import ACK_BYTE, answer, fake_port, reply, scan_frame
+
+    broken = bytearray(scan_frame())
+    plan = {"stop": 0}
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x25" and plan["stop"] == 1:  # close(): a broken scan, then ACK and reply
+            plan["stop"] += 1
+            broken[-1] = 0x15
+            return [(0.0, bytes(broken)), (0.02, ACK_BYTE), (0.03, reply(b"\xa0\x00\x10"))]
+        if payload == b"\x3b\xb4\x00\x32\x00" and plan["stop"] == 0:  # variant: a broken telegram, then NAK
+            plan["stop"] = 1
+            broken[-1] = 0x06
+            return [(0.0, bytes(broken)), (0.02, b"\x15")]
+        return answer(payload)
+
+    port = fake_port(monkeypatch, script)
+    t = time.monotonic()
+    lms = LMS200("fake://", baud=9600, probe=False, timeout=2.0)
+    assert time.monotonic() - t < 1.0  # the NAK is seen: resent at once, not after the 2 s timeout
+    assert lms.stats.retries == 1 and lms.parser.stats.naks == 1
+    assert sum(w[4:9] == b"\x3b\xb4\x00\x32\x00" for w in port.writes) == 2
+    lms.streaming = True
+    lms.close()
+    assert sum(w[4:6] == b"\x20\x25" for w in port.writes) == 2  # once at opening, once at close
+    assert lms.stats.retries == 1 and lms.parser.stats.naks == 1 and lms.parser.stats.bad_crc == 2

@@ -114,3 +114,35 @@ def test_fuzz_random_noise_never_raises_and_counts_every_byte() -> None:
     s = p.stats
     assert s.frames == 0
     assert s.skipped_bytes + s.acks + s.naks + p.pending == len(noise)
+
+
+def test_hides_frame_tells_a_false_start_from_a_partial_frame() -> None:
+    good = frame(b"\xa0\x00\x10")
+    p = FrameParser()
+    assert p.feed(good[:5]) == [] and p.pending == 5 and not p.hides_frame()  # a reply cut by a stalled link
+    assert p.feed(good[5:]) == [Frame(0x80, b"\xa0\x00\x10")]
+    assert p.feed(bytes([0x02, 0x80, 0x00, 0x02]) + good[:-1]) == [] and not p.hides_frame()  # not yet complete
+    assert p.feed(good[-1:]) == [] and p.hides_frame()  # a good frame behind LEN 512: a false start
+    assert p.idle() == [Frame(0x80, b"\xa0\x00\x10")] and p.stats.stalled == 1
+
+
+def test_the_crc_byte_of_a_corrupted_telegram_is_no_handshake() -> None:
+    """Review 32 (frm.py): the type reply with its CRC high byte hit into 0x15, then a scan, gave
+    [NAK, frame]: the broken telegram's last byte was taken for a NAK (0x06: for an ACK). Bytes
+    of a telegram that failed its CRC are garbage now; a handshake right after it still counts."""
+    ba = bytearray(frame(b"\xba" + b"LMS200;301063;V02.10 " + b"\x10"))
+    b0 = frame(b"\xb0\x01\x00\x10")
+    for tail in (NAK, ACK):
+        ba[-1] = tail
+        p = FrameParser()
+        assert p.feed(bytes(ba) + b0) == [Frame(0x80, b"\xb0\x01\x00\x10")]
+        assert (p.stats.acks, p.stats.naks, p.stats.bad_crc, p.stats.skipped_bytes) == (0, 0, 1, len(ba))
+        p = FrameParser()  # the broken telegram in one read, a real handshake in the next
+        assert p.feed(bytes(ba)) == [] and p.feed(bytes([NAK])) == [NAK] and p.stats.naks == 1
+        p = FrameParser()
+        assert p.feed(bytes(ba) + bytes([ACK]) + b0) == [ACK, Frame(0x80, b"\xb0\x01\x00\x10")]
+    # A good frame inside a failed candidate's span proves that candidate false: its span is no telegram.
+    good = frame(b"\xa0\x00\x10")
+    false_start = bytes([0x02, 0x80, 0x0A, 0x00, 0x00])  # LEN 10 spans the ACK and part of the reply
+    p = FrameParser()
+    assert p.feed(false_start + bytes([ACK]) + good + bytes(8)) == [ACK, Frame(0x80, b"\xa0\x00\x10")]

@@ -7,7 +7,8 @@ import pytest
 
 from functools import partial
 
-from slam import Observations, SlamConfig, SlamConfigError, SlamFilter, SlamInputError, run_observations
+from slam import Observations, SlamConfig, SlamConfigError, SlamFilter, SlamInputError, from_features, run_observations
+from slam.observations import scan_points
 from slam.config import AssociationConfig, LandmarkConfig, MotionConfig, ObservationConfig, PrealignConfig
 from slam.metrics import ate
 from slam.models import wrap
@@ -243,3 +244,68 @@ def test_a_filter_whose_scans_leave_the_map_reports_divergence():
     assert not lost_against_scan([0.9, 0.1, 0.1], cfg)
     assert lost_against_scan([0.9, 0.1, 0.1, 0.2], cfg)
     assert not lost_against_scan([0.1, 0.1, float("nan")], cfg)  # no reference is not evidence
+
+
+# --- bad input to run_observations / Observations, found by fuzzing the Python API (session 32) ----
+_LINE = dict(lines=np.array([[1.0, 0.0]]), line_cov=np.eye(2)[None] * 1e-4, line_ends=np.array([[1.0, -1.0, 1.0, 1.0]]))
+
+
+@pytest.mark.parametrize("call, message", [
+    # zip cut these to the shortest, silently: 11 stamps and 10 observations gave 10 poses, "abc" 3
+    (lambda: run_observations([0.0, 0.1, 0.2], [Observations()] * 2), r"^observations: 2 items for 3 stamps"),
+    (lambda: run_observations([0.0, 0.1], [Observations()] * 2, odometry="abc"),
+     r"^odometry: must be an iterable \(one item a scan\), got str"),
+    (lambda: run_observations([0.0, 0.1], [Observations()] * 2, truths=[(0, 0, 0)]), r"^truths: 1 items for 2 stamps"),
+    (lambda: run_observations(5, [Observations()]), r"^stamps: must be an iterable .*got int"),  # "not iterable"
+    # nan / inf stamps: "cannot convert float NaN to integer" deep in the filter; text numpy's ValueError
+    (lambda: run_observations([0.0, float("nan")], [Observations()] * 2), r"^scan 1: its stamp must be a finite number \(s\), got nan"),
+    (lambda: run_observations([0.0, float("inf")], [Observations()] * 2), r"^scan 1: its stamp must be a finite number"),
+    (lambda: run_observations(["0.0"], [Observations()]), r"^scan 0: its stamp must be a finite number \(s\), got '0.0'"),
+    (lambda: run_observations([0.0], [None]), r"^scan 0: its observations must be a slam.Observations, got NoneType"),  # AttributeError
+    (lambda: run_observations([0.0], [Observations()], truths=["abc"]), r"^scan 0: truth: must be None or three numbers"),  # IndexError
+    (lambda: run_observations([0.0], [Observations()], config="paper"), r"^config: must be a slam.SlamConfig, got str"),  # AttributeError
+])
+def test_run_observations_names_a_bad_argument(call, message: str) -> None:
+    with pytest.raises(SlamInputError, match=message):
+        call()
+
+
+@pytest.mark.parametrize("fields, message", [
+    ({"lines": "abc"}, r"^observations.lines: must be a \(k, 2\) array of real numbers"),  # AttributeError in the filter
+    ({**_LINE, "lines": np.zeros((1, 3))}, r"^observations.lines: must be a \(k, 2\) array .*got shape \(1, 3\)"),  # unpacking
+    ({**_LINE, "lines": np.zeros((2, 2))}, r"^observations.line_ends: 1 rows for 2 lines"),  # IndexError
+    ({**_LINE, "line_cov": np.full((1, 2, 2), np.nan)}, r"^observations.line_cov: must be \(1, 2, 2\) finite covariances.*got nan / inf"),
+    ({**_LINE, "line_cov": np.eye(2)}, r"^observations.line_cov: must be \(1, 2, 2\) .*got shape \(2, 2\)"),
+    ({"corners": np.zeros((1, 2))}, r"^observations.corner_cov: must be \(1, 2, 2\) .*got shape \(0, 2, 2\)"),
+    ({"points": np.array([[np.nan, 1.0]])}, r"^observations.points: must be finite"),
+])
+def test_observations_check_their_fields(fields: dict, message: str) -> None:
+    from lms200 import InputError
+
+    with pytest.raises(InputError, match=message):
+        Observations(**fields)
+
+
+def test_observations_of_lists_are_float_arrays_and_run() -> None:
+    obs = Observations(lines=[[1.0, 0.0]], line_cov=[[[1e-4, 0.0], [0.0, 1e-4]]], line_ends=[[1.0, -1.0, 1.0, 1.0]])
+    assert obs.lines.dtype == np.float64 and obs.line_cov.shape == (1, 2, 2)
+    res = run_observations([0.0, 0.1], [obs, obs], P())
+    assert res.trajectory.shape == (2, 4) and np.isfinite(res.trajectory).all()
+
+
+@pytest.mark.parametrize("call, error, message", [
+    (lambda fs, s: from_features(None, P()), "InputError", r"^fs: expected a features.FeatureSet, got NoneType"),  # AttributeError
+    (lambda fs, s: from_features(fs, "paper"), "InputError", r"^config: must be a slam.SlamConfig, got str"),
+    (lambda fs, s: from_features(fs, P(), scan=s.ranges), "ScanTypeError", r"^from_features: expected an lms200.Scan, got ndarray"),
+    (lambda fs, s: scan_points(s, stride=0), "ConfigError", r"^stride: must be an integer >= 1, got 0"),  # "slice step cannot be zero"
+    (lambda fs, s: scan_points(s, stride=-1), "ConfigError", r"^stride: must be an integer >= 1, got -1"),  # points in reverse
+    (lambda fs, s: scan_points(s, stride=2.5), "ConfigError", r"^stride: must be an integer >= 1, got 2.5"),
+    (lambda fs, s: scan_points(None), "ScanTypeError", r"^scan_points: expected an lms200.Scan, got NoneType"),
+])
+def test_from_features_and_scan_points_name_a_bad_argument(call, error: str, message: str) -> None:
+    from features import FeatureSet
+    from lms200 import LmsbenchError, Scan
+
+    with pytest.raises(LmsbenchError, match=message) as info:
+        call(FeatureSet(), Scan.lms200(np.full(361, 2.0)))
+    assert type(info.value).__name__ == error
