@@ -50,7 +50,7 @@ def pose_of(name: str, pose: object) -> Pose2D:
     if isinstance(pose, (str, bytes)):
         raise InputError(f"{shape}, got {type(pose).__name__} {pose!r}")
     try:
-        items = tuple(pose)  # type: ignore[arg-type]
+        items: tuple[object, ...] = tuple(pose)  # type: ignore[arg-type]
     except TypeError:
         raise InputError(f"{shape}, got {type(pose).__name__}") from None
     if len(items) != 3:
