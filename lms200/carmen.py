@@ -18,7 +18,8 @@ Formats (one message a line, ``#`` comments, unknown messages skipped):
 
 Conventions: a scan's ``stamp`` is the message's ipc_timestamp; ``.odom`` is the robot pose the laser
 message carries (FLASER odom fields, ROBOTLASER1 robot fields); ``.truth`` is the pose of a TRUEPOS
-line directly preceding the laser message. SICK special codes stored as ranges (81.83 / 81.91 m in
+line directly preceding the laser message (PARAM lines aside: any other message line between, even a
+malformed one or another laser kind, drops it). SICK special codes stored as ranges (81.83 / 81.91 m in
 cm mode, 8.183 / 8.191 m in mm mode) map to +inf / nan (REP-117). The range unit comes from the
 ROBOTLASER1 accuracy field, a ``PARAM lmsbench_range_units mm|cm`` line (which this writer emits), or,
 for FLASER logs without it, from the values themselves (see :func:`infer_units`). No CARMEN laser line
@@ -336,12 +337,17 @@ class CarmenReader:
             blank.reset()
             kind = words[0]
             stats.messages[kind] = stats.messages.get(kind, 0) + 1
+            # a TRUEPOS pose is the truth of the laser line directly after it (PARAM lines aside): any
+            # other line between (ODOM, another laser kind, a malformed line) drops it
+            held, truth = truth, None
             try:
                 if kind == "PARAM":
                     units, has_odometry = _param(words, params, units, has_odometry)
+                    truth = held
                 elif kind == "TRUEPOS":
-                    truth = _pose(words, 1, "TRUEPOS")
+                    pose = _pose(words, 1, "TRUEPOS")
                     _require(len(words) >= 8, "TRUEPOS needs at least 7 numbers")
+                    truth = pose
                 elif kind == "ODOM":
                     _require(len(words) >= 8, "ODOM needs x y theta tv rv accel timestamp")
                     _floats(words[1:8], "ODOM")
@@ -364,9 +370,7 @@ class CarmenReader:
                         _require(first[0] == len(scan),
                                  f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
                                  f"field of view and resolution carries {first[0]}")
-                    rec = Record(scan=scan, odom=odom if has_odometry else None, truth=truth)
-                    truth = None
-                    yield rec
+                    yield Record(scan=scan, odom=odom if has_odometry else None, truth=held)
             except (ValueError, OverflowError, ArithmeticError) as exc:
                 self._bad(line_no, kind, exc)
         if self.topic is not None and not stats.messages.get(self.topic) and stats.other_lasers():
@@ -636,8 +640,6 @@ def write_carmen(
                 range_min = scan.range_min
                 f.write(f"PARAM {RANGE_MIN_PARAM} {range_min!r} {hostname} 0\n")
             stamp = f"{scan.stamp:.6f} {hostname} {scan.stamp:.6f}"
-            if rec.truth is not None:
-                f.write(f"TRUEPOS {_pose_text(rec.truth)} {_pose_text(rec.odom)} {stamp}\n")
             ranges = _format_ranges(scan, u)
             odom = _pose_text(rec.odom)
             if fmt == "flaser":
@@ -646,6 +648,9 @@ def write_carmen(
                     flaser_params = params
                     for name, value in params.items():
                         f.write(f"PARAM {name} {value} {hostname} 0\n")
+            if rec.truth is not None:  # directly before its laser line, as the reader takes it
+                f.write(f"TRUEPOS {_pose_text(rec.truth)} {_pose_text(rec.odom)} {stamp}\n")
+            if fmt == "flaser":
                 f.write(f"FLASER {len(scan)} {ranges} {odom} {odom} {stamp}\n")
             else:
                 fov = scan.angle_max - scan.angle_min

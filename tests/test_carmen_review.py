@@ -150,3 +150,26 @@ def test_valid_readings_near_the_special_codes_stay_valid(tmp_path, fmt):
     far = Scan(np.array([8.183, 2.0, 8.19]), -0.05, 0.05, 0.0, 8.0)
     write_log(path, [Record(far)], fmt=fmt)
     assert not next(iter(read_log(path))).scan.valid[[0, 2]].any()
+
+
+def test_truth_is_only_the_truepos_line_directly_before_the_scan(tmp_path):
+    text = ("TRUEPOS 9 9 9 0 0 0 1 h 1\n" + _flaser("1.00 bad 3.00", stamp="1") + _flaser(stamp="2")
+            + "TRUEPOS 7 7 7 0 0 0 100 h 100\n" + "ODOM 0 0 0 0 0 0 150 h 150\n" * 3 + _flaser(stamp="500")
+            + "TRUEPOS 6 6 6 0 0 0 600 h 600\nRLASER 3 1 2 3 0 0 0 0 0 0 600 h 600\n" + _flaser(stamp="600")
+            + "TRUEPOS 5 5 5 0 0 0 700 h 700\nPARAM laser_front_laser_fov 180 h 0\n# a comment\n" + _flaser(stamp="700"))
+    reader = read_log(_write(tmp_path, "t.log", text), skip_bad_lines=True, topic="FLASER")
+    # was: (2.0, (9, 9, 9)) across a skipped malformed line, (500.0, (7, 7, 7)) across ODOM lines 400 s
+    # later, (600.0, (6, 6, 6)) across an RLASER line
+    assert [(r.scan.stamp, r.truth) for r in reader] == [(2.0, None), (500.0, None), (600.0, None),
+                                                        (700.0, (5.0, 5.0, 5.0))]
+    assert reader.stats.skipped == [(2, "FLASER: FLASER ranges: 'bad' is not a number")]
+
+
+def test_writer_puts_truepos_directly_before_its_laser_line(tmp_path):
+    path = tmp_path / "w.log"
+    recs = [Record(Scan(np.ones(3), -0.1, 0.1, 0.0, 8.0, stamp=t), odom=(t, 0.0, 0.0), truth=truth)
+            for t, truth in ((1.0, (1.0, 2.0, 3.0)), (2.0, None), (3.0, (4.0, 5.0, 6.0)))]
+    write_log(path, recs, fmt="flaser")
+    lines = [ln.split()[0] for ln in path.read_text().splitlines() if not ln.startswith("#")]
+    assert [lines[i + 1] for i, k in enumerate(lines) if k == "TRUEPOS"] == ["FLASER", "FLASER"]
+    assert [r.truth for r in read_log(path)] == [(1.0, 2.0, 3.0), None, (4.0, 5.0, 6.0)]
