@@ -73,6 +73,15 @@ from .scan import Scan, snap_angle
 UNITS_PARAM = "lmsbench_range_units"
 ODOMETRY_PARAM = "lmsbench_odometry"  # "absent": the pose fields of the scans that follow are not odometry
 RANGE_MIN_PARAM = "lmsbench_range_min"  # m: range_min of the scans that follow (no CARMEN laser line has the field; 0 without it)
+#: rad, exactly as written (the CARMEN PARAM lines are in degrees, which do not round-trip: -0.1 rad read
+#: back as -0.10000000000000002): a FLASER / RLASER scan's (angle_min, angle_increment), used where they
+#: agree with the geometry the other PARAM lines (or an override) give to within EXACT_GEOMETRY_AGREEMENT
+EXACT_GEOMETRY_NAMES = {
+    "FLASER": ("lmsbench_front_laser_angle_min", "lmsbench_front_laser_angle_increment"),
+    "RLASER": ("lmsbench_rear_laser_angle_min", "lmsbench_rear_laser_angle_increment"),
+}
+EXACT_GEOMETRY_PARAMS = frozenset(n for names in EXACT_GEOMETRY_NAMES.values() for n in names)
+EXACT_GEOMETRY_AGREEMENT = 1e-12  # rad, relative to max(1, |angle|): degrees to radians and back differ by ~1e-16
 POSED_LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages that carry poses
 RAW_LASER_KINDS = ("RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4")  # laser messages without poses
 LASER_KINDS = POSED_LASER_KINDS + RAW_LASER_KINDS  # laser messages read (one kind per pass)
@@ -361,7 +370,9 @@ class CarmenReader:
                     odom: Pose2D | None
                     if kind in ("FLASER", "RLASER"):
                         geometry = self.geometry.merged(laser_geometry.from_params(kind, params))
-                        scan, odom = _parse_flaser(words, units, geometry, params.get(RANGE_MIN_PARAM, 0.0))
+                        exact_min, exact_step = EXACT_GEOMETRY_NAMES[kind]
+                        exact = (params.get(exact_min), params.get(exact_step))
+                        scan, odom = _parse_flaser(words, units, geometry, params.get(RANGE_MIN_PARAM, 0.0), exact)
                     else:
                         scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
                                                        params.get(RANGE_MIN_PARAM, 0.0))
@@ -407,6 +418,8 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
         units = value  # type: ignore[assignment]
     elif name == ODOMETRY_PARAM:
         has_odometry = value != "absent"
+    elif name in EXACT_GEOMETRY_PARAMS:
+        params[name] = float(_floats([value], name)[0])
     elif name == RANGE_MIN_PARAM:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number >= 0, f"{name} must be a finite number >= 0 (m), got {value!r}")
@@ -492,7 +505,8 @@ def _ranges(values: np.ndarray, units: Units | None, what: str) -> tuple[np.ndar
 
 
 def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry,
-                  range_min: float = 0.0) -> tuple[Scan, Pose2D]:
+                  range_min: float = 0.0,
+                  exact: tuple[float | None, float | None] = (None, None)) -> tuple[Scan, Pose2D]:
     kind = words[0]
     _require(len(words) >= 2, f"{kind} needs a beam count")
     n = _count(words[1], "beam count")
@@ -501,9 +515,18 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     ranges, u = _ranges(_floats(words[2 : 2 + n], f"{kind} ranges"), units, kind)
     tail = _floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
+    angle_min, increment = _exact_or_snapped(angle_min, exact[0]), _exact_or_snapped(increment, exact[1], n)
     range_max = geometry.range_max if geometry.range_max is not None else LMS200_MAX_RANGE[u]
-    scan = Scan(ranges, snap_angle(angle_min), snap_angle(increment, n), range_min, range_max, float(tail[6]))
+    scan = Scan(ranges, angle_min, increment, range_min, range_max, float(tail[6]))
     return scan, _pose(words, 2 + n + 3, f"{kind} odometry")
+
+
+def _exact_or_snapped(angle: float, exact: float | None, beams: int = 1) -> float:
+    """The exact angle a ``PARAM lmsbench_*_laser_angle_*`` line gives where it agrees with the one
+    rebuilt from degrees, else that one snapped onto the 0.05 deg grid (:func:`snap_angle`)."""
+    if exact is not None and abs(exact - angle) <= EXACT_GEOMETRY_AGREEMENT * max(1.0, abs(angle)):
+        return exact
+    return snap_angle(angle, beams)
 
 
 def _parse_robotlaser(words: list[str], units: Units | None, range_max_override: float | None,
@@ -566,9 +589,16 @@ def _format_ranges(scan: Scan, units: Units) -> str:
     return " ".join(f"{v:.{decimals}f}" for v in r)
 
 
+def _num(value: float) -> str:
+    """A float as the shortest plain decimal that reads back as the same float64 (no exponent, for
+    CARMEN tools): 6 decimals lost precision (a stamp 1700000000.1234567 came back 238 ns off,
+    3.0000004 as 3.0; 1024 beams at 2 pi / 1024 rad ended 7.9e-5 rad off; a review's reproduction)."""
+    return np.format_float_positional(float(value), unique=True, trim="0")
+
+
 def _pose_text(pose: Pose2D | None) -> str:
     x, y, t = pose if pose is not None else (0.0, 0.0, 0.0)
-    return f"{x:.6f} {y:.6f} {t:.6f}"
+    return f"{_num(x)} {_num(y)} {_num(t)}"
 
 
 def _flaser_params(scan: Scan) -> dict[str, str]:
@@ -587,7 +617,9 @@ def _flaser_params(scan: Scan) -> dict[str, str]:
             f"at {res:.3f} deg (not centred ahead); use fmt='robotlaser1'"
         )
     names = laser_geometry.PARAM_NAMES["FLASER"]
-    return {names[0]: repr(res), names[1]: repr(fov), names[2]: repr(scan.range_max)}
+    exact = EXACT_GEOMETRY_NAMES["FLASER"]
+    return {names[0]: _num(res), names[1]: _num(fov), names[2]: _num(scan.range_max),
+            exact[0]: _num(scan.angle_min), exact[1]: _num(scan.angle_increment)}
 
 
 def write_carmen(
@@ -606,9 +638,12 @@ def write_carmen(
     (a valid reading that would round onto 8183 .. 8191 units as 8182, so it reads back valid); a ``PARAM lmsbench_range_units`` line records
     the unit, and ``PARAM lmsbench_odometry absent|present`` lines mark records without odometry
     (their pose fields are written as zeros); no CARMEN laser line has a range_min field, so a
-    ``PARAM lmsbench_range_min`` line gives it (exactly, ``repr``) before the first scan whose
+    ``PARAM lmsbench_range_min`` line gives it before the first scan whose
     range_min differs from the one before (0 before the first scan, as the reader assumes). ``flush=True`` pushes every scan to the file as soon
     as it is written (for recorders: a crash or Ctrl-C loses nothing already received).
+    Stamps, poses, angles and PARAM values are written as the shortest plain decimal that reads back
+    as the same float64 (FLASER logs also get ``PARAM lmsbench_front_laser_angle_min / _increment``
+    in rad), so a scan written and read back is equal to it.
     Returns the number of scans written.
     """
     if fmt not in ("robotlaser1", "flaser"):
@@ -638,8 +673,8 @@ def write_carmen(
                 f.write(f"PARAM {ODOMETRY_PARAM} {'present' if odometry else 'absent'} {hostname} 0\n")
             if scan.range_min != range_min:
                 range_min = scan.range_min
-                f.write(f"PARAM {RANGE_MIN_PARAM} {range_min!r} {hostname} 0\n")
-            stamp = f"{scan.stamp:.6f} {hostname} {scan.stamp:.6f}"
+                f.write(f"PARAM {RANGE_MIN_PARAM} {_num(range_min)} {hostname} 0\n")
+            stamp = f"{_num(scan.stamp)} {hostname} {_num(scan.stamp)}"
             ranges = _format_ranges(scan, u)
             odom = _pose_text(rec.odom)
             if fmt == "flaser":
@@ -655,8 +690,8 @@ def write_carmen(
             else:
                 fov = scan.angle_max - scan.angle_min
                 f.write(
-                    f"ROBOTLASER1 0 {scan.angle_min:.6f} {fov:.6f} {scan.angle_increment:.6f} "
-                    f"{scan.range_max:.6f} {metres_per_unit(u):.6f} 0 {len(scan)} {ranges} 0 "
+                    f"ROBOTLASER1 0 {_num(scan.angle_min)} {_num(fov)} {_num(scan.angle_increment)} "
+                    f"{_num(scan.range_max)} {_num(metres_per_unit(u))} 0 {len(scan)} {ranges} 0 "
                     f"{odom} {odom} 0.000000 0.000000 0.000000 0.000000 0.000000 {stamp}\n"
                 )
             count += 1

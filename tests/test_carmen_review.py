@@ -173,3 +173,31 @@ def test_writer_puts_truepos_directly_before_its_laser_line(tmp_path):
     lines = [ln.split()[0] for ln in path.read_text().splitlines() if not ln.startswith("#")]
     assert [lines[i + 1] for i, k in enumerate(lines) if k == "TRUEPOS"] == ["FLASER", "FLASER"]
     assert [r.truth for r in read_log(path)] == [(1.0, 2.0, 3.0), None, (4.0, 5.0, 6.0)]
+
+
+@pytest.mark.parametrize("fmt", ["robotlaser1", "flaser"])
+def test_round_trip_is_exact(tmp_path, fmt):
+    path = tmp_path / "rt.log"
+    scans = [Scan(np.full(1024, 2.0), -math.pi, 2 * math.pi / 1024, 0.0, 30.0, stamp=1700000000.1234567),
+             Scan(np.full(5, 2.0), -0.1, 0.05, 1e-5, 30.0, stamp=3.0000004),
+             Scan(np.full(361, 2.0), -math.pi / 2, math.pi / 360, 0.0, 30.0, stamp=3.5)]
+    if fmt == "flaser":  # FLASER carries scans centred ahead only
+        scans[0] = scans[0].replace(angle_min=-(1023 / 2) * scans[0].angle_increment)
+    recs = [Record(s, odom=(1.23456789, -2.0, 1e-7), truth=(0.1234567891, 3.0000004, -3.5)) for s in scans]
+    write_log(path, recs, fmt=fmt)
+    text = path.read_text()
+    assert "e-" not in text and "e+" not in text  # plain decimals, as CARMEN tools read them
+    back = list(read_log(path))
+    # was: stamps 238 ns off (3.0000004 as 3.0), poses to 6 decimals, ROBOTLASER1 1024 beams' last one
+    # 7.9e-5 rad off, FLASER angle_min -0.1 as -0.10000000000000002
+    for a, b in zip(recs, back):
+        assert b.scan == a.scan and b.odom == a.odom and b.truth == a.truth
+    assert back[1].scan.angle_min == -0.1 and back[0].scan.stamp == 1700000000.1234567
+
+
+def test_flaser_exact_geometry_params_yield_to_an_override(tmp_path):
+    path = tmp_path / "o.log"
+    write_log(path, [Record(Scan(np.full(5, 2.0), -0.1, 0.05, 0.0, 8.0))], fmt="flaser")
+    assert "PARAM lmsbench_front_laser_angle_min -0.1 " in path.read_text()
+    scan = next(iter(read_log(path, geometry=LaserGeometry(fov=math.radians(4.0), resolution=math.radians(1.0))))).scan
+    assert scan.angle_increment == math.radians(1.0) and scan.angle_min == pytest.approx(-math.radians(2.0))
