@@ -1,6 +1,7 @@
 """CARMEN log files: reader and writer for FLASER / RLASER, ROBOTLASER1 / 2, ODOM, TRUEPOS and PARAM.
 
-Formats (one message a line, ``#`` comments, unknown messages skipped):
+Formats (one message a line, ``#`` comments; messages of other kinds, named in capitals, digits and ``_``
+(NEFF, NMEA, SYNC, ...), are skipped, and a line that starts with no such name is malformed):
 
 - ``FLASER n r1..rn x y theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp``
   (RLASER: the rear laser, same fields); no angle fields: the geometry comes from an override, the
@@ -91,6 +92,9 @@ PIPE_REASON = ("a log is read more than once (its first lines to choose the lase
                "bzip2 and xz logs are read as they are) or save the stream to a file first (zcat LOG > FILE)")
 DEFAULT_TOPIC_LINES = 10_000  # lines looked at to choose the default laser kind (and to tell junk from a log)
 _MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]{2,}")  # how every CARMEN message line starts (ODOM, PARAM, FLASER, ...; a lone capital in binary junk is none)
+KNOWN_KINDS = frozenset(LASER_KINDS + ("ODOM", "TRUEPOS", "PARAM"))  # messages this reader reads
+MAX_MESSAGE_KINDS = 64  # message kinds counted by name in ReadStats.messages (the kinds above always)
+OTHER_KINDS = "other"  # where lines of further kinds are counted
 ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
 MAX_LINE_CHARS = 1 << 20  # a longer line is malformed (bounds memory on damaged files)
 #: most blank or comment lines in a row a log may hold: a log's header comments are tens of lines, and a
@@ -107,7 +111,8 @@ class ReadStats:
     """What a pass over a log met.
 
     Attributes:
-        messages: lines per message kind (every kind, read or not).
+        messages: lines per message kind, read or not: every kind this reader knows, other kinds up
+            to ``MAX_MESSAGE_KINDS`` of them (the rest under ``OTHER_KINDS``, "other").
         skipped: the bad lines skipped under ``skip_bad_lines``: (line number, reason).
         stopped: why reading ended early (undecompressable data under ``skip_bad_lines``), or None.
         laser: the laser message kind read (see ``topic``), None before the first one.
@@ -117,6 +122,14 @@ class ReadStats:
     skipped: list[tuple[int, str]] = field(default_factory=list)
     stopped: str | None = None
     laser: str | None = None
+
+    def count(self, kind: str) -> None:
+        """Count a line of a message kind: the kinds this reader knows always, others up to
+        ``MAX_MESSAGE_KINDS`` of them, then under ``OTHER_KINDS`` (1,000,000 unique names peaked at 88 MB)."""
+        messages = self.messages
+        if kind not in messages and kind not in KNOWN_KINDS and len(messages) >= MAX_MESSAGE_KINDS:
+            kind = OTHER_KINDS
+        messages[kind] = messages.get(kind, 0) + 1
 
     def other_lasers(self) -> dict[str, int]:
         """Laser message kinds in the log that were not read (kind -> lines)."""
@@ -345,11 +358,18 @@ class CarmenReader:
                 continue
             blank.reset()
             kind = words[0]
-            stats.messages[kind] = stats.messages.get(kind, 0) + 1
+            named = kind in KNOWN_KINDS or _MESSAGE_NAME.fullmatch(kind) is not None
+            if named:
+                stats.count(kind)
             # a TRUEPOS pose is the truth of the laser line directly after it (PARAM lines aside): any
             # other line between (ODOM, another laser kind, a malformed line) drops it
             held, truth = truth, None
             try:
+                if not named:  # 30 MB of random bytes after a log were read as 207k message kinds, none skipped
+                    shown = kind if len(kind) <= 24 else kind[:24] + "..."
+                    kind = "message"
+                    raise ValueError(f"it starts with {shown!r}, which is no CARMEN message name (FLASER, ODOM, "
+                                     "PARAM, ...: capitals, digits and '_'); junk or a damaged line")
                 if kind == "PARAM":
                     units, has_odometry = _param(words, params, units, has_odometry)
                     truth = held

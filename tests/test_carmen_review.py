@@ -201,3 +201,30 @@ def test_flaser_exact_geometry_params_yield_to_an_override(tmp_path):
     assert "PARAM lmsbench_front_laser_angle_min -0.1 " in path.read_text()
     scan = next(iter(read_log(path, geometry=LaserGeometry(fov=math.radians(4.0), resolution=math.radians(1.0))))).scan
     assert scan.angle_increment == math.radians(1.0) and scan.angle_min == pytest.approx(-math.radians(2.0))
+
+
+def test_junk_lines_are_bad_lines_and_message_kinds_are_bounded(tmp_path):
+    from lms200.carmen import MAX_MESSAGE_KINDS
+    # unknown but valid messages (NEFF in Intel / ACES; NMEA, SYNC, other CARMEN messages) are skipped, counted
+    valid = "".join(f"{k} 1 2 3\n" for k in ("NEFF", "NMEA", "SYNC", "GPSNMEA", "BASE_VELOCITY"))
+    reader = read_log(_write(tmp_path, "k.log", _flaser() + valid + _flaser()))
+    assert len(list(reader)) == 2 and reader.stats.skipped == []
+    assert reader.stats.messages == {"FLASER": 2, "NEFF": 1, "NMEA": 1, "SYNC": 1, "GPSNMEA": 1, "BASE_VELOCITY": 1}
+    # a line that starts with no message name: was counted as a "kind" (1,000,000 junk lines peaked at 88 MB;
+    # 30 MB of random bytes after Intel gave 207k kinds and no skipped line)
+    junk = _flaser() + "".join(f"W{i:x}q 1 2 3\n" for i in range(5)) + "\x00\x93garbage\n" + _flaser()
+    path = _write(tmp_path, "j.log", junk)
+    with pytest.raises(LogFormatError) as err:
+        list(read_log(path))
+    assert str(err.value) == (f"{path}:2: malformed message line: it starts with 'W0q', which is no CARMEN message "
+                              "name (FLASER, ODOM, PARAM, ...: capitals, digits and '_'); junk or a damaged line")
+    reader = read_log(path, skip_bad_lines=True)
+    assert len(list(reader)) == 2 and [at for at, _ in reader.stats.skipped] == [2, 3, 4, 5, 6, 7]
+    assert reader.stats.messages == {"FLASER": 2}
+    # message names are counted one by one up to MAX_MESSAGE_KINDS kinds, the rest as "other"
+    many = _flaser() + "".join(f"KIND{i} 1\n" for i in range(200)) + "ODOM 0 0 0 0 0 0 1 h 1\n" + _flaser()
+    reader = read_log(_write(tmp_path, "m.log", many))
+    assert len(list(reader)) == 2
+    messages = reader.stats.messages
+    assert len(messages) == MAX_MESSAGE_KINDS + 2 and messages["other"] == 200 - (MAX_MESSAGE_KINDS - 1)
+    assert messages["ODOM"] == 1 and messages["FLASER"] == 2
