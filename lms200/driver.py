@@ -448,12 +448,16 @@ class LMS200:
 
         Raises:
             LmsTimeoutError: when no scan arrives for ``stall_timeout`` seconds (default: the
-                request timeout plus the line time of two telegrams).
+                request timeout plus the line time of two telegrams). The first scan after
+                continuous output was started gets ``mode_timeout`` on top (a mode change takes
+                up to 3 s, and a virtual device's source may take a second for its first scan).
         """
+        limit = stall_timeout if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
+        allowed = limit
         if not self.streaming:
             self._set_mode(MODE_CONTINUOUS, "start continuous output (0x20 0x24)")
+            allowed = limit + self.mode_timeout
         self._doing = "reading scans in continuous mode"
-        limit = stall_timeout if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
         last = time.monotonic()
         while stop is None or not stop():
             events = self._pump()
@@ -466,9 +470,9 @@ class LMS200:
                     self._decode_errors += 1
                     continue
                 self._scans += 1
-                last = now
+                last, allowed = now, limit
                 yield scan
-            if now - last > limit:
+            if now - last > allowed:
                 raise LmsTimeoutError(
                     f"no scan from {self.port} for {now - last:.2f} s in continuous mode at {self.baud} baud "
                     f"({self.parser.stats.dropped_frames} frames dropped so far)"

@@ -372,3 +372,25 @@ def test_a_corrupted_telegram_ending_in_0x15_is_no_nak_and_one_ending_in_0x06_hi
     lms.close()
     assert sum(w[4:6] == b"\x20\x25" for w in port.writes) == 2  # once at opening, once at close
     assert lms.stats.retries == 1 and lms.parser.stats.naks == 1 and lms.parser.stats.bad_crc == 2
+
+
+def test_a_slow_first_scan_is_waited_for_but_a_later_stall_is_not(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 32c (slow500.py): the virtual device builds its first scan only after the 0x24 reply
+    (the office simulator's first takes 0.85 s), so the first scan fell inside the stall limit of
+    scans() (timeout + 2 line times: 0.23 s here, 0.53 s at the default timeout) and scans() raised
+    LmsTimeoutError 'no scan ... for 0.53 s'; `record --baud 500000` failed 2 runs of 8. The first
+    scan after starting continuous output now gets mode_timeout on top; later stalls do not."""
+    from lms200_fake_port import answer, fake_port, scan_frame
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":  # the first scan 0.6 s after the reply, the second 0.6 s later
+            return [*answer(payload), (0.6, scan_frame(1000)), (1.2, scan_frame(1001))]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=500000, probe=False, timeout=0.2, mode_timeout=1.0)
+    it = lms.scans()
+    assert next(it).ranges[0] == pytest.approx(1.0)  # old: LmsTimeoutError after 0.23 s
+    with pytest.raises(LmsTimeoutError, match=r"no scan from fake:// for 0\.2\d s in continuous mode at 500000 baud"):
+        next(it)
+    lms.close()
