@@ -394,3 +394,30 @@ def test_a_slow_first_scan_is_waited_for_but_a_later_stall_is_not(monkeypatch: p
     with pytest.raises(LmsTimeoutError, match=r"no scan from fake:// for 0\.2\d s in continuous mode at 500000 baud"):
         next(it)
     lms.close()
+
+
+def test_a_nak_behind_a_scan_that_lost_a_byte_is_resent_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 32c (nakdrop.py): close() while streaming; the device NAKs the stop request right
+    behind a scan telegram that lost one byte on the line. The parser took the NAK for the
+    broken telegram's CRC byte: close() waited out its timeout (1.94 s, naks 0) before resending."""
+    import time
+
+    from lms200_fake_port import answer, fake_port, scan_frame
+
+    sf = scan_frame()
+    plan = {"stop": 0}
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x25":
+            plan["stop"] += 1
+            if plan["stop"] == 2:  # close()'s stop request
+                return [(0.0, sf[:100] + sf[101:] + b"\x15" + sf + sf)]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False, timeout=0.5, mode_timeout=1.0)
+    lms.streaming = True
+    t = time.monotonic()
+    lms.close()
+    assert time.monotonic() - t < 0.5  # old: 1.94 s
+    assert (lms.stats.retries, lms.parser.stats.naks) == (1, 1)  # old: (1, 0)
