@@ -178,9 +178,12 @@ class LMS200:
         self._retries = 0
         self._last_rx = time.monotonic()
         self._backlog: list = []  # events read past a reply, handed out by the next _pump
-        # (stream offset after a read, host time.time() when the read returned), the newest reads
+        # (stream offset after a read, host time when the read returned), the newest reads
         self._reads: deque[tuple[int, float]] = deque(maxlen=_READS_KEPT)
-        self._last_end = -math.inf  # when the last scan telegram stamped ended (time.time())
+        self._last_end = -math.inf  # when the last scan telegram stamped ended (host time)
+        # Host time = time.monotonic() + this offset, taken once: a wall-clock step (NTP) while
+        # a backlog waits does not bend the stamps of the scans in it.
+        self._clock_offset = time.time() - time.monotonic()
         self._doing = "opening the port"  # for the message of a link that fails mid-use
         self._lost = False  # the port failed: close() only closes it
         try:
@@ -267,7 +270,7 @@ class LMS200:
         now = time.monotonic()
         if data:
             self._last_rx = now
-            self._reads.append((self.parser.received + len(data), time.time()))
+            self._reads.append((self.parser.received + len(data), now + self._clock_offset))
             return self.parser.feed(data)
         if self.parser.pending:
             quiet = now - self._last_rx
@@ -276,8 +279,8 @@ class LMS200:
         return []
 
     def _stamps(self, frames: list[Frame]) -> list[float]:
-        """Host time (``time.time()``) when each of ``frames`` (0xB0 telegrams in stream order)
-        began to arrive.
+        """Host time (``time.time()`` at open plus ``time.monotonic()`` since) when each of
+        ``frames`` (0xB0 telegrams in stream order) began to arrive.
 
         A frame's last byte arrived before the read that brought it returned, earlier by at least
         the line time of the bytes after it in that read; and telegrams in continuous mode are at
@@ -286,7 +289,13 @@ class LMS200:
         previous frame's end plus that spacing; its stamp is that end less its own line time. So
         scans read together (a backlog left while the consumer was busy) keep their spacing
         instead of sharing the time they were processed at. What the host cannot see is how long
-        a backlog waited in the port's buffer: its newest scans are stamped by the read."""
+        a backlog waited in the port's buffer: its newest scans are stamped by the read.
+
+        Telegrams can come faster than that spacing (a virtual device at ``time_scale`` < 1): where
+        it would put a frame past its read, the frame is put instead at an equal share of the time
+        between the previous frame's end and its read, one share per frame still to place, so
+        stamps stay strictly increasing and never later than their read (every frame of such a
+        read was pinned to the read's time: 359 of 399 stamp differences were exactly 0)."""
         byte_s = frame_seconds(1, self.baud)
         period = MIRROR_PERIOD_S * {100: 1, 50: 2, 25: 4}[self.variant[1]]
         ends, caps = [], []
@@ -296,15 +305,18 @@ class LMS200:
                 if end < frame.end:
                     break
                 found = (end, t)
-            end, t = found if found is not None else (frame.end, time.time())
+            end, t = found if found is not None else (frame.end, time.monotonic() + self._clock_offset)
             ends.append(t - (end - frame.end) * byte_s)
             caps.append(t)
         gaps = [max(len(f) * byte_s, period) for f in frames]
         for i in range(len(frames) - 2, -1, -1):  # the frames after one took their time to arrive
             ends[i] = min(ends[i], ends[i + 1] - gaps[i + 1])
         for i in range(len(frames)):
-            ends[i] = min(max(ends[i], self._last_end + gaps[i]), caps[i])
-            self._last_end = ends[i]
+            last = self._last_end
+            end = max(ends[i], last + gaps[i])
+            if end > caps[i] > last:  # closer than the spacing assumed: share the time up to the read
+                end = max(ends[i], last + (caps[i] - last) / (len(frames) - i))
+            ends[i] = self._last_end = end if end > last else math.nextafter(last, math.inf)
         return [e - len(f) * byte_s for e, f in zip(ends, frames)]
 
     def _request(self, payload: bytes, what: str, timeout: float | None = None, retries: int | None = None,

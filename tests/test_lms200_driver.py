@@ -421,3 +421,48 @@ def test_a_nak_behind_a_scan_that_lost_a_byte_is_resent_at_once(monkeypatch: pyt
     lms.close()
     assert time.monotonic() - t < 0.5  # old: 1.94 s
     assert (lms.stats.retries, lms.parser.stats.naks) == (1, 1)  # old: (1, 0)
+
+
+def test_scans_faster_than_the_assumed_spacing_keep_distinct_stamps_through_a_clock_step(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 32c (scaled.py, jump.py): each stamp was held at least one line time after the one
+    before but no later than its read, so telegrams coming faster than that (emulate
+    --time-scale 0.01: 359 of 399 differences exactly 0) were all pinned to their read's time; and
+    read times were time.time(), so a wall clock stepped back 0.5 s during a backlog gave
+    differences of 0 0 0 0 0 0. Now a read is timed by time.monotonic() plus one offset taken at
+    open, and frames that do not fit share the time between the previous frame and their read."""
+    import time
+
+    from lms200 import driver
+    from lms200_fake_port import answer, fake_port, scan_frame
+
+    line_s = 732 * 10 / 9600  # 762.5 ms a telegram at 9600 baud: far more than the 0.1 s between reads
+    shift = [0.0]
+
+    class SteppedClock:  # the time module, with a wall clock that NTP can step
+        def __getattr__(self, name: str) -> object:
+            return getattr(time, name)
+
+        def time(self) -> float:
+            return time.time() + shift[0]
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":  # 5 scans waiting at once, 3 more 0.1 s later
+            return [*answer(payload), (0.05, b"".join(scan_frame(1000 + i) for i in range(5))),
+                    (0.15, b"".join(scan_frame(2000 + i) for i in range(3)))]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    monkeypatch.setattr(driver, "time", SteppedClock())
+    lms = LMS200("fake://", baud=9600, probe=False)
+    stamps = []
+    for scan in itertools.islice(lms.scans(), 8):
+        stamps.append(scan.stamp)
+        if len(stamps) == 5:
+            shift[0] = -0.5  # the wall clock steps back while the next scans wait
+    diffs = np.diff(stamps)
+    np.testing.assert_allclose(diffs[:4], line_s, atol=1e-6)  # a backlog keeps the line's spacing
+    assert diffs[4:].min() > 0.02  # old: 0, 0 (all three pinned to their read's time)
+    np.testing.assert_allclose(diffs[4:], diffs[4:].mean(), atol=1e-5)  # an equal share each
+    assert 0.08 < diffs[4:].sum() < 0.5  # the time between the two reads (0.1 s apart)
+    lms.close()
