@@ -313,10 +313,10 @@ class LMS200:
             ends[i] = min(ends[i], ends[i + 1] - gaps[i + 1])
         for i in range(len(frames)):
             last = self._last_end
-            end = max(ends[i], last + gaps[i])
-            if end > caps[i] > last:  # closer than the spacing assumed: share the time up to the read
-                end = max(ends[i], last + (caps[i] - last) / (len(frames) - i))
-            ends[i] = self._last_end = end if end > last else math.nextafter(last, math.inf)
+            at = max(ends[i], last + gaps[i])
+            if at > caps[i] > last:  # closer than the spacing assumed: share the time up to the read
+                at = max(ends[i], last + (caps[i] - last) / (len(frames) - i))
+            ends[i] = self._last_end = at if at > last else math.nextafter(last, math.inf)
         return [e - len(f) * byte_s for e, f in zip(ends, frames)]
 
     def _request(self, payload: bytes, what: str, timeout: float | None = None, retries: int | None = None,
