@@ -28,6 +28,7 @@ import serial
 
 from .codes import Units
 from .errors import InputError, LmsDeviceError, LmsLinkError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
+from .finite import float_of, shown
 from .framing import Frame, FrameParser
 from .protocol import (
     ACK,
@@ -86,30 +87,32 @@ def _check_arguments(baud: object, fov_deg: object, resolution_deg: object, unit
 
     def real(name: str, value: object) -> float:
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
-            raise InputError(f"{name}: must be a number, got {type(value).__name__} {value!r}")
-        return float(value)
+            raise InputError(f"{name}: must be a number, got {type(value).__name__} {shown(value)}")
+        return float_of(value, name, InputError)  # 10**400: OverflowError from float()
 
     def integer(name: str, value: object) -> int:
         if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-            raise InputError(f"{name}: must be an integer, got {type(value).__name__} {value!r}")
+            raise InputError(f"{name}: must be an integer, got {type(value).__name__} {shown(value)}")
         return int(value)
 
-    if isinstance(baud, bool) or baud not in BAUD_MODES:
-        raise InputError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {baud!r}")
+    # An int first: a list was a TypeError (unhashable), 9600.0 passed
+    if isinstance(baud, bool) or not isinstance(baud, numbers.Integral) or int(baud) not in BAUD_MODES:
+        raise InputError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {shown(baud)}")
     fov, res = real("fov_deg", fov_deg), real("resolution_deg", resolution_deg)
-    variant = (int(fov), int(round(res * 100))) if math.isfinite(fov) and math.isfinite(res) else None
+    ok = math.isfinite(fov) and math.isfinite(res * 100)  # 1e307 * 100 is inf: round() overflowed
+    variant = (int(fov), int(round(res * 100))) if ok else None
     if variant not in VARIANTS or fov != variant[0] or not math.isclose(res * 100, variant[1], abs_tol=1e-6):
-        raise InputError(f"fov_deg, resolution_deg: ({fov_deg!r} deg, {resolution_deg!r} deg) is not an LMS200 variant; "
-                         f"the variants are {_variant_names()} (0.25 deg only with 100 deg)")
-    if units not in ("mm", "cm"):
-        raise InputError(f"units: must be 'mm' or 'cm', got {units!r}")
+        raise InputError(f"fov_deg, resolution_deg: ({shown(fov_deg)} deg, {shown(resolution_deg)} deg) is not an LMS200 "
+                         f"variant; the variants are {_variant_names()} (0.25 deg only with 100 deg)")
+    if not isinstance(units, str) or units not in ("mm", "cm"):  # an array was numpy's ValueError (ambiguous truth)
+        raise InputError(f"units: must be 'mm' or 'cm', got {shown(units)}")
     if not 0 <= integer("address", address) <= MAX_ADDRESS:
-        raise InputError(f"address: must be in 0..{MAX_ADDRESS} (replies come from address + 0x80), got {address}")
+        raise InputError(f"address: must be in 0..{MAX_ADDRESS} (replies come from address + 0x80), got {shown(address)}")
     if integer("retries", retries) < 1:
-        raise InputError(f"retries: must be >= 1, got {retries}")
+        raise InputError(f"retries: must be >= 1, got {shown(retries)}")
     for name, value in (("timeout", timeout), ("mode_timeout", mode_timeout)):
         if not 0 < real(name, value) <= MAX_TIMEOUT_S:  # also nan
-            raise InputError(f"{name}: must be in (0, {MAX_TIMEOUT_S:g}] s, got {value}")
+            raise InputError(f"{name}: must be in (0, {MAX_TIMEOUT_S:g}] s, got {shown(value)}")
     return variant
 
 
@@ -161,6 +164,7 @@ class LMS200:
         password: bytes = PASSWORD,
     ) -> None:
         self.variant = _check_arguments(baud, fov_deg, resolution_deg, units, address, timeout, mode_timeout, retries)
+        baud = int(baud)  # numpy's int64 too
         self.port = port_or_url
         self.target_baud = baud
         self.units: Units = units

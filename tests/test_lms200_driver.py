@@ -466,3 +466,47 @@ def test_scans_faster_than_the_assumed_spacing_keep_distinct_stamps_through_a_cl
     np.testing.assert_allclose(diffs[4:], diffs[4:].mean(), atol=1e-5)  # an equal share each
     assert 0.08 < diffs[4:].sum() < 0.5  # the time between the two reads (0.1 s apart)
     lms.close()
+
+
+def test_arguments_of_the_wrong_shape_or_size_are_one_line_input_errors() -> None:
+    """Review 32c (fuzz of the constructors): baud=[9600] raised TypeError (unhashable),
+    resolution_deg=1e307 OverflowError (round(inf)), 10**400 for a number OverflowError from
+    float(), units=np.array(['mm', 'cm']) numpy's ValueError (ambiguous truth); the virtual
+    device's units=['mm'] and variant=([180], 50) TypeError, and variant=(180.0, 50) was taken,
+    then a refused 0x3B raised struct.error in receive(); timeout=np.zeros((2, 2)) gave a
+    two-line message and a 400-digit address was echoed whole. Each is now an InputError of
+    one short line naming the argument."""
+    from lms200.errors import InputError
+    from lms200.protocol import build_frame
+
+    huge = 10**400
+    cases = [
+        ({"baud": [9600]}, "baud: the LMS200 supports [9600, 19200, 38400, 500000], got [9600]"),
+        ({"baud": 9600.0}, "baud: the LMS200 supports [9600, 19200, 38400, 500000], got 9600.0"),
+        ({"resolution_deg": 1e307}, "fov_deg, resolution_deg: (180 deg, 1e+307 deg) is not an LMS200 variant"),
+        ({"resolution_deg": huge}, "resolution_deg: must be finite, got a int beyond float64's range"),
+        ({"fov_deg": huge}, "fov_deg: must be finite, got a int beyond float64's range"),
+        ({"timeout": huge}, "timeout: must be finite, got a int beyond float64's range"),
+        ({"units": np.array(["mm", "cm"])}, "units: must be 'mm' or 'cm', got array(['mm', 'cm'], dtype='<U2')"),
+        ({"timeout": np.zeros((2, 2))}, "timeout: must be a number, got ndarray array([[0., 0.], [0., 0.]])"),
+        ({"address": huge}, "address: must be in 0..127 (replies come from address + 0x80), got "
+                            f"{'1' + '0' * 39}...00000000 (401 characters)"),
+        ({"address": 10**5000}, "address: must be in 0..127 (replies come from address + 0x80), got an int of more "
+                                "than 4300 digits"),
+    ]
+    for kw, message in cases:
+        with pytest.raises(InputError) as info:
+            LMS200("loop://", **kw)
+        assert str(info.value) == message or str(info.value).startswith(message + ";"), (kw, str(info.value))
+    variants = "(180, 100), (180, 50), (100, 100), (100, 50), (100, 25)"
+    for kw, message in [({"units": ["mm"]}, "units: must be 'mm' or 'cm', got ['mm']"),
+                        ({"variant": ([180], 50)}, f"variant: ([180], 50) is not an LMS200 variant; the variants are "
+                                                   f"(fov deg, resolution 1/100 deg, ints) {variants}"),
+                        ({"variant": (180.0, 50)}, "variant: (180.0, 50) is not an LMS200 variant"),
+                        ({"time_scale": np.zeros((2, 2))}, "time_scale: must be a number, got ndarray array([[0., 0.], [0., 0.]])")]:
+        with pytest.raises(InputError, match=f"^{re.escape(message)}"):
+            VirtualLMS200([], **kw)
+    dev = VirtualLMS200([], variant=(np.int64(100), np.int64(25)))  # numpy ints are ints: kept as Python ints
+    assert dev.variant == (100, 25) and type(dev.variant[0]) is int
+    dev.receive(build_frame(b"\x3b\xb4\x00\x19\x00"), 0.0)  # 180 deg at 0.25 refused: the reply carries the current variant
+    assert dev.transmit(1.0)[-1][0][4:10] == b"\xbb\x00\x64\x00\x19\x00"
