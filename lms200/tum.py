@@ -12,7 +12,7 @@ import numpy as np
 
 from .codes import real_rows, real_vector
 from .errors import InputError, LogFormatError
-from .logs import path_of
+from .logs import path_of, regular_file
 
 
 def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
@@ -56,10 +56,11 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
 
 def read_tum(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """Read a TUM file: (stamps (n,) s, poses (n, 3) x, y, yaw). Raises LogFormatError with the line
-    (a row that is not 8 finite numbers, a stamp before the previous one)."""
+    (a row that is not 8 finite numbers, a stamp before the previous one), InputError for a path
+    that is no str or PathLike, LogNotFoundError for one that is no regular file."""
     stamps: list[float] = []
     poses: list[tuple[float, float, float]] = []
-    with open(path_of(path), encoding="ascii", errors="replace") as f:
+    with open(regular_file(path, "TUM file"), encoding="ascii", errors="replace") as f:
         for no, line in enumerate(f, 1):
             s = line.strip()
             if not s or s.startswith("#"):

@@ -1292,3 +1292,33 @@ def test_line_arrays_given_to_the_real_data_measures_are_checked() -> None:
     bad[0, 6], bad[0, 7] = bad[0, 7], bad[0, 6]
     with pytest.raises(InputError, match=r"^fs: line 0: its beams must be whole numbers with 0 <= first <= last"):
         realdata.ray_residuals(bad, scan)
+
+
+@pytest.mark.parametrize("reader", ["read_tum", "read_relations"])
+@pytest.mark.parametrize("path, message", [
+    ("/dev/zero", r"^/dev/zero: a .* must be a regular file, not a folder, device or pipe"),  # read until memory ran out
+    (".", r"^\.: a .* must be a regular file"),                                                # IsADirectoryError
+    ("no/such.file", r"^no such .*: no/such.file"),
+])
+def test_tum_and_relations_readers_refuse_what_is_no_file_unread(reader: str, path: str, message: str) -> None:
+    from lms200 import read_tum
+    from lms200.errors import LogNotFoundError
+    from slam.metrics import read_relations
+
+    fn = {"read_tum": read_tum, "read_relations": read_relations}[reader]
+    with pytest.raises(LogNotFoundError, match=message):
+        fn(path)
+
+
+@pytest.mark.parametrize("call, message", [
+    # a float or text seed was numpy's TypeError ("SeedSequence expects int"), -1 its ValueError
+    (lambda s: __import__("lms200.noise").noise.estimate_range_noise(s, seed=2.5), r"^seed: must be a whole number >= 0, got 2.5"),
+    (lambda s: __import__("lms200.noise").noise.estimate_range_noise(s, seed=-1), r"^seed: must be a whole number >= 0, got -1"),
+    (lambda s: __import__("lms200.calibration").calibration.calibrate_scans([s, s], seed="0"), r"^seed: must be a whole number >= 0, got '0'"),
+    # None was "'>' not supported between instances of 'NoneType' and 'float'"
+    (lambda s: __import__("lms200.noise").noise.estimate_range_noise(s, min_range=None), r"^min_range: must be a number >= 0 .*got None"),
+    (lambda s: __import__("lms200.noise").noise.estimate_range_noise(s, max_range=float("nan")), r"^max_range: must be a number >= 0 .*got nan"),
+])
+def test_noise_and_calibration_seeds_and_bands_are_checked(call, message: str) -> None:
+    with pytest.raises(InputError, match=message):
+        call(_noise_scan())
