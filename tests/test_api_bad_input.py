@@ -1322,3 +1322,23 @@ def test_tum_and_relations_readers_refuse_what_is_no_file_unread(reader: str, pa
 def test_noise_and_calibration_seeds_and_bands_are_checked(call, message: str) -> None:
     with pytest.raises(InputError, match=message):
         call(_noise_scan())
+
+
+@pytest.mark.parametrize("corners, message", [
+    ([1.0], r"^corners\[0\]: must be a features.Corner, got float"),  # AttributeError: no attribute 'x'
+    ("abc", r"^corners: must be a features.Corners or a sequence of features.Corner, got str"),
+    ("corner:x=nan", r"^corners\[0\]: x, y and angle must be finite numbers, got nan"),  # a nan corner, scored as a miss
+    ("corner:x=text", r"^corners\[0\]: x, y and angle must be finite numbers, got 'a'"),  # numpy's ValueError
+    ("corner:index=2.5", r"^corners\[0\]: index and lines must be whole numbers .*got 2.5, \(0, 1\)"),  # truncated to 2
+])
+def test_feature_set_corners_are_checked(corners: object, message: str) -> None:
+    from features import Corner, FeatureSet
+
+    good = dict(x=1.0, y=0.5, angle=1.5, index=10, lines=(0, 1))
+    if isinstance(corners, str) and corners.startswith("corner:"):
+        field, value = corners[7:].split("=")
+        good[field] = {"nan": float("nan"), "text": "a", "2.5": 2.5}[value]
+        corners = [Corner(**good)]
+    with pytest.raises(InputError, match=message):
+        FeatureSet(corners=corners)
+    assert len(FeatureSet(corners=[Corner(1.0, 0.5, 1.5, 10, (0, 1))]).corners) == 1
