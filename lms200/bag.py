@@ -13,15 +13,17 @@ pose gets None, so a record written without odometry or truth reads back without
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from fractions import Fraction
 from pathlib import Path
 from typing import Any, Iterable, Iterator
 
 import numpy as np
 
 from .codes import finite_negative
-from .errors import LmsbenchError, LogNotFoundError
+from .errors import InputError, LmsbenchError, LogNotFoundError
 from .records import Pose2D, Record
 from .scan import Scan, snap_angle
+from .tum import quaternion_to_yaw
 from .timing import mirror_time_increment, scan_period, smallest_range
 
 SCAN_TOPIC = "/scan"
@@ -30,8 +32,15 @@ TRUTH_TOPIC = "/ground_truth"
 _POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "nav_msgs/msg/Odometry")
 
 
+MAX_STAMP_NS = 2**31 * 1_000_000_000  # a stamp a bag stores: 0 <= stamp < 2**31 s (int32 seconds in ROS 2)
+
+
 class BagError(LmsbenchError):
     """A bag that cannot be read as laser scans."""
+
+
+class BagExistsError(InputError, FileExistsError):
+    """``write_log`` to a bag path that exists (a bag is never written over)."""
 
 
 def is_bag(path: str | Path) -> bool:
@@ -46,9 +55,15 @@ def _typestore(ros1: bool):  # noqa: ANN202 - rosbags' Typestore
     return get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
 
 
-def _split_stamp(t: float) -> tuple[int, int]:
-    ns = int(round(t * 1e9))
-    return ns // 1_000_000_000, ns % 1_000_000_000
+def _stamp_ns(t: float) -> int:
+    """A float stamp (s) as the nearest integer nanosecond, computed exactly (``round(t * 1e9)``
+    in float64 was off by up to 119 ns for epoch stamps: 1602566218.7060776 stored ...706077696)."""
+    return round(Fraction(t) * 1_000_000_000)
+
+
+def _ns_stamp(ns: int) -> float:
+    """Integer nanoseconds as the float (s) nearest to them (``sec + nanosec * 1e-9`` was not)."""
+    return float(Fraction(ns, 1_000_000_000))
 
 
 def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOPIC) -> int:
@@ -59,11 +74,15 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
     the mirror's time per beam step (0.5 deg: 18.5 us), ``scan_time`` the sensor's scan period
     (0.5 deg: 26.7 ms), ``range_min`` the scan's own, or one code unit (1 mm, or 1 cm for cm-mode
     scans) where that is 0.
+
+    Raises:
+        BagExistsError: (an ``InputError`` and a ``FileExistsError``) ``path`` exists.
+        InputError: a scan stamp outside 0 <= stamp < 2**31 s (naming the item and the stamp).
     """
     path = Path(path)
     ros1 = path.suffix == ".bag"
-    if path.exists():
-        raise FileExistsError(f"{path} exists; bags are not overwritten")
+    if path.exists() or path.is_symlink():  # was a bare FileExistsError
+        raise BagExistsError(f"path: {path} exists; a bag is never written over: remove it or name another")
     ts = _typestore(ros1)
     T = ts.types
     LaserScan, Header, Time = T["sensor_msgs/msg/LaserScan"], T["std_msgs/msg/Header"], T["builtin_interfaces/msg/Time"]
@@ -91,8 +110,11 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
 
         for seq, rec in enumerate(records):
             scan = rec.scan
-            sec, nsec = _split_stamp(scan.stamp)
-            ns = sec * 1_000_000_000 + nsec
+            ns = _stamp_ns(scan.stamp)
+            if scan.stamp < 0 or ns >= MAX_STAMP_NS:  # was struct.error from rosbags' serialiser
+                raise InputError(f"records: item {seq}: stamp {scan.stamp!r} s cannot be stored in a bag "
+                                 f"(0 <= stamp < 2**31 s = {MAX_STAMP_NS // 1_000_000_000} s, a ROS time's range)")
+            sec, nsec = divmod(ns, 1_000_000_000)
             header_kw = {"stamp": Time(sec=sec, nanosec=nsec), "frame_id": "laser"}
             if ros1:
                 header_kw["seq"] = seq
@@ -129,14 +151,26 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
 
 
 def _pose_of(msg) -> Pose2D:  # noqa: ANN001
+    """A PoseStamped's or Odometry's (x, y, yaw); ValueError for a position that is not finite or a
+    zero or non-finite quaternion (normalised otherwise: (0, 0, 1, 1) is 90 deg, was 116.57 deg; (0, 0, 0, 0) was yaw 0)."""
     pose = msg.pose.pose if hasattr(msg.pose, "pose") else msg.pose
     q = pose.orientation
-    yaw = float(np.arctan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z)))
-    return (float(pose.position.x), float(pose.position.y), yaw)
+    yaw = float(quaternion_to_yaw(np.array([q.x, q.y, q.z, q.w], dtype=float))[0])
+    if np.isnan(yaw):
+        raise ValueError(f"orientation (x, y, z, w) = ({q.x!r}, {q.y!r}, {q.z!r}, {q.w!r}) is no rotation "
+                         "(a quaternion must have a positive finite norm)")
+    x, y = float(pose.position.x), float(pose.position.y)
+    if not (np.isfinite(x) and np.isfinite(y)):  # was Record's "odom: must be finite", without bag, topic or index
+        raise ValueError(f"position (x, y) = ({x!r}, {y!r}) is not finite")
+    return (x, y, yaw)
 
 
 def _stamp_of(msg) -> float:  # noqa: ANN001
-    return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+    return _ns_stamp(_header_ns(msg))
+
+
+def _header_ns(msg) -> int:  # noqa: ANN001
+    return int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
 
 
 def _scan_of(msg) -> Scan:  # noqa: ANN001

@@ -138,8 +138,10 @@ def regular_file(path: object, what: str) -> Path:
     p = path_of(path)
     if not p.exists():
         raise LogNotFoundError(f"no such {what}: {p}")
+    if p.is_dir():
+        raise LogNotFoundError(f"{p} is a folder, not a {what}")
     if not p.is_file():
-        raise LogNotFoundError(f"{p}: a {what} must be a regular file, not a folder, device or pipe")
+        raise LogNotFoundError(f"{p}: a {what} must be a regular file, not a device or pipe")
     return p
 
 

@@ -1,4 +1,5 @@
-"""TUM trajectory files: one pose a line, ``t x y z qx qy qz qw`` (s, m, unit quaternion).
+"""TUM trajectory files: one pose a line, ``t x y z qx qy qz qw`` (s, m, quaternion; read
+normalised, so any positive norm gives the same yaw).
 
 Planar poses (x, y, theta) are written with z = 0 and a rotation about z only.
 """
@@ -12,7 +13,6 @@ import numpy as np
 
 from .codes import real_rows, real_vector
 from .errors import InputError, LogFormatError
-from .logs import path_of, regular_file
 
 
 def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
@@ -23,10 +23,17 @@ def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
 
 
 def quaternion_to_yaw(q: np.ndarray) -> np.ndarray:
-    """(n, 4) quaternions (qx, qy, qz, qw) -> (n,) yaw (rad, in (-pi, pi])."""
+    """(n, 4) quaternions (qx, qy, qz, qw) -> (n,) yaw (rad, in (-pi, pi]) of the rotations they
+    stand for. A quaternion of any positive finite norm is normalised first (``(0, 0, 1, 1)`` is
+    90 deg; the unit formula gave 116.57 deg); a zero or non-finite one gives nan (no rotation)."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    qx, qy, qz, qw = q.T
-    return np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    scale = np.max(np.abs(q), axis=1)  # divide by it first: no overflow or underflow in the squares
+    ok = np.isfinite(q).all(axis=1) & (scale > 0)
+    u = q / np.where(ok, scale, 1.0)[:, None]
+    qx, qy, qz, qw = u.T
+    # atan2(2 (wz + xy), 1 - 2 (y^2 + z^2)) for a unit q, written so that it holds for any norm
+    yaw = np.arctan2(2.0 * (qw * qz + qx * qy), qw * qw + qx * qx - qy * qy - qz * qz)
+    return np.where(ok, yaw, np.nan)
 
 
 def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
@@ -37,11 +44,18 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
             numbers in non-decreasing order, or ``poses`` that are no (n, 3) array of real numbers
             (found by fuzzing: (3k, 4) poses, a whole trajectory with its stamps, were written as
             4k garbled rows, and decreasing or nan stamps made a file ``read_tum`` refuses).
-            Poses that are not finite (a lost SLAM run's) are written as nan.
+            Poses that are nan (a lost SLAM run's) are written as nan, which
+            ``read_tum(path, allow_nan=True)`` reads back; an infinite pose entry, which no reader
+            takes, is an InputError naming its row.
     """
+    from .logs import path_of  # not at the top: logs imports bag, which imports this module
+
     path = path_of(path)
     stamps = real_vector(stamps, "stamps", "s")
     poses = real_rows(poses, "poses", 3, "x m, y m, theta rad", finite=False)
+    if np.isinf(poses).any():  # was written as 'inf', which read_tum refuses
+        k = int(np.nonzero(np.isinf(poses).any(axis=1))[0][0])
+        raise InputError(f"poses: row {k} is infinite ({poses[k].tolist()}); a lost pose is written as nan")
     if stamps.size != poses.shape[0]:
         raise InputError(f"stamps: {stamps.size} stamps for {poses.shape[0]} poses")
     if np.any(np.diff(stamps) < 0):
@@ -54,13 +68,30 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
             f.write(f"{t:.6f} {x:.6f} {y:.6f} 0.000000 {qx:.9f} {qy:.9f} {qz:.9f} {qw:.9f}\n")
 
 
-def read_tum(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """Read a TUM file: (stamps (n,) s, poses (n, 3) x, y, yaw). Raises LogFormatError with the line
-    (a row that is not 8 finite numbers, a stamp before the previous one), InputError for a path
-    that is no str or PathLike, LogNotFoundError for one that is no regular file."""
+def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Read a TUM file: (stamps (n,) s, poses (n, 3) x, y, yaw). A quaternion of any positive norm
+    is normalised (``0 0 0 0 0 0 1 1`` is 90 deg).
+
+    Args:
+        allow_nan: read a nan in a row's pose (``write_tum``'s lost pose) as nan (x, y as
+            written; yaw nan when any of qx qy qz qw is) instead of refusing the row. Stamps must
+            be finite and nothing may be infinite either way.
+
+    Raises:
+        LogNotFoundError: (an ``LmsbenchError`` and a ``FileNotFoundError``) a path that does not
+            exist or is a folder (were a raw FileNotFoundError / IsADirectoryError), a device or
+            a pipe (read until memory ran out).
+        LogFormatError: naming the line: a row that is not 8 finite numbers (nan allowed in the pose
+            with ``allow_nan``), a zero quaternion, a stamp before the previous one.
+    """
+    from .logs import regular_file  # not at the top: logs imports bag, which imports this module
+
+    if not isinstance(allow_nan, bool):
+        raise InputError(f"allow_nan: must be True or False, got {type(allow_nan).__name__}")
+    p = regular_file(path, "TUM file")  # a device or pipe too: /dev/zero was read until memory ran out
     stamps: list[float] = []
     poses: list[tuple[float, float, float]] = []
-    with open(regular_file(path, "TUM file"), encoding="ascii", errors="replace") as f:
+    with open(p, encoding="ascii", errors="replace") as f:
         for no, line in enumerate(f, 1):
             s = line.strip()
             if not s or s.startswith("#"):
@@ -69,13 +100,17 @@ def read_tum(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
             if len(parts) != 8:
                 raise LogFormatError(path, no, f"TUM rows need 8 entries (t x y z qx qy qz qw), got {len(parts)}")
             try:
-                v = [float(p) for p in parts]
+                v = [float(w) for w in parts]
             except ValueError:
                 raise LogFormatError(path, no, f"TUM row has a non-number: {s[:60]!r}") from None
-            if not all(math.isfinite(x) for x in v):  # slam on a folder with a nan here: "internal error"
+            lost = allow_nan and math.isfinite(v[0]) and not any(math.isinf(x) for x in v)
+            if not lost and not all(math.isfinite(x) for x in v):  # slam on a folder with a nan here: "internal error"
                 raise LogFormatError(path, no, f"TUM row has a non-finite number: {s[:60]!r}")
             if stamps and v[0] < stamps[-1]:
                 raise LogFormatError(path, no, f"TUM stamps go backwards ({v[0]:.6f} s after {stamps[-1]:.6f} s)")
+            yaw = float(quaternion_to_yaw(np.array(v[4:8]))[0])
+            if math.isnan(yaw) and not any(math.isnan(x) for x in v[4:8]):  # (0, 0, 0, 0) read as yaw 0
+                raise LogFormatError(path, no, f"TUM row's quaternion (qx qy qz qw) is zero: {s[:60]!r}")
             stamps.append(v[0])
-            poses.append((v[1], v[2], float(quaternion_to_yaw(np.array(v[4:8]))[0])))
+            poses.append((v[1], v[2], yaw))
     return np.array(stamps), np.array(poses).reshape(-1, 3)

@@ -1,0 +1,226 @@
+"""ROS bags and TUM files: stamps, poses and errors reproduced by a review (session 32).
+
+Bags are built both with the project's writer (``write_log``) and with the ``rosbags`` library
+directly, so the reader is checked on bags it did not write itself.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lms200 import Record, Scan, read_log, write_log
+from lms200.bag import BagError
+from lms200.errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
+
+
+def _scan(t: float, v: float = 1.0) -> Scan:
+    return Scan(np.full(5, v), -0.1, 0.05, 0.0, 8.0, stamp=t)
+
+
+def _ros2_bag(path: Path, messages: list[tuple]) -> Path:
+    """A ROS 2 bag written with rosbags itself: ``messages`` are (topic, bag time s, header stamp s,
+    payload) in the order written; payload a range value for /scan, (x, y, qx, qy, qz, qw) for a
+    pose topic (PoseStamped)."""
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    T = ts.types
+    LS, H, Time = T["sensor_msgs/msg/LaserScan"], T["std_msgs/msg/Header"], T["builtin_interfaces/msg/Time"]
+    PS, Pose, Pt, Q = (T["geometry_msgs/msg/PoseStamped"], T["geometry_msgs/msg/Pose"], T["geometry_msgs/msg/Point"],
+                       T["geometry_msgs/msg/Quaternion"])
+    with Writer(path, version=8) as w:
+        conns: dict[str, object] = {}
+        for topic, bag_t, stamp, payload in messages:
+            ns = round(Fraction(stamp) * 10**9)
+            header = H(stamp=Time(sec=ns // 10**9, nanosec=ns % 10**9), frame_id="x")
+            if topic == "/scan":
+                kind = "sensor_msgs/msg/LaserScan"
+                msg = LS(header=header, angle_min=-1.0, angle_max=1.0, angle_increment=1.0, time_increment=0.0,
+                         scan_time=0.0, range_min=0.1, range_max=10.0, ranges=np.full(3, payload, np.float32),
+                         intensities=np.zeros(0, np.float32))
+            else:
+                kind = "geometry_msgs/msg/PoseStamped"
+                x, y, qx, qy, qz, qw = payload
+                msg = PS(header=header, pose=Pose(position=Pt(x=x, y=y, z=0.0), orientation=Q(x=qx, y=qy, z=qz, w=qw)))
+            if topic not in conns:
+                conns[topic] = w.add_connection(topic, kind, typestore=ts)
+            w.write(conns[topic], round(Fraction(bag_t) * 10**9), ts.serialize_cdr(msg, kind))
+    return path
+
+
+def _header_stamps(path: Path) -> list[tuple[int, int]]:
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    with AnyReader([path], default_typestore=get_typestore(Stores.ROS1_NOETIC)) as reader:
+        return [(m.header.stamp.sec, m.header.stamp.nanosec)
+                for c, _, raw in reader.messages() for m in [reader.deserialize(raw, c.msgtype)]]
+
+
+# --- stamps -------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("name", ["s.bag", "s2"])
+def test_every_epoch_stamp_round_trips_bit_for_bit(tmp_path: Path, name: str) -> None:
+    """round(t * 1e9) in float64 stored 1602566218.7060776 as ...706077696 ns (exact: ...706077576)
+    and read back ...7060778; 22 of 300 epoch stamps did not round-trip."""
+    rng = np.random.default_rng(2)
+    stamps = sorted([1602566218.7060776] + [float(t) for t in rng.uniform(1.6e9, 1.8e9, 300)]
+                    + [float(t) for t in rng.uniform(2.0**23, 2.0**31 - 1, 50)])
+    write_log(tmp_path / name, [Record(_scan(t)) for t in stamps], fmt="bag" if name.endswith(".bag") else "bag2")
+    back = [r.scan.stamp for r in read_log(tmp_path / name)]
+    assert back == stamps  # bit for bit
+    assert (1602566218, 706077576) in _header_stamps(tmp_path / name)
+
+
+def test_a_stamp_below_2_to_23_s_reads_back_to_the_nearest_nanosecond(tmp_path: Path) -> None:
+    stamps = [0.1, 3.1867706181171185, 1000.0 + 0.026667, 8388607.123456789]
+    write_log(tmp_path / "s.bag", [Record(_scan(t)) for t in stamps])
+    back = [r.scan.stamp for r in read_log(tmp_path / "s.bag")]
+    assert back == [float(Fraction(round(Fraction(t) * 10**9), 10**9)) for t in stamps]
+    assert back[:3] == [0.1, 3.186770618, 1000.026667]
+
+
+# --- what write_log cannot store in a bag -----------------------------------------------------------
+@pytest.mark.parametrize("name", ["s.bag", "s2"])
+@pytest.mark.parametrize("stamp", [-1.5, -1e-10, 2.0**31, 2.0**31 + 0.5, 2.0**32 + 0.5, 1e12])
+def test_a_stamp_a_bag_cannot_hold_is_an_input_error(tmp_path: Path, name: str, stamp: float) -> None:
+    """-1.5 s and >= 2**31 s raised struct.error from rosbags' serialiser (ROS 2 read -1.5 back)."""
+    recs = [Record(_scan(1.0)), Record(_scan(stamp))]
+    with pytest.raises(InputError, match=rf"records: item 1: stamp {re.escape(repr(stamp))} s cannot be stored in a "
+                                         r"bag \(0 <= stamp < 2\*\*31 s = 2147483648 s"):
+        write_log(tmp_path / name, recs, fmt="bag" if name.endswith(".bag") else "bag2")
+    assert not (tmp_path / name).exists()
+    last = np.nextafter(2.0**31, 0)  # the largest stamp a bag holds
+    write_log(tmp_path / name, [Record(_scan(0.0)), Record(_scan(last))], fmt="bag" if name.endswith(".bag") else "bag2")
+    assert [r.scan.stamp for r in read_log(tmp_path / name)] == [0.0, last]
+
+
+@pytest.mark.parametrize("name", ["a.bag", "a2"])
+def test_writing_over_an_existing_bag_is_an_input_error_naming_it(tmp_path: Path, name: str) -> None:
+    fmt = "bag" if name.endswith(".bag") else "bag2"
+    write_log(tmp_path / name, [Record(_scan(1.0))], fmt=fmt)
+    with pytest.raises(InputError, match=rf"path: .*{name} exists; a bag is never written over") as info:
+        write_log(tmp_path / name, [Record(_scan(2.0))], fmt=fmt)
+    assert isinstance(info.value, FileExistsError) and isinstance(info.value, LmsbenchError)
+    assert [r.scan.stamp for r in read_log(tmp_path / name)] == [1.0]  # left as it was
+
+
+# --- quaternions: normalised, a zero one refused ---------------------------------------------------
+_POS = (1.0, 2.0)
+
+
+def _pose_bag(path: Path, xy: tuple[float, float], q: tuple[float, float, float, float]) -> Path:
+    """Three scans at 10, 11, 12 s, each with its odometry (x, y, q) just before it, by rosbags."""
+    msgs: list[tuple] = []
+    for i in range(3):
+        msgs += [("/odom", 10 + i, 10 + i, (*xy, *q)), ("/scan", 10 + i, 10 + i, 1.0)]
+    return _ros2_bag(path, msgs)
+
+
+@pytest.mark.parametrize("q, deg", [((0.0, 0.0, 1.0, 1.0), 90.0), ((0.0, 0.0, 3e-200, 3e-200), 90.0),
+                                    ((0.0, 0.0, 1e200, -1e200), -90.0), ((0.0, 0.0, 0.0, 2.0), 0.0),
+                                    ((0.0, 0.0, -1.5 * math.sqrt(3), 1.5), -120.0)])
+def test_a_bag_pose_of_a_non_unit_quaternion_is_normalised(tmp_path: Path, q: tuple, deg: float) -> None:
+    """(0, 0, 1, 1) read as 116.57 deg (the unit formula on a quaternion of norm sqrt 2)."""
+    out = list(read_log(_pose_bag(tmp_path / "b", _POS, q)))
+    assert [r.odom[:2] for r in out] == [_POS] * 3
+    assert [math.degrees(r.odom[2]) for r in out] == pytest.approx([deg] * 3, abs=1e-9)
+
+
+@pytest.mark.parametrize("q", [(0.0, 0.0, 0.0, 0.0), (0.0, 0.0, math.nan, 1.0), (0.0, 0.0, math.inf, 1.0)])
+def test_a_bag_pose_with_a_zero_or_non_finite_quaternion_is_a_bag_error(tmp_path: Path, q: tuple) -> None:
+    """(0, 0, 0, 0) was read as yaw 0."""
+    bag = _pose_bag(tmp_path / "b", _POS, q)
+    with pytest.raises(BagError, match=rf"b: topic /odom message 0: cannot read: orientation \(x, y, z, w\) = "
+                                       rf"\(0\.0, 0\.0, {re.escape(repr(q[2]))}, {re.escape(repr(q[3]))}\) is no rotation"):
+        list(read_log(bag))
+    reader = read_log(bag, skip_bad_lines=True)
+    out = list(reader)
+    assert [r.odom for r in out] == [None] * 3 and [r.scan.stamp for r in out] == [10.0, 11.0, 12.0]
+    assert [i for i, _ in reader.stats.skipped] == [0, 1, 2]
+
+
+def test_a_tum_quaternion_is_normalised_and_a_zero_one_is_refused(tmp_path: Path) -> None:
+    from lms200 import read_tum
+
+    path = tmp_path / "u.tum"
+    path.write_text("0 0 0 0 0 0 1 1\n1 0 0 0 0 0 0.70710678 0.70710678\n2 0 0 0 0 0 -3 3\n3 5 6 0 0 0 0 7\n")
+    stamps, poses = read_tum(path)
+    assert np.degrees(poses[:, 2]) == pytest.approx([90.0, 90.0, -90.0, 0.0], abs=1e-6)  # was 116.57 deg first
+    assert poses[3, :2].tolist() == [5.0, 6.0]
+    path.write_text("0 0 0 0 0 0 1 1\n1 0 0 0 0 0 0 0\n")  # was yaw 0
+    with pytest.raises(LogFormatError, match=r"u\.tum:2: TUM row's quaternion \(qx qy qz qw\) is zero: '1 0 0 0 0 0 0 0'"):
+        read_tum(path)
+
+
+def test_quaternion_to_yaw_normalises_and_gives_nan_for_no_rotation() -> None:
+    from lms200.tum import quaternion_to_yaw
+
+    q = np.array([[0, 0, 1, 1], [0, 0, 0, 0], [0, 0, np.nan, 1], [0, 0, 0, 1], [0, 0, 1, 0]], dtype=float)
+    yaw = quaternion_to_yaw(q)
+    assert yaw[[0, 3, 4]] == pytest.approx([np.pi / 2, 0.0, np.pi])
+    assert np.isnan(yaw[1]) and np.isnan(yaw[2])
+
+
+# --- TUM: nan poses, missing paths ------------------------------------------------------------------
+def test_a_lost_pose_write_tum_writes_reads_back_with_allow_nan(tmp_path: Path) -> None:
+    """write_tum wrote nan poses that read_tum refused: now read_tum(path, allow_nan=True) reads them."""
+    from lms200 import read_tum, write_tum
+
+    path = tmp_path / "t.tum"
+    poses = np.array([[1.0, 2.0, 0.5], [np.nan, 0.0, 0.2], [np.nan, np.nan, np.nan], [3.0, -1.0, -3.0]])
+    write_tum(path, [0.0, 1.0, 2.0, 3.0], poses)
+    with pytest.raises(LogFormatError, match=r"t\.tum:3: TUM row has a non-finite number: '1\.000000 nan 0\.000000"):
+        read_tum(path)  # a ground truth must be finite: the default refuses, as slam needs
+    stamps, back = read_tum(path, allow_nan=True)
+    assert stamps.tolist() == [0.0, 1.0, 2.0, 3.0]
+    np.testing.assert_allclose(back, poses, atol=1e-6)  # nan where nan was written (assert_allclose: nan == nan)
+    assert np.isnan(back[1, 0]) and back[1, 1:].tolist() == pytest.approx([0.0, 0.2], abs=1e-6)
+    path.write_text("nan 0 0 0 0 0 0 1\n")  # a stamp must be finite either way
+    with pytest.raises(LogFormatError, match=r"t\.tum:1: TUM row has a non-finite number"):
+        read_tum(path, allow_nan=True)
+    path.write_text("0 inf 0 0 0 0 0 1\n")
+    with pytest.raises(LogFormatError, match=r"t\.tum:1: TUM row has a non-finite number"):
+        read_tum(path, allow_nan=True)
+
+
+def test_write_tum_refuses_an_infinite_pose_read_tum_could_not_read(tmp_path: Path) -> None:
+    from lms200 import write_tum
+
+    with pytest.raises(InputError, match=r"poses: row 1 is infinite \(\[inf, 0\.0, 0\.0\]\); a lost pose is written as nan"):
+        write_tum(tmp_path / "t.tum", [0.0, 1.0], [[0.0, 0.0, 0.0], [np.inf, 0.0, 0.0]])
+    assert not (tmp_path / "t.tum").exists()
+
+
+def test_read_tum_of_a_missing_path_or_a_folder_is_log_not_found(tmp_path: Path) -> None:
+    """Were a raw FileNotFoundError / IsADirectoryError (read_log says LogNotFoundError)."""
+    from lms200 import read_tum
+
+    with pytest.raises(LogNotFoundError, match=r"no such TUM file: .*missing\.tum"):
+        read_tum(tmp_path / "missing.tum")
+    with pytest.raises(LogNotFoundError, match=r"is a folder, not a TUM file"):
+        read_tum(tmp_path)
+    with pytest.raises(InputError, match="allow_nan: must be True or False, got str"):
+        read_tum(tmp_path / "missing.tum", allow_nan="yes")
+
+
+# --- a pose that is not finite -------------------------------------------------------------------------
+@pytest.mark.parametrize("xy", [(math.nan, 0.0), (0.0, math.inf)])
+def test_a_bag_pose_that_is_not_finite_is_a_bag_error_naming_the_message(tmp_path: Path, xy: tuple) -> None:
+    """position x = nan raised InputError 'odom: must be finite' (from Record, built outside the try)
+    without bag, topic or index, even with skip_bad_lines=True."""
+    bag = _pose_bag(tmp_path / "b", xy, (0.0, 0.0, 0.0, 1.0))
+    with pytest.raises(BagError, match=rf"b: topic /odom message 0: cannot read: position \(x, y\) = "
+                                       rf"\({re.escape(repr(xy[0]))}, {re.escape(repr(xy[1]))}\) is not finite"):
+        list(read_log(bag))
+    reader = read_log(bag, skip_bad_lines=True)
+    out = list(reader)
+    assert [r.odom for r in out] == [None] * 3 and [r.scan.stamp for r in out] == [10.0, 11.0, 12.0]
+    assert [i for i, _ in reader.stats.skipped] == [0, 1, 2]
+    assert "topic /odom message 2: position" in reader.stats.skipped[2][1]
