@@ -9,7 +9,8 @@ Formats (one message a line, ``#`` comments, unknown messages skipped):
   m rem1..remm laser_x laser_y laser_theta robot_x robot_y robot_theta tv rv forward_safety
   side_safety turn_axis ipc_timestamp hostname logger_timestamp`` (ROBOTLASER2: the rear laser);
   the declared field of view must hold the count at the declared resolution (fov = n x res, or
-  (n - 1) x res), and lines with the same declared geometry must carry the same count.
+  (n - 1) x res), lines with the same declared geometry must carry the same count, and max_range
+  must lie in [MIN_RANGE_MAX_M, MAX_RANGE_M] (:mod:`lms200.laser_geometry`).
 - ``RAWLASER1`` .. ``RAWLASER4`` (CARMEN 0.7 loggers): the ROBOTLASER1 fields up to the remissions,
   then ``ipc_timestamp hostname logger_timestamp``; no poses (``.odom`` is None), same checks.
 - ``ODOM x y theta tv rv accel ipc_timestamp hostname logger_timestamp``
@@ -52,8 +53,10 @@ import numpy as np
 
 from .codes import (
     CODE_ABOVE_MAXIMUM,
+    CODE_NOT_VALID,
     CODES_INVALID,
     LMS200_MAX_RANGE,
+    MAX_VALID_CODE,
     Units,
     decode_logged_ranges,
     finite_negative,
@@ -407,6 +410,13 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
     elif name in laser_geometry.GEOMETRY_PARAMS:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number > 0, f"{name} must be a finite number > 0, got {value!r}")
+        # checked here, not when a laser line uses it: `laser_front_laser_fov 720` was blamed on every
+        # FLASER line (all skipped under skip_bad_lines) instead of on itself (a review's reproduction)
+        laser_field = laser_geometry.GEOMETRY_PARAMS[name][1]
+        try:
+            LaserGeometry(**{laser_field: number if laser_field == "range_max" else math.radians(number)})
+        except ValueError as exc:
+            raise ValueError(f"{name} {value}: {exc}") from None
         params[name] = number
     return units, has_odometry
 
@@ -417,12 +427,26 @@ def _require(ok: bool, reason: str) -> None:
 
 
 def _floats(words: list[str], what: str) -> np.ndarray:
+    """Numbers as CARMEN's strtod reads them: Python's float() also takes ``1_000`` (read as 1000 m)
+    and turns ``1e400`` into inf, which CARMEN does not: both make the line malformed (a review's
+    reproduction); ``inf`` / ``nan`` written as words keep their meaning (logs converted from ROS)."""
+    if "_" in "".join(words):
+        bad = next(w for w in words if "_" in w)
+        raise ValueError(f"{what}: {bad!r} is not a number (no '_' in a CARMEN number)")
     try:
         values = np.array(words, dtype=np.float64)
     except ValueError:
         bad = next(w for w in words if not _is_number(w))
         raise ValueError(f"{what}: {bad!r} is not a number") from None
+    infinite = np.isinf(values)
+    if infinite.any():
+        for i in np.flatnonzero(infinite):
+            if words[i].lstrip("+-").lower() not in INF_WORDS:
+                raise ValueError(f"{what}: {words[i]!r} is beyond float64's range")
     return values
+
+
+INF_WORDS = ("inf", "infinity")  # how an infinite number is written as text (not 1e400, an overflow)
 
 
 def _is_number(word: str) -> bool:
@@ -430,13 +454,14 @@ def _is_number(word: str) -> bool:
         float(word)
     except ValueError:
         return False
-    return True
+    return "_" not in word
 
 
 def _count(word: str, what: str) -> int:
-    """A count field: a finite non-negative integer (written ``361`` or ``361.0``)."""
+    """A count field: a finite non-negative integer (written ``361`` or ``361.0``; not ``3_0``)."""
     try:
         value = float(word)
+        _require("_" not in word, "")
     except ValueError:
         raise ValueError(f"{what} {word!r} is not a number") from None
     if not math.isfinite(value) or value < 0 or value != math.floor(value):
@@ -473,7 +498,7 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     tail = _floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
     range_max = geometry.range_max if geometry.range_max is not None else LMS200_MAX_RANGE[u]
-    scan = Scan(ranges, snap_angle(angle_min), snap_angle(increment), range_min, range_max, float(tail[6]))
+    scan = Scan(ranges, snap_angle(angle_min), snap_angle(increment, n), range_min, range_max, float(tail[6]))
     return scan, _pose(words, 2 + n + 3, f"{kind} odometry")
 
 
@@ -505,11 +530,12 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
         stamp = float(_floats(words[10 + n + m : 11 + n + m], f"{kind} timestamp")[0])
     else:
         stamp = float(_floats(words[10 + n + m : 10 + n + m + 12], f"{kind} poses and timestamp")[11])
-    if range_max_override is not None:
-        range_max = range_max_override
-    else:
-        range_max = max_range if max_range > 0 else LMS200_MAX_RANGE["cm"]
-    scan = Scan(ranges, snap_angle(start), snap_angle(resolution), range_min, range_max, stamp)
+    # max_range 1e-300 made every reading invalid, silently, and -5 became 81.83 m (a review's reproduction)
+    _require(laser_geometry.MIN_RANGE_MAX_M <= max_range <= laser_geometry.MAX_RANGE_M,
+             f"maximum range must be in [{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, "
+             f"got {words[5]}")
+    range_max = range_max_override if range_max_override is not None else max_range
+    scan = Scan(ranges, snap_angle(start), snap_angle(resolution, n), range_min, range_max, stamp)
     if kind.startswith("RAWLASER"):
         return scan, None
     return scan, _pose(words, 10 + n + m + 3, f"{kind} robot pose")
@@ -521,10 +547,17 @@ def _units_of(scan: Scan) -> Units:
 
 
 def _format_ranges(scan: Scan, units: Units) -> str:
-    """Ranges rounded to the unit, with +inf / nan written as the SICK codes 8183 / 8191."""
+    """Ranges rounded to the unit, with +inf / nan written as the SICK codes 8183 / 8191; a valid
+    reading that would round onto the special band (8183 .. 8191 units: 8.183 m in mm mode, the
+    Scan.lms200 range_max, read back as +inf) is written as 8182 units, the largest valid code
+    (``MAX_VALID_CODE``, the protocol's largest valid reading), so it reads back valid."""
     scale = metres_per_unit(units)
     decimals = 3 if units == "mm" else 2
-    r = np.where(np.isposinf(scan.ranges), CODE_ABOVE_MAXIMUM * scale, scan.ranges)
+    with np.errstate(invalid="ignore", over="ignore"):
+        code = np.rint(scan.ranges / scale)
+    onto_special = scan.valid & (code > MAX_VALID_CODE) & (code <= CODE_NOT_VALID)
+    r = np.where(onto_special, MAX_VALID_CODE * scale, scan.ranges)
+    r = np.where(np.isposinf(r), CODE_ABOVE_MAXIMUM * scale, r)
     r = np.where(np.isnan(r), CODES_INVALID[-1] * scale, r)
     return " ".join(f"{v:.{decimals}f}" for v in r)
 
@@ -565,7 +598,8 @@ def write_carmen(
     Each scan becomes one FLASER or ROBOTLASER1 line (``fmt``), preceded by a TRUEPOS line when the
     record has a true pose. FLASER logs get ``PARAM laser_front_laser_resolution / _fov`` and
     ``robot_front_laser_max`` lines, so any scan centred ahead reads back with its geometry. Ranges
-    are written at the sensor unit (mm when range_max <= 8.183 m, else cm), +inf / nan as SICK codes 8183 / 8191; a ``PARAM lmsbench_range_units`` line records
+    are written at the sensor unit (mm when range_max <= 8.183 m, else cm), +inf / nan as SICK codes 8183 / 8191
+    (a valid reading that would round onto 8183 .. 8191 units as 8182, so it reads back valid); a ``PARAM lmsbench_range_units`` line records
     the unit, and ``PARAM lmsbench_odometry absent|present`` lines mark records without odometry
     (their pose fields are written as zeros); no CARMEN laser line has a range_min field, so a
     ``PARAM lmsbench_range_min`` line gives it (exactly, ``repr``) before the first scan whose

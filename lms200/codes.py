@@ -127,7 +127,7 @@ def real_vector(value: object, name: str, what: str, finite: bool = True) -> np.
 
 
 REFUSED = "(bool, complex, text and dates are refused)"
-_NOT_NUMBER_ITEMS = (bool, np.bool_, str, bytes, np.str_, np.bytes_)  # float() takes them: True as 1.0 m, "2" as 2.0 m
+NOT_NUMBER_ITEMS = (bool, np.bool_, str, bytes, np.str_, np.bytes_)  # float() takes them: True as 1.0 m, "2" as 2.0 m
 
 
 def check_real_kind(dtype: np.dtype, error: type[Exception] = InputError) -> None:
@@ -144,7 +144,7 @@ def check_real_items(items: Iterable[object], error: type[Exception] = InputErro
     for i, v in enumerate(items):
         if isinstance(v, np.ndarray) and v.ndim == 0:  # a 0-d array (np.array(True)) is its one item
             v = v.item()
-        if isinstance(v, _NOT_NUMBER_ITEMS):
+        if isinstance(v, NOT_NUMBER_ITEMS):
             raise error(f"ranges: must be real numbers (m), got {type(v).__name__} {v!r} at index {i} {REFUSED}")
 
 

@@ -35,6 +35,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+from .codes import NOT_NUMBER_ITEMS
+from .errors import InputError
+from .finite import float_of
+
 CONVENTION_FOV_DEG = 180.0  # CARMEN's assumed field of view of a FLASER scan without PARAM lines
 FIT_TOLERANCE_BEAMS = 0.25  # a declared fov / resolution must give the count to within this many beams
 
@@ -72,6 +76,10 @@ class LaserGeometry:
         resolution: angle between neighbouring beams (rad), > 0.
         angle_min: bearing of beam 0 (rad, sensor frame, CCW); None = centred on the x axis.
         range_max: largest valid range (m), in [MIN_RANGE_MAX_M, MAX_RANGE_M] = [0.1, 10000] m.
+
+    Raises:
+        InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the field: text, bools,
+            ints beyond float64, nan / inf or values out of range.
     """
 
     fov: float | None = None
@@ -84,24 +92,28 @@ class LaserGeometry:
             value = getattr(self, name)
             if value is None:
                 continue
+            if isinstance(value, NOT_NUMBER_ITEMS):  # float() takes "3" and True (1 rad)
+                raise InputError(f"{name}: must be a number, got {type(value).__name__} {value!r}")
             try:
-                value = float(value)
-            except (TypeError, ValueError):
-                raise ValueError(f"{name}: must be a number, got {value!r}") from None
+                value = float_of(value, name, InputError)  # 10**400: InputError, not OverflowError
+            except (TypeError, ValueError) as exc:
+                if isinstance(exc, InputError):
+                    raise
+                raise InputError(f"{name}: must be a number, got {value!r}") from None
             shown = _shown(name, value)
             if not math.isfinite(value):
-                raise ValueError(f"{name}: must be finite, got {shown}")
+                raise InputError(f"{name}: must be finite, got {shown}")
             if name != "angle_min" and value <= 0:
-                raise ValueError(f"{name}: must be > 0, got {shown}")
+                raise InputError(f"{name}: must be > 0, got {shown}")
             if name in ("fov", "resolution") and value > 2 * math.pi + 1e-9:
-                raise ValueError(f"{name}: must be at most 2 pi rad (360 deg), got {shown}")
+                raise InputError(f"{name}: must be at most 2 pi rad (360 deg), got {shown}")
             if name == "angle_min" and abs(value) > 2 * math.pi + 1e-9:
-                raise ValueError(f"{name}: a bearing must be within +-2 pi rad (+-360 deg), got {shown}")
+                raise InputError(f"{name}: a bearing must be within +-2 pi rad (+-360 deg), got {shown}")
             if name == "range_max" and value < MIN_RANGE_MAX_M:
-                raise ValueError(f"{name}: must be at least {MIN_RANGE_MAX_M:g} m (no laser rangefinder's maximum range "
+                raise InputError(f"{name}: must be at least {MIN_RANGE_MAX_M:g} m (no laser rangefinder's maximum range "
                                  f"is shorter; with it every reading would be invalid), got {shown}")
             if name == "range_max" and value > MAX_RANGE_M:
-                raise ValueError(f"{name}: must be at most {MAX_RANGE_M:g} m (no 2-D rangefinder reaches farther), "
+                raise InputError(f"{name}: must be at most {MAX_RANGE_M:g} m (no 2-D rangefinder reaches farther), "
                                  f"got {shown}")
             object.__setattr__(self, name, value)
 

@@ -26,12 +26,32 @@ LMS200_RANGE_MAX_CM_MODE = 81.83  # m: SICK code 8183 in cm units
 ANGLE_GRID_DEG = 0.05  # every LMS2xx start angle and resolution is a multiple of 0.05 deg
 
 
-def snap_angle(value: float, tolerance: float = 2e-5) -> float:
-    """Snap an angle (rad) stored with limited precision (text, float32) onto the exact 0.05 deg
-    grid when it lies within ``tolerance`` rad of it; otherwise return it unchanged."""
+#: rad: what writing an angle with 6 decimals (CARMEN loggers: -1.570796, 0.008727) can move it by, half
+#: a unit of the last decimal; float32 (a bag's LaserScan) moves it by at most 2**-24 of its value
+SNAP_TEXT_ERROR_RAD = 5e-7
+SNAP_RELATIVE_ERROR = 1e-6  # of the value: float32 (6e-8) with room to spare
+SNAP_MAX_DRIFT_BEAMS = 0.1  # an increment is snapped only if the last beam moves by less than this part of a beam
+
+
+def snap_angle(value: float, beams: int = 1) -> float:
+    """Snap an angle (rad) stored with limited precision (text with 6 decimals, float32) onto the
+    exact 0.05 deg grid when only that rounding can explain its distance from the grid: within
+    ``SNAP_TEXT_ERROR_RAD`` + ``SNAP_RELATIVE_ERROR`` x |value|; for a beam increment of a
+    ``beams``-beam scan, also only when the last beam moves by less than ``SNAP_MAX_DRIFT_BEAMS`` of
+    a beam. Otherwise the value is returned unchanged.
+
+    Before (a fixed 2e-5 rad), angles genuinely off the grid were snapped onto it (a review's
+    reproduction): a 720-beam scan at 2 pi / 719 rad (RPLIDAR style) read as 0.5 deg, its last
+    bearing 179.50 deg instead of 180.00 deg; 0.5 deg + 1.5e-5 rad lost 5.4 mrad at beam 360.
+    """
     step = np.deg2rad(ANGLE_GRID_DEG)
     snapped = float(np.round(value / step) * step)
-    return snapped if abs(snapped - value) < tolerance else float(value)
+    error = abs(snapped - value)
+    if error > SNAP_TEXT_ERROR_RAD + SNAP_RELATIVE_ERROR * abs(value):
+        return float(value)
+    if beams > 1 and (beams - 1) * error >= SNAP_MAX_DRIFT_BEAMS * abs(snapped):
+        return float(value)
+    return snapped
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,0 +1,152 @@
+"""Defects a read-only review (session 32) reproduced in the CARMEN reader / writer, the Scan angle
+snapping and the Record / LaserGeometry argument checks; each test failed on the code before its fix."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from lms200 import LaserGeometry, Record, Scan, read_log, write_log
+from lms200.errors import InputError, LogFormatError
+
+
+def _scan() -> Scan:
+    return Scan(np.ones(3), -0.1, 0.05, 0.0, 8.0)
+
+
+@pytest.mark.parametrize("pose, message", [
+    ((10**400, 0, 0), "odom: must be finite, got a int beyond float64's range"),
+    ("123", "odom: must be None or three numbers (x m, y m, theta rad), got str '123'"),
+    ((True, False, True), "odom: must be None or three numbers (x m, y m, theta rad), got bool True among them"),
+    ((1.0, 2.0), "odom: must be None or three numbers (x m, y m, theta rad), got 2 items"),
+])
+def test_record_pose_refused_with_input_error_naming_the_field(pose, message):
+    # was: raw OverflowError; "123" read as (1.0, 2.0, 3.0); (True, False, True) as (1.0, 0.0, 1.0)
+    with pytest.raises(InputError) as err:
+        Record(_scan(), odom=pose)
+    assert str(err.value) == message
+    with pytest.raises(InputError, match="^truth: "):
+        Record(_scan(), truth=pose)
+    assert Record(_scan(), odom=(np.float64(1), 2, np.int64(3))).odom == (1.0, 2.0, 3.0)
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(fov=-1), r"fov: must be > 0, got -1 rad \(-57.2958 deg\)"),
+    (dict(range_max=10**400), "range_max: must be finite, got a int beyond float64's range"),
+    (dict(fov="3"), "fov: must be a number, got str '3'"),
+    (dict(resolution=True), "resolution: must be a number, got bool True"),
+])
+def test_laser_geometry_refused_with_input_error_naming_the_field(kw, message):
+    # was: plain ValueError, raw OverflowError; "3" and True accepted as 3 rad and 1 rad
+    with pytest.raises(InputError, match=f"^{message}$"):
+        LaserGeometry(**kw)
+
+
+def _write(tmp_path, name: str, text: str):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def _robotlaser(max_range: str = "80", ranges: str = "1 2 3", count: str = "3") -> str:
+    return (f"ROBOTLASER1 0 -1.5707963 3.1415926 1.5707963 {max_range} 0.01 0 {count} {ranges} 0 "
+            "0 0 0 0 0 0 0 0 0 0 0 5 h 5\n")
+
+
+@pytest.mark.parametrize("max_range", ["1e-300", "-5", "0", "0.05"])
+def test_robotlaser_impossible_max_range_is_a_malformed_line(tmp_path, max_range):
+    # was: 1e-300 became range_max (every reading invalid, silently); -5 and 0 became 81.83 m
+    path = _write(tmp_path, "rl.log", "# x\n" + _robotlaser("80") + _robotlaser(max_range))
+    with pytest.raises(LogFormatError) as err:
+        list(read_log(path))
+    assert str(err.value) == (f"{path}:3: malformed ROBOTLASER1 line: maximum range must be in [0.1, 10000] m, "
+                              f"got {max_range}")
+    reader = read_log(path, skip_bad_lines=True)
+    assert [r.scan.range_max for r in reader] == [80.0]
+    assert reader.stats.skipped == [(3, f"ROBOTLASER1: maximum range must be in [0.1, 10000] m, got {max_range}")]
+
+
+def _flaser(ranges: str = "1.00 2.00 3.00", count: str | None = None, stamp: str = "12.5") -> str:
+    n = count if count is not None else str(len(ranges.split()))
+    return f"FLASER {n} {ranges} 0 0 0 0 0 0 {stamp} host {stamp}\n"
+
+
+@pytest.mark.parametrize("line, reason", [
+    (_flaser("1_000 2.00 3.00"), "FLASER ranges: '1_000' is not a number (no '_' in a CARMEN number)"),
+    (_flaser("1e400 2.00 3.00"), "FLASER ranges: '1e400' is beyond float64's range"),
+    (_flaser("-1e400 2.00 3.00"), "FLASER ranges: '-1e400' is beyond float64's range"),
+    (_flaser(stamp="1e400"), "FLASER poses and timestamp: '1e400' is beyond float64's range"),
+    ("FLASER 3_0 " + " ".join(["1.00"] * 30) + " 0 0 0 0 0 0 1 h 1\n", "beam count '3_0' is not a number"),
+])
+def test_overflowing_numbers_and_underscores_are_malformed(tmp_path, line, reason):
+    # was: 1e400 read as +inf, -1e400 as -inf, 1_000 as 1000 m and a beam count 3_0 as 30 (Python's float())
+    path = _write(tmp_path, "u.log", _flaser() + line)
+    with pytest.raises(LogFormatError) as err:
+        list(read_log(path))
+    assert str(err.value) == f"{path}:2: malformed FLASER line: {reason}"
+    reader = read_log(path, skip_bad_lines=True)
+    assert len(list(reader)) == 1 and reader.stats.skipped == [(2, f"FLASER: {reason}")]
+
+
+def test_inf_written_as_a_word_keeps_its_meaning(tmp_path):
+    path = _write(tmp_path, "w.log", _flaser("Infinity -inf 3.00"))
+    assert np.array_equal(next(iter(read_log(path))).scan.ranges, [np.inf, -np.inf, 3.0])
+
+
+def test_bad_param_line_is_blamed_not_every_laser_line(tmp_path):
+    # was: "c.log:3: malformed FLASER line: fov ..." for every FLASER line; skip_bad_lines dropped every scan
+    path = _write(tmp_path, "p.log", "# x\nPARAM laser_front_laser_fov 720 h 0\n" + _flaser() + _flaser())
+    reason = "laser_front_laser_fov 720: fov: must be at most 2 pi rad (360 deg), got 12.5664 rad (720 deg)"
+    with pytest.raises(LogFormatError) as err:
+        list(read_log(path))
+    assert str(err.value) == f"{path}:2: malformed PARAM line: {reason}"
+    reader = read_log(path, skip_bad_lines=True)
+    scans = [r.scan for r in reader]
+    assert reader.stats.skipped == [(2, f"PARAM: {reason}")]
+    assert len(scans) == 2 and scans[0].angle_increment == pytest.approx(math.pi / 2)  # the convention: 3 beams, 180 deg
+
+
+def test_snap_angle_keeps_angles_genuinely_off_the_grid():
+    from lms200.scan import snap_angle
+    half = math.radians(0.5)
+    # was: 2 pi / 719 (RPLIDAR style, 720 beams) snapped to 0.5 deg; 0.5 deg + 1.5e-5 rad too
+    assert snap_angle(2 * math.pi / 719, 720) == 2 * math.pi / 719
+    assert snap_angle(half + 1.5e-5, 361) == half + 1.5e-5
+    # what 6 decimals or float32 explain is still snapped (the CSAIL ROBOTLASER1 log writes 0.008727, -1.570796)
+    assert snap_angle(0.008727, 361) == half and snap_angle(-1.570796) == -math.pi / 2
+    assert snap_angle(float(np.float32(math.radians(0.25))), 1081) == math.radians(0.25)
+    # within the text error, but the last of 100,000 beams would move by more than 0.1 beam: kept
+    assert snap_angle(half + 4e-7, 100_000) == half + 4e-7
+
+
+def test_robotlaser_720_beams_at_2pi_over_719_keeps_its_last_bearing(tmp_path):
+    res = 2 * math.pi / 719
+    line = (f"ROBOTLASER1 0 {-math.pi!r} {2 * math.pi!r} {res!r} 12 0.001 0 720 " + " ".join(["1.0"] * 720)
+            + " 0 0 0 0 0 0 0 0 0 0 0 0 5 h 5\n")
+    scan = next(iter(read_log(_write(tmp_path, "rp.log", line)))).scan
+    assert scan.angle_increment == res  # was exactly 0.5 deg
+    assert math.degrees(scan.angle_max) == pytest.approx(180.0, abs=1e-9)  # was 179.50
+
+
+@pytest.mark.parametrize("fmt", ["robotlaser1", "flaser"])
+def test_valid_readings_near_the_special_codes_stay_valid(tmp_path, fmt):
+    path = tmp_path / "v.log"
+    # mm mode at the Scan.lms200 default range_max 8.183: 8.183 and 8.1826 read back +inf
+    mm = Scan(np.array([8.183, 8.1826, 8.1824, np.inf, np.nan, 3.0]), -0.05, 0.02, 0.0, 8.183)
+    write_log(path, [Record(mm)], fmt=fmt)
+    back = next(iter(read_log(path))).scan
+    assert back.ranges[:3].tolist() == [8.182, 8.182, 8.182] and back.ranges[5] == 3.0
+    assert np.isposinf(back.ranges[3]) and np.isnan(back.ranges[4])
+    assert back.valid.tolist() == mm.valid.tolist() == [True, True, True, False, False, True]
+    # cm mode, range_max 100: 81.83 / 81.86 / 81.90 / 81.91 read back +inf / nan
+    cm = Scan(np.array([81.83, 81.86, 81.90, 81.91, 81.82, 81.95]), -0.05, 0.02, 0.0, 100.0)
+    write_log(path, [Record(cm)], fmt=fmt)
+    back = next(iter(read_log(path))).scan
+    assert back.ranges.tolist() == [81.82, 81.82, 81.82, 81.82, 81.82, 81.95]
+    assert back.valid.all()
+    # not valid (beyond this scan's range_max): written as it is, and still not valid
+    far = Scan(np.array([8.183, 2.0, 8.19]), -0.05, 0.05, 0.0, 8.0)
+    write_log(path, [Record(far)], fmt=fmt)
+    assert not next(iter(read_log(path))).scan.valid[[0, 2]].any()
