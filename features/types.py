@@ -222,9 +222,29 @@ class Corners(Sequence):
 
     @classmethod
     def from_corners(cls, corners: Sequence[Corner]) -> Corners:
-        """Corners from ``Corner`` records."""
+        """Corners from ``Corner`` records.
+
+        Raises:
+            InputError: an item that is no Corner, or one whose x, y, angle are not finite numbers
+                or whose index and lines are not whole numbers (fuzzing: a float item was an
+                AttributeError, text numpy's ValueError, index 2.5 truncated to 2, silently).
+        """
         if not corners:
             return cls.empty()
+        for i, c in enumerate(corners):
+            if not isinstance(c, Corner):
+                raise InputError(f"corners[{i}]: must be a features.Corner, got {type(c).__name__}")
+            whole = (c.index, *c.lines) if isinstance(c.lines, tuple) and len(c.lines) == 2 else ()
+            if len(whole) != 3 or not all(isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_))
+                                          for v in whole):
+                raise InputError(f"corners[{i}]: index and lines must be whole numbers (a beam, two line indices), "
+                                 f"got {c.index!r}, {c.lines!r}")
+            try:
+                ok = all(np.isfinite(float(v)) for v in (c.x, c.y, c.angle))
+            except (TypeError, ValueError, OverflowError):
+                ok = False
+            if not ok:
+                raise InputError(f"corners[{i}]: x, y and angle must be finite numbers, got {c.x!r}, {c.y!r}, {c.angle!r}")
         values = np.array([(c.x, c.y, c.angle) for c in corners], dtype=float)
         beams = np.array([(c.index, *c.lines) for c in corners], dtype=np.int64)
         return cls(values, beams)

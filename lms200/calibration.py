@@ -37,6 +37,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from .codes import METRES_PER_UNIT
+from .finite import check_seed
 from .noise import (BOOTSTRAP_RESAMPLES, RangeNoise, _bootstrap_scale, _remove_quantisation, estimate_quantum, scans_of,
                     estimate_range_noise, interlace_stride, line_residuals, robust_scale)
 from .scan import Scan
@@ -351,6 +352,7 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
     Raises:
         ValueError: for fewer than ``MIN_SCANS`` scans.
     """
+    check_seed(seed)
     kept: list[Scan] = []
     for s in scans_of(scans):
         kept.append(s)

@@ -131,6 +131,20 @@ def path_of(path: object) -> Path:
     return Path(path)
 
 
+def regular_file(path: object, what: str) -> Path:
+    """``path`` (:func:`path_of`) of an existing regular file, ``what`` naming its kind in the
+    message; LogNotFoundError otherwise. A device or a pipe is refused unread: read_tum and
+    read_relations read /dev/zero line by line until the memory ran out (found by fuzzing)."""
+    p = path_of(path)
+    if not p.exists():
+        raise LogNotFoundError(f"no such {what}: {p}")
+    if p.is_dir():
+        raise LogNotFoundError(f"{p} is a folder, not a {what}")
+    if not p.is_file():
+        raise LogNotFoundError(f"{p}: a {what} must be a regular file, not a device or pipe")
+    return p
+
+
 def checked_records(records: Iterable[object], error: type[Exception] = InputError) -> Iterator[Record]:
     """The records, raising ``error`` naming the index of the first item that is not a Record (lazily:
     a log's records are checked as they are written or used)."""

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
+from .finite import check_seed, float_of, is_number
 from .scan import Scan
 
 QUANTUM_CANDIDATES_M = (0.01, 0.005, 0.002, 0.001, 0.0005, 0.0002, 0.0001)
@@ -188,6 +189,11 @@ def estimate_range_noise(scans: Scan | Iterable[Any], min_range: float = 0.0,
     Returns:
         A :class:`RangeNoise`. With fewer than 10 usable triples sigma_m is nan.
     """
+    check_seed(seed)
+    for name, value in (("min_range", min_range), ("max_range", max_range)):  # None was a TypeError deep inside
+        number = float_of(value, name, InputError) if is_number(value) else math.nan
+        if math.isnan(number) or number < 0:
+            raise InputError(f"{name}: must be a number >= 0 (m; max_range may be inf), got {value!r}")
     zs: list[np.ndarray] = []
     finite: list[np.ndarray] = []
     total = 0

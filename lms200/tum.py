@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from .codes import real_rows, real_vector
-from .errors import InputError, LogFormatError, LogNotFoundError
+from .errors import InputError, LogFormatError
 
 
 def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
@@ -79,19 +79,16 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
 
     Raises:
         LogNotFoundError: (an ``LmsbenchError`` and a ``FileNotFoundError``) a path that does not
-            exist or is a folder (were a raw FileNotFoundError / IsADirectoryError).
+            exist or is a folder (were a raw FileNotFoundError / IsADirectoryError), a device or
+            a pipe (read until memory ran out).
         LogFormatError: naming the line: a row that is not 8 finite numbers (nan allowed in the pose
             with ``allow_nan``), a zero quaternion, a stamp before the previous one.
     """
-    from .logs import path_of  # not at the top: logs imports bag, which imports this module
+    from .logs import regular_file  # not at the top: logs imports bag, which imports this module
 
-    p = path_of(path)
     if not isinstance(allow_nan, bool):
         raise InputError(f"allow_nan: must be True or False, got {type(allow_nan).__name__}")
-    if not p.exists():
-        raise LogNotFoundError(f"no such TUM file: {p}")
-    if p.is_dir():
-        raise LogNotFoundError(f"{p} is a folder, not a TUM file")
+    p = regular_file(path, "TUM file")  # a device or pipe too: /dev/zero was read until memory ran out
     stamps: list[float] = []
     poses: list[tuple[float, float, float]] = []
     with open(p, encoding="ascii", errors="replace") as f:

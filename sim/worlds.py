@@ -21,7 +21,7 @@ from dataclasses import replace
 import numpy as np
 
 from lms200.errors import InputError
-from lms200.finite import float_of
+from lms200.finite import check_seed, float_of
 
 from .clutter import ClutterConfig, add_clutter
 from .geometry import rectangle_corners
@@ -58,12 +58,6 @@ MIN_SCALE, MAX_SCALE = 0.7, 3.0  # the rooms' size factor (make_world(scale=...)
 # to a solid than the robot's radius (0.17 m at 0.5, 0.25 at 0.6; >= 0.33 m at 0.7 over 8 seeds of every roomed world)
 ROOMED_WORLDS = ("office", "cluttered", "random", "mit")  # the office generator's worlds, whose rooms scale
 MAX_CLUTTER = 10.0  # densest clutter level (10x a furnished office); the object count grows with it
-
-
-def check_seed(seed: object) -> None:
-    """A seed is a whole number >= 0 (numpy's Generators take no other); ValueError naming it."""
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputError(f"seed: must be a whole number >= 0, got {seed!r}")
 
 
 def make_world(name: str = "office", seed: int = 0, clutter: float | None = None, glass: float | None = None,

@@ -14,6 +14,7 @@ import numpy as np
 
 from lms200 import InputError, LmsbenchError, LogFormatError
 from lms200.codes import real_rows, real_vector
+from lms200.logs import regular_file
 from features.baselines.checks import positive
 
 from .models import wrap
@@ -289,7 +290,7 @@ def map_error(map_segments: np.ndarray, walls: np.ndarray, alignment: Alignment2
 def read_relations(path: str | Path) -> np.ndarray:
     """Read a relations file (``t1 t2 x y z roll pitch yaw`` a line) into (m, 5): t1, t2, x, y, yaw."""
     rows = []
-    with open(path, encoding="ascii", errors="replace") as f:
+    with open(regular_file(path, "relations file"), encoding="ascii", errors="replace") as f:
         for no, line in enumerate(f, 1):
             s = line.split()
             if not s or s[0].startswith("#"):

@@ -1292,3 +1292,53 @@ def test_line_arrays_given_to_the_real_data_measures_are_checked() -> None:
     bad[0, 6], bad[0, 7] = bad[0, 7], bad[0, 6]
     with pytest.raises(InputError, match=r"^fs: line 0: its beams must be whole numbers with 0 <= first <= last"):
         realdata.ray_residuals(bad, scan)
+
+
+@pytest.mark.parametrize("reader", ["read_tum", "read_relations"])
+@pytest.mark.parametrize("path, message", [
+    ("/dev/zero", r"^/dev/zero: a .* must be a regular file, not a device or pipe"),  # read until memory ran out
+    (".", r"^\. is a folder, not a "),                                                # IsADirectoryError
+    ("no/such.file", r"^no such .*: no/such.file"),
+])
+def test_tum_and_relations_readers_refuse_what_is_no_file_unread(reader: str, path: str, message: str) -> None:
+    from lms200 import read_tum
+    from lms200.errors import LogNotFoundError
+    from slam.metrics import read_relations
+
+    fn = {"read_tum": read_tum, "read_relations": read_relations}[reader]
+    with pytest.raises(LogNotFoundError, match=message):
+        fn(path)
+
+
+@pytest.mark.parametrize("call, message", [
+    # a float or text seed was numpy's TypeError ("SeedSequence expects int"), -1 its ValueError
+    (lambda s: __import__("lms200.noise").noise.estimate_range_noise(s, seed=2.5), r"^seed: must be a whole number >= 0, got 2.5"),
+    (lambda s: __import__("lms200.noise").noise.estimate_range_noise(s, seed=-1), r"^seed: must be a whole number >= 0, got -1"),
+    (lambda s: __import__("lms200.calibration").calibration.calibrate_scans([s, s], seed="0"), r"^seed: must be a whole number >= 0, got '0'"),
+    # None was "'>' not supported between instances of 'NoneType' and 'float'"
+    (lambda s: __import__("lms200.noise").noise.estimate_range_noise(s, min_range=None), r"^min_range: must be a number >= 0 .*got None"),
+    (lambda s: __import__("lms200.noise").noise.estimate_range_noise(s, max_range=float("nan")), r"^max_range: must be a number >= 0 .*got nan"),
+])
+def test_noise_and_calibration_seeds_and_bands_are_checked(call, message: str) -> None:
+    with pytest.raises(InputError, match=message):
+        call(_noise_scan())
+
+
+@pytest.mark.parametrize("corners, message", [
+    ([1.0], r"^corners\[0\]: must be a features.Corner, got float"),  # AttributeError: no attribute 'x'
+    ("abc", r"^corners: must be a features.Corners or a sequence of features.Corner, got str"),
+    ("corner:x=nan", r"^corners\[0\]: x, y and angle must be finite numbers, got nan"),  # a nan corner, scored as a miss
+    ("corner:x=text", r"^corners\[0\]: x, y and angle must be finite numbers, got 'a'"),  # numpy's ValueError
+    ("corner:index=2.5", r"^corners\[0\]: index and lines must be whole numbers .*got 2.5, \(0, 1\)"),  # truncated to 2
+])
+def test_feature_set_corners_are_checked(corners: object, message: str) -> None:
+    from features import Corner, FeatureSet
+
+    good = dict(x=1.0, y=0.5, angle=1.5, index=10, lines=(0, 1))
+    if isinstance(corners, str) and corners.startswith("corner:"):
+        field, value = corners[7:].split("=")
+        good[field] = {"nan": float("nan"), "text": "a", "2.5": 2.5}[value]
+        corners = [Corner(**good)]
+    with pytest.raises(InputError, match=message):
+        FeatureSet(corners=corners)
+    assert len(FeatureSet(corners=[Corner(1.0, 0.5, 1.5, 10, (0, 1))]).corners) == 1

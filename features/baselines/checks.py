@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 
+from lms200.finite import is_number as is_real  # a plain or numpy number, not a bool
+
 from ..errors import ConfigError
 
 MAX_BEAMS = 1 << 14  # most beams of a scan the extractors take (bounds the memory of one call)
@@ -30,11 +32,6 @@ def beams(n: int) -> int:
 def fail(name: str, requirement: str, value: object) -> None:
     """Raise the ConfigError ``"<name>: <requirement>, got <value>"``."""
     raise ConfigError(f"{name}: {requirement}, got {value!r}")
-
-
-def is_real(value: object) -> bool:
-    """A plain or numpy number, not a bool."""
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
 
 def finite(value: object) -> bool:
