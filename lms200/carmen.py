@@ -100,6 +100,9 @@ MAX_LINE_CHARS = 1 << 20  # a longer line is malformed (bounds memory on damaged
 #: most blank or comment lines in a row a log may hold: a log's header comments are tens of lines, and a
 #: gzip of 100 MB of blank lines was read twice to its end (48 s) to say it held no laser line
 MAX_BLANK_RUN = 100_000
+#: most lines that start with no message name a pass skips (``skip_bad_lines``) before it ends as junk
+#: (``stats.stopped``): 1,000,000 junk lines, each skipped and recorded, peaked at 289 MB
+MAX_JUNK_LINES = 10_000
 READ_ERRORS = (OSError, EOFError, zlib.error, lzma.LZMAError)  # what damaged or truncated compressed data raises
 # compressed logs are read in place, told apart by their first bytes (not their names)
 COMPRESSIONS = {"gzip": (b"\x1f\x8b", gzip.open), "bzip2": (b"BZh", bz2.open), "xz": (b"\xfd7zXZ\x00", lzma.open)}
@@ -351,6 +354,7 @@ class CarmenReader:
         params: dict[str, float] = {}
         counts: dict[tuple[str, str, str], tuple[int, int]] = {}  # ROBOTLASER header -> (beams, first line)
         blank = _BlankRun(self.path)
+        junk = 0  # lines that start with no message name
         for line_no, line in self._lines():
             words = line.split()
             if not words or words[0].startswith("#"):
@@ -361,6 +365,14 @@ class CarmenReader:
             named = kind in KNOWN_KINDS or _MESSAGE_NAME.fullmatch(kind) is not None
             if named:
                 stats.count(kind)
+            else:
+                junk += 1
+                if junk > MAX_JUNK_LINES and self.skip_bad_lines:
+                    reason = (f"more than {MAX_JUNK_LINES:,} lines that start with no CARMEN message name: junk from "
+                              "here on, not read")
+                    stats.stopped = f"line {line_no}: {reason}"
+                    stats.skipped.append((line_no, f"message: {reason}"))
+                    break
             # a TRUEPOS pose is the truth of the laser line directly after it (PARAM lines aside): any
             # other line between (ODOM, another laser kind, a malformed line) drops it
             held, truth = truth, None

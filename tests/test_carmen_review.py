@@ -228,3 +228,16 @@ def test_junk_lines_are_bad_lines_and_message_kinds_are_bounded(tmp_path):
     messages = reader.stats.messages
     assert len(messages) == MAX_MESSAGE_KINDS + 2 and messages["other"] == 200 - (MAX_MESSAGE_KINDS - 1)
     assert messages["ODOM"] == 1 and messages["FLASER"] == 2
+
+
+def test_a_pass_ends_after_max_junk_lines_under_skip_bad_lines(tmp_path, monkeypatch):
+    import lms200.carmen as carmen
+    monkeypatch.setattr(carmen, "MAX_JUNK_LINES", 5)
+    # was (with junk counted as kinds, then skipped one by one): 1,000,000 junk lines peaked at 289 MB
+    path = _write(tmp_path, "j.log", _flaser() + "".join(f"w{i} 1\n" for i in range(3)) + "NEFF 1\n" + _flaser()
+                  + "".join(f"w{i} 1\n" for i in range(100)) + _flaser())
+    reader = read_log(path, skip_bad_lines=True)
+    assert len(list(reader)) == 2  # the third FLASER lies beyond the sixth junk line (line 9)
+    assert len(reader.stats.skipped) == 5 + 1 and reader.stats.skipped[-1][0] == 9
+    assert reader.stats.stopped == ("line 9: more than 5 lines that start with no CARMEN message name: junk from "
+                                    "here on, not read")
