@@ -3,15 +3,19 @@
 No ROS installation is needed. Writing: a ``.bag`` path gives a ROS 1 bag, any other path a ROS 2
 bag folder (sqlite3 storage). Scans go to ``/scan`` (frame ``laser``); a record's odometry and true
 pose, when present, go to ``/odom`` and ``/ground_truth`` as ``geometry_msgs/PoseStamped`` with the
-scan's stamp, written just before the scan. Reading: the bag's LaserScan topic (a bag with
-several is refused unless one is named) in time order; odometry from ``/odom`` and truth from
-``/ground_truth`` (PoseStamped or nav_msgs/Odometry): the latest message at or before each scan whose header stamp lies within
-half the bag's median scan period of the scan's stamp (``pose_tolerance``); a scan with no such
-pose gets None, so a record written without odometry or truth reads back without it.
+scan's stamp, written just before the scan; bag times are the stamps, moved 1 ns past the message
+before where needed, so messages read back in the order written. Reading: the bag's LaserScan
+topic (a bag with several is refused unless one is named) in bag-time order; odometry from
+``/odom`` and truth from ``/ground_truth`` (PoseStamped or nav_msgs/Odometry) by header stamps
+(:class:`_PoseMatcher`): a pose stamped like the scan, else the latest one stamped before it
+within half the bag's median scan period (``pose_tolerance``) that is no other scan's, else None;
+so a record written without odometry or truth reads back without it.
 """
 
 from __future__ import annotations
 
+from bisect import bisect_left, insort
+from collections import deque
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -99,6 +103,15 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
 
         writer = Writer2(path, version=8)
     count = 0
+    last = [-1]  # the bag time of the message written last (ns)
+
+    def bag_time(ns: int) -> int:
+        """The stamp, or 1 ns after the message before: ROS 1 orders messages of one bag time by
+        topic, so a record's poses and scan, or records of one stamp, came back out of the order
+        written and could not be told apart."""
+        last[0] = max(ns, last[0] + 1)
+        return last[0]
+
     with writer:
         kw = {"typestore": ts}
         conns: dict[str, object] = {}
@@ -116,6 +129,7 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
                                  f"(0 <= stamp < 2**31 s = {MAX_STAMP_NS // 1_000_000_000} s, a ROS time's range)")
             sec, nsec = divmod(ns, 1_000_000_000)
             header_kw = {"stamp": Time(sec=sec, nanosec=nsec), "frame_id": "laser"}
+
             if ros1:
                 header_kw["seq"] = seq
             for name, pose in ((ODOM_TOPIC, rec.odom), (TRUTH_TOPIC, rec.truth)):
@@ -130,7 +144,7 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
                     ),
                 )
                 c = conn(name, "geometry_msgs/msg/PoseStamped")
-                writer.write(c, ns, serialize(msg, "geometry_msgs/msg/PoseStamped"))
+                writer.write(c, bag_time(ns), serialize(msg, "geometry_msgs/msg/PoseStamped"))
             time_increment = mirror_time_increment(scan.angle_increment)
             scan_time = scan_period(scan.angle_increment)
             msg = LaserScan(
@@ -145,7 +159,7 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
                 ranges=scan.ranges.astype(np.float32),
                 intensities=np.zeros(0, dtype=np.float32),
             )
-            writer.write(conn(topic, "sensor_msgs/msg/LaserScan"), ns, serialize(msg, "sensor_msgs/msg/LaserScan"))
+            writer.write(conn(topic, "sensor_msgs/msg/LaserScan"), bag_time(ns), serialize(msg, "sensor_msgs/msg/LaserScan"))
             count += 1
     return count
 
@@ -190,16 +204,17 @@ def _scan_of(msg) -> Scan:  # noqa: ANN001
     )
 
 
-STAMP_EPS_S = 1e-6  # s: stamps this close are the same instant (float seconds vs integer ns)
+STAMP_EPS_S = 1e-6  # s: the least pose tolerance; scans this close in bag time have one stamp
 
 
 def pose_tolerance(scan_times_ns: Iterable[int]) -> float:
-    """How far (s) a pose's stamp may lie from a scan's for the pose to be attached to the scan:
-    half the median period between consecutive scans (bag time), at least ``STAMP_EPS_S``; a
-    single scan gets ``STAMP_EPS_S`` (only a pose at its own stamp)."""
+    """How far (s) a pose's stamp may lie before a scan's for the pose to be attached to the scan:
+    half the median period between consecutive scans (bag time; steps of ``STAMP_EPS_S`` or less,
+    such as ``write_bag``'s 1 ns between records of one stamp, are no period), at least
+    ``STAMP_EPS_S``; a single scan gets ``STAMP_EPS_S``."""
     t = np.sort(np.fromiter(scan_times_ns, dtype=np.int64))
     periods = np.diff(t)
-    periods = periods[periods > 0]
+    periods = periods[periods > STAMP_EPS_S * 1e9]  # a microsecond or less: one stamp (write_bag's 1 ns steps)
     if periods.size == 0:
         return STAMP_EPS_S
     return max(0.5 * float(np.median(periods)) * 1e-9, STAMP_EPS_S)
@@ -292,10 +307,7 @@ class BagReader:
             except Exception as exc:  # damaged chunks, bad index: rosbags' own exception types
                 self._fail(f"topic {stats.laser}", exc, 0, fatal=True)
                 return
-            # Poses stamped like a scan may come just before or just after it (ties in bag time are
-            # unordered across topics): hold each scan until bag time moves past it.
-            latest: dict[str, tuple[float, Pose2D] | None] = {ODOM_TOPIC: None, TRUTH_TOPIC: None}
-            held: list[tuple[int, Scan]] = []
+            matcher = _PoseMatcher(sorted({c.topic for c in poses}), round(tolerance * 1e9))
             messages = reader.messages(connections=scans + poses)
             while True:
                 try:
@@ -309,28 +321,151 @@ class BagReader:
                 conn, t, raw = item
                 index = stats.messages.get(conn.topic, 0)
                 stats.messages[conn.topic] = index + 1
-                while held and held[0][0] < t:
-                    yield self._record(held.pop(0)[1], latest, tolerance)
                 try:
                     msg = reader.deserialize(raw, conn.msgtype)
                     if conn.msgtype != "sensor_msgs/msg/LaserScan":
-                        latest[conn.topic] = (_stamp_of(msg), _pose_of(msg))
-                        continue
-                    held.append((t, _scan_of(msg)))
+                        matcher.add_pose(conn.topic, _header_ns(msg), _pose_of(msg))
+                    else:
+                        matcher.add_scan(_header_ns(msg), _scan_of(msg), index, t)
                 except Exception as exc:  # noqa: BLE001 - deserialisation errors are rosbags' own types
                     self._fail(f"topic {conn.topic} message {index}", exc, index, fatal=False)
-            for _, scan in held:
-                yield self._record(scan, latest, tolerance)
+                yield from self._records(matcher.ready(t))
+            yield from self._records(matcher.ready(None))
         finally:
             reader.close()
 
-    @staticmethod
-    def _record(scan: Scan, latest: dict[str, tuple[float, Pose2D] | None], tolerance: float) -> Record:
-        """The scan with the latest odometry / truth whose stamp is within ``tolerance`` (s) of its
-        own; None where the latest is older (the previous scan's pose is not this scan's)."""
-        def near(entry: tuple[float, Pose2D] | None) -> Pose2D | None:
-            if entry is None or abs(entry[0] - scan.stamp) > tolerance:
-                return None
-            return entry[1]
+    def _records(self, matched: Iterable[tuple[int, Scan, dict[str, Pose2D | None]]]) -> Iterator[Record]:
+        for index, scan, pose in matched:
+            try:
+                rec = Record(scan=scan, odom=pose.get(ODOM_TOPIC), truth=pose.get(TRUTH_TOPIC))
+            except Exception as exc:  # noqa: BLE001 - was raised outside any try: no bag, topic or index
+                self._fail(f"topic {self.stats.laser} message {index}", exc, index, fatal=False)
+                continue
+            yield rec
 
-        return Record(scan=scan, odom=near(latest[ODOM_TOPIC]), truth=near(latest[TRUTH_TOPIC]))
+
+LOOKAHEAD_S = 1.0  # s of bag time a scan waits at most for the poses stamped at or before it
+MAX_HELD = 256  # scans waiting at most (a bag whose scans all have one bag time held them all: 35 MB for 5,000)
+MAX_POSES = 4096  # poses kept per topic at most
+
+
+class _Held:
+    """A scan waiting for its poses."""
+
+    __slots__ = ("index", "stamp", "bag_ns", "scan", "pose")
+
+    def __init__(self, index: int, stamp: int, bag_ns: int, scan: Scan) -> None:
+        self.index, self.stamp, self.bag_ns, self.scan = index, stamp, bag_ns, scan
+        self.pose: dict[str, Pose2D] = {}  # per topic, a pose stamped exactly like the scan, written before it
+
+
+class _PoseMatcher:
+    """Attaches to each scan, per pose topic, the pose for it by header stamps (integer ns):
+
+    * a pose stamped exactly like the scan; several scans with one stamp take such poses in the
+      order written (a pose before a scan is that scan's, as ``write_bag`` writes them; a pose that
+      comes after every scan of its stamp belongs to the last ones of them);
+    * else the latest pose stamped before the scan, at most ``tolerance_ns`` before it, whose stamp
+      is no other scan's (that pose is the other scan's: a record written without odometry reads
+      back without it);
+    * else None.
+
+    Scans are handed out in arrival order once every pose topic has shown a pose stamped after the
+    scan, or ``LOOKAHEAD_S`` of bag time has passed, or more than ``MAX_HELD`` scans wait, so what
+    is held stays bounded (poses: those within ``tolerance_ns`` of a waiting scan, at most
+    ``MAX_POSES`` a topic).
+    """
+
+    def __init__(self, topics: list[str], tolerance_ns: int) -> None:
+        self.topics = topics
+        self.tolerance = tolerance_ns
+        self.held: deque[_Held] = deque()
+        self.by_stamp: dict[str, dict[int, deque[Pose2D]]] = {t: {} for t in topics}  # unused poses, arrival order
+        self.stamps: dict[str, list[int]] = {t: [] for t in topics}  # the keys of by_stamp, sorted
+        self.count: dict[str, int] = {t: 0 for t in topics}
+        self.newest: dict[str, int | None] = {t: None for t in topics}
+        self.scan_stamps: dict[int, int] = {}  # stamps of recent scans -> how many
+        self.scan_order: deque[int] = deque()
+
+    def add_pose(self, topic: str, stamp: int, pose: Pose2D) -> None:
+        newest = self.newest[topic]
+        self.newest[topic] = stamp if newest is None else max(newest, stamp)
+        same = self.by_stamp[topic].get(stamp)
+        if same is None:
+            same = self.by_stamp[topic][stamp] = deque()
+            insort(self.stamps[topic], stamp)
+        same.append(pose)
+        self.count[topic] += 1
+        while self.count[topic] > MAX_POSES:
+            self._drop(topic, self.stamps[topic][0], 1)
+
+    def add_scan(self, stamp: int, scan: Scan, index: int, bag_ns: int) -> None:
+        h = _Held(index, stamp, bag_ns, scan)
+        for topic in self.topics:  # the first unused pose of its stamp written before it
+            same = self.by_stamp[topic].get(stamp)
+            if same:
+                h.pose[topic] = same.popleft()
+                self._used(topic, stamp)
+        self.held.append(h)
+        self.scan_stamps[stamp] = self.scan_stamps.get(stamp, 0) + 1
+        self.scan_order.append(stamp)
+
+    def ready(self, bag_ns: int | None) -> Iterator[tuple[int, Scan, dict[str, Pose2D | None]]]:
+        """The scans that need wait no longer (all at the end, ``bag_ns`` None) with their poses."""
+        held = self.held
+        while held:
+            h = held[0]
+            if (bag_ns is not None and len(held) <= MAX_HELD and bag_ns - h.bag_ns <= LOOKAHEAD_S * 1e9
+                    and not all(n is not None and n > h.stamp for n in self.newest.values())):
+                return
+            held.popleft()
+            yield h.index, h.scan, {topic: self._pose_for(topic, h) for topic in self.topics}
+            self._prune(min(h.stamp, held[0].stamp) if held else h.stamp)
+
+    def _pose_for(self, topic: str, h: _Held) -> Pose2D | None:
+        if topic in h.pose:
+            return h.pose[topic]
+        same = self.by_stamp[topic].get(h.stamp)
+        if same:  # poses of its stamp that came after it: the last ones go to the last scans
+            k = 1 + sum(1 for g in self.held if g.stamp == h.stamp and topic not in g.pose)
+            if len(same) >= k:
+                pose = same[len(same) - k]
+                del same[len(same) - k]
+                self._used(topic, h.stamp)
+                return pose
+        stamps = self.stamps[topic]
+        for j in range(bisect_left(stamps, h.stamp) - 1, -1, -1):
+            p = stamps[j]
+            if p < h.stamp - self.tolerance:
+                break
+            if p not in self.scan_stamps:  # a pose stamped like another scan is that scan's
+                return self.by_stamp[topic][p][-1]
+        return None
+
+    def _used(self, topic: str, stamp: int) -> None:
+        self.count[topic] -= 1
+        if not self.by_stamp[topic][stamp]:
+            del self.by_stamp[topic][stamp]
+            stamps = self.stamps[topic]
+            del stamps[bisect_left(stamps, stamp)]
+
+    def _drop(self, topic: str, stamp: int, n: int | None = None) -> None:
+        same = self.by_stamp[topic][stamp]
+        for _ in range(len(same) if n is None else n):
+            same.popleft()
+            self.count[topic] -= 1
+        if not same:
+            del self.by_stamp[topic][stamp]
+            del self.stamps[topic][bisect_left(self.stamps[topic], stamp)]
+
+    def _prune(self, stamp: int) -> None:
+        """Forget poses and scan stamps no scan stamped ``stamp`` or later can use."""
+        oldest = stamp - self.tolerance
+        for topic in self.topics:
+            while self.stamps[topic] and self.stamps[topic][0] < oldest:
+                self._drop(topic, self.stamps[topic][0])
+        while self.scan_order and (self.scan_order[0] < oldest or len(self.scan_order) > MAX_POSES):
+            s = self.scan_order.popleft()
+            self.scan_stamps[s] -= 1
+            if not self.scan_stamps[s]:
+                del self.scan_stamps[s]
