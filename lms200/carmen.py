@@ -1,6 +1,7 @@
 """CARMEN log files: reader and writer for FLASER / RLASER, ROBOTLASER1 / 2, ODOM, TRUEPOS and PARAM.
 
-Formats (one message a line, ``#`` comments, unknown messages skipped):
+Formats (one message a line, ``#`` comments; messages of other kinds, named in capitals, digits and ``_``
+(NEFF, NMEA, SYNC, ...), are skipped, and a line that starts with no such name is malformed):
 
 - ``FLASER n r1..rn x y theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp``
   (RLASER: the rear laser, same fields); no angle fields: the geometry comes from an override, the
@@ -18,7 +19,8 @@ Formats (one message a line, ``#`` comments, unknown messages skipped):
 
 Conventions: a scan's ``stamp`` is the message's ipc_timestamp; ``.odom`` is the robot pose the laser
 message carries (FLASER odom fields, ROBOTLASER1 robot fields); ``.truth`` is the pose of a TRUEPOS
-line directly preceding the laser message. SICK special codes stored as ranges (81.83 / 81.91 m in
+line directly preceding the laser message (PARAM lines aside: any other message line between, even a
+malformed one or another laser kind, drops it). SICK special codes stored as ranges (81.83 / 81.91 m in
 cm mode, 8.183 / 8.191 m in mm mode) map to +inf / nan (REP-117). The range unit comes from the
 ROBOTLASER1 accuracy field, a ``PARAM lmsbench_range_units mm|cm`` line (which this writer emits), or,
 for FLASER logs without it, from the values themselves (see :func:`infer_units`). No CARMEN laser line
@@ -72,6 +74,15 @@ from .scan import Scan, snap_angle
 UNITS_PARAM = "lmsbench_range_units"
 ODOMETRY_PARAM = "lmsbench_odometry"  # "absent": the pose fields of the scans that follow are not odometry
 RANGE_MIN_PARAM = "lmsbench_range_min"  # m: range_min of the scans that follow (no CARMEN laser line has the field; 0 without it)
+#: rad, exactly as written (the CARMEN PARAM lines are in degrees, which do not round-trip: -0.1 rad read
+#: back as -0.10000000000000002): a FLASER / RLASER scan's (angle_min, angle_increment), used where they
+#: agree with the geometry the other PARAM lines (or an override) give to within EXACT_GEOMETRY_AGREEMENT
+EXACT_GEOMETRY_NAMES = {
+    "FLASER": ("lmsbench_front_laser_angle_min", "lmsbench_front_laser_angle_increment"),
+    "RLASER": ("lmsbench_rear_laser_angle_min", "lmsbench_rear_laser_angle_increment"),
+}
+EXACT_GEOMETRY_PARAMS = frozenset(n for names in EXACT_GEOMETRY_NAMES.values() for n in names)
+EXACT_GEOMETRY_AGREEMENT = 1e-12  # rad, relative to max(1, |angle|): degrees to radians and back differ by ~1e-16
 POSED_LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages that carry poses
 RAW_LASER_KINDS = ("RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4")  # laser messages without poses
 LASER_KINDS = POSED_LASER_KINDS + RAW_LASER_KINDS  # laser messages read (one kind per pass)
@@ -81,6 +92,9 @@ PIPE_REASON = ("a log is read more than once (its first lines to choose the lase
                "bzip2 and xz logs are read as they are) or save the stream to a file first (zcat LOG > FILE)")
 DEFAULT_TOPIC_LINES = 10_000  # lines looked at to choose the default laser kind (and to tell junk from a log)
 _MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]{2,}")  # how every CARMEN message line starts (ODOM, PARAM, FLASER, ...; a lone capital in binary junk is none)
+KNOWN_KINDS = frozenset(LASER_KINDS + ("ODOM", "TRUEPOS", "PARAM"))  # messages this reader reads
+MAX_MESSAGE_KINDS = 64  # message kinds counted by name in ReadStats.messages (the kinds above always)
+OTHER_KINDS = "other"  # where lines of further kinds are counted
 ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
 MAX_LINE_CHARS = 1 << 20  # a longer line is malformed (bounds memory on damaged files)
 #: most blank or comment lines in a row a log may hold: a log's header comments are tens of lines, and a
@@ -97,7 +111,8 @@ class ReadStats:
     """What a pass over a log met.
 
     Attributes:
-        messages: lines per message kind (every kind, read or not).
+        messages: lines per message kind, read or not: every kind this reader knows, other kinds up
+            to ``MAX_MESSAGE_KINDS`` of them (the rest under ``OTHER_KINDS``, "other").
         skipped: the bad lines skipped under ``skip_bad_lines``: (line number, reason).
         stopped: why reading ended early (undecompressable data under ``skip_bad_lines``), or None.
         laser: the laser message kind read (see ``topic``), None before the first one.
@@ -107,6 +122,14 @@ class ReadStats:
     skipped: list[tuple[int, str]] = field(default_factory=list)
     stopped: str | None = None
     laser: str | None = None
+
+    def count(self, kind: str) -> None:
+        """Count a line of a message kind: the kinds this reader knows always, others up to
+        ``MAX_MESSAGE_KINDS`` of them, then under ``OTHER_KINDS`` (1,000,000 unique names peaked at 88 MB)."""
+        messages = self.messages
+        if kind not in messages and kind not in KNOWN_KINDS and len(messages) >= MAX_MESSAGE_KINDS:
+            kind = OTHER_KINDS
+        messages[kind] = messages.get(kind, 0) + 1
 
     def other_lasers(self) -> dict[str, int]:
         """Laser message kinds in the log that were not read (kind -> lines)."""
@@ -335,13 +358,25 @@ class CarmenReader:
                 continue
             blank.reset()
             kind = words[0]
-            stats.messages[kind] = stats.messages.get(kind, 0) + 1
+            named = kind in KNOWN_KINDS or _MESSAGE_NAME.fullmatch(kind) is not None
+            if named:
+                stats.count(kind)
+            # a TRUEPOS pose is the truth of the laser line directly after it (PARAM lines aside): any
+            # other line between (ODOM, another laser kind, a malformed line) drops it
+            held, truth = truth, None
             try:
+                if not named:  # 30 MB of random bytes after a log were read as 207k message kinds, none skipped
+                    shown = kind if len(kind) <= 24 else kind[:24] + "..."
+                    kind = "message"
+                    raise ValueError(f"it starts with {shown!r}, which is no CARMEN message name (FLASER, ODOM, "
+                                     "PARAM, ...: capitals, digits and '_'); junk or a damaged line")
                 if kind == "PARAM":
                     units, has_odometry = _param(words, params, units, has_odometry)
+                    truth = held
                 elif kind == "TRUEPOS":
-                    truth = _pose(words, 1, "TRUEPOS")
+                    pose = _pose(words, 1, "TRUEPOS")
                     _require(len(words) >= 8, "TRUEPOS needs at least 7 numbers")
+                    truth = pose
                 elif kind == "ODOM":
                     _require(len(words) >= 8, "ODOM needs x y theta tv rv accel timestamp")
                     _floats(words[1:8], "ODOM")
@@ -355,7 +390,9 @@ class CarmenReader:
                     odom: Pose2D | None
                     if kind in ("FLASER", "RLASER"):
                         geometry = self.geometry.merged(laser_geometry.from_params(kind, params))
-                        scan, odom = _parse_flaser(words, units, geometry, params.get(RANGE_MIN_PARAM, 0.0))
+                        exact_min, exact_step = EXACT_GEOMETRY_NAMES[kind]
+                        exact = (params.get(exact_min), params.get(exact_step))
+                        scan, odom = _parse_flaser(words, units, geometry, params.get(RANGE_MIN_PARAM, 0.0), exact)
                     else:
                         scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
                                                        params.get(RANGE_MIN_PARAM, 0.0))
@@ -364,9 +401,7 @@ class CarmenReader:
                         _require(first[0] == len(scan),
                                  f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
                                  f"field of view and resolution carries {first[0]}")
-                    rec = Record(scan=scan, odom=odom if has_odometry else None, truth=truth)
-                    truth = None
-                    yield rec
+                    yield Record(scan=scan, odom=odom if has_odometry else None, truth=held)
             except (ValueError, OverflowError, ArithmeticError) as exc:
                 self._bad(line_no, kind, exc)
         if self.topic is not None and not stats.messages.get(self.topic) and stats.other_lasers():
@@ -403,6 +438,8 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
         units = value  # type: ignore[assignment]
     elif name == ODOMETRY_PARAM:
         has_odometry = value != "absent"
+    elif name in EXACT_GEOMETRY_PARAMS:
+        params[name] = float(_floats([value], name)[0])
     elif name == RANGE_MIN_PARAM:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number >= 0, f"{name} must be a finite number >= 0 (m), got {value!r}")
@@ -488,7 +525,8 @@ def _ranges(values: np.ndarray, units: Units | None, what: str) -> tuple[np.ndar
 
 
 def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry,
-                  range_min: float = 0.0) -> tuple[Scan, Pose2D]:
+                  range_min: float = 0.0,
+                  exact: tuple[float | None, float | None] = (None, None)) -> tuple[Scan, Pose2D]:
     kind = words[0]
     _require(len(words) >= 2, f"{kind} needs a beam count")
     n = _count(words[1], "beam count")
@@ -497,9 +535,18 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     ranges, u = _ranges(_floats(words[2 : 2 + n], f"{kind} ranges"), units, kind)
     tail = _floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
+    angle_min, increment = _exact_or_snapped(angle_min, exact[0]), _exact_or_snapped(increment, exact[1], n)
     range_max = geometry.range_max if geometry.range_max is not None else LMS200_MAX_RANGE[u]
-    scan = Scan(ranges, snap_angle(angle_min), snap_angle(increment, n), range_min, range_max, float(tail[6]))
+    scan = Scan(ranges, angle_min, increment, range_min, range_max, float(tail[6]))
     return scan, _pose(words, 2 + n + 3, f"{kind} odometry")
+
+
+def _exact_or_snapped(angle: float, exact: float | None, beams: int = 1) -> float:
+    """The exact angle a ``PARAM lmsbench_*_laser_angle_*`` line gives where it agrees with the one
+    rebuilt from degrees, else that one snapped onto the 0.05 deg grid (:func:`snap_angle`)."""
+    if exact is not None and abs(exact - angle) <= EXACT_GEOMETRY_AGREEMENT * max(1.0, abs(angle)):
+        return exact
+    return snap_angle(angle, beams)
 
 
 def _parse_robotlaser(words: list[str], units: Units | None, range_max_override: float | None,
@@ -562,9 +609,16 @@ def _format_ranges(scan: Scan, units: Units) -> str:
     return " ".join(f"{v:.{decimals}f}" for v in r)
 
 
+def _num(value: float) -> str:
+    """A float as the shortest plain decimal that reads back as the same float64 (no exponent, for
+    CARMEN tools): 6 decimals lost precision (a stamp 1700000000.1234567 came back 238 ns off,
+    3.0000004 as 3.0; 1024 beams at 2 pi / 1024 rad ended 7.9e-5 rad off; a review's reproduction)."""
+    return np.format_float_positional(float(value), unique=True, trim="0")
+
+
 def _pose_text(pose: Pose2D | None) -> str:
     x, y, t = pose if pose is not None else (0.0, 0.0, 0.0)
-    return f"{x:.6f} {y:.6f} {t:.6f}"
+    return f"{_num(x)} {_num(y)} {_num(t)}"
 
 
 def _flaser_params(scan: Scan) -> dict[str, str]:
@@ -583,7 +637,9 @@ def _flaser_params(scan: Scan) -> dict[str, str]:
             f"at {res:.3f} deg (not centred ahead); use fmt='robotlaser1'"
         )
     names = laser_geometry.PARAM_NAMES["FLASER"]
-    return {names[0]: repr(res), names[1]: repr(fov), names[2]: repr(scan.range_max)}
+    exact = EXACT_GEOMETRY_NAMES["FLASER"]
+    return {names[0]: _num(res), names[1]: _num(fov), names[2]: _num(scan.range_max),
+            exact[0]: _num(scan.angle_min), exact[1]: _num(scan.angle_increment)}
 
 
 def write_carmen(
@@ -602,9 +658,12 @@ def write_carmen(
     (a valid reading that would round onto 8183 .. 8191 units as 8182, so it reads back valid); a ``PARAM lmsbench_range_units`` line records
     the unit, and ``PARAM lmsbench_odometry absent|present`` lines mark records without odometry
     (their pose fields are written as zeros); no CARMEN laser line has a range_min field, so a
-    ``PARAM lmsbench_range_min`` line gives it (exactly, ``repr``) before the first scan whose
+    ``PARAM lmsbench_range_min`` line gives it before the first scan whose
     range_min differs from the one before (0 before the first scan, as the reader assumes). ``flush=True`` pushes every scan to the file as soon
     as it is written (for recorders: a crash or Ctrl-C loses nothing already received).
+    Stamps, poses, angles and PARAM values are written as the shortest plain decimal that reads back
+    as the same float64 (FLASER logs also get ``PARAM lmsbench_front_laser_angle_min / _increment``
+    in rad), so a scan written and read back is equal to it.
     Returns the number of scans written.
     """
     if fmt not in ("robotlaser1", "flaser"):
@@ -634,10 +693,8 @@ def write_carmen(
                 f.write(f"PARAM {ODOMETRY_PARAM} {'present' if odometry else 'absent'} {hostname} 0\n")
             if scan.range_min != range_min:
                 range_min = scan.range_min
-                f.write(f"PARAM {RANGE_MIN_PARAM} {range_min!r} {hostname} 0\n")
-            stamp = f"{scan.stamp:.6f} {hostname} {scan.stamp:.6f}"
-            if rec.truth is not None:
-                f.write(f"TRUEPOS {_pose_text(rec.truth)} {_pose_text(rec.odom)} {stamp}\n")
+                f.write(f"PARAM {RANGE_MIN_PARAM} {_num(range_min)} {hostname} 0\n")
+            stamp = f"{_num(scan.stamp)} {hostname} {_num(scan.stamp)}"
             ranges = _format_ranges(scan, u)
             odom = _pose_text(rec.odom)
             if fmt == "flaser":
@@ -646,12 +703,15 @@ def write_carmen(
                     flaser_params = params
                     for name, value in params.items():
                         f.write(f"PARAM {name} {value} {hostname} 0\n")
+            if rec.truth is not None:  # directly before its laser line, as the reader takes it
+                f.write(f"TRUEPOS {_pose_text(rec.truth)} {_pose_text(rec.odom)} {stamp}\n")
+            if fmt == "flaser":
                 f.write(f"FLASER {len(scan)} {ranges} {odom} {odom} {stamp}\n")
             else:
                 fov = scan.angle_max - scan.angle_min
                 f.write(
-                    f"ROBOTLASER1 0 {scan.angle_min:.6f} {fov:.6f} {scan.angle_increment:.6f} "
-                    f"{scan.range_max:.6f} {metres_per_unit(u):.6f} 0 {len(scan)} {ranges} 0 "
+                    f"ROBOTLASER1 0 {_num(scan.angle_min)} {_num(fov)} {_num(scan.angle_increment)} "
+                    f"{_num(scan.range_max)} {_num(metres_per_unit(u))} 0 {len(scan)} {ranges} 0 "
                     f"{odom} {odom} 0.000000 0.000000 0.000000 0.000000 0.000000 {stamp}\n"
                 )
             count += 1

@@ -28,6 +28,7 @@ import serial
 
 from .codes import Units
 from .errors import InputError, LmsDeviceError, LmsLinkError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
+from .finite import float_of, shown
 from .framing import Frame, FrameParser
 from .protocol import (
     ACK,
@@ -86,30 +87,32 @@ def _check_arguments(baud: object, fov_deg: object, resolution_deg: object, unit
 
     def real(name: str, value: object) -> float:
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
-            raise InputError(f"{name}: must be a number, got {type(value).__name__} {value!r}")
-        return float(value)
+            raise InputError(f"{name}: must be a number, got {type(value).__name__} {shown(value)}")
+        return float_of(value, name, InputError)  # 10**400: OverflowError from float()
 
     def integer(name: str, value: object) -> int:
         if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-            raise InputError(f"{name}: must be an integer, got {type(value).__name__} {value!r}")
+            raise InputError(f"{name}: must be an integer, got {type(value).__name__} {shown(value)}")
         return int(value)
 
-    if isinstance(baud, bool) or baud not in BAUD_MODES:
-        raise InputError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {baud!r}")
+    # An int first: a list was a TypeError (unhashable), 9600.0 passed
+    if isinstance(baud, bool) or not isinstance(baud, numbers.Integral) or int(baud) not in BAUD_MODES:
+        raise InputError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {shown(baud)}")
     fov, res = real("fov_deg", fov_deg), real("resolution_deg", resolution_deg)
-    variant = (int(fov), int(round(res * 100))) if math.isfinite(fov) and math.isfinite(res) else None
+    ok = math.isfinite(fov) and math.isfinite(res * 100)  # 1e307 * 100 is inf: round() overflowed
+    variant = (int(fov), int(round(res * 100))) if ok else None
     if variant not in VARIANTS or fov != variant[0] or not math.isclose(res * 100, variant[1], abs_tol=1e-6):
-        raise InputError(f"fov_deg, resolution_deg: ({fov_deg!r} deg, {resolution_deg!r} deg) is not an LMS200 variant; "
-                         f"the variants are {_variant_names()} (0.25 deg only with 100 deg)")
-    if units not in ("mm", "cm"):
-        raise InputError(f"units: must be 'mm' or 'cm', got {units!r}")
+        raise InputError(f"fov_deg, resolution_deg: ({shown(fov_deg)} deg, {shown(resolution_deg)} deg) is not an LMS200 "
+                         f"variant; the variants are {_variant_names()} (0.25 deg only with 100 deg)")
+    if not isinstance(units, str) or units not in ("mm", "cm"):  # an array was numpy's ValueError (ambiguous truth)
+        raise InputError(f"units: must be 'mm' or 'cm', got {shown(units)}")
     if not 0 <= integer("address", address) <= MAX_ADDRESS:
-        raise InputError(f"address: must be in 0..{MAX_ADDRESS} (replies come from address + 0x80), got {address}")
+        raise InputError(f"address: must be in 0..{MAX_ADDRESS} (replies come from address + 0x80), got {shown(address)}")
     if integer("retries", retries) < 1:
-        raise InputError(f"retries: must be >= 1, got {retries}")
+        raise InputError(f"retries: must be >= 1, got {shown(retries)}")
     for name, value in (("timeout", timeout), ("mode_timeout", mode_timeout)):
         if not 0 < real(name, value) <= MAX_TIMEOUT_S:  # also nan
-            raise InputError(f"{name}: must be in (0, {MAX_TIMEOUT_S:g}] s, got {value}")
+            raise InputError(f"{name}: must be in (0, {MAX_TIMEOUT_S:g}] s, got {shown(value)}")
     return variant
 
 
@@ -161,6 +164,7 @@ class LMS200:
         password: bytes = PASSWORD,
     ) -> None:
         self.variant = _check_arguments(baud, fov_deg, resolution_deg, units, address, timeout, mode_timeout, retries)
+        baud = int(baud)  # numpy's int64 too
         self.port = port_or_url
         self.target_baud = baud
         self.units: Units = units
@@ -178,9 +182,12 @@ class LMS200:
         self._retries = 0
         self._last_rx = time.monotonic()
         self._backlog: list = []  # events read past a reply, handed out by the next _pump
-        # (stream offset after a read, host time.time() when the read returned), the newest reads
+        # (stream offset after a read, host time when the read returned), the newest reads
         self._reads: deque[tuple[int, float]] = deque(maxlen=_READS_KEPT)
-        self._last_end = -math.inf  # when the last scan telegram stamped ended (time.time())
+        self._last_end = -math.inf  # when the last scan telegram stamped ended (host time)
+        # Host time = time.monotonic() + this offset, taken once: a wall-clock step (NTP) while
+        # a backlog waits does not bend the stamps of the scans in it.
+        self._clock_offset = time.time() - time.monotonic()
         self._doing = "opening the port"  # for the message of a link that fails mid-use
         self._lost = False  # the port failed: close() only closes it
         try:
@@ -267,7 +274,7 @@ class LMS200:
         now = time.monotonic()
         if data:
             self._last_rx = now
-            self._reads.append((self.parser.received + len(data), time.time()))
+            self._reads.append((self.parser.received + len(data), now + self._clock_offset))
             return self.parser.feed(data)
         if self.parser.pending:
             quiet = now - self._last_rx
@@ -276,8 +283,8 @@ class LMS200:
         return []
 
     def _stamps(self, frames: list[Frame]) -> list[float]:
-        """Host time (``time.time()``) when each of ``frames`` (0xB0 telegrams in stream order)
-        began to arrive.
+        """Host time (``time.time()`` at open plus ``time.monotonic()`` since) when each of
+        ``frames`` (0xB0 telegrams in stream order) began to arrive.
 
         A frame's last byte arrived before the read that brought it returned, earlier by at least
         the line time of the bytes after it in that read; and telegrams in continuous mode are at
@@ -286,7 +293,13 @@ class LMS200:
         previous frame's end plus that spacing; its stamp is that end less its own line time. So
         scans read together (a backlog left while the consumer was busy) keep their spacing
         instead of sharing the time they were processed at. What the host cannot see is how long
-        a backlog waited in the port's buffer: its newest scans are stamped by the read."""
+        a backlog waited in the port's buffer: its newest scans are stamped by the read.
+
+        Telegrams can come faster than that spacing (a virtual device at ``time_scale`` < 1): where
+        it would put a frame past its read, the frame is put instead at an equal share of the time
+        between the previous frame's end and its read, one share per frame still to place, so
+        stamps stay strictly increasing and never later than their read (every frame of such a
+        read was pinned to the read's time: 359 of 399 stamp differences were exactly 0)."""
         byte_s = frame_seconds(1, self.baud)
         period = MIRROR_PERIOD_S * {100: 1, 50: 2, 25: 4}[self.variant[1]]
         ends, caps = [], []
@@ -296,15 +309,18 @@ class LMS200:
                 if end < frame.end:
                     break
                 found = (end, t)
-            end, t = found if found is not None else (frame.end, time.time())
+            end, t = found if found is not None else (frame.end, time.monotonic() + self._clock_offset)
             ends.append(t - (end - frame.end) * byte_s)
             caps.append(t)
         gaps = [max(len(f) * byte_s, period) for f in frames]
         for i in range(len(frames) - 2, -1, -1):  # the frames after one took their time to arrive
             ends[i] = min(ends[i], ends[i + 1] - gaps[i + 1])
         for i in range(len(frames)):
-            ends[i] = min(max(ends[i], self._last_end + gaps[i]), caps[i])
-            self._last_end = ends[i]
+            last = self._last_end
+            at = max(ends[i], last + gaps[i])
+            if at > caps[i] > last:  # closer than the spacing assumed: share the time up to the read
+                at = max(ends[i], last + (caps[i] - last) / (len(frames) - i))
+            ends[i] = self._last_end = at if at > last else math.nextafter(last, math.inf)
         return [e - len(f) * byte_s for e, f in zip(ends, frames)]
 
     def _request(self, payload: bytes, what: str, timeout: float | None = None, retries: int | None = None,
@@ -448,12 +464,16 @@ class LMS200:
 
         Raises:
             LmsTimeoutError: when no scan arrives for ``stall_timeout`` seconds (default: the
-                request timeout plus the line time of two telegrams).
+                request timeout plus the line time of two telegrams). The first scan after
+                continuous output was started gets ``mode_timeout`` on top (a mode change takes
+                up to 3 s, and a virtual device's source may take a second for its first scan).
         """
+        limit = stall_timeout if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
+        allowed = limit
         if not self.streaming:
             self._set_mode(MODE_CONTINUOUS, "start continuous output (0x20 0x24)")
+            allowed = limit + self.mode_timeout
         self._doing = "reading scans in continuous mode"
-        limit = stall_timeout if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
         last = time.monotonic()
         while stop is None or not stop():
             events = self._pump()
@@ -466,9 +486,9 @@ class LMS200:
                     self._decode_errors += 1
                     continue
                 self._scans += 1
-                last = now
+                last, allowed = now, limit
                 yield scan
-            if now - last > limit:
+            if now - last > allowed:
                 raise LmsTimeoutError(
                     f"no scan from {self.port} for {now - last:.2f} s in continuous mode at {self.baud} baud "
                     f"({self.parser.stats.dropped_frames} frames dropped so far)"

@@ -17,6 +17,19 @@ def float_of(value: object, name: str, error: type[Exception]) -> float:
         raise error(f"{name}: must be finite, got {overflow_text(value)}") from None
 
 
+def shown(value: object, most: int = 60) -> str:
+    """A user's value for a one-line message: its repr on one line (a 2-D array's took two), cut
+    to its start and end and its length past ``most`` characters (as the command line's
+    ``shorten_quoted``: a 400-digit address was echoed whole). An int too long to print (more
+    than 4,300 digits: Python refuses) is named by its size."""
+    try:
+        text = " ".join(repr(value).split())
+    except ValueError:
+        kind = type(value).__name__
+        return f"{'an' if kind[0] in 'aeiou' else 'a'} {kind} of more than 4300 digits"
+    return text if len(text) <= most else f"{text[:40]}...{text[-8:]} ({len(text)} characters)"
+
+
 def overflow_text(value: object) -> str:
     """How a value beyond float64 is named in a message: by its type, never printed."""
     return f"a {type(value).__name__} beyond float64's range"

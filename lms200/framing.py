@@ -5,7 +5,7 @@ device 0), read LEN, check LEN <= 812 and the CRC, and drop what fails by skippi
 byte and searching on, so a frame hidden behind a false start is still found. ACK / NAK bytes
 just before a frame (or ending what has arrived) are reported as handshake events in stream
 order; stray ones amid garbage are skipped with it, and so is the rest of a telegram that failed
-its CRC (its last byte is no handshake).
+its CRC, except its last byte when the telegram may have lost bytes (see ``_garbage``).
 
 A false start whose LEN reaches beyond the bytes received so far waits for more bytes; call
 :meth:`FrameParser.idle` when the line has gone quiet (a real device sends a frame without gaps;
@@ -85,6 +85,7 @@ class FrameParser:
         self._buf = bytearray()
         self._base = 0  # stream offset of the first byte held back
         self._shadow = 0  # held-back bytes that are the rest of a telegram with a bad CRC
+        self._shadow_open = False  # whether that telegram may have lost bytes (its last byte may be a handshake)
         self.received = 0  # bytes fed so far (the stream offset of the next byte)
         self.stats = ParserStats()
 
@@ -99,6 +100,7 @@ class FrameParser:
         self._base += len(self._buf)
         self._buf.clear()
         self._shadow = 0
+        self._shadow_open = False
 
     def feed(self, data: bytes) -> list[Event]:
         """Add received bytes; returns the complete frames and handshake bytes, in stream order.
@@ -141,17 +143,26 @@ class FrameParser:
         return [e for e in self.feed(data) if isinstance(e, Frame)]
 
     # -----------------------------------------------------------------------------------------
-    def _garbage(self, events: list[Event], garbage: bytes, shadowed: int = 0) -> None:
+    def _garbage(self, events: list[Event], garbage: bytes, shadowed: int = 0, open_end: bool = False) -> None:
         """Account for bytes outside frames. ACK / NAK bytes that end the run (just before a frame
         or at the end of what has arrived) are handshakes and become events in order; any other
         byte, an ACK / NAK value amid garbage included, is skipped garbage. So are the first
         ``shadowed`` bytes, the rest of a telegram that failed its CRC: its last byte (the CRC's
         high byte) is 0x06 or 0x15 once in 128 corrupted telegrams, and was taken for a handshake
-        (a fake NAK made the driver resend, a fake ACK hid a real NAK behind it)."""
+        (a fake NAK made the driver resend, a fake ACK hid a real NAK behind it).
+
+        Except when the telegram may have lost bytes (``open_end``: its CRC's low byte is wrong
+        too, so more than the high byte was hit): then LEN reached past its real end, and its last
+        byte may be the handshake that followed (one byte lost put a real NAK there, which was
+        swallowed and the request waited out its timeout). That byte is a handshake when it ends
+        the run (a second handshake after it is the real one). A NAK taken wrongly costs a resend;
+        one missed costs a timeout."""
         if not garbage:
             return
         cut = len(garbage)
         floor = min(max(shadowed, 0), cut)
+        if open_end and shadowed == cut and garbage[-1] in (ACK, NAK):
+            floor -= 1  # the telegram's span ends on the run's last byte: it may be a handshake
         while cut > floor and garbage[cut - 1] in (ACK, NAK):
             cut -= 1
         self.stats.skipped_bytes += cut
@@ -170,12 +181,13 @@ class FrameParser:
         sync = self._sync
         stats = self.stats
         shadow = self._shadow  # bytes before this index belong to a telegram that failed its CRC
+        open_end = self._shadow_open
         while True:
             start = buf.find(sync, pos)
             if start < 0:
                 # Keep a trailing STX: it may be the first byte of the next frame.
                 keep = size - 1 if size > pos and buf[size - 1] == STX else size
-                self._garbage(events, bytes(buf[pos:keep]), shadow - pos)
+                self._garbage(events, bytes(buf[pos:keep]), shadow - pos, open_end)
                 pos = keep
                 break
             # The candidate at `start`: waits for more bytes (None), fails, or is a good frame.
@@ -195,7 +207,7 @@ class FrameParser:
                     verdict = "good"
             if verdict == "good" and start < shadow:
                 shadow = pos  # a good frame inside the failed one: that was a false start, not a telegram
-            self._garbage(events, bytes(buf[pos:start]), shadow - pos)
+            self._garbage(events, bytes(buf[pos:start]), shadow - pos, open_end)
             pos = start
             if verdict is None:
                 break
@@ -206,7 +218,8 @@ class FrameParser:
                 continue
             if verdict == "bad_crc":
                 stats.bad_crc += 1
-                shadow = max(shadow, end)
+                if end > shadow:  # the low CRC byte right: only the high one was hit, LEN was right
+                    shadow, open_end = end, crc16(bytes(buf[start : end - 2])) & 0xFF != buf[end - 2]
             elif verdict == "bad_length":
                 stats.bad_length += 1
             else:
@@ -214,6 +227,7 @@ class FrameParser:
             stats.skipped_bytes += 1
             pos = start + 1
         self._shadow = max(0, shadow - pos)
+        self._shadow_open = open_end and self._shadow > 0
         del buf[:pos]
         self._base += pos
         return events

@@ -47,6 +47,8 @@ def snap_angle(value: float, beams: int = 1) -> float:
     step = np.deg2rad(ANGLE_GRID_DEG)
     snapped = float(np.round(value / step) * step)
     error = abs(snapped - value)
+    if error <= 4 * np.spacing(abs(snapped)):  # on the grid to float64 precision: kept exactly as given
+        return float(value)
     if error > SNAP_TEXT_ERROR_RAD + SNAP_RELATIVE_ERROR * abs(value):
         return float(value)
     if beams > 1 and (beams - 1) * error >= SNAP_MAX_DRIFT_BEAMS * abs(snapped):

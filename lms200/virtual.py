@@ -29,6 +29,7 @@ import numpy as np
 
 from .codes import Units, ranges_to_codes
 from .errors import InputError
+from .finite import shown
 from .protocol import (
     ACK,
     BAUD_MODES,
@@ -182,16 +183,20 @@ class VirtualLMS200:
         variant: tuple[int, int] = (180, 50),
     ) -> None:
         if not _is_real(time_scale):
-            raise InputError(f"time_scale: must be a number, got {type(time_scale).__name__} {time_scale!r}")
+            raise InputError(f"time_scale: must be a number, got {type(time_scale).__name__} {shown(time_scale)}")
         if not 0 < time_scale <= MAX_TIME_SCALE:  # also nan
-            raise InputError(f"time_scale: must be in (0, {MAX_TIME_SCALE:g}], got {time_scale}")
-        if not isinstance(variant, tuple) or variant not in VARIANTS:
-            raise InputError(f"variant: {variant!r} is not an LMS200 variant; the variants are (fov deg, resolution "
-                             f"1/100 deg) {', '.join(map(str, VARIANTS))} (25 = 0.25 deg only with 100 deg)")
-        if units not in UNITS_CODES:
-            raise InputError(f"units: must be 'mm' or 'cm', got {units!r}")
+            raise InputError(f"time_scale: must be in (0, {MAX_TIME_SCALE:g}], got {shown(time_scale)}")
+        # Two ints: ([180], 50) was a TypeError (unhashable), (180.0, 50) passed and a refused 0x3B
+        # later raised struct.error in receive()
+        if (not isinstance(variant, tuple) or len(variant) != 2 or not all(map(_is_integer, variant))
+                or variant not in VARIANTS):
+            raise InputError(f"variant: {shown(variant)} is not an LMS200 variant; the variants are (fov deg, resolution "
+                             f"1/100 deg, ints) {', '.join(map(str, VARIANTS))} (25 = 0.25 deg only with 100 deg)")
+        variant = (int(variant[0]), int(variant[1]))
+        if not isinstance(units, str) or units not in UNITS_CODES:  # a list was a TypeError (unhashable)
+            raise InputError(f"units: must be 'mm' or 'cm', got {shown(units)}")
         if not _is_integer(address) or not 0 <= address <= 0x7F:
-            raise InputError(f"address: must be an integer in 0..127 (replies come from address + 0x80), got {address!r}")
+            raise InputError(f"address: must be an integer in 0..127 (replies come from address + 0x80), got {shown(address)}")
         self._source: Iterator[Scan] = iter(source)
         self.address = address
         self.time_scale = float(time_scale)

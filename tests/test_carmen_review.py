@@ -150,3 +150,81 @@ def test_valid_readings_near_the_special_codes_stay_valid(tmp_path, fmt):
     far = Scan(np.array([8.183, 2.0, 8.19]), -0.05, 0.05, 0.0, 8.0)
     write_log(path, [Record(far)], fmt=fmt)
     assert not next(iter(read_log(path))).scan.valid[[0, 2]].any()
+
+
+def test_truth_is_only_the_truepos_line_directly_before_the_scan(tmp_path):
+    text = ("TRUEPOS 9 9 9 0 0 0 1 h 1\n" + _flaser("1.00 bad 3.00", stamp="1") + _flaser(stamp="2")
+            + "TRUEPOS 7 7 7 0 0 0 100 h 100\n" + "ODOM 0 0 0 0 0 0 150 h 150\n" * 3 + _flaser(stamp="500")
+            + "TRUEPOS 6 6 6 0 0 0 600 h 600\nRLASER 3 1 2 3 0 0 0 0 0 0 600 h 600\n" + _flaser(stamp="600")
+            + "TRUEPOS 5 5 5 0 0 0 700 h 700\nPARAM laser_front_laser_fov 180 h 0\n# a comment\n" + _flaser(stamp="700"))
+    reader = read_log(_write(tmp_path, "t.log", text), skip_bad_lines=True, topic="FLASER")
+    # was: (2.0, (9, 9, 9)) across a skipped malformed line, (500.0, (7, 7, 7)) across ODOM lines 400 s
+    # later, (600.0, (6, 6, 6)) across an RLASER line
+    assert [(r.scan.stamp, r.truth) for r in reader] == [(2.0, None), (500.0, None), (600.0, None),
+                                                        (700.0, (5.0, 5.0, 5.0))]
+    assert reader.stats.skipped == [(2, "FLASER: FLASER ranges: 'bad' is not a number")]
+
+
+def test_writer_puts_truepos_directly_before_its_laser_line(tmp_path):
+    path = tmp_path / "w.log"
+    recs = [Record(Scan(np.ones(3), -0.1, 0.1, 0.0, 8.0, stamp=t), odom=(t, 0.0, 0.0), truth=truth)
+            for t, truth in ((1.0, (1.0, 2.0, 3.0)), (2.0, None), (3.0, (4.0, 5.0, 6.0)))]
+    write_log(path, recs, fmt="flaser")
+    lines = [ln.split()[0] for ln in path.read_text().splitlines() if not ln.startswith("#")]
+    assert [lines[i + 1] for i, k in enumerate(lines) if k == "TRUEPOS"] == ["FLASER", "FLASER"]
+    assert [r.truth for r in read_log(path)] == [(1.0, 2.0, 3.0), None, (4.0, 5.0, 6.0)]
+
+
+@pytest.mark.parametrize("fmt", ["robotlaser1", "flaser"])
+def test_round_trip_is_exact(tmp_path, fmt):
+    path = tmp_path / "rt.log"
+    scans = [Scan(np.full(1024, 2.0), -math.pi, 2 * math.pi / 1024, 0.0, 30.0, stamp=1700000000.1234567),
+             Scan(np.full(5, 2.0), -0.1, 0.05, 1e-5, 30.0, stamp=3.0000004),
+             Scan(np.full(361, 2.0), -math.pi / 2, math.pi / 360, 0.0, 30.0, stamp=3.5)]
+    if fmt == "flaser":  # FLASER carries scans centred ahead only
+        scans[0] = scans[0].replace(angle_min=-(1023 / 2) * scans[0].angle_increment)
+    recs = [Record(s, odom=(1.23456789, -2.0, 1e-7), truth=(0.1234567891, 3.0000004, -3.5)) for s in scans]
+    write_log(path, recs, fmt=fmt)
+    text = path.read_text()
+    assert "e-" not in text and "e+" not in text  # plain decimals, as CARMEN tools read them
+    back = list(read_log(path))
+    # was: stamps 238 ns off (3.0000004 as 3.0), poses to 6 decimals, ROBOTLASER1 1024 beams' last one
+    # 7.9e-5 rad off, FLASER angle_min -0.1 as -0.10000000000000002
+    for a, b in zip(recs, back):
+        assert b.scan == a.scan and b.odom == a.odom and b.truth == a.truth
+    assert back[1].scan.angle_min == -0.1 and back[0].scan.stamp == 1700000000.1234567
+
+
+def test_flaser_exact_geometry_params_yield_to_an_override(tmp_path):
+    path = tmp_path / "o.log"
+    write_log(path, [Record(Scan(np.full(5, 2.0), -0.1, 0.05, 0.0, 8.0))], fmt="flaser")
+    assert "PARAM lmsbench_front_laser_angle_min -0.1 " in path.read_text()
+    scan = next(iter(read_log(path, geometry=LaserGeometry(fov=math.radians(4.0), resolution=math.radians(1.0))))).scan
+    assert scan.angle_increment == math.radians(1.0) and scan.angle_min == pytest.approx(-math.radians(2.0))
+
+
+def test_junk_lines_are_bad_lines_and_message_kinds_are_bounded(tmp_path):
+    from lms200.carmen import MAX_MESSAGE_KINDS
+    # unknown but valid messages (NEFF in Intel / ACES; NMEA, SYNC, other CARMEN messages) are skipped, counted
+    valid = "".join(f"{k} 1 2 3\n" for k in ("NEFF", "NMEA", "SYNC", "GPSNMEA", "BASE_VELOCITY"))
+    reader = read_log(_write(tmp_path, "k.log", _flaser() + valid + _flaser()))
+    assert len(list(reader)) == 2 and reader.stats.skipped == []
+    assert reader.stats.messages == {"FLASER": 2, "NEFF": 1, "NMEA": 1, "SYNC": 1, "GPSNMEA": 1, "BASE_VELOCITY": 1}
+    # a line that starts with no message name: was counted as a "kind" (1,000,000 junk lines peaked at 88 MB;
+    # 30 MB of random bytes after Intel gave 207k kinds and no skipped line)
+    junk = _flaser() + "".join(f"W{i:x}q 1 2 3\n" for i in range(5)) + "\x00\x93garbage\n" + _flaser()
+    path = _write(tmp_path, "j.log", junk)
+    with pytest.raises(LogFormatError) as err:
+        list(read_log(path))
+    assert str(err.value) == (f"{path}:2: malformed message line: it starts with 'W0q', which is no CARMEN message "
+                              "name (FLASER, ODOM, PARAM, ...: capitals, digits and '_'); junk or a damaged line")
+    reader = read_log(path, skip_bad_lines=True)
+    assert len(list(reader)) == 2 and [at for at, _ in reader.stats.skipped] == [2, 3, 4, 5, 6, 7]
+    assert reader.stats.messages == {"FLASER": 2}
+    # message names are counted one by one up to MAX_MESSAGE_KINDS kinds, the rest as "other"
+    many = _flaser() + "".join(f"KIND{i} 1\n" for i in range(200)) + "ODOM 0 0 0 0 0 0 1 h 1\n" + _flaser()
+    reader = read_log(_write(tmp_path, "m.log", many))
+    assert len(list(reader)) == 2
+    messages = reader.stats.messages
+    assert len(messages) == MAX_MESSAGE_KINDS + 2 and messages["other"] == 200 - (MAX_MESSAGE_KINDS - 1)
+    assert messages["ODOM"] == 1 and messages["FLASER"] == 2

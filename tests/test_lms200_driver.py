@@ -372,3 +372,141 @@ def test_a_corrupted_telegram_ending_in_0x15_is_no_nak_and_one_ending_in_0x06_hi
     lms.close()
     assert sum(w[4:6] == b"\x20\x25" for w in port.writes) == 2  # once at opening, once at close
     assert lms.stats.retries == 1 and lms.parser.stats.naks == 1 and lms.parser.stats.bad_crc == 2
+
+
+def test_a_slow_first_scan_is_waited_for_but_a_later_stall_is_not(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 32c (slow500.py): the virtual device builds its first scan only after the 0x24 reply
+    (the office simulator's first takes 0.85 s), so the first scan fell inside the stall limit of
+    scans() (timeout + 2 line times: 0.23 s here, 0.53 s at the default timeout) and scans() raised
+    LmsTimeoutError 'no scan ... for 0.53 s'; `record --baud 500000` failed 2 runs of 8. The first
+    scan after starting continuous output now gets mode_timeout on top; later stalls do not."""
+    from lms200_fake_port import answer, fake_port, scan_frame
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":  # the first scan 0.6 s after the reply, the second 0.6 s later
+            return [*answer(payload), (0.6, scan_frame(1000)), (1.2, scan_frame(1001))]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=500000, probe=False, timeout=0.2, mode_timeout=1.0)
+    it = lms.scans()
+    assert next(it).ranges[0] == pytest.approx(1.0)  # old: LmsTimeoutError after 0.23 s
+    with pytest.raises(LmsTimeoutError, match=r"no scan from fake:// for 0\.2\d s in continuous mode at 500000 baud"):
+        next(it)
+    lms.close()
+
+
+def test_a_nak_behind_a_scan_that_lost_a_byte_is_resent_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 32c (nakdrop.py): close() while streaming; the device NAKs the stop request right
+    behind a scan telegram that lost one byte on the line. The parser took the NAK for the
+    broken telegram's CRC byte: close() waited out its timeout (1.94 s, naks 0) before resending."""
+    import time
+
+    from lms200_fake_port import answer, fake_port, scan_frame
+
+    sf = scan_frame()
+    plan = {"stop": 0}
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x25":
+            plan["stop"] += 1
+            if plan["stop"] == 2:  # close()'s stop request
+                return [(0.0, sf[:100] + sf[101:] + b"\x15" + sf + sf)]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False, timeout=0.5, mode_timeout=1.0)
+    lms.streaming = True
+    t = time.monotonic()
+    lms.close()
+    assert time.monotonic() - t < 0.5  # old: 1.94 s
+    assert (lms.stats.retries, lms.parser.stats.naks) == (1, 1)  # old: (1, 0)
+
+
+def test_scans_faster_than_the_assumed_spacing_keep_distinct_stamps_through_a_clock_step(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 32c (scaled.py, jump.py): each stamp was held at least one line time after the one
+    before but no later than its read, so telegrams coming faster than that (emulate
+    --time-scale 0.01: 359 of 399 differences exactly 0) were all pinned to their read's time; and
+    read times were time.time(), so a wall clock stepped back 0.5 s during a backlog gave
+    differences of 0 0 0 0 0 0. Now a read is timed by time.monotonic() plus one offset taken at
+    open, and frames that do not fit share the time between the previous frame and their read."""
+    import time
+
+    from lms200 import driver
+    from lms200_fake_port import answer, fake_port, scan_frame
+
+    line_s = 732 * 10 / 9600  # 762.5 ms a telegram at 9600 baud: far more than the 0.1 s between reads
+    shift = [0.0]
+
+    class SteppedClock:  # the time module, with a wall clock that NTP can step
+        def __getattr__(self, name: str) -> object:
+            return getattr(time, name)
+
+        def time(self) -> float:
+            return time.time() + shift[0]
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":  # 5 scans waiting at once, 3 more 0.1 s later
+            return [*answer(payload), (0.05, b"".join(scan_frame(1000 + i) for i in range(5))),
+                    (0.15, b"".join(scan_frame(2000 + i) for i in range(3)))]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    monkeypatch.setattr(driver, "time", SteppedClock())
+    lms = LMS200("fake://", baud=9600, probe=False)
+    stamps = []
+    for scan in itertools.islice(lms.scans(), 8):
+        stamps.append(scan.stamp)
+        if len(stamps) == 5:
+            shift[0] = -0.5  # the wall clock steps back while the next scans wait
+    diffs = np.diff(stamps)
+    np.testing.assert_allclose(diffs[:4], line_s, atol=1e-6)  # a backlog keeps the line's spacing
+    assert diffs[4:].min() > 0.02  # old: 0, 0 (all three pinned to their read's time)
+    np.testing.assert_allclose(diffs[4:], diffs[4:].mean(), atol=1e-5)  # an equal share each
+    assert 0.08 < diffs[4:].sum() < 0.5  # the time between the two reads (0.1 s apart)
+    lms.close()
+
+
+def test_arguments_of_the_wrong_shape_or_size_are_one_line_input_errors() -> None:
+    """Review 32c (fuzz of the constructors): baud=[9600] raised TypeError (unhashable),
+    resolution_deg=1e307 OverflowError (round(inf)), 10**400 for a number OverflowError from
+    float(), units=np.array(['mm', 'cm']) numpy's ValueError (ambiguous truth); the virtual
+    device's units=['mm'] and variant=([180], 50) TypeError, and variant=(180.0, 50) was taken,
+    then a refused 0x3B raised struct.error in receive(); timeout=np.zeros((2, 2)) gave a
+    two-line message and a 400-digit address was echoed whole. Each is now an InputError of
+    one short line naming the argument."""
+    from lms200.errors import InputError
+    from lms200.protocol import build_frame
+
+    huge = 10**400
+    cases = [
+        ({"baud": [9600]}, "baud: the LMS200 supports [9600, 19200, 38400, 500000], got [9600]"),
+        ({"baud": 9600.0}, "baud: the LMS200 supports [9600, 19200, 38400, 500000], got 9600.0"),
+        ({"resolution_deg": 1e307}, "fov_deg, resolution_deg: (180 deg, 1e+307 deg) is not an LMS200 variant"),
+        ({"resolution_deg": huge}, "resolution_deg: must be finite, got a int beyond float64's range"),
+        ({"fov_deg": huge}, "fov_deg: must be finite, got a int beyond float64's range"),
+        ({"timeout": huge}, "timeout: must be finite, got a int beyond float64's range"),
+        ({"units": np.array(["mm", "cm"])}, "units: must be 'mm' or 'cm', got array(['mm', 'cm'], dtype='<U2')"),
+        ({"timeout": np.zeros((2, 2))}, "timeout: must be a number, got ndarray array([[0., 0.], [0., 0.]])"),
+        ({"address": huge}, "address: must be in 0..127 (replies come from address + 0x80), got "
+                            f"{'1' + '0' * 39}...00000000 (401 characters)"),
+        ({"address": 10**5000}, "address: must be in 0..127 (replies come from address + 0x80), got an int of more "
+                                "than 4300 digits"),
+    ]
+    for kw, message in cases:
+        with pytest.raises(InputError) as info:
+            LMS200("loop://", **kw)
+        assert str(info.value) == message or str(info.value).startswith(message + ";"), (kw, str(info.value))
+    variants = "(180, 100), (180, 50), (100, 100), (100, 50), (100, 25)"
+    for kw, message in [({"units": ["mm"]}, "units: must be 'mm' or 'cm', got ['mm']"),
+                        ({"variant": ([180], 50)}, f"variant: ([180], 50) is not an LMS200 variant; the variants are "
+                                                   f"(fov deg, resolution 1/100 deg, ints) {variants}"),
+                        ({"variant": (180.0, 50)}, "variant: (180.0, 50) is not an LMS200 variant"),
+                        ({"time_scale": np.zeros((2, 2))}, "time_scale: must be a number, got ndarray array([[0., 0.], [0., 0.]])")]:
+        with pytest.raises(InputError, match=f"^{re.escape(message)}"):
+            VirtualLMS200([], **kw)
+    dev = VirtualLMS200([], variant=(np.int64(100), np.int64(25)))  # numpy ints are ints: kept as Python ints
+    assert dev.variant == (100, 25) and type(dev.variant[0]) is int
+    dev.receive(build_frame(b"\x3b\xb4\x00\x19\x00"), 0.0)  # 180 deg at 0.25 refused: the reply carries the current variant
+    assert dev.transmit(1.0)[-1][0][4:10] == b"\xbb\x00\x64\x00\x19\x00"

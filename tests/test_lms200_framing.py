@@ -146,3 +146,33 @@ def test_the_crc_byte_of_a_corrupted_telegram_is_no_handshake() -> None:
     false_start = bytes([0x02, 0x80, 0x0A, 0x00, 0x00])  # LEN 10 spans the ACK and part of the reply
     p = FrameParser()
     assert p.feed(false_start + bytes([ACK]) + good + bytes(8)) == [ACK, Frame(0x80, b"\xa0\x00\x10")]
+
+
+def test_a_nak_behind_a_telegram_that_lost_a_byte_is_still_a_nak() -> None:
+    """Review 32c (nakvar.py): a scan telegram that lost one byte on the line reaches, by its LEN,
+    one byte further: onto the NAK behind it, which was skipped as the failed telegram's CRC byte
+    (NAK seen False for '1 byte lost' and 'LEN+1'; the request waited out its timeout). The span's
+    last byte is a handshake when the telegram's CRC low byte is wrong too (so more than the high
+    byte was hit); a telegram whose only fault is its CRC high byte still hides none."""
+    from lms200.protocol import encode_measurement
+
+    scan = frame(encode_measurement(np.full(361, 1000, np.uint16), "mm"))
+    longer = bytearray(scan)
+    longer[2] += 1
+    cases = {"1 byte lost": scan[:100] + scan[101:], "LEN+1": bytes(longer)}
+    for name, bad in cases.items():
+        for tail in (scan, b""):
+            p = FrameParser()
+            events = p.feed(bad + bytes([NAK]) + tail)
+            assert events[0] == NAK, name  # old: no NAK
+            assert (p.stats.naks, p.stats.bad_crc, p.stats.frames) == (1, 1, 1 if tail else 0), name
+            assert p.stats.skipped_bytes + p.stats.naks + p.pending == len(bad) + 1
+    # The broken telegram's own last byte 0x06, then the real NAK: the NAK is the handshake.
+    p = FrameParser()
+    assert p.feed(cases["1 byte lost"][:-1] + bytes([ACK, NAK]) + scan)[0] == NAK and p.stats.acks == 0
+    # Only the CRC high byte hit (0x15 / 0x06): no handshake, as before.
+    for value in (NAK, ACK):
+        hit = bytearray(scan)
+        hit[-1] = value
+        p = FrameParser()
+        assert p.feed(bytes(hit) + scan) == [Frame(0x80, scan[4:-2])] and p.stats.acks + p.stats.naks == 0
