@@ -175,7 +175,7 @@ def _config(config: object) -> RealDataConfig:
 
 def check_measure_args(fs: FeatureSet | np.ndarray, scan: Scan, sigma: object, sigma_name: str) -> np.ndarray:
     """The arguments of the real-data measures: ``fs`` a FeatureSet (or its ``line_array()``) of
-    lines within ``scan``'s beams, ``scan`` a Scan, ``sigma`` (m) a finite number > 0 (the range noise; 0
+    lines within ``scan``'s beams, ``scan`` a Scan, ``sigma`` (m) a number in (0, MAX_SIGMA_M] (the range noise; 0
     explained only beams a line predicts to the last bit: (0.0, nan) on any real scan). Returns the
     lines as the measures read them (``_lines``), made once.
 
@@ -190,8 +190,10 @@ def check_measure_args(fs: FeatureSet | np.ndarray, scan: Scan, sigma: object, s
     if not isinstance(fs, np.ndarray):
         check_features(fs)
     if isinstance(sigma, (bool, np.bool_)) or not isinstance(sigma, (int, float, np.integer, np.floating)) \
-            or not (checks.finite(sigma) and sigma > 0):  # checks.finite: 10**400 is no OverflowError
-        raise InputError(f"{sigma_name}: must be a finite number > 0 m (the range noise), got {sigma!r}")
+            or not (checks.finite(sigma) and 0 < sigma <= checks.MAX_SIGMA_M):  # checks.finite: 10**400 is no OverflowError
+        # above MAX_SIGMA_M, 3 sigma overflowed: sigma = 1e308 explained every covered beam, rms inf (fuzzing)
+        raise InputError(f"{sigma_name}: must be a finite number in (0, {checks.MAX_SIGMA_M:g}] m (the range noise), "
+                         f"got {sigma!r}")
     return _checked_lines(fs, scan)
 
 

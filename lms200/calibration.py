@@ -37,6 +37,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from .codes import METRES_PER_UNIT
+from .errors import InputError
 from .finite import check_seed
 from .noise import (BOOTSTRAP_RESAMPLES, RangeNoise, _bootstrap_scale, _remove_quantisation, estimate_quantum, scans_of,
                     estimate_range_noise, interlace_stride, line_residuals, robust_scale)
@@ -350,7 +351,9 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
     """Measure the error model of the laser behind ``scans`` (Scans or records with ``.scan``).
 
     Raises:
-        ValueError: for fewer than ``MIN_SCANS`` scans.
+        InputError: (an LmsbenchError and a ValueError; was a bare ValueError, found by fuzzing)
+            for fewer than ``MIN_SCANS`` scans, ``scans`` that are no Scans or records, or a
+            ``seed`` that is not a whole number >= 0.
     """
     check_seed(seed)
     kept: list[Scan] = []
@@ -359,7 +362,7 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
         if len(kept) >= MAX_SCANS:
             break
     if len(kept) < MIN_SCANS:
-        raise ValueError(f"scans: calibrating needs at least {MIN_SCANS} scans (standard errors are a bootstrap "
+        raise InputError(f"scans: calibrating needs at least {MIN_SCANS} scans (standard errors are a bootstrap "
                          f"over scans), got {len(kept)}")
     counts_n = np.bincount([len(s) for s in kept])
     n_beams = int(np.argmax(counts_n))

@@ -266,7 +266,7 @@ def test_calibration_of_too_few_scans_says_so_and_prints_no_nan() -> None:
     from sim import simulate_records
 
     scans = [r.scan for r in simulate_records("office", seed=0, duration=1.0, rate_hz=4)]
-    with pytest.raises(ValueError, match="^scans: calibrating needs at least 2 scans"):
+    with pytest.raises(InputError, match="^scans: calibrating needs at least 2 scans"):  # a bare ValueError
         calibrate_scans(scans[:1])
     cal = calibrate_scans([s.replace(ranges=np.where(np.isnan(s.ranges), 5.0, s.ranges)) for s in scans[:3]])
     assert np.isnan(cal.nan_clustering.value)  # no nan reading: nothing to measure
@@ -670,20 +670,22 @@ def test_score_scan_refuses_what_is_no_feature_set_or_truth() -> None:
             score_scan(f, t, c)  # type: ignore[arg-type]
 
 
-@pytest.mark.parametrize("sigma", [np.nan, -1.0, 0.0, np.inf, 10**400, "0.01", None, True])
+@pytest.mark.parametrize("sigma", [np.nan, -1.0, 0.0, np.inf, 10**400, "0.01", None, True, 1e308, 1000.001])
 def test_explained_fraction_sigma_must_be_a_range_noise(sigma: object) -> None:
     """nan, -1 and 0 returned (0.0, nan) and inf (1.0, inf), silently; 10**400 was an OverflowError
-    (review); text and None were TypeErrors."""
+    (review); text and None were TypeErrors; 1e308 (3 sigma overflowed) explained every covered
+    beam with an rms of inf (fuzzing, session 32): at most features.baselines.checks.MAX_SIGMA_M."""
     from features.realdata import scan_measures
     from features.scoring import explained_fraction
 
     fs, _, scan = _scored_scene()
-    with pytest.raises(InputError, match=r"^sigma: must be a finite number > 0 m"):
+    with pytest.raises(InputError, match=r"^sigma: must be a finite number in \(0, 1000\] m \(the range noise\)"):
         explained_fraction(fs, scan, sigma)  # type: ignore[arg-type]
-    with pytest.raises(InputError, match=r"^sigma_r: must be a finite number > 0 m"):
+    with pytest.raises(InputError, match=r"^sigma_r: must be a finite number in \(0, 1000\] m"):
         scan_measures(fs, scan, sigma)  # type: ignore[arg-type]
     frac, rms = explained_fraction(fs, scan, 0.005)
     assert 0.95 < frac <= 1.0 and 0.0 < rms < 0.005
+    assert explained_fraction(fs, scan, 1000.0)[0] >= frac  # the bound itself is a range noise
 
 
 def test_explained_fraction_of_another_scans_features() -> None:

@@ -347,3 +347,28 @@ def test_a_bag_whose_scans_share_one_time_is_read_in_bounded_memory(tmp_path: Pa
             tracemalloc.stop()
         assert out == [(i, 361) for i in range(3000)]  # each its own odometry (were all 2999 with one time)
     assert peaks["same"] < peaks["distinct"] + 4_000_000, peaks  # at most MAX_HELD = 256 scans wait (were 3,000)
+
+
+def test_a_scan_waits_for_its_poses_at_most_the_look_ahead_window_or_max_held() -> None:
+    """A pose topic that falls silent holds each scan for LOOKAHEAD_S of bag time, never longer,
+    and never more than MAX_HELD scans (a bag of one bag time); poses stamped after a scan are
+    never its own."""
+    from lms200.bag import LOOKAHEAD_S, MAX_HELD, _PoseMatcher
+
+    m = _PoseMatcher(["/odom"], tolerance_ns=50_000_000)
+    m.add_pose("/odom", 0, (0.0, 0.0, 0.0))
+    out = []
+    for k in range(40):  # 10 Hz scans, odometry silent after the first
+        ns = k * 100_000_000
+        m.add_scan(ns, _scan(ns * 1e-9), k, ns)
+        out += list(m.ready(ns))
+        assert len(m.held) <= LOOKAHEAD_S * 10 + 1
+    assert [i for i, _, _ in out] == list(range(40 - len(m.held)))
+    assert [p["/odom"] for _, _, p in out] == [(0.0, 0.0, 0.0)] + [None] * (len(out) - 1)
+    m = _PoseMatcher(["/odom"], tolerance_ns=1000)
+    for k in range(3 * MAX_HELD):  # one bag time, one stamp: poses that come after their scans
+        m.add_scan(5, _scan(5e-9), k, 5)
+        list(m.ready(5))
+        assert len(m.held) <= MAX_HELD
+    m.add_pose("/odom", 6, (1.0, 0.0, 0.0))  # stamped after every scan: none of theirs
+    assert [p["/odom"] for _, _, p in m.ready(None)] == [None] * MAX_HELD
