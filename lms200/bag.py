@@ -372,8 +372,9 @@ class _PoseMatcher:
 
     Scans are handed out in arrival order once every pose topic has shown a pose stamped after the
     scan, or ``LOOKAHEAD_S`` of bag time has passed, or more than ``MAX_HELD`` scans wait, so what
-    is held stays bounded (poses: those within ``tolerance_ns`` of a waiting scan, at most
-    ``MAX_POSES`` a topic).
+    is held stays bounded (poses: those stamped at most ``tolerance_ns`` plus ``LOOKAHEAD_S``
+    before the oldest waiting or last handed-out scan, so a scan arriving after others stamped
+    later still finds its pose; at most ``MAX_POSES`` a topic).
     """
 
     def __init__(self, topics: list[str], tolerance_ns: int) -> None:
@@ -420,7 +421,9 @@ class _PoseMatcher:
                 return
             held.popleft()
             yield h.index, h.scan, {topic: self._pose_for(topic, h) for topic in self.topics}
-            self._prune(min(h.stamp, held[0].stamp) if held else h.stamp)
+            # poses the held scans may use, and those of scans still to come stamped up to
+            # LOOKAHEAD_S before them (scans that arrive out of stamp order)
+            self._prune(min([h.stamp, *(g.stamp for g in held)]) - round(LOOKAHEAD_S * 1e9))
 
     def _pose_for(self, topic: str, h: _Held) -> Pose2D | None:
         if topic in h.pose:

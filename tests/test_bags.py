@@ -372,3 +372,21 @@ def test_a_scan_waits_for_its_poses_at_most_the_look_ahead_window_or_max_held() 
         assert len(m.held) <= MAX_HELD
     m.add_pose("/odom", 6, (1.0, 0.0, 0.0))  # stamped after every scan: none of theirs
     assert [p["/odom"] for _, _, p in m.ready(None)] == [None] * MAX_HELD
+
+
+def test_a_scan_arriving_after_a_later_stamped_one_still_gets_its_odometry(tmp_path: Path) -> None:
+    """Review 32 (t8.py): scans at 37.5 Hz arriving 60 ms after their stamp, two of them (50 and 51)
+    swapped, odometry at 100 Hz arriving 1 ms after its stamp (x = stamp): handing out scan 51
+    dropped every pose older than its stamp minus the tolerance, so scan 50 (stamped 2.3333 s),
+    coming next, got None instead of the pose stamped 2.33 s."""
+    period = Fraction(1, 375) * 10  # 37.5 scans/s
+    order = list(range(200))
+    order[50], order[51] = 51, 50
+    msgs = [("/scan", 1 + k * period + Fraction(6, 100), 1 + i * period, 1.0) for k, i in enumerate(order)]
+    msgs += [("/odom", Fraction(j, 100) + Fraction(1, 1000), Fraction(j, 100), (j / 100, 0.0, 0.0, 0.0, 0.0, 1.0))
+             for j in range(80, 700)]
+    msgs.sort(key=lambda m: m[1])
+    out = list(read_log(_ros2_bag(tmp_path / "b", msgs)))
+    assert [round(r.scan.stamp, 4) for r in out[49:53]] == [2.3067, 2.36, 2.3333, 2.3867]
+    assert [r.odom and r.odom[0] for r in out[49:53]] == [2.3, 2.36, 2.33, 2.38]
+    assert [r.odom[0] for r in out] == [math.floor(round(r.scan.stamp * 100, 6)) / 100 for r in out]
