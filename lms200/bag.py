@@ -204,17 +204,18 @@ def _scan_of(msg) -> Scan:  # noqa: ANN001
     )
 
 
-STAMP_EPS_S = 1e-6  # s: the least pose tolerance; scans this close in bag time have one stamp
+STAMP_EPS_S = 1e-6  # s: the least pose tolerance; scans stamped this close have one stamp
 
 
-def pose_tolerance(scan_times_ns: Iterable[int]) -> float:
+def pose_tolerance(scan_stamps_ns: Iterable[int]) -> float:
     """How far (s) a pose's stamp may lie before a scan's for the pose to be attached to the scan:
-    half the median period between consecutive scans (bag time; steps of ``STAMP_EPS_S`` or less,
-    such as ``write_bag``'s 1 ns between records of one stamp, are no period), at least
-    ``STAMP_EPS_S``; a single scan gets ``STAMP_EPS_S``."""
-    t = np.sort(np.fromiter(scan_times_ns, dtype=np.int64))
+    half the median period between consecutive scans by header stamp (the stamps matching compares;
+    bag times of a bulk-converted or bursty bag can lie microseconds apart), steps of
+    ``STAMP_EPS_S`` or less (scans of one stamp) being no period; at least ``STAMP_EPS_S``; a
+    single scan gets ``STAMP_EPS_S``."""
+    t = np.sort(np.fromiter(scan_stamps_ns, dtype=np.int64))
     periods = np.diff(t)
-    periods = periods[periods > STAMP_EPS_S * 1e9]  # a microsecond or less: one stamp (write_bag's 1 ns steps)
+    periods = periods[periods > STAMP_EPS_S * 1e9]  # a microsecond or less: one stamp
     if periods.size == 0:
         return STAMP_EPS_S
     return max(0.5 * float(np.median(periods)) * 1e-9, STAMP_EPS_S)
@@ -303,7 +304,7 @@ class BagReader:
             stats.laser = scans[0].topic
             poses = [c for c in reader.connections if c.msgtype in _POSE_TYPES and c.topic in (ODOM_TOPIC, TRUTH_TOPIC)]
             try:
-                tolerance = pose_tolerance(t for _, t, _ in reader.messages(connections=scans)) if poses else 0.0
+                tolerance = pose_tolerance(self._scan_stamps(reader, scans)) if poses else 0.0
             except Exception as exc:  # damaged chunks, bad index: rosbags' own exception types
                 self._fail(f"topic {stats.laser}", exc, 0, fatal=True)
                 return
@@ -333,6 +334,16 @@ class BagReader:
             yield from self._records(matcher.ready(None))
         finally:
             reader.close()
+
+    @staticmethod
+    def _scan_stamps(reader, scans: list) -> Iterator[int]:  # noqa: ANN001
+        """The header stamps (ns) of the scans, those that cannot be read left out (the pass that
+        reads them reports them)."""
+        for conn, _, raw in reader.messages(connections=scans):
+            try:
+                yield _header_ns(reader.deserialize(raw, conn.msgtype))
+            except Exception:  # noqa: BLE001, S112 - rosbags' own types; reported by the reading pass
+                continue
 
     def _records(self, matched: Iterable[tuple[int, Scan, dict[str, Pose2D | None]]]) -> Iterator[Record]:
         for index, scan, pose in matched:

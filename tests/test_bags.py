@@ -390,3 +390,28 @@ def test_a_scan_arriving_after_a_later_stamped_one_still_gets_its_odometry(tmp_p
     assert [round(r.scan.stamp, 4) for r in out[49:53]] == [2.3067, 2.36, 2.3333, 2.3867]
     assert [r.odom and r.odom[0] for r in out[49:53]] == [2.3, 2.36, 2.33, 2.38]
     assert [r.odom[0] for r in out] == [math.floor(round(r.scan.stamp * 100, 6)) / 100 for r in out]
+
+
+@pytest.mark.parametrize("arrival", ["bulk", "bursts"])
+def test_the_pose_tolerance_comes_from_header_stamps_not_bag_times(tmp_path: Path, arrival: str) -> None:
+    """Review 32 (t6.py, t7.py): 200 scans stamped at 37.5 Hz, each with odometry stamped 1 ms
+    before it (x = its index), bag times 1 us apart (a bulk-converted bag) or scans delivered in
+    bursts of 4 0.1 ms apart: the tolerance came from bag times (1 us) while matching compares
+    header stamps, so all 200 scans got odom=None; now the tolerance is 13.3 ms and each scan gets
+    its odometry."""
+    from lms200.bag import pose_tolerance
+
+    period = Fraction(1, 375) * 10
+    msgs = []
+    for i in range(200):
+        stamp = 1 + i * period
+        if arrival == "bulk":
+            msgs += [("/odom", 1 + Fraction(2 * i, 10**6), stamp - Fraction(1, 1000), (float(i), 0.0, 0.0, 0.0, 0.0, 1.0)),
+                     ("/scan", 1 + Fraction(2 * i + 1, 10**6), stamp, 1.0)]
+        else:
+            msgs += [("/scan", 1 + (i // 4 + 1) * 4 * period + (i % 4) * Fraction(1, 10**4), stamp, 1.0),
+                     ("/odom", stamp + Fraction(1, 1000), stamp - Fraction(1, 1000), (float(i), 0.0, 0.0, 0.0, 0.0, 1.0))]
+    msgs.sort(key=lambda m: m[1])
+    out = list(read_log(_ros2_bag(tmp_path / "b", msgs)))
+    assert [r.odom and r.odom[0] for r in out] == [float(i) for i in range(200)]
+    assert pose_tolerance(round(r.scan.stamp * 1e9) for r in out) == pytest.approx(0.5 / 37.5, abs=1e-9)
