@@ -415,3 +415,14 @@ def test_the_pose_tolerance_comes_from_header_stamps_not_bag_times(tmp_path: Pat
     out = list(read_log(_ros2_bag(tmp_path / "b", msgs)))
     assert [r.odom and r.odom[0] for r in out] == [float(i) for i in range(200)]
     assert pose_tolerance(round(r.scan.stamp * 1e9) for r in out) == pytest.approx(0.5 / 37.5, abs=1e-9)
+
+
+def test_odometry_slower_than_twice_the_scan_rate_leaves_some_scans_without_it(tmp_path: Path) -> None:
+    """The documented limit (review 32, t1.py): 300 scans at 37.5 Hz (tolerance 13.3 ms), odometry at
+    50 Hz (20 ms apart) 10 ms out of phase: every third scan's latest odometry is 16.7 ms before it,
+    beyond the tolerance, so 100 of 300 scans get None."""
+    out = list(read_log(_stream_bag(tmp_path / "b", 37.5, 0.002, 50, 0.003, odom_offset=-0.01, end=9.0)))
+    assert len(out) == 300
+    assert [r.odom is None for r in out] == [k % 3 == 1 for k in range(300)]
+    gaps = {round((r.scan.stamp - r.odom[0]) * 1000, 2) for r in out if r.odom is not None}
+    assert gaps == {10.0, 3.33}
