@@ -419,8 +419,8 @@ class CarmenReader:
                         _require(first[0] == len(scan),
                                  f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
                                  f"field of view and resolution carries {first[0]}")
-                    near = held is not None and abs(held[1] - scan.stamp) <= TRUTH_MAX_GAP_S
-                    yield Record(scan=scan, odom=odom if has_odometry else None, truth=held[0] if near else None)
+                    given = held[0] if held is not None and abs(held[1] - scan.stamp) <= TRUTH_MAX_GAP_S else None
+                    yield Record(scan=scan, odom=odom if has_odometry else None, truth=given)
             except (ValueError, OverflowError, ArithmeticError) as exc:
                 self._bad(line_no, kind, exc)
         if self.topic is not None and not stats.messages.get(self.topic) and stats.other_lasers():
