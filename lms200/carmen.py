@@ -18,9 +18,9 @@ Formats (one message a line, ``#`` comments; messages of other kinds, named in c
 - ``TRUEPOS true_x true_y true_theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp``
 
 Conventions: a scan's ``stamp`` is the message's ipc_timestamp; ``.odom`` is the robot pose the laser
-message carries (FLASER odom fields, ROBOTLASER1 robot fields); ``.truth`` is the pose of a TRUEPOS
-line directly preceding the laser message (PARAM lines aside: any other message line between, even a
-malformed one or another laser kind, drops it). SICK special codes stored as ranges (81.83 / 81.91 m in
+message carries (FLASER odom fields, ROBOTLASER1 robot fields); ``.truth`` is the pose of the last TRUEPOS
+line before the laser message (ODOM, PARAM, other laser kinds between do not matter), when no laser line of
+the kind read (even a malformed one) came between and their ipc_timestamps lie within TRUTH_MAX_GAP_S. SICK special codes stored as ranges (81.83 / 81.91 m in
 cm mode, 8.183 / 8.191 m in mm mode) map to +inf / nan (REP-117). The range unit comes from the
 ROBOTLASER1 accuracy field, a ``PARAM lmsbench_range_units mm|cm`` line (which this writer emits), or,
 for FLASER logs without it, from the values themselves (see :func:`infer_units`). No CARMEN laser line
@@ -92,6 +92,9 @@ PIPE_REASON = ("a log is read more than once (its first lines to choose the lase
                "bzip2 and xz logs are read as they are) or save the stream to a file first (zcat LOG > FILE)")
 DEFAULT_TOPIC_LINES = 10_000  # lines looked at to choose the default laser kind (and to tell junk from a log)
 _MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]{2,}")  # how every CARMEN message line starts (ODOM, PARAM, FLASER, ...; a lone capital in binary junk is none)
+# a TRUEPOS pose is the truth of the next scan of the kind read when their ipc_timestamps lie within
+# this (s): CARMEN's simulator logs them within a cycle (~0.1 s); a TRUEPOS long before its scan is stale
+TRUTH_MAX_GAP_S = 0.5
 KNOWN_KINDS = frozenset(LASER_KINDS + ("ODOM", "TRUEPOS", "PARAM"))  # messages this reader reads
 MAX_MESSAGE_KINDS = 64  # message kinds counted by name in ReadStats.messages (the kinds above always)
 OTHER_KINDS = "other"  # where lines of further kinds are counted
@@ -349,7 +352,7 @@ class CarmenReader:
         if stats.laser is not None:
             self._check_override(stats.laser)
         units: Units | None = None
-        truth: Pose2D | None = None
+        truth: tuple[Pose2D, float] | None = None  # the last TRUEPOS pose and its stamp (s), not yet given
         has_odometry = True
         params: dict[str, float] = {}
         counts: dict[tuple[str, str, str], tuple[int, int]] = {}  # ROBOTLASER header -> (beams, first line)
@@ -373,9 +376,12 @@ class CarmenReader:
                     stats.stopped = f"line {line_no}: {reason}"
                     stats.skipped.append((line_no, f"message: {reason}"))
                     break
-            # a TRUEPOS pose is the truth of the laser line directly after it (PARAM lines aside): any
-            # other line between (ODOM, another laser kind, a malformed line) drops it
-            held, truth = truth, None
+            # a TRUEPOS pose is the truth of the next line of the laser kind read (that line, even when
+            # malformed, takes it), when stamped within TRUTH_MAX_GAP_S of it: ODOM lines, other laser
+            # kinds and other messages between do not drop it (CARMEN's simulator logs TRUEPOS, ODOM, FLASER)
+            held = truth
+            if kind == stats.laser or (stats.laser is None and kind in LASER_KINDS):
+                truth = None
             try:
                 if not named:  # 30 MB of random bytes after a log were read as 207k message kinds, none skipped
                     shown = kind if len(kind) <= 24 else kind[:24] + "..."
@@ -384,11 +390,11 @@ class CarmenReader:
                                      "PARAM, ...: capitals, digits and '_'); junk or a damaged line")
                 if kind == "PARAM":
                     units, has_odometry = _param(words, params, units, has_odometry)
-                    truth = held
                 elif kind == "TRUEPOS":
+                    truth = None  # a malformed TRUEPOS sets none
                     pose = _pose(words, 1, "TRUEPOS")
                     _require(len(words) >= 8, "TRUEPOS needs at least 7 numbers")
-                    truth = pose
+                    truth = (pose, float(_floats(words[7:8], "TRUEPOS timestamp")[0]))
                 elif kind == "ODOM":
                     _require(len(words) >= 8, "ODOM needs x y theta tv rv accel timestamp")
                     _floats(words[1:8], "ODOM")
@@ -413,7 +419,8 @@ class CarmenReader:
                         _require(first[0] == len(scan),
                                  f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
                                  f"field of view and resolution carries {first[0]}")
-                    yield Record(scan=scan, odom=odom if has_odometry else None, truth=held)
+                    given = held[0] if held is not None and abs(held[1] - scan.stamp) <= TRUTH_MAX_GAP_S else None
+                    yield Record(scan=scan, odom=odom if has_odometry else None, truth=given)
             except (ValueError, OverflowError, ArithmeticError) as exc:
                 self._bad(line_no, kind, exc)
         if self.topic is not None and not stats.messages.get(self.topic) and stats.other_lasers():

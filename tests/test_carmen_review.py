@@ -152,16 +152,19 @@ def test_valid_readings_near_the_special_codes_stay_valid(tmp_path, fmt):
     assert not next(iter(read_log(path))).scan.valid[[0, 2]].any()
 
 
-def test_truth_is_only_the_truepos_line_directly_before_the_scan(tmp_path):
+def test_truth_is_the_last_truepos_before_the_scan_within_its_gap(tmp_path):
     text = ("TRUEPOS 9 9 9 0 0 0 1 h 1\n" + _flaser("1.00 bad 3.00", stamp="1") + _flaser(stamp="2")
             + "TRUEPOS 7 7 7 0 0 0 100 h 100\n" + "ODOM 0 0 0 0 0 0 150 h 150\n" * 3 + _flaser(stamp="500")
             + "TRUEPOS 6 6 6 0 0 0 600 h 600\nRLASER 3 1 2 3 0 0 0 0 0 0 600 h 600\n" + _flaser(stamp="600")
-            + "TRUEPOS 5 5 5 0 0 0 700 h 700\nPARAM laser_front_laser_fov 180 h 0\n# a comment\n" + _flaser(stamp="700"))
+            + "TRUEPOS 5 5 5 0 0 0 700 h 700\nPARAM laser_front_laser_fov 180 h 0\n# a comment\n" + _flaser(stamp="700")
+            + "TRUEPOS 4 4 4 0 0 0 800.0 h 800\nODOM 0 0 0 0 0 0 800.02 h 800\n" + _flaser(stamp="800.05")
+            + "TRUEPOS 3 3 3 0 0 0 900 h 900\n" + _flaser(stamp="900.6"))
     reader = read_log(_write(tmp_path, "t.log", text), skip_bad_lines=True, topic="FLASER")
-    # was: (2.0, (9, 9, 9)) across a skipped malformed line, (500.0, (7, 7, 7)) across ODOM lines 400 s
-    # later, (600.0, (6, 6, 6)) across an RLASER line
-    assert [(r.scan.stamp, r.truth) for r in reader] == [(2.0, None), (500.0, None), (600.0, None),
-                                                        (700.0, (5.0, 5.0, 5.0))]
+    # was: (2.0, (9, 9, 9)) across a skipped malformed line of the kind read, (500.0, (7, 7, 7)) across ODOM
+    # lines 400 s later; a TRUEPOS, ODOM, FLASER cycle (CARMEN's simulator) and another laser kind keep it
+    assert [(r.scan.stamp, r.truth) for r in reader] == [(2.0, None), (500.0, None), (600.0, (6.0, 6.0, 6.0)),
+                                                        (700.0, (5.0, 5.0, 5.0)), (800.05, (4.0, 4.0, 4.0)),
+                                                        (900.6, None)]
     assert reader.stats.skipped == [(2, "FLASER: FLASER ranges: 'bad' is not a number")]
 
 
