@@ -353,6 +353,7 @@ class CarmenReader:
             self._check_override(stats.laser)
         units: Units | None = None
         truth: tuple[Pose2D, float] | None = None  # the last TRUEPOS pose and its stamp (s), not yet given
+        last_stamp = -math.inf  # the last scan's stamp: a TRUEPOS stamped at or before it is its, not the next's
         has_odometry = True
         params: dict[str, float] = {}
         counts: dict[tuple[str, str, str], tuple[int, int]] = {}  # ROBOTLASER header -> (beams, first line)
@@ -419,7 +420,9 @@ class CarmenReader:
                         _require(first[0] == len(scan),
                                  f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
                                  f"field of view and resolution carries {first[0]}")
-                    given = held[0] if held is not None and abs(held[1] - scan.stamp) <= TRUTH_MAX_GAP_S else None
+                    given = (held[0] if held is not None and abs(held[1] - scan.stamp) <= TRUTH_MAX_GAP_S
+                             and (held[1] > last_stamp or held[1] == scan.stamp) else None)
+                    last_stamp = scan.stamp
                     yield Record(scan=scan, odom=odom if has_odometry else None, truth=given)
             except (ValueError, OverflowError, ArithmeticError) as exc:
                 self._bad(line_no, kind, exc)
@@ -554,18 +557,18 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     ranges, u = _ranges(_floats(words[2 : 2 + n], f"{kind} ranges"), units, kind)
     tail = _floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
-    angle_min, increment = _exact_or_snapped(angle_min, exact[0]), _exact_or_snapped(increment, exact[1], n)
+    angle_min, increment = _exact_or_snapped(angle_min, exact[0]), _exact_or_snapped(increment, exact[1])
     range_max = geometry.range_max if geometry.range_max is not None else LMS200_MAX_RANGE[u]
     scan = Scan(ranges, angle_min, increment, range_min, range_max, float(tail[6]))
     return scan, _pose(words, 2 + n + 3, f"{kind} odometry")
 
 
-def _exact_or_snapped(angle: float, exact: float | None, beams: int = 1) -> float:
+def _exact_or_snapped(angle: float, exact: float | None) -> float:
     """The exact angle a ``PARAM lmsbench_*_laser_angle_*`` line gives where it agrees with the one
     rebuilt from degrees, else that one snapped onto the 0.05 deg grid (:func:`snap_angle`)."""
     if exact is not None and abs(exact - angle) <= EXACT_GEOMETRY_AGREEMENT * max(1.0, abs(angle)):
         return exact
-    return snap_angle(angle, beams)
+    return snap_angle(angle)
 
 
 def _parse_robotlaser(words: list[str], units: Units | None, range_max_override: float | None,
@@ -597,11 +600,12 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     else:
         stamp = float(_floats(words[10 + n + m : 10 + n + m + 12], f"{kind} poses and timestamp")[11])
     # max_range 1e-300 made every reading invalid, silently, and -5 became 81.83 m (a review's reproduction)
-    _require(laser_geometry.MIN_RANGE_MAX_M <= max_range <= laser_geometry.MAX_RANGE_M,
+    # (an override replaces it: a converter's placeholder 0 is then no error)
+    _require(range_max_override is not None or laser_geometry.MIN_RANGE_MAX_M <= max_range <= laser_geometry.MAX_RANGE_M,
              f"maximum range must be in [{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, "
              f"got {words[5]}")
     range_max = range_max_override if range_max_override is not None else max_range
-    scan = Scan(ranges, snap_angle(start), snap_angle(resolution, n), range_min, range_max, stamp)
+    scan = Scan(ranges, snap_angle(start), snap_angle(resolution), range_min, range_max, stamp)
     if kind.startswith("RAWLASER"):
         return scan, None
     return scan, _pose(words, 10 + n + m + 3, f"{kind} robot pose")

@@ -30,15 +30,15 @@ ANGLE_GRID_DEG = 0.05  # every LMS2xx start angle and resolution is a multiple o
 #: a unit of the last decimal; float32 (a bag's LaserScan) moves it by at most 2**-24 of its value
 SNAP_TEXT_ERROR_RAD = 5e-7
 SNAP_RELATIVE_ERROR = 1e-6  # of the value: float32 (6e-8) with room to spare
-SNAP_MAX_DRIFT_BEAMS = 0.1  # an increment is snapped only if the last beam moves by less than this part of a beam
 
 
-def snap_angle(value: float, beams: int = 1) -> float:
+def snap_angle(value: float) -> float:
     """Snap an angle (rad) stored with limited precision (text with 6 decimals, float32) onto the
     exact 0.05 deg grid when only that rounding can explain its distance from the grid: within
-    ``SNAP_TEXT_ERROR_RAD`` + ``SNAP_RELATIVE_ERROR`` x |value|; for a beam increment of a
-    ``beams``-beam scan, also only when the last beam moves by less than ``SNAP_MAX_DRIFT_BEAMS`` of
-    a beam. Otherwise the value is returned unchanged.
+    ``SNAP_TEXT_ERROR_RAD`` + ``SNAP_RELATIVE_ERROR`` x |value|. Otherwise the value is returned
+    unchanged. (A rule that also kept increments whose last beam would move by 0.1 beam or more
+    kept CARMEN's 6-decimal 0.1 deg over 1801 beams off the grid, its last beam at 89.966 deg: the
+    rounding of the text is the whole of that drift, and the grid value is the increment.)
 
     Before (a fixed 2e-5 rad), angles genuinely off the grid were snapped onto it (a review's
     reproduction): a 720-beam scan at 2 pi / 719 rad (RPLIDAR style) read as 0.5 deg, its last
@@ -50,8 +50,6 @@ def snap_angle(value: float, beams: int = 1) -> float:
     if error <= 4 * np.spacing(abs(snapped)):  # on the grid to float64 precision: kept exactly as given
         return float(value)
     if error > SNAP_TEXT_ERROR_RAD + SNAP_RELATIVE_ERROR * abs(value):
-        return float(value)
-    if beams > 1 and (beams - 1) * error >= SNAP_MAX_DRIFT_BEAMS * abs(snapped):
         return float(value)
     return snapped
 

@@ -108,17 +108,42 @@ def test_bad_param_line_is_blamed_not_every_laser_line(tmp_path):
     assert len(scans) == 2 and scans[0].angle_increment == pytest.approx(math.pi / 2)  # the convention: 3 beams, 180 deg
 
 
+def test_robotlaser_placeholder_max_range_is_no_error_under_an_override(tmp_path):
+    # was: a converter's 0 was a malformed line even with --laser-range-max given, which replaces it
+    from lms200 import LaserGeometry
+    path = _write(tmp_path, "rl0.log", _robotlaser("0"))
+    assert [r.scan.range_max for r in read_log(path, geometry=LaserGeometry(range_max=30.0))] == [30.0]
+
+
+def test_a_truepos_stamped_with_the_scan_before_is_not_the_next_scans(tmp_path):
+    # was: FLASER 1.0, TRUEPOS 1.0, FLASER 1.1 gave the second scan the pose of the first's time
+    text = _flaser(stamp="1.0") + "TRUEPOS 9 9 9 0 0 0 1.0 h 1.0\n" + _flaser(stamp="1.1")
+    text += "TRUEPOS 8 8 8 0 0 0 1.15 h 1.15\n" + _flaser(stamp="1.2")
+    assert [r.truth for r in read_log(_write(tmp_path, "tp.log", text))] == [None, None, (8.0, 8.0, 8.0)]
+
+
 def test_snap_angle_keeps_angles_genuinely_off_the_grid():
     from lms200.scan import snap_angle
     half = math.radians(0.5)
     # was: 2 pi / 719 (RPLIDAR style, 720 beams) snapped to 0.5 deg; 0.5 deg + 1.5e-5 rad too
-    assert snap_angle(2 * math.pi / 719, 720) == 2 * math.pi / 719
-    assert snap_angle(half + 1.5e-5, 361) == half + 1.5e-5
+    assert snap_angle(2 * math.pi / 719) == 2 * math.pi / 719
+    assert snap_angle(half + 1.5e-5) == half + 1.5e-5
     # what 6 decimals or float32 explain is still snapped (the CSAIL ROBOTLASER1 log writes 0.008727, -1.570796)
-    assert snap_angle(0.008727, 361) == half and snap_angle(-1.570796) == -math.pi / 2
-    assert snap_angle(float(np.float32(math.radians(0.25))), 1081) == math.radians(0.25)
-    # within the text error, but the last of 100,000 beams would move by more than 0.1 beam: kept
-    assert snap_angle(half + 4e-7, 100_000) == half + 4e-7
+    assert snap_angle(0.008727) == half and snap_angle(-1.570796) == -math.pi / 2
+    assert snap_angle(float(np.float32(math.radians(0.25)))) == math.radians(0.25)
+    # 6 decimals of 0.1 and 0.05 deg (0.001745, 0.000873): snapped however many beams (a 0.1-beam drift rule
+    # kept 0.001745 over 1801 beams, the last beam at 89.966 deg instead of 90)
+    assert snap_angle(0.001745) == math.radians(0.1) and snap_angle(0.000873) == math.radians(0.05)
+
+
+def test_robotlaser_six_decimal_fine_resolution_snaps_onto_the_grid(tmp_path):
+    n = 1801
+    line = ("ROBOTLASER1 0 -1.570796 3.141593 0.001745 80.000000 0.010000 0 " + str(n) + " "
+            + " ".join(["2.00"] * n) + " 0 " + "0 " * 11 + "1.0 h 1.0\n")
+    path = tmp_path / "fine.log"
+    path.write_text(line)
+    scan = next(iter(read_log(path))).scan
+    assert scan.angle_increment == math.radians(0.1) and scan.angle_max == pytest.approx(math.pi / 2, abs=1e-12)
 
 
 def test_robotlaser_720_beams_at_2pi_over_719_keeps_its_last_bearing(tmp_path):
