@@ -7,7 +7,7 @@ All geometry is in the sensor frame of the scan (x ahead, y left, metres, radian
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -67,6 +67,21 @@ class Corner:
     lines: tuple[int, int]
 
 
+def whole_number(v: object) -> int | None:
+    """``v`` as an int when it is a whole number (an int, or a float with a whole value, numpy's
+    too; no bool) within int64's range, else None: a beam index or count of a hand-built Line or
+    Corner (user code often holds them as floats, e.g. 49.0)."""
+    if isinstance(v, (bool, np.bool_)):
+        return None
+    if isinstance(v, (int, np.integer)):
+        i = int(v)
+    elif isinstance(v, (float, np.floating)) and np.isfinite(v) and float(v).is_integer():
+        i = int(v)
+    else:
+        return None
+    return i if -2**63 <= i < 2**63 else None
+
+
 def check_line_rows(rows: np.ndarray, name: str) -> None:
     """InputError naming ``name`` and the first bad line of ``rows`` ((k, 8) float: rho, alpha,
     x0, y0, x1, y1, first, last, ``FeatureSet.line_array()``'s) unless every line has finite
@@ -80,7 +95,7 @@ def check_line_rows(rows: np.ndarray, name: str) -> None:
     with np.errstate(invalid="ignore"):
         checks = (
             (~np.isfinite(rows).all(axis=1), "its values must be finite"),
-            (rho < 0, "rho must be >= 0 m"),
+            (rho < -1e-9, "rho must be >= 0 m"),  # a line through the origin: rounding may leave -1e-12
             ((first < 0) | (first > last) | (first != np.floor(first)) | (last != np.floor(last)),
              "its beams must be whole numbers with 0 <= first <= last"),
         )
@@ -140,13 +155,14 @@ class Lines(Sequence):
                 raise InputError(f"lines[{i}]: must be a features.Line, got {type(line).__name__}")
             for field_name in ("first", "last", "n_points"):  # the int64 beams array truncated 2.5 to 2
                 v = getattr(line, field_name)
-                if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
+                if whole_number(v) is None:
                     raise InputError(f"lines[{i}].{field_name}: must be a whole number (a beam index or count), got {v!r}")
         try:
             out = cls.from_arrays(
                 [l.rho for l in lines], [l.alpha for l in lines], [l.start for l in lines], [l.end for l in lines],
                 np.array([np.asarray(l.cov, dtype=float).reshape(2, 2) for l in lines]),
-                [l.first for l in lines], [l.last for l in lines], [l.n_points for l in lines],
+                [whole_number(l.first) for l in lines], [whole_number(l.last) for l in lines],
+                [whole_number(l.n_points) for l in lines],
             )
         except (TypeError, ValueError, OverflowError) as exc:
             raise InputError(f"lines: each Line must hold numbers: rho, alpha, start and end (x, y), a 2x2 cov, "
@@ -234,9 +250,12 @@ class Corners(Sequence):
         for i, c in enumerate(corners):
             if not isinstance(c, Corner):
                 raise InputError(f"corners[{i}]: must be a features.Corner, got {type(c).__name__}")
-            whole = (c.index, *c.lines) if isinstance(c.lines, tuple) and len(c.lines) == 2 else ()
-            if len(whole) != 3 or not all(isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_))
-                                          for v in whole):
+            try:  # lines: any two whole numbers (a tuple, a list, an array), as np.array took them before
+                pair = tuple(c.lines) if not isinstance(c.lines, (str, bytes)) else ()
+            except TypeError:
+                pair = ()
+            whole = [whole_number(v) for v in (c.index, *pair)] if len(pair) == 2 else []
+            if len(whole) != 3 or None in whole:
                 raise InputError(f"corners[{i}]: index and lines must be whole numbers (a beam, two line indices), "
                                  f"got {c.index!r}, {c.lines!r}")
             try:
@@ -246,7 +265,7 @@ class Corners(Sequence):
             if not ok:
                 raise InputError(f"corners[{i}]: x, y and angle must be finite numbers, got {c.x!r}, {c.y!r}, {c.angle!r}")
         values = np.array([(c.x, c.y, c.angle) for c in corners], dtype=float)
-        beams = np.array([(c.index, *c.lines) for c in corners], dtype=np.int64)
+        beams = np.array([[whole_number(v) for v in (c.index, *tuple(c.lines))] for c in corners], dtype=np.int64)
         return cls(values, beams)
 
     x = property(lambda self: self.values[:, 0], doc="(C,) x of each corner (m)")
@@ -294,7 +313,7 @@ class FeatureSet:
     def __init__(self, lines: Lines | Sequence[Line] = (), corners: Corners | Sequence[Corner] = (),
                  method: str = "") -> None:
         for name, value, kind in (("lines", lines, Lines), ("corners", corners, Corners)):
-            if not isinstance(value, (kind, Sequence)) or isinstance(value, (str, bytes)):
+            if not isinstance(value, (kind, Iterable)) or isinstance(value, (str, bytes)):
                 raise InputError(f"{name}: must be a features.{kind.__name__} or a sequence of "
                                  f"features.{kind.__name__[:-1]}, got {type(value).__name__}")
         self.lines = lines if isinstance(lines, Lines) else Lines.from_lines(list(lines))

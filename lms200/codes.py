@@ -107,6 +107,8 @@ def real_rows(value: object, name: str, columns: int, what: str, finite: bool = 
     except (InputError, TypeError, ValueError, OverflowError):
         raise InputError(f"{name}: must be a (k, {columns}) array of real numbers ({what}), got "
                          f"{type(value).__name__}") from None
+    if a.shape == (0,):  # an empty list: no rows (a review: map_error([], walls), write_tum(p, [], []) were refused)
+        a = a.reshape(0, columns)
     if a.ndim != 2 or a.shape[1] != columns:
         raise InputError(f"{name}: must be a (k, {columns}) array ({what}), got shape {a.shape}")
     if finite and not np.isfinite(a).all():

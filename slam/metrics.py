@@ -235,11 +235,12 @@ def map_error(map_segments: np.ndarray, walls: np.ndarray, alignment: Alignment2
     is first moved into the truth frame by ``alignment`` (e.g. the ATE's).
 
     Raises:
-        InputError: segments or walls that are no finite (k, 4) arrays, a wall of zero length (its
+        InputError: segments or walls that are no (k, 4) arrays (walls finite; a lost run's segments
+            may hold nan: they match no wall), a wall of zero length (its
             direction was nan), an ``alignment`` that is no Alignment2D, or a ``max_angle`` /
             ``max_distance`` that is not a finite number > 0.
     """
-    seg = real_rows(map_segments, "map_segments", 4, "x0, y0, x1, y1 m")
+    seg = real_rows(map_segments, "map_segments", 4, "x0, y0, x1, y1 m", finite=False)  # a lost run's nan lines: unmatched
     walls = real_rows(walls, "walls", 4, "x0, y0, x1, y1 m")
     if alignment is not None and not isinstance(alignment, Alignment2D):
         raise InputError(f"alignment: must be a slam.metrics.Alignment2D or None, got {type(alignment).__name__}")

@@ -99,7 +99,8 @@ def _checked_step(k: int, t: object, obs: object, odom: object, truth: object) -
     was "cannot convert float NaN to integer" deep in the filter, text numpy's ValueError, an
     item that is no Observations an AttributeError, a true pose of text an IndexError."""
     if not (is_real(t) and finite(t)):
-        raise SlamInputError(f"scan {k}: its stamp must be a finite number (s), got {t!r}")
+        shown = repr(t) if len(repr(t)) <= 60 and "\n" not in repr(t) else type(t).__name__  # an Observations' was 187 lines
+        raise SlamInputError(f"scan {k}: its stamp must be a finite number (s), got {shown}")
     stamp = float(t)  # type: ignore[arg-type]  # a real number: is_real
     if not isinstance(obs, Observations):
         raise SlamInputError(f"scan {k}: its observations must be a slam.Observations, got {type(obs).__name__}")

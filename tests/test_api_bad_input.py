@@ -1255,7 +1255,7 @@ def _wall_features() -> tuple[Scan, Any]:
     # numpy's ValueError, a broadcast error, an OverflowError
     ({"rho": "abc"}, r"^lines: each Line must hold numbers"),
     ({"start": (1.0, 2.0, 3.0)}, r"^lines: each Line must hold numbers"),
-    ({"first": 10**30, "last": 10**30}, r"^lines: each Line must hold numbers"),
+    ({"first": 10**30, "last": 10**30}, r"^lines\[0\]\.first: must be a whole number"),
 ])
 def test_feature_sets_of_hand_built_lines_are_checked(change: dict, message: str) -> None:
     from features import FeatureSet
@@ -1344,3 +1344,27 @@ def test_feature_set_corners_are_checked(corners: object, message: str) -> None:
     with pytest.raises(InputError, match=message):
         FeatureSet(corners=corners)
     assert len(FeatureSet(corners=[Corner(1.0, 0.5, 1.5, 10, (0, 1))]).corners) == 1
+
+
+def test_review_of_the_hunt_valid_inputs_it_had_refused(tmp_path) -> None:
+    """A review of this hunt's checks found valid inputs they refused: a Corner whose lines are a list
+    (a user extractor's; it stopped a whole `lmsbench compare`), a FeatureSet from a generator, beams
+    held as whole floats (49.0), rho -1e-12 of a line through the origin, empty lists given to the
+    metrics and write_tum, a lost run's nan map lines (map_error raised)."""
+    from features.types import Corner, FeatureSet, Line
+    from lms200 import read_tum, write_tum
+    from slam.metrics import map_error
+
+    line = Line(rho=1.0, alpha=0.0, start=(1.0, -1.0), end=(1.0, 1.0), first=10, last=49.0, cov=np.eye(2) * 1e-4,
+                n_points=40)
+    origin = Line(rho=-1e-12, alpha=0.0, start=(0.0, -1.0), end=(0.0, 1.0), first=50, last=60, cov=np.eye(2) * 1e-4,
+                  n_points=11)
+    fs = FeatureSet((x for x in [line, origin]), [Corner(1.0, 1.0, 1.5, 49, [0, 1]), Corner(0.0, 1.0, 1.5, 50, np.array([0, 1]))])
+    assert fs.lines.beams.tolist() == [[10, 49, 40], [50, 60, 11]]
+    assert fs.corners.beams.tolist() == [[49, 0, 1], [50, 0, 1]]
+    walls = np.array([[0.0, 0.0, 5.0, 0.0], [5.0, 0.0, 5.0, 5.0]])
+    assert map_error([], walls).n_lines == 0
+    lost = map_error(np.array([[0.1, 0.0, 4.9, 0.0], [np.nan, 0.0, 1.0, 1.0]]), walls)
+    assert (lost.n_lines, lost.matched) == (2, 1)
+    write_tum(tmp_path / "none.tum", [], [])
+    assert read_tum(tmp_path / "none.tum")[0].size == 0
