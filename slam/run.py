@@ -9,6 +9,7 @@ import numpy as np
 
 from features.baselines.checks import finite, is_real
 from lms200.errors import InputError, LmsbenchError
+from lms200.finite import shown
 from lms200.logs import checked_records
 from lms200.records import Record, pose_of
 
@@ -99,8 +100,8 @@ def _checked_step(k: int, t: object, obs: object, odom: object, truth: object) -
     was "cannot convert float NaN to integer" deep in the filter, text numpy's ValueError, an
     item that is no Observations an AttributeError, a true pose of text an IndexError."""
     if not (is_real(t) and finite(t)):
-        shown = repr(t) if len(repr(t)) <= 60 and "\n" not in repr(t) else type(t).__name__  # an Observations' was 187 lines
-        raise SlamInputError(f"scan {k}: its stamp must be a finite number (s), got {shown}")
+        # shown: one line, cut past 60 characters (an Observations' repr was 187 lines)
+        raise SlamInputError(f"scan {k}: its stamp must be a finite number (s), got {shown(t)}")
     stamp = float(t)  # type: ignore[arg-type]  # a real number: is_real
     if not isinstance(obs, Observations):
         raise SlamInputError(f"scan {k}: its observations must be a slam.Observations, got {type(obs).__name__}")
