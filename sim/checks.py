@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from lms200.errors import InputError
-from lms200.finite import overflow_text
+from lms200.finite import is_number, overflow_text
 
 
 def _numbers(value: object, count: int, name: str, what: str) -> tuple[float, ...]:
@@ -64,7 +64,7 @@ def check_instance(value: Any, cls: type, name: str, optional: bool = True) -> N
 def check_number(value: object, name: str, lo: float, hi: float, *, lo_open: bool = False, unit: str = "") -> float:
     """``value`` as a finite float in [lo, hi] ((lo, hi] with ``lo_open``); InputError naming ``name``
     otherwise (a bool, text, a list, nan, or an int beyond float's range included)."""
-    ok = not isinstance(value, (bool, np.bool_)) and isinstance(value, (int, float, np.integer, np.floating))
+    ok = is_number(value)
     try:
         number = float(value) if ok else math.nan  # type: ignore[arg-type]
     except OverflowError:
