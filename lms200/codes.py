@@ -98,12 +98,13 @@ def real_numbers(ranges: object, error: type[Exception] = InputError) -> np.ndar
     return a
 
 
-def real_rows(value: object, name: str, columns: int, what: str, finite: bool = True) -> np.ndarray:
+def real_rows(value: object, name: str, columns: int, what: str, finite: bool = True, wider: bool = False) -> np.ndarray:
     """``value`` as a float64 (k, ``columns``) array; InputError naming ``name`` for what is no
     array of real numbers of that shape, or (``finite``) holds nan / inf. Found by fuzzing the
     Python API: ``slam.metrics`` read its arrays by ``reshape(-1, 4)``, so a (12, 3) trajectory
     was scored as nine garbled (t, x, y, theta) rows, silently, and text, None or an (n, 5) array
-    was numpy's bare ValueError; ``write_tum`` wrote (3k, 4) poses as 4k garbled rows."""
+    was numpy's bare ValueError; ``write_tum`` wrote (3k, 4) poses as 4k garbled rows. With
+    ``wider``, rows may have more columns (the caller reads the first ``columns``)."""
     try:
         if value is None:  # np.asarray(None).astype(float) is nan
             raise TypeError
@@ -111,12 +112,14 @@ def real_rows(value: object, name: str, columns: int, what: str, finite: bool = 
         check_real_kind(a.dtype, InputError)
         a = a.astype(np.float64)
     except (InputError, TypeError, ValueError, OverflowError):
-        raise InputError(f"{name}: must be a (k, {columns}) array of real numbers ({what}), got "
+        shape = f"(k, >= {columns})" if wider else f"(k, {columns})"
+        raise InputError(f"{name}: must be a {shape} array of real numbers ({what}), got "
                          f"{type(value).__name__}") from None
     if a.shape == (0,):  # an empty list: no rows (a review: map_error([], walls), write_tum(p, [], []) were refused)
         a = a.reshape(0, columns)
-    if a.ndim != 2 or a.shape[1] != columns:
-        raise InputError(f"{name}: must be a (k, {columns}) array ({what}), got shape {a.shape}")
+    if a.ndim != 2 or a.shape[1] < columns or (a.shape[1] > columns and not wider):
+        shape = f"(k, >= {columns})" if wider else f"(k, {columns})"
+        raise InputError(f"{name}: must be a {shape} array ({what}), got shape {a.shape}")
     if finite and not np.isfinite(a).all():
         raise InputError(f"{name}: must be finite ({what}); row {int(np.nonzero(~np.isfinite(a).all(1))[0][0])} is not")
     return a

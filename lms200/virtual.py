@@ -13,7 +13,10 @@ commands 0x10, 0x20 (installation mode with password, continuous 0x24, on-reques
 0x31, 0x3A, 0x3B, and the configuration telegrams 0x74 / 0x77 (units); anything else gets 0x92.
 In continuous mode one 0xB0 frame follows another as fast as the baud allows, each carrying the
 newest complete scan (a 0.5 deg scan completes every 26.7 ms). Each scan sent is the source's next
-scan, so a replayed log comes out in order and complete.
+scan, so a replayed log comes out in order and complete. Like a real unit, whose mirror always has
+a scan, the device holds the source's first scan from construction on, so the first telegram of
+continuous output follows the 0xA0 reply at once (a simulator's first scan takes 0.5-0.85 s to
+build; built after the reply, it arrived that much late).
 """
 
 from __future__ import annotations
@@ -225,6 +228,8 @@ class VirtualLMS200:
         self.baud = POWER_ON_BAUD
         self.mode = MODE_ON_REQUEST
         self.source_exhausted = False
+        self._ready: Scan | None = None
+        self._ready = self._next_scan()  # built now, not after the 0x24 reply (see the module doc)
         self.scans_sent = 0
         self.requests = 0
         self._queue: deque[_Chunk] = deque()
@@ -368,11 +373,21 @@ class VirtualLMS200:
         self._reply(bytes([REPLY_POWER_ON]) + TYPE_STRING, self._line_free + self._s(self.timing.reset_s))
 
     # -- device -> host ------------------------------------------------------------------------
-    def _scan_payload(self) -> bytes | None:
+    def _next_scan(self) -> Scan | None:
+        """The source's next scan: the one held since construction first, else a new one (None
+        when the source has run out)."""
+        scan, self._ready = self._ready, None
+        if scan is not None or self.source_exhausted:
+            return scan
         try:
-            scan = next(self._source)
+            return next(self._source)
         except StopIteration:
             self.source_exhausted = True
+            return None
+
+    def _scan_payload(self) -> bytes | None:
+        scan = self._next_scan()
+        if scan is None:
             return None
         codes = variant_codes(resample_to_grid(scan), self.variant, self.units)
         return encode_measurement(codes, self.units)[:-1]  # _reply appends the status byte
@@ -432,8 +447,8 @@ class VirtualLMS200:
                 chunk.done()
             if not self._queue:
                 # The next scan is built on the next call (next_wakeup or transmit), after the
-                # bytes due now are handed over: building it here (a simulator's first ray cast
-                # takes 0.3-0.5 s) held back the tail of the reply just sent, a gap no device makes.
+                # bytes due now are handed over: building it here (a slow source) held back the
+                # tail of the reply just sent, a gap no device makes.
                 break
         return [(d, b) for d, b in out if d]
 
