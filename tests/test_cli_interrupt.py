@@ -127,7 +127,7 @@ CLOSED_STDOUT = r"""
 import sys
 from lms200 import LmsbenchError
 from experiments import cli
-from experiments.commands import info, simulate
+from experiments.commands import calibrate, info, simulate
 
 def stopped_in_its_work(args):  # a command with --out whose progress goes to stdout (demo, bench, sweep)
     for i in range(100000):
@@ -138,7 +138,8 @@ def fails_after_a_line(args):  # an error (exit 2) with a line left in stdout's 
     print("a line")
     raise LmsbenchError("a user error")
 
-simulate.run, info.run = stopped_in_its_work, fails_after_a_line
+simulate.run = calibrate.run = stopped_in_its_work
+info.run = fails_after_a_line
 sys.exit(cli.main(sys.argv[1:]))
 """
 
@@ -147,6 +148,9 @@ sys.exit(cli.main(sys.argv[1:]))
     (["simulate", "--out", "DIR"], 141, ["lmsbench simulate: stopped: the reader of its standard output went away; DIR is incomplete"]),
     (["info", "x.clf"], 2, ["lmsbench info: error: a user error"]),
     (["--help"], 0, []),
+    # calibrate prints its YAML without --out: `calibrate LOG | head -5` said "its output folder is incomplete"
+    (["calibrate", "x.clf"], 141, []),
+    (["calibrate", "x.clf", "--out", "s.yaml"], 141, ["lmsbench calibrate: stopped: the reader of its standard output went away; s.yaml is incomplete"]),
 ])
 def test_a_reader_that_goes_away_during_work_or_before_an_error(argv, status, stderr):
     """Review of the SIGPIPE handling: a command stopped in its work by a closed stdout (`lmsbench

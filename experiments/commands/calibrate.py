@@ -19,7 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--stride", type=count(1), default=1, help="use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=count(1), help="use at most this many scans")
     add_log_options(p)
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, prints_without_out=True)  # without --out the YAML goes to stdout
 
 
 def run(args: argparse.Namespace) -> int:
