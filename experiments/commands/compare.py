@@ -57,7 +57,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="override a config field of every extractor that has it, or of METHOD only (repeatable)")
     p.add_argument("--out", type=path_arg, help="output folder (default: a new results/compare/DATE_TIME, "
                                             "linked as results/compare/latest)")
-    p.add_argument("--format", choices=("parquet", "csv"), default="parquet", help="format of the tidy table")
+    p.add_argument("--format", choices=("parquet", "csv"), default="parquet", help="format of the tidy table (default parquet)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_log_options(p)
     p.set_defaults(func=run)
