@@ -41,7 +41,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seeds", nargs="+", type=SEED, help="seeds of each world named without one, listed (default 0 1 2; "
                                                          "`--seeds 3` is the one seed 3)")
     p.add_argument("--duration", type=DURATION, help="simulated seconds per world and seed (default 30)")
-    p.add_argument("--rate", type=positive("scans/s"), help="simulated scans per second kept (default 2)")
+    p.add_argument("--rate", "--rate-hz", dest="rate", type=positive("scans/s"),
+                   help="simulated scans per second kept (default 2; --rate-hz as in simulate, demo, figures)")
     p.add_argument("--stride", type=count(1), help="logs and simulate folders: use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=count(1), help="at most this many scans per source")
     p.add_argument("--sigma", type=_sigma, default="auto",
@@ -58,7 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=path_arg, help="output folder (default: a new results/compare/DATE_TIME, "
                                             "linked as results/compare/latest)")
     p.add_argument("--format", choices=("parquet", "csv"), default="parquet", help="format of the tidy table (default parquet)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-progress", "--quiet", dest="no_progress", action="store_true", help="no progress bar")
     add_log_options(p)
     p.set_defaults(func=run)
 

@@ -36,7 +36,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--odometry", action="store_true", help="add noisy wheel odometry to the scans")
     p.add_argument("--config", type=path_arg, help="rerun a config.yaml written by an earlier run (it holds the whole "
                                                "run: no other option of the run may be given with it)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", "--no-progress", dest="quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
 
