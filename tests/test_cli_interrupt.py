@@ -166,6 +166,38 @@ def test_a_reader_that_goes_away_during_work_or_before_an_error(argv, status, st
     assert (proc.wait(timeout=120), err.splitlines()) == (status, stderr)
 
 
+def test_a_reader_that_goes_away_during_the_summary_does_not_call_finished_outputs_incomplete(tmp_path):
+    """`lmsbench compare office:0 ... --out DIR | head -3` (stdout unbuffered, or a summary longer than
+    its buffer): compare had written every file of DIR, then printed its table; the pipe broke on
+    the table and it said "stopped: ... DIR is incomplete", exit 141. DIR was whole. Now 141 with no
+    line; the outputs are there."""
+    out = tmp_path / "cmp"
+    cmd = [sys.executable, "-m", "experiments.cli", "compare", "office:0", "--duration", "2", "--methods", "sensor",
+           "split_merge", "--out", str(out)]
+    proc = subprocess.Popen(cmd, cwd=REPO, env={**_env(), "PYTHONUNBUFFERED": "1"}, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # the reader is gone before the first line
+    err = proc.stderr.read()
+    assert (proc.wait(timeout=300), err) == (141, "")
+    assert {p.name for p in out.iterdir()} == {"compare.parquet", "summary.csv", "summary.txt", "config.yaml"}
+
+
+def test_calibrate_writes_its_yaml_before_the_summary_a_reader_may_cut(tmp_path, shared_data):
+    """`lmsbench calibrate LOG --out S.yaml | head -3`: calibrate printed its summary first and wrote
+    S.yaml after it, so the broken pipe lost the YAML of a finished calibration. Now it is written first."""
+    out = tmp_path / "s.yaml"
+    cmd = [sys.executable, "-m", "experiments.cli", "calibrate", str(shared_data / "intel-corrected.log.gz"),
+           "--max-scans", "20", "--out", str(out)]
+    proc = subprocess.Popen(cmd, cwd=REPO, env={**_env(), "PYTHONUNBUFFERED": "1"}, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert (proc.wait(timeout=300), err) == (141, "")
+    assert out.read_text().startswith("# lmsbench calibrate ")
+
+
 SIGTERM_IN_A_COMMAND = r"""
 import signal
 from experiments import cli

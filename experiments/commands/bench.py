@@ -61,5 +61,6 @@ def run(args: argparse.Namespace) -> int:
     table.to_csv(args.out / "bench.csv", index=False)
     (args.out / "versions.yaml").write_text(yaml.safe_dump(dict(benchmarks=names, quick=args.quick, versions=versions()),
                                                            sort_keys=False))
+    args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     print(f"wrote {args.out / 'bench.csv'}, {args.out / 'versions.yaml'}")
     return 0

@@ -198,6 +198,7 @@ def run(args: argparse.Namespace) -> int:
 
             figures += [str(p) for p in fig_explained_vs_lines(summary, src.name, figure_stem(args.out, src.name))
                         if p.suffix == ".png"]
+    args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     print(text)
     print(f"wrote {path}, {args.out / 'summary.csv'}, {args.out / 'summary.txt'}, {args.out / 'config.yaml'}"
           + "".join(f", {f}" for f in figures))

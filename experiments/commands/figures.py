@@ -89,6 +89,7 @@ def run(args: argparse.Namespace) -> int:
                             "complete tables/ folder of `lmsbench figures` or `lmsbench demo`") from None
     for folder in args.sweep:
         written.update(draw_sweep(folder, args.out))
+    args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     for name, paths in written.items():
         print(f"{name:32s} " + " ".join(p.name for p in paths))
     for note in notes:

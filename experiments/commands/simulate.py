@@ -148,5 +148,6 @@ def run(args: argparse.Namespace) -> int:
     cfg = _config(args)
     _world(cfg)
     records = run_simulation(cfg, args.out, progress=not args.quiet)
+    args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     print(f"simulated {len(records)} scans of world {cfg.world} (seed {cfg.seed}, {cfg.duration:g} s) into {args.out}")
     return 0

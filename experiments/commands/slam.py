@@ -192,6 +192,7 @@ def run(args: argparse.Namespace) -> int:
     result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
                       out=args.out, paper_baseline=not args.no_paper_baseline)
     write_outputs(args.out, data, config, result)
+    args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     m = result.metrics
     print(f"slam ({config.preset} preset): {m['n_scans']} scans in {m['seconds']:.1f} s "
           f"({m['cpu_scans_per_s']:.0f} scans/s of CPU time), {m['landmarks']['lines']} map lines; outputs in {args.out}")
