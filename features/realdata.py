@@ -293,6 +293,29 @@ def scan_measures(fs: FeatureSet | np.ndarray, scan: Scan, sigma_r: float,
     return ScanMeasures(n_valid, n_ok / n_valid, n_sigma / n_valid, n_ok, rmse, lines.shape[0], mean_len)
 
 
+def explained_fraction(fs: FeatureSet, scan: Scan, sigma: float = 0.005) -> tuple[float, float]:
+    """Fraction of valid beams whose range some line predicts within 3 ``sigma`` (m), and the RMS
+    range residual (m, measured minus predicted along the beam) of those explained beams (the
+    inlier RMS, as Open3D's ``fitness`` / ``inlier_rmse`` pair). A beam is explained by the lines
+    whose beam span [first, last] covers it; where spans overlap the closest line counts.
+    nan where undefined (no valid beam; no explained beam for the RMS).
+
+    Raises:
+        InputError: a ``sigma`` that is not a finite number > 0 (nan, zero or a negative one
+            explained no beam, silently; inf every covered one), an ``fs`` that is no FeatureSet or whose lines reach past the scan's
+            beams (features of another scan). ScanTypeError: a ``scan`` that is no lms200.Scan.
+    """
+    lines = check_measure_args(fs, scan, sigma, "sigma")
+    n_valid = int(np.count_nonzero(scan.valid))
+    if n_valid == 0:
+        return float("nan"), float("nan")
+    best = _ray_residuals(lines, scan)  # inf where no line covers a valid beam
+    inlier = best <= 3.0 * sigma
+    explained = int(np.count_nonzero(inlier))
+    rms = float(np.sqrt(np.mean(best[inlier] ** 2))) if explained else float("nan")
+    return explained / n_valid, rms
+
+
 def _pose(name: str, pose: object) -> tuple[float, float, float]:
     """``pose`` as (x m, y m, theta rad) floats; InputError naming ``name`` unless three finite numbers."""
     try:

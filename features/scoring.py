@@ -35,13 +35,14 @@ from typing import Any
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from lms200 import Scan
-
-from .angles import wrap
+from lms200.codes import real_rows
 from lms200.errors import InputError
 
+from .angles import wrap
+
 from .baselines import checks
-from .realdata import TRUTH_FIELDS, _ray_residuals, check_features, check_measure_args, truth_arrays
+from .realdata import TRUTH_FIELDS, check_features, truth_arrays
+from .realdata import explained_fraction as explained_fraction  # its home is realdata; scoring's name kept for users
 from .types import FeatureSet
 
 _BIG = 1e6
@@ -117,23 +118,15 @@ def prf(tp: int, fp: int, fn: int) -> tuple[float, float, float]:
     return p, r, f
 
 
-def _rows(name: str, a: object, width: int, exact: bool = False) -> np.ndarray:
-    """``a`` as a float64 array of rows at least ``width`` wide (exactly, with ``exact``: segments, whose
-    (k, 8) line rows were read as end points, silently); InputError naming ``name`` otherwise (None was
-    a TypeError, 'NoneType' object is not subscriptable)."""
-    try:
-        rows = np.asarray(a, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name}: must be an array of numbers ({exc})") from None
-    if rows.ndim != 2 or rows.shape[1] < width or (exact and rows.shape[1] != width):
-        what = f"shape {rows.shape}" if isinstance(a, np.ndarray) else f"{type(a).__name__} of shape {rows.shape}"
-        raise InputError(f"{name}: must be (k, {width}) rows of numbers, got {what}")
-    return rows
+def _rows(name: str, a: object, width: int, what: str, exact: bool = False) -> np.ndarray:
+    """``a`` as float64 rows at least ``width`` wide (exactly, with ``exact``: segments, whose (k, 8)
+    line rows were read as end points, silently), nan allowed; InputError naming ``name`` otherwise."""
+    return real_rows(a, name, width, what, finite=False, wider=not exact)
 
 
 def truth_lines(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Normal form (rho >= 0, alpha) of segments (k,4); InputError naming ``segments`` unless (k, 4) numbers."""
-    segments = _rows("segments", segments, 4, exact=True)
+    segments = _rows("segments", segments, 4, "x1, y1, x2, y2 m", exact=True)
     dx, dy = segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1]
     norm = np.maximum(np.hypot(dx, dy), 1e-12)
     nx, ny = -dy / norm, dx / norm
@@ -193,7 +186,7 @@ def line_compatibility(lines: np.ndarray, seg: np.ndarray, cfg: ScoreConfig) -> 
     against truth segments (x1, y1, x2, y2); InputError naming the argument for other shapes or types."""
     if not isinstance(cfg, ScoreConfig):
         raise InputError(f"cfg: must be a features.scoring.ScoreConfig, got {type(cfg).__name__}")
-    lines, seg = _rows("lines", lines, 6), _rows("seg", seg, 4, exact=True)
+    lines, seg = _rows("lines", lines, 6, "rho m, alpha rad, x0, y0, x1, y1 m"), _rows("seg", seg, 4, "x1, y1, x2, y2 m", exact=True)
     rho_t, alpha_t = truth_lines(seg)
     d_alpha = np.abs(wrap(lines[:, 1:2] - alpha_t[None, :]))
     d_alpha = np.minimum(d_alpha, np.pi - d_alpha)  # a line through the origin has two normals
@@ -305,24 +298,3 @@ def _score_corners(fs: FeatureSet, truth: CheckedTruth, dont_faces: np.ndarray, 
     return tp, fp, fn, err
 
 
-def explained_fraction(fs: FeatureSet, scan: Scan, sigma: float = 0.005) -> tuple[float, float]:
-    """Fraction of valid beams whose range some line predicts within 3 ``sigma`` (m), and the RMS
-    range residual (m, measured minus predicted along the beam) of those explained beams (the
-    inlier RMS, as Open3D's ``fitness`` / ``inlier_rmse`` pair). A beam is explained by the lines
-    whose beam span [first, last] covers it; where spans overlap the closest line counts.
-    nan where undefined (no valid beam; no explained beam for the RMS).
-
-    Raises:
-        InputError: a ``sigma`` that is not a finite number > 0 (nan, zero or a negative one
-            explained no beam, silently; inf every covered one), an ``fs`` that is no FeatureSet or whose lines reach past the scan's
-            beams (features of another scan). ScanTypeError: a ``scan`` that is no lms200.Scan.
-    """
-    lines = check_measure_args(fs, scan, sigma, "sigma")
-    n_valid = int(np.count_nonzero(scan.valid))
-    if n_valid == 0:
-        return float("nan"), float("nan")
-    best = _ray_residuals(lines, scan)  # inf where no line covers a valid beam
-    inlier = best <= 3.0 * sigma
-    explained = int(np.count_nonzero(inlier))
-    rms = float(np.sqrt(np.mean(best[inlier] ** 2))) if explained else float("nan")
-    return explained / n_valid, rms

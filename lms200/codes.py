@@ -14,6 +14,7 @@ from typing import Iterable, Literal
 import numpy as np
 
 from .errors import InputError
+from .finite import shown
 
 Units = Literal["mm", "cm"]
 
@@ -28,12 +29,17 @@ METRES_PER_UNIT = {"mm": 0.001, "cm": 0.01}
 LMS200_MAX_RANGE = {"mm": 8.183, "cm": 81.83}
 
 
+def check_units(units: object) -> Units:
+    """``units`` if it is 'mm' or 'cm'; InputError naming ``units`` otherwise (a list or an array
+    was Python's "unhashable type" TypeError, found by fuzzing ``encode_scan``)."""
+    if not isinstance(units, str) or units not in METRES_PER_UNIT:
+        raise InputError(f"units: must be 'mm' or 'cm', got {shown(units)}")
+    return units  # type: ignore[return-value]
+
+
 def metres_per_unit(units: Units) -> float:
     """Size of one distance unit in metres; raises InputError (a ValueError) for an unknown unit."""
-    try:
-        return METRES_PER_UNIT[units]
-    except KeyError:
-        raise InputError(f"units: must be 'mm' or 'cm', got {units!r}") from None
+    return METRES_PER_UNIT[check_units(units)]
 
 
 def codes_to_ranges(codes: np.ndarray, units: Units = "mm") -> np.ndarray:
@@ -92,12 +98,13 @@ def real_numbers(ranges: object, error: type[Exception] = InputError) -> np.ndar
     return a
 
 
-def real_rows(value: object, name: str, columns: int, what: str, finite: bool = True) -> np.ndarray:
+def real_rows(value: object, name: str, columns: int, what: str, finite: bool = True, wider: bool = False) -> np.ndarray:
     """``value`` as a float64 (k, ``columns``) array; InputError naming ``name`` for what is no
     array of real numbers of that shape, or (``finite``) holds nan / inf. Found by fuzzing the
     Python API: ``slam.metrics`` read its arrays by ``reshape(-1, 4)``, so a (12, 3) trajectory
     was scored as nine garbled (t, x, y, theta) rows, silently, and text, None or an (n, 5) array
-    was numpy's bare ValueError; ``write_tum`` wrote (3k, 4) poses as 4k garbled rows."""
+    was numpy's bare ValueError; ``write_tum`` wrote (3k, 4) poses as 4k garbled rows. With
+    ``wider``, rows may have more columns (the caller reads the first ``columns``)."""
     try:
         if value is None:  # np.asarray(None).astype(float) is nan
             raise TypeError
@@ -105,12 +112,14 @@ def real_rows(value: object, name: str, columns: int, what: str, finite: bool = 
         check_real_kind(a.dtype, InputError)
         a = a.astype(np.float64)
     except (InputError, TypeError, ValueError, OverflowError):
-        raise InputError(f"{name}: must be a (k, {columns}) array of real numbers ({what}), got "
+        shape = f"(k, >= {columns})" if wider else f"(k, {columns})"
+        raise InputError(f"{name}: must be a {shape} array of real numbers ({what}), got "
                          f"{type(value).__name__}") from None
     if a.shape == (0,):  # an empty list: no rows (a review: map_error([], walls), write_tum(p, [], []) were refused)
         a = a.reshape(0, columns)
-    if a.ndim != 2 or a.shape[1] != columns:
-        raise InputError(f"{name}: must be a (k, {columns}) array ({what}), got shape {a.shape}")
+    if a.ndim != 2 or a.shape[1] < columns or (a.shape[1] > columns and not wider):
+        shape = f"(k, >= {columns})" if wider else f"(k, {columns})"
+        raise InputError(f"{name}: must be a {shape} array ({what}), got shape {a.shape}")
     if finite and not np.isfinite(a).all():
         raise InputError(f"{name}: must be finite ({what}); row {int(np.nonzero(~np.isfinite(a).all(1))[0][0])} is not")
     return a

@@ -743,12 +743,13 @@ def test_the_real_data_and_scoring_helpers_name_a_bad_argument() -> None:
         (lambda: truncated_normal_rms(None, 0.03), "^sigma, tolerance: must be finite numbers > 0 m, got None and 0.03$"),  # TypeError
         (lambda: truncated_normal_rms(np.inf, 0.03), "^sigma, tolerance: must be finite numbers > 0 m"),  # ZeroDivisionError
         (lambda: truncated_normal_rms(0.01, np.inf), "^sigma, tolerance: must be finite numbers > 0 m"),  # was nan, silently
-        (lambda: normal_form(None), r"^segments: must be \(k, 4\) rows of numbers, got NoneType"),
-        (lambda: normal_form(truth.segments[:, :2]), r"^segments: must be \(k, 4\) rows of numbers, got shape \(\d+, 2\)$"),
-        (lambda: line_compatibility(None, truth.segments, ScoreConfig()), r"^lines: must be \(k, 6\) rows"),
-        (lambda: line_compatibility(lines, None, ScoreConfig()), r"^seg: must be \(k, 4\) rows"),
-        (lambda: line_compatibility(lines, lines, ScoreConfig()), r"^seg: must be \(k, 4\) rows of numbers, got shape \(\d+, 8\)$"),  # 0 pairs, silently
-        (lambda: normal_form(np.zeros((2, 8))), r"^segments: must be \(k, 4\) rows of numbers, got shape \(2, 8\)$"),  # read x0..y1 from line rows
+        (lambda: normal_form(None), r"^segments: must be a \(k, 4\) array of real numbers \(x1, y1, x2, y2 m\), got NoneType$"),
+        (lambda: normal_form(truth.segments[:, :2]), r"^segments: must be a \(k, 4\) array \(x1, y1, x2, y2 m\), got shape \(\d+, 2\)$"),
+        (lambda: line_compatibility(None, truth.segments, ScoreConfig()), r"^lines: must be a \(k, >= 6\) array of real numbers \(rho m, alpha rad, x0, y0, x1, y1 m\), got NoneType$"),
+        (lambda: line_compatibility(lines, None, ScoreConfig()), r"^seg: must be a \(k, 4\) array of real numbers"),
+        (lambda: line_compatibility(lines, lines, ScoreConfig()), r"^seg: must be a \(k, 4\) array \(x1, y1, x2, y2 m\), got shape \(\d+, 8\)$"),  # 0 pairs, silently
+        (lambda: normal_form(np.zeros((2, 8))), r"^segments: must be a \(k, 4\) array \(x1, y1, x2, y2 m\), got shape \(2, 8\)$"),  # read x0..y1 from line rows
+        (lambda: line_compatibility(lines[:, :3], truth.segments, ScoreConfig()), r"^lines: must be a \(k, >= 6\) array \(rho m, alpha rad, x0, y0, x1, y1 m\), got shape \(\d+, 3\)$"),
         (lambda: line_compatibility(lines, truth.segments, None), "^cfg: must be a features.scoring.ScoreConfig, got NoneType$"),
     ]
     from features.scoring import CheckedTruth, check_truth, score_scan

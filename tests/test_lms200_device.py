@@ -193,18 +193,51 @@ def test_a_reply_is_handed_over_before_the_next_scan_is_built() -> None:
     """Review 32 (slowsrc.py): the tail of the 0xA0 reply that starts continuous output was handed
     over only after the device had built its first scan (the simulator's first ray cast takes
     0.3-0.5 s), a gap mid-frame no device makes; the driver dropped the reply and resent after
-    3.5 s. Now the source is asked for a scan only after the due bytes went out."""
+    3.5 s. The first scan is now built when the device is (see the next test); every later one
+    only after the bytes due went out: the second when the first telegram has arrived whole."""
     seen: list[list[object]] = []
+    events: list[tuple[float, object]] = []
 
     def source():  # noqa: ANN202
         while True:
-            seen.append([e for _, e in host.events if isinstance(e, Frame)])
+            seen.append([e for _, e in events if isinstance(e, Frame)])
             yield Scan.lms200(np.full(361, 2.0))
 
     host = Host(VirtualLMS200(source()))
+    host.events = events
+    assert seen == [[]]  # the first scan: built with the device, before any request
     host.send(mode_request(0x24))
-    host.run(0.2)
-    assert seen[0] == [Frame(0x80, b"\xa0\x00\x10")]  # the whole reply had arrived
+    host.run(1.0)  # 9600 baud: the first telegram takes 0.76 s
+    assert seen[1][0] == Frame(0x80, b"\xa0\x00\x10") and seen[1][1].code == 0xB0 and len(seen[1]) == 2
+
+
+def test_the_first_scan_of_continuous_output_is_built_before_the_request() -> None:
+    """Closing note of session 32: the device asked its source for the first scan only once the
+    0xA0 reply to 0x20 0x24 had gone out, so a slow first scan (the simulator's first ray cast,
+    0.5-0.85 s) stood between the reply and the first telegram: the real unit sends its newest
+    scan at once. The source's first scan is now taken when the device is built; the telegram
+    starts as the reply ends (a build timed on the host's clock: 0.5 s here, old gap 0.5 s)."""
+    built: list[int] = []
+    hosts: list[Host] = []
+
+    def source():  # noqa: ANN202
+        while True:
+            if not built and hosts:
+                hosts[0].t += 0.5  # the first build takes 0.5 s of the host's time
+            built.append(1)
+            yield Scan.lms200(np.full(361, 2.0))
+
+    dev = VirtualLMS200(source())
+    dev.baud = 500000
+    hosts.append(Host(dev))
+    host = hosts[0]
+    host.send(mode_request(0x24))
+    host.run(0.3, step=0.0001)
+    host.run(0.3, step=0.0001)  # the old build's 0.5 s jump passed the end of the first run
+    times = [(t, e.code) for t, e in host.events if isinstance(e, Frame)]
+    (t_reply, code), (t_scan, first) = times[:2]
+    assert (code, first) == (0xA0, 0xB0)
+    assert t_scan - t_reply < 732 * 10 / 500000 + 0.002  # the telegram's line time (old: 0.5 s more)
 
 
 def test_quarter_degree_midpoints_follow_nan_then_inf() -> None:
