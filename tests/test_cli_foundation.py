@@ -136,3 +136,24 @@ def test_the_rate_and_progress_options_take_the_other_commands_spelling(command,
 
     args = build_parser().parse_args(command + flag)
     assert getattr(args, dest) == value
+
+
+def test_the_research_scripts_docs_name_answer_help_without_running(capsys: pytest.CaptureFixture[str]) -> None:
+    """`python -m experiments.benchmarks.features --help` (docs/features.md's accuracy table) ignored
+    --help and ran the whole table; `python -m experiments.slameval --help` (docs/slam.md) showed a
+    description cut mid-sentence ("..., a long") and options with no word of help or default."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    bench = subprocess.run([sys.executable, "-m", "experiments.benchmarks.features", "--help"], cwd=root,
+                           capture_output=True, text=True, timeout=120)
+    assert bench.returncode == 0 and "usage: python -m experiments.benchmarks.features" in bench.stdout
+    assert "world=office" not in bench.stdout
+    from experiments import slameval
+
+    with pytest.raises(SystemExit) as stop:
+        slameval.main(["--help"])
+    assert stop.value.code == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "paper preset against the default." in text and "(default 0-20)" in text and "(default 90)" in text
