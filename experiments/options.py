@@ -245,6 +245,24 @@ def check_file(path: str | os.PathLike, what: str = "a file") -> Path:
     return p
 
 
+def check_world_file(world: str) -> None:
+    """A world named by its world.json (``simulate --world``, a sweep's ``world``; a relative path is
+    read from the current folder): loaded now, so that a missing or bad one is an error before
+    anything is simulated. A built-in world's name passes."""
+    if not world.endswith(".json"):
+        return
+    from lms200 import LmsbenchError
+    from sim import World
+
+    check_file(world, "a world.json")
+    try:
+        World.from_json(world)
+    except LmsbenchError:
+        raise
+    except (ValueError, KeyError, TypeError) as exc:
+        raise InputError(f"{world}: not a world.json ({type(exc).__name__}: {' '.join(str(exc).split())})") from None
+
+
 def check_yaml(path: str | os.PathLike, what: str = "a YAML file", sized: bool = True) -> Path:
     """An existing, readable text file, of at most ``lms200.yamlio.MAX_YAML_BYTES`` when ``sized`` (a
     file the user writes; not the sweep.yaml a sweep wrote, which lists a grid one value a line). YAML
