@@ -157,3 +157,22 @@ def test_the_research_scripts_docs_name_answer_help_without_running(capsys: pyte
     assert stop.value.code == 0
     text = " ".join(capsys.readouterr().out.split())
     assert "paper preset against the default." in text and "(default 0-20)" in text and "(default 90)" in text
+
+
+def test_a_missing_input_names_the_file_it_was_likely_meant_to_be(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    """`lmsbench info ../shared/data/carmen/mit-csail.clf` (the file is mit-csail.clf.gz) said
+    "no such log" and no more; so did a one-letter slip (`intel-corected`). Now the message names the
+    compressed file or the close name beside it; a name with nothing near gets no guess."""
+    (tmp_path / "mit-csail.clf.gz").write_bytes(b"")
+    (tmp_path / "intel-corrected.log").write_text("")
+    (tmp_path / "k_vs_noise.yaml").write_text("")
+    monkeypatch.chdir(tmp_path)
+    for argv, said in ((["info", "mit-csail.clf"], "mit-csail.clf: no such log (did you mean mit-csail.clf.gz?)"),
+                       (["info", str(tmp_path / "intel-corected.log")],
+                        f"{tmp_path / 'intel-corected.log'}: no such log (did you mean {tmp_path / 'intel-corrected.log'}?)"),
+                       (["slam", "mit-csail.clf", "--out", "o"], "mit-csail.clf: no such input (did you mean mit-csail.clf.gz?)"),
+                       (["sweep", "k_vs_nois.yaml"], "k_vs_nois.yaml: no such file (did you mean k_vs_noise.yaml?)"),
+                       (["info", "other.bag"], "other.bag: no such log")):
+        assert main(argv) == 2
+        assert capsys.readouterr().err == f"lmsbench {argv[0]}: error: {said}\n"
