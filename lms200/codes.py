@@ -14,6 +14,7 @@ from typing import Iterable, Literal
 import numpy as np
 
 from .errors import InputError
+from .finite import shown
 
 Units = Literal["mm", "cm"]
 
@@ -28,12 +29,17 @@ METRES_PER_UNIT = {"mm": 0.001, "cm": 0.01}
 LMS200_MAX_RANGE = {"mm": 8.183, "cm": 81.83}
 
 
+def check_units(units: object) -> Units:
+    """``units`` if it is 'mm' or 'cm'; InputError naming ``units`` otherwise (a list or an array
+    was Python's "unhashable type" TypeError, found by fuzzing ``encode_scan``)."""
+    if not isinstance(units, str) or units not in METRES_PER_UNIT:
+        raise InputError(f"units: must be 'mm' or 'cm', got {shown(units)}")
+    return units  # type: ignore[return-value]
+
+
 def metres_per_unit(units: Units) -> float:
     """Size of one distance unit in metres; raises InputError (a ValueError) for an unknown unit."""
-    try:
-        return METRES_PER_UNIT[units]
-    except KeyError:
-        raise InputError(f"units: must be 'mm' or 'cm', got {units!r}") from None
+    return METRES_PER_UNIT[check_units(units)]
 
 
 def codes_to_ranges(codes: np.ndarray, units: Units = "mm") -> np.ndarray:

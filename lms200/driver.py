@@ -26,7 +26,7 @@ from typing import Callable, Iterator
 
 import serial
 
-from .codes import Units
+from .codes import Units, check_units
 from .errors import InputError, LmsDeviceError, LmsLinkError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
 from .finite import float_of, shown
 from .framing import Frame, FrameParser
@@ -104,8 +104,7 @@ def _check_arguments(baud: object, fov_deg: object, resolution_deg: object, unit
     if variant not in VARIANTS or fov != variant[0] or not math.isclose(res * 100, variant[1], abs_tol=1e-6):
         raise InputError(f"fov_deg, resolution_deg: ({shown(fov_deg)} deg, {shown(resolution_deg)} deg) is not an LMS200 "
                          f"variant; the variants are {_variant_names()} (0.25 deg only with 100 deg)")
-    if not isinstance(units, str) or units not in ("mm", "cm"):  # an array was numpy's ValueError (ambiguous truth)
-        raise InputError(f"units: must be 'mm' or 'cm', got {shown(units)}")
+    check_units(units)  # an array was numpy's ValueError (ambiguous truth)
     if not 0 <= integer("address", address) <= MAX_ADDRESS:
         raise InputError(f"address: must be in 0..{MAX_ADDRESS} (replies come from address + 0x80), got {shown(address)}")
     if integer("retries", retries) < 1:

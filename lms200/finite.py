@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .errors import InputError
@@ -46,3 +48,37 @@ def check_seed(seed: object) -> None:
 def is_number(value: object) -> bool:
     """A plain or numpy real number, not a bool (``float()`` takes text and bools as well)."""
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+
+
+def is_integer(value: object) -> bool:
+    """A plain or numpy int, not a bool (``0 <= address`` took a float, and 2.5 then failed in struct)."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def check_integer(value: object, name: str, lo: int, hi: int | None = None, what: str = "") -> int:
+    """``value`` as an int in [lo, hi] (hi None: no bound); InputError naming ``name`` otherwise (a
+    float, text, None, a list or an array were Python's TypeError or struct.error)."""
+    if not is_integer(value) or value < lo or (hi is not None and value > hi):  # type: ignore[operator]
+        span = f"in {lo}..{hi}" if hi is not None else f">= {lo}"
+        raise InputError(f"{name}: must be an integer {span}{' ' + what if what else ''}, got {shown(value)}")
+    return int(value)  # type: ignore[call-overload]
+
+
+def check_number(value: object, name: str, lo: float, hi: float, *, lo_open: bool = False, unit: str = "",
+                 finite: bool = True) -> float:
+    """``value`` as a float in [lo, hi] ((lo, hi] with ``lo_open``), finite unless ``finite`` is
+    False (then +-inf within the bounds is taken, nan never); InputError naming ``name`` otherwise (a
+    bool, text, a list, nan, or an int beyond float's range included)."""
+    ok, overflow = is_number(value), False
+    try:
+        number = float(value) if ok else math.nan  # type: ignore[arg-type]
+    except OverflowError:  # 10**400 is no float
+        number, overflow = math.nan, True
+    inside = not math.isnan(number) and (finite is False or math.isfinite(number)) \
+        and (lo < number if lo_open else lo <= number) and number <= hi
+    if not inside:
+        span = f"{'(' if lo_open else '['}{lo:g}, {hi:g}]" if hi < math.inf else f"{'>' if lo_open else '>='} {lo:g}"
+        kind = "a finite number" if finite else "a number"
+        raise InputError(f"{name}: must be {kind} {'' if hi == math.inf else 'in '}{span}{' ' + unit if unit else ''}, "
+                         f"got {overflow_text(value) if overflow else shown(value)}")
+    return number

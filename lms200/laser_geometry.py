@@ -37,7 +37,7 @@ from dataclasses import dataclass, replace
 
 from .codes import NOT_NUMBER_ITEMS
 from .errors import InputError
-from .finite import float_of
+from .finite import check_integer, float_of
 
 CONVENTION_FOV_DEG = 180.0  # CARMEN's assumed field of view of a FLASER scan without PARAM lines
 FIT_TOLERANCE_BEAMS = 0.25  # a declared fov / resolution must give the count to within this many beams
@@ -127,10 +127,10 @@ def beam_angles(n: int, geometry: LaserGeometry | None = None) -> tuple[float, f
     """(angle_min, angle_increment) in rad of an n-beam scan of partly known geometry.
 
     Raises:
-        ValueError: when n < 1 or the declared field of view and resolution do not fit n beams.
+        InputError: (a ValueError) when n is no integer >= 1 (a plain ValueError before, a TypeError
+            for None) or the declared field of view and resolution do not fit n beams.
     """
-    if n < 1:
-        raise ValueError(f"a scan needs at least one beam, got {n}")
+    check_integer(n, "n", 1, 2**31, what="(beams)")  # 10**400 was an OverflowError
     g = geometry or LaserGeometry()
     steps_even, steps_odd = n, n - 1  # steps the field of view spans in each convention
     fov, res = g.fov, g.resolution
@@ -142,14 +142,14 @@ def beam_angles(n: int, geometry: LaserGeometry | None = None) -> tuple[float, f
     else:
         ratio = fov / res
         if abs(ratio - steps_odd) > FIT_TOLERANCE_BEAMS and abs(ratio - steps_even) > FIT_TOLERANCE_BEAMS:
-            raise ValueError(
+            raise InputError(
                 f"{n} beams do not fit a field of view of {math.degrees(fov):.3f} deg at "
                 f"{math.degrees(res):.4f} deg (that is {round(ratio)} or {round(ratio) + 1} beams); "
                 "override the geometry (read_log(..., geometry=LaserGeometry(...)) or --laser-resolution-deg / "
                 "--laser-fov-deg)"
             )
     if (n - 1) * res > 2 * math.pi + 1e-9:
-        raise ValueError(f"{n} beams at {math.degrees(res):.4f} deg span more than 360 deg")
+        raise InputError(f"{n} beams at {math.degrees(res):.4f} deg span more than 360 deg")
     angle_min = g.angle_min if g.angle_min is not None else -0.5 * fov
     return angle_min, res
 

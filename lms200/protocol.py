@@ -12,13 +12,15 @@ LEN counts every byte after the length field except the CRC, so a frame is LEN +
 
 from __future__ import annotations
 
+import math
 import struct
 from dataclasses import dataclass
 
 import numpy as np
 
-from .codes import LMS200_MAX_RANGE, Units, check_codes, codes_to_ranges, ranges_to_codes
+from .codes import LMS200_MAX_RANGE, Units, check_codes, check_units, codes_to_ranges, ranges_to_codes
 from .errors import InputError, LmsProtocolError
+from .finite import check_integer, check_number, is_integer, is_number, shown
 from .scan import Scan
 
 STX = 0x02
@@ -142,15 +144,14 @@ def build_frame(payload: bytes, address: int = HOST_ADDRESS) -> bytes:
 
     Raises:
         InputError: (a ValueError) for a payload that is not bytes, is empty or longer than 812 bytes,
-            or an address beyond a byte.
+            or an address that is no integer 0..255 (a float was struct's error, None a TypeError).
     """
     payload = byte_string(payload, "payload")
     if not payload:
         raise InputError("payload: must hold at least the command byte")
     if len(payload) > MAX_LEN:
         raise InputError(f"payload: at most {MAX_LEN} bytes, got {len(payload)}")
-    if not 0 <= address <= 0xFF:
-        raise InputError(f"address: must be 0..255, got {address}")
+    check_integer(address, "address", 0, 0xFF)
     head = struct.pack("<BBH", STX, address, len(payload)) + payload
     return head + struct.pack("<H", crc16(head))
 
@@ -163,10 +164,11 @@ def reset_request() -> bytes:
 
 
 def mode_request(sub_command: int, password: bytes = PASSWORD) -> bytes:
-    """0x20: switch the operating mode; installation mode (0x00) carries the 8-byte password."""
-    if not 0 <= sub_command <= 0xFF:
-        raise InputError(f"sub_command: must be a byte, got {sub_command}")
+    """0x20: switch the operating mode; installation mode (0x00) carries the 8-byte password.
+    InputError for a ``sub_command`` that is no integer 0..255 or a ``password`` that is not 8 bytes."""
+    check_integer(sub_command, "sub_command", 0, 0xFF)
     if sub_command == MODE_INSTALLATION:
+        password = byte_string(password, "password")
         if len(password) != 8:
             raise InputError(f"password: must be 8 bytes, got {len(password)}")
         return bytes([CMD_MODE, sub_command]) + bytes(password)
@@ -175,8 +177,8 @@ def mode_request(sub_command: int, password: bytes = PASSWORD) -> bytes:
 
 def baud_request(baud: int) -> bytes:
     """0x20 with the sub-command that switches to ``baud`` (9600, 19200, 38400, 500000)."""
-    if baud not in BAUD_MODES:
-        raise InputError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {baud}")
+    if not is_number(baud) or baud not in BAUD_MODES:  # a list was a TypeError (unhashable)
+        raise InputError(f"baud: the LMS200 supports {sorted(BAUD_MODES)}, got {shown(baud)}")
     return mode_request(BAUD_MODES[baud])
 
 
@@ -197,10 +199,11 @@ def type_request() -> bytes:
 
 def variant_request(fov_deg: int, resolution_cdeg: int) -> bytes:
     """0x3B: field of view (100 or 180 deg) and resolution (100, 50, 25 hundredths of a deg)."""
-    if (fov_deg, resolution_cdeg) not in VARIANTS:
+    if not (is_integer(fov_deg) and is_integer(resolution_cdeg)) or (fov_deg, resolution_cdeg) not in VARIANTS:
+        # a list was a TypeError (unhashable), 180.0 passed here and failed in struct
         raise InputError(
-            f"variant: ({fov_deg} deg, {resolution_cdeg / 100} deg) is not an LMS200 variant; "
-            f"choose one of {[(a, r / 100) for a, r in VARIANTS]}"
+            f"variant: ({shown(fov_deg)} deg, {shown(resolution_cdeg)} hundredths of a deg) is not an LMS200 variant; "
+            f"choose one of (ints) {list(VARIANTS)}"
         )
     return struct.pack("<BHH", CMD_VARIANT, fov_deg, resolution_cdeg)
 
@@ -217,8 +220,7 @@ def set_config_request(config: bytes) -> bytes:
 
 def with_units(config: bytes, units: Units) -> bytes:
     """A configuration block with the measured-value unit byte set to ``units``."""
-    if units not in UNITS_CODES:
-        raise InputError(f"units: must be 'mm' or 'cm', got {units!r}")
+    units = check_units(units)
     if len(config) <= CONFIG_UNITS_OFFSET:
         raise LmsProtocolError(f"configuration block of {len(config)} bytes has no unit byte")
     block = bytearray(config)
@@ -286,7 +288,12 @@ def scan_geometry(n_values: int) -> tuple[float, float]:
     """(angle_min, angle_increment) in rad of an LMS200 scan of ``n_values`` beams.
 
     180 deg variants run from -90 deg, 100 deg variants from -50 deg (right to left).
+
+    Raises:
+        LmsProtocolError: for a count of no variant; InputError for a ``n_values`` that is no
+            integer (a list was a TypeError, unhashable).
     """
+    check_integer(n_values, "n_values", 0)
     try:
         fov, res = VARIANT_OF_COUNT[n_values]
     except KeyError:
@@ -315,8 +322,7 @@ def encode_measurement(codes: np.ndarray, units: Units, status: int = STATUS_OK)
     """A 0xB0 payload carrying ``codes`` (uint16, one per beam) in ``units``; InputError naming the
     argument for codes that are not 16-bit values, an unknown unit or a status beyond a byte."""
     values = check_codes(codes).astype("<u2")
-    if units not in UNITS_CODES:
-        raise InputError(f"units: must be 'mm' or 'cm', got {units!r}")
+    units = check_units(units)
     if isinstance(status, bool) or not isinstance(status, (int, np.integer)) or not 0 <= status <= 0xFF:
         raise InputError(f"status: must be a byte 0..255, got {status!r}")
     if values.ndim != 1 or not 0 < values.size <= 0x3FF:
@@ -326,10 +332,15 @@ def encode_measurement(codes: np.ndarray, units: Units, status: int = STATUS_OK)
 
 
 def encode_scan(scan: Scan, units: Units = "mm", status: int = STATUS_OK) -> bytes:
-    """A 0xB0 payload for ``scan`` (ranges rounded to the unit; +inf -> 8183, nan -> 8191)."""
+    """A 0xB0 payload for ``scan`` (ranges rounded to the unit; +inf -> 8183, nan -> 8191); InputError
+    for a ``scan`` that is no lms200.Scan (an array or None was an AttributeError)."""
+    if not isinstance(scan, Scan):
+        raise InputError(f"scan: must be an lms200.Scan, got {type(scan).__name__}")
     return encode_measurement(ranges_to_codes(scan.ranges, units), units, status)
 
 
 def frame_seconds(n_bytes: int, baud: int) -> float:
-    """Time ``n_bytes`` take on the line at ``baud`` (8N1: 10 bits a byte), in seconds."""
-    return n_bytes * 10.0 / baud
+    """Time ``n_bytes`` take on the line at ``baud`` (8N1: 10 bits a byte), in seconds; InputError
+    for an ``n_bytes`` that is no finite number >= 0 or a ``baud`` that is no finite number > 0 (0
+    was a ZeroDivisionError, None or text a TypeError, 10**400 an OverflowError)."""
+    return check_number(n_bytes, "n_bytes", 0.0, math.inf) * 10.0 / check_number(baud, "baud", 0.0, math.inf, lo_open=True)

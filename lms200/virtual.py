@@ -30,9 +30,9 @@ from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
-from .codes import Units, ranges_to_codes
+from .codes import Units, check_units, ranges_to_codes, real_numbers
 from .errors import InputError
-from .finite import shown
+from .finite import check_integer, is_integer, shown
 from .protocol import (
     ACK,
     BAUD_MODES,
@@ -64,6 +64,7 @@ from .protocol import (
     UNITS_CODES,
     VARIANTS,
     build_frame,
+    byte_string,
     crc16,
     encode_measurement,
     reply_code,
@@ -112,7 +113,11 @@ class Faults:
 
 
 def resample_to_grid(scan: Scan) -> np.ndarray:
-    """A scan's ranges on the LMS200's 361-beam 0.5 deg frame (nearest beam; nan where uncovered)."""
+    """A scan's ranges on the LMS200's 361-beam 0.5 deg frame (nearest beam; nan where uncovered);
+    InputError for a ``scan`` that is no lms200.Scan (None, a number or an array were a TypeError or
+    an AttributeError, found by fuzzing)."""
+    if not isinstance(scan, Scan):
+        raise InputError(f"scan: must be an lms200.Scan, got {type(scan).__name__}")
     start, step, n = SOURCE_GRID_DEG
     target = np.deg2rad(start + step * np.arange(n))
     if len(scan) == n and math.isclose(scan.angle_min, target[0], abs_tol=1e-9) and math.isclose(
@@ -129,9 +134,17 @@ def resample_to_grid(scan: Scan) -> np.ndarray:
 def variant_codes(ranges361: np.ndarray, variant: tuple[int, int], units: Units) -> np.ndarray:
     """Distance codes a variant reports from 0.5 deg ranges: 1 deg takes every other beam, 100 deg
     the beams from -50 to +50 deg, 0.25 deg adds midpoints: the mean of the two neighbours, so nan
-    (8191, not valid) next to a nan, else +inf (8183, above the maximum) next to a +inf."""
-    fov, res = variant
-    r = np.asarray(ranges361, dtype=np.float64)
+    (8191, not valid) next to a nan, else +inf (8183, above the maximum) next to a +inf.
+
+    Raises:
+        InputError: ``ranges361`` that are not 361 real numbers (text was numpy's ValueError; other
+            lengths were cut silently), a ``variant`` that is no LMS200 variant (a number was a
+            TypeError), an unknown unit.
+    """
+    fov, res = check_variant(variant)
+    r = np.asarray(real_numbers(ranges361), dtype=np.float64)
+    if r.shape != (SOURCE_GRID_DEG[2],):
+        raise InputError(f"ranges: must be the {SOURCE_GRID_DEG[2]} ranges of the 0.5 deg frame, got shape {r.shape}")
     if fov == 100:
         r = r[80:281]
     if res == 100:
@@ -148,8 +161,15 @@ def _is_real(value: object) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
-def _is_integer(value: object) -> bool:
-    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+def check_variant(variant: object) -> tuple[int, int]:
+    """``variant`` as (fov deg, resolution 1/100 deg), two ints of an LMS200 variant; InputError
+    otherwise (([180], 50) was a TypeError, unhashable; (180.0, 50) passed and a refused 0x3B later
+    raised struct.error in receive(); a number was "cannot unpack" in variant_codes)."""
+    if (not isinstance(variant, tuple) or len(variant) != 2 or not all(map(is_integer, variant))
+            or variant not in VARIANTS):
+        raise InputError(f"variant: {shown(variant)} is not an LMS200 variant; the variants are (fov deg, resolution "
+                         f"1/100 deg, ints) {', '.join(map(str, VARIANTS))} (25 = 0.25 deg only with 100 deg)")
+    return int(variant[0]), int(variant[1])
 
 
 @dataclass
@@ -189,17 +209,12 @@ class VirtualLMS200:
             raise InputError(f"time_scale: must be a number, got {type(time_scale).__name__} {shown(time_scale)}")
         if not 0 < time_scale <= MAX_TIME_SCALE:  # also nan
             raise InputError(f"time_scale: must be in (0, {MAX_TIME_SCALE:g}], got {shown(time_scale)}")
-        # Two ints: ([180], 50) was a TypeError (unhashable), (180.0, 50) passed and a refused 0x3B
-        # later raised struct.error in receive()
-        if (not isinstance(variant, tuple) or len(variant) != 2 or not all(map(_is_integer, variant))
-                or variant not in VARIANTS):
-            raise InputError(f"variant: {shown(variant)} is not an LMS200 variant; the variants are (fov deg, resolution "
-                             f"1/100 deg, ints) {', '.join(map(str, VARIANTS))} (25 = 0.25 deg only with 100 deg)")
-        variant = (int(variant[0]), int(variant[1]))
-        if not isinstance(units, str) or units not in UNITS_CODES:  # a list was a TypeError (unhashable)
-            raise InputError(f"units: must be 'mm' or 'cm', got {shown(units)}")
-        if not _is_integer(address) or not 0 <= address <= 0x7F:
+        variant = check_variant(variant)
+        units = check_units(units)  # a list was a TypeError (unhashable)
+        if not is_integer(address) or not 0 <= address <= 0x7F:
             raise InputError(f"address: must be an integer in 0..127 (replies come from address + 0x80), got {shown(address)}")
+        if isinstance(source, (str, bytes)) or not isinstance(source, Iterable):  # None was "not iterable"
+            raise InputError(f"source: must be an iterable of lms200.Scan, got {type(source).__name__}")
         self._source: Iterator[Scan] = iter(source)
         self.address = address
         self.time_scale = float(time_scale)
@@ -243,7 +258,9 @@ class VirtualLMS200:
 
     # -- host -> device ------------------------------------------------------------------------
     def receive(self, data: bytes, now: float) -> None:
-        """Bytes from the host, received at ``now`` (s)."""
+        """Bytes from the host, received at ``now`` (s); InputError for ``data`` that are not bytes
+        (text was a TypeError, an array numpy's ambiguous-truth ValueError)."""
+        data = byte_string(data, "data")
         if not data:
             return
         if self._rx and now - self._rx_last > self.timing.rx_gap_s:
@@ -461,7 +478,11 @@ class VirtualLMS200:
 def garble(data: bytes, baud_sent: int, baud_read: int) -> bytes:
     """What a UART set to ``baud_read`` makes of bytes sent at ``baud_sent``: unchanged when the
     bauds agree, else a deterministic stream of wrong bytes (framing errors), about as many
-    bytes as bit times fit (never a valid telegram in practice)."""
+    bytes as bit times fit (never a valid telegram in practice). InputError for ``data`` that are not
+    bytes or a baud that is no integer >= 1 (0 was a ZeroDivisionError, None a TypeError, 5e-324
+    an OverflowError)."""
+    data = byte_string(data, "data")
+    baud_sent, baud_read = check_integer(baud_sent, "baud_sent", 1), check_integer(baud_read, "baud_read", 1)
     if baud_sent == baud_read or not data:
         return data
     n = max(1, round(len(data) * baud_read / baud_sent))

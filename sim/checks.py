@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from lms200.errors import InputError
-from lms200.finite import is_number, overflow_text
+from lms200.finite import check_number as check_number  # re-exported: its home before lms200 used it
 
 
 def _numbers(value: object, count: int, name: str, what: str) -> tuple[float, ...]:
@@ -59,19 +59,3 @@ def check_instance(value: Any, cls: type, name: str, optional: bool = True) -> N
         return
     raise InputError(f"{name}: must be a {cls.__module__.split('.')[0]}.{cls.__name__}"
                      f"{' or None' if optional else ''}, got {type(value).__name__}")
-
-
-def check_number(value: object, name: str, lo: float, hi: float, *, lo_open: bool = False, unit: str = "") -> float:
-    """``value`` as a finite float in [lo, hi] ((lo, hi] with ``lo_open``); InputError naming ``name``
-    otherwise (a bool, text, a list, nan, or an int beyond float's range included)."""
-    ok = is_number(value)
-    try:
-        number = float(value) if ok else math.nan  # type: ignore[arg-type]
-    except OverflowError:
-        number = math.inf
-    inside = math.isfinite(number) and (lo < number if lo_open else lo <= number) and number <= hi
-    if not inside:
-        shown = overflow_text(value) if ok and number == math.inf and isinstance(value, int) else repr(value)
-        span = f"{'(' if lo_open else '['}{lo:g}, {hi:g}]"
-        raise InputError(f"{name}: must be a finite number in {span}{' ' + unit if unit else ''}, got {shown}")
-    return number

@@ -19,7 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--stride", type=count(1), default=1, help="use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=count(1), help="use at most this many scans")
     add_log_options(p)
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, prints_without_out=True)  # without --out the YAML goes to stdout
 
 
 def run(args: argparse.Namespace) -> int:
@@ -42,6 +42,9 @@ def run(args: argparse.Namespace) -> int:
     with heartbeat_on_terminal("calibrate", "calibrate: measuring the log and fitting by simulation ..."):
         result = calibrate_log(args.log, world=args.world, stride=args.stride, max_scans=args.max_scans,
                                **read_options)
+    if args.out is not None:  # before the summary: `calibrate LOG --out S.yaml | head -3` lost the YAML
+        write_sensor_yaml(result, args.out, str(args.log))
+        args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     for line in format_calibration(result):
         print(line)
     if args.out is None:
@@ -50,7 +53,6 @@ def run(args: argparse.Namespace) -> int:
             write_sensor_yaml(result, path, str(args.log))
             print(path.read_text(), end="")
     else:
-        write_sensor_yaml(result, args.out, str(args.log))
         print(f"wrote {args.out}")
     return 0
 

@@ -110,6 +110,7 @@ def run(args: argparse.Namespace) -> int:
                   versions=versions())
     args.out = args.out or new_run_folder("results/sim2real")
     paths = write_outputs(result, args.out, str(args.log), config)
+    args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     print(format_report(result, str(args.log)), end="")
     for warning in result.warnings:
         print(f"lmsbench sim2real: warning: {warning}", file=sys.stderr)

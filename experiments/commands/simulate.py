@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate-hz", type=positive("scans/s"), default=None, help="keep about this many scans/s (default all)")
     p.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=float, choices=(0.25, 0.5, 1.0),
                    default=None, help="angular resolution, deg: 0.5 (361 beams), 1 (181), 0.25 (401 over 100 deg); "
-                   "--resolution is the old spelling")
+                   "default 0.5; --resolution is the old spelling")
     p.add_argument("--units", choices=("mm", "cm"), default=None, help="range unit mode (default mm)")
     p.add_argument("--ideal", action="store_true", help="exact ranges: no noise, quantisation, dropouts, ...")
     p.add_argument("--sensor", type=path_arg, metavar="FILE.yaml",
@@ -36,7 +36,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--odometry", action="store_true", help="add noisy wheel odometry to the scans")
     p.add_argument("--config", type=path_arg, help="rerun a config.yaml written by an earlier run (it holds the whole "
                                                "run: no other option of the run may be given with it)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", "--no-progress", dest="quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
 
@@ -148,5 +148,6 @@ def run(args: argparse.Namespace) -> int:
     cfg = _config(args)
     _world(cfg)
     records = run_simulation(cfg, args.out, progress=not args.quiet)
+    args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     print(f"simulated {len(records)} scans of world {cfg.world} (seed {cfg.seed}, {cfg.duration:g} s) into {args.out}")
     return 0

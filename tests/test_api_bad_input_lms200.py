@@ -1,0 +1,124 @@
+"""Bad input to lms200's codec, virtual device and geometry helpers (the API hunt of 2026-12-04,
+session 33): each user error is an ``InputError`` (an ``LmsbenchError``) whose message names the
+argument and what it must be, never Python's TypeError / ZeroDivisionError / OverflowError,
+struct's error or numpy's ambiguous-truth ValueError."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from lms200 import LmsbenchError, Scan
+from lms200.errors import InputError, LmsProtocolError
+from lms200 import noise, protocol, tum, virtual
+from lms200.laser_geometry import LaserGeometry, beam_angles
+
+SCAN = Scan.lms200(np.full(361, 3.0))
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: protocol.build_frame(b"\x20", 2.5), r"^address: must be an integer in 0\.\.255, got 2\.5$"),  # struct.error
+    (lambda: protocol.build_frame(b"\x20", None), r"^address: must be an integer in 0\.\.255, got None$"),  # TypeError
+    (lambda: protocol.build_frame(b"\x20", [1]), r"^address: must be an integer"),
+    (lambda: protocol.mode_request(0.0), r"^sub_command: must be an integer in 0\.\.255, got 0\.0$"),  # TypeError
+    (lambda: protocol.mode_request("a"), r"^sub_command: must be an integer"),
+    (lambda: protocol.mode_request(0, password=5), r"^password: must be bytes"),  # TypeError: len() of an int
+    (lambda: protocol.baud_request([9600]), r"^baud: the LMS200 supports \[9600, 19200, 38400, 500000\], got \[9600\]$"),
+    (lambda: protocol.variant_request([180], 50), r"^variant: \(\[180\] deg, 50 hundredths of a deg\) is not an LMS200 variant"),
+    (lambda: protocol.variant_request(180.0, 50), r"^variant: \(180\.0 deg"),  # passed, then struct.error
+    (lambda: protocol.scan_geometry([361]), r"^n_values: must be an integer >= 0, got \[361\]$"),  # unhashable
+    (lambda: protocol.encode_scan(None), r"^scan: must be an lms200\.Scan, got NoneType$"),  # AttributeError
+    (lambda: protocol.encode_scan(SCAN, units=["mm"]), r"^units: must be 'mm' or 'cm', got \['mm'\]$"),  # unhashable
+    (lambda: protocol.encode_measurement(np.zeros(3, np.uint16), np.array(["mm"])), r"^units: must be 'mm' or 'cm'"),
+    (lambda: protocol.frame_seconds(10, 0), r"^baud: must be a finite number > 0, got 0$"),  # ZeroDivisionError
+    (lambda: protocol.frame_seconds(None, 9600), r"^n_bytes: must be a finite number >= 0, got None$"),  # TypeError
+    (lambda: protocol.frame_seconds(10**400, 9600), r"^n_bytes: must be a finite number >= 0, got a int beyond"),  # OverflowError
+    (lambda: beam_angles(0), r"^n: must be an integer in 1\.\.2147483648 \(beams\), got 0$"),  # a plain ValueError
+    (lambda: beam_angles(None), r"^n: must be an integer"),  # TypeError
+    (lambda: beam_angles(10**400), r"^n: must be an integer .* got 1000"),  # OverflowError
+    (lambda: virtual.resample_to_grid(None), r"^scan: must be an lms200\.Scan, got NoneType$"),  # TypeError: len()
+    (lambda: virtual.resample_to_grid(np.ones(361)), r"^scan: must be an lms200\.Scan, got ndarray$"),
+    (lambda: virtual.variant_codes(np.ones(361), 180, "mm"), r"^variant: 180 is not an LMS200 variant"),  # cannot unpack
+    (lambda: virtual.variant_codes("abc", (180, 50), "mm"), r"^ranges: must be real numbers"),  # numpy's ValueError
+    (lambda: virtual.variant_codes(np.ones(360), (180, 50), "mm"), r"^ranges: must be the 361 ranges .* got shape \(360,\)$"),
+    (lambda: virtual.VirtualLMS200(None), r"^source: must be an iterable of lms200\.Scan, got NoneType$"),  # not iterable
+    (lambda: virtual.VirtualLMS200(3.0), r"^source: must be an iterable of lms200\.Scan, got float$"),
+    (lambda: virtual.VirtualLMS200([SCAN]).receive("abc", 0.0), r"^data: must be bytes .* got str$"),  # TypeError
+    (lambda: virtual.VirtualLMS200([SCAN]).receive(np.array([1.0]), 0.0), r"^data: must be bytes .* got ndarray$"),
+    (lambda: virtual.garble(b"abc", 0, 9600), r"^baud_sent: must be an integer >= 1, got 0$"),  # ZeroDivisionError
+    (lambda: virtual.garble(b"abc", 9600, None), r"^baud_read: must be an integer >= 1, got None$"),  # TypeError
+    (lambda: virtual.garble(b"abc", 5e-324, 9600), r"^baud_sent: must be an integer >= 1, got 5e-324$"),  # OverflowError
+    (lambda: virtual.garble("abc", 9600, 19200), r"^data: must be bytes"),
+])
+def test_codec_and_virtual_device_name_the_bad_argument(call, message: str) -> None:
+    with pytest.raises(InputError, match=message) as info:
+        call()
+    assert isinstance(info.value, LmsbenchError) and "\n" not in str(info.value)
+
+
+def test_codec_and_virtual_device_keep_their_valid_inputs() -> None:
+    """The checks refuse nothing that worked: numpy ints, 9600.0 for a baud request, an unknown
+    beam count is still the protocol's error, a beam-count mismatch still a ValueError."""
+    assert protocol.build_frame(b"\x20", np.int64(3))[:2] == b"\x02\x03"
+    assert protocol.baud_request(9600.0) == protocol.baud_request(9600) == bytes([0x20, 0x42])
+    assert protocol.mode_request(np.uint8(0x25)) == bytes([0x20, 0x25])
+    assert protocol.frame_seconds(1, 9600) == pytest.approx(10 / 9600)
+    assert protocol.scan_geometry(np.int64(181)) == pytest.approx((-math.pi / 2, math.pi / 180))
+    with pytest.raises(LmsProtocolError, match="362 values matches no LMS200 variant"):
+        protocol.scan_geometry(362)
+    assert beam_angles(np.int64(361)) == pytest.approx((-math.pi / 2, math.pi / 360))
+    with pytest.raises(ValueError, match="span more than 360 deg"):
+        beam_angles(1000, LaserGeometry(resolution=math.radians(1)))
+    assert virtual.garble(b"abc", 9600, 9600) == b"abc" and len(virtual.garble(b"abcdef", 9600, 19200)) == 12
+    assert virtual.variant_codes(virtual.resample_to_grid(SCAN), (180, 100), "mm").tolist() == [3000] * 181
+    dev = virtual.VirtualLMS200(iter([SCAN]))
+    dev.receive(bytearray(), 0.0)
+    dev.receive(protocol.build_frame(protocol.measure_request()), 0.0)
+    sent = b"".join(chunk for chunk, _ in dev.transmit(10.0))
+    assert sent[:1] == bytes([protocol.ACK]) and len(sent) == 1 + 732  # ACK, then the 361-value 0xB0 frame
+
+
+# -- lms200.noise, lms200.tum ----------------------------------------------------------------------
+@pytest.mark.parametrize("call, message", [
+    (lambda: noise.estimate_quantum("abc"), r"^ranges: must be a \(k, 1\) array of real numbers"),  # numpy's ValueError
+    (lambda: noise.robust_scale(b"\x00\x01"), r"^z: must be a \(k, 1\) array of real numbers"),
+    (lambda: noise.interlace_stride(None), r"^angle_increment: must be a finite number in \(0, 6\.28319\] rad, got None$"),
+    (lambda: noise.interlace_stride(0.0), r"^angle_increment: must be a finite number in \(0, 6\.28319\] rad, got 0\.0$"),  # OverflowError
+    (lambda: noise.line_residuals("abc", 0.01), r"^ranges: must be real numbers"),
+    (lambda: noise.line_residuals(np.ones((2, 361)), 0.01), r"^ranges: must be 1-D \(the ranges of one scan, m\), got shape \(2, 361\)$"),
+    (lambda: noise.line_residuals(SCAN.ranges, 10**400), r"^angle_increment: must be a finite number .* got a int beyond"),
+    (lambda: noise.line_residuals(SCAN.ranges, 0.01, range_min=None), r"^range_min: must be a finite number >= 0 m, got None$"),
+    (lambda: noise.line_residuals(SCAN.ranges, 0.01, range_max="8"), r"^range_max: must be a number >= 0 m, got '8'$"),
+    (lambda: noise.line_residuals(SCAN.ranges, 0.01, stride=0), r"^stride: must be an integer >= 1 \(beams\), got 0$"),  # broadcast error
+    (lambda: noise.line_residuals(SCAN.ranges, 0.01, stride=-1), r"^stride: must be an integer >= 1"),
+    (lambda: noise.line_residuals(SCAN.ranges, 0.01, stride=2.5), r"^stride: must be an integer >= 1 \(beams\), got 2\.5$"),  # taken as 2
+    (lambda: noise.estimate_range_noise(SCAN, max_range=0.0), r"^min_range, max_range: the band \[min_range, max_range\) is empty"),
+    (lambda: noise.estimate_range_noise(SCAN, min_range=math.inf), r"^min_range, max_range: the band"),
+    (lambda: tum.quaternion_to_yaw(None), r"^q: must be a \(k, 4\) array of real numbers"),  # not enough values to unpack
+    (lambda: tum.quaternion_to_yaw([0.0, 0.0, 1.0]), r"^q: must be a \(k, 4\) array .* got shape \(1, 3\)$"),
+    (lambda: tum.quaternion_to_yaw("abcd"), r"^q: must be a \(k, 4\) array of real numbers"),
+    (lambda: tum.yaw_to_quaternion("a"), r"^theta: must be a \(k, 1\) array of real numbers"),  # numpy's ValueError
+])
+def test_noise_and_tum_helpers_name_the_bad_argument(call, message: str) -> None:
+    with pytest.raises(InputError, match=message) as info:
+        call()
+    assert "\n" not in str(info.value)
+
+
+def test_noise_and_tum_helpers_keep_their_valid_inputs() -> None:
+    """Same numbers as before for valid inputs: a list, a float32 array, the default stride, an
+    infinite range_max, quaternions of any norm and shape (4,) or (n, 4)."""
+    rng = np.random.default_rng(1)
+    ranges = 3.0 + rng.normal(0, 0.01, 361)
+    z, r0, centre = noise.line_residuals(list(ranges), math.pi / 360)
+    assert z.size == r0.size == centre.size > 300 and noise.interlace_stride(math.pi / 360) == 2
+    assert np.array_equal(noise.line_residuals(ranges, math.pi / 360, 0.0, math.inf, 2)[0], z)
+    assert noise.robust_scale(z)[1] == pytest.approx(0.01, rel=0.2)
+    assert noise.estimate_quantum(np.round(ranges, 2).astype(np.float32)) == 0.01
+    assert noise.estimate_range_noise(Scan.lms200(ranges), min_range=1.0, max_range=5.0).sigma_m == pytest.approx(0.01, rel=0.2)
+    assert tum.quaternion_to_yaw([0, 0, 1, 1]) == pytest.approx([math.pi / 2])
+    assert tum.quaternion_to_yaw(np.array([[0, 0, 0, 1.0], [0, 0, 0, 0]])).tolist()[0] == 0.0
+    assert np.isnan(tum.quaternion_to_yaw([0, 0, 0, 0])[0])  # no rotation: nan, as documented
+    assert tum.yaw_to_quaternion(0.0).tolist() == [[0.0, 0.0, 0.0, 1.0]]

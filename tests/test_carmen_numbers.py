@@ -1,0 +1,80 @@
+"""How the CARMEN reader parses numbers: the fast paths (range words parsed once a pass, a few numbers
+by float()) give exactly what ``_floats`` (numpy's parse with its checks) gives, values bit for bit
+and the same error for every bad word, and keep bounded memory."""
+
+from __future__ import annotations
+
+import itertools
+import struct
+
+import numpy as np
+import pytest
+
+from lms200 import read_log
+from lms200 import carmen
+from lms200.carmen import MAX_CACHED_WORD_CHARS, MAX_CACHED_WORDS, _few_floats, _floats, _range_floats, _RangeWords
+
+# valid words (signed zeros, nan and inf words, subnormals, underflow, a sum that overflows) and every
+# kind of bad one (an underscore, an overflow, no number, hex)
+WORDS = ["1.5", "-0", "0", "81.91", "nan", "-nan", "NaN", "inf", "-Infinity", "+inf", "1e308", "4.9e-324",
+         "1e-400", "1.", ".5", "1E5", "1e400", "-1e400", "1_0", "x", "0x10", "1e"]
+
+
+def _bits(values: object) -> list[str]:
+    return [struct.pack("<d", v).hex() for v in np.asarray(values, dtype=np.float64).tolist()]
+
+
+def _outcome(parse, words: list[str]) -> tuple[str, object]:
+    try:
+        return "values", _bits(parse(words, "FLASER ranges"))
+    except ValueError as exc:
+        return "error", str(exc)
+
+
+@pytest.mark.parametrize("size", [1, 2, 3])
+def test_fast_parses_give_what_floats_gives_for_every_word(size: int) -> None:
+    warm = _RangeWords()  # one cache over every group: words met before come from it
+    for words in itertools.product(WORDS, repeat=size):
+        group = list(words)
+        expected = _outcome(_floats, group)
+        assert _outcome(_few_floats, group) == expected, group
+        assert _outcome(lambda w, what: _range_floats(w, what, _RangeWords()), group) == expected, group
+        assert _outcome(lambda w, what: _range_floats(w, what, warm), group) == expected, group
+
+
+def _flaser(ranges: str, stamp: float) -> str:
+    return f"FLASER {len(ranges.split())} {ranges} 1 2 0.5 1 2 0.5 {stamp} host {stamp}\n"
+
+
+def test_valid_lines_never_reach_the_numpy_parse(tmp_path, monkeypatch) -> None:
+    # was: every laser, ODOM and TRUEPOS line went through _floats (numpy's parse of a list of words, its
+    # '_' and overflow checks): 9-24 % slower reads; the checks cost as much as the parse on ODOM lines
+    path = tmp_path / "same.log"
+    path.write_text("".join("ODOM 1 2 0.5 0 0 0 {t} h {t}\nTRUEPOS 3 4 0.5 1 2 0.5 {t} h {t}\n".format(t=i / 10)
+                            + _flaser("1.00 2.00 81.91 nan inf", i / 10) for i in range(50)))
+    calls: list[str] = []
+    real = carmen._floats
+    monkeypatch.setattr(carmen, "_floats", lambda words, what: calls.append(what) or real(words, what))
+    records = list(read_log(path))
+    assert len(records) == 50 and calls == []
+    assert records[-1].odom == (1.0, 2.0, 0.5) and records[-1].truth == (3.0, 4.0, 0.5)
+    assert records[-1].scan.stamp == 4.9 and _bits(records[-1].scan.ranges) == _bits([1.0, 2.0, np.nan, np.nan, np.inf])
+
+
+def test_a_bad_word_is_still_named_by_floats_message(tmp_path) -> None:
+    path = tmp_path / "bad.log"
+    path.write_text(_flaser("1.00 2.00", 1.0) + _flaser("1.00 x 1_0", 2.0) + "ODOM 0 0 1e400 0 0 0 3 h 3\n")
+    reader = read_log(path, skip_bad_lines=True)
+    assert len(list(reader)) == 1
+    assert reader.stats.skipped == [(2, "FLASER: FLASER ranges: '1_0' is not a number (no '_' in a CARMEN number)"),
+                                    (3, "ODOM: ODOM: '1e400' is beyond float64's range")]
+
+
+def test_the_range_words_kept_are_bounded() -> None:
+    cache = _RangeWords()
+    words = [f"{i / 1000:.3f}" for i in range(MAX_CACHED_WORDS + 1000)]
+    assert _range_floats(words, "r", cache).tolist() == [float(w) for w in words]
+    assert len(cache) == MAX_CACHED_WORDS  # the rest parsed every time, not kept
+    long = "1." + "0" * MAX_CACHED_WORD_CHARS
+    cache = _RangeWords()
+    assert _range_floats([long, "2.5"], "r", cache).tolist() == [1.0, 2.5] and list(cache) == ["2.5"]
