@@ -144,7 +144,8 @@ def _main(argv: Sequence[str] | None) -> int:
         if interrupt.timer is not None or _from_interrupt(exc):  # what Ctrl-C broke: not the input's error
             return _interrupted(interrupt, name)
         if isinstance(exc, BrokenPipeError) and _stdout_closed():
-            return _stdout_gone(name, not done and hasattr(args, "out"), getattr(args, "out", None))
+            stopped = not done and _writes_outputs(args) and not getattr(args, "outputs_complete", False)
+            return _stdout_gone(name, stopped, getattr(args, "out", None))
         _end_progress_bars()
         print(f"lmsbench {name}: error: {_one_line(exc)}{_skip_hint(exc, args)}", file=sys.stderr)
         return 2
@@ -194,6 +195,14 @@ def _stdout_gone(name: str, stopped: bool, out: object) -> int:
         print(f"lmsbench {name}: stopped: the reader of its standard output went away; "
               f"{out if out is not None else 'its output folder'} is incomplete", file=sys.stderr)
     return PIPE_CLOSED_STATUS
+
+
+def _writes_outputs(args: argparse.Namespace) -> bool:
+    """Whether the command writes files: it has an --out option, and is not one whose output without
+    it is stdout alone (``calibrate LOG | head -5`` said its output folder was incomplete: there is
+    none). A command sets ``args.outputs_complete`` once they are all written, before it prints its
+    summary: ``compare ... | head -3`` said the folder it had just finished was incomplete."""
+    return hasattr(args, "out") and not (args.out is None and getattr(args, "prints_without_out", False))
 
 
 def _stdout_to_devnull() -> None:

@@ -217,8 +217,10 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     """Run SLAM over ``data`` (timed: feature extraction + SLAM; wall clock ``seconds`` and CPU
     time ``cpu_seconds``), score it, and score the baselines: the raw odometry, with
     ``odometry_baseline`` the paper's filter driven by odometry, and with ``paper_baseline`` (for
-    the default preset) the paper preset. With ``out``, trajectory.tum and map.json are written
-    there before any scoring, so a scoring error loses no result."""
+    the default preset) the paper preset. With ``out``, trajectory.tum, map.json and config.yaml
+    are written there before any scoring and the baselines, so a scoring error or a Ctrl-C loses no
+    result, and an earlier run's metrics.json and slam.png are removed then: a run stopped there
+    left them beside its own trajectory, as if they were its scores."""
     records: Iterable[Record] = data.records
     if progress:
         from tqdm import tqdm
@@ -229,6 +231,9 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     if out is not None:
         write_result(out, result)
+        write_config(out, data, config)
+        for stale in ("metrics.json", "slam.png"):  # an earlier run's, written again at the end
+            (out / stale).unlink(missing_ok=True)
     d = result.diagnostics
     scores = score(result.trajectory, data, result)
     table = [{"source": _source_name(config), **_flat(scores), "cpu_scans_per_s": len(data.records) / max(cpu, 1e-9)}]
@@ -296,13 +301,18 @@ def write_result(out: Path, res: SlamResult) -> None:
 
 def write_outputs(out: Path, data: SlamInput, config: SlamConfig, slam_run: SlamRun) -> None:
     """trajectory.tum, map.json, metrics.json, config.yaml, slam.png in ``out``."""
-    import yaml
-
     res = slam_run.result
     write_result(out, res)
     (out / "metrics.json").write_text(json.dumps(_jsonable(slam_run.metrics), indent=2) + "\n")
-    (out / "config.yaml").write_text(yaml.safe_dump({"input": data.sources, "slam": config.to_dict()}, sort_keys=False))
+    write_config(out, data, config)
     plot(out / "slam.png", data, res)
+
+
+def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:
+    """config.yaml in ``out``: the input and the resolved SLAM config of the run."""
+    import yaml
+
+    (out / "config.yaml").write_text(yaml.safe_dump({"input": data.sources, "slam": config.to_dict()}, sort_keys=False))
 
 
 def _jsonable(value: Any) -> Any:

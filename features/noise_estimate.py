@@ -26,6 +26,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from lms200 import Scan
+from lms200.codes import real_rows
 from lms200.noise import MIN_RANGE_M, scans_of
 
 from .baselines.checks import MAX_BEAMS, fail, integer, positive
@@ -62,7 +63,14 @@ def scan_sigma(scan: Scan, fallback: float = AUTO_FALLBACK) -> float:
 
 
 def stacked_sigma(ranges: np.ndarray, scan: Scan, fallback: float = AUTO_FALLBACK) -> float:
-    """:func:`neighbour_sigma` of scans of ``scan``'s geometry stacked as rows of ``ranges`` (S, n)."""
+    """:func:`neighbour_sigma` of scans of ``scan``'s geometry stacked as rows of ``ranges`` (S, n).
+    InputError for ``ranges`` that are no (S, n) array of real numbers (n = the scan's beams: a
+    number, text, None or one scan's (n,) ranges were numba's TypingError), ScanTypeError for a
+    ``scan`` that is no Scan, ConfigError for a ``fallback`` that is no finite number > 0."""
+    if not isinstance(scan, Scan):
+        raise not_a_scan(scan, "stacked_sigma")
+    positive("fallback", fallback, "m")
+    ranges = real_rows(ranges, "ranges", len(scan), "one scan of the geometry a row, m", finite=False)
     return _engine()[0].pooled_sigma(ranges, twice_cos(scan.angle_increment), float(scan.range_min), float(scan.range_max),
                         float(fallback))
 

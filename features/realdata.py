@@ -197,6 +197,9 @@ def check_measure_args(fs: FeatureSet | np.ndarray, scan: Scan, sigma: object, s
     return _checked_lines(fs, scan)
 
 
+TRUNCATION_NONE = 40.0  # sigmas beyond which a truncation leaves the RMS unchanged in float64 (phi(40) = 0)
+
+
 def truncated_normal_rms(sigma: float, tolerance: float) -> float:
     """RMS (m) of a zero-mean normal of std ``sigma`` (m) over its values within +-``tolerance``
     (m): the ray RMSE that exact lines score under Gaussian range noise, ``sigma sqrt(1 - 2 c
@@ -204,7 +207,7 @@ def truncated_normal_rms(sigma: float, tolerance: float) -> float:
     if not all(checks.is_real(v) and checks.finite(v) and v > 0 for v in (sigma, tolerance)):  # None: TypeError;
         # inf (or 10**400) sigma: ZeroDivisionError; inf tolerance: nan
         raise InputError(f"sigma, tolerance: must be finite numbers > 0 m, got {sigma!r} and {tolerance!r}")
-    c = tolerance / sigma
+    c = min(tolerance / sigma, TRUNCATION_NONE)  # tolerance 1e308 or sigma 5e-324: inf * phi(inf) was nan
     inside = math.erf(c / math.sqrt(2.0))  # 2 Phi(c) - 1
     density = math.exp(-0.5 * c * c) / math.sqrt(2.0 * math.pi)  # phi(c)
     return sigma * math.sqrt(max(1.0 - 2.0 * c * density / inside, 0.0))

@@ -37,13 +37,14 @@ from scipy.optimize import linear_sum_assignment
 
 from lms200.codes import real_rows
 from lms200.errors import InputError
+from lms200.finite import shown
 
 from .angles import wrap
 
 from .baselines import checks
 from .realdata import TRUTH_FIELDS, check_features, truth_arrays
 from .realdata import explained_fraction as explained_fraction  # its home is realdata; scoring's name kept for users
-from .types import FeatureSet
+from .types import FeatureSet, whole_number
 
 _BIG = 1e6
 
@@ -112,7 +113,12 @@ def _ratio(a: float, b: float) -> float:
 
 
 def prf(tp: int, fp: int, fn: int) -> tuple[float, float, float]:
-    """Precision, recall and F1 (nan where undefined)."""
+    """Precision, recall and F1 (nan where undefined: no detection, no truth). InputError for a
+    count that is no whole number >= 0 (-1 or nan gave nan scores, silently; None or text was a
+    TypeError)."""
+    for name, count in (("tp", tp), ("fp", fp), ("fn", fn)):
+        if (type(count) is not int or count < 0) and (whole_number(count) is None or count < 0):  # type: ignore[operator]
+            raise InputError(f"{name}: must be a whole number >= 0 (a count), got {shown(count)}")
     p, r = _ratio(tp, tp + fp), _ratio(tp, tp + fn)
     f = _ratio(2 * tp, 2 * tp + fp + fn)
     return p, r, f

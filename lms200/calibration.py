@@ -40,7 +40,7 @@ from .codes import METRES_PER_UNIT
 from .errors import InputError
 from .finite import check_seed
 from .noise import (BOOTSTRAP_RESAMPLES, RangeNoise, _bootstrap_scale, _remove_quantisation, estimate_quantum, scans_of,
-                    estimate_range_noise, interlace_stride, line_residuals, robust_scale)
+                    estimate_range_noise, interlace_stride, robust_scale, scan_residuals)
 from .scan import Scan
 
 NOISE_BAND_M = (1.0, 4.0)  # the band whose sigma is the config's noise_sigma
@@ -250,7 +250,7 @@ def _noise_bins(scans: list[Scan], quantum: float, seed: int) -> tuple[list[dict
     """sigma per range band and the weighted straight-line fit sigma(r) = a + b (r - 2.5 m)."""
     zs, rs, blocks = [], [], []
     for k, s in enumerate(scans):
-        z, r0, _ = line_residuals(s.ranges, s.angle_increment, s.range_min, s.range_max)
+        z, r0, _ = scan_residuals(s, s.range_min, s.range_max)
         zs.append(z.astype(np.float32))
         rs.append(r0.astype(np.float32))
         blocks.append(np.full(z.size, k, dtype=np.int32))
@@ -288,8 +288,7 @@ def _tail_fit(scans: list[Scan], core: float, seed: int) -> tuple[Estimate, floa
     w N(0, wide^2), on triples at 1-4 m with |z| < TAIL_WINDOW core; bootstrap over scans for w."""
     zs, blk = [], []
     for k, s in enumerate(scans):
-        z, _, _ = line_residuals(s.ranges, s.angle_increment, max(s.range_min, NOISE_BAND_M[0]),
-                                 min(s.range_max, NOISE_BAND_M[1]))
+        z, _, _ = scan_residuals(s, max(s.range_min, NOISE_BAND_M[0]), min(s.range_max, NOISE_BAND_M[1]))
         zs.append(z)
         blk.append(np.full(z.size, k))
     if not zs or core <= 0:
@@ -323,8 +322,7 @@ def _tail_clustering(scans: list[Scan], core: float, seed: int) -> Estimate:
         return Estimate(float("nan"), float("nan"), 0)
     both, first = np.zeros(len(scans)), np.zeros(len(scans))
     for k, s in enumerate(scans):
-        z, _, centre = line_residuals(s.ranges, s.angle_increment, max(s.range_min, NOISE_BAND_M[0]),
-                                      min(s.range_max, NOISE_BAND_M[1]))
+        z, _, centre = scan_residuals(s, max(s.range_min, NOISE_BAND_M[0]), min(s.range_max, NOISE_BAND_M[1]))
         if z.size == 0:
             continue
         d = TAIL_CLUSTER_STEP * interlace_stride(s.angle_increment)

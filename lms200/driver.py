@@ -341,7 +341,12 @@ class LMS200:
             if attempt:
                 self._retries += 1
             self._doing = f"{what}: sending {telegram.hex(' ')}"
+            # A reply byte (ACK / NAK) counts only after the request: handshakes read before it
+            # are dropped, and onto a quiet line the answer starts in step (see FrameParser).
+            self._backlog = [ev for ev in self._backlog if isinstance(ev, Frame)]
             try:
+                if not self.streaming and not self._ser.in_waiting:
+                    self.parser.request_sent()
                 self._ser.write(telegram)
                 self._ser.flush()
             except (serial.SerialException, OSError) as exc:

@@ -2,10 +2,15 @@
 
 It resynchronises on garbage the way SICK's listing asks: look for ``STX ADDR`` (``02 80`` for
 device 0), read LEN, check LEN <= 812 and the CRC, and drop what fails by skipping that one STX
-byte and searching on, so a frame hidden behind a false start is still found. ACK / NAK bytes
-just before a frame (or ending what has arrived) are reported as handshake events in stream
-order; stray ones amid garbage are skipped with it, and so is the rest of a telegram that failed
-its CRC, except its last byte when the telegram may have lost bytes (see ``_garbage``).
+byte and searching on, so a frame hidden behind a false start is still found. ACK / NAK bytes are
+reported as handshake events in stream order only where the protocol puts a reply byte: at a
+point where the stream is in step (its start, after a good frame, a handshake, the whole of a
+telegram that failed only its CRC, a quiet line, or a request sent onto a quiet line: see
+:meth:`FrameParser.request_sent`), and only when nothing but handshakes comes before the next
+frame. Bytes skipped while resynchronising are garbage up to the next good frame, 0x06 and 0x15
+among them (a telegram whose STX, address or LEN was hit is garbage whole, and its last byte,
+the CRC's high byte, is 0x06 or 0x15 once in 128 such telegrams); so is the rest of a telegram
+that failed its CRC, except its last byte when the telegram may have lost bytes (see ``_garbage``).
 
 A false start whose LEN reaches beyond the bytes received so far waits for more bytes; call
 :meth:`FrameParser.idle` when the line has gone quiet (a real device sends a frame without gaps;
@@ -86,6 +91,7 @@ class FrameParser:
         self._base = 0  # stream offset of the first byte held back
         self._shadow = 0  # held-back bytes that are the rest of a telegram with a bad CRC
         self._shadow_open = False  # whether that telegram may have lost bytes (its last byte may be a handshake)
+        self._in_step = True  # the next byte is where a handshake may come (not amid a resynchronisation)
         self.received = 0  # bytes fed so far (the stream offset of the next byte)
         self.stats = ParserStats()
 
@@ -101,6 +107,19 @@ class FrameParser:
         self._buf.clear()
         self._shadow = 0
         self._shadow_open = False
+        self._in_step = True
+
+    @property
+    def resynchronising(self) -> bool:
+        """Whether bytes were skipped since the last good frame (or handshake, or quiet line): while
+        so, no byte counts as ACK / NAK."""
+        return not self._in_step
+
+    def request_sent(self) -> None:
+        """The host has just sent a request. When no bytes are held back (the line was quiet), the
+        next byte begins the answer: a handshake there counts even if garbage came before."""
+        if not self._buf:
+            self._shadow, self._shadow_open, self._in_step = 0, False, True
 
     def feed(self, data: bytes) -> list[Event]:
         """Add received bytes; returns the complete frames and handshake bytes, in stream order.
@@ -118,8 +137,11 @@ class FrameParser:
 
         Bytes that may still begin a frame (a lone STX, or a complete header whose frame would not
         yet be complete only because its LEN is false) are resolved; a trailing lone STX is kept.
+        A quiet line ends any resynchronisation: the next byte may be a handshake.
         """
-        return self._scan(final=True)
+        events = self._scan(final=True)
+        self._in_step = True
+        return events
 
     def hides_frame(self) -> bool:
         """Whether the bytes held back contain a complete frame with a good CRC behind their first
@@ -144,29 +166,41 @@ class FrameParser:
 
     # -----------------------------------------------------------------------------------------
     def _garbage(self, events: list[Event], garbage: bytes, shadowed: int = 0, open_end: bool = False) -> None:
-        """Account for bytes outside frames. ACK / NAK bytes that end the run (just before a frame
-        or at the end of what has arrived) are handshakes and become events in order; any other
-        byte, an ACK / NAK value amid garbage included, is skipped garbage. So are the first
-        ``shadowed`` bytes, the rest of a telegram that failed its CRC: its last byte (the CRC's
-        high byte) is 0x06 or 0x15 once in 128 corrupted telegrams, and was taken for a handshake
-        (a fake NAK made the driver resend, a fake ACK hid a real NAK behind it).
+        """Account for bytes outside frames (a run that ends where a frame candidate starts, or at
+        the end of what has arrived).
 
-        Except when the telegram may have lost bytes (``open_end``: its CRC's low byte is wrong
-        too, so more than the high byte was hit): then LEN reached past its real end, and its last
-        byte may be the handshake that followed (one byte lost put a real NAK there, which was
-        swallowed and the request waited out its timeout). That byte is a handshake when it ends
-        the run (a second handshake after it is the real one). A NAK taken wrongly costs a resend;
-        one missed costs a timeout."""
+        The first ``shadowed`` bytes are the rest of a telegram that failed its CRC: garbage. Its
+        last byte (the CRC's high byte) is 0x06 or 0x15 once in 128 corrupted telegrams, and was
+        taken for a handshake (a fake NAK made the driver resend, a fake ACK hid a real NAK behind
+        it). A telegram that failed only its CRC high byte had its LEN right: the stream is in step
+        again after it. One whose CRC low byte is wrong too (``open_end``) may have lost bytes, so
+        LEN reached past its real end and its last byte may be the handshake that followed (one
+        byte lost put a real NAK there, which was swallowed and the request waited out its
+        timeout): that byte is a handshake when it ends the run (a second handshake after it is
+        the real one). A NAK taken wrongly costs a resend; one missed costs a timeout.
+
+        The other bytes are handshakes only when the stream is in step before them and they are
+        all 0x06 / 0x15 (a reply byte comes alone, then a frame or nothing). Anything else is
+        garbage, 0x06 / 0x15 included, and puts the stream out of step until the next good frame:
+        a telegram whose STX, address or LEN was hit is skipped whole, and its last byte is no
+        handshake. A real handshake amid such garbage is lost: an ACK costs nothing (the reply
+        still counts), a NAK a timeout and a resend."""
         if not garbage:
             return
-        cut = len(garbage)
-        floor = min(max(shadowed, 0), cut)
-        if open_end and shadowed == cut and garbage[-1] in (ACK, NAK):
-            floor -= 1  # the telegram's span ends on the run's last byte: it may be a handshake
-        while cut > floor and garbage[cut - 1] in (ACK, NAK):
-            cut -= 1
-        self.stats.skipped_bytes += cut
-        for b in garbage[cut:]:
+        n = len(garbage)
+        span = min(max(shadowed, 0), n)  # bytes of the telegram that failed its CRC
+        handshakes = b""
+        if span and open_end and shadowed == n and garbage[-1] in (ACK, NAK):
+            span, handshakes, self._in_step = n - 1, garbage[-1:], True
+        elif span:
+            self._in_step = shadowed <= n and not open_end  # after a whole telegram with only a bad CRC
+        rest = garbage[span + len(handshakes):]
+        if rest and self._in_step and all(b in (ACK, NAK) for b in rest):
+            handshakes = rest
+        elif rest:
+            span, self._in_step = n, False
+        self.stats.skipped_bytes += span
+        for b in handshakes:
             if b == ACK:
                 self.stats.acks += 1
             else:
@@ -215,6 +249,7 @@ class FrameParser:
                 events.append(Frame(buf[start + 1], bytes(buf[start + 4 : end - 2]), self._base + end))
                 stats.frames += 1
                 pos = end
+                self._in_step = True
                 continue
             if verdict == "bad_crc":
                 stats.bad_crc += 1
@@ -225,6 +260,7 @@ class FrameParser:
             else:
                 stats.stalled += 1
             stats.skipped_bytes += 1
+            self._in_step = False  # resynchronising: no handshake before the next good frame
             pos = start + 1
         self._shadow = max(0, shadow - pos)
         self._shadow_open = open_end and self._shadow > 0

@@ -30,8 +30,9 @@ from typing import Any
 
 import numpy as np
 
+from .codes import real_numbers, real_vector
 from .errors import InputError
-from .finite import check_seed, float_of, is_number
+from .finite import check_integer, check_number, check_seed, float_of, is_number
 from .scan import Scan
 
 QUANTUM_CANDIDATES_M = (0.01, 0.005, 0.002, 0.001, 0.0005, 0.0002, 0.0001)
@@ -45,6 +46,7 @@ MIN_RANGE_M = 0.05  # readings nearer than this are not used
 BOOTSTRAP_RESAMPLES = 200
 SINGLE_SCAN_BLOCK = 30  # beams per bootstrap block when there is only one scan
 MAX_TRIPLES = 4_000_000  # memory bound: triples beyond this many are not read
+MAX_STRIDE = 2**31  # interlace_stride's cap: a subnormal beam step made it round(inf), an OverflowError
 
 
 @dataclass(frozen=True)
@@ -76,8 +78,9 @@ class RangeNoise:
 
 def estimate_quantum(ranges: np.ndarray) -> float:
     """The largest step of ``QUANTUM_CANDIDATES_M`` on whose grid at least 99 % of the finite
-    readings (m) lie; 0.0 when none fits (continuous values) or nothing is finite."""
-    v = np.asarray(ranges, dtype=np.float64).ravel()
+    readings (m) lie; 0.0 when none fits (continuous values) or nothing is finite. InputError for
+    ``ranges`` that are not real numbers (text was numpy's ValueError)."""
+    v = real_vector(ranges, "ranges", "m", finite=False)
     v = v[np.isfinite(v) & (v > 0)]
     if v.size == 0:
         return 0.0
@@ -90,8 +93,16 @@ def estimate_quantum(ranges: np.ndarray) -> float:
 
 def interlace_stride(angle_increment: float) -> int:
     """Beams between two of the same mirror turn: an LMS200 takes a 0.5 deg scan in two interlaced
-    1 deg turns (0.25 deg: four), so neighbours come from poses 13 ms apart on a moving robot."""
-    return max(1, int(round(np.deg2rad(1.0) / angle_increment))) if angle_increment < np.deg2rad(0.99) else 1
+    1 deg turns (0.25 deg: four), so neighbours come from poses 13 ms apart on a moving robot.
+    InputError for an ``angle_increment`` that is no finite number in (0, 2 pi] rad (None was a
+    TypeError, 0 an OverflowError)."""
+    increment = check_number(angle_increment, "angle_increment", 0.0, 2 * math.pi, lo_open=True, unit="rad")
+    return _stride(increment)
+
+
+def _stride(increment: float) -> int:
+    """:func:`interlace_stride` of a checked beam step."""
+    return max(1, int(round(min(np.deg2rad(1.0) / increment, MAX_STRIDE)))) if increment < np.deg2rad(0.99) else 1
 
 
 def line_residuals(ranges: np.ndarray, angle_increment: float, range_min: float = 0.0,
@@ -111,9 +122,26 @@ def line_residuals(ranges: np.ndarray, angle_increment: float, range_min: float 
         z: residual of each usable triple scaled to one beam's noise (m);
         r0: range of its middle beam (m);
         centre: index of its middle beam.
+
+    Raises:
+        InputError: ``ranges`` that are no 1-D array of real numbers (text was numpy's ValueError),
+            an ``angle_increment`` that is no finite number in (0, 2 pi] rad, a ``range_min`` that
+            is no finite number >= 0 m or a ``range_max`` no number >= 0 m (None was a TypeError), a
+            ``stride`` that is no integer >= 1 (0 or -1 was numpy's broadcast error, 2.5 taken as 2).
     """
-    r = np.asarray(ranges, dtype=np.float64)
-    k = interlace_stride(angle_increment) if stride is None else int(stride)
+    r = np.asarray(real_numbers(ranges), dtype=np.float64)
+    if r.ndim != 1:
+        raise InputError(f"ranges: must be 1-D (the ranges of one scan, m), got shape {r.shape}")
+    increment = check_number(angle_increment, "angle_increment", 0.0, 2 * math.pi, lo_open=True, unit="rad")
+    range_min = check_number(range_min, "range_min", 0.0, math.inf, unit="m")
+    range_max = check_number(range_max, "range_max", 0.0, math.inf, unit="m", finite=False)
+    k = _stride(increment) if stride is None else check_integer(stride, "stride", 1, what="(beams)")
+    return _line_residuals(r, increment, range_min, range_max, k)
+
+
+def _line_residuals(r: np.ndarray, angle_increment: float, range_min: float, range_max: float, k: int
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`line_residuals` of checked arguments."""
     if r.size < 2 * k + 1:
         empty = np.zeros(0)
         return empty, empty, np.zeros(0, dtype=np.int64)
@@ -134,10 +162,18 @@ def line_residuals(ranges: np.ndarray, angle_increment: float, range_min: float 
     return z, r0, idx + k
 
 
+def scan_residuals(scan: Scan, range_min: float, range_max: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`line_residuals` of a Scan (whose geometry the Scan checked) between ``range_min`` and
+    ``range_max`` (numbers, m) at its interlace stride, without the argument checks: this module's
+    estimators and ``lms200.calibration`` call it once a scan."""
+    return _line_residuals(scan.ranges, scan.angle_increment, range_min, range_max, _stride(scan.angle_increment))
+
+
 def robust_scale(z: np.ndarray) -> tuple[float, float, np.ndarray]:
     """(centre, scale, kept mask) of residuals: MAD start, then iterated CLIP_SIGMAS clipping with the
-    clipped Gaussian's standard deviation corrected back to sigma."""
-    z = np.asarray(z, dtype=np.float64)
+    clipped Gaussian's standard deviation corrected back to sigma. InputError for ``z`` that are not
+    real numbers (text was numpy's ValueError)."""
+    z = real_vector(z, "z", "residuals, m", finite=False)
     if z.size == 0:
         return 0.0, float("nan"), np.zeros(0, dtype=bool)
     m = float(np.median(z))
@@ -194,12 +230,13 @@ def estimate_range_noise(scans: Scan | Iterable[Any], min_range: float = 0.0,
         number = float_of(value, name, InputError) if is_number(value) else math.nan
         if math.isnan(number) or number < 0:
             raise InputError(f"{name}: must be a number >= 0 (m; max_range may be inf), got {value!r}")
+    if not min_range < max_range:  # an empty band: sigma_m was nan, silently (max_range 0, min_range inf)
+        raise InputError(f"min_range, max_range: the band [min_range, max_range) is empty, got [{min_range!r}, {max_range!r})")
     zs: list[np.ndarray] = []
     finite: list[np.ndarray] = []
     total = 0
     for scan in scans_of(scans):
-        z, _, _ = line_residuals(scan.ranges, scan.angle_increment, max(scan.range_min, min_range),
-                                 min(scan.range_max, max_range))
+        z, _, _ = scan_residuals(scan, max(scan.range_min, min_range), min(scan.range_max, max_range))
         r = scan.ranges
         finite.append(r[np.isfinite(r)][::7].astype(np.float64))  # a thinned sample is plenty for the grid
         zs.append(z.astype(np.float32))

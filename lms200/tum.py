@@ -16,8 +16,9 @@ from .errors import InputError, LogFormatError
 
 
 def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
-    """(n,) yaw angles (rad) -> (n, 4) quaternions (qx, qy, qz, qw) about z."""
-    half = 0.5 * np.asarray(theta, dtype=float)
+    """(n,) yaw angles (rad) -> (n, 4) quaternions (qx, qy, qz, qw) about z; InputError for
+    ``theta`` that are not real numbers (text was numpy's ValueError)."""
+    half = 0.5 * real_vector(theta, "theta", "yaw rad", finite=False)
     zeros = np.zeros_like(half)
     return np.column_stack((zeros, zeros, np.sin(half), np.cos(half)))
 
@@ -25,8 +26,14 @@ def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
 def quaternion_to_yaw(q: np.ndarray) -> np.ndarray:
     """(n, 4) quaternions (qx, qy, qz, qw) -> (n,) yaw (rad, in (-pi, pi]) of the rotations they
     stand for. A quaternion of any positive finite norm is normalised first (``(0, 0, 1, 1)`` is
-    90 deg; the unit formula gave 116.57 deg); a zero or non-finite one gives nan (no rotation)."""
-    q = np.atleast_2d(np.asarray(q, dtype=float))
+    90 deg; the unit formula gave 116.57 deg); a zero or non-finite one gives nan (no rotation).
+    InputError for ``q`` that is no (4,) or (n, 4) array of real numbers (None, [nan] or three
+    numbers were Python's "not enough values to unpack", text numpy's ValueError)."""
+    try:
+        one = np.ndim(q) == 1  # type: ignore[arg-type]
+    except ValueError:  # a ragged list: refused by real_rows
+        one = False
+    q = real_rows([q] if one else q, "q", 4, "qx, qy, qz, qw", finite=False)
     scale = np.max(np.abs(q), axis=1)  # divide by it first: no overflow or underflow in the squares
     ok = np.isfinite(q).all(axis=1) & (scale > 0)
     u = q / np.where(ok, scale, 1.0)[:, None]

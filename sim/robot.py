@@ -11,6 +11,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from lms200 import LmsbenchError
+from lms200.codes import real_vector
 from lms200.errors import InputError
 from lms200.timing import MAX_DURATION_S
 
@@ -97,7 +98,8 @@ class Tour:
         return float(self.start[-1] + self.duration[-1])
 
     def _phase(self, t: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        if not (isinstance(t, np.ndarray) and t.dtype == np.float64 and t.ndim == 1 and np.isfinite(t).all()):
+            t = real_vector(t, "t", "s")  # None, nan and text were the tour's end pose, 10**400 an OverflowError
         k = np.clip(np.searchsorted(self.start, t, side="right") - 1, 0, len(self.start) - 1)
         tau = np.clip(t - self.start[k], 0.0, self.duration[k])
         ta, pk, acc, T = self.t_acc[k], self.peak[k], self.accel[k], self.duration[k]
@@ -111,7 +113,8 @@ class Tour:
 
     def pose_at(self, t: np.ndarray | float) -> np.ndarray:
         """(n, 3) true pose (x m, y m, theta rad wrapped to (-pi, pi]) at times t (s); constant
-        after the tour's end."""
+        after the tour's end. InputError for ``t`` that are not finite real numbers (a number or
+        any shape of them)."""
         k, s, _, _ = self._phase(t)
         x0, y0, th0 = self.pose0[k].T
         drive = self.kind[k] == DRIVE

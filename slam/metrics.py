@@ -40,7 +40,8 @@ def checked_trajectory(traj: object, name: str, finite_poses: bool = True) -> np
 
 def interpolate_poses(traj: np.ndarray, stamps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Poses (k, 3) of ``traj`` at ``stamps`` (linear in x, y; shortest arc in theta) and a mask of
-    the stamps inside the trajectory's time span (poses outside are nan)."""
+    the stamps inside the trajectory's time span (poses outside are nan, and so are those next to a
+    pose that is not finite: a lost run's)."""
     traj = checked_trajectory(traj, "trajectory", finite_poses=False)
     stamps = real_vector(stamps, "stamps", "s", finite=False)
     t = traj[:, 0]
@@ -106,7 +107,7 @@ class AteResult:
     n: int
     rotation: float
     translation: tuple[float, float]
-    mirror_rmse: float
+    mirror_rmse: float  # RMSE of the best reflection (m); inf with align=False (no alignment, none looked for)
     mirrored: bool  # a reflection fits better: the estimate is probably mirrored
 
     def as_dict(self) -> dict:
@@ -181,6 +182,15 @@ def rpe(estimate: np.ndarray, truth: np.ndarray, delta: float = 1.0, pairs: str 
 
     Either way the error of a pair is E = (T_i^-1 T_j)^-1 (P_i^-1 P_j) (T truth, P estimate):
     translation |t(E)| (m, evo's ``translation_part``), rotation |theta(E)| (rad).
+
+    With no pair (the truth travels less than ``delta``) ``n`` is 0 and the errors are nan; an
+    estimate with a pose that is not finite (a lost run) scores nan.
+
+    Raises:
+        InputError: ``estimate`` or ``truth`` is no (n, 4) trajectory with finite stamps that do
+            not decrease (the truth's poses finite too), fewer than 2 estimated poses fall inside
+            the truth's time span (one pose scored nan, silently), an unknown ``pairs`` or a
+            ``delta`` that is no finite number > 0.
     """
     if not isinstance(pairs, str) or pairs not in RPE_PAIRS:
         raise InputError(f"pairs: must be one of {', '.join(RPE_PAIRS)}, got {pairs!r}")
@@ -188,6 +198,8 @@ def rpe(estimate: np.ndarray, truth: np.ndarray, delta: float = 1.0, pairs: str 
     est = checked_trajectory(estimate, "estimate", finite_poses=False)
     tru, inside = interpolate_poses(checked_trajectory(truth, "truth"), est[:, 0])
     est, tru = est[inside, 1:], tru[inside]
+    if est.shape[0] < 2:
+        raise InputError("rpe: fewer than 2 estimated poses fall inside the ground truth's time span")
     steps = np.hypot(*np.diff(tru[:, :2], axis=0).T)
     if pairs == "evo":
         kept, path = [0], 0.0
@@ -215,7 +227,8 @@ def rpe(estimate: np.ndarray, truth: np.ndarray, delta: float = 1.0, pairs: str 
 @dataclass(frozen=True)
 class MapError:
     """Map lines against the true walls: perpendicular distance of segment endpoints (m) and
-    direction error (rad) to the matched wall; ``matched`` of ``n_lines`` lines found a wall."""
+    direction error (rad) to the matched wall; ``matched`` of ``n_lines`` lines found a wall (the
+    distances and angle are nan when none did: no line, or none near a wall in place and direction)."""
 
     n_lines: int
     matched: int
@@ -328,6 +341,7 @@ class RelationsResult:
 def relations_error(trajectory: np.ndarray, relations: np.ndarray) -> RelationsResult:
     """Kummerle et al.'s metric: for each relation (t1, t2, x, y, yaw), the estimated motion from
     t1 to t2 (poses interpolated at the stamps) against the true one; eps = true^-1 * estimated.
+    A trajectory with a pose that is not finite (a lost run) scores nan where a relation meets it.
 
     Raises:
         InputError: a ``trajectory`` that is no (n, 4) trajectory with finite stamps that do not

@@ -12,7 +12,7 @@ import pytest
 
 from lms200 import LmsbenchError, Scan
 from lms200.errors import InputError, LmsProtocolError
-from lms200 import protocol, virtual
+from lms200 import noise, protocol, tum, virtual
 from lms200.laser_geometry import LaserGeometry, beam_angles
 
 SCAN = Scan.lms200(np.full(361, 3.0))
@@ -78,3 +78,88 @@ def test_codec_and_virtual_device_keep_their_valid_inputs() -> None:
     dev.receive(protocol.build_frame(protocol.measure_request()), 0.0)
     sent = b"".join(chunk for chunk, _ in dev.transmit(10.0))
     assert sent[:1] == bytes([protocol.ACK]) and len(sent) == 1 + 732  # ACK, then the 361-value 0xB0 frame
+
+
+# -- lms200.noise, lms200.tum ----------------------------------------------------------------------
+@pytest.mark.parametrize("call, message", [
+    (lambda: noise.estimate_quantum("abc"), r"^ranges: must be a \(k, 1\) array of real numbers"),  # numpy's ValueError
+    (lambda: noise.robust_scale(b"\x00\x01"), r"^z: must be a \(k, 1\) array of real numbers"),
+    (lambda: noise.interlace_stride(None), r"^angle_increment: must be a finite number in \(0, 6\.28319\] rad, got None$"),
+    (lambda: noise.interlace_stride(0.0), r"^angle_increment: must be a finite number in \(0, 6\.28319\] rad, got 0\.0$"),  # OverflowError
+    (lambda: noise.line_residuals("abc", 0.01), r"^ranges: must be real numbers"),
+    (lambda: noise.line_residuals(np.ones((2, 361)), 0.01), r"^ranges: must be 1-D \(the ranges of one scan, m\), got shape \(2, 361\)$"),
+    (lambda: noise.line_residuals(SCAN.ranges, 10**400), r"^angle_increment: must be a finite number .* got a int beyond"),
+    (lambda: noise.line_residuals(SCAN.ranges, 0.01, range_min=None), r"^range_min: must be a finite number >= 0 m, got None$"),
+    (lambda: noise.line_residuals(SCAN.ranges, 0.01, range_max="8"), r"^range_max: must be a number >= 0 m, got '8'$"),
+    (lambda: noise.line_residuals(SCAN.ranges, 0.01, stride=0), r"^stride: must be an integer >= 1 \(beams\), got 0$"),  # broadcast error
+    (lambda: noise.line_residuals(SCAN.ranges, 0.01, stride=-1), r"^stride: must be an integer >= 1"),
+    (lambda: noise.line_residuals(SCAN.ranges, 0.01, stride=2.5), r"^stride: must be an integer >= 1 \(beams\), got 2\.5$"),  # taken as 2
+    (lambda: noise.estimate_range_noise(SCAN, max_range=0.0), r"^min_range, max_range: the band \[min_range, max_range\) is empty"),
+    (lambda: noise.estimate_range_noise(SCAN, min_range=math.inf), r"^min_range, max_range: the band"),
+    (lambda: tum.quaternion_to_yaw(None), r"^q: must be a \(k, 4\) array of real numbers"),  # not enough values to unpack
+    (lambda: tum.quaternion_to_yaw([0.0, 0.0, 1.0]), r"^q: must be a \(k, 4\) array .* got shape \(1, 3\)$"),
+    (lambda: tum.quaternion_to_yaw("abcd"), r"^q: must be a \(k, 4\) array of real numbers"),
+    (lambda: tum.yaw_to_quaternion("a"), r"^theta: must be a \(k, 1\) array of real numbers"),  # numpy's ValueError
+])
+def test_noise_and_tum_helpers_name_the_bad_argument(call, message: str) -> None:
+    with pytest.raises(InputError, match=message) as info:
+        call()
+    assert "\n" not in str(info.value)
+
+
+def test_noise_and_tum_helpers_keep_their_valid_inputs() -> None:
+    """Same numbers as before for valid inputs: a list, a float32 array, the default stride, an
+    infinite range_max, quaternions of any norm and shape (4,) or (n, 4)."""
+    rng = np.random.default_rng(1)
+    ranges = 3.0 + rng.normal(0, 0.01, 361)
+    z, r0, centre = noise.line_residuals(list(ranges), math.pi / 360)
+    assert z.size == r0.size == centre.size > 300 and noise.interlace_stride(math.pi / 360) == 2
+    assert np.array_equal(noise.line_residuals(ranges, math.pi / 360, 0.0, math.inf, 2)[0], z)
+    assert noise.robust_scale(z)[1] == pytest.approx(0.01, rel=0.2)
+    assert noise.estimate_quantum(np.round(ranges, 2).astype(np.float32)) == 0.01
+    assert noise.estimate_range_noise(Scan.lms200(ranges), min_range=1.0, max_range=5.0).sigma_m == pytest.approx(0.01, rel=0.2)
+    assert tum.quaternion_to_yaw([0, 0, 1, 1]) == pytest.approx([math.pi / 2])
+    assert tum.quaternion_to_yaw(np.array([[0, 0, 0, 1.0], [0, 0, 0, 0]])).tolist()[0] == 0.0
+    assert np.isnan(tum.quaternion_to_yaw([0, 0, 0, 0])[0])  # no rotation: nan, as documented
+    assert tum.yaw_to_quaternion(0.0).tolist() == [[0.0, 0.0, 0.0, 1.0]]
+
+
+# -- configuration telegrams, the virtual device's clock, timing and faults --------------------------
+TELEGRAM = protocol.build_frame(protocol.measure_request())
+
+
+def _device(**kw: object) -> virtual.VirtualLMS200:
+    return virtual.VirtualLMS200([SCAN], time_scale=0.01, **kw)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: protocol.set_config_request(5), r"^config: must be bytes .* got int$"),  # was 5 zero bytes, silently
+    (lambda: protocol.set_config_request("abc"), r"^config: must be bytes .* got str$"),  # TypeError
+    (lambda: protocol.with_units(None, "mm"), r"^config: must be bytes .* got NoneType$"),  # TypeError
+    (lambda: protocol.units_of_config("abcdefg"), r"^config: must be bytes .* got str$"),  # AttributeError
+    (lambda: _device().receive(TELEGRAM, None), r"^now: must be a finite number \(s\), got None$"),  # TypeError
+    (lambda: _device().receive(TELEGRAM, 10**400), r"^now: must be a finite number \(s\), got a int beyond"),  # OverflowError
+    (lambda: _device().transmit(math.inf), r"^now: must be a finite number \(s\), got inf$"),  # OverflowError
+    (lambda: _device().transmit("1"), r"^now: must be a finite number \(s\), got '1'$"),  # TypeError
+    (lambda: _device().next_wakeup(None), r"^now: must be a finite number \(s\), got None$"),
+    (lambda: _device(faults=0.5), r"^faults: must be a lms200\.Faults or None, got float$"),  # AttributeError: seed
+    (lambda: _device(timing="fast"), r"^timing: must be a lms200\.DeviceTiming or None, got str$"),
+    (lambda: virtual.DeviceTiming(ack_s=None), r"^ack_s: must be a finite number in \[0, 3600\] s, got None$"),  # TypeError later
+    (lambda: virtual.DeviceTiming(reset_s=10**400), r"^reset_s: must be a finite number in \[0, 3600\] s, got a int beyond"),
+    (lambda: virtual.Faults(corrupt_prob="0.1"), r"^corrupt_prob: must be a finite number in \[0, 1\], got '0\.1'$"),  # UFuncTypeError
+    (lambda: virtual.Faults(drop_prob=2.0), r"^drop_prob: must be a finite number in \[0, 1\], got 2\.0$"),
+    (lambda: virtual.Faults(seed=-1), r"^seed: must be a whole number >= 0, got -1$"),
+])
+def test_config_telegrams_and_device_clock_name_the_bad_argument(call, message: str) -> None:
+    with pytest.raises(InputError, match=message) as info:
+        call()
+    assert "\n" not in str(info.value)
+
+
+def test_device_keeps_its_valid_clock_timing_and_faults() -> None:
+    dev = _device(timing=virtual.DeviceTiming(ack_s=0, reply_s=np.float32(0.01)), faults=virtual.Faults(miss_prob=0, seed=np.int64(2)))
+    dev.receive(TELEGRAM, np.float64(0.0))
+    assert dev.next_wakeup(0) is not None
+    assert b"".join(piece for piece, _ in dev.transmit(10)).startswith(bytes([protocol.ACK, protocol.STX]))
+    block = protocol.with_units(bytearray(32), "mm")
+    assert protocol.units_of_config(memoryview(block)) == "mm" and protocol.set_config_request(block)[1:] == block

@@ -127,7 +127,7 @@ CLOSED_STDOUT = r"""
 import sys
 from lms200 import LmsbenchError
 from experiments import cli
-from experiments.commands import info, simulate
+from experiments.commands import calibrate, info, simulate
 
 def stopped_in_its_work(args):  # a command with --out whose progress goes to stdout (demo, bench, sweep)
     for i in range(100000):
@@ -138,7 +138,8 @@ def fails_after_a_line(args):  # an error (exit 2) with a line left in stdout's 
     print("a line")
     raise LmsbenchError("a user error")
 
-simulate.run, info.run = stopped_in_its_work, fails_after_a_line
+simulate.run = calibrate.run = stopped_in_its_work
+info.run = fails_after_a_line
 sys.exit(cli.main(sys.argv[1:]))
 """
 
@@ -147,6 +148,9 @@ sys.exit(cli.main(sys.argv[1:]))
     (["simulate", "--out", "DIR"], 141, ["lmsbench simulate: stopped: the reader of its standard output went away; DIR is incomplete"]),
     (["info", "x.clf"], 2, ["lmsbench info: error: a user error"]),
     (["--help"], 0, []),
+    # calibrate prints its YAML without --out: `calibrate LOG | head -5` said "its output folder is incomplete"
+    (["calibrate", "x.clf"], 141, []),
+    (["calibrate", "x.clf", "--out", "s.yaml"], 141, ["lmsbench calibrate: stopped: the reader of its standard output went away; s.yaml is incomplete"]),
 ])
 def test_a_reader_that_goes_away_during_work_or_before_an_error(argv, status, stderr):
     """Review of the SIGPIPE handling: a command stopped in its work by a closed stdout (`lmsbench
@@ -160,6 +164,38 @@ def test_a_reader_that_goes_away_during_work_or_before_an_error(argv, status, st
     proc.stdout.close()  # the reader is gone before the first line
     err = proc.stderr.read()
     assert (proc.wait(timeout=120), err.splitlines()) == (status, stderr)
+
+
+def test_a_reader_that_goes_away_during_the_summary_does_not_call_finished_outputs_incomplete(tmp_path):
+    """`lmsbench compare office:0 ... --out DIR | head -3` (stdout unbuffered, or a summary longer than
+    its buffer): compare had written every file of DIR, then printed its table; the pipe broke on
+    the table and it said "stopped: ... DIR is incomplete", exit 141. DIR was whole. Now 141 with no
+    line; the outputs are there."""
+    out = tmp_path / "cmp"
+    cmd = [sys.executable, "-m", "experiments.cli", "compare", "office:0", "--duration", "2", "--methods", "sensor",
+           "split_merge", "--out", str(out)]
+    proc = subprocess.Popen(cmd, cwd=REPO, env={**_env(), "PYTHONUNBUFFERED": "1"}, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # the reader is gone before the first line
+    err = proc.stderr.read()
+    assert (proc.wait(timeout=300), err) == (141, "")
+    assert {p.name for p in out.iterdir()} == {"compare.parquet", "summary.csv", "summary.txt", "config.yaml"}
+
+
+def test_calibrate_writes_its_yaml_before_the_summary_a_reader_may_cut(tmp_path, shared_data):
+    """`lmsbench calibrate LOG --out S.yaml | head -3`: calibrate printed its summary first and wrote
+    S.yaml after it, so the broken pipe lost the YAML of a finished calibration. Now it is written first."""
+    out = tmp_path / "s.yaml"
+    cmd = [sys.executable, "-m", "experiments.cli", "calibrate", str(shared_data / "intel-corrected.log.gz"),
+           "--max-scans", "20", "--out", str(out)]
+    proc = subprocess.Popen(cmd, cwd=REPO, env={**_env(), "PYTHONUNBUFFERED": "1"}, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert (proc.wait(timeout=300), err) == (141, "")
+    assert out.read_text().startswith("# lmsbench calibrate ")
 
 
 SIGTERM_IN_A_COMMAND = r"""

@@ -103,3 +103,46 @@ def test_the_experiments_pages_usage_lines_match_the_parser() -> None:
             if a in flags and b in flags:
                 between = usage[min(usage.index(a), usage.index(b)):max(usage.index(a), usage.index(b))]
                 assert "|" in between, f"{name}: {a} and {b} are refused together; the usage line shows them apart: {usage}"
+
+
+def _options_with_defaults(parser, name=""):
+    """(command, option, default, help) of every option of every (sub)command whose default is a value."""
+    import argparse
+
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub, subparser in action.choices.items():
+                yield from _options_with_defaults(subparser, f"{name} {sub}".strip())
+        elif action.option_strings and action.default not in (None, False, [], argparse.SUPPRESS):
+            yield name, action.option_strings[0], action.default, action.help or ""
+
+
+def test_every_option_with_a_default_says_it_in_its_help() -> None:
+    """`lmsbench demo --help` said `--seed SEED  world and run seed` and `figures --help` the same
+    option with `(default 0)`; `lms200 record --timeout`, `--baud`, `compare --format`, `slam --every`
+    did not say theirs either. Every option with a default value now names it in its help."""
+    from experiments.cli import build_parser
+
+    silent = [(cmd, opt, default) for cmd, opt, default, text in _options_with_defaults(build_parser())
+              if "default" not in text]
+    assert not silent, f"options whose help does not say their default: {silent}"
+
+
+def test_the_figures_help_names_every_paper_figure_it_draws() -> None:
+    """`lmsbench --help` said figures draws "the paper's figures (4-7, 9, 10)"; it draws fig3_scan too."""
+    from experiments.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    summary = next(c.help for c in sub._choices_actions if c.dest == "figures")
+    assert "(3-7, 9, 10)" in summary
+
+
+@pytest.mark.parametrize("command", ["info", "calibrate", "sim2real"])
+def test_the_log_argument_names_every_compression_that_is_read(command: str) -> None:
+    """`lmsbench info --help` said a log is "CARMEN log (plain or .gz)", though the README and
+    docs/data.md say, and `info LOG.bz2` / `info LOG.xz` show, that bzip2 and xz logs are read too."""
+    from experiments.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command").choices[command]
+    log = next(a for a in sub._actions if a.dest == "log")
+    assert ".gz" in log.help and ".bz2" in log.help and ".xz" in log.help

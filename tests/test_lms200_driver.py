@@ -532,3 +532,42 @@ def test_a_slow_first_scan_of_the_virtual_device_does_not_delay_continuous_outpu
         latency = time.monotonic() - t
         assert latency < 0.5, latency  # old: >= 1.0 s
         assert len(list(itertools.islice(it, 5))) == 5
+
+
+def test_scan_telegrams_with_their_header_hit_cost_no_resend_and_no_later_scan(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Closing note of session 32: a scan telegram whose STX, address or LEN was hit is skipped
+    whole, but its last byte (the CRC's high byte, 0x15 here) was taken for a NAK where it ended a
+    read or came just before a frame: while streaming the parser counted NAKs that no one sent, and
+    close()'s stop request, with such a telegram in flight before its ACK, was sent again (retries
+    1). Now bytes skipped while resynchronising are no handshakes: no NAK, no resend, and every
+    good scan between the broken ones is yielded in order."""
+    from lms200_fake_port import ACK_BYTE, answer, fake_port, reply
+    from test_lms200_framing import _header_hits, _scan_telegram
+
+    victim = _scan_telegram(217)
+    assert victim[-1] == 0x15
+    hits = _header_hits(victim)
+    broken = [hits[k] for k in ("STX bit 0", "address bit 2", "LEN low bit 5", "LEN high bit 1", "LEN high bit 0",
+                                "STX lost", "address lost", "LEN high lost")]
+    plan = {"stop": 0}
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":  # a good scan, a broken one, ... each in its own read
+            pieces = [*answer(payload)]
+            for i, b in enumerate(broken):
+                pieces += [(0.02 + 0.02 * i, _scan_telegram(10 + i)), (0.03 + 0.02 * i, b)]
+            return [*pieces, (0.02 + 0.02 * len(broken), _scan_telegram(99))]
+        if payload == b"\x20\x25":
+            plan["stop"] += 1
+            if plan["stop"] == 2:  # close() while streaming: a broken scan in flight, then ACK and reply
+                return [(0.0, broken[0]), (0.01, ACK_BYTE), (0.02, reply(b"\xa0\x00\x10"))]
+        return answer(payload)
+
+    port = fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False)
+    got = [int(round(s.ranges[0] * 1000)) for s in itertools.islice(lms.scans(), len(broken) + 1)]
+    assert got == [10 + i for i in range(len(broken))] + [99]
+    assert lms.parser.stats.naks == 0  # old: 8, one per broken scan
+    lms.close()
+    assert sum(w[4:6] == b"\x20\x25" for w in port.writes) == 2  # once at opening, once at close (old: 3)
+    assert (lms.stats.retries, lms.parser.stats.naks) == (0, 0)  # old: (1, 9)

@@ -32,8 +32,10 @@ def test_bad_crc_and_impossible_length_are_counted_and_skipped() -> None:
     too_long = bytes([0x02, 0x80, 0x2D, 0x03])  # LEN 813
     p = FrameParser()
     out = p.feed(bytes(bad) + too_long + b"gar\x15bage\x15" + good)
-    assert out == [0x15, Frame(0x80, b"\xb0\x01\x00\x10")]  # the NAK amid garbage is garbage
-    assert p.stats.bad_crc == 1 and p.stats.bad_length == 1 and p.stats.naks == 1
+    # 0x15 amid garbage is garbage, and so is the one just before the frame: while resynchronising
+    # no byte is a handshake (it is what the last byte of a telegram with its header hit looks like)
+    assert out == [Frame(0x80, b"\xb0\x01\x00\x10")]
+    assert p.stats.bad_crc == 1 and p.stats.bad_length == 1 and p.stats.naks == 0
 
 
 def test_false_start_waits_then_idle_recovers_the_frame_behind_it() -> None:
@@ -82,6 +84,15 @@ def streams(draw):  # noqa: ANN001, ANN201
     return stream, intact, cuts
 
 
+def feed_cut(p: FrameParser, stream: bytes, cuts: list[int]) -> list:
+    """The events of ``stream`` fed in pieces cut at ``cuts``, then of a quiet line."""
+    events = []
+    bounds = [0, *cuts, len(stream)]
+    for lo, hi in zip(bounds[:-1], bounds[1:]):
+        events += p.feed(stream[lo:hi])
+    return events + p.idle()
+
+
 def is_subsequence(needles: list[bytes], haystack: list[bytes]) -> bool:
     it = iter(haystack)
     return all(any(n == h for h in it) for n in needles)
@@ -92,11 +103,7 @@ def is_subsequence(needles: list[bytes], haystack: list[bytes]) -> bool:
 def test_fuzz_every_intact_frame_is_recovered(case) -> None:  # noqa: ANN001
     stream, intact, cuts = case
     p = FrameParser()
-    events = []
-    bounds = [0, *cuts, len(stream)]
-    for lo, hi in zip(bounds[:-1], bounds[1:]):
-        events += p.feed(stream[lo:hi])
-    events += p.idle()
+    events = feed_cut(p, stream, cuts)
     got = [e.payload for e in events if isinstance(e, Frame)]
     assert is_subsequence(intact, got)
     assert all(e in (ACK, NAK) for e in events if not isinstance(e, Frame))
@@ -141,11 +148,17 @@ def test_the_crc_byte_of_a_corrupted_telegram_is_no_handshake() -> None:
         assert p.feed(bytes(ba)) == [] and p.feed(bytes([NAK])) == [NAK] and p.stats.naks == 1
         p = FrameParser()
         assert p.feed(bytes(ba) + bytes([ACK]) + b0) == [ACK, Frame(0x80, b"\xb0\x01\x00\x10")]
-    # A good frame inside a failed candidate's span proves that candidate false: its span is no telegram.
+    # A good frame inside a failed candidate's span proves that candidate false: its span is no
+    # telegram, and the frame is found; the bytes between are skipped while resynchronising, an
+    # 0x06 among them too (it counted as an ACK before the closing note of session 32).
     good = frame(b"\xa0\x00\x10")
     false_start = bytes([0x02, 0x80, 0x0A, 0x00, 0x00])  # LEN 10 spans the ACK and part of the reply
     p = FrameParser()
-    assert p.feed(false_start + bytes([ACK]) + good + bytes(8)) == [ACK, Frame(0x80, b"\xa0\x00\x10")]
+    assert p.feed(false_start + bytes([ACK]) + good + bytes(8)) == [Frame(0x80, b"\xa0\x00\x10")]
+    p = FrameParser()  # a request sent onto the quiet line after it: its ACK counts
+    assert p.feed(false_start) == [] and p.idle() == [] and not p.resynchronising
+    p.request_sent()
+    assert p.feed(bytes([ACK]) + good) == [ACK, Frame(0x80, b"\xa0\x00\x10")]
 
 
 def test_a_nak_behind_a_telegram_that_lost_a_byte_is_still_a_nak() -> None:
@@ -176,3 +189,71 @@ def test_a_nak_behind_a_telegram_that_lost_a_byte_is_still_a_nak() -> None:
         hit[-1] = value
         p = FrameParser()
         assert p.feed(bytes(hit) + scan) == [Frame(0x80, scan[4:-2])] and p.stats.acks + p.stats.naks == 0
+
+
+def _scan_telegram(first: int) -> bytes:
+    from lms200.protocol import encode_measurement
+
+    values = np.full(361, 1000, np.uint16)
+    values[0] = first
+    return frame(encode_measurement(values, "mm"))
+
+
+def _header_hits(telegram: bytes) -> dict[str, bytes]:
+    """The telegram with each header byte (STX, address, LEN low, LEN high) hit: every single-bit
+    flip, and the byte lost."""
+    out = {}
+    for k, name in enumerate(("STX", "address", "LEN low", "LEN high")):
+        for bit in range(8):
+            hit = bytearray(telegram)
+            hit[k] ^= 1 << bit
+            out[f"{name} bit {bit}"] = bytes(hit)
+        out[f"{name} lost"] = telegram[:k] + telegram[k + 1 :]
+    return out
+
+
+def test_a_telegram_whose_header_was_hit_leaves_no_handshake_and_loses_no_frame() -> None:
+    """Closing note of session 32: a telegram whose STX, address or LEN was hit is garbage whole,
+    and its last byte (the CRC's high byte) ended the garbage run before the next frame (or a
+    read), where it was taken for a handshake: an NAK made a waiting request resend, an ACK hid a
+    real NAK. Scan telegrams whose CRC high byte is 0x15 and 0x06, each of 40 header hits, in a
+    stream between good scans, fed whole, byte by byte and cut around the hit: no handshake, and
+    every good scan behind it is found. Old: a handshake in 36 of the 40 hits fed whole (33 byte by byte)."""
+    goods = [_scan_telegram(v) for v in (1, 2, 3)]
+    for first, tail in ((217, NAK), (154, ACK)):
+        victim = _scan_telegram(first)
+        assert victim[-1] == tail
+        for name, broken in _header_hits(victim).items():
+            stream = goods[0] + broken + goods[1] + goods[2]
+            at = len(goods[0])
+            cut_sets = {"whole": [], "byte by byte": list(range(1, len(stream))),
+                        "around the hit": [at + c for c in (1, 2, 3, 4, 5, 100, len(broken) - 1, len(broken))]}
+            if name == "STX bit 2":  # 0x02 -> 0x06 ending a read where the stream is in step: taken
+                # for an ACK (it cannot be told from one until the next byte comes), see docs/lms200.md
+                cut_sets = {k: [c for c in v if c != at + 1] for k, v in cut_sets.items()}
+            for how, cuts in cut_sets.items():
+                p = FrameParser()
+                events = feed_cut(p, stream, cuts)
+                assert [e for e in events if not isinstance(e, Frame)] == [], (name, how)
+                assert [e.payload for e in events] == [g[4:-2] for g in goods], (name, how)
+                assert (p.stats.acks, p.stats.naks) == (0, 0)
+
+
+def test_handshakes_count_only_where_the_stream_is_in_step() -> None:
+    """A reply byte comes alone, then a frame or nothing: after a good frame, a handshake, the
+    whole of a telegram that failed only its CRC, a quiet line, or a request sent onto a quiet
+    line. Amid a resynchronisation (after skipped bytes, before the next good frame) 0x06 / 0x15
+    are garbage; an 0x06 followed by anything but a frame or another handshake is too."""
+    good = frame(b"\xa0\x00\x10")
+    p = FrameParser()
+    assert p.feed(bytes([ACK]) + good + bytes([NAK])) == [ACK, Frame(0x80, b"\xa0\x00\x10"), NAK]
+    assert p.feed(b"\x06\x80\xd6\x02") == [] and p.resynchronising  # a hit STX, not an ACK
+    assert p.feed(bytes([NAK])) == [] and p.feed(good) == [Frame(0x80, b"\xa0\x00\x10")]
+    assert not p.resynchronising and p.feed(bytes([NAK])) == [NAK]
+    assert (p.stats.acks, p.stats.naks, p.stats.skipped_bytes) == (1, 2, 5)
+    p.feed(b"noise")
+    p.request_sent()  # nothing held back: the answer starts here
+    assert p.feed(bytes([NAK])) == [NAK]
+    p.feed(b"noise\x02")  # a trailing STX is held back: the line was not quiet
+    p.request_sent()
+    assert p.resynchronising and p.feed(bytes([NAK])) == []

@@ -56,6 +56,33 @@ def test_trajectory_and_map_are_written_before_scoring(short_log, tmp_path, monk
     assert "lines" in json.loads((tmp_path / "o" / "map.json").read_text())
 
 
+def test_a_run_stopped_after_its_trajectory_leaves_no_earlier_runs_scores_beside_it(short_log, tmp_path, monkeypatch):
+    """Ctrl-C during `lmsbench slam RUN --out DIR`'s baselines, DIR holding an earlier run: the new
+    trajectory.tum and map.json were written, but the earlier run's metrics.json, config.yaml and
+    slam.png stayed beside them, read as this trajectory's scores and settings. Now the run's own
+    config.yaml is written with its trajectory and the earlier scores and figure are removed."""
+    import yaml
+
+    import experiments.slamrun as slamrun
+    from slam import SlamConfig
+
+    out = tmp_path / "o"
+    out.mkdir()
+    for name in ("metrics.json", "slam.png", "config.yaml"):
+        (out / name).write_text("an earlier run's\n")
+
+    def ctrl_c(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(slamrun, "score", ctrl_c)
+    data = slamrun.load_input(short_log, max_scans=5)
+    with pytest.raises(KeyboardInterrupt):
+        slamrun.run(data, SlamConfig(preset="paper"), progress=False, out=out)
+    assert sorted(p.name for p in out.iterdir()) == ["config.yaml", "map.json", "trajectory.tum"]
+    written = yaml.safe_load((out / "config.yaml").read_text())
+    assert written["slam"]["preset"] == "paper" and written["input"] == data.sources
+
+
 def test_the_shipped_mit_csail_config_loads_and_sets_the_cm_mode_noise():
     """configs/slam-mit-csail.yaml, which the README's MIT CSAIL command uses, is a valid SlamConfig."""
     import yaml

@@ -24,7 +24,8 @@ def discover() -> dict[str, object]:
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("bench", help="run the speed benchmarks and save a table of rates")
-    p.add_argument("names", nargs="*", help="benchmark areas to run (default: all)")
+    areas = ", ".join(sorted(m.name for m in pkgutil.iter_modules(benchmarks.__path__)))  # each module's NAME
+    p.add_argument("names", nargs="*", metavar="NAME", help=f"benchmark areas to run: {areas} (default: all)")
     p.add_argument("--quick", action="store_true", help="fewer repetitions, for a smoke run")
     p.add_argument("--out", type=path_arg, help="output folder (default: a new results/bench/DATE_TIME, "
                                             "linked as results/bench/latest)")
@@ -36,10 +37,10 @@ def run(args: argparse.Namespace) -> int:
     names = args.names or list(found)
     missing = [n for n in names if n not in found]
     if missing:
-        raise LmsbenchError(f"unknown benchmark(s) {missing}; available: {list(found)}")
+        raise LmsbenchError(f"unknown benchmark(s) {', '.join(missing)}; known: {', '.join(found)}")
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
-        raise LmsbenchError(f"benchmark(s) {twice} named more than once")
+        raise LmsbenchError(f"benchmark(s) {', '.join(twice)} named more than once")
     check_out(args.out, writes=BENCH_OUTPUTS)
     rows = []
     for name in names:
@@ -60,5 +61,6 @@ def run(args: argparse.Namespace) -> int:
     table.to_csv(args.out / "bench.csv", index=False)
     (args.out / "versions.yaml").write_text(yaml.safe_dump(dict(benchmarks=names, quick=args.quick, versions=versions()),
                                                            sort_keys=False))
+    args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     print(f"wrote {args.out / 'bench.csv'}, {args.out / 'versions.yaml'}")
     return 0

@@ -5,21 +5,21 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from experiments.logargs import add_log_options, read_log_options
+from experiments.logargs import LOG_HELP, add_log_options, read_log_options
 from experiments.options import InputError, check_log, check_out_file, count, path_arg, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("calibrate", help="measure a real log's noise, quantisation, no-return / invalid / "
                                          "max-range rates, mixed pixels and outliers; write a sensor YAML")
-    p.add_argument("log", help="CARMEN log (plain or .gz), ROS 1 .bag or ROS 2 bag folder")
+    p.add_argument("log", help=LOG_HELP)
     p.add_argument("--out", type=path_arg, help="write the sensor config here (default: print it)")
     p.add_argument("--world", default="office", type=world_name,
                    help="simulated world used to fit the spot width and the outlier baseline (default office)")
     p.add_argument("--stride", type=count(1), default=1, help="use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=count(1), help="use at most this many scans")
     add_log_options(p)
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, prints_without_out=True)  # without --out the YAML goes to stdout
 
 
 def run(args: argparse.Namespace) -> int:
@@ -42,6 +42,9 @@ def run(args: argparse.Namespace) -> int:
     with heartbeat_on_terminal("calibrate", "calibrate: measuring the log and fitting by simulation ..."):
         result = calibrate_log(args.log, world=args.world, stride=args.stride, max_scans=args.max_scans,
                                **read_options)
+    if args.out is not None:  # before the summary: `calibrate LOG --out S.yaml | head -3` lost the YAML
+        write_sensor_yaml(result, args.out, str(args.log))
+        args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     for line in format_calibration(result):
         print(line)
     if args.out is None:
@@ -50,7 +53,6 @@ def run(args: argparse.Namespace) -> int:
             write_sensor_yaml(result, path, str(args.log))
             print(path.read_text(), end="")
     else:
-        write_sensor_yaml(result, args.out, str(args.log))
         print(f"wrote {args.out}")
     return 0
 

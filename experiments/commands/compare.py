@@ -41,7 +41,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seeds", nargs="+", type=SEED, help="seeds of each world named without one, listed (default 0 1 2; "
                                                          "`--seeds 3` is the one seed 3)")
     p.add_argument("--duration", type=DURATION, help="simulated seconds per world and seed (default 30)")
-    p.add_argument("--rate", type=positive("scans/s"), help="simulated scans per second kept (default 2)")
+    p.add_argument("--rate", "--rate-hz", dest="rate", type=positive("scans/s"),
+                   help="simulated scans per second kept (default 2; --rate-hz as in simulate, demo, figures)")
     p.add_argument("--stride", type=count(1), help="logs and simulate folders: use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=count(1), help="at most this many scans per source")
     p.add_argument("--sigma", type=_sigma, default="auto",
@@ -57,8 +58,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="override a config field of every extractor that has it, or of METHOD only (repeatable)")
     p.add_argument("--out", type=path_arg, help="output folder (default: a new results/compare/DATE_TIME, "
                                             "linked as results/compare/latest)")
-    p.add_argument("--format", choices=("parquet", "csv"), default="parquet", help="format of the tidy table")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--format", choices=("parquet", "csv"), default="parquet", help="format of the tidy table (default parquet)")
+    p.add_argument("--no-progress", "--quiet", dest="no_progress", action="store_true", help="no progress bar")
     add_log_options(p)
     p.set_defaults(func=run)
 
@@ -197,6 +198,7 @@ def run(args: argparse.Namespace) -> int:
 
             figures += [str(p) for p in fig_explained_vs_lines(summary, src.name, figure_stem(args.out, src.name))
                         if p.suffix == ".png"]
+    args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     print(text)
     print(f"wrote {path}, {args.out / 'summary.csv'}, {args.out / 'summary.txt'}, {args.out / 'config.yaml'}"
           + "".join(f", {f}" for f in figures))

@@ -13,11 +13,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                                     "figures and results/demo/report.md")
     p.add_argument("--out", type=path_arg, help="output folder (default: a new results/demo/DATE_TIME, "
                                             "linked as results/demo/latest)")
-    p.add_argument("--seed", type=SEED, default=0, help="world and run seed")
-    p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them")
+    p.add_argument("--seed", type=SEED, default=0, help="world and run seed (default 0)")
+    p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them (default office)")
     p.add_argument("--duration", type=DURATION, default=40.0, help="simulated run, s (default 40)")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=10.0, help="scans kept per second of the run (default 10)")
-    p.add_argument("--log", type=path_arg, help="real CARMEN log or bag for Fig. 9 (default: the Intel log where present)")
+    p.add_argument("--log", type=path_arg, help="real CARMEN log or bag for Fig. 9 (default: shared/data/carmen/"
+                   "intel-corrected.log.gz beside the checkout, where present)")
     p.add_argument("--no-sweep", action="store_true", help="skip the small Dask sweep")
     p.add_argument("--inprocess", action="store_true", help="run the sweep in this process instead of on Dask")
     add_log_options(p)  # for the real log of Fig. 9

@@ -10,7 +10,7 @@ from experiments.options import (DURATION, FIGURES_OUTPUTS, SEED, STUDY_TABLES, 
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("figures", help="draw the paper's figures (4-7, 9, 10), accuracy vs speed, sweep plots")
+    p = sub.add_parser("figures", help="draw the paper's figures (3-7, 9, 10), accuracy vs speed, sweep plots")
     p.add_argument("--out", type=path_arg, help="output folder (default: a new results/figures/DATE_TIME, "
                                             "linked as results/figures/latest)")
     p.add_argument("--tables", type=path_arg,
@@ -22,7 +22,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=SEED, help="world and run seed (default 0)")
     p.add_argument("--world", type=world_name, help="simulated world: a built-in world name; lmsbench simulate --help lists them (default office)")
     p.add_argument("--methods", nargs="+", type=text("an extractor's name"), help="extractors to compare (default: all five)")
-    p.add_argument("--intel", type=path_arg, help="Intel CARMEN log for Fig. 9 (default ../shared/data/carmen/intel-corrected.log.gz)")
+    p.add_argument("--intel", type=path_arg, help="Intel CARMEN log for Fig. 9 (default: shared/data/carmen/"
+                   "intel-corrected.log.gz beside the checkout, where present)")
     p.add_argument("--no-slam", action="store_true", help="skip the SLAM run and Fig. 10")
     add_log_options(p)  # for the real log of Fig. 9
     p.set_defaults(func=run)
@@ -88,6 +89,7 @@ def run(args: argparse.Namespace) -> int:
                             "complete tables/ folder of `lmsbench figures` or `lmsbench demo`") from None
     for folder in args.sweep:
         written.update(draw_sweep(folder, args.out))
+    args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     for name, paths in written.items():
         print(f"{name:32s} " + " ".join(p.name for p in paths))
     for note in notes:

@@ -35,9 +35,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--tcp", type=PORT, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")
     e.add_argument("--rfc2217", action="store_true", help="with --tcp: speak RFC 2217 (rfc2217://HOST:PORT), so the host sets the baud")
     e.add_argument("--host", type=text("an address, e.g. 127.0.0.1 or 0.0.0.0"), help="address to listen on with --tcp (default 127.0.0.1)")
-    e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (the LMS200 ships in cm)")
+    e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (default cm, as the LMS200 ships)")
     e.add_argument("--time-scale", type=number(0.0, MAX_TIME_SCALE, lo_open=True), default=1.0,
-                   help=f"multiplies every byte time and device delay (0.01 = 100x faster; at most {MAX_TIME_SCALE:g})")
+                   help=f"multiplies every byte time and device delay (default 1, real time; 0.01 = 100x faster; at most {MAX_TIME_SCALE:g})")
     e.add_argument("--duration", type=positive("s"), help="stop after this many seconds (default: until Ctrl-C)")
     add_log_options(e)  # with --log
     e.set_defaults(func=run_emulate)
@@ -45,16 +45,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     r = cmds.add_parser("record", help="record an LMS200 to a CARMEN log (.clf, .log, .gz) or a ROS bag (.bag)")
     r.add_argument("--port", required=True, type=text("a serial device or a pyserial URL"), help="serial device or pyserial URL (socket://host:port, rfc2217://, loop://)")
     r.add_argument("--out", type=path_arg, required=True, help="output: FILE.clf / .log / .gz (CARMEN) or FILE.bag (ROS 1)")
-    r.add_argument("--baud", type=int, default=38400, choices=sorted(BAUD_MODES), help="line speed to switch to")
-    r.add_argument("--units", choices=("mm", "cm"), default="mm", help="range unit: mm (8.18 m) or cm (81.8 m)")
+    r.add_argument("--baud", type=int, default=38400, choices=sorted(BAUD_MODES), help="line speed to switch to (default 38400)")
+    r.add_argument("--units", choices=("mm", "cm"), default="mm", help="range unit: mm (8.18 m) or cm (81.8 m) (default mm)")
     r.add_argument("--fov-deg", "--fov", dest="fov_deg", type=int, default=180, choices=(180, 100),
-                   help="field of view, deg (--fov is the old spelling)")
+                   help="field of view, deg (default 180; --fov is the old spelling)")
     r.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=float, default=0.5,
-                   choices=(1.0, 0.5, 0.25), help="angular resolution, deg (--resolution is the old spelling)")
+                   choices=(1.0, 0.5, 0.25), help="angular resolution, deg (default 0.5; --resolution is the old spelling)")
     r.add_argument("--max-scans", type=count(1), help="stop after this many scans")
     r.add_argument("--duration", type=positive("s"), help="stop after this many seconds")
     r.add_argument("--timeout", type=number(0.0, MAX_TIMEOUT_S, lo_open=True, unit="s"), default=0.5,
-                   help=f"seconds to wait for a reply, on top of the line time (at most {MAX_TIMEOUT_S:g})")
+                   help=f"seconds to wait for a reply, on top of the line time (default 0.5, at most {MAX_TIMEOUT_S:g})")
     r.set_defaults(func=run_record)
 
 

@@ -8,6 +8,7 @@ from lms200.yamlio import load as load_yaml
 import argparse
 
 from experiments.options import (DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, InputError, check_file,
+                                 check_world_file,
                                  check_out, check_yaml, known_worlds, number, positive, path_arg)
 
 
@@ -27,7 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate-hz", type=positive("scans/s"), default=None, help="keep about this many scans/s (default all)")
     p.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=float, choices=(0.25, 0.5, 1.0),
                    default=None, help="angular resolution, deg: 0.5 (361 beams), 1 (181), 0.25 (401 over 100 deg); "
-                   "--resolution is the old spelling")
+                   "default 0.5; --resolution is the old spelling")
     p.add_argument("--units", choices=("mm", "cm"), default=None, help="range unit mode (default mm)")
     p.add_argument("--ideal", action="store_true", help="exact ranges: no noise, quantisation, dropouts, ...")
     p.add_argument("--sensor", type=path_arg, metavar="FILE.yaml",
@@ -36,7 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--odometry", action="store_true", help="add noisy wheel odometry to the scans")
     p.add_argument("--config", type=path_arg, help="rerun a config.yaml written by an earlier run (it holds the whole "
                                                "run: no other option of the run may be given with it)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", "--no-progress", dest="quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
 
@@ -125,28 +126,13 @@ def _config(args: argparse.Namespace):
                             clutter=args.clutter)
 
 
-def _world(cfg) -> None:
-    """Load a world.json now, so that a bad one is an error before anything is simulated."""
-    if not cfg.world.endswith(".json"):
-        return
-    from lms200 import LmsbenchError
-    from sim import World
-
-    check_file(cfg.world, "a world.json")
-    try:
-        World.from_json(cfg.world)
-    except LmsbenchError:
-        raise
-    except (ValueError, KeyError, TypeError) as exc:
-        raise InputError(f"{cfg.world}: not a world.json ({type(exc).__name__}: {' '.join(str(exc).split())})") from None
-
-
 def run(args: argparse.Namespace) -> int:
     from experiments.simulation import run_simulation
 
     check_out(args.out, writes=SIMULATE_OUTPUTS)
     cfg = _config(args)
-    _world(cfg)
+    check_world_file(cfg.world)
     records = run_simulation(cfg, args.out, progress=not args.quiet)
+    args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     print(f"simulated {len(records)} scans of world {cfg.world} (seed {cfg.seed}, {cfg.duration:g} s) into {args.out}")
     return 0

@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 
 from experiments.logargs import add_log_options, read_log_options
 from experiments.options import (SLAM_OUTPUTS, InputError, check_file, check_log, check_methods, check_out, check_yaml,
-                                 count, positive, path_arg, text)
+                                 count, missing_message, positive, path_arg, text)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -39,10 +39,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-odometry-baseline", action="store_true",
                    help="do not also run the filter with odometry for the comparison table")
     p.add_argument("--relations", type=path_arg, help="relations file (default: NAME.relations beside a log)")
-    p.add_argument("--every", type=count(1), default=1, help="keep every N-th scan (decimation)")
+    p.add_argument("--every", type=count(1), default=1, help="keep every N-th scan (decimation; default 1, every scan)")
     p.add_argument("--rate-hz", type=positive("scans/s"), help="decimate to about this many scans/s (by the stamps)")
     p.add_argument("--max-scans", type=count(2), help="stop after this many scans (at least 2)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", "--no-progress", dest="quiet", action="store_true", help="no progress bar")
     add_log_options(p)
     p.set_defaults(func=run)
 
@@ -135,7 +135,7 @@ def in_time_order(stamps: list[float]) -> list[int]:
 def _check_input(path: Path) -> None:
     """A simulator folder (scans.clf), a ROS 2 bag folder, or a log file of a known kind."""
     if not path.exists():
-        raise InputError(f"no such input: {path}")
+        raise InputError(missing_message(path, "input"))  # "X: no such input (did you mean X.gz?)"
     if path.is_dir() and (path / "scans.clf").is_file():
         check_log(path / "scans.clf")
     elif path.is_dir() and not (path / "metadata.yaml").is_file():
@@ -192,6 +192,7 @@ def run(args: argparse.Namespace) -> int:
     result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
                       out=args.out, paper_baseline=not args.no_paper_baseline)
     write_outputs(args.out, data, config, result)
+    args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     m = result.metrics
     print(f"slam ({config.preset} preset): {m['n_scans']} scans in {m['seconds']:.1f} s "
           f"({m['cpu_scans_per_s']:.0f} scans/s of CPU time), {m['landmarks']['lines']} map lines; outputs in {args.out}")

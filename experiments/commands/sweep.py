@@ -23,7 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--workers", type=count(1, 64), help="worker processes of the local cluster (default 2)")
     p.add_argument("--out", type=path_arg, help="sweep folder (default results/sweeps/NAME)")
     p.add_argument("--retry-failed", action="store_true", help="compute again the cells that failed before")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-progress", "--quiet", dest="no_progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
 
