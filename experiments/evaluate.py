@@ -40,10 +40,11 @@ def sensor_config(overrides: dict[str, Any] | None = None, sensor_file: str | No
 
 def simulate_run(world: str = "office", seed: int = 0, duration: float = 10.0, sensor=None,
                  rate_hz: float | None = None) -> tuple[Any, list[Record]]:
-    """The world object and the records of a simulated run (truth pose on every record)."""
-    from sim import make_world, simulate_records
+    """The world object and the records of a simulated run (truth pose on every record); ``world`` a
+    built-in world's name or a world.json (a sweep's every cell failed on one: "unknown world")."""
+    from sim import World, make_world, simulate_records
 
-    world_obj = make_world(world, seed=seed)
+    world_obj = World.from_json(world) if world.endswith(".json") else make_world(world, seed=seed)
     return world_obj, simulate_records(world=world_obj, seed=seed, duration=duration, sensor=sensor, rate_hz=rate_hz)
 
 

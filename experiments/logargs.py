@@ -20,6 +20,10 @@ _GEOMETRY_FLAGS = (("laser_fov_deg", "fov", True), ("laser_resolution_deg", "res
                    ("laser_angle_min_deg", "angle_min", True), ("laser_range_max", "range_max", False))
 
 
+#: the help of a command's LOG argument (it said "plain or .gz"; bzip2 and xz logs are read too)
+LOG_HELP = "CARMEN log (plain, .gz, .bz2 or .xz), ROS 1 .bag or ROS 2 bag folder"
+
+
 def add_log_options(parser: argparse.ArgumentParser) -> None:
     """Add the shared log-reading options to a command's parser."""
     g = parser.add_argument_group("reading logs")

@@ -223,7 +223,7 @@ def _text_head(path: Path, what: str, utf8: bool = True) -> None:
             raise InputError(f"{path}: not text (byte {exc.start} is not UTF-8), not {what}") from None
 
 
-def _missing(p: Path, what: str) -> str:
+def missing_message(p: Path, what: str) -> str:
     """Why an input path does not exist: no such file, or a symbolic link to nothing (data moved, a loop)."""
     if p.is_symlink():
         try:
@@ -231,18 +231,51 @@ def _missing(p: Path, what: str) -> str:
         except OSError:
             target = "?"
         return f"{p}: a symbolic link to {target}, which does not exist (or a loop of links)"
-    return f"{p}: no such {what}"
+    return f"{p}: no such {what}{_near_name(p)}"
+
+
+def _near_name(p: Path) -> str:
+    """" (did you mean NAME?)" for a missing path whose folder holds it compressed (`info mit-csail.clf`
+    beside mit-csail.clf.gz: "no such log", and no more) or a name one slip away; else ""."""
+    import difflib
+
+    folder = p.parent
+    try:
+        names = [e.name for _, e in zip(range(10_000), os.scandir(folder))]  # a huge folder: the first 10,000
+    except OSError:
+        return ""
+    found = [p.name + suffix for suffix in COMPRESSION_SUFFIXES if p.name + suffix in names]
+    found = found or difflib.get_close_matches(p.name, names, n=1, cutoff=0.85)
+    return f" (did you mean {folder / found[0] if str(folder) != '.' else found[0]}?)" if found else ""
 
 
 def check_file(path: str | os.PathLike, what: str = "a file") -> Path:
     """An existing, readable regular file."""
     p = Path(path)
     if not p.exists():
-        raise InputError(_missing(p, "file"))
+        raise InputError(missing_message(p, "file"))
     if p.is_dir():
         raise InputError(f"{p} is a folder, not {what}")
     _head(p, 1, what)
     return p
+
+
+def check_world_file(world: str) -> None:
+    """A world named by its world.json (``simulate --world``, a sweep's ``world``; a relative path is
+    read from the current folder): loaded now, so that a missing or bad one is an error before
+    anything is simulated. A built-in world's name passes."""
+    if not world.endswith(".json"):
+        return
+    from lms200 import LmsbenchError
+    from sim import World
+
+    check_file(world, "a world.json")
+    try:
+        World.from_json(world)
+    except LmsbenchError:
+        raise
+    except (ValueError, KeyError, TypeError) as exc:
+        raise InputError(f"{world}: not a world.json ({type(exc).__name__}: {' '.join(str(exc).split())})") from None
 
 
 def check_yaml(path: str | os.PathLike, what: str = "a YAML file", sized: bool = True) -> Path:
@@ -265,7 +298,7 @@ def check_log(path: str | os.PathLike) -> Path:
     p = Path(path)
     what = "a CARMEN log, ROS 1 .bag or ROS 2 bag folder"
     if not p.exists():
-        raise InputError(_missing(p, "log"))
+        raise InputError(missing_message(p, "log"))
     if p.is_dir():
         meta = p / "metadata.yaml"
         if not meta.is_file():
@@ -379,7 +412,7 @@ def check_link(p: Path, flag: str = "--out") -> None:
     Symlink loop"). The path's folders too (review: --out LOOP/sub, DANGLING/sub were the same)."""
     for q in (p, *p.parents):
         if q.is_symlink() and not q.exists():
-            raise InputError(f"{flag} {p}: " + _missing(q, "folder") if q != p else f"{flag} {_missing(p, 'folder')}")
+            raise InputError(f"{flag} {p}: " + missing_message(q, "folder") if q != p else f"{flag} {missing_message(p, 'folder')}")
 
 
 def check_out_spares(out: str | os.PathLike | None, writes: Sequence[str], reads: Sequence[str | os.PathLike]) -> None:

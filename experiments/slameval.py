@@ -119,12 +119,14 @@ def _seeds(text: str) -> list[int]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, required=True)
-    ap.add_argument("--seeds", default="0-20")
-    ap.add_argument("--duration", type=float, default=90.0)
-    ap.add_argument("--mit", type=Path, default=MIT_LOG)
-    ap.add_argument("--long", type=float, default=900.0, help="duration (s) of the consistency run (0: none)")
+    # the docstring's first paragraph (its first line alone stopped mid-sentence: "..., a long")
+    ap = argparse.ArgumentParser(prog="python -m experiments.slameval", description=" ".join(__doc__.split("\n\n")[0].split()))
+    ap.add_argument("--out", type=Path, required=True, help="folder for sim.parquet, mit.parquet, long.parquet, tables.md")
+    ap.add_argument("--seeds", default="0-20", help="simulated office runs, a seed or a range LO-HI (default 0-20)")
+    ap.add_argument("--duration", type=float, default=90.0, help="duration (s) of each simulated run (default 90)")
+    ap.add_argument("--mit", type=Path, default=MIT_LOG,
+                    help="MIT CSAIL log (default: shared/data/carmen/mit-csail.clf.gz beside the checkout; skipped where absent)")
+    ap.add_argument("--long", type=float, default=900.0, help="duration (s) of the consistency run (default 900; 0: none)")
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     md = []

@@ -136,3 +136,43 @@ def test_the_rate_and_progress_options_take_the_other_commands_spelling(command,
 
     args = build_parser().parse_args(command + flag)
     assert getattr(args, dest) == value
+
+
+def test_the_research_scripts_docs_name_answer_help_without_running(capsys: pytest.CaptureFixture[str]) -> None:
+    """`python -m experiments.benchmarks.features --help` (docs/features.md's accuracy table) ignored
+    --help and ran the whole table; `python -m experiments.slameval --help` (docs/slam.md) showed a
+    description cut mid-sentence ("..., a long") and options with no word of help or default."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    bench = subprocess.run([sys.executable, "-m", "experiments.benchmarks.features", "--help"], cwd=root,
+                           capture_output=True, text=True, timeout=120)
+    assert bench.returncode == 0 and "usage: python -m experiments.benchmarks.features" in bench.stdout
+    assert "world=office" not in bench.stdout
+    from experiments import slameval
+
+    with pytest.raises(SystemExit) as stop:
+        slameval.main(["--help"])
+    assert stop.value.code == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "paper preset against the default." in text and "(default 0-20)" in text and "(default 90)" in text
+
+
+def test_a_missing_input_names_the_file_it_was_likely_meant_to_be(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    """`lmsbench info ../shared/data/carmen/mit-csail.clf` (the file is mit-csail.clf.gz) said
+    "no such log" and no more; so did a one-letter slip (`intel-corected`). Now the message names the
+    compressed file or the close name beside it; a name with nothing near gets no guess."""
+    (tmp_path / "mit-csail.clf.gz").write_bytes(b"")
+    (tmp_path / "intel-corrected.log").write_text("")
+    (tmp_path / "k_vs_noise.yaml").write_text("")
+    monkeypatch.chdir(tmp_path)
+    for argv, said in ((["info", "mit-csail.clf"], "mit-csail.clf: no such log (did you mean mit-csail.clf.gz?)"),
+                       (["info", str(tmp_path / "intel-corected.log")],
+                        f"{tmp_path / 'intel-corected.log'}: no such log (did you mean {tmp_path / 'intel-corrected.log'}?)"),
+                       (["slam", "mit-csail.clf", "--out", "o"], "mit-csail.clf: no such input (did you mean mit-csail.clf.gz?)"),
+                       (["sweep", "k_vs_nois.yaml"], "k_vs_nois.yaml: no such file (did you mean k_vs_noise.yaml?)"),
+                       (["info", "other.bag"], "other.bag: no such log")):
+        assert main(argv) == 2
+        assert capsys.readouterr().err == f"lmsbench {argv[0]}: error: {said}\n"

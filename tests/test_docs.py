@@ -135,3 +135,14 @@ def test_the_figures_help_names_every_paper_figure_it_draws() -> None:
     sub = next(a for a in build_parser()._actions if a.dest == "command")
     summary = next(c.help for c in sub._choices_actions if c.dest == "figures")
     assert "(3-7, 9, 10)" in summary
+
+
+@pytest.mark.parametrize("command", ["info", "calibrate", "sim2real"])
+def test_the_log_argument_names_every_compression_that_is_read(command: str) -> None:
+    """`lmsbench info --help` said a log is "CARMEN log (plain or .gz)", though the README and
+    docs/data.md say, and `info LOG.bz2` / `info LOG.xz` show, that bzip2 and xz logs are read too."""
+    from experiments.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command").choices[command]
+    log = next(a for a in sub._actions if a.dest == "log")
+    assert ".gz" in log.help and ".bz2" in log.help and ".xz" in log.help

@@ -426,3 +426,33 @@ def test_extract_cell_row_has_no_speed_ratio_to_itself(monkeypatch: pytest.Monke
          "speed_vs_sensor": [1.0], "cpu_speed_vs_sensor": [1.0]}))
     row = kinds.extract_cell({"method": "split_merge", "duration": 0.5, "rate_hz": 2.0})
     assert row == {"f1": 0.9, "us_median": 40.0, "cpu_us_median": 38.0}
+
+
+def test_a_world_json_runs_in_a_sweep_and_a_missing_one_is_refused_before_any_cell(tmp_path, monkeypatch, capsys):
+    """`world: w.json` (a world `lmsbench simulate` wrote) passed the sweep's check, and then every
+    cell failed with "unknown world 'w.json'", exit 1. Now the cells run on that world (the scores
+    of the built-in world it was saved from), and a missing file, or a sensor_file, given relative
+    to the sweep file but run from another folder, is one line, exit 2, saying where it was looked for."""
+    from sim import make_world
+
+    from experiments.cli import main
+
+    make_world("office", seed=1).to_json(tmp_path / "w.json")
+    monkeypatch.chdir(tmp_path)
+    spec = SweepSpec.from_dict({"name": "wj", "kind": "extract", "fixed": {"duration": 1.0, "rate_hz": 3.0},
+                                "grid": {"world": ["w.json", "office"]}, "seeds": [1]})
+    table = run_sweep(spec, tmp_path / "out", "inprocess", progress=False).table
+    assert list(table["status"]) == ["ok", "ok"], list(table["error"])
+    scores = ["scans", "tp", "fp", "fn", "f1", "rho_rms_mm"]
+    assert table[scores].iloc[0].tolist() == table[scores].iloc[1].tolist()
+
+    (tmp_path / "sub").mkdir()
+    for field, value, what in (("world", "w.json", "w.json: no such file"),
+                               ("sensor_file", "s.yaml", "s.yaml: no such sensor file")):
+        (tmp_path / f"{field}.yaml").write_text(yaml.safe_dump(
+            {"name": field, "kind": "extract", "fixed": {"duration": 1.0, field: value}, "grid": {"extractor.k": [3]}}))
+        monkeypatch.chdir(tmp_path / "sub")
+        assert main(["sweep", str(tmp_path / f"{field}.yaml"), "--inprocess", "--out", str(tmp_path / f"o_{field}")]) == 2
+        err = capsys.readouterr().err
+        assert f"{field}: {what} (a sweep's relative paths are read from the current folder" in err
+        assert err.count("\n") == 1 and not (tmp_path / f"o_{field}").exists()

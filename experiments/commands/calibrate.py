@@ -5,14 +5,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from experiments.logargs import add_log_options, read_log_options
+from experiments.logargs import LOG_HELP, add_log_options, read_log_options
 from experiments.options import InputError, check_log, check_out_file, count, path_arg, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("calibrate", help="measure a real log's noise, quantisation, no-return / invalid / "
                                          "max-range rates, mixed pixels and outliers; write a sensor YAML")
-    p.add_argument("log", help="CARMEN log (plain or .gz), ROS 1 .bag or ROS 2 bag folder")
+    p.add_argument("log", help=LOG_HELP)
     p.add_argument("--out", type=path_arg, help="write the sensor config here (default: print it)")
     p.add_argument("--world", default="office", type=world_name,
                    help="simulated world used to fit the spot width and the outlier baseline (default office)")

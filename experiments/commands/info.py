@@ -7,14 +7,14 @@ import json
 
 from lms200 import LogFormatError, read_log
 
-from experiments.logargs import add_log_options, read_log_options, report_skipped
+from experiments.logargs import LOG_HELP, add_log_options, read_log_options, report_skipped
 from experiments.loginfo import summarise
 from experiments.options import check_log
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("info", help="summarise a CARMEN log or ROS bag (scans, geometry, rate, validity)")
-    p.add_argument("log", help="CARMEN log (plain or .gz), ROS 1 .bag or ROS 2 bag folder")
+    p.add_argument("log", help=LOG_HELP)
     add_log_options(p)
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.set_defaults(func=run)

@@ -9,7 +9,7 @@ import sys
 from lms200 import read_log
 from lms200.timing import check_scan_rate
 
-from experiments.logargs import add_log_options, read_log_options
+from experiments.logargs import LOG_HELP, add_log_options, read_log_options
 from experiments.options import (
     DURATION,
     SEED,
@@ -32,7 +32,7 @@ from experiments.sim2real import (DEFAULT_DURATION_S, DEFAULT_RATE_HZ, DEFAULT_S
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sim2real", help="a real log against its calibrated simulation: explained fraction, ray RMSE, "
                                         "lines per scan, range / residual / segment histograms (table and figure)")
-    p.add_argument("log", help="CARMEN log (plain or .gz), ROS 1 .bag or ROS 2 bag folder")
+    p.add_argument("log", help=LOG_HELP)
     p.add_argument("--world", default="mit", type=world_name, help="simulated world (default mit, the MIT-CSAIL-like preset)")
     p.add_argument("--sensor", type=path_arg, metavar="FILE.yaml",
                    help="use this sensor model instead of calibrating on the log")

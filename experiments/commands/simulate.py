@@ -8,6 +8,7 @@ from lms200.yamlio import load as load_yaml
 import argparse
 
 from experiments.options import (DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, InputError, check_file,
+                                 check_world_file,
                                  check_out, check_yaml, known_worlds, number, positive, path_arg)
 
 
@@ -125,28 +126,12 @@ def _config(args: argparse.Namespace):
                             clutter=args.clutter)
 
 
-def _world(cfg) -> None:
-    """Load a world.json now, so that a bad one is an error before anything is simulated."""
-    if not cfg.world.endswith(".json"):
-        return
-    from lms200 import LmsbenchError
-    from sim import World
-
-    check_file(cfg.world, "a world.json")
-    try:
-        World.from_json(cfg.world)
-    except LmsbenchError:
-        raise
-    except (ValueError, KeyError, TypeError) as exc:
-        raise InputError(f"{cfg.world}: not a world.json ({type(exc).__name__}: {' '.join(str(exc).split())})") from None
-
-
 def run(args: argparse.Namespace) -> int:
     from experiments.simulation import run_simulation
 
     check_out(args.out, writes=SIMULATE_OUTPUTS)
     cfg = _config(args)
-    _world(cfg)
+    check_world_file(cfg.world)
     records = run_simulation(cfg, args.out, progress=not args.quiet)
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     print(f"simulated {len(records)} scans of world {cfg.world} (seed {cfg.seed}, {cfg.duration:g} s) into {args.out}")

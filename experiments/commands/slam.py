@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 
 from experiments.logargs import add_log_options, read_log_options
 from experiments.options import (SLAM_OUTPUTS, InputError, check_file, check_log, check_methods, check_out, check_yaml,
-                                 count, positive, path_arg, text)
+                                 count, missing_message, positive, path_arg, text)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -135,7 +135,7 @@ def in_time_order(stamps: list[float]) -> list[int]:
 def _check_input(path: Path) -> None:
     """A simulator folder (scans.clf), a ROS 2 bag folder, or a log file of a known kind."""
     if not path.exists():
-        raise InputError(f"no such input: {path}")
+        raise InputError(missing_message(path, "input"))  # "X: no such input (did you mean X.gz?)"
     if path.is_dir() and (path / "scans.clf").is_file():
         check_log(path / "scans.clf")
     elif path.is_dir() and not (path / "metadata.yaml").is_file():

@@ -19,6 +19,7 @@ import numpy as np
 from experiments.compare import Source, compare, summarise
 from experiments.evaluate import sensor_config, simulate_run, split_params, truths_for
 from experiments.overrides import OverrideError, extractor_overrides
+from lms200 import LmsbenchError
 
 EXTRACT_DEFAULTS = {"method": "sensor", "world": "office", "duration": 5.0, "rate_hz": 4.0}
 SLAM_DEFAULTS = {"world": "office", "duration": 30.0, "rate_hz": None}
@@ -173,13 +174,31 @@ def _read_sensor_files(cells: Iterable[dict[str, Any]]) -> dict[str, Any]:
     (raises LmsbenchError naming a file that does not read as one)."""
     from sim import SensorConfig
 
+    from .spec import SweepSpecError
+
     paths = sorted({str(c["sensor_file"]) for c in cells if c.get("sensor_file") is not None})
-    return {path: SensorConfig.from_yaml(path) for path in paths}
+    files = {}
+    for path in paths:
+        try:
+            files[path] = SensorConfig.from_yaml(path)
+        except LmsbenchError as exc:
+            raise SweepSpecError(f"sensor_file: {exc}{_relative_hint(path)}") from None
+    return files
+
+
+def _relative_hint(path: str) -> str:
+    """For a relative path that is not there: where it was looked for (a sweep file's sensor_file
+    or world.json beside it, run from another folder, was 'no such file' and no more)."""
+    from pathlib import Path
+
+    if Path(path).is_absolute() or Path(path).exists():
+        return ""
+    return f" (a sweep's relative paths are read from the current folder, {Path.cwd()}, not the sweep file's)"
 
 
 def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: set[str]) -> None:
     """Plain (unprefixed) names are known ones, and world, duration and rate_hz have usable values."""
-    from experiments.options import MAX_DURATION_S, MIN_DURATION_S, known_worlds
+    from experiments.options import MAX_DURATION_S, MIN_DURATION_S, check_world_file, known_worlds
 
     from .spec import SweepSpecError
 
@@ -193,7 +212,12 @@ def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: s
         p = {**defaults, **cell}
         world = str(p["world"])
         if world not in known_worlds() and not world.endswith(".json"):
-            raise SweepSpecError(f"world: unknown world {world!r}; known worlds: {', '.join(known_worlds())}")
+            raise SweepSpecError(f"world: unknown world {world!r}; known worlds: {', '.join(known_worlds())} "
+                                 "or a world.json")
+        try:  # a missing one failed in every cell
+            check_world_file(world)
+        except LmsbenchError as exc:
+            raise SweepSpecError(f"world: {exc}{_relative_hint(world)}") from None
         duration = p["duration"]
         if isinstance(duration, bool) or not isinstance(duration, (int, float)) \
                 or not MIN_DURATION_S <= duration <= MAX_DURATION_S:  # shorter: no scan in the cell's run
