@@ -14,12 +14,13 @@ so a record written without odometry or truth reads back without it.
 
 from __future__ import annotations
 
+import struct
 from bisect import bisect_left, insort
 from collections import deque
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, Iterable, Iterator
+from typing import Any, Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -204,6 +205,47 @@ def _scan_of(msg) -> Scan:  # noqa: ANN001
     )
 
 
+_TIME = "builtin_interfaces/msg/Time"
+#: how ROS lays out the start of a LaserScan (its header, then the header's stamp), ROS 1 and ROS 2:
+#: either way the stamp's sec (int32) and nanosec (uint32) are bytes 4 to 11 of the serialized
+#: message (ROS 1: after the header's seq; ROS 2: after CDR's 4-byte encapsulation header)
+_SCAN_LAYOUT = {
+    "sensor_msgs/msg/LaserScan": ("header", "std_msgs/msg/Header"),
+    "ros1 std_msgs/msg/Header": (("seq", ("uint32", 0)), ("stamp", _TIME)),
+    "ros2 std_msgs/msg/Header": (("stamp", _TIME),),
+    _TIME: (("sec", ("int32", 0)), ("nanosec", ("uint32", 0))),
+}
+_STAMP_LE, _STAMP_BE = struct.Struct("<iI"), struct.Struct(">iI")
+
+
+def _raw_stamp_reader(reader) -> Callable[[bytes], int | None] | None:  # noqa: ANN001 - rosbags' AnyReader
+    """A function giving a serialized LaserScan's header stamp (ns), as :func:`_header_ns` of the
+    decoded message gives it, read from its bytes 4 to 11 (None for bytes that cannot hold one),
+    when the bag's message definitions lay the message out as ROS does; else None (then scans are
+    decoded for their stamps)."""
+    ros2 = bool(reader.is2)
+    try:
+        defs = reader.typestore.fielddefs
+        layout = (
+            tuple((name, typ) for name, (_, typ) in defs["sensor_msgs/msg/LaserScan"][1][:1])[0],
+            tuple((name, typ) for name, (_, typ) in defs["std_msgs/msg/Header"][1][: 1 if ros2 else 2]),
+            tuple((name, typ) for name, (_, typ) in defs[_TIME][1]),
+        )
+    except (KeyError, IndexError, TypeError, ValueError):
+        return None
+    header = "ros2 std_msgs/msg/Header" if ros2 else "ros1 std_msgs/msg/Header"
+    if layout != (_SCAN_LAYOUT["sensor_msgs/msg/LaserScan"], _SCAN_LAYOUT[header], _SCAN_LAYOUT[_TIME]):
+        return None
+
+    def stamp(raw: bytes) -> int | None:
+        if len(raw) < 12 or (ros2 and (raw[0] != 0 or raw[1] > 1)):
+            return None
+        sec, nanosec = (_STAMP_LE if not ros2 or raw[1] else _STAMP_BE).unpack_from(raw, 4)
+        return sec * 1_000_000_000 + nanosec
+
+    return stamp
+
+
 STAMP_EPS_S = 1e-6  # s: the least pose tolerance; scans stamped this close have one stamp
 
 
@@ -337,9 +379,19 @@ class BagReader:
 
     @staticmethod
     def _scan_stamps(reader, scans: list) -> Iterator[int]:  # noqa: ANN001
-        """The header stamps (ns) of the scans, those that cannot be read left out (the pass that
-        reads them reports them)."""
+        """The header stamps (ns) of the scans, read from their bytes where the bag's definitions
+        put them where ROS does (:func:`_raw_stamp_reader`): this pass decoded every scan, so a
+        bag's scans were decoded twice (20,000 scans: 80,000 decodes with odometry and truth, now
+        60,000). Scans whose stamp cannot be read are left out (the pass that reads them reports
+        them); with stamps read from the bytes, that is a message too short to hold one or, in ROS 2,
+        one with no CDR encapsulation header."""
+        raw_stamp = _raw_stamp_reader(reader)
         for conn, _, raw in reader.messages(connections=scans):
+            if raw_stamp is not None:
+                ns = raw_stamp(raw)
+                if ns is not None:
+                    yield ns
+                continue
             try:
                 yield _header_ns(reader.deserialize(raw, conn.msgtype))
             except Exception:  # noqa: BLE001, S112 - rosbags' own types; reported by the reading pass

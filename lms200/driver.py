@@ -137,7 +137,9 @@ class LMS200:
         units: 'mm' (8.18 m, 1 mm) or 'cm' (81.8 m, 1 cm).
         address: device address (0 for a single unit).
         timeout: seconds to wait for the ACK and reply of a request, on top of the line time of
-            the longest telegram (the listing promises 60 ms; USB adapters and TCP need more).
+            the reply (and of a scan telegram in flight while streaming); the listing promises
+            60 ms, USB adapters and TCP need more. A frame cut off by a line gone quiet is given
+            up after ``timeout`` plus the line time of the longest telegram (818 bytes).
         mode_timeout: the same for mode changes and configuration writes (up to 3 s).
         retries: attempts per request.
         probe: when 9600 baud gets no answer, try 19200, 38400 and 500000.

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -77,8 +78,23 @@ def check_number(value: object, name: str, lo: float, hi: float, *, lo_open: boo
     inside = not math.isnan(number) and (finite is False or math.isfinite(number)) \
         and (lo < number if lo_open else lo <= number) and number <= hi
     if not inside:
-        span = f"{'(' if lo_open else '['}{lo:g}, {hi:g}]" if hi < math.inf else f"{'>' if lo_open else '>='} {lo:g}"
+        if hi < math.inf:
+            span = f" in {'(' if lo_open else '['}{lo:g}, {hi:g}]{' ' + unit if unit else ''}"
+        elif lo > -math.inf:
+            span = f" {'>' if lo_open else '>='} {lo:g}{' ' + unit if unit else ''}"
+        else:
+            span = f" ({unit})" if unit else ""
         kind = "a finite number" if finite else "a number"
-        raise InputError(f"{name}: must be {kind} {'' if hi == math.inf else 'in '}{span}{' ' + unit if unit else ''}, "
-                         f"got {overflow_text(value) if overflow else shown(value)}")
+        raise InputError(f"{name}: must be {kind}{span}, got {overflow_text(value) if overflow else shown(value)}")
     return number
+
+
+def check_instance(value: Any, cls: type, name: str, optional: bool = True) -> None:
+    """``value`` is a ``cls`` (or None when ``optional``); InputError naming ``name`` otherwise
+    (a dict for a SensorConfig was an AttributeError deep inside; an empty dict for an
+    OdometryConfig was taken as none, silently; a number for the virtual LMS200's Faults an
+    AttributeError). The message names the class by its package (``sim.SensorConfig``)."""
+    if (value is None and optional) or isinstance(value, cls):
+        return
+    raise InputError(f"{name}: must be a {cls.__module__.split('.')[0]}.{cls.__name__}"
+                     f"{' or None' if optional else ''}, got {type(value).__name__}")

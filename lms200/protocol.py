@@ -214,12 +214,15 @@ def get_config_request() -> bytes:
 
 
 def set_config_request(config: bytes) -> bytes:
-    """0x77: write the configuration block (installation mode only; reply 0xF7)."""
-    return bytes([CMD_SET_CONFIG]) + bytes(config)
+    """0x77: write the configuration block (installation mode only; reply 0xF7). InputError for a
+    ``config`` that is not bytes (5 was taken as 5 zero bytes, True as one, text a TypeError)."""
+    return bytes([CMD_SET_CONFIG]) + byte_string(config, "config")
 
 
 def with_units(config: bytes, units: Units) -> bytes:
-    """A configuration block with the measured-value unit byte set to ``units``."""
+    """A configuration block with the measured-value unit byte set to ``units``; InputError for a
+    ``config`` that is not bytes (None or a number was a TypeError) or an unknown unit."""
+    config = byte_string(config, "config")
     units = check_units(units)
     if len(config) <= CONFIG_UNITS_OFFSET:
         raise LmsProtocolError(f"configuration block of {len(config)} bytes has no unit byte")
@@ -229,7 +232,9 @@ def with_units(config: bytes, units: Units) -> bytes:
 
 
 def units_of_config(config: bytes) -> Units:
-    """The measured-value unit a configuration block sets ('mm' or 'cm')."""
+    """The measured-value unit a configuration block sets ('mm' or 'cm'); InputError for a ``config``
+    that is not bytes (None was a TypeError, text an AttributeError)."""
+    config = byte_string(config, "config")
     if len(config) <= CONFIG_UNITS_OFFSET or config[CONFIG_UNITS_OFFSET] not in CODE_UNITS:
         raise LmsProtocolError(f"configuration block {config.hex(' ')} holds no known unit code")
     return CODE_UNITS[config[CONFIG_UNITS_OFFSET]]

@@ -25,14 +25,14 @@ import math
 import numbers
 import struct
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
 from .codes import Units, check_units, ranges_to_codes, real_numbers
 from .errors import InputError
-from .finite import check_integer, is_integer, shown
+from .finite import check_instance, check_integer, check_number, check_seed, is_integer, shown
 from .protocol import (
     ACK,
     BAUD_MODES,
@@ -72,6 +72,8 @@ from .protocol import (
 from .scan import Scan
 
 MAX_TIME_SCALE = 100.0  # slowest emulation: 100x slower than the device (1e9 took days a telegram)
+MAX_CLOCK_S = 1e12  # |now| a device takes (s, any monotonic clock; 1e308 overflowed a byte count: int(inf))
+MAX_DELAY_S = 3600.0  # longest device delay a DeviceTiming takes (the listing's longest is 3 s)
 MIRROR_PERIOD_S = 1.0 / 75.0  # one mirror turn: a 1 deg scan every 13.3 ms
 TYPE_STRING = b"LMS200;301063;V02.10 "
 SOURCE_GRID_DEG = (-90.0, 0.5, 361)  # every scan source is resampled onto the 0.5 deg frame
@@ -81,7 +83,9 @@ POWER_ON_CONFIG = bytes([0, 0, 0, 0, 0x0D, UNITS_CODES["cm"]]) + bytes(CONFIG_BY
 
 @dataclass
 class DeviceTiming:
-    """Device delays in seconds at time_scale 1 (the listing's typical and worst values)."""
+    """Device delays in seconds at time_scale 1 (the listing's typical and worst values); each a
+    finite number in [0, MAX_DELAY_S] s (InputError naming the field: None or text was a TypeError
+    at the first transmit, 10**400 an OverflowError)."""
 
     ack_s: float = 0.002  # ACK within 60 ms
     reply_s: float = 0.010  # reply after the ACK
@@ -89,6 +93,10 @@ class DeviceTiming:
     installation_s: float = 3.0  # installation mode and a configuration write ("up to 3 s")
     reset_s: float = 1.0  # from the 0x91 reply to the 0x90 power-on string
     rx_gap_s: float = 0.006  # largest gap between bytes of one host telegram (never scaled)
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            check_number(getattr(self, f.name), f.name, 0.0, MAX_DELAY_S, unit="s")
 
 
 @dataclass
@@ -110,6 +118,13 @@ class Faults:
     rx_corrupt_prob: float = 0.0
     mute: bool = False
     seed: int = 0
+
+    def __post_init__(self) -> None:
+        """The values given: probabilities in [0, 1], a seed >= 0; InputError naming the field (a
+        text probability was numpy's UFuncTypeError at the first transmit, 10**400 an OverflowError)."""
+        for name in ("corrupt_prob", "drop_prob", "miss_prob", "rx_corrupt_prob"):
+            check_number(getattr(self, name), name, 0.0, 1.0)
+        check_seed(self.seed)
 
 
 def resample_to_grid(scan: Scan) -> np.ndarray:
@@ -215,6 +230,8 @@ class VirtualLMS200:
             raise InputError(f"address: must be an integer in 0..127 (replies come from address + 0x80), got {shown(address)}")
         if isinstance(source, (str, bytes)) or not isinstance(source, Iterable):  # None was "not iterable"
             raise InputError(f"source: must be an iterable of lms200.Scan, got {type(source).__name__}")
+        check_instance(timing, DeviceTiming, "timing")  # a number was an AttributeError at the first transmit
+        check_instance(faults, Faults, "faults")  # a number was an AttributeError ('no attribute seed')
         self._source: Iterator[Scan] = iter(source)
         self.address = address
         self.time_scale = float(time_scale)
@@ -259,8 +276,10 @@ class VirtualLMS200:
     # -- host -> device ------------------------------------------------------------------------
     def receive(self, data: bytes, now: float) -> None:
         """Bytes from the host, received at ``now`` (s); InputError for ``data`` that are not bytes
-        (text was a TypeError, an array numpy's ambiguous-truth ValueError)."""
+        (text was a TypeError, an array numpy's ambiguous-truth ValueError) or a ``now`` that is no
+        finite number (None or text was a TypeError, 10**400 an OverflowError)."""
         data = byte_string(data, "data")
+        check_number(now, "now", -MAX_CLOCK_S, MAX_CLOCK_S, unit="s")
         if not data:
             return
         if self._rx and now - self._rx_last > self.timing.rx_gap_s:
@@ -424,7 +443,9 @@ class VirtualLMS200:
         self._reply(self._scan_payload(), ready, count_scan=True)
 
     def transmit(self, now: float) -> list[tuple[bytes, int]]:
-        """Bytes that have left the line by ``now``, as (bytes, baud they were sent at) pieces."""
+        """Bytes that have left the line by ``now``, as (bytes, baud they were sent at) pieces;
+        InputError for a ``now`` that is no finite number (inf was an OverflowError, None a TypeError)."""
+        check_number(now, "now", -MAX_CLOCK_S, MAX_CLOCK_S, unit="s")
         if self.faults.mute:
             self._queue.clear()
             self._line_free = now
@@ -453,7 +474,9 @@ class VirtualLMS200:
         return [(d, b) for d, b in out if d]
 
     def next_wakeup(self, now: float) -> float | None:
-        """When the next byte will be due (s), or None while the device waits for the host."""
+        """When the next byte will be due (s), or None while the device waits for the host; InputError
+        for a ``now`` that is no finite number."""
+        check_number(now, "now", -MAX_CLOCK_S, MAX_CLOCK_S, unit="s")
         if self.faults.mute:
             return None
         self._fill_continuous(now)

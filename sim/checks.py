@@ -6,12 +6,12 @@ a pose of two numbers or text was a bare unpacking error."""
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 
 from lms200.errors import InputError
-from lms200.finite import check_number as check_number  # re-exported: its home before lms200 used it
+from lms200.finite import check_instance as check_instance  # re-exported: their home before lms200 used them
+from lms200.finite import check_number as check_number
 
 
 def _numbers(value: object, count: int, name: str, what: str) -> tuple[float, ...]:
@@ -49,13 +49,3 @@ def check_beam_poses(beam_poses: object, n_beams: int) -> np.ndarray:
     if not np.all(np.isfinite(bp)):
         raise InputError("beam_poses: must be finite")
     return bp
-
-
-def check_instance(value: Any, cls: type, name: str, optional: bool = True) -> None:
-    """``value`` is a ``cls`` (or None when ``optional``); InputError naming ``name`` otherwise
-    (a dict for a SensorConfig was an AttributeError deep inside; an empty dict for an
-    OdometryConfig was taken as none, silently)."""
-    if (value is None and optional) or isinstance(value, cls):
-        return
-    raise InputError(f"{name}: must be a {cls.__module__.split('.')[0]}.{cls.__name__}"
-                     f"{' or None' if optional else ''}, got {type(value).__name__}")

@@ -122,3 +122,45 @@ def test_noise_and_tum_helpers_keep_their_valid_inputs() -> None:
     assert tum.quaternion_to_yaw(np.array([[0, 0, 0, 1.0], [0, 0, 0, 0]])).tolist()[0] == 0.0
     assert np.isnan(tum.quaternion_to_yaw([0, 0, 0, 0])[0])  # no rotation: nan, as documented
     assert tum.yaw_to_quaternion(0.0).tolist() == [[0.0, 0.0, 0.0, 1.0]]
+
+
+# -- configuration telegrams, the virtual device's clock, timing and faults --------------------------
+TELEGRAM = protocol.build_frame(protocol.measure_request())
+
+
+def _device(**kw: object) -> virtual.VirtualLMS200:
+    return virtual.VirtualLMS200([SCAN], time_scale=0.01, **kw)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: protocol.set_config_request(5), r"^config: must be bytes .* got int$"),  # was 5 zero bytes, silently
+    (lambda: protocol.set_config_request("abc"), r"^config: must be bytes .* got str$"),  # TypeError
+    (lambda: protocol.with_units(None, "mm"), r"^config: must be bytes .* got NoneType$"),  # TypeError
+    (lambda: protocol.units_of_config("abcdefg"), r"^config: must be bytes .* got str$"),  # AttributeError
+    (lambda: _device().receive(TELEGRAM, None), r"^now: must be a finite number in \[-1e\+12, 1e\+12\] s, got None$"),  # TypeError
+    (lambda: _device().receive(TELEGRAM, 10**400), r"^now: must be a finite number in .* got a int beyond"),  # OverflowError
+    (lambda: _device().transmit(math.inf), r"^now: must be a finite number in \[-1e\+12, 1e\+12\] s, got inf$"),  # OverflowError
+    (lambda: _device().transmit(1e308), r"^now: must be a finite number in \[-1e\+12, 1e\+12\] s, got 1e\+308$"),  # int(inf)
+    (lambda: _device().transmit("1"), r"^now: must be a finite number in .* got '1'$"),  # TypeError
+    (lambda: _device().next_wakeup(None), r"^now: must be a finite number in .* got None$"),
+    (lambda: _device(faults=0.5), r"^faults: must be a lms200\.Faults or None, got float$"),  # AttributeError: seed
+    (lambda: _device(timing="fast"), r"^timing: must be a lms200\.DeviceTiming or None, got str$"),
+    (lambda: virtual.DeviceTiming(ack_s=None), r"^ack_s: must be a finite number in \[0, 3600\] s, got None$"),  # TypeError later
+    (lambda: virtual.DeviceTiming(reset_s=10**400), r"^reset_s: must be a finite number in \[0, 3600\] s, got a int beyond"),
+    (lambda: virtual.Faults(corrupt_prob="0.1"), r"^corrupt_prob: must be a finite number in \[0, 1\], got '0\.1'$"),  # UFuncTypeError
+    (lambda: virtual.Faults(drop_prob=2.0), r"^drop_prob: must be a finite number in \[0, 1\], got 2\.0$"),
+    (lambda: virtual.Faults(seed=-1), r"^seed: must be a whole number >= 0, got -1$"),
+])
+def test_config_telegrams_and_device_clock_name_the_bad_argument(call, message: str) -> None:
+    with pytest.raises(InputError, match=message) as info:
+        call()
+    assert "\n" not in str(info.value)
+
+
+def test_device_keeps_its_valid_clock_timing_and_faults() -> None:
+    dev = _device(timing=virtual.DeviceTiming(ack_s=0, reply_s=np.float32(0.01)), faults=virtual.Faults(miss_prob=0, seed=np.int64(2)))
+    dev.receive(TELEGRAM, np.float64(0.0))
+    assert dev.next_wakeup(0) is not None
+    assert b"".join(piece for piece, _ in dev.transmit(10)).startswith(bytes([protocol.ACK, protocol.STX]))
+    block = protocol.with_units(bytearray(32), "mm")
+    assert protocol.units_of_config(memoryview(block)) == "mm" and protocol.set_config_request(block)[1:] == block

@@ -571,3 +571,45 @@ def test_scan_telegrams_with_their_header_hit_cost_no_resend_and_no_later_scan(m
     lms.close()
     assert sum(w[4:6] == b"\x20\x25" for w in port.writes) == 2  # once at opening, once at close (old: 3)
     assert (lms.stats.retries, lms.parser.stats.naks) == (0, 0)  # old: (1, 9)
+
+
+def test_docs_state_the_wait_for_a_frame_cut_off_by_the_code_rule(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Closing note of session 32: a frame cut off by a device gone silent is given up after
+    timeout + the line time of the longest telegram. docs/lms200.md says so, with the figures the
+    driver computes (LEN 812 + 6 = 818 bytes), and the driver keeps a cut frame no shorter than
+    that (given up 0.714 s after its last byte at 38400 baud, the rule's 0.713 s; 1.5 s allowed)."""
+    import time
+    from pathlib import Path
+
+    from lms200.protocol import MAX_LEN, OVERHEAD_BYTES, frame_seconds
+    from lms200_fake_port import answer, fake_port, scan_frame
+
+    rule = {b: 0.5 + frame_seconds(MAX_LEN + OVERHEAD_BYTES, b) for b in (38400, 9600, 500000)}
+    text = " ".join((Path(__file__).resolve().parents[1] / "docs" / "lms200.md").read_text().split())
+    assert (f"longest telegram (LEN {MAX_LEN} + {OVERHEAD_BYTES} bytes = {MAX_LEN + OVERHEAD_BYTES} bytes: "
+            f"{rule[38400]:.2f} s at 38400 baud, {rule[9600]:.2f} s at 9600, {rule[500000]:.2f} s at 500000, "
+            "with the default 0.5 s timeout") in text
+
+    cut = {}
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":  # 300 bytes of a scan telegram, then nothing
+            cut["at"] = time.monotonic() + 0.05
+            return [*answer(payload), (0.05, scan_frame()[:300])]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=38400, probe=False, mode_timeout=1.0)
+    given_up = []
+    idle = lms.parser.idle
+
+    def noted_idle() -> list:
+        given_up.append(time.monotonic())
+        return idle()
+
+    monkeypatch.setattr(lms.parser, "idle", noted_idle)
+    with pytest.raises(LmsTimeoutError):  # no scan: after timeout + 2 line times + mode_timeout
+        next(lms.scans())
+    assert lms.parser.stats.stalled == 1 and len(given_up) == 1
+    assert rule[38400] < given_up[0] - cut["at"] < 1.5  # the bytes were read at cut["at"] or later
+    lms.close()
