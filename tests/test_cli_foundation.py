@@ -88,7 +88,7 @@ def test_os_errors_are_one_line_with_exit_status_2(tmp_path: Path, capsys: pytes
     def unreachable(executor, workers):
         raise OSError(f"Timed out trying to connect to {executor} after 10 s")
 
-    monkeypatch.setattr(runner, "_client", unreachable)
+    monkeypatch.setattr(runner, "sweep_client", unreachable)
     spec = tmp_path / "s.yaml"
     spec.write_text("kind: extract\ngrid:\n  method: [sensor]\n")
     assert main(["sweep", str(spec), "--scheduler", "tcp://127.0.0.1:1", "--no-progress",
