@@ -30,11 +30,14 @@ def quaternion_to_yaw(q: np.ndarray) -> np.ndarray:
     90 deg; the unit formula gave 116.57 deg); a zero or non-finite one gives nan (no rotation).
     InputError for ``q`` that is no (4,) or (n, 4) array of real numbers (None, [nan] or three
     numbers were Python's "not enough values to unpack", text numpy's ValueError)."""
-    try:
-        one = np.ndim(q) == 1  # type: ignore[arg-type]
-    except ValueError:  # a ragged list: refused by real_rows
-        one = False
-    q = real_rows([q] if one else q, "q", 4, "qx, qy, qz, qw", finite=False)
+    if isinstance(q, np.ndarray) and q.dtype == np.float64 and q.ndim in (1, 2) and q.shape[-1] == 4:
+        q = q.reshape(-1, 4)  # the readers' own quaternions, one a pose: nothing to check, no copy
+    else:
+        try:
+            one = np.ndim(q) == 1  # type: ignore[arg-type]
+        except ValueError:  # a ragged list: refused by real_rows
+            one = False
+        q = real_rows([q] if one else q, "q", 4, "qx, qy, qz, qw", finite=False)
     scale = np.max(np.abs(q), axis=1)  # divide by it first: no overflow or underflow in the squares
     ok = np.isfinite(q).all(axis=1) & (scale > 0)
     u = q / np.where(ok, scale, 1.0)[:, None]
