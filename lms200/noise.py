@@ -173,7 +173,8 @@ def robust_scale(z: np.ndarray) -> tuple[float, float, np.ndarray]:
     """(centre, scale, kept mask) of residuals: MAD start, then iterated CLIP_SIGMAS clipping with the
     clipped Gaussian's standard deviation corrected back to sigma. InputError for ``z`` that are not
     real numbers (text was numpy's ValueError)."""
-    z = real_vector(z, "z", "residuals, m", finite=False)
+    if not (isinstance(z, np.ndarray) and z.dtype == np.float64 and z.ndim == 1):  # the estimators' own: no copy
+        z = real_vector(z, "z", "residuals, m", finite=False)
     if z.size == 0:
         return 0.0, float("nan"), np.zeros(0, dtype=bool)
     m = float(np.median(z))

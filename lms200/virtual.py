@@ -72,6 +72,7 @@ from .protocol import (
 from .scan import Scan
 
 MAX_TIME_SCALE = 100.0  # slowest emulation: 100x slower than the device (1e9 took days a telegram)
+MAX_CLOCK_S = 1e12  # |now| a device takes (s, any monotonic clock; 1e308 overflowed a byte count: int(inf))
 MAX_DELAY_S = 3600.0  # longest device delay a DeviceTiming takes (the listing's longest is 3 s)
 MIRROR_PERIOD_S = 1.0 / 75.0  # one mirror turn: a 1 deg scan every 13.3 ms
 TYPE_STRING = b"LMS200;301063;V02.10 "
@@ -278,7 +279,7 @@ class VirtualLMS200:
         (text was a TypeError, an array numpy's ambiguous-truth ValueError) or a ``now`` that is no
         finite number (None or text was a TypeError, 10**400 an OverflowError)."""
         data = byte_string(data, "data")
-        check_number(now, "now", -math.inf, math.inf, unit="s")
+        check_number(now, "now", -MAX_CLOCK_S, MAX_CLOCK_S, unit="s")
         if not data:
             return
         if self._rx and now - self._rx_last > self.timing.rx_gap_s:
@@ -444,7 +445,7 @@ class VirtualLMS200:
     def transmit(self, now: float) -> list[tuple[bytes, int]]:
         """Bytes that have left the line by ``now``, as (bytes, baud they were sent at) pieces;
         InputError for a ``now`` that is no finite number (inf was an OverflowError, None a TypeError)."""
-        check_number(now, "now", -math.inf, math.inf, unit="s")
+        check_number(now, "now", -MAX_CLOCK_S, MAX_CLOCK_S, unit="s")
         if self.faults.mute:
             self._queue.clear()
             self._line_free = now
@@ -475,7 +476,7 @@ class VirtualLMS200:
     def next_wakeup(self, now: float) -> float | None:
         """When the next byte will be due (s), or None while the device waits for the host; InputError
         for a ``now`` that is no finite number."""
-        check_number(now, "now", -math.inf, math.inf, unit="s")
+        check_number(now, "now", -MAX_CLOCK_S, MAX_CLOCK_S, unit="s")
         if self.faults.mute:
             return None
         self._fill_continuous(now)

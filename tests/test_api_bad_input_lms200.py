@@ -137,11 +137,12 @@ def _device(**kw: object) -> virtual.VirtualLMS200:
     (lambda: protocol.set_config_request("abc"), r"^config: must be bytes .* got str$"),  # TypeError
     (lambda: protocol.with_units(None, "mm"), r"^config: must be bytes .* got NoneType$"),  # TypeError
     (lambda: protocol.units_of_config("abcdefg"), r"^config: must be bytes .* got str$"),  # AttributeError
-    (lambda: _device().receive(TELEGRAM, None), r"^now: must be a finite number \(s\), got None$"),  # TypeError
-    (lambda: _device().receive(TELEGRAM, 10**400), r"^now: must be a finite number \(s\), got a int beyond"),  # OverflowError
-    (lambda: _device().transmit(math.inf), r"^now: must be a finite number \(s\), got inf$"),  # OverflowError
-    (lambda: _device().transmit("1"), r"^now: must be a finite number \(s\), got '1'$"),  # TypeError
-    (lambda: _device().next_wakeup(None), r"^now: must be a finite number \(s\), got None$"),
+    (lambda: _device().receive(TELEGRAM, None), r"^now: must be a finite number in \[-1e\+12, 1e\+12\] s, got None$"),  # TypeError
+    (lambda: _device().receive(TELEGRAM, 10**400), r"^now: must be a finite number in .* got a int beyond"),  # OverflowError
+    (lambda: _device().transmit(math.inf), r"^now: must be a finite number in \[-1e\+12, 1e\+12\] s, got inf$"),  # OverflowError
+    (lambda: _device().transmit(1e308), r"^now: must be a finite number in \[-1e\+12, 1e\+12\] s, got 1e\+308$"),  # int(inf)
+    (lambda: _device().transmit("1"), r"^now: must be a finite number in .* got '1'$"),  # TypeError
+    (lambda: _device().next_wakeup(None), r"^now: must be a finite number in .* got None$"),
     (lambda: _device(faults=0.5), r"^faults: must be a lms200\.Faults or None, got float$"),  # AttributeError: seed
     (lambda: _device(timing="fast"), r"^timing: must be a lms200\.DeviceTiming or None, got str$"),
     (lambda: virtual.DeviceTiming(ack_s=None), r"^ack_s: must be a finite number in \[0, 3600\] s, got None$"),  # TypeError later
