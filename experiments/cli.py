@@ -64,11 +64,12 @@ class _Interrupt:
         return STOP_SIGNALS.get(signal.Signals(self.signum), STOP_SIGNALS[signal.SIGINT])
 
     def handler(self, signum: int, frame: Any) -> None:
-        if self.timer is None:
-            self.signum = signum
-            self.timer = threading.Timer(INTERRUPT_GRACE_S, self.hard_stop)
-            self.timer.daemon = True
-            self.timer.start()
+        if self.timer is not None:  # a second Ctrl-C while the first one's stop runs: stop now, as said
+            self.hard_stop()  # (it raised KeyboardInterrupt inside the cleanup: a traceback, exit -2)
+        self.signum = signum
+        self.timer = threading.Timer(INTERRUPT_GRACE_S, self.hard_stop)
+        self.timer.daemon = True
+        self.timer.start()
         raise KeyboardInterrupt
 
     def hard_stop(self) -> None:
@@ -163,8 +164,9 @@ def _main(argv: Sequence[str] | None) -> int:
               "(a bug in lmsbench; LMSBENCH_TRACEBACK=1 shows where)", file=sys.stderr)
         return 1
     finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
+        if interrupt.timer is None:  # stopped by a signal: the handler stays for the exit's own cleanup
+            for sig, handler in previous.items():  # (atexit: Dask closing clusters), where a second
+                signal.signal(sig, handler)  # Ctrl-C printed a traceback; it now ends the process at once
 
 
 PIPE_CLOSED_STATUS = 141  # 128 + SIGPIPE: what a shell reports for a command whose reader went away

@@ -88,7 +88,7 @@ def test_os_errors_are_one_line_with_exit_status_2(tmp_path: Path, capsys: pytes
     def unreachable(executor, workers):
         raise OSError(f"Timed out trying to connect to {executor} after 10 s")
 
-    monkeypatch.setattr(runner, "_client", unreachable)
+    monkeypatch.setattr(runner, "sweep_client", unreachable)
     spec = tmp_path / "s.yaml"
     spec.write_text("kind: extract\ngrid:\n  method: [sensor]\n")
     assert main(["sweep", str(spec), "--scheduler", "tcp://127.0.0.1:1", "--no-progress",
@@ -127,6 +127,10 @@ def test_bench_with_an_unknown_name_is_a_one_line_error(tmp_path: Path, capsys: 
     (["sweep", "s.yaml"], ["--quiet"], "no_progress", True),
     (["simulate", "--out", "o"], ["--no-progress"], "quiet", True),
     (["slam", "run", "--out", "o"], ["--no-progress"], "quiet", True),
+    # `slam LOG --stride 4` (compare, calibrate and sim2real thin a log so) and `figures --log LOG`
+    # (demo's name for Fig. 9's log) were 'unrecognized arguments' too
+    (["slam", "run", "--out", "o"], ["--stride", "4"], "every", 4),
+    (["figures"], ["--log", "x.clf"], "intel", Path("x.clf")),
 ])
 def test_the_rate_and_progress_options_take_the_other_commands_spelling(command, flag, dest, value) -> None:
     """`lmsbench compare office --rate-hz 4` (simulate, demo, figures and sim2real spell it so) was

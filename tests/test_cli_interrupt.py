@@ -249,3 +249,34 @@ def test_sigterm_stops_a_sweep_whose_cells_resume(tmp_path):
     again = subprocess.run(cmd, cwd=REPO, env=_env(), capture_output=True, text=True, timeout=180)
     assert again.returncode == 0, again.stderr
     assert f"4 cells, {4 - done} computed, {done} already done, 0 failed" in again.stdout
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_the_runner_benchmark_on_its_local_cluster_is_one_line(tmp_path):
+    """`lmsbench bench experiments` (or `bench`, which runs it) stopped with Ctrl-C while its local
+    Dask cluster ran cells: the one line, then 75-79 lines of tracebacks (distributed's atexit
+    close_clusters: 'AssertionError: Status.running', multiprocessing's resource tracker relaunched:
+    KeyError '/mp-...'), its cluster being its own, whose workers did not ignore Ctrl-C and which
+    nothing closed. It now runs on the sweep's local cluster: the one line, exit 130."""
+    cmd = [sys.executable, "-m", "experiments.cli", "bench", "experiments", "--out", str(tmp_path / "b")]
+    proc = subprocess.Popen(cmd, cwd=REPO, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while True:  # the cluster's two worker processes are up
+            workers = [p for p in psutil.Process(proc.pid).children(recursive=True)
+                       if "spawn_main" in " ".join(p.cmdline())]
+            if len(workers) >= 2:
+                break
+            assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+            time.sleep(0.05)
+        while proc.poll() is None and time.monotonic() < deadline:  # Ctrl-C is ignored while the cluster starts
+            proc.send_signal(signal.SIGINT)
+            time.sleep(0.3)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, (out, err)
+    time.sleep(3)  # what a stray child would still write
+    assert err.splitlines() == ["lmsbench bench: interrupted"], err

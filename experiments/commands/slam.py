@@ -39,7 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-odometry-baseline", action="store_true",
                    help="do not also run the filter with odometry for the comparison table")
     p.add_argument("--relations", type=path_arg, help="relations file (default: NAME.relations beside a log)")
-    p.add_argument("--every", type=count(1), default=1, help="keep every N-th scan (decimation; default 1, every scan)")
+    p.add_argument("--every", "--stride", dest="every", type=count(1), default=1,
+                   help="keep every N-th scan (decimation; default 1, every scan; --stride as in compare)")
     p.add_argument("--rate-hz", type=positive("scans/s"), help="decimate to about this many scans/s (by the stamps)")
     p.add_argument("--max-scans", type=count(2), help="stop after this many scans (at least 2)")
     p.add_argument("--quiet", "--no-progress", dest="quiet", action="store_true", help="no progress bar")

@@ -101,7 +101,7 @@ def run_sweep(
                 for key, params in todo:
                     record(key, params, run_cell(spec.kind, params, fn))
             else:
-                with _client(executor, workers) as client:
+                with sweep_client(executor, workers) as client:
                     _run_on_dask(client, spec.kind, fn, todo, record)
     finally:
         bar.close()
@@ -233,7 +233,7 @@ def _main_thread() -> bool:
 
 
 @contextlib.contextmanager
-def _client(executor: Any, workers: int) -> Iterator[Any]:
+def sweep_client(executor: Any, workers: int) -> Iterator[Any]:
     """A Dask client for ``executor``: a new LocalCluster, a scheduler address, or a given client."""
     import dask
     from distributed import Client, LocalCluster
