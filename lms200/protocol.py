@@ -222,14 +222,16 @@ def get_config_request() -> bytes:
 
 def set_config_request(config: bytes) -> bytes:
     """0x77: write the configuration block (installation mode only; reply 0xF7). InputError for a
-    ``config`` that is not bytes (5 was taken as 5 zero bytes, True as one, text a TypeError)."""
-    return bytes([CMD_SET_CONFIG]) + byte_string(config, "config")
+    ``config`` that is not bytes or a list of integers 0..255 (5 was taken as 5 zero bytes, True as
+    one, text a TypeError)."""
+    return bytes([CMD_SET_CONFIG]) + byte_string(config, "config", int_lists=True)
 
 
 def with_units(config: bytes, units: Units) -> bytes:
     """A configuration block with the measured-value unit byte set to ``units``; InputError for a
-    ``config`` that is not bytes (None or a number was a TypeError) or an unknown unit."""
-    config = byte_string(config, "config")
+    ``config`` that is not bytes or a list of integers 0..255 (None or a number was a TypeError) or
+    an unknown unit."""
+    config = byte_string(config, "config", int_lists=True)
     units = check_units(units)
     if len(config) <= CONFIG_UNITS_OFFSET:
         raise LmsProtocolError(f"configuration block of {len(config)} bytes has no unit byte")

@@ -223,3 +223,20 @@ def test_device_keeps_its_valid_clock_timing_and_faults() -> None:
     assert b"".join(piece for piece, _ in dev.transmit(10)).startswith(bytes([protocol.ACK, protocol.STX]))
     block = protocol.with_units(bytearray(32), "mm")
     assert protocol.units_of_config(memoryview(block)) == "mm" and protocol.set_config_request(block)[1:] == block
+
+
+def test_a_configuration_block_given_as_a_list_of_bytes_is_sent_as_before() -> None:
+    """``set_config_request([0] * 32)`` and ``with_units(list, 'cm')`` worked before the checks of
+    b538d7c (a second review found them refused): a list of integers 0..255 is bytes again; a
+    list holding 256 or text is still an InputError naming ``config``."""
+    from lms200.errors import InputError
+    from lms200.protocol import CONFIG_UNITS_OFFSET, UNITS_CODES, set_config_request, with_units
+
+    block = list(range(32))
+    assert set_config_request(block) == bytes([0x77]) + bytes(block)
+    assert set_config_request(tuple(block)) == set_config_request(bytes(block))
+    cm = with_units(block, "cm")
+    assert cm[CONFIG_UNITS_OFFSET] == UNITS_CODES["cm"] and len(cm) == 32
+    for bad in ([256] * 32, ["a"] * 32, "abc", None):
+        with pytest.raises(InputError, match=r"^config: must be bytes"):
+            set_config_request(bad)
