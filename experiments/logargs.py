@@ -93,13 +93,14 @@ def report_skipped(reader: Any, stream: IO[str] | None = None, show: int = 3) ->
         return 0
     path = getattr(reader, "path", "")
     skipped = list(getattr(stats, "skipped", []))
+    count = getattr(stats, "skipped_count", len(skipped))  # skipped keeps the first MAX_SKIPPED_KEPT only
     bag = isinstance(stats, BagReadStats)  # bag reasons name topic and message index themselves
-    if skipped:
-        print(f"{path}: skipped {len(skipped)} bad {'messages' if bag else 'lines'}", file=stream)
+    if count:
+        print(f"{path}: skipped {count} bad {'messages' if bag else 'lines'}", file=stream)
         for where, reason in skipped[:show]:
             print(f"  {path}: {reason}" if bag else f"  {path}:{where}: {reason}", file=stream)
-        if len(skipped) > show:
-            print(f"  ... and {len(skipped) - show} more", file=stream)
+        if count > show:
+            print(f"  ... and {count - show} more", file=stream)
     if getattr(stats, "stopped", None):
         print(f"{path}: reading stopped early at {stats.stopped}", file=stream)
-    return len(skipped)
+    return count

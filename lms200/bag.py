@@ -26,7 +26,7 @@ import numpy as np
 
 from .codes import finite_negative
 from .errors import InputError, LmsbenchError, LogNotFoundError
-from .records import Pose2D, Record
+from .records import Pose2D, Record, SkipLog
 from .scan import Scan, snap_angle
 from .tum import quaternion_to_yaw
 from .timing import mirror_time_increment, scan_period, smallest_range
@@ -264,18 +264,18 @@ def pose_tolerance(scan_stamps_ns: Iterable[int]) -> float:
 
 
 @dataclass
-class BagReadStats:
+class BagReadStats(SkipLog):
     """What a pass over a bag met.
 
     Attributes:
         messages: messages per topic read (scan and pose topics).
-        skipped: the bad messages skipped under ``skip_bad_lines``: (message index on its topic, reason).
+        skipped: the bad messages skipped under ``skip_bad_lines``: (message index on its topic, reason),
+            the first ``lms200.records.MAX_SKIPPED_KEPT`` of them; ``skipped_count`` counts them all.
         stopped: why reading ended early (the bag cannot be iterated further), or None.
         laser: the LaserScan topic read.
     """
 
     messages: dict[str, int] = field(default_factory=dict)
-    skipped: list[tuple[int, str]] = field(default_factory=list)
     stopped: str | None = None
     laser: str | None = None
 
@@ -334,7 +334,7 @@ class BagReader:
         reason = f"{type(exc).__name__}: {exc}" if not isinstance(exc, ValueError) else str(exc)
         if not self.skip_bad_lines:
             raise BagError(f"{self.path}: {where}: cannot read: {reason}") from None
-        self.stats.skipped.append((index, f"{where}: {reason}"))
+        self.stats.skip(index, f"{where}: {reason}")
         if fatal:
             self.stats.stopped = f"{where}: {reason}"
 

@@ -10,7 +10,8 @@ Formats (one message a line, ``#`` comments; messages of other kinds, named in c
   m rem1..remm laser_x laser_y laser_theta robot_x robot_y robot_theta tv rv forward_safety
   side_safety turn_axis ipc_timestamp hostname logger_timestamp`` (ROBOTLASER2: the rear laser);
   the declared field of view must hold the count at the declared resolution (fov = n x res, or
-  (n - 1) x res), lines with the same declared geometry must carry the same count, and max_range
+  (n - 1) x res), lines with the same declared geometry must carry the same count (of the first
+  ``MAX_GEOMETRIES`` geometries a pass meets), and max_range
   must lie in [MIN_RANGE_MAX_M, MAX_RANGE_M] (:mod:`lms200.laser_geometry`).
 - ``RAWLASER1`` .. ``RAWLASER4`` (CARMEN 0.7 loggers): the ROBOTLASER1 fields up to the remissions,
   then ``ipc_timestamp hostname logger_timestamp``; no poses (``.odom`` is None), same checks.
@@ -33,7 +34,8 @@ poses (FLASER, RLASER, ROBOTLASER1 / 2) up to ``DEFAULT_TOPIC_LINES`` lines afte
 line, else the first RAWLASER kind: CARMEN 0.7 loggers write each reading twice, as RAWLASER1 and as ROBOTLASER1.
 Every failure while reading (a malformed line, a count that is not a finite non-negative integer,
 compressed data that cannot be decompressed, a line over ``MAX_LINE_CHARS``) is a ``LogFormatError`` naming
-file and line; ``skip_bad_lines`` records it in ``stats.skipped`` and goes on.
+file and line; ``skip_bad_lines`` records it in ``stats.skipped`` (the first
+``lms200.records.MAX_SKIPPED_KEPT``; ``stats.skipped_count`` counts them all) and goes on.
 """
 
 from __future__ import annotations
@@ -68,7 +70,7 @@ from .codes import (
 from . import laser_geometry
 from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
 from .laser_geometry import LaserGeometry
-from .records import Pose2D, Record
+from .records import Pose2D, Record, SkipLog
 from .scan import Scan, snap_angle
 
 UNITS_PARAM = "lmsbench_range_units"
@@ -99,6 +101,10 @@ KNOWN_KINDS = frozenset(LASER_KINDS + ("ODOM", "TRUEPOS", "PARAM"))  # messages 
 MAX_MESSAGE_KINDS = 64  # message kinds counted by name in ReadStats.messages (the kinds above always)
 OTHER_KINDS = "other"  # where lines of further kinds are counted
 ROBOTLASER_FIT_TOLERANCE_BEAMS = 0.5  # declared fov / resolution must be n or n - 1 steps to within this
+#: declared ROBOTLASER geometries (start, fov, resolution as written) a pass remembers with their beam
+#: count, to hold later lines of the same geometry to it: a log has a few; 1,000,000 lines of distinct
+#: start angles were each remembered (407 MB resident; now 30 MB)
+MAX_GEOMETRIES = 64
 MAX_LINE_CHARS = 1 << 20  # a longer line is malformed (bounds memory on damaged files)
 #: most blank or comment lines in a row a log may hold: a log's header comments are tens of lines, and a
 #: gzip of 100 MB of blank lines was read twice to its end (48 s) to say it held no laser line
@@ -113,19 +119,19 @@ COMPRESSION_SUFFIXES = {".gz": "gzip", ".bz2": "bzip2", ".xz": "xz"}
 
 
 @dataclass
-class ReadStats:
+class ReadStats(SkipLog):
     """What a pass over a log met.
 
     Attributes:
         messages: lines per message kind, read or not: every kind this reader knows, other kinds up
             to ``MAX_MESSAGE_KINDS`` of them (the rest under ``OTHER_KINDS``, "other").
-        skipped: the bad lines skipped under ``skip_bad_lines``: (line number, reason).
+        skipped: the bad lines skipped under ``skip_bad_lines``: (line number, reason), the first
+            ``lms200.records.MAX_SKIPPED_KEPT`` of them; ``skipped_count`` counts them all.
         stopped: why reading ended early (undecompressable data under ``skip_bad_lines``), or None.
         laser: the laser message kind read (see ``topic``), None before the first one.
     """
 
     messages: dict[str, int] = field(default_factory=dict)
-    skipped: list[tuple[int, str]] = field(default_factory=list)
     stopped: str | None = None
     laser: str | None = None
 
@@ -271,7 +277,7 @@ class CarmenReader:
                     if not self.skip_bad_lines:
                         raise LogFormatError(self.path, line_no + 1, reason) from None
                     self.stats.stopped = f"line {line_no + 1}: {reason}"
-                    self.stats.skipped.append((line_no + 1, reason))
+                    self.stats.skip(line_no + 1, reason)
                     return
                 if not line:
                     return
@@ -283,7 +289,7 @@ class CarmenReader:
     def _bad(self, line_no: int, kind: str, exc: Exception) -> None:
         if not self.skip_bad_lines:
             raise LogFormatError(self.path, line_no, f"malformed {kind} line: {exc}") from None
-        self.stats.skipped.append((line_no, f"{kind}: {exc}"))
+        self.stats.skip(line_no, f"{kind}: {exc}")
 
     def _check_override(self, kind: str) -> None:
         """A beam-geometry override for a log whose laser lines carry their own geometry is an
@@ -356,7 +362,7 @@ class CarmenReader:
         last_stamp = -math.inf  # the last scan's stamp: a TRUEPOS stamped at or before it is its, not the next's
         has_odometry = True
         params: dict[str, float] = {}
-        counts: dict[tuple[str, str, str], tuple[int, int]] = {}  # ROBOTLASER header -> (beams, first line)
+        counts: dict[tuple[str, str, str], tuple[int, int]] = {}  # ROBOTLASER header -> (beams, first line), bounded
         blank = _BlankRun(self.path)
         range_words = _RangeWords()  # range word -> its number (_range_floats), for this pass
         junk = 0  # lines that start with no message name
@@ -376,7 +382,7 @@ class CarmenReader:
                     reason = (f"more than {MAX_JUNK_LINES:,} lines that start with no CARMEN message name: junk from "
                               "here on, not read")
                     stats.stopped = f"line {line_no}: {reason}"
-                    stats.skipped.append((line_no, f"message: {reason}"))
+                    stats.skip(line_no, f"message: {reason}")
                     break
             # a TRUEPOS pose is the truth of the next line of the laser kind read (that line, even when
             # malformed, takes it), when stamped within TRUTH_MAX_GAP_S of it: ODOM lines, other laser
@@ -418,10 +424,13 @@ class CarmenReader:
                         scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
                                                        params.get(RANGE_MIN_PARAM, 0.0), range_words)
                         header = (words[2], words[3], words[4])  # start, fov, resolution as written
-                        first = counts.setdefault(header, (len(scan), line_no))
-                        _require(first[0] == len(scan),
-                                 f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
-                                 f"field of view and resolution carries {first[0]}")
+                        first = counts.get(header)
+                        if first is None and len(counts) < MAX_GEOMETRIES and max(map(len, header)) <= MAX_CACHED_WORD_CHARS:
+                            first = counts[header] = (len(scan), line_no)
+                        if first is not None:
+                            _require(first[0] == len(scan),
+                                     f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
+                                     f"field of view and resolution carries {first[0]}")
                     given = (held[0] if held is not None and abs(held[1] - scan.stamp) <= TRUTH_MAX_GAP_S
                              and (held[1] > last_stamp or held[1] == scan.stamp) else None)
                     last_stamp = scan.stamp

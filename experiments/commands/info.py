@@ -35,7 +35,7 @@ def run(args: argparse.Namespace) -> int:
     others = stats.other_lasers() if hasattr(stats, "other_lasers") else {}
     report_skipped(reader)
     if args.json:
-        print(json.dumps({**summary.as_dict(), "laser": stats.laser, "skipped_lines": len(stats.skipped),
+        print(json.dumps({**summary.as_dict(), "laser": stats.laser, "skipped_lines": stats.skipped_count,
                           "skipped": [{"at": at, "reason": reason} for at, reason in stats.skipped],
                           "stopped": stats.stopped, "other_lasers": others}, indent=2))
         return 0
