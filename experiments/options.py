@@ -340,6 +340,18 @@ class OutTree:
     files: tuple[str, ...] = ()
     folders: Mapping[str, "OutTree"] = field(default_factory=dict)
 
+    def present(self, folder: Path, prefix: str = "") -> list[str]:
+        """The files of ``folder`` (recursively, as ``sub/name``) of this tree's names."""
+        found = []
+        for e in sorted(folder.iterdir(), key=lambda e: e.name):
+            if e.name.startswith("."):
+                continue
+            if e.name in self.folders and e.is_dir() and not e.is_symlink():
+                found += self.folders[e.name].present(e, f"{prefix}{e.name}/")
+            elif not e.is_dir() and any(fnmatch.fnmatchcase(e.name, pat) for pat in self.files):
+                found.append(f"{prefix}{e.name}")
+        return found
+
     def foreign(self, folder: Path, prefix: str = "") -> list[str]:
         """The entries of ``folder`` (recursively, as ``sub/name``) this tree does not write; hidden
         entries (a temporary file of an atomic write) pass."""
@@ -374,8 +386,111 @@ DEMO_OUTPUTS = OutTree(("report.md", "report.html"),
                         "sim2real": OutTree(SIM2REAL_OUTPUTS), "sweeps": OutTree(folders={"demo_k_vs_noise": SWEEP_OUTPUTS})})
 
 
+def _yaml_mapping(path: Path) -> dict | None:
+    """The mapping a YAML file holds, or None (unreadable, not UTF-8, not YAML, not a mapping)."""
+    try:
+        raw = load_yaml(path.read_text(encoding="utf-8"))
+    except Exception:  # noqa: BLE001 - whatever it is, it is not a record of a run
+        return None
+    return raw if isinstance(raw, dict) else None
+
+
+def _json_object(path: Path) -> dict | None:
+    """The object a JSON file holds, or None."""
+    import json
+
+    try:
+        raw = json.loads(path.read_text(encoding="utf-8"))
+    except Exception:  # noqa: BLE001
+        return None
+    return raw if isinstance(raw, dict) else None
+
+
+def _csv_header(path: Path) -> list[str]:
+    """The column names of a CSV file's first line ([] if unreadable)."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return fh.readline(1 << 16).rstrip("\r\n").split(",")
+    except Exception:  # noqa: BLE001
+        return []
+
+
+def _yaml_has(*keys: str, dicts: Sequence[str] = (), exact: bool = False) -> Callable[[Path], bool]:
+    """A recogniser: a YAML mapping with ``keys`` (``exact``: only those), ``dicts`` of them mappings."""
+    def tells(path: Path) -> bool:
+        raw = _yaml_mapping(path)
+        return (raw is not None and (set(raw) == set(keys) if exact else set(keys) <= set(raw))
+                and all(isinstance(raw[k], dict) for k in dicts))
+    return tells
+
+
+def _json_has(**kinds: type) -> Callable[[Path], bool]:
+    """A recogniser: a JSON object whose keys ``kinds`` hold values of those types."""
+    def tells(path: Path) -> bool:
+        raw = _json_object(path)
+        return raw is not None and all(isinstance(raw.get(k), t) and not (t is int and isinstance(raw.get(k), bool))
+                                       for k, t in kinds.items())
+    return tells
+
+
+def _csv_starts(*columns: str) -> Callable[[Path], bool]:
+    """A recogniser: a CSV file whose header begins with ``columns``."""
+    return lambda path: _csv_header(path)[:len(columns)] == list(columns)
+
+
+def _slam_config(path: Path) -> bool:
+    """config.yaml as lmsbench slam writes it (slamrun.write_config): exactly input: and slam:
+    mappings, the slam one with a preset."""
+    raw = _yaml_mapping(path)
+    return (raw is not None and set(raw) == {"input", "slam"} and isinstance(raw["input"], dict)
+            and isinstance(raw["slam"], dict) and "preset" in raw["slam"])
+
+
+@dataclass(frozen=True)
+class Owner:
+    """How a command tells, from the content of what it left, that an earlier run of it wrote the
+    files of its output names in a folder: ``records`` maps a file name to a recogniser of its
+    content; every other output file (a TUM file, a figure, a table) counts as the earlier run's
+    only when one of the records beside it (in the folder given as --out) is recognised."""
+
+    command: str
+    records: Mapping[str, Callable[[Path], bool]]
+
+    def earlier(self, folder: Path, writes: OutTree) -> set[str]:
+        """The output files of ``folder`` (``sub/name`` in sub-folders) an earlier run wrote."""
+        present = writes.present(folder)
+        told = {n for n in present if n in self.records and self.records[n](folder / n)}
+        return (told | {n for n in present if n not in self.records}) if told else set()
+
+    def foreign(self, folder: Path, writes: OutTree) -> list[str]:
+        """The output files of ``folder`` this run would replace that no earlier run wrote."""
+        earlier = self.earlier(folder, writes)
+        return [n for n in writes.present(folder) if n not in earlier]
+
+
+#: What each command's earlier run left that says so (a user's summary.txt or config.yaml in a
+#: folder of nothing else was written over: check_out allowed a folder by its file names alone).
+SIMULATE_OWNER = Owner("simulate", {
+    "config.yaml": _yaml_has("world", "seed", "duration", "sensor", dicts=("sensor",)),  # SimulationConfig.to_dict
+    "world.json": _json_has(walls=list, corners=list, circles=list)})  # sim.World.to_json
+SLAM_OWNER = Owner("slam", {
+    "config.yaml": _slam_config,
+    "metrics.json": _json_has(input=dict, n_scans=int, consistency=dict),  # every version's
+    "map.json": _json_has(frame=str, lines=list, corners=list)})  # SlamResult.map_dict
+COMPARE_OWNER = Owner("compare", {
+    "config.yaml": _yaml_has("sources", "seeds", "methods", "scoring"),  # commands.compare: resolved
+    "compare.csv": _csv_starts("source"),
+    "summary.csv": _csv_starts("source", "method")})
+SIM2REAL_OWNER = Owner("sim2real", {
+    "config.yaml": _yaml_has("log", "probe_duration", "world", "sensor_file", "versions")})  # sim2real.write_outputs
+BENCH_OWNER = Owner("bench", {
+    "versions.yaml": _yaml_has("benchmarks", "quick", "versions", exact=True),
+    "bench.csv": _csv_starts("area", "case")})
+SWEEP_OWNER = Owner("sweep", {"sweep.yaml": _yaml_has("name", "kind")})  # sweep.runner.spec_record
+
+
 def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | None = None,
-              patterns: Sequence[str] = ()) -> Path | None:
+              patterns: Sequence[str] = (), owner: Owner | None = None) -> Path | None:
     """An output folder: absent (created later) or a folder; its nearest existing parent writable.
     None (no --out: a new timestamped folder will be made) passes. With ``writes`` (the fixed file
     names a command writes: SIMULATE_OUTPUTS, SLAM_OUTPUTS, COMPARE_OUTPUTS, or an OutTree of
@@ -398,6 +513,12 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
             shown = ", ".join(others[:3]) + (f" and {len(others) - 3} more" if len(others) > 3 else "")
             raise InputError(f"--out {p}: holds {shown}, which this command does not write; give a new or empty "
                              "folder (a folder of this command's own earlier outputs is replaced)")
+        if owner is not None:  # its own names, but not written by it: a user's summary.txt or config.yaml
+            theirs = owner.foreign(p, tree)
+            if theirs:
+                shown = " and ".join(theirs) if len(theirs) <= 3 else ", ".join(theirs[:3]) + f" and {len(theirs) - 3} more"
+                raise InputError(f"--out {p}: holds {shown}, which this run would replace but no earlier lmsbench "
+                                 f"{owner.command} run wrote; give a new or empty folder")
     parent = p
     while not parent.exists():
         parent = parent.parent

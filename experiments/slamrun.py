@@ -20,7 +20,7 @@ import numpy as np
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml
-from experiments.options import SLAM_OUTPUTS
+from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree
 from slam import SlamConfig, SlamResult, run_slam
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
 
@@ -312,43 +312,16 @@ def write_result(out: Path, res: SlamResult, earlier: Collection[str] = ()) -> N
 
 #: What lmsbench slam writes in its --out folder.
 OUTPUTS = SLAM_OUTPUTS
-#: The outputs that say by their content that lmsbench slam wrote them; the others (a TUM file, a
-#: PNG) are told by one of these beside them.
-_RECORDS = ("config.yaml", "metrics.json", "map.json")
-
-
-def _is_record(path: Path) -> bool:
-    """Whether ``path`` (config.yaml, metrics.json or map.json) is as lmsbench slam writes it:
-    config.yaml a mapping of exactly ``input`` and ``slam`` (write_config), metrics.json an object
-    with ``input``, ``n_scans`` and ``consistency`` (every version's), map.json one with ``frame``,
-    ``lines`` and ``corners`` (SlamResult.map_dict)."""
-    try:
-        text = path.read_text(encoding="utf-8")
-        if path.name == "config.yaml":
-            raw = load_yaml(text)
-            return (isinstance(raw, dict) and set(raw) == {"input", "slam"} and isinstance(raw["input"], dict)
-                    and isinstance(raw["slam"], dict) and "preset" in raw["slam"])
-        raw = json.loads(text)
-    except Exception:  # noqa: BLE001 - unreadable, not UTF-8, not YAML / JSON: not a record of a run
-        return False
-    if not isinstance(raw, dict):
-        return False
-    if path.name == "metrics.json":
-        return isinstance(raw.get("input"), dict) and isinstance(raw.get("n_scans"), int) and isinstance(raw.get("consistency"), dict)
-    return isinstance(raw.get("frame"), str) and isinstance(raw.get("lines"), list) and isinstance(raw.get("corners"), list)
 
 
 def earlier_run_files(out: Path) -> set[str]:
     """The files of ``out`` (of :data:`OUTPUTS`) an earlier ``lmsbench slam`` run wrote, as far as
-    what it left tells: config.yaml, metrics.json and map.json by their content (see
-    :func:`_is_record`), trajectory.tum, keyframes.tum and slam.png by one of those beside them.
-    A file it does not tell is the user's: never removed or written over (a metrics.json of notes
-    and a slam.png in an --out folder were deleted as an earlier run's)."""
-    present = [name for name in OUTPUTS if (out / name).is_file()]
-    records = {name for name in present if name in _RECORDS and _is_record(out / name)}
-    if not records:
-        return set()
-    return records | {name for name in present if name not in _RECORDS}
+    what it left tells (options.SLAM_OWNER, the rule every command with an --out folder follows):
+    config.yaml, metrics.json and map.json by their content, trajectory.tum, keyframes.tum and
+    slam.png by one of those beside them. A file it does not tell is the user's: never removed or
+    written over (a metrics.json of notes and a slam.png in an --out folder were deleted as an
+    earlier run's)."""
+    return SLAM_OWNER.earlier(out, OutTree(OUTPUTS))
 
 
 def foreign_outputs(out: Path) -> list[str]:
@@ -356,8 +329,7 @@ def foreign_outputs(out: Path) -> list[str]:
     (:func:`earlier_run_files`), which a run into ``out`` would write over or remove."""
     if not out.is_dir():
         return []
-    earlier = earlier_run_files(out)
-    return [name for name in OUTPUTS if (out / name).exists() and name not in earlier]
+    return sorted(SLAM_OWNER.foreign(out, OutTree(OUTPUTS)), key=OUTPUTS.index)
 
 
 def write_outputs(out: Path, data: SlamInput, config: SlamConfig, slam_run: SlamRun) -> None:

@@ -9,7 +9,7 @@ import pkgutil
 from lms200 import LmsbenchError
 
 from experiments import benchmarks
-from experiments.options import BENCH_OUTPUTS, check_out, path_arg
+from experiments.options import BENCH_OUTPUTS, BENCH_OWNER, check_out, path_arg
 
 
 def discover() -> dict[str, object]:
@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise LmsbenchError(f"benchmark(s) {', '.join(twice)} named more than once")
-    check_out(args.out, writes=BENCH_OUTPUTS)
+    check_out(args.out, writes=BENCH_OUTPUTS, owner=BENCH_OWNER)
     rows = []
     for name in names:
         print(f"== {name}", flush=True)

@@ -16,7 +16,7 @@ from lms200 import LmsbenchError
 from lms200.timing import check_scan_rate
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
-from experiments.options import (COMPARE_FIGURES, COMPARE_OUTPUTS, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
+from experiments.options import (COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
                                  check_out_spares, check_seeds, count, positive, path_arg, text)
 
 
@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
     reads = [Path(s) / name for s in args.sources if Path(s).is_dir() for name in SIMULATE_OUTPUTS]
     reads += [Path(s) for s in args.sources if Path(s).is_file()] + ([args.sensor] if args.sensor else [])
     check_out_spares(args.out, COMPARE_OUTPUTS, reads)
-    check_out(args.out, writes=COMPARE_OUTPUTS, patterns=COMPARE_FIGURES)  # after: an input in --out is the sharper message
+    check_out(args.out, writes=COMPARE_OUTPUTS, patterns=COMPARE_FIGURES, owner=COMPARE_OWNER)  # after: an input in --out is the sharper message
     _check_applies(args)
     args.seeds = args.seeds or list(DEFAULT_SEEDS)
     args.duration = args.duration or DEFAULT_DURATION_S

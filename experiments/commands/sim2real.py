@@ -14,6 +14,7 @@ from experiments.options import (
     DURATION,
     SEED,
     SIM2REAL_OUTPUTS,
+    SIM2REAL_OWNER,
     InputError,
     check_log,
     check_out,
@@ -69,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     read_options = read_log_options(args)
     check_log(args.log)
     check_out_spares(args.out, SIM2REAL_OUTPUTS, [args.log] + ([args.sensor] if args.sensor else []))
-    check_out(args.out, writes=SIM2REAL_OUTPUTS)  # after: an input in --out is the sharper message
+    check_out(args.out, writes=SIM2REAL_OUTPUTS, owner=SIM2REAL_OWNER)  # after: an input in --out is the sharper message
     check_seeds(args.seeds)
     if args.fit_rooms and args.world != "mit":
         raise InputError(f"--fit-rooms fits the mit world's room size; it does nothing for --world {args.world}")

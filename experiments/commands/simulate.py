@@ -7,9 +7,9 @@ from lms200.yamlio import load as load_yaml
 
 import argparse
 
-from experiments.options import (DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, InputError, check_file,
+from experiments.options import (DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, SIMULATE_OWNER, InputError, check_file,
                                  check_world_file,
-                                 check_out, check_yaml, known_worlds, number, positive, path_arg)
+                                 check_out, check_out_spares, check_yaml, known_worlds, number, positive, path_arg)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -129,7 +129,8 @@ def _config(args: argparse.Namespace):
 def run(args: argparse.Namespace) -> int:
     from experiments.simulation import run_simulation
 
-    check_out(args.out, writes=SIMULATE_OUTPUTS)
+    check_out_spares(args.out, SIMULATE_OUTPUTS, [f for f in (args.config, args.sensor) if f is not None])
+    check_out(args.out, writes=SIMULATE_OUTPUTS, owner=SIMULATE_OWNER)  # after: an input in --out is the sharper message
     cfg = _config(args)
     check_world_file(cfg.world)
     records = run_simulation(cfg, args.out, progress=not args.quiet)

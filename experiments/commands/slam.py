@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from slam import SlamConfig
 
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import (SLAM_OUTPUTS, InputError, check_file, check_log, check_methods, check_out, check_yaml,
+from experiments.options import (SIMULATE_OUTPUTS, SLAM_OUTPUTS, SLAM_OWNER, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_yaml,
                                  count, missing_message, positive, path_arg, text)
 
 
@@ -148,19 +148,18 @@ def _check_input(path: Path) -> None:
 def run(args: argparse.Namespace) -> int:
     from lms200 import LmsbenchError
 
-    from experiments.slamrun import (deskew_for_sensor, foreign_outputs, load_input, run as run_slam, simulated_interlaced,
+    from experiments.slamrun import (deskew_for_sensor, load_input, run as run_slam, simulated_interlaced,
                                      write_outputs)
 
     _check_input(Path(args.input))
     if args.relations is not None:
         check_file(args.relations, "a relations file")
-    check_out(args.out, writes=SLAM_OUTPUTS)
+    # `slam RUN --config DIR/config.yaml --out DIR` wrote the resolved settings over the given file
+    inp = Path(args.input)
+    reads = [inp / name for name in SIMULATE_OUTPUTS] if inp.is_dir() else [inp]
+    check_out_spares(args.out, SLAM_OUTPUTS, reads + [f for f in (args.config, args.relations) if f is not None])
     # by name alone a folder of the user's metrics.json and slam.png passed, and the run deleted them
-    foreign = foreign_outputs(args.out)
-    if foreign:
-        raise InputError(f"--out {args.out}: holds {' and '.join(foreign)}, which this run would replace but no earlier "
-                         "lmsbench slam run wrote (a run's config.yaml, metrics.json or map.json would say so); give a "
-                         "new or empty folder (a folder of an earlier run's outputs is replaced)")
+    check_out(args.out, writes=SLAM_OUTPUTS, owner=SLAM_OWNER)  # after: an input in --out is the sharper message
     config = _config(args)
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
                       read_options=read_log_options(args))

@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from experiments.options import SWEEP_OUTPUTS, InputError, check_link, check_out, check_out_spares, check_yaml, count, path_arg, text
+from experiments.options import SWEEP_OUTPUTS, SWEEP_OWNER, InputError, check_link, check_out, check_out_spares, check_yaml, count, path_arg, text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     # be run again (it is rewritten the same)
     own = Path(args.sweep).resolve() == (out / "sweep.yaml").resolve() and Path(args.sweep).read_text() == spec_record(spec)
     check_out_spares(out, SWEEP_OUTPUTS.files, [] if own else [args.sweep])
-    check_out(out, writes=SWEEP_OUTPUTS)
+    check_out(out, writes=SWEEP_OUTPUTS, owner=SWEEP_OWNER)
     _check_same_sweep(out, spec.name)
     executor = "inprocess" if args.inprocess else (args.scheduler if args.scheduler is not None else "local")
     if args.workers is not None and executor != "local":  # it was ignored
