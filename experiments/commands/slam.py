@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from slam import SlamConfig
 
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import (SIMULATE_OUTPUTS, SLAM_OUTPUTS, SLAM_OWNER, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_yaml,
+from experiments.options import (SLAM_OUTPUTS, SLAM_OWNER, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_yaml,
                                  count, missing_message, positive, path_arg, text)
 
 
@@ -155,9 +155,8 @@ def run(args: argparse.Namespace) -> int:
     if args.relations is not None:
         check_file(args.relations, "a relations file")
     # `slam RUN --config DIR/config.yaml --out DIR` wrote the resolved settings over the given file
-    inp = Path(args.input)
-    reads = [inp / name for name in SIMULATE_OUTPUTS] if inp.is_dir() else [inp]
-    check_out_spares(args.out, SLAM_OUTPUTS, reads + [f for f in (args.config, args.relations) if f is not None])
+    # (a simulate folder as --out holds its scans.clf, which check_out refuses by name)
+    check_out_spares(args.out, SLAM_OUTPUTS, [f for f in (args.input, args.config, args.relations) if f is not None])
     # by name alone a folder of the user's metrics.json and slam.png passed, and the run deleted them
     check_out(args.out, writes=SLAM_OUTPUTS, owner=SLAM_OWNER)  # after: an input in --out is the sharper message
     config = _config(args)

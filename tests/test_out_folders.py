@@ -1,0 +1,119 @@
+"""One rule for every command's --out folder (options.Owner): a file of an output name is replaced
+only when what the command left tells an earlier run of it wrote it; otherwise the run is refused
+before any work, one line, exit 2, the file kept. check_out went by file names alone: a user's
+config.yaml, summary.txt, sim2real.md, bench.csv or results.csv in a folder of nothing else was
+written over. Outputs never overwrite inputs: `slam RUN --config DIR/config.yaml --out DIR` wrote
+the resolved settings over the given file."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+from experiments.cli import main
+from experiments.options import BENCH_OUTPUTS, BENCH_OWNER, SIM2REAL_OUTPUTS, SIM2REAL_OWNER, SWEEP_OUTPUTS, SWEEP_OWNER, OutTree
+
+
+@pytest.fixture(scope="module")
+def sim(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("sim") / "run"
+    assert main(["simulate", "--duration", "2", "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+@pytest.fixture(scope="module")
+def sweep_file(tmp_path_factory) -> Path:
+    f = tmp_path_factory.mktemp("sw") / "sweep.yaml"
+    f.write_text(yaml.safe_dump({"name": "t", "kind": "extract", "fixed": {"duration": 0.5}, "grid": {"extractor.k": [3]}}))
+    return f
+
+
+def _refused(capsys, argv: list[str], folder: Path, name: str, command: str) -> None:
+    before = (folder / name).read_bytes()
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.splitlines() == [f"lmsbench {command}: error: --out {folder}: holds {name}, which this run would replace "
+                                f"but no earlier lmsbench {command} run wrote; give a new or empty folder"], err
+    assert (folder / name).read_bytes() == before
+    assert sorted(p.name for p in folder.iterdir()) == [name]
+
+
+@pytest.mark.parametrize("command, name, argv", [
+    ("simulate", "config.yaml", ["simulate", "--duration", "1", "--quiet"]),
+    ("simulate", "map.png", ["simulate", "--duration", "1", "--quiet"]),
+    ("slam", "config.yaml", ["slam", "{sim}", "--quiet"]),
+    ("compare", "summary.txt", ["compare", "office", "--duration", "1", "--seeds", "1"]),
+    ("compare", "config.yaml", ["compare", "office", "--duration", "1", "--seeds", "1"]),
+    ("sim2real", "sim2real.md", ["sim2real", "{sim}/scans.clf"]),
+    ("sim2real", "config.yaml", ["sim2real", "{sim}/scans.clf"]),
+    ("bench", "bench.csv", ["bench", "lms200"]),
+    ("sweep", "results.csv", ["sweep", "{sweep}", "--inprocess"]),
+])
+def test_a_users_file_of_an_output_name_is_refused(sim, sweep_file, tmp_path, capsys, command, name, argv):
+    """Before: the folder passed by its file names and the run wrote over the user's file, exit 0."""
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    (folder / name).write_text("my notes\n")
+    argv = [a.format(sim=sim, sweep=sweep_file) for a in argv] + ["--out", str(folder)]
+    _refused(capsys, argv, folder, name, command)
+
+
+def test_rerun_into_its_own_folder_is_accepted(sim, tmp_path, capsys):
+    """simulate, slam and compare run twice into one folder: the second run replaces the first's outputs."""
+    sim2 = tmp_path / "sim"
+    for _ in range(2):
+        assert main(["simulate", "--duration", "1", "--out", str(sim2), "--quiet"]) == 0
+    slam = tmp_path / "slam"
+    for _ in range(2):
+        assert main(["slam", str(sim), "--out", str(slam), "--quiet"]) == 0
+    cmp = tmp_path / "cmp"
+    for _ in range(2):
+        assert main(["compare", "office", "--duration", "1", "--seeds", "1", "--out", str(cmp)]) == 0
+    assert (cmp / "summary.txt").is_file() and (slam / "metrics.json").is_file() and (sim2 / "map.png").is_file()
+
+
+def test_slam_config_in_out_is_refused(sim, tmp_path, capsys):
+    """`slam RUN --config DIR/config.yaml --out DIR` wrote the resolved settings over the given file."""
+    out = tmp_path / "slam"
+    assert main(["slam", str(sim), "--out", str(out), "--quiet"]) == 0
+    cfg = out / "config.yaml"
+    before = cfg.read_bytes()
+    capsys.readouterr()
+    assert main(["slam", str(sim), "--config", str(cfg), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.splitlines() == [f"lmsbench slam: error: --out {out}: the run would write config.yaml over {cfg}, which it "
+                                "reads; give another folder"], err
+    assert cfg.read_bytes() == before
+
+
+def test_simulate_config_in_out_is_refused(sim, capsys):
+    assert main(["simulate", "--config", str(sim / "config.yaml"), "--out", str(sim), "--quiet"]) == 2
+    assert "the run would write config.yaml over" in capsys.readouterr().err
+
+
+def test_what_bench_sim2real_and_sweep_tell_as_their_own(tmp_path):
+    """The records the slower commands leave (their own formats) make the folder theirs; a figure or
+    table alone, or a record of another kind, does not."""
+    b = tmp_path / "bench"
+    b.mkdir()
+    (b / "bench.csv").write_text("area,case,method\nlms200,x,y\n")
+    (b / "versions.yaml").write_text(yaml.safe_dump({"benchmarks": ["lms200"], "quick": True, "versions": {}}))
+    assert BENCH_OWNER.foreign(b, OutTree(BENCH_OUTPUTS)) == []
+    (b / "bench.csv").write_text("a,b\n")
+    (b / "versions.yaml").write_text("python: 3.11\n")
+    assert BENCH_OWNER.foreign(b, OutTree(BENCH_OUTPUTS)) == ["bench.csv", "versions.yaml"]
+    s = tmp_path / "s2r"
+    s.mkdir()
+    (s / "sim2real.png").write_bytes(b"\x89PNG")
+    assert SIM2REAL_OWNER.foreign(s, OutTree(SIM2REAL_OUTPUTS)) == ["sim2real.png"]
+    (s / "config.yaml").write_text(yaml.safe_dump({"log": "x.clf", "duration": 1.0, "probe_duration": 1.0,
+                                                   "sensor_file": None, "world": "mit", "versions": {}}))
+    assert SIM2REAL_OWNER.foreign(s, OutTree(SIM2REAL_OUTPUTS)) == []
+    w = tmp_path / "sweep"
+    (w / "cells").mkdir(parents=True)
+    (w / "cells" / "a.parquet").write_bytes(b"PAR1")
+    assert SWEEP_OWNER.foreign(w, SWEEP_OUTPUTS) == ["cells/a.parquet"]
+    (w / "sweep.yaml").write_text("name: t\nkind: extract\n")
+    assert SWEEP_OWNER.foreign(w, SWEEP_OUTPUTS) == []
