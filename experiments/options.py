@@ -438,6 +438,17 @@ def _csv_starts(*columns: str) -> Callable[[Path], bool]:
     return lambda path: _csv_header(path)[:len(columns)] == list(columns)
 
 
+def _first_line(start: str) -> Callable[[Path], bool]:
+    """A recogniser: a text file whose first line begins with ``start``."""
+    def tells(path: Path) -> bool:
+        try:
+            with open(path, encoding="utf-8") as fh:
+                return fh.readline(1 << 12).startswith(start)
+        except Exception:  # noqa: BLE001
+            return False
+    return tells
+
+
 def _slam_config(path: Path) -> bool:
     """config.yaml as lmsbench slam writes it (slamrun.write_config): exactly input: and slam:
     mappings, the slam one with a preset."""
@@ -481,8 +492,9 @@ COMPARE_OWNER = Owner("compare", {
     "config.yaml": _yaml_has("sources", "seeds", "methods", "scoring"),  # commands.compare: resolved
     "compare.csv": _csv_starts("source"),
     "summary.csv": _csv_starts("source", "method")})
-SIM2REAL_OWNER = Owner("sim2real", {
-    "config.yaml": _yaml_has("log", "probe_duration", "world", "sensor_file", "versions")})  # sim2real.write_outputs
+SIM2REAL_OWNER = Owner("sim2real", {  # sim2real.write_outputs (also the demo's sim2real/)
+    "config.yaml": _yaml_has("log", "world", "seeds", "probe_seeds", "robot", "checks", dicts=("robot",)),
+    "sensor.yaml": _first_line("# sensor model used by lmsbench sim2real ")})
 BENCH_OWNER = Owner("bench", {
     "versions.yaml": _yaml_has("benchmarks", "quick", "versions", exact=True),
     "bench.csv": _csv_starts("area", "case")})

@@ -108,8 +108,10 @@ def test_what_bench_sim2real_and_sweep_tell_as_their_own(tmp_path):
     s.mkdir()
     (s / "sim2real.png").write_bytes(b"\x89PNG")
     assert SIM2REAL_OWNER.foreign(s, OutTree(SIM2REAL_OUTPUTS)) == ["sim2real.png"]
-    (s / "config.yaml").write_text(yaml.safe_dump({"log": "x.clf", "duration": 1.0, "probe_duration": 1.0,
-                                                   "sensor_file": None, "world": "mit", "versions": {}}))
+    (s / "config.yaml").write_text(yaml.safe_dump({"log": "x.clf", "world": "mit"}))  # not all of its keys
+    assert SIM2REAL_OWNER.foreign(s, OutTree(SIM2REAL_OUTPUTS)) == ["config.yaml", "sim2real.png"]
+    (s / "config.yaml").write_text(yaml.safe_dump({"log": "x.clf", "world": "mit", "seeds": [0], "probe_seeds": [0],
+                                                   "robot": {}, "checks": {}}))
     assert SIM2REAL_OWNER.foreign(s, OutTree(SIM2REAL_OUTPUTS)) == []
     w = tmp_path / "sweep"
     (w / "cells").mkdir(parents=True)
