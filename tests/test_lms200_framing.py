@@ -73,8 +73,10 @@ def streams(draw):  # noqa: ANN001, ANN201
             parts.append(bytes([0x02, 0x80]) + draw(st.binary(min_size=0, max_size=3)))
         else:
             f = bytearray(frame(draw(st.binary(min_size=1, max_size=60))))
-            if kind == "truncated":
-                f = f[: draw(st.integers(1, len(f) - 1))]
+            if kind == "truncated":  # at least 2 bytes short: a frame short of its last byte only
+                # is completed by the next frame's STX whenever its CRC high byte is 0x02 (1 in 256),
+                # and no parser can tell that frame from a good one (found by this fuzz, session 33)
+                f = f[: draw(st.integers(1, len(f) - 2))]
             else:
                 i = draw(st.integers(0, len(f) - 1))
                 f[i] ^= 1 << draw(st.integers(0, 7))
