@@ -13,13 +13,14 @@ import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Collection, Iterable
 
 import numpy as np
 
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml
+from experiments.options import SLAM_OUTPUTS
 from slam import SlamConfig, SlamResult, run_slam
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
 
@@ -213,14 +214,20 @@ def _source_name(config: SlamConfig) -> str:
 
 
 def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_baseline: bool = True,
-        out: Path | None = None, paper_baseline: bool = True) -> SlamRun:
+        out: Path | None = None, paper_baseline: bool = True, replace_earlier: bool = False) -> SlamRun:
     """Run SLAM over ``data`` (timed: feature extraction + SLAM; wall clock ``seconds`` and CPU
     time ``cpu_seconds``), score it, and score the baselines: the raw odometry, with
     ``odometry_baseline`` the paper's filter driven by odometry, and with ``paper_baseline`` (for
-    the default preset) the paper preset. With ``out``, trajectory.tum, map.json and config.yaml
-    are written there before any scoring and the baselines, so a scoring error or a Ctrl-C loses no
-    result, and an earlier run's metrics.json and slam.png are removed then: a run stopped there
-    left them beside its own trajectory, as if they were its scores."""
+    the default preset) the paper preset. With ``out``, trajectory.tum, map.json, keyframes.tum
+    (default preset) and config.yaml are written there before any scoring and the baselines, so a
+    scoring error or a Ctrl-C loses no result; no other file in ``out`` is touched (write_outputs
+    writes metrics.json and slam.png at the end). With ``replace_earlier`` (``lmsbench slam``, after
+    :func:`foreign_outputs` found none) an earlier run's metrics.json and slam.png in ``out``, and its
+    keyframes.tum where this run writes none, are removed before this run's trajectory is written,
+    so a run stopped after it does not leave them beside it as if they were its scores; only files
+    :func:`earlier_run_files` tells an earlier lmsbench slam run wrote (a user's own metrics.json
+    and slam.png in --out were deleted).
+    """
     records: Iterable[Record] = data.records
     if progress:
         from tqdm import tqdm
@@ -230,10 +237,12 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     result = run_slam(records, config)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     if out is not None:
-        write_result(out, result)
+        earlier = earlier_run_files(out) if replace_earlier and out.is_dir() else set()  # before this run writes
+        for stale in ("metrics.json", "slam.png"):  # an earlier run's, written again at the end; first, so that
+            if stale in earlier:  # no stop leaves them beside this run's trajectory
+                (out / stale).unlink(missing_ok=True)
+        write_result(out, result, earlier)
         write_config(out, data, config)
-        for stale in ("metrics.json", "slam.png"):  # an earlier run's, written again at the end
-            (out / stale).unlink(missing_ok=True)
     d = result.diagnostics
     scores = score(result.trajectory, data, result)
     table = [{"source": _source_name(config), **_flat(scores), "cpu_scans_per_s": len(data.records) / max(cpu, 1e-9)}]
@@ -286,23 +295,77 @@ def _flat(scores: dict[str, Any]) -> dict[str, float]:
     return {f"{k}_{f}": scores[k][f] for k, fields in keep.items() if k in scores for f in fields if f in scores[k]}
 
 
-def write_result(out: Path, res: SlamResult) -> None:
+def write_result(out: Path, res: SlamResult, earlier: Collection[str] = ()) -> None:
     """trajectory.tum and map.json in ``out`` (the run's own outputs, no scores); with the default
-    preset also keyframes.tum, the optimised keyframe poses."""
+    preset also keyframes.tum, the optimised keyframe poses. Without them (the paper preset) an
+    earlier default-preset run's keyframes.tum is removed when ``earlier`` (:func:`earlier_run_files`)
+    names it."""
     out.mkdir(parents=True, exist_ok=True)
     write_tum(out / "trajectory.tum", res.trajectory[:, 0], res.trajectory[:, 1:])
     kf = res.diagnostics.get("keyframes")
     if kf is not None:
         write_tum(out / "keyframes.tum", kf[:, 0], kf[:, 1:])
-    else:  # an earlier default-preset run's into this folder (options.check_out lets a run replace its own)
+    elif "keyframes.tum" in earlier:
         (out / "keyframes.tum").unlink(missing_ok=True)
     (out / "map.json").write_text(json.dumps(res.map_dict(), indent=1) + "\n")
 
 
+#: What lmsbench slam writes in its --out folder.
+OUTPUTS = SLAM_OUTPUTS
+#: The outputs that say by their content that lmsbench slam wrote them; the others (a TUM file, a
+#: PNG) are told by one of these beside them.
+_RECORDS = ("config.yaml", "metrics.json", "map.json")
+
+
+def _is_record(path: Path) -> bool:
+    """Whether ``path`` (config.yaml, metrics.json or map.json) is as lmsbench slam writes it:
+    config.yaml a mapping of exactly ``input`` and ``slam`` (write_config), metrics.json an object
+    with ``input``, ``n_scans`` and ``consistency`` (every version's), map.json one with ``frame``,
+    ``lines`` and ``corners`` (SlamResult.map_dict)."""
+    try:
+        text = path.read_text(encoding="utf-8")
+        if path.name == "config.yaml":
+            raw = load_yaml(text)
+            return (isinstance(raw, dict) and set(raw) == {"input", "slam"} and isinstance(raw["input"], dict)
+                    and isinstance(raw["slam"], dict) and "preset" in raw["slam"])
+        raw = json.loads(text)
+    except Exception:  # noqa: BLE001 - unreadable, not UTF-8, not YAML / JSON: not a record of a run
+        return False
+    if not isinstance(raw, dict):
+        return False
+    if path.name == "metrics.json":
+        return isinstance(raw.get("input"), dict) and isinstance(raw.get("n_scans"), int) and isinstance(raw.get("consistency"), dict)
+    return isinstance(raw.get("frame"), str) and isinstance(raw.get("lines"), list) and isinstance(raw.get("corners"), list)
+
+
+def earlier_run_files(out: Path) -> set[str]:
+    """The files of ``out`` (of :data:`OUTPUTS`) an earlier ``lmsbench slam`` run wrote, as far as
+    what it left tells: config.yaml, metrics.json and map.json by their content (see
+    :func:`_is_record`), trajectory.tum, keyframes.tum and slam.png by one of those beside them.
+    A file it does not tell is the user's: never removed or written over (a metrics.json of notes
+    and a slam.png in an --out folder were deleted as an earlier run's)."""
+    present = [name for name in OUTPUTS if (out / name).is_file()]
+    records = {name for name in present if name in _RECORDS and _is_record(out / name)}
+    if not records:
+        return set()
+    return records | {name for name in present if name not in _RECORDS}
+
+
+def foreign_outputs(out: Path) -> list[str]:
+    """The files of ``out`` named as lmsbench slam's outputs that no earlier run of it wrote
+    (:func:`earlier_run_files`), which a run into ``out`` would write over or remove."""
+    if not out.is_dir():
+        return []
+    earlier = earlier_run_files(out)
+    return [name for name in OUTPUTS if (out / name).exists() and name not in earlier]
+
+
 def write_outputs(out: Path, data: SlamInput, config: SlamConfig, slam_run: SlamRun) -> None:
-    """trajectory.tum, map.json, metrics.json, config.yaml, slam.png in ``out``."""
+    """trajectory.tum, map.json, metrics.json, config.yaml, slam.png in ``out`` (and keyframes.tum
+    with the default preset; an earlier run's, told by :func:`earlier_run_files`, is removed with the
+    paper preset)."""
     res = slam_run.result
-    write_result(out, res)
+    write_result(out, res, earlier_run_files(out) if out.is_dir() else set())
     (out / "metrics.json").write_text(json.dumps(_jsonable(slam_run.metrics), indent=2) + "\n")
     write_config(out, data, config)
     plot(out / "slam.png", data, res)

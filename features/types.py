@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from lms200.errors import InputError
+from lms200.finite import whole_number
 
 LINE_COLUMNS = ("rho", "alpha", "x0", "y0", "x1", "y1", "cov_rr", "cov_ra", "cov_ar", "cov_aa")
 CORNER_COLUMNS = ("x", "y", "angle")
@@ -65,21 +66,6 @@ class Corner:
     angle: float
     index: int
     lines: tuple[int, int]
-
-
-def whole_number(v: object) -> int | None:
-    """``v`` as an int when it is a whole number (an int, or a float with a whole value, numpy's
-    too; no bool) within int64's range, else None: a beam index or count of a hand-built Line or
-    Corner (user code often holds them as floats, e.g. 49.0)."""
-    if isinstance(v, (bool, np.bool_)):
-        return None
-    if isinstance(v, (int, np.integer)):
-        i = int(v)
-    elif isinstance(v, (float, np.floating)) and np.isfinite(v) and float(v).is_integer():
-        i = int(v)
-    else:
-        return None
-    return i if -2**63 <= i < 2**63 else None
 
 
 def check_line_rows(rows: np.ndarray, name: str) -> None:

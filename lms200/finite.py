@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 from typing import Any
 
 import numpy as np
@@ -47,8 +48,12 @@ def check_seed(seed: object) -> None:
 
 
 def is_number(value: object) -> bool:
-    """A plain or numpy real number, not a bool (``float()`` takes text and bools as well)."""
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+    """A real number of any numeric type (int, float, numpy's, ``fractions.Fraction``: any
+    ``numbers.Real``), not a bool (``float()`` takes text and bools as well). A review found
+    ``frame_seconds(Fraction(1, 2), 9600)`` refused, which worked before the argument checks."""
+    if isinstance(value, (int, float, np.integer, np.floating)):
+        return not isinstance(value, (bool, np.bool_))
+    return isinstance(value, numbers.Real)
 
 
 def is_integer(value: object) -> bool:
@@ -56,13 +61,34 @@ def is_integer(value: object) -> bool:
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
-def check_integer(value: object, name: str, lo: int, hi: int | None = None, what: str = "") -> int:
-    """``value`` as an int in [lo, hi] (hi None: no bound); InputError naming ``name`` otherwise (a
-    float, text, None, a list or an array were Python's TypeError or struct.error)."""
-    if not is_integer(value) or value < lo or (hi is not None and value > hi):  # type: ignore[operator]
+def whole_number(v: object) -> int | None:
+    """``v`` as an int when it is a whole number (an int, or a float with a whole value, numpy's
+    too; no bool) within int64's range, else None: a count or index held as a float (361.0, a
+    hand-built Line's 49.0) is one; 2.5, nan, 10**400 and a bool are not."""
+    if isinstance(v, (bool, np.bool_)):
+        return None
+    if isinstance(v, (int, np.integer)):
+        i = int(v)
+    elif isinstance(v, (float, np.floating)) and np.isfinite(v) and float(v).is_integer():
+        i = int(v)
+    else:
+        return None
+    return i if -2**63 <= i < 2**63 else None
+
+
+def check_integer(value: object, name: str, lo: int, hi: int | None = None, what: str = "", *,
+                  strict: bool = False) -> int:
+    """``value`` as an int in [lo, hi] (hi None: int64's bound): a count or index, a whole float
+    or numpy int included (:func:`whole_number`: ``scan_geometry(361.0)`` worked before these
+    checks); with ``strict``, a plain or numpy int only (a telegram's byte: ``bytes()`` and struct
+    took no float before either). InputError naming ``name`` otherwise (2.5, a bool, text, None, a
+    list or an array were Python's TypeError or struct.error). Callers use the int returned (a
+    float does not pack)."""
+    i = whole_number(value) if not strict or is_integer(value) else None
+    if i is None or i < lo or (hi is not None and i > hi):
         span = f"in {lo}..{hi}" if hi is not None else f">= {lo}"
         raise InputError(f"{name}: must be an integer {span}{' ' + what if what else ''}, got {shown(value)}")
-    return int(value)  # type: ignore[call-overload]
+    return i
 
 
 def check_number(value: object, name: str, lo: float, hi: float, *, lo_open: bool = False, unit: str = "",

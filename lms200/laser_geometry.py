@@ -130,7 +130,7 @@ def beam_angles(n: int, geometry: LaserGeometry | None = None) -> tuple[float, f
         InputError: (a ValueError) when n is no integer >= 1 (a plain ValueError before, a TypeError
             for None) or the declared field of view and resolution do not fit n beams.
     """
-    check_integer(n, "n", 1, 2**31, what="(beams)")  # 10**400 was an OverflowError
+    n = check_integer(n, "n", 1, 2**31, what="(beams)")  # 10**400 was an OverflowError
     g = geometry or LaserGeometry()
     steps_even, steps_odd = n, n - 1  # steps the field of view spans in each convention
     fov, res = g.fov, g.resolution

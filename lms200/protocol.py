@@ -15,10 +15,12 @@ from __future__ import annotations
 import math
 import struct
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
 
-from .codes import LMS200_MAX_RANGE, Units, check_codes, check_units, codes_to_ranges, ranges_to_codes
+from .codes import (LMS200_MAX_RANGE, Units, check_codes, check_units, codes_to_ranges, ranges_to_codes,
+                    real_vector)
 from .errors import InputError, LmsProtocolError
 from .finite import check_integer, check_number, is_integer, is_number, shown
 from .scan import Scan
@@ -115,16 +117,21 @@ _CRC_TABLE = _build_crc_table(_CRC_ROWS)
 _CRC_K = np.arange(_CRC_ROWS - 1, -1, -1)  # distance from the end, for the last n bytes: _CRC_K[-n:]
 
 
-def byte_string(data: object, name: str) -> bytes:
-    """``data`` (bytes, bytearray, memoryview or a uint8 array) as bytes; InputError naming ``name``
-    for anything else (text, None, a list: TypeErrors; a uint8 array's arithmetic overflowed)."""
+def byte_string(data: object, name: str, *, int_lists: bool = False) -> bytes:
+    """``data`` (bytes, bytearray, memoryview or a 1-D uint8 array; with ``int_lists``, a list or
+    tuple of integers 0..255 as well, as ``bytes()`` takes it: ``mode_request(0, list(b"SICK_LMS"))``
+    worked before this check) as bytes; InputError naming ``name`` for anything else (text, None,
+    a list: TypeErrors; a uint8 array's arithmetic overflowed)."""
     if isinstance(data, bytes):
         return data
     if isinstance(data, (bytearray, memoryview)):
         return bytes(data)
     if isinstance(data, np.ndarray) and data.dtype == np.uint8 and data.ndim == 1:
         return data.tobytes()
-    raise InputError(f"{name}: must be bytes (or a bytearray, memoryview, 1-D uint8 array), got {type(data).__name__}")
+    if int_lists and isinstance(data, (list, tuple)) and all(is_integer(b) and 0 <= b <= 0xFF for b in data):
+        return bytes(data)
+    lists = ", list or tuple of integers 0..255" if int_lists else ""
+    raise InputError(f"{name}: must be bytes (or a bytearray, memoryview, 1-D uint8 array{lists}), got {type(data).__name__}")
 
 
 def crc16(data: bytes) -> int:
@@ -151,7 +158,7 @@ def build_frame(payload: bytes, address: int = HOST_ADDRESS) -> bytes:
         raise InputError("payload: must hold at least the command byte")
     if len(payload) > MAX_LEN:
         raise InputError(f"payload: at most {MAX_LEN} bytes, got {len(payload)}")
-    check_integer(address, "address", 0, 0xFF)
+    address = check_integer(address, "address", 0, 0xFF, strict=True)
     head = struct.pack("<BBH", STX, address, len(payload)) + payload
     return head + struct.pack("<H", crc16(head))
 
@@ -166,9 +173,9 @@ def reset_request() -> bytes:
 def mode_request(sub_command: int, password: bytes = PASSWORD) -> bytes:
     """0x20: switch the operating mode; installation mode (0x00) carries the 8-byte password.
     InputError for a ``sub_command`` that is no integer 0..255 or a ``password`` that is not 8 bytes."""
-    check_integer(sub_command, "sub_command", 0, 0xFF)
+    sub_command = check_integer(sub_command, "sub_command", 0, 0xFF, strict=True)
     if sub_command == MODE_INSTALLATION:
-        password = byte_string(password, "password")
+        password = byte_string(password, "password", int_lists=True)
         if len(password) != 8:
             raise InputError(f"password: must be 8 bytes, got {len(password)}")
         return bytes([CMD_MODE, sub_command]) + bytes(password)
@@ -215,14 +222,16 @@ def get_config_request() -> bytes:
 
 def set_config_request(config: bytes) -> bytes:
     """0x77: write the configuration block (installation mode only; reply 0xF7). InputError for a
-    ``config`` that is not bytes (5 was taken as 5 zero bytes, True as one, text a TypeError)."""
-    return bytes([CMD_SET_CONFIG]) + byte_string(config, "config")
+    ``config`` that is not bytes or a list of integers 0..255 (5 was taken as 5 zero bytes, True as
+    one, text a TypeError)."""
+    return bytes([CMD_SET_CONFIG]) + byte_string(config, "config", int_lists=True)
 
 
 def with_units(config: bytes, units: Units) -> bytes:
     """A configuration block with the measured-value unit byte set to ``units``; InputError for a
-    ``config`` that is not bytes (None or a number was a TypeError) or an unknown unit."""
-    config = byte_string(config, "config")
+    ``config`` that is not bytes or a list of integers 0..255 (None or a number was a TypeError) or
+    an unknown unit."""
+    config = byte_string(config, "config", int_lists=True)
     units = check_units(units)
     if len(config) <= CONFIG_UNITS_OFFSET:
         raise LmsProtocolError(f"configuration block of {len(config)} bytes has no unit byte")
@@ -298,7 +307,7 @@ def scan_geometry(n_values: int) -> tuple[float, float]:
         LmsProtocolError: for a count of no variant; InputError for a ``n_values`` that is no
             integer (a list was a TypeError, unhashable).
     """
-    check_integer(n_values, "n_values", 0)
+    n_values = check_integer(n_values, "n_values", 0)
     try:
         fov, res = VARIANT_OF_COUNT[n_values]
     except KeyError:
@@ -344,8 +353,22 @@ def encode_scan(scan: Scan, units: Units = "mm", status: int = STATUS_OK) -> byt
     return encode_measurement(ranges_to_codes(scan.ranges, units), units, status)
 
 
-def frame_seconds(n_bytes: int, baud: int) -> float:
-    """Time ``n_bytes`` take on the line at ``baud`` (8N1: 10 bits a byte), in seconds; InputError
-    for an ``n_bytes`` that is no finite number >= 0 or a ``baud`` that is no finite number > 0 (0
-    was a ZeroDivisionError, None or text a TypeError, 10**400 an OverflowError)."""
+@overload
+def frame_seconds(n_bytes: float, baud: float) -> float: ...
+
+
+@overload
+def frame_seconds(n_bytes: np.ndarray, baud: float) -> np.ndarray: ...
+
+
+def frame_seconds(n_bytes: float | np.ndarray, baud: float) -> float | np.ndarray:
+    """Time ``n_bytes`` take on the line at ``baud`` (8N1: 10 bits a byte), in seconds; for an
+    array of byte counts, an array of times of its shape. InputError for an ``n_bytes`` that is no
+    finite real number >= 0 (or array of them) or a ``baud`` that is no finite number > 0 (0 was a
+    ZeroDivisionError, None or text a TypeError, 10**400 an OverflowError)."""
+    if isinstance(n_bytes, np.ndarray):  # as n_bytes * 10.0 / baud did
+        counts = real_vector(n_bytes, "n_bytes", "bytes")
+        if (counts < 0).any():
+            raise InputError(f"n_bytes: must be >= 0 (bytes), got {shown(n_bytes)}")
+        return counts.reshape(n_bytes.shape) * 10.0 / check_number(baud, "baud", 0.0, math.inf, lo_open=True)
     return check_number(n_bytes, "n_bytes", 0.0, math.inf) * 10.0 / check_number(baud, "baud", 0.0, math.inf, lo_open=True)

@@ -158,8 +158,10 @@ def variant_codes(ranges361: np.ndarray, variant: tuple[int, int], units: Units)
     """
     fov, res = check_variant(variant)
     r = np.asarray(real_numbers(ranges361), dtype=np.float64)
-    if r.shape != (SOURCE_GRID_DEG[2],):
+    shape = r.shape
+    if r.size != SOURCE_GRID_DEG[2] or max(shape, default=0) != r.size:  # one axis of 361, others of 1
         raise InputError(f"ranges: must be the {SOURCE_GRID_DEG[2]} ranges of the 0.5 deg frame, got shape {r.shape}")
+    r = r.reshape(-1)
     if fov == 100:
         r = r[80:281]
     if res == 100:
@@ -169,7 +171,8 @@ def variant_codes(ranges361: np.ndarray, variant: tuple[int, int], units: Units)
         fine = np.empty(2 * r.size - 1)
         fine[0::2], fine[1::2] = r, mid
         r = fine
-    return ranges_to_codes(r, units)
+    axis = shape.index(SOURCE_GRID_DEG[2])  # the codes in the ranges' shape: (1, 361) ranges, (1, n) codes
+    return ranges_to_codes(r, units).reshape(shape[:axis] + (r.size,) + shape[axis + 1:])
 
 
 def _is_real(value: object) -> bool:
@@ -177,14 +180,17 @@ def _is_real(value: object) -> bool:
 
 
 def check_variant(variant: object) -> tuple[int, int]:
-    """``variant`` as (fov deg, resolution 1/100 deg), two ints of an LMS200 variant; InputError
-    otherwise (([180], 50) was a TypeError, unhashable; (180.0, 50) passed and a refused 0x3B later
-    raised struct.error in receive(); a number was "cannot unpack" in variant_codes)."""
-    if (not isinstance(variant, tuple) or len(variant) != 2 or not all(map(is_integer, variant))
-            or variant not in VARIANTS):
+    """``variant`` (a tuple or a list: ``variant_codes(r, [180, 50], 'cm')`` worked before this
+    check) as (fov deg, resolution 1/100 deg), two ints of an LMS200 variant; InputError otherwise
+    (([180], 50) was a TypeError, unhashable; (180.0, 50) passed the device's check of the time
+    and a refused 0x3B later raised struct.error in receive(); a number was "cannot unpack" in
+    variant_codes)."""
+    items = tuple(variant) if isinstance(variant, (tuple, list)) else ()
+    pair = tuple(int(v) for v in items) if all(map(is_integer, items)) else ()  # type: ignore[call-overload]
+    if len(pair) != 2 or pair not in VARIANTS:
         raise InputError(f"variant: {shown(variant)} is not an LMS200 variant; the variants are (fov deg, resolution "
                          f"1/100 deg, ints) {', '.join(map(str, VARIANTS))} (25 = 0.25 deg only with 100 deg)")
-    return int(variant[0]), int(variant[1])
+    return pair  # type: ignore[return-value]
 
 
 @dataclass
@@ -228,11 +234,15 @@ class VirtualLMS200:
         units = check_units(units)  # a list was a TypeError (unhashable)
         if not is_integer(address) or not 0 <= address <= 0x7F:
             raise InputError(f"address: must be an integer in 0..127 (replies come from address + 0x80), got {shown(address)}")
-        if isinstance(source, (str, bytes)) or not isinstance(source, Iterable):  # None was "not iterable"
+        try:  # iter() decides, as before: an object with only __getitem__ is iterable too
+            scans = iter(source) if not isinstance(source, (str, bytes)) else None
+        except TypeError:  # None was "not iterable"
+            scans = None
+        if scans is None:
             raise InputError(f"source: must be an iterable of lms200.Scan, got {type(source).__name__}")
         check_instance(timing, DeviceTiming, "timing")  # a number was an AttributeError at the first transmit
         check_instance(faults, Faults, "faults")  # a number was an AttributeError ('no attribute seed')
-        self._source: Iterator[Scan] = iter(source)
+        self._source: Iterator[Scan] = scans
         self.address = address
         self.time_scale = float(time_scale)
         self.timing = timing or DeviceTiming()
@@ -502,10 +512,12 @@ def garble(data: bytes, baud_sent: int, baud_read: int) -> bytes:
     """What a UART set to ``baud_read`` makes of bytes sent at ``baud_sent``: unchanged when the
     bauds agree, else a deterministic stream of wrong bytes (framing errors), about as many
     bytes as bit times fit (never a valid telegram in practice). InputError for ``data`` that are not
-    bytes or a baud that is no integer >= 1 (0 was a ZeroDivisionError, None a TypeError, 5e-324
-    an OverflowError)."""
+    bytes or a baud that is no whole number >= 1 (0 was a ZeroDivisionError, None a TypeError,
+    5e-324 an OverflowError), empty data included: a baud of 0 is no line. A whole float baud
+    (9600.0) is a baud, as for ``frame_seconds`` and ``baud_request``."""
     data = byte_string(data, "data")
-    baud_sent, baud_read = check_integer(baud_sent, "baud_sent", 1), check_integer(baud_read, "baud_read", 1)
+    baud_sent = check_integer(baud_sent, "baud_sent", 1)
+    baud_read = check_integer(baud_read, "baud_read", 1)
     if baud_sent == baud_read or not data:
         return data
     n = max(1, round(len(data) * baud_read / baud_sent))

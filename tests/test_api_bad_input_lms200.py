@@ -80,6 +80,65 @@ def test_codec_and_virtual_device_keep_their_valid_inputs() -> None:
     assert sent[:1] == bytes([protocol.ACK]) and len(sent) == 1 + 732  # ACK, then the 361-value 0xB0 frame
 
 
+def test_codec_and_virtual_device_take_again_what_worked_before_the_checks() -> None:
+    """A review of b538d7c / 1bebcfd found valid calls refused that worked on f45cc33 (before the
+    checks): a count as a whole float, an array or Fraction of bytes, a whole float baud, a list
+    variant, (1, 361) ranges, a password as a list or tuple of ints, a source with only
+    __getitem__. Each now gives the old result, computed here from the formulas."""
+    from fractions import Fraction
+
+    seconds = protocol.frame_seconds(np.array([10, 20]), 9600)
+    assert isinstance(seconds, np.ndarray) and seconds.tolist() == [100.0 / 9600, 200.0 / 9600]
+    assert protocol.frame_seconds(Fraction(1, 2), 9600) == 5.0 / 9600
+    assert protocol.frame_seconds(10, 9600.0) == 100.0 / 9600
+    half_deg = (-math.pi / 2, math.radians(0.5))
+    assert protocol.scan_geometry(361.0) == pytest.approx(half_deg, rel=1e-15)
+    assert beam_angles(361.0) == pytest.approx(half_deg, rel=1e-15)
+    n = round(2 * 38400 / 9600)  # garble's stream: as many bytes as bit times fit, byte k from data[k % 2]
+    expected = bytes((b"ab"[k % 2] * 37 + 0x5B + k) & 0xFF for k in range(n)).replace(b"\x02", b"\xfd")
+    assert virtual.garble(b"ab", 9600.0, 38400) == expected == b"`\x86b\x88d\x8af\x8c"
+    assert virtual.garble(b"ab", 9600.0, 9600.0) == b"ab"
+    ranges = np.linspace(1.0, 5.0, 361)  # 1 m to 5 m by 1.111 cm
+    cm = np.round(ranges * 100).astype(np.uint16)
+    assert virtual.variant_codes(ranges, [180, 50], "cm").tolist() == cm.tolist()
+    row = virtual.variant_codes(ranges.reshape(1, 361), (180, 50), "cm")
+    assert row.shape == (1, 361) and row[0].tolist() == cm.tolist()
+    assert virtual.variant_codes(ranges.reshape(1, 361), (180, 100), "cm").tolist() == [cm[::2].tolist()]
+    installation = bytes([0x20, 0x00]) + b"SICK_LMS"
+    assert protocol.mode_request(0, list(b"SICK_LMS")) == protocol.mode_request(0, tuple(b"SICK_LMS")) == installation
+
+    class OldStyle:  # the sequence protocol: iter() walks it by index until IndexError
+        def __getitem__(self, i: int) -> Scan:
+            return [SCAN][i]
+
+    dev = virtual.VirtualLMS200(OldStyle())
+    dev.receive(protocol.build_frame(protocol.measure_request()), 0.0)
+    sent = b"".join(chunk for chunk, _ in dev.transmit(10.0))
+    assert sent[:1] == bytes([protocol.ACK]) and len(sent) == 1 + 732
+    # what the checks were for stays refused: bool, 2.5 as a count, 0 baud (an empty payload too), nan, text
+    for call, message in [
+        (lambda: protocol.frame_seconds(True, 9600), r"^n_bytes: must be a finite number >= 0, got True$"),
+        (lambda: protocol.frame_seconds(np.array([10, -1]), 9600), r"^n_bytes: must be >= 0 \(bytes\)"),
+        (lambda: protocol.frame_seconds(np.array([10, np.nan]), 9600), r"^n_bytes: must be finite"),
+        (lambda: protocol.frame_seconds(np.array(["a"]), 9600), r"^n_bytes: must be a \(k, 1\) array of real numbers"),
+        (lambda: protocol.scan_geometry(361.5), r"^n_values: must be an integer >= 0, got 361\.5$"),
+        (lambda: protocol.scan_geometry(math.nan), r"^n_values: must be an integer >= 0, got nan$"),
+        (lambda: beam_angles(True), r"^n: must be an integer .* got True$"),
+        (lambda: virtual.garble(b"", 0, 0), r"^baud_sent: must be an integer >= 1, got 0$"),
+        (lambda: virtual.garble(b"ab", 9600.5, 9600), r"^baud_sent: must be an integer >= 1, got 9600\.5$"),
+        (lambda: virtual.variant_codes(ranges, [180, 50.5], "cm"), r"^variant: \[180, 50\.5\] is not an LMS200 variant"),
+        (lambda: virtual.variant_codes(ranges.reshape(19, 19), (180, 50), "cm"), r"^ranges: must be the 361 ranges"),
+        (lambda: protocol.mode_request(True), r"^sub_command: must be an integer in 0\.\.255, got True$"),
+        (lambda: protocol.mode_request(0, [83] * 7 + [256]), r"^password: must be bytes"),
+        (lambda: protocol.mode_request(0, "SICK_LMS"), r"^password: must be bytes"),
+        (lambda: protocol.build_frame(b"1", address=True), r"^address: must be an integer in 0\.\.255, got True$"),
+        (lambda: protocol.build_frame(b"1", address=2.0), r"^address: must be an integer in 0\.\.255, got 2\.0$"),
+        (lambda: virtual.VirtualLMS200(b"abc"), r"^source: must be an iterable of lms200\.Scan, got bytes$"),
+    ]:
+        with pytest.raises(InputError, match=message):
+            call()
+
+
 # -- lms200.noise, lms200.tum ----------------------------------------------------------------------
 @pytest.mark.parametrize("call, message", [
     (lambda: noise.estimate_quantum("abc"), r"^ranges: must be a \(k, 1\) array of real numbers"),  # numpy's ValueError
@@ -164,3 +223,20 @@ def test_device_keeps_its_valid_clock_timing_and_faults() -> None:
     assert b"".join(piece for piece, _ in dev.transmit(10)).startswith(bytes([protocol.ACK, protocol.STX]))
     block = protocol.with_units(bytearray(32), "mm")
     assert protocol.units_of_config(memoryview(block)) == "mm" and protocol.set_config_request(block)[1:] == block
+
+
+def test_a_configuration_block_given_as_a_list_of_bytes_is_sent_as_before() -> None:
+    """``set_config_request([0] * 32)`` and ``with_units(list, 'cm')`` worked before the checks of
+    b538d7c (a second review found them refused): a list of integers 0..255 is bytes again; a
+    list holding 256 or text is still an InputError naming ``config``."""
+    from lms200.errors import InputError
+    from lms200.protocol import CONFIG_UNITS_OFFSET, UNITS_CODES, set_config_request, with_units
+
+    block = list(range(32))
+    assert set_config_request(block) == bytes([0x77]) + bytes(block)
+    assert set_config_request(tuple(block)) == set_config_request(bytes(block))
+    cm = with_units(block, "cm")
+    assert cm[CONFIG_UNITS_OFFSET] == UNITS_CODES["cm"] and len(cm) == 32
+    for bad in ([256] * 32, ["a"] * 32, "abc", None):
+        with pytest.raises(InputError, match=r"^config: must be bytes"):
+            set_config_request(bad)

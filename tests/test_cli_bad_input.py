@@ -60,6 +60,8 @@ def files(tmp_path_factory):
     (d / "empty.clf").write_text("")
     (d / "notalog.clf").write_text("hello\nworld\n")
     (d / "empty_dir").mkdir()
+    (d / "notes_dir").mkdir()
+    (d / "notes_dir" / "metrics.json").write_text("my notes\n")  # a user's, not a slam run's
     for name in ("pipe.clf", "pipe.yaml", "pipe.json"):  # named pipes with no writer: open() waited for ever
         os.mkfifo(d / name)
     (d / "bag_badmeta").mkdir()  # rosbags said "Could not load YAML ... "<unicode string>", line 1, ..."
@@ -309,6 +311,9 @@ CASES = [
     # an --out holding other things: the README's 'slam run --out slam' wrote into the slam package;
     # slam into the simulated run's own folder replaced its config.yaml (the sensor compare reads)
     (["slam", "{simrun}", "--out", "{simrun}"], "holds scans.clf, which this command does not write"),
+    # a folder of the slam outputs' names only passed, and the run deleted the user's metrics.json
+    (["slam", "{simrun}", "--out", "{notes_dir}"], "notes_dir: holds metrics.json, which this run would replace but "
+                                                   "no earlier lmsbench slam run wrote"),
     (["simulate", "--duration", "1", "--out", "{pkg}"], "holds __init__.py, which this command does not write"),
     (["slam", "{simrun}", "--config", "{slam_normal.yaml}", "--out", O], "alignment.normal_step: must be >= 1"),
     (["slam", "{simrun}", "--config", "{slam_range.yaml}", "--out", O], "alignment.max_range: must be in (0, 10000] m"),

@@ -280,3 +280,79 @@ def test_ctrl_c_during_the_runner_benchmark_on_its_local_cluster_is_one_line(tmp
     assert proc.returncode == 130, (out, err)
     time.sleep(3)  # what a stray child would still write
     assert err.splitlines() == ["lmsbench bench: interrupted"], err
+
+
+@pytest.fixture(scope="module")
+def sim_run(tmp_path_factory) -> Path:
+    """A 20 s office run from `lmsbench simulate`."""
+    from experiments.cli import main
+
+    out = tmp_path_factory.mktemp("sim") / "run"
+    assert main(["simulate", "--duration", "20", "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+def _slam_stopped_when(sim: Path, out: Path, ready, *extra: str) -> tuple[int, str]:
+    """`lmsbench slam SIM --out OUT --quiet` in a subprocess, sent SIGINT (as Ctrl-C) once ``ready()``
+    holds; (exit status, stderr). A run that ends before that is not signalled."""
+    cmd = [sys.executable, "-m", "experiments.cli", "slam", str(sim), "--out", str(out), "--quiet", *extra]
+    proc = subprocess.Popen(cmd, cwd=REPO, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 300
+        while proc.poll() is None and not ready():
+            assert time.monotonic() < deadline, "the run neither ended nor got ready"
+            time.sleep(0.02)
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    return proc.returncode, err
+
+
+@pytest.mark.slow
+def test_ctrl_c_after_slams_trajectory_keeps_the_users_own_metrics_and_figure(sim_run, tmp_path):
+    """Review of 0e69180: `lmsbench slam SIM --out DIR --quiet`, DIR holding the user's own
+    metrics.json ("my notes") and slam.png, passed the --out check (by their names) and, sent SIGINT
+    once trajectory.tum appeared, exited 130 with both files gone (0e69180^: 130, both kept; they
+    were written over at the end either way). Now such a folder is refused before any work: one line,
+    exit 2, naming the files, which stay as they were."""
+    out = tmp_path / "out"
+    out.mkdir()
+    mine = {"metrics.json": b"my notes\n", "slam.png": b"\x89PNG\r\n\x1a\nmine"}
+    for name, content in mine.items():
+        (out / name).write_bytes(content)
+    status, err = _slam_stopped_when(sim_run, out, lambda: (out / "trajectory.tum").exists())
+    kept = {name: (out / name).read_bytes() if (out / name).is_file() else None for name in mine}
+    assert kept == mine, (status, err)  # 0e69180: {'metrics.json': None, 'slam.png': None}, exit 130
+    assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "slam.png"]
+    assert status == 2, err
+    assert err.splitlines() == [f"lmsbench slam: error: --out {out}: holds metrics.json and slam.png, which this run "
+                                "would replace but no earlier lmsbench slam run wrote (a run's config.yaml, metrics.json "
+                                "or map.json would say so); give a new or empty folder (a folder of an earlier run's "
+                                "outputs is replaced)"]
+
+
+@pytest.mark.slow
+def test_ctrl_c_in_the_baselines_leaves_no_earlier_runs_scores_beside_the_new_trajectory(sim_run, tmp_path):
+    """The goal of 0e69180 still holds: DIR holding a finished paper-preset run, a default-preset run
+    into it stopped in its baselines (its own config.yaml written) keeps its trajectory, keyframes,
+    map and config, and none of the earlier run's metrics.json and slam.png."""
+    from experiments.cli import main
+
+    out = tmp_path / "run"
+    assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--preset", "paper", "--no-paper-baseline"]) == 0
+    before = (out / "trajectory.tum").read_text()
+
+    def new_config() -> bool:
+        try:
+            return yaml.safe_load((out / "config.yaml").read_text())["slam"]["preset"] == "default"
+        except (OSError, TypeError, KeyError, yaml.YAMLError):  # being written
+            return False
+
+    status, err = _slam_stopped_when(sim_run, out, new_config)
+    assert (status, err.splitlines()) == (130, ["lmsbench slam: interrupted"])
+    assert sorted(p.name for p in out.iterdir()) == ["config.yaml", "keyframes.tum", "map.json", "trajectory.tum"]
+    assert (out / "trajectory.tum").read_text() != before

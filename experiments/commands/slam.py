@@ -148,12 +148,19 @@ def _check_input(path: Path) -> None:
 def run(args: argparse.Namespace) -> int:
     from lms200 import LmsbenchError
 
-    from experiments.slamrun import deskew_for_sensor, load_input, run as run_slam, simulated_interlaced, write_outputs
+    from experiments.slamrun import (deskew_for_sensor, foreign_outputs, load_input, run as run_slam, simulated_interlaced,
+                                     write_outputs)
 
     _check_input(Path(args.input))
     if args.relations is not None:
         check_file(args.relations, "a relations file")
     check_out(args.out, writes=SLAM_OUTPUTS)
+    # by name alone a folder of the user's metrics.json and slam.png passed, and the run deleted them
+    foreign = foreign_outputs(args.out)
+    if foreign:
+        raise InputError(f"--out {args.out}: holds {' and '.join(foreign)}, which this run would replace but no earlier "
+                         "lmsbench slam run wrote (a run's config.yaml, metrics.json or map.json would say so); give a "
+                         "new or empty folder (a folder of an earlier run's outputs is replaced)")
     config = _config(args)
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
                       read_options=read_log_options(args))
@@ -191,7 +198,7 @@ def run(args: argparse.Namespace) -> int:
 
     warm_up_kernels(slam=config.preset == "default")
     result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
-                      out=args.out, paper_baseline=not args.no_paper_baseline)
+                      out=args.out, paper_baseline=not args.no_paper_baseline, replace_earlier=True)
     write_outputs(args.out, data, config, result)
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     m = result.metrics
