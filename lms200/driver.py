@@ -117,13 +117,16 @@ def _check_arguments(baud: object, fov_deg: object, resolution_deg: object, unit
 
 @dataclass
 class DriverStats:
-    """Counters of one connection: scans yielded, frames dropped by the parser, undecodable scans."""
+    """Counters of one connection: scans yielded, frames dropped by the parser, undecodable scans,
+    attempts resent (``retries``) and attempts that waited out their whole wait without a reply or
+    a NAK (``timeouts``: a NAK is resent at once, without one)."""
 
     scans: int
     dropped_frames: int
     skipped_bytes: int
     decode_errors: int
     retries: int
+    timeouts: int = 0
 
 
 class LMS200:
@@ -178,9 +181,11 @@ class LMS200:
         self.baud = POWER_ON_BAUD
         self.streaming = False
         self.parser = FrameParser(REPLY_FLAG | address)
+        self.parser.awaiting_reply = False  # True while a request waits for its handshake (see _request)
         self._scans = 0
         self._decode_errors = 0
         self._retries = 0
+        self._timeouts = 0
         self._last_rx = time.monotonic()
         self._backlog: list = []  # events read past a reply, handed out by the next _pump
         # (stream offset after a read, host time when the read returned), the newest reads
@@ -222,7 +227,7 @@ class LMS200:
     @property
     def stats(self) -> DriverStats:
         p = self.parser.stats
-        return DriverStats(self._scans, p.dropped_frames, p.skipped_bytes, self._decode_errors, self._retries)
+        return DriverStats(self._scans, p.dropped_frames, p.skipped_bytes, self._decode_errors, self._retries, self._timeouts)
 
     # -- low level -----------------------------------------------------------------------------
     def _idle_gap(self, hides_frame: bool) -> float:
@@ -338,17 +343,27 @@ class LMS200:
             in_flight = MAX_LEN + OVERHEAD_BYTES if self.streaming else 0
             budget = (self.timeout if timeout is None else timeout) + frame_seconds(reply_bytes + in_flight + 1, self.baud)
         attempts = self.retries if retries is None else retries
+        try:
+            return self._attempts(what, telegram, expected, budget, attempts)
+        finally:
+            self.parser.awaiting_reply = False
+
+    def _attempts(self, what: str, telegram: bytes, expected: int, budget: float, attempts: int) -> Frame:
+        """The attempts of :meth:`_request`."""
         seen: list[str] = []
         for attempt in range(attempts):
             if attempt:
                 self._retries += 1
             self._doing = f"{what}: sending {telegram.hex(' ')}"
             # A reply byte (ACK / NAK) counts only after the request: handshakes read before it
-            # are dropped, and onto a quiet line the answer starts in step (see FrameParser).
+            # are dropped, and with nothing unread the answer starts in step (see
+            # FrameParser.request_sent: in on-request mode bytes held back are stale; while
+            # streaming only a few stray bytes since the last good frame are passed over).
             self._backlog = [ev for ev in self._backlog if isinstance(ev, Frame)]
+            self.parser.awaiting_reply = True  # until the first handshake: the answer's
             try:
-                if not self.streaming and not self._ser.in_waiting:
-                    self.parser.request_sent()
+                if not self._ser.in_waiting:
+                    self.parser.request_sent(streaming=self.streaming)
                 self._ser.write(telegram)
                 self._ser.flush()
             except (serial.SerialException, OSError) as exc:
@@ -371,6 +386,8 @@ class LMS200:
                         if ev.code == REPLY_BAD_COMMAND:
                             raise LmsProtocolError(f"{what}: the device answered 0x92 (incorrect command) to {telegram.hex(' ')}")
                         others += 1
+            if not naked:
+                self._timeouts += 1
             seen.append("NAK" if naked else ("ACK, then no reply" if acked else "nothing") +
                         (f" ({others} other frames)" if others else ""))
         summary = "; ".join(f"attempt {i + 1}: {s}" for i, s in enumerate(seen))

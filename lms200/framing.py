@@ -26,6 +26,13 @@ from typing import Union
 from .errors import InputError
 from .protocol import ACK, MAX_LEN, NAK, OVERHEAD_BYTES, REPLY_FLAG, STX, crc16
 
+MAX_STRAY = 3
+"""Bytes skipped since the stream was last in step that still let a request written while
+streaming put it back in step (:meth:`FrameParser.request_sent`): fewer than a telegram's 4 header
+bytes. A telegram (7 bytes at least) whose header was hit is skipped whole; for its last byte to
+come alone after the request, all but that byte must have been skipped before it: 5 bytes or
+more with one byte lost on the line, 4 with two."""
+
 
 @dataclass(frozen=True)
 class Frame:
@@ -90,8 +97,17 @@ class FrameParser:
         self._buf = bytearray()
         self._base = 0  # stream offset of the first byte held back
         self._shadow = 0  # held-back bytes that are the rest of a telegram with a bad CRC
-        self._shadow_open = False  # whether that telegram may have lost bytes (its last byte may be a handshake)
+        self._shadow_open = 0  # that telegram may have lost bytes: 1, and its last byte may be a handshake: 2
         self._in_step = True  # the next byte is where a handshake may come (not amid a resynchronisation)
+        self._stale = 0  # held-back bytes received before a request in on-request mode (see request_sent)
+        self._mark = 0  # stats.skipped_bytes when the stream was last put in step (a frame, a handshake, ...)
+        self.awaiting_reply: bool | None = None
+        """Whether a request waits for its handshake. The device answers a request with one
+        handshake byte (ACK or NAK), so the exception of :meth:`_garbage` (the last byte of a
+        telegram that may have lost bytes is the NAK behind it) applies only while this is True,
+        and the first handshake counted sets it False. The driver sets it True before it writes
+        each request and False when the request is done; None (a parser not told of requests):
+        the exception always applies."""
         self.received = 0  # bytes fed so far (the stream offset of the next byte)
         self.stats = ParserStats()
 
@@ -106,8 +122,10 @@ class FrameParser:
         self._base += len(self._buf)
         self._buf.clear()
         self._shadow = 0
-        self._shadow_open = False
+        self._shadow_open = 0
         self._in_step = True
+        self._stale = 0
+        self._mark = self.stats.skipped_bytes
 
     @property
     def resynchronising(self) -> bool:
@@ -115,11 +133,31 @@ class FrameParser:
         so, no byte counts as ACK / NAK."""
         return not self._in_step
 
-    def request_sent(self) -> None:
-        """The host has just sent a request. When no bytes are held back (the line was quiet), the
-        next byte begins the answer: a handshake there counts even if garbage came before."""
-        if not self._buf:
-            self._shadow, self._shadow_open, self._in_step = 0, False, True
+    def request_sent(self, streaming: bool = False) -> None:
+        """The host is about to write a request (call it just before, with nothing unread on the
+        port): the bytes after it may begin the answer, whose first byte is a handshake.
+
+        On-request mode (``streaming`` False), where the device sends nothing unasked: with no
+        bytes held back (a quiet line) the stream is in step, even after garbage. With bytes held
+        back (a stray STX) it is in step after them when they and the bytes skipped since the
+        stream was last in step are at most :data:`MAX_STRAY`: the held bytes are then stale,
+        garbage unless the bytes after them complete a frame with a good CRC (a late reply, which
+        the driver tells from the answer by its code). A stray STX held back swallowed the NAK
+        behind it, which cost a timeout.
+
+        Continuous mode (``streaming`` True), with scan telegrams in flight: in step only when no
+        bytes are held back and at most :data:`MAX_STRAY` were skipped since the stream was last
+        in step (a stray byte after the last good frame swallowed the NAK to a stop request).
+
+        More bytes than that may be the head of a broken telegram, whose last byte (0x06 / 0x15
+        in 1 of 128) would come alone after the request: the stream stays resynchronising."""
+        held = len(self._buf)
+        if held and (streaming or self.stats.skipped_bytes - self._mark + held > MAX_STRAY):
+            return
+        if streaming and self.stats.skipped_bytes - self._mark > MAX_STRAY:
+            return
+        self._stale = held
+        self._shadow, self._shadow_open, self._in_step = 0, 0, True  # _mark stays: a request is no sign of step
 
     def feed(self, data: bytes) -> list[Event]:
         """Add received bytes; returns the complete frames and handshake bytes, in stream order.
@@ -141,6 +179,7 @@ class FrameParser:
         """
         events = self._scan(final=True)
         self._in_step = True
+        self._mark = self.stats.skipped_bytes
         return events
 
     def hides_frame(self) -> bool:
@@ -165,7 +204,7 @@ class FrameParser:
         return [e for e in self.feed(data) if isinstance(e, Frame)]
 
     # -----------------------------------------------------------------------------------------
-    def _garbage(self, events: list[Event], garbage: bytes, shadowed: int = 0, open_end: bool = False) -> None:
+    def _garbage(self, events: list[Event], garbage: bytes, shadowed: int = 0, open_end: int = 0) -> None:
         """Account for bytes outside frames (a run that ends where a frame candidate starts, or at
         the end of what has arrived).
 
@@ -173,11 +212,14 @@ class FrameParser:
         last byte (the CRC's high byte) is 0x06 or 0x15 once in 128 corrupted telegrams, and was
         taken for a handshake (a fake NAK made the driver resend, a fake ACK hid a real NAK behind
         it). A telegram that failed only its CRC high byte had its LEN right: the stream is in step
-        again after it. One whose CRC low byte is wrong too (``open_end``) may have lost bytes, so
+        again after it. One whose CRC low byte is wrong too (``open_end`` 1 or 2) may have lost bytes, so
         LEN reached past its real end and its last byte may be the handshake that followed (one
         byte lost put a real NAK there, which was swallowed and the request waited out its
         timeout): that byte is a handshake when it ends the run (a second handshake after it is
-        the real one). A NAK taken wrongly costs a resend; one missed costs a timeout.
+        the real one), only while a request waits for its handshake (``awaiting_reply``: ``open_end``
+        2; 1 when not). A NAK taken wrongly costs a resend; one
+        missed costs a timeout. With a corrupted telegram's last byte 0x06 / 0x15 in 1 of 128,
+        the exception made most of the fake handshakes left while streaming.
 
         The other bytes are handshakes only when the stream is in step before them and they are
         all 0x06 / 0x15 (a reply byte comes alone, then a frame or nothing). Anything else is
@@ -190,7 +232,7 @@ class FrameParser:
         n = len(garbage)
         span = min(max(shadowed, 0), n)  # bytes of the telegram that failed its CRC
         handshakes = b""
-        if span and open_end and shadowed == n and garbage[-1] in (ACK, NAK):
+        if span and open_end == 2 and shadowed == n and garbage[-1] in (ACK, NAK):
             span, handshakes, self._in_step = n - 1, garbage[-1:], True
         elif span:
             self._in_step = shadowed <= n and not open_end  # after a whole telegram with only a bad CRC
@@ -200,6 +242,10 @@ class FrameParser:
         elif rest:
             span, self._in_step = n, False
         self.stats.skipped_bytes += span
+        if handshakes:
+            self._mark = self.stats.skipped_bytes
+            if self.awaiting_reply:
+                self.awaiting_reply = False  # the request's one handshake has come
         for b in handshakes:
             if b == ACK:
                 self.stats.acks += 1
@@ -216,12 +262,26 @@ class FrameParser:
         stats = self.stats
         shadow = self._shadow  # bytes before this index belong to a telegram that failed its CRC
         open_end = self._shadow_open
+        stale = self._stale  # bytes before this index came before a request (on-request mode)
+
+        def run(pos: int, stop: int) -> None:
+            """Account for the garbage run buf[pos:stop]; its stale part is garbage, and the
+            stream is in step where the bytes received after the request begin."""
+            nonlocal stale
+            if stale and pos <= stale:
+                if stop < stale:
+                    stats.skipped_bytes += stop - pos
+                    return
+                stats.skipped_bytes += stale - pos
+                pos, stale = stale, 0
+                self._in_step = True
+            self._garbage(events, bytes(buf[pos:stop]), shadow - pos, open_end)
         while True:
             start = buf.find(sync, pos)
             if start < 0:
                 # Keep a trailing STX: it may be the first byte of the next frame.
                 keep = size - 1 if size > pos and buf[size - 1] == STX else size
-                self._garbage(events, bytes(buf[pos:keep]), shadow - pos, open_end)
+                run(pos, keep)
                 pos = keep
                 break
             # The candidate at `start`: waits for more bytes (None), fails, or is a good frame.
@@ -241,7 +301,7 @@ class FrameParser:
                     verdict = "good"
             if verdict == "good" and start < shadow:
                 shadow = pos  # a good frame inside the failed one: that was a false start, not a telegram
-            self._garbage(events, bytes(buf[pos:start]), shadow - pos, open_end)
+            run(pos, start)
             pos = start
             if verdict is None:
                 break
@@ -250,11 +310,19 @@ class FrameParser:
                 stats.frames += 1
                 pos = end
                 self._in_step = True
+                self._mark = stats.skipped_bytes
+                if stale and pos >= stale:
+                    stale = 0  # a late reply completed by bytes received after the request
                 continue
             if verdict == "bad_crc":
                 stats.bad_crc += 1
                 if end > shadow:  # the low CRC byte right: only the high one was hit, LEN was right
-                    shadow, open_end = end, crc16(bytes(buf[start : end - 2])) & 0xFF != buf[end - 2]
+                    # open_end: it may have lost bytes (1), and its last byte may be the NAK behind
+                    # it while a request waits for its answer (2; see _garbage)
+                    open_end = 0
+                    if crc16(bytes(buf[start : end - 2])) & 0xFF != buf[end - 2]:
+                        open_end = 1 if self.awaiting_reply is False else 2
+                    shadow = end
             elif verdict == "bad_length":
                 stats.bad_length += 1
             else:
@@ -262,8 +330,11 @@ class FrameParser:
             stats.skipped_bytes += 1
             self._in_step = False  # resynchronising: no handshake before the next good frame
             pos = start + 1
+        if stale and stale <= pos:  # every stale byte resolved: the bytes after the request are read in step
+            stale, self._in_step = 0, True
+        self._stale = stale - pos if stale else 0
         self._shadow = max(0, shadow - pos)
-        self._shadow_open = open_end and self._shadow > 0
+        self._shadow_open = open_end if self._shadow > 0 else 0
         del buf[:pos]
         self._base += pos
         return events
