@@ -499,6 +499,13 @@ BENCH_OWNER = Owner("bench", {
     "versions.yaml": _yaml_has("benchmarks", "quick", "versions", exact=True),
     "bench.csv": _csv_starts("area", "case")})
 SWEEP_OWNER = Owner("sweep", {"sweep.yaml": _yaml_has("name", "kind")})  # sweep.runner.spec_record
+#: The demo: its report, the study's settings (figures.study.save_tables, written first), its
+#: sim2real/ records and its sweep's sweep.yaml; its figures and tables count beside one of those.
+DEMO_OWNER = Owner("demo", {
+    "report.md": _first_line("# lmsbench demo"),
+    "tables/study.yaml": _yaml_has("world", "seed", "duration", "resolved", dicts=("resolved",)),
+    **{f"sim2real/{name}": tells for name, tells in SIM2REAL_OWNER.records.items()},
+    "sweeps/demo_k_vs_noise/sweep.yaml": SWEEP_OWNER.records["sweep.yaml"]})
 
 
 def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | None = None,

@@ -119,3 +119,26 @@ def test_what_bench_sim2real_and_sweep_tell_as_their_own(tmp_path):
     assert SWEEP_OWNER.foreign(w, SWEEP_OUTPUTS) == ["cells/a.parquet"]
     (w / "sweep.yaml").write_text("name: t\nkind: extract\n")
     assert SWEEP_OWNER.foreign(w, SWEEP_OUTPUTS) == []
+
+
+def test_demo_refuses_a_users_report_and_tells_its_own_folder(tmp_path, capsys):
+    """`demo --out DIR`, DIR holding the user's own report.md: written over before; now refused.
+    A folder with the demo's study settings (tables/study.yaml, written first) is its own."""
+    from experiments.options import DEMO_OUTPUTS, DEMO_OWNER
+
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "report.md").write_text("# my report\n")
+    _refused(capsys, ["demo", "--no-sweep", "--out", str(mine)], mine, "report.md", "demo")
+    own = tmp_path / "own"
+    (own / "tables").mkdir(parents=True)
+    (own / "report.md").write_text("# lmsbench demo: fast feature extraction in sensor coordinates\n")
+    assert DEMO_OWNER.foreign(own, DEMO_OUTPUTS) == []
+    (own / "report.md").write_text("# my report\n")
+    (own / "tables" / "summary.parquet").write_bytes(b"PAR1")
+    assert DEMO_OWNER.foreign(own, DEMO_OUTPUTS) == ["report.md", "tables/summary.parquet"]
+    (own / "tables" / "study.yaml").write_text(yaml.safe_dump({"world": "office", "seed": 0, "duration": 5.0,
+                                                               "resolved": {"sensor": {}}}))
+    assert DEMO_OWNER.foreign(own, DEMO_OUTPUTS) == ["report.md"]  # a record that says otherwise stays the user's
+    (own / "report.md").unlink()
+    assert DEMO_OWNER.foreign(own, DEMO_OUTPUTS) == []  # an interrupted demo's tables

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import DEMO_OUTPUTS, DURATION, SEED, InputError, check_log, check_out, positive, path_arg, world_name
+from experiments.options import DEMO_OUTPUTS, DEMO_OWNER, DURATION, SEED, InputError, check_log, check_out, positive, path_arg, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.inprocess and args.no_sweep:  # it was ignored: there is no sweep to run in this process
         raise InputError("--inprocess runs the demo's sweep in this process; --no-sweep skips it: give one of them")
-    check_out(args.out, writes=DEMO_OUTPUTS)
+    check_out(args.out, writes=DEMO_OUTPUTS, owner=DEMO_OWNER)
     cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz)
     if args.log is not None:
         cfg.intel_log = str(check_log(args.log))
