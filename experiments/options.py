@@ -518,7 +518,9 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
     own earlier outputs, which it replaces) and hidden files: ``slam run --out slam`` from the
     checkout wrote into the slam package, ``slam run --out run`` replaced the run's config.yaml,
     ``compare LOG --out FOLDER`` a config.yaml of the user's, ``demo --out FOLDER`` deleted a
-    folder's sweeps/demo_k_vs_noise."""
+    folder's sweeps/demo_k_vs_noise. With ``owner`` (how the command tells its own earlier outputs
+    by their content) a file of its names is accepted only when an earlier run of it wrote it: by
+    names alone a user's summary.txt or config.yaml in a folder of nothing else was written over."""
     if path is None:
         return None
     p = Path(path)
