@@ -497,7 +497,7 @@ SIM2REAL_OWNER = Owner("sim2real", {  # sim2real.write_outputs (also the demo's 
     "sensor.yaml": _first_line("# sensor model used by lmsbench sim2real ")})
 BENCH_OWNER = Owner("bench", {
     "versions.yaml": _yaml_has("benchmarks", "quick", "versions", exact=True),
-    "bench.csv": _csv_starts("area", "case")})
+    "bench.csv": _csv_starts("area")})  # commands.bench: {"area": name, **row}; the next column is the first area's own
 SWEEP_OWNER = Owner("sweep", {"sweep.yaml": _yaml_has("name", "kind")})  # sweep.runner.spec_record
 #: The demo: its report, the study's settings (figures.study.save_tables, written first), its
 #: sim2real/ records and its sweep's sweep.yaml; its figures and tables count beside one of those.

@@ -142,3 +142,26 @@ def test_demo_refuses_a_users_report_and_tells_its_own_folder(tmp_path, capsys):
     assert DEMO_OWNER.foreign(own, DEMO_OUTPUTS) == ["report.md"]  # a record that says otherwise stays the user's
     (own / "report.md").unlink()
     assert DEMO_OWNER.foreign(own, DEMO_OUTPUTS) == []  # an interrupted demo's tables
+
+
+def test_bench_runs_again_into_its_own_folder(tmp_path, monkeypatch, capsys):
+    """`lmsbench bench features --out DIR` twice: the second run refused DIR ("holds bench.csv ...
+    no earlier lmsbench bench run wrote"), as bench.csv was told by a header starting area,case,
+    while its second column is the first area's own first key (features: benchmark; sim: world).
+    Found by running bench twice after a431e72. Areas stubbed with each real area's first keys."""
+    import types
+
+    import experiments.commands.bench as bench
+
+    areas = {name: types.SimpleNamespace(run=lambda quick, k=key: [{k: "x", "scans_per_s": 1.0}])
+             for name, key in (("features", "benchmark"), ("sim", "world"), ("slam", "case"))}
+    monkeypatch.setattr(bench, "discover", lambda: areas)
+    out = tmp_path / "b"
+    for names in (["features"], ["sim", "slam"], ["slam"]):
+        assert main(["bench", *names, "--out", str(out)]) == 0, capsys.readouterr().err
+        assert (out / "bench.csv").read_text().startswith("area,")
+    (out / "bench.csv").write_text("region,area\n")  # not bench's own: refused, left as it is
+    (out / "versions.yaml").unlink()
+    assert main(["bench", "slam", "--out", str(out)]) == 2
+    assert "holds bench.csv, which this run would replace but no earlier lmsbench bench run wrote" in capsys.readouterr().err
+    assert (out / "bench.csv").read_text() == "region,area\n"
