@@ -340,30 +340,30 @@ class OutTree:
     files: tuple[str, ...] = ()
     folders: Mapping[str, "OutTree"] = field(default_factory=dict)
 
-    def present(self, folder: Path, prefix: str = "") -> list[str]:
-        """The files of ``folder`` (recursively, as ``sub/name``) of this tree's names."""
-        found = []
+    def entries(self, folder: Path, prefix: str = "") -> list[tuple[str, bool]]:
+        """The entries of ``folder`` (recursively, as ``sub/name``; a folder not of this tree as
+        ``name/``), each with whether this tree writes it; hidden entries (a temporary file of an
+        atomic write) are left out. One walk for :meth:`present` and :meth:`foreign`."""
+        out: list[tuple[str, bool]] = []
         for e in sorted(folder.iterdir(), key=lambda e: e.name):
             if e.name.startswith("."):
                 continue
             if e.name in self.folders and e.is_dir() and not e.is_symlink():
-                found += self.folders[e.name].present(e, f"{prefix}{e.name}/")
-            elif not e.is_dir() and any(fnmatch.fnmatchcase(e.name, pat) for pat in self.files):
-                found.append(f"{prefix}{e.name}")
-        return found
+                out += self.folders[e.name].entries(e, f"{prefix}{e.name}/")
+            elif e.is_dir():
+                out.append((f"{prefix}{e.name}/", False))
+            else:
+                out.append((f"{prefix}{e.name}", any(fnmatch.fnmatchcase(e.name, pat) for pat in self.files)))
+        return out
 
-    def foreign(self, folder: Path, prefix: str = "") -> list[str]:
+    def present(self, folder: Path) -> list[str]:
+        """The files of ``folder`` (recursively, as ``sub/name``) of this tree's names."""
+        return [name for name, ours in self.entries(folder) if ours]
+
+    def foreign(self, folder: Path) -> list[str]:
         """The entries of ``folder`` (recursively, as ``sub/name``) this tree does not write; hidden
         entries (a temporary file of an atomic write) pass."""
-        others = []
-        for e in sorted(folder.iterdir(), key=lambda e: e.name):
-            if e.name.startswith("."):
-                continue
-            if e.name in self.folders and e.is_dir() and not e.is_symlink():
-                others += self.folders[e.name].foreign(e, f"{prefix}{e.name}/")
-            elif not any(fnmatch.fnmatchcase(e.name, pat) for pat in self.files) or e.is_dir():
-                others.append(f"{prefix}{e.name}" + ("/" if e.is_dir() else ""))
-        return others
+        return [name for name, ours in self.entries(folder) if not ours]
 
 
 def _figure_files(stems: Sequence[str]) -> tuple[str, ...]:
