@@ -11,8 +11,13 @@ device's output by the device's baud. Both are context managers; ``close()`` sto
   (``rfc2217://127.0.0.1:PORT``) the host sets the baud over RFC 2217 and mismatches garble. The device keeps its state
   (baud, mode) across connections, like a unit that stays powered.
 
-Bytes the host does not read are dropped once the kernel buffer is full (a UART overrun), so a
-device in continuous mode never blocks the adapter.
+Bytes the host does not read are dropped once its receive buffer is full (a UART overrun), so a
+device in continuous mode never blocks the adapter. That buffer lasts as long in the device's time
+as in real time: the kernel's buffer (20 KiB on a pty here) plus, for a device at ``time_scale`` < 1,
+:data:`HOST_BUFFER_BYTES` / ``time_scale`` - :data:`HOST_BUFFER_BYTES` bytes the adapter holds
+for the host (none at time_scale 1 or above). At time_scale 0.01 the line carries 100 times its baud (192 kB/s
+at 19200 baud): the kernel's buffer alone was full after a 0.1 s pause of the host (a loaded
+machine), and the bytes behind it were lost; a real host at 19200 baud fills 4 KiB in 2.1 s.
 """
 
 from __future__ import annotations
@@ -26,10 +31,14 @@ import time
 import tty
 from typing import Callable
 
+import numpy as np
+
 from .virtual import VirtualLMS200, garble
 
 _TICK_S = 0.002  # longest sleep between pacing steps
 _IDLE_S = 0.05  # sleep while the device has nothing to send
+HOST_BUFFER_BYTES = 4096  # a serial port's receive buffer (the kernel's tty buffer: 4 KiB at least)
+_WRITE_MAX = 65536  # bytes offered to the port per write
 _SPEEDS = {getattr(termios, f"B{b}"): b for b in (9600, 19200, 38400, 57600, 115200, 230400, 500000) if hasattr(termios, f"B{b}")}
 
 
@@ -38,6 +47,7 @@ class _Adapter:
         self.device = device
         self.clock = clock
         self.overrun_bytes = 0
+        self._pending = bytearray()  # bytes due that the port did not take yet (see the module doc)
         self._stop = threading.Event()
         self._lock = threading.Lock()
         self._thread = threading.Thread(target=self._run, name=type(self).__name__, daemon=True)
@@ -49,6 +59,8 @@ class _Adapter:
         now = self.clock()
         with self._lock:
             wake = self.device.next_wakeup(now)
+        if self._pending:
+            return _TICK_S
         if wake is None:
             return _IDLE_S
         return min(_TICK_S, max(0.0, wake - now))
@@ -60,16 +72,28 @@ class _Adapter:
             if data:
                 dev.receive(garble(data, host_baud or dev.baud, dev.baud), self.clock())
             for piece, baud in dev.transmit(self.clock()):
-                if write is None:
-                    continue
-                out = garble(piece, baud, host_baud or baud)
-                try:
-                    sent = write(out)
-                except (BlockingIOError, InterruptedError):
-                    sent = 0
-                except OSError:  # the host went away mid-write: the bytes are lost
-                    sent = len(out)
-                self.overrun_bytes += len(out) - sent
+                if write is not None:
+                    self._pending += garble(piece, baud, host_baud or baud)
+            if write is None:
+                self._pending.clear()  # no host: the bytes go nowhere
+            elif self._pending:
+                self._deliver(write)
+
+    def _deliver(self, write: Callable[[bytes], int]) -> None:
+        """Write the bytes due; keep what the port does not take, up to the spare buffer, and drop
+        the newest beyond it (an overrun)."""
+        pending = self._pending
+        try:
+            sent = write(bytes(pending[:_WRITE_MAX]))
+        except (BlockingIOError, InterruptedError):
+            sent = 0
+        except OSError:  # the host went away mid-write: the bytes are lost
+            sent = len(pending)
+        del pending[:sent]
+        excess = len(pending) - max(0, int(HOST_BUFFER_BYTES * (1.0 / self.device.time_scale - 1.0)))
+        if excess > 0:
+            del pending[len(pending) - excess :]
+            self.overrun_bytes += excess
 
     def _run(self) -> None:  # pragma: no cover - overridden
         raise NotImplementedError
@@ -199,7 +223,10 @@ class TcpServer(_Adapter):
         def send(data: bytes) -> int:
             escaped = b"".join(manager.escape(data))
             sent = client.send(escaped)
-            return len(data) if sent == len(escaped) else min(sent, len(data))
+            if sent == len(escaped):
+                return len(data)
+            # the data bytes whose escaped form went out whole (0xFF is sent as FF FF)
+            return int(np.searchsorted(np.cumsum(1 + (np.frombuffer(data, np.uint8) == 0xFF)), sent, side="right"))
 
         return send
 

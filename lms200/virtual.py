@@ -21,6 +21,7 @@ build; built after the reply, it arrived that much late).
 
 from __future__ import annotations
 
+import difflib
 import math
 import numbers
 import struct
@@ -81,6 +82,15 @@ SOURCE_GRID_DEG = (-90.0, 0.5, 361)  # every scan source is resampled onto the 0
 POWER_ON_CONFIG = bytes([0, 0, 0, 0, 0x0D, UNITS_CODES["cm"]]) + bytes(CONFIG_BYTES - 6)
 
 
+def check_field_name(record: object, name: str) -> None:
+    """``name`` is a field of the dataclass ``record``; InputError naming the closest field otherwise."""
+    names = [f.name for f in fields(record)]  # type: ignore[arg-type]
+    if name not in names:
+        close = difflib.get_close_matches(name, names, n=1)
+        hint = f" (did you mean {close[0]}?)" if close else f"; its fields are {', '.join(names)}"
+        raise InputError(f"{type(record).__name__} has no field {name!r}{hint}")
+
+
 @dataclass
 class DeviceTiming:
     """Device delays in seconds at time_scale 1 (the listing's typical and worst values); each a
@@ -94,9 +104,12 @@ class DeviceTiming:
     reset_s: float = 1.0  # from the 0x91 reply to the 0x90 power-on string
     rx_gap_s: float = 0.006  # largest gap between bytes of one host telegram (never scaled)
 
-    def __post_init__(self) -> None:
-        for f in fields(self):
-            check_number(getattr(self, f.name), f.name, 0.0, MAX_DELAY_S, unit="s")
+    def __setattr__(self, name: str, value: object) -> None:
+        """Each field checked when it is set, at construction or later (``dev.timing.ack_s = -1``
+        was taken and broke the device's clock at the next request); a name that is no field is
+        an InputError too (a misspelt field was a new attribute the device never read)."""
+        check_field_name(self, name)
+        object.__setattr__(self, name, check_number(value, name, 0.0, MAX_DELAY_S, unit="s"))
 
 
 @dataclass
@@ -109,7 +122,7 @@ class Faults:
         miss_prob: probability that a correct request is ignored (as during a mirror turn).
         rx_corrupt_prob: probability that a host telegram arrives with a bit error (-> NAK).
         mute: the device stops answering and sending altogether.
-        seed: seed of the fault generator.
+        seed: seed of the fault generator (read when the device is built).
     """
 
     corrupt_prob: float = 0.0
@@ -119,12 +132,23 @@ class Faults:
     mute: bool = False
     seed: int = 0
 
-    def __post_init__(self) -> None:
-        """The values given: probabilities in [0, 1], a seed >= 0; InputError naming the field (a
-        text probability was numpy's UFuncTypeError at the first transmit, 10**400 an OverflowError)."""
-        for name in ("corrupt_prob", "drop_prob", "miss_prob", "rx_corrupt_prob"):
-            check_number(getattr(self, name), name, 0.0, 1.0)
-        check_seed(self.seed)
+    def __setattr__(self, name: str, value: object) -> None:
+        """Each field checked when it is set, at construction or later, as the fields are meant to
+        be changed on a running device: probabilities in [0, 1], ``mute`` a bool, a seed >= 0;
+        InputError naming the field (a text probability was numpy's UFuncTypeError at the first
+        transmit, 10**400 an OverflowError; set later, ``corrupt_prob = 2`` corrupted every byte
+        and ``mute = "no"`` muted the device, silently; a misspelt field was a new attribute the
+        device never read)."""
+        check_field_name(self, name)
+        if name == "mute":
+            if not isinstance(value, (bool, np.bool_)) and not (is_integer(value) and value in (0, 1)):
+                raise InputError(f"mute: must be True or False, got {shown(value)}")
+            value = bool(value)
+        elif name == "seed":
+            check_seed(value)
+        else:
+            value = check_number(value, name, 0.0, 1.0)
+        object.__setattr__(self, name, value)
 
 
 def resample_to_grid(scan: Scan) -> np.ndarray:

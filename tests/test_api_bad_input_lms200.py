@@ -225,6 +225,38 @@ def test_device_keeps_its_valid_clock_timing_and_faults() -> None:
     assert protocol.units_of_config(memoryview(block)) == "mm" and protocol.set_config_request(block)[1:] == block
 
 
+def _set(record: object, name: str, value: object) -> None:
+    setattr(record, name, value)
+
+
+@pytest.mark.parametrize("record, name, value, message", [
+    (virtual.Faults, "corrupt_prob", 2, r"^corrupt_prob: must be a finite number in \[0, 1\], got 2$"),  # every byte hit
+    (virtual.Faults, "drop_prob", math.nan, r"^drop_prob: must be a finite number in \[0, 1\], got nan$"),
+    (virtual.Faults, "mute", "no", r"^mute: must be True or False, got 'no'$"),  # muted the device
+    (virtual.Faults, "seed", -1, r"^seed: must be a whole number >= 0, got -1$"),
+    (virtual.Faults, "corupt_prob", 0.1, r"^Faults has no field 'corupt_prob' \(did you mean corrupt_prob\?\)$"),
+    (virtual.DeviceTiming, "ack_s", -1, r"^ack_s: must be a finite number in \[0, 3600\] s, got -1$"),
+    (virtual.DeviceTiming, "reply", 0.1, r"^DeviceTiming has no field 'reply' \(did you mean reply_s\?\)$"),
+])
+def test_faults_and_timing_changed_on_a_running_device_are_checked(record, name: str, value: object, message: str) -> None:
+    """The fields of Faults are meant to be changed while a device runs (its docstring): a value
+    set later was not checked (``corrupt_prob = 2`` corrupted every byte, ``mute = "no"`` muted
+    the device, a misspelt name was a new attribute nothing read), and the field keeps its value."""
+    held = record()
+    dev = _device(**{"faults" if record is virtual.Faults else "timing": held})
+    before = repr(held)
+    with pytest.raises(InputError, match=message):
+        _set(held, name, value)
+    assert repr(held) == before and not hasattr(held, "corupt_prob") and not hasattr(held, "reply")
+    valid = {"corrupt_prob": 0.25, "drop_prob": 0.5, "mute": True, "seed": 7, "ack_s": 0.01}
+    if name in valid:  # a valid value is taken, and is what the device reads
+        _set(held, name, valid[name])
+        assert getattr(dev.faults if record is virtual.Faults else dev.timing, name) == valid[name]
+    dev.faults.mute = np.bool_(False)
+    dev.faults.mute = 1
+    assert dev.faults.mute is True
+
+
 def test_a_configuration_block_given_as_a_list_of_bytes_is_sent_as_before() -> None:
     """``set_config_request([0] * 32)`` and ``with_units(list, 'cm')`` worked before the checks of
     b538d7c (a second review found them refused): a list of integers 0..255 is bytes again; a
