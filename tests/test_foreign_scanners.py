@@ -153,3 +153,19 @@ def test_beam_time_increment_is_bounded(tmp_path):
         SlamConfig.from_dict({"alignment": {"beam_time_increment": 1.0}})
     with pytest.raises(SlamConfigError, match=r"alignment.beam_time_increment: must be >= 0"):
         SlamConfig.from_dict({"alignment": {"beam_time_increment": -1e-5}})
+
+
+def test_calibrate_and_sim2real_refuse_a_270_deg_log_in_one_line(tmp_path, capsys):
+    """calibrate measured a 1081-beam 270 deg log and wrote a 721-beam 180 deg sensor (``n_beams``
+    cut, silently), which sim2real then simulated against the log's 270 deg scans."""
+    from experiments.cli import main
+
+    log = tmp_path / "utm.log"
+    write_log(log, hokuyo_run(scans=8))
+    expected = (f"{log}: its scans hold 1081 beams at 0.25 deg, 270 deg from first to last: the LMS200 model spans "
+                "at most 180 deg (721 beams at 0.25 deg); calibrate and sim2real cannot model this scanner")
+    assert main(["calibrate", str(log), "--out", str(tmp_path / "sensor.yaml")]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [f"lmsbench calibrate: error: {expected}"]
+    assert not (tmp_path / "sensor.yaml").exists()
+    assert main(["sim2real", str(log), "--seeds", "0", "--duration", "2", "--out", str(tmp_path / "s2r")]) == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1] == f"lmsbench sim2real: error: {expected}"
