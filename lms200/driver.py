@@ -187,6 +187,8 @@ class LMS200:
         self._retries = 0
         self._timeouts = 0
         self._last_rx = time.monotonic()
+        self._unanswered = 0  # attempts written whose answer (NAK, or the reply) was not read: see _no_answer_due
+        self._last_write = -math.inf
         self._backlog: list = []  # events read past a reply, handed out by the next _pump
         # (stream offset after a read, host time when the read returned), the newest reads
         self._reads: deque[tuple[int, float]] = deque(maxlen=_READS_KEPT)
@@ -243,6 +245,17 @@ class LMS200:
         if hides_frame:
             return max(_FALSE_START_GAP_S, frame_seconds(20, self.baud))
         return self.timeout + frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
+
+    def _no_answer_due(self) -> bool:
+        """Whether, in on-request mode, no telegram of the device can be on its way: every request
+        written was answered (a NAK, or its reply), none was written for longer than the longest
+        answer may take (``mode_timeout`` plus the line time of the longest telegram), or nothing
+        has arrived for 0.1 s (a device sends a telegram without gaps; as ``_idle_gap(True)``). The
+        device sends nothing unasked, so bytes held back then are garbage, and the first byte of
+        the answer to the next request is its handshake."""
+        now = time.monotonic()
+        longest = self.mode_timeout + frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
+        return self._unanswered == 0 or now - self._last_write > longest or now - self._last_rx > self._idle_gap(True)
 
     def _link_lost(self, exc: BaseException) -> LmsLinkError:
         """The error for a port that failed mid-use (pyserial's SerialException / OSError escaped
@@ -363,11 +376,19 @@ class LMS200:
             self.parser.awaiting_reply = True  # until the first handshake: the answer's
             try:
                 if not self._ser.in_waiting:
+                    if not self.streaming and self.parser.pending and self._no_answer_due():
+                        # On-request mode, every request answered (or nothing sent for 0.1 s): the
+                        # bytes held back are no telegram on its way but garbage, which held the NAK
+                        # to this request back (behind a stray 02 80 until the line had been quiet
+                        # for timeout + a telegram's line time; behind > 3 stray bytes for good).
+                        self._backlog += [ev for ev in self.parser.idle() if isinstance(ev, Frame)]
                     self.parser.request_sent(streaming=self.streaming)
                 self._ser.write(telegram)
                 self._ser.flush()
             except (serial.SerialException, OSError) as exc:
                 raise self._link_lost(exc) from None
+            self._unanswered += 1
+            self._last_write = time.monotonic()
             self._doing = f"{what}: waiting for the reply"
             deadline = time.monotonic() + budget
             acked = naked = False
@@ -379,9 +400,11 @@ class LMS200:
                         acked = True
                     elif ev == NAK and not acked:
                         naked = True
+                        self._unanswered = max(0, self._unanswered - 1)
                     elif isinstance(ev, Frame):
                         if ev.code == expected:
                             self._backlog = events[i + 1 :] + self._backlog
+                            self._unanswered = max(0, self._unanswered - 1)
                             return ev
                         if ev.code == REPLY_BAD_COMMAND:
                             raise LmsProtocolError(f"{what}: the device answered 0x92 (incorrect command) to {telegram.hex(' ')}")
