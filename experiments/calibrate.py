@@ -48,6 +48,7 @@ from lms200 import LmsbenchError, read_log
 from lms200.errors import InputError
 from lms200.calibration import LogCalibration, calibrate_scans
 from lms200.laser_geometry import MIN_RANGE_MAX_M
+from lms200.timing import LMS200_MAX_FOV_DEG
 
 WIDTH_GRID_STEPS = (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)  # spot widths tried, in beam steps
 TAIL_GRID = (0.0, 0.1, 0.3)  # noise_tail_prob values tried
@@ -116,7 +117,12 @@ def base_sensor(cal: LogCalibration):
     from sim import SensorConfig
 
     res = _resolution_deg(cal.angle_increment)
-    n_beams = min(cal.n_beams, int(round(180.0 / res)) + 1)
+    n_beams = cal.n_beams
+    widest = int(round(LMS200_MAX_FOV_DEG / res)) + 1
+    if n_beams > widest:  # was cut to `widest`, silently: a 270 deg Hokuyo log gave a 180 deg sensor YAML
+        raise LmsbenchError(f"its scans hold {n_beams} beams at {res:g} deg, {(n_beams - 1) * res:g} deg from first to "
+                            f"last: the LMS200 model spans at most {LMS200_MAX_FOV_DEG:g} deg ({widest} beams at "
+                            f"{res:g} deg); calibrate and sim2real cannot model this scanner")
     if not np.isfinite(cal.noise.sigma_m):
         raise LmsbenchError(f"too few straight runs of beams at 1-4 m in {cal.n_scans} scan(s) to estimate the range "
                             f"noise ({cal.noise.n_used} beam triples); calibrate needs a log of real surfaces within "
@@ -213,7 +219,7 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
     ``read_options`` go to ``lms200.read_log`` (topic, skip_bad_lines, geometry).
 
     Raises:
-        LmsbenchError: for a log without laser scans or an unsupported resolution.
+        LmsbenchError: for a log without laser scans, an unsupported resolution or more than 180 deg.
     """
     reader = read_log(path, **read_options)
 

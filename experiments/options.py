@@ -371,12 +371,12 @@ def _figure_files(stems: Sequence[str]) -> tuple[str, ...]:
     return tuple(f"{stem}{end}" for stem in stems for end in (".png", ".pdf", ".csv", "_*.csv"))
 
 
-#: ``figures``: the paper's figures, a figure per sweep and metric, and (unless --tables) the tables
-#: behind them (experiments.figures.make, experiments.figures.study.save_tables).
+#: ``figures``: its record (figures.yaml), the paper's figures, a figure per sweep and metric, and
+#: (unless --tables) the tables behind them (experiments.figures.make, figures.study.save_tables).
 STUDY_TABLES = OutTree(("*.parquet", "study.yaml", "notes.txt"))
-FIGURES_OUTPUTS = OutTree(_figure_files(("fig3_scan", "fig4_ad", "fig5_theta", "fig6_psi", "fig7_timing",
-                                         "fig9_office", "fig9_intel", "fig10_slam", "accuracy_speed", "sweep_*")),
-                          {"tables": STUDY_TABLES})
+FIGURES_OUTPUTS = OutTree(("figures.yaml",) + _figure_files((
+    "fig3_scan", "fig4_ad", "fig5_theta", "fig6_psi", "fig7_timing", "fig9_office", "fig9_intel", "fig10_slam",
+    "accuracy_speed", "sweep_*")), {"tables": STUDY_TABLES})
 #: A sweep folder (experiments.sweep.store).
 SWEEP_OUTPUTS = OutTree(("sweep.yaml", "versions.yaml", "results.parquet", "results.csv"),
                         {"cells": OutTree(("*.parquet",))})
@@ -424,6 +424,14 @@ def _yaml_has(*keys: str, dicts: Sequence[str] = (), exact: bool = False) -> Cal
     return tells
 
 
+def _yaml_says(**values: str) -> Callable[[Path], bool]:
+    """A recogniser: a YAML mapping whose keys ``values`` hold those values."""
+    def tells(path: Path) -> bool:
+        raw = _yaml_mapping(path)
+        return raw is not None and all(raw.get(k) == v for k, v in values.items())
+    return tells
+
+
 def _json_has(**kinds: type) -> Callable[[Path], bool]:
     """A recogniser: a JSON object whose keys ``kinds`` hold values of those types."""
     def tells(path: Path) -> bool:
@@ -462,16 +470,34 @@ class Owner:
     """How a command tells, from the content of what it left, that an earlier run of it wrote the
     files of its output names in a folder: ``records`` maps a file name to a recogniser of its
     content; every other output file (a TUM file, a figure, a table) counts as the earlier run's
-    only when one of the records beside it (in the folder given as --out) is recognised."""
+    only when one of the records beside it (in the folder given as --out) is recognised. ``within`` names
+    the sub-folder (by name) that another command's folder gives this one: a demo's ``figures/``,
+    which ``figures --tables DEMO/tables --out DEMO/figures`` redraws, is the figures' own
+    wherever the demo's records tell DEMO as the demo's."""
 
     command: str
     records: Mapping[str, Callable[[Path], bool]]
+    within: Mapping[str, "Owner"] = field(default_factory=dict)
+
+    def told(self, folder: Path) -> set[str]:
+        """The records of ``folder`` (``sub/name`` in sub-folders) that an earlier run wrote."""
+        return {n for n, tells in self.records.items() if (folder / n).is_file() and tells(folder / n)}
+
+    def wrote_in(self, folder: Path) -> bool:
+        """Whether an earlier run wrote into ``folder``: a record of it there, or ``folder`` is the
+        sub-folder of ``within`` in a folder an earlier run of that owner wrote."""
+        if self.told(folder):
+            return True
+        real = folder.resolve()
+        return any(real.name == sub and owner.wrote_in(real.parent) for sub, owner in self.within.items())
 
     def earlier(self, folder: Path, writes: OutTree) -> set[str]:
-        """The output files of ``folder`` (``sub/name`` in sub-folders) an earlier run wrote."""
-        present = writes.present(folder)
-        told = {n for n in present if n in self.records and self.records[n](folder / n)}
-        return (told | {n for n in present if n not in self.records}) if told else set()
+        """The output files of ``folder`` (``sub/name`` in sub-folders) an earlier run wrote; a
+        record whose content says otherwise is not one of them."""
+        if not self.wrote_in(folder):
+            return set()
+        told = self.told(folder)
+        return {n for n in writes.present(folder) if n in told or n not in self.records}
 
     def foreign(self, folder: Path, writes: OutTree) -> list[str]:
         """The output files of ``folder`` this run would replace that no earlier run wrote."""
@@ -499,17 +525,28 @@ BENCH_OWNER = Owner("bench", {
     "versions.yaml": _yaml_has("benchmarks", "quick", "versions", exact=True),
     "bench.csv": _csv_starts("area")})  # commands.bench: {"area": name, **row}; the next column is the first area's own
 SWEEP_OWNER = Owner("sweep", {"sweep.yaml": _yaml_has("name", "kind")})  # sweep.runner.spec_record
+#: The study's settings beside its tables (figures.study.save_tables, written first).
+_STUDY_RECORD = _yaml_has("world", "seed", "duration", "resolved", dicts=("resolved",))
 #: The demo: its report, the study's settings (figures.study.save_tables, written first), its
 #: sim2real/ records and its sweep's sweep.yaml; its figures and tables count beside one of those.
 DEMO_OWNER = Owner("demo", {
     "report.md": _first_line("# lmsbench demo"),
-    "tables/study.yaml": _yaml_has("world", "seed", "duration", "resolved", dicts=("resolved",)),
+    "tables/study.yaml": _STUDY_RECORD,
     **{f"sim2real/{name}": tells for name, tells in SIM2REAL_OWNER.records.items()},
     "sweeps/demo_k_vs_noise/sweep.yaml": SWEEP_OWNER.records["sweep.yaml"]})
+#: ``figures``: its figures.yaml (commands.figures, written first: the command, where the tables
+#: came from, the versions), or, from a run before figures.yaml, the study's settings of its
+#: tables/ (or of the tables folder itself, for ``figures --tables DIR --out DIR``); a demo's
+#: figures/ folder (``figures --tables DEMO/tables --out DEMO/figures``) is its own too. A figure
+#: or its CSV says nothing of lmsbench: by names alone a user's fig3_scan.png was written over.
+FIGURES_OWNER = Owner("figures", {"figures.yaml": _yaml_says(command="lmsbench figures"),
+                                  "tables/study.yaml": _STUDY_RECORD, "study.yaml": _STUDY_RECORD},
+                      within={"figures": DEMO_OWNER})
 
 
 def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | None = None,
-              patterns: Sequence[str] = (), owner: Owner | None = None) -> Path | None:
+              patterns: Sequence[str] = (), owner: Owner | None = None,
+              replaces: OutTree | None = None) -> Path | None:
     """An output folder: absent (created later) or a folder; its nearest existing parent writable.
     None (no --out: a new timestamped folder will be made) passes. With ``writes`` (the fixed file
     names a command writes: SIMULATE_OUTPUTS, SLAM_OUTPUTS, COMPARE_OUTPUTS, or an OutTree of
@@ -520,7 +557,9 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
     ``compare LOG --out FOLDER`` a config.yaml of the user's, ``demo --out FOLDER`` deleted a
     folder's sweeps/demo_k_vs_noise. With ``owner`` (how the command tells its own earlier outputs
     by their content) a file of its names is accepted only when an earlier run of it wrote it: by
-    names alone a user's summary.txt or config.yaml in a folder of nothing else was written over."""
+    names alone a user's summary.txt or config.yaml in a folder of nothing else was written over.
+    ``replaces``: the files of those the run writes (default: all; ``figures --tables DIR --out DIR``
+    reads the tables beside its figures and writes only the figures)."""
     if path is None:
         return None
     p = Path(path)
@@ -535,7 +574,7 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
             raise InputError(f"--out {p}: holds {shown}, which this command does not write; give a new or empty "
                              "folder (a folder of this command's own earlier outputs is replaced)")
         if owner is not None:  # its own names, but not written by it: a user's summary.txt or config.yaml
-            theirs = owner.foreign(p, tree)
+            theirs = owner.foreign(p, tree if replaces is None else replaces)
             if theirs:
                 shown = " and ".join(theirs) if len(theirs) <= 3 else ", ".join(theirs[:3]) + f" and {len(theirs) - 3} more"
                 raise InputError(f"--out {p}: holds {shown}, which this run would replace but no earlier lmsbench "

@@ -9,6 +9,7 @@ import platform
 import sys
 from importlib import metadata
 from pathlib import Path
+from typing import Callable
 
 #: Distributions whose version can change a result.
 PACKAGES = ("lmsbench", "numpy", "scipy", "numba", "pybullet", "pandas", "filterpy", "gtsam", "matplotlib")
@@ -46,3 +47,25 @@ def new_run_folder(base: str | os.PathLike, now: datetime.datetime | None = None
     tmp.symlink_to(folder.name)
     os.replace(tmp, latest)  # atomic: `latest` always names a whole run
     return folder
+
+
+def write_record(path: str | os.PathLike, content: str | Callable[[Path], object]) -> Path:
+    """Write a file whole or not at all: ``content`` (text, or a function that writes the file at
+    the path it is given) goes into a hidden temporary file beside ``path``, renamed over it
+    (``os.replace`` is atomic on POSIX). A file that tells a command's --out folder as its own
+    (``experiments.options.Owner``'s records: figures.yaml) is written this way before any other
+    output, so a run stopped at any moment (Ctrl-C, kill) leaves a folder the next run into the
+    same --out recognises, not one of figures it cannot tell from a user's."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")  # hidden: check_out passes it over
+    try:
+        if callable(content):
+            content(tmp)
+        else:
+            tmp.write_text(content, encoding="utf-8")
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path

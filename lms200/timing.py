@@ -87,6 +87,22 @@ def beam_time_offsets(n_beams: int, angle_increment: float) -> np.ndarray:
     return ((i % turns) + i * angle_increment / (2.0 * np.pi)) * MIRROR_TURN_S
 
 
+LMS200_RESOLUTIONS_DEG = (1.0, 0.5, 0.25)  # the device's angular resolutions (deg)
+LMS200_MAX_FOV_DEG = 180.0  # its widest field of view (deg; the other variant spans 100)
+_RESOLUTION_TOLERANCE = 1e-3  # relative: a logged or float32 step still reads as the device's
+
+
+def lms200_shaped(n_beams: int, angle_increment: float) -> bool:
+    """True where an LMS200 could have taken a scan of ``n_beams`` beams ``angle_increment`` rad
+    apart: a resolution of 1, 0.5 or 0.25 deg and at most 180 deg from first to last beam. Only such
+    a scan has the LMS200's interlaced beam timing (:func:`beam_time_offsets`); a Hokuyo's 1081
+    beams over 270 deg at 0.25 deg or 683 at 0.352 deg are swept in beam order by another clock."""
+    deg = math.degrees(angle_increment)
+    if not any(abs(deg - r) <= _RESOLUTION_TOLERANCE * r for r in LMS200_RESOLUTIONS_DEG):
+        return False
+    return (int(n_beams) - 1) * deg <= LMS200_MAX_FOV_DEG * (1.0 + _RESOLUTION_TOLERANCE)
+
+
 def smallest_range(range_max: float) -> float:
     """The smallest reading that is a distance (m): one code unit, 1 cm for cm-mode scans
     (range_max > 10 m) and 1 mm otherwise. A code of 0 is no measurement."""

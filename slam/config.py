@@ -61,6 +61,14 @@ class AlignmentConfig:
             16 cm during a 0.5 deg scan. Off for scans taken at one instant (the simulator's
             ``SensorConfig(interlaced=False)`` / ``.ideal()``), where it would add that motion
             instead of removing it (``lmsbench slam`` and sweeps switch it off there themselves).
+            A scan no LMS200 could take (a resolution other than 1, 0.5 or 0.25 deg, or more than
+            180 deg: ``lms200.timing.lms200_shaped``) is not de-skewed unless ``beam_time_increment``
+            gives its timing (``lmsbench slam`` then switches deskew off and says so).
+        beam_time_increment: s between consecutive beams of a scanner that sweeps them in beam
+            order (a Hokuyo UTM-30LX: 25 ms a 1440-step turn, 1.736e-5 s; an URG-04LX: 100 ms a
+            1024-step turn, 9.77e-5 s); de-skewing then uses these times for every scan instead of
+            the LMS200's. 0 (default): the LMS200's timing, for scans of its shape only. At most
+            ``MAX_BEAM_TIME_INCREMENT_S``.
         normal_agreement: a scan point (with a normal) is paired only with map points whose normal
             lies within this angle (rad) of its own: a point near a corner is not pulled onto the
             perpendicular wall (90 degrees off; along a corridor such pairs set the axis from a
@@ -132,6 +140,7 @@ class AlignmentConfig:
     normal_gap_per_range: float = 0.05
     motion_prior: bool = False
     deskew: bool = True
+    beam_time_increment: float = 0.0
     normal_agreement: float = 1.178
     search: bool = True
     search_sigmas: float = 3.0
@@ -470,6 +479,9 @@ class SlamConfig:
                                   f"leaves the graph without an anchor), got {self.loop_closure.prior_sigma}")
         if not 0 < al.max_range <= MAX_MATCH_RANGE_M:  # 1e300: its square overflowed (internal error)
             raise SlamConfigError(f"alignment.max_range: must be in (0, {MAX_MATCH_RANGE_M:g}] m, got {al.max_range}")
+        if al.beam_time_increment > MAX_BEAM_TIME_INCREMENT_S:
+            raise SlamConfigError(f"alignment.beam_time_increment: must be in [0, {MAX_BEAM_TIME_INCREMENT_S:g}] s "
+                                  f"between beams (0: the LMS200's timing), got {al.beam_time_increment}")
         if al.normal_step < 1:  # 0: an empty chord, an internal error on the first scan
             raise SlamConfigError(f"alignment.normal_step: must be >= 1 beam, got {al.normal_step}")
         if any(abs(h) > 2 * math.pi for h in al.heading_hypotheses):  # 1e300 overflowed; a half turn may read 3.1416
@@ -629,6 +641,7 @@ NOISE_SIGMAS = (("alignment", "sigma_point", "m"), ("motion", "sigma_lateral", "
                 ("observations", "sigma_alpha_obs", "rad"), ("observations", "sigma_corner", "m"),
                 ("prealign", "sigma_xy", "m"), ("prealign", "sigma_phi", "rad"), ("prealign", "scan_velocity_sigma", "m"),
                 ("loop_closure", "prior_sigma", "m and rad"))
+MAX_BEAM_TIME_INCREMENT_S = 0.01  # s between beams: a 1081-beam scan would take 10.8 s
 MAX_ICP_ITERATIONS = 1000  # alignment.max_iterations / fine_iterations (defaults 10 / 5)
 MAX_SIGMA_FLOOR = 1e3  # m and rad: a floor this wide leaves no motion model
 MAX_SIGMA_MOTION = 1e3  # m/s^2 and rad/s^2: the constant-velocity model's widest acceleration std

@@ -422,7 +422,7 @@ def run_scan_slam(steps, config) -> "SlamResult":
         if previous is not None and t < previous:
             raise SlamInputError(f"scan {k}: timestamp {t} is earlier than the previous one ({previous})")
         previous = t
-        info = slam.step(t, scan.points, _offsets(scan))
+        info = slam.step(t, scan.points, _offsets(scan, config.alignment))
         if info.new_keyframe:
             kf_scans[info.keyframe] = scan
         stamps.append(t)
@@ -473,16 +473,24 @@ def run_scan_slam(steps, config) -> "SlamResult":
     return SlamResult(traj, covs, lines, np.zeros((0, 3)), diag)
 
 
-def _offsets(scan) -> np.ndarray:
-    """Each beam's time after the scan's first beam (s), from the LMS200's mirror timing."""
-    return _beam_times(scan.ranges.shape[0], float(scan.angle_increment))
+def _offsets(scan, alignment: AlignmentConfig | None = None) -> np.ndarray | None:
+    """Each beam's time after the scan's first beam (s): ``alignment.beam_time_increment`` apart in
+    beam order where it is set, else the LMS200's interlaced mirror timing where the scan has an
+    LMS200's shape, else None (no de-skew: the scanner and its clock are unknown). The LMS200's timing
+    was used for every scan: a 1081-beam 270 deg Hokuyo scan at 0.25 deg was de-skewed as four
+    interlaced turns, neighbours 13 ms apart, which bent what it was meant to straighten (ATE
+    0.9 -> 4.3 cm on a simulated run, docs/slam.md). ``alignment`` None: the default config's."""
+    increment = alignment.beam_time_increment if alignment is not None else 0.0
+    return _beam_times(scan.ranges.shape[0], float(scan.angle_increment), increment)
 
 
 @lru_cache(maxsize=8)
-def _beam_times(n_beams: int, angle_increment: float) -> np.ndarray:
-    from lms200.timing import beam_time_offsets
+def _beam_times(n_beams: int, angle_increment: float, increment: float) -> np.ndarray | None:
+    from lms200.timing import beam_time_offsets, lms200_shaped
 
-    return beam_time_offsets(n_beams, angle_increment)
+    if increment > 0:
+        return np.arange(n_beams) * increment
+    return beam_time_offsets(n_beams, angle_increment) if lms200_shaped(n_beams, angle_increment) else None
 
 
 def _segments(fs, config) -> np.ndarray:

@@ -165,3 +165,61 @@ def test_bench_runs_again_into_its_own_folder(tmp_path, monkeypatch, capsys):
     assert main(["bench", "slam", "--out", str(out)]) == 2
     assert "holds bench.csv, which this run would replace but no earlier lmsbench bench run wrote" in capsys.readouterr().err
     assert (out / "bench.csv").read_text() == "region,area\n"
+
+
+@pytest.fixture(scope="module")
+def tables(tmp_path_factory) -> Path:
+    """The smallest tables folder a figure is drawn from: the study's settings and a timing table
+    (Fig. 7 alone, about a second)."""
+    import pandas as pd
+
+    t = tmp_path_factory.mktemp("tables")
+    (t / "study.yaml").write_text(yaml.safe_dump({"world": "office", "seed": 0, "duration": 1.0, "resolved": {"sensor": {}}}))
+    pd.DataFrame({"method": ["sensor"] * 3, "scan": [0, 1, 2], "time_ms": [0.05, 0.04, 0.06]}).to_parquet(
+        t / "timing.parquet", index=False)
+    return t
+
+
+@pytest.mark.parametrize("name", ["fig7_timing.png", "accuracy_speed.csv", "fig3_scan_lines.csv"])
+@pytest.mark.parametrize("study", [[], ["--no-slam", "--duration", "1", "--rate-hz", "2", "--methods", "sensor"]])
+def test_figures_refuses_a_users_file_of_a_figure_name(tables, tmp_path, capsys, name, study):
+    """`figures --out DIR` went by names alone: a user's own fig7_timing.png or accuracy_speed.csv
+    in DIR was written over, exit 0. Now refused before any work, the file kept (redrawing from
+    --tables as computing the study)."""
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    (folder / name).write_bytes(b"\x89PNG my own figure\n")
+    argv = ["figures", *(study or ["--tables", str(tables)]), "--out", str(folder)]
+    _refused(capsys, argv, folder, name, "figures")
+
+
+def test_figures_runs_again_into_its_own_folder_and_a_demos(tables, tmp_path, capsys):
+    """A second `figures` into its own folder replaces its figures (its figures.yaml, written
+    first, tells the folder); so does a folder of a run before figures.yaml (tables/study.yaml),
+    and a demo's figures/ (`figures --tables DEMO/tables --out DEMO/figures`), which the next demo
+    into DEMO still takes as its own. A figures/ folder in a folder the demo did not write is not."""
+    from experiments.options import DEMO_OUTPUTS, DEMO_OWNER, FIGURES_OUTPUTS, FIGURES_OWNER
+
+    own = tmp_path / "own"
+    for _ in range(2):
+        assert main(["figures", "--tables", str(tables), "--out", str(own)]) == 0, capsys.readouterr().err
+    assert yaml.safe_load((own / "figures.yaml").read_text())["command"] == "lmsbench figures"
+    assert sorted(p.name for p in own.iterdir()) == ["fig7_timing.csv", "fig7_timing.pdf", "fig7_timing.png", "figures.yaml"]
+    older = tmp_path / "older"  # a run before figures.yaml: its tables' settings tell it
+    (older / "tables").mkdir(parents=True)
+    (older / "tables" / "study.yaml").write_text((tables / "study.yaml").read_text())
+    (older / "fig7_timing.png").write_bytes(b"old")
+    assert FIGURES_OWNER.foreign(older, FIGURES_OUTPUTS) == []
+    demo = tmp_path / "demo"
+    (demo / "figures").mkdir(parents=True)
+    (demo / "tables").mkdir()
+    (demo / "tables" / "study.yaml").write_text((tables / "study.yaml").read_text())
+    (demo / "figures" / "fig7_timing.png").write_bytes(b"the demo's")
+    assert main(["figures", "--tables", str(tables), "--out", str(demo / "figures")]) == 0, capsys.readouterr().err
+    assert (demo / "figures" / "fig7_timing.png").read_bytes().startswith(b"\x89PNG")
+    assert DEMO_OWNER.foreign(demo, DEMO_OUTPUTS) == [] and DEMO_OUTPUTS.foreign(demo) == []
+    other = tmp_path / "other" / "figures"
+    other.mkdir(parents=True)
+    (other / "fig7_timing.png").write_bytes(b"mine")
+    _refused(capsys, ["figures", "--tables", str(tables), "--out", str(other)], other, "fig7_timing.png", "figures")
+

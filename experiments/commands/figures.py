@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import (DURATION, FIGURES_OUTPUTS, SEED, STUDY_TABLES, InputError, OutTree, check_log, check_methods,
-                                 check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name, text, check_link)
+from experiments.options import (DURATION, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log,
+                                 check_methods, check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name,
+                                 text, check_link)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,7 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from experiments.figures.make import DRIVING_TABLES, draw_figures, draw_sweep
-    from experiments.provenance import new_run_folder
+    from experiments.provenance import new_run_folder, write_record
     from experiments.figures.study import StudyConfig, check_study, load_config, load_tables, run_study, save_tables
 
     writes = FIGURES_OUTPUTS
@@ -41,7 +42,10 @@ def run(args: argparse.Namespace) -> int:
             check_link(path, "--out" if path is args.out else "--tables")
     if args.out is not None and args.tables is not None and args.out.resolve() == args.tables.resolve():
         writes = OutTree(FIGURES_OUTPUTS.files + STUDY_TABLES.files, FIGURES_OUTPUTS.folders)  # the tables it reads
-    check_out(args.out, writes=writes)
+    # a file of its names is replaced only beside its own record (options.FIGURES_OWNER): by names
+    # alone a user's fig3_scan.png or accuracy_speed.csv in --out was written over; --tables: no table is
+    check_out(args.out, writes=writes, owner=FIGURES_OWNER,
+              replaces=FIGURES_OUTPUTS if args.tables is None else OutTree(FIGURES_OUTPUTS.files))
     for folder in args.sweep:
         check_sweep_results(folder)
     study = (("--duration", args.duration), ("--rate-hz", args.rate_hz), ("--seed", args.seed), ("--world", args.world),
@@ -75,9 +79,10 @@ def run(args: argparse.Namespace) -> int:
         cfg.log_options = plain_log_options(read_log_options(args))
         check_study(cfg, hint=", or --no-slam")
         tables, notes = run_study(cfg)
-        args.out = args.out or new_run_folder("results/figures")
-        save_tables(tables, cfg, notes, args.out / "tables")
     args.out = args.out or new_run_folder("results/figures")
+    write_record(args.out / "figures.yaml", _record(args))  # first, whole: a run stopped after it is told as ours
+    if not args.tables:
+        save_tables(tables, cfg, notes, args.out / "tables")
     try:
         written = draw_figures(tables, args.out, signals_k=cfg.signals_k, world=cfg.world)
     except (KeyError, AttributeError) as exc:  # a column or field a figure reads is missing
@@ -99,3 +104,16 @@ def run(args: argparse.Namespace) -> int:
         print(f"note: table {name} is empty: the figures drawn from it are not drawn")
     print(f"wrote {sum(len(p) for p in written.values())} files in {args.out}")
     return 0
+
+
+def _record(args: argparse.Namespace) -> str:
+    """figures.yaml: what drew the figures of its folder (options.FIGURES_OWNER tells the folder by
+    it): a figure and its CSV say nothing of lmsbench, and ``--tables T --out DIR`` writes no table."""
+    import yaml
+
+    from experiments.provenance import versions
+
+    record = {"command": "lmsbench figures", "tables": str(args.tables) if args.tables else "tables (computed by this run)",
+              "sweeps": [str(folder) for folder in args.sweep], "versions": versions()}
+    return ("# what drew the figures in this folder; lmsbench figures --out replaces its files only beside this record\n"
+            + yaml.safe_dump(record, sort_keys=False))

@@ -145,6 +145,18 @@ def _check_input(path: Path) -> None:
         check_log(path)
 
 
+def _not_lms200_shape(records: list) -> str | None:
+    """The first scan shape among ``records`` that no LMS200 takes (``lms200.timing.lms200_shaped``),
+    described ("1081 beams at 0.25 deg over 270 deg"), or None."""
+    from lms200.timing import lms200_shaped
+
+    for n, inc in dict.fromkeys((len(r.scan), float(r.scan.angle_increment)) for r in records):
+        if not lms200_shaped(n, inc):
+            deg = np.degrees(inc)
+            return f"{n} beams at {deg:.4g} deg over {(n - 1) * deg:.4g} deg"
+    return None
+
+
 def run(args: argparse.Namespace) -> int:
     from lms200 import LmsbenchError
 
@@ -191,6 +203,12 @@ def run(args: argparse.Namespace) -> int:
     if simulated_interlaced(args.input) is False and config.preset == "default" and config.alignment.deskew:
         config = deskew_for_sensor(config, interlaced=False)
         print(f"{args.input}: simulated with interlaced=False (every beam from one pose): alignment.deskew off",
+              file=sys.stderr)
+    odd = _not_lms200_shape(data.records) if config.preset == "default" and config.alignment.deskew else None
+    if odd is not None and config.alignment.beam_time_increment == 0:
+        config = deskew_for_sensor(config, interlaced=False)
+        print(f"{data.sources.get('scans', args.input)}: {odd}, which no LMS200 takes: its beam timing is unknown, "
+              "alignment.deskew off (set alignment.beam_time_increment, s between beams, to de-skew it)",
               file=sys.stderr)
     from experiments.progress import warm_up_kernels
 

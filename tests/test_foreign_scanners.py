@@ -1,0 +1,171 @@
+"""Logs of scanners other than the LMS200 (Hokuyo shapes: 1081 beams over 270 deg, 683 over 240 deg).
+
+Found by building such logs from the simulator and running every command on them (session 34):
+SLAM de-skewed every scan with the LMS200's interlaced mirror timing, whatever its shape.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from lms200 import Record, Scan, write_log
+from lms200.timing import beam_time_offsets
+
+UTM_STEP_S = 0.025 / 1440  # s between beams of a Hokuyo UTM-30LX (a 1440-step turn in 25 ms)
+ROOM = np.array([  # walls (x0, y0, x1, y1), m: a room with two boxes, so no pose looks like another
+    (-9, -5, 9, -5), (9, -5, 9, 5), (9, 5, -9, 5), (-9, 5, -9, -5),
+    (2, 1, 3, 1), (3, 1, 3, 2.5), (3, 2.5, 2, 2.5), (2, 2.5, 2, 1),
+    (-4, -2, -3, -2), (-3, -2, -3, -1.2), (-3, -1.2, -4, -1.2), (-4, -1.2, -4, -2),
+], float)
+
+
+def _cast(origins: np.ndarray, headings: np.ndarray) -> np.ndarray:
+    """Exact ranges (m) of rays from (n, 2) origins along (n,) headings to the nearest wall of ROOM."""
+    d = np.column_stack((np.cos(headings), np.sin(headings)))[:, None, :]
+    a, e = ROOM[None, :, :2], (ROOM[:, 2:] - ROOM[:, :2])[None]
+    w = a - origins[:, None, :]
+    den = d[..., 0] * e[..., 1] - d[..., 1] * e[..., 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[..., 0] * e[..., 1] - w[..., 1] * e[..., 0]) / den
+        u = (w[..., 0] * d[..., 1] - w[..., 1] * d[..., 0]) / den
+    t = np.where((t > 0) & (u >= 0) & (u <= 1) & np.isfinite(t), t, np.inf)
+    return t.min(axis=1)
+
+
+def _pose(t: np.ndarray) -> np.ndarray:
+    """(n, 3) a circle of 1.2 m radius about (0, -0.5) at 1 rad/s, heading along it."""
+    phi = 1.0 * t
+    return np.column_stack((1.2 * np.cos(phi), -0.5 + 1.2 * np.sin(phi), phi + math.pi / 2))
+
+
+def hokuyo_run(n: int = 1081, res_deg: float = 0.25, scans: int = 60, rate_hz: float = 10.0,
+               step_s: float = UTM_STEP_S, noise: float = 0.005) -> list[Record]:
+    """A Hokuyo-like run: beams swept in beam order ``step_s`` apart from the moving robot, ``noise`` m
+    of range noise, 1 mm steps."""
+    rng = np.random.default_rng(0)
+    res = math.radians(res_deg)
+    start = -(n - 1) / 2 * res
+    records = []
+    for k in range(scans):
+        t0 = k / rate_hz
+        poses = _pose(t0 + np.arange(n) * step_s)
+        r = _cast(poses[:, :2], poses[:, 2] + start + np.arange(n) * res)
+        r = np.round(r + rng.normal(0, noise, n), 3)
+        p = tuple(float(v) for v in _pose(np.array([t0]))[0])
+        records.append(Record(Scan(r, start, res, 0.0, 30.0, t0), odom=p, truth=p))
+    return records
+
+
+def test_only_lms200_shaped_scans_are_lms200_shaped():
+    from lms200.timing import lms200_shaped
+
+    d = math.radians
+    for n, res in ((361, 0.5), (360, 0.5), (181, 1.0), (180, 1.0), (721, 0.25), (401, 0.25), (101, 1.0)):
+        assert lms200_shaped(n, d(res)), (n, res)
+    assert lms200_shaped(361, 0.008727)  # the CSAIL ROBOTLASER1 log's 6-decimal step
+    for n, res in ((1081, 0.25), (769, 360 / 1024), (683, 360 / 1024), (726, 360 / 1024), (362, 0.5), (182, 1.0),
+                   (360, 1.0), (541, 0.5), (1440, 0.25)):
+        assert not lms200_shaped(n, d(res)), (n, res)
+
+
+def test_deskew_times_follow_the_scan_shape():
+    from slam.scanslam import _offsets
+    from slam import SlamConfig
+
+    al = SlamConfig().alignment
+    lms = Scan.lms200(np.full(361, 3.0))
+    np.testing.assert_array_equal(_offsets(lms, al), beam_time_offsets(361, lms.angle_increment))
+    assert _offsets(lms, al)[1] == pytest.approx(1 / 75 + 0.5 / 360 / 75)  # the odd beams: the second turn
+    hokuyo = hokuyo_run(scans=1)[0].scan
+    assert _offsets(hokuyo, al) is None  # was the LMS200's: beam 1 at 13.3 ms, the last at 50 ms
+    given = SlamConfig.from_dict({"alignment": {"beam_time_increment": UTM_STEP_S}}).alignment
+    times = _offsets(hokuyo, given)
+    assert times[1] == pytest.approx(UTM_STEP_S) and times[-1] == pytest.approx(1080 * UTM_STEP_S)
+
+
+def _wall_scatter(points: np.ndarray) -> float:
+    """RMS distance (m) of the points on the far wall x = 9 m of ROOM (world frame) from their own fitted line."""
+    pts = points[np.isfinite(points).all(axis=1)]
+    c = pts - pts.mean(axis=0)
+    return float(np.sqrt(np.linalg.eigvalsh(c.T @ c / len(c))[0]))
+
+
+def test_deskew_of_a_hokuyo_scan_keeps_a_wall_straight():
+    """One noise-free UTM-30LX scan taken while turning at 1 rad/s (1.2 m/s ahead), de-skewed with the
+    true twist by ScanSlam.deskew and the times ``_offsets`` gives: the far wall's points stay on a
+    line. With the LMS200's interlaced times (the old default) neighbours 13-40 ms apart were moved
+    apart by the turn: a zigzag of 34 mm RMS about the wall."""
+    from slam import SlamConfig
+    from slam.scanslam import ScanSlam, _offsets
+
+    rec = hokuyo_run(scans=1, noise=0.0)[0]
+    scan = rec.scan
+    x, y, th = rec.truth
+    twist = np.array([1.2, 0.0, 1.0])  # the circle's v (m/s, sensor x) and w (rad/s)
+
+    class Moving:
+        def velocity(self) -> np.ndarray:
+            return twist
+
+    def on_wall(offsets):
+        pts = scan.points if offsets is None else ScanSlam.deskew(Moving(), scan.points, offsets)  # type: ignore[arg-type]
+        c, s = math.cos(th), math.sin(th)
+        world = np.column_stack((x + c * pts[:, 0] - s * pts[:, 1], y + s * pts[:, 0] + c * pts[:, 1]))
+        return world[(np.abs(world[:, 0] - 9.0) < 0.5) & (np.abs(world[:, 1]) < 4.0)]  # corners left out
+
+    al = SlamConfig().alignment
+    timed = SlamConfig.from_dict({"alignment": {"beam_time_increment": UTM_STEP_S}}).alignment
+    assert len(on_wall(None)) == 216
+    assert _wall_scatter(on_wall(beam_time_offsets(len(scan), scan.angle_increment))) > 0.03  # the old timing: 34 mm
+    assert _offsets(scan, al) is None and _wall_scatter(on_wall(None)) < 0.003  # not de-skewed: 2.2 mm (a slight bend)
+    assert _wall_scatter(on_wall(_offsets(scan, timed))) < 0.0005  # the scanner's own timing: 0.3 mm (1 mm steps)
+
+
+def test_slam_command_says_it_does_not_deskew_a_hokuyo_log(tmp_path, capsys):
+    from experiments.cli import main
+    from lms200.yamlio import load
+
+    log = tmp_path / "utm.log"
+    write_log(log, hokuyo_run(scans=12))
+    out = tmp_path / "run"
+    assert main(["slam", str(log), "--out", str(out), "--quiet", "--no-paper-baseline"]) == 0
+    err = capsys.readouterr().err
+    assert (f"{log}: 1081 beams at 0.25 deg over 270 deg, which no LMS200 takes: its beam timing is unknown, "
+            "alignment.deskew off") in err
+    alignment = load((out / "config.yaml").read_text())["slam"]["alignment"]
+    assert alignment["deskew"] is False and alignment["beam_time_increment"] == 0.0  # the config that ran
+    out2 = tmp_path / "timed"
+    (tmp_path / "timed.yaml").write_text(f"alignment:\n  beam_time_increment: {UTM_STEP_S!r}\n")
+    assert main(["slam", str(log), "--out", str(out2), "--quiet", "--no-paper-baseline",
+                 "--config", str(tmp_path / "timed.yaml")]) == 0
+    assert "no LMS200" not in capsys.readouterr().err
+    assert load((out2 / "config.yaml").read_text())["slam"]["alignment"]["deskew"] is True
+
+
+def test_beam_time_increment_is_bounded(tmp_path):
+    from slam import SlamConfig
+    from slam.config import SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=r"alignment.beam_time_increment: must be in \[0, 0.01\] s"):
+        SlamConfig.from_dict({"alignment": {"beam_time_increment": 1.0}})
+    with pytest.raises(SlamConfigError, match=r"alignment.beam_time_increment: must be >= 0"):
+        SlamConfig.from_dict({"alignment": {"beam_time_increment": -1e-5}})
+
+
+def test_calibrate_and_sim2real_refuse_a_270_deg_log_in_one_line(tmp_path, capsys):
+    """calibrate measured a 1081-beam 270 deg log and wrote a 721-beam 180 deg sensor (``n_beams``
+    cut, silently), which sim2real then simulated against the log's 270 deg scans."""
+    from experiments.cli import main
+
+    log = tmp_path / "utm.log"
+    write_log(log, hokuyo_run(scans=8))
+    expected = (f"{log}: its scans hold 1081 beams at 0.25 deg, 270 deg from first to last: the LMS200 model spans "
+                "at most 180 deg (721 beams at 0.25 deg); calibrate and sim2real cannot model this scanner")
+    assert main(["calibrate", str(log), "--out", str(tmp_path / "sensor.yaml")]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [f"lmsbench calibrate: error: {expected}"]
+    assert not (tmp_path / "sensor.yaml").exists()
+    assert main(["sim2real", str(log), "--seeds", "0", "--duration", "2", "--out", str(tmp_path / "s2r")]) == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1] == f"lmsbench sim2real: error: {expected}"
