@@ -476,24 +476,55 @@ class LMS200:
         self._set_mode(MODE_ON_REQUEST, "leave installation mode (0x20 0x25)")
 
     def _switch_baud(self, baud: int) -> None:
+        """Switch the device and then the host to ``baud``, attempt by attempt (``retries``).
+
+        The device answers a baud change at the old baud and then switches, so when its 0xA0 reply
+        is lost it is at the new baud already, and a request sent again at the old baud can only
+        time out (garbled): each such attempt cost ``mode_timeout`` (two of them, 7 s, before the
+        new baud was checked). So after an attempt without a reply the new baud is checked at once
+        (a type request; a NAK read there counts too: from a device at another baud a NAK arrives
+        garbled), and the switch is sent again at the old baud only when nothing answers there."""
         if baud == self.baud:
             return
         what = f"switch from {self.baud} to {baud} baud (0x20 0x{BAUD_MODES[baud]:02X})"
         old = self.baud
-        try:
-            reply = self._request(baud_request(baud), what, timeout=self.mode_timeout)
-        except LmsTimeoutError:
-            # The device may have switched but its 0xA0 got lost: ask again at the new baud.
-            self._use_baud(baud)
+        seen: list[str] = []
+        budget = ""
+        for attempt in range(self.retries):
+            if attempt:
+                self._retries += 1
             try:
-                self._request(type_request(), f"{what}: check at {baud} baud", retries=1)
-                return
-            except LmsTimeoutError:
+                reply = self._request(baud_request(baud), what, timeout=self.mode_timeout, retries=1)
+            except LmsNakError:
+                seen.append("NAK")
+                continue
+            except LmsTimeoutError as exc:
+                budget = str(exc).split(" on ", 1)[0].rsplit("within ", 1)[-1]
+                self._use_baud(baud)
+                if self._answers(f"{what}: check at {baud} baud"):
+                    return
                 self._use_baud(old)
-                raise
-        if len(reply.payload) < 2 or reply.payload[1] != 0:
-            raise LmsModeRefusedError(f"{what}: the device refused (0xA0 reply {reply.payload.hex(' ')})")
-        self._use_baud(baud)
+                seen.append(f"{str(exc).rsplit('attempt 1: ', 1)[-1]}, and nothing at {baud} baud")
+                continue
+            if len(reply.payload) < 2 or reply.payload[1] != 0:
+                raise LmsModeRefusedError(f"{what}: the device refused (0xA0 reply {reply.payload.hex(' ')})")
+            self._use_baud(baud)
+            return
+        summary = "; ".join(f"attempt {i + 1}: {s}" for i, s in enumerate(seen))
+        telegram = build_frame(baud_request(baud), self.address).hex(" ")
+        if seen[-1] == "NAK":
+            raise LmsNakError(f"{what}: sent {telegram} on {self.port} at {self.baud} baud; {summary}")
+        raise LmsTimeoutError(f"{what}: no 0xA0 reply within {budget} on {self.port} at {self.baud} baud; {summary}")
+
+    def _answers(self, what: str) -> bool:
+        """Whether the device answers a type request at the current baud (a reply or a NAK)."""
+        try:
+            self._request(type_request(), what, retries=1)
+        except LmsNakError:
+            return True
+        except LmsTimeoutError:
+            return False
+        return True
 
     # -- data ----------------------------------------------------------------------------------
     def scans(self, stall_timeout: float | None = None, stop: Callable[[], bool] | None = None) -> Iterator[Scan]:

@@ -795,3 +795,40 @@ def test_a_nak_right_behind_a_scan_with_a_corrupted_byte_is_resent_at_once(monke
     lms.close()
     assert sum(w[4:6] == b"\x20\x25" for w in port.writes) == 3  # once at opening, twice at close
     assert (lms.stats.retries, lms.stats.timeouts, lms.parser.stats.naks) == (1, 0, 1)  # old: (1, 1, 0)
+
+
+def test_a_lost_baud_change_reply_is_checked_at_the_new_baud_after_one_attempt(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Seeded fault runs (tests/lms200_sim_port.py, no NAK sent, 120 runs): 6 of the 12 timeouts
+    were two baud switches whose 0xA0 reply was lost. The device had switched; the driver sent the
+    switch twice more at the old baud (garbled at the device), each waiting out mode_timeout,
+    before it checked the new baud: 3 timeouts (10.5 s). Now it checks after the first."""
+    from lms200_sim_port import sim_port
+
+    dev = LosesOneBaudReply(source(), units="mm")
+    port = sim_port(monkeypatch, dev)
+    lms = LMS200("sim://", baud=38400)
+    assert dev.lost and (dev.baud, lms.baud) == (38400, 38400)
+    assert sum(w[4:5] == b"\x20" and w[5] == 0x40 for w in port.writes) == 1  # old: 3
+    assert (lms.stats.timeouts, lms.stats.retries) == (1, 0)  # old: (3, 2)
+    lms.close()
+    assert dev.baud == 9600 and lms.stats.timeouts == 1
+
+
+def test_a_baud_switch_that_never_takes_raises_naming_every_attempt(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A device that ignores the baud change: each attempt is checked at the new baud, the host
+    returns to the old one, and the error names the attempts."""
+    from lms200_sim_port import sim_port
+
+    class IgnoresBaud(VirtualLMS200):
+        def _mode(self, data: bytes, t_reply: float) -> None:
+            from lms200.protocol import MODE_BAUDS
+
+            if data[0] not in MODE_BAUDS:
+                super()._mode(data, t_reply)
+
+    dev = IgnoresBaud(source(), units="mm")
+    sim_port(monkeypatch, dev)
+    with pytest.raises(LmsTimeoutError, match=r"switch from 9600 to 38400 baud \(0x20 0x40\): no 0xA0 reply within 3\.5\d s "
+                       r"on sim:// at 9600 baud; attempt 1: ACK, then no reply, and nothing at 38400 baud; attempt 2: .*attempt 3: "):
+        LMS200("sim://", baud=38400, retries=3)
+    assert dev.baud == 9600
