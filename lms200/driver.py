@@ -187,6 +187,8 @@ class LMS200:
         self._retries = 0
         self._timeouts = 0
         self._last_rx = time.monotonic()
+        self._unanswered = 0  # attempts written whose answer (NAK, or the reply) was not read: see _no_answer_due
+        self._last_write = -math.inf
         self._backlog: list = []  # events read past a reply, handed out by the next _pump
         # (stream offset after a read, host time when the read returned), the newest reads
         self._reads: deque[tuple[int, float]] = deque(maxlen=_READS_KEPT)
@@ -243,6 +245,17 @@ class LMS200:
         if hides_frame:
             return max(_FALSE_START_GAP_S, frame_seconds(20, self.baud))
         return self.timeout + frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
+
+    def _no_answer_due(self) -> bool:
+        """Whether, in on-request mode, no telegram of the device can be on its way: every request
+        written was answered (a NAK, or its reply), none was written for longer than the longest
+        answer may take (``mode_timeout`` plus the line time of the longest telegram), or nothing
+        has arrived for 0.1 s (a device sends a telegram without gaps; as ``_idle_gap(True)``). The
+        device sends nothing unasked, so bytes held back then are garbage, and the first byte of
+        the answer to the next request is its handshake."""
+        now = time.monotonic()
+        longest = self.mode_timeout + frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
+        return self._unanswered == 0 or now - self._last_write > longest or now - self._last_rx > self._idle_gap(True)
 
     def _link_lost(self, exc: BaseException) -> LmsLinkError:
         """The error for a port that failed mid-use (pyserial's SerialException / OSError escaped
@@ -363,11 +376,19 @@ class LMS200:
             self.parser.awaiting_reply = True  # until the first handshake: the answer's
             try:
                 if not self._ser.in_waiting:
+                    if not self.streaming and self.parser.pending and self._no_answer_due():
+                        # On-request mode, every request answered (or nothing sent for 0.1 s): the
+                        # bytes held back are no telegram on its way but garbage, which held the NAK
+                        # to this request back (behind a stray 02 80 until the line had been quiet
+                        # for timeout + a telegram's line time; behind > 3 stray bytes for good).
+                        self._backlog += [ev for ev in self.parser.idle() if isinstance(ev, Frame)]
                     self.parser.request_sent(streaming=self.streaming)
                 self._ser.write(telegram)
                 self._ser.flush()
             except (serial.SerialException, OSError) as exc:
                 raise self._link_lost(exc) from None
+            self._unanswered += 1
+            self._last_write = time.monotonic()
             self._doing = f"{what}: waiting for the reply"
             deadline = time.monotonic() + budget
             acked = naked = False
@@ -379,9 +400,11 @@ class LMS200:
                         acked = True
                     elif ev == NAK and not acked:
                         naked = True
+                        self._unanswered = max(0, self._unanswered - 1)
                     elif isinstance(ev, Frame):
                         if ev.code == expected:
                             self._backlog = events[i + 1 :] + self._backlog
+                            self._unanswered = max(0, self._unanswered - 1)
                             return ev
                         if ev.code == REPLY_BAD_COMMAND:
                             raise LmsProtocolError(f"{what}: the device answered 0x92 (incorrect command) to {telegram.hex(' ')}")
@@ -453,24 +476,55 @@ class LMS200:
         self._set_mode(MODE_ON_REQUEST, "leave installation mode (0x20 0x25)")
 
     def _switch_baud(self, baud: int) -> None:
+        """Switch the device and then the host to ``baud``, attempt by attempt (``retries``).
+
+        The device answers a baud change at the old baud and then switches, so when its 0xA0 reply
+        is lost it is at the new baud already, and a request sent again at the old baud can only
+        time out (garbled): each such attempt cost ``mode_timeout`` (two of them, 7 s, before the
+        new baud was checked). So after an attempt without a reply the new baud is checked at once
+        (a type request; a NAK read there counts too: from a device at another baud a NAK arrives
+        garbled), and the switch is sent again at the old baud only when nothing answers there."""
         if baud == self.baud:
             return
         what = f"switch from {self.baud} to {baud} baud (0x20 0x{BAUD_MODES[baud]:02X})"
         old = self.baud
-        try:
-            reply = self._request(baud_request(baud), what, timeout=self.mode_timeout)
-        except LmsTimeoutError:
-            # The device may have switched but its 0xA0 got lost: ask again at the new baud.
-            self._use_baud(baud)
+        seen: list[str] = []
+        budget = ""
+        for attempt in range(self.retries):
+            if attempt:
+                self._retries += 1
             try:
-                self._request(type_request(), f"{what}: check at {baud} baud", retries=1)
-                return
-            except LmsTimeoutError:
+                reply = self._request(baud_request(baud), what, timeout=self.mode_timeout, retries=1)
+            except LmsNakError:
+                seen.append("NAK")
+                continue
+            except LmsTimeoutError as exc:
+                budget = str(exc).split(" on ", 1)[0].rsplit("within ", 1)[-1]
+                self._use_baud(baud)
+                if self._answers(f"{what}: check at {baud} baud"):
+                    return
                 self._use_baud(old)
-                raise
-        if len(reply.payload) < 2 or reply.payload[1] != 0:
-            raise LmsModeRefusedError(f"{what}: the device refused (0xA0 reply {reply.payload.hex(' ')})")
-        self._use_baud(baud)
+                seen.append(f"{str(exc).rsplit('attempt 1: ', 1)[-1]}, and nothing at {baud} baud")
+                continue
+            if len(reply.payload) < 2 or reply.payload[1] != 0:
+                raise LmsModeRefusedError(f"{what}: the device refused (0xA0 reply {reply.payload.hex(' ')})")
+            self._use_baud(baud)
+            return
+        summary = "; ".join(f"attempt {i + 1}: {s}" for i, s in enumerate(seen))
+        telegram = build_frame(baud_request(baud), self.address).hex(" ")
+        if seen[-1] == "NAK":
+            raise LmsNakError(f"{what}: sent {telegram} on {self.port} at {self.baud} baud; {summary}")
+        raise LmsTimeoutError(f"{what}: no 0xA0 reply within {budget} on {self.port} at {self.baud} baud; {summary}")
+
+    def _answers(self, what: str) -> bool:
+        """Whether the device answers a type request at the current baud (a reply or a NAK)."""
+        try:
+            self._request(type_request(), what, retries=1)
+        except LmsNakError:
+            return True
+        except LmsTimeoutError:
+            return False
+        return True
 
     # -- data ----------------------------------------------------------------------------------
     def scans(self, stall_timeout: float | None = None, stop: Callable[[], bool] | None = None) -> Iterator[Scan]:

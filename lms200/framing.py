@@ -26,6 +26,11 @@ from typing import Union
 from .errors import InputError
 from .protocol import ACK, MAX_LEN, NAK, OVERHEAD_BYTES, REPLY_FLAG, STX, crc16
 
+HEAD_BYTES = 5
+"""STX, address, LEN (2 bytes) and code: a failed telegram that begins with the same bytes as the
+last good frame, where the stream was in step, is taken to be a telegram of that length (see
+:meth:`FrameParser._garbage`)."""
+
 MAX_STRAY = 3
 """Bytes skipped since the stream was last in step that still let a request written while
 streaming put it back in step (:meth:`FrameParser.request_sent`): fewer than a telegram's 4 header
@@ -98,6 +103,8 @@ class FrameParser:
         self._base = 0  # stream offset of the first byte held back
         self._shadow = 0  # held-back bytes that are the rest of a telegram with a bad CRC
         self._shadow_open = 0  # that telegram may have lost bytes: 1, and its last byte may be a handshake: 2
+        self._shadow_like = False  # that telegram began like the last good frame: its length is known (see _garbage)
+        self._head = b""  # the first HEAD_BYTES bytes of the last good frame
         self._in_step = True  # the next byte is where a handshake may come (not amid a resynchronisation)
         self._stale = 0  # held-back bytes received before a request in on-request mode (see request_sent)
         self._mark = 0  # stats.skipped_bytes when the stream was last put in step (a frame, a handshake, ...)
@@ -123,6 +130,7 @@ class FrameParser:
         self._buf.clear()
         self._shadow = 0
         self._shadow_open = 0
+        self._shadow_like = False
         self._in_step = True
         self._stale = 0
         self._mark = self.stats.skipped_bytes
@@ -157,7 +165,7 @@ class FrameParser:
         if streaming and self.stats.skipped_bytes - self._mark > MAX_STRAY:
             return
         self._stale = held
-        self._shadow, self._shadow_open, self._in_step = 0, 0, True  # _mark stays: a request is no sign of step
+        self._shadow, self._shadow_open, self._shadow_like, self._in_step = 0, 0, False, True  # _mark stays: a request is no sign of step
 
     def feed(self, data: bytes) -> list[Event]:
         """Add received bytes; returns the complete frames and handshake bytes, in stream order.
@@ -204,7 +212,7 @@ class FrameParser:
         return [e for e in self.feed(data) if isinstance(e, Frame)]
 
     # -----------------------------------------------------------------------------------------
-    def _garbage(self, events: list[Event], garbage: bytes, shadowed: int = 0, open_end: int = 0) -> None:
+    def _garbage(self, events: list[Event], garbage: bytes, shadowed: int = 0, open_end: int = 0, like: bool = False) -> None:
         """Account for bytes outside frames (a run that ends where a frame candidate starts, or at
         the end of what has arrived).
 
@@ -221,6 +229,14 @@ class FrameParser:
         missed costs a timeout. With a corrupted telegram's last byte 0x06 / 0x15 in 1 of 128,
         the exception made most of the fake handshakes left while streaming.
 
+        A telegram that failed its CRC (``like``) but began where the stream was in step with the
+        same :data:`HEAD_BYTES` bytes as the last good frame has its LEN right, and a telegram loses
+        bytes but never gains any: it ends at its LEN or before. While a request waits for its
+        handshake, the byte right after that end (``garbage[shadowed]``, carried to the next feed
+        when it has not come yet) is the handshake if it is 0x06 / 0x15; had bytes been lost, that
+        position would hold the next telegram's header. A NAK right behind a scan with a
+        corrupted byte was garbage (its CRC low byte wrong too) and cost the request's timeout.
+
         The other bytes are handshakes only when the stream is in step before them and they are
         all 0x06 / 0x15 (a reply byte comes alone, then a frame or nothing). Anything else is
         garbage, 0x06 / 0x15 included, and puts the stream out of step until the next good frame:
@@ -234,6 +250,8 @@ class FrameParser:
         handshakes = b""
         if span and open_end == 2 and shadowed == n and garbage[-1] in (ACK, NAK):
             span, handshakes, self._in_step = n - 1, garbage[-1:], True
+        elif like and open_end == 2 and self.awaiting_reply and 0 <= shadowed < n and garbage[shadowed] in (ACK, NAK):
+            span, handshakes, self._in_step = shadowed, garbage[shadowed : shadowed + 1], True
         elif span:
             self._in_step = shadowed <= n and not open_end  # after a whole telegram with only a bad CRC
         rest = garbage[span + len(handshakes):]
@@ -262,6 +280,7 @@ class FrameParser:
         stats = self.stats
         shadow = self._shadow  # bytes before this index belong to a telegram that failed its CRC
         open_end = self._shadow_open
+        like = self._shadow_like  # that telegram began like the last good frame (its span ends at `shadow`)
         stale = self._stale  # bytes before this index came before a request (on-request mode)
 
         def run(pos: int, stop: int) -> None:
@@ -275,7 +294,7 @@ class FrameParser:
                 stats.skipped_bytes += stale - pos
                 pos, stale = stale, 0
                 self._in_step = True
-            self._garbage(events, bytes(buf[pos:stop]), shadow - pos, open_end)
+            self._garbage(events, bytes(buf[pos:stop]), shadow - pos, open_end, like and shadow >= pos)
         while True:
             start = buf.find(sync, pos)
             if start < 0:
@@ -300,12 +319,13 @@ class FrameParser:
                 else:
                     verdict = "good"
             if verdict == "good" and start < shadow:
-                shadow = pos  # a good frame inside the failed one: that was a false start, not a telegram
+                shadow, like = pos, False  # a good frame inside the failed one: that was a false start, not a telegram
             run(pos, start)
             pos = start
             if verdict is None:
                 break
             if verdict == "good":
+                self._head = bytes(buf[start : start + HEAD_BYTES])
                 events.append(Frame(buf[start + 1], bytes(buf[start + 4 : end - 2]), self._base + end))
                 stats.frames += 1
                 pos = end
@@ -322,6 +342,10 @@ class FrameParser:
                     open_end = 0
                     if crc16(bytes(buf[start : end - 2])) & 0xFF != buf[end - 2]:
                         open_end = 1 if self.awaiting_reply is False else 2
+                    # begun where the stream was in step (or where the last such telegram's span ended), like
+                    # the last good frame: a telegram of known length
+                    in_step = self._in_step or (like and start == shadow)
+                    like = in_step and bytes(buf[start : start + HEAD_BYTES]) == self._head
                     shadow = end
             elif verdict == "bad_length":
                 stats.bad_length += 1
@@ -334,7 +358,9 @@ class FrameParser:
             stale, self._in_step = 0, True
         self._stale = stale - pos if stale else 0
         self._shadow = max(0, shadow - pos)
-        self._shadow_open = open_end if self._shadow > 0 else 0
+        like = like and shadow >= pos  # the telegram's span ends here or further on: the byte after it is still to come
+        self._shadow_like = like
+        self._shadow_open = open_end if self._shadow > 0 or like else 0
         del buf[:pos]
         self._base += pos
         return events

@@ -730,3 +730,105 @@ def test_a_host_that_pauses_mid_stream_loses_no_byte_of_a_scaled_device() -> Non
     assert (lms.stats.scans, lms.stats.dropped_frames, lms.stats.skipped_bytes) == (40, 0, 0)
     for g, s in zip(got, sent):
         np.testing.assert_array_equal(codes(g.ranges), codes(s.ranges))
+
+
+@pytest.mark.parametrize("stray", [b"\x02\x80\xff\x01", b"\x33\x44\x55\x66\x02"], ids=["false start 02 80", "4 stray bytes and an STX"])
+def test_a_nak_behind_stray_bytes_after_an_answered_request_is_resent_at_once(monkeypatch: pytest.MonkeyPatch,
+                                                                               stray: bytes) -> None:
+    """Left open by session 33: on-request mode, stray bytes after the variant reply (a false start
+    02 80 with LEN 511, or 4 stray bytes and an STX) are held back when the configuration request
+    is written; the device NAKs it. The NAK was held behind the false start (until the line had
+    been quiet for timeout + a telegram's line time), or was garbage behind more than MAX_STRAY = 3
+    stray bytes: the driver waited out its timeout (timeouts 1, naks 0). The device sends nothing
+    unasked and every request so far was answered, so no telegram is on its way: the held bytes
+    are garbage, and the first byte after the request is its handshake."""
+    from lms200_fake_port import answer, fake_port, reply
+
+    plan = {"config": 0}
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload[0] == 0x3B:  # the variant reply, and the stray bytes in the same read
+            body = b"\xbb\x01" + payload[1:5] + b"\x10"
+            return [(0.002, b"\x06"), (0.010, reply(body) + stray)]
+        if payload[0] == 0x74:
+            plan["config"] += 1
+            if plan["config"] == 1:
+                return [(0.002, b"\x15")]
+        return answer(payload)
+
+    port = fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False)
+    assert sum(w[4] == 0x74 for w in port.writes) == 2
+    assert (lms.stats.retries, lms.stats.timeouts, lms.parser.stats.naks) == (1, 0, 1)  # old: (1, 1, 0)
+    lms.close()
+
+
+def test_a_nak_right_behind_a_scan_with_a_corrupted_byte_is_resent_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Streaming, close(): the device NAKs the stop request right behind the scan telegram in
+    flight, which has one data byte corrupted (no byte lost). With its CRC low byte wrong, the
+    telegram may have lost bytes, so the parser did not trust its end and the NAK was garbage:
+    close() waited out its timeout (timeouts 1, naks 0). A telegram loses bytes but never gains
+    any: one that began like the last good scan (02 80 D6 02 B0) where the stream was in step ends
+    at its LEN or before, and the byte right after that end is the handshake while a request waits
+    for one (had bytes been lost, that byte would be one of the next telegram's header)."""
+    from lms200_fake_port import answer, fake_port, scan_frame
+
+    from lms200.protocol import crc16
+
+    broken = bytearray(scan_frame(1500))
+    broken[300] ^= 0x40
+    assert crc16(bytes(broken[:-2])) & 0xFF != broken[-2]  # the CRC low byte is wrong too
+    plan = {"stop": 0}
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":
+            return [*answer(payload), (0.02, scan_frame(1234))]
+        if payload == b"\x20\x25":
+            plan["stop"] += 1
+            if plan["stop"] == 2:  # close()'s first stop request: the scan in flight, the NAK, the next scan
+                return [(0.0, bytes(broken[:200])), (0.001, bytes(broken[200:]) + b"\x15" + scan_frame(1501))]
+        return answer(payload)
+
+    port = fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False, mode_timeout=1.0)
+    assert [int(round(s.ranges[0] * 1000)) for s in itertools.islice(lms.scans(), 1)] == [1234]
+    lms.close()
+    assert sum(w[4:6] == b"\x20\x25" for w in port.writes) == 3  # once at opening, twice at close
+    assert (lms.stats.retries, lms.stats.timeouts, lms.parser.stats.naks) == (1, 0, 1)  # old: (1, 1, 0)
+
+
+def test_a_lost_baud_change_reply_is_checked_at_the_new_baud_after_one_attempt(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Seeded fault runs (tests/lms200_sim_port.py, no NAK sent, 120 runs): 6 of the 12 timeouts
+    were two baud switches whose 0xA0 reply was lost. The device had switched; the driver sent the
+    switch twice more at the old baud (garbled at the device), each waiting out mode_timeout,
+    before it checked the new baud: 3 timeouts (10.5 s). Now it checks after the first."""
+    from lms200_sim_port import sim_port
+
+    dev = LosesOneBaudReply(source(), units="mm")
+    port = sim_port(monkeypatch, dev)
+    lms = LMS200("sim://", baud=38400)
+    assert dev.lost and (dev.baud, lms.baud) == (38400, 38400)
+    assert sum(w[4:5] == b"\x20" and w[5] == 0x40 for w in port.writes) == 1  # old: 3
+    assert (lms.stats.timeouts, lms.stats.retries) == (1, 0)  # old: (3, 2)
+    lms.close()
+    assert dev.baud == 9600 and lms.stats.timeouts == 1
+
+
+def test_a_baud_switch_that_never_takes_raises_naming_every_attempt(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A device that ignores the baud change: each attempt is checked at the new baud, the host
+    returns to the old one, and the error names the attempts."""
+    from lms200_sim_port import sim_port
+
+    class IgnoresBaud(VirtualLMS200):
+        def _mode(self, data: bytes, t_reply: float) -> None:
+            from lms200.protocol import MODE_BAUDS
+
+            if data[0] not in MODE_BAUDS:
+                super()._mode(data, t_reply)
+
+    dev = IgnoresBaud(source(), units="mm")
+    sim_port(monkeypatch, dev)
+    with pytest.raises(LmsTimeoutError, match=r"switch from 9600 to 38400 baud \(0x20 0x40\): no 0xA0 reply within 3\.5\d s "
+                       r"on sim:// at 9600 baud; attempt 1: ACK, then no reply, and nothing at 38400 baud; attempt 2: .*attempt 3: "):
+        LMS200("sim://", baud=38400, retries=3)
+    assert dev.baud == 9600

@@ -384,3 +384,34 @@ def test_the_last_byte_of_a_telegram_that_may_have_lost_one_is_a_nak_only_while_
     p.awaiting_reply = True
     assert p.feed(bytes([ACK]) + goods[0] + victim + goods[1])[:1] == [ACK]  # the answer's handshake
     assert (p.awaiting_reply, p.stats.acks, p.stats.naks) == (False, 1, 0)  # 9b86e73: (1, 1)
+
+
+def test_the_byte_right_after_a_broken_scan_of_known_length_is_the_handshake_only_there() -> None:
+    """While a request waits for its handshake, a scan that failed its CRC but began in step with
+    the last good scan's 5 header bytes ends at its LEN or before: the byte right after that end is
+    the handshake (0x15 there: a NAK; old: garbage, the CRC low byte being wrong too). Not where
+    the header differs (LEN hit: its end is unknown), not for the byte after that one, and not
+    while no request waits."""
+    from lms200.protocol import crc16
+
+    good = _scan_telegram(5)
+    broken = bytearray(_scan_telegram(6))
+    broken[300] ^= 0x40
+    assert crc16(bytes(broken[:-2])) & 0xFF != broken[-2]
+    len_hit = bytearray(broken)
+    len_hit[2] ^= 0x01  # LEN 0x2D7: its span takes one more byte
+
+    def naks(stream: bytes, awaiting: bool | None, chunk: int = 4096) -> int:
+        p = FrameParser()
+        p.feed(good)
+        p.awaiting_reply = awaiting
+        for i in range(0, len(stream), chunk):
+            p.feed(stream[i : i + chunk])
+        return p.stats.naks
+
+    after = bytes(broken) + b"\x15" + _scan_telegram(7)
+    assert [naks(after, True, c) for c in (4096, 7, 1)] == [1, 1, 1]  # old: [0, 0, 0]
+    assert naks(after, False) == 0 and naks(after, None) == 0
+    assert naks(bytes(len_hit) + b"\x33\x15" + _scan_telegram(7), True) == 0
+    assert naks(bytes(broken) + b"\x33\x15" + _scan_telegram(7), True) == 0
+    assert naks(bytes(broken) + b"\x15\x33" + _scan_telegram(7), True) == 1  # pinned by the length, garbage after it
