@@ -470,7 +470,9 @@ class Owner:
     """How a command tells, from the content of what it left, that an earlier run of it wrote the
     files of its output names in a folder: ``records`` maps a file name to a recogniser of its
     content; every other output file (a TUM file, a figure, a table) counts as the earlier run's
-    only when one of the records beside it (in the folder given as --out) is recognised. ``within`` names
+    only when one of the records beside it (in the folder given as --out) is recognised. Each
+    command writes one record first, whole (``experiments.provenance.write_record``), so a run
+    stopped before its other outputs leaves a folder the next run recognises. ``within`` names
     the sub-folder (by name) that another command's folder gives this one: a demo's ``figures/``,
     which ``figures --tables DEMO/tables --out DEMO/figures`` redraws, is the figures' own
     wherever the demo's records tell DEMO as the demo's."""

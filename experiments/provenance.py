@@ -52,10 +52,11 @@ def new_run_folder(base: str | os.PathLike, now: datetime.datetime | None = None
 def write_record(path: str | os.PathLike, content: str | Callable[[Path], object]) -> Path:
     """Write a file whole or not at all: ``content`` (text, or a function that writes the file at
     the path it is given) goes into a hidden temporary file beside ``path``, renamed over it
-    (``os.replace`` is atomic on POSIX). A file that tells a command's --out folder as its own
-    (``experiments.options.Owner``'s records: figures.yaml) is written this way before any other
-    output, so a run stopped at any moment (Ctrl-C, kill) leaves a folder the next run into the
-    same --out recognises, not one of figures it cannot tell from a user's."""
+    (``os.replace`` is atomic on POSIX). The files that tell a command's --out folder as its own
+    (``experiments.options.Owner``'s records) are written this way, the first of them before any
+    other output, so a run stopped at any moment (Ctrl-C, kill) leaves a folder the next run into
+    the same --out recognises: files written before the record, or a record cut empty, were "not
+    written by an earlier run" and refused that run."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")  # hidden: check_out passes it over

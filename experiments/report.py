@@ -55,8 +55,9 @@ def write_report(folder: Path, title: str, sections: list[Section]) -> tuple[Pat
         md += [f"## {sec.title}", ""]
         for block in sec.text:
             md += [block, ""]
-    md_path = folder / "report.md"
-    md_path.write_text("\n".join(md))
+    from experiments.provenance import write_record
+
+    md_path = write_record(folder / "report.md", "\n".join(md))  # whole: it tells a demo's folder (DEMO_OWNER)
     html_path = folder / "report.html"
     html_path.write_text(markdown_to_html("\n".join(md), title, images=folder))
     return md_path, html_path

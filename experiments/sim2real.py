@@ -942,18 +942,21 @@ def write_outputs(result: Sim2RealResult, out: Path, log: str, config: dict[str,
 
     import yaml
 
-    out.mkdir(parents=True, exist_ok=True)
+    from experiments.provenance import write_record
+
     paths = [out / "sim2real.csv", out / "scene.csv", out / "sim2real.md", out / "sim2real.png",
              out / "sensor.yaml", out / "config.yaml"]
-    result.table.to_csv(paths[0], index=False)
-    scene_table(result).to_csv(paths[1], index=False)
-    paths[2].write_text(format_report(result, log))
-    draw(result, paths[3], log)
-    result.sensor.to_yaml(paths[4], header=f"sensor model used by lmsbench sim2real {log}")
     resolved = dict(config, world=result.world, seeds=result.seeds, probe_seeds=result.probe_seeds, robot=dataclasses.asdict(result.limits),
                     checks=result.checks, rough=None if result.rough is None else dataclasses.asdict(result.rough),
                     scale=None if result.scale is None else dataclasses.asdict(result.scale),
                     relief=None if result.relief is None else dataclasses.asdict(result.relief))
     resolved["robot"]["pause_s"] = list(resolved["robot"]["pause_s"])
-    paths[5].write_text(yaml.safe_dump(resolved, sort_keys=False))
+    # config.yaml first, whole: it tells the folder as sim2real's (options.SIM2REAL_OWNER); a run
+    # stopped among the tables or the figure left a folder the next run into it refused
+    write_record(paths[5], yaml.safe_dump(resolved, sort_keys=False))
+    result.table.to_csv(paths[0], index=False)
+    scene_table(result).to_csv(paths[1], index=False)
+    paths[2].write_text(format_report(result, log))
+    draw(result, paths[3], log)
+    write_record(paths[4], lambda p: result.sensor.to_yaml(p, header=f"sensor model used by lmsbench sim2real {log}"))
     return paths

@@ -26,6 +26,8 @@ from sim import SensorConfig, World, make_world, simulate_records
 from sim.records import OdometryConfig
 from sim.robot import RobotLimits
 
+from experiments.provenance import write_record
+
 
 SIMULATION_KEYS = frozenset({"world", "seed", "duration", "rate_hz", "sensor", "odometry", "robot", "clutter"})
 
@@ -143,12 +145,13 @@ def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> 
     finally:
         if bar is not None:
             bar.close()
-    out.mkdir(parents=True, exist_ok=True)
+    # config.yaml first, whole: it tells the folder as simulate's (options.SIMULATE_OWNER); a run
+    # stopped while writing scans.clf left a folder the next run into it refused
+    write_record(out / "config.yaml", yaml.safe_dump(cfg.to_dict(), sort_keys=False))
     write_carmen(out / "scans.clf", records)
     stamps = np.array([r.scan.stamp for r in records], dtype=float)
     write_tum(out / "groundtruth.tum", stamps, np.array([r.truth for r in records]).reshape(-1, 3))
-    world.to_json(out / "world.json")
-    (out / "config.yaml").write_text(yaml.safe_dump(cfg.to_dict(), sort_keys=False), encoding="ascii")
+    write_record(out / "world.json", world.to_json)  # a record too: whole, or a cut one refused the next run
     draw_map(world, records, out / "map.png")
     return records
 

@@ -21,6 +21,7 @@ from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml
 from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree
+from experiments.provenance import write_record
 from slam import SlamConfig, SlamResult, run_slam
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
 
@@ -218,8 +219,8 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     """Run SLAM over ``data`` (timed: feature extraction + SLAM; wall clock ``seconds`` and CPU
     time ``cpu_seconds``), score it, and score the baselines: the raw odometry, with
     ``odometry_baseline`` the paper's filter driven by odometry, and with ``paper_baseline`` (for
-    the default preset) the paper preset. With ``out``, trajectory.tum, map.json, keyframes.tum
-    (default preset) and config.yaml are written there before any scoring and the baselines, so a
+    the default preset) the paper preset. With ``out``, config.yaml (first), trajectory.tum, map.json and
+    keyframes.tum (default preset) are written there before any scoring and the baselines, so a
     scoring error or a Ctrl-C loses no result; no other file in ``out`` is touched (write_outputs
     writes metrics.json and slam.png at the end). With ``replace_earlier`` (``lmsbench slam``, after
     :func:`foreign_outputs` found none) an earlier run's metrics.json and slam.png in ``out``, and its
@@ -241,8 +242,8 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
         for stale in ("metrics.json", "slam.png"):  # an earlier run's, written again at the end; first, so that
             if stale in earlier:  # no stop leaves them beside this run's trajectory
                 (out / stale).unlink(missing_ok=True)
+        write_config(out, data, config)  # first: a stop after it leaves a folder told as slam's (SLAM_OWNER)
         write_result(out, result, earlier)
-        write_config(out, data, config)
     d = result.diagnostics
     scores = score(result.trajectory, data, result)
     table = [{"source": _source_name(config), **_flat(scores), "cpu_scans_per_s": len(data.records) / max(cpu, 1e-9)}]
@@ -307,7 +308,7 @@ def write_result(out: Path, res: SlamResult, earlier: Collection[str] = ()) -> N
         write_tum(out / "keyframes.tum", kf[:, 0], kf[:, 1:])
     elif "keyframes.tum" in earlier:
         (out / "keyframes.tum").unlink(missing_ok=True)
-    (out / "map.json").write_text(json.dumps(res.map_dict(), indent=1) + "\n")
+    write_record(out / "map.json", json.dumps(res.map_dict(), indent=1) + "\n")  # a record (SLAM_OWNER): whole
 
 
 #: What lmsbench slam writes in its --out folder.
@@ -337,17 +338,20 @@ def write_outputs(out: Path, data: SlamInput, config: SlamConfig, slam_run: Slam
     with the default preset; an earlier run's, told by :func:`earlier_run_files`, is removed with the
     paper preset)."""
     res = slam_run.result
-    write_result(out, res, earlier_run_files(out) if out.is_dir() else set())
-    (out / "metrics.json").write_text(json.dumps(_jsonable(slam_run.metrics), indent=2) + "\n")
+    earlier = earlier_run_files(out) if out.is_dir() else set()
     write_config(out, data, config)
+    write_result(out, res, earlier)
+    write_record(out / "metrics.json", json.dumps(_jsonable(slam_run.metrics), indent=2) + "\n")
     plot(out / "slam.png", data, res)
 
 
 def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:
-    """config.yaml in ``out``: the input and the resolved SLAM config of the run."""
+    """config.yaml in ``out``: the input and the resolved SLAM config of the run; written first and
+    whole (provenance.write_record), as it tells ``out`` as an lmsbench slam folder: a run stopped
+    after its trajectory.tum, before config.yaml, left a folder the next run into it refused."""
     import yaml
 
-    (out / "config.yaml").write_text(yaml.safe_dump({"input": data.sources, "slam": config.to_dict()}, sort_keys=False))
+    write_record(out / "config.yaml", yaml.safe_dump({"input": data.sources, "slam": config.to_dict()}, sort_keys=False))
 
 
 def _jsonable(value: Any) -> Any:

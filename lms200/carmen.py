@@ -14,7 +14,8 @@ Formats (one message a line, ``#`` comments; messages of other kinds, named in c
   ``MAX_GEOMETRIES`` geometries a pass meets), and max_range
   must lie in [MIN_RANGE_MAX_M, MAX_RANGE_M] (:mod:`lms200.laser_geometry`).
 - ``RAWLASER1`` .. ``RAWLASER4`` (CARMEN 0.7 loggers): the ROBOTLASER1 fields up to the remissions,
-  then ``ipc_timestamp hostname logger_timestamp``; no poses (``.odom`` is None), same checks.
+  then ``ipc_timestamp hostname logger_timestamp``; no poses, same checks: ``.odom`` is interpolated
+  from the ODOM lines around the scan's stamp (:mod:`lms200.carmen_odom`), else None.
 - ``ODOM x y theta tv rv accel ipc_timestamp hostname logger_timestamp``
 - ``TRUEPOS true_x true_y true_theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp``
 
@@ -55,6 +56,7 @@ from typing import IO, Iterable, Iterator
 
 import numpy as np
 
+from .carmen_odom import OdomPairing
 from .codes import (
     CODE_ABOVE_MAXIMUM,
     CODE_NOT_VALID,
@@ -366,6 +368,8 @@ class CarmenReader:
         blank = _BlankRun(self.path)
         range_words = _RangeWords()  # range word -> its number (_range_floats), for this pass
         junk = 0  # lines that start with no message name
+        # RAWLASER lines carry no pose: their odometry is interpolated from the log's ODOM lines
+        pairing = OdomPairing() if stats.laser in RAW_LASER_KINDS else None
         for line_no, line in self._lines():
             words = line.split()
             if not words or words[0].startswith("#"):
@@ -405,7 +409,9 @@ class CarmenReader:
                     truth = (pose, _few_floats(words[7:8], "TRUEPOS timestamp")[0])
                 elif kind == "ODOM":
                     _require(len(words) >= 8, "ODOM needs x y theta tv rv accel timestamp")
-                    _few_floats(words[1:8], "ODOM")
+                    values = _few_floats(words[1:8], "ODOM")
+                    if pairing is not None:  # odometry for the scans of a RAWLASER kind, which carry none
+                        yield from pairing.odom(values[6], (values[0], values[1], values[2]))
                 elif kind in LASER_KINDS:
                     if stats.laser is None:
                         stats.laser = kind
@@ -434,9 +440,15 @@ class CarmenReader:
                     given = (held[0] if held is not None and abs(held[1] - scan.stamp) <= TRUTH_MAX_GAP_S
                              and (held[1] > last_stamp or held[1] == scan.stamp) else None)
                     last_stamp = scan.stamp
-                    yield Record(scan=scan, odom=odom if has_odometry else None, truth=given)
+                    rec = Record(scan=scan, odom=odom if has_odometry else None, truth=given)
+                    if pairing is not None:
+                        yield from pairing.scan(rec)
+                    else:
+                        yield rec
             except (ValueError, OverflowError, ArithmeticError) as exc:
                 self._bad(line_no, kind, exc)
+        if pairing is not None:
+            yield from pairing.flush()
         if self.topic is not None and not stats.messages.get(self.topic) and stats.other_lasers():
             # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
             others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())

@@ -169,3 +169,49 @@ def test_calibrate_and_sim2real_refuse_a_270_deg_log_in_one_line(tmp_path, capsy
     assert not (tmp_path / "sensor.yaml").exists()
     assert main(["sim2real", str(log), "--seeds", "0", "--duration", "2", "--out", str(tmp_path / "s2r")]) == 2
     assert capsys.readouterr().err.strip().splitlines()[-1] == f"lmsbench sim2real: error: {expected}"
+
+
+def _rawlaser_line(scan: Scan, stamp: float) -> str:
+    n, fov = len(scan), (len(scan) - 1) * scan.angle_increment
+    ranges = " ".join(f"{r:.2f}" for r in scan.ranges)
+    return (f"RAWLASER1 0 {scan.angle_min!r} {fov!r} {scan.angle_increment!r} 81.9 0.01 0 {n} {ranges} "
+            f"{n} {' '.join('7' for _ in range(n))} {stamp!r} host {stamp!r}")
+
+
+def test_rawlaser_scans_take_odometry_interpolated_from_odom_lines(tmp_path):
+    """A CARMEN 0.7 log of RAWLASER1 lines (with remissions) and ODOM lines at 20 Hz, each scan's line
+    written after the first ODOM line stamped after it (as a logger writes what arrives): the scans
+    read as written, each with the pose interpolated at its stamp (linear motion, the heading across
+    +-pi the shorter way); none before the first ODOM line or inside a 1 s gap of the odometry.
+    Before, every RAWLASER scan read with odom None (info: "odometry no"; slam --odometry refused)."""
+    from lms200 import read_log
+
+    def pose(t: float) -> tuple[float, float, float]:
+        return (0.5 * t, -0.2 * t, math.remainder(2.5 + 0.8 * t, 2 * math.pi))
+
+    odom_stamps = [0.05 * k for k in range(1, 81) if not 30 <= k < 50]  # 0.05 .. 4.0 s, none in 1.5 .. 2.45 s
+    scan_stamps = [0.02 + 0.2 * k for k in range(20)]  # 0.02 .. 3.82 s
+    scans = [Scan.lms200(np.round(2.0 + 0.3 * np.sin(np.arange(361) / 40 + k), 2), stamp=t)
+             for k, t in enumerate(scan_stamps)]
+    lines, pending = [], list(zip(scan_stamps, scans))
+    for t in odom_stamps:
+        x, y, th = pose(t)
+        lines.append(f"ODOM {x!r} {y!r} {th!r} 0.5 0.8 0 {t!r} host {t!r}")
+        while pending and pending[0][0] < t:
+            lines.append(_rawlaser_line(pending[0][1], pending[0][0]))
+            pending.pop(0)
+    lines += [_rawlaser_line(sc, t) for t, sc in pending]
+    log = tmp_path / "raw.log"
+    log.write_text("\n".join(lines) + "\n")
+    recs = list(read_log(log))
+    assert [r.scan.stamp for r in recs] == scan_stamps
+    for rec, sc in zip(recs, scans):
+        np.testing.assert_array_equal(rec.scan.ranges, sc.ranges)
+    got = {round(r.scan.stamp, 2): r.odom for r in recs}
+    assert got[0.02] is None  # before the first ODOM line (0.05 s)
+    assert [t for t, p in got.items() if p is None] == [0.02, 1.62, 1.82, 2.02, 2.22, 2.42]  # 1.5 .. 2.45 s: no ODOM
+    for t, p in got.items():
+        if p is not None:
+            np.testing.assert_allclose(p[:2], pose(t)[:2], atol=1e-12)
+            assert abs(math.remainder(p[2] - pose(t)[2], 2 * math.pi)) < 1e-12, t
+    assert any(abs(p[2]) > 3.0 for p in got.values() if p is not None)  # the heading crossed +-pi in the run

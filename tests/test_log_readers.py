@@ -172,14 +172,15 @@ def rawlaser(n: int, fov: float, res: float, stamp: float = 10.0, kind: str = "R
 
 
 def test_rawlaser_lines_read_without_poses_and_robotlaser_is_preferred(tmp_path: Path) -> None:
-    """CARMEN 0.7 logs: RAWLASER1 alone reads (geometry from its header, no odometry); beside
+    """CARMEN 0.7 logs: RAWLASER1 alone reads (geometry from its header, odometry from ODOM lines); beside
     ROBOTLASER1 (the same readings with poses), ROBOTLASER1 is read by default even when RAWLASER1
     comes first; --topic RAWLASER1 chooses it; a RAWLASER line one beam short names its line."""
     res = math.radians(0.5)
     raw = write(tmp_path, "raw.log", ["ODOM 0 0 0 0 0 0 1 host 1"] + [rawlaser(361, 360 * res, res, stamp=t)
                                                                     for t in range(3)])
     recs = list(read_log(raw))
-    assert len(recs) == 3 and all(r.odom is None for r in recs)
+    # odometry only from an ODOM line stamped like the scan or ODOM lines within 0.5 s either side (tests/test_foreign_scanners.py)
+    assert len(recs) == 3 and [r.odom for r in recs] == [None, (0.0, 0.0, 0.0), None]
     assert [r.scan.stamp for r in recs] == [0.0, 1.0, 2.0]
     np.testing.assert_allclose(recs[0].scan.angles[[0, 180, 360]], [-math.pi / 2, 0.0, math.pi / 2], atol=1e-9)
     np.testing.assert_allclose(recs[0].scan.ranges[:3], [2.0, 2.01, 2.02])

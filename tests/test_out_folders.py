@@ -223,3 +223,101 @@ def test_figures_runs_again_into_its_own_folder_and_a_demos(tables, tmp_path, ca
     (other / "fig7_timing.png").write_bytes(b"mine")
     _refused(capsys, ["figures", "--tables", str(tables), "--out", str(other)], other, "fig7_timing.png", "figures")
 
+
+def _stop_at_write(monkeypatch, folder: Path, n: int) -> None:
+    """Ctrl-C (KeyboardInterrupt) as the ``n``-th file in ``folder`` is opened for writing, that file
+    left created and empty, as a stop between its open and its write leaves it: files opened with
+    open() (text, YAML, JSON, CSV, TUM, figures) and Parquet tables."""
+    import builtins
+    import io
+    import os
+
+    import pandas as pd
+
+    opened, real_open, real_parquet = [], io.open, pd.DataFrame.to_parquet
+
+    def stop(file) -> bool:
+        inside = isinstance(file, (str, os.PathLike)) and Path(file).absolute().is_relative_to(folder.absolute())
+        opened.extend([file] if inside else [])
+        return inside and len(opened) == n
+
+    def open_(file, mode="r", *args, **kwargs):
+        if any(c in mode for c in "wxa") and stop(file):
+            real_open(file, mode).close()
+            raise KeyboardInterrupt
+        return real_open(file, mode, *args, **kwargs)
+
+    def to_parquet(self, path, *args, **kwargs):
+        if stop(path):
+            Path(path).write_bytes(b"")
+            raise KeyboardInterrupt
+        return real_parquet(self, path, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "open", open_)
+    monkeypatch.setattr(io, "open", open_)
+    monkeypatch.setattr(pd.DataFrame, "to_parquet", to_parquet)
+
+
+def _stubbed_bench(monkeypatch) -> None:
+    import types
+
+    import experiments.commands.bench as bench
+
+    monkeypatch.setattr(bench, "discover", lambda: {"slam": types.SimpleNamespace(run=lambda quick: [{"case": "x", "hz": 1.0}])})
+
+
+@pytest.mark.parametrize("n", [1, 2])
+@pytest.mark.parametrize("argv", [
+    ["simulate", "--duration", "1", "--quiet"],
+    ["slam", "{sim}", "--quiet"],
+    ["compare", "office", "--duration", "1", "--seeds", "1"],
+    ["bench", "slam"],
+    ["sweep", "{sweep}", "--inprocess", "--no-progress"],
+    ["figures", "--tables", "{tables}"],
+], ids=lambda argv: argv[0])
+def test_a_run_stopped_at_its_first_files_leaves_a_folder_the_next_run_takes(sim, sweep_file, tables, tmp_path,
+                                                                             capsys, monkeypatch, argv, n):
+    """A run stopped (Ctrl-C, kill) before it wrote a file that tells its folder left files the next
+    run into the same --out refused ("holds scans.clf, which this run would replace but no earlier
+    lmsbench simulate run wrote"): simulate's scans.clf, slam's trajectory.tum, compare's
+    compare.parquet, all written before their config.yaml; a cut (empty) sweep.yaml or bench.csv.
+    Each command now writes a record first and whole (provenance.write_record). Found by stopping
+    each command at its first and second file."""
+    argv = [a.format(sim=sim, sweep=sweep_file, tables=tables) for a in argv]
+    out = tmp_path / "out"
+    if argv[0] == "bench":
+        _stubbed_bench(monkeypatch)
+    with monkeypatch.context() as m:
+        _stop_at_write(m, out, n)
+        assert main(argv + ["--out", str(out)]) == 130
+    assert capsys.readouterr().err.splitlines()[-1:] == [f"lmsbench {argv[0]}: interrupted"]
+    assert main(argv + ["--out", str(out)]) == 0, capsys.readouterr().err
+    assert not [p for p in out.rglob(".*")]  # no temporary file left behind
+
+
+def test_a_demo_or_sim2real_stopped_at_its_first_files_is_taken_by_the_next_run(sim, tmp_path, capsys, monkeypatch):
+    """The same for the slower commands: a demo stopped among its tables (Parquet files before
+    tables/study.yaml) and sim2real stopped after sim2real.csv were refused by the next run. The
+    next demo is stopped again at its first file (it got past the check: 130, not 2); the study
+    it runs is stubbed with a timing table."""
+    import pandas as pd
+
+    import experiments.demo
+
+    timing = pd.DataFrame({"method": ["sensor"], "scan": [0], "time_ms": [0.05]})
+    monkeypatch.setattr(experiments.demo, "run_study", lambda cfg, log=print: ({"timing": timing, "summary": timing}, []))
+    demo = tmp_path / "demo"
+    for n in (2, 1):
+        with monkeypatch.context() as m:
+            _stop_at_write(m, demo, n)
+            assert main(["demo", "--no-sweep", "--duration", "1", "--out", str(demo)]) == 130, capsys.readouterr().err
+        assert capsys.readouterr().err.splitlines()[-1:] == ["lmsbench demo: interrupted"]
+    s2r = tmp_path / "s2r"
+    argv = ["sim2real", str(sim / "scans.clf"), "--world", "office", "--seeds", "0", "--duration", "2", "--rate-hz", "1",
+            "--stride", "4", "--max-scans", "10", "--out", str(s2r)]
+    with monkeypatch.context() as m:
+        _stop_at_write(m, s2r, 2)
+        assert main(argv) == 130
+    capsys.readouterr()
+    assert main(argv) == 0, capsys.readouterr().err
+    assert (s2r / "sim2real.png").is_file()

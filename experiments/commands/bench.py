@@ -53,14 +53,14 @@ def run(args: argparse.Namespace) -> int:
 
     import yaml
 
-    from experiments.provenance import new_run_folder, versions
+    from experiments.provenance import new_run_folder, versions, write_record
 
     args.out = args.out or new_run_folder("results/bench")
-    args.out.mkdir(parents=True, exist_ok=True)
-    table = pd.DataFrame(rows)
-    table.to_csv(args.out / "bench.csv", index=False)
-    (args.out / "versions.yaml").write_text(yaml.safe_dump(dict(benchmarks=names, quick=args.quick, versions=versions()),
-                                                           sort_keys=False))
+    # versions.yaml first, whole: it tells the folder as bench's (options.BENCH_OWNER); a run stopped
+    # while writing bench.csv left a folder the next run into it refused (a cut bench.csv too)
+    write_record(args.out / "versions.yaml", yaml.safe_dump(dict(benchmarks=names, quick=args.quick, versions=versions()),
+                                                            sort_keys=False))
+    write_record(args.out / "bench.csv", lambda p: pd.DataFrame(rows).to_csv(p, index=False))  # a record too
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     print(f"wrote {args.out / 'bench.csv'}, {args.out / 'versions.yaml'}")
     return 0

@@ -162,18 +162,8 @@ def run(args: argparse.Namespace) -> int:
     summary = summarise(table)
     if matches:
         summary = summary.merge(common_errors(pd.DataFrame(matches)), on=["source", "method"], how="left")
-    from experiments.provenance import new_run_folder, versions
+    from experiments.provenance import new_run_folder, versions, write_record
 
-    args.out = args.out or new_run_folder("results/compare")
-    args.out.mkdir(parents=True, exist_ok=True)
-    path = args.out / f"compare.{args.format}"
-    if args.format == "parquet":
-        table.to_parquet(path, index=False)
-    else:
-        table.to_csv(path, index=False)
-    summary.to_csv(args.out / "summary.csv", index=False)
-    text = format_summary(summary)
-    (args.out / "summary.txt").write_text(text + "\n")
     resolved = dict(
         sources=args.sources, seeds=args.seeds, duration=args.duration, rate_hz=args.rate, stride=args.stride,
         max_scans=args.max_scans, sigma=args.sigma, poses=args.poses,
@@ -190,7 +180,18 @@ def run(args: argparse.Namespace) -> int:
     # what produced each source's scans: the sensor that was simulated (interlaced or not), the log read
     resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
     resolved["versions"] = versions()
-    (args.out / "config.yaml").write_text(yaml.safe_dump(resolved, sort_keys=False))
+    args.out = args.out or new_run_folder("results/compare")
+    # config.yaml first, whole: it tells the folder as compare's (options.COMPARE_OWNER); a run stopped
+    # after compare.parquet left a folder the next run into it refused
+    write_record(args.out / "config.yaml", yaml.safe_dump(resolved, sort_keys=False))
+    path = args.out / f"compare.{args.format}"
+    if args.format == "parquet":
+        table.to_parquet(path, index=False)
+    else:  # compare.csv and summary.csv are records too: whole, or a cut one refused the next run
+        write_record(path, lambda p: table.to_csv(p, index=False))
+    write_record(args.out / "summary.csv", lambda p: summary.to_csv(p, index=False))
+    text = format_summary(summary)
+    (args.out / "summary.txt").write_text(text + "\n")
     figures = []
     for src in sources:
         if src.kind == "log" and src.name in set(summary["source"]):

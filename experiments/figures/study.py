@@ -139,12 +139,11 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
 
 
 def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[str], folder: Path) -> None:
-    """Parquet per table, the settings (study.yaml) and the notes (notes.txt)."""
-    folder.mkdir(parents=True, exist_ok=True)
-    for name, table in tables.items():
-        table.to_parquet(folder / f"{name}.parquet", index=False)
+    """The settings (study.yaml), Parquet per table and the notes (notes.txt). The settings first,
+    whole: they tell the demo's folder as its own (options.DEMO_OWNER), and a demo stopped among
+    its tables left Parquet files without them, which the next demo into the folder refused."""
     from experiments.compare import resolved_configs
-    from experiments.provenance import versions
+    from experiments.provenance import versions, write_record
 
     settings = cfg.to_dict()
     settings["resolved"] = {"sensor": dataclasses.asdict(sensor_config(cfg.sensor)),
@@ -153,7 +152,9 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
         from slam import SlamConfig
 
         settings["resolved"]["slam"] = dataclasses.asdict(SlamConfig())
-    (folder / "study.yaml").write_text(yaml.safe_dump(settings, sort_keys=False))
+    write_record(folder / "study.yaml", yaml.safe_dump(settings, sort_keys=False))
+    for name, table in tables.items():
+        table.to_parquet(folder / f"{name}.parquet", index=False)
     (folder / "notes.txt").write_text("\n".join(notes) + ("\n" if notes else ""))
 
 

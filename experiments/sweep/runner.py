@@ -72,8 +72,9 @@ def run_sweep(
     fn = check_spec(spec)
     cells = spec.cells()
     store = CellStore(out)
-    (out / "sweep.yaml").write_text(spec_record(spec))
-    from experiments.provenance import versions
+    from experiments.provenance import versions, write_record
+
+    write_record(out / "sweep.yaml", spec_record(spec))  # whole: it tells the folder as the sweep's (SWEEP_OWNER)
 
     (out / "versions.yaml").write_text(yaml.safe_dump(versions(), sort_keys=False))  # of the last run into `out`
     keys = [cell_key(spec.kind, params) for params in cells]

@@ -1,0 +1,87 @@
+"""Odometry for CARMEN laser lines that carry no pose (RAWLASER1 .. 4), from the log's ODOM lines.
+
+CARMEN 0.7 loggers write each laser reading as RAWLASER (ranges and timestamps only) and the
+robot's odometry as ODOM lines (about 10-20 a second); CARMEN's robot module gives a scan the
+odometry interpolated at its timestamp. So does :class:`OdomPairing`: a scan stamped t takes the
+pose interpolated linearly (heading along the shorter turn) between the last ODOM stamped at or
+before t and the first stamped at or after it, when both lie within ``ODOM_MAX_GAP_S`` of t; else
+none (a scan before the first ODOM, after the last, or across a gap in the odometry).
+
+Scans wait for the ODOM after them: at most until a line stamped ``ODOM_MAX_GAP_S`` after them
+has been read, or ``MAX_PENDING_SCANS`` wait, so memory stays bounded.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from typing import Iterator
+
+from .records import Pose2D, Record
+
+ODOM_MAX_GAP_S = 0.5  # s: the farthest an ODOM line may lie from a scan (either side) to give its pose
+MAX_PENDING_SCANS = 256  # scans held at most while waiting for the ODOM line after them
+RECENT_ODOM = 8  # ODOM lines kept to pair scans with: a laser line may come a few ODOM lines late
+
+
+def interpolate_pose(t0: float, p0: Pose2D, t1: float, p1: Pose2D, t: float) -> Pose2D:
+    """The pose at ``t`` on the line from ``p0`` (at ``t0``) to ``p1`` (at ``t1``), the heading turned
+    the shorter way and wrapped to (-pi, pi]; ``p0`` where ``t1 == t0``."""
+    f = 0.0 if t1 == t0 else (t - t0) / (t1 - t0)
+    turn = math.remainder(p1[2] - p0[2], 2 * math.pi)
+    theta = math.remainder(p0[2] + f * turn, 2 * math.pi)
+    return (p0[0] + f * (p1[0] - p0[0]), p0[1] + f * (p1[1] - p0[1]), math.pi if theta == -math.pi else theta)
+
+
+class OdomPairing:
+    """Records of pose-less scans, handed back with odometry from the ODOM lines around them.
+
+    Feed it every ODOM pose (:meth:`odom`) and every record (:meth:`scan`) in log order; each
+    returns the records now complete, in the order given; :meth:`flush` the rest at the end.
+    ``paired`` counts the records given a pose.
+    """
+
+    def __init__(self) -> None:
+        self.recent: deque[tuple[float, Pose2D]] = deque(maxlen=RECENT_ODOM)  # the last ODOM lines (stamp s, pose)
+        self.pending: deque[Record] = deque()
+        self.newest = -math.inf  # the latest stamp read (scans and ODOM lines)
+        self.paired = 0
+
+    def odom(self, stamp: float, pose: Pose2D) -> Iterator[Record]:
+        """An ODOM line (one that is not finite gives no pose)."""
+        if math.isfinite(stamp) and all(map(math.isfinite, pose)):
+            self.recent.append((stamp, pose))
+            self.newest = max(self.newest, stamp)
+        return self._ready()
+
+    def scan(self, rec: Record) -> Iterator[Record]:
+        """A record without odometry: held until an ODOM line stamped at or after it is read."""
+        self.pending.append(rec)
+        self.newest = max(self.newest, rec.scan.stamp)
+        return self._ready()
+
+    def flush(self) -> Iterator[Record]:
+        """The scans still waiting (the log has ended)."""
+        while self.pending:
+            yield self._paired(self.pending.popleft())
+
+    def _ready(self) -> Iterator[Record]:
+        last = max((t for t, _ in self.recent), default=-math.inf)
+        while self.pending and (self.pending[0].scan.stamp <= last or len(self.pending) > MAX_PENDING_SCANS
+                                or self.newest - self.pending[0].scan.stamp > ODOM_MAX_GAP_S):
+            yield self._paired(self.pending.popleft())
+
+    def _paired(self, rec: Record) -> Record:
+        t = rec.scan.stamp
+        before = max((o for o in self.recent if o[0] <= t), default=None, key=lambda o: o[0])
+        after = min((o for o in self.recent if o[0] >= t), default=None, key=lambda o: o[0])
+        pose = None
+        if before is not None and before[0] == t:
+            pose = before[1]
+        elif before is not None and after is not None and t - before[0] <= ODOM_MAX_GAP_S \
+                and after[0] - t <= ODOM_MAX_GAP_S:
+            pose = interpolate_pose(before[0], before[1], after[0], after[1], t)
+        if pose is None:
+            return rec
+        self.paired += 1
+        return Record(scan=rec.scan, odom=pose, truth=rec.truth)
