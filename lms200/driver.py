@@ -343,11 +343,14 @@ class LMS200:
         return [e - len(f) * byte_s for e, f in zip(ends, frames)]
 
     def _request(self, payload: bytes, what: str, timeout: float | None = None, retries: int | None = None,
-                 budget: float | None = None) -> Frame:
+                 budget: float | None = None, proof: int | None = None) -> Frame:
         """Send a request and return its reply frame, retrying on silence and NAK.
 
         Each attempt waits ``timeout`` plus the line time of the reply (and of a scan telegram
-        that may be in flight in continuous mode), or ``budget`` seconds when given.
+        that may be in flight in continuous mode), or ``budget`` seconds when given. ``proof``: a
+        reply code that shows the request took effect when its reply is lost (0xB0 for the
+        request to start continuous output); such a frame is returned instead and kept for
+        :meth:`scans`.
         """
         expected = reply_code(payload[0])
         telegram = build_frame(payload, self.address)
@@ -357,11 +360,12 @@ class LMS200:
             budget = (self.timeout if timeout is None else timeout) + frame_seconds(reply_bytes + in_flight + 1, self.baud)
         attempts = self.retries if retries is None else retries
         try:
-            return self._attempts(what, telegram, expected, budget, attempts)
+            return self._attempts(what, telegram, expected, budget, attempts, proof)
         finally:
             self.parser.awaiting_reply = False
 
-    def _attempts(self, what: str, telegram: bytes, expected: int, budget: float, attempts: int) -> Frame:
+    def _attempts(self, what: str, telegram: bytes, expected: int, budget: float, attempts: int,
+                  proof: int | None = None) -> Frame:
         """The attempts of :meth:`_request`."""
         seen: list[str] = []
         for attempt in range(attempts):
@@ -406,6 +410,10 @@ class LMS200:
                             self._backlog = events[i + 1 :] + self._backlog
                             self._unanswered = max(0, self._unanswered - 1)
                             return ev
+                        if ev.code == proof:
+                            self._backlog = events[i:] + self._backlog  # the frame too, for scans()
+                            self._unanswered = max(0, self._unanswered - 1)
+                            return ev
                         if ev.code == REPLY_BAD_COMMAND:
                             raise LmsProtocolError(f"{what}: the device answered 0x92 (incorrect command) to {telegram.hex(' ')}")
                         others += 1
@@ -421,7 +429,14 @@ class LMS200:
         )
 
     def _set_mode(self, sub_command: int, what: str) -> None:
-        reply = self._request(mode_request(sub_command, self.password), what, timeout=self.mode_timeout)
+        # A scan telegram after the request to start continuous output shows that it took (the
+        # device sends none in on-request mode, and the driver asks for no single scan): its 0xA0
+        # reply lost, the driver waited out mode_timeout and sent the request again.
+        proof = REPLY_MEASURE if sub_command == MODE_CONTINUOUS else None
+        reply = self._request(mode_request(sub_command, self.password), what, timeout=self.mode_timeout, proof=proof)
+        if reply.code == REPLY_MEASURE:
+            self.streaming = True
+            return
         if len(reply.payload) < 2 or reply.payload[1] != 0:
             raise LmsModeRefusedError(f"{what}: the device refused (0xA0 reply {reply.payload.hex(' ')})")
         if sub_command in (MODE_CONTINUOUS, MODE_ON_REQUEST):

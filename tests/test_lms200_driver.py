@@ -832,3 +832,37 @@ def test_a_baud_switch_that_never_takes_raises_naming_every_attempt(monkeypatch:
                        r"on sim:// at 9600 baud; attempt 1: ACK, then no reply, and nothing at 38400 baud; attempt 2: .*attempt 3: "):
         LMS200("sim://", baud=38400, retries=3)
     assert dev.baud == 9600
+
+
+def test_scans_that_come_after_a_lost_start_reply_show_that_continuous_output_started(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Seeded fault runs (tests/lms200_sim_port.py, no NAK sent, 120 runs): 3 of the 8 timeouts
+    left were the 0xA0 reply to 0x20 0x24 lost while the device had started streaming: the
+    driver waited out mode_timeout (3.5 s) among the scans and sent the request again. A scan
+    telegram after that request shows it took (none comes in on-request mode): it is taken as the
+    answer and yielded, with no timeout, no resend and no scan lost."""
+    from lms200_sim_port import sim_port
+
+    from lms200.protocol import MODE_CONTINUOUS
+
+    class LosesStartReply(VirtualLMS200):
+        lost = False
+
+        def _mode(self, data: bytes, t_reply: float) -> None:
+            if data == bytes([MODE_CONTINUOUS]) and not self.lost:
+                self.lost = True
+                self.mode, self._continuous_from = MODE_CONTINUOUS, t_reply  # streams; its 0xA0 is lost
+                return
+            super()._mode(data, t_reply)
+
+    sent = source(20)
+    dev = LosesStartReply(sent, units="mm")
+    port = sim_port(monkeypatch, dev)
+    lms = LMS200("sim://", baud=38400)
+    got = list(itertools.islice(lms.scans(), 3))
+    assert dev.lost and sum(w[4:6] == b"\x20\x24" for w in port.writes) == 1  # old: 2
+    assert (lms.stats.timeouts, lms.stats.retries) == (0, 0)  # old: (1, 1)
+    for g, s in zip(got, sent):  # from the first scan sent
+        np.testing.assert_array_equal(codes(g.ranges), codes(s.ranges))
+    lms.close()
+    assert dev.baud == 9600 and not dev.continuous
