@@ -21,7 +21,11 @@ from .records import Pose2D, Record
 
 ODOM_MAX_GAP_S = 0.5  # s: the farthest an ODOM line may lie from a scan (either side) to give its pose
 MAX_PENDING_SCANS = 256  # scans held at most while waiting for the ODOM line after them
-RECENT_ODOM = 8  # ODOM lines kept to pair scans with: a laser line may come a few ODOM lines late
+#: s behind the newest stamp read for which ODOM lines are kept: a laser line written late (after
+#: ODOM lines stamped after it) still finds the lines around its stamp. A count of 8 lines was too
+#: few (a review: 100 Hz odometry and laser lines 0.1 s late, every scan read with odom None).
+ODOM_KEEP_S = 3 * ODOM_MAX_GAP_S
+MAX_RECENT_ODOM = 4096  # ODOM lines kept at most, whatever their rate (memory bound on any log)
 
 
 def interpolate_pose(t0: float, p0: Pose2D, t1: float, p1: Pose2D, t: float) -> Pose2D:
@@ -42,7 +46,8 @@ class OdomPairing:
     """
 
     def __init__(self) -> None:
-        self.recent: deque[tuple[float, Pose2D]] = deque(maxlen=RECENT_ODOM)  # the last ODOM lines (stamp s, pose)
+        self.recent: deque[tuple[float, Pose2D]] = deque(maxlen=MAX_RECENT_ODOM)  # ODOM lines (stamp s, pose), ODOM_KEEP_S
+        self.last_odom = -math.inf  # the latest ODOM stamp read
         self.pending: deque[Record] = deque()
         self.newest = -math.inf  # the latest stamp read (scans and ODOM lines)
         self.paired = 0
@@ -51,7 +56,9 @@ class OdomPairing:
         """An ODOM line (one that is not finite gives no pose)."""
         if math.isfinite(stamp) and all(map(math.isfinite, pose)):
             self.recent.append((stamp, pose))
-            self.newest = max(self.newest, stamp)
+            self.newest, self.last_odom = max(self.newest, stamp), max(self.last_odom, stamp)
+            while self.recent[0][0] < self.newest - ODOM_KEEP_S:
+                self.recent.popleft()
         return self._ready()
 
     def scan(self, rec: Record) -> Iterator[Record]:
@@ -66,8 +73,7 @@ class OdomPairing:
             yield self._paired(self.pending.popleft())
 
     def _ready(self) -> Iterator[Record]:
-        last = max((t for t, _ in self.recent), default=-math.inf)
-        while self.pending and (self.pending[0].scan.stamp <= last or len(self.pending) > MAX_PENDING_SCANS
+        while self.pending and (self.pending[0].scan.stamp <= self.last_odom or len(self.pending) > MAX_PENDING_SCANS
                                 or self.newest - self.pending[0].scan.stamp > ODOM_MAX_GAP_S):
             yield self._paired(self.pending.popleft())
 

@@ -215,3 +215,31 @@ def test_rawlaser_scans_take_odometry_interpolated_from_odom_lines(tmp_path):
             np.testing.assert_allclose(p[:2], pose(t)[:2], atol=1e-12)
             assert abs(math.remainder(p[2] - pose(t)[2], 2 * math.pi)) < 1e-12, t
     assert any(abs(p[2]) > 3.0 for p in got.values() if p is not None)  # the heading crossed +-pi in the run
+
+
+def test_rawlaser_lines_written_late_behind_fast_odometry_still_take_their_pose(tmp_path):
+    """ODOM at 100 Hz and each RAWLASER line written 0.1 s after its stamp (10 ODOM lines later):
+    every scan read with odom None (a review: the pairing kept the last 8 ODOM lines only). Now the
+    ODOM lines of the last ODOM_KEEP_S are kept: each scan takes its interpolated pose."""
+    from lms200 import read_log
+
+    def pose(t: float) -> tuple[float, float, float]:
+        return (0.3 * t, 0.1 * t, math.remainder(0.4 * t, 2 * math.pi))
+
+    scan_stamps = [0.105 + 0.2 * k for k in range(12)]
+    scans = [Scan.lms200(np.full(361, 3.0), stamp=t) for t in scan_stamps]
+    lines, pending = [], list(zip(scan_stamps, scans))
+    for k in range(1, 301):  # 0.01 .. 3.0 s
+        t = 0.01 * k
+        x, y, th = pose(t)
+        lines.append(f"ODOM {x!r} {y!r} {th!r} 0.3 0.4 0 {t!r} host {t!r}")
+        while pending and pending[0][0] + 0.1 <= t:
+            lines.append(_rawlaser_line(pending[0][1], pending[0][0]))
+            pending.pop(0)
+    log = tmp_path / "late.log"
+    log.write_text("\n".join(lines) + "\n")
+    recs = list(read_log(log))
+    assert [r.scan.stamp for r in recs] == scan_stamps
+    for rec in recs:
+        assert rec.odom is not None, rec.scan.stamp
+        np.testing.assert_allclose(rec.odom, pose(rec.scan.stamp), atol=1e-9)
