@@ -15,6 +15,7 @@ import argparse
 import importlib
 import os
 import pkgutil
+import _thread
 import signal
 import sys
 import threading
@@ -40,6 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+REDELIVER_S = 0.05  # s after a swallowed stop (see _Interrupt.swallowed) before it is raised again
 INTERRUPT_GRACE_S = 15.0  # s after Ctrl-C for cleanup; then child processes are killed and the process exits 130
 
 
@@ -57,13 +59,21 @@ class _Interrupt:
     def __init__(self, name: str) -> None:
         self.name, self.reported = name, False
         self.timer: threading.Timer | None = None
-        self.signum = signal.SIGINT
+        self.signum: int = signal.SIGINT
+        self.redeliver = False  # the stop's KeyboardInterrupt was swallowed: raise it again
+        self.in_hook = False  # sys.unraisablehook is running
 
     @property
     def word_and_status(self) -> tuple[str, int]:
         return STOP_SIGNALS.get(signal.Signals(self.signum), STOP_SIGNALS[signal.SIGINT])
 
     def handler(self, signum: int, frame: Any) -> None:
+        if self.redeliver:  # the first stop again (see swallowed), not a second Ctrl-C
+            if self.in_hook:  # not inside the hook itself, where it would be swallowed again
+                self._raise_again()
+                return
+            self.redeliver = False
+            raise KeyboardInterrupt
         if self.timer is not None:  # a second Ctrl-C while the first one's stop runs: stop now, as said
             self.hard_stop()  # (it raised KeyboardInterrupt inside the cleanup: a traceback, exit -2)
         self.signum = signum
@@ -71,6 +81,29 @@ class _Interrupt:
         self.timer.daemon = True
         self.timer.start()
         raise KeyboardInterrupt
+
+    def swallowed(self, unraisable: Any) -> bool:
+        """Whether ``unraisable`` (what ``sys.unraisablehook`` is given) is this stop's
+        KeyboardInterrupt raised where Python ignores exceptions (a garbage-collection callback,
+        as Dask's, a ``__del__``, a weakref callback); if so it is raised again in the main thread
+        at once. It printed "Exception ignored in: <function ...>" and a traceback above the one
+        line, and the command went on until a second Ctrl-C or the grace timer stopped it."""
+        if not isinstance(unraisable.exc_value, KeyboardInterrupt) or self.timer is None:
+            return False
+        self.in_hook, self.redeliver = True, True
+        try:
+            self._raise_again()
+        finally:
+            self.in_hook = False
+        return True
+
+    def _raise_again(self) -> None:
+        """The handler run again in the main thread REDELIVER_S from now, from another thread: by
+        then the hook and the collection have returned (a signal tripped at once is handled inside
+        the hook itself, where its exception is swallowed too)."""
+        timer = threading.Timer(REDELIVER_S, _thread.interrupt_main, (self.signum,))
+        timer.daemon = True
+        timer.start()
 
     def hard_stop(self) -> None:
         _kill_children()
@@ -134,6 +167,9 @@ def _main(argv: Sequence[str] | None) -> int:
     interrupt = _Interrupt(name)
     main_thread = threading.current_thread() is threading.main_thread()
     previous = {sig: signal.signal(sig, interrupt.handler) for sig in STOP_SIGNALS} if main_thread else {}
+    previous_hook = sys.unraisablehook
+    if main_thread:
+        sys.unraisablehook = lambda u: interrupt.swallowed(u) or previous_hook(u)
     done = False  # whether the command's work ended (a reader of stdout that went away then is no loss)
     try:
         default_threads()  # a bad $LMSBENCH_THREADS is refused before any work, by every command
@@ -167,6 +203,8 @@ def _main(argv: Sequence[str] | None) -> int:
         if interrupt.timer is None:  # stopped by a signal: the handler stays for the exit's own cleanup
             for sig, handler in previous.items():  # (atexit: Dask closing clusters), where a second
                 signal.signal(sig, handler)  # Ctrl-C printed a traceback; it now ends the process at once
+            if main_thread:
+                sys.unraisablehook = previous_hook
 
 
 PIPE_CLOSED_STATUS = 141  # 128 + SIGPIPE: what a shell reports for a command whose reader went away
