@@ -397,7 +397,11 @@ class LMS200:
             deadline = time.monotonic() + budget
             acked = naked = False
             others = 0
-            while time.monotonic() < deadline and not naked:
+            while not naked:
+                # The deadline is read before the port: a host kept from running past it (a loaded
+                # machine) still reads what came in time, once, before it gives up the attempt.
+                expired = time.monotonic() >= deadline
+                read = not self._backlog  # this _pump reads the port
                 events = self._pump()
                 for i, ev in enumerate(events):
                     if ev == ACK:
@@ -417,6 +421,8 @@ class LMS200:
                         if ev.code == REPLY_BAD_COMMAND:
                             raise LmsProtocolError(f"{what}: the device answered 0x92 (incorrect command) to {telegram.hex(' ')}")
                         others += 1
+                if expired and read:
+                    break
             if not naked:
                 self._timeouts += 1
             seen.append("NAK" if naked else ("ACK, then no reply" if acked else "nothing") +

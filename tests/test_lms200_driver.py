@@ -866,3 +866,46 @@ def test_scans_that_come_after_a_lost_start_reply_show_that_continuous_output_st
         np.testing.assert_array_equal(codes(g.ranges), codes(s.ranges))
     lms.close()
     assert dev.baud == 9600 and not dev.continuous
+
+
+def test_a_host_kept_from_running_past_the_deadline_still_reads_the_reply_that_came(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each attempt checked its deadline before reading: a host descheduled between writing a
+    request and its first read for longer than the attempt's wait (a loaded machine) gave the
+    attempt up without reading the reply that had come meanwhile, and sent the request again
+    (timeouts 1, retries 1, the variant request written twice). Now the port is read once more
+    after the deadline before the attempt is given up."""
+    import time
+
+    from lms200 import driver
+    from lms200_fake_port import answer, fake_port
+
+    class Descheduled:  # the time module; monotonic() jumps 10 s after the variant request's deadline was set
+        def __init__(self) -> None:
+            self.offset, self.armed = 0.0, -1
+
+        def __getattr__(self, name: str) -> object:
+            return getattr(time, name)
+
+        def monotonic(self) -> float:
+            if self.armed >= 0:
+                self.armed += 1
+                if self.armed == 2:  # the first reading after `deadline = monotonic() + budget`
+                    self.armed = -1
+                    time.sleep(0.05)  # long enough for the ACK (2 ms) and the reply (12 ms) to come
+                    self.offset += 10.0  # and far past the attempt's wait, as a host left off the CPU
+            return time.monotonic() + self.offset
+
+    clock = Descheduled()
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload[0] == 0x3B and not any(w[4] == 0x3B for w in port.writes[:-1]):  # the first one
+            clock.armed = 0
+        return answer(payload)
+
+    port = fake_port(monkeypatch, script)
+    monkeypatch.setattr(driver, "time", clock)
+    lms = LMS200("fake://", baud=9600, probe=False)
+    assert sum(w[4] == 0x3B for w in port.writes) == 1  # old: 2
+    assert (lms.stats.timeouts, lms.stats.retries) == (0, 0)  # old: (1, 1)
+    lms.close()
