@@ -15,7 +15,11 @@ Bytes the host does not read are dropped once its receive buffer is full (a UART
 device in continuous mode never blocks the adapter. That buffer lasts as long in the device's time
 as in real time: the kernel's buffer (20 KiB on a pty here) plus, for a device at ``time_scale`` < 1,
 :data:`HOST_BUFFER_BYTES` / ``time_scale`` - :data:`HOST_BUFFER_BYTES` bytes the adapter holds
-for the host (none at time_scale 1 or above). At time_scale 0.01 the line carries 100 times its baud (192 kB/s
+for the host (none at time_scale 1 or above; at most :data:`MAX_HELD_BYTES`, 1 MiB, so memory stays
+bounded at any time_scale). Held bytes are dropped when the host's baud changes (a new host, or the
+driver probing bauds): they were garbled for the baud of the host that left them, and a new host
+at 9600 baud read 424 kB of a stream left running at 500000 as valid frames at 9600 and never
+probed on (a review: reconnecting to a scaled device left streaming failed). At time_scale 0.01 the line carries 100 times its baud (192 kB/s
 at 19200 baud): the kernel's buffer alone was full after a 0.1 s pause of the host (a loaded
 machine), and the bytes behind it were lost; a real host at 19200 baud fills 4 KiB in 2.1 s.
 """
@@ -39,6 +43,7 @@ _TICK_S = 0.002  # longest sleep between pacing steps
 _IDLE_S = 0.05  # sleep while the device has nothing to send
 HOST_BUFFER_BYTES = 4096  # a serial port's receive buffer (the kernel's tty buffer: 4 KiB at least)
 _WRITE_MAX = 65536  # bytes offered to the port per write
+MAX_HELD_BYTES = 1 << 20  # bytes held for the host at most, whatever the time_scale (memory bound)
 _SPEEDS = {getattr(termios, f"B{b}"): b for b in (9600, 19200, 38400, 57600, 115200, 230400, 500000) if hasattr(termios, f"B{b}")}
 
 
@@ -48,6 +53,7 @@ class _Adapter:
         self.clock = clock
         self.overrun_bytes = 0
         self._pending = bytearray()  # bytes due that the port did not take yet (see the module doc)
+        self._pending_baud: int | None = None  # the host's baud they were garbled for
         self._stop = threading.Event()
         self._lock = threading.Lock()
         self._thread = threading.Thread(target=self._run, name=type(self).__name__, daemon=True)
@@ -71,6 +77,9 @@ class _Adapter:
             dev = self.device
             if data:
                 dev.receive(garble(data, host_baud or dev.baud, dev.baud), self.clock())
+            if host_baud != self._pending_baud:  # a host at another baud (a new one, or the driver's
+                self._pending.clear()  # probe): what the last took at its baud is not this one's input
+                self._pending_baud = host_baud
             for piece, baud in dev.transmit(self.clock()):
                 if write is not None:
                     self._pending += garble(piece, baud, host_baud or baud)
@@ -90,7 +99,8 @@ class _Adapter:
         except OSError:  # the host went away mid-write: the bytes are lost
             sent = len(pending)
         del pending[:sent]
-        excess = len(pending) - max(0, int(HOST_BUFFER_BYTES * (1.0 / self.device.time_scale - 1.0)))
+        spare = min(MAX_HELD_BYTES, HOST_BUFFER_BYTES * (1.0 / self.device.time_scale - 1.0))
+        excess = len(pending) - max(0, int(spare))
         if excess > 0:
             del pending[len(pending) - excess :]
             self.overrun_bytes += excess

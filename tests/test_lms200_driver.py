@@ -909,3 +909,30 @@ def test_a_host_kept_from_running_past_the_deadline_still_reads_the_reply_that_c
     assert sum(w[4] == 0x3B for w in port.writes) == 1  # old: 2
     assert (lms.stats.timeouts, lms.stats.retries) == (0, 0)  # old: (1, 1)
     lms.close()
+
+
+def test_a_new_host_at_another_baud_gets_none_of_the_bytes_held_for_the_last() -> None:
+    """Bytes held for a host (d19d993, above) survived a new host: a recorder killed while a scaled
+    device streamed at 500000 baud left 0.4 MB garbled for 500000, which the next host, opening at
+    9600 to probe, read as valid frames at 9600 (553 in 424 kB after flushing its input), so it
+    took the device for streaming at 9600 and never probed on (a review: the second `lms200
+    record` failed). Held bytes are dropped when the host's baud changes, and never exceed
+    MAX_HELD_BYTES whatever the time_scale (time_scale 1e-6 grew ~0.2 MB/s towards 4 GB)."""
+    import itertools
+    import time
+
+    from lms200 import adapters
+
+    dev = VirtualLMS200(itertools.cycle(source(20)), time_scale=0.001, units="mm")
+    with PtyAdapter(dev) as ad:
+        first = LMS200(ad.path, baud=500000)
+        next(first.scans())
+        first._ser.close()  # killed: no stop request, the device streams on
+        deadline = time.monotonic() + 5
+        while len(ad._pending) < adapters.MAX_HELD_BYTES and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert len(ad._pending) == adapters.MAX_HELD_BYTES  # bounded (the old bound: 4 GB)
+        with LMS200(ad.path, baud=500000) as second:  # opens at 9600 first, then probes
+            got = list(itertools.islice(second.scans(), 5))
+            baud = second.baud
+    assert (len(got), baud) == (5, 500000)
