@@ -33,7 +33,7 @@ import numpy as np
 
 from .codes import Units, check_units, ranges_to_codes, real_numbers
 from .errors import InputError
-from .finite import check_instance, check_integer, check_number, check_seed, is_integer, shown
+from .finite import check_instance, check_integer, check_number, check_seed, is_integer, shown, whole_number
 from .protocol import (
     ACK,
     BAUD_MODES,
@@ -82,13 +82,26 @@ SOURCE_GRID_DEG = (-90.0, 0.5, 361)  # every scan source is resampled onto the 0
 POWER_ON_CONFIG = bytes([0, 0, 0, 0, 0x0D, UNITS_CODES["cm"]]) + bytes(CONFIG_BYTES - 6)
 
 
-def check_field_name(record: object, name: str) -> None:
-    """``name`` is a field of the dataclass ``record``; InputError naming the closest field otherwise."""
+def checked_field(record: object, base: type, name: str) -> bool:
+    """Whether ``name`` is a field of ``base`` that ``record`` (a ``base`` or a subclass) checks when
+    set: a subclass's own fields and private names (``_note``) are set unchecked, as before; any
+    other name is an InputError naming the closest field (a misspelt field was a new attribute
+    nothing read)."""
+    if name in _FIELD_NAMES[base]:
+        return True
     names = [f.name for f in fields(record)]  # type: ignore[arg-type]
-    if name not in names:
-        close = difflib.get_close_matches(name, names, n=1)
-        hint = f" (did you mean {close[0]}?)" if close else f"; its fields are {', '.join(names)}"
-        raise InputError(f"{type(record).__name__} has no field {name!r}{hint}")
+    if name.startswith("_") or name in names:
+        return False
+    close = difflib.get_close_matches(name, names, n=1)
+    hint = f" (did you mean {close[0]}?)" if close else f"; its fields are {', '.join(names)}"
+    raise InputError(f"{type(record).__name__} has no field {name!r}{hint}")
+
+
+def refuse_field_deletion(record: object, name: str) -> None:
+    """``del record.FIELD`` left the device to fail at its next read; InputError instead."""
+    if name in {f.name for f in fields(record)}:  # type: ignore[arg-type]
+        raise InputError(f"{type(record).__name__}.{name} cannot be deleted; set it to another value")
+    object.__delattr__(record, name)
 
 
 @dataclass
@@ -108,8 +121,12 @@ class DeviceTiming:
         """Each field checked when it is set, at construction or later (``dev.timing.ack_s = -1``
         was taken and broke the device's clock at the next request); a name that is no field is
         an InputError too (a misspelt field was a new attribute the device never read)."""
-        check_field_name(self, name)
-        object.__setattr__(self, name, check_number(value, name, 0.0, MAX_DELAY_S, unit="s"))
+        if checked_field(self, DeviceTiming, name):
+            check_number(value, name, 0.0, MAX_DELAY_S, unit="s")
+        object.__setattr__(self, name, value)
+
+    def __delattr__(self, name: str) -> None:
+        refuse_field_deletion(self, name)
 
 
 @dataclass
@@ -139,16 +156,22 @@ class Faults:
         transmit, 10**400 an OverflowError; set later, ``corrupt_prob = 2`` corrupted every byte
         and ``mute = "no"`` muted the device, silently; a misspelt field was a new attribute the
         device never read)."""
-        check_field_name(self, name)
-        if name == "mute":
-            if not isinstance(value, (bool, np.bool_)) and not (is_integer(value) and value in (0, 1)):
+        if not checked_field(self, Faults, name):
+            pass
+        elif name == "mute":  # None, 0 and 0.0 meant not muted before the check, and still do
+            if value is not None and not isinstance(value, (bool, np.bool_)) and whole_number(value) not in (0, 1):
                 raise InputError(f"mute: must be True or False, got {shown(value)}")
-            value = bool(value)
         elif name == "seed":
             check_seed(value)
         else:
-            value = check_number(value, name, 0.0, 1.0)
+            check_number(value, name, 0.0, 1.0)
         object.__setattr__(self, name, value)
+
+    def __delattr__(self, name: str) -> None:
+        refuse_field_deletion(self, name)
+
+
+_FIELD_NAMES: dict[type, frozenset[str]] = {cls: frozenset(f.name for f in fields(cls)) for cls in (DeviceTiming, Faults)}
 
 
 def resample_to_grid(scan: Scan) -> np.ndarray:

@@ -252,9 +252,38 @@ def test_faults_and_timing_changed_on_a_running_device_are_checked(record, name:
     if name in valid:  # a valid value is taken, and is what the device reads
         _set(held, name, valid[name])
         assert getattr(dev.faults if record is virtual.Faults else dev.timing, name) == valid[name]
-    dev.faults.mute = np.bool_(False)
-    dev.faults.mute = 1
-    assert dev.faults.mute is True
+    for quiet in (np.bool_(False), 0, 0.0, None, 1):  # what worked before the checks still does
+        dev.faults.mute = quiet
+        assert dev.faults.mute is quiet
+
+
+def test_faults_checks_leave_subclass_fields_private_names_and_given_values_alone() -> None:
+    """A review of the checks above: a subclass's own field was checked as a probability
+    (``MyFaults(burst=3)`` refused), a private attribute refused, values stored as floats (a
+    Fraction or 0 changed type), ``mute=None`` refused; and ``del faults.mute`` passed, to fail
+    at the device's next read. Now as before the checks, and deleting a field is an InputError."""
+    import dataclasses
+    import fractions
+
+    @dataclasses.dataclass
+    class BurstFaults(virtual.Faults):
+        burst: int = 3
+
+    faults = BurstFaults(corrupt_prob=fractions.Fraction(1, 4), mute=None, burst=30)
+    faults._note = "kept"
+    assert (faults.burst, faults._note, faults.mute) == (30, "kept", None)
+    assert type(faults.corrupt_prob) is fractions.Fraction and repr(virtual.Faults(drop_prob=0)).startswith(
+        "Faults(corrupt_prob=0.0, drop_prob=0,")
+    with pytest.raises(InputError, match=r"^drop_prob: must be a finite number in \[0, 1\], got 3$"):
+        faults.drop_prob = 3
+    with pytest.raises(InputError, match=r"^BurstFaults has no field 'brust' \(did you mean burst\?\)$"):
+        faults.brust = 3
+    with pytest.raises(InputError, match=r"^Faults\.mute cannot be deleted; set it to another value$"):
+        del virtual.Faults().mute
+    timing = virtual.DeviceTiming()
+    with pytest.raises(InputError, match=r"^DeviceTiming\.ack_s cannot be deleted"):
+        del timing.ack_s
+    assert dataclasses.replace(faults, seed=4).seed == 4 and dataclasses.asdict(timing)["reply_s"] == 0.01
 
 
 def test_a_configuration_block_given_as_a_list_of_bytes_is_sent_as_before() -> None:
