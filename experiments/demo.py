@@ -62,6 +62,7 @@ def _run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None, beat) -> 
     s2r = _sim2real_section(cfg, out, log)
     beat.label = "figures"
     log("== figures")
+    (out / "figures" / "figures.yaml").unlink(missing_ok=True)  # a figures run's record: these are the demo's
     figs = draw_figures(tables, out / "figures", signals_k=cfg.signals_k, world=cfg.world)
     if sweep_table is not None:
         figs.update(draw_sweep(out / "sweeps" / DEMO_SWEEP["name"], out / "figures"))

@@ -541,8 +541,13 @@ DEMO_OWNER = Owner("demo", {
 #: tables/ (or of the tables folder itself, for ``figures --tables DIR --out DIR``); a demo's
 #: figures/ folder (``figures --tables DEMO/tables --out DEMO/figures``) is its own too. A figure
 #: or its CSV says nothing of lmsbench: by names alone a user's fig3_scan.png was written over.
+#: A folder of ``figures --tables T --out DIR`` from before figures.yaml holds no table: its
+#: fig4_ad.csv tells it (figures.tables.signals_table's columns and the reference line's; a review
+#: found such folders refused as "no earlier lmsbench figures run wrote").
 FIGURES_OWNER = Owner("figures", {"figures.yaml": _yaml_says(command="lmsbench figures"),
-                                  "tables/study.yaml": _STUDY_RECORD, "study.yaml": _STUDY_RECORD},
+                                  "tables/study.yaml": _STUDY_RECORD, "study.yaml": _STUDY_RECORD,
+                                  "fig4_ad.csv": _csv_starts("beam", "bearing_deg", "range_m", "ad", "ad_band",
+                                                             "theta_deg", "psi_deg", "reference")},
                       within={"figures": DEMO_OWNER})
 
 

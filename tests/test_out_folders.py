@@ -218,6 +218,11 @@ def test_figures_runs_again_into_its_own_folder_and_a_demos(tables, tmp_path, ca
     assert main(["figures", "--tables", str(tables), "--out", str(demo / "figures")]) == 0, capsys.readouterr().err
     assert (demo / "figures" / "fig7_timing.png").read_bytes().startswith(b"\x89PNG")
     assert DEMO_OWNER.foreign(demo, DEMO_OUTPUTS) == [] and DEMO_OUTPUTS.foreign(demo) == []
+    pre = tmp_path / "pre"  # `figures --tables T --out DIR` before figures.yaml: no table, no record
+    assert main(["figures", "--tables", str(tables), "--out", str(pre)]) == 0, capsys.readouterr().err
+    (pre / "figures.yaml").unlink()  # was refused: "no earlier lmsbench figures run wrote"
+    (pre / "fig4_ad.csv").write_text("beam,bearing_deg,range_m,ad,ad_band,theta_deg,psi_deg,reference\n")  # as it wrote
+    assert main(["figures", "--tables", str(tables), "--out", str(pre)]) == 0, capsys.readouterr().err
     other = tmp_path / "other" / "figures"
     other.mkdir(parents=True)
     (other / "fig7_timing.png").write_bytes(b"mine")
@@ -321,3 +326,21 @@ def test_a_demo_or_sim2real_stopped_at_its_first_files_is_taken_by_the_next_run(
     capsys.readouterr()
     assert main(argv) == 0, capsys.readouterr().err
     assert (s2r / "sim2real.png").is_file()
+
+
+def test_a_demo_run_again_leaves_no_figures_record_beside_its_own_figures(tmp_path, capsys, monkeypatch):
+    """`figures --tables DEMO/tables --out DEMO/figures` leaves its figures.yaml there; the next
+    demo into DEMO redrew the figures and kept it, a record of a figures run (its tables, its
+    versions) beside figures the demo drew (a review). The demo removes it; the study is stubbed."""
+    import pandas as pd
+
+    import experiments.demo
+
+    timing = pd.DataFrame({"method": ["sensor"], "scan": [0], "time_ms": [0.05]})
+    monkeypatch.setattr(experiments.demo, "run_study", lambda cfg, log=print: ({"timing": timing, "summary": timing}, []))
+    demo, argv = tmp_path / "demo", ["demo", "--no-sweep", "--duration", "1", "--out", str(tmp_path / "demo")]
+    assert main(argv) == 0, capsys.readouterr().err
+    assert main(["figures", "--tables", str(demo / "tables"), "--out", str(demo / "figures")]) == 0
+    assert (demo / "figures" / "figures.yaml").is_file()
+    assert main(argv) == 0, capsys.readouterr().err
+    assert sorted(p.name for p in (demo / "figures").iterdir()) == ["fig7_timing.csv", "fig7_timing.pdf", "fig7_timing.png"]
