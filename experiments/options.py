@@ -480,6 +480,9 @@ class Owner:
     command: str
     records: Mapping[str, Callable[[Path], bool]]
     within: Mapping[str, "Owner"] = field(default_factory=dict)
+    #: outputs that tell a folder of a run from before its records (not records: beside a record,
+    #: one of them holding anything else is still the run's own, to replace)
+    legacy: Mapping[str, Callable[[Path], bool]] = field(default_factory=dict)
 
     def told(self, folder: Path) -> set[str]:
         """The records of ``folder`` (``sub/name`` in sub-folders) that an earlier run wrote."""
@@ -488,7 +491,7 @@ class Owner:
     def wrote_in(self, folder: Path) -> bool:
         """Whether an earlier run wrote into ``folder``: a record of it there, or ``folder`` is the
         sub-folder of ``within`` in a folder an earlier run of that owner wrote."""
-        if self.told(folder):
+        if self.told(folder) or any((folder / n).is_file() and tells(folder / n) for n, tells in self.legacy.items()):
             return True
         real = folder.resolve()
         return any(real.name == sub and owner.wrote_in(real.parent) for sub, owner in self.within.items())
@@ -545,10 +548,10 @@ DEMO_OWNER = Owner("demo", {
 #: fig4_ad.csv tells it (figures.tables.signals_table's columns and the reference line's; a review
 #: found such folders refused as "no earlier lmsbench figures run wrote").
 FIGURES_OWNER = Owner("figures", {"figures.yaml": _yaml_says(command="lmsbench figures"),
-                                  "tables/study.yaml": _STUDY_RECORD, "study.yaml": _STUDY_RECORD,
-                                  "fig4_ad.csv": _csv_starts("beam", "bearing_deg", "range_m", "ad", "ad_band",
-                                                             "theta_deg", "psi_deg", "reference")},
-                      within={"figures": DEMO_OWNER})
+                                  "tables/study.yaml": _STUDY_RECORD, "study.yaml": _STUDY_RECORD},
+                      within={"figures": DEMO_OWNER},
+                      legacy={"fig4_ad.csv": _csv_starts("beam", "bearing_deg", "range_m", "ad", "ad_band",
+                                                         "theta_deg", "psi_deg", "reference")})
 
 
 def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | None = None,
