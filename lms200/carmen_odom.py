@@ -21,7 +21,7 @@ from .records import Pose2D, Record
 
 ODOM_MAX_GAP_S = 0.5  # s: the farthest an ODOM line may lie from a scan (either side) to give its pose
 MAX_PENDING_SCANS = 256  # scans held at most while waiting for the ODOM line after them
-#: s behind the newest stamp read for which ODOM lines are kept: a laser line written late (after
+#: s behind the latest ODOM stamp read for which ODOM lines are kept: a laser line written late (after
 #: ODOM lines stamped after it) still finds the lines around its stamp. A count of 8 lines was too
 #: few (a review: 100 Hz odometry and laser lines 0.1 s late, every scan read with odom None).
 ODOM_KEEP_S = 3 * ODOM_MAX_GAP_S
@@ -57,8 +57,9 @@ class OdomPairing:
         if math.isfinite(stamp) and all(map(math.isfinite, pose)):
             self.recent.append((stamp, pose))
             self.newest, self.last_odom = max(self.newest, stamp), max(self.last_odom, stamp)
-            while self.recent[0][0] < self.newest - ODOM_KEEP_S:
-                self.recent.popleft()
+            while self.recent and self.recent[0][0] < self.last_odom - ODOM_KEEP_S:
+                self.recent.popleft()  # behind the latest ODOM line: a scan's own stamp (two clocks, a bad
+                # stamp) emptied the buffer and raised IndexError on the next line (a review)
         return self._ready()
 
     def scan(self, rec: Record) -> Iterator[Record]:

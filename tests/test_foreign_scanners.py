@@ -243,3 +243,21 @@ def test_rawlaser_lines_written_late_behind_fast_odometry_still_take_their_pose(
     for rec in recs:
         assert rec.odom is not None, rec.scan.stamp
         np.testing.assert_allclose(rec.odom, pose(rec.scan.stamp), atol=1e-9)
+
+
+def test_odom_pairing_survives_scan_stamps_far_ahead_of_the_odometry():
+    """A scan stamped 10 s after the last ODOM line (two clocks, or one bad stamp) made the next
+    ODOM line empty the kept lines and raise IndexError (`lmsbench info: internal error`); the
+    lines are kept behind the latest ODOM stamp instead, and the scans read on."""
+    from lms200.carmen_odom import OdomPairing
+    from lms200.records import Record
+
+    pairing = OdomPairing()
+    assert list(pairing.odom(10.0, (0.0, 0.0, 0.0))) == []
+    ahead = Record(scan=Scan.lms200(np.full(361, 2.0), stamp=20.0), odom=None, truth=None)
+    assert list(pairing.scan(ahead)) == []
+    assert list(pairing.odom(11.0, (1.0, 0.0, 0.0))) == []
+    near = Record(scan=Scan.lms200(np.full(361, 2.0), stamp=10.5), odom=None, truth=None)
+    released = list(pairing.scan(near)) + list(pairing.flush())
+    assert [r.scan.stamp for r in released] == [20.0, 10.5]
+    assert released[0].odom is None and released[1].odom == pytest.approx((0.5, 0.0, 0.0))
