@@ -62,6 +62,7 @@ class _Interrupt:
         self.signum: int = signal.SIGINT
         self.redeliver = False  # the stop's KeyboardInterrupt was swallowed: raise it again
         self.in_hook = False  # sys.unraisablehook is running
+        self.running = False  # the command is running (a swallowed stop is raised again only then)
 
     @property
     def word_and_status(self) -> tuple[str, int]:
@@ -69,6 +70,9 @@ class _Interrupt:
 
     def handler(self, signum: int, frame: Any) -> None:
         if self.redeliver:  # the first stop again (see swallowed), not a second Ctrl-C
+            if not self.running:  # the command returned meanwhile: nothing to stop (raised during the
+                self.redeliver = False  # exit, it cut an atexit callback short, silently: a review)
+                return
             if self.in_hook:  # not inside the hook itself, where it would be swallowed again
                 self._raise_again()
                 return
@@ -88,7 +92,7 @@ class _Interrupt:
         as Dask's, a ``__del__``, a weakref callback); if so it is raised again in the main thread
         at once. It printed "Exception ignored in: <function ...>" and a traceback above the one
         line, and the command went on until a second Ctrl-C or the grace timer stopped it."""
-        if not isinstance(unraisable.exc_value, KeyboardInterrupt) or self.timer is None:
+        if not isinstance(unraisable.exc_value, KeyboardInterrupt) or self.timer is None or not self.running:
             return False
         self.in_hook, self.redeliver = True, True
         try:
@@ -173,7 +177,11 @@ def _main(argv: Sequence[str] | None) -> int:
     done = False  # whether the command's work ended (a reader of stdout that went away then is no loss)
     try:
         default_threads()  # a bad $LMSBENCH_THREADS is refused before any work, by every command
-        status = int(args.func(args) or 0)
+        interrupt.running = True
+        try:
+            status = int(args.func(args) or 0)
+        finally:
+            interrupt.running = False
         done = True
         sys.stdout.flush()  # here, not at exit: a reader that went away (`| head`) is said below
         return status
