@@ -214,6 +214,17 @@ def _header_hits(telegram: bytes) -> dict[str, bytes]:
     return out
 
 
+def _header_hit_streams(good_values: tuple[int, int, int]):
+    """Each of the 40 header hits of a scan telegram ending in 0x15 and of one ending in 0x06, between
+    three good scans: (the good telegrams, the hit's name, the broken telegram, the stream)."""
+    goods = [_scan_telegram(v) for v in good_values]
+    for first, tail in ((217, NAK), (154, ACK)):
+        victim = _scan_telegram(first)
+        assert victim[-1] == tail
+        for name, broken in _header_hits(victim).items():
+            yield goods, name, broken, goods[0] + broken + goods[1] + goods[2]
+
+
 def test_a_telegram_whose_header_was_hit_leaves_no_handshake_and_loses_no_frame() -> None:
     """Closing note of session 32: a telegram whose STX, address or LEN was hit is garbage whole,
     and its last byte (the CRC's high byte) ended the garbage run before the next frame (or a
@@ -221,24 +232,19 @@ def test_a_telegram_whose_header_was_hit_leaves_no_handshake_and_loses_no_frame(
     real NAK. Scan telegrams whose CRC high byte is 0x15 and 0x06, each of 40 header hits, in a
     stream between good scans, fed whole, byte by byte and cut around the hit: no handshake, and
     every good scan behind it is found. Old: a handshake in 36 of the 40 hits fed whole (33 byte by byte)."""
-    goods = [_scan_telegram(v) for v in (1, 2, 3)]
-    for first, tail in ((217, NAK), (154, ACK)):
-        victim = _scan_telegram(first)
-        assert victim[-1] == tail
-        for name, broken in _header_hits(victim).items():
-            stream = goods[0] + broken + goods[1] + goods[2]
-            at = len(goods[0])
-            cut_sets = {"whole": [], "byte by byte": list(range(1, len(stream))),
-                        "around the hit": [at + c for c in (1, 2, 3, 4, 5, 100, len(broken) - 1, len(broken))]}
-            if name == "STX bit 2":  # 0x02 -> 0x06 ending a read where the stream is in step: taken
-                # for an ACK (it cannot be told from one until the next byte comes), see docs/lms200.md
-                cut_sets = {k: [c for c in v if c != at + 1] for k, v in cut_sets.items()}
-            for how, cuts in cut_sets.items():
-                p = FrameParser()
-                events = feed_cut(p, stream, cuts)
-                assert [e for e in events if not isinstance(e, Frame)] == [], (name, how)
-                assert [e.payload for e in events] == [g[4:-2] for g in goods], (name, how)
-                assert (p.stats.acks, p.stats.naks) == (0, 0)
+    for goods, name, broken, stream in _header_hit_streams((1, 2, 3)):
+        at = len(goods[0])
+        cut_sets = {"whole": [], "byte by byte": list(range(1, len(stream))),
+                    "around the hit": [at + c for c in (1, 2, 3, 4, 5, 100, len(broken) - 1, len(broken))]}
+        if name == "STX bit 2":  # 0x02 -> 0x06 ending a read where the stream is in step: taken
+            # for an ACK (it cannot be told from one until the next byte comes), see docs/lms200.md
+            cut_sets = {k: [c for c in v if c != at + 1] for k, v in cut_sets.items()}
+        for how, cuts in cut_sets.items():
+            p = FrameParser()
+            events = feed_cut(p, stream, cuts)
+            assert [e for e in events if not isinstance(e, Frame)] == [], (name, how)
+            assert [e.payload for e in events] == [g[4:-2] for g in goods], (name, how)
+            assert (p.stats.acks, p.stats.naks) == (0, 0)
 
 
 def test_handshakes_count_only_where_the_stream_is_in_step() -> None:
@@ -343,23 +349,18 @@ def test_a_request_written_while_streaming_brings_back_no_handshake_from_a_heade
     """The 40 header hits of a scan telegram ending in 0x15 (0x06) between good scans, fed byte by
     byte with a request written while streaming (request_sent(streaming=True)) before every byte:
     no handshake, every good scan."""
-    goods = [_scan_telegram(v) for v in (11, 12, 13)]
-    for first, tail in ((217, NAK), (154, ACK)):
-        victim = _scan_telegram(first)
-        assert victim[-1] == tail
-        for name, broken in _header_hits(victim).items():
-            stream = goods[0] + broken + goods[1] + goods[2]
-            for step in (1, 7):
-                cuts = list(range(0, len(stream), step))
-                if name == "STX bit 2":  # 0x02 -> 0x06 ending a read in step: an ACK, see above
-                    cuts = [c for c in cuts if c != len(goods[0]) + 1]
-                p = FrameParser()
-                events = []
-                for i, j in zip(cuts, cuts[1:] + [len(stream)]):
-                    p.request_sent(streaming=True)
-                    events += p.feed(stream[i:j])
-                assert [e for e in events if not isinstance(e, Frame)] == [], (name, step)
-                assert [e.payload for e in events] == [g[4:-2] for g in goods], (name, step)
+    for goods, name, broken, stream in _header_hit_streams((11, 12, 13)):
+        for step in (1, 7):
+            cuts = list(range(0, len(stream), step))
+            if name == "STX bit 2":  # 0x02 -> 0x06 ending a read in step: an ACK, see above
+                cuts = [c for c in cuts if c != len(goods[0]) + 1]
+            p = FrameParser()
+            events = []
+            for i, j in zip(cuts, cuts[1:] + [len(stream)]):
+                p.request_sent(streaming=True)
+                events += p.feed(stream[i:j])
+            assert [e for e in events if not isinstance(e, Frame)] == [], (name, step)
+            assert [e.payload for e in events] == [g[4:-2] for g in goods], (name, step)
 
 
 def test_the_last_byte_of_a_telegram_that_may_have_lost_one_is_a_nak_only_while_a_reply_is_awaited() -> None:
