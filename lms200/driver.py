@@ -430,9 +430,11 @@ class LMS200:
         summary = "; ".join(f"attempt {i + 1}: {s}" for i, s in enumerate(seen))
         if seen and seen[-1] == "NAK":
             raise LmsNakError(f"{what}: sent {telegram.hex(' ')} on {self.port} at {self.baud} baud; {summary}")
-        raise LmsTimeoutError(
+        timeout = LmsTimeoutError(
             f"{what}: no 0x{expected:02X} reply within {budget:.2f} s on {self.port} at {self.baud} baud; {summary}"
         )
+        timeout.budget_s, timeout.attempts = budget, tuple(seen)
+        raise timeout
 
     def _set_mode(self, sub_command: int, what: str) -> None:
         # A scan telegram after the request to start continuous output shows that it took (the
@@ -520,12 +522,12 @@ class LMS200:
                 seen.append("NAK")
                 continue
             except LmsTimeoutError as exc:
-                budget = str(exc).split(" on ", 1)[0].rsplit("within ", 1)[-1]
+                budget = f"{exc.budget_s:.2f} s"
                 self._use_baud(baud)
                 if self._answers(f"{what}: check at {baud} baud"):
                     return
                 self._use_baud(old)
-                seen.append(f"{str(exc).rsplit('attempt 1: ', 1)[-1]}, and nothing at {baud} baud")
+                seen.append(f"{exc.attempts[-1]}, and nothing at {baud} baud")
                 continue
             if len(reply.payload) < 2 or reply.payload[1] != 0:
                 raise LmsModeRefusedError(f"{what}: the device refused (0xA0 reply {reply.payload.hex(' ')})")

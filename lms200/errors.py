@@ -42,7 +42,12 @@ class LmsDeviceError(LmsbenchError):
 
 
 class LmsTimeoutError(LmsDeviceError, TimeoutError):
-    """The device did not answer a request in time (after the retries)."""
+    """The device did not answer a request in time (after the retries). From the driver's request
+    loop: ``budget_s``, the seconds each attempt waited, and ``attempts``, what each attempt saw
+    (as its message lists them), for a caller that words its own message (the baud change)."""
+
+    budget_s: float | None = None
+    attempts: tuple[str, ...] = ()
 
 
 class LmsNakError(LmsDeviceError):
