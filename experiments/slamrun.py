@@ -224,8 +224,9 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     scoring error or a Ctrl-C loses no result; no other file in ``out`` is touched (write_outputs
     writes metrics.json and slam.png at the end). With ``replace_earlier`` (``lmsbench slam``, after
     :func:`foreign_outputs` found none) an earlier run's metrics.json and slam.png in ``out``, and its
-    keyframes.tum where this run writes none, are removed before this run's trajectory is written,
-    so a run stopped after it does not leave them beside it as if they were its scores; only files
+    trajectory.tum, keyframes.tum and map.json, are removed before this run's config.yaml is
+    written, so a run stopped while writing its files leaves none of them beside its own as if they
+    were its trajectory, map or scores; only files
     :func:`earlier_run_files` tells an earlier lmsbench slam run wrote (a user's own metrics.json
     and slam.png in --out were deleted).
     """
@@ -239,8 +240,8 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     if out is not None:
         earlier = earlier_run_files(out) if replace_earlier and out.is_dir() else set()  # before this run writes
-        for stale in ("metrics.json", "slam.png"):  # an earlier run's, written again at the end; first, so that
-            if stale in earlier:  # no stop leaves them beside this run's trajectory
+        for stale in _STALE_ORDER:  # an earlier run's outputs, all but the config.yaml written over whole next,
+            if stale in earlier:  # so that no stop leaves one of them beside this run's files; records last
                 (out / stale).unlink(missing_ok=True)
         write_config(out, data, config)  # first: a stop after it leaves a folder told as slam's (SLAM_OWNER)
         write_result(out, result, earlier)
@@ -313,6 +314,9 @@ def write_result(out: Path, res: SlamResult, earlier: Collection[str] = ()) -> N
 
 #: What lmsbench slam writes in its --out folder.
 OUTPUTS = SLAM_OUTPUTS
+#: An earlier run's outputs removed before a run writes its own, the files told by a record first,
+#: the records (map.json, metrics.json) last, so that a stop between leaves the folder told as slam's.
+_STALE_ORDER = ("slam.png", "trajectory.tum", "keyframes.tum", "metrics.json", "map.json")
 
 
 def earlier_run_files(out: Path) -> set[str]:

@@ -411,13 +411,46 @@ def test_ctrl_c_in_the_baselines_leaves_no_earlier_runs_scores_beside_the_new_tr
     assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--preset", "paper", "--no-paper-baseline"]) == 0
     before = (out / "trajectory.tum").read_text()
 
-    def new_config() -> bool:
-        try:
-            return yaml.safe_load((out / "config.yaml").read_text())["slam"]["preset"] == "default"
+    def new_outputs() -> bool:  # map.json, the last of them, is written whole (a CI run sent SIGINT once
+        try:  # config.yaml alone was new, between the trajectory and keyframes.tum: a race of this test)
+            new = yaml.safe_load((out / "config.yaml").read_text())["slam"]["preset"] == "default"
         except (OSError, TypeError, KeyError, yaml.YAMLError):  # being written
             return False
+        return new and (out / "map.json").exists()  # the earlier map.json is removed before config.yaml
 
-    status, err = _slam_stopped_when(sim_run, out, new_config)
+    status, err = _slam_stopped_when(sim_run, out, new_outputs)
     assert (status, err.splitlines()) == (130, ["lmsbench slam: interrupted"])
     assert sorted(p.name for p in out.iterdir()) == ["config.yaml", "keyframes.tum", "map.json", "trajectory.tum"]
     assert (out / "trajectory.tum").read_text() != before
+
+
+def test_a_stop_while_slam_writes_its_files_leaves_none_of_an_earlier_runs_beside_them(sim_run, tmp_path,
+                                                                                        monkeypatch, capsys):
+    """A stop between this run's config.yaml and its map.json (a CI run's Ctrl-C landed there) left
+    the earlier paper-preset run's map.json beside the new config.yaml and trajectory.tum, as if it
+    were the new run's map. The earlier run's outputs are now removed before the new config.yaml."""
+    import experiments.slamrun as slamrun
+    from experiments.cli import main
+
+    out = tmp_path / "run"
+    assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--preset", "paper", "--no-paper-baseline"]) == 0
+    earlier = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert sorted(earlier) == ["config.yaml", "map.json", "metrics.json", "slam.png", "trajectory.tum"]
+    write_tum = slamrun.write_tum
+
+    def stopped_at_keyframes(path, *args, **kwargs):
+        if Path(path).name == "keyframes.tum":
+            raise KeyboardInterrupt
+        return write_tum(path, *args, **kwargs)
+
+    monkeypatch.setattr(slamrun, "write_tum", stopped_at_keyframes)
+    capsys.readouterr()
+    assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--no-paper-baseline"]) == 130
+    assert capsys.readouterr().err.splitlines() == ["lmsbench slam: interrupted"]
+    assert sorted(p.name for p in out.iterdir()) == ["config.yaml", "trajectory.tum"]  # old: map.json too
+    assert yaml.safe_load((out / "config.yaml").read_text())["slam"]["preset"] == "default"
+    assert (out / "trajectory.tum").read_bytes() != earlier["trajectory.tum"]
+    monkeypatch.setattr(slamrun, "write_tum", write_tum)
+    assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--no-paper-baseline"]) == 0  # taken again
+    assert sorted(p.name for p in out.iterdir()) == ["config.yaml", "keyframes.tum", "map.json", "metrics.json",
+                                                     "slam.png", "trajectory.tum"]
