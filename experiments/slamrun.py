@@ -36,10 +36,11 @@ class SlamInput:
 
     name: str
     records: list[Record]
-    truth: np.ndarray | None = None  # (n, 4) t, x, y, theta
+    truth: np.ndarray | None = None  # (n, 4) t, x, y, theta of the reference poses (``reference``)
     walls: np.ndarray | None = None  # (k, 4) true wall segments, world frame
     relations: np.ndarray | None = None  # (m, 5) t1, t2, x, y, yaw
     sources: dict[str, str] = field(default_factory=dict)
+    reference: str = "ground truth"  # what ``truth`` holds: "ground truth", or "corrected poses" of a log
 
     @property
     def odometry(self) -> np.ndarray | None:
@@ -171,7 +172,12 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if truth is None and all(r.truth is not None for r in records):
         truth = np.array([(r.scan.stamp, *r.truth) for r in records], float)
         sources["truth"] = f"{log} (TRUEPOS)"
-    return SlamInput(p.name, records, truth, walls, rel, sources)
+    reference = "ground truth"
+    if truth is None and all(r.corrected is not None for r in records):  # a Radish corrected log: its odometry
+        truth = np.array([(r.scan.stamp, *r.corrected) for r in records], float)  # is the ODOM lines' (raw)
+        sources["truth"] = f"{log} (corrected poses: the log's own SLAM solution, not ground truth)"
+        reference = "corrected poses"
+    return SlamInput(p.name, records, truth, walls, rel, sources, reference)
 
 
 def score(traj: np.ndarray, data: SlamInput, result: SlamResult | None = None) -> dict[str, Any]:
@@ -275,6 +281,7 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
             consistency[key] = d[key]
     metrics = {
         "input": data.sources,
+        **({"reference": data.reference} if data.truth is not None else {}),  # what ate / rpe are against
         "preset": config.preset,
         "n_scans": len(data.records),
         "seconds": seconds,
@@ -375,7 +382,8 @@ def _jsonable(value: Any) -> Any:
 
 
 def plot(path: Path, data: SlamInput, res: SlamResult) -> None:
-    """Trajectory and map lines, over the ground truth (aligned into its frame) where there is one."""
+    """Trajectory and map lines, over the ground truth or corrected poses (aligned into their frame)
+    where there are some."""
     try:
         from experiments.style import apply_style, equal_axes
     except ImportError:  # pragma: no cover - the style module is part of the project
@@ -395,7 +403,7 @@ def plot(path: Path, data: SlamInput, res: SlamResult) -> None:
         if data.walls is not None:
             for w in data.walls:
                 ax.plot(w[[0, 2]], w[[1, 3]], color="0.75", lw=1.0)
-        ax.plot(data.truth[:, 1], data.truth[:, 2], color="k", lw=1.0, label="ground truth")
+        ax.plot(data.truth[:, 1], data.truth[:, 2], color="k", lw=1.0, label=data.reference)
     xy = al.apply(res.trajectory[:, 1:3])
     for ln in res.map_lines:
         ends = al.apply(ln[2:6].reshape(2, 2))

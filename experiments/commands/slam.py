@@ -240,10 +240,13 @@ def run(args: argparse.Namespace) -> int:
 
 def _score_lines(m: dict[str, Any]) -> list[str]:
     """This run's scores beside its baselines' (metrics.json's ``table``, this run first): the ATE
-    against true poses, the relations error against a relations file. The summary printed the
+    against true poses (or a log's corrected poses, so named), the relations error against a
+    relations file. The summary printed the
     published relations errors of MIT CSAIL with none of this run's."""
     lines = []
-    for key, label in (("ate_rmse", "ATE RMS (m)"), ("relations_trans_mean", "relations error, mean (m)")):
+    ate_label = "ATE RMS (m)" if m.get("reference", "ground truth") == "ground truth" else \
+        f"ATE RMS against the log's {m['reference']} (m)"
+    for key, label in (("ate_rmse", ate_label), ("relations_trans_mean", "relations error, mean (m)")):
         rows = [(("this run" if i == 0 else row["source"]), row[key]) for i, row in enumerate(m.get("table", []))
                 if isinstance(row.get(key), (int, float)) and math.isfinite(row[key])]
         if rows and rows[0][0] == "this run":
