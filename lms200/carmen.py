@@ -52,7 +52,7 @@ import tarfile
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Iterable, Iterator
+from typing import IO, Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -355,13 +355,12 @@ class CarmenReader:
         return raw
 
     def __iter__(self) -> Iterator[Record]:
-        self._holders: tuple[OdomPairing | CorrectedChain | None, ...] = ()
+        self._held: list[Callable[[], Iterator[Record]]] = []  # flush() of what holds records back
         try:
             yield from self._read()
         except Exception:  # a bad line ends the pass: the records held for a later line come first
-            for holder in self._holders:
-                if holder is not None:
-                    yield from holder.flush()
+            for flush in self._held:
+                yield from flush()
             raise
 
     def _read(self) -> Iterator[Record]:
@@ -382,7 +381,7 @@ class CarmenReader:
         pairing = OdomPairing() if stats.laser in RAW_LASER_KINDS else None
         # a Radish corrected log: the laser lines' poses are a SLAM solution, the ODOM lines the raw odometry
         chain = CorrectedChain() if pairing is None else None
-        self._holders = (pairing, chain)
+        self._held = [holder.flush for holder in (pairing, chain) if holder is not None]
         for line_no, line in self._lines():
             words = line.split()
             if not words or words[0].startswith("#"):
