@@ -119,7 +119,10 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
 
     import sim
 
+    from experiments.options import check_simulate_finished
+
     p = Path(path)
+    check_simulate_finished(p)
     world = sim.World.from_json(p / "world.json")
     settings: dict[str, Any] = {"folder": str(p)}
     sensor = sim.SensorConfig()

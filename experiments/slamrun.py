@@ -20,7 +20,7 @@ import numpy as np
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml
-from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree
+from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished
 from experiments.provenance import write_record
 from slam import SlamConfig, SlamResult, run_slam
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
@@ -96,7 +96,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
 
     Raises:
         FileNotFoundError: the input does not exist.
-        LmsbenchError: a folder without scans.clf, an input without scans, or none with a valid beam, or
+        LmsbenchError: a folder without scans.clf, a simulate folder whose run did not finish
+            (options.check_simulate_finished), an input without scans, or none with a valid beam, or
             more than one scan read and all of one stamp (no time between scans for the motion model), or
             one scan to run on (an input of one scan, ``max_scans`` below 2, ``rate_hz`` / ``every`` that
             keep one scan of several).
@@ -110,6 +111,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         raise LmsbenchError(f"--max-scans must be >= 2 (SLAM needs two or more scans), got {max_scans}")
     sources: dict[str, str] = {}
     truth = walls = rel = None
+    check_simulate_finished(p)
     if p.is_dir() and (p / "scans.clf").is_file():
         log = p / "scans.clf"
         if (p / "groundtruth.tum").is_file():

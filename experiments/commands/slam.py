@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from slam import SlamConfig
 
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import (SLAM_OUTPUTS, SLAM_OWNER, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_yaml,
+from experiments.options import (SLAM_OUTPUTS, SLAM_OWNER, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_simulate_finished, check_yaml,
                                  count, missing_message, positive, path_arg, text)
 
 
@@ -135,6 +135,7 @@ def in_time_order(stamps: list[float]) -> list[int]:
 
 def _check_input(path: Path) -> None:
     """A simulator folder (scans.clf), a ROS 2 bag folder, or a log file of a known kind."""
+    check_simulate_finished(path)  # first: a killed run's folder may hold no scans.clf ("no such input")
     if not path.exists():
         raise InputError(missing_message(path, "input"))  # "X: no such input (did you mean X.gz?)"
     if path.is_dir() and (path / "scans.clf").is_file():
