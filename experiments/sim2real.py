@@ -229,8 +229,12 @@ def odometry_limits_and_source(a: np.ndarray) -> tuple[Any, str]:
     dt = np.diff(a[:, 0])
     ok = (dt > 0) & (dt < MIN_SCAN_DT_S)
     if np.count_nonzero(ok) < 10 or np.mean(ok) < 0.5:  # mostly long gaps: a subsampled log
+        forward = int(np.count_nonzero(dt > 0))
+        if forward < 10 or forward < 0.5 * len(dt):
+            return RobotLimits(), defaults + (f"{len(dt) - forward} of the {len(dt)} steps between scans with "
+                                              "odometry take no time or go back in time")
         return RobotLimits(), defaults + (f"{np.count_nonzero(ok)} of the {len(dt)} steps between scans with odometry "
-                                          f"are shorter than {MIN_SCAN_DT_S:g} s (a keyframe or subsampled log)")
+                                          f"are shorter than {MIN_SCAN_DT_S:g} s: a keyframe or subsampled log")
     v = np.hypot(np.diff(a[:, 1]), np.diff(a[:, 2]))[ok] / dt[ok]
     w = np.abs(np.angle(np.exp(1j * np.diff(a[:, 3]))))[ok] / dt[ok]
     v_max, w_max = float(np.quantile(v, 0.75)), float(np.quantile(w, 0.95))

@@ -21,7 +21,7 @@ from collections import deque
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator
+from typing import Any, Callable, ClassVar, Iterable, Iterator
 
 import numpy as np
 
@@ -282,24 +282,37 @@ class BagReadStats(SkipLog):
     messages: dict[str, int] = field(default_factory=dict)
     stopped: str | None = None
     laser: str | None = None
-    time_increments: set[float] = field(default_factory=set)  # the scans' time_increment values (s), up to 8
+    time_increment_range: tuple[float, float] | None = None  # the least and largest time_increment read (s)
+    time_increment_sum: float = 0.0  # of the scans' time_increment values (s), for their mean
+    timed_scans: int = 0  # scans whose time_increment was noted
     clockwise: bool = False  # some scan swept clockwise (negative angle_increment; read reversed)
+
+    #: time_increment values within this ratio of each other are one timing (drivers that measure
+    #: each scan's period, such as rplidar_ros, give a slightly different value in every scan)
+    TIMING_SPREAD: ClassVar[float] = 1.05
 
     @property
     def time_increment(self) -> float | None:
-        """The seconds between consecutive beams every LaserScan read gives (``time_increment``),
-        in the order the scans are read; None where they give 0 (unknown), differ, or any scan swept
-        clockwise (read reversed, its last beam first)."""
-        if self.clockwise or len(self.time_increments) != 1:
+        """The seconds between consecutive beams the LaserScans give (``time_increment``; their
+        mean where they lie within TIMING_SPREAD of each other), in the order the scans are read;
+        None where any gives 0 (unknown) or they differ more, or any scan swept clockwise (read
+        reversed, its last beam first)."""
+        if self.clockwise or self.time_increment_range is None:
             return None
-        (value,) = self.time_increments
-        return value if math.isfinite(value) and value > 0 else None
+        low, high = self.time_increment_range
+        if not (math.isfinite(high) and low > 0 and high <= self.TIMING_SPREAD * low):
+            return None
+        return self.time_increment_sum / self.timed_scans
 
     def see_timing(self, time_increment: float, angle_increment: float) -> None:
         """Note one LaserScan's ``time_increment`` (s) and ``angle_increment`` (rad)."""
         self.clockwise |= angle_increment < 0
-        if len(self.time_increments) < 8:  # bounded: more than one value is no one timing anyway
-            self.time_increments.add(time_increment)
+        if not math.isfinite(time_increment):
+            time_increment = 0.0  # unknown
+        low, high = self.time_increment_range or (time_increment, time_increment)
+        self.time_increment_range = (min(low, time_increment), max(high, time_increment))
+        self.time_increment_sum += time_increment
+        self.timed_scans += 1
 
 
 class BagReader:

@@ -355,15 +355,15 @@ class CarmenReader:
         return raw
 
     def __iter__(self) -> Iterator[Record]:
-        self._held: list[Callable[[], Iterator[Record]]] = []  # flush() of what holds records back
+        flushes: list[Callable[[], Iterator[Record]]] = []  # this pass's flush() of what holds records back
         try:
-            yield from self._read()
+            yield from self._read(flushes)
         except Exception:  # a bad line ends the pass: the records held for a later line come first
-            for flush in self._held:
+            for flush in flushes:
                 yield from flush()
             raise
 
-    def _read(self) -> Iterator[Record]:
+    def _read(self, flushes: list[Callable[[], Iterator[Record]]]) -> Iterator[Record]:
         default = self._survey()
         self.stats = stats = ReadStats(laser=self.topic or default)
         if stats.laser is not None:
@@ -381,7 +381,7 @@ class CarmenReader:
         pairing = OdomPairing() if stats.laser in RAW_LASER_KINDS else None
         # a Radish corrected log: the laser lines' poses are a SLAM solution, the ODOM lines the raw odometry
         chain = CorrectedChain() if pairing is None else None
-        self._held = [holder.flush for holder in (pairing, chain) if holder is not None]
+        flushes += [holder.flush for holder in (pairing, chain) if holder is not None]
         for line_no, line in self._lines():
             words = line.split()
             if not words or words[0].startswith("#"):

@@ -115,9 +115,12 @@ def _wrap(theta: float) -> float:
     return math.pi if w == -math.pi else w
 
 
-#: s: an anchor's stamp is junk, at least this far before its scan's (Intel: >= 32.9 s, ACES >= 21.0 s);
-#: a real ODOM line right after a scan, at the same pose (a robot standing still), is stamped with it
-ANCHOR_STAMP_GAP_S = 1.0
+#: s: an anchor's stamp is junk: below JUNK_STAMP_S, or this far or more before its scan's (Intel: >=
+#: 32.9 s, ACES >= 21.0 s; 0 or a denormal but for one 1.13); a real ODOM line is stamped within a second
+#: or so of the scans around it (a robot standing still: at its scan's pose), hosts' clocks seconds apart
+ANCHOR_STAMP_GAP_S = 10.0
+JUNK_STAMP_S = 1e-9  # s: a stamp this close to 0 is no time any log was written at
+CONFIRMING_ANCHORS = 2  # anchors read in a row before a missing or foreign one is taken for one
 
 
 class CorrectedChain:
@@ -125,60 +128,107 @@ class CorrectedChain:
 
     Such a log (Intel Research Lab, ACES: a SLAM solution written back into the log) gives every
     FLASER / RLASER line the corrected pose in its pose fields (both the laser and the odometry
-    pose), and writes after each one an ODOM line at exactly that pose (its stamp is junk, far
-    before the scan's: ``ANCHOR_STAMP_GAP_S``; a raw log's ODOM line at a standing robot's pose
-    is stamped with its scan, and is no anchor): the
-    odometry restarts there, and the ODOM lines up to the next laser line are the robot's raw
-    odometry from it. So the odometry between two scans is the last ODOM pose before the second
-    seen from the first's anchor; chained from the first scan's pose, the scans get a raw
-    odometry trajectory (dead reckoning, in the corrected frame at the start), and their pose
-    fields become ``Record.corrected``. Measured: every laser line of the Intel (910) and ACES
-    (440) logs has its anchor; at the next scan the odometry and the corrected pose differ by a
-    median 5 cm and 0.7-2.6 deg (the odometry's drift over one 0.7-1 m step).
+    pose), and writes after each one an ODOM line at exactly that pose, its stamp junk (more than
+    ``ANCHOR_STAMP_GAP_S`` before the scan's): the odometry restarts at that anchor, and the ODOM
+    lines up to the next laser line are the robot's raw odometry from it. So the odometry between
+    two scans is the last ODOM pose before the second seen from the first's anchor; chained from
+    the first anchored scan's pose, the scans get a raw odometry trajectory (dead reckoning, in
+    the corrected frame at the start), and their pose fields become ``Record.corrected``.
+    Measured: every laser line of the Intel (910) and ACES (440) logs has its anchor; at the next
+    scan the odometry and the corrected pose differ by a median 5 cm and 0.7-2.6 deg (the
+    odometry's drift over one 0.7-1 m step).
 
     Feed every laser record of the kind read (:meth:`laser`, its ``odom`` being the line's pose
-    fields) and every ODOM pose (:meth:`odom`) in log order; each returns the records now
-    complete, in log order; :meth:`flush` the last at the end. A laser record whose next ODOM
-    line (other lines between do not matter) is not its anchor, or that another laser line
-    follows first, is handed back as read (the pose fields as odometry, no corrected pose), and
-    the chain starts again at the next anchored scan's pose. Holds one record at most.
+    fields) and every ODOM line (:meth:`odom`) in log order; each returns the records now
+    complete, in log order; :meth:`flush` the last at the end. Once a chain runs (``CONFIRMING_ANCHORS``
+    anchors read in a row, so that one coincidence in a raw log is not taken for a corrected log):
+
+    - a scan whose anchor is missing (a cut log, a damaged anchor skipped) keeps the chained
+      odometry and its pose fields as its corrected pose, and the chain goes on from it, as if
+      its anchor had been read;
+    - (once an anchor has been read) an ODOM line with a junk stamp that is no held scan's anchor
+      (the anchor of another laser kind's line, or of a laser line skipped as malformed) moves the
+      chain's anchor there, with the odometry at that point, so the ODOM lines after it are read
+      from it;
+    - odometry that is not finite (poses near 1e308) ends the chain.
+
+    Otherwise (a raw log) a scan without its anchor is handed back as read (its pose fields as
+    odometry, no corrected pose), and the chain starts again at the next anchor. Holds one record
+    at most.
     """
 
     def __init__(self) -> None:
         self.pending: tuple[Record, Pose2D] | None = None  # a laser record and its chained odometry
         self.anchor: tuple[Pose2D, Pose2D] | None = None  # the last anchor (corrected pose, odometry there)
         self.last_odom: Pose2D | None = None  # the last ODOM pose after that anchor
+        self.last_stamp = -math.inf  # the stamp of the last laser record (s)
         self.anchored = 0  # records given a corrected pose
+        self.in_a_row = 0  # anchors read in a row (CONFIRMING_ANCHORS: the chain runs)
 
     def laser(self, rec: Record) -> Iterator[Record]:
         """A laser record of the kind read; held until the ODOM line after it is read."""
         yield from self.flush()
+        self.last_stamp = rec.scan.stamp
         if rec.odom is None:  # the log says its pose fields are no odometry (PARAM lmsbench_odometry)
+            self._end()
             yield rec
             return
-        if self.anchor is None:
-            odom = rec.odom  # a chain starts at the scan's own pose
-        else:
-            at, odom_at = self.anchor
-            odom = compose(odom_at, relative(at, self.last_odom if self.last_odom is not None else at))
+        odom = rec.odom if self.anchor is None else self._odometry_now()  # a chain starts at the scan's own pose
+        if not all(map(math.isfinite, odom)):
+            self._end()
+            odom = rec.odom
         self.pending = (rec, odom)
 
     def odom(self, pose: Pose2D, stamp: float) -> Iterator[Record]:
-        """An ODOM line's pose and stamp (s): the anchor of the held record, or a step of the odometry."""
-        if self.pending is not None and pose == self.pending[0].odom \
-                and not stamp >= self.pending[0].scan.stamp - ANCHOR_STAMP_GAP_S:
+        """An ODOM line's pose and stamp (s): the anchor of the held record, another line's anchor,
+        or a step of the odometry."""
+        junk = not stamp >= self.last_stamp - ANCHOR_STAMP_GAP_S or abs(stamp) < JUNK_STAMP_S  # nan too
+        if self.pending is not None and junk and pose == self.pending[0].odom:
             rec, odom = self.pending
-            self.pending, self.anchor, self.last_odom = None, (pose, odom), None
-            self.anchored += 1
-            yield Record(scan=rec.scan, odom=odom, truth=rec.truth, corrected=rec.odom)
+            self.pending = None
+            self.in_a_row += 1
+            yield self._anchored(rec, odom)
             return
         yield from self.flush()
-        if all(map(math.isfinite, pose)):
-            self.last_odom = pose
+        if not all(map(math.isfinite, pose)):
+            return
+        if junk and self.anchor is not None:  # another line's anchor: the odometry restarts at its pose
+            odom = self._odometry_now()
+            if all(map(math.isfinite, odom)):
+                self.anchor, self.last_odom = (pose, odom), None
+            else:
+                self._end()
+            return
+        self.last_odom = pose
+
+    @property
+    def running(self) -> bool:
+        """A chain runs: CONFIRMING_ANCHORS anchors read in a row, none missed since."""
+        return self.anchor is not None and self.in_a_row >= CONFIRMING_ANCHORS
 
     def flush(self) -> Iterator[Record]:
-        """The held record, with no anchor after it: as read; the chain ends."""
+        """The held record, with no anchor after it: anchored all the same once a chain runs (its
+        pose fields are its corrected pose), else as read (the chain ends)."""
         if self.pending is not None:
-            rec, _ = self.pending
-            self.pending = self.anchor = self.last_odom = None
-            yield rec
+            rec, odom = self.pending
+            self.pending = None
+            if self.running:
+                yield self._anchored(rec, odom)
+            else:
+                self._end()
+                yield rec
+
+    def _end(self) -> None:
+        self.anchor, self.last_odom, self.in_a_row = None, None, 0
+
+    def _anchored(self, rec: Record, odom: Pose2D) -> Record:
+        assert rec.odom is not None
+        self.anchor, self.last_odom = (rec.odom, odom), None
+        self.anchored += 1
+        return Record(scan=rec.scan, odom=odom, truth=rec.truth, corrected=rec.odom)
+
+    def _odometry_now(self) -> Pose2D:
+        """The chained odometry at the last ODOM line read (at the anchor when none since)."""
+        assert self.anchor is not None
+        at, odom_at = self.anchor
+        return compose(odom_at, relative(at, self.last_odom if self.last_odom is not None else at))

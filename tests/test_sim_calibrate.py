@@ -567,7 +567,10 @@ def test_sim2real_says_where_its_robot_limits_come_from() -> None:
     assert limits.v_max == pytest.approx(0.5) and limits.w_max == pytest.approx(0.2)
     keyframes = steady * np.array([30.0, 1, 1, 1])  # the same poses 3 s apart
     assert odometry_limits_and_source(keyframes) == (RobotLimits(), "the simulator's defaults: 0 of the 299 steps "
-                                                     "between scans with odometry are shorter than 1.5 s (a keyframe "
-                                                     "or subsampled log)")
+                                                     "between scans with odometry are shorter than 1.5 s: a keyframe "
+                                                     "or subsampled log")
+    one_stamp = steady * np.array([0.0, 1, 1, 1])  # a review: said 'a keyframe or subsampled log'
+    assert odometry_limits_and_source(one_stamp)[1] == ("the simulator's defaults: 299 of the 299 steps between "
+                                                        "scans with odometry take no time or go back in time")
     assert odometry_limits_and_source(np.empty((0, 4)))[1] == "the simulator's defaults: the log has no odometry"
     assert odometry_limits_and_source(steady[:5])[1] == "the simulator's defaults: 5 scans with odometry, fewer than 10"
