@@ -889,6 +889,13 @@ def test_a_host_kept_from_running_past_the_deadline_still_reads_the_reply_that_c
     lms.close()
 
 
+def held(ad: PtyAdapter) -> int:
+    """The bytes the adapter holds for the host, read under its lock: an exchange adds the device's
+    new bytes before it trims to the bound, and a read between the two saw 1,048,884 bytes."""
+    with ad._lock:
+        return len(ad._pending)
+
+
 def test_a_new_host_at_another_baud_gets_none_of_the_bytes_held_for_the_last() -> None:
     """Bytes held for a host (d19d993, above) survived a new host: a recorder killed while a scaled
     device streamed at 500000 baud left 0.4 MB garbled for 500000, which the next host, opening at
@@ -907,9 +914,9 @@ def test_a_new_host_at_another_baud_gets_none_of_the_bytes_held_for_the_last() -
         next(first.scans())
         first._ser.close()  # killed: no stop request, the device streams on
         deadline = time.monotonic() + 120  # a deadline, not a rate: filling 1 MiB took 4.6-5 s and more on a loaded machine
-        while len(ad._pending) < adapters.MAX_HELD_BYTES and time.monotonic() < deadline:
+        while held(ad) < adapters.MAX_HELD_BYTES and time.monotonic() < deadline:
             time.sleep(0.02)
-        assert len(ad._pending) == adapters.MAX_HELD_BYTES  # bounded (the old bound: 4 GB)
+        assert held(ad) == adapters.MAX_HELD_BYTES  # bounded (the old bound: 4 GB)
         with LMS200(ad.path, baud=500000) as second:  # opens at 9600 first, then probes
             got = list(itertools.islice(second.scans(), 5))
             baud = second.baud
