@@ -954,8 +954,10 @@ def test_bytes_garbled_for_the_hosts_old_baud_never_reach_it_after_a_baud_change
                 return transmit(now)
 
             monkeypatch.setattr(dev, "transmit", host_changes_baud_meanwhile)
-            got = bytearray()
             deadline = time.monotonic() + 30
+            while not changed and time.monotonic() < deadline:  # what came before it was clean, and flushed
+                time.sleep(0.005)
+            got = bytearray()
             while len(got) < 20000 and time.monotonic() < deadline:
                 try:
                     got += os.read(host, 65536)
