@@ -441,7 +441,7 @@ def test_scans_faster_than_the_assumed_spacing_keep_distinct_stamps_through_a_cl
     from lms200 import driver
     from lms200_fake_port import answer, fake_port, scan_frame
 
-    line_s = 732 * 10 / 9600  # 762.5 ms a telegram at 9600 baud: far more than the 0.1 s between reads
+    line_s = 732 * 10 / 9600  # 762.5 ms a telegram at 9600 baud: far more than the 0.3 s between reads
     shift = [0.0]
 
     class SteppedClock:  # the time module, with a wall clock that NTP can step
@@ -451,13 +451,28 @@ def test_scans_faster_than_the_assumed_spacing_keep_distinct_stamps_through_a_cl
         def time(self) -> float:
             return time.time() + shift[0]
 
+    rest = {"due": False, "queued": False}
+
     def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
-        if payload == b"\x20\x24":  # 5 scans waiting at once, 3 more 0.1 s later
-            return [*answer(payload), (0.05, b"".join(scan_frame(1000 + i) for i in range(5))),
-                    (0.15, b"".join(scan_frame(2000 + i) for i in range(3)))]
+        if payload == b"\x20\x24":  # 5 scans waiting at once; 3 more 0.3 s after they were read
+            rest["due"] = True
+            return [*answer(payload), (0.05, b"".join(scan_frame(1000 + i) for i in range(5)))]
         return answer(payload)
 
-    fake_port(monkeypatch, script)
+    port = fake_port(monkeypatch, script)
+    read = port.read
+
+    def read_then_queue_the_rest(n: int) -> bytes:
+        # The 3 scans were due 0.1 s after the 5 (by the wall clock): a host kept from running
+        # 0.1 s read all 8 in one read, stamped at the line's spacing (sum 2.29 s, not < 0.5).
+        # Now they are queued only once the 5 have been read: always a read of their own.
+        data = read(n)
+        if rest["due"] and not rest["queued"] and not port.queue:
+            rest["queued"] = True
+            port.queue.append((time.monotonic() + 0.3, b"".join(scan_frame(2000 + i) for i in range(3))))
+        return data
+
+    monkeypatch.setattr(port, "read", read_then_queue_the_rest)
     monkeypatch.setattr(driver, "time", SteppedClock())
     lms = LMS200("fake://", baud=9600, probe=False)
     stamps = []
@@ -469,7 +484,8 @@ def test_scans_faster_than_the_assumed_spacing_keep_distinct_stamps_through_a_cl
     np.testing.assert_allclose(diffs[:4], line_s, atol=1e-6)  # a backlog keeps the line's spacing
     assert diffs[4:].min() > 0.02  # old: 0, 0 (all three pinned to their read's time)
     np.testing.assert_allclose(diffs[4:], diffs[4:].mean(), atol=1e-5)  # an equal share each
-    assert 0.08 < diffs[4:].sum() < 0.5  # the time between the two reads (0.1 s apart)
+    first, second = lms._reads[-2][1], lms._reads[-1][1]  # the host times of the two reads
+    assert diffs[4:].sum() == pytest.approx(second - first, abs=1e-6)  # the time between them (>= 0.3 s)
     lms.close()
 
 
