@@ -292,7 +292,6 @@ def test_a_reply_stalled_mid_frame_by_the_link_is_kept(monkeypatch: pytest.Monke
 def test_a_false_start_hiding_a_reply_is_still_dropped_after_a_tenth_of_a_second(monkeypatch: pytest.MonkeyPatch) -> None:
     """The longer wait is for consistent partial frames only: a false start (LEN 512 that never
     comes) with a good reply complete behind it is given up after 0.1 s of quiet, as before."""
-    import time
 
     from lms200_fake_port import TYPE_REPLY, answer, fake_port, reply
 
@@ -302,9 +301,11 @@ def test_a_false_start_hiding_a_reply_is_still_dropped_after_a_tenth_of_a_second
         return answer(payload)
 
     fake_port(monkeypatch, script)
-    t = time.monotonic()
     lms = LMS200("fake://", baud=9600, probe=False)
-    assert time.monotonic() - t < 1.0  # 0.1 s, not the 1.35 s a consistent partial frame gets
+    # dropped after 0.1 s, not the 1.35 s a consistent partial frame gets, which is past the
+    # request's wait: no attempt timed out (the counters, not the wall clock, which a full garbage
+    # collection of a test worker, 0.4-0.7 s on a loaded machine, can hold up)
+    assert lms.stats.timeouts == 0
     assert lms.type_string == "LMS200;301063;V02.10 " and lms.stats.retries == 0 and lms.parser.stats.stalled == 1
     lms.close()
 
@@ -344,7 +345,6 @@ def test_a_corrupted_telegram_ending_in_0x15_is_no_nak_and_one_ending_in_0x06_hi
     CRC byte line noise had turned into 0x15: the parser reported a NAK and close() sent the stop
     request again (retries 1). The other way round, a broken telegram ending in 0x06 before a
     real NAK passed for an ACK, so the NAK was ignored and the request waited out its timeout."""
-    import time
 
     from lms200_fake_port import ACK_BYTE, answer, fake_port, reply, scan_frame
 
@@ -363,9 +363,8 @@ def test_a_corrupted_telegram_ending_in_0x15_is_no_nak_and_one_ending_in_0x06_hi
         return answer(payload)
 
     port = fake_port(monkeypatch, script)
-    t = time.monotonic()
     lms = LMS200("fake://", baud=9600, probe=False, timeout=2.0)
-    assert time.monotonic() - t < 1.0  # the NAK is seen: resent at once, not after the 2 s timeout
+    assert lms.stats.timeouts == 0  # the NAK is seen: resent at once, not after the 2 s timeout (counted, not timed)
     assert lms.stats.retries == 1 and lms.parser.stats.naks == 1
     assert sum(w[4:9] == b"\x3b\xb4\x00\x32\x00" for w in port.writes) == 2
     lms.streaming = True
@@ -405,7 +404,6 @@ def test_a_nak_behind_a_scan_that_lost_a_byte_is_resent_at_once(monkeypatch: pyt
     """Review 32c (nakdrop.py): close() while streaming; the device NAKs the stop request right
     behind a scan telegram that lost one byte on the line. The parser took the NAK for the
     broken telegram's CRC byte: close() waited out its timeout (1.94 s, naks 0) before resending."""
-    import time
 
     from lms200_fake_port import answer, fake_port, scan_frame
 
@@ -422,9 +420,8 @@ def test_a_nak_behind_a_scan_that_lost_a_byte_is_resent_at_once(monkeypatch: pyt
     fake_port(monkeypatch, script)
     lms = LMS200("fake://", baud=9600, probe=False, timeout=0.5, mode_timeout=1.0)
     lms.streaming = True
-    t = time.monotonic()
     lms.close()
-    assert time.monotonic() - t < 0.5  # old: 1.94 s
+    assert lms.stats.timeouts == 0  # resent at once, not after the 0.5 s timeout (old: 1.94 s; counted, not timed)
     assert (lms.stats.retries, lms.parser.stats.naks) == (1, 1)  # old: (1, 0)
 
 
