@@ -17,6 +17,7 @@ from __future__ import annotations
 from lms200.yamlio import load as load_yaml
 
 import dataclasses
+from functools import partial
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -118,7 +119,10 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
 
     import sim
 
+    from experiments.options import check_simulate_finished
+
     p = Path(path)
+    check_simulate_finished(p)
     world = sim.World.from_json(p / "world.json")
     settings: dict[str, Any] = {"folder": str(p)}
     sensor = sim.SensorConfig()
@@ -162,7 +166,10 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
         read_options: keywords of ``lms200.read_log`` (topic, skip_bad_lines, geometry).
         poses: "corrected" when the log's poses are SLAM-corrected (repeatability is measured with
             them), "none" when they are raw odometry, "auto": corrected when the file name says
-            so (Radish names its corrected logs ``*-corrected*``).
+            so (Radish names its corrected logs ``*-corrected*``). The corrected poses a reader
+            found (``Record.corrected``: the laser lines' pose fields of a log whose ODOM lines
+            restart at each scan, :class:`lms200.carmen_odom.CorrectedChain`) are used unless
+            "none"; the odometry then is the raw one the ODOM lines give, never trusted.
     """
     if stride < 1:
         raise LmsbenchError(f"stride: must be >= 1, got {stride}")
@@ -186,9 +193,16 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
         return float(noise.sigma_m)
 
     return Source(Path(path).name, "log", None, records(), None, max_scans, sigma_r=None,
-                  pose_of=(lambda rec: rec.odom) if corrected else None, estimate_sigma=estimate_sigma,
+                  pose_of=None if poses == "none" else partial(_corrected_pose, odometry_too=corrected),
+                  estimate_sigma=estimate_sigma,
                   reader=reader, **log_noise_estimates(lambda: read_log(path, **options)),
                   settings={"log": str(path), "stride": stride, "poses": poses, **_plain(options)})
+
+
+def _corrected_pose(rec: Record, odometry_too: bool) -> Pose2D | None:
+    """The pose of ``rec`` to measure repeatability with: its corrected pose, or (``odometry_too``:
+    the user or the file name says the log's poses are corrected) its odometry pose."""
+    return rec.corrected if rec.corrected is not None else (rec.odom if odometry_too else None)
 
 
 def log_noise_estimates(scans: Callable[[], Iterable[Any]]) -> dict[str, Callable[[], float]]:

@@ -26,6 +26,7 @@ class LogSummary:
     odometry: bool
     truth: bool
     stamps_back: int = 0  # scans stamped before the previous scan of the log
+    corrected: int = 0  # scans with corrected poses (a Radish corrected log: odometry from its ODOM lines)
 
     def as_dict(self) -> dict:
         """The fields as JSON-ready values, numbers as numbers: ``beams`` is the beam count (int)
@@ -51,8 +52,11 @@ class LogSummary:
             f"duration        {self.duration_s:.2f} s",
             f"no return (inf) {100 * self.no_return_fraction:.2f} % of readings",
             f"invalid         {100 * self.invalid_fraction:.2f} % of readings (nan, -inf, 0 or out of limits)",
-            f"odometry        {'yes' if self.odometry else 'no'}",
+            f"odometry        {'yes' if self.odometry else 'no'}"
+            + (" (raw: the ODOM lines between scans, chained)" if self.corrected else ""),
             f"true poses      {'yes' if self.truth else 'no'}",
+            *([f"corrected poses {self.corrected} scans (the laser lines' pose fields: the log's own SLAM solution, "
+               "not ground truth)"] if self.corrected else []),
             "time order      " + (f"{self.stamps_back} scan{'s' * (self.stamps_back != 1)} stamped before the previous one "
                                   "(slam needs --skip-bad-lines)" if self.stamps_back else "yes"),
         ]
@@ -65,7 +69,7 @@ def summarise(records: Iterable[Record]) -> LogSummary:
     stamps: list[float] = []
     readings = inf = nan = 0
     odom = truth = False
-    back = 0
+    back = corrected = 0
     first = None
     for rec in records:
         s = rec.scan
@@ -79,6 +83,7 @@ def summarise(records: Iterable[Record]) -> LogSummary:
         nan += int(np.count_nonzero(~s.valid & ~np.isposinf(s.ranges)))  # nan, -inf (too close), 0 and out-of-limits readings
         odom |= rec.odom is not None
         truth |= rec.truth is not None
+        corrected += rec.corrected is not None
     if first is None:
         return LogSummary(0, "0", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False)
     duration = max(stamps) - min(stamps) if n > 1 else 0.0
@@ -97,4 +102,5 @@ def summarise(records: Iterable[Record]) -> LogSummary:
         odometry=odom,
         truth=truth,
         stamps_back=back,
+        corrected=corrected,
     )

@@ -290,12 +290,32 @@ def check_yaml(path: str | os.PathLike, what: str = "a YAML file", sized: bool =
     return p
 
 
+def check_simulate_finished(path: str | os.PathLike) -> None:
+    """Raise InputError when ``path``, a folder or one of the files ``lmsbench simulate`` writes
+    (SIMULATE_OUTPUTS; through a link: where it points), is in a folder whose simulate run did not
+    finish (its SIMULATE_UNFINISHED file is there): its scans.clf may be cut short, or an earlier
+    run's beside the new run's config.yaml."""
+    p = Path(path)
+    try:
+        real = p.resolve()
+    except (OSError, RuntimeError):  # a loop of links: the caller says so
+        real = p
+    folders = [p] if p.is_dir() else [q.parent for q in dict.fromkeys((p, real)) if q.name in SIMULATE_OUTPUTS]
+    for folder in folders:
+        if (folder / SIMULATE_UNFINISHED).exists():
+            raise InputError(f"{folder}: the lmsbench simulate run that wrote this folder did not finish (it was stopped "
+                             f"or killed while writing its files; {SIMULATE_UNFINISHED} is left), so its scans.clf may be "
+                             f"cut short or an earlier run's; run lmsbench simulate --out {folder} again")
+
+
 def check_log(path: str | os.PathLike) -> Path:
     """A CARMEN log (plain text, or compressed with gzip, bzip2 or xz), a ROS 1 ``.bag`` or a ROS 2 bag folder, by its content:
-    a binary file, an archive, a plain file named ``.gz``, a folder without ``metadata.yaml`` are errors."""
+    a binary file, an archive, a plain file named ``.gz``, a folder without ``metadata.yaml`` are errors;
+    so is the scans.clf (or folder) of a ``lmsbench simulate`` run that did not finish (check_simulate_finished)."""
     if not str(path).strip():  # Path("") is the current folder
         raise InputError(f"empty path {str(path)!r} given as a log; give {'a CARMEN log, ROS 1 .bag or ROS 2 bag folder'}")
     p = Path(path)
+    check_simulate_finished(p)
     what = "a CARMEN log, ROS 1 .bag or ROS 2 bag folder"
     if not p.exists():
         raise InputError(missing_message(p, "log"))
@@ -325,6 +345,13 @@ def check_log(path: str | os.PathLike) -> Path:
 
 
 SIMULATE_OUTPUTS = ("scans.clf", "groundtruth.tum", "world.json", "config.yaml", "map.png")
+#: The hidden file ``lmsbench simulate`` writes into its --out folder before any of its outputs and
+#: removes once they are all whole (experiments.simulation.run_simulation): a run stopped or killed
+#: while writing (Ctrl-C, SIGKILL, a crash, a power loss) leaves it, and the readers of the folder
+#: refuse it (check_simulate_finished). A killed run left a cut scans.clf (or the earlier run's files
+#: beside its new config.yaml) that slam, info, compare and sim2real read as a shorter run, exit 0.
+#: A folder from before this file has none and reads as before.
+SIMULATE_UNFINISHED = ".simulate-unfinished"
 SLAM_OUTPUTS = ("trajectory.tum", "keyframes.tum", "map.json", "metrics.json", "config.yaml", "slam.png")
 COMPARE_OUTPUTS = ("compare.parquet", "compare.csv", "summary.csv", "summary.txt", "config.yaml")  # and a figure per log
 COMPARE_FIGURES = ("realdata_*.png", "realdata_*.pdf", "realdata_*.csv")  # a log's figure and its rows (figures.realdata)

@@ -8,10 +8,16 @@ Files in the output folder:
 - ``world.json``: the world's ground truth (walls, circles, corners) and solids.
 - ``config.yaml``: everything needed to rerun it (no run timestamps: same seed, same bytes).
 - ``map.png``: the world, the path and one scan.
+
+Each file is written whole or not at all (a hidden temporary file renamed into place), and the
+hidden ``.simulate-unfinished`` (options.SIMULATE_UNFINISHED), written before them and removed once
+they are all whole and on disk, tells a run stopped or killed while writing from a finished one:
+every reader of the folder refuses it, and the next run into the folder takes it.
 """
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -26,6 +32,7 @@ from sim import SensorConfig, World, make_world, simulate_records
 from sim.records import OdometryConfig
 from sim.robot import RobotLimits
 
+from experiments.options import SIMULATE_OUTPUTS, SIMULATE_UNFINISHED
 from experiments.provenance import write_record
 
 
@@ -145,15 +152,53 @@ def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> 
     finally:
         if bar is not None:
             bar.close()
+    out.mkdir(parents=True, exist_ok=True)
+    _remove_temporary_files(out)
+    # before any output, on disk: a run killed from here on (SIGKILL, a crash, a power loss) left
+    # a cut scans.clf, or the earlier run's files beside its new config.yaml, read as a finished run
+    unfinished = out / SIMULATE_UNFINISHED
+    _write_synced(unfinished, "lmsbench simulate is writing this folder; removed once its files are whole "
+                              "(a folder holding this file is one whose run did not finish)\n")
     # config.yaml first, whole: it tells the folder as simulate's (options.SIMULATE_OWNER); a run
     # stopped while writing scans.clf left a folder the next run into it refused
     write_record(out / "config.yaml", yaml.safe_dump(cfg.to_dict(), sort_keys=False))
-    write_carmen(out / "scans.clf", records)
+    write_record(out / "scans.clf", lambda tmp: write_carmen(tmp, records))  # streamed into the temporary file
     stamps = np.array([r.scan.stamp for r in records], dtype=float)
-    write_tum(out / "groundtruth.tum", stamps, np.array([r.truth for r in records]).reshape(-1, 3))
+    write_record(out / "groundtruth.tum",
+                 lambda tmp: write_tum(tmp, stamps, np.array([r.truth for r in records]).reshape(-1, 3)))
     write_record(out / "world.json", world.to_json)  # a record too: whole, or a cut one refused the next run
-    draw_map(world, records, out / "map.png")
+    write_record(out / "map.png", lambda tmp: draw_map(world, records, tmp))
+    for name in SIMULATE_OUTPUTS:  # on disk before the marker goes: after a power loss it stays, or they are whole
+        _fsync(out / name)
+    _fsync(out)
+    unfinished.unlink()
+    _fsync(out)
     return records
+
+
+def _remove_temporary_files(out: Path) -> None:
+    """The temporary files (provenance.write_record's ``.NAME.PID.tmp``) a killed run left in ``out``."""
+    for name in SIMULATE_OUTPUTS:
+        for tmp in out.glob(f".{name}.*.tmp"):
+            tmp.unlink(missing_ok=True)
+
+
+def _write_synced(path: Path, text: str) -> None:
+    """``text`` into ``path``, on disk (the file and its folder's entry) when this returns."""
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+        fh.flush()
+        os.fsync(fh.fileno())
+    _fsync(path.parent)
+
+
+def _fsync(path: Path) -> None:
+    """Push a file's bytes, or a folder's entries, to the disk."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 def draw_map(world: World, records: list[Record], path: Path) -> None:
@@ -193,5 +238,5 @@ def draw_map(world: World, records: list[Record], path: Path) -> None:
         ax.set_aspect("equal")
     ax.set_title(f"world {world.name} (seed {world.seed})")
     ax.legend(loc="upper right")
-    fig.savefig(path, dpi=120, metadata={"Software": None})
+    fig.savefig(path, format="png", dpi=120, metadata={"Software": None})  # path: a temporary name
     plt.close(fig)

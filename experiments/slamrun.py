@@ -20,7 +20,7 @@ import numpy as np
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml
-from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree
+from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished
 from experiments.provenance import write_record
 from slam import SlamConfig, SlamResult, run_slam
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
@@ -36,10 +36,11 @@ class SlamInput:
 
     name: str
     records: list[Record]
-    truth: np.ndarray | None = None  # (n, 4) t, x, y, theta
+    truth: np.ndarray | None = None  # (n, 4) t, x, y, theta of the reference poses (``reference``)
     walls: np.ndarray | None = None  # (k, 4) true wall segments, world frame
     relations: np.ndarray | None = None  # (m, 5) t1, t2, x, y, yaw
     sources: dict[str, str] = field(default_factory=dict)
+    reference: str = "ground truth"  # what ``truth`` holds: "ground truth", or "corrected poses" of a log
 
     @property
     def odometry(self) -> np.ndarray | None:
@@ -94,7 +95,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
 
     Raises:
         FileNotFoundError: the input does not exist.
-        LmsbenchError: a folder without scans.clf, an input without scans, or none with a valid beam, or
+        LmsbenchError: a folder without scans.clf, a simulate folder whose run did not finish
+            (options.check_simulate_finished), an input without scans, or none with a valid beam, or
             more than one scan read and all of one stamp (no time between scans for the motion model), or
             one scan to run on (an input of one scan, ``max_scans`` below 2, ``rate_hz`` / ``every`` that
             keep one scan of several).
@@ -108,6 +110,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         raise LmsbenchError(f"--max-scans must be >= 2 (SLAM needs two or more scans), got {max_scans}")
     sources: dict[str, str] = {}
     truth = walls = rel = None
+    check_simulate_finished(p)
     if p.is_dir() and (p / "scans.clf").is_file():
         log = p / "scans.clf"
         if (p / "groundtruth.tum").is_file():
@@ -169,7 +172,12 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if truth is None and all(r.truth is not None for r in records):
         truth = np.array([(r.scan.stamp, *r.truth) for r in records], float)
         sources["truth"] = f"{log} (TRUEPOS)"
-    return SlamInput(p.name, records, truth, walls, rel, sources)
+    reference = "ground truth"
+    if truth is None and all(r.corrected is not None for r in records):  # a Radish corrected log: its odometry
+        truth = np.array([(r.scan.stamp, *r.corrected) for r in records], float)  # is the ODOM lines' (raw)
+        sources["truth"] = f"{log} (corrected poses: the log's own SLAM solution, not ground truth)"
+        reference = "corrected poses"
+    return SlamInput(p.name, records, truth, walls, rel, sources, reference)
 
 
 def score(traj: np.ndarray, data: SlamInput, result: SlamResult | None = None) -> dict[str, Any]:
@@ -273,6 +281,7 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
             consistency[key] = d[key]
     metrics = {
         "input": data.sources,
+        **({"reference": data.reference} if data.truth is not None else {}),  # what ate / rpe are against
         "preset": config.preset,
         "n_scans": len(data.records),
         "seconds": seconds,
@@ -373,7 +382,8 @@ def _jsonable(value: Any) -> Any:
 
 
 def plot(path: Path, data: SlamInput, res: SlamResult) -> None:
-    """Trajectory and map lines, over the ground truth (aligned into its frame) where there is one."""
+    """Trajectory and map lines, over the ground truth or corrected poses (aligned into their frame)
+    where there are some."""
     try:
         from experiments.style import apply_style, equal_axes
     except ImportError:  # pragma: no cover - the style module is part of the project
@@ -393,7 +403,7 @@ def plot(path: Path, data: SlamInput, res: SlamResult) -> None:
         if data.walls is not None:
             for w in data.walls:
                 ax.plot(w[[0, 2]], w[[1, 3]], color="0.75", lw=1.0)
-        ax.plot(data.truth[:, 1], data.truth[:, 2], color="k", lw=1.0, label="ground truth")
+        ax.plot(data.truth[:, 1], data.truth[:, 2], color="k", lw=1.0, label=data.reference)
     xy = al.apply(res.trajectory[:, 1:3])
     for ln in res.map_lines:
         ends = al.apply(ln[2:6].reshape(2, 2))

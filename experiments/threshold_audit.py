@@ -13,6 +13,7 @@ sweep), rounded to 1 cm. Every extractor gets the scans' neighbour scatter as ``
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from typing import Any
 
@@ -29,8 +30,6 @@ METHODS = ("split_merge", "iepf")
 def noisy(records: list[Any], sigma: float, zigzag: float, rng: np.random.Generator) -> list[Any]:
     """``records`` with Gaussian range noise ``sigma`` (m), the sweeps offset by ``zigzag`` (m) and
     ranges rounded to 1 cm (cm codes)."""
-    from lms200 import Record
-
     out = []
     for rec in records:
         s = rec.scan
@@ -38,7 +37,7 @@ def noisy(records: list[Any], sigma: float, zigzag: float, rng: np.random.Genera
         fin = np.isfinite(r)
         offset = np.where(np.arange(r.size) % 2 == 0, 0.5, -0.5) * zigzag
         r[fin] = np.round(r[fin] + rng.normal(0.0, sigma, int(fin.sum())) + offset[fin], 2)
-        out.append(Record(s.replace(ranges=r), rec.odom, rec.truth))
+        out.append(dataclasses.replace(rec, scan=s.replace(ranges=r)))  # odom, truth, corrected kept
     return out
 
 

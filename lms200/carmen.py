@@ -52,11 +52,11 @@ import tarfile
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Iterable, Iterator
+from typing import IO, Callable, Iterable, Iterator
 
 import numpy as np
 
-from .carmen_odom import OdomPairing
+from .carmen_odom import CorrectedChain, OdomPairing
 from .codes import (
     CODE_ABOVE_MAXIMUM,
     CODE_NOT_VALID,
@@ -355,6 +355,15 @@ class CarmenReader:
         return raw
 
     def __iter__(self) -> Iterator[Record]:
+        self._held: list[Callable[[], Iterator[Record]]] = []  # flush() of what holds records back
+        try:
+            yield from self._read()
+        except Exception:  # a bad line ends the pass: the records held for a later line come first
+            for flush in self._held:
+                yield from flush()
+            raise
+
+    def _read(self) -> Iterator[Record]:
         default = self._survey()
         self.stats = stats = ReadStats(laser=self.topic or default)
         if stats.laser is not None:
@@ -370,6 +379,9 @@ class CarmenReader:
         junk = 0  # lines that start with no message name
         # RAWLASER lines carry no pose: their odometry is interpolated from the log's ODOM lines
         pairing = OdomPairing() if stats.laser in RAW_LASER_KINDS else None
+        # a Radish corrected log: the laser lines' poses are a SLAM solution, the ODOM lines the raw odometry
+        chain = CorrectedChain() if pairing is None else None
+        self._held = [holder.flush for holder in (pairing, chain) if holder is not None]
         for line_no, line in self._lines():
             words = line.split()
             if not words or words[0].startswith("#"):
@@ -412,6 +424,8 @@ class CarmenReader:
                     values = _few_floats(words[1:8], "ODOM")
                     if pairing is not None:  # odometry for the scans of a RAWLASER kind, which carry none
                         yield from pairing.odom(values[6], (values[0], values[1], values[2]))
+                    elif chain is not None:
+                        yield from chain.odom((values[0], values[1], values[2]))
                 elif kind in LASER_KINDS:
                     if stats.laser is None:
                         stats.laser = kind
@@ -443,12 +457,16 @@ class CarmenReader:
                     rec = Record(scan=scan, odom=odom if has_odometry else None, truth=given)
                     if pairing is not None:
                         yield from pairing.scan(rec)
+                    elif chain is not None and kind in ("FLASER", "RLASER"):
+                        yield from chain.laser(rec)
                     else:
                         yield rec
             except (ValueError, OverflowError, ArithmeticError) as exc:
                 self._bad(line_no, kind, exc)
         if pairing is not None:
             yield from pairing.flush()
+        if chain is not None:
+            yield from chain.flush()
         if self.topic is not None and not stats.messages.get(self.topic) and stats.other_lasers():
             # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
             others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())
@@ -801,7 +819,7 @@ def write_carmen(
     """Write Records as a CARMEN log (plain, or compressed when the name ends in ``.gz``, ``.bz2`` or ``.xz``).
 
     Each scan becomes one FLASER or ROBOTLASER1 line (``fmt``), preceded by a TRUEPOS line when the
-    record has a true pose. FLASER logs get ``PARAM laser_front_laser_resolution / _fov`` and
+    record has a true pose (a record's ``corrected`` pose is not written: its odometry is). FLASER logs get ``PARAM laser_front_laser_resolution / _fov`` and
     ``robot_front_laser_max`` lines, so any scan centred ahead reads back with its geometry. Ranges
     are written at the sensor unit (mm when range_max <= 8.183 m, else cm), +inf / nan as SICK codes 8183 / 8191
     (a valid reading that would round onto 8183 .. 8191 units as 8182, so it reads back valid); a ``PARAM lmsbench_range_units`` line records

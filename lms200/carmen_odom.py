@@ -1,4 +1,6 @@
-"""Odometry for CARMEN laser lines that carry no pose (RAWLASER1 .. 4), from the log's ODOM lines.
+"""Odometry from a CARMEN log's ODOM lines: for laser lines that carry no pose (RAWLASER1 .. 4,
+:class:`OdomPairing`), and for the laser lines of a Radish ``*-corrected`` log, whose pose fields
+are a SLAM solution (:class:`CorrectedChain`).
 
 CARMEN 0.7 loggers write each laser reading as RAWLASER (ranges and timestamps only) and the
 robot's odometry as ODOM lines (about 10-20 a second); CARMEN's robot module gives a scan the
@@ -92,3 +94,83 @@ class OdomPairing:
             return rec
         self.paired += 1
         return Record(scan=rec.scan, odom=pose, truth=rec.truth)
+
+
+def compose(a: Pose2D, b: Pose2D) -> Pose2D:
+    """Pose ``b`` (given in the frame of ``a``) in the frame ``a`` is given in: a (+) b."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], _wrap(a[2] + b[2]))
+
+
+def relative(a: Pose2D, b: Pose2D) -> Pose2D:
+    """Pose ``b`` in the frame of pose ``a`` (both given in one frame): (-a) (+) b."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return (c * dx + s * dy, -s * dx + c * dy, _wrap(b[2] - a[2]))
+
+
+def _wrap(theta: float) -> float:
+    """``theta`` wrapped to (-pi, pi] (rad)."""
+    w = math.remainder(theta, 2 * math.pi)
+    return math.pi if w == -math.pi else w
+
+
+class CorrectedChain:
+    """Raw odometry and corrected poses for the laser lines of a Radish ``*-corrected`` log.
+
+    Such a log (Intel Research Lab, ACES: a SLAM solution written back into the log) gives every
+    FLASER / RLASER line the corrected pose in its pose fields (both the laser and the odometry
+    pose), and writes after each one an ODOM line at exactly that pose (its stamp is junk): the
+    odometry restarts there, and the ODOM lines up to the next laser line are the robot's raw
+    odometry from it. So the odometry between two scans is the last ODOM pose before the second
+    seen from the first's anchor; chained from the first scan's pose, the scans get a raw
+    odometry trajectory (dead reckoning, in the corrected frame at the start), and their pose
+    fields become ``Record.corrected``. Measured: every laser line of the Intel (910) and ACES
+    (440) logs has its anchor; at the next scan the odometry and the corrected pose differ by a
+    median 5 cm and 0.7-2.6 deg (the odometry's drift over one 0.7-1 m step).
+
+    Feed every laser record of the kind read (:meth:`laser`, its ``odom`` being the line's pose
+    fields) and every ODOM pose (:meth:`odom`) in log order; each returns the records now
+    complete, in log order; :meth:`flush` the last at the end. A laser record whose next ODOM
+    line (other lines between do not matter) is not its anchor, or that another laser line
+    follows first, is handed back as read (the pose fields as odometry, no corrected pose), and
+    the chain starts again at the next anchored scan's pose. Holds one record at most.
+    """
+
+    def __init__(self) -> None:
+        self.pending: tuple[Record, Pose2D] | None = None  # a laser record and its chained odometry
+        self.anchor: tuple[Pose2D, Pose2D] | None = None  # the last anchor (corrected pose, odometry there)
+        self.last_odom: Pose2D | None = None  # the last ODOM pose after that anchor
+        self.anchored = 0  # records given a corrected pose
+
+    def laser(self, rec: Record) -> Iterator[Record]:
+        """A laser record of the kind read; held until the ODOM line after it is read."""
+        yield from self.flush()
+        if rec.odom is None:  # the log says its pose fields are no odometry (PARAM lmsbench_odometry)
+            yield rec
+            return
+        if self.anchor is None:
+            odom = rec.odom  # a chain starts at the scan's own pose
+        else:
+            at, odom_at = self.anchor
+            odom = compose(odom_at, relative(at, self.last_odom if self.last_odom is not None else at))
+        self.pending = (rec, odom)
+
+    def odom(self, pose: Pose2D) -> Iterator[Record]:
+        """An ODOM line's pose: the anchor of the held record, or a step of the odometry."""
+        if self.pending is not None and pose == self.pending[0].odom:
+            rec, odom = self.pending
+            self.pending, self.anchor, self.last_odom = None, (pose, odom), None
+            self.anchored += 1
+            yield Record(scan=rec.scan, odom=odom, truth=rec.truth, corrected=rec.odom)
+            return
+        yield from self.flush()
+        if all(map(math.isfinite, pose)):
+            self.last_odom = pose
+
+    def flush(self) -> Iterator[Record]:
+        """The held record, with no anchor after it: as read; the chain ends."""
+        if self.pending is not None:
+            rec, _ = self.pending
+            self.pending = self.anchor = self.last_odom = None
+            yield rec

@@ -50,6 +50,9 @@ class Record:
         scan: the laser scan; ``scan.stamp`` is the source's timestamp (s).
         odom: raw odometry pose (x, y, theta) or None where the source has none.
         truth: true pose (x, y, theta) or None where the source has none.
+        corrected: a pose from a SLAM solution the source carries (x, y, theta; a Radish
+            ``*-corrected`` CARMEN log's laser pose fields, :class:`lms200.carmen_odom.CorrectedChain`),
+            or None: a published estimate, cm-level, not ground truth.
 
     Raises:
         InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the field: ``scan`` not a
@@ -59,11 +62,12 @@ class Record:
     scan: Scan
     odom: Pose2D | None = None
     truth: Pose2D | None = None
+    corrected: Pose2D | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.scan, Scan):
             raise InputError(f"scan: must be an lms200.Scan, got {type(self.scan).__name__}")
-        for name in ("odom", "truth"):
+        for name in ("odom", "truth", "corrected"):
             pose = getattr(self, name)
             if pose is not None:
                 object.__setattr__(self, name, pose_of(name, pose))

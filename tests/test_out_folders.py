@@ -344,3 +344,41 @@ def test_a_demo_run_again_leaves_no_figures_record_beside_its_own_figures(tmp_pa
     assert (demo / "figures" / "figures.yaml").is_file()
     assert main(argv) == 0, capsys.readouterr().err
     assert sorted(p.name for p in (demo / "figures").iterdir()) == ["fig7_timing.csv", "fig7_timing.pdf", "fig7_timing.png"]
+
+
+def test_figures_without_tables_into_a_demos_figures_is_refused(tables, tmp_path, capsys, monkeypatch):
+    """`figures --out DEMO/figures` without --tables computed a study of its own, drew its figures
+    over some of the demo's and saved its tables in DEMO/figures/tables/; the next `demo --out DEMO`
+    then refused DEMO, exit 2 ("holds figures/tables/, which this command does not write"). Found
+    by a review; reproduced with `demo --no-sweep --duration 1 --rate-hz 2` and `figures --no-slam
+    --duration 1 --rate-hz 2 --methods sensor --out DEMO/figures`. Now refused before any work, the
+    demo's figures kept; redrawing them from the demo's tables still runs, and the demo takes DEMO
+    again. The demo's study and sim2real are stubbed."""
+    import pandas as pd
+
+    import experiments.demo
+
+    timing = pd.DataFrame({"method": ["sensor"], "scan": [0], "time_ms": [0.05]})
+    monkeypatch.setattr(experiments.demo, "run_study", lambda cfg, log=print: ({"timing": timing, "summary": timing}, []))
+    monkeypatch.setattr(experiments.demo, "_sim2real_section", lambda cfg, out, log: None)
+    demo = tmp_path / "demo"
+    argv = ["demo", "--no-sweep", "--duration", "1", "--out", str(demo)]
+    assert main(argv) == 0, capsys.readouterr().err
+    figures = demo / "figures"
+    before = {p.name: p.read_bytes() for p in figures.iterdir()}
+    capsys.readouterr()
+    for out in (figures, demo / "sub" / ".." / "figures"):
+        assert main(["figures", "--no-slam", "--duration", "1", "--rate-hz", "2", "--methods", "sensor",
+                     "--out", str(out)]) == 2
+        shown = out.parent
+        assert capsys.readouterr().err.splitlines() == [
+            f"lmsbench figures: error: --out {out}: the figures of the lmsbench demo in {shown}, drawn from its "
+            "tables/ and shown in its report.md; without --tables this run computes a study of its own, whose figures "
+            f"and tables would not match them: give --tables {shown / 'tables'} to redraw the demo's figures, or another --out"]
+    assert {p.name: p.read_bytes() for p in figures.iterdir()} == before
+    assert main(["figures", "--tables", str(demo / "tables"), "--out", str(figures)]) == 0, capsys.readouterr().err
+    assert main(argv) == 0, capsys.readouterr().err
+    elsewhere = tmp_path / "other" / "figures"  # a figures/ folder of no demo: a study of its own, as before
+    assert main(["figures", "--no-slam", "--duration", "1", "--rate-hz", "2", "--methods", "sensor",
+                 "--out", str(elsewhere)]) == 0, capsys.readouterr().err
+    assert (elsewhere / "tables" / "study.yaml").is_file()

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import (DURATION, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log,
+from experiments.options import (DEMO_OWNER, DURATION, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log,
                                  check_methods, check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name,
                                  text, check_link)
 
@@ -40,6 +41,8 @@ def run(args: argparse.Namespace) -> int:
     for path in (args.out, args.tables):  # a loop of links: Path.resolve below raised RuntimeError
         if path is not None:
             check_link(path, "--out" if path is args.out else "--tables")
+    if args.out is not None and args.tables is None:
+        _check_not_a_demos_figures(args.out)
     if args.out is not None and args.tables is not None and args.out.resolve() == args.tables.resolve():
         writes = OutTree(FIGURES_OUTPUTS.files + STUDY_TABLES.files, FIGURES_OUTPUTS.folders)  # the tables it reads
     # a file of its names is replaced only beside its own record (options.FIGURES_OWNER): by names
@@ -104,6 +107,21 @@ def run(args: argparse.Namespace) -> int:
         print(f"note: table {name} is empty: the figures drawn from it are not drawn")
     print(f"wrote {sum(len(p) for p in written.values())} files in {args.out}")
     return 0
+
+
+def _check_not_a_demos_figures(out: Path) -> None:
+    """Refuse, before any work, ``figures --out DEMO/figures`` without --tables: it computed a study
+    of its own, drew its figures over some of the demo's (those of the demo's report.md and
+    tables/) and saved its tables in DEMO/figures/tables/, so the next ``demo --out DEMO`` refused
+    DEMO ("holds figures/tables/, which this command does not write"). A demo's figures are
+    redrawn from its own tables: ``--tables DEMO/tables``."""
+    real = out.resolve()
+    if real.name != "figures" or not DEMO_OWNER.wrote_in(real.parent):
+        return
+    demo = out.parent if out.name == "figures" else real.parent
+    raise InputError(f"--out {out}: the figures of the lmsbench demo in {demo}, drawn from its tables/ and shown in its "
+                     "report.md; without --tables this run computes a study of its own, whose figures and tables "
+                     f"would not match them: give --tables {demo / 'tables'} to redraw the demo's figures, or another --out")
 
 
 def _record(args: argparse.Namespace) -> str:

@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from slam import SlamConfig
 
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import (SLAM_OUTPUTS, SLAM_OWNER, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_yaml,
+from experiments.options import (SLAM_OUTPUTS, SLAM_OWNER, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_simulate_finished, check_yaml,
                                  count, missing_message, positive, path_arg, text)
 
 
@@ -135,6 +135,7 @@ def in_time_order(stamps: list[float]) -> list[int]:
 
 def _check_input(path: Path) -> None:
     """A simulator folder (scans.clf), a ROS 2 bag folder, or a log file of a known kind."""
+    check_simulate_finished(path)  # first: a killed run's folder may hold no scans.clf ("no such input")
     if not path.exists():
         raise InputError(missing_message(path, "input"))  # "X: no such input (did you mean X.gz?)"
     if path.is_dir() and (path / "scans.clf").is_file():
@@ -239,10 +240,13 @@ def run(args: argparse.Namespace) -> int:
 
 def _score_lines(m: dict[str, Any]) -> list[str]:
     """This run's scores beside its baselines' (metrics.json's ``table``, this run first): the ATE
-    against true poses, the relations error against a relations file. The summary printed the
+    against true poses (or a log's corrected poses, so named), the relations error against a
+    relations file. The summary printed the
     published relations errors of MIT CSAIL with none of this run's."""
     lines = []
-    for key, label in (("ate_rmse", "ATE RMS (m)"), ("relations_trans_mean", "relations error, mean (m)")):
+    ate_label = "ATE RMS (m)" if m.get("reference", "ground truth") == "ground truth" else \
+        f"ATE RMS against the log's {m['reference']} (m)"
+    for key, label in (("ate_rmse", ate_label), ("relations_trans_mean", "relations error, mean (m)")):
         rows = [(("this run" if i == 0 else row["source"]), row[key]) for i, row in enumerate(m.get("table", []))
                 if isinstance(row.get(key), (int, float)) and math.isfinite(row[key])]
         if rows and rows[0][0] == "this run":

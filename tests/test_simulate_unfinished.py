@@ -1,0 +1,133 @@
+"""A `lmsbench simulate --out DIR` run stopped or killed while writing its files (Ctrl-C, SIGKILL, a
+crash, a power loss) left a cut scans.clf, or the earlier run's scans.clf / groundtruth.tum /
+world.json beside its new config.yaml, and `slam DIR`, `info DIR/scans.clf`, `compare DIR`,
+`sim2real DIR/scans.clf` read it as a finished, shorter run: exit 0, no warning (a review). The run
+now writes each file whole (a hidden temporary file renamed into place) and leaves the hidden
+.simulate-unfinished (options.SIMULATE_UNFINISHED) until all of them are; the readers refuse such a
+folder, one line, exit 2; the next simulate into it takes it and leaves no temporary file."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from experiments.cli import main
+from experiments.options import SIMULATE_OUTPUTS, SIMULATE_UNFINISHED
+
+from test_out_folders import _stop_at_write
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def _unfinished(command: str, folder: Path) -> list[str]:
+    return [f"lmsbench {command}: error: {folder}: the lmsbench simulate run that wrote this folder did not finish "
+            f"(it was stopped or killed while writing its files; {SIMULATE_UNFINISHED} is left), so its scans.clf may "
+            f"be cut short or an earlier run's; run lmsbench simulate --out {folder} again"]
+
+
+def _readers_refuse(folder: Path, capsys, tmp_path: Path) -> None:
+    """Every reader of a simulate folder refuses ``folder``, one line naming it, exit 2."""
+    for argv, command in [(["slam", str(folder), "--quiet", "--out", str(tmp_path / "slam")], "slam"),
+                          (["slam", str(folder / "scans.clf"), "--quiet", "--out", str(tmp_path / "slam")], "slam"),
+                          (["info", str(folder / "scans.clf")], "info"),
+                          (["info", str(folder)], "info"),
+                          (["compare", str(folder), "--out", str(tmp_path / "cmp")], "compare"),
+                          (["sim2real", str(folder / "scans.clf"), "--out", str(tmp_path / "s2r")], "sim2real"),
+                          (["figures", "--log", str(folder / "scans.clf"), "--no-slam", "--duration", "1",
+                            "--out", str(tmp_path / "fig")], "figures")]:
+        assert main(argv) == 2, argv
+        assert capsys.readouterr().err.splitlines() == _unfinished(command, folder), argv
+    assert not [p for p in tmp_path.iterdir() if p.name in ("slam", "cmp", "s2r", "fig")]  # refused before any output
+
+
+def _taken_by_the_next_run(folder: Path, capsys) -> None:
+    """The next simulate into ``folder`` takes it, leaves no hidden file, and its log reads."""
+    assert main(["simulate", "--duration", "1", "--out", str(folder), "--quiet"]) == 0, capsys.readouterr().err
+    assert sorted(p.name for p in folder.iterdir()) == sorted(SIMULATE_OUTPUTS)
+    capsys.readouterr()
+    assert main(["info", str(folder / "scans.clf"), "--json"]) == 0, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 6])
+def test_a_simulate_run_stopped_at_each_file_is_refused_by_the_readers(tmp_path, capsys, monkeypatch, n):
+    """An earlier run (corridor, 2 s) in DIR, then a run (office, 1 s) stopped at its n-th file:
+    before, the 4th stop (world.json) left the new scans.clf and groundtruth.tum beside the
+    corridor's world.json, and `slam DIR` ran, exit 0, scoring the office's map against the
+    corridor's walls; the 2nd left a cut (empty) scans.clf."""
+    folder = tmp_path / "sim"
+    assert main(["simulate", "--world", "corridor", "--duration", "2", "--out", str(folder), "--quiet"]) == 0
+    with monkeypatch.context() as m:
+        _stop_at_write(m, folder, n)
+        assert main(["simulate", "--duration", "1", "--out", str(folder), "--quiet"]) == 130
+    assert capsys.readouterr().err.splitlines()[-1:] == ["lmsbench simulate: interrupted"]
+    _readers_refuse(folder, capsys, tmp_path)
+    assert (folder / SIMULATE_UNFINISHED).is_file()
+    _taken_by_the_next_run(folder, capsys)
+
+
+def test_a_killed_runs_temporary_files_are_removed_by_the_next_run(tmp_path, capsys):
+    """What SIGKILL leaves mid-scans.clf: the marker and a cut hidden temporary log (no Python
+    cleanup runs). A folder of nothing else is refused by its readers; the next simulate into it
+    removes the temporary file (before, such files stayed for good: a cut log of up to GBs)."""
+    folder = tmp_path / "sim"
+    folder.mkdir()
+    (folder / SIMULATE_UNFINISHED).write_text("lmsbench simulate is writing this folder\n")
+    (folder / ".scans.clf.4242.tmp").write_text("# CARMEN log written by lmsbench\nROBOTLASER1 0 -1.5")
+    (folder / ".config.yaml.4242.tmp").write_text("world: off")
+    _readers_refuse(folder, capsys, tmp_path)
+    _taken_by_the_next_run(folder, capsys)
+
+
+def test_a_finished_folder_and_one_from_before_the_marker_read(tmp_path, capsys):
+    """A finished run leaves its five files and nothing hidden; a folder without the marker (every
+    folder simulate wrote before it) reads as before."""
+    folder = tmp_path / "sim"
+    assert main(["simulate", "--duration", "1", "--out", str(folder), "--quiet"]) == 0
+    assert sorted(p.name for p in folder.iterdir()) == sorted(SIMULATE_OUTPUTS)
+    capsys.readouterr()
+    assert main(["info", str(folder / "scans.clf"), "--json"]) == 0, capsys.readouterr().err
+    assert main(["slam", str(folder), "--quiet", "--out", str(tmp_path / "slam")]) == 0, capsys.readouterr().err
+
+
+def _env() -> dict:
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "tests"), str(REPO)])}
+
+
+def _log_being_written(folder: Path) -> int:
+    """The size of the log the run is writing (its temporary file, or scans.clf itself), 0 if none."""
+    sizes = [p.stat().st_size for p in [*folder.glob(".scans.clf.*.tmp"), folder / "scans.clf"] if p.is_file()]
+    return max(sizes, default=0)
+
+
+@pytest.mark.slow
+def test_simulate_killed_while_writing_its_log_is_refused_and_rerun(tmp_path, capsys):
+    """A real SIGKILL of `lmsbench simulate --duration 60` once its log holds 256 KB (of about
+    11 MB): before, the cut scans.clf stayed and `info` / `slam` read it, exit 0. Only the end state
+    is asserted: whenever the kill lands in the write, the folder is refused by its readers."""
+    folder = tmp_path / "sim"
+    cmd = [sys.executable, "-m", "experiments.cli", "simulate", "--duration", "60", "--out", str(folder), "--quiet"]
+    proc = subprocess.Popen(cmd, cwd=REPO, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 600
+        while _log_being_written(folder) < 256 * 1024:
+            if proc.poll() is not None:
+                pytest.fail(f"the run ended (exit {proc.returncode}) before its log was seen growing: "
+                            f"{proc.communicate()[1]}")
+            assert time.monotonic() < deadline, "no log written in 600 s"
+            time.sleep(0.005)
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == -signal.SIGKILL
+    _readers_refuse(folder, capsys, tmp_path)
+    assert (folder / SIMULATE_UNFINISHED).is_file() and not (folder / "scans.clf").exists()
+    _taken_by_the_next_run(folder, capsys)
