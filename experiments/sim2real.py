@@ -5,7 +5,8 @@ Steps, all with fixed settings (nothing is tuned to the log beyond what is said 
 1. the sensor model: ``experiments.calibrate`` on the log (noise, quantum, rates, spot width);
 2. the robot's motion: speed and turn-rate limits from the log's odometry (the 75th percentile of
    speed and the 95th of turn rate between scans, which set how much the interlaced 0.5 deg
-   turns shear a scan); the simulator's defaults where the log has no usable odometry;
+   turns shear a scan); the simulator's defaults where the log has no usable odometry (the
+   report says which, and why);
 3. a simulated run in the world (default ``mit``, the MIT-CSAIL-like preset) with that sensor
    and robot, over several seeds; the world's glass panels (which read as no return) follow the
    log's no-return readings in the ``mit`` preset (:func:`glass_rate`): a log without any has no
@@ -212,21 +213,32 @@ def _signed_residuals(lines: np.ndarray, scan, unsigned: np.ndarray) -> np.ndarr
 def odometry_limits(a: np.ndarray):
     """Robot limits matching odometry ``a`` (n, 4): stamp s, x m, y m, theta rad per record with
     odometry, in log order (see the module docstring), or the defaults."""
+    return odometry_limits_and_source(a)[0]
+
+
+def odometry_limits_and_source(a: np.ndarray) -> tuple[Any, str]:
+    """:func:`odometry_limits` and where they come from, as the report says it: "the log's
+    odometry (N steps)", or "the simulator's defaults: " and why (no odometry, too few records
+    with odometry, scans mostly MIN_SCAN_DT_S or more apart)."""
     from sim.robot import RobotLimits
 
+    defaults = "the simulator's defaults: "
     if len(a) < 10:
-        return RobotLimits()
+        return RobotLimits(), defaults + ("the log has no odometry" if not len(a) else
+                                          f"{len(a)} scans with odometry, fewer than 10")
     dt = np.diff(a[:, 0])
     ok = (dt > 0) & (dt < MIN_SCAN_DT_S)
     if np.count_nonzero(ok) < 10 or np.mean(ok) < 0.5:  # mostly long gaps: a subsampled log
-        return RobotLimits()
+        return RobotLimits(), defaults + (f"{np.count_nonzero(ok)} of the {len(dt)} steps between scans with odometry "
+                                          f"are shorter than {MIN_SCAN_DT_S:g} s (a keyframe or subsampled log)")
     v = np.hypot(np.diff(a[:, 1]), np.diff(a[:, 2]))[ok] / dt[ok]
     w = np.abs(np.angle(np.exp(1j * np.diff(a[:, 3]))))[ok] / dt[ok]
     v_max, w_max = float(np.quantile(v, 0.75)), float(np.quantile(w, 0.95))
     base, top = RobotLimits(), {name: hi for name, (_, hi, _, _) in RobotLimits.BOUNDS.items()}
     v_max, w_max = min(v_max, top["v_max"]), min(w_max, top["w_max"])  # odometry that jumps: no endless tour
-    return RobotLimits(v_max=max(v_max, 0.1), w_max=max(w_max, 0.2), a_max=min(max(base.a_max, v_max), top["a_max"]),
-                       alpha_max=min(max(base.alpha_max, 2 * w_max), top["alpha_max"]))
+    return (RobotLimits(v_max=max(v_max, 0.1), w_max=max(w_max, 0.2), a_max=min(max(base.a_max, v_max), top["a_max"]),
+                        alpha_max=min(max(base.alpha_max, 2 * w_max), top["alpha_max"])),
+            f"the log's odometry ({np.count_nonzero(ok)} steps)")
 
 
 @dataclass
@@ -249,6 +261,7 @@ class Sim2RealResult:
     relief: ReliefFit | None = None  # the mit worlds' wall relief fitted to the log (fit_relief)
     probe_seeds: list[int] = field(default_factory=list)  # the worlds of the fits' probe runs (none: no fit)
     warnings: list[str] = field(default_factory=list)  # one line each: samples too small to mean much (MIN_SCANS)
+    limits_source: str = ""  # where ``limits`` come from (odometry_limits_and_source)
 
 
 def no_return_share(records: Sequence[Record], max_reading: float | None = None) -> float:
@@ -660,7 +673,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     if sensor is None:
         sensor = calibrate_log(log, world=world if world in ("office", "cluttered", "mit") else "office",
                                stride=max(1, stride // 2), fit_duration=fit_duration or FIT_DURATION_S, **opts).sensor
-    limits = odometry_limits(np.frombuffer(odometry, dtype=float).reshape(-1, 4))
+    limits, limits_source = odometry_limits_and_source(np.frombuffer(odometry, dtype=float).reshape(-1, 4))
     glass = glass_rate(world, no_return_share(real, sensor.max_reading))
     rough, scale, relief = (fit_world(real, sensor, limits, glass, probe_duration, probe_rate_hz, len(probes), fit_rooms,
                                       wall_relief, probes)
@@ -681,7 +694,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     table = _table(summary, name, f"sim:{world}", list(methods))
     result = Sim2RealResult(table, scene_statistics(real), scene_statistics(simulated), sensor, limits, world,
                             list(seeds), len(real), len(simulated), {}, glass, rough, scale, relief,
-                            probes if world == "mit" else [])
+                            probes if world == "mit" else [], limits_source=limits_source)
     if table.empty or not np.isfinite(table[["explained_3cm_real", "explained_3cm_sim"]].to_numpy()).all():
         raise LmsbenchError(f"{log}: nothing to compare: no method measured an explained fraction on both sources")
     result.checks = targets(table)
@@ -783,7 +796,8 @@ def format_report(result: Sim2RealResult, log: str) -> str:
     lines = [f"# sim2real: {log} against `{result.world}` (seeds {_seed_list(result.seeds)}"
              + (f"; probe seeds {_seed_list(result.probe_seeds)}" if result.probe_seeds else "") + ")", "",
              f"real scans {result.n_real}, simulated scans {result.n_sim}; robot limits v_max "
-             f"{result.limits.v_max:.2f} m/s, w_max {result.limits.w_max:.2f} rad/s; sensor: noise "
+             f"{result.limits.v_max:.2f} m/s, w_max {result.limits.w_max:.2f} rad/s"
+             + (f" ({result.limits_source})" if result.limits_source else "") + "; sensor: noise "
              f"{result.sensor.noise_sigma * 1000:.2f} mm, dropout {result.sensor.dropout_prob:.4f}, "
              f"spot {result.sensor.beam_width_deg:g} deg, outliers {result.sensor.outlier_prob:.4f}"
              + ("" if result.glass is None else f"; glass {result.glass:g} panels per 10 m and clutter level")

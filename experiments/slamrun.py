@@ -41,6 +41,7 @@ class SlamInput:
     relations: np.ndarray | None = None  # (m, 5) t1, t2, x, y, yaw
     sources: dict[str, str] = field(default_factory=dict)
     reference: str = "ground truth"  # what ``truth`` holds: "ground truth", or "corrected poses" of a log
+    time_increment: float | None = None  # s between beams as a bag's LaserScans give it (BagReadStats)
 
     @property
     def odometry(self) -> np.ndarray | None:
@@ -177,7 +178,9 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         truth = np.array([(r.scan.stamp, *r.corrected) for r in records], float)  # is the ODOM lines' (raw)
         sources["truth"] = f"{log} (corrected poses: the log's own SLAM solution, not ground truth)"
         reference = "corrected poses"
-    return SlamInput(p.name, records, truth, walls, rel, sources, reference)
+    time_increment = getattr(getattr(reader, "stats", None), "time_increment", None)  # bags only
+    return SlamInput(p.name, records, truth, walls, rel, sources, reference,
+                     time_increment if isinstance(time_increment, float) else None)
 
 
 def score(traj: np.ndarray, data: SlamInput, result: SlamResult | None = None) -> dict[str, Any]:

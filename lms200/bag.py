@@ -14,6 +14,7 @@ so a record written without odometry or truth reads back without it.
 
 from __future__ import annotations
 
+import math
 import struct
 from bisect import bisect_left, insort
 from collections import deque
@@ -29,7 +30,7 @@ from .errors import InputError, LmsbenchError, LogNotFoundError
 from .records import Pose2D, Record, SkipLog
 from .scan import Scan, snap_angle
 from .tum import quaternion_to_yaw
-from .timing import mirror_time_increment, scan_period, smallest_range
+from .timing import lms200_shaped, mirror_time_increment, scan_period, smallest_range
 
 SCAN_TOPIC = "/scan"
 ODOM_TOPIC = "/odom"
@@ -77,7 +78,8 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
     Ranges are stored as float32 (the message type), +inf / nan kept as they are (REP-117).
     The fields a Scan does not carry come from the LMS200 (``lms200.timing``): ``time_increment``
     the mirror's time per beam step (0.5 deg: 18.5 us), ``scan_time`` the sensor's scan period
-    (0.5 deg: 26.7 ms), ``range_min`` the scan's own, or one code unit (1 mm, or 1 cm for cm-mode
+    (0.5 deg: 26.7 ms), both 0 (unknown, as ROS allows) for a scan no LMS200 takes
+    (``lms200_shaped``), ``range_min`` the scan's own, or one code unit (1 mm, or 1 cm for cm-mode
     scans) where that is 0.
 
     Raises:
@@ -146,8 +148,10 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
                 )
                 c = conn(name, "geometry_msgs/msg/PoseStamped")
                 writer.write(c, bag_time(ns), serialize(msg, "geometry_msgs/msg/PoseStamped"))
-            time_increment = mirror_time_increment(scan.angle_increment)
-            scan_time = scan_period(scan.angle_increment)
+            if lms200_shaped(len(scan), scan.angle_increment):
+                time_increment, scan_time = mirror_time_increment(scan.angle_increment), scan_period(scan.angle_increment)
+            else:  # another scanner: its timing is unknown (the LMS200's mirror's was written, as if it were one)
+                time_increment = scan_time = 0.0
             msg = LaserScan(
                 header=Header(**header_kw),
                 angle_min=scan.angle_min,
@@ -278,6 +282,24 @@ class BagReadStats(SkipLog):
     messages: dict[str, int] = field(default_factory=dict)
     stopped: str | None = None
     laser: str | None = None
+    time_increments: set[float] = field(default_factory=set)  # the scans' time_increment values (s), up to 8
+    clockwise: bool = False  # some scan swept clockwise (negative angle_increment; read reversed)
+
+    @property
+    def time_increment(self) -> float | None:
+        """The seconds between consecutive beams every LaserScan read gives (``time_increment``),
+        in the order the scans are read; None where they give 0 (unknown), differ, or any scan swept
+        clockwise (read reversed, its last beam first)."""
+        if self.clockwise or len(self.time_increments) != 1:
+            return None
+        (value,) = self.time_increments
+        return value if math.isfinite(value) and value > 0 else None
+
+    def see_timing(self, time_increment: float, angle_increment: float) -> None:
+        """Note one LaserScan's ``time_increment`` (s) and ``angle_increment`` (rad)."""
+        self.clockwise |= angle_increment < 0
+        if len(self.time_increments) < 8:  # bounded: more than one value is no one timing anyway
+            self.time_increments.add(time_increment)
 
 
 class BagReader:
@@ -370,6 +392,7 @@ class BagReader:
                         matcher.add_pose(conn.topic, _header_ns(msg), _pose_of(msg))
                     else:
                         matcher.add_scan(_header_ns(msg), _scan_of(msg), index, t)
+                        stats.see_timing(float(msg.time_increment), float(msg.angle_increment))
                 except Exception as exc:  # noqa: BLE001 - deserialisation errors are rosbags' own types
                     self._fail(f"topic {conn.topic} message {index}", exc, index, fatal=False)
                 yield from self._records(matcher.ready(t))

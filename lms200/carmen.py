@@ -425,7 +425,7 @@ class CarmenReader:
                     if pairing is not None:  # odometry for the scans of a RAWLASER kind, which carry none
                         yield from pairing.odom(values[6], (values[0], values[1], values[2]))
                     elif chain is not None:
-                        yield from chain.odom((values[0], values[1], values[2]))
+                        yield from chain.odom((values[0], values[1], values[2]), values[6])
                 elif kind in LASER_KINDS:
                     if stats.laser is None:
                         stats.laser = kind

@@ -115,12 +115,19 @@ def _wrap(theta: float) -> float:
     return math.pi if w == -math.pi else w
 
 
+#: s: an anchor's stamp is junk, at least this far before its scan's (Intel: >= 32.9 s, ACES >= 21.0 s);
+#: a real ODOM line right after a scan, at the same pose (a robot standing still), is stamped with it
+ANCHOR_STAMP_GAP_S = 1.0
+
+
 class CorrectedChain:
     """Raw odometry and corrected poses for the laser lines of a Radish ``*-corrected`` log.
 
     Such a log (Intel Research Lab, ACES: a SLAM solution written back into the log) gives every
     FLASER / RLASER line the corrected pose in its pose fields (both the laser and the odometry
-    pose), and writes after each one an ODOM line at exactly that pose (its stamp is junk): the
+    pose), and writes after each one an ODOM line at exactly that pose (its stamp is junk, far
+    before the scan's: ``ANCHOR_STAMP_GAP_S``; a raw log's ODOM line at a standing robot's pose
+    is stamped with its scan, and is no anchor): the
     odometry restarts there, and the ODOM lines up to the next laser line are the robot's raw
     odometry from it. So the odometry between two scans is the last ODOM pose before the second
     seen from the first's anchor; chained from the first scan's pose, the scans get a raw
@@ -156,9 +163,10 @@ class CorrectedChain:
             odom = compose(odom_at, relative(at, self.last_odom if self.last_odom is not None else at))
         self.pending = (rec, odom)
 
-    def odom(self, pose: Pose2D) -> Iterator[Record]:
-        """An ODOM line's pose: the anchor of the held record, or a step of the odometry."""
-        if self.pending is not None and pose == self.pending[0].odom:
+    def odom(self, pose: Pose2D, stamp: float) -> Iterator[Record]:
+        """An ODOM line's pose and stamp (s): the anchor of the held record, or a step of the odometry."""
+        if self.pending is not None and pose == self.pending[0].odom \
+                and not stamp >= self.pending[0].scan.stamp - ANCHOR_STAMP_GAP_S:
             rec, odom = self.pending
             self.pending, self.anchor, self.last_odom = None, (pose, odom), None
             self.anchored += 1

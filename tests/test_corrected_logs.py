@@ -54,7 +54,8 @@ def _trajectories(n: int, seed: int = 3):
     return corrected, raw
 
 
-def _write_corrected_log(path: Path, n: int, drop_anchor: int | None = None, anchors: bool = True) -> tuple:
+def _write_corrected_log(path: Path, n: int, drop_anchor: int | None = None, anchors: bool = True,
+                         anchor_stamped: bool = False) -> tuple:
     """A corrected log as Radish writes them: FLASER at the corrected pose, its ODOM anchor (a junk
     stamp), then three ODOM lines of raw odometry from that anchor, the last at the next scan."""
     corrected, raw = _trajectories(n)
@@ -65,7 +66,8 @@ def _write_corrected_log(path: Path, n: int, drop_anchor: int | None = None, anc
         ranges = " ".join(f"{r:.3f}" for r in _ranges(corrected[k]))
         lines.append(f"FLASER {BEAMS} {ranges} {x:.6f} {y:.6f} {th:.6f} {x:.6f} {y:.6f} {th:.6f} {t:.4f} host {t:.4f}")
         if anchors and k != drop_anchor:
-            lines.append(f"ODOM {x:.6f} {y:.6f} {th:.6f} 0 0 0 1.08499e-42 host 0")
+            stamp = f"{t:.4f}" if anchor_stamped else "1.08499e-42"  # stamped with the scan: a real ODOM line
+            lines.append(f"ODOM {x:.6f} {y:.6f} {th:.6f} 0 0 0 {stamp} host 0")
         if k + 1 < n:
             start = np.linalg.inv(raw[k])
             for j, f in enumerate((0.3, 0.7, 1.0)):  # raw odometry samples towards the next scan
@@ -100,10 +102,13 @@ def test_an_anchor_missing_restarts_the_chain_and_a_plain_log_is_read_as_before(
     assert [r.corrected is not None for r in recs] == [k != 5 for k in range(12)]
     assert recs[5].odom == pytest.approx(np.round(corrected[5], 6))  # as read: its pose fields
     assert recs[6].odom == pytest.approx(np.round(corrected[6], 6))  # a new chain starts at its own pose
-    _write_corrected_log(tmp_path / "plain.log", 12, anchors=False)  # CARMEN's usual log: ODOM lines are odometry
-    recs = list(read_log(tmp_path / "plain.log"))
-    assert all(r.corrected is None for r in recs)
-    np.testing.assert_allclose([r.odom for r in recs], np.round(corrected, 6), atol=1e-12)
+    for name, options in (("plain.log", {"anchors": False}), ("standing.log", {"anchor_stamped": True})):
+        # CARMEN's usual log: ODOM lines are odometry, and one at a scan's pose, stamped with it, is a
+        # robot standing still (0.5 s after the scan or less), not an anchor
+        _write_corrected_log(tmp_path / name, 12, **options)
+        recs = list(read_log(tmp_path / name))
+        assert all(r.corrected is None for r in recs), name
+        np.testing.assert_allclose([r.odom for r in recs], np.round(corrected, 6), atol=1e-12)
 
 
 def test_slam_on_a_corrected_log_is_scored_against_its_corrected_poses(tmp_path, capsys):

@@ -261,3 +261,75 @@ def test_odom_pairing_survives_scan_stamps_far_ahead_of_the_odometry():
     released = list(pairing.scan(near)) + list(pairing.flush())
     assert [r.scan.stamp for r in released] == [20.0, 10.5]
     assert released[0].odom is None and released[1].odom == pytest.approx((0.5, 0.0, 0.0))
+
+
+def _bag_with_timing(path, records, time_increment: float):
+    """A ROS 2 bag of ``records``' scans written with rosbags itself, each LaserScan giving
+    ``time_increment`` (s between beams), as a Hokuyo driver does."""
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    T = ts.types
+    LS, H, Time = T["sensor_msgs/msg/LaserScan"], T["std_msgs/msg/Header"], T["builtin_interfaces/msg/Time"]
+    with Writer(path, version=8) as w:
+        conn = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts)
+        for rec in records:
+            s = rec.scan
+            ns = round(s.stamp * 1e9)
+            msg = LS(header=H(stamp=Time(sec=ns // 10**9, nanosec=ns % 10**9), frame_id="laser"),
+                     angle_min=s.angle_min, angle_max=s.angle_max, angle_increment=s.angle_increment,
+                     time_increment=time_increment, scan_time=len(s) * time_increment, range_min=0.02,
+                     range_max=s.range_max, ranges=s.ranges.astype(np.float32), intensities=np.zeros(0, np.float32))
+            w.write(conn, ns + 1, ts.serialize_cdr(msg, "sensor_msgs/msg/LaserScan"))
+    return path
+
+
+def test_slam_deskews_a_bag_with_the_time_increment_its_scans_give(tmp_path, capsys):
+    """A Hokuyo bag's LaserScans say the time between beams (time_increment), which the reader
+    dropped: `slam` ran such a bag without de-skew, as for a log of unknown timing. Now a bag whose
+    scans all give one time_increment is de-skewed with it, said in one line and in config.yaml;
+    lms200's own writer gives 0 (unknown) for scans no LMS200 takes, not the LMS200's mirror timing."""
+    from experiments.cli import main
+    from lms200 import read_log
+    from lms200.yamlio import load
+
+    records = hokuyo_run(scans=12)
+    bag = _bag_with_timing(tmp_path / "utm", records, UTM_STEP_S)
+    reader = read_log(bag)
+    assert len(list(reader)) == 12 and reader.stats.time_increment == pytest.approx(UTM_STEP_S, rel=1e-6)
+    out = tmp_path / "run"
+    assert main(["slam", str(bag), "--out", str(out), "--quiet", "--no-paper-baseline"]) == 0
+    err = capsys.readouterr().err
+    assert ("1081 beams at 0.25 deg over 270 deg, which no LMS200 takes: de-skewed with the bag's time_increment, "
+            "17.36 us between beams (alignment.beam_time_increment)") in err
+    alignment = load((out / "config.yaml").read_text())["slam"]["alignment"]
+    assert alignment["deskew"] is True and alignment["beam_time_increment"] == pytest.approx(UTM_STEP_S, rel=1e-6)
+    write_log(tmp_path / "ours.bag", records)  # lms200's writer: a scan no LMS200 takes has no known timing
+    reader = read_log(tmp_path / "ours.bag")
+    assert len(list(reader)) == 12 and reader.stats.time_increment is None  # was the LMS200's 9.26 us
+    lms = [Record(Scan.lms200(np.full(361, 3.0), stamp=0.1 * k)) for k in range(3)]
+    write_log(tmp_path / "lms.bag", lms)
+    reader = read_log(tmp_path / "lms.bag")
+    assert len(list(reader)) == 3 and reader.stats.time_increment == pytest.approx(0.5 / 360 / 75, rel=1e-6)
+    reader = read_log(_bag_with_timing(tmp_path / "zero", records[:3], 0.0))
+    assert len(list(reader)) == 3 and reader.stats.time_increment is None  # 0: unknown
+
+
+def test_bag_timing_is_one_value_or_none():
+    from lms200.bag import BagReadStats
+
+    stats = BagReadStats()
+    assert stats.time_increment is None
+    stats.see_timing(1e-5, 0.01)
+    stats.see_timing(1e-5, 0.01)
+    assert stats.time_increment == 1e-5
+    stats.see_timing(2e-5, 0.01)
+    assert stats.time_increment is None  # two timings: none trusted
+    stats = BagReadStats()
+    stats.see_timing(1e-5, -0.01)  # swept clockwise: read reversed, its last beam first
+    assert stats.time_increment is None
+    stats = BagReadStats()
+    for k in range(100):
+        stats.see_timing(k * 1e-6, 0.01)
+    assert len(stats.time_increments) == 8  # bounded

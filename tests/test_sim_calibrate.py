@@ -259,6 +259,7 @@ def test_sim2real_of_a_simulated_log_agrees_with_itself(tmp_path: Path) -> None:
     for name in ("scene.csv", "sim2real.md", "sim2real.png", "sensor.yaml", "config.yaml"):
         assert (tmp_path / "out" / name).is_file()
     assert SensorConfig.from_yaml(tmp_path / "out" / "sensor.yaml").units == "cm"
+    assert "rad/s (the simulator's defaults: the log has no odometry); sensor" in (tmp_path / "out" / "sim2real.md").read_text()
     bad = _cli("sim2real", str(tmp_path / "log.clf"), "--world", "moon")
     assert bad.returncode == 2 and "unknown world" in bad.stderr
 
@@ -550,3 +551,23 @@ def test_fit_world_runs_every_probe_on_the_probe_seeds_given(monkeypatch) -> Non
     assert len(sim2real.PROBE_SEEDS) == 12 and not set(sim2real.PROBE_SEEDS) & set(sim2real.DEFAULT_SEEDS)
     with pytest.raises(LmsbenchError, match="probe_seeds"):
         sim2real.sim2real(Path("unused.clf"), probe_seeds=[])
+
+
+def test_sim2real_says_where_its_robot_limits_come_from() -> None:
+    """The report gave the robot limits without saying that a log with no usable odometry (none,
+    too few records, or a keyframe log's scans 2-3 s apart: Intel, ACES) left them at the
+    simulator's defaults."""
+    from experiments.sim2real import odometry_limits, odometry_limits_and_source
+    from sim.robot import RobotLimits
+
+    t = 0.1 * np.arange(300)
+    steady = np.column_stack((t, 0.5 * t, np.zeros_like(t), 0.2 * t))  # 0.5 m/s, 0.2 rad/s
+    limits, source = odometry_limits_and_source(steady)
+    assert source == "the log's odometry (299 steps)" and limits == odometry_limits(steady)
+    assert limits.v_max == pytest.approx(0.5) and limits.w_max == pytest.approx(0.2)
+    keyframes = steady * np.array([30.0, 1, 1, 1])  # the same poses 3 s apart
+    assert odometry_limits_and_source(keyframes) == (RobotLimits(), "the simulator's defaults: 0 of the 299 steps "
+                                                     "between scans with odometry are shorter than 1.5 s (a keyframe "
+                                                     "or subsampled log)")
+    assert odometry_limits_and_source(np.empty((0, 4)))[1] == "the simulator's defaults: the log has no odometry"
+    assert odometry_limits_and_source(steady[:5])[1] == "the simulator's defaults: 5 scans with odometry, fewer than 10"

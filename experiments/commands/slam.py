@@ -206,7 +206,17 @@ def run(args: argparse.Namespace) -> int:
         print(f"{args.input}: simulated with interlaced=False (every beam from one pose): alignment.deskew off",
               file=sys.stderr)
     odd = _not_lms200_shape(data.records) if config.preset == "default" and config.alignment.deskew else None
-    if odd is not None and config.alignment.beam_time_increment == 0:
+    import dataclasses
+
+    from slam.config import MAX_BEAM_TIME_INCREMENT_S
+
+    given = data.time_increment  # a bag's LaserScans' own time_increment
+    if odd is not None and config.alignment.beam_time_increment == 0 and given is not None \
+            and given <= MAX_BEAM_TIME_INCREMENT_S:
+        config = dataclasses.replace(config, alignment=dataclasses.replace(config.alignment, beam_time_increment=given))
+        print(f"{data.sources.get('scans', args.input)}: {odd}, which no LMS200 takes: de-skewed with the bag's "
+              f"time_increment, {given * 1e6:.4g} us between beams (alignment.beam_time_increment)", file=sys.stderr)
+    elif odd is not None and config.alignment.beam_time_increment == 0:
         config = deskew_for_sensor(config, interlaced=False)
         print(f"{data.sources.get('scans', args.input)}: {odd}, which no LMS200 takes: its beam timing is unknown, "
               "alignment.deskew off (set alignment.beam_time_increment, s between beams, to de-skew it)",
