@@ -17,7 +17,8 @@ as in real time: the kernel's buffer (20 KiB on a pty here) plus, for a device a
 :data:`HOST_BUFFER_BYTES` / ``time_scale`` - :data:`HOST_BUFFER_BYTES` bytes the adapter holds
 for the host (none at time_scale 1 or above; at most :data:`MAX_HELD_BYTES`, 1 MiB, so memory stays
 bounded at any time_scale). Held bytes are dropped when the host's baud changes (a new host, or the
-driver probing bauds): they were garbled for the baud of the host that left them, and a new host
+driver probing bauds), also when it changes between the adapter reading it and writing (the
+host's baud is read again around each write to the pty): they were garbled for the baud of the host that left them, and a new host
 at 9600 baud read 424 kB of a stream left running at 500000 as valid frames at 9600 and never
 probed on (a review: reconnecting to a scaled device left streaming failed). At time_scale 0.01 the line carries 100 times its baud (192 kB/s
 at 19200 baud): the kernel's buffer alone was full after a 0.1 s pause of the host (a loaded
@@ -140,7 +141,21 @@ class PtyAdapter(_Adapter):
             return None
 
     def _write(self, data: bytes) -> int:
-        return os.write(self._master, data)
+        """Write bytes garbled for the host's baud as the exchange read it; the host may set
+        another baud (and flush its input) meanwhile, from its own process or thread, and then
+        must not read them: a host probing at 9600 read frames sent clean at 38400, and took
+        9600 for the device's baud (a loaded machine). So the baud is read again just before
+        the write (changed: the bytes are dropped, and the next exchange garbles for the new
+        baud) and just after it (changed during the write: the host's input is flushed)."""
+        if self.host_baud() != self._pending_baud:
+            return len(data)  # dropped: garbled for a baud the host has left
+        sent = os.write(self._master, data)
+        if self.host_baud() != self._pending_baud:
+            try:
+                termios.tcflush(self._slave, termios.TCIFLUSH)
+            except termios.error:
+                pass
+        return sent
 
     def _run(self) -> None:
         while not self._stop.is_set():

@@ -123,10 +123,17 @@ def test_sim2real_and_calibrate_beat_on_a_terminal_only() -> None:
         def isatty(self) -> bool:
             return True
 
+    # The terminal's two lines are waited for (a deadline): the heartbeat thread polls every 0.25 s,
+    # and a fixed 1.0 s sleep left 0.25 s of slack for a thread a loaded machine runs late. The
+    # pipe gets at least as long as the terminal needed for its two lines.
     tty, pipe = Terminal(), io.StringIO()
-    for stream in (tty, pipe):
-        with heartbeat_on_terminal("sim2real", "sim2real: starting ...", stream=stream, every=0.3, first_after=0.0):
-            time.sleep(1.0)
+    t0 = time.monotonic()
+    with heartbeat_on_terminal("sim2real", "sim2real: starting ...", stream=tty, every=0.3, first_after=0.0):
+        while len(tty.getvalue().splitlines()) < 2 and time.monotonic() < t0 + 30.0:
+            time.sleep(0.05)
+    needed = time.monotonic() - t0
+    with heartbeat_on_terminal("sim2real", "sim2real: starting ...", stream=pipe, every=0.3, first_after=0.0):
+        time.sleep(max(1.0, needed))
     lines = tty.getvalue().splitlines()
     assert lines[0] == "sim2real: starting ..." and len(lines) >= 2
     assert all(line.startswith("   ... sim2real: ") and line.endswith(" s") for line in lines[1:])
