@@ -58,6 +58,7 @@ class _Interrupt:
 
     def __init__(self, name: str) -> None:
         self.name, self.reported = name, False
+        self.lock = threading.Lock()  # the one line: written once, whoever comes first (see report)
         self.timer: threading.Timer | None = None
         self.signum: int = signal.SIGINT
         self.redeliver = False  # the stop's KeyboardInterrupt was swallowed: raise it again
@@ -109,12 +110,35 @@ class _Interrupt:
         timer.daemon = True
         timer.start()
 
+    def report(self) -> None:
+        """Write the stop's one line unless it is out already: the main thread's orderly stop, the
+        grace timer's hard stop and a second Ctrl-C each ask, and exactly one line is written
+        (the flag was set before the line: a hard stop between exited with no line, and one that
+        had read the flag before wrote a second). In the main thread the stop signals wait until
+        the line is out (a second Ctrl-C's hard stop is run after it, not inside the lock)."""
+        main = threading.current_thread() is threading.main_thread() and hasattr(signal, "pthread_sigmask")
+        blocked = signal.pthread_sigmask(signal.SIG_BLOCK, set(STOP_SIGNALS)) if main else None
+        try:
+            if not self.lock.acquire(timeout=2.0):  # a line stuck in a full pipe: exit without one
+                return
+            try:
+                if not self.reported:
+                    word, _ = self.word_and_status
+                    sys.stderr.write(f"lmsbench {self.name}: {word}\n")
+                    sys.stderr.flush()
+                    self.reported = True
+            finally:
+                self.lock.release()
+        except (OSError, ValueError):  # stderr closed: nothing to say it on
+            pass
+        finally:
+            if blocked is not None:
+                signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+
     def hard_stop(self) -> None:
         _kill_children()
-        word, status = self.word_and_status
-        if not self.reported:
-            sys.stderr.write(f"lmsbench {self.name}: {word}\n")
-            sys.stderr.flush()
+        _, status = self.word_and_status
+        self.report()
         os._exit(status)
 
 
@@ -267,10 +291,9 @@ def _interrupted(interrupt: _Interrupt, name: str) -> int:
     """Ctrl-C's one line and exit status 130 (SIGTERM's: "terminated", 143), the children killed."""
     _end_progress_bars()
     _kill_children()
-    interrupt.reported = True
-    word, status = interrupt.word_and_status
-    print(f"lmsbench {name}: {word}", file=sys.stderr)
-    return status
+    interrupt.name = name
+    interrupt.report()
+    return interrupt.word_and_status[1]
 
 
 def _from_interrupt(exc: BaseException) -> bool:

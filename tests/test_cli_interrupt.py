@@ -465,3 +465,70 @@ def test_a_stop_while_slam_writes_its_files_leaves_none_of_an_earlier_runs_besid
     assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--no-paper-baseline"]) == 0  # taken again
     assert sorted(p.name for p in out.iterdir()) == ["config.yaml", "keyframes.tum", "map.json", "metrics.json",
                                                      "slam.png", "trajectory.tum"]
+
+
+def test_the_stop_line_is_written_exactly_once_whoever_comes_first(monkeypatch):
+    """The flakiness review: the main thread's orderly stop set `reported` and then printed, and the
+    grace timer's hard stop read `reported` and then wrote, so a hard stop between the two exited
+    with no line, and one that had read the flag before printed a second. Both are now one line,
+    written under a lock by whoever comes first."""
+    import threading
+
+    import experiments.cli as cli
+
+    lines: list[str] = []
+    exits: list[tuple[int, int]] = []
+    main_started = threading.Event()
+
+    class Exit(Exception):
+        pass
+
+    class Err:
+        def write(self, s):
+            if threading.current_thread() is not threading.main_thread():  # the timer's hard stop
+                main_started.wait(2)
+                time.sleep(0.2)  # the orderly stop's turn to write, unless it waits for this one
+            lines.append(s)
+
+        def flush(self):
+            pass
+
+    def fake_exit(status):
+        exits.append((status, len(lines)))
+        raise Exit
+
+    monkeypatch.setattr(cli.sys, "stderr", Err())
+    monkeypatch.setattr(cli, "_kill_children", lambda: None)
+    monkeypatch.setattr(cli, "_end_progress_bars", main_started.set)
+    monkeypatch.setattr(cli.os, "_exit", fake_exit)
+
+    def hard_stop(interrupt):
+        try:
+            interrupt.hard_stop()
+        except Exit:
+            pass
+
+    # the hard stop first: it writes, the orderly stop waits for it and writes nothing (old: two lines)
+    interrupt = cli._Interrupt("slam")
+    timer = threading.Thread(target=hard_stop, args=(interrupt,))
+    timer.start()
+    time.sleep(0.05)
+    assert cli._interrupted(interrupt, "slam") == 130
+    timer.join(5)
+    assert lines == ["lmsbench slam: interrupted\n"] and exits == [(130, 1)]
+
+    # the hard stop the instant the orderly stop marks the line as written: it exits with the line
+    # out (old: the flag was set before the line, and the process ended with none)
+    lines.clear(), exits.clear()
+    main_started.set()
+
+    class Racing(cli._Interrupt):
+        def __setattr__(self, name, value):
+            super().__setattr__(name, value)
+            if name == "reported" and value:
+                t = threading.Thread(target=hard_stop, args=(self,))
+                t.start()
+                t.join(5)
+
+    assert cli._interrupted(Racing("slam"), "slam") == 130
+    assert lines == ["lmsbench slam: interrupted\n"] and exits == [(130, 1)]
