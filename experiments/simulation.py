@@ -180,7 +180,8 @@ def _remove_temporary_files(out: Path) -> None:
     """The temporary files (provenance.write_record's ``.NAME.PID.tmp``) a killed run left in ``out``."""
     for name in SIMULATE_OUTPUTS:
         for tmp in out.glob(f".{name}.*.tmp"):
-            tmp.unlink(missing_ok=True)
+            if tmp.name[len(name) + 2 : -len(".tmp")].isdigit():  # .NAME.PID.tmp only: a user's own
+                tmp.unlink(missing_ok=True)  # .scans.clf.notes.tmp was deleted (a review)
 
 
 def _write_synced(path: Path, text: str) -> None:

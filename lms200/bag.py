@@ -302,7 +302,7 @@ class BagReadStats(SkipLog):
         low, high = self.time_increment_range
         if not (math.isfinite(high) and low > 0 and high <= self.TIMING_SPREAD * low):
             return None
-        return self.time_increment_sum / self.timed_scans
+        return low if low == high else self.time_increment_sum / self.timed_scans  # one value: exactly it
 
     def see_timing(self, time_increment: float, angle_increment: float) -> None:
         """Note one LaserScan's ``time_increment`` (s) and ``angle_increment`` (rad)."""

@@ -115,11 +115,11 @@ def _wrap(theta: float) -> float:
     return math.pi if w == -math.pi else w
 
 
-#: s: an anchor's stamp is junk: below JUNK_STAMP_S, or this far or more before its scan's (Intel: >=
-#: 32.9 s, ACES >= 21.0 s; 0 or a denormal but for one 1.13); a real ODOM line is stamped within a second
-#: or so of the scans around it (a robot standing still: at its scan's pose), hosts' clocks seconds apart
+#: s: an anchor's stamp is junk: more than this before the odometry's clock (the last ODOM line read
+#: as a step; none before one). Intel's and ACES's anchors lie >= 21 s before (0, a denormal, once
+#: 1.13); a raw log's ODOM lines follow each other's clock whatever the laser host's says (a review:
+#: a laser clock 15 s ahead, or ODOM lines all stamped 0, froze the odometry of a raw log)
 ANCHOR_STAMP_GAP_S = 10.0
-JUNK_STAMP_S = 1e-9  # s: a stamp this close to 0 is no time any log was written at
 CONFIRMING_ANCHORS = 2  # anchors read in a row before a missing or foreign one is taken for one
 
 
@@ -129,7 +129,9 @@ class CorrectedChain:
     Such a log (Intel Research Lab, ACES: a SLAM solution written back into the log) gives every
     FLASER / RLASER line the corrected pose in its pose fields (both the laser and the odometry
     pose), and writes after each one an ODOM line at exactly that pose, its stamp junk (more than
-    ``ANCHOR_STAMP_GAP_S`` before the scan's): the odometry restarts at that anchor, and the ODOM
+    ``ANCHOR_STAMP_GAP_S`` before the odometry's own clock, the last ODOM step's stamp; so none
+    is seen before an ODOM step: both logs begin with ODOM lines): the odometry restarts at that
+    anchor, and the ODOM
     lines up to the next laser line are the robot's raw odometry from it. So the odometry between
     two scans is the last ODOM pose before the second seen from the first's anchor; chained from
     the first anchored scan's pose, the scans get a raw odometry trajectory (dead reckoning, in
@@ -146,7 +148,7 @@ class CorrectedChain:
     - a scan whose anchor is missing (a cut log, a damaged anchor skipped) keeps the chained
       odometry and its pose fields as its corrected pose, and the chain goes on from it, as if
       its anchor had been read;
-    - (once an anchor has been read) an ODOM line with a junk stamp that is no held scan's anchor
+    - (once an anchor and a step have been read) an ODOM line with a junk stamp that is no held scan's anchor
       (the anchor of another laser kind's line, or of a laser line skipped as malformed) moves the
       chain's anchor there, with the odometry at that point, so the ODOM lines after it are read
       from it;
@@ -162,6 +164,7 @@ class CorrectedChain:
         self.anchor: tuple[Pose2D, Pose2D] | None = None  # the last anchor (corrected pose, odometry there)
         self.last_odom: Pose2D | None = None  # the last ODOM pose after that anchor
         self.last_stamp = -math.inf  # the stamp of the last laser record (s)
+        self.step_stamp: float | None = None  # the stamp of the last ODOM line read as a step (s)
         self.anchored = 0  # records given a corrected pose
         self.in_a_row = 0  # anchors read in a row (CONFIRMING_ANCHORS: the chain runs)
 
@@ -182,7 +185,9 @@ class CorrectedChain:
     def odom(self, pose: Pose2D, stamp: float) -> Iterator[Record]:
         """An ODOM line's pose and stamp (s): the anchor of the held record, another line's anchor,
         or a step of the odometry."""
-        junk = not stamp >= self.last_stamp - ANCHOR_STAMP_GAP_S or abs(stamp) < JUNK_STAMP_S  # nan too
+        # judged by the odometry's own clock (a raw log's ODOM lines follow it, whatever the laser's
+        # says), so not before an ODOM step has been read (Intel and ACES begin with ODOM lines)
+        junk = self.step_stamp is not None and not stamp >= self.step_stamp - ANCHOR_STAMP_GAP_S  # nan too
         if self.pending is not None and junk and pose == self.pending[0].odom:
             rec, odom = self.pending
             self.pending = None
@@ -192,14 +197,16 @@ class CorrectedChain:
         yield from self.flush()
         if not all(map(math.isfinite, pose)):
             return
-        if junk and self.anchor is not None:  # another line's anchor: the odometry restarts at its pose
-            odom = self._odometry_now()
-            if all(map(math.isfinite, odom)):
+        if junk and self.anchor is not None and self.step_stamp is not None:
+            odom = self._odometry_now()  # another line's anchor (junk by the odometry's own clock): the
+            if all(map(math.isfinite, odom)):  # odometry restarts at its pose
                 self.anchor, self.last_odom = (pose, odom), None
             else:
                 self._end()
             return
         self.last_odom = pose
+        if math.isfinite(stamp):
+            self.step_stamp = stamp
 
     @property
     def running(self) -> bool:

@@ -55,7 +55,7 @@ def _trajectories(n: int, seed: int = 3):
 
 
 def _write_corrected_log(path: Path, n: int, drop_anchor: int | None = None, anchors: bool = True,
-                         anchor_stamped: bool = False, t0: float = 10.0, rear: bool = False,
+                         anchor_stamped: bool = False, t0: float = 100.0, rear: bool = False,
                          bad_line: int | None = None, cut_after: int | None = None) -> tuple:
     """A corrected log as Radish writes them: FLASER at the corrected pose, its ODOM anchor (a junk
     stamp), then three ODOM lines of raw odometry from that anchor, the last at the next scan.
@@ -63,7 +63,8 @@ def _write_corrected_log(path: Path, n: int, drop_anchor: int | None = None, anc
     anchor, from which the ODOM lines then go on; ``bad_line``: that FLASER line is malformed (its
     anchor stays); ``cut_after``: the log ends right after that scan's FLASER line."""
     corrected, raw = _trajectories(n)
-    lines = ["# a Radish-style corrected log", "PARAM robot_frontlaser_offset 0.0 host 0"]
+    lines = ["# a Radish-style corrected log", "PARAM robot_frontlaser_offset 0.0 host 0",
+             f"ODOM 0 0 0 0 0 0 {t0 - 0.05:.4f} host 0"]  # odometry before the first scan, as Intel and ACES have
     for k in range(n):
         t = t0 + 2.5 * k
         x, y, th = corrected[k]
@@ -127,13 +128,12 @@ def test_a_damaged_corrected_log_keeps_its_chain_and_a_raw_log_is_read_as_before
     """A review: one anchor missing (a cut log, a damaged anchor skipped) handed its scan back as
     read, its pose fields as odometry: a 22-29 m jump in Intel's odometry, and slam lost its score
     (every scan needs a corrected pose); a malformed FLASER line's anchor, or a rear laser's,
-    was read as a step of the odometry (0.26 m off by the end); a log starting before 1 s missed
-    its first anchor. Now a running chain (two anchors in a row) takes a missing anchor as read
+    was read as a step of the odometry (0.26 m off by the end). Now a running chain (two anchors in a row) takes a missing anchor as read
     and moves to another line's anchor; the raw odometry is the same dead reckoning throughout."""
     corrected, _ = _trajectories(12)
     expected = _dead_reckoning(12)
     cases = {"missing.log": ({"drop_anchor": 5}, range(12)), "rear.log": ({"rear": True}, range(12)),
-             "early.log": ({"t0": 0.5}, range(12)), "cut.log": ({"cut_after": 7}, range(8)),
+             "cut.log": ({"cut_after": 7}, range(8)),
              "bad.log": ({"bad_line": 4}, [k for k in range(12) if k != 4])}
     for name, (options, keep) in cases.items():
         _write_corrected_log(tmp_path / name, 12, **options)
@@ -157,20 +157,26 @@ def test_a_damaged_corrected_log_keeps_its_chain_and_a_raw_log_is_read_as_before
         np.testing.assert_allclose([r.odom for r in recs], np.round(corrected, 6), atol=1e-12)
 
 
-def test_a_raw_log_whose_laser_clock_runs_ahead_is_no_corrected_log(tmp_path):
-    """A review: a raw FLASER + ODOM log of two hosts, the laser's clock 1.5 s ahead, the robot
-    standing still: the ODOM line after each scan, at its pose and 1.5 s "before" it, was taken for
-    an anchor (50 of 100 scans 'corrected'; compare measured repeatability on a raw log)."""
+@pytest.mark.parametrize("odom_stamp", ["skew 1.5", "skew 15", "zero"])
+def test_a_raw_log_whose_clocks_disagree_is_no_corrected_log(tmp_path, odom_stamp):
+    """Reviews: a raw FLASER + ODOM log of two hosts, the laser's clock 1.5 s ahead and the robot
+    standing still, had the ODOM line after each standing scan (at its pose, 1.5 s "before" it) taken
+    for an anchor (50 of 100 scans 'corrected'); with the clock 15 s ahead, or ODOM lines all stamped
+    0 (a converter), every scan was 'corrected' and the odometry froze at its first pose (x 0 to the
+    end against 2.94 m). An anchor's stamp is now judged by the odometry's own clock."""
     lines = []
     for k in range(100):
         t = 100.0 + 0.2 * k
-        x = 0.01 * (k // 2)  # standing still every other scan
+        x = 0.01 * (k // 2) + (0.0 if k < 10 else 0.3 * (k - 10) / 10)  # standing still at first
         ranges = " ".join(["2.00"] * BEAMS)
-        lines.append(f"FLASER {BEAMS} {ranges} {x} 0 0 {x} 0 0 {t + 1.5:.3f} host {t + 1.5:.3f}")
-        lines.append(f"ODOM {x} 0 0 0 0 0 {t:.3f} host {t:.3f}")
-    (tmp_path / "skew.log").write_text("\n".join(lines) + "\n")
-    recs = list(read_log(tmp_path / "skew.log"))
+        laser_t = t + (15.0 if odom_stamp == "skew 15" else 1.5)
+        lines.append(f"FLASER {BEAMS} {ranges} {x} 0 0 {x} 0 0 {laser_t:.3f} host {laser_t:.3f}")
+        o = 0.0 if odom_stamp == "zero" else t
+        lines.append(f"ODOM {x} 0 0 0 0 0 {o:.3f} host {o:.3f}")
+    (tmp_path / "raw.log").write_text("\n".join(lines) + "\n")
+    recs = list(read_log(tmp_path / "raw.log"))
     assert len(recs) == 100 and all(r.corrected is None for r in recs)
+    assert [r.odom[0] for r in recs] == [float(line.split()[BEAMS + 5]) for line in lines[::2]]  # as written
 
 
 def test_overlapping_passes_each_keep_their_held_record(tmp_path):
@@ -186,7 +192,7 @@ def test_overlapping_passes_each_keep_their_held_record(tmp_path):
     with pytest.raises(LogFormatError):
         while True:
             got.append(next(first).scan.stamp)
-    assert got == [10.0, 12.5, 15.0]
+    assert got == [100.0, 102.5, 105.0]
 
 
 def test_slam_on_a_corrected_log_is_scored_against_its_corrected_poses(tmp_path, capsys):
@@ -206,7 +212,7 @@ def test_slam_on_a_corrected_log_is_scored_against_its_corrected_poses(tmp_path,
     m = json.loads((out / "metrics.json").read_text())
     assert m["reference"] == "corrected poses" and "not ground truth" in m["input"]["truth"]
     rows = {row["source"]: row for row in m["table"]}
-    stamps = 10.0 + 2.5 * np.arange(40)
+    stamps = 100.0 + 2.5 * np.arange(40)
     odometry = np.array([_pose(_matrix(corrected[0]) @ np.linalg.inv(raw[0]) @ raw[k]) for k in range(40)])
     reference = np.column_stack((stamps, np.round(corrected, 6)))
     expected = ate(np.column_stack((stamps, odometry)), reference).rmse

@@ -84,6 +84,18 @@ def test_a_killed_runs_temporary_files_are_removed_by_the_next_run(tmp_path, cap
     _taken_by_the_next_run(folder, capsys)
 
 
+def test_the_next_run_keeps_a_users_own_hidden_files(tmp_path, capsys):
+    """A review: the next simulate removed every .NAME.*.tmp, a user's .scans.clf.notes.tmp too;
+    only the .NAME.PID.tmp a killed run leaves is removed."""
+    folder = tmp_path / "sim"
+    assert main(["simulate", "--duration", "1", "--out", str(folder), "--quiet"]) == 0
+    mine = folder / ".scans.clf.notes.tmp"
+    mine.write_text("my notes")
+    (folder / ".map.png.77.tmp").write_text("cut")
+    assert main(["simulate", "--duration", "1", "--out", str(folder), "--quiet"]) == 0
+    assert mine.read_text() == "my notes" and not (folder / ".map.png.77.tmp").exists()
+
+
 def test_a_finished_folder_and_one_from_before_the_marker_read(tmp_path, capsys):
     """A finished run leaves its five files and nothing hidden; a folder without the marker (every
     folder simulate wrote before it) reads as before."""
