@@ -15,6 +15,7 @@ has been read, or ``MAX_PENDING_SCANS`` wait, so memory stays bounded.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import deque
 from typing import Iterator
@@ -35,8 +36,7 @@ def interpolate_pose(t0: float, p0: Pose2D, t1: float, p1: Pose2D, t: float) -> 
     the shorter way and wrapped to (-pi, pi]; ``p0`` where ``t1 == t0``."""
     f = 0.0 if t1 == t0 else (t - t0) / (t1 - t0)
     turn = math.remainder(p1[2] - p0[2], 2 * math.pi)
-    theta = math.remainder(p0[2] + f * turn, 2 * math.pi)
-    return (p0[0] + f * (p1[0] - p0[0]), p0[1] + f * (p1[1] - p0[1]), math.pi if theta == -math.pi else theta)
+    return (p0[0] + f * (p1[0] - p0[0]), p0[1] + f * (p1[1] - p0[1]), _wrap(p0[2] + f * turn))
 
 
 class OdomPairing:
@@ -44,7 +44,6 @@ class OdomPairing:
 
     Feed it every ODOM pose (:meth:`odom`) and every record (:meth:`scan`) in log order; each
     returns the records now complete, in the order given; :meth:`flush` the rest at the end.
-    ``paired`` counts the records given a pose.
     """
 
     def __init__(self) -> None:
@@ -52,7 +51,6 @@ class OdomPairing:
         self.last_odom = -math.inf  # the latest ODOM stamp read
         self.pending: deque[Record] = deque()
         self.newest = -math.inf  # the latest stamp read (scans and ODOM lines)
-        self.paired = 0
 
     def odom(self, stamp: float, pose: Pose2D) -> Iterator[Record]:
         """An ODOM line (one that is not finite gives no pose)."""
@@ -90,10 +88,7 @@ class OdomPairing:
         elif before is not None and after is not None and t - before[0] <= ODOM_MAX_GAP_S \
                 and after[0] - t <= ODOM_MAX_GAP_S:
             pose = interpolate_pose(before[0], before[1], after[0], after[1], t)
-        if pose is None:
-            return rec
-        self.paired += 1
-        return Record(scan=rec.scan, odom=pose, truth=rec.truth)
+        return rec if pose is None else dataclasses.replace(rec, odom=pose)
 
 
 def compose(a: Pose2D, b: Pose2D) -> Pose2D:
@@ -163,15 +158,12 @@ class CorrectedChain:
         self.pending: tuple[Record, Pose2D] | None = None  # a laser record and its chained odometry
         self.anchor: tuple[Pose2D, Pose2D] | None = None  # the last anchor (corrected pose, odometry there)
         self.last_odom: Pose2D | None = None  # the last ODOM pose after that anchor
-        self.last_stamp = -math.inf  # the stamp of the last laser record (s)
         self.step_stamp: float | None = None  # the stamp of the last ODOM line read as a step (s)
-        self.anchored = 0  # records given a corrected pose
         self.in_a_row = 0  # anchors read in a row (CONFIRMING_ANCHORS: the chain runs)
 
     def laser(self, rec: Record) -> Iterator[Record]:
         """A laser record of the kind read; held until the ODOM line after it is read."""
         yield from self.flush()
-        self.last_stamp = rec.scan.stamp
         if rec.odom is None:  # the log says its pose fields are no odometry (PARAM lmsbench_odometry)
             self._end()
             yield rec
@@ -197,7 +189,7 @@ class CorrectedChain:
         yield from self.flush()
         if not all(map(math.isfinite, pose)):
             return
-        if junk and self.anchor is not None and self.step_stamp is not None:
+        if junk and self.anchor is not None:
             odom = self._odometry_now()  # another line's anchor (junk by the odometry's own clock): the
             if all(map(math.isfinite, odom)):  # odometry restarts at its pose
                 self.anchor, self.last_odom = (pose, odom), None
@@ -231,8 +223,7 @@ class CorrectedChain:
     def _anchored(self, rec: Record, odom: Pose2D) -> Record:
         assert rec.odom is not None
         self.anchor, self.last_odom = (rec.odom, odom), None
-        self.anchored += 1
-        return Record(scan=rec.scan, odom=odom, truth=rec.truth, corrected=rec.odom)
+        return dataclasses.replace(rec, odom=odom, corrected=rec.odom)
 
     def _odometry_now(self) -> Pose2D:
         """The chained odometry at the last ODOM line read (at the anchor when none since)."""
