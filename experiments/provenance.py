@@ -4,6 +4,7 @@ made it, and a fresh timestamped run folder (with a ``latest`` link) when no ``-
 from __future__ import annotations
 
 import datetime
+import glob
 import os
 import platform
 import sys
@@ -70,3 +71,11 @@ def write_record(path: str | os.PathLike, content: str | Callable[[Path], object
         tmp.unlink(missing_ok=True)
         raise
     return path
+
+
+def leftover_temporaries(path: str | os.PathLike) -> list[Path]:
+    """The temporary files :func:`write_record` left beside ``path`` in a process that was killed
+    before it renamed them (``.NAME.PID.tmp`` only: a user's ``.NAME.notes.tmp`` is not one)."""
+    path = Path(path)
+    return [tmp for tmp in path.parent.glob(f".{glob.escape(path.name)}.*.tmp")
+            if tmp.name[len(path.name) + 2 : -len(".tmp")].isdigit()]

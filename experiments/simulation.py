@@ -33,7 +33,7 @@ from sim.records import OdometryConfig
 from sim.robot import RobotLimits
 
 from experiments.options import SIMULATE_OUTPUTS, SIMULATE_UNFINISHED
-from experiments.provenance import write_record
+from experiments.provenance import leftover_temporaries, write_record
 
 
 SIMULATION_KEYS = frozenset({"world", "seed", "duration", "rate_hz", "sensor", "odometry", "robot", "clutter"})
@@ -179,9 +179,8 @@ def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> 
 def _remove_temporary_files(out: Path) -> None:
     """The temporary files (provenance.write_record's ``.NAME.PID.tmp``) a killed run left in ``out``."""
     for name in SIMULATE_OUTPUTS:
-        for tmp in out.glob(f".{name}.*.tmp"):
-            if tmp.name[len(name) + 2 : -len(".tmp")].isdigit():  # .NAME.PID.tmp only: a user's own
-                tmp.unlink(missing_ok=True)  # .scans.clf.notes.tmp was deleted (a review)
+        for tmp in leftover_temporaries(out / name):  # not a user's own .scans.clf.notes.tmp (a review)
+            tmp.unlink(missing_ok=True)
 
 
 def _write_synced(path: Path, text: str) -> None:
