@@ -427,14 +427,20 @@ class LMS200:
                 self._timeouts += 1
             seen.append("NAK" if naked else ("ACK, then no reply" if acked else "nothing") +
                         (f" ({others} other frames)" if others else ""))
+        raise self._gave_up(what, telegram, expected, budget, seen)
+
+    def _gave_up(self, what: str, telegram: bytes, expected: int, budget: float,
+                 seen: list[str]) -> LmsNakError | LmsTimeoutError:
+        """The error for a request given up after the attempts ``seen`` (what each saw, as
+        listed in the message): a NAK to the last, or no ``expected`` reply within ``budget`` s."""
         summary = "; ".join(f"attempt {i + 1}: {s}" for i, s in enumerate(seen))
         if seen and seen[-1] == "NAK":
-            raise LmsNakError(f"{what}: sent {telegram.hex(' ')} on {self.port} at {self.baud} baud; {summary}")
+            return LmsNakError(f"{what}: sent {telegram.hex(' ')} on {self.port} at {self.baud} baud; {summary}")
         timeout = LmsTimeoutError(
             f"{what}: no 0x{expected:02X} reply within {budget:.2f} s on {self.port} at {self.baud} baud; {summary}"
         )
         timeout.budget_s, timeout.attempts = budget, tuple(seen)
-        raise timeout
+        return timeout
 
     def _set_mode(self, sub_command: int, what: str) -> None:
         # A scan telegram after the request to start continuous output shows that it took (the
@@ -512,7 +518,7 @@ class LMS200:
         what = f"switch from {self.baud} to {baud} baud (0x20 0x{BAUD_MODES[baud]:02X})"
         old = self.baud
         seen: list[str] = []
-        budget = ""
+        budget = 0.0
         for attempt in range(self.retries):
             if attempt:
                 self._retries += 1
@@ -522,7 +528,7 @@ class LMS200:
                 seen.append("NAK")
                 continue
             except LmsTimeoutError as exc:
-                budget = f"{exc.budget_s:.2f} s"
+                budget = exc.budget_s or 0.0
                 self._use_baud(baud)
                 if self._answers(f"{what}: check at {baud} baud"):
                     return
@@ -533,11 +539,8 @@ class LMS200:
                 raise LmsModeRefusedError(f"{what}: the device refused (0xA0 reply {reply.payload.hex(' ')})")
             self._use_baud(baud)
             return
-        summary = "; ".join(f"attempt {i + 1}: {s}" for i, s in enumerate(seen))
-        telegram = build_frame(baud_request(baud), self.address).hex(" ")
-        if seen[-1] == "NAK":
-            raise LmsNakError(f"{what}: sent {telegram} on {self.port} at {self.baud} baud; {summary}")
-        raise LmsTimeoutError(f"{what}: no 0xA0 reply within {budget} on {self.port} at {self.baud} baud; {summary}")
+        raise self._gave_up(what, build_frame(baud_request(baud), self.address), reply_code(baud_request(baud)[0]),
+                            budget, seen)
 
     def _answers(self, what: str) -> bool:
         """Whether the device answers a type request at the current baud (a reply or a NAK)."""
