@@ -211,7 +211,7 @@ def _main(argv: Sequence[str] | None) -> int:
         return status
     except (LmsbenchError, OSError) as exc:  # OSError: missing files, bad paths, unreachable hosts, timeouts
         if interrupt.timer is not None or _from_interrupt(exc):  # what Ctrl-C broke: not the input's error
-            return _interrupted(interrupt, name)
+            return _interrupted(interrupt)
         if isinstance(exc, BrokenPipeError) and _stdout_closed():
             stopped = not done and _writes_outputs(args) and not getattr(args, "outputs_complete", False)
             return _stdout_gone(name, stopped, getattr(args, "out", None))
@@ -219,12 +219,12 @@ def _main(argv: Sequence[str] | None) -> int:
         print(f"lmsbench {name}: error: {_one_line(exc)}{_skip_hint(exc, args)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        return _interrupted(interrupt, name)
+        return _interrupted(interrupt)
     except Exception as exc:  # a bug, not a user error: say so in one line
         if interrupt.timer is not None or _from_interrupt(exc):
             # Ctrl-C inside a compiled (numba) call: the KeyboardInterrupt comes out as a SystemError
             # ("<function _numba_unpickle> returned a result with an exception set"), not a bug
-            return _interrupted(interrupt, name)
+            return _interrupted(interrupt)
         if os.environ.get("LMSBENCH_TRACEBACK"):
             raise
         _end_progress_bars()
@@ -287,11 +287,10 @@ def _stdout_to_devnull() -> None:
         pass
 
 
-def _interrupted(interrupt: _Interrupt, name: str) -> int:
+def _interrupted(interrupt: _Interrupt) -> int:
     """Ctrl-C's one line and exit status 130 (SIGTERM's: "terminated", 143), the children killed."""
     _end_progress_bars()
     _kill_children()
-    interrupt.name = name
     interrupt.report()
     return interrupt.word_and_status[1]
 

@@ -513,7 +513,7 @@ def test_the_stop_line_is_written_exactly_once_whoever_comes_first(monkeypatch):
     timer = threading.Thread(target=hard_stop, args=(interrupt,))
     timer.start()
     time.sleep(0.05)
-    assert cli._interrupted(interrupt, "slam") == 130
+    assert cli._interrupted(interrupt) == 130
     timer.join(5)
     assert lines == ["lmsbench slam: interrupted\n"] and exits == [(130, 1)]
 
@@ -530,5 +530,5 @@ def test_the_stop_line_is_written_exactly_once_whoever_comes_first(monkeypatch):
                 t.start()
                 t.join(5)
 
-    assert cli._interrupted(Racing("slam"), "slam") == 130
+    assert cli._interrupted(Racing("slam")) == 130
     assert lines == ["lmsbench slam: interrupted\n"] and exits == [(130, 1)]
