@@ -232,7 +232,7 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     ``odometry_baseline`` the paper's filter driven by odometry, and with ``paper_baseline`` (for
     the default preset) the paper preset. With ``out``, config.yaml (first), trajectory.tum, map.json and
     keyframes.tum (default preset) are written there before any scoring and the baselines, so a
-    scoring error or a Ctrl-C loses no result; no other file in ``out`` is touched (write_outputs
+    scoring error or a Ctrl-C loses no result; no other file in ``out`` is touched (write_scores
     writes metrics.json and slam.png at the end). With ``replace_earlier`` (``lmsbench slam``, after
     :func:`foreign_outputs` found none) an earlier run's metrics.json and slam.png in ``out``, and its
     trajectory.tum, keyframes.tum and map.json, are removed before this run's config.yaml is
@@ -353,12 +353,17 @@ def write_outputs(out: Path, data: SlamInput, config: SlamConfig, slam_run: Slam
     """trajectory.tum, map.json, metrics.json, config.yaml, slam.png in ``out`` (and keyframes.tum
     with the default preset; an earlier run's, told by :func:`earlier_run_files`, is removed with the
     paper preset)."""
-    res = slam_run.result
     earlier = earlier_run_files(out) if out.is_dir() else set()
     write_config(out, data, config)
-    write_result(out, res, earlier)
+    write_result(out, slam_run.result, earlier)
+    write_scores(out, data, slam_run)
+
+
+def write_scores(out: Path, data: SlamInput, slam_run: SlamRun) -> None:
+    """metrics.json and slam.png in ``out``: what :func:`run` with ``out`` leaves to write once
+    the run is scored (it wrote config.yaml, the trajectory and the map before the scores)."""
     write_record(out / "metrics.json", json.dumps(_jsonable(slam_run.metrics), indent=2) + "\n")
-    plot(out / "slam.png", data, res)
+    plot(out / "slam.png", data, slam_run.result)
 
 
 def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:

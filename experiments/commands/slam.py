@@ -162,7 +162,7 @@ def run(args: argparse.Namespace) -> int:
     from lms200 import LmsbenchError
 
     from experiments.slamrun import (deskew_for_sensor, load_input, run as run_slam, simulated_interlaced,
-                                     write_outputs)
+                                     write_scores)
 
     _check_input(Path(args.input))
     if args.relations is not None:
@@ -226,7 +226,7 @@ def run(args: argparse.Namespace) -> int:
     warm_up_kernels(slam=config.preset == "default")
     result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
                       out=args.out, paper_baseline=not args.no_paper_baseline, replace_earlier=True)
-    write_outputs(args.out, data, config, result)
+    write_scores(args.out, data, result)  # run() wrote config.yaml, the trajectory and the map
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     m = result.metrics
     print(f"slam ({config.preset} preset): {m['n_scans']} scans in {m['seconds']:.1f} s "
