@@ -277,6 +277,9 @@ CASES = [
     (["compare", "office", "--set", "extractor.kk=3", "--out", O], "kk"),
     (["compare", "office", "--set", "sensor.k=3", "--out", O], "extractor.sensor.k"),
     (["compare", "office", "--set", "novalue", "--out", O], "--set"),
+    # the same field set twice ran the last value alone, exit 0 (an option given twice is refused)
+    (["compare", "office:1", "--set", "extractor.sensor.k=2", "--set", "extractor.sensor.k=3", "--out", O],
+     "--set extractor.sensor.k is given twice (extractor.sensor.k=2 and extractor.sensor.k=3); set each field once"),
     (["compare", "office", "--methods", "nosuch", "--out", O], "nosuch"),
     (["compare", "{binary.clf}", "--out", O], "binary"),
     (["compare", "{plain.gz}", "--out", O], "gzip"),

@@ -94,6 +94,17 @@ def _check_applies(args: argparse.Namespace) -> None:
                          f"none of {' '.join(args.sources)} is one (a log or a simulate folder has its own)")
 
 
+def _check_set_once(params: list[tuple[str, Any]]) -> None:
+    """A field set twice (``--set extractor.k=2 ... --set extractor.k=5``) ran the last value alone,
+    as an option given twice did (``--seed 1 ... --seed 2``); ``extractor.k`` beside
+    ``extractor.sensor.k`` is two fields (the method's own wins for it)."""
+    seen: dict[str, Any] = {}
+    for key, value in params:
+        if key in seen:
+            raise InputError(f"--set {key} is given twice ({key}={seen[key]!r} and {key}={value!r}); set each field once")
+        seen[key] = value
+
+
 def _sigma(text: str) -> float | str:
     if text == "auto":
         return text
@@ -120,6 +131,7 @@ def run(args: argparse.Namespace) -> int:
     from features.scoring import ScoreConfig
 
     methods = check_methods(args.methods)
+    _check_set_once(args.params)
     params = extractor_overrides(dict(args.params), methods)
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
     reads = [Path(s) / name for s in args.sources if Path(s).is_dir() for name in SIMULATE_OUTPUTS]
