@@ -212,6 +212,32 @@ def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -
     assert _cli("calibrate", str(tmp_path / "log.clf"), "--max-scans", "5", "--out", str(tmp_path / "empty.yaml")).returncode == 0
 
 
+def test_a_failed_write_leaves_the_earlier_sensor_yaml_whole(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                           capsys: pytest.CaptureFixture[str]) -> None:
+    """`calibrate LOG --out S.yaml` wrote S.yaml in place: a full disk while writing (found with
+    `ulimit -f 2`) left S.yaml cut at 2048 bytes, the earlier calibration lost and the rest not valid
+    YAML (`sim2real --sensor S.yaml`: 'not valid YAML (line 103, ...)'). It is written whole or not at all."""
+    from experiments.cli import main
+
+    write_carmen(tmp_path / "log.clf", simulate_records("office", seed=0, duration=2.0, sensor=SensorConfig(), rate_hz=4.0))
+    earlier = "# lmsbench calibrate earlier.clf\nunits: cm\nnoise_sigma: 0.01\n"
+    (tmp_path / "sensor.yaml").write_text(earlier)
+    write_text = Path.write_text
+
+    def full_disk(self: Path, data: str, *args: object, **kwargs: object) -> int:
+        if "sensor.yaml" in self.name:  # half of it reaches the disk, then the disk is full
+            write_text(self, data[: len(data) // 2], *args, **kwargs)  # type: ignore[arg-type]
+            raise OSError(28, "No space left on device")
+        return write_text(self, data, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Path, "write_text", full_disk)
+    code = main(["calibrate", str(tmp_path / "log.clf"), "--max-scans", "4", "--out", str(tmp_path / "sensor.yaml")])
+    err = capsys.readouterr().err
+    assert code == 2 and "No space left on device" in err and len(err.strip().splitlines()) == 1, err
+    assert (tmp_path / "sensor.yaml").read_text() == earlier
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["log.clf", "sensor.yaml"]  # no temporary file left
+
+
 @pytest.mark.parametrize("args, message", [
     (["calibrate", "missing.clf"], "no such log"),
     (["calibrate", "log.clf", "--stride", "0"], "--stride"),
