@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from decimal import Decimal
 from typing import Any
 
 import numpy as np
 import pytest
 
-from lms200 import LmsbenchError, Record, Scan, read_log, write_log
+from lms200 import LaserGeometry, LmsbenchError, Record, Scan, read_log, write_log
 from lms200.errors import InputError, ScanError
 
 GEOM = dict(angle_min=-1.0, angle_increment=0.01, range_min=0.0, range_max=10.0)
@@ -514,6 +515,45 @@ def test_bools_and_text_inside_object_arrays_and_lists_are_refused(ranges: objec
     from lms200.codes import ranges_to_codes
     with pytest.raises(InputError, match="^ranges: must be real numbers"):  # the code conversions read ranges alike
         ranges_to_codes(ranges)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("ranges, item", [
+    (np.array([1.0, np.complex128(1 + 1j)], dtype=object), "complex128 np.complex128(1+1j) at index 1"),  # was 1 m
+    (np.array([np.datetime64("2020-01-01"), 1.0], dtype=object), "datetime64 np.datetime64('2020-01-01') at index 0"),  # 18262 m
+    (np.array([np.timedelta64(5, "s"), 1.0], dtype=object), "timedelta64 np.timedelta64(5,'s') at index 0"),  # was 5 m
+])
+def test_complex_and_dates_inside_object_arrays_are_refused(ranges: np.ndarray, item: str) -> None:
+    """A complex or date array was refused by its dtype; an object array holding numpy's complex,
+    date or duration items was cast silently (the real part; the count of days or seconds as metres)."""
+    with pytest.raises(ScanError, match=rf"^ranges: must be real numbers \(m\), got {re.escape(item)} "
+                                        r"\(bool, complex, text and dates are refused\)$"):
+        Scan(ranges, **GEOM)
+
+
+@pytest.mark.parametrize("ranges, message", [
+    (np.array([Decimal("1e400"), 1.0], dtype=object), "Decimal at index 0 is beyond float64's range"),
+    (np.array([1.0, Decimal("-1e400")], dtype=object), "Decimal at index 1 is beyond float64's range"),
+    (np.array([np.longdouble("1e4000"), 1.0]), r"a number beyond float64's range \(dtype float128\)"),
+])
+def test_finite_ranges_beyond_float64_are_refused_not_read_as_no_return(ranges: np.ndarray, message: str) -> None:
+    """Decimal("1e400") and a long double's 1e4000 became +inf, REP-117's "no return", silently (the
+    CARMEN reader refuses a range of 1e400 as malformed); infinite items keep their REP-117 meaning."""
+    with pytest.raises(ScanError, match=rf"^ranges: {message}"):
+        Scan(ranges, **GEOM)
+    kept = Scan(np.array([Decimal("Infinity"), np.longdouble("inf"), -np.inf, 1.0], dtype=object), **GEOM)
+    assert kept.ranges.tolist() == [np.inf, np.inf, -np.inf, 1.0]
+
+
+@pytest.mark.parametrize("call", [
+    lambda: Scan([1.0], angle_min=np.complex128(0.1 + 1j), angle_increment=0.01, range_min=0.0, range_max=8.0),
+    lambda: Record(Scan([1.0], **GEOM), odom=(np.complex128(1 + 1j), 0.0, 0.0)),
+    lambda: LaserGeometry(range_max=np.complex128(8 + 1j)),
+])
+def test_numpy_complex_numbers_are_refused_as_scalar_fields(call) -> None:  # noqa: ANN001
+    """numpy's complex scalars went through float(): the real part, a ComplexWarning, and the field
+    set (angle_min 0.1 rad, odom x 1 m, range_max 8 m); Python's complex was already refused."""
+    with pytest.raises(LmsbenchError, match="complex128"):
+        call()
 
 
 def test_object_arrays_and_lists_of_numbers_still_read() -> None:
