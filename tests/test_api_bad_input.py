@@ -121,6 +121,37 @@ def test_write_log_bag_with_a_bad_record_leaves_no_bag(tmp_path) -> None:
     assert not path.exists()
 
 
+@pytest.mark.parametrize("name, fmt", [("run.log", "robotlaser1"), ("run.log", "flaser"), ("run.log.gz", "robotlaser1")])
+@pytest.mark.parametrize("range_max", [1e308, 20_000.0, 0.05])
+def test_write_log_refuses_a_range_max_its_reader_refuses(tmp_path, name: str, fmt: str, range_max: float) -> None:
+    """A Scan with range_max 1e308 (or 20 km, or 5 cm) was written as a CARMEN log, exit 0, that
+    read_log then refused ('maximum range must be in [0.1, 10000] m'): the writer wrote what its
+    reader cannot read back. The earlier log at the path is kept."""
+    path = tmp_path / name
+    write_log(path, _records(2), fmt=fmt)
+    before = path.read_bytes()
+    odd = Record(Scan(np.full(5, 0.04), -0.1, 0.05, 0.0, range_max, stamp=2.0))
+    with pytest.raises(InputError, match=rf"^records: item 2: range_max {re.escape(f'{range_max:g}')} m is outside \[0\.1, 10000\] m, "
+                                         r"which the CARMEN reader refuses \(the log could not be read back\)$"):
+        write_log(path, [*_records(2), odd], fmt=fmt)
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+    write_log(path, [Record(Scan(np.full(5, 5000.0), -0.1, 0.05, 0.0, 10_000.0))], fmt=fmt)  # the bound itself
+    assert [r.scan.ranges.tolist() for r in read_log(path)] == [[5000.0] * 5]
+
+
+@pytest.mark.parametrize("ranges, range_max", [(np.full(5, 1e300), 1e308), (np.full(5, 2.0), 1e39),
+                                               (np.array([1e39, 1, 1, 1, 1]), 1e38)])
+def test_write_log_bag_refuses_numbers_a_laserscan_cannot_hold(tmp_path, ranges: np.ndarray, range_max: float) -> None:
+    """A range or range_max beyond float32 was rosbags' raw OverflowError ('float too large to pack
+    with f format') after a RuntimeWarning of the float32 cast; no bag is left."""
+    path = tmp_path / "run.bag"
+    with pytest.raises(InputError, match=r"^records: item 1: a range or range_max beyond 3\.403e\+38 m cannot be stored "
+                                         r"in a bag \(a LaserScan's fields are float32\)"):
+        write_log(path, [_records(1)[0], Record(Scan(ranges, -0.1, 0.05, 0.0, range_max, stamp=5.0))])
+    assert not path.exists()
+
+
 @pytest.mark.parametrize("path_of, records, fmt, message", [
     (lambda d: d, "good", None, "^path: .* is not a regular file"),          # was IsADirectoryError
     (lambda d: d / "missing" / "x.log", "good", None, "^path: the folder .* does not exist"),  # was FileNotFoundError
