@@ -184,6 +184,30 @@ def test_zero_readings_are_measured_as_the_dropouts_they_are() -> None:
     assert b.noise.sigma_m == a.noise.sigma_m
 
 
+def test_a_reading_beyond_range_max_counts_as_invalid_not_as_the_top_reading() -> None:
+    """One stray reading of 1e308 (a finite number beyond range_max: out of limits, invalid) was taken
+    for the log's largest reading: the 50 m cap's rate read 0 % instead of its share, and the sums
+    over it overflowed (RuntimeWarnings on stderr, above calibrate's output). It counts as nan."""
+    import warnings
+
+    sensor = RECOVERY_CASES["cm_1deg_cap"]  # no_return_prob: readings of the 50 m cap
+    records = simulate_records("office", seed=2, duration=10.0, sensor=sensor, rate_hz=4.0)
+    stray = [r.scan for r in records]
+    as_nan = list(stray)
+    for k in (3, 9):
+        stray[k] = stray[k].replace(ranges=np.where(np.arange(len(stray[k])) == 100, 1e308, stray[k].ranges))
+        as_nan[k] = as_nan[k].replace(ranges=np.where(np.arange(len(as_nan[k])) == 100, np.nan, as_nan[k].ranges))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = calibrate_scans(stray)
+    want = calibrate_scans(as_nan)
+    assert want.max_reading == 50.0 and want.max_reading_rate.value > 0.001
+    for name in ("max_reading", "quantum_m"):
+        assert getattr(got, name) == getattr(want, name)
+    for name in ("max_reading_rate", "nan_rate", "mixed_share", "outlier_rate", "no_return_rate"):
+        assert getattr(got, name) == getattr(want, name), name
+
+
 # -- command line ----------------------------------------------------------------------------
 def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -> None:
     truth = RECOVERY_CASES["cm_0.5deg"]
