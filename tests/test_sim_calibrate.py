@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 import yaml
 
@@ -344,6 +345,22 @@ def test_sim2real_warns_on_tiny_samples_and_refuses_a_log_with_nothing_to_measur
     bad = _cli("sim2real", str(tmp_path / "dark.clf"), "--world", "cluttered", "--seeds", "7", "--out",
                str(tmp_path / "out2"))
     assert bad.returncode == 2 and "nothing to compare" in bad.stderr and len(bad.stderr.splitlines()) == 1, bad.stderr
+
+
+def test_sim2real_of_a_log_a_method_finds_no_line_in_reports_no_ratio(tmp_path: Path) -> None:
+    """A log the sensor method finds no line in (every beam at 2 m: a circle, which it leaves alone)
+    was 'internal error: ZeroDivisionError: float division by zero' (sim lines over real lines per
+    scan) after the whole run, exit 1. The ratio is nan, the report written."""
+    recs = simulate_records("office", seed=0, duration=2.0, sensor=SensorConfig(units="cm"), rate_hz=3.0)
+    circle = [dataclasses.replace(r, scan=r.scan.replace(ranges=np.full_like(r.scan.ranges, 2.0))) for r in recs]
+    write_carmen(tmp_path / "circle.clf", circle)
+    run = _cli("sim2real", str(tmp_path / "circle.clf"), "--world", "office", "--seeds", "0", "--duration", "1",
+               "--out", str(tmp_path / "out"))
+    assert run.returncode == 0, run.stderr
+    table = pd.read_csv(tmp_path / "out" / "sim2real.csv").set_index("method")
+    assert table.at["sensor", "lines_per_scan_real"] == 0 and np.isnan(table.at["sensor", "lines_ratio"])
+    assert table.at["split_merge", "lines_ratio"] == table.at["split_merge", "lines_per_scan_sim"] / \
+        table.at["split_merge", "lines_per_scan_real"]
 
 
 def test_sim2real_probe_seeds_may_not_be_report_seeds_given_or_default() -> None:
