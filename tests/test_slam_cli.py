@@ -166,6 +166,25 @@ def test_slam_refuses_stamps_and_poses_its_models_overflow_on(sim_folder, tmp_pa
     assert run_slam(gap).trajectory.shape == (20, 4)
 
 
+@pytest.mark.parametrize("wall", ["[0, 0, NaN, 1]", "[0, 0, 1e308, 1e308]"])
+def test_slam_refuses_a_world_json_wall_simulate_and_compare_refuse_before_the_run(sim_folder, tmp_path, capsys, wall):
+    """A simulate folder's world.json with a NaN wall was map_error's error after the whole run (its
+    config.yaml, trajectory, keyframes and map written, no metrics.json), and a wall at 1e308 m ran,
+    exit 0, with matplotlib's overflow RuntimeWarning on stderr and a nonsense map error; simulate and
+    compare refuse both (World.from_json). Refused before any output, one line."""
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    (run / "world.json").write_text('{"walls": [' + wall + '], "circles": [], "corners": []}')
+    assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench slam: error: {run / 'world.json'}: not a world.json (walls: must be finite numbers within +-1e+06 m)"]
+    assert not (tmp_path / "o").exists()
+
+
 def test_slam_command_errors_are_one_line(tmp_path, capsys):
     from experiments.cli import main  # in process: the subprocess test above covers the real command line
 
