@@ -670,6 +670,18 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(argv, expected, files, 
     assert sorted(p.name for p in files["dir"].iterdir()) == before
 
 
+@pytest.mark.parametrize("command", [["figures", "--no-slam"], ["figures"], ["demo", "--no-sweep"]])
+def test_a_rate_above_the_sensors_is_refused_before_the_study_starts(command, tmp_path, capsys):
+    """figures / demo --rate-hz 1e9 was refused only once the study's simulation began (after the
+    Intel log's panels, narrated on stdout), and the demo left its --out folder behind, empty."""
+    out = tmp_path / "out"
+    assert run_main([*command, "--rate-hz", "1e9", "--duration", "0.5", "--out", str(out)]) == 2
+    captured = capsys.readouterr()
+    assert captured.err.strip().splitlines() == [
+        f"lmsbench {command[0]}: error: --rate-hz: 1e+09 scans/s is more than the sensor gives (37.5 scans/s at 0.5 deg)"]
+    assert captured.out == "" and not out.exists()
+
+
 def test_the_issue_cases_are_all_here():
     """The issue's list, by command, is covered (and more of each kind)."""
     by_command = {}
