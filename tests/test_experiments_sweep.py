@@ -378,6 +378,18 @@ def test_a_parameter_of_a_prefix_the_kind_does_not_read_fails_before_any_cell_ru
     assert not (tmp_path / "out").exists()
 
 
+def test_a_slam_sweep_asking_for_odometry_its_runs_lack_fails_before_any_cell_runs(tmp_path):
+    """slam.motion.use_odometry: true ran every cell without odometry (the simulated runs of a sweep
+    carry none, and the filter falls back), exit 0, its column saying True; `slam --odometry` refuses
+    an input without it."""
+    spec = SweepSpec.from_dict({"kind": "slam", "fixed": {"duration": 3.0, "slam.preset": "paper",
+                                                          "slam.motion.use_odometry": True}})
+    with pytest.raises(SweepSpecError, match=r"slam.motion.use_odometry: true, but the slam cells' simulated runs carry "
+                                             r"no odometry: the filter would run without it, as with false"):
+        run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert not (tmp_path / "out").exists()
+
+
 def test_misspelled_slam_parameters_fail_before_any_cell_runs(tmp_path):
     spec = SweepSpec.from_dict({"kind": "slam", "grid": {"slam.motion.sigma_acel": [0.1]}})
     with pytest.raises(SweepSpecError, match=r"\['slam.motion.sigma_acel'\]: not fields of slam.SlamConfig.*'motion.sigma_accel'"):

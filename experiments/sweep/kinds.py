@@ -321,6 +321,10 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
     seen = set()
     for cell in cells:
         nested = slam_config_dict(cell)
+        motion = nested.get("motion")
+        if isinstance(motion, dict) and motion.get("use_odometry") is True:  # ran without it, the column saying True
+            raise SweepSpecError("slam.motion.use_odometry: true, but the slam cells' simulated runs carry no "
+                                 "odometry: the filter would run without it, as with false")
         key = repr(sorted(nested.items(), key=lambda kv: kv[0]))
         if key in seen:
             continue
