@@ -229,7 +229,7 @@ class SlamRun:
 def _source_name(config: SlamConfig) -> str:
     if config.preset == "paper":
         return "paper preset (odometry)" if config.motion.use_odometry else "paper preset"
-    return "slam"
+    return "slam (odometry)" if config.motion.use_odometry else "slam"
 
 
 def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_baseline: bool = True,
@@ -268,8 +268,9 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     table = [{"source": _source_name(config), **_flat(scores), "cpu_scans_per_s": len(data.records) / max(cpu, 1e-9)}]
     if paper_baseline and config.preset == "default":
         c1 = time.process_time()
-        paper = run_slam(data.records, dataclasses.replace(config, preset="paper"))
-        table.append({"source": "paper preset", **_flat(score(paper.trajectory, data, paper)),
+        paper_config = dataclasses.replace(config, preset="paper")  # the same motion input as the run
+        paper = run_slam(data.records, paper_config)
+        table.append({"source": _source_name(paper_config), **_flat(score(paper.trajectory, data, paper)),
                       "cpu_scans_per_s": len(data.records) / max(time.process_time() - c1, 1e-9)})
     odo = data.odometry
     if odo is not None:
@@ -286,7 +287,7 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     }
     if "prealign_used" in d:
         consistency["prealign_fraction"] = float(np.mean(d["prealign_used"]))
-    for key in ("matched_fraction", "searched_fraction", "ambiguous_fraction"):
+    for key in ("matched_fraction", "searched_fraction", "ambiguous_fraction", "odometry_fraction"):
         if key in d:
             consistency[key] = d[key]
     metrics = {

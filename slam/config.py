@@ -172,9 +172,20 @@ class MotionConfig:
             mounted off the turning axis and the arc that the Euler step leaves out.
         max_dt: (paper preset) longest step integrated at once (s); longer gaps are split, in at most
             ``slam.filter.MAX_PREDICT_STEPS`` (10,000) steps.
-        use_odometry: (paper preset) the log's odometry increments drive the prediction instead
-            (a comparison row, never the default); ``odom_noise``: (trans m/m, rot rad/rad,
-            rot rad/m) odometry error factors.
+        use_odometry: the log's odometry increments drive the prediction instead (never the
+            default; the paper preset's filter, or the default pipeline's matcher: its start,
+            the heading hypotheses it may try and the search's window); ``odom_noise``: (trans
+            m/m, rot rad/rad, rot rad/m) odometry error factors, each in [0, 10]: a step of d m
+            and dtheta rad has std ``a_t d`` m and ``a_r |dtheta| + a_rt d`` rad (+ the floors
+            above in the default pipeline).
+        odom_max_turn_error: (default pipeline, ``use_odometry``) a retry of the match tries the
+            heading hypotheses (``alignment.heading_hypotheses``) within this many rad of the
+            odometry's heading, or within ``alignment.search_sigmas`` of its std where that is
+            wider; in [0, pi]. A wheel odometry can be a few tenths of a radian off over a step
+            (a slip, a late stamp: MIT CSAIL's by up to 0.74 rad), not the half turn that
+            matches a corridor backwards. 1.5: every hypothesis below a quarter turn (chosen
+            from that reasoning; 0.6 and 1.5 measured alike on the logs, 3 std alone lost MIT
+            CSAIL's slips, docs/slam.md).
         jump_probability: a match further from the prediction than this chi-square quantile
             (3 dof, of the prediction's std) is a jump...
         jump_margin: ...and replaced by the narrow-reach match started at the prediction when
@@ -191,6 +202,7 @@ class MotionConfig:
     max_dt: float = 0.5
     use_odometry: bool = False
     odom_noise: tuple[float, float, float] = (0.1, 0.1, 0.05)
+    odom_max_turn_error: float = 1.5
 
 
 @dataclass(frozen=True)
@@ -533,6 +545,11 @@ class SlamConfig:
         if len(m.odom_noise) != 3:
             raise SlamConfigError(f"motion.odom_noise: must be 3 numbers (x, y, theta), got {list(m.odom_noise)!r}")
         noise = cast(tuple[float, float, float], tuple(float(v) for v in m.odom_noise))
+        if not all(v <= MAX_ODOM_NOISE for v in noise):  # (>= 0 checked above) 1e300: the std's square overflowed
+            raise SlamConfigError(f"motion.odom_noise: must be factors of at most {MAX_ODOM_NOISE:g} (m/m, rad/rad, "
+                                  f"rad/m), got {list(m.odom_noise)!r}")
+        if not 0.0 <= m.odom_max_turn_error <= math.pi:
+            raise SlamConfigError(f"motion.odom_max_turn_error: must be in [0, pi] rad, got {m.odom_max_turn_error}")
         object.__setattr__(self, "motion", dataclasses.replace(m, odom_noise=noise))
 
     def to_dict(self) -> dict[str, Any]:
@@ -645,6 +662,7 @@ MAX_BEAM_TIME_INCREMENT_S = 0.01  # s between beams: a 1081-beam scan would take
 MAX_ICP_ITERATIONS = 1000  # alignment.max_iterations / fine_iterations (defaults 10 / 5)
 MAX_SIGMA_FLOOR = 1e3  # m and rad: a floor this wide leaves no motion model
 MAX_SIGMA_MOTION = 1e3  # m/s^2 and rad/s^2: the constant-velocity model's widest acceleration std
+MAX_ODOM_NOISE = 10.0  # m/m, rad/rad, rad/m: ten times the motion itself, as the simulator's odometry alphas (sim.records)
 MAX_SEARCH_SIGMAS = 10.0  # std: the window's half-width is search_sigmas std, its prior that width / search_sigmas
 MAX_SEARCH_CANDIDATES = 32  # distinct poses refined per searched step (each an ICP run; the default 4)
 MAX_SEARCH_POSES = 4_000_000  # poses of one window: 32 MB of scores (the default: 159,201)

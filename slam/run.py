@@ -238,7 +238,7 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
     if config.preset == "default":
         from .scanslam import run_scan_slam
 
-        return run_scan_slam(((rec.scan.stamp, rec.scan, rec.truth) for rec in records), config)
+        return run_scan_slam(((rec.scan.stamp, rec.scan, rec.odom, rec.truth) for rec in records), config)
 
     def steps():
         batch: list[Record] = []

@@ -1,8 +1,9 @@
 """The default pipeline: motion measured from the scan, a keyframe pose graph with loop closures.
 
-Per scan: predict the pose from the last two poses (constant velocity, no odometry), match the
-scan's points against the local map of the newest keyframes (:mod:`slam.icp`), and take the
-matched pose. A scan far enough from the current keyframe becomes a keyframe: a factor between it
+Per scan: predict the pose from the last two poses (constant velocity; or, with
+``motion.use_odometry``, from the odometry's step since the previous scan), match the scan's
+points against the local map of the newest keyframes (:mod:`slam.icp`), and take the matched
+pose. A scan far enough from the current keyframe becomes a keyframe: a factor between it
 and the previous keyframe enters the gtsam graph, and every ``loop_closure.every`` keyframes the
 earlier keyframes near the estimate are matched for a loop closure. The output trajectory is the
 graph's: every scan's pose relative to its keyframe, composed with the keyframe's optimised pose.
@@ -49,6 +50,7 @@ class ScanStep:
     searched: bool = False  # the correlative search ran (the motion may lie beyond the ICP's reach)
     fit: float = float("nan")  # the chosen pose's fit (slam.correlative.fit) when searched
     ambiguous: bool = False  # the search found a distinct pose that fits as well, which the prior barely tells apart
+    odometry: bool = False  # the prediction was the odometry's step (motion.use_odometry)
     loop: LoopClosure | None = None
 
 
@@ -132,6 +134,7 @@ class ScanSlam:
         self._narrow = replace(self.alignment, max_iterations=0)
         self.predict_velocity = True
         self._field_cache: tuple[Reference, Field] | None = None
+        self._odom: np.ndarray | None = None  # the previous scan's odometry pose (motion.use_odometry)
 
     # -- one scan -------------------------------------------------------------------------------
     def predict(self, stamp: float) -> np.ndarray:
@@ -166,32 +169,64 @@ class ScanSlam:
         x, y = points[:, 0], points[:, 1]
         return np.column_stack((c * x - s * y + v[0] * tau, s * x + c * y + v[1] * tau))
 
-    def step(self, stamp: float, points: np.ndarray, offsets: np.ndarray | None = None) -> ScanStep:
+    def step(self, stamp: float, points: np.ndarray, offsets: np.ndarray | None = None,
+             odom: np.ndarray | None = None) -> ScanStep:
         """Process the scan taken at ``stamp`` (s, its first beam) with points (n, 2) in the sensor
         frame, in beam order (invalid beams as nan rows); ``offsets`` (n,), each beam's time (s)
         after the first (:func:`lms200.timing.beam_time_offsets`), undoes the motion during the
-        scan when ``alignment.deskew`` is on."""
+        scan when ``alignment.deskew`` is on. ``odom``: the odometry pose (x m, y m, theta rad, in
+        the odometry's own frame) at the scan, or None; with ``motion.use_odometry`` its increment
+        since the previous scan's is the prediction (:meth:`odometry_prediction`) wherever both
+        scans have one and the step is one the search could check, else the constant-velocity
+        model is."""
         if offsets is not None and self.alignment.deskew and len(self.last) >= 2:
             points = self.deskew(np.asarray(points, float).reshape(-1, 2), offsets)
         sp = ScanPoints.from_points(points, self.alignment)
+        odom_now = None if odom is None or not self.motion.use_odometry else np.asarray(odom, float).reshape(3)
+        odom_before, self._odom = self._odom, odom_now
         if self.graph is None:
             return self._first(stamp, sp)
-        pred = self.predict(stamp)
-        info = ScanStep(keyframe=self.keyframes[-1].key)
+        dt = stamp - self.last[-1][0]
+        predicted = None
+        if odom_now is not None and odom_before is not None:
+            predicted = self.odometry_prediction(odom_before, odom_now)
+        by_odometry = predicted is not None
+        if predicted is not None:
+            pred, (sxy, sth) = predicted
+        else:
+            pred, (sxy, sth) = self.predict(stamp), self._motion_sigma(dt)
+        info = ScanStep(keyframe=self.keyframes[-1].key, odometry=by_odometry)
         m: Match | None = None
         if sp.matched.shape[0] >= 10 and self.ref is not None:
-            starts = [pred, self.last[-1][1]] if self.predict_velocity else [self.last[-1][1], pred]
-            sxy, sth = self._motion_sigma(stamp - self.last[-1][0])
+            if by_odometry:  # the odometry's increment, not a guess: no start at the last pose
+                starts = [pred]
+            else:
+                starts = [pred, self.last[-1][1]] if self.predict_velocity else [self.last[-1][1], pred]
             prior = np.diag([sxy**-2, sxy**-2, sth**-2]) if self.alignment.motion_prior else None
             qn = sp.matched_normals if self.alignment.normal_agreement < np.pi else None
-            m = match(sp.matched, self.ref, starts, self.alignment, prior=prior, normals=qn)
-            m = self._check_jump(sp.matched, m, pred, stamp - self.last[-1][0], info, qn)
-            if self.alignment.search and (self._beyond_reach(sxy) or m.inliers < self.alignment.retry_inliers):
-                m = self._search(sp, m, pred, sxy, sth, stamp - self.last[-1][0], info, qn)
+            # a wheel odometry may be tenths of a radian off over a step (a slip, a late stamp), not the half
+            # turn that matches a corridor backwards: the retry's heading hypotheses stay within that
+            reach = max(self.alignment.search_sigmas * sth, self.motion.odom_max_turn_error) if by_odometry else np.inf
+            m = match(sp.matched, self.ref, starts, self.alignment, reach, prior=prior, normals=qn)
+            m = self._check_jump(sp.matched, m, pred, sxy, sth, info, qn)
+            # the search looks for motion beyond the ICP's reach; within the odometry's reach it runs only when
+            # the odometry-held match fails (a wheel slip), not to trade the odometry for a better-fitting slide
+            retry = self.alignment.min_inliers if by_odometry else self.alignment.retry_inliers
+            if self.alignment.search and (self._beyond_reach(sxy) or m.inliers < retry):
+                m = self._search(sp, m, pred, sxy, sth, dt, info, qn, by_odometry)
+            if by_odometry and info.searched:
+                # the ICP found nothing at the odometry's step (the search had to run): it may be a glitch (a
+                # reset, a slip within its std), so the constant-velocity prediction competes as a retry does,
+                # with the same heading reach (no match backwards)
+                alt = match(sp.matched, self.ref, [self.predict(stamp)], self.alignment, reach, normals=qn)
+                if alt.inliers > m.inliers + self.alignment.hypothesis_margin:
+                    m = alt
             info.inliers, info.rms, info.hypothesis = m.inliers, m.rms, m.start
         if m is not None and m.inliers >= self.alignment.min_inliers:
             pose, cov = m.pose, m.covariance
             info.matched = True
+        elif by_odometry:  # no match: the odometry's step, with its own uncertainty
+            pose, cov = pred, np.diag([sxy, sxy, sth]) ** 2
         else:
             pose, cov = pred, np.diag([0.1, 0.1, 0.03]) ** 2
         self.travelled += float(np.hypot(*(pose[:2] - self.last[-1][1][:2])))
@@ -211,14 +246,13 @@ class ScanSlam:
         self.last = [self.last[-1], (stamp, pose)]
         return info
 
-    def _check_jump(self, points: np.ndarray, m: Match, pred: np.ndarray, dt: float, info: ScanStep,
+    def _check_jump(self, points: np.ndarray, m: Match, pred: np.ndarray, sxy: float, sth: float, info: ScanStep,
                     normals: np.ndarray | None = None) -> Match:
-        """The point check: a match further from the prediction than the motion's uncertainty is
-        compared with a narrow-reach match started at the prediction (which cannot slide to an
-        aliased place along a corridor); the jump stands unless that one explains clearly more
-        of the scan's points."""
+        """The point check: a match further from the prediction than the prediction's std (``sxy``
+        m, ``sth`` rad) allows is compared with a narrow-reach match started at the prediction
+        (which cannot slide to an aliased place along a corridor); the jump stands unless that one
+        explains clearly more of the scan's points."""
         mc = self.motion
-        sxy, sth = self._motion_sigma(dt)
         e = m.pose - pred
         e[2] = np.arctan2(np.sin(e[2]), np.cos(e[2]))
         if (e[0] ** 2 + e[1] ** 2) / sxy**2 + e[2] ** 2 / sth**2 <= self._jump_gate:
@@ -235,7 +269,7 @@ class ScanSlam:
         return self.alignment.search_sigmas * sxy > self.alignment.max_correspondence
 
     def _search(self, sp: ScanPoints, m: Match, pred: np.ndarray, sxy: float, sth: float, dt: float, info: ScanStep,
-                normals: np.ndarray | None) -> Match:
+                normals: np.ndarray | None, by_odometry: bool = False) -> Match:
         """The correlative search (:mod:`slam.correlative`) about the prediction, and about the
         last pose when that lies outside the window: its best distinct poses, each refined by the
         ICP held near it (a prior of the window's step: the ICP does not slide along a corridor),
@@ -251,14 +285,23 @@ class ScanSlam:
         window: a half turn costs 9, a metre at most 2.25). ``info.ambiguous``: a pose
         ``DISTINCT_XY`` m or ``DISTINCT_THETA`` rad from the chosen one fits within
         ``fit_margin`` of the best and the prior prefers the chosen one by less than
-        ``ambiguity_sigmas`` std."""
+        ``ambiguity_sigmas`` std.
+
+        ``by_odometry`` (the prediction is the odometry's step): the search is about the
+        prediction alone, its headings within ``search_sigmas`` of the odometry's heading std
+        of it, and the prior is the prediction's (the last pose is no rival: the odometry says
+        how far the robot went)."""
         al = self.alignment
         assert self.ref is not None
         info.searched = True
         half_xy = min(al.search_sigmas * sxy, al.search_xy)
         half_th = min(al.search_sigmas * sth, np.pi)
-        last = self.last[-1][1]
-        max_turn = al.max_turn_rate * max(dt, 0.0)
+        if by_odometry:
+            last = pred
+            max_turn = half_th
+        else:
+            last = self.last[-1][1]
+            max_turn = al.max_turn_rate * max(dt, 0.0)
         turn = (float(last[2]), max_turn) if max_turn < np.pi else None
         centres = [pred]
         if np.any(np.abs(last[:2] - pred[:2]) > half_xy):
@@ -310,6 +353,26 @@ class ScanSlam:
             self._field_cache = (self.ref, make_field(self.ref.points, al.search_resolution, al.search_sigma,
                                                       centre, radius))
         return self._field_cache[1]
+
+    def odometry_prediction(self, odom_before: np.ndarray,
+                            odom_now: np.ndarray) -> tuple[np.ndarray, tuple[float, float]] | None:
+        """The pose the odometry predicts (the last pose composed with the odometry's increment
+        between two scans, in the robot's frame) and the std of that step (m, rad):
+        ``a_t d + sigma_floor_xy`` and ``a_r |dtheta| + a_rt d + sigma_floor_theta`` for a step of
+        ``d`` m and ``dtheta`` rad (``motion.odom_noise`` = (a_t, a_r, a_rt), the paper preset's
+        odometry model). None for a step no match could check: one longer than
+        ``alignment.max_range`` (the two scans would share nothing), one whose ``search_sigmas``
+        std is wider than ``alignment.search_xy`` (with the defaults a step over 6.6 m between two
+        scans: an odometry reset or a glitch; a 1 km jump made a 100 m std, which the pose graph
+        could not solve), or one that is not finite."""
+        delta = between(odom_before, odom_now)
+        dist, turn = float(np.hypot(delta[0], delta[1])), abs(float(delta[2]))
+        a_t, a_r, a_rt = self.motion.odom_noise
+        mc, al = self.motion, self.alignment
+        sxy, sth = a_t * dist + mc.sigma_floor_xy, a_r * turn + a_rt * dist + mc.sigma_floor_theta
+        if not (np.isfinite(sth) and dist <= al.max_range and al.search_sigmas * sxy <= al.search_xy):
+            return None
+        return compose(self.last[-1][1], delta), (sxy, sth)
 
     def _motion_sigma(self, dt: float) -> tuple[float, float]:
         """Std (m, rad) of the constant-velocity prediction over ``dt`` s."""
@@ -402,7 +465,8 @@ class ScanSlam:
 
 
 def run_scan_slam(steps, config) -> "SlamResult":
-    """The default pipeline over (stamp s, scan, true pose or None) steps; see :func:`slam.run_slam`.
+    """The default pipeline over (stamp s, scan, odometry pose or None, true pose or None) steps; see
+    :func:`slam.run_slam`. The odometry is used only with ``config.motion.use_odometry``.
 
     The trajectory and the keyframes come from the optimised pose graph; the map is the lines
     extracted on the keyframes (``features.extract_many``, once at the end), placed by their
@@ -417,12 +481,12 @@ def run_scan_slam(steps, config) -> "SlamResult":
     infos: list[ScanStep] = []
     kf_scans: dict[int, object] = {}  # keyframe key -> its scan, for the map's lines
     previous = None
-    for k, (t, scan, truth) in enumerate(steps):
+    for k, (t, scan, odom, truth) in enumerate(steps):
         t = float(t)
         if previous is not None and t < previous:
             raise SlamInputError(f"scan {k}: timestamp {t} is earlier than the previous one ({previous})")
         previous = t
-        info = slam.step(t, scan.points, _offsets(scan, config.alignment))
+        info = slam.step(t, scan.points, _offsets(scan, config.alignment), odom)
         if info.new_keyframe:
             kf_scans[info.keyframe] = scan
         stamps.append(t)
@@ -470,6 +534,8 @@ def run_scan_slam(steps, config) -> "SlamResult":
         "mean_nis_per_dof": float("nan"), "mean_nees": float(finite.mean()) if finite.size else float("nan"),
         "matched_fraction": matched_fraction,
     }
+    if config.motion.use_odometry:  # the steps the odometry predicted (the rest: no odometry, or a step beyond the search)
+        diag["odometry_fraction"] = float(np.mean([i.odometry for i in infos[1:]])) if len(infos) > 1 else 0.0
     return SlamResult(traj, covs, lines, np.zeros((0, 3)), diag)
 
 

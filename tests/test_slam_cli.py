@@ -226,11 +226,44 @@ def test_slam_config_files_name_a_bad_extractor_and_take_a_users_own(sim_folder,
     assert "extractor: slam_user_ext:lines" in (tmp_path / "o" / "config.yaml").read_text()
 
 
-def test_odometry_is_refused_outside_the_paper_preset(sim_folder, tmp_path, capsys):
+def test_odometry_on_an_input_without_any_is_refused(sim_folder, tmp_path, capsys):
+    """--odometry drives either preset now; an input without odometry is refused before any work,
+    in one line, and leaves no folder behind."""
     from experiments.cli import main
 
-    assert main(["slam", str(sim_folder), "--out", str(tmp_path / "o"), "--odometry", "--quiet"]) == 2
-    assert "--preset paper" in capsys.readouterr().err
+    for preset in ("default", "paper"):
+        assert main(["slam", str(sim_folder), "--out", str(tmp_path / "o"), "--odometry", "--preset", preset,
+                     "--quiet"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.endswith("--odometry needs odometry on every scan, and this input has none") and len(err.splitlines()) == 1
+        assert not (tmp_path / "o").exists()
+
+
+def test_odometry_drives_the_default_pipeline_and_names_its_rows(tmp_path, capsys):
+    """``lmsbench slam --odometry`` with the default preset: config.yaml says so, the summary
+    table's rows are "slam (odometry)" and the paper preset with the same motion input, and the
+    run is scored (a sparse simulated run with wheel odometry, 2 s between scans)."""
+
+    import yaml
+
+    from experiments.cli import main
+    from sim import make_world, simulate_records
+    from sim.records import OdometryConfig
+
+    folder = tmp_path / "sim"
+    folder.mkdir()
+    records = simulate_records("office", seed=1, duration=40.0, rate_hz=0.5, odometry=OdometryConfig())
+    write_log(folder / "scans.clf", records)
+    truth = np.array([(r.scan.stamp, *r.truth) for r in records])
+    write_tum(folder / "groundtruth.tum", truth[:, 0], truth[:, 1:])
+    make_world("office", seed=1).to_json(folder / "world.json")
+    out = tmp_path / "o"
+    assert main(["slam", str(folder), "--out", str(out), "--odometry", "--quiet"]) == 0
+    assert yaml.safe_load((out / "config.yaml").read_text())["slam"]["motion"]["use_odometry"] is True
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert [row["source"] for row in metrics["table"]] == ["slam (odometry)", "paper preset (odometry)", "raw odometry"]
+    rows = {row["source"]: row for row in metrics["table"]}
+    assert rows["slam (odometry)"]["ate_rmse"] < 0.5 * rows["raw odometry"]["ate_rmse"]
 
 
 def test_decimated_input_and_odometry_rows(sim_folder):

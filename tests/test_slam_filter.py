@@ -127,7 +127,10 @@ def test_bad_input_raises_clear_errors():
     # values that used to fail deep in a run: a reach beyond the search grid (ValueError in the
     # matcher), an unanchored graph (gtsam's indeterminate system), a step that split a gap forever
     for section, name, bad in (("alignment", "max_correspondence", 1e9), ("alignment", "fine_correspondence", 0.6),
-                               ("loop_closure", "prior_sigma", 1e9), ("motion", "max_dt", 1e-12)):
+                               ("loop_closure", "prior_sigma", 1e9), ("motion", "max_dt", 1e-12),
+                               # odometry factors whose std's square overflowed in the default pipeline's point check
+                               ("motion", "odom_noise", [0.1, 0.1, 1e300]),
+                               ("motion", "odom_max_turn_error", -0.1), ("motion", "odom_max_turn_error", 4.0)):
         with pytest.raises(SlamConfigError, match=f"^{section}.{name}: must be"):
             SlamConfig.from_dict({section: {name: bad}})
     # a half turn written to four places (3.1416 > pi) is a heading offset; 1e300 is not

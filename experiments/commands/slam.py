@@ -35,7 +35,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--extractor", type=text("an extraction method's name"), help="feature extraction method (default: the config's, 'sensor')")
     p.add_argument("--association", choices=("nn", "jcbb"), help="paper preset: data association (default: the config's)")
     p.add_argument("--corners", action="store_true", help="paper preset: add corner landmarks")
-    p.add_argument("--odometry", action="store_true", help="use the input's odometry as the motion input")
+    p.add_argument("--odometry", action="store_true",
+                   help="use the input's odometry as the motion input (default pipeline: the prediction the scan "
+                        "matcher starts from and the turns it may look for; paper preset: the filter's motion)")
     p.add_argument("--no-odometry-baseline", action="store_true",
                    help="do not also run the filter with odometry for the comparison table")
     p.add_argument("--relations", type=path_arg, help="relations file (default: NAME.relations beside a log)")
@@ -99,8 +101,6 @@ def _config(args: argparse.Namespace):
         cfg = dataclasses.replace(cfg, **changes)
     except LmsbenchError as exc:
         raise InputError(f"{args.config}: {exc}" if args.config else str(exc)) from None
-    if cfg.motion.use_odometry and cfg.preset != "paper":
-        raise LmsbenchError("--odometry drives the paper preset's filter: add --preset paper (the default pipeline uses no odometry)")
     paper_only = [flag for flag, given in (("--association", args.association), ("--corners", args.corners)) if given]
     # with the default preset they set the paper preset's baselines (its run and, with odometry, the
     # odometry one): ignored only when neither runs
