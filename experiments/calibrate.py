@@ -344,11 +344,17 @@ HEADER_START = "# lmsbench calibrate "
 
 
 def write_sensor_yaml(result: CalibrationResult, path: Path, source: str) -> None:
-    """The sensor config (top-level fields, read by SensorConfig.from_yaml) plus the measurements."""
+    """The sensor config (top-level fields, read by SensorConfig.from_yaml) plus the measurements,
+    written whole or not at all (``experiments.provenance.write_record``): written in place, a full
+    disk or a stop while writing left ``calibrate --out S.yaml`` a cut YAML, the earlier calibration
+    in S.yaml lost and the cut file not valid YAML for ``--sensor``."""
+    from experiments.provenance import write_record
+
     header = (f"{HEADER_START[2:]}{source}\n"
               "sensor model fitted to the log; read with SensorConfig.from_yaml or --sensor FILE.yaml\n"
               "the calibration section holds every measurement with its standard error (bootstrap over scans)")
-    result.sensor.to_yaml(path, header=header, extra=calibration_section(result, source))
+    extra = calibration_section(result, source)
+    write_record(path, lambda p: result.sensor.to_yaml(p, header=header, extra=extra))
 
 
 def sensor_from_option(path: str | Path | None, default: Any = None, **changes: Any) -> Any:

@@ -766,7 +766,8 @@ def _table(summary: pd.DataFrame, real: str, sim: str, methods: list[str]) -> pd
         for c in cols:
             row[f"{c}_real"], row[f"{c}_sim"] = float(r[c].iloc[0]), float(s[c].iloc[0])
         row["explained_diff"] = row["explained_3cm_sim"] - row["explained_3cm_real"]
-        row["lines_ratio"] = row["lines_per_scan_sim"] / row["lines_per_scan_real"]
+        real_lines = row["lines_per_scan_real"]  # 0 on a log the method finds no line in: no ratio (it was
+        row["lines_ratio"] = row["lines_per_scan_sim"] / real_lines if real_lines > 0 else float("nan")  # ZeroDivisionError)
         rows.append(row)
     import pandas as pd
 

@@ -124,6 +124,13 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
                 sources["walls"] = str(p / "world.json")
             except (KeyError, ValueError) as exc:
                 raise LmsbenchError(f"{p / 'world.json'}: no wall list ({exc})") from None
+            from sim.world import MAX_COORD_M
+
+            if not np.isfinite(walls).all() or (walls.size and np.abs(walls).max() > MAX_COORD_M):
+                # as World.from_json refuses them (simulate, compare); here a NaN wall was map_error's error
+                # after the whole run, its outputs but metrics.json written, and 1e308 overflowed the figure
+                raise LmsbenchError(f"{p / 'world.json'}: not a world.json (walls: must be finite numbers within "
+                                    f"+-{MAX_COORD_M:g} m)")
     elif p.is_dir() and not (p / "metadata.yaml").is_file():
         raise LmsbenchError(f"{p}: a folder input must hold scans.clf (a simulator output) or be a ROS 2 bag")
     else:

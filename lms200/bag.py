@@ -130,6 +130,9 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
             if scan.stamp < 0 or ns >= MAX_STAMP_NS:  # was struct.error from rosbags' serialiser
                 raise InputError(f"records: item {seq}: stamp {scan.stamp!r} s cannot be stored in a bag "
                                  f"(0 <= stamp < 2**31 s = {MAX_STAMP_NS // 1_000_000_000} s, a ROS time's range)")
+            if scan.range_max > FLOAT32_MAX or np.any(np.isfinite(scan.ranges) & (scan.ranges > FLOAT32_MAX)):
+                raise InputError(f"records: item {seq}: a range or range_max beyond {FLOAT32_MAX:.4g} m cannot be "
+                                 f"stored in a bag (a LaserScan's fields are float32), got range_max {scan.range_max:g} m")
             sec, nsec = divmod(ns, 1_000_000_000)
             header_kw = {"stamp": Time(sec=sec, nanosec=nsec), "frame_id": "laser"}
 
@@ -208,6 +211,10 @@ def _scan_of(msg) -> Scan:  # noqa: ANN001
         _stamp_of(msg),
     )
 
+
+#: m: the largest finite float32, a LaserScan's range fields (1e300 was rosbags' raw OverflowError
+#: "float too large to pack with f format" and a RuntimeWarning from the float32 cast)
+FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 _TIME = "builtin_interfaces/msg/Time"
 #: how ROS lays out the start of a LaserScan (its header, then the header's stamp), ROS 1 and ROS 2:

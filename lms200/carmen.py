@@ -832,6 +832,11 @@ def write_carmen(
     as the same float64 (FLASER logs also get ``PARAM lmsbench_front_laser_angle_min / _increment``
     in rad), so a scan written and read back is equal to it.
     Returns the number of scans written.
+
+    Raises:
+        InputError: an unknown ``fmt``, scans of mixed units, or a scan whose range_max lies outside
+            [MIN_RANGE_MAX_M, MAX_RANGE_M] (0.1 to 10000 m), which the reader refuses (such a log was
+            written, and could not be read back).
     """
     if fmt not in ("robotlaser1", "flaser"):
         raise InputError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
@@ -849,6 +854,10 @@ def write_carmen(
         f.write("# ROBOTLASER1 laser_type start_angle field_of_view angular_resolution maximum_range accuracy remission_mode num_readings [range_readings] num_remissions [remissions] laser_pose_x laser_pose_y laser_pose_theta robot_pose_x robot_pose_y robot_pose_theta laser_tv laser_rv forward_safety_dist side_safty_dist turn_axis ipc_timestamp hostname logger_timestamp\n")
         for rec in records:
             scan = rec.scan
+            if not laser_geometry.MIN_RANGE_MAX_M <= scan.range_max <= laser_geometry.MAX_RANGE_M:
+                raise InputError(f"records: item {count}: range_max {scan.range_max:g} m is outside "
+                                 f"[{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, which "
+                                 "the CARMEN reader refuses (the log could not be read back)")
             u = _units_of(scan)
             if units is None:
                 units = u

@@ -9,6 +9,7 @@ distance code is 8182.
 
 from __future__ import annotations
 
+import math
 from typing import Iterable, Literal
 
 import numpy as np
@@ -138,7 +139,10 @@ def real_vector(value: object, name: str, what: str, finite: bool = True) -> np.
 
 
 REFUSED = "(bool, complex, text and dates are refused)"
-NOT_NUMBER_ITEMS = (bool, np.bool_, str, bytes, np.str_, np.bytes_)  # float() takes them: True as 1.0 m, "2" as 2.0 m
+#: float() takes them: True as 1.0 m, "2" as 2.0 m; numpy's complex as its real part, numpy's dates
+#: and durations as their count of units (an object array's np.datetime64('2020-01-01') was 18262 m)
+NOT_NUMBER_ITEMS = (bool, np.bool_, str, bytes, np.str_, np.bytes_, complex, np.complexfloating, np.datetime64,
+                    np.timedelta64)
 
 
 def check_real_kind(dtype: np.dtype, error: type[Exception] = InputError) -> None:
@@ -160,11 +164,36 @@ def check_real_items(items: Iterable[object], error: type[Exception] = InputErro
 
 
 def float64_copy(a: np.ndarray, error: type[Exception] = InputError) -> np.ndarray:
-    """A private float64 copy of ``a``; ``error`` naming ``ranges`` for an object item that is no number."""
+    """A private float64 copy of ``a``; ``error`` naming ``ranges`` for an object item that is no
+    number, and for a finite number beyond float64's range (a long double's 1e4000, an object
+    array's ``Decimal("1e400")``), which the cast made +inf, REP-117's no return, silently (the
+    CARMEN reader refuses its 1e400 so)."""
     try:
-        return np.array(a, dtype=np.float64)
+        if a.dtype.kind == "O" or a.dtype.itemsize > 8:  # a long double beyond float64: FloatingPointError, not inf
+            with np.errstate(over="raise"):
+                r = np.array(a, dtype=np.float64)
+        else:  # float64, float32, ints: no cast overflows (and no errstate, on every scan read)
+            r = np.array(a, dtype=np.float64)
+    except FloatingPointError:
+        raise error(f"ranges: a number beyond float64's range (dtype {a.dtype}) would read as inf") from None
     except (TypeError, ValueError, OverflowError) as exc:
         raise error(f"ranges: cannot be read as float64 numbers ({exc})") from None
+    if a.dtype.kind == "O" and a.size and np.isinf(r).any():  # float(Decimal("1e400")) is inf, silently
+        for i in np.flatnonzero(np.isinf(r)):
+            item = a.flat[i]
+            if not _is_infinite(item):
+                raise error(f"ranges: {type(item).__name__} at index {i} is beyond float64's range "
+                            "(it would read as inf)")
+    return r
+
+
+def _is_infinite(item: object) -> bool:
+    """Whether an object array's item is itself infinite (``float("inf")``, ``Decimal("Infinity")``),
+    not a finite number that float() makes infinite."""
+    try:
+        return bool(item == math.inf or item == -math.inf)
+    except (TypeError, ValueError):
+        return False
 
 
 def finite_negative(ranges: np.ndarray) -> np.ndarray:

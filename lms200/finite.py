@@ -14,7 +14,10 @@ from .errors import InputError
 def float_of(value: object, name: str, error: type[Exception]) -> float:
     """``float(value)``; ``error`` naming ``name`` for an int beyond float64 (10**400: float()
     raises OverflowError). The message does not print the value: Python refuses to turn an int of
-    more than 4,300 digits into text (a ValueError)."""
+    more than 4,300 digits into text (a ValueError). A complex number is ``error`` too: numpy's
+    (``np.complex128(1+1j)``) gave its real part, with a warning (Python's was float()'s TypeError)."""
+    if isinstance(value, (complex, np.complexfloating)):
+        raise error(f"{name}: must be a real number, got {type(value).__name__} {value!r}")
     try:
         return float(value)  # type: ignore[arg-type]
     except OverflowError:

@@ -85,7 +85,8 @@ def estimate_quantum(ranges: np.ndarray) -> float:
     if v.size == 0:
         return 0.0
     for q in QUANTUM_CANDIDATES_M:
-        off = np.abs(v - np.rint(v / q) * q)
+        with np.errstate(over="ignore", invalid="ignore"):  # 1e308 / 1 mm: off the grid (nan), not a RuntimeWarning
+            off = np.abs(v - np.rint(v / q) * q)
         if np.mean(off < q / 20) >= QUANTUM_SHARE:
             return float(q)
     return 0.0
@@ -239,7 +240,9 @@ def estimate_range_noise(scans: Scan | Iterable[Any], min_range: float = 0.0,
     for scan in scans_of(scans):
         z, _, _ = scan_residuals(scan, max(scan.range_min, min_range), min(scan.range_max, max_range))
         r = scan.ranges
-        finite.append(r[np.isfinite(r)][::7].astype(np.float64))  # a thinned sample is plenty for the grid
+        with np.errstate(invalid="ignore"):  # readings beyond range_max are out of limits, no measurement
+            measured = r[np.isfinite(r) & (r <= scan.range_max)]
+        finite.append(measured[::7].astype(np.float64))  # a thinned sample is plenty for the grid
         zs.append(z.astype(np.float32))
         total += z.size
         if total >= MAX_TRIPLES:

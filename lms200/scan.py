@@ -30,6 +30,7 @@ ANGLE_GRID_DEG = 0.05  # every LMS2xx start angle and resolution is a multiple o
 #: a unit of the last decimal; float32 (a bag's LaserScan) moves it by at most 2**-24 of its value
 SNAP_TEXT_ERROR_RAD = 5e-7
 SNAP_RELATIVE_ERROR = 1e-6  # of the value: float32 (6e-8) with room to spare
+MAX_SNAP_RAD = 4 * np.pi  # rad: larger angles are left as given (a Scan refuses them: bearings within +-2 pi)
 
 
 def snap_angle(value: float) -> float:
@@ -44,6 +45,8 @@ def snap_angle(value: float) -> float:
     reproduction): a 720-beam scan at 2 pi / 719 rad (RPLIDAR style) read as 0.5 deg, its last
     bearing 179.50 deg instead of 180.00 deg; 0.5 deg + 1.5e-5 rad lost 5.4 mrad at beam 360.
     """
+    if not abs(value) <= MAX_SNAP_RAD:  # no bearing or increment a Scan takes (nan too): as given; 1e308 / step
+        return float(value)  # overflowed, a RuntimeWarning on stderr above a reader's one-line error
     step = np.deg2rad(ANGLE_GRID_DEG)
     snapped = float(np.round(value / step) * step)
     error = abs(snapped - value)
@@ -219,7 +222,7 @@ def _degrees_hint(value: float, fits_as_degrees: bool) -> str:
 def _number(name: str, value: object) -> float:
     """A scalar field as a finite float; ScanError naming the field for text, bools (True is not
     1 rad or 1 m), non-numbers, ints beyond float64 (10**400) and nan / inf."""
-    if isinstance(value, (str, bytes, bool, np.bool_)):
+    if isinstance(value, (str, bytes, bool, np.bool_, complex, np.complexfloating)):  # numpy's complex: its real part
         raise ScanError(f"{name}: must be a number, got {value!r}")
     try:
         number = float(value)  # type: ignore[arg-type]

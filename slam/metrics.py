@@ -301,9 +301,22 @@ def map_error(map_segments: np.ndarray, walls: np.ndarray, alignment: Alignment2
 
 
 # --- relations (Kummerle et al. 2009) ----------------------------------------------------------------
+#: how far from 1 the norm of a row's last four numbers may be for them to read as a TUM quaternion
+QUATERNION_NORM_TOLERANCE = 1e-4
+
+
 def read_relations(path: str | Path) -> np.ndarray:
-    """Read a relations file (``t1 t2 x y z roll pitch yaw`` a line) into (m, 5): t1, t2, x, y, yaw."""
+    """Read a relations file (``t1 t2 x y z roll pitch yaw`` a line) into (m, 5): t1, t2, x, y, yaw.
+
+    Raises:
+        LogFormatError: a row that is not 8 finite numbers, naming file and line.
+        LmsbenchError: a file without rows, or a TUM trajectory (``t x y z qx qy qz qw``, also 8 numbers
+            a row): every row's last four numbers of norm 1 and some row's z, roll or pitch (qx, qy, qz)
+            not 0 (a 2-D relation's z, roll, pitch and yaw are (0, 0, 0, yaw)).
+    """
     rows = []
+    unit_quaternions = 0  # rows whose last four numbers have norm 1, as a TUM row's quaternion has
+    turned = False  # a row with z, roll or pitch (a TUM row's qx, qy, qz) not 0
     with open(regular_file(path, "relations file"), encoding="ascii", errors="replace") as f:
         for no, line in enumerate(f, 1):
             s = line.split()
@@ -318,8 +331,14 @@ def read_relations(path: str | Path) -> np.ndarray:
             if not all(math.isfinite(x) for x in v):  # a nan made the mean error null, silently
                 raise LogFormatError(path, no, f"relation row has a non-finite number: {line.strip()[:60]!r}")
             rows.append((v[0], v[1], v[2], v[3], v[7]))
+            unit_quaternions += abs(math.hypot(*v[4:8]) - 1.0) <= QUATERNION_NORM_TOLERANCE
+            turned |= any(v[4:7])  # a TUM row's qz of a pose turned from the first; a 2-D relation's z, roll, pitch are 0
     if not rows:  # an empty file gave "none of the 0 relations falls inside the run" after the run
         raise LmsbenchError(f"{path}: no relations (t1 t2 x y z roll pitch yaw a line)")
+    if unit_quaternions == len(rows) and turned:  # a TUM file (slam --relations RUN/groundtruth.tum) scored 1.42 m, exit 0
+        raise LmsbenchError(f"{path}: a TUM trajectory (t x y z qx qy qz qw: the last four numbers of every row a "
+                            "unit quaternion), not a relations file (t1 t2 x y z roll pitch yaw a line: the pairs "
+                            "of stamps and the true motion between them)")
     return np.array(rows, float).reshape(-1, 5)
 
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Iterable
+from typing import Any, Iterable, Iterator
 
 import numpy as np
 
@@ -232,7 +232,7 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
     if not isinstance(config, SlamConfig):
         raise SlamInputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
     try:
-        records = checked_records(iter(records), SlamInputError)
+        records = in_scale(checked_records(iter(records), SlamInputError))
     except TypeError:
         raise SlamInputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
     if config.preset == "default":
@@ -250,6 +250,35 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
         yield from _observed(batch, config)
 
     return run_steps(steps(), config)
+
+
+#: s: the longest step between consecutive scans' stamps SLAM takes (31,700 years; a 1e9 s gap runs):
+#: the motion model's variance grows with its square, and a log stamped 1e200 s apart was
+#: 'internal error: OverflowError: (34, 'Numerical result out of range')' after the run had started
+MAX_STAMP_STEP_S = 1e12
+#: m: the largest odometry, true or corrected pose coordinate SLAM takes (an odometry of 1e300 m
+#: overflowed the odometry model's variance the same way)
+MAX_POSE_M = 1e9
+
+
+def in_scale(records: Iterable[Record], label: str = "records[{k}]") -> Iterator[Record]:
+    """The records, raising SlamInputError (naming the record by ``label``, formatted with its index
+    ``k``) at the first whose stamp lies more than MAX_STAMP_STEP_S after the one before or whose
+    odometry, true or corrected pose has a coordinate beyond +-MAX_POSE_M (lazily, as they are used)."""
+    before = None
+    for k, rec in enumerate(records):
+        stamp = rec.scan.stamp
+        if before is not None and stamp - before > MAX_STAMP_STEP_S:
+            raise SlamInputError(f"{label.format(k=k)}: stamp {stamp:.6g} s lies {stamp - before:.3g} s after the "
+                                 f"scan before's, more than {MAX_STAMP_STEP_S:g} s (stamps of another unit, or damaged?): "
+                                 "SLAM's motion model cannot step that far")
+        before = stamp
+        for name in ("odom", "truth", "corrected"):
+            pose = getattr(rec, name)
+            if pose is not None and not (abs(pose[0]) <= MAX_POSE_M and abs(pose[1]) <= MAX_POSE_M):
+                raise SlamInputError(f"{label.format(k=k)}: its {name} pose ({pose[0]:.6g}, {pose[1]:.6g}) m lies beyond "
+                                     f"+-{MAX_POSE_M:g} m (damaged?): SLAM's models cannot take it")
+        yield rec
 
 
 #: scans extracted in one ``features.extract_many`` call (bounds the memory of a long log)

@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from decimal import Decimal
 from typing import Any
 
 import numpy as np
 import pytest
 
-from lms200 import LmsbenchError, Record, Scan, read_log, write_log
+from lms200 import LaserGeometry, LmsbenchError, Record, Scan, read_log, write_log
 from lms200.errors import InputError, ScanError
 
 GEOM = dict(angle_min=-1.0, angle_increment=0.01, range_min=0.0, range_max=10.0)
@@ -117,6 +118,37 @@ def test_write_log_bag_with_a_bad_record_leaves_no_bag(tmp_path) -> None:
     path = tmp_path / "run.bag"
     with pytest.raises(InputError, match=r"^records\[1\]: expected an lms200.Record, got int"):
         write_log(path, [_records(1)[0], 1])  # type: ignore[list-item]
+    assert not path.exists()
+
+
+@pytest.mark.parametrize("name, fmt", [("run.log", "robotlaser1"), ("run.log", "flaser"), ("run.log.gz", "robotlaser1")])
+@pytest.mark.parametrize("range_max", [1e308, 20_000.0, 0.05])
+def test_write_log_refuses_a_range_max_its_reader_refuses(tmp_path, name: str, fmt: str, range_max: float) -> None:
+    """A Scan with range_max 1e308 (or 20 km, or 5 cm) was written as a CARMEN log, exit 0, that
+    read_log then refused ('maximum range must be in [0.1, 10000] m'): the writer wrote what its
+    reader cannot read back. The earlier log at the path is kept."""
+    path = tmp_path / name
+    write_log(path, _records(2), fmt=fmt)
+    before = path.read_bytes()
+    odd = Record(Scan(np.full(5, 0.04), -0.1, 0.05, 0.0, range_max, stamp=2.0))
+    with pytest.raises(InputError, match=rf"^records: item 2: range_max {re.escape(f'{range_max:g}')} m is outside \[0\.1, 10000\] m, "
+                                         r"which the CARMEN reader refuses \(the log could not be read back\)$"):
+        write_log(path, [*_records(2), odd], fmt=fmt)
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+    write_log(path, [Record(Scan(np.full(5, 5000.0), -0.1, 0.05, 0.0, 10_000.0))], fmt=fmt)  # the bound itself
+    assert [r.scan.ranges.tolist() for r in read_log(path)] == [[5000.0] * 5]
+
+
+@pytest.mark.parametrize("ranges, range_max", [(np.full(5, 1e300), 1e308), (np.full(5, 2.0), 1e39),
+                                               (np.array([1e39, 1, 1, 1, 1]), 1e38)])
+def test_write_log_bag_refuses_numbers_a_laserscan_cannot_hold(tmp_path, ranges: np.ndarray, range_max: float) -> None:
+    """A range or range_max beyond float32 was rosbags' raw OverflowError ('float too large to pack
+    with f format') after a RuntimeWarning of the float32 cast; no bag is left."""
+    path = tmp_path / "run.bag"
+    with pytest.raises(InputError, match=r"^records: item 1: a range or range_max beyond 3\.403e\+38 m cannot be stored "
+                                         r"in a bag \(a LaserScan's fields are float32\)"):
+        write_log(path, [_records(1)[0], Record(Scan(ranges, -0.1, 0.05, 0.0, range_max, stamp=5.0))])
     assert not path.exists()
 
 
@@ -514,6 +546,45 @@ def test_bools_and_text_inside_object_arrays_and_lists_are_refused(ranges: objec
     from lms200.codes import ranges_to_codes
     with pytest.raises(InputError, match="^ranges: must be real numbers"):  # the code conversions read ranges alike
         ranges_to_codes(ranges)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("ranges, item", [
+    (np.array([1.0, np.complex128(1 + 1j)], dtype=object), "complex128 np.complex128(1+1j) at index 1"),  # was 1 m
+    (np.array([np.datetime64("2020-01-01"), 1.0], dtype=object), "datetime64 np.datetime64('2020-01-01') at index 0"),  # 18262 m
+    (np.array([np.timedelta64(5, "s"), 1.0], dtype=object), "timedelta64 np.timedelta64(5,'s') at index 0"),  # was 5 m
+])
+def test_complex_and_dates_inside_object_arrays_are_refused(ranges: np.ndarray, item: str) -> None:
+    """A complex or date array was refused by its dtype; an object array holding numpy's complex,
+    date or duration items was cast silently (the real part; the count of days or seconds as metres)."""
+    with pytest.raises(ScanError, match=rf"^ranges: must be real numbers \(m\), got {re.escape(item)} "
+                                        r"\(bool, complex, text and dates are refused\)$"):
+        Scan(ranges, **GEOM)
+
+
+@pytest.mark.parametrize("ranges, message", [
+    (np.array([Decimal("1e400"), 1.0], dtype=object), "Decimal at index 0 is beyond float64's range"),
+    (np.array([1.0, Decimal("-1e400")], dtype=object), "Decimal at index 1 is beyond float64's range"),
+    (np.array([np.longdouble("1e4000"), 1.0]), r"a number beyond float64's range \(dtype float128\)"),
+])
+def test_finite_ranges_beyond_float64_are_refused_not_read_as_no_return(ranges: np.ndarray, message: str) -> None:
+    """Decimal("1e400") and a long double's 1e4000 became +inf, REP-117's "no return", silently (the
+    CARMEN reader refuses a range of 1e400 as malformed); infinite items keep their REP-117 meaning."""
+    with pytest.raises(ScanError, match=rf"^ranges: {message}"):
+        Scan(ranges, **GEOM)
+    kept = Scan(np.array([Decimal("Infinity"), np.longdouble("inf"), -np.inf, 1.0], dtype=object), **GEOM)
+    assert kept.ranges.tolist() == [np.inf, np.inf, -np.inf, 1.0]
+
+
+@pytest.mark.parametrize("call", [
+    lambda: Scan([1.0], angle_min=np.complex128(0.1 + 1j), angle_increment=0.01, range_min=0.0, range_max=8.0),
+    lambda: Record(Scan([1.0], **GEOM), odom=(np.complex128(1 + 1j), 0.0, 0.0)),
+    lambda: LaserGeometry(range_max=np.complex128(8 + 1j)),
+])
+def test_numpy_complex_numbers_are_refused_as_scalar_fields(call) -> None:  # noqa: ANN001
+    """numpy's complex scalars went through float(): the real part, a ComplexWarning, and the field
+    set (angle_min 0.1 rad, odom x 1 m, range_max 8 m); Python's complex was already refused."""
+    with pytest.raises(LmsbenchError, match="complex128"):
+        call()
 
 
 def test_object_arrays_and_lists_of_numbers_still_read() -> None:

@@ -277,6 +277,9 @@ CASES = [
     (["compare", "office", "--set", "extractor.kk=3", "--out", O], "kk"),
     (["compare", "office", "--set", "sensor.k=3", "--out", O], "extractor.sensor.k"),
     (["compare", "office", "--set", "novalue", "--out", O], "--set"),
+    # the same field set twice ran the last value alone, exit 0 (an option given twice is refused)
+    (["compare", "office:1", "--set", "extractor.sensor.k=2", "--set", "extractor.sensor.k=3", "--out", O],
+     "--set extractor.sensor.k is given twice (extractor.sensor.k=2 and extractor.sensor.k=3); set each field once"),
     (["compare", "office", "--methods", "nosuch", "--out", O], "nosuch"),
     (["compare", "{binary.clf}", "--out", O], "binary"),
     (["compare", "{plain.gz}", "--out", O], "gzip"),
@@ -665,6 +668,18 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(argv, expected, files, 
     assert expected in lines[0], lines[0]
     assert not out.exists() or not any(out.iterdir()), f"wrote {list(out.iterdir())}"
     assert sorted(p.name for p in files["dir"].iterdir()) == before
+
+
+@pytest.mark.parametrize("command", [["figures", "--no-slam"], ["figures"], ["demo", "--no-sweep"]])
+def test_a_rate_above_the_sensors_is_refused_before_the_study_starts(command, tmp_path, capsys):
+    """figures / demo --rate-hz 1e9 was refused only once the study's simulation began (after the
+    Intel log's panels, narrated on stdout), and the demo left its --out folder behind, empty."""
+    out = tmp_path / "out"
+    assert run_main([*command, "--rate-hz", "1e9", "--duration", "0.5", "--out", str(out)]) == 2
+    captured = capsys.readouterr()
+    assert captured.err.strip().splitlines() == [
+        f"lmsbench {command[0]}: error: --rate-hz: 1e+09 scans/s is more than the sensor gives (37.5 scans/s at 0.5 deg)"]
+    assert captured.out == "" and not out.exists()
 
 
 def test_the_issue_cases_are_all_here():

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -355,6 +356,36 @@ def test_the_cli_exits_0_when_every_cell_succeeds_and_1_when_any_fails(tmp_path,
 def test_misspelled_parameters_fail_before_any_cell_runs(tmp_path, param, message):
     spec = SweepSpec.from_dict({"kind": "extract", "fixed": {"duration": 0.5}, "grid": {param: [1, 2]}})
     with pytest.raises(SweepSpecError, match=message):
+        run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("kind, param, reads", [
+    ("extract", "sensorr.noise_sigma", "sensor.*, extractor.*"),   # a typo of the prefix: the default noise ran
+    ("extract", "extractors.k", "sensor.*, extractor.*"),
+    ("extract", "slam.motion.sigma_accel", "sensor.*, extractor.*"),  # a SLAM field in an extract sweep
+    ("slam", "extractor.k", "sensor.*, slam.*"),                   # the SLAM's extractor is slam.extractor_params.k
+    ("slam", "bogus.x", "sensor.*, slam.*"),
+])
+def test_a_parameter_of_a_prefix_the_kind_does_not_read_fails_before_any_cell_runs(tmp_path, kind, param, reads):
+    """A dotted name whose prefix the cells read nothing of (sensorr.noise_sigma, extractors.k,
+    slam.* in an extract sweep) passed the check, became a column and set nothing: the cells ran
+    the defaults, exit 0."""
+    spec = SweepSpec.from_dict({"kind": kind, "fixed": {"duration": 0.5}, "grid": {param: [1, 2]}})
+    with pytest.raises(SweepSpecError, match=rf"unknown parameter\(s\) \['{re.escape(param)}'\]: these cells read "
+                                             rf"{re.escape(reads)} fields and the plain names .*, so they would set nothing"):
+        run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_slam_sweep_asking_for_odometry_its_runs_lack_fails_before_any_cell_runs(tmp_path):
+    """slam.motion.use_odometry: true ran every cell without odometry (the simulated runs of a sweep
+    carry none, and the filter falls back), exit 0, its column saying True; `slam --odometry` refuses
+    an input without it."""
+    spec = SweepSpec.from_dict({"kind": "slam", "fixed": {"duration": 3.0, "slam.preset": "paper",
+                                                          "slam.motion.use_odometry": True}})
+    with pytest.raises(SweepSpecError, match=r"slam.motion.use_odometry: true, but the slam cells' simulated runs carry "
+                                             r"no odometry: the filter would run without it, as with false"):
         run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
     assert not (tmp_path / "out").exists()
 

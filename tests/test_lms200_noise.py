@@ -73,6 +73,21 @@ def test_quantum_detection() -> None:
     assert estimate_quantum(np.array([np.inf, np.nan])) == 0.0
 
 
+def test_readings_beyond_range_max_leave_the_quantum_and_warn_of_nothing() -> None:
+    """A stray reading of 1e308 (beyond range_max: out of limits) entered the quantum's sample, and
+    1e308 / 1 mm overflowed: `lmsbench compare LOG` printed numpy's RuntimeWarning (two lines) on
+    stderr. Such readings are no measurement: the estimate is that of the log without them."""
+    import warnings
+
+    clean = line_scans(0.008, 40, seed=4, quantum=0.01)
+    stray = [s.replace(ranges=np.where(np.arange(len(s)) % 5 == 0, 1e308, s.ranges)) for s in clean]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = estimate_range_noise(stray)
+        assert estimate_quantum(np.array([1e308, 0.5, 1.25, 2.0, 3.75] * 30)) == 0.0  # 1e308 is off every grid
+    assert got.quantum_m == 0.01 == estimate_range_noise(clean).quantum_m
+
+
 def test_interlace_stride() -> None:
     assert interlace_stride(np.deg2rad(1.0)) == 1
     assert interlace_stride(np.deg2rad(0.5)) == 2

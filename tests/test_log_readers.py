@@ -165,6 +165,22 @@ def test_robotlaser1_fov_must_fit_the_count(tmp_path: Path) -> None:
         list(read_log(write(tmp_path, "rl3.log", ["ROBOTLASER1 0 -1.57 3.14 0.0087 80 0.01 0 5 1 1"])))
 
 
+@pytest.mark.parametrize("start", ["1e308", "-1e308", "1e300"])
+def test_a_huge_start_angle_is_a_malformed_line_without_a_warning(tmp_path: Path, start: str) -> None:
+    """A ROBOTLASER1 start angle of 1e308 overflowed in snap_angle (1e308 / 0.05 deg): a RuntimeWarning
+    ('overflow encountered in scalar divide') printed two lines on stderr above the command's one-line
+    error. It is the malformed line alone."""
+    import warnings
+
+    line = robotlaser(361, 361 * 0.5 * DEG, 0.5 * DEG).split(" ")
+    line[2] = start
+    path = write(tmp_path, "rl.log", [" ".join(line)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(LogFormatError, match=r"rl\.log:1: malformed ROBOTLASER1 line: angle_min: a bearing within"):
+            list(read_log(path))
+
+
 # --- damage ----------------------------------------------------------------------------------------
 def rawlaser(n: int, fov: float, res: float, stamp: float = 10.0, kind: str = "RAWLASER1") -> str:
     ranges = " ".join(f"{2.0 + 0.01 * i:.2f}" for i in range(n))

@@ -74,6 +74,26 @@ def test_rerun_into_its_own_folder_is_accepted(sim, tmp_path, capsys):
     assert (cmp / "summary.txt").is_file() and (slam / "metrics.json").is_file() and (sim2 / "map.png").is_file()
 
 
+def test_compare_run_again_leaves_none_of_the_earlier_runs_outputs_beside_its_own(sim, tmp_path, capsys):
+    """`compare a.clf --out D` then `compare b.clf --out D` left a.clf's realdata_* figure and rows
+    beside a summary of b.clf alone, and a `--format csv` run left the earlier run's compare.parquet
+    beside its compare.csv: files of another run shown as this run's (slam removes its earlier
+    outputs alike)."""
+    import shutil
+
+    for name in ("a.clf", "b.clf"):
+        shutil.copy(sim / "scans.clf", tmp_path / name)
+    out = tmp_path / "cmp"
+    base = ["--methods", "sensor", "--max-scans", "3", "--no-progress", "--out", str(out)]
+    assert main(["compare", str(tmp_path / "a.clf"), *base]) == 0
+    assert {p.name for p in out.iterdir()} >= {"compare.parquet", "realdata_a_clf.png", "realdata_a_clf.csv"}
+    assert main(["compare", str(tmp_path / "b.clf"), *base, "--format", "csv"]) == 0
+    capsys.readouterr()
+    assert sorted(p.name for p in out.iterdir()) == [
+        "compare.csv", "config.yaml", "realdata_b_clf.csv", "realdata_b_clf.pdf", "realdata_b_clf.png",
+        "summary.csv", "summary.txt"]
+
+
 def test_slam_config_in_out_is_refused(sim, tmp_path, capsys):
     """`slam RUN --config DIR/config.yaml --out DIR` wrote the resolved settings over the given file."""
     out = tmp_path / "slam"

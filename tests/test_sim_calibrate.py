@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 import yaml
 
@@ -184,6 +185,30 @@ def test_zero_readings_are_measured_as_the_dropouts_they_are() -> None:
     assert b.noise.sigma_m == a.noise.sigma_m
 
 
+def test_a_reading_beyond_range_max_counts_as_invalid_not_as_the_top_reading() -> None:
+    """One stray reading of 1e308 (a finite number beyond range_max: out of limits, invalid) was taken
+    for the log's largest reading: the 50 m cap's rate read 0 % instead of its share, and the sums
+    over it overflowed (RuntimeWarnings on stderr, above calibrate's output). It counts as nan."""
+    import warnings
+
+    sensor = RECOVERY_CASES["cm_1deg_cap"]  # no_return_prob: readings of the 50 m cap
+    records = simulate_records("office", seed=2, duration=10.0, sensor=sensor, rate_hz=4.0)
+    stray = [r.scan for r in records]
+    as_nan = list(stray)
+    for k in (3, 9):
+        stray[k] = stray[k].replace(ranges=np.where(np.arange(len(stray[k])) == 100, 1e308, stray[k].ranges))
+        as_nan[k] = as_nan[k].replace(ranges=np.where(np.arange(len(as_nan[k])) == 100, np.nan, as_nan[k].ranges))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = calibrate_scans(stray)
+    want = calibrate_scans(as_nan)
+    assert want.max_reading == 50.0 and want.max_reading_rate.value > 0.001
+    for name in ("max_reading", "quantum_m"):
+        assert getattr(got, name) == getattr(want, name)
+    for name in ("max_reading_rate", "nan_rate", "mixed_share", "outlier_rate", "no_return_rate"):
+        assert getattr(got, name) == getattr(want, name), name
+
+
 # -- command line ----------------------------------------------------------------------------
 def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -> None:
     truth = RECOVERY_CASES["cm_0.5deg"]
@@ -210,6 +235,32 @@ def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -
     assert (tmp_path / "mine.yaml").read_text() == "units: cm\n# my own settings\n" and mine.stdout == ""
     (tmp_path / "empty.yaml").write_text("")  # nothing to lose: taken (mktemp's file)
     assert _cli("calibrate", str(tmp_path / "log.clf"), "--max-scans", "5", "--out", str(tmp_path / "empty.yaml")).returncode == 0
+
+
+def test_a_failed_write_leaves_the_earlier_sensor_yaml_whole(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                           capsys: pytest.CaptureFixture[str]) -> None:
+    """`calibrate LOG --out S.yaml` wrote S.yaml in place: a full disk while writing (found with
+    `ulimit -f 2`) left S.yaml cut at 2048 bytes, the earlier calibration lost and the rest not valid
+    YAML (`sim2real --sensor S.yaml`: 'not valid YAML (line 103, ...)'). It is written whole or not at all."""
+    from experiments.cli import main
+
+    write_carmen(tmp_path / "log.clf", simulate_records("office", seed=0, duration=2.0, sensor=SensorConfig(), rate_hz=4.0))
+    earlier = "# lmsbench calibrate earlier.clf\nunits: cm\nnoise_sigma: 0.01\n"
+    (tmp_path / "sensor.yaml").write_text(earlier)
+    write_text = Path.write_text
+
+    def full_disk(self: Path, data: str, *args: object, **kwargs: object) -> int:
+        if "sensor.yaml" in self.name:  # half of it reaches the disk, then the disk is full
+            write_text(self, data[: len(data) // 2], *args, **kwargs)  # type: ignore[arg-type]
+            raise OSError(28, "No space left on device")
+        return write_text(self, data, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Path, "write_text", full_disk)
+    code = main(["calibrate", str(tmp_path / "log.clf"), "--max-scans", "4", "--out", str(tmp_path / "sensor.yaml")])
+    err = capsys.readouterr().err
+    assert code == 2 and "No space left on device" in err and len(err.strip().splitlines()) == 1, err
+    assert (tmp_path / "sensor.yaml").read_text() == earlier
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["log.clf", "sensor.yaml"]  # no temporary file left
 
 
 @pytest.mark.parametrize("args, message", [
@@ -294,6 +345,22 @@ def test_sim2real_warns_on_tiny_samples_and_refuses_a_log_with_nothing_to_measur
     bad = _cli("sim2real", str(tmp_path / "dark.clf"), "--world", "cluttered", "--seeds", "7", "--out",
                str(tmp_path / "out2"))
     assert bad.returncode == 2 and "nothing to compare" in bad.stderr and len(bad.stderr.splitlines()) == 1, bad.stderr
+
+
+def test_sim2real_of_a_log_a_method_finds_no_line_in_reports_no_ratio(tmp_path: Path) -> None:
+    """A log the sensor method finds no line in (every beam at 2 m: a circle, which it leaves alone)
+    was 'internal error: ZeroDivisionError: float division by zero' (sim lines over real lines per
+    scan) after the whole run, exit 1. The ratio is nan, the report written."""
+    recs = simulate_records("office", seed=0, duration=2.0, sensor=SensorConfig(units="cm"), rate_hz=3.0)
+    circle = [dataclasses.replace(r, scan=r.scan.replace(ranges=np.full_like(r.scan.ranges, 2.0))) for r in recs]
+    write_carmen(tmp_path / "circle.clf", circle)
+    run = _cli("sim2real", str(tmp_path / "circle.clf"), "--world", "office", "--seeds", "0", "--duration", "1",
+               "--out", str(tmp_path / "out"))
+    assert run.returncode == 0, run.stderr
+    table = pd.read_csv(tmp_path / "out" / "sim2real.csv").set_index("method")
+    assert table.at["sensor", "lines_per_scan_real"] == 0 and np.isnan(table.at["sensor", "lines_ratio"])
+    assert table.at["split_merge", "lines_ratio"] == table.at["split_merge", "lines_per_scan_sim"] / \
+        table.at["split_merge", "lines_per_scan_real"]
 
 
 def test_sim2real_probe_seeds_may_not_be_report_seeds_given_or_default() -> None:

@@ -132,6 +132,59 @@ def test_slam_refuses_a_log_of_one_stamp_and_warns_of_steps_without_time(sim_fol
     assert read_tum(tmp_path / "p" / "trajectory.tum")[0].size == 20
 
 
+@pytest.mark.parametrize("damage, message", [
+    ("gap", "scan 10: stamp 1e+200 s lies 1e+200 s after the scan before's, more than 1e+12 s (stamps of another unit, "
+            "or damaged?): SLAM's motion model cannot step that far"),
+    ("odom", "scan 10: its odom pose (1e+300, -3) m lies beyond +-1e+09 m (damaged?): SLAM's models cannot take it"),
+])
+def test_slam_refuses_stamps_and_poses_its_models_overflow_on(sim_folder, tmp_path, capsys, damage, message):
+    """A log whose stamps jump by 1e200 s (or whose odometry reads 1e300 m: the default run's odometry
+    baseline) was 'internal error: OverflowError: (34, 'Numerical result out of range')', exit 1, after
+    the run had started; a 1e9 s gap still runs. Refused before any output, one line; run_slam alike."""
+    import dataclasses
+
+    from experiments.cli import main
+    from lms200 import read_log
+    from slam import SlamConfig, run_slam
+    from slam.run import SlamInputError
+
+    records = list(read_log(sim_folder / "scans.clf"))[:20]
+    if damage == "gap":
+        bad = [dataclasses.replace(r, scan=r.scan.replace(stamp=r.scan.stamp + (1e200 if k >= 10 else 0.0)))
+               for k, r in enumerate(records)]
+    else:
+        bad = [dataclasses.replace(r, odom=(1e300, -3.0, 0.0)) if k >= 10 else dataclasses.replace(r, odom=(0.0, 0.0, 0.0))
+               for k, r in enumerate(records)]
+    write_log(tmp_path / "bad.clf", bad)
+    assert main(["slam", str(tmp_path / "bad.clf"), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [f"lmsbench slam: error: {tmp_path / 'bad.clf'}: {message}"]
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+    with pytest.raises(SlamInputError, match=r"^records\[10\]: "):
+        run_slam(bad, SlamConfig(preset="paper", motion=dataclasses.replace(SlamConfig().motion, use_odometry=True)))
+    gap = [dataclasses.replace(r, scan=r.scan.replace(stamp=r.scan.stamp + (1e9 if k >= 10 else 0.0)))
+           for k, r in enumerate(records)]
+    assert run_slam(gap).trajectory.shape == (20, 4)
+
+
+@pytest.mark.parametrize("wall", ["[0, 0, NaN, 1]", "[0, 0, 1e308, 1e308]"])
+def test_slam_refuses_a_world_json_wall_simulate_and_compare_refuse_before_the_run(sim_folder, tmp_path, capsys, wall):
+    """A simulate folder's world.json with a NaN wall was map_error's error after the whole run (its
+    config.yaml, trajectory, keyframes and map written, no metrics.json), and a wall at 1e308 m ran,
+    exit 0, with matplotlib's overflow RuntimeWarning on stderr and a nonsense map error; simulate and
+    compare refuse both (World.from_json). Refused before any output, one line."""
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    (run / "world.json").write_text('{"walls": [' + wall + '], "circles": [], "corners": []}')
+    assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench slam: error: {run / 'world.json'}: not a world.json (walls: must be finite numbers within +-1e+06 m)"]
+    assert not (tmp_path / "o").exists()
+
+
 def test_slam_command_errors_are_one_line(tmp_path, capsys):
     from experiments.cli import main  # in process: the subprocess test above covers the real command line
 

@@ -125,6 +125,22 @@ def test_relations_reader_errors_name_the_line(tmp_path):
         read_relations(p)
 
 
+def test_a_tum_trajectory_given_as_relations_is_refused_naming_both_formats(tmp_path):
+    """`slam SIM --relations SIM/groundtruth.tum` read the TUM rows (t x y z qx qy qz qw, 8 numbers as
+    a relation's) as relations from t to x, and scored the run 1.42 m against them, exit 0."""
+    from lms200.tum import write_tum
+
+    truth = square_path()
+    p = tmp_path / "groundtruth.tum"
+    write_tum(p, truth[:, 0], truth[:, 1:])
+    with pytest.raises(LmsbenchError, match=r"groundtruth\.tum: a TUM trajectory \(t x y z qx qy qz qw: the last four "
+                                            r"numbers of every row a unit quaternion\), not a relations file"):
+        read_relations(p)
+    # relations whose yaw is 1 rad (z, roll, pitch 0) and relations with a 3-D part still read
+    p.write_text("0 1 1 0 0 0 0 1.0\n1 2 1 0 0 0 0 -1.0\n2 3 1 0 0.5 0 0 0.3\n")
+    assert read_relations(p).tolist() == [[0, 1, 1, 0, 1.0], [1, 2, 1, 0, -1.0], [2, 3, 1, 0, 0.3]]
+
+
 def test_interpolation_takes_the_short_way_round():
     traj = np.array([[0.0, 0, 0, 3.0], [1.0, 0, 0, -3.0]])
     pose, inside = interpolate_poses(traj, np.array([0.5, 2.0]))

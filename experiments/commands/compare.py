@@ -94,6 +94,30 @@ def _check_applies(args: argparse.Namespace) -> None:
                          f"none of {' '.join(args.sources)} is one (a log or a simulate folder has its own)")
 
 
+def _remove_earlier_outputs(out: Path, fmt: str) -> None:
+    """Remove the outputs an earlier compare left in ``out`` (check_out has told them as compare's)
+    that this run may not write again: every log's realdata_* figure and rows, and the table of the
+    other format. They stayed beside the new run's files as if they were its own: ``compare a.clf
+    --out D`` then ``compare b.clf --out D`` left a.clf's figures beside a summary of b.clf alone, and
+    a --format csv run left the parquet table of the run before."""
+    if not out.is_dir():
+        return
+    other = "csv" if fmt == "parquet" else "parquet"
+    for stale in [out / f"compare.{other}", *(p for pattern in COMPARE_FIGURES for p in out.glob(pattern))]:
+        stale.unlink(missing_ok=True)
+
+
+def _check_set_once(params: list[tuple[str, Any]]) -> None:
+    """A field set twice (``--set extractor.k=2 ... --set extractor.k=5``) ran the last value alone,
+    as an option given twice did (``--seed 1 ... --seed 2``); ``extractor.k`` beside
+    ``extractor.sensor.k`` is two fields (the method's own wins for it)."""
+    seen: dict[str, Any] = {}
+    for key, value in params:
+        if key in seen:
+            raise InputError(f"--set {key} is given twice ({key}={seen[key]!r} and {key}={value!r}); set each field once")
+        seen[key] = value
+
+
 def _sigma(text: str) -> float | str:
     if text == "auto":
         return text
@@ -120,6 +144,7 @@ def run(args: argparse.Namespace) -> int:
     from features.scoring import ScoreConfig
 
     methods = check_methods(args.methods)
+    _check_set_once(args.params)
     params = extractor_overrides(dict(args.params), methods)
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
     reads = [Path(s) / name for s in args.sources if Path(s).is_dir() for name in SIMULATE_OUTPUTS]
@@ -182,6 +207,7 @@ def run(args: argparse.Namespace) -> int:
     resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
     resolved["versions"] = versions()
     args.out = args.out or new_run_folder("results/compare")
+    _remove_earlier_outputs(args.out, args.format)
     # config.yaml first, whole: it tells the folder as compare's (options.COMPARE_OWNER); a run stopped
     # after compare.parquet left a folder the next run into it refused
     write_record(args.out / "config.yaml", yaml.safe_dump(resolved, sort_keys=False))

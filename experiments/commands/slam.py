@@ -193,6 +193,12 @@ def run(args: argparse.Namespace) -> int:
         if len(data.records) < 2:  # it ran on the one scan left (load_input refuses a one-scan input)
             raise InputError(f"{where}: {len(data.records)} of its {len(stamps)} scans are in time order; SLAM "
                              "needs two or more")
+    from slam.run import in_scale
+
+    # before any output (run_slam checks the same as it goes: a stamp 1e200 s after the one before or an
+    # odometry of 1e300 m was an internal error after the run started)
+    for _ in in_scale(data.records, f"{data.sources.get('scans', args.input)}: scan {{k}}"):
+        pass
     stamps = [r.scan.stamp for r in data.records]
     still = [k for k in range(1, len(stamps)) if stamps[k] == stamps[k - 1]]
     if still:  # each such step predicts no motion and searches no turn: kept (a coarse clock still works), said

@@ -196,19 +196,30 @@ def _relative_hint(path: str) -> str:
     return f" (a sweep's relative paths are read from the current folder, {Path.cwd()}, not the sweep file's)"
 
 
-def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: set[str]) -> None:
-    """Plain (unprefixed) names are known ones, and world, duration and rate_hz have usable values."""
+def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: set[str],
+                 prefixes: tuple[str, ...]) -> None:
+    """Plain (unprefixed) names are known ones, dotted names start with one of ``prefixes`` (the
+    configs the kind reads), and world, duration and rate_hz have usable values."""
     from experiments.options import MAX_DURATION_S, MIN_DURATION_S, check_world_file, known_worlds
 
     from .spec import SweepSpecError
 
     known = set(defaults) | extra | {"seed", "sensor_file"}
+    read = ", ".join(f"{prefix}.*" for prefix in prefixes)
     for cell in cells:
         plain = {k for k in cell if "." not in k}
         bad = sorted(plain - known)
         if bad:
             raise SweepSpecError(f"unknown parameter(s) {bad}; known plain names: {sorted(known)} "
-                                 "(and sensor.*, extractor.*, slam.* fields)")
+                                 f"(and {read} fields)")
+        # a misspelt or foreign prefix (sensorr.noise_sigma, extractors.k; slam.* in an extract sweep) was
+        # taken as a column and read by nothing: the cells ran the defaults, exit 0
+        other = sorted(k for k in cell if "." in k and k.partition(".")[0] not in prefixes)
+        if other:
+            hint = (f" (the SLAM's extractor: slam.extractor_params.{other[0].partition('.')[2]})"
+                    if "slam" in prefixes and other[0].startswith("extractor.") else "")
+            raise SweepSpecError(f"unknown parameter(s) {other}: these cells read {read} fields and the plain "
+                                 f"names {sorted(known)}, so they would set nothing{hint}")
         p = {**defaults, **cell}
         world = str(p["world"])
         if world not in known_worlds() and not world.endswith(".json"):
@@ -263,7 +274,7 @@ def check_extract_params(cells: list[dict[str, Any]]) -> None:
 
     files = _read_sensor_files(cells)
     _unknown(cells, "sensor", _sensor_fields)
-    _check_plain(cells, EXTRACT_DEFAULTS, set())
+    _check_plain(cells, EXTRACT_DEFAULTS, set(), ("sensor", "extractor"))
     _check_sensors(cells, files)
     from .spec import SweepSpecError
 
@@ -299,7 +310,7 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
     _unknown(slam_cells, "slam", lambda c: (known, "slam.SlamConfig"))
     default = SlamConfig().extractor
     _unknown(cells, "slam.extractor_params", lambda c: _extractor_fields(str(c.get("slam.extractor", default))))
-    _check_plain(cells, SLAM_DEFAULTS, set())
+    _check_plain(cells, SLAM_DEFAULTS, set(), ("sensor", "slam"))
     _check_sensors(cells, files)
     from lms200 import LmsbenchError
 
@@ -310,6 +321,10 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
     seen = set()
     for cell in cells:
         nested = slam_config_dict(cell)
+        motion = nested.get("motion")
+        if isinstance(motion, dict) and motion.get("use_odometry") is True:  # ran without it, the column saying True
+            raise SweepSpecError("slam.motion.use_odometry: true, but the slam cells' simulated runs carry no "
+                                 "odometry: the filter would run without it, as with false")
         key = repr(sorted(nested.items(), key=lambda kv: kv[0]))
         if key in seen:
             continue
