@@ -296,7 +296,10 @@ def check_simulate_finished(path: str | os.PathLike) -> None:
     """Raise InputError when ``path``, a folder or one of the files ``lmsbench simulate`` writes
     (SIMULATE_OUTPUTS; through a link: where it points), is in a folder whose simulate run did not
     finish (its SIMULATE_UNFINISHED file is there): its scans.clf may be cut short, or an earlier
-    run's beside the new run's config.yaml."""
+    run's beside the new run's config.yaml. The file holds that run's settings (a simulate config,
+    since the marker held them), so the error names ``simulate --config DIR/.simulate-unfinished
+    --out DIR``: "run lmsbench simulate --out DIR again" ran the defaults, and config.yaml may still
+    be the earlier run's (a run stopped before writing it)."""
     p = Path(path)
     try:
         real = p.resolve()
@@ -304,10 +307,14 @@ def check_simulate_finished(path: str | os.PathLike) -> None:
         real = p
     folders = [p] if p.is_dir() else [q.parent for q in dict.fromkeys((p, real)) if q.name in SIMULATE_OUTPUTS]
     for folder in folders:
-        if (folder / SIMULATE_UNFINISHED).exists():
+        marker = folder / SIMULATE_UNFINISHED
+        if marker.exists():
+            rerun = (f"rerun it with lmsbench simulate --config {marker} --out {folder} (that file holds its settings)"
+                     if SIMULATE_OWNER.records["config.yaml"](marker) else  # a marker from before it held them
+                     f"run lmsbench simulate --out {folder} again with the options the run was given")
             raise InputError(f"{folder}: the lmsbench simulate run that wrote this folder did not finish (it was stopped "
                              f"or killed while writing its files; {SIMULATE_UNFINISHED} is left), so its scans.clf may be "
-                             f"cut short or an earlier run's; run lmsbench simulate --out {folder} again")
+                             f"cut short or an earlier run's; {rerun}")
 
 
 def check_log(path: str | os.PathLike) -> Path:
@@ -352,7 +359,8 @@ SIMULATE_OUTPUTS = ("scans.clf", "groundtruth.tum", "world.json", "config.yaml",
 #: while writing (Ctrl-C, SIGKILL, a crash, a power loss) leaves it, and the readers of the folder
 #: refuse it (check_simulate_finished). A killed run left a cut scans.clf (or the earlier run's files
 #: beside its new config.yaml) that slam, info, compare and sim2real read as a shorter run, exit 0.
-#: A folder from before this file has none and reads as before.
+#: A folder from before this file has none and reads as before. It holds the run's settings (a
+#: simulate config under a comment), so ``simulate --config DIR/.simulate-unfinished --out DIR`` reruns it.
 SIMULATE_UNFINISHED = ".simulate-unfinished"
 SLAM_OUTPUTS = ("trajectory.tum", "keyframes.tum", "map.json", "metrics.json", "config.yaml", "slam.png")
 COMPARE_OUTPUTS = ("compare.parquet", "compare.csv", "summary.csv", "summary.txt", "config.yaml")  # and a figure per log

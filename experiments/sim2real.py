@@ -217,8 +217,8 @@ def odometry_limits(a: np.ndarray):
 
 
 def odometry_limits_and_source(a: np.ndarray) -> tuple[Any, str]:
-    """:func:`odometry_limits` and where they come from, as the report says it: "the log's
-    odometry (N steps)", or "the simulator's defaults: " and why (no odometry, too few records
+    """:func:`odometry_limits` and where they come from, as the report says it: "from N steps
+    of the log's odometry", or "the simulator's defaults: " and why (no odometry, too few records
     with odometry, scans mostly MIN_SCAN_DT_S or more apart)."""
     from sim.robot import RobotLimits
 
@@ -242,7 +242,7 @@ def odometry_limits_and_source(a: np.ndarray) -> tuple[Any, str]:
     v_max, w_max = min(v_max, top["v_max"]), min(w_max, top["w_max"])  # odometry that jumps: no endless tour
     return (RobotLimits(v_max=max(v_max, 0.1), w_max=max(w_max, 0.2), a_max=min(max(base.a_max, v_max), top["a_max"]),
                         alpha_max=min(max(base.alpha_max, 2 * w_max), top["alpha_max"])),
-            f"the log's odometry ({np.count_nonzero(ok)} steps)")
+            f"from {np.count_nonzero(ok)} steps of the log's odometry")
 
 
 @dataclass

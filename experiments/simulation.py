@@ -12,7 +12,9 @@ Files in the output folder:
 Each file is written whole or not at all (a hidden temporary file renamed into place), and the
 hidden ``.simulate-unfinished`` (options.SIMULATE_UNFINISHED), written before them and removed once
 they are all whole and on disk, tells a run stopped or killed while writing from a finished one:
-every reader of the folder refuses it, and the next run into the folder takes it.
+every reader of the folder refuses it, and the next run into the folder takes it. It holds the
+run's settings (config.yaml's content under a comment), so ``simulate --config DIR/.simulate-unfinished
+--out DIR`` reruns the run that did not finish.
 """
 
 from __future__ import annotations
@@ -154,11 +156,18 @@ def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> 
             bar.close()
     out.mkdir(parents=True, exist_ok=True)
     _remove_temporary_files(out)
-    # before any output, on disk: a run killed from here on (SIGKILL, a crash, a power loss) left
-    # a cut scans.clf, or the earlier run's files beside its new config.yaml, read as a finished run
+    # before any output, whole and on disk: a run killed from here on (SIGKILL, a crash, a power
+    # loss) left a cut scans.clf, or the earlier run's files beside its new config.yaml, read as a
+    # finished run. It holds the run's settings, which the readers' refusal reruns with --config
+    # MARKER (config.yaml, written next, is still the earlier run's, or absent, when the run stops
+    # before it); whole or not at all, as a cut one would run the defaults for the settings it lost
     unfinished = out / SIMULATE_UNFINISHED
-    _write_synced(unfinished, "lmsbench simulate is writing this folder; removed once its files are whole "
-                              "(a folder holding this file is one whose run did not finish)\n")
+    marker = ("# lmsbench simulate is writing this folder; removed once its files are whole (a folder\n"
+              "# holding this file is one whose run did not finish). Below, the settings of that run (a\n"
+              "# simulate config): lmsbench simulate --config DIR/.simulate-unfinished --out DIR reruns it.\n"
+              + yaml.safe_dump(cfg.to_dict(), sort_keys=False))
+    write_record(unfinished, lambda tmp: _write_synced(tmp, marker))
+    _fsync(out)
     # config.yaml first, whole: it tells the folder as simulate's (options.SIMULATE_OWNER); a run
     # stopped while writing scans.clf left a folder the next run into it refused
     write_record(out / "config.yaml", yaml.safe_dump(cfg.to_dict(), sort_keys=False))
@@ -177,8 +186,8 @@ def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> 
 
 
 def _remove_temporary_files(out: Path) -> None:
-    """The temporary files (provenance.write_record's ``.NAME.PID.tmp``) a killed run left in ``out``."""
-    for name in SIMULATE_OUTPUTS:
+    """The temporary files (provenance.write_record's ``.NAME.PID.tmp``, the marker's too) a killed run left in ``out``."""
+    for name in (*SIMULATE_OUTPUTS, SIMULATE_UNFINISHED):
         for tmp in leftover_temporaries(out / name):  # not a user's own .scans.clf.notes.tmp (a review)
             tmp.unlink(missing_ok=True)
 

@@ -124,11 +124,11 @@ class CorrectedChain:
     Such a log (Intel Research Lab, ACES: a SLAM solution written back into the log) gives every
     FLASER / RLASER line the corrected pose in its pose fields (both the laser and the odometry
     pose), and writes after each one an ODOM line at exactly that pose, its stamp junk (more than
-    ``ANCHOR_STAMP_GAP_S`` before the odometry's own clock, the last ODOM step's stamp; so none
-    is seen before an ODOM step: both logs begin with ODOM lines): the odometry restarts at that
-    anchor, and the ODOM
-    lines up to the next laser line are the robot's raw odometry from it. So the odometry between
-    two scans is the last ODOM pose before the second seen from the first's anchor; chained from
+    ``ANCHOR_STAMP_GAP_S`` before the odometry's own clock, the last ODOM step's stamp; both logs
+    begin with ODOM lines, but one cut before a scan does not: there the first scan's anchor is
+    judged by the stamps of the next ODOM line and of the scan itself): the odometry restarts at
+    that anchor, and the ODOM lines up to the next laser line are the robot's raw odometry from it.
+    So the odometry between two scans is the last ODOM pose before the second seen from the first's anchor; chained from
     the first anchored scan's pose, the scans get a raw odometry trajectory (dead reckoning, in
     the corrected frame at the start), and their pose fields become ``Record.corrected``.
     Measured: every laser line of the Intel (910) and ACES (440) logs has its anchor; at the next
@@ -160,6 +160,9 @@ class CorrectedChain:
         self.last_odom: Pose2D | None = None  # the last ODOM pose after that anchor
         self.step_stamp: float | None = None  # the stamp of the last ODOM line read as a step (s)
         self.in_a_row = 0  # anchors read in a row (CONFIRMING_ANCHORS: the chain runs)
+        #: an ODOM line (pose, stamp s) at the held scan's pose read before any ODOM step: no clock yet
+        #: judges its stamp, so it waits for the next ODOM line's (:meth:`_judge_first`)
+        self.first: tuple[Pose2D, float] | None = None
 
     def laser(self, rec: Record) -> Iterator[Record]:
         """A laser record of the kind read; held until the ODOM line after it is read."""
@@ -177,6 +180,12 @@ class CorrectedChain:
     def odom(self, pose: Pose2D, stamp: float) -> Iterator[Record]:
         """An ODOM line's pose and stamp (s): the anchor of the held record, another line's anchor,
         or a step of the odometry."""
+        if self.first is not None:
+            yield from self._judge_first(stamp)
+        if (self.step_stamp is None and self.pending is not None and pose == self.pending[0].odom
+                and all(map(math.isfinite, pose))):
+            self.first = (pose, stamp)  # the held scan's anchor, if the next ODOM line's stamp says its stamp is junk
+            return
         # judged by the odometry's own clock (a raw log's ODOM lines follow it, whatever the laser's
         # says), so not before an ODOM step has been read (Intel and ACES begin with ODOM lines)
         junk = self.step_stamp is not None and not stamp >= self.step_stamp - ANCHOR_STAMP_GAP_S  # nan too
@@ -208,6 +217,9 @@ class CorrectedChain:
     def flush(self) -> Iterator[Record]:
         """The held record, with no anchor after it: anchored all the same once a chain runs (its
         pose fields are its corrected pose), else as read (the chain ends)."""
+        if self.first is not None:  # no ODOM line after it to judge it: a step, as read
+            yield from self._judge_first(math.nan)
+            return
         if self.pending is not None:
             rec, odom = self.pending
             self.pending = None
@@ -216,6 +228,27 @@ class CorrectedChain:
             else:
                 self._end()
                 yield rec
+
+    def _judge_first(self, clock: float) -> Iterator[Record]:
+        """Settle :attr:`first` by ``clock``, the stamp of the ODOM line after it (nan: none came
+        before the next laser line or the end): its stamp more than ANCHOR_STAMP_GAP_S before that
+        and before the held scan's own stamp makes it the scan's anchor (a log that begins with a
+        laser line: Intel or ACES cut before their first scan); else it is a step, as any ODOM line
+        before the first step was read (a raw log's ODOM line at a standing robot's pose, or ODOM
+        lines all stamped alike)."""
+        assert self.first is not None and self.pending is not None
+        pose, stamp = self.first
+        self.first = None
+        rec, odom = self.pending
+        if stamp < clock - ANCHOR_STAMP_GAP_S and stamp < rec.scan.stamp - ANCHOR_STAMP_GAP_S:
+            self.pending = None
+            self.in_a_row += 1
+            yield self._anchored(rec, odom)
+            return
+        yield from self.flush()
+        self.last_odom = pose
+        if math.isfinite(stamp):
+            self.step_stamp = stamp
 
     def _end(self) -> None:
         self.anchor, self.last_odom, self.in_a_row = None, None, 0

@@ -56,15 +56,17 @@ def _trajectories(n: int, seed: int = 3):
 
 def _write_corrected_log(path: Path, n: int, drop_anchor: int | None = None, anchors: bool = True,
                          anchor_stamped: bool = False, t0: float = 100.0, rear: bool = False,
-                         bad_line: int | None = None, cut_after: int | None = None) -> tuple:
+                         bad_line: int | None = None, cut_after: int | None = None, lead: bool = True) -> tuple:
     """A corrected log as Radish writes them: FLASER at the corrected pose, its ODOM anchor (a junk
     stamp), then three ODOM lines of raw odometry from that anchor, the last at the next scan.
     ``rear``: each FLASER's anchor is followed by an RLASER line at the pose turned by pi and its
     anchor, from which the ODOM lines then go on; ``bad_line``: that FLASER line is malformed (its
-    anchor stays); ``cut_after``: the log ends right after that scan's FLASER line."""
+    anchor stays); ``cut_after``: the log ends right after that scan's FLASER line; ``lead``: an ODOM
+    line before the first scan (else the log begins with that scan's FLASER line)."""
     corrected, raw = _trajectories(n)
-    lines = ["# a Radish-style corrected log", "PARAM robot_frontlaser_offset 0.0 host 0",
-             f"ODOM 0 0 0 0 0 0 {t0 - 0.05:.4f} host 0"]  # odometry before the first scan, as Intel and ACES have
+    lines = ["# a Radish-style corrected log", "PARAM robot_frontlaser_offset 0.0 host 0"]
+    if lead:  # odometry before the first scan, as Intel and ACES have
+        lines.append(f"ODOM 0 0 0 0 0 0 {t0 - 0.05:.4f} host 0")
     for k in range(n):
         t = t0 + 2.5 * k
         x, y, th = corrected[k]
@@ -157,6 +159,38 @@ def test_a_damaged_corrected_log_keeps_its_chain_and_a_raw_log_is_read_as_before
         np.testing.assert_allclose([r.odom for r in recs], np.round(corrected, 6), atol=1e-12)
 
 
+def test_a_corrected_log_that_begins_with_a_scan_is_corrected_from_it(tmp_path):
+    """A corrected log whose first line is a laser line (Intel or ACES cut before a scan) read its
+    first anchor as a step of the odometry: no ODOM step had yet given the clock its junk stamp is
+    judged by, so the first scan had no corrected pose and `slam` scored none of the run (every scan
+    needs one; a review). The line at the first scan's pose is now its anchor when its stamp lies
+    more than 10 s before both the next ODOM line's and the scan's own; raw logs that begin with a
+    laser line, an ODOM line at its pose after it, still read as written."""
+    corrected, _ = _trajectories(12)
+    _write_corrected_log(tmp_path / "cut-corrected.log", 12, lead=False)
+    recs = list(read_log(tmp_path / "cut-corrected.log"))
+    assert [r.corrected is not None for r in recs] == [True] * 12
+    np.testing.assert_allclose([r.corrected for r in recs], np.round(corrected, 6), atol=1e-12)
+    _assert_odometry(recs, _dead_reckoning(12))
+    for name, options in (("plain.log", {"anchors": False}), ("standing.log", {"anchor_stamped": True})):
+        _write_corrected_log(tmp_path / name, 12, lead=False, **options)
+        recs = list(read_log(tmp_path / name))
+        assert all(r.corrected is None for r in recs), name
+        np.testing.assert_allclose([r.odom for r in recs], np.round(corrected, 6), atol=1e-12)
+    ranges = " ".join(["2.00"] * BEAMS)
+    for name, laser_t, first_odom_t, next_odom_t in (("laser clock 15 s ahead", 115.0, 100.0, 100.1),
+                                                     ("15 s gap in the odometry", 100.0, 100.0, 115.0)):
+        # a robot standing at (0, 0, 0): its first ODOM line is at the scan's pose, and its stamp lies
+        # 15 s before one of the two clocks but not the other
+        lines = [f"FLASER {BEAMS} {ranges} 0 0 0 0 0 0 {laser_t} host {laser_t}", f"ODOM 0 0 0 0 0 0 {first_odom_t} host 0",
+                 f"ODOM 0.1 0 0 0 0 0 {next_odom_t} host 0",
+                 f"FLASER {BEAMS} {ranges} 0.1 0 0 0.1 0 0 {laser_t + 0.2} host {laser_t + 0.2}",
+                 f"ODOM 0.1 0 0 0 0 0 {next_odom_t + 0.2} host 0"]
+        (tmp_path / "raw.log").write_text("\n".join(lines) + "\n")
+        recs = list(read_log(tmp_path / "raw.log"))
+        assert [(r.odom, r.corrected) for r in recs] == [((0.0, 0.0, 0.0), None), ((0.1, 0.0, 0.0), None)], name
+
+
 @pytest.mark.parametrize("odom_stamp", ["skew 1.5", "skew 15", "zero"])
 def test_a_raw_log_whose_clocks_disagree_is_no_corrected_log(tmp_path, odom_stamp):
     """Reviews: a raw FLASER + ODOM log of two hosts, the laser's clock 1.5 s ahead and the robot
@@ -218,6 +252,24 @@ def test_slam_on_a_corrected_log_is_scored_against_its_corrected_poses(tmp_path,
     expected = ate(np.column_stack((stamps, odometry)), reference).rmse
     assert rows["raw odometry"]["ate_rmse"] == pytest.approx(expected, abs=1e-4)
     assert rows["raw odometry"]["ate_rmse"] > 0.02  # before: 0 (the reference itself)
+
+
+@pytest.mark.shared_data
+@pytest.mark.parametrize("name", ["intel-corrected.log.gz", "aces-corrected.log.gz"])
+def test_the_real_corrected_logs_cut_before_their_first_scan_read_the_same(shared_data, tmp_path, name):
+    """Intel and ACES from their first laser line on (their ODOM lines before it dropped): the same
+    records, corrected from the first scan on; before, the first scan had no corrected pose."""
+    import gzip
+
+    full = list(read_log(shared_data / name))
+    with gzip.open(shared_data / name, "rt") as fh:
+        lines = fh.readlines()
+    first = next(i for i, line in enumerate(lines) if line.startswith("FLASER"))
+    assert any(line.startswith("ODOM") for line in lines[:first])
+    (tmp_path / "cut.log").write_text("".join(lines[first:]))
+    recs = list(read_log(tmp_path / "cut.log"))
+    assert [(r.scan.stamp, r.odom, r.corrected) for r in recs] == [(r.scan.stamp, r.odom, r.corrected) for r in full]
+    assert recs[0].corrected is not None
 
 
 @pytest.mark.shared_data

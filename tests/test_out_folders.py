@@ -233,9 +233,10 @@ def test_figures_runs_again_into_its_own_folder_and_a_demos(tables, tmp_path, ca
     demo = tmp_path / "demo"
     (demo / "figures").mkdir(parents=True)
     (demo / "tables").mkdir()
-    (demo / "tables" / "study.yaml").write_text((tables / "study.yaml").read_text())
+    for name in ("study.yaml", "timing.parquet"):  # the demo's own tables: only they redraw its figures
+        (demo / "tables" / name).write_bytes((tables / name).read_bytes())
     (demo / "figures" / "fig7_timing.png").write_bytes(b"the demo's")
-    assert main(["figures", "--tables", str(tables), "--out", str(demo / "figures")]) == 0, capsys.readouterr().err
+    assert main(["figures", "--tables", str(demo / "tables"), "--out", str(demo / "figures")]) == 0, capsys.readouterr().err
     assert (demo / "figures" / "fig7_timing.png").read_bytes().startswith(b"\x89PNG")
     assert DEMO_OWNER.foreign(demo, DEMO_OUTPUTS) == [] and DEMO_OUTPUTS.foreign(demo) == []
     pre = tmp_path / "pre"  # `figures --tables T --out DIR` before figures.yaml: no table, no record
@@ -402,3 +403,39 @@ def test_figures_without_tables_into_a_demos_figures_is_refused(tables, tmp_path
     assert main(["figures", "--no-slam", "--duration", "1", "--rate-hz", "2", "--methods", "sensor",
                  "--out", str(elsewhere)]) == 0, capsys.readouterr().err
     assert (elsewhere / "tables" / "study.yaml").is_file()
+
+
+def test_figures_from_another_studys_tables_into_a_demos_figures_is_refused(tables, tmp_path, capsys, monkeypatch):
+    """`figures --tables X/tables --out DEMO/figures`, X another study's folder, drew X's figures over
+    the demo's, exit 0: fig7_timing then showed X's three scans beside the demo's own fig10_slam and
+    under its report.md, which still described the demo's study (a review, after 1f17742 refused the
+    same without --tables). Now refused before any work, the demo's figures kept, pointing to a new
+    --out; the demo's own tables, however named (through a link too), redraw them as before. The
+    demo's study and sim2real are stubbed."""
+    import pandas as pd
+
+    import experiments.demo
+
+    timing = pd.DataFrame({"method": ["sensor"], "scan": [0], "time_ms": [0.05]})
+    monkeypatch.setattr(experiments.demo, "run_study", lambda cfg, log=print: ({"timing": timing, "summary": timing}, []))
+    monkeypatch.setattr(experiments.demo, "_sim2real_section", lambda cfg, out, log: None)
+    demo = tmp_path / "demo"
+    assert main(["demo", "--no-sweep", "--duration", "1", "--out", str(demo)]) == 0, capsys.readouterr().err
+    figures = demo / "figures"
+    before = {p.name: p.read_bytes() for p in figures.iterdir()}
+    capsys.readouterr()
+    for out in (figures, demo / "sub" / ".." / "figures"):
+        assert main(["figures", "--tables", str(tables), "--out", str(out)]) == 2
+        shown = out.parent
+        assert capsys.readouterr().err.splitlines() == [
+            f"lmsbench figures: error: --out {out}: the figures of the lmsbench demo in {shown}, drawn from its "
+            f"tables/ and shown in its report.md; figures drawn from --tables {tables}, not the demo's tables, would "
+            f"not match them: give a new folder as --out, or --tables {shown / 'tables'} to redraw the demo's figures"]
+    assert {p.name: p.read_bytes() for p in figures.iterdir()} == before
+    (tmp_path / "link").symlink_to(demo / "tables")
+    for own in (demo / "tables", demo / "figures" / ".." / "tables", tmp_path / "link"):
+        assert main(["figures", "--tables", str(own), "--out", str(figures)]) == 0, capsys.readouterr().err
+    assert pd.read_csv(figures / "fig7_timing.csv").shape[0] == 1  # the demo's one scan, not the other study's three
+    fresh = tmp_path / "fresh"  # the other study's figures in a new folder: as before
+    assert main(["figures", "--tables", str(tables), "--out", str(fresh)]) == 0, capsys.readouterr().err
+    assert (fresh / "fig7_timing.png").is_file()

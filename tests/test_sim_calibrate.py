@@ -623,14 +623,16 @@ def test_fit_world_runs_every_probe_on_the_probe_seeds_given(monkeypatch) -> Non
 def test_sim2real_says_where_its_robot_limits_come_from() -> None:
     """The report gave the robot limits without saying that a log with no usable odometry (none,
     too few records, or a keyframe log's scans 2-3 s apart: Intel, ACES) left them at the
-    simulator's defaults."""
+    simulator's defaults. The report puts the source in parentheses after the limits: "the log's
+    odometry (299 steps)" nested them, "(the log's odometry (59 steps))" (a review); it is now
+    "from 299 steps of the log's odometry"."""
     from experiments.sim2real import odometry_limits, odometry_limits_and_source
     from sim.robot import RobotLimits
 
     t = 0.1 * np.arange(300)
     steady = np.column_stack((t, 0.5 * t, np.zeros_like(t), 0.2 * t))  # 0.5 m/s, 0.2 rad/s
     limits, source = odometry_limits_and_source(steady)
-    assert source == "the log's odometry (299 steps)" and limits == odometry_limits(steady)
+    assert source == "from 299 steps of the log's odometry" and limits == odometry_limits(steady)
     assert limits.v_max == pytest.approx(0.5) and limits.w_max == pytest.approx(0.2)
     keyframes = steady * np.array([30.0, 1, 1, 1])  # the same poses 3 s apart
     assert odometry_limits_and_source(keyframes) == (RobotLimits(), "the simulator's defaults: 0 of the 299 steps "

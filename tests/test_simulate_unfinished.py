@@ -8,6 +8,7 @@ folder, one line, exit 2; the next simulate into it takes it and leaves no tempo
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -25,13 +26,16 @@ from test_out_folders import _stop_at_write
 REPO = Path(__file__).resolve().parents[1]
 
 
-def _unfinished(command: str, folder: Path) -> list[str]:
+def _unfinished(command: str, folder: Path, settings: bool = True) -> list[str]:
+    """The refusal; ``settings``: the marker holds the run's settings (not one from before it did)."""
+    rerun = (f"rerun it with lmsbench simulate --config {folder / SIMULATE_UNFINISHED} --out {folder} (that file holds "
+             "its settings)" if settings else f"run lmsbench simulate --out {folder} again with the options the run was given")
     return [f"lmsbench {command}: error: {folder}: the lmsbench simulate run that wrote this folder did not finish "
             f"(it was stopped or killed while writing its files; {SIMULATE_UNFINISHED} is left), so its scans.clf may "
-            f"be cut short or an earlier run's; run lmsbench simulate --out {folder} again"]
+            f"be cut short or an earlier run's; {rerun}"]
 
 
-def _readers_refuse(folder: Path, capsys, tmp_path: Path) -> None:
+def _readers_refuse(folder: Path, capsys, tmp_path: Path, settings: bool = True) -> None:
     """Every reader of a simulate folder refuses ``folder``, one line naming it, exit 2."""
     for argv, command in [(["slam", str(folder), "--quiet", "--out", str(tmp_path / "slam")], "slam"),
                           (["slam", str(folder / "scans.clf"), "--quiet", "--out", str(tmp_path / "slam")], "slam"),
@@ -42,7 +46,7 @@ def _readers_refuse(folder: Path, capsys, tmp_path: Path) -> None:
                           (["figures", "--log", str(folder / "scans.clf"), "--no-slam", "--duration", "1",
                             "--out", str(tmp_path / "fig")], "figures")]:
         assert main(argv) == 2, argv
-        assert capsys.readouterr().err.splitlines() == _unfinished(command, folder), argv
+        assert capsys.readouterr().err.splitlines() == _unfinished(command, folder, settings), argv
     assert not [p for p in tmp_path.iterdir() if p.name in ("slam", "cmp", "s2r", "fig")]  # refused before any output
 
 
@@ -57,18 +61,52 @@ def _taken_by_the_next_run(folder: Path, capsys) -> None:
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 6])
 def test_a_simulate_run_stopped_at_each_file_is_refused_by_the_readers(tmp_path, capsys, monkeypatch, n):
     """An earlier run (corridor, 2 s) in DIR, then a run (office, 1 s) stopped at its n-th file:
-    before, the 4th stop (world.json) left the new scans.clf and groundtruth.tum beside the
+    before, the 5th stop (world.json) left the new scans.clf and groundtruth.tum beside the
     corridor's world.json, and `slam DIR` ran, exit 0, scoring the office's map against the
-    corridor's walls; the 2nd left a cut (empty) scans.clf."""
+    corridor's walls; the 3rd left a cut (empty) scans.clf. The 1st is the marker itself, written
+    whole: stopped there, nothing of the run is in DIR, and the corridor's files read as before."""
     folder = tmp_path / "sim"
     assert main(["simulate", "--world", "corridor", "--duration", "2", "--out", str(folder), "--quiet"]) == 0
     with monkeypatch.context() as m:
         _stop_at_write(m, folder, n)
         assert main(["simulate", "--duration", "1", "--out", str(folder), "--quiet"]) == 130
     assert capsys.readouterr().err.splitlines()[-1:] == ["lmsbench simulate: interrupted"]
+    if n == 1:
+        assert sorted(p.name for p in folder.iterdir()) == sorted(SIMULATE_OUTPUTS)
+        assert main(["info", str(folder / "scans.clf"), "--json"]) == 0, capsys.readouterr().err
+        assert json.loads(capsys.readouterr().out)["scans"] == 75  # the corridor's
+        return
     _readers_refuse(folder, capsys, tmp_path)
     assert (folder / SIMULATE_UNFINISHED).is_file()
     _taken_by_the_next_run(folder, capsys)
+
+
+@pytest.mark.parametrize("n", [2, 3, 5])
+def test_the_refusal_names_the_command_that_reruns_the_run_that_did_not_finish(tmp_path, capsys, monkeypatch, n):
+    """The refusal said "run lmsbench simulate --out DIR again", which runs the defaults (office,
+    seed 0, 120 s), not the settings of the run that did not finish; `simulate --config
+    DIR/config.yaml --out DIR` is refused (it would write over the file it reads), and config.yaml
+    is the earlier run's when the run stopped before writing it (its 2nd file, the first after the
+    marker). The marker now holds the run's settings and the refusal names `simulate --config
+    DIR/.simulate-unfinished --out DIR`: run as named, it leaves the files a clean run of the same
+    settings writes, byte for byte."""
+    argv = ["--world", "office", "--seed", "3", "--duration", "1.5", "--rate-hz", "4", "--odometry", "--quiet"]
+    folder = tmp_path / "sim"
+    assert main(["simulate", "--world", "corridor", "--duration", "2", "--out", str(folder), "--quiet"]) == 0
+    with monkeypatch.context() as m:
+        _stop_at_write(m, folder, n)
+        assert main(["simulate", *argv, "--out", str(folder)]) == 130
+    capsys.readouterr()
+    assert main(["info", str(folder)]) == 2
+    refusal = capsys.readouterr().err.splitlines()
+    assert refusal == _unfinished("info", folder)
+    command = refusal[0].split("rerun it with lmsbench ")[1].split(" (that file")[0].split()
+    assert command == ["simulate", "--config", str(folder / SIMULATE_UNFINISHED), "--out", str(folder)]
+    assert main(command) == 0, capsys.readouterr().err
+    assert main(["simulate", *argv, "--out", str(tmp_path / "clean")]) == 0
+    assert sorted(p.name for p in folder.iterdir()) == sorted(SIMULATE_OUTPUTS)  # the marker gone, nothing hidden
+    for name in SIMULATE_OUTPUTS:
+        assert (folder / name).read_bytes() == (tmp_path / "clean" / name).read_bytes(), name
 
 
 def test_a_killed_runs_temporary_files_are_removed_by_the_next_run(tmp_path, capsys):
@@ -80,7 +118,8 @@ def test_a_killed_runs_temporary_files_are_removed_by_the_next_run(tmp_path, cap
     (folder / SIMULATE_UNFINISHED).write_text("lmsbench simulate is writing this folder\n")
     (folder / ".scans.clf.4242.tmp").write_text("# CARMEN log written by lmsbench\nROBOTLASER1 0 -1.5")
     (folder / ".config.yaml.4242.tmp").write_text("world: off")
-    _readers_refuse(folder, capsys, tmp_path)
+    (folder / "..simulate-unfinished.4242.tmp").write_text("# lmsbench simulate is writing")  # a marker being written
+    _readers_refuse(folder, capsys, tmp_path, settings=False)  # a marker from before it held the settings
     _taken_by_the_next_run(folder, capsys)
 
 

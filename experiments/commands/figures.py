@@ -41,8 +41,8 @@ def run(args: argparse.Namespace) -> int:
     for path in (args.out, args.tables):  # a loop of links: Path.resolve below raised RuntimeError
         if path is not None:
             check_link(path, "--out" if path is args.out else "--tables")
-    if args.out is not None and args.tables is None:
-        _check_not_a_demos_figures(args.out)
+    if args.out is not None:
+        _check_not_a_demos_figures(args.out, args.tables)
     if args.out is not None and args.tables is not None and args.out.resolve() == args.tables.resolve():
         writes = OutTree(FIGURES_OUTPUTS.files + STUDY_TABLES.files, FIGURES_OUTPUTS.folders)  # the tables it reads
     # a file of its names is replaced only beside its own record (options.FIGURES_OWNER): by names
@@ -109,19 +109,26 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _check_not_a_demos_figures(out: Path) -> None:
-    """Refuse, before any work, ``figures --out DEMO/figures`` without --tables: it computed a study
-    of its own, drew its figures over some of the demo's (those of the demo's report.md and
-    tables/) and saved its tables in DEMO/figures/tables/, so the next ``demo --out DEMO`` refused
-    DEMO ("holds figures/tables/, which this command does not write"). A demo's figures are
-    redrawn from its own tables: ``--tables DEMO/tables``."""
+def _check_not_a_demos_figures(out: Path, tables: Path | None) -> None:
+    """Refuse, before any work, ``figures --out DEMO/figures`` unless it redraws the demo's figures
+    from the demo's own tables (``--tables DEMO/tables``). Without --tables it computed a study of
+    its own, drew its figures over some of the demo's (those of the demo's report.md and tables/)
+    and saved its tables in DEMO/figures/tables/, so the next ``demo --out DEMO`` refused DEMO
+    ("holds figures/tables/, which this command does not write"); with another study's tables
+    (``--tables X/tables``) it drew X's figures over the demo's, exit 0, beside the demo's
+    fig10_slam and under its report.md, which still described its own study."""
     real = out.resolve()
     if real.name != "figures" or not DEMO_OWNER.wrote_in(real.parent):
         return
     demo = out.parent if out.name == "figures" else real.parent
-    raise InputError(f"--out {out}: the figures of the lmsbench demo in {demo}, drawn from its tables/ and shown in its "
-                     "report.md; without --tables this run computes a study of its own, whose figures and tables "
-                     f"would not match them: give --tables {demo / 'tables'} to redraw the demo's figures, or another --out")
+    if tables is None:
+        raise InputError(f"--out {out}: the figures of the lmsbench demo in {demo}, drawn from its tables/ and shown in its "
+                         "report.md; without --tables this run computes a study of its own, whose figures and tables "
+                         f"would not match them: give --tables {demo / 'tables'} to redraw the demo's figures, or another --out")
+    if tables.resolve() != real.parent / "tables":
+        raise InputError(f"--out {out}: the figures of the lmsbench demo in {demo}, drawn from its tables/ and shown in its "
+                         f"report.md; figures drawn from --tables {tables}, not the demo's tables, would not match them: "
+                         f"give a new folder as --out, or --tables {demo / 'tables'} to redraw the demo's figures")
 
 
 def _record(args: argparse.Namespace) -> str:
