@@ -286,7 +286,7 @@ class CarmenReader:
                 line_no += 1
                 yield line_no, ("" if too_long else line)
                 if too_long:
-                    self._bad(line_no, "line", ValueError(f"line longer than {MAX_LINE_CHARS} characters"))
+                    self._bad(line_no, "overlong", ValueError(f"longer than {MAX_LINE_CHARS} characters"))  # not "line line"
 
     def _bad(self, line_no: int, kind: str, exc: Exception) -> None:
         if not self.skip_bad_lines:

@@ -879,7 +879,7 @@ def test_an_overlong_last_line_is_malformed(tmp_path) -> None:
     good = tmp_path / "good.log"
     write_log(good, _records(2))
     log.write_bytes(gzip.compress(good.read_bytes() + b"FLASER 361 " + b"2.0 " * 300_000))
-    with pytest.raises(LogFormatError, match=r"a\.clf\.gz:\d+: malformed line line: line longer than 1048576"):
+    with pytest.raises(LogFormatError, match=r"a\.clf\.gz:\d+: malformed overlong line: longer than 1048576 characters"):
         list(read_log(log))
     reader = read_log(log, skip_bad_lines=True)
     assert len(list(reader)) == 2 and len(reader.stats.skipped) == 1

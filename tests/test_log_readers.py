@@ -286,10 +286,11 @@ def test_overlong_line_is_malformed(tmp_path: Path, monkeypatch: pytest.MonkeyPa
 
     monkeypatch.setattr(carmen, "MAX_LINE_CHARS", 500)
     path = write(tmp_path, "long.log", [flaser(5), "FLASER " + "1.0 " * 400, flaser(5, stamp=11.0)])
-    with pytest.raises(LogFormatError, match=r"long\.log:2: .*longer than 500 characters"):
-        list(read_log(path))
+    with pytest.raises(LogFormatError, match=r"/long\.log:2: malformed overlong line: longer than 500 characters$"):
+        list(read_log(path))  # it said "malformed line line: line longer than 500 characters"
     reader = read_log(path, skip_bad_lines=True)
     assert [r.scan.stamp for r in reader] == [10.0, 11.0] and reader.stats.skipped[0][0] == 2
+    assert reader.stats.skipped[0][1] == "overlong: longer than 500 characters"
 
 
 def test_every_byte_flip_of_a_gzip_log_is_a_log_format_error(tmp_path: Path) -> None:
