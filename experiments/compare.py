@@ -264,6 +264,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
 
     seen: dict[tuple[str, int | None], str] = {}  # (source name, seed or None) -> the word that gave it
     kinds: dict[str, tuple[str, str]] = {}  # source name -> (a word that gave it, its path or "world")
+    stems: dict[str, str] = {}  # a log's figure name (realdata_STEM) -> the word that gave it
     for spec in specs:
         name, colon, seed = spec.partition(":")
         world = name in WORLD_NAMES  # as parse_sources reads it
@@ -300,6 +301,16 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
             raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}){hint}, a simulate folder "
                                 "nor an existing log")
         check_log(spec)
+        # each log's figure is named by its file name made safe (figures.realdata.figure_stem): "a b.clf" and
+        # "a_b.clf" both wrote realdata_a_b_clf.*, the second over the first ("ä.clf" and "ö.clf": realdata__clf)
+        from experiments.figures.realdata import figure_stem
+
+        stem = figure_stem(Path(), label).name
+        other = stems.setdefault(stem, spec)
+        if other != spec:
+            raise LmsbenchError(f"{other} and {spec} would both write their figure as {stem}.png (a figure's "
+                                "name keeps only letters, digits, _ and - of the file name): give one of them another "
+                                "name, e.g. a link")
         reader = read_log(spec, **(read_options or {}))
         if next(iter(reader), None) is None:
             if reader.stats.stopped:  # damage before the first scan (read under --skip-bad-lines)

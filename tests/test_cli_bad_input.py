@@ -775,6 +775,23 @@ def test_two_logs_of_one_name_are_refused_before_any_work(files, tmp_path, capsy
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("first, second", [("a b.clf", "a_b.clf"), ("\u00e4.clf", "\u00f6.clf")])
+def test_two_logs_of_one_figure_name_are_refused_before_any_work(files, tmp_path, capsys, first, second):
+    """A log's figure is named by its file name kept to letters, digits, _ and -: "a b.clf" and
+    "a_b.clf" (or "ä.clf" and "ö.clf") both wrote realdata_a_b_clf.* (realdata__clf.*), the second
+    over the first, exit 0 ('wrote ..., realdata_a_b_clf.png, realdata_a_b_clf.png')."""
+    text = Path(files["good.clf"]).read_text()
+    for name in (first, second):
+        (tmp_path / name).write_text(text)
+    stem = "realdata_a_b_clf" if first.startswith("a") else "realdata__clf"
+    assert run_main(["compare", str(tmp_path / first), str(tmp_path / second), "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench compare: error: {tmp_path / first} and {tmp_path / second} would both write their figure as "
+        f"{stem}.png (a figure's name keeps only letters, digits, _ and - of the file name): give one of them another "
+        "name, e.g. a link"]
+    assert not (tmp_path / "o").exists()
+
+
 def test_out_may_not_write_over_what_the_run_reads(files, tmp_path, capsys):
     """`compare SIMFOLDER --out SIMFOLDER` replaced the folder's config.yaml (the simulate config
     whose sensor model compare reads for it) with compare's own, exit 0; sim2real's sensor.yaml

@@ -37,5 +37,6 @@ def fig_explained_vs_lines(summary: pd.DataFrame, source: str, stem: Path) -> li
 
 
 def figure_stem(out: Path, source: str) -> Path:
-    """``out/realdata_<source>`` with the source name made safe for a file name."""
+    """``out/realdata_<source>`` with the source name made safe for a file name (compare's
+    ``check_sources`` refuses two logs whose names give one stem)."""
     return out / ("realdata_" + re.sub(r"[^A-Za-z0-9_-]+", "_", source))
