@@ -239,7 +239,7 @@ def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: f
     for spec in specs:
         name, colon, seed = spec.partition(":")
         if name in WORLD_NAMES:
-            if colon and not (seed.isdigit() and int(seed) < 2**32):
+            if colon and not (seed.isascii() and seed.isdigit() and int(seed) < 2**32):
                 raise LmsbenchError(f"{spec}: the seed after the colon must be a whole number >= 0, got {seed!r}")
             for s in ([int(seed)] if colon else seeds):
                 out.append(sim_source(name, s, duration, rate_hz, sensor))
@@ -267,7 +267,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
     for spec in specs:
         name, colon, seed = spec.partition(":")
         world = name in WORLD_NAMES  # as parse_sources reads it
-        if world and colon and not (seed.isdigit() and int(seed) < 2**32):
+        if world and colon and not (seed.isascii() and seed.isdigit() and int(seed) < 2**32):
             raise LmsbenchError(f"{spec}: the seed after the colon must be a whole number >= 0, got {seed!r}")
         label = name if world else Path(spec).name
         where = "world" if world else str(Path(spec).resolve())

@@ -95,6 +95,8 @@ def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = 
 
     def parse(text: str):
         try:
+            if "_" in text or not text.isascii():  # Python reads "1_0" as 10 and "٣" as 3 (a typo of 1.0 ran 10 s);
+                raise ValueError  # the CARMEN reader refuses them as strtod does
             value = int(text) if integer else float(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}") from None

@@ -277,6 +277,14 @@ CASES = [
     (["compare", "office", "--set", "extractor.kk=3", "--out", O], "kk"),
     (["compare", "office", "--set", "sensor.k=3", "--out", O], "extractor.sensor.k"),
     (["compare", "office", "--set", "novalue", "--out", O], "--set"),
+    # Python's int() / float() take underscores and other scripts' digits: 1_0 (a typo of 1.0) ran 10 s,
+    # Arabic-Indic ٣ and fullwidth ２ ran seed 3 and every 2nd scan, as the CARMEN reader refuses them
+    (["compare", "office:1", "--duration", "1_0", "--out", O], "argument --duration: must be a finite number >= 0.1 "
+                                                               "and <= 3600 s, got '1_0'"),
+    (["compare", "office", "--seeds", "\u0663", "--out", O], "argument --seeds: must be a whole number >= 0"),
+    (["compare", "office:\u0663", "--out", O], "the seed after the colon must be a whole number >= 0"),
+    (["compare", "office:1", "--sigma", "1_0", "--out", O], "--sigma takes metres or 'auto', got '1_0'"),
+    (["slam", "{simrun}", "--every", "\uff12", "--out", O], "argument --every/--stride: must be a whole number >= 1"),
     # the same field set twice ran the last value alone, exit 0 (an option given twice is refused)
     (["compare", "office:1", "--set", "extractor.sensor.k=2", "--set", "extractor.sensor.k=3", "--out", O],
      "--set extractor.sensor.k is given twice (extractor.sensor.k=2 and extractor.sensor.k=3); set each field once"),

@@ -122,6 +122,8 @@ def _sigma(text: str) -> float | str:
     if text == "auto":
         return text
     try:
+        if "_" in text or not text.isascii():  # float("1_0") is 10, as options.number refuses it
+            raise ValueError
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"--sigma takes metres or 'auto', got {text!r}") from None
