@@ -224,7 +224,8 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
     ``"paper"``: the paper's EKF (section 4.1) with line (and, with ``config.observations.use_corners``,
     corner) observations from ``features.extract_many(scans, method=config.extractor,
     **config.extractor_params)`` in batches of ``EXTRACT_BATCH`` scans. The records' odometry is used only with
-    ``config.motion.use_odometry`` (paper preset); true poses only for the NEES diagnostic.
+    ``config.motion.use_odometry`` (either preset; a record without it is predicted by the
+    motion model); true poses only for the NEES diagnostic.
 
     Returns:
         SlamResult with one pose per record, stamped with the record's ``scan.stamp``.

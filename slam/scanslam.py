@@ -51,6 +51,7 @@ class ScanStep:
     fit: float = float("nan")  # the chosen pose's fit (slam.correlative.fit) when searched
     ambiguous: bool = False  # the search found a distinct pose that fits as well, which the prior barely tells apart
     odometry: bool = False  # the prediction was the odometry's step (motion.use_odometry)
+    odometry_doubt: bool = False  # its match was poor and the constant-velocity prediction's clearly better
     loop: LoopClosure | None = None
 
 
@@ -221,6 +222,8 @@ class ScanSlam:
                 alt = match(sp.matched, self.ref, [self.predict(stamp)], self.alignment, reach, normals=qn)
                 if alt.inliers > m.inliers + self.alignment.hypothesis_margin:
                     m = alt
+            elif by_odometry and m.inliers < self.alignment.retry_inliers:
+                info.odometry_doubt = self._doubts_odometry(sp.matched, m, stamp, reach, qn)
             info.inliers, info.rms, info.hypothesis = m.inliers, m.rms, m.start
         if m is not None and m.inliers >= self.alignment.min_inliers:
             pose, cov = m.pose, m.covariance
@@ -263,6 +266,19 @@ class ScanSlam:
             return m
         info.jump_rejected = True
         return near
+
+    def _doubts_odometry(self, points: np.ndarray, m: Match, stamp: float, reach: float,
+                         normals: np.ndarray | None) -> bool:
+        """A poor match ``m`` from the odometry's step (under ``retry_inliers``) that one from the
+        constant-velocity prediction beats clearly (at least ``retry_inliers`` and
+        ``hypothesis_margin`` more): the odometry may be wrong (frozen, reversed, a spike). Only
+        said, not acted on: on the keyframe logs, whose odometry is right, that prediction slides
+        along corridors (switching to it took Intel and ACES to 2.6 and 4.5 m), and it does not
+        repair a wrong odometry either (simulated, 1.3-4.1 m)."""
+        assert self.ref is not None
+        al = self.alignment
+        alt = match(points, self.ref, [self.predict(stamp)], al, reach, normals=normals)
+        return alt.inliers >= al.retry_inliers and alt.inliers > m.inliers + al.hypothesis_margin
 
     def _beyond_reach(self, sxy: float) -> bool:
         """The prediction's position std ``sxy`` (m) times ``search_sigmas`` exceeds the ICP's reach."""
@@ -536,6 +552,10 @@ def run_scan_slam(steps, config) -> "SlamResult":
     }
     if config.motion.use_odometry:  # the steps the odometry predicted (the rest: no odometry, or a step beyond the search)
         diag["odometry_fraction"] = float(np.mean([i.odometry for i in infos[1:]])) if len(infos) > 1 else 0.0
+        doubt = np.array([i.odometry_doubt for i in infos])
+        diag["odometry_doubt"] = doubt
+        diag["odometry_doubt_fraction"] = float(doubt[1:].mean()) if len(infos) > 1 else 0.0
+        diag["healthy"] = diag["healthy"] and diag["odometry_doubt_fraction"] <= config.consistency.max_odometry_doubt
     return SlamResult(traj, covs, lines, np.zeros((0, 3)), diag)
 
 

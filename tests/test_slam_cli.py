@@ -239,6 +239,42 @@ def test_odometry_on_an_input_without_any_is_refused(sim_folder, tmp_path, capsy
         assert not (tmp_path / "o").exists()
 
 
+def test_odometry_options_that_would_set_nothing_are_refused(tmp_path, capsys):
+    """With --odometry there is no separate odometry baseline: --no-odometry-baseline set nothing,
+    and --association / --corners with --no-paper-baseline set a filter nothing ran (exit 0, rows
+    without it). A log with odometry on some scans only was told it had none; a config's
+    use_odometry was called --odometry. Each is one line, exit 2, before any work."""
+    from dataclasses import replace
+
+    from experiments.cli import main
+    from sim import simulate_records
+    from sim.records import OdometryConfig
+
+    records = simulate_records("office", seed=1, duration=4.0, rate_hz=3.0, odometry=OdometryConfig())
+    write_log(tmp_path / "odo.clf", records)
+    write_log(tmp_path / "partial.clf", [r if k % 3 else replace(r, odom=None) for k, r in enumerate(records)])
+    (tmp_path / "odo.yaml").write_text("motion: {use_odometry: true}\n")
+    out = str(tmp_path / "o")
+    cases = [
+        (["--odometry", "--no-odometry-baseline"], "--no-odometry-baseline: this run uses the odometry itself"),
+        (["--odometry", "--no-paper-baseline", "--association", "jcbb"],
+         "--association set the paper preset's filter, which this run does not use (the default pipeline, with "
+         "--no-paper-baseline and --odometry, which has no separate odometry baseline)"),
+    ]
+    for extra, message in cases:
+        assert main(["slam", str(tmp_path / "odo.clf"), "--out", out, "--quiet", *extra]) == 2
+        err = capsys.readouterr().err.strip()
+        assert message in err and len(err.splitlines()) == 1, err
+    n, missing = len(records), sum(1 for k in range(len(records)) if k % 3 == 0)
+    assert main(["slam", str(tmp_path / "partial.clf"), "--out", out, "--quiet", "--odometry"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.endswith(f"--odometry needs odometry on every scan, and {missing} of the {n} scans have none"), err
+    assert main(["slam", str(tmp_path / "partial.clf"), "--out", out, "--quiet", "--config", str(tmp_path / "odo.yaml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert f"motion.use_odometry (in {tmp_path / 'odo.yaml'}) needs odometry on every scan" in err, err
+    assert not (tmp_path / "o").exists()
+
+
 def test_odometry_drives_the_default_pipeline_and_names_its_rows(tmp_path, capsys):
     """``lmsbench slam --odometry`` with the default preset: config.yaml says so, the summary
     table's rows are "slam (odometry)" and the paper preset with the same motion input, and the

@@ -223,7 +223,8 @@ def sparse_runs_with_odometry():
 def test_odometry_holds_the_default_pipeline_in_a_corridor_the_scans_do_not_fix(sparse_runs_with_odometry, seed):
     """Seeds 1 and 11 slide along bare corridors without odometry (measured: ATE 2.28 and 1.76 m,
     not healthy). With ``motion.use_odometry`` the odometry's step is the prediction, the matcher
-    tries no turn beyond 3 std of it and the search runs only where that match fails: ATE 0.023
+    tries no turn beyond a quarter turn of it (or 3 std, where wider) and the search runs only
+    where that match fails: ATE 0.023
     and 0.053 m, healthy, well below the raw odometry's 0.43 and 0.33 m."""
     records = sparse_runs_with_odometry[seed]
     truth = np.array([(r.scan.stamp, *r.truth) for r in records])
@@ -254,6 +255,29 @@ def test_an_odometry_glitch_does_not_take_the_run_with_it(sparse_runs_with_odome
     err, diag = _ate(records, SlamConfig.from_dict({"motion": {"use_odometry": True}}))
     assert err < 0.05
     assert diag["odometry_fraction"] > 0.9  # the rest of the run keeps its odometry
+
+
+@pytest.mark.parametrize("fault", ["frozen from scan 20", "a 1.6 rad spike at scan 20"])
+def test_a_wrong_odometry_is_not_reported_healthy(sparse_runs_with_odometry, fault):
+    """An encoder feed that freezes, or a heading spike, takes the run metres off (measured: ATE
+    4.35 and 3.74 m), and it was reported healthy: the match from the odometry's step passed 30 %
+    of the points, so no search ran and no step was ambiguous. Now a step whose match from the
+    odometry explains under 70 % while one from the constant-velocity prediction explains 70 %
+    and 5 % more doubts the odometry, and one such step makes the run unhealthy. The clean run
+    has none."""
+    from dataclasses import replace
+
+    records = sparse_runs_with_odometry[1]
+    config = SlamConfig.from_dict({"motion": {"use_odometry": True}})
+    clean = run_slam(records, config).diagnostics
+    assert clean["odometry_doubt_fraction"] == 0.0 and clean["healthy"]
+    if fault == "frozen from scan 20":
+        records = [r if k < 20 else replace(r, odom=records[20].odom) for k, r in enumerate(records)]
+    else:
+        records = [r if k != 20 else replace(r, odom=(r.odom[0], r.odom[1], r.odom[2] + 1.6)) for k, r in enumerate(records)]
+    err, diag = _ate(records, config)
+    assert err > 1.0  # not repaired: said
+    assert diag["odometry_doubt_fraction"] > 0.0 and not diag["healthy"]
 
 
 def test_records_without_odometry_run_on_the_constant_velocity_model(sparse_runs):

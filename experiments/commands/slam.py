@@ -101,13 +101,17 @@ def _config(args: argparse.Namespace):
         cfg = dataclasses.replace(cfg, **changes)
     except LmsbenchError as exc:
         raise InputError(f"{args.config}: {exc}" if args.config else str(exc)) from None
+    if cfg.motion.use_odometry and args.no_odometry_baseline:  # it set nothing: the run itself uses the odometry
+        raise InputError("--no-odometry-baseline: this run uses the odometry itself, so there is no separate "
+                         "odometry baseline to leave out (--no-paper-baseline leaves out the paper preset's run)")
     paper_only = [flag for flag, given in (("--association", args.association), ("--corners", args.corners)) if given]
-    # with the default preset they set the paper preset's baselines (its run and, with odometry, the
+    # with the default preset they set the paper preset's baselines (its run and, without --odometry, the
     # odometry one): ignored only when neither runs
-    if paper_only and cfg.preset != "paper" and args.no_paper_baseline and args.no_odometry_baseline:
+    if paper_only and cfg.preset != "paper" and args.no_paper_baseline and (args.no_odometry_baseline
+                                                                          or cfg.motion.use_odometry):
+        why = "--no-odometry-baseline" if args.no_odometry_baseline else "--odometry, which has no separate odometry baseline"
         raise InputError(f"{', '.join(paper_only)} set the paper preset's filter, which this run does not use (the "
-                         "default pipeline, with --no-paper-baseline and --no-odometry-baseline): add --preset paper "
-                         "or drop them")
+                         f"default pipeline, with --no-paper-baseline and {why}): add --preset paper or drop them")
     return cfg
 
 
@@ -202,11 +206,17 @@ def run(args: argparse.Namespace) -> int:
     stamps = [r.scan.stamp for r in data.records]
     still = [k for k in range(1, len(stamps)) if stamps[k] == stamps[k - 1]]
     if still:  # each such step predicts no motion and searches no turn: kept (a coarse clock still works), said
+        over = ("the motion model predicts no motion and the search no turn over them" if not config.motion.use_odometry
+                else "where the odometry gives no step for them, the motion model predicts no motion and the search no "
+                     "turn over them")
         print(f"lmsbench slam: warning: {data.sources.get('scans', args.input)}: {len(still)} of {len(stamps) - 1} "
               f"steps take no time (scan {still[0]} has the stamp of the scan before, {stamps[still[0]]:.6f} s): "
-              "the motion model predicts no motion and the search no turn over them", file=sys.stderr)
+              f"{over}", file=sys.stderr)
     if config.motion.use_odometry and data.odometry is None:
-        raise LmsbenchError(f"{args.input}: --odometry needs odometry on every scan, and this input has none")
+        asked = "--odometry" if args.odometry else f"motion.use_odometry (in {args.config})"
+        missing = sum(r.odom is None for r in data.records)
+        has = "this input has none" if missing == len(data.records) else f"{missing} of the {len(data.records)} scans have none"
+        raise LmsbenchError(f"{args.input}: {asked} needs odometry on every scan, and {has}")
     if simulated_interlaced(args.input) is False and config.preset == "default" and config.alignment.deskew:
         config = deskew_for_sensor(config, interlaced=False)
         print(f"{args.input}: simulated with interlaced=False (every beam from one pose): alignment.deskew off",
@@ -247,6 +257,14 @@ def run(args: argparse.Namespace) -> int:
     warning = _health_warning(m, config)
     if warning:
         print(f"lmsbench slam: warning: {args.input}: {warning}", file=sys.stderr)
+    used = m["consistency"].get("odometry_fraction")
+    if used is not None and used < 0.9:  # steps beyond what the search could check fell back to the motion model
+        steps = max(int(m["n_scans"]) - 1, 1)
+        print(f"lmsbench slam: warning: {args.input}: the odometry predicted only {round(used * steps)} of {steps} "
+              f"steps ({100 * used:.1f} %); the others used the constant-velocity model (a step longer than the scan's "
+              f"reach, or whose {config.alignment.search_sigmas:g} std (motion.odom_noise) exceed the search's "
+              f"{config.alignment.search_xy:g} m window: "
+              "metrics.json consistency.odometry_fraction)", file=sys.stderr)
     if "note" in m.get("relations", {}):
         print(f"  relations: {m['relations']['note']}")
     if "anchors_relations_trans_mean_m" in m:
@@ -306,6 +324,11 @@ def _unhealthy_reasons(m: dict[str, Any], config: "SlamConfig") -> list[str]:
         out.append(f"{round(share * steps)} of {steps} steps ({100 * share:.1f} %) were ambiguous (a distinct pose "
                    f"fitted the scan as well and only the motion model chose; consistency.max_ambiguous "
                    f"{cc.max_ambiguous:g})")
+    doubt = c.get("odometry_doubt_fraction")
+    if doubt is not None and doubt > cc.max_odometry_doubt:
+        out.append(f"{round(doubt * steps)} of {steps} steps ({100 * doubt:.1f} %) doubted the odometry (the match from "
+                   f"its step explained under {config.alignment.retry_inliers:g} of the points and the constant-"
+                   f"velocity prediction's clearly more; consistency.max_odometry_doubt {cc.max_odometry_doubt:g})")
     if config.preset == "paper" and not c["healthy"]:
         out.append("the filter's state is not finite or its covariance is not positive definite")
     return out
