@@ -605,3 +605,25 @@ def test_slam_summary_prints_the_runs_relations_error_beside_the_published_ones(
     # a run whose relations all lie outside it (its note is printed instead) and an input without scores
     assert _score_lines({"table": [{"source": "slam", "relations_n": 0}, table[1]]}) == []
     assert _score_lines({"table": [{"source": "slam"}]}) == [] == _score_lines({})
+
+
+def test_a_reference_covering_part_of_the_run_is_said(sim_folder, tmp_path, capsys):
+    """A groundtruth.tum covering 2 of the run's poses gave the ATE over those 2 as the run's,
+    exit 0 and nothing said (the wrong-input hunt). The run still scores what it can, and says
+    how much of it that is; a whole reference says nothing."""
+    import shutil
+
+    from experiments.cli import main
+
+    short = tmp_path / "short"
+    shutil.copytree(sim_folder, short)
+    stamps, poses = read_tum(sim_folder / "groundtruth.tum")
+    write_tum(short / "groundtruth.tum", stamps[:2], poses[:2])
+    argv = ["--out", str(tmp_path / "o"), "--quiet", "--no-paper-baseline", "--max-scans", "20"]
+    assert main(["slam", str(short), *argv]) == 0
+    err = capsys.readouterr().err
+    assert ("the ATE covers 2 of the run's 20 poses, those within the span of its reference (ground truth); the "
+            "rest are not scored (metrics.json ate.n)") in err
+    assert json.loads((tmp_path / "o" / "metrics.json").read_text())["ate"]["n"] == 2
+    assert main(["slam", str(sim_folder), *argv[:1], str(tmp_path / "o2"), *argv[2:]]) == 0
+    assert "the ATE covers" not in capsys.readouterr().err

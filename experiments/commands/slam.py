@@ -257,6 +257,11 @@ def run(args: argparse.Namespace) -> int:
     warning = _health_warning(m, config)
     if warning:
         print(f"lmsbench slam: warning: {args.input}: {warning}", file=sys.stderr)
+    scored = m.get("ate", {}).get("n")
+    if scored is not None and scored < 0.9 * m["n_scans"]:  # the reference's span: poses outside it are left out
+        print(f"lmsbench slam: warning: {args.input}: the ATE covers {scored} of the run's {m['n_scans']} poses, those "
+              f"within the span of its reference ({m.get('reference', 'ground truth')}); the rest are not scored "
+              "(metrics.json ate.n)", file=sys.stderr)
     used = m["consistency"].get("odometry_fraction")
     if used is not None and used < 0.9:  # steps beyond what the search could check fell back to the motion model
         steps = max(int(m["n_scans"]) - 1, 1)
