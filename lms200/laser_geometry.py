@@ -46,6 +46,9 @@ MAX_RANGE_M = 10_000.0  # m: the largest range_max accepted (long-range 2-D lida
 #: m: the smallest range_max accepted: no laser rangefinder's maximum range is shorter (the shortest-range
 #: 2-D scanners reach 2-4 m); ``range_max: 1e-320`` (a subnormal) or 0.001 made every reading invalid, silently
 MIN_RANGE_MAX_M = 0.1
+#: rad (0.00057 deg): finer than any rangefinder's step, and 20 times the rounding a reader snaps to 0
+#: (``lms200.scan.SNAP_TEXT_ERROR_RAD``): --laser-resolution-deg 1e-300 was read as 0 and blamed on a log line
+MIN_RESOLUTION_RAD = 1e-5
 ANGLE_FIELDS = ("fov", "resolution", "angle_min")
 
 
@@ -107,6 +110,10 @@ class LaserGeometry:
                 raise InputError(f"{name}: must be > 0, got {shown}")
             if name in ("fov", "resolution") and value > 2 * math.pi + 1e-9:
                 raise InputError(f"{name}: must be at most 2 pi rad (360 deg), got {shown}")
+            if name in ("fov", "resolution") and value < MIN_RESOLUTION_RAD:
+                raise InputError(f"{name}: must be at least {MIN_RESOLUTION_RAD:g} rad "
+                                 f"({math.degrees(MIN_RESOLUTION_RAD):.5f} deg; finer than any rangefinder's step), "
+                                 f"got {shown}")
             if name == "angle_min" and abs(value) > 2 * math.pi + 1e-9:
                 raise InputError(f"{name}: a bearing must be within +-2 pi rad (+-360 deg), got {shown}")
             if name == "range_max" and value < MIN_RANGE_MAX_M:
@@ -148,6 +155,10 @@ def beam_angles(n: int, geometry: LaserGeometry | None = None) -> tuple[float, f
                 "override the geometry (read_log(..., geometry=LaserGeometry(...)) or --laser-resolution-deg / "
                 "--laser-fov-deg)"
             )
+    if res < MIN_RESOLUTION_RAD:  # a field of view of 1e-9 deg over the scan's beams read as 0 apart, blamed on the log
+        raise InputError(f"{n} beams over {math.degrees(fov):.3g} deg are {math.degrees(res):.3g} deg apart, finer than "
+                         f"any rangefinder's step ({math.degrees(MIN_RESOLUTION_RAD):.5f} deg); override the geometry "
+                         "(--laser-fov-deg / --laser-resolution-deg)")
     if (n - 1) * res > 2 * math.pi + 1e-9:
         raise InputError(f"{n} beams at {math.degrees(res):.4f} deg span more than 360 deg")
     angle_min = g.angle_min if g.angle_min is not None else -0.5 * fov

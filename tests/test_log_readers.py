@@ -574,6 +574,15 @@ def test_geometry_flags(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     assert "90.00 deg (from -45.00 deg)" in out and "0.500 deg" in out
     assert main(["info", str(path), "--laser-resolution-deg", "-1"]) == 2
     assert "--laser-resolution-deg: must be > 0" in capsys.readouterr().err
+    # finer than any rangefinder: read as 0 apart and blamed on the log's line 1 (--skip-bad-lines advised)
+    for flag, value in (("--laser-resolution-deg", "1e-300"), ("--laser-fov-deg", "1e-9")):
+        assert main(["info", str(path), flag, value]) == 2
+        err = capsys.readouterr().err.strip()
+        assert f"{flag}: must be at least 1e-05 rad (0.00057 deg; finer than any rangefinder's step)" in err, err
+    assert main(["info", str(path), "--laser-fov-deg", "0.01"]) == 2  # fine as a field of view, not over 181 beams
+    err = capsys.readouterr().err.strip()
+    assert ("181 beams over 0.01 deg are 5.56e-05 deg apart, finer than any rangefinder's step (0.00057 deg); "
+            "override the geometry (--laser-fov-deg / --laser-resolution-deg)") in err and len(err.splitlines()) == 1, err
 
 
 def test_a_byte_order_mark_before_the_first_line_is_skipped(tmp_path: Path) -> None:
