@@ -183,9 +183,9 @@ class MotionConfig:
             odometry's heading, or within ``alignment.search_sigmas`` of its std where that is
             wider; in [0, pi]. A wheel odometry can be a few tenths of a radian off over a step
             (a slip, a late stamp: MIT CSAIL's by up to 0.74 rad), not the half turn that
-            matches a corridor backwards. 1.5: every hypothesis below a quarter turn (chosen
-            from that reasoning; 0.6 and 1.5 measured alike on the logs, 3 std alone lost MIT
-            CSAIL's slips, docs/slam.md).
+            matches a corridor backwards. 1.5: every hypothesis below a quarter turn. Set on the
+            logs after 3 std alone lost MIT CSAIL's slips (0.6 measured alike; docs/slam.md,
+            "With odometry", says how each rule was reached on Intel, ACES and MIT CSAIL).
         jump_probability: a match further from the prediction than this chi-square quantile
             (3 dof, of the prediction's std) is a jump...
         jump_margin: ...and replaced by the narrow-reach match started at the prediction when

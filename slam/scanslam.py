@@ -304,9 +304,9 @@ class ScanSlam:
         ``ambiguity_sigmas`` std.
 
         ``by_odometry`` (the prediction is the odometry's step): the search is about the
-        prediction alone, its headings within ``search_sigmas`` of the odometry's heading std
-        of it, and the prior is the prediction's (the last pose is no rival: the odometry says
-        how far the robot went)."""
+        prediction alone, its headings within ``search_sigmas`` std (the odometry's heading std)
+        of the prediction's, and the prior is the prediction's (the last pose is no rival: the
+        odometry says how far the robot went)."""
         al = self.alignment
         assert self.ref is not None
         info.searched = True
