@@ -215,15 +215,23 @@ class ScanSlam:
             retry = self.alignment.min_inliers if by_odometry else self.alignment.retry_inliers
             if self.alignment.search and (self._beyond_reach(sxy) or m.inliers < retry):
                 m = self._search(sp, m, pred, sxy, sth, dt, info, qn, by_odometry)
-            if by_odometry and info.searched:
-                # the ICP found nothing at the odometry's step (the search had to run): it may be a glitch (a
-                # reset, a slip within its std), so the constant-velocity prediction competes as a retry does,
-                # with the same heading reach (no match backwards)
-                alt = match(sp.matched, self.ref, [self.predict(stamp)], self.alignment, reach, normals=qn)
-                if alt.inliers > m.inliers + self.alignment.hypothesis_margin:
-                    m = alt
-            elif by_odometry and m.inliers < self.alignment.retry_inliers:
-                info.odometry_doubt = self._doubts_odometry(sp.matched, m, stamp, reach, qn)
+            al = self.alignment
+            if by_odometry and (info.searched or m.inliers < al.retry_inliers):
+                # the constant-velocity prediction's match, with the same heading reach (no match backwards)
+                alt = match(sp.matched, self.ref, [self.predict(stamp)], al, reach, normals=qn)
+                better = alt.inliers > m.inliers + al.hypothesis_margin
+                if info.searched:
+                    # the ICP found nothing at the odometry's step (the search had to run): it may be a glitch
+                    # (a reset, a slip within its std), so that match competes as a retry does
+                    if better:
+                        m = alt
+                else:
+                    # a poor match from the odometry's step that one from the constant-velocity prediction
+                    # beats clearly: the odometry may be wrong (frozen, reversed, a spike). Only said, not
+                    # acted on: on the keyframe logs, whose odometry is right, that prediction slides along
+                    # corridors (switching took Intel and ACES to 2.6 and 4.5 m), and it does not repair a
+                    # wrong odometry either (simulated, 1.3-4.1 m)
+                    info.odometry_doubt = better and alt.inliers >= al.retry_inliers
             info.inliers, info.rms, info.hypothesis = m.inliers, m.rms, m.start
         if m is not None and m.inliers >= self.alignment.min_inliers:
             pose, cov = m.pose, m.covariance
@@ -266,19 +274,6 @@ class ScanSlam:
             return m
         info.jump_rejected = True
         return near
-
-    def _doubts_odometry(self, points: np.ndarray, m: Match, stamp: float, reach: float,
-                         normals: np.ndarray | None) -> bool:
-        """A poor match ``m`` from the odometry's step (under ``retry_inliers``) that one from the
-        constant-velocity prediction beats clearly (at least ``retry_inliers`` and
-        ``hypothesis_margin`` more): the odometry may be wrong (frozen, reversed, a spike). Only
-        said, not acted on: on the keyframe logs, whose odometry is right, that prediction slides
-        along corridors (switching to it took Intel and ACES to 2.6 and 4.5 m), and it does not
-        repair a wrong odometry either (simulated, 1.3-4.1 m)."""
-        assert self.ref is not None
-        al = self.alignment
-        alt = match(points, self.ref, [self.predict(stamp)], al, reach, normals=normals)
-        return alt.inliers >= al.retry_inliers and alt.inliers > m.inliers + al.hypothesis_margin
 
     def _beyond_reach(self, sxy: float) -> bool:
         """The prediction's position std ``sxy`` (m) times ``search_sigmas`` exceeds the ICP's reach."""
