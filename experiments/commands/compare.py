@@ -6,6 +6,7 @@ from __future__ import annotations
 from lms200.yamlio import load as load_yaml
 
 import argparse
+import sys
 import dataclasses
 from pathlib import Path
 from typing import Any
@@ -232,6 +233,12 @@ def run(args: argparse.Namespace) -> int:
     print(text)
     print(f"wrote {path}, {args.out / 'summary.csv'}, {args.out / 'summary.txt'}, {args.out / 'config.yaml'}"
           + "".join(f", {f}" for f in figures))
+    if args.poses == "corrected" and "repeat_in_view" in table:
+        for src in sources:  # asked for, and nothing to measure it with: it was "-" in the table, nothing said
+            rows = table[table["source"] == src.name]
+            if src.kind == "log" and len(rows) and rows["repeat_in_view"].isna().all():
+                print(f"lmsbench compare: warning: {src.name}: --poses corrected, but no two scans in a row have a "
+                      "pose (a corrected pose or odometry): its repeatability is not measured", file=sys.stderr)
     return 0
 
 
