@@ -18,7 +18,7 @@ from lms200.timing import check_scan_rate
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
 from experiments.options import (COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
-                                 check_out_spares, check_seeds, count, positive, path_arg, text)
+                                 check_out_spares, check_seeds, count, plain_number, positive, path_arg, text)
 
 
 def _param(text: str) -> tuple[str, Any]:
@@ -123,9 +123,7 @@ def _sigma(text: str) -> float | str:
     if text == "auto":
         return text
     try:
-        if "_" in text or not text.isascii():  # float("1_0") is 10, as options.number refuses it
-            raise ValueError
-        value = float(text)
+        value = plain_number(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"--sigma takes metres or 'auto', got {text!r}") from None
     from features.baselines.checks import MAX_SIGMA_M
