@@ -223,6 +223,12 @@ def world_words(specs: Sequence[str]) -> list[str]:
     return [s for s in specs if s.partition(":")[0] in WORLD_NAMES]
 
 
+def _check_seed(spec: str, seed: str) -> None:
+    """The seed after a world's colon (``office:3``): ASCII digits below 2**32 ("٣" read as 3)."""
+    if not (seed.isascii() and seed.isdigit() and int(seed) < 2**32):
+        raise LmsbenchError(f"{spec}: the seed after the colon must be a whole number >= 0, got {seed!r}")
+
+
 def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: float = 30.0,
                   rate_hz: float | None = 2.0, stride: int = 1, max_scans: int | None = None,
                   read_options: dict[str, Any] | None = None, poses: str = "auto",
@@ -239,8 +245,8 @@ def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: f
     for spec in specs:
         name, colon, seed = spec.partition(":")
         if name in WORLD_NAMES:
-            if colon and not (seed.isascii() and seed.isdigit() and int(seed) < 2**32):
-                raise LmsbenchError(f"{spec}: the seed after the colon must be a whole number >= 0, got {seed!r}")
+            if colon:
+                _check_seed(spec, seed)
             for s in ([int(seed)] if colon else seeds):
                 out.append(sim_source(name, s, duration, rate_hz, sensor))
         elif is_simulation_folder(spec):
@@ -268,8 +274,8 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
     for spec in specs:
         name, colon, seed = spec.partition(":")
         world = name in WORLD_NAMES  # as parse_sources reads it
-        if world and colon and not (seed.isascii() and seed.isdigit() and int(seed) < 2**32):
-            raise LmsbenchError(f"{spec}: the seed after the colon must be a whole number >= 0, got {seed!r}")
+        if world and colon:
+            _check_seed(spec, seed)
         label = name if world else Path(spec).name
         where = "world" if world else str(Path(spec).resolve())
         first = kinds.setdefault(label, (spec, where))

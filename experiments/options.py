@@ -81,6 +81,15 @@ class OneLineParser(argparse.ArgumentParser):
         return super().parse_known_args(args, namespace)
 
 
+def plain_number(text: str, integer: bool = False) -> float:
+    """``int(text)`` or ``float(text)`` of a number as a command line writes it; ValueError also for
+    underscores and non-ASCII digits, which Python reads ("1_0" as 10 and "٣" as 3: a typo of 1.0
+    ran 10 s) and the CARMEN reader refuses, as strtod does."""
+    if "_" in text or not text.isascii():
+        raise ValueError(f"not a plain number: {text!r}")
+    return int(text) if integer else float(text)
+
+
 def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = False, unit: str = "",
            integer: bool = False) -> Callable[[str], float]:
     """An argparse type: a finite number in [lo, hi] (lo excluded with ``lo_open``)."""
@@ -95,9 +104,7 @@ def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = 
 
     def parse(text: str):
         try:
-            if "_" in text or not text.isascii():  # Python reads "1_0" as 10 and "٣" as 3 (a typo of 1.0 ran 10 s);
-                raise ValueError  # the CARMEN reader refuses them as strtod does
-            value = int(text) if integer else float(text)
+            value = plain_number(text, integer)
         except ValueError:
             raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}") from None
         bad = not math.isfinite(value) or (lo is not None and (value <= lo if lo_open else value < lo)) \

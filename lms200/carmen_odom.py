@@ -205,9 +205,7 @@ class CorrectedChain:
             else:
                 self._end()
             return
-        self.last_odom = pose
-        if math.isfinite(stamp):
-            self.step_stamp = stamp
+        self._step(pose, stamp)
 
     @property
     def running(self) -> bool:
@@ -246,6 +244,10 @@ class CorrectedChain:
             yield self._anchored(rec, odom)
             return
         yield from self.flush()
+        self._step(pose, stamp)
+
+    def _step(self, pose: Pose2D, stamp: float) -> None:
+        """An ODOM line read as a step of the odometry: its pose, and its stamp as the odometry's clock."""
         self.last_odom = pose
         if math.isfinite(stamp):
             self.step_stamp = stamp

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .codes import check_real_items, check_real_kind, finite_negative, float64_copy, real_numbers
+from .codes import NOT_NUMBER_ITEMS, check_real_items, check_real_kind, finite_negative, float64_copy, real_numbers
 from .errors import ScanError
 from .finite import overflow_text
 
@@ -222,7 +222,7 @@ def _degrees_hint(value: float, fits_as_degrees: bool) -> str:
 def _number(name: str, value: object) -> float:
     """A scalar field as a finite float; ScanError naming the field for text, bools (True is not
     1 rad or 1 m), non-numbers, ints beyond float64 (10**400) and nan / inf."""
-    if isinstance(value, (str, bytes, bool, np.bool_, complex, np.complexfloating)):  # numpy's complex: its real part
+    if isinstance(value, NOT_NUMBER_ITEMS):  # numpy's complex: float() gave its real part
         raise ScanError(f"{name}: must be a number, got {value!r}")
     try:
         number = float(value)  # type: ignore[arg-type]

@@ -168,3 +168,27 @@ def test_zero_ranges_count_as_invalid_like_nan_for_every_extractor_and_the_expla
     assert len(a.lines) >= 1
     np.testing.assert_array_equal(a.lines.values, b.lines.values)
     np.testing.assert_array_equal(a.lines.beams, b.lines.beams)
+
+
+def test_compare_poses_corrected_on_a_log_without_poses_says_so(tmp_path, capsys) -> None:
+    """``compare LOG --poses corrected`` on a log with no pose on any scan (no corrected pose, no
+    odometry) left the repeatability "-", exit 0 and nothing said (the wrong-input hunt). It now
+    says so on stderr; a log with odometry is measured and says nothing."""
+    import dataclasses
+
+    from experiments.cli import main
+    from lms200 import write_log
+    from sim import simulate_records
+    from sim.records import OdometryConfig
+
+    bare = [dataclasses.replace(r, truth=None) for r in simulate_records("office", seed=1, duration=2.0, rate_hz=5.0)]
+    write_log(tmp_path / "bare.clf", bare)
+    argv = ["--poses", "corrected", "--methods", "split_merge"]
+    assert main(["compare", str(tmp_path / "bare.clf"), *argv, "--out", str(tmp_path / "a")]) == 0
+    assert ("lmsbench compare: warning: bare.clf: --poses corrected, but no two scans in a row have a pose (a "
+            "corrected pose or odometry): its repeatability is not measured") in capsys.readouterr().err
+    posed = [dataclasses.replace(r, truth=None) for r in
+             simulate_records("office", seed=1, duration=2.0, rate_hz=5.0, odometry=OdometryConfig())]
+    write_log(tmp_path / "posed.clf", posed)
+    assert main(["compare", str(tmp_path / "posed.clf"), *argv, "--out", str(tmp_path / "b")]) == 0
+    assert "warning" not in capsys.readouterr().err

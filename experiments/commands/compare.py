@@ -6,6 +6,7 @@ from __future__ import annotations
 from lms200.yamlio import load as load_yaml
 
 import argparse
+import sys
 import dataclasses
 from pathlib import Path
 from typing import Any
@@ -17,7 +18,7 @@ from lms200.timing import check_scan_rate
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
 from experiments.options import (COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
-                                 check_out_spares, check_seeds, count, positive, path_arg, text)
+                                 check_out_spares, check_seeds, count, plain_number, positive, path_arg, text)
 
 
 def _param(text: str) -> tuple[str, Any]:
@@ -122,9 +123,7 @@ def _sigma(text: str) -> float | str:
     if text == "auto":
         return text
     try:
-        if "_" in text or not text.isascii():  # float("1_0") is 10, as options.number refuses it
-            raise ValueError
-        value = float(text)
+        value = plain_number(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"--sigma takes metres or 'auto', got {text!r}") from None
     from features.baselines.checks import MAX_SIGMA_M
@@ -232,6 +231,12 @@ def run(args: argparse.Namespace) -> int:
     print(text)
     print(f"wrote {path}, {args.out / 'summary.csv'}, {args.out / 'summary.txt'}, {args.out / 'config.yaml'}"
           + "".join(f", {f}" for f in figures))
+    if args.poses == "corrected" and "repeat_in_view" in table:
+        for src in sources:  # asked for, and nothing to measure it with: it was "-" in the table, nothing said
+            rows = table[table["source"] == src.name]
+            if src.kind == "log" and len(rows) and rows["repeat_in_view"].isna().all():
+                print(f"lmsbench compare: warning: {src.name}: --poses corrected, but no two scans in a row have a "
+                      "pose (a corrected pose or odometry): its repeatability is not measured", file=sys.stderr)
     return 0
 
 
