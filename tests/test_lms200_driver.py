@@ -1003,3 +1003,34 @@ def test_bytes_garbled_for_the_hosts_old_baud_never_reach_it_after_a_baud_change
             os.close(host)
     assert changed and len(got) >= 20000
     assert got.count(0x02) == 0  # old: the stream at 38400 (hundreds of STX), flushed behind the host's back
+
+
+def test_a_nak_behind_a_scan_that_lost_two_bytes_or_more_is_resent_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Left open by session 36: close() while streaming, the device NAKs the stop request right
+    behind the scan telegram in flight, which lost 2 bytes or more on the line (down to its 5
+    header bytes, 02 80 D6 02 B0). Its LEN reached past the NAK into the next scan, the parser took
+    it for a false start and the NAK for garbage: close() waited out the attempt's 1.92 s
+    (retries, timeouts, naks (1, 1, 0)). Now (1, 0, 1), and the scans behind it are still frames."""
+    from lms200_fake_port import answer, fake_port, scan_frame
+
+    sf = scan_frame(1500)
+    for broken in (sf[:100] + sf[102:], sf[:100] + sf[103:], sf[:5]):
+        plan = {"stop": 0}
+
+        def script(payload: bytes, n: int, broken: bytes = broken) -> list[tuple[float, bytes]]:
+            if payload == b"\x20\x24":
+                return [*answer(payload), (0.02, scan_frame(1234))]
+            if payload == b"\x20\x25":
+                plan["stop"] += 1
+                if plan["stop"] == 2:  # close()'s first stop request: the broken scan, the NAK, the next scans
+                    return [(0.0, broken + b"\x15" + scan_frame(1501)), (0.005, scan_frame(1502))]
+            return answer(payload)
+
+        port = fake_port(monkeypatch, script)
+        lms = LMS200("fake://", baud=9600, probe=False, mode_timeout=1.0)
+        assert [int(round(s.ranges[0] * 1000)) for s in itertools.islice(lms.scans(), 1)] == [1234]
+        frames = lms.parser.stats.frames
+        lms.close()
+        assert sum(w[4:6] == b"\x20\x25" for w in port.writes) == 3  # once at opening, twice at close
+        assert (lms.stats.retries, lms.stats.timeouts, lms.parser.stats.naks) == (1, 0, 1), len(broken)  # old: (1, 1, 0)
+        assert lms.parser.stats.frames - frames == 3  # both scans behind the NAK, then the stop reply
