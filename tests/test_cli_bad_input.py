@@ -792,6 +792,47 @@ def test_two_logs_of_one_figure_name_are_refused_before_any_work(files, tmp_path
     assert not (tmp_path / "o").exists()
 
 
+def _sweep_folder(folder: Path, f1: float, spec: str) -> Path:
+    folder.mkdir(parents=True)
+    pd.DataFrame({"x": [1, 2], "status": ["ok", "ok"], "error": ["", ""], "cell": ["a", "b"], "seed": [0, 0],
+                  "f1": [f1, f1]}).to_parquet(folder / "results.parquet")
+    (folder / "sweep.yaml").write_text(spec)
+    return folder
+
+
+@pytest.mark.parametrize("spec", ["name: k_vs_noise\nkind: extract\ngrid:\n  x: [1, 2]\n",  # one sweep file, two --out
+                                  "kind: extract\ngrid:\n  x: [1, 2]\n"])  # no name: both folders named "sweep"
+def test_two_sweeps_of_one_plot_name_are_refused_before_any_work(tmp_path, capsys, spec):
+    """`figures --sweep a/sweep --sweep b/sweep` of two sweeps of one name (one sweep file run into
+    two folders, or two folders of one name without a name:) drew b's sweep_NAME_f1 plot over a's,
+    exit 0 ('sweep_sweep_f1 ... wrote 31 files', a's f1 of 0.5 nowhere): refused before any work,
+    one line, naming both folders and the plot, as compare refuses two logs of one figure name."""
+    a = _sweep_folder(tmp_path / "a" / "sweep", 0.5, spec)
+    b = _sweep_folder(tmp_path / "b" / "sweep", 0.9, spec)
+    stem = "sweep_k_vs_noise_f1" if spec.startswith("name") else "sweep_sweep_f1"
+    assert run_main(["figures", "--sweep", str(a), "--sweep", str(b), "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench figures: error: --sweep {a} and --sweep {b} would both write their plot {stem}.png (a sweep's plots "
+        "are named by the name: of its sweep.yaml, else by its folder's name): draw them with two runs of figures "
+        "(another --out), or give one of them another name: in its sweep.yaml"]
+    assert not (tmp_path / "o").exists()
+    assert run_main(["figures", "--sweep", str(a), "--sweep", str(a) + "/", "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench figures: error: --sweep {a} is given twice ({a} and {a}): each sweep folder once"]
+    assert not (tmp_path / "o").exists()
+
+
+def test_sweeps_of_other_names_are_drawn_side_by_side(tmp_path):
+    """The check leaves two sweeps of other names alone: each one's plots are drawn."""
+    from experiments.commands.figures import _check_sweeps_apart
+    from experiments.figures.make import sweep_stems
+
+    a = _sweep_folder(tmp_path / "a" / "sweep", 0.5, "name: one\nkind: extract\ngrid:\n  x: [1, 2]\n")
+    b = _sweep_folder(tmp_path / "b" / "sweep", 0.9, "name: two\nkind: extract\ngrid:\n  x: [1, 2]\n")
+    assert sweep_stems(a) == ["sweep_one_f1"] and sweep_stems(b) == ["sweep_two_f1"]
+    _check_sweeps_apart([a, b])
+
+
 def test_out_may_not_write_over_what_the_run_reads(files, tmp_path, capsys):
     """`compare SIMFOLDER --out SIMFOLDER` replaced the folder's config.yaml (the simulate config
     whose sensor model compare reads for it) with compare's own, exit 0; sim2real's sensor.yaml

@@ -558,6 +558,21 @@ def test_a_paper_run_that_diverged_but_stayed_healthy_warns_of_the_divergence():
     assert _health_warning({"n_scans": 11, "consistency": {"diverged": False, "healthy": True}}, paper) == ""
 
 
+def test_the_odometry_doubt_warning_names_both_causes():
+    """A step that doubts the odometry was said to be the odometry's fault alone. On Intel and ACES,
+    whose odometry is right, all 30 such steps had the odometry's match right and the
+    constant-velocity one slid along a corridor (docs/slam.md), so the phrase names both causes."""
+    from experiments.commands.slam import _health_warning
+    from slam import SlamConfig
+
+    m = {"n_scans": 101, "consistency": {"diverged": False, "healthy": False, "odometry_doubt_fraction": 0.03}}
+    assert _health_warning(m, SlamConfig()) == (
+        "the run is not healthy: 3 of 100 steps (3.0 %) doubted the odometry (the match from its step explained "
+        "under 0.7 of the points and the constant-velocity prediction's clearly more: a wrong odometry, or matching "
+        "that is ambiguous there, as along a corridor; consistency.max_odometry_doubt 0) "
+        "(metrics.json: consistency.healthy false)")
+
+
 def test_slam_refuses_one_scan(sim_folder, tmp_path, capsys):
     """A log of one scan, --max-scans 1, or one scan left in time order, ran a "SLAM" of one pose and reported it healthy
     (matched fraction 1.0 of no step, exit 0). Both are refused in one line, before any output."""

@@ -51,6 +51,7 @@ def run(args: argparse.Namespace) -> int:
               replaces=FIGURES_OUTPUTS if args.tables is None else OutTree(FIGURES_OUTPUTS.files))
     for folder in args.sweep:
         check_sweep_results(folder)
+    _check_sweeps_apart(args.sweep)
     study = (("--duration", args.duration), ("--rate-hz", args.rate_hz), ("--seed", args.seed), ("--world", args.world),
              ("--methods", args.methods), ("--intel", args.intel), ("--no-slam", args.no_slam or None))
     ignored = [flag for flag, value in study if value is not None]
@@ -129,6 +130,28 @@ def _check_not_a_demos_figures(out: Path, tables: Path | None) -> None:
         raise InputError(f"--out {out}: the figures of the lmsbench demo in {demo}, drawn from its tables/ and shown in its "
                          f"report.md; figures drawn from --tables {tables}, not the demo's tables, would not match them: "
                          f"give a new folder as --out, or --tables {demo / 'tables'} to redraw the demo's figures")
+
+
+def _check_sweeps_apart(folders: list[Path]) -> None:
+    """Refuse, before any work, two ``--sweep`` folders whose plots would have one name: a sweep's
+    plots are ``sweep_<name>_<metric>.*`` by the ``name:`` of its sweep.yaml, so one sweep file run
+    into two folders (``sweep s.yaml --out a``, ``--out b``) drew b's plots over a's, exit 0
+    ("sweep_k_vs_noise_f1 ... wrote 31 files"); the same folder twice is refused as such, as
+    ``compare`` refuses a source given twice (and, like it, two logs of one figure name)."""
+    from experiments.figures.make import sweep_stems
+
+    seen: dict[str, Path] = {}  # a plot's name -> the --sweep folder that draws it
+    folders_seen: dict[Path, Path] = {}  # a folder's real path -> the --sweep word that gave it
+    for folder in folders:
+        first = folders_seen.setdefault(folder.resolve(), folder)
+        if first is not folder:
+            raise InputError(f"--sweep {folder} is given twice ({first} and {folder}): each sweep folder once")
+        for stem in sweep_stems(folder):
+            other = seen.setdefault(stem, folder)
+            if other is not folder:
+                raise InputError(f"--sweep {other} and --sweep {folder} would both write their plot {stem}.png (a sweep's "
+                                 "plots are named by the name: of its sweep.yaml, else by its folder's name): draw them with two runs of figures "
+                                 "(another --out), or give one of them another name: in its sweep.yaml")
 
 
 def _record(args: argparse.Namespace) -> str:

@@ -81,17 +81,9 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
 def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
     """Plots of one sweep folder: each metric against the first grid parameter, a line per value
     of the second, a panel per value of the third (or combination of the rest); mean +/- std over
-    seeds and random draws. A linked grid key "a,b" counts as its first name."""
-    from experiments.figures.study import read_table
-
-    table = read_table(folder / "results.parquet")
-    spec = load_yaml((folder / "sweep.yaml").read_text())
-    name = spec.get("name", folder.name)
-    # one name per grid key: parameters linked to it ("a,b") follow it and need no line of their own
-    varied = [key.split(",")[0].strip() for key in spec.get("grid", {})]
-    varied = [n for n in varied if n in table and table[n].nunique() > 1]
-    sampled = [n for n in spec.get("random", {}) if n in table]
-    metrics = sweep_metrics(table, spec)
+    seeds and random draws. A linked grid key "a,b" counts as its first name. The plots are
+    ``out/sweep_<name>_<metric>.*`` (``sweep_stems``), name being the sweep.yaml's ``name:``."""
+    table, name, varied, sampled, metrics = _sweep_plan(folder)
     if not varied and sampled:  # a random search: each metric against each sampled parameter
         return {f"sweep_{name}_{m}": draw.fig_sweep_scatter(table, sampled, m, out / f"sweep_{name}_{m}",
                                                             title=f"{name}: {m} against the sampled parameters")
@@ -113,6 +105,30 @@ def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
         written[stem] = draw.fig_sweep(table, x, metric, out / stem, hue=hue, facet=facet,
                                        title=f"{name}: {metric} against {x}")
     return written
+
+
+def sweep_stems(folder: Path) -> list[str]:
+    """The names (without .png / .pdf / .csv) of the plots ``draw_sweep`` draws of ``folder``,
+    drawing nothing: ``figures`` checks before any work that no two ``--sweep`` folders share one
+    (two sweeps of one name, e.g. one sweep file run into two folders, wrote the second's plots over
+    the first's, exit 0)."""
+    _, name, varied, sampled, metrics = _sweep_plan(folder)
+    return [f"sweep_{name}_{m}" for m in metrics] if varied or sampled else []
+
+
+def _sweep_plan(folder: Path) -> tuple[pd.DataFrame, str, list[str], list[str], list[str]]:
+    """What ``draw_sweep`` plots of ``folder``: its table, name, varied grid parameters, sampled
+    parameters and metrics."""
+    from experiments.figures.study import read_table
+
+    table = read_table(folder / "results.parquet")
+    spec = load_yaml((folder / "sweep.yaml").read_text())
+    name = spec.get("name", folder.name)
+    # one name per grid key: parameters linked to it ("a,b") follow it and need no line of their own
+    varied = [key.split(",")[0].strip() for key in spec.get("grid", {})]
+    varied = [n for n in varied if n in table and table[n].nunique() > 1]
+    sampled = [n for n in spec.get("random", {}) if n in table]
+    return table, name, varied, sampled, sweep_metrics(table, spec)
 
 
 #: a sweep row's columns that are no metric: the runner's own (docs/experiments.md, "Sweep outputs")
