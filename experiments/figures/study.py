@@ -184,6 +184,26 @@ def read_table(path: Path) -> pd.DataFrame:
         raise LmsbenchError(f"{path}: not a readable parquet table ({' '.join(str(exc).split())[:200]})") from None
 
 
+def check_panel_log(cfg: StudyConfig) -> None:
+    """Refuse, before any output, a Fig. 9 log that does not read: its first scan is read with the
+    study's log options (a file that is not a log fails on its first lines). ``demo --log
+    run/groundtruth.tum`` made the run folder and moved ``results/demo/latest`` to it, empty, before
+    the study refused the file."""
+    from lms200 import read_log
+
+    from experiments.logargs import log_options_from_plain
+
+    if cfg.intel_log is None or not Path(cfg.intel_log).exists():
+        return
+    records = iter(read_log(Path(cfg.intel_log), **log_options_from_plain(cfg.log_options)))
+    try:
+        next(records, None)
+    finally:
+        close = getattr(records, "close", None)  # a generator's: its file is closed now, not when collected
+        if close is not None:
+            close()
+
+
 def _intel_panels(path: Path, n: int, method: str, params: dict | None,
                   log_options: dict | None = None) -> dict[str, pd.DataFrame]:
     from lms200 import read_log
