@@ -168,6 +168,28 @@ def at_a_glance(tables: dict[str, pd.DataFrame]) -> list[str]:
     return ["\n".join(items)] if items else []
 
 
+def demo_command(cfg: StudyConfig, executor: str = "local") -> str:
+    """The ``lmsbench demo`` command line that runs this study again (the options that differ from
+    the defaults; ``executor`` "" for ``--no-sweep``). The report said `lmsbench demo` whatever
+    the world, seed or log it ran."""
+    import shlex
+
+    from experiments.figures.study import INTEL_LOG
+    from experiments.logargs import log_option_flags
+
+    default = StudyConfig()
+    words = ["lmsbench", "demo"]
+    for flag, name in (("--world", "world"), ("--seed", "seed"), ("--duration", "duration"), ("--rate-hz", "rate_hz")):
+        value = getattr(cfg, name)
+        if value != getattr(default, name):
+            words += [flag, f"{value:g}" if isinstance(value, float) else str(value)]
+    if cfg.intel_log is not None and Path(cfg.intel_log) != INTEL_LOG:
+        words += ["--log", str(cfg.intel_log)]
+    words += log_option_flags(cfg.log_options)
+    words += ["--no-sweep"] if not executor else (["--inprocess"] if executor == "inprocess" else [])
+    return shlex.join(words)
+
+
 def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: StudyConfig, figs: dict,
                     sweep_table: pd.DataFrame | None, elapsed: float, executor: str = "local") -> list[Section]:
     timing = tables["timing"]
@@ -177,8 +199,8 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
         f"{cfg.duration:g} s tour; {n_scans} scans were kept ({cfg.rate_hz:g} scans/s of the sensor's 37.5). "
         f"Every extractor ran on every scan and was scored against the exact visible ground truth of the "
         f"simulator; the odometry-free SLAM (the paper preset's EKF and the default scan-matching pipeline) ran on the same scans. Whole demo: {elapsed:.0f} s.",
-        "Reproduce: `lmsbench demo` (settings in `tables/study.yaml`; every table behind the figures is in "
-        "`tables/*.parquet` and beside each figure as CSV).",
+        f"Reproduce: `{demo_command(cfg, executor)}` (settings in `tables/study.yaml`; every table behind the "
+        "figures is in `tables/*.parquet` and beside each figure as CSV).",
     ])
     sections = [intro]
     glance = at_a_glance(tables)

@@ -180,3 +180,29 @@ def test_the_study_compiles_the_slam_kernels_before_it_times_the_slam(monkeypatc
     with pytest.raises(Warmed):
         run_study(StudyConfig(duration=2.0, slam=slam), log=lambda msg: None)
     assert seen == {"slam": slam}
+
+
+def test_the_demo_report_names_the_command_that_ran_it():
+    """The report's "Reproduce:" line said `lmsbench demo` whatever the world, seed, duration or
+    log of the run (a new user's review: `demo --world pillars --duration 3 --no-sweep`). It now
+    gives the options that differ from the defaults, the log's reading options included."""
+    import math
+    import shlex
+
+    from experiments.demo import demo_command
+    from experiments.figures.study import StudyConfig
+
+    assert demo_command(StudyConfig()) == "lmsbench demo"
+    assert demo_command(StudyConfig(world="pillars", duration=3.0), executor="") == \
+        "lmsbench demo --world pillars --duration 3 --no-sweep"
+    cfg = StudyConfig(seed=7, rate_hz=2.5, intel_log="logs/my run.clf",
+                      log_options={"topic": None, "skip_bad_lines": True,
+                                   "geometry": {"resolution": math.radians(0.5), "range_max": 30.0}})
+    line = demo_command(cfg, executor="inprocess")
+    assert line == ("lmsbench demo --seed 7 --rate-hz 2.5 --log 'logs/my run.clf' --skip-bad-lines "
+                    "--laser-resolution-deg 0.5 --laser-range-max 30 --inprocess")
+    from experiments.cli import build_parser
+
+    args = build_parser().parse_args(shlex.split(line)[1:])  # the line parses back to the same options
+    assert (args.world, args.seed, args.rate_hz, str(args.log), args.skip_bad_lines, args.laser_resolution_deg,
+            args.laser_range_max, args.inprocess) == ("office", 7, 2.5, "logs/my run.clf", True, 0.5, 30.0, True)
