@@ -96,7 +96,10 @@ def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -
     result = sim2real(path, world="mit", seeds=(cfg.seed,), duration=cfg.duration, rate_hz=3.0, stride=10,
                       max_scans=max_scans, fit_duration=min(30.0, cfg.duration), wall_relief=False,
                       probe_duration=cfg.duration, probe_rate_hz=PROBE_RATE_HZ,
-                      probe_seeds=[next(s for s in PROBE_SEEDS if s != cfg.seed)])
+                      probe_seeds=[next(s for s in PROBE_SEEDS if s != cfg.seed)],
+                      advice=f"a longer demo --duration, or `lmsbench sim2real {path.name}` for the full comparison")
+    for warning in result.warnings:  # in the report and, as sim2real says them, on the terminal
+        log(f"warning: sim2real: {warning}")
     write_outputs(result, out / "sim2real", str(path), dict(log=str(path), duration=cfg.duration, stride=10,
                                                            max_scans=max_scans))
     body = format_report(result, path.name).split("\n", 2)[2]  # the tables, without the title
