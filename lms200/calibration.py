@@ -36,7 +36,7 @@ from typing import Any, Iterable
 
 import numpy as np
 
-from .codes import METRES_PER_UNIT
+from .codes import CODE_ABOVE_MAXIMUM, CODE_NOT_VALID, METRES_PER_UNIT
 from .errors import InputError
 from .finite import check_seed
 from .noise import (BOOTSTRAP_RESAMPLES, RangeNoise, _bootstrap_scale, _remove_quantisation, estimate_quantum, scans_of,
@@ -160,6 +160,26 @@ def _beyond_range_max_invalid(scan: Scan) -> Scan:
     if not beyond.any():
         return scan
     return scan.replace(ranges=np.where(beyond, np.nan, scan.ranges))
+
+
+def _mm_mode_codes(scan: Scan) -> Scan:
+    """A mm-mode scan's readings at or above the mm mode's maximum (8.183 m, code 8183) as the
+    LMS200 means them (``lms200.codes``): 8183 and any reading above the 13-bit distance field
+    (8.191 m) measured nothing within range, +inf (REP-117); 8184 .. 8191 (dazzling, operation
+    overflow, ...) are invalid, nan. A mm-mode unit sends no distance beyond 8.182 m, so such
+    readings come from a logger, not from a surface: a log whose no-returns were written as
+    8.5 .. 40 m had them counted as nan (out of the log's range_max) and fitted as dropouts
+    (dropout_prob 3.4 % and no_return_prob 0.02 % where the same log with +inf gave 0.08 % and
+    3.3 %), and a FLASER line with one such reading was read in cm, its 8.183 m no-returns kept as
+    echoes at 8.183 m (taken for a cap)."""
+    r = scan.ranges
+    with np.errstate(invalid="ignore", over="ignore"):
+        code = np.rint(r / METRES_PER_UNIT["mm"])
+        above = np.isfinite(r) & (code >= CODE_ABOVE_MAXIMUM)
+    if not above.any():
+        return scan
+    invalid = above & (code > CODE_ABOVE_MAXIMUM) & (code <= CODE_NOT_VALID)
+    return scan.replace(ranges=np.where(invalid, np.nan, np.where(above, np.inf, r)))
 
 
 def _max_reading(scans: list[Scan], quantum: float) -> float | None:
@@ -368,7 +388,7 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
     check_seed(seed)
     kept: list[Scan] = []
     for s in scans_of(scans):
-        kept.append(_beyond_range_max_invalid(s))
+        kept.append(s)
         if len(kept) >= MAX_SCANS:
             break
     if len(kept) < MIN_SCANS:
@@ -377,9 +397,13 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
     counts_n = np.bincount([len(s) for s in kept])
     n_beams = int(np.argmax(counts_n))
     inc = float(np.median([s.angle_increment for s in kept]))
-    sample = np.concatenate([s.ranges[np.isfinite(s.ranges)][::5] for s in kept])
+    with np.errstate(invalid="ignore"):
+        sample = np.concatenate([s.ranges[np.isfinite(s.ranges) & (s.ranges <= s.range_max)][::5] for s in kept])
     quantum = estimate_quantum(sample)
     units = "cm" if quantum >= METRES_PER_UNIT["cm"] - 1e-12 else "mm"
+    # mm mode: readings from its maximum on are no echoes (_mm_mode_codes); then any finite reading
+    # beyond the log's own range_max is out of limits, invalid (_beyond_range_max_invalid)
+    kept = [_beyond_range_max_invalid(_mm_mode_codes(s) if units == "mm" else s) for s in kept]
     noise = estimate_range_noise(kept, *NOISE_BAND_M, seed=seed)
     sigma = noise.sigma_m if np.isfinite(noise.sigma_m) else 0.0
     bins, slope = _noise_bins(kept, quantum, seed)

@@ -236,6 +236,10 @@ class FrameParser:
         when it has not come yet) is the handshake if it is 0x06 / 0x15; had bytes been lost, that
         position would hold the next telegram's header. A NAK right behind a scan with a
         corrupted byte was garbage (its CRC low byte wrong too) and cost the request's timeout.
+        Such a telegram that lost bytes ends before a good frame found inside its span (the
+        next telegram): while a request waits, the byte just before that frame is the handshake
+        if it is 0x06 / 0x15 (``_scan`` holds it back until the frame is complete). A NAK behind
+        a scan that lost 2 bytes or more was taken for garbage of a false start.
 
         The other bytes are handshakes only when the stream is in step before them and they are
         all 0x06 / 0x15 (a reply byte comes alone, then a frame or nothing). Anything else is
@@ -300,6 +304,8 @@ class FrameParser:
             if start < 0:
                 # Keep a trailing STX: it may be the first byte of the next frame.
                 keep = size - 1 if size > pos and buf[size - 1] == STX else size
+                if not final and like and pos < keep < shadow and self.awaiting_reply and buf[keep - 1] in (ACK, NAK):
+                    keep -= 1  # inside a telegram of known length: the handshake if a frame starts after it
                 run(pos, keep)
                 pos = keep
                 break
@@ -318,7 +324,14 @@ class FrameParser:
                     verdict = "bad_crc"
                 else:
                     verdict = "good"
-            if verdict == "good" and start < shadow:
+            lost = like and pos < start < shadow and self.awaiting_reply  # see _garbage
+            if lost and verdict is None and buf[start - 1] in (ACK, NAK):
+                run(pos, start - 1)  # the byte before the frame: decided once the frame is complete
+                pos = start - 1
+                break
+            if lost and verdict == "good":
+                shadow, open_end = start - 1, 2  # the telegram lost bytes: it ends before this frame
+            elif verdict == "good" and start < shadow:
                 shadow, like = pos, False  # a good frame inside the failed one: that was a false start, not a telegram
             run(pos, start)
             pos = start

@@ -1003,3 +1003,95 @@ def test_bytes_garbled_for_the_hosts_old_baud_never_reach_it_after_a_baud_change
             os.close(host)
     assert changed and len(got) >= 20000
     assert got.count(0x02) == 0  # old: the stream at 38400 (hundreds of STX), flushed behind the host's back
+
+
+def test_a_nak_behind_a_scan_that_lost_two_bytes_or_more_is_resent_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Left open by session 36: close() while streaming, the device NAKs the stop request right
+    behind the scan telegram in flight, which lost 2 bytes or more on the line (down to its 5
+    header bytes, 02 80 D6 02 B0). Its LEN reached past the NAK into the next scan, the parser took
+    it for a false start and the NAK for garbage: close() waited out the attempt's 1.92 s
+    (retries, timeouts, naks (1, 1, 0)). Now (1, 0, 1), and the scans behind it are still frames."""
+    from lms200_fake_port import answer, fake_port, scan_frame
+
+    sf = scan_frame(1500)
+    for broken in (sf[:100] + sf[102:], sf[:100] + sf[103:], sf[:5]):
+        plan = {"stop": 0}
+
+        def script(payload: bytes, n: int, broken: bytes = broken) -> list[tuple[float, bytes]]:
+            if payload == b"\x20\x24":
+                return [*answer(payload), (0.02, scan_frame(1234))]
+            if payload == b"\x20\x25":
+                plan["stop"] += 1
+                if plan["stop"] == 2:  # close()'s first stop request: the broken scan, the NAK, the next scans
+                    return [(0.0, broken + b"\x15" + scan_frame(1501)), (0.005, scan_frame(1502))]
+            return answer(payload)
+
+        port = fake_port(monkeypatch, script)
+        lms = LMS200("fake://", baud=9600, probe=False, mode_timeout=1.0)
+        assert [int(round(s.ranges[0] * 1000)) for s in itertools.islice(lms.scans(), 1)] == [1234]
+        frames = lms.parser.stats.frames
+        lms.close()
+        assert sum(w[4:6] == b"\x20\x25" for w in port.writes) == 3  # once at opening, twice at close
+        assert (lms.stats.retries, lms.stats.timeouts, lms.parser.stats.naks) == (1, 0, 1), len(broken)  # old: (1, 1, 0)
+        assert lms.parser.stats.frames - frames == 3  # both scans behind the NAK, then the stop reply
+
+
+class LosesStopReply(VirtualLMS200):
+    """A streaming unit that takes the first stop request (0x20 0x25: it ACKs it and stops
+    streaming) but whose 0xA0 reply to it is lost on the line."""
+
+    lost = False
+
+    def _mode(self, data: bytes, t_reply: float) -> None:
+        from lms200.protocol import MODE_ON_REQUEST
+
+        if data == bytes([MODE_ON_REQUEST]) and self.continuous and not self.lost:
+            self.lost = True
+            self.mode = MODE_ON_REQUEST  # streaming stops; the ACK is queued already, the 0xA0 is lost
+            return
+        super()._mode(data, t_reply)
+
+
+@pytest.mark.parametrize("baud, old_s, bound_s", [(500000, 3.670, 0.8), (38400, 3.886, 1.0), (9600, 4.527, 1.6)])
+def test_a_lost_reply_to_the_stop_request_costs_the_quiet_line_not_the_mode_timeout(
+        monkeypatch: pytest.MonkeyPatch, baud: int, old_s: float, bound_s: float) -> None:
+    """The virtual unit on the simulated clock: close() while streaming, the unit takes the stop
+    request (ACK, streaming stops) but its 0xA0 reply is lost. The driver waited out the whole
+    attempt (mode_timeout 3.5 s plus the line time of a reply and a scan in flight) among a quiet
+    line before it sent the stop again: close() took old_s (simulated seconds; timeouts 1,
+    retries 1). A streaming unit sends telegram after telegram, so a line quiet for ``timeout``
+    (0.5 s) shows that the stop took effect: the driver sends it again then and the unit, in
+    on-request mode, answers at once (close() within bound_s: the telegram in flight, 0.5 s, the
+    resend, and the switch back to 9600 baud; timeouts 0, retries 1)."""
+    from lms200_sim_port import sim_port
+
+    dev = LosesStopReply(source(20), units="mm")
+    port = sim_port(monkeypatch, dev)
+    lms = LMS200("sim://", baud=baud)
+    assert len(list(itertools.islice(lms.scans(), 2))) == 2 and dev.continuous
+    start, writes = port.clock.t, len(port.writes)
+    lms.close()
+    took = port.clock.t - start
+    assert dev.lost and not dev.continuous and dev.baud == 9600 and not lms.streaming
+    assert sum(w[4:6] == b"\x20\x25" for w in port.writes[writes:]) == 2
+    assert (lms.stats.timeouts, lms.stats.retries) == (0, 1)  # old: (1, 1)
+    assert lms.timeout < took < bound_s < old_s  # old: old_s
+
+
+def test_a_unit_that_falls_silent_while_streaming_is_given_up_naming_the_quiet_line(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The stop request's first attempt ends on a quiet line; the attempts after it (the unit is
+    no longer streaming) wait their whole budget, and the error says what each attempt saw."""
+    from lms200_sim_port import sim_port
+
+    dev = VirtualLMS200(source(20), units="mm")
+    port = sim_port(monkeypatch, dev)
+    lms = LMS200("sim://", baud=500000)
+    assert len(list(itertools.islice(lms.scans(), 1))) == 1
+    dev.faults.mute = True
+    start = port.clock.t
+    with pytest.raises(LmsTimeoutError, match=r"stop continuous output \(0x20 0x25\): no 0xA0 reply within 3\.5\d s .*"
+                       r"attempt 1: nothing, then the line quiet for 0\.5 s: continuous output stopped; "
+                       r"attempt 2: nothing; attempt 3: nothing$"):
+        lms.close()
+    assert (lms.stats.timeouts, lms.stats.retries) == (2, 2)  # old: (3, 2)
+    assert port.clock.t - start < 0.5 + 0.1 + 2 * 3.6  # old: 3 x 3.52

@@ -416,3 +416,55 @@ def test_the_byte_right_after_a_broken_scan_of_known_length_is_the_handshake_onl
     assert naks(bytes(len_hit) + b"\x33\x15" + _scan_telegram(7), True) == 0
     assert naks(bytes(broken) + b"\x33\x15" + _scan_telegram(7), True) == 0
     assert naks(bytes(broken) + b"\x15\x33" + _scan_telegram(7), True) == 1  # pinned by the length, garbage after it
+
+
+def test_a_nak_behind_a_telegram_that_lost_two_bytes_or_more_is_a_nak_and_loses_no_frame() -> None:
+    """Left open by session 36 (docs/lms200.md, "what is left"): a telegram that began in step with
+    the last good frame's 5 header bytes (its length known) but lost 2 bytes or more on the line
+    reaches, by its LEN, past the NAK behind it into the next telegram; the parser skipped its STX,
+    found the next telegram inside its span, took the broken one for a false start and the NAK for
+    garbage (the request waited out its timeout). Such a telegram lost bytes (it never gains any),
+    so it ends before the frame found in its span: the byte just before that frame is the
+    handshake while a request waits for one. Hand-built from the listing's vectors (variant reply
+    02 80 07 00 BB 01 B4 00 32 00 10 03 9D, mode reply 02 80 03 00 A0 00 10 16 0A) and scans."""
+    variant = bytes.fromhex("02 80 07 00 BB 01 B4 00 32 00 10 03 9D")
+    mode = bytes.fromhex("02 80 03 00 A0 00 10 16 0A")
+    lost_two = bytes.fromhex("02 80 07 00 BB 01 B4 00 10 03 9D")  # 32 00 lost
+    header_only = bytes.fromhex("02 80 07 00 BB")  # all but the header lost
+    for broken in (lost_two, header_only):
+        for tail in (variant, mode):
+            for chunk in (64, 7, 1):
+                p = FrameParser()
+                assert p.feed(variant) == [Frame(0x80, variant[4:-2])]
+                p.awaiting_reply = True
+                stream = broken + bytes([NAK]) + tail
+                events = []
+                for i in range(0, len(stream), chunk):
+                    events += p.feed(stream[i : i + chunk])
+                assert events == [NAK, Frame(0x80, tail[4:-2])], (broken.hex(), chunk)  # old: [Frame]
+                assert (p.stats.naks, p.stats.bad_crc, p.stats.skipped_bytes, p.pending) == (1, 1, len(broken), 0)
+                assert p.awaiting_reply is False
+    # Scans: every loss of 2..727 bytes (header kept), the NAK, then two good scans: one NAK, both scans.
+    goods = [_scan_telegram(v) for v in (21, 22, 23)]
+    victim = _scan_telegram(24)
+    for lost in (2, 3, 17, 400, 727):
+        for at in (5, 100, len(victim) - lost):
+            broken = victim[:at] + victim[at + lost :]
+            for chunk in (4096, 7, 1):
+                p = FrameParser()
+                p.feed(goods[0])
+                p.awaiting_reply = True
+                stream = broken + bytes([NAK]) + goods[1] + goods[2]
+                events = feed_cut(p, stream, list(range(chunk, len(stream), chunk)))
+                assert events == [NAK] + [Frame(0x80, g[4:-2]) for g in goods[1:]], (lost, at, chunk)  # old: no NAK
+    # No request waiting, or the header differs from the last good frame's (its length unknown): garbage, as before.
+    for awaiting, first in ((False, lost_two), (None, lost_two), (True, bytes.fromhex("02 80 07 00 BA 01 B4 00 10 03 9D"))):
+        p = FrameParser()
+        p.feed(variant)
+        p.awaiting_reply = awaiting
+        assert p.feed(first + bytes([NAK]) + variant) == [Frame(0x80, variant[4:-2])]
+    # Without a NAK behind it, the broken telegram's last byte is no handshake (9D here) and nothing is lost.
+    p = FrameParser()
+    p.feed(variant)
+    p.awaiting_reply = True
+    assert p.feed(lost_two + mode + bytes([ACK])) == [Frame(0x80, mode[4:-2]), ACK]

@@ -209,6 +209,52 @@ def test_a_reading_beyond_range_max_counts_as_invalid_not_as_the_top_reading() -
         assert getattr(got, name) == getattr(want, name), name
 
 
+def test_mm_mode_readings_above_8_183_m_are_no_returns_or_invalid_not_echoes(tmp_path: Path) -> None:
+    """An LMS200 in mm mode measures up to 8.182 m: code 8183 means nothing within range (+inf),
+    8184 .. 8191 dazzling / overflow / invalid (nan), and a logged reading above the 13-bit field
+    (8.191 m) is no echo either. A mm-mode log (written by write_carmen) with half its no-returns
+    written as 8.5, 9, 12 or 40.958 m was calibrated with those as nan (beyond the log's range_max):
+    nan rate 2.38 % and no-return rate 0.97 % where the same log with +inf reads 0.86 % and 1.84 %,
+    so the sensor YAML had dropout_prob 0.024 and no_return_prob 0.0097. The same FLASER log without
+    the PARAM lines (a CARMEN logger's) had every line holding such a reading read in cm: its 8.183 m
+    no-returns were echoes at 8.183 m (inf rate 0.03 %, max_reading 8.183 in the YAML). Now both
+    calibrate as the log with +inf."""
+    from experiments.calibrate import base_sensor
+
+    sensor = RECOVERY_CASES["mm_0.5deg"]
+    records = simulate_records("office", seed=5, duration=8.0, sensor=sensor, rate_hz=4.0)
+    over = np.array([8.5, 9.0, 12.0, 40.958])
+    as_over = []
+    for k, rec in enumerate(records):
+        r = rec.scan.ranges
+        beyond = np.where(np.isposinf(r) & (np.arange(r.size) % 2 == 0), over[np.arange(r.size) % over.size], r)  # half of them
+        as_over.append(dataclasses.replace(rec, scan=rec.scan.replace(ranges=beyond)))
+    write_carmen(tmp_path / "inf.clf", records, fmt="flaser")
+    write_carmen(tmp_path / "over.clf", as_over, fmt="flaser")
+    assert "8.500" in (tmp_path / "over.clf").read_text()
+    want = calibrate_scans(read_log(tmp_path / "inf.clf"))
+    assert want.units == "mm" and want.inf_rate.value > 0.02 and want.nan_rate.value < 0.02
+    got = calibrate_scans(read_log(tmp_path / "over.clf"))
+    for name in ("nan_rate", "inf_rate", "no_return_rate", "max_reading", "mixed_share", "outlier_rate", "quantum_m"):
+        assert getattr(got, name) == getattr(want, name), name  # old: nan_rate 0.0238 against 0.0086
+    assert base_sensor(got) == base_sensor(want)
+    # The same without the PARAM lines (a CARMEN logger's FLASER): lines holding 9 m were read in cm.
+    plain = "".join(line for line in (tmp_path / "over.clf").read_text().splitlines(keepends=True)
+                    if not line.startswith("PARAM lmsbench_"))
+    (tmp_path / "plain.clf").write_text(plain)
+    got = calibrate_scans(read_log(tmp_path / "plain.clf"))
+    assert got.max_reading is None  # old: 8.183
+    for name in ("nan_rate", "inf_rate", "no_return_rate"):
+        assert getattr(got, name) == getattr(want, name), name  # old: inf_rate 0.0003 against 0.0305
+    # Codes 8184 .. 8191 are invalid readings (nan), 8183 and readings above 8.191 m +inf.
+    from lms200.calibration import _mm_mode_codes
+
+    codes = np.array([8.182, 8.183, 8.1834, 8.184, 8.185, 8.186, 8.188, 8.191, 8.192, 9.0, 1e308])
+    scan = records[0].scan.replace(ranges=np.concatenate((codes, records[0].scan.ranges[codes.size:])))
+    np.testing.assert_array_equal(_mm_mode_codes(scan).ranges[: codes.size],
+                                  [8.182, np.inf, np.inf, np.nan, np.nan, np.nan, np.nan, np.nan, np.inf, np.inf, np.inf])
+
+
 # -- command line ----------------------------------------------------------------------------
 def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -> None:
     truth = RECOVERY_CASES["cm_0.5deg"]
