@@ -397,8 +397,14 @@ CASES = [
     (["lms200", "record", "--port", " ", "--out", "{out}/x.clf"], "argument --port: must not be empty, got ' '"),
     (["compare", "office:1", "--methods", "sensor", "", "--out", O], "argument --methods: must not be empty, got ''"),
     # a noise of 1e308 m overflowed in the summary (a RuntimeWarning on stderr, sigma_r_mm inf), exit 0
-    (["compare", "office:1", "--sigma", "1e308", "--out", O], "--sigma must be a range noise std in (0, 1000] m, "
-                                                              "got '1e308'"),
+    (["compare", "office:1", "--sigma", "1e308", "--out", O], "--sigma must be a range noise std in [0.0001, 1000] m, "
+                                                              "or 'auto', got '1e308'"),
+    # a noise of 1e-300 m ran, exit 0: the sensor method found no line (F1 0), every 3-sigma explained
+    # fraction was 0 and sigma_r_mm read 1e-297; below 0.1 mm no rangefinder's noise lies
+    (["compare", "office:1", "--sigma", "1e-300", "--out", O], "argument --sigma: --sigma must be a range noise std in "
+                                                               "[0.0001, 1000] m, or 'auto', got '1e-300'"),
+    (["compare", "office:1", "--sigma", "5e-5", "--out", O], "--sigma must be a range noise std in [0.0001, 1000] m, "
+                                                             "or 'auto', got '5e-5'"),
     # a world.json nested 100,000 deep, walls at 1e308 m (RuntimeWarnings on stderr before the error line)
     (["simulate", "--world", "{deep.json}", "--out", O], "deep.json: not a world.json (nested too deeply to parse)"),
     (["simulate", "--world", "{far_walls.json}", "--out", O], "far_walls.json: not a world.json (walls: must be finite "
