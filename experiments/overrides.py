@@ -1,21 +1,51 @@
-"""The one spelling of extractor overrides, for ``lmsbench compare --set``, sweep files and the
-library: flat names ``extractor.FIELD`` (that field of every extractor of the run that has it) or
-``extractor.METHOD.FIELD`` (one extractor's field), resolved to ``{method: {field: value}}``, the
-``params`` argument of ``experiments.compare.compare``.
+"""The one spelling of extractor overrides, for ``lmsbench compare --set`` and ``lmsbench slam
+--set``, sweep files (extraction and SLAM sweeps) and the library: flat names ``extractor.FIELD``
+(that field of every extractor of the run that has it) or ``extractor.METHOD.FIELD`` (one
+extractor's field), resolved to ``{method: {field: value}}``, the ``params`` argument of
+``experiments.compare.compare`` (a SLAM run's ``extractor_params`` is its one method's entry).
 """
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 from typing import Any, Mapping, Sequence
 
+import yaml
+
 from lms200 import LmsbenchError
+from lms200.yamlio import load as load_yaml
 
 PREFIX = "extractor"
 
 
 class OverrideError(LmsbenchError, ValueError):
     """An override names no field of the extractors that run (the message lists the known ones)."""
+
+
+def set_option(text: str) -> tuple[str, Any]:
+    """One ``--set extractor.[METHOD.]FIELD=VALUE`` of the command line: (key, value read as YAML)."""
+    key, eq, value = text.partition("=")
+    if not eq or not key.startswith(PREFIX + ".") or len(key) <= len(PREFIX + "."):
+        hint = f" (write extractor.{key})" if eq and "." in key and not key.startswith(PREFIX + ".") else ""
+        raise argparse.ArgumentTypeError(f"--set takes extractor.FIELD=VALUE or extractor.METHOD.FIELD=VALUE, "
+                                         f"got {text!r}{hint}")
+    try:
+        return key, load_yaml(value)
+    except yaml.YAMLError:
+        raise argparse.ArgumentTypeError(f"--set {key}: {value!r} is not a value") from None
+
+
+def check_set_once(params: list[tuple[str, Any]]) -> None:
+    """A field set twice (``--set extractor.k=2 ... --set extractor.k=5``) ran the last value alone,
+    as an option given twice did (``--seed 1 ... --seed 2``); ``extractor.k`` beside
+    ``extractor.sensor.k`` is two fields (the method's own wins for it)."""
+    seen: dict[str, Any] = {}
+    for key, value in params:
+        if key in seen:
+            raise OverrideError(f"--set {key} is given twice ({key}={seen[key]!r} and {key}={value!r}); "
+                                "set each field once")
+        seen[key] = value
 
 
 def _fields(method: str) -> list[str]:

@@ -364,8 +364,8 @@ def test_misspelled_parameters_fail_before_any_cell_runs(tmp_path, param, messag
     ("extract", "sensorr.noise_sigma", "sensor.*, extractor.*"),   # a typo of the prefix: the default noise ran
     ("extract", "extractors.k", "sensor.*, extractor.*"),
     ("extract", "slam.motion.sigma_accel", "sensor.*, extractor.*"),  # a SLAM field in an extract sweep
-    ("slam", "extractor.k", "sensor.*, slam.*"),                   # the SLAM's extractor is slam.extractor_params.k
-    ("slam", "bogus.x", "sensor.*, slam.*"),
+    ("slam", "extractors.k", "sensor.*, slam.*, extractor.*"),     # the SLAM's extractor is extractor.k
+    ("slam", "bogus.x", "sensor.*, slam.*, extractor.*"),
 ])
 def test_a_parameter_of_a_prefix_the_kind_does_not_read_fails_before_any_cell_runs(tmp_path, kind, param, reads):
     """A dotted name whose prefix the cells read nothing of (sensorr.noise_sigma, extractors.k,
@@ -487,3 +487,28 @@ def test_a_world_json_runs_in_a_sweep_and_a_missing_one_is_refused_before_any_ce
         err = capsys.readouterr().err
         assert f"{field}: {what} (a sweep's relative paths are read from the current folder" in err
         assert err.count("\n") == 1 and not (tmp_path / f"o_{field}").exists()
+
+
+def test_a_slam_sweep_spells_its_extractors_fields_as_every_other_run_does(tmp_path):
+    """Issue #16 asks for one spelling of extractor overrides. A SLAM sweep refused extractor.k
+    (compare --set's and extraction sweeps' spelling) and took only slam.extractor_params.k (an
+    audit of the resolved issues). extractor.[METHOD.]FIELD now sets the SLAM's extractor; the older
+    spelling still works, and one field given both ways is refused before any cell runs."""
+    from experiments.overrides import OverrideError
+    from experiments.sweep.kinds import slam_config_dict
+
+    assert slam_config_dict({"extractor.k": 5, "slam.motion.sigma_accel": 2.0}) == {
+        "motion": {"sigma_accel": 2.0}, "extractor_params": {"k": 5}}
+    assert slam_config_dict({"extractor.sensor.k": 5, "slam.extractor_params.ad_tau": 3.0}) == {
+        "extractor_params": {"ad_tau": 3.0, "k": 5}}
+    assert slam_config_dict({"slam.extractor": "split_merge", "extractor.split_threshold": 0.05}) == {
+        "extractor": "split_merge", "extractor_params": {"split_threshold": 0.05}}
+    with pytest.raises(OverrideError, match="both set one field"):
+        slam_config_dict({"extractor.k": 5, "slam.extractor_params.k": 4})
+    for grid, message in (({"extractor.kk": [1]}, r"extractor.kk: no extractor of this run \(sensor\) has a field 'kk'"),
+                          ({"extractor.hough.rho_step": [0.1]}, r"'hough' is not an extractor of this run"),
+                          ({"extractor.k": [0]}, r"extractor_params.k: must be an integer")):
+        spec = SweepSpec.from_dict({"kind": "slam", "fixed": {"duration": 0.5}, "grid": grid})
+        with pytest.raises(SweepSpecError, match=message):
+            run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+        assert not (tmp_path / "out").exists()

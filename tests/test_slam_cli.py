@@ -665,3 +665,26 @@ def test_relations_over_part_of_a_log_are_said(shared_data, tmp_path, capsys):
     assert (f"the relations error covers {rel['n']} of the file's 1172 relations, those within the run's time span "
             "(--max-scans or a cut log leave the rest out); it is not comparable with errors over the whole log "
             "(metrics.json relations.n, n_skipped)") in err
+
+
+def test_slam_set_overrides_its_extractor_as_compare_does(sim_folder, tmp_path, capsys):
+    """Issue #16: one spelling of extractor overrides. `slam` had no --set: its extractor took
+    overrides only as a config file's extractor_params (an audit of the resolved issues). `--set
+    extractor.[METHOD.]FIELD=VALUE` now joins extractor_params, checked as compare checks it."""
+    import yaml
+
+    from experiments.cli import main
+
+    argv = ["slam", str(sim_folder), "--quiet", "--no-paper-baseline", "--max-scans", "10"]
+    assert main([*argv, "--set", "extractor.k=5", "--set", "extractor.sensor.ad_tau=3.5", "--out", str(tmp_path / "o")]) == 0
+    record = yaml.safe_load((tmp_path / "o" / "config.yaml").read_text())
+    assert record["slam"]["extractor_params"] == {"k": 5, "ad_tau": 3.5}
+    for extra, message in ((["--set", "extractor.kk=1"], "no extractor of this run (sensor) has a field 'kk'"),
+                           (["--set", "extractor.hough.rho_step=0.1"], "'hough' is not an extractor of this run"),
+                           (["--set", "extractor.k=abc"], "extractor_params.k: must be an integer"),
+                           (["--set", "extractor.k=2", "--set", "extractor.k=3"], "--set extractor.k is given twice"),
+                           (["--set", "k=5"], "--set takes extractor.FIELD=VALUE")):
+        assert main([*argv, *extra, "--out", str(tmp_path / "bad")]) == 2
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1, err
+        assert not (tmp_path / "bad").exists()

@@ -3,34 +3,20 @@ interleaved in one process; a tidy table, a summary (printed and saved) and the 
 
 from __future__ import annotations
 
-from lms200.yamlio import load as load_yaml
-
 import argparse
 import sys
 import dataclasses
 from pathlib import Path
-from typing import Any
 
 import yaml
 
 from lms200 import LmsbenchError
 from lms200.timing import check_scan_rate
 
+from experiments.overrides import check_set_once, set_option
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
 from experiments.options import (COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
                                  check_out_spares, check_seeds, count, plain_number, positive, path_arg, text)
-
-
-def _param(text: str) -> tuple[str, Any]:
-    key, eq, value = text.partition("=")
-    if not eq or not key.startswith("extractor.") or len(key) <= len("extractor."):
-        hint = f" (write extractor.{key})" if eq and "." in key and not key.startswith("extractor.") else ""
-        raise argparse.ArgumentTypeError(f"--set takes extractor.FIELD=VALUE or extractor.METHOD.FIELD=VALUE, "
-                                         f"got {text!r}{hint}")
-    try:
-        return key, load_yaml(value)
-    except yaml.YAMLError:
-        raise argparse.ArgumentTypeError(f"--set {key}: {value!r} is not a value") from None
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -56,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sensor", type=path_arg, metavar="FILE.yaml",
                    help="sensor model of the simulated sources, as written (e.g. from `lmsbench calibrate`); "
                    "needs a world among the sources (logs and simulate folders carry their own)")
-    p.add_argument("--set", dest="params", action="append", type=_param, default=[], metavar="extractor.[METHOD.]FIELD=VALUE",
+    p.add_argument("--set", dest="params", action="append", type=set_option, default=[], metavar="extractor.[METHOD.]FIELD=VALUE",
                    help="override a config field of every extractor that has it, or of METHOD only (repeatable)")
     p.add_argument("--out", type=path_arg, help="output folder (default: a new results/compare/DATE_TIME, "
                                             "linked as results/compare/latest)")
@@ -108,17 +94,6 @@ def _remove_earlier_outputs(out: Path, fmt: str) -> None:
         stale.unlink(missing_ok=True)
 
 
-def _check_set_once(params: list[tuple[str, Any]]) -> None:
-    """A field set twice (``--set extractor.k=2 ... --set extractor.k=5``) ran the last value alone,
-    as an option given twice did (``--seed 1 ... --seed 2``); ``extractor.k`` beside
-    ``extractor.sensor.k`` is two fields (the method's own wins for it)."""
-    seen: dict[str, Any] = {}
-    for key, value in params:
-        if key in seen:
-            raise InputError(f"--set {key} is given twice ({key}={seen[key]!r} and {key}={value!r}); set each field once")
-        seen[key] = value
-
-
 def _sigma(text: str) -> float | str:
     if text == "auto":
         return text
@@ -144,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
     from features.scoring import ScoreConfig
 
     methods = check_methods(args.methods)
-    _check_set_once(args.params)
+    check_set_once(args.params)
     params = extractor_overrides(dict(args.params), methods)
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
     reads = [Path(s) / name for s in args.sources if Path(s).is_dir() for name in SIMULATE_OUTPUTS]

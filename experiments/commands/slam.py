@@ -17,6 +17,7 @@ if TYPE_CHECKING:
     from slam import SlamConfig
 
 from experiments.logargs import add_log_options, read_log_options
+from experiments.overrides import check_set_once, extractor_overrides, set_option
 from experiments.options import (SLAM_OUTPUTS, SLAM_OWNER, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_simulate_finished, check_yaml,
                                  count, missing_message, positive, path_arg, text)
 
@@ -33,6 +34,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-paper-baseline", action="store_true",
                    help="with the default preset, do not also run the paper preset for the comparison table")
     p.add_argument("--extractor", type=text("an extraction method's name"), help="feature extraction method (default: the config's, 'sensor')")
+    p.add_argument("--set", dest="params", action="append", type=set_option, default=[], metavar="extractor.[METHOD.]FIELD=VALUE",
+                   help="override a field of the SLAM's extractor, as compare --set and sweeps spell it (repeatable; "
+                        "it joins the config's extractor_params)")
     p.add_argument("--association", choices=("nn", "jcbb"), help="paper preset: data association (default: the config's)")
     p.add_argument("--corners", action="store_true", help="paper preset: add corner landmarks")
     p.add_argument("--odometry", action="store_true",
@@ -101,6 +105,13 @@ def _config(args: argparse.Namespace):
         cfg = dataclasses.replace(cfg, **changes)
     except LmsbenchError as exc:
         raise InputError(f"{args.config}: {exc}" if args.config else str(exc)) from None
+    if args.params:  # --set extractor.FIELD=VALUE: compare's and the sweeps' spelling, into extractor_params
+        check_set_once(args.params)
+        overrides = extractor_overrides(dict(args.params), [cfg.extractor])[cfg.extractor]
+        try:
+            cfg = dataclasses.replace(cfg, extractor_params={**cfg.extractor_params, **overrides})
+        except LmsbenchError as exc:
+            raise InputError(f"--set: {exc}") from None
     if cfg.motion.use_odometry and args.no_odometry_baseline:  # it set nothing: the run itself uses the odometry
         raise InputError("--no-odometry-baseline: this run uses the odometry itself, so there is no separate "
                          "odometry baseline to leave out (--no-paper-baseline leaves out the paper preset's run)")

@@ -4,7 +4,7 @@ Parameters (flat, as in the sweep file): ``method``, ``world`` (default office),
 ``duration`` (s of simulated time), ``rate_hz`` (scans per second kept), ``sensor.*`` (fields of
 ``sim.SensorConfig``; ``sensor_file`` names a sensor YAML, e.g. from ``lmsbench calibrate``, that
 they override), ``extractor.*`` (the extractor's config fields), ``slam.*`` (fields of
-``slam.SlamConfig``; ``slam.extractor_params.NAME`` sets one entry of its extractor_params). Each returns a dict of scalar metrics.
+``slam.SlamConfig``; ``extractor.FIELD``, or the older ``slam.extractor_params.FIELD``, a field of the SLAM's extractor). Each returns a dict of scalar metrics.
 """
 
 from __future__ import annotations
@@ -82,10 +82,26 @@ def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
 
 def slam_config_dict(params: dict[str, Any]) -> dict[str, Any]:
     """The nested dict of ``SlamConfig.from_dict`` from a cell's flat ``slam.*`` parameters
-    (``slam.SECTION.FIELD`` -> ``{SECTION: {FIELD: value}}``, ``slam.extractor_params.NAME``)."""
+    (``slam.SECTION.FIELD`` -> ``{SECTION: {FIELD: value}}``) and the SLAM extractor's fields,
+    ``extractor.[METHOD.]FIELD`` as compare --set and extraction sweeps spell them (or the older
+    ``slam.extractor_params.NAME``; one field set both ways is refused).
+
+    Raises:
+        OverrideError: an ``extractor.*`` field the SLAM's extractor does not have, or set twice."""
+    from slam import SlamConfig
+
     slam_params = split_params(params, "slam")
     extractor_params = split_params(slam_params, "extractor_params")  # slam.extractor_params.NAME
     slam_params = {k: v for k, v in slam_params.items() if not k.startswith("extractor_params.")}
+    flat = {k: v for k, v in params.items() if k.startswith("extractor.")}
+    if flat:  # the one spelling: into the SLAM's extractor_params
+        method = str(slam_params.get("extractor", SlamConfig().extractor))
+        more = extractor_overrides(flat, [method])[method]
+        both = sorted(set(more) & set(extractor_params))
+        if both:
+            raise OverrideError(f"extractor.{both[0]} and slam.extractor_params.{both[0]} both set one field of the "
+                                "SLAM's extractor; give it once (extractor.FIELD)")
+        extractor_params = {**extractor_params, **more}
     if extractor_params:
         slam_params["extractor_params"] = extractor_params
     nested: dict[str, Any] = {}
@@ -297,8 +313,8 @@ def check_extract_params(cells: list[dict[str, Any]]) -> None:
 
 
 def check_slam_params(cells: list[dict[str, Any]]) -> None:
-    """Every ``sensor.*``, ``slam.*`` (``slam.SECTION.FIELD`` for the nested sections) and
-    ``slam.extractor_params.*`` name is a field of its config."""
+    """Every ``sensor.*``, ``slam.*`` (``slam.SECTION.FIELD`` for the nested sections),
+    ``extractor.*`` and ``slam.extractor_params.*`` name is a field of its config."""
     from slam import SlamConfig
 
     files = _read_sensor_files(cells)
@@ -310,7 +326,7 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
     _unknown(slam_cells, "slam", lambda c: (known, "slam.SlamConfig"))
     default = SlamConfig().extractor
     _unknown(cells, "slam.extractor_params", lambda c: _extractor_fields(str(c.get("slam.extractor", default))))
-    _check_plain(cells, SLAM_DEFAULTS, set(), ("sensor", "slam"))
+    _check_plain(cells, SLAM_DEFAULTS, set(), ("sensor", "slam", "extractor"))
     _check_sensors(cells, files)
     from lms200 import LmsbenchError
 
@@ -320,7 +336,10 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
 
     seen = set()
     for cell in cells:
-        nested = slam_config_dict(cell)
+        try:
+            nested = slam_config_dict(cell)
+        except OverrideError as exc:  # an extractor.* field the SLAM's extractor lacks, or set both ways
+            raise SweepSpecError(str(exc)) from None
         motion = nested.get("motion")
         if isinstance(motion, dict) and motion.get("use_odometry") is True:  # ran without it, the column saying True
             raise SweepSpecError("slam.motion.use_odometry: true, but the slam cells' simulated runs carry no "
