@@ -94,10 +94,18 @@ def _warm_up_slam(scan: Any) -> None:
     run_slam(records, SlamConfig())
 
 
+#: the heartbeats active now, outermost first: one inside another (the compile's inside the demo's)
+#: speaks for both while it has announced itself
+_ACTIVE: list["Heartbeat"] = []
+_ACTIVE_LOCK = threading.Lock()
+
+
 class Heartbeat:
     """While active, prints ``... LABEL: N s`` whenever nothing was said for ``every`` seconds
     (with ``first``: that line after ``first_after`` s, and nothing at all before it; with ``when``
-    as well, not before ``when()`` is true: the slow part has started).
+    as well, not before ``when()`` is true: the slow part has started). Inside another heartbeat
+    that has announced itself, it keeps quiet: the first demo printed "... demo: 5 s" and
+    "... compiling kernels: 5 s" together.
 
     Use ``beat.say(msg)`` for the step's own messages (they reset the timer) and ``beat.label =``
     to name the current step."""
@@ -124,15 +132,27 @@ class Heartbeat:
                 continue
             if now - self.last >= self.every:
                 self.last = now
-                self.log(f"   ... {self.label}: {now - self.start:.0f} s")
+                if not self._inner_speaking():
+                    self.log(f"   ... {self.label}: {now - self.start:.0f} s")
+
+    def _inner_speaking(self) -> bool:
+        """A heartbeat started inside this one has announced itself (it says the time for both)."""
+        with _ACTIVE_LOCK:
+            inner = _ACTIVE[_ACTIVE.index(self) + 1:] if self in _ACTIVE else []
+        return any(beat.announced for beat in inner)
 
     def __enter__(self) -> "Heartbeat":
+        with _ACTIVE_LOCK:
+            _ACTIVE.append(self)
         self._thread.start()
         return self
 
     def __exit__(self, *exc: object) -> None:
         self._stop.set()
         self._thread.join()
+        with _ACTIVE_LOCK:
+            if self in _ACTIVE:
+                _ACTIVE.remove(self)
 
 
 def heartbeat_on_terminal(label: str, first: str, stream: IO[str] | None = None, every: float = 4.0,

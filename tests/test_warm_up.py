@@ -111,6 +111,33 @@ def test_the_heartbeat_waits_for_its_condition() -> None:
     assert said == ["slow step ..."]
 
 
+def test_a_heartbeat_inside_another_speaks_for_both() -> None:
+    """The first demo printed '   ... demo: 5 s' and '   ... compiling kernels: 5 s' together (a new
+    user's review): the demo's heartbeat and the compile's, one inside the other, each on its own
+    clock. While the inner one has announced itself, the outer keeps quiet; after it, the outer
+    speaks again."""
+    import threading
+    import time
+
+    from experiments.progress import Heartbeat
+
+    said: list[str] = []
+    outer_spoke = threading.Event()
+
+    def log(msg: str) -> None:
+        said.append(msg)
+        if "outer" in msg:
+            outer_spoke.set()
+
+    with Heartbeat(log, "outer", every=0.3):
+        with Heartbeat(log, "inner", every=0.3):  # no first line: announced from the start
+            time.sleep(1.6)  # about six polls of each
+        inner = list(said)
+        assert outer_spoke.wait(10.0)  # generous: a loaded machine may run the polling thread late
+    assert inner and all("inner" in line for line in inner), inner
+    assert any("outer" in line for line in said[len(inner):]), said
+
+
 def test_sim2real_and_calibrate_beat_on_a_terminal_only() -> None:
     """sim2real ran 2-3 min at its defaults without a line on a terminal (calibrate 10-15 s); they
     now beat like the demo there, and stay silent off a terminal (stderr keeps an error's one line)."""
