@@ -53,7 +53,7 @@ ORDER_MARGIN = 0.03  # two methods this far apart on the real log must keep thei
 # mean's sd at 0.017-0.024, so seed sets 0-5 and 18-23 read up to 0.066 apart; 24 worlds of 30
 # scans bring it to 0.009-0.012 at twice the extractor work.
 DEFAULT_SEEDS = tuple(range(24))
-# Share of no-return readings that the mit preset's glass (0.1 panels per 10 m and clutter level)
+# Share of no-return readings that the mit preset's glass (0.1 panels per 10 m per clutter level)
 # gives: 3.1 % in `lmsbench sim2real` of MIT CSAIL at glass 0.1 (six seeds; the sensor there has no
 # other no-return: no_return_prob 0, cm mode, nothing beyond 81 m), rounded. Glass per 10 m
 # scales with the log's no-return share against it (glass_rate).
@@ -259,7 +259,7 @@ class Sim2RealResult:
     n_real: int
     n_sim: int
     checks: dict[str, Any]
-    glass: float | None = None  # the mit worlds' glass panels per 10 m and clutter level (glass_rate)
+    glass: float | None = None  # the mit worlds' glass panels per 10 m per clutter level (glass_rate)
     rough: RoughFit | None = None  # the mit worlds' rough fill fitted to the log (fit_rough)
     scale: ScaleFit | None = None  # the mit worlds' room size fitted to the log (fit_scale)
     relief: ReliefFit | None = None  # the mit worlds' wall relief fitted to the log (fit_relief)
@@ -809,7 +809,7 @@ def format_report(result: Sim2RealResult, log: str) -> str:
              + (f" ({result.limits_source})" if result.limits_source else "") + "; sensor: noise "
              f"{result.sensor.noise_sigma * 1000:.2f} mm, dropout {result.sensor.dropout_prob:.4f}, "
              f"spot {result.sensor.beam_width_deg:g} deg, outliers {result.sensor.outlier_prob:.4f}"
-             + ("" if result.glass is None else f"; glass {result.glass:g} panels per 10 m and clutter level")
+             + ("" if result.glass is None else f"; glass {result.glass:g} panels per 10 m per clutter level")
              + ("" if result.scale is None else
                 f"; rooms x{result.scale.scale:.2f}"
                 + _bound_note(result.scale.at_bound, result.scale.log_share, result.scale.probe_shares)
