@@ -502,11 +502,14 @@ def _first_line(start: str) -> Callable[[Path], bool]:
 
 
 def _slam_config(path: Path) -> bool:
-    """config.yaml as lmsbench slam writes it (slamrun.write_config): exactly input: and slam:
-    mappings, the slam one with a preset."""
+    """config.yaml as lmsbench slam writes it (slamrun.write_config): input: and slam: mappings,
+    the slam one with a preset, and nothing else but the records extractor_config: and versions:
+    (mappings; an earlier version wrote neither)."""
     raw = _yaml_mapping(path)
-    return (raw is not None and set(raw) == {"input", "slam"} and isinstance(raw["input"], dict)
-            and isinstance(raw["slam"], dict) and "preset" in raw["slam"])
+    records = ("extractor_config", "versions")  # experiments.slamrun.RECORD_KEYS (slamrun imports the slam package)
+    return (raw is not None and {"input", "slam"} <= set(raw) <= {"input", "slam", *records}
+            and isinstance(raw["input"], dict) and isinstance(raw["slam"], dict) and "preset" in raw["slam"]
+            and all(isinstance(raw[k], dict) for k in records if k in raw))
 
 
 @dataclass(frozen=True)

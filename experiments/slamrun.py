@@ -376,12 +376,24 @@ def write_scores(out: Path, data: SlamInput, slam_run: SlamRun) -> None:
 
 
 def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:
-    """config.yaml in ``out``: the input and the resolved SLAM config of the run; written first and
-    whole (provenance.write_record), as it tells ``out`` as an lmsbench slam folder: a run stopped
-    after its trajectory.tum, before config.yaml, left a folder the next run into it refused."""
+    """config.yaml in ``out``: the input, the SLAM config of the run, the extractor's resolved
+    config (every field of ``config.extractor``'s config, its defaults included: the SLAM config
+    holds only the overrides, ``extractor_params: {}`` for none) and the versions of the code and
+    libraries; written first and whole (provenance.write_record), as it tells ``out`` as an lmsbench
+    slam folder: a run stopped after its trajectory.tum, before config.yaml, left a folder the next
+    run into it refused. ``slam --config`` reads the slam: section back; the other two are records."""
     import yaml
 
-    write_record(out / "config.yaml", yaml.safe_dump({"input": data.sources, "slam": config.to_dict()}, sort_keys=False))
+    from experiments.compare import resolved_configs
+    from experiments.provenance import versions
+
+    extractor = resolved_configs([config.extractor], {config.extractor: config.extractor_params})[config.extractor]
+    record = {"input": data.sources, "slam": config.to_dict(), RECORD_KEYS[0]: extractor, RECORD_KEYS[1]: versions()}
+    write_record(out / "config.yaml", yaml.safe_dump(record, sort_keys=False))
+
+
+#: config.yaml's records beside input: and slam: (what ran, not settings: ``slam --config`` skips them)
+RECORD_KEYS = ("extractor_config", "versions")
 
 
 def _jsonable(value: Any) -> Any:

@@ -642,3 +642,30 @@ def test_a_reference_covering_part_of_the_run_is_said(sim_folder, tmp_path, caps
     assert json.loads((tmp_path / "o" / "metrics.json").read_text())["ate"]["n"] == 2
     assert main(["slam", str(sim_folder), *argv[:1], str(tmp_path / "o2"), *argv[2:]]) == 0
     assert "the ATE covers" not in capsys.readouterr().err
+
+
+def test_slam_config_yaml_holds_the_extractors_resolved_config_and_the_versions(sim_folder, tmp_path, capsys):
+    """Issue #16: every command writes the resolved config of what ran, sensor, extractor, SLAM and
+    versions. slam's config.yaml held `extractor_params: {}` (the overrides, none) and no
+    versions (an audit of the resolved issues). It now holds every field of the extractor's config
+    and the versions; `slam --config` on it reads the slam: section as before and runs the same."""
+    import dataclasses
+
+    import yaml
+
+    from experiments.cli import main
+    from features.registry import make_config
+
+    out = tmp_path / "run"
+    argv = ["--quiet", "--no-paper-baseline", "--max-scans", "15"]
+    assert main(["slam", str(sim_folder), "--out", str(out), *argv]) == 0
+    record = yaml.safe_load((out / "config.yaml").read_text())
+    assert list(record) == ["input", "slam", "extractor_config", "versions"]
+    assert record["extractor_config"] == dataclasses.asdict(make_config(record["slam"]["extractor"]))
+    assert record["extractor_config"]["k"] == 3 and record["extractor_config"]["sigma_r_cm"] == "auto"
+    assert {"lmsbench", "numpy", "numba", "gtsam", "python"} <= set(record["versions"])
+    again = tmp_path / "again"
+    assert main(["slam", str(sim_folder), "--config", str(out / "config.yaml"), "--out", str(again), *argv]) == 0
+    assert (again / "trajectory.tum").read_text() == (out / "trajectory.tum").read_text()
+    assert main(["slam", str(sim_folder), "--out", str(out), *argv]) == 0  # its own earlier folder: replaced
+    capsys.readouterr()

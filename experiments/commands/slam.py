@@ -73,7 +73,8 @@ def _config(args: argparse.Namespace):
         if not isinstance(raw, dict):
             raise LmsbenchError(f"{args.config}: expected a mapping of SLAM config fields")
         if "slam" in raw:  # a run's config.yaml: {input: ..., slam: {...}}
-            beside = sorted(str(k) for k in raw if k not in ("slam", "input"))
+            # a run's records of what ran (extractor_config:, versions:) are not settings: read past
+            beside = sorted(str(k) for k in raw if k not in ("slam", "input", "extractor_config", "versions"))
             if beside:  # they were ignored: `motion: {sigma_accel: 9}` beside `slam:` ran with 1.0
                 raise InputError(f"{args.config}: key(s) {beside} beside the slam: section would be ignored; "
                                  "put them under slam:")
