@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
 from experiments.options import DEMO_OUTPUTS, DEMO_OWNER, DURATION, SEED, InputError, check_log, check_out, positive, path_arg, world_name
@@ -40,5 +41,28 @@ def run(args: argparse.Namespace) -> int:
     executor = None if args.no_sweep else ("inprocess" if args.inprocess else "local")
     from experiments.provenance import new_run_folder
 
-    run_demo(args.out or new_run_folder("results/demo"), cfg, sweep_executor=executor)
+    if args.out is not None:
+        run_demo(args.out, cfg, sweep_executor=executor)
+        return 0
+    report = run_demo(new_run_folder(DEMO_BASE), cfg, sweep_executor=executor)
+    copy_report_up(report)
     return 0
+
+
+#: where the demo's runs go without --out, each in its own DATE_TIME folder, the newest linked as latest
+DEMO_BASE = "results/demo"
+
+
+def copy_report_up(report: Path) -> None:
+    """Copy the newest run's report to its base folder (``results/demo/report.md`` and
+    ``report.html``, the paths issue #8 names), the Markdown's relative links pointing into the run's
+    folder; the HTML embeds its figures already. Each run without --out replaces both."""
+    import re
+
+    from experiments.provenance import write_record
+
+    run = report.parent
+    text = re.sub(r"\]\((?![a-z]+:|/|#)([^)]+)\)", lambda m: f"]({run.name}/{m.group(1)})", report.read_text())
+    write_record(run.parent / "report.md", text)
+    write_record(run.parent / "report.html", (run / "report.html").read_text())
+    print(f"== copied the report to {run.parent / 'report.md'} and {run.parent / 'report.html'}")
