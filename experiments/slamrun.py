@@ -440,8 +440,11 @@ def plot(path: Path, data: SlamInput, res: SlamResult) -> None:
     ax.plot(xy[:, 0], xy[:, 1], color="#8c564b", lw=1.0, label="slam trajectory")
     if res.map_corners.size:
         c = al.apply(res.map_corners[:, :2])
-        ax.plot(c[:, 0], c[:, 1], "o", color="#2ca02c", ms=3, label="corner landmarks")
-    ax.plot([], [], color="#1f77b4", lw=1.5, label="line landmarks")
+        ax.plot(c[:, 0], c[:, 1], "o", color="#2ca02c", ms=3, label="map corners" if "keyframes" in res.diagnostics
+                else "corner landmarks")
+    # the paper preset's EKF keeps line landmarks; the default pipeline's lines are its keyframes' merged map
+    default_pipeline = "keyframes" in res.diagnostics
+    ax.plot([], [], color="#1f77b4", lw=1.5, label="map lines" if default_pipeline else "line landmarks")
     ax.set_title(f"{data.name}: {len(data.records)} scans, {res.map_lines.shape[0]} lines")
     ax.legend(loc="best")
     if equal_axes:

@@ -669,3 +669,22 @@ def test_slam_config_yaml_holds_the_extractors_resolved_config_and_the_versions(
     assert (again / "trajectory.tum").read_text() == (out / "trajectory.tum").read_text()
     assert main(["slam", str(sim_folder), "--out", str(out), *argv]) == 0  # its own earlier folder: replaced
     capsys.readouterr()
+
+
+@pytest.mark.parametrize("preset, label", [("default", "map lines"), ("paper", "line landmarks")])
+def test_slam_png_names_the_default_pipelines_lines_as_its_map(sim_folder, tmp_path, monkeypatch, preset, label):
+    """slam.png's legend said "line landmarks" for the default pipeline, whose lines are its
+    keyframes' merged map, not EKF landmarks (a new user's review); the paper preset keeps it."""
+    import matplotlib.figure
+
+    from experiments.cli import main
+
+    seen = []
+
+    def savefig(self, *args, **kwargs):
+        seen.extend(t.get_text() for ax in self.axes if ax.get_legend() for t in ax.get_legend().get_texts())
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", savefig)
+    assert main(["slam", str(sim_folder), "--preset", preset, "--max-scans", "12", "--no-paper-baseline", "--quiet",
+                 "--out", str(tmp_path / "o")]) == 0
+    assert label in seen and ({"map lines", "line landmarks"} - {label}).isdisjoint(seen)
