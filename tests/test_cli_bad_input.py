@@ -151,6 +151,11 @@ def files(tmp_path_factory):
     (d / "badcolon.yaml").write_text("noise_sigma: 0.1\n  x: : 3\n")
     (d / "badalias.yaml").write_text("noise_sigma: *nope\n")
     (d / "run_date.yaml").write_text("world: office\nseed: 2025-02-30\nduration: 2\n")  # an internal ValueError
+    # YAML 1.1 numbers: seed 90 and seed 8 simulated, 181 beams, k 10 swept, silently
+    (d / "run_sexagesimal.yaml").write_text("world: office\nseed: 1:30\nduration: 2\n")
+    (d / "run_octal.yaml").write_text("world: office\nseed: 010\nduration: 2\n")
+    (d / "sensor_underscore.yaml").write_text("n_beams: 18_1\nresolution_deg: 1.0\n")
+    (d / "sweep_underscore.yaml").write_text("name: k\nkind: extract\ngrid:\n  extractor.k: [1_0]\n")
     (d / "simbadyaml").mkdir()
     (d / "simbadyaml" / "config.yaml").write_text("sensor: {noise_sigma: 0.005\n")
     write_log(d / "simbadyaml" / "scans.clf", good)
@@ -502,6 +507,16 @@ CASES = [
      "'2025-02-30' is not a valid date or time (day is out of range for month))"),
     (["slam", "{good.clf}", "--config", "{run_date.yaml}", "--out", O], "run_date.yaml: not valid YAML (line 2, column 7: "),
     (["sweep", "{run_date.yaml}", "--out", O], "run_date.yaml: not valid YAML: line 2, column 7: '2025-02-30' is not"),
+    (["simulate", "--config", "{run_sexagesimal.yaml}", "--out", O], "run_sexagesimal.yaml: not valid YAML (line 2, column 7: "
+     "key 'seed': 1:30 is read as 90: YAML 1.1 reads digits between colons in base 60 (a time or an angle); write the "
+     "number as a plain decimal, or quote it ('1:30') for text)"),
+    (["simulate", "--config", "{run_octal.yaml}", "--out", O], "run_octal.yaml: not valid YAML (line 2, column 7: key 'seed': "
+     "010 is read as 8: YAML 1.1 reads a whole number with a leading 0 in octal"),
+    (["simulate", "--sensor", "{sensor_underscore.yaml}", "--world", "office", "--seed", "0", "--duration", "1", "--out", O],
+     "sensor_underscore.yaml: not valid YAML (line 1, column 10: key 'n_beams': 18_1 is read as 181: YAML 1.1 drops a "
+     "number's underscores"),
+    (["sweep", "{sweep_underscore.yaml}", "--out", O], "sweep_underscore.yaml: not valid YAML: line 4, column 17: key "
+     "'extractor.k', item 1: 1_0 is read as 10"),
     # configs and sweep files over 1 MiB: refused unread (a 1.5 MB sweep file took 81 s to be refused)
     (["sweep", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576 a config or sweep file "
      "may hold (refused unread"),
