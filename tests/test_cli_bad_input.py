@@ -135,6 +135,9 @@ def files(tmp_path_factory):
     (d / "sensor_flag.yaml").write_text("quantise: 3\n")
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
     (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
+    (d / "sensor_cm.yaml").write_text("n_beams: 361\nresolution_deg: 0.5\nunits: cm\nnoise_sigma: 0.44\n")  # cm meant
+    (d / "sensor_slope_mm.yaml").write_text("noise_sigma: 0.005\nnoise_sigma_per_m: 0.5\n")  # mm per m meant
+    (d / "sensor_gap_cm.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 10\n")  # cm meant: no mixed pixel at all
     (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
     (d / "sensor_cap.yaml").write_text("max_reading: 1.0e-320\n")  # every reading logged as 1e-320 m
     laughs = "[" + ", ".join(["&c0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]"] + [f"&c{i} [" + ", ".join([f"*c{i - 1}"] * 10) + "]"
@@ -258,7 +261,15 @@ CASES = [
     (["simulate", "--config", "{run_bool.yaml}", "--out", O], "run_bool.yaml: not a simulate config (duration: must be a number, got True)"),
     (["simulate", "--config", "{run_list.yaml}", "--out", O], "(duration: must be a number, got [2])"),
     (["simulate", "--config", "{run_robot.yaml}", "--out", O], "(robot: must be a mapping of fields, got 5)"),
-    (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 1] m"),
+    (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 0.1] m"),
+    # a calibrated sensor with its noise in cm (MIT CSAIL's 4.4 mm as 0.44): sim2real compared the log
+    # against 0.44 m of noise ("sensor: noise 440.00 mm", largest gap 0.514), exit 0
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_cm.yaml}", "--out", O], "sensor_cm.yaml: noise_sigma: must be in [0, "
+     "0.1] m (a 1-sigma range error in metres; the datasheet's is 0.005: a value in mm or cm is refused), got 0.44"),
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_slope_mm.yaml}", "--out", O], "sensor_slope_mm.yaml: noise_sigma_per_m: "
+     "must be within +-0.05 m per m of range (metres of noise per metre; real logs' are below 0.001), got 0.5"),
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_gap_cm.yaml}", "--out", O], "sensor_gap_cm.yaml: mixed_gap: must be in "
+     "[0, 1] m (a depth step in metres; the default is 0.1), got 10"),
     (["compare", "office", "--sensor", "{sensor_fine.yaml}", "--out", O], "sensor_fine.yaml: resolution_deg"),
     (["sim2real", "{good.clf}", "--sensor", "{sensor_dup.yaml}", "--out", O], "sensor_dup.yaml: not valid YAML (key 'noise_sigma' given twice"),
     # compare
