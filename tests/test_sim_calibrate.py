@@ -330,6 +330,25 @@ def test_a_failed_write_leaves_the_earlier_sensor_yaml_whole(tmp_path: Path, mon
     assert sorted(p.name for p in tmp_path.iterdir()) == ["log.clf", "sensor.yaml"]  # no temporary file left
 
 
+def test_calibrate_without_out_prints_one_valid_sensor_yaml(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`calibrate LOG > S.yaml`, the obvious use of "(default: print it)", wrote the summary's lines
+    above the YAML, and `simulate --sensor S.yaml` refused it ('not valid YAML (line 4, ...)'). The
+    summary is now the YAML's comments: stdout reads as the same sensor as `--out` writes."""
+    from experiments.cli import main
+    from experiments.calibrate import HEADER_START
+
+    write_carmen(tmp_path / "log.clf", simulate_records("office", seed=0, duration=2.0, sensor=SensorConfig(), rate_hz=4.0))
+    assert main(["calibrate", str(tmp_path / "log.clf"), "--max-scans", "6", "--out", str(tmp_path / "out.yaml")]) == 0
+    summary = [line for line in capsys.readouterr().out.splitlines() if not line.startswith("wrote ")]
+    assert main(["calibrate", str(tmp_path / "log.clf"), "--max-scans", "6"]) == 0
+    printed = capsys.readouterr().out
+    (tmp_path / "printed.yaml").write_text(printed)
+    assert printed.startswith(HEADER_START)
+    assert SensorConfig.from_yaml(tmp_path / "printed.yaml") == SensorConfig.from_yaml(tmp_path / "out.yaml")
+    assert yaml.safe_load(printed) == yaml.safe_load((tmp_path / "out.yaml").read_text())
+    assert len(summary) > 5 and all(f"# {line}".rstrip() in printed.splitlines() for line in summary)
+
+
 @pytest.mark.parametrize("args, message", [
     (["calibrate", "missing.clf"], "no such log"),
     (["calibrate", "log.clf", "--stride", "0"], "--stride"),
