@@ -1205,3 +1205,18 @@ def test_a_sweeps_own_big_sweep_yaml_is_read_for_its_plots(tmp_path):
     pd.DataFrame({"extractor.ad_tau": [1.0], "status": ["ok"], "error": [""], "cell": ["a"], "seed": [0]}).to_parquet(
         tmp_path / "results.parquet")
     assert check_sweep_results(tmp_path) == tmp_path
+
+
+@pytest.mark.parametrize("with_out", [True, False])
+def test_demo_refuses_a_log_that_does_not_read_before_it_makes_its_folder(with_out, tmp_path, monkeypatch, capsys):
+    """`demo --log run/groundtruth.tum` (a file, not a log) made results/demo/DATE_TIME and moved
+    results/demo/latest to it, empty, before the study refused the file (or left --out X behind,
+    empty): the earlier good report was no longer "latest". The log's first lines are read first."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "groundtruth.tum").write_text("0.0 0 0 0 0 0 0 1\n0.1 0.1 0 0 0 0 0 1\n")
+    out = ["--out", str(tmp_path / "x")] if with_out else []
+    assert run_main(["demo", "--log", "groundtruth.tum", "--no-sweep", "--duration", "1", *out]) == 2
+    captured = capsys.readouterr()
+    (line,) = captured.err.strip().splitlines()
+    assert "groundtruth.tum:1: not a CARMEN log" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["groundtruth.tum"]  # no results/, no x/
