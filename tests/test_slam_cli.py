@@ -186,6 +186,34 @@ def test_slam_refuses_a_world_json_wall_simulate_and_compare_refuse_before_the_r
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("name, content, message", [
+    ("groundtruth.tum", None, "{f} is a folder, not a TUM file"),
+    ("world.json", None, "{f} is a folder, not a world.json"),
+    ("world.json", "[1, 2]", "{f}: no wall list (list indices must be integers or slices, not str)"),
+    ("world.json", "null", "{f}: no wall list ('NoneType' object is not subscriptable)"),
+    ("world.json", '{"walls": {"a": 1}}', "{f}: no wall list (float() argument must be a string or a real number, not 'dict')"),
+])
+def test_a_simulate_folder_whose_truth_or_world_is_a_folder_or_no_mapping_is_refused(sim_folder, tmp_path, capsys,
+                                                                                    name, content, message):
+    """The wrong-input hunt: a groundtruth.tum or world.json that is a folder was passed over (is_file()),
+    so slam ran without the truth's or the map's scores, exit 0, and said nothing; a world.json
+    holding a JSON list, null or a mapping of walls was 'internal error: TypeError', exit 1."""
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    (run / name).unlink()
+    if content is None:
+        (run / name).mkdir()
+    else:
+        (run / name).write_text(content)
+    assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet", "--max-scans", "5"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [f"lmsbench slam: error: {message.format(f=run / name)}"]
+    assert not (tmp_path / "o").exists()
+
+
 def test_slam_command_errors_are_one_line(tmp_path, capsys):
     from experiments.cli import main  # in process: the subprocess test above covers the real command line
 
