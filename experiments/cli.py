@@ -5,8 +5,10 @@ Known errors (``lms200.LmsbenchError``, any ``OSError``: missing files, bad path
 schedulers or devices) and bad options become one-line messages ``lmsbench CMD: error: ...`` with
 exit status 2; Ctrl-C exits with 130 and one line, within INTERRUPT_GRACE_S even when a cleanup
 (closing a Dask cluster whose workers are in the middle of cells) would take longer; SIGTERM (``kill``,
-a batch system's time limit) stops the same way, with 143 and "terminated". Anything else is a bug: one line saying so,
-exit status 1 (``LMSBENCH_TRACEBACK=1`` shows the traceback).
+a batch system's time limit) stops the same way, with 143 and "terminated". An exception raised by the user's own code that a
+command runs (a ``--methods MODULE:FUNCTION`` extractor: ``experiments.user_methods.UserMethodFailed``)
+is a user error too, named as such (exit 2; ``LMSBENCH_TRACEBACK=1`` shows its traceback). Anything
+else is a bug: one line saying so, exit status 1 (``LMSBENCH_TRACEBACK=1`` shows the traceback).
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import _thread
 import signal
 import sys
 import threading
+import traceback
 from typing import Any, Sequence
 
 from features.batch import default_threads
@@ -216,7 +219,9 @@ def _main(argv: Sequence[str] | None) -> int:
             stopped = not done and _writes_outputs(args) and not getattr(args, "outputs_complete", False)
             return _stdout_gone(name, stopped, getattr(args, "out", None))
         _end_progress_bars()
-        print(f"lmsbench {name}: error: {_one_line(exc)}{_skip_hint(exc, args)}", file=sys.stderr)
+        if _users_code(exc) and os.environ.get("LMSBENCH_TRACEBACK"):
+            traceback.print_exception(exc)  # the user's exception first, then where lmsbench called it
+        print(f"lmsbench {name}: error: {_one_line(exc)}{_skip_hint(exc, args)}{_traceback_hint(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return _interrupted(interrupt)
@@ -368,6 +373,20 @@ def _skip_hint(exc: BaseException, args: argparse.Namespace) -> str:
     if exc.reason.startswith("cannot read on"):
         return " (--skip-bad-lines keeps the scans before the damage)"
     return ""
+
+
+def _users_code(exc: BaseException) -> bool:
+    """Whether ``exc`` is an exception raised by the user's own code that lmsbench ran (a
+    ``--methods MODULE:FUNCTION`` extractor): a user error, said in one line with exit status 2 (it
+    was "internal error: ... (a bug in lmsbench ...)", exit 1), its traceback under LMSBENCH_TRACEBACK=1."""
+    from experiments.user_methods import UserMethodFailed
+
+    return isinstance(exc, UserMethodFailed) and exc.raised
+
+
+def _traceback_hint(exc: BaseException) -> str:
+    """Where the traceback of the user's own code's exception is to be had."""
+    return " (LMSBENCH_TRACEBACK=1 shows its traceback)" if _users_code(exc) and not os.environ.get("LMSBENCH_TRACEBACK") else ""
 
 
 def _one_line(exc: BaseException) -> str:

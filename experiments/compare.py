@@ -405,7 +405,7 @@ def compare(
         alpha_err_mean / alpha_err_rms (rad), endpoint_err_mean (m), n_truth_corners, corner_tp,
         corner_fp, corner_fn, corner_err_mean (m).
     """
-    from experiments.user_methods import ensure_method
+    from experiments.user_methods import UserMethodFailed, ensure_method
 
     methods = list(methods) if methods else available_methods()
     for m in methods:
@@ -435,13 +435,19 @@ def compare(
             n_valid = int(np.count_nonzero(scan.valid))
             exact = _truth_row(truth, scan, sigma_r, rd_cfg) if truth is not None else {}
             shift = k % len(runs)
-            if not warmed:  # first calls load compiled kernels and fill caches: not timed
-                for _, fn, cfg in src_runs:
-                    fn(scan, cfg)
-                warmed = True
+            try:
+                if not warmed:  # first calls load compiled kernels and fill caches: not timed
+                    for _, fn, cfg in src_runs:
+                        fn(scan, cfg)
+                    warmed = True
+            except UserMethodFailed as exc:  # a user's MODULE:FUNCTION failed: say on which scan
+                raise exc.at(source_label(src), k)
             for name, fn, cfg in src_runs[shift:] + src_runs[:shift]:
                 t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
-                fs = fn(scan, cfg)
+                try:
+                    fs = fn(scan, cfg)
+                except UserMethodFailed as exc:
+                    raise exc.at(source_label(src), k)
                 c1, t1 = time.thread_time_ns(), time.perf_counter_ns()
                 elapsed, cpu = t1 - t0, c1 - c0
                 explained, range_rms = explained_fraction(fs, scan, sigma_r)
@@ -468,6 +474,12 @@ def compare(
     if not table.empty:
         table.insert(table.columns.get_loc("microseconds") + 1, "time_ms", table["microseconds"] / 1e3)
     return table
+
+
+def source_label(src: Source) -> str:
+    """How a message names ``src``: a world with its seed as on the command line (``office:3``),
+    else its name (a simulate folder's or a log's)."""
+    return f"{src.name}:{src.seed}" if src.name in WORLD_NAMES and src.seed is not None else src.name
 
 
 def _source_sigma(src: Source, sigma: float | str) -> float:

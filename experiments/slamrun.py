@@ -22,6 +22,7 @@ from lms200.records import Record
 from lms200.yamlio import load as load_yaml
 from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished
 from experiments.provenance import write_record
+from experiments.user_methods import scans_of
 from slam import SlamConfig, SlamResult, run_slam
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
 
@@ -254,7 +255,8 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
 
         records = tqdm(data.records, desc="slam", unit="scan", leave=False, disable=None)  # terminal only
     t0, c0 = time.perf_counter(), time.process_time()
-    result = run_slam(records, config)
+    with scans_of(data.name, data.records):  # a user's --extractor MODULE:FUNCTION that fails names its scan
+        result = run_slam(records, config)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     if out is not None:
         earlier = earlier_run_files(out) if replace_earlier and out.is_dir() else set()  # before this run writes
@@ -269,14 +271,16 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     if paper_baseline and config.preset == "default":
         c1 = time.process_time()
         paper_config = dataclasses.replace(config, preset="paper")  # the same motion input as the run
-        paper = run_slam(data.records, paper_config)
+        with scans_of(data.name, data.records):
+            paper = run_slam(data.records, paper_config)
         table.append({"source": _source_name(paper_config), **_flat(score(paper.trajectory, data, paper)),
                       "cpu_scans_per_s": len(data.records) / max(time.process_time() - c1, 1e-9)})
     odo = data.odometry
     if odo is not None:
         table.append({"source": "raw odometry", **_flat(score(odo, data))})
         if odometry_baseline and not config.motion.use_odometry:
-            with_odo = run_slam(data.records, dataclasses.replace(config, preset="paper", motion=dataclasses.replace(config.motion, use_odometry=True)))
+            with scans_of(data.name, data.records):
+                with_odo = run_slam(data.records, dataclasses.replace(config, preset="paper", motion=dataclasses.replace(config.motion, use_odometry=True)))
             table.append({"source": "paper preset (odometry)", **_flat(score(with_odo.trajectory, data, with_odo))})
     consistency = {
         "diverged": bool(d["diverged"]),
