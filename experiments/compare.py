@@ -105,9 +105,11 @@ def _truth_in(world: Any, sensor: Any) -> Callable[[Record], Any]:
 
 
 def is_simulation_folder(path: str | Path) -> bool:
-    """A ``lmsbench simulate`` output folder (scans.clf and world.json)."""
-    p = Path(path)
-    return p.is_dir() and (p / "scans.clf").is_file() and (p / "world.json").is_file()
+    """A ``lmsbench simulate`` output folder (``options.simulate_log``) with its world.json, whose
+    scans are scored against their truth (without it, its scans.clf is compared as a log)."""
+    from experiments.options import simulate_log
+
+    return simulate_log(path) is not None and (Path(path) / "world.json").is_file()
 
 
 def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = None) -> Source:
@@ -255,7 +257,9 @@ def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: f
             if not Path(spec).exists():
                 raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}), a simulate folder "
                                     "nor an existing log")
-            out.append(log_source(spec, stride, max_scans, read_options, poses))
+            from experiments.options import simulate_log
+
+            out.append(log_source(simulate_log(spec) or spec, stride, max_scans, read_options, poses))
     return out
 
 
@@ -306,7 +310,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
             hint = f" (did you mean {close[0]}?)" if close else ""
             raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}){hint}, a simulate folder "
                                 "nor an existing log")
-        check_log(spec)
+        spec = str(check_log(spec))  # a simulate folder without world.json: its scans.clf, as a log
         # each log's figure is named by its file name made safe (figures.realdata.figure_stem): "a b.clf" and
         # "a_b.clf" both wrote realdata_a_b_clf.*, the second over the first ("ä.clf" and "ö.clf": realdata__clf)
         from experiments.figures.realdata import figure_stem

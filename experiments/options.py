@@ -324,10 +324,28 @@ def check_simulate_finished(path: str | os.PathLike) -> None:
                              f"cut short or an earlier run's; {rerun}")
 
 
+def simulate_log(path: str | os.PathLike) -> Path | None:
+    """The log of a ``lmsbench simulate`` output folder, its scans.clf (a CARMEN log with the true
+    poses), or None when ``path`` is not such a folder. The one test of every command that reads a
+    log: slam and compare took a simulate folder, info, calibrate, sim2real, figures --log and
+    lms200 emulate --log said it was "a folder but not a ROS 2 bag"."""
+    p = Path(path)
+    log = p / "scans.clf"
+    return log if p.is_dir() and log.is_file() else None
+
+
+def not_a_log_folder(path: str | os.PathLike) -> str:
+    """The message of a folder given as a log that is neither kind of folder a log may be."""
+    return (f"{path} is a folder but neither a ROS 2 bag (no metadata.yaml) nor a lmsbench simulate folder "
+            "(no scans.clf)")
+
+
 def check_log(path: str | os.PathLike) -> Path:
-    """A CARMEN log (plain text, or compressed with gzip, bzip2 or xz), a ROS 1 ``.bag`` or a ROS 2 bag folder, by its content:
-    a binary file, an archive, a plain file named ``.gz``, a folder without ``metadata.yaml`` are errors;
-    so is the scans.clf (or folder) of a ``lmsbench simulate`` run that did not finish (check_simulate_finished)."""
+    """The log to read for ``path``, checked: a CARMEN log (plain text, or compressed with gzip,
+    bzip2 or xz), a ROS 1 ``.bag``, a ROS 2 bag folder, or a ``lmsbench simulate`` folder (its
+    scans.clf is returned: :func:`simulate_log`), by its content: a binary file, an archive, a
+    plain file named ``.gz``, a folder that is neither kind are errors; so is the scans.clf (or
+    folder) of a ``lmsbench simulate`` run that did not finish (check_simulate_finished)."""
     if not str(path).strip():  # Path("") is the current folder
         raise InputError(f"empty path {str(path)!r} given as a log; give {'a CARMEN log, ROS 1 .bag or ROS 2 bag folder'}")
     p = Path(path)
@@ -335,10 +353,13 @@ def check_log(path: str | os.PathLike) -> Path:
     what = "a CARMEN log, ROS 1 .bag or ROS 2 bag folder"
     if not p.exists():
         raise InputError(missing_message(p, "log"))
+    sim_log = simulate_log(p)
+    if sim_log is not None:
+        return check_log(sim_log)
     if p.is_dir():
         meta = p / "metadata.yaml"
         if not meta.is_file():
-            raise InputError(f"{p} is a folder but not a ROS 2 bag (no metadata.yaml)")
+            raise InputError(not_a_log_folder(p))
         _text_head(meta, "a ROS 2 bag's metadata.yaml")
         try:  # rosbags said "Could not load YAML ... in "<unicode string>", line 1, ..." over several lines
             info = load_yaml(meta.read_text(encoding="utf-8"))

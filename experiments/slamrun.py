@@ -20,7 +20,7 @@ import numpy as np
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml
-from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished
+from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished, not_a_log_folder, simulate_log
 from experiments.provenance import write_record
 from experiments.user_methods import scans_of
 from slam import SlamConfig, SlamResult, run_slam
@@ -75,7 +75,7 @@ def simulated_interlaced(path: str | Path) -> bool | None:
     """The ``sensor.interlaced`` of a simulator output folder's config.yaml (None: not a simulator
     folder, or the file does not say)."""
     cfg = Path(path) / "config.yaml"
-    if not (Path(path).is_dir() and (Path(path) / "scans.clf").is_file() and cfg.is_file()):
+    if simulate_log(path) is None or not cfg.is_file():
         return None
     try:
         raw = load_yaml(cfg.read_text())
@@ -113,8 +113,9 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     sources: dict[str, str] = {}
     truth = walls = rel = None
     check_simulate_finished(p)
-    if p.is_dir() and (p / "scans.clf").is_file():
-        log = p / "scans.clf"
+    sim_log = simulate_log(p)
+    if sim_log is not None:
+        log = sim_log
         if (p / "groundtruth.tum").is_file():
             stamps, poses = read_tum(p / "groundtruth.tum")
             truth = np.column_stack((stamps, poses))
@@ -133,7 +134,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
                 raise LmsbenchError(f"{p / 'world.json'}: not a world.json (walls: must be finite numbers within "
                                     f"+-{MAX_COORD_M:g} m)")
     elif p.is_dir() and not (p / "metadata.yaml").is_file():
-        raise LmsbenchError(f"{p}: a folder input must hold scans.clf (a simulator output) or be a ROS 2 bag")
+        raise LmsbenchError(not_a_log_folder(p))
     else:
         log = p
     sources["scans"] = str(log)

@@ -29,7 +29,7 @@ def run(args: argparse.Namespace) -> int:
     from experiments.progress import heartbeat_on_terminal
 
     read_options = read_log_options(args)
-    check_log(args.log)
+    args.log = check_log(args.log)  # a simulate folder: its scans.clf
     check_out_file(args.out)
     if args.out is not None:  # 'calibrate LOG --out LOG' wrote the YAML over the log it had just read
         if args.out.suffix.lower() not in (".yaml", ".yml"):

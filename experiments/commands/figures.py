@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--world", type=world_name, help="simulated world: a built-in world name; lmsbench simulate --help lists them (default office)")
     p.add_argument("--methods", nargs="+", type=text("an extractor's name"), help="extractors to compare (default: all five)")
     p.add_argument("--intel", "--log", dest="intel", type=path_arg,
-                   help="CARMEN log or bag for Fig. 9 (--log as in demo; default: shared/data/carmen/"
+                   help="CARMEN log, bag or lmsbench simulate folder for Fig. 9 (--log as in demo; default: shared/data/carmen/"
                    "intel-corrected.log.gz beside the checkout, where present)")
     p.add_argument("--no-slam", action="store_true", help="skip the SLAM run and Fig. 10")
     add_log_options(p)  # for the real log of Fig. 9
