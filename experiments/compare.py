@@ -32,7 +32,7 @@ from features.realdata import RealDataConfig, repeat_counts, scan_measures, trut
 from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
 
-WORLD_NAMES = ("office", "corridor", "angles", "pillars", "random", "cluttered", "mit")  # == sim.WORLD_NAMES (sim loads lazily)
+from experiments.options import known_worlds  # sim.WORLD_NAMES, the simulator imported when first asked
 
 
 @dataclass
@@ -222,7 +222,7 @@ def log_noise_estimates(scans: Callable[[], Iterable[Any]]) -> dict[str, Callabl
 def world_words(specs: Sequence[str]) -> list[str]:
     """The source words that name a simulated world (``office``, ``office:1``), told by name as
     ``parse_sources`` reads them (a folder named ``office`` does not make ``office`` a file)."""
-    return [s for s in specs if s.partition(":")[0] in WORLD_NAMES]
+    return [s for s in specs if s.partition(":")[0] in known_worlds()]
 
 
 def _check_seed(spec: str, seed: str) -> None:
@@ -246,7 +246,7 @@ def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: f
     out: list[Source] = []
     for spec in specs:
         name, colon, seed = spec.partition(":")
-        if name in WORLD_NAMES:
+        if name in known_worlds():
             if colon:
                 _check_seed(spec, seed)
             for s in ([int(seed)] if colon else seeds):
@@ -255,7 +255,7 @@ def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: f
             out.append(folder_source(spec, stride, max_scans))
         else:
             if not Path(spec).exists():
-                raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}), a simulate folder "
+                raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(known_worlds())}), a simulate folder "
                                     "nor an existing log")
             from experiments.options import simulate_log
 
@@ -277,7 +277,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
     stems: dict[str, str] = {}  # a log's figure name (realdata_STEM) -> the word that gave it
     for spec in specs:
         name, colon, seed = spec.partition(":")
-        world = name in WORLD_NAMES  # as parse_sources reads it
+        world = name in known_worlds()  # as parse_sources reads it
         if world and colon:
             _check_seed(spec, seed)
         label = name if world else Path(spec).name
@@ -306,9 +306,9 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
                 raise LmsbenchError(f"{spec}/world.json: not a world ({type(exc).__name__}: {exc})") from None
             spec = str(Path(spec) / "scans.clf")
         elif not Path(spec).exists() and not Path(spec).is_symlink():  # a link to nothing: check_log says so
-            close = [w for w in WORLD_NAMES if _close(w, name)]
+            close = [w for w in known_worlds() if _close(w, name)]
             hint = f" (did you mean {close[0]}?)" if close else ""
-            raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}){hint}, a simulate folder "
+            raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(known_worlds())}){hint}, a simulate folder "
                                 "nor an existing log")
         spec = str(check_log(spec))  # a simulate folder without world.json: its scans.clf, as a log
         # each log's figure is named by its file name made safe (figures.realdata.figure_stem): "a b.clf" and
@@ -483,7 +483,7 @@ def compare(
 def source_label(src: Source) -> str:
     """How a message names ``src``: a world with its seed as on the command line (``office:3``),
     else its name (a simulate folder's or a log's)."""
-    return f"{src.name}:{src.seed}" if src.name in WORLD_NAMES and src.seed is not None else src.name
+    return f"{src.name}:{src.seed}" if src.name in known_worlds() and src.seed is not None else src.name
 
 
 def _source_sigma(src: Source, sigma: float | str) -> float:

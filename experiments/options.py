@@ -35,6 +35,28 @@ def known_worlds() -> tuple[str, ...]:
     return tuple(WORLD_NAMES)
 
 
+#: written in an option's help text, replaced by the simulator's world names (known_worlds) when the
+#: help is shown: ``compare --help`` listed five of the seven worlds, written out by hand; the names
+#: are not read when the parsers are built (that imports the simulator, for every command)
+WORLDS = "{worlds}"
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """argparse's help, with WORLDS in a help text filled in."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = super()._get_help_string(action)
+        if not text or WORLDS not in text:
+            return text
+        from lms200 import LmsbenchError
+
+        try:
+            names = ", ".join(known_worlds())
+        except LmsbenchError:  # the simulator cannot load (numba missing): its error comes when it is used
+            names = "a built-in world's name"
+        return text.replace(WORLDS, names)
+
+
 #: a quoted value of 80 characters or more: the opening quote not after a letter or digit, the closing
 #: one not before one, so an apostrophe ("don't", "the log's") is not taken for a quote (the text
 #: between it and a value's opening quote was cut instead of the value)
@@ -55,6 +77,7 @@ class OneLineParser(argparse.ArgumentParser):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("allow_abbrev", False)
+        kwargs.setdefault("formatter_class", HelpFormatter)
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> None:  # type: ignore[override]

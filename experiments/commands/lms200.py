@@ -18,7 +18,7 @@ from lms200.virtual import MAX_TIME_SCALE
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import (PORT, SEED, InputError, check_log, check_out_file, count, number, path_arg, positive, text,
+from experiments.options import (WORLDS, PORT, SEED, InputError, check_log, check_out_file, count, number, path_arg, positive, text,
                                  world_name)
 
 
@@ -29,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     cmds = p.add_subparsers(dest="lms200_command", metavar="ACTION")
 
     e = cmds.add_parser("emulate", help="serve a virtual LMS200 on a pseudo-terminal (or TCP); prints its path / URL")
-    e.add_argument("--world", type=world_name, help="simulator world to scan (a built-in world name; lmsbench simulate --help lists them; default office)")
+    e.add_argument("--world", type=world_name, help="simulator world to scan: " + WORLDS + " (default office)")
     e.add_argument("--seed", type=SEED, help="seed of the world and the sensor noise (default 0)")
     e.add_argument("--log", type=path_arg, help="replay this log (CARMEN, bag or lmsbench simulate folder) instead of the simulator, in a loop")
     e.add_argument("--tcp", type=PORT, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")
