@@ -70,6 +70,22 @@ def shorten_quoted(message: str) -> str:
     return _LONG_QUOTED.sub(lambda m: f"'{m[1][:40]}...{m[1][-8:]}' ({len(m[1])} characters)", message)
 
 
+UNRECOGNIZED = "unrecognized arguments: "  # argparse's message of words no option or argument took
+NEAR_MISS_EDITS = 2  # edits (edits()) within which an unknown option of five letters or more is a near miss of a known one
+
+
+def edits(a: str, b: str) -> int:
+    """The fewest single-letter insertions, deletions, substitutions and swaps of neighbours that
+    turn ``a`` into ``b`` (optimal string alignment distance)."""
+    d = [[i + j if i * j == 0 else 0 for j in range(len(b) + 1)] for i in range(len(a) + 1)]
+    for i in range(1, len(a) + 1):
+        for j in range(1, len(b) + 1):
+            d[i][j] = min(d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] != b[j - 1]))
+            if i > 1 and j > 1 and a[i - 1] == b[j - 2] and a[i - 2] == b[j - 1]:
+                d[i][j] = min(d[i][j], d[i - 2][j - 2] + 1)
+    return d[len(a)][len(b)]
+
+
 class OneLineParser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line, ``PROG: error: MESSAGE``, exit status 2
     (argparse's own prints the usage first). Options are spelled out: no abbreviations (``--dur 3``
@@ -81,7 +97,37 @@ class OneLineParser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> None:  # type: ignore[override]
+        if message.startswith(UNRECOGNIZED):
+            message += self.near_misses(message[len(UNRECOGNIZED):].split())
         self.exit(2, f"{self.prog}: error: {shorten_quoted(message)} (see {self.prog} --help)\n")
+
+    def near_misses(self, words: Sequence[str]) -> str:
+        """"; did you mean --seeds?" for the unrecognized option ``words`` that are a near miss of
+        one of this parser's options (``compare --seed 1``: simulate and demo take --seed, compare
+        and sim2real --seeds; argparse 3.11 says only "unrecognized arguments"), or "" for none:
+        the start of exactly one option (abbreviations are not taken: ``--dur``), else within
+        NEAR_MISS_EDITS edits (a letter added, left out, changed, or two swapped; one for names of
+        up to four letters)."""
+        options = [o for o in self._option_string_actions if o.startswith("--")]
+        pairs = []
+        for word in words:
+            name = word.split("=", 1)[0]
+            if not name.startswith("-") or name in ("-", "--") or name in self._option_string_actions:
+                continue
+            bare = name.lstrip("-")  # -seeds, ---seeds
+            starts = [o for o in options if o.startswith("--" + bare)] if len(bare) > 1 else []
+            if len(starts) == 1:
+                pairs.append((name, starts[0]))
+                continue
+            allowed = 1 if len(bare) <= 4 else NEAR_MISS_EDITS
+            distance, best = min(((edits(bare, o[2:]), o) for o in options), default=(allowed + 1, ""))
+            if distance <= allowed:
+                pairs.append((name, best))
+        if not pairs:
+            return ""
+        if len(pairs) == 1:
+            return f"; did you mean {pairs[0][1]}?"
+        return "; did you mean " + ", ".join(f"{right} for {wrong}" for wrong, right in pairs) + "?"
 
     def parse_known_args(self, args: Sequence[str] | None = None, namespace: Any = None) -> Any:  # type: ignore[override]
         """As argparse, but an option that takes a value given twice is an error: argparse kept the

@@ -29,3 +29,26 @@ def test_building_the_parsers_imports_neither_the_simulator_nor_numba() -> None:
             "print(sorted(m for m in ('sim', 'numba') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+@pytest.mark.parametrize("argv, hint", [
+    (["compare", "office", "--seed", "1"], "--seed 1; did you mean --seeds?"),  # simulate's spelling
+    (["simulate", "--out", "x", "--seeds", "1"], "--seeds 1; did you mean --seed?"),  # compare's spelling
+    (["compare", "office", "--seed=1"], "--seed=1; did you mean --seeds?"),
+    (["compare", "office", "-seeds", "1"], "-seeds 1; did you mean --seeds?"),
+    (["compare", "office", "--dur", "3"], "--dur 3; did you mean --duration?"),  # the start of one option
+    (["slam", "x", "--out", "y", "--extracter", "sensor"], "--extracter sensor; did you mean --extractor?"),
+    (["lms200", "emulate", "--tpc", "3"], "--tpc 3; did you mean --tcp?"),  # two letters swapped
+    (["compare", "office", "--seed", "1", "--ot", "x"], "--seed 1 --ot x; did you mean --seeds for --seed, --out for --ot?"),
+])
+def test_an_unrecognized_option_near_a_real_one_says_which(argv, hint, capsys) -> None:
+    assert main(argv) == 2
+    command = " ".join(w for w in argv[:2] if not w.startswith("-") and w in ("compare", "simulate", "slam", "lms200", "emulate"))
+    assert capsys.readouterr().err == f"lmsbench {command}: error: unrecognized arguments: {hint} (see lmsbench {command} --help)\n"
+
+
+@pytest.mark.parametrize("argv", [["compare", "office", "--bogus"], ["compare", "office", "--o", "x"], ["--bogus", "compare", "office"]])
+def test_an_option_near_none_gets_no_guess(argv, capsys) -> None:
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "unrecognized arguments:" in err and "did you mean" not in err
