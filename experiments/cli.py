@@ -36,12 +36,31 @@ def build_parser() -> argparse.ArgumentParser:
         prog="lmsbench",
         description="Fast feature extraction from 2-D laser rangefinders: a research testbed.",
     )
+    parser.add_argument("--version", action=_Version, help="print lmsbench's version (and git commit, run from a checkout) and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
         module = importlib.import_module(f"{commands.__name__}.{info.name}")
         if hasattr(module, "register"):
             module.register(sub)
     return parser
+
+
+class _Version(argparse.Action):
+    """``lmsbench --version``: the installed package's version and, run from a git checkout, its
+    commit (experiments.provenance.version_text), worked out only when asked."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str = argparse.SUPPRESS, help: str | None = None) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, help=help)
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
+                 option_string: str | None = None) -> None:
+        from .provenance import version_text
+
+        try:
+            sys.stdout.write(version_text() + "\n")
+        except OSError:  # a reader that went away (`--version | head -0`), as argparse's --help: nothing to say it to
+            _stdout_to_devnull()
+        parser.exit()
 
 
 REDELIVER_S = 0.05  # s after a swallowed stop (see _Interrupt.swallowed) before it is raised again

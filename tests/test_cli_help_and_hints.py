@@ -3,8 +3,10 @@ five of seven), "did you mean" for a near miss of a command's option, and ``lmsb
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
+from importlib import metadata
 
 import pytest
 
@@ -52,3 +54,30 @@ def test_an_option_near_none_gets_no_guess(argv, capsys) -> None:
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert "unrecognized arguments:" in err and "did you mean" not in err
+
+
+def test_version_names_the_installed_package_and_the_checkouts_commit(capsys) -> None:
+    from experiments.provenance import CHECKOUT
+
+    assert main(["--version"]) == 0
+    out = capsys.readouterr().out
+    assert re.fullmatch(rf"lmsbench {re.escape(metadata.version('lmsbench'))}( \(git [0-9a-f]{{12}}(, modified)?\))?\n", out), out
+    if (CHECKOUT / ".git").exists():  # make test runs in a checkout: its commit is named
+        head = subprocess.run(["git", "-C", str(CHECKOUT), "rev-parse", "--short=12", "HEAD"], capture_output=True,
+                              text=True).stdout.strip()
+        assert f"(git {head}" in out
+
+
+def test_version_outside_a_checkout_is_the_package_version_alone(tmp_path, monkeypatch, capsys) -> None:
+    import experiments.provenance as provenance
+
+    monkeypatch.setattr(provenance, "CHECKOUT", tmp_path)  # an installed wheel: no .git beside the code
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out == f"lmsbench {metadata.version('lmsbench')}\n"
+
+
+def test_version_is_cheap_it_loads_neither_numba_nor_the_simulator() -> None:
+    code = ("import sys; from experiments.cli import main; status = main(['--version']); "
+            "print(status, sorted(m for m in ('sim', 'numba') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.splitlines()[-1] == "0 []"
