@@ -21,7 +21,9 @@ import _thread
 import signal
 import sys
 import threading
+import time
 import traceback
+from pathlib import Path
 from typing import Any, Sequence
 
 from features.batch import default_threads
@@ -221,6 +223,7 @@ def _main(argv: Sequence[str] | None) -> int:
     if main_thread:
         sys.unraisablehook = lambda u: interrupt.swallowed(u) or previous_hook(u)
     done = False  # whether the command's work ended (a reader of stdout that went away then is no loss)
+    started_ns = time.time_ns()  # files in --out modified since were written by this run (_stdout_gone)
     try:
         default_threads()  # a bad $LMSBENCH_THREADS is refused before any work, by every command
         interrupt.running = True
@@ -236,7 +239,7 @@ def _main(argv: Sequence[str] | None) -> int:
             return _interrupted(interrupt)
         if isinstance(exc, BrokenPipeError) and _stdout_closed():
             stopped = not done and _writes_outputs(args) and not getattr(args, "outputs_complete", False)
-            return _stdout_gone(name, stopped, getattr(args, "out", None))
+            return _stdout_gone(name, stopped, getattr(args, "out", None), started_ns)
         _end_progress_bars()
         if _users_code(exc) and os.environ.get("LMSBENCH_TRACEBACK"):
             traceback.print_exception(exc)  # the user's exception first, then where lmsbench called it
@@ -278,19 +281,44 @@ def _stdout_closed() -> bool:
         return False
 
 
-def _stdout_gone(name: str, stopped: bool, out: object) -> int:
+def _stdout_gone(name: str, stopped: bool, out: object, started_ns: int = 0) -> int:
     """A reader of stdout that went away (`lmsbench info LOG | head -4`): no error message (it was
     'error: [Errno 32] Broken pipe', exit 2, or with buffered output Python's 'Exception ignored ...
     BrokenPipeError' at exit, status 120), the status a shell gives for SIGPIPE. A command that
-    writes outputs (an --out option: ``out``, None for its default folder) and was ``stopped`` in its
-    work by it (`lmsbench demo | head -1`) says so in one line on stderr: its outputs are incomplete. What is left in stdout's buffer goes
-    to /dev/null, so the interpreter's last flush does not fail again."""
+    writes outputs (an --out option: ``out``, None while its default folder is not made) and was
+    ``stopped`` in its work by it (`lmsbench demo | head -1`) says so in one line on stderr, with
+    what it left: nothing, or how many files it wrote in ``out`` since ``started_ns`` (time.time_ns):
+    `figures --out DIR | head -1`, stopped before DIR was made, said "DIR is incomplete". What is
+    left in stdout's buffer goes to /dev/null, so the interpreter's last flush does not fail again."""
     _stdout_to_devnull()
     if stopped:
         _end_progress_bars()
-        print(f"lmsbench {name}: stopped: the reader of its standard output went away; "
-              f"{out if out is not None else 'its output folder'} is incomplete", file=sys.stderr)
+        written = _files_written(Path(out), started_ns) if isinstance(out, (str, os.PathLike)) else 0
+        if not written:
+            left = f"nothing was written{f' in {out}' if out is not None and Path(out).is_dir() else ''}"
+        elif Path(out).is_dir():
+            left = f"{out} is incomplete: this run wrote {written} file{'s' if written > 1 else ''} there before it stopped"
+        else:
+            left = f"{out} is incomplete"
+        print(f"lmsbench {name}: stopped: the reader of its standard output went away; {left}", file=sys.stderr)
     return PIPE_CLOSED_STATUS
+
+
+MTIME_SLACK_NS = 10_000_000  # a file's mtime comes from the kernel's coarse clock, a few ms behind time.time_ns
+
+
+def _files_written(out: Path, since_ns: int) -> int:
+    """How many files ``out`` (a folder, searched through; or a file) holds that were modified at
+    or after ``since_ns`` (time.time_ns): the ones this run wrote."""
+    def fresh(path: str | os.PathLike) -> bool:
+        try:
+            return os.stat(path).st_mtime_ns >= since_ns - MTIME_SLACK_NS
+        except OSError:
+            return False
+
+    if not out.is_dir():
+        return int(out.is_file() and fresh(out))
+    return sum(fresh(os.path.join(top, f)) for top, _, files in os.walk(out) for f in files if not f.startswith("."))
 
 
 def _writes_outputs(args: argparse.Namespace) -> bool:

@@ -40,5 +40,6 @@ def run(args: argparse.Namespace) -> int:
     executor = None if args.no_sweep else ("inprocess" if args.inprocess else "local")
     from experiments.provenance import new_run_folder
 
-    run_demo(args.out or new_run_folder("results/demo"), cfg, sweep_executor=executor)
+    args.out = args.out or new_run_folder("results/demo")  # named if a reader of stdout that goes away stops it
+    run_demo(args.out, cfg, sweep_executor=executor)
     return 0
