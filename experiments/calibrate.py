@@ -279,6 +279,7 @@ def calibration_section(result: CalibrationResult, source: str) -> dict[str, Any
         "calibration": {
             "source": source,
             "scans": c.n_scans,
+            **({"repeated_scans_passed_over": c.repeated_scans} if c.repeated_scans else {}),
             "beams_per_scan": c.n_beams,
             "quantum_m": c.quantum_m,
             "noise_sigma_1_4m": {"value": _round(c.noise.sigma_m), "std": _round(c.noise.sigma_std_m),
@@ -319,7 +320,8 @@ def format_calibration(result: CalibrationResult) -> list[str]:
         return f"{e.value * scale:.4g} +- {std}{unit}"
 
     lines = [
-        f"scans {c.n_scans}, {c.n_beams} beams at {np.rad2deg(c.angle_increment):g} deg, quantum {c.quantum_m * 1000:g} mm ({c.units} mode)",
+        f"scans {c.n_scans}, {c.n_beams} beams at {np.rad2deg(c.angle_increment):g} deg, quantum {c.quantum_m * 1000:g} mm ({c.units} mode)"
+        + (f"; {c.repeated_scans} scans passed over as repeats of the scan before them" if c.repeated_scans else ""),
         f"noise sigma at 1-4 m   {c.noise.sigma_m * 1000:.3f} +- {c.noise.sigma_std_m * 1000:.3f} mm  ({c.noise.n_used} triples)",
         f"noise growth           {pm(c.noise_slope, 1000, ' mm/m')}",
         "noise by range         " + ", ".join(f"{b['r_lo']:g}-{b['r_hi']:g} m: {b['sigma'] * 1000:.1f} mm" for b in c.noise_bins),

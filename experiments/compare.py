@@ -31,6 +31,7 @@ from features.registry import available_methods, backend_of, get_method, make_co
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
 from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
+from lms200.noise import QUANTUM_CANDIDATES_M
 
 from experiments.options import known_worlds  # sim.WORLD_NAMES, the simulator imported when first asked
 
@@ -388,8 +389,9 @@ def compare(
         methods: extractor names; the order does not matter (it is rotated per scan).
         params: per-method overrides of config fields, ``{"hough": {"rho_step": 0.01}}``.
         score_config: line / corner matching tolerances.
-        sigma: range noise, 1 sigma (m), for the noise-scaled explained fractions, or "auto": the
-            sensor model's for simulated sources, estimated from the data for logs.
+        sigma: range noise, 1 sigma (m, in [MIN_SIGMA_M, MAX_SIGMA_M]: 0.1 mm to 1000 m), for the
+            noise-scaled explained fractions, or "auto": the sensor model's for simulated sources,
+            estimated from the data for logs.
         max_scans: at most this many scans per source.
         progress: show a tqdm progress bar.
         matches: if a list, one dict per matched line is appended to it (method, source, seed,
@@ -486,12 +488,33 @@ def source_label(src: Source) -> str:
     return f"{src.name}:{src.seed}" if src.name in known_worlds() and src.seed is not None else src.name
 
 
+#: the range noise std (m) ``compare``'s ``sigma`` (``--sigma``) takes, given as a number: at least
+#: 0.1 mm, below any rangefinder's (the LMS200 codes ranges in 1 mm or 1 cm, the finest quantum
+#: ``lms200.noise`` looks for is 0.1 mm): --sigma 1e-300 ran, the sensor method found no line (F1 0),
+#: every 3-sigma explained fraction was 0 and sigma_r_mm read 1e-297, exit 0; at most the
+#: extractors' cap (``features.baselines.checks.MAX_SIGMA_M``; 1e308 overflowed in the summary)
+MIN_SIGMA_M = min(QUANTUM_CANDIDATES_M)
+
+
+def sigma_problem(value: float) -> str | None:
+    """What is wrong with ``value`` (m) as the range noise std of ``compare``'s ``sigma``, or None."""
+    from features.baselines.checks import MAX_SIGMA_M, finite
+
+    if not (finite(value) and MIN_SIGMA_M <= value <= MAX_SIGMA_M):  # nan fails every comparison
+        return f"must be a range noise std in [{MIN_SIGMA_M:g}, {MAX_SIGMA_M:g}] m, or 'auto'"
+    return None
+
+
 def _source_sigma(src: Source, sigma: float | str) -> float:
     """The range noise (m) a source is scored with: ``sigma`` if a number, else the source's own."""
     if sigma != "auto":
-        value = float(sigma)
-        if not np.isfinite(value) or value <= 0:
-            raise LmsbenchError(f"sigma: must be a number > 0 or 'auto', got {sigma!r}")
+        try:
+            value = float(sigma)
+        except (TypeError, ValueError):
+            value = float("nan")
+        problem = sigma_problem(value)
+        if problem:
+            raise LmsbenchError(f"sigma: {problem}, got {sigma!r}")
         return value
     if src.sigma_r is None and src.estimate_sigma is not None:
         src.sigma_r = src.estimate_sigma()

@@ -96,7 +96,10 @@ def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -
     result = sim2real(path, world="mit", seeds=(cfg.seed,), duration=cfg.duration, rate_hz=3.0, stride=10,
                       max_scans=max_scans, fit_duration=min(30.0, cfg.duration), wall_relief=False,
                       probe_duration=cfg.duration, probe_rate_hz=PROBE_RATE_HZ,
-                      probe_seeds=[next(s for s in PROBE_SEEDS if s != cfg.seed)])
+                      probe_seeds=[next(s for s in PROBE_SEEDS if s != cfg.seed)],
+                      advice=f"a longer demo --duration, or `lmsbench sim2real {path.name}` for the full comparison")
+    for warning in result.warnings:  # in the report and, as sim2real says them, on the terminal
+        log(f"warning: sim2real: {warning}")
     write_outputs(result, out / "sim2real", str(path), dict(log=str(path), duration=cfg.duration, stride=10,
                                                            max_scans=max_scans))
     body = format_report(result, path.name).split("\n", 2)[2]  # the tables, without the title
@@ -168,6 +171,28 @@ def at_a_glance(tables: dict[str, pd.DataFrame]) -> list[str]:
     return ["\n".join(items)] if items else []
 
 
+def demo_command(cfg: StudyConfig, executor: str = "local") -> str:
+    """The ``lmsbench demo`` command line that runs this study again (the options that differ from
+    the defaults; ``executor`` "" for ``--no-sweep``). The report said `lmsbench demo` whatever
+    the world, seed or log it ran."""
+    import shlex
+
+    from experiments.figures.study import INTEL_LOG
+    from experiments.logargs import log_option_flags
+
+    default = StudyConfig()
+    words = ["lmsbench", "demo"]
+    for flag, name in (("--world", "world"), ("--seed", "seed"), ("--duration", "duration"), ("--rate-hz", "rate_hz")):
+        value = getattr(cfg, name)
+        if value != getattr(default, name):
+            words += [flag, f"{value:g}" if isinstance(value, float) else str(value)]
+    if cfg.intel_log is not None and Path(cfg.intel_log) != INTEL_LOG:
+        words += ["--log", str(cfg.intel_log)]
+    words += log_option_flags(cfg.log_options)
+    words += ["--no-sweep"] if not executor else (["--inprocess"] if executor == "inprocess" else [])
+    return shlex.join(words)
+
+
 def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: StudyConfig, figs: dict,
                     sweep_table: pd.DataFrame | None, elapsed: float, executor: str = "local") -> list[Section]:
     timing = tables["timing"]
@@ -177,8 +202,8 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
         f"{cfg.duration:g} s tour; {n_scans} scans were kept ({cfg.rate_hz:g} scans/s of the sensor's 37.5). "
         f"Every extractor ran on every scan and was scored against the exact visible ground truth of the "
         f"simulator; the odometry-free SLAM (the paper preset's EKF and the default scan-matching pipeline) ran on the same scans. Whole demo: {elapsed:.0f} s.",
-        "Reproduce: `lmsbench demo` (settings in `tables/study.yaml`; every table behind the figures is in "
-        "`tables/*.parquet` and beside each figure as CSV).",
+        f"Reproduce: `{demo_command(cfg, executor)}` (settings in `tables/study.yaml`; every table behind the "
+        "figures is in `tables/*.parquet` and beside each figure as CSV).",
     ])
     sections = [intro]
     glance = at_a_glance(tables)

@@ -74,6 +74,20 @@ def plain_log_options(options: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+def log_option_flags(plain: dict[str, Any] | None) -> list[str]:
+    """The command-line flags that give these plain ``read_log`` options (:func:`plain_log_options`),
+    none for the defaults: how a report names the run that read the log."""
+    plain = plain or {}
+    flags = ["--topic", str(plain["topic"])] if plain.get("topic") else []
+    flags += ["--skip-bad-lines"] if plain.get("skip_bad_lines") else []
+    geometry = plain.get("geometry") or {}
+    for flag, name, degrees in _GEOMETRY_FLAGS:
+        if geometry.get(name) is not None:
+            value = math.degrees(geometry[name]) if degrees else geometry[name]
+            flags += [f"--{flag.replace('_', '-')}", f"{value:g}"]
+    return flags
+
+
 def log_options_from_plain(plain: dict[str, Any] | None) -> dict[str, Any]:
     """The inverse of :func:`plain_log_options`: ``read_log`` keywords."""
     out = dict(plain or {})

@@ -625,7 +625,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
              methods: Sequence[str] = METHODS, sensor: Any = None, read_options: dict | None = None,
              fit_duration: float | None = None, fit_rooms: bool = False, wall_relief: bool = True,
              probe_duration: float = PROBE_DURATION_S, probe_rate_hz: float = PROBE_RATE_HZ,
-             probe_seeds: Sequence[int] | None = None) -> Sim2RealResult:
+             probe_seeds: Sequence[int] | None = None, advice: str | None = None) -> Sim2RealResult:
     """Compare a real log with the calibrated simulation (see the module docstring).
 
     Args:
@@ -642,6 +642,8 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
             the scans kept per second (PROBE_DURATION_S, PROBE_RATE_HZ).
         probe_seeds: the worlds of the mit fits' probe runs (each probe value runs on all of them);
             default the first ``len(seeds)`` of PROBE_SEEDS (all of them for the default seeds).
+        advice: how the caller's user gets more scans, for a warning on too few (default: the
+            ``lmsbench sim2real`` options of each short side).
 
     Raises:
         LmsbenchError: for a log without scans or an unknown world.
@@ -703,7 +705,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
         raise LmsbenchError(f"{log}: nothing to compare: no method measured an explained fraction on both sources")
     result.checks = targets(table)
     n_probe = (len(scan_stamps(sensor, probe_duration, probe_rate_hz)) * len(probes)) if result.probe_seeds else None
-    result.warnings = small_sample_warnings(len(real), len(simulated), n_probe) + bound_warnings(rough, scale, relief)
+    result.warnings = small_sample_warnings(len(real), len(simulated), n_probe, advice) + bound_warnings(rough, scale, relief)
     return result
 
 
@@ -740,9 +742,10 @@ def bound_warnings(rough: RoughFit | None, scale: ScaleFit | None = None,
             "do not reach it there; see the report's first lines)"]
 
 
-def small_sample_warnings(n_real: int, n_sim: int, n_probe: int | None = None) -> list[str]:
+def small_sample_warnings(n_real: int, n_sim: int, n_probe: int | None = None, advice: str | None = None) -> list[str]:
     """One line when a side has fewer than MIN_SCANS scans (real, simulated, probe scans per probe
-    value; None: no fit), else none."""
+    value; None: no fit), else none; ``advice``: how to get more, instead of the sim2real options
+    (the demo's report advised --max-scans and --seeds, which the demo does not take)."""
     sides = ((n_real, "real scans", "a higher --max-scans or a lower --stride"),
              (n_sim, "simulated scans", "more --seeds, a longer --duration or a higher --rate-hz"),
              (n_probe, "probe scans per probe value", "more --probe-seeds or a longer --probe-duration"))
@@ -750,8 +753,9 @@ def small_sample_warnings(n_real: int, n_sim: int, n_probe: int | None = None) -
     if not short:
         return []
     # the options that raise the short sides' counts only (it named all six whatever was short; not --rate-hz)
+    more = advice if advice is not None else "; ".join(how for _, how in short)
     return [f"only {' and '.join(few for few, _ in short)} (fewer than {MIN_SCANS}): the figures are too noisy to "
-            f"compare real and simulated (more with {'; '.join(how for _, how in short)})"]
+            f"compare real and simulated (more with {more})"]
 
 
 def _table(summary: pd.DataFrame, real: str, sim: str, methods: list[str]) -> pd.DataFrame:

@@ -18,6 +18,7 @@ from typing import Any, Collection, Iterable
 import numpy as np
 
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
+from lms200.logs import regular_file
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml
 from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished, not_a_log_folder, simulate_log
@@ -116,15 +117,18 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     sim_log = simulate_log(p)
     if sim_log is not None:
         log = sim_log
-        if (p / "groundtruth.tum").is_file():
+        # a folder (or a pipe) of these names is an error (read_tum, regular_file), not no truth / no
+        # world: a groundtruth.tum that was a folder ran without the truth's scores, exit 0
+        if (p / "groundtruth.tum").exists():
             stamps, poses = read_tum(p / "groundtruth.tum")
             truth = np.column_stack((stamps, poses))
             sources["truth"] = str(p / "groundtruth.tum")
-        if (p / "world.json").is_file():
+        if (p / "world.json").exists():
             try:
-                walls = np.asarray(json.loads((p / "world.json").read_text())["walls"], float).reshape(-1, 4)
+                text = regular_file(p / "world.json", "world.json").read_text(encoding="utf-8", errors="replace")
+                walls = np.asarray(json.loads(text)["walls"], float).reshape(-1, 4)
                 sources["walls"] = str(p / "world.json")
-            except (KeyError, ValueError) as exc:
+            except (KeyError, TypeError, ValueError) as exc:  # TypeError: a JSON list, null or a dict of walls
                 raise LmsbenchError(f"{p / 'world.json'}: no wall list ({exc})") from None
             from sim.world import MAX_COORD_M
 

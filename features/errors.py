@@ -17,6 +17,11 @@ class ScanGeometryError(LmsbenchError, ValueError):
     or Hough accumulator beyond its memory bound, scans of different geometry in one batch."""
 
 
+class BatchSizeError(LmsbenchError, ValueError):
+    """A batch ``extract_many`` cannot hold: an iterator or generator of scans that does not end
+    within ``features.batch.MAX_ITERATOR_BEAMS`` beams (``itertools.repeat(scan)`` never ended)."""
+
+
 class ScanTypeError(LmsbenchError, TypeError):
     """An extractor was given something other than an ``lms200.Scan`` (a log record, a bare array)."""
 

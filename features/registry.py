@@ -18,7 +18,7 @@ import numpy as np
 from lms200 import Scan
 
 from .baselines.checks import MAX_BEAMS
-from .batch import check_threads, common_geometry, run_pieces
+from .batch import check_threads, common_geometry, run_pieces, scan_list
 from .errors import ConfigError, ScanGeometryError, ScanTypeError, not_a_scan
 from .types import FeatureSet
 
@@ -198,7 +198,9 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
     """``extract`` of every scan in ``scans`` (a sequence of ``lms200.Scan`` of one geometry: beam
     count, angle_min, angle_increment, range_min, range_max), in compiled calls of up to
     BATCH_CHUNK scans for the compiled methods (sensor, split_merge, iepf); the result equals
-    calling ``extract`` on each, whatever the thread count.
+    calling ``extract`` on each, whatever the thread count. A list or tuple (any sized collection)
+    is taken whole; an iterator or generator is read up to ``features.batch.MAX_ITERATOR_BEAMS``
+    beams (92,948 scans of 361 beams), and one that yields more, or never ends, is refused.
 
     ``threads``: pieces of the batch run on this many threads at once (each thread at least
     MIN_SCANS_PER_THREAD scans) for the compiled methods (registered ``thread_safe``); None:
@@ -208,6 +210,7 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
     Raises:
         ValueError: naming the first scan whose geometry differs from the first's.
         ScanTypeError: naming the first item that is not an ``lms200.Scan``.
+        BatchSizeError: an iterator of more than MAX_ITERATOR_BEAMS beams, or one that never ends.
         ConfigError: a ``threads`` that is not a whole number >= 1.
     """
     m = (_REGISTRY.get(method) if type(method) is str else None) or get_method(method)
@@ -216,8 +219,10 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
     if isinstance(scans, Scan):
         raise ScanTypeError("extract_many: expected a sequence of lms200.Scan, got one Scan (use extract, or [scan])")
     try:
-        scans = list(scans)
-    except TypeError:
+        scans = scan_list(scans)  # an endless iterator (itertools.repeat(scan)) ran until memory ran out
+    except TypeError as exc:
+        if isinstance(exc, ScanTypeError):
+            raise
         raise ScanTypeError(f"extract_many: expected a sequence of lms200.Scan, got {type(scans).__name__}") from None  # its items are checked to be Scans by common_geometry, on every path below
     if scans and isinstance(scans[0], Scan) and len(scans[0]) > MAX_BEAMS:
         raise ScanGeometryError(too_many_beams(len(scans[0])))

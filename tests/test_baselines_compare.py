@@ -183,3 +183,21 @@ def test_compare_checks_each_scans_truth_once(monkeypatch):
             assert a.extra == b.extra
             for name in set(a.__dataclass_fields__) - {"extra"}:
                 assert np.array_equal(np.asarray(getattr(a, name)), np.asarray(getattr(b, name)), equal_nan=True), name
+
+
+@pytest.mark.parametrize("sigma", [1e-300, 5e-5, 0.0, -1.0, float("nan"), 1001.0, "abc"])
+def test_compare_refuses_a_noise_no_rangefinder_has(sigma):
+    """``compare(..., sigma=1e-300)`` (and ``--sigma 1e-300``) ran, exit 0: the extractors were told
+    a noise of 1e-300 m (the sensor method found no line, F1 0) and every 3-sigma explained fraction
+    was 0 (sigma_r_mm 1e-297). A number is taken in [0.1 mm, features.baselines.checks.MAX_SIGMA_M]."""
+    from lms200 import LmsbenchError
+
+    with pytest.raises(LmsbenchError, match=r"^sigma: must be a range noise std in \[0\.0001, 1000\] m, or 'auto', got "):
+        compare([room_source()], ["split_merge"], sigma=sigma)
+
+
+def test_compare_takes_a_noise_at_its_bounds():
+    """The bounds themselves are taken, and a number is used as given (not floored)."""
+    for sigma in (1e-4, 1000.0):
+        table = compare([room_source()], ["split_merge"], sigma=sigma)
+        assert (table["sigma_r"] == sigma).all()

@@ -397,8 +397,14 @@ CASES = [
     (["lms200", "record", "--port", " ", "--out", "{out}/x.clf"], "argument --port: must not be empty, got ' '"),
     (["compare", "office:1", "--methods", "sensor", "", "--out", O], "argument --methods: must not be empty, got ''"),
     # a noise of 1e308 m overflowed in the summary (a RuntimeWarning on stderr, sigma_r_mm inf), exit 0
-    (["compare", "office:1", "--sigma", "1e308", "--out", O], "--sigma must be a range noise std in (0, 1000] m, "
-                                                              "got '1e308'"),
+    (["compare", "office:1", "--sigma", "1e308", "--out", O], "--sigma must be a range noise std in [0.0001, 1000] m, "
+                                                              "or 'auto', got '1e308'"),
+    # a noise of 1e-300 m ran, exit 0: the sensor method found no line (F1 0), every 3-sigma explained
+    # fraction was 0 and sigma_r_mm read 1e-297; below 0.1 mm no rangefinder's noise lies
+    (["compare", "office:1", "--sigma", "1e-300", "--out", O], "argument --sigma: --sigma must be a range noise std in "
+                                                               "[0.0001, 1000] m, or 'auto', got '1e-300'"),
+    (["compare", "office:1", "--sigma", "5e-5", "--out", O], "--sigma must be a range noise std in [0.0001, 1000] m, "
+                                                             "or 'auto', got '5e-5'"),
     # a world.json nested 100,000 deep, walls at 1e308 m (RuntimeWarnings on stderr before the error line)
     (["simulate", "--world", "{deep.json}", "--out", O], "deep.json: not a world.json (nested too deeply to parse)"),
     (["simulate", "--world", "{far_walls.json}", "--out", O], "far_walls.json: not a world.json (walls: must be finite "
@@ -1173,3 +1179,18 @@ def test_a_sweeps_own_big_sweep_yaml_is_read_for_its_plots(tmp_path):
     pd.DataFrame({"extractor.ad_tau": [1.0], "status": ["ok"], "error": [""], "cell": ["a"], "seed": [0]}).to_parquet(
         tmp_path / "results.parquet")
     assert check_sweep_results(tmp_path) == tmp_path
+
+
+@pytest.mark.parametrize("with_out", [True, False])
+def test_demo_refuses_a_log_that_does_not_read_before_it_makes_its_folder(with_out, tmp_path, monkeypatch, capsys):
+    """`demo --log run/groundtruth.tum` (a file, not a log) made results/demo/DATE_TIME and moved
+    results/demo/latest to it, empty, before the study refused the file (or left --out X behind,
+    empty): the earlier good report was no longer "latest". The log's first lines are read first."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "groundtruth.tum").write_text("0.0 0 0 0 0 0 0 1\n0.1 0.1 0 0 0 0 0 1\n")
+    out = ["--out", str(tmp_path / "x")] if with_out else []
+    assert run_main(["demo", "--log", "groundtruth.tum", "--no-sweep", "--duration", "1", *out]) == 2
+    captured = capsys.readouterr()
+    (line,) = captured.err.strip().splitlines()
+    assert "groundtruth.tum:1: not a CARMEN log" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["groundtruth.tum"]  # no results/, no x/

@@ -336,3 +336,45 @@ def test_pieces_run_in_order_on_at_most_the_threads_asked_and_errors_come_throug
         return fbatch.run_pieces(echo, list(piece), cfg, 2, 7)
 
     assert fbatch.run_pieces(nested, items, "cfg", 3, 50) == [x * 10 for x in items]
+
+
+def test_an_endless_iterator_is_refused_not_read_until_memory_runs_out(monkeypatch) -> None:
+    """``extract_many(itertools.repeat(scan))`` (or a generator that never ends) read on until
+    memory ran out (a MemoryError under a 3 GB address-space limit; without one, the machine's).
+    An iterator is read up to features.batch.MAX_ITERATOR_BEAMS beams; more is a BatchSizeError
+    (an LmsbenchError and a ValueError) saying to pass a list; lists, tuples and finite
+    generators give what they gave."""
+    import itertools
+
+    from features import batch as batch_module
+    from features.errors import BatchSizeError
+    from lms200 import LmsbenchError
+
+    assert batch_module.MAX_ITERATOR_BEAMS == 1 << 25  # 92,948 scans of 361 beams
+    scan = room(0)
+    assert len(scan) == 361
+
+    def endless():
+        while True:
+            yield scan
+
+    for method, scans in (("sensor", itertools.repeat(scan)), ("split_merge", endless()), ("hough", endless())):
+        with pytest.raises(BatchSizeError, match=re.escape(
+                f"scans: an iterator or generator ({type(scans).__name__}) that yielded more than 33,554,432 beams "
+                "(92,949 scans) without ending: extract_many returns one FeatureSet a scan, so it takes a finite batch; "
+                "pass a list or tuple of scans, or call it on pieces of the iterator (itertools.islice(scans, 4096))")) as info:
+            extract_many(scans, method=method)
+        assert isinstance(info.value, LmsbenchError) and isinstance(info.value, ValueError)
+    with pytest.raises(ScanTypeError, match=r"^scans\[0\]: expected an lms200.Scan, got int$"):
+        extract_many(itertools.count())  # an endless iterator of something else: its first item says so
+    monkeypatch.setattr(batch_module, "MAX_ITERATOR_BEAMS", 361 * 5)  # the bound itself is taken
+    scans = batch(12)[:5]
+    want = [extract(s) for s in scans]
+    for given in (iter(scans), (s for s in scans), tuple(scans), scans):
+        got = extract_many(given)
+        assert len(got) == 5
+        for fs, ref in zip(got, want):
+            assert_equal_sets(fs, ref)
+    assert len(extract_many(scans * 2)) == 10  # a list is taken whole, whatever the bound
+    with pytest.raises(BatchSizeError, match=r"more than 1,805 beams \(6 scans\)"):
+        extract_many(iter(scans + scans[:1]))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import warnings
 from pathlib import Path
 
@@ -182,6 +183,34 @@ def test_slam_refuses_a_world_json_wall_simulate_and_compare_refuse_before_the_r
     assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet"]) == 2
     assert capsys.readouterr().err.strip().splitlines() == [
         f"lmsbench slam: error: {run / 'world.json'}: not a world.json (walls: must be finite numbers within +-1e+06 m)"]
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("name, content, message", [
+    ("groundtruth.tum", None, "{f} is a folder, not a TUM file"),
+    ("world.json", None, "{f} is a folder, not a world.json"),
+    ("world.json", "[1, 2]", "{f}: no wall list (list indices must be integers or slices, not str)"),
+    ("world.json", "null", "{f}: no wall list ('NoneType' object is not subscriptable)"),
+    ("world.json", '{"walls": {"a": 1}}', "{f}: no wall list (float() argument must be a string or a real number, not 'dict')"),
+])
+def test_a_simulate_folder_whose_truth_or_world_is_a_folder_or_no_mapping_is_refused(sim_folder, tmp_path, capsys,
+                                                                                    name, content, message):
+    """The wrong-input hunt: a groundtruth.tum or world.json that is a folder was passed over (is_file()),
+    so slam ran without the truth's or the map's scores, exit 0, and said nothing; a world.json
+    holding a JSON list, null or a mapping of walls was 'internal error: TypeError', exit 1."""
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    (run / name).unlink()
+    if content is None:
+        (run / name).mkdir()
+    else:
+        (run / name).write_text(content)
+    assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet", "--max-scans", "5"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [f"lmsbench slam: error: {message.format(f=run / name)}"]
     assert not (tmp_path / "o").exists()
 
 
@@ -642,3 +671,25 @@ def test_a_reference_covering_part_of_the_run_is_said(sim_folder, tmp_path, caps
     assert json.loads((tmp_path / "o" / "metrics.json").read_text())["ate"]["n"] == 2
     assert main(["slam", str(sim_folder), *argv[:1], str(tmp_path / "o2"), *argv[2:]]) == 0
     assert "the ATE covers" not in capsys.readouterr().err
+
+
+@pytest.mark.shared_data
+def test_relations_over_part_of_a_log_are_said(shared_data, tmp_path, capsys):
+    """`slam mit-csail.clf.gz --max-scans 100` printed 'relations error, mean (m): this run 0.0163'
+    beside the published errors over the whole log, and said nothing: 24 of the file's 1172
+    relations were scored (a new user's review). It now says how many, and that the figure is not
+    comparable."""
+    from experiments.cli import main
+
+    argv = ["slam", str(shared_data / "mit-csail.clf.gz"), "--max-scans", "100", "--no-paper-baseline",
+            "--no-odometry-baseline", "--quiet", "--out", str(tmp_path / "o")]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    err = captured.err
+    # and the summary's time is named: 'in 58.1 s (35 scans/s of CPU time)' read as one clock
+    assert re.search(r"100 scans in [0-9.]+ s of wall-clock time \([0-9]+ scans/s of CPU time\)", captured.out)
+    rel = json.loads((tmp_path / "o" / "metrics.json").read_text())["relations"]
+    assert rel["n"] + rel["n_skipped"] == 1172 and rel["n"] < 100
+    assert (f"the relations error covers {rel['n']} of the file's 1172 relations, those within the run's time span "
+            "(--max-scans or a cut log leave the rest out); it is not comparable with errors over the whole log "
+            "(metrics.json relations.n, n_skipped)") in err

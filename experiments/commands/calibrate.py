@@ -45,14 +45,20 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None:  # before the summary: `calibrate LOG --out S.yaml | head -3` lost the YAML
         write_sensor_yaml(result, args.out, str(args.log))
         args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
-    for line in format_calibration(result):
-        print(line)
-    if args.out is None:
+    if args.out is None:  # stdout is the sensor YAML: `calibrate LOG > S.yaml` wrote the summary above the YAML,
+        # which `--sensor S.yaml` refused (not valid YAML); the summary is now its comments
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / "sensor.yaml"
             write_sensor_yaml(result, path, str(args.log))
-            print(path.read_text(), end="")
+            text = path.read_text()
+        first, _, rest = text.partition("\n")  # the YAML's own first line names calibrate and the log
+        print(first)
+        for line in format_calibration(result):
+            print(f"# {line}".rstrip())
+        print(rest, end="")
     else:
+        for line in format_calibration(result):
+            print(line)
         print(f"wrote {args.out}")
     return 0
 

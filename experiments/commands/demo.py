@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from experiments.demo import run_demo
-    from experiments.figures.study import StudyConfig, check_study
+    from experiments.figures.study import StudyConfig, check_panel_log, check_study
 
     if args.inprocess and args.no_sweep:  # it was ignored: there is no sweep to run in this process
         raise InputError("--inprocess runs the demo's sweep in this process; --no-sweep skips it: give one of them")
@@ -37,6 +37,7 @@ def run(args: argparse.Namespace) -> int:
         cfg.intel_log = str(check_log(args.log))
     cfg.log_options = plain_log_options(read_log_options(args))
     check_study(cfg)
+    check_panel_log(cfg)  # before the run folder and results/demo/latest are made
     executor = None if args.no_sweep else ("inprocess" if args.inprocess else "local")
     from experiments.provenance import new_run_folder
 
