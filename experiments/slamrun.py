@@ -21,8 +21,9 @@ from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.logs import regular_file
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml
-from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished
+from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished, not_a_log_folder, simulate_log
 from experiments.provenance import write_record
+from experiments.user_methods import scans_of
 from slam import SlamConfig, SlamResult, run_slam
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
 
@@ -75,7 +76,7 @@ def simulated_interlaced(path: str | Path) -> bool | None:
     """The ``sensor.interlaced`` of a simulator output folder's config.yaml (None: not a simulator
     folder, or the file does not say)."""
     cfg = Path(path) / "config.yaml"
-    if not (Path(path).is_dir() and (Path(path) / "scans.clf").is_file() and cfg.is_file()):
+    if simulate_log(path) is None or not cfg.is_file():
         return None
     try:
         raw = load_yaml(cfg.read_text())
@@ -113,8 +114,9 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     sources: dict[str, str] = {}
     truth = walls = rel = None
     check_simulate_finished(p)
-    if p.is_dir() and (p / "scans.clf").is_file():
-        log = p / "scans.clf"
+    sim_log = simulate_log(p)
+    if sim_log is not None:
+        log = sim_log
         # a folder (or a pipe) of these names is an error (read_tum, regular_file), not no truth / no
         # world: a groundtruth.tum that was a folder ran without the truth's scores, exit 0
         if (p / "groundtruth.tum").exists():
@@ -136,7 +138,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
                 raise LmsbenchError(f"{p / 'world.json'}: not a world.json (walls: must be finite numbers within "
                                     f"+-{MAX_COORD_M:g} m)")
     elif p.is_dir() and not (p / "metadata.yaml").is_file():
-        raise LmsbenchError(f"{p}: a folder input must hold scans.clf (a simulator output) or be a ROS 2 bag")
+        raise LmsbenchError(not_a_log_folder(p))
     else:
         log = p
     sources["scans"] = str(log)
@@ -258,7 +260,8 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
 
         records = tqdm(data.records, desc="slam", unit="scan", leave=False, disable=None)  # terminal only
     t0, c0 = time.perf_counter(), time.process_time()
-    result = run_slam(records, config)
+    with scans_of(data.name, data.records):  # a user's --extractor MODULE:FUNCTION that fails names its scan
+        result = run_slam(records, config)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     if out is not None:
         earlier = earlier_run_files(out) if replace_earlier and out.is_dir() else set()  # before this run writes
@@ -273,14 +276,16 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     if paper_baseline and config.preset == "default":
         c1 = time.process_time()
         paper_config = dataclasses.replace(config, preset="paper")  # the same motion input as the run
-        paper = run_slam(data.records, paper_config)
+        with scans_of(data.name, data.records):
+            paper = run_slam(data.records, paper_config)
         table.append({"source": _source_name(paper_config), **_flat(score(paper.trajectory, data, paper)),
                       "cpu_scans_per_s": len(data.records) / max(time.process_time() - c1, 1e-9)})
     odo = data.odometry
     if odo is not None:
         table.append({"source": "raw odometry", **_flat(score(odo, data))})
         if odometry_baseline and not config.motion.use_odometry:
-            with_odo = run_slam(data.records, dataclasses.replace(config, preset="paper", motion=dataclasses.replace(config.motion, use_odometry=True)))
+            with scans_of(data.name, data.records):
+                with_odo = run_slam(data.records, dataclasses.replace(config, preset="paper", motion=dataclasses.replace(config.motion, use_odometry=True)))
             table.append({"source": "paper preset (odometry)", **_flat(score(with_odo.trajectory, data, with_odo))})
     consistency = {
         "diverged": bool(d["diverged"]),

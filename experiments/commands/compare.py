@@ -17,7 +17,7 @@ from lms200 import LmsbenchError
 from lms200.timing import check_scan_rate
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
-from experiments.options import (COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
+from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
                                  check_out_spares, check_seeds, count, plain_number, positive, path_arg, text)
 
 
@@ -36,7 +36,7 @@ def _param(text: str) -> tuple[str, Any]:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("compare", help="every extractor on identical scans: accuracy, corners and speed")
     p.add_argument("sources", nargs="+",
-                   help="world names (office, corridor, angles, pillars, random; WORLD:SEED for one seed), "
+                   help="world names (" + WORLDS + "; WORLD:SEED for one seed), "
                         "`lmsbench simulate` folders, or paths of real logs")
     p.add_argument("--methods", "--method", nargs="+", type=text("an extractor's name"),
                    help="extractors: built-in names or a user's MODULE:FUNCTION (default: every built-in one; "
@@ -74,9 +74,10 @@ DEFAULT_SEEDS, DEFAULT_DURATION_S, DEFAULT_RATE_HZ = (0, 1, 2), 30.0, 2.0  # of 
 def _check_applies(args: argparse.Namespace) -> None:
     """An option given for sources none of which it applies to was ignored: ``compare office:1
     --seeds 4 5`` ran seed 1 alone, ``compare LOG --duration 60`` read the log as before."""
-    from experiments.compare import WORLD_NAMES, world_words
+    from experiments.compare import world_words
+    from experiments.options import known_worlds
 
-    bare = [s for s in args.sources if s in WORLD_NAMES]
+    bare = [s for s in args.sources if s in known_worlds()]
     worlds = world_words(args.sources)
     files = [s for s in args.sources if s not in worlds]
     if args.seeds is not None and not bare:

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import DEMO_OUTPUTS, DEMO_OWNER, DURATION, SEED, InputError, check_log, check_out, positive, path_arg, world_name
+from experiments.options import WORLDS, DEMO_OUTPUTS, DEMO_OWNER, DURATION, SEED, InputError, check_log, check_out, positive, path_arg, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -15,10 +15,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=path_arg, help="output folder (default: a new results/demo/DATE_TIME, "
                                             "linked as results/demo/latest)")
     p.add_argument("--seed", type=SEED, default=0, help="world and run seed (default 0)")
-    p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them (default office)")
+    p.add_argument("--world", type=world_name, default="office", help="simulated world: " + WORLDS + " (default office)")
     p.add_argument("--duration", type=DURATION, default=40.0, help="simulated run, s (default 40)")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=10.0, help="scans kept per second of the run (default 10)")
-    p.add_argument("--log", type=path_arg, help="real CARMEN log or bag for Fig. 9 (default: shared/data/carmen/"
+    p.add_argument("--log", type=path_arg, help="real CARMEN log, bag or lmsbench simulate folder for Fig. 9 (default: shared/data/carmen/"
                    "intel-corrected.log.gz beside the checkout, where present)")
     p.add_argument("--no-sweep", action="store_true", help="skip the small Dask sweep")
     p.add_argument("--inprocess", action="store_true", help="run the sweep in this process instead of on Dask")
@@ -45,8 +45,8 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None:
         run_demo(args.out, cfg, sweep_executor=executor)
         return 0
-    report = run_demo(new_run_folder(DEMO_BASE), cfg, sweep_executor=executor)
-    copy_report_up(report)
+    args.out = new_run_folder(DEMO_BASE)  # named if a reader of stdout that goes away stops it
+    copy_report_up(run_demo(args.out, cfg, sweep_executor=executor))
     return 0
 
 
