@@ -38,9 +38,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("sources", nargs="+",
                    help="world names (" + WORLDS + "; WORLD:SEED for one seed), "
                         "`lmsbench simulate` folders, or paths of real logs")
-    p.add_argument("--methods", "--method", nargs="+", type=text("an extractor's name"),
-                   help="extractors: built-in names or a user's MODULE:FUNCTION (default: every built-in one; "
-                        "--method as issue #16 names it, the same option)")
+    p.add_argument("--methods", nargs="+", type=text("an extractor's name"),
+                   help="extractors: built-in names or a user's MODULE:FUNCTION (default: every built-in one)")
+    p.add_argument("--method", dest="methods", nargs="+", type=text("an extractor's name"),
+                   help="the same as --methods (`--method MODULE:FUNCTION` runs a user's extractor)")
     p.add_argument("--seeds", nargs="+", type=SEED, help="seeds of each world named without one, listed (default 0 1 2; "
                                                          "`--seeds 3` is the one seed 3)")
     p.add_argument("--duration", type=DURATION, help="simulated seconds per world and seed (default 30)")
