@@ -115,6 +115,7 @@ def _resolution_deg(angle_increment: float) -> float:
 def base_sensor(cal: LogCalibration):
     """The SensorConfig that the measurements give directly (spot width and outliers not yet fitted)."""
     from sim import SensorConfig
+    from sim.sensor import MAX_NOISE_SIGMA_M, MAX_NOISE_SLOPE
 
     res = _resolution_deg(cal.angle_increment)
     n_beams = cal.n_beams
@@ -128,11 +129,16 @@ def base_sensor(cal: LogCalibration):
                             f"noise ({cal.noise.n_used} beam triples); calibrate needs a log of real surfaces within "
                             "1-4 m of the laser")
     sigma = cal.noise.sigma_m
+    if sigma > MAX_NOISE_SIGMA_M:  # the sensor model refuses it (a value in cm where metres are meant): say why here
+        raise LmsbenchError(f"its range noise at 1-4 m reads {sigma * 1000:.0f} mm (1 sigma), more than the "
+                            f"{MAX_NOISE_SIGMA_M * 1000:g} mm a laser rangefinder's model takes (sim.SensorConfig.noise_sigma); "
+                            "calibrate cannot model this scanner")
 
     def rate(estimate) -> float:  # a rate with nothing to count (no beams of that kind): none seen
         return float(min(estimate.value, 0.5)) if np.isfinite(estimate.value) else 0.0
 
     slope = cal.noise_slope.value if np.isfinite(cal.noise_slope.value) else 0.0
+    slope = float(np.clip(slope, -MAX_NOISE_SLOPE, MAX_NOISE_SLOPE))  # the model's bound: real logs' are below 0.001
     units = cal.units
     cap = cal.max_reading
     range_max = 81.83 if units == "cm" else 8.183
@@ -279,6 +285,7 @@ def calibration_section(result: CalibrationResult, source: str) -> dict[str, Any
         "calibration": {
             "source": source,
             "scans": c.n_scans,
+            **({"repeated_scans_passed_over": c.repeated_scans} if c.repeated_scans else {}),
             "beams_per_scan": c.n_beams,
             "quantum_m": c.quantum_m,
             "noise_sigma_1_4m": {"value": _round(c.noise.sigma_m), "std": _round(c.noise.sigma_std_m),
@@ -319,7 +326,8 @@ def format_calibration(result: CalibrationResult) -> list[str]:
         return f"{e.value * scale:.4g} +- {std}{unit}"
 
     lines = [
-        f"scans {c.n_scans}, {c.n_beams} beams at {np.rad2deg(c.angle_increment):g} deg, quantum {c.quantum_m * 1000:g} mm ({c.units} mode)",
+        f"scans {c.n_scans}, {c.n_beams} beams at {np.rad2deg(c.angle_increment):g} deg, quantum {c.quantum_m * 1000:g} mm ({c.units} mode)"
+        + (f"; {c.repeated_scans} scans passed over as repeats of the scan before them" if c.repeated_scans else ""),
         f"noise sigma at 1-4 m   {c.noise.sigma_m * 1000:.3f} +- {c.noise.sigma_std_m * 1000:.3f} mm  ({c.noise.n_used} triples)",
         f"noise growth           {pm(c.noise_slope, 1000, ' mm/m')}",
         "noise by range         " + ", ".join(f"{b['r_lo']:g}-{b['r_hi']:g} m: {b['sigma'] * 1000:.1f} mm" for b in c.noise_bins),

@@ -5,8 +5,10 @@ Known errors (``lms200.LmsbenchError``, any ``OSError``: missing files, bad path
 schedulers or devices) and bad options become one-line messages ``lmsbench CMD: error: ...`` with
 exit status 2; Ctrl-C exits with 130 and one line, within INTERRUPT_GRACE_S even when a cleanup
 (closing a Dask cluster whose workers are in the middle of cells) would take longer; SIGTERM (``kill``,
-a batch system's time limit) stops the same way, with 143 and "terminated". Anything else is a bug: one line saying so,
-exit status 1 (``LMSBENCH_TRACEBACK=1`` shows the traceback).
+a batch system's time limit) stops the same way, with 143 and "terminated". An exception raised by the user's own code that a
+command runs (a ``--methods MODULE:FUNCTION`` extractor: ``experiments.user_methods.UserMethodFailed``)
+is a user error too, named as such (exit 2; ``LMSBENCH_TRACEBACK=1`` shows its traceback). Anything
+else is a bug: one line saying so, exit status 1 (``LMSBENCH_TRACEBACK=1`` shows the traceback).
 """
 
 from __future__ import annotations
@@ -19,6 +21,9 @@ import _thread
 import signal
 import sys
 import threading
+import time
+import traceback
+from pathlib import Path
 from typing import Any, Sequence
 
 from features.batch import default_threads
@@ -33,12 +38,31 @@ def build_parser() -> argparse.ArgumentParser:
         prog="lmsbench",
         description="Fast feature extraction from 2-D laser rangefinders: a research testbed.",
     )
+    parser.add_argument("--version", action=_Version, help="print lmsbench's version (and git commit, run from a checkout) and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
         module = importlib.import_module(f"{commands.__name__}.{info.name}")
         if hasattr(module, "register"):
             module.register(sub)
     return parser
+
+
+class _Version(argparse.Action):
+    """``lmsbench --version``: the installed package's version and, run from a git checkout, its
+    commit (experiments.provenance.version_text), worked out only when asked."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str = argparse.SUPPRESS, help: str | None = None) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, help=help)
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
+                 option_string: str | None = None) -> None:
+        from .provenance import version_text
+
+        try:
+            sys.stdout.write(version_text() + "\n")
+        except OSError:  # a reader that went away (`--version | head -0`), as argparse's --help: nothing to say it to
+            _stdout_to_devnull()
+        parser.exit()
 
 
 REDELIVER_S = 0.05  # s after a swallowed stop (see _Interrupt.swallowed) before it is raised again
@@ -199,6 +223,7 @@ def _main(argv: Sequence[str] | None) -> int:
     if main_thread:
         sys.unraisablehook = lambda u: interrupt.swallowed(u) or previous_hook(u)
     done = False  # whether the command's work ended (a reader of stdout that went away then is no loss)
+    started_ns = time.time_ns()  # files in --out modified since were written by this run (_stdout_gone)
     try:
         default_threads()  # a bad $LMSBENCH_THREADS is refused before any work, by every command
         interrupt.running = True
@@ -214,9 +239,11 @@ def _main(argv: Sequence[str] | None) -> int:
             return _interrupted(interrupt)
         if isinstance(exc, BrokenPipeError) and _stdout_closed():
             stopped = not done and _writes_outputs(args) and not getattr(args, "outputs_complete", False)
-            return _stdout_gone(name, stopped, getattr(args, "out", None))
+            return _stdout_gone(name, stopped, getattr(args, "out", None), started_ns)
         _end_progress_bars()
-        print(f"lmsbench {name}: error: {_one_line(exc)}{_skip_hint(exc, args)}", file=sys.stderr)
+        if _users_code(exc) and os.environ.get("LMSBENCH_TRACEBACK"):
+            traceback.print_exception(exc)  # the user's exception first, then where lmsbench called it
+        print(f"lmsbench {name}: error: {_one_line(exc)}{_skip_hint(exc, args)}{_traceback_hint(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return _interrupted(interrupt)
@@ -254,19 +281,44 @@ def _stdout_closed() -> bool:
         return False
 
 
-def _stdout_gone(name: str, stopped: bool, out: object) -> int:
+def _stdout_gone(name: str, stopped: bool, out: object, started_ns: int = 0) -> int:
     """A reader of stdout that went away (`lmsbench info LOG | head -4`): no error message (it was
     'error: [Errno 32] Broken pipe', exit 2, or with buffered output Python's 'Exception ignored ...
     BrokenPipeError' at exit, status 120), the status a shell gives for SIGPIPE. A command that
-    writes outputs (an --out option: ``out``, None for its default folder) and was ``stopped`` in its
-    work by it (`lmsbench demo | head -1`) says so in one line on stderr: its outputs are incomplete. What is left in stdout's buffer goes
-    to /dev/null, so the interpreter's last flush does not fail again."""
+    writes outputs (an --out option: ``out``, None while its default folder is not made) and was
+    ``stopped`` in its work by it (`lmsbench demo | head -1`) says so in one line on stderr, with
+    what it left: nothing, or how many files it wrote in ``out`` since ``started_ns`` (time.time_ns):
+    `figures --out DIR | head -1`, stopped before DIR was made, said "DIR is incomplete". What is
+    left in stdout's buffer goes to /dev/null, so the interpreter's last flush does not fail again."""
     _stdout_to_devnull()
     if stopped:
         _end_progress_bars()
-        print(f"lmsbench {name}: stopped: the reader of its standard output went away; "
-              f"{out if out is not None else 'its output folder'} is incomplete", file=sys.stderr)
+        written = _files_written(Path(out), started_ns) if isinstance(out, (str, os.PathLike)) else 0
+        if not written:
+            left = f"nothing was written{f' in {out}' if out is not None and Path(out).is_dir() else ''}"
+        elif Path(out).is_dir():
+            left = f"{out} is incomplete: this run wrote {written} file{'s' if written > 1 else ''} there before it stopped"
+        else:
+            left = f"{out} is incomplete"
+        print(f"lmsbench {name}: stopped: the reader of its standard output went away; {left}", file=sys.stderr)
     return PIPE_CLOSED_STATUS
+
+
+MTIME_SLACK_NS = 10_000_000  # a file's mtime comes from the kernel's coarse clock, a few ms behind time.time_ns
+
+
+def _files_written(out: Path, since_ns: int) -> int:
+    """How many files ``out`` (a folder, searched through; or a file) holds that were modified at
+    or after ``since_ns`` (time.time_ns): the ones this run wrote."""
+    def fresh(path: str | os.PathLike) -> bool:
+        try:
+            return os.stat(path).st_mtime_ns >= since_ns - MTIME_SLACK_NS
+        except OSError:
+            return False
+
+    if not out.is_dir():
+        return int(out.is_file() and fresh(out))
+    return sum(fresh(os.path.join(top, f)) for top, _, files in os.walk(out) for f in files if not f.startswith("."))
 
 
 def _writes_outputs(args: argparse.Namespace) -> bool:
@@ -368,6 +420,20 @@ def _skip_hint(exc: BaseException, args: argparse.Namespace) -> str:
     if exc.reason.startswith("cannot read on"):
         return " (--skip-bad-lines keeps the scans before the damage)"
     return ""
+
+
+def _users_code(exc: BaseException) -> bool:
+    """Whether ``exc`` is an exception raised by the user's own code that lmsbench ran (a
+    ``--methods MODULE:FUNCTION`` extractor): a user error, said in one line with exit status 2 (it
+    was "internal error: ... (a bug in lmsbench ...)", exit 1), its traceback under LMSBENCH_TRACEBACK=1."""
+    from experiments.user_methods import UserMethodFailed
+
+    return isinstance(exc, UserMethodFailed) and exc.raised
+
+
+def _traceback_hint(exc: BaseException) -> str:
+    """Where the traceback of the user's own code's exception is to be had."""
+    return " (LMSBENCH_TRACEBACK=1 shows its traceback)" if _users_code(exc) and not os.environ.get("LMSBENCH_TRACEBACK") else ""
 
 
 def _one_line(exc: BaseException) -> str:

@@ -33,7 +33,7 @@ from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, 
 from lms200 import LmsbenchError, Pose2D, Record, read_log
 from lms200.noise import QUANTUM_CANDIDATES_M
 
-WORLD_NAMES = ("office", "corridor", "angles", "pillars", "random", "cluttered", "mit")  # == sim.WORLD_NAMES (sim loads lazily)
+from experiments.options import known_worlds  # sim.WORLD_NAMES, the simulator imported when first asked
 
 
 @dataclass
@@ -106,9 +106,11 @@ def _truth_in(world: Any, sensor: Any) -> Callable[[Record], Any]:
 
 
 def is_simulation_folder(path: str | Path) -> bool:
-    """A ``lmsbench simulate`` output folder (scans.clf and world.json)."""
-    p = Path(path)
-    return p.is_dir() and (p / "scans.clf").is_file() and (p / "world.json").is_file()
+    """A ``lmsbench simulate`` output folder (``options.simulate_log``) with its world.json, whose
+    scans are scored against their truth (without it, its scans.clf is compared as a log)."""
+    from experiments.options import simulate_log
+
+    return simulate_log(path) is not None and (Path(path) / "world.json").is_file()
 
 
 def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = None) -> Source:
@@ -221,7 +223,7 @@ def log_noise_estimates(scans: Callable[[], Iterable[Any]]) -> dict[str, Callabl
 def world_words(specs: Sequence[str]) -> list[str]:
     """The source words that name a simulated world (``office``, ``office:1``), told by name as
     ``parse_sources`` reads them (a folder named ``office`` does not make ``office`` a file)."""
-    return [s for s in specs if s.partition(":")[0] in WORLD_NAMES]
+    return [s for s in specs if s.partition(":")[0] in known_worlds()]
 
 
 def _check_seed(spec: str, seed: str) -> None:
@@ -245,7 +247,7 @@ def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: f
     out: list[Source] = []
     for spec in specs:
         name, colon, seed = spec.partition(":")
-        if name in WORLD_NAMES:
+        if name in known_worlds():
             if colon:
                 _check_seed(spec, seed)
             for s in ([int(seed)] if colon else seeds):
@@ -254,9 +256,11 @@ def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: f
             out.append(folder_source(spec, stride, max_scans))
         else:
             if not Path(spec).exists():
-                raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}), a simulate folder "
+                raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(known_worlds())}), a simulate folder "
                                     "nor an existing log")
-            out.append(log_source(spec, stride, max_scans, read_options, poses))
+            from experiments.options import simulate_log
+
+            out.append(log_source(simulate_log(spec) or spec, stride, max_scans, read_options, poses))
     return out
 
 
@@ -274,7 +278,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
     stems: dict[str, str] = {}  # a log's figure name (realdata_STEM) -> the word that gave it
     for spec in specs:
         name, colon, seed = spec.partition(":")
-        world = name in WORLD_NAMES  # as parse_sources reads it
+        world = name in known_worlds()  # as parse_sources reads it
         if world and colon:
             _check_seed(spec, seed)
         label = name if world else Path(spec).name
@@ -303,11 +307,11 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
                 raise LmsbenchError(f"{spec}/world.json: not a world ({type(exc).__name__}: {exc})") from None
             spec = str(Path(spec) / "scans.clf")
         elif not Path(spec).exists() and not Path(spec).is_symlink():  # a link to nothing: check_log says so
-            close = [w for w in WORLD_NAMES if _close(w, name)]
+            close = [w for w in known_worlds() if _close(w, name)]
             hint = f" (did you mean {close[0]}?)" if close else ""
-            raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(WORLD_NAMES)}){hint}, a simulate folder "
+            raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(known_worlds())}){hint}, a simulate folder "
                                 "nor an existing log")
-        check_log(spec)
+        spec = str(check_log(spec))  # a simulate folder without world.json: its scans.clf, as a log
         # each log's figure is named by its file name made safe (figures.realdata.figure_stem): "a b.clf" and
         # "a_b.clf" both wrote realdata_a_b_clf.*, the second over the first ("ä.clf" and "ö.clf": realdata__clf)
         from experiments.figures.realdata import figure_stem
@@ -407,7 +411,7 @@ def compare(
         alpha_err_mean / alpha_err_rms (rad), endpoint_err_mean (m), n_truth_corners, corner_tp,
         corner_fp, corner_fn, corner_err_mean (m).
     """
-    from experiments.user_methods import ensure_method
+    from experiments.user_methods import UserMethodFailed, ensure_method
 
     methods = list(methods) if methods else available_methods()
     for m in methods:
@@ -437,13 +441,19 @@ def compare(
             n_valid = int(np.count_nonzero(scan.valid))
             exact = _truth_row(truth, scan, sigma_r, rd_cfg) if truth is not None else {}
             shift = k % len(runs)
-            if not warmed:  # first calls load compiled kernels and fill caches: not timed
-                for _, fn, cfg in src_runs:
-                    fn(scan, cfg)
-                warmed = True
+            try:
+                if not warmed:  # first calls load compiled kernels and fill caches: not timed
+                    for _, fn, cfg in src_runs:
+                        fn(scan, cfg)
+                    warmed = True
+            except UserMethodFailed as exc:  # a user's MODULE:FUNCTION failed: say on which scan
+                raise exc.at(source_label(src), k)
             for name, fn, cfg in src_runs[shift:] + src_runs[:shift]:
                 t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
-                fs = fn(scan, cfg)
+                try:
+                    fs = fn(scan, cfg)
+                except UserMethodFailed as exc:
+                    raise exc.at(source_label(src), k)
                 c1, t1 = time.thread_time_ns(), time.perf_counter_ns()
                 elapsed, cpu = t1 - t0, c1 - c0
                 explained, range_rms = explained_fraction(fs, scan, sigma_r)
@@ -470,6 +480,12 @@ def compare(
     if not table.empty:
         table.insert(table.columns.get_loc("microseconds") + 1, "time_ms", table["microseconds"] / 1e3)
     return table
+
+
+def source_label(src: Source) -> str:
+    """How a message names ``src``: a world with its seed as on the command line (``office:3``),
+    else its name (a simulate folder's or a log's)."""
+    return f"{src.name}:{src.seed}" if src.name in known_worlds() and src.seed is not None else src.name
 
 
 #: the range noise std (m) ``compare``'s ``sigma`` (``--sigma``) takes, given as a number: at least

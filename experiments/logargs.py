@@ -21,7 +21,7 @@ _GEOMETRY_FLAGS = (("laser_fov_deg", "fov", True), ("laser_resolution_deg", "res
 
 
 #: the help of a command's LOG argument (it said "plain or .gz"; bzip2 and xz logs are read too)
-LOG_HELP = "CARMEN log (plain, .gz, .bz2 or .xz), ROS 1 .bag or ROS 2 bag folder"
+LOG_HELP = "CARMEN log (plain, .gz, .bz2 or .xz), ROS 1 .bag, ROS 2 bag folder or lmsbench simulate folder"
 
 
 def add_log_options(parser: argparse.ArgumentParser) -> None:

@@ -27,6 +27,7 @@ class LogSummary:
     truth: bool
     stamps_back: int = 0  # scans stamped before the previous scan of the log
     corrected: int = 0  # scans with corrected poses (a Radish corrected log: odometry from its ODOM lines)
+    stamps_repeated: int = 0  # scans stamped like the previous scan of the log
 
     def as_dict(self) -> dict:
         """The fields as JSON-ready values, numbers as numbers: ``beams`` is the beam count (int)
@@ -58,7 +59,9 @@ class LogSummary:
             *([f"corrected poses {self.corrected} scans (the laser lines' pose fields: the log's own SLAM solution, "
                "not ground truth)"] if self.corrected else []),
             "time order      " + (f"{self.stamps_back} scan{'s' * (self.stamps_back != 1)} stamped before the previous one "
-                                  "(slam needs --skip-bad-lines)" if self.stamps_back else "yes"),
+                                  "(slam needs --skip-bad-lines)" if self.stamps_back else "yes")
+            + (f"; {self.stamps_repeated} scan{'s' * (self.stamps_repeated != 1)} stamped like the previous one "
+               "(the same scan twice, or a coarse clock)" if self.stamps_repeated else ""),
         ]
 
 
@@ -69,7 +72,7 @@ def summarise(records: Iterable[Record]) -> LogSummary:
     stamps: list[float] = []
     readings = inf = nan = 0
     odom = truth = False
-    back = corrected = 0
+    back = corrected = repeated = 0
     first = None
     for rec in records:
         s = rec.scan
@@ -77,6 +80,7 @@ def summarise(records: Iterable[Record]) -> LogSummary:
         n += 1
         sizes.add(len(s))
         back += bool(stamps) and s.stamp < stamps[-1]
+        repeated += bool(stamps) and s.stamp == stamps[-1]  # "time order yes" for a log of every line twice
         stamps.append(s.stamp)
         readings += len(s)
         inf += int(np.isposinf(s.ranges).sum())
@@ -103,4 +107,5 @@ def summarise(records: Iterable[Record]) -> LogSummary:
         truth=truth,
         stamps_back=back,
         corrected=corrected,
+        stamps_repeated=repeated,
     )

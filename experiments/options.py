@@ -35,6 +35,28 @@ def known_worlds() -> tuple[str, ...]:
     return tuple(WORLD_NAMES)
 
 
+#: written in an option's help text, replaced by the simulator's world names (known_worlds) when the
+#: help is shown: ``compare --help`` listed five of the seven worlds, written out by hand; the names
+#: are not read when the parsers are built (that imports the simulator, for every command)
+WORLDS = "{worlds}"
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """argparse's help, with WORLDS in a help text filled in."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = super()._get_help_string(action)
+        if not text or WORLDS not in text:
+            return text
+        from lms200 import LmsbenchError
+
+        try:
+            names = ", ".join(known_worlds())
+        except LmsbenchError:  # the simulator cannot load (numba missing): its error comes when it is used
+            names = "a built-in world's name"
+        return text.replace(WORLDS, names)
+
+
 #: a quoted value of 80 characters or more: the opening quote not after a letter or digit, the closing
 #: one not before one, so an apostrophe ("don't", "the log's") is not taken for a quote (the text
 #: between it and a value's opening quote was cut instead of the value)
@@ -48,6 +70,22 @@ def shorten_quoted(message: str) -> str:
     return _LONG_QUOTED.sub(lambda m: f"'{m[1][:40]}...{m[1][-8:]}' ({len(m[1])} characters)", message)
 
 
+UNRECOGNIZED = "unrecognized arguments: "  # argparse's message of words no option or argument took
+NEAR_MISS_EDITS = 2  # edits (edits()) within which an unknown option of five letters or more is a near miss of a known one
+
+
+def edits(a: str, b: str) -> int:
+    """The fewest single-letter insertions, deletions, substitutions and swaps of neighbours that
+    turn ``a`` into ``b`` (optimal string alignment distance)."""
+    d = [[i + j if i * j == 0 else 0 for j in range(len(b) + 1)] for i in range(len(a) + 1)]
+    for i in range(1, len(a) + 1):
+        for j in range(1, len(b) + 1):
+            d[i][j] = min(d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] != b[j - 1]))
+            if i > 1 and j > 1 and a[i - 1] == b[j - 2] and a[i - 2] == b[j - 1]:
+                d[i][j] = min(d[i][j], d[i - 2][j - 2] + 1)
+    return d[len(a)][len(b)]
+
+
 class OneLineParser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line, ``PROG: error: MESSAGE``, exit status 2
     (argparse's own prints the usage first). Options are spelled out: no abbreviations (``--dur 3``
@@ -55,10 +93,41 @@ class OneLineParser(argparse.ArgumentParser):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("allow_abbrev", False)
+        kwargs.setdefault("formatter_class", HelpFormatter)
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> None:  # type: ignore[override]
+        if message.startswith(UNRECOGNIZED):
+            message += self.near_misses(message[len(UNRECOGNIZED):].split())
         self.exit(2, f"{self.prog}: error: {shorten_quoted(message)} (see {self.prog} --help)\n")
+
+    def near_misses(self, words: Sequence[str]) -> str:
+        """"; did you mean --seeds?" for the unrecognized option ``words`` that are a near miss of
+        one of this parser's options (``compare --seed 1``: simulate and demo take --seed, compare
+        and sim2real --seeds; argparse 3.11 says only "unrecognized arguments"), or "" for none:
+        the start of exactly one option (abbreviations are not taken: ``--dur``), else within
+        NEAR_MISS_EDITS edits (a letter added, left out, changed, or two swapped; one for names of
+        up to four letters)."""
+        options = [o for o in self._option_string_actions if o.startswith("--")]
+        pairs = []
+        for word in words:
+            name = word.split("=", 1)[0]
+            if not name.startswith("-") or name in ("-", "--") or name in self._option_string_actions:
+                continue
+            bare = name.lstrip("-")  # -seeds, ---seeds
+            starts = [o for o in options if o.startswith("--" + bare)] if len(bare) > 1 else []
+            if len(starts) == 1:
+                pairs.append((name, starts[0]))
+                continue
+            allowed = 1 if len(bare) <= 4 else NEAR_MISS_EDITS
+            distance, best = min(((edits(bare, o[2:]), o) for o in options), default=(allowed + 1, ""))
+            if distance <= allowed:
+                pairs.append((name, best))
+        if not pairs:
+            return ""
+        if len(pairs) == 1:
+            return f"; did you mean {pairs[0][1]}?"
+        return "; did you mean " + ", ".join(f"{right} for {wrong}" for wrong, right in pairs) + "?"
 
     def parse_known_args(self, args: Sequence[str] | None = None, namespace: Any = None) -> Any:  # type: ignore[override]
         """As argparse, but an option that takes a value given twice is an error: argparse kept the
@@ -324,10 +393,28 @@ def check_simulate_finished(path: str | os.PathLike) -> None:
                              f"cut short or an earlier run's; {rerun}")
 
 
+def simulate_log(path: str | os.PathLike) -> Path | None:
+    """The log of a ``lmsbench simulate`` output folder, its scans.clf (a CARMEN log with the true
+    poses), or None when ``path`` is not such a folder. The one test of every command that reads a
+    log: slam and compare took a simulate folder, info, calibrate, sim2real, figures --log and
+    lms200 emulate --log said it was "a folder but not a ROS 2 bag"."""
+    p = Path(path)
+    log = p / "scans.clf"
+    return log if p.is_dir() and log.is_file() else None
+
+
+def not_a_log_folder(path: str | os.PathLike) -> str:
+    """The message of a folder given as a log that is neither kind of folder a log may be."""
+    return (f"{path} is a folder but neither a ROS 2 bag (no metadata.yaml) nor a lmsbench simulate folder "
+            "(no scans.clf)")
+
+
 def check_log(path: str | os.PathLike) -> Path:
-    """A CARMEN log (plain text, or compressed with gzip, bzip2 or xz), a ROS 1 ``.bag`` or a ROS 2 bag folder, by its content:
-    a binary file, an archive, a plain file named ``.gz``, a folder without ``metadata.yaml`` are errors;
-    so is the scans.clf (or folder) of a ``lmsbench simulate`` run that did not finish (check_simulate_finished)."""
+    """The log to read for ``path``, checked: a CARMEN log (plain text, or compressed with gzip,
+    bzip2 or xz), a ROS 1 ``.bag``, a ROS 2 bag folder, or a ``lmsbench simulate`` folder (its
+    scans.clf is returned: :func:`simulate_log`), by its content: a binary file, an archive, a
+    plain file named ``.gz``, a folder that is neither kind are errors; so is the scans.clf (or
+    folder) of a ``lmsbench simulate`` run that did not finish (check_simulate_finished)."""
     if not str(path).strip():  # Path("") is the current folder
         raise InputError(f"empty path {str(path)!r} given as a log; give {'a CARMEN log, ROS 1 .bag or ROS 2 bag folder'}")
     p = Path(path)
@@ -335,10 +422,13 @@ def check_log(path: str | os.PathLike) -> Path:
     what = "a CARMEN log, ROS 1 .bag or ROS 2 bag folder"
     if not p.exists():
         raise InputError(missing_message(p, "log"))
+    sim_log = simulate_log(p)
+    if sim_log is not None:
+        return check_log(sim_log)
     if p.is_dir():
         meta = p / "metadata.yaml"
         if not meta.is_file():
-            raise InputError(f"{p} is a folder but not a ROS 2 bag (no metadata.yaml)")
+            raise InputError(not_a_log_folder(p))
         _text_head(meta, "a ROS 2 bag's metadata.yaml")
         try:  # rosbags said "Could not load YAML ... in "<unicode string>", line 1, ..." over several lines
             info = load_yaml(meta.read_text(encoding="utf-8"))
@@ -502,11 +592,14 @@ def _first_line(start: str) -> Callable[[Path], bool]:
 
 
 def _slam_config(path: Path) -> bool:
-    """config.yaml as lmsbench slam writes it (slamrun.write_config): exactly input: and slam:
-    mappings, the slam one with a preset."""
+    """config.yaml as lmsbench slam writes it (slamrun.write_config): input: and slam: mappings,
+    the slam one with a preset, and nothing else but the records extractor_config: and versions:
+    (mappings; an earlier version wrote neither)."""
     raw = _yaml_mapping(path)
-    return (raw is not None and set(raw) == {"input", "slam"} and isinstance(raw["input"], dict)
-            and isinstance(raw["slam"], dict) and "preset" in raw["slam"])
+    records = ("extractor_config", "versions")  # experiments.slamrun.RECORD_KEYS (slamrun imports the slam package)
+    return (raw is not None and {"input", "slam"} <= set(raw) <= {"input", "slam", *records}
+            and isinstance(raw["input"], dict) and isinstance(raw["slam"], dict) and "preset" in raw["slam"]
+            and all(isinstance(raw[k], dict) for k in records if k in raw))
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ import datetime
 import glob
 import os
 import platform
+import subprocess
 import sys
 from importlib import metadata
 from pathlib import Path
@@ -26,6 +27,41 @@ def versions() -> dict[str, str]:
         except metadata.PackageNotFoundError:
             continue
     return out
+
+
+#: the checkout this module lies in (lmsbench installed editable, ``make setup``), if a git one
+CHECKOUT = Path(__file__).resolve().parents[1]
+GIT_TIMEOUT_S = 5.0  # s: a git that does not answer leaves the commit out
+
+
+def checkout_commit() -> str | None:
+    """The commit of the git checkout lmsbench runs from ("2a1ee83d2902", with ", modified" when
+    tracked files differ from it), or None where it runs from no checkout (an installed wheel) or
+    git cannot say (not installed, not a repository). Two quick git calls, no import."""
+    if not (CHECKOUT / ".git").exists():  # a folder, or a worktree's file
+        return None
+    try:
+        head = subprocess.run(["git", "-C", str(CHECKOUT), "rev-parse", "--short=12", "HEAD"], capture_output=True,
+                              text=True, timeout=GIT_TIMEOUT_S)
+        if head.returncode != 0 or not head.stdout.strip():
+            return None
+        status = subprocess.run(["git", "-C", str(CHECKOUT), "status", "--porcelain", "--untracked-files=no"],
+                                capture_output=True, text=True, timeout=GIT_TIMEOUT_S)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    modified = status.returncode == 0 and bool(status.stdout.strip())
+    return head.stdout.strip() + (", modified" if modified else "")
+
+
+def version_text() -> str:
+    """What ``lmsbench --version`` prints: the installed package's version and, run from a git
+    checkout, its commit: ``lmsbench 0.1.0 (git 2a1ee83d2902)``."""
+    try:
+        text = f"lmsbench {metadata.version('lmsbench')}"
+    except metadata.PackageNotFoundError:  # run from a checkout that was never installed
+        text = "lmsbench (not installed)"
+    commit = checkout_commit()
+    return text + (f" (git {commit})" if commit else "")
 
 
 def new_run_folder(base: str | os.PathLike, now: datetime.datetime | None = None) -> Path:

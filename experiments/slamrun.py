@@ -18,10 +18,12 @@ from typing import Any, Collection, Iterable
 import numpy as np
 
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
+from lms200.logs import regular_file
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml
-from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished
+from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished, not_a_log_folder, simulate_log
 from experiments.provenance import write_record
+from experiments.user_methods import scans_of
 from slam import SlamConfig, SlamResult, run_slam
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
 
@@ -74,7 +76,7 @@ def simulated_interlaced(path: str | Path) -> bool | None:
     """The ``sensor.interlaced`` of a simulator output folder's config.yaml (None: not a simulator
     folder, or the file does not say)."""
     cfg = Path(path) / "config.yaml"
-    if not (Path(path).is_dir() and (Path(path) / "scans.clf").is_file() and cfg.is_file()):
+    if simulate_log(path) is None or not cfg.is_file():
         return None
     try:
         raw = load_yaml(cfg.read_text())
@@ -112,17 +114,21 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     sources: dict[str, str] = {}
     truth = walls = rel = None
     check_simulate_finished(p)
-    if p.is_dir() and (p / "scans.clf").is_file():
-        log = p / "scans.clf"
-        if (p / "groundtruth.tum").is_file():
+    sim_log = simulate_log(p)
+    if sim_log is not None:
+        log = sim_log
+        # a folder (or a pipe) of these names is an error (read_tum, regular_file), not no truth / no
+        # world: a groundtruth.tum that was a folder ran without the truth's scores, exit 0
+        if (p / "groundtruth.tum").exists():
             stamps, poses = read_tum(p / "groundtruth.tum")
             truth = np.column_stack((stamps, poses))
             sources["truth"] = str(p / "groundtruth.tum")
-        if (p / "world.json").is_file():
+        if (p / "world.json").exists():
             try:
-                walls = np.asarray(json.loads((p / "world.json").read_text())["walls"], float).reshape(-1, 4)
+                text = regular_file(p / "world.json", "world.json").read_text(encoding="utf-8", errors="replace")
+                walls = np.asarray(json.loads(text)["walls"], float).reshape(-1, 4)
                 sources["walls"] = str(p / "world.json")
-            except (KeyError, ValueError) as exc:
+            except (KeyError, TypeError, ValueError) as exc:  # TypeError: a JSON list, null or a dict of walls
                 raise LmsbenchError(f"{p / 'world.json'}: no wall list ({exc})") from None
             from sim.world import MAX_COORD_M
 
@@ -132,7 +138,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
                 raise LmsbenchError(f"{p / 'world.json'}: not a world.json (walls: must be finite numbers within "
                                     f"+-{MAX_COORD_M:g} m)")
     elif p.is_dir() and not (p / "metadata.yaml").is_file():
-        raise LmsbenchError(f"{p}: a folder input must hold scans.clf (a simulator output) or be a ROS 2 bag")
+        raise LmsbenchError(not_a_log_folder(p))
     else:
         log = p
     sources["scans"] = str(log)
@@ -254,7 +260,8 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
 
         records = tqdm(data.records, desc="slam", unit="scan", leave=False, disable=None)  # terminal only
     t0, c0 = time.perf_counter(), time.process_time()
-    result = run_slam(records, config)
+    with scans_of(data.name, data.records):  # a user's --extractor MODULE:FUNCTION that fails names its scan
+        result = run_slam(records, config)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     if out is not None:
         earlier = earlier_run_files(out) if replace_earlier and out.is_dir() else set()  # before this run writes
@@ -269,14 +276,16 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     if paper_baseline and config.preset == "default":
         c1 = time.process_time()
         paper_config = dataclasses.replace(config, preset="paper")  # the same motion input as the run
-        paper = run_slam(data.records, paper_config)
+        with scans_of(data.name, data.records):
+            paper = run_slam(data.records, paper_config)
         table.append({"source": _source_name(paper_config), **_flat(score(paper.trajectory, data, paper)),
                       "cpu_scans_per_s": len(data.records) / max(time.process_time() - c1, 1e-9)})
     odo = data.odometry
     if odo is not None:
         table.append({"source": "raw odometry", **_flat(score(odo, data))})
         if odometry_baseline and not config.motion.use_odometry:
-            with_odo = run_slam(data.records, dataclasses.replace(config, preset="paper", motion=dataclasses.replace(config.motion, use_odometry=True)))
+            with scans_of(data.name, data.records):
+                with_odo = run_slam(data.records, dataclasses.replace(config, preset="paper", motion=dataclasses.replace(config.motion, use_odometry=True)))
             table.append({"source": "paper preset (odometry)", **_flat(score(with_odo.trajectory, data, with_odo))})
     consistency = {
         "diverged": bool(d["diverged"]),
@@ -376,12 +385,24 @@ def write_scores(out: Path, data: SlamInput, slam_run: SlamRun) -> None:
 
 
 def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:
-    """config.yaml in ``out``: the input and the resolved SLAM config of the run; written first and
-    whole (provenance.write_record), as it tells ``out`` as an lmsbench slam folder: a run stopped
-    after its trajectory.tum, before config.yaml, left a folder the next run into it refused."""
+    """config.yaml in ``out``: the input, the SLAM config of the run, the extractor's resolved
+    config (every field of ``config.extractor``'s config, its defaults included: the SLAM config
+    holds only the overrides, ``extractor_params: {}`` for none) and the versions of the code and
+    libraries; written first and whole (provenance.write_record), as it tells ``out`` as an lmsbench
+    slam folder: a run stopped after its trajectory.tum, before config.yaml, left a folder the next
+    run into it refused. ``slam --config`` reads the slam: section back; the other two are records."""
     import yaml
 
-    write_record(out / "config.yaml", yaml.safe_dump({"input": data.sources, "slam": config.to_dict()}, sort_keys=False))
+    from experiments.compare import resolved_configs
+    from experiments.provenance import versions
+
+    extractor = resolved_configs([config.extractor], {config.extractor: config.extractor_params})[config.extractor]
+    record = {"input": data.sources, "slam": config.to_dict(), RECORD_KEYS[0]: extractor, RECORD_KEYS[1]: versions()}
+    write_record(out / "config.yaml", yaml.safe_dump(record, sort_keys=False))
+
+
+#: config.yaml's records beside input: and slam: (what ran, not settings: ``slam --config`` skips them)
+RECORD_KEYS = ("extractor_config", "versions")
 
 
 def _jsonable(value: Any) -> Any:
@@ -428,8 +449,11 @@ def plot(path: Path, data: SlamInput, res: SlamResult) -> None:
     ax.plot(xy[:, 0], xy[:, 1], color="#8c564b", lw=1.0, label="slam trajectory")
     if res.map_corners.size:
         c = al.apply(res.map_corners[:, :2])
-        ax.plot(c[:, 0], c[:, 1], "o", color="#2ca02c", ms=3, label="corner landmarks")
-    ax.plot([], [], color="#1f77b4", lw=1.5, label="line landmarks")
+        ax.plot(c[:, 0], c[:, 1], "o", color="#2ca02c", ms=3, label="map corners" if "keyframes" in res.diagnostics
+                else "corner landmarks")
+    # the paper preset's EKF keeps line landmarks; the default pipeline's lines are its keyframes' merged map
+    default_pipeline = "keyframes" in res.diagnostics
+    ax.plot([], [], color="#1f77b4", lw=1.5, label="map lines" if default_pipeline else "line landmarks")
     ax.set_title(f"{data.name}: {len(data.records)} scans, {res.map_lines.shape[0]} lines")
     ax.legend(loc="best")
     if equal_axes:

@@ -7,21 +7,70 @@ A name ``MODULE:FUNCTION`` is imported (the current folder first on the path, so
 an empty config; the function receives the ``lms200.Scan`` and returns a ``FeatureSet`` (lines and
 corners in the sensor frame). A function with a ``config_type`` attribute (a dataclass) is called
 ``fn(scan, config)`` and its config's fields can be set with ``--set extractor.MODULE:FUNCTION.FIELD=V``.
+
+An exception the function raises on a scan is the user's code failing, not lmsbench: it comes out
+as :class:`UserMethodFailed` (an ``LmsbenchError``, its ``__cause__`` the user's exception), which
+the drivers that know where the scan came from place (``.at(source, index)``); the command line
+says it in one line, exit 2, and shows the user's traceback under ``LMSBENCH_TRACEBACK=1``.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import importlib
 import os
 import sys
-from typing import Any, Callable
+from typing import Any, Callable, Iterator, Sequence
 
 from lms200 import LmsbenchError
 
 
 class UserMethodError(LmsbenchError, ValueError):
     """A ``MODULE:FUNCTION`` extractor that cannot be loaded or returns the wrong thing."""
+
+
+class UserMethodFailed(UserMethodError):
+    """A ``MODULE:FUNCTION`` extractor that failed on a scan: it raised an exception (``raised``;
+    the exception is ``__cause__``: the user's code, not lmsbench's) or returned something other
+    than a FeatureSet. ``at(source, index)`` names the scan; until then it is named by its stamp."""
+
+    def __init__(self, method: str, what: str, scan: Any, raised: bool) -> None:
+        self.method, self.what, self.scan, self.raised = method, what, scan, raised
+        self.place: str | None = None
+        super().__init__(self._message())
+
+    def _message(self) -> str:
+        stamp = getattr(self.scan, "stamp", None)
+        where = self.place or (f"on the scan stamped {stamp:.6f} s" if isinstance(stamp, float) else "on a scan")
+        return f"your extractor {self.method} {self.what} {where}"
+
+    def at(self, source: str, index: int) -> "UserMethodFailed":
+        """This error, naming its scan as ``index`` (0-based) of ``source`` (a driver that knows
+        the source better than the one it called names it again: the last place given stays)."""
+        self.place = f"on {source} scan {index}"
+        self.args = (self._message(),)
+        return self
+
+    def at_scan_of(self, source: str, scans: Sequence[Any]) -> "UserMethodFailed":
+        """This error, naming its scan by its index in ``scans`` (scans or records, found by
+        identity, else by stamp: a driver that passed copies, e.g. de-skewed ones)."""
+        items = [getattr(s, "scan", s) for s in scans]
+        k = next((i for i, s in enumerate(items) if s is self.scan), None)
+        stamp = getattr(self.scan, "stamp", None)
+        if k is None and stamp is not None:
+            k = next((i for i, s in enumerate(items) if getattr(s, "stamp", None) == stamp), None)
+        return self.at(source, k) if k is not None else self
+
+
+@contextlib.contextmanager
+def scans_of(source: str, scans: Sequence[Any]) -> Iterator[None]:
+    """Within it, a user extractor's failure names its scan by its index in ``scans`` (scans or
+    records) of ``source``: for a driver that hands a whole run to a library call (``run_slam``)."""
+    try:
+        yield
+    except UserMethodFailed as exc:
+        raise exc.at_scan_of(source, scans)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -80,9 +129,13 @@ def _checked(name: str, fn: Callable[..., Any], takes_config: bool) -> Callable[
     from features import FeatureSet
 
     def run(scan: Any, config: Any) -> Any:
-        out = fn(scan, config) if takes_config else fn(scan)
+        try:
+            out = fn(scan, config) if takes_config else fn(scan)
+        except Exception as exc:  # noqa: BLE001 - the user's code: said as such, not as a bug in lmsbench
+            said = f"raised {type(exc).__name__}" + (f": {exc}" if str(exc) else "")
+            raise UserMethodFailed(name, said, scan, True) from exc
         if not isinstance(out, FeatureSet):
-            raise UserMethodError(f"{name} returned {type(out).__name__}, not a features.FeatureSet")
+            raise UserMethodFailed(name, f"returned {type(out).__name__}, not a features.FeatureSet", scan, False)
         return out
 
     run.__name__ = getattr(fn, "__name__", "run")

@@ -102,6 +102,8 @@ class LogCalibration:
             beams gives about the tail's own share; rough stretches of surface give more.
         nan_clustering: how nan readings gather along a scan: of the nan beams, the share whose
             next beam is nan too (about nan_rate for beams dropped one by one; MIT CSAIL: 0.82).
+        repeated_scans: scans passed over as the scan before them again (the same stamp, geometry
+            and readings: a log written twice over, line by line), not among ``n_scans``.
     """
 
     n_scans: int
@@ -125,6 +127,7 @@ class LogCalibration:
     tail_sigma_m: float = 0.0
     tail_clustering: Estimate = Estimate(float("nan"), float("nan"), 0)
     nan_clustering: Estimate = Estimate(float("nan"), float("nan"), 0)
+    repeated_scans: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -160,6 +163,14 @@ def _beyond_range_max_invalid(scan: Scan) -> Scan:
     if not beyond.any():
         return scan
     return scan.replace(ranges=np.where(beyond, np.nan, scan.ranges))
+
+
+def _repeats(scan: Scan, before: Scan | None) -> bool:
+    """Whether ``scan`` is ``before`` again: the same stamp, geometry and readings (nan as nan)."""
+    return (before is not None and scan.stamp == before.stamp and len(scan) == len(before)
+            and scan.angle_min == before.angle_min and scan.angle_increment == before.angle_increment
+            and scan.range_min == before.range_min and scan.range_max == before.range_max
+            and bool(np.array_equal(scan.ranges, before.ranges, equal_nan=True)))
 
 
 def _mm_mode_codes(scan: Scan) -> Scan:
@@ -387,7 +398,13 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
     """
     check_seed(seed)
     kept: list[Scan] = []
+    repeated = 0
     for s in scans_of(scans):
+        # A scan read twice is no second sample: a log whose every line came twice (written twice
+        # over) was measured with each scan counted twice, its standard errors 1/sqrt(2) as large.
+        if _repeats(s, kept[-1] if kept else None):
+            repeated += 1
+            continue
         kept.append(s)
         if len(kept) >= MAX_SCANS:
             break
@@ -423,5 +440,5 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
         outlier_straight_rate=_ratio(c[:, 11], c[:, 10], seed),
         mixed_share=_ratio(c[:, 8], c[:, 8] + c[:, 9], seed),
         tail_share=tail, tail_sigma_m=float(tail_sigma), tail_clustering=clustering,
-        nan_clustering=_nan_clustering(kept, seed),
+        nan_clustering=_nan_clustering(kept, seed), repeated_scans=repeated,
     )

@@ -499,10 +499,13 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
     if name == UNITS_PARAM:
         _require(value in ("mm", "cm"), f"{UNITS_PARAM} must be mm or cm, got {value!r}")
         units = value  # type: ignore[assignment]
-    elif name == ODOMETRY_PARAM:
-        has_odometry = value != "absent"
-    elif name in EXACT_GEOMETRY_PARAMS:
-        params[name] = float(_floats([value], name)[0])
+    elif name == ODOMETRY_PARAM:  # any other value read as present ("maybe", "no", "Absent"), silently
+        _require(value in ("absent", "present"), f"{ODOMETRY_PARAM} must be absent or present, got {value!r}")
+        has_odometry = value == "present"
+    elif name in EXACT_GEOMETRY_PARAMS:  # nan or inf was taken and then passed over as disagreeing, silently
+        number = float(_floats([value], name)[0])
+        _require(math.isfinite(number), f"{name} must be a finite number (rad), got {value!r}")
+        params[name] = number
     elif name == RANGE_MIN_PARAM:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number >= 0, f"{name} must be a finite number >= 0 (m), got {value!r}")

@@ -10,7 +10,8 @@ before t and the first stamped at or after it, when both lie within ``ODOM_MAX_G
 none (a scan before the first ODOM, after the last, or across a gap in the odometry).
 
 Scans wait for the ODOM after them: at most until a line stamped ``ODOM_MAX_GAP_S`` after them
-has been read, or ``MAX_PENDING_SCANS`` wait, so memory stays bounded.
+has been read, or ``MAX_PENDING_SCANS`` wait, or their beams pass ``MAX_PENDING_BEAMS``, so memory
+stays bounded.
 """
 
 from __future__ import annotations
@@ -24,6 +25,10 @@ from .records import Pose2D, Record
 
 ODOM_MAX_GAP_S = 0.5  # s: the farthest an ODOM line may lie from a scan (either side) to give its pose
 MAX_PENDING_SCANS = 256  # scans held at most while waiting for the ODOM line after them
+#: beams held at most in those scans (256 of 361 beams are 92,416): 256 pose-less scans of one stamp of
+#: 314,000 beams each (the longest line the reader takes) were held, 1.33 GB resident for a 188 MB log
+#: (74 MB when stamped 1 s apart)
+MAX_PENDING_BEAMS = 1 << 20
 #: s behind the latest ODOM stamp read for which ODOM lines are kept: a laser line written late (after
 #: ODOM lines stamped after it) still finds the lines around its stamp. A count of 8 lines was too
 #: few (a review: 100 Hz odometry and laser lines 0.1 s late, every scan read with odom None).
@@ -50,6 +55,7 @@ class OdomPairing:
         self.recent: deque[tuple[float, Pose2D]] = deque(maxlen=MAX_RECENT_ODOM)  # ODOM lines (stamp s, pose), ODOM_KEEP_S
         self.last_odom = -math.inf  # the latest ODOM stamp read
         self.pending: deque[Record] = deque()
+        self.pending_beams = 0  # beams of the pending scans
         self.newest = -math.inf  # the latest stamp read (scans and ODOM lines)
 
     def odom(self, stamp: float, pose: Pose2D) -> Iterator[Record]:
@@ -65,18 +71,25 @@ class OdomPairing:
     def scan(self, rec: Record) -> Iterator[Record]:
         """A record without odometry: held until an ODOM line stamped at or after it is read."""
         self.pending.append(rec)
+        self.pending_beams += len(rec.scan)
         self.newest = max(self.newest, rec.scan.stamp)
         return self._ready()
 
     def flush(self) -> Iterator[Record]:
         """The scans still waiting (the log has ended)."""
         while self.pending:
-            yield self._paired(self.pending.popleft())
+            yield self._paired(self._pop())
 
     def _ready(self) -> Iterator[Record]:
         while self.pending and (self.pending[0].scan.stamp <= self.last_odom or len(self.pending) > MAX_PENDING_SCANS
+                                or self.pending_beams > MAX_PENDING_BEAMS
                                 or self.newest - self.pending[0].scan.stamp > ODOM_MAX_GAP_S):
-            yield self._paired(self.pending.popleft())
+            yield self._paired(self._pop())
+
+    def _pop(self) -> Record:
+        rec = self.pending.popleft()
+        self.pending_beams -= len(rec.scan)
+        return rec
 
     def _paired(self, rec: Record) -> Record:
         t = rec.scan.stamp

@@ -14,7 +14,7 @@ from typing import Iterable, Iterator
 
 from .bag import BagError, BagReader, is_bag, write_bag
 from .carmen import CarmenReader, write_carmen
-from .errors import InputError, LogNotFoundError
+from .errors import InputError, LogFormatError, LogNotFoundError
 from .laser_geometry import LaserGeometry
 from .records import Record
 
@@ -143,6 +143,39 @@ def regular_file(path: object, what: str) -> Path:
     if not p.is_file():
         raise LogNotFoundError(f"{p}: a {what} must be a regular file, not a device or pipe")
     return p
+
+
+MAX_ROW_CHARS = 1 << 20
+"""Longest line of a text file of rows (TUM, relations) read (characters, as ``carmen.MAX_LINE_CHARS``):
+a row is 8 numbers, under 200 characters. A file of zeros or of binary data with no line break
+was read as one line, whole: a 3 GB one ended in MemoryError ("internal error", exit 1)."""
+MAX_COORD_M = 1e9
+"""Largest |x|, |y| (m) a TUM or relations row may hold: far beyond any trajectory on Earth (UTM
+northings are below 1e7 m); 1e300 m overflowed the squares of the metrics (RuntimeWarnings on
+stderr and an error of inf, exit 0)."""
+
+
+def row_lines(path: str | Path, p: Path) -> Iterator[tuple[int, str]]:
+    """(line number, line) of the text file ``p`` (named ``path`` in messages), each line read at most
+    :data:`MAX_ROW_CHARS` characters at a time: a longer one is a LogFormatError naming it."""
+    with open(p, encoding="ascii", errors="replace") as f:
+        for no, line in enumerate(iter(lambda: f.readline(MAX_ROW_CHARS + 1), ""), 1):
+            if len(line) > MAX_ROW_CHARS:
+                raise LogFormatError(path, no, f"longer than {MAX_ROW_CHARS:,} characters: not a text file of rows "
+                                               "(binary data, or no line breaks)")
+            yield no, line
+
+
+def row_numbers(path: str | Path, no: int, words: list[str], what: str) -> list[float]:
+    """The numbers of a TUM or relations row, as a float parser of the format reads them: Python's
+    float() also takes ``1_000`` (a stamp 1_000 read as 1000 s), which neither evo nor numpy does:
+    a LogFormatError naming the line, as a word that is no number is."""
+    try:
+        if any("_" in w for w in words):
+            raise ValueError
+        return [float(w) for w in words]
+    except ValueError:
+        raise LogFormatError(path, no, f"{what} has a non-number: {' '.join(words)[:60]!r}") from None
 
 
 def checked_records(records: Iterable[object], error: type[Exception] = InputError) -> Iterator[Record]:

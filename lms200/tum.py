@@ -99,35 +99,34 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
             exist or is a folder (were a raw FileNotFoundError / IsADirectoryError), a device or
             a pipe (read until memory ran out).
         LogFormatError: naming the line: a row that is not 8 finite numbers (nan allowed in the pose
-            with ``allow_nan``), a zero quaternion, a stamp before the previous one.
+            with ``allow_nan``; no ``_`` in a number), x or y beyond +-``logs.MAX_COORD_M``, a zero
+            quaternion, a stamp before the previous one, a line longer than ``logs.MAX_ROW_CHARS``.
     """
-    from .logs import regular_file  # not at the top: logs imports bag, which imports this module
+    from .logs import MAX_COORD_M, regular_file, row_lines, row_numbers  # not at the top: logs imports bag, which imports this module
 
     if not isinstance(allow_nan, bool):
         raise InputError(f"allow_nan: must be True or False, got {type(allow_nan).__name__}")
     p = regular_file(path, "TUM file")  # a device or pipe too: /dev/zero was read until memory ran out
     stamps: list[float] = []
     poses: list[tuple[float, float, float]] = []
-    with open(p, encoding="ascii", errors="replace") as f:
-        for no, line in enumerate(f, 1):
-            s = line.strip()
-            if not s or s.startswith("#"):
-                continue
-            parts = s.split()
-            if len(parts) != 8:
-                raise LogFormatError(path, no, f"TUM rows need 8 entries (t x y z qx qy qz qw), got {len(parts)}")
-            try:
-                v = [float(w) for w in parts]
-            except ValueError:
-                raise LogFormatError(path, no, f"TUM row has a non-number: {s[:60]!r}") from None
-            lost = allow_nan and math.isfinite(v[0]) and not any(math.isinf(x) for x in v)
-            if not lost and not all(math.isfinite(x) for x in v):  # slam on a folder with a nan here: "internal error"
-                raise LogFormatError(path, no, f"TUM row has a non-finite number: {s[:60]!r}")
-            if stamps and v[0] < stamps[-1]:
-                raise LogFormatError(path, no, f"TUM stamps go backwards ({v[0]:.6f} s after {stamps[-1]:.6f} s)")
-            yaw = float(quaternion_to_yaw(np.array(v[4:8]))[0])
-            if math.isnan(yaw) and not any(math.isnan(x) for x in v[4:8]):  # (0, 0, 0, 0) read as yaw 0
-                raise LogFormatError(path, no, f"TUM row's quaternion (qx qy qz qw) is zero: {s[:60]!r}")
-            stamps.append(v[0])
-            poses.append((v[1], v[2], yaw))
+    for no, line in row_lines(path, p):  # a line of 3 GB (a file of zeros) was read whole: MemoryError
+        s = line.strip()
+        if not s or s.startswith("#"):
+            continue
+        parts = s.split()
+        if len(parts) != 8:
+            raise LogFormatError(path, no, f"TUM rows need 8 entries (t x y z qx qy qz qw), got {len(parts)}")
+        v = row_numbers(path, no, parts, "TUM row")
+        lost = allow_nan and math.isfinite(v[0]) and not any(math.isinf(x) for x in v)
+        if not lost and not all(math.isfinite(x) for x in v):  # slam on a folder with a nan here: "internal error"
+            raise LogFormatError(path, no, f"TUM row has a non-finite number: {s[:60]!r}")
+        if abs(v[1]) > MAX_COORD_M or abs(v[2]) > MAX_COORD_M:
+            raise LogFormatError(path, no, f"TUM row's x or y is beyond +-{MAX_COORD_M:g} m: {s[:60]!r}")
+        if stamps and v[0] < stamps[-1]:
+            raise LogFormatError(path, no, f"TUM stamps go backwards ({v[0]:.6f} s after {stamps[-1]:.6f} s)")
+        yaw = float(quaternion_to_yaw(np.array(v[4:8]))[0])
+        if math.isnan(yaw) and not any(math.isnan(x) for x in v[4:8]):  # (0, 0, 0, 0) read as yaw 0
+            raise LogFormatError(path, no, f"TUM row's quaternion (qx qy qz qw) is zero: {s[:60]!r}")
+        stamps.append(v[0])
+        poses.append((v[1], v[2], yaw))
     return np.array(stamps), np.array(poses).reshape(-1, 3)

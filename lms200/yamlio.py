@@ -9,7 +9,10 @@ nesting too deep for Python's recursion limit (a RecursionError, not a YAML erro
 that expand a document to billions of values or into itself (a "billion laughs": fine to
 PyYAML, which shares the objects, but endless to the ``repr`` of an error message), and a
 scalar its tag cannot make (an impossible date, ``seed: 2025-02-30``, or ``!!float abc``: Python's
-ValueError, without the file or line). All
+ValueError, without the file or line), and a number that YAML 1.1 reads otherwise than YAML 1.2,
+Python and the command line (``k: 1_0`` read as 10, ``duration: 1:30`` as 90, ``seed: 010`` as 8;
+quoted, each is text for the field's own check). Hexadecimal (``0x10``), binary (``0b101``),
+``.inf`` and ``.nan`` read as before. All
 raise ``yaml.YAMLError`` with the line, as any malformed YAML does; PyYAML's own errors are
 re-raised as :class:`Malformed`, one line that starts with the place ("line 2, column 1: ...")."""
 
@@ -35,11 +38,45 @@ Loader.add_implicit_resolver(
 )
 
 
+_INT_TAG, _FLOAT_TAG = "tag:yaml.org,2002:int", "tag:yaml.org,2002:float"
+_OCTAL = re.compile(r"[-+]?0[0-9]+")  # YAML 1.1's octal (010 is 8); a lone 0 is not one
+
+
+def yaml11_number(loader: Loader, node: yaml.Node) -> str | None:
+    """Why ``node``, a scalar that YAML 1.1 (PyYAML) reads as a number, reads as another number
+    than YAML 1.2, Python and the command line (``experiments.options.plain_number``) would, or
+    None: underscores dropped (``1_0`` is 10), base 60 (``1:30`` is 90, ``12:30:00`` 45000), a
+    leading 0 read as octal (``010`` is 8). Each ran, silently, as that other number."""
+    if not isinstance(node, yaml.ScalarNode) or node.tag not in (_INT_TAG, _FLOAT_TAG):
+        return None
+    text = node.value
+    if ":" in text:
+        why = "YAML 1.1 reads digits between colons in base 60 (a time or an angle)"
+    elif "_" in text:
+        why = "YAML 1.1 drops a number's underscores (the command line refuses them)"
+    elif node.tag == _INT_TAG and _OCTAL.fullmatch(text):
+        why = "YAML 1.1 reads a whole number with a leading 0 in octal"
+    else:
+        return None
+    value = yaml.SafeLoader.construct_object(loader, node)
+    return f"{text} is read as {value!r}: {why}; write the number as a plain decimal, or quote it ('{text}') for text"
+
+
+def _refuse_yaml11_number(loader: Loader, node: yaml.Node, where: str = "") -> None:
+    """Raise a YAML error at ``node`` (``where``: "key 'k': " before the problem) if
+    ``yaml11_number`` finds it reads as another number."""
+    problem = yaml11_number(loader, node)
+    if problem:
+        raise yaml.constructor.ConstructorError(None, None, where + problem, node.start_mark)
+
+
 def _construct_object(loader: Loader, node: yaml.Node, deep: bool = False) -> Any:
     """SafeLoader's construction, with a scalar that its tag cannot make a YAML error at its line
     and column: an impossible date (``seed: 2025-02-30``, "day is out of range for month") or an
     explicit tag's bad value (``!!float abc``) was Python's ValueError, an internal error without
-    the file, line or field; an int of more than 4300 digits says so."""
+    the file, line or field; an int of more than 4300 digits says so. A number that YAML 1.1 reads
+    otherwise than YAML 1.2 and the command line (``yaml11_number``) is refused at its place."""
+    _refuse_yaml11_number(loader, node)
     try:
         return yaml.SafeLoader.construct_object(loader, node, deep=deep)
     except (ValueError, TypeError, AttributeError, OverflowError) as exc:
@@ -77,6 +114,12 @@ def _construct_mapping(loader: Loader, node: yaml.MappingNode, deep: bool = Fals
                 continue
             if duplicate:
                 raise DuplicateKey(f"key {key!r} given twice (again at line {key_node.start_mark.line + 1})")
+        for key_node, value_node in node.value:  # a number read otherwise, named by its key (the place alone below)
+            items = value_node.value if isinstance(value_node, yaml.SequenceNode) else [value_node]
+            for i, item in enumerate(items):
+                shown = key_node.value if isinstance(key_node, yaml.ScalarNode) else "?"
+                item_of = f", item {i + 1}" if isinstance(value_node, yaml.SequenceNode) else ""
+                _refuse_yaml11_number(loader, item, f"key {shown!r}{item_of}: ")
     return yaml.SafeLoader.construct_mapping(loader, node, deep=deep)
 
 

@@ -28,9 +28,17 @@ from lms200.timing import MIRROR_TURN_S, scan_period, turns_per_scan
 NOISE_REFERENCE_RANGE_M = 2.5  # m: noise_sigma holds at this range (the middle of 1-4 m)
 OUTLIER_RANGE_SHARE = (0.1, 0.9)  # an outlier reads this share of the true range (uniform)
 MIN_RESOLUTION_DEG = 0.25  # the LMS200's finest angular step (deg)
-MAX_NOISE_SIGMA_M = 1.0  # largest noise_sigma / noise_tail_sigma (m) and |noise_sigma_per_m| (m per m)
+# The bounds of a sensor file's values (``lmsbench calibrate`` writes them; ``--sensor`` reads
+# them), each physically plausible for a 2-D laser rangefinder with room to spare: a value
+# written in mm or cm where metres are meant lies outside (noise_sigma: 0.5 meant as 5 mm in cm
+# simulated 0.5 m of noise, and sim2real compared the log against it for minutes, exit 0).
+MAX_NOISE_SIGMA_M = 0.1  # largest noise_sigma (m at 2.5 m): the datasheet's 0.005, the real logs' calibrations 0.004-0.027
+MAX_TAIL_SIGMA_M = 1.0  # largest noise_tail_sigma (m): the logs' heavy tails are 0.05-0.07
+MAX_NOISE_SLOPE = 0.05  # largest |noise_sigma_per_m| (m per m of range): the logs' 0.0006 at most (0.5 mm per m)
+MAX_MIXED_GAP_M = 1.0  # largest mixed_gap (m): the default 0.1
 MAX_BEAM_WIDTH_DEG = 10.0  # widest laser spot (deg); the LMS200's diverges by about 0.25 deg
 MIN_PATCH_M = 1e-3  # smallest rough / dark cell (m): one range code in mm mode
+MAX_PATCH_M = 10.0  # largest rough / dark cell (m), a room's size: calibrate tries up to 2 m
 
 
 @dataclass(frozen=True)
@@ -80,10 +88,11 @@ class SensorConfig:
     ``lmsbench calibrate`` fits all of them to a real log.
 
     Checked when built (an ``InputError`` names the field): every number finite; resolution_deg
-    in [0.25, 1] deg and a field of view of at most 180 deg (so at most 721 beams); noise_sigma
-    and noise_tail_sigma in [0, 1] m and |noise_sigma_per_m| <= 1 (metres: a 5 meant as
-    millimetres is refused, not simulated); mixed_gap >= 0; beam_width_deg in [0, 10] deg;
-    probabilities in [0, 1); the two cell sizes 0 or >= 1 mm.
+    in [0.25, 1] deg and a field of view of at most 180 deg (so at most 721 beams); noise_sigma in
+    [0, 0.1] m, noise_tail_sigma in [0, 1] m and |noise_sigma_per_m| <= 0.05 m per m (metres: a
+    5 meant as millimetres or a 0.5 meant as centimetres is refused, not simulated); mixed_gap in
+    [0, 1] m; beam_width_deg in [0, 10] deg; probabilities in [0, 1); the two cell sizes 0 or in
+    [1 mm, 10 m].
     """
 
     n_beams: int = 361
@@ -133,16 +142,17 @@ class SensorConfig:
                              f"got {self.resolution_deg}")
         if self.fov_deg > 180.0 + 1e-9:
             raise InputError(f"n_beams, resolution_deg: field of view {self.fov_deg} deg exceeds 180 deg")
-        for name in ("noise_sigma", "noise_tail_sigma"):  # metres: 5 meant as mm simulated 5 m of noise
-            value = getattr(self, name)
-            if not 0 <= value <= MAX_NOISE_SIGMA_M:
-                raise InputError(f"{name}: must be in [0, {MAX_NOISE_SIGMA_M:g}] m (a 1-sigma range error in metres; "
-                                 f"the datasheet's is 0.005), got {value}")
-        if abs(self.noise_sigma_per_m) > MAX_NOISE_SIGMA_M:
-            raise InputError(f"noise_sigma_per_m: must be within +-{MAX_NOISE_SIGMA_M:g} m per m of range, "
-                             f"got {self.noise_sigma_per_m}")
-        if self.mixed_gap < 0:
-            raise InputError(f"mixed_gap: must be >= 0 m, got {self.mixed_gap}")
+        for name, most in (("noise_sigma", MAX_NOISE_SIGMA_M), ("noise_tail_sigma", MAX_TAIL_SIGMA_M)):
+            value = getattr(self, name)  # metres: 5 meant as mm simulated 5 m of noise, 0.5 meant as cm 0.5 m
+            if not 0 <= value <= most:
+                raise InputError(f"{name}: must be in [0, {most:g}] m (a 1-sigma range error in metres; "
+                                 f"the datasheet's is 0.005: a value in mm or cm is refused), got {value}")
+        if abs(self.noise_sigma_per_m) > MAX_NOISE_SLOPE:  # 0.5 meant as mm per m grew the noise by 3 m at 8 m
+            raise InputError(f"noise_sigma_per_m: must be within +-{MAX_NOISE_SLOPE:g} m per m of range (metres of "
+                             f"noise per metre; real logs' are below 0.001), got {self.noise_sigma_per_m}")
+        if not 0 <= self.mixed_gap <= MAX_MIXED_GAP_M:  # 10 meant as cm made no mixed pixel at all
+            raise InputError(f"mixed_gap: must be in [0, {MAX_MIXED_GAP_M:g}] m (a depth step in metres; the default "
+                             f"is 0.1), got {self.mixed_gap}")
         for name in ("dropout_prob", "no_return_prob", "outlier_prob"):
             value = getattr(self, name)
             if not 0 <= value < 1:
@@ -153,8 +163,9 @@ class SensorConfig:
             raise InputError(f"noise_tail_prob: must be in [0, 1), got {self.noise_tail_prob}")
         for name in ("noise_tail_patch_m", "dropout_patch_m"):  # 1e-300 m cells overflowed the cell index
             value = getattr(self, name)
-            if not (value == 0 or value >= MIN_PATCH_M):
-                raise InputError(f"{name}: must be 0 (beam by beam) or a cell size >= {MIN_PATCH_M:g} m, got {value}")
+            if not (value == 0 or MIN_PATCH_M <= value <= MAX_PATCH_M):  # 30 meant as cm: cells of 30 m
+                raise InputError(f"{name}: must be 0 (beam by beam) or a cell size in [{MIN_PATCH_M:g}, {MAX_PATCH_M:g}] m, "
+                                 f"got {value}")
         if self.max_reading is not None and not MIN_RANGE_MAX_M <= self.max_reading <= self.range_max:
             # 1e-320 (a subnormal) logged every reading as 1e-320 m: no laser's cap is under 0.1 m
             raise InputError(f"max_reading: must be in [{MIN_RANGE_MAX_M:g}, range_max = {self.range_max}] m, "

@@ -14,7 +14,7 @@ import numpy as np
 
 from lms200 import InputError, LmsbenchError, LogFormatError
 from lms200.codes import real_rows, real_vector
-from lms200.logs import regular_file
+from lms200.logs import MAX_COORD_M, regular_file, row_lines, row_numbers
 from features.baselines.checks import positive
 
 from .models import wrap
@@ -309,7 +309,8 @@ def read_relations(path: str | Path) -> np.ndarray:
     """Read a relations file (``t1 t2 x y z roll pitch yaw`` a line) into (m, 5): t1, t2, x, y, yaw.
 
     Raises:
-        LogFormatError: a row that is not 8 finite numbers, naming file and line.
+        LogFormatError: a row that is not 8 finite numbers (no ``_`` in a number), x or y beyond
+            +-``lms200.logs.MAX_COORD_M``, a line longer than ``lms200.logs.MAX_ROW_CHARS``, naming file and line.
         LmsbenchError: a file without rows, or a TUM trajectory (``t x y z qx qy qz qw``, also 8 numbers
             a row): every row's last four numbers of norm 1 and some row's z, roll or pitch (qx, qy, qz)
             not 0 (a 2-D relation's z, roll, pitch and yaw are (0, 0, 0, yaw)).
@@ -317,22 +318,20 @@ def read_relations(path: str | Path) -> np.ndarray:
     rows = []
     unit_quaternions = 0  # rows whose last four numbers have norm 1, as a TUM row's quaternion has
     turned = False  # a row with z, roll or pitch (a TUM row's qx, qy, qz) not 0
-    with open(regular_file(path, "relations file"), encoding="ascii", errors="replace") as f:
-        for no, line in enumerate(f, 1):
-            s = line.split()
-            if not s or s[0].startswith("#"):
-                continue
-            if len(s) != 8:
-                raise LogFormatError(path, no, f"relation rows need 8 numbers (t1 t2 x y z roll pitch yaw), got {len(s)}")
-            try:
-                v = [float(w) for w in s]
-            except ValueError:
-                raise LogFormatError(path, no, f"relation row has a non-number: {line.strip()[:60]!r}") from None
-            if not all(math.isfinite(x) for x in v):  # a nan made the mean error null, silently
-                raise LogFormatError(path, no, f"relation row has a non-finite number: {line.strip()[:60]!r}")
-            rows.append((v[0], v[1], v[2], v[3], v[7]))
-            unit_quaternions += abs(math.hypot(*v[4:8]) - 1.0) <= QUATERNION_NORM_TOLERANCE
-            turned |= any(v[4:7])  # a TUM row's qz of a pose turned from the first; a 2-D relation's z, roll, pitch are 0
+    for no, line in row_lines(path, regular_file(path, "relations file")):  # a 3 GB line was read whole: MemoryError
+        s = line.split()
+        if not s or s[0].startswith("#"):
+            continue
+        if len(s) != 8:
+            raise LogFormatError(path, no, f"relation rows need 8 numbers (t1 t2 x y z roll pitch yaw), got {len(s)}")
+        v = row_numbers(path, no, s, "relation row")
+        if not all(math.isfinite(x) for x in v):  # a nan made the mean error null, silently
+            raise LogFormatError(path, no, f"relation row has a non-finite number: {line.strip()[:60]!r}")
+        if abs(v[2]) > MAX_COORD_M or abs(v[3]) > MAX_COORD_M:
+            raise LogFormatError(path, no, f"relation row's x or y is beyond +-{MAX_COORD_M:g} m: {line.strip()[:60]!r}")
+        rows.append((v[0], v[1], v[2], v[3], v[7]))
+        unit_quaternions += abs(math.hypot(*v[4:8]) - 1.0) <= QUATERNION_NORM_TOLERANCE
+        turned |= any(v[4:7])  # a TUM row's qz of a pose turned from the first; a 2-D relation's z, roll, pitch are 0
     if not rows:  # an empty file gave "none of the 0 relations falls inside the run" after the run
         raise LmsbenchError(f"{path}: no relations (t1 t2 x y z roll pitch yaw a line)")
     if unit_quaternions == len(rows) and turned:  # a TUM file (slam --relations RUN/groundtruth.tum) scored 1.42 m, exit 0

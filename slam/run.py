@@ -10,7 +10,7 @@ import numpy as np
 from features.baselines.checks import finite, is_real
 from lms200.errors import InputError, LmsbenchError
 from lms200.finite import shown
-from lms200.logs import checked_records
+from lms200.logs import MAX_COORD_M, checked_records
 from lms200.records import Record, pose_of
 
 from .config import SlamConfig
@@ -258,8 +258,8 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
 #: 'internal error: OverflowError: (34, 'Numerical result out of range')' after the run had started
 MAX_STAMP_STEP_S = 1e12
 #: m: the largest odometry, true or corrected pose coordinate SLAM takes (an odometry of 1e300 m
-#: overflowed the odometry model's variance the same way)
-MAX_POSE_M = 1e9
+#: overflowed the odometry model's variance the same way); the TUM and relations readers' bound too
+MAX_POSE_M = MAX_COORD_M
 
 
 def in_scale(records: Iterable[Record], label: str = "records[{k}]") -> Iterator[Record]:

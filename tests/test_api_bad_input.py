@@ -410,10 +410,21 @@ def test_paper_slam_over_a_long_gap_in_the_stamps() -> None:
     # the others simulated silently meaningless scans
     (dict(n_beams=100_000_000, resolution_deg=1e-6), r"^resolution_deg: the LMS200's finest step is 0.25 deg"),
     (dict(resolution_deg=1e-300), r"^resolution_deg: the LMS200's finest step"),
-    (dict(noise_sigma=5.0), r"^noise_sigma: must be in \[0, 1\] m"),
+    (dict(noise_sigma=5.0), r"^noise_sigma: must be in \[0, 0.1\] m"),
     (dict(noise_tail_sigma=1e300), r"^noise_tail_sigma: must be in \[0, 1\] m"),
-    (dict(noise_sigma_per_m=-1e300), r"^noise_sigma_per_m: must be within \+-1 m per m"),
-    (dict(mixed_gap=-1.0), r"^mixed_gap: must be >= 0 m"),
+    (dict(noise_sigma_per_m=-1e300), r"^noise_sigma_per_m: must be within \+-0.05 m per m"),
+    (dict(mixed_gap=-1.0), r"^mixed_gap: must be in \[0, 1\] m"),
+    # values in cm or mm where metres are meant, taken and simulated (0.44: MIT CSAIL's 4.4 mm in cm;
+    # 0.5 mm per m; a 10 cm gap; 30 cm cells): physically implausible, refused naming field and unit
+    (dict(noise_sigma=0.44), r"^noise_sigma: must be in \[0, 0.1\] m \(a 1-sigma range error in metres; the "
+                             r"datasheet's is 0.005: a value in mm or cm is refused\), got 0.44$"),
+    (dict(noise_sigma_per_m=0.5), r"^noise_sigma_per_m: must be within \+-0.05 m per m of range \(metres of noise per "
+                                  r"metre; real logs' are below 0.001\), got 0.5$"),
+    (dict(mixed_gap=10.0), r"^mixed_gap: must be in \[0, 1\] m \(a depth step in metres; the default is 0.1\), got 10.0$"),
+    (dict(mixed_gap=1e300), r"^mixed_gap: must be in \[0, 1\] m"),
+    (dict(noise_tail_patch_m=30.0), r"^noise_tail_patch_m: must be 0 \(beam by beam\) or a cell size in \[0.001, 10\] m, "
+                                    r"got 30.0$"),
+    (dict(dropout_patch_m=1e300), r"^dropout_patch_m: must be 0 \(beam by beam\) or a cell size in \[0.001, 10\] m"),
     (dict(beam_width_deg=1e300), r"^beam_width_deg: must be in \[0, 10\] deg"),
     (dict(dropout_prob=0.5, dropout_patch_m=1e-300), r"^dropout_patch_m: must be 0 \(beam by beam\) or a cell size"),
     (dict(noise_tail_patch_m=1e-9), r"^noise_tail_patch_m: must be 0"),

@@ -135,6 +135,9 @@ def files(tmp_path_factory):
     (d / "sensor_flag.yaml").write_text("quantise: 3\n")
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
     (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
+    (d / "sensor_cm.yaml").write_text("n_beams: 361\nresolution_deg: 0.5\nunits: cm\nnoise_sigma: 0.44\n")  # cm meant
+    (d / "sensor_slope_mm.yaml").write_text("noise_sigma: 0.005\nnoise_sigma_per_m: 0.5\n")  # mm per m meant
+    (d / "sensor_gap_cm.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 10\n")  # cm meant: no mixed pixel at all
     (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
     (d / "sensor_cap.yaml").write_text("max_reading: 1.0e-320\n")  # every reading logged as 1e-320 m
     laughs = "[" + ", ".join(["&c0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]"] + [f"&c{i} [" + ", ".join([f"*c{i - 1}"] * 10) + "]"
@@ -151,6 +154,11 @@ def files(tmp_path_factory):
     (d / "badcolon.yaml").write_text("noise_sigma: 0.1\n  x: : 3\n")
     (d / "badalias.yaml").write_text("noise_sigma: *nope\n")
     (d / "run_date.yaml").write_text("world: office\nseed: 2025-02-30\nduration: 2\n")  # an internal ValueError
+    # YAML 1.1 numbers: seed 90 and seed 8 simulated, 181 beams, k 10 swept, silently
+    (d / "run_sexagesimal.yaml").write_text("world: office\nseed: 1:30\nduration: 2\n")
+    (d / "run_octal.yaml").write_text("world: office\nseed: 010\nduration: 2\n")
+    (d / "sensor_underscore.yaml").write_text("n_beams: 18_1\nresolution_deg: 1.0\n")
+    (d / "sweep_underscore.yaml").write_text("name: k\nkind: extract\ngrid:\n  extractor.k: [1_0]\n")
     (d / "simbadyaml").mkdir()
     (d / "simbadyaml" / "config.yaml").write_text("sensor: {noise_sigma: 0.005\n")
     write_log(d / "simbadyaml" / "scans.clf", good)
@@ -253,7 +261,15 @@ CASES = [
     (["simulate", "--config", "{run_bool.yaml}", "--out", O], "run_bool.yaml: not a simulate config (duration: must be a number, got True)"),
     (["simulate", "--config", "{run_list.yaml}", "--out", O], "(duration: must be a number, got [2])"),
     (["simulate", "--config", "{run_robot.yaml}", "--out", O], "(robot: must be a mapping of fields, got 5)"),
-    (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 1] m"),
+    (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 0.1] m"),
+    # a calibrated sensor with its noise in cm (MIT CSAIL's 4.4 mm as 0.44): sim2real compared the log
+    # against 0.44 m of noise ("sensor: noise 440.00 mm", largest gap 0.514), exit 0
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_cm.yaml}", "--out", O], "sensor_cm.yaml: noise_sigma: must be in [0, "
+     "0.1] m (a 1-sigma range error in metres; the datasheet's is 0.005: a value in mm or cm is refused), got 0.44"),
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_slope_mm.yaml}", "--out", O], "sensor_slope_mm.yaml: noise_sigma_per_m: "
+     "must be within +-0.05 m per m of range (metres of noise per metre; real logs' are below 0.001), got 0.5"),
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_gap_cm.yaml}", "--out", O], "sensor_gap_cm.yaml: mixed_gap: must be in "
+     "[0, 1] m (a depth step in metres; the default is 0.1), got 10"),
     (["compare", "office", "--sensor", "{sensor_fine.yaml}", "--out", O], "sensor_fine.yaml: resolution_deg"),
     (["sim2real", "{good.clf}", "--sensor", "{sensor_dup.yaml}", "--out", O], "sensor_dup.yaml: not valid YAML (key 'noise_sigma' given twice"),
     # compare
@@ -502,6 +518,16 @@ CASES = [
      "'2025-02-30' is not a valid date or time (day is out of range for month))"),
     (["slam", "{good.clf}", "--config", "{run_date.yaml}", "--out", O], "run_date.yaml: not valid YAML (line 2, column 7: "),
     (["sweep", "{run_date.yaml}", "--out", O], "run_date.yaml: not valid YAML: line 2, column 7: '2025-02-30' is not"),
+    (["simulate", "--config", "{run_sexagesimal.yaml}", "--out", O], "run_sexagesimal.yaml: not valid YAML (line 2, column 7: "
+     "key 'seed': 1:30 is read as 90: YAML 1.1 reads digits between colons in base 60 (a time or an angle); write the "
+     "number as a plain decimal, or quote it ('1:30') for text)"),
+    (["simulate", "--config", "{run_octal.yaml}", "--out", O], "run_octal.yaml: not valid YAML (line 2, column 7: key 'seed': "
+     "010 is read as 8: YAML 1.1 reads a whole number with a leading 0 in octal"),
+    (["simulate", "--sensor", "{sensor_underscore.yaml}", "--world", "office", "--seed", "0", "--duration", "1", "--out", O],
+     "sensor_underscore.yaml: not valid YAML (line 1, column 10: key 'n_beams': 18_1 is read as 181: YAML 1.1 drops a "
+     "number's underscores"),
+    (["sweep", "{sweep_underscore.yaml}", "--out", O], "sweep_underscore.yaml: not valid YAML: line 4, column 17: key "
+     "'extractor.k', item 1: 1_0 is read as 10"),
     # configs and sweep files over 1 MiB: refused unread (a 1.5 MB sweep file took 81 s to be refused)
     (["sweep", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576 a config or sweep file "
      "may hold (refused unread"),

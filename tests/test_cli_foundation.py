@@ -180,3 +180,24 @@ def test_a_missing_input_names_the_file_it_was_likely_meant_to_be(tmp_path: Path
                        (["info", "other.bag"], "other.bag: no such log")):
         assert main(argv) == 2
         assert capsys.readouterr().err == f"lmsbench {argv[0]}: error: {said}\n"
+
+
+def test_info_says_when_scans_repeat_the_stamp_before_them(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The wrong-input hunt (duplicated stamps): a log of every line twice, or of three scans of one
+    stamp, said 'time order      yes' and nothing else (the scan rate read as the lines'). Now the
+    time order line counts the scans stamped like the one before (``stamps_repeated`` in --json)."""
+    from lms200 import Record, Scan, write_log
+
+    scans = [Scan.lms200(np.full(361, 2.0 + k), stamp=0.5 * k) for k in range(3)]
+    write_log(tmp_path / "twice.clf", [Record(s) for s in scans for _ in range(2)])
+    assert main(["info", str(tmp_path / "twice.clf")]) == 0
+    out = capsys.readouterr().out
+    assert ("time order      yes; 3 scans stamped like the previous one (the same scan twice, or a coarse clock)"
+            in out.splitlines()[-2])  # old: "time order      yes"
+    write_log(tmp_path / "back.clf", [Record(s.replace(stamp=t)) for s, t in zip(scans, (1.0, 1.0, 0.5))])
+    assert main(["info", str(tmp_path / "back.clf"), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert (info["stamps_back"], info["stamps_repeated"]) == (1, 1)
+    write_log(tmp_path / "ok.clf", [Record(s) for s in scans])
+    assert main(["info", str(tmp_path / "ok.clf")]) == 0
+    assert "  time order      yes\n" in capsys.readouterr().out

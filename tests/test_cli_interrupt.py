@@ -201,7 +201,7 @@ CLOSED_STDOUT = r"""
 import sys
 from lms200 import LmsbenchError
 from experiments import cli
-from experiments.commands import calibrate, info, simulate
+from experiments.commands import calibrate, info, simulate, slam
 
 def stopped_in_its_work(args):  # a command with --out whose progress goes to stdout (demo, bench, sweep)
     for i in range(100000):
@@ -212,26 +212,38 @@ def fails_after_a_line(args):  # an error (exit 2) with a line left in stdout's 
     print("a line")
     raise LmsbenchError("a user error")
 
+def wrote_two_files_then_stopped(args):  # a command stopped after writing some of its outputs
+    args.out.mkdir()
+    for name in ("config.yaml", "trajectory.tum"):
+        (args.out / name).write_text("x\n")
+    stopped_in_its_work(args)
+
 simulate.run = calibrate.run = stopped_in_its_work
+slam.run = wrote_two_files_then_stopped
 info.run = fails_after_a_line
 sys.exit(cli.main(sys.argv[1:]))
 """
 
 
 @pytest.mark.parametrize("argv, status, stderr", [
-    (["simulate", "--out", "DIR"], 141, ["lmsbench simulate: stopped: the reader of its standard output went away; DIR is incomplete"]),
+    # DIR never made: it said "DIR is incomplete" (figures --out DIR | head -1, stopped in its study)
+    (["simulate", "--out", "DIR"], 141, ["lmsbench simulate: stopped: the reader of its standard output went away; nothing was written"]),
+    (["slam", "x.clf", "--out", "{tmp}/d"], 141, ["lmsbench slam: stopped: the reader of its standard output went away; "
+                                                  "{tmp}/d is incomplete: this run wrote 2 files there before it stopped"]),
     (["info", "x.clf"], 2, ["lmsbench info: error: a user error"]),
     (["--help"], 0, []),
     # calibrate prints its YAML without --out: `calibrate LOG | head -5` said "its output folder is incomplete"
     (["calibrate", "x.clf"], 141, []),
-    (["calibrate", "x.clf", "--out", "s.yaml"], 141, ["lmsbench calibrate: stopped: the reader of its standard output went away; s.yaml is incomplete"]),
+    (["calibrate", "x.clf", "--out", "s.yaml"], 141, ["lmsbench calibrate: stopped: the reader of its standard output went away; nothing was written"]),
 ])
-def test_a_reader_that_goes_away_during_work_or_before_an_error(argv, status, stderr):
+def test_a_reader_that_goes_away_during_work_or_before_an_error(argv, status, stderr, tmp_path):
     """Review of the SIGPIPE handling: a command stopped in its work by a closed stdout (`lmsbench
     demo | head -1`) ended with 141 and no word, its output folder left incomplete (before that,
     'error: [Errno 32] Broken pipe', exit 2): now one line says so. An error, a Ctrl-C or --help with
     output left in stdout's buffer ended with Python's 'Exception ignored ... BrokenPipeError' and
     status 120 at the interpreter's last flush: now the command's own status and line."""
+    argv = [w.format(tmp=tmp_path) for w in argv]
+    stderr = [w.format(tmp=tmp_path) for w in stderr]
     proc = subprocess.Popen([sys.executable, "-c", CLOSED_STDOUT, *argv], cwd=REPO, env={**_env(), "PYTHONUNBUFFERED": ""},
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert proc.stdout is not None and proc.stderr is not None
@@ -255,6 +267,27 @@ def test_a_reader_that_goes_away_during_the_summary_does_not_call_finished_outpu
     err = proc.stderr.read()
     assert (proc.wait(timeout=300), err) == (141, "")
     assert {p.name for p in out.iterdir()} == {"compare.parquet", "summary.csv", "summary.txt", "config.yaml"}
+
+
+def test_figures_stopped_before_its_folder_was_made_says_nothing_was_written(tmp_path):
+    """`lmsbench figures --out DIR | head -1`: the study's first progress line went to head, the next
+    broke the pipe before DIR was made, and it said "DIR is incomplete" of a folder that did not
+    exist. Now it says nothing was written."""
+    from lms200 import Record, Scan, write_log
+
+    log = tmp_path / "a.clf"  # Fig. 9's real log, read first: its line is the first progress line
+    write_log(log, [Record(Scan.lms200(np.full(361, 2.0), stamp=0.1 * i)) for i in range(3)])
+    out = tmp_path / "figs-pipe"
+    cmd = [sys.executable, "-m", "experiments.cli", "figures", "--no-slam", "--duration", "0.5", "--methods", "sensor",
+           "--intel", str(log), "--out", str(out)]
+    proc = subprocess.Popen(cmd, cwd=REPO, env={**_env(), "PYTHONUNBUFFERED": "1"}, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert (proc.wait(timeout=300), err) == (141, "lmsbench figures: stopped: the reader of its standard output went "
+                                                  "away; nothing was written\n")
+    assert not out.exists()
 
 
 def test_calibrate_writes_its_yaml_before_the_summary_a_reader_may_cut(tmp_path, shared_data):

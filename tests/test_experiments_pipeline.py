@@ -5,6 +5,7 @@ its report."""
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -156,6 +157,32 @@ def test_fig9_of_another_log_is_named_by_that_log(tmp_path, capsys, monkeypatch)
     assert _real_log_caption(tables).startswith("Fig. 9: the same on scans of the real log lab.clf (")
     intel = {"intel_points": pd.DataFrame({"label": ["Intel scan 88"]})}
     assert "Intel Research Lab log (real data, 180 beams at 1°" in _real_log_caption(intel)
+
+
+def test_the_demo_without_out_also_leaves_results_demo_report_md(tmp_path, monkeypatch, capsys):
+    """Issue #8 names `results/demo/report.md`; since issue #16 each run goes to its own
+    results/demo/DATE_TIME folder (linked as latest) and no results/demo/report.md was left (an
+    audit of the resolved issues). The newest run's report is now copied there, its links pointing
+    into the run's folder, with the self-contained report.html beside it."""
+    import experiments.demo
+
+    def fake_run_demo(out, cfg, sweep_executor="local", log=print):
+        (out / "figures").mkdir(parents=True)
+        (out / "figures" / "a.png").write_bytes(b"png")
+        (out / "report.md").write_text("# lmsbench demo\n\n![a](figures/a.png) [web](https://x.org/a.png)\n")
+        (out / "report.html").write_text("<html>embedded</html>")
+        return out / "report.md"
+
+    monkeypatch.setattr(experiments.demo, "run_demo", fake_run_demo)
+    monkeypatch.chdir(tmp_path)
+    assert main(["demo", "--no-sweep", "--duration", "2"]) == 0
+    base = tmp_path / "results" / "demo"
+    run = (base / "latest").resolve()
+    copied = (base / "report.md").read_text()
+    assert copied == f"# lmsbench demo\n\n![a]({run.name}/figures/a.png) [web](https://x.org/a.png)\n"
+    assert all((base / p).is_file() for p in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", copied))
+    assert (base / "report.html").read_text() == "<html>embedded</html>"
+    assert f"copied the report to {Path('results/demo/report.md')}" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("slam", [True, False])

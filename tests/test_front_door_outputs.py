@@ -122,6 +122,12 @@ def test_compare_runs_a_users_extractor_by_module_and_function(tmp_path, monkeyp
     summary = pd.read_csv(tmp_path / "out" / "summary.csv").set_index("method")
     assert summary.loc["frontdoor_ext:lines", "f1"] == summary.loc["split_merge", "f1"]  # same features, same scoring
     assert summary.loc["frontdoor_ext:lines", "tp"] == summary.loc["split_merge", "tp"] > 0
+    # `--method module:function`, the spelling issue #16 names, was refused ('unrecognized arguments') once
+    # abbreviations were switched off: it is the same option
+    assert main(["compare", "office:0", "--duration", "2", "--rate", "2", "--method", "frontdoor_ext:lines",
+                 "--out", str(tmp_path / "one"), "--no-progress", "--format", "csv"]) == 0
+    one = pd.read_csv(tmp_path / "one" / "summary.csv").set_index("method")
+    assert list(one.index) == ["frontdoor_ext:lines"] and one.loc["frontdoor_ext:lines", "f1"] == summary.loc["split_merge", "f1"]
     capsys.readouterr()
     for argv, message in ((["frontdoor_ext:nosuch"], "has no 'nosuch'"), (["nomodule:f"], "cannot import module"),
                           (["frontdoor_ext:wrong"], "returned int, not a features.FeatureSet")):

@@ -118,6 +118,27 @@ def test_bad_geometry_param_names_its_line(tmp_path: Path, bad: str) -> None:
     assert len(list(read_log(path, skip_bad_lines=True))) == 2
 
 
+@pytest.mark.parametrize("bad, reason", [
+    ("PARAM lmsbench_odometry maybe", "lmsbench_odometry must be absent or present, got 'maybe'"),
+    ("PARAM lmsbench_odometry Absent", "lmsbench_odometry must be absent or present, got 'Absent'"),
+    ("PARAM lmsbench_front_laser_angle_min nan", "lmsbench_front_laser_angle_min must be a finite number \\(rad\\), got 'nan'"),
+    ("PARAM lmsbench_front_laser_angle_increment -inf",
+     "lmsbench_front_laser_angle_increment must be a finite number \\(rad\\), got '-inf'"),
+])
+def test_an_lmsbench_param_line_of_no_value_it_takes_names_its_line(tmp_path: Path, bad: str, reason: str) -> None:
+    """The wrong-input hunt: ``PARAM lmsbench_odometry`` with any value but 'absent' ('maybe',
+    'Absent', 'no') was read as present, and an exact-geometry PARAM of nan or inf was taken and
+    then passed over as disagreeing with the degrees, both silently; the units PARAM and the CARMEN
+    geometry PARAMs already named their line."""
+    path = write(tmp_path, "p.log", [flaser(180), bad, flaser(180)])
+    with pytest.raises(LogFormatError, match=rf"p\.log:2: malformed PARAM line: {reason}"):
+        list(read_log(path))
+    assert len(list(read_log(path, skip_bad_lines=True))) == 2
+    ok = write(tmp_path, "ok.log", ["PARAM lmsbench_odometry absent", flaser(180), "PARAM lmsbench_odometry present",
+                                    flaser(180)])
+    assert [r.odom for r in read_log(ok)] == [None, (1.0, 2.0, 0.5)]
+
+
 def test_geometry_override() -> None:
     assert beam_angles(361) == pytest.approx((-90 * DEG, 0.5 * DEG))
     assert beam_angles(361, LaserGeometry(fov=100 * DEG)) == pytest.approx((-50 * DEG, 100 / 360 * DEG))

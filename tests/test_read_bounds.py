@@ -74,3 +74,31 @@ def test_the_robotlaser_geometries_a_pass_remembers_are_bounded(tmp_path) -> Non
     assert reader.stats.skipped == [
         (len(starts) + 1 + k, f"ROBOTLASER1: carries 2 beams, but line {first} with the same start angle, field of view "
                               "and resolution carries 3") for k, first in enumerate([1, MAX_GEOMETRIES])]
+
+
+def test_pose_less_scans_waiting_for_odometry_are_bounded_by_their_beams(tmp_path, monkeypatch) -> None:
+    """The wrong-input hunt (bounded memory): RAWLASER scans wait for the ODOM line after them, at
+    most 256 of them whatever their size: 256 scans of one stamp of 314,000 beams each (the longest
+    line the reader takes) were held, 1.33 GB resident for a 188 MB log (74 MB when stamped 1 s
+    apart). Now they are held up to 2^20 beams too (lms200.carmen_odom.MAX_PENDING_BEAMS; here 20,000
+    for a small file): the same records, in order, with a peak a fraction of the log's."""
+    import math
+    import tracemalloc
+
+    from lms200 import carmen_odom
+
+    n = 10_000
+    fov = math.pi
+    line = f"RAWLASER1 0 {-fov / 2:.6f} {fov:.6f} {fov / n:.9f} 80.0 0.01 0 {n} " + "1.00 " * n + "0 5.0 host 5.0\n"
+    path = tmp_path / "raw.log"
+    path.write_text(line * 60)
+    monkeypatch.setattr(carmen_odom, "MAX_PENDING_BEAMS", 2 * n, raising=False)
+    tracemalloc.start()
+    count = 0
+    for rec in read_log(path):
+        count += 1
+        assert rec.odom is None and len(rec.scan) == n
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert count == 60
+    assert peak < 60 * n * 8  # 4.8 MB, the 60 scans' ranges; now 3.0 MB, old: 11.8 MB (every scan held)

@@ -255,6 +255,27 @@ def test_mm_mode_readings_above_8_183_m_are_no_returns_or_invalid_not_echoes(tmp
                                   [8.182, np.inf, np.inf, np.nan, np.nan, np.nan, np.nan, np.nan, np.inf, np.inf, np.inf])
 
 
+def test_a_log_of_every_scan_twice_is_measured_as_the_log_once(tmp_path: Path) -> None:
+    """The wrong-input hunt (duplicated stamps): a log written twice over, line by line (each
+    FLASER line twice: the same stamp and readings), was calibrated with every scan counted twice:
+    n_scans 50 against 25 and every standard error about 1/sqrt(2) as large (the noise sigma's 0.033
+    mm against 0.050, the nan rate's 0.063 % against 0.091 %), silently. A scan that is the one before it again is passed over and counted apart."""
+    records = simulate_records("office", seed=6, duration=6.0, sensor=RECOVERY_CASES["mm_0.5deg"], rate_hz=4.0)
+    write_carmen(tmp_path / "once.clf", records, fmt="flaser")
+    lines = (tmp_path / "once.clf").read_text().splitlines(keepends=True)
+    (tmp_path / "twice.clf").write_text("".join(line * (2 if line.startswith("FLASER") else 1) for line in lines))
+    want = calibrate_scans(read_log(tmp_path / "once.clf"))
+    got = calibrate_scans(read_log(tmp_path / "twice.clf"))
+    assert (got.n_scans, got.repeated_scans, want.repeated_scans) == (want.n_scans, len(records), 0)  # old: 2 x n_scans
+    assert got.noise == want.noise  # old: sigma_std_m 1/sqrt(2) as large
+    for name in ("nan_rate", "inf_rate", "no_return_rate", "mixed_share", "outlier_rate", "tail_share"):
+        assert getattr(got, name) == getattr(want, name), name
+    # two scans of one stamp with other readings (a coarse clock) both count
+    scans = [r.scan for r in records[:4]]
+    clock = [s.replace(stamp=scans[0].stamp) for s in scans]
+    assert calibrate_scans(clock).n_scans == 4
+
+
 # -- command line ----------------------------------------------------------------------------
 def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -> None:
     truth = RECOVERY_CASES["cm_0.5deg"]

@@ -186,6 +186,34 @@ def test_slam_refuses_a_world_json_wall_simulate_and_compare_refuse_before_the_r
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("name, content, message", [
+    ("groundtruth.tum", None, "{f} is a folder, not a TUM file"),
+    ("world.json", None, "{f} is a folder, not a world.json"),
+    ("world.json", "[1, 2]", "{f}: no wall list (list indices must be integers or slices, not str)"),
+    ("world.json", "null", "{f}: no wall list ('NoneType' object is not subscriptable)"),
+    ("world.json", '{"walls": {"a": 1}}', "{f}: no wall list (float() argument must be a string or a real number, not 'dict')"),
+])
+def test_a_simulate_folder_whose_truth_or_world_is_a_folder_or_no_mapping_is_refused(sim_folder, tmp_path, capsys,
+                                                                                    name, content, message):
+    """The wrong-input hunt: a groundtruth.tum or world.json that is a folder was passed over (is_file()),
+    so slam ran without the truth's or the map's scores, exit 0, and said nothing; a world.json
+    holding a JSON list, null or a mapping of walls was 'internal error: TypeError', exit 1."""
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    (run / name).unlink()
+    if content is None:
+        (run / name).mkdir()
+    else:
+        (run / name).write_text(content)
+    assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet", "--max-scans", "5"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [f"lmsbench slam: error: {message.format(f=run / name)}"]
+    assert not (tmp_path / "o").exists()
+
+
 def test_slam_command_errors_are_one_line(tmp_path, capsys):
     from experiments.cli import main  # in process: the subprocess test above covers the real command line
 
@@ -643,6 +671,52 @@ def test_a_reference_covering_part_of_the_run_is_said(sim_folder, tmp_path, caps
     assert json.loads((tmp_path / "o" / "metrics.json").read_text())["ate"]["n"] == 2
     assert main(["slam", str(sim_folder), *argv[:1], str(tmp_path / "o2"), *argv[2:]]) == 0
     assert "the ATE covers" not in capsys.readouterr().err
+
+
+def test_slam_config_yaml_holds_the_extractors_resolved_config_and_the_versions(sim_folder, tmp_path, capsys):
+    """Issue #16: every command writes the resolved config of what ran, sensor, extractor, SLAM and
+    versions. slam's config.yaml held `extractor_params: {}` (the overrides, none) and no
+    versions (an audit of the resolved issues). It now holds every field of the extractor's config
+    and the versions; `slam --config` on it reads the slam: section as before and runs the same."""
+    import dataclasses
+
+    import yaml
+
+    from experiments.cli import main
+    from features.registry import make_config
+
+    out = tmp_path / "run"
+    argv = ["--quiet", "--no-paper-baseline", "--max-scans", "15"]
+    assert main(["slam", str(sim_folder), "--out", str(out), *argv]) == 0
+    record = yaml.safe_load((out / "config.yaml").read_text())
+    assert list(record) == ["input", "slam", "extractor_config", "versions"]
+    assert record["extractor_config"] == dataclasses.asdict(make_config(record["slam"]["extractor"]))
+    assert record["extractor_config"]["k"] == 3 and record["extractor_config"]["sigma_r_cm"] == "auto"
+    assert {"lmsbench", "numpy", "numba", "gtsam", "python"} <= set(record["versions"])
+    again = tmp_path / "again"
+    assert main(["slam", str(sim_folder), "--config", str(out / "config.yaml"), "--out", str(again), *argv]) == 0
+    assert (again / "trajectory.tum").read_text() == (out / "trajectory.tum").read_text()
+    assert main(["slam", str(sim_folder), "--out", str(out), *argv]) == 0  # its own earlier folder: replaced
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize("preset, label", [("default", "map lines"), ("paper", "line landmarks")])
+def test_slam_png_names_the_default_pipelines_lines_as_its_map(sim_folder, tmp_path, monkeypatch, preset, label):
+    """slam.png's legend said "line landmarks" for the default pipeline, whose lines are its
+    keyframes' merged map, not EKF landmarks (a new user's review); the paper preset keeps it."""
+    import matplotlib.figure
+
+    from experiments.cli import main
+
+    seen = []
+
+    def savefig(self, *args, **kwargs):
+        seen.extend(t.get_text() for ax in self.axes if ax.get_legend() for t in ax.get_legend().get_texts())
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", savefig)
+    assert main(["slam", str(sim_folder), "--preset", preset, "--max-scans", "12", "--no-paper-baseline", "--quiet",
+                 "--out", str(tmp_path / "o")]) == 0
+    assert label in seen and ({"map lines", "line landmarks"} - {label}).isdisjoint(seen)
 
 
 @pytest.mark.shared_data

@@ -194,3 +194,42 @@ def test_ate_of_a_lost_run_is_nan_not_a_linalg_error() -> None:
     a = ate(est, truth)
     assert np.isnan(a.rmse) and np.isnan(a.rotation) and a.n == truth.shape[0] and not a.mirrored
     assert ate(truth, truth).rmse == pytest.approx(0.0, abs=1e-12)
+
+
+def test_tum_and_relations_readers_bound_a_line_and_refuse_underscores_and_huge_coordinates(tmp_path):
+    """Found by fuzzing `lmsbench slam` inputs: a TUM or relations file of zeros (or binary data)
+    with no line break was read as one line, whole: a 3 GB one ended in MemoryError ("internal
+    error", exit 1); ``1_000`` was read as 1000 (Python's float(), which neither evo nor numpy
+    takes); a TUM row at x = 1e300 m overflowed the metrics' squares (RuntimeWarnings, an error of
+    inf, exit 0). Each is now a LogFormatError naming the file and line."""
+    import tracemalloc
+
+    from lms200.logs import MAX_ROW_CHARS
+    from lms200.tum import read_tum
+
+    zeros = tmp_path / "zeros.tum"
+    with open(zeros, "wb") as f:
+        f.truncate(64 * MAX_ROW_CHARS)  # 64 MiB of zeros, no line break
+    for read in (read_tum, read_relations):
+        tracemalloc.start()
+        with pytest.raises(LogFormatError, match=r"zeros\.tum:1: longer than 1,048,576 characters: not a text file of rows"):
+            read(zeros)
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        assert peak < 8 * MAX_ROW_CHARS  # old: the whole file, 64 MiB (and up) as one line
+    tum = tmp_path / "t.tum"
+    tum.write_text("0 0 0 0 0 0 0 1\n1_000 1 0 0 0 0 0 1\n")
+    with pytest.raises(LogFormatError, match=r"t\.tum:2: TUM row has a non-number: '1_000 1 0 0 0 0 0 1'"):
+        read_tum(tum)  # old: a pose at 1000 s
+    tum.write_text("0 0 0 0 0 0 0 1\n1 1e300 0 0 0 0 0 1\n")
+    with pytest.raises(LogFormatError, match=r"t\.tum:2: TUM row's x or y is beyond \+-1e\+09 m"):
+        read_tum(tum)
+    tum.write_text("0 0 0 0 0 0 0 1\n1 -1e9 5.4e6 0 0 0 0 1\n")  # the bound itself, and a UTM northing, read
+    assert read_tum(tum)[1][1].tolist() == [-1e9, 5.4e6, 0.0]
+    rel = tmp_path / "r.relations"
+    rel.write_text("0 1 1 0 0 0 0 0\n1 2 1_0 0 0 0 0 0\n")
+    with pytest.raises(LogFormatError, match=r"r\.relations:2: relation row has a non-number: '1 2 1_0 0 0 0 0 0'"):
+        read_relations(rel)  # old: a relation of 10 m
+    rel.write_text("0 1 1 0 0 0 0 0\n1 2 1 -2e200 0 0 0 0\n")
+    with pytest.raises(LogFormatError, match=r"r\.relations:2: relation row's x or y is beyond \+-1e\+09 m"):
+        read_relations(rel)

@@ -85,3 +85,53 @@ def test_aliases_within_bounds_and_long_documents_load(monkeypatch) -> None:
     text = "a: &a [1,1,1,1,1,1,1,1,1,1]\nb: [*a, *a, *a]\n"  # 44 characters, 48 values
     with pytest.raises(yamlio.AliasBomb, match=f"more than {len(text)} values"):
         load(text)
+
+
+UNDERSCORES = "YAML 1.1 drops a number's underscores (the command line refuses them)"
+BASE_60 = "YAML 1.1 reads digits between colons in base 60 (a time or an angle)"
+OCTAL = "YAML 1.1 reads a whole number with a leading 0 in octal"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("k: 1_0\n", f"line 1, column 4: key 'k': 1_0 is read as 10: {UNDERSCORES}"),
+    ("duration: 1:30\n", f"line 1, column 11: key 'duration': 1:30 is read as 90: {BASE_60}"),
+    ("seed: 010\n", f"line 1, column 7: key 'seed': 010 is read as 8: {OCTAL}"),
+    ("a: 1\nx: 1_000.5\n", f"line 2, column 4: key 'x': 1_000.5 is read as 1000.5: {UNDERSCORES}"),
+    ("t: 12:30:00\n", f"line 1, column 4: key 't': 12:30:00 is read as 45000: {BASE_60}"),
+    ("t: -1:30.5\n", f"line 1, column 4: key 't': -1:30.5 is read as -90.5: {BASE_60}"),
+    ("h: 0x1_0\n", f"line 1, column 4: key 'h': 0x1_0 is read as 16: {UNDERSCORES}"),
+    ("grid:\n  extractor.k: [3, 1_0]\n", f"line 2, column 20: key 'extractor.k', item 2: 1_0 is read as 10: {UNDERSCORES}"),
+    ("robot: {v_max: 1:30}\n", f"line 1, column 16: key 'v_max': 1:30 is read as 90: {BASE_60}"),
+    ("- [1_0]\n", f"line 1, column 4: 1_0 is read as 10: {UNDERSCORES}"),  # no key: the place alone
+    ("1_0: x\n", f"line 1, column 1: 1_0 is read as 10: {UNDERSCORES}"),
+])
+def test_numbers_yaml_1_1_reads_otherwise_are_refused_at_their_key_and_line(text: str, message: str) -> None:
+    """PyYAML follows YAML 1.1: ``k: 1_0`` read as 10, ``duration: 1:30`` as 90 (base 60) and
+    ``seed: 010`` as 8 (octal), silently (``simulate --config`` with ``seed: 1:30`` simulated seed
+    90, with ``seed: 010`` seed 8; ``n_beams: 18_1`` in a sensor file 181 beams). YAML 1.2, Python
+    and the command line (``experiments.options.plain_number``) read none of them so: each is
+    refused, naming the key and line; quoted, it is text, which the field's own check refuses."""
+    from lms200.yamlio import Malformed
+
+    value = message.split(" is read as ")[0].rsplit(" ", 1)[-1]
+    with pytest.raises(Malformed) as info:
+        load(text)
+    assert str(info.value) == f"{message}; write the number as a plain decimal, or quote it ('{value}') for text"
+    assert load(text.replace(value, f"'{value}'")) is not None  # quoted: text
+
+
+def test_numbers_read_as_before() -> None:
+    """Every number YAML 1.2 and YAML 1.1 read alike reads as it did: ints, floats with or
+    without a dot or exponent, hexadecimal and binary, infinities and nan; and text that only
+    looks like the refused forms stays text."""
+    import math
+
+    text = ("a: 1\nb: 1.5\nc: 1e-3\nd: -2\ne: .5\nf: 0x10\ng: 0b101\nh: 0\ni: -0\nj: +1\nk: 1E6\nl: 1.0e+3\nm: 0.0\n"
+            "n: 01.5\no: 1.\np: .inf\nq: -.inf\nr: 09\ns: 1:60\nt: a:b\nu: _1\nv: '1_0'\nw: \"1:30\"\nx: 2026-01-02\n")
+    got = load(text)
+    nan = load("z: .nan\n")["z"]
+    assert math.isnan(nan)
+    assert got == {"a": 1, "b": 1.5, "c": 1e-3, "d": -2, "e": 0.5, "f": 16, "g": 5, "h": 0, "i": 0, "j": 1, "k": 1e6,
+                   "l": 1000.0, "m": 0.0, "n": 1.5, "o": 1.0, "p": float("inf"), "q": float("-inf"), "r": "09", "s": "1:60",
+                   "t": "a:b", "u": "_1", "v": "1_0", "w": "1:30", "x": datetime.date(2026, 1, 2)}
+    assert [type(got[k]) for k in "adfghij"] == [int] * 7 and [type(got[k]) for k in "bcekl"] == [float] * 5

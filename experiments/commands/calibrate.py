@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import LOG_HELP, add_log_options, read_log_options
-from experiments.options import InputError, check_log, check_out_file, count, path_arg, world_name
+from experiments.options import WORLDS, InputError, check_log, check_out_file, count, path_arg, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -15,7 +15,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("log", help=LOG_HELP)
     p.add_argument("--out", type=path_arg, help="write the sensor config here (default: print it)")
     p.add_argument("--world", default="office", type=world_name,
-                   help="simulated world used to fit the spot width and the outlier baseline (default office)")
+                   help="simulated world used to fit the spot width and the outlier baseline: " + WORLDS + " (default office)")
     p.add_argument("--stride", type=count(1), default=1, help="use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=count(1), help="use at most this many scans")
     add_log_options(p)
@@ -29,7 +29,7 @@ def run(args: argparse.Namespace) -> int:
     from experiments.progress import heartbeat_on_terminal
 
     read_options = read_log_options(args)
-    check_log(args.log)
+    args.log = check_log(args.log)  # a simulate folder: its scans.clf
     check_out_file(args.out)
     if args.out is not None:  # 'calibrate LOG --out LOG' wrote the YAML over the log it had just read
         if args.out.suffix.lower() not in (".yaml", ".yml"):

@@ -15,16 +15,19 @@ from lms200.timing import check_scan_rate
 
 from experiments.overrides import check_set_once, set_option
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
-from experiments.options import (COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
+from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
                                  check_out_spares, check_seeds, count, plain_number, positive, path_arg, text)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("compare", help="every extractor on identical scans: accuracy, corners and speed")
     p.add_argument("sources", nargs="+",
-                   help="world names (office, corridor, angles, pillars, random; WORLD:SEED for one seed), "
+                   help="world names (" + WORLDS + "; WORLD:SEED for one seed), "
                         "`lmsbench simulate` folders, or paths of real logs")
-    p.add_argument("--methods", nargs="+", type=text("an extractor's name"), help="extractors (default: every available one)")
+    p.add_argument("--methods", nargs="+", type=text("an extractor's name"),
+                   help="extractors: built-in names or a user's MODULE:FUNCTION (default: every built-in one)")
+    p.add_argument("--method", dest="methods", nargs="+", type=text("an extractor's name"),
+                   help="the same as --methods (`--method MODULE:FUNCTION` runs a user's extractor)")
     p.add_argument("--seeds", nargs="+", type=SEED, help="seeds of each world named without one, listed (default 0 1 2; "
                                                          "`--seeds 3` is the one seed 3)")
     p.add_argument("--duration", type=DURATION, help="simulated seconds per world and seed (default 30)")
@@ -58,9 +61,10 @@ DEFAULT_SEEDS, DEFAULT_DURATION_S, DEFAULT_RATE_HZ = (0, 1, 2), 30.0, 2.0  # of 
 def _check_applies(args: argparse.Namespace) -> None:
     """An option given for sources none of which it applies to was ignored: ``compare office:1
     --seeds 4 5`` ran seed 1 alone, ``compare LOG --duration 60`` read the log as before."""
-    from experiments.compare import WORLD_NAMES, world_words
+    from experiments.compare import world_words
+    from experiments.options import known_worlds
 
-    bare = [s for s in args.sources if s in WORLD_NAMES]
+    bare = [s for s in args.sources if s in known_worlds()]
     worlds = world_words(args.sources)
     files = [s for s in args.sources if s not in worlds]
     if args.seeds is not None and not bare:

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import DEMO_OUTPUTS, DEMO_OWNER, DURATION, SEED, InputError, check_log, check_out, positive, path_arg, world_name
+from experiments.options import WORLDS, DEMO_OUTPUTS, DEMO_OWNER, DURATION, SEED, InputError, check_log, check_out, positive, path_arg, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -14,10 +15,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=path_arg, help="output folder (default: a new results/demo/DATE_TIME, "
                                             "linked as results/demo/latest)")
     p.add_argument("--seed", type=SEED, default=0, help="world and run seed (default 0)")
-    p.add_argument("--world", type=world_name, default="office", help="simulated world: a built-in world name; lmsbench simulate --help lists them (default office)")
+    p.add_argument("--world", type=world_name, default="office", help="simulated world: " + WORLDS + " (default office)")
     p.add_argument("--duration", type=DURATION, default=40.0, help="simulated run, s (default 40)")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=10.0, help="scans kept per second of the run (default 10)")
-    p.add_argument("--log", type=path_arg, help="real CARMEN log or bag for Fig. 9 (default: shared/data/carmen/"
+    p.add_argument("--log", type=path_arg, help="real CARMEN log, bag or lmsbench simulate folder for Fig. 9 (default: shared/data/carmen/"
                    "intel-corrected.log.gz beside the checkout, where present)")
     p.add_argument("--no-sweep", action="store_true", help="skip the small Dask sweep")
     p.add_argument("--inprocess", action="store_true", help="run the sweep in this process instead of on Dask")
@@ -41,5 +42,28 @@ def run(args: argparse.Namespace) -> int:
     executor = None if args.no_sweep else ("inprocess" if args.inprocess else "local")
     from experiments.provenance import new_run_folder
 
-    run_demo(args.out or new_run_folder("results/demo"), cfg, sweep_executor=executor)
+    if args.out is not None:
+        run_demo(args.out, cfg, sweep_executor=executor)
+        return 0
+    args.out = new_run_folder(DEMO_BASE)  # named if a reader of stdout that goes away stops it
+    copy_report_up(run_demo(args.out, cfg, sweep_executor=executor))
     return 0
+
+
+#: where the demo's runs go without --out, each in its own DATE_TIME folder, the newest linked as latest
+DEMO_BASE = "results/demo"
+
+
+def copy_report_up(report: Path) -> None:
+    """Copy the newest run's report to its base folder (``results/demo/report.md`` and
+    ``report.html``, the paths issue #8 names), the Markdown's relative links pointing into the run's
+    folder; the HTML embeds its figures already. Each run without --out replaces both."""
+    import re
+
+    from experiments.provenance import write_record
+
+    run = report.parent
+    text = re.sub(r"\]\((?![a-z]+:|/|#)([^)]+)\)", lambda m: f"]({run.name}/{m.group(1)})", report.read_text())
+    write_record(run.parent / "report.md", text)
+    write_record(run.parent / "report.html", (run / "report.html").read_text())
+    print(f"== copied the report to {run.parent / 'report.md'} and {run.parent / 'report.html'}")

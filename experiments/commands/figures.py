@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import (DEMO_OWNER, DURATION, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log,
+from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log,
                                  check_methods, check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name,
                                  text, check_link)
 
@@ -22,10 +22,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--duration", type=DURATION, help="simulated run, s (default 40)")
     p.add_argument("--rate-hz", type=positive("scans/s"), help="scans kept per second of the run (default 10)")
     p.add_argument("--seed", type=SEED, help="world and run seed (default 0)")
-    p.add_argument("--world", type=world_name, help="simulated world: a built-in world name; lmsbench simulate --help lists them (default office)")
+    p.add_argument("--world", type=world_name, help="simulated world: " + WORLDS + " (default office)")
     p.add_argument("--methods", nargs="+", type=text("an extractor's name"), help="extractors to compare (default: all five)")
     p.add_argument("--intel", "--log", dest="intel", type=path_arg,
-                   help="CARMEN log or bag for Fig. 9 (--log as in demo; default: shared/data/carmen/"
+                   help="CARMEN log, bag or lmsbench simulate folder for Fig. 9 (--log as in demo; default: shared/data/carmen/"
                    "intel-corrected.log.gz beside the checkout, where present)")
     p.add_argument("--no-slam", action="store_true", help="skip the SLAM run and Fig. 10")
     add_log_options(p)  # for the real log of Fig. 9

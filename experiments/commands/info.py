@@ -13,7 +13,7 @@ from experiments.options import check_log
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("info", help="summarise a CARMEN log or ROS bag (scans, geometry, rate, validity)")
+    p = sub.add_parser("info", help="summarise a CARMEN log, ROS bag or lmsbench simulate folder (scans, geometry, rate, validity)")
     p.add_argument("log", help=LOG_HELP)
     add_log_options(p)
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -21,7 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    check_log(args.log)
+    args.log = check_log(args.log)  # a simulate folder: its scans.clf
     reader = read_log(args.log, **read_log_options(args))
     summary = summarise(reader)
     stats = reader.stats

@@ -18,7 +18,7 @@ from lms200.virtual import MAX_TIME_SCALE
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, read_log_options
-from experiments.options import (PORT, SEED, InputError, check_log, check_out_file, count, number, path_arg, positive, text,
+from experiments.options import (WORLDS, PORT, SEED, InputError, check_log, check_out_file, count, number, path_arg, positive, text,
                                  world_name)
 
 
@@ -29,9 +29,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     cmds = p.add_subparsers(dest="lms200_command", metavar="ACTION")
 
     e = cmds.add_parser("emulate", help="serve a virtual LMS200 on a pseudo-terminal (or TCP); prints its path / URL")
-    e.add_argument("--world", type=world_name, help="simulator world to scan (a built-in world name; lmsbench simulate --help lists them; default office)")
+    e.add_argument("--world", type=world_name, help="simulator world to scan: " + WORLDS + " (default office)")
     e.add_argument("--seed", type=SEED, help="seed of the world and the sensor noise (default 0)")
-    e.add_argument("--log", type=path_arg, help="replay this log (CARMEN or bag) instead of the simulator, in a loop")
+    e.add_argument("--log", type=path_arg, help="replay this log (CARMEN, bag or lmsbench simulate folder) instead of the simulator, in a loop")
     e.add_argument("--tcp", type=PORT, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")
     e.add_argument("--rfc2217", action="store_true", help="with --tcp: speak RFC 2217 (rfc2217://HOST:PORT), so the host sets the baud")
     e.add_argument("--host", type=text("an address, e.g. 127.0.0.1 or 0.0.0.0"), help="address to listen on with --tcp (default 127.0.0.1)")
@@ -73,7 +73,7 @@ def run_emulate(args: argparse.Namespace) -> int:
     args.world, args.seed = args.world or "office", 0 if args.seed is None else args.seed
     args.host = args.host or "127.0.0.1"
     if args.log:
-        check_log(args.log)
+        args.log = check_log(args.log)  # a simulate folder: its scans.clf
         scans = log_scans(args.log, read_options=read_log_options(args))
         what = f"scans of {args.log} in a loop"
     else:

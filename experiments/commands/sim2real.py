@@ -15,6 +15,7 @@ from experiments.options import (
     SEED,
     SIM2REAL_OUTPUTS,
     SIM2REAL_OWNER,
+    WORLDS,
     InputError,
     check_log,
     check_out,
@@ -34,7 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sim2real", help="a real log against its calibrated simulation: explained fraction, ray RMSE, "
                                         "lines per scan, range / residual / segment histograms (table and figure)")
     p.add_argument("log", help=LOG_HELP)
-    p.add_argument("--world", default="mit", type=world_name, help="simulated world (default mit, the MIT-CSAIL-like preset)")
+    p.add_argument("--world", default="mit", type=world_name, help="simulated world: " + WORLDS + " (default mit, the MIT-CSAIL-like preset)")
     p.add_argument("--sensor", type=path_arg, metavar="FILE.yaml",
                    help="use this sensor model instead of calibrating on the log")
     p.add_argument("--seeds", nargs="+", type=SEED, default=list(DEFAULT_SEEDS),
@@ -68,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     from experiments.sim2real import format_report, sim2real, write_outputs
 
     read_options = read_log_options(args)
-    check_log(args.log)
+    args.log = check_log(args.log)  # a simulate folder: its scans.clf
     check_out_spares(args.out, SIM2REAL_OUTPUTS, [args.log] + ([args.sensor] if args.sensor else []))
     check_out(args.out, writes=SIM2REAL_OUTPUTS, owner=SIM2REAL_OWNER)  # after: an input in --out is the sharper message
     check_seeds(args.seeds)

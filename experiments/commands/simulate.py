@@ -7,7 +7,7 @@ from lms200.yamlio import load as load_yaml
 
 import argparse
 
-from experiments.options import (DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, SIMULATE_OWNER, InputError, check_file,
+from experiments.options import (WORLDS, DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, SIMULATE_OWNER, InputError, check_file,
                                  check_world_file,
                                  check_out, check_out_spares, check_yaml, known_worlds, number, positive, path_arg)
 
@@ -16,8 +16,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("simulate", help="simulate an LMS200 run through an office world (scans.clf, "
                                         "groundtruth.tum, world.json, config.yaml, map.png)")
     p.add_argument("--world", default=None,
-                   help="office, corridor, angles, pillars, random, cluttered (office with clutter 1), "
-                        "mit (the MIT-CSAIL-like preset), or a world.json (default office)")
+                   help="a built-in world (" + WORLDS + "; cluttered is the office with clutter 1, mit the "
+                        "MIT-CSAIL-like preset) or a world.json (default office)")
     p.add_argument("--clutter", type=number(0.0), default=None,
                    help="clutter level of a named world: 0 none, 1 a furnished office, 2-3 busy "
                         "(chair and table legs, people, plants, bins, glass, doors at any angle; at most 10; default: the world's own)")

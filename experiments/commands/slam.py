@@ -77,7 +77,8 @@ def _config(args: argparse.Namespace):
         if not isinstance(raw, dict):
             raise LmsbenchError(f"{args.config}: expected a mapping of SLAM config fields")
         if "slam" in raw:  # a run's config.yaml: {input: ..., slam: {...}}
-            beside = sorted(str(k) for k in raw if k not in ("slam", "input"))
+            # a run's records of what ran (extractor_config:, versions:) are not settings: read past
+            beside = sorted(str(k) for k in raw if k not in ("slam", "input", "extractor_config", "versions"))
             if beside:  # they were ignored: `motion: {sigma_accel: 9}` beside `slam:` ran with 1.0
                 raise InputError(f"{args.config}: key(s) {beside} beside the slam: section would be ignored; "
                                  "put them under slam:")
@@ -153,12 +154,7 @@ def _check_input(path: Path) -> None:
     check_simulate_finished(path)  # first: a killed run's folder may hold no scans.clf ("no such input")
     if not path.exists():
         raise InputError(missing_message(path, "input"))  # "X: no such input (did you mean X.gz?)"
-    if path.is_dir() and (path / "scans.clf").is_file():
-        check_log(path / "scans.clf")
-    elif path.is_dir() and not (path / "metadata.yaml").is_file():
-        raise InputError(f"{path}: a folder input must hold scans.clf (a simulator output) or be a ROS 2 bag")
-    else:
-        check_log(path)
+    check_log(path)  # a simulate folder's scans.clf, a bag folder or a log file
 
 
 def _not_lms200_shape(records: list) -> str | None:

@@ -22,6 +22,7 @@ import yaml
 from experiments.sweep.kinds import align, slam_metrics, true_trajectory
 from experiments.compare import Source, compare, summarise
 from experiments.evaluate import ALL_METHODS, extract_timed, sensor_config, simulate_run, truths_for
+from experiments.user_methods import scans_of
 
 from .tables import feature_panels, map_table, pick_evenly, signals_table, trajectory_table
 
@@ -111,14 +112,17 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
 
     tables["signals"] = signals_table(records[len(records) // 2].scan, k=cfg.signals_k, sigma_r=sensor.noise_sigma or 0.005)
     noise = max(float(sensor.noise_sigma), 0.001)
-    tables["timing"] = compare([Source.from_records(records, truths, seed=cfg.seed)], cfg.methods, sigma=noise)
+    run_name = f"{cfg.world}:{cfg.seed}"  # how an error of a user's MODULE:FUNCTION extractor names the run
+    with scans_of(run_name, records):
+        tables["timing"] = compare([Source.from_records(records, truths, seed=cfg.seed)], cfg.methods, sigma=noise)
     tables["summary"] = summarise(tables["timing"])
     for row in tables["summary"].itertuples():
         say(f"{row.method:12s} median {row.time_ms_median:7.2f} ms/scan, line F1 {row.f1:.3f}, "
             f"{row.lines_per_scan:.1f} lines/scan")
 
     picks = pick_evenly(len(records), cfg.panels)
-    fsets, _ = extract_timed([records[i].scan for i in picks], panel_method)
+    with scans_of(run_name, records):
+        fsets, _ = extract_timed([records[i].scan for i in picks], panel_method)
     pts, lns, crs = feature_panels([records[i].scan for i in picks], [f"{cfg.world} scan {i}" for i in picks], fsets)
     tables.update(office_points=pts, office_lines=lns.assign(method=panel_method), office_corners=crs)
 
@@ -223,7 +227,8 @@ def _intel_panels(path: Path, n: int, method: str, params: dict | None,
                             "no scan to draw for Fig. 9")
     picks = [valid[i] for i in pick_evenly(len(valid), n)]
     scans = [records[i].scan for i in picks]
-    fsets, _ = extract_timed(scans, method, params)
+    with scans_of(str(path), records):
+        fsets, _ = extract_timed(scans, method, params)
     pts, lns, crs = feature_panels(scans, [f"{log_name(path)} scan {i}" for i in picks], fsets)
     return {"intel_points": pts, "intel_lines": lns.assign(method=method), "intel_corners": crs}
 

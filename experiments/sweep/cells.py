@@ -73,7 +73,10 @@ def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> 
             raise ValueError(f"cell kind {kind!r} returned metric(s) {clash} that clash with parameter/column names")
         row = {"status": "ok", "error": "", **metrics}
     except Exception as exc:  # noqa: BLE001 - a failing cell is recorded, not fatal
-        last = traceback.extract_tb(exc.__traceback__)[-1:]
+        from experiments.user_methods import UserMethodFailed
+
+        raised = exc.__cause__ if isinstance(exc, UserMethodFailed) and exc.raised else exc  # a user's extractor: its line
+        last = traceback.extract_tb(raised.__traceback__)[-1:]
         where = f" ({last[0].filename.rsplit('/', 1)[-1]}:{last[0].lineno})" if last else ""
         row = {"status": "error", "error": f"{type(exc).__name__}: {exc}{where}"}
     row["elapsed_s"] = time.perf_counter() - start

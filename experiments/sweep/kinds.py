@@ -55,7 +55,7 @@ def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
     _, sensor, records, truths = _records(p, EXTRACT_DEFAULTS, with_truth=True)
     method = str(p["method"])
     noise = float(sensor.noise_sigma)
-    source = Source.from_records(records, truths, seed=int(p.get("seed", 0)))
+    source = Source.from_records(records, truths, name=str(p["world"]), seed=int(p.get("seed", 0)))  # named in errors
     params = extractor_overrides(p, [method], other_methods=True)
     table = compare([source], [method], params=params, sigma=max(noise, 0.001))
     row = summarise(table, reference=method).iloc[0]
@@ -69,14 +69,15 @@ def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
     from experiments.slamrun import deskew_for_sensor
     from slam import SlamConfig, run_slam
 
-    from experiments.user_methods import ensure_method
+    from experiments.user_methods import ensure_method, scans_of
 
     p = {**SLAM_DEFAULTS, **params}
     _, sensor, records, _ = _records(p, SLAM_DEFAULTS, with_truth=False)
     nested = slam_config_dict(p)
     ensure_method(str(nested.get("extractor", "")))  # a MODULE:FUNCTION extractor, registered in this worker
     config = deskew_for_sensor(SlamConfig.from_dict(nested), bool(sensor.interlaced))
-    result = run_slam(records, config)
+    with scans_of(f"{p['world']}:{int(p.get('seed', 0))}", records):  # a failing MODULE:FUNCTION names its scan
+        result = run_slam(records, config)
     return slam_metrics(result, records)
 
 

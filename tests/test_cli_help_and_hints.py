@@ -1,0 +1,83 @@
+"""What the command line tells a new user: help texts that list every world (compare --help listed
+five of seven), "did you mean" for a near miss of a command's option, and ``lmsbench --version``."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from importlib import metadata
+
+import pytest
+
+from experiments.cli import main
+from sim import WORLD_NAMES
+
+WORLD_HELP = [["compare"], ["simulate"], ["demo"], ["figures"], ["sim2real"], ["calibrate"], ["lms200", "emulate"]]
+
+
+@pytest.mark.parametrize("command", WORLD_HELP, ids=" ".join)
+def test_help_lists_every_world(command: list[str], capsys: pytest.CaptureFixture[str]) -> None:
+    assert main([*command, "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())  # argparse wraps the lines
+    listed = ", ".join(WORLD_NAMES)
+    assert listed in text, text
+    assert "{worlds}" not in text
+
+
+def test_building_the_parsers_imports_neither_the_simulator_nor_numba() -> None:
+    """The world names are read when a help is shown, not when every command's parser is built."""
+    code = ("import sys; from experiments.cli import build_parser; build_parser(); "
+            "print(sorted(m for m in ('sim', 'numba') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
+
+
+@pytest.mark.parametrize("argv, hint", [
+    (["compare", "office", "--seed", "1"], "--seed 1; did you mean --seeds?"),  # simulate's spelling
+    (["simulate", "--out", "x", "--seeds", "1"], "--seeds 1; did you mean --seed?"),  # compare's spelling
+    (["compare", "office", "--seed=1"], "--seed=1; did you mean --seeds?"),
+    (["compare", "office", "-seeds", "1"], "-seeds 1; did you mean --seeds?"),
+    (["compare", "office", "--dur", "3"], "--dur 3; did you mean --duration?"),  # the start of one option
+    (["slam", "x", "--out", "y", "--extracter", "sensor"], "--extracter sensor; did you mean --extractor?"),
+    (["lms200", "emulate", "--tpc", "3"], "--tpc 3; did you mean --tcp?"),  # two letters swapped
+    (["compare", "office", "--seed", "1", "--ot", "x"], "--seed 1 --ot x; did you mean --seeds for --seed, --out for --ot?"),
+])
+def test_an_unrecognized_option_near_a_real_one_says_which(argv, hint, capsys) -> None:
+    assert main(argv) == 2
+    command = " ".join(w for w in argv[:2] if not w.startswith("-") and w in ("compare", "simulate", "slam", "lms200", "emulate"))
+    assert capsys.readouterr().err == f"lmsbench {command}: error: unrecognized arguments: {hint} (see lmsbench {command} --help)\n"
+
+
+@pytest.mark.parametrize("argv", [["compare", "office", "--bogus"], ["compare", "office", "--o", "x"], ["--bogus", "compare", "office"]])
+def test_an_option_near_none_gets_no_guess(argv, capsys) -> None:
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "unrecognized arguments:" in err and "did you mean" not in err
+
+
+def test_version_names_the_installed_package_and_the_checkouts_commit(capsys) -> None:
+    from experiments.provenance import CHECKOUT
+
+    assert main(["--version"]) == 0
+    out = capsys.readouterr().out
+    assert re.fullmatch(rf"lmsbench {re.escape(metadata.version('lmsbench'))}( \(git [0-9a-f]{{12}}(, modified)?\))?\n", out), out
+    if (CHECKOUT / ".git").exists():  # make test runs in a checkout: its commit is named
+        head = subprocess.run(["git", "-C", str(CHECKOUT), "rev-parse", "--short=12", "HEAD"], capture_output=True,
+                              text=True).stdout.strip()
+        assert f"(git {head}" in out
+
+
+def test_version_outside_a_checkout_is_the_package_version_alone(tmp_path, monkeypatch, capsys) -> None:
+    import experiments.provenance as provenance
+
+    monkeypatch.setattr(provenance, "CHECKOUT", tmp_path)  # an installed wheel: no .git beside the code
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out == f"lmsbench {metadata.version('lmsbench')}\n"
+
+
+def test_version_is_cheap_it_loads_neither_numba_nor_the_simulator() -> None:
+    code = ("import sys; from experiments.cli import main; status = main(['--version']); "
+            "print(status, sorted(m for m in ('sim', 'numba') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.splitlines()[-1] == "0 []"

@@ -1,0 +1,125 @@
+"""A user's own extractor (``--methods MODULE:FUNCTION``, docs/baselines.md) that raises: the
+user's code failing, said as such in one line naming the method, the source and the scan (exit 2),
+not as a bug in lmsbench ("internal error: RuntimeError: x (a bug in lmsbench; ...)", exit 1)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import sys
+
+import pytest
+
+from experiments.cli import main
+from features import registry
+
+TRACEBACK_HINT = " (LMSBENCH_TRACEBACK=1 shows its traceback)"
+
+
+class _UserMethodsDropped(dict):
+    """The registry during a test: the built-in methods it loads stay registered afterwards, the
+    MODULE:FUNCTION ones registered here do not (as in test_front_door_outputs)."""
+
+    def __init__(self, real: dict) -> None:
+        super().__init__(real)
+        self.real = real
+
+    def __setitem__(self, key, value) -> None:
+        super().__setitem__(key, value)
+        if ":" not in key:
+            self.real[key] = value
+
+
+USER_MODULES = ("boomext", "wrongext", "fine")
+
+
+@pytest.fixture
+def boom(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
+    """A folder (the current one) with boomext.py: ``boom`` raises on the third scan it is given,
+    ``quiet`` raises an exception without a message."""
+    monkeypatch.setattr(registry, "_REGISTRY", _UserMethodsDropped(registry._REGISTRY))
+    monkeypatch.delenv("LMSBENCH_TRACEBACK", raising=False)
+    (tmp_path / "boomext.py").write_text(
+        "from features import extract\n"
+        "calls = []\n"
+        "def boom(scan):\n"
+        "    calls.append(scan.stamp)\n"
+        "    if len(calls) == 3:\n"
+        "        raise RuntimeError('x')\n"
+        "    return extract(scan, method='split_merge')\n"
+        "def quiet(scan):\n"
+        "    raise KeyError\n")
+    monkeypatch.chdir(tmp_path)
+    for name in USER_MODULES:  # each test's own files, not an earlier test's modules
+        sys.modules.pop(name, None)
+    yield tmp_path
+    for name in USER_MODULES:
+        sys.modules.pop(name, None)
+
+
+def test_compare_says_a_users_extractor_failed_naming_method_source_and_scan(boom, capsys) -> None:
+    # the first call is the untimed warm-up on scan 0, the second the timed one on scan 0, the third scan 1's
+    assert main(["compare", "office:0", "--duration", "2", "--rate", "2", "--methods", "boomext:boom",
+                 "--out", "cmp", "--no-progress"]) == 2
+    assert capsys.readouterr().err == ("lmsbench compare: error: your extractor boomext:boom raised RuntimeError: x "
+                                       f"on office:0 scan 1{TRACEBACK_HINT}\n")
+    assert main(["compare", "office:0", "--duration", "1", "--methods", "boomext:quiet", "--out", "cmp2",
+                 "--no-progress"]) == 2
+    assert capsys.readouterr().err == ("lmsbench compare: error: your extractor boomext:quiet raised KeyError "
+                                       f"on office:0 scan 0{TRACEBACK_HINT}\n")
+
+
+def test_lmsbench_traceback_shows_the_users_code_and_still_exits_2(boom, capsys, monkeypatch) -> None:
+    monkeypatch.setenv("LMSBENCH_TRACEBACK", "1")
+    assert main(["compare", "office:0", "--duration", "1", "--methods", "boomext:quiet", "--out", "cmp",
+                 "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert f'File "{boom / "boomext.py"}", line 9, in quiet' in err and "\nKeyError\n" in err
+    assert err.endswith("lmsbench compare: error: your extractor boomext:quiet raised KeyError on office:0 scan 0\n")
+
+
+def test_a_bug_in_lmsbench_beside_a_user_extractor_is_still_an_internal_error(boom, capsys, monkeypatch) -> None:
+    import experiments.compare
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("y")
+
+    monkeypatch.setattr(experiments.compare, "explained_fraction", broken)  # lmsbench's own code, after the call
+    (boom / "fine.py").write_text("from features import extract\ndef f(scan):\n    return extract(scan, method='iepf')\n")
+    assert main(["compare", "office:0", "--duration", "1", "--methods", "fine:f", "--out", "cmp2",
+                 "--no-progress"]) == 1
+    assert capsys.readouterr().err == ("lmsbench compare: internal error: RuntimeError: y (a bug in lmsbench; "
+                                       "LMSBENCH_TRACEBACK=1 shows where)\n")
+
+
+def test_slam_with_a_failing_user_extractor_names_the_scan(boom, capsys) -> None:
+    assert main(["simulate", "--duration", "2", "--out", "run", "--quiet"]) == 0
+    capsys.readouterr()
+    for preset in ("paper", "default"):  # paper: scan by scan in batches; default: the keyframes at the end
+        if "boomext" in sys.modules:  # the run before called it: count this run's calls afresh
+            sys.modules["boomext"].calls.clear()
+        assert main(["slam", "run", "--extractor", "boomext:boom", "--preset", preset, "--out", f"slam-{preset}",
+                     "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("lmsbench slam: error: your extractor boomext:boom raised RuntimeError: x on run scan ")
+        assert err.endswith(TRACEBACK_HINT + "\n") and err.count("\n") == 1
+    assert main(["slam", "run", "--extractor", "boomext:quiet", "--preset", "paper", "--out", "slam-q", "--quiet"]) == 2
+    assert capsys.readouterr().err == ("lmsbench slam: error: your extractor boomext:quiet raised KeyError on run "
+                                       f"scan 0{TRACEBACK_HINT}\n")
+
+
+def test_a_sweep_cell_records_the_users_failure_and_its_line(boom) -> None:
+    from experiments.sweep.cells import run_cell
+
+    row = run_cell("extract", {"method": "boomext:quiet", "world": "office", "seed": 2, "duration": 1.0, "rate_hz": 2.0})
+    assert row["status"] == "error"
+    assert row["error"] == ("UserMethodFailed: your extractor boomext:quiet raised KeyError on office:2 scan 0 "
+                            "(boomext.py:9)")
+
+
+def test_a_wrong_result_names_its_scan_too(boom, capsys) -> None:
+    (boom / "wrongext.py").write_text("def f(scan):\n    return 42\n")
+    assert main(["compare", "office:0", "--duration", "1", "--methods", "wrongext:f", "--out", "cmp",
+                 "--no-progress"]) == 2
+    assert capsys.readouterr().err == ("lmsbench compare: error: your extractor wrongext:f returned int, not a "
+                                       "features.FeatureSet on office:0 scan 0\n")
