@@ -1034,3 +1034,20 @@ def test_a_nak_behind_a_scan_that_lost_two_bytes_or_more_is_resent_at_once(monke
         assert sum(w[4:6] == b"\x20\x25" for w in port.writes) == 3  # once at opening, twice at close
         assert (lms.stats.retries, lms.stats.timeouts, lms.parser.stats.naks) == (1, 0, 1), len(broken)  # old: (1, 1, 0)
         assert lms.parser.stats.frames - frames == 3  # both scans behind the NAK, then the stop reply
+
+
+def test_a_late_reply_to_the_stop_request_leaves_driver_and_unit_at_9600(monkeypatch):
+    """A unit may take up to 3 s over a mode change. A rule that re-sent the stop request after
+    0.5 s of quiet line (to save a lost reply's mode_timeout) took the first stop's late reply for
+    the second's, and the second's for the baud change's: close() left the unit streaming at
+    500000 baud and said nothing (a review; the rule was taken back). The late reply is waited for."""
+    from lms200_sim_port import sim_port
+
+    dev = VirtualLMS200(source(20), units="mm")
+    sim_port(monkeypatch, dev)
+    lms = LMS200("sim://", baud=500000)
+    list(itertools.islice(lms.scans(), 2))
+    dev.timing.mode_change_s = 0.6  # the unit answers the stop 0.6 s after it
+    lms.close()
+    assert lms.baud == dev.baud == 9600
+    assert lms.stats.retries == 0
