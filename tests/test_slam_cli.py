@@ -762,3 +762,32 @@ def test_slam_set_overrides_its_extractor_as_compare_does(sim_folder, tmp_path, 
         err = capsys.readouterr().err
         assert message in err and len(err.strip().splitlines()) == 1, err
         assert not (tmp_path / "bad").exists()
+
+
+def test_a_users_extractor_config_of_numpy_values_and_tuples_is_recorded(sim_folder, tmp_path, monkeypatch, capsys):
+    """slam's config.yaml records the extractor's resolved config; a user's config whose defaults
+    were numpy values (np.deg2rad(20)) or tuples failed yaml.safe_dump: 'internal error:
+    RepresenterError', exit 1, where the run had completed before (a review). compare's config.yaml
+    failed the same way. They are written as plain data."""
+    import yaml
+
+    from experiments.cli import main
+    from features.registry import _REGISTRY
+
+    (tmp_path / "npext.py").write_text(
+        "import dataclasses\nimport numpy as np\nfrom features import extract\n\n\n"
+        "@dataclasses.dataclass(frozen=True)\nclass Cfg:\n    turn: float = np.deg2rad(20.0)\n"
+        "    window: tuple = (1, 2)\n    gains: np.ndarray = dataclasses.field(default_factory=lambda: np.array([0.5, 1.5]))\n\n\n"
+        "def ext(scan, config):\n    return extract(scan, method='split_merge')\n\n\next.config_type = Cfg\n")
+    monkeypatch.chdir(tmp_path)
+    try:
+        assert main(["slam", str(sim_folder), "--extractor", "npext:ext", "--out", "o", "--quiet",
+                     "--no-paper-baseline", "--max-scans", "8"]) == 0
+        assert main(["compare", str(sim_folder), "--methods", "npext:ext", "--max-scans", "3", "--out", "c",
+                     "--no-progress"]) == 0
+    finally:
+        _REGISTRY.pop("npext:ext", None)
+    record = yaml.safe_load((tmp_path / "o" / "config.yaml").read_text())["extractor_config"]
+    assert record == {"turn": 0.3490658503988659, "window": [1, 2], "gains": [0.5, 1.5]}
+    assert yaml.safe_load((tmp_path / "c" / "config.yaml").read_text())["methods"]["npext:ext"] == record
+    capsys.readouterr()
