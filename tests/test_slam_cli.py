@@ -757,7 +757,11 @@ def test_slam_set_overrides_its_extractor_as_compare_does(sim_folder, tmp_path, 
                            (["--set", "extractor.hough.rho_step=0.1"], "'hough' is not an extractor of this run"),
                            (["--set", "extractor.k=abc"], "extractor_params.k: must be an integer"),
                            (["--set", "extractor.k=2", "--set", "extractor.k=3"], "--set extractor.k is given twice"),
-                           (["--set", "k=5"], "--set takes extractor.FIELD=VALUE")):
+                           (["--set", "k=5"], "--set takes extractor.FIELD=VALUE"),
+                           # yamlio's reason, which said only "'1_0' is not a value" (a review)
+                           (["--set", "extractor.k=1_0"], "--set extractor.k: '1_0' is not a value (1_0 is read as 10: "
+                                                          "YAML 1.1 drops a number's underscores"),
+                           (["--set", "extractor.k=[1"], "--set extractor.k: '[1' is not a value (expected ',' or ']'")):
         assert main([*argv, *extra, "--out", str(tmp_path / "bad")]) == 2
         err = capsys.readouterr().err
         assert message in err and len(err.strip().splitlines()) == 1, err
