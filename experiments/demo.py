@@ -179,13 +179,14 @@ def demo_command(cfg: StudyConfig, executor: str = "local") -> str:
 
     from experiments.figures.study import INTEL_LOG
     from experiments.logargs import log_option_flags
+    from experiments.options import number_text
 
     default = StudyConfig()
     words = ["lmsbench", "demo"]
     for flag, name in (("--world", "world"), ("--seed", "seed"), ("--duration", "duration"), ("--rate-hz", "rate_hz")):
         value = getattr(cfg, name)
         if value != getattr(default, name):
-            words += [flag, f"{value:g}" if isinstance(value, float) else str(value)]
+            words += [flag, number_text(value) if isinstance(value, float) else str(value)]
     if cfg.intel_log is not None and Path(cfg.intel_log) != INTEL_LOG:
         words += ["--log", str(cfg.intel_log)]
     words += log_option_flags(cfg.log_options)

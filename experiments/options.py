@@ -150,6 +150,14 @@ class OneLineParser(argparse.ArgumentParser):
         return super().parse_known_args(args, namespace)
 
 
+def number_text(value: float) -> str:
+    """``value`` as a command line would give it back exactly: the short form (``40``, ``0.5``)
+    where that reads back as the same float, else the shortest exact one (``repr``); a Reproduce
+    line gave ``--duration 12.3457`` for a run of 12.3456789 s."""
+    short = f"{value:g}"
+    return short if float(short) == value else repr(float(value))
+
+
 def plain_number(text: str, integer: bool = False) -> float:
     """``int(text)`` or ``float(text)`` of a number as a command line writes it; ValueError also for
     underscores and non-ASCII digits, which Python reads ("1_0" as 10 and "٣" as 3: a typo of 1.0

@@ -228,6 +228,11 @@ def test_the_demo_report_names_the_command_that_ran_it():
     line = demo_command(cfg, executor="inprocess")
     assert line == ("lmsbench demo --seed 7 --rate-hz 2.5 --log 'logs/my run.clf' --skip-bad-lines "
                     "--laser-resolution-deg 0.5 --laser-range-max 30 --inprocess")
+    # every number exactly (it gave --duration 12.3457 for 12.3456789: a review)
+    exact = StudyConfig(duration=12.3456789, rate_hz=0.1234567,
+                        log_options={"geometry": {"resolution": math.radians(0.3)}})
+    assert demo_command(exact) == ("lmsbench demo --duration 12.3456789 --rate-hz 0.1234567 "
+                                   f"--laser-resolution-deg {math.degrees(math.radians(0.3))!r}")
     from experiments.cli import build_parser
 
     args = build_parser().parse_args(shlex.split(line)[1:])  # the line parses back to the same options
