@@ -17,6 +17,28 @@ def shared_data() -> Path:
     return SHARED_DATA
 
 
+class _UserMethodsDropped(dict):
+    """The extractor registry during a test: the built-in methods it loads stay registered
+    afterwards (their modules register once), the MODULE:FUNCTION ones registered here do not."""
+
+    def __init__(self, real: dict) -> None:
+        super().__init__(real)
+        self.real = real
+
+    def __setitem__(self, key, value) -> None:
+        super().__setitem__(key, value)
+        if ":" not in key:
+            self.real[key] = value
+
+
+@pytest.fixture
+def user_methods_dropped(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A user's MODULE:FUNCTION extractors registered by the test are gone after it."""
+    from features import registry
+
+    monkeypatch.setattr(registry, "_REGISTRY", _UserMethodsDropped(registry._REGISTRY))
+
+
 def pytest_configure(config: pytest.Config) -> None:
     """Under pytest-xdist (`make test` runs ``-n auto``), compile the numba kernels once, in the
     controller, before the workers start: the extractors', the default SLAM's and the simulator's

@@ -90,25 +90,9 @@ def test_the_html_report_embeds_its_images_and_fits_the_page(tmp_path):
     assert "<img src='figures/x.png' alt='cap'>" in linked
 
 
-class _UserMethodsDropped(dict):
-    """The registry during a test: the built-in methods it loads stay registered afterwards (their
-    modules register once), the MODULE:FUNCTION ones registered here do not."""
-
-    def __init__(self, real: dict) -> None:
-        super().__init__(real)
-        self.real = real
-
-    def __setitem__(self, key, value) -> None:
-        super().__setitem__(key, value)
-        if ":" not in key:
-            self.real[key] = value
-
-
-def test_compare_runs_a_users_extractor_by_module_and_function(tmp_path, monkeypatch, capsys):
+def test_compare_runs_a_users_extractor_by_module_and_function(tmp_path, monkeypatch, capsys, user_methods_dropped):
     from experiments.cli import main
-    from features import registry
 
-    monkeypatch.setattr(registry, "_REGISTRY", _UserMethodsDropped(registry._REGISTRY))
 
     (tmp_path / "frontdoor_ext.py").write_text(
         "from features import extract\n"

@@ -11,33 +11,15 @@ import sys
 import pytest
 
 from experiments.cli import main
-from features import registry
 
 TRACEBACK_HINT = " (LMSBENCH_TRACEBACK=1 shows its traceback)"
-
-
-class _UserMethodsDropped(dict):
-    """The registry during a test: the built-in methods it loads stay registered afterwards, the
-    MODULE:FUNCTION ones registered here do not (as in test_front_door_outputs)."""
-
-    def __init__(self, real: dict) -> None:
-        super().__init__(real)
-        self.real = real
-
-    def __setitem__(self, key, value) -> None:
-        super().__setitem__(key, value)
-        if ":" not in key:
-            self.real[key] = value
-
-
 USER_MODULES = ("boomext", "wrongext", "fine")
 
 
 @pytest.fixture
-def boom(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
+def boom(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, user_methods_dropped: None):
     """A folder (the current one) with boomext.py: ``boom`` raises on the third scan it is given,
     ``quiet`` raises an exception without a message."""
-    monkeypatch.setattr(registry, "_REGISTRY", _UserMethodsDropped(registry._REGISTRY))
     monkeypatch.delenv("LMSBENCH_TRACEBACK", raising=False)
     (tmp_path / "boomext.py").write_text(
         "from features import extract\n"
