@@ -743,8 +743,25 @@ def format_summary(summary: pd.DataFrame) -> str:
     return text
 
 
+def plain_data(value: Any) -> Any:
+    """``value`` as data ``yaml.safe_dump`` writes: mappings, lists, str, int, float (inf and nan
+    kept), bool and None; numpy scalars and arrays as Python's, any other object as its repr."""
+    if isinstance(value, dict):
+        return {str(k): plain_data(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain_data(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return plain_data(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    if value is None or isinstance(value, (str, bool, int, float)):
+        return value
+    return repr(value)
+
+
 def resolved_configs(methods: Sequence[str], params: dict[str, dict[str, Any]] | None = None) -> dict[str, Any]:
-    """Each method's full config as plain data (saved beside the results).
+    """Each method's full config as plain data (saved beside the results as YAML: numpy values as
+    Python's, other objects as their repr).
 
     Raises:
         LmsbenchError: an override of a value that cannot work (``rho_step=0``, ``k="abc"``)."""
@@ -753,7 +770,8 @@ def resolved_configs(methods: Sequence[str], params: dict[str, dict[str, Any]] |
     for m in methods:
         _check_types(m, params.get(m, {}))
         try:
-            out[m] = dataclasses.asdict(make_config(m, **params.get(m, {})))
+            # a user's config with np.deg2rad(20) as a default failed yaml.safe_dump: internal error, exit 1
+            out[m] = plain_data(dataclasses.asdict(make_config(m, **params.get(m, {}))))
         except LmsbenchError:
             raise
         except (ValueError, TypeError) as exc:

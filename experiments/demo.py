@@ -4,6 +4,7 @@ run the SLAM, a small sweep on Dask, draw the figures and write ``report.md`` / 
 
 from __future__ import annotations
 
+import os
 import shutil
 import time
 from pathlib import Path
@@ -97,7 +98,9 @@ def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -
                       max_scans=max_scans, fit_duration=min(30.0, cfg.duration), wall_relief=False,
                       probe_duration=cfg.duration, probe_rate_hz=PROBE_RATE_HZ,
                       probe_seeds=[next(s for s in PROBE_SEEDS if s != cfg.seed)],
-                      advice=f"a longer demo --duration, or `lmsbench sim2real {path.name}` for the full comparison")
+                      # the log as a path from here: its bare name did not run from the checkout (a review)
+                      advice=f"a longer demo --duration, or `lmsbench sim2real {os.path.relpath(path)}` for the full "
+                             "comparison")
     for warning in result.warnings:  # in the report and, as sim2real says them, on the terminal
         log(f"warning: sim2real: {warning}")
     write_outputs(result, out / "sim2real", str(path), dict(log=str(path), duration=cfg.duration, stride=10,
@@ -179,13 +182,14 @@ def demo_command(cfg: StudyConfig, executor: str = "local") -> str:
 
     from experiments.figures.study import INTEL_LOG
     from experiments.logargs import log_option_flags
+    from experiments.options import number_text
 
     default = StudyConfig()
     words = ["lmsbench", "demo"]
     for flag, name in (("--world", "world"), ("--seed", "seed"), ("--duration", "duration"), ("--rate-hz", "rate_hz")):
         value = getattr(cfg, name)
         if value != getattr(default, name):
-            words += [flag, f"{value:g}" if isinstance(value, float) else str(value)]
+            words += [flag, number_text(value) if isinstance(value, float) else str(value)]
     if cfg.intel_log is not None and Path(cfg.intel_log) != INTEL_LOG:
         words += ["--log", str(cfg.intel_log)]
     words += log_option_flags(cfg.log_options)

@@ -77,6 +77,8 @@ def plain_log_options(options: dict[str, Any]) -> dict[str, Any]:
 def log_option_flags(plain: dict[str, Any] | None) -> list[str]:
     """The command-line flags that give these plain ``read_log`` options (:func:`plain_log_options`),
     none for the defaults: how a report names the run that read the log."""
+    from experiments.options import number_text
+
     plain = plain or {}
     flags = ["--topic", str(plain["topic"])] if plain.get("topic") else []
     flags += ["--skip-bad-lines"] if plain.get("skip_bad_lines") else []
@@ -84,7 +86,7 @@ def log_option_flags(plain: dict[str, Any] | None) -> list[str]:
     for flag, name, degrees in _GEOMETRY_FLAGS:
         if geometry.get(name) is not None:
             value = math.degrees(geometry[name]) if degrees else geometry[name]
-            flags += [f"--{flag.replace('_', '-')}", f"{value:g}"]
+            flags += [f"--{flag.replace('_', '-')}", number_text(value)]
     return flags
 
 

@@ -150,6 +150,14 @@ class OneLineParser(argparse.ArgumentParser):
         return super().parse_known_args(args, namespace)
 
 
+def number_text(value: float) -> str:
+    """``value`` as a command line would give it back exactly: the short form (``40``, ``0.5``)
+    where that reads back as the same float, else the shortest exact one (``repr``); a Reproduce
+    line gave ``--duration 12.3457`` for a run of 12.3456789 s."""
+    short = f"{value:g}"
+    return short if float(short) == value else repr(float(value))
+
+
 def plain_number(text: str, integer: bool = False) -> float:
     """``int(text)`` or ``float(text)`` of a number as a command line writes it; ValueError also for
     underscores and non-ASCII digits, which Python reads ("1_0" as 10 and "٣" as 3: a typo of 1.0
@@ -591,15 +599,19 @@ def _first_line(start: str) -> Callable[[Path], bool]:
     return tells
 
 
+#: a slam run's config.yaml records beside input: and slam: (what ran, not settings: ``slam --config``
+#: reads past them; experiments.slamrun.write_config writes them)
+SLAM_RECORD_KEYS = ("extractor_config", "versions")
+
+
 def _slam_config(path: Path) -> bool:
     """config.yaml as lmsbench slam writes it (slamrun.write_config): input: and slam: mappings,
     the slam one with a preset, and nothing else but the records extractor_config: and versions:
     (mappings; an earlier version wrote neither)."""
     raw = _yaml_mapping(path)
-    records = ("extractor_config", "versions")  # experiments.slamrun.RECORD_KEYS (slamrun imports the slam package)
-    return (raw is not None and {"input", "slam"} <= set(raw) <= {"input", "slam", *records}
+    return (raw is not None and {"input", "slam"} <= set(raw) <= {"input", "slam", *SLAM_RECORD_KEYS}
             and isinstance(raw["input"], dict) and isinstance(raw["slam"], dict) and "preset" in raw["slam"]
-            and all(isinstance(raw[k], dict) for k in records if k in raw))
+            and all(isinstance(raw[k], dict) for k in SLAM_RECORD_KEYS if k in raw))
 
 
 @dataclass(frozen=True)

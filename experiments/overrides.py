@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import re
 from typing import Any, Mapping, Sequence
 
 import yaml
@@ -32,8 +33,9 @@ def set_option(text: str) -> tuple[str, Any]:
                                          f"got {text!r}{hint}")
     try:
         return key, load_yaml(value)
-    except yaml.YAMLError:
-        raise argparse.ArgumentTypeError(f"--set {key}: {value!r} is not a value") from None
+    except yaml.YAMLError as exc:  # yamlio's reason: '1_0 is read as 10: YAML 1.1 drops ...' was 'is not a value'
+        reason = re.sub(r"^line \d+, column \d+: ", "", str(exc))  # the position within one value says nothing
+        raise argparse.ArgumentTypeError(f"--set {key}: {value!r} is not a value ({reason})") from None
 
 
 def check_set_once(params: list[tuple[str, Any]]) -> None:

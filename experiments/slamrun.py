@@ -394,15 +394,14 @@ def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:
     import yaml
 
     from experiments.compare import resolved_configs
+    from experiments.options import SLAM_RECORD_KEYS
     from experiments.provenance import versions
 
     extractor = resolved_configs([config.extractor], {config.extractor: config.extractor_params})[config.extractor]
-    record = {"input": data.sources, "slam": config.to_dict(), RECORD_KEYS[0]: extractor, RECORD_KEYS[1]: versions()}
-    write_record(out / "config.yaml", yaml.safe_dump(record, sort_keys=False))
-
-
-#: config.yaml's records beside input: and slam: (what ran, not settings: ``slam --config`` skips them)
-RECORD_KEYS = ("extractor_config", "versions")
+    records = {"extractor_config": extractor, "versions": versions()}
+    assert tuple(records) == SLAM_RECORD_KEYS  # what slam --config reads past and --out tells the folder by
+    write_record(out / "config.yaml", yaml.safe_dump({"input": data.sources, "slam": config.to_dict(), **records},
+                                                     sort_keys=False))
 
 
 def _jsonable(value: Any) -> Any:

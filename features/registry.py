@@ -200,7 +200,7 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
     BATCH_CHUNK scans for the compiled methods (sensor, split_merge, iepf); the result equals
     calling ``extract`` on each, whatever the thread count. A list or tuple (any sized collection)
     is taken whole; an iterator or generator is read up to ``features.batch.MAX_ITERATOR_BEAMS``
-    beams (92,948 scans of 361 beams), and one that yields more, or never ends, is refused.
+    beams (371,794 scans of 361 beams), and one that yields more, or never ends, is refused.
 
     ``threads``: pieces of the batch run on this many threads at once (each thread at least
     MIN_SCANS_PER_THREAD scans) for the compiled methods (registered ``thread_safe``); None:

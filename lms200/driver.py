@@ -119,8 +119,7 @@ def _check_arguments(baud: object, fov_deg: object, resolution_deg: object, unit
 class DriverStats:
     """Counters of one connection: scans yielded, frames dropped by the parser, undecodable scans,
     attempts resent (``retries``) and attempts that waited out their whole wait without a reply or
-    a NAK (``timeouts``: a NAK is resent at once, without one, and so is a stop request written
-    while streaming once the line has gone quiet: see ``LMS200._stream_stopped``)."""
+    a NAK (``timeouts``: a NAK is resent at once, without one)."""
 
     scans: int
     dropped_frames: int
@@ -144,9 +143,7 @@ class LMS200:
             the reply (and of a scan telegram in flight while streaming); the listing promises
             60 ms, USB adapters and TCP need more. A frame cut off by a line gone quiet is given
             up after ``timeout`` plus the line time of the longest telegram (818 bytes).
-        mode_timeout: the same for mode changes and configuration writes (up to 3 s); a stop
-            request written while streaming is sent again once the line has been quiet for
-            ``timeout`` (its reply lost), not after ``mode_timeout``.
+        mode_timeout: the same for mode changes and configuration writes (up to 3 s).
         retries: attempts per request.
         probe: when 9600 baud gets no answer, try 19200, 38400 and 500000.
         password: installation-mode password (needed to change the units).
@@ -346,16 +343,14 @@ class LMS200:
         return [e - len(f) * byte_s for e, f in zip(ends, frames)]
 
     def _request(self, payload: bytes, what: str, timeout: float | None = None, retries: int | None = None,
-                 budget: float | None = None, proof: int | None = None, stops_stream: bool = False) -> Frame:
+                 budget: float | None = None, proof: int | None = None) -> Frame:
         """Send a request and return its reply frame, retrying on silence and NAK.
 
         Each attempt waits ``timeout`` plus the line time of the reply (and of a scan telegram
         that may be in flight in continuous mode), or ``budget`` seconds when given. ``proof``: a
         reply code that shows the request took effect when its reply is lost (0xB0 for the
         request to start continuous output); such a frame is returned instead and kept for
-        :meth:`scans`. ``stops_stream``: the request ends continuous output (0x20 0x25); an
-        attempt written while streaming ends once the line has been quiet for ``timeout`` (see
-        :meth:`_stream_stopped`).
+        :meth:`scans`.
         """
         expected = reply_code(payload[0])
         telegram = build_frame(payload, self.address)
@@ -365,22 +360,12 @@ class LMS200:
             budget = (self.timeout if timeout is None else timeout) + frame_seconds(reply_bytes + in_flight + 1, self.baud)
         attempts = self.retries if retries is None else retries
         try:
-            return self._attempts(what, telegram, expected, budget, attempts, proof, stops_stream)
+            return self._attempts(what, telegram, expected, budget, attempts, proof)
         finally:
             self.parser.awaiting_reply = False
 
-    def _stream_stopped(self) -> bool:
-        """Whether continuous output has visibly stopped: nothing held back by the parser and no
-        byte received for ``timeout`` since the last byte or the last request written. A unit in
-        continuous mode sends telegram after telegram (back to back up to 38400 baud, at most a
-        scan period apart at 500000: 53 ms at 0.25 deg), so a line quiet that long shows that a
-        stop request took effect, and a reply still missing then was lost: waiting out the rest of
-        ``mode_timeout`` for it (3.5 s by default) cost that much for nothing."""
-        quiet = time.monotonic() - max(self._last_write, self._last_rx)
-        return not self.parser.pending and quiet >= self.timeout
-
     def _attempts(self, what: str, telegram: bytes, expected: int, budget: float, attempts: int,
-                  proof: int | None = None, stops_stream: bool = False) -> Frame:
+                  proof: int | None = None) -> Frame:
         """The attempts of :meth:`_request`."""
         seen: list[str] = []
         for attempt in range(attempts):
@@ -410,8 +395,7 @@ class LMS200:
             self._last_write = time.monotonic()
             self._doing = f"{what}: waiting for the reply"
             deadline = time.monotonic() + budget
-            acked = naked = stopped = False
-            watch_stream = stops_stream and self.streaming  # written while streaming: see _stream_stopped
+            acked = naked = False
             others = 0
             while not naked:
                 # The deadline is read before the port: a host kept from running past it (a loaded
@@ -439,16 +423,10 @@ class LMS200:
                         others += 1
                 if expired and read:
                     break
-                if watch_stream and read and self._stream_stopped():
-                    # The stop took effect (or the unit went silent) and its reply was lost: send
-                    # it again now; in on-request mode the unit answers it at once.
-                    stopped, self.streaming = True, False
-                    break
-            if not naked and not stopped:
+            if not naked:
                 self._timeouts += 1
             seen.append("NAK" if naked else ("ACK, then no reply" if acked else "nothing") +
-                        (f" ({others} other frames)" if others else "") +
-                        (f", then the line quiet for {self.timeout:g} s: continuous output stopped" if stopped else ""))
+                        (f" ({others} other frames)" if others else ""))
         raise self._gave_up(what, telegram, expected, budget, seen)
 
     def _gave_up(self, what: str, telegram: bytes, expected: int, budget: float,
@@ -469,8 +447,7 @@ class LMS200:
         # device sends none in on-request mode, and the driver asks for no single scan): its 0xA0
         # reply lost, the driver waited out mode_timeout and sent the request again.
         proof = REPLY_MEASURE if sub_command == MODE_CONTINUOUS else None
-        reply = self._request(mode_request(sub_command, self.password), what, timeout=self.mode_timeout, proof=proof,
-                              stops_stream=sub_command == MODE_ON_REQUEST)
+        reply = self._request(mode_request(sub_command, self.password), what, timeout=self.mode_timeout, proof=proof)
         if reply.code == REPLY_MEASURE:
             self.streaming = True
             return

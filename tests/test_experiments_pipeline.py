@@ -4,6 +4,7 @@ its report."""
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
@@ -169,7 +170,8 @@ def test_the_demo_without_out_also_leaves_results_demo_report_md(tmp_path, monke
     def fake_run_demo(out, cfg, sweep_executor="local", log=print):
         (out / "figures").mkdir(parents=True)
         (out / "figures" / "a.png").write_bytes(b"png")
-        (out / "report.md").write_text("# lmsbench demo\n\n![a](figures/a.png) [web](https://x.org/a.png)\n")
+        (out / "report.md").write_text("# lmsbench demo\n\n![a](figures/a.png) [web](https://x.org/a.png)\n"
+                                       "settings in `tables/study.yaml`, `lmsbench demo`\n")
         (out / "report.html").write_text("<html>embedded</html>")
         return out / "report.md"
 
@@ -179,7 +181,8 @@ def test_the_demo_without_out_also_leaves_results_demo_report_md(tmp_path, monke
     base = tmp_path / "results" / "demo"
     run = (base / "latest").resolve()
     copied = (base / "report.md").read_text()
-    assert copied == f"# lmsbench demo\n\n![a]({run.name}/figures/a.png) [web](https://x.org/a.png)\n"
+    assert copied == (f"# lmsbench demo\n\n![a]({run.name}/figures/a.png) [web](https://x.org/a.png)\n"
+                      f"settings in `{run.name}/tables/study.yaml`, `lmsbench demo`\n")
     assert all((base / p).is_file() for p in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", copied))
     assert (base / "report.html").read_text() == "<html>embedded</html>"
     assert f"copied the report to {Path('results/demo/report.md')}" in capsys.readouterr().out
@@ -228,6 +231,11 @@ def test_the_demo_report_names_the_command_that_ran_it():
     line = demo_command(cfg, executor="inprocess")
     assert line == ("lmsbench demo --seed 7 --rate-hz 2.5 --log 'logs/my run.clf' --skip-bad-lines "
                     "--laser-resolution-deg 0.5 --laser-range-max 30 --inprocess")
+    # every number exactly (it gave --duration 12.3457 for 12.3456789: a review)
+    exact = StudyConfig(duration=12.3456789, rate_hz=0.1234567,
+                        log_options={"geometry": {"resolution": math.radians(0.3)}})
+    assert demo_command(exact) == ("lmsbench demo --duration 12.3456789 --rate-hz 0.1234567 "
+                                   f"--laser-resolution-deg {math.degrees(math.radians(0.3))!r}")
     from experiments.cli import build_parser
 
     args = build_parser().parse_args(shlex.split(line)[1:])  # the line parses back to the same options
@@ -263,4 +271,6 @@ def test_the_demos_sim2real_warnings_give_advice_the_demo_takes(tmp_path, monkey
     (tmp_path / "mit.clf").write_text("")
     with pytest.raises(Stop):
         _sim2real_section(cfg, tmp_path, lambda msg: None)
-    assert seen["advice"] == "a longer demo --duration, or `lmsbench sim2real mit.clf` for the full comparison"
+    # the log as a path from where the demo runs (its bare name did not run from the checkout)
+    assert seen["advice"] == (f"a longer demo --duration, or `lmsbench sim2real {os.path.relpath(tmp_path / 'mit.clf')}` "
+                              "for the full comparison")

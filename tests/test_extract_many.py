@@ -350,7 +350,7 @@ def test_an_endless_iterator_is_refused_not_read_until_memory_runs_out(monkeypat
     from features.errors import BatchSizeError
     from lms200 import LmsbenchError
 
-    assert batch_module.MAX_ITERATOR_BEAMS == 1 << 25  # 92,948 scans of 361 beams
+    assert batch_module.MAX_ITERATOR_BEAMS == 1 << 27  # 371,794 scans of 361 beams: a 45 min log's 101,250 pass
     scan = room(0)
     assert len(scan) == 361
 
@@ -360,8 +360,8 @@ def test_an_endless_iterator_is_refused_not_read_until_memory_runs_out(monkeypat
 
     for method, scans in (("sensor", itertools.repeat(scan)), ("split_merge", endless()), ("hough", endless())):
         with pytest.raises(BatchSizeError, match=re.escape(
-                f"scans: an iterator or generator ({type(scans).__name__}) that yielded more than 33,554,432 beams "
-                "(92,949 scans) without ending: extract_many returns one FeatureSet a scan, so it takes a finite batch; "
+                f"scans: an iterator or generator ({type(scans).__name__}) that yielded more than 134,217,728 beams "
+                "(371,795 scans) without ending: extract_many returns one FeatureSet a scan, so it takes a finite batch; "
                 "pass a list or tuple of scans, or call it on pieces of the iterator (itertools.islice(scans, 4096))")) as info:
             extract_many(scans, method=method)
         assert isinstance(info.value, LmsbenchError) and isinstance(info.value, ValueError)

@@ -1036,62 +1036,18 @@ def test_a_nak_behind_a_scan_that_lost_two_bytes_or_more_is_resent_at_once(monke
         assert lms.parser.stats.frames - frames == 3  # both scans behind the NAK, then the stop reply
 
 
-class LosesStopReply(VirtualLMS200):
-    """A streaming unit that takes the first stop request (0x20 0x25: it ACKs it and stops
-    streaming) but whose 0xA0 reply to it is lost on the line."""
-
-    lost = False
-
-    def _mode(self, data: bytes, t_reply: float) -> None:
-        from lms200.protocol import MODE_ON_REQUEST
-
-        if data == bytes([MODE_ON_REQUEST]) and self.continuous and not self.lost:
-            self.lost = True
-            self.mode = MODE_ON_REQUEST  # streaming stops; the ACK is queued already, the 0xA0 is lost
-            return
-        super()._mode(data, t_reply)
-
-
-@pytest.mark.parametrize("baud, old_s, bound_s", [(500000, 3.670, 0.8), (38400, 3.886, 1.0), (9600, 4.527, 1.6)])
-def test_a_lost_reply_to_the_stop_request_costs_the_quiet_line_not_the_mode_timeout(
-        monkeypatch: pytest.MonkeyPatch, baud: int, old_s: float, bound_s: float) -> None:
-    """The virtual unit on the simulated clock: close() while streaming, the unit takes the stop
-    request (ACK, streaming stops) but its 0xA0 reply is lost. The driver waited out the whole
-    attempt (mode_timeout 3.5 s plus the line time of a reply and a scan in flight) among a quiet
-    line before it sent the stop again: close() took old_s (simulated seconds; timeouts 1,
-    retries 1). A streaming unit sends telegram after telegram, so a line quiet for ``timeout``
-    (0.5 s) shows that the stop took effect: the driver sends it again then and the unit, in
-    on-request mode, answers at once (close() within bound_s: the telegram in flight, 0.5 s, the
-    resend, and the switch back to 9600 baud; timeouts 0, retries 1)."""
-    from lms200_sim_port import sim_port
-
-    dev = LosesStopReply(source(20), units="mm")
-    port = sim_port(monkeypatch, dev)
-    lms = LMS200("sim://", baud=baud)
-    assert len(list(itertools.islice(lms.scans(), 2))) == 2 and dev.continuous
-    start, writes = port.clock.t, len(port.writes)
-    lms.close()
-    took = port.clock.t - start
-    assert dev.lost and not dev.continuous and dev.baud == 9600 and not lms.streaming
-    assert sum(w[4:6] == b"\x20\x25" for w in port.writes[writes:]) == 2
-    assert (lms.stats.timeouts, lms.stats.retries) == (0, 1)  # old: (1, 1)
-    assert lms.timeout < took < bound_s < old_s  # old: old_s
-
-
-def test_a_unit_that_falls_silent_while_streaming_is_given_up_naming_the_quiet_line(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The stop request's first attempt ends on a quiet line; the attempts after it (the unit is
-    no longer streaming) wait their whole budget, and the error says what each attempt saw."""
+def test_a_late_reply_to_the_stop_request_leaves_driver_and_unit_at_9600(monkeypatch):
+    """A unit may take up to 3 s over a mode change. A rule that re-sent the stop request after
+    0.5 s of quiet line (to save a lost reply's mode_timeout) took the first stop's late reply for
+    the second's, and the second's for the baud change's: close() left the unit streaming at
+    500000 baud and said nothing (a review; the rule was taken back). The late reply is waited for."""
     from lms200_sim_port import sim_port
 
     dev = VirtualLMS200(source(20), units="mm")
-    port = sim_port(monkeypatch, dev)
+    sim_port(monkeypatch, dev)
     lms = LMS200("sim://", baud=500000)
-    assert len(list(itertools.islice(lms.scans(), 1))) == 1
-    dev.faults.mute = True
-    start = port.clock.t
-    with pytest.raises(LmsTimeoutError, match=r"stop continuous output \(0x20 0x25\): no 0xA0 reply within 3\.5\d s .*"
-                       r"attempt 1: nothing, then the line quiet for 0\.5 s: continuous output stopped; "
-                       r"attempt 2: nothing; attempt 3: nothing$"):
-        lms.close()
-    assert (lms.stats.timeouts, lms.stats.retries) == (2, 2)  # old: (3, 2)
-    assert port.clock.t - start < 0.5 + 0.1 + 2 * 3.6  # old: 3 x 3.52
+    list(itertools.islice(lms.scans(), 2))
+    dev.timing.mode_change_s = 0.6  # the unit answers the stop 0.6 s after it
+    lms.close()
+    assert lms.baud == dev.baud == 9600
+    assert lms.stats.retries == 0

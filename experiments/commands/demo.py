@@ -64,6 +64,8 @@ def copy_report_up(report: Path) -> None:
 
     run = report.parent
     text = re.sub(r"\]\((?![a-z]+:|/|#)([^)]+)\)", lambda m: f"]({run.name}/{m.group(1)})", report.read_text())
+    # and the run's files named in code spans ("settings in `tables/study.yaml`")
+    text = re.sub(r"`((?:tables|figures|sim2real|sweeps)/[^`]*)`", lambda m: f"`{run.name}/{m.group(1)}`", text)
     write_record(run.parent / "report.md", text)
     write_record(run.parent / "report.html", (run / "report.html").read_text())
     print(f"== copied the report to {run.parent / 'report.md'} and {run.parent / 'report.html'}")

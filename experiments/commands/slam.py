@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 
 from experiments.logargs import add_log_options, read_log_options
 from experiments.overrides import check_set_once, extractor_overrides, set_option
-from experiments.options import (SLAM_OUTPUTS, SLAM_OWNER, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_simulate_finished, check_yaml,
+from experiments.options import (SLAM_OUTPUTS, SLAM_OWNER, SLAM_RECORD_KEYS, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_simulate_finished, check_yaml,
                                  count, missing_message, positive, path_arg, text)
 
 
@@ -78,7 +78,7 @@ def _config(args: argparse.Namespace):
             raise LmsbenchError(f"{args.config}: expected a mapping of SLAM config fields")
         if "slam" in raw:  # a run's config.yaml: {input: ..., slam: {...}}
             # a run's records of what ran (extractor_config:, versions:) are not settings: read past
-            beside = sorted(str(k) for k in raw if k not in ("slam", "input", "extractor_config", "versions"))
+            beside = sorted(str(k) for k in raw if k not in ("slam", "input", *SLAM_RECORD_KEYS))
             if beside:  # they were ignored: `motion: {sigma_accel: 9}` beside `slam:` ran with 1.0
                 raise InputError(f"{args.config}: key(s) {beside} beside the slam: section would be ignored; "
                                  "put them under slam:")
