@@ -44,7 +44,7 @@ def warm_up_kernels(log: Log = stderr, slam: bool = False) -> float:
     # and the same scan in cm mode (range_max > 10 m), whose noise the sensor method estimates ("auto")
     scans = (scan, scan.replace(range_max=81.83))
     start = time.perf_counter()
-    first = "compiling kernels, once (about 20-60 s; cached beside the code for every later run) ..."
+    first = "compiling kernels, once (about 1-2 min; cached beside the code for every later run) ..."
     event.register("numba:compile", compiles)  # numba raises this event for compiles only, not cache loads
     try:
         with Heartbeat(log, "compiling kernels", first=first, first_after=1.0, when=lambda: compiles.compiled) as beat:

@@ -18,14 +18,18 @@ PACKAGES = ("lmsbench", "numpy", "scipy", "numba", "pybullet", "pandas", "filter
 
 
 def versions() -> dict[str, str]:
-    """Python, the platform and the installed version of every package in PACKAGES (absent ones
-    are left out)."""
+    """Python, the platform, the installed version of every package in PACKAGES (absent ones are
+    left out) and, run from a git checkout, its commit (``lmsbench_git``, as ``lmsbench
+    --version`` gives it): the package's version alone did not tell two checkouts apart."""
     out = {"python": platform.python_version(), "platform": f"{sys.platform}-{platform.machine()}"}
     for name in PACKAGES:
         try:
             out[name] = metadata.version(name)
         except metadata.PackageNotFoundError:
             continue
+    commit = checkout_commit()
+    if commit is not None:
+        out["lmsbench_git"] = commit
     return out
 
 

@@ -30,6 +30,24 @@ def test_versions_name_python_and_the_numeric_libraries():
     assert v["python"].startswith("3.11") and "numpy" in v and "lmsbench" in v
 
 
+def test_versions_name_the_checkouts_commit(monkeypatch):
+    """Every result's record of versions gave the package's version alone (0.1.0 for every commit);
+    `lmsbench --version` could tell the commit, the records beside the results could not. Run from a
+    git checkout they now hold it; elsewhere (an installed wheel) they leave it out."""
+    import subprocess
+
+    from experiments import provenance
+
+    if provenance.checkout_commit() is not None:
+        head = subprocess.run(["git", "-C", str(provenance.CHECKOUT), "rev-parse", "--short=12", "HEAD"],
+                              capture_output=True, text=True, check=True).stdout.strip()
+        assert versions()["lmsbench_git"].startswith(head)
+    monkeypatch.setattr(provenance, "checkout_commit", lambda: None)
+    assert "lmsbench_git" not in versions()
+    monkeypatch.setattr(provenance, "checkout_commit", lambda: "0123456789ab, modified")
+    assert versions()["lmsbench_git"] == "0123456789ab, modified"
+
+
 def test_result_files_get_the_users_umask(tmp_path):
     old = os.umask(0o022)
     try:
