@@ -38,6 +38,16 @@ def _sweep(tmp_path: Path, sleep: float, xs: int) -> list[str]:
     return [sys.executable, "-m", "experiments.cli", "sweep", str(path), "--workers", "2", "--out", str(tmp_path / "out")]
 
 
+def _cmdline(p: psutil.Process) -> str:
+    """A process's command line, "" for one that ended between being listed and being asked (a
+    short-lived child, such as the git of the versions record, left a zombie: psutil.ZombieProcess
+    failed this test once in a fresh clone's CI)."""
+    try:
+        return " ".join(p.cmdline())
+    except (psutil.NoSuchProcess, psutil.AccessDenied):  # ZombieProcess is a NoSuchProcess
+        return ""
+
+
 def _env() -> dict:
     return {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "tests"), str(REPO)])}
 
@@ -375,8 +385,7 @@ def test_ctrl_c_during_the_runner_benchmark_on_its_local_cluster_is_one_line(tmp
     try:
         deadline = time.monotonic() + 120
         while True:  # the cluster's two worker processes are up
-            workers = [p for p in psutil.Process(proc.pid).children(recursive=True)
-                       if "spawn_main" in " ".join(p.cmdline())]
+            workers = [p for p in psutil.Process(proc.pid).children(recursive=True) if "spawn_main" in _cmdline(p)]
             if len(workers) >= 2:
                 break
             assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
