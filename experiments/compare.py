@@ -441,37 +441,34 @@ def compare(
             n_valid = int(np.count_nonzero(scan.valid))
             exact = _truth_row(truth, scan, sigma_r, rd_cfg) if truth is not None else {}
             shift = k % len(runs)
-            try:
+            try:  # a user's MODULE:FUNCTION that fails, warming up or timed, is said with its scan
                 if not warmed:  # first calls load compiled kernels and fill caches: not timed
                     for _, fn, cfg in src_runs:
                         fn(scan, cfg)
                     warmed = True
-            except UserMethodFailed as exc:  # a user's MODULE:FUNCTION failed: say on which scan
-                raise exc.at(source_label(src), k)
-            for name, fn, cfg in src_runs[shift:] + src_runs[:shift]:
-                t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
-                try:
+                for name, fn, cfg in src_runs[shift:] + src_runs[:shift]:
+                    t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
                     fs = fn(scan, cfg)
-                except UserMethodFailed as exc:
-                    raise exc.at(source_label(src), k)
-                c1, t1 = time.thread_time_ns(), time.perf_counter_ns()
-                elapsed, cpu = t1 - t0, c1 - c0
-                explained, range_rms = explained_fraction(fs, scan, sigma_r)
-                row = dict(method=name, backend=backends[name], source=src.name, kind=src.kind, seed=src.seed, scan=k,
-                           stamp=scan.stamp, n_valid=n_valid, n_lines=len(fs.lines),
-                           n_corners=len(fs.corners), microseconds=elapsed / 1e3, cpu_microseconds=cpu / 1e3,
-                           explained=explained, range_rms=range_rms)
-                row.update(_realdata_row(fs, rec, src, sigma_r, rd_cfg, previous, name))
-                row.update(exact)
-                if truth is not None:
-                    score = score_scan(fs, truth, score_config)
-                    row.update(_score_row(score))
-                    if matches is not None:
-                        for face, dr, da in zip(score.matches[:, 1].tolist(), score.rho_errors.tolist(),
-                                                score.alpha_errors.tolist()):
-                            matches.append(dict(method=name, source=src.name, seed=src.seed, scan=k,
-                                                face=face, rho_err=dr, alpha_err=da))
-                rows.append(row)
+                    c1, t1 = time.thread_time_ns(), time.perf_counter_ns()
+                    elapsed, cpu = t1 - t0, c1 - c0
+                    explained, range_rms = explained_fraction(fs, scan, sigma_r)
+                    row = dict(method=name, backend=backends[name], source=src.name, kind=src.kind, seed=src.seed, scan=k,
+                               stamp=scan.stamp, n_valid=n_valid, n_lines=len(fs.lines),
+                               n_corners=len(fs.corners), microseconds=elapsed / 1e3, cpu_microseconds=cpu / 1e3,
+                               explained=explained, range_rms=range_rms)
+                    row.update(_realdata_row(fs, rec, src, sigma_r, rd_cfg, previous, name))
+                    row.update(exact)
+                    if truth is not None:
+                        score = score_scan(fs, truth, score_config)
+                        row.update(_score_row(score))
+                        if matches is not None:
+                            for face, dr, da in zip(score.matches[:, 1].tolist(), score.rho_errors.tolist(),
+                                                    score.alpha_errors.tolist()):
+                                matches.append(dict(method=name, source=src.name, seed=src.seed, scan=k,
+                                                    face=face, rho_err=dr, alpha_err=da))
+                    rows.append(row)
+            except UserMethodFailed as exc:
+                raise exc.at(source_label(src), k)
             if bar is not None:
                 bar.update(1)
     if bar is not None:

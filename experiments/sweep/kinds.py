@@ -233,10 +233,8 @@ def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: s
         # taken as a column and read by nothing: the cells ran the defaults, exit 0
         other = sorted(k for k in cell if "." in k and k.partition(".")[0] not in prefixes)
         if other:
-            hint = (f" (the SLAM's extractor: slam.extractor_params.{other[0].partition('.')[2]})"
-                    if "slam" in prefixes and other[0].startswith("extractor.") else "")
             raise SweepSpecError(f"unknown parameter(s) {other}: these cells read {read} fields and the plain "
-                                 f"names {sorted(known)}, so they would set nothing{hint}")
+                                 f"names {sorted(known)}, so they would set nothing")
         p = {**defaults, **cell}
         world = str(p["world"])
         if world not in known_worlds() and not world.endswith(".json"):
