@@ -1,0 +1,101 @@
+"""A field set with --set replaces that field alone, a field no scan reads is said, and compare's
+config.yaml records the noise each method ran with per source (a researcher's walkthrough):
+``compare mit-csail.clf.gz --set extractor.sensor.sigma_r=X`` gave the same output for X = 0.005
+and 5 (sigma_r is not read on cm-mode scans), yet dropped the log's bearing noise (explained 0.545
+-> 0.518, 8.32 -> 6.73 lines a scan), and config.yaml still read ``bearing_sigma: 0.00597``."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+import yaml
+
+CM_WARNING = ("lmsbench compare: warning: sensor: sigma_r=5 is not used: sigma_r applies to mm-mode scans "
+              "(range_max <= 10 m); the scans of run.clf are cm mode (range_max 81.83 m): set sigma_r_cm")
+
+
+@pytest.fixture(scope="module")
+def cm_log(tmp_path_factory):
+    """A small CARMEN log of cm-mode scans (range_max 81.83 m), interlaced: a bearing noise to estimate."""
+    from lms200 import write_log
+    from sim import SensorConfig, simulate_records
+
+    recs = simulate_records("office", seed=3, duration=6.0, rate_hz=5, sensor=SensorConfig(units="cm", noise_sigma=0.008))
+    assert recs[0].scan.range_max > 10.0
+    path = tmp_path_factory.mktemp("cm") / "run.clf"
+    write_log(path, recs)
+    return path
+
+
+def _compare(path, out, *extra, methods=("sensor", "split_merge")):
+    from experiments.cli import main
+
+    assert main(["compare", str(path), "--methods", *methods, "--out", str(out), "--no-progress", *extra]) == 0
+    return pd.read_csv(out / "summary.csv").set_index("method"), yaml.safe_load((out / "config.yaml").read_text())
+
+
+def test_a_set_field_replaces_that_field_alone() -> None:
+    """_with_noise: a range noise the caller sets leaves the source's bearing noise and fit scatter."""
+    from experiments.compare import _with_noise
+    from features.registry import get_method, make_config
+
+    given = {"sensor": {"sigma_r": 0.02}, "split_merge": {"sigma": 0.03}}
+    runs = [(m, get_method(m).run, make_config(m, **given[m])) for m in ("sensor", "split_merge")]  # as compare makes them
+    out = {name: cfg for name, _, cfg in _with_noise(runs, given, 0.012, 0.0095, 0.006)}
+    assert (out["sensor"].sigma_r, out["sensor"].sigma_r_cm, out["sensor"].sigma_bearing) == (0.02, 0.012, 0.006)
+    assert (out["split_merge"].sigma, out["split_merge"].sigma_fit) == (0.03, 0.0095)
+    runs = [("sensor", get_method("sensor").run, make_config("sensor", sigma_bearing=0.0))]
+    set_bearing = {name: cfg for name, _, cfg in _with_noise(runs, {"sensor": {"sigma_bearing": 0.0}}, 0.012, None, 0.006)}
+    assert (set_bearing["sensor"].sigma_bearing, set_bearing["sensor"].sigma_r_cm) == (0.0, 0.012)
+
+
+def test_sigma_r_on_a_cm_mode_log_changes_nothing_and_is_said(cm_log, tmp_path, capsys) -> None:
+    from features.noise_estimate import bearing_sigma, neighbour_sigma
+    from lms200 import read_log
+
+    plain, plain_cfg = _compare(cm_log, tmp_path / "plain")
+    capsys.readouterr()
+    given, given_cfg = _compare(cm_log, tmp_path / "given", "--set", "extractor.sensor.sigma_r=5")
+    err = capsys.readouterr().err
+    assert CM_WARNING in err.splitlines()
+    cols = ["explained_3cm", "lines_per_scan", "ray_rmse_mm"]
+    pd.testing.assert_frame_equal(plain[cols], given[cols])  # the old code: 7.76 -> 7.55 lines a scan
+    scans = list(read_log(cm_log))
+    b, n = bearing_sigma(scans), neighbour_sigma(scans)
+    assert b > 0.001
+    ran = {"sensor": {"sigma_r_cm": n, "sigma_bearing": b}, "split_merge": {"sigma": n, "sigma_fit": pytest.approx(0.0094, abs=5e-4)}}
+    assert plain_cfg["ran_with"] == {"run.clf": ran} and given_cfg["ran_with"] == {"run.clf": ran}
+    assert given_cfg["methods"]["sensor"]["sigma_r"] == "5: not read (no mm-mode scan)"
+    assert given_cfg["methods"]["sensor"]["sigma_bearing"] == "set per source (ran_with)"
+    assert plain_cfg["methods"]["split_merge"]["sigma_fit"] == "set per source (ran_with)"  # it read null
+    assert "bearing_sigma" not in plain_cfg  # the log's estimate, written even where it was not used
+    # the bearing noise matters on this log (the test can fail), and a 0 set for it is what is recorded
+    off, off_cfg = _compare(cm_log, tmp_path / "off", "--set", "extractor.sensor.sigma_bearing=0", methods=("sensor",))
+    assert off.loc["sensor", "lines_per_scan"] != plain.loc["sensor", "lines_per_scan"]
+    assert off_cfg["ran_with"]["run.clf"]["sensor"] == {"sigma_r_cm": n, "sigma_bearing": 0}
+    assert "warning" not in capsys.readouterr().err
+
+
+def test_sigma_r_cm_on_mm_mode_scans_is_said(tmp_path, capsys) -> None:
+    _, cfg = _compare("office:0", tmp_path / "w", "--duration", "2", "--set", "extractor.sigma_r_cm=0.01",
+                      methods=("sensor",))
+    assert ("lmsbench compare: warning: sensor: sigma_r_cm=0.01 is not used: sigma_r_cm applies to cm-mode scans "
+            "(range_max > 10 m); the scans of office:0 are mm mode (range_max 8.183 m): set sigma_r") \
+        in capsys.readouterr().err.splitlines()
+    assert cfg["ran_with"]["office:0" if "office:0" in cfg["ran_with"] else "office"]["sensor"] == {
+        "sigma_r": 0.005, "sigma_bearing": 0.0}
+
+
+def test_the_real_mit_log_keeps_its_bearing_noise_under_a_sigma_r_override(shared_data, tmp_path, capsys) -> None:
+    """The walkthrough's own command: 0.545 / 8.32 with or without --set extractor.sensor.sigma_r
+    (the old code gave 0.518 / 6.73 with it, as with sigma_bearing=0)."""
+    log = shared_data / "mit-csail.clf.gz"
+    plain, cfg = _compare(log, tmp_path / "a", "--max-scans", "300", methods=("sensor",))
+    given, _ = _compare(log, tmp_path / "b", "--max-scans", "300", "--set", "extractor.sensor.sigma_r=0.005",
+                        methods=("sensor",))
+    assert "sigma_r=0.005 is not used" in capsys.readouterr().err
+    assert plain.loc["sensor", "explained_3cm"] == pytest.approx(0.545, abs=5e-4)
+    assert plain.loc["sensor", "lines_per_scan"] == pytest.approx(8.32, abs=5e-3)
+    cols = ["explained_3cm", "lines_per_scan", "ray_rmse_mm"]
+    pd.testing.assert_frame_equal(plain[cols], given[cols])
+    assert cfg["ran_with"]["mit-csail.clf.gz"]["sensor"]["sigma_bearing"] == pytest.approx(0.00597, abs=1e-5)
