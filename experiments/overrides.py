@@ -128,3 +128,17 @@ def unread_fields(params: Mapping[str, Mapping[str, Any]], configs: Mapping[str,
                 out.append(f"{method}: {field}={value!r} is not used: {field} applies to {mode}-mode scans ({rule}); "
                            f"{scans} are {MODE_FIELDS[other][0]} mode (range_max {shown} m): set {other}")
     return out
+
+
+def unread_marked(values: dict[str, Any], config: Any, range_maxes: Sequence[float] | set[float],
+                  given: Mapping[str, Any]) -> dict[str, Any]:
+    """``values`` (``config`` as plain data, for a run's config.yaml) with each mode-bound
+    range-noise field the user set (``given``) that no scan of the run read (``range_maxes``, m)
+    written as ``"V: not read (no MODE-mode scan)"``: the record said ``sigma_r: 0.02`` as if it
+    had run. (A default the scans do not read stays: which one a scan reads is the method's rule.)"""
+    noise_field = getattr(config, "noise_field", None)
+    if not range_maxes or not callable(noise_field):
+        return values
+    read = {noise_field(r) for r in range_maxes}
+    return {f: f"{v!r}: not read (no {MODE_FIELDS[f][0]}-mode scan)" if f in MODE_FIELDS and f in given and f not in read
+            else v for f, v in values.items()}

@@ -230,17 +230,18 @@ def _per_source_marked(configs: dict[str, Any], params: dict[str, dict[str, Any]
     fit = any(src.fit_sigma is not None for src in sources)
     bearing = any(src.bearing_sigma is not None for src in sources)
     filled = NOISE_FIELDS + (FIT_NOISE_FIELDS if fit else ()) + (BEARING_NOISE_FIELDS if bearing else ())
-    from experiments.overrides import MODE_FIELDS
+    from experiments.overrides import unread_marked
 
     range_maxes = {r for src in sources for r in src.range_maxes}
     out = {}
     for method, cfg in configs.items():
+        if not isinstance(cfg, dict):
+            out[method] = cfg
+            continue
         given = params.get(method, {})
         ran = next((src.ran[method] for src in sources if method in src.ran), None)
-        read = {ran.noise_field(r) for r in range_maxes} if callable(getattr(ran, "noise_field", None)) else None
-        out[method] = {f: PER_SOURCE if f in filled and f not in given
-                       else f"{v!r}: not read (no {MODE_FIELDS[f][0]}-mode scan)" if read and f in MODE_FIELDS and f not in read
-                       else v for f, v in cfg.items()} if isinstance(cfg, dict) else cfg
+        marked = unread_marked(cfg, ran, range_maxes, given)  # a field set with --set that no scan read
+        out[method] = {f: PER_SOURCE if f in filled and f not in given else v for f, v in marked.items()}
     return out
 
 
