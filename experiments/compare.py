@@ -56,11 +56,11 @@ class Source:
     bearing_sigma: float | None = None  # bearing noise (rad) for the sensor method's tests; None: its config's (0)
     estimate_bearing_sigma: Callable[[], float] | None = None  # its estimate (logs: features.noise_estimate.bearing_sigma)
     reader: Any = None  # the log reader (its ``stats`` say what was skipped)
+    settings: dict[str, Any] = dataclasses.field(default_factory=dict)  # what produced the scans (saved beside results)
     # filled by compare(): the config each method ran with on this source (its noise fields set,
     # :func:`_with_noise`) and the range_max of its scans (m; which range-noise field applies)
     ran: dict[str, Any] = dataclasses.field(default_factory=dict)
     range_maxes: set[float] = dataclasses.field(default_factory=set)
-    settings: dict[str, Any] = dataclasses.field(default_factory=dict)  # what produced the scans (saved beside results)
 
     @classmethod
     def from_records(cls, records: Sequence[Record], truths: Sequence[Any] | None = None, name: str = "sim",

@@ -83,7 +83,7 @@ def test_sigma_r_cm_on_mm_mode_scans_is_said(tmp_path, capsys) -> None:
     assert ("lmsbench compare: warning: sensor: sigma_r_cm=0.01 is not used: sigma_r_cm applies to cm-mode scans "
             "(range_max > 10 m); the scans of office:0 are mm mode (range_max 8.183 m): set sigma_r") \
         in capsys.readouterr().err.splitlines()
-    assert cfg["ran_with"]["office:0" if "office:0" in cfg["ran_with"] else "office"]["sensor"] == {
+    assert cfg["ran_with"]["office:0"]["sensor"] == {
         "sigma_r": 0.005, "sigma_bearing": 0.0}
 
 

@@ -118,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
     import pandas as pd
 
     from experiments.compare import (check_sources, common_errors, compare, format_summary, parse_sources,
-                                     resolved_configs, source_noise, summarise, world_words)
+                                     resolved_configs, source_label, source_noise, summarise, world_words)
     from experiments.overrides import extractor_overrides
     from experiments.progress import warm_up_kernels
     from features.scoring import ScoreConfig
@@ -180,7 +180,7 @@ def run(args: argparse.Namespace) -> int:
         # the noise each method ran with on each source (m; sigma_bearing rad): the fields compare sets
         # per source (the log's estimates, the simulator's noise) and those set with --set, each as it
         # was read (the sensor method's sigma_r_cm on cm-mode scans, sigma_r on mm-mode ones)
-        ran_with={src.name: source_noise(src) for src in sources},
+        ran_with={source_label(src): source_noise(src) for src in sources},  # office:0, office:1, a log's name
     )
     # what produced each source's scans: the sensor that was simulated (interlaced or not), the log read
     resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
@@ -252,6 +252,8 @@ def _warn_unread(params: dict[str, dict[str, Any]], sources: list) -> None:
 
     configs = {m: cfg for src in sources for m, cfg in src.ran.items()}
     range_maxes = sorted({r for src in sources for r in src.range_maxes})
-    names = ", ".join(src.name if src.seed is None or src.kind == "log" else f"{src.name}:{src.seed}" for src in sources)
+    from experiments.compare import source_label
+
+    names = ", ".join(source_label(src) for src in sources)
     for line in unread_fields(params, configs, range_maxes, f"the scans of {names}"):
         print(f"lmsbench compare: warning: {line}", file=sys.stderr)
