@@ -35,6 +35,7 @@ MAX_RESOLUTION_DEG = 1.0  # the LMS200's coarsest angular step (deg)
 MIN_RESOLUTION = math.radians(MIN_RESOLUTION_DEG)  # rad, 0.004363
 MAX_RESOLUTION = math.radians(MAX_RESOLUTION_DEG)  # rad, 0.017453
 MAX_FOV_DEG = 180.0  # the LMS200's widest field of view (deg)
+RESOLUTION_SLACK = 1e-4  # relative: a resolution written by hand to 6 decimals (0.004363 for 0.25 deg) is taken
 # The bounds of a sensor file's values (``lmsbench calibrate`` writes them; ``--sensor`` reads
 # them), each physically plausible for a 2-D laser rangefinder with room to spare: a value
 # written in mm or cm where metres are meant lies outside (noise_sigma: 0.5 meant as 5 mm in cm
@@ -150,8 +151,9 @@ class SensorConfig:
             raise InputError(f"units: must be 'mm' or 'cm', got {self.units!r}")
         if self.n_beams < 2:
             raise InputError(f"n_beams: must be >= 2, got {self.n_beams}")
-        if not MIN_RESOLUTION <= self.resolution <= MAX_RESOLUTION:  # the LMS200's steps: finer ones made
-            # 10^8-beam scans (a hang) or overflowed; a 0.5 meant as degrees is 29 deg
+        slack = 1 + RESOLUTION_SLACK  # the bounds as written to 6 decimals (0.004363) are taken
+        if not MIN_RESOLUTION / slack <= self.resolution <= MAX_RESOLUTION * slack:  # the LMS200's steps: finer
+            # ones made 10^8-beam scans (a hang) or overflowed; a 0.5 meant as degrees is 29 deg
             raise InputError(f"resolution: must be in [{MIN_RESOLUTION:.6f}, {MAX_RESOLUTION:.6f}] rad "
                              f"({MIN_RESOLUTION_DEG:g}-{MAX_RESOLUTION_DEG:g} deg, the LMS200's steps), got "
                              f"{self.resolution}{_degrees_hint(self.resolution, MAX_RESOLUTION, MAX_RESOLUTION_DEG)}")

@@ -108,6 +108,11 @@ def test_degrees_given_as_radians_are_refused_with_the_hint(tmp_path: Path) -> N
     with pytest.raises(LmsbenchError, match=r"^" + str(f) + r": resolution: must be in \[0.004363, 0.017453\] rad "
                                             r"\(0.25-1 deg, the LMS200's steps\), got 0.5 \(degrees given as radians\?\)$"):
         SensorConfig.from_yaml(f)
+    # the bounds as the message writes them (6 decimals) are taken: 401 beams at 0.004363 rad
+    assert SensorConfig(n_beams=401, resolution=0.004363).turns_per_scan == 4
+    assert SensorConfig(n_beams=181, resolution=0.017453).fov_deg == pytest.approx(180.0, abs=0.01)
+    with pytest.raises(InputError, match=r"^n_beams, resolution: field of view 180.0\d* deg exceeds 180 deg"):
+        SensorConfig(n_beams=181, resolution=0.017455)
     with pytest.raises(InputError, match=r"^beam_width: must be in \[0, 0.174533\] rad \(0-10 deg\), got 0.4 "
                                          r"\(degrees given as radians\?\)$"):
         SensorConfig(beam_width=0.4)
