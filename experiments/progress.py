@@ -184,13 +184,13 @@ class _Quiet:
         pass
 
 
-def heartbeat_on_terminal(label: str, first: str, stream: IO[str] | None = None, every: float = 4.0,
+def heartbeat_on_terminal(label: str, first: str | None, stream: IO[str] | None = None, every: float = 4.0,
                           first_after: float = 1.0) -> ContextManager[Any]:
     """A :class:`Heartbeat` on ``stream`` (default stderr) when it is a terminal, else one that
     says nothing (its ``say`` and ``label`` do nothing either): off a terminal stderr keeps to the
     one line of an error. For the steps that take minutes without a progress bar of their own
     (``sim2real``: 2-3 min silent at its defaults; ``calibrate``; each area of ``bench``; the
-    figures being drawn)."""
+    figures being drawn). ``first`` None: no opening line (the step says its own through ``say``)."""
     out = sys.stderr if stream is None else stream
     if not on_terminal(out):
         return _Quiet()

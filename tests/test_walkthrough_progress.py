@@ -114,3 +114,117 @@ def test_a_slam_sweep_compiles_the_slam_kernels_before_its_workers(tmp_path, mon
         # the sweep stops there: an internal error, exit 1
         assert main(["sweep", str(repo / "sweeps" / sweep), "--inprocess", "--out", str(tmp_path / sweep)]) == 1
         assert calls.pop() == {"slam": slam}
+
+
+def _folder_time(folder: Path) -> float:
+    """The start a run folder is named by (results/X/YYYY-MM-DD_HH-MM-SS), as a Unix time."""
+    import datetime
+
+    return datetime.datetime.strptime(folder.name, "%Y-%m-%d_%H-%M-%S").timestamp()
+
+
+def test_bench_beats_per_area_on_a_terminal_and_names_its_folder_by_its_start(tmp_path, monkeypatch, capsys):
+    """`lmsbench bench features` on a terminal: 106 s of silence, then every row at once (`make
+    bench`: 159 s); and its folder was named by the run's end (a run started 10:34:23 wrote
+    results/bench/2026-12-05_10-38-00). Each area now beats on a terminal, and the folder is
+    named by the start, as the demo's. Areas stubbed: each takes 2.5 s."""
+    import experiments.commands.bench as bench
+    from experiments.cli import main
+
+    def slow(quick: bool) -> list[dict]:
+        time.sleep(2.5)
+        return [{"case": "x", "scans_per_s": 1.0}]
+
+    monkeypatch.setattr(bench, "discover", lambda: {"first": types.SimpleNamespace(run=slow),
+                                                    "second": types.SimpleNamespace(run=slow)})
+    monkeypatch.chdir(tmp_path)
+    tty = Terminal()
+    monkeypatch.setattr(sys, "stderr", tty)
+    start = time.time()
+    assert main(["bench"]) == 0
+    err = tty.getvalue()
+    assert err.startswith("bench: measuring first (area 1 of 2; its rows follow when it ends) ...\n"), err
+    assert "bench: measuring second (area 2 of 2; its rows follow when it ends) ...\n" in err
+    assert capsys.readouterr().out.startswith("== first\n   area=first, case=x, scans_per_s=1\n== second\n")
+    folder = (tmp_path / "results" / "bench" / "latest").resolve()
+    assert (folder / "bench.csv").is_file()
+    assert int(start) <= _folder_time(folder) <= start + 1.0  # the end was 5 s later
+    monkeypatch.setattr(sys, "stderr", io.StringIO())  # no terminal: no beat
+    assert main(["bench", "first", "--out", str(tmp_path / "b")]) == 0
+    assert sys.stderr.getvalue() == ""
+
+
+@pytest.fixture(scope="module")
+def timing_tables(tmp_path_factory) -> Path:
+    """A tables folder of Fig. 7 alone (the study's settings and a timing table)."""
+    import pandas as pd
+    import yaml
+
+    t = tmp_path_factory.mktemp("tables")
+    (t / "study.yaml").write_text(yaml.safe_dump({"world": "office", "seed": 0, "duration": 1.0,
+                                                  "resolved": {"sensor": {}}}))
+    pd.DataFrame({"method": ["sensor"] * 3, "scan": [0, 1, 2], "time_ms": [0.05, 0.04, 0.06]}).to_parquet(
+        t / "timing.parquet", index=False)
+    return t
+
+
+def test_figures_says_each_figure_on_a_terminal_and_names_its_folder_by_its_start(timing_tables, tmp_path,
+                                                                                  monkeypatch, capsys):
+    """`lmsbench figures` drew ~27 s without a word (`--tables`: 12 s) before its listing, and its
+    folder was named by the run's end. Each figure is now said as it starts, on a terminal, and
+    the folder is named by the start. Fig. 7 slowed to 2.5 s."""
+    from experiments.cli import main
+    from experiments.figures import draw
+
+    real = draw.fig_timing
+
+    def slow(*args, **kwargs):
+        time.sleep(2.5)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(draw, "fig_timing", slow)
+    monkeypatch.chdir(tmp_path)
+    tty = Terminal()
+    monkeypatch.setattr(sys, "stderr", tty)
+    start = time.time()
+    assert main(["figures", "--tables", str(timing_tables)]) == 0
+    assert tty.getvalue() == "figures: drawing fig7_timing (1 of 1) ...\n"
+    assert capsys.readouterr().out.startswith("fig7_timing ")
+    folder = (tmp_path / "results" / "figures" / "latest").resolve()
+    assert (folder / "fig7_timing.png").is_file()
+    assert int(start) <= _folder_time(folder) <= start + 1.0
+    monkeypatch.setattr(sys, "stderr", io.StringIO())  # no terminal: nothing said
+    monkeypatch.setattr(draw, "fig_timing", real)
+    assert main(["figures", "--tables", str(timing_tables), "--out", str(tmp_path / "f")]) == 0
+    assert sys.stderr.getvalue() == ""
+
+
+def test_compare_and_sim2real_name_their_folders_by_their_start(odometry_folder, tmp_path, monkeypatch, capsys):
+    """As bench and figures (above): compare and sim2real named their results/CMD/DATE_TIME
+    folders by the run's end, minutes after it started on a real log. Their work is slowed by
+    2.5 s (compare) or stubbed (sim2real)."""
+    import experiments.compare
+    import experiments.sim2real
+    from experiments.cli import main
+
+    real = experiments.compare.compare
+
+    def slow_compare(*args, **kwargs):
+        time.sleep(2.5)
+        return real(*args, **kwargs)
+
+    def slow_sim2real(*args, **kwargs):
+        time.sleep(2.5)
+        return types.SimpleNamespace(glass=None, warnings=[])
+
+    monkeypatch.setattr(experiments.compare, "compare", slow_compare)
+    monkeypatch.setattr(experiments.sim2real, "sim2real", slow_sim2real)
+    monkeypatch.setattr(experiments.sim2real, "write_outputs", lambda result, out, log, config: [out])
+    monkeypatch.setattr(experiments.sim2real, "format_report", lambda result, log: "")
+    monkeypatch.chdir(tmp_path)
+    for command in (["compare", str(odometry_folder), "--max-scans", "3", "--methods", "sensor"],
+                    ["sim2real", str(odometry_folder / "scans.clf")]):
+        start = time.time()
+        assert main(command) == 0, capsys.readouterr().err
+        folder = (tmp_path / "results" / command[0] / "latest").resolve()
+        assert int(start) <= _folder_time(folder) <= start + 1.0, command
