@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..angles import wrap_one as wrap  # one compiled wrap for both engines
+from lms200.angles import wrap_one as wrap  # the project's one wrap, compiled
 from ..jit import inline_kernel, kernel
 from ..rows import append_rows, finish_rows, new_rows
 
