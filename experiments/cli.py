@@ -44,6 +44,7 @@ def build_parser() -> argparse.ArgumentParser:
         module = importlib.import_module(f"{commands.__name__}.{info.name}")
         if hasattr(module, "register"):
             module.register(sub)
+    parser.set_root()  # an option given to the wrong command names the commands that take it
     return parser
 
 

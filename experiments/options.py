@@ -95,11 +95,39 @@ class OneLineParser(argparse.ArgumentParser):
         kwargs.setdefault("allow_abbrev", False)
         kwargs.setdefault("formatter_class", HelpFormatter)
         super().__init__(*args, **kwargs)
+        self.root: argparse.ArgumentParser | None = None  # the whole command line's parser (set_root): other commands' options
+
+    def set_root(self) -> None:
+        """Make this parser the root of every (sub)command parser below it, for :meth:`elsewhere`."""
+        for _, parser in command_parsers(self):
+            if isinstance(parser, OneLineParser):
+                parser.root = self
 
     def error(self, message: str) -> None:  # type: ignore[override]
+        elsewhere = ""
         if message.startswith(UNRECOGNIZED):
-            message += self.near_misses(message[len(UNRECOGNIZED):].split())
-        self.exit(2, f"{self.prog}: error: {shorten_quoted(message)} (see {self.prog} --help)\n")
+            words = message[len(UNRECOGNIZED):].split()
+            message += self.near_misses(words)
+            elsewhere = self.elsewhere(words)
+        self.exit(2, f"{self.prog}: error: {shorten_quoted(message)} ({elsewhere}see {self.prog} --help)\n")
+
+    def elsewhere(self, words: Sequence[str]) -> str:
+        """"--max-scans is an option of: compare, slam; " for the unrecognized options among ``words``
+        that other (sub)commands take, or "" for none: an option given to the wrong command said
+        only "unrecognized arguments"."""
+        if self.root is None:
+            return ""
+        where: dict[str, list[str]] = {}
+        for word in words:
+            name = word.split("=", 1)[0]
+            if not name.startswith("-") or name in ("-", "--") or name in self._option_string_actions or name in where:
+                continue
+            owners = [" ".join(path) for path, parser in command_parsers(self.root)
+                      if parser is not self and name in parser._option_string_actions]
+            if owners:
+                where[name] = owners
+        return "".join(f"{name} is an option of lmsbench itself, given before the command; " if owners == [""] else
+                       f"{name} is an option of: {', '.join(o or 'lmsbench' for o in owners)}; " for name, owners in where.items())
 
     def near_misses(self, words: Sequence[str]) -> str:
         """"; did you mean --seeds?" for the unrecognized option ``words`` that are a near miss of
@@ -148,6 +176,21 @@ class OneLineParser(argparse.ArgumentParser):
             if len(names) > 1:
                 self.error(f"argument {'/'.join(dict.fromkeys(names))}: given {len(names)} times; give it once")  # each spelling used
         return super().parse_known_args(args, namespace)
+
+
+def command_parsers(parser: argparse.ArgumentParser, path: tuple[str, ...] = ()
+                    ) -> list[tuple[tuple[str, ...], argparse.ArgumentParser]]:
+    """``parser`` and every (sub)command parser below it, each once with its command words
+    (``("lms200", "emulate")``; an alias's parser under its first name), depth first."""
+    found = [(path, parser)]
+    seen = {id(parser)}
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for word, sub in action.choices.items():
+                if id(sub) not in seen:
+                    seen.add(id(sub))
+                    found += command_parsers(sub, (*path, word))
+    return found
 
 
 def number_text(value: float) -> str:

@@ -225,18 +225,36 @@ def ranges_to_codes(ranges: np.ndarray, units: Units = "mm") -> np.ndarray:
     return c.astype(np.uint16)
 
 
-def infer_units(values: np.ndarray) -> Units:
-    """Guess the LMS unit mode of logged ranges (m) that carry no unit field.
+#: m: the largest range an mm-mode reading can hold (code 8191 of the special band, plus rounding)
+MM_MODE_MAX_READING = 8.1915
+#: Readings above MM_MODE_MAX_READING that an mm-mode scan may hold as junk (a logger's over-range
+#: value, a damaged number): more than this many, and more than MM_JUNK_SHARE of the readings, make
+#: the scan cm mode. One such reading read a whole mm-mode line in cm (8.183 m no-returns as echoes).
+MM_JUNK_READINGS = 3
+MM_JUNK_SHARE = 0.02
 
-    cm mode if any reading lies above the mm-mode special band (> 8.1915 m) or every reading sits
-    on the 1 cm grid; mm mode otherwise (readings with millimetre digits, all below 8.192 m).
+
+def infer_units(values: np.ndarray) -> Units:
+    """Guess the LMS unit mode of logged ranges (m) that carry no unit field, by the bulk of the
+    readings (the finite ones > 0: a 0 is no reading and lies on every grid), not by one of them.
+
+    cm mode when most readings sit on the 1 cm grid (a SICK in cm mode writes nothing else; an
+    mm-mode scan has about one in ten there by chance), or when more than a few (MM_JUNK_READINGS
+    and MM_JUNK_SHARE of them) lie above the mm-mode maximum (> 8.1915 m: a foreign scanner's log
+    in mm steps to 30 m); mm mode otherwise (readings with millimetre digits, all but a few junk
+    ones below 8.192 m), and for no reading at all, cm. Before, one reading above 8.1915 m made a
+    scan cm mode, and one reading off the cm grid an mm-mode one.
     """
     v = np.asarray(values, dtype=np.float64)
-    v = v[np.isfinite(v)]
-    if v.size == 0 or np.any(v > 8.1915):
+    v = v[np.isfinite(v) & (v > 0.0)]
+    if v.size == 0:
         return "cm"
-    off_cm_grid = np.abs(v * 100.0 - np.rint(v * 100.0)) > 1e-4
-    return "mm" if np.any(off_cm_grid) else "cm"
+    with np.errstate(over="ignore", invalid="ignore"):  # 1e308 m in cm is inf: off the grid
+        on_cm_grid = np.abs(v * 100.0 - np.rint(v * 100.0)) <= 1e-4
+    if 2 * np.count_nonzero(on_cm_grid) > v.size:
+        return "cm"
+    over = np.count_nonzero(v > MM_MODE_MAX_READING)
+    return "cm" if over > max(MM_JUNK_READINGS, MM_JUNK_SHARE * v.size) else "mm"
 
 
 def decode_logged_ranges(ranges: np.ndarray, units: Units | None = None) -> np.ndarray:

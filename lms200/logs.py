@@ -43,7 +43,8 @@ def read_log(
             is not a str / PathLike, ``skip_bad_lines`` that is not a bool, ``topic`` that is not a
             str, ``geometry`` that is not a LaserGeometry.
         LogNotFoundError: (an ``LmsbenchError`` and a ``FileNotFoundError``) when the path does not exist, or is a folder that is not a ROS 2 bag or
-            not a regular file (a device, a pipe).
+            not a regular file (a device, a pipe); for a ``lmsbench simulate`` folder the message names
+            its scans.clf to read instead (:func:`folder_message`).
         LogFormatError: (while iterating) a CARMEN line that cannot be read, naming file and line.
         BagError: (while iterating) a bag that cannot be read, naming the topic and message index.
     """
@@ -61,7 +62,7 @@ def read_log(
             raise BagError(f"{p}: a bag's LaserScan messages carry their geometry; no geometry override")
         return BagReader(p, topic=topic, skip_bad_lines=skip_bad_lines)
     if p.is_dir():
-        raise LogNotFoundError(f"{p} is a folder but not a ROS 2 bag (no metadata.yaml)")
+        raise LogNotFoundError(folder_message(p))
     return CarmenReader(p, skip_bad_lines=skip_bad_lines, topic=topic, geometry=geometry)
 
 
@@ -122,6 +123,23 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
         if os.path.exists(tmp):
             os.unlink(tmp)
     return n
+
+
+SIMULATE_LOG = "scans.clf"
+"""The CARMEN log a ``lmsbench simulate`` output folder holds (beside its ground truth and world)."""
+
+
+def folder_message(p: Path) -> str:
+    """Why ``read_log`` refuses the folder ``p`` (not a ROS 2 bag), and, for a ``lmsbench simulate``
+    folder, which file to read instead. The folder is not read as its scans.clf: this package knows
+    log formats, not the layout of the command line's output folders, and the command line checks
+    such a folder before it reads its log (a run that was killed left a cut scans.clf, refused
+    there, ``experiments.options.check_log``); ``read_log(p)`` said "not a ROS 2 bag" and no more."""
+    log = p / SIMULATE_LOG
+    if log.is_file():
+        return (f"{p} is a folder, not a log: it holds {SIMULATE_LOG}, as a lmsbench simulate output folder does; "
+                f"read_log({str(log)!r}) reads its scans (`lmsbench info {p}` also checks that its run finished)")
+    return f"{p} is a folder but not a ROS 2 bag (no metadata.yaml)"
 
 
 def path_of(path: object) -> Path:

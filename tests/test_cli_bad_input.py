@@ -637,7 +637,7 @@ CASES = [
     (["bench", "lms200", "--out", "{a_file}"], "a_file"),
     (["nosuch"], "nosuch"),
     # an unknown option was said by the top-level parser ("lmsbench: error: ... see lmsbench --help")
-    (["compare", "office", "--ideal", "--out", O], "lmsbench compare: error: unrecognized arguments: --ideal (see lmsbench compare --help)"),
+    (["compare", "office", "--ideal", "--out", O], "lmsbench compare: error: unrecognized arguments: --ideal (--ideal is an option of: simulate; see lmsbench compare --help)"),
     (["lms200", "emulate", "--bogus", "1"], "lmsbench lms200 emulate: error: unrecognized arguments: --bogus 1"),
     (["simulate", "--world", "office", "--dur", "1", "--out", O], "lmsbench simulate: error: unrecognized arguments: --dur 1"),  # ran as --duration 1
     # an unknown option before the command was said by the command's parser (or as its missing SOURCES)

@@ -33,20 +33,42 @@ def test_building_the_parsers_imports_neither_the_simulator_nor_numba() -> None:
     assert out.strip() == "[]"
 
 
-@pytest.mark.parametrize("argv, hint", [
-    (["compare", "office", "--seed", "1"], "--seed 1; did you mean --seeds?"),  # simulate's spelling
-    (["simulate", "--out", "x", "--seeds", "1"], "--seeds 1; did you mean --seed?"),  # compare's spelling
-    (["compare", "office", "--seed=1"], "--seed=1; did you mean --seeds?"),
-    (["compare", "office", "-seeds", "1"], "-seeds 1; did you mean --seeds?"),
-    (["compare", "office", "--dur", "3"], "--dur 3; did you mean --duration?"),  # the start of one option
-    (["slam", "x", "--out", "y", "--extracter", "sensor"], "--extracter sensor; did you mean --extractor?"),
-    (["lms200", "emulate", "--tpc", "3"], "--tpc 3; did you mean --tcp?"),  # two letters swapped
-    (["compare", "office", "--seed", "1", "--ot", "x"], "--seed 1 --ot x; did you mean --seeds for --seed, --out for --ot?"),
+SEED = "--seed is an option of: demo, figures, lms200 emulate, simulate; "
+
+
+@pytest.mark.parametrize("argv, hint, elsewhere", [
+    (["compare", "office", "--seed", "1"], "--seed 1; did you mean --seeds?", SEED),  # simulate's spelling
+    (["simulate", "--out", "x", "--seeds", "1"], "--seeds 1; did you mean --seed?",
+     "--seeds is an option of: compare, sim2real; "),  # compare's spelling
+    (["compare", "office", "--seed=1"], "--seed=1; did you mean --seeds?", SEED),
+    (["compare", "office", "-seeds", "1"], "-seeds 1; did you mean --seeds?", ""),
+    (["compare", "office", "--dur", "3"], "--dur 3; did you mean --duration?", ""),  # the start of one option
+    (["slam", "x", "--out", "y", "--extracter", "sensor"], "--extracter sensor; did you mean --extractor?", ""),
+    (["lms200", "emulate", "--tpc", "3"], "--tpc 3; did you mean --tcp?", ""),  # two letters swapped
+    (["compare", "office", "--seed", "1", "--ot", "x"], "--seed 1 --ot x; did you mean --seeds for --seed, --out for --ot?", SEED),
 ])
-def test_an_unrecognized_option_near_a_real_one_says_which(argv, hint, capsys) -> None:
+def test_an_unrecognized_option_near_a_real_one_says_which(argv, hint, elsewhere, capsys) -> None:
     assert main(argv) == 2
     command = " ".join(w for w in argv[:2] if not w.startswith("-") and w in ("compare", "simulate", "slam", "lms200", "emulate"))
-    assert capsys.readouterr().err == f"lmsbench {command}: error: unrecognized arguments: {hint} (see lmsbench {command} --help)\n"
+    assert capsys.readouterr().err == f"lmsbench {command}: error: unrecognized arguments: {hint} ({elsewhere}see lmsbench {command} --help)\n"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["lms200", "emulate", "--max-scans", "3"], "lmsbench lms200 emulate: error: unrecognized arguments: --max-scans 3 "
+     "(--max-scans is an option of: calibrate, compare, lms200 record, sim2real, slam; see lmsbench lms200 emulate --help)"),
+    (["info", "x", "--max-scans=3", "--seed", "2", "--bogus"], "lmsbench info: error: unrecognized arguments: --max-scans=3 "
+     "--seed 2 --bogus (--max-scans is an option of: calibrate, compare, lms200 record, sim2real, slam; " + SEED +
+     "see lmsbench info --help)"),
+    (["simulate", "--methods", "sensor", "--out", "x"], "lmsbench simulate: error: unrecognized arguments: --methods sensor "
+     "(--methods is an option of: compare, figures; see lmsbench simulate --help)"),
+    (["info", "x", "--version"], "lmsbench info: error: unrecognized arguments: --version (--version is an option of "
+     "lmsbench itself, given before the command; see lmsbench info --help)"),
+])
+def test_an_option_of_another_command_names_the_commands_that_take_it(argv, message, capsys) -> None:
+    """`lmsbench lms200 emulate --max-scans 3` said only "unrecognized arguments": the option is
+    another command's, and the one line now says whose."""
+    assert main(argv) == 2
+    assert capsys.readouterr().err == message + "\n"
 
 
 @pytest.mark.parametrize("argv", [["compare", "office", "--bogus"], ["compare", "office", "--o", "x"], ["--bogus", "compare", "office"]])

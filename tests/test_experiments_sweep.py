@@ -512,3 +512,28 @@ def test_a_slam_sweep_spells_its_extractors_fields_as_every_other_run_does(tmp_p
         with pytest.raises(SweepSpecError, match=message):
             run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
         assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("name", ["a/b", "../x", "..", ".hidden", "-x", "a\\b", "a" * 101, "a\nb", ""])
+def test_a_sweep_name_that_is_no_plain_folder_name_is_refused_at_load(tmp_path, name):
+    """The name names results/sweeps/NAME: a path separator, `..` or a hidden name was refused at
+    load, but a 300-character one only when its folder was made ("File name too long")."""
+    path = tmp_path / "s.yaml"
+    path.write_text(yaml.safe_dump({"name": name, "kind": "extract", "grid": {"extractor.k": [3]}}))
+    with pytest.raises(SweepSpecError, match=r"s.yaml: name: .* must be a plain folder name \(letters, digits, _ . -, "
+                                             r"not starting with . or -, at most 100 characters\)") as info:
+        load_sweep(path)
+    assert "\n" not in str(info.value)
+    path.write_text(yaml.safe_dump({"name": "a" * 100, "kind": "extract", "grid": {"extractor.k": [3]}}))
+    assert load_sweep(path).name == "a" * 100
+
+
+def test_a_sweep_without_a_name_whose_file_name_cannot_name_a_folder_says_so(tmp_path):
+    """Without `name:` the file's name names the folder: "my sweep.yaml" said "name: 'my sweep' must
+    be a plain folder name", blaming a key the file does not have."""
+    path = tmp_path / "my sweep.yaml"
+    path.write_text("kind: extract\ngrid: {extractor.k: [3]}\n")
+    with pytest.raises(SweepSpecError, match=r"my sweep.yaml: no `name:` given, and the file's name 'my sweep' cannot "
+                                             r"name the output folder results/sweeps/NAME \(.*\); add a `name:`$"):
+        load_sweep(path)
+    assert load_sweep(path.rename(tmp_path / "my_sweep.yaml")).name == "my_sweep"

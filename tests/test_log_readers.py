@@ -619,3 +619,57 @@ def test_a_byte_order_mark_before_the_first_line_is_skipped(tmp_path: Path) -> N
     for path in (marked, packed):
         got = [r.scan for r in read_log(path)]
         assert len(got) == 3 and all(a == b for a, b in zip(got, want))
+
+
+def _flaser_values(values: list[str], stamp: float = 10.0) -> str:
+    return f"FLASER {len(values)} {' '.join(values)} 1 2 0.5 1 2 0.5 {stamp} host {stamp}"
+
+
+def test_the_unit_mode_is_inferred_from_the_bulk_of_a_lines_readings(tmp_path: Path) -> None:
+    """docs/data.md: an mm-mode log with one junk reading over 8.1915 m on a line was read in cm:
+    that line's range_max became 81.83 m (its noise then estimated as a cm-code scan's) and its
+    8.183 m no-returns valid echoes. A few junk readings no longer decide, nor does one reading with
+    millimetre digits in a cm-mode line; the bulk of the readings does."""
+    mm = [f"{2 + 0.001 * (i % 997) + 0.0007:.3f}" for i in range(181)]  # millimetre digits, < 8.19 m
+    mm[10:14] = ["8.183"] * 4  # no return (code 8183)
+    mm[20] = "8.191"  # invalid (code 8191)
+    junk1, junk3 = list(mm), list(mm)
+    junk1[50] = "12.345"
+    junk3[50:53] = ["12.345", "30.001", "9.5"]
+    cm = ["2.35"] * 181
+    cm[7] = "81.83"
+    cm_junk = list(cm)
+    cm_junk[60] = "1.234"  # one reading off the cm grid
+    foreign = [f"{9 + 0.001 * i + 0.0004:.3f}" for i in range(181)]  # mm steps beyond 8.19 m: cm mode
+    path = write(tmp_path, "units.log", [_flaser_values(v, stamp=i + 1.0)
+                                         for i, v in enumerate([mm, junk1, junk3, cm, cm_junk, foreign])])
+    scans = [rec.scan for rec in read_log(path)]
+    assert [s.range_max for s in scans] == [8.183, 8.183, 8.183, 81.83, 81.83, 81.83]
+    for s in scans[:3]:
+        assert np.isposinf(s.ranges[10:14]).all() and np.isnan(s.ranges[20])
+    assert scans[1].ranges[50] == 12.345 and not scans[1].valid[50]  # beyond range_max: no reading
+    assert np.isposinf(scans[3].ranges[7]) and np.isposinf(scans[4].ranges[7]) and scans[4].ranges[60] == 1.234
+    assert np.count_nonzero(scans[5].valid) == 181
+
+
+def test_more_than_a_few_readings_beyond_the_mm_maximum_make_a_line_cm() -> None:
+    from lms200.codes import MM_JUNK_READINGS, infer_units
+
+    base = np.full(361, 1.2345)
+    assert infer_units(base) == "mm"
+    for over, units in [(1, "mm"), (MM_JUNK_READINGS, "mm"), (7, "mm"), (8, "cm"), (200, "cm")]:
+        r = base.copy()
+        r[:over] = 12.3456
+        assert infer_units(r) == units, over
+    assert infer_units(np.array([0.0, 0.0, 1.234])) == "mm"  # zeros are no readings: they do not vote cm
+    assert infer_units(np.array([np.nan, np.inf])) == "cm" and infer_units(np.array([1e308, 1.234])) == "mm"
+
+
+@pytest.mark.parametrize("name, scans", [("aces-corrected.log.gz", 440), ("intel-corrected.log.gz", 910),
+                                         ("mit-csail.clf.gz", 1988)])
+def test_every_line_of_the_real_flaser_logs_stays_cm_mode(shared_data: Path, name: str, scans: int) -> None:
+    """The three real FLASER logs carry no unit field: every line is inferred cm (all readings on the
+    1 cm grid; 393 of their lines have no reading beyond 8.1915 m), as before the inference went by
+    the bulk of the readings (every scan's ranges, range_max and noise mode hashed the same)."""
+    got = [rec.scan.range_max for rec in read_log(shared_data / name)]
+    assert len(got) == scans and set(got) == {81.83}

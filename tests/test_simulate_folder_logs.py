@@ -80,3 +80,20 @@ def test_a_folder_of_neither_kind_says_what_was_expected(tmp_path, capsys, argv)
     assert err.endswith(f"error: {folder} is a folder but neither a ROS 2 bag (no metadata.yaml) nor a lmsbench "
                         "simulate folder (no scans.clf)\n"), err
     assert err.count("\n") == 1
+
+
+def test_read_log_of_a_simulate_folder_names_its_log(sim_folder: Path) -> None:
+    """The library's read_log said "DIR is a folder but not a ROS 2 bag (no metadata.yaml)" for the
+    folder every command takes: it is still refused (lms200 does not know the command line's folders,
+    nor its check that the run finished), but the message says which file to read instead."""
+    from lms200 import read_log
+    from lms200.errors import LogNotFoundError
+
+    log = sim_folder / "scans.clf"
+    with pytest.raises(LogNotFoundError) as info:
+        read_log(sim_folder)
+    message = str(info.value)
+    assert message == (f"{sim_folder} is a folder, not a log: it holds scans.clf, as a lmsbench simulate output folder "
+                       f"does; read_log({str(log)!r}) reads its scans (`lmsbench info {sim_folder}` also checks that "
+                       "its run finished)")
+    assert "\n" not in message and len(list(read_log(log))) == 5

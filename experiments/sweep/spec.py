@@ -102,6 +102,9 @@ class SweepSpec:
         name = raw.get("name", default_name)
         if not isinstance(name, str):
             raise SweepSpecError(f"name: must be a string (it names the output folder results/sweeps/NAME), got {name!r}")
+        if "name" not in raw and not _plain_name(name):  # "name: 'my sweep' must be ..." blamed a key not written
+            raise SweepSpecError(f"no `name:` given, and the file's name {name!r} cannot name the output folder "
+                                 f"results/sweeps/NAME ({NAME_RULE}); add a `name:`")
         return cls(
             name=name,
             kind=str(raw["kind"]),
@@ -185,9 +188,20 @@ def _names(key: str) -> list[str]:
     return [name.strip() for name in key.split(",")]
 
 
+MAX_NAME_CHARS = 100
+"""Longest sweep name: it names a folder, and a 300-character one failed only when the folder was
+made ("File name too long"), after the sweep file had been read and checked."""
+NAME_RULE = f"letters, digits, _ . -, not starting with . or -, at most {MAX_NAME_CHARS} characters"
+
+
+def _plain_name(name: str) -> bool:
+    """A name that is one plain folder name: no path separator, no `..`, no hidden or option-like name."""
+    return len(name) <= MAX_NAME_CHARS and re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", name) is not None
+
+
 def _check(spec: SweepSpec) -> None:
-    if not re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", spec.name):
-        raise SweepSpecError(f"name: {spec.name!r} must be a plain folder name (letters, digits, _ . -), "
+    if not _plain_name(spec.name):
+        raise SweepSpecError(f"name: {spec.name[:MAX_NAME_CHARS + 20]!r} must be a plain folder name ({NAME_RULE}), "
                              "as it names the output folder results/sweeps/NAME")
     names = Counter([*spec.fixed, *(n for key in spec.grid for n in _names(key)), *spec.random])
     clashes = sorted({n for n, times in names.items() if times > 1} | ({"seed"} & set(names)))  # one pass (count() was n^2)
