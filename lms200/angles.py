@@ -1,10 +1,12 @@
 """The project's one angle wrap: angles (rad) to (-pi, pi].
 
 One formula, ``pi - (pi - a) mod 2 pi`` with -pi (and what rounds to it) moved to +pi, written
-once (:func:`wrap_formula`) and used three ways: :func:`wrap` for Python floats and numpy arrays,
-and :data:`wrap_one`, the same function compiled, for the kernels of the extractors and the scan
-matcher. ``mod`` is the floored remainder (Python's ``%``, ``np.mod``, numba's ``%``: the same
-fmod-based result in all three), so a compiled kernel and numpy wrap an angle to the same bits.
+once (:func:`wrap_formula`; :func:`wrap_scalar` is it for one float) and used three ways:
+:func:`wrap` for Python floats and numpy arrays, and ``features.jit.wrap_one``, :func:`wrap_scalar`
+compiled, for the kernels of the extractors and the scan matcher (compiled there: importing
+``lms200`` loads no numba, so that a command's help and ``--version`` stay quick). ``mod`` is the
+floored remainder (Python's ``%``, ``np.mod``, numba's ``%``: the same fmod-based result in all
+three), so a compiled kernel and numpy wrap an angle to the same bits.
 """
 
 from __future__ import annotations
@@ -14,13 +16,11 @@ from typing import overload
 
 import numpy as np
 
-from .numba_required import numba
-
 TWO_PI = 2.0 * math.pi
 
 
 def wrap_formula(angle):  # noqa: ANN001, ANN201  (a float, a numpy array or a compiled float)
-    """``angle`` (rad) wrapped to (-pi, pi]: the formula behind :func:`wrap` and :data:`wrap_one`."""
+    """``angle`` (rad) wrapped to (-pi, pi]: the formula behind :func:`wrap` and :func:`wrap_scalar`."""
     w = math.pi - (math.pi - angle) % TWO_PI
     return w + TWO_PI * (w <= -math.pi)  # mod can round up to 2 pi: w = -pi then becomes +pi
 
@@ -33,9 +33,6 @@ def wrap_scalar(angle: float) -> float:
     w = math.pi - t if 0.0 <= t < TWO_PI else math.pi - t % TWO_PI
     return w + TWO_PI if w <= -math.pi else w
 
-
-#: :func:`wrap_scalar` compiled (numba, cached on disk), for compiled kernels; a float in, a float out
-wrap_one = numba.njit(cache=True, error_model="numpy", nogil=True)(wrap_scalar)
 
 
 @overload

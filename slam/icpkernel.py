@@ -14,7 +14,7 @@ from typing import Any, Callable, TypeVar, cast
 
 import numpy as np
 
-from lms200.angles import wrap_one
+from features.jit import wrap_one
 from lms200.numba_required import numba
 
 _F = TypeVar("_F", bound=Callable[..., Any])

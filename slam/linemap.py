@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from lms200.angles import wrap_one
+from features.jit import wrap_one
 
 from .icpkernel import kernel
 from .models import wrap

@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lms200.angles import TWO_PI, wrap, wrap_one
+from features.jit import wrap_one
+from lms200.angles import TWO_PI, wrap
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -43,8 +43,8 @@ import numpy as np
 from lms200.noise import CLIP_SIGMAS, JUMP_FRACTION, MIN_RANGE_M, QUANTUM_CANDIDATES_M, QUANTUM_SHARE
 from lms200.noise import _CLIP_STD_FACTOR as CLIP_STD_FACTOR
 
-from lms200.angles import wrap_one as wrap  # the project's one wrap, compiled
 from ..jit import inline_kernel, kernel
+from ..jit import wrap_one as wrap  # the project's one wrap (lms200.angles), compiled
 from ..rows import append_rows, finish_rows, new_rows
 
 PW_BLOCKSIZE = 128  # numpy's pairwise-summation block (numpy/_core/src/umath/loops_utils.h.src)
