@@ -159,7 +159,8 @@ def plain(scan):
 '''
 
 
-def test_a_user_extractor_gets_the_logs_noise_through_its_config_fields(cm_log, tmp_path, monkeypatch) -> None:
+def test_a_user_extractor_gets_the_logs_noise_through_its_config_fields(cm_log, tmp_path, monkeypatch,
+                                                                        user_methods_dropped) -> None:
     """docs/baselines.md's myext:lines wrapped iepf without a config: on Intel it explained 0.6613
     against the built-in iepf's 0.6630 in the same run, unexplained, and config.yaml listed iepf's
     ``sigma: 0.005, sigma_fit: null`` though it ran with the log's. A config_type whose fields are
