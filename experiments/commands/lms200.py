@@ -17,7 +17,7 @@ from lms200.protocol import BAUD_MODES
 from lms200.virtual import MAX_TIME_SCALE
 
 from experiments.lms200_sources import log_scans, simulator_scans
-from experiments.logargs import add_log_options, read_log_options
+from experiments.logargs import add_log_options, given_log_flags, read_log_options
 from experiments.options import (WORLDS, PORT, SEED, InputError, check_log, check_out_file, count, number, path_arg, positive, text,
                                  world_name)
 
@@ -70,6 +70,10 @@ def run_emulate(args: argparse.Namespace) -> int:
     simulated = [flag for flag, value in (("--world", args.world), ("--seed", args.seed)) if value is not None]
     if args.log and simulated:  # they were ignored: the log's scans were replayed
         raise InputError(f"{', '.join(simulated)} set the simulated scans; --log replays the log's own")
+    unread = given_log_flags(args)
+    if not args.log and unread:  # they were ignored: the simulator's scans were served
+        raise InputError(f"{', '.join(unread)} {'say' if len(unread) > 1 else 'says'} how to read the --log to replay; "
+                         "without --log the device serves simulated scans (give --log LOG, or leave them out)")
     args.world, args.seed = args.world or "office", 0 if args.seed is None else args.seed
     args.host = args.host or "127.0.0.1"
     if args.log:
