@@ -4,7 +4,7 @@ The measurements are :func:`lms200.calibration.calibrate_scans` (from the log al
 onto :class:`sim.SensorConfig` fields one to one, except two that depend on how the simulator
 produces the effect, which are fitted by simulation (indirect inference, fixed seeds):
 
-- ``beam_width_deg``: the simulator makes a mixed pixel where a beam's spot straddles a depth
+- ``beam_width`` (rad): the simulator makes a mixed pixel where a beam's spot straddles a depth
   step, so the share of steps with a mixed pixel grows with the spot's width. The same counter is
   run on short simulated runs at spot widths of 0-2 beam steps; the width whose share equals the
   log's is interpolated (capped at 2 beam steps).
@@ -38,6 +38,7 @@ dropout_prob the nan rate, no_return_prob the surface no-return rate, max_readin
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
@@ -66,7 +67,7 @@ class CalibrationResult:
 
     measured: LogCalibration
     sensor: Any  # sim.SensorConfig
-    width_curve: list[tuple[float, float]]  # (beam_width_deg, simulated mixed share)
+    width_curve: list[tuple[float, float]]  # (beam_width in rad, simulated mixed share)
     outlier_baseline: float  # the outlier counter's rate amid straight stretches on the simulated run without outliers
     world: str
     tail_curve: list[tuple[float, float]] = ()  # type: ignore[assignment]  # (noise_tail_prob, simulated tail share)
@@ -143,7 +144,7 @@ def base_sensor(cal: LogCalibration):
     cap = cal.max_reading
     range_max = 81.83 if units == "cm" else 8.183
     return SensorConfig(
-        n_beams=n_beams, resolution_deg=res, units=units, noise_sigma=float(sigma), quantise=cal.quantum_m > 0,
+        n_beams=n_beams, resolution=math.radians(res), units=units, noise_sigma=float(sigma), quantise=cal.quantum_m > 0,
         dropout_prob=rate(cal.nan_rate), mixed_pixels=True, interlaced=res < 1.0,
         noise_sigma_per_m=float(slope), no_return_prob=rate(cal.no_return_rate),
         outlier_prob=0.0, max_reading=float(cap) if cap is not None and MIN_RANGE_MAX_M <= cap <= range_max else None,
@@ -167,11 +168,13 @@ def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT
     sensor = base_sensor(cal)
     built = make_world(world, FIT_SEED)  # once: every fit run goes through the same world
     curve: list[tuple[float, float]] = []
+    widths_deg = []  # the grid in degrees, as interpolated and rounded before the config held radians
     for steps in WIDTH_GRID_STEPS:
         w = steps * sensor.resolution_deg
-        m = _simulated_measurement(sensor.replace(beam_width_deg=w, mixed_pixels=w > 0), built, duration)
-        curve.append((w, float(m.mixed_share.value)))
-    widths = np.array([c[0] for c in curve])
+        m = _simulated_measurement(sensor.replace(beam_width=math.radians(w), mixed_pixels=w > 0), built, duration)
+        curve.append((math.radians(w), float(m.mixed_share.value)))
+        widths_deg.append(w)
+    widths = np.array(widths_deg)
     shares = np.maximum.accumulate(np.nan_to_num(np.array([c[1] for c in curve])))  # monotone
     target = float(cal.mixed_share.value) if np.isfinite(cal.mixed_share.value) else 0.0
     if target >= shares[-1]:
@@ -184,8 +187,8 @@ def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT
             s0, s1 = shares[first - 1], shares[first]
             t = 0.0 if s1 <= s0 else (target - s0) / (s1 - s0)
             width = float(widths[first - 1] + t * (widths[first] - widths[first - 1]))
-    width = round(width, 4)
-    with_width = sensor.replace(beam_width_deg=width, mixed_pixels=width > 0)
+    width = round(width, 4)  # deg
+    with_width = sensor.replace(beam_width=math.radians(width), mixed_pixels=width > 0)
     tail_sigma = float(cal.tail_sigma_m * np.sqrt(1.5))  # a beam's sigma: residuals mix three beams
     tail_curve: list[tuple[float, float]] = []
     baseline = 0.0
@@ -302,7 +305,7 @@ def calibration_section(result: CalibrationResult, source: str) -> dict[str, Any
             "isolated_outlier_rate": _est(c.outlier_rate),
             "isolated_outlier_rate_amid_straight_stretches": _est(c.outlier_straight_rate),
             "fit_world": result.world,
-            "simulated_mixed_share_by_beam_width_deg": [[_round(w), _round(s)] for w, s in result.width_curve],
+            "simulated_mixed_share_by_beam_width": [[_round(w), _round(s)] for w, s in result.width_curve],  # rad
             "simulated_outlier_rate_amid_straight_stretches_without_outliers": _round(result.outlier_baseline),
             "residual_tail_share": _est(c.tail_share),
             "residual_tail_sigma_m": _round(c.tail_sigma_m),
@@ -335,7 +338,7 @@ def format_calibration(result: CalibrationResult) -> list[str]:
         f"+inf (no return) rate  {pm(c.inf_rate, 100, ' %')}",
         f"max-reading rate       {pm(c.max_reading_rate, 100, ' %')}" + (f"  (cap {c.max_reading:g} m)" if c.max_reading else ""),
         f"no return on surfaces  {pm(c.no_return_rate, 100, ' %')}",
-        f"mixed pixels at steps  {pm(c.mixed_share, 100, ' %')}  -> beam_width_deg {s.beam_width_deg:g}",
+        f"mixed pixels at steps  {pm(c.mixed_share, 100, ' %')}  -> beam_width {s.beam_width:.6g} rad ({math.degrees(s.beam_width):.4g} deg)",
         f"isolated outliers      {pm(c.outlier_rate, 100, ' %')}; amid straight stretches "
         f"{pm(c.outlier_straight_rate, 100, ' %')}  -> outlier_prob {s.outlier_prob:.4g} "
         f"(simulated world alone: {result.outlier_baseline * 100:.3g} %)",

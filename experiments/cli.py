@@ -14,6 +14,7 @@ else is a bug: one line saying so, exit status 1 (``LMSBENCH_TRACEBACK=1`` shows
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib
 import os
 import pkgutil
@@ -23,11 +24,13 @@ import sys
 import threading
 import time
 import traceback
+import warnings
 from pathlib import Path
 from typing import Any, Sequence
 
 from features.batch import default_threads
 from lms200 import LmsbenchError, LogFormatError
+from lms200.errors import LmsbenchWarning
 
 from . import commands
 from .options import OneLineParser, shorten_quoted
@@ -223,6 +226,8 @@ def _main(argv: Sequence[str] | None) -> int:
     previous_hook = sys.unraisablehook
     if main_thread:
         sys.unraisablehook = lambda u: interrupt.swallowed(u) or previous_hook(u)
+    previous_show = warnings.showwarning
+    warnings.showwarning = functools.partial(_show_warning, name, previous_show)
     done = False  # whether the command's work ended (a reader of stdout that went away then is no loss)
     started_ns = time.time_ns()  # files in --out modified since were written by this run (_stdout_gone)
     try:
@@ -265,6 +270,7 @@ def _main(argv: Sequence[str] | None) -> int:
                 signal.signal(sig, handler)  # Ctrl-C printed a traceback; it now ends the process at once
             if main_thread:
                 sys.unraisablehook = previous_hook
+            warnings.showwarning = previous_show
 
 
 PIPE_CLOSED_STATUS = 141  # 128 + SIGPIPE: what a shell reports for a command whose reader went away
@@ -397,6 +403,26 @@ def _command_parser(parser: argparse.ArgumentParser, args: argparse.Namespace) -
         if sub is None or name is None or name not in sub.choices:
             return parser
         parser = sub.choices[name]
+
+
+def _show_warning(name: str, previous: Any, message: Warning | str, category: type[Warning], filename: str,
+                  lineno: int, file: Any = None, line: str | None = None) -> None:
+    """An ``LmsbenchWarning`` (an old spelling read, converted: a sensor file's ``resolution_deg``)
+    as one line, ``lmsbench CMD: warning: ...``, above any progress bar; other warnings as Python
+    shows them (``previous``). Python's own form is two lines, the second the source line that warned."""
+    if not issubclass(category, LmsbenchWarning):
+        previous(message, category, filename, lineno, file, line)
+        return
+    text = f"lmsbench {name}: warning: {_one_line(Exception(str(message)))}"
+    try:
+        if "tqdm" in sys.modules:
+            from tqdm import tqdm
+
+            tqdm.write(text, file=sys.stderr)
+        else:
+            print(text, file=sys.stderr)
+    except (OSError, ValueError):  # stderr closed: nothing to say it on
+        pass
 
 
 def _end_progress_bars() -> None:

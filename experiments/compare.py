@@ -121,6 +121,7 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
     interlaced sensor charges the robot's motion within a scan (up to 1.2 deg) to the extractor."""
 
     import sim
+    from sim.sensor import upgrade_fields
 
     from experiments.options import check_simulate_finished
 
@@ -135,7 +136,10 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
             cfg = load_yaml((p / "config.yaml").read_text()) or {}
             if not isinstance(cfg, dict):
                 raise TypeError("expected a mapping of world, seed, duration, sensor, ...")
-            sensor = sim.SensorConfig(**(cfg.get("sensor") or {}))
+            raw_sensor = cfg.get("sensor") or {}
+            if isinstance(raw_sensor, dict):  # degrees in a folder simulated before the config held radians: read
+                raw_sensor = upgrade_fields(raw_sensor, f"{p / 'config.yaml'}: sensor")  # converted, with a warning
+            sensor = sim.SensorConfig(**raw_sensor)
             seed = cfg.get("seed")
             if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
                 raise TypeError(f"seed: must be a whole number, got {seed!r}")

@@ -8,7 +8,6 @@ figures and the demo; they hand it records simulated once through ``Source.from_
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from typing import Any, Iterable, Sequence
 
@@ -31,11 +30,12 @@ def sensor_config(overrides: dict[str, Any] | None = None, sensor_file: str | No
     uses: the truth is that of one pose, so the robot's motion within a scan is not charged to
     the extractors) with the given fields changed (``interlaced=True`` for the moving-scan model).
     With ``sensor_file`` (a sensor YAML, e.g. from ``lmsbench calibrate``) the base is that file's
-    config, exactly as written (its ``interlaced`` included), and ``overrides`` go on top."""
+    config, exactly as written (its ``interlaced`` included), and ``overrides`` go on top (an old
+    degree field, ``resolution_deg``, converted to radians with a warning: ``SensorConfig.replace``)."""
     from sim import SensorConfig
 
     base = SensorConfig.from_yaml(sensor_file) if sensor_file else SensorConfig(interlaced=False)
-    return dataclasses.replace(base, **(overrides or {}))
+    return base.replace(**(overrides or {}))
 
 
 def simulate_run(world: str = "office", seed: int = 0, duration: float = 10.0, sensor=None,

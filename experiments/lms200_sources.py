@@ -12,6 +12,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from lms200 import LmsbenchError, Scan, read_log
+from lms200.angles import wrap
 
 STEP_M = 0.02  # scanner travel between two scans sent (0.75 m/s at 37.5 scans/s)
 TURN_RAD = math.radians(3.0)  # largest heading change between two scans, turning in place
@@ -35,9 +36,9 @@ def route_poses(nodes: np.ndarray, edges: np.ndarray, seed: int = 0) -> Iterator
         nxt = options[int(rng.integers(len(options)))]
         (x0, y0), (x1, y1) = nodes[node], nodes[nxt]
         target = math.atan2(y1 - y0, x1 - x0)
-        turn = math.remainder(target - heading, math.tau)
+        turn = wrap(target - heading)
         for k in range(1, int(abs(turn) // TURN_RAD) + 1):
-            yield float(x0), float(y0), math.remainder(heading + math.copysign(k * TURN_RAD, turn), math.tau)
+            yield float(x0), float(y0), wrap(heading + math.copysign(k * TURN_RAD, turn))
         heading = target
         steps = max(1, math.ceil(math.hypot(x1 - x0, y1 - y0) / STEP_M - 1e-9))
         for t in np.linspace(0.0, 1.0, steps + 1)[1:]:

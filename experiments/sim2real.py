@@ -25,6 +25,7 @@ lines per scan, segment lengths, explained fraction by method), ``sensor.yaml`` 
 
 from __future__ import annotations
 
+import math
 from array import array
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -808,7 +809,7 @@ def format_report(result: Sim2RealResult, log: str) -> str:
              f"{result.limits.v_max:.2f} m/s, w_max {result.limits.w_max:.2f} rad/s"
              + (f" ({result.limits_source})" if result.limits_source else "") + "; sensor: noise "
              f"{result.sensor.noise_sigma * 1000:.2f} mm, dropout {result.sensor.dropout_prob:.4f}, "
-             f"spot {result.sensor.beam_width_deg:g} deg, outliers {result.sensor.outlier_prob:.4f}"
+             f"spot {math.degrees(result.sensor.beam_width):g} deg, outliers {result.sensor.outlier_prob:.4f}"
              + ("" if result.glass is None else f"; glass {result.glass:g} panels per 10 m per clutter level")
              + ("" if result.scale is None else
                 f"; rooms x{result.scale.scale:.2f}"

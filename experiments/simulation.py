@@ -32,6 +32,7 @@ from lms200.carmen import write_carmen
 from lms200.tum import write_tum
 from sim import SensorConfig, World, make_world, simulate_records
 from sim.records import OdometryConfig
+from sim.sensor import upgrade_fields
 from sim.robot import RobotLimits
 
 from experiments.options import SIMULATE_OUTPUTS, SIMULATE_UNFINISHED
@@ -67,9 +68,12 @@ class SimulationConfig:
         }
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SimulationConfig":
+    def from_dict(cls, d: dict, where: str | None = None) -> "SimulationConfig":
         """The inverse of :meth:`to_dict`. Raises ValueError for a key this config does not have
-        (a file of another kind would otherwise run the defaults) and for values of the wrong type."""
+        (a file of another kind would otherwise run the defaults) and for values of the wrong type.
+        A sensor section in degrees (``resolution_deg``, ``beam_width_deg``: a config.yaml written
+        before the sensor config held radians) is read, converted, with a warning naming ``where``
+        (the file)."""
         unknown = sorted(set(d) - SIMULATION_KEYS, key=str)
         if unknown:  # a section's field at the top (`pause_s: 5`) is named with the section it belongs to
             homes = [f"{key} belongs under {section}: ({section}: {{{key}: ...}})" for key in unknown
@@ -87,7 +91,8 @@ class SimulationConfig:
             robot["pause_s"] = tuple(robot["pause_s"])
         duration, rate_hz, clutter = (_number(d, key) for key in ("duration", "rate_hz", "clutter"))
         return cls(world=world, seed=seed, duration=120.0 if duration is None else duration, rate_hz=rate_hz,
-                   sensor=_section(d, "sensor"),
+                   sensor=_section({"sensor": upgrade_fields(_mapping(d, "sensor"),
+                                                             f"{where}: sensor" if where else "sensor")}, "sensor"),
                    odometry=_section(d, "odometry") if _mapping(d, "odometry") else None,
                    robot=_section({"robot": robot}, "robot"), clutter=clutter)
 

@@ -14,13 +14,15 @@ same length on x and y.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
-from typing import Iterable
+from typing import Any, Iterable
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 #: rcParams applied by :func:`apply_style`: small, print-sized, readable in a report.
@@ -92,8 +94,6 @@ def log_axis(ax, which: str = "x") -> None:
     """A readable log axis: plain decimal tick labels (0.05, 0.1, 2, 50), never scientific
     notation; minor ticks labelled (at 2 and 5 x a power of ten) only when the axis spans less than
     two decades, so labels never run into each other."""
-    import math
-
     from matplotlib.ticker import FuncFormatter, LogLocator
 
     axis = ax.xaxis if which == "x" else ax.yaxis
@@ -118,7 +118,10 @@ def log_axis(ax, which: str = "x") -> None:
 #: Axis labels (with units) of the parameters and metrics of sweeps and comparisons.
 LABELS: dict[str, str] = {
     "sensor.noise_sigma": "range noise, 1 sigma (m)",
-    "sensor.resolution_deg": "angular resolution (deg)",
+    "sensor.resolution": "angular resolution (deg)",  # radians in the config, drawn in degrees (see shown)
+    "sensor.resolution_deg": "angular resolution (deg)",  # the old spelling, in sweep tables written before
+    "sensor.beam_width": "laser spot width (deg)",  # radians in the config, drawn in degrees
+    "sensor.beam_width_deg": "laser spot width (deg)",
     "sensor.n_beams": "beams per scan",
     "sensor.dropout_prob": "dropout probability",
     "extractor.k": "window half-width k (beams)",
@@ -144,6 +147,18 @@ LABELS: dict[str, str] = {
     "heading_rms": "heading RMS error (rad)",
     "lines_per_scan": "lines per scan",
 }
+
+
+#: Parameters held in radians (configs have one angle unit) but drawn in degrees, as their labels say.
+SHOWN_IN_DEGREES = frozenset({"sensor.resolution", "sensor.beam_width"})
+
+
+def shown(name: str, values: Any) -> Any:
+    """``values`` of parameter ``name`` as drawn: degrees for the angles of SHOWN_IN_DEGREES (their
+    labels say deg), else as they are. Takes a number or an array / Series."""
+    if name not in SHOWN_IN_DEGREES:
+        return values
+    return np.degrees(values) if not isinstance(values, (int, float)) else math.degrees(values)
 
 
 def label_of(name: str) -> str:

@@ -14,6 +14,7 @@ sweep), rounded to 1 cm. Every extractor gets the scans' neighbour scatter as ``
 from __future__ import annotations
 
 import dataclasses
+import math
 import sys
 from typing import Any
 
@@ -60,7 +61,7 @@ def run(world: str = "office") -> pd.DataFrame:
     rows = []
     for geometry, (n_beams, step_deg, zigzag) in GEOMETRIES.items():
         for seed in SEEDS:
-            sensor = sim.SensorConfig(n_beams=n_beams, resolution_deg=step_deg, units="cm", noise_sigma=0.0,
+            sensor = sim.SensorConfig(n_beams=n_beams, resolution=math.radians(step_deg), units="cm", noise_sigma=0.0,
                                       quantise=False, interlaced=False)
             w = sim.make_world(world, seed=seed)
             clean = sim.simulate_records(world=w, seed=seed, duration=DURATION_S, sensor=sensor, rate_hz=RATE_HZ)

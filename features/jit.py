@@ -5,6 +5,7 @@ inf or nan, as in numpy, never an exception). Compiled code runs without Python'
 
 from __future__ import annotations
 
+from lms200.angles import wrap_scalar
 from lms200.numba_required import numba
 
 kernel = numba.njit(cache=True, error_model="numpy", nogil=True)
@@ -12,6 +13,9 @@ kernel = numba.njit(cache=True, error_model="numpy", nogil=True)
 # numba's IR, so that the arrays it is passed are not reference-counted at each call (two atomic
 # operations per array argument: ~11 % of the sensor kernel's time went to NRT_incref / NRT_decref)
 inline_kernel = numba.njit(cache=True, error_model="numpy", nogil=True, inline="always")
+#: the project's one angle wrap (``lms200.angles.wrap_scalar``) compiled, for every kernel: the
+#: extractors' and the scan matcher's; a float in (rad), a float out in (-pi, pi]
+wrap_one = kernel(wrap_scalar)
 
 
 

@@ -39,7 +39,7 @@ from lms200.codes import real_rows
 from lms200.errors import InputError
 from lms200.finite import shown
 
-from .angles import wrap
+from lms200.angles import wrap
 
 from .baselines import checks
 from .realdata import TRUTH_FIELDS, check_features, truth_arrays

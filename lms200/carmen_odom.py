@@ -21,6 +21,7 @@ import math
 from collections import deque
 from typing import Iterator
 
+from .angles import wrap
 from .records import Pose2D, Record
 
 ODOM_MAX_GAP_S = 0.5  # s: the farthest an ODOM line may lie from a scan (either side) to give its pose
@@ -40,8 +41,8 @@ def interpolate_pose(t0: float, p0: Pose2D, t1: float, p1: Pose2D, t: float) -> 
     """The pose at ``t`` on the line from ``p0`` (at ``t0``) to ``p1`` (at ``t1``), the heading turned
     the shorter way and wrapped to (-pi, pi]; ``p0`` where ``t1 == t0``."""
     f = 0.0 if t1 == t0 else (t - t0) / (t1 - t0)
-    turn = math.remainder(p1[2] - p0[2], 2 * math.pi)
-    return (p0[0] + f * (p1[0] - p0[0]), p0[1] + f * (p1[1] - p0[1]), _wrap(p0[2] + f * turn))
+    turn = wrap(p1[2] - p0[2])
+    return (p0[0] + f * (p1[0] - p0[0]), p0[1] + f * (p1[1] - p0[1]), wrap(p0[2] + f * turn))
 
 
 class OdomPairing:
@@ -107,20 +108,14 @@ class OdomPairing:
 def compose(a: Pose2D, b: Pose2D) -> Pose2D:
     """Pose ``b`` (given in the frame of ``a``) in the frame ``a`` is given in: a (+) b."""
     c, s = math.cos(a[2]), math.sin(a[2])
-    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], _wrap(a[2] + b[2]))
+    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], wrap(a[2] + b[2]))
 
 
 def relative(a: Pose2D, b: Pose2D) -> Pose2D:
     """Pose ``b`` in the frame of pose ``a`` (both given in one frame): (-a) (+) b."""
     c, s = math.cos(a[2]), math.sin(a[2])
     dx, dy = b[0] - a[0], b[1] - a[1]
-    return (c * dx + s * dy, -s * dx + c * dy, _wrap(b[2] - a[2]))
-
-
-def _wrap(theta: float) -> float:
-    """``theta`` wrapped to (-pi, pi] (rad)."""
-    w = math.remainder(theta, 2 * math.pi)
-    return math.pi if w == -math.pi else w
+    return (c * dx + s * dy, -s * dx + c * dy, wrap(b[2] - a[2]))
 
 
 #: s: an anchor's stamp is junk: more than this before the odometry's clock (the last ODOM line read

@@ -65,3 +65,9 @@ class LmsLinkError(LmsDeviceError, ConnectionError):
 
 class LmsProtocolError(LmsDeviceError, ValueError):
     """A telegram that does not make sense: wrong reply code, bad length, unknown variant, ..."""
+
+
+class LmsbenchWarning(UserWarning):
+    """Something read that still works but should be written differently (an old spelling of a
+    config field): the message names the file where known and says what to write instead. The
+    command line prints it as one line, ``lmsbench CMD: warning: ...``."""

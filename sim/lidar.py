@@ -93,7 +93,7 @@ class LMS200Sim:
         self._angles = s.angles
         self._offsets = s.beam_time_offsets
         self._ray_length = s.range_max + 0.01
-        self._half_width = np.deg2rad(s.beam_width_deg) / 2
+        self._half_width = np.float64(s.beam_width) / 2  # rad
         surface = np.random.default_rng([int(seed), _STREAM_SURFACE])
         self._cell_offset = surface.uniform(0.0, 1.0, 2) * s.noise_tail_patch_m
         self._cell_key = np.uint64(surface.integers(0, 2**63))

@@ -11,6 +11,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from lms200 import LmsbenchError
+from lms200.angles import wrap
 from lms200.codes import real_vector
 from lms200.errors import InputError
 from lms200.timing import MAX_DURATION_S
@@ -128,12 +129,6 @@ class Tour:
         """(n, 2) forward speed (m/s) and turn rate (rad/s) at times t."""
         k, _, rate, _ = self._phase(t)
         return np.column_stack((np.where(self.kind[k] == DRIVE, rate, 0.0), np.where(self.kind[k] == TURN, rate, 0.0)))
-
-
-def wrap(angle: np.ndarray) -> np.ndarray:
-    """Wrap angles (rad) to (-pi, pi]."""
-    a = np.mod(np.asarray(angle, dtype=float) + np.pi, 2 * np.pi) - np.pi
-    return np.where(a == -np.pi, np.pi, a)
 
 
 def plan_waypoints(world: World, rng: np.random.Generator, length_m: float) -> tuple[np.ndarray, np.ndarray]:

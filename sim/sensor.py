@@ -12,7 +12,10 @@ from __future__ import annotations
 
 from lms200.yamlio import load as load_yaml, size_problem
 
+import math
 import os
+import warnings
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -20,7 +23,7 @@ from typing import Any, Literal
 import numpy as np
 
 from lms200 import LmsbenchError
-from lms200.errors import InputError
+from lms200.errors import InputError, LmsbenchWarning
 from lms200.codes import LMS200_MAX_RANGE, metres_per_unit
 from lms200.laser_geometry import MIN_RANGE_MAX_M
 from lms200.timing import MIRROR_TURN_S, scan_period, turns_per_scan
@@ -28,6 +31,11 @@ from lms200.timing import MIRROR_TURN_S, scan_period, turns_per_scan
 NOISE_REFERENCE_RANGE_M = 2.5  # m: noise_sigma holds at this range (the middle of 1-4 m)
 OUTLIER_RANGE_SHARE = (0.1, 0.9)  # an outlier reads this share of the true range (uniform)
 MIN_RESOLUTION_DEG = 0.25  # the LMS200's finest angular step (deg)
+MAX_RESOLUTION_DEG = 1.0  # the LMS200's coarsest angular step (deg)
+MIN_RESOLUTION = math.radians(MIN_RESOLUTION_DEG)  # rad, 0.004363
+MAX_RESOLUTION = math.radians(MAX_RESOLUTION_DEG)  # rad, 0.017453
+MAX_FOV_DEG = 180.0  # the LMS200's widest field of view (deg)
+RESOLUTION_SLACK = 1e-4  # relative: a resolution written by hand to 6 decimals (0.004363 for 0.25 deg) is taken
 # The bounds of a sensor file's values (``lmsbench calibrate`` writes them; ``--sensor`` reads
 # them), each physically plausible for a 2-D laser rangefinder with room to spare: a value
 # written in mm or cm where metres are meant lies outside (noise_sigma: 0.5 meant as 5 mm in cm
@@ -37,6 +45,10 @@ MAX_TAIL_SIGMA_M = 1.0  # largest noise_tail_sigma (m): the logs' heavy tails ar
 MAX_NOISE_SLOPE = 0.05  # largest |noise_sigma_per_m| (m per m of range): the logs' 0.0006 at most (0.5 mm per m)
 MAX_MIXED_GAP_M = 1.0  # largest mixed_gap (m): the default 0.1
 MAX_BEAM_WIDTH_DEG = 10.0  # widest laser spot (deg); the LMS200's diverges by about 0.25 deg
+MAX_BEAM_WIDTH = math.radians(MAX_BEAM_WIDTH_DEG)  # rad, 0.174533
+#: The sensor config's angles are radians (issue #16: one angle unit in configs). Files written
+#: before held these fields in degrees; they are read, converted, with a warning (see upgrade_fields).
+DEGREE_FIELDS = {"resolution_deg": "resolution", "beam_width_deg": "beam_width"}
 MIN_PATCH_M = 1e-3  # smallest rough / dark cell (m): one range code in mm mode
 MAX_PATCH_M = 10.0  # largest rough / dark cell (m), a room's size: calibrate tries up to 2 m
 
@@ -47,14 +59,15 @@ class SensorConfig:
 
     Attributes:
         n_beams: beams per scan (361 at 0.5 deg, 181 at 1 deg, 401 at 0.25 deg over 100 deg).
-        resolution_deg: angular step between beams (deg); the scan is centred on straight ahead.
+        resolution: angular step between beams (rad; default 0.5 deg); the scan is centred on
+            straight ahead.
         units: "mm" (1 mm codes, max range 8.183 m) or "cm" (1 cm codes, max 81.83 m).
         noise_sigma: Gaussian range noise, 1 sigma (m); datasheet mm mode: 5 mm.
         quantise: round ranges to the unit (1 mm or 1 cm) as the device's codes do.
         dropout_prob: probability that a beam returns an invalid reading (nan).
         mixed_pixels: a beam whose spot straddles a depth edge returns a range between the two
             surfaces (weighted by the share of the spot on each).
-        beam_width_deg: width of the laser spot used for mixed pixels (deg).
+        beam_width: width of the laser spot used for mixed pixels (rad; default 0.5 deg).
         mixed_gap: smallest depth step (m) inside a spot that makes a mixed pixel.
         interlaced: each beam is taken from the pose at its own time (mirror turns of 13.3 ms),
             so a moving scanner distorts the scan; False = every beam from the scan's pose.
@@ -87,22 +100,25 @@ class SensorConfig:
     The last eight fields default to the datasheet model (none of these effects);
     ``lmsbench calibrate`` fits all of them to a real log.
 
-    Checked when built (an ``InputError`` names the field): every number finite; resolution_deg
-    in [0.25, 1] deg and a field of view of at most 180 deg (so at most 721 beams); noise_sigma in
-    [0, 0.1] m, noise_tail_sigma in [0, 1] m and |noise_sigma_per_m| <= 0.05 m per m (metres: a
-    5 meant as millimetres or a 0.5 meant as centimetres is refused, not simulated); mixed_gap in
-    [0, 1] m; beam_width_deg in [0, 10] deg; probabilities in [0, 1); the two cell sizes 0 or in
-    [1 mm, 10 m].
+    Checked when built (an ``InputError`` names the field): every number finite; resolution
+    in [0.004363, 0.017453] rad (0.25-1 deg) and a field of view of at most 180 deg (so at most
+    721 beams); noise_sigma in [0, 0.1] m, noise_tail_sigma in [0, 1] m and |noise_sigma_per_m|
+    <= 0.05 m per m (metres: a 5 meant as millimetres or a 0.5 meant as centimetres is refused,
+    not simulated); mixed_gap in [0, 1] m; beam_width in [0, 0.174533] rad (0-10 deg: a 0.5 meant
+    as degrees is refused); probabilities in [0, 1); the two cell sizes 0 or in [1 mm, 10 m].
+    Angles are radians, as everywhere in configs; files with the older ``resolution_deg`` /
+    ``beam_width_deg`` are read by :meth:`from_dict` / :meth:`from_yaml` (converted, with a
+    warning).
     """
 
     n_beams: int = 361
-    resolution_deg: float = 0.5
+    resolution: float = math.radians(0.5)
     units: Literal["mm", "cm"] = "mm"
     noise_sigma: float = 0.005
     quantise: bool = True
     dropout_prob: float = 0.001
     mixed_pixels: bool = True
-    beam_width_deg: float = 0.5
+    beam_width: float = math.radians(0.5)
     mixed_gap: float = 0.1
     interlaced: bool = True
     noise_sigma_per_m: float = 0.0
@@ -135,13 +151,15 @@ class SensorConfig:
             raise InputError(f"units: must be 'mm' or 'cm', got {self.units!r}")
         if self.n_beams < 2:
             raise InputError(f"n_beams: must be >= 2, got {self.n_beams}")
-        if not 0 < self.resolution_deg <= 1.0:
-            raise InputError(f"resolution_deg: must be in (0, 1], got {self.resolution_deg}")
-        if self.resolution_deg < MIN_RESOLUTION_DEG:  # finer steps made 10^8-beam scans (a hang) or overflowed
-            raise InputError(f"resolution_deg: the LMS200's finest step is {MIN_RESOLUTION_DEG} deg, "
-                             f"got {self.resolution_deg}")
-        if self.fov_deg > 180.0 + 1e-9:
-            raise InputError(f"n_beams, resolution_deg: field of view {self.fov_deg} deg exceeds 180 deg")
+        slack = 1 + RESOLUTION_SLACK  # the bounds as written to 6 decimals (0.004363) are taken
+        if not MIN_RESOLUTION / slack <= self.resolution <= MAX_RESOLUTION * slack:  # the LMS200's steps: finer
+            # ones made 10^8-beam scans (a hang) or overflowed; a 0.5 meant as degrees is 29 deg
+            raise InputError(f"resolution: must be in [{MIN_RESOLUTION:.6f}, {MAX_RESOLUTION:.6f}] rad "
+                             f"({MIN_RESOLUTION_DEG:g}-{MAX_RESOLUTION_DEG:g} deg, the LMS200's steps), got "
+                             f"{self.resolution}{_degrees_hint(self.resolution, MAX_RESOLUTION, MAX_RESOLUTION_DEG)}")
+        if self.fov_deg > MAX_FOV_DEG + 1e-9:
+            raise InputError(f"n_beams, resolution: field of view {self.fov_deg:g} deg exceeds {MAX_FOV_DEG:g} deg "
+                             f"({math.radians(MAX_FOV_DEG):.6f} rad)")
         for name, most in (("noise_sigma", MAX_NOISE_SIGMA_M), ("noise_tail_sigma", MAX_TAIL_SIGMA_M)):
             value = getattr(self, name)  # metres: 5 meant as mm simulated 5 m of noise, 0.5 meant as cm 0.5 m
             if not 0 <= value <= most:
@@ -157,8 +175,9 @@ class SensorConfig:
             value = getattr(self, name)
             if not 0 <= value < 1:
                 raise InputError(f"{name}: must be in [0, 1), got {value}")
-        if not 0 <= self.beam_width_deg <= MAX_BEAM_WIDTH_DEG:  # 1e300 deg cast sub-rays at meaningless bearings
-            raise InputError(f"beam_width_deg: must be in [0, {MAX_BEAM_WIDTH_DEG:g}] deg, got {self.beam_width_deg}")
+        if not 0 <= self.beam_width <= MAX_BEAM_WIDTH:  # 1e300 cast sub-rays at meaningless bearings
+            raise InputError(f"beam_width: must be in [0, {MAX_BEAM_WIDTH:.6f}] rad (0-{MAX_BEAM_WIDTH_DEG:g} deg), "
+                             f"got {self.beam_width}{_degrees_hint(self.beam_width, MAX_BEAM_WIDTH, MAX_BEAM_WIDTH_DEG)}")
         if not 0 <= self.noise_tail_prob < 1:
             raise InputError(f"noise_tail_prob: must be in [0, 1), got {self.noise_tail_prob}")
         for name in ("noise_tail_patch_m", "dropout_patch_m"):  # 1e-300 m cells overflowed the cell index
@@ -182,15 +201,17 @@ class SensorConfig:
     @classmethod
     def lms200_1deg(cls, **changes: Any) -> "SensorConfig":
         """181 beams at 1 deg (one mirror turn a scan, 75 scans/s)."""
-        return cls(**{"n_beams": 181, "resolution_deg": 1.0, **changes})
+        return cls(**{"n_beams": 181, "resolution": math.radians(1.0), **changes})
 
     @classmethod
     def lms200_quarter_deg(cls, **changes: Any) -> "SensorConfig":
         """401 beams at 0.25 deg over 100 deg (four interlaced turns, 18.75 scans/s)."""
-        return cls(**{"n_beams": 401, "resolution_deg": 0.25, **changes})
+        return cls(**{"n_beams": 401, "resolution": math.radians(0.25), **changes})
 
     def replace(self, **changes: Any) -> "SensorConfig":
-        return replace(self, **changes)
+        """A copy with ``changes``; an old degree field (``resolution_deg=1.0``) is converted, with a
+        warning, as in a file."""
+        return replace(self, **upgrade_fields(changes, None))
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -204,6 +225,7 @@ class SensorConfig:
         """
         if not isinstance(d, dict):
             raise LmsbenchError(f"{where}: a sensor config must be a mapping of fields, got {type(d).__name__}")
+        d = upgrade_fields(d, where)
         known = {f.name for f in fields(cls)}
         unknown = sorted(set(d) - known)
         if unknown:
@@ -268,17 +290,25 @@ class SensorConfig:
 
     # -- derived ------------------------------------------------------------------------------
     @property
+    def resolution_deg(self) -> float:
+        """The angular step in degrees, for display (configs hold ``resolution``, rad)."""
+        return math.degrees(self.resolution)
+
+    @property
     def fov_deg(self) -> float:
+        """Field of view from first to last beam (deg), for display and the 180 deg check."""
         return (self.n_beams - 1) * self.resolution_deg
 
     @property
     def angle_min(self) -> float:
-        """Bearing of beam 0 (rad)."""
+        """Bearing of beam 0 (rad). Computed through degrees as before the config held radians, so
+        the scans stay the same to the bit (at 0.25, 0.5 and 1 deg the degrees are exact)."""
         return -np.deg2rad(self.fov_deg) / 2
 
     @property
     def angle_increment(self) -> float:
-        return float(np.deg2rad(self.resolution_deg))
+        """Bearing step between beams (rad): ``resolution``."""
+        return float(self.resolution)
 
     @property
     def angles(self) -> np.ndarray:
@@ -311,3 +341,37 @@ class SensorConfig:
         its bearing's share of the turn."""
         i = np.arange(self.n_beams)
         return ((i % self.turns_per_scan) + i * self.resolution_deg / 360.0) * MIRROR_TURN_S
+
+
+def _degrees_hint(value: float, most: float, most_deg: float) -> str:
+    """`` (degrees given as radians?)`` for a value above its bound in radians that is within it
+    read as degrees (``resolution: 0.5``, ``beam_width: 0.5`` from a file of the old spelling)."""
+    return " (degrees given as radians?)" if most < value <= most_deg else ""
+
+
+def upgrade_fields(d: Mapping[str, Any], where: str | None = "sensor") -> dict[str, Any]:
+    """``d`` with the old degree fields (``resolution_deg``, ``beam_width_deg``: sensor files,
+    sweep axes and overrides written before the config held radians) converted to their radian
+    fields, each with a one-line :class:`LmsbenchWarning` naming ``where`` (a file) and the value
+    to write instead. A value that is not a number is passed on as is, for the field's own check.
+
+    Raises:
+        InputError: when ``d`` gives a field in both spellings.
+    """
+    out = dict(d)
+    for old, new in DEGREE_FIELDS.items():
+        if old not in out:
+            continue
+        place = f"{where}: " if where else ""
+        if new in out:
+            raise InputError(f"{place}gives both {old} (deg, the old spelling) and {new} (rad); give {new} only")
+        value = out.pop(old)
+        if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_)):
+            try:
+                value = math.radians(value)
+            except OverflowError:  # an int beyond float's range: the field's check says "must be finite"
+                value = math.inf
+            warnings.warn(f"{place}{old}: {d[old]} (deg) is the old spelling, read as {new}: {value!r} (rad); "
+                          f"write `{new}: {value!r}` instead", LmsbenchWarning, stacklevel=3)
+        out[new] = value
+    return out

@@ -103,9 +103,9 @@ def search(points: np.ndarray, field: Field, centre: np.ndarray, half_xy: float,
         a, rest = divmod(int(f), side * side)
         i, j = divmod(rest, side)
         pose = np.array([centre[0] + (i - n) * k * res, centre[1] + (j - n) * k * res,
-                         math.atan2(math.sin(thetas[a]), math.cos(thetas[a]))])
+                         wrap(thetas[a])])
         if all(np.hypot(*(pose[:2] - c.pose[:2])) >= min_xy
-               or abs(math.remainder(pose[2] - c.pose[2], 2 * math.pi)) >= min_theta for c in out):
+               or abs(wrap(pose[2] - c.pose[2])) >= min_theta for c in out):
             out.append(Candidate(pose, float(flat[f])))
             if len(out) == count:
                 break

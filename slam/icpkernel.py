@@ -14,6 +14,7 @@ from typing import Any, Callable, TypeVar, cast
 
 import numpy as np
 
+from features.jit import wrap_one
 from lms200.numba_required import numba
 
 _F = TypeVar("_F", bound=Callable[..., Any])
@@ -302,7 +303,7 @@ def gauss_newton(px, py, pose0, rx, ry, nrx, nry, order, start, lox, loy, cell, 
                 return pose, np.zeros((3, 3)), 0, np.inf, np.zeros((3, 3)), 0
             A = H + prior_info
             e = pose - prior
-            e[2] = math.atan2(math.sin(e[2]), math.cos(e[2]))
+            e[2] = wrap_one(e[2])
             b = g + prior_info @ e
             lam = damping * (A[0, 0] + A[1, 1] + A[2, 2]) / 3.0 + 1e-12
             for k in range(3):
@@ -311,7 +312,7 @@ def gauss_newton(px, py, pose0, rx, ry, nrx, nry, order, start, lox, loy, cell, 
             pose[0] -= step[0]
             pose[1] -= step[1]
             pose[2] = pose[2] - step[2]
-            pose[2] = math.atan2(math.sin(pose[2]), math.cos(pose[2]))
+            pose[2] = wrap_one(pose[2])
             if abs(step[0]) + abs(step[1]) < tol_xy and abs(step[2]) < tol_theta:
                 break
     return pose, H, inliers, ss, B, used

@@ -9,7 +9,7 @@ import numpy as np
 
 from .config import AlignmentConfig, LoopClosureConfig
 from .geometry import between, rotate_covariance, to_world
-from .models import chi2_quantile
+from .models import chi2_quantile, wrap
 from .icp import Match, Reference, make_reference, match
 
 
@@ -111,7 +111,7 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
         max_heading = np.inf if prior is None else float(np.sqrt(gate * max(prior[2, 2], 0.0)))
         m = match(scan_points, ref, [new.pose], alignment, max_heading, normals=normals)
         d = m.pose - new.pose
-        d[2] = np.arctan2(np.sin(d[2]), np.cos(d[2]))
+        d[2] = wrap(d[2])
         d2 = float(d @ np.linalg.solve(prior + m.covariance, d)) if prior is not None else 0.0
         if not _verified(m, cfg, alignment):
             continue

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from features.jit import wrap_one
+
 from .icpkernel import kernel
 from .models import wrap
 
@@ -48,7 +50,7 @@ def _merge(seg, R, th, order, max_angle, max_offset, max_gap):
         joined = False
         for g in range(m):
             c, s_ = gc[g], gs[g]
-            dth = abs(np.mod(th[i] - gth[g] + np.pi, 2 * np.pi) - np.pi)
+            dth = abs(wrap_one(th[i] - gth[g]))
             if dth > max_angle:
                 continue
             off0, off1 = x0 * c + y0 * s_ - gR[g], x1 * c + y1 * s_ - gR[g]

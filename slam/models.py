@@ -8,9 +8,9 @@ frame; a corner landmark is ``(x m, y m)`` in the world frame. Angles are wrappe
 
 from __future__ import annotations
 
-from typing import overload
-
 import numpy as np
+
+from lms200.angles import wrap as wrap  # the project's one wrap, re-exported for slam's modules
 
 ROBOT_DIM = 5  # X, Y, Phi, V, w
 
@@ -21,21 +21,6 @@ def chi2_quantile(probability: float, dof: int) -> float:
     from scipy.special import gammaincinv
 
     return float(2.0 * gammaincinv(0.5 * dof, probability))
-
-
-@overload
-def wrap(angle: float) -> float: ...
-
-
-@overload
-def wrap(angle: np.ndarray) -> np.ndarray: ...
-
-
-def wrap(angle: np.ndarray | float) -> np.ndarray | float:
-    """Wrap angles (rad) to (-pi, pi]: a float for a scalar, an array for an array."""
-    a = np.asarray(angle, dtype=float)
-    w = np.pi - np.mod(np.pi - a, 2.0 * np.pi)
-    return float(w) if w.ndim == 0 else w
 
 
 # --- motion: constant velocity, white acceleration noise (NOTES.md: cos(Phi), not cos(w)) ----------

@@ -265,7 +265,7 @@ class ScanSlam:
         explains clearly more of the scan's points."""
         mc = self.motion
         e = m.pose - pred
-        e[2] = np.arctan2(np.sin(e[2]), np.cos(e[2]))
+        e[2] = wrap(e[2])
         if (e[0] ** 2 + e[1] ** 2) / sxy**2 + e[2] ** 2 / sth**2 <= self._jump_gate:
             return m
         assert self.ref is not None

@@ -5,6 +5,7 @@ argument, never a raw numpy / Python exception, a silent cast or a lost file (fu
 from __future__ import annotations
 
 import dataclasses
+import math
 import re
 from decimal import Decimal
 from typing import Any
@@ -221,7 +222,7 @@ def test_simulate_records_rate_above_the_sensors_is_refused() -> None:
 
     with pytest.raises(InputError, match=r"^rate_hz: 1e\+09 scans/s is more than the sensor gives \(37.5 scans/s"):
         simulate_records("office", seed=0, duration=1.0, rate_hz=1e9)
-    one_deg = SensorConfig(n_beams=181, resolution_deg=1.0)
+    one_deg = SensorConfig.lms200_1deg()
     check_rate(75.0, one_deg)  # the 1 deg sweep's rate is allowed
     with pytest.raises(InputError, match=r"\(75 scans/s at 1 deg\)"):
         check_rate(76.0, one_deg)
@@ -405,11 +406,17 @@ def test_paper_slam_over_a_long_gap_in_the_stamps() -> None:
 @pytest.mark.parametrize("kw, message", [
     (dict(noise_sigma="x"), "^noise_sigma: must be a number"),
     (dict(units="m"), "^units: must be 'mm' or 'cm'"),
-    (dict(resolution_deg=-1.0), r"^resolution_deg: must be in \(0, 1\]"),
+    (dict(resolution=-1.0), r"^resolution: must be in \[0.004363, 0.017453\] rad \(0.25-1 deg, the LMS200's steps\), "
+                            r"got -1.0$"),
     # values that were taken and ran: 1e-6 deg (10^8 beams) hung, 1e-300 overflowed (internal error),
     # the others simulated silently meaningless scans
-    (dict(n_beams=100_000_000, resolution_deg=1e-6), r"^resolution_deg: the LMS200's finest step is 0.25 deg"),
-    (dict(resolution_deg=1e-300), r"^resolution_deg: the LMS200's finest step"),
+    (dict(n_beams=100_000_000, resolution=1e-8), r"^resolution: must be in \[0.004363, 0.017453\] rad"),
+    (dict(resolution=1e-300), r"^resolution: must be in \[0.004363, 0.017453\] rad"),
+    # degrees given as radians (a file of the old spelling with the key renamed): refused, with the hint
+    (dict(resolution=0.5), r"^resolution: must be in \[0.004363, 0.017453\] rad \(0.25-1 deg, the LMS200's steps\), "
+                           r"got 0.5 \(degrees given as radians\?\)$"),
+    (dict(resolution=2.0), r"^resolution: must be in .* got 2.0$"),  # not a degree step: no hint
+    (dict(n_beams=361, resolution=math.radians(1.0)), r"^n_beams, resolution: field of view 360 deg exceeds 180 deg"),
     (dict(noise_sigma=5.0), r"^noise_sigma: must be in \[0, 0.1\] m"),
     (dict(noise_tail_sigma=1e300), r"^noise_tail_sigma: must be in \[0, 1\] m"),
     (dict(noise_sigma_per_m=-1e300), r"^noise_sigma_per_m: must be within \+-0.05 m per m"),
@@ -425,7 +432,8 @@ def test_paper_slam_over_a_long_gap_in_the_stamps() -> None:
     (dict(noise_tail_patch_m=30.0), r"^noise_tail_patch_m: must be 0 \(beam by beam\) or a cell size in \[0.001, 10\] m, "
                                     r"got 30.0$"),
     (dict(dropout_patch_m=1e300), r"^dropout_patch_m: must be 0 \(beam by beam\) or a cell size in \[0.001, 10\] m"),
-    (dict(beam_width_deg=1e300), r"^beam_width_deg: must be in \[0, 10\] deg"),
+    (dict(beam_width=1e300), r"^beam_width: must be in \[0, 0.174533\] rad \(0-10 deg\), got 1e\+300$"),
+    (dict(beam_width=0.5), r"^beam_width: must be in \[0, 0.174533\] rad \(0-10 deg\), got 0.5 \(degrees given as radians\?\)$"),
     (dict(dropout_prob=0.5, dropout_patch_m=1e-300), r"^dropout_patch_m: must be 0 \(beam by beam\) or a cell size"),
     (dict(noise_tail_patch_m=1e-9), r"^noise_tail_patch_m: must be 0"),
     (dict(noise_sigma=10**400), r"^noise_sigma: must be finite"),  # was numpy's "ufunc 'isfinite' not supported"

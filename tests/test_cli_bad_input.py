@@ -135,7 +135,7 @@ def files(tmp_path_factory):
     (d / "sensor_flag.yaml").write_text("quantise: 3\n")
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
     (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
-    (d / "sensor_cm.yaml").write_text("n_beams: 361\nresolution_deg: 0.5\nunits: cm\nnoise_sigma: 0.44\n")  # cm meant
+    (d / "sensor_cm.yaml").write_text("n_beams: 361\nresolution: 0.008726646259971648\nunits: cm\nnoise_sigma: 0.44\n")  # cm meant
     (d / "sensor_slope_mm.yaml").write_text("noise_sigma: 0.005\nnoise_sigma_per_m: 0.5\n")  # mm per m meant
     (d / "sensor_gap_cm.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 10\n")  # cm meant: no mixed pixel at all
     (d / "sensor_ok.yaml").write_text("noise_sigma: 0.005\n")
@@ -144,12 +144,12 @@ def files(tmp_path_factory):
                                                                     for i in range(1, 9)]) + "]"
     (d / "sensor_laughs.yaml").write_text(f"noise_sigma: {laughs}\n")  # 10^9 values: the message's repr hung
     (d / "slam_laughs.yaml").write_text(f"motion: {{sigma_accel: {laughs}}}\n")
-    (d / "sensor_1deg.yaml").write_text("n_beams: 181\nresolution_deg: 1.0\n")  # good.clf: 361 at 0.5 deg
+    (d / "sensor_1deg.yaml").write_text("n_beams: 181\nresolution: 0.017453292519943295\n")  # good.clf: 361 at 0.5 deg
     (d / "short_run.yaml").write_text("world: office\nseed: 0\nduration: 0.001\n")  # a simulate config: no scan
     (d / "run_bool.yaml").write_text("world: office\nseed: 0\nduration: true\n")  # ran 1 s
     (d / "run_list.yaml").write_text("world: office\nseed: 0\nduration: [2]\n")
     (d / "run_robot.yaml").write_text("world: office\nseed: 0\nduration: 2\nrobot: 5\n")
-    (d / "sensor_fine.yaml").write_text("n_beams: 100000000\nresolution_deg: 1.0e-6\n")  # 10^8 beams: a hang
+    (d / "sensor_fine.yaml").write_text("n_beams: 100000000\nresolution: 1.0e-8\n")  # 10^8 beams: a hang
     (d / "badyaml.yaml").write_text("a: [1, 2\n")
     (d / "badcolon.yaml").write_text("noise_sigma: 0.1\n  x: : 3\n")
     (d / "badalias.yaml").write_text("noise_sigma: *nope\n")
@@ -157,7 +157,7 @@ def files(tmp_path_factory):
     # YAML 1.1 numbers: seed 90 and seed 8 simulated, 181 beams, k 10 swept, silently
     (d / "run_sexagesimal.yaml").write_text("world: office\nseed: 1:30\nduration: 2\n")
     (d / "run_octal.yaml").write_text("world: office\nseed: 010\nduration: 2\n")
-    (d / "sensor_underscore.yaml").write_text("n_beams: 18_1\nresolution_deg: 1.0\n")
+    (d / "sensor_underscore.yaml").write_text("n_beams: 18_1\nresolution: 0.017453292519943295\n")
     (d / "sweep_underscore.yaml").write_text("name: k\nkind: extract\ngrid:\n  extractor.k: [1_0]\n")
     (d / "simbadyaml").mkdir()
     (d / "simbadyaml" / "config.yaml").write_text("sensor: {noise_sigma: 0.005\n")
@@ -270,7 +270,7 @@ CASES = [
      "must be within +-0.05 m per m of range (metres of noise per metre; real logs' are below 0.001), got 0.5"),
     (["sim2real", "{good.clf}", "--sensor", "{sensor_gap_cm.yaml}", "--out", O], "sensor_gap_cm.yaml: mixed_gap: must be in "
      "[0, 1] m (a depth step in metres; the default is 0.1), got 10"),
-    (["compare", "office", "--sensor", "{sensor_fine.yaml}", "--out", O], "sensor_fine.yaml: resolution_deg"),
+    (["compare", "office", "--sensor", "{sensor_fine.yaml}", "--out", O], "sensor_fine.yaml: resolution: must be in [0.004363, 0.017453] rad"),
     (["sim2real", "{good.clf}", "--sensor", "{sensor_dup.yaml}", "--out", O], "sensor_dup.yaml: not valid YAML (key 'noise_sigma' given twice"),
     # compare
     (["compare", "office:x", "--out", O], "office:x"),
@@ -1115,7 +1115,7 @@ def test_compare_tells_worlds_from_files_by_name_for_sensor_as_for_seeds(tmp_pat
     ("robot: {pause_s: 5}", "(robot.pause_s: must be two numbers of seconds [shortest, longest], got 5)"),
     ("robot: {bogus: 1}", "(robot: unknown field(s) ['bogus']; robot: has v_max, a_max, w_max, alpha_max, radius, pause_s)"),
     ("odometry: {alpha5: 1}", "(odometry: unknown field(s) ['alpha5']; odometry: has alpha1, alpha2, alpha3, alpha4)"),
-    ("sensor: {noise: 1}", "(sensor: unknown field(s) ['noise']; sensor: has n_beams, resolution_deg, units, noise_sigma, "),
+    ("sensor: {noise: 1}", "(sensor: unknown field(s) ['noise']; sensor: has n_beams, resolution, units, noise_sigma, "),
     ("pause_s: 5", "(unknown key(s) ['pause_s']; a simulate config has ['clutter', 'duration', 'odometry', 'rate_hz', "
                    "'robot', 'seed', 'sensor', 'world']; pause_s belongs under robot: (robot: {pause_s: ...}))"),
 ])

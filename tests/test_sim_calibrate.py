@@ -4,6 +4,7 @@ recovery test: `lmsbench calibrate` on simulated logs of known parameters gets t
 from __future__ import annotations
 
 import dataclasses
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -32,7 +33,7 @@ def _static_scans(sensor: SensorConfig, n: int = 200) -> tuple[np.ndarray, np.nd
     """(exact, measured) ranges of n scans from one pose in the corridor world."""
     world = make_world("corridor", seed=0)
     pose = (3.0, 1.0, 0.2)
-    with LMS200Sim(world, SensorConfig.ideal(n_beams=sensor.n_beams, resolution_deg=sensor.resolution_deg,
+    with LMS200Sim(world, SensorConfig.ideal(n_beams=sensor.n_beams, resolution=sensor.resolution,
                                              units=sensor.units)) as ideal:
         exact = ideal.scan_at(pose).ranges
     with LMS200Sim(world, sensor, seed=1) as lidar:
@@ -94,11 +95,11 @@ def test_sensor_yaml_round_trip_and_errors(tmp_path: Path) -> None:
 # -- recovery --------------------------------------------------------------------------------
 RECOVERY_CASES = {
     "cm_0.5deg": SensorConfig(units="cm", noise_sigma=0.008, noise_sigma_per_m=0.001, dropout_prob=0.03,
-                              no_return_prob=0.01, outlier_prob=0.01, beam_width_deg=0.25),
+                              no_return_prob=0.01, outlier_prob=0.01, beam_width=math.radians(0.25)),
     "mm_0.5deg": SensorConfig(units="mm", noise_sigma=0.005, dropout_prob=0.01, no_return_prob=0.02,
-                              outlier_prob=0.004, beam_width_deg=0.4),
+                              outlier_prob=0.004, beam_width=math.radians(0.4)),
     "cm_1deg_cap": SensorConfig.lms200_1deg(units="cm", noise_sigma=0.012, dropout_prob=0.005, no_return_prob=0.015,
-                                            outlier_prob=0.008, beam_width_deg=0.5, max_reading=50.0),
+                                            outlier_prob=0.008, beam_width=math.radians(0.5), max_reading=50.0),
 }
 
 
@@ -110,10 +111,10 @@ def test_calibrate_recovers_known_parameters_from_a_simulated_log(case: str, tmp
     write_carmen(tmp_path / "log.clf", records)
     result = calibrate_log(tmp_path / "log.clf")
     got = result.sensor
-    assert got.units == truth.units and got.n_beams == truth.n_beams and got.resolution_deg == truth.resolution_deg
+    assert got.units == truth.units and got.n_beams == truth.n_beams and got.resolution == truth.resolution
     assert result.measured.quantum_m == truth.unit_m
     assert got.noise_sigma == pytest.approx(truth.noise_sigma, rel=0.10)
-    for name in ("dropout_prob", "no_return_prob", "outlier_prob", "beam_width_deg"):
+    for name in ("dropout_prob", "no_return_prob", "outlier_prob", "beam_width"):
         assert getattr(got, name) == pytest.approx(getattr(truth, name), rel=0.20), name
     assert got.max_reading == truth.max_reading
     assert got.noise_tail_prob < 0.01  # no heavy tail in, none out
@@ -382,7 +383,7 @@ def test_sim2real_of_a_simulated_log_agrees_with_itself(tmp_path: Path) -> None:
     tour and noise stream (seed 7), with the sensor model fitted to the log instead of the true
     one. Every method's explained fraction within 0.02, lines per scan within 5 %; the files are
     written. (Across seeds the explained fraction of 20 s runs varies by 0.03-0.04 alone.)"""
-    truth = SensorConfig(units="cm", noise_sigma=0.006, dropout_prob=0.01, beam_width_deg=0.2)
+    truth = SensorConfig(units="cm", noise_sigma=0.006, dropout_prob=0.01, beam_width=math.radians(0.2))
     write_carmen(tmp_path / "log.clf", simulate_records("cluttered", seed=7, duration=20.0, sensor=truth, rate_hz=3.0))
     run = _cli("sim2real", str(tmp_path / "log.clf"), "--world", "cluttered", "--seeds", "7", "--duration", "20",
                "--rate-hz", "3", "--stride", "1", "--out", str(tmp_path / "out"))

@@ -187,7 +187,7 @@ def test_simulate_records_refuses_bad_arguments_by_name(kwargs, name):
 def test_a_sensor_config_refuses_nan_and_inf():
     from sim import SensorConfig
 
-    for name in ("noise_sigma", "dropout_prob", "beam_width_deg", "noise_sigma_per_m"):
+    for name in ("noise_sigma", "dropout_prob", "beam_width", "resolution", "noise_sigma_per_m"):
         for bad in (float("nan"), float("inf")):
             with pytest.raises(ValueError, match=f"^{name}: must be finite"):
                 SensorConfig(**{name: bad})

@@ -25,7 +25,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="world names (" + WORLDS + "; WORLD:SEED for one seed), "
                         "`lmsbench simulate` folders, or paths of real logs")
     p.add_argument("--methods", nargs="+", type=text("an extractor's name"),
-                   help="extractors: built-in names or a user's MODULE:FUNCTION (default: every built-in one)")
+                   help="extractors: built-in names or a user's MODULE:FUNCTION, apart or comma-separated (default: every "
+                        "built-in one)")
     p.add_argument("--method", dest="methods", nargs="+", type=text("an extractor's name"),
                    help="the same as --methods (`--method MODULE:FUNCTION` runs a user's extractor)")
     p.add_argument("--seeds", nargs="+", type=SEED, help="seeds of each world named without one, listed (default 0 1 2; "

@@ -23,7 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate-hz", type=positive("scans/s"), help="scans kept per second of the run (default 10)")
     p.add_argument("--seed", type=SEED, help="world and run seed (default 0)")
     p.add_argument("--world", type=world_name, help="simulated world: " + WORLDS + " (default office)")
-    p.add_argument("--methods", nargs="+", type=text("an extractor's name"), help="extractors to compare (default: all five)")
+    p.add_argument("--methods", nargs="+", type=text("an extractor's name"), help="extractors to compare, apart or comma-separated (default: all five)")
     p.add_argument("--intel", "--log", dest="intel", type=path_arg,
                    help="CARMEN log, bag or lmsbench simulate folder for Fig. 9 (--log as in demo; default: shared/data/carmen/"
                    "intel-corrected.log.gz beside the checkout, where present)")

@@ -6,6 +6,7 @@ from lms200.timing import check_scan_rate
 from lms200.yamlio import load as load_yaml
 
 import argparse
+import math
 
 from experiments.options import (WORLDS, DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, SIMULATE_OWNER, InputError, check_file,
                                  check_world_file,
@@ -69,7 +70,7 @@ def _config(args: argparse.Namespace):
         try:
             if not isinstance(raw, dict):
                 raise TypeError("expected a mapping of world, seed, duration, sensor, ...")
-            cfg = SimulationConfig.from_dict(raw)
+            cfg = SimulationConfig.from_dict(raw, where=str(args.config))
         except (TypeError, ValueError) as exc:
             raise InputError(f"{args.config}: not a simulate config ({' '.join(str(exc).split())})") from None
         if cfg.world not in known_worlds() and not cfg.world.endswith(".json"):
@@ -118,7 +119,7 @@ def _config(args: argparse.Namespace):
         except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
             raise InputError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
     else:
-        sensor = base(n_beams=beams, resolution_deg=args.resolution_deg, units=args.units,
+        sensor = base(n_beams=beams, resolution=math.radians(args.resolution_deg), units=args.units,
                       **({} if args.ideal or args.units == "mm" else {"noise_sigma": 0.01}))
     check_scan_rate(args.rate_hz, sensor.angle_increment, "--rate-hz")
     return SimulationConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz,

@@ -95,6 +95,8 @@ def _config(args: argparse.Namespace):
     if args.preset:
         changes["preset"] = args.preset
     if args.extractor is not None:
+        if "," in args.extractor:
+            raise InputError(f"--extractor {args.extractor}: one extractor runs in the SLAM; give one name")
         changes["extractor"] = check_methods([args.extractor])[0]
     if args.association:
         changes["association"] = dataclasses.replace(cfg.association, method=args.association)

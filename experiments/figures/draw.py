@@ -12,9 +12,9 @@ import numpy as np
 import pandas as pd
 import matplotlib.pyplot as plt
 
-from experiments.style import (CORNER_COLOR, LINE_COLOR, SCAN_COLOR, TRUTH_COLOR, equal_axes, label_of, log_axis,
+from experiments.style import (CORNER_COLOR, LINE_COLOR, SCAN_COLOR, SHOWN_IN_DEGREES, TRUTH_COLOR, equal_axes, label_of, log_axis,
                                method_color,
-                               new_figure, save_figure)
+                               new_figure, save_figure, shown)
 
 
 def fig_scan(signals: pd.DataFrame, stem: Path, title: str) -> list[Path]:
@@ -181,11 +181,13 @@ def fig_sweep(table: pd.DataFrame, x: str, y: str, stem: Path, hue: str | None =
             else:
                 color = None
             yerr = group["std"].fillna(0.0) if seeds > 1 else None  # no spread from a single seed
-            ax.errorbar(group[x], group["mean"], yerr=yerr, fmt="o-", ms=4, capsize=2,
-                        lw=1.0, label=f"{value}" if hue else label_of(y), color=color)
+            ax.errorbar(shown(x, group[x]), group["mean"], yerr=yerr, fmt="o-", ms=4, capsize=2,
+                        lw=1.0, label=f"{shown(hue, value):g}" if hue in SHOWN_IN_DEGREES else f"{value}" if hue
+                        else label_of(y), color=color)
         ax.set_xlabel(label_of(x))
         if facet:
-            ax.set_title(f"{facet} = {facet_value}", fontsize=9)
+            facet_shown = f"{shown(facet, facet_value):g} deg" if facet in SHOWN_IN_DEGREES else f"{facet_value}"
+            ax.set_title(f"{facet} = {facet_shown}", fontsize=9)
     spread = f"mean +/- std over {seeds} seeds" if seeds > 1 else "one seed"
     axes.ravel()[0].set_ylabel(f"{label_of(y)}\n({spread})")
     if hue:
@@ -199,7 +201,7 @@ def fig_sweep_scatter(table: pd.DataFrame, params: list[str], y: str, stem: Path
     ok = table[table["status"] == "ok"] if "status" in table else table
     fig, axes = new_figure(1, len(params), width=min(3.6 * len(params), 14), height=3.4, squeeze=False, sharey=True)
     for ax, name in zip(axes.ravel(), params):
-        ax.plot(ok[name], ok[y], "o", ms=4, color=method_color("sensor"), alpha=0.8, label="one cell")
+        ax.plot(shown(name, ok[name]), ok[y], "o", ms=4, color=method_color("sensor"), alpha=0.8, label="one cell")
         ax.set_xlabel(label_of(name))
     axes.ravel()[0].set_ylabel(label_of(y))
     axes.ravel()[0].legend(loc="best")

@@ -7,6 +7,7 @@ figures are then drawn from those files alone (:mod:`experiments.figures.make`).
 
 from __future__ import annotations
 
+from lms200.angles import wrap
 from lms200.yamlio import load as load_yaml
 
 import dataclasses
@@ -248,7 +249,7 @@ def _slam_in_world(result, records) -> tuple[np.ndarray, np.ndarray]:
     ate = metrics.ate(est, true_trajectory(records))
     traj = est.copy()
     traj[:, 1:3] = align(est[:, 1:3], ate.rotation, ate.translation)
-    traj[:, 3] = np.arctan2(np.sin(est[:, 3] + ate.rotation), np.cos(est[:, 3] + ate.rotation))
+    traj[:, 3] = wrap(est[:, 3] + ate.rotation)
     lines = np.asarray(result.map_lines, float).reshape(-1, 7)
     segs = np.column_stack((align(lines[:, 2:4], ate.rotation, ate.translation),
                             align(lines[:, 4:6], ate.rotation, ate.translation)))

@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import warnings
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -21,6 +22,7 @@ from experiments.compare import Source, compare, summarise
 from experiments.evaluate import sensor_config, simulate_run, split_params, truths_for
 from experiments.overrides import OverrideError, extractor_overrides
 from lms200 import LmsbenchError
+from lms200.errors import LmsbenchWarning
 
 EXTRACT_DEFAULTS = {"method": "sensor", "world": "office", "duration": 5.0, "rate_hz": 4.0}
 SLAM_DEFAULTS = {"world": "office", "duration": 30.0, "rate_hz": None}
@@ -35,7 +37,9 @@ def _run(world: str, seed: int, duration: float, rate_hz: float | None, sensor_i
     (:func:`input_digests`), only key the cache: by path alone, a worker that outlives a sweep (a
     ``--scheduler``'s, or this process for ``run_sweep``) ran the next sweep's cells on the old
     content of an edited sensor file or world.json."""
-    sensor = sensor_config(dict(sensor_items), sensor_file)
+    with warnings.catch_warnings():  # an old degree field (sensor.resolution_deg, a sensor file's) was said once,
+        warnings.simplefilter("ignore", LmsbenchWarning)  # when the sweep was read and checked, not in every worker
+        sensor = sensor_config(dict(sensor_items), sensor_file)
     world_obj, records = simulate_run(world, seed, duration, sensor, rate_hz)
     truths = truths_for(world_obj, records, sensor) if with_truth else None
     return world_obj, sensor, records, truths
@@ -169,8 +173,9 @@ def _unknown(cells: Iterable[dict[str, Any]], prefix: str, known_for) -> None:
 
 def _sensor_fields(cell: dict[str, Any]) -> tuple[set[str], str]:
     from sim import SensorConfig
+    from sim.sensor import DEGREE_FIELDS
 
-    return _fields(SensorConfig), "sim.SensorConfig"
+    return _fields(SensorConfig) | set(DEGREE_FIELDS), "sim.SensorConfig"  # the old degree names: read, converted
 
 
 def _extractor_fields(method: str) -> tuple[set[str], str]:
@@ -273,10 +278,12 @@ def _check_sensors(cells: list[dict[str, Any]], files: dict[str, Any]) -> None:
         seen.add(key)
         sensor_file = cell.get("sensor_file")
         try:
-            if sensor_file is None:
-                sensor_config(dict(items))
-            else:  # the file's config with the overrides on top, as sensor_config builds it
-                dataclasses.replace(files[str(sensor_file)], **dict(items))
+            with warnings.catch_warnings():  # an old degree name was said when the sweep was read (spec.py)
+                warnings.simplefilter("ignore", LmsbenchWarning)
+                if sensor_file is None:
+                    sensor_config(dict(items))
+                else:  # the file's config with the overrides on top, as sensor_config builds it
+                    files[str(sensor_file)].replace(**dict(items))
         except (LmsbenchError, TypeError, ValueError) as exc:
             raise SweepSpecError(f"sensor {dict(items)}: {exc}") from None
 

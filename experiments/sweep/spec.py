@@ -20,7 +20,7 @@ A sweep file is YAML::
 where three seeds were meant; ``extractor.k: 3, 5, 10`` is the one string "3, 5, 10" in YAML).
 
 Parameters that must change together are linked: a grid key of comma-separated names takes
-tuples, e.g. ``"sensor.resolution_deg,sensor.n_beams": [[0.5, 361], [1.0, 181]]``.
+tuples, e.g. ``"sensor.noise_sigma,extractor.sigma_r": [[0.002, 0.002], [0.01, 0.01]]``.
 
 Random distributions: ``{uniform: [lo, hi]}``, ``{loguniform: [lo, hi]}``, ``{int: [lo, hi]}``
 (inclusive), ``{choice: [a, b, ...]}``. Parameter names are free; the built-in cell kinds read
@@ -77,7 +77,9 @@ class SweepSpec:
         _check(self)
 
     @classmethod
-    def from_dict(cls, raw: dict[str, Any], default_name: str = "sweep") -> "SweepSpec":
+    def from_dict(cls, raw: dict[str, Any], default_name: str = "sweep", where: str | None = None) -> "SweepSpec":
+        """The spec of a sweep file's mapping; ``where`` (the file) names it in the warning for an old
+        degree parameter (see :func:`_degree_parameters`)."""
         if not isinstance(raw, dict):
             raise SweepSpecError("a sweep file must be a YAML mapping (name, kind, grid, ...)")
         unknown = set(raw) - _KEYS
@@ -105,7 +107,7 @@ class SweepSpec:
         if "name" not in raw and not _plain_name(name):  # "name: 'my sweep' must be ..." blamed a key not written
             raise SweepSpecError(f"no `name:` given, and the file's name {name!r} cannot name the output folder "
                                  f"results/sweeps/NAME ({NAME_RULE}); add a `name:`")
-        return cls(
+        spec = cls(
             name=name,
             kind=str(raw["kind"]),
             fixed=dict(raw.get("fixed") or {}),
@@ -116,6 +118,8 @@ class SweepSpec:
             seeds=_seeds(seeds),
             description=str(raw.get("description", "")),
         )
+        _degree_parameters(spec, where)
+        return spec
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"name": self.name, "kind": self.kind}
@@ -158,7 +162,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     except yaml.YAMLError as exc:
         raise SweepSpecError(f"{path}: not valid YAML: {exc}") from exc
     try:
-        return SweepSpec.from_dict(raw, default_name=path.stem)
+        return SweepSpec.from_dict(raw, default_name=path.stem, where=str(path))
     except SweepSpecError as exc:
         raise SweepSpecError(f"{path}: {exc}") from exc
 
@@ -175,6 +179,40 @@ def _seeds(raw: Any) -> list[int]:
     if not isinstance(raw, (list, tuple)) or not all(isinstance(s, int) and not isinstance(s, bool) for s in raw):
         raise SweepSpecError(f"`seeds:` must be a list of whole numbers >= 0, got {raw!r}")
     return list(raw)
+
+
+def _degree_parameters(spec: SweepSpec, where: str | None) -> None:
+    """Say, in one warning each, a ``sensor.*`` parameter of the old degree spelling
+    (``sensor.resolution_deg``: sweep files written before the sensor config held radians, issue
+    #16) with the radians to write instead; such a sweep still runs, each cell's value converted
+    (``SensorConfig.replace``), and its cells and table keep the name as written, so a sweep of an
+    old file resumes where it stopped. Both spellings of one field are refused.
+
+    Raises:
+        SweepSpecError: for ``sensor.resolution_deg`` and ``sensor.resolution`` in one sweep.
+    """
+    import warnings
+
+    from lms200.errors import LmsbenchWarning
+    from sim.sensor import DEGREE_FIELDS
+
+    names = {*spec.fixed, *(n for key in spec.grid for n in _names(key)), *spec.random}
+    place = f"{where}: " if where else ""
+    for old, new in DEGREE_FIELDS.items():
+        old_name, new_name = f"sensor.{old}", f"sensor.{new}"
+        if old_name not in names:
+            continue
+        if new_name in names:
+            raise SweepSpecError(f"gives both {old_name} (deg, the old spelling) and {new_name} (rad); give {new_name} only")
+        values: list[Any] = [spec.fixed[old_name]] if old_name in spec.fixed else []
+        for key, grid_values in spec.grid.items():
+            if old_name in _names(key):
+                i = _names(key).index(old_name)
+                values += [v[i] if "," in key and isinstance(v, (list, tuple)) and len(v) > i else v for v in grid_values]
+        numbers = sorted({v for v in values if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)})
+        instead = (f" ({', '.join(f'{v:g} deg = {math.radians(v)!r}' for v in numbers)})" if numbers else "")
+        warnings.warn(f"{place}{old_name} (deg) is the old spelling of {new_name} (rad); read, each value converted; "
+                      f"write {new_name} with the values in radians{instead} instead", LmsbenchWarning, stacklevel=3)
 
 
 def cell_key(kind: str, params: dict[str, Scalar], inputs: dict[str, str] | None = None) -> str:

@@ -16,7 +16,7 @@ import numpy as np
 
 from lms200 import Scan
 
-from ..angles import wrap
+from lms200.angles import wrap
 from ..types import Corners, FeatureSet, Lines
 from . import checks, engine
 

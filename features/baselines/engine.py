@@ -24,8 +24,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..angles import wrap_one as wrap  # one compiled wrap for both engines
 from ..jit import inline_kernel, kernel
+from ..jit import wrap_one as wrap  # the project's one wrap (lms200.angles), compiled
 from ..rows import append_rows, finish_rows, new_rows
 
 TRIM_TOL_SIGMA = 3.0  # end points farther than this many sigma from the fitted line are trimmed

@@ -88,7 +88,7 @@ def signals(scan: Scan, k: int = 3, sigma_r: float = 0.005, min_range: float = 0
         scan.ranges, scan.angles, cfg.params.k, max(scan.range_min, cfg.min_range), scan.range_max,
         float(sigma_r), two_sin_sum,
     )
-    from ..angles import wrap  # noqa: PLC0415
+    from lms200.angles import wrap  # noqa: PLC0415
 
     with np.errstate(invalid="ignore"):  # a variance rounded below 0 on a degenerate window reads nan, as before
         ad_sigma, theta_sigma, psi_sigma = sigma_r * np.sqrt(AD_var), np.sqrt(theta_var), np.sqrt(psi_var)

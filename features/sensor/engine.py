@@ -43,9 +43,8 @@ import numpy as np
 from lms200.noise import CLIP_SIGMAS, JUMP_FRACTION, MIN_RANGE_M, QUANTUM_CANDIDATES_M, QUANTUM_SHARE
 from lms200.noise import _CLIP_STD_FACTOR as CLIP_STD_FACTOR
 
-from ..angles import TWO_PI
-from ..angles import wrap_one as wrap  # one compiled wrap for both engines
 from ..jit import inline_kernel, kernel
+from ..jit import wrap_one as wrap  # the project's one wrap (lms200.angles), compiled
 from ..rows import append_rows, finish_rows, new_rows
 
 PW_BLOCKSIZE = 128  # numpy's pairwise-summation block (numpy/_core/src/umath/loops_utils.h.src)
@@ -708,11 +707,19 @@ def signal_block(ranges, bearings, k, range_lo, range_hi, sigma_r, two_sin_sum):
             i += np.uint64(1)
     if n > k:
         ku = np.uint64(k)
+        n_wrap = 0
         for i in range(np.uint64(n - k)):
             dpsi = out[S_THETA, i] - out[S_THETA, ku + i]  # the corner signal psi_i = theta_i - theta_{i+k}
-            # wrapped to [-pi, pi]: dpsi - 2 pi rint(dpsi / 2 pi), where rint gives +-0 for |dpsi| < pi
-            out[S_PSI, i] = dpsi + 0.0 if abs(dpsi) < math.pi else dpsi - TWO_PI * np.rint(dpsi / TWO_PI)
+            out[S_PSI, i] = dpsi + 0.0  # (+0.0: -0.0 becomes 0.0)
+            n_wrap += abs(dpsi) >= math.pi
             out[S_PSI_VAR, i] = out[S_THETA_VAR, i] + out[S_THETA_VAR, ku + i]
+        i = np.uint64(0)
+        while n_wrap > 0:  # psi wrapped to (-pi, pi] where it lies outside: a few beams a scan (a loop
+            # of its own, so that the one above stays branch-free and vectorises)
+            if abs(out[S_PSI, i]) >= math.pi:
+                out[S_PSI, i] = wrap(out[S_PSI, i])
+                n_wrap -= 1
+            i += np.uint64(1)
     return valid, out
 
 
@@ -1793,7 +1800,7 @@ def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p) -> int:  # no
             move_line(rho, alpha, cov, first, last, npts, i, cur)
             continue
         dr = rho[i] - rho[cur]
-        da = (alpha[i] - alpha[cur] + math.pi) % (2 * math.pi) - math.pi
+        da = wrap(alpha[i] - alpha[cur])
         a00, a01, a11 = cov[cur, 0, 0], cov[cur, 0, 1], cov[cur, 1, 1]
         b00, b01, b11 = cov[i, 0, 0], cov[i, 0, 1], cov[i, 1, 1]
         s00, s01, s11 = a00 + b00 + MERGE_FLOOR_RHO_VAR, a01 + b01, a11 + b11 + MERGE_FLOOR_ALPHA_VAR
