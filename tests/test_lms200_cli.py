@@ -131,6 +131,7 @@ def test_record_reports_an_unreachable_port_in_one_line(tmp_path: Path) -> None:
     run = subprocess.run(cli("record", "--port", "socket://127.0.0.1:9", "--out", str(tmp_path / "x.clf")),
                          env=ENV, capture_output=True, text=True, timeout=60)
     assert run.returncode == 2 and "lmsbench lms200 record: error: cannot open socket://127.0.0.1:9" in run.stderr
+    assert "was not written" not in run.stderr  # no file was made: nothing to say of one
     assert run.stderr.count("\n") == 1 and "Traceback" not in run.stderr  # the opening status is overwritten
 
 

@@ -201,7 +201,7 @@ def run_record(args: argparse.Namespace) -> int:
         raise InputError(f"--out {args.out} exists; a recording is not written over a file (give a new name)")
     check_out_file(args.out)
     stop: dict = {"now": False}
-    written = 0
+    written, set_up = 0, False
     # Ctrl-C and SIGTERM (a batch system's limit) end the recording as asked: the file closed and
     # readable (SIGTERM went to the CLI's interrupt: a bag cut in its index, "Bag is not indexed")
     previous = {sig: signal.signal(sig, lambda *_: stop.update(now=True)) for sig in (signal.SIGINT, signal.SIGTERM)}
@@ -215,6 +215,7 @@ def run_record(args: argparse.Namespace) -> int:
             opened = (f"{dev.type_string.strip()} at {dev.baud} baud, {args.units}; recording to {args.out} "
                       f"(Ctrl-C stops)")
             print(f"{opened:<{len(status)}}", file=sys.stderr, flush=True)
+            set_up = True
             progress = _Progress(dev)
             try:
                 written = _write(args.out, _records(dev, progress, stop, args.max_scans, args.duration))
@@ -222,6 +223,8 @@ def run_record(args: argparse.Namespace) -> int:
                 progress.update(final=True)
             stats = dev.stats
     except LmsbenchError as exc:  # the device did not return to on-request mode as the port closed
+        if not set_up:  # the port did not open, or the device was not set up: no file was made, said as it was
+            raise
         raise LmsbenchError(_record_failed(args.out, written, stop.get("error"), exc)) from exc
     finally:
         for sig, handler in previous.items():
