@@ -841,7 +841,8 @@ def _can_create_in(folder: Path) -> bool:
 
 
 def check_methods(methods: Sequence[str] | None) -> list[str]:
-    """Known extractor names (all of them when None)."""
+    """Known extractor names (all of them when None), given apart or comma-separated
+    (``--methods sensor split_merge`` or ``--methods sensor,split_merge``)."""
     from features.registry import available_methods
 
     from experiments.user_methods import ensure_method, is_user_method
@@ -849,6 +850,7 @@ def check_methods(methods: Sequence[str] | None) -> list[str]:
     known = available_methods()
     if not methods:
         return known
+    methods = split_methods(methods)
     for m in methods:
         if is_user_method(m):
             ensure_method(m)  # raises naming what is wrong with MODULE:FUNCTION
@@ -859,6 +861,19 @@ def check_methods(methods: Sequence[str] | None) -> list[str]:
     if len(set(methods)) != len(methods):
         raise InputError(f"a method is named twice in {' '.join(methods)}")
     return list(methods)
+
+
+def split_methods(methods: Sequence[str]) -> list[str]:
+    """Method names given apart or separated by commas (no name holds one: neither a built-in
+    name nor MODULE:FUNCTION); an empty name between commas is refused (``sensor,,hough``)."""
+    names = []
+    for given in methods:
+        parts = [part.strip() for part in given.split(",")] if "," in given else [given]
+        if any(not part for part in parts):
+            raise InputError(f"method list {given!r}: an empty name between commas; give names such as "
+                             "sensor,split_merge or sensor split_merge")
+        names += parts
+    return names
 
 
 def check_study_tables(folder: str | os.PathLike) -> Path:

@@ -4,7 +4,6 @@ terminal). Drivers only: algorithm code never prints."""
 
 from __future__ import annotations
 
-import contextlib
 import sys
 import threading
 import time
@@ -155,14 +154,46 @@ class Heartbeat:
                 _ACTIVE.remove(self)
 
 
-def heartbeat_on_terminal(label: str, first: str, stream: IO[str] | None = None, every: float = 4.0,
-                          first_after: float = 1.0) -> ContextManager[Any]:
-    """A :class:`Heartbeat` on ``stream`` (default stderr) when it is a terminal, else nothing:
-    off a terminal stderr keeps to the one line of an error. For the steps that take minutes
-    without a progress bar of their own (``sim2real``: 2-3 min silent at its defaults; ``calibrate``)."""
+def on_terminal(stream: IO[str] | None = None) -> bool:
+    """Whether ``stream`` (default stderr) is a terminal: progress is said there only, as the
+    progress bars (tqdm's ``disable=None``) do; off a terminal stderr keeps to warnings and errors."""
     out = sys.stderr if stream is None else stream
-    if not (hasattr(out, "isatty") and out.isatty()):
-        return contextlib.nullcontext()
+    return bool(hasattr(out, "isatty") and out.isatty())
+
+
+def say_on_terminal(msg: str, stream: IO[str] | None = None) -> None:
+    """Print ``msg`` on ``stream`` (default stderr) when it is a terminal, else nothing: the line
+    that announces a step before its progress bar (``slam``'s baselines)."""
+    out = sys.stderr if stream is None else stream
+    if on_terminal(out):
+        print(msg, file=out, flush=True)
+
+
+class _Quiet:
+    """What :func:`heartbeat_on_terminal` gives off a terminal: a heartbeat that says nothing."""
+
+    label = ""
+
+    def say(self, msg: str) -> None:
+        pass
+
+    def __enter__(self) -> "_Quiet":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        pass
+
+
+def heartbeat_on_terminal(label: str, first: str | None, stream: IO[str] | None = None, every: float = 4.0,
+                          first_after: float = 1.0) -> ContextManager[Any]:
+    """A :class:`Heartbeat` on ``stream`` (default stderr) when it is a terminal, else one that
+    says nothing (its ``say`` and ``label`` do nothing either): off a terminal stderr keeps to the
+    one line of an error. For the steps that take minutes without a progress bar of their own
+    (``sim2real``: 2-3 min silent at its defaults; ``calibrate``; each area of ``bench``; the
+    figures being drawn). ``first`` None: no opening line (the step says its own through ``say``)."""
+    out = sys.stderr if stream is None else stream
+    if not on_terminal(out):
+        return _Quiet()
 
     def log(msg: str) -> None:
         print(msg, file=out, flush=True)

@@ -201,3 +201,27 @@ def test_compare_takes_a_noise_at_its_bounds():
     for sigma in (1e-4, 1000.0):
         table = compare([room_source()], ["split_merge"], sigma=sigma)
         assert (table["sigma_r"] == sigma).all()
+
+
+def test_methods_are_taken_comma_separated_as_well_as_apart():
+    """``--methods sensor,split_merge`` (how many tools take lists) was refused as one unknown name."""
+    from experiments.options import check_methods
+
+    assert check_methods(["sensor,split_merge", "iepf"]) == ["sensor", "split_merge", "iepf"]
+    assert check_methods(["sensor, hough"]) == ["sensor", "hough"]
+    from lms200 import LmsbenchError
+
+    for bad, says in ((["sensor,,hough"], "an empty name between commas"), ([","], "an empty name"),
+                      (["sensor,"], "an empty name"), (["sensor,sensor"], "named twice")):
+        with pytest.raises(LmsbenchError, match=says):
+            check_methods(bad)
+
+
+def test_slam_takes_one_extractor_not_a_list(tmp_path):
+    log = tmp_path / "room.log"
+    write_log(log, room_source().records[:3])
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    res = subprocess.run([sys.executable, "-m", "experiments.cli", "slam", str(log), "--extractor", "sensor,iepf",
+                          "--out", str(tmp_path / "s")], capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
+    assert res.returncode == 2 and res.stderr.strip().endswith("one extractor runs in the SLAM; give one name"), res.stderr
+    assert not (tmp_path / "s").exists()

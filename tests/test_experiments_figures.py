@@ -15,6 +15,7 @@ from experiments.figures import draw
 from experiments.figures.make import PAPER_FIGURES, draw_figures, draw_sweep
 from experiments.figures.tables import ad_reference, feature_panels, map_table, pick_evenly, trajectory_table
 from experiments.report import fmt, markdown_table, markdown_to_html
+from experiments.style import label_of
 from experiments.synthetic import L_ROOM, room_scan
 from lms200 import Record
 
@@ -198,3 +199,40 @@ def test_sweep_of_a_user_kind_plots_its_own_metrics(tmp_path):
     assert list(draw_sweep(folder, tmp_path / "figs")) == ["sweep_custom_score", "sweep_custom_hits", "sweep_custom_f1"]
     stats = pd.read_csv(tmp_path / "figs" / "sweep_custom_score.csv").set_index("a")
     assert stats["mean"].to_dict() == {1: 2.5, 2: 4.5, 3: 6.5}
+
+
+def test_sweep_plot_puts_a_numeric_parameter_on_x_when_the_first_grid_key_is_text(tmp_path, monkeypatch):
+    """A researcher's sweep over logs (first grid key: three log paths) then psi_split drew the
+    paths, overlapping, as x values joined by lines, in alphabetical order."""
+    logs = ["/data/zeta/mit.clf.gz", "/data/alpha/intel.log.gz", "/data/aces.log.gz"]
+    rows = [{"log": g, "psi": p, "seed": 0, "f1": i + p, "status": "ok"}
+            for i, g in enumerate(logs) for p in (0.2, 0.35, 0.5)]
+    folder = tmp_path / "real"
+    folder.mkdir()
+    pd.DataFrame(rows).to_parquet(folder / "results.parquet")
+    (folder / "sweep.yaml").write_text("name: real\nkind: x:y\ngrid:\n  log: [" + ", ".join(logs) + "]\n"
+                                       "  psi: [0.2, 0.35, 0.5]\nseeds: [0]\n")
+    axes_seen = []
+    real_save = draw.save_figure
+    monkeypatch.setattr(draw, "save_figure", lambda fig, stem, data=None: (axes_seen.extend(fig.axes),
+                                                                           real_save(fig, stem, data=data))[1])
+    draw_sweep(folder, tmp_path / "figs")
+    ax = axes_seen[0]
+    assert ax.get_xlabel() == label_of("psi")
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["mit.clf.gz", "intel.log.gz", "aces.log.gz"]
+
+
+def test_sweep_plot_of_text_values_alone_draws_categories_in_the_grid_order(tmp_path, monkeypatch):
+    rows = [{"world": w, "seed": s, "f1": i + 0.1 * s, "status": "ok"}
+            for i, w in enumerate(["office", "corridor", "atrium"]) for s in (0, 1)]
+    axes_seen = []
+    real_save = draw.save_figure
+    monkeypatch.setattr(draw, "save_figure", lambda fig, stem, data=None: (axes_seen.extend(fig.axes),
+                                                                           real_save(fig, stem, data=data))[1])
+    draw.fig_sweep(pd.DataFrame(rows), "world", "f1", tmp_path / "w")
+    ax = axes_seen[0]
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["office", "corridor", "atrium"]
+    (line,) = [c for c in ax.containers]  # one errorbar: its points at 0, 1, 2 with the grid's means
+    np.testing.assert_allclose(np.asarray(line.lines[0].get_xdata(), float), [0, 1, 2])
+    np.testing.assert_allclose(np.asarray(line.lines[0].get_ydata(), float), [0.05, 1.05, 2.05])
+    assert line.lines[0].get_linestyle() == "None"  # categories are not joined by lines

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import datetime
 import importlib
 import pkgutil
 
@@ -42,10 +43,19 @@ def run(args: argparse.Namespace) -> int:
     if twice:
         raise LmsbenchError(f"benchmark(s) {', '.join(twice)} named more than once")
     check_out(args.out, writes=BENCH_OUTPUTS, owner=BENCH_OWNER)
+    from experiments.progress import heartbeat_on_terminal
+
+    # the run's folder is named by its start, as the demo's: a run started 10:34:23 wrote 2026-12-05_10-38-00
+    started = datetime.datetime.now()
     rows = []
-    for name in names:
+    for number, name in enumerate(names, 1):
         print(f"== {name}", flush=True)
-        for row in found[name].run(quick=args.quick):
+        # an area's rows come when it ends: `bench features` was 106 s of silence on a terminal, `make bench`
+        # 159 s; a line every few seconds there says it runs
+        first = f"bench: measuring {name} (area {number} of {len(names)}; its rows follow when it ends) ..."
+        with heartbeat_on_terminal(f"bench {name}", first):
+            area = found[name].run(quick=args.quick)
+        for row in area:
             row = {"area": name, **row}
             rows.append(row)
             print("   " + ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()), flush=True)
@@ -55,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
 
     from experiments.provenance import new_run_folder, versions, write_record
 
-    args.out = args.out or new_run_folder("results/bench")
+    args.out = args.out or new_run_folder("results/bench", now=started)
     # versions.yaml first, whole: it tells the folder as bench's (options.BENCH_OWNER); a run stopped
     # while writing bench.csv left a folder the next run into it refused (a cut bench.csv too)
     write_record(args.out / "versions.yaml", yaml.safe_dump(dict(benchmarks=names, quick=args.quick, versions=versions()),

@@ -25,7 +25,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="world names (" + WORLDS + "; WORLD:SEED for one seed), "
                         "`lmsbench simulate` folders, or paths of real logs")
     p.add_argument("--methods", nargs="+", type=text("an extractor's name"),
-                   help="extractors: built-in names or a user's MODULE:FUNCTION (default: every built-in one)")
+                   help="extractors: built-in names or a user's MODULE:FUNCTION, apart or comma-separated (default: every "
+                        "built-in one)")
     p.add_argument("--method", dest="methods", nargs="+", type=text("an extractor's name"),
                    help="the same as --methods (`--method MODULE:FUNCTION` runs a user's extractor)")
     p.add_argument("--seeds", nargs="+", type=SEED, help="seeds of each world named without one, listed (default 0 1 2; "
@@ -114,7 +115,11 @@ def _sigma(text: str) -> float | str:
 
 
 def run(args: argparse.Namespace) -> int:
+    import datetime
+
     import pandas as pd
+
+    started = datetime.datetime.now()  # what names the run's folder (a real log's compare takes minutes)
 
     from experiments.compare import (check_sources, common_errors, compare, format_summary, parse_sources,
                                      resolved_configs, summarise, world_words)
@@ -185,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
     # what produced each source's scans: the sensor that was simulated (interlaced or not), the log read
     resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
     resolved["versions"] = versions()
-    args.out = args.out or new_run_folder("results/compare")
+    args.out = args.out or new_run_folder("results/compare", now=started)  # named by the run's start, as the demo's
     _remove_earlier_outputs(args.out, args.format)
     # config.yaml first, whole: it tells the folder as compare's (options.COMPARE_OWNER); a run stopped
     # after compare.parquet left a folder the next run into it refused

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import datetime
 from pathlib import Path
 
-from experiments.logargs import add_log_options, plain_log_options, read_log_options
+from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options
 from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log,
                                  check_methods, check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name,
                                  text, check_link)
@@ -23,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate-hz", type=positive("scans/s"), help="scans kept per second of the run (default 10)")
     p.add_argument("--seed", type=SEED, help="world and run seed (default 0)")
     p.add_argument("--world", type=world_name, help="simulated world: " + WORLDS + " (default office)")
-    p.add_argument("--methods", nargs="+", type=text("an extractor's name"), help="extractors to compare (default: all five)")
+    p.add_argument("--methods", nargs="+", type=text("an extractor's name"), help="extractors to compare, apart or comma-separated (default: all five)")
     p.add_argument("--intel", "--log", dest="intel", type=path_arg,
                    help="CARMEN log, bag or lmsbench simulate folder for Fig. 9 (--log as in demo; default: shared/data/carmen/"
                    "intel-corrected.log.gz beside the checkout, where present)")
@@ -37,6 +38,7 @@ def run(args: argparse.Namespace) -> int:
     from experiments.provenance import new_run_folder, write_record
     from experiments.figures.study import StudyConfig, check_study, load_config, load_tables, run_study, save_tables
 
+    started = datetime.datetime.now()
     writes = FIGURES_OUTPUTS
     for path in (args.out, args.tables):  # a loop of links: Path.resolve below raised RuntimeError
         if path is not None:
@@ -58,10 +60,7 @@ def run(args: argparse.Namespace) -> int:
     if args.tables and ignored:  # they were ignored: the figures were redrawn from the tables as they were
         raise InputError(f"{', '.join(ignored)} set the study that --tables replaces; redrawing from {args.tables} "
                          "computes nothing (leave them out, or leave out --tables)")
-    log_flags = (("--topic", args.topic), ("--skip-bad-lines", args.skip_bad_lines or None),
-                 ("--laser-fov-deg", args.laser_fov_deg), ("--laser-resolution-deg", args.laser_resolution_deg),
-                 ("--laser-angle-min-deg", args.laser_angle_min_deg), ("--laser-range-max", args.laser_range_max))
-    unread = [flag for flag, value in log_flags if value is not None]
+    unread = given_log_flags(args)
     if args.tables and unread:  # they were ignored: the tables hold what the study read of the log
         raise InputError(f"{', '.join(unread)} {'do' if len(unread) > 1 else 'does'} not apply to --tables: they say how to read the study's log (Fig. 9's "
                          f"Intel log), and redrawing from {args.tables} reads no log (leave them out, or leave out --tables)")
@@ -83,22 +82,28 @@ def run(args: argparse.Namespace) -> int:
         cfg.log_options = plain_log_options(read_log_options(args))
         check_study(cfg, hint=", or --no-slam")
         tables, notes = run_study(cfg)
-    args.out = args.out or new_run_folder("results/figures")
+    args.out = args.out or new_run_folder("results/figures", now=started)  # named by the run's start
     write_record(args.out / "figures.yaml", _record(args))  # first, whole: a run stopped after it is told as ours
     if not args.tables:
         save_tables(tables, cfg, notes, args.out / "tables")
-    try:
-        written = draw_figures(tables, args.out, signals_k=cfg.signals_k, world=cfg.world)
-    except (KeyError, AttributeError) as exc:  # a column or field a figure reads is missing
-        if not args.tables:
-            raise
-        from lms200 import LmsbenchError  # tables from the user's folder lack what a figure reads
+    from experiments.progress import heartbeat_on_terminal
 
-        raise LmsbenchError(f"--tables {args.tables}: the tables do not hold what the figures read "
-                            f"({type(exc).__name__}: {' '.join(str(exc).split())[:160]}); redraw from a "
-                            "complete tables/ folder of `lmsbench figures` or `lmsbench demo`") from None
-    for folder in args.sweep:
-        written.update(draw_sweep(folder, args.out))
+    # drawing took ~27 s without a word (12 s from --tables) before the listing: each figure is said on a
+    # terminal as it starts, and a slow one beats
+    with heartbeat_on_terminal("figures", None) as beat:
+        say = lambda msg: beat.say(f"figures: {msg}")  # noqa: E731
+        try:
+            written = draw_figures(tables, args.out, signals_k=cfg.signals_k, world=cfg.world, log=say)
+        except (KeyError, AttributeError) as exc:  # a column or field a figure reads is missing
+            if not args.tables:
+                raise
+            from lms200 import LmsbenchError  # tables from the user's folder lack what a figure reads
+
+            raise LmsbenchError(f"--tables {args.tables}: the tables do not hold what the figures read "
+                                f"({type(exc).__name__}: {' '.join(str(exc).split())[:160]}); redraw from a "
+                                "complete tables/ folder of `lmsbench figures` or `lmsbench demo`") from None
+        for folder in args.sweep:
+            written.update(draw_sweep(folder, args.out, log=say))
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     for name, paths in written.items():
         print(f"{name:32s} " + " ".join(p.name for p in paths))

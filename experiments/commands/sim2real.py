@@ -62,7 +62,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import datetime
+
     from sim import SensorConfig
+
+    started = datetime.datetime.now()  # what names the run's folder (2-3 min at the defaults)
 
     from experiments.progress import heartbeat_on_terminal
     from experiments.provenance import new_run_folder, versions
@@ -110,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
                   max_scans=args.max_scans, sensor_file=None if args.sensor is None else str(args.sensor),
                   world=args.world, glass_per_10m=result.glass, fit_rooms=args.fit_rooms,
                   versions=versions())
-    args.out = args.out or new_run_folder("results/sim2real")
+    args.out = args.out or new_run_folder("results/sim2real", now=started)  # named by the run's start, as the demo's
     paths = write_outputs(result, args.out, str(args.log), config)
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     print(format_report(result, str(args.log)), end="")

@@ -54,10 +54,11 @@ def run(args: argparse.Namespace) -> int:
     except SweepSpecError as exc:  # an unknown kind or parameter name
         raise SweepSpecError(f"{args.sweep}: {exc}") from exc
     if spec.kind in ("extract", "slam") and executor in ("local", "inprocess"):
-        # compile once here (the workers then load the cache), not in every worker at the same time
+        # compile once here (the workers then load the cache), not in every worker at the same time; a slam
+        # sweep's SLAM kernels too (slam_vs_noise's first cell spent 36 s compiling them in the workers, unsaid)
         from experiments.progress import warm_up_kernels
 
-        warm_up_kernels()
+        warm_up_kernels(slam=spec.kind == "slam")
     try:
         result = run_sweep(spec, out, executor, workers=args.workers, retry_failed=args.retry_failed,
                            progress=not args.no_progress)

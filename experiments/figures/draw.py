@@ -158,6 +158,14 @@ def fig_accuracy_speed(summary: pd.DataFrame, stem: Path) -> list[Path]:
     return save_figure(fig, stem, data=summary)
 
 
+def short_value(value: object) -> str:
+    """A parameter value as a short label: a path by its file name, any text cut to 28 characters."""
+    text = str(value)
+    if "/" in text:
+        text = text.rstrip("/").rsplit("/", 1)[-1]
+    return text if len(text) <= 28 else text[:27] + "~"
+
+
 def fig_sweep(table: pd.DataFrame, x: str, y: str, stem: Path, hue: str | None = None,
               facet: str | None = None, title: str = "") -> list[Path]:
     """A sweep plot: metric ``y`` (mean over seeds, +/- one std) against parameter ``x``, a line per
@@ -165,14 +173,17 @@ def fig_sweep(table: pd.DataFrame, x: str, y: str, stem: Path, hue: str | None =
     ok = table[table["status"] == "ok"] if "status" in table else table
     keys = [c for c in (facet, hue, x) if c]
     stats = ok.groupby(keys, dropna=False)[y].agg(["mean", "std", "count"]).reset_index()
+    # text x values (every varied parameter is text): categories in the grid's order, not joined
+    categories = None if pd.api.types.is_numeric_dtype(ok[x]) else list(dict.fromkeys(ok[x]))
     seeds = int(stats["count"].max()) if len(stats) else 0
     panels = list(stats.groupby(facet, sort=True)) if facet else [(None, stats)]
     fig, axes = new_figure(1, len(panels), width=min(4.2 * len(panels), 13), height=3.6, squeeze=False,
                            sharey=True)
-    hue_values = sorted(stats[hue].unique()) if hue else [None]
+    hue_values = (sorted(stats[hue].unique()) if pd.api.types.is_numeric_dtype(stats[hue])
+                  else list(dict.fromkeys(ok[hue]))) if hue else [None]  # text: the grid's order
     cmap = plt.get_cmap("viridis", max(2, len(hue_values)))
     for ax, (facet_value, panel) in zip(axes.ravel(), panels):
-        groups = panel.groupby(hue, sort=True) if hue else [(None, panel)]
+        groups = sorted(panel.groupby(hue), key=lambda g: hue_values.index(g[0])) if hue else [(None, panel)]
         for value, group in groups:
             if hue in ("method", "extractor"):
                 color = method_color(str(value))
@@ -180,10 +191,16 @@ def fig_sweep(table: pd.DataFrame, x: str, y: str, stem: Path, hue: str | None =
                 color = cmap(hue_values.index(value) / max(1, len(hue_values) - 1))
             else:
                 color = None
+            if categories is not None:
+                group = group.assign(_at=group[x].map(categories.index)).sort_values("_at")
             yerr = group["std"].fillna(0.0) if seeds > 1 else None  # no spread from a single seed
-            ax.errorbar(shown(x, group[x]), group["mean"], yerr=yerr, fmt="o-", ms=4, capsize=2,
-                        lw=1.0, label=f"{shown(hue, value):g}" if hue in SHOWN_IN_DEGREES else f"{value}" if hue
+            ax.errorbar(shown(x, group[x]) if categories is None else group["_at"], group["mean"], yerr=yerr,
+                        fmt="o-" if categories is None else "o", ms=4, capsize=2, lw=1.0,
+                        label=f"{shown(hue, value):g}" if hue in SHOWN_IN_DEGREES else short_value(value) if hue
                         else label_of(y), color=color)
+        if categories is not None:
+            ax.set_xticks(range(len(categories)), [short_value(v) for v in categories], rotation=20, ha="right",
+                          fontsize=7)
         ax.set_xlabel(label_of(x))
         if facet:
             facet_shown = f"{shown(facet, facet_value):g} deg" if facet in SHOWN_IN_DEGREES else f"{facet_value}"

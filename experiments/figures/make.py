@@ -16,6 +16,7 @@ from __future__ import annotations
 from lms200.yamlio import load as load_yaml
 
 from pathlib import Path
+from typing import Callable
 
 import pandas as pd
 
@@ -39,27 +40,32 @@ DRIVING_TABLES = ("signals", "timing", "summary", "trajectory", "office_points",
 
 
 def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10,
-                 angle_increment: float | None = None, world: str = "office") -> dict[str, list[Path]]:
+                 angle_increment: float | None = None, world: str = "office",
+                 log: Callable[[str], None] | None = None) -> dict[str, list[Path]]:
     """Every paper figure whose tables are present and whose driving table (``DRIVING_TABLES``)
     holds rows (an empty one drew empty axes); returns name -> files written. ``world`` names the simulated world in the
-    titles (the files keep the paper's names, e.g. ``fig9_office``)."""
+    titles (the files keep the paper's names, e.g. ``fig9_office``). ``log`` (a driver's progress)
+    is told of each figure as it starts: ``drawing fig3_scan (1 of 9) ...``."""
     out.mkdir(parents=True, exist_ok=True)
-    written: dict[str, list[Path]] = {}
     # a figure's driving table without rows draws nothing (the tables beside it, lines, corners, the
     # map, may be empty: a scan without corners still has its figure)
     tables = {name: table for name, table in tables.items() if len(table) or name not in DRIVING_TABLES}
+    plan: list[tuple[str, Callable[[], list[Path]]]] = []  # each figure to draw, in order, and how
     if "signals" in tables:
         sig = tables["signals"]
         inc = angle_increment or float(pd.Series(sig["bearing_deg"]).diff().median() * 3.141592653589793 / 180)
-        written["fig3_scan"] = draw.fig_scan(sig, out / "fig3_scan", f"Fig. 3: a {len(sig)}-beam scan of the {world}")
-        written["fig4_ad"] = draw.fig_signal(sig, "ad", f"AD_i{signals_k}", f"Fig. 4: AD_i{signals_k} of {_article(world)} {world} scan",
-                                             out / "fig4_ad", reference=ad_reference(signals_k, inc))
-        written["fig5_theta"] = draw.fig_signal(sig, "theta_deg", "theta_i (deg)",
-                                                "Fig. 5: theta_i (line normal angle) of the scan", out / "fig5_theta")
-        written["fig6_psi"] = draw.fig_signal(sig, "psi_deg", "psi_i (deg)",
-                                              f"Fig. 6: psi_i = theta_i - theta_(i+{signals_k})", out / "fig6_psi")
+        plan += [
+            ("fig3_scan", lambda: draw.fig_scan(sig, out / "fig3_scan", f"Fig. 3: a {len(sig)}-beam scan of the {world}")),
+            ("fig4_ad", lambda: draw.fig_signal(sig, "ad", f"AD_i{signals_k}",
+                                                f"Fig. 4: AD_i{signals_k} of {_article(world)} {world} scan",
+                                                out / "fig4_ad", reference=ad_reference(signals_k, inc))),
+            ("fig5_theta", lambda: draw.fig_signal(sig, "theta_deg", "theta_i (deg)",
+                                                   "Fig. 5: theta_i (line normal angle) of the scan", out / "fig5_theta")),
+            ("fig6_psi", lambda: draw.fig_signal(sig, "psi_deg", "psi_i (deg)",
+                                                 f"Fig. 6: psi_i = theta_i - theta_(i+{signals_k})", out / "fig6_psi")),
+        ]
     if "timing" in tables:
-        written["fig7_timing"] = draw.fig_timing(tables["timing"], out / "fig7_timing")
+        plan.append(("fig7_timing", lambda: draw.fig_timing(tables["timing"], out / "fig7_timing")))
     real = panels_log_name(tables["intel_points"]) if "intel_points" in tables else "Intel"
     for source, title in (("office", "Fig. 9: features extracted by {method}, simulated " + world),
                           ("intel", "Fig. 9: features extracted by {method}, "
@@ -67,29 +73,46 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
         if f"{source}_points" in tables and len(tables[f"{source}_points"]):  # no panel: no figure
             lines = tables[f"{source}_lines"]
             method = str(lines["method"].iloc[0]) if "method" in lines and len(lines) else "the extractor"
-            title = title.format(method=method)
-            written[f"fig9_{source}"] = draw.fig_scans(tables[f"{source}_points"], tables[f"{source}_lines"],
-                                                       tables[f"{source}_corners"], out / f"fig9_{source}", title)
+            plan.append((f"fig9_{source}", lambda source=source, title=title.format(method=method): draw.fig_scans(
+                tables[f"{source}_points"], tables[f"{source}_lines"], tables[f"{source}_corners"],
+                out / f"fig9_{source}", title)))
     if "trajectory" in tables and "map" in tables:
-        written["fig10_slam"] = draw.fig_slam(tables["trajectory"], tables["map"], out / "fig10_slam",
-                                              "Fig. 10: SLAM without odometry against ground truth")
+        plan.append(("fig10_slam", lambda: draw.fig_slam(tables["trajectory"], tables["map"], out / "fig10_slam",
+                                                         "Fig. 10: SLAM without odometry against ground truth")))
     if "summary" in tables and "f1" in tables["summary"]:
-        written["accuracy_speed"] = draw.fig_accuracy_speed(tables["summary"], out / "accuracy_speed")
+        plan.append(("accuracy_speed", lambda: draw.fig_accuracy_speed(tables["summary"], out / "accuracy_speed")))
+    written: dict[str, list[Path]] = {}
+    for number, (name, figure) in enumerate(plan, 1):
+        if log is not None:  # figures drew ~27 s without a word (12 s from --tables) before its listing
+            log(f"drawing {name} ({number} of {len(plan)}) ...")
+        written[name] = figure()
     return written
 
 
-def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
+def draw_sweep(folder: Path, out: Path, log: Callable[[str], None] | None = None) -> dict[str, list[Path]]:
     """Plots of one sweep folder: each metric against the first grid parameter, a line per value
     of the second, a panel per value of the third (or combination of the rest); mean +/- std over
     seeds and random draws. A linked grid key "a,b" counts as its first name. The plots are
-    ``out/sweep_<name>_<metric>.*`` (``sweep_stems``), name being the sweep.yaml's ``name:``."""
+    ``out/sweep_<name>_<metric>.*`` (``sweep_stems``), name being the sweep.yaml's ``name:``.
+    ``log`` is told of each plot as it starts, as by :func:`draw_figures`."""
     table, name, varied, sampled, metrics = _sweep_plan(folder)
+
+    def starting(stem: str, number: int) -> None:
+        if log is not None:
+            log(f"drawing {stem} ({number} of {len(metrics)}) ...")
+
     if not varied and sampled:  # a random search: each metric against each sampled parameter
-        return {f"sweep_{name}_{m}": draw.fig_sweep_scatter(table, sampled, m, out / f"sweep_{name}_{m}",
-                                                            title=f"{name}: {m} against the sampled parameters")
-                for m in metrics}
+        scatters = {}
+        for number, m in enumerate(metrics, 1):
+            starting(f"sweep_{name}_{m}", number)
+            scatters[f"sweep_{name}_{m}"] = draw.fig_sweep_scatter(table, sampled, m, out / f"sweep_{name}_{m}",
+                                                                   title=f"{name}: {m} against the sampled parameters")
+        return scatters
     if not varied:
         return {}
+    # the x axis is a number where one is varied: text parameters (logs, methods, worlds) become the
+    # lines and panels (a sweep whose first grid key was a list of log paths drew them as x values)
+    varied = sorted(varied, key=lambda n: not pd.api.types.is_numeric_dtype(table[n]))
     x, rest = varied[0], varied[1:]
     hue = rest[0] if rest else None
     facet = None
@@ -100,8 +123,9 @@ def draw_sweep(folder: Path, out: Path) -> dict[str, list[Path]]:
         table = table.assign(**{facet: table[rest[1:]].astype(object).apply(
             lambda r: ", ".join(f"{k}={v}" for k, v in r.items()), axis=1)})
     written = {}
-    for metric in metrics:
+    for number, metric in enumerate(metrics, 1):
         stem = f"sweep_{name}_{metric}"
+        starting(stem, number)
         written[stem] = draw.fig_sweep(table, x, metric, out / stem, hue=hue, facet=facet,
                                        title=f"{name}: {metric} against {x}")
     return written
