@@ -51,6 +51,8 @@ from lms200.calibration import LogCalibration, calibrate_scans
 from lms200.laser_geometry import MIN_RANGE_MAX_M
 from lms200.timing import LMS200_MAX_FOV_DEG
 
+from experiments.logargs import report_skipped
+
 WIDTH_GRID_STEPS = (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)  # spot widths tried, in beam steps
 TAIL_GRID = (0.0, 0.1, 0.3)  # noise_tail_prob values tried
 PATCH_GRID_M = (0.0, 0.1, 0.3, 1.0, 2.0)  # noise_tail_patch_m values tried (m)
@@ -223,9 +225,12 @@ def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT
 
 
 def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_scans: int | None = None,
-                  fit_duration: float = FIT_DURATION_S, **read_options: Any) -> CalibrationResult:
+                  fit_duration: float = FIT_DURATION_S, report_skips: bool = True, **read_options: Any) -> CalibrationResult:
     """Measure a log (every ``stride``-th scan, at most ``max_scans``) and fit the sensor model;
-    ``read_options`` go to ``lms200.read_log`` (topic, skip_bad_lines, geometry).
+    ``read_options`` go to ``lms200.read_log`` (topic, skip_bad_lines, geometry). What
+    ``skip_bad_lines`` skipped is said on stderr (``logargs.report_skipped``) unless not
+    ``report_skips``: calibrate and sim2real skipped bad lines silently, where the option's help
+    and every other command report them.
 
     Raises:
         LmsbenchError: for a log without laser scans, an unsupported resolution or more than 180 deg.
@@ -244,6 +249,8 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
 
     try:  # the log's errors (reading it, measuring it) name it; the fit's own errors are not the log's
         cal = calibrate_scans(scans())
+        if report_skips:
+            report_skipped(reader)
         base_sensor(cal)  # what the log gives directly: a log too poor for a sensor model is the log's error
     except LmsbenchError as exc:
         if str(path) in str(exc):  # the reader's errors name the file already

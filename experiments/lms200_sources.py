@@ -65,7 +65,11 @@ def simulator_scans(world: str = "office", seed: int = 0) -> Iterator[Scan]:
 def log_scans(path: str | Path, loop: bool = True, read_options: dict[str, Any] | None = None) -> Iterator[Scan]:
     """The scans of a log (CARMEN or bag), in order, replayed endlessly when ``loop``;
     ``read_options``: keywords of ``lms200.read_log`` (topic, skip_bad_lines, geometry)."""
-    scans = [rec.scan for rec in read_log(path, **(read_options or {}))]
+    from experiments.logargs import report_skipped
+
+    reader = read_log(path, **(read_options or {}))
+    scans = [rec.scan for rec in reader]
+    report_skipped(reader)  # emulate --skip-bad-lines skipped them silently
     if not scans:
         raise LmsbenchError(f"{path} holds no scans to replay")
     return itertools.cycle(scans) if loop else iter(scans)

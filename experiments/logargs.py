@@ -66,6 +66,14 @@ def read_log_options(args: argparse.Namespace) -> dict[str, Any]:
     return dict(topic=topic, skip_bad_lines=bool(getattr(args, "skip_bad_lines", False)), geometry=geometry)
 
 
+def given_log_flags(args: argparse.Namespace) -> list[str]:
+    """The log options (:func:`add_log_options`) given on the command line, as their flags: for a
+    command to refuse them where it reads no log (they were ignored, silently)."""
+    flags = ["--topic"] if getattr(args, "topic", None) is not None else []
+    flags += ["--skip-bad-lines"] if getattr(args, "skip_bad_lines", False) else []
+    return flags + [f"--{flag.replace('_', '-')}" for flag, _, _ in _GEOMETRY_FLAGS if getattr(args, flag, None) is not None]
+
+
 def plain_log_options(options: dict[str, Any]) -> dict[str, Any]:
     """``read_log`` keywords as plain data (for a config saved beside results): geometry as a dict."""
     out = dict(options)

@@ -36,6 +36,8 @@ import numpy as np
 from lms200 import LmsbenchError, Record, read_log
 from lms200.calibration import missing_readings
 
+from experiments.logargs import report_skipped
+
 if TYPE_CHECKING:
     import pandas as pd
 
@@ -661,7 +663,8 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     span = None if max_scans is None else max_scans * stride
     real: list[Record] = []  # the scans used: every stride-th of the first span
     odometry = array("d")  # stamp, x, y, theta of every record read with odometry (the motion): 32 bytes each
-    for k, rec in enumerate(read_log(log, **opts)):
+    reader = read_log(log, **opts)
+    for k, rec in enumerate(reader):
         if k % stride == 0:
             real.append(rec)
         if rec.odom is not None:
@@ -677,6 +680,8 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
             raise LmsbenchError(f"{log}: {exc}") from None
     if not any(rec.scan.valid.any() for rec in real):
         raise LmsbenchError(f"{log}: nothing to compare: none of the {len(real)} scans used has a valid reading")
+    if sensor is not None:  # else the calibration's pass, over the whole log, says what it skipped
+        report_skipped(reader)
     if sensor is None:
         sensor = calibrate_log(log, world=world if world in ("office", "cluttered", "mit") else "office",
                                stride=max(1, stride // 2), fit_duration=fit_duration or FIT_DURATION_S, **opts).sensor

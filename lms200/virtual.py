@@ -395,7 +395,7 @@ class VirtualLMS200:
             fov, res = struct.unpack("<HH", data)
             ok = (fov, res) in VARIANTS
             if ok:
-                self.variant = (fov, res)
+                self._set_variant((fov, res))
             cur = struct.pack("<HH", *self.variant)
             self._reply(bytes([reply_code(cmd), 1 if ok else 0]) + cur, t_reply)
         elif cmd == CMD_GET_CONFIG and not data:
@@ -445,8 +445,18 @@ class VirtualLMS200:
         """After a reset: 9600 baud, on-request mode, power-on variant; then the 0x90 string."""
         self.baud = POWER_ON_BAUD
         self.mode = MODE_ON_REQUEST
-        self.variant = self._power_on_variant
+        self._set_variant(self._power_on_variant)
         self._reply(bytes([REPLY_POWER_ON]) + TYPE_STRING, self._line_free + self._s(self.timing.reset_s))
+
+    def _set_variant(self, variant: tuple[int, int]) -> None:
+        """Take ``variant``; a new one starts the count of mirror scans afresh. The index of the
+        last scan sent counts scans of the old variant's period: kept, a switch to a longer period
+        (0.5 -> 0.25 deg) read it as a scan twice as late, and continuous output waited until the
+        clock had doubled (found by recording 0.25 deg after a 0.5 deg recording on one emulator:
+        no scan, then no answer at all)."""
+        if variant != self.variant:
+            self._last_scan_index = -1
+        self.variant = variant
 
     # -- device -> host ------------------------------------------------------------------------
     def _next_scan(self) -> Scan | None:

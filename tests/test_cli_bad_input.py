@@ -439,6 +439,11 @@ CASES = [
     (["lms200", "emulate", "--log", "{good.clf}", "--world", "corridor", "--seed", "5"],
      "--world, --seed set the simulated scans; --log replays the log's own"),
     (["lms200", "emulate", "--host", "0.0.0.0"], "--host needs --tcp PORT (without it the device is a pseudo-terminal)"),
+    # the log options without --log were ignored: the simulator's scans served, exit 0
+    (["lms200", "emulate", "--laser-fov-deg", "90", "--topic", "FLASER", "--duration", "0.1"],
+     "error: --topic, --laser-fov-deg say how to read the --log to replay; without --log the device serves simulated "
+     "scans (give --log LOG, or leave them out)"),
+    (["lms200", "emulate", "--skip-bad-lines", "--duration", "0.1"], "error: --skip-bad-lines says how to read the --log"),
     (["sweep", "{sweep.yaml}", "--inprocess", "--workers", "3", "--out", O],
      "--workers sets the processes of the local cluster; --inprocess runs in this process"),
     (["demo", "--inprocess", "--no-sweep", "--out", O], "--inprocess runs the demo's sweep in this process; --no-sweep"),

@@ -439,7 +439,8 @@ def test_a_sensor_file_is_read_once_per_check_and_once_per_run(tmp_path, monkeyp
     monkeypatch.setattr(kinds, "summarise", lambda table, reference: pd.DataFrame({"f1": [1.0]}))
     row = kinds.extract_cell({**cells[1], "duration": 0.5, "rate_hz": 2.0})
     assert row == {"f1": 1.0} and seen == [0.0123] and reads == [str(path)]
-    world, sensor, records, _ = kinds._run("office", 0, 0.5, 2.0, (("dropout_prob", 0.01),), True, str(path))
+    digests = tuple(kinds.input_digests({"sensor_file": str(path)}, {}).items())  # the file's content keys the cache too
+    world, sensor, records, _ = kinds._run("office", 0, 0.5, 2.0, (("dropout_prob", 0.01),), True, str(path), digests)
     assert reads == [str(path)]  # the cached run: not read again
     assert (sensor.noise_sigma, sensor.dropout_prob, sensor.interlaced) == (0.0123, 0.01, False)
 
@@ -537,3 +538,29 @@ def test_a_sweep_without_a_name_whose_file_name_cannot_name_a_folder_says_so(tmp
                                              r"name the output folder results/sweeps/NAME \(.*\); add a `name:`$"):
         load_sweep(path)
     assert load_sweep(path.rename(tmp_path / "my_sweep.yaml")).name == "my_sweep"
+
+
+def test_a_cell_whose_sensor_file_or_world_changed_is_computed_again(tmp_path, monkeypatch):
+    """A resumed sweep took the cells it had computed with a sensor_file (or world.json) since
+    edited as done, "2 cells, 0 computed, 2 already done", their rows those of the old file. The
+    files a built-in cell reads are now part of its key; a sweep without them keeps its keys."""
+    from sim import SensorConfig, make_world
+
+    monkeypatch.chdir(tmp_path)
+    SensorConfig(noise_sigma=0.005).to_yaml(tmp_path / "sensor.yaml")
+    make_world("office", seed=1).to_json(tmp_path / "w.json")
+    spec = SweepSpec.from_dict({"name": "sf", "kind": "extract", "grid": {"extractor.k": [3, 5]},
+                                "fixed": {"duration": 1.0, "rate_hz": 3.0, "sensor_file": "sensor.yaml", "world": "w.json"}})
+    first = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert (first.computed, first.skipped) == (2, 0)
+    again = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert (again.computed, again.skipped) == (0, 2)  # unchanged files: resumed
+    SensorConfig(noise_sigma=0.03).to_yaml(tmp_path / "sensor.yaml")
+    edited = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert (edited.computed, edited.skipped) == (2, 0)
+    assert set(edited.table["cell"]).isdisjoint(first.table["cell"])
+    assert not edited.table["range_rms_mm"].equals(first.table["range_rms_mm"])  # the new noise, not the old rows
+    make_world("office", seed=2).to_json(tmp_path / "w.json")
+    assert run_sweep(spec, tmp_path / "out", "inprocess", progress=False).computed == 2
+    plain = SweepSpec.from_dict({"name": "p", "kind": "extract", "grid": {"extractor.k": [3]}})
+    assert [cell_key("extract", c) for c in plain.cells()] == ["8e22acbc29fc2b6a"]  # the key of before

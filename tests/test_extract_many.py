@@ -378,3 +378,15 @@ def test_an_endless_iterator_is_refused_not_read_until_memory_runs_out(monkeypat
     assert len(extract_many(scans * 2)) == 10  # a list is taken whole, whatever the bound
     with pytest.raises(BatchSizeError, match=r"more than 1,805 beams \(6 scans\)"):
         extract_many(iter(scans + scans[:1]))
+
+
+@pytest.mark.parametrize("method", available_methods())
+def test_an_empty_batch_on_several_threads_is_an_empty_list(method: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """extract_many([], threads=2), and extract_many([]) with $LMSBENCH_THREADS=2, was an IndexError
+    from the geometry check of the (empty) batch; one thread gave []."""
+    from features.batch import THREADS_ENV
+
+    assert extract_many([], method=method, threads=2) == []
+    assert extract_many(iter(()), method=method, threads=4) == []
+    monkeypatch.setenv(THREADS_ENV, "2")
+    assert extract_many((), method=method) == []

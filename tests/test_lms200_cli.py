@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -130,6 +131,7 @@ def test_record_reports_an_unreachable_port_in_one_line(tmp_path: Path) -> None:
     run = subprocess.run(cli("record", "--port", "socket://127.0.0.1:9", "--out", str(tmp_path / "x.clf")),
                          env=ENV, capture_output=True, text=True, timeout=60)
     assert run.returncode == 2 and "lmsbench lms200 record: error: cannot open socket://127.0.0.1:9" in run.stderr
+    assert "was not written" not in run.stderr  # no file was made: nothing to say of one
     assert run.stderr.count("\n") == 1 and "Traceback" not in run.stderr  # the opening status is overwritten
 
 
@@ -187,3 +189,59 @@ def test_record_refuses_an_impossible_variant_in_one_line(tmp_path: Path) -> Non
     assert run.stderr.startswith("lmsbench lms200 record: error: fov_deg, resolution_deg: (180 deg, 0.25 deg) is not "
                                  "an LMS200 variant;") and "(0.25 deg only with 100 deg)" in run.stderr
     assert run.stderr.count("\n") == 1 and not (tmp_path / "x.clf").exists()
+
+
+@pytest.mark.parametrize("name", ["rec.clf", "rec.bag"])
+def test_a_recording_of_no_scan_leaves_no_file(tmp_path: Path, name: str) -> None:
+    """A device that sends no scan: record said "the 0 scans before it are saved in OUT" and left a
+    log of headers alone, which no command reads, and the same command again was refused ("--out
+    OUT exists"). Now no file is left, and the run can be repeated as it was."""
+    out = tmp_path / name
+    with TcpServer(VirtualLMS200([], time_scale=0.01)) as ad:
+        for _ in range(2):
+            run = subprocess.run(cli("record", "--port", ad.url, "--out", str(out), "--max-scans", "5", "--timeout", "0.5"),
+                                 env=ENV, capture_output=True, text=True, timeout=60)
+            assert run.returncode == 2, run.stderr
+            last = run.stderr.strip().splitlines()[-1]
+            assert last.startswith("lmsbench lms200 record: error: no scan from")
+            assert last.endswith(f"; no scan was recorded, so {out} was not written") and not out.exists()
+
+
+def test_a_device_that_goes_mute_says_both_errors_and_leaves_no_empty_file(tmp_path: Path) -> None:
+    """The device answers the setup, then nothing: no scan came, and returning it to on-request
+    mode as the port closed failed too. The message was the second error alone, and the file of
+    headers stayed."""
+    dev = VirtualLMS200([], time_scale=0.01)
+    out = tmp_path / "rec.clf"
+    with TcpServer(dev) as ad:
+        proc = subprocess.Popen(cli("record", "--port", ad.url, "--out", str(out), "--timeout", "0.5"), env=ENV,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 60
+        while not out.exists():  # made once the device is set up
+            assert proc.poll() is None and time.monotonic() < deadline
+            time.sleep(0.01)
+        dev.faults.mute = True
+        _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 2, stderr
+    last = stderr.strip().splitlines()[-1]
+    # muted before or after the device took the start request
+    assert re.match(r"lmsbench lms200 record: error: (no scan from |start continuous output \(0x20 0x24\): ).*; stop continuous output \(0x20 0x25\): no 0xA0 reply "
+                    rf".*; no scan was recorded, so {re.escape(str(out))} was not written$", last), last
+    assert not out.exists()
+
+
+def test_ctrl_c_before_the_first_scan_leaves_no_file(tmp_path: Path) -> None:
+    dev = VirtualLMS200([], time_scale=0.01)
+    out = tmp_path / "rec.clf"
+    with TcpServer(dev) as ad:
+        proc = subprocess.Popen(cli("record", "--port", ad.url, "--out", str(out), "--timeout", "5"), env=ENV,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 60
+        while not out.exists():
+            assert proc.poll() is None and time.monotonic() < deadline
+            time.sleep(0.01)
+        proc.send_signal(signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 0, stderr
+    assert stdout == f"recorded no scan; {out} not written; device back in on-request mode at 9600 baud\n"
+    assert not out.exists()

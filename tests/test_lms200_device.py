@@ -252,3 +252,28 @@ def test_quarter_degree_midpoints_follow_nan_then_inf() -> None:
     assert codes[2 * 19 + 1 : 2 * 24].tolist() == [8183, 8183, 8183, 2000, 8191, 8191, 8191, 8183, 8183]
     #                                   mid 99|100, 100 (inf), mid 100|101, 101, mid 101|102 (nan), 102 (nan),
     #                                   mid 102|103 (nan, inf: nan), 103 (inf), mid 103|104 (inf)
+
+
+@pytest.mark.parametrize("first, second", [((180, 50), (100, 25)), ((180, 100), (180, 50)), ((100, 25), (180, 100))])
+def test_continuous_output_after_a_variant_change_starts_at_once(first, second) -> None:
+    """`lmsbench lms200 record` at 0.25 deg after one at 0.5 deg on the same emulator got no scan:
+    the index of the last scan sent, counted at the old period, read at the new (longer) one put the
+    next scan at twice the clock (an hour of uptime: an hour's wait), and the device then answered
+    nothing. The clock here starts at 1000 s, as a monotonic clock does."""
+    import itertools
+
+    dev = VirtualLMS200(itertools.cycle(scans(10)), units="mm", variant=first)
+    dev.baud = 500000
+    host = Host(dev)
+    host.t = 1000.0
+    for variant in (first, second, first):
+        host.send(variant_request(*variant))
+        host.send(mode_request(0x24))
+        host.run(0.3, step=0.0002)
+        start = host.t
+        host.run(0.4, step=0.0002)
+        times = [t for t, e in host.events if t > start and isinstance(e, Frame) and e.code == 0xB0]
+        period = 0.0133333 * {100: 1, 50: 2, 25: 4}[variant[1]]
+        assert len(times) >= 4 and np.diff(times).max() < period * 1.6, (variant, times[:3])
+        host.send(mode_request(0x25))
+        host.run(0.1, step=0.0002)

@@ -84,3 +84,46 @@ def test_compare_real_log_measures(shared_data: Path) -> None:
     assert t2["repeat_in_view"].isna().all()
     with pytest.raises(LmsbenchError, match="sigma"):
         compare([log_source(shared_data / "aces-corrected.log.gz")], ["iepf"], sigma=-1.0, max_scans=1)
+
+
+def _intel_with_bad_lines(shared_data: Path, tmp_path: Path, n: int = 40) -> Path:
+    import gzip
+
+    with gzip.open(shared_data / "intel-corrected.log.gz", "rt") as f:
+        lines = [line.rstrip("\n") for line in f if line.startswith("FLASER")][:n]
+    lines[5] = lines[5][:100]  # cut short
+    lines[9] = "FLASER 180 garbage"
+    return write(tmp_path, "bad.log", lines)
+
+
+def test_calibrate_sim2real_and_emulate_report_the_lines_they_skip(shared_data: Path, tmp_path: Path,
+                                                                   capsys: pytest.CaptureFixture,
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    """--skip-bad-lines is "reported on stderr" (its help) and info, compare, slam and figures did;
+    calibrate, sim2real and lms200 emulate --log skipped the lines silently."""
+    from sim import SensorConfig
+
+    from experiments import sim2real as s2r
+    from experiments.calibrate import calibrate_log
+    from experiments.lms200_sources import log_scans
+
+    path = _intel_with_bad_lines(shared_data, tmp_path)
+    said = (f"{path}: skipped 2 bad lines\n  {path}:6: FLASER: FLASER with 180 beams needs 191 fields, got 21\n"
+            f"  {path}:10: FLASER: FLASER with 180 beams needs 191 fields, got 3\n")
+    assert len(list(log_scans(path, loop=False, read_options={"skip_bad_lines": True}))) == 38
+    assert capsys.readouterr().err == said
+    calibrate_log(path, skip_bad_lines=True, fit_duration=2.0)
+    assert capsys.readouterr().err == said
+    calibrate_log(path, skip_bad_lines=True, fit_duration=2.0, report_skips=False)
+    assert capsys.readouterr().err == ""
+
+    class Read(Exception):
+        pass
+
+    def stop(*args, **kwargs):
+        raise Read
+
+    monkeypatch.setattr(s2r, "odometry_limits_and_source", stop)  # after the log's pass
+    with pytest.raises(Read):
+        s2r.sim2real(path, world="office", stride=1, max_scans=None, sensor=SensorConfig(), read_options={"skip_bad_lines": True})
+    assert capsys.readouterr().err == said

@@ -6,7 +6,7 @@ import argparse
 import datetime
 from pathlib import Path
 
-from experiments.logargs import add_log_options, plain_log_options, read_log_options
+from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options
 from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log,
                                  check_methods, check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name,
                                  text, check_link)
@@ -60,10 +60,7 @@ def run(args: argparse.Namespace) -> int:
     if args.tables and ignored:  # they were ignored: the figures were redrawn from the tables as they were
         raise InputError(f"{', '.join(ignored)} set the study that --tables replaces; redrawing from {args.tables} "
                          "computes nothing (leave them out, or leave out --tables)")
-    log_flags = (("--topic", args.topic), ("--skip-bad-lines", args.skip_bad_lines or None),
-                 ("--laser-fov-deg", args.laser_fov_deg), ("--laser-resolution-deg", args.laser_resolution_deg),
-                 ("--laser-angle-min-deg", args.laser_angle_min_deg), ("--laser-range-max", args.laser_range_max))
-    unread = [flag for flag, value in log_flags if value is not None]
+    unread = given_log_flags(args)
     if args.tables and unread:  # they were ignored: the tables hold what the study read of the log
         raise InputError(f"{', '.join(unread)} {'do' if len(unread) > 1 else 'does'} not apply to --tables: they say how to read the study's log (Fig. 9's "
                          f"Intel log), and redrawing from {args.tables} reads no log (leave them out, or leave out --tables)")

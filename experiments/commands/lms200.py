@@ -17,7 +17,7 @@ from lms200.protocol import BAUD_MODES
 from lms200.virtual import MAX_TIME_SCALE
 
 from experiments.lms200_sources import log_scans, simulator_scans
-from experiments.logargs import add_log_options, read_log_options
+from experiments.logargs import add_log_options, given_log_flags, read_log_options
 from experiments.options import (WORLDS, PORT, SEED, InputError, check_log, check_out_file, count, number, path_arg, positive, text,
                                  world_name)
 
@@ -70,6 +70,10 @@ def run_emulate(args: argparse.Namespace) -> int:
     simulated = [flag for flag, value in (("--world", args.world), ("--seed", args.seed)) if value is not None]
     if args.log and simulated:  # they were ignored: the log's scans were replayed
         raise InputError(f"{', '.join(simulated)} set the simulated scans; --log replays the log's own")
+    unread = given_log_flags(args)
+    if not args.log and unread:  # they were ignored: the simulator's scans were served
+        raise InputError(f"{', '.join(unread)} {'say' if len(unread) > 1 else 'says'} how to read the --log to replay; "
+                         "without --log the device serves simulated scans (give --log LOG, or leave them out)")
     args.world, args.seed = args.world or "office", 0 if args.seed is None else args.seed
     args.host = args.host or "127.0.0.1"
     if args.log:
@@ -161,6 +165,32 @@ def _write(out: Path, records: Iterable[Record]) -> int:
 RECORD_SUFFIXES = (".clf", ".log", ".gz", ".bag")
 
 
+def _drop_empty(out: Path) -> None:
+    """Remove a recording of no scan (the file run_record made: --out did not exist): a log of
+    headers alone, which no command reads and which a second run refused to write over."""
+    try:
+        if out.is_dir():
+            import shutil
+
+            shutil.rmtree(out)
+        else:
+            out.unlink(missing_ok=True)
+    except OSError:
+        pass  # the error being reported is the one to see
+
+
+def _record_failed(out: Path, written: int, error: BaseException | None, closing: BaseException | None = None) -> str:
+    """The one line of a recording that ended on a device error (``error``; ``closing``: the error
+    of returning the device to on-request mode, which came after it, if any), saying what was kept.
+    A recording of no scan is removed: "the 0 scans before it are saved in OUT" left a file of
+    headers alone, and the next run into OUT was refused ("exists")."""
+    what = "; ".join(str(e) for e in (error, closing) if e is not None)
+    if written == 0:
+        _drop_empty(out)
+        return f"{what}; no scan was recorded, so {out} was not written"
+    return f"{what}; the {written} scans before it are saved in {out}"
+
+
 def run_record(args: argparse.Namespace) -> int:
     if args.out.is_dir():  # was "unknown kind '(no suffix)'"
         raise InputError(f"--out {args.out} is a folder; give a file name (.clf, .log, .gz or .bag)")
@@ -170,7 +200,8 @@ def run_record(args: argparse.Namespace) -> int:
     if args.out.exists() or args.out.is_symlink():  # a CARMEN recording replaced an earlier one silently
         raise InputError(f"--out {args.out} exists; a recording is not written over a file (give a new name)")
     check_out_file(args.out)
-    stop = {"now": False}
+    stop: dict = {"now": False}
+    written, set_up = 0, False
     # Ctrl-C and SIGTERM (a batch system's limit) end the recording as asked: the file closed and
     # readable (SIGTERM went to the CLI's interrupt: a bag cut in its index, "Bag is not indexed")
     previous = {sig: signal.signal(sig, lambda *_: stop.update(now=True)) for sig in (signal.SIGINT, signal.SIGTERM)}
@@ -184,17 +215,26 @@ def run_record(args: argparse.Namespace) -> int:
             opened = (f"{dev.type_string.strip()} at {dev.baud} baud, {args.units}; recording to {args.out} "
                       f"(Ctrl-C stops)")
             print(f"{opened:<{len(status)}}", file=sys.stderr, flush=True)
+            set_up = True
             progress = _Progress(dev)
             try:
                 written = _write(args.out, _records(dev, progress, stop, args.max_scans, args.duration))
             finally:
                 progress.update(final=True)
             stats = dev.stats
+    except LmsbenchError as exc:  # the device did not return to on-request mode as the port closed
+        if not set_up:  # the port did not open, or the device was not set up: no file was made, said as it was
+            raise
+        raise LmsbenchError(_record_failed(args.out, written, stop.get("error"), exc)) from exc
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     if stop.get("error") is not None:
-        raise LmsbenchError(f"{stop['error']}; the {written} scans before it are saved in {args.out}")
+        raise LmsbenchError(_record_failed(args.out, written, stop["error"]))
+    if written == 0:
+        _drop_empty(args.out)
+        print(f"recorded no scan; {args.out} not written; device back in on-request mode at 9600 baud")
+        return 0
     print(f"recorded {written} scans to {args.out} ({stats.dropped_frames} frames dropped, "
           f"{stats.decode_errors} undecodable); device back in on-request mode at 9600 baud")
     return 0

@@ -13,6 +13,7 @@ import dataclasses
 import functools
 import math
 import warnings
+from pathlib import Path
 from typing import Any, Iterable
 
 import numpy as np
@@ -29,10 +30,13 @@ SLAM_DEFAULTS = {"world": "office", "duration": 30.0, "rate_hz": None}
 
 @functools.lru_cache(maxsize=4)
 def _run(world: str, seed: int, duration: float, rate_hz: float | None, sensor_items: tuple, with_truth: bool,
-         sensor_file: str | None = None):
+         sensor_file: str | None = None, inputs: tuple = ()):
     """The world, the sensor (``sensor_file`` read here, once), the simulated records and their
     visible truths, cached per worker: a grid over extractor parameters simulates each (world,
-    seed, sensor) once per worker process."""
+    seed, sensor) once per worker process. ``inputs``, the digests of the files read
+    (:func:`input_digests`), only key the cache: by path alone, a worker that outlives a sweep (a
+    ``--scheduler``'s, or this process for ``run_sweep``) ran the next sweep's cells on the old
+    content of an edited sensor file or world.json."""
     with warnings.catch_warnings():  # an old degree field (sensor.resolution_deg, a sensor file's) was said once,
         warnings.simplefilter("ignore", LmsbenchWarning)  # when the sweep was read and checked, not in every worker
         sensor = sensor_config(dict(sensor_items), sensor_file)
@@ -48,7 +52,7 @@ def _records(params: dict[str, Any], defaults: dict[str, Any], with_truth: bool)
     sensor_items = tuple(sorted(split_params(p, "sensor").items()))
     sensor_file = p.get("sensor_file")
     return _run(str(p["world"]), int(p.get("seed", 0)), float(p["duration"]), rate, sensor_items, with_truth,
-                None if sensor_file is None else str(sensor_file))
+                None if sensor_file is None else str(sensor_file), tuple(sorted(input_digests(p, {}).items())))
 
 
 def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
@@ -211,7 +215,6 @@ def _read_sensor_files(cells: Iterable[dict[str, Any]]) -> dict[str, Any]:
 def _relative_hint(path: str) -> str:
     """For a relative path that is not there: where it was looked for (a sweep file's sensor_file
     or world.json beside it, run from another folder, was 'no such file' and no more)."""
-    from pathlib import Path
 
     if Path(path).is_absolute() or Path(path).exists():
         return ""
@@ -361,5 +364,27 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
             raise SweepSpecError(f"slam {nested}: {exc}") from None
 
 
+def input_digests(params: dict[str, Any], seen: dict[str, str]) -> dict[str, str]:
+    """Digests of the files a built-in cell reads (its ``sensor_file``, a ``world`` that is a
+    world.json), by parameter name, for its key (``spec.cell_key``); ``seen`` holds the digests of
+    this run by path, so each file is read once. A resumed sweep took the cells it had computed
+    with a sensor file or world since edited as done ("2 already done"), their rows those of the
+    old file, silently."""
+    import hashlib
+
+    files = {"sensor_file": params.get("sensor_file"), "world": params.get("world")}
+    out = {}
+    for name, path in files.items():
+        if path is None or (name == "world" and not str(path).endswith(".json")):
+            continue
+        path = str(path)
+        if path not in seen:
+            seen[path] = hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
+        out[name] = seen[path]
+    return out
+
+
 extract_cell.check_params = check_extract_params  # type: ignore[attr-defined]
 slam_cell.check_params = check_slam_params  # type: ignore[attr-defined]
+extract_cell.input_digests = input_digests  # type: ignore[attr-defined]
+slam_cell.input_digests = input_digests  # type: ignore[attr-defined]

@@ -77,7 +77,8 @@ def run_sweep(
     write_record(out / "sweep.yaml", spec_record(spec))  # whole: it tells the folder as the sweep's (SWEEP_OWNER)
 
     (out / "versions.yaml").write_text(yaml.safe_dump(versions(), sort_keys=False))  # of the last run into `out`
-    keys = [cell_key(spec.kind, params) for params in cells]
+    digests, seen = getattr(fn, "input_digests", None), {}  # the files a cell reads are part of its key
+    keys = [cell_key(spec.kind, params, digests(params, seen) if digests else None) for params in cells]
     done = store.done()
     if retry_failed:
         done = {k for k in done if store.status(k) == "ok"}

@@ -215,9 +215,15 @@ def _degree_parameters(spec: SweepSpec, where: str | None) -> None:
                       f"write {new_name} with the values in radians{instead} instead", LmsbenchWarning, stacklevel=3)
 
 
-def cell_key(kind: str, params: dict[str, Scalar]) -> str:
-    """A stable 16-hex-digit hash of the cell kind and its parameters (key order does not matter)."""
-    text = json.dumps({"kind": kind, "params": params}, sort_keys=True, separators=(",", ":"))
+def cell_key(kind: str, params: dict[str, Scalar], inputs: dict[str, str] | None = None) -> str:
+    """A stable 16-hex-digit hash of the cell kind and its parameters (key order does not matter)
+    and ``inputs``, the digests of the files the cell reads (parameter name -> digest, the kind's
+    ``input_digests``), so that a cell whose file changed is computed again; without any, the key
+    is the one of before."""
+    record: dict[str, Any] = {"kind": kind, "params": params}
+    if inputs:
+        record["inputs"] = inputs
+    text = json.dumps(record, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
