@@ -344,7 +344,7 @@ def _bar(records: list[Record], desc: str, progress: bool) -> Iterable[Record]:
 
 def _flat(scores: dict[str, Any]) -> dict[str, float]:
     keep = {"ate": ("rmse", "mean", "max"), "rpe_1m": ("trans_rmse", "rot_rmse"), "map": ("distance_mean", "matched"),
-            "relations": ("trans_mean", "trans_std", "rot_mean_deg", "rot_std_deg")}
+            "relations": ("trans_mean", "trans_std", "rot_mean_deg", "rot_std_deg", "trans_median", "trans_mean_far")}
     return {f"{k}_{f}": scores[k][f] for k, fields in keep.items() if k in scores for f in fields if f in scores[k]}
 
 

@@ -100,6 +100,21 @@ def _load(name: str) -> Callable[..., Any]:
     module_name, _, attr = name.partition(":")
     if not module_name or not attr:
         raise UserMethodError(f"{name!r}: a user extractor is named MODULE:FUNCTION (e.g. myext:extract)")
+    return import_named(name, name, UserMethodError)
+
+
+def import_named(target: str, what: str, error: type[LmsbenchError] = UserMethodError) -> Callable[..., Any]:
+    """The callable ``MODULE:ATTR`` names (ATTR may be dotted), MODULE imported with the current
+    folder first on the path, so a file ``./myext.py`` is ``myext:ATTR`` (as with PYTHONPATH=.):
+    the one rule for a user's extractor (``compare --methods``, ``slam --extractor``, an extract
+    sweep's ``method``) and a sweep's cell ``kind`` (which needed PYTHONPATH=.: "cannot import
+    mysw:cell: No module named 'mysw'"). The current folder leaves the path again after the import.
+
+    Raises:
+        error: naming ``what``, when MODULE cannot be imported (with the hint "importable from the
+            current folder or PYTHONPATH"), fails while importing, has no ATTR, or ATTR is not callable.
+    """
+    module_name, _, attr = target.partition(":")
     cwd = os.getcwd()
     added = cwd not in sys.path
     if added:
@@ -107,20 +122,20 @@ def _load(name: str) -> Callable[..., Any]:
     try:
         module = importlib.import_module(module_name)
     except ImportError as exc:
-        raise UserMethodError(f"{name}: cannot import module {module_name!r} ({exc}); it must be importable "
-                              "from the current folder or PYTHONPATH") from None
+        raise error(f"{what}: cannot import module {module_name!r} ({exc}); it must be importable "
+                    "from the current folder or PYTHONPATH") from None
     except Exception as exc:  # noqa: BLE001 - the user's module failed while importing
-        raise UserMethodError(f"{name}: importing {module_name!r} failed: {type(exc).__name__}: {exc}") from None
+        raise error(f"{what}: importing {module_name!r} failed: {type(exc).__name__}: {exc}") from None
     finally:
         if added:
             sys.path.remove(cwd)
     fn = module
     for part in attr.split("."):
         if not hasattr(fn, part):
-            raise UserMethodError(f"{name}: module {module_name!r} has no {attr!r}")
+            raise error(f"{what}: module {module_name!r} has no {attr!r}")
         fn = getattr(fn, part)
     if not callable(fn):
-        raise UserMethodError(f"{name}: {attr!r} is not callable")
+        raise error(f"{what}: {attr!r} is not callable")
     return fn
 
 

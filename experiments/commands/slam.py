@@ -320,7 +320,12 @@ def _score_lines(m: dict[str, Any]) -> list[str]:
     lines = []
     ate_label = "ATE RMS (m)" if m.get("reference", "ground truth") == "ground truth" else \
         f"ATE RMS against the log's {m['reference']} (m)"
-    for key, label in (("ate_rmse", ate_label), ("relations_trans_mean", "relations error, mean (m)")):
+    rel = m.get("relations", {})
+    far = (f"relations error over poses more than {rel.get('far_apart_s', 200):g} s apart, mean (m; "
+           f"{rel.get('n_far', 0)} relations)")
+    # the README's MIT CSAIL columns "median" and "> 200 s apart, mean" were in no output (a researcher's walkthrough)
+    for key, label in (("ate_rmse", ate_label), ("relations_trans_mean", "relations error, mean (m)"),
+                       ("relations_trans_median", "relations error, median (m)"), ("relations_trans_mean_far", far)):
         rows = [(("this run" if i == 0 else row["source"]), row[key]) for i, row in enumerate(m.get("table", []))
                 if isinstance(row.get(key), (int, float)) and math.isfinite(row[key])]
         if rows and rows[0][0] == "this run":

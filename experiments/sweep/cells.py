@@ -47,13 +47,35 @@ def resolve_kind(kind: str) -> CellFn:
     if ":" not in target:
         raise SweepSpecError(f"unknown cell kind {kind!r}; known: {available_kinds()} or 'package.module:function'")
     module_name, _, attr = target.partition(":")
-    try:
-        fn = getattr(importlib.import_module(module_name), attr)
-    except (ImportError, AttributeError) as exc:
-        raise SweepSpecError(f"cell kind {kind!r}: cannot import {target}: {exc}") from exc
-    if not callable(fn):
-        raise SweepSpecError(f"cell kind {kind!r}: {target} is not callable")
-    return fn
+    if kind in BUILTIN_KINDS:  # lmsbench's own
+        return getattr(importlib.import_module(module_name), attr)
+    from experiments.user_methods import import_named
+
+    # the current folder first on the path, as for a user's extractor (compare --methods myext:lines):
+    # `kind: mysw:cell` beside the sweep file needed PYTHONPATH=.
+    return UserKind(kind, import_named(target, f"cell kind {kind!r}", SweepSpecError))
+
+
+class UserKind:
+    """A user's ``MODULE:FUNCTION`` cell kind: called as its function; sent to a Dask worker by
+    name and imported there, at its first call, by :func:`resolve_kind` (the worker's current
+    folder, the driver's on a local cluster, first on the path). Pickled by reference, the
+    function was imported by the worker's unpickler without the current folder: "No module named
+    'mysw'", and the sweep hung; a module a worker cannot import is now each cell's error row."""
+
+    def __init__(self, kind: str, fn: CellFn | None) -> None:
+        self.kind, self._fn = kind, fn
+        self.check_params = getattr(fn, "check_params", None)  # the runner's check before any cell
+
+    def __call__(self, params: dict[str, Scalar]) -> dict[str, Any]:
+        if self._fn is None:  # in a worker
+            fn = resolve_kind(self.kind)
+            self._fn = fn._fn if isinstance(fn, UserKind) else fn
+        assert self._fn is not None
+        return self._fn(params)
+
+    def __reduce__(self) -> tuple[Any, tuple[str, None]]:
+        return UserKind, (self.kind, None)
 
 
 def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> dict[str, Any]:
