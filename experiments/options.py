@@ -865,14 +865,16 @@ def check_methods(methods: Sequence[str] | None) -> list[str]:
 
 def split_methods(methods: Sequence[str]) -> list[str]:
     """Method names given apart or separated by commas (no name holds one: neither a built-in
-    name nor MODULE:FUNCTION); an empty name between commas is refused (``sensor,,hough``)."""
+    name nor MODULE:FUNCTION). A comma at a word's end or start joins it to the next or last word
+    (the shell splits ``--methods sensor, hough`` into ``sensor,`` and ``hough``); an empty name
+    between two commas (``sensor,,hough``) or a word of commas alone is refused."""
     names = []
     for given in methods:
         parts = [part.strip() for part in given.split(",")] if "," in given else [given]
-        if any(not part for part in parts):
+        if any(not part for part in parts[1:-1]) or not any(parts):
             raise InputError(f"method list {given!r}: an empty name between commas; give names such as "
                              "sensor,split_merge or sensor split_merge")
-        names += parts
+        names += [part for part in parts if part]
     return names
 
 

@@ -211,10 +211,12 @@ def test_methods_are_taken_comma_separated_as_well_as_apart():
 
     assert check_methods(["sensor,split_merge", "iepf"]) == ["sensor", "split_merge", "iepf"]
     assert check_methods(["sensor, hough"]) == ["sensor", "hough"]
+    assert check_methods(["sensor,", "hough"]) == ["sensor", "hough"]  # the shell's split of `sensor, hough`
+    assert check_methods(["sensor", ",hough"]) == ["sensor", "hough"]
     from lms200 import LmsbenchError
 
     for bad, says in ((["sensor,,hough"], "an empty name between commas"), ([","], "an empty name"),
-                      (["sensor,"], "an empty name"), (["sensor,sensor"], "named twice")):
+                      ([",,"], "an empty name"), (["sensor,sensor"], "named twice")):
         with pytest.raises(LmsbenchError, match=says):
             check_methods(bad)
 
