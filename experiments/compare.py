@@ -57,6 +57,10 @@ class Source:
     estimate_bearing_sigma: Callable[[], float] | None = None  # its estimate (logs: features.noise_estimate.bearing_sigma)
     reader: Any = None  # the log reader (its ``stats`` say what was skipped)
     settings: dict[str, Any] = dataclasses.field(default_factory=dict)  # what produced the scans (saved beside results)
+    # filled by compare(): the config each method ran with on this source (its noise fields set,
+    # :func:`_with_noise`) and the range_max of its scans (m; which range-noise field applies)
+    ran: dict[str, Any] = dataclasses.field(default_factory=dict)
+    range_maxes: set[float] = dataclasses.field(default_factory=set)
 
     @classmethod
     def from_records(cls, records: Sequence[Record], truths: Sequence[Any] | None = None, name: str = "sim",
@@ -436,11 +440,13 @@ def compare(
     for src in srcs:
         sigma_r = _source_sigma(src, sigma)
         src_runs = _with_noise(runs, params, _extractor_noise(src, sigma_r), _fit_noise(src), _bearing_noise(src))
+        src.ran = {name: cfg for name, _, cfg in src_runs}
         previous: dict[str, tuple[np.ndarray, Pose2D]] = {}  # method -> lines and pose of the last scan
         for k, rec in enumerate(src.records):
             if max_scans is not None and k >= max_scans:
                 break
             scan = rec.scan
+            src.range_maxes.add(float(scan.range_max))
             truth = check_truth(src.truth_of(rec)) if src.truth_of else None  # checked once, scored per method
             n_valid = int(np.count_nonzero(scan.valid))
             exact = _truth_row(truth, scan, sigma_r, rd_cfg) if truth is not None else {}
@@ -566,17 +572,38 @@ def _with_noise(runs: list, params: dict[str, dict[str, Any]], noise: float, fit
                 bearing_noise: float | None = None) -> list:
     """``runs`` with every extractor's noise fields set to ``noise`` (m), its fit-scatter fields
     to ``fit_noise`` (m) and its bearing-noise fields to ``bearing_noise`` (rad; each when given),
-    except those the caller set in ``params``."""
+    except those the caller set in ``params``: a field the caller set replaces that field alone
+    (``--set extractor.sensor.sigma_r=X`` once dropped the log's bearing noise as well, and on a
+    cm-mode log, where sigma_r is not read, that was its only effect)."""
     out = []
     for name, fn, cfg in runs:
         fields = {f.name for f in dataclasses.fields(cfg)}
         given = params.get(name, {})
         noise_params: dict[str, Any] = {f: noise for f in NOISE_FIELDS if f in fields and f not in given}
-        if fit_noise is not None and not any(f in given for f in NOISE_FIELDS):
+        if fit_noise is not None:
             noise_params.update({f: fit_noise for f in FIT_NOISE_FIELDS if f in fields and f not in given})
-        if bearing_noise is not None and not any(f in given for f in NOISE_FIELDS):
+        if bearing_noise is not None:
             noise_params.update({f: bearing_noise for f in BEARING_NOISE_FIELDS if f in fields and f not in given})
         out.append((name, fn, dataclasses.replace(cfg, **noise_params) if noise_params else cfg))
+    return out
+
+
+def source_noise(src: Source) -> dict[str, dict[str, Any]]:
+    """The noise each method ran with on ``src`` (after :func:`compare`): ``{method: {field:
+    value}}`` of its noise fields (range noise, fit scatter, bearing noise), those it read alone:
+    the sensor method's range noise of the mode of the source's scans (``sigma_r_cm`` for cm-mode
+    scans, ``sigma_r`` for mm-mode ones), and a ``sigma_fit`` of None (as ``sigma``) as the value
+    it stood for. What compare's config.yaml records per source (``ran_with``)."""
+    out: dict[str, dict[str, Any]] = {}
+    for method, cfg in src.ran.items():
+        values = {f.name: getattr(cfg, f.name) for f in dataclasses.fields(cfg)
+                  if f.name in NOISE_FIELDS + FIT_NOISE_FIELDS + BEARING_NOISE_FIELDS}
+        if hasattr(cfg, "noise_field") and src.range_maxes:  # sigma_r / sigma_r_cm: the one each scan reads
+            read = {cfg.noise_field(r) for r in src.range_maxes}
+            values = {f: v for f, v in values.items() if f not in ("sigma_r", "sigma_r_cm") or f in read}
+        if values.get("sigma_fit", 0.0) is None and "sigma" in values:
+            values["sigma_fit"] = values["sigma"]
+        out[method] = {f: plain_data(v) for f, v in values.items()}
     return out
 
 

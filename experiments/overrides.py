@@ -97,3 +97,48 @@ def extractor_overrides(flat: Mapping[str, Any], methods: Sequence[str], *,
         for m in targets:
             out[m].setdefault(name, value)  # an extractor.METHOD.FIELD entry wins, whatever the order
     return {m: p for m, p in out.items() if p}
+
+
+#: the scans each mode-bound range-noise field of the sensor method is read for
+#: (``features.sensor.config.SensorMethodConfig.noise_field``)
+MODE_FIELDS = {"sigma_r": ("mm", "range_max <= 10 m"), "sigma_r_cm": ("cm", "range_max > 10 m")}
+
+
+def unread_fields(params: Mapping[str, Mapping[str, Any]], configs: Mapping[str, Any], range_maxes: Sequence[float],
+                  scans: str) -> list[str]:
+    """One line (no prefix) per field a user set (``params``: ``{method: {field: value}}``) that
+    no scan of the run reads: the sensor method reads ``sigma_r`` for mm-mode scans and
+    ``sigma_r_cm`` for cm-mode ones (range_max > 10 m; any config with a ``noise_field`` method),
+    so ``--set extractor.sensor.sigma_r=5`` on the cm-mode CARMEN logs changed nothing, silently.
+    ``configs``: each method's config as it ran; ``range_maxes``: those of the run's scans (m);
+    ``scans``: how the line names them ("the scans of mit-csail.clf.gz")."""
+    out: list[str] = []
+    if not range_maxes:
+        return out
+    shown = ", ".join(f"{r:g}" for r in sorted(set(range_maxes))[:3]) + (", ..." if len(set(range_maxes)) > 3 else "")
+    for method, given in params.items():
+        cfg = configs.get(method)
+        if cfg is None or not callable(getattr(cfg, "noise_field", None)):
+            continue
+        read = {cfg.noise_field(r) for r in range_maxes}
+        for field, value in given.items():
+            if field in MODE_FIELDS and field not in read:
+                other = next(iter(read))
+                mode, rule = MODE_FIELDS[field]
+                out.append(f"{method}: {field}={value!r} is not used: {field} applies to {mode}-mode scans ({rule}); "
+                           f"{scans} are {MODE_FIELDS[other][0]} mode (range_max {shown} m): set {other}")
+    return out
+
+
+def unread_marked(values: dict[str, Any], config: Any, range_maxes: Sequence[float] | set[float],
+                  given: Mapping[str, Any]) -> dict[str, Any]:
+    """``values`` (``config`` as plain data, for a run's config.yaml) with each mode-bound
+    range-noise field the user set (``given``) that no scan of the run read (``range_maxes``, m)
+    written as ``"V: not read (no MODE-mode scan)"``: the record said ``sigma_r: 0.02`` as if it
+    had run. (A default the scans do not read stays: which one a scan reads is the method's rule.)"""
+    noise_field = getattr(config, "noise_field", None)
+    if not range_maxes or not callable(noise_field):
+        return values
+    read = {noise_field(r) for r in range_maxes}
+    return {f: f"{v!r}: not read (no {MODE_FIELDS[f][0]}-mode scan)" if f in MODE_FIELDS and f in given and f not in read
+            else v for f, v in values.items()}

@@ -418,7 +418,13 @@ def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:
     from experiments.options import SLAM_RECORD_KEYS
     from experiments.provenance import versions
 
+    from experiments.overrides import unread_marked
+    from features.registry import make_config
+
     extractor = resolved_configs([config.extractor], {config.extractor: config.extractor_params})[config.extractor]
+    # sigma_r given for cm-mode scans (or sigma_r_cm for mm-mode ones) was recorded as if it ran
+    extractor = unread_marked(extractor, make_config(config.extractor, **config.extractor_params),
+                              {float(r.scan.range_max) for r in data.records}, config.extractor_params)
     records = {"extractor_config": extractor, "versions": versions()}
     assert tuple(records) == SLAM_RECORD_KEYS  # what slam --config reads past and --out tells the folder by
     write_record(out / "config.yaml", yaml.safe_dump({"input": data.sources, "slam": config.to_dict(), **records},

@@ -7,6 +7,10 @@ A name ``MODULE:FUNCTION`` is imported (the current folder first on the path, so
 an empty config; the function receives the ``lms200.Scan`` and returns a ``FeatureSet`` (lines and
 corners in the sensor frame). A function with a ``config_type`` attribute (a dataclass) is called
 ``fn(scan, config)`` and its config's fields can be set with ``--set extractor.MODULE:FUNCTION.FIELD=V``.
+``compare`` sets the fields of that config named ``sigma``, ``sigma_r``, ``sigma_r_cm`` (the
+source's range noise), ``sigma_fit`` and ``sigma_bearing`` (a log's fit scatter and bearing noise)
+per source, as it does the built-in methods' (``experiments.compare._with_noise``); a function
+without a config gets none of them (docs/baselines.md).
 
 An exception the function raises on a scan is the user's code failing, not lmsbench: it comes out
 as :class:`UserMethodFailed` (an ``LmsbenchError``, its ``__cause__`` the user's exception), which

@@ -99,8 +99,10 @@ def test_cli_on_a_log_writes_table_summary_and_config(tmp_path):
     import yaml
 
     resolved = yaml.safe_load((out / "config.yaml").read_text())  # the noise the extractors ran with
-    assert 0.004 < resolved["extractor_sigma"]["room.log"] < 0.007  # 5 mm simulated, estimated from the log
-    assert 0.004 < resolved["fit_sigma"]["room.log"] < 0.007
+    ran = resolved["ran_with"]["room.log"]
+    assert 0.004 < ran["split_merge"]["sigma"] < 0.007  # 5 mm simulated, estimated from the log
+    assert 0.004 < ran["split_merge"]["sigma_fit"] < 0.007
+    assert ran["hough"] == {"sigma": ran["split_merge"]["sigma"]}
 
 
 def test_cli_errors_are_one_line(tmp_path):

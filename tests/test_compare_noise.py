@@ -1,6 +1,6 @@
 """compare gives every extractor the source's noise: the range noise fields of all methods, and for
 split_merge / iepf the scatter about fitted lines (``sigma_fit``) of their split and merge tests;
-a noise the caller gives a method turns both off for it."""
+a field the caller sets replaces that field alone (tests/test_noise_overrides.py)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from features.registry import get_method, make_config
 from lms200 import Scan
 
 
-def test_the_baselines_get_the_fit_scatter_and_a_given_noise_turns_it_off() -> None:
+def test_the_baselines_get_the_fit_scatter_and_a_given_noise_leaves_it() -> None:
     runs = [(m, get_method(m).run, make_config(m)) for m in ("sensor", "split_merge", "iepf")]
     out = {name: cfg for name, _, cfg in _with_noise(runs, {}, 0.012, 0.0095)}
     assert out["split_merge"].sigma == 0.012 and out["split_merge"].sigma_fit == 0.0095
@@ -20,7 +20,7 @@ def test_the_baselines_get_the_fit_scatter_and_a_given_noise_turns_it_off() -> N
     assert out["sensor"].sigma_r == 0.012 and not hasattr(out["sensor"], "sigma_fit")
     given = {name: cfg for name, _, cfg in _with_noise(runs, {"split_merge": {"sigma": 0.02}}, 0.012, 0.0095)}
     assert given["split_merge"].sigma == make_config("split_merge").sigma  # the caller's, not the source's
-    assert given["split_merge"].sigma_fit is None
+    assert given["split_merge"].sigma_fit == 0.0095  # not a field the caller set: the source's
     assert given["iepf"].sigma_fit == 0.0095
     assert {n: c.sigma_fit for n, c in out.items() if n != "sensor"} != {"split_merge": None, "iepf": None}
 
@@ -67,7 +67,7 @@ def test_records_in_memory_get_the_noise_a_log_gets(tmp_path) -> None:
 def test_compare_runs_the_sensor_method_with_the_sources_bearing_noise() -> None:
     """compare hands a log-like source's bearing-noise estimate to the sensor method (issue #13):
     its rows equal extract() given that noise, and differ from extract() without it; a range noise
-    the caller sets for the sensor method turns the estimate off for it, as for the fit scatter."""
+    the caller sets for the sensor method leaves it (a researcher's walkthrough: it dropped it)."""
     from experiments.compare import NOISE_FIELDS, Source, _with_noise, compare
     from features import extract
     from features.registry import get_method
@@ -85,6 +85,6 @@ def test_compare_runs_the_sensor_method_with_the_sources_bearing_noise() -> None
     assert with_b != without  # the bearing noise changes the lines: the test can fail
     runs = [("sensor", get_method("sensor").run, get_method("sensor").config_type())]
     (_, _, given), = _with_noise(runs, {"sensor": {"sigma_r": 0.02}}, 0.01, None, 0.02)
-    assert given.sigma_bearing == 0.0  # the caller's noise: no estimate
+    assert given.sigma_bearing == 0.02 and given.sigma_r_cm == 0.01  # the caller set sigma_r alone
     (_, _, estimated), = _with_noise(runs, {}, 0.01, None, 0.02)
     assert estimated.sigma_bearing == 0.02 and estimated.sigma_r == 0.01

@@ -564,3 +564,33 @@ def test_a_cell_whose_sensor_file_or_world_changed_is_computed_again(tmp_path, m
     assert run_sweep(spec, tmp_path / "out", "inprocess", progress=False).computed == 2
     plain = SweepSpec.from_dict({"name": "p", "kind": "extract", "grid": {"extractor.k": [3]}})
     assert [cell_key("extract", c) for c in plain.cells()] == ["8e22acbc29fc2b6a"]  # the key of before
+
+
+def test_a_sweep_that_fails_before_any_cell_leaves_no_folder(tmp_path, monkeypatch):
+    """`lmsbench sweep S.yaml --scheduler tcp://HOST:PORT` with no scheduler there: one line, exit 2
+    ("Timed out trying to connect"), and it left its folder behind, sweep.yaml, versions.yaml and an
+    empty cells/. Now what it wrote goes again; a folder with a finished cell is kept to resume."""
+    import contextlib
+
+    from experiments.sweep import runner
+
+    @contextlib.contextmanager
+    def unreachable(executor, workers):
+        raise TimeoutError(f"Timed out trying to connect to {executor} after 10 s")
+        yield
+
+    monkeypatch.setattr(runner, "sweep_client", unreachable)
+    log = tmp_path / "log.txt"
+    spec = make_spec(log, xs=[0, 1], seeds=[0])
+    for out, made in ((tmp_path / "new", False), (tmp_path / "empty", True)):
+        if made:
+            out.mkdir()
+        with pytest.raises(TimeoutError, match="Timed out trying to connect"):
+            run_sweep(spec, out, "tcp://127.0.0.1:9", progress=False)
+        assert out.exists() == made and (not made or list(out.iterdir()) == [])
+    run_sweep(make_spec(log, xs=[0], seeds=[0]), tmp_path / "new", "inprocess", progress=False)
+    with pytest.raises(TimeoutError):
+        run_sweep(spec, tmp_path / "new", "tcp://127.0.0.1:9", progress=False)
+    assert sorted(p.name for p in (tmp_path / "new").iterdir()) == ["cells", "results.csv", "results.parquet",
+                                                                     "sweep.yaml", "versions.yaml"]
+    assert len(list((tmp_path / "new" / "cells").iterdir())) == 1 and computed(log) == ["0 0"]

@@ -135,16 +135,3 @@ def test_an_earlier_run_is_told_by_what_it_left(tmp_path, name, content, told):
     (tmp_path / "trajectory.tum").write_text("0 0 0 0 0 0 0 1\n")
     assert earlier_run_files(tmp_path) == ({name, "trajectory.tum"} if told else set())
     assert foreign_outputs(tmp_path) == ([] if told else sorted([name, "trajectory.tum"], key=SLAM_ORDER.index))
-
-
-def test_the_shipped_mit_csail_config_loads_and_sets_the_cm_mode_noise():
-    """configs/slam-mit-csail.yaml, which the README's MIT CSAIL command uses, is a valid SlamConfig."""
-    import yaml
-    from pathlib import Path
-
-    from slam import SlamConfig
-
-    path = Path(__file__).resolve().parents[1] / "configs" / "slam-mit-csail.yaml"
-    cfg = SlamConfig.from_dict(yaml.safe_load(path.read_text()))
-    assert cfg.extractor_params == {"sigma_r": 0.02}
-    assert cfg.extractor == SlamConfig().extractor

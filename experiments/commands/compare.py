@@ -7,6 +7,7 @@ import argparse
 import sys
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -122,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
     started = datetime.datetime.now()  # what names the run's folder (a real log's compare takes minutes)
 
     from experiments.compare import (check_sources, common_errors, compare, format_summary, parse_sources,
-                                     resolved_configs, summarise, world_words)
+                                     resolved_configs, source_label, source_noise, summarise, world_words)
     from experiments.overrides import extractor_overrides
     from experiments.progress import warm_up_kernels
     from features.scoring import ScoreConfig
@@ -167,6 +168,7 @@ def run(args: argparse.Namespace) -> int:
     for src in sources:
         if src.reader is not None:
             report_skipped(src.reader)
+    _warn_unread(params, sources)
     if table.empty:
         raise LmsbenchError("no scans in the given sources")
     summary = summarise(table)
@@ -178,14 +180,12 @@ def run(args: argparse.Namespace) -> int:
         sources=args.sources, seeds=args.seeds, duration=args.duration, rate_hz=args.rate, stride=args.stride,
         max_scans=args.max_scans, sigma=args.sigma, poses=args.poses,
         log_options=plain_log_options(read_log_options(args)),
-        sigma_r={src.name: src.sigma_r for src in sources}, methods=configs, scoring=dataclasses.asdict(score_config),
-        # the noise each source's extractors ran with (m; the configs above are before it is set):
-        # sigma_r / sigma_r_cm / sigma fields, and split_merge's / iepf's sigma_fit (None: as the former)
-        extractor_sigma={src.name: _plain_float(src.extractor_sigma if src.extractor_sigma is not None else src.sigma_r)
-                         for src in sources},
-        fit_sigma={src.name: _plain_float(src.fit_sigma) for src in sources},
-        # the sensor method's sigma_bearing (rad; None: its config's 0)
-        bearing_sigma={src.name: _plain_float(src.bearing_sigma) for src in sources},
+        sigma_r={src.name: src.sigma_r for src in sources},
+        methods=_per_source_marked(configs, params, sources), scoring=dataclasses.asdict(score_config),
+        # the noise each method ran with on each source (m; sigma_bearing rad): the fields compare sets
+        # per source (the log's estimates, the simulator's noise) and those set with --set, each as it
+        # was read (the sensor method's sigma_r_cm on cm-mode scans, sigma_r on mm-mode ones)
+        ran_with={source_label(src): source_noise(src) for src in sources},  # office:0, office:1, a log's name
     )
     # what produced each source's scans: the sensor that was simulated (interlaced or not), the log read
     resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
@@ -223,6 +223,42 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _plain_float(value: float | None) -> float | None:
-    """A float for YAML (numpy scalars are not plain YAML), or None."""
-    return None if value is None else float(value)
+PER_SOURCE = "set per source (ran_with)"  # config.yaml's methods: entry of a field compare sets per source
+
+
+def _per_source_marked(configs: dict[str, Any], params: dict[str, dict[str, Any]], sources: list) -> dict[str, Any]:
+    """``configs`` (each method's config as plain data) with every field compare set per source
+    (not by --set) written as PER_SOURCE: it listed the defaults there (``sigma: 0.005, sigma_fit:
+    null``) for methods that ran with each log's noise, and config.yaml's ran_with has the values."""
+    from experiments.compare import BEARING_NOISE_FIELDS, FIT_NOISE_FIELDS, NOISE_FIELDS
+
+    fit = any(src.fit_sigma is not None for src in sources)
+    bearing = any(src.bearing_sigma is not None for src in sources)
+    filled = NOISE_FIELDS + (FIT_NOISE_FIELDS if fit else ()) + (BEARING_NOISE_FIELDS if bearing else ())
+    from experiments.overrides import unread_marked
+
+    range_maxes = {r for src in sources for r in src.range_maxes}
+    out = {}
+    for method, cfg in configs.items():
+        if not isinstance(cfg, dict):
+            out[method] = cfg
+            continue
+        given = params.get(method, {})
+        ran = next((src.ran[method] for src in sources if method in src.ran), None)
+        marked = unread_marked(cfg, ran, range_maxes, given)  # a field set with --set that no scan read
+        out[method] = {f: PER_SOURCE if f in filled and f not in given else v for f, v in marked.items()}
+    return out
+
+
+def _warn_unread(params: dict[str, dict[str, Any]], sources: list) -> None:
+    """A warning line per field set with --set that no scan of the run reads (``sigma_r`` with
+    only cm-mode logs, ``sigma_r_cm`` with only mm-mode scans): it changed nothing, silently."""
+    from experiments.overrides import unread_fields
+
+    configs = {m: cfg for src in sources for m, cfg in src.ran.items()}
+    range_maxes = sorted({r for src in sources for r in src.range_maxes})
+    from experiments.compare import source_label
+
+    names = ", ".join(source_label(src) for src in sources)
+    for line in unread_fields(params, configs, range_maxes, f"the scans of {names}"):
+        print(f"lmsbench compare: warning: {line}", file=sys.stderr)

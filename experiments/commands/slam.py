@@ -130,6 +130,20 @@ def _config(args: argparse.Namespace):
     return cfg
 
 
+def _warn_unread(config: "SlamConfig", records: list, where: Any) -> None:
+    """A warning line per extractor field of the run (``extractor_params``: --config, --set) that no
+    scan reads: ``sigma_r: 0.02`` (configs/slam-mit-csail.yaml) ran bit for bit as the defaults on
+    the cm-mode MIT CSAIL log, whose scans read sigma_r_cm, and nothing said so."""
+    from features.registry import make_config
+
+    from experiments.overrides import unread_fields
+
+    configs = {config.extractor: make_config(config.extractor, **config.extractor_params)}
+    for line in unread_fields({config.extractor: config.extractor_params}, configs,
+                              sorted({float(r.scan.range_max) for r in records}), f"the scans of {Path(str(where)).name}"):
+        print(f"lmsbench slam: warning: {line}", file=sys.stderr)
+
+
 def in_time_order(stamps: list[float]) -> list[int]:
     """Indices of the longest run of scans, in log order, whose stamps (s) never decrease: the
     fewest scans dropped to leave the rest in time order (a stamp that jumps ahead costs that one
@@ -190,6 +204,7 @@ def run(args: argparse.Namespace) -> int:
     config = _config(args)
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
                       read_options=read_log_options(args))
+    _warn_unread(config, data.records, data.sources.get("scans", args.input))
     stamps = [r.scan.stamp for r in data.records]
     back = next((k for k in range(1, len(stamps)) if stamps[k] < stamps[k - 1]), None)
     if back is not None:

@@ -71,7 +71,36 @@ def run_sweep(
     check_executor(executor, workers)
     fn = check_spec(spec)
     cells = spec.cells()
-    store = CellStore(out)
+    fresh = not out.exists() and not out.is_symlink()
+    before = set() if fresh or not out.is_dir() else {p.name for p in out.iterdir()}
+    try:
+        return _run_into(spec, CellStore(out), fn, cells, executor, workers, retry_failed, progress)
+    except Exception:
+        _undo(out, fresh, before)
+        raise
+
+
+def _undo(out: Path, fresh: bool, before: set[str]) -> None:
+    """After a run that failed before any cell finished (a ``--scheduler`` not reached, a local
+    cluster that did not start: "Timed out trying to connect", exit 2), remove what it wrote into
+    ``out`` (the folder itself when it made it): it left sweep.yaml, versions.yaml and an empty
+    cells/ behind. A run with a finished cell, or stopped by Ctrl-C, keeps its folder to resume."""
+    import shutil
+
+    if not out.is_dir() or CellStore.finished(out):
+        return
+    if fresh:
+        shutil.rmtree(out, ignore_errors=True)
+        return
+    for entry in out.iterdir():
+        if entry.name not in before:
+            shutil.rmtree(entry, ignore_errors=True) if entry.is_dir() and not entry.is_symlink() else entry.unlink(missing_ok=True)
+
+
+def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, Scalar]], executor: Any, workers: int,
+              retry_failed: bool, progress: bool) -> SweepResult:
+    """:func:`run_sweep` into the folder of ``store``."""
+    out = store.root
     from experiments.provenance import versions, write_record
 
     write_record(out / "sweep.yaml", spec_record(spec))  # whole: it tells the folder as the sweep's (SWEEP_OWNER)

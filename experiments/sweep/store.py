@@ -32,6 +32,11 @@ class CellStore:
         for stale in self.cells.glob(".*.tmp"):  # left by a kill between write and rename
             stale.unlink(missing_ok=True)
 
+    @staticmethod
+    def finished(root: str | Path) -> bool:
+        """Whether the sweep folder ``root`` holds a finished cell (without making its cells/ folder)."""
+        return any((Path(root) / CELLS_DIR).glob("*.parquet"))
+
     def path(self, key: str) -> Path:
         return self.cells / f"{key}.parquet"
 

@@ -113,7 +113,14 @@ class SensorMethodConfig:
     def sigma_for(self, range_max: float) -> float | str:
         """The range noise std (m) for a scan with this ``range_max`` (m): ``sigma_r_cm`` for the
         SICK cm codes (range_max > 10 m), else ``sigma_r``; either may be "auto"."""
-        return self.sigma_r_cm if range_max > CM_MODE_RANGE_MAX else self.sigma_r
+        return self.sigma_r_cm if self.noise_field(range_max) == "sigma_r_cm" else self.sigma_r
+
+    @staticmethod
+    def noise_field(range_max: float) -> str:
+        """The name of the range-noise field read for a scan with this ``range_max`` (m):
+        "sigma_r_cm" for the SICK cm codes (range_max > 10 m), else "sigma_r". The other field
+        changes nothing on such a scan: the drivers warn when a user sets it and no scan reads it."""
+        return "sigma_r_cm" if range_max > CM_MODE_RANGE_MAX else "sigma_r"
 
 
 #: beam counts are capped here before the kernels' int64 fields: every count beyond any scan's
