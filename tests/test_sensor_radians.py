@@ -227,3 +227,28 @@ def test_half_a_degree_written_to_6_decimals_spans_180_deg_and_is_taken(tmp_path
     assert exact.angle_min == -math.pi / 2 and np.array_equal(exact.angles, -np.deg2rad(180.0) / 2 + np.arange(361) * HALF_DEG)
     assert _same_scans(_scans(exact), _scans(SensorConfig()))
     assert not _same_scans(_scans(short), _scans(exact))  # as written, not snapped to 0.5 deg
+
+
+def test_a_sweeps_old_sensor_file_is_warned_of_once(tmp_path: Path) -> None:
+    """`lmsbench sweep` checked the spec before compiling the kernels and run_sweep checked it
+    again, each reading the sensor_file: every old-spelling warning was said twice. Found by the
+    session's review."""
+    import os
+    import subprocess
+    import sys
+
+    old = tmp_path / "OLD.yaml"
+    old.write_text("resolution_deg: 0.5\nbeam_width_deg: 0.4\n")
+    sweep = tmp_path / "sf.yaml"
+    sweep.write_text(f"name: sf\nkind: extract\nfixed: {{sensor_file: {old}, duration: 1.0}}\ngrid: {{method: [sensor]}}\n")
+    root = Path(__file__).resolve().parents[1]
+    run = subprocess.run([sys.executable, "-m", "experiments.cli", "sweep", str(sweep), "--inprocess", "--quiet",
+                          "--out", str(tmp_path / "out")], env={**os.environ, "PYTHONPATH": str(root)}, cwd=tmp_path,
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert run.stderr.splitlines() == [
+        f"lmsbench sweep: warning: {old}: resolution_deg: 0.5 (deg) is the old spelling, read as resolution: "
+        f"{HALF_DEG!r} (rad); write `resolution: {HALF_DEG!r}` instead",
+        f"lmsbench sweep: warning: {old}: beam_width_deg: 0.4 (deg) is the old spelling, read as beam_width: "
+        "0.006981317007977318 (rad); write `beam_width: 0.006981317007977318` instead"]
+    assert "sf: 1 cells, 1 computed" in run.stdout
