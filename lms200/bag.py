@@ -84,7 +84,8 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
 
     Raises:
         BagExistsError: (an ``InputError`` and a ``FileExistsError``) ``path`` exists.
-        InputError: a scan stamp outside 0 <= stamp < 2**31 s (naming the item and the stamp).
+        InputError: a scan stamp outside 0 <= stamp < 2**31 s (naming the item and the stamp). The
+            records before the refused one are left in ``path`` as a readable bag.
     """
     path = Path(path)
     ros1 = path.suffix == ".bag"
@@ -124,51 +125,57 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
                 conns[name] = writer.add_connection(name, msgtype, **kw)
             return conns[name]
 
-        for seq, rec in enumerate(records):
-            scan = rec.scan
-            ns = _stamp_ns(scan.stamp)
-            if scan.stamp < 0 or ns >= MAX_STAMP_NS:  # was struct.error from rosbags' serialiser
-                raise InputError(f"records: item {seq}: stamp {scan.stamp!r} s cannot be stored in a bag "
-                                 f"(0 <= stamp < 2**31 s = {MAX_STAMP_NS // 1_000_000_000} s, a ROS time's range)")
-            if scan.range_max > FLOAT32_MAX or np.any(np.isfinite(scan.ranges) & (scan.ranges > FLOAT32_MAX)):
-                raise InputError(f"records: item {seq}: a range or range_max beyond {FLOAT32_MAX:.4g} m cannot be "
-                                 f"stored in a bag (a LaserScan's fields are float32), got range_max {scan.range_max:g} m")
-            sec, nsec = divmod(ns, 1_000_000_000)
-            header_kw = {"stamp": Time(sec=sec, nanosec=nsec), "frame_id": "laser"}
+        try:
+            for seq, rec in enumerate(records):
+                scan = rec.scan
+                ns = _stamp_ns(scan.stamp)
+                if scan.stamp < 0 or ns >= MAX_STAMP_NS:  # was struct.error from rosbags' serialiser
+                    raise InputError(f"records: item {seq}: stamp {scan.stamp!r} s cannot be stored in a bag "
+                                     f"(0 <= stamp < 2**31 s = {MAX_STAMP_NS // 1_000_000_000} s, a ROS time's range)")
+                if scan.range_max > FLOAT32_MAX or np.any(np.isfinite(scan.ranges) & (scan.ranges > FLOAT32_MAX)):
+                    raise InputError(f"records: item {seq}: a range or range_max beyond {FLOAT32_MAX:.4g} m cannot be "
+                                     f"stored in a bag (a LaserScan's fields are float32), got range_max {scan.range_max:g} m")
+                sec, nsec = divmod(ns, 1_000_000_000)
+                header_kw = {"stamp": Time(sec=sec, nanosec=nsec), "frame_id": "laser"}
 
-            if ros1:
-                header_kw["seq"] = seq
-            for name, pose in ((ODOM_TOPIC, rec.odom), (TRUTH_TOPIC, rec.truth)):
-                if pose is None:
-                    continue
-                x, y, th = pose
-                msg = PoseStamped(
-                    header=Header(**{**header_kw, "frame_id": "map" if name == TRUTH_TOPIC else "odom"}),
-                    pose=Pose(
-                        position=Point(x=float(x), y=float(y), z=0.0),
-                        orientation=Quaternion(x=0.0, y=0.0, z=float(np.sin(th / 2)), w=float(np.cos(th / 2))),
-                    ),
+                if ros1:
+                    header_kw["seq"] = seq
+                for name, pose in ((ODOM_TOPIC, rec.odom), (TRUTH_TOPIC, rec.truth)):
+                    if pose is None:
+                        continue
+                    x, y, th = pose
+                    msg = PoseStamped(
+                        header=Header(**{**header_kw, "frame_id": "map" if name == TRUTH_TOPIC else "odom"}),
+                        pose=Pose(
+                            position=Point(x=float(x), y=float(y), z=0.0),
+                            orientation=Quaternion(x=0.0, y=0.0, z=float(np.sin(th / 2)), w=float(np.cos(th / 2))),
+                        ),
+                    )
+                    c = conn(name, "geometry_msgs/msg/PoseStamped")
+                    writer.write(c, bag_time(ns), serialize(msg, "geometry_msgs/msg/PoseStamped"))
+                if lms200_shaped(len(scan), scan.angle_increment):
+                    time_increment, scan_time = mirror_time_increment(scan.angle_increment), scan_period(scan.angle_increment)
+                else:  # another scanner: its timing is unknown (the LMS200's mirror's was written, as if it were one)
+                    time_increment = scan_time = 0.0
+                msg = LaserScan(
+                    header=Header(**header_kw),
+                    angle_min=scan.angle_min,
+                    angle_max=scan.angle_max,
+                    angle_increment=scan.angle_increment,
+                    time_increment=time_increment,
+                    scan_time=scan_time,
+                    range_min=max(scan.range_min, smallest_range(scan.range_max)),
+                    range_max=scan.range_max,
+                    ranges=scan.ranges.astype(np.float32),
+                    intensities=np.zeros(0, dtype=np.float32),
                 )
-                c = conn(name, "geometry_msgs/msg/PoseStamped")
-                writer.write(c, bag_time(ns), serialize(msg, "geometry_msgs/msg/PoseStamped"))
-            if lms200_shaped(len(scan), scan.angle_increment):
-                time_increment, scan_time = mirror_time_increment(scan.angle_increment), scan_period(scan.angle_increment)
-            else:  # another scanner: its timing is unknown (the LMS200's mirror's was written, as if it were one)
-                time_increment = scan_time = 0.0
-            msg = LaserScan(
-                header=Header(**header_kw),
-                angle_min=scan.angle_min,
-                angle_max=scan.angle_max,
-                angle_increment=scan.angle_increment,
-                time_increment=time_increment,
-                scan_time=scan_time,
-                range_min=max(scan.range_min, smallest_range(scan.range_max)),
-                range_max=scan.range_max,
-                ranges=scan.ranges.astype(np.float32),
-                intensities=np.zeros(0, dtype=np.float32),
-            )
-            writer.write(conn(topic, "sensor_msgs/msg/LaserScan"), bag_time(ns), serialize(msg, "sensor_msgs/msg/LaserScan"))
-            count += 1
+                writer.write(conn(topic, "sensor_msgs/msg/LaserScan"), bag_time(ns), serialize(msg, "sensor_msgs/msg/LaserScan"))
+                count += 1
+        except InputError:  # a refused scan: the ones before it stay a readable bag, as a CARMEN log's do
+            # (the writer was left to rosbags' abort, unindexed, "Bag is not indexed": `lms200 record` said
+            # "the 3 scans before it are saved" of a bag that could not be read; found by the session's review)
+            writer.close()
+            raise
     return count
 
 

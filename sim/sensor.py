@@ -35,7 +35,8 @@ MAX_RESOLUTION_DEG = 1.0  # the LMS200's coarsest angular step (deg)
 MIN_RESOLUTION = math.radians(MIN_RESOLUTION_DEG)  # rad, 0.004363
 MAX_RESOLUTION = math.radians(MAX_RESOLUTION_DEG)  # rad, 0.017453
 MAX_FOV_DEG = 180.0  # the LMS200's widest field of view (deg)
-RESOLUTION_SLACK = 1e-4  # relative: a resolution written by hand to 6 decimals (0.004363 for 0.25 deg) is taken
+RESOLUTION_SLACK = 1e-4  # relative: a resolution written by hand to 6 decimals (0.004363 for 0.25 deg) is taken,
+# in its bounds and in the field of view it spans (361 beams at 0.008727: 180.007 deg)
 # The bounds of a sensor file's values (``lmsbench calibrate`` writes them; ``--sensor`` reads
 # them), each physically plausible for a 2-D laser rangefinder with room to spare: a value
 # written in mm or cm where metres are meant lies outside (noise_sigma: 0.5 meant as 5 mm in cm
@@ -102,7 +103,8 @@ class SensorConfig:
 
     Checked when built (an ``InputError`` names the field): every number finite; resolution
     in [0.004363, 0.017453] rad (0.25-1 deg) and a field of view of at most 180 deg (so at most
-    721 beams); noise_sigma in [0, 0.1] m, noise_tail_sigma in [0, 1] m and |noise_sigma_per_m|
+    721 beams), both to 1 part in 10^4 (0.5 deg written to 6 decimals, 0.008727, over 361 beams is
+    taken, simulated as written); noise_sigma in [0, 0.1] m, noise_tail_sigma in [0, 1] m and |noise_sigma_per_m|
     <= 0.05 m per m (metres: a 5 meant as millimetres or a 0.5 meant as centimetres is refused,
     not simulated); mixed_gap in [0, 1] m; beam_width in [0, 0.174533] rad (0-10 deg: a 0.5 meant
     as degrees is refused); probabilities in [0, 1); the two cell sizes 0 or in [1 mm, 10 m].
@@ -157,7 +159,8 @@ class SensorConfig:
             raise InputError(f"resolution: must be in [{MIN_RESOLUTION:.6f}, {MAX_RESOLUTION:.6f}] rad "
                              f"({MIN_RESOLUTION_DEG:g}-{MAX_RESOLUTION_DEG:g} deg, the LMS200's steps), got "
                              f"{self.resolution}{_degrees_hint(self.resolution, MAX_RESOLUTION, MAX_RESOLUTION_DEG)}")
-        if self.fov_deg > MAX_FOV_DEG + 1e-9:
+        if self.fov_deg > MAX_FOV_DEG * slack:  # 361 beams at 0.008727 (0.5 deg to 6 decimals) span 180.007 deg:
+            # taken, as the bound is, and simulated as written (an exact step is exactly 180 deg)
             raise InputError(f"n_beams, resolution: field of view {self.fov_deg:g} deg exceeds {MAX_FOV_DEG:g} deg "
                              f"({math.radians(MAX_FOV_DEG):.6f} rad)")
         for name, most in (("noise_sigma", MAX_NOISE_SIGMA_M), ("noise_tail_sigma", MAX_TAIL_SIGMA_M)):

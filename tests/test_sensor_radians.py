@@ -111,8 +111,10 @@ def test_degrees_given_as_radians_are_refused_with_the_hint(tmp_path: Path) -> N
     # the bounds as the message writes them (6 decimals) are taken: 401 beams at 0.004363 rad
     assert SensorConfig(n_beams=401, resolution=0.004363).turns_per_scan == 4
     assert SensorConfig(n_beams=181, resolution=0.017453).fov_deg == pytest.approx(180.0, abs=0.01)
-    with pytest.raises(InputError, match=r"^n_beams, resolution: field of view 180.0\d* deg exceeds 180 deg"):
-        SensorConfig(n_beams=181, resolution=0.017455)
+    with pytest.raises(InputError, match=r"^n_beams, resolution: field of view 180.028 deg exceeds 180 deg"):
+        SensorConfig(n_beams=361, resolution=0.008728)  # 1.6 parts in 10^4 over 0.5 deg: not 0.5 deg written short
+    with pytest.raises(InputError, match=r"^n_beams, resolution: field of view 181 deg exceeds 180 deg"):
+        SensorConfig(n_beams=182, resolution=RES_1DEG)
     with pytest.raises(InputError, match=r"^beam_width: must be in \[0, 0.174533\] rad \(0-10 deg\), got 0.4 "
                                          r"\(degrees given as radians\?\)$"):
         SensorConfig(beam_width=0.4)
@@ -208,3 +210,45 @@ def test_calibrate_writes_radians_that_read_back_to_an_equal_config(tmp_path: Pa
     assert back == result.sensor
     # the fitted width is the degree grid's, rounded to 1e-4 deg as before, in radians
     assert round(math.degrees(back.beam_width), 4) == pytest.approx(math.degrees(back.beam_width), abs=1e-9)
+
+
+def test_half_a_degree_written_to_6_decimals_spans_180_deg_and_is_taken(tmp_path: Path) -> None:
+    """`resolution: 0.008727` (0.5 deg to the 6 decimals the bounds' message shows) over 361 beams
+    was refused, "field of view 180.007 deg exceeds 180 deg": f33cca8 loosened the bounds by 1 part
+    in 10^4, not the field of view. Found by the session's review. It is simulated as written; the
+    exact step's scans do not change by a bit."""
+    f = tmp_path / "s.yaml"
+    f.write_text("n_beams: 361\nresolution: 0.008727\n")
+    short = SensorConfig.from_yaml(f)
+    assert short.resolution == 0.008727 and short.fov_deg == pytest.approx(180.0073, abs=1e-4)
+    assert short.angle_increment == 0.008727 and short.turns_per_scan == 2 and short.angles[-1] > math.pi / 2
+    assert len(_scans(short)[0].scan) == 361
+    exact = SensorConfig(n_beams=361, resolution=HALF_DEG)
+    assert exact.angle_min == -math.pi / 2 and np.array_equal(exact.angles, -np.deg2rad(180.0) / 2 + np.arange(361) * HALF_DEG)
+    assert _same_scans(_scans(exact), _scans(SensorConfig()))
+    assert not _same_scans(_scans(short), _scans(exact))  # as written, not snapped to 0.5 deg
+
+
+def test_a_sweeps_old_sensor_file_is_warned_of_once(tmp_path: Path) -> None:
+    """`lmsbench sweep` checked the spec before compiling the kernels and run_sweep checked it
+    again, each reading the sensor_file: every old-spelling warning was said twice. Found by the
+    session's review."""
+    import os
+    import subprocess
+    import sys
+
+    old = tmp_path / "OLD.yaml"
+    old.write_text("resolution_deg: 0.5\nbeam_width_deg: 0.4\n")
+    sweep = tmp_path / "sf.yaml"
+    sweep.write_text(f"name: sf\nkind: extract\nfixed: {{sensor_file: {old}, duration: 1.0}}\ngrid: {{method: [sensor]}}\n")
+    root = Path(__file__).resolve().parents[1]
+    run = subprocess.run([sys.executable, "-m", "experiments.cli", "sweep", str(sweep), "--inprocess", "--quiet",
+                          "--out", str(tmp_path / "out")], env={**os.environ, "PYTHONPATH": str(root)}, cwd=tmp_path,
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert run.stderr.splitlines() == [
+        f"lmsbench sweep: warning: {old}: resolution_deg: 0.5 (deg) is the old spelling, read as resolution: "
+        f"{HALF_DEG!r} (rad); write `resolution: {HALF_DEG!r}` instead",
+        f"lmsbench sweep: warning: {old}: beam_width_deg: 0.4 (deg) is the old spelling, read as beam_width: "
+        "0.006981317007977318 (rad); write `beam_width: 0.006981317007977318` instead"]
+    assert "sf: 1 cells, 1 computed" in run.stdout

@@ -162,6 +162,26 @@ def _write(out: Path, records: Iterable[Record]) -> int:
     return write_carmen(out, records, flush=True)
 
 
+class _Counted:
+    """The records handed to a writer, counted, so that a writer that fails says how many it had
+    written: it takes a record only after the one before is in the file (CARMEN flushed, the bag
+    closed with its index on the error), so all but the last one taken, or all once it asked for
+    more and there were none."""
+
+    def __init__(self, records: Iterable[Record]) -> None:
+        self.records, self.taken, self.done = records, 0, False
+
+    def __iter__(self) -> Iterator[Record]:
+        for rec in self.records:
+            self.taken += 1
+            yield rec
+        self.done = True
+
+    @property
+    def written(self) -> int:
+        return self.taken if self.done else max(self.taken - 1, 0)
+
+
 RECORD_SUFFIXES = (".clf", ".log", ".gz", ".bag")
 
 
@@ -217,8 +237,13 @@ def run_record(args: argparse.Namespace) -> int:
             print(f"{opened:<{len(status)}}", file=sys.stderr, flush=True)
             set_up = True
             progress = _Progress(dev)
+            counted = _Counted(_records(dev, progress, stop, args.max_scans, args.duration))
             try:
-                written = _write(args.out, _records(dev, progress, stop, args.max_scans, args.duration))
+                written = _write(args.out, counted)
+            except LmsbenchError as exc:  # the writer refused a scan (units changed): the ones before it are kept
+                # (was caught below as the port's closing error with 0 written: the file of 3 flushed
+                # scans was deleted, "no scan was recorded"; found by the session's review)
+                written, stop["error"] = counted.written, exc
             finally:
                 progress.update(final=True)
             stats = dev.stats

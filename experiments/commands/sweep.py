@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         warm_up_kernels(slam=spec.kind == "slam")
     try:
         result = run_sweep(spec, out, executor, workers=args.workers, retry_failed=args.retry_failed,
-                           progress=not args.no_progress)
+                           progress=not args.no_progress, checked=True)  # checked above: its warnings were said once
     except SweepSpecError as exc:  # an unknown kind or parameter name, found before any cell ran
         raise SweepSpecError(f"{args.sweep}: {exc}") from exc
     if result.failed:  # said first on stderr: a stdout whose reader went away stops at the summary below
