@@ -207,6 +207,17 @@ def test_a_recording_of_no_scan_leaves_no_file(tmp_path: Path, name: str) -> Non
             assert last.endswith(f"; no scan was recorded, so {out} was not written") and not out.exists()
 
 
+def _recording(url: str, out: Path, timeout: str) -> subprocess.Popen:
+    """`lms200 record` started in a process, returned once its file exists (the device is set up)."""
+    proc = subprocess.Popen(cli("record", "--port", url, "--out", str(out), "--timeout", timeout), env=ENV,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not out.exists():
+        assert proc.poll() is None and time.monotonic() < deadline
+        time.sleep(0.01)
+    return proc
+
+
 def test_a_device_that_goes_mute_says_both_errors_and_leaves_no_empty_file(tmp_path: Path) -> None:
     """The device answers the setup, then nothing: no scan came, and returning it to on-request
     mode as the port closed failed too. The message was the second error alone, and the file of
@@ -214,12 +225,7 @@ def test_a_device_that_goes_mute_says_both_errors_and_leaves_no_empty_file(tmp_p
     dev = VirtualLMS200([], time_scale=0.01)
     out = tmp_path / "rec.clf"
     with TcpServer(dev) as ad:
-        proc = subprocess.Popen(cli("record", "--port", ad.url, "--out", str(out), "--timeout", "0.5"), env=ENV,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 60
-        while not out.exists():  # made once the device is set up
-            assert proc.poll() is None and time.monotonic() < deadline
-            time.sleep(0.01)
+        proc = _recording(ad.url, out, "0.5")
         dev.faults.mute = True
         _, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 2, stderr
@@ -234,12 +240,7 @@ def test_ctrl_c_before_the_first_scan_leaves_no_file(tmp_path: Path) -> None:
     dev = VirtualLMS200([], time_scale=0.01)
     out = tmp_path / "rec.clf"
     with TcpServer(dev) as ad:
-        proc = subprocess.Popen(cli("record", "--port", ad.url, "--out", str(out), "--timeout", "5"), env=ENV,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 60
-        while not out.exists():
-            assert proc.poll() is None and time.monotonic() < deadline
-            time.sleep(0.01)
+        proc = _recording(ad.url, out, "5")
         proc.send_signal(signal.SIGINT)
         stdout, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 0, stderr
