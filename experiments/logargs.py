@@ -120,7 +120,8 @@ def report_skipped(reader: Any, stream: IO[str] | None = None, show: int = 3) ->
     count = getattr(stats, "skipped_count", len(skipped))  # skipped keeps the first MAX_SKIPPED_KEPT only
     bag = isinstance(stats, BagReadStats)  # bag reasons name topic and message index themselves
     if count:
-        print(f"{path}: skipped {count} bad {'messages' if bag else 'lines'}", file=stream)
+        noun = ("message" if bag else "line") + ("" if count == 1 else "s")
+        print(f"{path}: skipped {count} bad {noun}", file=stream)
         for where, reason in skipped[:show]:
             print(f"  {path}: {reason}" if bag else f"  {path}:{where}: {reason}", file=stream)
         if count > show:

@@ -57,7 +57,7 @@ def test_compare_on_a_log_with_bad_lines_and_two_lasers(tmp_path: Path, capsys: 
     assert f"{path}:4: malformed FLASER line" in capsys.readouterr().err
     assert main(argv + ["--skip-bad-lines", "--sigma", "0.01"]) == 0
     captured = capsys.readouterr()
-    assert "skipped 1 bad lines" in captured.err and "realdata_corridor-corrected_log.png" in captured.out
+    assert "skipped 1 bad line\n" in captured.err and "realdata_corridor-corrected_log.png" in captured.out
     summary = pd.read_csv(out / "summary.csv")
     assert set(summary["method"]) == {"split_merge", "iepf"} and (summary["scans"] == 11).all()
     for col in ("explained_3cm", "explained_3sigma", "ray_rmse_mm", "lines_per_scan", "mean_segment_m",

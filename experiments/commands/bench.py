@@ -38,7 +38,8 @@ def run(args: argparse.Namespace) -> int:
     names = args.names or list(found)
     missing = [n for n in names if n not in found]
     if missing:
-        raise LmsbenchError(f"unknown benchmark(s) {', '.join(missing)}; known: {', '.join(found)}")
+        shown_missing = ", ".join(n if n.strip() else repr(n) for n in missing)  # '' would be invisible
+        raise LmsbenchError(f"unknown benchmark(s) {shown_missing}; known: {', '.join(found)}")
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise LmsbenchError(f"benchmark(s) {', '.join(twice)} named more than once")
