@@ -31,6 +31,7 @@ from features.registry import available_methods, backend_of, get_method, make_co
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
 from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
+from lms200.logs import SIMULATE_LOG
 from lms200.noise import QUANTUM_CANDIDATES_M
 
 from experiments.options import known_worlds  # sim.WORLD_NAMES, the simulator imported when first asked
@@ -153,7 +154,7 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
             raise LmsbenchError(f"{p / 'config.yaml'}: not a simulate config ({' '.join(str(exc).split())})") from None
         settings.update({k: cfg.get(k) for k in ("world", "seed", "duration", "rate_hz")})
     settings["sensor"] = dataclasses.asdict(sensor)
-    inner = log_source(p / "scans.clf", stride, max_scans, poses="none")
+    inner = log_source(p / SIMULATE_LOG, stride, max_scans, poses="none")
     return Source(p.name, "sim", int(seed) if seed is not None else None, inner.records, _truth_in(world, sensor),
                   max_scans, sigma_r=sensor.noise_sigma, pose_of=lambda rec: rec.truth, reader=inner.reader,
                   settings=settings)
@@ -313,7 +314,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
                 raise
             except (ValueError, KeyError, TypeError) as exc:
                 raise LmsbenchError(f"{spec}/world.json: not a world ({type(exc).__name__}: {exc})") from None
-            spec = str(Path(spec) / "scans.clf")
+            spec = str(Path(spec) / SIMULATE_LOG)
         elif not Path(spec).exists() and not Path(spec).is_symlink():  # a link to nothing: check_log says so
             close = [w for w in known_worlds() if _close(w, name)]
             hint = f" (did you mean {close[0]}?)" if close else ""

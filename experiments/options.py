@@ -23,6 +23,7 @@ import yaml
 
 from lms200.carmen import COMPRESSION_SUFFIXES, PIPE_REASON, READ_ERRORS, archive_kind, compression, open_bytes
 from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
+from lms200.logs import SIMULATE_LOG
 from lms200.timing import MAX_DURATION_S, MIN_DURATION_S  # a simulated run's bounds (s)
 from lms200.yamlio import load as load_yaml, size_problem
 
@@ -450,7 +451,7 @@ def simulate_log(path: str | os.PathLike) -> Path | None:
     log: slam and compare took a simulate folder, info, calibrate, sim2real, figures --log and
     lms200 emulate --log said it was "a folder but not a ROS 2 bag"."""
     p = Path(path)
-    log = p / "scans.clf"
+    log = p / SIMULATE_LOG
     return log if p.is_dir() and log.is_file() else None
 
 
@@ -501,7 +502,7 @@ def check_log(path: str | os.PathLike) -> Path:
     return p
 
 
-SIMULATE_OUTPUTS = ("scans.clf", "groundtruth.tum", "world.json", "config.yaml", "map.png")
+SIMULATE_OUTPUTS = (SIMULATE_LOG, "groundtruth.tum", "world.json", "config.yaml", "map.png")
 #: The hidden file ``lmsbench simulate`` writes into its --out folder before any of its outputs and
 #: removes once they are all whole (experiments.simulation.run_simulation): a run stopped or killed
 #: while writing (Ctrl-C, SIGKILL, a crash, a power loss) leaves it, and the readers of the folder

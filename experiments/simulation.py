@@ -29,6 +29,7 @@ import yaml
 
 from lms200 import Record
 from lms200.carmen import write_carmen
+from lms200.logs import SIMULATE_LOG
 from lms200.tum import write_tum
 from sim import SensorConfig, World, make_world, simulate_records
 from sim.records import OdometryConfig
@@ -176,7 +177,7 @@ def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> 
     # config.yaml first, whole: it tells the folder as simulate's (options.SIMULATE_OWNER); a run
     # stopped while writing scans.clf left a folder the next run into it refused
     write_record(out / "config.yaml", yaml.safe_dump(cfg.to_dict(), sort_keys=False))
-    write_record(out / "scans.clf", lambda tmp: write_carmen(tmp, records))  # streamed into the temporary file
+    write_record(out / SIMULATE_LOG, lambda tmp: write_carmen(tmp, records))  # streamed into the temporary file
     stamps = np.array([r.scan.stamp for r in records], dtype=float)
     write_record(out / "groundtruth.tum",
                  lambda tmp: write_tum(tmp, stamps, np.array([r.truth for r in records]).reshape(-1, 3)))
