@@ -113,21 +113,27 @@ def unread_fields(params: Mapping[str, Mapping[str, Any]], configs: Mapping[str,
     ``configs``: each method's config as it ran; ``range_maxes``: those of the run's scans (m);
     ``scans``: how the line names them ("the scans of mit-csail.clf.gz")."""
     out: list[str] = []
-    if not range_maxes:
-        return out
     shown = ", ".join(f"{r:g}" for r in sorted(set(range_maxes))[:3]) + (", ..." if len(set(range_maxes)) > 3 else "")
     for method, given in params.items():
-        cfg = configs.get(method)
-        if cfg is None or not callable(getattr(cfg, "noise_field", None)):
-            continue
-        read = {cfg.noise_field(r) for r in range_maxes}
-        for field, value in given.items():
-            if field in MODE_FIELDS and field not in read:
-                other = next(iter(read))
-                mode, rule = MODE_FIELDS[field]
-                out.append(f"{method}: {field}={value!r} is not used: {field} applies to {mode}-mode scans ({rule}); "
-                           f"{scans} are {MODE_FIELDS[other][0]} mode (range_max {shown} m): set {other}")
+        read, unread = _mode_fields_read(configs.get(method), range_maxes, given)
+        for field in unread:
+            other = next(iter(read))
+            mode, rule = MODE_FIELDS[field]
+            out.append(f"{method}: {field}={given[field]!r} is not used: {field} applies to {mode}-mode scans ({rule}); "
+                       f"{scans} are {MODE_FIELDS[other][0]} mode (range_max {shown} m): set {other}")
     return out
+
+
+def _mode_fields_read(config: Any, range_maxes: Sequence[float] | set[float],
+                      given: Mapping[str, Any]) -> tuple[set[str], list[str]]:
+    """The mode-bound range-noise fields of ``config`` that scans of these ``range_maxes`` (m)
+    read, and those of ``given`` (the user's fields, in their order) that none reads; both empty
+    for a config without ``noise_field`` or a run of no scan."""
+    noise_field = getattr(config, "noise_field", None)
+    if not range_maxes or not callable(noise_field):
+        return set(), []
+    read = {noise_field(r) for r in range_maxes}
+    return read, [f for f in given if f in MODE_FIELDS and f not in read]
 
 
 def unread_marked(values: dict[str, Any], config: Any, range_maxes: Sequence[float] | set[float],
@@ -136,9 +142,5 @@ def unread_marked(values: dict[str, Any], config: Any, range_maxes: Sequence[flo
     range-noise field the user set (``given``) that no scan of the run read (``range_maxes``, m)
     written as ``"V: not read (no MODE-mode scan)"``: the record said ``sigma_r: 0.02`` as if it
     had run. (A default the scans do not read stays: which one a scan reads is the method's rule.)"""
-    noise_field = getattr(config, "noise_field", None)
-    if not range_maxes or not callable(noise_field):
-        return values
-    read = {noise_field(r) for r in range_maxes}
-    return {f: f"{v!r}: not read (no {MODE_FIELDS[f][0]}-mode scan)" if f in MODE_FIELDS and f in given and f not in read
-            else v for f, v in values.items()}
+    _, unread = _mode_fields_read(config, range_maxes, given)
+    return {f: f"{v!r}: not read (no {MODE_FIELDS[f][0]}-mode scan)" if f in unread else v for f, v in values.items()}

@@ -231,12 +231,11 @@ def _per_source_marked(configs: dict[str, Any], params: dict[str, dict[str, Any]
     (not by --set) written as PER_SOURCE: it listed the defaults there (``sigma: 0.005, sigma_fit:
     null``) for methods that ran with each log's noise, and config.yaml's ran_with has the values."""
     from experiments.compare import BEARING_NOISE_FIELDS, FIT_NOISE_FIELDS, NOISE_FIELDS
+    from experiments.overrides import unread_marked
 
     fit = any(src.fit_sigma is not None for src in sources)
     bearing = any(src.bearing_sigma is not None for src in sources)
     filled = NOISE_FIELDS + (FIT_NOISE_FIELDS if fit else ()) + (BEARING_NOISE_FIELDS if bearing else ())
-    from experiments.overrides import unread_marked
-
     range_maxes = {r for src in sources for r in src.range_maxes}
     out = {}
     for method, cfg in configs.items():
@@ -253,12 +252,11 @@ def _per_source_marked(configs: dict[str, Any], params: dict[str, dict[str, Any]
 def _warn_unread(params: dict[str, dict[str, Any]], sources: list) -> None:
     """A warning line per field set with --set that no scan of the run reads (``sigma_r`` with
     only cm-mode logs, ``sigma_r_cm`` with only mm-mode scans): it changed nothing, silently."""
+    from experiments.compare import source_label
     from experiments.overrides import unread_fields
 
     configs = {m: cfg for src in sources for m, cfg in src.ran.items()}
     range_maxes = sorted({r for src in sources for r in src.range_maxes})
-    from experiments.compare import source_label
-
     names = ", ".join(source_label(src) for src in sources)
     for line in unread_fields(params, configs, range_maxes, f"the scans of {names}"):
         print(f"lmsbench compare: warning: {line}", file=sys.stderr)
