@@ -189,6 +189,11 @@ def test_random_sampling_is_seeded_in_range_and_crossed_with_grid_and_seeds():
         ({"kind": "k", "random": {"u": {"uniform": [2, 1]}}, "samples": 3}, r"low <= high"),
         ({"kind": "k", "random": {"u": {"normal": [0, 1]}}, "samples": 3}, r"random.u must be one of"),
         ({"kind": "k", "random": {"u": {"uniform": [0, 1]}}}, r"needs `samples:`"),
+        # ignored without `random:` (a wrong-input hunt): `samples: 8` ran each grid point once, exit 0
+        ({"kind": "k", "grid": {"x": [1]}, "samples": 8}, r"`samples: 8` is for random draws, and the sweep has "
+                                                         r"no `random:` parameters to draw"),
+        ({"kind": "k", "random": {}, "samples": 8}, r"`samples: 8` is for random draws"),
+        ({"kind": "k", "sample_seed": 3}, r"`sample_seed: 3` is for random draws"),
         ({"kind": "k", "fixed": {"x": [1, 2]}}, r"fixed.x must be a number, string, bool or null, got \[1, 2\] "
                                                 r"\(to vary it, put it under grid:\)"),
         # a bare number ran as a list of one: `seeds: 3` the one seed 3, `grid: {x: 5}` the one value
