@@ -599,3 +599,18 @@ def test_a_sweep_that_fails_before_any_cell_leaves_no_folder(tmp_path, monkeypat
     assert sorted(p.name for p in (tmp_path / "new").iterdir()) == ["cells", "results.csv", "results.parquet",
                                                                      "sweep.yaml", "versions.yaml"]
     assert len(list((tmp_path / "new" / "cells").iterdir())) == 1 and computed(log) == ["0 0"]
+
+
+def test_a_cell_calling_sys_exit_is_an_error_row_not_the_end_of_the_sweep():
+    """The wrong-input hunt: a cell kind calling sys.exit(0) ended an --inprocess sweep silently,
+    exit 0, half its cells not run; on a cluster it killed the cell's worker twice (KilledWorker)."""
+    import sys
+
+    from experiments.sweep.cells import run_cell
+
+    def exits(params):
+        sys.exit(0)
+
+    row = run_cell("mine:cell", {"a": 1}, exits)
+    assert row["status"] == "error"
+    assert row["error"].startswith("SystemExit: 0 (it called sys.exit) (test_experiments_sweep.py:")
