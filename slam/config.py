@@ -45,7 +45,8 @@ class AlignmentConfig:
         retry_inliers: when the ICP from the prediction explains fewer than this fraction of the
             points, it is also run from standing still and from ``heading_hypotheses``.
         heading_hypotheses: heading offsets (rad) about the prediction tried on a retry (15, 30,
-            60, 90 and 180 degrees: a fast turn between two scans).
+            60, 90 and 180 degrees: a fast turn between two scans), without odometry only those
+            within ``max_turn_rate`` of the last heading (the search's bound, below).
         refine_hypotheses: how many of the retry starts (best first by their initial score) are refined.
         hypothesis_margin: a retry wins only with this much larger inlier fraction.
         min_inliers: a match explaining fewer points is not used (the pose follows the prediction).

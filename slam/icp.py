@@ -13,6 +13,7 @@ import numpy as np
 
 from . import icpkernel
 from .config import SEARCH_CELL_M, AlignmentConfig
+from .models import wrap
 
 
 _EYE3 = np.eye(3)
@@ -184,7 +185,8 @@ def score(points: np.ndarray, ref: Reference, pose: np.ndarray, distance: float)
 
 
 def match(points: np.ndarray, ref: Reference, starts: list[np.ndarray], cfg: AlignmentConfig,
-          max_heading: float = np.inf, prior: np.ndarray | None = None, normals: np.ndarray | None = None) -> Match:
+          max_heading: float = np.inf, prior: np.ndarray | None = None, normals: np.ndarray | None = None,
+          turn: tuple[float, float] | None = None) -> Match:
     """ICP from the first start; when it explains fewer than ``retry_inliers`` of the points, also
     from every other start and from heading offsets ``heading_hypotheses`` (rad) about the first
     (those up to ``max_heading`` rad: a loop closure tries only headings its drift allows); the
@@ -195,6 +197,8 @@ def match(points: np.ndarray, ref: Reference, starts: list[np.ndarray], cfg: Ali
         return best
     first = np.asarray(starts[0], float)
     extra = list(starts[1:]) + [first + (0.0, 0.0, dh) for dh in cfg.heading_hypotheses if abs(dh) <= max_heading]
+    if turn is not None:
+        extra = [s for s in extra if abs(wrap(float(s[2]) - turn[0])) <= turn[1]]
     # cheap screening: refine only the few starts that already explain most points
     scored = sorted(((score(points, ref, s, cfg.max_correspondence), k + 1, s) for k, s in enumerate(extra)),
                     key=lambda t: -t[0])

@@ -208,12 +208,14 @@ class ScanSlam:
             # a wheel odometry may be tenths of a radian off over a step (a slip, a late stamp), not the half
             # turn that matches a corridor backwards: the retry's heading hypotheses stay within that
             reach = max(self.alignment.search_sigmas * sth, self.motion.odom_max_turn_error) if by_odometry else np.inf
-            m = match(sp.matched, self.ref, starts, self.alignment, reach, prior=prior, normals=qn)
+            turn = None if by_odometry else self._turn_bound(dt)
+            m = match(sp.matched, self.ref, starts, self.alignment, reach, prior=prior, normals=qn, turn=turn)
             m = self._check_jump(sp.matched, m, pred, sxy, sth, info, qn)
             # the search looks for motion beyond the ICP's reach; within the odometry's reach it runs only when
             # the odometry-held match fails (a wheel slip), not to trade the odometry for a better-fitting slide
             retry = self.alignment.min_inliers if by_odometry else self.alignment.retry_inliers
-            if self.alignment.search and (self._beyond_reach(sxy) or m.inliers < retry):
+            turned = turn is not None and abs(wrap(m.pose[2] - turn[0])) > turn[1]
+            if self.alignment.search and (self._beyond_reach(sxy) or m.inliers < retry or turned):
                 m = self._search(sp, m, pred, sxy, sth, dt, info, qn, by_odometry)
             al = self.alignment
             if by_odometry and (info.searched or m.inliers < al.retry_inliers):
@@ -274,6 +276,12 @@ class ScanSlam:
             return m
         info.jump_rejected = True
         return near
+
+    def _turn_bound(self, dt: float) -> tuple[float, float] | None:
+        """(last heading, rad) and the turn a robot makes at most in ``dt`` s (``max_turn_rate``,
+        plus ``DISTINCT_THETA``), the search's bound; None when it allows the whole turn."""
+        max_turn = self.alignment.max_turn_rate * max(dt, 0.0)
+        return None if max_turn >= np.pi else (float(self.last[-1][1][2]), max_turn + DISTINCT_THETA)
 
     def _beyond_reach(self, sxy: float) -> bool:
         """The prediction's position std ``sxy`` (m) times ``search_sigmas`` exceeds the ICP's reach."""
