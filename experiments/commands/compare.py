@@ -122,8 +122,8 @@ def run(args: argparse.Namespace) -> int:
 
     started = datetime.datetime.now()  # what names the run's folder (a real log's compare takes minutes)
 
-    from experiments.compare import (check_sources, common_errors, compare, format_summary, parse_sources,
-                                     resolved_configs, source_label, source_noise, summarise, world_words)
+    from experiments.compare import (check_sources, common_errors, compare, format_ran_with, format_summary,
+                                     parse_sources, resolved_configs, source_label, source_noise, summarise, world_words)
     from experiments.overrides import extractor_overrides
     from experiments.progress import warm_up_kernels
     from features.scoring import ScoreConfig
@@ -202,7 +202,7 @@ def run(args: argparse.Namespace) -> int:
     else:  # compare.csv and summary.csv are records too: whole, or a cut one refused the next run
         write_record(path, lambda p: table.to_csv(p, index=False))
     write_record(args.out / "summary.csv", lambda p: summary.to_csv(p, index=False))
-    text = format_summary(summary)
+    text = format_summary(summary) + "\n" + format_ran_with(resolved["ran_with"])  # the noise, as read: config.yaml
     (args.out / "summary.txt").write_text(text + "\n")
     figures = []
     for src in sources:
