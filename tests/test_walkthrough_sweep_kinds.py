@@ -97,6 +97,8 @@ def test_a_worker_that_cannot_import_the_kind_records_error_rows(tmp_path, monke
     elsewhere.mkdir()
     monkeypatch.chdir(elsewhere)
     monkeypatch.delitem(sys.modules, "mysw")
+    # a worker's own process: the driver's folder, kept on this process's path for lazy imports, is not on its
+    monkeypatch.setattr(sys, "path", [p for p in sys.path if p != str(tmp_path)])
     worker = pickle.loads(sent)  # no import yet
     row = run_cell("mysw:cell", {"x": 3, "seed": 1}, worker)
     assert row["status"] == "error" and row["error"].startswith(
