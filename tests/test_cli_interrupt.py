@@ -645,3 +645,27 @@ def test_the_stop_line_is_written_exactly_once_whoever_comes_first(monkeypatch):
 
     assert cli._interrupted(Racing("slam")) == 130
     assert lines == ["lmsbench slam: interrupted\n"] and exits == [(130, 1)]
+
+
+def test_the_workers_start_through_a_script_that_ignores_ctrl_c_or_as_before(monkeypatch) -> None:
+    """The local cluster's workers are spawned through a script that ignores SIGINT and runs this
+    Python; where it cannot run (a temporary folder mounted noexec) the driver ignores SIGINT while
+    they start, as before, and multiprocessing's executable is left as it was."""
+    import multiprocessing.spawn
+
+    from experiments.sweep import runner
+
+    python = multiprocessing.spawn.get_executable()
+    with runner._workers_ignore_ctrl_c() as wrapped:
+        script = Path(os.fsdecode(multiprocessing.spawn.get_executable()))
+        assert wrapped and script != Path(os.fsdecode(python))
+        assert script.read_text().splitlines()[1:] == ["trap '' INT", f"exec {os.fsdecode(python)} \"$@\""]
+        ignored = subprocess.run([str(script), "-c", "import signal; print(signal.getsignal(signal.SIGINT))"],
+                                 capture_output=True, text=True, timeout=60)
+        assert ignored.stdout.strip() == str(int(signal.SIG_IGN)), ignored.stderr  # Python ran with SIGINT ignored
+    assert multiprocessing.spawn.get_executable() == python and not script.exists()
+    monkeypatch.setattr(runner.os, "access", lambda path, mode: False)
+    with runner._workers_ignore_ctrl_c() as wrapped, runner._ctrl_c_held(ignore=not wrapped):
+        assert not wrapped and multiprocessing.spawn.get_executable() == python
+        assert signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

@@ -286,16 +286,18 @@ class _HeldCtrlC:
 
 
 @contextlib.contextmanager
-def _ctrl_c_held() -> Iterator[_HeldCtrlC]:
+def _ctrl_c_held(ignore: bool = False) -> Iterator[_HeldCtrlC]:
     """Hold Ctrl-C (SIGINT) and SIGTERM while a local cluster starts: each is recorded (in this
     process; a Python handler sees a signal whichever thread the system gives it to), and
     ``deliver()`` after the block acts on it, once the cluster can be closed: Ctrl-C was ignored
-    while the cluster started (2-4 s), so it was lost and the sweep ran to its end, exit 0."""
+    while the cluster started (2-4 s), so it was lost and the sweep ran to its end, exit 0.
+    ``ignore``: SIGINT is ignored meanwhile instead (and lost), for workers that inherit it so."""
     held = _HeldCtrlC()
     if threading.current_thread() is not threading.main_thread():  # signals are the main thread's
         yield held
         return
-    held.previous = {sig: signal.signal(sig, held.record) for sig in (signal.SIGINT, signal.SIGTERM)}
+    held.previous = {signal.SIGINT: signal.signal(signal.SIGINT, signal.SIG_IGN if ignore else held.record),
+                     signal.SIGTERM: signal.signal(signal.SIGTERM, held.record)}
     try:
         yield held
     finally:
@@ -304,13 +306,14 @@ def _ctrl_c_held() -> Iterator[_HeldCtrlC]:
 
 
 @contextlib.contextmanager
-def _workers_ignore_ctrl_c() -> Iterator[None]:
+def _workers_ignore_ctrl_c() -> Iterator[bool]:
     """Processes that multiprocessing spawns meanwhile (a local cluster's workers) start with
     Ctrl-C (SIGINT) ignored: through a two-line shell script that ignores it and runs Python (an
     ignored signal stays ignored in the Python it runs), so a terminal's Ctrl-C, sent to the whole
-    process group, reaches the driver alone, which cancels the cells and closes the cluster. This
-    process keeps its own handler: ignoring SIGINT here while the workers were spawned lost a
-    Ctrl-C that came then."""
+    process group, reaches the driver alone, which cancels the cells and closes the cluster, and
+    this process keeps its own handler (ignoring SIGINT here while the workers were spawned lost a
+    Ctrl-C that came then). Yields False, the script not used, where no temporary folder lets it
+    run (a /tmp mounted noexec): the caller then ignores SIGINT while the workers start, as before."""
     import multiprocessing.spawn
     import shlex
     import shutil
@@ -318,14 +321,18 @@ def _workers_ignore_ctrl_c() -> Iterator[None]:
 
     previous = multiprocessing.spawn.get_executable()  # bytes or str
     folder = Path(tempfile.mkdtemp(prefix="lmsbench-workers-"))
-    script = folder / "python"
-    script.write_text(f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(os.fsdecode(previous))} \"$@\"\n")
-    script.chmod(0o700)
-    multiprocessing.spawn.set_executable(str(script))
     try:
-        yield
+        script = folder / "python"
+        script.write_text(f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(os.fsdecode(previous))} \"$@\"\n")
+        script.chmod(0o700)
+        usable = os.access(script, os.X_OK) and Path("/bin/sh").is_file()  # X_OK fails on a noexec mount
+        if usable:
+            multiprocessing.spawn.set_executable(str(script))
+        try:
+            yield usable
+        finally:
+            multiprocessing.spawn.set_executable(previous)
     finally:
-        multiprocessing.spawn.set_executable(previous)
         shutil.rmtree(folder, ignore_errors=True)
 
 
@@ -338,10 +345,10 @@ def sweep_client(executor: Any, workers: int) -> Iterator[Any]:
     if executor == "local":
         quiet_dask()
         # a cell that kills its worker fails after one retry instead of three
-        with dask.config.set({"distributed.scheduler.allowed-failures": 1}), _workers_ignore_ctrl_c():
+        with dask.config.set({"distributed.scheduler.allowed-failures": 1}), _workers_ignore_ctrl_c() as wrapped:
             cluster = None
             try:
-                with _ctrl_c_held() as held:
+                with _ctrl_c_held(ignore=not wrapped) as held:
                     try:
                         # no dashboard, and its HTTP server on a free port: the default 8787 of another
                         # cluster on the machine made Dask warn on stderr
