@@ -287,7 +287,17 @@ def _main(argv: Sequence[str] | None) -> int:
         return 2
     except KeyboardInterrupt:
         return _interrupted(interrupt)
-    except Exception as exc:  # a bug, not a user error: say so in one line
+    except SystemExit as exc:  # no command exits so: code it ran called sys.exit() (a user's sweep cell kind)
+        if interrupt.timer is not None:  # it ended the command silently with that status (0: as if finished)
+            return _interrupted(interrupt)
+        if os.environ.get("LMSBENCH_TRACEBACK"):
+            traceback.print_exception(exc)
+        _end_progress_bars()
+        print(f"lmsbench {name}: error: code the command ran called sys.exit({exc.code!r}), which stopped it "
+              "before it finished (a user's extractor or sweep cell kind?"
+              f"{'' if os.environ.get('LMSBENCH_TRACEBACK') else '; LMSBENCH_TRACEBACK=1 shows where'})", file=sys.stderr)
+        return 2
+    except BaseException as exc:  # a bug, not a user error: say so in one line (GeneratorExit: a traceback)
         if interrupt.timer is not None or _from_interrupt(exc):
             # Ctrl-C inside a compiled (numba) call: the KeyboardInterrupt comes out as a SystemError
             # ("<function _numba_unpickle> returned a result with an exception set"), not a bug

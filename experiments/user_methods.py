@@ -133,8 +133,9 @@ def import_named(target: str, what: str, error: type[LmsbenchError] = UserMethod
     except ImportError as exc:
         raise error(f"{what}: cannot import module {module_name!r} ({exc}); it must be importable "
                     "from the current folder or PYTHONPATH") from None
-    except Exception as exc:  # noqa: BLE001 - the user's module failed while importing
-        raise error(f"{what}: importing {module_name!r} failed: {type(exc).__name__}: {exc}") from None
+    except (Exception, SystemExit, GeneratorExit) as exc:  # noqa: BLE001 - the user's module failed while importing
+        # (sys.exit() at import time ended the command silently, exit 0: found by the wrong-input hunt)
+        raise error(f"{what}: importing {module_name!r} failed: {raised_text(exc)}") from None
     finally:
         if added:  # from first to last: found for lazy sibling imports, shadowing nothing installed
             sys.path.remove(cwd)
@@ -157,12 +158,21 @@ def _checked(name: str, fn: Callable[..., Any], takes_config: bool) -> Callable[
     def run(scan: Any, config: Any) -> Any:
         try:
             out = fn(scan, config) if takes_config else fn(scan)
-        except Exception as exc:  # noqa: BLE001 - the user's code: said as such, not as a bug in lmsbench
-            said = f"raised {type(exc).__name__}" + (f": {exc}" if str(exc) else "")
-            raise UserMethodFailed(name, said, scan, True) from exc
+        except (Exception, SystemExit, GeneratorExit) as exc:  # noqa: BLE001 - the user's code: said as such, not as a bug in lmsbench
+            # sys.exit() in the function ended `compare` silently with its status (0: as if it had
+            # finished, nothing written), GeneratorExit with a traceback: found by the wrong-input hunt
+            raise UserMethodFailed(name, f"raised {raised_text(exc)}", scan, True) from exc
         if not isinstance(out, FeatureSet):
             raise UserMethodFailed(name, f"returned {type(out).__name__}, not a features.FeatureSet", scan, False)
         return out
 
     run.__name__ = getattr(fn, "__name__", "run")
     return run
+
+
+def raised_text(exc: BaseException) -> str:
+    """What a user's code raised, for a message: ``RuntimeError: x``, ``SystemExit: 0`` (its
+    ``sys.exit()``; ``sys.exit()`` without a status says ``SystemExit: None``)."""
+    if isinstance(exc, SystemExit):
+        return f"SystemExit: {exc.code!r} (it called sys.exit)"
+    return type(exc).__name__ + (f": {exc}" if str(exc) else "")

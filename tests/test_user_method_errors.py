@@ -14,7 +14,7 @@ import pytest
 from experiments.cli import main
 
 TRACEBACK_HINT = " (LMSBENCH_TRACEBACK=1 shows its traceback)"
-USER_MODULES = ("boomext", "wrongext", "fine")
+USER_MODULES = ("boomext", "wrongext", "fine", "exitext", "exitatimport")
 
 
 @pytest.fixture
@@ -72,6 +72,41 @@ def test_a_bug_in_lmsbench_beside_a_user_extractor_is_still_an_internal_error(bo
     assert main(["compare", "office:0", "--duration", "1", "--methods", "fine:f", "--out", "cmp2",
                  "--no-progress"]) == 1
     assert capsys.readouterr().err == ("lmsbench compare: internal error: RuntimeError: y (a bug in lmsbench; "
+                                       "LMSBENCH_TRACEBACK=1 shows where)\n")
+
+
+def test_a_user_extractor_calling_sys_exit_is_said_in_one_line_not_a_silent_exit(boom, capsys) -> None:
+    """The wrong-input hunt: sys.exit(0) in a user's extractor ended `compare` silently with exit 0
+    (as if it had finished; nothing written), sys.exit(3) with 3, sys.exit() at its module's import
+    the same, and GeneratorExit with a traceback, exit 1: each is now the user's code failing."""
+    (boom / "exitext.py").write_text("import sys\ndef zero(scan):\n    sys.exit(0)\n"
+                                     "def gen(scan):\n    raise GeneratorExit\n")
+    (boom / "exitatimport.py").write_text("import sys\nsys.exit(0)\ndef f(scan):\n    pass\n")
+    for fn, said in (("zero", "SystemExit: 0 (it called sys.exit)"), ("gen", "GeneratorExit")):
+        assert main(["compare", "office:0", "--duration", "1", "--methods", f"exitext:{fn}", "--out", f"c_{fn}",
+                     "--no-progress"]) == 2
+        assert capsys.readouterr().err == (f"lmsbench compare: error: your extractor exitext:{fn} raised {said} "
+                                           f"on office:0 scan 0{TRACEBACK_HINT}\n")
+    assert main(["compare", "office:0", "--duration", "1", "--methods", "exitatimport:f", "--out", "c_imp",
+                 "--no-progress"]) == 2
+    assert capsys.readouterr().err == ("lmsbench compare: error: exitatimport:f: importing 'exitatimport' failed: "
+                                       "SystemExit: 0 (it called sys.exit)\n")
+
+
+def test_sys_exit_in_code_a_command_runs_is_one_line_exit_2_not_its_status(boom, capsys, monkeypatch) -> None:
+    """No command calls sys.exit(): a SystemExit out of one came from code it ran, and ended the
+    command with that status (0 said a run that stopped half-way had finished)."""
+    import experiments.compare
+
+    def exits(*args, **kwargs):
+        sys.exit(0)
+
+    monkeypatch.setattr(experiments.compare, "explained_fraction", exits)
+    (boom / "fine.py").write_text("from features import extract\ndef f(scan):\n    return extract(scan, method='iepf')\n")
+    assert main(["compare", "office:0", "--duration", "1", "--methods", "fine:f", "--out", "cmp",
+                 "--no-progress"]) == 2
+    assert capsys.readouterr().err == ("lmsbench compare: error: code the command ran called sys.exit(0), which "
+                                       "stopped it before it finished (a user's extractor or sweep cell kind?; "
                                        "LMSBENCH_TRACEBACK=1 shows where)\n")
 
 
