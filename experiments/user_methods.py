@@ -3,7 +3,8 @@ mypkg.lines:extract`` runs ``extract(scan) -> features.FeatureSet`` beside the b
 timed and scored the same way.
 
 A name ``MODULE:FUNCTION`` is imported (the current folder first on the path, so a file
-``./myext.py`` is ``myext:FUNCTION``) and registered in ``features.registry`` under that name, with
+``./myext.py`` is ``myext:FUNCTION``; the folder stays on the path, last, for the run, so a sibling
+module the function imports when it is called is found: :func:`import_named`) and registered in ``features.registry`` under that name, with
 an empty config; the function receives the ``lms200.Scan`` and returns a ``FeatureSet`` (lines and
 corners in the sensor frame). A function with a ``config_type`` attribute (a dataclass) is called
 ``fn(scan, config)`` and its config's fields can be set with ``--set extractor.MODULE:FUNCTION.FIELD=V``.
@@ -112,7 +113,11 @@ def import_named(target: str, what: str, error: type[LmsbenchError] = UserMethod
     folder first on the path, so a file ``./myext.py`` is ``myext:ATTR`` (as with PYTHONPATH=.):
     the one rule for a user's extractor (``compare --methods``, ``slam --extractor``, an extract
     sweep's ``method``) and a sweep's cell ``kind`` (which needed PYTHONPATH=.: "cannot import
-    mysw:cell: No module named 'mysw'"). The current folder leaves the path again after the import.
+    mysw:cell: No module named 'mysw'"). After the import the current folder stays on the path for
+    the run, last: a module that imports a sibling lazily (``import helper`` inside its function)
+    finds it when it is called (the folder was removed, and such a call failed with "No module
+    named 'helper'"), and the folder's files do not shadow lmsbench's own modules or installed ones
+    (``./sim.py`` beside a user's extractor), which lmsbench imports lazily too.
 
     Raises:
         error: naming ``what``, when MODULE cannot be imported (with the hint "importable from the
@@ -132,8 +137,10 @@ def import_named(target: str, what: str, error: type[LmsbenchError] = UserMethod
         # (sys.exit() at import time ended the command silently, exit 0: found by the wrong-input hunt)
         raise error(f"{what}: importing {module_name!r} failed: {raised_text(exc)}") from None
     finally:
-        if added:
+        if added:  # from first to last: found for lazy sibling imports, shadowing nothing installed
             sys.path.remove(cwd)
+            if cwd not in sys.path:
+                sys.path.append(cwd)
     fn = module
     for part in attr.split("."):
         if not hasattr(fn, part):

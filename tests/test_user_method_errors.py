@@ -8,6 +8,7 @@ from pathlib import Path
 
 import sys
 
+import pandas as pd
 import pytest
 
 from experiments.cli import main
@@ -140,3 +141,43 @@ def test_a_wrong_result_names_its_scan_too(boom, capsys) -> None:
                  "--no-progress"]) == 2
     assert capsys.readouterr().err == ("lmsbench compare: error: your extractor wrongext:f returned int, not a "
                                        "features.FeatureSet on office:0 scan 0\n")
+
+
+LAZY_MODULES = ("lazyext", "lazyhelper")
+
+
+def test_a_user_extractor_that_imports_a_sibling_when_called_finds_it(tmp_path, monkeypatch, capsys,
+                                                                      user_methods_dropped) -> None:
+    """`lmsbench compare office:0 --methods lazyext:lines`, lazyext.py importing lazyhelper.py (beside
+    it) inside its function: the current folder was put on the path for the import and taken off
+    after it, so the call failed, "your extractor lazyext:lines raised ModuleNotFoundError: No module
+    named 'lazyhelper' on office:0 scan 0", exit 2 (the installed script's path does not start with
+    the current folder). The folder now stays on the path, last."""
+    from features import FeatureSet
+
+    from experiments.user_methods import import_named
+
+    (tmp_path / "lazyext.py").write_text("def lines(scan):\n"
+                                         "    import lazyhelper  # a sibling, imported when called\n"
+                                         "    return lazyhelper.lines(scan)\n")
+    (tmp_path / "lazyhelper.py").write_text("from features import extract\n"
+                                            "def lines(scan):\n"
+                                            "    return extract(scan, method='split_merge')\n")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "path", [p for p in sys.path if p not in ("", ".", str(tmp_path))])  # as `lmsbench`
+    for name in LAZY_MODULES:
+        monkeypatch.delitem(sys.modules, name, raising=False)
+    fn = import_named("lazyext:lines", "lazyext:lines")
+    from lms200 import Scan
+    import numpy as np
+
+    assert isinstance(fn(Scan.lms200(np.full(361, 2.0))), FeatureSet)  # old: ModuleNotFoundError
+    assert sys.path[-1] == str(tmp_path) and sys.path.count(str(tmp_path)) == 1  # last: it shadows nothing
+    monkeypatch.delitem(sys.modules, "lazyhelper")
+    assert main(["compare", "office:0", "--duration", "1", "--methods", "lazyext:lines", "--out", "cmp",
+                 "--no-progress"]) == 0, capsys.readouterr().err
+    assert sys.path.count(str(tmp_path)) == 1
+    summary = pd.read_csv(tmp_path / "cmp" / "summary.csv")
+    assert list(summary["method"]) == ["lazyext:lines"] and summary["lines_per_scan"].iloc[0] > 0
+    for name in LAZY_MODULES:
+        sys.modules.pop(name, None)
