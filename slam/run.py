@@ -291,13 +291,17 @@ def extract_all(scans: list, config: SlamConfig) -> list:
     ``features.extract`` scan by scan where the geometry changes within the batch."""
     from features import extract, extract_many
     from features.errors import ScanGeometryError
+    from features.registry import make_config
 
     if not scans:
         return []
+    # the config, not its fields as keywords: a noise field no scan reads is said once by the
+    # drivers (``lmsbench slam``), not by extract_many in every batch; the same config either way
+    cfg = make_config(config.extractor, **config.extractor_params)
     try:
-        return extract_many(scans, method=config.extractor, **config.extractor_params)
+        return extract_many(scans, method=config.extractor, config=cfg)
     except ScanGeometryError:  # scans of different geometries: one call each
-        return [extract(s, method=config.extractor, **config.extractor_params) for s in scans]
+        return [extract(s, method=config.extractor, config=cfg) for s in scans]
 
 
 def _observed(batch: list, config: SlamConfig):

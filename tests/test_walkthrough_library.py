@@ -86,3 +86,48 @@ def test_log_source_reads_at_most_max_scans(tmp_path) -> None:
     assert [r.scan.stamp for r in log_source(path, max_scans=4).records] == stamps[:4]
     assert [r.scan.stamp for r in log_source(path, stride=3, max_scans=4).records] == stamps[::3][:4]
     assert len(list(log_source(path).records)) == len(recs) > 12
+
+
+def _hokuyo_room(range_max: float):
+    """A 1081-beam, 270 deg scan (0.25 deg) of a room's three walls with 2 cm noise."""
+    import numpy as np
+
+    from lms200 import Scan
+
+    n, amin, inc = 1081, -3 * np.pi / 4, np.radians(0.25)
+    b = amin + inc * np.arange(n)
+    walls = []
+    for rho, alpha in ((3.0, 0.0), (2.0, np.pi / 2), (2.5, -np.pi / 2)):
+        c = np.cos(b - alpha)
+        walls.append(np.where(c > 1e-9, rho / np.where(c > 1e-9, c, 1.0), np.inf))
+    r = np.min(walls, axis=0) + np.random.default_rng(0).normal(0.0, 0.02, n)
+    return Scan(r, angle_min=amin, angle_increment=inc, range_min=0.02, range_max=range_max)
+
+
+def test_a_noise_field_the_scan_does_not_read_is_said() -> None:
+    """A 30 m scanner's scan reads ``sigma_r_cm`` (range_max > 10 m), so ``extract(scan,
+    sigma_r=0.005)`` ran with "auto", silently (the walkthrough's Hokuyo-like scan of one wall: 1 line
+    for any sigma_r, 8 for sigma_r_cm=0.005). Now a one-line LmsbenchWarning names the field to set; the
+    features are what they were."""
+    import warnings
+
+    import pytest
+
+    from features import extract, extract_many
+    from lms200.errors import LmsbenchWarning
+
+    far, near = _hokuyo_room(30.0), _hokuyo_room(5.6)
+    with pytest.warns(LmsbenchWarning, match=r"^extract: sigma_r=0.005 is not read: a scan whose range_max is above "
+                      r"10 m \(SICK cm codes\), as this one's 30 m, reads sigma_r_cm \(now 'auto'\); set sigma_r_cm for it$"):
+        fs = extract(far, sigma_r=0.005)
+    assert fs.lines == extract(far).lines
+    with pytest.warns(LmsbenchWarning, match=r"^extract_many: sigma_r_cm=0.02 is not read: a scan whose range_max is "
+                      r"of 10 m or less \(SICK mm codes\), as this one's 5.6 m, reads sigma_r \(now 0.005\)"):
+        extract_many([near, near], sigma_r_cm=0.02)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert extract(far, sigma_r_cm=0.005).lines != fs.lines  # the field it reads (no warning) counts
+        extract(near, sigma_r=0.02)
+        extract(far, sigma_r=0.005, sigma_r_cm=0.005)
+        extract(far, method="split_merge", sigma=0.02)  # no such pair of fields
+        extract_many([far], sigma_r_cm=0.005)
