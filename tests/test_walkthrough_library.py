@@ -131,3 +131,47 @@ def test_a_noise_field_the_scan_does_not_read_is_said() -> None:
         extract(far, sigma_r=0.005, sigma_r_cm=0.005)
         extract(far, method="split_merge", sigma=0.02)  # no such pair of fields
         extract_many([far], sigma_r_cm=0.005)
+
+
+def test_a_virtual_device_fed_records_says_so_when_built() -> None:
+    """``VirtualLMS200(read_log(path))`` (records, not scans) was taken, and its first scan telegram
+    failed in the adapter's thread: a traceback on stderr and, for the host, a driver timeout after
+    4.4 s. The device takes its first item when built, so it now says it there."""
+    import numpy as np
+    import pytest
+
+    from lms200 import InputError, Record, Scan
+    from lms200.virtual import VirtualLMS200
+
+    scan = Scan.lms200(np.full(361, 2.0))
+    with pytest.raises(InputError, match=r"^source: item 0 is a Record, not an lms200.Scan \(a log's records: pass "
+                       r"their scans, rec.scan for rec in read_log\(path\)\)$"):
+        VirtualLMS200([Record(scan)])
+    with pytest.raises(InputError, match=r"^source: item 0 is a ndarray, not an lms200.Scan$"):
+        VirtualLMS200([scan.ranges])
+    VirtualLMS200([scan])  # a Scan is taken
+
+
+def test_an_adapter_raises_what_stopped_its_device_at_close() -> None:
+    """A source whose second item is no Scan stopped the adapter's thread with a traceback on
+    stderr; the host's driver timed out and the ``with`` block ended without an error from the
+    adapter. Now ``close()`` (the block's end) raises the device's error, once."""
+    import numpy as np
+    import pytest
+
+    from lms200 import LMS200, InputError, Scan
+    from lms200.adapters import PtyAdapter
+    from lms200.errors import LmsDeviceError
+    from lms200.virtual import VirtualLMS200
+
+    scan = Scan.lms200(np.full(361, 2.0))
+    got = []
+    with pytest.raises(InputError, match=r"^source: item 1 is a ndarray, not an lms200.Scan$") as caught:
+        with PtyAdapter(VirtualLMS200(iter([scan, scan.ranges]), time_scale=0.01)) as pty:
+            with LMS200(pty.path, baud=38400, timeout=0.1, mode_timeout=0.3, retries=1) as dev:
+                for s in dev.scans(stall_timeout=0.5):
+                    got.append(s)
+    assert len(got) == 1 and np.array_equal(got[0].ranges, scan.ranges)
+    assert isinstance(caught.value.__context__, LmsDeviceError)  # the host's timeout, behind it
+    assert pty.error is None  # raised once
+    pty.close()
