@@ -175,3 +175,38 @@ def test_an_adapter_raises_what_stopped_its_device_at_close() -> None:
     assert isinstance(caught.value.__context__, LmsDeviceError)  # the host's timeout, behind it
     assert pty.error is None  # raised once
     pty.close()
+
+
+def test_lines_and_corners_take_numpy_style_row_selections() -> None:
+    """``fs.lines[fs.lines.length > 0.5]`` (a boolean mask) was numpy's "cannot reshape array of
+    size 32 into shape (2,2)", ``fs.lines[[0, 1]]`` "list index out of range" and ``fs.corners[[0]]``
+    "not enough values to unpack"; they now select rows as Lines / Corners, the same rows as the
+    arrays, and an index of another kind is an InputError naming it."""
+    import numpy as np
+    import pytest
+
+    from features import extract
+    from features.types import Corners, Lines
+    from lms200 import InputError
+
+    fs = extract(_hokuyo_room(5.6), sigma_r=0.02)
+    lines, corners = fs.lines, fs.corners
+    assert len(lines) >= 3 and len(corners) >= 1
+    long = lines[lines.length > 4.7]
+    assert isinstance(long, Lines) and 0 < len(long) < len(lines)
+    np.testing.assert_array_equal(long.values, lines.values[lines.length > 4.7])
+    np.testing.assert_array_equal(long.beams, lines.beams[lines.length > 4.7])
+    pair = lines[[0, -1]]
+    assert len(pair) == 2 and pair[1].first == lines[-1].first and pair[0].rho == lines[0].rho
+    assert lines[np.array([], dtype=np.int64)] == Lines.empty()
+    assert isinstance(corners[[0]], Corners) and corners[[0]][0] == corners[0]
+    assert lines[np.int64(1)].last == int(lines.last[1])
+    with pytest.raises(IndexError, match=rf"^lines: index {len(lines)} is out of range for {len(lines)} lines$"):
+        lines[len(lines)]
+    with pytest.raises(IndexError, match=r"^corners: index 7 is out of range"):
+        corners[[7]]
+    with pytest.raises(InputError, match=r"^lines: an index must be an int, a slice, .* got float$"):
+        lines[1.0]
+    with pytest.raises(InputError, match=r"^lines: an index must be .* got ndarray of shape \(2,\) and dtype bool$"):
+        lines[np.array([True, False])]  # a mask of another length
+    assert [line.first for line in lines] == lines.first.tolist()  # iteration as before
