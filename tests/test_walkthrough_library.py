@@ -210,3 +210,27 @@ def test_lines_and_corners_take_numpy_style_row_selections() -> None:
     with pytest.raises(InputError, match=r"^lines: an index must be .* got ndarray of shape \(2,\) and dtype bool$"):
         lines[np.array([True, False])]  # a mask of another length
     assert [line.first for line in lines] == lines.first.tolist()  # iteration as before
+
+
+def test_scans_out_of_time_order_are_refused_saying_how_to_go_on() -> None:
+    """``run_slam`` of Intel's corrected log stopped at "scan 295: timestamp 940.54 is earlier than
+    the previous one (940.654)" with no word of what to do; both presets now name the helper that
+    keeps the most scans in order, and the records it keeps run."""
+    import pytest
+
+    from experiments.commands.slam import in_time_order
+    from lms200 import Record
+    from sim import simulate_records
+    from slam import SlamConfig, SlamInputError, run_slam
+
+    recs = simulate_records("office", seed=1, duration=2.0, rate_hz=10)
+    late = Record(recs[3].scan.replace(stamp=recs[1].scan.stamp - 0.01), truth=recs[3].truth)
+    shuffled = recs[:3] + [late] + recs[4:]
+    for preset in ("default", "paper"):
+        with pytest.raises(SlamInputError, match=r"^scan 3: timestamp .* is earlier than the previous one .*; SLAM "
+                           r"needs scans in time order: drop those out of order \(experiments.commands.slam."
+                           r"in_time_order\(stamps\) gives the indices of the most scans in order"):
+            run_slam(shuffled, SlamConfig(preset=preset))
+    keep = in_time_order([r.scan.stamp for r in shuffled])
+    assert keep == [k for k in range(len(shuffled)) if k != 3]
+    assert run_slam([shuffled[k] for k in keep]).trajectory.shape == (len(recs) - 1, 4)
