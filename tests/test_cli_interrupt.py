@@ -663,7 +663,11 @@ def test_the_workers_start_through_a_script_that_ignores_ctrl_c_or_as_before(mon
         ignored = subprocess.run([str(script), "-c", "import signal; print(signal.getsignal(signal.SIGINT))"],
                                  capture_output=True, text=True, timeout=60)
         assert ignored.stdout.strip() == str(int(signal.SIG_IGN)), ignored.stderr  # Python ran with SIGINT ignored
-    assert multiprocessing.spawn.get_executable() == python and not script.exists()
+    assert multiprocessing.spawn.get_executable() == python
+    assert script.parent.name == f"lmsbench-workers-{os.getuid()}" and script.parent.stat().st_mode & 0o777 == 0o700
+    with runner._workers_ignore_ctrl_c():  # the same script again: one per Python, kept (a hard stop leaked a folder a run)
+        assert Path(os.fsdecode(multiprocessing.spawn.get_executable())) == script
+    assert sorted(p.name for p in script.parent.iterdir() if p.name.startswith(".")) == []
     monkeypatch.setattr(runner.os, "access", lambda path, mode: False)
     with runner._workers_ignore_ctrl_c() as wrapped, runner._ctrl_c_held(ignore=not wrapped):
         assert not wrapped and multiprocessing.spawn.get_executable() == python
