@@ -1234,3 +1234,18 @@ def test_demo_refuses_a_log_that_does_not_read_before_it_makes_its_folder(with_o
     (line,) = captured.err.strip().splitlines()
     assert said in line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["groundtruth.tum", "no_returns.clf"]  # no results/, no x/
+
+
+def test_a_geometry_the_flags_give_that_fits_no_line_does_not_offer_to_skip_every_line(tmp_path, capsys):
+    """--laser-fov-deg 90 --laser-resolution-deg 1 on 361-beam FLASER lines misfits every line:
+    the error said so, then offered --skip-bad-lines, which would skip the whole log. The offer
+    stays for a geometry the log itself declares (a line of another count is skippable)."""
+    log = tmp_path / "flaser.clf"
+    line = "FLASER 361 " + " ".join(["2.00"] * 361) + " 0 0 0 0 0 0 {t} host {t}\n"
+    log.write_text("".join(line.format(t=1.0 + k) for k in range(3)))
+    assert run_main(["info", str(log), "--laser-fov-deg", "90", "--laser-resolution-deg", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "361 beams do not fit a field of view of 90.000 deg at 1.0000 deg" in err
+    assert "--skip-bad-lines" not in err
+    assert run_main(["info", str(log)]) == 0  # the convention's 180 deg at 0.5 deg
+    capsys.readouterr()
