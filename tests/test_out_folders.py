@@ -484,3 +484,17 @@ def test_figures_from_tables_whose_notes_are_a_pipe_is_refused_not_a_hang(tables
     assert main(["figures", "--tables", str(folder), "--out", str(tmp_path / "figs")]) == 2
     assert capsys.readouterr().err == (f"lmsbench figures: error: {folder / 'notes.txt'}: not a regular file (a pipe, "
                                        "a device or a socket); a study's notes are a text file\n")
+
+
+def test_a_study_yaml_larger_than_any_config_is_refused_unread(tmp_path):
+    """study.yaml had no size bound, unlike every other YAML the commands read (a 30 MB one took
+    10 s to parse); it now takes lms200.yamlio.MAX_YAML_BYTES, as config and sweep files do."""
+    from experiments.figures.study import load_config
+    from lms200 import LmsbenchError
+    from lms200.yamlio import MAX_YAML_BYTES
+
+    (tmp_path / "study.yaml").write_text("world: office\n" + "# padding\n" * (MAX_YAML_BYTES // 10 + 1))
+    with pytest.raises(LmsbenchError, match=r"study.yaml: 1,048,5\d\d bytes, more than the 1,048,576"):
+        load_config(tmp_path)
+    (tmp_path / "study.yaml").write_text("world: office\nseed: 3\n")
+    assert load_config(tmp_path).seed == 3

@@ -275,7 +275,12 @@ def load_config(folder: Path) -> StudyConfig:
     """The settings saved beside the tables (defaults where there is no study.yaml)."""
     from lms200 import LmsbenchError
 
+    from lms200.yamlio import size_problem
+
     path = folder / "study.yaml"
+    too_big = size_problem(path.stat().st_size) if path.is_file() else None
+    if too_big:  # read whole and parsed, a 30 MB one took 10 s before its error
+        raise LmsbenchError(f"{path}: {too_big}")
     try:
         raw = load_yaml(path.read_text()) if path.exists() else {}
         if not isinstance(raw or {}, dict):
