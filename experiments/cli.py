@@ -28,12 +28,43 @@ import warnings
 from pathlib import Path
 from typing import Any, Sequence
 
-from features.batch import default_threads
-from lms200 import LmsbenchError, LogFormatError
-from lms200.errors import LmsbenchWarning
 
-from . import commands
-from .options import OneLineParser, shorten_quoted
+
+def _command_words(argv: Sequence[str]) -> str:
+    """The command ``argv`` names, as its messages do (``sweep``, ``lms200 record``), read before
+    the parser exists: the words before the first option."""
+    words = []
+    for word in argv:
+        if word.startswith("-") or len(words) == (2 if words[:1] == ["lms200"] else 1):
+            break
+        words.append(word)
+    return " ".join(words)
+
+
+def _stopped_while_starting(argv: Sequence[str]) -> int:
+    """Ctrl-C before the command's own handler is in place (lmsbench's imports, ~0.5-1 s, and
+    the reading of its options): the one line and 130. It was Python's traceback of the import it
+    cut (`lmsbench sweep S.yaml` stopped 0.5 s in) and exit status -2."""
+    name = _command_words(argv)
+    try:
+        sys.stderr.write(f"lmsbench{' ' + name if name else ''}: interrupted\n")
+        sys.stderr.flush()
+    except (OSError, ValueError):
+        pass
+    return 130
+
+
+try:  # lmsbench's packages: most of its start-up time
+    from features.batch import default_threads
+    from lms200 import LmsbenchError, LogFormatError
+    from lms200.errors import LmsbenchWarning
+
+    from . import commands
+    from .options import OneLineParser, shorten_quoted
+except KeyboardInterrupt:
+    if __name__ != "__main__" and Path(sys.argv[0]).name != "lmsbench":  # imported by a program: its own Ctrl-C
+        raise
+    raise SystemExit(_stopped_while_starting(sys.argv[1:])) from None
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -183,7 +214,10 @@ def _kill_children() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    return _flushed(_main(argv))
+    try:
+        return _flushed(_main(argv))
+    except KeyboardInterrupt:  # before the command's handler is in place: its options being read
+        return _flushed(_stopped_while_starting(sys.argv[1:] if argv is None else argv))
 
 
 def _flushed(status: int) -> int:
@@ -253,7 +287,17 @@ def _main(argv: Sequence[str] | None) -> int:
         return 2
     except KeyboardInterrupt:
         return _interrupted(interrupt)
-    except Exception as exc:  # a bug, not a user error: say so in one line
+    except SystemExit as exc:  # no command exits so: code it ran called sys.exit() (a user's sweep cell kind)
+        if interrupt.timer is not None:  # it ended the command silently with that status (0: as if finished)
+            return _interrupted(interrupt)
+        if os.environ.get("LMSBENCH_TRACEBACK"):
+            traceback.print_exception(exc)
+        _end_progress_bars()
+        print(f"lmsbench {name}: error: code the command ran called sys.exit({exc.code!r}), which stopped it "
+              "before it finished (a user's extractor or sweep cell kind?"
+              f"{'' if os.environ.get('LMSBENCH_TRACEBACK') else '; LMSBENCH_TRACEBACK=1 shows where'})", file=sys.stderr)
+        return 2
+    except BaseException as exc:  # a bug, not a user error: say so in one line (GeneratorExit: a traceback)
         if interrupt.timer is not None or _from_interrupt(exc):
             # Ctrl-C inside a compiled (numba) call: the KeyboardInterrupt comes out as a SystemError
             # ("<function _numba_unpickle> returned a result with an exception set"), not a bug

@@ -772,6 +772,30 @@ def format_summary(summary: pd.DataFrame) -> str:
     return text
 
 
+#: the range noise fields of a method's config, as format_ran_with shows them
+RANGE_NOISE_FIELDS = ("sigma", "sigma_r", "sigma_r_cm")
+
+
+def format_ran_with(ran_with: dict[str, dict[str, dict[str, Any]]]) -> str:
+    """The range noise each method ran with on each source (config.yaml's ``ran_with``), for
+    summary.txt: a line per source, each method's range noise field and value in mm (``sensor
+    sigma_r_cm=9.47`` on cm-mode scans, ``split_merge sigma=9.47``), ``-`` for a method with no such
+    field (a user's extractor without a config_type). A value that is not a number (``auto``) as it is."""
+    def mm(value: Any) -> str:
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return f"{value * 1000:.3g}"
+        return str(value)
+
+    width = max((len(source) for source in ran_with), default=0)
+    lines = ["range noise each method ran with (mm; config.yaml's ran_with has every noise field):"]
+    for source, methods in ran_with.items():
+        said = []
+        for method, fields in methods.items():
+            noise = [f"{f}={mm(fields[f])}" for f in RANGE_NOISE_FIELDS if f in fields]
+            said.append(f"{method} {' '.join(noise) if noise else '-'}")
+        lines.append(f"  {source:{width}s}  {', '.join(said)}")
+    return "\n".join(lines)
+
 def plain_data(value: Any) -> Any:
     """``value`` as data ``yaml.safe_dump`` writes: mappings, lists, str, int, float (inf and nan
     kept), bool and None; numpy scalars and arrays as Python's, any other object as its repr."""

@@ -1,5 +1,6 @@
 """What a result needs beside it to be reproduced: the versions of the code and libraries that
-made it, and a fresh timestamped run folder (with a ``latest`` link) when no ``--out`` is given."""
+made it, and a fresh timestamped run folder when no ``--out`` is given (linked as ``latest`` once
+the run has finished)."""
 
 from __future__ import annotations
 
@@ -69,8 +70,10 @@ def version_text() -> str:
 
 
 def new_run_folder(base: str | os.PathLike, now: datetime.datetime | None = None) -> Path:
-    """A new folder ``base/YYYY-MM-DD_HH-MM-SS`` (``-2``, ``-3``, ... when taken) and a symlink
-    ``base/latest`` pointing at it, so runs never overwrite each other."""
+    """A new folder ``base/YYYY-MM-DD_HH-MM-SS`` (``-2``, ``-3``, ... when taken), so runs never
+    overwrite each other. ``base/latest`` is not moved here: :func:`link_latest` moves it once the
+    run has written all its outputs (it moved here, at the start, so a run stopped by Ctrl-C or an
+    error left ``latest`` naming its partial folder, the last finished run no longer linked)."""
     base = Path(base)
     base.mkdir(parents=True, exist_ok=True)
     stamp = (now or datetime.datetime.now()).strftime("%Y-%m-%d_%H-%M-%S")
@@ -78,16 +81,23 @@ def new_run_folder(base: str | os.PathLike, now: datetime.datetime | None = None
     while True:
         try:
             folder.mkdir()
-            break
+            return folder
         except FileExistsError:
             n += 1
             folder = base / f"{stamp}-{n}"
-    latest = base / "latest"
-    tmp = base / f".latest.{os.getpid()}"
+
+
+def link_latest(folder: str | os.PathLike) -> Path:
+    """Point the symlink ``latest`` beside ``folder`` (a run folder of :func:`new_run_folder`) at
+    it: called by a command once its outputs there are complete, so ``latest`` always names the
+    last run that finished. Returns the link."""
+    folder = Path(folder)
+    latest = folder.parent / "latest"
+    tmp = folder.parent / f".latest.{os.getpid()}"
     tmp.unlink(missing_ok=True)
     tmp.symlink_to(folder.name)
     os.replace(tmp, latest)  # atomic: `latest` always names a whole run
-    return folder
+    return latest
 
 
 def write_record(path: str | os.PathLike, content: str | Callable[[Path], object]) -> Path:

@@ -3,7 +3,8 @@ mypkg.lines:extract`` runs ``extract(scan) -> features.FeatureSet`` beside the b
 timed and scored the same way.
 
 A name ``MODULE:FUNCTION`` is imported (the current folder first on the path, so a file
-``./myext.py`` is ``myext:FUNCTION``) and registered in ``features.registry`` under that name, with
+``./myext.py`` is ``myext:FUNCTION``; the folder stays on the path, last, for the run, so a sibling
+module the function imports when it is called is found: :func:`import_named`) and registered in ``features.registry`` under that name, with
 an empty config; the function receives the ``lms200.Scan`` and returns a ``FeatureSet`` (lines and
 corners in the sensor frame). A function with a ``config_type`` attribute (a dataclass) is called
 ``fn(scan, config)`` and its config's fields can be set with ``--set extractor.MODULE:FUNCTION.FIELD=V``.
@@ -112,7 +113,11 @@ def import_named(target: str, what: str, error: type[LmsbenchError] = UserMethod
     folder first on the path, so a file ``./myext.py`` is ``myext:ATTR`` (as with PYTHONPATH=.):
     the one rule for a user's extractor (``compare --methods``, ``slam --extractor``, an extract
     sweep's ``method``) and a sweep's cell ``kind`` (which needed PYTHONPATH=.: "cannot import
-    mysw:cell: No module named 'mysw'"). The current folder leaves the path again after the import.
+    mysw:cell: No module named 'mysw'"). After the import the current folder stays on the path for
+    the run, last: a module that imports a sibling lazily (``import helper`` inside its function)
+    finds it when it is called (the folder was removed, and such a call failed with "No module
+    named 'helper'"), and the folder's files do not shadow lmsbench's own modules or installed ones
+    (``./sim.py`` beside a user's extractor), which lmsbench imports lazily too.
 
     Raises:
         error: naming ``what``, when MODULE cannot be imported (with the hint "importable from the
@@ -128,11 +133,14 @@ def import_named(target: str, what: str, error: type[LmsbenchError] = UserMethod
     except ImportError as exc:
         raise error(f"{what}: cannot import module {module_name!r} ({exc}); it must be importable "
                     "from the current folder or PYTHONPATH") from None
-    except Exception as exc:  # noqa: BLE001 - the user's module failed while importing
-        raise error(f"{what}: importing {module_name!r} failed: {type(exc).__name__}: {exc}") from None
+    except (Exception, SystemExit, GeneratorExit) as exc:  # noqa: BLE001 - the user's module failed while importing
+        # (sys.exit() at import time ended the command silently, exit 0: found by the wrong-input hunt)
+        raise error(f"{what}: importing {module_name!r} failed: {raised_text(exc)}") from None
     finally:
-        if added:
+        if added:  # from first to last: found for lazy sibling imports, shadowing nothing installed
             sys.path.remove(cwd)
+            if cwd not in sys.path:
+                sys.path.append(cwd)
     fn = module
     for part in attr.split("."):
         if not hasattr(fn, part):
@@ -150,12 +158,21 @@ def _checked(name: str, fn: Callable[..., Any], takes_config: bool) -> Callable[
     def run(scan: Any, config: Any) -> Any:
         try:
             out = fn(scan, config) if takes_config else fn(scan)
-        except Exception as exc:  # noqa: BLE001 - the user's code: said as such, not as a bug in lmsbench
-            said = f"raised {type(exc).__name__}" + (f": {exc}" if str(exc) else "")
-            raise UserMethodFailed(name, said, scan, True) from exc
+        except (Exception, SystemExit, GeneratorExit) as exc:  # noqa: BLE001 - the user's code: said as such, not as a bug in lmsbench
+            # sys.exit() in the function ended `compare` silently with its status (0: as if it had
+            # finished, nothing written), GeneratorExit with a traceback: found by the wrong-input hunt
+            raise UserMethodFailed(name, f"raised {raised_text(exc)}", scan, True) from exc
         if not isinstance(out, FeatureSet):
             raise UserMethodFailed(name, f"returned {type(out).__name__}, not a features.FeatureSet", scan, False)
         return out
 
     run.__name__ = getattr(fn, "__name__", "run")
     return run
+
+
+def raised_text(exc: BaseException) -> str:
+    """What a user's code raised, for a message: ``RuntimeError: x``, ``SystemExit: 0`` (its
+    ``sys.exit()``; ``sys.exit()`` without a status says ``SystemExit: None``)."""
+    if isinstance(exc, SystemExit):
+        return f"SystemExit: {exc.code!r} (it called sys.exit)"
+    return type(exc).__name__ + (f": {exc}" if str(exc) else "")

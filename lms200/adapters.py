@@ -208,7 +208,9 @@ class _SocketWriter:
 
 
 class TcpServer(_Adapter):
-    """The device behind a TCP port: ``adapter.url`` = ``socket://HOST:PORT`` for pyserial.
+    """The device behind a TCP port: ``adapter.url`` = ``socket://HOST:PORT`` for pyserial. An
+    IPv6 ``host`` (``::1``, or ``[::1]`` as in a URL) listens on IPv6, its URL bracketed
+    (``socket://[::1]:PORT``): it was bound as IPv4, "Address family for hostname not supported".
 
     With ``rfc2217=True`` the port speaks RFC 2217 (``rfc2217://HOST:PORT``): the host sets the
     line's baud over the network, and as on the pseudo-terminal a baud that differs from the
@@ -218,11 +220,13 @@ class TcpServer(_Adapter):
     def __init__(self, device: VirtualLMS200, host: str = "127.0.0.1", port: int = 0,
                  clock: Callable[[], float] = time.monotonic, rfc2217: bool = False) -> None:
         super().__init__(device, clock)
-        self._listener = socket.create_server((host, port))
+        bare = host[1:-1] if host.startswith("[") and host.endswith("]") else host
+        self._listener = socket.create_server((bare, port), family=socket.AF_INET6 if ":" in bare else socket.AF_INET)
         self._listener.setblocking(False)
         self.host, self.port = self._listener.getsockname()[:2]
         self.rfc2217 = rfc2217
-        self.url = f"{'rfc2217' if rfc2217 else 'socket'}://{self.host}:{self.port}"
+        shown = f"[{self.host}]" if ":" in self.host else self.host
+        self.url = f"{'rfc2217' if rfc2217 else 'socket'}://{shown}:{self.port}"
         self.connections = 0
         self._manager = None
         self._line = _LineSettings()

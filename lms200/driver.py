@@ -129,6 +129,20 @@ class DriverStats:
     timeouts: int = 0
 
 
+
+def _bracketed_ipv6(url: str) -> str | None:
+    """``url`` with its host in brackets when it is a ``socket://`` or ``rfc2217://`` URL whose
+    host is a bare IPv6 address (``socket://::1:2111`` -> ``socket://[::1]:2111``), else None."""
+    scheme, sep, rest = url.partition("://")
+    if not sep or scheme.lower() not in ("socket", "rfc2217"):
+        return None
+    end = min((i for i in (rest.find("/"), rest.find("?")) if i >= 0), default=len(rest))
+    netloc, tail = rest[:end], rest[end:]  # socket://HOST:PORT?logging=debug
+    if netloc.startswith("[") or netloc.count(":") < 2:
+        return None
+    host, _, port = netloc.rpartition(":")
+    return f"{scheme}://[{host}]:{port}{tail}"
+
 class LMS200:
     """A connection to one LMS200.
 
@@ -198,6 +212,9 @@ class LMS200:
         self._clock_offset = time.time() - time.monotonic()
         self._doing = "opening the port"  # for the message of a link that fails mid-use
         self._lost = False  # the port failed: close() only closes it
+        bracketed = _bracketed_ipv6(port_or_url)
+        if bracketed is not None:  # pyserial said "Could not open port ...: 'debug|info|warning|error'"
+            raise LmsDeviceError(f"cannot open {port_or_url}: an IPv6 address in a URL goes in brackets: {bracketed}")
         try:
             self._ser = serial.serial_for_url(port_or_url, baudrate=POWER_ON_BAUD, timeout=_READ_POLL_S)
         except (serial.SerialException, ValueError, OSError) as exc:

@@ -17,6 +17,18 @@ def shared_data() -> Path:
     return SHARED_DATA
 
 
+@pytest.fixture(autouse=True)
+def _sys_path_restored():
+    """sys.path as it was before each test: a user's MODULE:FUNCTION imported from the test's
+    folder keeps that folder on the path for the process (experiments.user_methods.import_named),
+    and a later test's "cannot import mysw" found the earlier test's mysw.py through it."""
+    import sys
+
+    saved = list(sys.path)
+    yield
+    sys.path[:] = saved
+
+
 class _UserMethodsDropped(dict):
     """The extractor registry during a test: the built-in methods it loads stay registered
     afterwards (their modules register once), the MODULE:FUNCTION ones registered here do not."""

@@ -77,6 +77,77 @@ def test_ctrl_c_stops_the_sweep_and_its_workers_with_one_line(tmp_path):
 
 
 @pytest.mark.slow
+def test_ctrl_c_while_the_local_cluster_starts_stops_the_sweep_with_one_line(tmp_path):
+    """`lmsbench sweep S.yaml` sent Ctrl-C while its local cluster started (its first worker
+    spawned, 2-4 s into the run) ignored it: the process ignored SIGINT meanwhile, so that the
+    workers would, and the sweep ran every cell, exit 0. Now the driver holds the stop until the
+    cluster is up, then stops: the one line, 130, no worker left, and a run again computes the cells."""
+    cmd = _sweep(tmp_path, sleep=2.0, xs=2) + ["--no-progress"]
+    proc = subprocess.Popen(cmd, cwd=REPO, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while True:  # the first worker process is being spawned
+            children = psutil.Process(proc.pid).children(recursive=True)
+            if any("spawn_main" in _cmdline(p) or "lmsbench-workers" in _cmdline(p) for p in children):
+                break
+            assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+            time.sleep(0.01)
+        assert not list((tmp_path / "marks").iterdir())  # no cell has started: the cluster is starting
+        os.killpg(proc.pid, signal.SIGINT)  # a terminal's Ctrl-C
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert (proc.returncode, err.splitlines()) == (130, ["lmsbench sweep: interrupted"]), out  # old: 0, ""
+    gone, alive = psutil.wait_procs(children, timeout=20)
+    assert not alive, f"workers left running: {alive}"
+    assert not list((tmp_path / "out" / "cells").glob("*.parquet"))
+    again = subprocess.run(cmd, cwd=REPO, env=_env(), capture_output=True, text=True, timeout=180)
+    assert again.returncode == 0, again.stderr
+    assert "2 cells, 2 computed, 0 already done, 0 failed" in again.stdout
+
+
+CTRL_C_IN_THE_IMPORTS = r"""
+import sys
+
+class Stop:  # Ctrl-C while lmsbench imports its packages (the first 0.5-1 s of every command)
+    def find_spec(self, name, path=None, target=None):
+        if name == "features.batch":
+            raise KeyboardInterrupt
+
+sys.argv = [sys.argv[1], "lms200", "record", "--port", "socket://x:1"]
+sys.meta_path.insert(0, Stop())
+from experiments.cli import main
+print("imported", flush=True)
+"""
+
+
+@pytest.mark.parametrize("argv0", ["/venv/bin/lmsbench", "my_program.py"])
+def test_ctrl_c_while_lmsbench_imports_its_packages_is_one_line(argv0) -> None:
+    """`lmsbench sweep S.yaml` stopped 0.5 s in: Python's traceback of the import it cut, exit -2.
+    Now the one line and 130 from the lmsbench command; a program that imports experiments.cli
+    gets its KeyboardInterrupt as before."""
+    out = subprocess.run([sys.executable, "-c", CTRL_C_IN_THE_IMPORTS, argv0], capture_output=True, text=True,
+                         cwd=REPO, env=_env(), timeout=120)
+    if argv0.endswith("lmsbench"):
+        assert (out.returncode, out.stderr, out.stdout) == (130, "lmsbench lms200 record: interrupted\n", "")
+    else:
+        assert out.returncode == -signal.SIGINT and out.stderr.rstrip().endswith("KeyboardInterrupt") and out.stdout == ""
+
+
+def test_ctrl_c_while_the_options_are_read_is_one_line(monkeypatch, capsys) -> None:
+    import experiments.cli as cli
+
+    def stopped():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "build_parser", stopped)
+    assert cli.main(["sweep", "s.yaml", "--workers", "2"]) == 130  # old: the KeyboardInterrupt went out of main
+    assert capsys.readouterr().err == "lmsbench sweep: interrupted\n"
+
+
+@pytest.mark.slow
 def test_a_sweep_on_the_local_cluster_says_nothing_from_dask(tmp_path):
     cmd = _sweep(tmp_path, sleep=0.0, xs=4) + ["--no-progress"]
     run = subprocess.run(cmd, cwd=REPO, env=_env(), capture_output=True, text=True, timeout=180)
@@ -574,3 +645,27 @@ def test_the_stop_line_is_written_exactly_once_whoever_comes_first(monkeypatch):
 
     assert cli._interrupted(Racing("slam")) == 130
     assert lines == ["lmsbench slam: interrupted\n"] and exits == [(130, 1)]
+
+
+def test_the_workers_start_through_a_script_that_ignores_ctrl_c_or_as_before(monkeypatch) -> None:
+    """The local cluster's workers are spawned through a script that ignores SIGINT and runs this
+    Python; where it cannot run (a temporary folder mounted noexec) the driver ignores SIGINT while
+    they start, as before, and multiprocessing's executable is left as it was."""
+    import multiprocessing.spawn
+
+    from experiments.sweep import runner
+
+    python = multiprocessing.spawn.get_executable()
+    with runner._workers_ignore_ctrl_c() as wrapped:
+        script = Path(os.fsdecode(multiprocessing.spawn.get_executable()))
+        assert wrapped and script != Path(os.fsdecode(python))
+        assert script.read_text().splitlines()[1:] == ["trap '' INT", f"exec {os.fsdecode(python)} \"$@\""]
+        ignored = subprocess.run([str(script), "-c", "import signal; print(signal.getsignal(signal.SIGINT))"],
+                                 capture_output=True, text=True, timeout=60)
+        assert ignored.stdout.strip() == str(int(signal.SIG_IGN)), ignored.stderr  # Python ran with SIGINT ignored
+    assert multiprocessing.spawn.get_executable() == python and not script.exists()
+    monkeypatch.setattr(runner.os, "access", lambda path, mode: False)
+    with runner._workers_ignore_ctrl_c() as wrapped, runner._ctrl_c_held(ignore=not wrapped):
+        assert not wrapped and multiprocessing.spawn.get_executable() == python
+        assert signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

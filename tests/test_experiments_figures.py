@@ -261,3 +261,56 @@ def test_accuracy_speed_names_each_point_in_its_own_colour(tmp_path, monkeypatch
     draw.fig_accuracy_speed(summary, tmp_path / "a")
     assert sorted(name for name, _ in captured) == sorted(methods * 2)  # both panels
     assert all(colour == to_rgba(method_color(name)) for name, colour in captured)
+
+
+def test_a_boolean_parameter_is_a_category_not_the_numeric_x_axis(tmp_path, monkeypatch):
+    """A sweep over `alignment.deskew: [true, false]` then k drew deskew as the x axis, at 0 and 1
+    joined by lines, and k as the legend: a bool is an int to pandas. Booleans are categories, as
+    text: k is the x axis and deskew the lines, in the grid's order."""
+    rows = [{"alignment.deskew": d, "k": k, "seed": 0, "f1": k / 10 + (0.5 if d else 0.0), "status": "ok"}
+            for d in (True, False) for k in (3, 5, 7)]
+    folder = tmp_path / "dk"
+    folder.mkdir()
+    pd.DataFrame(rows).to_parquet(folder / "results.parquet")
+    (folder / "sweep.yaml").write_text("name: dk\nkind: x:y\ngrid:\n  alignment.deskew: [true, false]\n"
+                                       "  k: [3, 5, 7]\nseeds: [0]\n")
+    axes_seen = []
+    real_save = draw.save_figure
+    monkeypatch.setattr(draw, "save_figure", lambda fig, stem, data=None: (axes_seen.extend(fig.axes),
+                                                                           real_save(fig, stem, data=data))[1])
+    draw_sweep(folder, tmp_path / "figs")
+    ax = axes_seen[0]
+    assert ax.get_xlabel() == label_of("k")  # old: label_of("alignment.deskew")
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["True", "False"]  # old: 3, 5, 7
+    xs = [np.asarray(c.lines[0].get_xdata(), float) for c in ax.containers]
+    ys = [np.asarray(c.lines[0].get_ydata(), float) for c in ax.containers]
+    np.testing.assert_allclose(xs, [[3, 5, 7], [3, 5, 7]])
+    np.testing.assert_allclose(ys, [[0.8, 1.0, 1.2], [0.3, 0.5, 0.7]])
+
+
+def test_a_boolean_parameter_alone_draws_two_labelled_categories(tmp_path, monkeypatch):
+    rows = [{"alignment.deskew": d, "seed": s, "f1": (0.9 if d else 0.7) + 0.01 * s, "status": "ok"}
+            for d in (True, False) for s in (0, 1)]
+    axes_seen = []
+    real_save = draw.save_figure
+    monkeypatch.setattr(draw, "save_figure", lambda fig, stem, data=None: (axes_seen.extend(fig.axes),
+                                                                           real_save(fig, stem, data=data))[1])
+    draw.fig_sweep(pd.DataFrame(rows), "alignment.deskew", "f1", tmp_path / "d")
+    ax = axes_seen[0]
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["True", "False"]  # old: numeric ticks 0.0 ... 1.0
+    (line,) = ax.containers
+    np.testing.assert_allclose(np.asarray(line.lines[0].get_xdata(), float), [0, 1])
+    np.testing.assert_allclose(np.asarray(line.lines[0].get_ydata(), float), [0.905, 0.705])
+    assert line.lines[0].get_linestyle() == "None"  # old: "-", a line from "false" to "true"
+
+
+def test_a_random_choice_of_booleans_is_drawn_as_two_categories(tmp_path, monkeypatch):
+    table = pd.DataFrame({"deskew": [True, False, True, False], "seed": 0, "status": "ok", "f1": [0.9, 0.7, 0.8, 0.6]})
+    axes_seen = []
+    real_save = draw.save_figure
+    monkeypatch.setattr(draw, "save_figure", lambda fig, stem, data=None: (axes_seen.extend(fig.axes),
+                                                                           real_save(fig, stem, data=data))[1])
+    draw.fig_sweep_scatter(table, ["deskew"], "f1", tmp_path / "r")
+    fig = axes_seen[0].figure
+    fig.canvas.draw()
+    assert [t.get_text() for t in axes_seen[0].get_xticklabels()] == ["True", "False"]

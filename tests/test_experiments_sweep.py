@@ -189,6 +189,11 @@ def test_random_sampling_is_seeded_in_range_and_crossed_with_grid_and_seeds():
         ({"kind": "k", "random": {"u": {"uniform": [2, 1]}}, "samples": 3}, r"low <= high"),
         ({"kind": "k", "random": {"u": {"normal": [0, 1]}}, "samples": 3}, r"random.u must be one of"),
         ({"kind": "k", "random": {"u": {"uniform": [0, 1]}}}, r"needs `samples:`"),
+        # ignored without `random:` (a wrong-input hunt): `samples: 8` ran each grid point once, exit 0
+        ({"kind": "k", "grid": {"x": [1]}, "samples": 8}, r"`samples: 8` is for random draws, and the sweep has "
+                                                         r"no `random:` parameters to draw"),
+        ({"kind": "k", "random": {}, "samples": 8}, r"`samples: 8` is for random draws"),
+        ({"kind": "k", "sample_seed": 3}, r"`sample_seed: 3` is for random draws"),
         ({"kind": "k", "fixed": {"x": [1, 2]}}, r"fixed.x must be a number, string, bool or null, got \[1, 2\] "
                                                 r"\(to vary it, put it under grid:\)"),
         # a bare number ran as a list of one: `seeds: 3` the one seed 3, `grid: {x: 5}` the one value
@@ -594,3 +599,18 @@ def test_a_sweep_that_fails_before_any_cell_leaves_no_folder(tmp_path, monkeypat
     assert sorted(p.name for p in (tmp_path / "new").iterdir()) == ["cells", "results.csv", "results.parquet",
                                                                      "sweep.yaml", "versions.yaml"]
     assert len(list((tmp_path / "new" / "cells").iterdir())) == 1 and computed(log) == ["0 0"]
+
+
+def test_a_cell_calling_sys_exit_is_an_error_row_not_the_end_of_the_sweep():
+    """The wrong-input hunt: a cell kind calling sys.exit(0) ended an --inprocess sweep silently,
+    exit 0, half its cells not run; on a cluster it killed the cell's worker twice (KilledWorker)."""
+    import sys
+
+    from experiments.sweep.cells import run_cell
+
+    def exits(params):
+        sys.exit(0)
+
+    row = run_cell("mine:cell", {"a": 1}, exits)
+    assert row["status"] == "error"
+    assert row["error"].startswith("SystemExit: 0 (it called sys.exit) (test_experiments_sweep.py:")

@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import datetime
 import os
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from experiments.figures.draw import fig_sweep
-from experiments.provenance import new_run_folder, versions
+from experiments.provenance import link_latest, new_run_folder, versions
 from experiments.report import markdown_to_html
 from experiments.style import label_of, log_axis, new_figure
 from experiments.sweep.store import write_atomic
@@ -22,7 +23,69 @@ def test_runs_without_out_never_overwrite_each_other(tmp_path):
     b = new_run_folder(tmp_path / "compare", now)  # the same second: a suffix
     assert a.name == "2026-12-01_22-00-00" and b.name == "2026-12-01_22-00-00-2" and a.is_dir() and b.is_dir()
     latest = tmp_path / "compare" / "latest"
-    assert latest.is_symlink() and latest.resolve() == b.resolve()
+    assert not latest.exists()  # a run folder is linked once its run has finished, not when it is made
+    assert link_latest(b) == latest and latest.is_symlink() and latest.resolve() == b.resolve()
+
+
+def _bench_areas(monkeypatch) -> None:
+    import types
+
+    import experiments.commands.bench as bench
+
+    monkeypatch.setattr(bench, "discover", lambda: {"a": types.SimpleNamespace(run=lambda quick: [{"case": "x", "v": 1.0}])})
+
+
+def test_latest_names_the_last_run_that_finished_not_one_stopped_midway(tmp_path, monkeypatch, capsys):
+    """`results/CMD/latest` was moved when the run folder was made: `lmsbench bench` (or compare,
+    figures, sim2real, demo) stopped by Ctrl-C or an error after that left latest naming a folder
+    without bench.csv, the finished run before it no longer linked. It now moves once the run's
+    outputs are all written."""
+    from experiments import provenance
+    from experiments.cli import main
+
+    _bench_areas(monkeypatch)
+    monkeypatch.chdir(tmp_path)
+    assert main(["bench"]) == 0
+    latest = tmp_path / "results" / "bench" / "latest"
+    finished = latest.resolve()
+    assert (finished / "bench.csv").is_file()
+    real = provenance.write_record
+
+    def stopped_at_the_table(path, content):
+        if Path(path).name == "bench.csv":
+            raise KeyboardInterrupt  # Ctrl-C while the table is written
+        return real(path, content)
+
+    monkeypatch.setattr(provenance, "write_record", stopped_at_the_table)
+    for _ in range(2):  # two stopped runs: each leaves its folder, neither is linked
+        assert main(["bench"]) == 130
+    assert capsys.readouterr().err.splitlines() == ["lmsbench bench: interrupted"] * 2
+    folders = sorted(p for p in latest.parent.iterdir() if p.name != "latest")
+    assert len(folders) == 3 and not (folders[-1] / "bench.csv").exists()
+    assert latest.resolve() == finished  # old: the last stopped run's folder, without bench.csv
+    monkeypatch.setattr(provenance, "write_record", real)
+    assert main(["bench"]) == 0
+    assert latest.resolve() not in folders and (latest.resolve() / "bench.csv").is_file()
+
+
+def test_a_demo_that_fails_midway_leaves_latest_at_the_last_finished_demo(tmp_path, monkeypatch, capsys):
+    """`lmsbench demo` made results/demo/DATE_TIME and linked it as latest before its minutes of
+    work: an error or Ctrl-C in the study left latest naming a folder with no report."""
+    import experiments.demo
+    from experiments.cli import main
+    from lms200 import LmsbenchError
+
+    def failing_demo(out, cfg, sweep_executor="local", log=print):
+        (out / "tables").mkdir()
+        raise LmsbenchError("the study failed")
+
+    monkeypatch.setattr(experiments.demo, "run_demo", failing_demo)
+    monkeypatch.chdir(tmp_path)
+    assert main(["demo", "--no-sweep", "--duration", "2"]) == 2
+    assert capsys.readouterr().err.splitlines() == ["lmsbench demo: error: the study failed"]
+    base = tmp_path / "results" / "demo"
+    assert not (base / "latest").exists() and not (base / "latest").is_symlink()  # old: linked to the failed run
+    assert len(list(base.iterdir())) == 1
 
 
 def test_versions_name_python_and_the_numeric_libraries():

@@ -284,3 +284,57 @@ def test_a_scan_the_writer_refuses_keeps_the_scans_before_it(tmp_path: Path, nam
     assert last.endswith(f"; the 3 scans before it are saved in {out}"), last
     got = [rec.scan for rec in read_log(out)]
     assert [codes(s) for s in got] == [codes(s) for s in sent[:3]]
+
+
+def _ipv6_loopback() -> bool:
+    import socket
+
+    try:
+        with socket.create_server(("::1", 0), family=socket.AF_INET6):
+            return True
+    except OSError:
+        return False
+
+
+needs_ipv6 = pytest.mark.skipif(not _ipv6_loopback(), reason="no IPv6 loopback (::1) on this machine")
+
+
+@needs_ipv6
+@pytest.mark.parametrize("rfc2217", [False, True])
+def test_a_device_on_ipv6_is_recorded_through_its_bracketed_url(tmp_path: Path, rfc2217: bool) -> None:
+    """`lmsbench lms200 emulate --tcp 0 --host ::1` was refused: "[Errno -9] Address family for
+    hostname not supported (while attempting to bind on address ('::1', 0))" (TcpServer bound every
+    host as IPv4). It now serves on IPv6 at socket://[::1]:PORT, which `record --port` takes."""
+    sent = source()
+    with TcpServer(VirtualLMS200(sent, time_scale=0.01), "::1", 0, rfc2217=rfc2217) as ad:
+        assert ad.url == f"{'rfc2217' if rfc2217 else 'socket'}://[::1]:{ad.port}"
+        out = tmp_path / "rec.clf"
+        run = subprocess.run(cli("record", "--port", ad.url, "--out", str(out), "--max-scans", "4"), env=ENV,
+                             capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    assert [codes(rec.scan) for rec in read_log(out)] == [codes(s) for s in sent[:4]]
+
+
+@needs_ipv6
+def test_emulate_prints_the_bracketed_url_of_an_ipv6_host() -> None:
+    for host in ("::1", "[::1]"):
+        run = subprocess.run(cli("emulate", "--tcp", "0", "--host", host, "--duration", "0.2"), env=ENV,
+                             capture_output=True, text=True, timeout=60)
+        assert run.returncode == 0, run.stderr  # old: 2, "... Address family for hostname not supported ..."
+        assert re.fullmatch(r"socket://\[::1\]:\d+\n", run.stdout), run.stdout
+
+
+def test_an_ipv6_address_without_brackets_is_refused_with_the_url_to_give(tmp_path: Path) -> None:
+    """`record --port socket://::1:PORT` said "cannot open socket://::1:PORT: Could not open port
+    socket://::1:PORT: 'debug|info|warning|error'" (pyserial read the address's colons as options)."""
+    from lms200.errors import LmsDeviceError
+
+    with pytest.raises(LmsDeviceError, match=re.escape("cannot open socket://::1:2111: an IPv6 address in a URL "
+                                                       "goes in brackets: socket://[::1]:2111") + "$"):
+        LMS200("socket://::1:2111")
+    with pytest.raises(LmsDeviceError, match=re.escape("brackets: rfc2217://[fe80::1]:99?logging=debug") + "$"):
+        LMS200("rfc2217://fe80::1:99?logging=debug")
+    run = subprocess.run(cli("record", "--port", "socket://::1:2111", "--out", str(tmp_path / "r.clf")), env=ENV,
+                         capture_output=True, text=True, timeout=60)
+    assert (run.returncode, run.stderr) == (2, "lmsbench lms200 record: error: cannot open socket://::1:2111: an IPv6 "
+                                               "address in a URL goes in brackets: socket://[::1]:2111\n")

@@ -180,3 +180,31 @@ def test_a_user_extractor_gets_the_logs_noise_through_its_config_fields(cm_log, 
     assert cfg["methods"]["iepf"]["sigma"] == cfg["methods"]["noise_ext:lines"]["sigma_fit"] == "set per source (ran_with)"
     # the plain function ran with iepf's 5 mm defaults: other lines on this 8 mm log (why docs' Intel figures differed)
     assert summary.loc["noise_ext:plain", "lines_per_scan"] != summary.loc["iepf", "lines_per_scan"]
+
+
+def test_summary_txt_says_the_range_noise_each_method_ran_with(cm_log, tmp_path) -> None:
+    """summary.txt (and the printed summary) did not say which range noise each method's extractor
+    ran with: config.yaml had it (ran_with), summary.txt's sigma_r_mm column is the scoring's noise,
+    not the extractor's field. It now ends with a line per source: the sensor method's field as its
+    scans read it (sigma_r_cm on the cm-mode log, sigma_r on the simulated mm-mode office), mm."""
+    from experiments.cli import main
+
+    out = tmp_path / "both"
+    assert main(["compare", str(cm_log), "office:0", "--duration", "2", "--methods", "sensor", "split_merge",
+                 "--out", str(out), "--no-progress"]) == 0
+    cfg = yaml.safe_load((out / "config.yaml").read_text())
+    ran = cfg["ran_with"]
+    n = ran["run.clf"]["sensor"]["sigma_r_cm"]
+    assert ran["run.clf"]["split_merge"]["sigma"] == n and ran["office:0"]["sensor"]["sigma_r"] == 0.005
+    text = (tmp_path / "both" / "summary.txt").read_text()
+    assert text.endswith("\nrange noise each method ran with (mm; config.yaml's ran_with has every noise field):\n"
+                         f"  run.clf   sensor sigma_r_cm={n * 1000:.3g}, split_merge sigma={n * 1000:.3g}\n"
+                         "  office:0  sensor sigma_r=5, split_merge sigma=5\n"), text
+
+
+def test_the_ran_with_lines_show_a_value_that_is_no_number_and_a_method_without_one() -> None:
+    from experiments.compare import format_ran_with
+
+    text = format_ran_with({"a.clf": {"sensor": {"sigma_r_cm": "auto", "sigma_bearing": 0.001},
+                                      "mine:lines": {}, "hough": {"sigma": 0.0123456}}})
+    assert text.splitlines()[1:] == ["  a.clf  sensor sigma_r_cm=auto, mine:lines -, hough sigma=12.3"]

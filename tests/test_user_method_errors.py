@@ -8,12 +8,13 @@ from pathlib import Path
 
 import sys
 
+import pandas as pd
 import pytest
 
 from experiments.cli import main
 
 TRACEBACK_HINT = " (LMSBENCH_TRACEBACK=1 shows its traceback)"
-USER_MODULES = ("boomext", "wrongext", "fine")
+USER_MODULES = ("boomext", "wrongext", "fine", "exitext", "exitatimport")
 
 
 @pytest.fixture
@@ -74,6 +75,41 @@ def test_a_bug_in_lmsbench_beside_a_user_extractor_is_still_an_internal_error(bo
                                        "LMSBENCH_TRACEBACK=1 shows where)\n")
 
 
+def test_a_user_extractor_calling_sys_exit_is_said_in_one_line_not_a_silent_exit(boom, capsys) -> None:
+    """The wrong-input hunt: sys.exit(0) in a user's extractor ended `compare` silently with exit 0
+    (as if it had finished; nothing written), sys.exit(3) with 3, sys.exit() at its module's import
+    the same, and GeneratorExit with a traceback, exit 1: each is now the user's code failing."""
+    (boom / "exitext.py").write_text("import sys\ndef zero(scan):\n    sys.exit(0)\n"
+                                     "def gen(scan):\n    raise GeneratorExit\n")
+    (boom / "exitatimport.py").write_text("import sys\nsys.exit(0)\ndef f(scan):\n    pass\n")
+    for fn, said in (("zero", "SystemExit: 0 (it called sys.exit)"), ("gen", "GeneratorExit")):
+        assert main(["compare", "office:0", "--duration", "1", "--methods", f"exitext:{fn}", "--out", f"c_{fn}",
+                     "--no-progress"]) == 2
+        assert capsys.readouterr().err == (f"lmsbench compare: error: your extractor exitext:{fn} raised {said} "
+                                           f"on office:0 scan 0{TRACEBACK_HINT}\n")
+    assert main(["compare", "office:0", "--duration", "1", "--methods", "exitatimport:f", "--out", "c_imp",
+                 "--no-progress"]) == 2
+    assert capsys.readouterr().err == ("lmsbench compare: error: exitatimport:f: importing 'exitatimport' failed: "
+                                       "SystemExit: 0 (it called sys.exit)\n")
+
+
+def test_sys_exit_in_code_a_command_runs_is_one_line_exit_2_not_its_status(boom, capsys, monkeypatch) -> None:
+    """No command calls sys.exit(): a SystemExit out of one came from code it ran, and ended the
+    command with that status (0 said a run that stopped half-way had finished)."""
+    import experiments.compare
+
+    def exits(*args, **kwargs):
+        sys.exit(0)
+
+    monkeypatch.setattr(experiments.compare, "explained_fraction", exits)
+    (boom / "fine.py").write_text("from features import extract\ndef f(scan):\n    return extract(scan, method='iepf')\n")
+    assert main(["compare", "office:0", "--duration", "1", "--methods", "fine:f", "--out", "cmp",
+                 "--no-progress"]) == 2
+    assert capsys.readouterr().err == ("lmsbench compare: error: code the command ran called sys.exit(0), which "
+                                       "stopped it before it finished (a user's extractor or sweep cell kind?; "
+                                       "LMSBENCH_TRACEBACK=1 shows where)\n")
+
+
 def test_slam_with_a_failing_user_extractor_names_the_scan(boom, capsys) -> None:
     assert main(["simulate", "--duration", "2", "--out", "run", "--quiet"]) == 0
     capsys.readouterr()
@@ -105,3 +141,43 @@ def test_a_wrong_result_names_its_scan_too(boom, capsys) -> None:
                  "--no-progress"]) == 2
     assert capsys.readouterr().err == ("lmsbench compare: error: your extractor wrongext:f returned int, not a "
                                        "features.FeatureSet on office:0 scan 0\n")
+
+
+LAZY_MODULES = ("lazyext", "lazyhelper")
+
+
+def test_a_user_extractor_that_imports_a_sibling_when_called_finds_it(tmp_path, monkeypatch, capsys,
+                                                                      user_methods_dropped) -> None:
+    """`lmsbench compare office:0 --methods lazyext:lines`, lazyext.py importing lazyhelper.py (beside
+    it) inside its function: the current folder was put on the path for the import and taken off
+    after it, so the call failed, "your extractor lazyext:lines raised ModuleNotFoundError: No module
+    named 'lazyhelper' on office:0 scan 0", exit 2 (the installed script's path does not start with
+    the current folder). The folder now stays on the path, last."""
+    from features import FeatureSet
+
+    from experiments.user_methods import import_named
+
+    (tmp_path / "lazyext.py").write_text("def lines(scan):\n"
+                                         "    import lazyhelper  # a sibling, imported when called\n"
+                                         "    return lazyhelper.lines(scan)\n")
+    (tmp_path / "lazyhelper.py").write_text("from features import extract\n"
+                                            "def lines(scan):\n"
+                                            "    return extract(scan, method='split_merge')\n")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "path", [p for p in sys.path if p not in ("", ".", str(tmp_path))])  # as `lmsbench`
+    for name in LAZY_MODULES:
+        monkeypatch.delitem(sys.modules, name, raising=False)
+    fn = import_named("lazyext:lines", "lazyext:lines")
+    from lms200 import Scan
+    import numpy as np
+
+    assert isinstance(fn(Scan.lms200(np.full(361, 2.0))), FeatureSet)  # old: ModuleNotFoundError
+    assert sys.path[-1] == str(tmp_path) and sys.path.count(str(tmp_path)) == 1  # last: it shadows nothing
+    monkeypatch.delitem(sys.modules, "lazyhelper")
+    assert main(["compare", "office:0", "--duration", "1", "--methods", "lazyext:lines", "--out", "cmp",
+                 "--no-progress"]) == 0, capsys.readouterr().err
+    assert sys.path.count(str(tmp_path)) == 1
+    summary = pd.read_csv(tmp_path / "cmp" / "summary.csv")
+    assert list(summary["method"]) == ["lazyext:lines"] and summary["lines_per_scan"].iloc[0] > 0
+    for name in LAZY_MODULES:
+        sys.modules.pop(name, None)

@@ -64,8 +64,9 @@ def run(args: argparse.Namespace) -> int:
 
     import yaml
 
-    from experiments.provenance import new_run_folder, versions, write_record
+    from experiments.provenance import link_latest, new_run_folder, versions, write_record
 
+    run_folder = args.out is None  # results/bench/DATE_TIME, linked as latest once its files are written
     args.out = args.out or new_run_folder("results/bench", now=started)
     # versions.yaml first, whole: it tells the folder as bench's (options.BENCH_OWNER); a run stopped
     # while writing bench.csv left a folder the next run into it refused (a cut bench.csv too)
@@ -73,5 +74,7 @@ def run(args: argparse.Namespace) -> int:
                                                             sort_keys=False))
     write_record(args.out / "bench.csv", lambda p: pd.DataFrame(rows).to_csv(p, index=False))  # a record too
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
+    if run_folder:
+        link_latest(args.out)
     print(f"wrote {args.out / 'bench.csv'}, {args.out / 'versions.yaml'}")
     return 0

@@ -122,8 +122,8 @@ def run(args: argparse.Namespace) -> int:
 
     started = datetime.datetime.now()  # what names the run's folder (a real log's compare takes minutes)
 
-    from experiments.compare import (check_sources, common_errors, compare, format_summary, parse_sources,
-                                     resolved_configs, source_label, source_noise, summarise, world_words)
+    from experiments.compare import (check_sources, common_errors, compare, format_ran_with, format_summary,
+                                     parse_sources, resolved_configs, source_label, source_noise, summarise, world_words)
     from experiments.overrides import extractor_overrides
     from experiments.progress import warm_up_kernels
     from features.scoring import ScoreConfig
@@ -174,7 +174,7 @@ def run(args: argparse.Namespace) -> int:
     summary = summarise(table)
     if matches:
         summary = summary.merge(common_errors(pd.DataFrame(matches)), on=["source", "method"], how="left")
-    from experiments.provenance import new_run_folder, versions, write_record
+    from experiments.provenance import link_latest, new_run_folder, versions, write_record
 
     resolved = dict(
         sources=args.sources, seeds=args.seeds, duration=args.duration, rate_hz=args.rate, stride=args.stride,
@@ -190,6 +190,7 @@ def run(args: argparse.Namespace) -> int:
     # what produced each source's scans: the sensor that was simulated (interlaced or not), the log read
     resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
     resolved["versions"] = versions()
+    run_folder = args.out is None  # results/compare/DATE_TIME, linked as latest once its files are written
     args.out = args.out or new_run_folder("results/compare", now=started)  # named by the run's start, as the demo's
     _remove_earlier_outputs(args.out, args.format)
     # config.yaml first, whole: it tells the folder as compare's (options.COMPARE_OWNER); a run stopped
@@ -201,7 +202,7 @@ def run(args: argparse.Namespace) -> int:
     else:  # compare.csv and summary.csv are records too: whole, or a cut one refused the next run
         write_record(path, lambda p: table.to_csv(p, index=False))
     write_record(args.out / "summary.csv", lambda p: summary.to_csv(p, index=False))
-    text = format_summary(summary)
+    text = format_summary(summary) + "\n" + format_ran_with(resolved["ran_with"])  # the noise, as read: config.yaml
     (args.out / "summary.txt").write_text(text + "\n")
     figures = []
     for src in sources:
@@ -211,6 +212,8 @@ def run(args: argparse.Namespace) -> int:
             figures += [str(p) for p in fig_explained_vs_lines(summary, src.name, figure_stem(args.out, src.name))
                         if p.suffix == ".png"]
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
+    if run_folder:
+        link_latest(args.out)
     print(text)
     print(f"wrote {path}, {args.out / 'summary.csv'}, {args.out / 'summary.txt'}, {args.out / 'config.yaml'}"
           + "".join(f", {f}" for f in figures))

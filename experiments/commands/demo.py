@@ -40,13 +40,15 @@ def run(args: argparse.Namespace) -> int:
     check_study(cfg)
     check_panel_log(cfg)  # before the run folder and results/demo/latest are made
     executor = None if args.no_sweep else ("inprocess" if args.inprocess else "local")
-    from experiments.provenance import new_run_folder
+    from experiments.provenance import link_latest, new_run_folder
 
     if args.out is not None:
         run_demo(args.out, cfg, sweep_executor=executor)
         return 0
     args.out = new_run_folder(DEMO_BASE)  # named if a reader of stdout that goes away stops it
-    copy_report_up(run_demo(args.out, cfg, sweep_executor=executor))
+    report = run_demo(args.out, cfg, sweep_executor=executor)
+    link_latest(args.out)  # only now: a demo stopped or failed midway left latest naming its partial folder
+    copy_report_up(report)
     return 0
 
 

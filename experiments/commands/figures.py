@@ -35,7 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from experiments.figures.make import DRIVING_TABLES, draw_figures, draw_sweep
-    from experiments.provenance import new_run_folder, write_record
+    from experiments.provenance import link_latest, new_run_folder, write_record
     from experiments.figures.study import StudyConfig, check_study, load_config, load_tables, run_study, save_tables
 
     started = datetime.datetime.now()
@@ -82,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
         cfg.log_options = plain_log_options(read_log_options(args))
         check_study(cfg, hint=", or --no-slam")
         tables, notes = run_study(cfg)
+    run_folder = args.out is None  # results/figures/DATE_TIME, linked as latest once its figures are drawn
     args.out = args.out or new_run_folder("results/figures", now=started)  # named by the run's start
     write_record(args.out / "figures.yaml", _record(args))  # first, whole: a run stopped after it is told as ours
     if not args.tables:
@@ -105,6 +106,8 @@ def run(args: argparse.Namespace) -> int:
         for folder in args.sweep:
             written.update(draw_sweep(folder, args.out, log=say))
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
+    if run_folder:
+        link_latest(args.out)
     for name, paths in written.items():
         print(f"{name:32s} " + " ".join(p.name for p in paths))
     for note in notes:

@@ -32,9 +32,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--world", type=world_name, help="simulator world to scan: " + WORLDS + " (default office)")
     e.add_argument("--seed", type=SEED, help="seed of the world and the sensor noise (default 0)")
     e.add_argument("--log", type=path_arg, help="replay this log (CARMEN, bag or lmsbench simulate folder) instead of the simulator, in a loop")
-    e.add_argument("--tcp", type=PORT, metavar="PORT", help="serve on socket://127.0.0.1:PORT instead of a pty (0 = any free port)")
+    e.add_argument("--tcp", type=PORT, metavar="PORT", help="serve on socket://127.0.0.1:PORT (or --host's address) instead of a pty (0 = any free port)")
     e.add_argument("--rfc2217", action="store_true", help="with --tcp: speak RFC 2217 (rfc2217://HOST:PORT), so the host sets the baud")
-    e.add_argument("--host", type=text("an address, e.g. 127.0.0.1 or 0.0.0.0"), help="address to listen on with --tcp (default 127.0.0.1)")
+    e.add_argument("--host", type=text("an address, e.g. 127.0.0.1, 0.0.0.0 or ::1"), help="address to listen on with --tcp (default 127.0.0.1; ::1 for IPv6, its URL socket://[::1]:PORT)")
     e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (default cm, as the LMS200 ships)")
     e.add_argument("--time-scale", type=number(0.0, MAX_TIME_SCALE, lo_open=True), default=1.0,
                    help=f"multiplies every byte time and device delay (default 1, real time; 0.01 = 100x faster; at most {MAX_TIME_SCALE:g})")

@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     started = datetime.datetime.now()  # what names the run's folder (2-3 min at the defaults)
 
     from experiments.progress import heartbeat_on_terminal
-    from experiments.provenance import new_run_folder, versions
+    from experiments.provenance import link_latest, new_run_folder, versions
     from experiments.sim2real import format_report, sim2real, write_outputs
 
     read_options = read_log_options(args)
@@ -114,9 +114,12 @@ def run(args: argparse.Namespace) -> int:
                   max_scans=args.max_scans, sensor_file=None if args.sensor is None else str(args.sensor),
                   world=args.world, glass_per_10m=result.glass, fit_rooms=args.fit_rooms,
                   versions=versions())
+    run_folder = args.out is None  # results/sim2real/DATE_TIME, linked as latest once its files are written
     args.out = args.out or new_run_folder("results/sim2real", now=started)  # named by the run's start, as the demo's
     paths = write_outputs(result, args.out, str(args.log), config)
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
+    if run_folder:
+        link_latest(args.out)
     print(format_report(result, str(args.log)), end="")
     for warning in result.warnings:
         print(f"lmsbench sim2real: warning: {warning}", file=sys.stderr)

@@ -168,6 +168,14 @@ def short_value(value: object) -> str:
     return text if len(text) <= 28 else text[:27] + "~"
 
 
+def is_number(values: pd.Series) -> bool:
+    """Whether a parameter's values are numbers to draw on a numeric axis: numeric and not booleans
+    (a bool is an int to pandas and numpy: ``alignment.deskew: [true, false]`` was drawn at x = 0
+    and 1, joined by a line, or taken as the x axis before a numeric parameter). Booleans, like
+    text, are categories: lines, panels or labelled x positions."""
+    return pd.api.types.is_numeric_dtype(values) and not pd.api.types.is_bool_dtype(values)
+
+
 def fig_sweep(table: pd.DataFrame, x: str, y: str, stem: Path, hue: str | None = None,
               facet: str | None = None, title: str = "") -> list[Path]:
     """A sweep plot: metric ``y`` (mean over seeds, +/- one std) against parameter ``x``, a line per
@@ -175,14 +183,14 @@ def fig_sweep(table: pd.DataFrame, x: str, y: str, stem: Path, hue: str | None =
     ok = table[table["status"] == "ok"] if "status" in table else table
     keys = [c for c in (facet, hue, x) if c]
     stats = ok.groupby(keys, dropna=False)[y].agg(["mean", "std", "count"]).reset_index()
-    # text x values (every varied parameter is text): categories in the grid's order, not joined
-    categories = None if pd.api.types.is_numeric_dtype(ok[x]) else list(dict.fromkeys(ok[x]))
+    # text or boolean x values (no varied parameter is a number): categories in the grid's order, not joined
+    categories = None if is_number(ok[x]) else list(dict.fromkeys(ok[x]))
     seeds = int(stats["count"].max()) if len(stats) else 0
     panels = list(stats.groupby(facet, sort=True)) if facet else [(None, stats)]
     fig, axes = new_figure(1, len(panels), width=min(4.2 * len(panels), 13), height=3.6, squeeze=False,
                            sharey=True)
-    hue_values = (sorted(stats[hue].unique()) if pd.api.types.is_numeric_dtype(stats[hue])
-                  else list(dict.fromkeys(ok[hue]))) if hue else [None]  # text: the grid's order
+    hue_values = (sorted(stats[hue].unique()) if is_number(stats[hue])
+                  else list(dict.fromkeys(ok[hue]))) if hue else [None]  # text, booleans: the grid's order
     cmap = plt.get_cmap("viridis", max(2, len(hue_values)))
     for ax, (facet_value, panel) in zip(axes.ravel(), panels):
         groups = sorted(panel.groupby(hue), key=lambda g: hue_values.index(g[0])) if hue else [(None, panel)]
@@ -220,7 +228,8 @@ def fig_sweep_scatter(table: pd.DataFrame, params: list[str], y: str, stem: Path
     ok = table[table["status"] == "ok"] if "status" in table else table
     fig, axes = new_figure(1, len(params), width=min(3.6 * len(params), 14), height=3.4, squeeze=False, sharey=True)
     for ax, name in zip(axes.ravel(), params):
-        ax.plot(shown(name, ok[name]), ok[y], "o", ms=4, color=method_color("sensor"), alpha=0.8, label="one cell")
+        values = shown(name, ok[name]) if is_number(ok[name]) else ok[name].astype(str)  # categories: a choice
+        ax.plot(values, ok[y], "o", ms=4, color=method_color("sensor"), alpha=0.8, label="one cell")
         ax.set_xlabel(label_of(name))
     axes.ravel()[0].set_ylabel(label_of(y))
     axes.ravel()[0].legend(loc="best")

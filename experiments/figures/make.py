@@ -110,9 +110,10 @@ def draw_sweep(folder: Path, out: Path, log: Callable[[str], None] | None = None
         return scatters
     if not varied:
         return {}
-    # the x axis is a number where one is varied: text parameters (logs, methods, worlds) become the
-    # lines and panels (a sweep whose first grid key was a list of log paths drew them as x values)
-    varied = sorted(varied, key=lambda n: not pd.api.types.is_numeric_dtype(table[n]))
+    # the x axis is a number where one is varied: text and boolean parameters (logs, methods, worlds,
+    # deskew on/off) become the lines and panels (a sweep whose first grid key was a list of log paths
+    # drew them as x values; one of [true, false] was drawn at x = 0 and 1)
+    varied = sorted(varied, key=lambda n: not draw.is_number(table[n]))
     x, rest = varied[0], varied[1:]
     hue = rest[0] if rest else None
     facet = None

@@ -82,8 +82,10 @@ def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> 
     """Run one cell and return its metrics plus status "ok", or status "error" with the error text.
 
     ``fn`` is the cell function when the caller resolved it already (else ``resolve_kind(kind)``).
-    Exceptions from the cell become an error row (the sweep goes on); ``KeyboardInterrupt`` and
-    ``SystemExit`` propagate. ``elapsed_s`` is the wall time of the cell function (s).
+    Exceptions from the cell become an error row (the sweep goes on), ``SystemExit`` too (a cell
+    calling ``sys.exit()`` stopped an ``--inprocess`` sweep silently with its status, and killed the
+    workers of a cluster, twice, for a ``KilledWorker`` row); ``KeyboardInterrupt`` propagates.
+    ``elapsed_s`` is the wall time of the cell function (s).
     """
     start = time.perf_counter()
     try:
@@ -94,12 +96,13 @@ def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> 
         if clash:
             raise ValueError(f"cell kind {kind!r} returned metric(s) {clash} that clash with parameter/column names")
         row = {"status": "ok", "error": "", **metrics}
-    except Exception as exc:  # noqa: BLE001 - a failing cell is recorded, not fatal
-        from experiments.user_methods import UserMethodFailed
+    except (Exception, SystemExit) as exc:  # noqa: BLE001 - a failing cell is recorded, not fatal
+        from experiments.user_methods import UserMethodFailed, raised_text
 
         raised = exc.__cause__ if isinstance(exc, UserMethodFailed) and exc.raised else exc  # a user's extractor: its line
         last = traceback.extract_tb(raised.__traceback__)[-1:]
         where = f" ({last[0].filename.rsplit('/', 1)[-1]}:{last[0].lineno})" if last else ""
-        row = {"status": "error", "error": f"{type(exc).__name__}: {exc}{where}"}
+        said = raised_text(exc) if isinstance(exc, SystemExit) else f"{type(exc).__name__}: {exc}"
+        row = {"status": "error", "error": f"{said}{where}"}
     row["elapsed_s"] = time.perf_counter() - start
     return row

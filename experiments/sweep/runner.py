@@ -11,8 +11,10 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import os
 import signal
 import sys
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterator
@@ -261,10 +263,77 @@ def quiet_dask() -> None:
         logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
-def _main_thread() -> bool:
-    import threading
+class _HeldCtrlC:
+    """What :func:`_ctrl_c_held` saw: the stop signals that came while it held them."""
 
-    return threading.current_thread() is threading.main_thread()
+    def __init__(self) -> None:
+        self.previous: dict[int, Any] = {}
+        self.came: list[int] = []
+
+    def record(self, signum: int, frame: Any) -> None:
+        self.came.append(signum)
+
+    def deliver(self) -> None:
+        """Hand the first held signal to the handler that was in place before (the command line's:
+        KeyboardInterrupt, its one line and exit status), or raise KeyboardInterrupt."""
+        if not self.came:
+            return
+        handler = self.previous.get(self.came[0])
+        if callable(handler):
+            handler(self.came[0], None)
+        if handler != signal.SIG_IGN:
+            raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def _ctrl_c_held(ignore: bool = False) -> Iterator[_HeldCtrlC]:
+    """Hold Ctrl-C (SIGINT) and SIGTERM while a local cluster starts: each is recorded (in this
+    process; a Python handler sees a signal whichever thread the system gives it to), and
+    ``deliver()`` after the block acts on it, once the cluster can be closed: Ctrl-C was ignored
+    while the cluster started (2-4 s), so it was lost and the sweep ran to its end, exit 0.
+    ``ignore``: SIGINT is ignored meanwhile instead (and lost), for workers that inherit it so."""
+    held = _HeldCtrlC()
+    if threading.current_thread() is not threading.main_thread():  # signals are the main thread's
+        yield held
+        return
+    held.previous = {signal.SIGINT: signal.signal(signal.SIGINT, signal.SIG_IGN if ignore else held.record),
+                     signal.SIGTERM: signal.signal(signal.SIGTERM, held.record)}
+    try:
+        yield held
+    finally:
+        for sig, handler in held.previous.items():
+            signal.signal(sig, handler)
+
+
+@contextlib.contextmanager
+def _workers_ignore_ctrl_c() -> Iterator[bool]:
+    """Processes that multiprocessing spawns meanwhile (a local cluster's workers) start with
+    Ctrl-C (SIGINT) ignored: through a two-line shell script that ignores it and runs Python (an
+    ignored signal stays ignored in the Python it runs), so a terminal's Ctrl-C, sent to the whole
+    process group, reaches the driver alone, which cancels the cells and closes the cluster, and
+    this process keeps its own handler (ignoring SIGINT here while the workers were spawned lost a
+    Ctrl-C that came then). Yields False, the script not used, where no temporary folder lets it
+    run (a /tmp mounted noexec): the caller then ignores SIGINT while the workers start, as before."""
+    import multiprocessing.spawn
+    import shlex
+    import shutil
+    import tempfile
+
+    previous = multiprocessing.spawn.get_executable()  # bytes or str
+    folder = Path(tempfile.mkdtemp(prefix="lmsbench-workers-"))
+    try:
+        script = folder / "python"
+        script.write_text(f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(os.fsdecode(previous))} \"$@\"\n")
+        script.chmod(0o700)
+        usable = os.access(script, os.X_OK) and Path("/bin/sh").is_file()  # X_OK fails on a noexec mount
+        if usable:
+            multiprocessing.spawn.set_executable(str(script))
+        try:
+            yield usable
+        finally:
+            multiprocessing.spawn.set_executable(previous)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 @contextlib.contextmanager
@@ -276,25 +345,27 @@ def sweep_client(executor: Any, workers: int) -> Iterator[Any]:
     if executor == "local":
         quiet_dask()
         # a cell that kills its worker fails after one retry instead of three
-        with dask.config.set({"distributed.scheduler.allowed-failures": 1}):
-            # the worker processes start with Ctrl-C ignored (an ignored signal stays ignored in a
-            # spawned Python): Ctrl-C stops the driver, which cancels the cells and closes the cluster
-            previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if _main_thread() else None
+        with dask.config.set({"distributed.scheduler.allowed-failures": 1}), _workers_ignore_ctrl_c() as wrapped:
+            cluster = None
             try:
-                # no dashboard, and its HTTP server on a free port: the default 8787 of another
-                # cluster on the machine made Dask warn on stderr
-                # one extraction thread a worker (``features.extract_many``): the workers are the parallelism
-                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                       dashboard_address=":0", scheduler_kwargs={"dashboard": False},
-                                       silence_logs=logging.CRITICAL, env={THREADS_ENV: "1"})
-            finally:
-                if previous is not None:
-                    signal.signal(signal.SIGINT, previous)
-            try:
+                with _ctrl_c_held(ignore=not wrapped) as held:
+                    try:
+                        # no dashboard, and its HTTP server on a free port: the default 8787 of another
+                        # cluster on the machine made Dask warn on stderr
+                        # one extraction thread a worker (``features.extract_many``): the workers are the parallelism
+                        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                               dashboard_address=":0", scheduler_kwargs={"dashboard": False},
+                                               silence_logs=logging.CRITICAL, env={THREADS_ENV: "1"})
+                    except Exception:
+                        if not held.came:
+                            raise
+                        # a worker stopped by that Ctrl-C as it started ("Nanny failed to start"): the stop is said
+                held.deliver()  # a Ctrl-C while the cluster started stops here, the cluster closed below
                 with Client(cluster) as client:
                     yield client
             finally:
-                cluster.close()
+                if cluster is not None:
+                    cluster.close()
     elif isinstance(executor, str):
         quiet_dask()
         with Client(executor, timeout="10s") as client:

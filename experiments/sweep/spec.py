@@ -285,6 +285,11 @@ def _check(spec: SweepSpec) -> None:
             raise SweepSpecError(f"random.{name}: choice needs a non-empty list, got {args!r}")
     if spec.random and spec.samples < 1:
         raise SweepSpecError("`random:` needs `samples:` >= 1 (the number of draws)")
+    if not spec.random and (spec.samples or spec.sample_seed):  # ignored: `samples: 8` ran 1 cell, not 8, exit 0
+        given = f"`samples: {spec.samples}`" if spec.samples else f"`sample_seed: {spec.sample_seed}`"
+        raise SweepSpecError(f"{given} is for random draws, and the sweep has no `random:` parameters to draw "
+                             "(each grid point would run once, not once a draw); add a `random:` mapping, "
+                             "e.g. `random: {extractor.ad_tau: {uniform: [2.0, 8.0]}}`, or leave it out")
     if not spec.seeds:
         raise SweepSpecError("`seeds:` is empty; give at least one seed")
     if any(not 0 <= s <= MAX_SEED for s in spec.seeds) or len(set(spec.seeds)) != len(spec.seeds):
