@@ -69,10 +69,14 @@ class Source:
         """Records already in memory (a simulated run, a log read once), with their visible truths
         (one per record, sensor frame) when known: scored against them; else like a log, with the
         noise the extractors get on a log (``sigma_r="auto"``) estimated from these records as
-        :func:`log_source` estimates it from its file."""
+        :func:`log_source` estimates it from its file, and repeatability measured through the
+        records' corrected poses (``Record.corrected``, a Radish ``*-corrected`` log's) where they
+        have them, as :func:`log_source` measures it (it was nan: a researcher's walkthrough,
+        ``read_log`` of Intel into ``from_records``, against ``compare`` of the file's 0.82)."""
         records = list(records)
         if truths is None:
-            return cls(name, "log", seed, records, None, len(records), **log_noise_estimates(lambda: records))
+            return cls(name, "log", seed, records, None, len(records),
+                       pose_of=partial(_corrected_pose, odometry_too=False), **log_noise_estimates(lambda: records))
         truths = list(truths)
         if len(truths) != len(records):
             raise LmsbenchError(f"{len(records)} records but {len(truths)} truths")
@@ -172,7 +176,7 @@ def _plain(options: dict[str, Any]) -> dict[str, Any]:
 
 def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
                read_options: dict[str, Any] | None = None, poses: str = "auto") -> Source:
-    """Every ``stride``-th scan of a real log (CARMEN or bag); no ground truth.
+    """Every ``stride``-th scan of a real log (CARMEN or bag), at most ``max_scans`` of them; no ground truth.
 
     Args:
         read_options: keywords of ``lms200.read_log`` (topic, skip_bad_lines, geometry).
@@ -191,9 +195,13 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
     reader = read_log(path, **options)
     corrected = poses == "corrected" or (poses == "auto" and "corrected" in Path(path).name.lower())
 
-    def records() -> Iterable[Record]:
+    def records() -> Iterable[Record]:  # at most max_scans: it was the progress bar's total alone, and
+        kept = 0  # log_source(path, max_scans=40) gave all 910 of Intel's scans (a library walkthrough)
         for k, rec in enumerate(reader):
+            if max_scans is not None and kept >= max_scans:
+                return
             if k % stride == 0:
+                kept += 1
                 yield rec
 
     def estimate_sigma() -> float:

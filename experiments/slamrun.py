@@ -184,6 +184,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if not any(r.scan.valid.any() for r in records):
         raise LmsbenchError(f"{log}: none of its {len(records)} scans has a valid beam (all +inf or nan): "
                             "nothing to localise against")
+    if truth is not None:  # groundtruth.tum: its scores need it beside the scans (see _check_truth_span)
+        _check_truth_span(truth, records, sources["truth"])
     if truth is None and all(r.truth is not None for r in records):
         truth = np.array([(r.scan.stamp, *r.truth) for r in records], float)
         sources["truth"] = f"{log} (TRUEPOS)"
@@ -195,6 +197,21 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     time_increment = getattr(getattr(reader, "stats", None), "time_increment", None)  # bags only
     return SlamInput(p.name, records, truth, walls, rel, sources, reference,
                      time_increment if isinstance(time_increment, float) else None)
+
+
+def _check_truth_span(truth: np.ndarray, records: list[Record], where: str) -> None:
+    """LmsbenchError naming the truth file, before any work, when fewer than two of the scans kept
+    lie within its time span (the ATE interpolates the truth at the scans' stamps and leaves the
+    others out). A groundtruth.tum of another run, or shifted by 100 s, ran the whole SLAM, wrote
+    its trajectory and map, then failed: "ate: fewer than 2 estimated poses fall inside the ground
+    truth's time span", exit 2, no file named, no metrics.json (the wrong-input hunt)."""
+    stamps = np.array([r.scan.stamp for r in records])
+    t0, t1 = float(truth[0, 0]), float(truth[-1, 0])
+    inside = int(np.count_nonzero((stamps >= t0) & (stamps <= t1)))
+    if inside < 2:
+        raise LmsbenchError(f"{where}: its stamps ({t0:.6f} to {t1:.6f} s) cover {inside} of the {len(records)} scans "
+                            f"to run on ({stamps[0]:.6f} to {stamps[-1]:.6f} s); scoring against it needs two or more "
+                            "(the ground truth of another run, or stamps of another clock?)")
 
 
 def score(traj: np.ndarray, data: SlamInput, result: SlamResult | None = None) -> dict[str, Any]:

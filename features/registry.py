@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import importlib.util
+import warnings
 from dataclasses import dataclass
 from collections.abc import Sequence
 from typing import Any, Callable
@@ -16,6 +17,7 @@ from typing import Any, Callable
 import numpy as np
 
 from lms200 import Scan
+from lms200.errors import LmsbenchWarning
 
 from .baselines.checks import MAX_BEAMS
 from .batch import check_threads, common_geometry, run_pieces, scan_list
@@ -176,7 +178,27 @@ def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: An
         raise not_a_scan(scan, "extract")
     if len(scan) > MAX_BEAMS:
         raise ScanGeometryError(too_many_beams(len(scan)))
+    if params:
+        warn_unread_noise(m, cfg, params, scan.range_max, "extract")
     return m.run(scan, cfg)
+
+
+def warn_unread_noise(m: Method, cfg: Any, params: dict[str, Any], range_max: float, where: str) -> None:
+    """An ``LmsbenchWarning`` when ``params`` set a range-noise field that a scan of this
+    ``range_max`` does not read (the sensor method reads ``sigma_r`` at range_max <= 10 m and
+    ``sigma_r_cm`` above: ``noise_field``), and not the one it reads: ``extract(scan, sigma_r=0.01)``
+    on a scanner with a 30 m range ran with "auto", silently (a library walkthrough)."""
+    noise_field = getattr(m.config_type, "noise_field", None)
+    if noise_field is None:
+        return
+    read = noise_field(range_max)
+    given = [f for f in ("sigma_r", "sigma_r_cm") if f in params]
+    if not given or read in given:
+        return
+    when = "above 10 m (SICK cm codes)" if read == "sigma_r_cm" else "of 10 m or less (SICK mm codes)"
+    warnings.warn(f"{where}: {given[0]}={params[given[0]]!r} is not read: a scan whose range_max is {when}, as "
+                  f"this one's {range_max:g} m, reads {read} (now {getattr(cfg, read)!r}); set {read} for it",
+                  LmsbenchWarning, stacklevel=3)
 
 
 
@@ -226,6 +248,8 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
         raise ScanTypeError(f"extract_many: expected a sequence of lms200.Scan, got {type(scans).__name__}") from None  # its items are checked to be Scans by common_geometry, on every path below
     if scans and isinstance(scans[0], Scan) and len(scans[0]) > MAX_BEAMS:
         raise ScanGeometryError(too_many_beams(len(scans[0])))
+    if params and scans and isinstance(scans[0], Scan):  # one geometry: the first scan's range_max is every scan's
+        warn_unread_noise(m, cfg, params, scans[0].range_max, "extract_many")
     if m.run_many is not None:
         use = n_threads if m.thread_safe else 1
         if not scans:  # threads=2 (or $LMSBENCH_THREADS=2) made an empty batch an IndexError

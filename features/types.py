@@ -68,6 +68,33 @@ class Corner:
     lines: tuple[int, int]
 
 
+def row_index(i: Any, n: int, what: str) -> int | slice | np.ndarray:
+    """The rows ``i`` selects of ``n`` (``what``: "lines" or "corners"): an int (negative from the
+    end), or a slice, a 1-D integer array or list, or a boolean mask of length ``n``, which select
+    a subset. IndexError for an int out of range (the Sequence protocol's), InputError naming the
+    index for anything else: a list index was "list index out of range", a boolean mask numpy's
+    "cannot reshape array of size 32 into shape (2,2)" (a library walkthrough filtered
+    ``fs.lines[fs.lines.length > 0.5]``)."""
+    if isinstance(i, slice):
+        return i
+    if isinstance(i, (int, np.integer)) and not isinstance(i, (bool, np.bool_)):
+        k = int(i)
+        if not -n <= k < n:
+            raise IndexError(f"{what}: index {k} is out of range for {n} {what}")
+        return k
+    idx = np.asarray(i) if isinstance(i, (list, tuple, np.ndarray)) else None
+    if idx is not None and idx.ndim == 1 and idx.dtype == bool and idx.size == n:
+        return idx
+    if idx is not None and idx.ndim == 1 and (idx.size == 0 or np.issubdtype(idx.dtype, np.integer)):
+        idx = idx.astype(np.int64)
+        bad = idx[(idx < -n) | (idx >= n)]
+        if bad.size:
+            raise IndexError(f"{what}: index {int(bad[0])} is out of range for {n} {what}")
+        return idx
+    raise InputError(f"{what}: an index must be an int, a slice, a 1-D array or list of ints, or a boolean mask of "
+                     f"{n} values, got {type(i).__name__}" + (f" of shape {idx.shape} and dtype {idx.dtype}" if idx is not None else ""))
+
+
 def check_line_rows(rows: np.ndarray, name: str) -> None:
     """InputError naming ``name`` and the first bad line of ``rows`` ((k, 8) float: rho, alpha,
     x0, y0, x1, y1, first, last, ``FeatureSet.line_array()``'s) unless every line has finite
@@ -179,7 +206,10 @@ class Lines(Sequence):
         return self.values.shape[0]
 
     def __getitem__(self, i: Any) -> Any:
-        if isinstance(i, slice):
+        """``lines[k]``: the ``Line`` of row k; a slice, integer array or boolean mask: those rows
+        as ``Lines`` (``fs.lines[fs.lines.length > 0.5]``)."""
+        i = row_index(i, len(self), "lines")
+        if not isinstance(i, int):
             return Lines(self.values[i], self.beams[i])
         v = self.values[i].tolist()
         b = self.beams[i].tolist()
@@ -264,7 +294,10 @@ class Corners(Sequence):
         return self.values.shape[0]
 
     def __getitem__(self, i: Any) -> Any:
-        if isinstance(i, slice):
+        """``corners[k]``: the ``Corner`` of row k; a slice, integer array or boolean mask: those
+        rows as ``Corners``."""
+        i = row_index(i, len(self), "corners")
+        if not isinstance(i, int):
             return Corners(self.values[i], self.beams[i])
         x, y, angle = self.values[i].tolist()
         index, a, b = self.beams[i].tolist()

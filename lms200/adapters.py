@@ -57,7 +57,11 @@ class _Adapter:
         self._pending_baud: int | None = None  # the host's baud they were garbled for
         self._stop = threading.Event()
         self._lock = threading.Lock()
-        self._thread = threading.Thread(target=self._run, name=type(self).__name__, daemon=True)
+        #: what stopped the adapter's thread (the device's source raised, or gave an item that is no
+        #: Scan), or None; ``close()`` raises it. It was a traceback from the thread on stderr, and the
+        #: host saw only its driver's timeout (a library walkthrough fed ``read_log``'s records).
+        self.error: BaseException | None = None
+        self._thread = threading.Thread(target=self._guarded, name=type(self).__name__, daemon=True)
 
     def start(self) -> None:
         self._thread.start()
@@ -109,11 +113,25 @@ class _Adapter:
     def _run(self) -> None:  # pragma: no cover - overridden
         raise NotImplementedError
 
+    def _guarded(self) -> None:
+        try:
+            self._run()
+        except BaseException as exc:  # kept for close(), which raises it in the caller's thread
+            self.error = exc
+
+    def _release(self) -> None:
+        """Release the port (after the thread has stopped)."""
+
     def close(self) -> None:
-        """Stop the thread and release the port."""
+        """Stop the thread and release the port; then raise what stopped the thread, if anything
+        did (``error``: the device's source raised, or gave an item that is no Scan), once."""
         self._stop.set()
         if self._thread.is_alive():
             self._thread.join(timeout=2.0)
+        self._release()
+        error, self.error = self.error, None
+        if error is not None:
+            raise error
 
     def __enter__(self) -> "_Adapter":
         return self
@@ -170,8 +188,7 @@ class PtyAdapter(_Adapter):
                     data = None
             self._exchange(data, self.host_baud(), self._write)
 
-    def close(self) -> None:
-        super().close()
+    def _release(self) -> None:
         for fd in (self._master, self._slave):
             try:
                 os.close(fd)
@@ -291,6 +308,5 @@ class TcpServer(_Adapter):
         if client is not None:
             client.close()
 
-    def close(self) -> None:
-        super().close()
+    def _release(self) -> None:
         self._listener.close()

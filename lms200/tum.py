@@ -64,11 +64,18 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
             4k garbled rows, and decreasing or nan stamps made a file ``read_tum`` refuses).
             Poses that are nan (a lost SLAM run's) are written as nan, which
             ``read_tum(path, allow_nan=True)`` reads back; an infinite pose entry, which no reader
-            takes, is an InputError naming its row.
+            takes, is an InputError naming its row. A ``path`` that is a folder or a device, or in
+            a folder that does not exist, or that cannot be written, is an InputError naming it
+            (they were a raw IsADirectoryError, FileNotFoundError, ...: the wrong-input hunt).
     """
     from .logs import path_of  # not at the top: logs imports bag, which imports this module
 
     path = path_of(path)
+    if not path.parent.is_dir():
+        raise InputError(f"path: the folder {path.parent} does not exist")
+    if path.exists() and not path.is_file():
+        raise InputError(f"path: {path} exists and is not a regular file (a folder or a device); "
+                         "name a file to write the trajectory to")
     stamps = real_vector(stamps, "stamps", "s")
     poses = real_rows(poses, "poses", 3, "x m, y m, theta rad", finite=False)
     if np.isinf(poses).any():  # was written as 'inf', which read_tum refuses
@@ -80,9 +87,12 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
         k = int(np.nonzero(np.diff(stamps) < 0)[0][0]) + 1
         raise InputError(f"stamps: must not decrease (stamp {k}: {stamps[k].item()!r} s after {stamps[k - 1].item()!r} s)")
     rows = np.column_stack((stamps, poses[:, :2], np.zeros(stamps.size), yaw_to_quaternion(poses[:, 2])))
-    with open(path, "w", encoding="ascii") as f:
-        f.write("# timestamp x y z qx qy qz qw\n")
-        f.writelines(" ".join(map(repr, row)) + "\n" for row in rows.tolist())
+    try:
+        with open(path, "w", encoding="ascii") as f:
+            f.write("# timestamp x y z qx qy qz qw\n")
+            f.writelines(" ".join(map(repr, row)) + "\n" for row in rows.tolist())
+    except OSError as exc:
+        raise InputError(f"path: cannot write {path}: {exc.strerror or exc}") from None
 
 
 def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.ndarray]:

@@ -70,6 +70,7 @@ from .protocol import (
     encode_measurement,
     reply_code,
 )
+from .records import Record
 from .scan import Scan
 
 MAX_TIME_SCALE = 100.0  # slowest emulation: 100x slower than the device (1e9 took days a telegram)
@@ -302,6 +303,7 @@ class VirtualLMS200:
         self.baud = POWER_ON_BAUD
         self.mode = MODE_ON_REQUEST
         self.source_exhausted = False
+        self._taken = 0  # items taken from the source (an error names the one that is no Scan)
         self._ready: Scan | None = None
         self._ready = self._next_scan()  # built now, not after the 0x24 reply (see the module doc)
         self.scans_sent = 0
@@ -466,10 +468,16 @@ class VirtualLMS200:
         if scan is not None or self.source_exhausted:
             return scan
         try:
-            return next(self._source)
+            item = next(self._source)
         except StopIteration:
             self.source_exhausted = True
             return None
+        self._taken += 1
+        if not isinstance(item, Scan):  # said here, naming the item: it failed in the adapter's thread, where
+            # the host saw only a timeout (a library walkthrough passed read_log's records, not their scans)
+            hint = " (a log's records: pass their scans, rec.scan for rec in read_log(path))" if isinstance(item, Record) else ""
+            raise InputError(f"source: item {self._taken - 1} is a {type(item).__name__}, not an lms200.Scan{hint}")
+        return item
 
     def _scan_payload(self) -> bytes | None:
         scan = self._next_scan()

@@ -131,6 +131,11 @@ class Tour:
         return np.column_stack((np.where(self.kind[k] == DRIVE, rate, 0.0), np.where(self.kind[k] == TURN, rate, 0.0)))
 
 
+#: route nodes a tour passes at most: the mit world's longest tour (3,600 s at 10 m/s) passes a few
+#: thousand; a world whose route targets lie 1e-7 m apart planned ever more legs, for ever
+MAX_WAYPOINTS = 200_000
+
+
 def plan_waypoints(world: World, rng: np.random.Generator, length_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Waypoints (k, 2) visiting random route targets by shortest paths until the path is at
     least ``length_m`` long, and a (k,) mask of the targets reached (pause points).
@@ -157,6 +162,10 @@ def plan_waypoints(world: World, rng: np.random.Generator, length_m: float) -> t
             leg.append(int(pred[current, leg[-1]]))
         leg = leg[::-1][1:]
         path += leg
+        if len(path) > MAX_WAYPOINTS:  # route targets 1e-7 m apart: ever more legs, for ever (a hang)
+            raise LmsbenchError(f"world {world.name!r}: a tour of {length_m:g} m would pass more than "
+                                f"{MAX_WAYPOINTS:,} route nodes (its route targets are too close together for "
+                                f"the run's duration and speed: {total:.3g} m of path so far)")
         is_target += [False] * (len(leg) - 1) + [True]
         total += float(dist[current, goal])
         current = goal

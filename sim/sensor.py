@@ -230,9 +230,10 @@ class SensorConfig:
             raise LmsbenchError(f"{where}: a sensor config must be a mapping of fields, got {type(d).__name__}")
         d = upgrade_fields(d, where)
         known = {f.name for f in fields(cls)}
-        unknown = sorted(set(d) - known)
-        if unknown:
-            raise LmsbenchError(f"{where}: unknown sensor field(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}")
+        unknown = sorted(set(d) - known, key=str)  # YAML keys may be numbers, null, true: `1: 2` was
+        if unknown:  # "not a sensor model (sequence item 0: expected str instance, int found)"
+            raise LmsbenchError(f"{where}: unknown sensor field(s) {', '.join(map(str, unknown))}; "
+                                f"known: {', '.join(sorted(known))}")
         try:
             return cls(**d)
         except (TypeError, ValueError) as exc:

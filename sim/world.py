@@ -22,6 +22,14 @@ from .walls_only import box_thickness, orient_walls, unreproduced
 SCAN_HEIGHT_M = 0.35  # height of the scan plane above the floor (LMS200 on a Pioneer-class robot)
 MAX_COORD_M = 1e6  # m: the largest coordinate a world may hold (a building is < 1 km; beyond, float geometry degrades)
 FACE_BOX_THICKNESS_M = 0.05  # thickness of the boxes rebuilt behind faces for a walls-only world.json
+#: solids a world may hold at most (boxes + cylinders; a walls-only world.json's walls + circles): its
+#: faces are built pair by pair, in time quadratic in them. The mit world has 909 (2,345 faces, 1.6 s);
+#: a world.json of 8,000 walls took 88 s to be read, one of 200,000 hours (found by the wrong-input hunt)
+MAX_SOLIDS = 5_000
+#: route nodes at most: a tour's shortest paths are all pairs' (12 bytes a pair): a world.json of
+#: 20,000 route nodes took 4.8 GB and a minute (the mit world has 42)
+MAX_ROUTE_NODES = 2_000
+MAX_WORLD_JSON_BYTES = 32 << 20  # a world.json read at most (the mit world's is 0.54 MB): refused unread
 
 
 @dataclass(eq=False)
@@ -94,6 +102,7 @@ class World:
             raise InputError("boxes: half sizes hx, hy must be > 0 and the top z1 above the bottom z0")
         if ((c[:, 2] <= 0) | (c[:, 4] <= c[:, 3])).any():
             raise InputError("cylinders: the radius must be > 0 and the top z1 above the bottom z0")
+        _check_sizes(len(b) + len(c), "boxes and cylinders", len(self.route_nodes))
         n = len(self.route_nodes)
         for name in ("route_edges", "route_targets"):
             idx = getattr(self, name)
@@ -135,6 +144,10 @@ class World:
             LmsbenchError: for a file that is not a world description, or a walls-only file whose
                 rebuilt boxes do not give back its walls as faces.
         """
+        size = Path(path).stat().st_size
+        if size > MAX_WORLD_JSON_BYTES:  # read whole: a 3 GB file took as much memory
+            raise LmsbenchError(f"{path}: {size:,} bytes, more than the {MAX_WORLD_JSON_BYTES:,} a world.json may "
+                                f"hold (refused unread; the mit world's is 0.5 MB)")
         try:
             d = json.loads(Path(path).read_text(encoding="ascii"))
             if not isinstance(d, dict):
@@ -144,6 +157,10 @@ class World:
             for name, a in (("walls", walls), ("circles", circles)):  # before the walls-only rebuild, which
                 if not np.isfinite(a).all() or (a.size and np.abs(a).max() > MAX_COORD_M):  # overflowed (warnings)
                     raise InputError(f"{name}: must be finite numbers within +-{MAX_COORD_M:g} m")
+            if "boxes" not in d:  # before the walls-only rebuild, quadratic in the walls
+                _check_sizes(len(walls) + len(circles), "walls and circles", len(d.get("route_nodes") or []))
+        except WorldSizeError as exc:
+            raise LmsbenchError(f"{path}: {exc}") from None
         except RecursionError:  # [[[[...]]]] 100,000 deep: json's RecursionError was an internal error
             raise LmsbenchError(f"{path}: not a world.json (nested too deeply to parse)") from None
         except (ValueError, TypeError, UnicodeDecodeError) as exc:
@@ -169,6 +186,8 @@ class World:
                 route_targets=d.get("route_targets", []),
                 glass=d.get("glass", []),
             )
+        except WorldSizeError as exc:
+            raise LmsbenchError(f"{path}: {exc}") from None
         except (ValueError, TypeError, KeyError, IndexError, OverflowError) as exc:
             raise LmsbenchError(f"{path}: not a world.json ({type(exc).__name__}: {exc})") from None
         bad = unreproduced(walls, world.walls, FACE_BOX_THICKNESS_M) if walls_only else None
@@ -202,6 +221,21 @@ class World:
             dc = np.hypot(p[:, None, 0] - c[:, 0], p[:, None, 1] - c[:, 1]) - c[:, 2]
             d = np.minimum(d, dc.min(axis=1))
         return d
+
+
+class WorldSizeError(InputError):
+    """A world of more solids or route nodes than it may hold (:func:`_check_sizes`)."""
+
+
+def _check_sizes(solids: int, what: str, route_nodes: int) -> None:
+    """WorldSizeError (an InputError) for a world of more than MAX_SOLIDS solids (``what``: their kinds) or
+    MAX_ROUTE_NODES route nodes, before anything is built from them."""
+    if solids > MAX_SOLIDS:
+        raise WorldSizeError(f"{what}: {solids:,} in all, more than the {MAX_SOLIDS:,} a world may hold (the mit world "
+                         "has 909 solids; the faces are built pair by pair, in time that grows as their square)")
+    if route_nodes > MAX_ROUTE_NODES:
+        raise WorldSizeError(f"route_nodes: {route_nodes:,}, more than the {MAX_ROUTE_NODES:,} a world may hold (the mit "
+                         "world has 42; the tour plans over the shortest paths between every pair)")
 
 
 def boxes_behind_faces(walls: np.ndarray, height: float) -> np.ndarray:

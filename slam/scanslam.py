@@ -497,7 +497,7 @@ def run_scan_slam(steps, config) -> "SlamResult":
     optimised poses and merged (:mod:`slam.linemap`).
     """
     from .linemap import merge_lines
-    from .run import SlamInputError, SlamResult, extract_all, lost_against_scan, pose_nees
+    from .run import SlamInputError, SlamResult, extract_all, lost_against_scan, out_of_order, pose_nees
 
     slam = ScanSlam(config.alignment, config.motion, config.keyframes, config.loop_closure)
     stamps: list[float] = []
@@ -508,7 +508,7 @@ def run_scan_slam(steps, config) -> "SlamResult":
     for k, (t, scan, odom, truth) in enumerate(steps):
         t = float(t)
         if previous is not None and t < previous:
-            raise SlamInputError(f"scan {k}: timestamp {t} is earlier than the previous one ({previous})")
+            raise out_of_order(k, t, previous)
         previous = t
         info = slam.step(t, scan.points, _offsets(scan, config.alignment), odom)
         if info.new_keyframe:

@@ -235,6 +235,21 @@ def test_read_tum_of_a_missing_path_or_a_folder_is_log_not_found(tmp_path: Path)
         read_tum(tmp_path / "missing.tum", allow_nan="yes")
 
 
+def test_write_tum_to_a_folder_a_device_or_a_missing_folder_is_an_input_error(tmp_path: Path) -> None:
+    """The wrong-input hunt: write_tum(FOLDER, ...) was a raw IsADirectoryError, and a file in a
+    folder that does not exist a raw FileNotFoundError (write_log says InputError for both)."""
+    from lms200 import write_tum
+
+    stamps, poses = np.array([0.0]), np.zeros((1, 3))
+    with pytest.raises(InputError, match=rf"path: {re.escape(str(tmp_path))} exists and is not a regular file "
+                                         r"\(a folder or a device\); name a file to write the trajectory to"):
+        write_tum(tmp_path, stamps, poses)
+    with pytest.raises(InputError, match=r"path: /dev/null exists and is not a regular file"):
+        write_tum("/dev/null", stamps, poses)
+    with pytest.raises(InputError, match=rf"path: the folder {re.escape(str(tmp_path / 'gone'))} does not exist"):
+        write_tum(tmp_path / "gone" / "t.tum", stamps, poses)
+
+
 # --- a pose that is not finite -------------------------------------------------------------------------
 @pytest.mark.parametrize("xy", [(math.nan, 0.0), (0.0, math.inf)])
 def test_a_bag_pose_that_is_not_finite_is_a_bag_error_naming_the_message(tmp_path: Path, xy: tuple) -> None:

@@ -1213,15 +1213,24 @@ def test_a_sweeps_own_big_sweep_yaml_is_read_for_its_plots(tmp_path):
 
 
 @pytest.mark.parametrize("with_out", [True, False])
-def test_demo_refuses_a_log_that_does_not_read_before_it_makes_its_folder(with_out, tmp_path, monkeypatch, capsys):
+@pytest.mark.parametrize("log, said", [
+    ("groundtruth.tum", "groundtruth.tum:1: not a CARMEN log"),
+    # the wrong-input hunt: a log of only +inf readings passed the first-scan check, and the study's
+    # refusal left the run folder (or --out) behind, empty
+    ("no_returns.clf", "no_returns.clf: none of its 5 scans has a valid beam (all +inf, nan or 0): no scan to draw"),
+])
+def test_demo_refuses_a_log_that_does_not_read_before_it_makes_its_folder(with_out, log, said, tmp_path, monkeypatch,
+                                                                         capsys):
     """`demo --log run/groundtruth.tum` (a file, not a log) made results/demo/DATE_TIME and moved
     results/demo/latest to it, empty, before the study refused the file (or left --out X behind,
-    empty): the earlier good report was no longer "latest". The log's first lines are read first."""
+    empty): the earlier good report was no longer "latest". The log is read first, up to a scan
+    with a valid beam."""
     monkeypatch.chdir(tmp_path)
     (tmp_path / "groundtruth.tum").write_text("0.0 0 0 0 0 0 0 1\n0.1 0.1 0 0 0 0 0 1\n")
+    write_log(tmp_path / "no_returns.clf", [Record(Scan.lms200(np.full(361, np.inf), stamp=0.1 * k)) for k in range(5)])
     out = ["--out", str(tmp_path / "x")] if with_out else []
-    assert run_main(["demo", "--log", "groundtruth.tum", "--no-sweep", "--duration", "1", *out]) == 2
+    assert run_main(["demo", "--log", log, "--no-sweep", "--duration", "1", *out]) == 2
     captured = capsys.readouterr()
     (line,) = captured.err.strip().splitlines()
-    assert "groundtruth.tum:1: not a CARMEN log" in line
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["groundtruth.tum"]  # no results/, no x/
+    assert said in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["groundtruth.tum", "no_returns.clf"]  # no results/, no x/

@@ -286,6 +286,26 @@ def test_a_scan_the_writer_refuses_keeps_the_scans_before_it(tmp_path: Path, nam
     assert [codes(s) for s in got] == [codes(s) for s in sent[:3]]
 
 
+def test_emulate_on_a_port_in_use_or_an_address_not_here_names_the_option(capsys: pytest.CaptureFixture) -> None:
+    """The wrong-input hunt: `emulate --tcp P` on a port in use said "error: [Errno 98] Address already
+    in use (while attempting to bind on address ('127.0.0.1', P))", and `--host 8.8.8.8` "[Errno 99]
+    Cannot assign requested address (...)": now the option to change, one line, exit 2."""
+    import socket
+
+    from experiments.cli import main
+
+    with socket.create_server(("127.0.0.1", 0)) as taken:
+        port = taken.getsockname()[1]
+        assert main(["lms200", "emulate", "--tcp", str(port), "--duration", "0.1"]) == 2
+        assert capsys.readouterr().err == (f"lmsbench lms200 emulate: error: --tcp {port}: cannot listen on "
+                                           f"127.0.0.1:{port} (Address already in use); give a free port "
+                                           "(--tcp 0 picks one)\n")
+    assert main(["lms200", "emulate", "--tcp", "0", "--host", "192.0.2.1", "--duration", "0.1"]) == 2  # TEST-NET-1
+    assert capsys.readouterr().err == ("lmsbench lms200 emulate: error: --host 192.0.2.1: cannot listen there "
+                                       "(Cannot assign requested address); give an address of this machine "
+                                       "(127.0.0.1, or 0.0.0.0 for all of them)\n")
+
+
 def _ipv6_loopback() -> bool:
     import socket
 

@@ -439,3 +439,34 @@ def test_figures_from_another_studys_tables_into_a_demos_figures_is_refused(tabl
     fresh = tmp_path / "fresh"  # the other study's figures in a new folder: as before
     assert main(["figures", "--tables", str(tables), "--out", str(fresh)]) == 0, capsys.readouterr().err
     assert (fresh / "fig7_timing.png").is_file()
+
+
+@pytest.mark.parametrize("table, frame, said", [
+    # text where numbers are plotted: "internal error: TypeError: Cannot perform reduction 'median' with
+    # string dtype", exit 1, after figures.yaml was written
+    ("timing", {"method": ["sensor"] * 2, "scan": ["0", "1"], "time_ms": ["0.05", "0.04"]},
+     "table timing's column scan holds"),
+    # a trajectory and map as text: drawn on categorical axes, exit 0
+    ("trajectory", {"source": ["truth", "slam"], "t": [0.0, 0.0], "x": ["1.0", "2.0"], "y": ["0", "1"]},
+     "table trajectory's column x holds"),
+    ("timing", {"method": ["sensor"], "t": [0.05]}, "table timing has no columns scan, time_ms, which the figures read"),
+])
+def test_figures_from_a_foreign_table_is_refused_before_any_output(tables, tmp_path, capsys, table, frame, said):
+    """The wrong-input hunt: a table of a figure's name that lmsbench did not write (edited, or
+    another program's) failed part-way through the drawing as an internal error, or was drawn."""
+    import pandas as pd
+
+    folder = tmp_path / "tables"
+    folder.mkdir()
+    (folder / "study.yaml").write_bytes((tables / "study.yaml").read_bytes())
+    (folder / "timing.parquet").write_bytes((tables / "timing.parquet").read_bytes())
+    if table == "trajectory":
+        pd.DataFrame({"source": ["truth"], "x1": [0.0], "y1": [0.0], "x2": [1.0], "y2": [0.0]}).to_parquet(
+            folder / "map.parquet", index=False)
+    pd.DataFrame(frame).to_parquet(folder / f"{table}.parquet", index=False)
+    out = tmp_path / "figs"
+    assert main(["figures", "--tables", str(folder), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"lmsbench figures: error: --tables {folder}: {said}") and err.count("\n") == 1, err
+    assert "not a table of `lmsbench figures` or `lmsbench demo` (edited, or another program's?)" in err
+    assert not out.exists()

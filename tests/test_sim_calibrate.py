@@ -82,6 +82,11 @@ def test_sensor_yaml_round_trip_and_errors(tmp_path: Path) -> None:
     (tmp_path / "bad.yaml").write_text("noise_sigma: 0.01\nnoise_sigmaa: 0.02\n")
     with pytest.raises(LmsbenchError, match="unknown sensor field.*noise_sigmaa"):
         SensorConfig.from_yaml(tmp_path / "bad.yaml")
+    # keys YAML reads as no text (the wrong-input hunt): "not a sensor model (sequence item 0: expected str
+    # instance, int found)" from compare, simulate's and sweeps' own wording; a TypeError from the API
+    (tmp_path / "keys.yaml").write_text("1: 2\nnull: 3\nnoise_sigmaa: 0.02\n")
+    with pytest.raises(LmsbenchError, match=r"keys.yaml: unknown sensor field\(s\) 1, None, noise_sigmaa; known: "):
+        SensorConfig.from_yaml(tmp_path / "keys.yaml")
     (tmp_path / "neg.yaml").write_text("dropout_prob: 1.5\n")
     with pytest.raises(LmsbenchError, match="dropout_prob"):
         SensorConfig.from_yaml(tmp_path / "neg.yaml")

@@ -197,3 +197,49 @@ def test_walls_only_walls_the_boxes_cannot_reproduce_are_an_error(tmp_path) -> N
     # a loose wall 2 cm in front of a room wall, solid towards it: its box is thinned to the gap
     w = _square(tmp_path, "thin.json", [room_cw], extra=[[2.0, 0.02, 1.0, 0.02]])
     assert any(np.allclose(f, [3.0, 0.0, 0.0, 0.0]) for f in w.walls)  # the room wall stays whole
+
+
+def test_a_world_json_too_big_to_build_is_refused_before_the_geometry(tmp_path) -> None:
+    """The wrong-input hunt: a walls-only world.json of 200,000 walls was read for hours (its faces
+    are built pair by pair; 8,000 took 88 s) before `simulate` said anything, one of 20,000 route
+    nodes took 4.8 GB (all pairs' shortest paths), and a file was read whole whatever its size."""
+    import time
+
+    from sim.world import MAX_ROUTE_NODES, MAX_SOLIDS, MAX_WORLD_JSON_BYTES
+
+    walls = [[0.001 * i, 0.0, 0.001 * i + 0.0005, 1.0] for i in range(MAX_SOLIDS + 1)]
+    (tmp_path / "walls.json").write_text(json.dumps({"walls": walls}))
+    start = time.perf_counter()
+    with pytest.raises(LmsbenchError, match=r"walls.json: walls and circles: 5,001 in all, more than the 5,000 "
+                                            r"a world may hold \(the mit world has 909 solids"):
+        World.from_json(tmp_path / "walls.json")
+    assert time.perf_counter() - start < 5.0
+    d = make_world("office", 0).to_dict()
+    boxes = {**d, "boxes": d["boxes"] * (MAX_SOLIDS // len(d["boxes"]) + 1)}
+    (tmp_path / "boxes.json").write_text(json.dumps(boxes))
+    with pytest.raises(LmsbenchError, match=r"boxes.json: boxes and cylinders: [0-9,]+ in all, more than the 5,000"):
+        World.from_json(tmp_path / "boxes.json")
+    nodes = {**d, "route_nodes": [[1.0, 1.0]] * (MAX_ROUTE_NODES + 1)}
+    (tmp_path / "nodes.json").write_text(json.dumps(nodes))
+    with pytest.raises(LmsbenchError, match=r"nodes.json: route_nodes: 2,001, more than the 2,000 a world may hold"):
+        World.from_json(tmp_path / "nodes.json")
+    with open(tmp_path / "big.json", "wb") as fh:  # sparse: no disk used
+        fh.truncate(MAX_WORLD_JSON_BYTES + 1)
+    with pytest.raises(LmsbenchError, match=r"big.json: 33,554,433 bytes, more than the 33,554,432 a world.json may "
+                                            r"hold \(refused unread"):
+        World.from_json(tmp_path / "big.json")
+
+
+def test_a_route_whose_targets_nearly_coincide_is_refused_not_toured_for_ever() -> None:
+    """The wrong-input hunt: two route targets 1e-7 m apart made the tour planner add legs of
+    1e-7 m until the path was long enough (7e7 of them for 2 s): `simulate` hung, its memory
+    growing. Now a tour is refused past MAX_WAYPOINTS route nodes."""
+    from sim.robot import robot_tour
+
+    d = make_world("office", 0).to_dict()
+    x, y = d["route_nodes"][0]
+    w = World(name="close", seed=0, boxes=d["boxes"], cylinders=d["cylinders"],
+              route_nodes=[[x, y], [x + 1e-7, y]], route_edges=[[0, 1]], route_targets=[0, 1])
+    with pytest.raises(LmsbenchError, match=r"world 'close': a tour of [0-9.]+ m would pass more than 200,000 route "
+                                            r"nodes \(its route targets are too close together"):
+        robot_tour(w, seed=0, duration=2.0)

@@ -214,6 +214,28 @@ def test_a_simulate_folder_whose_truth_or_world_is_a_folder_or_no_mapping_is_ref
     assert not (tmp_path / "o").exists()
 
 
+def test_a_ground_truth_beside_none_of_the_scans_is_refused_before_the_run(sim_folder, tmp_path, capsys):
+    """The wrong-input hunt: a simulate folder whose groundtruth.tum was another run's, or shifted by
+    100 s, ran the whole SLAM, wrote config.yaml, the trajectory, keyframes and map, then failed with
+    "ate: fewer than 2 estimated poses fall inside the ground truth's time span" (no file named, no
+    metrics.json). Now refused before any output, naming the file and both time spans."""
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    stamps, poses = read_tum(sim_folder / "groundtruth.tum")
+    write_tum(run / "groundtruth.tum", stamps + 100.0, poses)
+    assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet", "--max-scans", "5"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and re.fullmatch(
+        rf"lmsbench slam: error: {re.escape(str(run / 'groundtruth.tum'))}: its stamps \(100\.000000 to 10[0-9.]+ s\) "
+        r"cover 0 of the 5 scans to run on \(0\.000000 to [0-9.]+ s\); scoring against it needs two or more "
+        r"\(the ground truth of another run, or stamps of another clock\?\)", err[0]), err
+    assert not (tmp_path / "o").exists()
+
+
 def test_slam_command_errors_are_one_line(tmp_path, capsys):
     from experiments.cli import main  # in process: the subprocess test above covers the real command line
 

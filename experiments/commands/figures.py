@@ -34,7 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from experiments.figures.make import DRIVING_TABLES, draw_figures, draw_sweep
+    from experiments.figures.make import DRIVING_TABLES, check_tables, draw_figures, draw_sweep
     from experiments.provenance import link_latest, new_run_folder, write_record
     from experiments.figures.study import StudyConfig, check_study, load_config, load_tables, run_study, save_tables
 
@@ -70,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
     if args.tables:
         check_study_tables(args.tables)
         tables, notes = load_tables(args.tables)
+        check_tables(tables, f"--tables {args.tables}")  # before any output: a foreign table failed part-way
         if not any(len(t) for n, t in tables.items() if n in DRIVING_TABLES) and not args.sweep:  # "wrote 0 files", exit 0
             raise InputError(f"--tables {args.tables}: every table a figure is drawn from is empty (no rows); nothing to draw")
         cfg = load_config(args.tables)

@@ -84,7 +84,21 @@ def run_emulate(args: argparse.Namespace) -> int:
         scans = simulator_scans(args.world, args.seed)
         what = f"simulated scans of world {args.world} (seed {args.seed}) along its route graph"
     device = VirtualLMS200(scans, time_scale=args.time_scale, units=args.units)
-    adapter = TcpServer(device, args.host, args.tcp, rfc2217=args.rfc2217) if args.tcp is not None else PtyAdapter(device)
+    try:
+        adapter = TcpServer(device, args.host, args.tcp, rfc2217=args.rfc2217) if args.tcp is not None else PtyAdapter(device)
+    except OSError as exc:  # said "[Errno 98] Address already in use (while attempting to bind on address (...))"
+        if args.tcp is None:
+            raise
+        import errno
+        import socket
+
+        why = str(exc.strerror or exc).split(" (while attempting", 1)[0]
+        if isinstance(exc, socket.gaierror) or (exc.errno or 0) < 0 or exc.errno == errno.EADDRNOTAVAIL:  # < 0: getaddrinfo
+            raise InputError(f"--host {args.host}: cannot listen there ({why}); give an address of this machine "
+                             "(127.0.0.1, or 0.0.0.0 for all of them)") from None
+        bare = args.host.strip("[]")
+        raise InputError(f"--tcp {args.tcp}: cannot listen on {f'[{bare}]' if ':' in bare else bare}:{args.tcp} ({why}); "
+                         "give a free port (--tcp 0 picks one)") from None
     where = adapter.url if args.tcp is not None else adapter.path
     print(where, flush=True)
     print(f"virtual LMS200 at {where}: {what}, 9600 baud at power-on, "

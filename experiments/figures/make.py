@@ -39,6 +39,47 @@ def _article(word: str) -> str:
 DRIVING_TABLES = ("signals", "timing", "summary", "trajectory", "office_points", "intel_points")
 
 
+#: what the figures read of each table: the columns they group or label by, and the ones they plot or
+#: compute with, which must hold numbers (``check_tables``); summary's only when it has an ``f1``
+#: (accuracy_speed is drawn only then), and its ``rho_rms_mm`` where it has one
+_POSITIONS = {"points": ("x", "y"), "lines": ("x1", "y1", "x2", "y2"), "corners": ("x", "y")}
+TABLE_COLUMNS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "signals": ((), ("beam", "bearing_deg", "range_m", "ad", "theta_deg", "psi_deg")),
+    "timing": (("method",), ("scan", "time_ms")),
+    **{f"{panel}_{kind}": (("panel",), numbers) for panel in ("office", "intel") for kind, numbers in _POSITIONS.items()},
+    "trajectory": (("source",), ("x", "y")),
+    "map": (("source",), ("x1", "y1", "x2", "y2")),
+    "summary": (("method",), ("f1", "time_ms_median", "time_ms_p25", "time_ms_p75")),
+}
+
+
+def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
+    """LmsbenchError naming ``where`` (the tables' folder), the table and the column, for a table
+    that lacks a column the figures read or holds text (or dates, ...) where they plot numbers.
+    Checked before any output: a table of the same name written by other code, or edited, failed
+    part-way through the drawing ("internal error: TypeError: Cannot perform reduction 'median'
+    with string dtype", exit 1, figures.yaml and the figures before it written) or, for points,
+    trajectories and maps held as text, drew them on categorical axes, exit 0 (found by the
+    wrong-input hunt)."""
+    from lms200 import LmsbenchError
+
+    for name, (keys, numbers) in TABLE_COLUMNS.items():
+        table = tables.get(name)
+        if table is None or not len(table) or (name == "summary" and "f1" not in table):  # none drawn from
+            continue
+        numbers = numbers + (("rho_rms_mm",) if name == "summary" and "rho_rms_mm" in table else ())
+        missing = [c for c in keys + numbers if c not in table]
+        if missing:
+            raise LmsbenchError(f"{where}: table {name} has no column{'s' if len(missing) > 1 else ''} {', '.join(missing)}, "
+                                "which the figures read: "
+                                "not a table of `lmsbench figures` or `lmsbench demo` (edited, or another program's?)")
+        text = [c for c in numbers if not (pd.api.types.is_numeric_dtype(table[c]) and not pd.api.types.is_bool_dtype(table[c]))]
+        if text:
+            raise LmsbenchError(f"{where}: table {name}'s column {text[0]} holds {table[text[0]].dtype} values, where "
+                                "the figures plot numbers: not a table of `lmsbench figures` or `lmsbench demo` "
+                                "(edited, or another program's?)")
+
+
 def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10,
                  angle_increment: float | None = None, world: str = "office",
                  log: Callable[[str], None] | None = None) -> dict[str, list[Path]]:

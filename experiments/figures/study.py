@@ -190,23 +190,33 @@ def read_table(path: Path) -> pd.DataFrame:
 
 
 def check_panel_log(cfg: StudyConfig) -> None:
-    """Refuse, before any output, a Fig. 9 log that does not read: its first scan is read with the
-    study's log options (a file that is not a log fails on its first lines). ``demo --log
-    run/groundtruth.tum`` made the run folder and moved ``results/demo/latest`` to it, empty, before
-    the study refused the file."""
-    from lms200 import read_log
+    """Refuse, before any output, a Fig. 9 log that does not read, or holds no scan with a valid
+    beam: it is read with the study's log options up to its first scan with one (a file that is not
+    a log fails on its first lines). ``demo --log run/groundtruth.tum`` made the run folder and
+    moved ``results/demo/latest`` to it, empty, before the study refused the file; a log of only
+    +inf / nan readings still left the run folder (or ``--out``) behind, empty (the wrong-input hunt)."""
+    from lms200 import LmsbenchError, read_log
 
     from experiments.logargs import log_options_from_plain
 
     if cfg.intel_log is None or not Path(cfg.intel_log).exists():
         return
-    records = iter(read_log(Path(cfg.intel_log), **log_options_from_plain(cfg.log_options)))
+    path = Path(cfg.intel_log)
+    records = iter(read_log(path, **log_options_from_plain(cfg.log_options)))
+    n = 0
     try:
-        next(records, None)
+        for record in records:  # the first scan of a log has a valid beam but for a damaged one: no second pass
+            n += 1
+            if record.scan.valid.any():
+                return
     finally:
         close = getattr(records, "close", None)  # a generator's: its file is closed now, not when collected
         if close is not None:
             close()
+    if n == 0:
+        raise LmsbenchError(f"{path}: no laser scans found")
+    raise LmsbenchError(f"{path}: none of its {n} scans has a valid beam (all +inf, nan or 0): no scan to draw for "
+                        "Fig. 9")
 
 
 def _intel_panels(path: Path, n: int, method: str, params: dict | None,
