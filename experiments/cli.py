@@ -14,6 +14,7 @@ else is a bug: one line saying so, exit status 1 (``LMSBENCH_TRACEBACK=1`` shows
 from __future__ import annotations
 
 import argparse
+import atexit
 import functools
 import importlib
 import os
@@ -106,6 +107,20 @@ INTERRUPT_GRACE_S = 15.0  # s after Ctrl-C for cleanup; then child processes are
 
 #: The signals that stop a command in order, with the word said and the exit status (128 + signal).
 STOP_SIGNALS = {signal.SIGINT: ("interrupted", 130), signal.SIGTERM: ("terminated", 143)}
+
+#: the command was stopped by a signal (its line written): the stop signals are ignored at the exit's end
+_STOPPED = threading.Event()
+
+
+@atexit.register  # at this module's import: it runs after the exit handlers of libraries imported later (Dask's)
+def _ignore_stop_signals_at_the_end() -> None:
+    """Once a command stopped by Ctrl-C or SIGTERM has run the exit handlers (Dask closing its
+    cluster, where a second Ctrl-C still ends it at once), the stop signals are ignored: Python's
+    finalization then sets a handled signal back to its default, and one more Ctrl-C there (a
+    user's, or a test's repeated SIGINT) killed the process after its line: exit -2, not 130."""
+    if _STOPPED.is_set() and threading.current_thread() is threading.main_thread():
+        for sig in STOP_SIGNALS:
+            signal.signal(sig, signal.SIG_IGN)
 
 
 class _Interrupt:
@@ -395,6 +410,7 @@ def _interrupted(interrupt: _Interrupt) -> int:
     _end_progress_bars()
     _kill_children()
     interrupt.report()
+    _STOPPED.set()
     return interrupt.word_and_status[1]
 
 

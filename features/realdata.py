@@ -30,6 +30,7 @@ Pure functions: arrays in, numbers out.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -102,8 +103,10 @@ def truth_arrays(truth: Any, need: tuple[str, ...] = TRUTH_FIELDS, finite: bool 
     """
     missing = [name for name in need if not hasattr(truth, name)]
     if missing:
+        keys = isinstance(truth, Mapping) and all(name in truth for name in need)  # "dict lacks segments" of a dict that held it
         raise InputError(f"truth: must have the fields of sim.VisibleTruth ({', '.join(need)}); "
-                         f"{type(truth).__name__} lacks {', '.join(missing)}")
+                         f"{type(truth).__name__} lacks {', '.join(missing)}"
+                         + (" as attributes (a mapping's keys are not read: pass types.SimpleNamespace(**truth))" if keys else ""))
     try:
         arrays = {name: np.asarray(getattr(truth, name), dtype=np.float64) for name in need}
     except (TypeError, ValueError) as exc:

@@ -354,6 +354,11 @@ class BagReader:
     def _open(self):  # noqa: ANN202 - rosbags' AnyReader
         from rosbags.highlevel import AnyReader
 
+        if self.path.is_dir():  # a ROS 2 bag's storage files: a pipe's open waited for ever, SIGTERM too
+            for entry in sorted(self.path.iterdir()):
+                if entry.exists() and not entry.is_file() and not entry.is_dir():
+                    raise BagError(f"{entry}: not a regular file (a pipe, a device or a socket) in the ROS 2 bag "
+                                   f"{self.path}; a bag's files must be regular files (give the files themselves)")
         try:
             reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
             reader.open()

@@ -96,8 +96,10 @@ class Scan:
             raise ScanError("ranges: must hold at least one beam")
         for name in ("angle_min", "angle_increment", "range_min", "range_max", "stamp"):
             object.__setattr__(self, name, _number(name, getattr(self, name)))
-        if self.angle_increment <= 0:
-            raise ScanError(f"angle_increment: must be > 0, got {self.angle_increment}")
+        if self.angle_increment <= 0:  # a ROS LaserScan of a laser mounted upside down has a negative one
+            flip = (" (beams clockwise, a laser mounted upside down: reverse the ranges, ranges[::-1], and start "
+                    "at the last beam's bearing, angle_min + (n - 1) * angle_increment)") if self.angle_increment < 0 else ""
+            raise ScanError(f"angle_increment: must be > 0, got {self.angle_increment}{flip}")
         if abs(self.angle_min) > MAX_BEARING_RAD:
             raise ScanError(f"angle_min: a bearing within +-2 pi rad (+-360 deg), got {self.angle_min:g} rad"
                             f"{_degrees_hint(self.angle_min, abs(np.deg2rad(self.angle_min)) <= MAX_BEARING_RAD)}")

@@ -250,6 +250,30 @@ def test_write_tum_to_a_folder_a_device_or_a_missing_folder_is_an_input_error(tm
         write_tum(tmp_path / "gone" / "t.tum", stamps, poses)
 
 
+def test_a_ros2_bag_whose_storage_file_is_a_pipe_is_a_bag_error_not_a_hang(tmp_path: Path) -> None:
+    """The wrong-input hunt: `lmsbench info BAG` where BAG/BAG.db3 was a named pipe (or linked to
+    one) waited in sqlite's open for ever, and SIGTERM did not stop it (sqlite retries the
+    interrupted open). A bag's files that are no regular files are refused unread."""
+    import os
+    import subprocess
+    import sys
+
+    bag = tmp_path / "b2"
+    write_log(bag, [Record(Scan.lms200(np.full(361, 3.0), stamp=0.1 * k)) for k in range(3)], fmt="bag2")
+    (db,) = bag.glob("*.db3")
+    db.unlink()
+    os.mkfifo(db)
+    code = f"from lms200 import read_log\nlist(read_log({str(bag)!r}))"
+    try:
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    except subprocess.TimeoutExpired:
+        pytest.fail("reading a bag whose storage file is a pipe hung")
+    assert done.returncode == 1
+    assert done.stderr.strip().splitlines()[-1] == (
+        f"lms200.bag.BagError: {db}: not a regular file (a pipe, a device or a socket) in the ROS 2 bag {bag}; a "
+        "bag's files must be regular files (give the files themselves)")
+
+
 # --- a pose that is not finite -------------------------------------------------------------------------
 @pytest.mark.parametrize("xy", [(math.nan, 0.0), (0.0, math.inf)])
 def test_a_bag_pose_that_is_not_finite_is_a_bag_error_naming_the_message(tmp_path: Path, xy: tuple) -> None:

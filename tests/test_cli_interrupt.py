@@ -461,7 +461,7 @@ def test_ctrl_c_during_the_runner_benchmark_on_its_local_cluster_is_one_line(tmp
                 break
             assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
             time.sleep(0.05)
-        while proc.poll() is None and time.monotonic() < deadline:  # Ctrl-C is ignored while the cluster starts
+        while proc.poll() is None and time.monotonic() < deadline:  # Ctrl-C, again and again, until it ends
             proc.send_signal(signal.SIGINT)
             time.sleep(0.3)
         out, err = proc.communicate(timeout=60)
@@ -663,9 +663,42 @@ def test_the_workers_start_through_a_script_that_ignores_ctrl_c_or_as_before(mon
         ignored = subprocess.run([str(script), "-c", "import signal; print(signal.getsignal(signal.SIGINT))"],
                                  capture_output=True, text=True, timeout=60)
         assert ignored.stdout.strip() == str(int(signal.SIG_IGN)), ignored.stderr  # Python ran with SIGINT ignored
-    assert multiprocessing.spawn.get_executable() == python and not script.exists()
+    assert multiprocessing.spawn.get_executable() == python
+    assert script.parent.name == f"lmsbench-workers-{os.getuid()}" and script.parent.stat().st_mode & 0o777 == 0o700
+    with runner._workers_ignore_ctrl_c():  # the same script again: one per Python, kept (a hard stop leaked a folder a run)
+        assert Path(os.fsdecode(multiprocessing.spawn.get_executable())) == script
+    assert sorted(p.name for p in script.parent.iterdir() if p.name.startswith(".")) == []
     monkeypatch.setattr(runner.os, "access", lambda path, mode: False)
     with runner._workers_ignore_ctrl_c() as wrapped, runner._ctrl_c_held(ignore=not wrapped):
         assert not wrapped and multiprocessing.spawn.get_executable() == python
         assert signal.getsignal(signal.SIGINT) == signal.SIG_IGN
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+STOPPED_THEN_EXITING = r"""
+import atexit, os, signal
+
+def last():  # registered first: runs after every other exit handler, as Python's finalization follows them
+    print(f"at the end: {'ignored' if signal.getsignal(signal.SIGINT) == signal.SIG_IGN else 'handled'}", flush=True)
+    os.kill(os.getpid(), signal.SIGINT)  # a Ctrl-C as the interpreter finishes
+
+atexit.register(last)
+from experiments import cli
+from experiments.commands import info
+
+def run(args):
+    signal.raise_signal(signal.SIGINT)
+
+info.run = run
+raise SystemExit(cli.main(["info", "x.clf"]))
+"""
+
+
+def test_a_ctrl_c_after_the_stops_exit_handlers_does_not_change_its_status() -> None:
+    """`bench experiments` stopped by Ctrl-C (the interrupt test above sends one every 0.3 s until the
+    process ends) once exited -2 after its one line: Python's finalization sets a handled SIGINT
+    back to its default, and a Ctrl-C then killed the process. Once the exit handlers have run
+    (Dask's, where a second Ctrl-C still ends it at once), the stop signals are now ignored."""
+    out = subprocess.run([sys.executable, "-c", STOPPED_THEN_EXITING], capture_output=True, text=True, cwd=REPO,
+                         env=_env(), timeout=120)
+    assert (out.returncode, out.stdout, out.stderr) == (130, "at the end: ignored\n", "lmsbench info: interrupted\n")

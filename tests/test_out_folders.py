@@ -470,3 +470,17 @@ def test_figures_from_a_foreign_table_is_refused_before_any_output(tables, tmp_p
     assert err.startswith(f"lmsbench figures: error: --tables {folder}: {said}") and err.count("\n") == 1, err
     assert "not a table of `lmsbench figures` or `lmsbench demo` (edited, or another program's?)" in err
     assert not out.exists()
+
+
+def test_figures_from_tables_whose_notes_are_a_pipe_is_refused_not_a_hang(tables, tmp_path, capsys):
+    """The wrong-input hunt: a named pipe as a tables folder's notes.txt was read, and waited on for ever."""
+    import os
+
+    folder = tmp_path / "tables"
+    folder.mkdir()
+    for name in ("study.yaml", "timing.parquet"):
+        (folder / name).write_bytes((tables / name).read_bytes())
+    os.mkfifo(folder / "notes.txt")
+    assert main(["figures", "--tables", str(folder), "--out", str(tmp_path / "figs")]) == 2
+    assert capsys.readouterr().err == (f"lmsbench figures: error: {folder / 'notes.txt'}: not a regular file (a pipe, "
+                                       "a device or a socket); a study's notes are a text file\n")

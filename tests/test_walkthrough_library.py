@@ -234,3 +234,34 @@ def test_scans_out_of_time_order_are_refused_saying_how_to_go_on() -> None:
     keep = in_time_order([r.scan.stamp for r in shuffled])
     assert keep == [k for k in range(len(shuffled)) if k != 3]
     assert run_slam([shuffled[k] for k in keep]).trajectory.shape == (len(recs) - 1, 4)
+
+
+def test_a_clockwise_scan_and_a_truth_dict_are_refused_saying_what_to_do() -> None:
+    """Two refusals of the walkthrough that named the fault but not the way out: a scan of a laser
+    mounted upside down (ROS: angle_increment < 0) was "angle_increment: must be > 0, got -0.1",
+    and a truth given as a dict of its four arrays "truth: ... dict lacks segments, segment_beams,
+    corners, corner_beams" (it held all four). Both now say what to pass instead."""
+    import types
+
+    import numpy as np
+    import pytest
+
+    from features import extract
+    from features.scoring import score_scan
+    from lms200 import InputError, Scan, ScanError
+
+    with pytest.raises(ScanError, match=r"^angle_increment: must be > 0, got -0.1 \(beams clockwise, a laser mounted "
+                       r"upside down: reverse the ranges, ranges\[::-1\], and start at the last beam's bearing"):
+        Scan(np.ones(5), angle_min=0.2, angle_increment=-0.1, range_min=0.0, range_max=10.0)
+    with pytest.raises(ScanError, match=r"^angle_increment: must be > 0, got 0.0$"):
+        Scan(np.ones(5), angle_min=0.2, angle_increment=0.0, range_min=0.0, range_max=10.0)
+    scan = _hokuyo_room(5.6)
+    truth = {"segments": [(3.0, -2.5, 3.0, 2.0)], "segment_beams": [(252, 828)], "corners": np.zeros((0, 4)),
+             "corner_beams": []}
+    fs = extract(scan, sigma_r=0.02)
+    with pytest.raises(InputError, match=r"lacks segments, segment_beams, corners, corner_beams as attributes \(a "
+                       r"mapping's keys are not read: pass types.SimpleNamespace\(\*\*truth\)\)$"):
+        score_scan(fs, truth)
+    assert score_scan(fs, types.SimpleNamespace(**truth)).tp == 1  # the wall x = 3 m, as the hint says
+    with pytest.raises(InputError, match=r"object lacks segments, segment_beams, corners, corner_beams$"):
+        score_scan(fs, object())  # no hint where it does not apply

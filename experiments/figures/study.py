@@ -172,8 +172,13 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
 
 def load_tables(folder: Path) -> tuple[dict[str, pd.DataFrame], list[str]]:
     """The tables and notes saved by :func:`save_tables`."""
+    from lms200 import LmsbenchError
+
     tables = {p.stem: read_table(p) for p in sorted(folder.glob("*.parquet"))}
     notes_file = folder / "notes.txt"
+    if notes_file.exists() and not notes_file.is_file():  # a named pipe was waited on for ever (the wrong-input hunt)
+        raise LmsbenchError(f"{notes_file}: not a regular file (a pipe, a device or a socket); a study's notes are "
+                            "a text file")
     notes = notes_file.read_text().splitlines() if notes_file.exists() else []
     return tables, notes
 

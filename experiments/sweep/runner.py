@@ -312,28 +312,44 @@ def _workers_ignore_ctrl_c() -> Iterator[bool]:
     ignored signal stays ignored in the Python it runs), so a terminal's Ctrl-C, sent to the whole
     process group, reaches the driver alone, which cancels the cells and closes the cluster, and
     this process keeps its own handler (ignoring SIGINT here while the workers were spawned lost a
-    Ctrl-C that came then). Yields False, the script not used, where no temporary folder lets it
-    run (a /tmp mounted noexec): the caller then ignores SIGINT while the workers start, as before."""
+    Ctrl-C that came then). Yields False, the script not used, where it cannot run (a /tmp mounted
+    noexec): the caller then ignores SIGINT while the workers start, as before."""
     import multiprocessing.spawn
-    import shlex
-    import shutil
-    import tempfile
 
     previous = multiprocessing.spawn.get_executable()  # bytes or str
-    folder = Path(tempfile.mkdtemp(prefix="lmsbench-workers-"))
+    script = _ctrl_c_script(os.fsdecode(previous))
+    if script is not None:
+        multiprocessing.spawn.set_executable(str(script))
     try:
-        script = folder / "python"
-        script.write_text(f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(os.fsdecode(previous))} \"$@\"\n")
-        script.chmod(0o700)
-        usable = os.access(script, os.X_OK) and Path("/bin/sh").is_file()  # X_OK fails on a noexec mount
-        if usable:
-            multiprocessing.spawn.set_executable(str(script))
-        try:
-            yield usable
-        finally:
-            multiprocessing.spawn.set_executable(previous)
+        yield script is not None
     finally:
-        shutil.rmtree(folder, ignore_errors=True)
+        multiprocessing.spawn.set_executable(previous)
+
+
+def _ctrl_c_script(python: str) -> Path | None:
+    """The script that runs ``python`` with SIGINT ignored: ``TMP/lmsbench-workers-UID/python-HASH``,
+    one per Python, written whole each time and kept (a folder made and removed per run was left
+    behind by every hard stop: the grace timer's ``os._exit`` runs no cleanup); None where it cannot
+    run (``os.access`` X_OK fails on a noexec mount) or the folder is not this user's alone."""
+    import hashlib
+    import shlex
+    import stat
+    import tempfile
+
+    folder = Path(tempfile.gettempdir()) / f"lmsbench-workers-{os.getuid()}"
+    script = folder / f"python-{hashlib.sha256(python.encode()).hexdigest()[:12]}"
+    try:
+        folder.mkdir(mode=0o700, exist_ok=True)
+        st = os.lstat(folder)
+        if not stat.S_ISDIR(st.st_mode) or st.st_uid != os.getuid() or st.st_mode & 0o077:
+            return None  # another user's, or a link: not a folder to run a script from
+        tmp = folder / f".{script.name}.{os.getpid()}.tmp"
+        tmp.write_text(f"#!/bin/sh\ntrap '' INT\nexec {shlex.quote(python)} \"$@\"\n")
+        tmp.chmod(0o700)
+        os.replace(tmp, script)
+    except OSError:
+        return None
+    return script if os.access(script, os.X_OK) and Path("/bin/sh").is_file() else None
 
 
 @contextlib.contextmanager
