@@ -377,8 +377,10 @@ class BagReader:
                            f"sensor_msgs/LaserScan; its LaserScan topics: {', '.join(names) or 'none'}")
         if not scans:
             topics = sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections})
-            wanted = f"topic {self.topic!r}" if self.topic else "any sensor_msgs/LaserScan topic"
-            raise BagError(f"{self.path}: no {wanted}; topics: {topics}")
+            wanted = f"topic {self.topic!r}" if self.topic else "sensor_msgs/LaserScan topic"
+            # was "no any sensor_msgs/LaserScan topic; topics: []" for a bag of no message (write_log of no record)
+            held = f"topics: {', '.join(topics)}" if topics else "it holds no topic (an empty bag)"
+            raise BagError(f"{self.path}: no {wanted}; {held}")
         if len(names) > 1 and self.topic is None:
             raise BagError(f"{self.path}: {len(names)} LaserScan topics ({', '.join(names)}); choose one "
                            "(--topic TOPIC, or read_log(path, topic=...))")

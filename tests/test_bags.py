@@ -587,3 +587,15 @@ def test_a_scan_write_bag_refuses_leaves_the_ones_before_it_readable(tmp_path: P
     got = list(read_log(tmp_path / name))
     assert [r.scan.stamp for r in got] == [0.0, 1.0] and [r.scan.ranges[0] for r in got] == [1.0, 2.0]
     assert got[0].odom == (0.0, 0.0, 0.0)
+
+
+@pytest.mark.parametrize("name", ["empty.bag", "empty2"])
+def test_a_bag_of_no_message_says_it_holds_no_topic(tmp_path: Path, name: str) -> None:
+    """The wrong-input hunt: write_log(BAG, []) writes a bag of no message, which read_log refused
+    as "no any sensor_msgs/LaserScan topic; topics: []"."""
+    from lms200.bag import BagError
+
+    write_log(tmp_path / name, [], fmt="bag" if name.endswith(".bag") else "bag2")
+    with pytest.raises(BagError, match=rf"^{re.escape(str(tmp_path / name))}: no sensor_msgs/LaserScan topic; it holds "
+                                       r"no topic \(an empty bag\)$"):
+        list(read_log(tmp_path / name))
