@@ -45,8 +45,10 @@ class AlignmentConfig:
         retry_inliers: when the ICP from the prediction explains fewer than this fraction of the
             points, it is also run from standing still and from ``heading_hypotheses``.
         heading_hypotheses: heading offsets (rad) about the prediction tried on a retry (15, 30,
-            60, 90 and 180 degrees: a fast turn between two scans), without odometry only those
-            within ``max_turn_rate`` of the last heading (the search's bound, below).
+            60, 90 and 180 degrees: a fast turn between two scans); without odometry first only
+            those within ``max_turn_rate`` times the time since the last scan plus 0.1 rad
+            (``slam.scanslam.DISTINCT_THETA``) of the last heading, the search's bound (below),
+            and all of them only when no pose within that bound fits.
         refine_hypotheses: how many of the retry starts (best first by their initial score) are refined.
         hypothesis_margin: a retry wins only with this much larger inlier fraction.
         min_inliers: a match explaining fewer points is not used (the pose follows the prediction).
@@ -82,7 +84,7 @@ class AlignmentConfig:
             the last scan may lie beyond the ICP's reach: the prediction's std (``motion``, it
             grows with dt^2) times ``search_sigmas`` exceeds ``max_correspondence``, or the match
             from the prediction (and its retries) explains fewer than ``retry_inliers`` of the
-            points. Its window is the prediction +- ``search_sigmas`` std, at most
+            points or turned beyond ``max_turn_rate`` (below). Its window is the prediction +- ``search_sigmas`` std, at most
             ``search_xy`` m in x and y (and the whole turn at most); the ``search_candidates``
             best distinct poses are refined by the ICP and compete with the prediction's match,
             which stays unless one of them fits better by more than ``fit_margin``.

@@ -191,7 +191,8 @@ def match(points: np.ndarray, ref: Reference, starts: list[np.ndarray], cfg: Ali
     from every other start and from heading offsets ``heading_hypotheses`` (rad) about the first
     (those up to ``max_heading`` rad: a loop closure tries only headings its drift allows); the
     start with most inliers wins (ties keep the earlier start). ``prior`` (information, see
-    :func:`refine`) holds the first start only: a retry is a different motion."""
+    :func:`refine`) holds the first start only: a retry is a different motion. ``turn`` (heading
+    rad, bound rad): the retry's other starts and hypotheses only within the bound of that heading."""
     best = refine(points, ref, starts[0], cfg, prior, normals)
     if best.inliers >= cfg.retry_inliers:
         return best

@@ -217,6 +217,11 @@ class ScanSlam:
             turned = turn is not None and abs(wrap(m.pose[2] - turn[0])) > turn[1]
             if self.alignment.search and (self._beyond_reach(sxy) or m.inliers < retry or turned):
                 m = self._search(sp, m, pred, sxy, sth, dt, info, qn, by_odometry)
+            if turn is not None and abs(wrap(m.pose[2] - turn[0])) > turn[1]:
+                # no pose within the bound fits (the search found none, or did not run): the scan says the robot
+                # turned faster than a robot does, so the stamps do not time the motion; the retry as without it
+                m = match(sp.matched, self.ref, starts, self.alignment, reach, prior=prior, normals=qn)
+                m = self._check_jump(sp.matched, m, pred, sxy, sth, info, qn)
             al = self.alignment
             if by_odometry and (info.searched or m.inliers < al.retry_inliers):
                 # the constant-velocity prediction's match, with the same heading reach (no match backwards)

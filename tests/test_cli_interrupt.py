@@ -669,10 +669,15 @@ def test_the_workers_start_through_a_script_that_ignores_ctrl_c_or_as_before(mon
         assert Path(os.fsdecode(multiprocessing.spawn.get_executable())) == script
     assert sorted(p.name for p in script.parent.iterdir() if p.name.startswith(".")) == []
     monkeypatch.setattr(runner.os, "access", lambda path, mode: False)
-    with runner._workers_ignore_ctrl_c() as wrapped, runner._ctrl_c_held(ignore=not wrapped):
-        assert not wrapped and multiprocessing.spawn.get_executable() == python
-        assert signal.getsignal(signal.SIGINT) == signal.SIG_IGN
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    # a known handler first: a pytest-xdist worker may hold SIGINT ignored (the suite failed so on some orders)
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with runner._workers_ignore_ctrl_c() as wrapped, runner._ctrl_c_held(ignore=not wrapped):
+            assert not wrapped and multiprocessing.spawn.get_executable() == python
+            assert signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 STOPPED_THEN_EXITING = r"""

@@ -238,6 +238,31 @@ def test_sweep_plot_of_text_values_alone_draws_categories_in_the_grid_order(tmp_
     assert line.lines[0].get_linestyle() == "None"  # categories are not joined by lines
 
 
+def test_accuracy_speed_names_each_point_in_its_own_colour(tmp_path, monkeypatch):
+    """hough and ransac run at nearly one speed: their names, placed alternately above and below,
+    stood each beside the other's point. Each name now has its point's colour."""
+    from matplotlib.colors import to_rgba
+
+    from experiments.style import method_color
+
+    captured = []
+    save = draw.save_figure
+
+    def keep(fig, *args, **kwargs):
+        captured.extend((t.get_text(), to_rgba(t.get_color())) for ax in fig.axes for t in ax.texts)
+        return save(fig, *args, **kwargs)
+
+    monkeypatch.setattr(draw, "save_figure", keep)
+    methods = ["sensor", "split_merge", "iepf", "hough", "ransac"]
+    summary = pd.DataFrame({"method": methods, "f1": [0.976, 0.990, 0.991, 0.990, 0.984],
+                            "rho_rms_mm": [6.3, 8.5, 11.3, 9.0, 9.5],
+                            "time_ms_median": [0.06, 0.03, 0.03, 2.43, 2.28],
+                            "time_ms_p25": [0.05, 0.02, 0.02, 2.3, 2.1], "time_ms_p75": [0.07, 0.04, 0.04, 2.6, 2.4]})
+    draw.fig_accuracy_speed(summary, tmp_path / "a")
+    assert sorted(name for name, _ in captured) == sorted(methods * 2)  # both panels
+    assert all(colour == to_rgba(method_color(name)) for name, colour in captured)
+
+
 def test_a_boolean_parameter_is_a_category_not_the_numeric_x_axis(tmp_path, monkeypatch):
     """A sweep over `alignment.deskew: [true, false]` then k drew deskew as the x axis, at 0 and 1
     joined by lines, and k as the legend: a bool is an int to pandas. Booleans are categories, as

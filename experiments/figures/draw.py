@@ -147,8 +147,10 @@ def fig_accuracy_speed(summary: pd.DataFrame, stem: Path) -> list[Path]:
             x, y = row.time_ms_median, getattr(row, column)
             ax.errorbar(x, y, xerr=[[x - row.time_ms_p25], [row.time_ms_p75 - x]], fmt="o", ms=6, capsize=3,
                         color=method_color(row.method))
+            # alternate above / below so neighbours do not overwrite each other, in the point's colour:
+            # two methods of nearly one speed (hough, ransac) had each name beside the other's point
             ax.annotate(row.method, (x, y), textcoords="offset points", xytext=(5, 5 if i % 2 == 0 else -12),
-                        fontsize=8)  # alternate above / below so neighbours do not overwrite each other
+                        fontsize=8, color=method_color(row.method))
         log_axis(ax, "x")
         ax.set_xlabel("time per scan (ms; median, bars 25-75 %)")
         ax.set_ylabel(label)
