@@ -201,6 +201,15 @@ def test_sweep_of_a_user_kind_plots_its_own_metrics(tmp_path):
     assert stats["mean"].to_dict() == {1: 2.5, 2: 4.5, 3: 6.5}
 
 
+def captured_axes(monkeypatch) -> list:
+    """The axes of every figure ``draw`` saves from now on (the figures are saved as before)."""
+    axes_seen: list = []
+    real_save = draw.save_figure
+    monkeypatch.setattr(draw, "save_figure", lambda fig, stem, data=None: (axes_seen.extend(fig.axes),
+                                                                           real_save(fig, stem, data=data))[1])
+    return axes_seen
+
+
 def test_sweep_plot_puts_a_numeric_parameter_on_x_when_the_first_grid_key_is_text(tmp_path, monkeypatch):
     """A researcher's sweep over logs (first grid key: three log paths) then psi_split drew the
     paths, overlapping, as x values joined by lines, in alphabetical order."""
@@ -212,10 +221,7 @@ def test_sweep_plot_puts_a_numeric_parameter_on_x_when_the_first_grid_key_is_tex
     pd.DataFrame(rows).to_parquet(folder / "results.parquet")
     (folder / "sweep.yaml").write_text("name: real\nkind: x:y\ngrid:\n  log: [" + ", ".join(logs) + "]\n"
                                        "  psi: [0.2, 0.35, 0.5]\nseeds: [0]\n")
-    axes_seen = []
-    real_save = draw.save_figure
-    monkeypatch.setattr(draw, "save_figure", lambda fig, stem, data=None: (axes_seen.extend(fig.axes),
-                                                                           real_save(fig, stem, data=data))[1])
+    axes_seen = captured_axes(monkeypatch)
     draw_sweep(folder, tmp_path / "figs")
     ax = axes_seen[0]
     assert ax.get_xlabel() == label_of("psi")
@@ -225,10 +231,7 @@ def test_sweep_plot_puts_a_numeric_parameter_on_x_when_the_first_grid_key_is_tex
 def test_sweep_plot_of_text_values_alone_draws_categories_in_the_grid_order(tmp_path, monkeypatch):
     rows = [{"world": w, "seed": s, "f1": i + 0.1 * s, "status": "ok"}
             for i, w in enumerate(["office", "corridor", "atrium"]) for s in (0, 1)]
-    axes_seen = []
-    real_save = draw.save_figure
-    monkeypatch.setattr(draw, "save_figure", lambda fig, stem, data=None: (axes_seen.extend(fig.axes),
-                                                                           real_save(fig, stem, data=data))[1])
+    axes_seen = captured_axes(monkeypatch)
     draw.fig_sweep(pd.DataFrame(rows), "world", "f1", tmp_path / "w")
     ax = axes_seen[0]
     assert [t.get_text() for t in ax.get_xticklabels()] == ["office", "corridor", "atrium"]
@@ -274,10 +277,7 @@ def test_a_boolean_parameter_is_a_category_not_the_numeric_x_axis(tmp_path, monk
     pd.DataFrame(rows).to_parquet(folder / "results.parquet")
     (folder / "sweep.yaml").write_text("name: dk\nkind: x:y\ngrid:\n  alignment.deskew: [true, false]\n"
                                        "  k: [3, 5, 7]\nseeds: [0]\n")
-    axes_seen = []
-    real_save = draw.save_figure
-    monkeypatch.setattr(draw, "save_figure", lambda fig, stem, data=None: (axes_seen.extend(fig.axes),
-                                                                           real_save(fig, stem, data=data))[1])
+    axes_seen = captured_axes(monkeypatch)
     draw_sweep(folder, tmp_path / "figs")
     ax = axes_seen[0]
     assert ax.get_xlabel() == label_of("k")  # old: label_of("alignment.deskew")
@@ -291,10 +291,7 @@ def test_a_boolean_parameter_is_a_category_not_the_numeric_x_axis(tmp_path, monk
 def test_a_boolean_parameter_alone_draws_two_labelled_categories(tmp_path, monkeypatch):
     rows = [{"alignment.deskew": d, "seed": s, "f1": (0.9 if d else 0.7) + 0.01 * s, "status": "ok"}
             for d in (True, False) for s in (0, 1)]
-    axes_seen = []
-    real_save = draw.save_figure
-    monkeypatch.setattr(draw, "save_figure", lambda fig, stem, data=None: (axes_seen.extend(fig.axes),
-                                                                           real_save(fig, stem, data=data))[1])
+    axes_seen = captured_axes(monkeypatch)
     draw.fig_sweep(pd.DataFrame(rows), "alignment.deskew", "f1", tmp_path / "d")
     ax = axes_seen[0]
     assert [t.get_text() for t in ax.get_xticklabels()] == ["True", "False"]  # old: numeric ticks 0.0 ... 1.0
@@ -306,10 +303,7 @@ def test_a_boolean_parameter_alone_draws_two_labelled_categories(tmp_path, monke
 
 def test_a_random_choice_of_booleans_is_drawn_as_two_categories(tmp_path, monkeypatch):
     table = pd.DataFrame({"deskew": [True, False, True, False], "seed": 0, "status": "ok", "f1": [0.9, 0.7, 0.8, 0.6]})
-    axes_seen = []
-    real_save = draw.save_figure
-    monkeypatch.setattr(draw, "save_figure", lambda fig, stem, data=None: (axes_seen.extend(fig.axes),
-                                                                           real_save(fig, stem, data=data))[1])
+    axes_seen = captured_axes(monkeypatch)
     draw.fig_sweep_scatter(table, ["deskew"], "f1", tmp_path / "r")
     fig = axes_seen[0].figure
     fig.canvas.draw()
