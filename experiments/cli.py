@@ -502,7 +502,9 @@ def _skip_hint(exc: BaseException, args: argparse.Namespace) -> str:
     short is a truncated .gz)."""
     if not isinstance(exc, LogFormatError) or getattr(args, "skip_bad_lines", True):
         return ""
-    if "do not fit a field of view" in exc.reason and any(
+    from lms200.laser_geometry import MISFIT_WORDS
+
+    if MISFIT_WORDS in exc.reason and any(
             getattr(args, flag, None) is not None for flag in ("laser_fov_deg", "laser_resolution_deg")):
         return ""  # the flags' geometry misfits every line of that beam count: skipping them skips the log
     if exc.reason.startswith("malformed"):

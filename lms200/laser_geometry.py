@@ -41,6 +41,8 @@ from .finite import check_integer, float_of
 
 CONVENTION_FOV_DEG = 180.0  # CARMEN's assumed field of view of a FLASER scan without PARAM lines
 FIT_TOLERANCE_BEAMS = 0.25  # a declared fov / resolution must give the count to within this many beams
+#: how the error of a declared geometry that does not fit a line's beam count reads (callers tell it by this)
+MISFIT_WORDS = "do not fit a field of view"
 
 MAX_RANGE_M = 10_000.0  # m: the largest range_max accepted (long-range 2-D lidars reach ~300 m)
 #: m: the smallest range_max accepted: no laser rangefinder's maximum range is shorter (the shortest-range
@@ -150,7 +152,7 @@ def beam_angles(n: int, geometry: LaserGeometry | None = None) -> tuple[float, f
         ratio = fov / res
         if abs(ratio - steps_odd) > FIT_TOLERANCE_BEAMS and abs(ratio - steps_even) > FIT_TOLERANCE_BEAMS:
             raise InputError(
-                f"{n} beams do not fit a field of view of {math.degrees(fov):.3f} deg at "
+                f"{n} beams {MISFIT_WORDS} of {math.degrees(fov):.3f} deg at "
                 f"{math.degrees(res):.4f} deg (that is {round(ratio)} or {round(ratio) + 1} beams); "
                 "override the geometry (read_log(..., geometry=LaserGeometry(...)) or --laser-resolution-deg / "
                 "--laser-fov-deg)"
