@@ -11,21 +11,16 @@ import numpy as np
 import pytest
 
 from lms200 import read_tum, write_log, write_tum
+from sim_folder import write_sim_folder
 
 
 
 @pytest.fixture(scope="module")
 def sim_folder(tmp_path_factory) -> Path:
     """A 6 s office run written the way `lmsbench simulate` lays out its folder."""
-    from sim import make_world, simulate_records
+    from sim import simulate_records
 
-    out = tmp_path_factory.mktemp("sim")
-    records = simulate_records("office", seed=1, duration=6.0)
-    write_log(out / "scans.clf", records)
-    truth = np.array([(r.scan.stamp, *r.truth) for r in records])
-    write_tum(out / "groundtruth.tum", truth[:, 0], truth[:, 1:])
-    make_world("office", seed=1).to_json(out / "world.json")
-    return out
+    return write_sim_folder(tmp_path_factory.mktemp("sim"), simulate_records("office", seed=1, duration=6.0), 1)
 
 
 def test_slam_command_writes_every_output(sim_folder, tmp_path, capsys):
@@ -334,16 +329,11 @@ def test_odometry_drives_the_default_pipeline_and_names_its_rows(tmp_path, capsy
     import yaml
 
     from experiments.cli import main
-    from sim import make_world, simulate_records
+    from sim import simulate_records
     from sim.records import OdometryConfig
 
-    folder = tmp_path / "sim"
-    folder.mkdir()
     records = simulate_records("office", seed=1, duration=40.0, rate_hz=0.5, odometry=OdometryConfig())
-    write_log(folder / "scans.clf", records)
-    truth = np.array([(r.scan.stamp, *r.truth) for r in records])
-    write_tum(folder / "groundtruth.tum", truth[:, 0], truth[:, 1:])
-    make_world("office", seed=1).to_json(folder / "world.json")
+    folder = write_sim_folder(tmp_path / "sim", records, 1)
     out = tmp_path / "o"
     assert main(["slam", str(folder), "--out", str(out), "--odometry", "--quiet"]) == 0
     assert yaml.safe_load((out / "config.yaml").read_text())["slam"]["motion"]["use_odometry"] is True
@@ -520,12 +510,7 @@ def test_an_unhealthy_run_warns_on_stderr(tmp_path, capsys):
     from experiments.cli import main
     from sim import simulate_records
 
-    folder = tmp_path / "sparse"
-    folder.mkdir()
-    records = simulate_records("office", seed=1, duration=90.0, rate_hz=0.5)
-    write_log(folder / "scans.clf", records)
-    truth = np.array([(r.scan.stamp, *r.truth) for r in records])
-    write_tum(folder / "groundtruth.tum", truth[:, 0], truth[:, 1:])
+    folder = write_sim_folder(tmp_path / "sparse", simulate_records("office", seed=1, duration=90.0, rate_hz=0.5))
     out = tmp_path / "run"
     assert main(["slam", str(folder), "--out", str(out), "--quiet", "--no-paper-baseline"]) == 0
     m = json.loads((out / "metrics.json").read_text())

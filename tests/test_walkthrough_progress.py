@@ -13,10 +13,9 @@ import time
 import types
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from lms200 import write_log, write_tum
+from sim_folder import write_sim_folder
 
 
 class Terminal(io.StringIO):
@@ -30,16 +29,11 @@ class Terminal(io.StringIO):
 def odometry_folder(tmp_path_factory) -> Path:
     """A 3 s office run with wheel odometry, laid out as `lmsbench simulate` writes it: slam runs
     both its baselines on it (the paper preset, and the paper preset driven by the odometry)."""
-    from sim import make_world, simulate_records
+    from sim import simulate_records
     from sim.records import OdometryConfig
 
-    out = tmp_path_factory.mktemp("odo")
-    records = simulate_records("office", seed=1, duration=3.0, odometry=OdometryConfig())
-    write_log(out / "scans.clf", records)
-    truth = np.array([(r.scan.stamp, *r.truth) for r in records])
-    write_tum(out / "groundtruth.tum", truth[:, 0], truth[:, 1:])
-    make_world("office", seed=1).to_json(out / "world.json")
-    return out
+    return write_sim_folder(tmp_path_factory.mktemp("odo"),
+                            simulate_records("office", seed=1, duration=3.0, odometry=OdometryConfig()), 1)
 
 
 def test_slam_announces_each_baseline_with_a_bar_on_a_terminal(odometry_folder, tmp_path, monkeypatch, capsys):

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lms200 import write_log, write_tum
+from sim_folder import write_sim_folder
 from slam.metrics import AteResult, RelationsResult, ate, relations_error
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -84,16 +84,12 @@ def test_slam_writes_and_prints_the_median_and_far_apart_relation_errors(tmp_pat
     summary line); the library's, set to 20 s, counts the two long pairs."""
     from experiments.cli import main
     from lms200 import read_tum
-    from sim import make_world, simulate_records
+    from sim import simulate_records
     from slam.metrics import relative
 
-    folder = tmp_path / "sim"
-    folder.mkdir()
     records = simulate_records("office", seed=1, duration=30.0, rate_hz=5.0)
-    write_log(folder / "scans.clf", records)
+    folder = write_sim_folder(tmp_path / "sim", records, 1)
     truth = np.array([(r.scan.stamp, *r.truth) for r in records])
-    write_tum(folder / "groundtruth.tum", truth[:, 0], truth[:, 1:])
-    make_world("office", seed=1).to_json(folder / "world.json")
     pairs = [(i, i + 5) for i in range(1, len(records) - 6, 5)] + [(1, len(records) - 4), (2, len(records) - 3)]
     rel = np.array([(truth[i, 0], truth[j, 0], *relative(truth[i, 1:4][None], truth[j, 1:4][None])[0])
                     for i, j in pairs])
