@@ -146,6 +146,10 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
         info = slam.step(t, obs, odom if config.motion.use_odometry else None)
         pose = slam.pose
         P = slam.ekf.P[:3, :3].copy()
+        if not np.all(np.abs(pose[:2]) <= MAX_COORD_M):  # diverged beyond every reader's bound (the TUM reader's):
+            pose = np.full(3, np.nan)  # a lost pose (written as nan), not x = 1e18 m in a file no reader takes
+            healthy = False
+            diverged_at = t if diverged_at is None else diverged_at
         traj.append((t, *pose))
         covs.append(P)
         nees = np.nan
