@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from features.registry import available_methods, backend_of, get_method, make_config
+from features.registry import available_methods, backend_of, get_method, make_config, warn_unread_fields
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
 from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
@@ -502,6 +502,10 @@ def compare(
                 bar.update(1)
     if bar is not None:
         bar.close()
+    # a --set / params field no scan of the run read (sigma_r on cm-mode logs): said once, as extract says it per call
+    warn_unread_fields(params, {name: cfg for src in srcs for name, cfg in src.ran.items()},
+                       sorted({r for src in srcs for r in src.range_maxes}),
+                       f"the scans of {', '.join(source_label(src) for src in srcs)}")
     table = pd.DataFrame(rows)
     if not table.empty:
         table.insert(table.columns.get_loc("microseconds") + 1, "time_ms", table["microseconds"] / 1e3)

@@ -274,8 +274,14 @@ def run(args: argparse.Namespace) -> int:
     from experiments.progress import warm_up_kernels
 
     warm_up_kernels(slam=config.preset == "default")
-    result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
-                      out=args.out, paper_baseline=not args.no_paper_baseline, replace_earlier=True)
+    import warnings
+
+    from features.registry import UnreadNoiseWarning
+
+    with warnings.catch_warnings():  # said above, before the run (_warn_unread), not again by each run_slam of it
+        warnings.simplefilter("ignore", UnreadNoiseWarning)
+        result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
+                          out=args.out, paper_baseline=not args.no_paper_baseline, replace_earlier=True)
     write_scores(args.out, data, result)  # run() wrote config.yaml, the trajectory and the map
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     m = result.metrics
