@@ -76,3 +76,21 @@ def test_write_tum_refuses_what_read_tum_refuses(tmp_path):
     with pytest.raises(InputError, match=r"poses: row 1 lies beyond \+-1e\+09 m .* which read_tum refuses"):
         write_tum(tmp_path / "t.tum", np.array([0.0, 1.0]), np.array([[0.0, 0.0, 0.0], [1.2e11, 0.0, 0.0]]))
     assert not (tmp_path / "t.tum").exists()
+
+
+def test_a_pose_lost_beyond_the_readers_bound_is_nan_and_the_run_unhealthy(monkeypatch, tmp_path):
+    """Whatever else makes the filter diverge, its trajectory reads back: a pose beyond +-1e9 m
+    (read_tum's bound) is a lost pose, nan, written as nan."""
+    from slam import SlamConfig
+    from slam.filter import SlamFilter
+    from slam.observations import Observations
+    from slam.run import run_observations
+
+    real = SlamFilter.pose
+    monkeypatch.setattr(SlamFilter, "pose", property(lambda self: real.fget(self) + (1.2e11 if self.scan_no >= 2 else 0.0)))
+    res = run_observations([0.0, 0.1, 0.2, 0.3], [Observations()] * 4, SlamConfig(preset="paper"))
+    assert np.isfinite(res.trajectory[:2, 1:]).all() and np.isnan(res.trajectory[2:, 1:]).all()
+    assert res.diagnostics["healthy"] is False and res.diagnostics["diverged_at"] == 0.2
+    write_tum(tmp_path / "t.tum", res.trajectory[:, 0], res.trajectory[:, 1:])
+    stamps, poses = read_tum(tmp_path / "t.tum", allow_nan=True)
+    assert stamps.tolist() == [0.0, 0.1, 0.2, 0.3] and np.isnan(poses[2:]).all()
