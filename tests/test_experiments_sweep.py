@@ -21,6 +21,7 @@ import pytest
 import yaml
 
 from experiments.sweep import SweepSpec, SweepSpecError, cell_key, load_sweep, run_sweep
+from lms200.errors import LmsbenchWarning
 
 REPO = Path(__file__).resolve().parents[1]
 KIND = f"{Path(__file__).stem}:square"
@@ -614,3 +615,39 @@ def test_a_cell_calling_sys_exit_is_an_error_row_not_the_end_of_the_sweep():
     row = run_cell("mine:cell", {"a": 1}, exits)
     assert row["status"] == "error"
     assert row["error"].startswith("SystemExit: 0 (it called sys.exit) (test_experiments_sweep.py:")
+
+
+class _CellWarning(LmsbenchWarning):
+    """A warning of lmsbench's own kind, as a cell's extractor gives one (an unread noise field)."""
+
+
+def warner(params: dict) -> dict:
+    """Warns once of lmsbench's kind (the same text in every cell) and once of Python's, then y = x."""
+    import warnings
+
+    warnings.warn("sigma_r=0.02 is not read", _CellWarning)
+    warnings.warn(f"a numpy-like warning of cell {params['x']}", UserWarning)
+    return {"y": params["x"]}
+
+
+@pytest.mark.parametrize("on", ["inprocess", "dask"])
+def test_a_warning_every_cell_gives_is_said_once_for_the_sweep(tmp_path, on, request):
+    """Each cell that warned (compare or run_slam given sigma_r on cm-mode scans: 'not read') put
+    two lines of Python's warning on stderr, from every cell of the sweep: a sweep of 400 cells,
+    800 lines. The runner now says each of lmsbench's warnings once, in its own category; other
+    warnings pass as they were, and the table has no column for them."""
+    import warnings
+
+    executor = request.getfixturevalue("dask_client") if on == "dask" else "inprocess"
+    spec = SweepSpec.from_dict({"name": "warns", "kind": f"{Path(__file__).stem}:warner", "grid": {"x": [1, 2, 3]},
+                                "seeds": [0, 1]})
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = run_sweep(spec, tmp_path / "out", executor, progress=False)
+    assert result.computed == 6 and result.failed == 0
+    ours = [str(w.message) for w in caught if issubclass(w.category, _CellWarning)]
+    assert ours == ["sigma_r=0.02 is not read (said once for the sweep's cells)"]
+    if on == "inprocess":  # a worker's own warnings stay in its process, as before
+        assert sorted(str(w.message) for w in caught if w.category is UserWarning) == sorted(
+            f"a numpy-like warning of cell {x}" for x in (1, 2, 3) for _ in (0, 1))
+    assert "warnings" not in result.table.columns and list(result.table["y"]) == [1, 1, 2, 2, 3, 3]

@@ -14,7 +14,10 @@ from __future__ import annotations
 import importlib
 import time
 import traceback
+import warnings
 from typing import Any, Callable
+
+from lms200.errors import LmsbenchWarning
 
 from .spec import Scalar, SweepSpecError
 
@@ -85,9 +88,30 @@ def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> 
     Exceptions from the cell become an error row (the sweep goes on), ``SystemExit`` too (a cell
     calling ``sys.exit()`` stopped an ``--inprocess`` sweep silently with its status, and killed the
     workers of a cluster, twice, for a ``KilledWorker`` row); ``KeyboardInterrupt`` propagates.
-    ``elapsed_s`` is the wall time of the cell function (s).
+    ``elapsed_s`` is the wall time of the cell function (s). The cell's ``LmsbenchWarning`` texts
+    (an extractor field no scan of the cell reads, ...) come back as ``warnings`` (a list of
+    (category, text), each once), for the runner to say once per sweep, not once per cell (a flood of two-line
+    Python warnings from the workers before); other warnings are shown as they were.
     """
     start = time.perf_counter()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        row = _run_cell(kind, params, fn)
+    said: list[tuple[type[Warning], str]] = []
+    for w in caught:  # lmsbench's own warnings go back with the row, said once per sweep by the runner
+        if issubclass(w.category, LmsbenchWarning):
+            if (w.category, str(w.message)) not in said:
+                said.append((w.category, str(w.message)))
+        else:  # others as they were, through the filters in force
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
+    if said:
+        row["warnings"] = said
+    row["elapsed_s"] = time.perf_counter() - start
+    return row
+
+
+def _run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None) -> dict[str, Any]:
+    """:func:`run_cell`'s row without its time and warnings."""
     try:
         metrics = (fn or resolve_kind(kind))(dict(params))
         if not isinstance(metrics, dict):
@@ -104,5 +128,4 @@ def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> 
         where = f" ({last[0].filename.rsplit('/', 1)[-1]}:{last[0].lineno})" if last else ""
         said = raised_text(exc) if isinstance(exc, SystemExit) else f"{type(exc).__name__}: {exc}"
         row = {"status": "error", "error": f"{said}{where}"}
-    row["elapsed_s"] = time.perf_counter() - start
     return row

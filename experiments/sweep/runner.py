@@ -15,6 +15,7 @@ import os
 import signal
 import sys
 import threading
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterator
@@ -31,7 +32,7 @@ from .spec import Scalar, SweepSpec, cell_key
 from .store import CellStore, write_atomic
 
 #: Columns every row has besides its parameters and metrics.
-BOOKKEEPING = ("status", "error", "elapsed_s", "cell")
+BOOKKEEPING = ("status", "error", "elapsed_s", "cell", "warnings")
 
 
 @dataclass
@@ -125,7 +126,13 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
     bar = tqdm(total=len(set(keys)), initial=skipped, desc=spec.name, unit="cell", file=sys.stderr,
                disable=True if not progress else None, dynamic_ncols=True)  # None: on a terminal only
 
+    said: set[tuple[type[Warning], str]] = set()
+
     def record(key: str, params: dict[str, Scalar], result: dict[str, Any]) -> None:
+        for category, text in result.get("warnings", ()):  # each once per sweep (every cell had its two lines)
+            if (category, text) not in said:
+                said.add((category, text))
+                warnings.warn(f"{text} (said once for the sweep's cells)", category, stacklevel=2)
         store.write(key, _row(params, result, key))
         counts["computed"] += 1
         counts["failed"] += result["status"] != "ok"
