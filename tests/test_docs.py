@@ -128,6 +128,20 @@ def test_every_option_with_a_default_says_it_in_its_help() -> None:
     assert not silent, f"options whose help does not say their default: {silent}"
 
 
+def test_every_simulate_option_with_a_default_says_it_in_its_help() -> None:
+    """`lmsbench simulate --help` said `--seed SEED  seed of the world, tour and sensor noise (>= 0)`
+    and nothing of its default, 0: simulate's options default to None in the parser (a --config
+    run refuses them beside it) and take `experiments.commands.simulate.DEFAULTS` after."""
+    from experiments.cli import build_parser
+    from experiments.commands.simulate import DEFAULTS
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command").choices["simulate"]
+    helps = {a.dest: a.help or "" for a in sub._actions}
+    said = {name: f"default {value:g}" if isinstance(value, float) else f"default {value}" for name, value in DEFAULTS.items()}
+    silent = {name: text for name, text in said.items() if text not in helps[name]}
+    assert not silent, f"simulate options whose help does not say their default: {silent}"
+
+
 def test_the_figures_help_names_every_paper_figure_it_draws() -> None:
     """`lmsbench --help` said figures draws "the paper's figures (4-7, 9, 10)"; it draws fig3_scan too."""
     from experiments.cli import build_parser
