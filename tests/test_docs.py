@@ -160,3 +160,37 @@ def test_the_log_argument_names_every_compression_that_is_read(command: str) -> 
     sub = next(a for a in build_parser()._actions if a.dest == "command").choices[command]
     log = next(a for a in sub._actions if a.dest == "log")
     assert ".gz" in log.help and ".bz2" in log.help and ".xz" in log.help
+
+
+#: documented command lines that show an option the command refuses, on purpose (the error's example)
+REFUSED_EXAMPLES = {("lms200 emulate", "--max-scans")}
+
+
+def test_every_documented_command_line_names_options_its_command_has() -> None:
+    """Every `lmsbench CMD ...` of README.md and docs/ (in backticks, or an indented or fenced
+    command line) names a command of the parser and only options of that command, so a renamed or
+    removed option cannot stay in the documentation."""
+    import argparse
+
+    from experiments.cli import build_parser
+
+    commands = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
+    wrong, seen = [], 0
+    for page in PAGES:
+        text = page.read_text()
+        for m in re.finditer(r"(?:`|^\s*)lmsbench ([a-z][^`\n]*)", text, re.M):
+            words = m.group(1).split()
+            parser, name = commands.get(words[0]), words[0]
+            if parser is None:  # a message quoted (`lmsbench compare: error: ...`), else no such command
+                if not words[0].endswith(":"):
+                    wrong.append(f"{page.name}:{text.count(chr(10), 0, m.start()) + 1}: no command {words[0]!r}")
+                continue
+            if name == "lms200" and len(words) > 1 and words[1] in ("emulate", "record"):
+                sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+                parser, name = sub[words[1]], f"lms200 {words[1]}"
+            seen += 1
+            for flag in re.findall(r"(?<![\w-])(--[a-z][a-z0-9-]*)(?![a-z0-9*-])", m.group(1)):
+                if flag not in parser._option_string_actions and (name, flag) not in REFUSED_EXAMPLES:
+                    line = text.count("\n", 0, m.start()) + 1
+                    wrong.append(f"{page.name}:{line}: lmsbench {name} has no option {flag}")
+    assert seen > 100 and not wrong, wrong
