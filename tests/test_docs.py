@@ -194,3 +194,24 @@ def test_every_documented_command_line_names_options_its_command_has() -> None:
                     line = text.count("\n", 0, m.start()) + 1
                     wrong.append(f"{page.name}:{line}: lmsbench {name} has no option {flag}")
     assert seen > 100 and not wrong, wrong
+
+
+def test_every_option_of_every_command_is_documented() -> None:
+    """Each option string of every command and subcommand (`lmsbench COMMAND --help`) appears in
+    README.md or docs/, where a user looks for what it does."""
+    text = "\n".join(page.read_text() for page in PAGES)
+    from experiments.cli import build_parser
+
+    import argparse
+
+    def options(parser, name=""):
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub, subparser in action.choices.items():
+                    yield from options(subparser, f"{name} {sub}".strip())
+            else:
+                yield from ((name, o) for o in action.option_strings if o.startswith("--") and o != "--help")
+
+    found = list(options(build_parser()))
+    missing = [(cmd, o) for cmd, o in found if not re.search(re.escape(o) + r"(?![a-z0-9-])", text)]
+    assert len(found) > 150 and not missing, missing
