@@ -215,3 +215,53 @@ def test_every_option_of_every_command_is_documented() -> None:
     found = list(options(build_parser()))
     missing = [(cmd, o) for cmd, o in found if not re.search(re.escape(o) + r"(?![a-z0-9-])", text)]
     assert len(found) > 150 and not missing, missing
+
+
+def _default_rows(page: str, header: str):
+    """(field names, default cell) of each row of the table under ``header`` in docs/``page``."""
+    text = (ROOT / "docs" / page).read_text()
+    block = text[text.index(header):]
+    block = block[:block.index("\n\n")]
+    for line in block.splitlines():
+        m = re.match(r"^\| ((?:`[a-z0-9_]+`(?:, )?)+) \| ([^|]+) \|", line)
+        if m:
+            yield re.findall(r"`([a-z0-9_]+)`", m.group(1)), m.group(2)
+
+
+def _same_default(cell: str, value) -> bool:
+    """Whether a default as the docs write it (`0.005 m`, `"mm"`, `true`, `null`, `4 beams`) is ``value``."""
+    if cell in ("true", "True", "false", "False"):
+        return value is (cell.lower() == "true")
+    if cell == "null":
+        return value is None
+    if cell.startswith('"'):
+        return cell.strip('"') == value
+    try:
+        return abs(float(cell) - float(value)) <= 1e-6 * max(1.0, abs(float(value)))
+    except (TypeError, ValueError):
+        return False
+
+
+@pytest.mark.parametrize("page, header, config", [
+    ("features.md", "| name | default | meaning |", "features.sensor:SensorMethodConfig"),
+    ("simulator.md", "| field | default | meaning |", "sim:SensorConfig"),
+])
+def test_the_parameter_tables_give_the_configs_defaults(page: str, header: str, config: str) -> None:
+    """Each row of the docs' tables of `SensorMethodConfig` and `SensorConfig` fields states the
+    field's default (several fields a row, their defaults comma-separated, units and notes in
+    parentheses after them), and every field of the config has its row."""
+    import dataclasses
+    import importlib
+
+    module, _, name = config.partition(":")
+    cls = getattr(importlib.import_module(module), name)
+    cfg, seen, wrong = cls(), set(), []
+    for names, cell in _default_rows(page, header):
+        cells = [part.strip().split()[0].strip("`") for part in re.sub(r"\([^)]*\)", "", cell).split(",")]
+        assert len(cells) == len(names), (page, names, cell)
+        for field, text in zip(names, cells):
+            seen.add(field)
+            if not _same_default(text, getattr(cfg, field)):
+                wrong.append(f"{page}: {field} {text} (the config's default is {getattr(cfg, field)!r})")
+    assert not wrong, wrong
+    assert seen == {f.name for f in dataclasses.fields(cls)}, f"{page}: fields without a row: {sorted({f.name for f in dataclasses.fields(cls)} - seen)}"
