@@ -179,7 +179,7 @@ def test_a_user_extractor_that_imports_a_sibling_when_called_finds_it(tmp_path, 
     it) inside its function: the current folder was put on the path for the import and taken off
     after it, so the call failed, "your extractor lazyext:lines raised ModuleNotFoundError: No module
     named 'lazyhelper' on office:0 scan 0", exit 2 (the installed script's path does not start with
-    the current folder). The folder now stays on the path, last."""
+    the current folder). The folder is now searched for the run, after every other place."""
     from features import FeatureSet
 
     from experiments.user_methods import import_named
