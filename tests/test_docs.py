@@ -265,3 +265,24 @@ def test_the_parameter_tables_give_the_configs_defaults(page: str, header: str, 
                 wrong.append(f"{page}: {field} {text} (the config's default is {getattr(cfg, field)!r})")
     assert not wrong, wrong
     assert seen == {f.name for f in dataclasses.fields(cls)}, f"{page}: fields without a row: {sorted({f.name for f in dataclasses.fields(cls)} - seen)}"
+
+
+def test_the_docs_sweep_files_pass_the_sweeps_checks() -> None:
+    """Every ```yaml block of the docs that is a sweep file (it has `kind:`) is read as one and its
+    parameter names pass the kind's checks before any cell runs (`lmsbench sweep` would run it)."""
+    import yaml
+
+    from experiments.sweep import SweepSpec
+    from experiments.sweep.runner import check_spec
+
+    fence = re.compile(r"^```yaml[ \t]*\n(.*?)^```[ \t]*$", re.S | re.M)
+    specs = [(page.name, m.group(1)) for page in PAGES for m in fence.finditer(page.read_text())]
+    sweeps = [(name, text) for name, text in specs if re.search(r"^kind:", text, re.M)]
+    assert sweeps, "no sweep file in the docs"
+    for name, text in sweeps:
+        data = yaml.safe_load(text)
+        if "samples" in data:  # one draw names what every draw names (1024 cells took 4 s to check)
+            data["samples"] = 1
+        spec = SweepSpec.from_dict(data)
+        check_spec(spec)
+        assert spec.cells(), name
