@@ -182,7 +182,8 @@ def archive_kind(head: bytes) -> str | None:
 
 def open_text(path: str | Path) -> IO[str]:
     """Open a plain or compressed (gzip, bzip2, xz) text file for reading, by magic bytes, not
-    the name; a leading UTF-8 byte-order mark is skipped.
+    the name; a leading UTF-8 byte-order mark is skipped. Lines end at "\\n" (a lone "\\r" is
+    no line end; a "\\r\\n" line keeps its "\\r", whitespace to ``str.split``).
 
     Raises:
         LogFormatError: for an archive (tar, zip): the log must be extracted from it first.
@@ -199,7 +200,11 @@ def open_text(path: str | Path) -> IO[str]:
     raw = open_bytes(path)
     if head.startswith(UTF8_BOM):  # a log saved by a Windows editor: the mark would hide line 1's message name
         raw.read(len(UTF8_BOM))
-    return io.TextIOWrapper(raw, encoding="ascii", errors="replace")
+    # lines end at "\n" alone ("\r\n" too: the "\r" is whitespace to the word split), as the line numbers
+    # of an editor or `sed -n Np` count them: the universal-newline default also ended a line at a lone
+    # "\r", so a corrupted byte 0x0d split a line in two (both halves malformed, the line lost) and every
+    # error after it named the line after the one at fault
+    return io.TextIOWrapper(raw, encoding="ascii", errors="replace", newline="\n")
 
 
 class CarmenReader:
