@@ -183,7 +183,8 @@ def archive_kind(head: bytes) -> str | None:
 def open_text(path: str | Path) -> IO[str]:
     """Open a plain or compressed (gzip, bzip2, xz) text file for reading, by magic bytes, not
     the name; a leading UTF-8 byte-order mark is skipped. Lines end at "\\n" (a lone "\\r" is
-    no line end; a "\\r\\n" line keeps its "\\r", whitespace to ``str.split``).
+    no line end; a "\\r\\n" line keeps its "\\r", whitespace to ``str.split``), or at "\\r" in a
+    file whose first 4096 bytes hold a "\\r" and no "\\n" (classic Mac line ends).
 
     Raises:
         LogFormatError: for an archive (tar, zip): the log must be extracted from it first.
@@ -203,8 +204,10 @@ def open_text(path: str | Path) -> IO[str]:
     # lines end at "\n" alone ("\r\n" too: the "\r" is whitespace to the word split), as the line numbers
     # of an editor or `sed -n Np` count them: the universal-newline default also ended a line at a lone
     # "\r", so a corrupted byte 0x0d split a line in two (both halves malformed, the line lost) and every
-    # error after it named the line after the one at fault
-    return io.TextIOWrapper(raw, encoding="ascii", errors="replace", newline="\n")
+    # error after it named the line after the one at fault. A log whose first 4096 bytes hold a "\r" and
+    # no "\n" has classic Mac line ends: its lines end at "\r" (as before)
+    mac = b"\r" in head and b"\n" not in head
+    return io.TextIOWrapper(raw, encoding="ascii", errors="replace", newline=None if mac else "\n")
 
 
 class CarmenReader:
