@@ -150,6 +150,9 @@ def read(data: bytes, skip: bool) -> tuple[list, LmsbenchError | None, str]:
 def test_a_damaged_log_reads_or_names_the_file_and_a_damaged_line(case) -> None:  # noqa: ANN001
     kind, lines, data, edited, where = case
     recs, exc, path = read(data, skip=False)
+    if exc is not None and data.startswith(MAGIC):  # bytes inserted at the start made it look compressed or packed
+        assert isinstance(exc, LogFormatError) and exc.line_no in (0, 1), repr(exc)
+        return
     if exc is not None:
         assert isinstance(exc, LogFormatError), repr(exc)
         assert exc.path == path and str(exc).startswith(f"{path}:{exc.line_no}: ")
@@ -160,6 +163,9 @@ def test_a_damaged_log_reads_or_names_the_file_and_a_damaged_line(case) -> None:
         assert exc.line_no in blamed or (params and min(params) < exc.line_no < where[-1]), (exc.line_no, edited, str(exc))
     for rec in recs:
         assert len(rec.scan) in (181, 361)
+
+
+MAGIC = (b"\x1f\x8b", b"BZh", b"\xfd7zXZ\x00", b"PK\x03\x04")  # gzip, bzip2, xz, zip (told by these, not by names)
 
 
 def laser_lines(kind: str, lines: list[str]) -> list[int]:
@@ -173,13 +179,13 @@ def test_skipping_bad_lines_loses_no_laser_line_left_alone(case) -> None:  # noq
     clean = "".join(line + "\n" for line in lines).encode()
     want, exc, _ = read(clean, skip=False)
     assert exc is None and len(want) == len(laser_lines(kind, lines))
+    if data.startswith(MAGIC):
+        return  # bytes inserted at the start made it look compressed or packed: a whole-file error
     got, exc, path = read(data, skip=True)
     assert exc is None, repr(exc)
     joined = {n + 1 for n in edited if data.count(b"\n") < len(lines)}  # a joined line takes the next one with it
     if any(lines[n - 1].startswith("PARAM") for n in edited):
         return  # a damaged PARAM line changes how the lines after it read
-    if data.count(b"FLASER") > "".join(lines).count("FLASER"):
-        return  # a message name turned into FLASER: its (malformed) line chooses the laser read
     untouched = [rec for rec, n in zip(want, laser_lines(kind, lines)) if n not in edited and n not in joined]
     got_stamps = {rec.scan.stamp: rec for rec in got}
     for rec in untouched:
