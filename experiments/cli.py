@@ -96,8 +96,11 @@ class _Version(argparse.Action):
 
         try:
             sys.stdout.write(version_text() + "\n")
-        except OSError:  # a reader that went away (`--version | head -0`), as argparse's --help: nothing to say it to
+            sys.stdout.flush()
+        except BrokenPipeError:  # a reader that went away (`--version | head -0`), as argparse's --help: nothing to say it to
             _stdout_to_devnull()
+        except OSError as exc:  # `--version > /dev/full`: it exited 0, nothing written
+            parser.exit(_stdout_failed("", exc))
         parser.exit()
 
 
@@ -245,8 +248,7 @@ def _flushed(status: int) -> int:
     except BrokenPipeError:
         _stdout_to_devnull()
     except OSError as exc:
-        print(f"lmsbench: error: cannot write the standard output: {exc}", file=sys.stderr)
-        return status or 2
+        return _stdout_failed("", exc, status)
     except ValueError:  # stdout closed by the caller: nothing left to write
         pass
     return status
@@ -262,6 +264,8 @@ def _main(argv: Sequence[str] | None) -> int:
             _command_parser(parser, args).error(f"unrecognized arguments: {' '.join(extra)}")
     except SystemExit as exc:  # --help (0) or a bad option, already printed in one line (2)
         return int(exc.code or 0)
+    except OSError as exc:  # --help to a standard output that cannot be written (options.OneLineParser._print_message)
+        return _stdout_failed(_command_words(argv), exc)
     if not getattr(args, "func", None):  # "lmsbench" or "lmsbench lms200" alone: a usage error, one line, 2
         sub = _command_parser(parser, args)
         try:
@@ -279,15 +283,19 @@ def _main(argv: Sequence[str] | None) -> int:
     warnings.showwarning = functools.partial(_show_warning, name, previous_show)
     done = False  # whether the command's work ended (a reader of stdout that went away then is no loss)
     started_ns = time.time_ns()  # files in --out modified since were written by this run (_stdout_gone)
+    watched = _WatchedStdout(sys.stdout)
     try:
         default_threads()  # a bad $LMSBENCH_THREADS is refused before any work, by every command
         interrupt.running = True
+        sys.stdout = watched  # type: ignore[assignment]
         try:
             status = int(args.func(args) or 0)
+            done = True
+            sys.stdout.flush()  # here, not at exit: a reader that went away (`| head`) is said below
         finally:
             interrupt.running = False
-        done = True
-        sys.stdout.flush()  # here, not at exit: a reader that went away (`| head`) is said below
+            if sys.stdout is watched:
+                sys.stdout = watched.stream
         return status
     except (LmsbenchError, OSError) as exc:  # OSError: missing files, bad paths, unreachable hosts, timeouts
         if interrupt.timer is not None or _from_interrupt(exc):  # what Ctrl-C broke: not the input's error
@@ -295,6 +303,9 @@ def _main(argv: Sequence[str] | None) -> int:
         if isinstance(exc, BrokenPipeError) and _stdout_closed():
             stopped = not done and _writes_outputs(args) and not getattr(args, "outputs_complete", False)
             return _stdout_gone(name, stopped, getattr(args, "out", None), started_ns)
+        if isinstance(exc, OSError) and exc is watched.failed:
+            _end_progress_bars()  # `lmsbench info LOG > /dev/full`: it said "error: [Errno 28] No space left on device"
+            return _stdout_failed(name, exc)
         _end_progress_bars()
         if _users_code(exc) and os.environ.get("LMSBENCH_TRACEBACK"):
             traceback.print_exception(exc)  # the user's exception first, then where lmsbench called it
@@ -393,6 +404,52 @@ def _writes_outputs(args: argparse.Namespace) -> bool:
     none). A command sets ``args.outputs_complete`` once they are all written, before it prints its
     summary: ``compare ... | head -3`` said the folder it had just finished was incomplete."""
     return hasattr(args, "out") and not (args.out is None and getattr(args, "prints_without_out", False))
+
+
+def _stdout_failed(name: str, exc: OSError, status: int = 0) -> int:
+    """A standard output that cannot be written (``> /dev/full``, a full disk under ``> FILE``): one
+    line on stderr, and ``status``, or 2 where it was 0 (the run wrote nothing, or not all, of what it
+    was asked to print: a user-side error, as every other). What is left in stdout's buffer goes to
+    /dev/null, so the interpreter's last flush does not fail again."""
+    _stdout_to_devnull()
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    try:
+        print(f"lmsbench{' ' + name if name else ''}: error: cannot write the standard output: "
+              f"{reason[:1].lower()}{reason[1:]}", file=sys.stderr)
+    except (OSError, ValueError):
+        pass
+    return status or 2
+
+
+class _WatchedStdout:
+    """sys.stdout while a command runs: the stream itself, except that the OSError a write or flush
+    of it raises is kept (``failed``), so that the error it ends the command with is said as the
+    standard output's, not as "[Errno 28] No space left on device" of nothing named."""
+
+    def __init__(self, stream: Any) -> None:  # noqa: ANN401 - any text stream (a test's capture too)
+        self.stream = stream
+        self.failed: OSError | None = None
+
+    def write(self, text: str) -> int:
+        try:
+            return self.stream.write(text)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            self.failed = exc
+            raise
+
+    def flush(self) -> None:
+        try:
+            self.stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            self.failed = exc
+            raise
+
+    def __getattr__(self, name: str) -> Any:  # noqa: ANN401
+        return getattr(self.stream, name)
 
 
 def _stdout_to_devnull() -> None:

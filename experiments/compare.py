@@ -17,6 +17,7 @@ from __future__ import annotations
 from lms200.yamlio import load as load_yaml
 
 import dataclasses
+import os
 from functools import partial
 import time
 from dataclasses import dataclass
@@ -27,7 +28,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from features.registry import available_methods, backend_of, get_method, make_config
+from features.registry import available_methods, backend_of, get_method, make_config, warn_unread_fields
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
 from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
@@ -293,7 +294,9 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
     seen: dict[tuple[str, int | None], str] = {}  # (source name, seed or None) -> the word that gave it
     kinds: dict[str, tuple[str, str]] = {}  # source name -> (a word that gave it, its path or "world")
     stems: dict[str, str] = {}  # a log's figure name (realdata_STEM) -> the word that gave it
+    files: dict[tuple[int, int], tuple[str, Path]] = {}  # the file read (st_dev, st_ino) -> the word that gave it, its path
     for spec in specs:
+        word = spec
         name, colon, seed = spec.partition(":")
         world = name in known_worlds()  # as parse_sources reads it
         if world and colon:
@@ -329,6 +332,13 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
             raise LmsbenchError(f"{spec!r} is neither a world ({', '.join(known_worlds())}){hint}, a simulate folder "
                                 "nor an existing log")
         spec = str(check_log(spec))  # a simulate folder without world.json: its scans.clf, as a log
+        # one input under two spellings (a simulate folder and its scans.clf, a path and a link to it, a hard
+        # link): the names differ, so the checks above pass, and its scans were counted twice
+        st = os.stat(spec)
+        other, read = files.setdefault((st.st_dev, st.st_ino), (word, Path(spec).resolve()))
+        if other != word:
+            raise LmsbenchError(f"{other} and {word} are the same input ({read}), given twice: "
+                                "each source once (the tables would count its scans twice)")
         # each log's figure is named by its file name made safe (figures.realdata.figure_stem): "a b.clf" and
         # "a_b.clf" both wrote realdata_a_b_clf.*, the second over the first ("ä.clf" and "ö.clf": realdata__clf)
         from experiments.figures.realdata import figure_stem
@@ -492,6 +502,10 @@ def compare(
                 bar.update(1)
     if bar is not None:
         bar.close()
+    # a --set / params field no scan of the run read (sigma_r on cm-mode logs): said once, as extract says it per call
+    warn_unread_fields(params, {name: cfg for src in srcs for name, cfg in src.ran.items()},
+                       sorted({r for src in srcs for r in src.range_maxes}),
+                       f"the scans of {', '.join(source_label(src) for src in srcs)}")
     table = pd.DataFrame(rows)
     if not table.empty:
         table.insert(table.columns.get_loc("microseconds") + 1, "time_ms", table["microseconds"] / 1e3)

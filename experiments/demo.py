@@ -94,17 +94,22 @@ def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -
     max_scans = max(20, int(cfg.duration * cfg.rate_hz))
     # the rough fill's probe runs: the tour's duration on one world other than the report's, at
     # sim2real's PROBE_RATE_HZ (1 scan/s), as `lmsbench sim2real` runs them on twelve worlds
-    result = sim2real(path, world="mit", seeds=(cfg.seed,), duration=cfg.duration, rate_hz=3.0, stride=10,
-                      max_scans=max_scans, fit_duration=min(30.0, cfg.duration), wall_relief=False,
-                      probe_duration=cfg.duration, probe_rate_hz=PROBE_RATE_HZ,
+    # the settings the run is given are the ones its config.yaml records: it recorded the duration,
+    # stride and max_scans alone, so the record read as sim2real's defaults (0.25 scans/s, 120 s probe
+    # runs, the wall relief fitted) where the demo ran 3 scans/s, probes as long as the tour, no relief
+    settings = dict(duration=cfg.duration, rate_hz=3.0, stride=10, max_scans=max_scans,
+                    fit_duration=min(30.0, cfg.duration), wall_relief=False, probe_duration=cfg.duration,
+                    probe_rate_hz=PROBE_RATE_HZ)
+    result = sim2real(path, world="mit", seeds=(cfg.seed,), **settings,
                       probe_seeds=[next(s for s in PROBE_SEEDS if s != cfg.seed)],
                       # the log as a path from here: its bare name did not run from the checkout (a review)
                       advice=f"a longer demo --duration, or `lmsbench sim2real {os.path.relpath(path)}` for the full "
                              "comparison")
     for warning in result.warnings:  # in the report and, as sim2real says them, on the terminal
         log(f"warning: sim2real: {warning}")
-    write_outputs(result, out / "sim2real", str(path), dict(log=str(path), duration=cfg.duration, stride=10,
-                                                           max_scans=max_scans))
+    from experiments.provenance import versions
+
+    write_outputs(result, out / "sim2real", str(path), dict(log=str(path), **settings, versions=versions()))
     body = format_report(result, path.name).split("\n", 2)[2]  # the tables, without the title
     return Section("Calibrated simulation next to a real log", [
         f"`lmsbench calibrate` fitted the sensor model to {path.name}; the `mit` preset (generator parameters "

@@ -15,6 +15,7 @@ import os
 import re
 import stat
 import tempfile
+import sys
 from pathlib import Path
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, Sequence
@@ -103,6 +104,26 @@ class OneLineParser(argparse.ArgumentParser):
         for _, parser in command_parsers(self):
             if isinstance(parser, OneLineParser):
                 parser.root = self
+
+    def _print_message(self, message: str, file: Any = None) -> None:
+        """argparse's, except that a standard output that cannot be written (``--help > /dev/full``)
+        raises the OSError (argparse swallowed it: nothing written, exit status 0); a reader that went
+        away (BrokenPipeError) and a standard error that cannot be written are still passed over
+        (``experiments.cli`` says the first as a shell does, and the second has nowhere to be said)."""
+        if not message:
+            return
+        file = file or sys.stderr
+        try:
+            file.write(message)
+            if file is sys.stdout:
+                file.flush()
+        except BrokenPipeError:
+            pass
+        except OSError:
+            if file is sys.stdout:
+                raise
+        except AttributeError:  # no stream (pythonw): as argparse
+            pass
 
     def error(self, message: str) -> None:  # type: ignore[override]
         elsewhere = ""

@@ -14,6 +14,8 @@ from typing import Any, Mapping, Sequence
 
 import yaml
 
+from features.registry import MODE_FIELDS, unread_fields  # noqa: F401 - the one rule, shared with compare and run_slam
+from features.registry import mode_fields_read as _mode_fields_read
 from lms200 import LmsbenchError
 from lms200.yamlio import load as load_yaml
 
@@ -97,43 +99,6 @@ def extractor_overrides(flat: Mapping[str, Any], methods: Sequence[str], *,
         for m in targets:
             out[m].setdefault(name, value)  # an extractor.METHOD.FIELD entry wins, whatever the order
     return {m: p for m, p in out.items() if p}
-
-
-#: the scans each mode-bound range-noise field of the sensor method is read for
-#: (``features.sensor.config.SensorMethodConfig.noise_field``)
-MODE_FIELDS = {"sigma_r": ("mm", "range_max <= 10 m"), "sigma_r_cm": ("cm", "range_max > 10 m")}
-
-
-def unread_fields(params: Mapping[str, Mapping[str, Any]], configs: Mapping[str, Any], range_maxes: Sequence[float],
-                  scans: str) -> list[str]:
-    """One line (no prefix) per field a user set (``params``: ``{method: {field: value}}``) that
-    no scan of the run reads: the sensor method reads ``sigma_r`` for mm-mode scans and
-    ``sigma_r_cm`` for cm-mode ones (range_max > 10 m; any config with a ``noise_field`` method),
-    so ``--set extractor.sensor.sigma_r=5`` on the cm-mode CARMEN logs changed nothing, silently.
-    ``configs``: each method's config as it ran; ``range_maxes``: those of the run's scans (m);
-    ``scans``: how the line names them ("the scans of mit-csail.clf.gz")."""
-    out: list[str] = []
-    shown = ", ".join(f"{r:g}" for r in sorted(set(range_maxes))[:3]) + (", ..." if len(set(range_maxes)) > 3 else "")
-    for method, given in params.items():
-        read, unread = _mode_fields_read(configs.get(method), range_maxes, given)
-        for field in unread:
-            other = next(iter(read))
-            mode, rule = MODE_FIELDS[field]
-            out.append(f"{method}: {field}={given[field]!r} is not used: {field} applies to {mode}-mode scans ({rule}); "
-                       f"{scans} are {MODE_FIELDS[other][0]} mode (range_max {shown} m): set {other}")
-    return out
-
-
-def _mode_fields_read(config: Any, range_maxes: Sequence[float] | set[float],
-                      given: Mapping[str, Any]) -> tuple[set[str], list[str]]:
-    """The mode-bound range-noise fields of ``config`` that scans of these ``range_maxes`` (m)
-    read, and those of ``given`` (the user's fields, in their order) that none reads; both empty
-    for a config without ``noise_field`` or a run of no scan."""
-    noise_field = getattr(config, "noise_field", None)
-    if not range_maxes or not callable(noise_field):
-        return set(), []
-    read = {noise_field(r) for r in range_maxes}
-    return read, [f for f in given if f in MODE_FIELDS and f not in read]
 
 
 def unread_marked(values: dict[str, Any], config: Any, range_maxes: Sequence[float] | set[float],

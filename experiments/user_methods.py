@@ -3,8 +3,8 @@ mypkg.lines:extract`` runs ``extract(scan) -> features.FeatureSet`` beside the b
 timed and scored the same way.
 
 A name ``MODULE:FUNCTION`` is imported (the current folder first on the path, so a file
-``./myext.py`` is ``myext:FUNCTION``; the folder stays on the path, last, for the run, so a sibling
-module the function imports when it is called is found: :func:`import_named`) and registered in ``features.registry`` under that name, with
+``./myext.py`` is ``myext:FUNCTION``; the folder is searched after every other place for the run,
+so a sibling module the function imports when it is called is found: :func:`import_named`) and registered in ``features.registry`` under that name, with
 an empty config; the function receives the ``lms200.Scan`` and returns a ``FeatureSet`` (lines and
 corners in the sensor frame). A function with a ``config_type`` attribute (a dataclass) is called
 ``fn(scan, config)`` and its config's fields can be set with ``--set extractor.MODULE:FUNCTION.FIELD=V``.
@@ -24,6 +24,8 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import importlib
+import importlib.abc
+import importlib.machinery
 import os
 import sys
 from typing import Any, Callable, Iterator, Sequence
@@ -108,16 +110,42 @@ def _load(name: str) -> Callable[..., Any]:
     return import_named(name, name, UserMethodError)
 
 
+class FolderFinder(importlib.abc.MetaPathFinder):
+    """Finds top-level modules in one folder, asked after every other finder of ``sys.meta_path``.
+
+    The folder was appended to ``sys.path`` instead, "last, so it shadows nothing"; but the path's
+    finder runs before the finder of an editable install (``make setup``: setuptools appends it to
+    ``sys.meta_path``), so a folder ``slam/`` in the current folder (an earlier ``slam --out slam``)
+    became lmsbench's ``slam`` wherever it was imported after a user's module: ``lmsbench bench``
+    there failed "internal error: ImportError: cannot import name 'SlamConfig' from 'slam'
+    (unknown location)", exit 1."""
+
+    def __init__(self, folder: str) -> None:
+        self.folder = folder
+
+    def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
+        if path is not None:  # a submodule: its package's own __path__ finds it
+            return None
+        return importlib.machinery.PathFinder.find_spec(name, [self.folder])
+
+
+def search_last(folder: str) -> None:
+    """Search ``folder`` for top-level modules after every other place (:class:`FolderFinder`)."""
+    if not any(isinstance(f, FolderFinder) and f.folder == folder for f in sys.meta_path):
+        sys.meta_path.append(FolderFinder(folder))
+
+
 def import_named(target: str, what: str, error: type[LmsbenchError] = UserMethodError) -> Callable[..., Any]:
     """The callable ``MODULE:ATTR`` names (ATTR may be dotted), MODULE imported with the current
     folder first on the path, so a file ``./myext.py`` is ``myext:ATTR`` (as with PYTHONPATH=.):
     the one rule for a user's extractor (``compare --methods``, ``slam --extractor``, an extract
     sweep's ``method``) and a sweep's cell ``kind`` (which needed PYTHONPATH=.: "cannot import
-    mysw:cell: No module named 'mysw'"). After the import the current folder stays on the path for
-    the run, last: a module that imports a sibling lazily (``import helper`` inside its function)
-    finds it when it is called (the folder was removed, and such a call failed with "No module
-    named 'helper'"), and the folder's files do not shadow lmsbench's own modules or installed ones
-    (``./sim.py`` beside a user's extractor), which lmsbench imports lazily too.
+    mysw:cell: No module named 'mysw'"). After the import the current folder is searched for the
+    run, after every other place (:class:`FolderFinder`): a module that imports a sibling lazily
+    (``import helper`` inside its function) finds it when it is called (the folder was removed, and
+    such a call failed with "No module named 'helper'"), and the folder's files do not shadow
+    lmsbench's own modules or installed ones (``./sim.py`` beside a user's extractor, a ``slam/``
+    output folder), which lmsbench imports lazily too.
 
     Raises:
         error: naming ``what``, when MODULE cannot be imported (with the hint "importable from the
@@ -137,10 +165,9 @@ def import_named(target: str, what: str, error: type[LmsbenchError] = UserMethod
         # (sys.exit() at import time ended the command silently, exit 0: found by the wrong-input hunt)
         raise error(f"{what}: importing {module_name!r} failed: {raised_text(exc)}") from None
     finally:
-        if added:  # from first to last: found for lazy sibling imports, shadowing nothing installed
+        if added:  # off the path, searched last instead: found for lazy sibling imports, shadowing nothing
             sys.path.remove(cwd)
-            if cwd not in sys.path:
-                sys.path.append(cwd)
+            search_last(cwd)
     fn = module
     for part in attr.split("."):
         if not hasattr(fn, part):

@@ -183,6 +183,55 @@ def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: An
     return m.run(scan, cfg)
 
 
+class UnreadNoiseWarning(LmsbenchWarning):
+    """A range-noise field was set that the run's scans do not read (``sigma_r`` for cm-mode scans,
+    ``sigma_r_cm`` for mm-mode ones): it changed nothing. Said by ``extract`` / ``extract_many``
+    per call, by ``experiments.compare.compare`` and ``slam.run_slam`` once per run."""
+
+
+#: the scans each mode-bound range-noise field of the sensor method is read for
+#: (``features.sensor.config.SensorMethodConfig.noise_field``)
+MODE_FIELDS = {"sigma_r": ("mm", "range_max <= 10 m"), "sigma_r_cm": ("cm", "range_max > 10 m")}
+
+
+def mode_fields_read(config: Any, range_maxes: Sequence[float] | set[float],
+                     given: Any) -> tuple[set[str], list[str]]:
+    """The mode-bound range-noise fields of ``config`` that scans of these ``range_maxes`` (m)
+    read, and those of ``given`` (the user's fields, in their order) that none reads; both empty
+    for a config without ``noise_field`` or a run of no scan."""
+    noise_field = getattr(config, "noise_field", None)
+    if not range_maxes or not callable(noise_field):
+        return set(), []
+    read = {noise_field(r) for r in range_maxes}
+    return read, [f for f in given if f in MODE_FIELDS and f not in read]
+
+
+def unread_fields(params: Any, configs: Any, range_maxes: Sequence[float], scans: str) -> list[str]:
+    """One line (no prefix) per field a user set (``params``: ``{method: {field: value}}``) that
+    no scan of the run reads: the sensor method reads ``sigma_r`` for mm-mode scans and
+    ``sigma_r_cm`` for cm-mode ones (range_max > 10 m; any config with a ``noise_field`` method),
+    so ``--set extractor.sensor.sigma_r=5`` on the cm-mode CARMEN logs changed nothing, silently.
+    ``configs``: each method's config as it ran; ``range_maxes``: those of the run's scans (m);
+    ``scans``: how the line names them ("the scans of mit-csail.clf.gz")."""
+    out: list[str] = []
+    shown = ", ".join(f"{r:g}" for r in sorted(set(range_maxes))[:3]) + (", ..." if len(set(range_maxes)) > 3 else "")
+    for method, given in params.items():
+        read, unread = mode_fields_read(configs.get(method), range_maxes, given)
+        for field in unread:
+            other = next(iter(read))
+            mode, rule = MODE_FIELDS[field]
+            out.append(f"{method}: {field}={given[field]!r} is not used: {field} applies to {mode}-mode scans ({rule}); "
+                       f"{scans} are {MODE_FIELDS[other][0]} mode (range_max {shown} m): set {other}")
+    return out
+
+
+def warn_unread_fields(params: Any, configs: Any, range_maxes: Sequence[float], scans: str, stacklevel: int = 3) -> None:
+    """An :class:`UnreadNoiseWarning` per line of :func:`unread_fields`: what a run (``compare``,
+    ``run_slam``) says once, at its end, over every scan it read (``stacklevel`` 3: its caller's line)."""
+    for line in unread_fields(params, configs, range_maxes, scans):
+        warnings.warn(line, UnreadNoiseWarning, stacklevel=stacklevel)
+
+
 def warn_unread_noise(m: Method, cfg: Any, params: dict[str, Any], range_max: float, where: str) -> None:
     """An ``LmsbenchWarning`` when ``params`` set a range-noise field that a scan of this
     ``range_max`` does not read (the sensor method reads ``sigma_r`` at range_max <= 10 m and
@@ -198,7 +247,7 @@ def warn_unread_noise(m: Method, cfg: Any, params: dict[str, Any], range_max: fl
     when = "above 10 m (SICK cm codes)" if read == "sigma_r_cm" else "of 10 m or less (SICK mm codes)"
     warnings.warn(f"{where}: {given[0]}={params[given[0]]!r} is not read: a scan whose range_max is {when}, as "
                   f"this one's {range_max:g} m, reads {read} (now {getattr(cfg, read)!r}); set {read} for it",
-                  LmsbenchWarning, stacklevel=3)
+                  UnreadNoiseWarning, stacklevel=3)
 
 
 

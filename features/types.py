@@ -31,7 +31,9 @@ class Line:
         end: (x, y) endpoint at the last beam (m).
         first: index of the first beam assigned to the line (inclusive).
         last: index of the last beam assigned to the line (inclusive).
-        cov: 2x2 covariance of (rho, alpha) in (m^2, m rad, rad^2).
+        cov: 2x2 covariance of (rho, alpha) in (m^2, m rad, rad^2); of a ``FeatureSet``'s line
+            (``fs.lines[i]``), a read-only view of its arrays (writing through it changed the
+            FeatureSet, silently): ``cov.copy()`` to change it.
         n_points: number of valid beams that support the line.
     """
 
@@ -119,6 +121,16 @@ def check_line_rows(rows: np.ndarray, name: str) -> None:
             raise InputError(f"{name}: line {i}: {what} (rho, alpha, x0, y0, x1, y1, first, last = {shown})")
 
 
+def read_only(a: np.ndarray) -> np.ndarray:
+    """A view of ``a`` that cannot be written through (``a`` itself stays writable): what the
+    Line / Corner records and the column properties of Lines / Corners hand out, so that
+    ``fs.lines[0].cov[0, 0] = 5`` or ``fs.lines.rho[0] = 7`` is numpy's "assignment destination is
+    read-only" instead of a silent change of the FeatureSet (copy it to change it: ``cov.copy()``)."""
+    v = a.view()
+    v.flags.writeable = False
+    return v
+
+
 class Lines(Sequence):
     """The lines of one scan as arrays, in beam order; ``lines[i]`` is the ``Line`` of row i.
 
@@ -183,18 +195,19 @@ class Lines(Sequence):
         check_line_rows(np.column_stack((out.values[:, :6], out.beams[:, :2])), "lines")
         return out
 
-    rho = property(lambda self: self.values[:, 0], doc="(L,) distance of each line from the origin (m)")
-    alpha = property(lambda self: self.values[:, 1], doc="(L,) normal angle (rad, (-pi, pi])")
-    start = property(lambda self: self.values[:, 2:4], doc="(L, 2) endpoint at the first beam (m)")
-    end = property(lambda self: self.values[:, 4:6], doc="(L, 2) endpoint at the last beam (m)")
-    first = property(lambda self: self.beams[:, 0], doc="(L,) first beam (inclusive)")
-    last = property(lambda self: self.beams[:, 1], doc="(L,) last beam (inclusive)")
-    n_points = property(lambda self: self.beams[:, 2], doc="(L,) number of supporting valid beams")
+    # the columns as read-only views (read_only): ``values`` and ``beams`` are the storage
+    rho = property(lambda self: read_only(self.values[:, 0]), doc="(L,) distance of each line from the origin (m)")
+    alpha = property(lambda self: read_only(self.values[:, 1]), doc="(L,) normal angle (rad, (-pi, pi])")
+    start = property(lambda self: read_only(self.values[:, 2:4]), doc="(L, 2) endpoint at the first beam (m)")
+    end = property(lambda self: read_only(self.values[:, 4:6]), doc="(L, 2) endpoint at the last beam (m)")
+    first = property(lambda self: read_only(self.beams[:, 0]), doc="(L,) first beam (inclusive)")
+    last = property(lambda self: read_only(self.beams[:, 1]), doc="(L,) last beam (inclusive)")
+    n_points = property(lambda self: read_only(self.beams[:, 2]), doc="(L,) number of supporting valid beams")
 
     @property
     def cov(self) -> np.ndarray:
-        """(L, 2, 2) covariance of (rho, alpha) of each line (a view)."""
-        return self.values[:, 6:10].reshape(-1, 2, 2)
+        """(L, 2, 2) covariance of (rho, alpha) of each line (a read-only view)."""
+        return read_only(self.values[:, 6:10].reshape(-1, 2, 2))
 
     @property
     def length(self) -> np.ndarray:
@@ -215,7 +228,7 @@ class Lines(Sequence):
         b = self.beams[i].tolist()
         line = object.__new__(Line)  # the frozen dataclass without its per-field setattr
         line.__dict__.update(rho=v[0], alpha=v[1], start=(v[2], v[3]), end=(v[4], v[5]), first=b[0], last=b[1],
-                             cov=self.values[i, 6:10].reshape(2, 2), n_points=b[2])
+                             cov=read_only(self.values[i, 6:10].reshape(2, 2)), n_points=b[2])
         return line
 
     def __iter__(self) -> Iterator[Line]:
@@ -284,11 +297,11 @@ class Corners(Sequence):
         beams = np.array([[whole_number(v) for v in (c.index, *tuple(c.lines))] for c in corners], dtype=np.int64)
         return cls(values, beams)
 
-    x = property(lambda self: self.values[:, 0], doc="(C,) x of each corner (m)")
-    y = property(lambda self: self.values[:, 1], doc="(C,) y of each corner (m)")
-    angle = property(lambda self: self.values[:, 2], doc="(C,) interior angle (rad, (0, pi))")
-    beam = property(lambda self: self.beams[:, 0], doc="(C,) beam index of each corner")
-    line_pair = property(lambda self: self.beams[:, 1:3], doc="(C, 2) indices of the two lines of each corner")
+    x = property(lambda self: read_only(self.values[:, 0]), doc="(C,) x of each corner (m)")
+    y = property(lambda self: read_only(self.values[:, 1]), doc="(C,) y of each corner (m)")
+    angle = property(lambda self: read_only(self.values[:, 2]), doc="(C,) interior angle (rad, (0, pi))")
+    beam = property(lambda self: read_only(self.beams[:, 0]), doc="(C,) beam index of each corner")
+    line_pair = property(lambda self: read_only(self.beams[:, 1:3]), doc="(C, 2) indices of the two lines of each corner")
 
     def __len__(self) -> int:
         return self.values.shape[0]

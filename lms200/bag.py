@@ -45,6 +45,87 @@ class BagError(LmsbenchError):
     """A bag that cannot be read as laser scans."""
 
 
+class BagTooLargeError(BagError):
+    """A compressed ROS 1 chunk or ROS 2 message that decompresses to more than
+    :data:`MAX_DECOMPRESSED_BYTES` (a compression bomb): refused, never skipped."""
+
+
+#: bytes: the most one compressed ROS 1 chunk (bz2, lz4) or ROS 2 message (zstd) may decompress to. rosbags
+#: decompresses each whole, in memory: a 4 MB lz4 chunk of zeros became 1 GiB (a bz2 one of 79 bytes is 64 MiB).
+#: A chunk is ``rosbag record``'s chunk size (768 KiB by default) and one message more.
+MAX_DECOMPRESSED_BYTES = 128 * 2**20
+
+
+def _too_large(what: str) -> BagTooLargeError:
+    return BagTooLargeError(f"{what} decompresses to more than {MAX_DECOMPRESSED_BYTES / 2**20:g} MiB "
+                            "(lms200.bag.MAX_DECOMPRESSED_BYTES): a compression bomb, or chunks or messages "
+                            "far larger than a bag of laser scans holds; not read")
+
+
+def _bounded(data: bytes, new_decompressor: Callable[[], Any], what: str, all_frames: bool) -> bytes:
+    """``data`` decompressed frame after frame (bz2 streams, zstd frames; only the first lz4 frame,
+    as ``lz4.frame.decompress``), never more than MAX_DECOMPRESSED_BYTES + 1 bytes of output at
+    once: BagTooLargeError beyond it; ValueError for data that ends inside a frame."""
+    out = bytearray()
+    rest = bytes(data)
+    while rest:
+        d = new_decompressor()
+        out += d.decompress(rest, max_length=MAX_DECOMPRESSED_BYTES + 1 - len(out))
+        if len(out) > MAX_DECOMPRESSED_BYTES:
+            raise _too_large(what)
+        if not d.eof:
+            raise ValueError("compressed data ended before the end-of-stream marker was reached")
+        rest = d.unused_data if all_frames else b""
+    return bytes(out)
+
+
+def _bound_decompression(reader: Any, path: Path) -> None:  # noqa: ANN401 - rosbags' AnyReader
+    """Bound what ``reader`` (an open rosbags AnyReader) decompresses at once (MAX_DECOMPRESSED_BYTES):
+    rosbags decompresses a ROS 1 chunk whole (``Chunk.decompressor``) and a ROS 2 message whole
+    (``zstd.decompress`` in ``rosbags.rosbag2.reader``); each is replaced by a bounded decompression."""
+    import bz2
+
+    import lz4.frame
+
+    from rosbags.rosbag1 import reader as reader1
+
+    bounded = {
+        reader1.decompressors["bz2"]: lambda data: _bounded(data, bz2.BZ2Decompressor, f"{path}: a bz2 chunk", True),
+        reader1.decompressors["lz4"]: lambda data: _bounded(data, lz4.frame.LZ4FrameDecompressor,
+                                                             f"{path}: an lz4 chunk", False),
+    }
+    for r in getattr(reader, "readers", ()):
+        chunks = getattr(r, "chunks", None)
+        if isinstance(chunks, dict):
+            r.chunks = {pos: c._replace(decompressor=bounded.get(c.decompressor, c.decompressor))
+                        for pos, c in chunks.items()}
+    _bound_zstd_messages()
+
+
+def _bound_zstd_messages() -> None:
+    """rosbags' ROS 2 reader decompresses a message with its module's ``zstd.decompress``: that name is
+    pointed at a bounded one (the rest of the module, ``zstd.open`` of a file-compressed bag, which
+    streams to a file, is rosbags' own)."""
+    from rosbags.rosbag2 import reader as reader2
+
+    if isinstance(reader2.zstd, _BoundedZstd):
+        return
+    reader2.zstd = _BoundedZstd(reader2.zstd)  # type: ignore[assignment]
+
+
+class _BoundedZstd:
+    """The zstd module rosbags' ROS 2 reader uses, with a ``decompress`` bounded by MAX_DECOMPRESSED_BYTES."""
+
+    def __init__(self, module: Any) -> None:  # noqa: ANN401 - a module
+        self._module = module
+
+    def __getattr__(self, name: str) -> Any:  # noqa: ANN401
+        return getattr(self._module, name)
+
+    def decompress(self, data: bytes) -> bytes:
+        return _bounded(data, self._module.ZstdDecompressor, "a zstd-compressed message", True)
+
+
 class BagExistsError(InputError, FileExistsError):
     """``write_log`` to a bag path that exists (a bag is never written over)."""
 
@@ -364,6 +445,7 @@ class BagReader:
             reader.open()
         except Exception as exc:  # rosbags raises its own types for every kind of damage
             raise BagError(f"{self.path}: cannot open as a ROS bag: {type(exc).__name__}: {exc}") from None
+        _bound_decompression(reader, self.path)
         return reader
 
     def _scan_connections(self, reader) -> list:  # noqa: ANN001
@@ -387,6 +469,10 @@ class BagReader:
         return scans
 
     def _fail(self, where: str, exc: Exception, index: int, fatal: bool) -> None:
+        if isinstance(exc, BagTooLargeError):  # not a damaged message to skip: memory is at stake
+            if str(self.path) not in str(exc):  # a ROS 2 message's (rosbags' zstd knows no file)
+                raise BagTooLargeError(f"{self.path}: {where}: {exc}") from None
+            raise exc
         reason = f"{type(exc).__name__}: {exc}" if not isinstance(exc, ValueError) else str(exc)
         if not self.skip_bad_lines:
             raise BagError(f"{self.path}: {where}: cannot read: {reason}") from None

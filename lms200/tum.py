@@ -63,12 +63,12 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
             (found by fuzzing: (3k, 4) poses, a whole trajectory with its stamps, were written as
             4k garbled rows, and decreasing or nan stamps made a file ``read_tum`` refuses).
             Poses that are nan (a lost SLAM run's) are written as nan, which
-            ``read_tum(path, allow_nan=True)`` reads back; an infinite pose entry, which no reader
-            takes, is an InputError naming its row. A ``path`` that is a folder or a device, or in
+            ``read_tum(path, allow_nan=True)`` reads back; an infinite pose entry, or an x or y beyond
+            +-``logs.MAX_COORD_M`` (1e9 m), which no reader takes, is an InputError naming its row. A ``path`` that is a folder or a device, or in
             a folder that does not exist, or that cannot be written, is an InputError naming it
             (they were a raw IsADirectoryError, FileNotFoundError, ...: the wrong-input hunt).
     """
-    from .logs import path_of  # not at the top: logs imports bag, which imports this module
+    from .logs import MAX_COORD_M, path_of  # not at the top: logs imports bag, which imports this module
 
     path = path_of(path)
     if not path.parent.is_dir():
@@ -81,6 +81,11 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
     if np.isinf(poses).any():  # was written as 'inf', which read_tum refuses
         k = int(np.nonzero(np.isinf(poses).any(axis=1))[0][0])
         raise InputError(f"poses: row {k} is infinite ({poses[k].tolist()}); a lost pose is written as nan")
+    far = np.abs(poses[:, :2]) > MAX_COORD_M
+    if far.any():  # read_tum refuses such a row: a file written that its own reader does not take
+        k = int(np.nonzero(far.any(axis=1))[0][0])
+        raise InputError(f"poses: row {k} lies beyond +-{MAX_COORD_M:g} m ({poses[k].tolist()}), which read_tum "
+                         "refuses; a lost pose is written as nan")
     if stamps.size != poses.shape[0]:
         raise InputError(f"stamps: {stamps.size} stamps for {poses.shape[0]} poses")
     if np.any(np.diff(stamps) < 0):

@@ -175,6 +175,14 @@ class MotionConfig:
             mounted off the turning axis and the arc that the Euler step leaves out.
         max_dt: (paper preset) longest step integrated at once (s); longer gaps are split, in at most
             ``slam.filter.MAX_PREDICT_STEPS`` (10,000) steps.
+        max_gap: a step between scans longer than this (s; a pause in the recording, two logs
+            joined, a clock jump) is not predicted by the constant-velocity model, which knows
+            nothing of it (the paper preset's filter, integrating a 1e11 s gap, put the robot
+            1e18 m away): the motion restarts as at the first scan, from the last pose with zero
+            velocity (the paper preset: its velocity's uncertainty as at the start, the pose's and
+            the map's kept; the default pipeline: its match starts at the last pose). Steps the
+            odometry predicts (``use_odometry``) are not affected. Above every gap of the Intel,
+            ACES and MIT CSAIL logs (at most 37.7 s).
         use_odometry: the log's odometry increments drive the prediction instead (never the
             default; the paper preset's filter, or the default pipeline's matcher: its start,
             the heading hypotheses it may try and the search's window); ``odom_noise``: (trans
@@ -203,6 +211,7 @@ class MotionConfig:
     jump_margin: float = 0.02
     sigma_lateral: float = 0.1
     max_dt: float = 0.5
+    max_gap: float = 60.0
     use_odometry: bool = False
     odom_noise: tuple[float, float, float] = (0.1, 0.1, 0.05)
     odom_max_turn_error: float = 1.5
@@ -522,7 +531,7 @@ class SlamConfig:
             raise SlamConfigError(f"association.method: must be 'nn' or 'jcbb', got {a.method!r}")
         for sec, name in (("motion", "sigma_accel"), ("motion", "sigma_alpha"), ("motion", "sigma_lateral"),
                           ("motion", "sigma_floor_xy"), ("motion", "sigma_floor_theta"),
-                          ("motion", "max_dt"), ("observations", "sigma_rho"), ("observations", "sigma_alpha_obs"),
+                          ("motion", "max_dt"), ("motion", "max_gap"), ("observations", "sigma_rho"), ("observations", "sigma_alpha_obs"),
                           ("observations", "sigma_corner"), ("prealign", "sigma_xy"), ("prealign", "sigma_phi")):
             if not getattr(getattr(self, sec), name) > 0:
                 raise SlamConfigError(f"{sec}.{name}: must be > 0, got {getattr(getattr(self, sec), name)}")

@@ -32,6 +32,7 @@ class SlamEKF(ExtendedKalmanFilter):
     def __init__(self, pose: tuple[float, float, float] = (0.0, 0.0, 0.0), pose_sigma: float = 0.0,
                  velocity_sigma: tuple[float, float] = (0.5, 0.5)) -> None:
         super().__init__(dim_x=ROBOT_DIM, dim_z=2)
+        self.velocity_sigma = (float(velocity_sigma[0]), float(velocity_sigma[1]))
         self.x = np.array([[pose[0]], [pose[1]], [pose[2]], [0.0], [0.0]])
         self.P = np.diag([pose_sigma**2, pose_sigma**2, pose_sigma**2, velocity_sigma[0] ** 2, velocity_sigma[1] ** 2])
         self.Q = np.zeros((ROBOT_DIM, ROBOT_DIM))
@@ -93,6 +94,15 @@ class SlamEKF(ExtendedKalmanFilter):
         self._sync_internals()
 
     # -- prediction ----------------------------------------------------------------------------
+    def restart_velocity(self) -> None:
+        """The velocity (V, w) set to zero with the uncertainty it started with, uncorrelated with
+        the rest of the state (pose and landmarks kept): the motion restarts as at the first scan."""
+        self.x[3:ROBOT_DIM, 0] = 0.0
+        self.P[3:ROBOT_DIM, :] = 0.0
+        self.P[:, 3:ROBOT_DIM] = 0.0
+        self.P[3, 3], self.P[4, 4] = self.velocity_sigma[0] ** 2, self.velocity_sigma[1] ** 2
+        self.x_prior, self.P_prior = self.x.copy(), self.P.copy()
+
     def set_motion(self, dt: float, sigma_accel: float, sigma_alpha: float, sigma_lateral: float = 0.0) -> None:
         """Constant-velocity step of ``dt`` s: sets the robot blocks of F (Jacobian) and Q."""
         r = self.x[:ROBOT_DIM, 0]

@@ -67,6 +67,7 @@ class SlamFilter:
         self._references: list[tuple[float, np.ndarray, cKDTree, np.ndarray, np.ndarray]] = []
         self._heading_before = float(initial_pose[2])
         self._dt = 0.0
+        self.restarts: list[int] = []  # scans after a step longer than motion.max_gap (the velocity restarted)
 
     # -- state views ---------------------------------------------------------------------------
     @property
@@ -123,6 +124,10 @@ class SlamFilter:
             var_r = (a_r * abs(delta[2]) + a_rt * dist) ** 2 + 1e-6
             self.ekf.set_odometry(delta, dt, np.diag([var_t, var_t, var_r]))
             self.ekf.predict()
+            return
+        if dt > cfg.motion.max_gap:  # no constant velocity over it: integrated, it diverged (1e11 s: x of 1e18 m)
+            self.ekf.restart_velocity()
+            self.restarts.append(self.scan_no)
             return
         n = max(1, min(int(np.ceil(dt / cfg.motion.max_dt)), MAX_PREDICT_STEPS))
         for _ in range(n):

@@ -146,6 +146,10 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
         info = slam.step(t, obs, odom if config.motion.use_odometry else None)
         pose = slam.pose
         P = slam.ekf.P[:3, :3].copy()
+        if not np.all(np.abs(pose[:2]) <= MAX_COORD_M):  # diverged beyond every reader's bound (the TUM reader's):
+            pose = np.full(3, np.nan)  # a lost pose (written as nan), not x = 1e18 m in a file no reader takes
+            healthy = False
+            diverged_at = t if diverged_at is None else diverged_at
         traj.append((t, *pose))
         covs.append(P)
         nees = np.nan
@@ -246,10 +250,20 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
         records = in_scale(checked_records(iter(records), SlamInputError))
     except TypeError:
         raise SlamInputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
+    range_maxes: set[float] = set()
+
+    def seen(records: Iterable[Record]) -> Iterator[Record]:
+        for rec in records:
+            range_maxes.add(float(rec.scan.range_max))
+            yield rec
+
+    records = seen(records)
     if config.preset == "default":
         from .scanslam import run_scan_slam
 
-        return run_scan_slam(((rec.scan.stamp, rec.scan, rec.odom, rec.truth) for rec in records), config)
+        result = run_scan_slam(((rec.scan.stamp, rec.scan, rec.odom, rec.truth) for rec in records), config)
+        _warn_unread(config, range_maxes)
+        return result
 
     def steps():
         batch: list[Record] = []
@@ -260,7 +274,23 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
                 batch = []
         yield from _observed(batch, config)
 
-    return run_steps(steps(), config)
+    result = run_steps(steps(), config)
+    _warn_unread(config, range_maxes)
+    return result
+
+
+def _warn_unread(config: SlamConfig, range_maxes: set[float]) -> None:
+    """An ``UnreadNoiseWarning`` (``features.registry``) per field of ``config.extractor_params`` that
+    none of the run's scans read (``sigma_r`` on cm-mode scans): once per run, as ``features.extract``
+    says it per call (``extract_all`` passes the config, not its fields, so it did not, and the run
+    was silent)."""
+    if not config.extractor_params:
+        return
+    from features.registry import make_config, warn_unread_fields
+
+    warn_unread_fields({config.extractor: config.extractor_params},
+                       {config.extractor: make_config(config.extractor, **config.extractor_params)},
+                       sorted(range_maxes), "the scans", stacklevel=4)
 
 
 #: s: the longest step between consecutive scans' stamps SLAM takes (31,700 years; a 1e9 s gap runs):

@@ -136,6 +136,7 @@ class ScanSlam:
         self.predict_velocity = True
         self._field_cache: tuple[Reference, Field] | None = None
         self._odom: np.ndarray | None = None  # the previous scan's odometry pose (motion.use_odometry)
+        self.restarts: list[int] = []  # scans after a step longer than motion.max_gap (the motion restarted)
 
     # -- one scan -------------------------------------------------------------------------------
     def predict(self, stamp: float) -> np.ndarray:
@@ -180,6 +181,10 @@ class ScanSlam:
         since the previous scan's is the prediction (:meth:`odometry_prediction`) wherever both
         scans have one and the step is one the search could check, else the constant-velocity
         model is."""
+        if self.last and stamp - self.last[-1][0] > self.motion.max_gap:
+            # a gap (a pause, two logs joined): no velocity across it; the motion restarts at the last pose
+            self.last = self.last[-1:]
+            self.restarts.append(len(self.covariances))  # this scan's index
         if offsets is not None and self.alignment.deskew and len(self.last) >= 2:
             points = self.deskew(np.asarray(points, float).reshape(-1, 2), offsets)
         sp = ScanPoints.from_points(points, self.alignment)
@@ -203,6 +208,8 @@ class ScanSlam:
                 starts = [pred]
             else:
                 starts = [pred, self.last[-1][1]] if self.predict_velocity else [self.last[-1][1], pred]
+                if len(self.last) < 2:  # the prediction is the last pose: one start
+                    starts = starts[:1]
             prior = np.diag([sxy**-2, sxy**-2, sth**-2]) if self.alignment.motion_prior else None
             qn = sp.matched_normals if self.alignment.normal_agreement < np.pi else None
             # a wheel odometry may be tenths of a radian off over a step (a slip, a late stamp), not the half

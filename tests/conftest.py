@@ -19,14 +19,15 @@ def shared_data() -> Path:
 
 @pytest.fixture(autouse=True)
 def _sys_path_restored():
-    """sys.path as it was before each test: a user's MODULE:FUNCTION imported from the test's
-    folder keeps that folder on the path for the process (experiments.user_methods.import_named),
+    """sys.path and sys.meta_path as they were before each test: a user's MODULE:FUNCTION imported
+    from the test's folder keeps that folder searched for the process (experiments.user_methods.import_named),
     and a later test's "cannot import mysw" found the earlier test's mysw.py through it."""
     import sys
 
-    saved = list(sys.path)
+    saved, finders = list(sys.path), list(sys.meta_path)
     yield
     sys.path[:] = saved
+    sys.meta_path[:] = finders  # the folder's finder (experiments.user_methods.FolderFinder) too
 
 
 class _UserMethodsDropped(dict):

@@ -128,6 +128,20 @@ def test_every_option_with_a_default_says_it_in_its_help() -> None:
     assert not silent, f"options whose help does not say their default: {silent}"
 
 
+def test_every_simulate_option_with_a_default_says_it_in_its_help() -> None:
+    """`lmsbench simulate --help` said `--seed SEED  seed of the world, tour and sensor noise (>= 0)`
+    and nothing of its default, 0: simulate's options default to None in the parser (a --config
+    run refuses them beside it) and take `experiments.commands.simulate.DEFAULTS` after."""
+    from experiments.cli import build_parser
+    from experiments.commands.simulate import DEFAULTS
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command").choices["simulate"]
+    helps = {a.dest: a.help or "" for a in sub._actions}
+    said = {name: f"default {value:g}" if isinstance(value, float) else f"default {value}" for name, value in DEFAULTS.items()}
+    silent = {name: text for name, text in said.items() if text not in helps[name]}
+    assert not silent, f"simulate options whose help does not say their default: {silent}"
+
+
 def test_the_figures_help_names_every_paper_figure_it_draws() -> None:
     """`lmsbench --help` said figures draws "the paper's figures (4-7, 9, 10)"; it draws fig3_scan too."""
     from experiments.cli import build_parser
@@ -146,3 +160,129 @@ def test_the_log_argument_names_every_compression_that_is_read(command: str) -> 
     sub = next(a for a in build_parser()._actions if a.dest == "command").choices[command]
     log = next(a for a in sub._actions if a.dest == "log")
     assert ".gz" in log.help and ".bz2" in log.help and ".xz" in log.help
+
+
+#: documented command lines that show an option the command refuses, on purpose (the error's example)
+REFUSED_EXAMPLES = {("lms200 emulate", "--max-scans")}
+
+
+def test_every_documented_command_line_names_options_its_command_has() -> None:
+    """Every `lmsbench CMD ...` of README.md and docs/ (in backticks, or an indented or fenced
+    command line) names a command of the parser and only options of that command, so a renamed or
+    removed option cannot stay in the documentation."""
+    import argparse
+
+    from experiments.cli import build_parser
+
+    commands = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
+    wrong, seen = [], 0
+    for page in PAGES:
+        text = page.read_text()
+        for m in re.finditer(r"(?:`|^\s*)lmsbench ([a-z][^`\n]*)", text, re.M):
+            words = m.group(1).split()
+            parser, name = commands.get(words[0]), words[0]
+            if parser is None:  # a message quoted (`lmsbench compare: error: ...`), else no such command
+                if not words[0].endswith(":"):
+                    wrong.append(f"{page.name}:{text.count(chr(10), 0, m.start()) + 1}: no command {words[0]!r}")
+                continue
+            if name == "lms200" and len(words) > 1 and words[1] in ("emulate", "record"):
+                sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+                parser, name = sub[words[1]], f"lms200 {words[1]}"
+            seen += 1
+            for flag in re.findall(r"(?<![\w-])(--[a-z][a-z0-9-]*)(?![a-z0-9*-])", m.group(1)):
+                if flag not in parser._option_string_actions and (name, flag) not in REFUSED_EXAMPLES:
+                    line = text.count("\n", 0, m.start()) + 1
+                    wrong.append(f"{page.name}:{line}: lmsbench {name} has no option {flag}")
+    assert seen > 100 and not wrong, wrong
+
+
+def test_every_option_of_every_command_is_documented() -> None:
+    """Each option string of every command and subcommand (`lmsbench COMMAND --help`) appears in
+    README.md or docs/, where a user looks for what it does."""
+    text = "\n".join(page.read_text() for page in PAGES)
+    from experiments.cli import build_parser
+
+    import argparse
+
+    def options(parser, name=""):
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub, subparser in action.choices.items():
+                    yield from options(subparser, f"{name} {sub}".strip())
+            else:
+                yield from ((name, o) for o in action.option_strings if o.startswith("--") and o != "--help")
+
+    found = list(options(build_parser()))
+    missing = [(cmd, o) for cmd, o in found if not re.search(re.escape(o) + r"(?![a-z0-9-])", text)]
+    assert len(found) > 150 and not missing, missing
+
+
+def _default_rows(page: str, header: str):
+    """(field names, default cell) of each row of the table under ``header`` in docs/``page``."""
+    text = (ROOT / "docs" / page).read_text()
+    block = text[text.index(header):]
+    block = block[:block.index("\n\n")]
+    for line in block.splitlines():
+        m = re.match(r"^\| ((?:`[a-z0-9_]+`(?:, )?)+) \| ([^|]+) \|", line)
+        if m:
+            yield re.findall(r"`([a-z0-9_]+)`", m.group(1)), m.group(2)
+
+
+def _same_default(cell: str, value) -> bool:
+    """Whether a default as the docs write it (`0.005 m`, `"mm"`, `true`, `null`, `4 beams`) is ``value``."""
+    if cell in ("true", "True", "false", "False"):
+        return value is (cell.lower() == "true")
+    if cell == "null":
+        return value is None
+    if cell.startswith('"'):
+        return cell.strip('"') == value
+    try:
+        return abs(float(cell) - float(value)) <= 1e-6 * max(1.0, abs(float(value)))
+    except (TypeError, ValueError):
+        return False
+
+
+@pytest.mark.parametrize("page, header, config", [
+    ("features.md", "| name | default | meaning |", "features.sensor:SensorMethodConfig"),
+    ("simulator.md", "| field | default | meaning |", "sim:SensorConfig"),
+])
+def test_the_parameter_tables_give_the_configs_defaults(page: str, header: str, config: str) -> None:
+    """Each row of the docs' tables of `SensorMethodConfig` and `SensorConfig` fields states the
+    field's default (several fields a row, their defaults comma-separated, units and notes in
+    parentheses after them), and every field of the config has its row."""
+    import dataclasses
+    import importlib
+
+    module, _, name = config.partition(":")
+    cls = getattr(importlib.import_module(module), name)
+    cfg, seen, wrong = cls(), set(), []
+    for names, cell in _default_rows(page, header):
+        cells = [part.strip().split()[0].strip("`") for part in re.sub(r"\([^)]*\)", "", cell).split(",")]
+        assert len(cells) == len(names), (page, names, cell)
+        for field, text in zip(names, cells):
+            seen.add(field)
+            if not _same_default(text, getattr(cfg, field)):
+                wrong.append(f"{page}: {field} {text} (the config's default is {getattr(cfg, field)!r})")
+    assert not wrong, wrong
+    assert seen == {f.name for f in dataclasses.fields(cls)}, f"{page}: fields without a row: {sorted({f.name for f in dataclasses.fields(cls)} - seen)}"
+
+
+def test_the_docs_sweep_files_pass_the_sweeps_checks() -> None:
+    """Every ```yaml block of the docs that is a sweep file (it has `kind:`) is read as one and its
+    parameter names pass the kind's checks before any cell runs (`lmsbench sweep` would run it)."""
+    import yaml
+
+    from experiments.sweep import SweepSpec
+    from experiments.sweep.runner import check_spec
+
+    fence = re.compile(r"^```yaml[ \t]*\n(.*?)^```[ \t]*$", re.S | re.M)
+    specs = [(page.name, m.group(1)) for page in PAGES for m in fence.finditer(page.read_text())]
+    sweeps = [(name, text) for name, text in specs if re.search(r"^kind:", text, re.M)]
+    assert sweeps, "no sweep file in the docs"
+    for name, text in sweeps:
+        data = yaml.safe_load(text)
+        if "samples" in data:  # one draw names what every draw names (1024 cells took 4 s to check)
+            data["samples"] = 1
+        spec = SweepSpec.from_dict(data)
+        check_spec(spec)
+        assert spec.cells(), name

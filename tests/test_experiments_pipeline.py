@@ -274,3 +274,37 @@ def test_the_demos_sim2real_warnings_give_advice_the_demo_takes(tmp_path, monkey
     # the log as a path from where the demo runs (its bare name did not run from the checkout)
     assert seen["advice"] == (f"a longer demo --duration, or `lmsbench sim2real {os.path.relpath(tmp_path / 'mit.clf')}` "
                               "for the full comparison")
+
+
+def test_the_demos_sim2real_config_records_the_settings_it_ran_with(tmp_path, monkeypatch):
+    """The demo's sim2real/config.yaml held log, duration, stride and max_scans alone (and no
+    versions): read as `lmsbench sim2real`'s record, the run was at its defaults, 0.25 scans/s with
+    120 s probe runs and the wall relief fitted, where the demo ran 3 scans/s, probes as long as the
+    tour and no relief. Every setting the demo passes to sim2real is now in the record."""
+    import experiments.sim2real
+    from experiments.demo import _sim2real_section
+    from experiments.figures.study import StudyConfig
+
+    class Stop(Exception):
+        pass
+
+    ran, recorded = {}, {}
+
+    def fake(log, **kwargs):
+        ran.update(kwargs)
+        return type("Result", (), {"warnings": []})()
+
+    def fake_write(result, out, log, config):
+        recorded.update(config)
+        raise Stop
+
+    monkeypatch.setattr(experiments.sim2real, "sim2real", fake)
+    monkeypatch.setattr(experiments.sim2real, "write_outputs", fake_write)
+    cfg = StudyConfig(duration=7.0)
+    cfg.sim2real_log = str(tmp_path / "mit.clf")
+    (tmp_path / "mit.clf").write_text("")
+    with pytest.raises(Stop):
+        _sim2real_section(cfg, tmp_path, lambda msg: None)
+    assert (recorded["rate_hz"], recorded["probe_duration"], recorded["wall_relief"]) == (3.0, 7.0, False)  # old: KeyError
+    settings = {k: v for k, v in ran.items() if k not in ("world", "seeds", "probe_seeds", "advice")}
+    assert {k: recorded[k] for k in settings} == settings and "versions" in recorded

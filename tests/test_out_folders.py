@@ -352,13 +352,14 @@ def test_a_demo_or_sim2real_stopped_at_its_first_files_is_taken_by_the_next_run(
 def test_a_demo_run_again_leaves_no_figures_record_beside_its_own_figures(tmp_path, capsys, monkeypatch):
     """`figures --tables DEMO/tables --out DEMO/figures` leaves its figures.yaml there; the next
     demo into DEMO redrew the figures and kept it, a record of a figures run (its tables, its
-    versions) beside figures the demo drew (a review). The demo removes it; the study is stubbed."""
+    versions) beside figures the demo drew (a review). The demo removes it; the study and sim2real are stubbed."""
     import pandas as pd
 
     import experiments.demo
 
     timing = pd.DataFrame({"method": ["sensor"], "scan": [0], "time_ms": [0.05]})
     monkeypatch.setattr(experiments.demo, "run_study", lambda cfg, log=print: ({"timing": timing, "summary": timing}, []))
+    monkeypatch.setattr(experiments.demo, "_sim2real_section", lambda cfg, out, log: None)
     demo, argv = tmp_path / "demo", ["demo", "--no-sweep", "--duration", "1", "--out", str(tmp_path / "demo")]
     assert main(argv) == 0, capsys.readouterr().err
     assert main(["figures", "--tables", str(demo / "tables"), "--out", str(demo / "figures")]) == 0

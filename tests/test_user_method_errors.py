@@ -146,13 +146,40 @@ def test_a_wrong_result_names_its_scan_too(boom, capsys) -> None:
 LAZY_MODULES = ("lazyext", "lazyhelper")
 
 
+def last_searched(folder: str) -> int:
+    """How many finders of sys.meta_path search ``folder`` after every other place."""
+    from experiments.user_methods import FolderFinder
+
+    return sum(isinstance(f, FolderFinder) and f.folder == folder for f in sys.meta_path)
+
+
+def test_a_folder_beside_a_user_module_does_not_shadow_lmsbench(tmp_path) -> None:
+    """`lmsbench bench` (its experiments area imports its cell kind as a user's module is imported)
+    in a folder holding an earlier `slam --out slam` failed in its slam area: "internal error:
+    ImportError: cannot import name 'SlamConfig' from 'slam' (unknown location)", exit 1. The
+    current folder was left on sys.path, "last", but an editable install's finder comes after the
+    path's, so ./slam/ was imported as a namespace package in place of lmsbench's slam."""
+    import subprocess
+
+    (tmp_path / "slam").mkdir()  # an output folder, as `lmsbench slam RUN --out slam` leaves it
+    (tmp_path / "slam" / "trajectory.tum").write_text("")
+    (tmp_path / "myext.py").write_text("def lines(scan):\n    return None\n")
+    code = ("from experiments.user_methods import import_named\n"
+            "import_named('myext:lines', 'myext:lines')\n"
+            "import slam\n"
+            "print(hasattr(slam, 'SlamConfig'), slam.__file__ is not None)\n")
+    out = subprocess.run([sys.executable, "-P", "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["True", "True"]  # old: False False (a namespace package)
+
+
 def test_a_user_extractor_that_imports_a_sibling_when_called_finds_it(tmp_path, monkeypatch, capsys,
                                                                       user_methods_dropped) -> None:
     """`lmsbench compare office:0 --methods lazyext:lines`, lazyext.py importing lazyhelper.py (beside
     it) inside its function: the current folder was put on the path for the import and taken off
     after it, so the call failed, "your extractor lazyext:lines raised ModuleNotFoundError: No module
     named 'lazyhelper' on office:0 scan 0", exit 2 (the installed script's path does not start with
-    the current folder). The folder now stays on the path, last."""
+    the current folder). The folder is now searched for the run, after every other place."""
     from features import FeatureSet
 
     from experiments.user_methods import import_named
@@ -165,6 +192,7 @@ def test_a_user_extractor_that_imports_a_sibling_when_called_finds_it(tmp_path, 
                                             "    return extract(scan, method='split_merge')\n")
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(sys, "path", [p for p in sys.path if p not in ("", ".", str(tmp_path))])  # as `lmsbench`
+    monkeypatch.setattr(sys, "meta_path", list(sys.meta_path))  # the folder's finder goes with the test
     for name in LAZY_MODULES:
         monkeypatch.delitem(sys.modules, name, raising=False)
     fn = import_named("lazyext:lines", "lazyext:lines")
@@ -172,11 +200,11 @@ def test_a_user_extractor_that_imports_a_sibling_when_called_finds_it(tmp_path, 
     import numpy as np
 
     assert isinstance(fn(Scan.lms200(np.full(361, 2.0))), FeatureSet)  # old: ModuleNotFoundError
-    assert sys.path[-1] == str(tmp_path) and sys.path.count(str(tmp_path)) == 1  # last: it shadows nothing
+    assert str(tmp_path) not in sys.path and last_searched(str(tmp_path)) == 1  # searched last: it shadows nothing
     monkeypatch.delitem(sys.modules, "lazyhelper")
     assert main(["compare", "office:0", "--duration", "1", "--methods", "lazyext:lines", "--out", "cmp",
                  "--no-progress"]) == 0, capsys.readouterr().err
-    assert sys.path.count(str(tmp_path)) == 1
+    assert str(tmp_path) not in sys.path and last_searched(str(tmp_path)) == 1
     summary = pd.read_csv(tmp_path / "cmp" / "summary.csv")
     assert list(summary["method"]) == ["lazyext:lines"] and summary["lines_per_scan"].iloc[0] > 0
     for name in LAZY_MODULES:

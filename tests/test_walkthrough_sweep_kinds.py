@@ -41,7 +41,10 @@ def test_a_sweep_kind_in_the_current_folder_runs_in_process(tmp_path, monkeypatc
     assert main(["sweep", "s.yaml", "--inprocess", "--no-progress"]) == 0, capsys.readouterr().err
     table = pd.read_parquet(tmp_path / "results" / "sweeps" / "mine" / "results.parquet")
     assert list(table["y"]) == [10, 11, 20, 21] and set(table["status"]) == {"ok"}
-    assert sys.path.count(str(tmp_path)) == 1 and sys.path[-1] == str(tmp_path)  # last: shadows nothing installed
+    from experiments.user_methods import FolderFinder
+
+    assert str(tmp_path) not in sys.path  # searched after every other place: shadows nothing installed
+    assert [f.folder for f in sys.meta_path if isinstance(f, FolderFinder)].count(str(tmp_path)) == 1
 
 
 def test_a_missing_sweep_kind_gives_the_extractors_hint(tmp_path, monkeypatch, capsys):
@@ -97,8 +100,9 @@ def test_a_worker_that_cannot_import_the_kind_records_error_rows(tmp_path, monke
     elsewhere.mkdir()
     monkeypatch.chdir(elsewhere)
     monkeypatch.delitem(sys.modules, "mysw")
-    # a worker's own process: the driver's folder, kept on this process's path for lazy imports, is not on its
+    # a worker's own process: the driver's folder, searched by this process for lazy imports, is not by its
     monkeypatch.setattr(sys, "path", [p for p in sys.path if p != str(tmp_path)])
+    monkeypatch.setattr(sys, "meta_path", [f for f in sys.meta_path if getattr(f, "folder", None) != str(tmp_path)])
     worker = pickle.loads(sent)  # no import yet
     row = run_cell("mysw:cell", {"x": 3, "seed": 1}, worker)
     assert row["status"] == "error" and row["error"].startswith(

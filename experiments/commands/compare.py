@@ -168,7 +168,6 @@ def run(args: argparse.Namespace) -> int:
     for src in sources:
         if src.reader is not None:
             report_skipped(src.reader)
-    _warn_unread(params, sources)
     if table.empty:
         raise LmsbenchError("no scans in the given sources")
     summary = summarise(table)
@@ -250,16 +249,3 @@ def _per_source_marked(configs: dict[str, Any], params: dict[str, dict[str, Any]
         marked = unread_marked(cfg, ran, range_maxes, given)  # a field set with --set that no scan read
         out[method] = {f: PER_SOURCE if f in filled and f not in given else v for f, v in marked.items()}
     return out
-
-
-def _warn_unread(params: dict[str, dict[str, Any]], sources: list) -> None:
-    """A warning line per field set with --set that no scan of the run reads (``sigma_r`` with
-    only cm-mode logs, ``sigma_r_cm`` with only mm-mode scans): it changed nothing, silently."""
-    from experiments.compare import source_label
-    from experiments.overrides import unread_fields
-
-    configs = {m: cfg for src in sources for m, cfg in src.ran.items()}
-    range_maxes = sorted({r for src in sources for r in src.range_maxes})
-    names = ", ".join(source_label(src) for src in sources)
-    for line in unread_fields(params, configs, range_maxes, f"the scans of {names}"):
-        print(f"lmsbench compare: warning: {line}", file=sys.stderr)

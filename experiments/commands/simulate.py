@@ -22,7 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--clutter", type=number(0.0), default=None,
                    help="clutter level of a named world: 0 none, 1 a furnished office, 2-3 busy "
                         "(chair and table legs, people, plants, bins, glass, doors at any angle; at most 10; default: the world's own)")
-    p.add_argument("--seed", type=SEED, default=None, help="seed of the world, tour and sensor noise (>= 0)")
+    p.add_argument("--seed", type=SEED, default=None, help="seed of the world, tour and sensor noise (>= 0; default 0)")
     p.add_argument("--duration", type=DURATION, default=None,
                    help=f"simulated time, s (default 120, at most {MAX_DURATION_S:g})")
     p.add_argument("--out", type=path_arg, required=True, help="output folder")

@@ -238,6 +238,14 @@ def run(args: argparse.Namespace) -> int:
         print(f"lmsbench slam: warning: {data.sources.get('scans', args.input)}: {len(still)} of {len(stamps) - 1} "
               f"steps take no time (scan {still[0]} has the stamp of the scan before, {stamps[still[0]]:.6f} s): "
               f"{over}", file=sys.stderr)
+    gaps = [k for k in range(1, len(stamps)) if stamps[k] - stamps[k - 1] > config.motion.max_gap]
+    if gaps:  # the constant-velocity model knows nothing of such a gap: the motion restarts (slam.config.MotionConfig)
+        longest = max(gaps, key=lambda k: stamps[k] - stamps[k - 1])
+        over = "" if not config.motion.use_odometry else " where the odometry gives no step"
+        print(f"lmsbench slam: warning: {data.sources.get('scans', args.input)}: {len(gaps)} of {len(stamps) - 1} "
+              f"steps are longer than motion.max_gap, {config.motion.max_gap:g} s (scan {longest} is stamped "
+              f"{stamps[longest] - stamps[longest - 1]:.6g} s after the scan before): the motion restarts{over} from the "
+              "last pose with zero velocity after each", file=sys.stderr)
     if config.motion.use_odometry and data.odometry is None:
         asked = "--odometry" if args.odometry else f"motion.use_odometry (in {args.config})"
         missing = sum(r.odom is None for r in data.records)
@@ -266,8 +274,14 @@ def run(args: argparse.Namespace) -> int:
     from experiments.progress import warm_up_kernels
 
     warm_up_kernels(slam=config.preset == "default")
-    result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
-                      out=args.out, paper_baseline=not args.no_paper_baseline, replace_earlier=True)
+    import warnings
+
+    from features.registry import UnreadNoiseWarning
+
+    with warnings.catch_warnings():  # said above, before the run (_warn_unread), not again by each run_slam of it
+        warnings.simplefilter("ignore", UnreadNoiseWarning)
+        result = run_slam(data, config, progress=not args.quiet, odometry_baseline=not args.no_odometry_baseline,
+                          out=args.out, paper_baseline=not args.no_paper_baseline, replace_earlier=True)
     write_scores(args.out, data, result)  # run() wrote config.yaml, the trajectory and the map
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     m = result.metrics

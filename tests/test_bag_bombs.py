@@ -1,0 +1,148 @@
+"""Compression bombs: a ROS 1 bag whose bz2 or lz4 chunk, or a ROS 2 bag whose zstd message,
+decompresses to far more than its size. rosbags decompresses each whole, in memory; lms200.bag
+bounds it (MAX_DECOMPRESSED_BYTES) and refuses the bag naming it, never reading it into memory."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lms200 import Record, Scan, read_log, write_log
+from lms200.bag import BagTooLargeError
+
+ROOT = Path(__file__).resolve().parents[1]
+MiB = 2**20
+
+
+def _records(n: int = 3) -> list[Record]:
+    return [Record(scan=Scan(np.full(5, 1.0), -0.1, 0.05, 0.0, 8.0, stamp=float(k))) for k in range(n)]
+
+
+def _lz4_bomb(data: bytes, zeros_mib: int) -> bytes:
+    """One lz4 frame holding ``data`` and then ``zeros_mib`` MiB of zeros (independent 4 MiB blocks,
+    each 16 KB compressed: the frame is built, not compressed whole)."""
+    import lz4.frame
+
+    kw = dict(block_size=lz4.frame.BLOCKSIZE_MAX4MB, block_linked=False, store_size=False, content_checksum=False)
+    frame = lz4.frame.compress(bytes(4 * MiB), **kw)  # a 7-byte header (4 MiB blocks), one block, a 4-byte end mark
+    return frame[:7] + lz4.frame.compress(data, **kw)[7:-4] + frame[7:-4] * (zeros_mib // 4) + frame[-4:]
+
+
+def _bz2_bomb(data: bytes, zeros_mib: int) -> bytes:
+    """``data``'s bz2 stream and then ``zeros_mib`` streams of 1 MiB of zeros (about 45 bytes each);
+    ``bz2.decompress`` (rosbags') reads every stream."""
+    import bz2
+
+    return bz2.compress(data, 9) + bz2.compress(bytes(MiB), 9) * zeros_mib
+
+
+def _ros1_bomb(path: Path, kind: str, zeros_mib: int, monkeypatch) -> Path:
+    """A ROS 1 bag of three scans (write_log) in one chunk compressed as ``kind``, with zeros after them."""
+    import rosbags.rosbag1 as rosbag1
+
+    base = rosbag1.Writer
+
+    class Bomb(base):  # type: ignore[misc, valid-type]
+        def __init__(self, *args, **kwargs) -> None:
+            super().__init__(*args, **kwargs)
+            self.set_compression(base.CompressionFormat[kind.upper()])
+            self.compressor = lambda data: (_lz4_bomb if kind == "lz4" else _bz2_bomb)(data, zeros_mib)
+
+    with monkeypatch.context() as m:
+        m.setattr(rosbag1, "Writer", Bomb)
+        write_log(path, _records())
+    return path
+
+
+def _ros2_bomb(path: Path, zeros_mib: int, monkeypatch) -> Path:
+    """A ROS 2 bag of three scans, each message zstd-compressed (compression_mode: message) with
+    ``zeros_mib`` frames of 1 MiB of zeros after it."""
+    import rosbags.rosbag2 as rosbag2
+    from rosbags.rosbag2 import writer as writer2
+
+    zstd = writer2.zstd
+    base = rosbag2.Writer
+    zeros = zstd.compress(bytes(MiB))
+
+    class Bomb(base):  # type: ignore[misc, valid-type]
+        def __init__(self, *args, **kwargs) -> None:
+            super().__init__(*args, **kwargs)
+            self.set_compression(rosbag2.CompressionMode.MESSAGE, rosbag2.CompressionFormat.ZSTD)
+
+    class BombZstd:
+        def __getattr__(self, name):
+            return getattr(zstd, name)
+
+        @staticmethod
+        def compress(data: bytes) -> bytes:
+            return zstd.compress(data) + zeros * zeros_mib
+
+    with monkeypatch.context() as m:
+        m.setattr(rosbag2, "Writer", Bomb)
+        m.setattr(writer2, "zstd", BombZstd())
+        write_log(path, _records(), fmt="bag2")
+    return path
+
+
+@pytest.mark.parametrize("kind", ["bz2", "lz4"])
+def test_a_ros1_bomb_chunk_is_refused_naming_the_bag(tmp_path, monkeypatch, kind):
+    import lms200.bag
+
+    bag = _ros1_bomb(tmp_path / "bomb.bag", kind, 8, monkeypatch)
+    assert bag.stat().st_size < 200_000  # 8 MiB of zeros after the scans
+    monkeypatch.setattr(lms200.bag, "MAX_DECOMPRESSED_BYTES", 4 * MiB)
+    with pytest.raises(BagTooLargeError) as e:
+        list(read_log(bag))
+    assert str(e.value) == (f"{bag}: a{'n' if kind == 'lz4' else ''} {kind} chunk decompresses to more than 4 MiB "
+                            "(lms200.bag.MAX_DECOMPRESSED_BYTES): a compression bomb, or chunks or messages far "
+                            "larger than a bag of laser scans holds; not read")
+    with pytest.raises(BagTooLargeError):  # not a damaged message to skip
+        list(read_log(bag, skip_bad_lines=True))
+    monkeypatch.setattr(lms200.bag, "MAX_DECOMPRESSED_BYTES", 16 * MiB)  # within the bound: read as ever
+    assert [r.scan.stamp for r in read_log(bag)] == [0.0, 1.0, 2.0]
+
+
+def test_a_ros2_bomb_message_is_refused_naming_the_bag(tmp_path, monkeypatch):
+    import lms200.bag
+
+    bag = _ros2_bomb(tmp_path / "bomb2", 8, monkeypatch)
+    monkeypatch.setattr(lms200.bag, "MAX_DECOMPRESSED_BYTES", 4 * MiB)
+    with pytest.raises(BagTooLargeError, match=r"^" + str(bag) + r": topic /scan after message 0: a zstd-compressed "
+                       r"message decompresses to more than 4 MiB \(lms200.bag.MAX_DECOMPRESSED_BYTES\)"):
+        list(read_log(bag))
+    plain = _ros2_bomb(tmp_path / "plain2", 0, monkeypatch)  # zstd-compressed messages, no bomb: read as ever
+    assert [r.scan.stamp for r in read_log(plain)] == [0.0, 1.0, 2.0]
+
+
+CHILD = r"""
+import resource, sys
+from lms200 import read_log
+from lms200.bag import BagError
+import lz4.frame, bz2, rosbags.rosbag1, rosbags.highlevel  # loaded before the limit
+status = dict(line.split(":", 1) for line in open("/proc/self/status"))
+limit = int(status["VmSize"].split()[0]) * 1024 + LIMIT_MB * 2**20
+resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+try:
+    n = len(list(read_log(sys.argv[1])))
+    print("read", n)
+except BagError as exc:
+    print(type(exc).__name__, exc)
+except MemoryError:
+    print("MemoryError")
+"""
+LIMIT_MB = 400  # MAX_DECOMPRESSED_BYTES (128 MiB) twice over, and room
+
+
+def test_a_1_gib_lz4_bomb_is_refused_within_bounded_memory(tmp_path, monkeypatch):
+    """A 4 MB bag whose one lz4 chunk holds 1 GiB: read in a process of at most 400 MB more
+    address space than it started with (it was a MemoryError there, and 1 GiB resident without)."""
+    bag = _ros1_bomb(tmp_path / "big.bag", "lz4", 1024, monkeypatch)
+    assert bag.stat().st_size < 5 * MiB
+    out = subprocess.run([sys.executable, "-c", CHILD.replace("LIMIT_MB", str(LIMIT_MB)), str(bag)], cwd=ROOT,
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith(f"BagTooLargeError {bag}: an lz4 chunk decompresses to more than 128 MiB "), out.stdout
