@@ -31,8 +31,8 @@ emits wherever a scan's range_min differs from the one before, starting from 0: 
 gives it for the laser lines that follow.
 
 One laser is read per pass (``topic``: a message kind); by default the first kind that carries
-poses (FLASER, RLASER, ROBOTLASER1 / 2) up to ``DEFAULT_TOPIC_LINES`` lines after the first laser
-line, else the first RAWLASER kind: CARMEN 0.7 loggers write each reading twice, as RAWLASER1 and as ROBOTLASER1.
+poses (FLASER, RLASER, ROBOTLASER1 / 2; from a line whose fields add up to its counts) up to
+``DEFAULT_TOPIC_LINES`` lines after the first laser line, else the first RAWLASER kind: CARMEN 0.7 loggers write each reading twice, as RAWLASER1 and as ROBOTLASER1.
 Every failure while reading (a malformed line, a count that is not a finite non-negative integer,
 compressed data that cannot be decompressed, a line over ``MAX_LINE_CHARS``) is a ``LogFormatError`` naming
 file and line; ``skip_bad_lines`` records it in ``stats.skipped`` (the first
@@ -182,7 +182,9 @@ def archive_kind(head: bytes) -> str | None:
 
 def open_text(path: str | Path) -> IO[str]:
     """Open a plain or compressed (gzip, bzip2, xz) text file for reading, by magic bytes, not
-    the name; a leading UTF-8 byte-order mark is skipped.
+    the name; a leading UTF-8 byte-order mark is skipped. Lines end at "\\n" (a lone "\\r" is
+    no line end; a "\\r\\n" line keeps its "\\r", whitespace to ``str.split``), or at "\\r" in a
+    file whose first 4096 bytes hold a "\\r" and no "\\n" (classic Mac line ends).
 
     Raises:
         LogFormatError: for an archive (tar, zip): the log must be extracted from it first.
@@ -199,7 +201,13 @@ def open_text(path: str | Path) -> IO[str]:
     raw = open_bytes(path)
     if head.startswith(UTF8_BOM):  # a log saved by a Windows editor: the mark would hide line 1's message name
         raw.read(len(UTF8_BOM))
-    return io.TextIOWrapper(raw, encoding="ascii", errors="replace")
+    # lines end at "\n" alone ("\r\n" too: the "\r" is whitespace to the word split), as the line numbers
+    # of an editor or `sed -n Np` count them: the universal-newline default also ended a line at a lone
+    # "\r", so a corrupted byte 0x0d split a line in two (both halves malformed, the line lost) and every
+    # error after it named the line after the one at fault. A log whose first 4096 bytes hold a "\r" and
+    # no "\n" has classic Mac line ends: its lines end at "\r" (as before)
+    mac = b"\r" in head and b"\n" not in head
+    return io.TextIOWrapper(raw, encoding="ascii", errors="replace", newline=None if mac else "\n")
 
 
 class CarmenReader:
@@ -313,7 +321,10 @@ class CarmenReader:
 
     def _survey(self) -> str | None:
         """The laser kind read by default: the first with poses up to ``DEFAULT_TOPIC_LINES`` lines
-        after the first laser line, else the first RAWLASER kind, else None (no laser line).
+        after the first laser line, else the first RAWLASER kind, else None (no laser line). A line
+        of a kind with poses whose fields do not add up (:func:`_fields_fit`) chooses no laser: a
+        damaged line named FLASER before a log's RAWLASER1 lines made FLASER the laser, and under
+        ``skip_bad_lines`` the log gave no record.
 
         Raises:
             LogFormatError: when none of the first ``DEFAULT_TOPIC_LINES`` lines (comments aside)
@@ -341,7 +352,7 @@ class CarmenReader:
                     looked += 1
                     since_raw += raw is not None
                     named = named or _MESSAGE_NAME.fullmatch(kind) is not None
-                    if kind in POSED_LASER_KINDS or (named and self.topic is not None):
+                    if (kind in POSED_LASER_KINDS and _fields_fit(kind, line)) or (named and self.topic is not None):
                         return kind  # (a given topic is read whatever this returns)
                     raw = raw or (kind if kind in RAW_LASER_KINDS else None)
         except (*READ_ERRORS, UnicodeError):
@@ -471,6 +482,23 @@ class CarmenReader:
             # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
             others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())
             raise InputError(f"topic: {self.path} has no {self.topic} lines; its laser lines: {others}")
+
+
+def _fields_fit(kind: str, line: str) -> bool:
+    """Whether a FLASER / RLASER / ROBOTLASER1 / 2 line has the fields its counts announce (the
+    beam count, and the remission count, against the number of words); True for a piece of a line
+    longer than the survey reads at once (``line`` not ending in a newline), which is not judged."""
+    if not line.endswith("\n"):
+        return True
+    words = line.split()
+    try:
+        if kind in ("FLASER", "RLASER"):
+            n = _count(words[1], "beam count")
+            return n > 0 and len(words) == n + 11
+        n = _count(words[8], "beam count")
+        return n > 0 and len(words) == 10 + n + _count(words[9 + n], "remission count") + 14
+    except (ValueError, IndexError):
+        return False
 
 
 class _BlankRun:

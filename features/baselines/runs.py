@@ -11,14 +11,21 @@ from .common import (CornerConfig, Points, build_lines, contiguous_runs, feature
 
 def refine(pts: Points, cand: np.ndarray, rho: float, alpha: float, tolerances: tuple[float, ...]):
     """Re-select the inliers among candidate positions ``cand`` and refit by least squares, once
-    per tolerance (m), shrinking the band around the line. Returns (inlier positions, rho, alpha)."""
+    per tolerance (m), shrinking the band around the line. Returns (inlier positions, rho, alpha);
+    no inliers where their least-squares moments overflow float64 (points beyond ~1e154 m)."""
     inl = cand
     for tol in tolerances:
         inl = cand[point_line_distance(pts.x[cand], pts.y[cand], rho, alpha) <= tol]
         if inl.size < 2:
             return inl, rho, alpha
         x, y = pts.x[inl], pts.y[inl]
-        rho, alpha, *_ = fit_moments(float(inl.size), x.sum(), y.sum(), (x * x).sum(), (y * y).sum(), (x * y).sum())
+        with np.errstate(over="ignore", invalid="ignore"):  # inf + -inf among the x * y
+            sxx, syy, sxy = (x * x).sum(), (y * y).sum(), (x * y).sum()
+        if not np.isfinite(sxx + syy + sxy):
+            # points beyond ~1e154 m (valid under range_max 1e308): their moments overflow float64, and the
+            # fit gave RuntimeWarnings on stderr; no line, as split_merge, iepf and sensor give none there
+            return inl[:0], rho, alpha
+        rho, alpha, *_ = fit_moments(float(inl.size), x.sum(), y.sum(), sxx, syy, sxy)
         rho, alpha = float(rho), float(alpha)
     return inl, rho, alpha
 

@@ -1,0 +1,52 @@
+"""Line numbers in the CARMEN reader's errors are the file's: lines end at "\\n" (and "\\r\\n")."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from lms200 import LogFormatError, read_log
+
+GOOD = "FLASER 3 1.00 2.00 3.00 0 0 0 0 0 0 {t} host {t}"
+
+
+def test_a_stray_carriage_return_does_not_split_a_line_or_shift_the_line_numbers(tmp_path: Path) -> None:
+    """A byte 0x0d inserted into line 2 (found by tests/test_fuzz_carmen.py) made the reader, which
+    split lines the universal-newline way, read it as two lines: its tail was blamed as line 3
+    ("it starts with '00', which is no CARMEN message name"), and every later error was one line
+    off, the 'x' of line 4 reported at line 5. A lone "\\r" is no line end in a CARMEN log: it
+    parts words, as any whitespace does (a CR in place of a space changes nothing)."""
+    lines = ["PARAM lmsbench_range_units cm lmsbench 0", GOOD.format(t=10.0).replace("1.00", "1.\r00"),
+             GOOD.format(t=10.1).replace(" 0 0 10.1", " 0\r0 10.1"), GOOD.format(t=10.2).replace("3.00", "x"),
+             GOOD.format(t=10.3)]
+    path = tmp_path / "cr.log"
+    path.write_bytes(("\n".join(lines) + "\n").encode())
+    reader = read_log(path, skip_bad_lines=True)
+    assert [r.scan.stamp for r in reader] == [10.1, 10.3]
+    assert reader.stats.skipped == [(2, "FLASER: FLASER with 3 beams needs 14 fields, got 15"),
+                                    (4, "FLASER: FLASER ranges: 'x' is not a number")]
+    with pytest.raises(LogFormatError, match=r"cr\.log:2: malformed FLASER line: FLASER with 3 beams needs 14 fields, got 15"):
+        list(read_log(path))
+
+
+def test_crlf_line_ends_still_read(tmp_path: Path) -> None:
+    path = tmp_path / "crlf.log"
+    path.write_bytes("\r\n".join(GOOD.format(t=t) for t in (1.0, 2.0, 3.0)).encode() + b"\r\n")
+    assert [r.scan.stamp for r in read_log(path)] == [1.0, 2.0, 3.0]
+    bad = tmp_path / "crlf_bad.log"
+    bad.write_bytes("\r\n".join([GOOD.format(t=1.0), GOOD.format(t=2.0).replace("2.00", "y")]).encode() + b"\r\n")
+    with pytest.raises(LogFormatError, match=r"crlf_bad\.log:2: malformed FLASER line: FLASER ranges: 'y' is not a number"):
+        list(read_log(bad))
+
+
+def test_a_log_with_classic_mac_line_ends_still_reads(tmp_path: Path) -> None:
+    """Lines ended by "\\r" alone throughout (the first 4096 bytes hold no "\\n"): read as before the
+    lone "\\r" stopped ending lines, an error naming the line by those ends."""
+    path = tmp_path / "mac.log"
+    path.write_bytes("\r".join(GOOD.format(t=t) for t in (1.0, 2.0, 3.0)).encode() + b"\r")
+    assert [r.scan.stamp for r in read_log(path)] == [1.0, 2.0, 3.0]
+    bad = tmp_path / "mac_bad.log"
+    bad.write_bytes("\r".join([GOOD.format(t=1.0), GOOD.format(t=2.0).replace("2.00", "y")]).encode() + b"\r")
+    with pytest.raises(LogFormatError, match=r"mac_bad\.log:2: malformed FLASER line: FLASER ranges: 'y' is not a number"):
+        list(read_log(bad))
