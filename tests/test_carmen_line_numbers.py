@@ -30,23 +30,14 @@ def test_a_stray_carriage_return_does_not_split_a_line_or_shift_the_line_numbers
         list(read_log(path))
 
 
-def test_crlf_line_ends_still_read(tmp_path: Path) -> None:
-    path = tmp_path / "crlf.log"
-    path.write_bytes("\r\n".join(GOOD.format(t=t) for t in (1.0, 2.0, 3.0)).encode() + b"\r\n")
+@pytest.mark.parametrize("end, name", [("\r\n", "crlf"), ("\r", "mac")])
+def test_crlf_and_classic_mac_line_ends_still_read(tmp_path: Path, end: str, name: str) -> None:
+    """Lines ended by "\\r\\n", or by "\\r" alone throughout (the first 4096 bytes hold no "\\n"):
+    read as before the lone "\\r" stopped ending lines, an error naming the line by those ends."""
+    path = tmp_path / f"{name}.log"
+    path.write_bytes(end.join(GOOD.format(t=t) for t in (1.0, 2.0, 3.0)).encode() + end.encode())
     assert [r.scan.stamp for r in read_log(path)] == [1.0, 2.0, 3.0]
-    bad = tmp_path / "crlf_bad.log"
-    bad.write_bytes("\r\n".join([GOOD.format(t=1.0), GOOD.format(t=2.0).replace("2.00", "y")]).encode() + b"\r\n")
-    with pytest.raises(LogFormatError, match=r"crlf_bad\.log:2: malformed FLASER line: FLASER ranges: 'y' is not a number"):
-        list(read_log(bad))
-
-
-def test_a_log_with_classic_mac_line_ends_still_reads(tmp_path: Path) -> None:
-    """Lines ended by "\\r" alone throughout (the first 4096 bytes hold no "\\n"): read as before the
-    lone "\\r" stopped ending lines, an error naming the line by those ends."""
-    path = tmp_path / "mac.log"
-    path.write_bytes("\r".join(GOOD.format(t=t) for t in (1.0, 2.0, 3.0)).encode() + b"\r")
-    assert [r.scan.stamp for r in read_log(path)] == [1.0, 2.0, 3.0]
-    bad = tmp_path / "mac_bad.log"
-    bad.write_bytes("\r".join([GOOD.format(t=1.0), GOOD.format(t=2.0).replace("2.00", "y")]).encode() + b"\r")
-    with pytest.raises(LogFormatError, match=r"mac_bad\.log:2: malformed FLASER line: FLASER ranges: 'y' is not a number"):
+    bad = tmp_path / f"{name}_bad.log"
+    bad.write_bytes(end.join([GOOD.format(t=1.0), GOOD.format(t=2.0).replace("2.00", "y")]).encode() + end.encode())
+    with pytest.raises(LogFormatError, match=rf"{name}_bad\.log:2: malformed FLASER line: FLASER ranges: 'y' is not a number"):
         list(read_log(bad))

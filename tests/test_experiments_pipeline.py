@@ -249,8 +249,6 @@ def test_the_demos_sim2real_warnings_give_advice_the_demo_takes(tmp_path, monkey
     the terminal heard none of it (a new user's review). The demo now passes its own advice and
     says each warning on the terminal too."""
     import experiments.sim2real
-    from experiments.demo import _sim2real_section
-    from experiments.figures.study import StudyConfig
     from experiments.sim2real import small_sample_warnings
 
     assert small_sample_warnings(5, 720, 12, advice="a longer demo --duration")[0].endswith(
@@ -266,11 +264,8 @@ def test_the_demos_sim2real_warnings_give_advice_the_demo_takes(tmp_path, monkey
         raise Stop
 
     monkeypatch.setattr(experiments.sim2real, "sim2real", fake)
-    cfg = StudyConfig(duration=2.0)
-    cfg.sim2real_log = str(tmp_path / "mit.clf")
-    (tmp_path / "mit.clf").write_text("")
     with pytest.raises(Stop):
-        _sim2real_section(cfg, tmp_path, lambda msg: None)
+        _demo_sim2real_until(tmp_path, 2.0)
     # the log as a path from where the demo runs (its bare name did not run from the checkout)
     assert seen["advice"] == (f"a longer demo --duration, or `lmsbench sim2real {os.path.relpath(tmp_path / 'mit.clf')}` "
                               "for the full comparison")
@@ -282,8 +277,6 @@ def test_the_demos_sim2real_config_records_the_settings_it_ran_with(tmp_path, mo
     120 s probe runs and the wall relief fitted, where the demo ran 3 scans/s, probes as long as the
     tour and no relief. Every setting the demo passes to sim2real is now in the record."""
     import experiments.sim2real
-    from experiments.demo import _sim2real_section
-    from experiments.figures.study import StudyConfig
 
     class Stop(Exception):
         pass
@@ -300,11 +293,19 @@ def test_the_demos_sim2real_config_records_the_settings_it_ran_with(tmp_path, mo
 
     monkeypatch.setattr(experiments.sim2real, "sim2real", fake)
     monkeypatch.setattr(experiments.sim2real, "write_outputs", fake_write)
-    cfg = StudyConfig(duration=7.0)
-    cfg.sim2real_log = str(tmp_path / "mit.clf")
-    (tmp_path / "mit.clf").write_text("")
     with pytest.raises(Stop):
-        _sim2real_section(cfg, tmp_path, lambda msg: None)
+        _demo_sim2real_until(tmp_path, 7.0)
     assert (recorded["rate_hz"], recorded["probe_duration"], recorded["wall_relief"]) == (3.0, 7.0, False)  # old: KeyError
     settings = {k: v for k, v in ran.items() if k not in ("world", "seeds", "probe_seeds", "advice")}
     assert {k: recorded[k] for k in settings} == settings and "versions" in recorded
+
+
+def _demo_sim2real_until(folder: Path, duration: float) -> None:
+    """The demo's sim2real section on an empty mit.clf in ``folder`` (the test's fakes stop it)."""
+    from experiments.demo import _sim2real_section
+    from experiments.figures.study import StudyConfig
+
+    cfg = StudyConfig(duration=duration)
+    cfg.sim2real_log = str(folder / "mit.clf")
+    (folder / "mit.clf").write_text("")
+    _sim2real_section(cfg, folder, lambda msg: None)
