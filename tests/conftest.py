@@ -27,7 +27,18 @@ def _sys_path_restored():
     saved, finders = list(sys.path), list(sys.meta_path)
     yield
     sys.path[:] = saved
-    sys.meta_path[:] = finders  # the folder's finder (experiments.user_methods.FolderFinder) too
+    sys.meta_path[:] = meta_path_after(finders, sys.meta_path)
+
+
+def meta_path_after(before: list, now: list) -> list:
+    """``sys.meta_path`` after a test: without the user folders' finders (FolderFinder) the test
+    added, every other finder kept. The whole list put back dropped the finder that dask's import of
+    the importlib_metadata backport appends (it deletes the standard PathFinder's
+    find_distributions): importlib.metadata then found no installed package for the rest of the
+    xdist worker (provenance.versions() gave python and platform alone, a flaky failure)."""
+    from experiments.user_methods import FolderFinder
+
+    return [f for f in now if not isinstance(f, FolderFinder) or f in before]
 
 
 class _UserMethodsDropped(dict):

@@ -192,7 +192,7 @@ def test_a_user_extractor_that_imports_a_sibling_when_called_finds_it(tmp_path, 
                                             "    return extract(scan, method='split_merge')\n")
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(sys, "path", [p for p in sys.path if p not in ("", ".", str(tmp_path))])  # as `lmsbench`
-    monkeypatch.setattr(sys, "meta_path", list(sys.meta_path))  # the folder's finder goes with the test
+    # the folder's finder goes with the test (conftest.meta_path_after)
     for name in LAZY_MODULES:
         monkeypatch.delitem(sys.modules, name, raising=False)
     fn = import_named("lazyext:lines", "lazyext:lines")
@@ -209,3 +209,14 @@ def test_a_user_extractor_that_imports_a_sibling_when_called_finds_it(tmp_path, 
     assert list(summary["method"]) == ["lazyext:lines"] and summary["lines_per_scan"].iloc[0] > 0
     for name in LAZY_MODULES:
         sys.modules.pop(name, None)
+
+
+def test_a_test_keeps_the_finders_it_added_but_a_user_folders():
+    """conftest's restore of sys.meta_path drops the user folders' finders a test added and keeps
+    any other (dask's importlib_metadata backport appends one and deletes the standard finder's
+    find_distributions: dropping it left importlib.metadata finding no package at all)."""
+    from conftest import meta_path_after
+    from experiments.user_methods import FolderFinder
+
+    kept, other, users, earlier = object(), object(), FolderFinder("/x"), FolderFinder("/y")
+    assert meta_path_after([kept, earlier], [kept, earlier, other, users]) == [kept, earlier, other]

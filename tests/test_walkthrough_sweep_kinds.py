@@ -102,7 +102,8 @@ def test_a_worker_that_cannot_import_the_kind_records_error_rows(tmp_path, monke
     monkeypatch.delitem(sys.modules, "mysw")
     # a worker's own process: the driver's folder, searched by this process for lazy imports, is not by its
     monkeypatch.setattr(sys, "path", [p for p in sys.path if p != str(tmp_path)])
-    monkeypatch.setattr(sys, "meta_path", [f for f in sys.meta_path if getattr(f, "folder", None) != str(tmp_path)])
+    for finder in [f for f in sys.meta_path if getattr(f, "folder", None) == str(tmp_path)]:
+        sys.meta_path.remove(finder)  # in place: the list swapped back would drop finders added meanwhile (conftest)
     worker = pickle.loads(sent)  # no import yet
     row = run_cell("mysw:cell", {"x": 3, "seed": 1}, worker)
     assert row["status"] == "error" and row["error"].startswith(
