@@ -622,32 +622,43 @@ class _CellWarning(LmsbenchWarning):
 
 
 def warner(params: dict) -> dict:
-    """Warns once of lmsbench's kind (the same text in every cell) and once of Python's, then y = x."""
+    """Warns once of lmsbench's kind (the same text in every cell) and twice of Python's, then y = x."""
     import warnings
 
     warnings.warn("sigma_r=0.02 is not read", _CellWarning)
-    warnings.warn(f"a numpy-like warning of cell {params['x']}", UserWarning)
-    return {"y": params["x"]}
+    for _ in range(2):  # one place, twice: Python's "default" filter shows it once
+        warnings.warn(f"a numpy-like warning of cell {params['x']}", UserWarning)
+    return {"y": params["x"], "warnings": 0}  # a metric of that name is the user's (it crashed the runner)
 
 
-@pytest.mark.parametrize("on", ["inprocess", "dask"])
-def test_a_warning_every_cell_gives_is_said_once_for_the_sweep(tmp_path, on, request):
+@pytest.mark.parametrize("on, filters", [("inprocess", "always"), ("inprocess", "default"), ("dask", "always")])
+def test_a_warning_every_cell_gives_is_said_once_for_the_sweep(tmp_path, on, filters, request):
     """Each cell that warned (compare or run_slam given sigma_r on cm-mode scans: 'not read') put
     two lines of Python's warning on stderr, from every cell of the sweep: a sweep of 400 cells,
     800 lines. The runner now says each of lmsbench's warnings once, in its own category; other
-    warnings pass as they were, and the table has no column for them."""
+    warnings pass as they were, through the filters in force (a first version showed every
+    occurrence), and the table has no column for them; a metric named "warnings" is the user's."""
     import warnings
 
     executor = request.getfixturevalue("dask_client") if on == "dask" else "inprocess"
     spec = SweepSpec.from_dict({"name": "warns", "kind": f"{Path(__file__).stem}:warner", "grid": {"x": [1, 2, 3]},
                                 "seeds": [0, 1]})
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+        warnings.simplefilter(filters)
         result = run_sweep(spec, tmp_path / "out", executor, progress=False)
     assert result.computed == 6 and result.failed == 0
     ours = [str(w.message) for w in caught if issubclass(w.category, _CellWarning)]
     assert ours == ["sigma_r=0.02 is not read (said once for the sweep's cells)"]
     if on == "inprocess":  # a worker's own warnings stay in its process, as before
+        shown = 2 if filters == "always" else 1  # a cell's "default": once per text and place, as without the runner
         assert sorted(str(w.message) for w in caught if w.category is UserWarning) == sorted(
-            f"a numpy-like warning of cell {x}" for x in (1, 2, 3) for _ in (0, 1))
-    assert "warnings" not in result.table.columns and list(result.table["y"]) == [1, 1, 2, 2, 3, 3]
+            f"a numpy-like warning of cell {x}" for x in (1, 2, 3) for _ in range(2 * shown))
+    assert "_warnings" not in result.table.columns and list(result.table["y"]) == [1, 1, 2, 2, 3, 3]
+    assert list(result.table["warnings"]) == [0] * 6
+
+
+def test_a_metric_named_as_the_rows_warnings_is_refused():
+    from experiments.sweep.cells import WARNINGS_KEY, run_cell
+
+    row = run_cell("k", {"x": 1}, lambda params: {WARNINGS_KEY: 1})
+    assert row["status"] == "error" and "clash" in row["error"] and WARNINGS_KEY in row["error"]

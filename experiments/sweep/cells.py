@@ -12,6 +12,7 @@ a misspelled parameter fails at once rather than in every cell.
 from __future__ import annotations
 
 import importlib
+import threading
 import time
 import traceback
 import warnings
@@ -81,6 +82,29 @@ class UserKind:
         return UserKind, (self.kind, None)
 
 
+#: the row's key of the cell's lmsbench warnings (not a metric: a metric of this name is refused)
+WARNINGS_KEY = "_warnings"
+_COLLECTING = threading.local()  # .said: the list the current thread's cell collects into, else None
+
+
+def _cell_hook(previous: Callable[..., None]) -> Callable[..., None]:
+    """``warnings.showwarning`` that hands an ``LmsbenchWarning`` shown in a thread running a cell to
+    that cell's list, and shows every other warning with ``previous``. Per thread (cells may run in
+    threads of one worker); no filter is changed."""
+
+    def show(message: Warning | str, category: type[Warning], filename: str, lineno: int, file: Any = None,
+             line: str | None = None) -> None:
+        said = getattr(_COLLECTING, "said", None)
+        if said is not None and issubclass(category, LmsbenchWarning):
+            if (category, str(message)) not in said:
+                said.append((category, str(message)))
+            return
+        previous(message, category, filename, lineno, file, line)
+
+    show.lmsbench_cell_hook = True  # type: ignore[attr-defined]
+    return show
+
+
 def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> dict[str, Any]:
     """Run one cell and return its metrics plus status "ok", or status "error" with the error text.
 
@@ -88,24 +112,22 @@ def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> 
     Exceptions from the cell become an error row (the sweep goes on), ``SystemExit`` too (a cell
     calling ``sys.exit()`` stopped an ``--inprocess`` sweep silently with its status, and killed the
     workers of a cluster, twice, for a ``KilledWorker`` row); ``KeyboardInterrupt`` propagates.
-    ``elapsed_s`` is the wall time of the cell function (s). The cell's ``LmsbenchWarning`` texts
-    (an extractor field no scan of the cell reads, ...) come back as ``warnings`` (a list of
-    (category, text), each once), for the runner to say once per sweep, not once per cell (a flood of two-line
-    Python warnings from the workers before); other warnings are shown as they were.
+    ``elapsed_s`` is the wall time of the cell function (s). The ``LmsbenchWarning`` s the cell's
+    thread shows (an extractor field no scan of the cell reads, ...; Python's filters decide which,
+    as before) come back as ``WARNINGS_KEY`` (a list of (category, text), each once), for the runner
+    to say once per sweep, not once per cell (two lines of Python's warning from every cell before);
+    other warnings are shown as they were.
     """
     start = time.perf_counter()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+    if not getattr(warnings.showwarning, "lmsbench_cell_hook", False):
+        warnings.showwarning = _cell_hook(warnings.showwarning)
+    _COLLECTING.said = said = []
+    try:
         row = _run_cell(kind, params, fn)
-    said: list[tuple[type[Warning], str]] = []
-    for w in caught:  # lmsbench's own warnings go back with the row, said once per sweep by the runner
-        if issubclass(w.category, LmsbenchWarning):
-            if (w.category, str(w.message)) not in said:
-                said.append((w.category, str(w.message)))
-        else:  # others as they were, through the filters in force
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
+    finally:
+        _COLLECTING.said = None
     if said:
-        row["warnings"] = said
+        row[WARNINGS_KEY] = said
     row["elapsed_s"] = time.perf_counter() - start
     return row
 
@@ -116,7 +138,7 @@ def _run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None) -> dict[s
         metrics = (fn or resolve_kind(kind))(dict(params))
         if not isinstance(metrics, dict):
             raise TypeError(f"cell kind {kind!r} returned {type(metrics).__name__}, expected a dict of metrics")
-        clash = sorted(set(metrics) & (set(params) | {"status", "error", "elapsed_s", "cell"}))
+        clash = sorted(set(metrics) & (set(params) | {"status", "error", "elapsed_s", "cell", WARNINGS_KEY}))
         if clash:
             raise ValueError(f"cell kind {kind!r} returned metric(s) {clash} that clash with parameter/column names")
         row = {"status": "ok", "error": "", **metrics}

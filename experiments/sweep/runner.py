@@ -27,12 +27,12 @@ from tqdm import tqdm
 from features.batch import THREADS_ENV
 from lms200 import LmsbenchError
 
-from .cells import resolve_kind, run_cell
+from .cells import WARNINGS_KEY, resolve_kind, run_cell
 from .spec import Scalar, SweepSpec, cell_key
 from .store import CellStore, write_atomic
 
 #: Columns every row has besides its parameters and metrics.
-BOOKKEEPING = ("status", "error", "elapsed_s", "cell", "warnings")
+BOOKKEEPING = ("status", "error", "elapsed_s", "cell", WARNINGS_KEY)
 
 
 @dataclass
@@ -129,7 +129,7 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
     said: set[tuple[type[Warning], str]] = set()
 
     def record(key: str, params: dict[str, Scalar], result: dict[str, Any]) -> None:
-        for category, text in result.get("warnings", ()):  # each once per sweep (every cell had its two lines)
+        for category, text in result.get(WARNINGS_KEY, ()):  # each once per sweep (every cell had its two lines)
             if (category, text) not in said:
                 said.add((category, text))
                 warnings.warn(f"{text} (said once for the sweep's cells)", category, stacklevel=2)
