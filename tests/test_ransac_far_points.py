@@ -11,7 +11,7 @@ from features import extract
 from lms200 import Scan
 
 
-@pytest.mark.parametrize("distance", [1e160, 1e300])
+@pytest.mark.parametrize("distance", [1e154, 1.3e154, 1e160, 1e300])
 def test_a_wall_too_far_to_square_gives_no_line_and_no_runtime_warning(distance: float) -> None:
     """A wall 1e160 m or more away (valid under range_max 1e308) gave ransac 27 RuntimeWarnings
     ("overflow encountered in multiply": x * x of its least-squares moments; found by

@@ -21,7 +21,7 @@ def refine(pts: Points, cand: np.ndarray, rho: float, alpha: float, tolerances: 
         x, y = pts.x[inl], pts.y[inl]
         with np.errstate(over="ignore", invalid="ignore"):  # inf + -inf among the x * y
             sxx, syy, sxy = (x * x).sum(), (y * y).sum(), (x * y).sum()
-        if not np.isfinite(sxx + syy + sxy):
+        if not (np.isfinite(sxx) and np.isfinite(syy) and np.isfinite(sxy)):  # (their sum warned: inf + -inf)
             # points beyond ~1e154 m (valid under range_max 1e308): their moments overflow float64, and the
             # fit gave RuntimeWarnings on stderr; no line, as split_merge, iepf and sensor give none there
             return inl[:0], rho, alpha
