@@ -456,10 +456,14 @@ def _stdout_to_devnull() -> None:
     """stdout's file descriptor pointed at /dev/null (its reader went away)."""
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
+    except OSError:
+        return
+    try:
         os.dup2(devnull, sys.stdout.fileno())
-        os.close(devnull)
-    except (OSError, ValueError, AttributeError):
+    except (OSError, ValueError, AttributeError):  # no descriptor (a StringIO): nothing to point
         pass
+    finally:
+        os.close(devnull)  # it leaked when fileno() raised
 
 
 def _interrupted(interrupt: _Interrupt) -> int:
