@@ -285,7 +285,7 @@ def test_a_log_of_every_scan_twice_is_measured_as_the_log_once(tmp_path: Path) -
 # -- command line ----------------------------------------------------------------------------
 def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -> None:
     truth = RECOVERY_CASES["cm_0.5deg"]
-    write_carmen(tmp_path / "log.clf", simulate_records("office", seed=3, duration=20.0, sensor=truth, rate_hz=4.0))
+    write_carmen(tmp_path / "log.clf", simulate_records("office", seed=3, duration=10.0, sensor=truth, rate_hz=4.0))
     run = _cli("calibrate", str(tmp_path / "log.clf"), "--out", str(tmp_path / "sensor.yaml"))
     assert run.returncode == 0, run.stderr
     assert "noise sigma at 1-4 m" in run.stdout and "wrote" in run.stdout

@@ -149,10 +149,14 @@ def test_fit_tells_a_tight_fit_from_points_near_a_wall():
 def test_aces_keyframe_log_is_not_reported_healthy(shared_data):
     """ACES (440 scans, 2.2 s median apart, long bare corridors): the scans do not fix the
     position along a corridor, and the run drifts by metres against the log's own corrected
-    poses; it must not be reported healthy."""
+    poses; it must not be reported healthy. Its first 150 scans suffice (ambiguous 0.20 of the
+    steps, 0.25 on the whole log) at a third of the time."""
+    from itertools import islice
+
     from lms200 import read_log
 
-    records = list(read_log(shared_data / "aces-corrected.log.gz"))
+    records = list(islice(read_log(shared_data / "aces-corrected.log.gz"), 150))
+    assert len(records) == 150
     diag = run_slam(records, SlamConfig()).diagnostics
     assert diag["ambiguous_fraction"] > 0.15
     assert not diag["healthy"]
