@@ -36,3 +36,18 @@ def test_a_standard_output_that_cannot_be_written_is_one_line_and_status_2(tmp_p
     write_log(log, [Record(Scan(np.full(181, 2.0), -np.pi / 2, np.pi / 180, 0.0, 8.183, stamp=float(k))) for k in range(3)])
     out = _run([str(log) if a == "LOG" else a for a in args], unbuffered)
     assert (out.returncode, out.stderr) == (2, f"{name}: error: cannot write the standard output: {FULL}\n")
+
+
+def test_pointing_a_stdout_without_a_descriptor_at_dev_null_leaks_no_descriptor(monkeypatch):
+    """stdout's reader gone, its descriptor is pointed at /dev/null; a stdout with none (a StringIO,
+    as a library caller's capture) left the /dev/null descriptor open on every call (a review)."""
+    import io
+    import os
+
+    from experiments.cli import _stdout_to_devnull
+
+    monkeypatch.setattr(sys, "stdout", io.StringIO())
+    before = len(os.listdir("/proc/self/fd"))
+    for _ in range(50):
+        _stdout_to_devnull()
+    assert len(os.listdir("/proc/self/fd")) == before
