@@ -494,11 +494,20 @@ def _fields_fit(kind: str, line: str) -> bool:
     try:
         if kind in ("FLASER", "RLASER"):
             n = _count(words[1], "beam count")
-            return n > 0 and len(words) == n + 11
+            return n > 0 and len(words) == _field_count(kind, n)
         n = _count(words[8], "beam count")
-        return n > 0 and len(words) == 10 + n + _count(words[9 + n], "remission count") + 14
+        return n > 0 and len(words) == _field_count(kind, n, _count(words[9 + n], "remission count"))
     except (ValueError, IndexError):
         return False
+
+
+def _field_count(kind: str, n: int, m: int = 0) -> int:
+    """The words of a laser line of ``kind`` with ``n`` ranges and ``m`` remissions: FLASER / RLASER
+    ranges, poses, timestamps and host; ROBOTLASER1 / 2 and RAWLASER1 .. 4 a header, the ranges and
+    remissions and their tail (poses, speeds, safety, timestamps, host; RAWLASER timestamps and host)."""
+    if kind in ("FLASER", "RLASER"):
+        return n + 11
+    return 10 + n + m + (3 if kind.startswith("RAWLASER") else 14)
 
 
 class _BlankRun:
@@ -729,7 +738,7 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     _require(len(words) >= 2, f"{kind} needs a beam count")
     n = _count(words[1], "beam count")
     _require(n > 0, f"{kind} needs at least one beam, got a beam count of {n}")  # was "needs 11 fields, got 11"
-    _require(len(words) == n + 11, f"{kind} with {n} beams needs {n + 11} fields, got {len(words)}")
+    _require(len(words) == _field_count(kind, n), f"{kind} with {n} beams needs {_field_count(kind, n)} fields, got {len(words)}")
     ranges, u = _ranges(_range_floats(words[2 : 2 + n], f"{kind} ranges", cache), units, kind)
     tail = _few_floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
@@ -751,7 +760,6 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
                       range_min: float = 0.0, cache: _RangeWords | None = None) -> tuple[Scan, Pose2D | None]:
     """A ROBOTLASER1 / 2 line (robot pose as odometry) or a RAWLASER1 .. 4 line (no pose)."""
     kind = words[0]
-    tail_fields = 3 if kind.startswith("RAWLASER") else 14  # (poses, speeds, safety,) timestamps, host
     _require(len(words) >= 10, f"{kind} is too short")
     head = _few_floats(words[1:8], f"{kind} header")
     start, fov, resolution, max_range, accuracy = head[1:6]
@@ -759,7 +767,7 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     _require(n > 0, f"{kind} needs at least one beam, got a beam count of {n}")
     _require(len(words) > 9 + n, f"{kind} announces {n} beams but has fewer fields")
     m = _count(words[9 + n], "remission count")
-    expected = 10 + n + m + tail_fields
+    expected = _field_count(kind, n, m)
     _require(len(words) == expected, f"{kind} with {n} ranges and {m} remissions needs {expected} fields, got {len(words)}")
     _require(all(map(math.isfinite, head)), f"{kind} header is not finite")
     _require(resolution > 0, f"angular resolution must be > 0, got {resolution}")
