@@ -14,8 +14,7 @@ from typing import Any, Mapping, Sequence
 
 import yaml
 
-from features.registry import MODE_FIELDS, unread_fields  # noqa: F401 - the one rule, shared with compare and run_slam
-from features.registry import mode_fields_read as _mode_fields_read
+from features.registry import MODE_FIELDS, mode_fields_read
 from lms200 import LmsbenchError
 from lms200.yamlio import load as load_yaml
 
@@ -107,5 +106,5 @@ def unread_marked(values: dict[str, Any], config: Any, range_maxes: Sequence[flo
     range-noise field the user set (``given``) that no scan of the run read (``range_maxes``, m)
     written as ``"V: not read (no MODE-mode scan)"``: the record said ``sigma_r: 0.02`` as if it
     had run. (A default the scans do not read stays: which one a scan reads is the method's rule.)"""
-    _, unread = _mode_fields_read(config, range_maxes, given)
+    _, unread = mode_fields_read(config, range_maxes, given)
     return {f: f"{v!r}: not read (no {MODE_FIELDS[f][0]}-mode scan)" if f in unread else v for f, v in values.items()}

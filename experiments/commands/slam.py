@@ -136,7 +136,7 @@ def _warn_unread(config: "SlamConfig", records: list, where: Any) -> None:
     the cm-mode MIT CSAIL log, whose scans read sigma_r_cm, and nothing said so."""
     from features.registry import make_config
 
-    from experiments.overrides import unread_fields
+    from features.registry import unread_fields
 
     configs = {config.extractor: make_config(config.extractor, **config.extractor_params)}
     for line in unread_fields({config.extractor: config.extractor_params}, configs,
