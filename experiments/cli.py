@@ -15,8 +15,10 @@ from __future__ import annotations
 
 import argparse
 import atexit
+import errno
 import functools
 import importlib
+import io
 import os
 import pkgutil
 import _thread
@@ -231,7 +233,58 @@ def _kill_children() -> None:
         pass
 
 
+class _ClosedStdout(io.TextIOBase):
+    """sys.stdout when the caller closed its descriptor (``lmsbench info LOG >&-``): Python leaves
+    it None, and the first print was "internal error: AttributeError: 'NoneType' object has no
+    attribute 'write'" with a traceback, exit 1. A write fails as one to ``/dev/full`` does (the
+    one line "cannot write the standard output: ...", exit 2); a command that prints nothing is
+    not stopped by it."""
+
+    def writable(self) -> bool:
+        return True
+
+    def write(self, text: str) -> int:
+        if not text:
+            return 0
+        raise OSError(errno.EBADF, "bad file descriptor (it was closed)")
+
+    def flush(self) -> None:
+        pass
+
+    def isatty(self) -> bool:
+        return False
+
+
+def _standard_streams() -> None:
+    """A standard descriptor the caller closed (``>&-``, ``2>&-``, ``<&-``) is pointed at /dev/null
+    before any work: else the next file opened takes its number, and what a library or a child
+    process writes to "its" stderr lands in it. A closed stderr becomes a text stream on that
+    /dev/null (Python left it None: a print to it went to stdout, ``sim``'s import failed and the
+    command with it, exit 1), a closed stdout one whose writes fail (_ClosedStdout)."""
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+            continue
+        except OSError:
+            pass
+        try:
+            devnull = os.open(os.devnull, os.O_RDONLY if fd == 0 else os.O_WRONLY)
+        except OSError:
+            continue
+        if devnull != fd:
+            os.dup2(devnull, fd)
+            os.close(devnull)
+    if sys.stderr is None:
+        try:
+            sys.stderr = open(2, "w", encoding="utf-8", errors="backslashreplace", buffering=1, closefd=False)
+        except OSError:
+            pass
+    if sys.stdout is None:
+        sys.stdout = _ClosedStdout()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    _standard_streams()
     try:
         return _flushed(_main(argv))
     except KeyboardInterrupt:  # before the command's handler is in place: its options being read

@@ -51,3 +51,54 @@ def test_pointing_a_stdout_without_a_descriptor_at_dev_null_leaks_no_descriptor(
     for _ in range(50):
         _stdout_to_devnull()
     assert len(os.listdir("/proc/self/fd")) == before
+
+
+def _closed(args: list[str], fd: int, timeout: float = 120) -> subprocess.CompletedProcess:
+    """``lmsbench ARGS`` with standard descriptor ``fd`` closed (``>&-``: 1, ``2>&-``: 2); the other
+    one captured."""
+    return subprocess.run([sys.executable, "-m", "experiments.cli", *args], cwd=ROOT, timeout=timeout,
+                          stdout=subprocess.PIPE if fd == 2 else None, stderr=subprocess.PIPE if fd == 1 else None,
+                          preexec_fn=lambda: os.close(fd), text=True)
+
+
+CLOSED = "cannot write the standard output: bad file descriptor (it was closed)"
+
+
+@pytest.mark.parametrize("args, name", [(["--help"], "lmsbench"), (["--version"], "lmsbench"),
+                                        (["info", "LOG"], "lmsbench info")])
+def test_a_closed_standard_output_is_one_line_and_status_2(tmp_path, args, name):
+    """``lmsbench info LOG >&-`` was "internal error: AttributeError: 'NoneType' object has no
+    attribute 'write'" and a traceback, exit 1 (Python leaves sys.stdout None): now as ``> /dev/full``."""
+    log = tmp_path / "run.clf"
+    write_log(log, [Record(Scan(np.full(181, 2.0), -np.pi / 2, np.pi / 180, 0.0, 8.183, stamp=float(k))) for k in range(3)])
+    out = _closed([str(log) if a == "LOG" else a for a in args], 1)
+    assert (out.returncode, out.stderr) == (2, f"{name}: error: {CLOSED}\n")
+
+
+def test_a_closed_standard_output_keeps_a_user_errors_line_and_status():
+    out = _closed(["info", "/nonexistent/log.clf"], 1)
+    assert (out.returncode, out.stderr) == (2, "lmsbench info: error: /nonexistent/log.clf: no such log\n")
+    out = _closed([], 1)  # no command: its usage line, and no traceback of the exit's flush
+    assert out.returncode == 2 and out.stderr.startswith("lmsbench: error: a command is required: ")
+    assert out.stderr.count("\n") == 1
+
+
+def test_a_closed_standard_error_keeps_the_status_and_stdout_clean(tmp_path):
+    """``2>&-``: Python leaves sys.stderr None, and print(file=None) writes to stdout: a user error's
+    line went to stdout; ``simulate`` failed with "internal error: ImportError: cannot import name
+    'simulate_records' from 'sim'" on stdout, exit 1."""
+    out = _closed(["info", "/nonexistent/log.clf"], 2)
+    assert (out.returncode, out.stdout) == (2, "")
+    out = _closed(["simulate", "--duration", "0.2", "--out", str(tmp_path / "sim"), "--quiet"], 2)
+    assert (out.returncode, out.stdout) == (0, f"simulated 7 scans of world office (seed 0, 0.2 s) into {tmp_path / 'sim'}\n")
+
+
+def test_a_closed_standard_descriptor_is_not_taken_by_the_next_file_opened(tmp_path):
+    """With fd 2 closed, the next file opened took number 2, and whatever wrote to "stderr" (a C
+    library, a child process) wrote into it; it is pointed at /dev/null first."""
+    code = ("import os, sys; from experiments.cli import _standard_streams; _standard_streams(); "
+            f"f = open({str(tmp_path / 'f')!r}, 'w'); print(f.fileno(), sys.stderr is not None, os.path.realpath('/proc/self/fd/2'))")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, stdout=subprocess.PIPE, text=True, timeout=60,
+                         preexec_fn=lambda: os.close(2))
+    fd, has_stderr, target = out.stdout.split()
+    assert (int(fd) > 2, has_stderr, target) == (True, "True", "/dev/null")
