@@ -62,7 +62,6 @@ from .codes import (
     CODE_NOT_VALID,
     CODES_INVALID,
     LMS200_MAX_RANGE,
-    MAX_VALID_CODE,
     Units,
     decode_logged_ranges,
     finite_negative,
@@ -800,19 +799,76 @@ def _units_of(scan: Scan) -> Units:
 
 
 def _format_ranges(scan: Scan, units: Units) -> str:
-    """Ranges rounded to the unit, with +inf / nan written as the SICK codes 8183 / 8191; a valid
-    reading that would round onto the special band (8183 .. 8191 units: 8.183 m in mm mode, the
-    Scan.lms200 range_max, read back as +inf) is written as 8182 units, the largest valid code
-    (``MAX_VALID_CODE``, the protocol's largest valid reading), so it reads back valid."""
+    """Ranges rounded to the unit, with +inf / nan written as the SICK codes 8183 / 8191, each word
+    read back as the reader will (:func:`_read_back`): a beam whose rounded word would change its
+    meaning is written with the digits it needs instead (:func:`_kept_word`). Rounding alone turned a
+    valid reading just below range_max into one above it (4.9996 m at a range_max of 4.9996 m: 5.000),
+    a tie onto the special band (81.825 m in cm mode: "81.83", +inf; the check rounded half to even,
+    the text half up), a valid reading below half a unit into 0 (no reading), one just above
+    range_min below it, and an invalid one just above range_max (or below range_min) into a valid one."""
     scale = metres_per_unit(units)
     decimals = 3 if units == "mm" else 2
-    with np.errstate(invalid="ignore", over="ignore"):
-        code = np.rint(scan.ranges / scale)
-    onto_special = scan.valid & (code > MAX_VALID_CODE) & (code <= CODE_NOT_VALID)
-    r = np.where(onto_special, MAX_VALID_CODE * scale, scan.ranges)
-    r = np.where(np.isposinf(r), CODE_ABOVE_MAXIMUM * scale, r)
+    r = np.where(np.isposinf(scan.ranges), CODE_ABOVE_MAXIMUM * scale, scan.ranges)
     r = np.where(np.isnan(r), CODES_INVALID[-1] * scale, r)
-    return " ".join(f"{v:.{decimals}f}" for v in r)
+    words = [f"{v:.{decimals}f}" for v in r]
+    # only beams within 2 units of range_min, range_max, 0 or the special band can change meaning
+    # (reading every word back cost the writer 1.7x its time)
+    x = scan.ranges
+    with np.errstate(invalid="ignore", over="ignore"):
+        near = np.isfinite(x) & ((np.abs(x - scan.range_max) <= 2 * scale) | (np.abs(x - scan.range_min) <= 2 * scale)
+                                 | (x <= 2 * scale) | (np.abs(x / scale - SPECIAL_BAND_MIDDLE) <= SPECIAL_BAND_HALF + 2))
+    for i in np.flatnonzero(near):
+        if _meaning_changed(scan, _read_back([words[i]], units), scale, int(i))[0]:
+            words[i] = _kept_word(scan, int(i), units)
+    return " ".join(words)
+
+
+def _read_back(words: list[str], units: Units) -> np.ndarray:
+    """The ranges (m, REP-117) a reader takes ``words`` (range words of ``units``) for."""
+    return decode_logged_ranges(np.array(words, dtype=np.float64), units)
+
+
+def _valid(ranges: np.ndarray, scan: Scan) -> np.ndarray:
+    """:attr:`Scan.valid` of ``ranges`` under ``scan``'s range_min and range_max."""
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges > 0.0) & (ranges <= scan.range_max)
+
+
+#: units: the SICK special codes (CODE_ABOVE_MAXIMUM .. CODE_NOT_VALID) as a middle and half width
+SPECIAL_BAND_MIDDLE = (CODE_ABOVE_MAXIMUM + CODE_NOT_VALID) / 2
+SPECIAL_BAND_HALF = (CODE_NOT_VALID - CODE_ABOVE_MAXIMUM) / 2
+
+
+def _meaning_changed(scan: Scan, back: np.ndarray, scale: float, i: int) -> np.ndarray:
+    """Whether beam ``i``'s read-back value ``back`` (an array of one) means something else than
+    the scan's: valid where it was not, or not where it was; a valid one more than half a unit off;
+    +inf (no return), nan or -inf turned into another of them (a finite reading that is not valid may read back as +inf:
+    8.183 m beyond a range_max of 8 m is the code for no return within range)."""
+    r = scan.ranges[i : i + 1]
+    valid, valid_back = _valid(r, scan), _valid(back, scan)
+    with np.errstate(invalid="ignore"):
+        off = valid & (np.abs(back - r) > scale / 2 * (1 + 1e-9))
+    kind = ~np.isfinite(r) & ((np.isposinf(r) != np.isposinf(back)) | (np.isnan(r) != np.isnan(back)))
+    return (valid != valid_back) | off | kind
+
+
+def _kept_word(scan: Scan, i: int, units: Units) -> str:
+    """Beam ``i``'s range written with the digits it needs to keep its meaning: the shortest
+    decimal that reads back as the same float64, or, for a valid reading whose exact value is a
+    special code (8.183 m in mm mode at range_max 8.183 m, 81.86 m in cm mode at range_max 100 m),
+    the one half a unit below or above it."""
+    scale = metres_per_unit(units)
+    decimals = 3 if units == "mm" else 2
+    r = float(scan.ranges[i])
+    words = [_num(r) if math.isfinite(r) else f"{r}"]
+    if math.isfinite(r):
+        code = round(r / scale)
+        words += [f"{(code - 0.5) * scale:.{decimals + 1}f}", f"{(code + 0.5) * scale:.{decimals + 1}f}"]
+    for word in words:
+        back = _read_back([word], units)
+        if not _meaning_changed(scan, back, scale, i)[0]:
+            return word
+    raise AssertionError(f"no CARMEN word keeps range {r!r} m as it is (a bug)")  # pragma: no cover
 
 
 def _num(value: float) -> str:
@@ -861,7 +917,8 @@ def write_carmen(
     record has a true pose (a record's ``corrected`` pose is not written: its odometry is). FLASER logs get ``PARAM laser_front_laser_resolution / _fov`` and
     ``robot_front_laser_max`` lines, so any scan centred ahead reads back with its geometry. Ranges
     are written at the sensor unit (mm when range_max <= 8.183 m, else cm), +inf / nan as SICK codes 8183 / 8191
-    (a valid reading that would round onto 8183 .. 8191 units as 8182, so it reads back valid); a ``PARAM lmsbench_range_units`` line records
+    (a reading whose rounded word would read back with another meaning, :func:`_format_ranges`, with the
+    digits it needs: valid stays valid, within half a unit); a ``PARAM lmsbench_range_units`` line records
     the unit, and ``PARAM lmsbench_odometry absent|present`` lines mark records without odometry
     (their pose fields are written as zeros); no CARMEN laser line has a range_min field, so a
     ``PARAM lmsbench_range_min`` line gives it before the first scan whose

@@ -158,18 +158,19 @@ def test_robotlaser_720_beams_at_2pi_over_719_keeps_its_last_bearing(tmp_path):
 @pytest.mark.parametrize("fmt", ["robotlaser1", "flaser"])
 def test_valid_readings_near_the_special_codes_stay_valid(tmp_path, fmt):
     path = tmp_path / "v.log"
-    # mm mode at the Scan.lms200 default range_max 8.183: 8.183 and 8.1826 read back +inf
+    # mm mode at the Scan.lms200 default range_max 8.183: 8.183 and 8.1826 read back +inf; then as
+    # 8.182 (a unit off); now with the digits they need (8.183 is the code itself: half a unit below)
     mm = Scan(np.array([8.183, 8.1826, 8.1824, np.inf, np.nan, 3.0]), -0.05, 0.02, 0.0, 8.183)
     write_log(path, [Record(mm)], fmt=fmt)
     back = next(iter(read_log(path))).scan
-    assert back.ranges[:3].tolist() == [8.182, 8.182, 8.182] and back.ranges[5] == 3.0
+    assert back.ranges[:3].tolist() == [8.1825, 8.1826, 8.182] and back.ranges[5] == 3.0
     assert np.isposinf(back.ranges[3]) and np.isnan(back.ranges[4])
     assert back.valid.tolist() == mm.valid.tolist() == [True, True, True, False, False, True]
     # cm mode, range_max 100: 81.83 / 81.86 / 81.90 / 81.91 read back +inf / nan
     cm = Scan(np.array([81.83, 81.86, 81.90, 81.91, 81.82, 81.95]), -0.05, 0.02, 0.0, 100.0)
     write_log(path, [Record(cm)], fmt=fmt)
     back = next(iter(read_log(path))).scan
-    assert back.ranges.tolist() == [81.82, 81.82, 81.82, 81.82, 81.82, 81.95]
+    assert back.ranges.tolist() == [81.825, 81.855, 81.895, 81.905, 81.82, 81.95]
     assert back.valid.all()
     # not valid (beyond this scan's range_max): written as it is, and still not valid
     far = Scan(np.array([8.183, 2.0, 8.19]), -0.05, 0.05, 0.0, 8.0)
