@@ -56,6 +56,20 @@ class BagTooLargeError(BagError):
 MAX_DECOMPRESSED_BYTES = 128 * 2**20
 
 
+#: bytes: the most one storage file of a file-compressed ROS 2 bag (``compression_mode: file``, zstd) may
+#: decompress to. rosbags decompresses each whole to a temporary file before it reads a message (sqlite3 and
+#: mcap need the file): its memory is bounded, its disk was not (a 1 MB file of zeros filled 1 GiB of the
+#: temporary folder, a bomb of a few MB the disk). An hour of 361-beam scans at 75 Hz is about 0.4 GB.
+MAX_DECOMPRESSED_FILE_BYTES = 4 * 2**30
+
+#: bytes: what a file-compressed ROS 2 bag's decompression leaves free in the temporary folder at least
+#: (``tempfile.gettempdir()``, ``$TMPDIR``); it is refused before it would leave less.
+MIN_FREE_TEMP_BYTES = 1 * 2**30
+
+#: bytes decompressed between two looks at the temporary folder's free space
+FREE_CHECK_BYTES = 64 * 2**20
+
+
 def _too_large(what: str) -> BagTooLargeError:
     return BagTooLargeError(f"{what} decompresses to more than {MAX_DECOMPRESSED_BYTES / 2**20:g} MiB "
                             "(lms200.bag.MAX_DECOMPRESSED_BYTES): a compression bomb, or chunks or messages "
@@ -103,9 +117,9 @@ def _bound_decompression(reader: Any, path: Path) -> None:  # noqa: ANN401 - ros
 
 
 def _bound_zstd_messages() -> None:
-    """rosbags' ROS 2 reader decompresses a message with its module's ``zstd.decompress``: that name is
-    pointed at a bounded one (the rest of the module, ``zstd.open`` of a file-compressed bag, which
-    streams to a file, is rosbags' own)."""
+    """rosbags' ROS 2 reader decompresses a message with its module's ``zstd.decompress`` and a
+    file-compressed bag's storage files with its ``zstd.open`` (streamed to a temporary file): that
+    name is pointed at a module whose both are bounded (:class:`_BoundedZstd`)."""
     from rosbags.rosbag2 import reader as reader2
 
     if isinstance(reader2.zstd, _BoundedZstd):
@@ -124,6 +138,72 @@ class _BoundedZstd:
 
     def decompress(self, data: bytes) -> bytes:
         return _bounded(data, self._module.ZstdDecompressor, "a zstd-compressed message", True)
+
+    def open(self, file: Any, mode: str = "rb", **kwargs: Any) -> Any:  # noqa: ANN401
+        """rosbags opens a file-compressed bag's storage file so and copies it whole to a temporary
+        file: the stream read is bounded (:class:`_BoundedZstdFile`)."""
+        stream = self._module.open(file, mode, **kwargs)
+        return _BoundedZstdFile(stream, str(getattr(file, "name", file))) if "r" in mode else stream
+
+
+def _free_temp_bytes() -> int:
+    """Free bytes in the temporary folder, where rosbags decompresses a file-compressed ROS 2 bag."""
+    import shutil
+    import tempfile
+
+    return shutil.disk_usage(tempfile.gettempdir()).free
+
+
+class _BoundedZstdFile:
+    """A file-compressed ROS 2 bag's storage file as rosbags reads it to decompress it to a temporary
+    file: BagTooLargeError naming the file once more than MAX_DECOMPRESSED_FILE_BYTES are read, or
+    before what is read would leave less than MIN_FREE_TEMP_BYTES free in the temporary folder
+    (looked at every FREE_CHECK_BYTES and at the start)."""
+
+    def __init__(self, stream: Any, name: str) -> None:  # noqa: ANN401
+        self._stream, self._name = stream, name
+        self._read = 0
+        self._checked = -FREE_CHECK_BYTES  # the free space is looked at before the first read
+        self._free = 0
+
+    def __enter__(self) -> "_BoundedZstdFile":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stream.close()
+
+    def __getattr__(self, name: str) -> Any:  # noqa: ANN401
+        return getattr(self._stream, name)
+
+    def read(self, size: int = -1) -> bytes:
+        limit = MAX_DECOMPRESSED_FILE_BYTES + 1 - self._read
+        data = self._stream.read(limit if size is None or size < 0 else min(size, limit))
+        self._count(len(data))
+        return data
+
+    def readinto(self, buffer: Any) -> int:  # noqa: ANN401
+        view = memoryview(buffer)[: MAX_DECOMPRESSED_FILE_BYTES + 1 - self._read]
+        n = self._stream.readinto(view)
+        self._count(n)
+        return n
+
+    def _count(self, n: int) -> None:
+        self._read += n
+        if self._read > MAX_DECOMPRESSED_FILE_BYTES:
+            raise BagTooLargeError(
+                f"{self._name}: a zstd-compressed storage file (compression_mode: file) decompresses to more than "
+                f"{MAX_DECOMPRESSED_FILE_BYTES / 2**20:g} MiB (lms200.bag.MAX_DECOMPRESSED_FILE_BYTES): a "
+                "compression bomb, or a bag far larger than one of laser scans; not read")
+        if self._read - self._checked >= FREE_CHECK_BYTES:
+            self._free, self._checked = _free_temp_bytes(), self._read
+        if self._free - (self._read - self._checked) < MIN_FREE_TEMP_BYTES:
+            import tempfile
+
+            raise BagTooLargeError(
+                f"{self._name}: a zstd-compressed storage file (compression_mode: file), decompressed to the "
+                f"temporary folder {tempfile.gettempdir()} (where rosbags reads it), would leave less than "
+                f"{MIN_FREE_TEMP_BYTES / 2**20:g} MiB free there (lms200.bag.MIN_FREE_TEMP_BYTES; "
+                f"{self._read / 2**20:.0f} MiB decompressed so far); not read (TMPDIR names a folder with more room)")
 
 
 class BagExistsError(InputError, FileExistsError):
@@ -440,9 +520,12 @@ class BagReader:
                 if entry.exists() and not entry.is_file() and not entry.is_dir():
                     raise BagError(f"{entry}: not a regular file (a pipe, a device or a socket) in the ROS 2 bag "
                                    f"{self.path}; a bag's files must be regular files (give the files themselves)")
+        _bound_zstd_messages()  # before open: a file-compressed ROS 2 bag is decompressed there
         try:
             reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
             reader.open()
+        except BagTooLargeError:
+            raise
         except Exception as exc:  # rosbags raises its own types for every kind of damage
             raise BagError(f"{self.path}: cannot open as a ROS bag: {type(exc).__name__}: {exc}") from None
         _bound_decompression(reader, self.path)

@@ -146,3 +146,82 @@ def test_a_1_gib_lz4_bomb_is_refused_within_bounded_memory(tmp_path, monkeypatch
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.startswith(f"BagTooLargeError {bag}: an lz4 chunk decompresses to more than 128 MiB "), out.stdout
+
+
+def _ros2_file_bomb(path: Path, zeros_mib: int, monkeypatch) -> Path:
+    """A file-compressed ROS 2 bag (compression_mode: file, zstd) of three scans whose storage file
+    decompresses to the sqlite3 file and then ``zeros_mib`` MiB of zeros (which sqlite3 reads past)."""
+    import rosbags.rosbag2 as rosbag2
+    from rosbags.rosbag2 import writer as writer2
+
+    base = rosbag2.Writer
+
+    class FileCompressed(base):  # type: ignore[misc, valid-type]
+        def __init__(self, *args, **kwargs) -> None:
+            super().__init__(*args, **kwargs)
+            self.set_compression(rosbag2.CompressionMode.FILE, rosbag2.CompressionFormat.ZSTD)
+
+    with monkeypatch.context() as m:
+        m.setattr(rosbag2, "Writer", FileCompressed)
+        write_log(path, _records(), fmt="bag2")
+    (storage,) = path.glob("*.zstd")
+    zstd = writer2.zstd
+    c = zstd.ZstdCompressor()
+    storage.write_bytes(c.compress(zstd.decompress(storage.read_bytes()))
+                        + b"".join(c.compress(bytes(MiB)) for _ in range(zeros_mib)) + c.flush())
+    return path
+
+
+def test_a_file_compressed_ros2_bomb_is_refused_before_it_fills_the_disk(tmp_path, monkeypatch):
+    """rosbags decompresses a file-compressed ROS 2 bag's storage file whole to a temporary file,
+    bounded in memory but not on disk: a 2 KB file of 16 MiB of zeros wrote all 16 MiB (a bomb of a
+    few MB, the disk). It is refused once more than MAX_DECOMPRESSED_FILE_BYTES are decompressed,
+    naming the file, and the temporary file is removed."""
+    import tempfile
+
+    import lms200.bag
+
+    bag = _ros2_file_bomb(tmp_path / "bomb2", 16, monkeypatch)
+    assert sum(p.stat().st_size for p in bag.iterdir()) < 10_000
+    temp = tmp_path / "temp"
+    temp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temp))
+    monkeypatch.setattr(lms200.bag, "MAX_DECOMPRESSED_FILE_BYTES", 4 * MiB)
+    with pytest.raises(BagTooLargeError) as e:
+        list(read_log(bag))
+    assert str(e.value) == (f"{bag / 'bomb2.db3.zstd'}: a zstd-compressed storage file (compression_mode: file) "
+                            "decompresses to more than 4 MiB (lms200.bag.MAX_DECOMPRESSED_FILE_BYTES): a compression "
+                            "bomb, or a bag far larger than one of laser scans; not read")
+    with pytest.raises(BagTooLargeError):  # not a damaged message to skip
+        list(read_log(bag, skip_bad_lines=True))
+    assert list(temp.iterdir()) == []
+    monkeypatch.setattr(lms200.bag, "MAX_DECOMPRESSED_FILE_BYTES", 32 * MiB)  # within the bound: read as ever
+    assert [r.scan.stamp for r in read_log(bag)] == [0.0, 1.0, 2.0]
+
+
+def test_a_file_compressed_ros2_bag_is_refused_before_it_leaves_the_temporary_folder_short(tmp_path, monkeypatch):
+    import tempfile
+
+    import lms200.bag
+
+    bag = _ros2_file_bomb(tmp_path / "bomb2", 16, monkeypatch)
+    monkeypatch.setattr(lms200.bag, "_free_temp_bytes", lambda: lms200.bag.MIN_FREE_TEMP_BYTES + 8 * MiB)
+    with pytest.raises(BagTooLargeError, match=r"^" + str(bag / "bomb2.db3.zstd") + r": a zstd-compressed storage "
+                       r"file \(compression_mode: file\), decompressed to the temporary folder " + tempfile.gettempdir()
+                       + r" \(where rosbags reads it\), would leave less than 1024 MiB free there \(lms200.bag.MIN_FREE_TEMP_BYTES; "
+                       r"8 MiB decompressed so far\); not read \(TMPDIR names a folder with more room\)$"):
+        list(read_log(bag))
+    monkeypatch.setattr(lms200.bag, "_free_temp_bytes", lambda: lms200.bag.MIN_FREE_TEMP_BYTES + 64 * MiB)
+    assert [r.scan.stamp for r in read_log(bag)] == [0.0, 1.0, 2.0]
+
+
+def test_a_file_compressed_ros2_bomb_is_one_line_and_status_2_from_the_command(tmp_path, monkeypatch, capsys):
+    import lms200.bag
+    from experiments.cli import main
+
+    bag = _ros2_file_bomb(tmp_path / "bomb2", 8, monkeypatch)
+    monkeypatch.setattr(lms200.bag, "MAX_DECOMPRESSED_FILE_BYTES", 4 * MiB)
+    assert main(["info", str(bag)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"lmsbench info: error: {bag / 'bomb2.db3.zstd'}: a zstd-compressed storage file ")
+    assert err.count("\n") == 1
