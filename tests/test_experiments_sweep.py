@@ -13,6 +13,7 @@ import os
 import re
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -159,6 +160,27 @@ def test_retry_failed_recomputes_only_the_failed_cells(tmp_path):
     again = run_sweep(make_spec(log), tmp_path / "out", "inprocess", retry_failed=True, progress=False)
     assert (again.computed, again.skipped, again.failed) == (2, 10, 2)
     assert computed(log)[12:] == ["3 0", "3 1"]
+
+
+def test_a_damaged_cell_file_is_computed_again_with_one_warning(tmp_path):
+    """A cell file cut short (a disk error, a copy) stopped the resumed sweep with "internal error:
+    ArrowInvalid: ... smaller than the minimum file footer", exit 1; with --retry-failed too."""
+    log = tmp_path / "log.txt"
+    spec = make_spec(log, xs=[0, 1], seeds=[0])
+    first = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    cells = sorted((tmp_path / "out" / "cells").glob("*.parquet"))
+    cells[0].write_bytes(cells[0].read_bytes()[:5])
+    pd.DataFrame({"a": [1]}).to_parquet(cells[1])  # a Parquet file, but no cell's row
+    with pytest.warns(LmsbenchWarning, match=r"cells: 2 cell files cannot be read as a finished cell \(damaged: "
+                      rf"{cells[0].name}, {cells[1].name}\); computed again$"):
+        again = run_sweep(spec, tmp_path / "out", "inprocess", retry_failed=True, progress=False)
+    assert (again.computed, again.skipped) == (2, 0)
+    pd.testing.assert_frame_equal(comparable(again.table), comparable(first.table))
+    with warnings.catch_warnings():  # written again whole: no warning, nothing computed
+        warnings.simplefilter("error", LmsbenchWarning)
+        again = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert (again.computed, again.skipped) == (0, 2)
+    assert computed(log) == ["0 0", "1 0", "0 0", "1 0"]
 
 
 def test_random_sampling_is_seeded_in_range_and_crossed_with_grid_and_seeds():

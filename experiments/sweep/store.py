@@ -8,16 +8,22 @@ Layout of a sweep folder::
 
 A cell file is written to a temporary name in the same folder and renamed into place
 (``os.replace`` is atomic on POSIX), so a sweep killed at any moment leaves only whole cell files.
+A cell file damaged otherwise (a disk error, a copy cut short, an edit) is no finished cell: it is
+computed again, with one warning line (it stopped the resumed sweep with "internal error:
+ArrowInvalid: ... smaller than the minimum file footer", exit 1).
 """
 
 from __future__ import annotations
 
 import os
 import tempfile
+import warnings
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
+
+from lms200.errors import LmsbenchWarning
 
 CELLS_DIR = "cells"
 
@@ -41,15 +47,21 @@ class CellStore:
         return self.cells / f"{key}.parquet"
 
     def done(self) -> set[str]:
-        """Keys of every cell with a finished file."""
-        return {p.stem for p in self.cells.glob("*.parquet")}
+        """Keys of every cell with a finished file (one that reads as a cell's row: a damaged one
+        is computed again, said in one warning)."""
+        keys, damaged = set(), []
+        for p in sorted(self.cells.glob("*.parquet")):
+            (keys.add(p.stem) if _cell_row(p, ["status"]) is not None else damaged.append(p.name))
+        if damaged:
+            warnings.warn(f"{self.cells}: {len(damaged)} cell file{'s' if len(damaged) > 1 else ''} cannot be read as "
+                          f"a finished cell (damaged: {', '.join(damaged[:3])}{', ...' if len(damaged) > 3 else ''}); "
+                          "computed again", LmsbenchWarning, stacklevel=2)
+        return keys
 
     def status(self, key: str) -> str | None:
-        """"ok", "error", or None when the cell has no file."""
-        path = self.path(key)
-        if not path.exists():
-            return None
-        return str(pd.read_parquet(path, columns=["status"])["status"].iloc[0])
+        """"ok", "error", or None when the cell has no file (or a damaged one)."""
+        row = _cell_row(self.path(key), ["status"])
+        return None if row is None else str(row["status"].iloc[0])
 
     def write(self, key: str, row: dict[str, Any]) -> Path:
         """Write one cell's row atomically (temporary file, fsync, rename)."""
@@ -69,12 +81,27 @@ class CellStore:
 
     def read(self, keys: list[str]) -> pd.DataFrame:
         """The rows of the given cells that have files, in the given order."""
-        frames = [pd.read_parquet(self.path(k)) for k in keys if self.path(k).exists()]
+        rows = (_cell_row(self.path(k)) for k in keys)
+        frames = [f for f in rows if f is not None]
         if not frames:
             return pd.DataFrame()
         columns = list(dict.fromkeys(c for f in frames for c in f.columns))
         frames = [f.dropna(axis=1, how="all") for f in frames]  # all-null cells must not decide dtypes
         return _tidy(pd.concat(frames, ignore_index=True, sort=False).reindex(columns=columns))
+
+
+def _cell_row(path: Path, columns: list[str] | None = None) -> pd.DataFrame | None:
+    """A cell file's row (``columns`` of it), or None where there is no file or it does not read
+    as one row with a ``status`` and a ``cell`` column (a damaged file)."""
+    try:
+        table = pd.read_parquet(path, columns=columns if columns is None else [*columns, "cell"])
+    except FileNotFoundError:
+        return None
+    except Exception:  # noqa: BLE001 - pyarrow's ArrowInvalid, OSError, KeyError of a column: damaged
+        return None
+    if len(table) != 1 or "status" not in table.columns or "cell" not in table.columns:
+        return None
+    return table
 
 
 def user_mode() -> int:
