@@ -206,6 +206,27 @@ class _BoundedZstdFile:
                 f"{self._read / 2**20:.0f} MiB decompressed so far); not read (TMPDIR names a folder with more room)")
 
 
+def _check_storage_files(path: Path) -> None:
+    """BagError for a ROS 2 bag whose metadata.yaml lists one storage file more than once
+    (``relative_file_paths``; rosbags takes each by its name): its messages were read once for each
+    listing (3 scans read as 6, stamps going back, exit 0). A metadata.yaml that does not read is
+    left to rosbags, which says why."""
+    from pathlib import PurePath
+
+    from .yamlio import load
+
+    try:
+        info = load((path / "metadata.yaml").read_text(encoding="utf-8"))
+        listed = [PurePath(str(x)).name for x in info["rosbag2_bagfile_information"]["relative_file_paths"]]
+    except Exception:  # noqa: BLE001 - rosbags reads it next, and says what is wrong
+        return
+    twice = sorted({name for name in listed if listed.count(name) > 1})
+    if twice:
+        raise BagError(f"{path}: its metadata.yaml lists the storage file{'s' if len(twice) > 1 else ''} "
+                       f"{', '.join(twice)} more than once (relative_file_paths); each message would be read once "
+                       "for each listing")
+
+
 class BagExistsError(InputError, FileExistsError):
     """``write_log`` to a bag path that exists (a bag is never written over)."""
 
@@ -520,6 +541,8 @@ class BagReader:
                 if entry.exists() and not entry.is_file() and not entry.is_dir():
                     raise BagError(f"{entry}: not a regular file (a pipe, a device or a socket) in the ROS 2 bag "
                                    f"{self.path}; a bag's files must be regular files (give the files themselves)")
+        if self.path.is_dir():
+            _check_storage_files(self.path)
         _bound_zstd_messages()  # before open: a file-compressed ROS 2 bag is decompressed there
         try:
             reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))

@@ -599,3 +599,19 @@ def test_a_bag_of_no_message_says_it_holds_no_topic(tmp_path: Path, name: str) -
     with pytest.raises(BagError, match=rf"^{re.escape(str(tmp_path / name))}: no sensor_msgs/LaserScan topic; it holds "
                                        r"no topic \(an empty bag\)$"):
         list(read_log(tmp_path / name))
+
+
+def test_a_ros2_bag_listing_its_storage_file_twice_is_a_bag_error(tmp_path: Path) -> None:
+    """rosbags opened b2.db3 once for each listing in relative_file_paths: 3 scans read as 6,
+    the fourth stamped before the third, exit 0 from `lmsbench info`."""
+    bag = tmp_path / "b2"
+    write_log(bag, [Record(Scan(np.full(5, 1.0), -0.1, 0.05, 0.0, 8.0, stamp=float(k))) for k in range(3)], fmt="bag2")
+    meta = bag / "metadata.yaml"
+    text = meta.read_text()
+    meta.write_text(text.replace("relative_file_paths:\n  - b2.db3\n", "relative_file_paths:\n  - b2.db3\n  - sub/b2.db3\n"))
+    with pytest.raises(BagError) as e:
+        list(read_log(bag))
+    assert str(e.value) == (f"{bag}: its metadata.yaml lists the storage file b2.db3 more than once (relative_file_paths); "
+                            "each message would be read once for each listing")
+    meta.write_text(text)
+    assert [r.scan.stamp for r in read_log(bag)] == [0.0, 1.0, 2.0]
