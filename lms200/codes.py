@@ -152,7 +152,7 @@ def check_real_kind(dtype: np.dtype, error: type[Exception] = InputError) -> Non
 
 
 def check_real_items(items: Iterable[object], error: type[Exception] = InputError) -> None:
-    """``error`` naming ``ranges`` and the first item that is a bool or text: the items of an
+    """``error`` naming ``ranges`` and the first item that is a bool, text or None: the items of an
     object array, or of a list or tuple, which numpy casts to float64 silently (True became 1.0 m,
     "2" 2.0 m), while a bool or text array is refused by its dtype (:func:`check_real_kind`).
     Nested lists are left to the shape check."""
@@ -161,6 +161,8 @@ def check_real_items(items: Iterable[object], error: type[Exception] = InputErro
             v = v.item()
         if isinstance(v, NOT_NUMBER_ITEMS):
             raise error(f"ranges: must be real numbers (m), got {type(v).__name__} {v!r} at index {i} {REFUSED}")
+        if v is None:  # numpy casts it to nan: Scan([1.0, None]), decode_logged_ranges(None) passed, silently
+            raise error(f"ranges: must be real numbers (m), got None at index {i} (an invalid reading is nan)")
 
 
 def float64_copy(a: np.ndarray, error: type[Exception] = InputError) -> np.ndarray:

@@ -580,6 +580,21 @@ def test_complex_and_dates_inside_object_arrays_are_refused(ranges: np.ndarray, 
         Scan(ranges, **GEOM)
 
 
+@pytest.mark.parametrize("ranges, index", [([1.0, None, 2.0], 1), (np.array([None, 1.0], dtype=object), 0), (None, 0)])
+def test_none_among_ranges_is_refused_not_read_as_nan(ranges: object, index: int) -> None:
+    """numpy casts None to nan: Scan([1.0, None, 2.0]) was a scan with an invalid beam and
+    decode_logged_ranges(None) array(nan), silently."""
+    from lms200 import decode_logged_ranges
+    from lms200.codes import ranges_to_codes
+
+    message = rf"^ranges: must be real numbers \(m\), got None at index {index} \(an invalid reading is nan\)$"
+    with pytest.raises(ScanError, match=message):
+        Scan(ranges, **GEOM)  # type: ignore[arg-type]
+    for convert in (decode_logged_ranges, ranges_to_codes):
+        with pytest.raises(InputError, match=message):
+            convert(ranges)  # type: ignore[arg-type]
+
+
 @pytest.mark.parametrize("ranges, message", [
     (np.array([Decimal("1e400"), 1.0], dtype=object), "Decimal at index 0 is beyond float64's range"),
     (np.array([1.0, Decimal("-1e400")], dtype=object), "Decimal at index 1 is beyond float64's range"),
