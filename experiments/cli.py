@@ -272,8 +272,10 @@ def _standard_streams() -> None:
         except OSError:
             continue
         if devnull != fd:
-            os.dup2(devnull, fd)
+            os.dup2(devnull, fd)  # inheritable, as dup2 makes it
             os.close(devnull)
+        else:  # os.open's descriptor is not inherited (PEP 446): a child process (a Dask worker) found it
+            os.set_inheritable(fd, True)  # closed, its sys.stderr None, and its cells failed to import sim
     if sys.stderr is None:
         try:
             sys.stderr = open(2, "w", encoding="utf-8", errors="backslashreplace", buffering=1, closefd=False)

@@ -45,25 +45,45 @@ def _flush_c_stdout() -> None:
 
 @contextmanager
 def _quiet_stdout() -> Iterator[None]:
-    """Silence fds 1 and 2 (PyBullet prints a build banner from C on import and connect)."""
+    """Silence fds 1 and 2 (PyBullet prints a build banner from C on import and connect). A closed
+    one is left alone, and the copies kept are numbered above 2: with fd 2 closed at start (a daemon,
+    ``2>&-``), ``os.dup(1)`` took number 2, the silencing wrote /dev/null over it, and stdout was
+    /dev/null for the rest of the process, silently."""
+    import fcntl
+
+    saved: dict[int, int] = {}
+    for fd in (1, 2):
+        try:
+            saved[fd] = fcntl.fcntl(fd, fcntl.F_DUPFD_CLOEXEC, 3)
+        except OSError:  # closed: nothing to silence there
+            pass
     try:
-        saved = [os.dup(1), os.dup(2)]
+        devnull = os.open(os.devnull, os.O_WRONLY)
     except OSError:
+        devnull = -1
+    if devnull < 0 or not saved:
+        for copy in saved.values():
+            os.close(copy)
+        if devnull >= 0:
+            os.close(devnull)
         yield
         return
-    devnull = os.open(os.devnull, os.O_WRONLY)
     try:
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os.dup2(devnull, 1)
-        os.dup2(devnull, 2)
+        for stream in (sys.stdout, sys.stderr):  # None where the descriptor was closed at start (`2>&-`, a
+            try:  # Dask worker of such a process): "import sim.lidar" failed on its AttributeError
+                if stream is not None:
+                    stream.flush()
+            except (OSError, ValueError):  # said where the stream is written next, not as an import error
+                pass
+        for fd in saved:
+            os.dup2(devnull, fd)
         yield
     finally:
         _flush_c_stdout()  # the banner may sit in C's stdio buffer: flush it into /dev/null
-        os.dup2(saved[0], 1)
-        os.dup2(saved[1], 2)
-        for fd in saved + [devnull]:
-            os.close(fd)
+        for fd, copy in saved.items():
+            os.dup2(copy, fd)
+            os.close(copy)
+        os.close(devnull)
 
 
 with _quiet_stdout():

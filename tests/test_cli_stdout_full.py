@@ -102,3 +102,27 @@ def test_a_closed_standard_descriptor_is_not_taken_by_the_next_file_opened(tmp_p
                          preexec_fn=lambda: os.close(2))
     fd, has_stderr, target = out.stdout.split()
     assert (int(fd) > 2, has_stderr, target) == (True, "True", "/dev/null")
+
+
+def test_a_closed_standard_descriptor_is_reopened_inheritable_for_child_processes():
+    """os.open's /dev/null on the closed fd 2 was not inherited (PEP 446): a Dask worker of
+    `lmsbench sweep S.yaml 2>&-` started with fd 2 closed, its sys.stderr None, and every cell
+    failed ("ImportError: cannot import name 'simulate_records' from 'sim'"), exit 1."""
+    code = ("import subprocess, sys; from experiments.cli import _standard_streams; _standard_streams(); "
+            "print(subprocess.run([sys.executable, '-c', 'import sys; print(sys.stderr is not None)'], "
+            "stdout=subprocess.PIPE, text=True).stdout.strip())")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, stdout=subprocess.PIPE, text=True, timeout=60,
+                         preexec_fn=lambda: os.close(2))
+    assert out.stdout == "True\n"
+
+
+@pytest.mark.parametrize("fd", [1, 2])
+def test_importing_the_simulator_with_a_closed_standard_descriptor_keeps_the_other(fd):
+    """sim.lidar silences fds 1 and 2 while pybullet prints its banner: with fd 2 closed, os.dup(1)
+    took number 2 and stdout was /dev/null for the rest of the process (nothing printed, exit 0);
+    with either closed, sys.stdout / sys.stderr None failed the import (AttributeError)."""
+    code = ("import sys; from sim import LMS200Sim; "
+            "print('imported', file=sys.stdout if sys.stdout is not None else sys.stderr)")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=60,
+                         preexec_fn=lambda: os.close(fd))
+    assert (out.returncode, out.stdout + out.stderr) == (0, "imported\n")
