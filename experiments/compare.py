@@ -35,7 +35,7 @@ from lms200 import LmsbenchError, Pose2D, Record, read_log
 from lms200.logs import SIMULATE_LOG
 from lms200.noise import QUANTUM_CANDIDATES_M
 
-from experiments.options import known_worlds  # sim.WORLD_NAMES, the simulator imported when first asked
+from experiments.options import known_worlds, real_path  # sim.WORLD_NAMES, the simulator imported when first asked
 
 
 @dataclass
@@ -302,7 +302,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
         if world and colon:
             _check_seed(spec, seed)
         label = name if world else Path(spec).name
-        where = "world" if world else str(Path(spec).resolve())
+        where = "world" if world else str(real_path(spec))
         first = kinds.setdefault(label, (spec, where))
         if first[1] != where:
             raise LmsbenchError(f"{first[0]} and {spec} would both be reported as {label!r} (compare names a "
@@ -335,7 +335,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
         # one input under two spellings (a simulate folder and its scans.clf, a path and a link to it, a hard
         # link): the names differ, so the checks above pass, and its scans were counted twice
         st = os.stat(spec)
-        other, read = files.setdefault((st.st_dev, st.st_ino), (word, Path(spec).resolve()))
+        other, read = files.setdefault((st.st_dev, st.st_ino), (word, real_path(spec)))
         if other != word:
             raise LmsbenchError(f"{other} and {word} are the same input ({read}), given twice: "
                                 "each source once (the tables would count its scans twice)")

@@ -482,6 +482,13 @@ def not_a_log_folder(path: str | os.PathLike) -> str:
             "(no scans.clf)")
 
 
+def real_path(path: str | os.PathLike) -> Path:
+    """``path`` with its links followed (``os.path.realpath``): ``Path.resolve()`` raised RuntimeError
+    ("Symlink loop from ...") on a loop of links, an internal error (`compare LOOP`, `simulate
+    --config LOOP`); a loop is left as it is, for the check that says so by name."""
+    return Path(os.path.realpath(path))
+
+
 def check_log(path: str | os.PathLike) -> Path:
     """The log to read for ``path``, checked: a CARMEN log (plain text, or compressed with gzip,
     bzip2 or xz), a ROS 1 ``.bag``, a ROS 2 bag folder, or a ``lmsbench simulate`` folder (its
@@ -707,7 +714,7 @@ class Owner:
         sub-folder of ``within`` in a folder an earlier run of that owner wrote."""
         if self.told(folder) or any((folder / n).is_file() and tells(folder / n) for n, tells in self.legacy.items()):
             return True
-        real = folder.resolve()
+        real = real_path(folder)
         return any(real.name == sub and owner.wrote_in(real.parent) for sub, owner in self.within.items())
 
     def earlier(self, folder: Path, writes: OutTree) -> set[str]:
@@ -827,9 +834,9 @@ def check_out_spares(out: str | os.PathLike | None, writes: Sequence[str], reads
     if out is None:
         return
     check_link(Path(out))
-    targets = {(Path(out) / name).resolve() for name in writes}
+    targets = {real_path(Path(out) / name) for name in writes}
     for f in reads:
-        if Path(f).resolve() in targets:
+        if real_path(f) in targets:
             raise InputError(f"--out {out}: the run would write {Path(f).name} over {f}, which it reads; "
                              "give another folder")
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 import functools
 import html
 import math
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -125,7 +126,7 @@ def _src(path: str, images: Path | None) -> str:
 
     if images is None:
         return path
-    file = (images / html.unescape(path)).resolve()
+    file = Path(os.path.realpath(images / html.unescape(path)))  # Path.resolve: RuntimeError on a loop of links
     mime = _MIME.get(file.suffix.lower())
     if mime is None or not file.is_file():
         return path

@@ -1196,6 +1196,22 @@ def test_out_a_link_to_nothing_or_a_loop_is_refused_before_the_work(command, lin
         f"lmsbench {command[0]}: error: {said}: a symbolic link to {target}, which does not exist (or a loop of links)"]
 
 
+@pytest.mark.parametrize("command", [["compare", "LOOP"], ["compare", "LOOP", "--out", "{out}"],
+                                     ["simulate", "--config", "LOOP", "--out", "{out}"],
+                                     ["calibrate", "LOOP", "--out", "{out}.yaml"], ["sweep", "LOOP", "--out", "{out}"]])
+def test_an_input_that_is_a_loop_of_links_is_one_line_and_status_2(command, tmp_path, capsys):
+    """`compare LOOP` and `simulate --config LOOP --out DIR` said "internal error: RuntimeError:
+    Symlink loop from ..." (Path.resolve, in the checks of a source's path and of what --out would
+    replace), exit 1."""
+    loop = tmp_path / "loop"
+    loop.symlink_to(tmp_path / "loop2")
+    (tmp_path / "loop2").symlink_to(loop)
+    argv = [str(loop) if w == "LOOP" else w.replace("{out}", str(tmp_path / "out")) for w in command]
+    assert run_main(argv) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench {command[0]}: error: {loop}: a symbolic link to {tmp_path / 'loop2'}, which does not exist (or a loop of links)"]
+
+
 def test_a_sweeps_own_big_sweep_yaml_is_read_for_its_plots(tmp_path):
     """The 1 MiB bound is for files a user writes: the sweep.yaml a sweep of the most cells writes,
     one grid value a line, is larger (1.2 MB here) and `figures --sweep DIR` still reads it."""

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import LOG_HELP, add_log_options, read_log_options
-from experiments.options import WORLDS, InputError, check_log, check_out_file, count, path_arg, world_name
+from experiments.options import WORLDS, InputError, check_log, check_out_file, count, path_arg, real_path, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None:  # 'calibrate LOG --out LOG' wrote the YAML over the log it had just read
         if args.out.suffix.lower() not in (".yaml", ".yml"):
             raise InputError(f"--out {args.out}: calibrate writes a sensor YAML; give a file name ending in .yaml")
-        if args.out.exists() and Path(args.log).exists() and args.out.resolve() == Path(args.log).resolve():
+        if args.out.exists() and Path(args.log).exists() and real_path(args.out) == real_path(args.log):
             raise InputError(f"--out {args.out} is the log being calibrated")
         if args.out.exists() and not _written_by_calibrate(args.out):  # a user's YAML was replaced silently
             raise InputError(f"--out {args.out} exists and is not a sensor YAML that calibrate wrote; give a new "

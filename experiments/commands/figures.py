@@ -7,7 +7,7 @@ import datetime
 from pathlib import Path
 
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options
-from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log,
+from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log, real_path,
                                  check_methods, check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name,
                                  text, check_link)
 
@@ -45,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
             check_link(path, "--out" if path is args.out else "--tables")
     if args.out is not None:
         _check_not_a_demos_figures(args.out, args.tables)
-    if args.out is not None and args.tables is not None and args.out.resolve() == args.tables.resolve():
+    if args.out is not None and args.tables is not None and real_path(args.out) == real_path(args.tables):
         writes = OutTree(FIGURES_OUTPUTS.files + STUDY_TABLES.files, FIGURES_OUTPUTS.folders)  # the tables it reads
     # a file of its names is replaced only beside its own record (options.FIGURES_OWNER): by names
     # alone a user's fig3_scan.png or accuracy_speed.csv in --out was written over; --tables: no table is
@@ -127,7 +127,7 @@ def _check_not_a_demos_figures(out: Path, tables: Path | None) -> None:
     ("holds figures/tables/, which this command does not write"); with another study's tables
     (``--tables X/tables``) it drew X's figures over the demo's, exit 0, beside the demo's
     fig10_slam and under its report.md, which still described its own study."""
-    real = out.resolve()
+    real = real_path(out)
     if real.name != "figures" or not DEMO_OWNER.wrote_in(real.parent):
         return
     demo = out.parent if out.name == "figures" else real.parent
@@ -135,7 +135,7 @@ def _check_not_a_demos_figures(out: Path, tables: Path | None) -> None:
         raise InputError(f"--out {out}: the figures of the lmsbench demo in {demo}, drawn from its tables/ and shown in its "
                          "report.md; without --tables this run computes a study of its own, whose figures and tables "
                          f"would not match them: give --tables {demo / 'tables'} to redraw the demo's figures, or another --out")
-    if tables.resolve() != real.parent / "tables":
+    if real_path(tables) != real.parent / "tables":
         raise InputError(f"--out {out}: the figures of the lmsbench demo in {demo}, drawn from its tables/ and shown in its "
                          f"report.md; figures drawn from --tables {tables}, not the demo's tables, would not match them: "
                          f"give a new folder as --out, or --tables {demo / 'tables'} to redraw the demo's figures")
@@ -152,7 +152,7 @@ def _check_sweeps_apart(folders: list[Path]) -> None:
     seen: dict[str, Path] = {}  # a plot's name -> the --sweep folder that draws it
     folders_seen: dict[Path, Path] = {}  # a folder's real path -> the --sweep word that gave it
     for folder in folders:
-        first = folders_seen.setdefault(folder.resolve(), folder)
+        first = folders_seen.setdefault(real_path(folder), folder)
         if first is not folder:
             raise InputError(f"--sweep {folder} is given twice ({first} and {folder}): each sweep folder once")
         for stem in sweep_stems(folder):

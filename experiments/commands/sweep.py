@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from experiments.options import SWEEP_OUTPUTS, SWEEP_OWNER, InputError, check_link, check_out, check_out_spares, check_yaml, count, path_arg, text
+from experiments.options import SWEEP_OUTPUTS, SWEEP_OWNER, InputError, check_link, check_out, check_out_spares, check_yaml, count, path_arg, real_path, text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     check_link(out)  # a loop of links: Path.resolve below raised RuntimeError
     # `sweep DIR/sweep.yaml --out DIR` lost a user's comments; the sweep.yaml a run wrote, as it wrote it, may
     # be run again (it is rewritten the same)
-    own = Path(args.sweep).resolve() == (out / "sweep.yaml").resolve() and Path(args.sweep).read_text() == spec_record(spec)
+    own = real_path(args.sweep) == real_path(out / "sweep.yaml") and Path(args.sweep).read_text() == spec_record(spec)
     check_out_spares(out, SWEEP_OUTPUTS.files, [] if own else [args.sweep])
     check_out(out, writes=SWEEP_OUTPUTS, owner=SWEEP_OWNER)
     _check_same_sweep(out, spec.name)
