@@ -231,6 +231,25 @@ def test_a_ground_truth_beside_none_of_the_scans_is_refused_before_the_run(sim_f
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("content", ["", "# timestamp x y z qx qy qz qw\n\n"])
+def test_a_ground_truth_of_no_poses_is_refused_before_the_run(sim_folder, tmp_path, capsys, content):
+    """An emptied or cut groundtruth.tum (no row) was "internal error: IndexError: index 0 is out of
+    bounds for axis 0 with size 0", exit 1 (the span check read its first row)."""
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    (run / "groundtruth.tum").write_text(content)
+    assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet", "--max-scans", "5"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench slam: error: {run / 'groundtruth.tum'}: holds no poses (empty, or comments only: a cut or emptied "
+        "file); scoring against it needs the true poses over the scans' stamps (without it, the scans' own TRUEPOS "
+        "lines are the reference, where they have them)"]
+    assert not (tmp_path / "o").exists()
+
+
 def test_slam_command_errors_are_one_line(tmp_path, capsys):
     from experiments.cli import main  # in process: the subprocess test above covers the real command line
 
