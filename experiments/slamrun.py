@@ -127,7 +127,11 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         if (p / "world.json").exists():
             try:
                 text = regular_file(p / "world.json", "world.json").read_text(encoding="utf-8", errors="replace")
-                walls = np.asarray(json.loads(text)["walls"], float).reshape(-1, 4)
+                content = json.loads(text)
+                if isinstance(content, dict) and not any(content.get(k) for k in ("walls", "circles", "boxes")):
+                    raise LmsbenchError(f"{p / 'world.json'}: not a world.json: it holds no walls, circles or boxes, "
+                                        "nothing to scan or score against")  # as World.from_json (compare): the
+                walls = np.asarray(content["walls"], float).reshape(-1, 4)  # map was scored against nothing, exit 0
                 sources["walls"] = str(p / "world.json")
             except (KeyError, TypeError, ValueError) as exc:  # TypeError: a JSON list, null or a dict of walls
                 raise LmsbenchError(f"{p / 'world.json'}: no wall list ({exc})") from None

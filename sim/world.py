@@ -175,6 +175,9 @@ class World:
                 cylinders = np.array([[cx, cy, r, 0.0, 2.0] for cx, cy, r in circles], dtype=float).reshape(-1, 5)
             else:
                 boxes, cylinders = d["boxes"], d.get("cylinders", [])
+            if len(boxes) == 0 and len(cylinders) == 0:  # `{}` or `{"walls": []}`: compare scored every extractor
+                raise LmsbenchError(f"{path}: not a world.json: it holds no walls, circles or boxes, nothing to "
+                                    "scan or score against")  # against no face (F1 0), slam ran, exit 0
             world = cls(
                 name=str(d.get("name", Path(path).stem)),
                 seed=int(d.get("seed", 0)),

@@ -250,6 +250,29 @@ def test_a_ground_truth_of_no_poses_is_refused_before_the_run(sim_folder, tmp_pa
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("content", ["{}", '{"walls": []}', '{"walls": [], "circles": []}', '{"boxes": []}'])
+@pytest.mark.parametrize("command", ["slam", "compare", "simulate"])
+def test_a_world_json_of_nothing_is_refused(sim_folder, tmp_path, capsys, content, command):
+    """A world.json with no wall, circle or box: compare scored every extractor against no face (F1 0,
+    exit 0), slam scored its map against no wall (wall_coverage 0, exit 0)."""
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    world = run / "world.json"
+    world.write_text(content)
+    argv = {"slam": ["slam", str(run), "--max-scans", "5"], "compare": ["compare", str(run), "--max-scans", "2",
+                                                                         "--methods", "sensor"],
+            "simulate": ["simulate", "--world", str(world), "--duration", "0.2"]}[command]
+    assert main([*argv, "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"lmsbench {command}: error: {world}: not a world.json: it holds no walls, circles or boxes, "
+                   "nothing to scan or score against"], err
+    assert not (tmp_path / "o").exists()
+
+
 def test_slam_command_errors_are_one_line(tmp_path, capsys):
     from experiments.cli import main  # in process: the subprocess test above covers the real command line
 
