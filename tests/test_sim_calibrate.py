@@ -432,7 +432,7 @@ def test_sim2real_warns_on_tiny_samples_and_refuses_a_log_with_nothing_to_measur
     recs = simulate_records("cluttered", seed=7, duration=2.0, sensor=SensorConfig(units="cm"), rate_hz=3.0)
     write_carmen(tmp_path / "log.clf", recs)
     run = _cli("sim2real", str(tmp_path / "log.clf"), "--world", "cluttered", "--seeds", "7", "--duration", "0.1",
-               "--max-scans", "1", "--out", str(tmp_path / "out"))
+               "--max-scans", "1", "--fit-duration", "1", "--out", str(tmp_path / "out"))  # the fit: 1 s runs, not 30
     assert run.returncode == 0, run.stderr
     warned = [line for line in run.stderr.splitlines() if "warning" in line]
     assert len(warned) == 1 and "only 1 real scans and 1 simulated scans" in warned[0], run.stderr
@@ -462,12 +462,13 @@ def test_sim2real_of_a_log_a_method_finds_no_line_in_reports_no_ratio(tmp_path: 
     circle = [dataclasses.replace(r, scan=r.scan.replace(ranges=np.full_like(r.scan.ranges, 2.0))) for r in recs]
     write_carmen(tmp_path / "circle.clf", circle)
     run = _cli("sim2real", str(tmp_path / "circle.clf"), "--world", "office", "--seeds", "0", "--duration", "1",
-               "--out", str(tmp_path / "out"))
+               "--fit-duration", "1", "--out", str(tmp_path / "out"))  # the calibration's fit: 1 s runs, not 30
     assert run.returncode == 0, run.stderr
     table = pd.read_csv(tmp_path / "out" / "sim2real.csv").set_index("method")
     assert table.at["sensor", "lines_per_scan_real"] == 0 and np.isnan(table.at["sensor", "lines_ratio"])
     assert table.at["split_merge", "lines_ratio"] == table.at["split_merge", "lines_per_scan_sim"] / \
         table.at["split_merge", "lines_per_scan_real"]
+    assert yaml.safe_load((tmp_path / "out" / "config.yaml").read_text())["fit_duration"] == 1.0
 
 
 def test_sim2real_probe_seeds_may_not_be_report_seeds_given_or_default() -> None:
