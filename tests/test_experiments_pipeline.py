@@ -64,20 +64,26 @@ def test_the_figure_command_writes_every_named_figure_and_redraws_from_its_table
     assert len(signals) == 361
     # on straight walls AD_i10 sits at 1 + 2 sum cos(j * 0.5 deg) (eq. 4): the median beam is on one
     assert np.nanmedian(signals["ad"]) == pytest.approx(1 + 2 * np.cos(np.deg2rad(0.5) * np.arange(1, 11)).sum(), abs=0.05)
-    # redraw from the saved tables alone: the same data beside the figures
-    again = tmp_path / "again"
-    assert main(["figures", "--tables", str(out / "tables"), "--out", str(again)]) == 0
     # a log option with --tables was ignored (the figures redrawn as they were, exit 0): refused
     capsys.readouterr()
     assert main(["figures", "--tables", str(out / "tables"), "--laser-range-max", "50", "--out", str(tmp_path / "lr")]) == 2
     assert "--laser-range-max does not apply to --tables" in capsys.readouterr().err and not (tmp_path / "lr").exists()
+    # redraw from the saved tables alone: the same data beside the figures; and a folder of its own
+    # earlier outputs is replaced (here redrawn from its own tables: every CSV and figure made stale
+    # first, so each one is written again); one with a file of the user's is refused, untouched.
+    # (One redraw for both: a redraw into a new folder, which this did too, is the one from the
+    # emptied tables below.)
+    drawn = {csv.name: pd.read_csv(csv) for name in expected for csv in sorted(out.glob(f"{name}*.csv"))}
     for name in expected:
-        for csv in sorted(out.glob(f"{name}*.csv")):
-            pd.testing.assert_frame_equal(pd.read_csv(again / csv.name), pd.read_csv(csv))
-    # a folder of its own earlier outputs is replaced (here redrawn from its own tables); one with a
-    # file of the user's is refused, untouched
-    (out / "fig4_ad.csv").write_text("stale\n")
+        for stale in [*out.glob(f"{name}*.csv"), out / f"{name}.png", out / f"{name}.pdf"]:
+            stale.write_text("stale\n")
     assert main(["figures", "--tables", str(out / "tables"), "--out", str(out)]) == 0
+    assert sorted(drawn) == sorted(csv.name for name in expected for csv in out.glob(f"{name}*.csv"))
+    for csv_name, table in drawn.items():
+        pd.testing.assert_frame_equal(pd.read_csv(out / csv_name), table)
+    for name in expected:
+        for suffix in (".png", ".pdf"):
+            assert (out / f"{name}{suffix}").stat().st_size > 1000, name
     pd.testing.assert_frame_equal(pd.read_csv(out / "fig4_ad.csv"), signals)
     (out / "tables" / "mine.txt").write_text("mine")
     assert main(["figures", "--tables", str(out / "tables"), "--out", str(out)]) == 2
