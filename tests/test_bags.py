@@ -390,6 +390,7 @@ def test_records_with_missing_poses_and_repeated_stamps_round_trip_exactly(tmp_p
             assert x is None or y[2] == pytest.approx(x[2], abs=1e-12)
 
 
+@pytest.mark.slow
 def test_a_bag_whose_scans_share_one_time_is_read_in_bounded_memory(tmp_path: Path) -> None:
     """Scans that all have one bag time were held until the end of the bag: 3,000 scans of 361
     beams with one time peaked 20 MB above distinct times (5,000 written by write_log: 35 MB vs 8 MB).

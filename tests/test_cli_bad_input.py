@@ -1196,6 +1196,7 @@ def test_out_a_link_to_nothing_or_a_loop_is_refused_before_the_work(command, lin
         f"lmsbench {command[0]}: error: {said}: a symbolic link to {target}, which does not exist (or a loop of links)"]
 
 
+@pytest.mark.slow
 def test_a_sweeps_own_big_sweep_yaml_is_read_for_its_plots(tmp_path):
     """The 1 MiB bound is for files a user writes: the sweep.yaml a sweep of many cells writes,
     one grid value a line, is larger (1.1 MB here: 50,000 values of 17 digits; the most cells,

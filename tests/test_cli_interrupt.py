@@ -548,6 +548,7 @@ def test_ctrl_c_in_the_baselines_leaves_no_earlier_runs_scores_beside_the_new_tr
     assert (out / "trajectory.tum").read_text() != before
 
 
+@pytest.mark.slow
 def test_a_stop_while_slam_writes_its_files_leaves_none_of_an_earlier_runs_beside_them(sim_run, tmp_path,
                                                                                         monkeypatch, capsys):
     """A stop between this run's config.yaml and its map.json (a CI run's Ctrl-C landed there) left

@@ -47,6 +47,7 @@ def test_slam_cell_reports_trajectory_error_against_truth():
         slam_cell({**params, "slam.extractor_params.no_such_field": 1})
 
 
+@pytest.mark.slow
 def test_the_figure_command_writes_every_named_figure_and_redraws_from_its_tables(tmp_path, capsys):
     out = tmp_path / "figs"
     assert main(["figures", "--out", str(out), "--duration", "4", "--rate-hz", "5",
@@ -137,6 +138,7 @@ def test_the_demo_writes_a_report_whose_figures_exist(tmp_path):
     assert DEMO_OUTPUTS.foreign(out) == []
 
 
+@pytest.mark.slow
 def test_fig9_of_another_log_is_named_by_that_log(tmp_path, capsys, monkeypatch):
     """`demo --log aces-corrected.log.gz` (docs/experiments.md) drew ACES's scans under "Intel log:
     4 scans with features", panels "Intel scan I", the title "Intel Research Lab (real log)" and the

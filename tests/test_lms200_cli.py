@@ -191,6 +191,7 @@ def test_record_refuses_an_impossible_variant_in_one_line(tmp_path: Path) -> Non
     assert run.stderr.count("\n") == 1 and not (tmp_path / "x.clf").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["rec.clf", "rec.bag"])
 def test_a_recording_of_no_scan_leaves_no_file(tmp_path: Path, name: str) -> None:
     """A device that sends no scan: record said "the 0 scans before it are saved in OUT" and left a
@@ -221,6 +222,7 @@ def _recording(url: str, out: Path, timeout: str, *extra: str) -> subprocess.Pop
     return proc
 
 
+@pytest.mark.slow
 def test_a_device_that_goes_mute_says_both_errors_and_leaves_no_empty_file(tmp_path: Path) -> None:
     """The device answers the setup, then nothing: no scan came, and returning it to on-request
     mode as the port closed failed too. The message was the second error alone, and the file of
@@ -338,6 +340,7 @@ def test_a_device_on_ipv6_is_recorded_through_its_bracketed_url(tmp_path: Path, 
     assert [codes(rec.scan) for rec in read_log(out)] == [codes(s) for s in sent[:4]]
 
 
+@pytest.mark.slow
 @needs_ipv6
 def test_emulate_prints_the_bracketed_url_of_an_ipv6_host() -> None:
     for host in ("::1", "[::1]"):

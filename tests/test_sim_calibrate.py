@@ -108,6 +108,7 @@ RECOVERY_CASES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", sorted(RECOVERY_CASES))
 def test_calibrate_recovers_known_parameters_from_a_simulated_log(case: str, tmp_path: Path) -> None:
     """The independent check of the issue: noise sigma within 10 %, rates within 20 % relative."""
@@ -283,6 +284,7 @@ def test_a_log_of_every_scan_twice_is_measured_as_the_log_once(tmp_path: Path) -
 
 
 # -- command line ----------------------------------------------------------------------------
+@pytest.mark.slow
 def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from experiments.cli import main
 
@@ -398,6 +400,7 @@ def test_calibrate_real_logs(shared_data: Path) -> None:
 
 
 # -- sim2real --------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_sim2real_of_a_simulated_log_agrees_with_itself(tmp_path: Path) -> None:
     """A simulated log of the cluttered office against its calibrated simulation: the same world,
     tour and noise stream (seed 7), with the sensor model fitted to the log instead of the true
@@ -515,6 +518,7 @@ def test_rough_patches_stay_in_the_world_and_gather_the_tail() -> None:
     assert clustering(white) < 0.2 < 0.4 < clustering(white.replace(noise_tail_patch_m=0.7))
 
 
+@pytest.mark.slow
 def test_dark_cells_gather_the_nans_and_calibrate_finds_their_size(tmp_path: Path) -> None:
     """dropout_patch_m > 0: the nans come from dark cells of the surfaces, so from one pose the
     same beams read nan scan after scan, in stretches, at about dropout_prob; the calibration's
