@@ -82,7 +82,7 @@ def test_ctrl_c_while_the_local_cluster_starts_stops_the_sweep_with_one_line(tmp
     spawned, 2-4 s into the run) ignored it: the process ignored SIGINT meanwhile, so that the
     workers would, and the sweep ran every cell, exit 0. Now the driver holds the stop until the
     cluster is up, then stops: the one line, 130, no worker left, and a run again computes the cells."""
-    cmd = _sweep(tmp_path, sleep=2.0, xs=2) + ["--no-progress"]
+    cmd = _sweep(tmp_path, sleep=0.5, xs=2) + ["--no-progress"]  # cells of 0.5 s: the run again computes them
     proc = subprocess.Popen(cmd, cwd=REPO, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)
     try:
@@ -417,8 +417,8 @@ def test_sigterm_stops_a_sweep_whose_cells_resume(tmp_path):
     exit 143, no worker left running; the cells done before it are not computed again. The cells
     x = 2, 3 are held (120 s) in the first run: the 2 s cells after the first two finished 2 s
     later, so a test process kept from running that long (a loaded machine) signalled a sweep
-    that had ended, exit 0."""
-    cmd = _sweep(tmp_path, sleep=2.0, xs=4) + ["--no-progress"]
+    that had ended, exit 0. The other cells take 0.5 s (the held ones are what the signal meets)."""
+    cmd = _sweep(tmp_path, sleep=0.5, xs=4) + ["--no-progress"]
     proc = subprocess.Popen(cmd, cwd=REPO, env={**_env(), "SLOW_TEST_HOLD_FROM": "2"}, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
