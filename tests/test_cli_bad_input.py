@@ -399,6 +399,11 @@ CASES = [
     (["compare", "office", "--duration", "0.01", "--out", O], "--duration"),
     (["sim2real", "{good.clf}", "--duration", "0.001", "--out", O], "--duration"),
     (["sim2real", "{good.clf}", "--probe-duration", "0.05", "--out", O], "--probe-duration"),
+    # the fit's runs: 1-600 s (a run of 0.2 s held 1 scan, too few to calibrate), and nothing to fit with --sensor
+    (["calibrate", "{good.clf}", "--fit-duration", "0.5"], "argument --fit-duration: must be a finite number >= 1 and <= 600 s"),
+    (["sim2real", "{good.clf}", "--fit-duration", "601", "--out", O], "--fit-duration"),
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_ok.yaml}", "--fit-duration", "2", "--out", O],
+     "--fit-duration sets the calibration's fit; with --sensor the log is not calibrated"),
     (["demo", "--duration", "0.01", "--out", O], "--duration"),
     # a 'billion laughs' of aliases: the error message's repr of the value hung past the test's alarm
     (["simulate", "--sensor", "{sensor_laughs.yaml}", "--out", O], "sensor_laughs.yaml: not valid YAML (its aliases "
@@ -494,6 +499,8 @@ CASES = [
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--duration", "-5"], "--duration"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--max-scans", "0"], "--max-scans"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--timeout", "0"], "--timeout"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--mode-timeout", "0"], "--mode-timeout"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--mode-timeout", "nan"], "--mode-timeout"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--timeout", "1e9"],
      "argument --timeout: must be a finite number > 0 and <= 60 s, got '1e9'"),
     (["lms200", "record", "--port", "loop://", "--out", "{missing_dir}/x.clf"], "missing_dir"),

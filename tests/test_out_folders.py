@@ -343,7 +343,7 @@ def test_a_demo_or_sim2real_stopped_at_its_first_files_is_taken_by_the_next_run(
         assert capsys.readouterr().err.splitlines()[-1:] == ["lmsbench demo: interrupted"]
     s2r = tmp_path / "s2r"
     argv = ["sim2real", str(sim / "scans.clf"), "--world", "office", "--seeds", "0", "--duration", "2", "--rate-hz", "1",
-            "--stride", "4", "--max-scans", "10", "--out", str(s2r)]
+            "--stride", "4", "--max-scans", "10", "--fit-duration", "1", "--out", str(s2r)]  # the fit: 1 s runs, not 30
     with monkeypatch.context() as m:
         _stop_at_write(m, s2r, 2)
         assert main(argv) == 130
