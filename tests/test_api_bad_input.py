@@ -259,6 +259,47 @@ def test_make_world_errors_are_lmsbench_errors(kw: dict, message: str) -> None:
         make_world(**args)
 
 
+BOX = [0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 2.0]  # cx, cy, yaw, hx, hy, z0, z1
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(boxes=[["a"] * 7]), r"^boxes: must be a \(k, 7\) array of real numbers \(cx, cy, yaw, hx, hy, z0, z1\), got list$"),
+    (dict(boxes=np.array([BOX]) + 1j), r"^boxes: must be a \(k, 7\) array of real numbers"),  # ComplexWarning, imaginary part lost
+    (dict(boxes=np.ones((1, 7), bool)), r"^boxes: must be a \(k, 7\) array of real numbers"),  # read as 0 / 1 m
+    (dict(boxes=np.ones((2, 6))), r"^boxes: must be a \(k, 7\) array \(cx, .*\), got shape \(2, 6\)$"),  # reshape's ValueError
+    (dict(boxes=np.ones(14)), r"^boxes: must be a \(k, 7\) array .* got shape \(14,\)$"),  # read as two garbled boxes
+    (dict(boxes=None), r"^boxes: must be a \(k, 7\) array of real numbers .* got NoneType$"),  # reshape's ValueError
+    (dict(cylinders=[[0, 0, 1, 0]]), r"^cylinders: must be a \(k, 5\) array \(cx, cy, r, z0, z1\), got shape \(1, 4\)$"),
+    (dict(glass="x"), r"^glass: must be a \(k, 4\) array of real numbers"),  # numpy's ValueError
+    (dict(scan_height="0.35"), r"^scan_height: must be a finite height >= 0 m, got '0.35'$"),  # math.isfinite's TypeError
+    (dict(route_nodes=[[0, 0], [1, 1]], route_edges=[[0.5, 1.7]]), r"^route_edges: must be whole numbers \(route node "
+                                                                   r"indices\), got \[\[0.5, 1.7\]\]$"),  # read as 0 - 1
+    (dict(route_nodes=[[0, 0]], route_targets=["0"]), r"^route_targets: must be a \(k, 1\) array of real numbers"),
+    (dict(name=5), r"^name: must be text, got int 5$"),  # taken
+    (dict(seed=-3), r"^seed: must be a whole number >= 0, got -3$"),  # taken
+])
+def test_a_world_built_by_hand_names_a_bad_field(kw: dict, message: str) -> None:
+    """``sim.World`` built directly (simulate_records takes one): each field read by its shape and
+    kind, an InputError naming it (they were read by ``np.asarray(..., dtype=float).reshape(-1, 7)``)."""
+    from sim.world import World
+
+    args: dict = dict(name="w", seed=0, boxes=[BOX], cylinders=np.zeros((0, 5)))
+    args.update(kw)
+    with pytest.raises(InputError, match=message):
+        World(**args)
+
+
+def test_a_world_built_by_hand_keeps_what_it_took() -> None:
+    """One box given flat, empty lists, numpy ints and floats: read as before."""
+    from sim.world import World
+
+    w = World("w", np.int64(2), np.array(BOX), [], route_nodes=[[0, 0], [1.0, 1]], route_edges=[[0, 1.0]],
+              route_targets=np.array([1]), scan_height=np.float32(0.5))
+    assert w.boxes.tolist() == [BOX] and w.cylinders.shape == (0, 5) and w.glass.shape == (0, 4)
+    assert w.route_edges.tolist() == [[0, 1]] and w.route_edges.dtype == np.int64 and w.route_targets.tolist() == [1]
+    assert w.scan_height == 0.5 and len(w.walls) == 4
+
+
 @pytest.mark.parametrize("action", [
     np.array([np.nan, 0.0]),     # drove the pose to (nan, nan)
     None,                        # the same
