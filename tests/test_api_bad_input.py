@@ -1239,6 +1239,21 @@ def test_robot_limits_and_odometry_config_check_their_fields() -> None:
         OdometryConfig(alpha3=True)
 
 
+@pytest.mark.parametrize("field", ["v_max", "a_max", "w_max", "alpha_max"])
+def test_robot_limits_near_zero_keep_the_robot_still_without_overflow_warnings(field: str) -> None:
+    """A limit of 1e-300 (within RobotLimits' bounds, > 0) gives phases of ~1e300 s: every pose of
+    the tour was computed in all three profile branches, and the unused deceleration's (T - tau)^2
+    overflowed, a RuntimeWarning per call (an error under this suite's filter; on stderr for a
+    user). Now no warning, and the robot barely leaves its first pose in 20 s."""
+    from sim import simulate_records
+    from sim.robot import RobotLimits
+
+    records = simulate_records("office", seed=0, duration=20.0, rate_hz=0.2, limits=RobotLimits(**{field: 1e-300}))
+    truth = np.array([r.truth for r in records])
+    assert len(records) == 5 and np.isfinite(truth).all()
+    np.testing.assert_allclose(truth[:, :2], [[2.0, -2.0]] * 5, atol=1e-6)
+
+
 # --- TUM trajectories, found by fuzzing the Python API (session 32) ---------------------------------
 def _tum_path(tmp_path):
     return tmp_path / "t.tum"
