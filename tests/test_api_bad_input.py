@@ -956,6 +956,22 @@ def test_write_log_flaser_of_a_scan_not_centred_is_an_input_error(tmp_path) -> N
     assert path.read_bytes() == before
 
 
+def test_write_log_flaser_of_one_beam_is_refused_not_written_unreadable(tmp_path) -> None:
+    """A one-beam scan centred ahead (angle_min 0) was written as FLASER with ``PARAM
+    laser_front_laser_fov -0`` (its field of view, (n - 1) x res, is 0), which read_log refused
+    ("laser_front_laser_fov must be a finite number > 0"): now refused when written, the log at the
+    path kept; ROBOTLASER1 carries it and reads it back."""
+    path = tmp_path / "run.log"
+    write_log(path, _records(2))
+    before = path.read_bytes()
+    one = Record(Scan(np.array([2.0]), angle_min=0.0, angle_increment=np.pi / 360, range_min=0.0, range_max=8.0))
+    with pytest.raises(InputError, match=r"^records: FLASER cannot carry a scan of one beam .*use fmt='robotlaser1'$"):
+        write_log(path, [one], fmt="flaser")
+    assert path.read_bytes() == before
+    write_log(tmp_path / "one.log", [one])
+    assert [r.scan for r in read_log(tmp_path / "one.log")] == [one.scan]
+
+
 # -- LMS200 codes and telegrams --------------------------------------------------------------------------
 @pytest.mark.parametrize("codes", [
     np.array([np.nan]),        # was 0 m (a RuntimeWarning from the cast)
