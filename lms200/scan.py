@@ -49,6 +49,8 @@ def snap_angle(value: float) -> float:
         return float(value)  # overflowed, a RuntimeWarning on stderr above a reader's one-line error
     step = np.deg2rad(ANGLE_GRID_DEG)
     snapped = float(np.round(value / step) * step)
+    if snapped == 0.0 and value != 0.0:  # 0 is exact in 6-decimal text and in float32: neither rounding
+        return float(value)  # moves it; an increment of 1e-9 rad read back as 0, refused by Scan
     error = abs(snapped - value)
     if error <= 4 * np.spacing(abs(snapped)):  # on the grid to float64 precision: kept exactly as given
         return float(value)
