@@ -25,10 +25,20 @@ GEOM = dict(angle_min=-1.0, angle_increment=0.01, range_min=0.0, range_max=10.0)
     np.array([True, False]),                      # was [1 m, 0 m]
     ["1", "2"],                                   # text
     np.array(["2020-01-01"], dtype="datetime64[D]"),  # was 18262 m
+    bytearray(b"\x01\x02"),                       # was [1 m, 2 m]: one metre per byte value (bytes were refused)
+    memoryview(b"\x01\x02"),                      # the same
 ])
 def test_scan_refuses_ranges_that_are_not_real_numbers(ranges: object) -> None:
     with pytest.raises(ScanError, match="^ranges: must be real numbers"):
         Scan(ranges, **GEOM)  # type: ignore[arg-type]
+
+
+def test_scan_still_reads_a_memoryview_of_numbers() -> None:
+    """A memoryview of float64 (or a buffer cast to them) is numbers, not raw bytes: read as before."""
+    assert Scan(memoryview(np.array([1.5, 2.0])), **GEOM).ranges.tolist() == [1.5, 2.0]
+    raw = bytearray(np.array([1.5, 2.0]).tobytes())
+    assert Scan(memoryview(raw).cast("d"), **GEOM).ranges.tolist() == [1.5, 2.0]
+    assert Scan(np.frombuffer(raw, "<f8"), **GEOM).ranges.tolist() == [1.5, 2.0]
 
 
 @pytest.mark.parametrize("field, value, message", [
