@@ -849,7 +849,7 @@ def _flaser_params(scan: Scan) -> dict[str, str]:
     fov = -2.0 * math.degrees(scan.angle_min)
     n = len(scan)
     if n < 2:  # its field of view, (n - 1) x res, is 0, which no reader's geometry takes
-        raise InputError(f"records: FLASER cannot carry a scan of one beam (its field of view would be 0 deg, which "
+        raise InputError("records: FLASER cannot carry a scan of one beam (its field of view would be 0 deg, which "
                          "the reader refuses); use fmt='robotlaser1'")
     centred = abs(fov / res - (n - 1)) < 1e-6 or abs(fov / res - n) < 1e-6
     if not centred:
