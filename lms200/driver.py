@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 import time
 from collections import deque
 from dataclasses import dataclass
@@ -143,6 +144,23 @@ def _bracketed_ipv6(url: str) -> str | None:
     host, _, port = netloc.rpartition(":")
     return f"{scheme}://[{host}]:{port}{tail}"
 
+def _url_port_problem(url: str) -> str | None:
+    """What is wrong with the port of a ``socket://`` or ``rfc2217://`` URL (none, not a number,
+    outside 1..65535), or None: pyserial's own messages for them were "'debug|info|warning|error'"
+    and "'<=' not supported between instances of 'int' and 'NoneType'"."""
+    scheme, sep, rest = url.partition("://")
+    if not sep or scheme.lower() not in ("socket", "rfc2217"):
+        return None
+    end = min((i for i in (rest.find("/"), rest.find("?")) if i >= 0), default=len(rest))
+    netloc = rest[:end]
+    host, colon, port = netloc.rpartition(":") if not netloc.endswith("]") else (netloc, "", "")
+    if not colon:  # (an empty host, socket://:2111, is this machine's, as pyserial takes it)
+        return f"a {scheme.lower()}:// URL needs a port after its host, {scheme.lower()}://HOST:PORT"
+    if not (port.isascii() and port.isdigit() and 1 <= int(port) <= 65535):
+        return f"its port must be a number from 1 to 65535, got {port!r}"
+    return None
+
+
 class LMS200:
     """A connection to one LMS200.
 
@@ -181,6 +199,11 @@ class LMS200:
         probe: bool = True,
         password: bytes = PASSWORD,
     ) -> None:
+        if isinstance(port_or_url, os.PathLike):
+            port_or_url = os.fspath(port_or_url)  # type: ignore[assignment]
+        if not isinstance(port_or_url, str) or not port_or_url:  # None was an AttributeError ('partition')
+            raise InputError(f"port_or_url: must be a serial device (/dev/ttyUSB0) or a pyserial URL "
+                             f"(socket://HOST:PORT, rfc2217://HOST:PORT), got {shown(port_or_url)}")
         self.variant = _check_arguments(baud, fov_deg, resolution_deg, units, address, timeout, mode_timeout, retries)
         baud = int(baud)  # numpy's int64 too
         self.port = port_or_url
@@ -215,6 +238,9 @@ class LMS200:
         bracketed = _bracketed_ipv6(port_or_url)
         if bracketed is not None:  # pyserial said "Could not open port ...: 'debug|info|warning|error'"
             raise LmsDeviceError(f"cannot open {port_or_url}: an IPv6 address in a URL goes in brackets: {bracketed}")
+        problem = _url_port_problem(port_or_url)
+        if problem is not None:
+            raise LmsDeviceError(f"cannot open {port_or_url}: {problem}")
         try:
             self._ser = serial.serial_for_url(port_or_url, baudrate=POWER_ON_BAUD, timeout=_READ_POLL_S)
         except (serial.SerialException, ValueError, OSError) as exc:
