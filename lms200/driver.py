@@ -29,7 +29,7 @@ import serial
 
 from .codes import Units, check_units
 from .errors import InputError, LmsDeviceError, LmsLinkError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
-from .finite import float_of, shown
+from .finite import check_number, float_of, shown
 from .framing import Frame, FrameParser
 from .protocol import (
     ACK,
@@ -65,6 +65,7 @@ from .scan import Scan
 
 PROBE_BAUDS = (9600, 19200, 38400, 500000)
 MAX_TIMEOUT_S = 60.0  # longest wait for a reply (s): a device takes 3 s at most (mode changes); 1e9 waited for ever
+MAX_STALL_TIMEOUT_S = 3600.0  # longest wait for the next scan in continuous mode (s): nan waited for ever
 _READ_POLL_S = 0.01  # longest blocking read (s)
 MIRROR_PERIOD_S = 1.0 / 75.0  # one mirror turn: a scan every 13.3 ms at 1 deg (2 turns at 0.5, 4 at 0.25)
 _SHORT_REPLY_BYTES = 64  # every reply but 0xB0 fits (the 0xF7 configuration reply is 41 bytes)
@@ -614,7 +615,17 @@ class LMS200:
                 continuous output was started gets ``mode_timeout`` on top (a mode change takes
                 up to 3 s, and a virtual device's source may take a second for its first scan).
         """
-        limit = stall_timeout if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
+        # checked when called, not at the first next(): a nan stall_timeout never timed out (a device
+        # gone silent hung the loop for ever), text was a TypeError once the first scan was yielded,
+        # and a stop that is no function a TypeError at the first read
+        if stop is not None and not callable(stop):
+            raise InputError(f"stop: must be None or a function returning True to stop, got {shown(stop)}")
+        limit = (check_number(stall_timeout, "stall_timeout", 0.0, MAX_STALL_TIMEOUT_S, lo_open=True, unit="s")
+                 if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud))
+        return self._stream(limit, stop)
+
+    def _stream(self, limit: float, stop: Callable[[], bool] | None) -> Iterator[Scan]:
+        """The generator of :meth:`scans`, its arguments checked."""
         allowed = limit
         if not self.streaming:
             self._set_mode(MODE_CONTINUOUS, "start continuous output (0x20 0x24)")
