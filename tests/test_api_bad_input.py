@@ -169,6 +169,10 @@ def test_write_log_bag_refuses_numbers_a_laserscan_cannot_hold(tmp_path, ranges:
     (lambda d: "/dev/full", "good", None, "^path: /dev/full exists and is not a regular file"),  # was OSError ENOSPC
     (lambda d: d / "x.log", None, None, "^records: must be an iterable"),    # was TypeError
     (lambda d: d / "x.log", "good", "xyz", "^fmt: must be"),                  # was a bare ValueError
+    (lambda d: d / "x.clf.zst", "good", None, r"^path: x\.clf\.zst names a zstd-compressed file, which write_log does "
+                                              r"not write \(a CARMEN log is plain text, or compressed as \.gz, \.bz2 or "
+                                              r"\.xz\)$"),  # plain text under a .zst name
+    (lambda d: d / "x.log.ZIP", "good", None, r"^path: x\.log\.ZIP names a zip archive"),  # the same
 ])
 def test_write_log_bad_paths_and_arguments(tmp_path, path_of, records, fmt, message: str) -> None:
     recs = _records(2) if records == "good" else records
