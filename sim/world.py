@@ -246,8 +246,15 @@ def _rows_of(value: object, name: str, columns: int, what: str) -> np.ndarray:
 def _indices_of(value: object, name: str, columns: int) -> np.ndarray:
     """Route node indices as an int64 (k, ``columns``) array; InputError naming the field for
     what are no whole numbers (``route_edges=[[0.5, 1.7]]`` was truncated to the edge 0 - 1)."""
-    column = np.reshape(value, (-1, 1)) if columns == 1 and isinstance(value, (list, tuple, np.ndarray)) else value
+    column = value
+    if columns == 1 and isinstance(value, (list, tuple, np.ndarray)):
+        try:
+            column = np.reshape(value, (-1, 1))
+        except ValueError:  # a ragged list: refused by real_rows, naming it
+            pass
     a = real_rows(column, name, columns, "route node indices")
+    if not (np.abs(a) < 2**62).all() or not (a == np.rint(a)).all():  # (a cast of 1e300 to int64 warned)
+        raise InputError(f"{name}: must be whole numbers (route node indices), got {shown(value)}")
     as_int = a.astype(np.int64)
     if not (as_int == a).all():
         raise InputError(f"{name}: must be whole numbers (route node indices), got {shown(value)}")

@@ -289,6 +289,8 @@ BOX = [0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 2.0]  # cx, cy, yaw, hx, hy, z0, z1
     (dict(route_nodes=[[0, 0], [1, 1]], route_edges=[[0.5, 1.7]]), r"^route_edges: must be whole numbers \(route node "
                                                                    r"indices\), got \[\[0.5, 1.7\]\]$"),  # read as 0 - 1
     (dict(route_nodes=[[0, 0]], route_targets=["0"]), r"^route_targets: must be a \(k, 1\) array of real numbers"),
+    (dict(route_nodes=[[0, 0]], route_targets=[[0], [1, 2]]), r"^route_targets: must be a \(k, 1\) array of real numbers"),
+    (dict(route_nodes=[[0, 0], [1, 1]], route_edges=[[0, 1e300]]), r"^route_edges: must be whole numbers"),  # no cast warning
     (dict(name=5), r"^name: must be text, got int 5$"),  # taken
     (dict(seed=-3), r"^seed: must be a whole number >= 0, got -3$"),  # taken
 ])
