@@ -469,7 +469,11 @@ def compare(
                          f"got {shown(params)}")
     if isinstance(sources, (str, bytes)):
         raise InputError(f"sources: must be a list of sources, got the text {sources!r} (give [{sources!r}])")
-    if not len(sources):  # an empty table, silently
+    try:
+        sources = list(sources)  # a generator of sources too
+    except TypeError:
+        raise InputError(f"sources: must be a list of sources, got {shown(sources)}") from None
+    if not sources:  # an empty table, silently
         raise InputError("sources: no source given")
     if max_scans is not None:
         max_scans = check_integer(max_scans, "max_scans", 1, what="(or None: every scan)", strict=True)

@@ -360,3 +360,10 @@ def test_compare_names_a_bad_argument_before_any_work(args, kw: dict, message: s
 
     with pytest.raises(InputError, match=message):
         compare(*args(sim_source("office", duration=0.1, rate_hz=None)), **kw)
+
+
+def test_compare_still_takes_a_generator_of_sources() -> None:
+    from experiments.compare import compare, sim_source
+
+    table = compare((s for s in [sim_source("office", duration=0.1, rate_hz=None)]), ["split_merge"])
+    assert set(table["method"]) == {"split_merge"} and len(table) == 4  # 0.1 s: four scans
