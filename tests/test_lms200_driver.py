@@ -932,6 +932,7 @@ def held(ad: PtyAdapter) -> int:
         return len(ad._pending)
 
 
+@pytest.mark.slow
 def test_a_new_host_at_another_baud_gets_none_of_the_bytes_held_for_the_last() -> None:
     """Bytes held for a host (d19d993, above) survived a new host: a recorder killed while a scaled
     device streamed at 500000 baud left 0.4 MB garbled for 500000, which the next host, opening at
