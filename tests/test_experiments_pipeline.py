@@ -320,3 +320,61 @@ def _demo_sim2real_until(folder: Path, duration: float) -> None:
     cfg.sim2real_log = str(folder / "mit.clf")
     (folder / "mit.clf").write_text("")
     _sim2real_section(cfg, folder, lambda msg: None)
+
+
+def _tiny_log(tmp_path: Path) -> Path:
+    from lms200 import write_log
+
+    path = tmp_path / "tiny.clf"
+    write_log(path, sim.simulate_records("office", seed=0, duration=0.5, rate_hz=5))
+    return path
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(stride=1.5), r"^stride: must be an integer >= 1 \(every stride-th scan\), got 1\.5$"),  # every 3rd scan (k % 1.5)
+    (dict(stride=True), r"^stride: must be an integer >= 1 .*, got True$"),  # every scan
+    (dict(stride="2"), r"^stride: must be an integer >= 1 .*, got '2'$"),  # '<' TypeError
+    (dict(stride=0), r"^stride: must be an integer >= 1"),
+    (dict(max_scans=0), r"^max_scans: must be an integer >= 1 \(or None: every scan\), got 0$"),  # no scan, silently
+    (dict(max_scans=-1), r"^max_scans: must be an integer >= 1"),  # the same
+])
+def test_log_source_refuses_counts_that_are_not_whole_numbers_from_1(tmp_path: Path, kw: dict, message: str) -> None:
+    from experiments.compare import log_source
+    from lms200.errors import InputError
+
+    with pytest.raises(InputError, match=message):
+        log_source(_tiny_log(tmp_path), **kw)
+
+
+def test_log_source_still_takes_its_counts(tmp_path: Path) -> None:
+    from experiments.compare import log_source
+
+    path = _tiny_log(tmp_path)
+    stamps = [r.scan.stamp for r in log_source(path).records]
+    assert len(stamps) == 3
+    assert [r.scan.stamp for r in log_source(path, stride=np.int64(2)).records] == stamps[::2]
+    assert len(list(log_source(path, max_scans=2).records)) == 2
+
+
+@pytest.mark.parametrize("args, kw, message", [
+    (lambda s: ([s], "sensor"), {}, r"^methods: must be a list of method names, got the text 'sensor' \(give \['sensor'\]\)$"),
+    (lambda s: ([s], []), {}, r"^methods: no method given \(None runs every available one\)$"),  # ran all five
+    (lambda s: ([s], ["sensor", "sensor"]), {}, r"^methods: 'sensor' is given twice$"),  # every scan counted twice
+    (lambda s: ([s], ["sensor"]), dict(params=5), r"^params: must be a mapping of method name to its fields"),  # AttributeError
+    (lambda s: ([s], ["sensor"]), dict(params={"sensor": 3}), r"^params: must be a mapping"),  # a TypeError
+    (lambda s: ([], ["sensor"]), {}, r"^sources: no source given$"),  # an empty table, silently
+    (lambda s: ([s], ["sensor"]), dict(max_scans=0), r"^max_scans: must be an integer >= 1"),  # the same
+])
+def test_compare_names_a_bad_argument_before_any_work(args, kw: dict, message: str) -> None:
+    from experiments.compare import compare, sim_source
+    from lms200.errors import InputError
+
+    with pytest.raises(InputError, match=message):
+        compare(*args(sim_source("office", duration=0.1, rate_hz=None)), **kw)
+
+
+def test_compare_still_takes_a_generator_of_sources() -> None:
+    from experiments.compare import compare, sim_source
+
+    table = compare((s for s in [sim_source("office", duration=0.1, rate_hz=None)]), ["split_merge"])
+    assert set(table["method"]) == {"split_merge"} and len(table) == 4  # 0.1 s: four scans

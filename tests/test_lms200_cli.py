@@ -350,6 +350,32 @@ def test_emulate_prints_the_bracketed_url_of_an_ipv6_host() -> None:
         assert re.fullmatch(r"socket://\[::1\]:\d+\n", run.stdout), run.stdout
 
 
+@pytest.mark.parametrize("url, problem", [
+    ("socket://localhost:abc", "its port must be a number from 1 to 65535, got 'abc'"),  # 'debug|info|warning|error'
+    ("socket://localhost:99999", "its port must be a number from 1 to 65535, got '99999'"),  # the same
+    ("socket://[::1]:0", "its port must be a number from 1 to 65535, got '0'"),
+    ("SOCKET://localhost", "a socket:// URL needs a port after its host, socket://HOST:PORT"),  # '<=' not supported ...
+    ("rfc2217://localhost", "a rfc2217:// URL needs a port after its host, rfc2217://HOST:PORT"),
+])
+def test_a_url_without_a_port_number_says_so(url: str, problem: str) -> None:
+    """pyserial's messages for a socket:// URL whose port is no number 1..65535 were its option
+    list, "'debug|info|warning|error'", or "'<=' not supported between instances of 'int' and
+    'NoneType'" for no port at all."""
+    from lms200.errors import LmsDeviceError
+
+    with pytest.raises(LmsDeviceError, match=re.escape(f"cannot open {url}: {problem}") + "$"):
+        LMS200(url)
+
+
+@pytest.mark.parametrize("port", [None, 5, ""])
+def test_a_port_that_is_no_text_is_an_input_error(port: object) -> None:
+    """None was an AttributeError ('NoneType' object has no attribute 'partition')."""
+    from lms200.errors import InputError
+
+    with pytest.raises(InputError, match=r"^port_or_url: must be a serial device \(/dev/ttyUSB0\) or a pyserial URL"):
+        LMS200(port)  # type: ignore[arg-type]
+
+
 def test_an_ipv6_address_without_brackets_is_refused_with_the_url_to_give(tmp_path: Path) -> None:
     """`record --port socket://::1:PORT` said "cannot open socket://::1:PORT: Could not open port
     socket://::1:PORT: 'debug|info|warning|error'" (pyserial read the address's colons as options)."""
