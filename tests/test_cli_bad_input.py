@@ -163,6 +163,11 @@ def files(tmp_path_factory):
     (d / "simbadyaml" / "config.yaml").write_text("sensor: {noise_sigma: 0.005\n")
     write_log(d / "simbadyaml" / "scans.clf", good)
     (d / "simbadyaml" / "world.json").write_text((d / "simbroken" / "world.json").read_text())
+    for name, text in {"simemptycfg": "", "simnosensor": "world: office\nseed: 0\n"}.items():
+        (d / name).mkdir()  # an empty or cut config.yaml: compare scored the scans with the default sensor, exit 0
+        (d / name / "config.yaml").write_text(text)
+        write_log(d / name / "scans.clf", good)
+        (d / name / "world.json").write_text((d / "simbroken" / "world.json").read_text())
     for name, spec in {"sweep_badspec": "a: [1\n", "sweep_listspec": "- 1\n"}.items():
         (d / name).mkdir()
         pd.DataFrame({"extractor.k": [3], "status": ["ok"], "error": [""], "cell": ["a"], "seed": [0],
@@ -634,6 +639,8 @@ CASES = [
     (["sim2real", "{good.clf}", "--sensor", "{badalias.yaml}", "--out", O],
      "badalias.yaml: not valid YAML (line 1, column 14: found undefined alias 'nope')"),
     (["compare", "{simbadyaml}", "--out", O], "config.yaml: not a simulate config (line 2, column 1: expected ',' or '}'"),
+    (["compare", "{simemptycfg}", "--out", O], "config.yaml: not a simulate config (it has no sensor: mapping"),
+    (["compare", "{simnosensor}", "--out", O], "config.yaml: not a simulate config (it has no sensor: mapping"),
     (["figures", "--sweep", "{sweep_badspec}", "--no-slam", "--out", O], "sweep.yaml: not valid YAML (line 2, column 1: "),
     (["figures", "--sweep", "{sweep_listspec}", "--no-slam", "--out", O], "sweep.yaml: not the sweep.yaml of `lmsbench sweep`"),
     # bench, the top level
