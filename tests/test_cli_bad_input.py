@@ -866,6 +866,21 @@ def test_two_sweeps_of_one_plot_name_are_refused_before_any_work(tmp_path, capsy
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("f1, spec, why", [
+    (float("nan"), "name: nan\nkind: extract\ngrid:\n  x: [1, 2]\n",
+     "no metric has a value in its results.parquet (0 of its 2 cells failed, the others gave nan for every metric"),
+    (0.5, "name: flat\nkind: extract\nfixed:\n  x: 1\n",
+     "no grid parameter takes two values and none is sampled, so there is nothing to plot the metrics against")])
+def test_a_sweep_with_nothing_to_plot_is_refused_before_any_work(tmp_path, capsys, f1, spec, why):
+    """`figures --sweep S` of a sweep whose cells all gave nan (or that varies nothing) drew no plot
+    of it and said nothing, exit 0 ("wrote 31 files", none of the sweep): refused before any work."""
+    folder = _sweep_folder(tmp_path / "s", f1, spec)
+    assert run_main(["figures", "--sweep", str(folder), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"lmsbench figures: error: --sweep {folder}: {why}"), err
+    assert not (tmp_path / "o").exists()
+
+
 def test_sweeps_of_other_names_are_drawn_side_by_side(tmp_path):
     """The check leaves two sweeps of other names alone: each one's plots are drawn."""
     from experiments.commands.figures import _check_sweeps_apart
