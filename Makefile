@@ -33,7 +33,8 @@ check: $(STAMP)
 	$(BIN)/mypy
 
 # the tests on every core (pytest-xdist; the numba kernels are compiled once, before the workers start:
-# tests/conftest.py); `-n 0` in PYTEST_ARGS runs them in this process, one by one
+# tests/conftest.py, which also starts the tests marked slow first; pyproject.toml's addopts: --dist worksteal);
+# `-n 0` in PYTEST_ARGS runs them in this process, one by one
 test: check
 	$(BIN)/python -m pytest -q -rs --durations=30 -n auto $(PYTEST_ARGS)
 

@@ -59,6 +59,8 @@ PATCH_GRID_M = (0.0, 0.1, 0.3, 1.0, 2.0)  # noise_tail_patch_m values tried (m)
 DARK_GRID_M = (0.0, 0.1, 0.2, 0.4, 0.8)  # dropout_patch_m values tried (m)
 NAN_CLUSTER_MIN = 0.1  # nan clustering (less 3 std) above this and twice the nan rate: nans gather, fit cells
 FIT_DURATION_S = 30.0  # simulated seconds per spot width
+MIN_FIT_DURATION_S = 1.0  # `calibrate --fit-duration`: 5 scans a fit run (a bootstrap needs 2)
+MAX_FIT_DURATION_S = 600.0  # 3000 scans a fit run, held at once (16 runs take minutes)
 FIT_RATE_HZ = 5.0  # scans kept per simulated second
 FIT_SEED = 0
 
@@ -75,6 +77,7 @@ class CalibrationResult:
     tail_curve: list[tuple[float, float]] = ()  # type: ignore[assignment]  # (noise_tail_prob, simulated tail share)
     patch_curve: list[tuple[float, float]] = ()  # type: ignore[assignment]  # (noise_tail_patch_m, simulated clustering)
     dark_curve: list[tuple[float, float]] = ()  # type: ignore[assignment]  # (dropout_patch_m, simulated nan clustering)
+    fit_duration: float = 30.0  # simulated seconds of each fit run (FIT_DURATION_S unless asked otherwise)
 
 
 def monotone_curve(values: Sequence[float]) -> np.ndarray:
@@ -221,7 +224,7 @@ def fit_sensor(cal: LogCalibration, world: str = "office", duration: float = FIT
     log_rate = float(cal.outlier_straight_rate.value)
     outlier = max(log_rate - (baseline if np.isfinite(baseline) else 0.0), 0.0) if np.isfinite(log_rate) else 0.0
     fitted = with_width.replace(outlier_prob=min(outlier, 0.5))
-    return CalibrationResult(cal, fitted, curve, baseline, world, tail_curve, patch_curve, dark_curve)
+    return CalibrationResult(cal, fitted, curve, baseline, world, tail_curve, patch_curve, dark_curve, duration)
 
 
 def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_scans: int | None = None,
@@ -312,6 +315,7 @@ def calibration_section(result: CalibrationResult, source: str) -> dict[str, Any
             "isolated_outlier_rate": _est(c.outlier_rate),
             "isolated_outlier_rate_amid_straight_stretches": _est(c.outlier_straight_rate),
             "fit_world": result.world,
+            "fit_duration_s": result.fit_duration,
             "simulated_mixed_share_by_beam_width": [[_round(w), _round(s)] for w, s in result.width_curve],  # rad
             "simulated_outlier_rate_amid_straight_stretches_without_outliers": _round(result.outlier_baseline),
             "residual_tail_share": _est(c.tail_share),

@@ -32,6 +32,8 @@ from features.registry import available_methods, backend_of, get_method, make_co
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
 from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
+from lms200.errors import InputError
+from lms200.finite import check_integer, shown
 from lms200.logs import SIMULATE_LOG
 from lms200.noise import QUANTUM_CANDIDATES_M
 
@@ -129,6 +131,7 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
 
     The truth is that of the pose at the scan's stamp: a folder simulated with the default
     interlaced sensor charges the robot's motion within a scan (up to 1.2 deg) to the extractor."""
+    stride, max_scans = check_counts(stride, max_scans)
 
     import sim
     from sim.sensor import upgrade_fields
@@ -178,6 +181,16 @@ def _plain(options: dict[str, Any]) -> dict[str, Any]:
     return plain_log_options(options)
 
 
+def check_counts(stride: object, max_scans: object) -> tuple[int, int | None]:
+    """``stride`` a whole number >= 1 and ``max_scans`` None or one; InputError naming it. (A stride
+    of 1.5 kept every third scan, ``k % 1.5 == 0``, True every one, "2" was a TypeError; max_scans 0
+    or -1 read no scan and compared nothing, silently.)"""
+    step = check_integer(stride, "stride", 1, what="(every stride-th scan)", strict=True)
+    most = None if max_scans is None else check_integer(max_scans, "max_scans", 1, what="(or None: every scan)",
+                                                        strict=True)
+    return step, most
+
+
 def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
                read_options: dict[str, Any] | None = None, poses: str = "auto") -> Source:
     """Every ``stride``-th scan of a real log (CARMEN or bag), at most ``max_scans`` of them; no ground truth.
@@ -191,8 +204,7 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
             restart at each scan, :class:`lms200.carmen_odom.CorrectedChain`) are used unless
             "none"; the odometry then is the raw one the ODOM lines give, never trusted.
     """
-    if stride < 1:
-        raise LmsbenchError(f"stride: must be >= 1, got {stride}")
+    stride, max_scans = check_counts(stride, max_scans)
     if poses not in POSES:
         raise LmsbenchError(f"poses: must be one of {', '.join(POSES)}, got {poses!r}")
     options = dict(read_options or {})
@@ -265,6 +277,7 @@ def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: f
     Raises:
         LmsbenchError: a word that is none of these, a bad seed, or a log of the wrong kind.
     """
+    stride, max_scans = check_counts(stride, max_scans)
     out: list[Source] = []
     for spec in specs:
         name, colon, seed = spec.partition(":")
@@ -443,10 +456,30 @@ def compare(
     """
     from experiments.user_methods import UserMethodFailed, ensure_method
 
-    methods = list(methods) if methods else available_methods()
+    if isinstance(methods, (str, bytes)):  # its letters were taken as names: "unknown extraction method 's'"
+        raise InputError(f"methods: must be a list of method names, got the text {methods!r} (give [{methods!r}])")
+    methods = available_methods() if methods is None else list(methods)
+    if not methods:  # [] ran every method, as None does
+        raise InputError("methods: no method given (None runs every available one)")
     for m in methods:
         ensure_method(m)
-    params = params or {}
+    twice = next((m for i, m in enumerate(methods) if m in methods[:i]), None)
+    if twice is not None:  # each of its scans was measured and counted twice
+        raise InputError(f"methods: {twice!r} is given twice")
+    params = {} if params is None else params
+    if not isinstance(params, dict) or not all(isinstance(v, dict) for v in params.values()):  # 'int' object has no attribute 'get'
+        raise InputError(f"params: must be a mapping of method name to its fields, {{'hough': {{'rho_step': 0.01}}}}, "
+                         f"got {shown(params)}")
+    if isinstance(sources, (str, bytes)):
+        raise InputError(f"sources: must be a list of sources, got the text {sources!r} (give [{sources!r}])")
+    try:
+        sources = list(sources)  # a generator of sources too
+    except TypeError:
+        raise InputError(f"sources: must be a list of sources, got {shown(sources)}") from None
+    if not sources:  # an empty table, silently
+        raise InputError("sources: no source given")
+    if max_scans is not None:
+        max_scans = check_integer(max_scans, "max_scans", 1, what="(or None: every scan)", strict=True)
     runs = [(m, get_method(m).run, make_config(m, **params.get(m, {}))) for m in methods]
     backends = {name: backend_of(name, cfg) for name, _, cfg in runs}
     srcs = [s for spec in sources for s in ([spec] if isinstance(spec, Source) else parse_sources([spec]))]

@@ -27,7 +27,7 @@ import numpy as np
 
 from lms200 import Scan
 from lms200.codes import real_rows
-from lms200.noise import MIN_RANGE_M, scans_of
+from lms200.noise import MAX_USED_RANGE_M, MIN_RANGE_M, scans_of
 
 from .baselines.checks import MAX_BEAMS, fail, integer, positive
 from .errors import not_a_scan
@@ -142,7 +142,10 @@ def fit_residuals_and_slopes(scan: Scan, window: int = FIT_WINDOW) -> tuple[np.n
     if r.size < window:
         return np.empty(0), np.empty(0), np.empty(0)
     with np.errstate(invalid="ignore"):
-        ok = np.isfinite(r) & (r >= max(float(scan.range_min), MIN_RANGE_M)) & (r <= float(scan.range_max))
+        # readings of 10 km or more are no rangefinder's (lms200.noise.MAX_USED_RANGE_M): 1e160 m ones,
+        # which a Scan of range_max 1e308 takes, overflowed r^2 with RuntimeWarnings
+        ok = (np.isfinite(r) & (r >= max(float(scan.range_min), MIN_RANGE_M)) & (r <= float(scan.range_max))
+              & (r < MAX_USED_RANGE_M))
     k = fit_kernel(float(scan.angle_increment), window)
     view = np.lib.stride_tricks.sliding_window_view
     full = view(ok, window).all(axis=1)

@@ -38,6 +38,9 @@ from typing import Callable
 
 import numpy as np
 
+from .errors import InputError
+from .finite import check_integer
+from .finite import shown as shown_value
 from .virtual import VirtualLMS200, garble
 
 _TICK_S = 0.002  # longest sleep between pacing steps
@@ -50,6 +53,10 @@ _SPEEDS = {getattr(termios, f"B{b}"): b for b in (9600, 19200, 38400, 57600, 115
 
 class _Adapter:
     def __init__(self, device: VirtualLMS200, clock: Callable[[], float] = time.monotonic) -> None:
+        if not isinstance(device, VirtualLMS200):  # None ran a thread that died at once, an AttributeError at close()
+            raise InputError(f"device: must be an lms200.virtual.VirtualLMS200, got {type(device).__name__}")
+        if not callable(clock):
+            raise InputError(f"clock: must be a function giving seconds, got {shown_value(clock)}")
         self.device = device
         self.clock = clock
         self.overrun_bytes = 0
@@ -236,6 +243,10 @@ class TcpServer(_Adapter):
 
     def __init__(self, device: VirtualLMS200, host: str = "127.0.0.1", port: int = 0,
                  clock: Callable[[], float] = time.monotonic, rfc2217: bool = False) -> None:
+        if not isinstance(host, str) or not host:  # None was an AttributeError ('startswith')
+            raise InputError(f"host: must be an address or a host name (127.0.0.1, ::1, localhost), got {shown_value(host)}")
+        # a bool port (True bound port 1), 99999 (OverflowError), 1.5 or text (TypeError)
+        port = check_integer(port, "port", 0, 65535, "(0: a free one)", strict=True)
         super().__init__(device, clock)
         bare = host[1:-1] if host.startswith("[") and host.endswith("]") else host
         self._listener = socket.create_server((bare, port), family=socket.AF_INET6 if ":" in bare else socket.AF_INET)

@@ -165,11 +165,23 @@ def open_bytes(path: str | Path) -> IO[bytes]:
     return COMPRESSIONS[kind][1](path, "rb") if kind else open(path, "rb")  # type: ignore[operator, return-value]
 
 
+#: first bytes of packings the reader does not open: named in the error instead of reading them as
+#: text (a zstd file, or a gzip of a gzip, was "not a CARMEN log: none of its 1 lines starts with a
+#: message name"); gzip, bzip2 and xz here are a second compression inside the first
+OTHER_PACKINGS = {b"\x28\xb5\x2f\xfd": "a zstd-compressed file", b"\x04\x22\x4d\x18": "an lz4-compressed file",
+                  b"7z\xbc\xaf\x27\x1c": "a 7z archive", b"Rar!\x1a\x07": "a rar archive",
+                  b"\x1f\x8b": "a gzip file compressed twice", b"BZh": "a bzip2 file compressed twice",
+                  b"\xfd7zXZ\x00": "an xz file compressed twice"}
+
+
 def archive_kind(head: bytes) -> str | None:
     """"a tar archive (first member ...)" or "a zip archive" when the (decompressed) first bytes
     (4096 name a tar's first member) are an archive's, else None: a log packed in an archive must be extracted first."""
     if head.startswith(b"PK\x03\x04"):
         return "a zip archive"
+    packed = next((what for magic, what in OTHER_PACKINGS.items() if head.startswith(magic)), None)
+    if packed:  # was "not a CARMEN log: none of its 1 lines starts with a message name"
+        return packed
     if len(head) >= 262 and head[257:262] == b"ustar":
         try:  # the first member's header (and a pax header before it) lies in the first blocks
             with tarfile.open(fileobj=io.BytesIO(head), mode="r:") as tar:
@@ -836,6 +848,9 @@ def _flaser_params(scan: Scan) -> dict[str, str]:
     res = math.degrees(scan.angle_increment)
     fov = -2.0 * math.degrees(scan.angle_min)
     n = len(scan)
+    if n < 2:  # its field of view, (n - 1) x res, is 0, which no reader's geometry takes
+        raise InputError("records: FLASER cannot carry a scan of one beam (its field of view would be 0 deg, which "
+                         "the reader refuses); use fmt='robotlaser1'")
     centred = abs(fov / res - (n - 1)) < 1e-6 or abs(fov / res - n) < 1e-6
     if not centred:
         raise InputError(

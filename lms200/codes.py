@@ -83,10 +83,18 @@ def real_ranges(ranges: object) -> np.ndarray:
     return float64_copy(real_numbers(ranges))
 
 
+RAW_BYTE_FORMATS = ("B", "b", "c")  # a memoryview of bytes (struct formats): not numbers of metres
+
+
 def real_numbers(ranges: object, error: type[Exception] = InputError) -> np.ndarray:
     """``ranges`` as an array (not copied) of real numbers: ints, floats or objects; ``error``
     naming ``ranges`` for bool, complex, text or dates (cast silently: 1+1j to 1.0, True to 1.0 m)
-    and for what numpy cannot read. ``lms200.Scan`` and the code conversions read ranges by it."""
+    and for what numpy cannot read. ``lms200.Scan`` and the code conversions read ranges by it.
+    Raw bytes are refused too: a bytearray (or a memoryview of bytes) read as one metre per byte
+    value, silently, while bytes were refused as text."""
+    if isinstance(ranges, bytearray) or (isinstance(ranges, memoryview) and ranges.format in RAW_BYTE_FORMATS):
+        raise error(f"ranges: must be real numbers (m), got {type(ranges).__name__} of raw bytes (read them as "
+                    "numbers first, e.g. np.frombuffer(data, '<f4'))")
     try:
         a = ranges if isinstance(ranges, np.ndarray) else np.asarray(ranges)
     except (TypeError, ValueError, OverflowError) as exc:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 import time
 from collections import deque
 from dataclasses import dataclass
@@ -28,7 +29,7 @@ import serial
 
 from .codes import Units, check_units
 from .errors import InputError, LmsDeviceError, LmsLinkError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
-from .finite import float_of, shown
+from .finite import check_number, float_of, shown
 from .framing import Frame, FrameParser
 from .protocol import (
     ACK,
@@ -64,6 +65,7 @@ from .scan import Scan
 
 PROBE_BAUDS = (9600, 19200, 38400, 500000)
 MAX_TIMEOUT_S = 60.0  # longest wait for a reply (s): a device takes 3 s at most (mode changes); 1e9 waited for ever
+MAX_STALL_TIMEOUT_S = 3600.0  # longest wait for the next scan in continuous mode (s): nan waited for ever
 _READ_POLL_S = 0.01  # longest blocking read (s)
 MIRROR_PERIOD_S = 1.0 / 75.0  # one mirror turn: a scan every 13.3 ms at 1 deg (2 turns at 0.5, 4 at 0.25)
 _SHORT_REPLY_BYTES = 64  # every reply but 0xB0 fits (the 0xF7 configuration reply is 41 bytes)
@@ -143,6 +145,23 @@ def _bracketed_ipv6(url: str) -> str | None:
     host, _, port = netloc.rpartition(":")
     return f"{scheme}://[{host}]:{port}{tail}"
 
+def _url_port_problem(url: str) -> str | None:
+    """What is wrong with the port of a ``socket://`` or ``rfc2217://`` URL (none, not a number,
+    outside 1..65535), or None: pyserial's own messages for them were "'debug|info|warning|error'"
+    and "'<=' not supported between instances of 'int' and 'NoneType'"."""
+    scheme, sep, rest = url.partition("://")
+    if not sep or scheme.lower() not in ("socket", "rfc2217"):
+        return None
+    end = min((i for i in (rest.find("/"), rest.find("?")) if i >= 0), default=len(rest))
+    netloc = rest[:end]
+    host, colon, port = netloc.rpartition(":") if not netloc.endswith("]") else (netloc, "", "")
+    if not colon:  # (an empty host, socket://:2111, is this machine's, as pyserial takes it)
+        return f"a {scheme.lower()}:// URL needs a port after its host, {scheme.lower()}://HOST:PORT"
+    if not (port.isascii() and port.isdigit() and 1 <= int(port) <= 65535):
+        return f"its port must be a number from 1 to 65535, got {port!r}"
+    return None
+
+
 class LMS200:
     """A connection to one LMS200.
 
@@ -181,6 +200,11 @@ class LMS200:
         probe: bool = True,
         password: bytes = PASSWORD,
     ) -> None:
+        if isinstance(port_or_url, os.PathLike):
+            port_or_url = os.fspath(port_or_url)  # type: ignore[assignment]
+        if not isinstance(port_or_url, str) or not port_or_url:  # None was an AttributeError ('partition')
+            raise InputError(f"port_or_url: must be a serial device (/dev/ttyUSB0) or a pyserial URL "
+                             f"(socket://HOST:PORT, rfc2217://HOST:PORT), got {shown(port_or_url)}")
         self.variant = _check_arguments(baud, fov_deg, resolution_deg, units, address, timeout, mode_timeout, retries)
         baud = int(baud)  # numpy's int64 too
         self.port = port_or_url
@@ -215,6 +239,9 @@ class LMS200:
         bracketed = _bracketed_ipv6(port_or_url)
         if bracketed is not None:  # pyserial said "Could not open port ...: 'debug|info|warning|error'"
             raise LmsDeviceError(f"cannot open {port_or_url}: an IPv6 address in a URL goes in brackets: {bracketed}")
+        problem = _url_port_problem(port_or_url)
+        if problem is not None:
+            raise LmsDeviceError(f"cannot open {port_or_url}: {problem}")
         try:
             self._ser = serial.serial_for_url(port_or_url, baudrate=POWER_ON_BAUD, timeout=_READ_POLL_S)
         except (serial.SerialException, ValueError, OSError) as exc:
@@ -588,7 +615,17 @@ class LMS200:
                 continuous output was started gets ``mode_timeout`` on top (a mode change takes
                 up to 3 s, and a virtual device's source may take a second for its first scan).
         """
-        limit = stall_timeout if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud)
+        # checked when called, not at the first next(): a nan stall_timeout never timed out (a device
+        # gone silent hung the loop for ever), text was a TypeError once the first scan was yielded,
+        # and a stop that is no function a TypeError at the first read
+        if stop is not None and not callable(stop):
+            raise InputError(f"stop: must be None or a function returning True to stop, got {shown(stop)}")
+        limit = (check_number(stall_timeout, "stall_timeout", 0.0, MAX_STALL_TIMEOUT_S, lo_open=True, unit="s")
+                 if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud))
+        return self._stream(limit, stop)
+
+    def _stream(self, limit: float, stop: Callable[[], bool] | None) -> Iterator[Scan]:
+        """The generator of :meth:`scans`, its arguments checked."""
         allowed = limit
         if not self.streaming:
             self._set_mode(MODE_CONTINUOUS, "start continuous output (0x20 0x24)")

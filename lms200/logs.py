@@ -66,6 +66,13 @@ def read_log(
     return CarmenReader(p, skip_bad_lines=skip_bad_lines, topic=topic, geometry=geometry)
 
 
+#: name endings of packings the CARMEN writer does not make (it compresses .gz, .bz2 and .xz): a log
+#: named so held plain text, which zstd, unzip or tar then refused
+UNWRITTEN_PACKINGS = {".zst": "zstd-compressed file", ".lz4": "lz4-compressed file", ".zip": "zip archive",
+                      ".7z": "7z archive", ".rar": "rar archive", ".tar": "tar archive", ".tgz": "tar archive",
+                      ".z": "compress(1) file", ".bz": "bzip file"}
+
+
 def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = None) -> int:
     """Write Records to ``path``; returns the number of scans written.
 
@@ -108,6 +115,9 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
             elif not existed and p.exists():
                 p.unlink()
             raise
+    if p.suffix.lower() in UNWRITTEN_PACKINGS:  # plain text was written under the name, silently
+        raise InputError(f"path: {p.name} names a {UNWRITTEN_PACKINGS[p.suffix.lower()]}, which write_log does not "
+                         "write (a CARMEN log is plain text, or compressed as .gz, .bz2 or .xz)")
     if p.exists() and not p.is_file():
         raise InputError(f"path: {p} exists and is not a regular file (a folder or a device); "
                          "name a file to write the log to")

@@ -43,6 +43,10 @@ _CLIP_STD_FACTOR = float(np.sqrt(1 - 2 * CLIP_SIGMAS * np.exp(-CLIP_SIGMAS**2 / 
                                  / math.erf(CLIP_SIGMAS / np.sqrt(2))))
 JUMP_FRACTION = 0.2  # a triple with |r+ - r-| > this x r0 straddles a depth step: not used
 MIN_RANGE_M = 0.05  # readings nearer than this are not used
+#: readings this far or farther are not used (m): no rangefinder measures them (``lms200.laser_geometry``'s
+#: largest range_max), and a scan of 1e160 m readings (range_max 1e308) overflowed the triples' products,
+#: RuntimeWarnings on stderr and an inf scale
+MAX_USED_RANGE_M = 10_000.0
 BOOTSTRAP_RESAMPLES = 200
 SINGLE_SCAN_BLOCK = 30  # beams per bootstrap block when there is only one scan
 MAX_TRIPLES = 4_000_000  # memory bound: triples beyond this many are not read
@@ -115,7 +119,7 @@ def line_residuals(ranges: np.ndarray, angle_increment: float, range_min: float 
         ranges: (n,) ranges of one scan (m), REP-117 special values allowed.
         angle_increment: bearing step between beams (rad).
         range_min, range_max: readings outside [max(range_min, MIN_RANGE_M), range_max) are
-            not used.
+            not used, nor readings of MAX_USED_RANGE_M (10 km) or more.
         stride: k; default :func:`interlace_stride` (beams of one mirror turn, so the robot's
             motion between interlaced turns is not taken for noise).
 
@@ -148,7 +152,7 @@ def _line_residuals(r: np.ndarray, angle_increment: float, range_min: float, ran
         return empty, empty, np.zeros(0, dtype=np.int64)
     lo = max(range_min, MIN_RANGE_M)
     with np.errstate(invalid="ignore"):
-        ok = np.isfinite(r) & (r >= lo) & (r < range_max)
+        ok = np.isfinite(r) & (r >= lo) & (r < min(range_max, MAX_USED_RANGE_M))
     rm, r0, rp = r[: -2 * k], r[k:-k], r[2 * k :]
     use = ok[: -2 * k] & ok[k:-k] & ok[2 * k :]
     with np.errstate(invalid="ignore"):

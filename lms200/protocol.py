@@ -347,10 +347,29 @@ def encode_measurement(codes: np.ndarray, units: Units, status: int = STATUS_OK)
 
 def encode_scan(scan: Scan, units: Units = "mm", status: int = STATUS_OK) -> bytes:
     """A 0xB0 payload for ``scan`` (ranges rounded to the unit; +inf -> 8183, nan -> 8191); InputError
-    for a ``scan`` that is no lms200.Scan (an array or None was an AttributeError)."""
+    for a ``scan`` that is no lms200.Scan (an array or None was an AttributeError), or whose
+    geometry is no LMS200 variant's (:func:`scan_geometry`): a 0xB0 telegram carries no angles, its
+    beam count alone gives them, so a 181-beam scan at 0.5 deg (-90 .. 0 deg) was decoded as one
+    at 1 deg (-90 .. +90 deg), silently."""
     if not isinstance(scan, Scan):
         raise InputError(f"scan: must be an lms200.Scan, got {type(scan).__name__}")
+    n = len(scan)
+    if n in VARIANT_OF_COUNT:
+        angle_min, increment = scan_geometry(n)
+    if n not in VARIANT_OF_COUNT or not (
+            math.isclose(scan.angle_min, angle_min, rel_tol=0.0, abs_tol=GEOMETRY_TOLERANCE_RAD)
+            and math.isclose(scan.angle_increment, increment, rel_tol=GEOMETRY_TOLERANCE_RAD)):
+        raise InputError(
+            f"scan: {n} beams from {math.degrees(scan.angle_min):.6g} deg, {math.degrees(scan.angle_increment):.6g} deg "
+            "apart, is no LMS200 variant's scan (181 or 361 beams from -90 deg at 1 or 0.5 deg; 101, 201 or 401 from "
+            "-50 deg at 1, 0.5 or 0.25 deg): a 0xB0 telegram carries no angles, its beam count gives them; resample "
+            "it onto a variant (lms200.virtual.resample_to_grid and variant_codes, as the virtual device does)")
     return encode_measurement(ranges_to_codes(scan.ranges, units), units, status)
+
+
+#: rad: how far a scan's angle_min (absolute) and angle_increment (relative) may lie from its
+#: variant's for encode_scan: float32 angles (a bag's) and 6-decimal text are within 1e-6
+GEOMETRY_TOLERANCE_RAD = 1e-6
 
 
 @overload

@@ -176,7 +176,8 @@ _FIELD_NAMES: dict[type, frozenset[str]] = {cls: frozenset(f.name for f in field
 
 
 def resample_to_grid(scan: Scan) -> np.ndarray:
-    """A scan's ranges on the LMS200's 361-beam 0.5 deg frame (nearest beam; nan where uncovered);
+    """A scan's ranges on the LMS200's 361-beam 0.5 deg frame (nearest beam, bearings compared
+    modulo a full turn; nan where uncovered);
     InputError for a ``scan`` that is no lms200.Scan (None, a number or an array were a TypeError or
     an AttributeError, found by fuzzing)."""
     if not isinstance(scan, Scan):
@@ -187,7 +188,12 @@ def resample_to_grid(scan: Scan) -> np.ndarray:
         scan.angle_increment, target[1] - target[0], rel_tol=1e-9
     ):
         return np.array(scan.ranges)
-    idx = np.rint((target - scan.angle_min) / scan.angle_increment).astype(np.int64)
+    # each target's bearing after the first beam's, taken modulo a full turn (within half a beam
+    # before it still counts as the first beam): a 360 deg scan from 0 to 2 pi covers -90 deg as
+    # +270 deg (its bearings were taken as they were, and half of the frame came out nan)
+    half = 0.5 * scan.angle_increment
+    offset = np.mod(target - scan.angle_min + half, 2 * np.pi) - half
+    idx = np.rint(offset / scan.angle_increment).astype(np.int64)
     covered = (idx >= 0) & (idx < len(scan))
     out = np.full(n, np.nan)
     out[covered] = scan.ranges[idx[covered]]

@@ -104,9 +104,13 @@ class Tour:
         k = np.clip(np.searchsorted(self.start, t, side="right") - 1, 0, len(self.start) - 1)
         tau = np.clip(t - self.start[k], 0.0, self.duration[k])
         ta, pk, acc, T = self.t_acc[k], self.peak[k], self.accel[k], self.duration[k]
-        s = np.where(tau < ta, 0.5 * acc * tau**2,
-                     np.where(tau < T - ta, 0.5 * acc * ta**2 + pk * (tau - ta), np.abs(self.amount[k]) - 0.5 * acc * (T - tau) ** 2))
-        rate = np.where(tau < ta, acc * tau, np.where(tau < T - ta, pk, acc * (T - tau)))
+        # every branch is computed, the one chosen stays finite (the deceleration's only where T - tau
+        # <= ta): a phase of 1e300 s (limits of v_max 1e-300 m/s) overflowed in the others, a
+        # RuntimeWarning on stderr per pose asked
+        with np.errstate(over="ignore", invalid="ignore"):
+            s = np.where(tau < ta, 0.5 * acc * tau**2,
+                         np.where(tau < T - ta, 0.5 * acc * ta**2 + pk * (tau - ta), np.abs(self.amount[k]) - 0.5 * acc * (T - tau) ** 2))
+            rate = np.where(tau < ta, acc * tau, np.where(tau < T - ta, pk, acc * (T - tau)))
         sign = np.sign(self.amount[k])
         s = np.where(self.kind[k] == STILL, 0.0, s * sign)
         rate = np.where(self.kind[k] == STILL, 0.0, rate * sign)

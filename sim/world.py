@@ -14,7 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from lms200 import LmsbenchError
+from lms200.codes import real_rows
 from lms200.errors import InputError
+from lms200.finite import check_seed, is_number, shown
 
 from .geometry import distance_to_segments, face_corners, rectangle_corners, union_faces
 from .walls_only import box_thickness, orient_walls, unreproduced
@@ -72,12 +74,18 @@ class World:
     corner_faces: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
-        self.boxes = np.asarray(self.boxes, dtype=float).reshape(-1, 7)
-        self.cylinders = np.asarray(self.cylinders, dtype=float).reshape(-1, 5)
-        self.route_nodes = np.asarray(self.route_nodes, dtype=float).reshape(-1, 2)
-        self.route_edges = np.asarray(self.route_edges, dtype=int).reshape(-1, 2)
-        self.route_targets = np.asarray(self.route_targets, dtype=int).reshape(-1)
-        self.glass = np.asarray(self.glass, dtype=float).reshape(-1, 4)
+        if not isinstance(self.name, str):
+            raise InputError(f"name: must be text, got {type(self.name).__name__} {self.name!r}")
+        check_seed(self.seed)
+        self.boxes = _rows_of(self.boxes, "boxes", 7, "cx, cy, yaw, hx, hy, z0, z1")
+        self.cylinders = _rows_of(self.cylinders, "cylinders", 5, "cx, cy, r, z0, z1")
+        self.route_nodes = _rows_of(self.route_nodes, "route_nodes", 2, "x, y")
+        self.route_edges = _indices_of(self.route_edges, "route_edges", 2)
+        self.route_targets = _indices_of(self.route_targets, "route_targets", 1).reshape(-1)
+        self.glass = _rows_of(self.glass, "glass", 4, "x1, y1, x2, y2")
+        if not is_number(self.scan_height):  # text was math.isfinite's TypeError
+            raise InputError(f"scan_height: must be a finite height >= 0 m, got {shown(self.scan_height)}")
+        self.scan_height = float(self.scan_height)
         self._check()
         h = self.scan_height
         cut_boxes = self.boxes[(self.boxes[:, 5] <= h) & (self.boxes[:, 6] >= h)]
@@ -221,6 +229,36 @@ class World:
             dc = np.hypot(p[:, None, 0] - c[:, 0], p[:, None, 1] - c[:, 1]) - c[:, 2]
             d = np.minimum(d, dc.min(axis=1))
         return d
+
+
+def _rows_of(value: object, name: str, columns: int, what: str) -> np.ndarray:
+    """A World field as a float64 (k, ``columns``) array (one row may be given flat); InputError
+    naming the field for what is no array of real numbers of that shape. (Read by ``reshape(-1,
+    columns)``: text and None were numpy's bare ValueError, complex numbers lost their imaginary
+    part with a ComplexWarning, bools read as 0 / 1 m, and 12 numbers given as (2, 6) boxes were an
+    internal error while 14 were read as two boxes of garbled fields.)"""
+    if isinstance(value, np.ndarray) and value.shape == (columns,) or (
+            isinstance(value, (list, tuple)) and len(value) == columns and all(is_number(v) for v in value)):
+        value = np.reshape(value, (1, columns))
+    return real_rows(value, name, columns, what, finite=False)  # finite and within MAX_COORD_M: _check
+
+
+def _indices_of(value: object, name: str, columns: int) -> np.ndarray:
+    """Route node indices as an int64 (k, ``columns``) array; InputError naming the field for
+    what are no whole numbers (``route_edges=[[0.5, 1.7]]`` was truncated to the edge 0 - 1)."""
+    column = value
+    if columns == 1 and isinstance(value, (list, tuple, np.ndarray)):
+        try:
+            column = np.reshape(value, (-1, 1))
+        except ValueError:  # a ragged list: refused by real_rows, naming it
+            pass
+    a = real_rows(column, name, columns, "route node indices")
+    if not (np.abs(a) < 2**62).all() or not (a == np.rint(a)).all():  # (a cast of 1e300 to int64 warned)
+        raise InputError(f"{name}: must be whole numbers (route node indices), got {shown(value)}")
+    as_int = a.astype(np.int64)
+    if not (as_int == a).all():
+        raise InputError(f"{name}: must be whole numbers (route node indices), got {shown(value)}")
+    return as_int
 
 
 class WorldSizeError(InputError):

@@ -63,6 +63,17 @@ def user_methods_dropped(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(registry, "_REGISTRY", _UserMethodsDropped(registry._REGISTRY))
 
 
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Under pytest-xdist, the tests marked ``slow`` first (in their order), then the rest as
+    collected: a test of 20 s that starts last keeps one core busy while the other has nothing
+    left (``--dist worksteal`` in pyproject.toml moves queued tests to an idle worker, not a
+    running one); started first, the other worker takes the quick ones meanwhile. The order is
+    the same in every worker (xdist requires it). In one process (``-n 0``) the order is left."""
+    if getattr(config, "workerinput", None) is None:
+        return
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)  # stable: False (slow) first
+
+
 def pytest_configure(config: pytest.Config) -> None:
     """Under pytest-xdist (`make test` runs ``-n auto``), compile the numba kernels once, in the
     controller, before the workers start: the extractors', the default SLAM's and the simulator's

@@ -25,10 +25,20 @@ GEOM = dict(angle_min=-1.0, angle_increment=0.01, range_min=0.0, range_max=10.0)
     np.array([True, False]),                      # was [1 m, 0 m]
     ["1", "2"],                                   # text
     np.array(["2020-01-01"], dtype="datetime64[D]"),  # was 18262 m
+    bytearray(b"\x01\x02"),                       # was [1 m, 2 m]: one metre per byte value (bytes were refused)
+    memoryview(b"\x01\x02"),                      # the same
 ])
 def test_scan_refuses_ranges_that_are_not_real_numbers(ranges: object) -> None:
     with pytest.raises(ScanError, match="^ranges: must be real numbers"):
         Scan(ranges, **GEOM)  # type: ignore[arg-type]
+
+
+def test_scan_still_reads_a_memoryview_of_numbers() -> None:
+    """A memoryview of float64 (or a buffer cast to them) is numbers, not raw bytes: read as before."""
+    assert Scan(memoryview(np.array([1.5, 2.0])), **GEOM).ranges.tolist() == [1.5, 2.0]
+    raw = bytearray(np.array([1.5, 2.0]).tobytes())
+    assert Scan(memoryview(raw).cast("d"), **GEOM).ranges.tolist() == [1.5, 2.0]
+    assert Scan(np.frombuffer(raw, "<f8"), **GEOM).ranges.tolist() == [1.5, 2.0]
 
 
 @pytest.mark.parametrize("field, value, message", [
@@ -159,6 +169,10 @@ def test_write_log_bag_refuses_numbers_a_laserscan_cannot_hold(tmp_path, ranges:
     (lambda d: "/dev/full", "good", None, "^path: /dev/full exists and is not a regular file"),  # was OSError ENOSPC
     (lambda d: d / "x.log", None, None, "^records: must be an iterable"),    # was TypeError
     (lambda d: d / "x.log", "good", "xyz", "^fmt: must be"),                  # was a bare ValueError
+    (lambda d: d / "x.clf.zst", "good", None, r"^path: x\.clf\.zst names a zstd-compressed file, which write_log does "
+                                              r"not write \(a CARMEN log is plain text, or compressed as \.gz, \.bz2 or "
+                                              r"\.xz\)$"),  # plain text under a .zst name
+    (lambda d: d / "x.log.ZIP", "good", None, r"^path: x\.log\.ZIP names a zip archive"),  # the same
 ])
 def test_write_log_bad_paths_and_arguments(tmp_path, path_of, records, fmt, message: str) -> None:
     recs = _records(2) if records == "good" else records
@@ -257,6 +271,49 @@ def test_make_world_errors_are_lmsbench_errors(kw: dict, message: str) -> None:
     args.update(kw)
     with pytest.raises(InputError, match=message):
         make_world(**args)
+
+
+BOX = [0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 2.0]  # cx, cy, yaw, hx, hy, z0, z1
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(boxes=[["a"] * 7]), r"^boxes: must be a \(k, 7\) array of real numbers \(cx, cy, yaw, hx, hy, z0, z1\), got list$"),
+    (dict(boxes=np.array([BOX]) + 1j), r"^boxes: must be a \(k, 7\) array of real numbers"),  # ComplexWarning, imaginary part lost
+    (dict(boxes=np.ones((1, 7), bool)), r"^boxes: must be a \(k, 7\) array of real numbers"),  # read as 0 / 1 m
+    (dict(boxes=np.ones((2, 6))), r"^boxes: must be a \(k, 7\) array \(cx, .*\), got shape \(2, 6\)$"),  # reshape's ValueError
+    (dict(boxes=np.ones(14)), r"^boxes: must be a \(k, 7\) array .* got shape \(14,\)$"),  # read as two garbled boxes
+    (dict(boxes=None), r"^boxes: must be a \(k, 7\) array of real numbers .* got NoneType$"),  # reshape's ValueError
+    (dict(cylinders=[[0, 0, 1, 0]]), r"^cylinders: must be a \(k, 5\) array \(cx, cy, r, z0, z1\), got shape \(1, 4\)$"),
+    (dict(glass="x"), r"^glass: must be a \(k, 4\) array of real numbers"),  # numpy's ValueError
+    (dict(scan_height="0.35"), r"^scan_height: must be a finite height >= 0 m, got '0.35'$"),  # math.isfinite's TypeError
+    (dict(route_nodes=[[0, 0], [1, 1]], route_edges=[[0.5, 1.7]]), r"^route_edges: must be whole numbers \(route node "
+                                                                   r"indices\), got \[\[0.5, 1.7\]\]$"),  # read as 0 - 1
+    (dict(route_nodes=[[0, 0]], route_targets=["0"]), r"^route_targets: must be a \(k, 1\) array of real numbers"),
+    (dict(route_nodes=[[0, 0]], route_targets=[[0], [1, 2]]), r"^route_targets: must be a \(k, 1\) array of real numbers"),
+    (dict(route_nodes=[[0, 0], [1, 1]], route_edges=[[0, 1e300]]), r"^route_edges: must be whole numbers"),  # no cast warning
+    (dict(name=5), r"^name: must be text, got int 5$"),  # taken
+    (dict(seed=-3), r"^seed: must be a whole number >= 0, got -3$"),  # taken
+])
+def test_a_world_built_by_hand_names_a_bad_field(kw: dict, message: str) -> None:
+    """``sim.World`` built directly (simulate_records takes one): each field read by its shape and
+    kind, an InputError naming it (they were read by ``np.asarray(..., dtype=float).reshape(-1, 7)``)."""
+    from sim.world import World
+
+    args: dict = dict(name="w", seed=0, boxes=[BOX], cylinders=np.zeros((0, 5)))
+    args.update(kw)
+    with pytest.raises(InputError, match=message):
+        World(**args)
+
+
+def test_a_world_built_by_hand_keeps_what_it_took() -> None:
+    """One box given flat, empty lists, numpy ints and floats: read as before."""
+    from sim.world import World
+
+    w = World("w", np.int64(2), np.array(BOX), [], route_nodes=[[0, 0], [1.0, 1]], route_edges=[[0, 1.0]],
+              route_targets=np.array([1]), scan_height=np.float32(0.5))
+    assert w.boxes.tolist() == [BOX] and w.cylinders.shape == (0, 5) and w.glass.shape == (0, 4)
+    assert w.route_edges.tolist() == [[0, 1]] and w.route_edges.dtype == np.int64 and w.route_targets.tolist() == [1]
+    assert w.scan_height == 0.5 and len(w.walls) == 4
 
 
 @pytest.mark.parametrize("action", [
@@ -915,6 +972,22 @@ def test_write_log_flaser_of_a_scan_not_centred_is_an_input_error(tmp_path) -> N
     assert path.read_bytes() == before
 
 
+def test_write_log_flaser_of_one_beam_is_refused_not_written_unreadable(tmp_path) -> None:
+    """A one-beam scan centred ahead (angle_min 0) was written as FLASER with ``PARAM
+    laser_front_laser_fov -0`` (its field of view, (n - 1) x res, is 0), which read_log refused
+    ("laser_front_laser_fov must be a finite number > 0"): now refused when written, the log at the
+    path kept; ROBOTLASER1 carries it and reads it back."""
+    path = tmp_path / "run.log"
+    write_log(path, _records(2))
+    before = path.read_bytes()
+    one = Record(Scan(np.array([2.0]), angle_min=0.0, angle_increment=np.pi / 360, range_min=0.0, range_max=8.0))
+    with pytest.raises(InputError, match=r"^records: FLASER cannot carry a scan of one beam .*use fmt='robotlaser1'$"):
+        write_log(path, [one], fmt="flaser")
+    assert path.read_bytes() == before
+    write_log(tmp_path / "one.log", [one])
+    assert [r.scan for r in read_log(tmp_path / "one.log")] == [one.scan]
+
+
 # -- LMS200 codes and telegrams --------------------------------------------------------------------------
 @pytest.mark.parametrize("codes", [
     np.array([np.nan]),        # was 0 m (a RuntimeWarning from the cast)
@@ -1200,6 +1273,21 @@ def test_robot_limits_and_odometry_config_check_their_fields() -> None:
         RobotLimits(radius=10**400)
     with pytest.raises(InputError, match=r"^alpha3: must be a finite number in \[0, 10\], got True"):
         OdometryConfig(alpha3=True)
+
+
+@pytest.mark.parametrize("field", ["v_max", "a_max", "w_max", "alpha_max"])
+def test_robot_limits_near_zero_keep_the_robot_still_without_overflow_warnings(field: str) -> None:
+    """A limit of 1e-300 (within RobotLimits' bounds, > 0) gives phases of ~1e300 s: every pose of
+    the tour was computed in all three profile branches, and the unused deceleration's (T - tau)^2
+    overflowed, a RuntimeWarning per call (an error under this suite's filter; on stderr for a
+    user). Now no warning, and the robot barely leaves its first pose in 20 s."""
+    from sim import simulate_records
+    from sim.robot import RobotLimits
+
+    records = simulate_records("office", seed=0, duration=20.0, rate_hz=0.2, limits=RobotLimits(**{field: 1e-300}))
+    truth = np.array([r.truth for r in records])
+    assert len(records) == 5 and np.isfinite(truth).all()
+    np.testing.assert_allclose(truth[:, :2], [[2.0, -2.0]] * 5, atol=1e-6)
 
 
 # --- TUM trajectories, found by fuzzing the Python API (session 32) ---------------------------------

@@ -301,3 +301,27 @@ def test_a_configuration_block_given_as_a_list_of_bytes_is_sent_as_before() -> N
     for bad in ([256] * 32, ["a"] * 32, "abc", None):
         with pytest.raises(InputError, match=r"^config: must be bytes"):
             set_config_request(bad)
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda a: a.PtyAdapter(None), r"^device: must be an lms200\.virtual\.VirtualLMS200, got NoneType$"),  # thread died, AttributeError at close
+    (lambda a: a.TcpServer("x"), r"^device: must be an lms200\.virtual\.VirtualLMS200, got str$"),
+    (lambda a: a.PtyAdapter(virtual.VirtualLMS200([SCAN]), clock=5), r"^clock: must be a function giving seconds, got 5$"),
+    (lambda a: a.TcpServer(virtual.VirtualLMS200([SCAN]), None), r"^host: must be an address or a host name"),  # AttributeError
+    (lambda a: a.TcpServer(virtual.VirtualLMS200([SCAN]), "127.0.0.1", 99999),
+     r"^port: must be an integer in 0\.\.65535 \(0: a free one\), got 99999$"),  # OverflowError from bind()
+    (lambda a: a.TcpServer(virtual.VirtualLMS200([SCAN]), "127.0.0.1", True), r"^port: must be an integer .* got True$"),  # bound port 1
+    (lambda a: a.TcpServer(virtual.VirtualLMS200([SCAN]), "127.0.0.1", 1.5), r"^port: must be an integer .* got 1\.5$"),  # TypeError
+])
+def test_adapters_name_a_bad_argument_before_they_start(make, message: str) -> None:
+    from lms200 import adapters
+
+    with pytest.raises(InputError, match=message):
+        make(adapters)
+
+
+def test_an_adapter_still_takes_a_numpy_port() -> None:
+    from lms200.adapters import TcpServer
+
+    with TcpServer(virtual.VirtualLMS200([SCAN]), "127.0.0.1", np.int64(0)) as adapter:
+        assert adapter.url.startswith("socket://127.0.0.1:") and adapter.port > 0

@@ -358,3 +358,21 @@ def test_ransac_stops_at_its_work_bound_and_runs_what_fits(monkeypatch):
     wall = Scan.lms200(np.minimum(3.0 / np.maximum(np.cos(bearings), 1e-3), 8.0))  # a wall 3 m ahead
     got = extract(wall, "ransac", hypotheses=60000)
     assert len(got.lines) >= 1 and np.min(np.abs(got.lines.values[:, 0] - 3.0)) < 0.01  # the wall
+
+
+def test_iepf_splits_a_closed_ring_whose_last_beam_repeats_its_first() -> None:
+    """A 360 deg scan of 721 beams from -pi to +pi (its last beam repeats its first, which a Scan
+    takes: some drivers do) of a 4 m square room: the chord of the whole ring has no length. iepf
+    found no line in it (the chord's normal, divided by a length clamped at 1e-12 m, made every
+    distance ~1e-4 m: the ring was never split); now it finds split_merge's five lines (the seam cuts
+    the wall behind) and four right-angle corners, as on 720 beams, whose ends do not meet."""
+    inc = 2 * np.pi / 720
+    bearings = -np.pi + np.arange(721) * inc
+    scan = Scan(2.0 / np.maximum(np.abs(np.cos(bearings)), np.abs(np.sin(bearings))), -np.pi, inc, 0.0, 8.0)
+    fs, sm = extract(scan, method="iepf"), extract(scan, method="split_merge")
+    assert fs.lines.beams[:, :2].tolist() == [[0, 89], [91, 269], [271, 449], [451, 629], [631, 720]]
+    assert fs.lines.beams.tolist() == sm.lines.beams.tolist()
+    np.testing.assert_allclose(fs.lines.rho, 2.0, atol=1e-9)
+    np.testing.assert_allclose(fs.lines.alpha, [-np.pi, -np.pi / 2, 0.0, np.pi / 2, np.pi], atol=1e-9)
+    np.testing.assert_allclose(fs.corners.values[:, 2], np.pi / 2, atol=1e-9)
+    assert len(fs.corners) == 4

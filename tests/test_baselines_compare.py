@@ -81,6 +81,7 @@ def _cli(*args: str) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
 
 
+@pytest.mark.slow
 def test_cli_on_a_log_writes_table_summary_and_config(tmp_path):
     log = tmp_path / "room.log"
     write_log(log, [Record(room_scan(L_ROOM, p, sigma=0.005, seed=k)[0].replace(stamp=float(k)))

@@ -404,6 +404,11 @@ CASES = [
     (["compare", "office", "--duration", "0.01", "--out", O], "--duration"),
     (["sim2real", "{good.clf}", "--duration", "0.001", "--out", O], "--duration"),
     (["sim2real", "{good.clf}", "--probe-duration", "0.05", "--out", O], "--probe-duration"),
+    # the fit's runs: 1-600 s (a run of 0.2 s held 1 scan, too few to calibrate), and nothing to fit with --sensor
+    (["calibrate", "{good.clf}", "--fit-duration", "0.5"], "argument --fit-duration: must be a finite number >= 1 and <= 600 s"),
+    (["sim2real", "{good.clf}", "--fit-duration", "601", "--out", O], "--fit-duration"),
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_ok.yaml}", "--fit-duration", "2", "--out", O],
+     "--fit-duration sets the calibration's fit; with --sensor the log is not calibrated"),
     (["demo", "--duration", "0.01", "--out", O], "--duration"),
     # a 'billion laughs' of aliases: the error message's repr of the value hung past the test's alarm
     (["simulate", "--sensor", "{sensor_laughs.yaml}", "--out", O], "sensor_laughs.yaml: not valid YAML (its aliases "
@@ -499,6 +504,8 @@ CASES = [
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--duration", "-5"], "--duration"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--max-scans", "0"], "--max-scans"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--timeout", "0"], "--timeout"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--mode-timeout", "0"], "--mode-timeout"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--mode-timeout", "nan"], "--mode-timeout"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--timeout", "1e9"],
      "argument --timeout: must be a finite number > 0 and <= 60 s, got '1e9'"),
     (["lms200", "record", "--port", "loop://", "--out", "{missing_dir}/x.clf"], "missing_dir"),
@@ -1218,15 +1225,19 @@ def test_out_a_link_to_nothing_or_a_loop_is_refused_before_the_work(command, lin
         f"lmsbench {command[0]}: error: {said}: a symbolic link to {target}, which does not exist (or a loop of links)"]
 
 
+@pytest.mark.slow
 def test_a_sweeps_own_big_sweep_yaml_is_read_for_its_plots(tmp_path):
-    """The 1 MiB bound is for files a user writes: the sweep.yaml a sweep of the most cells writes,
-    one grid value a line, is larger (1.2 MB here) and `figures --sweep DIR` still reads it."""
+    """The 1 MiB bound is for files a user writes: the sweep.yaml a sweep of many cells writes,
+    one grid value a line, is larger (1.1 MB here: 50,000 values of 17 digits; the most cells,
+    MAX_CELLS, write more) and `figures --sweep DIR` still reads it. (Half the lines of 100,000
+    short values, for the same size: the YAML parser's time goes by the line, 14 s for those.)"""
     from experiments.options import check_sweep_results
     from experiments.sweep.runner import spec_record
     from experiments.sweep.spec import SweepSpec
     from lms200.yamlio import MAX_YAML_BYTES
 
-    spec = SweepSpec.from_dict({"name": "t", "kind": "extract", "grid": {"extractor.ad_tau": [1.0 + i / 1e5 for i in range(100_000)]}})
+    spec = SweepSpec.from_dict({"name": "t", "kind": "extract", "grid": {"extractor.ad_tau": [1.0 + i * 1.2345678901234e-6
+                                                                                             for i in range(50_000)]}})
     (tmp_path / "sweep.yaml").write_text(spec_record(spec))
     assert (tmp_path / "sweep.yaml").stat().st_size > MAX_YAML_BYTES
     pd.DataFrame({"extractor.ad_tau": [1.0], "status": ["ok"], "error": [""], "cell": ["a"], "seed": [0]}).to_parquet(

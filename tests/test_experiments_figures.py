@@ -59,6 +59,7 @@ def test_comparison_of_given_records_pools_score_scan_by_hand(synthetic_run):
     assert (per_scan["time_ms"] > 0).all() and len(per_scan) == len(METHODS) * len(records)
 
 
+@pytest.mark.slow
 def test_every_figure_is_drawn_from_its_tables_with_the_data_beside_it(tmp_path, synthetic_run):
     from features import extract
 

@@ -47,6 +47,7 @@ def test_slam_cell_reports_trajectory_error_against_truth():
         slam_cell({**params, "slam.extractor_params.no_such_field": 1})
 
 
+@pytest.mark.slow
 def test_the_figure_command_writes_every_named_figure_and_redraws_from_its_tables(tmp_path, capsys):
     out = tmp_path / "figs"
     assert main(["figures", "--out", str(out), "--duration", "4", "--rate-hz", "5",
@@ -64,20 +65,26 @@ def test_the_figure_command_writes_every_named_figure_and_redraws_from_its_table
     assert len(signals) == 361
     # on straight walls AD_i10 sits at 1 + 2 sum cos(j * 0.5 deg) (eq. 4): the median beam is on one
     assert np.nanmedian(signals["ad"]) == pytest.approx(1 + 2 * np.cos(np.deg2rad(0.5) * np.arange(1, 11)).sum(), abs=0.05)
-    # redraw from the saved tables alone: the same data beside the figures
-    again = tmp_path / "again"
-    assert main(["figures", "--tables", str(out / "tables"), "--out", str(again)]) == 0
     # a log option with --tables was ignored (the figures redrawn as they were, exit 0): refused
     capsys.readouterr()
     assert main(["figures", "--tables", str(out / "tables"), "--laser-range-max", "50", "--out", str(tmp_path / "lr")]) == 2
     assert "--laser-range-max does not apply to --tables" in capsys.readouterr().err and not (tmp_path / "lr").exists()
+    # redraw from the saved tables alone: the same data beside the figures; and a folder of its own
+    # earlier outputs is replaced (here redrawn from its own tables: every CSV and figure made stale
+    # first, so each one is written again); one with a file of the user's is refused, untouched.
+    # (One redraw for both: a redraw into a new folder, which this did too, is the one from the
+    # emptied tables below.)
+    drawn = {csv.name: pd.read_csv(csv) for name in expected for csv in sorted(out.glob(f"{name}*.csv"))}
     for name in expected:
-        for csv in sorted(out.glob(f"{name}*.csv")):
-            pd.testing.assert_frame_equal(pd.read_csv(again / csv.name), pd.read_csv(csv))
-    # a folder of its own earlier outputs is replaced (here redrawn from its own tables); one with a
-    # file of the user's is refused, untouched
-    (out / "fig4_ad.csv").write_text("stale\n")
+        for stale in [*out.glob(f"{name}*.csv"), out / f"{name}.png", out / f"{name}.pdf"]:
+            stale.write_text("stale\n")
     assert main(["figures", "--tables", str(out / "tables"), "--out", str(out)]) == 0
+    assert sorted(drawn) == sorted(csv.name for name in expected for csv in out.glob(f"{name}*.csv"))
+    for csv_name, table in drawn.items():
+        pd.testing.assert_frame_equal(pd.read_csv(out / csv_name), table)
+    for name in expected:
+        for suffix in (".png", ".pdf"):
+            assert (out / f"{name}{suffix}").stat().st_size > 1000, name
     pd.testing.assert_frame_equal(pd.read_csv(out / "fig4_ad.csv"), signals)
     (out / "tables" / "mine.txt").write_text("mine")
     assert main(["figures", "--tables", str(out / "tables"), "--out", str(out)]) == 2
@@ -89,14 +96,17 @@ def test_the_figure_command_writes_every_named_figure_and_redraws_from_its_table
     emptied = tmp_path / "emptied"
     shutil.copytree(out / "tables", emptied)
     (emptied / "mine.txt").unlink()
-    for name in ("summary", "office_corners"):  # a scan without corners still has its Fig. 9 (review)
+    # (the signals and the trajectory emptied too: five figures fewer to draw, 4 s of the test's 25)
+    for name in ("summary", "office_corners", "signals", "trajectory"):  # a scan without corners still has its Fig. 9 (review)
         pd.read_parquet(emptied / f"{name}.parquet").iloc[:0].to_parquet(emptied / f"{name}.parquet")
     capsys.readouterr()
     assert main(["figures", "--tables", str(emptied), "--out", str(tmp_path / "e1")]) == 0
     assert not (tmp_path / "e1" / "accuracy_speed.png").exists() and (tmp_path / "e1" / "fig7_timing.png").exists()
     assert (tmp_path / "e1" / "fig9_office.png").exists()
+    assert not any((tmp_path / "e1" / f"{name}.png").exists() for name in ("fig3_scan", "fig4_ad", "fig10_slam"))
     printed = capsys.readouterr().out
-    assert "note: table summary is empty: the figures drawn from it are not drawn" in printed
+    for name in ("summary", "signals", "trajectory"):
+        assert f"note: table {name} is empty: the figures drawn from it are not drawn" in printed
     assert "note: table office_corners" not in printed
     for table in emptied.glob("*.parquet"):
         pd.read_parquet(table).iloc[:0].to_parquet(table)
@@ -131,6 +141,7 @@ def test_the_demo_writes_a_report_whose_figures_exist(tmp_path):
     assert DEMO_OUTPUTS.foreign(out) == []
 
 
+@pytest.mark.slow
 def test_fig9_of_another_log_is_named_by_that_log(tmp_path, capsys, monkeypatch):
     """`demo --log aces-corrected.log.gz` (docs/experiments.md) drew ACES's scans under "Intel log:
     4 scans with features", panels "Intel scan I", the title "Intel Research Lab (real log)" and the
@@ -309,3 +320,61 @@ def _demo_sim2real_until(folder: Path, duration: float) -> None:
     cfg.sim2real_log = str(folder / "mit.clf")
     (folder / "mit.clf").write_text("")
     _sim2real_section(cfg, folder, lambda msg: None)
+
+
+def _tiny_log(tmp_path: Path) -> Path:
+    from lms200 import write_log
+
+    path = tmp_path / "tiny.clf"
+    write_log(path, sim.simulate_records("office", seed=0, duration=0.5, rate_hz=5))
+    return path
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(stride=1.5), r"^stride: must be an integer >= 1 \(every stride-th scan\), got 1\.5$"),  # every 3rd scan (k % 1.5)
+    (dict(stride=True), r"^stride: must be an integer >= 1 .*, got True$"),  # every scan
+    (dict(stride="2"), r"^stride: must be an integer >= 1 .*, got '2'$"),  # '<' TypeError
+    (dict(stride=0), r"^stride: must be an integer >= 1"),
+    (dict(max_scans=0), r"^max_scans: must be an integer >= 1 \(or None: every scan\), got 0$"),  # no scan, silently
+    (dict(max_scans=-1), r"^max_scans: must be an integer >= 1"),  # the same
+])
+def test_log_source_refuses_counts_that_are_not_whole_numbers_from_1(tmp_path: Path, kw: dict, message: str) -> None:
+    from experiments.compare import log_source
+    from lms200.errors import InputError
+
+    with pytest.raises(InputError, match=message):
+        log_source(_tiny_log(tmp_path), **kw)
+
+
+def test_log_source_still_takes_its_counts(tmp_path: Path) -> None:
+    from experiments.compare import log_source
+
+    path = _tiny_log(tmp_path)
+    stamps = [r.scan.stamp for r in log_source(path).records]
+    assert len(stamps) == 3
+    assert [r.scan.stamp for r in log_source(path, stride=np.int64(2)).records] == stamps[::2]
+    assert len(list(log_source(path, max_scans=2).records)) == 2
+
+
+@pytest.mark.parametrize("args, kw, message", [
+    (lambda s: ([s], "sensor"), {}, r"^methods: must be a list of method names, got the text 'sensor' \(give \['sensor'\]\)$"),
+    (lambda s: ([s], []), {}, r"^methods: no method given \(None runs every available one\)$"),  # ran all five
+    (lambda s: ([s], ["sensor", "sensor"]), {}, r"^methods: 'sensor' is given twice$"),  # every scan counted twice
+    (lambda s: ([s], ["sensor"]), dict(params=5), r"^params: must be a mapping of method name to its fields"),  # AttributeError
+    (lambda s: ([s], ["sensor"]), dict(params={"sensor": 3}), r"^params: must be a mapping"),  # a TypeError
+    (lambda s: ([], ["sensor"]), {}, r"^sources: no source given$"),  # an empty table, silently
+    (lambda s: ([s], ["sensor"]), dict(max_scans=0), r"^max_scans: must be an integer >= 1"),  # the same
+])
+def test_compare_names_a_bad_argument_before_any_work(args, kw: dict, message: str) -> None:
+    from experiments.compare import compare, sim_source
+    from lms200.errors import InputError
+
+    with pytest.raises(InputError, match=message):
+        compare(*args(sim_source("office", duration=0.1, rate_hz=None)), **kw)
+
+
+def test_compare_still_takes_a_generator_of_sources() -> None:
+    from experiments.compare import compare, sim_source
+
+    table = compare((s for s in [sim_source("office", duration=0.1, rate_hz=None)]), ["split_merge"])
+    assert set(table["method"]) == {"split_merge"} and len(table) == 4  # 0.1 s: four scans

@@ -241,6 +241,7 @@ def test_unknown_kind_fails_before_anything_runs(tmp_path):
     assert not list((tmp_path / "out" / "cells").glob("*"))
 
 
+@pytest.mark.slow
 def test_the_cli_runs_a_sweep_file_on_its_own_local_cluster(tmp_path):
     log = tmp_path / "log.txt"
     spec_path = tmp_path / "squares.yaml"

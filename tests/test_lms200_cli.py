@@ -191,6 +191,7 @@ def test_record_refuses_an_impossible_variant_in_one_line(tmp_path: Path) -> Non
     assert run.stderr.count("\n") == 1 and not (tmp_path / "x.clf").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["rec.clf", "rec.bag"])
 def test_a_recording_of_no_scan_leaves_no_file(tmp_path: Path, name: str) -> None:
     """A device that sends no scan: record said "the 0 scans before it are saved in OUT" and left a
@@ -199,17 +200,20 @@ def test_a_recording_of_no_scan_leaves_no_file(tmp_path: Path, name: str) -> Non
     out = tmp_path / name
     with TcpServer(VirtualLMS200([], time_scale=0.01)) as ad:
         for _ in range(2):
-            run = subprocess.run(cli("record", "--port", ad.url, "--out", str(out), "--max-scans", "5", "--timeout", "0.5"),
+            run = subprocess.run(cli("record", "--port", ad.url, "--out", str(out), "--max-scans", "5", "--timeout", "0.5",
+                                     "--mode-timeout", "0.5"),
                                  env=ENV, capture_output=True, text=True, timeout=60)
             assert run.returncode == 2, run.stderr
             last = run.stderr.strip().splitlines()[-1]
             assert last.startswith("lmsbench lms200 record: error: no scan from")
             assert last.endswith(f"; no scan was recorded, so {out} was not written") and not out.exists()
+            # --mode-timeout 0.5 is the wait for the first scan after the start (default 3.5 s on top)
+            assert float(re.search(r" for ([0-9.]+) s in continuous mode", last)[1]) < 3.5, last
 
 
-def _recording(url: str, out: Path, timeout: str) -> subprocess.Popen:
+def _recording(url: str, out: Path, timeout: str, *extra: str) -> subprocess.Popen:
     """`lms200 record` started in a process, returned once its file exists (the device is set up)."""
-    proc = subprocess.Popen(cli("record", "--port", url, "--out", str(out), "--timeout", timeout), env=ENV,
+    proc = subprocess.Popen(cli("record", "--port", url, "--out", str(out), "--timeout", timeout, *extra), env=ENV,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 60
     while not out.exists():
@@ -218,6 +222,7 @@ def _recording(url: str, out: Path, timeout: str) -> subprocess.Popen:
     return proc
 
 
+@pytest.mark.slow
 def test_a_device_that_goes_mute_says_both_errors_and_leaves_no_empty_file(tmp_path: Path) -> None:
     """The device answers the setup, then nothing: no scan came, and returning it to on-request
     mode as the port closed failed too. The message was the second error alone, and the file of
@@ -225,7 +230,7 @@ def test_a_device_that_goes_mute_says_both_errors_and_leaves_no_empty_file(tmp_p
     dev = VirtualLMS200([], time_scale=0.01)
     out = tmp_path / "rec.clf"
     with TcpServer(dev) as ad:
-        proc = _recording(ad.url, out, "0.5")
+        proc = _recording(ad.url, out, "0.5", "--mode-timeout", "0.5")  # the waits for a mute device: 3.5 s each
         dev.faults.mute = True
         _, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 2, stderr
@@ -335,6 +340,7 @@ def test_a_device_on_ipv6_is_recorded_through_its_bracketed_url(tmp_path: Path, 
     assert [codes(rec.scan) for rec in read_log(out)] == [codes(s) for s in sent[:4]]
 
 
+@pytest.mark.slow
 @needs_ipv6
 def test_emulate_prints_the_bracketed_url_of_an_ipv6_host() -> None:
     for host in ("::1", "[::1]"):
@@ -342,6 +348,32 @@ def test_emulate_prints_the_bracketed_url_of_an_ipv6_host() -> None:
                              capture_output=True, text=True, timeout=60)
         assert run.returncode == 0, run.stderr  # old: 2, "... Address family for hostname not supported ..."
         assert re.fullmatch(r"socket://\[::1\]:\d+\n", run.stdout), run.stdout
+
+
+@pytest.mark.parametrize("url, problem", [
+    ("socket://localhost:abc", "its port must be a number from 1 to 65535, got 'abc'"),  # 'debug|info|warning|error'
+    ("socket://localhost:99999", "its port must be a number from 1 to 65535, got '99999'"),  # the same
+    ("socket://[::1]:0", "its port must be a number from 1 to 65535, got '0'"),
+    ("SOCKET://localhost", "a socket:// URL needs a port after its host, socket://HOST:PORT"),  # '<=' not supported ...
+    ("rfc2217://localhost", "a rfc2217:// URL needs a port after its host, rfc2217://HOST:PORT"),
+])
+def test_a_url_without_a_port_number_says_so(url: str, problem: str) -> None:
+    """pyserial's messages for a socket:// URL whose port is no number 1..65535 were its option
+    list, "'debug|info|warning|error'", or "'<=' not supported between instances of 'int' and
+    'NoneType'" for no port at all."""
+    from lms200.errors import LmsDeviceError
+
+    with pytest.raises(LmsDeviceError, match=re.escape(f"cannot open {url}: {problem}") + "$"):
+        LMS200(url)
+
+
+@pytest.mark.parametrize("port", [None, 5, ""])
+def test_a_port_that_is_no_text_is_an_input_error(port: object) -> None:
+    """None was an AttributeError ('NoneType' object has no attribute 'partition')."""
+    from lms200.errors import InputError
+
+    with pytest.raises(InputError, match=r"^port_or_url: must be a serial device \(/dev/ttyUSB0\) or a pyserial URL"):
+        LMS200(port)  # type: ignore[arg-type]
 
 
 def test_an_ipv6_address_without_brackets_is_refused_with_the_url_to_give(tmp_path: Path) -> None:

@@ -277,3 +277,33 @@ def test_continuous_output_after_a_variant_change_starts_at_once(first, second) 
         assert len(times) >= 4 and np.diff(times).max() < period * 1.6, (variant, times[:3])
         host.send(mode_request(0x25))
         host.run(0.1, step=0.0002)
+
+
+@pytest.mark.parametrize("angle_min", [0.0, -np.pi, -2 * np.pi, np.pi / 2])
+def test_a_full_turn_scan_fills_the_whole_frame_whatever_its_first_bearing(angle_min: float) -> None:
+    """A 720-beam 360 deg scan (0.5 deg apart) served by the virtual device: each beam of the
+    LMS200's -90 .. +90 deg frame is the scan's beam of that bearing, compared modulo a full turn.
+    From angle_min 0 (0 .. 359.5 deg, as some 360 deg drivers publish) the 180 beams -90 .. -0.5 deg
+    came out nan (their bearings, 270 .. 359.5 deg, were not found), so half the frame read invalid."""
+    from lms200.virtual import resample_to_grid
+
+    ranges = 1.0 + 0.01 * np.arange(720)  # beam k at angle_min + k * 0.5 deg
+    scan = Scan(ranges, angle_min, np.pi / 360, 0.0, 8.0)
+    frame_deg = -90.0 + 0.5 * np.arange(361)
+    beam = np.rint(np.mod(frame_deg - np.rad2deg(angle_min), 360.0) / 0.5).astype(int) % 720
+    np.testing.assert_array_equal(resample_to_grid(scan), ranges[beam])
+    if angle_min == 0.0:
+        assert resample_to_grid(scan)[:3].tolist() == [6.4, 6.41, 6.42]  # beams 540.. (270 deg), not nan
+
+
+def test_a_partial_scan_still_leaves_the_frame_it_does_not_cover_nan() -> None:
+    """Bearings compared modulo a full turn change nothing for a scan narrower than the frame:
+    101 beams at 0.9 deg from -45 deg fill the frame's -45 .. +45 deg, the rest stays nan; and a
+    target within half a beam outside the scan still takes its end beam."""
+    from lms200.virtual import resample_to_grid
+
+    scan = Scan(1.0 + 0.01 * np.arange(101), -np.pi / 4, np.deg2rad(0.9), 0.0, 8.0)
+    out = resample_to_grid(scan)
+    covered = np.flatnonzero(~np.isnan(out))
+    assert (covered[0], covered[-1]) == (90, 270)
+    assert out[90] == 1.0 and out[270] == 2.0 and out[180] == pytest.approx(1.5)

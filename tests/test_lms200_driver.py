@@ -932,6 +932,7 @@ def held(ad: PtyAdapter) -> int:
         return len(ad._pending)
 
 
+@pytest.mark.slow
 def test_a_new_host_at_another_baud_gets_none_of_the_bytes_held_for_the_last() -> None:
     """Bytes held for a host (d19d993, above) survived a new host: a recorder killed while a scaled
     device streamed at 500000 baud left 0.4 MB garbled for 500000, which the next host, opening at
@@ -1051,3 +1052,26 @@ def test_a_late_reply_to_the_stop_request_leaves_driver_and_unit_at_9600(monkeyp
     lms.close()
     assert lms.baud == dev.baud == 9600
     assert lms.stats.retries == 0
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(stall_timeout=float("nan")), r"^stall_timeout: must be a finite number in \(0, 3600\] s, got nan$"),  # never timed out
+    (dict(stall_timeout=-1.0), r"^stall_timeout: must be a finite number in \(0, 3600\] s, got -1\.0$"),
+    (dict(stall_timeout="1"), r"^stall_timeout: must be a finite number .* got '1'$"),  # TypeError after the first scan
+    (dict(stop=5), r"^stop: must be None or a function returning True to stop, got 5$"),  # TypeError at the first read
+])
+def test_scans_checks_its_arguments_when_called_before_streaming(kw: dict, message: str) -> None:
+    """``scans()`` was a generator: its arguments were first used inside it, and a nan
+    stall_timeout (``now - last > nan`` is never true) kept a loop on a silent device waiting for
+    ever. Now they are checked when it is called, before continuous output is asked for; a good
+    call streams as before."""
+    from lms200.errors import InputError
+
+    dev = VirtualLMS200(source(), time_scale=SCALE)
+    with TcpServer(dev) as ad, LMS200(ad.url) as lms:
+        with pytest.raises(InputError, match=message):
+            lms.scans(**kw)
+        assert not lms.streaming and not dev.continuous
+        stream = lms.scans(stall_timeout=np.float32(2.0), stop=lambda: False)
+        assert len(next(stream)) == 361 and lms.streaming
+        stream.close()

@@ -117,3 +117,22 @@ def test_recovers_the_simulators_noise_in_the_office(units: str, sigma: float) -
     adjacent = np.concatenate([line_residuals(r.scan.ranges, r.scan.angle_increment, stride=1)[0] for r in records])
     same_turn = np.concatenate([line_residuals(r.scan.ranges, r.scan.angle_increment)[0] for r in records])
     assert np.median(np.abs(adjacent)) > np.median(np.abs(same_turn))
+
+
+def test_readings_beyond_any_rangefinder_are_not_used_and_overflow_nothing() -> None:
+    """A Scan takes range_max up to 1e308: readings of 1e160 m and more overflowed the triples'
+    products (r- r+, a RuntimeWarning, an error under this suite's filter) and those of 1e100 m the
+    float32 the residuals are kept in. Readings of 10 km or more are not used now: no triple, sigma
+    nan; the same scans at 2 m give the noise as before."""
+    from lms200 import Scan
+    from lms200.noise import MAX_USED_RANGE_M, estimate_range_noise
+
+    assert MAX_USED_RANGE_M == 10_000.0
+    inc = np.pi / 360
+    for scale in (1e300, 1e160, 1e100):
+        scans = [Scan(np.full(361, scale) * (1 + np.random.default_rng(i).normal(0, 1e-3, 361)), -np.pi / 2, inc, 0.0, 1e308)
+                 for i in range(5)]
+        noise = estimate_range_noise(scans)
+        assert noise.n_used == 0 and np.isnan(noise.sigma_m)
+    scans = [Scan(2.0 * (1 + np.random.default_rng(i).normal(0, 1e-3, 361)), -np.pi / 2, inc, 0.0, 1e308) for i in range(5)]
+    assert estimate_range_noise(scans).sigma_m == pytest.approx(0.00196, abs=2e-5)

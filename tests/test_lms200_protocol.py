@@ -156,3 +156,30 @@ def test_units_byte_of_the_configuration_block() -> None:
     assert with_units(block, "cm")[5] == 0 and with_units(block, "cm")[6:] == block[6:]
     with pytest.raises(LmsProtocolError, match="unit"):
         units_of_config(bytes([0, 0, 0, 0, 0, 7]))
+
+
+@pytest.mark.parametrize("ranges, angle_min, increment, shown", [
+    (np.full(181, 2.0), -np.pi / 2, np.pi / 360, "181 beams from -90 deg, 0.5 deg apart"),  # decoded as 1 deg, -90 .. +90
+    (np.full(361, 2.0), -np.pi / 4, np.pi / 720, "361 beams from -45 deg, 0.25 deg apart"),  # decoded as 0.5 deg from -90
+    (np.full(361, 2.0), -np.pi / 2 + 0.01, np.pi / 360, "361 beams from -89.427 deg, 0.5 deg apart"),
+    (np.full(400, 2.0), -np.pi / 2, np.pi / 360, "400 beams from -90 deg, 0.5 deg apart"),  # a payload decode_scan refused
+])
+def test_encode_scan_refuses_a_scan_whose_geometry_the_telegram_cannot_carry(ranges, angle_min, increment, shown) -> None:
+    """A 0xB0 telegram carries no angles: decode_scan takes them from the beam count. encode_scan
+    wrote any scan's ranges, so a 181-beam scan at 0.5 deg came back spanning twice its angle,
+    silently; now it is an InputError naming the scan and its geometry."""
+    from lms200.errors import InputError
+
+    with pytest.raises(InputError, match=rf"^scan: {shown}, is no LMS200 variant's scan .*resample it"):
+        encode_scan(Scan(ranges, angle_min, increment, 0.0, 8.0))
+
+
+def test_encode_scan_takes_every_variant_float32_angles_included() -> None:
+    """The five variants' geometries, also as a bag's float32 angles, encode and decode to their
+    beam count and angles."""
+    for n, (fov, res) in [(181, (180, 100)), (361, (180, 50)), (101, (100, 100)), (201, (100, 50)), (401, (100, 25))]:
+        amin, inc = np.deg2rad(-fov / 2), np.deg2rad(res / 100)
+        for a, i in ((amin, inc), (float(np.float32(amin)), float(np.float32(inc)))):
+            back = decode_scan(encode_scan(Scan(np.full(n, 2.5), a, i, 0.0, 8.0)))
+            assert len(back) == n and back.angle_min == pytest.approx(amin, abs=1e-12)
+            assert back.angle_increment == pytest.approx(inc, rel=1e-12) and (back.ranges == 2.5).all()

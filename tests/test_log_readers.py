@@ -673,3 +673,20 @@ def test_every_line_of_the_real_flaser_logs_stays_cm_mode(shared_data: Path, nam
     the bulk of the readings (every scan's ranges, range_max and noise mode hashed the same)."""
     got = [rec.scan.range_max for rec in read_log(shared_data / name)]
     assert len(got) == scans and set(got) == {81.83}
+
+
+@pytest.mark.parametrize("pack, what", [
+    (lambda b: b"\x28\xb5\x2f\xfd" + bytes(range(40)), "a zstd-compressed file"),
+    (lambda b: b"\x04\x22\x4d\x18" + bytes(range(40)), "an lz4-compressed file"),
+    (lambda b: b"7z\xbc\xaf\x27\x1c" + bytes(range(40)), "a 7z archive"),
+    (lambda b: gzip.compress(gzip.compress(b)), "a gzip file compressed twice"),
+])
+def test_a_log_packed_in_a_way_the_reader_does_not_open_is_named(tmp_path: Path, pack, what: str) -> None:
+    """A zstd, lz4 or 7z file (named .gz or not), or a gzip of a gzip, was read as text: "not a
+    CARMEN log: none of its 1 lines (comments aside) starts with a message name". Now the error
+    names the packing and says to extract the log, as for a tar or zip archive."""
+    log = write(tmp_path, "fr.log", [flaser(360, stamp=float(t)) for t in range(3)])
+    path = tmp_path / "fr.log.gz"
+    path.write_bytes(pack(log.read_bytes()))
+    with pytest.raises(LogFormatError, match=rf"^{path}:0: {what}, not a log: extract the log from it first$"):
+        list(read_log(path))

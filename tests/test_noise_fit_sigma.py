@@ -57,3 +57,16 @@ def test_too_few_runs_fall_back() -> None:
     r[::7] = 2.0  # no run of 7 valid beams
     assert fit_sigma(Scan.lms200(r)) == 0.005
     assert fit_residuals(Scan(np.full(5, 2.0), -0.01, 0.005, 0.0, 8.0)).size == 0
+
+
+def test_readings_beyond_any_rangefinder_overflow_neither_fit_nor_bearing_sigma() -> None:
+    """fit_sigma and bearing_sigma of scans of 1e160 m readings (range_max 1e308, which a Scan takes)
+    overflowed r^2 (RuntimeWarnings, errors under this suite's filter); readings of 10 km or more are
+    not used now: no residual, the fallback (fit_sigma) and 0 (bearing_sigma)."""
+    from features.noise_estimate import bearing_sigma
+
+    scans = [Scan(np.full(361, 1e300) * (1 + np.random.default_rng(i).normal(0, 1e-3, 361)), -np.pi / 2, np.pi / 360,
+                  0.0, 1e308) for i in range(5)]
+    assert fit_residuals(scans[0]).size == 0
+    assert fit_sigma(scans, fallback=0.007) == 0.007
+    assert bearing_sigma(scans) == 0.0

@@ -87,6 +87,7 @@ def test_sigma_r_cm_on_mm_mode_scans_is_said(tmp_path, capsys) -> None:
         "sigma_r": 0.005, "sigma_bearing": 0.0}
 
 
+@pytest.mark.slow
 def test_the_real_mit_log_keeps_its_bearing_noise_under_a_sigma_r_override(shared_data, tmp_path, capsys) -> None:
     """The walkthrough's own command: 0.545 / 8.32 with or without --set extractor.sensor.sigma_r
     (the old code gave 0.518 / 6.73 with it, as with sigma_bearing=0)."""

@@ -60,6 +60,7 @@ def test_a_users_file_of_an_output_name_is_refused(sim, sweep_file, tmp_path, ca
     _refused(capsys, argv, folder, name, command)
 
 
+@pytest.mark.slow
 def test_rerun_into_its_own_folder_is_accepted(sim, tmp_path, capsys):
     """simulate, slam and compare run twice into one folder: the second run replaces the first's outputs."""
     sim2 = tmp_path / "sim"
@@ -213,6 +214,7 @@ def test_figures_refuses_a_users_file_of_a_figure_name(tables, tmp_path, capsys,
     _refused(capsys, argv, folder, name, "figures")
 
 
+@pytest.mark.slow
 def test_figures_runs_again_into_its_own_folder_and_a_demos(tables, tmp_path, capsys):
     """A second `figures` into its own folder replaces its figures (its figures.yaml, written
     first, tells the folder); so does a folder of a run before figures.yaml (tables/study.yaml),
@@ -321,6 +323,7 @@ def test_a_run_stopped_at_its_first_files_leaves_a_folder_the_next_run_takes(sim
     assert not [p for p in out.rglob(".*")]  # no temporary file left behind
 
 
+@pytest.mark.slow
 def test_a_demo_or_sim2real_stopped_at_its_first_files_is_taken_by_the_next_run(sim, tmp_path, capsys, monkeypatch):
     """The same for the slower commands: a demo stopped among its tables (Parquet files before
     tables/study.yaml) and sim2real stopped after sim2real.csv were refused by the next run. The
@@ -340,7 +343,7 @@ def test_a_demo_or_sim2real_stopped_at_its_first_files_is_taken_by_the_next_run(
         assert capsys.readouterr().err.splitlines()[-1:] == ["lmsbench demo: interrupted"]
     s2r = tmp_path / "s2r"
     argv = ["sim2real", str(sim / "scans.clf"), "--world", "office", "--seeds", "0", "--duration", "2", "--rate-hz", "1",
-            "--stride", "4", "--max-scans", "10", "--out", str(s2r)]
+            "--stride", "4", "--max-scans", "10", "--fit-duration", "1", "--out", str(s2r)]  # the fit: 1 s runs, not 30
     with monkeypatch.context() as m:
         _stop_at_write(m, s2r, 2)
         assert main(argv) == 130
@@ -368,6 +371,7 @@ def test_a_demo_run_again_leaves_no_figures_record_beside_its_own_figures(tmp_pa
     assert sorted(p.name for p in (demo / "figures").iterdir()) == ["fig7_timing.csv", "fig7_timing.pdf", "fig7_timing.png"]
 
 
+@pytest.mark.slow
 def test_figures_without_tables_into_a_demos_figures_is_refused(tables, tmp_path, capsys, monkeypatch):
     """`figures --out DEMO/figures` without --tables computed a study of its own, drew its figures
     over some of the demo's and saved its tables in DEMO/figures/tables/; the next `demo --out DEMO`

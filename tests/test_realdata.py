@@ -192,3 +192,21 @@ def test_compare_poses_corrected_on_a_log_without_poses_says_so(tmp_path, capsys
     write_log(tmp_path / "posed.clf", posed)
     assert main(["compare", str(tmp_path / "posed.clf"), *argv, "--out", str(tmp_path / "b")]) == 0
     assert "warning" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("angle_min", [0.0, np.pi / 2])
+def test_repeatability_sees_a_wall_behind_on_a_360_degree_scan_from_0_to_2_pi(angle_min: float) -> None:
+    """Scan b is a 360 deg scan of 720 beams; the wall y = -4 m lies at bearing -90 deg, which
+    scan b holds as its beam 540 (270 deg) from angle_min 0, or beam 180 from 90 deg. arctan2's
+    -90 deg was taken as it was, before the scan's first bearing: the wall was "not in view" in b,
+    (0, 0), though b reads it at 4 m; now (1, 1), as the same scan from angle_min -pi gives."""
+    inc = np.pi / 360
+    b = angle_min + np.arange(720) * inc
+    with np.errstate(divide="ignore"):
+        r = np.where(np.sin(b) < -0.5, -4.0 / np.sin(b), np.inf)  # the wall y = -4 below 30 deg of it
+    sb = Scan(r, angle_min, inc, 0.0, 80.0)
+    wall = Line(4.0, -math.pi / 2, (3.0, -4.0), (-3.0, -4.0), 0, 10)
+    fa = FeatureSet([wall])
+    assert repeat_counts(fa, (0.0, 0.0, 0.0), fa, (0.0, 0.0, 0.0), sb) == (1, 1)
+    shifted = Scan(np.roll(r, round((angle_min + np.pi) / inc)), -np.pi, inc, 0.0, 80.0)  # the same readings
+    assert repeat_counts(fa, (0.0, 0.0, 0.0), fa, (0.0, 0.0, 0.0), shifted) == (1, 1)

@@ -148,6 +148,21 @@ def test_snap_angle() -> None:
     assert snap_angle(0.0123) == 0.0123  # not near the 0.05 deg grid: unchanged
 
 
+def test_snap_angle_never_snaps_a_nonzero_angle_onto_0(tmp_path) -> None:
+    """0 rad is exact in 6-decimal text and in float32, so neither rounding explains a nonzero angle
+    near it: snap_angle(1e-9) was 0.0, and a ROBOTLASER1 scan of 361 beams 1e-9 rad apart, written by
+    write_log, was refused by read_log ("angle_increment: must be > 0, got 0.0"); an angle_min of
+    3e-7 rad read back as 0."""
+    from lms200 import Record, read_log, write_log
+
+    assert snap_angle(1e-9) == 1e-9 and snap_angle(-3e-7) == -3e-7 and snap_angle(0.0) == 0.0
+    assert snap_angle(-0.0) == 0.0 and snap_angle(0.000873) == np.deg2rad(0.05)  # the grid's next step still snaps
+    scans = [Scan(np.full(361, 2.0), 3e-7, 1e-9, 0.0, 8.0), Scan(np.full(3, 2.0), -1e-7, 2e-7, 0.0, 8.0)]
+    for k, scan in enumerate(scans):
+        write_log(tmp_path / f"{k}.clf", [Record(scan)])
+        assert [r.scan for r in read_log(tmp_path / f"{k}.clf")] == [scan]
+
+
 def test_decoding_a_huge_logged_range_keeps_it_without_a_warning():
     """1e308 m divided by the 1 cm unit overflows to inf: no special code, the value is kept, and
     numpy's overflow warning is not printed to the user (pytest turns RuntimeWarnings into errors)."""
@@ -182,3 +197,24 @@ def test_minus_inf_beams_extract_as_nan_beams() -> None:
         assert len(a.lines) >= 1, method
         np.testing.assert_array_equal(a.lines.values, b.lines.values, err_msg=method)
         np.testing.assert_array_equal(a.lines.beams, b.lines.beams, err_msg=method)
+
+
+def test_scans_of_one_geometry_share_their_read_only_bearings() -> None:
+    """Every scan held its own copy of its bearings (2.9 kB a 361-beam scan, half of what a run's
+    records take: simulate_records of 3,600 s held 390 MB of identical bearings). Now the scans of one
+    geometry share one read-only array; other geometries have their own, and the values are as before."""
+    import tracemalloc
+
+    ranges = np.full(361, 2.0)
+    first = Scan.lms200(ranges)
+    tracemalloc.start()
+    scans = [Scan.lms200(ranges, stamp=float(t)) for t in range(1000)]
+    held, _ = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert all(s.angles is first.angles for s in scans) and not first.angles.flags.writeable
+    assert held < 1000 * 3500  # each scan's ranges (2.9 kB) and its object; its bearings were 2.9 kB more
+    np.testing.assert_array_equal(first.angles, -np.pi / 2 + np.arange(361) * np.deg2rad(0.5))
+    other = Scan(ranges, -np.pi / 2, np.deg2rad(0.5), 0.0, 8.183, 0.0)  # the same geometry given by hand
+    assert other.angles is first.angles
+    moved = Scan(ranges, -np.pi / 2 + 1e-12, np.deg2rad(0.5), 0.0, 8.183)
+    assert moved.angles is not first.angles and moved.angles[0] == -np.pi / 2 + 1e-12

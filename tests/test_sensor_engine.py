@@ -215,3 +215,22 @@ def test_overlapping_first_pass_spans_fit_the_scratch_blocks() -> None:
         one = extract(scan, "sensor", cfg)
         np.testing.assert_array_equal(one.lines.values, many.lines.values)
         assert len(one.lines) >= 3
+
+
+@pytest.mark.parametrize("angle_min", [0.0, -2 * np.pi])
+def test_a_corner_s_beam_is_its_bearing_s_beam_on_a_scan_past_pi(angle_min: float) -> None:
+    """A 720-beam 360 deg scan (0.5 deg) of the L room with 5 mm noise, its bearings from 0 to 2 pi
+    (or the same from -2 pi to 0): each corner's beam is the beam of its bearing, counted from the
+    first beam modulo a full turn. atan2 gives bearings in (-pi, pi], and taken as they were, beam
+    indices past pi (angle_min 0) came out negative and those before -pi (angle_min -2 pi) past the
+    scan: each clamped onto a line's end, the corner at 264.8 deg read as beam 529, not 530 (and
+    from -2 pi, 136 and 354 as 137 and 355)."""
+    from experiments.synthetic import L_ROOM, cast
+
+    inc = np.pi / 360
+    ranges = cast(L_ROOM, (0.5, 0.5, 1.0), np.arange(720) * inc)[0]
+    ranges = ranges + np.random.default_rng(0).normal(0.0, 0.005, ranges.size)
+    fs = extract(Scan(ranges, angle_min, inc, 0.0, 8.0), method="sensor")
+    assert fs.corners.beams[:, 0].tolist() == [136, 354, 530, 605, 683]
+    bearing_beams = np.mod(np.arctan2(fs.corners.y, fs.corners.x), 2 * np.pi) / inc
+    np.testing.assert_array_equal(fs.corners.beams[:, 0], np.rint(bearing_beams))

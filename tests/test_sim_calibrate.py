@@ -108,6 +108,7 @@ RECOVERY_CASES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", sorted(RECOVERY_CASES))
 def test_calibrate_recovers_known_parameters_from_a_simulated_log(case: str, tmp_path: Path) -> None:
     """The independent check of the issue: noise sigma within 10 %, rates within 20 % relative."""
@@ -283,31 +284,45 @@ def test_a_log_of_every_scan_twice_is_measured_as_the_log_once(tmp_path: Path) -
 
 
 # -- command line ----------------------------------------------------------------------------
-def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path) -> None:
+@pytest.mark.slow
+def test_calibrate_command_writes_a_sensor_that_simulate_takes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from experiments.cli import main
+
+    def run_main(*args: str) -> tuple[int, str, str]:  # in this process: 2 s of start-up less than _cli each
+        code = main(list(args))
+        out, err = capsys.readouterr()
+        return code, out, err
+
     truth = RECOVERY_CASES["cm_0.5deg"]
     write_carmen(tmp_path / "log.clf", simulate_records("office", seed=3, duration=10.0, sensor=truth, rate_hz=4.0))
-    run = _cli("calibrate", str(tmp_path / "log.clf"), "--out", str(tmp_path / "sensor.yaml"))
+    # --fit-duration 2: the fit's 16 simulated runs of 2 s, not 30 (9 s of the test's 30 per calibration)
+    run = _cli("calibrate", str(tmp_path / "log.clf"), "--fit-duration", "2", "--out", str(tmp_path / "sensor.yaml"))
     assert run.returncode == 0, run.stderr
     assert "noise sigma at 1-4 m" in run.stdout and "wrote" in run.stdout
     sensor = SensorConfig.from_yaml(tmp_path / "sensor.yaml")
     doc = yaml.safe_load((tmp_path / "sensor.yaml").read_text())
     assert doc["calibration"]["noise_sigma_1_4m"]["std"] > 0 and doc["units"] == "cm"
-    sim_run = _cli("simulate", "--duration", "2", "--sensor", str(tmp_path / "sensor.yaml"), "--out", str(tmp_path / "s"))
-    assert sim_run.returncode == 0, sim_run.stderr
+    assert doc["calibration"]["fit_duration_s"] == 2.0
+    code, _, err = run_main("simulate", "--duration", "2", "--sensor", str(tmp_path / "sensor.yaml"), "--out", str(tmp_path / "s"))
+    assert code == 0, err
     cfg = yaml.safe_load((tmp_path / "s" / "config.yaml").read_text())
     assert SensorConfig.from_dict(cfg["sensor"]) == sensor
     assert read_log(tmp_path / "s" / "scans.clf") is not None
     # --out replaces calibrate's own earlier output, never another file (a user's YAML was replaced)
-    again = _cli("calibrate", str(tmp_path / "log.clf"), "--max-scans", "5", "--out", str(tmp_path / "sensor.yaml"))
-    assert again.returncode == 0, again.stderr
+    code, _, err = run_main("calibrate", str(tmp_path / "log.clf"), "--max-scans", "5", "--fit-duration", "1", "--out",
+                            str(tmp_path / "sensor.yaml"))
+    assert code == 0, err
+    assert yaml.safe_load((tmp_path / "sensor.yaml").read_text())["calibration"]["scans"] == 5  # replaced
     (tmp_path / "mine.yaml").write_text("units: cm\n# my own settings\n")
-    mine = _cli("calibrate", str(tmp_path / "log.clf"), "--out", str(tmp_path / "mine.yaml"))
-    assert mine.returncode == 2 and mine.stderr.splitlines() == [
+    code, out, err = run_main("calibrate", str(tmp_path / "log.clf"), "--out", str(tmp_path / "mine.yaml"))
+    assert code == 2 and err.splitlines() == [
         f"lmsbench calibrate: error: --out {tmp_path / 'mine.yaml'} exists and is not a sensor YAML that calibrate "
-        "wrote; give a new file name (calibrate replaces only its own earlier output)"], mine.stderr
-    assert (tmp_path / "mine.yaml").read_text() == "units: cm\n# my own settings\n" and mine.stdout == ""
+        "wrote; give a new file name (calibrate replaces only its own earlier output)"], err
+    assert (tmp_path / "mine.yaml").read_text() == "units: cm\n# my own settings\n" and out == ""
     (tmp_path / "empty.yaml").write_text("")  # nothing to lose: taken (mktemp's file)
-    assert _cli("calibrate", str(tmp_path / "log.clf"), "--max-scans", "5", "--out", str(tmp_path / "empty.yaml")).returncode == 0
+    assert run_main("calibrate", str(tmp_path / "log.clf"), "--max-scans", "5", "--fit-duration", "1", "--out",
+                    str(tmp_path / "empty.yaml"))[0] == 0
+    assert yaml.safe_load((tmp_path / "empty.yaml").read_text())["calibration"]["scans"] == 5
 
 
 def test_a_failed_write_leaves_the_earlier_sensor_yaml_whole(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
@@ -329,7 +344,8 @@ def test_a_failed_write_leaves_the_earlier_sensor_yaml_whole(tmp_path: Path, mon
         return write_text(self, data, *args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(Path, "write_text", full_disk)
-    code = main(["calibrate", str(tmp_path / "log.clf"), "--max-scans", "4", "--out", str(tmp_path / "sensor.yaml")])
+    code = main(["calibrate", str(tmp_path / "log.clf"), "--max-scans", "4", "--fit-duration", "1", "--out",
+                 str(tmp_path / "sensor.yaml")])
     err = capsys.readouterr().err
     assert code == 2 and "No space left on device" in err and len(err.strip().splitlines()) == 1, err
     assert (tmp_path / "sensor.yaml").read_text() == earlier
@@ -344,9 +360,10 @@ def test_calibrate_without_out_prints_one_valid_sensor_yaml(tmp_path: Path, caps
     from experiments.calibrate import HEADER_START
 
     write_carmen(tmp_path / "log.clf", simulate_records("office", seed=0, duration=2.0, sensor=SensorConfig(), rate_hz=4.0))
-    assert main(["calibrate", str(tmp_path / "log.clf"), "--max-scans", "6", "--out", str(tmp_path / "out.yaml")]) == 0
+    fit = ["--fit-duration", "1"]  # the fit's 16 simulated runs of 1 s, not 30: 8 s of CPU less per calibration
+    assert main(["calibrate", str(tmp_path / "log.clf"), "--max-scans", "6", *fit, "--out", str(tmp_path / "out.yaml")]) == 0
     summary = [line for line in capsys.readouterr().out.splitlines() if not line.startswith("wrote ")]
-    assert main(["calibrate", str(tmp_path / "log.clf"), "--max-scans", "6"]) == 0
+    assert main(["calibrate", str(tmp_path / "log.clf"), "--max-scans", "6", *fit]) == 0
     printed = capsys.readouterr().out
     (tmp_path / "printed.yaml").write_text(printed)
     assert printed.startswith(HEADER_START)
@@ -383,6 +400,7 @@ def test_calibrate_real_logs(shared_data: Path) -> None:
 
 
 # -- sim2real --------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_sim2real_of_a_simulated_log_agrees_with_itself(tmp_path: Path) -> None:
     """A simulated log of the cluttered office against its calibrated simulation: the same world,
     tour and noise stream (seed 7), with the sensor model fitted to the log instead of the true
@@ -417,7 +435,7 @@ def test_sim2real_warns_on_tiny_samples_and_refuses_a_log_with_nothing_to_measur
     recs = simulate_records("cluttered", seed=7, duration=2.0, sensor=SensorConfig(units="cm"), rate_hz=3.0)
     write_carmen(tmp_path / "log.clf", recs)
     run = _cli("sim2real", str(tmp_path / "log.clf"), "--world", "cluttered", "--seeds", "7", "--duration", "0.1",
-               "--max-scans", "1", "--out", str(tmp_path / "out"))
+               "--max-scans", "1", "--fit-duration", "1", "--out", str(tmp_path / "out"))  # the fit: 1 s runs, not 30
     assert run.returncode == 0, run.stderr
     warned = [line for line in run.stderr.splitlines() if "warning" in line]
     assert len(warned) == 1 and "only 1 real scans and 1 simulated scans" in warned[0], run.stderr
@@ -447,12 +465,13 @@ def test_sim2real_of_a_log_a_method_finds_no_line_in_reports_no_ratio(tmp_path: 
     circle = [dataclasses.replace(r, scan=r.scan.replace(ranges=np.full_like(r.scan.ranges, 2.0))) for r in recs]
     write_carmen(tmp_path / "circle.clf", circle)
     run = _cli("sim2real", str(tmp_path / "circle.clf"), "--world", "office", "--seeds", "0", "--duration", "1",
-               "--out", str(tmp_path / "out"))
+               "--fit-duration", "1", "--out", str(tmp_path / "out"))  # the calibration's fit: 1 s runs, not 30
     assert run.returncode == 0, run.stderr
     table = pd.read_csv(tmp_path / "out" / "sim2real.csv").set_index("method")
     assert table.at["sensor", "lines_per_scan_real"] == 0 and np.isnan(table.at["sensor", "lines_ratio"])
     assert table.at["split_merge", "lines_ratio"] == table.at["split_merge", "lines_per_scan_sim"] / \
         table.at["split_merge", "lines_per_scan_real"]
+    assert yaml.safe_load((tmp_path / "out" / "config.yaml").read_text())["fit_duration"] == 1.0
 
 
 def test_sim2real_probe_seeds_may_not_be_report_seeds_given_or_default() -> None:
@@ -499,6 +518,7 @@ def test_rough_patches_stay_in_the_world_and_gather_the_tail() -> None:
     assert clustering(white) < 0.2 < 0.4 < clustering(white.replace(noise_tail_patch_m=0.7))
 
 
+@pytest.mark.slow
 def test_dark_cells_gather_the_nans_and_calibrate_finds_their_size(tmp_path: Path) -> None:
     """dropout_patch_m > 0: the nans come from dark cells of the surfaces, so from one pose the
     same beams read nan scan after scan, in stretches, at about dropout_prob; the calibration's

@@ -415,6 +415,7 @@ def test_relief_share_counts_steps_between_straight_parallel_stretches() -> None
     assert np.isnan(relief_share([]))
 
 
+@pytest.mark.slow
 def test_fit_relief_tells_walls_with_relief_from_plain_walls_on_worlds_other_than_its_probes() -> None:
     """fit_relief (two probe worlds, seeds 100-101, 60 s each) on simulated logs of two other mit
     worlds (60 s each) at wall relief 0 and 0.75: plain walls fit at 0 (0.000-0.002 on seed pairs

@@ -140,6 +140,7 @@ def _simulate(out: Path, *extra: str) -> subprocess.CompletedProcess:
     return subprocess.run(cmd, capture_output=True, text=True, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
 
 
+@pytest.mark.slow
 def test_simulate_command_files_and_determinism(tmp_path: Path) -> None:
     a, c = tmp_path / "a", tmp_path / "c"
     run = _simulate(a)

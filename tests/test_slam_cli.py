@@ -503,6 +503,7 @@ def test_search_window_bound_counts_the_poses_the_search_scores(monkeypatch):
     assert sizes[0] == 361 * 21 * 21
 
 
+@pytest.mark.slow
 def test_an_unhealthy_run_warns_on_stderr(tmp_path, capsys):
     """Office seed 1 at 0.5 scans/s slides along a bare corridor (ATE 2.3 m) with 1 of its 44
     steps ambiguous (tests/test_slam_keyframe_logs.py): the command says so in one line on stderr,

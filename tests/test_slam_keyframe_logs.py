@@ -145,6 +145,7 @@ def test_fit_tells_a_tight_fit_from_points_near_a_wall():
     assert off == pytest.approx(np.exp(-0.5 * (0.05 / 0.03) ** 2), abs=0.03)
 
 
+@pytest.mark.slow
 @pytest.mark.shared_data
 def test_aces_keyframe_log_is_not_reported_healthy(shared_data):
     """ACES (440 scans, 2.2 s median apart, long bare corridors): the scans do not fix the

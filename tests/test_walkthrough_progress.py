@@ -117,6 +117,7 @@ def _folder_time(folder: Path) -> float:
     return datetime.datetime.strptime(folder.name, "%Y-%m-%d_%H-%M-%S").timestamp()
 
 
+@pytest.mark.slow
 def test_bench_beats_per_area_on_a_terminal_and_names_its_folder_by_its_start(tmp_path, monkeypatch, capsys):
     """`lmsbench bench features` on a terminal: 106 s of silence, then every row at once (`make
     bench`: 159 s); and its folder was named by the run's end (a run started 10:34:23 wrote
@@ -200,6 +201,7 @@ def test_figures_says_each_figure_on_a_terminal_and_names_its_folder_by_its_star
     assert sys.stderr.getvalue() == ""
 
 
+@pytest.mark.slow
 def test_compare_and_sim2real_name_their_folders_by_their_start(odometry_folder, tmp_path, monkeypatch, capsys):
     """As bench and figures (above): compare and sim2real named their results/CMD/DATE_TIME
     folders by the run's end, minutes after it started on a real log. Their work is slowed by

@@ -11,6 +11,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 CHILD = r"""
@@ -47,12 +49,14 @@ print(sorted(f"{n}.{a}" for (n, a), c in after.items() if c != before.get((n, a)
 """
 
 
+@pytest.mark.slow
 def test_warm_up_leaves_nothing_to_compile_for_cm_mode_logs() -> None:
     out = subprocess.run([sys.executable, "-c", CHILD], cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout
 
 
+@pytest.mark.slow
 def test_a_warm_up_from_the_cache_says_nothing() -> None:
     """Once the kernels are cached (the test above compiled them), a new process's warm-up loads
     them without a word: "compiling kernels, once" is for compiles only, however long a load takes."""

@@ -6,7 +6,8 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import LOG_HELP, add_log_options, read_log_options
-from experiments.options import WORLDS, InputError, check_log, check_out_file, count, path_arg, world_name
+from experiments.calibrate import FIT_DURATION_S, MAX_FIT_DURATION_S, MIN_FIT_DURATION_S
+from experiments.options import WORLDS, InputError, check_log, check_out_file, count, number, path_arg, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -18,6 +19,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="simulated world used to fit the spot width and the outlier baseline: " + WORLDS + " (default office)")
     p.add_argument("--stride", type=count(1), default=1, help="use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=count(1), help="use at most this many scans")
+    p.add_argument("--fit-duration", type=number(MIN_FIT_DURATION_S, MAX_FIT_DURATION_S, unit="s"), default=FIT_DURATION_S,
+                   metavar="S", help=f"simulated seconds of each of the fit's runs of --world (default {FIT_DURATION_S:g}; "
+                                     f"{MIN_FIT_DURATION_S:g}-{MAX_FIT_DURATION_S:g}: shorter is faster and its fitted "
+                                     "fields noisier)")
     add_log_options(p)
     p.set_defaults(func=run, prints_without_out=True)  # without --out the YAML goes to stdout
 
@@ -41,6 +46,7 @@ def run(args: argparse.Namespace) -> int:
                              "file name (calibrate replaces only its own earlier output)")
     with heartbeat_on_terminal("calibrate", "calibrate: measuring the log and fitting by simulation ..."):
         result = calibrate_log(args.log, world=args.world, stride=args.stride, max_scans=args.max_scans,
+                               fit_duration=args.fit_duration,
                                **read_options)
     if args.out is not None:  # before the summary: `calibrate LOG --out S.yaml | head -3` lost the YAML
         write_sensor_yaml(result, args.out, str(args.log))

@@ -55,6 +55,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--duration", type=positive("s"), help="stop after this many seconds")
     r.add_argument("--timeout", type=number(0.0, MAX_TIMEOUT_S, lo_open=True, unit="s"), default=0.5,
                    help=f"seconds to wait for a reply, on top of the line time (default 0.5, at most {MAX_TIMEOUT_S:g})")
+    r.add_argument("--mode-timeout", type=number(0.0, MAX_TIMEOUT_S, lo_open=True, unit="s"), default=3.5,
+                   help="seconds to wait for the reply to a mode change (start or stop of continuous output, "
+                        f"installation mode) and for the first scan after it (default 3.5: the LMS200 takes up to 3 s; "
+                        f"at most {MAX_TIMEOUT_S:g})")
     r.set_defaults(func=run_record)
 
 
@@ -245,7 +249,7 @@ def run_record(args: argparse.Namespace) -> int:
         status = f"opening {args.port} ..." if sys.stderr.isatty() else ""
         print(status, end="\r" if status else "", file=sys.stderr, flush=True)
         with LMS200(args.port, baud=args.baud, fov_deg=args.fov_deg, resolution_deg=args.resolution_deg,
-                    units=args.units, timeout=args.timeout) as dev:
+                    units=args.units, timeout=args.timeout, mode_timeout=args.mode_timeout) as dev:
             opened = (f"{dev.type_string.strip()} at {dev.baud} baud, {args.units}; recording to {args.out} "
                       f"(Ctrl-C stops)")
             print(f"{opened:<{len(status)}}", file=sys.stderr, flush=True)

@@ -23,10 +23,12 @@ from experiments.options import (
     check_seeds,
     check_yaml,
     count,
+    number,
     positive,
     path_arg,
     world_name,
 )
+from experiments.calibrate import FIT_DURATION_S, MAX_FIT_DURATION_S, MIN_FIT_DURATION_S
 from experiments.sim2real import (DEFAULT_DURATION_S, DEFAULT_RATE_HZ, DEFAULT_SEEDS, PROBE_DURATION_S, PROBE_RATE_HZ,
                                   PROBE_SEEDS, resolve_probe_seeds)
 
@@ -52,6 +54,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"simulated scans kept per second (default {DEFAULT_RATE_HZ:g}; the probe runs keep {PROBE_RATE_HZ:g})")
     p.add_argument("--stride", type=count(1), default=5, help="use every STRIDE-th real scan (default 5)")
     p.add_argument("--max-scans", type=count(1), default=400, help="at most this many real scans (default 400)")
+    p.add_argument("--fit-duration", type=number(MIN_FIT_DURATION_S, MAX_FIT_DURATION_S, unit="s"), metavar="S",
+                   help=f"simulated seconds of each run of the sensor calibration's fit (default {FIT_DURATION_S:g}, as "
+                        f"`lmsbench calibrate`; {MIN_FIT_DURATION_S:g}-{MAX_FIT_DURATION_S:g}; not with --sensor)")
     p.add_argument("--fit-rooms", action="store_true",
                    help="mit world: also fit the rooms' size to the log's share of readings at 2-8 m that reach 4 m "
                         "(off by default: docs/simulator.md)")
@@ -77,6 +82,8 @@ def run(args: argparse.Namespace) -> int:
     check_out_spares(args.out, SIM2REAL_OUTPUTS, [args.log] + ([args.sensor] if args.sensor else []))
     check_out(args.out, writes=SIM2REAL_OUTPUTS, owner=SIM2REAL_OWNER)  # after: an input in --out is the sharper message
     check_seeds(args.seeds)
+    if args.fit_duration is not None and args.sensor is not None:  # it would be ignored: nothing is calibrated
+        raise InputError("--fit-duration sets the calibration's fit; with --sensor the log is not calibrated")
     if args.fit_rooms and args.world != "mit":
         raise InputError(f"--fit-rooms fits the mit world's room size; it does nothing for --world {args.world}")
     if args.probe_duration is not None and args.world != "mit":
@@ -108,11 +115,13 @@ def run(args: argparse.Namespace) -> int:
     with heartbeat_on_terminal("sim2real", first):
         result = sim2real(args.log, world=args.world, seeds=args.seeds, duration=args.duration, rate_hz=args.rate_hz,
                           stride=args.stride, max_scans=args.max_scans, sensor=sensor, read_options=read_options,
-                          fit_rooms=args.fit_rooms, probe_duration=args.probe_duration, probe_seeds=args.probe_seeds)
+                          fit_rooms=args.fit_rooms, probe_duration=args.probe_duration, probe_seeds=args.probe_seeds,
+                          fit_duration=args.fit_duration)
     config = dict(log=str(args.log), duration=args.duration, probe_duration=args.probe_duration, rate_hz=args.rate_hz,
                   stride=args.stride,
                   max_scans=args.max_scans, sensor_file=None if args.sensor is None else str(args.sensor),
                   world=args.world, glass_per_10m=result.glass, fit_rooms=args.fit_rooms,
+                  fit_duration=None if args.sensor is not None else args.fit_duration or FIT_DURATION_S,
                   versions=versions())
     run_folder = args.out is None  # results/sim2real/DATE_TIME, linked as latest once its files are written
     args.out = args.out or new_run_folder("results/sim2real", now=started)  # named by the run's start, as the demo's

@@ -263,6 +263,28 @@ def disconnected(dx, dy, r_prev, sin_step, sin_rest, ratio, margin) -> bool:  # 
     return gap_exceeds(dx, dy, dmax) or dmax <= 0
 
 
+@kernel
+def split_at_point(x, y, s, e, threshold, finite):  # noqa: ANN001, ANN201
+    """``split_at`` of iepf where the end points s and e coincide (a closed ring: a 360 deg scan
+    whose last beam repeats its first, which ``lms200.Scan`` takes), so that no chord joins them:
+    the interior point farthest from that point (the first of equal ones) when it lies farther
+    than ``threshold`` (m), else -1; -1 too when a distance is nan. (The chord's normal, divided by
+    a length clamped at 1e-12 m, had a length near 0 there: every distance came out near 0, no
+    ring was ever split, and iepf found no line in such a scan of a square room.)"""
+    dmax = -1.0
+    at = s
+    for q in range(s + 1, e):
+        d = math.hypot(x[q] - x[s], y[q] - y[s])
+        if not finite and d != d:
+            return -1
+        if d > dmax:
+            dmax = d
+            at = q
+    if not dmax > threshold:
+        return -1
+    return at
+
+
 @inline_kernel
 def split_at(x, y, s, e, threshold, cf, sf, rho_f, chord, finite):  # noqa: ANN001, ANN201
     """Where points s..e (e - s >= 2) split: the interior point farthest from the chord between the
@@ -271,7 +293,10 @@ def split_at(x, y, s, e, threshold, cf, sf, rho_f, chord, finite):  # noqa: ANN0
     points included); -1 when none does, or when a distance is nan (``finite``: none can be, the
     checks are skipped)."""
     dx, dy = x[e] - x[s], y[e] - y[s]
-    norm = npmax(math.hypot(dx, dy), 1e-12)
+    chord_length = math.hypot(dx, dy)
+    if chord and chord_length < 1e-12:  # the end points coincide: no chord, the point itself
+        return split_at_point(x, y, s, e, threshold, finite)
+    norm = npmax(chord_length, 1e-12)
     nx, ny = -dy / norm, dx / norm
     rho_c = nx * x[s] + ny * y[s]
     cmax = -1.0  # the end points count as -1 from the chord

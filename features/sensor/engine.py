@@ -1954,7 +1954,11 @@ def corners(lv, lb, sig, ranges, valid, angle_min, increment, sigma_r, p):  # no
                 peak = max(peak, abs(sig[S_PSI, t]))
         if peak < 0.0 or peak < p.corner_psi * turn:
             continue
-        index = np.int64(np.rint((b - angle_min) / increment))
+        # the beam of bearing b, counted from the first beam modulo a full turn: atan2 gives b in
+        # (-pi, pi], the scan's bearings may lie beyond pi (a 360 deg scan from 0 to 2 pi, a scan
+        # looking back); taken as it was, such a corner's beam was clamped onto a line's end
+        half = 0.5 * increment
+        index = np.int64(np.rint(((b - angle_min + half) % (2.0 * math.pi) - half) / increment))
         index = min(max(index, last_i), first_j)
         if p.acute_check:
             var = neighbourhood_var(ranges, valid, max(0, index - k), min(n - 1, index + k))
