@@ -149,7 +149,10 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
             cfg = load_yaml((p / "config.yaml").read_text()) or {}
             if not isinstance(cfg, dict):
                 raise TypeError("expected a mapping of world, seed, duration, sensor, ...")
-            raw_sensor = cfg.get("sensor") or {}
+            raw_sensor = cfg.get("sensor")
+            if raw_sensor is None:  # an empty or cut file: the default sensor scored the scans, silently
+                raise TypeError("it has no sensor: mapping (the sensor the scans were simulated with, which scores "
+                                "them); restore it, or simulate the folder again")
             if isinstance(raw_sensor, dict):  # degrees in a folder simulated before the config held radians: read
                 raw_sensor = upgrade_fields(raw_sensor, f"{p / 'config.yaml'}: sensor")  # converted, with a warning
             sensor = sim.SensorConfig(**raw_sensor)

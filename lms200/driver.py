@@ -245,7 +245,7 @@ class LMS200:
         try:
             self._ser = serial.serial_for_url(port_or_url, baudrate=POWER_ON_BAUD, timeout=_READ_POLL_S)
         except (serial.SerialException, ValueError, OSError) as exc:
-            raise LmsDeviceError(f"cannot open {port_or_url}: {exc}") from None
+            raise LmsDeviceError(f"cannot open {port_or_url}: {_open_failure(exc)}") from None
         try:
             self._connect(probe)
             self._set_mode(MODE_ON_REQUEST, "stop continuous output (0x20 0x25)")
@@ -676,3 +676,13 @@ class LMS200:
 
 
 __all__ = ["LMS200", "DriverStats", "PROBE_BAUDS"]
+
+
+def _open_failure(exc: BaseException) -> str:
+    """The reason a port did not open: the operating system's own words where pyserial wraps an
+    OSError ("[Errno 21] could not open port /tmp: [Errno 21] Is a directory: '/tmp'" said the
+    cause twice around the port's name), else pyserial's message."""
+    cause = exc if isinstance(exc, OSError) and not isinstance(exc, serial.SerialException) else exc.__context__
+    if isinstance(cause, OSError) and cause.strerror:
+        return cause.strerror
+    return str(exc)

@@ -124,8 +124,10 @@ def ate(estimate: np.ndarray, truth: np.ndarray, align: bool = True) -> AteResul
     Raises:
         InputError: ``estimate`` or ``truth`` is no (n, 4) trajectory with finite stamps that do
             not decrease (the truth's poses finite too), or fewer than 2 estimated poses fall
-            inside the truth's time span.
+            inside the truth's time span, or ``align`` is not a bool.
     """
+    if not isinstance(align, (bool, np.bool_)):  # align="no" is true, and aligned silently
+        raise InputError(f"ate: align must be True or False, got {align!r}")
     est = checked_trajectory(estimate, "estimate", finite_poses=False)
     tru, inside = interpolate_poses(checked_trajectory(truth, "truth"), est[:, 0])
     est, tru = est[inside], tru[inside]

@@ -163,6 +163,11 @@ def files(tmp_path_factory):
     (d / "simbadyaml" / "config.yaml").write_text("sensor: {noise_sigma: 0.005\n")
     write_log(d / "simbadyaml" / "scans.clf", good)
     (d / "simbadyaml" / "world.json").write_text((d / "simbroken" / "world.json").read_text())
+    for name, text in {"simemptycfg": "", "simnosensor": "world: office\nseed: 0\n"}.items():
+        (d / name).mkdir()  # an empty or cut config.yaml: compare scored the scans with the default sensor, exit 0
+        (d / name / "config.yaml").write_text(text)
+        write_log(d / name / "scans.clf", good)
+        (d / name / "world.json").write_text((d / "simbroken" / "world.json").read_text())
     for name, spec in {"sweep_badspec": "a: [1\n", "sweep_listspec": "- 1\n"}.items():
         (d / name).mkdir()
         pd.DataFrame({"extractor.k": [3], "status": ["ok"], "error": [""], "cell": ["a"], "seed": [0],
@@ -641,6 +646,8 @@ CASES = [
     (["sim2real", "{good.clf}", "--sensor", "{badalias.yaml}", "--out", O],
      "badalias.yaml: not valid YAML (line 1, column 14: found undefined alias 'nope')"),
     (["compare", "{simbadyaml}", "--out", O], "config.yaml: not a simulate config (line 2, column 1: expected ',' or '}'"),
+    (["compare", "{simemptycfg}", "--out", O], "config.yaml: not a simulate config (it has no sensor: mapping"),
+    (["compare", "{simnosensor}", "--out", O], "config.yaml: not a simulate config (it has no sensor: mapping"),
     (["figures", "--sweep", "{sweep_badspec}", "--no-slam", "--out", O], "sweep.yaml: not valid YAML (line 2, column 1: "),
     (["figures", "--sweep", "{sweep_listspec}", "--no-slam", "--out", O], "sweep.yaml: not the sweep.yaml of `lmsbench sweep`"),
     # bench, the top level
@@ -863,6 +870,21 @@ def test_two_sweeps_of_one_plot_name_are_refused_before_any_work(tmp_path, capsy
     assert run_main(["figures", "--sweep", str(a), "--sweep", str(a) + "/", "--out", str(tmp_path / "o")]) == 2
     assert capsys.readouterr().err.strip().splitlines() == [
         f"lmsbench figures: error: --sweep {a} is given twice ({a} and {a}): each sweep folder once"]
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("f1, spec, why", [
+    (float("nan"), "name: nan\nkind: extract\ngrid:\n  x: [1, 2]\n",
+     "no metric has a value in its results.parquet (0 of its 2 cells failed, the others gave nan for every metric"),
+    (0.5, "name: flat\nkind: extract\nfixed:\n  x: 1\n",
+     "no grid parameter takes two values and none is sampled, so there is nothing to plot the metrics against")])
+def test_a_sweep_with_nothing_to_plot_is_refused_before_any_work(tmp_path, capsys, f1, spec, why):
+    """`figures --sweep S` of a sweep whose cells all gave nan (or that varies nothing) drew no plot
+    of it and said nothing, exit 0 ("wrote 31 files", none of the sweep): refused before any work."""
+    folder = _sweep_folder(tmp_path / "s", f1, spec)
+    assert run_main(["figures", "--sweep", str(folder), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"lmsbench figures: error: --sweep {folder}: {why}"), err
     assert not (tmp_path / "o").exists()
 
 

@@ -685,3 +685,36 @@ def test_a_metric_named_as_the_rows_warnings_is_refused():
 
     row = run_cell("k", {"x": 1}, lambda params: {WARNINGS_KEY: 1})
     assert row["status"] == "error" and "clash" in row["error"] and WARNINGS_KEY in row["error"]
+
+
+def test_a_cell_that_ran_after_its_sensor_file_changed_is_not_stored_under_the_old_files_key(tmp_path, monkeypatch):
+    """A sensor file edited while a sweep ran: the cells computed after the edit read the new file,
+    and were stored under the key of the old one (the digests are taken when the sweep starts), so a
+    resumed sweep took them as done with the old file. They are not stored now, with one warning
+    naming the file; the next run computes them with the file as it is."""
+    import experiments.sweep.runner as runner
+    from sim import SensorConfig
+
+    monkeypatch.chdir(tmp_path)
+    SensorConfig(noise_sigma=0.005).to_yaml(tmp_path / "sensor.yaml")
+    spec = SweepSpec.from_dict({"name": "sf", "kind": "extract", "grid": {"extractor.k": [3, 5]},
+                                "fixed": {"duration": 1.0, "rate_hz": 3.0, "sensor_file": "sensor.yaml"}})
+    calls = []
+    real = runner.run_cell
+
+    def edit_before_the_second(kind, params, fn=None):
+        calls.append(params)
+        if len(calls) == 2:
+            SensorConfig(noise_sigma=0.03).to_yaml(tmp_path / "sensor.yaml")
+        return real(kind, params, fn)
+
+    monkeypatch.setattr(runner, "run_cell", edit_before_the_second)
+    with pytest.warns(LmsbenchWarning, match=r"^sensor.yaml changed while the sweep ran: 1 cell that finished after "
+                                             r"the change was not stored .*run the sweep again"):
+        first = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert (first.total, first.computed, first.skipped) == (2, 1, 0)
+    assert list(first.table["extractor.k"]) == [3]  # the cell of the old file only
+    monkeypatch.setattr(runner, "run_cell", real)
+    again = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert (again.computed, again.skipped) == (2, 0)  # both with the new file, under its keys
+    assert set(again.table["cell"]).isdisjoint(first.table["cell"])

@@ -390,3 +390,15 @@ def test_an_ipv6_address_without_brackets_is_refused_with_the_url_to_give(tmp_pa
                          capture_output=True, text=True, timeout=60)
     assert (run.returncode, run.stderr) == (2, "lmsbench lms200 record: error: cannot open socket://::1:2111: an IPv6 "
                                                "address in a URL goes in brackets: socket://[::1]:2111\n")
+
+
+def test_a_port_that_does_not_open_says_the_systems_reason_once(tmp_path: Path) -> None:
+    """`record --port /tmp` said "cannot open /tmp: [Errno 21] could not open port /tmp: [Errno 21]
+    Is a directory: '/tmp'" (pyserial's wrapping of the OSError, the cause twice): now the system's
+    reason alone, after the port."""
+    from lms200.errors import LmsDeviceError
+
+    with pytest.raises(LmsDeviceError, match=re.escape(f"cannot open {tmp_path}: Is a directory") + "$"):
+        LMS200(str(tmp_path))
+    with pytest.raises(LmsDeviceError, match=re.escape(f"cannot open {tmp_path / 'nope'}: No such file or directory") + "$"):
+        LMS200(str(tmp_path / "nope"))

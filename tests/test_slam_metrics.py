@@ -42,6 +42,17 @@ def test_ate_of_a_constant_offset_without_alignment():
     assert ate(est, truth).rmse < 1e-9  # a pure shift aligns away
 
 
+@pytest.mark.parametrize("align", ["no", "false", 0, None, 1.0])
+def test_ate_refuses_an_align_that_is_no_bool(align):
+    """`ate(est, truth, align="no")` aligned (the text is true): an offset of 0.3 m scored 0."""
+    truth = square_path()
+    est = truth.copy()
+    est[:, 1] += 0.3
+    with pytest.raises(LmsbenchError, match=r"^ate: align must be True or False, got "):
+        ate(est, truth, align=align)
+    assert ate(est, truth, align=np.bool_(False)).rmse == pytest.approx(0.3)  # numpy's bool is one
+
+
 def test_ate_detects_a_mirrored_estimate():
     truth = square_path()
     est = truth.copy()

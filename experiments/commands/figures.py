@@ -155,12 +155,30 @@ def _check_sweeps_apart(folders: list[Path]) -> None:
         first = folders_seen.setdefault(real_path(folder), folder)
         if first is not folder:
             raise InputError(f"--sweep {folder} is given twice ({first} and {folder}): each sweep folder once")
-        for stem in sweep_stems(folder):
+        stems = sweep_stems(folder)
+        if not stems:  # nothing of it was drawn, and the run said nothing of it
+            raise InputError(f"--sweep {folder}: {_nothing_to_plot(folder)}")
+        for stem in stems:
             other = seen.setdefault(stem, folder)
             if other is not folder:
                 raise InputError(f"--sweep {other} and --sweep {folder} would both write their plot {stem}.png (a sweep's "
                                  "plots are named by the name: of its sweep.yaml, else by its folder's name): draw them with two runs of figures "
                                  "(another --out), or give one of them another name: in its sweep.yaml")
+
+
+def _nothing_to_plot(folder: Path) -> str:
+    """Why a sweep folder gives no plot: no metric with a value (its cells failed), or no grid
+    parameter that varies and no sampled one (nothing to plot against)."""
+    from experiments.figures.make import _sweep_plan
+
+    table, _, varied, sampled, metrics = _sweep_plan(folder)
+    if not metrics:
+        failed = int((table["status"] != "ok").sum()) if "status" in table else 0
+        return (f"no metric has a value in its results.parquet ({failed} of its {len(table)} cells failed, the others "
+                "gave nan for every metric; the error column of its results.csv holds the failures' reasons), so "
+                "there is nothing to plot")
+    return ("no grid parameter takes two values and none is sampled, so there is nothing to plot the metrics "
+            "against (its results.csv holds them)")
 
 
 def _record(args: argparse.Namespace) -> str:

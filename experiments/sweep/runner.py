@@ -26,6 +26,7 @@ from tqdm import tqdm
 
 from features.batch import THREADS_ENV
 from lms200 import LmsbenchError
+from lms200.errors import LmsbenchWarning
 
 from .cells import WARNINGS_KEY, resolve_kind, run_cell
 from .spec import Scalar, SweepSpec, cell_key
@@ -114,7 +115,9 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
 
     (out / "versions.yaml").write_text(yaml.safe_dump(versions(), sort_keys=False))  # of the last run into `out`
     digests, seen = getattr(fn, "input_digests", None), {}  # the files a cell reads are part of its key
-    keys = [cell_key(spec.kind, params, digests(params, seen) if digests else None) for params in cells]
+    inputs = [digests(params, seen) if digests else None for params in cells]
+    keys = [cell_key(spec.kind, params, given) for params, given in zip(cells, inputs)]
+    inputs_of = dict(zip(keys, inputs))
     done = store.done()
     if retry_failed:
         done = {k for k in done if store.status(k) == "ok"}
@@ -127,12 +130,19 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
                disable=True if not progress else None, dynamic_ncols=True)  # None: on a terminal only
 
     said: set[tuple[type[Warning], str]] = set()
+    changed: dict[str, int] = {}  # a file a cell reads that changed during the run: cells not stored
 
     def record(key: str, params: dict[str, Scalar], result: dict[str, Any]) -> None:
         for category, text in result.get(WARNINGS_KEY, ()):  # each once per sweep (every cell had its two lines)
             if (category, text) not in said:
                 said.add((category, text))
                 warnings.warn(f"{text} (said once for the sweep's cells)", category, stacklevel=2)
+        edited = _changed_inputs(digests, params, inputs_of.get(key))
+        if edited:  # the cell may have read the new content: its row is not the key's (the old content's)
+            for path in edited:
+                changed[path] = changed.get(path, 0) + 1
+            bar.update(1)
+            return
         store.write(key, _row(params, result, key))
         counts["computed"] += 1
         counts["failed"] += result["status"] != "ok"
@@ -149,6 +159,10 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
                     _run_on_dask(client, spec.kind, fn, todo, record)
     finally:
         bar.close()
+        for path, n in changed.items():
+            warnings.warn(f"{path} changed while the sweep ran: {n} cell{'s' if n != 1 else ''} that finished after "
+                          f"the change {'were' if n != 1 else 'was'} not stored (they may have read either content); "
+                          "run the sweep again to compute them with the file as it is now", LmsbenchWarning, stacklevel=2)
         table = store.read(keys)
         if not table.empty:
             table = table.drop_duplicates("cell", ignore_index=True)
@@ -156,6 +170,18 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
             write_atomic(table, out / "results.csv")
     failed = int((table["status"] != "ok").sum()) if not table.empty else 0
     return SweepResult(table, len(set(keys)), counts["computed"], skipped, failed, out)
+
+
+def _changed_inputs(digests: Any, params: dict[str, Scalar], given: dict[str, str] | None) -> list[str]:
+    """The files (paths as the cell's parameters give them) whose digest now differs from ``given``,
+    the digests the cell's key was made with (a file gone or unreadable counts as changed)."""
+    if not digests or not given:
+        return []
+    try:
+        now = digests(params, {})
+    except OSError:
+        now = {}
+    return [str(params[name]) for name in sorted(given) if now.get(name) != given[name]]
 
 
 def load_results(out: str | Path) -> pd.DataFrame:

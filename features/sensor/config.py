@@ -67,6 +67,9 @@ class SensorMethodConfig:
         checks.integer("k", self.k, 1, checks.MAX_BEAMS // 2)  # a window wider than any scan taken: no line
         for name in ("sigma_r", "sigma_r_cm"):
             if getattr(self, name) != AUTO:
+                if isinstance(getattr(self, name), str):  # 'AUTO', 'Auto': said as no number, with no word of "auto"
+                    checks.fail(name, f"must be a range noise std in (0, {checks.MAX_SIGMA_M:g}] m, or '{AUTO}'",
+                                getattr(self, name))
                 checks.positive(name, getattr(self, name), "m")
                 if getattr(self, name) > checks.MAX_SIGMA_M:  # 1e300 found no line, silently (the baselines' cap)
                     checks.fail(name, f"must be a range noise std in (0, {checks.MAX_SIGMA_M:g}] m, or 'auto'",
