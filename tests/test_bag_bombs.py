@@ -88,20 +88,29 @@ def _ros2_bomb(path: Path, zeros_mib: int, monkeypatch) -> Path:
     return path
 
 
+def _refused_at_the_bound(bag, bound: str, monkeypatch, message: str) -> None:
+    """With ``lms200.bag``'s ``bound`` at 4 MiB, reading ``bag`` is the BagTooLargeError
+    ``message``, with or without skip_bad_lines (not a damaged message to skip)."""
+    import lms200.bag
+
+    monkeypatch.setattr(lms200.bag, bound, 4 * MiB)
+    with pytest.raises(BagTooLargeError) as e:
+        list(read_log(bag))
+    assert str(e.value) == message
+    with pytest.raises(BagTooLargeError):
+        list(read_log(bag, skip_bad_lines=True))
+
+
 @pytest.mark.parametrize("kind", ["bz2", "lz4"])
 def test_a_ros1_bomb_chunk_is_refused_naming_the_bag(tmp_path, monkeypatch, kind):
     import lms200.bag
 
     bag = _ros1_bomb(tmp_path / "bomb.bag", kind, 8, monkeypatch)
     assert bag.stat().st_size < 200_000  # 8 MiB of zeros after the scans
-    monkeypatch.setattr(lms200.bag, "MAX_DECOMPRESSED_BYTES", 4 * MiB)
-    with pytest.raises(BagTooLargeError) as e:
-        list(read_log(bag))
-    assert str(e.value) == (f"{bag}: a{'n' if kind == 'lz4' else ''} {kind} chunk decompresses to more than 4 MiB "
-                            "(lms200.bag.MAX_DECOMPRESSED_BYTES): a compression bomb, or chunks or messages far "
-                            "larger than a bag of laser scans holds; not read")
-    with pytest.raises(BagTooLargeError):  # not a damaged message to skip
-        list(read_log(bag, skip_bad_lines=True))
+    _refused_at_the_bound(bag, "MAX_DECOMPRESSED_BYTES", monkeypatch, (
+        f"{bag}: a{'n' if kind == 'lz4' else ''} {kind} chunk decompresses to more than 4 MiB "
+        "(lms200.bag.MAX_DECOMPRESSED_BYTES): a compression bomb, or chunks or messages far "
+        "larger than a bag of laser scans holds; not read"))
     monkeypatch.setattr(lms200.bag, "MAX_DECOMPRESSED_BYTES", 16 * MiB)  # within the bound: read as ever
     assert [r.scan.stamp for r in read_log(bag)] == [0.0, 1.0, 2.0]
 
@@ -186,14 +195,10 @@ def test_a_file_compressed_ros2_bomb_is_refused_before_it_fills_the_disk(tmp_pat
     temp = tmp_path / "temp"
     temp.mkdir()
     monkeypatch.setattr(tempfile, "tempdir", str(temp))
-    monkeypatch.setattr(lms200.bag, "MAX_DECOMPRESSED_FILE_BYTES", 4 * MiB)
-    with pytest.raises(BagTooLargeError) as e:
-        list(read_log(bag))
-    assert str(e.value) == (f"{bag / 'bomb2.db3.zstd'}: a zstd-compressed storage file (compression_mode: file) "
-                            "decompresses to more than 4 MiB (lms200.bag.MAX_DECOMPRESSED_FILE_BYTES): a compression "
-                            "bomb, or a bag far larger than one of laser scans; not read")
-    with pytest.raises(BagTooLargeError):  # not a damaged message to skip
-        list(read_log(bag, skip_bad_lines=True))
+    _refused_at_the_bound(bag, "MAX_DECOMPRESSED_FILE_BYTES", monkeypatch, (
+        f"{bag / 'bomb2.db3.zstd'}: a zstd-compressed storage file (compression_mode: file) "
+        "decompresses to more than 4 MiB (lms200.bag.MAX_DECOMPRESSED_FILE_BYTES): a compression "
+        "bomb, or a bag far larger than one of laser scans; not read"))
     assert list(temp.iterdir()) == []
     monkeypatch.setattr(lms200.bag, "MAX_DECOMPRESSED_FILE_BYTES", 32 * MiB)  # within the bound: read as ever
     assert [r.scan.stamp for r in read_log(bag)] == [0.0, 1.0, 2.0]
