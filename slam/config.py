@@ -352,7 +352,8 @@ class ConsistencyConfig:
         min_matched_fraction: (default pipeline) not healthy when fewer than this share of the
             steps were matched (an unmatched step's pose is the motion model's guess): the four
             shared logs match 0.98-1.0 of their steps; a log of 3-beam scans matched none and was
-            reported healthy.
+            reported healthy. (Paper preset: below it ``lmsbench slam`` warns, and ``healthy``
+            stays the filter's own state; MIT CSAIL pairs a line on 0.98 of its steps.)
         max_odometry_doubt: (default pipeline, ``motion.use_odometry``) not healthy when more than
             this share of the steps doubt the odometry: the match from the odometry's step explained
             fewer than ``alignment.retry_inliers`` of the points, and one from the constant-velocity

@@ -38,7 +38,8 @@ class SlamResult:
             ``keyframes`` (t, x, y, theta) and the ``loops`` closed); scalars ``diverged``,
             ``diverged_at`` (stamp or None: NIS too high, or the scan's points off the map at
             the estimate for ``consistency.point_window`` scans), ``mean_nis_per_dof``,
-            ``mean_nees``, ``healthy``.
+            ``mean_nees``, ``healthy``, ``matched_fraction`` (the share of steps after the first
+            matched to the map: paper preset, a line paired with a landmark).
     """
 
     trajectory: np.ndarray
@@ -189,6 +190,9 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
         diverged=diverged_at is not None,
         diverged_at=diverged_at,
         healthy=bool(healthy and slam.healthy(full=True)),
+        # the steps whose scan had a line paired with a landmark (the rest are the motion model's
+        # guess): a run of scans without a line (every beam nan, 3-beam scans) was said nothing of
+        matched_fraction=float(np.mean(out["n_matched"][1:] > 0)) if len(traj) > 1 else 1.0,
         mean_nis_per_dof=float(out["nis"].sum() / dof) if dof else float("nan"),
         mean_nees=float(finite_nees.mean()) if finite_nees.size else float("nan"),
     )

@@ -591,6 +591,29 @@ def test_a_run_whose_steps_were_not_matched_is_not_healthy(tmp_path, capsys):
     assert len(warnings) == 1 and f"only 0 of {steps} steps (0.0 %) were matched to the map" in warnings[0]
 
 
+def test_a_paper_run_of_scans_without_a_line_says_so(tmp_path, capsys):
+    """The paper preset on scans of 7 valid beams each (no line: nothing is paired with a landmark,
+    every pose is the motion model's guess) said nothing, exit 0 (fuzzing): its metrics.json now
+    gives matched_fraction 0 and the command warns, naming it; healthy stays the filter's state."""
+    from experiments.cli import main
+    from lms200 import Record
+    from sim import simulate_records
+
+    records = simulate_records("office", seed=1, duration=2.0, rate_hz=5.0)
+    sparse = []
+    for r in records:
+        ranges = np.full(r.scan.ranges.size, np.nan)
+        ranges[::60] = r.scan.ranges[::60]
+        sparse.append(Record(r.scan.replace(ranges=ranges), truth=r.truth))
+    write_log(tmp_path / "sparse.clf", sparse)
+    out = tmp_path / "run"
+    assert main(["slam", str(tmp_path / "sparse.clf"), "--preset", "paper", "--out", str(out), "--quiet"]) == 0
+    c = json.loads((out / "metrics.json").read_text())["consistency"]
+    assert c["matched_fraction"] == 0.0 and c["healthy"]
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and "only 0 of 9 steps (0.0 %) were matched to the map" in warnings[0], warnings
+
+
 def test_a_diverged_run_warns_once_naming_every_reason(tmp_path, capsys):
     """14 scans of uniform random ranges (0.5-8 m) at 5 scans/s: nothing matches (0 of 13 steps),
     10 scans in a row put fewer than 30 % of their points on the map (diverged at the 11th scan,
