@@ -829,8 +829,10 @@ def _format_ranges(scan: Scan, units: Units) -> str:
     with np.errstate(invalid="ignore", over="ignore"):
         near = np.isfinite(x) & ((np.abs(x - scan.range_max) <= 2 * scale) | (np.abs(x - scan.range_min) <= 2 * scale)
                                  | (x <= 2 * scale) | (np.abs(x / scale - SPECIAL_BAND_MIDDLE) <= SPECIAL_BAND_HALF + 2))
-    for i in np.flatnonzero(near):
-        if _meaning_changed(scan, _read_back([words[i]], units), scale, int(i))[0]:
+    index = np.flatnonzero(near)  # read back together: one at a time cost ~35 us a beam, 20x the writer's
+    if index.size:  # time on scans whose no-returns are 0 or range_max
+        changed = _meaning_changed(scan, _read_back([words[i] for i in index], units), scale, index)
+        for i in index[changed]:
             words[i] = _kept_word(scan, int(i), units)
     return " ".join(words)
 
@@ -851,12 +853,12 @@ SPECIAL_BAND_MIDDLE = (CODE_ABOVE_MAXIMUM + CODE_NOT_VALID) / 2
 SPECIAL_BAND_HALF = (CODE_NOT_VALID - CODE_ABOVE_MAXIMUM) / 2
 
 
-def _meaning_changed(scan: Scan, back: np.ndarray, scale: float, i: int) -> np.ndarray:
-    """Whether beam ``i``'s read-back value ``back`` (an array of one) means something else than
-    the scan's: valid where it was not, or not where it was; a valid one more than half a unit off;
+def _meaning_changed(scan: Scan, back: np.ndarray, scale: float, index: np.ndarray | int) -> np.ndarray:
+    """Whether each beam of ``index`` (an array, or one beam) has a read-back value (``back``, one
+    a beam) that means something else than the scan's: valid where it was not, or not where it was; a valid one more than half a unit off;
     +inf (no return), nan or -inf turned into another of them (a finite reading that is not valid may read back as +inf:
     8.183 m beyond a range_max of 8 m is the code for no return within range)."""
-    r = scan.ranges[i : i + 1]
+    r = scan.ranges[np.atleast_1d(index)]
     valid, valid_back = _valid(r, scan), _valid(back, scan)
     with np.errstate(invalid="ignore"):
         off = valid & (np.abs(back - r) > scale / 2 * (1 + 1e-9))
