@@ -1954,11 +1954,17 @@ def corners(lv, lb, sig, ranges, valid, angle_min, increment, sigma_r, p):  # no
                 peak = max(peak, abs(sig[S_PSI, t]))
         if peak < 0.0 or peak < p.corner_psi * turn:
             continue
-        # the beam of bearing b, counted from the first beam modulo a full turn: atan2 gives b in
-        # (-pi, pi], the scan's bearings may lie beyond pi (a 360 deg scan from 0 to 2 pi, a scan
-        # looking back); taken as it was, such a corner's beam was clamped onto a line's end
-        half = 0.5 * increment
-        index = np.int64(np.rint(((b - angle_min + half) % (2.0 * math.pi) - half) / increment))
+        # the beam of bearing b, of the three a full turn apart the one nearest the two lines' facing
+        # ends: atan2 gives b in (-pi, pi], the scan's bearings may lie beyond pi (a 360 deg scan from
+        # 0 to 2 pi, a scan looking back), where b taken as it was put the corner's beam off the scan,
+        # clamped onto a line's end; and a bearing just before the first beam stays there (a wrap
+        # of every bearing into [angle_min, angle_min + 2 pi) sent it to the far end of the turn)
+        at = (b - angle_min) / increment
+        turn_beams = 2.0 * math.pi / increment
+        for other in (at - turn_beams, at + turn_beams):
+            if max(last_i - other, other - first_j, 0.0) < max(last_i - at, at - first_j, 0.0):
+                at = other
+        index = np.int64(np.rint(at))
         index = min(max(index, last_i), first_j)
         if p.acute_check:
             var = neighbourhood_var(ranges, valid, max(0, index - k), min(n - 1, index + k))
