@@ -184,10 +184,10 @@ def _plain(options: dict[str, Any]) -> dict[str, Any]:
 def check_counts(stride: object, max_scans: object) -> tuple[int, int | None]:
     """``stride`` a whole number >= 1 and ``max_scans`` None or one; InputError naming it. (A stride
     of 1.5 kept every third scan, ``k % 1.5 == 0``, True every one, "2" was a TypeError; max_scans 0
-    or -1 read no scan and compared nothing, silently.)"""
-    step = check_integer(stride, "stride", 1, what="(every stride-th scan)", strict=True)
-    most = None if max_scans is None else check_integer(max_scans, "max_scans", 1, what="(or None: every scan)",
-                                                        strict=True)
+    or -1 read no scan and compared nothing, silently; a whole float, 2.0, is taken as the int it
+    is, as it was before the check.)"""
+    step = check_integer(stride, "stride", 1, what="(every stride-th scan)")
+    most = None if max_scans is None else check_integer(max_scans, "max_scans", 1, what="(or None: every scan)")
     return step, most
 
 

@@ -353,6 +353,8 @@ def test_log_source_still_takes_its_counts(tmp_path: Path) -> None:
     stamps = [r.scan.stamp for r in log_source(path).records]
     assert len(stamps) == 3
     assert [r.scan.stamp for r in log_source(path, stride=np.int64(2)).records] == stamps[::2]
+    assert [r.scan.stamp for r in log_source(path, stride=2.0).records] == stamps[::2]  # a whole float, as before
+    assert len(list(log_source(path, max_scans=2.0).records)) == 2
     assert len(list(log_source(path, max_scans=2).records)) == 2
 
 
