@@ -33,10 +33,11 @@ check: $(STAMP)
 	$(BIN)/mypy
 
 # the tests on every core (pytest-xdist; the numba kernels are compiled once, before the workers start:
-# tests/conftest.py, which also starts the tests marked slow first; pyproject.toml's addopts: --dist worksteal);
+# tests/conftest.py, which also starts the modules with a test marked slow first; --dist worksteal: a worker
+# whose queue is empty takes queued tests from the other's, where the default "load" keeps each queue);
 # `-n 0` in PYTEST_ARGS runs them in this process, one by one
 test: check
-	$(BIN)/python -m pytest -q -rs --durations=30 -n auto $(PYTEST_ARGS)
+	$(BIN)/python -m pytest -q -rs --durations=30 -n auto --dist worksteal $(PYTEST_ARGS)
 
 bench: $(STAMP)
 	$(BIN)/lmsbench bench

@@ -64,14 +64,17 @@ def user_methods_dropped(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Under pytest-xdist, the tests marked ``slow`` first (in their order), then the rest as
-    collected: a test of 20 s that starts last keeps one core busy while the other has nothing
-    left (``--dist worksteal`` in pyproject.toml moves queued tests to an idle worker, not a
-    running one); started first, the other worker takes the quick ones meanwhile. The order is
-    the same in every worker (xdist requires it). In one process (``-n 0``) the order is left."""
+    """Under pytest-xdist, the modules with a test marked ``slow`` first (each whole, in their
+    order), then the rest as collected: a test of 20 s that starts last keeps one core busy while
+    the other has nothing left (``--dist worksteal``, in the Makefile, moves queued tests to an
+    idle worker, not a running one); started first, the other worker takes the quick ones
+    meanwhile. A module stays together, so its module-scoped fixtures are built once a worker
+    (the slow tests alone first split modules, and a fixture of both halves was built twice). The
+    order is the same in every worker (xdist requires it). In one process (``-n 0``) it is left."""
     if getattr(config, "workerinput", None) is None:
         return
-    items.sort(key=lambda item: item.get_closest_marker("slow") is None)  # stable: False (slow) first
+    slow_modules = {item.module for item in items if item.get_closest_marker("slow") is not None}
+    items.sort(key=lambda item: item.module not in slow_modules)  # stable: False (a slow module) first
 
 
 def pytest_configure(config: pytest.Config) -> None:
