@@ -63,7 +63,8 @@ MAX_DECOMPRESSED_BYTES = 128 * 2**20
 MAX_DECOMPRESSED_FILE_BYTES = 4 * 2**30
 
 #: bytes: what a file-compressed ROS 2 bag's decompression leaves free in the temporary folder at least
-#: (``tempfile.gettempdir()``, ``$TMPDIR``); it is refused before it would leave less.
+#: (``tempfile.gettempdir()``, ``$TMPDIR``), or half of what was free when it began where that is less
+#: (a bag of 2 KB was refused on a folder with 900 MiB free); it is refused before it would leave less.
 MIN_FREE_TEMP_BYTES = 1 * 2**30
 
 #: bytes decompressed between two looks at the temporary folder's free space
@@ -165,6 +166,7 @@ class _BoundedZstdFile:
         self._read = 0
         self._checked = -FREE_CHECK_BYTES  # the free space is looked at before the first read
         self._free = 0
+        self._reserve = -1  # bytes to leave free: MIN_FREE_TEMP_BYTES, or half the free space at the start
 
     def __enter__(self) -> "_BoundedZstdFile":
         return self
@@ -196,13 +198,16 @@ class _BoundedZstdFile:
                 "compression bomb, or a bag far larger than one of laser scans; not read")
         if self._read - self._checked >= FREE_CHECK_BYTES:
             self._free, self._checked = _free_temp_bytes(), self._read
-        if self._free - (self._read - self._checked) < MIN_FREE_TEMP_BYTES:
+            if self._reserve < 0:
+                self._reserve = min(MIN_FREE_TEMP_BYTES, self._free // 2)
+        if self._free - (self._read - self._checked) < self._reserve:
             import tempfile
 
             raise BagTooLargeError(
                 f"{self._name}: a zstd-compressed storage file (compression_mode: file), decompressed to the "
                 f"temporary folder {tempfile.gettempdir()} (where rosbags reads it), would leave less than "
-                f"{MIN_FREE_TEMP_BYTES / 2**20:g} MiB free there (lms200.bag.MIN_FREE_TEMP_BYTES; "
+                f"{self._reserve / 2**20:.0f} MiB free there (lms200.bag.MIN_FREE_TEMP_BYTES, or half the free space "
+                "at the start; "
                 f"{self._read / 2**20:.0f} MiB decompressed so far); not read (TMPDIR names a folder with more room)")
 
 

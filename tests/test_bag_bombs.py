@@ -205,19 +205,30 @@ def test_a_file_compressed_ros2_bomb_is_refused_before_it_fills_the_disk(tmp_pat
 
 
 def test_a_file_compressed_ros2_bag_is_refused_before_it_leaves_the_temporary_folder_short(tmp_path, monkeypatch):
+    """The decompression leaves MIN_FREE_TEMP_BYTES free in the temporary folder, or half of what was
+    free at its start where that is less: a bag of a few KB was refused on a folder with 900 MiB free
+    (review), whatever its size."""
     import tempfile
 
     import lms200.bag
 
     bag = _ros2_file_bomb(tmp_path / "bomb2", 16, monkeypatch)
-    monkeypatch.setattr(lms200.bag, "_free_temp_bytes", lambda: lms200.bag.MIN_FREE_TEMP_BYTES + 8 * MiB)
-    with pytest.raises(BagTooLargeError, match=r"^" + str(bag / "bomb2.db3.zstd") + r": a zstd-compressed storage "
-                       r"file \(compression_mode: file\), decompressed to the temporary folder " + tempfile.gettempdir()
-                       + r" \(where rosbags reads it\), would leave less than 1024 MiB free there \(lms200.bag.MIN_FREE_TEMP_BYTES; "
-                       r"8 MiB decompressed so far\); not read \(TMPDIR names a folder with more room\)$"):
-        list(read_log(bag))
-    monkeypatch.setattr(lms200.bag, "_free_temp_bytes", lambda: lms200.bag.MIN_FREE_TEMP_BYTES + 64 * MiB)
-    assert [r.scan.stamp for r in read_log(bag)] == [0.0, 1.0, 2.0]
+
+    def refused(free: int, reserve_mib: int) -> None:
+        monkeypatch.setattr(lms200.bag, "_free_temp_bytes", lambda: free)
+        with pytest.raises(BagTooLargeError, match=r"^" + str(bag / "bomb2.db3.zstd") + r": a zstd-compressed storage "
+                           r"file \(compression_mode: file\), decompressed to the temporary folder " + tempfile.gettempdir()
+                           + rf" \(where rosbags reads it\), would leave less than {reserve_mib} MiB free there "
+                           r"\(lms200.bag.MIN_FREE_TEMP_BYTES, or half the free space at the start; \d+ MiB decompressed "
+                           r"so far\); not read \(TMPDIR names a folder with more room\)$"):
+            list(read_log(bag))
+
+    refused(24 * MiB, 12)  # half of 24 MiB: refused after 12 of its 16 MiB
+    monkeypatch.setattr(lms200.bag, "MIN_FREE_TEMP_BYTES", 8 * MiB)
+    refused(20 * MiB, 8)  # the bound where it is less than half
+    for free in (900 * MiB, 2 * 1024 * MiB):  # a few MB leave plenty of either
+        monkeypatch.setattr(lms200.bag, "_free_temp_bytes", lambda free=free: free)
+        assert [r.scan.stamp for r in read_log(bag)] == [0.0, 1.0, 2.0]
 
 
 def test_a_file_compressed_ros2_bomb_is_one_line_and_status_2_from_the_command(tmp_path, monkeypatch, capsys):
