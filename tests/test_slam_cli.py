@@ -567,23 +567,30 @@ def test_an_unhealthy_run_warns_on_stderr(tmp_path, capsys):
     assert f"1 of {steps} steps ({100 / steps:.1f} %) were ambiguous" in warnings[0]
 
 
+def _seven_beam_log(tmp_path: Path) -> Path:
+    """A CARMEN log of 10 office scans (2 s at 5 scans/s) with 7 valid beams each, every 60th:
+    nothing to match or extract a line from."""
+    from lms200 import Record
+    from sim import simulate_records
+
+    sparse = []
+    for r in simulate_records("office", seed=1, duration=2.0, rate_hz=5.0):
+        ranges = np.full(r.scan.ranges.size, np.nan)
+        ranges[::60] = r.scan.ranges[::60]
+        sparse.append(Record(r.scan.replace(ranges=ranges), truth=r.truth))
+    write_log(tmp_path / "sparse.clf", sparse)
+    return tmp_path / "sparse.clf"
+
+
 def test_a_run_whose_steps_were_not_matched_is_not_healthy(tmp_path, capsys):
     """Scans with 7 valid beams each give the matcher nothing (it needs 10 points), so every pose
     is the motion model's guess; such a run was reported healthy, silently. Now it is not, and the
     command names the share of matched steps (0 of 9)."""
     from experiments.cli import main
-    from lms200 import Record
-    from sim import simulate_records
 
-    records = simulate_records("office", seed=1, duration=2.0, rate_hz=5.0)
-    sparse = []
-    for r in records:
-        ranges = np.full(r.scan.ranges.size, np.nan)
-        ranges[::60] = r.scan.ranges[::60]
-        sparse.append(Record(r.scan.replace(ranges=ranges), truth=r.truth))
-    write_log(tmp_path / "sparse.clf", sparse)
+    log = _seven_beam_log(tmp_path)
     out = tmp_path / "run"
-    assert main(["slam", str(tmp_path / "sparse.clf"), "--out", str(out), "--quiet", "--no-paper-baseline"]) == 0
+    assert main(["slam", str(log), "--out", str(out), "--quiet", "--no-paper-baseline"]) == 0
     m = json.loads((out / "metrics.json").read_text())
     steps = m["n_scans"] - 1
     assert steps == 9 and m["consistency"]["matched_fraction"] == 0.0 and not m["consistency"]["healthy"]
@@ -596,18 +603,10 @@ def test_a_paper_run_of_scans_without_a_line_says_so(tmp_path, capsys):
     every pose is the motion model's guess) said nothing, exit 0 (fuzzing): its metrics.json now
     gives matched_fraction 0 and the command warns, naming it; healthy stays the filter's state."""
     from experiments.cli import main
-    from lms200 import Record
-    from sim import simulate_records
 
-    records = simulate_records("office", seed=1, duration=2.0, rate_hz=5.0)
-    sparse = []
-    for r in records:
-        ranges = np.full(r.scan.ranges.size, np.nan)
-        ranges[::60] = r.scan.ranges[::60]
-        sparse.append(Record(r.scan.replace(ranges=ranges), truth=r.truth))
-    write_log(tmp_path / "sparse.clf", sparse)
+    log = _seven_beam_log(tmp_path)
     out = tmp_path / "run"
-    assert main(["slam", str(tmp_path / "sparse.clf"), "--preset", "paper", "--out", str(out), "--quiet"]) == 0
+    assert main(["slam", str(log), "--preset", "paper", "--out", str(out), "--quiet"]) == 0
     c = json.loads((out / "metrics.json").read_text())["consistency"]
     assert c["matched_fraction"] == 0.0 and c["healthy"]
     warnings = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
