@@ -381,11 +381,7 @@ def repeat_counts(fs_a: FeatureSet | np.ndarray, pose_a: tuple[float, float, flo
     rho, alpha, mid = _to_frame(a, pose_a, pose_b)
     bearing = np.arctan2(mid[:, 1], mid[:, 0])
     dist = np.hypot(mid[:, 0], mid[:, 1])
-    # the beam of each bearing counted from scan b's first modulo a full turn (arctan2 gives
-    # (-pi, pi]; a 360 deg scan from 0 to 2 pi saw nothing behind it at -pi .. 0 taken as it was)
-    half = 0.5 * scan_b.angle_increment
-    offset = np.mod(bearing - scan_b.angle_min + half, 2 * np.pi) - half
-    idx = np.rint(offset / scan_b.angle_increment).astype(np.int64)
+    idx = scan_b.beam_of(bearing)  # modulo a full turn: a 360 deg scan from 0 to 2 pi saw nothing at -pi .. 0
     inside = (idx >= 0) & (idx < len(scan_b))
     idx_c = np.clip(idx, 0, len(scan_b) - 1)
     reading = np.where(scan_b.valid[idx_c], scan_b.ranges[idx_c], np.nan)

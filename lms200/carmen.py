@@ -72,7 +72,7 @@ from . import laser_geometry
 from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
 from .laser_geometry import LaserGeometry
 from .records import Pose2D, Record, SkipLog
-from .scan import Scan, snap_angle
+from .scan import Scan, snap_angle, valid_ranges
 
 UNITS_PARAM = "lmsbench_range_units"
 ODOMETRY_PARAM = "lmsbench_odometry"  # "absent": the pose fields of the scans that follow are not odometry
@@ -842,12 +842,6 @@ def _read_back(words: list[str], units: Units) -> np.ndarray:
     return decode_logged_ranges(np.array(words, dtype=np.float64), units)
 
 
-def _valid(ranges: np.ndarray, scan: Scan) -> np.ndarray:
-    """:attr:`Scan.valid` of ``ranges`` under ``scan``'s range_min and range_max."""
-    with np.errstate(invalid="ignore"):
-        return np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges > 0.0) & (ranges <= scan.range_max)
-
-
 #: units: the SICK special codes (CODE_ABOVE_MAXIMUM .. CODE_NOT_VALID) as a middle and half width
 SPECIAL_BAND_MIDDLE = (CODE_ABOVE_MAXIMUM + CODE_NOT_VALID) / 2
 SPECIAL_BAND_HALF = (CODE_NOT_VALID - CODE_ABOVE_MAXIMUM) / 2
@@ -859,7 +853,7 @@ def _meaning_changed(scan: Scan, back: np.ndarray, scale: float, index: np.ndarr
     +inf (no return), nan or -inf turned into another of them (a finite reading that is not valid may read back as +inf:
     8.183 m beyond a range_max of 8 m is the code for no return within range)."""
     r = scan.ranges[np.atleast_1d(index)]
-    valid, valid_back = _valid(r, scan), _valid(back, scan)
+    valid, valid_back = (valid_ranges(a, scan.range_min, scan.range_max) for a in (r, back))
     with np.errstate(invalid="ignore"):
         off = valid & (np.abs(back - r) > scale / 2 * (1 + 1e-9))
     kind = ~np.isfinite(r) & ((np.isposinf(r) != np.isposinf(back)) | (np.isnan(r) != np.isnan(back)))

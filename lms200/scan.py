@@ -169,9 +169,16 @@ class Scan:
     @property
     def valid(self) -> np.ndarray:
         """Mask of beams with a finite return inside [range_min, range_max], and > 0 m."""
-        r = self.ranges
-        with np.errstate(invalid="ignore"):
-            return np.isfinite(r) & (r >= self.range_min) & (r > 0.0) & (r <= self.range_max)
+        return valid_ranges(self.ranges, self.range_min, self.range_max)
+
+    def beam_of(self, bearings: np.ndarray) -> np.ndarray:
+        """The beam index (int64) of each bearing (rad, sensor frame), counted from the first beam
+        modulo a full turn (a bearing within half a beam before the first is the first's); an index
+        outside [0, len(self)) is a bearing the scan does not cover. arctan2's bearings lie in
+        (-pi, pi]: taken as they were, a 360 deg scan from 0 to 2 pi covered none of -pi .. 0."""
+        half = 0.5 * self.angle_increment
+        offset = np.mod(np.asarray(bearings, dtype=float) - self.angle_min + half, 2 * np.pi) - half
+        return np.rint(offset / self.angle_increment).astype(np.int64)
 
     @property
     def points(self) -> np.ndarray:
@@ -239,6 +246,13 @@ def _bearings(angle_min: float, angle_increment: float, n: int) -> np.ndarray:
     angles = angle_min + np.arange(n) * angle_increment
     angles.setflags(write=False)
     return angles
+
+
+def valid_ranges(ranges: np.ndarray, range_min: float, range_max: float) -> np.ndarray:
+    """Mask of ``ranges`` (m) that are valid readings under ``range_min`` and ``range_max``: finite,
+    inside [range_min, range_max] and > 0 m (:attr:`Scan.valid`'s rule, REP-117)."""
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(ranges) & (ranges >= range_min) & (ranges > 0.0) & (ranges <= range_max)
 
 
 def _degrees_hint(value: float, fits_as_degrees: bool) -> str:

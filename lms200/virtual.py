@@ -188,12 +188,9 @@ def resample_to_grid(scan: Scan) -> np.ndarray:
         scan.angle_increment, target[1] - target[0], rel_tol=1e-9
     ):
         return np.array(scan.ranges)
-    # each target's bearing after the first beam's, taken modulo a full turn (within half a beam
-    # before it still counts as the first beam): a 360 deg scan from 0 to 2 pi covers -90 deg as
-    # +270 deg (its bearings were taken as they were, and half of the frame came out nan)
-    half = 0.5 * scan.angle_increment
-    offset = np.mod(target - scan.angle_min + half, 2 * np.pi) - half
-    idx = np.rint(offset / scan.angle_increment).astype(np.int64)
+    # modulo a full turn: a 360 deg scan from 0 to 2 pi covers -90 deg as +270 deg (its bearings were
+    # taken as they were, and half of the frame came out nan)
+    idx = scan.beam_of(target)
     covered = (idx >= 0) & (idx < len(scan))
     out = np.full(n, np.nan)
     out[covered] = scan.ranges[idx[covered]]
