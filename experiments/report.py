@@ -8,7 +8,6 @@ from __future__ import annotations
 import functools
 import html
 import math
-import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -124,9 +123,11 @@ def _src(path: str, images: Path | None) -> str:
     """A data URI of an image file below the report's folder ``images``, else the path as given."""
     import base64
 
+    from experiments.options import real_path
+
     if images is None:
         return path
-    file = Path(os.path.realpath(images / html.unescape(path)))  # Path.resolve: RuntimeError on a loop of links
+    file = real_path(images / html.unescape(path))  # Path.resolve: RuntimeError on a loop of links
     mime = _MIME.get(file.suffix.lower())
     if mime is None or not file.is_file():
         return path

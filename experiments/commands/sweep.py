@@ -34,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
     check_yaml(args.sweep, "a sweep file")
     spec = load_sweep(args.sweep)
     out = args.out = args.out or Path("results/sweeps") / spec.name  # named if a reader of stdout that goes away stops it
-    check_link(out)  # a loop of links: Path.resolve below raised RuntimeError
+    check_link(out)  # a loop of links is said by name (real_path below leaves it as it is)
     # `sweep DIR/sweep.yaml --out DIR` lost a user's comments; the sweep.yaml a run wrote, as it wrote it, may
     # be run again (it is rewritten the same)
     own = real_path(args.sweep) == real_path(out / "sweep.yaml") and Path(args.sweep).read_text() == spec_record(spec)
