@@ -27,7 +27,7 @@ class AlignmentConfig:
         max_range: beams longer than this (m) are not matched (far points are sparse and noisy).
         max_correspondence: a point further than this (m) from every map point is left out of a step...
         fine_correspondence: ...and once converged, further than this (m) (partial overlaps).
-        huber: Huber threshold (m) of the point-to-line residuals.
+        huber: Huber threshold (m) of the point-to-line residuals (at least ``MIN_HUBER_M``, 1 um).
         max_iterations, fine_iterations: Gauss-Newton steps at most with the wide and then the
             narrow reach; a step below ``tolerance_xy`` (m) and ``tolerance_theta`` (rad) ends a stage.
         damping: Levenberg damping, a fraction of the Hessian's mean eigenvalue: an unconstrained
@@ -41,7 +41,8 @@ class AlignmentConfig:
             with the scans de-skewed and a 45-degree normal check, 3, 1.5 and 1 gave mean pose
             NEES of 0.3-0.4, 0.5-0.7 and 0.8-1.1 (3 dof; 3 is consistent): 1, no inflation (below
             1 the floor above would no longer be a floor); on the final code (67.5 degrees), 0.9-1.7.
-            Before the de-skew, 3 compensated for the scan's own motion distortion.
+            Before the de-skew, 3 compensated for the scan's own motion distortion. In [0.01, 100]
+            (``MIN_COVARIANCE_INFLATION``, ``MAX_COVARIANCE_INFLATION``).
         retry_inliers: when the ICP from the prediction explains fewer than this fraction of the
             points, it is also run from standing still and from ``heading_hypotheses``.
         heading_hypotheses: heading offsets (rad) about the prediction tried on a retry (15, 30,
@@ -512,6 +513,15 @@ class SlamConfig:
                                   f"leaves the graph without an anchor), got {self.loop_closure.prior_sigma}")
         if not 0 < al.max_range <= MAX_MATCH_RANGE_M:  # 1e300: its square overflowed (internal error)
             raise SlamConfigError(f"alignment.max_range: must be in (0, {MAX_MATCH_RANGE_M:g}] m, got {al.max_range}")
+        if not al.huber >= MIN_HUBER_M:  # 1e-30: every weight ~0, gtsam's "indeterminate linear system" (exit 1)
+            raise SlamConfigError(f"alignment.huber: must be at least {MIN_HUBER_M:g} m (a residual's scale; below it "
+                                  f"every point's weight vanishes and the match fixes nothing), got {al.huber}")
+        if not MIN_COVARIANCE_INFLATION <= al.covariance_inflation <= MAX_COVARIANCE_INFLATION:
+            # 1e4 and more: the keyframe factors lose to the rest, ATE 2.5-3.5 m on a 120 s office run (0.007 m
+            # at 1-1000), exit 0 without a warning; 1e-300 overflows the information it divides
+            raise SlamConfigError(f"alignment.covariance_inflation: must be in [{MIN_COVARIANCE_INFLATION:g}, "
+                                  f"{MAX_COVARIANCE_INFLATION:g}] (a factor on the match's covariance; 1, the default, "
+                                  f"is none), got {al.covariance_inflation}")
         if al.beam_time_increment > MAX_BEAM_TIME_INCREMENT_S:
             raise SlamConfigError(f"alignment.beam_time_increment: must be in [0, {MAX_BEAM_TIME_INCREMENT_S:g}] s "
                                   f"between beams (0: the LMS200's timing), got {al.beam_time_increment}")
@@ -679,6 +689,9 @@ NOISE_SIGMAS = (("alignment", "sigma_point", "m"), ("motion", "sigma_lateral", "
                 ("observations", "sigma_alpha_obs", "rad"), ("observations", "sigma_corner", "m"),
                 ("prealign", "sigma_xy", "m"), ("prealign", "sigma_phi", "rad"), ("prealign", "scan_velocity_sigma", "m"),
                 ("loop_closure", "prior_sigma", "m and rad"))
+MIN_HUBER_M = 1e-6  # m: alignment.huber (1e-30 and below: gtsam's indeterminate system; the LMS200's quantum is 1 mm)
+#: alignment.covariance_inflation: 1e4 and more left a 120 s office run 2.5-3.5 m off (0.007 m at 1 to 1000)
+MIN_COVARIANCE_INFLATION, MAX_COVARIANCE_INFLATION = 0.01, 100.0
 MAX_BEAM_TIME_INCREMENT_S = 0.01  # s between beams: a 1081-beam scan would take 10.8 s
 MAX_ICP_ITERATIONS = 1000  # alignment.max_iterations / fine_iterations (defaults 10 / 5)
 MAX_SIGMA_FLOOR = 1e3  # m and rad: a floor this wide leaves no motion model

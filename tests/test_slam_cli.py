@@ -867,3 +867,23 @@ def test_a_users_extractor_config_of_numpy_values_and_tuples_is_recorded(sim_fol
     assert record == {"turn": 0.3490658503988659, "window": [1, 2], "gains": [0.5, 1.5]}
     assert yaml.safe_load((tmp_path / "c" / "config.yaml").read_text())["methods"]["npext:ext"] == record
     capsys.readouterr()
+
+
+@pytest.mark.parametrize("field, value, message", [
+    ("huber", 1e-300, r"alignment\.huber: must be at least 1e-06 m \(a residual's scale; .*\), got 1e-300"),
+    ("covariance_inflation", 1e30, r"alignment\.covariance_inflation: must be in \[0\.01, 100\] \(a factor on the "
+                                   r"match's covariance; 1, the default, is none\), got 1e\+30")])
+def test_slam_config_refuses_an_icp_scale_that_breaks_the_run(sim_folder, tmp_path, capsys, field, value, message):
+    """Fuzzing of 2026-12-06: alignment.huber 1e-30 or less weighed every point ~0, and gtsam
+    stopped the run ("internal error: RuntimeError: Indeterminate linear system", exit 1);
+    covariance_inflation 1e4 or more left the keyframe factors no weight against the rest: a 120 s
+    office run 2.5-3.5 m off (0.007 m at 1-1000), exit 0 without a warning. Refused before any work."""
+    from experiments.cli import main
+
+    config = tmp_path / "slam.yaml"
+    config.write_text(f"alignment: {{{field}: {value!r}}}\n")
+    out = tmp_path / "run"
+    assert main(["slam", str(sim_folder), "--out", str(out), "--config", str(config), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert re.fullmatch(rf"lmsbench slam: error: {re.escape(str(config))}: {message}\n", err), err
+    assert not out.exists()
