@@ -341,6 +341,9 @@ def _main(argv: Sequence[str] | None) -> int:
     watched = _WatchedStdout(sys.stdout)
     try:
         default_threads()  # a bad $LMSBENCH_THREADS is refused before any work, by every command
+        from .options import holding_outputs
+
+        holding_outputs(name)  # the command's --out is its own until it ends (options.hold_output)
         interrupt.running = True
         sys.stdout = watched  # type: ignore[assignment]
         try:
@@ -390,6 +393,9 @@ def _main(argv: Sequence[str] | None) -> int:
               "(a bug in lmsbench; LMSBENCH_TRACEBACK=1 shows where)", file=sys.stderr)
         return 1
     finally:
+        from .options import release_outputs
+
+        release_outputs()
         if interrupt.timer is None:  # stopped by a signal: the handler stays for the exit's own cleanup
             for sig, handler in previous.items():  # (atexit: Dask closing clusters), where a second
                 signal.signal(sig, handler)  # Ctrl-C printed a traceback; it now ends the process at once

@@ -797,6 +797,7 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
     check_link(p)
     if p.exists() and not p.is_dir():
         raise InputError(f"--out {p}: exists and is not a folder")
+    hold_output(p)  # first: what another run is writing there is no sign of what the folder holds
     if writes is not None and p.is_dir():
         tree = writes if isinstance(writes, OutTree) else OutTree(tuple(writes) + tuple(patterns))
         others = tree.foreign(p)
@@ -816,6 +817,72 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
     if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK) or not _can_create_in(parent):
         raise InputError(f"--out {p}: {parent} is not a writable folder")
     return p
+
+
+#: the outputs (``--out`` folders and files) the running command holds: real path -> the open lock
+#: file. None outside a command (:func:`holding_outputs`): the library's own calls lock nothing.
+_HELD_OUTPUTS: dict[str, int] | None = None
+_HOLDER = ""  # what holds them: "pid 1234, lmsbench simulate", written into the lock file
+
+
+def holding_outputs(command: str) -> None:
+    """Start a command's holding of its outputs (``experiments.cli``, before the command runs):
+    from here :func:`check_out` and :func:`check_out_file` take each output for this process until
+    :func:`release_outputs`."""
+    global _HELD_OUTPUTS, _HOLDER
+    release_outputs()
+    _HELD_OUTPUTS, _HOLDER = {}, f"pid {os.getpid()}, lmsbench {command}"
+
+
+def release_outputs() -> None:
+    """End the holding (the command ended; a killed process's locks end with it, by the kernel)."""
+    global _HELD_OUTPUTS
+    for fd in (_HELD_OUTPUTS or {}).values():
+        try:
+            os.ftruncate(fd, 0)  # no holder named by the next run's refusal (a killed one's name stays)
+        finally:
+            os.close(fd)
+    _HELD_OUTPUTS = None
+
+
+def _lock_folder() -> Path:
+    """The folder of the outputs' lock files: one a user, in the temporary folder (not in the
+    output, whose listing is the run's: a lock file there would be an output of its own)."""
+    folder = Path(tempfile.gettempdir()) / f"lmsbench-{os.getuid()}-outputs"
+    folder.mkdir(mode=0o700, exist_ok=True)
+    return folder
+
+
+def hold_output(p: Path, flag: str = "--out") -> None:
+    """Take the output ``p`` (a folder or a file, present or not) for this command, or refuse it
+    when another lmsbench command holds it: two runs into one --out interleaved their files, each
+    removing the other's temporary files (``simulate --seed 1 --out D`` beside ``--seed 2 --out
+    D``: one said "D/.scans.clf.N.tmp: no such file or directory", the other "simulated ... seed 1
+    into D" over a folder of seed 2's files, exit 0). An advisory lock (``fcntl.flock``) on a file
+    named by ``p``'s real path, released when the command ends or its process dies (SIGKILL too)."""
+    import fcntl
+    import hashlib
+
+    if _HELD_OUTPUTS is None:
+        return
+    key = str(real_path(p))
+    if key in _HELD_OUTPUTS:
+        return
+    lock = _lock_folder() / (hashlib.sha256(key.encode("utf-8", "surrogateescape")).hexdigest()[:40] + ".lock")
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o600)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        holder = os.pread(fd, 200, 0).decode("utf-8", "replace").strip()
+        os.close(fd)
+        raise InputError(f"{flag} {p}: another lmsbench command{f' ({holder})' if holder else ''} is writing there; "
+                         "wait for it to end, or give another path") from None
+    except BaseException:
+        os.close(fd)
+        raise
+    os.ftruncate(fd, 0)
+    os.pwrite(fd, _HOLDER.encode("utf-8", "replace"), 0)
+    _HELD_OUTPUTS[key] = fd
 
 
 def check_link(p: Path, flag: str = "--out") -> None:
@@ -851,6 +918,7 @@ def check_out_file(path: str | os.PathLike | None, flag: str = "--out") -> Path 
         raise InputError(f"{flag} {p} is a folder; give a file name")
     if p.exists() and not p.is_file():  # writing to a pipe with no reader hung the command after its work
         raise InputError(f"{flag} {p}: not a regular file (a pipe, a device or a socket); give a file name")
+    hold_output(p, flag)
     parent = p.parent
     if not parent.is_dir():
         raise InputError(f"{flag} {p}: {parent} is not a folder")
