@@ -993,6 +993,9 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
     p = Path(folder)
     path = p / "results.parquet"
     if not path.is_file():
+        if (p / "sweep.yaml").is_file():  # a sweep stopped or killed before its table
+            raise InputError(f"--sweep {p}: no results.parquet: the sweep did not finish; finish it with lmsbench "
+                             f"sweep {p / 'sweep.yaml'} --out {p}, then draw it")
         raise InputError(f"--sweep {p}: no results.parquet (run `lmsbench sweep` first)")
     try:
         table = pd.read_parquet(path)
@@ -1009,4 +1012,28 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
     if not isinstance(spec, dict) or not all(isinstance(spec.get(k) or {}, dict) for k in ("grid", "random")):
         raise InputError(f"--sweep {spec_path}: not the sweep.yaml of `lmsbench sweep` (a mapping whose grid: and "
                          "random: are mappings)")
+    cells = _sweep_cells(spec)
+    held = int(table["cell"].nunique()) if "cell" in table else len(table)
+    if cells is not None and held != cells:  # a stopped sweep's table was drawn as the sweep's result, exit 0
+        raise InputError(f"--sweep {p}: its results.parquet holds {held} of the {cells} cells of its sweep.yaml: the "
+                         f"sweep did not finish (stopped, or cells not stored); finish it with lmsbench sweep "
+                         f"{spec_path} --out {p}, then draw it")
     return p
+
+
+def _sweep_cells(raw: dict) -> int | None:
+    """The number of distinct cells of a sweep.yaml's sweep, None when it does not read as a sweep
+    (one of an older lmsbench: its table is drawn as it is)."""
+    import warnings
+
+    from lms200 import LmsbenchError
+
+    from experiments.sweep.spec import SweepSpec, cell_key
+
+    try:
+        with warnings.catch_warnings():  # an old spelling was said when the sweep ran
+            warnings.simplefilter("ignore")
+            spec = SweepSpec.from_dict(raw)
+        return len({cell_key(spec.kind, cell) for cell in spec.cells()})
+    except (LmsbenchError, ValueError, TypeError):
+        return None

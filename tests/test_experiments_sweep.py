@@ -718,3 +718,48 @@ def test_a_cell_that_ran_after_its_sensor_file_changed_is_not_stored_under_the_o
     again = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
     assert (again.computed, again.skipped) == (2, 0)  # both with the new file, under its keys
     assert set(again.table["cell"]).isdisjoint(first.table["cell"])
+
+
+def test_a_killed_run_of_a_changed_sweep_leaves_no_earlier_table_to_draw(tmp_path, capsys):
+    """A run of an edited sweep file killed before its table (SIGKILL; os._exit here) left the
+    earlier file's results.parquet beside the new sweep.yaml, and `figures --sweep` drew it as the
+    sweep's result, exit 0. The new run removes it as it writes its sweep.yaml."""
+    from experiments.cli import main
+
+    log, out = tmp_path / "log.txt", tmp_path / "out"
+    run_sweep(make_spec(log, xs=[0, 1], seeds=[0]), out, "inprocess", progress=False)
+    assert len(pd.read_parquet(out / "results.parquet")) == 2
+    spec_path = tmp_path / "squares.yaml"
+    spec_path.write_text(yaml.safe_dump(make_spec(log, xs=[0, 1, 2, 4, 5], seeds=[0]).to_dict()))
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), str(REPO / "tests")]), "SWEEP_TEST_DIE_AT": "4"}
+    killed = subprocess.run([sys.executable, "-m", "experiments.cli", "sweep", str(spec_path), "--inprocess",
+                             "--no-progress", "--out", str(out)], env=env, cwd=REPO, capture_output=True, text=True,
+                            timeout=120)
+    assert killed.returncode == 9, killed.stderr
+    assert load_sweep(out / "sweep.yaml").grid == {"x": [0, 1, 2, 4, 5]}
+    assert not (out / "results.parquet").exists() and not (out / "results.csv").exists()
+    assert main(["figures", "--sweep", str(out), "--out", str(tmp_path / "figs")]) == 2
+    assert capsys.readouterr().err == (f"lmsbench figures: error: --sweep {out}: no results.parquet: the sweep did not "
+                                       f"finish; finish it with lmsbench sweep {out / 'sweep.yaml'} --out {out}, then "
+                                       "draw it\n")
+    # the same sweep file again keeps its table: a rerun of a finished sweep is no change
+    run_sweep(make_spec(log, xs=[0, 2], seeds=[0]), out, "inprocess", progress=False)
+    run_sweep(make_spec(log, xs=[0, 2], seeds=[0]), out, "inprocess", progress=False)
+    assert list(pd.read_parquet(out / "results.parquet")["x"]) == [0, 2]
+
+
+def test_figures_refuses_a_stopped_sweeps_partial_table(tmp_path, capsys):
+    """A sweep stopped by Ctrl-C writes the table of the cells it finished (4 of 12 here), which
+    `figures --sweep` drew as the sweep's result, exit 0."""
+    from experiments.cli import main
+
+    log, out = tmp_path / "log.txt", tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(make_spec(log, interrupt_at=2), out, "inprocess", progress=False)
+    assert len(pd.read_parquet(out / "results.parquet")) == 4
+    assert main(["figures", "--sweep", str(out), "--out", str(tmp_path / "figs")]) == 2
+    assert capsys.readouterr().err == (f"lmsbench figures: error: --sweep {out}: its results.parquet holds 4 of the 12 "
+                                       f"cells of its sweep.yaml: the sweep did not finish (stopped, or cells not "
+                                       f"stored); finish it with lmsbench sweep {out / 'sweep.yaml'} --out {out}, "
+                                       "then draw it\n")
+    assert not (tmp_path / "figs").exists()

@@ -111,7 +111,11 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
     out = store.root
     from experiments.provenance import versions, write_record
 
-    write_record(out / "sweep.yaml", spec_record(spec))  # whole: it tells the folder as the sweep's (SWEEP_OWNER)
+    record = spec_record(spec)
+    if _recorded(out / "sweep.yaml") not in (None, record):  # the folder's table is another sweep file's: a run
+        for name in ("results.parquet", "results.csv"):  # killed before writing its own left it beside this
+            (out / name).unlink(missing_ok=True)  # sweep.yaml, drawn by `figures --sweep` as this one's, exit 0
+    write_record(out / "sweep.yaml", record)  # whole: it tells the folder as the sweep's (SWEEP_OWNER)
 
     (out / "versions.yaml").write_text(yaml.safe_dump(versions(), sort_keys=False))  # of the last run into `out`
     digests, seen = getattr(fn, "input_digests", None), {}  # the files a cell reads are part of its key
@@ -170,6 +174,14 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
             write_atomic(table, out / "results.csv")
     failed = int((table["status"] != "ok").sum()) if not table.empty else 0
     return SweepResult(table, len(set(keys)), counts["computed"], skipped, failed, out)
+
+
+def _recorded(path: Path) -> str | None:
+    """The text of an earlier run's sweep.yaml, None when there is none (or it cannot be read)."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
 
 
 def _changed_inputs(digests: Any, params: dict[str, Scalar], given: dict[str, str] | None) -> list[str]:
