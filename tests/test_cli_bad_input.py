@@ -876,7 +876,7 @@ def test_two_sweeps_of_one_plot_name_are_refused_before_any_work(tmp_path, capsy
 @pytest.mark.parametrize("f1, spec, why", [
     (float("nan"), "name: nan\nkind: extract\ngrid:\n  x: [1, 2]\n",
      "no metric has a value in its results.parquet (0 of its 2 cells failed, the others gave nan for every metric"),
-    (0.5, "name: flat\nkind: extract\nfixed:\n  x: 1\n",
+    (0.5, "name: flat\nkind: extract\nfixed:\n  x: 1\nseeds: [0, 1]\n",  # two cells, as its table's
      "no grid parameter takes two values and none is sampled, so there is nothing to plot the metrics against")])
 def test_a_sweep_with_nothing_to_plot_is_refused_before_any_work(tmp_path, capsys, f1, spec, why):
     """`figures --sweep S` of a sweep whose cells all gave nan (or that varies nothing) drew no plot
@@ -1256,8 +1256,9 @@ def test_a_sweeps_own_big_sweep_yaml_is_read_for_its_plots(tmp_path):
                                                                                              for i in range(50_000)]}})
     (tmp_path / "sweep.yaml").write_text(spec_record(spec))
     assert (tmp_path / "sweep.yaml").stat().st_size > MAX_YAML_BYTES
-    pd.DataFrame({"extractor.ad_tau": [1.0], "status": ["ok"], "error": [""], "cell": ["a"], "seed": [0]}).to_parquet(
-        tmp_path / "results.parquet")
+    n = len(spec.cells())  # a finished sweep's table: one row a cell (fewer is a sweep that did not finish)
+    pd.DataFrame({"extractor.ad_tau": spec.grid["extractor.ad_tau"], "status": ["ok"] * n, "error": [""] * n,
+                  "cell": [str(i) for i in range(n)], "seed": [0] * n}).to_parquet(tmp_path / "results.parquet")
     assert check_sweep_results(tmp_path) == tmp_path
 
 
