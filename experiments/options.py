@@ -438,7 +438,19 @@ def check_yaml(path: str | os.PathLike, what: str = "a YAML file", sized: bool =
     too_big = size_problem(p.stat().st_size) if sized else None
     if too_big:
         raise InputError(f"{p}: {too_big}")
+    _utf8(p, what)
     return p
+
+
+def _utf8(p: Path, what: str) -> None:
+    """Raise InputError unless the whole file is UTF-8, as its reader decodes it: the head's check
+    (:func:`_text_head`, 4 KB) passed a byte beyond it, and one in the last 4 bytes of a short file
+    (taken for a character cut at the end of the block), and ``read_text`` failed after: `slam
+    --config`, `simulate --config` and `figures --sweep` said "internal error: UnicodeDecodeError"."""
+    try:
+        p.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{p}: not text (byte {exc.start} is not UTF-8), not {what}") from None
 
 
 def check_simulate_finished(path: str | os.PathLike) -> None:
@@ -510,6 +522,7 @@ def check_log(path: str | os.PathLike) -> Path:
         if not meta.is_file():
             raise InputError(not_a_log_folder(p))
         _text_head(meta, "a ROS 2 bag's metadata.yaml")
+        _utf8(meta, "a ROS 2 bag's metadata.yaml")
         try:  # rosbags said "Could not load YAML ... in "<unicode string>", line 1, ..." over several lines
             info = load_yaml(meta.read_text(encoding="utf-8"))
         except yaml.YAMLError as exc:

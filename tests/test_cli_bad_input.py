@@ -1299,3 +1299,34 @@ def test_a_geometry_the_flags_give_that_fits_no_line_does_not_offer_to_skip_ever
     assert "--skip-bad-lines" not in err
     assert run_main(["info", str(log)]) == 0  # the convention's 180 deg at 0.5 deg
     capsys.readouterr()
+
+
+def test_yaml_files_not_utf8_past_the_head_are_one_line(tmp_path, capsys):
+    """Fuzzing of 2026-12-06: the UTF-8 check read a YAML file's first 4 KB, and took a bad byte in
+    the last 4 bytes of a shorter file for a character cut at the end of that block: `simulate
+    --config`, `slam --config` and `figures --sweep` then failed in read_text, "internal error:
+    UnicodeDecodeError", exit 1 (a sweep file and a bag's metadata.yaml the same past 4 KB)."""
+    late = b"# " + b"x" * 5000 + b"\n# \xff\n"  # byte 5005
+    (tmp_path / "short.yaml").write_bytes(b"world: office # \xff\n")  # byte 16 of 18
+    (tmp_path / "late.yaml").write_bytes(b"world: office\n" + late)
+    (tmp_path / "sweep.yaml").write_bytes(b"name: t\nkind: extract\ngrid: {extractor.k: [3, 5]}\n" + late)
+    swept = tmp_path / "swept"
+    swept.mkdir()
+    (swept / "sweep.yaml").write_bytes(b"name: t\nkind: extract\ngrid: {extractor.k: [3]}\n" + late)
+    pd.DataFrame({"extractor.k": [3], "seed": [0], "f1": [1.0], "status": ["ok"], "cell": ["a"]}).to_parquet(
+        swept / "results.parquet")
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    (bag / "metadata.yaml").write_bytes(b"rosbag2_bagfile_information: {}\n" + late)
+    out = str(tmp_path / "out")
+    cases = [(["simulate", "--config", str(tmp_path / "short.yaml"), "--out", out], "short.yaml", 16, "a simulate config.yaml"),
+             (["simulate", "--config", str(tmp_path / "late.yaml"), "--out", out], "late.yaml", 5019, "a simulate config.yaml"),
+             (["sweep", str(tmp_path / "sweep.yaml"), "--inprocess", "--out", out], "sweep.yaml", 5055, "a sweep file"),
+             (["figures", "--sweep", str(swept), "--out", out], "swept/sweep.yaml", 5052,
+              "the sweep.yaml `lmsbench sweep` writes beside its results"),
+             (["info", str(bag)], "bag/metadata.yaml", 5037, "a ROS 2 bag's metadata.yaml")]
+    for argv, name, byte, what in cases:
+        assert main(argv) == 2, argv
+        assert capsys.readouterr().err == (f"lmsbench {argv[0]}: error: {tmp_path / name}: not text (byte {byte} is not "
+                                           f"UTF-8), not {what}\n"), argv
+    assert not Path(out).exists()
