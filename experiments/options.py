@@ -863,6 +863,9 @@ def _lock_folder() -> Path:
     output, whose listing is the run's: a lock file there would be an output of its own)."""
     folder = Path(tempfile.gettempdir()) / f"lmsbench-{os.getuid()}-outputs"
     folder.mkdir(mode=0o700, exist_ok=True)
+    info = os.lstat(folder)
+    if not stat.S_ISDIR(info.st_mode) or info.st_uid != os.getuid():  # a link, or another user's folder
+        raise PermissionError(f"{folder}: not a folder of this user's")
     return folder
 
 
@@ -881,8 +884,11 @@ def hold_output(p: Path, flag: str = "--out") -> None:
     key = str(real_path(p))
     if key in _HELD_OUTPUTS:
         return
-    lock = _lock_folder() / (hashlib.sha256(key.encode("utf-8", "surrogateescape")).hexdigest()[:40] + ".lock")
-    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o600)
+    try:
+        lock = _lock_folder() / (hashlib.sha256(key.encode("utf-8", "surrogateescape")).hexdigest()[:40] + ".lock")
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600)
+    except OSError:  # no lock to be had (a temporary folder not writable, or not the user's): the run goes on
+        return  # unguarded, as before the lock, rather than refusing every --out
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
@@ -890,9 +896,9 @@ def hold_output(p: Path, flag: str = "--out") -> None:
         os.close(fd)
         raise InputError(f"{flag} {p}: another lmsbench command{f' ({holder})' if holder else ''} is writing there; "
                          "wait for it to end, or give another path") from None
-    except BaseException:
+    except OSError:  # a file system without locks: unguarded, as above
         os.close(fd)
-        raise
+        return
     os.ftruncate(fd, 0)
     os.pwrite(fd, _HOLDER.encode("utf-8", "replace"), 0)
     _HELD_OUTPUTS[key] = fd

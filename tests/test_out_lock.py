@@ -81,3 +81,15 @@ def test_an_output_file_held_by_another_command_is_refused(tmp_path, capsys):
     finally:
         proc.kill()
         proc.communicate()
+
+
+def test_without_a_lock_to_be_had_the_command_goes_on(tmp_path, capsys, monkeypatch):
+    """The locks' folder not the user's (a file of its name here, or another user's folder, a link):
+    the command runs unguarded, as before the lock, instead of refusing every --out."""
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    (tmp_path / f"lmsbench-{os.getuid()}-outputs").write_text("not a folder")
+    target = tmp_path / "scans.clf"
+    assert main(["lms200", "record", "--port", str(tmp_path), "--out", str(target)]) == 2
+    assert capsys.readouterr().err == f"lmsbench lms200 record: error: cannot open {tmp_path}: Is a directory\n"
