@@ -763,3 +763,20 @@ def test_figures_refuses_a_stopped_sweeps_partial_table(tmp_path, capsys):
                                        f"stored); finish it with lmsbench sweep {out / 'sweep.yaml'} --out {out}, "
                                        "then draw it\n")
     assert not (tmp_path / "figs").exists()
+
+
+@pytest.mark.parametrize("kind, fixed", [("extract", "method: sensor, "), ("slam", "")])
+def test_a_rate_the_sensor_does_not_give_is_refused_before_any_cell(tmp_path, capsys, kind, fixed):
+    """Fuzzing of 2026-12-06: `rate_hz: 1e300` (or 75 scans/s at 0.5 deg) passed the sweep's checks
+    (> 0) and failed in every cell ("more than the sensor gives"), exit 1 after the work."""
+    from experiments.cli import main
+
+    spec = tmp_path / "s.yaml"
+    spec.write_text(f"name: t\nkind: {kind}\nfixed: {{{fixed}world: office, duration: 1.0}}\n"
+                    "grid:\n  \"sensor.resolution,sensor.n_beams,rate_hz\": [[0.017453292519943295, 181, 75], "
+                    "[0.008726646259971648, 361, 1e300]]\n")
+    out = tmp_path / "out"
+    assert main(["sweep", str(spec), "--inprocess", "--no-progress", "--out", str(out)]) == 2
+    assert capsys.readouterr().err == (f"lmsbench sweep: error: {spec}: rate_hz: 1e+300 scans/s is more than the "
+                                       "sensor gives (37.5 scans/s at 0.5 deg)\n")
+    assert not out.exists()

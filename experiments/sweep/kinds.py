@@ -262,17 +262,21 @@ def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: s
             raise SweepSpecError(f"rate_hz: must be a number of scans/s > 0 or null, got {rate!r}")
 
 
-def _check_sensors(cells: list[dict[str, Any]], files: dict[str, Any]) -> None:
-    """Every distinct sensor of the cells builds (a bad value fails before any cell runs); a
-    cell's ``sensor_file`` is taken from ``files`` (read once, by :func:`_read_sensor_files`)."""
+def _check_sensors(cells: list[dict[str, Any]], files: dict[str, Any], defaults: dict[str, Any]) -> None:
+    """Every distinct sensor of the cells builds (a bad value fails before any cell runs), and the
+    cell's ``rate_hz`` is one it gives (``rate_hz: 1e300`` failed in every cell, "more than the
+    sensor gives", exit 1); a cell's ``sensor_file`` is taken from ``files`` (read once, by
+    :func:`_read_sensor_files`)."""
     from lms200 import LmsbenchError
+    from lms200.timing import check_scan_rate
 
     from .spec import SweepSpecError
 
     seen = set()
     for cell in cells:
         items = tuple(sorted(split_params(cell, "sensor").items()))
-        key = (items, cell.get("sensor_file"))
+        rate = {**defaults, **cell}.get("rate_hz")
+        key = (items, cell.get("sensor_file"), rate)
         if key in seen:
             continue
         seen.add(key)
@@ -281,11 +285,15 @@ def _check_sensors(cells: list[dict[str, Any]], files: dict[str, Any]) -> None:
             with warnings.catch_warnings():  # an old degree name was said when the sweep was read (spec.py)
                 warnings.simplefilter("ignore", LmsbenchWarning)
                 if sensor_file is None:
-                    sensor_config(dict(items))
+                    sensor = sensor_config(dict(items))
                 else:  # the file's config with the overrides on top, as sensor_config builds it
-                    files[str(sensor_file)].replace(**dict(items))
+                    sensor = files[str(sensor_file)].replace(**dict(items))
         except (LmsbenchError, TypeError, ValueError) as exc:
             raise SweepSpecError(f"sensor {dict(items)}: {exc}") from None
+        try:
+            check_scan_rate(rate, sensor.resolution)
+        except LmsbenchError as exc:
+            raise SweepSpecError(str(exc)) from None
 
 
 def check_extract_params(cells: list[dict[str, Any]]) -> None:
@@ -300,7 +308,7 @@ def check_extract_params(cells: list[dict[str, Any]]) -> None:
     files = _read_sensor_files(cells)
     _unknown(cells, "sensor", _sensor_fields)
     _check_plain(cells, EXTRACT_DEFAULTS, set(), ("sensor", "extractor"))
-    _check_sensors(cells, files)
+    _check_sensors(cells, files, EXTRACT_DEFAULTS)
     from .spec import SweepSpecError
 
     seen = set()
@@ -336,7 +344,7 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
     default = SlamConfig().extractor
     _unknown(cells, "slam.extractor_params", lambda c: _extractor_fields(str(c.get("slam.extractor", default))))
     _check_plain(cells, SLAM_DEFAULTS, set(), ("sensor", "slam", "extractor"))
-    _check_sensors(cells, files)
+    _check_sensors(cells, files, SLAM_DEFAULTS)
     from lms200 import LmsbenchError
 
     from experiments.user_methods import ensure_method
