@@ -834,7 +834,7 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
 
 #: the outputs (``--out`` folders and files) the running command holds: real path -> the open lock
 #: file. None outside a command (:func:`holding_outputs`): the library's own calls lock nothing.
-_HELD_OUTPUTS: dict[str, int] | None = None
+_HELD_OUTPUTS: dict[str, tuple[int, Path]] | None = None
 _HOLDER = ""  # what holds them: "pid 1234, lmsbench simulate", written into the lock file
 
 
@@ -850,9 +850,11 @@ def holding_outputs(command: str) -> None:
 def release_outputs() -> None:
     """End the holding (the command ended; a killed process's locks end with it, by the kernel)."""
     global _HELD_OUTPUTS
-    for fd in (_HELD_OUTPUTS or {}).values():
-        try:
-            os.ftruncate(fd, 0)  # no holder named by the next run's refusal (a killed one's name stays)
+    for fd, lock in (_HELD_OUTPUTS or {}).values():
+        try:  # removed while held (one file an output path the runs used piled up in the temporary folder);
+            lock.unlink(missing_ok=True)  # a run that opened it meanwhile finds it gone once locked, and retries
+        except OSError:
+            pass
         finally:
             os.close(fd)
     _HELD_OUTPUTS = None
@@ -875,7 +877,8 @@ def hold_output(p: Path, flag: str = "--out") -> None:
     removing the other's temporary files (``simulate --seed 1 --out D`` beside ``--seed 2 --out
     D``: one said "D/.scans.clf.N.tmp: no such file or directory", the other "simulated ... seed 1
     into D" over a folder of seed 2's files, exit 0). An advisory lock (``fcntl.flock``) on a file
-    named by ``p``'s real path, released when the command ends or its process dies (SIGKILL too)."""
+    named by ``p``'s real path, released when the command ends (the file removed) or its process
+    dies (SIGKILL too; the file stays, to be taken and removed by the next run of that output)."""
     import fcntl
     import hashlib
 
@@ -884,24 +887,31 @@ def hold_output(p: Path, flag: str = "--out") -> None:
     key = str(real_path(p))
     if key in _HELD_OUTPUTS:
         return
-    try:
-        lock = _lock_folder() / (hashlib.sha256(key.encode("utf-8", "surrogateescape")).hexdigest()[:40] + ".lock")
-        fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600)
-    except OSError:  # no lock to be had (a temporary folder not writable, or not the user's): the run goes on
-        return  # unguarded, as before the lock, rather than refusing every --out
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        holder = os.pread(fd, 200, 0).decode("utf-8", "replace").strip()
+    for _ in range(100):  # the file removed by its holder's end between our open and our lock: again
+        try:
+            lock = _lock_folder() / (hashlib.sha256(key.encode("utf-8", "surrogateescape")).hexdigest()[:40] + ".lock")
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600)
+        except OSError:  # no lock to be had (a temporary folder not writable, or not the user's): the run goes on
+            return  # unguarded, as before the lock, rather than refusing every --out
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            same = os.path.samestat(os.fstat(fd), os.stat(lock, follow_symlinks=False))
+        except BlockingIOError:
+            holder = os.pread(fd, 200, 0).decode("utf-8", "replace").strip()
+            os.close(fd)
+            raise InputError(f"{flag} {p}: another lmsbench command{f' ({holder})' if holder else ''} is writing "
+                             "there; wait for it to end, or give another path") from None
+        except FileNotFoundError:
+            same = False
+        except OSError:  # a file system without locks: unguarded, as above
+            os.close(fd)
+            return
+        if same:
+            os.ftruncate(fd, 0)  # a killed holder's name
+            os.pwrite(fd, _HOLDER.encode("utf-8", "replace"), 0)
+            _HELD_OUTPUTS[key] = (fd, lock)
+            return
         os.close(fd)
-        raise InputError(f"{flag} {p}: another lmsbench command{f' ({holder})' if holder else ''} is writing there; "
-                         "wait for it to end, or give another path") from None
-    except OSError:  # a file system without locks: unguarded, as above
-        os.close(fd)
-        return
-    os.ftruncate(fd, 0)
-    os.pwrite(fd, _HOLDER.encode("utf-8", "replace"), 0)
-    _HELD_OUTPUTS[key] = fd
 
 
 def check_link(p: Path, flag: str = "--out") -> None:

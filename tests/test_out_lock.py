@@ -6,11 +6,13 @@ killed run's), the other "simulated ... (seed 1 ...) into D" over a folder of se
 
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -61,6 +63,9 @@ def test_a_second_command_into_a_held_out_is_refused_and_a_killed_ones_folder_re
     assert main(["sweep", str(spec), "--inprocess", "--out", str(out), "--no-progress"]) == 0
     captured = capsys.readouterr()
     assert "held: 1 cells, 1 computed, 0 already done, 0 failed" in captured.out, captured
+    # the killed run's lock file, taken by this run, is removed as it ends (none piles up in the temporary folder)
+    name = hashlib.sha256(os.path.realpath(out).encode()).hexdigest()[:40] + ".lock"
+    assert not (Path(tempfile.gettempdir()) / f"lmsbench-{os.getuid()}-outputs" / name).exists()
 
 
 def test_an_output_file_held_by_another_command_is_refused(tmp_path, capsys):
@@ -86,8 +91,6 @@ def test_an_output_file_held_by_another_command_is_refused(tmp_path, capsys):
 def test_without_a_lock_to_be_had_the_command_goes_on(tmp_path, capsys, monkeypatch):
     """The locks' folder not the user's (a file of its name here, or another user's folder, a link):
     the command runs unguarded, as before the lock, instead of refusing every --out."""
-    import tempfile
-
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     (tmp_path / f"lmsbench-{os.getuid()}-outputs").write_text("not a folder")
     target = tmp_path / "scans.clf"
