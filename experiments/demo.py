@@ -266,8 +266,7 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
             pivot = ok.pivot_table(index="extractor.k", columns="sensor.noise_sigma", values="f1", aggfunc="mean")
             pivot.columns = [f"F1 at σ = {c:g} m" for c in pivot.columns]
             sw.text.append(markdown_table(pivot.reset_index().rename(columns={"extractor.k": "k"})))
-        sw.text.append(f"{len(sweep_table)} cells, {int((sweep_table['status'] != 'ok').sum())} failed; "
-                       f"table in `sweeps/{DEMO_SWEEP['name']}/results.parquet`. Larger sweeps: `sweeps/*.yaml`.")
+        sw.text.append(sweep_note(len(sweep_table), int((sweep_table["status"] != "ok").sum())))
         for name in sorted(n for n in figs if n.startswith("sweep_")):
             metric = name[len(f"sweep_{DEMO_SWEEP['name']}_"):]
             sw.text.append(figure(f"figures/{name}.png", f"Sweep: {metric} against the range noise (m), one line "
@@ -276,6 +275,15 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
     if notes:
         sections.append(Section("Notes", [f"- {n}" for n in notes]))
     return sections
+
+
+def sweep_note(cells: int, failed: int) -> str:
+    """The sweep section's last line: its table, in the run's folder, and where the larger sweeps are:
+    the checkout's ``sweeps/*.yaml``, not the run's ``sweeps/`` (which holds the demo's sweep alone; the
+    copy in results/demo pointed ``sweeps/*.yaml`` into the run folder, where no such file is)."""
+    return (f"{cells} cells, {failed} failed; table in `sweeps/{DEMO_SWEEP['name']}/results.parquet`. "
+            "Larger sweeps: the sweep files of the checkout's `sweeps` folder (`lmsbench sweep "
+            "sweeps/k_vs_noise.yaml` from the checkout; docs/experiments.md).")
 
 
 def _real_log_caption(tables: dict[str, pd.DataFrame]) -> str:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pandas as pd
 
 from experiments.demo import method_table, timing_note
@@ -29,3 +31,21 @@ def test_an_all_numpy_summary_says_so_and_claims_no_compiled_comparison():
     assert "`sensor`, `hough` on vectorised numpy" in note and "compiled with compiled" not in note
     mixed = pd.DataFrame({"method": ["sensor", "hough"], "backend": ["numba", "numpy"]})
     assert "not like for like" in timing_note(mixed)
+
+
+def test_the_copied_report_points_its_larger_sweeps_at_the_checkout_not_into_the_run(tmp_path):
+    """results/demo/report.md said `RUN/sweeps/*.yaml` (the copy's links rebased into the run folder),
+    where the run holds only sweeps/demo_k_vs_noise/: the larger sweeps are the checkout's sweep files."""
+    from experiments.commands.demo import copy_report_up
+    from experiments.demo import sweep_note
+
+    run = tmp_path / "2026-01-01_00-00-00"
+    run.mkdir()
+    (run / "report.md").write_text(sweep_note(9, 0) + "\n")
+    (run / "report.html").write_text("<html></html>")
+    copy_report_up(run / "report.md")
+    copied = (tmp_path / "report.md").read_text()
+    assert "`2026-01-01_00-00-00/sweeps/demo_k_vs_noise/results.parquet`" in copied
+    assert "2026-01-01_00-00-00/sweeps/*.yaml" not in copied
+    assert "`lmsbench sweep sweeps/k_vs_noise.yaml` from the checkout" in copied
+    assert (Path(__file__).resolve().parents[1] / "sweeps" / "k_vs_noise.yaml").is_file()
