@@ -103,3 +103,12 @@ def test_version_is_cheap_it_loads_neither_numba_nor_the_simulator() -> None:
             "print(status, sorted(m for m in ('sim', 'numba') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.splitlines()[-1] == "0 []"
+
+
+def test_compare_help_says_what_each_poses_choice_does(capsys) -> None:
+    """--poses {auto,corrected,none}: the help said what auto and none do, not corrected."""
+    assert main(["compare", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "auto (default): when the file name says 'corrected'" in text
+    assert "corrected: always (a log without such anchors: its odometry taken as corrected poses)" in text
+    assert "none: never" in text

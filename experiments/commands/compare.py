@@ -43,7 +43,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--poses", choices=("auto", "corrected", "none"), default=None,
                    help="logs: are the log's poses SLAM-corrected (then repeatability is measured)? "
                         "auto (default): when the file name says 'corrected' or the reader found a Radish "
-                        "corrected log's anchors; none: never")
+                        "corrected log's anchors; corrected: always (a log without such anchors: its "
+                        "odometry taken as corrected poses); none: never")
     p.add_argument("--sensor", type=path_arg, metavar="FILE.yaml",
                    help="sensor model of the simulated sources, as written (e.g. from `lmsbench calibrate`); "
                    "needs a world among the sources (logs and simulate folders carry their own)")
