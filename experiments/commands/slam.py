@@ -359,6 +359,9 @@ def _score_lines(m: dict[str, Any]) -> list[str]:
                 if isinstance(row.get(key), (int, float)) and math.isfinite(row[key])]
         if rows and rows[0][0] == "this run":
             lines.append(f"  {label}: " + ", ".join(f"{source} {value:.3g}" for source, value in rows))
+    if not lines and "ate" not in m and "relations" not in m:  # csail-robotlaser1 printed no score and said nothing of why
+        lines.append("  no score: the input has no reference to score the run against (no true or corrected poses, "
+                     "no relations file: --relations FILE, or NAME.relations beside the log)")
     return lines
 
 
