@@ -112,3 +112,25 @@ def test_compare_help_says_what_each_poses_choice_does(capsys) -> None:
     assert "auto (default): when the file name says 'corrected'" in text
     assert "corrected: always (a log without such anchors: its odometry taken as corrected poses)" in text
     assert "none: never" in text
+
+
+@pytest.mark.parametrize("argv, hint", [
+    (["compare", "office", "--seeds", "0-2"], "got '0-2'; the seeds are listed one by one, not as a range: 0 1 2 "),
+    (["sim2real", "x.clf", "--seeds", "40-63"],
+     "got '40-63'; the seeds are listed one by one, not as a range: $(seq 40 63) in a shell, or 40 41 ... 63 written out"),
+    (["sim2real", "x.clf", "--probe-seeds", "100..103"], "not as a range: 100 101 102 103 "),
+])
+def test_a_range_of_seeds_says_how_to_list_them(argv, hint, capsys) -> None:
+    """The README names seed sets as ranges ("seeds 40-63"); `--seeds 40-63` said only "must be a
+    whole number", as for any other word."""
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"lmsbench {argv[0]}: error: argument {argv[2]}: must be a whole number >= 0")
+    assert hint in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("word", ["5-2", "-1", "a-b", "1.5"])
+def test_a_seed_that_is_no_range_gets_no_range_hint(word, capsys) -> None:
+    assert main(["compare", "office", "--seeds", word]) == 2
+    err = capsys.readouterr().err
+    assert "must be a whole number" in err and "range" not in err

@@ -16,7 +16,7 @@ from lms200.timing import check_scan_rate
 
 from experiments.overrides import check_set_once, set_option
 from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
-from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SEED, SIMULATE_OUTPUTS, InputError, check_methods, check_out,
+from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SIMULATE_OUTPUTS, listed_seed, InputError, check_methods, check_out,
                                  check_out_spares, check_seeds, count, plain_number, positive, path_arg, text)
 
 
@@ -30,7 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "built-in one)")
     p.add_argument("--method", dest="methods", nargs="+", type=text("an extractor's name"),
                    help="the same as --methods (`--method MODULE:FUNCTION` runs a user's extractor)")
-    p.add_argument("--seeds", nargs="+", type=SEED, help="seeds of each world named without one, listed (default 0 1 2; "
+    p.add_argument("--seeds", nargs="+", type=listed_seed, help="seeds of each world named without one, listed (default 0 1 2; "
                                                          "`--seeds 3` is the one seed 3)")
     p.add_argument("--duration", type=DURATION, help="simulated seconds per world and seed (default 30)")
     p.add_argument("--rate", "--rate-hz", dest="rate", type=positive("scans/s"),
