@@ -134,3 +134,12 @@ def test_a_seed_that_is_no_range_gets_no_range_hint(word, capsys) -> None:
     assert main(["compare", "office", "--seeds", word]) == 2
     err = capsys.readouterr().err
     assert "must be a whole number" in err and "range" not in err
+
+
+def test_calibrate_help_names_every_fit_its_world_runs(capsys) -> None:
+    """calibrate --world said it fits "the spot width and the outlier baseline"; the same world's runs
+    fit the residual tail and the clustering of the tail and of the nans too (experiments.calibrate.fit_sensor)."""
+    assert main(["calibrate", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert ("simulated world of the fits by simulation (spot width, outlier baseline, residual tail, the tail's "
+            "and the nans' clustering)") in text
