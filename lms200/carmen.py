@@ -282,6 +282,22 @@ class CarmenReader:
             pass
         return counts
 
+    def _no_laser_reason(self, lines: int, quiet: int) -> str:
+        """Why a pass that met no laser line (of any kind) is an error, by what the file held: a log
+        that gives no scan is a failed recording or download, not a run of no scans (an empty file,
+        a gzip of nothing or a file of comments read as no records, silently)."""
+        kinds = " (FLASER, RLASER, ROBOTLASER1 / 2, RAWLASER1 .. 4)"
+        if lines == 0:
+            with open(self.path, "rb") as f:
+                packed = compression(f.read(6))
+            if packed:
+                return f"its {packed} data decompresses to nothing: an empty log, no laser lines{kinds}"
+            return f"an empty file (0 bytes): no laser lines{kinds}"
+        if quiet == lines:
+            return f"holds only blank or comment lines ({lines:,}): no laser lines{kinds}"
+        met = ", ".join(f"{k} ({n:,})" for k, n in self.stats.messages.items())
+        return f"holds no laser lines{kinds}, only other messages: {met}"
+
     def _lines(self) -> Iterator[tuple[int, str]]:
         """(line number, text) of every line; damage in the stream becomes LogFormatError."""
         line_no = 0
@@ -404,10 +420,13 @@ class CarmenReader:
         # a Radish corrected log: the laser lines' poses are a SLAM solution, the ODOM lines the raw odometry
         chain = CorrectedChain() if pairing is None else None
         flushes += [holder.flush for holder in (pairing, chain) if holder is not None]
+        lines = quiet = 0  # lines read, and of them blank or comment lines (for a log of no laser line)
         for line_no, line in self._lines():
+            lines = line_no
             words = line.split()
             if not words or words[0].startswith("#"):
                 blank.see(line_no)
+                quiet += 1
                 continue
             blank.reset()
             kind = words[0]
@@ -489,6 +508,8 @@ class CarmenReader:
             yield from pairing.flush()
         if chain is not None:
             yield from chain.flush()
+        if not any(stats.messages.get(k) for k in LASER_KINDS) and not stats.skipped_count and stats.stopped is None:
+            raise LogFormatError(self.path, 1, self._no_laser_reason(lines, quiet))
         if self.topic is not None and not stats.messages.get(self.topic) and stats.other_lasers():
             # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
             others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())

@@ -45,7 +45,9 @@ def read_log(
         LogNotFoundError: (an ``LmsbenchError`` and a ``FileNotFoundError``) when the path does not exist, or is a folder that is not a ROS 2 bag or
             not a regular file (a device, a pipe); for a ``lmsbench simulate`` folder the message names
             its scans.clf to read instead (:func:`folder_message`).
-        LogFormatError: (while iterating) a CARMEN line that cannot be read, naming file and line.
+        LogFormatError: (while iterating) a CARMEN line that cannot be read, naming file and line; a
+            CARMEN log of no laser line (an empty file, a compressed stream of nothing, only comments
+            or only other messages), naming the file and what it holds.
         BagError: (while iterating) a bag that cannot be read, naming the topic and message index.
     """
     p = path_of(path)
