@@ -70,6 +70,7 @@ from .codes import (
 )
 from . import laser_geometry
 from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
+from .finite import fixed
 from .laser_geometry import LaserGeometry
 from .records import Pose2D, Record, SkipLog
 from .scan import Scan, snap_angle, valid_ranges
@@ -806,8 +807,8 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     _require(fov >= 0, f"field of view must be >= 0, got {fov}")
     steps = fov / resolution  # CARMEN loggers write fov = n x res (csail) or (n - 1) x res
     _require(min(abs(steps - n), abs(steps - (n - 1))) <= ROBOTLASER_FIT_TOLERANCE_BEAMS,
-             f"declares a field of view of {math.degrees(fov):.3f} deg at {math.degrees(resolution):.4f} deg, "
-             f"which holds {steps:.1f} steps, but carries {n} beams (fov must be n or n - 1 steps)")
+             f"declares a field of view of {fixed(math.degrees(fov), 3)} deg at {fixed(math.degrees(resolution), 4)} deg, "
+             f"which holds {fixed(steps, 1)} steps, but carries {n} beams (fov must be n or n - 1 steps)")
     if units is None and accuracy in (0.01, 0.001):
         units = "cm" if accuracy == 0.01 else "mm"
     ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind)

@@ -14,6 +14,7 @@ import numpy as np
 
 from .codes import real_rows, real_vector
 from .errors import InputError, LogFormatError
+from .finite import fixed
 
 
 def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
@@ -138,7 +139,7 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
         if abs(v[1]) > MAX_COORD_M or abs(v[2]) > MAX_COORD_M:
             raise LogFormatError(path, no, f"TUM row's x or y is beyond +-{MAX_COORD_M:g} m: {s[:60]!r}")
         if stamps and v[0] < stamps[-1]:
-            raise LogFormatError(path, no, f"TUM stamps go backwards ({v[0]:.6f} s after {stamps[-1]:.6f} s)")
+            raise LogFormatError(path, no, f"TUM stamps go backwards ({fixed(v[0])} s after {fixed(stamps[-1])} s)")
         yaw = float(quaternion_to_yaw(np.array(v[4:8]))[0])
         if math.isnan(yaw) and not any(math.isnan(x) for x in v[4:8]):  # (0, 0, 0, 0) read as yaw 0
             raise LogFormatError(path, no, f"TUM row's quaternion (qx qy qz qw) is zero: {s[:60]!r}")

@@ -36,3 +36,50 @@ def test_a_log_of_junk_skipped_under_skip_bad_lines_says_what_it_skipped(tmp_pat
     (tmp_path / "bad.clf").write_text("FLASER 3 1 2\n")
     reader = read_log(tmp_path / "bad.clf", skip_bad_lines=True)
     assert list(reader) == [] and reader.stats.skipped_count == 1
+
+
+# -- 6. numbers near 1e308 in messages -------------------------------------------------------------
+def test_fixed_writes_huge_numbers_with_an_exponent_and_others_as_before() -> None:
+    from lms200.finite import fixed
+
+    assert fixed(1700000000.1234567) == "1700000000.123457" == f"{1700000000.1234567:.6f}"
+    assert fixed(2.5, 1) == "2.5" and fixed(float("nan")) == "nan" and fixed(float("-inf"), 3) == "-inf"
+    assert fixed(1e308) == "1e+308" and fixed(-1.5e300, 3) == "-1.5e+300"
+
+
+def test_a_tum_stamp_near_1e308_is_quoted_compactly(tmp_path: Path) -> None:
+    """'TUM stamps go backwards (1.000000 s after 1000000000000000010979063629440455417404923096773118...'"""
+    from lms200 import read_tum
+
+    (tmp_path / "t.tum").write_text("1e308 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n")
+    with pytest.raises(LogFormatError) as info:
+        read_tum(tmp_path / "t.tum")
+    assert str(info.value) == f"{tmp_path / 't.tum'}:2: TUM stamps go backwards (1.000000 s after 1e+308 s)"
+
+
+def _flaser_log(path: Path, stamps: list[str]) -> Path:
+    ranges = " ".join(["2.0"] * 181)
+    path.write_text("".join(f"FLASER 181 {ranges} 0 0 0 0 0 0 {t} h {t}\n" for t in stamps))
+    return path
+
+
+def test_slam_and_info_quote_a_stamp_near_1e308_compactly(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    from experiments.cli import main
+
+    log = _flaser_log(tmp_path / "big.log", ["1e308", "1", "2"])
+    assert main(["slam", str(log), "--out", str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"lmsbench slam: error: {log}: time goes backwards at scan 1 (stamp 1.000000 s after 1e+308 s); "
+                   "SLAM needs scans in time order (--skip-bad-lines skips the fewest scans that leave the rest in order)")
+    assert main(["info", str(log)]) == 0
+    assert "  duration        1e+308 s\n" in capsys.readouterr().out
+
+
+def test_a_robotlaser_header_of_1e300_steps_is_quoted_compactly(tmp_path: Path) -> None:
+    """'which holds 10000000000000000525047602552044202487...0.0 steps' (301 digits)."""
+    log = tmp_path / "rl.log"
+    log.write_text("ROBOTLASER1 0 -1 1e10 1e-290 80 0.01 0 3 2 2 2 0 0 0 0 0 0 0 0 0 0 0 0 1 h 1\n")
+    with pytest.raises(LogFormatError, match=r"rl\.log:1: malformed ROBOTLASER1 line: declares a field of view of "
+                                             r"572957795130\.823 deg at 0\.0000 deg, which holds 1e\+300 steps, but "
+                                             r"carries 3 beams \(fov must be n or n - 1 steps\)$"):
+        list(read_log(log))
