@@ -389,8 +389,27 @@ def _header_ns(msg) -> int:  # noqa: ANN001
     return int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
 
 
-def _scan_of(msg) -> Scan:  # noqa: ANN001
-    """A LaserScan message as a Scan; raises ValueError for fields a scan cannot have."""
+#: what a user can do about a LaserScan's range_max that no Scan takes
+RANGE_MAX_HINT = ("give the sensor's maximum range instead: --laser-range-max M "
+                  "(read_log(..., geometry=LaserGeometry(range_max=M)))")
+
+
+def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
+    """A LaserScan message as a Scan, its range_max replaced by ``range_max`` when given; raises
+    ValueError for fields a scan cannot have."""
+    range_min = float(msg.range_min)
+    if range_max is None:
+        range_max = float(msg.range_max)
+        if not math.isfinite(range_max) or (math.isfinite(range_min) and range_max <= range_min):
+            # was "range_max: must be finite, got inf", no word of what to do
+            what = ("inf (no limit, as some drivers write)" if range_max == math.inf
+                    else f"{range_max:g}" if not math.isfinite(range_max)
+                    else f"{range_max:g} m, not above range_min ({range_min:g} m)")
+            raise ValueError(f"range_max is {what}, which no scan takes (a reading's validity is judged against "
+                             f"it); {RANGE_MAX_HINT}")
+    elif math.isfinite(range_min) and range_max <= range_min:
+        raise ValueError(f"the range_max override ({range_max:g} m, --laser-range-max) is not above the scan's "
+                         f"range_min ({range_min:g} m); give a larger one")
     ranges = np.asarray(msg.ranges, dtype=np.float64)
     ranges[finite_negative(ranges)] = np.nan  # some drivers mark invalid beams with negative values; -inf is REP-117's "too close"
     angle_min, increment = float(msg.angle_min), float(msg.angle_increment)
@@ -400,8 +419,8 @@ def _scan_of(msg) -> Scan:  # noqa: ANN001
         ranges,
         snap_angle(angle_min),  # float32 in the message: back onto the 0.05 deg grid
         snap_angle(increment),
-        float(msg.range_min),
-        float(msg.range_max),
+        range_min,
+        range_max,
         _stamp_of(msg),
     )
 
@@ -524,17 +543,21 @@ class BagReader:
         topic: the LaserScan topic; may be left out when the bag has exactly one.
         skip_bad_lines: skip messages that cannot be read as scans (recorded in ``stats.skipped``)
             instead of raising; damage that stops iteration ends the pass (``stats.stopped``).
+        range_max: m, replaces every scan's ``range_max`` (``read_log(..., geometry=LaserGeometry(range_max=M))``,
+            ``--laser-range-max M``): for a driver that writes inf (no limit) or 0, which no Scan takes.
 
     Raises:
         BagError: (while iterating) a bag that cannot be opened, several LaserScan topics and no
             ``topic``, a missing topic, or a message that cannot be read (naming topic and index).
     """
 
-    def __init__(self, path: str | Path, topic: str | None = None, skip_bad_lines: bool = False) -> None:
+    def __init__(self, path: str | Path, topic: str | None = None, skip_bad_lines: bool = False,
+                 range_max: float | None = None) -> None:
         self.path = Path(path)
         if not self.path.exists():
             raise LogNotFoundError(f"no such bag: {self.path}")
         self.topic = topic
+        self.range_max = range_max
         self.skip_bad_lines = skip_bad_lines
         self.stats = BagReadStats()
 
@@ -622,7 +645,7 @@ class BagReader:
                     if conn.msgtype != "sensor_msgs/msg/LaserScan":
                         matcher.add_pose(conn.topic, _header_ns(msg), _pose_of(msg))
                     else:
-                        matcher.add_scan(_header_ns(msg), _scan_of(msg), index, t)
+                        matcher.add_scan(_header_ns(msg), _scan_of(msg, self.range_max), index, t)
                         stats.see_timing(float(msg.time_increment), float(msg.angle_increment))
                 except Exception as exc:  # noqa: BLE001 - deserialisation errors are rosbags' own types
                     self._fail(f"topic {conn.topic} message {index}", exc, index, fatal=False)

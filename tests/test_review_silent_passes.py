@@ -83,3 +83,33 @@ def test_a_robotlaser_header_of_1e300_steps_is_quoted_compactly(tmp_path: Path) 
                                              r"572957795130\.823 deg at 0\.0000 deg, which holds 1e\+300 steps, but "
                                              r"carries 3 beams \(fov must be n or n - 1 steps\)$"):
         list(read_log(log))
+
+
+# -- 4. a bag's LaserScan range_max of inf ------------------------------------------------------------
+def test_a_bag_scan_of_range_max_inf_says_how_to_override_it_and_the_override_reads_it(
+        tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """Was "range_max: must be finite, got inf", and --laser-range-max was refused for bags ("no geometry override")."""
+    import math
+
+    from experiments.cli import main
+    from lms200.bag import BagError
+    from lms200.laser_geometry import LaserGeometry
+    from test_bags import _ros2_bag
+
+    bag = _ros2_bag(tmp_path / "b", [("/scan", 1.0, 1.0, 2.0), ("/scan", 1.1, 1.1, 20.0)], range_max=math.inf)
+    hint = ("give the sensor's maximum range instead: --laser-range-max M "
+            "(read_log(..., geometry=LaserGeometry(range_max=M)))")
+    with pytest.raises(BagError) as info:
+        list(read_log(bag))
+    assert str(info.value) == (f"{bag}: topic /scan message 0: cannot read: range_max is inf (no limit, as some "
+                               f"drivers write), which no scan takes (a reading's validity is judged against it); {hint}")
+    scans = [r.scan for r in read_log(bag, geometry=LaserGeometry(range_max=8.0))]
+    assert [s.range_max for s in scans] == [8.0, 8.0] and [int(s.valid.sum()) for s in scans] == [3, 0]
+    assert main(["info", str(bag), "--laser-range-max", "8"]) == 0
+    assert "  scans           2\n" in capsys.readouterr().out
+    with pytest.raises(BagError, match=r"the range_max override \(0\.1 m, --laser-range-max\) is not above the "
+                                       r"scan's range_min \(0\.1 m\); give a larger one"):
+        list(read_log(bag, geometry=LaserGeometry(range_max=0.1)))
+    with pytest.raises(BagError, match=r"the override of resolution \(--laser-\*-deg\) applies to CARMEN FLASER / "
+                                       r"RLASER lines only"):
+        read_log(bag, geometry=LaserGeometry(resolution=0.01, range_max=8.0))
