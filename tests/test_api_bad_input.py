@@ -356,7 +356,7 @@ def test_calibration_of_too_few_scans_says_so_and_prints_no_nan() -> None:
     from sim import simulate_records
 
     scans = [r.scan for r in simulate_records("office", seed=0, duration=1.0, rate_hz=4)]
-    with pytest.raises(InputError, match="^scans: calibrating needs at least 2 scans"):  # a bare ValueError
+    with pytest.raises(InputError, match="^scans: calibrating needs at least 2 distinct scans"):  # a bare ValueError
         calibrate_scans(scans[:1])
     cal = calibrate_scans([s.replace(ranges=np.where(np.isnan(s.ranges), 5.0, s.ranges)) for s in scans[:3]])
     assert np.isnan(cal.nan_clustering.value)  # no nan reading: nothing to measure

@@ -113,3 +113,29 @@ def test_a_bag_scan_of_range_max_inf_says_how_to_override_it_and_the_override_re
     with pytest.raises(BagError, match=r"the override of resolution \(--laser-\*-deg\) applies to CARMEN FLASER / "
                                        r"RLASER lines only"):
         read_log(bag, geometry=LaserGeometry(resolution=0.01, range_max=8.0))
+
+
+# -- 5. calibrate_scans of copies of one scan ----------------------------------------------------------
+def test_calibrating_copies_of_one_scan_says_they_are_copies(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """50 copies of one scan said "got 1", as if one scan had been given."""
+    import numpy as np
+
+    from experiments.cli import main
+    from lms200 import Scan
+    from lms200.calibration import calibrate_scans
+    from lms200.errors import InputError
+
+    scan = Scan(np.linspace(1.0, 5.0, 181), -np.pi / 2, np.pi / 180, 0.0, 81.83, 1.0)
+    with pytest.raises(InputError) as info:
+        calibrate_scans([scan] * 50)
+    assert str(info.value) == ("scans: calibrating needs at least 2 distinct scans (standard errors are a bootstrap "
+                               "over scans), got 50 scans but only 1 distinct: 49 repeat the scan before them (same "
+                               "stamp, geometry and readings), which is no second sample")
+    with pytest.raises(InputError, match=r"at least 2 distinct scans \(standard errors are a bootstrap over scans\), "
+                                         r"got 1$"):
+        calibrate_scans([scan])
+    ranges = " ".join(f"{r:.2f}" for r in np.linspace(1.0, 5.0, 181))
+    log = tmp_path / "dup.log"
+    log.write_text(f"FLASER 181 {ranges} 0 0 0 0 0 0 1 h 1\n" * 50)
+    assert main(["calibrate", str(log), "--out", str(tmp_path / "s.yaml")]) == 2
+    assert "got 50 scans but only 1 distinct: 49 repeat the scan before them" in capsys.readouterr().err
