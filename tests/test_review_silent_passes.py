@@ -139,3 +139,51 @@ def test_calibrating_copies_of_one_scan_says_they_are_copies(tmp_path: Path, cap
     log.write_text(f"FLASER 181 {ranges} 0 0 0 0 0 0 1 h 1\n" * 50)
     assert main(["calibrate", str(log), "--out", str(tmp_path / "s.yaml")]) == 2
     assert "got 50 scans but only 1 distinct: 49 repeat the scan before them" in capsys.readouterr().err
+
+
+# -- 3. a TUM pose with roll or pitch ---------------------------------------------------------------
+def _quaternion(roll_deg: float, pitch_deg: float, yaw_deg: float) -> tuple[float, float, float, float]:
+    """(qx, qy, qz, qw) of the rotation Rz(yaw) Ry(pitch) Rx(roll)."""
+    import math
+
+    cr, sr = math.cos(math.radians(roll_deg) / 2), math.sin(math.radians(roll_deg) / 2)
+    cp, sp = math.cos(math.radians(pitch_deg) / 2), math.sin(math.radians(pitch_deg) / 2)
+    cy, sy = math.cos(math.radians(yaw_deg) / 2), math.sin(math.radians(yaw_deg) / 2)
+    return (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy,
+            cr * cp * cy + sr * sp * sy)
+
+
+def _tum(path: Path, tilts: list[tuple[float, float]]) -> Path:
+    path.write_text("".join(f"{i} {i} 0 0 {' '.join(map(repr, _quaternion(r, p, 30.0)))}\n"
+                            for i, (r, p) in enumerate(tilts)))
+    return path
+
+
+def test_a_tum_pose_tilted_beyond_30_deg_is_refused_naming_the_line(tmp_path: Path) -> None:
+    """A camera-frame trajectory (z forward: 90 deg from upright) gave a yaw, silently."""
+    from lms200 import read_tum
+
+    tum = _tum(tmp_path / "cam.tum", [(0, 0), (0, 0), (-90, 0)])
+    with pytest.raises(LogFormatError, match=r"cam\.tum:3: TUM row's rotation is tilted 90\.0 deg from upright \(roll "
+                                             r"or pitch; at most 30 deg\): its z axis is not up"):
+        read_tum(tum)
+    with pytest.raises(LogFormatError, match=r"cam\.tum:2: TUM row's rotation is tilted 31\.0 deg"):
+        read_tum(_tum(tmp_path / "cam.tum", [(0, 0), (0, 31)]))
+
+
+def test_a_tum_pose_tilted_a_little_is_read_as_its_heading_with_one_warning(tmp_path: Path) -> None:
+    import warnings
+
+    from lms200 import read_tum
+    from lms200.errors import LmsbenchWarning
+
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        stamps, poses = read_tum(_tum(tmp_path / "t.tum", [(0, 0), (2, 1), (10, 0), (0, -12), (4, 3)]))
+    assert poses[:, 2] == pytest.approx([0.5235987755982988] * 5, abs=1e-12)  # 30 deg: the heading, tilted or not
+    assert [(w.category, str(w.message)) for w in said] == [(LmsbenchWarning, (
+        f"{tmp_path / 't.tum'}: 2 of its 5 poses are tilted by more than 5 deg (roll or pitch; up to 12.0 deg, line 4): "
+        "read as the heading of their x axis and the projection of their position onto the plane"))]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a planar file, and one tilted by under 5 deg, read without a word
+        read_tum(_tum(tmp_path / "u.tum", [(0, 0), (2, 1), (-4.9, 0)]))
