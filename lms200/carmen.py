@@ -78,6 +78,10 @@ from .scan import Scan, snap_angle, valid_ranges
 UNITS_PARAM = "lmsbench_range_units"
 ODOMETRY_PARAM = "lmsbench_odometry"  # "absent": the pose fields of the scans that follow are not odometry
 RANGE_MIN_PARAM = "lmsbench_range_min"  # m: range_min of the scans that follow (no CARMEN laser line has the field; 0 without it)
+#: "exact": the start angle and resolution of the ROBOTLASER / RAWLASER lines that follow are taken as
+#: written, not snapped onto the 0.05 deg grid (``snap_angle``), which the writer emits before the first
+#: scan whose angles snapping would move (an angle_min 3e-7 rad off the grid read back on it); "grid": snapped again
+EXACT_ANGLES_PARAM = "lmsbench_robotlaser_angles"
 #: rad, exactly as written (the CARMEN PARAM lines are in degrees, which do not round-trip: -0.1 rad read
 #: back as -0.10000000000000002): a FLASER / RLASER scan's (angle_min, angle_increment), used where they
 #: agree with the geometry the other PARAM lines (or an override) give to within EXACT_GEOMETRY_AGREEMENT
@@ -484,7 +488,8 @@ class CarmenReader:
                                                    range_words)
                     else:
                         scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
-                                                       params.get(RANGE_MIN_PARAM, 0.0), range_words)
+                                                       params.get(RANGE_MIN_PARAM, 0.0), range_words,
+                                                       exact_angles=bool(params.get(EXACT_ANGLES_PARAM)))
                         header = (words[2], words[3], words[4])  # start, fov, resolution as written
                         first = counts.get(header)
                         if first is None and len(counts) < MAX_GEOMETRIES and max(map(len, header)) <= MAX_CACHED_WORD_CHARS:
@@ -576,6 +581,9 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number), f"{name} must be a finite number (rad), got {value!r}")
         params[name] = number
+    elif name == EXACT_ANGLES_PARAM:
+        _require(value in ("exact", "grid"), f"{EXACT_ANGLES_PARAM} must be exact or grid, got {value!r}")
+        params[name] = float(value == "exact")
     elif name == RANGE_MIN_PARAM:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number >= 0, f"{name} must be a finite number >= 0 (m), got {value!r}")
@@ -790,8 +798,12 @@ def _exact_or_snapped(angle: float, exact: float | None) -> float:
 
 
 def _parse_robotlaser(words: list[str], units: Units | None, range_max_override: float | None,
-                      range_min: float = 0.0, cache: _RangeWords | None = None) -> tuple[Scan, Pose2D | None]:
-    """A ROBOTLASER1 / 2 line (robot pose as odometry) or a RAWLASER1 .. 4 line (no pose)."""
+                      range_min: float = 0.0, cache: _RangeWords | None = None,
+                      exact_angles: bool = False) -> tuple[Scan, Pose2D | None]:
+    """A ROBOTLASER1 / 2 line (robot pose as odometry) or a RAWLASER1 .. 4 line (no pose); its start
+    angle and resolution snapped onto the 0.05 deg grid where only text rounding explains their
+    distance from it (:func:`snap_angle`), or taken as written with ``exact_angles`` (``PARAM
+    lmsbench_robotlaser_angles exact``)."""
     kind = words[0]
     _require(len(words) >= 10, f"{kind} is too short")
     head = _few_floats(words[1:8], f"{kind} header")
@@ -821,7 +833,8 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
              f"maximum range must be in [{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, "
              f"got {words[5]}")
     range_max = range_max_override if range_max_override is not None else max_range
-    scan = Scan(ranges, snap_angle(start), snap_angle(resolution), range_min, range_max, stamp)
+    snap = (lambda angle: angle) if exact_angles else snap_angle
+    scan = Scan(ranges, snap(start), snap(resolution), range_min, range_max, stamp)
     if kind.startswith("RAWLASER"):
         return scan, None
     return scan, _finite_pose(tail[3:6], f"{kind} robot pose")
@@ -959,7 +972,8 @@ def write_carmen(
     as it is written (for recorders: a crash or Ctrl-C loses nothing already received).
     Stamps, poses, angles and PARAM values are written as the shortest plain decimal that reads back
     as the same float64 (FLASER logs also get ``PARAM lmsbench_front_laser_angle_min / _increment``
-    in rad), so a scan written and read back is equal to it.
+    in rad; a ROBOTLASER1 log ``PARAM lmsbench_robotlaser_angles exact`` before the first scan whose
+    angles the reader would snap onto the 0.05 deg grid), so a scan written and read back is equal to it.
     Returns the number of scans written.
 
     Raises:
@@ -976,6 +990,7 @@ def write_carmen(
     units: Units | None = None
     odometry: bool | None = None
     range_min = 0.0  # what the reader assumes without a PARAM line
+    exact_angles = False  # PARAM lmsbench_robotlaser_angles exact written
     flaser_params: dict[str, str] = {}
     with opener(path, "wt", encoding="ascii") as f:  # type: ignore[operator]
         f.write("# CARMEN log written by lmsbench\n")
@@ -1002,6 +1017,10 @@ def write_carmen(
             stamp = f"{_num(scan.stamp)} {hostname} {_num(scan.stamp)}"
             ranges = _format_ranges(scan, u)
             odom = _pose_text(rec.odom)
+            if fmt != "flaser" and not exact_angles and (snap_angle(scan.angle_min) != scan.angle_min
+                                                         or snap_angle(scan.angle_increment) != scan.angle_increment):
+                exact_angles = True  # the reader would snap them onto the grid: it is told to take them as written
+                f.write(f"PARAM {EXACT_ANGLES_PARAM} exact {hostname} 0\n")
             if fmt == "flaser":
                 params = _flaser_params(scan)
                 if params != flaser_params:

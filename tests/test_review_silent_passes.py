@@ -187,3 +187,47 @@ def test_a_tum_pose_tilted_a_little_is_read_as_its_heading_with_one_warning(tmp_
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a planar file, and one tilted by under 5 deg, read without a word
         read_tum(_tum(tmp_path / "u.tum", [(0, 0), (2, 1), (-4.9, 0)]))
+
+
+# -- 2. ROBOTLASER1 angles near the 0.05 deg grid ------------------------------------------------------
+@pytest.mark.parametrize("angle_min, increment", [
+    (-1.5707963267948966 + 3e-7, 0.008726646259971648),  # off the grid by 3e-7 rad: read back on it
+    (-1.5707963267948966, 0.008726646259971648 + 2e-7),  # an increment 2e-7 rad off: 7.2e-5 rad at the last beam
+    (-1.570796, 0.008727),  # as a CARMEN logger's 6 decimals give them
+    (-1.5707963705062866, 0.008726646192371845),  # float32
+])
+def test_robotlaser1_angles_round_trip_exactly(tmp_path: Path, angle_min: float, increment: float) -> None:
+    """The writer wrote them exactly, but the reader snapped them onto the grid, as it does a logger's 6 decimals."""
+    import numpy as np
+
+    from lms200 import Record, Scan, write_log
+
+    scan = Scan(np.linspace(1.0, 5.0, 361), angle_min, increment, 0.0, 80.0, 1.0)
+    write_log(tmp_path / "a.log", [Record(scan=scan)] * 2)
+    back = [r.scan for r in read_log(tmp_path / "a.log")]
+    assert [(s.angle_min, s.angle_increment) for s in back] == [(angle_min, increment)] * 2
+    assert (tmp_path / "a.log").read_text().count("PARAM lmsbench_robotlaser_angles exact lmsbench 0\n") == 1
+
+
+def test_a_log_of_grid_angles_is_written_as_before_and_a_logger_s_6_decimals_still_snap(tmp_path: Path) -> None:
+    import math
+
+    import numpy as np
+
+    from lms200 import Record, Scan, write_log
+
+    scan = Scan(np.linspace(1.0, 5.0, 361), -math.pi / 2, math.radians(0.5), 0.0, 80.0, 1.0)
+    write_log(tmp_path / "a.log", [Record(scan=scan)])
+    text = (tmp_path / "a.log").read_text()
+    assert "robotlaser_angles" not in text and " -1.5707963267948966 3.141592653589793 0.008726646259971648 " in text
+    ranges = " ".join(["2.00"] * 361)
+    tail = "0 0 0 0 0 0 0 0 0 0 0 1 h 1"
+    (tmp_path / "b.log").write_text(f"ROBOTLASER1 0 -1.570796 3.150447 0.008727 80 0.01 0 361 {ranges} 0 {tail}\n"
+                                    "PARAM lmsbench_robotlaser_angles grid\n"
+                                    f"ROBOTLASER1 0 -1.570796 3.150447 0.008727 80 0.01 0 361 {ranges} 0 {tail}\n"
+                                    "PARAM lmsbench_robotlaser_angles maybe\n")
+    assert [(s.scan.angle_min, s.scan.angle_increment) for s in read_log(tmp_path / "b.log", skip_bad_lines=True)] \
+        == [(-math.pi / 2, math.radians(0.5))] * 2
+    with pytest.raises(LogFormatError, match=r"b\.log:4: malformed PARAM line: lmsbench_robotlaser_angles must be "
+                                             r"exact or grid, got 'maybe'"):
+        list(read_log(tmp_path / "b.log"))
