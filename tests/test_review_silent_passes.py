@@ -231,3 +231,73 @@ def test_a_log_of_grid_angles_is_written_as_before_and_a_logger_s_6_decimals_sti
     with pytest.raises(LogFormatError, match=r"b\.log:4: malformed PARAM line: lmsbench_robotlaser_angles must be "
                                              r"exact or grid, got 'maybe'"):
         list(read_log(tmp_path / "b.log"))
+
+
+# -- 7. a sweep cell reads its sensor file once -----------------------------------------------------
+def test_a_sweep_cell_computes_with_the_bytes_its_key_names(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The cell read the sensor file twice (its digest, then its content): an edit between the reads,
+    put back before the cell finished, had the cell compute with the edit and the row stored under
+    the key of the file as it was (the runner's check after the cell read the old content again)."""
+    import pandas as pd
+
+    from experiments.sweep import SweepSpec, kinds, run_sweep
+    from sim import SensorConfig
+
+    monkeypatch.chdir(tmp_path)
+    sensor = tmp_path / "sensor.yaml"
+    SensorConfig(noise_sigma=0.005).to_yaml(sensor)
+    before = sensor.read_bytes()
+    SensorConfig(noise_sigma=0.03).to_yaml(sensor)
+    edit = sensor.read_bytes()
+    sensor.write_bytes(before)
+    real = SensorConfig.from_yaml.__func__
+
+    def edited_while_read(cls, p, data=None):  # noqa: ANN001, ANN202 - the file is the edit while the cell parses it
+        sensor.write_bytes(edit)
+        try:
+            return real(cls, p, *([] if data is None else [data]))
+        finally:
+            sensor.write_bytes(before)
+
+    seen: list[float] = []
+    monkeypatch.setattr(kinds, "compare", lambda sources, methods, params, sigma: seen.append(sigma) or pd.DataFrame())
+    monkeypatch.setattr(kinds, "summarise", lambda table, reference: pd.DataFrame({"f1": [1.0]}))
+    spec = SweepSpec.from_dict({"name": "sf", "kind": "extract",
+                                "fixed": {"duration": 0.5, "rate_hz": 2.0, "sensor_file": "sensor.yaml"}})
+    kinds._run.cache_clear()
+    monkeypatch.setattr(SensorConfig, "from_yaml", classmethod(edited_while_read))
+    result = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert seen == [0.005] and (result.computed, len(result.table)) == (1, 1)  # the content of its key
+
+
+def test_a_sweep_cell_that_read_an_edit_put_back_before_it_finished_is_not_stored(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The runner judged a cell by the file as it was when the cell finished: an edit the cell read,
+    put back since, passed, and its row was stored under the key of the content it did not read."""
+    import experiments.sweep.runner as runner
+    from experiments.sweep import SweepSpec, run_sweep
+    from lms200.errors import LmsbenchWarning
+    from sim import SensorConfig
+
+    monkeypatch.chdir(tmp_path)
+    sensor = tmp_path / "sensor.yaml"
+    SensorConfig(noise_sigma=0.03).to_yaml(sensor)
+    edit = sensor.read_bytes()
+    SensorConfig(noise_sigma=0.005).to_yaml(sensor)
+    before = sensor.read_bytes()
+    real = runner.run_cell
+
+    def edited_while_running(kind, params, fn=None):  # noqa: ANN001, ANN202
+        sensor.write_bytes(edit)
+        try:
+            return real(kind, params, fn)
+        finally:
+            sensor.write_bytes(before)
+
+    monkeypatch.setattr(runner, "run_cell", edited_while_running)
+    spec = SweepSpec.from_dict({"name": "sf", "kind": "extract",
+                                "fixed": {"duration": 0.5, "rate_hz": 2.0, "sensor_file": "sensor.yaml"}})
+    with pytest.warns(LmsbenchWarning, match=r"^sensor.yaml changed while the sweep ran: 1 cell that finished after "
+                                             r"the change was not stored"):
+        result = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert (result.total, result.computed) == (1, 0) and result.table.empty
