@@ -464,9 +464,11 @@ class CarmenReader:
                     truth = None  # a malformed TRUEPOS sets none
                     pose = _pose(words, 1, "TRUEPOS")
                     _require(len(words) >= 8, "TRUEPOS needs at least 7 numbers")
+                    _require(len(words) <= MAX_POSE_WORDS, _too_many_words("TRUEPOS", len(words)))
                     truth = (pose, _few_floats(words[7:8], "TRUEPOS timestamp")[0])
                 elif kind == "ODOM":
                     _require(len(words) >= 8, "ODOM needs x y theta tv rv accel timestamp")
+                    _require(len(words) <= MAX_POSE_WORDS, _too_many_words("ODOM", len(words)))
                     values = _few_floats(words[1:8], "ODOM")
                     if pairing is not None:  # odometry for the scans of a RAWLASER kind, which carry none
                         yield from pairing.odom(values[6], (values[0], values[1], values[2]))
@@ -520,6 +522,18 @@ class CarmenReader:
             # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
             others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())
             raise InputError(f"topic: {self.path} has no {self.topic} lines; its laser lines: {others}")
+
+
+#: most words of an ODOM or TRUEPOS line: its name, 6 numbers, ipc_timestamp, hostname, logger_timestamp.
+#: More were taken without a word: a laser line that lost the newline before it (a damaged log) ran
+#: into the ODOM line and was read as its tail, the scan lost silently
+MAX_POSE_WORDS = 10
+
+
+def _too_many_words(kind: str, n: int) -> str:
+    """Why an ODOM / TRUEPOS line of ``n`` words is malformed."""
+    return (f"{kind} has {n} fields, at most {MAX_POSE_WORDS} ({kind} and 6 numbers, ipc_timestamp, hostname, "
+            "logger_timestamp): two lines run together (a lost line break)?")
 
 
 def _fields_fit(kind: str, line: str) -> bool:

@@ -301,3 +301,23 @@ def test_a_sweep_cell_that_read_an_edit_put_back_before_it_finished_is_not_store
                                              r"the change was not stored"):
         result = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
     assert (result.total, result.computed) == (1, 0) and result.table.empty
+
+
+# -- more silent passes: an ODOM / TRUEPOS line with more fields than its message has ------------------
+def test_a_laser_line_run_into_an_odom_line_is_a_malformed_line_not_a_lost_scan(tmp_path: Path) -> None:
+    """A lost line break ran a FLASER line into the ODOM line before it: the ODOM line's extra words
+    were ignored and the scan lost without a word (found by fuzzing damaged logs)."""
+    ranges = " ".join(["2.00"] * 181)
+    log = tmp_path / "a.log"
+    log.write_text(f"ODOM 0 0 0 0 0 0 1 h 1\nFLASER 181 {ranges} 0 0 0 0 0 0 1.5 h 1.5\n"
+                   f"ODOM 0 0 0 0 0 0 2 h 2 FLASER 181 {ranges} 0 0 0 0 0 0 2.5 h 2.5\n"
+                   f"TRUEPOS 0 0 0 0 0 0 3 h 3 x\nFLASER 181 {ranges} 0 0 0 0 0 0 3 h 3\n")
+    with pytest.raises(LogFormatError, match=r"a\.log:3: malformed ODOM line: ODOM has 202 fields, at most 10 \(ODOM "
+                                             r"and 6 numbers, ipc_timestamp, hostname, logger_timestamp\): two lines "
+                                             r"run together \(a lost line break\)\?"):
+        list(read_log(log))
+    reader = read_log(log, skip_bad_lines=True)
+    assert [r.scan.stamp for r in reader] == [1.5, 3.0]
+    assert [at for at, _ in reader.stats.skipped] == [3, 4] and "TRUEPOS has 11 fields" in reader.stats.skipped[1][1]
+    log.write_text(f"ODOM 0 0 0 0 0 0 1 h 1\nODOM 0 0 0 0 0 0 1\nFLASER 181 {ranges} 0 0 0 0 0 0 1.5 h 1.5\n")
+    assert len(list(read_log(log))) == 1  # 8 to 10 words read as before
