@@ -29,7 +29,7 @@ from .codes import finite_negative
 from .errors import InputError, LmsbenchError, LogNotFoundError
 from .records import Pose2D, Record, SkipLog
 from .scan import Scan, snap_angle
-from .tum import quaternion_to_yaw
+from .tum import MAX_TILT_DEG, quaternion_to_yaw, tilt_deg
 from .timing import lms200_shaped, mirror_time_increment, scan_period, smallest_range
 
 SCAN_TOPIC = "/scan"
@@ -375,6 +375,11 @@ def _pose_of(msg) -> Pose2D:  # noqa: ANN001
     if np.isnan(yaw):
         raise ValueError(f"orientation (x, y, z, w) = ({q.x!r}, {q.y!r}, {q.z!r}, {q.w!r}) is no rotation "
                          "(a quaternion must have a positive finite norm)")
+    tilt = tilt_deg(np.array([q.x, q.y, q.z, q.w], dtype=float))
+    if tilt > MAX_TILT_DEG:  # as read_tum: its yaw is no heading in the plane (was read as one, silently)
+        raise ValueError(f"orientation (x, y, z, w) = ({q.x!r}, {q.y!r}, {q.z!r}, {q.w!r}) is tilted {tilt:.1f} deg "
+                         f"from upright (roll or pitch; at most {MAX_TILT_DEG:g} deg): its z axis is not up, so its "
+                         "yaw is no heading in the plane")
     x, y = float(pose.position.x), float(pose.position.y)
     if not (np.isfinite(x) and np.isfinite(y)):  # was Record's "odom: must be finite", without bag, topic or index
         raise ValueError(f"position (x, y) = ({x!r}, {y!r}) is not finite")

@@ -321,3 +321,18 @@ def test_a_laser_line_run_into_an_odom_line_is_a_malformed_line_not_a_lost_scan(
     assert [at for at, _ in reader.stats.skipped] == [3, 4] and "TRUEPOS has 11 fields" in reader.stats.skipped[1][1]
     log.write_text(f"ODOM 0 0 0 0 0 0 1 h 1\nODOM 0 0 0 0 0 0 1\nFLASER 181 {ranges} 0 0 0 0 0 0 1.5 h 1.5\n")
     assert len(list(read_log(log))) == 1  # 8 to 10 words read as before
+
+
+def test_a_bag_pose_tilted_beyond_30_deg_is_a_bag_error_as_in_a_tum_file(tmp_path: Path) -> None:
+    """A /odom pose in a frame whose z is not up gave its yaw, silently (read_tum refuses it)."""
+    import math
+
+    from lms200.bag import BagError
+    from test_bags import _POS, _pose_bag
+
+    bag = _pose_bag(tmp_path / "b", _POS, _quaternion(-90.0, 0.0, -90.0))
+    with pytest.raises(BagError, match=r"b: topic /odom message 0: cannot read: orientation \(x, y, z, w\) = .* is "
+                                       r"tilted 90\.0 deg from upright \(roll or pitch; at most 30 deg\)"):
+        list(read_log(bag))
+    tilted = [r.odom[2] for r in read_log(_pose_bag(tmp_path / "c", _POS, _quaternion(10.0, -5.0, 40.0)))]
+    assert tilted == pytest.approx([math.radians(40.0)] * 3, abs=1e-12)  # a little tilt: its heading, as before
