@@ -656,6 +656,11 @@ class BagReader:
                     self._fail(f"topic {conn.topic} message {index}", exc, index, fatal=False)
                 yield from self._records(matcher.ready(t))
             yield from self._records(matcher.ready(None))
+            if not stats.messages.get(stats.laser) and not stats.skipped_count and stats.stopped is None:
+                # as a CARMEN log of no laser line: it read as no records, silently
+                others = ", ".join(f"{c.topic} ({c.msgcount})" for c in reader.connections if c.msgcount)
+                raise BagError(f"{self.path}: its LaserScan topic {stats.laser} holds no message: no scan (a recording "
+                               f"stopped before its first scan?){'; other topics: ' + others if others else ''}")
         finally:
             reader.close()
 

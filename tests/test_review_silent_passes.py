@@ -336,3 +336,22 @@ def test_a_bag_pose_tilted_beyond_30_deg_is_a_bag_error_as_in_a_tum_file(tmp_pat
         list(read_log(bag))
     tilted = [r.odom[2] for r in read_log(_pose_bag(tmp_path / "c", _POS, _quaternion(10.0, -5.0, 40.0)))]
     assert tilted == pytest.approx([math.radians(40.0)] * 3, abs=1e-12)  # a little tilt: its heading, as before
+
+
+def test_a_bag_whose_laserscan_topic_holds_no_message_is_a_bag_error(tmp_path: Path) -> None:
+    """A bag with a /scan connection but no scan on it read as no records, silently."""
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from lms200.bag import BagError
+    from test_bags import _ros2_bag
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    with Writer(tmp_path / "e", version=8) as w:
+        w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts)
+    for skip in (False, True):
+        with pytest.raises(BagError, match=r"e: its LaserScan topic /scan holds no message: no scan \(a recording "
+                                           r"stopped before its first scan\?\)$"):
+            list(read_log(tmp_path / "e", skip_bad_lines=skip))
+    bag = _ros2_bag(tmp_path / "s", [("/scan", 1.0, 1.0, 2.0)])
+    assert len(list(read_log(bag))) == 1
