@@ -355,3 +355,17 @@ def test_a_bag_whose_laserscan_topic_holds_no_message_is_a_bag_error(tmp_path: P
             list(read_log(tmp_path / "e", skip_bad_lines=skip))
     bag = _ros2_bag(tmp_path / "s", [("/scan", 1.0, 1.0, 2.0)])
     assert len(list(read_log(bag))) == 1
+
+
+def test_a_relation_of_large_roll_or_pitch_is_refused_naming_its_line(tmp_path: Path) -> None:
+    """A relation's z, roll and pitch were dropped: a 3-D motion was scored as its x, y and yaw, silently."""
+    from slam.metrics import read_relations
+
+    rel = tmp_path / "r.relations"
+    rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 0.1 0.05 -0.1 0.2\n3 4 0.3 0.0 0 0 0.6 0.2\n")
+    with pytest.raises(LogFormatError, match=r"r\.relations:3: relation row's roll or pitch passes 30 deg \(0\.5236 "
+                                             r"rad\): not a planar motion, whose x, y and yaw could be scored: "
+                                             r"'3 4 0\.3 0\.0 0 0 0\.6 0\.2'"):
+        read_relations(rel)
+    rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 0.1 0.05 -0.1 0.2\n")
+    assert read_relations(rel).tolist() == [[1, 2, 0.3, 0, 0.2], [2, 3, 0.3, 0, 0.2]]  # a little: as before
