@@ -580,6 +580,10 @@ class _BlankRun:
         self.count = 0
 
 
+LMSBENCH_PARAM_PREFIX = "lmsbench_"  # the PARAM names this package writes and reads
+LMSBENCH_PARAMS = frozenset({UNITS_PARAM, ODOMETRY_PARAM, RANGE_MIN_PARAM, EXACT_ANGLES_PARAM} | EXACT_GEOMETRY_PARAMS)
+
+
 def _param(words: list[str], params: dict[str, float], units: Units | None,
            has_odometry: bool) -> tuple[Units | None, bool]:
     """Apply a PARAM line: the range unit, odometry flag, range_min and laser geometry; returns (units, odometry)."""
@@ -602,6 +606,9 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number >= 0, f"{name} must be a finite number >= 0 (m), got {value!r}")
         params[name] = number
+    elif name.startswith(LMSBENCH_PARAM_PREFIX) and name not in LMSBENCH_PARAMS:
+        # a misspelt one (lmsbench_range_unit mm) was passed over: the unit inferred, the scans read otherwise
+        raise ValueError(f"{name!r} is no lmsbench PARAM (known: {', '.join(sorted(LMSBENCH_PARAMS))})")
     elif name in laser_geometry.GEOMETRY_PARAMS:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number > 0, f"{name} must be a finite number > 0, got {value!r}")

@@ -369,3 +369,18 @@ def test_a_relation_of_large_roll_or_pitch_is_refused_naming_its_line(tmp_path: 
         read_relations(rel)
     rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 0.1 0.05 -0.1 0.2\n")
     assert read_relations(rel).tolist() == [[1, 2, 0.3, 0, 0.2], [2, 3, 0.3, 0, 0.2]]  # a little: as before
+
+
+def test_a_misspelt_lmsbench_param_is_a_malformed_line(tmp_path: Path) -> None:
+    """`PARAM lmsbench_range_unit mm` was passed over: the scan's unit inferred instead (cm here: range_max
+    81.83 m where the log meant mm mode's 8.183 m, its readings of 20 m taken as valid)."""
+    ranges = " ".join(["20.00"] * 181)
+    log = tmp_path / "a.log"
+    log.write_text(f"PARAM lmsbench_range_unit mm h 0\nFLASER 181 {ranges} 0 0 0 0 0 0 1 h 1\n")
+    with pytest.raises(LogFormatError, match=r"a\.log:1: malformed PARAM line: 'lmsbench_range_unit' is no lmsbench "
+                                             r"PARAM \(known: lmsbench_front_laser_angle_increment, .*, "
+                                             r"lmsbench_range_units, lmsbench_rear_laser_angle_increment, "
+                                             r"lmsbench_rear_laser_angle_min, lmsbench_robotlaser_angles\)$"):
+        list(read_log(log))
+    log.write_text(f"PARAM lmsbench_range_units mm h 0\nPARAM other_thing 1 h 0\nFLASER 181 {ranges} 0 0 0 0 0 0 1 h 1\n")
+    assert [(r.scan.range_max, int(r.scan.valid.sum())) for r in read_log(log)] == [(8.183, 0)]  # as before
