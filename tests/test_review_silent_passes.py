@@ -16,12 +16,12 @@ from lms200.errors import LogFormatError
 # -- 1. a log of no laser line ----------------------------------------------------------------------
 @pytest.mark.parametrize("name, data, reason", [
     ("empty.clf", b"", r"an empty file \(0 bytes\): no laser lines"),
-    ("empty.clf.gz", gzip.compress(b""), r"its gzip data decompresses to nothing: an empty log, no laser lines"),
+    ("empty.clf.gz", gzip.compress(b"", mtime=0), r"its gzip data decompresses to nothing: an empty log, no laser lines"),
     ("empty.clf.bz2", bz2.compress(b""), r"its bzip2 data decompresses to nothing"),
     ("quiet.clf", b"# header\n\n   \n# more\n", r"holds only blank or comment lines \(4\): no laser lines"),
     ("odom.clf", b"ODOM 0 0 0 0 0 0 1 h 1\nODOM 0 0 0 0 0 0 2 h 2\nPARAM x 1\n",
      r"holds no laser lines \(FLASER, .*\), only other messages: ODOM \(2\), PARAM \(1\)"),
-])
+], ids=["empty", "gzip-of-nothing", "bzip2-of-nothing", "comments", "odom-only"])  # the same ids on every xdist worker
 @pytest.mark.parametrize("skip", [False, True])
 def test_a_log_of_no_laser_line_is_refused_naming_the_file(tmp_path: Path, name: str, data: bytes, reason: str,
                                                           skip: bool) -> None:
