@@ -100,11 +100,12 @@ def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -
     settings = dict(duration=cfg.duration, rate_hz=3.0, stride=10, max_scans=max_scans,
                     fit_duration=min(30.0, cfg.duration), wall_relief=False, probe_duration=cfg.duration,
                     probe_rate_hz=PROBE_RATE_HZ)
+    full_run = f"lmsbench sim2real {os.path.relpath(path)}"  # the report said `lmsbench sim2real mit-csail.clf.gz`,
+    # a bare name that does not run from the checkout, where the warnings' advice already gave the path
     result = sim2real(path, world="mit", seeds=(cfg.seed,), **settings,
                       probe_seeds=[next(s for s in PROBE_SEEDS if s != cfg.seed)],
                       # the log as a path from here: its bare name did not run from the checkout (a review)
-                      advice=f"a longer demo --duration, or `lmsbench sim2real {os.path.relpath(path)}` for the full "
-                             "comparison")
+                      advice=f"a longer demo --duration, or `{full_run}` for the full comparison")
     for warning in result.warnings:  # in the report and, as sim2real says them, on the terminal
         log(f"warning: sim2real: {warning}")
     from experiments.provenance import versions
@@ -117,7 +118,7 @@ def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -
         f"that sensor and the log's robot speeds, and every extractor ran on both (real-data measures of "
         f"`features.realdata`). Demo size: {result.n_real} real and {result.n_sim} simulated scans (world "
         f"{cfg.seed}), the rough fill fitted on probe runs of {cfg.duration:g} s at {PROBE_RATE_HZ:g} scan/s on "
-        f"world {', '.join(map(str, result.probe_seeds))}, no wall relief fitted; `lmsbench sim2real {path.name}` "
+        f"world {', '.join(map(str, result.probe_seeds))}, no wall relief fitted; `{full_run}` "
         "runs the full comparison.", body,
         figure("sim2real/sim2real.png", "Real against calibrated simulation: readings by range, ray residuals "
                                         "around split-and-merge lines, lines per scan, segment lengths, "
@@ -266,8 +267,7 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
             pivot = ok.pivot_table(index="extractor.k", columns="sensor.noise_sigma", values="f1", aggfunc="mean")
             pivot.columns = [f"F1 at σ = {c:g} m" for c in pivot.columns]
             sw.text.append(markdown_table(pivot.reset_index().rename(columns={"extractor.k": "k"})))
-        sw.text.append(f"{len(sweep_table)} cells, {int((sweep_table['status'] != 'ok').sum())} failed; "
-                       f"table in `sweeps/{DEMO_SWEEP['name']}/results.parquet`. Larger sweeps: `sweeps/*.yaml`.")
+        sw.text.append(sweep_note(len(sweep_table), int((sweep_table["status"] != "ok").sum())))
         for name in sorted(n for n in figs if n.startswith("sweep_")):
             metric = name[len(f"sweep_{DEMO_SWEEP['name']}_"):]
             sw.text.append(figure(f"figures/{name}.png", f"Sweep: {metric} against the range noise (m), one line "
@@ -276,6 +276,15 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
     if notes:
         sections.append(Section("Notes", [f"- {n}" for n in notes]))
     return sections
+
+
+def sweep_note(cells: int, failed: int) -> str:
+    """The sweep section's last line: its table, in the run's folder, and where the larger sweeps are:
+    the checkout's ``sweeps/*.yaml``, not the run's ``sweeps/`` (which holds the demo's sweep alone; the
+    copy in results/demo pointed ``sweeps/*.yaml`` into the run folder, where no such file is)."""
+    return (f"{cells} cells, {failed} failed; table in `sweeps/{DEMO_SWEEP['name']}/results.parquet`. "
+            "Larger sweeps: the sweep files of the checkout's `sweeps` folder (`lmsbench sweep "
+            "sweeps/k_vs_noise.yaml` from the checkout; docs/experiments.md).")
 
 
 def _real_log_caption(tables: dict[str, pd.DataFrame]) -> str:

@@ -25,26 +25,29 @@ def split_params(params: dict[str, Any], prefix: str) -> dict[str, Any]:
     return {k[len(head):]: v for k, v in params.items() if k.startswith(head)}
 
 
-def sensor_config(overrides: dict[str, Any] | None = None, sensor_file: str | None = None):
+def sensor_config(overrides: dict[str, Any] | None = None, sensor_file: str | None = None,
+                  sensor_bytes: bytes | None = None):
     """The experiments' sensor: ``sim.SensorConfig(interlaced=False)`` (as ``experiments.compare``
     uses: the truth is that of one pose, so the robot's motion within a scan is not charged to
     the extractors) with the given fields changed (``interlaced=True`` for the moving-scan model).
     With ``sensor_file`` (a sensor YAML, e.g. from ``lmsbench calibrate``) the base is that file's
     config, exactly as written (its ``interlaced`` included), and ``overrides`` go on top (an old
-    degree field, ``resolution_deg``, converted to radians with a warning: ``SensorConfig.replace``)."""
+    degree field, ``resolution_deg``, converted to radians with a warning: ``SensorConfig.replace``).
+    ``sensor_bytes``: the sensor file's content, read already (``SensorConfig.from_yaml``'s ``data``)."""
     from sim import SensorConfig
 
-    base = SensorConfig.from_yaml(sensor_file) if sensor_file else SensorConfig(interlaced=False)
+    base = SensorConfig.from_yaml(sensor_file, sensor_bytes) if sensor_file else SensorConfig(interlaced=False)
     return base.replace(**(overrides or {}))
 
 
 def simulate_run(world: str = "office", seed: int = 0, duration: float = 10.0, sensor=None,
-                 rate_hz: float | None = None) -> tuple[Any, list[Record]]:
+                 rate_hz: float | None = None, world_bytes: bytes | None = None) -> tuple[Any, list[Record]]:
     """The world object and the records of a simulated run (truth pose on every record); ``world`` a
-    built-in world's name or a world.json (a sweep's every cell failed on one: "unknown world")."""
+    built-in world's name or a world.json (a sweep's every cell failed on one: "unknown world"),
+    ``world_bytes`` its content when read already (``World.from_json``'s ``data``)."""
     from sim import World, make_world, simulate_records
 
-    world_obj = World.from_json(world) if world.endswith(".json") else make_world(world, seed=seed)
+    world_obj = World.from_json(world, world_bytes) if world.endswith(".json") else make_world(world, seed=seed)
     return world_obj, simulate_records(world=world_obj, seed=seed, duration=duration, sensor=sensor, rate_hz=rate_hz)
 
 

@@ -39,7 +39,7 @@ def add_log_options(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--laser-angle-min-deg", type=float, metavar="DEG",
                    help="FLASER/RLASER bearing of the first beam (deg; default: the scan is centred ahead)")
     g.add_argument("--laser-range-max", type=float, metavar="M", help="largest valid range (m, 0.1 to 10000, above the log's range_min), overriding the log's own "
-                        "(PARAM lines, ROBOTLASER's field, else the unit's 8.183 / 81.83 m)")
+                        "(PARAM lines, ROBOTLASER's field, a bag's LaserScan range_max, else the unit's 8.183 / 81.83 m)")
 
 
 def read_log_options(args: argparse.Namespace) -> dict[str, Any]:

@@ -8,6 +8,7 @@ from typing import Iterable
 import numpy as np
 
 from lms200 import Record
+from lms200.finite import fixed
 
 
 @dataclass(frozen=True)
@@ -49,8 +50,8 @@ class LogSummary:
             f"beams per scan  {self.beams}",
             f"field of view   {self.fov_deg:.2f} deg (from {self.angle_min_deg:.2f} deg){self._first}",
             f"resolution      {self.resolution_deg:.3f} deg{self._first}",
-            f"scan rate       {self.scan_rate_hz:.2f} scans/s",
-            f"duration        {self.duration_s:.2f} s",
+            f"scan rate       {fixed(self.scan_rate_hz, 2)} scans/s",
+            f"duration        {fixed(self.duration_s, 2)} s",
             f"no return (inf) {100 * self.no_return_fraction:.2f} % of readings",
             f"invalid         {100 * self.invalid_fraction:.2f} % of readings (nan, -inf, 0 or out of limits)",
             f"odometry        {'yes' if self.odometry else 'no'}"

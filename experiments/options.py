@@ -292,6 +292,24 @@ def text(what: str) -> Callable[[str], str]:
 
 
 SEED = count(0, 2**32 - 1)
+
+
+def listed_seed(text: str) -> float:
+    """A seed of a ``--seeds`` list (compare, sim2real): a range written as one word (``0-23``, as
+    the README names seed sets) is refused saying how to list it; it said only "must be a whole number"."""
+    try:
+        return SEED(text)
+    except argparse.ArgumentTypeError as error:
+        span = re.fullmatch(r"(\d+)(?:-|\.\.|:)(\d+)", text.strip())
+        if span is None or int(span[1]) >= int(span[2]):
+            raise
+        first, last = int(span[1]), int(span[2])
+        listed = (" ".join(str(s) for s in range(first, last + 1)) if last - first < 6
+                  else f"$(seq {first} {last}) in a shell, or {first} {first + 1} ... {last} written out")
+        raise argparse.ArgumentTypeError(f"{error}; the seeds are listed one by one, not as a range: {listed}") from None
+
+
+listed_seed.__name__ = "integer"
 DURATION = number(MIN_DURATION_S, MAX_DURATION_S, unit="s")  # a simulated run: at least one scan
 PORT = count(0, 65535)
 

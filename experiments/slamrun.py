@@ -18,6 +18,7 @@ from typing import Any, Collection, Iterable
 import numpy as np
 
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
+from lms200.finite import fixed
 from lms200.logs import regular_file
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml
@@ -177,14 +178,14 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if not records:
         raise LmsbenchError(f"{log}: no laser scans found")
     if n_read > 1 and not timed:  # it ran: every step predicted no motion and searched no turn
-        raise LmsbenchError(f"{log}: all {n_read} scans read have the same stamp ({first_stamp:.6f} s); SLAM's "
+        raise LmsbenchError(f"{log}: all {n_read} scans read have the same stamp ({fixed(first_stamp)} s); SLAM's "
                             "motion model needs the time between scans (a log written without a clock?)")
     if len(records) == 1 and n_read > 1 and (rate_hz is not None or every > 1):  # it ran: a "SLAM" of one scan
         flag = f"--rate-hz {rate_hz:g}" if rate_hz is not None else f"--every {every}"
-        raise LmsbenchError(f"{log}: {flag} keeps 1 of the {n_read} scans read (stamps {first_stamp:.6f} to "
-                            f"{last_stamp:.6f} s); SLAM needs two or more")
+        raise LmsbenchError(f"{log}: {flag} keeps 1 of the {n_read} scans read (stamps {fixed(first_stamp)} to "
+                            f"{fixed(last_stamp)} s); SLAM needs two or more")
     if len(records) == 1:  # it ran and reported a healthy run of no step (matched fraction 1 of 0 steps)
-        raise LmsbenchError(f"{log}: holds one scan (stamp {first_stamp:.6f} s); SLAM needs two or more")
+        raise LmsbenchError(f"{log}: holds one scan (stamp {fixed(first_stamp)} s); SLAM needs two or more")
     if not any(r.scan.valid.any() for r in records):
         raise LmsbenchError(f"{log}: none of its {len(records)} scans has a valid beam (all +inf or nan): "
                             "nothing to localise against")
@@ -217,8 +218,8 @@ def _check_truth_span(truth: np.ndarray, records: list[Record], where: str) -> N
     t0, t1 = float(truth[0, 0]), float(truth[-1, 0])
     inside = int(np.count_nonzero((stamps >= t0) & (stamps <= t1)))
     if inside < 2:
-        raise LmsbenchError(f"{where}: its stamps ({t0:.6f} to {t1:.6f} s) cover {inside} of the {len(records)} scans "
-                            f"to run on ({stamps[0]:.6f} to {stamps[-1]:.6f} s); scoring against it needs two or more "
+        raise LmsbenchError(f"{where}: its stamps ({fixed(t0)} to {fixed(t1)} s) cover {inside} of the {len(records)} scans "
+                            f"to run on ({fixed(stamps[0])} to {fixed(stamps[-1])} s); scoring against it needs two or more "
                             "(the ground truth of another run, or stamps of another clock?)")
 
 
@@ -245,7 +246,7 @@ def _relations_score(traj: np.ndarray, relations: np.ndarray) -> dict[str, Any]:
     if not np.any(in1 & in2):
         return {"n": 0, "n_skipped": int(relations.shape[0]),
                 "note": f"none of the {relations.shape[0]} relations falls inside the run's time span "
-                        f"({traj[0, 0]:.3f} to {traj[-1, 0]:.3f} s)"}
+                        f"({fixed(traj[0, 0], 3)} to {fixed(traj[-1, 0], 3)} s)"}
     return relations_error(traj, relations).as_dict()
 
 

@@ -31,6 +31,7 @@ import sys
 from typing import Any, Callable, Iterator, Sequence
 
 from lms200 import LmsbenchError
+from lms200.finite import fixed
 
 
 class UserMethodError(LmsbenchError, ValueError):
@@ -49,7 +50,7 @@ class UserMethodFailed(UserMethodError):
 
     def _message(self) -> str:
         stamp = getattr(self.scan, "stamp", None)
-        where = self.place or (f"on the scan stamped {stamp:.6f} s" if isinstance(stamp, float) else "on a scan")
+        where = self.place or (f"on the scan stamped {fixed(stamp)} s" if isinstance(stamp, float) else "on a scan")
         return f"your extractor {self.method} {self.what} {where}"
 
     def at(self, source: str, index: int) -> "UserMethodFailed":

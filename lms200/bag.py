@@ -29,7 +29,7 @@ from .codes import finite_negative
 from .errors import InputError, LmsbenchError, LogNotFoundError
 from .records import Pose2D, Record, SkipLog
 from .scan import Scan, snap_angle
-from .tum import quaternion_to_yaw
+from .tum import MAX_TILT_DEG, quaternion_to_yaw, tilt_deg
 from .timing import lms200_shaped, mirror_time_increment, scan_period, smallest_range
 
 SCAN_TOPIC = "/scan"
@@ -375,6 +375,11 @@ def _pose_of(msg) -> Pose2D:  # noqa: ANN001
     if np.isnan(yaw):
         raise ValueError(f"orientation (x, y, z, w) = ({q.x!r}, {q.y!r}, {q.z!r}, {q.w!r}) is no rotation "
                          "(a quaternion must have a positive finite norm)")
+    tilt = tilt_deg(np.array([q.x, q.y, q.z, q.w], dtype=float))
+    if tilt > MAX_TILT_DEG:  # as read_tum: its yaw is no heading in the plane (was read as one, silently)
+        raise ValueError(f"orientation (x, y, z, w) = ({q.x!r}, {q.y!r}, {q.z!r}, {q.w!r}) is tilted {tilt:.1f} deg "
+                         f"from upright (roll or pitch; at most {MAX_TILT_DEG:g} deg): its z axis is not up, so its "
+                         "yaw is no heading in the plane")
     x, y = float(pose.position.x), float(pose.position.y)
     if not (np.isfinite(x) and np.isfinite(y)):  # was Record's "odom: must be finite", without bag, topic or index
         raise ValueError(f"position (x, y) = ({x!r}, {y!r}) is not finite")
@@ -389,8 +394,27 @@ def _header_ns(msg) -> int:  # noqa: ANN001
     return int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
 
 
-def _scan_of(msg) -> Scan:  # noqa: ANN001
-    """A LaserScan message as a Scan; raises ValueError for fields a scan cannot have."""
+#: what a user can do about a LaserScan's range_max that no Scan takes
+RANGE_MAX_HINT = ("give the sensor's maximum range instead: --laser-range-max M "
+                  "(read_log(..., geometry=LaserGeometry(range_max=M)))")
+
+
+def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
+    """A LaserScan message as a Scan, its range_max replaced by ``range_max`` when given; raises
+    ValueError for fields a scan cannot have."""
+    range_min = float(msg.range_min)
+    if range_max is None:
+        range_max = float(msg.range_max)
+        if not math.isfinite(range_max) or (math.isfinite(range_min) and range_max <= range_min):
+            # was "range_max: must be finite, got inf", no word of what to do
+            what = ("inf (no limit, as some drivers write)" if range_max == math.inf
+                    else f"{range_max:g}" if not math.isfinite(range_max)
+                    else f"{range_max:g} m, not above range_min ({range_min:g} m)")
+            raise ValueError(f"range_max is {what}, which no scan takes (a reading's validity is judged against "
+                             f"it); {RANGE_MAX_HINT}")
+    elif math.isfinite(range_min) and range_max <= range_min:
+        raise ValueError(f"the range_max override ({range_max:g} m, --laser-range-max) is not above the scan's "
+                         f"range_min ({range_min:g} m); give a larger one")
     ranges = np.asarray(msg.ranges, dtype=np.float64)
     ranges[finite_negative(ranges)] = np.nan  # some drivers mark invalid beams with negative values; -inf is REP-117's "too close"
     angle_min, increment = float(msg.angle_min), float(msg.angle_increment)
@@ -400,8 +424,8 @@ def _scan_of(msg) -> Scan:  # noqa: ANN001
         ranges,
         snap_angle(angle_min),  # float32 in the message: back onto the 0.05 deg grid
         snap_angle(increment),
-        float(msg.range_min),
-        float(msg.range_max),
+        range_min,
+        range_max,
         _stamp_of(msg),
     )
 
@@ -524,17 +548,21 @@ class BagReader:
         topic: the LaserScan topic; may be left out when the bag has exactly one.
         skip_bad_lines: skip messages that cannot be read as scans (recorded in ``stats.skipped``)
             instead of raising; damage that stops iteration ends the pass (``stats.stopped``).
+        range_max: m, replaces every scan's ``range_max`` (``read_log(..., geometry=LaserGeometry(range_max=M))``,
+            ``--laser-range-max M``): for a driver that writes inf (no limit) or 0, which no Scan takes.
 
     Raises:
         BagError: (while iterating) a bag that cannot be opened, several LaserScan topics and no
             ``topic``, a missing topic, or a message that cannot be read (naming topic and index).
     """
 
-    def __init__(self, path: str | Path, topic: str | None = None, skip_bad_lines: bool = False) -> None:
+    def __init__(self, path: str | Path, topic: str | None = None, skip_bad_lines: bool = False,
+                 range_max: float | None = None) -> None:
         self.path = Path(path)
         if not self.path.exists():
             raise LogNotFoundError(f"no such bag: {self.path}")
         self.topic = topic
+        self.range_max = range_max
         self.skip_bad_lines = skip_bad_lines
         self.stats = BagReadStats()
 
@@ -622,12 +650,17 @@ class BagReader:
                     if conn.msgtype != "sensor_msgs/msg/LaserScan":
                         matcher.add_pose(conn.topic, _header_ns(msg), _pose_of(msg))
                     else:
-                        matcher.add_scan(_header_ns(msg), _scan_of(msg), index, t)
+                        matcher.add_scan(_header_ns(msg), _scan_of(msg, self.range_max), index, t)
                         stats.see_timing(float(msg.time_increment), float(msg.angle_increment))
                 except Exception as exc:  # noqa: BLE001 - deserialisation errors are rosbags' own types
                     self._fail(f"topic {conn.topic} message {index}", exc, index, fatal=False)
                 yield from self._records(matcher.ready(t))
             yield from self._records(matcher.ready(None))
+            if not stats.messages.get(stats.laser) and not stats.skipped_count and stats.stopped is None:
+                # as a CARMEN log of no laser line: it read as no records, silently
+                others = ", ".join(f"{c.topic} ({c.msgcount})" for c in reader.connections if c.msgcount)
+                raise BagError(f"{self.path}: its LaserScan topic {stats.laser} holds no message: no scan (a recording "
+                               f"stopped before its first scan?){'; other topics: ' + others if others else ''}")
         finally:
             reader.close()
 

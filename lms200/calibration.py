@@ -409,8 +409,11 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
         if len(kept) >= MAX_SCANS:
             break
     if len(kept) < MIN_SCANS:
-        raise InputError(f"scans: calibrating needs at least {MIN_SCANS} scans (standard errors are a bootstrap "
-                         f"over scans), got {len(kept)}")
+        # "got 1" for 50 copies of one scan: the count of distinct scans, not what was given
+        got = (f"got {len(kept) + repeated} scans but only {len(kept)} distinct: {repeated} repeat the scan before "
+               "them (same stamp, geometry and readings), which is no second sample") if repeated else f"got {len(kept)}"
+        raise InputError(f"scans: calibrating needs at least {MIN_SCANS} distinct scans (standard errors are a "
+                         f"bootstrap over scans), {got}")
     counts_n = np.bincount([len(s) for s in kept])
     n_beams = int(np.argmax(counts_n))
     inc = float(np.median([s.angle_increment for s in kept]))

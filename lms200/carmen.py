@@ -70,6 +70,7 @@ from .codes import (
 )
 from . import laser_geometry
 from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
+from .finite import fixed
 from .laser_geometry import LaserGeometry
 from .records import Pose2D, Record, SkipLog
 from .scan import Scan, snap_angle, valid_ranges
@@ -77,6 +78,10 @@ from .scan import Scan, snap_angle, valid_ranges
 UNITS_PARAM = "lmsbench_range_units"
 ODOMETRY_PARAM = "lmsbench_odometry"  # "absent": the pose fields of the scans that follow are not odometry
 RANGE_MIN_PARAM = "lmsbench_range_min"  # m: range_min of the scans that follow (no CARMEN laser line has the field; 0 without it)
+#: "exact": the start angle and resolution of the ROBOTLASER / RAWLASER lines that follow are taken as
+#: written, not snapped onto the 0.05 deg grid (``snap_angle``), which the writer emits before the first
+#: scan whose angles snapping would move (an angle_min 3e-7 rad off the grid read back on it); "grid": snapped again
+EXACT_ANGLES_PARAM = "lmsbench_robotlaser_angles"
 #: rad, exactly as written (the CARMEN PARAM lines are in degrees, which do not round-trip: -0.1 rad read
 #: back as -0.10000000000000002): a FLASER / RLASER scan's (angle_min, angle_increment), used where they
 #: agree with the geometry the other PARAM lines (or an override) give to within EXACT_GEOMETRY_AGREEMENT
@@ -282,6 +287,22 @@ class CarmenReader:
             pass
         return counts
 
+    def _no_laser_reason(self, lines: int, quiet: int) -> str:
+        """Why a pass that met no laser line (of any kind) is an error, by what the file held: a log
+        that gives no scan is a failed recording or download, not a run of no scans (an empty file,
+        a gzip of nothing or a file of comments read as no records, silently)."""
+        kinds = " (FLASER, RLASER, ROBOTLASER1 / 2, RAWLASER1 .. 4)"
+        if lines == 0:
+            with open(self.path, "rb") as f:
+                packed = compression(f.read(6))
+            if packed:
+                return f"its {packed} data decompresses to nothing: an empty log, no laser lines{kinds}"
+            return f"an empty file (0 bytes): no laser lines{kinds}"
+        if quiet == lines:
+            return f"holds only blank or comment lines ({lines:,}): no laser lines{kinds}"
+        met = ", ".join(f"{k} ({n:,})" for k, n in self.stats.messages.items())
+        return f"holds no laser lines{kinds}, only other messages: {met}"
+
     def _lines(self) -> Iterator[tuple[int, str]]:
         """(line number, text) of every line; damage in the stream becomes LogFormatError."""
         line_no = 0
@@ -404,10 +425,13 @@ class CarmenReader:
         # a Radish corrected log: the laser lines' poses are a SLAM solution, the ODOM lines the raw odometry
         chain = CorrectedChain() if pairing is None else None
         flushes += [holder.flush for holder in (pairing, chain) if holder is not None]
+        lines = quiet = 0  # lines read, and of them blank or comment lines (for a log of no laser line)
         for line_no, line in self._lines():
+            lines = line_no
             words = line.split()
             if not words or words[0].startswith("#"):
                 blank.see(line_no)
+                quiet += 1
                 continue
             blank.reset()
             kind = words[0]
@@ -440,9 +464,11 @@ class CarmenReader:
                     truth = None  # a malformed TRUEPOS sets none
                     pose = _pose(words, 1, "TRUEPOS")
                     _require(len(words) >= 8, "TRUEPOS needs at least 7 numbers")
+                    _require(len(words) <= MAX_POSE_WORDS, _too_many_words("TRUEPOS", len(words)))
                     truth = (pose, _few_floats(words[7:8], "TRUEPOS timestamp")[0])
                 elif kind == "ODOM":
                     _require(len(words) >= 8, "ODOM needs x y theta tv rv accel timestamp")
+                    _require(len(words) <= MAX_POSE_WORDS, _too_many_words("ODOM", len(words)))
                     values = _few_floats(words[1:8], "ODOM")
                     if pairing is not None:  # odometry for the scans of a RAWLASER kind, which carry none
                         yield from pairing.odom(values[6], (values[0], values[1], values[2]))
@@ -464,7 +490,8 @@ class CarmenReader:
                                                    range_words)
                     else:
                         scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
-                                                       params.get(RANGE_MIN_PARAM, 0.0), range_words)
+                                                       params.get(RANGE_MIN_PARAM, 0.0), range_words,
+                                                       exact_angles=bool(params.get(EXACT_ANGLES_PARAM)))
                         header = (words[2], words[3], words[4])  # start, fov, resolution as written
                         first = counts.get(header)
                         if first is None and len(counts) < MAX_GEOMETRIES and max(map(len, header)) <= MAX_CACHED_WORD_CHARS:
@@ -489,10 +516,24 @@ class CarmenReader:
             yield from pairing.flush()
         if chain is not None:
             yield from chain.flush()
+        if not any(stats.messages.get(k) for k in LASER_KINDS) and not stats.skipped_count and stats.stopped is None:
+            raise LogFormatError(self.path, 1, self._no_laser_reason(lines, quiet))
         if self.topic is not None and not stats.messages.get(self.topic) and stats.other_lasers():
             # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
             others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())
             raise InputError(f"topic: {self.path} has no {self.topic} lines; its laser lines: {others}")
+
+
+#: most words of an ODOM or TRUEPOS line: its name, 6 numbers, ipc_timestamp, hostname, logger_timestamp.
+#: More were taken without a word: a laser line that lost the newline before it (a damaged log) ran
+#: into the ODOM line and was read as its tail, the scan lost silently
+MAX_POSE_WORDS = 10
+
+
+def _too_many_words(kind: str, n: int) -> str:
+    """Why an ODOM / TRUEPOS line of ``n`` words is malformed."""
+    return (f"{kind} has {n} fields, at most {MAX_POSE_WORDS} ({kind} and 6 numbers, ipc_timestamp, hostname, "
+            "logger_timestamp): two lines run together (a lost line break)?")
 
 
 def _fields_fit(kind: str, line: str) -> bool:
@@ -539,6 +580,10 @@ class _BlankRun:
         self.count = 0
 
 
+LMSBENCH_PARAM_PREFIX = "lmsbench_"  # the PARAM names this package writes and reads
+LMSBENCH_PARAMS = frozenset({UNITS_PARAM, ODOMETRY_PARAM, RANGE_MIN_PARAM, EXACT_ANGLES_PARAM} | EXACT_GEOMETRY_PARAMS)
+
+
 def _param(words: list[str], params: dict[str, float], units: Units | None,
            has_odometry: bool) -> tuple[Units | None, bool]:
     """Apply a PARAM line: the range unit, odometry flag, range_min and laser geometry; returns (units, odometry)."""
@@ -554,10 +599,16 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number), f"{name} must be a finite number (rad), got {value!r}")
         params[name] = number
+    elif name == EXACT_ANGLES_PARAM:
+        _require(value in ("exact", "grid"), f"{EXACT_ANGLES_PARAM} must be exact or grid, got {value!r}")
+        params[name] = float(value == "exact")
     elif name == RANGE_MIN_PARAM:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number >= 0, f"{name} must be a finite number >= 0 (m), got {value!r}")
         params[name] = number
+    elif name.startswith(LMSBENCH_PARAM_PREFIX) and name not in LMSBENCH_PARAMS:
+        # a misspelt one (lmsbench_range_unit mm) was passed over: the unit inferred, the scans read otherwise
+        raise ValueError(f"{name!r} is no lmsbench PARAM (known: {', '.join(sorted(LMSBENCH_PARAMS))})")
     elif name in laser_geometry.GEOMETRY_PARAMS:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number > 0, f"{name} must be a finite number > 0, got {value!r}")
@@ -768,8 +819,12 @@ def _exact_or_snapped(angle: float, exact: float | None) -> float:
 
 
 def _parse_robotlaser(words: list[str], units: Units | None, range_max_override: float | None,
-                      range_min: float = 0.0, cache: _RangeWords | None = None) -> tuple[Scan, Pose2D | None]:
-    """A ROBOTLASER1 / 2 line (robot pose as odometry) or a RAWLASER1 .. 4 line (no pose)."""
+                      range_min: float = 0.0, cache: _RangeWords | None = None,
+                      exact_angles: bool = False) -> tuple[Scan, Pose2D | None]:
+    """A ROBOTLASER1 / 2 line (robot pose as odometry) or a RAWLASER1 .. 4 line (no pose); its start
+    angle and resolution snapped onto the 0.05 deg grid where only text rounding explains their
+    distance from it (:func:`snap_angle`), or taken as written with ``exact_angles`` (``PARAM
+    lmsbench_robotlaser_angles exact``)."""
     kind = words[0]
     _require(len(words) >= 10, f"{kind} is too short")
     head = _few_floats(words[1:8], f"{kind} header")
@@ -785,8 +840,8 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     _require(fov >= 0, f"field of view must be >= 0, got {fov}")
     steps = fov / resolution  # CARMEN loggers write fov = n x res (csail) or (n - 1) x res
     _require(min(abs(steps - n), abs(steps - (n - 1))) <= ROBOTLASER_FIT_TOLERANCE_BEAMS,
-             f"declares a field of view of {math.degrees(fov):.3f} deg at {math.degrees(resolution):.4f} deg, "
-             f"which holds {steps:.1f} steps, but carries {n} beams (fov must be n or n - 1 steps)")
+             f"declares a field of view of {fixed(math.degrees(fov), 3)} deg at {fixed(math.degrees(resolution), 4)} deg, "
+             f"which holds {fixed(steps, 1)} steps, but carries {n} beams (fov must be n or n - 1 steps)")
     if units is None and accuracy in (0.01, 0.001):
         units = "cm" if accuracy == 0.01 else "mm"
     ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind)
@@ -799,7 +854,8 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
              f"maximum range must be in [{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, "
              f"got {words[5]}")
     range_max = range_max_override if range_max_override is not None else max_range
-    scan = Scan(ranges, snap_angle(start), snap_angle(resolution), range_min, range_max, stamp)
+    snap = (lambda angle: angle) if exact_angles else snap_angle
+    scan = Scan(ranges, snap(start), snap(resolution), range_min, range_max, stamp)
     if kind.startswith("RAWLASER"):
         return scan, None
     return scan, _finite_pose(tail[3:6], f"{kind} robot pose")
@@ -937,7 +993,8 @@ def write_carmen(
     as it is written (for recorders: a crash or Ctrl-C loses nothing already received).
     Stamps, poses, angles and PARAM values are written as the shortest plain decimal that reads back
     as the same float64 (FLASER logs also get ``PARAM lmsbench_front_laser_angle_min / _increment``
-    in rad), so a scan written and read back is equal to it.
+    in rad; a ROBOTLASER1 log ``PARAM lmsbench_robotlaser_angles exact`` before the first scan whose
+    angles the reader would snap onto the 0.05 deg grid), so a scan written and read back is equal to it.
     Returns the number of scans written.
 
     Raises:
@@ -954,6 +1011,7 @@ def write_carmen(
     units: Units | None = None
     odometry: bool | None = None
     range_min = 0.0  # what the reader assumes without a PARAM line
+    exact_angles = False  # PARAM lmsbench_robotlaser_angles exact written
     flaser_params: dict[str, str] = {}
     with opener(path, "wt", encoding="ascii") as f:  # type: ignore[operator]
         f.write("# CARMEN log written by lmsbench\n")
@@ -980,6 +1038,10 @@ def write_carmen(
             stamp = f"{_num(scan.stamp)} {hostname} {_num(scan.stamp)}"
             ranges = _format_ranges(scan, u)
             odom = _pose_text(rec.odom)
+            if fmt != "flaser" and not exact_angles and (snap_angle(scan.angle_min) != scan.angle_min
+                                                         or snap_angle(scan.angle_increment) != scan.angle_increment):
+                exact_angles = True  # the reader would snap them onto the grid: it is told to take them as written
+                f.write(f"PARAM {EXACT_ANGLES_PARAM} exact {hostname} 0\n")
             if fmt == "flaser":
                 params = _flaser_params(scan)
                 if params != flaser_params:

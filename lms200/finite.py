@@ -37,6 +37,21 @@ def shown(value: object, most: int = 60) -> str:
     return text if len(text) <= most else f"{text[:40]}...{text[-8:]} ({len(text)} characters)"
 
 
+#: magnitude from which :func:`fixed` writes a number with an exponent: a float64 holds no digit after
+#: the point there (its spacing at 1e15 is 0.125), and a stamp of 1e308 written with 6 decimals was 315 characters
+FIXED_MAX = 1e15
+
+
+def fixed(value: float, decimals: int = 6) -> str:
+    """A number for a message as ``f"{value:.{decimals}f}"`` (a stamp 1700000000.123456 s), but with
+    an exponent from ``FIXED_MAX`` on (``1e+308``, ``%.{decimals}g``): a stamp near 1e308 was
+    quoted with its 309 digits (nan and inf as such)."""
+    value = float(value)
+    if math.isfinite(value) and abs(value) >= FIXED_MAX:
+        return f"{value:.{max(decimals, 1)}g}"
+    return f"{value:.{decimals}f}"
+
+
 def overflow_text(value: object) -> str:
     """How a value beyond float64 is named in a message: by its type, never printed."""
     return f"a {type(value).__name__} beyond float64's range"

@@ -36,7 +36,9 @@ def read_log(
             CARMEN laser message kind (FLASER, RLASER, ROBOTLASER1 / 2, RAWLASER1 .. 4; default: the
             first kind with poses in the log, else the first RAWLASER kind).
         geometry: CARMEN FLASER / RLASER only: beam geometry (rad, m) that overrides the log's
-            PARAM lines and the convention from the beam count (see :mod:`lms200.laser_geometry`).
+            PARAM lines and the convention from the beam count (see :mod:`lms200.laser_geometry`);
+            its ``range_max`` alone also replaces a ROBOTLASER line's and a bag's LaserScan's (a
+            driver's range_max of inf, which no scan takes, needs it).
 
     Raises:
         InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument, for a path that
@@ -45,7 +47,9 @@ def read_log(
         LogNotFoundError: (an ``LmsbenchError`` and a ``FileNotFoundError``) when the path does not exist, or is a folder that is not a ROS 2 bag or
             not a regular file (a device, a pipe); for a ``lmsbench simulate`` folder the message names
             its scans.clf to read instead (:func:`folder_message`).
-        LogFormatError: (while iterating) a CARMEN line that cannot be read, naming file and line.
+        LogFormatError: (while iterating) a CARMEN line that cannot be read, naming file and line; a
+            CARMEN log of no laser line (an empty file, a compressed stream of nothing, only comments
+            or only other messages), naming the file and what it holds.
         BagError: (while iterating) a bag that cannot be read, naming the topic and message index.
     """
     p = path_of(path)
@@ -58,9 +62,13 @@ def read_log(
     if not p.exists():
         raise LogNotFoundError(f"no such log: {p}")
     if is_bag(p):
-        if geometry is not None and geometry != LaserGeometry():
-            raise BagError(f"{p}: a bag's LaserScan messages carry their geometry; no geometry override")
-        return BagReader(p, topic=topic, skip_bad_lines=skip_bad_lines)
+        given = [name for name in ("fov", "resolution", "angle_min") if geometry is not None and getattr(geometry, name) is not None]
+        if given:
+            raise BagError(f"{p}: a bag's LaserScan messages carry their own beam geometry; the override of "
+                           f"{', '.join(given)} (--laser-*-deg) applies to CARMEN FLASER / RLASER lines only "
+                           "(range_max, --laser-range-max, applies to a bag's scans too)")
+        return BagReader(p, topic=topic, skip_bad_lines=skip_bad_lines,
+                         range_max=geometry.range_max if geometry is not None else None)
     if p.is_dir():
         raise LogNotFoundError(folder_message(p))
     return CarmenReader(p, skip_bad_lines=skip_bad_lines, topic=topic, geometry=geometry)

@@ -14,6 +14,7 @@ import numpy as np
 
 from .codes import real_rows, real_vector
 from .errors import InputError, LogFormatError
+from .finite import fixed
 
 
 def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
@@ -100,6 +101,26 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
         raise InputError(f"path: cannot write {path}: {exc.strerror or exc}") from None
 
 
+#: deg: a TUM pose tilted further from upright (the angle between its z axis and the plane's normal)
+#: is refused: its frame's z is not up (a camera's optical frame, z forward, is tilted 90 deg), so its
+#: yaw is no heading in the plane. A ground robot tilts a few degrees (uneven floors, ramps of up to
+#: 8 deg, a sensor mount, motion capture noise); streets of 17 deg are the steepest of them
+MAX_TILT_DEG = 30.0
+#: deg: a tilt above this (and up to MAX_TILT_DEG) is read, with one warning for the file: the yaw is the
+#: heading of the pose's x axis projected onto the plane (exact for any tilt short of 90 deg) and x, y
+#: are the position's projection, but the trajectory is not planar (at 5 deg a pose's x axis is
+#: foreshortened by under 0.4 %)
+TILT_NOTE_DEG = 5.0
+
+
+def tilt_deg(q: np.ndarray) -> float:
+    """The angle (deg) between the z axis of the rotation a quaternion (qx, qy, qz, qw, any positive
+    finite norm) stands for and the world's z: 0 for a rotation about z alone (a planar pose's)."""
+    qx, qy, qz, qw = np.asarray(q, dtype=float) / np.max(np.abs(q))
+    cos_tilt = 1.0 - 2.0 * (qx * qx + qy * qy) / (qx * qx + qy * qy + qz * qz + qw * qw)
+    return math.degrees(math.acos(min(1.0, max(-1.0, cos_tilt))))
+
+
 def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Read a TUM file: (stamps (n,) s, poses (n, 3) x, y, yaw). A quaternion of any positive norm
     is normalised (``0 0 0 0 0 0 1 1`` is 90 deg).
@@ -115,7 +136,13 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
             a pipe (read until memory ran out).
         LogFormatError: naming the line: a row that is not 8 finite numbers (nan allowed in the pose
             with ``allow_nan``; no ``_`` in a number), x or y beyond +-``logs.MAX_COORD_M``, a zero
-            quaternion, a stamp before the previous one, a line longer than ``logs.MAX_ROW_CHARS``.
+            quaternion, a quaternion tilted more than ``MAX_TILT_DEG`` (30 deg) from a rotation about
+            z (a frame whose z is not up: its yaw is no heading; was read as one, silently), a stamp
+            before the previous one, a line longer than ``logs.MAX_ROW_CHARS``.
+
+    Warns:
+        LmsbenchWarning: once for a file with poses tilted by more than ``TILT_NOTE_DEG`` (5 deg) and
+            up to 30 deg (roll or pitch): read as their heading, naming the line of the largest tilt.
     """
     from .logs import MAX_COORD_M, regular_file, row_lines, row_numbers  # not at the top: logs imports bag, which imports this module
 
@@ -124,6 +151,7 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
     p = regular_file(path, "TUM file")  # a device or pipe too: /dev/zero was read until memory ran out
     stamps: list[float] = []
     poses: list[tuple[float, float, float]] = []
+    tilted, most = 0, (0.0, 0)  # poses tilted beyond TILT_NOTE_DEG, and the largest tilt with its line
     for no, line in row_lines(path, p):  # a line of 3 GB (a file of zeros) was read whole: MemoryError
         s = line.strip()
         if not s or s.startswith("#"):
@@ -138,10 +166,29 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
         if abs(v[1]) > MAX_COORD_M or abs(v[2]) > MAX_COORD_M:
             raise LogFormatError(path, no, f"TUM row's x or y is beyond +-{MAX_COORD_M:g} m: {s[:60]!r}")
         if stamps and v[0] < stamps[-1]:
-            raise LogFormatError(path, no, f"TUM stamps go backwards ({v[0]:.6f} s after {stamps[-1]:.6f} s)")
+            raise LogFormatError(path, no, f"TUM stamps go backwards ({fixed(v[0])} s after {fixed(stamps[-1])} s)")
         yaw = float(quaternion_to_yaw(np.array(v[4:8]))[0])
         if math.isnan(yaw) and not any(math.isnan(x) for x in v[4:8]):  # (0, 0, 0, 0) read as yaw 0
             raise LogFormatError(path, no, f"TUM row's quaternion (qx qy qz qw) is zero: {s[:60]!r}")
+        if not math.isnan(yaw):
+            tilt = tilt_deg(np.array(v[4:8]))
+            if tilt > MAX_TILT_DEG:
+                raise LogFormatError(path, no, f"TUM row's rotation is tilted {tilt:.1f} deg from upright (roll or "
+                                               f"pitch; at most {MAX_TILT_DEG:g} deg): its z axis is not up (a camera's "
+                                               "optical frame?), so its yaw is no heading in the plane; give a "
+                                               f"trajectory of the robot's base frame: {s[:60]!r}")
+            if tilt > TILT_NOTE_DEG:
+                tilted += 1
+                if tilt > most[0]:
+                    most = (tilt, no)
         stamps.append(v[0])
         poses.append((v[1], v[2], yaw))
+    if tilted:
+        import warnings
+
+        from .errors import LmsbenchWarning
+
+        warnings.warn(f"{path}: {tilted} of its {len(stamps)} poses are tilted by more than {TILT_NOTE_DEG:g} deg "
+                      f"(roll or pitch; up to {most[0]:.1f} deg, line {most[1]}): read as the heading of their x axis "
+                      "and the projection of their position onto the plane", LmsbenchWarning, stacklevel=2)
     return np.array(stamps), np.array(poses).reshape(-1, 3)

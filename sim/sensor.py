@@ -240,19 +240,20 @@ class SensorConfig:
             raise LmsbenchError(f"{where}: {exc}") from None
 
     @classmethod
-    def from_yaml(cls, path: str | Path) -> "SensorConfig":
+    def from_yaml(cls, path: str | Path, data: bytes | None = None) -> "SensorConfig":
         """Read a sensor YAML: the fields at top level (as ``lmsbench calibrate`` writes them; its
         ``calibration`` section of estimates is metadata and skipped), or a run's config.yaml
-        with a ``sensor`` section.
+        with a ``sensor`` section. ``data``: the file's bytes, read already (a sweep cell parses the
+        bytes it keyed itself by); ``path`` then only names it.
 
         Raises:
             LmsbenchError: for a missing or unreadable file, unknown fields or bad values.
         """
-        import yaml
-
         if not isinstance(path, (str, os.PathLike)) or isinstance(path, bytes):  # None raised TypeError from Path
             raise InputError(f"path: must be a str or os.PathLike naming a sensor YAML, got {type(path).__name__}")
         p = Path(path)
+        if data is not None:
+            return cls._from_text(p, data)
         if p.is_dir():  # was "no such sensor file"
             raise InputError(f"{p} is a folder, not a sensor YAML")
         if p.exists() and not p.is_file():  # a pipe (--sensor <(cat s.yaml)) was "no such sensor file"
@@ -263,8 +264,18 @@ class SensorConfig:
         too_big = size_problem(p.stat().st_size)
         if too_big:
             raise InputError(f"{p}: {too_big}")
+        return cls._from_text(p, p.read_bytes())
+
+    @classmethod
+    def _from_text(cls, p: Path, data: bytes) -> "SensorConfig":
+        """:meth:`from_yaml` of the bytes ``data`` of the file ``p``."""
+        import yaml
+
+        too_big = size_problem(len(data))
+        if too_big:
+            raise InputError(f"{p}: {too_big}")
         try:
-            d = load_yaml(p.read_text(encoding="utf-8"))
+            d = load_yaml(data.decode("utf-8"))
         except (yaml.YAMLError, UnicodeDecodeError) as exc:
             raise LmsbenchError(f"{p}: not valid YAML ({' '.join(str(exc).split())})") from None
         if isinstance(d, dict) and isinstance(d.get("sensor"), dict):

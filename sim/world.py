@@ -142,22 +142,25 @@ class World:
         Path(path).write_text(json.dumps(self.to_dict(), indent=1) + "\n", encoding="ascii")
 
     @classmethod
-    def from_json(cls, path: str | Path) -> "World":
+    def from_json(cls, path: str | Path, data: bytes | None = None) -> "World":
         """Read a world.json. A file with only walls/circles gets thin boxes rebuilt behind each
         face (on its solid side, see ``sim.walls_only``: closed loops are oriented from the
         topology, open walls taken as drawn, solid on the left of p1 -> p2) and cylinders of 2 m
         height, so it can be simulated.
 
+        ``data``: the file's bytes, read already (a sweep cell parses the bytes it keyed itself by);
+        ``path`` then only names it.
+
         Raises:
             LmsbenchError: for a file that is not a world description, or a walls-only file whose
                 rebuilt boxes do not give back its walls as faces.
         """
-        size = Path(path).stat().st_size
+        size = Path(path).stat().st_size if data is None else len(data)
         if size > MAX_WORLD_JSON_BYTES:  # read whole: a 3 GB file took as much memory
             raise LmsbenchError(f"{path}: {size:,} bytes, more than the {MAX_WORLD_JSON_BYTES:,} a world.json may "
                                 f"hold (refused unread; the mit world's is 0.5 MB)")
         try:
-            d = json.loads(Path(path).read_text(encoding="ascii"))
+            d = json.loads((Path(path).read_bytes() if data is None else data).decode("ascii"))
             if not isinstance(d, dict):
                 raise TypeError(f"the top level is a {type(d).__name__}, not a mapping of walls, boxes, ...")
             walls = np.asarray(d.get("walls", []), dtype=float).reshape(-1, 4)

@@ -356,7 +356,7 @@ def test_calibration_of_too_few_scans_says_so_and_prints_no_nan() -> None:
     from sim import simulate_records
 
     scans = [r.scan for r in simulate_records("office", seed=0, duration=1.0, rate_hz=4)]
-    with pytest.raises(InputError, match="^scans: calibrating needs at least 2 scans"):  # a bare ValueError
+    with pytest.raises(InputError, match="^scans: calibrating needs at least 2 distinct scans"):  # a bare ValueError
         calibrate_scans(scans[:1])
     cal = calibrate_scans([s.replace(ranges=np.where(np.isnan(s.ranges), 5.0, s.ranges)) for s in scans[:3]])
     assert np.isnan(cal.nan_clustering.value)  # no nan reading: nothing to measure
@@ -953,7 +953,9 @@ def test_a_short_file_of_binary_junk_is_not_a_log(tmp_path) -> None:
         with pytest.raises(LogFormatError, match=r"junk\.clf:1: not a CARMEN log: none of its \d+ lines"):
             list(read_log(junk, skip_bad_lines=skip))
     (tmp_path / "empty.clf").write_text("# a log with no message yet\n\n")
-    assert list(read_log(tmp_path / "empty.clf")) == []  # an empty log is still one
+    # a log of no laser line gives no scan: refused, not read as a run of none (lms200 review, empty logs)
+    with pytest.raises(LogFormatError, match=r"empty\.clf:1: holds only blank or comment lines \(2\): no laser lines"):
+        list(read_log(tmp_path / "empty.clf"))
     log = tmp_path / "a.log"
     write_log(log, _records(2))
     assert len(list(read_log(log))) == 2

@@ -103,3 +103,43 @@ def test_version_is_cheap_it_loads_neither_numba_nor_the_simulator() -> None:
             "print(status, sorted(m for m in ('sim', 'numba') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.splitlines()[-1] == "0 []"
+
+
+def test_compare_help_says_what_each_poses_choice_does(capsys) -> None:
+    """--poses {auto,corrected,none}: the help said what auto and none do, not corrected."""
+    assert main(["compare", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "auto (default): when the file name says 'corrected'" in text
+    assert "corrected: always (a log without such anchors: its odometry taken as corrected poses)" in text
+    assert "none: never" in text
+
+
+@pytest.mark.parametrize("argv, hint", [
+    (["compare", "office", "--seeds", "0-2"], "got '0-2'; the seeds are listed one by one, not as a range: 0 1 2 "),
+    (["sim2real", "x.clf", "--seeds", "40-63"],
+     "got '40-63'; the seeds are listed one by one, not as a range: $(seq 40 63) in a shell, or 40 41 ... 63 written out"),
+    (["sim2real", "x.clf", "--probe-seeds", "100..103"], "not as a range: 100 101 102 103 "),
+])
+def test_a_range_of_seeds_says_how_to_list_them(argv, hint, capsys) -> None:
+    """The README names seed sets as ranges ("seeds 40-63"); `--seeds 40-63` said only "must be a
+    whole number", as for any other word."""
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"lmsbench {argv[0]}: error: argument {argv[2]}: must be a whole number >= 0")
+    assert hint in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("word", ["5-2", "-1", "a-b", "1.5"])
+def test_a_seed_that_is_no_range_gets_no_range_hint(word, capsys) -> None:
+    assert main(["compare", "office", "--seeds", word]) == 2
+    err = capsys.readouterr().err
+    assert "must be a whole number" in err and "range" not in err
+
+
+def test_calibrate_help_names_every_fit_its_world_runs(capsys) -> None:
+    """calibrate --world said it fits "the spot width and the outlier baseline"; the same world's runs
+    fit the residual tail and the clustering of the tail and of the nans too (experiments.calibrate.fit_sensor)."""
+    assert main(["calibrate", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert ("simulated world of the fits by simulation (spot width, outlier baseline, residual tail, the tail's "
+            "and the nans' clustering)") in text

@@ -22,6 +22,7 @@ import pytest
 import yaml
 
 from experiments.sweep import SweepSpec, SweepSpecError, cell_key, load_sweep, run_sweep
+from experiments.sweep.cells import INPUTS_KEY
 from lms200.errors import LmsbenchWarning
 
 REPO = Path(__file__).resolve().parents[1]
@@ -448,9 +449,9 @@ def test_a_sensor_file_is_read_once_per_check_and_once_per_run(tmp_path, monkeyp
     reads = []
     real = SensorConfig.from_yaml.__func__
 
-    def counting(cls, p):
+    def counting(cls, p, data=None):
         reads.append(str(p))
-        return real(cls, p)
+        return real(cls, p, data)
 
     monkeypatch.setattr(SensorConfig, "from_yaml", classmethod(counting))
     cells = [{"method": "split_merge", "sensor_file": str(path), "sensor.dropout_prob": q} for q in (0.0, 0.01, 0.02)]
@@ -467,9 +468,10 @@ def test_a_sensor_file_is_read_once_per_check_and_once_per_run(tmp_path, monkeyp
                         pd.DataFrame({"source": ["s"], "method": ["split_merge"]}))
     monkeypatch.setattr(kinds, "summarise", lambda table, reference: pd.DataFrame({"f1": [1.0]}))
     row = kinds.extract_cell({**cells[1], "duration": 0.5, "rate_hz": 2.0})
-    assert row == {"f1": 1.0} and seen == [0.0123] and reads == [str(path)]
-    digests = tuple(kinds.input_digests({"sensor_file": str(path)}, {}).items())  # the file's content keys the cache too
-    world, sensor, records, _ = kinds._run("office", 0, 0.5, 2.0, (("dropout_prob", 0.01),), True, str(path), digests)
+    digest = kinds.input_digests({"sensor_file": str(path)}, {})["sensor_file"]  # the file's content keys the cache too
+    assert row == {"f1": 1.0, INPUTS_KEY: {"sensor_file": digest}} and seen == [0.0123] and reads == [str(path)]
+    content = kinds._Content(str(path), path.read_bytes())
+    world, sensor, records, _ = kinds._run("office", 0, 0.5, 2.0, (("dropout_prob", 0.01),), True, content, None)
     assert reads == [str(path)]  # the cached run: not read again
     assert (sensor.noise_sigma, sensor.dropout_prob, sensor.interlaced) == (0.0123, 0.01, False)
 
@@ -486,7 +488,7 @@ def test_extract_cell_row_has_no_speed_ratio_to_itself(monkeypatch: pytest.Monke
         {"source": ["s"], "method": ["split_merge"], "f1": [0.9], "us_median": [40.0], "cpu_us_median": [38.0],
          "speed_vs_sensor": [1.0], "cpu_speed_vs_sensor": [1.0]}))
     row = kinds.extract_cell({"method": "split_merge", "duration": 0.5, "rate_hz": 2.0})
-    assert row == {"f1": 0.9, "us_median": 40.0, "cpu_us_median": 38.0}
+    assert row == {"f1": 0.9, "us_median": 40.0, "cpu_us_median": 38.0, INPUTS_KEY: {}}  # no file read
 
 
 def test_a_world_json_runs_in_a_sweep_and_a_missing_one_is_refused_before_any_cell(tmp_path, monkeypatch, capsys):

@@ -153,6 +153,9 @@ def test_a_damaged_log_reads_or_names_the_file_and_a_damaged_line(case) -> None:
     if exc is not None and data.startswith(MAGIC):  # bytes inserted at the start made it look compressed or packed
         assert isinstance(exc, LogFormatError) and exc.line_no in (0, 1), repr(exc)
         return
+    if exc is not None and "holds no laser lines" in str(exc):  # the damage took every laser line (a lost
+        assert not recs and exc.line_no == 1  # newline merged it into an ODOM line): no scan, said as such
+        return
     if exc is not None:
         assert isinstance(exc, LogFormatError), repr(exc)
         assert exc.path == path and str(exc).startswith(f"{path}:{exc.line_no}: ")

@@ -521,11 +521,11 @@ def test_bag_message_that_is_no_scan_names_topic_and_index(tmp_path: Path) -> No
     real = bag._scan_of
     calls = {"n": 0}
 
-    def flaky(msg):  # noqa: ANN001, ANN202 - the third scan message cannot be a Scan
+    def flaky(msg, range_max=None):  # noqa: ANN001, ANN202 - the third scan message cannot be a Scan
         calls["n"] += 1
         if calls["n"] == 3:
             raise ValueError("angle_increment: must be > 0, got 0.0")
-        return real(msg)
+        return real(msg, range_max)
 
     bag._scan_of = flaky
     try:

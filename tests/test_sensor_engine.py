@@ -234,3 +234,33 @@ def test_a_corner_s_beam_is_its_bearing_s_beam_on_a_scan_past_pi(angle_min: floa
     assert fs.corners.beams[:, 0].tolist() == [136, 354, 530, 605, 683]
     bearing_beams = np.mod(np.arctan2(fs.corners.y, fs.corners.x), 2 * np.pi) / inc
     np.testing.assert_array_equal(fs.corners.beams[:, 0], np.rint(bearing_beams))
+
+
+def test_a_corner_bearing_just_before_the_first_beam_stays_at_the_scan_s_start() -> None:
+    """The ``corners`` kernel on two lines made to meet at a bearing 0.3 beams before the first beam
+    (line 0 over beams 0-2 runs along x = -7.9 mm, nearly radial there; line 1 from beam 4 along
+    y = -3 m): the corner's beam is line 0's last (2), the nearest of its bearing's three beams a
+    full turn apart (-0.3, -720.3, 719.7). A wrap of every bearing into [angle_min, angle_min + 2 pi)
+    read 719.7 and clamped it onto line 1's first beam (4), the other line."""
+    from features.sensor.config import SensorMethodConfig
+    from features.sensor.engine import S_PSI, corners
+
+    n, inc, angle_min = 361, np.deg2rad(0.5), -np.pi / 2
+    b = angle_min - 0.3 * inc  # the corner's bearing
+    cx, cy = 3.0 * np.tan(b + np.pi / 2), -3.0  # on y = -3, at bearing b
+    # rows: rho, alpha, start x, y, end x, y, cov (4); line 0 ends 0.1 m before the corner, line 1
+    # starts at beam 4's hit on y = -3
+    start_1 = 3.0 / np.cos(4 * inc)  # the range of beam 4 (2 deg past -90 deg) on y = -3
+    lv = np.array([[-cx, np.pi, cx, cy - 1.0, cx, cy + 0.1, 1e-6, 0.0, 0.0, 1e-6],
+                   [3.0, -np.pi / 2, start_1 * np.cos(angle_min + 4 * inc), -3.0, 2.0, -3.0, 1e-6, 0.0, 0.0, 1e-6]])
+    lb = np.array([[0, 2], [4, 40]], np.int64)
+    sig = np.full((11, n), np.nan)
+    sig[S_PSI] = np.pi / 2  # the turn shows in psi everywhere
+    ranges = np.full(n, 3.0)
+    valid = np.ones(n, np.bool_)
+    p = SensorMethodConfig(acute_check=False).params
+    values, beams = corners(lv, lb, sig, ranges, valid, angle_min, inc, 0.01, p)
+    assert len(beams) == 1
+    assert values[0, 0] == pytest.approx(cx, abs=1e-12) and values[0, 1] == pytest.approx(cy, abs=1e-12)
+    assert values[0, 2] == pytest.approx(np.pi / 2, abs=1e-9)
+    assert beams[0].tolist() == [2, 0, 1]

@@ -719,8 +719,12 @@ def test_slam_summary_prints_the_runs_relations_error_beside_the_published_ones(
     assert _score_lines({"table": table}) == [
         "  relations error, mean (m): this run 0.0283, paper preset 0.583, raw odometry 1.68"]
     # a run whose relations all lie outside it (its note is printed instead) and an input without scores
-    assert _score_lines({"table": [{"source": "slam", "relations_n": 0}, table[1]]}) == []
-    assert _score_lines({"table": [{"source": "slam"}]}) == [] == _score_lines({})
+    assert _score_lines({"relations": {"n": 0, "note": "none of the 1172 relations falls inside the run"},
+                         "table": [{"source": "slam", "relations_n": 0}, table[1]]}) == []
+    # an input with no reference says so (it printed nothing: tests/test_walkthrough_scores.py)
+    assert _score_lines({"table": [{"source": "slam"}]}) == _score_lines({}) == [
+        "  no score: the input has no reference to score the run against (no true or corrected poses, no "
+        "relations file: --relations FILE, or NAME.relations beside the log)"]
 
 
 def test_a_reference_covering_part_of_the_run_is_said(sim_folder, tmp_path, capsys):

@@ -130,3 +130,19 @@ def test_the_summary_prints_the_far_apart_mean_with_its_count():
         "  relations error, median (m): this run 0.023, paper preset 0.035",
         "  relations error over poses more than 200 s apart, mean (m; 97 relations): this run 0.051, paper preset 6.13",
     ]
+
+
+def test_the_summary_says_when_the_input_has_nothing_to_score_against():
+    """csail-robotlaser1 (its poses are its odometry; no relations file): the summary ended after the
+    loop closures, with no score and no word of why; an input with a reference keeps its lines."""
+    from experiments.commands.slam import _score_lines
+
+    bare = {"table": [{"source": "slam", "cpu_scans_per_s": 103.0, "seconds": 7.6}, {"source": "raw odometry"}]}
+    assert _score_lines(bare) == [
+        "  no score: the input has no reference to score the run against (no true or corrected poses, no "
+        "relations file: --relations FILE, or NAME.relations beside the log)"]
+    scored = {"reference": "ground truth", "ate": {"rmse": 0.00618},
+              "table": [{"source": "slam", "ate_rmse": 0.00618}, {"source": "paper preset", "ate_rmse": 0.0313}]}
+    assert _score_lines(scored) == ["  ATE RMS (m): this run 0.00618, paper preset 0.0313"]
+    lost = {"reference": "ground truth", "ate": {"rmse": float("nan")}, "table": [{"source": "slam", "ate_rmse": float("nan")}]}
+    assert _score_lines(lost) == []  # scored, but nan: no "no reference" line

@@ -16,7 +16,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("log", help=LOG_HELP)
     p.add_argument("--out", type=path_arg, help="write the sensor config here (default: print it)")
     p.add_argument("--world", default="office", type=world_name,
-                   help="simulated world used to fit the spot width and the outlier baseline: " + WORLDS + " (default office)")
+                   help="simulated world of the fits by simulation (spot width, outlier baseline, residual tail, the tail's "
+                        "and the nans' clustering): " + WORLDS + " (default office)")
     p.add_argument("--stride", type=count(1), default=1, help="use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=count(1), help="use at most this many scans")
     p.add_argument("--fit-duration", type=number(MIN_FIT_DURATION_S, MAX_FIT_DURATION_S, unit="s"), default=FIT_DURATION_S,

@@ -12,7 +12,7 @@ from lms200.timing import check_scan_rate
 from experiments.logargs import LOG_HELP, add_log_options, read_log_options
 from experiments.options import (
     DURATION,
-    SEED,
+    listed_seed,
     SIM2REAL_OUTPUTS,
     SIM2REAL_OWNER,
     WORLDS,
@@ -40,14 +40,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--world", default="mit", type=world_name, help="simulated world: " + WORLDS + " (default mit, the MIT-CSAIL-like preset)")
     p.add_argument("--sensor", type=path_arg, metavar="FILE.yaml",
                    help="use this sensor model instead of calibrating on the log")
-    p.add_argument("--seeds", nargs="+", type=SEED, default=list(DEFAULT_SEEDS),
+    p.add_argument("--seeds", nargs="+", type=listed_seed, default=list(DEFAULT_SEEDS),
                    help=f"simulated runs, one world each, listed (default {DEFAULT_SEEDS[0]}-{DEFAULT_SEEDS[-1]}; `--seeds 3` is the "
                         "one world 3)")
     p.add_argument("--duration", type=DURATION, default=DEFAULT_DURATION_S,
                    help=f"simulated seconds per seed (default {DEFAULT_DURATION_S:g}, as the fits' probe runs)")
     p.add_argument("--probe-duration", type=DURATION,
                    help=f"simulated seconds of each probe run of the mit world's fits (default {PROBE_DURATION_S:g})")
-    p.add_argument("--probe-seeds", nargs="+", type=SEED, metavar="SEED",
+    p.add_argument("--probe-seeds", nargs="+", type=listed_seed, metavar="SEED",
                    help=f"worlds of the mit world's fits' probe runs, none of them in --seeds (default "
                         f"{PROBE_SEEDS[0]}-{PROBE_SEEDS[-1]}, the first as many as --seeds gives)")
     p.add_argument("--rate-hz", type=positive("scans/s"), default=DEFAULT_RATE_HZ,

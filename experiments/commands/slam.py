@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from lms200.finite import fixed
 from lms200.yamlio import load as load_yaml
 
 import argparse
@@ -210,13 +211,13 @@ def run(args: argparse.Namespace) -> int:
     if back is not None:
         where = data.sources.get("scans", args.input)
         if not args.skip_bad_lines:
-            raise InputError(f"{where}: time goes backwards at scan {back} (stamp {stamps[back]:.6f} s after "
-                             f"{stamps[back - 1]:.6f} s); SLAM needs scans in time order (--skip-bad-lines "
+            raise InputError(f"{where}: time goes backwards at scan {back} (stamp {fixed(stamps[back])} s after "
+                             f"{fixed(stamps[back - 1])} s); SLAM needs scans in time order (--skip-bad-lines "
                              "skips the fewest scans that leave the rest in order)")
         keep = in_time_order(stamps)
         kept = set(keep)
         for k in (k for k in range(len(stamps)) if k not in kept):
-            print(f"{where}: skipped scan {k} (stamp {stamps[k]:.6f} s): out of time order", file=sys.stderr)
+            print(f"{where}: skipped scan {k} (stamp {fixed(stamps[k])} s): out of time order", file=sys.stderr)
         data.records = [data.records[k] for k in keep]
         if data.truth is not None and np.array_equal(data.truth[:, 0], stamps):  # a pose per scan (TRUEPOS)
             data.truth = data.truth[keep]
@@ -236,7 +237,7 @@ def run(args: argparse.Namespace) -> int:
                 else "where the odometry gives no step for them, the motion model predicts no motion and the search no "
                      "turn over them")
         print(f"lmsbench slam: warning: {data.sources.get('scans', args.input)}: {len(still)} of {len(stamps) - 1} "
-              f"steps take no time (scan {still[0]} has the stamp of the scan before, {stamps[still[0]]:.6f} s): "
+              f"steps take no time (scan {still[0]} has the stamp of the scan before, {fixed(stamps[still[0]])} s): "
               f"{over}", file=sys.stderr)
     gaps = [k for k in range(1, len(stamps)) if stamps[k] - stamps[k - 1] > config.motion.max_gap]
     if gaps:  # the constant-velocity model knows nothing of such a gap: the motion restarts (slam.config.MotionConfig)
@@ -294,7 +295,7 @@ def run(args: argparse.Namespace) -> int:
     print("  " + _time_line(m, time.perf_counter() - started))
     if "loop_closures" in m:
         lc, t0 = m["loop_closures"], data.records[0].scan.stamp
-        shown = ", ".join(f"{c['new_stamp'] - t0:.1f} s -> {c['old_stamp'] - t0:.1f} s" for c in lc["closed"][:6])
+        shown = ", ".join(f"{fixed(c['new_stamp'] - t0, 1)} s -> {fixed(c['old_stamp'] - t0, 1)} s" for c in lc["closed"][:6])
         more = ", ..." if lc["n"] > 6 else ""
         print(f"  {lc['n']} loop closures over {lc['n_keyframes']} keyframes" + (f" ({shown}{more})" if lc["n"] else ""))
     for line in _score_lines(m):
@@ -359,6 +360,9 @@ def _score_lines(m: dict[str, Any]) -> list[str]:
                 if isinstance(row.get(key), (int, float)) and math.isfinite(row[key])]
         if rows and rows[0][0] == "this run":
             lines.append(f"  {label}: " + ", ".join(f"{source} {value:.3g}" for source, value in rows))
+    if not lines and "ate" not in m and "relations" not in m:  # csail-robotlaser1 printed no score and said nothing of why
+        lines.append("  no score: the input has no reference to score the run against (no true or corrected poses, "
+                     "no relations file: --relations FILE, or NAME.relations beside the log)")
     return lines
 
 

@@ -84,6 +84,9 @@ class UserKind:
 
 #: the row's key of the cell's lmsbench warnings (not a metric: a metric of this name is refused)
 WARNINGS_KEY = "_warnings"
+#: a built-in cell's result: the digests of the files it read (parameter name -> digest of the bytes it computed
+#: with), for the runner to store the row only under a key made with the same (``runner._changed_inputs``)
+INPUTS_KEY = "_inputs"
 _COLLECTING = threading.local()  # .said: the list the current thread's cell collects into, else None
 
 

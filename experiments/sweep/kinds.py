@@ -24,35 +24,71 @@ from experiments.overrides import OverrideError, extractor_overrides
 from lms200 import LmsbenchError
 from lms200.errors import LmsbenchWarning
 
+from .cells import INPUTS_KEY
+
 EXTRACT_DEFAULTS = {"method": "sensor", "world": "office", "duration": 5.0, "rate_hz": 4.0}
 SLAM_DEFAULTS = {"world": "office", "duration": 30.0, "rate_hz": None}
 
 
+class _Content:
+    """A file's bytes as read once by a cell, equal to another by its path and digest alone (an
+    ``lru_cache`` key that does not hash the bytes)."""
+
+    def __init__(self, path: str, data: bytes) -> None:
+        import hashlib
+
+        self.path, self.data = path, data
+        self.digest = hashlib.sha256(data).hexdigest()[:16]  # as input_digests makes it
+
+    def _key(self) -> tuple[str, str]:
+        return (self.path, self.digest)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, _Content) and self._key() == other._key()
+
+    def __hash__(self) -> int:
+        return hash(self._key())
+
+
+def _read_inputs(params: dict[str, Any]) -> dict[str, _Content]:
+    """The files a built-in cell reads (the parameters :func:`input_digests` names), each read once:
+    the cell's digests and its computation come from the same bytes."""
+    files = {"sensor_file": params.get("sensor_file"), "world": params.get("world")}
+    return {name: _Content(str(path), Path(str(path)).read_bytes()) for name, path in files.items()
+            if path is not None and (name != "world" or str(path).endswith(".json"))}
+
+
 @functools.lru_cache(maxsize=4)
 def _run(world: str, seed: int, duration: float, rate_hz: float | None, sensor_items: tuple, with_truth: bool,
-         sensor_file: str | None = None, inputs: tuple = ()):
-    """The world, the sensor (``sensor_file`` read here, once), the simulated records and their
-    visible truths, cached per worker: a grid over extractor parameters simulates each (world,
-    seed, sensor) once per worker process. ``inputs``, the digests of the files read
-    (:func:`input_digests`), only key the cache: by path alone, a worker that outlives a sweep (a
+         sensor_file: _Content | None = None, world_file: _Content | None = None):
+    """The world, the sensor, the simulated records and their visible truths, cached per worker: a
+    grid over extractor parameters simulates each (world, seed, sensor) once per worker process.
+    ``sensor_file`` and ``world_file`` (a world.json) are the files' bytes as the cell read them
+    (:func:`_read_inputs`), keying the cache by path and digest: by path alone, a worker that outlives a sweep (a
     ``--scheduler``'s, or this process for ``run_sweep``) ran the next sweep's cells on the old
-    content of an edited sensor file or world.json."""
+    content of an edited sensor file or world.json; and the files were read twice, for the
+    digest and for the run, so an edit between the two computed the new content under the old digest
+    (a row stored under the key of the content it did not read, and cached for later cells)."""
     with warnings.catch_warnings():  # an old degree field (sensor.resolution_deg, a sensor file's) was said once,
         warnings.simplefilter("ignore", LmsbenchWarning)  # when the sweep was read and checked, not in every worker
-        sensor = sensor_config(dict(sensor_items), sensor_file)
-    world_obj, records = simulate_run(world, seed, duration, sensor, rate_hz)
+        sensor = sensor_config(dict(sensor_items), sensor_file.path if sensor_file else None,
+                               sensor_file.data if sensor_file else None)
+    world_obj, records = simulate_run(world, seed, duration, sensor, rate_hz, world_file.data if world_file else None)
     truths = truths_for(world_obj, records, sensor) if with_truth else None
     return world_obj, sensor, records, truths
 
 
-def _records(params: dict[str, Any], defaults: dict[str, Any], with_truth: bool):
+def _records(params: dict[str, Any], defaults: dict[str, Any], with_truth: bool, used: dict[str, str]):
+    """The cell's run (:func:`_run`); ``used`` is filled with the digests of the files it read."""
     p = {**defaults, **params}
     rate = p.get("rate_hz")
     rate = None if rate is None or (isinstance(rate, float) and math.isnan(rate)) else float(rate)
     sensor_items = tuple(sorted(split_params(p, "sensor").items()))
-    sensor_file = p.get("sensor_file")
+    files = _read_inputs(p)
+    used.clear()
+    used.update({name: content.digest for name, content in files.items()})
     return _run(str(p["world"]), int(p.get("seed", 0)), float(p["duration"]), rate, sensor_items, with_truth,
-                None if sensor_file is None else str(sensor_file), tuple(sorted(input_digests(p, {}).items())))
+                files.get("sensor_file"), files.get("world"))
 
 
 def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
@@ -60,7 +96,8 @@ def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
     (``experiments.compare``): the pooled summary row (f1, precision, recall, rho_rms_mm,
     alpha_rms_deg, corner_*, explained, us_median, time_ms_median, lines_per_scan, ...)."""
     p = {**EXTRACT_DEFAULTS, **params}
-    _, sensor, records, truths = _records(p, EXTRACT_DEFAULTS, with_truth=True)
+    used: dict[str, str] = {}
+    _, sensor, records, truths = _records(p, EXTRACT_DEFAULTS, with_truth=True, used=used)
     method = str(p["method"])
     noise = float(sensor.noise_sigma)
     source = Source.from_records(records, truths, name=str(p["world"]), seed=int(p.get("seed", 0)))  # named in errors
@@ -69,7 +106,8 @@ def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
     row = summarise(table, reference=method).iloc[0]
     # the speed ratios are against the cell's own method (one method a cell): 1.0 in every row
     skip = {"source", "method", "kind", "seeds", "speed_vs_sensor", "cpu_speed_vs_sensor"}
-    return {k: float(v) for k, v in row.items() if k not in skip and isinstance(v, (int, float, np.number))}
+    metrics: dict[str, Any] = {k: float(v) for k, v in row.items() if k not in skip and isinstance(v, (int, float, np.number))}
+    return {**metrics, INPUTS_KEY: used}
 
 
 def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
@@ -80,13 +118,14 @@ def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
     from experiments.user_methods import ensure_method, scans_of
 
     p = {**SLAM_DEFAULTS, **params}
-    _, sensor, records, _ = _records(p, SLAM_DEFAULTS, with_truth=False)
+    used: dict[str, str] = {}
+    _, sensor, records, _ = _records(p, SLAM_DEFAULTS, with_truth=False, used=used)
     nested = slam_config_dict(p)
     ensure_method(str(nested.get("extractor", "")))  # a MODULE:FUNCTION extractor, registered in this worker
     config = deskew_for_sensor(SlamConfig.from_dict(nested), bool(sensor.interlaced))
     with scans_of(f"{p['world']}:{int(p.get('seed', 0))}", records):  # a failing MODULE:FUNCTION names its scan
         result = run_slam(records, config)
-    return slam_metrics(result, records)
+    return {**slam_metrics(result, records), INPUTS_KEY: used}
 
 
 def slam_config_dict(params: dict[str, Any]) -> dict[str, Any]:

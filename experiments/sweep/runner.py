@@ -28,12 +28,12 @@ from features.batch import THREADS_ENV
 from lms200 import LmsbenchError
 from lms200.errors import LmsbenchWarning
 
-from .cells import WARNINGS_KEY, resolve_kind, run_cell
+from .cells import INPUTS_KEY, WARNINGS_KEY, resolve_kind, run_cell
 from .spec import Scalar, SweepSpec, cell_key
 from .store import CellStore, write_atomic
 
 #: Columns every row has besides its parameters and metrics.
-BOOKKEEPING = ("status", "error", "elapsed_s", "cell", WARNINGS_KEY)
+BOOKKEEPING = ("status", "error", "elapsed_s", "cell", WARNINGS_KEY, INPUTS_KEY)
 
 
 @dataclass
@@ -141,7 +141,8 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
             if (category, text) not in said:
                 said.add((category, text))
                 warnings.warn(f"{text} (said once for the sweep's cells)", category, stacklevel=2)
-        edited = _changed_inputs(digests, params, inputs_of.get(key))
+        used = result.get(INPUTS_KEY)
+        edited = _changed_inputs(digests, params, inputs_of.get(key), used if isinstance(used, dict) else None)
         if edited:  # the cell may have read the new content: its row is not the key's (the old content's)
             for path in edited:
                 changed[path] = changed.get(path, 0) + 1
@@ -184,15 +185,23 @@ def _recorded(path: Path) -> str | None:
         return None
 
 
-def _changed_inputs(digests: Any, params: dict[str, Scalar], given: dict[str, str] | None) -> list[str]:
-    """The files (paths as the cell's parameters give them) whose digest now differs from ``given``,
-    the digests the cell's key was made with (a file gone or unreadable counts as changed)."""
+def _changed_inputs(digests: Any, params: dict[str, Scalar], given: dict[str, str] | None,
+                    used: dict[str, str] | None = None) -> list[str]:
+    """The files (paths as the cell's parameters give them) whose digest differs from ``given``, the
+    digests the cell's key was made with: ``used``, the digests of the bytes the cell computed with
+    (a built-in cell reads each file once and says so, ``cells.INPUTS_KEY``), else the file's now (a
+    file gone or unreadable counts as changed). Read now, a file edited and put back while the cell
+    ran (or edited between the key's read and the cell's) passed, the row of the other content
+    stored under the key."""
     if not digests or not given:
         return []
-    try:
-        now = digests(params, {})
-    except OSError:
-        now = {}
+    if used is not None:
+        now = used
+    else:
+        try:
+            now = digests(params, {})
+        except OSError:
+            now = {}
     return [str(params[name]) for name in sorted(given) if now.get(name) != given[name]]
 
 
