@@ -431,6 +431,9 @@ def _stdout_gone(name: str, stopped: bool, out: object, started_ns: int = 0) -> 
     _stdout_to_devnull()
     if stopped:
         _end_progress_bars()
+        from .options import release_outputs
+
+        release_outputs()  # first: an --out folder made to be locked and still empty is removed (nothing was written)
         written = _files_written(Path(out), started_ns) if isinstance(out, (str, os.PathLike)) else 0
         if not written:
             left = f"nothing was written{f' in {out}' if out is not None and Path(out).is_dir() else ''}"

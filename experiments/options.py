@@ -16,6 +16,7 @@ import re
 import stat
 import tempfile
 import sys
+import threading
 from pathlib import Path
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, Sequence
@@ -828,7 +829,8 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
     check_link(p)
     if p.exists() and not p.is_dir():
         raise InputError(f"--out {p}: exists and is not a folder")
-    hold_output(p)  # first: what another run is writing there is no sign of what the folder holds
+    if p.is_dir():
+        hold_output(p)  # first: what another run is writing there is no sign of what the folder holds
     if writes is not None and p.is_dir():
         tree = writes if isinstance(writes, OutTree) else OutTree(tuple(writes) + tuple(patterns))
         others = tree.foreign(p)
@@ -847,87 +849,125 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
         parent = parent.parent
     if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK) or not _can_create_in(parent):
         raise InputError(f"--out {p}: {parent} is not a writable folder")
+    hold_output(p, make=True)  # a new folder is made here to be locked (removed as the command ends if still empty)
     return p
 
 
-#: the outputs (``--out`` folders and files) the running command holds: real path -> the open lock
-#: file. None outside a command (:func:`holding_outputs`): the library's own calls lock nothing.
-_HELD_OUTPUTS: dict[str, tuple[int, Path]] | None = None
-_HOLDER = ""  # what holds them: "pid 1234, lmsbench simulate", written into the lock file
+#: the outputs (``--out`` folders and files) the running command holds, per thread (two ``cli.main``
+#: calls on threads released each other's): real path -> (the open locked descriptor, the lock file
+#: to remove or None, the folders check_out made for it, deepest last). None outside a command
+#: (:func:`holding_outputs`): the library's own calls lock nothing.
+_HOLDING = threading.local()
+#: A file output's lock: a hidden file beside it (``.NAME.lmsbench-lock``), removed as the command ends.
+LOCK_SUFFIX = ".lmsbench-lock"
+
+
+def _held() -> dict[str, tuple[int, Path | None, list[Path]]] | None:
+    return getattr(_HOLDING, "held", None)
 
 
 def holding_outputs(command: str) -> None:
     """Start a command's holding of its outputs (``experiments.cli``, before the command runs):
     from here :func:`check_out` and :func:`check_out_file` take each output for this process until
     :func:`release_outputs`."""
-    global _HELD_OUTPUTS, _HOLDER
     release_outputs()
-    _HELD_OUTPUTS, _HOLDER = {}, f"pid {os.getpid()}, lmsbench {command}"
+    _HOLDING.held = {}
 
 
 def release_outputs() -> None:
-    """End the holding (the command ended; a killed process's locks end with it, by the kernel)."""
-    global _HELD_OUTPUTS
-    for fd, lock in (_HELD_OUTPUTS or {}).values():
-        try:  # removed while held (one file an output path the runs used piled up in the temporary folder);
-            lock.unlink(missing_ok=True)  # a run that opened it meanwhile finds it gone once locked, and retries
-        except OSError:
-            pass
+    """End the holding (the command ended; a killed process's locks end with it, by the kernel):
+    a file output's lock file is removed, and so is a folder check_out made that is still empty
+    (a command refused after check_out left no folder before the lock made it)."""
+    for fd, lock, made in (_held() or {}).values():
+        try:  # removed while held: a run that opened it meanwhile finds it gone once locked, and retries
+            _remove_lock(lock, made)
         finally:
             os.close(fd)
-    _HELD_OUTPUTS = None
+    _HOLDING.held = None
 
 
-def _lock_folder() -> Path:
-    """The folder of the outputs' lock files: one a user, in the temporary folder (not in the
-    output, whose listing is the run's: a lock file there would be an output of its own)."""
-    folder = Path(tempfile.gettempdir()) / f"lmsbench-{os.getuid()}-outputs"
-    folder.mkdir(mode=0o700, exist_ok=True)
-    info = os.lstat(folder)
-    if not stat.S_ISDIR(info.st_mode) or info.st_uid != os.getuid():  # a link, or another user's folder
-        raise PermissionError(f"{folder}: not a folder of this user's")
-    return folder
+def _remove_lock(lock: Path | None, made: list[Path]) -> None:
+    """Remove a file output's lock file, and the folders check_out made that are still empty."""
+    try:
+        if lock is not None:
+            lock.unlink(missing_ok=True)
+        for folder in reversed(made):
+            folder.rmdir()  # only an empty one: the first not empty ends it
+    except OSError:
+        pass
 
 
-def hold_output(p: Path, flag: str = "--out") -> None:
-    """Take the output ``p`` (a folder or a file, present or not) for this command, or refuse it
-    when another lmsbench command holds it: two runs into one --out interleaved their files, each
-    removing the other's temporary files (``simulate --seed 1 --out D`` beside ``--seed 2 --out
-    D``: one said "D/.scans.clf.N.tmp: no such file or directory", the other "simulated ... seed 1
-    into D" over a folder of seed 2's files, exit 0). An advisory lock (``fcntl.flock``) on a file
-    named by ``p``'s real path, released when the command ends (the file removed) or its process
-    dies (SIGKILL too; the file stays, to be taken and removed by the next run of that output)."""
+def _lock_holder(fd: int) -> str:
+    """Who holds the lock of ``fd``: "pid N" from the kernel's table of locks (Linux's /proc/locks,
+    which names the device and inode of each), or "" where that cannot be told."""
+    info = os.fstat(fd)
+    want = f"{os.major(info.st_dev):02x}:{os.minor(info.st_dev):02x}:{info.st_ino}"
+    try:
+        with open("/proc/locks", encoding="ascii", errors="replace") as table:
+            for line in table:
+                fields = line.split()
+                if len(fields) >= 6 and fields[1] == "FLOCK" and fields[5] == want and fields[4].isdigit():
+                    return f"pid {fields[4]}"
+    except OSError:
+        pass
+    return ""
+
+
+def hold_output(p: Path, flag: str = "--out", make: bool = False) -> None:
+    """Take the output ``p`` (a folder or a file) for this command, or refuse it when another
+    lmsbench command holds it: two runs into one --out interleaved their files, each removing the
+    other's temporary files (``simulate --seed 1 --out D`` beside ``--seed 2 --out D``: one said
+    "D/.scans.clf.N.tmp: no such file or directory", the other "simulated ... seed 1 into D" over
+    a folder of seed 2's files, exit 0). An advisory lock (``fcntl.flock``) on the output folder
+    itself (``make``: made first when absent, by :func:`check_out` once the path is checked), or for
+    a file on a hidden lock file beside it (``.NAME.lmsbench-lock``, removed as the command ends; one
+    a killed run left holds no lock and is taken). Nothing in the temporary folder: a lock file there
+    depended on $TMPDIR (two runs of different TMPDIR both wrote one --out) and piled up. A lock
+    ends with the command or with its process when it is killed (SIGKILL too). Any OSError while
+    locking (a read-only or full file system, one without locks): the run goes on unguarded."""
     import fcntl
-    import hashlib
 
-    if _HELD_OUTPUTS is None:
+    held = _held()
+    if held is None:
         return
     key = str(real_path(p))
-    if key in _HELD_OUTPUTS:
+    if key in held:
         return
-    for _ in range(100):  # the file removed by its holder's end between our open and our lock: again
+    folder = make or p.is_dir()
+    lock = None if folder else Path(key).with_name(f".{Path(key).name}{LOCK_SUFFIX}")  # beside the real file
+    for _ in range(100):  # removed by its holder's end between our open and our lock: again
+        made: list[Path] = []
         try:
-            lock = _lock_folder() / (hashlib.sha256(key.encode("utf-8", "surrogateescape")).hexdigest()[:40] + ".lock")
-            fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600)
-        except OSError:  # no lock to be had (a temporary folder not writable, or not the user's): the run goes on
-            return  # unguarded, as before the lock, rather than refusing every --out
+            if folder:
+                for q in (p, *p.parents):
+                    if q.exists():
+                        break
+                    made.insert(0, q)
+                p.mkdir(parents=True, exist_ok=True)
+                fd = os.open(p, os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
+            else:
+                assert lock is not None
+                fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600)
+        except FileNotFoundError:
+            continue
+        except OSError:  # no lock to be had (a read-only or full file system): unguarded, rather than refusing
+            return
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            same = os.path.samestat(os.fstat(fd), os.stat(lock, follow_symlinks=False))
+            same = os.path.samestat(os.fstat(fd), os.stat(lock or p, follow_symlinks=lock is None))
         except BlockingIOError:
-            holder = os.pread(fd, 200, 0).decode("utf-8", "replace").strip()
-            os.close(fd)
+            holder = _lock_holder(fd)
+            os.close(fd)  # a folder made just now stays: its holder made it too, and removes it when empty
             raise InputError(f"{flag} {p}: another lmsbench command{f' ({holder})' if holder else ''} is writing "
                              "there; wait for it to end, or give another path") from None
         except FileNotFoundError:
             same = False
-        except OSError:  # a file system without locks: unguarded, as above
-            os.close(fd)
+        except OSError:  # a file system without locks (EPERM, ENOLCK; NFS refuses a folder's): unguarded, and
+            os.close(fd)  # nothing of the lock's left (no lock is held there: the file system takes none)
+            _remove_lock(lock, made)
             return
         if same:
-            os.ftruncate(fd, 0)  # a killed holder's name
-            os.pwrite(fd, _HOLDER.encode("utf-8", "replace"), 0)
-            _HELD_OUTPUTS[key] = (fd, lock)
+            held[key] = (fd, lock, made)
             return
         os.close(fd)
 

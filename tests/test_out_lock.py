@@ -6,7 +6,6 @@ killed run's), the other "simulated ... (seed 1 ...) into D" over a folder of se
 
 from __future__ import annotations
 
-import hashlib
 import os
 import re
 import signal
@@ -39,7 +38,10 @@ def test_a_second_command_into_a_held_out_is_refused_and_a_killed_ones_folder_re
     spec = tmp_path / "held.yaml"
     spec.write_text(yaml.safe_dump({"name": "held", "kind": KIND, "fixed": {"marks": str(marks)}, "grid": {"x": [0]}}))
     out = tmp_path / "out"
-    env = {**os.environ, "HOLD_THE_CELL": "1", "PYTHONPATH": os.pathsep.join([str(REPO / "tests"), str(REPO)])}
+    temp = tmp_path / "temp"  # the holder's temporary folder: nothing is left there (a lock file a run piled up)
+    temp.mkdir()
+    env = {**os.environ, "HOLD_THE_CELL": "1", "PYTHONPATH": os.pathsep.join([str(REPO / "tests"), str(REPO)]),
+           "TMPDIR": str(temp)}
     proc = subprocess.Popen([sys.executable, "-m", "experiments.cli", "sweep", str(spec), "--inprocess", "--out",
                              str(out), "--no-progress"], cwd=REPO, env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
@@ -51,7 +53,7 @@ def test_a_second_command_into_a_held_out_is_refused_and_a_killed_ones_folder_re
         assert main(["sweep", str(spec), "--inprocess", "--out", str(out), "--no-progress"]) == 2
         err = capsys.readouterr().err
         assert re.fullmatch(rf"lmsbench sweep: error: --out {re.escape(str(out))}: another lmsbench command "
-                            rf"\(pid {proc.pid}, lmsbench sweep\) is writing there; wait for it to end, or give another "
+                            rf"\(pid {proc.pid}\) is writing there; wait for it to end, or give another "
                             r"path\n", err), err
         assert not (out / "results.parquet").exists()  # nothing of the second run's
         proc.send_signal(signal.SIGKILL)  # killed: its lock ends with its process
@@ -63,9 +65,9 @@ def test_a_second_command_into_a_held_out_is_refused_and_a_killed_ones_folder_re
     assert main(["sweep", str(spec), "--inprocess", "--out", str(out), "--no-progress"]) == 0
     captured = capsys.readouterr()
     assert "held: 1 cells, 1 computed, 0 already done, 0 failed" in captured.out, captured
-    # the killed run's lock file, taken by this run, is removed as it ends (none piles up in the temporary folder)
-    name = hashlib.sha256(os.path.realpath(out).encode()).hexdigest()[:40] + ".lock"
-    assert not (Path(tempfile.gettempdir()) / f"lmsbench-{os.getuid()}-outputs" / name).exists()
+    assert sorted(p.name for p in out.iterdir()) == ["cells", "results.csv", "results.parquet", "sweep.yaml",
+                                                     "versions.yaml"]  # no lock file in the output
+    assert list(temp.iterdir()) == []
 
 
 def test_an_output_file_held_by_another_command_is_refused(tmp_path, capsys):
@@ -80,19 +82,94 @@ def test_an_output_file_held_by_another_command_is_refused(tmp_path, capsys):
         assert proc.stdout is not None and proc.stdout.readline() == "held\n", proc.communicate()
         assert main(["lms200", "record", "--port", "socket://127.0.0.1:9", "--out", str(target)]) == 2
         err = capsys.readouterr().err
-        assert err == (f"lmsbench lms200 record: error: --out {target}: another lmsbench command (pid {proc.pid}, "
-                       "lmsbench lms200 record) is writing there; wait for it to end, or give another path\n")
+        assert err == (f"lmsbench lms200 record: error: --out {target}: another lmsbench command (pid {proc.pid}) "
+                       "is writing there; wait for it to end, or give another path\n")
         assert not target.exists()
+        assert sorted(p.name for p in tmp_path.iterdir()) == [".scans.clf.lmsbench-lock"]  # the holder's, beside it
     finally:
         proc.kill()
         proc.communicate()
 
 
+def test_a_stale_lock_file_beside_an_output_file_is_taken_and_removed(tmp_path, capsys):
+    """A killed run's hidden lock file holds no lock: the next run takes it and removes it as it ends."""
+    target = tmp_path / "scans.clf"
+    (tmp_path / ".scans.clf.lmsbench-lock").write_text("")
+    assert main(["lms200", "record", "--port", str(tmp_path), "--out", str(target)]) == 2
+    assert capsys.readouterr().err == f"lmsbench lms200 record: error: cannot open {tmp_path}: Is a directory\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+HOLD = ("import sys, time\nfrom experiments.options import check_out, holding_outputs\n"
+        "holding_outputs('simulate')\ncheck_out(sys.argv[1])\nprint('held', flush=True)\ntime.sleep(60)\n")
+
+
+def test_a_folder_held_by_a_command_of_another_tmpdir_is_refused(tmp_path, capsys, monkeypatch):
+    """The lock was a file in the temporary folder: two commands of different $TMPDIR (a SLURM job's,
+    pam_tmpdir's) both wrote one --out, exit 0, the folder one seed's files, the other run saying
+    it simulated into it."""
+    out, first, second = tmp_path / "simE", tmp_path / "t1", tmp_path / "t2"
+    first.mkdir()
+    second.mkdir()
+    proc = subprocess.Popen([sys.executable, "-c", HOLD, str(out)], cwd=REPO, env={**os.environ, "TMPDIR": str(first)},
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None and proc.stdout.readline() == "held\n", proc.communicate()
+        monkeypatch.setattr(tempfile, "tempdir", str(second))
+        assert main(["simulate", "--out", str(out), "--duration", "3", "--seed", "2"]) == 2
+        assert capsys.readouterr().err == (f"lmsbench simulate: error: --out {out}: another lmsbench command "
+                                           f"(pid {proc.pid}) is writing there; wait for it to end, or give another "
+                                           "path\n")
+        assert list(out.iterdir()) == [] and list(first.iterdir()) == [] and list(second.iterdir()) == []
+    finally:
+        proc.kill()
+        proc.communicate()
+
+
+def test_a_file_system_that_takes_no_byte_still_locks_and_a_refused_run_leaves_no_folder(tmp_path):
+    """RLIMIT_FSIZE=0 (as a full disk, ENOSPC/EDQUOT): writing the holder's name into the lock file
+    failed every --out command with "[Errno 27] File too large". The lock writes nothing now; a
+    folder check_out made for its lock, still empty as the command ends, is removed."""
+    import resource
+
+    code = ("import sys\nfrom experiments.options import check_out, check_out_file, holding_outputs, release_outputs\n"
+            "holding_outputs('simulate')\ntry:\n    check_out(sys.argv[1]); check_out_file(sys.argv[2])\n"
+            "    print('held', flush=True)\n    sys.stdin.readline()\nfinally:\n    release_outputs()\n")
+    out, target = tmp_path / "new" / "simE", tmp_path / "scans.clf"
+
+    def no_bytes() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (0, resource.RLIM_INFINITY))
+
+    proc = subprocess.Popen([sys.executable, "-c", code, str(out), str(target)], cwd=REPO, preexec_fn=no_bytes,
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None and proc.stdout.readline() == "held\n", proc.communicate()
+        for path, args in ((out, [out, tmp_path / "other.clf"]), (target, [tmp_path / "other", target])):
+            refused = subprocess.run([sys.executable, "-c", code, *map(str, args)], cwd=REPO, stdin=subprocess.DEVNULL,
+                                     capture_output=True, text=True, timeout=60)  # held, so another is refused
+            assert refused.returncode == 1 and refused.stderr.endswith(
+                f"InputError: --out {path}: another lmsbench command (pid {proc.pid}) is writing there; wait for it "
+                "to end, or give another path\n"), refused.stderr
+        stdout, stderr = proc.communicate("\n", timeout=60)
+        assert proc.returncode == 0, stderr
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert list(tmp_path.iterdir()) == []  # the folders it made, empty, and the lock file: gone
+
+
 def test_without_a_lock_to_be_had_the_command_goes_on(tmp_path, capsys, monkeypatch):
-    """The locks' folder not the user's (a file of its name here, or another user's folder, a link):
-    the command runs unguarded, as before the lock, instead of refusing every --out."""
-    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
-    (tmp_path / f"lmsbench-{os.getuid()}-outputs").write_text("not a folder")
+    """A file system without locks (ENOLCK; NFS refuses a folder's, EBADF): the command runs
+    unguarded, as before the lock, instead of refusing every --out."""
+    import errno
+    import fcntl
+
+    def no_locks(fd: int, how: int) -> None:
+        raise OSError(errno.ENOLCK, os.strerror(errno.ENOLCK))
+
+    monkeypatch.setattr(fcntl, "flock", no_locks)
     target = tmp_path / "scans.clf"
     assert main(["lms200", "record", "--port", str(tmp_path), "--out", str(target)]) == 2
     assert capsys.readouterr().err == f"lmsbench lms200 record: error: cannot open {tmp_path}: Is a directory\n"
+    assert list(tmp_path.iterdir()) == []
