@@ -744,10 +744,18 @@ def test_a_killed_run_of_a_changed_sweep_leaves_no_earlier_table_to_draw(tmp_pat
     assert capsys.readouterr().err == (f"lmsbench figures: error: --sweep {out}: no results.parquet: the sweep did not "
                                        f"finish; finish it with lmsbench sweep {out / 'sweep.yaml'} --out {out}, then "
                                        "draw it\n")
-    # the same sweep file again keeps its table: a rerun of a finished sweep is no change
-    run_sweep(make_spec(log, xs=[0, 2], seeds=[0]), out, "inprocess", progress=False)
-    run_sweep(make_spec(log, xs=[0, 2], seeds=[0]), out, "inprocess", progress=False)
+    # the same sweep file again keeps its table: a rerun of it killed before its table leaves the earlier one
+    # (a runner removing the table on every run passed here: the rerun wrote it again)
+    same = make_spec(log, xs=[0, 2], seeds=[0])
+    run_sweep(same, out, "inprocess", progress=False)
+    spec_path.write_text(yaml.safe_dump(same.to_dict()))
+    (out / "cells" / f"{cell_key(same.kind, same.cells()[1])}.parquet").unlink()  # x = 2 to compute again
+    killed = subprocess.run([sys.executable, "-m", "experiments.cli", "sweep", str(spec_path), "--inprocess",
+                             "--no-progress", "--out", str(out)], env={**env, "SWEEP_TEST_DIE_AT": "2"}, cwd=REPO,
+                            capture_output=True, text=True, timeout=120)
+    assert killed.returncode == 9, killed.stderr
     assert list(pd.read_parquet(out / "results.parquet")["x"]) == [0, 2]
+    assert list(pd.read_csv(out / "results.csv")["x"]) == [0, 2]
 
 
 def test_figures_refuses_a_stopped_sweeps_partial_table(tmp_path, capsys):
