@@ -15,6 +15,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import pytest
 import yaml
 
 from experiments.cli import main
@@ -173,3 +174,38 @@ def test_without_a_lock_to_be_had_the_command_goes_on(tmp_path, capsys, monkeypa
     assert main(["lms200", "record", "--port", str(tmp_path), "--out", str(target)]) == 2
     assert capsys.readouterr().err == f"lmsbench lms200 record: error: cannot open {tmp_path}: Is a directory\n"
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_command_on_another_thread_keeps_its_hold(tmp_path):
+    """The holding was the process's: a second command starting on another thread released the
+    first's locks (its holding_outputs began with a release of all)."""
+    import threading
+
+    from experiments.options import InputError, check_out, holding_outputs, release_outputs
+
+    out = tmp_path / "out"
+    held, done = threading.Event(), threading.Event()
+
+    def first() -> None:
+        holding_outputs("simulate")
+        check_out(out)
+        held.set()
+        done.wait(30)
+        release_outputs()
+
+    thread = threading.Thread(target=first)
+    thread.start()
+    try:
+        assert held.wait(30)
+        holding_outputs("slam")
+        try:
+            with pytest.raises(InputError) as refused:
+                check_out(out)
+        finally:
+            release_outputs()
+        assert str(refused.value) == (f"--out {out}: another lmsbench command (pid {os.getpid()}) is writing there; "
+                                      "wait for it to end, or give another path")
+    finally:
+        done.set()
+        thread.join(30)
+    assert not out.exists()  # made for the lock, left empty: removed as the first ended
