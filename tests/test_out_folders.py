@@ -114,6 +114,22 @@ def test_simulate_config_in_out_is_refused(sim, capsys):
     assert "the run would write config.yaml over" in capsys.readouterr().err
 
 
+def test_slam_into_its_input_folder_says_so(sim, capsys):
+    """`slam RUN --out RUN` was refused as "holds groundtruth.tum, map.png, scans.clf and 1 more,
+    which this command does not write": true, but not why."""
+    names = sorted(p.name for p in sim.iterdir())
+    assert main(["slam", str(sim), "--out", str(sim), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.splitlines() == [f"lmsbench slam: error: --out {sim} is the input folder {sim}, which the run reads; "
+                                "give another folder for its outputs"], err
+    assert sorted(p.name for p in sim.iterdir()) == names
+    for command in ("compare", "sim2real"):  # the same rule
+        assert main([command, str(sim), "--out", str(sim)]) == 2
+        assert capsys.readouterr().err.splitlines() == [
+            f"lmsbench {command}: error: --out {sim} is the input folder {sim}, which the run reads; give another "
+            "folder for its outputs"]
+
+
 def test_simulate_world_in_out_is_refused(sim, tmp_path, capsys):
     """`simulate --world DIR/world.json --out DIR` wrote world.json over the file it read (so did a
     --config naming that world.json)."""
