@@ -134,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
     params = extractor_overrides(dict(args.params), methods)
     configs = resolved_configs(methods, params)  # raises on unknown methods / fields before any work
     reads = [Path(s) / name for s in args.sources if Path(s).is_dir() for name in SIMULATE_OUTPUTS]
-    reads += [Path(s) for s in args.sources if Path(s).is_file() or Path(s).is_dir()] + ([args.sensor] if args.sensor else [])
+    reads += [Path(s) for s in args.sources if Path(s).is_file()] + ([args.sensor] if args.sensor else [])
     check_out_spares(args.out, COMPARE_OUTPUTS, reads)
     check_out(args.out, writes=COMPARE_OUTPUTS, patterns=COMPARE_FIGURES, owner=COMPARE_OWNER)  # after: an input in --out is the sharper message
     _check_applies(args)
