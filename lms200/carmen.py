@@ -213,7 +213,7 @@ def open_text(path: str | Path) -> IO[str]:
             head = b""  # damaged data: reported with its line by the reader
     what = archive_kind(head)
     if what:
-        raise LogFormatError(path, 0, f"{what}, not a log: extract the log from it first")
+        raise LogFormatError(path, None, f"{what}, not a log: extract the log from it first")
     raw = open_bytes(path)
     if head.startswith(UTF8_BOM):  # a log saved by a Windows editor: the mark would hide line 1's message name
         raw.read(len(UTF8_BOM))
@@ -390,11 +390,11 @@ class CarmenReader:
         except (*READ_ERRORS, UnicodeError):
             return raw  # damage is reported, with its line, by the pass itself
         if looked >= DEFAULT_TOPIC_LINES and not named:
-            raise LogFormatError(self.path, 1, f"not a CARMEN log: none of its first {DEFAULT_TOPIC_LINES:,} lines "
-                                               "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
+            raise LogFormatError(self.path, None, f"not a CARMEN log: none of its first {DEFAULT_TOPIC_LINES:,} lines "
+                                                  "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
         if looked and not named:  # a shorter file, read to its end: it gave no record, silently (binary junk)
-            raise LogFormatError(self.path, 1, f"not a CARMEN log: none of its {looked:,} lines (comments aside) "
-                                               "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
+            raise LogFormatError(self.path, None, f"not a CARMEN log: none of its {looked:,} lines (comments aside) "
+                                                  "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
         return raw
 
     def __iter__(self) -> Iterator[Record]:
@@ -517,7 +517,7 @@ class CarmenReader:
         if chain is not None:
             yield from chain.flush()
         if not any(stats.messages.get(k) for k in LASER_KINDS) and not stats.skipped_count and stats.stopped is None:
-            raise LogFormatError(self.path, 1, self._no_laser_reason(lines, quiet))
+            raise LogFormatError(self.path, None, self._no_laser_reason(lines, quiet))
         if self.topic is not None and not stats.messages.get(self.topic) and stats.other_lasers():
             # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
             others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import bz2
 import gzip
+import re
 from pathlib import Path
 
 import pytest
@@ -27,8 +28,25 @@ def test_a_log_of_no_laser_line_is_refused_naming_the_file(tmp_path: Path, name:
                                                           skip: bool) -> None:
     """A zero-byte log, a gzip of nothing, a file of comments read as no records, silently."""
     (tmp_path / name).write_bytes(data)
-    with pytest.raises(LogFormatError, match=rf"{name.replace('.', '[.]')}:1: {reason}"):
+    # a whole-file problem names the file alone: it said "FILE:1: ...", a line not at fault
+    with pytest.raises(LogFormatError, match=rf"^{re.escape(str(tmp_path / name))}: {reason}") as info:
         list(read_log(tmp_path / name, skip_bad_lines=skip))
+    assert info.value.line_no is None
+
+
+@pytest.mark.parametrize("command", [["info"], ["compare", "--out", "{out}"], ["slam", "--out", "{out}"]],
+                         ids=["info", "compare", "slam"])
+def test_the_commands_name_a_log_of_no_laser_line_without_a_line(tmp_path: Path, capsys, command: list[str]) -> None:
+    """`lmsbench info odo.log` said "odo.log:1: holds no laser lines ...": line 1 is not at fault."""
+    from experiments.cli import main
+
+    log = tmp_path / "odo.log"
+    log.write_bytes(b"ODOM 0 0 0 0 0 0 1 h 1\n")
+    argv = [command[0], str(log), *(a.format(out=tmp_path / "out") for a in command[1:])]
+    assert main(argv) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        f"lmsbench {command[0]}: error: {log}: holds no laser lines (FLASER, RLASER, ROBOTLASER1 / 2, RAWLASER1 .. 4), "
+        "only other messages: ODOM (1)"]
 
 
 def test_a_log_of_junk_skipped_under_skip_bad_lines_says_what_it_skipped(tmp_path: Path) -> None:
