@@ -619,8 +619,15 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
             assert bio is not None
             size = os.fstat(bio.fileno()).st_size
             bio.readline()
-            r1.Header.read(bio, r1.RecordType.BAGHEADER)
-            bio.seek(r1.read_uint32(bio), os.SEEK_CUR)
+            try:
+                r1.Header.read(bio, r1.RecordType.BAGHEADER)
+                padding = r1.read_uint32(bio)
+            except r1.ReaderError:
+                padding = -1
+            if padding < 0 or bio.tell() + padding > size:
+                raise BagError(f"{self.path}: the bag was not closed and ends within its header ({size} bytes: a "
+                               "recording killed before its first messages were written); no message to recover")
+            bio.seek(padding, os.SEEK_CUR)
             found = Recovered()
             conns: dict[int, Any] = {}
             indexes: dict[int, list] = defaultdict(list)

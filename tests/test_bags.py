@@ -687,3 +687,14 @@ def test_an_unindexed_bag_with_a_damaged_record_names_its_offset(tmp_path: Path)
     with pytest.raises(BagError, match=rf"killed\.bag: an unindexed bag \(not closed\) whose record at byte {at - 8} is "
                        r"damaged: op code 9, which no record between"):  # the record's header length, the op field's
         list(read_log(out))
+
+
+def test_an_unindexed_bag_cut_in_its_header_says_so(tmp_path: Path) -> None:
+    from lms200 import read_log
+    from lms200.bag import BagError
+
+    out, _ = _unindexed(tmp_path)
+    out.write_bytes(out.read_bytes()[:86])
+    with pytest.raises(BagError, match=r"killed\.bag: the bag was not closed and ends within its header \(86 bytes: a "
+                       r"recording killed before its first messages were written\); no message to recover$"):
+        list(read_log(out))
