@@ -15,6 +15,7 @@ so a record written without odometry or truth reads back without it.
 from __future__ import annotations
 
 import math
+import os
 import struct
 import time
 from bisect import bisect_left, insort
@@ -274,7 +275,7 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
     scans) where that is 0.
 
     ``flush_s`` (ROS 1 only; ``lmsbench lms200 record`` gives ``RECORD_FLUSH_S``): after a scan, the
-    messages held in memory are written to the file as a chunk and flushed once this many seconds
+    messages held in memory are written to the file as a chunk and flushed (and synced to the disk) once this many seconds
     have passed since the last chunk, so a writer killed (SIGKILL, a power cut) before it closes the
     bag and writes its index leaves every chunk before the kill readable (``BagReader`` recovers an
     unindexed bag from its chunks, with a warning). By default rosbags holds a chunk until it passes
@@ -314,6 +315,7 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
             return
         writer.write_chunk(writer.chunks[-1])
         writer.bio.flush()
+        os.fsync(writer.bio.fileno())  # on the disk, not only the OS's cache: a power cut keeps it too
         flushed[0] = time.monotonic()
 
     def bag_time(ns: int) -> int:
@@ -585,7 +587,6 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
     read as from an indexed bag. A record that runs past the end of the file (the one being written
     when the recording was cut) is dropped (``recovered.dropped_at``); a record that cannot be parsed
     is a BagError naming its byte offset. ``recovered`` is None for an indexed bag."""
-    import os
     from collections import defaultdict
     from io import BytesIO
 
