@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from lms200 import read_log
-from lms200.errors import LogFormatError
+from lms200.errors import LmsbenchWarning, LogFormatError
 
 
 # -- 1. a log of no laser line ----------------------------------------------------------------------
@@ -378,9 +378,22 @@ def test_a_misspelt_lmsbench_param_is_a_malformed_line(tmp_path: Path) -> None:
     log = tmp_path / "a.log"
     log.write_text(f"PARAM lmsbench_range_unit mm h 0\nFLASER 181 {ranges} 0 0 0 0 0 0 1 h 1\n")
     with pytest.raises(LogFormatError, match=r"a\.log:1: malformed PARAM line: 'lmsbench_range_unit' is no lmsbench "
-                                             r"PARAM \(known: lmsbench_front_laser_angle_increment, .*, "
+                                             r"PARAM: 'lmsbench_range_units' misspelt\? "
+                                             r"\(known: lmsbench_front_laser_angle_increment, .*, "
                                              r"lmsbench_range_units, lmsbench_rear_laser_angle_increment, "
                                              r"lmsbench_rear_laser_angle_min, lmsbench_robotlaser_angles\)$"):
         list(read_log(log))
     log.write_text(f"PARAM lmsbench_range_units mm h 0\nPARAM other_thing 1 h 0\nFLASER 181 {ranges} 0 0 0 0 0 0 1 h 1\n")
     assert [(r.scan.range_max, int(r.scan.valid.sum())) for r in read_log(log)] == [(8.183, 0)]  # as before
+
+
+def test_an_lmsbench_param_near_no_known_name_is_passed_over_with_a_warning(tmp_path: Path) -> None:
+    """A name near none of the known ones (a later version's PARAM, a lab's own) is no misspelling: a
+    log refused for it lost every scan (the review: `PARAM lmsbench_writer_version 0.2.0`); it is read as
+    other programs' PARAM lines are, with a warning naming it."""
+    ranges = " ".join(["2.00"] * 181)
+    log = tmp_path / "a.log"
+    log.write_text(f"PARAM lmsbench_writer_version 0.2.0 h 0\nFLASER 181 {ranges} 0 0 0 0 0 0 1 h 1\n")
+    with pytest.warns(LmsbenchWarning, match=r"PARAM lmsbench_writer_version: no lmsbench PARAM this version reads"):
+        records = list(read_log(log))
+    assert [int(r.scan.valid.sum()) for r in records] == [181]
