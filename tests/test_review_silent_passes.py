@@ -7,6 +7,7 @@ import bz2
 import gzip
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from lms200 import read_log
@@ -363,9 +364,22 @@ def test_a_relation_of_large_roll_or_pitch_is_refused_naming_its_line(tmp_path: 
 
     rel = tmp_path / "r.relations"
     rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 0.1 0.05 -0.1 0.2\n3 4 0.3 0.0 0 0 0.6 0.2\n")
-    with pytest.raises(LogFormatError, match=r"r\.relations:3: relation row's roll or pitch passes 30 deg \(0\.5236 "
-                                             r"rad\): not a planar motion, whose x, y and yaw could be scored: "
+    with pytest.raises(LogFormatError, match=r"r\.relations:3: relation row's roll and pitch tilt it by more than 30 "
+                                             r"deg: not a planar motion, whose x, y and yaw could be scored: "
                                              r"'3 4 0\.3 0\.0 0 0 0\.6 0\.2'"):
+        read_relations(rel)
+    # roll and pitch of 25 deg each tilt it by 35 deg, as read_tum measures a quaternion's tilt (the first
+    # version of this check took the larger of the two, and passed it)
+    from lms200.tum import tilt_deg, tilt_of_roll_pitch_deg
+
+    for roll, pitch, yaw in ((0.4363, 0.4363, 0.2), (0.3, -0.5, 1.0), (-1.2, 0.1, -2.5)):  # z-y-x Euler -> quaternion
+        cr, sr, cp, sp, cy, sy = (f(a / 2) for a in (roll, pitch, yaw) for f in (np.cos, np.sin))
+        q = np.array([sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy,
+                      cr * cp * cy + sr * sp * sy])
+        assert tilt_of_roll_pitch_deg(roll, pitch) == pytest.approx(tilt_deg(q), abs=1e-9)
+    assert tilt_of_roll_pitch_deg(0.4363, 0.4363) == pytest.approx(35.0, abs=0.1)
+    rel.write_text("1 2 0.3 0.0 0 0.4363 0.4363 0.2\n")
+    with pytest.raises(LogFormatError, match=r"r\.relations:1: relation row's roll and pitch tilt it"):
         read_relations(rel)
     rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 0.1 0.05 -0.1 0.2\n")
     assert read_relations(rel).tolist() == [[1, 2, 0.3, 0, 0.2], [2, 3, 0.3, 0, 0.2]]  # a little: as before
