@@ -1008,12 +1008,15 @@ def write_carmen(
     Returns the number of scans written.
 
     Raises:
-        InputError: an unknown ``fmt``, scans of mixed units, or a scan whose range_max lies outside
+        InputError: an unknown ``fmt``, a ``hostname`` that is not one word of printable ASCII, scans of mixed units, or a scan whose range_max lies outside
             [MIN_RANGE_MAX_M, MAX_RANGE_M] (0.1 to 10000 m), which the reader refuses (such a log was
             written, and could not be read back).
     """
     if fmt not in ("robotlaser1", "flaser"):
         raise InputError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
+    if not isinstance(hostname, str) or not hostname.isascii() or not hostname.isprintable() or not hostname \
+            or any(c.isspace() for c in hostname):  # "my host" was written as two words: every line unreadable
+        raise InputError(f"hostname: must be one word of printable ASCII (a CARMEN line's field), got {hostname!r}")
     path = Path(path)
     kind = COMPRESSION_SUFFIXES.get(path.suffix)
     opener = COMPRESSIONS[kind][1] if kind else open

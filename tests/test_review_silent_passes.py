@@ -411,3 +411,20 @@ def test_an_lmsbench_param_near_no_known_name_is_passed_over_with_a_warning(tmp_
     with pytest.warns(LmsbenchWarning, match=r"PARAM lmsbench_writer_version: no lmsbench PARAM this version reads"):
         records = list(read_log(log))
     assert [int(r.scan.valid.sum()) for r in records] == [181]
+
+
+@pytest.mark.parametrize("hostname", ["my host", "", "tab\there", "nl\n", "höst", 7])
+def test_write_carmen_refuses_a_hostname_that_is_not_one_field(tmp_path: Path, hostname: object) -> None:
+    """`write_carmen(..., hostname="my host")` wrote a log of lines one field too long, none of which
+    read back (the review); an empty or non-ASCII one was written as well."""
+    from lms200 import Scan
+    from lms200.carmen import write_carmen
+    from lms200.errors import InputError
+    from lms200.records import Record
+
+    records = [Record(Scan(np.full(181, 2.0), -np.pi / 2, np.pi / 180, 0.0, 8.0, stamp=1.0))]
+    with pytest.raises(InputError, match=r"^hostname: must be one word of printable ASCII"):
+        write_carmen(tmp_path / "a.log", records, hostname=hostname)  # type: ignore[arg-type]
+    assert not (tmp_path / "a.log").exists()
+    write_carmen(tmp_path / "b.log", records, hostname="robot-7")
+    assert [r.scan.stamp for r in read_log(tmp_path / "b.log")] == [1.0]
