@@ -984,10 +984,14 @@ def check_link(p: Path, flag: str = "--out") -> None:
 def check_out_spares(out: str | os.PathLike | None, writes: Sequence[str], reads: Sequence[str | os.PathLike]) -> None:
     """No file a run writes into ``out`` (the names ``writes``) is a file it reads (``reads``):
     ``compare SIMFOLDER --out SIMFOLDER`` replaced the simulate folder's config.yaml, the sensor
-    model compare reads for it, with its own."""
+    model compare reads for it, with its own; nor is ``out`` a folder it reads (said so)."""
     if out is None:
         return
     check_link(Path(out))
+    for f in reads:  # `slam RUN --out RUN` was refused as "holds groundtruth.tum ..., which this command does not write"
+        if Path(f).is_dir() and real_path(f) == real_path(Path(out)):
+            raise InputError(f"--out {out} is the input folder {f}, which the run reads; give another folder for "
+                             "its outputs")
     targets = {real_path(Path(out) / name) for name in writes}
     for f in reads:
         if real_path(f) in targets:

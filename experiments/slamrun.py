@@ -312,7 +312,9 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
                       "seconds": time.perf_counter() - t1})
     odo = data.odometry
     if odo is not None:
-        table.append({"source": "raw odometry", **_flat(score(odo, data))})
+        raw = _flat(score(odo, data))
+        if raw:  # without a reference (no truth, no relations) it has no score: it was an empty row
+            table.append({"source": "raw odometry", **raw})
         if odometry_baseline and not config.motion.use_odometry:
             if progress:
                 say_on_terminal(f"slam: baseline: the paper preset driven by the input's odometry over the same "

@@ -15,7 +15,9 @@ so a record written without odometry or truth reads back without it.
 from __future__ import annotations
 
 import math
+import os
 import struct
+import time
 from bisect import bisect_left, insort
 from collections import deque
 from dataclasses import dataclass, field
@@ -37,6 +39,9 @@ ODOM_TOPIC = "/odom"
 TRUTH_TOPIC = "/ground_truth"
 _POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "nav_msgs/msg/Odometry")
 
+
+#: s: how often ``lmsbench lms200 record`` writes a bag's messages out as a chunk (``write_bag(flush_s=...)``)
+RECORD_FLUSH_S = 1.0
 
 MAX_STAMP_NS = 2**31 * 1_000_000_000  # a stamp a bag stores: 0 <= stamp < 2**31 s (int32 seconds in ROS 2)
 
@@ -259,7 +264,7 @@ def _ns_stamp(ns: int) -> float:
     return float(Fraction(ns, 1_000_000_000))
 
 
-def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOPIC) -> int:
+def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOPIC, flush_s: float | None = None) -> int:
     """Write Records to a ROS 1 (``*.bag``) or ROS 2 (folder) bag; returns the number of scans.
 
     Ranges are stored as float32 (the message type), +inf / nan kept as they are (REP-117).
@@ -268,6 +273,13 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
     (0.5 deg: 26.7 ms), both 0 (unknown, as ROS allows) for a scan no LMS200 takes
     (``lms200_shaped``), ``range_min`` the scan's own, or one code unit (1 mm, or 1 cm for cm-mode
     scans) where that is 0.
+
+    ``flush_s`` (ROS 1 only; ``lmsbench lms200 record`` gives ``RECORD_FLUSH_S``): after a scan, the
+    messages held in memory are written to the file as a chunk and flushed (and synced to the disk) once this many seconds
+    have passed since the last chunk, so a writer killed (SIGKILL, a power cut) before it closes the
+    bag and writes its index leaves every chunk before the kill readable (``BagReader`` recovers an
+    unindexed bag from its chunks, with a warning). By default rosbags holds a chunk until it passes
+    1 MiB: a killed recording of a few seconds was a file of the bag's header alone.
 
     Raises:
         BagExistsError: (an ``InputError`` and a ``FileExistsError``) ``path`` exists.
@@ -295,6 +307,16 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
         writer = Writer2(path, version=8)
     count = 0
     last = [-1]  # the bag time of the message written last (ns)
+    flushed = [time.monotonic()]
+
+    def flush() -> None:
+        """The messages held written out as a chunk, and the file flushed (see ``flush_s``)."""
+        if flush_s is None or not ros1 or time.monotonic() - flushed[0] < flush_s:
+            return
+        writer.write_chunk(writer.chunks[-1])
+        writer.bio.flush()
+        os.fsync(writer.bio.fileno())  # on the disk, not only the OS's cache: a power cut keeps it too
+        flushed[0] = time.monotonic()
 
     def bag_time(ns: int) -> int:
         """The stamp, or 1 ns after the message before: ROS 1 orders messages of one bag time by
@@ -358,6 +380,7 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
                 )
                 writer.write(conn(topic, "sensor_msgs/msg/LaserScan"), bag_time(ns), serialize(msg, "sensor_msgs/msg/LaserScan"))
                 count += 1
+                flush()
         except InputError:  # a refused scan: the ones before it stay a readable bag, as a CARMEN log's do
             # (the writer was left to rosbags' abort, unindexed, "Bag is not indexed": `lms200 record` said
             # "the 3 scans before it are saved" of a bag that could not be read; found by the session's review)
@@ -540,6 +563,178 @@ class BagReadStats(SkipLog):
         self.timed_scans += 1
 
 
+#: bytes: the largest record header an unindexed ROS 1 bag's sequential scan takes (a connection's
+#: header holds its message definition: a few KB); a larger one is damage, not a record
+MAX_RECORD_HEADER_BYTES = 16 * 2**20
+
+
+@dataclass
+class Recovered:
+    """What the sequential scan of an unindexed ROS 1 bag found (:func:`_recovering_reader`)."""
+
+    messages: int = 0  # messages in whole chunks
+    chunks: int = 0
+    dropped_at: int | None = None  # the byte offset of a truncated last record, dropped
+
+
+def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 Reader
+    """A rosbags ROS 1 reader of ``path`` that also opens a bag that was never closed (a recording
+    killed by SIGKILL or a power cut): its header says index_pos 0 and it has no index, which rosbags
+    refuses ("Bag is not indexed, reindex before reading"). Such a bag is scanned record by record
+    from its start (ROS bag 2.0: chunk records holding connection and message data records, each
+    chunk followed by its index data records) and the index rosbags keeps is built from what the
+    chunks hold, one chunk decompressed at a time (bounded by MAX_DECOMPRESSED_BYTES); messages then
+    read as from an indexed bag. A record that runs past the end of the file (the one being written
+    when the recording was cut) is dropped (``recovered.dropped_at``); a record that cannot be parsed
+    is a BagError naming its byte offset. ``recovered`` is None for an indexed bag."""
+    from collections import defaultdict
+    from io import BytesIO
+
+    from rosbags.interfaces import Connection, ConnectionExtRosbag1, MessageDefinition, MessageDefinitionFormat
+    from rosbags.rosbag1 import reader as r1
+    from rosbags.typesys.msg import normalize_msgtype
+
+    class RecoveringReader(r1.Reader):
+        recovered: Recovered | None = None
+
+        def open(self) -> None:
+            try:
+                super().open()
+            except r1.ReaderError as exc:
+                if "not indexed" not in str(exc):
+                    raise
+                self.bio = self.path.open("rb")
+                try:
+                    self._scan()
+                except BaseException:
+                    bio, self.bio = self.bio, None
+                    if bio is not None:
+                        bio.close()
+                    raise
+
+        def _damaged(self, pos: int, what: str) -> BagError:
+            return BagError(f"{self.path}: an unindexed bag (not closed) whose record at byte {pos} is damaged: {what}")
+
+        def _scan(self) -> None:
+            bio = self.bio
+            assert bio is not None
+            size = os.fstat(bio.fileno()).st_size
+            bio.readline()
+            try:
+                r1.Header.read(bio, r1.RecordType.BAGHEADER)
+                padding = r1.read_uint32(bio)
+            except r1.ReaderError:
+                padding = -1
+            if padding < 0 or bio.tell() + padding > size:
+                raise BagError(f"{self.path}: the bag was not closed and ends within its header ({size} bytes: a "
+                               "recording killed before its first messages were written); no message to recover")
+            bio.seek(padding, os.SEEK_CUR)
+            found = Recovered()
+            conns: dict[int, Any] = {}
+            indexes: dict[int, list] = defaultdict(list)
+            while (pos := bio.tell()) < size:
+                head = bio.read(4)
+                if len(head) < 4 or pos + 4 + struct.unpack("<I", head)[0] + 4 > size:
+                    found.dropped_at = pos
+                    break
+                hlen = struct.unpack("<I", head)[0]
+                if hlen > MAX_RECORD_HEADER_BYTES:
+                    raise self._damaged(pos, f"a header of {hlen} bytes (at most {MAX_RECORD_HEADER_BYTES})")
+                bio.seek(pos)
+                try:
+                    header = r1.Header.read(bio)
+                    op = header.get_uint8("op")
+                except (r1.ReaderError, KeyError, struct.error) as exc:
+                    raise self._damaged(pos, str(exc) or type(exc).__name__) from None
+                dlen = r1.read_uint32(bio)
+                datapos = bio.tell()
+                if datapos + dlen > size:
+                    found.dropped_at = pos
+                    break
+                try:
+                    if op == r1.RecordType.CHUNK:
+                        self._chunk(pos, header, bio.read(dlen), datapos, conns, indexes, found)
+                    elif op == r1.RecordType.CONNECTION:
+                        self._connection(header, BytesIO(bio.read(dlen)), dlen, conns)
+                    elif op in (r1.RecordType.IDXDATA, r1.RecordType.CHUNK_INFO):
+                        bio.seek(dlen, os.SEEK_CUR)
+                    else:
+                        raise self._damaged(pos, f"op code {op}, which no record between a bag's header and its "
+                                                 "index has (chunk 5, index data 4, connection 7)")
+                except BagError:
+                    raise
+                except (r1.ReaderError, KeyError, ValueError, struct.error) as exc:
+                    raise self._damaged(pos, str(exc) or type(exc).__name__) from None
+            self.connections = [c._replace(msgcount=len(indexes[c.id])) for c in conns.values()]
+            self.indexes = {c.id: sorted(indexes[c.id]) for c in conns.values()}
+            self.recovered = found
+
+        def _connection(self, header: Any, data: Any, dlen: int, conns: dict) -> None:  # noqa: ANN401
+            cid = header.get_uint32("conn")
+            topic = header.get_string("topic")
+            fields = r1.Header.read(BytesIO(struct.pack("<I", dlen) + data.read(dlen)))
+            latching = fields.get_string("latching") if "latching" in fields else None
+            if cid not in conns:
+                conns[cid] = Connection(
+                    cid, r1.normalize(topic), normalize_msgtype(fields.get_string("type")),
+                    MessageDefinition(MessageDefinitionFormat.MSG, fields.get_string("message_definition")),
+                    fields.get_string("md5sum"), 0,
+                    ConnectionExtRosbag1(fields.get_string("callerid") if "callerid" in fields else None,
+                                         int(latching) if latching not in (None, "") else None),
+                    self)
+
+        def _chunk(self, pos: int, header: Any, raw: bytes, datapos: int, conns: dict,  # noqa: ANN401
+                   indexes: dict, found: Recovered) -> None:
+            compression = header.get_string("compression")
+            declared = header.get_uint32("size")
+            if declared > MAX_DECOMPRESSED_BYTES:
+                raise _too_large(f"{self.path}: the chunk at byte {pos}")
+            if compression == "none":
+                decompress = r1.decompressors["none"]
+            elif compression == "bz2":
+                import bz2
+
+                decompress = lambda data: _bounded(data, bz2.BZ2Decompressor, f"{self.path}: a bz2 chunk", True)  # noqa: E731
+            elif compression == "lz4":
+                import lz4.frame
+
+                decompress = lambda data: _bounded(data, lz4.frame.LZ4FrameDecompressor,  # noqa: E731
+                                                   f"{self.path}: an lz4 chunk", False)
+            else:
+                raise self._damaged(pos, f"chunk compression {compression!r} (none, bz2 or lz4)")
+            data = decompress(raw)
+            inner, end, count = BytesIO(data), len(data), 0
+            start, stop = 2**63 - 1, 0
+            counts: dict[int, int] = {}
+            while (offset := inner.tell()) < end:
+                rec = r1.Header.read(inner)
+                op = rec.get_uint8("op")
+                n = r1.read_uint32(inner)
+                if inner.tell() + n > end:
+                    raise ValueError(f"a record at chunk offset {offset} runs past the chunk's end")
+                if op == r1.RecordType.CONNECTION:
+                    self._connection(rec, inner, n, conns)
+                elif op == r1.RecordType.MSGDATA:
+                    cid, t = rec.get_uint32("conn"), rec.get_time("time")
+                    if cid not in conns:
+                        raise ValueError(f"a message at chunk offset {offset} of connection {cid}, which no "
+                                         "connection record before it defines")
+                    indexes[cid].append(r1.IndexData(t, pos, offset))
+                    counts[cid] = counts.get(cid, 0) + 1
+                    start, stop, count = min(start, t), max(stop, t + 1), count + 1
+                    inner.seek(n, os.SEEK_CUR)
+                else:
+                    raise ValueError(f"op code {op} at chunk offset {offset} (a chunk holds connections, 7, "
+                                     "and messages, 2)")
+            self.chunks[pos] = r1.Chunk(len(raw), datapos, decompress)
+            self.chunk_infos.append(r1.ChunkInfo(pos, start, stop, counts))
+            found.messages += count
+            found.chunks += 1
+
+    reader = RecoveringReader(path)
+    return reader
+
+
 class BagReader:
     """Iterate the LaserScans of a ROS 1 or ROS 2 bag as Records (iterable several times).
 
@@ -565,6 +760,7 @@ class BagReader:
         self.range_max = range_max
         self.skip_bad_lines = skip_bad_lines
         self.stats = BagReadStats()
+        self._warned = False  # the warning of a bag never closed: once
 
     def _open(self):  # noqa: ANN202 - rosbags' AnyReader
         from rosbags.highlevel import AnyReader
@@ -579,12 +775,27 @@ class BagReader:
         _bound_zstd_messages()  # before open: a file-compressed ROS 2 bag is decompressed there
         try:
             reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
+            if not reader.is2:  # a bag never closed (a killed recording) is read from its chunks
+                reader.readers = [_recovering_reader(self.path)]
             reader.open()
+        except BagError:
+            raise
         except BagTooLargeError:
             raise
         except Exception as exc:  # rosbags raises its own types for every kind of damage
             raise BagError(f"{self.path}: cannot open as a ROS bag: {type(exc).__name__}: {exc}") from None
         _bound_decompression(reader, self.path)
+        found = getattr(reader.readers[0], "recovered", None)
+        if found is not None and not self._warned:
+            import warnings
+
+            from .errors import LmsbenchWarning
+
+            self._warned = True
+            cut = f"; a truncated last record at byte {found.dropped_at} dropped" if found.dropped_at is not None else ""
+            warnings.warn(f"{self.path}: the bag was not closed (a recording killed or cut by a power failure): it has "
+                          f"no index; {found.messages} messages recovered from its {found.chunks} whole chunks{cut}",
+                          LmsbenchWarning, stacklevel=3)
         return reader
 
     def _scan_connections(self, reader) -> list:  # noqa: ANN001

@@ -42,6 +42,7 @@ file and line; ``skip_bad_lines`` records it in ``stats.skipped`` (the first
 from __future__ import annotations
 
 import bz2
+import difflib
 import gzip
 import io
 import lzma
@@ -49,6 +50,7 @@ import math
 import re
 import stat
 import tarfile
+import warnings
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -69,7 +71,7 @@ from .codes import (
     metres_per_unit,
 )
 from . import laser_geometry
-from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
+from .errors import InputError, LmsbenchError, LmsbenchWarning, LogFormatError, LogNotFoundError
 from .finite import fixed
 from .laser_geometry import LaserGeometry
 from .records import Pose2D, Record, SkipLog
@@ -213,7 +215,7 @@ def open_text(path: str | Path) -> IO[str]:
             head = b""  # damaged data: reported with its line by the reader
     what = archive_kind(head)
     if what:
-        raise LogFormatError(path, 0, f"{what}, not a log: extract the log from it first")
+        raise LogFormatError(path, None, f"{what}, not a log: extract the log from it first")
     raw = open_bytes(path)
     if head.startswith(UTF8_BOM):  # a log saved by a Windows editor: the mark would hide line 1's message name
         raw.read(len(UTF8_BOM))
@@ -390,11 +392,11 @@ class CarmenReader:
         except (*READ_ERRORS, UnicodeError):
             return raw  # damage is reported, with its line, by the pass itself
         if looked >= DEFAULT_TOPIC_LINES and not named:
-            raise LogFormatError(self.path, 1, f"not a CARMEN log: none of its first {DEFAULT_TOPIC_LINES:,} lines "
-                                               "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
+            raise LogFormatError(self.path, None, f"not a CARMEN log: none of its first {DEFAULT_TOPIC_LINES:,} lines "
+                                                  "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
         if looked and not named:  # a shorter file, read to its end: it gave no record, silently (binary junk)
-            raise LogFormatError(self.path, 1, f"not a CARMEN log: none of its {looked:,} lines (comments aside) "
-                                               "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
+            raise LogFormatError(self.path, None, f"not a CARMEN log: none of its {looked:,} lines (comments aside) "
+                                                  "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
         return raw
 
     def __iter__(self) -> Iterator[Record]:
@@ -517,7 +519,7 @@ class CarmenReader:
         if chain is not None:
             yield from chain.flush()
         if not any(stats.messages.get(k) for k in LASER_KINDS) and not stats.skipped_count and stats.stopped is None:
-            raise LogFormatError(self.path, 1, self._no_laser_reason(lines, quiet))
+            raise LogFormatError(self.path, None, self._no_laser_reason(lines, quiet))
         if self.topic is not None and not stats.messages.get(self.topic) and stats.other_lasers():
             # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
             others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())
@@ -581,6 +583,7 @@ class _BlankRun:
 
 
 LMSBENCH_PARAM_PREFIX = "lmsbench_"  # the PARAM names this package writes and reads
+PARAM_NEAR_MISS = 0.8  # difflib ratio from which an unknown lmsbench_* name is taken as a misspelt known one
 LMSBENCH_PARAMS = frozenset({UNITS_PARAM, ODOMETRY_PARAM, RANGE_MIN_PARAM, EXACT_ANGLES_PARAM} | EXACT_GEOMETRY_PARAMS)
 
 
@@ -607,8 +610,15 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
         _require(math.isfinite(number) and number >= 0, f"{name} must be a finite number >= 0 (m), got {value!r}")
         params[name] = number
     elif name.startswith(LMSBENCH_PARAM_PREFIX) and name not in LMSBENCH_PARAMS:
-        # a misspelt one (lmsbench_range_unit mm) was passed over: the unit inferred, the scans read otherwise
-        raise ValueError(f"{name!r} is no lmsbench PARAM (known: {', '.join(sorted(LMSBENCH_PARAMS))})")
+        # a misspelt one (lmsbench_range_unit mm) was passed over: the unit inferred, the scans read otherwise;
+        # a name near none of ours (a later version's, a lab's own lmsbench_writer_version) is passed over
+        # with a warning, as a whole log refused for it would lose every scan
+        near = difflib.get_close_matches(name, LMSBENCH_PARAMS, n=1, cutoff=PARAM_NEAR_MISS)
+        if near:
+            raise ValueError(f"{name!r} is no lmsbench PARAM: {near[0]!r} misspelt? (known: "
+                             f"{', '.join(sorted(LMSBENCH_PARAMS))})")
+        warnings.warn(f"PARAM {name}: no lmsbench PARAM this version reads (known: {', '.join(sorted(LMSBENCH_PARAMS))}); "
+                      "passed over, as other programs' PARAM lines are", LmsbenchWarning, stacklevel=2)
     elif name in laser_geometry.GEOMETRY_PARAMS:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number > 0, f"{name} must be a finite number > 0, got {value!r}")
@@ -998,12 +1008,15 @@ def write_carmen(
     Returns the number of scans written.
 
     Raises:
-        InputError: an unknown ``fmt``, scans of mixed units, or a scan whose range_max lies outside
+        InputError: an unknown ``fmt``, a ``hostname`` that is not one word of printable ASCII, scans of mixed units, or a scan whose range_max lies outside
             [MIN_RANGE_MAX_M, MAX_RANGE_M] (0.1 to 10000 m), which the reader refuses (such a log was
             written, and could not be read back).
     """
     if fmt not in ("robotlaser1", "flaser"):
         raise InputError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
+    if not isinstance(hostname, str) or not hostname.isascii() or not hostname.isprintable() or not hostname \
+            or any(c.isspace() for c in hostname):  # "my host" was written as two words: every line unreadable
+        raise InputError(f"hostname: must be one word of printable ASCII (a CARMEN line's field), got {hostname!r}")
     path = Path(path)
     kind = COMPRESSION_SUFFIXES.get(path.suffix)
     opener = COMPRESSIONS[kind][1] if kind else open

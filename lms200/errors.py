@@ -16,13 +16,15 @@ class NumbaUnavailableError(LmsbenchError, ImportError):
 
 
 class LogFormatError(LmsbenchError, ValueError):
-    """A log file that cannot be read: the message names the file and the line number."""
+    """A log file that cannot be read: the message names the file and the line number, or the file
+    alone (``line_no`` None) for a problem of the whole file (no laser line in it, not a CARMEN log,
+    an archive): those said ``FILE:1:``, pointing at a line that was not at fault."""
 
-    def __init__(self, path: str | os.PathLike[str], line_no: int, reason: str) -> None:
+    def __init__(self, path: str | os.PathLike[str], line_no: int | None, reason: str) -> None:
         self.path = str(path)
         self.line_no = line_no
         self.reason = reason
-        super().__init__(f"{self.path}:{line_no}: {reason}")
+        super().__init__(f"{self.path}: {reason}" if line_no is None else f"{self.path}:{line_no}: {reason}")
 
 
 class ScanError(LmsbenchError, ValueError):

@@ -121,6 +121,12 @@ def tilt_deg(q: np.ndarray) -> float:
     return math.degrees(math.acos(min(1.0, max(-1.0, cos_tilt))))
 
 
+def tilt_of_roll_pitch_deg(roll: float, pitch: float) -> float:
+    """The tilt (deg) of a rotation given by roll and pitch (rad; any yaw, z-y-x order): the angle
+    between its z axis and the world's, acos(cos roll cos pitch), as ``tilt_deg`` of its quaternion."""
+    return math.degrees(math.acos(min(1.0, max(-1.0, math.cos(roll) * math.cos(pitch)))))
+
+
 def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Read a TUM file: (stamps (n,) s, poses (n, 3) x, y, yaw). A quaternion of any positive norm
     is normalised (``0 0 0 0 0 0 1 1`` is 90 deg).

@@ -15,7 +15,7 @@ import numpy as np
 from lms200 import InputError, LmsbenchError, LogFormatError
 from lms200.codes import real_rows, real_vector
 from lms200.logs import MAX_COORD_M, regular_file, row_lines, row_numbers
-from lms200.tum import MAX_TILT_DEG
+from lms200.tum import MAX_TILT_DEG, tilt_of_roll_pitch_deg
 from features.baselines.checks import positive
 
 from .models import wrap
@@ -319,13 +319,13 @@ def read_relations(path: str | Path) -> np.ndarray:
         LmsbenchError: a file without rows, or a TUM trajectory (``t x y z qx qy qz qw``, also 8 numbers
             a row): every row's last four numbers of norm 1 and some row's z, roll or pitch (qx, qy, qz)
             not 0 (a 2-D relation's z, roll, pitch and yaw are (0, 0, 0, yaw)).
-        LogFormatError: a row whose roll or pitch passes ``lms200.tum.MAX_TILT_DEG`` (30 deg, in rad):
+        LogFormatError: a row whose roll and pitch tilt it by more than ``lms200.tum.MAX_TILT_DEG`` (30 deg; acos(cos roll cos pitch)):
             a motion out of the plane (its x, y and yaw were scored, silently), naming file and line.
     """
     rows = []
     unit_quaternions = 0  # rows whose last four numbers have norm 1, as a TUM row's quaternion has
     turned = False  # a row with z, roll or pitch (a TUM row's qx, qy, qz) not 0
-    tilted: tuple[int, str] | None = None  # the first row whose roll or pitch passes MAX_TILT_DEG, and its text
+    tilted: tuple[int, str] | None = None  # the first row tilted by more than MAX_TILT_DEG, and its text
     for no, line in row_lines(path, regular_file(path, "relations file")):  # a 3 GB line was read whole: MemoryError
         s = line.split()
         if not s or s[0].startswith("#"):
@@ -340,7 +340,7 @@ def read_relations(path: str | Path) -> np.ndarray:
         rows.append((v[0], v[1], v[2], v[3], v[7]))
         unit_quaternions += abs(math.hypot(*v[4:8]) - 1.0) <= QUATERNION_NORM_TOLERANCE
         turned |= any(v[4:7])  # a TUM row's qz of a pose turned from the first; a 2-D relation's z, roll, pitch are 0
-        if tilted is None and max(abs(v[5]), abs(v[6])) > math.radians(MAX_TILT_DEG):
+        if tilted is None and tilt_of_roll_pitch_deg(v[5], v[6]) > MAX_TILT_DEG:  # as read_tum's and the bags' tilt
             tilted = (no, line.strip()[:60])
     if not rows:  # an empty file gave "none of the 0 relations falls inside the run" after the run
         raise LmsbenchError(f"{path}: no relations (t1 t2 x y z roll pitch yaw a line)")
@@ -349,8 +349,8 @@ def read_relations(path: str | Path) -> np.ndarray:
                             "unit quaternion), not a relations file (t1 t2 x y z roll pitch yaw a line: the pairs "
                             "of stamps and the true motion between them)")
     if tilted is not None:  # a 3-D relation's motion read as its x, y and yaw, silently (as read_tum refuses a tilted pose)
-        raise LogFormatError(path, tilted[0], f"relation row's roll or pitch passes {MAX_TILT_DEG:g} deg "
-                                              f"({math.radians(MAX_TILT_DEG):.4f} rad): not a planar motion, whose x, y "
+        raise LogFormatError(path, tilted[0], f"relation row's roll and pitch tilt it by more than {MAX_TILT_DEG:g} "
+                                              "deg: not a planar motion, whose x, y "
                                               f"and yaw could be scored: {tilted[1]!r}")
     return np.array(rows, float).reshape(-1, 5)
 

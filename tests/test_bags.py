@@ -619,3 +619,82 @@ def test_a_ros2_bag_listing_its_storage_file_twice_is_a_bag_error(tmp_path: Path
                             "each message would be read once for each listing")
     meta.write_text(text)
     assert [r.scan.stamp for r in read_log(bag)] == [0.0, 1.0, 2.0]
+
+
+def _unindexed(tmp_path: Path, n: int = 10, cut: int = 0) -> tuple[Path, list]:
+    """A bag as a killed recording leaves it: its chunks (one every scan here) and their index data
+    records, no index, index_pos 0 in its header; ``cut`` bytes more removed from its end."""
+    import struct
+
+    from lms200 import Record, Scan
+    from lms200.bag import write_bag
+
+    recs = [Record(Scan.lms200(np.full(361, 1.0 + i / 100), stamp=float(i)), odom=(i / 10, 0.0, 0.0)) for i in range(n)]
+    whole = tmp_path / "whole.bag"
+    write_bag(whole, recs, flush_s=0.0)
+    data = bytearray(whole.read_bytes())
+    at = data.index(b"index_pos=") + 10
+    index_pos = struct.unpack("<Q", data[at:at + 8])[0]
+    data[at:at + 8] = bytes(8)
+    out = tmp_path / "killed.bag"
+    out.write_bytes(bytes(data[:index_pos - cut]))
+    return out, recs
+
+
+def test_an_unindexed_bag_is_recovered_from_its_chunks(tmp_path: Path) -> None:
+    """A bag never closed (a killed recording) was refused: "Bag is not indexed, reindex before reading"."""
+    import warnings
+
+    from lms200 import read_log
+
+    out, recs = _unindexed(tmp_path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = list(read_log(out))
+    assert [str(w.message) for w in caught] == [
+        f"{out}: the bag was not closed (a recording killed or cut by a power failure): it has no index; 20 messages "
+        "recovered from its 10 whole chunks"]
+    assert [r.scan.stamp for r in got] == [float(i) for i in range(10)]
+    assert [r.odom for r in got] == [r.odom for r in recs]
+    assert np.array_equal(got[9].scan.ranges, np.full(361, 1.09, dtype=np.float32).astype(float))
+
+
+def test_an_unindexed_bag_drops_its_truncated_last_record(tmp_path: Path) -> None:
+    """The chunk being written when the recording was cut is dropped; those before it are read."""
+    import warnings
+
+    from lms200 import read_log
+
+    out, _ = _unindexed(tmp_path, cut=1000)  # into the last scan's chunk (a scan is 1.5 kB)
+    last_chunk = out.read_bytes().rindex(b"compression=none") - 16  # its header length, its op field (4 + 4 bytes)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = list(read_log(out))
+    assert [r.scan.stamp for r in got] == [float(i) for i in range(9)]
+    assert str(caught[0].message).endswith("18 messages recovered from its 9 whole chunks; a truncated last record "
+                                           f"at byte {last_chunk} dropped")
+
+
+def test_an_unindexed_bag_with_a_damaged_record_names_its_offset(tmp_path: Path) -> None:
+    from lms200 import read_log
+    from lms200.bag import BagError
+
+    out, _ = _unindexed(tmp_path)
+    data = bytearray(out.read_bytes())
+    at = data.index(b"op=\x05", 4200)  # the second chunk's op code
+    data[at + 3] = 9
+    out.write_bytes(bytes(data))
+    with pytest.raises(BagError, match=rf"killed\.bag: an unindexed bag \(not closed\) whose record at byte {at - 8} is "
+                       r"damaged: op code 9, which no record between"):  # the record's header length, the op field's
+        list(read_log(out))
+
+
+def test_an_unindexed_bag_cut_in_its_header_says_so(tmp_path: Path) -> None:
+    from lms200 import read_log
+    from lms200.bag import BagError
+
+    out, _ = _unindexed(tmp_path)
+    out.write_bytes(out.read_bytes()[:86])
+    with pytest.raises(BagError, match=r"killed\.bag: the bag was not closed and ends within its header \(86 bytes: a "
+                       r"recording killed before its first messages were written\); no message to recover$"):
+        list(read_log(out))

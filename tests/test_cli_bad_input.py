@@ -342,7 +342,7 @@ CASES = [
     (["slam", "{simrun}", "--config", "{slam_voxel.yaml}", "--out", O], "slam_voxel.yaml: keyframes.voxel: must be 0"),
     # an --out holding other things: the README's 'slam run --out slam' wrote into the slam package;
     # slam into the simulated run's own folder replaced its config.yaml (the sensor compare reads)
-    (["slam", "{simrun}", "--out", "{simrun}"], "holds scans.clf, which this command does not write"),
+    (["slam", "{simrun}", "--out", "{simrun}"], "simrun is the input folder "),
     # a folder of the slam outputs' names only passed, and the run deleted the user's metrics.json
     (["slam", "{simrun}", "--out", "{notes_dir}"], "notes_dir: holds metrics.json, which this run would replace but "
                                                    "no earlier lmsbench slam run wrote"),
@@ -1264,7 +1264,7 @@ def test_a_sweeps_own_big_sweep_yaml_is_read_for_its_plots(tmp_path):
 
 @pytest.mark.parametrize("with_out", [True, False])
 @pytest.mark.parametrize("log, said", [
-    ("groundtruth.tum", "groundtruth.tum:1: not a CARMEN log"),
+    ("groundtruth.tum", "groundtruth.tum: not a CARMEN log"),
     # the wrong-input hunt: a log of only +inf readings passed the first-scan check, and the study's
     # refusal left the run folder (or --out) behind, empty
     ("no_returns.clf", "no_returns.clf: none of its 5 scans has a valid beam (all +inf, nan or 0): no scan to draw"),

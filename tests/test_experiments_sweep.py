@@ -689,6 +689,21 @@ def test_a_metric_named_as_the_rows_warnings_is_refused():
     assert row["status"] == "error" and "clash" in row["error"] and WARNINGS_KEY in row["error"]
 
 
+def test_a_user_cells_metric_named_as_the_runners_inputs_record_is_refused():
+    """A user's cell returning ``_inputs`` (cells.INPUTS_KEY, the runner's record of the files a
+    built-in cell read) had it taken as file digests (the row stored as "ok"); a built-in cell's own
+    record is kept."""
+    from experiments.sweep.cells import INPUTS_KEY, run_cell
+
+    row = run_cell("mysw:cell", {"x": 1}, lambda params: {"y": 2, INPUTS_KEY: {"sensor": "abc"}})
+    assert row["status"] == "error", row
+    assert row["error"].startswith("ValueError: cell kind 'mysw:cell' returned a metric named '_inputs', the runner's "
+                                   "record of the files a built-in cell read (cells.INPUTS_KEY), not a metric a cell "
+                                   "may return; name it otherwise ("), row["error"]
+    builtin = run_cell("extract", {"x": 1}, lambda params: {"y": 2, INPUTS_KEY: {}})
+    assert builtin["status"] == "ok" and builtin[INPUTS_KEY] == {}
+
+
 def test_a_cell_that_ran_after_its_sensor_file_changed_is_not_stored_under_the_old_files_key(tmp_path, monkeypatch):
     """A sensor file edited while a sweep ran: the cells computed after the edit read the new file,
     and were stored under the key of the old one (the digests are taken when the sweep starts), so a

@@ -402,3 +402,45 @@ def test_a_port_that_does_not_open_says_the_systems_reason_once(tmp_path: Path) 
         LMS200(str(tmp_path))
     with pytest.raises(LmsDeviceError, match=re.escape(f"cannot open {tmp_path / 'nope'}: No such file or directory") + "$"):
         LMS200(str(tmp_path / "nope"))
+
+
+def test_a_killed_bag_recording_keeps_its_scans(tmp_path: Path) -> None:
+    """`lms200 record --out X.bag` killed by SIGKILL (or a power cut) left the bag's header alone (86
+    bytes after 5 s: rosbags held the chunk in memory until 1 MiB) and `info` said "Bag is not
+    indexed, reindex before reading": every scan was lost, where a CARMEN log keeps every whole
+    line. The bag now gets a chunk every RECORD_FLUSH_S and its reader recovers an unindexed bag
+    from its chunks, with a warning naming how many messages it found."""
+    import warnings
+
+    from lms200.bag import RECORD_FLUSH_S
+
+    sent = source(400)
+    dev = VirtualLMS200(sent, time_scale=0.1)
+    out = tmp_path / "rec.bag"
+    with TcpServer(dev) as ad:
+        proc = subprocess.Popen(cli("record", "--port", ad.url, "--out", str(out), "--baud", "38400"), env=ENV,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            deadline = time.monotonic() + 60
+            while not out.exists() or out.stat().st_size < 4200 + 3 * 1500:  # header + a chunk of a few scans
+                assert proc.poll() is None and time.monotonic() < deadline, proc.poll()
+                time.sleep(0.05)
+            time.sleep(RECORD_FLUSH_S)
+            proc.kill()
+            proc.communicate(timeout=30)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = [rec.scan for rec in read_log(out)]
+    assert len(got) >= 3
+    assert [codes(s) for s in got] == [codes(s) for s in sent[:len(got)]]
+    said = [str(w.message) for w in caught]
+    assert len(said) == 1 and said[0].startswith(f"{out}: the bag was not closed")
+    assert f"; {len(got)} messages recovered from its " in said[0]
+    info = subprocess.run([sys.executable, "-m", "experiments.cli", "info", str(out)], env=ENV, capture_output=True,
+                          text=True, timeout=60)
+    assert info.returncode == 0, info.stderr
+    assert "warning: " in info.stderr and "the bag was not closed" in info.stderr
+    assert re.search(rf"^  scans +{len(got)}$", info.stdout, re.M), info.stdout

@@ -114,6 +114,40 @@ def test_simulate_config_in_out_is_refused(sim, capsys):
     assert "the run would write config.yaml over" in capsys.readouterr().err
 
 
+def test_slam_into_its_input_folder_says_so(sim, capsys):
+    """`slam RUN --out RUN` was refused as "holds groundtruth.tum, map.png, scans.clf and 1 more,
+    which this command does not write": true, but not why."""
+    names = sorted(p.name for p in sim.iterdir())
+    assert main(["slam", str(sim), "--out", str(sim), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.splitlines() == [f"lmsbench slam: error: --out {sim} is the input folder {sim}, which the run reads; "
+                                "give another folder for its outputs"], err
+    assert sorted(p.name for p in sim.iterdir()) == names
+    for command in ("sim2real",):  # the same rule (compare names the config.yaml it would write over)
+        assert main([command, str(sim), "--out", str(sim)]) == 2
+        assert capsys.readouterr().err.splitlines() == [
+            f"lmsbench {command}: error: --out {sim} is the input folder {sim}, which the run reads; give another "
+            "folder for its outputs"]
+
+
+def test_simulate_world_in_out_is_refused(sim, tmp_path, capsys):
+    """`simulate --world DIR/world.json --out DIR` wrote world.json over the file it read (so did a
+    --config naming that world.json)."""
+    world = sim / "world.json"
+    before = world.read_bytes()
+    assert main(["simulate", "--world", str(world), "--duration", "1", "--out", str(sim), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.splitlines() == [f"lmsbench simulate: error: --out {sim}: the run would write world.json over {world}, "
+                                "which it reads; give another folder"], err
+    cfg = tmp_path / "run.yaml"
+    cfg.write_text(yaml.safe_dump({"world": str(world), "seed": 0, "duration": 1.0}))
+    assert main(["simulate", "--config", str(cfg), "--out", str(sim), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.splitlines() == [f"lmsbench simulate: error: --out {sim}: the run would write world.json over {world}, "
+                                "which it reads; give another folder"], err
+    assert world.read_bytes() == before
+
+
 def test_what_bench_sim2real_and_sweep_tell_as_their_own(tmp_path):
     """The records the slower commands leave (their own formats) make the folder theirs; a figure or
     table alone, or a record of another kind, does not."""

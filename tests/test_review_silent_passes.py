@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import bz2
 import gzip
+import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from lms200 import read_log
-from lms200.errors import LogFormatError
+from lms200.errors import LmsbenchWarning, LogFormatError
 
 
 # -- 1. a log of no laser line ----------------------------------------------------------------------
@@ -27,8 +29,25 @@ def test_a_log_of_no_laser_line_is_refused_naming_the_file(tmp_path: Path, name:
                                                           skip: bool) -> None:
     """A zero-byte log, a gzip of nothing, a file of comments read as no records, silently."""
     (tmp_path / name).write_bytes(data)
-    with pytest.raises(LogFormatError, match=rf"{name.replace('.', '[.]')}:1: {reason}"):
+    # a whole-file problem names the file alone: it said "FILE:1: ...", a line not at fault
+    with pytest.raises(LogFormatError, match=rf"^{re.escape(str(tmp_path / name))}: {reason}") as info:
         list(read_log(tmp_path / name, skip_bad_lines=skip))
+    assert info.value.line_no is None
+
+
+@pytest.mark.parametrize("command", [["info"], ["compare", "--out", "{out}"], ["slam", "--out", "{out}"]],
+                         ids=["info", "compare", "slam"])
+def test_the_commands_name_a_log_of_no_laser_line_without_a_line(tmp_path: Path, capsys, command: list[str]) -> None:
+    """`lmsbench info odo.log` said "odo.log:1: holds no laser lines ...": line 1 is not at fault."""
+    from experiments.cli import main
+
+    log = tmp_path / "odo.log"
+    log.write_bytes(b"ODOM 0 0 0 0 0 0 1 h 1\n")
+    argv = [command[0], str(log), *(a.format(out=tmp_path / "out") for a in command[1:])]
+    assert main(argv) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        f"lmsbench {command[0]}: error: {log}: holds no laser lines (FLASER, RLASER, ROBOTLASER1 / 2, RAWLASER1 .. 4), "
+        "only other messages: ODOM (1)"]
 
 
 def test_a_log_of_junk_skipped_under_skip_bad_lines_says_what_it_skipped(tmp_path: Path) -> None:
@@ -363,9 +382,22 @@ def test_a_relation_of_large_roll_or_pitch_is_refused_naming_its_line(tmp_path: 
 
     rel = tmp_path / "r.relations"
     rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 0.1 0.05 -0.1 0.2\n3 4 0.3 0.0 0 0 0.6 0.2\n")
-    with pytest.raises(LogFormatError, match=r"r\.relations:3: relation row's roll or pitch passes 30 deg \(0\.5236 "
-                                             r"rad\): not a planar motion, whose x, y and yaw could be scored: "
+    with pytest.raises(LogFormatError, match=r"r\.relations:3: relation row's roll and pitch tilt it by more than 30 "
+                                             r"deg: not a planar motion, whose x, y and yaw could be scored: "
                                              r"'3 4 0\.3 0\.0 0 0 0\.6 0\.2'"):
+        read_relations(rel)
+    # roll and pitch of 25 deg each tilt it by 34.8 deg, as read_tum measures a quaternion's tilt (the first
+    # version of this check took the larger of the two, and passed it)
+    from lms200.tum import tilt_deg, tilt_of_roll_pitch_deg
+
+    for roll, pitch, yaw in ((0.4363, 0.4363, 0.2), (0.3, -0.5, 1.0), (-1.2, 0.1, -2.5)):  # z-y-x Euler -> quaternion
+        cr, sr, cp, sp, cy, sy = (f(a / 2) for a in (roll, pitch, yaw) for f in (np.cos, np.sin))
+        q = np.array([sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy,
+                      cr * cp * cy + sr * sp * sy])
+        assert tilt_of_roll_pitch_deg(roll, pitch) == pytest.approx(tilt_deg(q), abs=1e-9)
+    assert tilt_of_roll_pitch_deg(0.4363, 0.4363) == pytest.approx(34.77, abs=0.01)
+    rel.write_text("1 2 0.3 0.0 0 0.4363 0.4363 0.2\n")
+    with pytest.raises(LogFormatError, match=r"r\.relations:1: relation row's roll and pitch tilt it"):
         read_relations(rel)
     rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 0.1 0.05 -0.1 0.2\n")
     assert read_relations(rel).tolist() == [[1, 2, 0.3, 0, 0.2], [2, 3, 0.3, 0, 0.2]]  # a little: as before
@@ -378,9 +410,39 @@ def test_a_misspelt_lmsbench_param_is_a_malformed_line(tmp_path: Path) -> None:
     log = tmp_path / "a.log"
     log.write_text(f"PARAM lmsbench_range_unit mm h 0\nFLASER 181 {ranges} 0 0 0 0 0 0 1 h 1\n")
     with pytest.raises(LogFormatError, match=r"a\.log:1: malformed PARAM line: 'lmsbench_range_unit' is no lmsbench "
-                                             r"PARAM \(known: lmsbench_front_laser_angle_increment, .*, "
+                                             r"PARAM: 'lmsbench_range_units' misspelt\? "
+                                             r"\(known: lmsbench_front_laser_angle_increment, .*, "
                                              r"lmsbench_range_units, lmsbench_rear_laser_angle_increment, "
                                              r"lmsbench_rear_laser_angle_min, lmsbench_robotlaser_angles\)$"):
         list(read_log(log))
     log.write_text(f"PARAM lmsbench_range_units mm h 0\nPARAM other_thing 1 h 0\nFLASER 181 {ranges} 0 0 0 0 0 0 1 h 1\n")
     assert [(r.scan.range_max, int(r.scan.valid.sum())) for r in read_log(log)] == [(8.183, 0)]  # as before
+
+
+def test_an_lmsbench_param_near_no_known_name_is_passed_over_with_a_warning(tmp_path: Path) -> None:
+    """A name near none of the known ones (a later version's PARAM, a lab's own) is no misspelling: a
+    log refused for it lost every scan (the review: `PARAM lmsbench_writer_version 0.2.0`); it is read as
+    other programs' PARAM lines are, with a warning naming it."""
+    ranges = " ".join(["2.00"] * 181)
+    log = tmp_path / "a.log"
+    log.write_text(f"PARAM lmsbench_writer_version 0.2.0 h 0\nFLASER 181 {ranges} 0 0 0 0 0 0 1 h 1\n")
+    with pytest.warns(LmsbenchWarning, match=r"PARAM lmsbench_writer_version: no lmsbench PARAM this version reads"):
+        records = list(read_log(log))
+    assert [int(r.scan.valid.sum()) for r in records] == [181]
+
+
+@pytest.mark.parametrize("hostname", ["my host", "", "tab\there", "nl\n", "höst", 7])
+def test_write_carmen_refuses_a_hostname_that_is_not_one_field(tmp_path: Path, hostname: object) -> None:
+    """`write_carmen(..., hostname="my host")` wrote a log of lines one field too long, none of which
+    read back (the review); an empty or non-ASCII one was written as well."""
+    from lms200 import Scan
+    from lms200.carmen import write_carmen
+    from lms200.errors import InputError
+    from lms200.records import Record
+
+    records = [Record(Scan(np.full(181, 2.0), -np.pi / 2, np.pi / 180, 0.0, 8.0, stamp=1.0))]
+    with pytest.raises(InputError, match=r"^hostname: must be one word of printable ASCII"):
+        write_carmen(tmp_path / "a.log", records, hostname=hostname)  # type: ignore[arg-type]
+    assert not (tmp_path / "a.log").exists()
+    write_carmen(tmp_path / "b.log", records, hostname="robot-7")
+    assert [r.scan.stamp for r in read_log(tmp_path / "b.log")] == [1.0]

@@ -377,7 +377,7 @@ def test_calibrate_without_out_prints_one_valid_sensor_yaml(tmp_path: Path, caps
     (["calibrate", "log.clf", "--stride", "0"], "--stride"),
     (["calibrate", "log.clf", "--out", "."], "is a folder"),
     (["calibrate", "log.clf", "--world", "moon"], "unknown world"),
-    (["calibrate", "empty.clf"], "empty.clf:1: holds only blank or comment lines (1): no laser lines"),
+    (["calibrate", "empty.clf"], "empty.clf: holds only blank or comment lines (1): no laser lines"),
     (["simulate", "--sensor", "nope.yaml", "--out", "x"], "no such sensor file"),
     (["compare", "office", "--sensor", "nope.yaml"], "no such sensor file"),
 ])

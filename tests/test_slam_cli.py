@@ -385,6 +385,28 @@ def test_odometry_drives_the_default_pipeline_and_names_its_rows(tmp_path, capsy
     assert rows["slam (odometry)"]["ate_rmse"] < 0.5 * rows["raw odometry"]["ate_rmse"]
 
 
+def test_odometry_without_a_reference_leaves_no_empty_row(tmp_path):
+    """On a log with odometry and no reference (csail-robotlaser1.log.gz) metrics.json's table had
+    a row ``{"source": "raw odometry"}`` of nothing: raw odometry has no score without a reference."""
+    from lms200 import Record
+    from sim import simulate_records
+    from sim.records import OdometryConfig
+    from slam import SlamConfig
+
+    from experiments.slamrun import load_input, run
+
+    records = simulate_records("office", seed=1, duration=3.0, odometry=OdometryConfig())
+    log = tmp_path / "run.clf"
+    write_log(log, [Record(r.scan, odom=r.odom) for r in records])  # no truth
+    data = load_input(log, every=4)
+    assert data.odometry is not None and data.truth is None
+    result = run(data, SlamConfig(), progress=False, paper_baseline=False)
+    table = result.metrics["table"]
+    assert [row["source"] for row in table] == ["slam", "paper preset (odometry)"]
+    assert all(set(row) == {"source", "cpu_scans_per_s", "seconds"} - ({"cpu_scans_per_s"} if "odometry" in row["source"]
+                                                                       else set()) for row in table), table
+
+
 def test_decimated_input_and_odometry_rows(sim_folder):
     from slam import SlamConfig
 

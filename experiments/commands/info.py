@@ -27,10 +27,10 @@ def run(args: argparse.Namespace) -> int:
     stats = reader.stats
     if summary.scans == 0:
         if stats.stopped:  # damage before the first scan (read under --skip-bad-lines)
-            raise LogFormatError(args.log, 1, f"no scan read: the file stops being readable at {stats.stopped}")
+            raise LogFormatError(args.log, None, f"no scan read: the file stops being readable at {stats.stopped}")
         met = getattr(stats, "messages", {})
         seen = f" (other lines: {sum(met.values())})" if met else ""
-        raise LogFormatError(args.log, 1, "no laser messages found: not a CARMEN log (FLASER/RLASER/ROBOTLASER/RAWLASER "
+        raise LogFormatError(args.log, None, "no laser messages found: not a CARMEN log (FLASER/RLASER/ROBOTLASER/RAWLASER "
                                           f"lines) nor a bag with LaserScan messages{seen}")
     others = stats.other_lasers() if hasattr(stats, "other_lasers") else {}
     report_skipped(reader)

@@ -174,9 +174,9 @@ def _records(dev: LMS200, progress: _Progress, stop: dict, max_scans: int | None
 
 def _write(out: Path, records: Iterable[Record]) -> int:
     if out.suffix == ".bag":
-        from lms200.bag import write_bag
+        from lms200.bag import RECORD_FLUSH_S, write_bag
 
-        return write_bag(out, records)
+        return write_bag(out, records, flush_s=RECORD_FLUSH_S)  # a killed recording keeps all but its last second
     return write_carmen(out, records, flush=True)
 
 

@@ -78,8 +78,8 @@ def run(args: argparse.Namespace) -> int:
     from experiments.sim2real import format_report, sim2real, write_outputs
 
     read_options = read_log_options(args)
-    args.log = check_log(args.log)  # a simulate folder: its scans.clf
-    check_out_spares(args.out, SIM2REAL_OUTPUTS, [args.log] + ([args.sensor] if args.sensor else []))
+    given, args.log = args.log, check_log(args.log)  # a simulate folder: its scans.clf
+    check_out_spares(args.out, SIM2REAL_OUTPUTS, [given, args.log] + ([args.sensor] if args.sensor else []))
     check_out(args.out, writes=SIM2REAL_OUTPUTS, owner=SIM2REAL_OWNER)  # after: an input in --out is the sharper message
     check_seeds(args.seeds)
     if args.fit_duration is not None and args.sensor is not None:  # it would be ignored: nothing is calibrated

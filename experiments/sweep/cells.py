@@ -141,6 +141,11 @@ def _run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None) -> dict[s
         metrics = (fn or resolve_kind(kind))(dict(params))
         if not isinstance(metrics, dict):
             raise TypeError(f"cell kind {kind!r} returned {type(metrics).__name__}, expected a dict of metrics")
+        if INPUTS_KEY in metrics and (kind not in BUILTIN_KINDS or kind in _registry):
+            # the runner took it as the digests of the files the cell read (a built-in cell's own record)
+            raise ValueError(f"cell kind {kind!r} returned a metric named {INPUTS_KEY!r}, the runner's record of the "
+                             "files a built-in cell read (cells.INPUTS_KEY), not a metric a cell may return; name it "
+                             "otherwise")
         clash = sorted(set(metrics) & (set(params) | {"status", "error", "elapsed_s", "cell", WARNINGS_KEY}))
         if clash:
             raise ValueError(f"cell kind {kind!r} returned metric(s) {clash} that clash with parameter/column names")

@@ -35,10 +35,8 @@ class _Content:
     ``lru_cache`` key that does not hash the bytes)."""
 
     def __init__(self, path: str, data: bytes) -> None:
-        import hashlib
-
         self.path, self.data = path, data
-        self.digest = hashlib.sha256(data).hexdigest()[:16]  # as input_digests makes it
+        self.digest = _digest(data)  # as input_digests makes it
 
     def _key(self) -> tuple[str, str]:
         return (self.path, self.digest)
@@ -53,9 +51,23 @@ class _Content:
 def _read_inputs(params: dict[str, Any]) -> dict[str, _Content]:
     """The files a built-in cell reads (the parameters :func:`input_digests` names), each read once:
     the cell's digests and its computation come from the same bytes."""
+    return {name: _Content(path, Path(path).read_bytes()) for name, path in _input_files(params).items()}
+
+
+def _input_files(params: dict[str, Any]) -> dict[str, str]:
+    """The files a built-in cell reads, by parameter name: its ``sensor_file`` and a ``world`` that is a
+    world.json (one rule for the key's digests, :func:`input_digests`, and the cell's read, :func:`_read_inputs`:
+    were they to differ, every such cell would count as changed while it ran and never be stored)."""
     files = {"sensor_file": params.get("sensor_file"), "world": params.get("world")}
-    return {name: _Content(str(path), Path(str(path)).read_bytes()) for name, path in files.items()
+    return {name: str(path) for name, path in files.items()
             if path is not None and (name != "world" or str(path).endswith(".json"))}
+
+
+def _digest(data: bytes) -> str:
+    """A file's digest in a cell's key: the first 16 hex digits of its SHA-256."""
+    import hashlib
+
+    return hashlib.sha256(data).hexdigest()[:16]
 
 
 @functools.lru_cache(maxsize=4)
@@ -417,16 +429,10 @@ def input_digests(params: dict[str, Any], seen: dict[str, str]) -> dict[str, str
     this run by path, so each file is read once. A resumed sweep took the cells it had computed
     with a sensor file or world since edited as done ("2 already done"), their rows those of the
     old file, silently."""
-    import hashlib
-
-    files = {"sensor_file": params.get("sensor_file"), "world": params.get("world")}
     out = {}
-    for name, path in files.items():
-        if path is None or (name == "world" and not str(path).endswith(".json")):
-            continue
-        path = str(path)
+    for name, path in _input_files(params).items():
         if path not in seen:
-            seen[path] = hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
+            seen[path] = _digest(Path(path).read_bytes())
         out[name] = seen[path]
     return out
 
