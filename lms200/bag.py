@@ -613,7 +613,8 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
                     raise
 
         def _damaged(self, pos: int, what: str) -> BagError:
-            return BagError(f"{self.path}: an unindexed bag (not closed) whose record at byte {pos} is damaged: {what}")
+            return BagError(f"{self.path}: an unindexed bag (not closed) whose record at byte {pos} is damaged: {what}"
+                            + (" (a chunk offset counts bytes of the chunk's data, decompressed)" if "chunk offset" in what else ""))
 
         def _scan(self) -> None:
             bio = self.bio
@@ -633,20 +634,32 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
             conns: dict[int, Any] = {}
             indexes: dict[int, list] = defaultdict(list)
             while (pos := bio.tell()) < size:
+                # a length no record has is damage, whether or not it runs past the file's end; only a
+                # plausible record cut by the file's end is the truncated last one (a damaged length in
+                # the middle was taken for the end: every chunk after it dropped, under a warning)
                 head = bio.read(4)
-                if len(head) < 4 or pos + 4 + struct.unpack("<I", head)[0] + 4 > size:
+                if len(head) < 4:
                     found.dropped_at = pos
                     break
                 hlen = struct.unpack("<I", head)[0]
                 if hlen > MAX_RECORD_HEADER_BYTES:
                     raise self._damaged(pos, f"a header of {hlen} bytes (at most {MAX_RECORD_HEADER_BYTES})")
+                if pos + 4 + hlen + 4 > size:
+                    found.dropped_at = pos
+                    break
                 bio.seek(pos)
                 try:
                     header = r1.Header.read(bio)
                     op = header.get_uint8("op")
-                except (r1.ReaderError, KeyError, struct.error) as exc:
+                    dlen = r1.read_uint32(bio)
+                    if dlen > MAX_DECOMPRESSED_BYTES:  # read whole below: bounded before the read
+                        raise ValueError(f"a data length of {dlen} bytes (at most {MAX_DECOMPRESSED_BYTES})")
+                    if op == r1.RecordType.CHUNK and header.get_string("compression") == "none" \
+                            and dlen != header.get_uint32("size"):
+                        raise ValueError(f"an uncompressed chunk of {dlen} bytes that declares "
+                                         f"{header.get_uint32('size')}")
+                except (r1.ReaderError, KeyError, ValueError, struct.error) as exc:
                     raise self._damaged(pos, str(exc) or type(exc).__name__) from None
-                dlen = r1.read_uint32(bio)
                 datapos = bio.tell()
                 if datapos + dlen > size:
                     found.dropped_at = pos
@@ -707,9 +720,12 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
             start, stop = 2**63 - 1, 0
             counts: dict[int, int] = {}
             while (offset := inner.tell()) < end:
-                rec = r1.Header.read(inner)
-                op = rec.get_uint8("op")
-                n = r1.read_uint32(inner)
+                try:
+                    rec = r1.Header.read(inner)
+                    op = rec.get_uint8("op")
+                    n = r1.read_uint32(inner)
+                except (r1.ReaderError, KeyError, struct.error) as exc:  # named by the chunk's byte alone before
+                    raise ValueError(f"its record at chunk offset {offset}: {str(exc) or type(exc).__name__}") from None
                 if inner.tell() + n > end:
                     raise ValueError(f"a record at chunk offset {offset} runs past the chunk's end")
                 if op == r1.RecordType.CONNECTION:

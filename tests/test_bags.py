@@ -698,3 +698,67 @@ def test_an_unindexed_bag_cut_in_its_header_says_so(tmp_path: Path) -> None:
     with pytest.raises(BagError, match=r"killed\.bag: the bag was not closed and ends within its header \(86 bytes: a "
                        r"recording killed before its first messages were written\); no message to recover$"):
         list(read_log(out))
+
+
+@pytest.mark.parametrize("field", ["header length", "data length"])
+def test_an_unindexed_bag_with_a_damaged_length_mid_file_is_damaged_not_truncated(tmp_path: Path, field: str) -> None:
+    """A length no record has (0xFFFFFF00) in the second chunk ran past the file's end, so it was taken
+    for the truncated last record: the eight chunks after it dropped under a warning (the review)."""
+    import struct
+
+    from lms200 import read_log
+    from lms200.bag import BagError
+
+    out, _ = _unindexed(tmp_path)
+    data = bytearray(out.read_bytes())
+    op = data.index(b"op=\x05", 4200)  # the second chunk's op code
+    pos = data.rindex(b"compression=none", 0, op) - 16  # the record's header length (4) and the field's (4)
+    hlen = struct.unpack("<I", data[pos:pos + 4])[0]
+    at = pos if field == "header length" else pos + 4 + hlen
+    data[at:at + 4] = struct.pack("<I", 0xFFFFFF00)
+    out.write_bytes(bytes(data))
+    with pytest.raises(BagError, match=rf"killed\.bag: an unindexed bag \(not closed\) whose record at byte {pos} is "
+                       r"damaged: a (header|data length) of 4294967040 bytes"):
+        list(read_log(out))
+
+
+def test_an_unindexed_bag_s_uncompressed_chunk_must_hold_what_it_declares(tmp_path: Path) -> None:
+    """An uncompressed chunk's data length differing from its declared size is damage (such a chunk
+    of size 100 and 400 MiB of data was read whole, 444 MB of memory, before its records failed)."""
+    import struct
+
+    from lms200 import read_log
+    from lms200.bag import BagError
+
+    out, _ = _unindexed(tmp_path)
+    data = bytearray(out.read_bytes())
+    op = data.index(b"op=\x05", 4200)
+    pos = data.rindex(b"compression=none", 0, op) - 16
+    at = data.index(b"size=", pos) + 5
+    declared = struct.unpack("<I", data[at:at + 4])[0]
+    data[at:at + 4] = struct.pack("<I", declared - 1)
+    out.write_bytes(bytes(data))
+    with pytest.raises(BagError, match=rf"whose record at byte {pos} is damaged: an uncompressed chunk of {declared} "
+                       rf"bytes that declares {declared - 1}$"):
+        list(read_log(out))
+
+
+def test_an_unindexed_bag_s_damaged_message_record_is_named_by_its_chunk_offset(tmp_path: Path) -> None:
+    """A message record whose header was damaged inside a chunk was named by the chunk's byte alone."""
+    import struct
+
+    from lms200 import read_log
+    from lms200.bag import BagError
+
+    out, _ = _unindexed(tmp_path)
+    data = bytearray(out.read_bytes())
+    op = data.index(b"op=\x05", 4200)
+    pos = data.rindex(b"compression=none", 0, op) - 16
+    hlen = struct.unpack("<I", data[pos:pos + 4])[0]
+    datapos = pos + 4 + hlen + 4  # the chunk's data: a connection record, then the scan's message record
+    msg = data.index(b"op=\x02", datapos) - 8  # that record's header length, its op field's
+    data[msg + 4:msg + 8] = struct.pack("<I", 0xFFFF)  # the op field's length, past the record's header
+    out.write_bytes(bytes(data))
+    with pytest.raises(BagError, match=rf"whose record at byte {pos} is damaged: its record at chunk offset "
+                       rf"{msg - datapos}: .* \(a chunk offset counts bytes of the chunk's data, decompressed\)$"):
+        list(read_log(out))
