@@ -340,7 +340,9 @@ def read_relations(path: str | Path) -> np.ndarray:
         rows.append((v[0], v[1], v[2], v[3], v[7]))
         unit_quaternions += abs(math.hypot(*v[4:8]) - 1.0) <= QUATERNION_NORM_TOLERANCE
         turned |= any(v[4:7])  # a TUM row's qz of a pose turned from the first; a 2-D relation's z, roll, pitch are 0
-        if tilted is None and tilt_of_roll_pitch_deg(v[5], v[6]) > MAX_TILT_DEG:  # as read_tum's and the bags' tilt
+        # tilted as read_tum and the bags measure it; roll and pitch both near +-pi tilt it by ~0 but turn its
+        # heading by pi (its yaw would be scored half a turn off): a planar relation's are near 0
+        if tilted is None and (tilt_of_roll_pitch_deg(v[5], v[6]) > MAX_TILT_DEG or math.cos(v[5]) < 0):
             tilted = (no, line.strip()[:60])
     if not rows:  # an empty file gave "none of the 0 relations falls inside the run" after the run
         raise LmsbenchError(f"{path}: no relations (t1 t2 x y z roll pitch yaw a line)")
@@ -350,7 +352,7 @@ def read_relations(path: str | Path) -> np.ndarray:
                             "of stamps and the true motion between them)")
     if tilted is not None:  # a 3-D relation's motion read as its x, y and yaw, silently (as read_tum refuses a tilted pose)
         raise LogFormatError(path, tilted[0], f"relation row's roll and pitch tilt it by more than {MAX_TILT_DEG:g} "
-                                              "deg: not a planar motion, whose x, y "
+                                              "deg, or are not near 0: not a planar motion, whose x, y "
                                               f"and yaw could be scored: {tilted[1]!r}")
     return np.array(rows, float).reshape(-1, 5)
 

@@ -383,7 +383,7 @@ def test_a_relation_of_large_roll_or_pitch_is_refused_naming_its_line(tmp_path: 
     rel = tmp_path / "r.relations"
     rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 0.1 0.05 -0.1 0.2\n3 4 0.3 0.0 0 0 0.6 0.2\n")
     with pytest.raises(LogFormatError, match=r"r\.relations:3: relation row's roll and pitch tilt it by more than 30 "
-                                             r"deg: not a planar motion, whose x, y and yaw could be scored: "
+                                             r"deg, or are not near 0: not a planar motion, whose x, y and yaw could be scored: "
                                              r"'3 4 0\.3 0\.0 0 0 0\.6 0\.2'"):
         read_relations(rel)
     # roll and pitch of 25 deg each tilt it by 34.8 deg, as read_tum measures a quaternion's tilt (the first
@@ -398,6 +398,11 @@ def test_a_relation_of_large_roll_or_pitch_is_refused_naming_its_line(tmp_path: 
     assert tilt_of_roll_pitch_deg(0.4363, 0.4363) == pytest.approx(34.77, abs=0.01)
     rel.write_text("1 2 0.3 0.0 0 0.4363 0.4363 0.2\n")
     with pytest.raises(LogFormatError, match=r"r\.relations:1: relation row's roll and pitch tilt it"):
+        read_relations(rel)
+    # roll and pitch of pi tilt it by 0 but turn it by pi: its yaw 0.5 is a heading of 0.5 + pi (the review)
+    rel.write_text("0 1 1.0 0 0 3.14159265 3.14159265 0.5\n")
+    with pytest.raises(LogFormatError, match=r"r\.relations:1: relation row's roll and pitch tilt it by more than 30 "
+                                             r"deg, or are not near 0: not a planar motion"):
         read_relations(rel)
     rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 0.1 0.05 -0.1 0.2\n")
     assert read_relations(rel).tolist() == [[1, 2, 0.3, 0, 0.2], [2, 3, 0.3, 0, 0.2]]  # a little: as before
