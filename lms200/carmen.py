@@ -583,7 +583,8 @@ class _BlankRun:
 
 
 LMSBENCH_PARAM_PREFIX = "lmsbench_"  # the PARAM names this package writes and reads
-PARAM_NEAR_MISS = 0.8  # difflib ratio from which an unknown lmsbench_* name is taken as a misspelt known one
+PARAM_NEAR_MISS = 0.8  # difflib ratio (of the names after the prefix) from which an unknown lmsbench_* name misspells a known one
+PARAM_KEY_WORDS = ("units", "odometry", "robotlaser")  # words of a known name that only it has: an unknown name with one misspells it
 LMSBENCH_PARAMS = frozenset({UNITS_PARAM, ODOMETRY_PARAM, RANGE_MIN_PARAM, EXACT_ANGLES_PARAM} | EXACT_GEOMETRY_PARAMS)
 
 
@@ -613,9 +614,9 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
         # a misspelt one (lmsbench_range_unit mm) was passed over: the unit inferred, the scans read otherwise;
         # a name near none of ours (a later version's, a lab's own lmsbench_writer_version) is passed over
         # with a warning, as a whole log refused for it would lose every scan
-        near = difflib.get_close_matches(name, LMSBENCH_PARAMS, n=1, cutoff=PARAM_NEAR_MISS)
+        near = _misspelt_param(name)
         if near:
-            raise ValueError(f"{name!r} is no lmsbench PARAM: {near[0]!r} misspelt? (known: "
+            raise ValueError(f"{name!r} is no lmsbench PARAM: {near!r} misspelt? (known: "
                              f"{', '.join(sorted(LMSBENCH_PARAMS))})")
         warnings.warn(f"PARAM {name}: no lmsbench PARAM this version reads (known: {', '.join(sorted(LMSBENCH_PARAMS))}); "
                       "passed over, as other programs' PARAM lines are", LmsbenchWarning, stacklevel=2)
@@ -631,6 +632,24 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
             raise ValueError(f"{name} {value}: {exc}") from None
         params[name] = number
     return units, has_odometry
+
+
+def _misspelt_param(name: str) -> str | None:
+    """The known lmsbench PARAM that an unknown ``lmsbench_*`` name misspells, or None. The names are
+    compared after the shared prefix (whole, the prefix made every pair look alike); a name that
+    extends a known one (``lmsbench_odometry_frame``, ``lmsbench_range_min_m``: a later version's) is
+    no misspelling; nor is one near none of them by difflib's ratio (``PARAM_NEAR_MISS``) or by a word
+    (``lmsbench_unit``: units)."""
+    stem = name[len(LMSBENCH_PARAM_PREFIX):]
+    known = {p[len(LMSBENCH_PARAM_PREFIX):]: p for p in LMSBENCH_PARAMS}
+    if any(stem.startswith(k + "_") for k in known):
+        return None
+    near = difflib.get_close_matches(stem, list(known), n=1, cutoff=PARAM_NEAR_MISS)
+    if near:
+        return known[near[0]]
+    words = {w.rstrip("s") for w in stem.split("_") if len(w) > 3}
+    shared = [p for k, p in sorted(known.items()) if words & {w.rstrip("s") for w in k.split("_") if w in PARAM_KEY_WORDS}]
+    return shared[0] if len(shared) == 1 else None
 
 
 def _require(ok: bool, reason: str) -> None:

@@ -424,16 +424,32 @@ def test_a_misspelt_lmsbench_param_is_a_malformed_line(tmp_path: Path) -> None:
     assert [(r.scan.range_max, int(r.scan.valid.sum())) for r in read_log(log)] == [(8.183, 0)]  # as before
 
 
-def test_an_lmsbench_param_near_no_known_name_is_passed_over_with_a_warning(tmp_path: Path) -> None:
-    """A name near none of the known ones (a later version's PARAM, a lab's own) is no misspelling: a
-    log refused for it lost every scan (the review: `PARAM lmsbench_writer_version 0.2.0`); it is read as
-    other programs' PARAM lines are, with a warning naming it."""
+@pytest.mark.parametrize("name", ["lmsbench_writer_version", "lmsbench_odometry_frame", "lmsbench_range_min_m"])
+def test_an_lmsbench_param_near_no_known_name_is_passed_over_with_a_warning(tmp_path: Path, name: str) -> None:
+    """A name near none of the known ones (a lab's own), or one that extends a known one (a later
+    version's), is no misspelling: a log refused for it lost every scan (the review: `PARAM
+    lmsbench_writer_version 0.2.0`; compared whole, the shared prefix made `lmsbench_odometry_frame` a
+    misspelt `lmsbench_odometry`); it is read as other programs' PARAM lines are, with a warning naming it."""
     ranges = " ".join(["2.00"] * 181)
     log = tmp_path / "a.log"
-    log.write_text(f"PARAM lmsbench_writer_version 0.2.0 h 0\nFLASER 181 {ranges} 0 0 0 0 0 0 1 h 1\n")
-    with pytest.warns(LmsbenchWarning, match=r"PARAM lmsbench_writer_version: no lmsbench PARAM this version reads"):
+    log.write_text(f"PARAM {name} 0.2.0 h 0\nFLASER 181 {ranges} 0 0 0 0 0 0 1 h 1\n")
+    with pytest.warns(LmsbenchWarning, match=rf"PARAM {name}: no lmsbench PARAM this version reads"):
         records = list(read_log(log))
     assert [int(r.scan.valid.sum()) for r in records] == [181]
+
+
+@pytest.mark.parametrize("name, known", [("lmsbench_unit", "lmsbench_range_units"),
+                                         ("lmsbench_odometri", "lmsbench_odometry"),
+                                         ("lmsbench_robotlaser_angle", "lmsbench_robotlaser_angles")])
+def test_an_lmsbench_param_misspelt_by_more_than_a_letter_is_still_malformed(tmp_path: Path, name: str,
+                                                                            known: str) -> None:
+    """`lmsbench_unit mm` shares a word only lmsbench_range_units has: refused naming it (whole names
+    compared, it was only warned of, the unit inferred)."""
+    log = tmp_path / "a.log"
+    log.write_text(f"PARAM {name} mm h 0\nFLASER 181 {' '.join(['20.00'] * 181)} 0 0 0 0 0 0 1 h 1\n")
+    with pytest.raises(LogFormatError, match=rf"a\.log:1: malformed PARAM line: '{name}' is no lmsbench PARAM: "
+                                             rf"'{known}' misspelt\?"):
+        list(read_log(log))
 
 
 @pytest.mark.parametrize("hostname", ["my host", "", "tab\there", "nl\n", "höst", 7])
