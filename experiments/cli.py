@@ -343,7 +343,7 @@ def _main(argv: Sequence[str] | None) -> int:
         default_threads()  # a bad $LMSBENCH_THREADS is refused before any work, by every command
         from .options import holding_outputs
 
-        holding_outputs(name)  # the command's --out is its own until it ends (options.hold_output)
+        holding_outputs()  # the command's --out is its own until it ends (options.hold_output)
         interrupt.running = True
         sys.stdout = watched  # type: ignore[assignment]
         try:

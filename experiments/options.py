@@ -866,7 +866,7 @@ def _held() -> dict[str, tuple[int, Path | None, list[Path]]] | None:
     return getattr(_HOLDING, "held", None)
 
 
-def holding_outputs(command: str) -> None:
+def holding_outputs() -> None:
     """Start a command's holding of its outputs (``experiments.cli``, before the command runs):
     from here :func:`check_out` and :func:`check_out_file` take each output for this process until
     :func:`release_outputs`."""

@@ -76,7 +76,7 @@ def test_an_output_file_held_by_another_command_is_refused(tmp_path, capsys):
     recordings into one file interleaved their lines."""
     target = tmp_path / "scans.clf"
     code = ("import sys, time\nfrom pathlib import Path\nfrom experiments.options import check_out_file, holding_outputs\n"
-            "holding_outputs('lms200 record')\ncheck_out_file(Path(sys.argv[1]))\nprint('held', flush=True)\ntime.sleep(60)\n")
+            "holding_outputs()\ncheck_out_file(Path(sys.argv[1]))\nprint('held', flush=True)\ntime.sleep(60)\n")
     proc = subprocess.Popen([sys.executable, "-c", code, str(target)], cwd=REPO, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     try:
@@ -102,7 +102,7 @@ def test_a_stale_lock_file_beside_an_output_file_is_taken_and_removed(tmp_path, 
 
 
 HOLD = ("import sys, time\nfrom experiments.options import check_out, holding_outputs\n"
-        "holding_outputs('simulate')\ncheck_out(sys.argv[1])\nprint('held', flush=True)\ntime.sleep(60)\n")
+        "holding_outputs()\ncheck_out(sys.argv[1])\nprint('held', flush=True)\ntime.sleep(60)\n")
 
 
 def test_a_folder_held_by_a_command_of_another_tmpdir_is_refused(tmp_path, capsys, monkeypatch):
@@ -134,7 +134,7 @@ def test_a_file_system_that_takes_no_byte_still_locks_and_a_refused_run_leaves_n
     import resource
 
     code = ("import sys\nfrom experiments.options import check_out, check_out_file, holding_outputs, release_outputs\n"
-            "holding_outputs('simulate')\ntry:\n    check_out(sys.argv[1]); check_out_file(sys.argv[2])\n"
+            "holding_outputs()\ntry:\n    check_out(sys.argv[1]); check_out_file(sys.argv[2])\n"
             "    print('held', flush=True)\n    sys.stdin.readline()\nfinally:\n    release_outputs()\n")
     out, target = tmp_path / "new" / "simE", tmp_path / "scans.clf"
 
@@ -187,7 +187,7 @@ def test_a_command_on_another_thread_keeps_its_hold(tmp_path):
     held, done = threading.Event(), threading.Event()
 
     def first() -> None:
-        holding_outputs("simulate")
+        holding_outputs()
         check_out(out)
         held.set()
         done.wait(30)
@@ -197,7 +197,7 @@ def test_a_command_on_another_thread_keeps_its_hold(tmp_path):
     thread.start()
     try:
         assert held.wait(30)
-        holding_outputs("slam")
+        holding_outputs()
         try:
             with pytest.raises(InputError) as refused:
                 check_out(out)
