@@ -90,17 +90,17 @@ def _run(world: str, seed: int, duration: float, rate_hz: float | None, sensor_i
     return world_obj, sensor, records, truths
 
 
-def _records(params: dict[str, Any], defaults: dict[str, Any], with_truth: bool, used: dict[str, str]):
-    """The cell's run (:func:`_run`); ``used`` is filled with the digests of the files it read."""
+def _records(params: dict[str, Any], defaults: dict[str, Any], with_truth: bool):
+    """The cell's run (:func:`_run`: world, sensor, records, truths) and the digests of the files it
+    read (parameter name -> digest)."""
     p = {**defaults, **params}
     rate = p.get("rate_hz")
     rate = None if rate is None or (isinstance(rate, float) and math.isnan(rate)) else float(rate)
     sensor_items = tuple(sorted(split_params(p, "sensor").items()))
     files = _read_inputs(p)
-    used.clear()
-    used.update({name: content.digest for name, content in files.items()})
-    return _run(str(p["world"]), int(p.get("seed", 0)), float(p["duration"]), rate, sensor_items, with_truth,
-                files.get("sensor_file"), files.get("world"))
+    run = _run(str(p["world"]), int(p.get("seed", 0)), float(p["duration"]), rate, sensor_items, with_truth,
+               files.get("sensor_file"), files.get("world"))
+    return run, {name: content.digest for name, content in files.items()}
 
 
 def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
@@ -108,8 +108,7 @@ def extract_cell(params: dict[str, Any]) -> dict[str, Any]:
     (``experiments.compare``): the pooled summary row (f1, precision, recall, rho_rms_mm,
     alpha_rms_deg, corner_*, explained, us_median, time_ms_median, lines_per_scan, ...)."""
     p = {**EXTRACT_DEFAULTS, **params}
-    used: dict[str, str] = {}
-    _, sensor, records, truths = _records(p, EXTRACT_DEFAULTS, with_truth=True, used=used)
+    (_, sensor, records, truths), used = _records(p, EXTRACT_DEFAULTS, with_truth=True)
     method = str(p["method"])
     noise = float(sensor.noise_sigma)
     source = Source.from_records(records, truths, name=str(p["world"]), seed=int(p.get("seed", 0)))  # named in errors
@@ -130,8 +129,7 @@ def slam_cell(params: dict[str, Any]) -> dict[str, Any]:
     from experiments.user_methods import ensure_method, scans_of
 
     p = {**SLAM_DEFAULTS, **params}
-    used: dict[str, str] = {}
-    _, sensor, records, _ = _records(p, SLAM_DEFAULTS, with_truth=False, used=used)
+    (_, sensor, records, _), used = _records(p, SLAM_DEFAULTS, with_truth=False)
     nested = slam_config_dict(p)
     ensure_method(str(nested.get("extractor", "")))  # a MODULE:FUNCTION extractor, registered in this worker
     config = deskew_for_sensor(SlamConfig.from_dict(nested), bool(sensor.interlaced))
