@@ -1033,8 +1033,7 @@ def write_carmen(
     """
     if fmt not in ("robotlaser1", "flaser"):
         raise InputError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
-    if not isinstance(hostname, str) or not hostname.isascii() or not hostname.isprintable() or not hostname \
-            or any(c.isspace() for c in hostname):  # "my host" was written as two words: every line unreadable
+    if not isinstance(hostname, str) or not re.fullmatch(r"[!-~]+", hostname):  # "my host": two words, no line read back
         raise InputError(f"hostname: must be one word of printable ASCII (a CARMEN line's field), got {hostname!r}")
     path = Path(path)
     kind = COMPRESSION_SUFFIXES.get(path.suffix)
