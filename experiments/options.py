@@ -75,6 +75,9 @@ def shorten_quoted(message: str) -> str:
 
 UNRECOGNIZED = "unrecognized arguments: "  # argparse's message of words no option or argument took
 NEAR_MISS_EDITS = 2  # edits (edits()) within which an unknown option of five letters or more is a near miss of a known one
+#: a word that is a negative number, not an option: argparse 3.11 takes -5 and -.5 only, so `--seed -1e3`,
+#: `--duration -inf` and a valid `--laser-angle-min-deg -9e1` (or -90.) said "expected one argument"
+NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
 
 
 def edits(a: str, b: str) -> int:
@@ -98,6 +101,7 @@ class OneLineParser(argparse.ArgumentParser):
         kwargs.setdefault("allow_abbrev", False)
         kwargs.setdefault("formatter_class", HelpFormatter)
         super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER  # no option here looks like a number (-1): a value
         self.root: argparse.ArgumentParser | None = None  # the whole command line's parser (set_root): other commands' options
 
     def set_root(self) -> None:

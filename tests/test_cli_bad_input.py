@@ -1053,6 +1053,28 @@ def test_repeatable_options_and_flags_may_still_be_given_twice():
     assert [str(p) for p in args.sweep] == ["a", "b"] and args.no_slam
 
 
+@pytest.mark.parametrize("word", ["-9e1", "-90.", "-9.0E+1"])
+def test_a_negative_number_with_an_exponent_or_a_trailing_point_is_an_options_value(word):
+    """argparse 3.11 takes -90 and -.5 for numbers, any other word with a leading '-' for an
+    option: `info LOG --laser-angle-min-deg -9e1` (a valid bearing) said "argument
+    --laser-angle-min-deg: expected one argument"."""
+    from experiments.cli import build_parser
+
+    args = build_parser().parse_args(["info", "x.clf", "--laser-angle-min-deg", word])
+    assert args.laser_angle_min_deg == -90.0
+
+
+@pytest.mark.parametrize("option, word, says", [
+    ("--seed", "-1e3", "argument --seed: must be a whole number >= 0 and <= 4294967295, got '-1e3'"),
+    ("--duration", "-inf", "argument --duration: must be a finite number >= 0.1 and <= 3600 s, got '-inf'"),
+    ("--duration", "-NaN", "argument --duration: must be a finite number >= 0.1 and <= 3600 s, got '-NaN'")])
+def test_a_negative_number_out_of_range_says_its_range_not_expected_one_argument(option, word, says, tmp_path, capsys):
+    assert run_main(["simulate", "--out", str(tmp_path / "o"), option, word]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench simulate: error: {says} (see lmsbench simulate --help)"]
+    assert not (tmp_path / "o").exists()
+
+
 def test_sweep_out_holds_only_sweep_outputs_and_not_the_sweep_file(files, tmp_path, capsys):
     """`sweep DIR/sweep.yaml --out DIR` wrote the resolved spec over the user's file (its comments
     lost), and `sweep --out DIR` replaced a user's results.csv in DIR; both are refused before any
