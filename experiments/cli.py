@@ -21,6 +21,7 @@ import importlib
 import io
 import os
 import pkgutil
+import tempfile
 import _thread
 import signal
 import sys
@@ -367,7 +368,8 @@ def _main(argv: Sequence[str] | None) -> int:
         _end_progress_bars()
         if _users_code(exc) and os.environ.get("LMSBENCH_TRACEBACK"):
             traceback.print_exception(exc)  # the user's exception first, then where lmsbench called it
-        print(f"lmsbench {name}: error: {_one_line(exc)}{_skip_hint(exc, args)}{_traceback_hint(exc)}", file=sys.stderr)
+        text = _full_disk(exc, getattr(args, "out", None)) or _one_line(exc)
+        print(f"lmsbench {name}: error: {text}{_skip_hint(exc, args)}{_traceback_hint(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return _interrupted(interrupt)
@@ -651,6 +653,22 @@ def _users_code(exc: BaseException) -> bool:
 def _traceback_hint(exc: BaseException) -> str:
     """Where the traceback of the user's own code's exception is to be had."""
     return " (LMSBENCH_TRACEBACK=1 shows its traceback)" if _users_code(exc) and not os.environ.get("LMSBENCH_TRACEBACK") else ""
+
+
+#: the errors of a write that found no room: a file's write or close raises them without its name
+FULL_DISK_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
+
+
+def _full_disk(exc: BaseException, out: object) -> str:
+    """The message of a write that found no room and names no file (a full disk: a file's write or
+    close raises ENOSPC without its name, and the command said only "[Errno 28] No space left on
+    device"), naming where a command writes: ``out`` (its --out) and the temporary folder; else ""."""
+    if not isinstance(exc, OSError) or exc.errno not in FULL_DISK_ERRNOS or exc.filename is not None:
+        return ""
+    reason = exc.strerror or os.strerror(exc.errno)
+    where = f"--out {out}" if out is not None else "the outputs"
+    return (f"cannot write: {reason[:1].lower()}{reason[1:]} (on the disk of {where} or of the temporary "
+            f"folder {tempfile.gettempdir()})")
 
 
 def _one_line(exc: BaseException) -> str:

@@ -1115,6 +1115,34 @@ def test_a_system_error_names_its_file_without_errno_clutter():
     assert _one_line(TimeoutError("timed out")) == "timed out"
 
 
+@pytest.mark.parametrize("argv, where", [(["simulate", "--duration", "0.5", "--out", "{out}"], "--out {out}"),
+                                         (["calibrate", "{sim}", "--fit-duration", "1", "--out", "{out}.yaml"], "--out {out}.yaml")])
+def test_a_full_disk_says_where_the_command_writes(argv, where, tmp_path, capsys, monkeypatch):
+    """A full disk (a file's write or close raises ENOSPC without the file's name) was said as
+    "error: [Errno 28] No space left on device", naming nothing; it now names the command's --out
+    and the temporary folder, whichever disk filled."""
+    import errno
+    import tempfile
+
+    import experiments.simulation
+
+    sim = tmp_path / "sim"
+    if argv[0] == "calibrate":
+        assert run_main(["simulate", "--duration", "0.5", "--quiet", "--out", str(sim)]) == 0
+    capsys.readouterr()
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(experiments.simulation, "_write_synced", full)  # simulate's first write
+    monkeypatch.setattr("experiments.provenance.write_record", full)  # calibrate's YAML, every record
+    out = tmp_path / "o"
+    assert run_main([a.format(out=out, sim=sim) for a in argv]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench {argv[0]}: error: cannot write: no space left on device (on the disk of {where.format(out=out)} "
+        f"or of the temporary folder {tempfile.gettempdir()})"]
+
+
 def test_info_on_a_log_of_two_scan_sizes_says_whose_geometry_it_shows(files, capsys):
     """`info` on a log mixing 361 beams at 0.5 deg and 181 at 1 deg printed the first scan's field
     of view and resolution as the log's; it now says they are the first scan's."""
