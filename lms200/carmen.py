@@ -47,6 +47,7 @@ import gzip
 import io
 import lzma
 import math
+import os
 import re
 import stat
 import tarfile
@@ -1019,7 +1020,8 @@ def write_carmen(
     (their pose fields are written as zeros); no CARMEN laser line has a range_min field, so a
     ``PARAM lmsbench_range_min`` line gives it before the first scan whose
     range_min differs from the one before (0 before the first scan, as the reader assumes). ``flush=True`` pushes every scan to the file as soon
-    as it is written (for recorders: a crash or Ctrl-C loses nothing already received).
+    as it is written (for recorders: a crash or Ctrl-C loses nothing already received), and a write
+    that fails (a full disk) leaves a plain log cut after its last whole line, not within a scan's.
     Stamps, poses, angles and PARAM values are written as the shortest plain decimal that reads back
     as the same float64 (FLASER logs also get ``PARAM lmsbench_front_laser_angle_min / _increment``
     in rad; a ROBOTLASER1 log ``PARAM lmsbench_robotlaser_angles exact`` before the first scan whose
@@ -1044,53 +1046,64 @@ def write_carmen(
     range_min = 0.0  # what the reader assumes without a PARAM line
     exact_angles = False  # PARAM lmsbench_robotlaser_angles exact written
     flaser_params: dict[str, str] = {}
-    with opener(path, "wt", encoding="ascii") as f:  # type: ignore[operator]
-        f.write("# CARMEN log written by lmsbench\n")
-        f.write("# FLASER num_readings [range_readings] x y theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp\n")
-        f.write("# ROBOTLASER1 laser_type start_angle field_of_view angular_resolution maximum_range accuracy remission_mode num_readings [range_readings] num_remissions [remissions] laser_pose_x laser_pose_y laser_pose_theta robot_pose_x robot_pose_y robot_pose_theta laser_tv laser_rv forward_safety_dist side_safty_dist turn_axis ipc_timestamp hostname logger_timestamp\n")
-        for rec in records:
-            scan = rec.scan
-            if not laser_geometry.MIN_RANGE_MAX_M <= scan.range_max <= laser_geometry.MAX_RANGE_M:
-                raise InputError(f"records: item {count}: range_max {scan.range_max:g} m is outside "
-                                 f"[{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, which "
-                                 "the CARMEN reader refuses (the log could not be read back)")
-            u = _units_of(scan)
-            if units is None:
-                units = u
-                f.write(f"PARAM {UNITS_PARAM} {units} {hostname} 0\n")
-            elif u != units:
-                raise InputError(f"records: scan at {scan.stamp} is in {u} mode, earlier scans in {units}")
-            if odometry is None or odometry != (rec.odom is not None):
-                odometry = rec.odom is not None
-                f.write(f"PARAM {ODOMETRY_PARAM} {'present' if odometry else 'absent'} {hostname} 0\n")
-            if scan.range_min != range_min:
-                range_min = scan.range_min
-                f.write(f"PARAM {RANGE_MIN_PARAM} {_num(range_min)} {hostname} 0\n")
-            stamp = f"{_num(scan.stamp)} {hostname} {_num(scan.stamp)}"
-            ranges = _format_ranges(scan, u)
-            odom = _pose_text(rec.odom)
-            if fmt != "flaser" and not exact_angles and (snap_angle(scan.angle_min) != scan.angle_min
-                                                         or snap_angle(scan.angle_increment) != scan.angle_increment):
-                exact_angles = True  # the reader would snap them onto the grid: it is told to take them as written
-                f.write(f"PARAM {EXACT_ANGLES_PARAM} exact {hostname} 0\n")
-            if fmt == "flaser":
-                params = _flaser_params(scan)
-                if params != flaser_params:
-                    flaser_params = params
-                    for name, value in params.items():
-                        f.write(f"PARAM {name} {value} {hostname} 0\n")
-            if rec.truth is not None:  # directly before its laser line, as the reader takes it
-                f.write(f"TRUEPOS {_pose_text(rec.truth)} {_pose_text(rec.odom)} {stamp}\n")
-            if fmt == "flaser":
-                f.write(f"FLASER {len(scan)} {ranges} {odom} {odom} {stamp}\n")
-            else:
-                fov = scan.angle_max - scan.angle_min
-                f.write(
-                    f"ROBOTLASER1 0 {_num(scan.angle_min)} {_num(fov)} {_num(scan.angle_increment)} "
-                    f"{_num(scan.range_max)} {_num(metres_per_unit(u))} 0 {len(scan)} {ranges} 0 "
-                    f"{odom} {odom} 0.000000 0.000000 0.000000 0.000000 0.000000 {stamp}\n"
-                )
-            count += 1
-            if flush:
-                f.flush()
+    whole = 0  # bytes of a plain log written with flush up to the end of its last whole line
+    try:
+        with opener(path, "wt", encoding="ascii") as f:  # type: ignore[operator]
+            f.write("# CARMEN log written by lmsbench\n")
+            f.write("# FLASER num_readings [range_readings] x y theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp\n")
+            f.write("# ROBOTLASER1 laser_type start_angle field_of_view angular_resolution maximum_range accuracy remission_mode num_readings [range_readings] num_remissions [remissions] laser_pose_x laser_pose_y laser_pose_theta robot_pose_x robot_pose_y robot_pose_theta laser_tv laser_rv forward_safety_dist side_safty_dist turn_axis ipc_timestamp hostname logger_timestamp\n")
+            for rec in records:
+                scan = rec.scan
+                if not laser_geometry.MIN_RANGE_MAX_M <= scan.range_max <= laser_geometry.MAX_RANGE_M:
+                    raise InputError(f"records: item {count}: range_max {scan.range_max:g} m is outside "
+                                     f"[{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, which "
+                                     "the CARMEN reader refuses (the log could not be read back)")
+                u = _units_of(scan)
+                if units is None:
+                    units = u
+                    f.write(f"PARAM {UNITS_PARAM} {units} {hostname} 0\n")
+                elif u != units:
+                    raise InputError(f"records: scan at {scan.stamp} is in {u} mode, earlier scans in {units}")
+                if odometry is None or odometry != (rec.odom is not None):
+                    odometry = rec.odom is not None
+                    f.write(f"PARAM {ODOMETRY_PARAM} {'present' if odometry else 'absent'} {hostname} 0\n")
+                if scan.range_min != range_min:
+                    range_min = scan.range_min
+                    f.write(f"PARAM {RANGE_MIN_PARAM} {_num(range_min)} {hostname} 0\n")
+                stamp = f"{_num(scan.stamp)} {hostname} {_num(scan.stamp)}"
+                ranges = _format_ranges(scan, u)
+                odom = _pose_text(rec.odom)
+                if fmt != "flaser" and not exact_angles and (snap_angle(scan.angle_min) != scan.angle_min
+                                                             or snap_angle(scan.angle_increment) != scan.angle_increment):
+                    exact_angles = True  # the reader would snap them onto the grid: it is told to take them as written
+                    f.write(f"PARAM {EXACT_ANGLES_PARAM} exact {hostname} 0\n")
+                if fmt == "flaser":
+                    params = _flaser_params(scan)
+                    if params != flaser_params:
+                        flaser_params = params
+                        for name, value in params.items():
+                            f.write(f"PARAM {name} {value} {hostname} 0\n")
+                if rec.truth is not None:  # directly before its laser line, as the reader takes it
+                    f.write(f"TRUEPOS {_pose_text(rec.truth)} {_pose_text(rec.odom)} {stamp}\n")
+                if fmt == "flaser":
+                    f.write(f"FLASER {len(scan)} {ranges} {odom} {odom} {stamp}\n")
+                else:
+                    fov = scan.angle_max - scan.angle_min
+                    f.write(
+                        f"ROBOTLASER1 0 {_num(scan.angle_min)} {_num(fov)} {_num(scan.angle_increment)} "
+                        f"{_num(scan.range_max)} {_num(metres_per_unit(u))} 0 {len(scan)} {ranges} 0 "
+                        f"{odom} {odom} 0.000000 0.000000 0.000000 0.000000 0.000000 {stamp}\n"
+                    )
+                count += 1
+                if flush:
+                    f.flush()
+                    if kind is None:
+                        whole = f.buffer.tell()
+    except OSError:
+        if flush and kind is None:  # a full disk cut the line being written: a recording keeps its whole lines
+            try:  # (the reader refused the cut last line; a recorder says how many scans it kept)
+                os.truncate(path, whole)
+            except OSError:
+                pass
+        raise
     return count

@@ -291,6 +291,55 @@ def test_a_scan_the_writer_refuses_keeps_the_scans_before_it(tmp_path: Path, nam
     assert [codes(s) for s in got] == [codes(s) for s in sent[:3]]
 
 
+def test_a_full_disk_keeps_the_whole_scans_before_it_and_says_so(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """The disk fills while the 4th scan's line is written: half of it lands, then ENOSPC. The
+    command said "error: [Errno 28] No space left on device" and left the log ending in that half
+    line, which every reader refused ("malformed ROBOTLASER1 line ... fewer fields"); a bag of no
+    scan was left as a file of 0 bytes. The log now ends after the 3rd scan's line and the line
+    says what was kept."""
+    import builtins
+    import errno
+    import io
+
+    import lms200.carmen
+    from experiments.cli import main
+
+    class FullDisk(io.FileIO):
+        """A file whose disk has room for three laser lines and half of a fourth."""
+        lines = 0
+        cut = False
+
+        def write(self, data) -> int:  # noqa: ANN001
+            data = bytes(data)
+            if self.cut:
+                raise OSError(errno.ENOSPC, "No space left on device")
+            if b"ROBOTLASER1 0 " in data:
+                if self.lines == 3:
+                    self.cut = True
+                    return super().write(data[:len(data) // 2])
+                self.lines += 1
+            return super().write(data)
+
+    def opener(path, mode="r", *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
+        if mode != "wt":
+            return builtins.open(path, mode, *args, **kwargs)
+        return io.TextIOWrapper(io.BufferedWriter(FullDisk(path, "w")), encoding=kwargs.get("encoding"))
+
+    monkeypatch.setattr(lms200.carmen, "open", opener, raising=False)
+    sent = source(10)
+    out = tmp_path / "rec.clf"
+    with TcpServer(VirtualLMS200(sent, time_scale=0.01)) as ad:
+        rc = main(["lms200", "record", "--port", ad.url, "--out", str(out), "--max-scans", "10", "--baud", "500000"])
+    err = capsys.readouterr().err
+    assert rc == 2, err
+    assert err.strip().splitlines()[-1] == (f"lmsbench lms200 record: error: cannot write {out}: no space left on "
+                                            f"device; the 3 scans before it are saved in {out}")
+    monkeypatch.undo()
+    assert out.read_bytes().endswith(b"\n")
+    assert [codes(rec.scan) for rec in read_log(out)] == [codes(s) for s in sent[:3]]
+
+
 def test_emulate_on_a_port_in_use_or_an_address_not_here_names_the_option(capsys: pytest.CaptureFixture) -> None:
     """The wrong-input hunt: `emulate --tcp P` on a port in use said "error: [Errno 98] Address already
     in use (while attempting to bind on address ('127.0.0.1', P))", and `--host 8.8.8.8` "[Errno 99]

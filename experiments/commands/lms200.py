@@ -262,6 +262,11 @@ def run_record(args: argparse.Namespace) -> int:
                 # (was caught below as the port's closing error with 0 written: the file of 3 flushed
                 # scans was deleted, "no scan was recorded"; found by the session's review)
                 written, stop["error"] = counted.written, exc
+            except OSError as exc:  # the file could not be written on (a full disk): the scans before it are
+                # kept, said as such (it said "[Errno 28] No space left on device" and left a bag of 0 bytes)
+                reason = exc.strerror or str(exc)
+                written = counted.written
+                stop["error"] = LmsbenchError(f"cannot write {args.out}: {reason[:1].lower()}{reason[1:]}")
             finally:
                 progress.update(final=True)
             stats = dev.stats
