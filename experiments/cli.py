@@ -665,7 +665,7 @@ def _full_disk(exc: BaseException, out: object) -> str:
     device"), naming where a command writes: ``out`` (its --out) and the temporary folder; else ""."""
     if not isinstance(exc, OSError) or exc.errno not in FULL_DISK_ERRNOS or exc.filename is not None:
         return ""
-    reason = exc.strerror or os.strerror(exc.errno)
+    reason = os.strerror(exc.errno)  # not pyarrow's "error writing bytes to file. Detail: [errno 28] ..."
     where = f"--out {out}" if out is not None else "the outputs"
     return (f"cannot write: {reason[:1].lower()}{reason[1:]} (on the disk of {where} or of the temporary "
             f"folder {tempfile.gettempdir()})")

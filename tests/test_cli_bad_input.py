@@ -1143,6 +1143,21 @@ def test_a_full_disk_says_where_the_command_writes(argv, where, tmp_path, capsys
         f"or of the temporary folder {tempfile.gettempdir()})"]
 
 
+def test_a_full_disk_under_pyarrow_is_said_once_as_the_systems_reason():
+    """pyarrow's OSError of a full disk (a sweep's cell files) has its own text around the errno:
+    the line read "cannot write: error writing bytes to file. Detail: [errno 28] No space left on device"."""
+    import errno
+    import tempfile
+
+    from experiments.cli import _full_disk
+
+    exc = OSError(errno.ENOSPC, "error writing bytes to file. Detail: [errno 28] No space left on device")
+    assert _full_disk(exc, Path("sw")) == ("cannot write: no space left on device (on the disk of --out sw or of the "
+                                           f"temporary folder {tempfile.gettempdir()})")
+    assert _full_disk(OSError(errno.ENOSPC, "No space left on device", "a.clf"), None) == ""  # named: as every OSError
+    assert _full_disk(OSError(errno.ENOENT, "No such file or directory"), None) == ""
+
+
 def test_info_on_a_log_of_two_scan_sizes_says_whose_geometry_it_shows(files, capsys):
     """`info` on a log mixing 361 beams at 0.5 deg and 181 at 1 deg printed the first scan's field
     of view and resolution as the log's; it now says they are the first scan's."""
