@@ -813,7 +813,7 @@ FIGURES_OWNER = Owner("figures", {"figures.yaml": _yaml_says(command="lmsbench f
 
 def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | None = None,
               patterns: Sequence[str] = (), owner: Owner | None = None,
-              replaces: OutTree | None = None) -> Path | None:
+              replaces: OutTree | None = None, default: str | None = None) -> Path | None:
     """An output folder: absent (created later) or a folder; its nearest existing parent writable.
     None (no --out: a new timestamped folder will be made) passes. With ``writes`` (the fixed file
     names a command writes: SIMULATE_OUTPUTS, SLAM_OUTPUTS, COMPARE_OUTPUTS, or an OutTree of
@@ -826,8 +826,12 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
     by their content) a file of its names is accepted only when an earlier run of it wrote it: by
     names alone a user's summary.txt or config.yaml in a folder of nothing else was written over.
     ``replaces``: the files of those the run writes (default: all; ``figures --tables DIR --out DIR``
-    reads the tables beside its figures and writes only the figures)."""
+    reads the tables beside its figures and writes only the figures). ``default``: where the command
+    makes its run's folder without --out (``results/compare``), checked as --out's parent is: a
+    read-only or full current folder failed ``bench`` and ``figures`` after all their work."""
     if path is None:
+        if default is not None:
+            _check_default_base(Path(default))
         return None
     p = Path(path)
     check_link(p)
@@ -1020,6 +1024,20 @@ def check_out_file(path: str | os.PathLike | None, flag: str = "--out") -> Path 
     if not os.access(parent, os.W_OK | os.X_OK) or not _can_create_in(parent):
         raise InputError(f"{flag} {p}: {parent} is not a writable folder")
     return p
+
+
+def _check_default_base(base: Path) -> None:
+    """The folder ``base`` a command makes its run folder ``base/DATE_TIME`` in without --out: a
+    folder, or absent beneath a writable one."""
+    check_link(base)
+    if base.exists() and not base.is_dir():
+        raise InputError(f"{base} (where a run without --out goes) exists and is not a folder; give --out")
+    parent = base
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK) or not _can_create_in(parent):
+        what = "a writable folder" if parent.is_dir() else "a folder"
+        raise InputError(f"{parent} is not {what}, so a run without --out cannot be made in {base}; give --out")
 
 
 def _can_create_in(folder: Path) -> bool:

@@ -1143,6 +1143,35 @@ def test_a_full_disk_says_where_the_command_writes(argv, where, tmp_path, capsys
         f"or of the temporary folder {tempfile.gettempdir()})"]
 
 
+@pytest.mark.parametrize("argv, base", [
+    (["compare", "office:0", "--duration", "0.5", "--methods", "sensor"], "compare"),
+    (["bench", "sim", "--quick"], "bench"),
+    (["figures", "--no-slam", "--duration", "0.5", "--methods", "sensor"], "figures"),
+    (["sim2real", "{good.clf}", "--sensor", "{sensor_ok.yaml}"], "sim2real"),
+    (["demo", "--no-sweep", "--duration", "0.5"], "demo")])
+def test_a_run_folder_that_cannot_be_made_is_refused_before_any_work(argv, base, files, tmp_path, capsys, monkeypatch):
+    """Without --out a command makes results/CMD/DATE_TIME, which was not checked: where results is
+    a file (or the folder read-only), bench ran every benchmark and figures its whole study, then
+    failed with "results: not a directory" (their rows and tables lost). It is refused first."""
+    import experiments.benchmarks.sim
+    import experiments.demo
+    import experiments.figures.study
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the work started")
+
+    monkeypatch.setattr(experiments.benchmarks.sim, "run", no_work)
+    monkeypatch.setattr(experiments.figures.study, "run_study", no_work)
+    monkeypatch.setattr(experiments.demo, "run_study", no_work)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "results").write_text("mine")
+    assert run_main(_fill(argv, files, tmp_path / "unused")) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench {argv[0]}: error: results is not a folder, so a run without --out cannot be made in "
+        f"results/{base}; give --out"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results"]
+
+
 def test_a_full_disk_under_pyarrow_is_said_once_as_the_systems_reason():
     """pyarrow's OSError of a full disk (a sweep's cell files) has its own text around the errno:
     the line read "cannot write: error writing bytes to file. Detail: [errno 28] No space left on device"."""

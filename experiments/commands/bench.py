@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise LmsbenchError(f"benchmark(s) {', '.join(twice)} named more than once")
-    check_out(args.out, writes=BENCH_OUTPUTS, owner=BENCH_OWNER)
+    check_out(args.out, writes=BENCH_OUTPUTS, owner=BENCH_OWNER, default="results/bench")
     from experiments.progress import heartbeat_on_terminal
 
     # the run's folder is named by its start, as the demo's: a run started 10:34:23 wrote 2026-12-05_10-38-00

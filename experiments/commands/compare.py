@@ -136,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
     reads = [Path(s) / name for s in args.sources if Path(s).is_dir() for name in SIMULATE_OUTPUTS]
     reads += [Path(s) for s in args.sources if Path(s).is_file()] + ([args.sensor] if args.sensor else [])
     check_out_spares(args.out, COMPARE_OUTPUTS, reads)
-    check_out(args.out, writes=COMPARE_OUTPUTS, patterns=COMPARE_FIGURES, owner=COMPARE_OWNER)  # after: an input in --out is the sharper message
+    check_out(args.out, writes=COMPARE_OUTPUTS, patterns=COMPARE_FIGURES, owner=COMPARE_OWNER, default="results/compare")  # after: an input in --out is the sharper message
     _check_applies(args)
     args.seeds = args.seeds or list(DEFAULT_SEEDS)
     args.duration = args.duration or DEFAULT_DURATION_S

@@ -32,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.inprocess and args.no_sweep:  # it was ignored: there is no sweep to run in this process
         raise InputError("--inprocess runs the demo's sweep in this process; --no-sweep skips it: give one of them")
-    check_out(args.out, writes=DEMO_OUTPUTS, owner=DEMO_OWNER)
+    check_out(args.out, writes=DEMO_OUTPUTS, owner=DEMO_OWNER, default=DEMO_BASE)
     cfg = StudyConfig(world=args.world, seed=args.seed, duration=args.duration, rate_hz=args.rate_hz)
     if args.log is not None:
         cfg.intel_log = str(check_log(args.log))

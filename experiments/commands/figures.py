@@ -50,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     # a file of its names is replaced only beside its own record (options.FIGURES_OWNER): by names
     # alone a user's fig3_scan.png or accuracy_speed.csv in --out was written over; --tables: no table is
     check_out(args.out, writes=writes, owner=FIGURES_OWNER,
-              replaces=FIGURES_OUTPUTS if args.tables is None else OutTree(FIGURES_OUTPUTS.files))
+              replaces=FIGURES_OUTPUTS if args.tables is None else OutTree(FIGURES_OUTPUTS.files), default="results/figures")
     for folder in args.sweep:
         check_sweep_results(folder)
     _check_sweeps_apart(args.sweep)

@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     read_options = read_log_options(args)
     given, args.log = args.log, check_log(args.log)  # a simulate folder: its scans.clf
     check_out_spares(args.out, SIM2REAL_OUTPUTS, [given, args.log] + ([args.sensor] if args.sensor else []))
-    check_out(args.out, writes=SIM2REAL_OUTPUTS, owner=SIM2REAL_OWNER)  # after: an input in --out is the sharper message
+    check_out(args.out, writes=SIM2REAL_OUTPUTS, owner=SIM2REAL_OWNER, default="results/sim2real")  # after: an input in --out is the sharper message
     check_seeds(args.seeds)
     if args.fit_duration is not None and args.sensor is not None:  # it would be ignored: nothing is calibrated
         raise InputError("--fit-duration sets the calibration's fit; with --sensor the log is not calibrated")
