@@ -15,6 +15,7 @@ import os
 import signal
 import sys
 import threading
+import urllib.parse
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -298,6 +299,29 @@ def check_executor(executor: Any, workers: int) -> None:
     if isinstance(executor, str) and executor not in ("local", "inprocess") and not executor.startswith(SCHEMES):
         raise LmsbenchError(f"scheduler: {executor!r} is not a Dask scheduler address (tcp://HOST:PORT), "
                             "nor 'local' or 'inprocess'")
+    if isinstance(executor, str) and executor.startswith(SCHEMES):
+        _check_address(executor)
+
+
+def _check_address(address: str) -> None:
+    """A scheduler address Dask can connect to: a host and a port 1-65535 (``inproc://``: Dask's
+    HOST/PID/N of a scheduler in this process). Dask's own parse of ``tcp://``, ``tcp://HOST``,
+    ``tcp://[::1`` or ``inproc://x`` was an internal error (ValueError), and a port beyond 65535 or
+    0 a 10 s wait for a connection that cannot be."""
+    scheme, _, location = address.partition("://")
+    if scheme == "inproc":
+        if len(location.split("/")) != 3:
+            raise LmsbenchError(f"scheduler: {address!r} is not an in-process Dask address (inproc://HOST/PID/N)")
+        return
+    try:
+        parts = urllib.parse.urlsplit(address)
+        host, port = parts.hostname, parts.port
+    except ValueError as exc:  # "Invalid IPv6 URL", "Port out of range 0-65535", a port that is no number
+        raise LmsbenchError(f"scheduler: {address!r} is not a Dask scheduler address ({scheme}://HOST:PORT): "
+                            f"{str(exc)[:1].lower()}{str(exc)[1:]}") from None
+    if not host or port is None or not 1 <= port <= 65535 or parts.path or parts.query:
+        raise LmsbenchError(f"scheduler: {address!r} is not a Dask scheduler address: give {scheme}://HOST:PORT, "
+                            "a host and a port 1-65535 (an IPv6 host in brackets: tcp://[::1]:8786)")
 
 
 def check_spec(spec: SweepSpec):
