@@ -368,7 +368,7 @@ def _main(argv: Sequence[str] | None) -> int:
         _end_progress_bars()
         if _users_code(exc) and os.environ.get("LMSBENCH_TRACEBACK"):
             traceback.print_exception(exc)  # the user's exception first, then where lmsbench called it
-        text = _full_disk(exc, getattr(args, "out", None)) or _one_line(exc)
+        text = _full_disk(exc, getattr(args, "out", None)) or _cwd_gone(exc) or _one_line(exc)
         print(f"lmsbench {name}: error: {text}{_skip_hint(exc, args)}{_traceback_hint(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
@@ -669,6 +669,19 @@ def _full_disk(exc: BaseException, out: object) -> str:
     where = f"--out {out}" if out is not None else "the outputs"
     return (f"cannot write: {reason[:1].lower()}{reason[1:]} (on the disk of {where} or of the temporary "
             f"folder {tempfile.gettempdir()})")
+
+
+def _cwd_gone(exc: BaseException) -> str:
+    """The message of a relative path that could not be made absolute because the current folder
+    was removed after the shell entered it (os.getcwd's FileNotFoundError names no file: "error:
+    [Errno 2] No such file or directory"), else ""."""
+    if not isinstance(exc, FileNotFoundError) or exc.filename is not None:
+        return ""
+    try:
+        os.getcwd()
+    except FileNotFoundError:
+        return "the current folder no longer exists (it was removed after the shell entered it); cd to one that does"
+    return ""
 
 
 def _one_line(exc: BaseException) -> str:

@@ -12,6 +12,8 @@ import gzip
 import json
 import os
 import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -1178,6 +1180,21 @@ def test_a_run_folder_that_cannot_be_made_is_refused_before_any_work(argv, base,
         f"lmsbench {argv[0]}: error: results is not a folder, so a run without --out cannot be made in "
         f"results/{base}; give --out"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["results"]
+
+
+def test_a_removed_current_folder_is_said_as_such(files, tmp_path):
+    """`slam RUN --out rel` from a folder removed after the shell entered it said "error: [Errno 2] No
+    such file or directory" (os.getcwd's error, naming no file)."""
+    gone = tmp_path / "gone"
+    gone.mkdir()
+    script = ("import os, sys; from experiments.cli import main; os.chdir(sys.argv[1]); os.rmdir(sys.argv[1]); "
+              "sys.exit(main(['slam', sys.argv[2], '--out', 'rel', '--quiet']))")
+    run = subprocess.run([sys.executable, "-c", script, str(gone), str(files["good.clf"])], capture_output=True,
+                         text=True, timeout=60, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert run.returncode == 2, run.stderr
+    assert run.stderr.strip().splitlines() == [
+        "lmsbench slam: error: the current folder no longer exists (it was removed after the shell entered it); "
+        "cd to one that does"]
 
 
 def test_a_full_disk_under_pyarrow_is_said_once_as_the_systems_reason():
