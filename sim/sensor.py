@@ -259,6 +259,8 @@ class SensorConfig:
         if p.exists() and not p.is_file():  # a pipe (--sensor <(cat s.yaml)) was "no such sensor file"
             raise InputError(f"{p}: not a regular file (a pipe, a device or a socket): a sensor YAML must be a regular "
                              "file; give the file itself (or save the stream to a file first)")
+        if p.is_symlink() and not p.exists():  # as every other input's link to nothing: was "no such sensor file"
+            raise InputError(f"{p}: a symbolic link to {os.readlink(p)}, which does not exist (or a loop of links)")
         if not p.is_file():
             raise LmsbenchError(f"{p}: no such sensor file")
         too_big = size_problem(p.stat().st_size)
@@ -278,6 +280,9 @@ class SensorConfig:
             d = load_yaml(data.decode("utf-8"))
         except (yaml.YAMLError, UnicodeDecodeError) as exc:
             raise LmsbenchError(f"{p}: not valid YAML ({' '.join(str(exc).split())})") from None
+        if d is None:  # `calibrate LOG > s.yaml` that failed leaves it empty: was "got NoneType"
+            raise InputError(f"{p}: empty (no sensor field, only comments or nothing); a sensor YAML holds the "
+                             "fields `lmsbench calibrate` writes")
         if isinstance(d, dict) and isinstance(d.get("sensor"), dict):
             d = d["sensor"]
         if isinstance(d, dict):

@@ -703,6 +703,12 @@ CASES = [
     (["info", "{cut_short.clf}"], "cut_short.clf:10: malformed ROBOTLASER1 line: ROBOTLASER1 announces 361 beams but has fewer fields"),
     (["info", "{cut_short.clf}"], "(--skip-bad-lines skips malformed lines, each reported)"),
     (["compare", "{dangling.clf}", "--out", O], "dangling.clf: a symbolic link to "),
+    # a sensor YAML of comments only (`calibrate LOG > s.yaml` that failed) said "got NoneType", and a link to
+    # nothing "no such sensor file", where every other input names the link
+    (["simulate", "--sensor", "{empty.yaml}", "--duration", "0.5", "--out", O],
+     "empty.yaml: empty (no sensor field, only comments or nothing); a sensor YAML holds the fields"),
+    (["sim2real", "{good.clf}", "--sensor", "{empty.yaml}", "--out", O], "empty.yaml: empty (no sensor field"),
+    (["compare", "office:0", "--sensor", "{dangling.clf}", "--out", O], "dangling.clf: a symbolic link to "),
     # lms200 record replaced an earlier CARMEN recording silently (bags were refused); a folder was "unknown kind"
     (["lms200", "record", "--port", "loop://", "--out", "{good.clf}"], "good.clf exists; a recording is not written over a file"),
     (["lms200", "record", "--port", "loop://", "--out", "{empty_dir}"], "empty_dir is a folder; give a file name"),
