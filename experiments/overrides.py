@@ -28,6 +28,9 @@ class OverrideError(LmsbenchError, ValueError):
 def set_option(text: str) -> tuple[str, Any]:
     """One ``--set extractor.[METHOD.]FIELD=VALUE`` of the command line: (key, value read as YAML)."""
     key, eq, value = text.partition("=")
+    if eq and key != key.strip():  # ' extractor.k=3' (a quoted word's space) was told "(write extractor. extractor.k)"
+        raise argparse.ArgumentTypeError(f"--set {text!r}: a space around the field's name; write "
+                                         f"{key.strip()}={value.strip()}")
     if not eq or not key.startswith(PREFIX + ".") or len(key) <= len(PREFIX + "."):
         hint = f" (write extractor.{key})" if eq and "." in key and not key.startswith(PREFIX + ".") else ""
         raise argparse.ArgumentTypeError(f"--set takes extractor.FIELD=VALUE or extractor.METHOD.FIELD=VALUE, "

@@ -703,6 +703,10 @@ CASES = [
     (["info", "{cut_short.clf}"], "cut_short.clf:10: malformed ROBOTLASER1 line: ROBOTLASER1 announces 361 beams but has fewer fields"),
     (["info", "{cut_short.clf}"], "(--skip-bad-lines skips malformed lines, each reported)"),
     (["compare", "{dangling.clf}", "--out", O], "dangling.clf: a symbolic link to "),
+    # a space around --set's name: its hint said "(write extractor. extractor.k)", or no field 'k ' was found
+    (["compare", "office:0", "--set", " extractor.k=3", "--out", O],
+     "argument --set: --set ' extractor.k=3': a space around the field's name; write extractor.k=3"),
+    (["slam", "{good.clf}", "--set", "extractor.k =3", "--out", O], "a space around the field's name; write extractor.k=3"),
     # a sensor YAML of comments only (`calibrate LOG > s.yaml` that failed) said "got NoneType", and a link to
     # nothing "no such sensor file", where every other input names the link
     (["simulate", "--sensor", "{empty.yaml}", "--duration", "0.5", "--out", O],
