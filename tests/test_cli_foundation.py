@@ -119,6 +119,8 @@ def test_bench_with_an_unknown_name_is_a_one_line_error(tmp_path: Path, capsys: 
     assert not (tmp_path / "b").exists()
     assert main(["bench", "", "--out", str(tmp_path / "b")]) == 2  # an empty name was shown as nothing
     assert capsys.readouterr().err.startswith("lmsbench bench: error: unknown benchmark(s) ''; known: ")
+    assert main(["bench", " sim", "--out", str(tmp_path / "b")]) == 2  # it said "unknown benchmark(s) sim"
+    assert capsys.readouterr().err.startswith("lmsbench bench: error: unknown benchmark(s) ' sim'; known: ")
     assert main(["bench", "--help"]) == 0  # the areas are named before a user has to guess one
     assert f"{', '.join(discover())} (default: all)" in " ".join(capsys.readouterr().out.split())
 

@@ -38,7 +38,8 @@ def run(args: argparse.Namespace) -> int:
     names = args.names or list(found)
     missing = [n for n in names if n not in found]
     if missing:
-        shown_missing = ", ".join(n if n.strip() else repr(n) for n in missing)  # '' would be invisible
+        # '' would be invisible, and ' sim' read as the known sim
+        shown_missing = ", ".join(n if n.strip() == n and n else repr(n) for n in missing)
         raise LmsbenchError(f"unknown benchmark(s) {shown_missing}; known: {', '.join(found)}")
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
