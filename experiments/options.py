@@ -279,6 +279,9 @@ def path_arg(text: str) -> Path:
     into the current folder)."""
     if not text.strip():
         raise argparse.ArgumentTypeError(f"empty path {text!r}; give a file or folder name")
+    if text == "-":  # no command streams a file: `simulate --out -` made a folder named '-', `calibrate --out -` a file
+        raise argparse.ArgumentTypeError("'-' is no stream here: give a file or folder name (calibrate without --out "
+                                         "prints its YAML)")
     return Path(text)
 
 

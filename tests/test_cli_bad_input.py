@@ -1062,6 +1062,20 @@ def test_out_given_as_an_empty_string_is_refused_not_the_current_folder(tmp_path
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("argv", [["simulate", "--duration", "0.5", "--out", "-"], ["calibrate", "x.clf", "--out", "-"],
+                                  ["slam", "-", "--out", "o"]])
+def test_a_dash_is_no_path(argv, tmp_path, monkeypatch, capsys):
+    """`simulate --out -` made a folder named '-' (and `calibrate --out -` a file), where '-' reads as
+    the standard output."""
+    monkeypatch.chdir(tmp_path)
+    assert run_main(argv) == 2
+    flag = "input" if argv[1] == "-" else "--out"
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench {argv[0]}: error: argument {flag}: '-' is no stream here: give a file or folder name (calibrate "
+        f"without --out prints its YAML) (see lmsbench {argv[0]} --help)"]
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_repeatable_options_and_flags_may_still_be_given_twice():
     """Only options that take one value are refused twice: --set and --sweep collect, a flag
     given twice means the same."""
