@@ -35,6 +35,8 @@ def set_option(text: str) -> tuple[str, Any]:
         hint = f" (write extractor.{key})" if eq and "." in key and not key.startswith(PREFIX + ".") else ""
         raise argparse.ArgumentTypeError(f"--set takes extractor.FIELD=VALUE or extractor.METHOD.FIELD=VALUE, "
                                          f"got {text!r}{hint}")
+    if not value.strip():  # YAML reads nothing as null: "sensor: k must be a whole number (default 3), got None"
+        raise argparse.ArgumentTypeError(f"--set {key}: no value after '='; give {key}=VALUE")
     try:
         return key, load_yaml(value)
     except yaml.YAMLError as exc:  # yamlio's reason: '1_0 is read as 10: YAML 1.1 drops ...' was 'is not a value'

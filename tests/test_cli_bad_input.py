@@ -707,6 +707,8 @@ CASES = [
     (["compare", "office:0", "--set", " extractor.k=3", "--out", O],
      "argument --set: --set ' extractor.k=3': a space around the field's name; write extractor.k=3"),
     (["slam", "{good.clf}", "--set", "extractor.k =3", "--out", O], "a space around the field's name; write extractor.k=3"),
+    (["compare", "office:0", "--set", "extractor.sensor.k=", "--out", O],  # it said "k must be ..., got None"
+     "argument --set: --set extractor.sensor.k: no value after '='; give extractor.sensor.k=VALUE"),
     # a sensor YAML of comments only (`calibrate LOG > s.yaml` that failed) said "got NoneType", and a link to
     # nothing "no such sensor file", where every other input names the link
     (["simulate", "--sensor", "{empty.yaml}", "--duration", "0.5", "--out", O],
