@@ -1022,6 +1022,8 @@ def check_out_file(path: str | os.PathLike | None, flag: str = "--out") -> Path 
         raise InputError(f"{flag} {p}: not a regular file (a pipe, a device or a socket); give a file name")
     hold_output(p, flag)
     parent = p.parent
+    if not parent.exists():  # it said "nodir is not a folder", as of a file: the file's folder is not made
+        raise InputError(f"{flag} {p}: no folder {parent}; make it first (a file's folder is not made for it)")
     if not parent.is_dir():
         raise InputError(f"{flag} {p}: {parent} is not a folder")
     if not os.access(parent, os.W_OK | os.X_OK) or not _can_create_in(parent):

@@ -600,6 +600,9 @@ CASES = [
     (["compare", "{good.clf}", "--laser-resolution-deg", "1", "--out", O], "own beam geometry"),
     # calibrate
     (["calibrate", "{good.clf}", "--out", "{a_file}/sensor.yaml"], "is not a folder"),
+    # a folder that does not exist was said as a file is, "nodir is not a folder"
+    (["calibrate", "{good.clf}", "--out", "{out}/nodir/sensor.yaml"], "/nodir/sensor.yaml: no folder "),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/nodir/rec.clf"], "nodir; make it first (a file's folder is not made"),
     (["calibrate", "{good.clf}", "--out", "{empty_dir}"], "is a folder; give a file name"),
     (["calibrate", "{good.clf}", "--out", "/proc/sensor.yaml"], "not a writable folder"),
     (["compare", "{good.clf}", "--out", "/proc/lmsbench-out"], "not a writable folder"),
