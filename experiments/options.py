@@ -1096,6 +1096,8 @@ def split_methods(methods: Sequence[str]) -> list[str]:
 def check_study_tables(folder: str | os.PathLike) -> Path:
     """A folder of tables saved by an earlier ``lmsbench figures`` / ``demo`` (study.yaml and Parquet)."""
     p = Path(folder)
+    if p.exists() and not p.is_dir():  # it said "no such folder" of a file
+        raise InputError(f"--tables {p} is a file, not a folder of tables")
     if not p.is_dir():
         raise InputError(f"--tables {p}: no such folder")
     if not (p / "study.yaml").is_file() or not any(p.glob("*.parquet")):
@@ -1110,6 +1112,9 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
 
     p = Path(folder)
     path = p / "results.parquet"
+    if p.exists() and not p.is_dir():  # a sweep file given for its folder: it said "no results.parquet"
+        raise InputError(f"--sweep {p} is a file, not a sweep folder (the folder `lmsbench sweep` wrote: --out, "
+                         "default results/sweeps/NAME)")
     if not path.is_file():
         if (p / "sweep.yaml").is_file():  # a sweep stopped or killed before its table
             raise InputError(f"--sweep {p}: no results.parquet: the sweep did not finish; finish it with lmsbench "

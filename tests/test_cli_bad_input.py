@@ -600,6 +600,9 @@ CASES = [
     (["compare", "{good.clf}", "--laser-resolution-deg", "1", "--out", O], "own beam geometry"),
     # calibrate
     (["calibrate", "{good.clf}", "--out", "{a_file}/sensor.yaml"], "is not a folder"),
+    # a file where a folder is read: "no such folder", and a sweep file for its folder "no results.parquet"
+    (["figures", "--tables", "{good.clf}", "--out", O], "good.clf is a file, not a folder of tables"),
+    (["figures", "--sweep", "{sweep.yaml}", "--no-slam", "--out", O], "sweep.yaml is a file, not a sweep folder"),
     # a folder that does not exist was said as a file is, "nodir is not a folder"
     (["calibrate", "{good.clf}", "--out", "{out}/nodir/sensor.yaml"], "/nodir/sensor.yaml: no folder "),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/nodir/rec.clf"], "nodir; make it first (a file's folder is not made"),
