@@ -333,8 +333,20 @@ def check_seeds(seeds: Sequence[int], flag: str = "--seeds") -> list[int]:
 def world_name(text: str) -> str:
     """A built-in world's name."""
     if text not in known_worlds():
-        raise argparse.ArgumentTypeError(f"unknown world {text!r}; known worlds: {', '.join(known_worlds())}")
+        raise argparse.ArgumentTypeError(f"unknown world {text!r}{world_hint(text)}; known worlds: "
+                                         f"{', '.join(known_worlds())}")
     return text
+
+
+def world_hint(text: str) -> str:
+    """" (did you mean office?)" for a known world's name in other case or with spaces around it, and
+    " (a folder holding world.json: give DIR/world.json)" for a simulate folder given as a world; else ""."""
+    near = [w for w in known_worlds() if w == text.strip().lower()]
+    if near:
+        return f" (did you mean {near[0]}?)"
+    if (Path(text) / "world.json").is_file():
+        return f" (a folder holding world.json: give {Path(text) / 'world.json'})"
+    return ""
 
 
 def _head(path: Path, n: int = 4096, what: str = "an input") -> bytes:

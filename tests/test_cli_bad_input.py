@@ -600,6 +600,10 @@ CASES = [
     (["compare", "{good.clf}", "--laser-resolution-deg", "1", "--out", O], "own beam geometry"),
     # calibrate
     (["calibrate", "{good.clf}", "--out", "{a_file}/sensor.yaml"], "is not a folder"),
+    # a world's name in other case, and a simulate folder given as its world, were only "unknown world"
+    (["simulate", "--world", "OFFICE", "--out", O], "--world: unknown world 'OFFICE' (did you mean office?); known worlds:"),
+    (["demo", "--world", "Office", "--out", O], "unknown world 'Office' (did you mean office?); known worlds:"),
+    (["simulate", "--world", "{simbroken}", "--out", O], "(a folder holding world.json: give "),
     # a file where a folder is read: "no such folder", and a sweep file for its folder "no results.parquet"
     (["figures", "--tables", "{good.clf}", "--out", O], "good.clf is a file, not a folder of tables"),
     (["figures", "--sweep", "{sweep.yaml}", "--no-slam", "--out", O], "sweep.yaml is a file, not a sweep folder"),

@@ -10,7 +10,7 @@ import math
 
 from experiments.options import (WORLDS, DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, SIMULATE_OWNER, InputError, check_file,
                                  check_world_file,
-                                 check_out, check_out_spares, check_yaml, known_worlds, number, positive, path_arg)
+                                 check_out, check_out_spares, check_yaml, known_worlds, number, positive, path_arg, world_hint)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -98,7 +98,8 @@ def _config(args: argparse.Namespace):
             setattr(args, dest, default)
     worlds = known_worlds()
     if args.world not in worlds and not args.world.endswith(".json"):
-        raise InputError(f"--world: unknown world {args.world!r}; known worlds: {', '.join(worlds)} or a world.json")
+        raise InputError(f"--world: unknown world {args.world!r}{world_hint(args.world)}; known worlds: "
+                         f"{', '.join(worlds)} or a world.json")
     if args.world.endswith(".json"):
         check_file(args.world, "a world.json")
     if args.clutter is not None and args.world.endswith(".json"):
