@@ -600,6 +600,10 @@ CASES = [
     (["compare", "{good.clf}", "--laser-resolution-deg", "1", "--out", O], "own beam geometry"),
     # calibrate
     (["calibrate", "{good.clf}", "--out", "{a_file}/sensor.yaml"], "is not a folder"),
+    # a log's reading options where no log is compared were ignored, exit 0
+    (["compare", "office:0", "--topic", "FLASER", "--skip-bad-lines", "--out", O],
+     "--topic, --skip-bad-lines say how to read a log; none of office:0 is one (the worlds are simulated)"),
+    (["compare", "office", "--laser-fov-deg", "180", "--out", O], "--laser-fov-deg says how to read a log; none of office"),
     # a world's name in other case, and a simulate folder given as its world, were only "unknown world"
     (["simulate", "--world", "OFFICE", "--out", O], "--world: unknown world 'OFFICE' (did you mean office?); known worlds:"),
     (["demo", "--world", "Office", "--out", O], "unknown world 'Office' (did you mean office?); known worlds:"),

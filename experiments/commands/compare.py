@@ -15,7 +15,7 @@ from lms200 import LmsbenchError
 from lms200.timing import check_scan_rate
 
 from experiments.overrides import check_set_once, set_option
-from experiments.logargs import add_log_options, plain_log_options, read_log_options, report_skipped
+from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options, report_skipped
 from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SIMULATE_OUTPUTS, listed_seed, InputError, check_methods, check_out,
                                  check_out_spares, check_seeds, count, plain_number, positive, path_arg, text)
 
@@ -83,6 +83,10 @@ def _check_applies(args: argparse.Namespace) -> None:
     if args.poses is not None and not files:
         raise InputError(f"--poses says whether a log's poses are SLAM-corrected; none of {' '.join(args.sources)} "
                          "is a log (a world's poses are its ground truth)")
+    unread = given_log_flags(args)
+    if unread and not files:  # they were ignored: `compare office:0 --topic FLASER --skip-bad-lines` ran, exit 0
+        raise InputError(f"{', '.join(unread)} {'say' if len(unread) > 1 else 'says'} how to read a log; none of "
+                         f"{' '.join(args.sources)} is one (the worlds are simulated)")
     if args.sensor is not None and not worlds:  # it was ignored: logs and simulate folders carry their own
         raise InputError("--sensor sets the sensor of the worlds compare simulates (office, office:1, ...); "
                          f"none of {' '.join(args.sources)} is one (a log or a simulate folder has its own)")
