@@ -600,6 +600,9 @@ CASES = [
     (["compare", "{good.clf}", "--laser-resolution-deg", "1", "--out", O], "own beam geometry"),
     # calibrate
     (["calibrate", "{good.clf}", "--out", "{a_file}/sensor.yaml"], "is not a folder"),
+    # --no-paper-baseline on a run of the paper preset itself set nothing, exit 0
+    (["slam", "{good.clf}", "--preset", "paper", "--no-paper-baseline", "--out", O],
+     "--no-paper-baseline: this run is the paper preset itself, so there is no separate paper baseline to leave out"),
     # a log's reading options where no log is compared were ignored, exit 0
     (["compare", "office:0", "--topic", "FLASER", "--skip-bad-lines", "--out", O],
      "--topic, --skip-bad-lines say how to read a log; none of office:0 is one (the worlds are simulated)"),

@@ -526,7 +526,7 @@ def test_ctrl_c_in_the_baselines_leaves_no_earlier_runs_scores_beside_the_new_tr
     from experiments.cli import main
 
     out = tmp_path / "run"
-    assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--preset", "paper", "--no-paper-baseline"]) == 0
+    assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--preset", "paper"]) == 0
     before = (out / "trajectory.tum").read_text()
 
     def new_outputs() -> bool:  # map.json, the last of them, is written whole (a CI run sent SIGINT once
@@ -552,7 +552,7 @@ def test_a_stop_while_slam_writes_its_files_leaves_none_of_an_earlier_runs_besid
     from experiments.cli import main
 
     out = tmp_path / "run"
-    assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--preset", "paper", "--no-paper-baseline"]) == 0
+    assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--preset", "paper"]) == 0
     earlier = {p.name: p.read_bytes() for p in out.iterdir()}
     assert sorted(earlier) == ["config.yaml", "map.json", "metrics.json", "slam.png", "trajectory.tum"]
     write_tum = slamrun.write_tum

@@ -120,6 +120,9 @@ def _config(args: argparse.Namespace):
     if cfg.motion.use_odometry and args.no_odometry_baseline:  # it set nothing: the run itself uses the odometry
         raise InputError("--no-odometry-baseline: this run uses the odometry itself, so there is no separate "
                          "odometry baseline to leave out (--no-paper-baseline leaves out the paper preset's run)")
+    if cfg.preset == "paper" and args.no_paper_baseline:  # it set nothing: `slam RUN --preset paper --no-paper-baseline` ran, exit 0
+        raise InputError("--no-paper-baseline: this run is the paper preset itself, so there is no separate paper "
+                         "baseline to leave out (--no-odometry-baseline leaves out the run driven by the odometry)")
     paper_only = [flag for flag, given in (("--association", args.association), ("--corners", args.corners)) if given]
     # with the default preset they set the paper preset's baselines (its run and, without --odometry, the
     # odometry one): ignored only when neither runs
