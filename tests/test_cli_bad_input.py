@@ -599,7 +599,7 @@ CASES = [
     (["info", "{good.clf}", "--laser-fov-deg", "-5"], "(-5 deg)"),
     (["compare", "{good.clf}", "--laser-resolution-deg", "1", "--out", O], "own beam geometry"),
     # calibrate
-    (["calibrate", "{good.clf}", "--out", "{a_file}/sensor.yaml"], "is not a folder"),
+    (["calibrate", "{good.clf}", "--out", "{a_file/sensor.yaml}"], "/a_file is not a folder"),  # a file in the folder's place
     # --no-paper-baseline on a run of the paper preset itself set nothing, exit 0
     (["slam", "{good.clf}", "--preset", "paper", "--no-paper-baseline", "--out", O],
      "--no-paper-baseline: this run is the paper preset itself, so there is no separate paper baseline to leave out"),
