@@ -344,9 +344,11 @@ def world_hint(text: str) -> str:
     near = [w for w in known_worlds() if w == text.strip().lower()]
     if near:
         return f" (did you mean {near[0]}?)"
-    if (Path(text) / "world.json").is_file():
-        return f" (a folder holding world.json: give {Path(text) / 'world.json'})"
-    return ""
+    try:
+        held = (Path(text) / "world.json").is_file()
+    except (OSError, ValueError):  # a name too long for a path, a NUL in it
+        held = False
+    return f" (a folder holding world.json: give {Path(text) / 'world.json'})" if held else ""
 
 
 def _head(path: Path, n: int = 4096, what: str = "an input") -> bytes:
