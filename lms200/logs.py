@@ -6,6 +6,7 @@ name; both yield :class:`lms200.Record` objects.
 
 from __future__ import annotations
 
+import io
 import os
 import shutil
 import tempfile
@@ -13,7 +14,7 @@ from pathlib import Path
 from typing import Iterable, Iterator
 
 from .bag import BagError, BagReader, is_bag, write_bag
-from .carmen import CarmenReader, write_carmen
+from .carmen import UTF8_BOM, CarmenReader, write_carmen
 from .errors import InputError, LogFormatError, LogNotFoundError
 from .laser_geometry import LaserGeometry
 from .records import Record
@@ -193,8 +194,14 @@ stderr and an error of inf, exit 0)."""
 
 def row_lines(path: str | Path, p: Path) -> Iterator[tuple[int, str]]:
     """(line number, line) of the text file ``p`` (named ``path`` in messages), each line read at most
-    :data:`MAX_ROW_CHARS` characters at a time: a longer one is a LogFormatError naming it."""
-    with open(p, encoding="ascii", errors="replace") as f:
+    :data:`MAX_ROW_CHARS` characters at a time: a longer one is a LogFormatError naming it. A UTF-8
+    byte-order mark before the first line (a file saved by a Windows editor) is skipped, as the CARMEN
+    reader skips it: it read as three replacement characters, so a TUM file's header comment was a
+    row of 9 entries and a first row a non-number."""
+    with open(p, "rb") as raw:
+        if raw.read(len(UTF8_BOM)) != UTF8_BOM:
+            raw.seek(0)
+        f = io.TextIOWrapper(raw, encoding="ascii", errors="replace")
         for no, line in enumerate(iter(lambda: f.readline(MAX_ROW_CHARS + 1), ""), 1):
             if len(line) > MAX_ROW_CHARS:
                 raise LogFormatError(path, no, f"longer than {MAX_ROW_CHARS:,} characters: not a text file of rows "
