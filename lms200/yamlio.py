@@ -74,16 +74,23 @@ def _construct_object(loader: Loader, node: yaml.Node, deep: bool = False) -> An
     """SafeLoader's construction, with a scalar that its tag cannot make a YAML error at its line
     and column: an impossible date (``seed: 2025-02-30``, "day is out of range for month") or an
     explicit tag's bad value (``!!float abc``) was Python's ValueError, an internal error without
-    the file, line or field; an int of more than 4300 digits says so. A number that YAML 1.1 reads
+    the file, line or field; an int of more than 4300 digits says so, and so does one beyond float64's
+    range (``duration: 1000...0`` of 401 digits was an internal OverflowError where it was cast to float). A number that YAML 1.1 reads
     otherwise than YAML 1.2 and the command line (``yaml11_number``) is refused at its place."""
     _refuse_yaml11_number(loader, node)
     try:
-        return yaml.SafeLoader.construct_object(loader, node, deep=deep)
+        value = yaml.SafeLoader.construct_object(loader, node, deep=deep)
+        if type(value) is int and not -sys.float_info.max <= value <= sys.float_info.max:
+            raise OverflowError("beyond float64's range, +-1.8e308: no setting takes it")
+        return value
     except (ValueError, TypeError, AttributeError, OverflowError) as exc:
         if not isinstance(node, yaml.ScalarNode):
             raise
         kind = str(node.tag).rsplit(":", 1)[-1]
         shown = node.value if len(node.value) <= 40 else f"{node.value[:30]}...({len(node.value)} characters)"
+        if isinstance(exc, OverflowError) and kind == "int":  # a 401-digit number: an internal OverflowError where
+            raise yaml.constructor.ConstructorError(  # a setting was cast to float (simulate's duration, a sweep's grid)
+                None, None, f"a whole number of {len(node.value)} characters, {exc}", node.start_mark) from None
         if isinstance(exc, ValueError) and "digits" in str(exc):  # int("9" * 5000): Python's limit
             problem = f"a whole number of more than {sys.get_int_max_str_digits()} digits"
         else:

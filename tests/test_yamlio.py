@@ -135,3 +135,26 @@ def test_numbers_read_as_before() -> None:
                    "l": 1000.0, "m": 0.0, "n": 1.5, "o": 1.0, "p": float("inf"), "q": float("-inf"), "r": "09", "s": "1:60",
                    "t": "a:b", "u": "_1", "v": "1_0", "w": "1:30", "x": datetime.date(2026, 1, 2)}
     assert [type(got[k]) for k in "adfghij"] == [int] * 7 and [type(got[k]) for k in "bcekl"] == [float] * 5
+
+
+def test_a_whole_number_beyond_float64s_range_is_refused_at_its_place(tmp_path, capsys) -> None:
+    """Found by fuzzing configs: a whole number of 401 digits (below Python's 4300-digit limit) loaded
+    as an int, and failed where a setting was cast to float: `simulate --config` with such a duration
+    or rate_hz said 'internal error: OverflowError: int too large to convert to float', exit 1. Every
+    YAML the project reads refuses it at its line; the largest float64-sized ones load as before."""
+    from experiments.cli import main
+
+    big = "1" + "0" * 400
+    for text, place in ((f"duration: {big}\n", "line 1, column 11: a whole number of 401"),
+                        (f"a: [1, {{b: -{big}}}]\n", "line 1, column 12: a whole number of 402"),
+                        (f"? {big}\n: 3\n", "line 1, column 3: a whole number of 401")):
+        with pytest.raises(yaml.YAMLError) as info:
+            load(text)
+        assert str(info.value) == f"{place} characters, beyond float64's range, +-1.8e308: no setting takes it"
+    assert load(f"a: {'1' + '0' * 308}\nb: {-(2**1023)}\n") == {"a": 10**308, "b": -(2**1023)}
+    config = tmp_path / "config.yaml"
+    config.write_text(f"world: office\nduration: {big}\n")
+    assert main(["simulate", "--config", str(config), "--out", str(tmp_path / "run"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "line 2, column 11: a whole number of 401 characters, beyond float64's range" in err
+    assert not (tmp_path / "run").exists()
