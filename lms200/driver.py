@@ -28,7 +28,7 @@ from typing import Callable, Iterator
 import serial
 
 from .codes import Units, check_units
-from .errors import InputError, LmsDeviceError, LmsLinkError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
+from .errors import InputError, LmsDeviceError, LmsLinkError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsStatusError, LmsTimeoutError
 from .finite import check_number, float_of, shown
 from .framing import Frame, FrameParser
 from .protocol import (
@@ -119,8 +119,8 @@ def _check_arguments(baud: object, fov_deg: object, resolution_deg: object, unit
 
 @dataclass
 class DriverStats:
-    """Counters of one connection: scans yielded, frames dropped by the parser, undecodable scans,
-    attempts resent (``retries``) and attempts that waited out their whole wait without a reply or
+    """Counters of one connection: scans yielded, frames dropped by the parser, undecodable scans
+    (``flagged``: those of them the device's STATUS byte marked as not to be used), attempts resent (``retries``) and attempts that waited out their whole wait without a reply or
     a NAK (``timeouts``: a NAK is resent at once, without one)."""
 
     scans: int
@@ -129,6 +129,7 @@ class DriverStats:
     decode_errors: int
     retries: int
     timeouts: int = 0
+    flagged: int = 0  # scans dropped for their STATUS byte (an error, implausible values: protocol.status_problem)
 
 
 
@@ -222,6 +223,7 @@ class LMS200:
         self.parser.awaiting_reply = False  # True while a request waits for its handshake (see _request)
         self._scans = 0
         self._decode_errors = 0
+        self._flagged = 0
         self._retries = 0
         self._timeouts = 0
         self._last_rx = time.monotonic()
@@ -273,7 +275,8 @@ class LMS200:
     @property
     def stats(self) -> DriverStats:
         p = self.parser.stats
-        return DriverStats(self._scans, p.dropped_frames, p.skipped_bytes, self._decode_errors, self._retries, self._timeouts)
+        return DriverStats(self._scans, p.dropped_frames, p.skipped_bytes, self._decode_errors, self._retries, self._timeouts,
+                           self._flagged)
 
     # -- low level -----------------------------------------------------------------------------
     def _idle_gap(self, hides_frame: bool) -> float:
@@ -639,8 +642,9 @@ class LMS200:
             for ev, stamp in zip(frames, self._stamps(frames)):
                 try:
                     scan = decode_scan(ev.payload, stamp)
-                except LmsProtocolError:
+                except LmsProtocolError as exc:  # a scan flagged by its STATUS byte too: its values were yielded
                     self._decode_errors += 1
+                    self._flagged += isinstance(exc, LmsStatusError)
                     continue
                 self._scans += 1
                 last, allowed = now, limit

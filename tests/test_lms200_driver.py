@@ -1075,3 +1075,29 @@ def test_scans_checks_its_arguments_when_called_before_streaming(kw: dict, messa
         stream = lms.scans(stall_timeout=np.float32(2.0), stop=lambda: False)
         assert len(next(stream)) == 361 and lms.streaming
         stream.close()
+
+
+def test_scans_the_device_flags_as_not_to_be_used_are_dropped_and_counted(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Found by fuzzing the telegram decoder: a scan telegram whose STATUS byte said an error (level 3),
+    a fatal error (4) or implausible measured values (bit 6) was decoded and yielded as a good scan,
+    its values recorded as measured. It is dropped and counted (``stats.flagged``, among
+    ``decode_errors``); info, warnings and pollution (bit 7) keep their scans."""
+    from lms200.protocol import encode_measurement
+    from lms200_fake_port import answer, fake_port, reply
+
+    def frame(value: int, status: int) -> bytes:
+        return reply(encode_measurement(np.full(361, value, np.uint16), "mm", status))
+
+    statuses = [0x10, 0x13, 0x11, 0x14, 0x50, 0x12, 0x90, 0x17, 0x10]  # ok, error, info, fatal, implausible, ...
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":
+            return [*answer(payload), (0.05, b"".join(frame(1000 + i, s) for i, s in enumerate(statuses)))]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False)
+    got = [round(float(scan.ranges[0]) * 1000) for scan in itertools.islice(lms.scans(), 5)]  # mm
+    assert got == [1000, 1002, 1005, 1006, 1008]  # old: 1000, 1001, 1002, ... every scan
+    assert (lms.stats.flagged, lms.stats.decode_errors, lms.stats.scans) == (4, 4, 5)
+    lms.close()

@@ -278,6 +278,7 @@ def run_record(args: argparse.Namespace) -> int:
         _drop_empty(args.out)
         print(f"recorded no scan; {args.out} not written; device back in on-request mode at 9600 baud")
         return 0
+    flagged = f", {stats.flagged} of them flagged by the device's status byte" if stats.flagged else ""
     print(f"recorded {written} scans to {args.out} ({stats.dropped_frames} frames dropped, "
-          f"{stats.decode_errors} undecodable); device back in on-request mode at 9600 baud")
+          f"{stats.decode_errors} undecodable{flagged}); device back in on-request mode at 9600 baud")
     return 0
