@@ -128,7 +128,12 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         if (p / "world.json").exists():
             try:
                 text = regular_file(p / "world.json", "world.json").read_text(encoding="utf-8", errors="replace")
-                content = json.loads(text)
+                from sim.world import world_json_content
+
+                try:  # a key given twice or misspelt: as World.from_json refuses it (simulate, compare)
+                    content = world_json_content(text)
+                except (TypeError, ValueError) as exc:
+                    raise LmsbenchError(f"{p / 'world.json'}: not a world.json ({exc})") from None
                 if isinstance(content, dict) and not any(content.get(k) for k in ("walls", "circles", "boxes")):
                     raise LmsbenchError(f"{p / 'world.json'}: not a world.json: it holds no walls, circles or boxes, "
                                         "nothing to scan or score against")  # as World.from_json (compare): the

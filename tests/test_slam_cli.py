@@ -184,8 +184,14 @@ def test_slam_refuses_a_world_json_wall_simulate_and_compare_refuse_before_the_r
 @pytest.mark.parametrize("name, content, message", [
     ("groundtruth.tum", None, "{f} is a folder, not a TUM file"),
     ("world.json", None, "{f} is a folder, not a world.json"),
-    ("world.json", "[1, 2]", "{f}: no wall list (list indices must be integers or slices, not str)"),
-    ("world.json", "null", "{f}: no wall list ('NoneType' object is not subscriptable)"),
+    ("world.json", "[1, 2]", "{f}: not a world.json (the top level is a list, not a mapping of walls, boxes, ...)"),
+    ("world.json", "null", "{f}: not a world.json (the top level is a NoneType, not a mapping of walls, boxes, ...)"),
+    # a key given twice or misspelt (found by fuzzing): the walls left out of the map's score, silently
+    ("world.json", '{"walls": [[0, 0, 1, 0]], "walls": []}',
+     "{f}: not a world.json (key 'walls' given twice (the last would be taken, silently))"),
+    ("world.json", '{"walls": [[0, 0, 1, 0]], "circle": []}',
+     "{f}: not a world.json (unknown key(s) ['circle'] ('circle' for 'circles'?): a world.json has name, seed, "
+     "scan_height, walls, circles, corners, boxes, cylinders, route_nodes, route_edges, route_targets, glass)"),
     ("world.json", '{"walls": {"a": 1}}', "{f}: no wall list (float() argument must be a string or a real number, not 'dict')"),
 ])
 def test_a_simulate_folder_whose_truth_or_world_is_a_folder_or_no_mapping_is_refused(sim_folder, tmp_path, capsys,
