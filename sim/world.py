@@ -222,7 +222,7 @@ class World:
                                     "scan or score against")  # against no face (F1 0), slam ran, exit 0
             world = cls(
                 name=str(d.get("name", Path(path).stem)),
-                seed=int(d.get("seed", 0)),
+                seed=d.get("seed", 0),  # int() read 1.5 as the world of seed 1, silently
                 boxes=boxes,
                 cylinders=cylinders,
                 scan_height=h,

@@ -262,3 +262,13 @@ def test_a_world_json_key_given_twice_or_misspelt_is_refused_naming_it(tmp_path)
             World.from_json(tmp_path / "w.json")
     (tmp_path / "w.json").write_text(text)
     assert len(World.from_json(tmp_path / "w.json").cylinders) == 4
+
+
+def test_a_world_json_seed_that_is_no_whole_number_is_refused() -> None:
+    """Found by fuzzing: a world.json's seed went through int(), so 1.5 was the world of seed 1 and
+    true seed 1, without a word; World itself refuses them (lms200.finite.check_seed)."""
+    text = json.dumps(make_world("office", seed=0).to_dict())
+    for seed in ("1.5", "true", "\"2\""):
+        with pytest.raises(LmsbenchError, match=r"not a world\.json \(InputError: seed: must be a whole number >= 0, got "):
+            World.from_json("w.json", data=text.replace('"seed": 0', f'"seed": {seed}').encode())
+    assert World.from_json("w.json", data=text.replace('"seed": 0', '"seed": 7').encode()).seed == 7
