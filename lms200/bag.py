@@ -883,6 +883,17 @@ class BagReader:
                     self._fail(f"topic {conn.topic} message {index}", exc, index, fatal=False)
                 yield from self._records(matcher.ready(t))
             yield from self._records(matcher.ready(None))
+            late = {topic: n for topic, n in matcher.late.items() if n}
+            if late:  # they were read without their poses, silently (a bag's topics written one after the other)
+                import warnings
+
+                from .errors import LmsbenchWarning
+
+                said = ", ".join(f"{n} on {topic}" for topic, n in late.items())
+                warnings.warn(f"{self.path}: poses came more than {LOOKAHEAD_S:g} s of bag time after the scans they are "
+                              f"stamped for ({said}): those scans were read without them (the bag's topics written one "
+                              "after the other, or a pose topic recorded late); write the bag in header-stamp order",
+                              LmsbenchWarning, stacklevel=2)
             if not stats.messages.get(stats.laser) and not stats.skipped_count and stats.stopped is None:
                 # as a CARMEN log of no laser line: it read as no records, silently
                 others = ", ".join(f"{c.topic} ({c.msgcount})" for c in reader.connections if c.msgcount)
@@ -969,8 +980,17 @@ class _PoseMatcher:
         self.newest: dict[str, int | None] = {t: None for t in topics}
         self.scan_stamps: dict[int, int] = {}  # stamps of recent scans -> how many
         self.scan_order: deque[int] = deque()
+        #: per topic, the stamps of scans handed out without a pose of it (sorted; the latest MAX_POSES),
+        #: and the poses that came after such a scan they would have been attached to (``late``)
+        self.missed: dict[str, list[int]] = {t: [] for t in topics}
+        self.late: dict[str, int] = {t: 0 for t in topics}
 
     def add_pose(self, topic: str, stamp: int, pose: Pose2D) -> None:
+        missed = self.missed[topic]
+        if missed:  # a pose for a scan handed out without it (written more than LOOKAHEAD_S of bag time late)
+            i = bisect_left(missed, stamp)
+            if i < len(missed) and missed[i] - stamp <= self.tolerance:
+                self.late[topic] += 1
         newest = self.newest[topic]
         self.newest[topic] = stamp if newest is None else max(newest, stamp)
         same = self.by_stamp[topic].get(stamp)
@@ -1005,7 +1025,13 @@ class _PoseMatcher:
                 return
             held.popleft()
             self.held_beams -= len(h.scan)
-            yield h.index, h.scan, {topic: self._pose_for(topic, h) for topic in self.topics}
+            poses = {topic: self._pose_for(topic, h) for topic in self.topics}
+            for topic, pose in poses.items():
+                if pose is None:  # remembered: a pose of its stamp coming later is said (see late)
+                    insort(self.missed[topic], h.stamp)
+                    if len(self.missed[topic]) > MAX_POSES:
+                        del self.missed[topic][0]
+            yield h.index, h.scan, poses
             # poses the held scans may use, and those of scans still to come stamped up to
             # LOOKAHEAD_S before them (scans that arrive out of stamp order)
             self._prune(min([h.stamp, *(g.stamp for g in held)]) - round(LOOKAHEAD_S * 1e9))

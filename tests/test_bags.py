@@ -762,3 +762,28 @@ def test_an_unindexed_bag_s_damaged_message_record_is_named_by_its_chunk_offset(
     with pytest.raises(BagError, match=rf"whose record at byte {pos} is damaged: its record at chunk offset "
                        rf"{msg - datapos}: .* \(a chunk offset counts bytes of the chunk's data, decompressed\)$"):
         list(read_log(out))
+
+
+def test_poses_written_after_the_look_ahead_window_are_said(tmp_path: Path) -> None:
+    """Found by fuzzing: a bag whose poses were written after every scan (a ground truth added to a
+    bag afterwards, its topics written one after the other) read its 20 scans without their
+    odometry, silently ('odometry yes' in info): a scan waits LOOKAHEAD_S of bag time for its poses.
+    The loss is bounded as before, and now said in one warning naming the topic and the count."""
+    from lms200.errors import LmsbenchWarning
+
+    q = (0.0, 0.0, 0.0, 1.0)
+    scans = [("/scan", 1.0 + 0.1 * k, 1.0 + 0.1 * k, 1.0) for k in range(20)]
+    odom = [("/odom", 10.0 + 0.01 * k, 1.0 + 0.1 * k, (float(k), 0.0, *q)) for k in range(20)]
+    with pytest.warns(LmsbenchWarning) as caught:
+        out = list(read_log(_ros2_bag(tmp_path / "late", scans + odom)))
+    assert [r.odom for r in out] == [None] * 20  # as before: the look-ahead is bounded
+    assert [str(w.message) for w in caught] == [
+        f"{tmp_path / 'late'}: poses came more than 1 s of bag time after the scans they are stamped for (20 on /odom): "
+        "those scans were read without them (the bag's topics written one after the other, or a pose topic recorded "
+        "late); write the bag in header-stamp order"]
+    import warnings
+
+    with warnings.catch_warnings():  # in time (written 0.5 s late): no warning, every scan its odometry
+        warnings.simplefilter("error")
+        assert [r.odom[0] for r in read_log(_ros2_bag(tmp_path / "in_time", sorted(
+            scans + [(t, b - 9.0 + 0.5, s, p) for t, b, s, p in odom], key=lambda m: m[1])))] == [float(k) for k in range(20)]
