@@ -540,6 +540,9 @@ def check_log(path: str | os.PathLike) -> Path:
         meta = p / "metadata.yaml"
         if not meta.is_file():
             raise InputError(not_a_log_folder(p))
+        from lms200.bag import check_metadata_size
+
+        check_metadata_size(p)  # before anything parses it: a 5.5 MB one took minutes, 1 GB
         _text_head(meta, "a ROS 2 bag's metadata.yaml")
         _utf8(meta, "a ROS 2 bag's metadata.yaml")
         try:  # rosbags said "Could not load YAML ... in "<unicode string>", line 1, ..." over several lines

@@ -216,6 +216,24 @@ class _BoundedZstdFile:
                 f"{self._read / 2**20:.0f} MiB decompressed so far); not read (TMPDIR names a folder with more room)")
 
 
+#: bytes: the largest ROS 2 metadata.yaml read (a bag's is a few KB; a thousand topics with their QoS
+#: strings, or thousands of split storage files, stay under it). Both this reader and rosbags parse it
+#: whole in pure Python, about 50 s and 180 MB a MiB: a 5.5 MB one held `lmsbench info` 267 s at 1 GB
+MAX_METADATA_BYTES = 1 << 20
+
+
+def check_metadata_size(folder: Path) -> None:
+    """BagError for a ROS 2 bag folder whose metadata.yaml is larger than MAX_METADATA_BYTES, before
+    anything parses it (the command line's check, this reader and rosbags each parsed it whole: a
+    5.5 MB one held `lmsbench info` 340 s at 1 GB resident, and memory grows with it)."""
+    meta = folder / "metadata.yaml"
+    size = meta.stat().st_size
+    if size > MAX_METADATA_BYTES:
+        raise BagError(f"{meta}: {size:,} bytes, more than the {MAX_METADATA_BYTES:,} a ROS 2 bag's metadata.yaml may "
+                       "hold (refused unread: a bag's is a few KB, one of a thousand topics or of thousands of storage "
+                       "files well under 1 MiB)")
+
+
 def _check_storage_files(path: Path) -> None:
     """BagError for a ROS 2 bag whose metadata.yaml lists one storage file more than once
     (``relative_file_paths``; rosbags takes each by its name): its messages were read once for each
@@ -787,6 +805,7 @@ class BagReader:
                     raise BagError(f"{entry}: not a regular file (a pipe, a device or a socket) in the ROS 2 bag "
                                    f"{self.path}; a bag's files must be regular files (give the files themselves)")
         if self.path.is_dir():
+            check_metadata_size(self.path)
             _check_storage_files(self.path)
         _bound_zstd_messages()  # before open: a file-compressed ROS 2 bag is decompressed there
         try:
