@@ -762,3 +762,46 @@ def test_an_unindexed_bag_s_damaged_message_record_is_named_by_its_chunk_offset(
     with pytest.raises(BagError, match=rf"whose record at byte {pos} is damaged: its record at chunk offset "
                        rf"{msg - datapos}: .* \(a chunk offset counts bytes of the chunk's data, decompressed\)$"):
         list(read_log(out))
+
+
+def test_write_bag_flush_s_writes_the_first_scan_at_once_and_on_a_tick(tmp_path: Path) -> None:
+    """With ``flush_s`` the first chunk went out only after a scan ``flush_s`` after the bag was
+    opened: a recording killed in its first second (and one whose device sent its scans within it,
+    then went silent) was a file of the bag's header alone. Now the first scan is written out at
+    once, and a None (a tick: no record) writes out the scans held once they are due."""
+    import shutil
+    import time
+    import warnings
+
+    from lms200.bag import write_bag
+
+    out = tmp_path / "rec.bag"
+    on_disk: list[int] = []
+
+    def seen() -> int:  # the scans a reader recovers from the file as it is now (as if the writer were killed)
+        copy = tmp_path / "copy.bag"
+        shutil.copyfile(out, copy)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                return sum(1 for _ in read_log(copy))
+        except BagError:  # the header alone
+            return 0
+        finally:
+            copy.unlink()
+
+    def records():  # noqa: ANN202
+        yield Record(Scan.lms200(np.full(361, 1.0), stamp=0.0))
+        on_disk.append(seen())  # the first scan: at once
+        yield Record(Scan.lms200(np.full(361, 2.0), stamp=1.0))
+        yield None  # a tick 0.3 s before the second scan is due: still held
+        on_disk.append(seen())
+        time.sleep(0.35)
+        yield None  # due now: written out without a next scan
+        on_disk.append(seen())
+        yield None  # nothing held: nothing written
+        on_disk.append(seen())
+
+    assert write_bag(out, records(), flush_s=0.3) == 2
+    assert on_disk == [1, 1, 2, 2]
+    assert [r.scan.stamp for r in read_log(out)] == [0.0, 1.0]
