@@ -610,12 +610,27 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
     class RecoveringReader(r1.Reader):
         recovered: Recovered | None = None
 
-        def open(self) -> None:
+        def _unindexed(self) -> bool:
+            """The bag's header record (ROS bag format 2.0: after the "#ROSBAG V2.0" line) says
+            index_pos 0: the bag was never closed. Told from the header itself, not from the text
+            of rosbags' refusal ("Bag is not indexed, ..."), which a rosbags version may word
+            otherwise. False for a file whose header cannot be read, or that is encrypted: rosbags
+            says what is wrong with it."""
             try:
+                with self.path.open("rb") as bio:
+                    if bio.read(13) != b"#ROSBAG V2.0\n":  # the version line (rosbags refuses another)
+                        return False
+                    header = r1.Header.read(bio, r1.RecordType.BAGHEADER)
+                    if "encryptor" in header and header.get_string("encryptor"):
+                        return False
+                    return header.get_uint64("index_pos") == 0
+            except (OSError, r1.ReaderError, KeyError, struct.error):
+                return False
+
+        def open(self) -> None:
+            if not self._unindexed():
                 super().open()
-            except r1.ReaderError as exc:
-                if "not indexed" not in str(exc):
-                    raise
+            else:
                 self.bio = self.path.open("rb")
                 try:
                     self._scan()

@@ -805,3 +805,39 @@ def test_write_bag_flush_s_writes_the_first_scan_at_once_and_on_a_tick(tmp_path:
     assert write_bag(out, records(), flush_s=0.3) == 2
     assert on_disk == [1, 1, 2, 2]
     assert [r.scan.stamp for r in read_log(out)] == [0.0, 1.0]
+
+
+def test_an_unindexed_bag_is_told_by_its_header_not_by_rosbags_words(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A bag never closed was told by the text of rosbags' refusal ("Bag is not indexed, reindex
+    before reading"): a rosbags that words it otherwise (here: "Bag has no index") made a killed
+    recording "cannot open as a ROS bag: AnyReaderError: Bag has no index.". It is told by its header's
+    index_pos 0 now, and recovered as before."""
+    import warnings
+
+    from rosbags.rosbag1 import reader as r1
+
+    opened = r1.Reader.open
+
+    def reworded(self) -> None:  # noqa: ANN001
+        try:
+            opened(self)
+        except r1.ReaderError as exc:
+            raise r1.ReaderError(str(exc).replace("Bag is not indexed, reindex before reading.", "Bag has no index.")) from None
+
+    monkeypatch.setattr(r1.Reader, "open", reworded)
+    out, recs = _unindexed(tmp_path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = list(read_log(out))
+    assert [str(w.message) for w in caught] == [
+        f"{out}: the bag was not closed (a recording killed or cut by a power failure): it has no index; 20 messages "
+        "recovered from its 10 whole chunks"]
+    assert [r.scan.stamp for r in got] == [float(i) for i in range(10)]
+    # an indexed bag still goes through rosbags' own open (its refusals as they were)
+    whole = tmp_path / "whole.bag"
+    assert [r.scan.stamp for r in read_log(whole)] == [float(i) for i in range(10)]
+    data = bytearray(whole.read_bytes())
+    data[:13] = b"#ROSBAG V1.2\n"
+    whole.write_bytes(bytes(data))
+    with pytest.raises(BagError, match=r"whole\.bag: cannot open as a ROS bag: AnyReaderError: Bag version 102 is not supported\.$"):
+        list(read_log(whole))
