@@ -92,6 +92,33 @@ def test_an_output_file_held_by_another_command_is_refused(tmp_path, capsys):
         proc.communicate()
 
 
+def test_an_output_file_of_a_name_near_255_bytes_is_still_guarded(tmp_path, capsys):
+    """An output file named near the file system's longest name (255 bytes): its lock's name,
+    ``.NAME.lmsbench-lock``, was too long (ENAMETOOLONG), so both runs went on unguarded (the second
+    run got to opening its port: "cannot open socket://127.0.0.1:9 ..."). The lock's name is cut and
+    carries a hash of the whole name then, so the second run is refused as for any other name."""
+    import hashlib
+
+    name = "r" * 250 + ".clf"  # 254 bytes: a name the file system takes
+    target = tmp_path / name
+    code = ("import sys, time\nfrom pathlib import Path\nfrom experiments.options import check_out_file, holding_outputs\n"
+            "holding_outputs()\ncheck_out_file(Path(sys.argv[1]))\nprint('held', flush=True)\ntime.sleep(60)\n")
+    proc = subprocess.Popen([sys.executable, "-c", code, str(target)], cwd=REPO, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None and proc.stdout.readline() == "held\n", proc.communicate()
+        assert main(["lms200", "record", "--port", "socket://127.0.0.1:9", "--out", str(target)]) == 2
+        err = capsys.readouterr().err
+        assert err == (f"lmsbench lms200 record: error: --out {target}: another lmsbench command (pid {proc.pid}) "
+                       "is writing there; wait for it to end, or give another path\n")
+        lock = "." + "r" * (255 - 2 - 16 - len(".lmsbench-lock")) + "." + hashlib.sha256(name.encode()).hexdigest()[:16] \
+            + ".lmsbench-lock"
+        assert len(lock) == 255 and [p.name for p in tmp_path.iterdir()] == [lock]
+    finally:
+        proc.kill()
+        proc.communicate()
+
+
 def test_a_stale_lock_file_beside_an_output_file_is_taken_and_removed(tmp_path, capsys):
     """A killed run's hidden lock file holds no lock: the next run takes it and removes it as it ends."""
     target = tmp_path / "scans.clf"
