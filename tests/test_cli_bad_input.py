@@ -1131,10 +1131,15 @@ def test_compare_tells_worlds_from_files_by_name_for_sensor_as_for_seeds(tmp_pat
 
 
 @pytest.mark.parametrize("section, expected", [
-    ("robot: {v_max: 1.0e300}", "(robot.v_max: must be a finite number in (0, 10] m/s, got 1e+300)"),  # planned for ever
-    ("robot: {v_max: -1}", "(robot.v_max: must be a finite number in (0, 10] m/s, got -1)"),  # ran, silently
-    ("robot: {a_max: 0}", "(robot.a_max: must be a finite number in (0, 100] m/s^2, got 0)"),  # a tour of nan, warnings
-    ("robot: {v_max: [1, 2]}", "(robot.v_max: must be a finite number in (0, 10] m/s, got [1, 2])"),  # internal error
+    ("robot: {v_max: 1.0e300}", "(robot.v_max: must be a finite number in [0.01, 10] m/s, got 1e+300)"),  # planned for ever
+    ("robot: {v_max: -1}", "(robot.v_max: must be a finite number in [0.01, 10] m/s, got -1)"),  # ran, silently
+    ("robot: {a_max: 0}", "(robot.a_max: must be a finite number in [0.01, 100] m/s^2, got 0)"),  # a tour of nan, warnings
+    # positive but absurd: a robot that never left its first pose, exit 0
+    ("robot: {a_max: 1.0e-300}", "(robot.a_max: must be a finite number in [0.01, 100] m/s^2, got 1e-300)"),
+    ("robot: {v_max: 0.001}", "(robot.v_max: must be a finite number in [0.01, 10] m/s, got 0.001)"),
+    ("robot: {w_max: 1.0e-9}", "(robot.w_max: must be a finite number in [0.01, 20] rad/s, got 1e-09)"),
+    ("robot: {alpha_max: 0.005}", "(robot.alpha_max: must be a finite number in [0.01, 200] rad/s^2, got 0.005)"),
+    ("robot: {v_max: [1, 2]}", "(robot.v_max: must be a finite number in [0.01, 10] m/s, got [1, 2])"),  # internal error
     ("robot: {pause_s: [5, 1]}", "(robot.pause_s: the shortest pause must not exceed the longest, got [5, 1])"),
     ("robot: {pause_s: [1, 2, 3]}", "(robot.pause_s: must be two numbers of seconds [shortest, longest], got (1, 2, 3))"),
     ("odometry: {alpha1: x}", "(odometry.alpha1: must be a finite number in [0, 10], got 'x')"),  # internal error (numpy)
