@@ -1165,6 +1165,17 @@ def test_simulate_config_robot_and_odometry_values_are_checked(section, expected
     assert not (tmp_path / "o").exists()
 
 
+def test_a_yaml_1_1_boolean_word_in_a_config_is_refused_naming_the_file_line_and_key(tmp_path, capsys):
+    """`simulate --config` with `sensor: {interlaced: no}` ran a non-interlaced sensor, exit 0: PyYAML
+    (YAML 1.1) reads no as False, where YAML 1.2 reads text. Refused before any work, one line."""
+    (tmp_path / "run.yaml").write_text("world: office\nduration: 1\nsensor: {interlaced: no}\n")
+    assert run_main(["simulate", "--config", str(tmp_path / "run.yaml"), "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err == (
+        f"lmsbench simulate: error: {tmp_path / 'run.yaml'}: not valid YAML (line 3, column 22: key 'interlaced': no is "
+        "read as false (YAML 1.1), but as text by YAML 1.2; write true or false, or quote it ('no') for text)\n")
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_sweep_is_not_written_into_another_sweeps_folder(files, tmp_path, capsys):
     """`sweep B.yaml --out FOLDER_OF_A` replaced A's sweep.yaml, results.parquet and results.csv
     with B's, exit 0: A's table and record were gone (its cells stayed). Refused before any cell,
