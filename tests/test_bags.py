@@ -841,3 +841,24 @@ def test_an_unindexed_bag_is_told_by_its_header_not_by_rosbags_words(tmp_path: P
     whole.write_bytes(bytes(data))
     with pytest.raises(BagError, match=r"whole\.bag: cannot open as a ROS bag: AnyReaderError: Bag version 102 is not supported\.$"):
         list(read_log(whole))
+
+
+@pytest.mark.parametrize("content, held", [
+    ("", "an empty file (0 bytes)"),
+    ("# timestamp x y z qx qy qz qw\n", "holds only blank or comment lines (1)"),
+    ("# t x y z qx qy qz qw\n\n   \n# end\n", "holds only blank or comment lines (4)"),
+])
+def test_a_tum_file_of_no_pose_is_refused_naming_it(tmp_path: Path, content: str, held: str) -> None:
+    """An empty TUM file, or one of comments only (a cut or emptied trajectory), read as no poses,
+    silently, where an empty CARMEN log is refused ("FILE: an empty file (0 bytes): no laser lines")."""
+    from lms200 import read_tum
+
+    path = tmp_path / "gt.tum"
+    path.write_text(content)
+    with pytest.raises(LogFormatError) as info:
+        read_tum(path)
+    assert str(info.value) == (f"{path}: no poses: {held}; a TUM file holds a row t x y z qx qy qz qw per pose (a cut or "
+                               "emptied file?)")
+    path.write_text(content + "1.0 2.0 3.0 0 0 0 0 1\n")  # one pose: read
+    stamps, poses = read_tum(path)
+    assert stamps.tolist() == [1.0] and poses.tolist() == [[2.0, 3.0, 0.0]]
