@@ -1176,6 +1176,26 @@ def test_a_yaml_1_1_boolean_word_in_a_config_is_refused_naming_the_file_line_and
     assert not (tmp_path / "o").exists()
 
 
+def test_simulate_checks_a_configs_world_against_out_as_it_does_world(tmp_path, capsys, monkeypatch):
+    """`simulate` checked its inputs against --out twice: --world before the folder's own check, a
+    --config's world.json after it, once the config was read. So `--config C.yaml --out W` (C.yaml:
+    world: W/world.json) with a stray file in W said "holds notes.txt, which this command does not
+    write", where `--world W/world.json --out W` said the run would write world.json over its input.
+    One check now, after the config is read and before any output: the same message both ways."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "W").mkdir()
+    (tmp_path / "W" / "world.json").write_text("{}")
+    (tmp_path / "W" / "notes.txt").write_text("mine\n")
+    (tmp_path / "c.yaml").write_text("world: W/world.json\nduration: 1\n")
+    said = ("lmsbench simulate: error: --out W: the run would write world.json over W/world.json, which it reads; "
+            "give another folder\n")
+    assert run_main(["simulate", "--config", "c.yaml", "--out", "W"]) == 2
+    assert capsys.readouterr().err == said
+    assert run_main(["simulate", "--world", "W/world.json", "--duration", "1", "--out", "W"]) == 2
+    assert capsys.readouterr().err == said
+    assert sorted(p.name for p in (tmp_path / "W").iterdir()) == ["notes.txt", "world.json"]
+
+
 def test_a_sweep_is_not_written_into_another_sweeps_folder(files, tmp_path, capsys):
     """`sweep B.yaml --out FOLDER_OF_A` replaced A's sweep.yaml, results.parquet and results.csv
     with B's, exit 0: A's table and record were gone (its cells stayed). Refused before any cell,
