@@ -865,23 +865,12 @@ LOCK_SUFFIX = ".lmsbench-lock"
 def lock_file(path: Path) -> Path:
     """The hidden lock file of the output file ``path`` (a real path): ``.NAME.lmsbench-lock`` beside
     it, or, where that name would pass the file system's longest name (NAME_MAX, 255 bytes on
-    Linux's), ``.PREFIX.HASH.lmsbench-lock``: NAME's first bytes and 16 hex digits of its SHA-256,
-    so that every run of one output takes one lock (an output named near 255 bytes made a lock
-    name no file system takes, and the run went on unguarded)."""
-    import hashlib
+    Linux's), ``.PREFIX.HASH.lmsbench-lock``: NAME's first bytes and 16 hex digits of its SHA-256
+    (:func:`lms200.logs.hidden_stem`), so that every run of one output takes one lock (an output
+    named near 255 bytes made a lock name no file system takes, and the run went on unguarded)."""
+    from lms200.logs import hidden_stem
 
-    name = os.fsencode(path.name)
-    try:
-        most = os.pathconf(path.parent, "PC_NAME_MAX")
-    except (OSError, ValueError):
-        most = 255
-    most = most if most and most > 0 else 255
-    suffix = os.fsencode(LOCK_SUFFIX)
-    if 1 + len(name) + len(suffix) <= most:
-        return path.with_name(f".{path.name}{LOCK_SUFFIX}")
-    digest = hashlib.sha256(name).hexdigest()[:16].encode()
-    keep = max(most - 1 - 1 - len(digest) - len(suffix), 0)
-    return path.with_name(os.fsdecode(b"." + name[:keep] + b"." + digest + suffix))
+    return path.with_name(hidden_stem(path, len(os.fsencode(LOCK_SUFFIX))) + LOCK_SUFFIX)
 
 
 def _held() -> dict[str, tuple[int, Path | None, list[Path]]] | None:

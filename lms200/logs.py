@@ -129,7 +129,9 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
     if p.exists() and not p.is_file():
         raise InputError(f"path: {p} exists and is not a regular file (a folder or a device); "
                          "name a file to write the log to")
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp" + "".join(p.suffixes[-1:]), dir=p.parent)
+    suffix = ".tmp" + "".join(p.suffixes[-1:])
+    # mkstemp puts 8 characters between prefix and suffix; a name near 255 bytes made one too long
+    fd, tmp = tempfile.mkstemp(prefix=hidden_stem(p, 1 + 8 + len(os.fsencode(suffix))) + ".", suffix=suffix, dir=p.parent)
     os.close(fd)
     os.chmod(tmp, (p.stat().st_mode & 0o777) if p.exists() else 0o644)  # mkstemp's is 0o600
     try:
@@ -145,6 +147,28 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
 
 SIMULATE_LOG = "scans.clf"
 """The CARMEN log a ``lmsbench simulate`` output folder holds (beside its ground truth and world)."""
+
+
+def hidden_stem(path: Path, tail_bytes: int) -> str:
+    """The start of a hidden file's name beside ``path`` (its lock, its temporary file), to which a
+    tail of ``tail_bytes`` bytes is added: ``.NAME``, or, where that would pass the file system's
+    longest name (NAME_MAX, 255 bytes on Linux's), ``.PREFIX.HASH``: NAME's first bytes and 16 hex
+    digits of its SHA-256, the same for every run. A file named near 255 bytes made names no file
+    system takes: its lock went unguarded, and ``calibrate --out`` failed after its work,
+    "...: file name too long", naming the temporary file."""
+    import hashlib
+
+    name = os.fsencode(path.name)
+    try:
+        most = os.pathconf(path.parent if path.parent.is_dir() else ".", "PC_NAME_MAX")
+    except (OSError, ValueError):
+        most = 255
+    most = most if most and most > 0 else 255
+    if 1 + len(name) + tail_bytes <= most:
+        return f".{path.name}"
+    digest = hashlib.sha256(name).hexdigest()[:16].encode()
+    keep = max(most - tail_bytes - 2 - len(digest), 0)
+    return os.fsdecode(b"." + name[:keep] + b"." + digest)
 
 
 def folder_message(p: Path) -> str:

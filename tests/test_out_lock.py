@@ -236,3 +236,27 @@ def test_a_command_on_another_thread_keeps_its_hold(tmp_path):
         done.set()
         thread.join(30)
     assert not out.exists()  # made for the lock, left empty: removed as the first ended
+
+
+def test_files_written_whole_under_a_name_near_255_bytes_get_a_short_temporary_name(tmp_path):
+    """An output named near the file system's longest name (255 bytes): the hidden temporary file it
+    is written through (``.NAME.PID.tmp``, ``.NAME.XXXXXXXX.tmp.gz``) had a name too long to make, so
+    `calibrate --out NAME.yaml` failed after its work ("....yaml.29521.tmp: file name too long") and
+    ``write_log`` raised OSError. The temporary name is shortened as the lock's is; a killed run's
+    leftover of that name is still found."""
+    from experiments.provenance import leftover_temporaries, write_record
+    from lms200 import Record, Scan, read_log, write_log
+
+    out = tmp_path / ("c" * 250 + ".yaml")  # 255 bytes
+    write_record(out, "a: 1\n")
+    assert out.read_text() == "a: 1\n" and [p.name for p in tmp_path.iterdir()] == [out.name]
+    seen = []
+    write_record(out, lambda tmp: seen.append(tmp.name) or tmp.write_text("a: 2\n"))
+    assert out.read_text() == "a: 2\n" and len(seen[0].encode()) <= 255 and seen[0].startswith(".ccc")
+    left = tmp_path / seen[0].replace(f".{os.getpid()}.tmp", ".4194303.tmp")  # as a killed run leaves it
+    left.write_text("cut")
+    assert leftover_temporaries(out) == [left]
+
+    log = tmp_path / ("d" * 245 + ".clf.gz")  # 252 bytes
+    assert write_log(log, [Record(Scan.lms200([1.0] * 361, stamp=float(i))) for i in range(3)]) == 3
+    assert [r.scan.stamp for r in read_log(log)] == [0.0, 1.0, 2.0]
