@@ -354,6 +354,9 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                 if scan.stamp < 0 or ns >= MAX_STAMP_NS:  # was struct.error from rosbags' serialiser
                     raise InputError(f"records: item {seq}: stamp {scan.stamp!r} s cannot be stored in a bag "
                                      f"(0 <= stamp < 2**31 s = {MAX_STAMP_NS // 1_000_000_000} s, a ROS time's range)")
+                if np.float32(scan.angle_increment) == 0:  # stored as 0, which no reader takes ("must be > 0, got 0.0")
+                    raise InputError(f"records: item {seq}: angle_increment {scan.angle_increment:g} rad cannot be stored "
+                                     f"in a bag (a LaserScan's fields are float32, in which it is 0)")
                 if scan.range_max > FLOAT32_MAX or np.any(np.isfinite(scan.ranges) & (scan.ranges > FLOAT32_MAX)):
                     raise InputError(f"records: item {seq}: a range or range_max beyond {FLOAT32_MAX:.4g} m cannot be "
                                      f"stored in a bag (a LaserScan's fields are float32), got range_max {scan.range_max:g} m")

@@ -862,3 +862,16 @@ def test_a_tum_file_of_no_pose_is_refused_naming_it(tmp_path: Path, content: str
     path.write_text(content + "1.0 2.0 3.0 0 0 0 0 1\n")  # one pose: read
     stamps, poses = read_tum(path)
     assert stamps.tolist() == [1.0] and poses.tolist() == [[2.0, 3.0, 0.0]]
+
+
+def test_write_bag_refuses_an_angle_increment_that_float32_makes_0(tmp_path: Path) -> None:
+    """A Scan 1e-290 rad apart was written to a bag as 0 (a LaserScan's fields are float32), a bag
+    its reader refuses ("angle_increment: must be > 0, got 0.0", of a value never given): refused
+    when written, naming the item and the value; the scans before it are kept."""
+    from lms200.bag import write_bag
+
+    recs = [Record(_scan(0.0)), Record(Scan(np.full(5, 1.0), -0.1, 1e-290, 0.0, 8.0, stamp=1.0))]
+    with pytest.raises(InputError, match=r"^records: item 1: angle_increment 1e-290 rad cannot be stored in a bag "
+                                         r"\(a LaserScan's fields are float32, in which it is 0\)$"):
+        write_bag(tmp_path / "s.bag", recs)
+    assert [r.scan.stamp for r in read_log(tmp_path / "s.bag")] == [0.0]
