@@ -1165,6 +1165,21 @@ def test_simulate_config_robot_and_odometry_values_are_checked(section, expected
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("line, said", [
+    ("duration: 5000", "duration: must be in [0.1, 3600] s (shorter holds no scan), got 5000"),
+    ("duration: 0.01", "duration: must be in [0.1, 3600] s (shorter holds no scan), got 0.01"),
+    ("duration: .nan", "duration: must be in [0.1, 3600] s (shorter holds no scan), got nan"),
+    ("rate_hz: -1", "rate_hz: must be a finite number of scans/s > 0 (or None: every scan), got -1.0"),
+])
+def test_simulate_config_duration_and_rate_name_the_value_given(tmp_path, capsys, line, said):
+    """`simulate --config` with `duration: 5000` said "duration must be in [0.1, 3600] s (shorter holds
+    no scan) and rate_hz > 0": not the value given, and a rate that was fine. Now the field and its value."""
+    (tmp_path / "run.yaml").write_text(f"world: office\n{line}\n")
+    assert run_main(["simulate", "--config", str(tmp_path / "run.yaml"), "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err == f"lmsbench simulate: error: {tmp_path / 'run.yaml'}: {said}\n"
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_yaml_1_1_boolean_word_in_a_config_is_refused_naming_the_file_line_and_key(tmp_path, capsys):
     """`simulate --config` with `sensor: {interlaced: no}` ran a non-interlaced sensor, exit 0: PyYAML
     (YAML 1.1) reads no as False, where YAML 1.2 reads text. Refused before any work, one line."""
