@@ -261,7 +261,7 @@ CASES = [
     (["simulate", "--sensor", "{sensor_ok.yaml}", "--resolution-deg", "1", "--out", O], "--resolution-deg cannot be given"),
     (["simulate", "--sensor", "{sensor_ok.yaml}", "--units", "cm", "--out", O], "--sensor holds the whole sensor model"),
     (["compare", "{good.clf}", "--sensor", "{sensor_ok.yaml}", "--out", O], "--sensor sets the sensor of the worlds"),
-    (["simulate", "--config", "{short_run.yaml}", "--out", O], "duration must be in [0.1, 3600] s"),
+    (["simulate", "--config", "{short_run.yaml}", "--out", O], "duration: must be in [0.1, 3600] s (shorter holds no scan), got 0.001"),
     # values of the wrong type: `duration: true` ran 1 s; a list said "float() argument must be ..."
     (["simulate", "--config", "{run_bool.yaml}", "--out", O], "run_bool.yaml: not a simulate config (duration: must be a number, got True)"),
     (["simulate", "--config", "{run_list.yaml}", "--out", O], "(duration: must be a number, got [2])"),
