@@ -21,7 +21,7 @@ from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.finite import fixed
 from lms200.logs import regular_file
 from lms200.records import Record
-from lms200.yamlio import load as load_yaml
+from lms200.yamlio import load as load_yaml, dump as dump_yaml
 from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished, not_a_log_folder, simulate_log
 from experiments.progress import say_on_terminal
 from experiments.provenance import write_record
@@ -437,7 +437,6 @@ def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:
     libraries; written first and whole (provenance.write_record), as it tells ``out`` as an lmsbench
     slam folder: a run stopped after its trajectory.tum, before config.yaml, left a folder the next
     run into it refused. ``slam --config`` reads the slam: section back; the other two are records."""
-    import yaml
 
     from experiments.compare import resolved_configs
     from experiments.options import SLAM_RECORD_KEYS
@@ -452,7 +451,7 @@ def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:
                               {float(r.scan.range_max) for r in data.records}, config.extractor_params)
     records = {"extractor_config": extractor, "versions": versions()}
     assert tuple(records) == SLAM_RECORD_KEYS  # what slam --config reads past and --out tells the folder by
-    write_record(out / "config.yaml", yaml.safe_dump({"input": data.sources, "slam": config.to_dict(), **records},
+    write_record(out / "config.yaml", dump_yaml({"input": data.sources, "slam": config.to_dict(), **records},
                                                      sort_keys=False))
 
 

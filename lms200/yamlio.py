@@ -156,6 +156,21 @@ def _construct_mapping(loader: Loader, node: yaml.MappingNode, deep: bool = Fals
 Loader.construct_mapping = _construct_mapping  # type: ignore[method-assign,assignment]
 
 
+class Dumper(yaml.SafeDumper):
+    """The safe dumper, quoting text that :class:`Loader` refuses written plain: the boolean words
+    ``y`` and ``n`` (any case) and ``yes`` / ``no`` / ``on`` / ``off`` in a case PyYAML reads as text
+    (``yEs``). ``yaml.safe_dump`` wrote them plain (PyYAML reads them as text), so a config.yaml or
+    sweep.yaml lmsbench wrote with such a value (a grid's ``['y', 'n']``) was refused when read back."""
+
+
+Dumper.add_implicit_resolver("tag:yaml.org,2002:bool", re.compile(r"^(?i:yes|no|on|off|y|n)$"), list("yYnNoO"))
+
+
+def dump(data: Any, **kwargs: Any) -> str:  # noqa: ANN401 - any YAML data
+    """``yaml.safe_dump(data, **kwargs)`` with :class:`Dumper`: text :func:`load` reads back as written."""
+    return yaml.dump(data, Dumper=Dumper, **kwargs)
+
+
 class TooDeep(yaml.YAMLError):
     """YAML nested deeper than the parser's recursion allows."""
 

@@ -913,3 +913,21 @@ def test_slam_config_refuses_an_icp_scale_that_breaks_the_run(sim_folder, tmp_pa
     err = capsys.readouterr().err
     assert re.fullmatch(rf"lmsbench slam: error: {re.escape(str(config))}: {message}\n", err), err
     assert not out.exists()
+
+
+def test_a_slam_run_of_a_log_named_like_a_boolean_word_reruns_into_its_folder(sim_folder, tmp_path, capsys, monkeypatch):
+    """config.yaml was written with yaml.safe_dump, which leaves ``n`` and ``y`` unquoted (text to
+    PyYAML): a run on a log named ``n`` wrote ``log: n``, which the loader refuses as a YAML 1.1
+    boolean word, so the next run into that --out took the folder for none of slam's ("holds
+    config.yaml, ... no earlier lmsbench slam run wrote"). lmsbench's YAML writer quotes them."""
+    import shutil
+
+    from experiments.cli import main
+    from lms200.yamlio import load
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copyfile(sim_folder / "scans.clf", tmp_path / "n")
+    for _ in range(2):
+        assert main(["slam", "n", "--out", "o", "--quiet", "--max-scans", "5"]) == 0, capsys.readouterr().err
+    assert "input:\n  scans: 'n'\n" in (tmp_path / "o" / "config.yaml").read_text()
+    assert load((tmp_path / "o" / "config.yaml").read_text())["input"]["scans"] == "n"

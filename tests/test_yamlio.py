@@ -177,3 +177,15 @@ def test_true_false_quoted_and_tagged_words_and_keys_read_as_before() -> None:
             "on: 1\n")
     assert load(text) == {"a": True, "b": False, "c": True, "d": "yes", "e": "off", "f": "no", "g": True, "h": "none",
                           "i": "yess", "j": [True, "n"], True: 1}
+
+
+def test_dump_quotes_what_load_refuses_plain_so_its_text_reads_back() -> None:
+    """yaml.safe_dump wrote the text ``n``, ``y`` (and ``yEs``) plain, as PyYAML reads them as text;
+    the loader refuses them as YAML 1.1 boolean words, so a config lmsbench wrote (a grid of
+    ``['y', 'n']``, a log named ``n``) was refused when read back. ``yamlio.dump`` quotes them."""
+    from lms200.yamlio import dump
+
+    data = {"grid": ["y", "n", "Y", "N", "yEs", "no", "On", "OFF", "true", True, False, "none", "ny", 1, 1.5], "n": "y"}
+    text = dump(data, sort_keys=False)
+    assert text.startswith("grid:\n- 'y'\n- 'n'\n- 'Y'\n- 'N'\n- 'yEs'\n- 'no'\n- 'On'\n- 'OFF'\n- 'true'\n- true\n- false\n- none\n")
+    assert load(text) == data
