@@ -185,10 +185,18 @@ def folder_message(p: Path) -> str:
 
 
 def path_of(path: object) -> Path:
-    """``path`` as a Path; InputError naming it when it is not a str or os.PathLike."""
+    """``path`` as a Path; InputError naming it when it is not a str or os.PathLike, or when a name
+    in it is longer than the file system takes (NAME_MAX, 255 bytes on Linux's: the readers and
+    writers raised a raw OSError, "File name too long", from their first look at it)."""
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(f"path: must be a str or os.PathLike, got {type(path).__name__}")
-    return Path(path)
+    p = Path(path)
+    for part in p.parts:
+        size = len(os.fsencode(part))
+        if size > 255:  # no file system takes it (NAME_MAX: 255 on Linux's, less on none of the usual ones)
+            raise InputError(f"path: a name of {size} bytes ({part[:40]}...), longer than a file system takes (255); "
+                             "give a shorter one")
+    return p
 
 
 def regular_file(path: object, what: str) -> Path:

@@ -260,3 +260,21 @@ def test_files_written_whole_under_a_name_near_255_bytes_get_a_short_temporary_n
     log = tmp_path / ("d" * 245 + ".clf.gz")  # 252 bytes
     assert write_log(log, [Record(Scan.lms200([1.0] * 361, stamp=float(i))) for i in range(3)]) == 3
     assert [r.scan.stamp for r in read_log(log)] == [0.0, 1.0, 2.0]
+
+
+def test_the_library_refuses_a_name_longer_than_255_bytes_as_an_input_error(tmp_path):
+    """read_log, write_log, read_tum and write_tum of a path whose name passes 255 bytes raised a raw
+    OSError ("[Errno 36] File name too long") from their first look at it: an InputError naming the
+    argument now, as for any other bad path."""
+    from lms200 import Record, Scan, read_log, read_tum, write_log, write_tum
+    from lms200.errors import InputError
+
+    name = "x" * 300
+    calls = [lambda: read_log(tmp_path / f"{name}.clf"), lambda: read_tum(tmp_path / f"{name}.tum"),
+             lambda: write_log(tmp_path / f"{name}.bag", [Record(Scan.lms200([1.0] * 361))]),
+             lambda: write_tum(tmp_path / name / "t.tum", [0.0], [[0.0, 0.0, 0.0]])]
+    for call in calls:
+        with pytest.raises(InputError, match=r"^path: a name of 30\d bytes \(x{40}\.\.\.\), longer than a file system "
+                                             r"takes \(255\); give a shorter one$"):
+            call()
+    assert list(tmp_path.iterdir()) == []
