@@ -168,7 +168,13 @@ def hidden_stem(path: Path, tail_bytes: int) -> str:
         return f".{path.name}"
     digest = hashlib.sha256(name).hexdigest()[:16].encode()
     keep = max(most - tail_bytes - 2 - len(digest), 0)
-    return os.fsdecode(b"." + name[:keep] + b"." + digest)
+    head = name[:keep]
+    try:  # not cut within a UTF-8 character: its first bytes alone were a name no UTF-8 decoder reads
+        name.decode("utf-8")
+        head = head.decode("utf-8", "ignore").encode("utf-8")  # drops only the cut character's bytes
+    except UnicodeDecodeError:  # a name that is no UTF-8 (os.fsencode's escapes): cut as bytes
+        pass
+    return os.fsdecode(b"." + head + b"." + digest)
 
 
 def folder_message(p: Path) -> str:

@@ -278,3 +278,21 @@ def test_the_library_refuses_a_name_longer_than_255_bytes_as_an_input_error(tmp_
                                              r"takes \(255\); give a shorter one$"):
             call()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_shortened_hidden_name_is_not_cut_within_a_utf8_character(tmp_path):
+    """``hidden_stem`` cut a long name's bytes where the count fell: within a two-byte character
+    (``é``), which left a lone 0xC3 byte in the lock's and temporary file's names (a name no UTF-8
+    reader takes; a killed run leaves it behind). It stops at the character before."""
+    from experiments.options import lock_file
+    from lms200.logs import hidden_stem
+
+    out = tmp_path / ("é" * 125 + ".yaml")  # 255 bytes
+    stem = hidden_stem(out, len(".lmsbench-lock"))
+    stem.encode("utf-8")  # no lone surrogate escape
+    assert stem.startswith(".éé") and len(os.fsencode(stem)) + len(".lmsbench-lock") <= 255
+    name = lock_file(out).name
+    name.encode("utf-8")
+    assert name.endswith(".lmsbench-lock") and len(os.fsencode(name)) <= 255
+    for odd in range(1, 3):  # either parity of the cut
+        hidden_stem(tmp_path / ("x" * odd + "é" * 125), 14).encode("utf-8")
