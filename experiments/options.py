@@ -543,7 +543,7 @@ def check_log(path: str | os.PathLike) -> Path:
         _text_head(meta, "a ROS 2 bag's metadata.yaml")
         _utf8(meta, "a ROS 2 bag's metadata.yaml")
         try:  # rosbags said "Could not load YAML ... in "<unicode string>", line 1, ..." over several lines
-            info = load_yaml(meta.read_text(encoding="utf-8"))
+            info = load_yaml(meta.read_text(encoding="utf-8"), words=True)  # rosbag2 writes it, not our users
         except yaml.YAMLError as exc:
             raise InputError(f"{meta}: not valid YAML ({exc})") from None
         if not isinstance(info, dict) or not isinstance(info.get("rosbag2_bagfile_information"), dict):
@@ -635,7 +635,7 @@ DEMO_OUTPUTS = OutTree(("report.md", "report.html"),
 def _yaml_mapping(path: Path) -> dict | None:
     """The mapping a YAML file holds, or None (unreadable, not UTF-8, not YAML, not a mapping)."""
     try:
-        raw = load_yaml(path.read_text(encoding="utf-8"))
+        raw = load_yaml(path.read_text(encoding="utf-8"), words=True)  # an earlier version's record may hold a plain n
     except Exception:  # noqa: BLE001 - whatever it is, it is not a record of a run
         return None
     return raw if isinstance(raw, dict) else None

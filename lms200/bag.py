@@ -226,7 +226,7 @@ def _check_storage_files(path: Path) -> None:
     from .yamlio import load
 
     try:
-        info = load((path / "metadata.yaml").read_text(encoding="utf-8"))
+        info = load((path / "metadata.yaml").read_text(encoding="utf-8"), words=True)  # rosbag2 wrote it
         listed = [PurePath(str(x)).name for x in info["rosbag2_bagfile_information"]["relative_file_paths"]]
     except Exception:  # noqa: BLE001 - rosbags reads it next, and says what is wrong
         return

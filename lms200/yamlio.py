@@ -30,6 +30,19 @@ import yaml
 class Loader(yaml.SafeLoader):
     """The safe loader with YAML 1.2 floats (``1e9``, ``5e-3``)."""
 
+    #: a plain YAML 1.1 boolean word (``yes``, ``no``, ``on``, ``off``, ``y``, ``n``) as a value is
+    #: refused (``yaml11_bool``); :class:`WordsLoader` reads them as PyYAML does
+    refuse_words = True
+
+
+class WordsLoader(Loader):
+    """:class:`Loader` that reads YAML 1.1's boolean words as PyYAML does (``no`` False, ``n``
+    text), for YAML that lmsbench's users do not write for it: a ROS 2 bag's metadata.yaml (rosbag2
+    writes it) and the records of runs an earlier version wrote with ``yaml.safe_dump`` (``n`` and
+    ``y`` plain), which :func:`load` would refuse."""
+
+    refuse_words = False
+
 
 Loader.add_implicit_resolver(
     "tag:yaml.org,2002:float",
@@ -64,7 +77,7 @@ def yaml11_number(loader: Loader, node: yaml.Node) -> str | None:
     return f"{text} is read as {value!r}: {why}; write the number as a plain decimal, or quote it ('{text}') for text"
 
 
-_BOOL_WORD = re.compile(r"yes|no|on|off|y|n", re.I)  # YAML 1.1's booleans besides true / false (any case here)
+_BOOL_WORD = re.compile(r"^(?:yes|no|on|off|y|n)$", re.I)  # YAML 1.1's booleans besides true / false (any case here)
 
 
 def yaml11_bool(loader: Loader, node: yaml.Node) -> str | None:
@@ -91,7 +104,7 @@ def _refuse_yaml11_number(loader: Loader, node: yaml.Node, where: str = "", key:
     """Raise a YAML error at ``node`` (``where``: "key 'k': " before the problem) if
     ``yaml11_number`` finds it reads as another number, or, unless it is a mapping's ``key``,
     ``yaml11_bool`` finds it a YAML 1.1 boolean word."""
-    problem = yaml11_number(loader, node) or (None if key else yaml11_bool(loader, node))
+    problem = yaml11_number(loader, node) or (None if key or not loader.refuse_words else yaml11_bool(loader, node))
     if problem:
         raise yaml.constructor.ConstructorError(None, None, where + problem, node.start_mark)
 
@@ -156,6 +169,16 @@ def _construct_mapping(loader: Loader, node: yaml.MappingNode, deep: bool = Fals
 Loader.construct_mapping = _construct_mapping  # type: ignore[method-assign,assignment]
 
 
+def _flatten_mapping(loader: Loader, node: yaml.MappingNode) -> None:
+    """SafeLoader's merge (``<<``), the keys it brings in from the merged mappings marked as keys
+    too (``yaml11_bool`` passes a key such as ``on:`` over: one merged in was refused)."""
+    yaml.SafeLoader.flatten_mapping(loader, node)
+    loader.__dict__.setdefault("_key_nodes", set()).update(id(key_node) for key_node, _ in node.value)
+
+
+Loader.flatten_mapping = _flatten_mapping  # type: ignore[method-assign,assignment]
+
+
 class Dumper(yaml.SafeDumper):
     """The safe dumper, quoting text that :class:`Loader` refuses written plain: the boolean words
     ``y`` and ``n`` (any case) and ``yes`` / ``no`` / ``on`` / ``off`` in a case PyYAML reads as text
@@ -163,7 +186,7 @@ class Dumper(yaml.SafeDumper):
     sweep.yaml lmsbench wrote with such a value (a grid's ``['y', 'n']``) was refused when read back."""
 
 
-Dumper.add_implicit_resolver("tag:yaml.org,2002:bool", re.compile(r"^(?i:yes|no|on|off|y|n)$"), list("yYnNoO"))
+Dumper.add_implicit_resolver("tag:yaml.org,2002:bool", _BOOL_WORD, list("yYnNoO"))
 
 
 def dump(data: Any, **kwargs: Any) -> str:  # noqa: ANN401 - any YAML data
@@ -265,8 +288,9 @@ def _malformed(exc: yaml.YAMLError, text: str) -> Malformed:
     return Malformed(" ".join(str(exc).split()))
 
 
-def load(text: str) -> Any:
-    """Parse YAML text with :class:`Loader`.
+def load(text: str, *, words: bool = False) -> Any:
+    """Parse YAML text with :class:`Loader` (``words``: with :class:`WordsLoader`, YAML 1.1's
+    boolean words read as PyYAML reads them, for YAML not written for lmsbench by its users).
 
     Raises:
         yaml.YAMLError: as ``yaml.safe_load`` does but in one line that starts with the place
@@ -276,7 +300,7 @@ def load(text: str) -> Any:
             a value that holds itself (:class:`SelfReference`).
     """
     try:
-        doc = yaml.load(text, Loader=Loader)  # noqa: S506 - Loader is a SafeLoader
+        doc = yaml.load(text, Loader=WordsLoader if words else Loader)  # noqa: S506 - both are SafeLoaders
     except RecursionError:
         raise TooDeep("nested too deeply to parse") from None
     except (DuplicateKey, TooDeep):

@@ -189,3 +189,58 @@ def test_dump_quotes_what_load_refuses_plain_so_its_text_reads_back() -> None:
     text = dump(data, sort_keys=False)
     assert text.startswith("grid:\n- 'y'\n- 'n'\n- 'Y'\n- 'N'\n- 'yEs'\n- 'no'\n- 'On'\n- 'OFF'\n- 'true'\n- true\n- false\n- none\n")
     assert load(text) == data
+
+
+def test_a_merged_key_that_is_a_boolean_word_reads_as_a_written_one() -> None:
+    """A key such as ``on:`` is read as PyYAML reads it; brought in by a merge (``<<``) it was
+    refused as a value ("on is read as true"), since the merge's keys were not marked as keys."""
+    assert load("a:\n  <<: {on: 1}\n  b: 2\n") == {"a": {True: 1, "b": 2}}
+    assert load("base: &b {on: 1}\na:\n  <<: *b\n") == {"base": {True: 1}, "a": {True: 1}}
+    with pytest.raises(yaml.YAMLError, match="no is read as false"):
+        load("a:\n  <<: {x: no}\n")  # a merged value is still one
+
+
+def test_words_reads_yaml_not_written_for_lmsbench_as_pyyaml_does() -> None:
+    """``load(text, words=True)``: a ROS 2 bag's metadata.yaml (rosbag2 writes it) and the records
+    an earlier version wrote with yaml.safe_dump (``scans: n`` plain) read as PyYAML reads them."""
+    text = "custom_data: {operator: n, heated: yes}\nscans: y\n"
+    with pytest.raises(yaml.YAMLError, match="YAML 1.1"):
+        load(text)
+    assert load(text, words=True) == {"custom_data": {"operator": "n", "heated": True}, "scans": "y"}
+    with pytest.raises(yaml.YAMLError, match="octal"):  # the other checks stay
+        load("seed: 010\n", words=True)
+
+
+def test_a_ros2_bag_whose_metadata_holds_a_boolean_word_is_read_by_the_command_line(tmp_path, capsys) -> None:
+    """check_log read a ROS 2 bag's metadata.yaml with the loader that refuses YAML 1.1's boolean
+    words, so `info BAG` refused a bag whose metadata held ``operator: n`` (custom data rosbag2
+    writes as given), which read_log and rosbags read (review)."""
+    from experiments.cli import main
+    from lms200 import Record, Scan, read_log
+    from lms200.bag import write_bag
+
+    bag = tmp_path / "r2"
+    write_bag(bag, [Record(Scan.lms200([1.0 + 0.01 * i] * 361, stamp=float(i))) for i in range(3)])
+    meta = bag / "metadata.yaml"
+    text = meta.read_text()
+    assert text.count("  custom_data: null\n") == 1
+    meta.write_text(text.replace("  custom_data: null\n", "  custom_data:\n    operator: n\n    heated: no\n"))
+    assert len(list(read_log(bag))) == 3
+    assert main(["info", str(bag)]) == 0, capsys.readouterr().err
+    assert "scans           3" in capsys.readouterr().out
+
+
+def test_a_slam_folder_an_earlier_version_wrote_with_a_plain_n_is_rerun_into(tmp_path, capsys, monkeypatch) -> None:
+    """An earlier version wrote config.yaml with yaml.safe_dump (``scans: n`` plain): the check of
+    --out read it with the loader that refuses ``n``, and took the folder for none of slam's ("no
+    earlier lmsbench slam run wrote"); a record is read as PyYAML reads it (review)."""
+    from experiments.cli import main
+    from lms200 import Record, Scan, write_log
+
+    monkeypatch.chdir(tmp_path)
+    write_log(tmp_path / "n", [Record(Scan.lms200([2.0] * 361, stamp=0.1 * i)) for i in range(5)])
+    assert main(["slam", "n", "--out", "o", "--quiet"]) == 0, capsys.readouterr().err
+    cfg = tmp_path / "o" / "config.yaml"
+    cfg.write_text(cfg.read_text().replace("scans: 'n'", "scans: n"))  # as yaml.safe_dump wrote it
+    assert "scans: n\n" in cfg.read_text()
+    assert main(["slam", "n", "--out", "o", "--quiet"]) == 0, capsys.readouterr().err

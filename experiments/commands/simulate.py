@@ -76,8 +76,9 @@ def _config(args: argparse.Namespace):
         if cfg.world not in known_worlds() and not cfg.world.endswith(".json"):
             raise InputError(f"{args.config}: unknown world {cfg.world!r}; known worlds: {', '.join(known_worlds())}")
         if not MIN_DURATION_S <= cfg.duration <= MAX_DURATION_S:  # the value given was not said (nor which field)
-            raise InputError(f"{args.config}: duration: must be in [{MIN_DURATION_S:g}, {MAX_DURATION_S:g}] s (shorter "
-                             f"holds no scan), got {cfg.duration:g}")  # (rate_hz: check_scan_rate below, naming it)
+            why = " (shorter holds no scan)" if cfg.duration < MIN_DURATION_S else ""  # said of a value too long too
+            raise InputError(f"{args.config}: duration: must be in [{MIN_DURATION_S:g}, {MAX_DURATION_S:g}] s{why}, "
+                             f"got {cfg.duration:g}")  # (rate_hz: check_scan_rate below, naming it)
         from sim.worlds import MAX_CLUTTER, check_seed
 
         try:
