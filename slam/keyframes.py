@@ -102,17 +102,17 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
             break
         if any(abs(keyframes[k].key - t) <= cfg.visit_gap for t in tried):
             continue  # the same visit as a candidate already matched: try other visits of the place
+        tried.append(keyframes[k].key)
         cand = keyframes[k]
-        prior = drift(cand) if drift is not None else None
-        max_heading = np.inf if prior is None else float(np.sqrt(gate * max(prior[2, 2], 0.0)))
-        if not _could_overlap(new, cand, cfg.min_inliers, max_heading):
-            continue  # looking away from it (a corridor passed the other way): not a visit to spend a try on
-        tried.append(cand.key)
         lo = max(0, cand.key - cfg.submap)
         sub = [kf for kf in keyframes[lo: cand.key + cfg.submap + 1] if new.travelled - kf.travelled >= cfg.min_travel]
         ref = local_map(sub, voxel)
+        prior = drift(cand) if drift is not None else None
+        max_heading = np.inf if prior is None else float(np.sqrt(gate * max(prior[2, 2], 0.0)))
         m = match(scan_points, ref, [new.pose], alignment, max_heading, normals=normals)
-        d2 = _distance2(m, new.pose, prior)
+        d = m.pose - new.pose
+        d[2] = wrap(d[2])
+        d2 = float(d @ np.linalg.solve(prior + m.covariance, d)) if prior is not None else 0.0
         if not _verified(m, cfg, alignment):
             continue
         if d2 > gate:
@@ -121,51 +121,6 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
                            float(np.hypot(*(m.pose[:2] - new.pose[:2]))),
                            rotate_covariance(m.covariance, -m.pose[2]), d2)  # world -> frame of the new keyframe
     return None
-
-
-def field_of_view(points: np.ndarray) -> float:
-    """The bearing span (rad) of a scan's points (sensor frame): pi for a 180-degree scanner, about
-    2 pi for a full turn (the widest gap between neighbouring bearings left out)."""
-    p = np.asarray(points, float).reshape(-1, 2)
-    if p.shape[0] < 2:
-        return 0.0
-    b = np.sort(np.arctan2(p[:, 1], p[:, 0]))
-    gaps = np.diff(np.append(b, b[0] + 2 * np.pi))
-    return float(2 * np.pi - gaps.max())
-
-
-def shared_view(fov: float, turn: float) -> float:
-    """The share of a field of view ``fov`` (rad, centred on the heading) that a second one of the same
-    width, turned by ``turn`` rad, also covers (on the circle: a full turn always covers all of it)."""
-    d = abs(float(wrap(turn)))
-    if fov <= 0.0:
-        return 0.0
-    return min(1.0, (max(0.0, fov - d) + max(0.0, fov - (2 * np.pi - d))) / fov)
-
-
-def _could_overlap(new: Keyframe, cand: Keyframe, min_inliers: float, heading_tolerance: float) -> bool:
-    """Whether the two keyframes' views can share ``min_inliers`` of their field of view (the
-    narrower of the two, :func:`field_of_view`), their headings' difference taken at the least the
-    drift allows (``heading_tolerance`` rad less): a closure must explain that share of the scan's
-    points, and points outside the candidate's view cannot be explained. A 180-degree scan looking
-    back along a corridor the candidate looked down shares its side walls alone: the points that
-    fix the axis (door recesses) then alias, and such closures were metres off."""
-    fov = min(field_of_view(new.points), field_of_view(cand.points))
-    d = abs(float(wrap(new.pose[2] - cand.pose[2])))
-    lo = max(0.0, d - heading_tolerance)
-    # shared_view is piecewise linear in the turn: its largest value over [lo, d] is at an end or a kink
-    turns = [lo, d] + [k for k in (fov, 2 * np.pi - fov) if lo < k < d]
-    return max(shared_view(fov, t) for t in turns) >= min_inliers
-
-
-def _distance2(m: Match, estimate: np.ndarray, prior: np.ndarray | None) -> float:
-    """Mahalanobis distance^2 of the match's correction of ``estimate`` against the drift ``prior``
-    (world frame) plus the match's own covariance (0 without a prior)."""
-    if prior is None:
-        return 0.0
-    d = m.pose - estimate
-    d[2] = wrap(d[2])
-    return float(d @ np.linalg.solve(prior + m.covariance, d))
 
 
 def _verified(m: Match, cfg: LoopClosureConfig, alignment: AlignmentConfig) -> bool:

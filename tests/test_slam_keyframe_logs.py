@@ -310,33 +310,3 @@ def test_radish_keyframe_logs_with_their_odometry(shared_data, name, bound):
     result = run_slam(records, SlamConfig.from_dict({"motion": {"use_odometry": True}}))
     err = ate(result.trajectory, truth).rmse
     assert err < bound and err < ate(odometry, truth).rmse
-
-
-@pytest.mark.parametrize("name", ["intel-corrected.log.gz", "aces-corrected.log.gz"])
-def test_radish_keyframe_logs_close_no_loop_that_the_corrected_poses_deny(shared_data, name):
-    """Every loop closure of the odometry-driven run joins two keyframes whose optimised relative
-    pose agrees with the logs' corrected poses within 0.2 m and 3 degrees (the closures' own
-    relative poses, measured: at most 0.12 m off on Intel's 66, 0.05 m on ACES's 4). Before, the
-    three visits a closure tries were often passes the other way along a corridor, whose 180-degree
-    scans share only the side walls: 4 of Intel's 69 closures were 0.3-2.3 m off and 6 of ACES's 10
-    0.3-4.0 m off (door recesses a spacing apart), and this test failed on both (a closed pair 0.34 m
-    off on Intel, 0.63 m on ACES)."""
-    from experiments.commands.slam import in_time_order
-    from lms200 import read_log
-    from slam.geometry import between
-    from slam.models import wrap
-
-    records = list(read_log(shared_data / name))
-    records = [records[k] for k in in_time_order([r.scan.stamp for r in records])]
-    result = run_slam(records, SlamConfig.from_dict({"motion": {"use_odometry": True}}))
-    stamps = np.array([r.scan.stamp for r in records])
-    ref = {float(t): np.array(r.corrected) for t, r in zip(stamps, records)}
-    loops = result.diagnostics["loops"]
-    assert len(loops) >= 4
-    for lp in loops:
-        kf = result.diagnostics["keyframes"]
-        old, new = kf[lp["old"]], kf[lp["new"]]
-        # the closure's relative pose is the optimised keyframes' (the graph holds it within its noise)
-        est = between(old[1:], new[1:])
-        true = between(ref[float(lp["old_stamp"])], ref[float(lp["new_stamp"])])
-        assert np.hypot(*(est[:2] - true[:2])) < 0.2 and abs(wrap(est[2] - true[2])) < np.radians(3)
