@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime
+import re
 
 import pytest
 
@@ -135,3 +136,56 @@ def test_numbers_read_as_before() -> None:
                    "l": 1000.0, "m": 0.0, "n": 1.5, "o": 1.0, "p": float("inf"), "q": float("-inf"), "r": "09", "s": "1:60",
                    "t": "a:b", "u": "_1", "v": "1_0", "w": "1:30", "x": datetime.date(2026, 1, 2)}
     assert [type(got[k]) for k in "adfghij"] == [int] * 7 and [type(got[k]) for k in "bcekl"] == [float] * 5
+
+
+BOOL_TEXT = "is read as text here, but is YAML 1.1's boolean word for"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("deskew: yes\n", "line 1, column 9: key 'deskew': yes is read as true (YAML 1.1), but as text by YAML 1.2"),
+    ("a: 1\ninterlaced: No\n", "line 2, column 13: key 'interlaced': No is read as false (YAML 1.1), but as text by YAML 1.2"),
+    ("sensor: {flag: ON}\n", "line 1, column 16: key 'flag': ON is read as true (YAML 1.1), but as text by YAML 1.2"),
+    ("grid:\n  mode: [true, off]\n", "line 2, column 16: key 'mode', item 2: off is read as false (YAML 1.1), but as text by YAML 1.2"),
+    ("k: y\n", f"line 1, column 4: key 'k': y {BOOL_TEXT} true"),
+    ("k: N\n", f"line 1, column 4: key 'k': N {BOOL_TEXT} false"),
+    ("k: yEs\n", f"line 1, column 4: key 'k': yEs {BOOL_TEXT} true"),
+    ("k: &a on\n", "line 1, column 4: key 'k': on is read as true (YAML 1.1), but as text by YAML 1.2"),
+    ("- [n]\n", f"line 1, column 4: n {BOOL_TEXT} false"),  # no key: the place alone
+    ("yes\n", "line 1, column 1: yes is read as true (YAML 1.1), but as text by YAML 1.2"),  # a --set value
+])
+def test_yaml_1_1_boolean_words_are_refused_at_their_key_and_line(text: str, message: str) -> None:
+    """PyYAML follows YAML 1.1: ``deskew: yes`` / ``no`` / ``on`` / ``off`` read as True / False,
+    silently (``simulate --config`` with ``sensor: {interlaced: no}`` ran, exit 0), where YAML 1.2,
+    Python and the command line read text; ``y`` and ``n`` it reads as text, where YAML 1.1 has a
+    boolean. Each, in any case, written unquoted as a value is refused naming the key and line;
+    quoted it is text, and true / false read as before."""
+    from lms200.yamlio import Malformed
+
+    value = message.split(": ")[-1].split(" ")[0]
+    with pytest.raises(Malformed) as info:
+        load(text)
+    assert str(info.value) == f"{message}; write true or false, or quote it ('{value}') for text"
+    quoted = re.sub(rf"\b{value}\b", f"'{value}'", text)
+    assert quoted.count("'") == 2 and f"'{value}'" in repr(load(quoted))  # quoted: text
+
+
+def test_true_false_quoted_and_tagged_words_and_keys_read_as_before() -> None:
+    """Only an unquoted, untagged boolean word as a value is refused: true / false in any of
+    YAML's spellings, a quoted or explicitly tagged word, text that merely starts like one, and a
+    key read as they did."""
+    text = ("a: true\nb: False\nc: TRUE\nd: 'yes'\ne: \"off\"\nf: !!str no\ng: !!bool yes\nh: none\ni: yess\nj: [true, 'n']\n"
+            "on: 1\n")
+    assert load(text) == {"a": True, "b": False, "c": True, "d": "yes", "e": "off", "f": "no", "g": True, "h": "none",
+                          "i": "yess", "j": [True, "n"], True: 1}
+
+
+def test_dump_quotes_what_load_refuses_plain_so_its_text_reads_back() -> None:
+    """yaml.safe_dump wrote the text ``n``, ``y`` (and ``yEs``) plain, as PyYAML reads them as text;
+    the loader refuses them as YAML 1.1 boolean words, so a config lmsbench wrote (a grid of
+    ``['y', 'n']``, a log named ``n``) was refused when read back. ``yamlio.dump`` quotes them."""
+    from lms200.yamlio import dump
+
+    data = {"grid": ["y", "n", "Y", "N", "yEs", "no", "On", "OFF", "true", True, False, "none", "ny", 1, 1.5], "n": "y"}
+    text = dump(data, sort_keys=False)
+    assert text.startswith("grid:\n- 'y'\n- 'n'\n- 'Y'\n- 'N'\n- 'yEs'\n- 'no'\n- 'On'\n- 'OFF'\n- 'true'\n- true\n- false\n- none\n")
+    assert load(text) == data
