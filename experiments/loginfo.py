@@ -54,8 +54,8 @@ class LogSummary:
         return [
             f"scans           {self.scans}",
             f"beams per scan  {self.beams}",
-            f"field of view   {self.fov_deg:.2f} deg (from {self.angle_min_deg:.2f} deg){self._first}",
-            f"resolution      {self.resolution_deg:.3f} deg{self._first}",
+            f"field of view   {fixed(self.fov_deg, 2)} deg (from {fixed(self.angle_min_deg, 2)} deg){self._first}",
+            f"resolution      {fixed(self.resolution_deg, 3)} deg{self._first}",
             f"scan rate       {fixed(self.scan_rate_hz, 2)} scans/s",
             f"duration        {fixed(self.duration_s, 2)} s",
             f"no return (inf) {100 * self.no_return_fraction:.2f} % of readings",

@@ -130,7 +130,9 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
     if p.exists() and not p.is_file():
         raise InputError(f"path: {p} exists and is not a regular file (a folder or a device); "
                          "name a file to write the log to")
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp" + "".join(p.suffixes[-1:]), dir=p.parent)
+    suffix = ".tmp" + "".join(p.suffixes[-1:])
+    # mkstemp puts 8 characters between prefix and suffix; a name near 255 bytes made one too long
+    fd, tmp = tempfile.mkstemp(prefix=hidden_stem(p, 1 + 8 + len(os.fsencode(suffix))) + ".", suffix=suffix, dir=p.parent)
     os.close(fd)
     os.chmod(tmp, (p.stat().st_mode & 0o777) if p.exists() else 0o644)  # mkstemp's is 0o600
     try:
@@ -148,6 +150,34 @@ SIMULATE_LOG = "scans.clf"
 """The CARMEN log a ``lmsbench simulate`` output folder holds (beside its ground truth and world)."""
 
 
+def hidden_stem(path: Path, tail_bytes: int) -> str:
+    """The start of a hidden file's name beside ``path`` (its lock, its temporary file), to which a
+    tail of ``tail_bytes`` bytes is added: ``.NAME``, or, where that would pass the file system's
+    longest name (NAME_MAX, 255 bytes on Linux's), ``.PREFIX.HASH``: NAME's first bytes and 16 hex
+    digits of its SHA-256, the same for every run. A file named near 255 bytes made names no file
+    system takes: its lock went unguarded, and ``calibrate --out`` failed after its work,
+    "...: file name too long", naming the temporary file."""
+    import hashlib
+
+    name = os.fsencode(path.name)
+    try:
+        most = os.pathconf(path.parent if path.parent.is_dir() else ".", "PC_NAME_MAX")
+    except (OSError, ValueError):
+        most = 255
+    most = most if most and most > 0 else 255
+    if 1 + len(name) + tail_bytes <= most:
+        return f".{path.name}"
+    digest = hashlib.sha256(name).hexdigest()[:16].encode()
+    keep = max(most - tail_bytes - 2 - len(digest), 0)
+    head = name[:keep]
+    try:  # not cut within a UTF-8 character: its first bytes alone were a name no UTF-8 decoder reads
+        name.decode("utf-8")
+        head = head.decode("utf-8", "ignore").encode("utf-8")  # drops only the cut character's bytes
+    except UnicodeDecodeError:  # a name that is no UTF-8 (os.fsencode's escapes): cut as bytes
+        pass
+    return os.fsdecode(b"." + head + b"." + digest)
+
+
 def folder_message(p: Path) -> str:
     """Why ``read_log`` refuses the folder ``p`` (not a ROS 2 bag), and, for a ``lmsbench simulate``
     folder, which file to read instead. The folder is not read as its scans.clf: this package knows
@@ -162,10 +192,18 @@ def folder_message(p: Path) -> str:
 
 
 def path_of(path: object) -> Path:
-    """``path`` as a Path; InputError naming it when it is not a str or os.PathLike."""
+    """``path`` as a Path; InputError naming it when it is not a str or os.PathLike, or when a name
+    in it is longer than the file system takes (NAME_MAX, 255 bytes on Linux's: the readers and
+    writers raised a raw OSError, "File name too long", from their first look at it)."""
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(f"path: must be a str or os.PathLike, got {type(path).__name__}")
-    return Path(path)
+    p = Path(path)
+    for part in p.parts:
+        size = len(os.fsencode(part))
+        if size > 255:  # no file system takes it (NAME_MAX: 255 on Linux's, less on none of the usual ones)
+            raise InputError(f"path: a name of {size} bytes ({part[:40]}...), longer than a file system takes (255); "
+                             "give a shorter one")
+    return p
 
 
 def regular_file(path: object, what: str) -> Path:
