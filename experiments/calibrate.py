@@ -47,6 +47,7 @@ import numpy as np
 
 from lms200 import LmsbenchError, read_log
 from lms200.errors import InputError
+from lms200.finite import fixed
 from lms200.calibration import LogCalibration, calibrate_scans
 from lms200.laser_geometry import MIN_RANGE_MAX_M
 from lms200.timing import LMS200_MAX_FOV_DEG
@@ -115,7 +116,7 @@ def _resolution_deg(angle_increment: float) -> float:
     for known in (0.25, 0.5, 1.0):
         if abs(deg - known) < 0.01:
             return known
-    raise LmsbenchError(f"angular resolution {deg:.4f} deg: the LMS200 model has 0.25, 0.5 or 1 deg")
+    raise LmsbenchError(f"angular resolution {fixed(deg, 4)} deg: the LMS200 model has 0.25, 0.5 or 1 deg")
 
 
 def base_sensor(cal: LogCalibration):

@@ -146,7 +146,7 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
     seed = None
     if (p / "config.yaml").is_file():
         try:  # the simulate config the folder was made with: its sensor model scores the scans
-            cfg = load_yaml((p / "config.yaml").read_text()) or {}
+            cfg = load_yaml((p / "config.yaml").read_text(), words=True) or {}  # simulate's record, an earlier version's too
             if not isinstance(cfg, dict):
                 raise TypeError("expected a mapping of world, seed, duration, sensor, ...")
             raw_sensor = cfg.get("sensor")

@@ -29,6 +29,8 @@ class LogSummary:
     stamps_back: int = 0  # scans stamped before the previous scan of the log
     corrected: int = 0  # scans with corrected poses (a Radish corrected log: odometry from its ODOM lines)
     stamps_repeated: int = 0  # scans stamped like the previous scan of the log
+    odometry_scans: int = 0  # scans with odometry (``odometry``: any); "yes" read as every scan's
+    truth_scans: int = 0  # scans with a true pose
 
     def as_dict(self) -> dict:
         """The fields as JSON-ready values, numbers as numbers: ``beams`` is the beam count (int)
@@ -39,6 +41,10 @@ class LogSummary:
         out["beams_min"], out["beams_max"] = int(low), int(high or low)
         return out
 
+    def _share(self, n: int) -> str:
+        """", on N of M scans" where some scans but not all have it (1 of 40 read as "yes", as every scan's)."""
+        return f", on {n:,} of {self.scans:,} scans" if 0 < n < self.scans else ""
+
     @property
     def _first(self) -> str:
         """Where the log mixes scan sizes, the geometry shown is the first scan's (it read as the log's)."""
@@ -48,15 +54,15 @@ class LogSummary:
         return [
             f"scans           {self.scans}",
             f"beams per scan  {self.beams}",
-            f"field of view   {self.fov_deg:.2f} deg (from {self.angle_min_deg:.2f} deg){self._first}",
-            f"resolution      {self.resolution_deg:.3f} deg{self._first}",
+            f"field of view   {fixed(self.fov_deg, 2)} deg (from {fixed(self.angle_min_deg, 2)} deg){self._first}",
+            f"resolution      {fixed(self.resolution_deg, 3)} deg{self._first}",
             f"scan rate       {fixed(self.scan_rate_hz, 2)} scans/s",
             f"duration        {fixed(self.duration_s, 2)} s",
             f"no return (inf) {100 * self.no_return_fraction:.2f} % of readings",
             f"invalid         {100 * self.invalid_fraction:.2f} % of readings (nan, -inf, 0 or out of limits)",
-            f"odometry        {'yes' if self.odometry else 'no'}"
+            f"odometry        {'yes' if self.odometry else 'no'}{self._share(self.odometry_scans)}"
             + (" (raw: the ODOM lines between scans, chained)" if self.corrected else ""),
-            f"true poses      {'yes' if self.truth else 'no'}",
+            f"true poses      {'yes' if self.truth else 'no'}{self._share(self.truth_scans)}",
             *([f"corrected poses {self.corrected} scans (the laser lines' pose fields: the log's own SLAM solution, "
                "not ground truth)"] if self.corrected else []),
             "time order      " + (f"{self.stamps_back} scan{'s' * (self.stamps_back != 1)} stamped before the previous one "
@@ -72,7 +78,7 @@ def summarise(records: Iterable[Record]) -> LogSummary:
     sizes: set[int] = set()
     stamps: list[float] = []
     readings = inf = nan = 0
-    odom = truth = False
+    odom_n = truth_n = 0
     back = corrected = repeated = 0
     first = None
     for rec in records:
@@ -86,8 +92,8 @@ def summarise(records: Iterable[Record]) -> LogSummary:
         readings += len(s)
         inf += int(np.isposinf(s.ranges).sum())
         nan += int(np.count_nonzero(~s.valid & ~np.isposinf(s.ranges)))  # nan, -inf (too close), 0 and out-of-limits readings
-        odom |= rec.odom is not None
-        truth |= rec.truth is not None
+        odom_n += rec.odom is not None
+        truth_n += rec.truth is not None
         corrected += rec.corrected is not None
     if first is None:
         return LogSummary(0, "0", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False)
@@ -104,9 +110,11 @@ def summarise(records: Iterable[Record]) -> LogSummary:
         duration_s=duration,
         no_return_fraction=inf / readings,
         invalid_fraction=nan / readings,
-        odometry=odom,
-        truth=truth,
+        odometry=odom_n > 0,
+        truth=truth_n > 0,
         stamps_back=back,
         corrected=corrected,
         stamps_repeated=repeated,
+        odometry_scans=odom_n,
+        truth_scans=truth_n,
     )

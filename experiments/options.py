@@ -561,10 +561,13 @@ def check_log(path: str | os.PathLike) -> Path:
         meta = p / "metadata.yaml"
         if not meta.is_file():
             raise InputError(not_a_log_folder(p))
+        from lms200.bag import check_metadata_size
+
+        check_metadata_size(p)  # before anything parses it: a 5.5 MB one took minutes, 1 GB
         _text_head(meta, "a ROS 2 bag's metadata.yaml")
         _utf8(meta, "a ROS 2 bag's metadata.yaml")
         try:  # rosbags said "Could not load YAML ... in "<unicode string>", line 1, ..." over several lines
-            info = load_yaml(meta.read_text(encoding="utf-8"))
+            info = load_yaml(meta.read_text(encoding="utf-8"), words=True)  # rosbag2 writes it, not our users
         except yaml.YAMLError as exc:
             raise InputError(f"{meta}: not valid YAML ({exc})") from None
         if not isinstance(info, dict) or not isinstance(info.get("rosbag2_bagfile_information"), dict):
@@ -656,7 +659,7 @@ DEMO_OUTPUTS = OutTree(("report.md", "report.html"),
 def _yaml_mapping(path: Path) -> dict | None:
     """The mapping a YAML file holds, or None (unreadable, not UTF-8, not YAML, not a mapping)."""
     try:
-        raw = load_yaml(path.read_text(encoding="utf-8"))
+        raw = load_yaml(path.read_text(encoding="utf-8"), words=True)  # an earlier version's record may hold a plain n
     except Exception:  # noqa: BLE001 - whatever it is, it is not a record of a run
         return None
     return raw if isinstance(raw, dict) else None
@@ -887,6 +890,17 @@ _HOLDING = threading.local()
 LOCK_SUFFIX = ".lmsbench-lock"
 
 
+def lock_file(path: Path) -> Path:
+    """The hidden lock file of the output file ``path`` (a real path): ``.NAME.lmsbench-lock`` beside
+    it, or, where that name would pass the file system's longest name (NAME_MAX, 255 bytes on
+    Linux's), ``.PREFIX.HASH.lmsbench-lock``: NAME's first bytes and 16 hex digits of its SHA-256
+    (:func:`lms200.logs.hidden_stem`), so that every run of one output takes one lock (an output
+    named near 255 bytes made a lock name no file system takes, and the run went on unguarded)."""
+    from lms200.logs import hidden_stem
+
+    return path.with_name(hidden_stem(path, len(os.fsencode(LOCK_SUFFIX))) + LOCK_SUFFIX)
+
+
 def _held() -> dict[str, tuple[int, Path | None, list[Path]]] | None:
     return getattr(_HOLDING, "held", None)
 
@@ -945,7 +959,7 @@ def hold_output(p: Path, flag: str = "--out", make: bool = False) -> None:
     "D/.scans.clf.N.tmp: no such file or directory", the other "simulated ... seed 1 into D" over
     a folder of seed 2's files, exit 0). An advisory lock (``fcntl.flock``) on the output folder
     itself (``make``: made first when absent, by :func:`check_out` once the path is checked), or for
-    a file on a hidden lock file beside it (``.NAME.lmsbench-lock``, removed as the command ends; one
+    a file on a hidden lock file beside it (``.NAME.lmsbench-lock``, :func:`lock_file`, removed as the command ends; one
     a killed run left holds no lock and is taken). Nothing in the temporary folder: a lock file there
     depended on $TMPDIR (two runs of different TMPDIR both wrote one --out) and piled up. A lock
     ends with the command or with its process when it is killed (SIGKILL too). Any OSError while
@@ -959,7 +973,7 @@ def hold_output(p: Path, flag: str = "--out", make: bool = False) -> None:
     if key in held:
         return
     folder = make or p.is_dir()
-    lock = None if folder else Path(key).with_name(f".{Path(key).name}{LOCK_SUFFIX}")  # beside the real file
+    lock = None if folder else lock_file(Path(key))  # beside the real file
     for _ in range(100):  # removed by its holder's end between our open and our lock: again
         made: list[Path] = []
         try:

@@ -110,7 +110,7 @@ def write_record(path: str | os.PathLike, content: str | Callable[[Path], object
     written by an earlier run" and refused that run."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")  # hidden: check_out passes it over
+    tmp = path.with_name(f"{_temporary_stem(path)}.{os.getpid()}.tmp")  # hidden: check_out passes it over
     try:
         if callable(content):
             content(tmp)
@@ -123,9 +123,19 @@ def write_record(path: str | os.PathLike, content: str | Callable[[Path], object
     return path
 
 
+def _temporary_stem(path: Path) -> str:
+    """``.NAME`` of write_record's ``.NAME.PID.tmp``, shortened for a name near the file system's
+    longest (``lms200.logs.hidden_stem``; room kept for a PID of 10 digits, so one stem for every run:
+    "...: file name too long" was ``calibrate --out``'s error after its work)."""
+    from lms200.logs import hidden_stem
+
+    return hidden_stem(path, len(".0123456789.tmp"))
+
+
 def leftover_temporaries(path: str | os.PathLike) -> list[Path]:
     """The temporary files :func:`write_record` left beside ``path`` in a process that was killed
     before it renamed them (``.NAME.PID.tmp`` only: a user's ``.NAME.notes.tmp`` is not one)."""
     path = Path(path)
-    return [tmp for tmp in path.parent.glob(f".{glob.escape(path.name)}.*.tmp")
-            if tmp.name[len(path.name) + 2 : -len(".tmp")].isdigit()]
+    stem = _temporary_stem(path)
+    return [tmp for tmp in path.parent.glob(f"{glob.escape(stem)}.*.tmp")
+            if tmp.name[len(stem) + 1 : -len(".tmp")].isdigit()]

@@ -35,6 +35,7 @@ import numpy as np
 
 from lms200 import LmsbenchError, Record, read_log
 from lms200.calibration import missing_readings
+from lms200.yamlio import dump as dump_yaml
 
 from experiments.logargs import report_skipped
 
@@ -969,8 +970,6 @@ def write_outputs(result: Sim2RealResult, out: Path, log: str, config: dict[str,
     """sim2real.csv, scene.csv, sim2real.md, sim2real.png, sensor.yaml, config.yaml in ``out``."""
     import dataclasses
 
-    import yaml
-
     from experiments.provenance import write_record
 
     paths = [out / "sim2real.csv", out / "scene.csv", out / "sim2real.md", out / "sim2real.png",
@@ -982,7 +981,7 @@ def write_outputs(result: Sim2RealResult, out: Path, log: str, config: dict[str,
     resolved["robot"]["pause_s"] = list(resolved["robot"]["pause_s"])
     # config.yaml first, whole: it tells the folder as sim2real's (options.SIM2REAL_OWNER); a run
     # stopped among the tables or the figure left a folder the next run into it refused
-    write_record(paths[5], yaml.safe_dump(resolved, sort_keys=False))
+    write_record(paths[5], dump_yaml(resolved, sort_keys=False))
     result.table.to_csv(paths[0], index=False)
     scene_table(result).to_csv(paths[1], index=False)
     paths[2].write_text(format_report(result, log))

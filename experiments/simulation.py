@@ -25,12 +25,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from lms200 import Record
 from lms200.carmen import write_carmen
 from lms200.logs import SIMULATE_LOG
 from lms200.tum import write_tum
+from lms200.yamlio import dump as dump_yaml
 from sim import SensorConfig, World, make_world, simulate_records
 from sim.records import OdometryConfig
 from sim.sensor import upgrade_fields
@@ -171,12 +171,12 @@ def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> 
     marker = ("# lmsbench simulate is writing this folder; removed once its files are whole (a folder\n"
               "# holding this file is one whose run did not finish). Below, the settings of that run (a\n"
               "# simulate config): lmsbench simulate --config DIR/.simulate-unfinished --out DIR reruns it.\n"
-              + yaml.safe_dump(cfg.to_dict(), sort_keys=False))
+              + dump_yaml(cfg.to_dict(), sort_keys=False))
     write_record(unfinished, lambda tmp: _write_synced(tmp, marker))
     _fsync(out)
     # config.yaml first, whole: it tells the folder as simulate's (options.SIMULATE_OWNER); a run
     # stopped while writing scans.clf left a folder the next run into it refused
-    write_record(out / "config.yaml", yaml.safe_dump(cfg.to_dict(), sort_keys=False))
+    write_record(out / "config.yaml", dump_yaml(cfg.to_dict(), sort_keys=False))
     write_record(out / SIMULATE_LOG, lambda tmp: write_carmen(tmp, records))  # streamed into the temporary file
     stamps = np.array([r.scan.stamp for r in records], dtype=float)
     write_record(out / "groundtruth.tum",

@@ -21,7 +21,7 @@ from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.finite import fixed
 from lms200.logs import regular_file
 from lms200.records import Record
-from lms200.yamlio import load as load_yaml
+from lms200.yamlio import load as load_yaml, dump as dump_yaml
 from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished, not_a_log_folder, simulate_log
 from experiments.progress import say_on_terminal
 from experiments.provenance import write_record
@@ -128,7 +128,12 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         if (p / "world.json").exists():
             try:
                 text = regular_file(p / "world.json", "world.json").read_text(encoding="utf-8", errors="replace")
-                content = json.loads(text)
+                from sim.world import world_json_content
+
+                try:  # a key given twice or misspelt: as World.from_json refuses it (simulate, compare)
+                    content = world_json_content(text)
+                except (TypeError, ValueError) as exc:
+                    raise LmsbenchError(f"{p / 'world.json'}: not a world.json ({exc})") from None
                 if isinstance(content, dict) and not any(content.get(k) for k in ("walls", "circles", "boxes")):
                     raise LmsbenchError(f"{p / 'world.json'}: not a world.json: it holds no walls, circles or boxes, "
                                         "nothing to scan or score against")  # as World.from_json (compare): the
@@ -210,10 +215,7 @@ def _check_truth_span(truth: np.ndarray, records: list[Record], where: str) -> N
     others out). A groundtruth.tum of another run, or shifted by 100 s, ran the whole SLAM, wrote
     its trajectory and map, then failed: "ate: fewer than 2 estimated poses fall inside the ground
     truth's time span", exit 2, no file named, no metrics.json (the wrong-input hunt)."""
-    if len(truth) == 0:  # a groundtruth.tum of comments or of nothing: "internal error: IndexError", exit 1
-        raise LmsbenchError(f"{where}: holds no poses (empty, or comments only: a cut or emptied file); scoring "
-                            "against it needs the true poses over the scans' stamps (without it, the scans' own "
-                            "TRUEPOS lines are the reference, where they have them)")
+    # (a groundtruth.tum of comments or of nothing, "internal error: IndexError" here once: read_tum refuses it)
     stamps = np.array([r.scan.stamp for r in records])
     t0, t1 = float(truth[0, 0]), float(truth[-1, 0])
     inside = int(np.count_nonzero((stamps >= t0) & (stamps <= t1)))
@@ -440,7 +442,6 @@ def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:
     libraries; written first and whole (provenance.write_record), as it tells ``out`` as an lmsbench
     slam folder: a run stopped after its trajectory.tum, before config.yaml, left a folder the next
     run into it refused. ``slam --config`` reads the slam: section back; the other two are records."""
-    import yaml
 
     from experiments.compare import resolved_configs
     from experiments.options import SLAM_RECORD_KEYS
@@ -455,7 +456,7 @@ def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:
                               {float(r.scan.range_max) for r in data.records}, config.extractor_params)
     records = {"extractor_config": extractor, "versions": versions()}
     assert tuple(records) == SLAM_RECORD_KEYS  # what slam --config reads past and --out tells the folder by
-    write_record(out / "config.yaml", yaml.safe_dump({"input": data.sources, "slam": config.to_dict(), **records},
+    write_record(out / "config.yaml", dump_yaml({"input": data.sources, "slam": config.to_dict(), **records},
                                                      sort_keys=False))
 
 

@@ -216,6 +216,24 @@ class _BoundedZstdFile:
                 f"{self._read / 2**20:.0f} MiB decompressed so far); not read (TMPDIR names a folder with more room)")
 
 
+#: bytes: the largest ROS 2 metadata.yaml read (a bag's is a few KB; a thousand topics with their QoS
+#: strings, or thousands of split storage files, stay under it). Both this reader and rosbags parse it
+#: whole in pure Python, about 50 s and 180 MB a MiB: a 5.5 MB one held `lmsbench info` 267 s at 1 GB
+MAX_METADATA_BYTES = 1 << 20
+
+
+def check_metadata_size(folder: Path) -> None:
+    """BagError for a ROS 2 bag folder whose metadata.yaml is larger than MAX_METADATA_BYTES, before
+    anything parses it (the command line's check, this reader and rosbags each parsed it whole: a
+    5.5 MB one held `lmsbench info` 340 s at 1 GB resident, and memory grows with it)."""
+    meta = folder / "metadata.yaml"
+    size = meta.stat().st_size
+    if size > MAX_METADATA_BYTES:
+        raise BagError(f"{meta}: {size:,} bytes, more than the {MAX_METADATA_BYTES:,} a ROS 2 bag's metadata.yaml may "
+                       "hold (refused unread: a bag's is a few KB, one of a thousand topics or of thousands of storage "
+                       "files well under 1 MiB)")
+
+
 def _check_storage_files(path: Path) -> None:
     """BagError for a ROS 2 bag whose metadata.yaml lists one storage file more than once
     (``relative_file_paths``; rosbags takes each by its name): its messages were read once for each
@@ -226,7 +244,7 @@ def _check_storage_files(path: Path) -> None:
     from .yamlio import load
 
     try:
-        info = load((path / "metadata.yaml").read_text(encoding="utf-8"))
+        info = load((path / "metadata.yaml").read_text(encoding="utf-8"), words=True)  # rosbag2 wrote it
         listed = [PurePath(str(x)).name for x in info["rosbag2_bagfile_information"]["relative_file_paths"]]
     except Exception:  # noqa: BLE001 - rosbags reads it next, and says what is wrong
         return
@@ -264,7 +282,8 @@ def _ns_stamp(ns: int) -> float:
     return float(Fraction(ns, 1_000_000_000))
 
 
-def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOPIC, flush_s: float | None = None) -> int:
+def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = SCAN_TOPIC,
+              flush_s: float | None = None) -> int:
     """Write Records to a ROS 1 (``*.bag``) or ROS 2 (folder) bag; returns the number of scans.
 
     Ranges are stored as float32 (the message type), +inf / nan kept as they are (REP-117).
@@ -274,12 +293,17 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
     (``lms200_shaped``), ``range_min`` the scan's own, or one code unit (1 mm, or 1 cm for cm-mode
     scans) where that is 0.
 
-    ``flush_s`` (ROS 1 only; ``lmsbench lms200 record`` gives ``RECORD_FLUSH_S``): after a scan, the
-    messages held in memory are written to the file as a chunk and flushed (and synced to the disk) once this many seconds
-    have passed since the last chunk, so a writer killed (SIGKILL, a power cut) before it closes the
-    bag and writes its index leaves every chunk before the kill readable (``BagReader`` recovers an
-    unindexed bag from its chunks, with a warning). By default rosbags holds a chunk until it passes
-    1 MiB: a killed recording of a few seconds was a file of the bag's header alone.
+    ``flush_s`` (ROS 1 only; ``lmsbench lms200 record`` gives ``RECORD_FLUSH_S``): the messages
+    held in memory are written to the file as a chunk and flushed (and synced to the disk) after the
+    first scan, and then once this many seconds have passed since the last chunk, so a writer killed
+    (SIGKILL, a power cut) before it closes the bag and writes its index leaves every chunk before
+    the kill readable (``BagReader`` recovers an unindexed bag from its chunks, with a warning). By
+    default rosbags holds a chunk until it passes 1 MiB: a killed recording of a few seconds was a
+    file of the bag's header alone (and one killed in its first second, before its first chunk, was
+    so still). An item None of ``records`` is no record but a tick: the messages held are written out
+    if they are due, so a source that has no scan for a while (a device gone silent) gives None
+    meanwhile (``LMS200.scans(idle_s=...)``) and its last scans reach the file on time: they waited
+    for the next scan, and a recording killed in a stall lost them.
 
     Raises:
         BagExistsError: (an ``InputError`` and a ``FileExistsError``) ``path`` exists.
@@ -307,11 +331,14 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
         writer = Writer2(path, version=8)
     count = 0
     last = [-1]  # the bag time of the message written last (ns)
-    flushed = [time.monotonic()]
+    flushed = [-math.inf]  # when the last chunk was written (time.monotonic()): the first scan's at once
 
     def flush() -> None:
-        """The messages held written out as a chunk, and the file flushed (see ``flush_s``)."""
+        """The messages held written out as a chunk, and the file flushed (see ``flush_s``), when
+        there are any and the last chunk is ``flush_s`` old."""
         if flush_s is None or not ros1 or time.monotonic() - flushed[0] < flush_s:
+            return
+        if writer.chunks[-1].data.tell() == 0:  # nothing held: a tick after the last chunk (no fsync for nothing)
             return
         writer.write_chunk(writer.chunks[-1])
         writer.bio.flush()
@@ -335,12 +362,19 @@ def write_bag(path: str | Path, records: Iterable[Record], topic: str = SCAN_TOP
             return conns[name]
 
         try:
-            for seq, rec in enumerate(records):
+            for rec in records:
+                if rec is None:  # a tick: no record (see flush_s)
+                    flush()
+                    continue
+                seq = count
                 scan = rec.scan
                 ns = _stamp_ns(scan.stamp)
                 if scan.stamp < 0 or ns >= MAX_STAMP_NS:  # was struct.error from rosbags' serialiser
                     raise InputError(f"records: item {seq}: stamp {scan.stamp!r} s cannot be stored in a bag "
                                      f"(0 <= stamp < 2**31 s = {MAX_STAMP_NS // 1_000_000_000} s, a ROS time's range)")
+                if np.float32(scan.angle_increment) == 0:  # stored as 0, which no reader takes ("must be > 0, got 0.0")
+                    raise InputError(f"records: item {seq}: angle_increment {scan.angle_increment:g} rad cannot be stored "
+                                     f"in a bag (a LaserScan's fields are float32, in which it is 0)")
                 if scan.range_max > FLOAT32_MAX or np.any(np.isfinite(scan.ranges) & (scan.ranges > FLOAT32_MAX)):
                     raise InputError(f"records: item {seq}: a range or range_max beyond {FLOAT32_MAX:.4g} m cannot be "
                                      f"stored in a bag (a LaserScan's fields are float32), got range_max {scan.range_max:g} m")
@@ -597,12 +631,27 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
     class RecoveringReader(r1.Reader):
         recovered: Recovered | None = None
 
-        def open(self) -> None:
+        def _unindexed(self) -> bool:
+            """The bag's header record (ROS bag format 2.0: after the "#ROSBAG V2.0" line) says
+            index_pos 0: the bag was never closed. Told from the header itself, not from the text
+            of rosbags' refusal ("Bag is not indexed, ..."), which a rosbags version may word
+            otherwise. False for a file whose header cannot be read, or that is encrypted: rosbags
+            says what is wrong with it."""
             try:
+                with self.path.open("rb") as bio:
+                    if bio.read(13) != b"#ROSBAG V2.0\n":  # the version line (rosbags refuses another)
+                        return False
+                    header = r1.Header.read(bio, r1.RecordType.BAGHEADER)
+                    if "encryptor" in header and header.get_string("encryptor"):
+                        return False
+                    return header.get_uint64("index_pos") == 0
+            except (OSError, r1.ReaderError, KeyError, struct.error):
+                return False
+
+        def open(self) -> None:
+            if not self._unindexed():
                 super().open()
-            except r1.ReaderError as exc:
-                if "not indexed" not in str(exc):
-                    raise
+            else:
                 self.bio = self.path.open("rb")
                 try:
                     self._scan()
@@ -787,6 +836,7 @@ class BagReader:
                     raise BagError(f"{entry}: not a regular file (a pipe, a device or a socket) in the ROS 2 bag "
                                    f"{self.path}; a bag's files must be regular files (give the files themselves)")
         if self.path.is_dir():
+            check_metadata_size(self.path)
             _check_storage_files(self.path)
         _bound_zstd_messages()  # before open: a file-compressed ROS 2 bag is decompressed there
         try:
@@ -883,6 +933,17 @@ class BagReader:
                     self._fail(f"topic {conn.topic} message {index}", exc, index, fatal=False)
                 yield from self._records(matcher.ready(t))
             yield from self._records(matcher.ready(None))
+            late = {topic: n for topic, n in matcher.late.items() if n}
+            if late:  # they were read without their poses, silently (a bag's topics written one after the other)
+                import warnings
+
+                from .errors import LmsbenchWarning
+
+                said = ", ".join(f"{n} on {topic}" for topic, n in late.items())
+                warnings.warn(f"{self.path}: poses came more than {LOOKAHEAD_S:g} s of bag time after the scans they are "
+                              f"stamped for ({said}): those scans were read without them (the bag's topics written one "
+                              "after the other, or a pose topic recorded late); write the bag in header-stamp order",
+                              LmsbenchWarning, stacklevel=2)
             if not stats.messages.get(stats.laser) and not stats.skipped_count and stats.stopped is None:
                 # as a CARMEN log of no laser line: it read as no records, silently
                 others = ", ".join(f"{c.topic} ({c.msgcount})" for c in reader.connections if c.msgcount)
@@ -969,8 +1030,17 @@ class _PoseMatcher:
         self.newest: dict[str, int | None] = {t: None for t in topics}
         self.scan_stamps: dict[int, int] = {}  # stamps of recent scans -> how many
         self.scan_order: deque[int] = deque()
+        #: per topic, the stamps of scans handed out without a pose of it (sorted; the latest MAX_POSES),
+        #: and the poses that came after such a scan they would have been attached to (``late``)
+        self.missed: dict[str, list[int]] = {t: [] for t in topics}
+        self.late: dict[str, int] = {t: 0 for t in topics}
 
     def add_pose(self, topic: str, stamp: int, pose: Pose2D) -> None:
+        missed = self.missed[topic]
+        if missed:  # a pose for a scan handed out without it (written more than LOOKAHEAD_S of bag time late)
+            i = bisect_left(missed, stamp)
+            if i < len(missed) and missed[i] - stamp <= self.tolerance:
+                self.late[topic] += 1
         newest = self.newest[topic]
         self.newest[topic] = stamp if newest is None else max(newest, stamp)
         same = self.by_stamp[topic].get(stamp)
@@ -1005,7 +1075,13 @@ class _PoseMatcher:
                 return
             held.popleft()
             self.held_beams -= len(h.scan)
-            yield h.index, h.scan, {topic: self._pose_for(topic, h) for topic in self.topics}
+            poses = {topic: self._pose_for(topic, h) for topic in self.topics}
+            for topic, pose in poses.items():
+                if pose is None:  # remembered: a pose of its stamp coming later is said (see late)
+                    insort(self.missed[topic], h.stamp)
+                    if len(self.missed[topic]) > MAX_POSES:
+                        del self.missed[topic][0]
+            yield h.index, h.scan, poses
             # poses the held scans may use, and those of scans still to come stamped up to
             # LOOKAHEAD_S before them (scans that arrive out of stamp order)
             self._prune(min([h.stamp, *(g.stamp for g in held)]) - round(LOOKAHEAD_S * 1e9))

@@ -203,7 +203,8 @@ def open_text(path: str | Path) -> IO[str]:
     """Open a plain or compressed (gzip, bzip2, xz) text file for reading, by magic bytes, not
     the name; a leading UTF-8 byte-order mark is skipped. Lines end at "\\n" (a lone "\\r" is
     no line end; a "\\r\\n" line keeps its "\\r", whitespace to ``str.split``), or at "\\r" in a
-    file whose first 4096 bytes hold a "\\r" and no "\\n" (classic Mac line ends).
+    file whose first line ends at a "\\r" and whose first 4096 bytes hold no "\\n" (classic Mac line
+    ends; :func:`_first_line_end`).
 
     Raises:
         LogFormatError: for an archive (tar, zip): the log must be extracted from it first.
@@ -212,8 +213,9 @@ def open_text(path: str | Path) -> IO[str]:
     with open_bytes(path) as f:
         try:
             head = f.read(4096)
+            ends = _first_line_end(head, f)
         except READ_ERRORS:
-            head = b""  # damaged data: reported with its line by the reader
+            head = ends = b""  # damaged data: reported with its line by the reader
     what = archive_kind(head)
     if what:
         raise LogFormatError(path, None, f"{what}, not a log: extract the log from it first")
@@ -223,10 +225,25 @@ def open_text(path: str | Path) -> IO[str]:
     # lines end at "\n" alone ("\r\n" too: the "\r" is whitespace to the word split), as the line numbers
     # of an editor or `sed -n Np` count them: the universal-newline default also ended a line at a lone
     # "\r", so a corrupted byte 0x0d split a line in two (both halves malformed, the line lost) and every
-    # error after it named the line after the one at fault. A log whose first 4096 bytes hold a "\r" and
-    # no "\n" has classic Mac line ends: its lines end at "\r" (as before)
-    mac = b"\r" in head and b"\n" not in head
+    # error after it named the line after the one at fault. A log whose first line ends at a "\r" not
+    # followed by "\n" (and whose first 4096 bytes hold no "\n") has classic Mac line ends: its lines end
+    # at "\r" (as before)
+    mac = b"\r" in ends and b"\n" not in ends
     return io.TextIOWrapper(raw, encoding="ascii", errors="replace", newline=None if mac else "\n")
+
+
+def _first_line_end(head: bytes, f: IO[bytes]) -> bytes:
+    """The bytes that tell a file's line ends (see :func:`open_text`): its first 4096 bytes ``head``,
+    read on from ``f`` (up to ``MAX_LINE_CHARS``) while they hold no "\n" and no "\r" followed by
+    a byte: a Mac log whose first line passed 4096 bytes (a ROBOTLASER1 line with remissions) was
+    read as one line of the whole file ("needs 746 fields, got 14920")."""
+    ends = head
+    while b"\n" not in ends and b"\r" not in ends[:-1] and len(ends) <= MAX_LINE_CHARS:
+        more = f.read(65536)
+        if not more:
+            break
+        ends += more
+    return ends
 
 
 class CarmenReader:

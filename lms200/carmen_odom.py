@@ -132,7 +132,8 @@ class CorrectedChain:
     Such a log (Intel Research Lab, ACES: a SLAM solution written back into the log) gives every
     FLASER / RLASER line the corrected pose in its pose fields (both the laser and the odometry
     pose), and writes after each one an ODOM line at exactly that pose, its stamp junk (more than
-    ``ANCHOR_STAMP_GAP_S`` before the odometry's own clock, the last ODOM step's stamp; both logs
+    ``ANCHOR_STAMP_GAP_S`` before the odometry's own clock, the last ODOM step's stamp, and before the
+    laser line's own stamp: 21 s or more in both; both logs
     begin with ODOM lines, but one cut before a scan does not: there the first scan's anchor is
     judged by the stamps of the next ODOM line and of the scan itself): the odometry restarts at
     that anchor, and the ODOM lines up to the next laser line are the robot's raw odometry from it.
@@ -197,7 +198,13 @@ class CorrectedChain:
         # judged by the odometry's own clock (a raw log's ODOM lines follow it, whatever the laser's
         # says), so not before an ODOM step has been read (Intel and ACES begin with ODOM lines)
         junk = self.step_stamp is not None and not stamp >= self.step_stamp - ANCHOR_STAMP_GAP_S  # nan too
-        if self.pending is not None and junk and pose == self.pending[0].odom:
+        # an anchor's stamp is junk by the scan's own clock too (Intel's and ACES's lie 21 s or more before
+        # their laser line's), as _judge_first asks: a raw log whose clock jumped back (two runs joined, a
+        # clock set back) had every later ODOM line junk by the odometry's clock, and one at a standing
+        # robot's pose, its laser line's odometry, was taken for an anchor: the scans from there on were
+        # read as a corrected log's, their odometry frozen (3 m off after 10 s) and their pose fields corrected poses
+        if (self.pending is not None and junk and pose == self.pending[0].odom
+                and not stamp >= self.pending[0].scan.stamp - ANCHOR_STAMP_GAP_S):
             rec, odom = self.pending
             self.pending = None
             self.in_a_row += 1

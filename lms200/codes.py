@@ -124,7 +124,7 @@ def real_rows(value: object, name: str, columns: int, what: str, finite: bool = 
         shape = f"(k, >= {columns})" if wider else f"(k, {columns})"
         raise InputError(f"{name}: must be a {shape} array of real numbers ({what}), got "
                          f"{type(value).__name__}") from None
-    if a.shape == (0,):  # an empty list: no rows (a review: map_error([], walls), write_tum(p, [], []) were refused)
+    if a.shape == (0,):  # an empty list: no rows (a review: map_error([], walls) was refused)
         a = a.reshape(0, columns)
     if a.ndim != 2 or a.shape[1] < columns or (a.shape[1] > columns and not wider):
         shape = f"(k, >= {columns})" if wider else f"(k, {columns})"

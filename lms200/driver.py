@@ -23,12 +23,12 @@ import os
 import time
 from collections import deque
 from dataclasses import dataclass
-from typing import Callable, Iterator
+from typing import Callable, Iterator, overload
 
 import serial
 
 from .codes import Units, check_units
-from .errors import InputError, LmsDeviceError, LmsLinkError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsTimeoutError
+from .errors import InputError, LmsDeviceError, LmsLinkError, LmsModeRefusedError, LmsNakError, LmsProtocolError, LmsStatusError, LmsTimeoutError
 from .finite import check_number, float_of, shown
 from .framing import Frame, FrameParser
 from .protocol import (
@@ -119,8 +119,8 @@ def _check_arguments(baud: object, fov_deg: object, resolution_deg: object, unit
 
 @dataclass
 class DriverStats:
-    """Counters of one connection: scans yielded, frames dropped by the parser, undecodable scans,
-    attempts resent (``retries``) and attempts that waited out their whole wait without a reply or
+    """Counters of one connection: scans yielded, frames dropped by the parser, undecodable scans
+    (``flagged``: those of them the device's STATUS byte marked as not to be used), attempts resent (``retries``) and attempts that waited out their whole wait without a reply or
     a NAK (``timeouts``: a NAK is resent at once, without one)."""
 
     scans: int
@@ -129,6 +129,7 @@ class DriverStats:
     decode_errors: int
     retries: int
     timeouts: int = 0
+    flagged: int = 0  # scans dropped for their STATUS byte (an error, implausible values: protocol.status_problem)
 
 
 
@@ -222,6 +223,7 @@ class LMS200:
         self.parser.awaiting_reply = False  # True while a request waits for its handshake (see _request)
         self._scans = 0
         self._decode_errors = 0
+        self._flagged = 0
         self._retries = 0
         self._timeouts = 0
         self._last_rx = time.monotonic()
@@ -273,7 +275,8 @@ class LMS200:
     @property
     def stats(self) -> DriverStats:
         p = self.parser.stats
-        return DriverStats(self._scans, p.dropped_frames, p.skipped_bytes, self._decode_errors, self._retries, self._timeouts)
+        return DriverStats(self._scans, p.dropped_frames, p.skipped_bytes, self._decode_errors, self._retries, self._timeouts,
+                           self._flagged)
 
     # -- low level -----------------------------------------------------------------------------
     def _idle_gap(self, hides_frame: bool) -> float:
@@ -597,7 +600,16 @@ class LMS200:
         return True
 
     # -- data ----------------------------------------------------------------------------------
-    def scans(self, stall_timeout: float | None = None, stop: Callable[[], bool] | None = None) -> Iterator[Scan]:
+    @overload
+    def scans(self, stall_timeout: float | None = None, stop: Callable[[], bool] | None = None,
+              idle_s: None = None) -> Iterator[Scan]: ...
+
+    @overload
+    def scans(self, stall_timeout: float | None = None, stop: Callable[[], bool] | None = None, *,
+              idle_s: float) -> Iterator[Scan | None]: ...
+
+    def scans(self, stall_timeout: float | None = None, stop: Callable[[], bool] | None = None,
+              idle_s: float | None = None) -> Iterator[Scan] | Iterator[Scan | None]:
         """Start continuous output and yield every scan the device sends, as it sends them.
 
         ``scan.stamp`` is the host's clock (``time.time()``, s) when the telegram began to arrive,
@@ -608,6 +620,11 @@ class LMS200:
         ``stop``: checked between reads (at least every 10 ms); the generator ends when it
         returns True (e.g. a flag set by a Ctrl-C handler). The device keeps streaming until
         :meth:`close`.
+
+        ``idle_s``: when given, the generator also yields None once no scan has come for this many
+        seconds, and again every ``idle_s`` while none comes, so that its consumer can do timed work
+        while the device is silent (``lmsbench lms200 record`` writes the scans it holds to its bag:
+        they waited in memory for the next scan, and a recording killed in a stall lost them).
 
         Raises:
             LmsTimeoutError: when no scan arrives for ``stall_timeout`` seconds (default: the
@@ -622,9 +639,11 @@ class LMS200:
             raise InputError(f"stop: must be None or a function returning True to stop, got {shown(stop)}")
         limit = (check_number(stall_timeout, "stall_timeout", 0.0, MAX_STALL_TIMEOUT_S, lo_open=True, unit="s")
                  if stall_timeout is not None else self.timeout + 2 * frame_seconds(MAX_LEN + OVERHEAD_BYTES, self.baud))
-        return self._stream(limit, stop)
+        idle = (check_number(idle_s, "idle_s", 0.0, MAX_STALL_TIMEOUT_S, lo_open=True, unit="s")
+                if idle_s is not None else None)
+        return self._stream(limit, stop, idle)
 
-    def _stream(self, limit: float, stop: Callable[[], bool] | None) -> Iterator[Scan]:
+    def _stream(self, limit: float, stop: Callable[[], bool] | None, idle_s: float | None) -> Iterator[Scan | None]:
         """The generator of :meth:`scans`, its arguments checked."""
         allowed = limit
         if not self.streaming:
@@ -632,6 +651,7 @@ class LMS200:
             allowed = limit + self.mode_timeout
         self._doing = "reading scans in continuous mode"
         last = time.monotonic()
+        idle_at = last if idle_s is None else last + idle_s  # when to yield None next (idle_s given)
         while stop is None or not stop():
             events = self._pump()
             now = time.monotonic()
@@ -639,17 +659,23 @@ class LMS200:
             for ev, stamp in zip(frames, self._stamps(frames)):
                 try:
                     scan = decode_scan(ev.payload, stamp)
-                except LmsProtocolError:
+                except LmsProtocolError as exc:  # a scan flagged by its STATUS byte too: its values were yielded
                     self._decode_errors += 1
+                    self._flagged += isinstance(exc, LmsStatusError)
                     continue
                 self._scans += 1
                 last, allowed = now, limit
+                if idle_s is not None:
+                    idle_at = now + idle_s
                 yield scan
             if now - last > allowed:
                 raise LmsTimeoutError(
                     f"no scan from {self.port} for {now - last:.2f} s in continuous mode at {self.baud} baud "
                     f"({self.parser.stats.dropped_frames} frames dropped so far)"
                 )
+            if idle_s is not None and now >= idle_at:
+                idle_at = now + idle_s
+                yield None
 
     def close(self) -> None:
         """Return the device to on-request mode and 9600 baud, then close the port.

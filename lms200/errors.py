@@ -69,6 +69,11 @@ class LmsProtocolError(LmsDeviceError, ValueError):
     """A telegram that does not make sense: wrong reply code, bad length, unknown variant, ..."""
 
 
+class LmsStatusError(LmsProtocolError):
+    """A scan telegram whose STATUS byte says its values are not to be used: an error or a fatal
+    error (bits 0-2 of 3 or more) or implausible values (bit 6): ``lms200.protocol.status_problem``."""
+
+
 class LmsbenchWarning(UserWarning):
     """Something read that still works but should be written differently (an old spelling of a
     config field): the message names the file where known and says what to write instead. The

@@ -45,9 +45,11 @@ FIXED_MAX = 1e15
 def fixed(value: float, decimals: int = 6) -> str:
     """A number for a message as ``f"{value:.{decimals}f}"`` (a stamp 1700000000.123456 s), but with
     an exponent from ``FIXED_MAX`` on (``1e+308``, ``%.{decimals}g``): a stamp near 1e308 was
-    quoted with its 309 digits (nan and inf as such)."""
+    quoted with its 309 digits (nan and inf as such); and a value not 0 that so many decimals show
+    as 0 in significant digits (``1e-288``, ``%.{decimals}g``): an angle increment of 1e-290 rad was
+    "0.0000 deg", a value no one had given."""
     value = float(value)
-    if math.isfinite(value) and abs(value) >= FIXED_MAX:
+    if math.isfinite(value) and (abs(value) >= FIXED_MAX or 0 < abs(value) < 0.5 * 10.0 ** -decimals):
         return f"{value:.{max(decimals, 1)}g}"
     return f"{value:.{decimals}f}"
 

@@ -6,6 +6,7 @@ name; both yield :class:`lms200.Record` objects.
 
 from __future__ import annotations
 
+import io
 import os
 import shutil
 import tempfile
@@ -13,7 +14,7 @@ from pathlib import Path
 from typing import Iterable, Iterator
 
 from .bag import BagError, BagReader, is_bag, write_bag
-from .carmen import CarmenReader, write_carmen
+from .carmen import UTF8_BOM, CarmenReader, write_carmen
 from .errors import InputError, LogFormatError, LogNotFoundError
 from .laser_geometry import LaserGeometry
 from .records import Record
@@ -129,7 +130,9 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
     if p.exists() and not p.is_file():
         raise InputError(f"path: {p} exists and is not a regular file (a folder or a device); "
                          "name a file to write the log to")
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp" + "".join(p.suffixes[-1:]), dir=p.parent)
+    suffix = ".tmp" + "".join(p.suffixes[-1:])
+    # mkstemp puts 8 characters between prefix and suffix; a name near 255 bytes made one too long
+    fd, tmp = tempfile.mkstemp(prefix=hidden_stem(p, 1 + 8 + len(os.fsencode(suffix))) + ".", suffix=suffix, dir=p.parent)
     os.close(fd)
     os.chmod(tmp, (p.stat().st_mode & 0o777) if p.exists() else 0o644)  # mkstemp's is 0o600
     try:
@@ -147,6 +150,34 @@ SIMULATE_LOG = "scans.clf"
 """The CARMEN log a ``lmsbench simulate`` output folder holds (beside its ground truth and world)."""
 
 
+def hidden_stem(path: Path, tail_bytes: int) -> str:
+    """The start of a hidden file's name beside ``path`` (its lock, its temporary file), to which a
+    tail of ``tail_bytes`` bytes is added: ``.NAME``, or, where that would pass the file system's
+    longest name (NAME_MAX, 255 bytes on Linux's), ``.PREFIX.HASH``: NAME's first bytes and 16 hex
+    digits of its SHA-256, the same for every run. A file named near 255 bytes made names no file
+    system takes: its lock went unguarded, and ``calibrate --out`` failed after its work,
+    "...: file name too long", naming the temporary file."""
+    import hashlib
+
+    name = os.fsencode(path.name)
+    try:
+        most = os.pathconf(path.parent if path.parent.is_dir() else ".", "PC_NAME_MAX")
+    except (OSError, ValueError):
+        most = 255
+    most = most if most and most > 0 else 255
+    if 1 + len(name) + tail_bytes <= most:
+        return f".{path.name}"
+    digest = hashlib.sha256(name).hexdigest()[:16].encode()
+    keep = max(most - tail_bytes - 2 - len(digest), 0)
+    head = name[:keep]
+    try:  # not cut within a UTF-8 character: its first bytes alone were a name no UTF-8 decoder reads
+        name.decode("utf-8")
+        head = head.decode("utf-8", "ignore").encode("utf-8")  # drops only the cut character's bytes
+    except UnicodeDecodeError:  # a name that is no UTF-8 (os.fsencode's escapes): cut as bytes
+        pass
+    return os.fsdecode(b"." + head + b"." + digest)
+
+
 def folder_message(p: Path) -> str:
     """Why ``read_log`` refuses the folder ``p`` (not a ROS 2 bag), and, for a ``lmsbench simulate``
     folder, which file to read instead. The folder is not read as its scans.clf: this package knows
@@ -161,10 +192,18 @@ def folder_message(p: Path) -> str:
 
 
 def path_of(path: object) -> Path:
-    """``path`` as a Path; InputError naming it when it is not a str or os.PathLike."""
+    """``path`` as a Path; InputError naming it when it is not a str or os.PathLike, or when a name
+    in it is longer than the file system takes (NAME_MAX, 255 bytes on Linux's: the readers and
+    writers raised a raw OSError, "File name too long", from their first look at it)."""
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(f"path: must be a str or os.PathLike, got {type(path).__name__}")
-    return Path(path)
+    p = Path(path)
+    for part in p.parts:
+        size = len(os.fsencode(part))
+        if size > 255:  # no file system takes it (NAME_MAX: 255 on Linux's, less on none of the usual ones)
+            raise InputError(f"path: a name of {size} bytes ({part[:40]}...), longer than a file system takes (255); "
+                             "give a shorter one")
+    return p
 
 
 def regular_file(path: object, what: str) -> Path:
@@ -193,8 +232,14 @@ stderr and an error of inf, exit 0)."""
 
 def row_lines(path: str | Path, p: Path) -> Iterator[tuple[int, str]]:
     """(line number, line) of the text file ``p`` (named ``path`` in messages), each line read at most
-    :data:`MAX_ROW_CHARS` characters at a time: a longer one is a LogFormatError naming it."""
-    with open(p, encoding="ascii", errors="replace") as f:
+    :data:`MAX_ROW_CHARS` characters at a time: a longer one is a LogFormatError naming it. A UTF-8
+    byte-order mark before the first line (a file saved by a Windows editor) is skipped, as the CARMEN
+    reader skips it: it read as three replacement characters, so a TUM file's header comment was a
+    row of 9 entries and a first row a non-number."""
+    with open(p, "rb") as raw:
+        if raw.read(len(UTF8_BOM)) != UTF8_BOM:
+            raw.seek(0)
+        f = io.TextIOWrapper(raw, encoding="ascii", errors="replace")
         for no, line in enumerate(iter(lambda: f.readline(MAX_ROW_CHARS + 1), ""), 1):
             if len(line) > MAX_ROW_CHARS:
                 raise LogFormatError(path, no, f"longer than {MAX_ROW_CHARS:,} characters: not a text file of rows "

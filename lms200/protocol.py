@@ -21,7 +21,7 @@ import numpy as np
 
 from .codes import (LMS200_MAX_RANGE, Units, check_codes, check_units, codes_to_ranges, ranges_to_codes,
                     real_vector)
-from .errors import InputError, LmsProtocolError
+from .errors import InputError, LmsProtocolError, LmsStatusError
 from .finite import check_integer, check_number, is_integer, is_number, shown
 from .scan import Scan
 
@@ -34,6 +34,9 @@ MAX_LEN = 812  # largest LEN field of any LMS2xx telegram
 HEADER_BYTES = 4  # STX, ADDR, LEN
 OVERHEAD_BYTES = 6  # header + CRC
 STATUS_OK = 0x10  # STATUS byte of a healthy LMS200
+STATUS_LEVEL_MASK = 0x07  # STATUS bits 0-2: 0 ok, 1 info, 2 warning, 3 error, 4 fatal (5-7 undefined)
+STATUS_ERROR_LEVEL = 3  # the first level whose scan's values are not to be used
+STATUS_IMPLAUSIBLE = 0x40  # STATUS bit 6: implausible measured values
 CRC_POLY = 0x8005
 
 # Commands (host -> device) and their replies (device -> host).
@@ -317,14 +320,32 @@ def scan_geometry(n_values: int) -> tuple[float, float]:
     return float(np.deg2rad(-fov / 2)), float(np.deg2rad(res / 100))
 
 
+def status_problem(status: int) -> str | None:
+    """Why the values of a scan whose STATUS byte is ``status`` are not to be used, or None: an error
+    or fatal error (bits 0-2 of 3 or more, the levels past a warning) or implausible measured values
+    (bit 6). Info, warnings and pollution (bit 7: a dirty front screen) leave the values measured."""
+    level = status & STATUS_LEVEL_MASK
+    problems = [{3: "an error", 4: "a fatal error"}.get(level, f"undefined level {level}")
+                for _ in (0,) if level >= STATUS_ERROR_LEVEL]
+    if status & STATUS_IMPLAUSIBLE:
+        problems.append("implausible measured values")
+    return f"status 0x{status:02X}: {' and '.join(problems)}" if problems else None
+
+
 def decode_scan(payload: bytes, stamp: float = 0.0) -> Scan:
     """A 0xB0 payload to a :class:`Scan` (ranges in m, 8183 -> +inf, invalid codes -> nan).
 
     Raises:
         LmsProtocolError: for a malformed reply, an unknown beam count or a partial scan of an
             interlaced scan (not supported: request full scans).
+        LmsStatusError: (an LmsProtocolError) for a scan whose STATUS byte says its values are not
+            to be used (:func:`status_problem`: an error, a fatal error, implausible values): its
+            values were taken as measured, silently.
     """
     m = parse_measurement(payload)
+    problem = status_problem(m.status)
+    if problem:
+        raise LmsStatusError(f"0xB0 scan with {problem}: its values are not to be used")
     if m.partial:
         raise LmsProtocolError(f"0xB0 partial scan {m.partial_index}: interlaced partial scans are not supported")
     angle_min, increment = scan_geometry(m.codes.size)

@@ -65,7 +65,8 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
             4k garbled rows, and decreasing or nan stamps made a file ``read_tum`` refuses).
             Poses that are nan (a lost SLAM run's) are written as nan, which
             ``read_tum(path, allow_nan=True)`` reads back; an infinite pose entry, or an x or y beyond
-            +-``logs.MAX_COORD_M`` (1e9 m), which no reader takes, is an InputError naming its row. A ``path`` that is a folder or a device, or in
+            +-``logs.MAX_COORD_M`` (1e9 m), which no reader takes, is an InputError naming its row; so
+            is no pose at all (``read_tum`` refuses a file of none). A ``path`` that is a folder or a device, or in
             a folder that does not exist, or that cannot be written, is an InputError naming it
             (they were a raw IsADirectoryError, FileNotFoundError, ...: the wrong-input hunt).
     """
@@ -89,6 +90,8 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
                          "refuses; a lost pose is written as nan")
     if stamps.size != poses.shape[0]:
         raise InputError(f"stamps: {stamps.size} stamps for {poses.shape[0]} poses")
+    if not stamps.size:  # read_tum refuses a file of no pose: a file written that its own reader does not take
+        raise InputError("poses: none to write (a TUM file of no pose is refused by read_tum, as a cut or emptied file)")
     if np.any(np.diff(stamps) < 0):
         k = int(np.nonzero(np.diff(stamps) < 0)[0][0]) + 1
         raise InputError(f"stamps: must not decrease (stamp {k}: {stamps[k].item()!r} s after {stamps[k - 1].item()!r} s)")
@@ -144,7 +147,8 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
             with ``allow_nan``; no ``_`` in a number), x or y beyond +-``logs.MAX_COORD_M``, a zero
             quaternion, a quaternion tilted more than ``MAX_TILT_DEG`` (30 deg) from a rotation about
             z (a frame whose z is not up: its yaw is no heading; was read as one, silently), a stamp
-            before the previous one, a line longer than ``logs.MAX_ROW_CHARS``.
+            before the previous one, a line longer than ``logs.MAX_ROW_CHARS``; naming the file alone,
+            a file of no pose (empty, or blank and comment lines only: it read as no poses).
 
     Warns:
         LmsbenchWarning: once for a file with poses tilted by more than ``TILT_NOTE_DEG`` (5 deg) and
@@ -158,7 +162,9 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
     stamps: list[float] = []
     poses: list[tuple[float, float, float]] = []
     tilted, most = 0, (0.0, 0)  # poses tilted beyond TILT_NOTE_DEG, and the largest tilt with its line
+    lines = 0
     for no, line in row_lines(path, p):  # a line of 3 GB (a file of zeros) was read whole: MemoryError
+        lines = no
         s = line.strip()
         if not s or s.startswith("#"):
             continue
@@ -189,6 +195,10 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
                     most = (tilt, no)
         stamps.append(v[0])
         poses.append((v[1], v[2], yaw))
+    if not stamps:  # read as no poses, silently, as an empty CARMEN log was read as no scans
+        held = f"holds only blank or comment lines ({lines:,})" if lines else "an empty file (0 bytes)"
+        raise LogFormatError(path, None, f"no poses: {held}; a TUM file holds a row t x y z qx qy qz qw per pose "
+                                         "(a cut or emptied file?)")
     if tilted:
         import warnings
 

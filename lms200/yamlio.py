@@ -11,7 +11,9 @@ PyYAML, which shares the objects, but endless to the ``repr`` of an error messag
 scalar its tag cannot make (an impossible date, ``seed: 2025-02-30``, or ``!!float abc``: Python's
 ValueError, without the file or line), and a number that YAML 1.1 reads otherwise than YAML 1.2,
 Python and the command line (``k: 1_0`` read as 10, ``duration: 1:30`` as 90, ``seed: 010`` as 8;
-quoted, each is text for the field's own check). Hexadecimal (``0x10``), binary (``0b101``),
+quoted, each is text for the field's own check), and a value written as one of YAML 1.1's boolean
+words other than true / false (``yes``, ``no``, ``on``, ``off``, ``y``, ``n``, any case, unquoted:
+``deskew: no`` was False, ``y`` text; a key such as ``on:`` reads as before). Hexadecimal (``0x10``), binary (``0b101``),
 ``.inf`` and ``.nan`` read as before. All
 raise ``yaml.YAMLError`` with the line, as any malformed YAML does; PyYAML's own errors are
 re-raised as :class:`Malformed`, one line that starts with the place ("line 2, column 1: ...")."""
@@ -27,6 +29,19 @@ import yaml
 
 class Loader(yaml.SafeLoader):
     """The safe loader with YAML 1.2 floats (``1e9``, ``5e-3``)."""
+
+    #: a plain YAML 1.1 boolean word (``yes``, ``no``, ``on``, ``off``, ``y``, ``n``) as a value is
+    #: refused (``yaml11_bool``); :class:`WordsLoader` reads them as PyYAML does
+    refuse_words = True
+
+
+class WordsLoader(Loader):
+    """:class:`Loader` that reads YAML 1.1's boolean words as PyYAML does (``no`` False, ``n``
+    text), for YAML that lmsbench's users do not write for it: a ROS 2 bag's metadata.yaml (rosbag2
+    writes it) and the records of runs an earlier version wrote with ``yaml.safe_dump`` (``n`` and
+    ``y`` plain), which :func:`load` would refuse."""
+
+    refuse_words = False
 
 
 Loader.add_implicit_resolver(
@@ -62,10 +77,34 @@ def yaml11_number(loader: Loader, node: yaml.Node) -> str | None:
     return f"{text} is read as {value!r}: {why}; write the number as a plain decimal, or quote it ('{text}') for text"
 
 
-def _refuse_yaml11_number(loader: Loader, node: yaml.Node, where: str = "") -> None:
+_BOOL_WORD = re.compile(r"^(?:yes|no|on|off|y|n)$", re.I)  # YAML 1.1's booleans besides true / false (any case here)
+
+
+def yaml11_bool(loader: Loader, node: yaml.Node) -> str | None:
+    """Why ``node``, a value written as a plain (unquoted, untagged) YAML 1.1 boolean word other
+    than true / false (``yes``, ``no``, ``on``, ``off``, ``y``, ``n``, any case), is refused, or
+    None: PyYAML reads ``yes`` / ``no`` / ``on`` / ``off`` as True / False (``units: no`` became
+    False, a sweep's ``mode: [on, off]`` [True, False]) where YAML 1.2, Python and the command line
+    read text, and ``y`` / ``n`` as text where YAML 1.1 reads a boolean: what was meant cannot be
+    told. ``true`` / ``false`` and a quoted word read as before; so does a key (``on:``)."""
+    if not isinstance(node, yaml.ScalarNode) or node.style is not None or not _BOOL_WORD.fullmatch(node.value):
+        return None
+    mark, end = node.start_mark, node.end_mark
+    if mark.buffer is not None and "!" in mark.buffer[mark.pointer:end.pointer - len(node.value)]:
+        return None  # an explicit tag (!!str yes, !!bool yes) says what it is
+    text, truth = node.value, node.value.lower() in ("yes", "on", "y")
+    if node.tag == "tag:yaml.org,2002:bool":
+        read = f"is read as {str(truth).lower()} (YAML 1.1), but as text by YAML 1.2"
+    else:
+        read = f"is read as text here, but is YAML 1.1's boolean word for {str(truth).lower()}"
+    return f"{text} {read}; write true or false, or quote it ('{text}') for text"
+
+
+def _refuse_yaml11_number(loader: Loader, node: yaml.Node, where: str = "", key: bool = False) -> None:
     """Raise a YAML error at ``node`` (``where``: "key 'k': " before the problem) if
-    ``yaml11_number`` finds it reads as another number."""
-    problem = yaml11_number(loader, node)
+    ``yaml11_number`` finds it reads as another number, or, unless it is a mapping's ``key``,
+    ``yaml11_bool`` finds it a YAML 1.1 boolean word."""
+    problem = yaml11_number(loader, node) or (None if key or not loader.refuse_words else yaml11_bool(loader, node))
     if problem:
         raise yaml.constructor.ConstructorError(None, None, where + problem, node.start_mark)
 
@@ -74,16 +113,24 @@ def _construct_object(loader: Loader, node: yaml.Node, deep: bool = False) -> An
     """SafeLoader's construction, with a scalar that its tag cannot make a YAML error at its line
     and column: an impossible date (``seed: 2025-02-30``, "day is out of range for month") or an
     explicit tag's bad value (``!!float abc``) was Python's ValueError, an internal error without
-    the file, line or field; an int of more than 4300 digits says so. A number that YAML 1.1 reads
-    otherwise than YAML 1.2 and the command line (``yaml11_number``) is refused at its place."""
-    _refuse_yaml11_number(loader, node)
+    the file, line or field; an int of more than 4300 digits says so, and so does one beyond float64's
+    range (``duration: 1000...0`` of 401 digits was an internal OverflowError where it was cast to float). A
+    number that YAML 1.1 reads otherwise than YAML 1.2 and the command line (``yaml11_number``) is refused at
+    its place, and so is a YAML 1.1 boolean word that is no mapping's key (``yaml11_bool``)."""
+    _refuse_yaml11_number(loader, node, key=id(node) in getattr(loader, "_key_nodes", ()))
     try:
-        return yaml.SafeLoader.construct_object(loader, node, deep=deep)
+        value = yaml.SafeLoader.construct_object(loader, node, deep=deep)
+        if type(value) is int and not -sys.float_info.max <= value <= sys.float_info.max:
+            raise OverflowError("beyond float64's range, +-1.8e308: no setting takes it")
+        return value
     except (ValueError, TypeError, AttributeError, OverflowError) as exc:
         if not isinstance(node, yaml.ScalarNode):
             raise
         kind = str(node.tag).rsplit(":", 1)[-1]
         shown = node.value if len(node.value) <= 40 else f"{node.value[:30]}...({len(node.value)} characters)"
+        if isinstance(exc, OverflowError) and kind == "int":  # a 401-digit number: an internal OverflowError where
+            raise yaml.constructor.ConstructorError(  # a setting was cast to float (simulate's duration, a sweep's grid)
+                None, None, f"a whole number of {len(node.value)} characters, {exc}", node.start_mark) from None
         if isinstance(exc, ValueError) and "digits" in str(exc):  # int("9" * 5000): Python's limit
             problem = f"a whole number of more than {sys.get_int_max_str_digits()} digits"
         else:
@@ -103,6 +150,8 @@ def _construct_mapping(loader: Loader, node: yaml.MappingNode, deep: bool = Fals
     """SafeLoader's mapping, refusing a key written twice (merge keys ``<<`` may be overridden)."""
     if isinstance(node, yaml.MappingNode):
         seen: set[Any] = set()
+        keys = loader.__dict__.setdefault("_key_nodes", set())  # a key may be a boolean word (``on:``)
+        keys.update(id(key_node) for key_node, _ in node.value)
         for key_node, _ in node.value:
             if key_node.tag == "tag:yaml.org,2002:merge":
                 continue
@@ -114,7 +163,8 @@ def _construct_mapping(loader: Loader, node: yaml.MappingNode, deep: bool = Fals
                 continue
             if duplicate:
                 raise DuplicateKey(f"key {key!r} given twice (again at line {key_node.start_mark.line + 1})")
-        for key_node, value_node in node.value:  # a number read otherwise, named by its key (the place alone below)
+        for key_node, value_node in node.value:  # a number read otherwise or a boolean word, named by its key
+            # (the place alone below)
             items = value_node.value if isinstance(value_node, yaml.SequenceNode) else [value_node]
             for i, item in enumerate(items):
                 shown = key_node.value if isinstance(key_node, yaml.ScalarNode) else "?"
@@ -124,6 +174,31 @@ def _construct_mapping(loader: Loader, node: yaml.MappingNode, deep: bool = Fals
 
 
 Loader.construct_mapping = _construct_mapping  # type: ignore[method-assign,assignment]
+
+
+def _flatten_mapping(loader: Loader, node: yaml.MappingNode) -> None:
+    """SafeLoader's merge (``<<``), the keys it brings in from the merged mappings marked as keys
+    too (``yaml11_bool`` passes a key such as ``on:`` over: one merged in was refused)."""
+    yaml.SafeLoader.flatten_mapping(loader, node)
+    loader.__dict__.setdefault("_key_nodes", set()).update(id(key_node) for key_node, _ in node.value)
+
+
+Loader.flatten_mapping = _flatten_mapping  # type: ignore[method-assign,assignment]
+
+
+class Dumper(yaml.SafeDumper):
+    """The safe dumper, quoting text that :class:`Loader` refuses written plain: the boolean words
+    ``y`` and ``n`` (any case) and ``yes`` / ``no`` / ``on`` / ``off`` in a case PyYAML reads as text
+    (``yEs``). ``yaml.safe_dump`` wrote them plain (PyYAML reads them as text), so a config.yaml or
+    sweep.yaml lmsbench wrote with such a value (a grid's ``['y', 'n']``) was refused when read back."""
+
+
+Dumper.add_implicit_resolver("tag:yaml.org,2002:bool", _BOOL_WORD, list("yYnNoO"))
+
+
+def dump(data: Any, **kwargs: Any) -> str:  # noqa: ANN401 - any YAML data
+    """``yaml.safe_dump(data, **kwargs)`` with :class:`Dumper`: text :func:`load` reads back as written."""
+    return yaml.dump(data, Dumper=Dumper, **kwargs)
 
 
 class TooDeep(yaml.YAMLError):
@@ -220,8 +295,9 @@ def _malformed(exc: yaml.YAMLError, text: str) -> Malformed:
     return Malformed(" ".join(str(exc).split()))
 
 
-def load(text: str) -> Any:
-    """Parse YAML text with :class:`Loader`.
+def load(text: str, *, words: bool = False) -> Any:
+    """Parse YAML text with :class:`Loader` (``words``: with :class:`WordsLoader`, YAML 1.1's
+    boolean words read as PyYAML reads them, for YAML not written for lmsbench by its users).
 
     Raises:
         yaml.YAMLError: as ``yaml.safe_load`` does but in one line that starts with the place
@@ -231,7 +307,7 @@ def load(text: str) -> Any:
             a value that holds itself (:class:`SelfReference`).
     """
     try:
-        doc = yaml.load(text, Loader=Loader)  # noqa: S506 - Loader is a SafeLoader
+        doc = yaml.load(text, Loader=WordsLoader if words else Loader)  # noqa: S506 - both are SafeLoaders
     except RecursionError:
         raise TooDeep("nested too deeply to parse") from None
     except (DuplicateKey, TooDeep):

@@ -26,7 +26,8 @@ STILL, DRIVE, TURN = 0, 1, 2
 class RobotLimits:
     """Limits of a Pioneer-class robot (m, s, rad), each checked against BOUNDS when made (a
     ``simulate --config`` with ``robot: {v_max: 1e300}`` planned a tour for ever, ``v_max: -1`` or
-    ``a_max: 0`` drove a tour of nan or no motion silently, ``pause_s: [5, 1]`` was an internal error).
+    ``a_max: 0`` drove a tour of nan or no motion silently, ``a_max: 1e-300`` a robot standing still,
+    ``pause_s: [5, 1]`` was an internal error).
 
     Raises:
         InputError: naming the field, for a value that is not a finite number within its bounds.
@@ -39,10 +40,13 @@ class RobotLimits:
     radius: float = 0.25  # m, for collision checks
     pause_s: tuple[float, float] = (0.5, 2.0)  # pause at each visited room (uniform range)
 
-    #: (lowest, highest, lowest excluded, unit) of each number: far beyond any indoor robot (a
-    #: Pioneer drives at most 1.5 m/s), yet a tour of MAX_DURATION_S at V_MAX plans in seconds
-    BOUNDS = {"v_max": (0.0, 10.0, True, "m/s"), "a_max": (0.0, 100.0, True, "m/s^2"),
-              "w_max": (0.0, 20.0, True, "rad/s"), "alpha_max": (0.0, 200.0, True, "rad/s^2"),
+    #: (lowest, highest, lowest excluded, unit) of each number: highest far beyond any indoor robot
+    #: (a Pioneer drives at most 1.5 m/s), yet a tour of MAX_DURATION_S at V_MAX plans in seconds;
+    #: lowest 0.01 (1 cm/s, 1 cm/s^2, 0.01 rad/s and rad/s^2: a half turn of 314 s, a start to
+    #: the default 0.5 m/s of 50 s), far below any robot that moves: a_max 1e-300 was taken and ran
+    #: a robot that never left its first pose, exit 0; radius 0 is a point robot
+    BOUNDS = {"v_max": (0.01, 10.0, False, "m/s"), "a_max": (0.01, 100.0, False, "m/s^2"),
+              "w_max": (0.01, 20.0, False, "rad/s"), "alpha_max": (0.01, 200.0, False, "rad/s^2"),
               "radius": (0.0, 2.0, False, "m")}
 
     def __post_init__(self) -> None:

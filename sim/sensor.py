@@ -10,7 +10,7 @@ laser scanner for mobile robot obstacle negotiation", ICRA 2002 - mixed pixels a
 
 from __future__ import annotations
 
-from lms200.yamlio import load as load_yaml, size_problem
+from lms200.yamlio import load as load_yaml, size_problem, dump as dump_yaml
 
 import math
 import os
@@ -295,12 +295,11 @@ class SensorConfig:
 
     def to_yaml(self, path: str | Path, header: str = "", extra: dict[str, Any] | None = None) -> None:
         """Write the fields as YAML (``header`` as # comment lines, ``extra`` as more sections)."""
-        import yaml
 
         lines = "".join(f"# {line}\n" for line in header.splitlines())
-        body = yaml.safe_dump(self.to_dict(), sort_keys=False)
+        body = dump_yaml(self.to_dict(), sort_keys=False)
         if extra:
-            body += yaml.safe_dump(extra, sort_keys=False)
+            body += dump_yaml(extra, sort_keys=False)
         Path(path).write_text(lines + body, encoding="utf-8")
 
     def sigma_at(self, ranges: np.ndarray) -> np.ndarray:

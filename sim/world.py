@@ -32,6 +32,39 @@ MAX_SOLIDS = 5_000
 #: 20,000 route nodes took 4.8 GB and a minute (the mit world has 42)
 MAX_ROUTE_NODES = 2_000
 MAX_WORLD_JSON_BYTES = 32 << 20  # a world.json read at most (the mit world's is 0.54 MB): refused unread
+#: the keys of a world.json (``World.to_dict``); any other, or one given twice, is refused (:func:`world_json_content`)
+WORLD_JSON_KEYS = ("name", "seed", "scan_height", "walls", "circles", "corners", "boxes", "cylinders", "route_nodes",
+                   "route_edges", "route_targets", "glass")
+
+
+def _unique_keys(pairs: list[tuple[str, object]]) -> dict[str, object]:
+    """A JSON object's mapping, ValueError for a key it gives twice (``json`` keeps the last, silently)."""
+    out: dict[str, object] = {}
+    for key, value in pairs:
+        if key in out:
+            raise ValueError(f"key {key!r} given twice (the last would be taken, silently)")
+        out[key] = value
+    return out
+
+
+def world_json_content(text: str) -> dict:
+    """The mapping a world.json's text holds, for :meth:`World.from_json` and slam's reader of a
+    simulate folder: ValueError / TypeError for text that is no JSON mapping, for a key given twice
+    in any object, and for a key that is none of ``WORLD_JSON_KEYS``: a misspelt key
+    (``"cylinder"``) or a second ``"cylinders": []`` left the pillars out of the simulation (or the
+    walls out of slam's map score) without a word, exit 0."""
+    d = json.loads(text, object_pairs_hook=_unique_keys)
+    if not isinstance(d, dict):
+        raise TypeError(f"the top level is a {type(d).__name__}, not a mapping of walls, boxes, ...")
+    unknown = sorted(set(d) - set(WORLD_JSON_KEYS))
+    if unknown:
+        import difflib
+
+        near = {k: difflib.get_close_matches(k, WORLD_JSON_KEYS, n=1) for k in unknown}
+        hint = "; ".join(f"{k!r} for {m[0]!r}?" for k, m in near.items() if m)
+        raise ValueError(f"unknown key(s) {unknown}{' (' + hint + ')' if hint else ''}: a world.json has "
+                         f"{', '.join(WORLD_JSON_KEYS)}")
+    return d
 
 
 @dataclass(eq=False)
@@ -160,9 +193,7 @@ class World:
             raise LmsbenchError(f"{path}: {size:,} bytes, more than the {MAX_WORLD_JSON_BYTES:,} a world.json may "
                                 f"hold (refused unread; the mit world's is 0.5 MB)")
         try:
-            d = json.loads((Path(path).read_bytes() if data is None else data).decode("ascii"))
-            if not isinstance(d, dict):
-                raise TypeError(f"the top level is a {type(d).__name__}, not a mapping of walls, boxes, ...")
+            d = world_json_content((Path(path).read_bytes() if data is None else data).decode("ascii"))
             walls = np.asarray(d.get("walls", []), dtype=float).reshape(-1, 4)
             circles = np.asarray(d.get("circles", []), dtype=float).reshape(-1, 3)
             for name, a in (("walls", walls), ("circles", circles)):  # before the walls-only rebuild, which
@@ -191,7 +222,7 @@ class World:
                                     "scan or score against")  # against no face (F1 0), slam ran, exit 0
             world = cls(
                 name=str(d.get("name", Path(path).stem)),
-                seed=int(d.get("seed", 0)),
+                seed=d.get("seed", 0),  # int() read 1.5 as the world of seed 1, silently
                 boxes=boxes,
                 cylinders=cylinders,
                 scan_height=h,

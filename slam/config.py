@@ -198,6 +198,12 @@ class MotionConfig:
             matches a corridor backwards. 1.5: every hypothesis below a quarter turn. Set on the
             logs after 3 std alone lost MIT CSAIL's slips (0.6 measured alike; docs/slam.md,
             "With odometry", says how each rule was reached on Intel, ACES and MIT CSAIL).
+        odom_retry_gate: (default pipeline, ``use_odometry``; off) a retry whose heading stays
+            within the odometry's ``jump_probability`` chi-square gate (1 dof) found no heading slip,
+            and must keep its position within the same gate of the odometry's step (2 dof); one
+            that found a slip may go anywhere. On Intel and ACES it takes the steps off the
+            corrected poses by more than 0.3 m from 19 to 6 and 33 to 9, but not the ATE (the
+            closures then decide it; docs/slam.md, "Why Intel and ACES end metres off").
         jump_probability: a match further from the prediction than this chi-square quantile
             (3 dof, of the prediction's std) is a jump...
         jump_margin: ...and replaced by the narrow-reach match started at the prediction when
@@ -216,6 +222,7 @@ class MotionConfig:
     use_odometry: bool = False
     odom_noise: tuple[float, float, float] = (0.1, 0.1, 0.05)
     odom_max_turn_error: float = 1.5
+    odom_retry_gate: bool = False
 
 
 @dataclass(frozen=True)

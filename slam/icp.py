@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from typing import Callable
+
 import numpy as np
 
 from . import icpkernel
@@ -186,13 +188,16 @@ def score(points: np.ndarray, ref: Reference, pose: np.ndarray, distance: float)
 
 def match(points: np.ndarray, ref: Reference, starts: list[np.ndarray], cfg: AlignmentConfig,
           max_heading: float = np.inf, prior: np.ndarray | None = None, normals: np.ndarray | None = None,
-          turn: tuple[float, float] | None = None) -> Match:
+          turn: tuple[float, float] | None = None,
+          within: Callable[[np.ndarray], bool] | None = None) -> Match:
     """ICP from the first start; when it explains fewer than ``retry_inliers`` of the points, also
     from every other start and from heading offsets ``heading_hypotheses`` (rad) about the first
     (those up to ``max_heading`` rad: a loop closure tries only headings its drift allows); the
     start with most inliers wins (ties keep the earlier start). ``prior`` (information, see
     :func:`refine`) holds the first start only: a retry is a different motion. ``turn`` (heading
-    rad, bound rad): the retry's other starts and hypotheses only within the bound of that heading."""
+    rad, bound rad): the retry's other starts and hypotheses only within the bound of that heading.
+    ``within(pose)``: a retry's pose is a candidate only where it is true (the prediction's gate:
+    a heading hypothesis recovers a heading, not a position the prediction rules out)."""
     best = refine(points, ref, starts[0], cfg, prior, normals)
     if best.inliers >= cfg.retry_inliers:
         return best
@@ -205,6 +210,8 @@ def match(points: np.ndarray, ref: Reference, starts: list[np.ndarray], cfg: Ali
                     key=lambda t: -t[0])
     for _, k, s in scored[: cfg.refine_hypotheses]:
         m = refine(points, ref, s, cfg, normals=normals)
+        if within is not None and not within(m.pose):
+            continue
         if m.inliers > best.inliers + cfg.hypothesis_margin:
             best = Match(m.pose, m.information, m.inliers, m.rms, m.n_points, m.hessian, k)
     return best

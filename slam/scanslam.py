@@ -132,6 +132,8 @@ class ScanSlam:
         self._since_search = 0
         self._closed_at = 0.0  # path length (m) at the last loop closure
         self._jump_gate = chi2_quantile(self.motion.jump_probability, 3)
+        self._retry_gate = chi2_quantile(self.motion.jump_probability, 2)
+        self._heading_gate = chi2_quantile(self.motion.jump_probability, 1)
         self._narrow = replace(self.alignment, max_iterations=0)
         self.predict_velocity = True
         self._field_cache: tuple[Reference, Field] | None = None
@@ -216,7 +218,10 @@ class ScanSlam:
             # turn that matches a corridor backwards: the retry's heading hypotheses stay within that
             reach = max(self.alignment.search_sigmas * sth, self.motion.odom_max_turn_error) if by_odometry else np.inf
             turn = None if by_odometry else self._turn_bound(dt)
-            m = match(sp.matched, self.ref, starts, self.alignment, reach, prior=prior, normals=qn, turn=turn)
+            # motion.odom_retry_gate: a retry that found no heading slip keeps its position within the odometry's gate
+            within = self._odometry_gate(pred, sxy, sth) if by_odometry and self.motion.odom_retry_gate else None
+            m = match(sp.matched, self.ref, starts, self.alignment, reach, prior=prior, normals=qn, turn=turn,
+                      within=within)
             m = self._check_jump(sp.matched, m, pred, sxy, sth, info, qn)
             # the search looks for motion beyond the ICP's reach; within the odometry's reach it runs only when
             # the odometry-held match fails (a wheel slip), not to trade the odometry for a better-fitting slide
@@ -288,6 +293,22 @@ class ScanSlam:
             return m
         info.jump_rejected = True
         return near
+
+    def _odometry_gate(self, pred: np.ndarray, sxy: float, sth: float):
+        """``within(pose)`` for a retry of an odometry-predicted match (a heading hypothesis): a pose
+        whose heading lies outside the odometry's ``jump_probability`` chi-square gate (1 dof of
+        ``sth`` rad) found a heading slip, and a slip leaves the odometry's step in doubt too, so any
+        position goes; a pose whose heading agrees with the odometry's found no slip, so its
+        position must agree as well (the same gate, 2 dof of ``sxy`` m): beyond it, it has slid to
+        an aliased place along a corridor, which explains a few more points of a partial overlap."""
+        bound_xy, bound_th = self._retry_gate * sxy**2, self._heading_gate * sth**2
+
+        def within(pose: np.ndarray) -> bool:
+            if wrap(float(pose[2] - pred[2])) ** 2 > bound_th:
+                return True
+            return float(np.sum((pose[:2] - pred[:2]) ** 2)) <= bound_xy
+
+        return within
 
     def _turn_bound(self, dt: float) -> tuple[float, float] | None:
         """(last heading, rad) and the turn a robot makes at most in ``dt`` s (``max_turn_rate``,

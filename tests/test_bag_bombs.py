@@ -241,3 +241,28 @@ def test_a_file_compressed_ros2_bomb_is_one_line_and_status_2_from_the_command(t
     err = capsys.readouterr().err
     assert err.startswith(f"lmsbench info: error: {bag / 'bomb2.db3.zstd'}: a zstd-compressed storage file ")
     assert err.count("\n") == 1
+
+
+def test_a_ros2_metadata_yaml_too_big_to_parse_is_refused_unread(tmp_path, capsys) -> None:
+    """Found by fuzzing: a ROS 2 bag's metadata.yaml was parsed whole three times (the command line's
+    check, the reader's and rosbags'), in pure Python: one of 5.5 MB held `lmsbench info` 340 s at
+    1 GB resident. Over lms200.bag.MAX_METADATA_BYTES (1 MiB) it is refused before any parse."""
+    import re
+    import time
+
+    from experiments.cli import main
+    from lms200.bag import MAX_METADATA_BYTES, BagError
+
+    bag = tmp_path / "b2"
+    write_log(bag, [Record(Scan(np.full(5, 1.0), -0.1, 0.05, 0.0, 8.0, stamp=t)) for t in (1.0, 2.0)], fmt="bag2")
+    meta = bag / "metadata.yaml"
+    assert [r.scan.stamp for r in read_log(bag)] == [1.0, 2.0]
+    with open(meta, "a") as f:
+        f.write("# padding\n" * (MAX_METADATA_BYTES // 10))
+    message = f"{meta}: {meta.stat().st_size:,} bytes, more than the 1,048,576 a ROS 2 bag's metadata.yaml may hold"
+    start = time.monotonic()
+    with pytest.raises(BagError, match=re.escape(message)):
+        list(read_log(bag))
+    assert main(["info", str(bag)]) == 2
+    assert capsys.readouterr().err.startswith(f"lmsbench info: error: {message} (refused unread")
+    assert time.monotonic() - start < 2  # old: both parsed it (10 s of comments; minutes of content)

@@ -762,3 +762,141 @@ def test_an_unindexed_bag_s_damaged_message_record_is_named_by_its_chunk_offset(
     with pytest.raises(BagError, match=rf"whose record at byte {pos} is damaged: its record at chunk offset "
                        rf"{msg - datapos}: .* \(a chunk offset counts bytes of the chunk's data, decompressed\)$"):
         list(read_log(out))
+
+
+def test_poses_written_after_the_look_ahead_window_are_said(tmp_path: Path) -> None:
+    """Found by fuzzing: a bag whose poses were written after every scan (a ground truth added to a
+    bag afterwards, its topics written one after the other) read its 20 scans without their
+    odometry, silently ('odometry yes' in info): a scan waits LOOKAHEAD_S of bag time for its poses.
+    The loss is bounded as before, and now said in one warning naming the topic and the count."""
+    from lms200.errors import LmsbenchWarning
+
+    q = (0.0, 0.0, 0.0, 1.0)
+    scans = [("/scan", 1.0 + 0.1 * k, 1.0 + 0.1 * k, 1.0) for k in range(20)]
+    odom = [("/odom", 10.0 + 0.01 * k, 1.0 + 0.1 * k, (float(k), 0.0, *q)) for k in range(20)]
+    with pytest.warns(LmsbenchWarning) as caught:
+        out = list(read_log(_ros2_bag(tmp_path / "late", scans + odom)))
+    assert [r.odom for r in out] == [None] * 20  # as before: the look-ahead is bounded
+    assert [str(w.message) for w in caught] == [
+        f"{tmp_path / 'late'}: poses came more than 1 s of bag time after the scans they are stamped for (20 on /odom): "
+        "those scans were read without them (the bag's topics written one after the other, or a pose topic recorded "
+        "late); write the bag in header-stamp order"]
+    import warnings
+
+    with warnings.catch_warnings():  # in time (written 0.5 s late): no warning, every scan its odometry
+        warnings.simplefilter("error")
+        assert [r.odom[0] for r in read_log(_ros2_bag(tmp_path / "in_time", sorted(
+            scans + [(t, b - 9.0 + 0.5, s, p) for t, b, s, p in odom], key=lambda m: m[1])))] == [float(k) for k in range(20)]
+
+
+def test_write_bag_flush_s_writes_the_first_scan_at_once_and_on_a_tick(tmp_path: Path) -> None:
+    """With ``flush_s`` the first chunk went out only after a scan ``flush_s`` after the bag was
+    opened: a recording killed in its first second (and one whose device sent its scans within it,
+    then went silent) was a file of the bag's header alone. Now the first scan is written out at
+    once, and a None (a tick: no record) writes out the scans held once they are due."""
+    import shutil
+    import time
+    import warnings
+
+    from lms200.bag import write_bag
+
+    out = tmp_path / "rec.bag"
+    on_disk: list[int] = []
+
+    def seen() -> int:  # the scans a reader recovers from the file as it is now (as if the writer were killed)
+        copy = tmp_path / "copy.bag"
+        shutil.copyfile(out, copy)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                return sum(1 for _ in read_log(copy))
+        except BagError:  # the header alone
+            return 0
+        finally:
+            copy.unlink()
+
+    def records():  # noqa: ANN202
+        yield Record(Scan.lms200(np.full(361, 1.0), stamp=0.0))
+        on_disk.append(seen())  # the first scan: at once
+        yield Record(Scan.lms200(np.full(361, 2.0), stamp=1.0))
+        yield None  # a tick 0.3 s before the second scan is due: still held
+        on_disk.append(seen())
+        time.sleep(0.35)
+        yield None  # due now: written out without a next scan
+        on_disk.append(seen())
+        yield None  # nothing held: nothing written
+        on_disk.append(seen())
+
+    assert write_bag(out, records(), flush_s=0.3) == 2
+    assert on_disk == [1, 1, 2, 2]
+    assert [r.scan.stamp for r in read_log(out)] == [0.0, 1.0]
+
+
+def test_an_unindexed_bag_is_told_by_its_header_not_by_rosbags_words(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A bag never closed was told by the text of rosbags' refusal ("Bag is not indexed, reindex
+    before reading"): a rosbags that words it otherwise (here: "Bag has no index") made a killed
+    recording "cannot open as a ROS bag: AnyReaderError: Bag has no index.". It is told by its header's
+    index_pos 0 now, and recovered as before."""
+    import warnings
+
+    from rosbags.rosbag1 import reader as r1
+
+    opened = r1.Reader.open
+
+    def reworded(self) -> None:  # noqa: ANN001
+        try:
+            opened(self)
+        except r1.ReaderError as exc:
+            raise r1.ReaderError(str(exc).replace("Bag is not indexed, reindex before reading.", "Bag has no index.")) from None
+
+    monkeypatch.setattr(r1.Reader, "open", reworded)
+    out, recs = _unindexed(tmp_path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = list(read_log(out))
+    assert [str(w.message) for w in caught] == [
+        f"{out}: the bag was not closed (a recording killed or cut by a power failure): it has no index; 20 messages "
+        "recovered from its 10 whole chunks"]
+    assert [r.scan.stamp for r in got] == [float(i) for i in range(10)]
+    # an indexed bag still goes through rosbags' own open (its refusals as they were)
+    whole = tmp_path / "whole.bag"
+    assert [r.scan.stamp for r in read_log(whole)] == [float(i) for i in range(10)]
+    data = bytearray(whole.read_bytes())
+    data[:13] = b"#ROSBAG V1.2\n"
+    whole.write_bytes(bytes(data))
+    with pytest.raises(BagError, match=r"whole\.bag: cannot open as a ROS bag: AnyReaderError: Bag version 102 is not supported\.$"):
+        list(read_log(whole))
+
+
+@pytest.mark.parametrize("content, held", [
+    ("", "an empty file (0 bytes)"),
+    ("# timestamp x y z qx qy qz qw\n", "holds only blank or comment lines (1)"),
+    ("# t x y z qx qy qz qw\n\n   \n# end\n", "holds only blank or comment lines (4)"),
+])
+def test_a_tum_file_of_no_pose_is_refused_naming_it(tmp_path: Path, content: str, held: str) -> None:
+    """An empty TUM file, or one of comments only (a cut or emptied trajectory), read as no poses,
+    silently, where an empty CARMEN log is refused ("FILE: an empty file (0 bytes): no laser lines")."""
+    from lms200 import read_tum
+
+    path = tmp_path / "gt.tum"
+    path.write_text(content)
+    with pytest.raises(LogFormatError) as info:
+        read_tum(path)
+    assert str(info.value) == (f"{path}: no poses: {held}; a TUM file holds a row t x y z qx qy qz qw per pose (a cut or "
+                               "emptied file?)")
+    path.write_text(content + "1.0 2.0 3.0 0 0 0 0 1\n")  # one pose: read
+    stamps, poses = read_tum(path)
+    assert stamps.tolist() == [1.0] and poses.tolist() == [[2.0, 3.0, 0.0]]
+
+
+def test_write_bag_refuses_an_angle_increment_that_float32_makes_0(tmp_path: Path) -> None:
+    """A Scan 1e-290 rad apart was written to a bag as 0 (a LaserScan's fields are float32), a bag
+    its reader refuses ("angle_increment: must be > 0, got 0.0", of a value never given): refused
+    when written, naming the item and the value; the scans before it are kept."""
+    from lms200.bag import write_bag
+
+    recs = [Record(_scan(0.0)), Record(Scan(np.full(5, 1.0), -0.1, 1e-290, 0.0, 8.0, stamp=1.0))]
+    with pytest.raises(InputError, match=r"^records: item 1: angle_increment 1e-290 rad cannot be stored in a bag "
+                                         r"\(a LaserScan's fields are float32, in which it is 0\)$"):
+        write_bag(tmp_path / "s.bag", recs)
+    assert [r.scan.stamp for r in read_log(tmp_path / "s.bag")] == [0.0]

@@ -41,3 +41,24 @@ def test_crlf_and_classic_mac_line_ends_still_read(tmp_path: Path, end: str, nam
     bad.write_bytes(end.join([GOOD.format(t=1.0), GOOD.format(t=2.0).replace("2.00", "y")]).encode() + end.encode())
     with pytest.raises(LogFormatError, match=rf"{name}_bad\.log:2: malformed FLASER line: FLASER ranges: 'y' is not a number"):
         list(read_log(bad))
+
+
+@pytest.mark.parametrize("end, name", [("\r\n", "crlf"), ("\r", "mac"), ("\n", "unix")])
+def test_line_ends_are_told_when_the_first_line_passes_4096_bytes(tmp_path: Path, end: str, name: str) -> None:
+    """Found by fuzzing: a log of classic Mac line ends whose first line passed the 4096 bytes the
+    reader looked at to tell its line ends (a ROBOTLASER1 line of 361 ranges and 361 remissions,
+    4,900 bytes) was read as one line, the whole file: 'line 1: ... needs 746 fields, got 2238'.
+    The reader looks on to the first line end; CRLF and "\\n" logs read as before."""
+    ranges = " ".join(f"{1 + i / 1000:.3f}" for i in range(361))
+    remissions = " ".join("0.500000" for _ in range(361))
+    lines = [f"ROBOTLASER1 0 -1.570796 3.141593 0.008727 8.183 0.001 0 361 {ranges} 361 {remissions} "
+             f"0 0 0 0 0 0 0 0 0 0 0 {t} host {t}" for t in (1.0, 2.0, 3.0)]
+    assert len(lines[0]) > 4096
+    path = tmp_path / f"{name}.log"
+    path.write_bytes(end.join(lines).encode() + end.encode())
+    records = list(read_log(path))
+    assert [r.scan.stamp for r in records] == [1.0, 2.0, 3.0]
+    assert records[2].scan.ranges[[0, 360]].tolist() == [1.0, 1.36]
+    path.write_bytes(end.join(lines + [lines[0].replace("1.360", "z")]).encode() + end.encode())
+    with pytest.raises(LogFormatError, match=rf"{name}\.log:4: malformed ROBOTLASER1 line: ROBOTLASER1 ranges: 'z' is not a number"):
+        list(read_log(path))

@@ -263,7 +263,7 @@ CASES = [
     (["simulate", "--sensor", "{sensor_ok.yaml}", "--resolution-deg", "1", "--out", O], "--resolution-deg cannot be given"),
     (["simulate", "--sensor", "{sensor_ok.yaml}", "--units", "cm", "--out", O], "--sensor holds the whole sensor model"),
     (["compare", "{good.clf}", "--sensor", "{sensor_ok.yaml}", "--out", O], "--sensor sets the sensor of the worlds"),
-    (["simulate", "--config", "{short_run.yaml}", "--out", O], "duration must be in [0.1, 3600] s"),
+    (["simulate", "--config", "{short_run.yaml}", "--out", O], "duration: must be in [0.1, 3600] s (shorter holds no scan), got 0.001"),
     # values of the wrong type: `duration: true` ran 1 s; a list said "float() argument must be ..."
     (["simulate", "--config", "{run_bool.yaml}", "--out", O], "run_bool.yaml: not a simulate config (duration: must be a number, got True)"),
     (["simulate", "--config", "{run_list.yaml}", "--out", O], "(duration: must be a number, got [2])"),
@@ -1293,10 +1293,15 @@ def test_compare_tells_worlds_from_files_by_name_for_sensor_as_for_seeds(tmp_pat
 
 
 @pytest.mark.parametrize("section, expected", [
-    ("robot: {v_max: 1.0e300}", "(robot.v_max: must be a finite number in (0, 10] m/s, got 1e+300)"),  # planned for ever
-    ("robot: {v_max: -1}", "(robot.v_max: must be a finite number in (0, 10] m/s, got -1)"),  # ran, silently
-    ("robot: {a_max: 0}", "(robot.a_max: must be a finite number in (0, 100] m/s^2, got 0)"),  # a tour of nan, warnings
-    ("robot: {v_max: [1, 2]}", "(robot.v_max: must be a finite number in (0, 10] m/s, got [1, 2])"),  # internal error
+    ("robot: {v_max: 1.0e300}", "(robot.v_max: must be a finite number in [0.01, 10] m/s, got 1e+300)"),  # planned for ever
+    ("robot: {v_max: -1}", "(robot.v_max: must be a finite number in [0.01, 10] m/s, got -1)"),  # ran, silently
+    ("robot: {a_max: 0}", "(robot.a_max: must be a finite number in [0.01, 100] m/s^2, got 0)"),  # a tour of nan, warnings
+    # positive but absurd: a robot that never left its first pose, exit 0
+    ("robot: {a_max: 1.0e-300}", "(robot.a_max: must be a finite number in [0.01, 100] m/s^2, got 1e-300)"),
+    ("robot: {v_max: 0.001}", "(robot.v_max: must be a finite number in [0.01, 10] m/s, got 0.001)"),
+    ("robot: {w_max: 1.0e-9}", "(robot.w_max: must be a finite number in [0.01, 20] rad/s, got 1e-09)"),
+    ("robot: {alpha_max: 0.005}", "(robot.alpha_max: must be a finite number in [0.01, 200] rad/s^2, got 0.005)"),
+    ("robot: {v_max: [1, 2]}", "(robot.v_max: must be a finite number in [0.01, 10] m/s, got [1, 2])"),  # internal error
     ("robot: {pause_s: [5, 1]}", "(robot.pause_s: the shortest pause must not exceed the longest, got [5, 1])"),
     ("robot: {pause_s: [1, 2, 3]}", "(robot.pause_s: must be two numbers of seconds [shortest, longest], got (1, 2, 3))"),
     ("odometry: {alpha1: x}", "(odometry.alpha1: must be a finite number in [0, 10], got 'x')"),  # internal error (numpy)
@@ -1320,6 +1325,52 @@ def test_simulate_config_robot_and_odometry_values_are_checked(section, expected
     assert len(err) == 1 and err[0].startswith(f"lmsbench simulate: error: {tmp_path / 'run.yaml'}: not a simulate config {expected}")
     assert err[0].endswith(")")
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("line, said", [
+    ("duration: 5000", "duration: must be in [0.1, 3600] s, got 5000"),
+    ("duration: 0.01", "duration: must be in [0.1, 3600] s (shorter holds no scan), got 0.01"),
+    ("duration: .nan", "duration: must be in [0.1, 3600] s, got nan"),
+    ("rate_hz: -1", "rate_hz: must be a finite number of scans/s > 0 (or None: every scan), got -1.0"),
+])
+def test_simulate_config_duration_and_rate_name_the_value_given(tmp_path, capsys, line, said):
+    """`simulate --config` with `duration: 5000` said "duration must be in [0.1, 3600] s (shorter holds
+    no scan) and rate_hz > 0": not the value given, and a rate that was fine. Now the field and its value."""
+    (tmp_path / "run.yaml").write_text(f"world: office\n{line}\n")
+    assert run_main(["simulate", "--config", str(tmp_path / "run.yaml"), "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err == f"lmsbench simulate: error: {tmp_path / 'run.yaml'}: {said}\n"
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_yaml_1_1_boolean_word_in_a_config_is_refused_naming_the_file_line_and_key(tmp_path, capsys):
+    """`simulate --config` with `sensor: {interlaced: no}` ran a non-interlaced sensor, exit 0: PyYAML
+    (YAML 1.1) reads no as False, where YAML 1.2 reads text. Refused before any work, one line."""
+    (tmp_path / "run.yaml").write_text("world: office\nduration: 1\nsensor: {interlaced: no}\n")
+    assert run_main(["simulate", "--config", str(tmp_path / "run.yaml"), "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err == (
+        f"lmsbench simulate: error: {tmp_path / 'run.yaml'}: not valid YAML (line 3, column 22: key 'interlaced': no is "
+        "read as false (YAML 1.1), but as text by YAML 1.2; write true or false, or quote it ('no') for text)\n")
+    assert not (tmp_path / "o").exists()
+
+
+def test_simulate_checks_a_configs_world_against_out_as_it_does_world(tmp_path, capsys, monkeypatch):
+    """`simulate` checked its inputs against --out twice: --world before the folder's own check, a
+    --config's world.json after it, once the config was read. So `--config C.yaml --out W` (C.yaml:
+    world: W/world.json) with a stray file in W said "holds notes.txt, which this command does not
+    write", where `--world W/world.json --out W` said the run would write world.json over its input.
+    One check now, after the config is read and before any output: the same message both ways."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "W").mkdir()
+    (tmp_path / "W" / "world.json").write_text("{}")
+    (tmp_path / "W" / "notes.txt").write_text("mine\n")
+    (tmp_path / "c.yaml").write_text("world: W/world.json\nduration: 1\n")
+    said = ("lmsbench simulate: error: --out W: the run would write world.json over W/world.json, which it reads; "
+            "give another folder\n")
+    assert run_main(["simulate", "--config", "c.yaml", "--out", "W"]) == 2
+    assert capsys.readouterr().err == said
+    assert run_main(["simulate", "--world", "W/world.json", "--duration", "1", "--out", "W"]) == 2
+    assert capsys.readouterr().err == said
+    assert sorted(p.name for p in (tmp_path / "W").iterdir()) == ["notes.txt", "world.json"]
 
 
 def test_a_sweep_is_not_written_into_another_sweeps_folder(files, tmp_path, capsys):

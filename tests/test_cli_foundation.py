@@ -205,3 +205,25 @@ def test_info_says_when_scans_repeat_the_stamp_before_them(tmp_path: Path, capsy
     write_log(tmp_path / "ok.clf", [Record(s) for s in scans])
     assert main(["info", str(tmp_path / "ok.clf")]) == 0
     assert "  time order      yes\n" in capsys.readouterr().out
+
+
+def test_info_says_on_how_many_scans_odometry_or_truth_is_when_not_on_all(tmp_path: Path,
+                                                                          capsys: pytest.CaptureFixture[str]) -> None:
+    """Found by fuzzing: a log (or a bag whose poses came late) with odometry on 1 of its 40 scans
+    said 'odometry yes', as a log of odometry on every scan; slam --odometry then refused it (39 of
+    the 40 scans have none). The text says how many scans have it; --json gives the counts."""
+    from lms200 import Record, Scan, write_log
+
+    recs = [Record(Scan(np.full(181, 2.0), -np.pi / 2, np.pi / 180, 0.0, 8.0, stamp=1.0 + 0.1 * k),
+                   odom=(0.1 * k, 0.0, 0.0) if k < 3 else None, truth=(0.0, 0.0, 0.0) if k == 5 else None) for k in range(40)]
+    write_log(tmp_path / "part.clf", recs)
+    assert main(["info", str(tmp_path / "part.clf")]) == 0
+    out = capsys.readouterr().out
+    assert "  odometry        yes, on 3 of 40 scans\n" in out and "  true poses      yes, on 1 of 40 scans\n" in out
+    assert main(["info", str(tmp_path / "part.clf"), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert (info["odometry"], info["odometry_scans"], info["truth"], info["truth_scans"]) == (True, 3, True, 1)
+    write_log(tmp_path / "all.clf", [Record(r.scan, odom=(0.0, 0.0, 0.0)) for r in recs])
+    assert main(["info", str(tmp_path / "all.clf")]) == 0
+    out = capsys.readouterr().out
+    assert "  odometry        yes\n" in out and "  true poses      no\n" in out

@@ -292,3 +292,27 @@ def test_the_real_corrected_logs_give_raw_odometry(shared_data, name, count, ste
     length_o = np.hypot(*np.diff(odom[:, :2], axis=0).T).sum()
     length_c = np.hypot(*np.diff(corr[:, :2], axis=0).T).sum()
     assert abs(length_o / length_c - 1) < 0.01
+
+
+def test_a_raw_log_whose_clock_jumps_back_while_the_robot_stands_is_no_corrected_log(tmp_path):
+    """Found by fuzzing: a raw FLASER + ODOM log whose clock jumped back 100 s (two runs joined, a
+    clock set back) while the robot stood still had every later ODOM line junk by the odometry's
+    clock, and the one at a standing scan's pose was taken for its anchor: 51 of 100 scans were read
+    as a corrected log's (pose fields as corrected poses) and their odometry froze at x 4.75 m (3 m
+    off at the end). An anchor's stamp must also lie ANCHOR_STAMP_GAP_S before its laser line's own
+    (21 s or more in Intel and ACES); only the scan just before the jump may still read as anchored,
+    its odometry and corrected pose both its own pose fields."""
+    lines, x = [], 0.0
+    ranges = " ".join(["2.00"] * BEAMS)
+    for k in range(200):
+        x += 0.0 if 95 <= k < 140 else 0.05
+        t = 1000.0 + 0.1 * k - (100.0 if k >= 100 else 0.0)
+        lines.append(f"ODOM {x:.3f} 0 0 0 0 0 {t:.3f} h {t:.3f}")
+        if k % 2:
+            lines.append(f"FLASER {BEAMS} {ranges} {x:.3f} 0 0 {x:.3f} 0 0 {t + 0.01:.3f} h {t + 0.01:.3f}")
+    (tmp_path / "joined.log").write_text("\n".join(lines) + "\n")
+    recs = list(read_log(tmp_path / "joined.log"))
+    fields = [float(line.split()[BEAMS + 5]) for line in lines if line.startswith("FLASER")]
+    assert len(recs) == 100 and [r.odom[0] for r in recs] == fields  # old: 4.75 from scan 48 on
+    anchored = [k for k, r in enumerate(recs) if r.corrected is not None]
+    assert anchored == [49] and recs[49].corrected == recs[49].odom  # old: 51 scans, 49 to 99

@@ -805,3 +805,31 @@ def test_a_rate_the_sensor_does_not_give_is_refused_before_any_cell(tmp_path, ca
     assert capsys.readouterr().err == (f"lmsbench sweep: error: {spec}: rate_hz: 1e+300 scans/s is more than the "
                                        "sensor gives (37.5 scans/s at 0.5 deg)\n")
     assert not out.exists()
+
+
+@pytest.mark.parametrize("raw, message", [
+    # a choice is a cell's value, as a grid's is: a list drawn was 'internal error: TypeError: unhashable
+    # type', and nan ran a user's cell on nan
+    ({"kind": KIND, "random": {"k": {"choice": [[3, 5]]}}, "samples": 1},
+     r"random\.k must be a number, string, bool or null, got \[3, 5\]"),
+    ({"kind": KIND, "random": {"x": {"choice": [1.0, float("nan")]}}, "samples": 4},
+     r"random\.x must be finite \(within float64's range, \+-1\.8e308\), got nan"),
+    # a whole number of 401 digits: math.isfinite's (or numpy's) OverflowError, an internal error
+    ({"kind": KIND, "random": {"u": {"uniform": [0, 10**400]}}, "samples": 1},
+     r"random\.u: uniform needs \[low, high\], finite numbers with low <= high, got \[0, 1000"),
+    ({"kind": KIND, "grid": {"sensor.n_beams": [10**400]}},
+     r"grid\.sensor\.n_beams must be finite \(within float64's range, \+-1\.8e308\), got a whole number of 401 digits"),
+    ({"kind": KIND, "random": {"c": {"choice": [-10**400]}}, "samples": 1}, r"got a whole number of 401 digits"),
+    # `null: 3` and `1: 3` were an internal AttributeError; "a," linked an empty name
+    ({"kind": KIND, "fixed": {None: 3}}, r"fixed: parameter name None must be text"),
+    ({"kind": KIND, "fixed": {1: 3}}, r"fixed: parameter name 1 must be text"),
+    ({"kind": KIND, "grid": {"extractor.k,": [[3, 4]]}}, r"grid: parameter name 'extractor\.k,' must be text \(a name, "
+                                                          r"or names linked by commas, none of them empty\)"),
+    ({"kind": KIND, "random": {"": {"int": [1, 2]}}, "samples": 1}, r"random: parameter name '' must be text"),
+])
+def test_sweep_values_and_names_no_cell_can_take_are_refused_at_load(raw, message):
+    """Found by fuzzing sweep files: each passed the checks and failed as an internal error once the
+    sweep ran (or ran a user's cell on it); each is now a SweepSpecError saying what to fix."""
+    with pytest.raises(SweepSpecError, match=message):
+        SweepSpec.from_dict(raw)
+    SweepSpec.from_dict({"kind": KIND, "random": {"c": {"choice": ["a", 2, 2.5, None, True, 10**300]}}, "samples": 3})

@@ -14,10 +14,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from lms200.codes import codes_to_ranges
-from lms200.errors import InputError, LmsbenchError, LmsProtocolError
+from lms200.errors import InputError, LmsbenchError, LmsProtocolError, LmsStatusError
 from lms200.framing import Frame, FrameParser
 from lms200.protocol import (ACK, MAX_LEN, NAK, OVERHEAD_BYTES, REPLY_MEASURE, STX, VARIANTS, build_frame, decode_scan,
-                             encode_measurement, scan_geometry)
+                             encode_measurement, scan_geometry, status_problem)
 
 SETTINGS = dict(deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 MAX_HELD = MAX_LEN + OVERHEAD_BYTES  # the longest telegram: all the parser may hold back after a feed
@@ -118,7 +118,10 @@ def test_every_untouched_telegram_is_decoded_exactly_and_no_touched_one_is_accep
     assert all(e in (ACK, NAK) for e in events if not isinstance(e, Frame))
     for f in frames:
         assert stream[f.end - len(f) : f.end] == reply(f.payload)  # where it was found
-        if f.code == REPLY_MEASURE and not f.payload[2] & 0x20:
+        if f.code == REPLY_MEASURE and status_problem(f.payload[-1]):  # an error, implausible values
+            with pytest.raises(LmsStatusError, match=r"0xB0 scan with status 0x[0-9A-F]{2}: .*: its values are not to be used"):
+                decode_scan(f.payload, stamp=1.5)
+        elif f.code == REPLY_MEASURE and not f.payload[2] & 0x20:
             scan = decode_scan(f.payload, stamp=1.5)
             ranges, angle_min, increment, units = expected_scan(f.payload)
             np.testing.assert_array_equal(scan.ranges, ranges)
@@ -138,6 +141,7 @@ def test_any_payload_decodes_to_a_scan_or_is_a_protocol_error(payload: bytes) ->
         return
     n = len(scan)
     assert payload[0] == REPLY_MEASURE and len(payload) == 4 + 2 * n and not payload[2] & 0x20
+    assert status_problem(payload[-1]) is None
     assert np.all(np.isnan(scan.ranges) | (scan.ranges >= 0))
 
 

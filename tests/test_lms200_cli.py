@@ -493,3 +493,59 @@ def test_a_killed_bag_recording_keeps_its_scans(tmp_path: Path) -> None:
     assert info.returncode == 0, info.stderr
     assert "warning: " in info.stderr and "the bag was not closed" in info.stderr
     assert re.search(rf"^  scans +{len(got)}$", info.stdout, re.M), info.stdout
+
+
+def _recovered(bag: Path, copy: Path) -> int:
+    """The scans read back from a copy of a bag being written (none while it is no bag yet)."""
+    import shutil
+    import warnings
+
+    from lms200 import LmsbenchError
+
+    if not bag.exists():
+        return 0
+    shutil.copyfile(bag, copy)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return sum(1 for _ in read_log(copy))
+    except LmsbenchError:
+        return 0
+    finally:
+        copy.unlink()
+
+
+def _kill_when(proc: subprocess.Popen, ready, seconds: float = 20.0) -> None:  # noqa: ANN001
+    """SIGKILL ``proc`` once ``ready()`` or ``seconds`` have passed (asserting it still runs)."""
+    try:
+        deadline = time.monotonic() + seconds
+        while not ready() and time.monotonic() < deadline:
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.05)
+        proc.kill()
+        proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == -signal.SIGKILL
+
+
+def test_a_bag_recording_killed_in_a_stall_keeps_the_scans_before_it(tmp_path: Path) -> None:
+    """A device that stops sending (here: a source of 5 scans, run out; --timeout 30, so no stall
+    error) left the bag's scans since its last chunk in memory until the next scan, which never
+    came: killed 20 s into the stall, the bag was its header alone (read back: "no LaserScan topic";
+    all 5 scans lost). The recorder now writes them out on time while the device is silent."""
+    import warnings
+
+    sent = source(5)
+    dev = VirtualLMS200(sent, time_scale=0.1)
+    out = tmp_path / "rec.bag"
+    with TcpServer(dev) as ad:
+        proc = subprocess.Popen(cli("record", "--port", ad.url, "--out", str(out), "--baud", "38400", "--timeout", "30"),
+                                env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        _kill_when(proc, lambda: dev.scans_sent == 5 and _recovered(out, tmp_path / "copy.bag") == 5)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = [rec.scan for rec in read_log(out)]
+    assert [codes(s) for s in got] == [codes(s) for s in sent]
+    assert [str(w.message).split(": it has no index; ")[1] for w in caught] == ["5 messages recovered from its 2 whole chunks"]

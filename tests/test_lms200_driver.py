@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 import re
+import time
 
 import numpy as np
 import pytest
@@ -1059,6 +1060,7 @@ def test_a_late_reply_to_the_stop_request_leaves_driver_and_unit_at_9600(monkeyp
     (dict(stall_timeout=-1.0), r"^stall_timeout: must be a finite number in \(0, 3600\] s, got -1\.0$"),
     (dict(stall_timeout="1"), r"^stall_timeout: must be a finite number .* got '1'$"),  # TypeError after the first scan
     (dict(stop=5), r"^stop: must be None or a function returning True to stop, got 5$"),  # TypeError at the first read
+    (dict(idle_s=float("nan")), r"^idle_s: must be a finite number in \(0, 3600\] s, got nan$"),
 ])
 def test_scans_checks_its_arguments_when_called_before_streaming(kw: dict, message: str) -> None:
     """``scans()`` was a generator: its arguments were first used inside it, and a nan
@@ -1075,3 +1077,44 @@ def test_scans_checks_its_arguments_when_called_before_streaming(kw: dict, messa
         stream = lms.scans(stall_timeout=np.float32(2.0), stop=lambda: False)
         assert len(next(stream)) == 361 and lms.streaming
         stream.close()
+
+
+def test_scans_the_device_flags_as_not_to_be_used_are_dropped_and_counted(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Found by fuzzing the telegram decoder: a scan telegram whose STATUS byte said an error (level 3),
+    a fatal error (4) or implausible measured values (bit 6) was decoded and yielded as a good scan,
+    its values recorded as measured. It is dropped and counted (``stats.flagged``, among
+    ``decode_errors``); info, warnings and pollution (bit 7) keep their scans."""
+    from lms200.protocol import encode_measurement
+    from lms200_fake_port import answer, fake_port, reply
+
+    def frame(value: int, status: int) -> bytes:
+        return reply(encode_measurement(np.full(361, value, np.uint16), "mm", status))
+
+    statuses = [0x10, 0x13, 0x11, 0x14, 0x50, 0x12, 0x90, 0x17, 0x10]  # ok, error, info, fatal, implausible, ...
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":
+            return [*answer(payload), (0.05, b"".join(frame(1000 + i, s) for i, s in enumerate(statuses)))]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False)
+    got = [round(float(scan.ranges[0]) * 1000) for scan in itertools.islice(lms.scans(), 5)]  # mm
+    assert got == [1000, 1002, 1005, 1006, 1008]  # old: 1000, 1001, 1002, ... every scan
+    assert (lms.stats.flagged, lms.stats.decode_errors, lms.stats.scans) == (4, 4, 5)
+    lms.close()
+
+
+def test_scans_with_idle_s_yields_none_while_the_device_is_silent() -> None:
+    """``idle_s``: a None after that long without a scan, and every ``idle_s`` after it, so that a
+    consumer (the bag recorder) can write out what it holds while a device sends nothing."""
+    dev = VirtualLMS200(source()[:2], time_scale=SCALE)  # two scans, then silence
+    with TcpServer(dev) as ad, LMS200(ad.url) as lms:
+        got, start = [], time.monotonic()
+        for item in lms.scans(stall_timeout=5.0, idle_s=0.1):
+            got.append(item if item is None else len(item))
+            if got.count(361) == 2 and got[-3:] == [None, None, None]:  # a busy machine may put a None between the scans
+                break
+        took = time.monotonic() - start
+    assert [g for g in got if g is not None] == [361, 361] and got[-3:] == [None, None, None]
+    assert took > 0.25  # the three Nones after the last scan come idle_s apart, not at once

@@ -183,3 +183,21 @@ def test_encode_scan_takes_every_variant_float32_angles_included() -> None:
             back = decode_scan(encode_scan(Scan(np.full(n, 2.5), a, i, 0.0, 8.0)))
             assert len(back) == n and back.angle_min == pytest.approx(amin, abs=1e-12)
             assert back.angle_increment == pytest.approx(inc, rel=1e-12) and (back.ranges == 2.5).all()
+
+
+@pytest.mark.parametrize("status, problem", [
+    (0x13, "status 0x13: an error"), (0x14, "status 0x14: a fatal error"), (0x16, "status 0x16: undefined level 6"),
+    (0x50, "status 0x50: implausible measured values"), (0xD4, "status 0xD4: a fatal error and implausible measured values"),
+])
+def test_a_scan_whose_status_byte_says_its_values_are_not_to_be_used_is_refused(status: int, problem: str) -> None:
+    """Found by fuzzing: decode_scan took the values of a scan whose STATUS byte (bits 0-2: 0 ok,
+    1 info, 2 warning, 3 error, 4 fatal; bit 6 implausible values) said they were not to be used."""
+    from lms200.errors import LmsStatusError
+    from lms200.protocol import encode_measurement
+
+    payload = encode_measurement(np.full(181, 1000, np.uint16), "mm", status)
+    with pytest.raises(LmsStatusError, match=f"^0xB0 scan with {problem}: its values are not to be used$") as info:
+        decode_scan(payload)
+    assert isinstance(info.value, LmsProtocolError)
+    for fine in (0x10, 0x11, 0x12, 0x90, 0x00):  # ok, info, warning, pollution (a dirty front screen), no flag
+        assert decode_scan(encode_measurement(np.full(181, 1000, np.uint16), "mm", fine)).ranges[0] == 1.0

@@ -92,6 +92,33 @@ def test_an_output_file_held_by_another_command_is_refused(tmp_path, capsys):
         proc.communicate()
 
 
+def test_an_output_file_of_a_name_near_255_bytes_is_still_guarded(tmp_path, capsys):
+    """An output file named near the file system's longest name (255 bytes): its lock's name,
+    ``.NAME.lmsbench-lock``, was too long (ENAMETOOLONG), so both runs went on unguarded (the second
+    run got to opening its port: "cannot open socket://127.0.0.1:9 ..."). The lock's name is cut and
+    carries a hash of the whole name then, so the second run is refused as for any other name."""
+    import hashlib
+
+    name = "r" * 250 + ".clf"  # 254 bytes: a name the file system takes
+    target = tmp_path / name
+    code = ("import sys, time\nfrom pathlib import Path\nfrom experiments.options import check_out_file, holding_outputs\n"
+            "holding_outputs()\ncheck_out_file(Path(sys.argv[1]))\nprint('held', flush=True)\ntime.sleep(60)\n")
+    proc = subprocess.Popen([sys.executable, "-c", code, str(target)], cwd=REPO, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None and proc.stdout.readline() == "held\n", proc.communicate()
+        assert main(["lms200", "record", "--port", "socket://127.0.0.1:9", "--out", str(target)]) == 2
+        err = capsys.readouterr().err
+        assert err == (f"lmsbench lms200 record: error: --out {target}: another lmsbench command (pid {proc.pid}) "
+                       "is writing there; wait for it to end, or give another path\n")
+        lock = "." + "r" * (255 - 2 - 16 - len(".lmsbench-lock")) + "." + hashlib.sha256(name.encode()).hexdigest()[:16] \
+            + ".lmsbench-lock"
+        assert len(lock) == 255 and [p.name for p in tmp_path.iterdir()] == [lock]
+    finally:
+        proc.kill()
+        proc.communicate()
+
+
 def test_a_stale_lock_file_beside_an_output_file_is_taken_and_removed(tmp_path, capsys):
     """A killed run's hidden lock file holds no lock: the next run takes it and removes it as it ends."""
     target = tmp_path / "scans.clf"
@@ -209,3 +236,63 @@ def test_a_command_on_another_thread_keeps_its_hold(tmp_path):
         done.set()
         thread.join(30)
     assert not out.exists()  # made for the lock, left empty: removed as the first ended
+
+
+def test_files_written_whole_under_a_name_near_255_bytes_get_a_short_temporary_name(tmp_path):
+    """An output named near the file system's longest name (255 bytes): the hidden temporary file it
+    is written through (``.NAME.PID.tmp``, ``.NAME.XXXXXXXX.tmp.gz``) had a name too long to make, so
+    `calibrate --out NAME.yaml` failed after its work ("....yaml.29521.tmp: file name too long") and
+    ``write_log`` raised OSError. The temporary name is shortened as the lock's is; a killed run's
+    leftover of that name is still found."""
+    from experiments.provenance import leftover_temporaries, write_record
+    from lms200 import Record, Scan, read_log, write_log
+
+    out = tmp_path / ("c" * 250 + ".yaml")  # 255 bytes
+    write_record(out, "a: 1\n")
+    assert out.read_text() == "a: 1\n" and [p.name for p in tmp_path.iterdir()] == [out.name]
+    seen = []
+    write_record(out, lambda tmp: seen.append(tmp.name) or tmp.write_text("a: 2\n"))
+    assert out.read_text() == "a: 2\n" and len(seen[0].encode()) <= 255 and seen[0].startswith(".ccc")
+    left = tmp_path / seen[0].replace(f".{os.getpid()}.tmp", ".4194303.tmp")  # as a killed run leaves it
+    left.write_text("cut")
+    assert leftover_temporaries(out) == [left]
+
+    log = tmp_path / ("d" * 245 + ".clf.gz")  # 252 bytes
+    assert write_log(log, [Record(Scan.lms200([1.0] * 361, stamp=float(i))) for i in range(3)]) == 3
+    assert [r.scan.stamp for r in read_log(log)] == [0.0, 1.0, 2.0]
+
+
+def test_the_library_refuses_a_name_longer_than_255_bytes_as_an_input_error(tmp_path):
+    """read_log, write_log, read_tum and write_tum of a path whose name passes 255 bytes raised a raw
+    OSError ("[Errno 36] File name too long") from their first look at it: an InputError naming the
+    argument now, as for any other bad path."""
+    from lms200 import Record, Scan, read_log, read_tum, write_log, write_tum
+    from lms200.errors import InputError
+
+    name = "x" * 300
+    calls = [lambda: read_log(tmp_path / f"{name}.clf"), lambda: read_tum(tmp_path / f"{name}.tum"),
+             lambda: write_log(tmp_path / f"{name}.bag", [Record(Scan.lms200([1.0] * 361))]),
+             lambda: write_tum(tmp_path / name / "t.tum", [0.0], [[0.0, 0.0, 0.0]])]
+    for call in calls:
+        with pytest.raises(InputError, match=r"^path: a name of 30\d bytes \(x{40}\.\.\.\), longer than a file system "
+                                             r"takes \(255\); give a shorter one$"):
+            call()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_shortened_hidden_name_is_not_cut_within_a_utf8_character(tmp_path):
+    """``hidden_stem`` cut a long name's bytes where the count fell: within a two-byte character
+    (``é``), which left a lone 0xC3 byte in the lock's and temporary file's names (a name no UTF-8
+    reader takes; a killed run leaves it behind). It stops at the character before."""
+    from experiments.options import lock_file
+    from lms200.logs import hidden_stem
+
+    out = tmp_path / ("é" * 125 + ".yaml")  # 255 bytes
+    stem = hidden_stem(out, len(".lmsbench-lock"))
+    stem.encode("utf-8")  # no lone surrogate escape
+    assert stem.startswith(".éé") and len(os.fsencode(stem)) + len(".lmsbench-lock") <= 255
+    name = lock_file(out).name
+    name.encode("utf-8")
+    assert name.endswith(".lmsbench-lock") and len(os.fsencode(name)) <= 255
+    for odd in range(1, 3):  # either parity of the cut
+        hidden_stem(tmp_path / ("x" * odd + "é" * 125), 14).encode("utf-8")

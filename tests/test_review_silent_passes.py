@@ -66,6 +66,40 @@ def test_fixed_writes_huge_numbers_with_an_exponent_and_others_as_before() -> No
     assert fixed(1e308) == "1e+308" and fixed(-1.5e300, 3) == "-1.5e+300"
 
 
+def test_fixed_writes_a_tiny_number_in_significant_digits_not_as_zero() -> None:
+    """A value not 0 that the decimals show as 0 (an angle increment of 1e-290 rad: "0.0000 deg")
+    is written in significant digits; 0 and values the decimals show stay as they were."""
+    from lms200.finite import fixed
+
+    assert fixed(5.729577951308232e-289, 4) == "5.73e-289" and fixed(-1e-7) == "-1e-07" and fixed(4e-5, 4) == "4e-05"
+    assert fixed(0.0, 4) == "0.0000" and fixed(5e-5, 4) == "0.0001" and fixed(0.5, 4) == "0.5000" and fixed(0.04, 1) == "0.04"
+
+
+def test_calibrate_and_info_show_a_tiny_resolution_as_it_is(tmp_path: Path, capsys) -> None:  # noqa: ANN001
+    """A CARMEN log declaring an angular resolution of 1e-290 rad: calibrate said "angular resolution
+    0.0000 deg: the LMS200 model has 0.25, 0.5 or 1 deg" and info "resolution 0.000 deg", a value the
+    log does not hold."""
+    import numpy as np
+
+    from experiments.cli import main
+    from lms200 import Record, Scan, write_log
+
+    log = tmp_path / "tiny.clf"
+    write_log(log, [Record(Scan(np.full(361, 2.0), -0.1, 0.5 * np.pi / 180, 0.0, 8.0, stamp=0.2 * i)) for i in range(20)])
+    lines = log.read_text().splitlines(keepends=True)
+    for k, line in enumerate(lines):  # the geometry of 361 beams 1e-290 rad apart, as written by hand
+        if line.startswith("ROBOTLASER1 "):
+            words = line.split(" ")
+            words[3:5] = ["3.6e-288", "1e-290"]
+            lines[k] = " ".join(words)
+    log.write_text("".join(lines))
+    assert main(["calibrate", str(log), "--out", str(tmp_path / "s.yaml")]) == 2
+    assert capsys.readouterr().err == (f"lmsbench calibrate: error: {log}: angular resolution 5.73e-289 deg: the LMS200 "
+                                       "model has 0.25, 0.5 or 1 deg\n")
+    assert main(["info", str(log)]) == 0
+    assert "\n  resolution      5.73e-289 deg\n" in capsys.readouterr().out
+
+
 def test_a_tum_stamp_near_1e308_is_quoted_compactly(tmp_path: Path) -> None:
     """'TUM stamps go backwards (1.000000 s after 1000000000000000010979063629440455417404923096773118...'"""
     from lms200 import read_tum
@@ -95,11 +129,12 @@ def test_slam_and_info_quote_a_stamp_near_1e308_compactly(tmp_path: Path, capsys
 
 
 def test_a_robotlaser_header_of_1e300_steps_is_quoted_compactly(tmp_path: Path) -> None:
-    """'which holds 10000000000000000525047602552044202487...0.0 steps' (301 digits)."""
+    """'which holds 10000000000000000525047602552044202487...0.0 steps' (301 digits); and its resolution
+    of 1e-290 rad was 'at 0.0000 deg'."""
     log = tmp_path / "rl.log"
     log.write_text("ROBOTLASER1 0 -1 1e10 1e-290 80 0.01 0 3 2 2 2 0 0 0 0 0 0 0 0 0 0 0 0 1 h 1\n")
     with pytest.raises(LogFormatError, match=r"rl\.log:1: malformed ROBOTLASER1 line: declares a field of view of "
-                                             r"572957795130\.823 deg at 0\.0000 deg, which holds 1e\+300 steps, but "
+                                             r"572957795130\.823 deg at 5\.73e-289 deg, which holds 1e\+300 steps, but "
                                              r"carries 3 beams \(fov must be n or n - 1 steps\)$"):
         list(read_log(log))
 

@@ -243,3 +243,32 @@ def test_a_route_whose_targets_nearly_coincide_is_refused_not_toured_for_ever() 
     with pytest.raises(LmsbenchError, match=r"world 'close': a tour of [0-9.]+ m would pass more than 200,000 route "
                                             r"nodes \(its route targets are too close together"):
         robot_tour(w, seed=0, duration=2.0)
+
+
+def test_a_world_json_key_given_twice_or_misspelt_is_refused_naming_it(tmp_path) -> None:
+    """Found by fuzzing: json keeps the last of a key given twice and World.from_json passed over keys
+    it does not read, so a world.json with a second "cylinders": [] or a misspelt "cylinder" was
+    simulated without its pillars (`simulate --world` wrote a world.json of 0 cylinders), exit 0."""
+    w = make_world("office", seed=0)
+    text = json.dumps(w.to_dict())
+    assert len(w.cylinders) == 4
+    for bad, message in ((text[:-1] + ', "cylinders": []}', r"not a world\.json \(key 'cylinders' given twice"),
+                         (text.replace('"cylinders"', '"cylinder"'),
+                          r"not a world\.json \(unknown key\(s\) \['cylinder'\] \('cylinder' for 'cylinders'\?\): a world\.json "
+                          r"has name, seed, scan_height, walls, circles"),
+                         ('{"walls": [[0, 0, 0, 4]], "boxes": [], "route_nodes": {"a": 1, "a": 2}}', r"key 'a' given twice")):
+        (tmp_path / "w.json").write_text(bad)
+        with pytest.raises(LmsbenchError, match=message):
+            World.from_json(tmp_path / "w.json")
+    (tmp_path / "w.json").write_text(text)
+    assert len(World.from_json(tmp_path / "w.json").cylinders) == 4
+
+
+def test_a_world_json_seed_that_is_no_whole_number_is_refused() -> None:
+    """Found by fuzzing: a world.json's seed went through int(), so 1.5 was the world of seed 1 and
+    true seed 1, without a word; World itself refuses them (lms200.finite.check_seed)."""
+    text = json.dumps(make_world("office", seed=0).to_dict())
+    for seed in ("1.5", "true", "\"2\""):
+        with pytest.raises(LmsbenchError, match=r"not a world\.json \(InputError: seed: must be a whole number >= 0, got "):
+            World.from_json("w.json", data=text.replace('"seed": 0', f'"seed": {seed}').encode())
+    assert World.from_json("w.json", data=text.replace('"seed": 0', '"seed": 7').encode()).seed == 7

@@ -184,8 +184,14 @@ def test_slam_refuses_a_world_json_wall_simulate_and_compare_refuse_before_the_r
 @pytest.mark.parametrize("name, content, message", [
     ("groundtruth.tum", None, "{f} is a folder, not a TUM file"),
     ("world.json", None, "{f} is a folder, not a world.json"),
-    ("world.json", "[1, 2]", "{f}: no wall list (list indices must be integers or slices, not str)"),
-    ("world.json", "null", "{f}: no wall list ('NoneType' object is not subscriptable)"),
+    ("world.json", "[1, 2]", "{f}: not a world.json (the top level is a list, not a mapping of walls, boxes, ...)"),
+    ("world.json", "null", "{f}: not a world.json (the top level is a NoneType, not a mapping of walls, boxes, ...)"),
+    # a key given twice or misspelt (found by fuzzing): the walls left out of the map's score, silently
+    ("world.json", '{"walls": [[0, 0, 1, 0]], "walls": []}',
+     "{f}: not a world.json (key 'walls' given twice (the last would be taken, silently))"),
+    ("world.json", '{"walls": [[0, 0, 1, 0]], "circle": []}',
+     "{f}: not a world.json (unknown key(s) ['circle'] ('circle' for 'circles'?): a world.json has name, seed, "
+     "scan_height, walls, circles, corners, boxes, cylinders, route_nodes, route_edges, route_targets, glass)"),
     ("world.json", '{"walls": {"a": 1}}', "{f}: no wall list (float() argument must be a string or a real number, not 'dict')"),
 ])
 def test_a_simulate_folder_whose_truth_or_world_is_a_folder_or_no_mapping_is_refused(sim_folder, tmp_path, capsys,
@@ -231,10 +237,11 @@ def test_a_ground_truth_beside_none_of_the_scans_is_refused_before_the_run(sim_f
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("content", ["", "# timestamp x y z qx qy qz qw\n\n"])
-def test_a_ground_truth_of_no_poses_is_refused_before_the_run(sim_folder, tmp_path, capsys, content):
+@pytest.mark.parametrize("content, held", [("", "an empty file (0 bytes)"),
+                                           ("# timestamp x y z qx qy qz qw\n\n", "holds only blank or comment lines (2)")])
+def test_a_ground_truth_of_no_poses_is_refused_before_the_run(sim_folder, tmp_path, capsys, content, held):
     """An emptied or cut groundtruth.tum (no row) was "internal error: IndexError: index 0 is out of
-    bounds for axis 0 with size 0", exit 1 (the span check read its first row)."""
+    bounds for axis 0 with size 0", exit 1 (the span check read its first row); read_tum refuses it."""
     import shutil
 
     from experiments.cli import main
@@ -244,9 +251,8 @@ def test_a_ground_truth_of_no_poses_is_refused_before_the_run(sim_folder, tmp_pa
     (run / "groundtruth.tum").write_text(content)
     assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet", "--max-scans", "5"]) == 2
     assert capsys.readouterr().err.strip().splitlines() == [
-        f"lmsbench slam: error: {run / 'groundtruth.tum'}: holds no poses (empty, or comments only: a cut or emptied "
-        "file); scoring against it needs the true poses over the scans' stamps (without it, the scans' own TRUEPOS "
-        "lines are the reference, where they have them)"]
+        f"lmsbench slam: error: {run / 'groundtruth.tum'}: no poses: {held}; a TUM file holds a row t x y z qx qy qz qw "
+        "per pose (a cut or emptied file?)"]
     assert not (tmp_path / "o").exists()
 
 
@@ -914,3 +920,21 @@ def test_slam_config_refuses_an_icp_scale_that_breaks_the_run(sim_folder, tmp_pa
     err = capsys.readouterr().err
     assert re.fullmatch(rf"lmsbench slam: error: {re.escape(str(config))}: {message}\n", err), err
     assert not out.exists()
+
+
+def test_a_slam_run_of_a_log_named_like_a_boolean_word_reruns_into_its_folder(sim_folder, tmp_path, capsys, monkeypatch):
+    """config.yaml was written with yaml.safe_dump, which leaves ``n`` and ``y`` unquoted (text to
+    PyYAML): a run on a log named ``n`` wrote ``log: n``, which the loader refuses as a YAML 1.1
+    boolean word, so the next run into that --out took the folder for none of slam's ("holds
+    config.yaml, ... no earlier lmsbench slam run wrote"). lmsbench's YAML writer quotes them."""
+    import shutil
+
+    from experiments.cli import main
+    from lms200.yamlio import load
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copyfile(sim_folder / "scans.clf", tmp_path / "n")
+    for _ in range(2):
+        assert main(["slam", "n", "--out", "o", "--quiet", "--max-scans", "5"]) == 0, capsys.readouterr().err
+    assert "input:\n  scans: 'n'\n" in (tmp_path / "o" / "config.yaml").read_text()
+    assert load((tmp_path / "o" / "config.yaml").read_text())["input"]["scans"] == "n"

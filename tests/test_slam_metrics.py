@@ -244,3 +244,26 @@ def test_tum_and_relations_readers_bound_a_line_and_refuse_underscores_and_huge_
     rel.write_text("0 1 1 0 0 0 0 0\n1 2 1 -2e200 0 0 0 0\n")
     with pytest.raises(LogFormatError, match=r"r\.relations:2: relation row's x or y is beyond \+-1e\+09 m"):
         read_relations(rel)
+
+
+def test_tum_and_relations_files_saved_with_a_byte_order_mark_read_as_without_it(tmp_path):
+    """Found by fuzzing: a TUM or relations file saved by a Windows editor (a UTF-8 byte-order mark
+    before its first line) was refused: the mark read as three replacement characters, so a TUM
+    header comment was 'rows need 8 entries ..., got 9' and a first row 'a non-number'. It is
+    skipped, as the CARMEN reader skips it; a mark anywhere else is still a non-number."""
+    from lms200.tum import read_tum
+
+    bom = "\ufeff".encode()
+    rows = b"1.0 0 0 0 0 0 0 1\n2.0 1 0.5 0 0 0 0.7071067811865476 0.7071067811865476\n"
+    for text in (b"# t x y z qx qy qz qw\n" + rows, rows):
+        tum = tmp_path / "bom.tum"
+        tum.write_bytes(bom + text)
+        stamps, poses = read_tum(tum)
+        assert stamps.tolist() == [1.0, 2.0]
+        assert poses.ravel().tolist() == pytest.approx([0.0, 0.0, 0.0, 1.0, 0.5, np.pi / 2])
+    rel = tmp_path / "bom.relations"
+    rel.write_bytes(bom + b"10 11 0.3 0.02 0 0 0 0.24\n")
+    assert read_relations(rel).tolist() == [[10.0, 11.0, 0.3, 0.02, 0.24]]
+    tum.write_bytes(rows + bom + rows)
+    with pytest.raises(LogFormatError, match=r"bom\.tum:3: TUM row has a non-number"):
+        read_tum(tum)

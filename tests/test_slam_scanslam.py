@@ -335,3 +335,18 @@ def test_sandwich_information_equals_its_formula_and_the_gaussian_limit():
     ratio = np.linalg.eigvals(np.linalg.solve(H / sigma**2, got)).real
     assert np.all(np.abs(ratio - 1.0) < 0.25)
     assert not icpkernel.sandwich(H, B, 3).any()
+
+
+def test_the_odometry_retry_gate_passes_a_heading_slip_and_refuses_a_slide():
+    """A retry that turned beyond the odometry's heading gate found a slip (any position goes); one
+    that kept the odometry's heading must keep its position within the odometry's gate too."""
+    from slam.config import MotionConfig
+
+    slam = ScanSlam(motion=MotionConfig(use_odometry=True, odom_retry_gate=True))
+    slam.last = [(0.0, np.zeros(3))]
+    within = slam._odometry_gate(np.array([1.0, 0.0, 0.0]), 0.11, 0.07)  # a 1 m step's std
+    # position gate sqrt(chi2(0.999, 2)) * 0.11 = 0.41 m; heading gate sqrt(chi2(0.999, 1)) * 0.07 = 0.23 rad
+    assert within(np.array([1.3, 0.2, 0.1]))  # 0.36 m off, heading agrees
+    assert not within(np.array([1.6, 0.0, 0.05]))  # 0.6 m along, heading agrees: a slide
+    assert within(np.array([1.6, 0.0, 0.5]))  # 0.6 m off with a 0.5 rad heading slip
+    assert not within(np.array([1.0, 0.45, -0.2]))

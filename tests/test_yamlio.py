@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime
+import re
 
 import pytest
 
@@ -135,3 +136,134 @@ def test_numbers_read_as_before() -> None:
                    "l": 1000.0, "m": 0.0, "n": 1.5, "o": 1.0, "p": float("inf"), "q": float("-inf"), "r": "09", "s": "1:60",
                    "t": "a:b", "u": "_1", "v": "1_0", "w": "1:30", "x": datetime.date(2026, 1, 2)}
     assert [type(got[k]) for k in "adfghij"] == [int] * 7 and [type(got[k]) for k in "bcekl"] == [float] * 5
+
+
+def test_a_whole_number_beyond_float64s_range_is_refused_at_its_place(tmp_path, capsys) -> None:
+    """Found by fuzzing configs: a whole number of 401 digits (below Python's 4300-digit limit) loaded
+    as an int, and failed where a setting was cast to float: `simulate --config` with such a duration
+    or rate_hz said 'internal error: OverflowError: int too large to convert to float', exit 1. Every
+    YAML the project reads refuses it at its line; the largest float64-sized ones load as before."""
+    from experiments.cli import main
+
+    big = "1" + "0" * 400
+    for text, place in ((f"duration: {big}\n", "line 1, column 11: a whole number of 401"),
+                        (f"a: [1, {{b: -{big}}}]\n", "line 1, column 12: a whole number of 402"),
+                        (f"? {big}\n: 3\n", "line 1, column 3: a whole number of 401")):
+        with pytest.raises(yaml.YAMLError) as info:
+            load(text)
+        assert str(info.value) == f"{place} characters, beyond float64's range, +-1.8e308: no setting takes it"
+    assert load(f"a: {'1' + '0' * 308}\nb: {-(2**1023)}\n") == {"a": 10**308, "b": -(2**1023)}
+    config = tmp_path / "config.yaml"
+    config.write_text(f"world: office\nduration: {big}\n")
+    assert main(["simulate", "--config", str(config), "--out", str(tmp_path / "run"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "line 2, column 11: a whole number of 401 characters, beyond float64's range" in err
+    assert not (tmp_path / "run").exists()
+
+
+BOOL_TEXT = "is read as text here, but is YAML 1.1's boolean word for"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("deskew: yes\n", "line 1, column 9: key 'deskew': yes is read as true (YAML 1.1), but as text by YAML 1.2"),
+    ("a: 1\ninterlaced: No\n", "line 2, column 13: key 'interlaced': No is read as false (YAML 1.1), but as text by YAML 1.2"),
+    ("sensor: {flag: ON}\n", "line 1, column 16: key 'flag': ON is read as true (YAML 1.1), but as text by YAML 1.2"),
+    ("grid:\n  mode: [true, off]\n", "line 2, column 16: key 'mode', item 2: off is read as false (YAML 1.1), but as text by YAML 1.2"),
+    ("k: y\n", f"line 1, column 4: key 'k': y {BOOL_TEXT} true"),
+    ("k: N\n", f"line 1, column 4: key 'k': N {BOOL_TEXT} false"),
+    ("k: yEs\n", f"line 1, column 4: key 'k': yEs {BOOL_TEXT} true"),
+    ("k: &a on\n", "line 1, column 4: key 'k': on is read as true (YAML 1.1), but as text by YAML 1.2"),
+    ("- [n]\n", f"line 1, column 4: n {BOOL_TEXT} false"),  # no key: the place alone
+    ("yes\n", "line 1, column 1: yes is read as true (YAML 1.1), but as text by YAML 1.2"),  # a --set value
+])
+def test_yaml_1_1_boolean_words_are_refused_at_their_key_and_line(text: str, message: str) -> None:
+    """PyYAML follows YAML 1.1: ``deskew: yes`` / ``no`` / ``on`` / ``off`` read as True / False,
+    silently (``simulate --config`` with ``sensor: {interlaced: no}`` ran, exit 0), where YAML 1.2,
+    Python and the command line read text; ``y`` and ``n`` it reads as text, where YAML 1.1 has a
+    boolean. Each, in any case, written unquoted as a value is refused naming the key and line;
+    quoted it is text, and true / false read as before."""
+    from lms200.yamlio import Malformed
+
+    value = message.split(": ")[-1].split(" ")[0]
+    with pytest.raises(Malformed) as info:
+        load(text)
+    assert str(info.value) == f"{message}; write true or false, or quote it ('{value}') for text"
+    quoted = re.sub(rf"\b{value}\b", f"'{value}'", text)
+    assert quoted.count("'") == 2 and f"'{value}'" in repr(load(quoted))  # quoted: text
+
+
+def test_true_false_quoted_and_tagged_words_and_keys_read_as_before() -> None:
+    """Only an unquoted, untagged boolean word as a value is refused: true / false in any of
+    YAML's spellings, a quoted or explicitly tagged word, text that merely starts like one, and a
+    key read as they did."""
+    text = ("a: true\nb: False\nc: TRUE\nd: 'yes'\ne: \"off\"\nf: !!str no\ng: !!bool yes\nh: none\ni: yess\nj: [true, 'n']\n"
+            "on: 1\n")
+    assert load(text) == {"a": True, "b": False, "c": True, "d": "yes", "e": "off", "f": "no", "g": True, "h": "none",
+                          "i": "yess", "j": [True, "n"], True: 1}
+
+
+def test_dump_quotes_what_load_refuses_plain_so_its_text_reads_back() -> None:
+    """yaml.safe_dump wrote the text ``n``, ``y`` (and ``yEs``) plain, as PyYAML reads them as text;
+    the loader refuses them as YAML 1.1 boolean words, so a config lmsbench wrote (a grid of
+    ``['y', 'n']``, a log named ``n``) was refused when read back. ``yamlio.dump`` quotes them."""
+    from lms200.yamlio import dump
+
+    data = {"grid": ["y", "n", "Y", "N", "yEs", "no", "On", "OFF", "true", True, False, "none", "ny", 1, 1.5], "n": "y"}
+    text = dump(data, sort_keys=False)
+    assert text.startswith("grid:\n- 'y'\n- 'n'\n- 'Y'\n- 'N'\n- 'yEs'\n- 'no'\n- 'On'\n- 'OFF'\n- 'true'\n- true\n- false\n- none\n")
+    assert load(text) == data
+
+
+def test_a_merged_key_that_is_a_boolean_word_reads_as_a_written_one() -> None:
+    """A key such as ``on:`` is read as PyYAML reads it; brought in by a merge (``<<``) it was
+    refused as a value ("on is read as true"), since the merge's keys were not marked as keys."""
+    assert load("a:\n  <<: {on: 1}\n  b: 2\n") == {"a": {True: 1, "b": 2}}
+    assert load("base: &b {on: 1}\na:\n  <<: *b\n") == {"base": {True: 1}, "a": {True: 1}}
+    with pytest.raises(yaml.YAMLError, match="no is read as false"):
+        load("a:\n  <<: {x: no}\n")  # a merged value is still one
+
+
+def test_words_reads_yaml_not_written_for_lmsbench_as_pyyaml_does() -> None:
+    """``load(text, words=True)``: a ROS 2 bag's metadata.yaml (rosbag2 writes it) and the records
+    an earlier version wrote with yaml.safe_dump (``scans: n`` plain) read as PyYAML reads them."""
+    text = "custom_data: {operator: n, heated: yes}\nscans: y\n"
+    with pytest.raises(yaml.YAMLError, match="YAML 1.1"):
+        load(text)
+    assert load(text, words=True) == {"custom_data": {"operator": "n", "heated": True}, "scans": "y"}
+    with pytest.raises(yaml.YAMLError, match="octal"):  # the other checks stay
+        load("seed: 010\n", words=True)
+
+
+def test_a_ros2_bag_whose_metadata_holds_a_boolean_word_is_read_by_the_command_line(tmp_path, capsys) -> None:
+    """check_log read a ROS 2 bag's metadata.yaml with the loader that refuses YAML 1.1's boolean
+    words, so `info BAG` refused a bag whose metadata held ``operator: n`` (custom data rosbag2
+    writes as given), which read_log and rosbags read (review)."""
+    from experiments.cli import main
+    from lms200 import Record, Scan, read_log
+    from lms200.bag import write_bag
+
+    bag = tmp_path / "r2"
+    write_bag(bag, [Record(Scan.lms200([1.0 + 0.01 * i] * 361, stamp=float(i))) for i in range(3)])
+    meta = bag / "metadata.yaml"
+    text = meta.read_text()
+    assert text.count("  custom_data: null\n") == 1
+    meta.write_text(text.replace("  custom_data: null\n", "  custom_data:\n    operator: n\n    heated: no\n"))
+    assert len(list(read_log(bag))) == 3
+    assert main(["info", str(bag)]) == 0, capsys.readouterr().err
+    assert "scans           3" in capsys.readouterr().out
+
+
+def test_a_slam_folder_an_earlier_version_wrote_with_a_plain_n_is_rerun_into(tmp_path, capsys, monkeypatch) -> None:
+    """An earlier version wrote config.yaml with yaml.safe_dump (``scans: n`` plain): the check of
+    --out read it with the loader that refuses ``n``, and took the folder for none of slam's ("no
+    earlier lmsbench slam run wrote"); a record is read as PyYAML reads it (review)."""
+    from experiments.cli import main
+    from lms200 import Record, Scan, write_log
+
+    monkeypatch.chdir(tmp_path)
+    write_log(tmp_path / "n", [Record(Scan.lms200([2.0] * 361, stamp=0.1 * i)) for i in range(5)])
+    assert main(["slam", "n", "--out", "o", "--quiet"]) == 0, capsys.readouterr().err
+    cfg = tmp_path / "o" / "config.yaml"
+    cfg.write_text(cfg.read_text().replace("scans: 'n'", "scans: n"))  # as yaml.safe_dump wrote it
+    assert "scans: n\n" in cfg.read_text()
+    assert main(["slam", "n", "--out", "o", "--quiet"]) == 0, capsys.readouterr().err

@@ -8,6 +8,7 @@ import importlib
 import pkgutil
 
 from lms200 import LmsbenchError
+from lms200.yamlio import dump as dump_yaml
 
 from experiments import benchmarks
 from experiments.options import BENCH_OUTPUTS, BENCH_OWNER, check_out, path_arg
@@ -63,15 +64,13 @@ def run(args: argparse.Namespace) -> int:
             print("   " + ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()), flush=True)
     import pandas as pd  # here, not at import: every `lmsbench` start (even --help) loads this module
 
-    import yaml
-
     from experiments.provenance import link_latest, new_run_folder, versions, write_record
 
     run_folder = args.out is None  # results/bench/DATE_TIME, linked as latest once its files are written
     args.out = args.out or new_run_folder("results/bench", now=started)
     # versions.yaml first, whole: it tells the folder as bench's (options.BENCH_OWNER); a run stopped
     # while writing bench.csv left a folder the next run into it refused (a cut bench.csv too)
-    write_record(args.out / "versions.yaml", yaml.safe_dump(dict(benchmarks=names, quick=args.quick, versions=versions()),
+    write_record(args.out / "versions.yaml", dump_yaml(dict(benchmarks=names, quick=args.quick, versions=versions()),
                                                             sort_keys=False))
     write_record(args.out / "bench.csv", lambda p: pd.DataFrame(rows).to_csv(p, index=False))  # a record too
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)

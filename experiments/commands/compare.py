@@ -13,6 +13,7 @@ import yaml
 
 from lms200 import LmsbenchError
 from lms200.timing import check_scan_rate
+from lms200.yamlio import dump as dump_yaml
 
 from experiments.overrides import check_set_once, set_option
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options, report_skipped
@@ -199,7 +200,7 @@ def run(args: argparse.Namespace) -> int:
     _remove_earlier_outputs(args.out, args.format)
     # config.yaml first, whole: it tells the folder as compare's (options.COMPARE_OWNER); a run stopped
     # after compare.parquet left a folder the next run into it refused
-    write_record(args.out / "config.yaml", yaml.safe_dump(resolved, sort_keys=False))
+    write_record(args.out / "config.yaml", dump_yaml(resolved, sort_keys=False))
     path = args.out / f"compare.{args.format}"
     if args.format == "parquet":
         table.to_parquet(path, index=False)

@@ -6,6 +6,8 @@ import argparse
 import datetime
 from pathlib import Path
 
+from lms200.yamlio import dump as dump_yaml
+
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options
 from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log, real_path,
                                  check_methods, check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name,
@@ -184,11 +186,10 @@ def _nothing_to_plot(folder: Path) -> str:
 def _record(args: argparse.Namespace) -> str:
     """figures.yaml: what drew the figures of its folder (options.FIGURES_OWNER tells the folder by
     it): a figure and its CSV say nothing of lmsbench, and ``--tables T --out DIR`` writes no table."""
-    import yaml
 
     from experiments.provenance import versions
 
     record = {"command": "lmsbench figures", "tables": str(args.tables) if args.tables else "tables (computed by this run)",
               "sweeps": [str(folder) for folder in args.sweep], "versions": versions()}
     return ("# what drew the figures in this folder; lmsbench figures --out replaces its files only beside this record\n"
-            + yaml.safe_dump(record, sort_keys=False))
+            + dump_yaml(record, sort_keys=False))

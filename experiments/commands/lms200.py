@@ -150,9 +150,15 @@ class _Progress:
             print(text, file=sys.stderr, flush=True)
 
 
+#: s: while the device sends nothing, the records give a None this often, so that the bag writer
+#: writes out the scans it holds on time (``write_bag(flush_s=...)``), not at the next scan
+IDLE_TICK_S = 0.1
+
+
 def _records(dev: LMS200, progress: _Progress, stop: dict, max_scans: int | None,
-             duration: float | None) -> Iterator[Record]:
-    """Records from the device until Ctrl-C, the scan limit or the duration. A device error (a
+             duration: float | None) -> Iterator[Record | None]:
+    """Records from the device until Ctrl-C, the scan limit or the duration, and a None every
+    IDLE_TICK_S while none comes (see ``write_bag``). A device error (a
     timeout, a lost connection) ends the records as a stop does, so the file is closed with every
     scan before it (a bag that an exception leaves open is not indexed, and unreadable), and is
     kept in ``stop["error"]`` for the caller to report."""
@@ -162,7 +168,11 @@ def _records(dev: LMS200, progress: _Progress, stop: dict, max_scans: int | None
     if max_scans is not None and max_scans <= 0:
         return
     try:
-        for scan in dev.scans(stop=done):
+        for scan in dev.scans(stop=done, idle_s=IDLE_TICK_S):
+            if scan is None:
+                yield None
+                progress.update()
+                continue
             progress.count += 1
             yield Record(scan)
             progress.update()
@@ -172,12 +182,13 @@ def _records(dev: LMS200, progress: _Progress, stop: dict, max_scans: int | None
         stop["error"] = exc
 
 
-def _write(out: Path, records: Iterable[Record]) -> int:
+def _write(out: Path, records: Iterable[Record | None]) -> int:
     if out.suffix == ".bag":
         from lms200.bag import RECORD_FLUSH_S, write_bag
 
-        return write_bag(out, records, flush_s=RECORD_FLUSH_S)  # a killed recording keeps all but its last second
-    return write_carmen(out, records, flush=True)
+        # a killed recording keeps all but its last second, its first scan and the scans before a stall too
+        return write_bag(out, records, flush_s=RECORD_FLUSH_S)
+    return write_carmen(out, (rec for rec in records if rec is not None), flush=True)  # every line flushed
 
 
 class _Counted:
@@ -186,12 +197,12 @@ class _Counted:
     closed with its index on the error), so all but the last one taken, or all once it asked for
     more and there were none."""
 
-    def __init__(self, records: Iterable[Record]) -> None:
+    def __init__(self, records: Iterable[Record | None]) -> None:
         self.records, self.taken, self.done = records, 0, False
 
-    def __iter__(self) -> Iterator[Record]:
+    def __iter__(self) -> Iterator[Record | None]:
         for rec in self.records:
-            self.taken += 1
+            self.taken += rec is not None  # a None is a tick, no record
             yield rec
         self.done = True
 
@@ -283,6 +294,7 @@ def run_record(args: argparse.Namespace) -> int:
         _drop_empty(args.out)
         print(f"recorded no scan; {args.out} not written; device back in on-request mode at 9600 baud")
         return 0
+    flagged = f", {stats.flagged} of them flagged by the device's status byte" if stats.flagged else ""
     print(f"recorded {written} scans to {args.out} ({stats.dropped_frames} frames dropped, "
-          f"{stats.decode_errors} undecodable); device back in on-request mode at 9600 baud")
+          f"{stats.decode_errors} undecodable{flagged}); device back in on-request mode at 9600 baud")
     return 0

@@ -75,9 +75,10 @@ def _config(args: argparse.Namespace):
             raise InputError(f"{args.config}: not a simulate config ({' '.join(str(exc).split())})") from None
         if cfg.world not in known_worlds() and not cfg.world.endswith(".json"):
             raise InputError(f"{args.config}: unknown world {cfg.world!r}; known worlds: {', '.join(known_worlds())}")
-        if not (MIN_DURATION_S <= cfg.duration <= MAX_DURATION_S) or (cfg.rate_hz is not None and not cfg.rate_hz > 0):
-            raise InputError(f"{args.config}: duration must be in [{MIN_DURATION_S:g}, {MAX_DURATION_S:g}] s (shorter "
-                             "holds no scan) and rate_hz > 0")
+        if not MIN_DURATION_S <= cfg.duration <= MAX_DURATION_S:  # the value given was not said (nor which field)
+            why = " (shorter holds no scan)" if cfg.duration < MIN_DURATION_S else ""  # said of a value too long too
+            raise InputError(f"{args.config}: duration: must be in [{MIN_DURATION_S:g}, {MAX_DURATION_S:g}] s{why}, "
+                             f"got {cfg.duration:g}")  # (rate_hz: check_scan_rate below, naming it)
         from sim.worlds import MAX_CLUTTER, check_seed
 
         try:
@@ -131,13 +132,13 @@ def _config(args: argparse.Namespace):
 def run(args: argparse.Namespace) -> int:
     from experiments.simulation import run_simulation
 
-    world = args.world if isinstance(args.world, str) and args.world.endswith(".json") else None
-    # a world.json read is an input too: `simulate --world DIR/world.json --out DIR` wrote world.json over it
+    cfg = _config(args)  # reads and checks the inputs (the config, the sensor YAML), writes nothing
+    # every input against --out at once, the config's world.json too (it was a second check after the
+    # config was read): a world.json read is an input too, `simulate --world DIR/world.json --out DIR`
+    # wrote world.json over it
+    world = cfg.world if cfg.world.endswith(".json") else None
     check_out_spares(args.out, SIMULATE_OUTPUTS, [f for f in (args.config, args.sensor, world) if f is not None])
     check_out(args.out, writes=SIMULATE_OUTPUTS, owner=SIMULATE_OWNER)  # after: an input in --out is the sharper message
-    cfg = _config(args)
-    if cfg.world.endswith(".json"):  # the world.json a --config names
-        check_out_spares(args.out, SIMULATE_OUTPUTS, [cfg.world])
     check_world_file(cfg.world)
     records = run_simulation(cfg, args.out, progress=not args.quiet)
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)

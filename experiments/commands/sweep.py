@@ -91,7 +91,7 @@ def _check_same_sweep(out: Path, name: str) -> None:
     if not record.is_file():
         return
     try:
-        held = load_yaml(record.read_text(encoding="utf-8"))
+        held = load_yaml(record.read_text(encoding="utf-8"), words=True)  # an earlier version's record too
     except (OSError, UnicodeDecodeError, yaml.YAMLError):
         return  # not a record of a sweep: check_out's business
     other = held.get("name") if isinstance(held, dict) else None

@@ -188,7 +188,7 @@ def _sweep_plan(folder: Path) -> tuple[pd.DataFrame, str, list[str], list[str], 
     from experiments.figures.study import read_table
 
     table = read_table(folder / "results.parquet")
-    spec = load_yaml((folder / "sweep.yaml").read_text())
+    spec = load_yaml((folder / "sweep.yaml").read_text(), words=True)  # the sweep's record, an earlier version's too
     name = spec.get("name", folder.name)
     # one name per grid key: parameters linked to it ("a,b") follow it and need no line of their own
     varied = [key.split(",")[0].strip() for key in spec.get("grid", {})]

@@ -8,7 +8,7 @@ figures are then drawn from those files alone (:mod:`experiments.figures.make`).
 from __future__ import annotations
 
 from lms200.angles import wrap
-from lms200.yamlio import load as load_yaml
+from lms200.yamlio import load as load_yaml, dump as dump_yaml
 
 import dataclasses
 import time
@@ -164,7 +164,7 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
         from slam import SlamConfig
 
         settings["resolved"]["slam"] = dataclasses.asdict(SlamConfig())
-    write_record(folder / "study.yaml", yaml.safe_dump(settings, sort_keys=False))
+    write_record(folder / "study.yaml", dump_yaml(settings, sort_keys=False))
     for name, table in tables.items():
         table.to_parquet(folder / f"{name}.parquet", index=False)
     (folder / "notes.txt").write_text("\n".join(notes) + ("\n" if notes else ""))

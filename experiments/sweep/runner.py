@@ -22,12 +22,12 @@ from pathlib import Path
 from typing import Any, Iterator
 
 import pandas as pd
-import yaml
 from tqdm import tqdm
 
 from features.batch import THREADS_ENV
 from lms200 import LmsbenchError
 from lms200.errors import LmsbenchWarning
+from lms200.yamlio import dump as dump_yaml
 
 from .cells import INPUTS_KEY, WARNINGS_KEY, resolve_kind, run_cell
 from .spec import Scalar, SweepSpec, cell_key
@@ -118,7 +118,7 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
             (out / name).unlink(missing_ok=True)  # sweep.yaml, drawn by `figures --sweep` as this one's, exit 0
     write_record(out / "sweep.yaml", record)  # whole: it tells the folder as the sweep's (SWEEP_OWNER)
 
-    (out / "versions.yaml").write_text(yaml.safe_dump(versions(), sort_keys=False))  # of the last run into `out`
+    (out / "versions.yaml").write_text(dump_yaml(versions(), sort_keys=False))  # of the last run into `out`
     digests, seen = getattr(fn, "input_digests", None), {}  # the files a cell reads are part of its key
     inputs = [digests(params, seen) if digests else None for params in cells]
     keys = [cell_key(spec.kind, params, given) for params, given in zip(cells, inputs)]
@@ -289,7 +289,7 @@ SCHEMES = ("tcp://", "tls://", "inproc://", "ucx://", "ws://", "wss://")
 
 def spec_record(spec: SweepSpec) -> str:
     """The text of the ``sweep.yaml`` a run writes into its folder: the sweep as run."""
-    return yaml.safe_dump(spec.to_dict(), sort_keys=False)
+    return dump_yaml(spec.to_dict(), sort_keys=False)
 
 
 def check_executor(executor: Any, workers: int) -> None:

@@ -247,6 +247,11 @@ def _check(spec: SweepSpec) -> None:
     if not _plain_name(spec.name):
         raise SweepSpecError(f"name: {spec.name[:MAX_NAME_CHARS + 20]!r} must be a plain folder name ({NAME_RULE}), "
                              "as it names the output folder results/sweeps/NAME")
+    for part in ("fixed", "grid", "random"):  # `null: 3` or `1: 3` was an internal AttributeError at the kinds' check
+        for key in getattr(spec, part):
+            if not isinstance(key, str) or not all(_names(key)):  # "a,": a linked key of an empty second name
+                raise SweepSpecError(f"{part}: parameter name {key!r} must be text (a name, or names linked by commas, "
+                                     "none of them empty)")
     names = Counter([*spec.fixed, *(n for key in spec.grid for n in _names(key)), *spec.random])
     clashes = sorted({n for n, times in names.items() if times > 1} | ({"seed"} & set(names)))  # one pass (count() was n^2)
     if clashes:
@@ -270,9 +275,9 @@ def _check(spec: SweepSpec) -> None:
             raise SweepSpecError(f"random.{name} must be one of {{{'|'.join(_DISTRIBUTIONS)}: [...]}}, got {dist!r}")
         (law, args), = dist.items()
         numeric = isinstance(args, list) and all(
-            not isinstance(a, bool) and isinstance(a, (int, float)) and math.isfinite(a) for a in args)
+            not isinstance(a, bool) and isinstance(a, (int, float)) and _finite(a) for a in args)
         if law != "choice" and (not numeric or len(args) != 2 or not args[0] <= args[1]):
-            raise SweepSpecError(f"random.{name}: {law} needs [low, high] with low <= high, got {args!r}")
+            raise SweepSpecError(f"random.{name}: {law} needs [low, high], finite numbers with low <= high, got {args!r:.80}")
         if law == "int" and not all(isinstance(a, int) for a in args):
             raise SweepSpecError(f"random.{name}: int needs whole-number bounds [low, high], got {args!r}")
         if law == "int" and not all(-(2**63) <= a < 2**63 for a in args):  # 10**24: numpy's "high is out of bounds"
@@ -283,6 +288,9 @@ def _check(spec: SweepSpec) -> None:
             raise SweepSpecError(f"random.{name}: loguniform needs low > 0, got {args!r}")
         if law == "choice" and (not isinstance(args, list) or not args):
             raise SweepSpecError(f"random.{name}: choice needs a non-empty list, got {args!r}")
+        if law == "choice":  # each a cell's value, as a grid's: a list drawn was an internal TypeError, nan a cell
+            for value in args:
+                _check_scalar(f"random.{name}", value)
     if spec.random and spec.samples < 1:
         raise SweepSpecError("`random:` needs `samples:` >= 1 (the number of draws)")
     if not spec.random and (spec.samples or spec.sample_seed):  # ignored: `samples: 8` ran 1 cell, not 8, exit 0
@@ -300,12 +308,22 @@ def _check(spec: SweepSpec) -> None:
                              "split it into several sweeps")
 
 
+def _finite(value: int | float) -> bool:
+    """Whether a number is finite as a float64: a whole number beyond +-1.8e308 is not (math.isfinite and
+    numpy raised OverflowError on one of 401 digits, an internal error)."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
 def _check_scalar(where: str, value: Any) -> None:
     if not isinstance(value, (str, int, float, bool, type(None))):
         hint = " (to vary it, put it under grid:)" if where.startswith("fixed.") and isinstance(value, list) else ""
         raise SweepSpecError(f"{where} must be a number, string, bool or null, got {value!r}{hint}")
-    if isinstance(value, float) and not math.isfinite(value):
-        raise SweepSpecError(f"{where} must be finite, got {value!r}")
+    if isinstance(value, (int, float)) and not _finite(value):
+        shown = repr(value) if isinstance(value, float) else f"a whole number of {len(str(abs(value)))} digits"
+        raise SweepSpecError(f"{where} must be finite (within float64's range, +-1.8e308), got {shown}")
 
 
 def _draw(space: dict[str, dict[str, list[Any]]], samples: int, seed: int) -> list[dict[str, Scalar]]:
