@@ -631,6 +631,8 @@ class LMS200:
                 request timeout plus the line time of two telegrams). The first scan after
                 continuous output was started gets ``mode_timeout`` on top (a mode change takes
                 up to 3 s, and a virtual device's source may take a second for its first scan).
+            LmsDeviceError: when, for that long, every scan the device sent was flagged by its
+                STATUS byte as not to be used (``protocol.status_problem``), naming the last flag.
         """
         # checked when called, not at the first next(): a nan stall_timeout never timed out (a device
         # gone silent hung the loop for ever), text was a TypeError once the first scan was yielded,
@@ -652,6 +654,7 @@ class LMS200:
         self._doing = "reading scans in continuous mode"
         last = time.monotonic()
         idle_at = last if idle_s is None else last + idle_s  # when to yield None next (idle_s given)
+        refused, why = 0, ""  # scans the STATUS byte refused since the last usable one, and the last one's reason
         while stop is None or not stop():
             events = self._pump()
             now = time.monotonic()
@@ -661,14 +664,20 @@ class LMS200:
                     scan = decode_scan(ev.payload, stamp)
                 except LmsProtocolError as exc:  # a scan flagged by its STATUS byte too: its values were yielded
                     self._decode_errors += 1
-                    self._flagged += isinstance(exc, LmsStatusError)
+                    if isinstance(exc, LmsStatusError):
+                        self._flagged += 1
+                        refused, why = refused + 1, str(exc)
                     continue
                 self._scans += 1
-                last, allowed = now, limit
+                last, allowed, refused = now, limit, 0
                 if idle_s is not None:
                     idle_at = now + idle_s
                 yield scan
-            if now - last > allowed:
+            if now - last > allowed and refused:  # the device sends, but says its values are not to be used
+                raise LmsDeviceError(
+                    f"no usable scan from {self.port} for {now - last:.2f} s: the device sent {refused} scans, each "
+                    f"flagged by its STATUS byte as not to be used (the last: {why}); see the device")
+            if now - last > allowed:  # said "no scan ... (0 frames dropped)" of a device flagging every scan
                 raise LmsTimeoutError(
                     f"no scan from {self.port} for {now - last:.2f} s in continuous mode at {self.baud} baud "
                     f"({self.parser.stats.dropped_frames} frames dropped so far)"

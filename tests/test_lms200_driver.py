@@ -1105,6 +1105,34 @@ def test_scans_the_device_flags_as_not_to_be_used_are_dropped_and_counted(monkey
     lms.close()
 
 
+def test_a_device_that_flags_every_scan_is_said_so_not_taken_for_a_silent_one(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A device that kept sending scans its STATUS byte flagged (an error level, implausible values)
+    was reported as silent once they were dropped: "no scan from ... (0 frames dropped so far)",
+    the flags never named (review). The stall now says what the device sent and the last flag."""
+    from lms200.errors import LmsDeviceError
+    from lms200.protocol import encode_measurement
+    from lms200_fake_port import answer, fake_port, reply
+
+    def frame(value: int, status: int) -> bytes:
+        return reply(encode_measurement(np.full(361, value, np.uint16), "mm", status))
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":  # one usable scan, then five flagged ones, then nothing
+            return [*answer(payload), (0.05, frame(1000, 0x10) + b"".join(frame(1001 + i, 0x53) for i in range(5)))]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False)
+    stream = lms.scans(stall_timeout=0.3)
+    assert round(float(next(stream).ranges[0]) * 1000) == 1000
+    with pytest.raises(LmsDeviceError, match=r"^no usable scan from fake:// for 0\.\d\d s: the device sent 5 scans, each "
+                                             r"flagged by its STATUS byte as not to be used \(the last: 0xB0 scan with "
+                                             r"status 0x53: an error and implausible measured values: its values are not "
+                                             r"to be used\); see the device$"):
+        next(stream)
+    lms.close()
+
+
 def test_scans_with_idle_s_yields_none_while_the_device_is_silent() -> None:
     """``idle_s``: a None after that long without a scan, and every ``idle_s`` after it, so that a
     consumer (the bag recorder) can write out what it holds while a device sends nothing."""
