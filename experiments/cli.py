@@ -680,7 +680,9 @@ def _cwd_gone(exc: BaseException) -> str:
     try:
         os.getcwd()
     except FileNotFoundError:
-        return "the current folder no longer exists (it was removed after the shell entered it); cd to one that does"
+        from experiments.options import CWD_GONE
+
+        return CWD_GONE
     return ""
 
 

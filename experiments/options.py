@@ -1059,9 +1059,18 @@ def check_out_file(path: str | os.PathLike | None, flag: str = "--out") -> Path 
     return p
 
 
+#: the line of a relative path met after the current folder was removed (the shell still in it)
+CWD_GONE = "the current folder no longer exists (it was removed after the shell entered it); cd to one that does"
+
+
 def _check_default_base(base: Path) -> None:
     """The folder ``base`` a command makes its run folder ``base/DATE_TIME`` in without --out: a
     folder, or absent beneath a writable one."""
+    if not base.is_absolute():
+        try:
+            os.getcwd()
+        except FileNotFoundError:  # said ". is not a writable folder, so a run without --out cannot be made ..."
+            raise InputError(CWD_GONE) from None
     check_link(base)
     if base.exists() and not base.is_dir():
         raise InputError(f"{base} (where a run without --out goes) exists and is not a folder; give --out")

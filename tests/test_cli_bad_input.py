@@ -1238,6 +1238,17 @@ def test_a_removed_current_folder_is_said_as_such(files, tmp_path):
     assert run.stderr.strip().splitlines() == [
         "lmsbench slam: error: the current folder no longer exists (it was removed after the shell entered it); "
         "cd to one that does"]
+    # without --out (the run folder in results/compare): it said ". is not a writable folder, so a run without
+    # --out cannot be made in results/compare; give --out" (review)
+    script = ("import os, sys; from experiments.cli import main; os.chdir(sys.argv[1]); os.rmdir(sys.argv[1]); "
+              "sys.exit(main(['compare', 'office:0', '--duration', '0.5', '--methods', 'sensor', '--no-progress']))")
+    gone.mkdir()
+    run = subprocess.run([sys.executable, "-c", script, str(gone)], capture_output=True,
+                         text=True, timeout=60, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert run.returncode == 2, run.stderr
+    assert run.stderr.strip().splitlines() == [
+        "lmsbench compare: error: the current folder no longer exists (it was removed after the shell entered it); "
+        "cd to one that does"]
 
 
 def test_a_full_disk_under_pyarrow_is_said_once_as_the_systems_reason():
