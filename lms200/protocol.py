@@ -325,8 +325,9 @@ def status_problem(status: int) -> str | None:
     or fatal error (bits 0-2 of 3 or more, the levels past a warning) or implausible measured values
     (bit 6). Info, warnings and pollution (bit 7: a dirty front screen) leave the values measured."""
     level = status & STATUS_LEVEL_MASK
-    problems = [{3: "an error", 4: "a fatal error"}.get(level, f"undefined level {level}")
-                for _ in (0,) if level >= STATUS_ERROR_LEVEL]
+    problems = []
+    if level >= STATUS_ERROR_LEVEL:
+        problems.append({3: "an error", 4: "a fatal error"}.get(level, f"undefined level {level}"))
     if status & STATUS_IMPLAUSIBLE:
         problems.append("implausible measured values")
     return f"status 0x{status:02X}: {' and '.join(problems)}" if problems else None
