@@ -641,19 +641,23 @@ def _unindexed(tmp_path: Path, n: int = 10, cut: int = 0) -> tuple[Path, list]:
     return out, recs
 
 
-def test_an_unindexed_bag_is_recovered_from_its_chunks(tmp_path: Path) -> None:
-    """A bag never closed (a killed recording) was refused: "Bag is not indexed, reindex before reading"."""
+def _read_recovered(out: Path) -> list:
+    """The records read from ``_unindexed``'s bag of 10 scans, asserting the one warning of its recovery."""
     import warnings
 
-    from lms200 import read_log
-
-    out, recs = _unindexed(tmp_path)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         got = list(read_log(out))
     assert [str(w.message) for w in caught] == [
         f"{out}: the bag was not closed (a recording killed or cut by a power failure): it has no index; 20 messages "
         "recovered from its 10 whole chunks"]
+    return got
+
+
+def test_an_unindexed_bag_is_recovered_from_its_chunks(tmp_path: Path) -> None:
+    """A bag never closed (a killed recording) was refused: "Bag is not indexed, reindex before reading"."""
+    out, recs = _unindexed(tmp_path)
+    got = _read_recovered(out)
     assert [r.scan.stamp for r in got] == [float(i) for i in range(10)]
     assert [r.odom for r in got] == [r.odom for r in recs]
     assert np.array_equal(got[9].scan.ranges, np.full(361, 1.09, dtype=np.float32).astype(float))
@@ -837,8 +841,6 @@ def test_an_unindexed_bag_is_told_by_its_header_not_by_rosbags_words(tmp_path: P
     before reading"): a rosbags that words it otherwise (here: "Bag has no index") made a killed
     recording "cannot open as a ROS bag: AnyReaderError: Bag has no index.". It is told by its header's
     index_pos 0 now, and recovered as before."""
-    import warnings
-
     from rosbags.rosbag1 import reader as r1
 
     opened = r1.Reader.open
@@ -851,12 +853,7 @@ def test_an_unindexed_bag_is_told_by_its_header_not_by_rosbags_words(tmp_path: P
 
     monkeypatch.setattr(r1.Reader, "open", reworded)
     out, recs = _unindexed(tmp_path)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        got = list(read_log(out))
-    assert [str(w.message) for w in caught] == [
-        f"{out}: the bag was not closed (a recording killed or cut by a power failure): it has no index; 20 messages "
-        "recovered from its 10 whole chunks"]
+    got = _read_recovered(out)
     assert [r.scan.stamp for r in got] == [float(i) for i in range(10)]
     # an indexed bag still goes through rosbags' own open (its refusals as they were)
     whole = tmp_path / "whole.bag"

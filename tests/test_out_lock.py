@@ -6,6 +6,7 @@ killed run's), the other "simulated ... (seed 1 ...) into D" over a folder of se
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import signal
@@ -14,6 +15,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Iterator
 
 import pytest
 import yaml
@@ -71,25 +73,32 @@ def test_a_second_command_into_a_held_out_is_refused_and_a_killed_ones_folder_re
     assert list(temp.iterdir()) == []
 
 
-def test_an_output_file_held_by_another_command_is_refused(tmp_path, capsys):
-    """`lms200 record --out F` and `calibrate --out F` take their file as a folder is taken: two
-    recordings into one file interleaved their lines."""
-    target = tmp_path / "scans.clf"
+@contextlib.contextmanager
+def file_held_by_another_process(target: Path) -> Iterator[int]:
+    """Another process holding the output file ``target`` (``check_out_file``) while the block runs; yields its pid."""
     code = ("import sys, time\nfrom pathlib import Path\nfrom experiments.options import check_out_file, holding_outputs\n"
             "holding_outputs()\ncheck_out_file(Path(sys.argv[1]))\nprint('held', flush=True)\ntime.sleep(60)\n")
     proc = subprocess.Popen([sys.executable, "-c", code, str(target)], cwd=REPO, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     try:
         assert proc.stdout is not None and proc.stdout.readline() == "held\n", proc.communicate()
-        assert main(["lms200", "record", "--port", "socket://127.0.0.1:9", "--out", str(target)]) == 2
-        err = capsys.readouterr().err
-        assert err == (f"lmsbench lms200 record: error: --out {target}: another lmsbench command (pid {proc.pid}) "
-                       "is writing there; wait for it to end, or give another path\n")
-        assert not target.exists()
-        assert sorted(p.name for p in tmp_path.iterdir()) == [".scans.clf.lmsbench-lock"]  # the holder's, beside it
+        yield proc.pid
     finally:
         proc.kill()
         proc.communicate()
+
+
+def test_an_output_file_held_by_another_command_is_refused(tmp_path, capsys):
+    """`lms200 record --out F` and `calibrate --out F` take their file as a folder is taken: two
+    recordings into one file interleaved their lines."""
+    target = tmp_path / "scans.clf"
+    with file_held_by_another_process(target) as pid:
+        assert main(["lms200", "record", "--port", "socket://127.0.0.1:9", "--out", str(target)]) == 2
+        err = capsys.readouterr().err
+        assert err == (f"lmsbench lms200 record: error: --out {target}: another lmsbench command (pid {pid}) "
+                       "is writing there; wait for it to end, or give another path\n")
+        assert not target.exists()
+        assert sorted(p.name for p in tmp_path.iterdir()) == [".scans.clf.lmsbench-lock"]  # the holder's, beside it
 
 
 def test_an_output_file_of_a_name_near_255_bytes_is_still_guarded(tmp_path, capsys):
@@ -101,22 +110,14 @@ def test_an_output_file_of_a_name_near_255_bytes_is_still_guarded(tmp_path, caps
 
     name = "r" * 250 + ".clf"  # 254 bytes: a name the file system takes
     target = tmp_path / name
-    code = ("import sys, time\nfrom pathlib import Path\nfrom experiments.options import check_out_file, holding_outputs\n"
-            "holding_outputs()\ncheck_out_file(Path(sys.argv[1]))\nprint('held', flush=True)\ntime.sleep(60)\n")
-    proc = subprocess.Popen([sys.executable, "-c", code, str(target)], cwd=REPO, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    try:
-        assert proc.stdout is not None and proc.stdout.readline() == "held\n", proc.communicate()
+    with file_held_by_another_process(target) as pid:
         assert main(["lms200", "record", "--port", "socket://127.0.0.1:9", "--out", str(target)]) == 2
         err = capsys.readouterr().err
-        assert err == (f"lmsbench lms200 record: error: --out {target}: another lmsbench command (pid {proc.pid}) "
+        assert err == (f"lmsbench lms200 record: error: --out {target}: another lmsbench command (pid {pid}) "
                        "is writing there; wait for it to end, or give another path\n")
         lock = "." + "r" * (255 - 2 - 16 - len(".lmsbench-lock")) + "." + hashlib.sha256(name.encode()).hexdigest()[:16] \
             + ".lmsbench-lock"
         assert len(lock) == 255 and [p.name for p in tmp_path.iterdir()] == [lock]
-    finally:
-        proc.kill()
-        proc.communicate()
 
 
 def test_a_stale_lock_file_beside_an_output_file_is_taken_and_removed(tmp_path, capsys):
