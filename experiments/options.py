@@ -872,10 +872,8 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
                 shown = " and ".join(theirs) if len(theirs) <= 3 else ", ".join(theirs[:3]) + f" and {len(theirs) - 3} more"
                 raise InputError(f"--out {p}: holds {shown}, which this run would replace but no earlier lmsbench "
                                  f"{owner.command} run wrote; give a new or empty folder")
-    parent = p
-    while not parent.exists():
-        parent = parent.parent
-    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK) or not _can_create_in(parent):
+    parent = _nearest_existing(p)
+    if not _writable_folder(parent):
         raise InputError(f"--out {p}: {parent} is not a writable folder")
     hold_output(p, make=True)  # a new folder is made here to be locked (removed as the command ends if still empty)
     return p
@@ -1054,7 +1052,7 @@ def check_out_file(path: str | os.PathLike | None, flag: str = "--out") -> Path 
         raise InputError(f"{flag} {p}: no folder {parent}; make it first (a file's folder is not made for it)")
     if not parent.is_dir():
         raise InputError(f"{flag} {p}: {parent} is not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK) or not _can_create_in(parent):
+    if not _writable_folder(parent):
         raise InputError(f"{flag} {p}: {parent} is not a writable folder")
     return p
 
@@ -1074,12 +1072,22 @@ def _check_default_base(base: Path) -> None:
     check_link(base)
     if base.exists() and not base.is_dir():
         raise InputError(f"{base} (where a run without --out goes) exists and is not a folder; give --out")
-    parent = base
-    while not parent.exists():
-        parent = parent.parent
-    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK) or not _can_create_in(parent):
+    parent = _nearest_existing(base)
+    if not _writable_folder(parent):
         what = "a writable folder" if parent.is_dir() else "a folder"
         raise InputError(f"{parent} is not {what}, so a run without --out cannot be made in {base}; give --out")
+
+
+def _nearest_existing(p: Path) -> Path:
+    """``p`` or its nearest parent that exists (where a folder to be made goes)."""
+    while not p.exists():
+        p = p.parent
+    return p
+
+
+def _writable_folder(folder: Path) -> bool:
+    """Whether ``folder`` is a folder this process can make files and folders in."""
+    return folder.is_dir() and os.access(folder, os.W_OK | os.X_OK) and _can_create_in(folder)
 
 
 def _can_create_in(folder: Path) -> bool:
