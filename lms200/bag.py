@@ -601,6 +601,53 @@ class BagReadStats(SkipLog):
 #: header holds its message definition: a few KB); a larger one is damage, not a record
 MAX_RECORD_HEADER_BYTES = 16 * 2**20
 
+#: bytes: the most a ROS 1 connection record's fields (type, md5sum, callerid and the message
+#: definition, with those of every type it uses and their comments) may hold. rosbags reads each
+#: whole and parses the definition with a parser that costs about 1-10 us and 50 bytes of memory a
+#: byte: a 5.6 MB definition took 11 s and 279 MB in `lmsbench info` (58 s and 340 MB written as
+#: field lines). LaserScan's own is 2.5 KB, the largest of ROS Noetic's common messages
+#: (visualization_msgs/InteractiveMarkerUpdate) under 20 KB; a larger one is refused before it is read.
+MAX_CONNECTION_BYTES = 256 * 2**10
+
+
+def _connection_too_large(path: object, cid: int | None, topic: str | None, size: int) -> BagTooLargeError:
+    """The error of a connection record whose fields (its message definition) exceed MAX_CONNECTION_BYTES."""
+    which = "a connection" if cid is None else f"connection {cid}" + (f" ({topic})" if topic else "")
+    return BagTooLargeError(f"{path}: {which} holds {size:,} bytes of type, md5sum and message definition, more than "
+                            f"the {MAX_CONNECTION_BYTES:,} a ROS 1 bag's connection may (lms200.bag.MAX_CONNECTION_BYTES): "
+                            "an absurd message definition, or damage; not read")
+
+
+def _check_index_connections(path: Any) -> None:  # noqa: ANN401 - a Path, or rosbags' RPath
+    """BagTooLargeError naming the file for an indexed ROS 1 bag whose index holds a connection record
+    of more than MAX_CONNECTION_BYTES of fields, told from the record lengths alone before rosbags
+    reads the index (it reads each connection whole and parses its message definition). A bag whose
+    header or index cannot be followed is left to rosbags, which says what is wrong."""
+    from rosbags.rosbag1 import reader as r1
+
+    try:
+        with path.open("rb") as bio:
+            size = os.fstat(bio.fileno()).st_size
+            if bio.read(13) != b"#ROSBAG V2.0\n":
+                return
+            header = r1.Header.read(bio, r1.RecordType.BAGHEADER)
+            index_pos, conn_count = header.get_uint64("index_pos"), header.get_uint32("conn_count")
+            if index_pos == 0 or index_pos >= size:
+                return
+            bio.seek(index_pos)
+            for _ in range(conn_count):
+                hlen = r1.read_uint32(bio)
+                if hlen > MAX_CONNECTION_BYTES:  # op, conn and topic: a few bytes
+                    raise _connection_too_large(path, None, None, hlen)
+                bio.seek(-4, os.SEEK_CUR)
+                rec = r1.Header.read(bio, r1.RecordType.CONNECTION)
+                dlen = r1.read_uint32(bio)
+                if dlen > MAX_CONNECTION_BYTES:
+                    raise _connection_too_large(path, rec.get_uint32("conn"), rec.get_string("topic"), dlen)
+                bio.seek(dlen, os.SEEK_CUR)
+    except (OSError, r1.ReaderError, KeyError, UnicodeDecodeError, struct.error):
+        return
+
 
 @dataclass
 class Recovered:
@@ -650,6 +697,7 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
 
         def open(self) -> None:
             if not self._unindexed():
+                _check_index_connections(self.path)
                 super().open()
             else:
                 self.bio = self.path.open("rb")
@@ -734,6 +782,8 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
         def _connection(self, header: Any, data: Any, dlen: int, conns: dict) -> None:  # noqa: ANN401
             cid = header.get_uint32("conn")
             topic = header.get_string("topic")
+            if dlen > MAX_CONNECTION_BYTES:
+                raise _connection_too_large(self.path, cid, topic, dlen)
             fields = r1.Header.read(BytesIO(struct.pack("<I", dlen) + data.read(dlen)))
             latching = fields.get_string("latching") if "latching" in fields else None
             if cid not in conns:
