@@ -604,9 +604,9 @@ MAX_RECORD_HEADER_BYTES = 16 * 2**20
 #: bytes: the most a ROS 1 connection record's fields (type, md5sum, callerid and the message
 #: definition, with those of every type it uses and their comments) may hold. rosbags reads each
 #: whole and parses the definition with a parser that costs about 1-10 us and 50 bytes of memory a
-#: byte: a 5.6 MB definition took 11 s and 279 MB in `lmsbench info` (58 s and 340 MB written as
-#: field lines). LaserScan's own is 2.5 KB, the largest of ROS Noetic's common messages
-#: (visualization_msgs/InteractiveMarkerUpdate) under 20 KB; a larger one is refused before it is read.
+#: byte: a 5.6 MB definition of comment lines took 6 s and 65 MB in `lmsbench info` (58 s and 340 MB as
+#: field lines). A definition is a few KB: the largest rosbags' Noetic store writes (visualization_msgs/
+#: InteractiveMarkerUpdate, with every type it uses) is 3 KB without comments; a larger one is refused unread.
 MAX_CONNECTION_BYTES = 256 * 2**10
 
 

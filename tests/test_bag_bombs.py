@@ -305,9 +305,9 @@ def _bag_with_definition(path: Path, extra: int, unindexed: bool = False) -> Pat
 @pytest.mark.parametrize("unindexed", [False, True], ids=["indexed", "unindexed"])
 def test_a_ros1_connection_of_an_absurd_message_definition_is_refused_unread(tmp_path, capsys, unindexed) -> None:
     """Review: a ROS 1 bag whose LaserScan connection carried a 5.6 MB message definition held
-    `lmsbench info` 11 s at 279 MB (rosbags parses the definition, about 50 bytes of memory a byte;
+    `lmsbench info` 6 s at 65 MB as comment lines (rosbags parses the definition, up to 50 bytes of memory a byte;
     58 s and 340 MB as field lines). A connection of more than lms200.bag.MAX_CONNECTION_BYTES
-    (256 KiB; LaserScan's is 2.5 KB) is refused from the record lengths, before rosbags reads it."""
+    (256 KiB; a definition is a few KB) is refused from the record lengths, before rosbags reads it."""
     import re
     import time
     import warnings
