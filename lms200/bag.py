@@ -30,7 +30,7 @@ import numpy as np
 from .codes import finite_negative
 from .errors import InputError, LmsbenchError, LogNotFoundError
 from .records import Pose2D, Record, SkipLog
-from .scan import Scan, snap_angle
+from .scan import Scan, snap_float32_angle
 from .tum import MAX_TILT_DEG, quaternion_to_yaw, tilt_deg
 from .timing import lms200_shaped, mirror_time_increment, scan_period, smallest_range
 
@@ -400,6 +400,7 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                     time_increment, scan_time = mirror_time_increment(scan.angle_increment), scan_period(scan.angle_increment)
                 else:  # another scanner: its timing is unknown (the LMS200's mirror's was written, as if it were one)
                     time_increment = scan_time = 0.0
+                range_min = max(scan.range_min, smallest_range(scan.range_max))
                 msg = LaserScan(
                     header=Header(**header_kw),
                     angle_min=scan.angle_min,
@@ -407,9 +408,9 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                     angle_increment=scan.angle_increment,
                     time_increment=time_increment,
                     scan_time=scan_time,
-                    range_min=max(scan.range_min, smallest_range(scan.range_max)),
+                    range_min=range_min,
                     range_max=scan.range_max,
-                    ranges=scan.ranges.astype(np.float32),
+                    ranges=float32_ranges(scan.ranges, range_min, scan.range_max),
                     intensities=np.zeros(0, dtype=np.float32),
                 )
                 writer.write(conn(topic, "sensor_msgs/msg/LaserScan"), bag_time(ns), serialize(msg, "sensor_msgs/msg/LaserScan"))
@@ -456,6 +457,20 @@ RANGE_MAX_HINT = ("give the sensor's maximum range instead: --laser-range-max M 
                   "(read_log(..., geometry=LaserGeometry(range_max=M)))")
 
 
+def float32_ranges(ranges: np.ndarray, range_min: float, range_max: float) -> np.ndarray:
+    """``ranges`` (m) as a LaserScan's float32, each on the side of ``range_min`` and ``range_max``
+    (written as float32 too) it lies on: REP-117 takes a reading above range_max (or below range_min)
+    for out of range, and a reader compares in the message's float32, where rounding put a reading
+    just above range_max onto it (8.18300005 m under 8.183 m: both 8.1829996 m), read back valid.
+    Such a reading is written as the next float32 beyond the limit; every other as its nearest float32."""
+    out = ranges.astype(np.float32)
+    low, high = np.float32(range_min), np.float32(range_max)
+    with np.errstate(invalid="ignore"):
+        out[(ranges > range_max) & (out <= high)] = np.nextafter(high, np.float32(np.inf))
+        out[(ranges < range_min) & (ranges > 0) & (out >= low)] = np.nextafter(low, np.float32(0))
+    return out
+
+
 def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
     """A LaserScan message as a Scan, its range_max replaced by ``range_max`` when given; raises
     ValueError for fields a scan cannot have."""
@@ -479,8 +494,8 @@ def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
         ranges, angle_min, increment = ranges[::-1].copy(), angle_min + (ranges.size - 1) * increment, -increment
     return Scan(
         ranges,
-        snap_angle(angle_min),  # float32 in the message: back onto the 0.05 deg grid
-        snap_angle(increment),
+        snap_float32_angle(angle_min),  # float32 in the message: back onto the 0.05 deg grid where its rounding explains
+        snap_float32_angle(increment),
         range_min,
         range_max,
         _stamp_of(msg),
