@@ -163,7 +163,9 @@ class CorrectedChain:
     anchored scan is held until the chain runs: should the next scan have no anchor, it too is handed
     back as read, so a raw log never has a corrected pose from one coincidence (a clock set back
     100 s while the robot stood read the scan before the jump as corrected, and ``info`` said
-    "corrected poses 1 scans"). Holds two records at most.
+    "corrected poses 1 scans"), and the chain is confirmed only if an ODOM step on the odometry's
+    own clock came between its first two anchors (the odometry host's clock alone set back, the
+    robot standing, gave an "anchor" after every scan with none between). Holds two records at most.
     """
 
     def __init__(self) -> None:
@@ -172,6 +174,7 @@ class CorrectedChain:
         self.last_odom: Pose2D | None = None  # the last ODOM pose after that anchor
         self.step_stamp: float | None = None  # the stamp of the last ODOM line read as a step (s)
         self.in_a_row = 0  # anchors read in a row (CONFIRMING_ANCHORS: the chain runs)
+        self.stepped = False  # an ODOM step read (on the odometry's clock) since the chain's first anchor
         #: an ODOM line (pose, stamp s) at the held scan's pose read before any ODOM step: no clock yet
         #: judges its stamp, so it waits for the next ODOM line's (:meth:`_judge_first`)
         self.first: tuple[Pose2D, float] | None = None
@@ -213,6 +216,15 @@ class CorrectedChain:
                 and not stamp >= self.pending[0].scan.stamp - ANCHOR_STAMP_GAP_S):
             rec, odom = self.pending
             self.pending = None
+            if 0 < self.in_a_row < CONFIRMING_ANCHORS and not self.stepped:
+                # no ODOM step on the odometry's clock since the chain's first anchor: that clock jumped
+                # back (the odometry host's alone set back, while the robot stood), as a corrected log's
+                # never does (steps stamped by it follow every anchor); 51 of 200 scans read "corrected",
+                # their odometry frozen. Both scans as read, and the clock goes on from this line
+                yield from self._end()
+                yield rec
+                self._step(pose, stamp)
+                return
             yield from self._anchored(rec, odom)
             return
         yield from self._settle()
@@ -274,6 +286,7 @@ class CorrectedChain:
     def _step(self, pose: Pose2D, stamp: float) -> None:
         """An ODOM line read as a step of the odometry: its pose, and its stamp as the odometry's clock."""
         self.last_odom = pose
+        self.stepped = True
         if math.isfinite(stamp):
             self.step_stamp = stamp
 
@@ -294,6 +307,8 @@ class CorrectedChain:
         assert rec.odom is not None
         self.anchor, self.last_odom = (rec.odom, odom), None
         self.in_a_row += 1
+        if self.in_a_row == 1:
+            self.stepped = False
         done = dataclasses.replace(rec, odom=odom, corrected=rec.odom)
         if self.in_a_row < CONFIRMING_ANCHORS:
             self.tentative = (rec, done)
