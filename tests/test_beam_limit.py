@@ -1,7 +1,8 @@
 """The extractors' beam limit (``features.baselines.checks.MAX_BEAMS``, what ``features.extract``
 refuses) in the drivers that call a method's ``run`` directly to time it: ``compare``, ``sim2real``,
 ``experiments.evaluate.extract_timed`` and the baselines benchmark ran scans of more beams
-unchecked (``lmsbench compare`` on a 20,000-beam log: exit 0, a table of 20,000-beam scans)."""
+unchecked (``lmsbench compare`` on a 20,000-beam log: exit 0, a table of 20,000-beam scans).
+``slam``, through ``extract``, refused it after a note on the input's beam timing, naming no file."""
 
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ def _records(widths) -> list[Record]:
     return [Record(scan=_scan(n, k), odom=(0.1 * k, 0.0, 0.0)) for k, n in enumerate(widths)]
 
 
-@pytest.mark.parametrize("command, index", [("compare", 0), ("sim2real", 1)])
+@pytest.mark.parametrize("command, index", [("compare", 0), ("sim2real", 1), ("slam", 0)])
 @pytest.mark.parametrize("name, fmt", [("wide.clf", "robotlaser1"), ("wide.bag", "bag")])
 def test_a_log_of_wider_scans_is_refused_before_any_work(tmp_path, capsys, command, index, name, fmt):
     log = tmp_path / name
