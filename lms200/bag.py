@@ -621,7 +621,8 @@ MAX_RECORD_HEADER_BYTES = 16 * 2**20
 #: whole and parses the definition with a parser that costs about 1-10 us and 50 bytes of memory a
 #: byte: a 5.6 MB definition of comment lines took 6 s and 65 MB in `lmsbench info` (58 s and 340 MB as
 #: field lines). A definition is a few KB: the largest rosbags' Noetic store writes (visualization_msgs/
-#: InteractiveMarkerUpdate, with every type it uses) is 3 KB without comments; a larger one is refused unread.
+#: InteractiveMarkerUpdate, with every type it uses) is 3 KB without comments; a larger one is refused unread
+#: (a ROS 2 bag's definition, read from its storage file, unparsed: :func:`_bound_definitions`).
 MAX_CONNECTION_BYTES = 256 * 2**10
 
 
@@ -631,6 +632,32 @@ def _connection_too_large(path: object, cid: int | None, topic: str | None, size
     return BagTooLargeError(f"{path}: {which} holds {size:,} bytes of type, md5sum and message definition, more than "
                             f"the {MAX_CONNECTION_BYTES:,} a ROS 1 bag's connection may (lms200.bag.MAX_CONNECTION_BYTES): "
                             "an absurd message definition, or damage; not read")
+
+
+def _bound_definitions() -> None:
+    """rosbags' AnyReader parses every connection's message definition (``get_types_from_msg``,
+    ``get_types_from_idl`` of its module) when it opens a bag: those names are pointed at parsers
+    that first refuse a definition of more than MAX_CONNECTION_BYTES characters (a BagTooLargeError,
+    which :meth:`BagReader._open` names the bag in). A ROS 1 bag's is refused before it is read
+    (:func:`_check_index_connections`); a ROS 2 bag's comes from its storage file (sqlite3, mcap):
+    one of 5.6 MB of comment lines held `lmsbench info` 4.5 s at 63 MB."""
+    from rosbags.highlevel import anyreader
+
+    for name in ("get_types_from_msg", "get_types_from_idl"):
+        parse = getattr(anyreader, name)
+        if getattr(parse, "lmsbench_bounded", False):
+            continue
+
+        def bounded(text: str, *args: Any, _parse: Callable[..., Any] = parse, **kwargs: Any) -> Any:  # noqa: ANN401
+            if len(text) > MAX_CONNECTION_BYTES:
+                which = f"{args[0]}'s message definition" if args else "a message definition (IDL)"
+                raise BagTooLargeError(f"{which} holds {len(text):,} characters, more than the {MAX_CONNECTION_BYTES:,} "
+                                       "a bag's may (lms200.bag.MAX_CONNECTION_BYTES): an absurd message definition, "
+                                       "or damage; not parsed")
+            return _parse(text, *args, **kwargs)
+
+        bounded.lmsbench_bounded = True  # type: ignore[attr-defined]
+        setattr(anyreader, name, bounded)
 
 
 def _check_index_connections(path: Any) -> None:  # noqa: ANN401 - a Path, or rosbags' RPath
@@ -904,14 +931,17 @@ class BagReader:
             check_metadata_size(self.path)
             _check_storage_files(self.path)
         _bound_zstd_messages()  # before open: a file-compressed ROS 2 bag is decompressed there
+        _bound_definitions()
         try:
             reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
             if not reader.is2:  # a bag never closed (a killed recording) is read from its chunks
                 reader.readers = [_recovering_reader(self.path)]
             reader.open()
-        except BagError:
+        except BagTooLargeError as exc:
+            if str(self.path) not in str(exc):  # a message definition's (_bound_definitions knows no file)
+                raise BagTooLargeError(f"{self.path}: {exc}") from None
             raise
-        except BagTooLargeError:
+        except BagError:
             raise
         except Exception as exc:  # rosbags raises its own types for every kind of damage
             raise BagError(f"{self.path}: cannot open as a ROS bag: {type(exc).__name__}: {exc}") from None

@@ -329,3 +329,39 @@ def test_a_ros1_connection_of_an_absurd_message_definition_is_refused_unread(tmp
                         r"type, md5sum and message definition, more than the 262,144 a ROS 1 bag's connection may "
                         r"\(lms200.bag.MAX_CONNECTION_BYTES\): an absurd message definition, or damage; not read\n", err)
     assert time.monotonic() - start < 1.5
+
+
+def test_a_ros2_bags_absurd_message_definition_is_refused_unparsed(tmp_path, capsys) -> None:
+    """The same in a ROS 2 bag, whose message definitions come from its storage file (sqlite3 here):
+    one of 5.6 MB of comment lines held `lmsbench info` 4.5 s at 63 MB. A definition of more than
+    MAX_CONNECTION_BYTES characters is refused before rosbags parses it."""
+    import math
+    import re
+
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from experiments.cli import main
+    from lms200.bag import MAX_CONNECTION_BYTES
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    T = ts.types
+    msgdef, _ = ts.generate_msgdef("sensor_msgs/msg/LaserScan", ros_version=2)
+    line = "# " + "x" * 77 + "\n"
+    for name, extra in (("ok", 100_000), ("big", MAX_CONNECTION_BYTES)):
+        with Writer(tmp_path / name, version=8) as w:
+            c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts,
+                                 msgdef=msgdef + line * (extra // len(line)), rihs01=ts.hash_rihs01("sensor_msgs/msg/LaserScan"))
+            msg = T["sensor_msgs/msg/LaserScan"](
+                header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=10, nanosec=0), frame_id="l"),
+                angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360, time_increment=0.0,
+                scan_time=0.0, range_min=0.01, range_max=8.0, ranges=np.full(361, 2.0, np.float32),
+                intensities=np.zeros(0, np.float32))
+            w.write(c, 10 * 10**9, ts.serialize_cdr(msg, "sensor_msgs/msg/LaserScan"))
+    assert [r.scan.stamp for r in read_log(tmp_path / "ok")] == [10.0]
+    bag = tmp_path / "big"
+    assert main(["info", str(bag)]) == 2  # old: exit 0 after parsing it
+    err = capsys.readouterr().err
+    assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(bag))}: sensor_msgs/msg/LaserScan's message definition "
+                        r"holds 262,\d{3} characters, more than the 262,144 a bag's may \(lms200.bag.MAX_CONNECTION_BYTES\): "
+                        r"an absurd message definition, or damage; not parsed\n", err)
