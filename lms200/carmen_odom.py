@@ -219,7 +219,7 @@ class CorrectedChain:
             if 0 < self.in_a_row < CONFIRMING_ANCHORS and not self.stepped:
                 # no ODOM step on the odometry's clock since the chain's first anchor: that clock jumped
                 # back (the odometry host's alone set back, while the robot stood), as a corrected log's
-                # never does (steps stamped by it follow every anchor); 51 of 200 scans read "corrected",
+                # never does (steps stamped by it follow every anchor); 51 of 100 scans read "corrected",
                 # their odometry frozen. Both scans as read, and the clock goes on from this line
                 yield from self._end()
                 yield rec
