@@ -226,7 +226,7 @@ class CorrectedChain:
                 # a corrected log whose raw ODOM lines are sparse (none between some scans) read raw
                 yield from self._end()
                 self._step(pose, stamp)
-                yield from self._anchored(rec, rec.odom)
+                yield from self._anchored(rec, pose)  # its own pose: a new chain starts there
                 return
             yield from self._anchored(rec, odom)
             return
