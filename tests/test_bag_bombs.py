@@ -375,6 +375,7 @@ def test_a_bags_message_definitions_are_bounded_together(tmp_path, capsys, monke
     records together MAX_CONNECTIONS_TOTAL_BYTES. Here three connections of 1,500 field lines each
     (each alone well under every bound) are refused before rosbags registers them."""
     import re
+    import struct
 
     from experiments.cli import main
 
@@ -402,6 +403,18 @@ def test_a_bags_message_definitions_are_bounded_together(tmp_path, capsys, monke
     assert main(["info", str(big)]) == 2
     err = capsys.readouterr().err
     assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(big))}: its 3 connections hold 2\d,\d{{3}} bytes of type, "
+                        r"md5sum and message definition together, more than the 20,000 a ROS 1 bag's may "
+                        r"\(lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES\): absurd message definitions, or damage; not read\n", err)
+    # a bag never closed: the connection records as its chunks give them (each connection once)
+    data = bytearray(big.read_bytes())
+    at = data.index(b"index_pos=") + 10
+    index_pos = struct.unpack("<Q", data[at:at + 8])[0]
+    data[at:at + 8] = bytes(8)
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(bytes(data[:index_pos]))
+    assert main(["info", str(cut)]) == 2
+    err = capsys.readouterr().err
+    assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(cut))}: its 3 connections hold 2\d,\d{{3}} bytes of type, "
                         r"md5sum and message definition together, more than the 20,000 a ROS 1 bag's may "
                         r"\(lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES\): absurd message definitions, or damage; not read\n", err)
 
