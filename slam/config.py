@@ -419,8 +419,8 @@ class LoopClosureConfig:
             before the inflation) in every direction (a bare corridor does not fix its axis and
             cannot close a loop).
         gate_probability: ...and move the new keyframe by no more than the drift since the
-            candidate allows: the correction's Mahalanobis distance against the graph's marginal
-            covariances of the two keyframes plus the match's own covariance within this
+            candidate allows: the correction's Mahalanobis distance against that drift (``drift``,
+            below) plus the match's own covariance within this
             chi-square quantile (3 dof); only heading hypotheses inside that gate are tried (an
             aliased place half a turn or a door's spacing away is refused).
         kernel: robust loss of the closure factors, "cauchy" or "huber"...
