@@ -266,3 +266,102 @@ def test_a_ros2_metadata_yaml_too_big_to_parse_is_refused_unread(tmp_path, capsy
     assert main(["info", str(bag)]) == 2
     assert capsys.readouterr().err.startswith(f"lmsbench info: error: {message} (refused unread")
     assert time.monotonic() - start < 2  # old: both parsed it (10 s of comments; minutes of content)
+
+
+def _bag_with_definition(path: Path, extra: int, unindexed: bool = False) -> Path:
+    """A ROS 1 bag of two LaserScans whose connection carries LaserScan's message definition and
+    ``extra`` bytes of comment lines (a definition's comments are part of it, as ROS writes them);
+    ``unindexed``: its index cut off and index_pos 0, as a killed recording leaves it."""
+    import math
+    import struct
+
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    T = ts.types
+    msgdef, md5 = ts.generate_msgdef("sensor_msgs/msg/LaserScan")
+    line = "# " + "x" * 77 + "\n"
+    with Writer(path) as w:
+        c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts,
+                             msgdef=msgdef + line * (extra // len(line)), md5sum=md5)
+        for k in range(2):
+            msg = T["sensor_msgs/msg/LaserScan"](
+                header=T["std_msgs/msg/Header"](seq=k, stamp=T["builtin_interfaces/msg/Time"](sec=10 + k, nanosec=0),
+                                                 frame_id="laser"),
+                angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360, time_increment=0.0,
+                scan_time=0.0, range_min=0.01, range_max=8.0, ranges=np.full(361, 2.0, np.float32),
+                intensities=np.zeros(0, np.float32))
+            w.write(c, (10 + k) * 10**9, ts.serialize_ros1(msg, "sensor_msgs/msg/LaserScan"))
+    if unindexed:
+        data = bytearray(path.read_bytes())
+        at = data.index(b"index_pos=") + 10
+        index_pos = struct.unpack("<Q", data[at:at + 8])[0]
+        data[at:at + 8] = bytes(8)
+        path.write_bytes(bytes(data[:index_pos]))
+    return path
+
+
+@pytest.mark.parametrize("unindexed", [False, True], ids=["indexed", "unindexed"])
+def test_a_ros1_connection_of_an_absurd_message_definition_is_refused_unread(tmp_path, capsys, unindexed) -> None:
+    """Review: a ROS 1 bag whose LaserScan connection carried a 5.6 MB message definition held
+    `lmsbench info` 6 s at 65 MB as comment lines (rosbags parses the definition, up to 50 bytes of memory a byte;
+    58 s and 340 MB as field lines). A connection of more than lms200.bag.MAX_CONNECTION_BYTES
+    (256 KiB; a definition is a few KB) is refused from the record lengths, before rosbags reads it."""
+    import re
+    import time
+    import warnings
+
+    from experiments.cli import main
+    from lms200.bag import MAX_CONNECTION_BYTES
+
+    ok = _bag_with_definition(tmp_path / "ok.bag", 100_000, unindexed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the unindexed bag's recovery warning
+        assert [r.scan.stamp for r in read_log(ok)] == [10.0, 11.0]
+    bag = _bag_with_definition(tmp_path / "big.bag", MAX_CONNECTION_BYTES, unindexed)
+    start = time.monotonic()
+    with pytest.raises(BagTooLargeError, match=re.escape(f"{bag}: connection 0 (/scan) holds ")):
+        list(read_log(bag))
+    assert main(["info", str(bag)]) == 2  # old: exit 0 after parsing it
+    err = capsys.readouterr().err
+    assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(bag))}: connection 0 \(/scan\) holds 262,\d{{3}} bytes of "
+                        r"type, md5sum and message definition, more than the 262,144 a ROS 1 bag's connection may "
+                        r"\(lms200.bag.MAX_CONNECTION_BYTES\): an absurd message definition, or damage; not read\n", err)
+    assert time.monotonic() - start < 1.5
+
+
+def test_a_ros2_bags_absurd_message_definition_is_refused_unparsed(tmp_path, capsys) -> None:
+    """The same in a ROS 2 bag, whose message definitions come from its storage file (sqlite3 here):
+    one of 5.6 MB of comment lines held `lmsbench info` 4.5 s at 63 MB. A definition of more than
+    MAX_CONNECTION_BYTES characters is refused before rosbags parses it."""
+    import math
+    import re
+
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from experiments.cli import main
+    from lms200.bag import MAX_CONNECTION_BYTES
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    T = ts.types
+    msgdef, _ = ts.generate_msgdef("sensor_msgs/msg/LaserScan", ros_version=2)
+    line = "# " + "x" * 77 + "\n"
+    for name, extra in (("ok", 100_000), ("big", MAX_CONNECTION_BYTES)):
+        with Writer(tmp_path / name, version=8) as w:
+            c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts,
+                                 msgdef=msgdef + line * (extra // len(line)), rihs01=ts.hash_rihs01("sensor_msgs/msg/LaserScan"))
+            msg = T["sensor_msgs/msg/LaserScan"](
+                header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=10, nanosec=0), frame_id="l"),
+                angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360, time_increment=0.0,
+                scan_time=0.0, range_min=0.01, range_max=8.0, ranges=np.full(361, 2.0, np.float32),
+                intensities=np.zeros(0, np.float32))
+            w.write(c, 10 * 10**9, ts.serialize_cdr(msg, "sensor_msgs/msg/LaserScan"))
+    assert [r.scan.stamp for r in read_log(tmp_path / "ok")] == [10.0]
+    bag = tmp_path / "big"
+    assert main(["info", str(bag)]) == 2  # old: exit 0 after parsing it
+    err = capsys.readouterr().err
+    assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(bag))}: sensor_msgs/msg/LaserScan's message definition "
+                        r"holds 262,\d{3} characters, more than the 262,144 a bag's may \(lms200.bag.MAX_CONNECTION_BYTES\): "
+                        r"an absurd message definition, or damage; not parsed\n", err)

@@ -144,10 +144,11 @@ def test_a_damaged_corrected_log_keeps_its_chain_and_a_raw_log_is_read_as_before
         np.testing.assert_allclose([r.corrected for r in recs], np.round(corrected, 6)[list(keep)], atol=1e-12)
         _assert_odometry(recs, expected[list(keep)])
     # before two anchors in a row the chain does not run: a second scan without its anchor is read as
-    # written, and the chain starts again at the next anchor
+    # written, and so is the first (one anchor is no chain), and the chain starts again at the next anchor
     _write_corrected_log(tmp_path / "second.log", 12, drop_anchor=1)
     recs = list(read_log(tmp_path / "second.log"))
-    assert [r.corrected is not None for r in recs] == [k != 1 for k in range(12)]
+    assert [r.corrected is not None for r in recs] == [k >= 2 for k in range(12)]
+    assert recs[0].odom == pytest.approx(np.round(corrected[0], 6))  # as read: its pose fields
     assert recs[1].odom == pytest.approx(np.round(corrected[1], 6))  # as read: its pose fields
     assert recs[2].odom == pytest.approx(np.round(corrected[2], 6))  # a new chain starts at its own pose
     for name, options in (("plain.log", {"anchors": False}), ("standing.log", {"anchor_stamped": True})):
@@ -294,25 +295,39 @@ def test_the_real_corrected_logs_give_raw_odometry(shared_data, name, count, ste
     assert abs(length_o / length_c - 1) < 0.01
 
 
-def test_a_raw_log_whose_clock_jumps_back_while_the_robot_stands_is_no_corrected_log(tmp_path):
+@pytest.mark.parametrize("jumped", ["both clocks", "odometry clock"])
+def test_a_raw_log_whose_clock_jumps_back_while_the_robot_stands_is_no_corrected_log(tmp_path, capsys, jumped):
     """Found by fuzzing: a raw FLASER + ODOM log whose clock jumped back 100 s (two runs joined, a
     clock set back) while the robot stood still had every later ODOM line junk by the odometry's
     clock, and the one at a standing scan's pose was taken for its anchor: 51 of 100 scans were read
     as a corrected log's (pose fields as corrected poses) and their odometry froze at x 4.75 m (3 m
     off at the end). An anchor's stamp must also lie ANCHOR_STAMP_GAP_S before its laser line's own
-    (21 s or more in Intel and ACES); only the scan just before the jump may still read as anchored,
-    its odometry and corrected pose both its own pose fields."""
+    (21 s or more in Intel and ACES). The scan just before the jump still found its "anchor" (the
+    first ODOM line after the jump, at its pose, 100 s before it by both clocks) and read as corrected,
+    `info` saying "corrected poses 1 scans": a chain's first anchored scan is now held until a second
+    anchor in a row confirms the chain, and read as written when none does. With the odometry host's
+    clock alone set back (two hosts), every ODOM line after the jump lay 100 s before both clocks, the
+    one after each standing scan at its pose: a chain ran, 51 scans "corrected", the odometry frozen at
+    4.75 m (7.75 m at the end). A chain is now confirmed only with an ODOM step on the odometry's own
+    clock between its first two anchors, as a corrected log has (at least two in Intel's and ACES's)."""
     lines, x = [], 0.0
     ranges = " ".join(["2.00"] * BEAMS)
     for k in range(200):
         x += 0.0 if 95 <= k < 140 else 0.05
         t = 1000.0 + 0.1 * k - (100.0 if k >= 100 else 0.0)
+        t_laser = t if jumped == "both clocks" else 1000.0 + 0.1 * k
         lines.append(f"ODOM {x:.3f} 0 0 0 0 0 {t:.3f} h {t:.3f}")
         if k % 2:
-            lines.append(f"FLASER {BEAMS} {ranges} {x:.3f} 0 0 {x:.3f} 0 0 {t + 0.01:.3f} h {t + 0.01:.3f}")
+            lines.append(f"FLASER {BEAMS} {ranges} {x:.3f} 0 0 {x:.3f} 0 0 {t_laser + 0.01:.3f} h {t_laser + 0.01:.3f}")
     (tmp_path / "joined.log").write_text("\n".join(lines) + "\n")
     recs = list(read_log(tmp_path / "joined.log"))
     fields = [float(line.split()[BEAMS + 5]) for line in lines if line.startswith("FLASER")]
     assert len(recs) == 100 and [r.odom[0] for r in recs] == fields  # old: 4.75 from scan 48 on
     anchored = [k for k, r in enumerate(recs) if r.corrected is not None]
-    assert anchored == [49] and recs[49].corrected == recs[49].odom  # old: 51 scans, 49 to 99
+    assert anchored == []  # both clocks, older: 51 scans, 49 to 99; old: [49]. odometry clock, old: 49 to 99
+    from experiments.cli import main
+
+    assert main(["info", str(tmp_path / "joined.log")]) == 0
+    out = capsys.readouterr().out
+    assert "corrected poses" not in out  # old: "corrected poses 1 scans" (odometry clock: 51 scans)
+    assert "  odometry        yes\n" in out  # old: "yes (raw: the ODOM lines between scans, chained)"
