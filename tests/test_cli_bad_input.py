@@ -354,8 +354,8 @@ CASES = [
     (["slam", "{simrun}", "--config", "{slam_turn.yaml}", "--out", O], "alignment.heading_hypotheses: offsets"),
     (["slam", "{backwards.clf}", "--out", O], "backwards"),
     # thinned to one scan of several: a "SLAM" of one pose, exit 0
-    (["slam", "{good.clf}", "--rate-hz", "1e-300", "--out", O], "good.clf: --rate-hz 1e-300 keeps 1 of the 5 scans read "
-                                                               "(stamps 0.000000 to 0.400000 s); SLAM needs two or more"),
+    (["slam", "{good.clf}", "--rate-hz", "0.01", "--out", O], "good.clf: --rate-hz 0.01 keeps 1 of the 5 scans read "
+                                                              "(stamps 0.000000 to 0.400000 s); SLAM needs two or more"),
     (["slam", "{good.clf}", "--every", "10", "--out", O], "good.clf: --every 10 keeps 1 of the 5 scans read"),
     (["slam", "{binary.clf}", "--out", O], "binary"),
     (["slam", "{no_returns.clf}", "--out", O], "no_returns.clf"),
@@ -777,6 +777,26 @@ def test_a_rate_above_the_sensors_is_refused_before_the_study_starts(command, tm
     captured = capsys.readouterr()
     assert captured.err.strip().splitlines() == [
         f"lmsbench {command[0]}: error: --rate-hz: 1e+09 scans/s is more than the sensor gives (37.5 scans/s at 0.5 deg)"]
+    assert captured.out == "" and not out.exists()
+
+
+@pytest.mark.parametrize("argv", [["simulate", "--duration", "5"], ["compare", "office:0", "--duration", "5"],
+                                  ["sim2real", "{good.clf}"], ["figures", "--no-slam"], ["demo", "--no-sweep"],
+                                  ["slam", "{good.clf}"]], ids=lambda a: a[0])
+@pytest.mark.parametrize("rate", ["1e-308", "5e-324", "0.0001"])
+def test_a_rate_below_one_scan_an_hour_is_refused_before_any_work(argv, rate, files, tmp_path, capsys):
+    """`simulate --rate-hz 1e-308` (and compare --rate, sim2real / figures / demo / slam --rate-hz) ran
+    and kept the first scan alone, exit 0 (slam refused it only after reading the whole input): no run
+    of at most an hour keeps a second scan below 1/3600 scans/s."""
+    out = tmp_path / "out"
+    flag = "--rate" if argv[0] == "compare" else "--rate-hz"
+    status = run_main([*_fill(argv, files, out), flag, rate, "--out", str(out)])
+    captured = capsys.readouterr()
+    assert status == 2
+    assert captured.err.strip().splitlines() == [
+        f"lmsbench {argv[0]}: error: argument {'--rate/--rate-hz' if argv[0] == 'compare' else '--rate-hz'}: must be at "
+        "least 1/3600 scans/s (one scan an hour, the longest simulated run: a lower rate keeps the first scan alone), "
+        f"got '{rate}' (see lmsbench {argv[0]} --help)"]
     assert captured.out == "" and not out.exists()
 
 
