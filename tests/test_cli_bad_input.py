@@ -603,6 +603,12 @@ CASES = [
     # --no-paper-baseline on a run of the paper preset itself set nothing, exit 0
     (["slam", "{good.clf}", "--preset", "paper", "--no-paper-baseline", "--out", O],
      "--no-paper-baseline: this run is the paper preset itself, so there is no separate paper baseline to leave out"),
+    # --no-odometry-baseline on an input without odometry set nothing (the baseline runs only with it), exit 0
+    (["slam", "{good.clf}", "--no-odometry-baseline", "--out", O],
+     "good.clf has no odometry, so there is no odometry baseline to leave out (it runs only on an input with odometry "
+     "on every scan)"),
+    (["slam", "{simrun}", "--preset", "paper", "--no-odometry-baseline", "--out", O],
+     "--no-odometry-baseline: "),
     # a log's reading options where no log is compared were ignored, exit 0
     (["compare", "office:0", "--topic", "FLASER", "--skip-bad-lines", "--out", O],
      "--topic, --skip-bad-lines say how to read a log; none of office:0 is one (the worlds are simulated)"),

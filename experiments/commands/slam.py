@@ -255,6 +255,11 @@ def run(args: argparse.Namespace) -> int:
         missing = sum(r.odom is None for r in data.records)
         has = "this input has none" if missing == len(data.records) else f"{missing} of the {len(data.records)} scans have none"
         raise LmsbenchError(f"{args.input}: {asked} needs odometry on every scan, and {has}")
+    if args.no_odometry_baseline and data.odometry is None:  # it set nothing: the baseline runs only with odometry
+        missing = sum(r.odom is None for r in data.records)
+        has = "has no odometry" if missing == len(data.records) else f"has none on {missing} of its {len(data.records)} scans"
+        raise InputError(f"--no-odometry-baseline: {args.input} {has}, so there is no odometry baseline to leave out "
+                         "(it runs only on an input with odometry on every scan)")
     if simulated_interlaced(args.input) is False and config.preset == "default" and config.alignment.deskew:
         config = deskew_for_sensor(config, interlaced=False)
         print(f"{args.input}: simulated with interlaced=False (every beam from one pose): alignment.deskew off",
