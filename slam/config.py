@@ -183,7 +183,8 @@ class MotionConfig:
             velocity (the paper preset: its velocity's uncertainty as at the start, the pose's and
             the map's kept; the default pipeline: its match starts at the last pose). Steps the
             odometry predicts (``use_odometry``) are not affected. Above every gap of the Intel,
-            ACES and MIT CSAIL logs (at most 37.7 s).
+            ACES and MIT CSAIL logs (at most 37.7 s). At least ``MIN_MAX_GAP_S`` (0.01 s: 1e-300
+            made every step a gap, and the model never ran).
         use_odometry: the log's odometry increments drive the prediction instead (never the
             default; the paper preset's filter, or the default pipeline's matcher: its start,
             the heading hypotheses it may try and the search's window); ``odom_noise``: (trans
@@ -541,6 +542,10 @@ class SlamConfig:
         if not (voxel == 0 or MIN_VOXEL_M <= voxel <= MAX_VOXEL_M):  # 1e-12: the cell grid's size overflowed
             raise SlamConfigError(f"keyframes.voxel: must be 0 (no thinning) or in [{MIN_VOXEL_M:g}, {MAX_VOXEL_M:g}] m, "
                                   f"got {voxel}")
+        if not self.motion.max_gap >= MIN_MAX_GAP_S:  # 1e-300: every step restarted the motion, exit 0
+            raise SlamConfigError(f"motion.max_gap: must be at least {MIN_MAX_GAP_S:g} s (100 scans/s, faster than any "
+                                  f"scanner's: a shorter gap makes every step a gap, the motion model never runs), "
+                                  f"got {self.motion.max_gap}")
         if not self.motion.max_dt >= MIN_MAX_DT_S:
             raise SlamConfigError(f"motion.max_dt: must be >= {MIN_MAX_DT_S} s (a gap is integrated in steps of at "
                                   f"most max_dt), got {self.motion.max_dt}")
@@ -711,6 +716,7 @@ SEARCH_CELL_M = 0.5  # m: cell of the scan matcher's search grid, the farthest a
 MAX_PRIOR_SIGMA = 1.0  # m and rad: loosest prior on the first keyframe that still anchors the graph
 MAX_MATCH_RANGE_M = 1e4  # alignment.max_range: at most 10 km (as the command line's --laser-range-max)
 MIN_VOXEL_M, MAX_VOXEL_M = 1e-3, 10.0  # keyframes.voxel: a local map's cells (m), when thinned
+MIN_MAX_GAP_S = 0.01  # s: motion.max_gap; the LMS200 scans at most 75 times a second, a Hokuyo 40
 MIN_MAX_DT_S = 1e-3  # s: finest prediction step of the paper preset (a 10 s gap: at most 10,000 steps)
 SECTIONS: dict[str, type] = {"motion": MotionConfig, "observations": ObservationConfig, "alignment": AlignmentConfig,
                              "keyframes": KeyframeConfig, "loop_closure": LoopClosureConfig,

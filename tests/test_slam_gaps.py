@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import gzip
 import itertools
+import re
 from pathlib import Path
 
 import numpy as np
@@ -94,3 +95,17 @@ def test_a_pose_lost_beyond_the_readers_bound_is_nan_and_the_run_unhealthy(monke
     write_tum(tmp_path / "t.tum", res.trajectory[:, 0], res.trajectory[:, 1:])
     stamps, poses = read_tum(tmp_path / "t.tum", allow_nan=True)
     assert stamps.tolist() == [0.0, 0.1, 0.2, 0.3] and np.isnan(poses[2:]).all()
+
+
+@pytest.mark.parametrize("gap", [1e-300, 1e-3, 0.0099])
+def test_a_max_gap_shorter_than_any_scanners_step_is_refused(gap):
+    """``motion.max_gap: 1e-300`` was taken: every step was a gap, the motion restarted at each and
+    the model never ran (exit 0, one warning); every scanner steps more slowly than 100 scans/s."""
+    from slam import SlamConfig
+    from slam.config import SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=re.escape(
+            f"motion.max_gap: must be at least 0.01 s (100 scans/s, faster than any scanner's: a shorter gap makes "
+            f"every step a gap, the motion model never runs), got {gap}")):
+        SlamConfig.from_dict({"motion": {"max_gap": gap}})
+    assert SlamConfig.from_dict({"motion": {"max_gap": 0.01}}).motion.max_gap == 0.01  # the bound itself is taken
