@@ -512,6 +512,10 @@ CASES = [
     (["lms200", "emulate", "--log", "{missing.clf}"], "missing.clf"),
     (["lms200", "emulate", "--rfc2217"], "--tcp"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--duration", "-5"], "--duration"),
+    # shorter than any scan: the emulator stopped at once ("0 scans sent"), the recorder "recorded no scan", exit 0
+    (["lms200", "emulate", "--duration", "1e-320"], "argument --duration: must be a finite number >= 0.1 s, got '1e-320'"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--duration", "1e-300"],
+     "argument --duration: must be a finite number >= 0.1 s, got '1e-300'"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--max-scans", "0"], "--max-scans"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--timeout", "0"], "--timeout"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--mode-timeout", "0"], "--mode-timeout"),
