@@ -139,6 +139,10 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
                     raise LmsbenchError(f"{p / 'world.json'}: not a world.json: it holds no walls, circles or boxes, "
                                         "nothing to scan or score against")  # as World.from_json (compare): the
                 walls = np.asarray(content["walls"], float).reshape(-1, 4)  # map was scored against nothing, exit 0
+                if not walls.size and content.get("boxes"):  # the boxes simulated the scans, the walls score the map:
+                    raise LmsbenchError(f"{p / 'world.json'}: not a world.json: its walls list is empty beside "  # with
+                                        f"{len(content['boxes'])} boxes, so the map would be scored against no wall "
+                                        "(simulate writes the boxes' faces there)")  # none, 0 matched, exit 0
                 sources["walls"] = str(p / "world.json")
             except (KeyError, TypeError, ValueError) as exc:  # TypeError: a JSON list, null or a dict of walls
                 raise LmsbenchError(f"{p / 'world.json'}: no wall list ({exc})") from None

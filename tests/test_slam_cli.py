@@ -985,3 +985,24 @@ def test_the_slam_figure_draws_walls_and_map_lines_as_one_artist_each(sim_folder
     plot(tmp_path / "slam.png", data, res)
     assert seen["segments"] == [len(data.walls), len(res.map_lines)] and seen["lines"] <= 4  # truth, path, legend
     assert seen["xlim"][0] <= -80.0  # the far wall is in view
+
+
+def test_a_world_json_of_boxes_with_an_empty_walls_list_is_refused(sim_folder, tmp_path, capsys):
+    """simulate writes the boxes (what is scanned) and their faces as walls (what the map is scored
+    against); a world.json whose walls list was emptied ran, its map scored against no wall
+    (metrics.json map: matched 0, wall_coverage 0.0), exit 0."""
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    world = json.loads((run / "world.json").read_text())
+    assert world["boxes"] and world["walls"]
+    world["walls"] = []
+    (run / "world.json").write_text(json.dumps(world))
+    assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench slam: error: {run / 'world.json'}: not a world.json: its walls list is empty beside "
+        f"{len(world['boxes'])} boxes, so the map would be scored against no wall (simulate writes the boxes' faces there)"]
+    assert not (tmp_path / "o").exists()
