@@ -90,6 +90,25 @@ def simulated_interlaced(path: str | Path) -> bool | None:
     return value if isinstance(value, bool) else None
 
 
+def _check_cut_boxes(path: Path, content: dict) -> None:
+    """Refuse a world.json whose walls list is empty although some box spans the scan plane: simulate
+    writes the faces of those boxes (sim.world.spans_plane, the rule World uses) as the walls, so an
+    empty list beside them would score the map against no wall. Boxes all off the plane give no walls:
+    simulate wrote that file itself (they were scanned as nothing)."""
+    from sim.world import SCAN_HEIGHT_M, spans_plane
+
+    try:
+        boxes = np.asarray(content["boxes"], float).reshape(-1, 7)
+        h = float(content.get("scan_height", SCAN_HEIGHT_M))
+    except (TypeError, ValueError) as exc:
+        raise LmsbenchError(f"{path}: not a world.json (boxes: rows of cx, cy, yaw, hx, hy, z0, z1: {exc})") from None
+    cut = int(spans_plane(boxes[:, 5], boxes[:, 6], h).sum())
+    if cut:
+        raise LmsbenchError(f"{path}: not a world.json: its walls list is empty beside {cut} of its {len(boxes)} "
+                            f"boxes that span the scan plane (at {h:g} m), so the map would be scored against no "
+                            "wall (simulate writes those boxes' faces there)")
+
+
 def load_input(path: str | Path, relations: str | Path | None = None, every: int = 1,
                max_scans: int | None = None, rate_hz: float | None = None,
                read_options: dict[str, Any] | None = None) -> SlamInput:
@@ -140,9 +159,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
                                         "nothing to scan or score against")  # as World.from_json (compare): the
                 walls = np.asarray(content["walls"], float).reshape(-1, 4)  # map was scored against nothing, exit 0
                 if not walls.size and content.get("boxes"):  # the boxes simulated the scans, the walls score the map:
-                    raise LmsbenchError(f"{p / 'world.json'}: not a world.json: its walls list is empty beside "  # with
-                                        f"{len(content['boxes'])} boxes, so the map would be scored against no wall "
-                                        "(simulate writes the boxes' faces there)")  # none, 0 matched, exit 0
+                    _check_cut_boxes(p / "world.json", content)  # with none, 0 matched, exit 0
                 sources["walls"] = str(p / "world.json")
             except (KeyError, TypeError, ValueError) as exc:  # TypeError: a JSON list, null or a dict of walls
                 raise LmsbenchError(f"{p / 'world.json'}: no wall list ({exc})") from None

@@ -22,6 +22,12 @@ from .geometry import distance_to_segments, face_corners, rectangle_corners, uni
 from .walls_only import box_thickness, orient_walls, unreproduced
 
 SCAN_HEIGHT_M = 0.35  # height of the scan plane above the floor (LMS200 on a Pioneer-class robot)
+
+
+def spans_plane(z0: np.ndarray, z1: np.ndarray, scan_height: float) -> np.ndarray:
+    """Which solids (bottoms ``z0``, tops ``z1``) the scan plane at ``scan_height`` cuts, ends included:
+    only their cross-sections are walls and circles (World), and only they are scanned."""
+    return (np.asarray(z0) <= scan_height) & (np.asarray(z1) >= scan_height)
 MAX_COORD_M = 1e6  # m: the largest coordinate a world may hold (a building is < 1 km; beyond, float geometry degrades)
 FACE_BOX_THICKNESS_M = 0.05  # thickness of the boxes rebuilt behind faces for a walls-only world.json
 #: solids a world may hold at most (boxes + cylinders; a walls-only world.json's walls + circles): its
@@ -121,8 +127,8 @@ class World:
         self.scan_height = float(self.scan_height)
         self._check()
         h = self.scan_height
-        cut_boxes = self.boxes[(self.boxes[:, 5] <= h) & (self.boxes[:, 6] >= h)]
-        cut_cyl = self.cylinders[(self.cylinders[:, 3] <= h) & (self.cylinders[:, 4] >= h)]
+        cut_boxes = self.boxes[spans_plane(self.boxes[:, 5], self.boxes[:, 6], h)]
+        cut_cyl = self.cylinders[spans_plane(self.cylinders[:, 3], self.cylinders[:, 4], h)]
         self.circles = cut_cyl[:, :3].copy()
         rects = [rectangle_corners(*b[:5]) for b in cut_boxes]
         self.walls = union_faces(rects, self.circles)

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lms200 import read_tum, write_log, write_tum
+from lms200 import LmsbenchError, read_tum, write_log, write_tum
 from sim_folder import write_sim_folder
 
 
@@ -1000,9 +1000,34 @@ def test_a_world_json_of_boxes_with_an_empty_walls_list_is_refused(sim_folder, t
     world = json.loads((run / "world.json").read_text())
     assert world["boxes"] and world["walls"]
     world["walls"] = []
+    assert sum(b[5] <= 0.35 <= b[6] for b in world["boxes"]) == 37 and len(world["boxes"]) == 39
     (run / "world.json").write_text(json.dumps(world))
     assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet"]) == 2
     assert capsys.readouterr().err.strip().splitlines() == [
         f"lmsbench slam: error: {run / 'world.json'}: not a world.json: its walls list is empty beside "
-        f"{len(world['boxes'])} boxes, so the map would be scored against no wall (simulate writes the boxes' faces there)"]
+        f"{sum(b[5] <= 0.35 <= b[6] for b in world['boxes'])} of its {len(world['boxes'])} boxes that span the scan plane (at 0.35 m), so the map "
+        "would be scored against no wall (simulate writes those boxes' faces there)"]
     assert not (tmp_path / "o").exists()
+
+
+def test_a_world_json_whose_boxes_all_sit_off_the_scan_plane_is_read(sim_folder, tmp_path):
+    """simulate writes no walls for boxes the scan plane does not cut (sim.world.spans_plane): its own
+    world.json of low boxes and tall cylinders was refused by slam as 'walls list is empty beside 2 boxes'."""
+    import shutil
+
+    from experiments.slamrun import load_input
+    from sim.world import World
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    World(name="lowbox", seed=0, boxes=[[0, 0, 0, 0.5, 0.5, 0.0, 0.1], [8, 0, 0, 0.5, 0.5, 0.0, 0.1]],
+          cylinders=[[2, 2, 0.3, 0, 2]], scan_height=0.3).to_json(run / "world.json")
+    written = json.loads((run / "world.json").read_text())
+    assert written["walls"] == [] and len(written["boxes"]) == 2
+    data = load_input(run)
+    assert data.sources["walls"] == str(run / "world.json") and data.walls.shape == (0, 4)
+    # one box that reaches the plane (its top exactly at it, ends included as World cuts it) is refused
+    written["boxes"][1][6] = 0.3
+    (run / "world.json").write_text(json.dumps(written))
+    with pytest.raises(LmsbenchError, match=r"empty beside 1 of its 2 boxes that span the scan plane \(at 0.3 m\)"):
+        load_input(run)
