@@ -65,6 +65,7 @@ class Source:
     # :func:`_with_noise`) and the range_max of its scans (m; which range-noise field applies)
     ran: dict[str, Any] = dataclasses.field(default_factory=dict)
     range_maxes: set[float] = dataclasses.field(default_factory=set)
+    stride: int = 1  # records are every stride-th scan of the log: record k is the log's scan k * stride (messages)
 
     @classmethod
     def from_records(cls, records: Sequence[Record], truths: Sequence[Any] | None = None, name: str = "sim",
@@ -168,7 +169,7 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
     inner = log_source(p / SIMULATE_LOG, stride, max_scans, poses="none")
     return Source(p.name, "sim", int(seed) if seed is not None else None, inner.records, _truth_in(world, sensor),
                   max_scans, sigma_r=sensor.noise_sigma, pose_of=lambda rec: rec.truth, reader=inner.reader,
-                  settings=settings)
+                  settings=settings, stride=stride)
 
 
 POSES = ("auto", "corrected", "none")
@@ -233,7 +234,7 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
                   pose_of=None if poses == "none" else partial(_corrected_pose, odometry_too=corrected),
                   estimate_sigma=estimate_sigma,
                   reader=reader, **log_noise_estimates(lambda: read_log(path, **options)),
-                  settings={"log": str(path), "stride": stride, "poses": poses, **_plain(options)})
+                  settings={"log": str(path), "stride": stride, "poses": poses, **_plain(options)}, stride=stride)
 
 
 def _corrected_pose(rec: Record, odometry_too: bool) -> Pose2D | None:
@@ -538,7 +539,7 @@ def compare(
                                                     face=face, rho_err=dr, alpha_err=da))
                     rows.append(row)
             except UserMethodFailed as exc:
-                raise exc.at(source_label(src), k)
+                raise exc.at(source_label(src), k * src.stride)  # the log's own scan number, as docs/commands.md
             if bar is not None:
                 bar.update(1)
     if bar is not None:

@@ -47,6 +47,12 @@ class SlamInput:
     sources: dict[str, str] = field(default_factory=dict)
     reference: str = "ground truth"  # what ``truth`` holds: "ground truth", or "corrected poses" of a log
     time_increment: float | None = None  # s between beams as a bag's LaserScans give it (BagReadStats)
+    numbers: list[int] = field(default_factory=list)  # each record's own scan number in the log (from 0); [] as 0, 1, ...
+
+    def number(self, k: int) -> int:
+        """The log's own scan number of record ``k`` (messages name a scan by it, docs/commands.md), not
+        its index among the scans kept (``--every`` / ``--rate-hz`` / ``--max-scans``)."""
+        return self.numbers[k] if self.numbers else k
 
     @property
     def odometry(self) -> np.ndarray | None:
@@ -189,6 +195,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     from features.registry import check_beams
 
     records: list[Record] = []
+    numbers: list[int] = []  # the log's own scan number of each record kept
     reader = read_log(log, **(read_options or {}))
     first_stamp, last_stamp, n_read, timed = None, None, 0, False  # timed: some scan read has another stamp than the first
     for k, rec in enumerate(reader):
@@ -206,6 +213,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
             # by the log's own scan number (counted from 0), not the kept scan's
             check_beams(rec.scan, f"{log}: scan {k}")
             records.append(rec)
+            numbers.append(k)
             if max_scans is not None and len(records) >= max_scans:
                 break
     if getattr(reader, "stats", None) is not None and (reader.stats.skipped or reader.stats.stopped):
@@ -238,7 +246,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         reference = "corrected poses"
     time_increment = getattr(getattr(reader, "stats", None), "time_increment", None)  # bags only
     return SlamInput(p.name, records, truth, walls, rel, sources, reference,
-                     time_increment if isinstance(time_increment, float) else None)
+                     time_increment if isinstance(time_increment, float) else None, numbers)
 
 
 def _check_truth_span(truth: np.ndarray, records: list[Record], where: str) -> None:
@@ -316,7 +324,7 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     and slam.png in --out were deleted).
     """
     t0, c0 = time.perf_counter(), time.process_time()
-    with scans_of(data.name, data.records):  # a user's --extractor MODULE:FUNCTION that fails names its scan
+    with scans_of(data.name, data.records, data.numbers):  # a user's --extractor MODULE:FUNCTION that fails names its scan
         result = run_slam(_bar(data.records, "slam", progress), config)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     if out is not None:
@@ -339,7 +347,7 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
                             "comparison table (--no-paper-baseline leaves it out) ...")
         t1, c1 = time.perf_counter(), time.process_time()
         paper_config = dataclasses.replace(config, preset="paper")  # the same motion input as the run
-        with scans_of(data.name, data.records):
+        with scans_of(data.name, data.records, data.numbers):
             paper = run_slam(_bar(data.records, "paper preset", progress), paper_config)
         table.append({"source": _source_name(paper_config), **_flat(score(paper.trajectory, data, paper)),
                       "cpu_scans_per_s": len(data.records) / max(time.process_time() - c1, 1e-9),
@@ -355,7 +363,7 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
                                 f"{len(data.records)} scans, for the comparison table (--no-odometry-baseline leaves "
                                 "it out) ...")
             t1 = time.perf_counter()
-            with scans_of(data.name, data.records):
+            with scans_of(data.name, data.records, data.numbers):
                 with_odo = run_slam(_bar(data.records, "paper preset (odometry)", progress),
                                     dataclasses.replace(config, preset="paper", motion=dataclasses.replace(config.motion, use_odometry=True)))
             table.append({"source": "paper preset (odometry)", **_flat(score(with_odo.trajectory, data, with_odo)),

@@ -60,25 +60,29 @@ class UserMethodFailed(UserMethodError):
         self.args = (self._message(),)
         return self
 
-    def at_scan_of(self, source: str, scans: Sequence[Any]) -> "UserMethodFailed":
+    def at_scan_of(self, source: str, scans: Sequence[Any], numbers: Sequence[int] | None = None) -> "UserMethodFailed":
         """This error, naming its scan by its index in ``scans`` (scans or records, found by
-        identity, else by stamp: a driver that passed copies, e.g. de-skewed ones)."""
+        identity, else by stamp: a driver that passed copies, e.g. de-skewed ones), or by ``numbers``
+        at that index (the log's own scan number of each, where ``scans`` are some of a log's)."""
         items = [getattr(s, "scan", s) for s in scans]
         k = next((i for i, s in enumerate(items) if s is self.scan), None)
         stamp = getattr(self.scan, "stamp", None)
         if k is None and stamp is not None:
             k = next((i for i, s in enumerate(items) if getattr(s, "stamp", None) == stamp), None)
+        if k is not None and numbers:
+            k = numbers[k]
         return self.at(source, k) if k is not None else self
 
 
 @contextlib.contextmanager
-def scans_of(source: str, scans: Sequence[Any]) -> Iterator[None]:
+def scans_of(source: str, scans: Sequence[Any], numbers: Sequence[int] | None = None) -> Iterator[None]:
     """Within it, a user extractor's failure names its scan by its index in ``scans`` (scans or
-    records) of ``source``: for a driver that hands a whole run to a library call (``run_slam``)."""
+    records) of ``source``, or by ``numbers`` at that index (the log's own scan numbers): for a driver
+    that hands a whole run to a library call (``run_slam``)."""
     try:
         yield
     except UserMethodFailed as exc:
-        raise exc.at_scan_of(source, scans)
+        raise exc.at_scan_of(source, scans, numbers)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Iterator
+from typing import Any, Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -306,12 +306,15 @@ MAX_STAMP_STEP_S = 1e12
 MAX_POSE_M = MAX_COORD_M
 
 
-def in_scale(records: Iterable[Record], label: str = "records[{k}]") -> Iterator[Record]:
+def in_scale(records: Iterable[Record], label: str = "records[{k}]",
+             numbers: Sequence[int] | None = None) -> Iterator[Record]:
     """The records, raising SlamInputError (naming the record by ``label``, formatted with its index
-    ``k``) at the first whose stamp lies more than MAX_STAMP_STEP_S after the one before or whose
-    odometry, true or corrected pose has a coordinate beyond +-MAX_POSE_M (lazily, as they are used)."""
+    ``k``, or with ``numbers[k]``: the log's own scan number of each record) at the first whose stamp lies
+    more than MAX_STAMP_STEP_S after the one before or whose odometry, true or corrected pose has a
+    coordinate beyond +-MAX_POSE_M (lazily, as they are used)."""
     before = None
-    for k, rec in enumerate(records):
+    for i, rec in enumerate(records):
+        k = numbers[i] if numbers else i
         stamp = rec.scan.stamp
         if before is not None and stamp - before > MAX_STAMP_STEP_S:
             raise SlamInputError(f"{label.format(k=k)}: stamp {stamp:.6g} s lies {stamp - before:.3g} s after the "

@@ -123,7 +123,7 @@ def test_slam_refuses_a_log_of_one_stamp_and_warns_of_steps_without_time(sim_fol
     err = capsys.readouterr().err.strip().splitlines()
     assert [line for line in err if "take no time" in line] == [
         f"lmsbench slam: warning: {tmp_path / 'paired.clf'}: 10 of 19 steps take no time (scan 1 has the stamp of the "
-        f"scan before, {records[0].scan.stamp:.6f} s): the motion model predicts no motion and the search no turn "
+        f"scan kept before it, scan 0's {records[0].scan.stamp:.6f} s): the motion model predicts no motion and the search no turn "
         "over them"]
     assert read_tum(tmp_path / "p" / "trajectory.tum")[0].size == 20
 
@@ -1031,3 +1031,37 @@ def test_a_world_json_whose_boxes_all_sit_off_the_scan_plane_is_read(sim_folder,
     (run / "world.json").write_text(json.dumps(written))
     with pytest.raises(LmsbenchError, match=r"empty beside 1 of its 2 boxes that span the scan plane \(at 0.3 m\)"):
         load_input(run)
+
+
+def test_slam_messages_name_the_logs_own_scan_number_under_every(sim_folder, tmp_path, capsys):
+    """docs/commands.md: messages count a log's scans from 0, by the log's own number. With --every 2
+    the time-order, skipped-scan, in-scale, no-time-step and max_gap messages named the index among the
+    scans kept: "time goes backwards at scan 2" for the log's scan 4."""
+    import dataclasses
+
+    from experiments.cli import main
+    from lms200 import read_log
+
+    records = list(read_log(sim_folder / "scans.clf"))[:20]
+    t = [r.scan.stamp for r in records]
+
+    def log(name: str, stamps: list[float]) -> str:
+        write_log(tmp_path / name, [dataclasses.replace(r, scan=r.scan.replace(stamp=s)) for r, s in zip(records, stamps)])
+        return str(tmp_path / name)
+
+    back = log("back.clf", [t[1] if k == 4 else s for k, s in enumerate(t)])  # scan 4 before scan 2 (kept: 0, 2, 4, ...)
+    assert main(["slam", back, "--every", "2", "--out", str(tmp_path / "o1"), "--quiet"]) == 2
+    assert capsys.readouterr().err.startswith(f"lmsbench slam: error: {back}: time goes backwards at scan 4 (stamp "
+                                              f"{t[1]:.6f} s after {t[2]:.6f} s)")
+    assert main(["slam", back, "--every", "2", "--skip-bad-lines", "--out", str(tmp_path / "o2"), "--quiet"]) == 0
+    # kept stamps t0, t2, t1, t6, ...: one of the log's scans 2 and 4 goes (kept scans 1 and 2)
+    assert f"{back}: skipped scan 2 (stamp {t[2]:.6f} s): out of time order" in capsys.readouterr().err
+    far = log("far.clf", [s + (1e200 if k >= 10 else 0.0) for k, s in enumerate(t)])
+    assert main(["slam", far, "--every", "2", "--out", str(tmp_path / "o3"), "--quiet"]) == 2
+    assert capsys.readouterr().err.startswith(f"lmsbench slam: error: {far}: scan 10: stamp 1e+200 s lies")
+    odd = log("odd.clf", [t[4] if k == 6 else s + (100.0 if k >= 10 else 0.0) for k, s in enumerate(t)])
+    assert main(["slam", odd, "--every", "2", "--out", str(tmp_path / "o4"), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert (f"1 of 9 steps take no time (scan 6 has the stamp of the scan kept before it, scan 4's {t[4]:.6f} s)"
+            in err)
+    assert f"(scan 10 is stamped {t[10] + 100 - t[8]:.6g} s after scan 8, the one kept before it)" in err

@@ -47,7 +47,7 @@ def test_a_huge_gap_restarts_the_motion_and_the_trajectory_reads_back(gap_log, t
         read_tum(out / "keyframes.tum")
     err = capsys.readouterr().err
     assert ("warning: " + str(gap_log) + ": 1 of 49 steps are longer than motion.max_gap, 60 s (scan 25 is stamped "
-            "1e+11 s after the scan before): the motion restarts from the last pose with zero velocity after each") in err
+            "1e+11 s after scan 24, the one kept before it): the motion restarts from the last pose with zero velocity after each") in err
     import json
 
     m = json.loads((out / "metrics.json").read_text())

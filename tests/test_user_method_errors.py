@@ -220,3 +220,40 @@ def test_a_test_keeps_the_finders_it_added_but_a_user_folders():
 
     kept, other, users, earlier = object(), object(), FolderFinder("/x"), FolderFinder("/y")
     assert meta_path_after([kept, earlier], [kept, earlier, other, users]) == [kept, earlier, other]
+
+
+def test_compare_names_a_logs_own_scan_number_under_stride(boom, capsys) -> None:
+    """docs/commands.md: a scan is named by the log's own number. compare --stride 2 named the third
+    call's scan (warm-up and timed on the log's scan 0, then its scan 2) 'scan 1', the index among those kept."""
+    from lms200 import write_log
+    from sim import simulate_records
+
+    write_log(boom / "run.clf", simulate_records("office", seed=0, duration=2.0)[:8])
+    assert main(["compare", "run.clf", "--stride", "2", "--methods", "boomext:boom", "--out", "cmp",
+                 "--no-progress"]) == 2
+    assert capsys.readouterr().err == ("lmsbench compare: error: your extractor boomext:boom raised RuntimeError: x "
+                                       f"on run.clf scan 2{TRACEBACK_HINT}\n")
+
+
+def test_slam_every_names_the_failing_scan_by_the_logs_own_number(boom, capsys) -> None:
+    """slam --every 2 --extractor: the user's extractor failing on the log's scan 4 (the third kept) was
+    named 'scan 2', the index among the scans kept (docs/commands.md: the log's own number)."""
+    from lms200 import write_log
+    from sim import simulate_records
+
+    records = simulate_records("office", seed=0, duration=2.0)[:12]
+    write_log(boom / "run.clf", records)
+    (boom / "late.py").write_text(
+        "from features import extract\n"
+        "def late(scan):\n"
+        f"    if scan.stamp >= {records[4].scan.stamp!r}:\n"
+        "        raise RuntimeError('late')\n"
+        "    return extract(scan, method='split_merge')\n")
+    sys.modules.pop("late", None)
+    try:
+        assert main(["slam", "run.clf", "--every", "2", "--extractor", "late:late", "--preset", "paper", "--out", "s",
+                     "--quiet"]) == 2
+    finally:
+        sys.modules.pop("late", None)
+    assert capsys.readouterr().err == ("lmsbench slam: error: your extractor late:late raised RuntimeError: late on "
+                                       f"run.clf scan 4{TRACEBACK_HINT}\n")

@@ -214,14 +214,15 @@ def run(args: argparse.Namespace) -> int:
     if back is not None:
         where = data.sources.get("scans", args.input)
         if not args.skip_bad_lines:
-            raise InputError(f"{where}: time goes backwards at scan {back} (stamp {fixed(stamps[back])} s after "
-                             f"{fixed(stamps[back - 1])} s); SLAM needs scans in time order (--skip-bad-lines "
+            raise InputError(f"{where}: time goes backwards at scan {data.number(back)} (stamp {fixed(stamps[back])} s "
+                             f"after {fixed(stamps[back - 1])} s); SLAM needs scans in time order (--skip-bad-lines "
                              "skips the fewest scans that leave the rest in order)")
         keep = in_time_order(stamps)
         kept = set(keep)
         for k in (k for k in range(len(stamps)) if k not in kept):
-            print(f"{where}: skipped scan {k} (stamp {fixed(stamps[k])} s): out of time order", file=sys.stderr)
+            print(f"{where}: skipped scan {data.number(k)} (stamp {fixed(stamps[k])} s): out of time order", file=sys.stderr)
         data.records = [data.records[k] for k in keep]
+        data.numbers = [data.number(k) for k in keep]
         if data.truth is not None and np.array_equal(data.truth[:, 0], stamps):  # a pose per scan (TRUEPOS)
             data.truth = data.truth[keep]
         if len(data.records) < 2:  # it ran on the one scan left (load_input refuses a one-scan input)
@@ -231,7 +232,7 @@ def run(args: argparse.Namespace) -> int:
 
     # before any output (run_slam checks the same as it goes: a stamp 1e200 s after the one before or an
     # odometry of 1e300 m was an internal error after the run started)
-    for _ in in_scale(data.records, f"{data.sources.get('scans', args.input)}: scan {{k}}"):
+    for _ in in_scale(data.records, f"{data.sources.get('scans', args.input)}: scan {{k}}", data.numbers):
         pass
     stamps = [r.scan.stamp for r in data.records]
     still = [k for k in range(1, len(stamps)) if stamps[k] == stamps[k - 1]]
@@ -240,15 +241,17 @@ def run(args: argparse.Namespace) -> int:
                 else "where the odometry gives no step for them, the motion model predicts no motion and the search no "
                      "turn over them")
         print(f"lmsbench slam: warning: {data.sources.get('scans', args.input)}: {len(still)} of {len(stamps) - 1} "
-              f"steps take no time (scan {still[0]} has the stamp of the scan before, {fixed(stamps[still[0]])} s): "
+              f"steps take no time (scan {data.number(still[0])} has the stamp of the scan kept before it, scan "
+              f"{data.number(still[0] - 1)}'s {fixed(stamps[still[0]])} s): "
               f"{over}", file=sys.stderr)
     gaps = [k for k in range(1, len(stamps)) if stamps[k] - stamps[k - 1] > config.motion.max_gap]
     if gaps:  # the constant-velocity model knows nothing of such a gap: the motion restarts (slam.config.MotionConfig)
         longest = max(gaps, key=lambda k: stamps[k] - stamps[k - 1])
         over = "" if not config.motion.use_odometry else " where the odometry gives no step"
         print(f"lmsbench slam: warning: {data.sources.get('scans', args.input)}: {len(gaps)} of {len(stamps) - 1} "
-              f"steps are longer than motion.max_gap, {config.motion.max_gap:g} s (scan {longest} is stamped "
-              f"{stamps[longest] - stamps[longest - 1]:.6g} s after the scan before): the motion restarts{over} from the "
+              f"steps are longer than motion.max_gap, {config.motion.max_gap:g} s (scan {data.number(longest)} is stamped "
+              f"{stamps[longest] - stamps[longest - 1]:.6g} s after scan {data.number(longest - 1)}, the one kept before "
+              f"it): the motion restarts{over} from the "
               "last pose with zero velocity after each", file=sys.stderr)
     if config.motion.use_odometry and data.odometry is None:
         asked = "--odometry" if args.odometry else f"motion.use_odometry (in {args.config})"
