@@ -549,3 +549,22 @@ def test_a_bag_recording_killed_in_a_stall_keeps_the_scans_before_it(tmp_path: P
         got = [rec.scan for rec in read_log(out)]
     assert [codes(s) for s in got] == [codes(s) for s in sent]
     assert [str(w.message).split(": it has no index; ")[1] for w in caught] == ["5 messages recovered from its 2 whole chunks"]
+
+
+@pytest.mark.slow
+def test_a_duration_shorter_than_a_scans_telegram_is_an_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`record --duration 0.1` at 9600 baud (a 361-beam telegram takes 0.76 s) printed "recorded no scan
+    ... not written" and exited 0: the duration ran out before the first scan could come."""
+    from experiments.cli import main
+    from lms200.protocol import scan_telegram_seconds
+
+    assert scan_telegram_seconds(361, 38400) == pytest.approx(732 * 10 / 38400)  # 0.19 s
+    assert scan_telegram_seconds(361, 9600) == pytest.approx(0.7625)
+    out = tmp_path / "rec.clf"
+    with TcpServer(VirtualLMS200(source(), time_scale=1.0)) as ad:
+        assert main(["lms200", "record", "--port", ad.url, "--out", str(out), "--baud", "9600", "--duration", "0.1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err == (f"lmsbench lms200 record: error: --duration 0.1 s ended before the first scan came ({out} not "
+                   "written): one 361-beam scan telegram takes 0.76 s at 9600 baud, and the first whole one can take "
+                   "twice that; give --duration 1.6 or more (or a higher --baud)")
+    assert not out.exists()

@@ -4,6 +4,7 @@ recorder that logs a real (or virtual) LMS200 to a CARMEN log or a ROS bag."""
 from __future__ import annotations
 
 import argparse
+import math
 import signal
 import sys
 import time
@@ -23,8 +24,10 @@ from experiments.options import (WORLDS, PORT, SEED, InputError, check_log, chec
                                  text, world_name)
 
 
-#: emulate / record --duration: at least lms200.timing.MIN_DURATION_S, the shortest run that holds a scan in
-#: every LMS200 mode (1e-300 stopped at once: "0 scans sent" / "recorded no scan", exit 0)
+#: emulate / record --duration: at least lms200.timing.MIN_DURATION_S (1e-300 stopped at once: "0 scans sent" /
+#: "recorded no scan", exit 0). Wall-clock seconds in both: emulate's --time-scale does not scale it (at 0.01 a
+#: 0.1 s run holds hundreds of scans' line time; at 100 none, but serving stops there as asked). A recording
+#: whose duration ends before its first scan (a telegram takes 0.19 s at 38400 baud) is an error (_no_scan_within).
 STOP_AFTER = number(MIN_DURATION_S, unit="s")
 
 
@@ -44,8 +47,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (default cm, as the LMS200 ships)")
     e.add_argument("--time-scale", type=number(0.0, MAX_TIME_SCALE, lo_open=True), default=1.0,
                    help=f"multiplies every byte time and device delay (default 1, real time; 0.01 = 100x faster; at most {MAX_TIME_SCALE:g})")
-    e.add_argument("--duration", type=STOP_AFTER, help=f"stop after this many seconds (at least {MIN_DURATION_S:g}; "
-                                                      "default: until Ctrl-C)")
+    e.add_argument("--duration", type=STOP_AFTER, help=f"stop after this many seconds of wall-clock time, whatever --time-scale "
+                                                      f"(at least {MIN_DURATION_S:g}; default: until Ctrl-C)")
     add_log_options(e)  # with --log
     e.set_defaults(func=run_emulate)
 
@@ -59,7 +62,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=float, default=0.5,
                    choices=(1.0, 0.5, 0.25), help="angular resolution, deg (default 0.5; --resolution is the old spelling)")
     r.add_argument("--max-scans", type=count(1), help="stop after this many scans")
-    r.add_argument("--duration", type=STOP_AFTER, help=f"stop after this many seconds (at least {MIN_DURATION_S:g})")
+    r.add_argument("--duration", type=STOP_AFTER, help=f"stop after this many seconds (at least {MIN_DURATION_S:g}; one that ends before the first scan, "
+                                                      "a 361-beam telegram taking 0.19 s at 38400 baud, is an error)")
     r.add_argument("--timeout", type=number(0.0, MAX_TIMEOUT_S, lo_open=True, unit="s"), default=0.5,
                    help=f"seconds to wait for a reply, on top of the line time (default 0.5, at most {MAX_TIMEOUT_S:g})")
     r.add_argument("--mode-timeout", type=number(0.0, MAX_TIMEOUT_S, lo_open=True, unit="s"), default=3.5,
@@ -247,6 +251,24 @@ def _record_failed(out: Path, written: int, error: BaseException | None, closing
     return f"{what}; the {written} scans before it are saved in {out}"
 
 
+def _no_scan_within(duration: float, baud: int, variant: tuple[int, int], out: Path) -> str:
+    """The one line of a recording whose --duration ran out before its first scan: what one scan's
+    telegram takes at the baud used, and the duration that holds one (the stream may start mid-telegram:
+    the first whole one ends within two telegrams' time)."""
+    from lms200.protocol import scan_telegram_seconds
+
+    fov, res_cdeg = variant
+    beams = round(fov * 100 / res_cdeg) + 1
+    telegram = scan_telegram_seconds(beams, baud)
+    need = math.ceil(2 * telegram * 10) / 10
+    if duration >= need:  # time enough for a scan: the device sent none
+        return (f"--duration {duration:g} s ended with no scan from the device ({out} not written), though one "
+                f"{beams}-beam scan telegram takes {telegram:.2f} s at {baud} baud")
+    return (f"--duration {duration:g} s ended before the first scan came ({out} not written): one {beams}-beam scan "
+            f"telegram takes {telegram:.2f} s at {baud} baud, and the first whole one can take twice that; give "
+            f"--duration {need:g} or more (or a higher --baud)")
+
+
 def run_record(args: argparse.Namespace) -> int:
     if args.out.is_dir():  # was "unknown kind '(no suffix)'"
         raise InputError(f"--out {args.out} is a folder; give a file name (.clf, .log, .gz or .bag)")
@@ -272,6 +294,7 @@ def run_record(args: argparse.Namespace) -> int:
                       f"(Ctrl-C stops)")
             print(f"{opened:<{len(status)}}", file=sys.stderr, flush=True)
             set_up = True
+            line = (dev.baud, dev.variant)
             progress = _Progress(dev)
             counted = _Counted(_records(dev, progress, stop, args.max_scans, args.duration))
             try:
@@ -299,6 +322,8 @@ def run_record(args: argparse.Namespace) -> int:
         raise LmsbenchError(_record_failed(args.out, written, stop["error"]))
     if written == 0:
         _drop_empty(args.out)
+        if args.duration is not None and not stop["now"]:  # --duration ran out first: it said "recorded no scan", exit 0
+            raise LmsbenchError(_no_scan_within(args.duration, *line, args.out))
         print(f"recorded no scan; {args.out} not written; device back in on-request mode at 9600 baud")
         return 0
     flagged = f", {stats.flagged} of them flagged by the device's status byte" if stats.flagged else ""
