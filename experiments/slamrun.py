@@ -21,7 +21,6 @@ from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.finite import fixed
 from lms200.logs import regular_file
 from lms200.records import Record
-from lms200.timing import MIN_RATE_HZ, RATE_FLOOR_TEXT
 from lms200.yamlio import load as load_yaml, dump as dump_yaml
 from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished, not_a_log_folder, simulate_log
 from experiments.progress import say_on_terminal
@@ -190,8 +189,10 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if rel_path is not None:
         rel = read_relations(rel_path)
         sources["relations"] = str(rel_path)
-    if rate_hz is not None and not rate_hz >= MIN_RATE_HZ:  # 1e-308 kept the first scan alone
-        raise LmsbenchError(f"--rate-hz must be at least {RATE_FLOOR_TEXT}, got {rate_hz}")
+    # > 0, no floor: a log may last a day (slam day.clf --rate-hz 0.0002 keeps 17 scans); a rate that keeps one
+    # scan alone (1e-308 did, exit 0) is refused below, after the read, with the count it kept
+    if rate_hz is not None and not rate_hz > 0:
+        raise LmsbenchError(f"--rate-hz must be > 0 scans/s, got {rate_hz}")
     from features.registry import check_beams
 
     records: list[Record] = []

@@ -833,3 +833,20 @@ def test_sweep_values_and_names_no_cell_can_take_are_refused_at_load(raw, messag
     with pytest.raises(SweepSpecError, match=message):
         SweepSpec.from_dict(raw)
     SweepSpec.from_dict({"kind": KIND, "random": {"c": {"choice": ["a", 2, 2.5, None, True, 10**300]}}, "samples": 3})
+
+
+@pytest.mark.parametrize("rate", ["1e-308", "0"])
+def test_a_sweep_rate_below_one_scan_an_hour_names_the_floor(tmp_path, capsys, rate):
+    """The sweep's own check said 'rate_hz: must be a number of scans/s > 0 or null' for 0, while 1e-308
+    (> 0) was refused by another check for being below 1/3600: the first message now names the floor."""
+    from experiments.cli import main
+
+    spec = tmp_path / "s.yaml"
+    spec.write_text(f"name: t\nkind: extract\nfixed: {{method: sensor, world: office, duration: 1.0, rate_hz: {rate}}}\n"
+                    "grid:\n  extractor.min_points: [4, 5]\n")
+    out = tmp_path / "out"
+    assert main(["sweep", str(spec), "--inprocess", "--no-progress", "--out", str(out)]) == 2
+    assert capsys.readouterr().err == (f"lmsbench sweep: error: {spec}: rate_hz: must be a number of scans/s of at least "
+                                       "1/3600 scans/s (one scan an hour, the longest simulated run: a lower rate keeps "
+                                       f"the first scan alone), or null, got {float(rate) if 'e' in rate else int(rate)!r}\n")
+    assert not out.exists()

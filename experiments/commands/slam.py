@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 from experiments.logargs import add_log_options, read_log_options
 from experiments.overrides import check_set_once, extractor_overrides, set_option
 from experiments.options import (SLAM_OUTPUTS, SLAM_OWNER, SLAM_RECORD_KEYS, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_simulate_finished, check_yaml,
-                                 count, missing_message, path_arg, scan_rate, text)
+                                 count, missing_message, path_arg, positive, text)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -49,7 +49,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--relations", type=path_arg, help="relations file (default: NAME.relations beside a log)")
     p.add_argument("--every", "--stride", dest="every", type=count(1), default=1,
                    help="keep every N-th scan (decimation; default 1, every scan; --stride as in compare)")
-    p.add_argument("--rate-hz", type=scan_rate, help="decimate to about this many scans/s (by the stamps)")
+    # a log may last longer than the simulated runs' hour: > 0, no floor (one that keeps a single scan is refused
+    # after the read); one at or above the log's own rate keeps every scan
+    p.add_argument("--rate-hz", type=positive("scans/s"), help="decimate to about this many scans/s (by the stamps; "
+                   "> 0, a rate at or above the log's own keeps every scan)")
     p.add_argument("--max-scans", type=count(2), help="stop after this many scans (at least 2)")
     p.add_argument("--quiet", "--no-progress", dest="quiet", action="store_true", help="no progress bar")
     add_log_options(p)

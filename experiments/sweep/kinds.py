@@ -307,8 +307,12 @@ def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: s
             raise SweepSpecError(f"duration: must be a number of seconds in [{MIN_DURATION_S:g}, {MAX_DURATION_S:g}], "
                                  f"got {duration!r}")
         rate = p.get("rate_hz")
-        if rate is not None and (isinstance(rate, bool) or not isinstance(rate, (int, float)) or not 0 < rate < math.inf):
-            raise SweepSpecError(f"rate_hz: must be a number of scans/s > 0 or null, got {rate!r}")
+        from lms200.timing import MIN_RATE_HZ, RATE_FLOOR_TEXT
+
+        if rate is not None and (isinstance(rate, bool) or not isinstance(rate, (int, float))
+                                 or not MIN_RATE_HZ <= rate < math.inf):  # a cell's run lasts at most an hour
+            raise SweepSpecError(f"rate_hz: must be a number of scans/s of at least {RATE_FLOOR_TEXT}, or null, "
+                                 f"got {rate!r}")
 
 
 def _check_sensors(cells: list[dict[str, Any]], files: dict[str, Any], defaults: dict[str, Any]) -> None:
