@@ -393,7 +393,8 @@ def test_a_bags_message_definitions_are_bounded_together(tmp_path, capsys, monke
     err = capsys.readouterr().err
     assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(bag))}: junk_msgs/msg/J2's message definition brings the "
                         r"field lines of the bag's message definitions to 4,515, more than the 4,096 a bag's may "
-                        r"\(lms200.bag.MAX_DEFINITION_FIELDS; every ROS Noetic type together has 529\): absurd message "
+                        r"\(lms200.bag.MAX_DEFINITION_FIELDS; the 164 ROS Noetic types, each with the definitions it nests, total "
+                        r"2,011\): absurd message "
                         r"definitions, or damage; not parsed\n", err)
     assert registered == []  # refused before rosbags registers a type (old: [8], 4,500 fields with LaserScan's)
     # a ROS 1 bag's connection records together, told from the index before rosbags reads them
@@ -495,3 +496,57 @@ def test_a_ros2_bags_absurd_message_definition_is_refused_unparsed(tmp_path, cap
     assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(bag))}: sensor_msgs/msg/LaserScan's message definition "
                         r"holds 262,\d{3} characters, more than the 262,144 a bag's may \(lms200.bag.MAX_CONNECTION_BYTES\): "
                         r"an absurd message definition, or damage; not parsed\n", err)
+
+
+LASERSCAN_IDL = '''// generated from rosidl_adapter/resource/msg.idl.em
+// with input from sensor_msgs/msg/LaserScan.msg
+// generated code does not contain a copyright notice
+
+#include "std_msgs/msg/Header.idl"
+
+module sensor_msgs {
+  module msg {
+    @verbatim (language="comment", text=
+      "Single scan from a planar laser range-finder" "\\n"
+      "" "\\n"
+      "If you have another ranging device with different behavior (e.g. a sonar" "\\n"
+      "array), please find or create a different message, since applications" "\\n"
+      "will make fairly laser-specific assumptions about this data")
+    struct LaserScan {
+      @verbatim (language="comment", text=
+        "timestamp in the header is the acquisition time of" "\\n"
+        "the first ray in the scan." "\\n"
+        "" "\\n"
+        "in frame frame_id, angles are measured around" "\\n"
+        "the positive Z axis (counterclockwise, if Z is up)" "\\n"
+        "with zero angle being forward along the x axis")
+      std_msgs::msg::Header header;
+
+      @verbatim (language="comment", text=
+        "start angle of the scan [rad]")
+      @unit (value="rad")
+      float angle_min;
+
+      @verbatim (language="comment", text=
+        "end angle of the scan [rad]")
+      float angle_max;
+
+      @default (value=0.0) float range_min;
+
+      sequence<float> ranges;
+    };
+  };
+};
+'''
+
+
+def test_idl_comment_and_annotation_lines_are_not_counted_as_fields():
+    """A ros2idl definition carries every .msg comment as an @verbatim annotation of quoted-string lines:
+    _field_lines counted each (this snippet 29 lines for its 5 fields), so real ROS 2 definitions met
+    MAX_DEFINITION_FIELDS 5-8x sooner than their fields. A declaration behind an annotation on its line counts."""
+    from lms200.bag import _field_lines
+
+    # 2 modules, struct, 5 declarations, 3 closing braces (#include reads as a MSG comment); no @verbatim, @unit
+    # or quoted line (old: 29)
+    assert _field_lines(LASERSCAN_IDL) == 11
+    assert _field_lines("uint32 seq\n# a comment\ntime stamp\n\nstring frame_id\n") == 3  # MSG as before
