@@ -41,7 +41,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 import numpy as np
 
@@ -240,10 +240,23 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
         LmsbenchError: for a log without laser scans, an unsupported resolution or more than 180 deg.
     """
     reader = read_log(path, **read_options)
+    named: list[BaseException] = []  # the reader's errors: they name the file already
+
+    def records() -> Iterator[Any]:
+        it = iter(reader)
+        while True:
+            try:
+                rec = next(it)
+            except StopIteration:
+                return
+            except LmsbenchError as exc:
+                named.append(exc)
+                raise
+            yield rec
 
     def scans():
         first = None
-        for k, rec in enumerate(reader):
+        for k, rec in enumerate(records()):
             if max_scans is not None and k // stride >= max_scans:
                 break
             if k % stride == 0:
@@ -257,7 +270,9 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
             report_skipped(reader)
         base_sensor(cal)  # what the log gives directly: a log too poor for a sensor model is the log's error
     except LmsbenchError as exc:
-        if str(path) in str(exc):  # the reader's errors name the file already
+        # told by where it came from, not by the path's text within the message: a mixed-geometry log
+        # named `deg` ("... 1 deg ...") went unnamed
+        if any(exc is e for e in named):
             raise
         raise _naming(exc, path) from None
     except ValueError as exc:

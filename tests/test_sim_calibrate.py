@@ -756,3 +756,25 @@ def test_sim2real_says_where_its_robot_limits_come_from() -> None:
                                                         "scans with odometry take no time or go back in time")
     assert odometry_limits_and_source(np.empty((0, 4)))[1] == "the simulator's defaults: the log has no odometry"
     assert odometry_limits_and_source(steady[:5])[1] == "the simulator's defaults: 5 scans with odometry, fewer than 10"
+
+
+def test_a_mixed_geometry_log_is_named_whatever_its_name(tmp_path, monkeypatch, capsys):
+    """calibrate put the log's path before an error whose text did not hold it already: a log named `deg`
+    mixing 0.5 and 1 deg scans ("... at 1 deg ...") was said without its name."""
+    from experiments.cli import main
+    from lms200 import write_log
+    from sim import SensorConfig, simulate_records
+
+    a = simulate_records("office", seed=0, duration=0.3)
+    b = simulate_records("office", seed=0, duration=0.3, sensor=SensorConfig(resolution=math.radians(1.0), n_beams=181))
+    monkeypatch.chdir(tmp_path)
+    write_log(tmp_path / "deg", [a[0], b[0], a[1], b[1]])
+    assert main(["calibrate", "deg"]) == 2
+    assert capsys.readouterr().err == (
+        "lmsbench calibrate: error: deg: scan 1 has 181 beams at 1 deg, scan 0 361 at 0.5 deg: a sensor model has one "
+        "geometry, so every scan used must have it (a log of two lasers: choose one with --topic)\n")
+    # an error of the reader names the file once, as it did
+    (tmp_path / "cut").write_text((tmp_path / "deg").read_text().replace("ROBOTLASER1", "ROBOTLASER1 x", 1))
+    assert main(["calibrate", "cut"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("lmsbench calibrate: error: cut:") and err.count("cut") == 1, err
