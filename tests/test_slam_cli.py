@@ -497,7 +497,9 @@ def sparse_log(tmp_path_factory) -> Path:
     ("motion: {sigma_floor_xy: 1.0e-160, sigma_floor_theta: 1.0e-160}\nalignment: {motion_prior: true}",
      "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # OverflowError: sxy**-2 at the repeated stamp
     ("motion: {sigma_floor_xy: 0.01, sigma_floor_theta: 1.0e-160}", "motion.sigma_floor_theta: must be in [1e-06"),
-    ("motion: {sigma_accel: 1.0e200}", "motion.sigma_accel: must be in [0, 1000] m/s^2"),  # sxy**2 overflowed
+    ("motion: {sigma_accel: 1.0e200}", "motion.sigma_accel: must be in (0, 1000] m/s^2"),  # sxy**2 overflowed
+    # 0 was "must be > 0" while 1e200 said [0, 1000]: one interval, the one that holds
+    ("motion: {sigma_accel: 0}", "motion.sigma_accel: must be in (0, 1000] m/s^2"),
     ("consistency: {max_ambiguous: 2}", "consistency.max_ambiguous: a share of steps, must be in [0, 1]"),
     ("consistency: {min_matched_fraction: 2}", "consistency.min_matched_fraction: a share of steps, must be in [0, 1]"),
     ("alignment: {search_candidates: 1000000000}", "alignment.search_candidates: must be in [1, 32]"),  # an ICP per pose
