@@ -327,14 +327,14 @@ def map_error(map_segments: np.ndarray, walls: np.ndarray, alignment: Alignment2
     order = np.argsort(bk, kind="stable")  # the matched lines grouped by wall, in line order within one
     groups = np.split(order, np.nonzero(np.diff(bk[order]))[0] + 1)
     for g in groups:  # union of overlaps per wall
-        w = int(bk[g[0]])
-        iv = sorted((max(float(lo_k[i]), 0.0), min(float(hi_k[i]), float(wlen[w]))) for i in g)
+        wi = int(bk[g[0]])
+        iv = sorted((max(float(lo_k[i]), 0.0), min(float(hi_k[i]), float(wlen[wi]))) for i in g)
         total, end = 0.0, -np.inf
         for a, b in iv:
             if b > end:
                 total += b - max(a, end)
                 end = b
-        covered[w] = total
+        covered[wi] = total
     return MapError(seg.shape[0], int(k.size), float(dk.mean()), float(np.sqrt(np.mean(dk**2))),
                     float(ang_k.mean()), float(covered.sum() / wlen.sum()))
 
