@@ -275,6 +275,21 @@ def positive(unit: str = "") -> Callable[[str], float]:
     return number(0.0, lo_open=True, unit=unit)
 
 
+def scan_rate(text: str) -> float:
+    """An argparse type: scans kept per second, a finite number >= ``lms200.timing.MIN_RATE_HZ`` (one
+    scan an hour): `--rate-hz 1e-308` ran and kept the first scan alone. The sensor's own rate, the
+    ceiling, depends on its resolution and is checked where that is known (``check_scan_rate``)."""
+    from lms200.timing import MIN_RATE_HZ, RATE_FLOOR_TEXT
+
+    value = positive("scans/s")(text)
+    if value < MIN_RATE_HZ:
+        raise argparse.ArgumentTypeError(f"must be at least {RATE_FLOOR_TEXT}, got {text!r}")
+    return value
+
+
+scan_rate.__name__ = "number"  # argparse names the type in some messages
+
+
 def count(lo: int = 1, hi: int | None = None) -> Callable[[str], float]:
     """A whole number >= lo (scan counts, strides, workers)."""
     return number(lo, hi, integer=True)

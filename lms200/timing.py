@@ -32,6 +32,10 @@ MAX_DURATION_S = 3600.0
 #: comes 43.7 ms after its first); 0.001 s simulated no scan and then wrote an empty run (simulate),
 #: failed after 15 s of calibration (sim2real) or with an IndexError (figures).
 MIN_DURATION_S = 0.1
+#: lowest rate (scans/s) a run may be decimated to: one scan an hour, the longest simulated run. Below it
+#: no run keeps a second scan: `simulate --rate-hz 1e-308` (also compare --rate, sim2real / figures / demo
+#: --rate-hz, sim configs' and sweeps' rate_hz, slam --rate-hz) ran, kept the first scan alone, exit 0.
+MIN_RATE_HZ = 1.0 / MAX_DURATION_S
 
 
 def turns_per_scan(angle_increment: float) -> int:
@@ -46,9 +50,15 @@ def scan_period(angle_increment: float) -> float:
     return turns_per_scan(angle_increment) * MIRROR_TURN_S
 
 
+#: what MIN_RATE_HZ means, in the messages of the checks that refuse a lower rate
+RATE_FLOOR_TEXT = (f"1/{MAX_DURATION_S:g} scans/s (one scan an hour, the longest simulated run: a lower rate keeps "
+                   "the first scan alone)")
+
+
 def check_scan_rate(rate_hz: object, angle_increment: float, name: str = "rate_hz") -> None:
-    """``rate_hz`` (scans/s kept of a run) is None (every scan) or a number in (0, the sensor's scan
-    rate at ``angle_increment``]: a higher rate cannot be kept (37.5 scans/s at 0.5 deg, 75 at 1 deg).
+    """``rate_hz`` (scans/s kept of a run) is None (every scan) or a number in [``MIN_RATE_HZ``, the
+    sensor's scan rate at ``angle_increment``]: a higher rate cannot be kept (37.5 scans/s at 0.5 deg,
+    75 at 1 deg), a lower one keeps only the first scan of any run (one scan an hour, 1/3600 scans/s).
 
     Raises:
         InputError: naming ``name`` (an argument or a command-line flag) otherwise.
@@ -64,6 +74,8 @@ def check_scan_rate(rate_hz: object, angle_increment: float, name: str = "rate_h
         shown = repr(rate_hz) if value != math.inf or not isinstance(rate_hz, int) else overflow_text(rate_hz)
         raise InputError(f"{name}: must be a finite number of scans/s > 0 (or None: every scan), got {shown}")
     rate_hz = value
+    if rate_hz < MIN_RATE_HZ:
+        raise InputError(f"{name}: {rate_hz:g} scans/s is below the lowest rate kept, {RATE_FLOOR_TEXT}")
     most = 1.0 / scan_period(angle_increment)
     if rate_hz > most * (1 + 1e-9):
         raise InputError(f"{name}: {rate_hz:g} scans/s is more than the sensor gives ({most:g} scans/s at "

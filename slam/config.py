@@ -24,7 +24,8 @@ class AlignmentConfig:
 
     Attributes:
         stride: every ``stride``-th valid beam of a scan is matched (1 = all).
-        max_range: beams longer than this (m) are not matched (far points are sparse and noisy).
+        max_range: beams longer than this (m) are not matched (far points are sparse and noisy); in
+            [0.1, 1e4] m.
         max_correspondence: a point further than this (m) from every map point is left out of a step...
         fine_correspondence: ...and once converged, further than this (m) (partial overlaps).
         huber: Huber threshold (m) of the point-to-line residuals (at least ``MIN_HUBER_M``, 1 um).
@@ -32,7 +33,8 @@ class AlignmentConfig:
             narrow reach; a step below ``tolerance_xy`` (m) and ``tolerance_theta`` (rad) ends a stage.
         damping: Levenberg damping, a fraction of the Hessian's mean eigenvalue: an unconstrained
             direction (a corridor's axis) stays at the prediction.
-        inlier_distance: a point this close (m) to a map point counts as explained.
+        inlier_distance: a point this close (m) to a map point counts as explained. It and the two
+            reaches above are at least 1 mm (``MIN_REACH_M``, the LMS200's quantum: 1e-300 paired no point).
         sigma_point: floor (m) of one point's point-to-line residual in the covariance (a
             near-perfect fit does not make a pose exact)...
         covariance_inflation: ...the match's covariance is the sandwich of its own residuals
@@ -183,7 +185,8 @@ class MotionConfig:
             velocity (the paper preset: its velocity's uncertainty as at the start, the pose's and
             the map's kept; the default pipeline: its match starts at the last pose). Steps the
             odometry predicts (``use_odometry``) are not affected. Above every gap of the Intel,
-            ACES and MIT CSAIL logs (at most 37.7 s).
+            ACES and MIT CSAIL logs (at most 37.7 s). At least ``MIN_MAX_GAP_S`` (0.01 s: 1e-300
+            made every step a gap, and the model never ran).
         use_odometry: the log's odometry increments drive the prediction instead (never the
             default; the paper preset's filter, or the default pipeline's matcher: its start,
             the heading hypotheses it may try and the search's window); ``odom_noise``: (trans
@@ -526,6 +529,10 @@ class SlamConfig:
             if not 0 < getattr(al, name) <= SEARCH_CELL_M:
                 raise SlamConfigError(f"alignment.{name}: must be in (0, {SEARCH_CELL_M}] m (the cell of the "
                                       f"scan matcher's search grid), got {getattr(al, name)}")
+        for name in ("max_correspondence", "fine_correspondence", "inlier_distance"):
+            if not getattr(al, name) >= MIN_REACH_M:  # 1e-300: no point paired, no step matched (exit 0, "not healthy")
+                raise SlamConfigError(f"alignment.{name}: must be at least {MIN_REACH_M:g} m (the LMS200's range quantum: "
+                                      f"a shorter reach pairs no point), got {getattr(al, name)}")
         _check_search(al)
         if not 0 < al.normal_agreement <= math.pi:
             raise SlamConfigError(f"alignment.normal_agreement: must be in (0, pi] rad (pi: no normal check), "
@@ -533,8 +540,10 @@ class SlamConfig:
         if not self.loop_closure.prior_sigma <= MAX_PRIOR_SIGMA:
             raise SlamConfigError(f"loop_closure.prior_sigma: must be <= {MAX_PRIOR_SIGMA} (m, rad; a looser prior "
                                   f"leaves the graph without an anchor), got {self.loop_closure.prior_sigma}")
-        if not 0 < al.max_range <= MAX_MATCH_RANGE_M:  # 1e300: its square overflowed (internal error)
-            raise SlamConfigError(f"alignment.max_range: must be in (0, {MAX_MATCH_RANGE_M:g}] m, got {al.max_range}")
+        # 1e300: its square overflowed (internal error); 1e-300: no beam matched, no step (exit 0, "not healthy")
+        if not MIN_MATCH_RANGE_M <= al.max_range <= MAX_MATCH_RANGE_M:
+            raise SlamConfigError(f"alignment.max_range: must be in [{MIN_MATCH_RANGE_M:g}, {MAX_MATCH_RANGE_M:g}] m, "
+                                  f"got {al.max_range}")
         if not al.huber >= MIN_HUBER_M:  # 1e-30: every weight ~0, gtsam's "indeterminate linear system" (exit 1)
             raise SlamConfigError(f"alignment.huber: must be at least {MIN_HUBER_M:g} m (a residual's scale; below it "
                                   f"every point's weight vanishes and the match fixes nothing), got {al.huber}")
@@ -556,6 +565,10 @@ class SlamConfig:
         if not (voxel == 0 or MIN_VOXEL_M <= voxel <= MAX_VOXEL_M):  # 1e-12: the cell grid's size overflowed
             raise SlamConfigError(f"keyframes.voxel: must be 0 (no thinning) or in [{MIN_VOXEL_M:g}, {MAX_VOXEL_M:g}] m, "
                                   f"got {voxel}")
+        if not self.motion.max_gap >= MIN_MAX_GAP_S:  # 1e-300: every step restarted the motion, exit 0
+            raise SlamConfigError(f"motion.max_gap: must be at least {MIN_MAX_GAP_S:g} s (100 scans/s, faster than any "
+                                  f"scanner's: a shorter gap makes every step a gap, the motion model never runs), "
+                                  f"got {self.motion.max_gap}")
         if not self.motion.max_dt >= MIN_MAX_DT_S:
             raise SlamConfigError(f"motion.max_dt: must be >= {MIN_MAX_DT_S} s (a gap is integrated in steps of at "
                                   f"most max_dt), got {self.motion.max_dt}")
@@ -724,8 +737,11 @@ MAX_SEARCH_CANDIDATES = 32  # distinct poses refined per searched step (each an 
 MAX_SEARCH_POSES = 4_000_000  # poses of one window: 32 MB of scores (the default: 159,201)
 SEARCH_CELL_M = 0.5  # m: cell of the scan matcher's search grid, the farthest a correspondence can reach
 MAX_PRIOR_SIGMA = 1.0  # m and rad: loosest prior on the first keyframe that still anchors the graph
+MIN_MATCH_RANGE_M = 0.1  # alignment.max_range: at least 10 cm (as the command line's --laser-range-max)
+MIN_REACH_M = 1e-3  # m: alignment's correspondence reaches and inlier_distance, the LMS200's range quantum
 MAX_MATCH_RANGE_M = 1e4  # alignment.max_range: at most 10 km (as the command line's --laser-range-max)
 MIN_VOXEL_M, MAX_VOXEL_M = 1e-3, 10.0  # keyframes.voxel: a local map's cells (m), when thinned
+MIN_MAX_GAP_S = 0.01  # s: motion.max_gap; the LMS200 scans at most 75 times a second, a Hokuyo 40
 MIN_MAX_DT_S = 1e-3  # s: finest prediction step of the paper preset (a 10 s gap: at most 10,000 steps)
 SECTIONS: dict[str, type] = {"motion": MotionConfig, "observations": ObservationConfig, "alignment": AlignmentConfig,
                              "keyframes": KeyframeConfig, "loop_closure": LoopClosureConfig,

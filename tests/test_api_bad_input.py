@@ -244,6 +244,27 @@ def test_simulate_records_rate_above_the_sensors_is_refused() -> None:
     assert len(recs) == len(simulate_records("office", seed=0, duration=1.0))  # every scan, as without a rate
 
 
+@pytest.mark.parametrize("rate_hz", [1e-320, 5e-324, 1e-300, 1e-4])
+def test_a_rate_below_one_scan_an_hour_is_refused(rate_hz: float, tmp_path) -> None:  # noqa: ANN001
+    """simulate_records(rate_hz=1e-300) (and a simulate config's or a sweep's rate_hz, slam's
+    load_input) ran and kept the first scan alone: no run of at most an hour keeps a second one."""
+    from sim import simulate_records
+
+    from experiments.slamrun import load_input
+    from experiments.sweep.kinds import _check_sensors
+
+    floor = "1/3600 scans/s (one scan an hour, the longest simulated run: a lower rate keeps the first scan alone)"
+    with pytest.raises(InputError, match=re.escape(f"rate_hz: {rate_hz:g} scans/s is below the lowest rate kept, {floor}")):
+        simulate_records("office", seed=0, duration=1.0, rate_hz=rate_hz)
+    with pytest.raises(LmsbenchError, match=re.escape(f"rate_hz: {rate_hz:g} scans/s is below the lowest rate kept")):
+        _check_sensors([{"rate_hz": rate_hz}], {}, {})
+    log = tmp_path / "two.clf"
+    write_log(log, simulate_records("office", seed=0, duration=0.2))
+    with pytest.raises(LmsbenchError, match=re.escape(f"--rate-hz must be at least {floor}, got {rate_hz}")):
+        load_input(log, rate_hz=rate_hz)
+    assert len(simulate_records("office", seed=0, duration=1.0, rate_hz=1 / 3600)) == 1  # the floor itself runs
+
+
 @pytest.mark.parametrize("rate_hz", [1e-320, 5e-324, 1e-300])
 def test_a_rate_near_zero_keeps_the_first_scan_as_any_low_rate_does(rate_hz: float) -> None:
     """`simulate --rate-hz 1e-320` (also compare --rate, sim2real --rate-hz, sweeps' rate_hz) was

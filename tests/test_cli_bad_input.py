@@ -350,12 +350,12 @@ CASES = [
                                                    "no earlier lmsbench slam run wrote"),
     (["simulate", "--duration", "1", "--out", "{pkg}"], "holds __init__.py, which this command does not write"),
     (["slam", "{simrun}", "--config", "{slam_normal.yaml}", "--out", O], "alignment.normal_step: must be >= 1"),
-    (["slam", "{simrun}", "--config", "{slam_range.yaml}", "--out", O], "alignment.max_range: must be in (0, 10000] m"),
+    (["slam", "{simrun}", "--config", "{slam_range.yaml}", "--out", O], "alignment.max_range: must be in [0.1, 10000] m"),
     (["slam", "{simrun}", "--config", "{slam_turn.yaml}", "--out", O], "alignment.heading_hypotheses: offsets"),
     (["slam", "{backwards.clf}", "--out", O], "backwards"),
     # thinned to one scan of several: a "SLAM" of one pose, exit 0
-    (["slam", "{good.clf}", "--rate-hz", "1e-300", "--out", O], "good.clf: --rate-hz 1e-300 keeps 1 of the 5 scans read "
-                                                               "(stamps 0.000000 to 0.400000 s); SLAM needs two or more"),
+    (["slam", "{good.clf}", "--rate-hz", "0.01", "--out", O], "good.clf: --rate-hz 0.01 keeps 1 of the 5 scans read "
+                                                              "(stamps 0.000000 to 0.400000 s); SLAM needs two or more"),
     (["slam", "{good.clf}", "--every", "10", "--out", O], "good.clf: --every 10 keeps 1 of the 5 scans read"),
     (["slam", "{binary.clf}", "--out", O], "binary"),
     (["slam", "{no_returns.clf}", "--out", O], "no_returns.clf"),
@@ -512,6 +512,10 @@ CASES = [
     (["lms200", "emulate", "--log", "{missing.clf}"], "missing.clf"),
     (["lms200", "emulate", "--rfc2217"], "--tcp"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--duration", "-5"], "--duration"),
+    # shorter than any scan: the emulator stopped at once ("0 scans sent"), the recorder "recorded no scan", exit 0
+    (["lms200", "emulate", "--duration", "1e-320"], "argument --duration: must be a finite number >= 0.1 s, got '1e-320'"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--duration", "1e-300"],
+     "argument --duration: must be a finite number >= 0.1 s, got '1e-300'"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--max-scans", "0"], "--max-scans"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--timeout", "0"], "--timeout"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--mode-timeout", "0"], "--mode-timeout"),
@@ -603,6 +607,12 @@ CASES = [
     # --no-paper-baseline on a run of the paper preset itself set nothing, exit 0
     (["slam", "{good.clf}", "--preset", "paper", "--no-paper-baseline", "--out", O],
      "--no-paper-baseline: this run is the paper preset itself, so there is no separate paper baseline to leave out"),
+    # --no-odometry-baseline on an input without odometry set nothing (the baseline runs only with it), exit 0
+    (["slam", "{good.clf}", "--no-odometry-baseline", "--out", O],
+     "good.clf has no odometry, so there is no odometry baseline to leave out (it runs only on an input with odometry "
+     "on every scan)"),
+    (["slam", "{simrun}", "--preset", "paper", "--no-odometry-baseline", "--out", O],
+     "--no-odometry-baseline: "),
     # a log's reading options where no log is compared were ignored, exit 0
     (["compare", "office:0", "--topic", "FLASER", "--skip-bad-lines", "--out", O],
      "--topic, --skip-bad-lines say how to read a log; none of office:0 is one (the worlds are simulated)"),
@@ -777,6 +787,26 @@ def test_a_rate_above_the_sensors_is_refused_before_the_study_starts(command, tm
     captured = capsys.readouterr()
     assert captured.err.strip().splitlines() == [
         f"lmsbench {command[0]}: error: --rate-hz: 1e+09 scans/s is more than the sensor gives (37.5 scans/s at 0.5 deg)"]
+    assert captured.out == "" and not out.exists()
+
+
+@pytest.mark.parametrize("argv", [["simulate", "--duration", "5"], ["compare", "office:0", "--duration", "5"],
+                                  ["sim2real", "{good.clf}"], ["figures", "--no-slam"], ["demo", "--no-sweep"],
+                                  ["slam", "{good.clf}"]], ids=lambda a: a[0])
+@pytest.mark.parametrize("rate", ["1e-308", "5e-324", "0.0001"])
+def test_a_rate_below_one_scan_an_hour_is_refused_before_any_work(argv, rate, files, tmp_path, capsys):
+    """`simulate --rate-hz 1e-308` (and compare --rate, sim2real / figures / demo / slam --rate-hz) ran
+    and kept the first scan alone, exit 0 (slam refused it only after reading the whole input): no run
+    of at most an hour keeps a second scan below 1/3600 scans/s."""
+    out = tmp_path / "out"
+    flag = "--rate" if argv[0] == "compare" else "--rate-hz"
+    status = run_main([*_fill(argv, files, out), flag, rate, "--out", str(out)])
+    captured = capsys.readouterr()
+    assert status == 2
+    assert captured.err.strip().splitlines() == [
+        f"lmsbench {argv[0]}: error: argument {'--rate/--rate-hz' if argv[0] == 'compare' else '--rate-hz'}: must be at "
+        "least 1/3600 scans/s (one scan an hour, the longest simulated run: a lower rate keeps the first scan alone), "
+        f"got '{rate}' (see lmsbench {argv[0]} --help)"]
     assert captured.out == "" and not out.exists()
 
 

@@ -110,7 +110,7 @@ def test_slam_says_an_extractor_field_no_scan_reads(cm_log, tmp_path, capsys) ->
     from experiments.cli import main
 
     (tmp_path / "sigma.yaml").write_text("extractor_params: {sigma_r: 0.02}\n")
-    common = ["--quiet", "--no-paper-baseline", "--no-odometry-baseline", "--max-scans", "6"]
+    common = ["--quiet", "--no-paper-baseline", "--max-scans", "6"]  # the log has no odometry: no such baseline
     assert main(["slam", str(cm_log), "--config", str(tmp_path / "sigma.yaml"), "--out", str(tmp_path / "a"), *common]) == 0
     assert ("lmsbench slam: warning: sensor: sigma_r=0.02 is not used: sigma_r applies to mm-mode scans "
             "(range_max <= 10 m); the scans of run.clf are cm mode (range_max 81.83 m): set sigma_r_cm") \

@@ -938,3 +938,71 @@ def test_a_slam_run_of_a_log_named_like_a_boolean_word_reruns_into_its_folder(si
         assert main(["slam", "n", "--out", "o", "--quiet", "--max-scans", "5"]) == 0, capsys.readouterr().err
     assert "input:\n  scans: 'n'\n" in (tmp_path / "o" / "config.yaml").read_text()
     assert load((tmp_path / "o" / "config.yaml").read_text())["input"]["scans"] == "n"
+
+
+def test_a_world_json_wall_of_zero_length_is_refused_before_the_run_naming_the_file(sim_folder, tmp_path, capsys):
+    """A simulate folder's world.json with a wall whose ends are equal ran the whole SLAM and then
+    failed in map_error, "walls: every wall must have two distinct ends (...)", naming no file."""
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    world = json.loads((run / "world.json").read_text())
+    world["walls"][3] = [1.0, 1.0, 1.0, 1.0]
+    (run / "world.json").write_text(json.dumps(world))
+    assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench slam: error: {run / 'world.json'}: not a world.json (walls: wall 3, [1.0, 1.0, 1.0, 1.0], has two "
+        "equal ends: a wall of zero length has no direction to score the map against)"]
+    assert not (tmp_path / "o").exists()
+
+
+def test_the_slam_figure_draws_walls_and_map_lines_as_one_artist_each(sim_folder, tmp_path, monkeypatch):
+    """slam.png drew each wall and map line with its own ax.plot: a world.json of 20,000 walls took
+    118 s in plot() (mit's 2,345 several seconds), a hang for a larger one. Now one LineCollection
+    each, the axes still spanning every wall."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.figure import Figure
+
+    from experiments.slamrun import load_input, plot
+    from slam import run_slam
+
+    data = load_input(sim_folder)
+    res = run_slam(data.records)
+    rng = np.random.default_rng(0)
+    far = np.column_stack((rng.uniform(-50, 50, (20_000, 2)), rng.uniform(-50, 50, (20_000, 2))))
+    data.walls = np.vstack((data.walls, far, [[-80.0, -1.0, -79.0, -1.0]]))
+    seen = {}
+
+    def savefig(fig, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003
+        ax = fig.axes[0]
+        seen.update(lines=len(ax.lines), segments=[len(c.get_segments()) for c in ax.collections
+                                                   if isinstance(c, LineCollection)], xlim=ax.get_xlim())
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+    plot(tmp_path / "slam.png", data, res)
+    assert seen["segments"] == [len(data.walls), len(res.map_lines)] and seen["lines"] <= 4  # truth, path, legend
+    assert seen["xlim"][0] <= -80.0  # the far wall is in view
+
+
+def test_a_world_json_of_boxes_with_an_empty_walls_list_is_refused(sim_folder, tmp_path, capsys):
+    """simulate writes the boxes (what is scanned) and their faces as walls (what the map is scored
+    against); a world.json whose walls list was emptied ran, its map scored against no wall
+    (metrics.json map: matched 0, wall_coverage 0.0), exit 0."""
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    world = json.loads((run / "world.json").read_text())
+    assert world["boxes"] and world["walls"]
+    world["walls"] = []
+    (run / "world.json").write_text(json.dumps(world))
+    assert main(["slam", str(run), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench slam: error: {run / 'world.json'}: not a world.json: its walls list is empty beside "
+        f"{len(world['boxes'])} boxes, so the map would be scored against no wall (simulate writes the boxes' faces there)"]
+    assert not (tmp_path / "o").exists()

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import gzip
 import itertools
+import re
 from pathlib import Path
 
 import numpy as np
@@ -94,3 +95,38 @@ def test_a_pose_lost_beyond_the_readers_bound_is_nan_and_the_run_unhealthy(monke
     write_tum(tmp_path / "t.tum", res.trajectory[:, 0], res.trajectory[:, 1:])
     stamps, poses = read_tum(tmp_path / "t.tum", allow_nan=True)
     assert stamps.tolist() == [0.0, 0.1, 0.2, 0.3] and np.isnan(poses[2:]).all()
+
+
+@pytest.mark.parametrize("gap", [1e-300, 1e-3, 0.0099])
+def test_a_max_gap_shorter_than_any_scanners_step_is_refused(gap):
+    """``motion.max_gap: 1e-300`` was taken: every step was a gap, the motion restarted at each and
+    the model never ran (exit 0, one warning); every scanner steps more slowly than 100 scans/s."""
+    from slam import SlamConfig
+    from slam.config import SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=re.escape(
+            f"motion.max_gap: must be at least 0.01 s (100 scans/s, faster than any scanner's: a shorter gap makes "
+            f"every step a gap, the motion model never runs), got {gap}")):
+        SlamConfig.from_dict({"motion": {"max_gap": gap}})
+    assert SlamConfig.from_dict({"motion": {"max_gap": 0.01}}).motion.max_gap == 0.01  # the bound itself is taken
+
+
+@pytest.mark.parametrize("name, bad, message", [
+    ("max_range", 1e-300, "alignment.max_range: must be in [0.1, 10000] m, got 1e-300"),
+    ("max_range", 0.05, "alignment.max_range: must be in [0.1, 10000] m, got 0.05"),
+    ("max_correspondence", 1e-300, "alignment.max_correspondence: must be at least 0.001 m (the LMS200's range quantum: "
+                                   "a shorter reach pairs no point), got 1e-300"),
+    ("fine_correspondence", 1e-300, "alignment.fine_correspondence: must be at least 0.001 m"),
+    ("inlier_distance", 1e-4, "alignment.inlier_distance: must be at least 0.001 m")])
+def test_a_match_reach_that_pairs_no_point_is_refused(name, bad, message):
+    """``alignment.max_range`` / ``max_correspondence`` / ``fine_correspondence`` / ``inlier_distance``
+    of 1e-300 were taken: no beam was paired, none of the steps matched, and the run ended exit 0
+    with a "not healthy" warning after its whole length."""
+    from slam import SlamConfig
+    from slam.config import SlamConfigError
+
+    with pytest.raises(SlamConfigError, match="^" + re.escape(message)):
+        SlamConfig.from_dict({"alignment": {name: bad}})
+    ok = SlamConfig.from_dict({"alignment": {"max_range": 0.1, "max_correspondence": 0.001, "fine_correspondence": 0.001,
+                                             "inlier_distance": 0.001}}).alignment
+    assert (ok.max_range, ok.max_correspondence, ok.inlier_distance) == (0.1, 0.001, 0.001)  # the bounds are taken

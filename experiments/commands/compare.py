@@ -18,7 +18,7 @@ from lms200.yamlio import dump as dump_yaml
 from experiments.overrides import check_set_once, set_option
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options, report_skipped
 from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SIMULATE_OUTPUTS, listed_seed, InputError, check_methods, check_out,
-                                 check_out_spares, check_seeds, count, plain_number, positive, path_arg, text)
+                                 check_out_spares, check_seeds, count, plain_number, path_arg, scan_rate, text)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,7 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seeds", nargs="+", type=listed_seed, help="seeds of each world named without one, listed (default 0 1 2; "
                                                          "`--seeds 3` is the one seed 3)")
     p.add_argument("--duration", type=DURATION, help="simulated seconds per world and seed (default 30)")
-    p.add_argument("--rate", "--rate-hz", dest="rate", type=positive("scans/s"),
+    p.add_argument("--rate", "--rate-hz", dest="rate", type=scan_rate,
                    help="simulated scans per second kept (default 2; --rate-hz as in simulate, demo, figures)")
     p.add_argument("--stride", type=count(1), help="logs and simulate folders: use every STRIDE-th scan (default 1)")
     p.add_argument("--max-scans", type=count(1), help="at most this many scans per source")

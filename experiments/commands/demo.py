@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from experiments.logargs import add_log_options, plain_log_options, read_log_options
-from experiments.options import WORLDS, DEMO_OUTPUTS, DEMO_OWNER, DURATION, SEED, InputError, check_log, check_out, positive, path_arg, world_name
+from experiments.options import WORLDS, DEMO_OUTPUTS, DEMO_OWNER, DURATION, SEED, InputError, check_log, check_out, path_arg, scan_rate, world_name
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -17,7 +17,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=SEED, default=0, help="world and run seed (default 0)")
     p.add_argument("--world", type=world_name, default="office", help="simulated world: " + WORLDS + " (default office)")
     p.add_argument("--duration", type=DURATION, default=40.0, help="simulated run, s (default 40)")
-    p.add_argument("--rate-hz", type=positive("scans/s"), default=10.0, help="scans kept per second of the run (default 10)")
+    p.add_argument("--rate-hz", type=scan_rate, default=10.0, help="scans kept per second of the run (default 10)")
     p.add_argument("--log", type=path_arg, help="real CARMEN log, bag or lmsbench simulate folder for Fig. 9 (default: shared/data/carmen/"
                    "intel-corrected.log.gz beside the checkout, where present)")
     p.add_argument("--no-sweep", action="store_true", help="skip the small Dask sweep")

@@ -10,7 +10,7 @@ from lms200.yamlio import dump as dump_yaml
 
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options
 from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log, real_path,
-                                 check_methods, check_out, check_study_tables, check_sweep_results, positive, path_arg, world_name,
+                                 check_methods, check_out, check_study_tables, check_sweep_results, path_arg, scan_rate, world_name,
                                  text, check_link)
 
 
@@ -23,7 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sweep", type=path_arg, action="append", default=[], metavar="DIR",
                    help="also plot this sweep folder (with results.parquet); repeatable")
     p.add_argument("--duration", type=DURATION, help="simulated run, s (default 40)")
-    p.add_argument("--rate-hz", type=positive("scans/s"), help="scans kept per second of the run (default 10)")
+    p.add_argument("--rate-hz", type=scan_rate, help="scans kept per second of the run (default 10)")
     p.add_argument("--seed", type=SEED, help="world and run seed (default 0)")
     p.add_argument("--world", type=world_name, help="simulated world: " + WORLDS + " (default office)")
     p.add_argument("--methods", nargs="+", type=text("an extractor's name"), help="extractors to compare, apart or comma-separated (default: all five)")

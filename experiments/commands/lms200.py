@@ -14,12 +14,18 @@ from lms200 import LmsbenchError, Record
 from lms200.carmen import write_carmen
 from lms200.driver import LMS200, MAX_TIMEOUT_S
 from lms200.protocol import BAUD_MODES
+from lms200.timing import MIN_DURATION_S
 from lms200.virtual import MAX_TIME_SCALE
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, given_log_flags, read_log_options
-from experiments.options import (WORLDS, PORT, SEED, InputError, check_log, check_out_file, count, mid_sentence, number, path_arg,
-                                 positive, text, world_name)
+from experiments.options import (WORLDS, PORT, SEED, InputError, check_log, check_out_file, count, mid_sentence, number,
+                                 path_arg, text, world_name)
+
+
+#: emulate / record --duration: at least lms200.timing.MIN_DURATION_S, the shortest run that holds a scan in
+#: every LMS200 mode (1e-300 stopped at once: "0 scans sent" / "recorded no scan", exit 0)
+STOP_AFTER = number(MIN_DURATION_S, unit="s")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -38,7 +44,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (default cm, as the LMS200 ships)")
     e.add_argument("--time-scale", type=number(0.0, MAX_TIME_SCALE, lo_open=True), default=1.0,
                    help=f"multiplies every byte time and device delay (default 1, real time; 0.01 = 100x faster; at most {MAX_TIME_SCALE:g})")
-    e.add_argument("--duration", type=positive("s"), help="stop after this many seconds (default: until Ctrl-C)")
+    e.add_argument("--duration", type=STOP_AFTER, help=f"stop after this many seconds (at least {MIN_DURATION_S:g}; "
+                                                      "default: until Ctrl-C)")
     add_log_options(e)  # with --log
     e.set_defaults(func=run_emulate)
 
@@ -52,7 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=float, default=0.5,
                    choices=(1.0, 0.5, 0.25), help="angular resolution, deg (default 0.5; --resolution is the old spelling)")
     r.add_argument("--max-scans", type=count(1), help="stop after this many scans")
-    r.add_argument("--duration", type=positive("s"), help="stop after this many seconds")
+    r.add_argument("--duration", type=STOP_AFTER, help=f"stop after this many seconds (at least {MIN_DURATION_S:g})")
     r.add_argument("--timeout", type=number(0.0, MAX_TIMEOUT_S, lo_open=True, unit="s"), default=0.5,
                    help=f"seconds to wait for a reply, on top of the line time (default 0.5, at most {MAX_TIMEOUT_S:g})")
     r.add_argument("--mode-timeout", type=number(0.0, MAX_TIMEOUT_S, lo_open=True, unit="s"), default=3.5,

@@ -23,8 +23,8 @@ from experiments.options import (
     check_seeds,
     check_yaml,
     count,
+    scan_rate,
     number,
-    positive,
     path_arg,
     world_name,
 )
@@ -50,7 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--probe-seeds", nargs="+", type=listed_seed, metavar="SEED",
                    help=f"worlds of the mit world's fits' probe runs, none of them in --seeds (default "
                         f"{PROBE_SEEDS[0]}-{PROBE_SEEDS[-1]}, the first as many as --seeds gives)")
-    p.add_argument("--rate-hz", type=positive("scans/s"), default=DEFAULT_RATE_HZ,
+    p.add_argument("--rate-hz", type=scan_rate, default=DEFAULT_RATE_HZ,
                    help=f"simulated scans kept per second (default {DEFAULT_RATE_HZ:g}; the probe runs keep {PROBE_RATE_HZ:g})")
     p.add_argument("--stride", type=count(1), default=5, help="use every STRIDE-th real scan (default 5)")
     p.add_argument("--max-scans", type=count(1), default=400, help="at most this many real scans (default 400)")

@@ -10,7 +10,7 @@ import math
 
 from experiments.options import (WORLDS, DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, SIMULATE_OWNER, InputError, check_file,
                                  check_world_file,
-                                 check_out, check_out_spares, check_yaml, known_worlds, number, positive, path_arg, world_hint)
+                                 check_out, check_out_spares, check_yaml, known_worlds, number, path_arg, scan_rate, world_hint)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -26,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--duration", type=DURATION, default=None,
                    help=f"simulated time, s (default 120, at most {MAX_DURATION_S:g})")
     p.add_argument("--out", type=path_arg, required=True, help="output folder")
-    p.add_argument("--rate-hz", type=positive("scans/s"), default=None, help="keep about this many scans/s (default all)")
+    p.add_argument("--rate-hz", type=scan_rate, default=None, help="keep about this many scans/s (default all)")
     p.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=float, choices=(0.25, 0.5, 1.0),
                    default=None, help="angular resolution, deg: 0.5 (361 beams), 1 (181), 0.25 (401 over 100 deg); "
                    "default 0.5; --resolution is the old spelling")

@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 from experiments.logargs import add_log_options, read_log_options
 from experiments.overrides import check_set_once, extractor_overrides, set_option
 from experiments.options import (SLAM_OUTPUTS, SLAM_OWNER, SLAM_RECORD_KEYS, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_simulate_finished, check_yaml,
-                                 count, missing_message, positive, path_arg, text)
+                                 count, missing_message, path_arg, scan_rate, text)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -49,7 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--relations", type=path_arg, help="relations file (default: NAME.relations beside a log)")
     p.add_argument("--every", "--stride", dest="every", type=count(1), default=1,
                    help="keep every N-th scan (decimation; default 1, every scan; --stride as in compare)")
-    p.add_argument("--rate-hz", type=positive("scans/s"), help="decimate to about this many scans/s (by the stamps)")
+    p.add_argument("--rate-hz", type=scan_rate, help="decimate to about this many scans/s (by the stamps)")
     p.add_argument("--max-scans", type=count(2), help="stop after this many scans (at least 2)")
     p.add_argument("--quiet", "--no-progress", dest="quiet", action="store_true", help="no progress bar")
     add_log_options(p)
@@ -259,6 +259,11 @@ def run(args: argparse.Namespace) -> int:
         missing = sum(r.odom is None for r in data.records)
         has = "this input has none" if missing == len(data.records) else f"{missing} of the {len(data.records)} scans have none"
         raise LmsbenchError(f"{args.input}: {asked} needs odometry on every scan, and {has}")
+    if args.no_odometry_baseline and data.odometry is None:  # it set nothing: the baseline runs only with odometry
+        missing = sum(r.odom is None for r in data.records)
+        has = "has no odometry" if missing == len(data.records) else f"has none on {missing} of its {len(data.records)} scans"
+        raise InputError(f"--no-odometry-baseline: {args.input} {has}, so there is no odometry baseline to leave out "
+                         "(it runs only on an input with odometry on every scan)")
     if simulated_interlaced(args.input) is False and config.preset == "default" and config.alignment.deskew:
         config = deskew_for_sensor(config, interlaced=False)
         print(f"{args.input}: simulated with interlaced=False (every beam from one pose): alignment.deskew off",
