@@ -218,6 +218,7 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
                 return
             if k % stride == 0:
                 kept += 1
+                check_beams(rec.scan, f"{path}: scan {k}")  # the log's own scan number, not the kept one's
                 yield rec
 
     def estimate_sigma() -> float:

@@ -18,6 +18,7 @@ import math
 import os
 import struct
 import time
+from contextvars import ContextVar
 from bisect import bisect_left, insort
 from collections import deque
 from dataclasses import dataclass, field
@@ -143,13 +144,24 @@ class _BoundedZstd:
         return getattr(self._module, name)
 
     def decompress(self, data: bytes) -> bytes:
-        return _bounded(data, self._module.ZstdDecompressor, "a zstd-compressed message", True)
+        try:
+            return _bounded(data, self._module.ZstdDecompressor, "a zstd-compressed message", True)
+        except BagTooLargeError as exc:
+            raise _unnamed(exc) from None
 
     def open(self, file: Any, mode: str = "rb", **kwargs: Any) -> Any:  # noqa: ANN401
         """rosbags opens a file-compressed bag's storage file so and copies it whole to a temporary
         file: the stream read is bounded (:class:`_BoundedZstdFile`)."""
         stream = self._module.open(file, mode, **kwargs)
         return _BoundedZstdFile(stream, str(getattr(file, "name", file))) if "r" in mode else stream
+
+
+def _unnamed(exc: BagTooLargeError) -> BagTooLargeError:
+    """``exc``, marked as naming no file: :class:`BagReader` puts the bag's path before its message
+    (told by the mark, not by the path's text within the message: a bag named ``bag`` or ``msg``
+    was found in any message and went unnamed)."""
+    exc.lmsbench_unnamed = True  # type: ignore[attr-defined]
+    return exc
 
 
 def _free_temp_bytes() -> int:
@@ -625,36 +637,106 @@ MAX_RECORD_HEADER_BYTES = 16 * 2**20
 #: (a ROS 2 bag's definition, read from its storage file, unparsed: :func:`_bound_definitions`).
 MAX_CONNECTION_BYTES = 256 * 2**10
 
+#: bytes: the most all the connection records of a ROS 1 bag may hold together (rosbags reads each
+#: whole and keeps its definition): a few hundred connections of a few KB each
+MAX_CONNECTIONS_TOTAL_BYTES = 4 * 2**20
+
+#: field lines (lines that are neither blank, nor comments, nor a section's separator or header) the
+#: distinct message definitions of one bag may hold together, every IDL section counted. Most of what
+#: an absurd definition costs is rosbags' ``Typestore.register``, which generates code for each field:
+#: 20,000 field lines (250 KB, under MAX_CONNECTION_BYTES) held `lmsbench info` 13 s at 280 MB, three
+#: such connections 44 s at 556 MB; 4,000 cost 0.3 s to parse and 0.6 s to register. Every type of
+#: rosbags' ROS Noetic store together has 529 fields; LaserScan's definition with its Header 14 lines.
+MAX_DEFINITION_FIELDS = 4096
+
+#: characters the distinct message definitions of one bag may hold together (parsing costs about
+#: 1 us a character of comment lines, 6 of field lines); the same definition on many connections counts once
+MAX_DEFINITIONS_BYTES = 1 * 2**20
+
 
 def _connection_too_large(path: object, cid: int | None, topic: str | None, size: int) -> BagTooLargeError:
-    """The error of a connection record whose fields (its message definition) exceed MAX_CONNECTION_BYTES."""
-    which = "a connection" if cid is None else f"connection {cid}" + (f" ({topic})" if topic else "")
+    """The error of a connection record whose fields (its message definition) exceed MAX_CONNECTION_BYTES,
+    or (``cid`` None) whose record header (op, conn and topic: a few bytes) does."""
+    if cid is None:
+        return BagTooLargeError(f"{path}: a connection record's header (its op, conn and topic) holds {size:,} bytes, "
+                                f"more than the {MAX_CONNECTION_BYTES:,} a ROS 1 bag's connection may "
+                                "(lms200.bag.MAX_CONNECTION_BYTES): damage; not read")
+    which = f"connection {cid}" + (f" ({topic})" if topic else "")
     return BagTooLargeError(f"{path}: {which} holds {size:,} bytes of type, md5sum and message definition, more than "
                             f"the {MAX_CONNECTION_BYTES:,} a ROS 1 bag's connection may (lms200.bag.MAX_CONNECTION_BYTES): "
                             "an absurd message definition, or damage; not read")
 
 
+def _connections_too_large(path: object, count: int, size: int) -> BagTooLargeError:
+    return BagTooLargeError(f"{path}: its {count:,} connections hold {size:,} bytes of type, md5sum and message "
+                            f"definition together, more than the {MAX_CONNECTIONS_TOTAL_BYTES:,} a ROS 1 bag's may "
+                            "(lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES): absurd message definitions, or damage; not read")
+
+
+class _DefinitionBudget:
+    """What the message definitions of one bag opened have cost so far (:func:`_bound_definitions`)."""
+
+    def __init__(self) -> None:
+        self.chars = 0
+        self.fields = 0
+        self.parsed: dict[tuple, Any] = {}  # (parser, text, args): its types, parsed once
+
+
+#: the budget of the bag being opened (:meth:`BagReader._open`); None: each definition on its own
+_BUDGET: ContextVar[_DefinitionBudget | None] = ContextVar("lmsbench_definition_budget", default=None)
+
+
+def _field_lines(text: str) -> int:
+    """Lines of a message definition (MSG or IDL) that are neither blank, nor comments, nor a
+    section's separator or header: a bound on its fields (and the constants and IDL syntax)."""
+    return sum(1 for line in text.splitlines()
+               if (s := line.strip()) and not s.startswith(("#", "//", "/*", "*", "==", "MSG:", "IDL:")))
+
+
 def _bound_definitions() -> None:
     """rosbags' AnyReader parses every connection's message definition (``get_types_from_msg``,
-    ``get_types_from_idl`` of its module) when it opens a bag: those names are pointed at parsers
-    that first refuse a definition of more than MAX_CONNECTION_BYTES characters (a BagTooLargeError,
-    which :meth:`BagReader._open` names the bag in). A ROS 1 bag's is refused before it is read
-    (:func:`_check_index_connections`); a ROS 2 bag's comes from its storage file (sqlite3, mcap):
-    one of 5.6 MB of comment lines held `lmsbench info` 4.5 s at 63 MB."""
+    ``get_types_from_idl`` of its module, called for each IDL section) and registers the types (code
+    generated for each field) when it opens a bag: those names are pointed at parsers that first refuse
+    a definition of more than MAX_CONNECTION_BYTES characters, and a bag whose distinct definitions
+    together pass MAX_DEFINITION_FIELDS field lines or MAX_DEFINITIONS_BYTES characters (a
+    BagTooLargeError, which :meth:`BagReader._open` names the bag in); the same definition is parsed
+    once a bag. A ROS 1 bag's is refused by its length before it is read (:func:`_check_index_connections`);
+    a ROS 2 bag's comes from its storage file (sqlite3, mcap): one of 5.6 MB of comment lines held
+    `lmsbench info` 4.5 s at 63 MB. A rosbags without one of those names is left as it is."""
     from rosbags.highlevel import anyreader
 
     for name in ("get_types_from_msg", "get_types_from_idl"):
-        parse = getattr(anyreader, name)
-        if getattr(parse, "lmsbench_bounded", False):
+        parse = getattr(anyreader, name, None)
+        if parse is None or getattr(parse, "lmsbench_bounded", False):
             continue
 
-        def bounded(text: str, *args: Any, _parse: Callable[..., Any] = parse, **kwargs: Any) -> Any:  # noqa: ANN401
+        def bounded(text: str, *args: Any, _parse: Callable[..., Any] = parse, _name: str = name,  # noqa: ANN401
+                    **kwargs: Any) -> Any:  # noqa: ANN401
+            which = f"{args[0]}'s message definition" if args else "a message definition (IDL)"
             if len(text) > MAX_CONNECTION_BYTES:
-                which = f"{args[0]}'s message definition" if args else "a message definition (IDL)"
-                raise BagTooLargeError(f"{which} holds {len(text):,} characters, more than the {MAX_CONNECTION_BYTES:,} "
-                                       "a bag's may (lms200.bag.MAX_CONNECTION_BYTES): an absurd message definition, "
-                                       "or damage; not parsed")
-            return _parse(text, *args, **kwargs)
+                raise _unnamed(BagTooLargeError(
+                    f"{which} holds {len(text):,} characters, more than the {MAX_CONNECTION_BYTES:,} a bag's may "
+                    "(lms200.bag.MAX_CONNECTION_BYTES): an absurd message definition, or damage; not parsed"))
+            budget = _BUDGET.get() or _DefinitionBudget()
+            key = (_name, text, args) if not kwargs else None
+            if key is not None and key in budget.parsed:
+                return dict(budget.parsed[key])
+            budget.chars += len(text)
+            budget.fields += _field_lines(text)
+            if budget.fields > MAX_DEFINITION_FIELDS:
+                raise _unnamed(BagTooLargeError(
+                    f"{which} brings the field lines of the bag's message definitions to {budget.fields:,}, more "
+                    f"than the {MAX_DEFINITION_FIELDS:,} a bag's may (lms200.bag.MAX_DEFINITION_FIELDS; every ROS "
+                    "Noetic type together has 529): absurd message definitions, or damage; not parsed"))
+            if budget.chars > MAX_DEFINITIONS_BYTES:
+                raise _unnamed(BagTooLargeError(
+                    f"{which} brings the bag's message definitions to {budget.chars:,} characters, more than the "
+                    f"{MAX_DEFINITIONS_BYTES:,} a bag's may (lms200.bag.MAX_DEFINITIONS_BYTES): absurd message "
+                    "definitions, or damage; not parsed"))
+            types = _parse(text, *args, **kwargs)
+            if key is not None:
+                budget.parsed[key] = types
+            return types
 
         bounded.lmsbench_bounded = True  # type: ignore[attr-defined]
         setattr(anyreader, name, bounded)
@@ -677,6 +759,7 @@ def _check_index_connections(path: Any) -> None:  # noqa: ANN401 - a Path, or ro
             if index_pos == 0 or index_pos >= size:
                 return
             bio.seek(index_pos)
+            total = 0
             for _ in range(conn_count):
                 hlen = r1.read_uint32(bio)
                 if hlen > MAX_CONNECTION_BYTES:  # op, conn and topic: a few bytes
@@ -686,6 +769,9 @@ def _check_index_connections(path: Any) -> None:  # noqa: ANN401 - a Path, or ro
                 dlen = r1.read_uint32(bio)
                 if dlen > MAX_CONNECTION_BYTES:
                     raise _connection_too_large(path, rec.get_uint32("conn"), rec.get_string("topic"), dlen)
+                total += dlen
+                if total > MAX_CONNECTIONS_TOTAL_BYTES:
+                    raise _connections_too_large(path, conn_count, total)
                 bio.seek(dlen, os.SEEK_CUR)
     except (OSError, r1.ReaderError, KeyError, UnicodeDecodeError, struct.error):
         return
@@ -826,6 +912,10 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
             topic = header.get_string("topic")
             if dlen > MAX_CONNECTION_BYTES:
                 raise _connection_too_large(self.path, cid, topic, dlen)
+            if cid not in conns:  # a chunk repeats the connections of the chunks before it
+                self.connection_bytes = getattr(self, "connection_bytes", 0) + dlen
+                if self.connection_bytes > MAX_CONNECTIONS_TOTAL_BYTES:
+                    raise _connections_too_large(self.path, len(conns) + 1, self.connection_bytes)
             fields = r1.Header.read(BytesIO(struct.pack("<I", dlen) + data.read(dlen)))
             latching = fields.get_string("latching") if "latching" in fields else None
             if cid not in conns:
@@ -932,19 +1022,22 @@ class BagReader:
             _check_storage_files(self.path)
         _bound_zstd_messages()  # before open: a file-compressed ROS 2 bag is decompressed there
         _bound_definitions()
+        budget = _BUDGET.set(_DefinitionBudget())  # the definitions of this bag together
         try:
             reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
             if not reader.is2:  # a bag never closed (a killed recording) is read from its chunks
                 reader.readers = [_recovering_reader(self.path)]
             reader.open()
         except BagTooLargeError as exc:
-            if str(self.path) not in str(exc):  # a message definition's (_bound_definitions knows no file)
+            if getattr(exc, "lmsbench_unnamed", False):  # a message definition's (_bound_definitions knows no file)
                 raise BagTooLargeError(f"{self.path}: {exc}") from None
             raise
         except BagError:
             raise
         except Exception as exc:  # rosbags raises its own types for every kind of damage
             raise BagError(f"{self.path}: cannot open as a ROS bag: {type(exc).__name__}: {exc}") from None
+        finally:
+            _BUDGET.reset(budget)
         _bound_decompression(reader, self.path)
         found = getattr(reader.readers[0], "recovered", None)
         if found is not None and not self._warned:
@@ -981,7 +1074,7 @@ class BagReader:
 
     def _fail(self, where: str, exc: Exception, index: int, fatal: bool) -> None:
         if isinstance(exc, BagTooLargeError):  # not a damaged message to skip: memory is at stake
-            if str(self.path) not in str(exc):  # a ROS 2 message's (rosbags' zstd knows no file)
+            if getattr(exc, "lmsbench_unnamed", False):  # a ROS 2 message's (rosbags' zstd knows no file)
                 raise BagTooLargeError(f"{self.path}: {where}: {exc}") from None
             raise exc
         reason = f"{type(exc).__name__}: {exc}" if not isinstance(exc, ValueError) else str(exc)

@@ -165,7 +165,8 @@ class CorrectedChain:
     100 s while the robot stood read the scan before the jump as corrected, and ``info`` said
     "corrected poses 1 scans"), and the chain is confirmed only if an ODOM step on the odometry's
     own clock came between its first two anchors (the odometry host's clock alone set back, the
-    robot standing, gave an "anchor" after every scan with none between). Holds two records at most.
+    robot standing, gave an "anchor" after every scan with none between); without one the first
+    scan is handed back as read and the chain starts again at the second. Holds two records at most.
     """
 
     def __init__(self) -> None:
@@ -220,10 +221,12 @@ class CorrectedChain:
                 # no ODOM step on the odometry's clock since the chain's first anchor: that clock jumped
                 # back (the odometry host's alone set back, while the robot stood), as a corrected log's
                 # never does (steps stamped by it follow every anchor); 51 of 100 scans read "corrected",
-                # their odometry frozen. Both scans as read, and the clock goes on from this line
+                # their odometry frozen. The first scan as read, the clock goes on from this line, and a
+                # chain starts at this scan: handing both back as read started chains only in pairs, so
+                # a corrected log whose raw ODOM lines are sparse (none between some scans) read raw
                 yield from self._end()
-                yield rec
                 self._step(pose, stamp)
+                yield from self._anchored(rec, pose)  # its own pose: a new chain starts there
                 return
             yield from self._anchored(rec, odom)
             return

@@ -27,7 +27,7 @@ def _records(widths) -> list[Record]:
     return [Record(scan=_scan(n, k), odom=(0.1 * k, 0.0, 0.0)) for k, n in enumerate(widths)]
 
 
-@pytest.mark.parametrize("command, index", [("compare", 0), ("sim2real", 1), ("slam", 0)])
+@pytest.mark.parametrize("command, index", [("compare", 0), ("sim2real", 0), ("slam", 0)])
 @pytest.mark.parametrize("name, fmt", [("wide.clf", "robotlaser1"), ("wide.bag", "bag")])
 def test_a_log_of_wider_scans_is_refused_before_any_work(tmp_path, capsys, command, index, name, fmt):
     log = tmp_path / name
@@ -60,3 +60,21 @@ def test_the_timed_runs_refuse_wider_scans_before_timing():
         extract_timed(scans, "split_merge")
     _, times = extract_timed(scans[:1], "split_merge")
     assert times.shape == (1,)
+
+
+@pytest.mark.parametrize("command, thinning, damaged", [("slam", "--every", True), ("compare", "--stride", False)])
+def test_a_wider_scan_is_named_by_the_logs_own_scan_number_as_it_is_read(tmp_path, capsys, command, thinning, damaged):
+    """A review: with --every 2, slam named the wider scan by the index of the scans kept (scan 2 for
+    the log's scan 4), and refused it only after the whole log was read (a damaged line after it was
+    the error instead); compare --stride named it so, and by the log's base name where its first scan
+    was named by the path given (compare reads the whole log first, for its noise: no damaged line for it).
+    Scans are numbered as read from the log, from 0, in every command."""
+    log = tmp_path / "wide.clf"
+    write_log(log, _records([361, 361, 361, 361, WIDE, 361]), fmt="robotlaser1")
+    if damaged:
+        with open(log, "a", encoding="utf-8") as f:
+            f.write("ROBOTLASER1 damaged\n")  # after the wider scan: never read
+    assert main([command, str(log), thinning, "2", "--out", str(tmp_path / "out")]) == 2
+    lines = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert lines == [f"lmsbench {command}: error: {log}: scan 4: {WIDE} beams is more than the extractors "
+                     f"handle ({MAX_BEAMS}, a 0.022 deg step over 360 deg); split the scan into sectors"]

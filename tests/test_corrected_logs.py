@@ -56,13 +56,15 @@ def _trajectories(n: int, seed: int = 3):
 
 def _write_corrected_log(path: Path, n: int, drop_anchor: int | None = None, anchors: bool = True,
                          anchor_stamped: bool = False, t0: float = 100.0, rear: bool = False,
-                         bad_line: int | None = None, cut_after: int | None = None, lead: bool = True) -> tuple:
+                         bad_line: int | None = None, cut_after: int | None = None, lead: bool = True,
+                         sparse: bool = False) -> tuple:
     """A corrected log as Radish writes them: FLASER at the corrected pose, its ODOM anchor (a junk
     stamp), then three ODOM lines of raw odometry from that anchor, the last at the next scan.
     ``rear``: each FLASER's anchor is followed by an RLASER line at the pose turned by pi and its
     anchor, from which the ODOM lines then go on; ``bad_line``: that FLASER line is malformed (its
     anchor stays); ``cut_after``: the log ends right after that scan's FLASER line; ``lead``: an ODOM
-    line before the first scan (else the log begins with that scan's FLASER line)."""
+    line before the first scan (else the log begins with that scan's FLASER line); ``sparse``: no raw
+    odometry after the even-numbered scans (their anchors stay)."""
     corrected, raw = _trajectories(n)
     lines = ["# a Radish-style corrected log", "PARAM robot_frontlaser_offset 0.0 host 0"]
     if lead:  # odometry before the first scan, as Intel and ACES have
@@ -85,7 +87,7 @@ def _write_corrected_log(path: Path, n: int, drop_anchor: int | None = None, anc
                          f"{t:.4f} host {t:.4f}")
             lines.append(f"ODOM {rx:.6f} {ry:.6f} {rth:.6f} 0 0 0 0 host 0")
             origin = _matrix((float(f"{rx:.6f}"), float(f"{ry:.6f}"), float(f"{rth:.6f}")))
-        if k + 1 < n:
+        if k + 1 < n and not (sparse and k % 2 == 0):
             start = np.linalg.inv(raw[k])
             for j, f in enumerate((0.3, 0.7, 1.0)):  # raw odometry samples towards the next scan
                 step = start @ raw[k + 1]
@@ -124,6 +126,24 @@ def test_a_corrected_log_gives_its_raw_odometry_and_its_corrected_poses(tmp_path
     np.testing.assert_allclose(np.angle(np.exp(1j * (got[:, 2] - np.array(expected)[:, 2]))), 0, atol=2e-5)
     drift = np.hypot(*(got[-1, :2] - np.array(corrected[-1][:2])))
     assert drift > 0.05  # the odometry is not the corrected pose (before: identical)
+
+
+def test_a_corrected_log_with_sparse_odometry_is_read_corrected(tmp_path):
+    """A review: two anchors with no ODOM step between them handed both scans back as read, and the
+    chain waited for the next anchored scan, so chains started only in pairs: a corrected log with
+    no raw ODOM line after every other scan (Intel's log so cut: 0 of 910 scans corrected, before
+    the ODOM-step rule 910) read entirely raw. The second scan now starts a chain."""
+    corrected, _ = _trajectories(12)
+    _write_corrected_log(tmp_path / "sparse-corrected.log", 12, sparse=True)
+    recs = list(read_log(tmp_path / "sparse-corrected.log"))
+    assert len(recs) == 12
+    assert [r.corrected is not None for r in recs] == [k >= 1 for k in range(12)]  # old: all False
+    assert recs[0].odom == pytest.approx(np.round(corrected[0], 6))  # as read: its pose fields
+    assert recs[1].odom == pytest.approx(np.round(corrected[1], 6))  # the chain starts at its own pose
+    np.testing.assert_allclose([r.corrected for r in recs[1:]], np.round(corrected, 6)[1:], atol=1e-12)
+    # no raw odometry after scan 2: the odometry stands still to scan 3, and goes on from there
+    assert recs[3].odom == pytest.approx(recs[2].odom)
+    assert recs[2].odom != pytest.approx(recs[2].corrected, abs=1e-4)
 
 
 def test_a_damaged_corrected_log_keeps_its_chain_and_a_raw_log_is_read_as_before(tmp_path):

@@ -103,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
     if first is not None:
         from features.registry import check_beams
 
-        check_beams(first.scan, f"{args.log}: scan 1")  # the extractors' limit, as extract's
+        check_beams(first.scan, f"{args.log}: scan 0")  # the extractors' limit, as extract's
     if sensor is not None:
         check_scan_rate(args.rate_hz, sensor.angle_increment, "--rate-hz")
         if first is not None and (len(first.scan) != sensor.n_beams

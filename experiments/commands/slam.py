@@ -208,10 +208,6 @@ def run(args: argparse.Namespace) -> int:
     config = _config(args)
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
                       read_options=read_log_options(args))
-    from features.registry import check_beams
-
-    for k, rec in enumerate(data.records):  # extract refuses it at that scan, after the notes on the input
-        check_beams(rec.scan, f"{data.sources.get('scans', args.input)}: scan {k}")
     _warn_unread(config, data.records, data.sources.get("scans", args.input))
     stamps = [r.scan.stamp for r in data.records]
     back = next((k for k in range(1, len(stamps)) if stamps[k] < stamps[k - 1]), None)
