@@ -248,7 +248,7 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
                 break
             if k % stride == 0:
                 first = first or (k, rec.scan)
-                same_geometry(rec.scan, first[1], f"scan {k + 1}", f"scan {first[0] + 1}")
+                same_geometry(rec.scan, first[1], f"scan {k}", f"scan {first[0]}")
                 yield rec.scan
 
     try:  # the log's errors (reading it, measuring it) name it; the fit's own errors are not the log's

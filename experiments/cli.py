@@ -64,7 +64,7 @@ try:  # lmsbench's packages: most of its start-up time
     from lms200.errors import LmsbenchWarning
 
     from . import commands
-    from .options import OneLineParser, shorten_quoted
+    from .options import OneLineParser, mid_sentence, shorten_quoted
 except KeyboardInterrupt:
     if __name__ != "__main__" and Path(sys.argv[0]).name != "lmsbench":  # imported by a program: its own Ctrl-C
         raise
@@ -481,7 +481,7 @@ def _stdout_failed(name: str, exc: OSError, status: int = 0) -> int:
     reason = exc.strerror or str(exc) or type(exc).__name__
     try:
         print(f"lmsbench{' ' + name if name else ''}: error: cannot write the standard output: "
-              f"{reason[:1].lower()}{reason[1:]}", file=sys.stderr)
+              f"{mid_sentence(reason)}", file=sys.stderr)
     except (OSError, ValueError):
         pass
     return status or 2
@@ -667,7 +667,7 @@ def _full_disk(exc: BaseException, out: object) -> str:
         return ""
     reason = os.strerror(exc.errno)  # not pyarrow's "error writing bytes to file. Detail: [errno 28] ..."
     where = f"--out {out}" if out is not None else "the outputs"
-    return (f"cannot write: {reason[:1].lower()}{reason[1:]} (on the disk of {where} or of the temporary "
+    return (f"cannot write: {mid_sentence(reason)} (on the disk of {where} or of the temporary "
             f"folder {tempfile.gettempdir()})")
 
 
@@ -688,7 +688,7 @@ def _cwd_gone(exc: BaseException) -> str:
 
 def _one_line(exc: BaseException) -> str:
     if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:  # not "[Errno 13] Permission denied: 'x'"
-        text = f"{exc.filename}: {exc.strerror[:1].lower()}{exc.strerror[1:]}"
+        text = f"{exc.filename}: {mid_sentence(exc.strerror)}"
         if exc.filename2 is not None:
             text += f" ({exc.filename2})"
         return text

@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from features.registry import available_methods, backend_of, get_method, make_config, warn_unread_fields
+from features.registry import available_methods, backend_of, check_beams, get_method, make_config, warn_unread_fields
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
 from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
@@ -218,6 +218,7 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
                 return
             if k % stride == 0:
                 kept += 1
+                check_beams(rec.scan, f"{path}: scan {k}")  # the log's own scan number, not the kept one's
                 yield rec
 
     def estimate_sigma() -> float:
@@ -366,7 +367,10 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
                                 "name keeps only letters, digits, _ and - of the file name): give one of them another "
                                 "name, e.g. a link")
         reader = read_log(spec, **(read_options or {}))
-        if next(iter(reader), None) is None:
+        first = next(iter(reader), None)
+        if first is not None:  # its scans go to the extractors' run, which extract's beam limit does not guard
+            check_beams(first.scan, f"{spec}: scan 0")
+        if first is None:
             if reader.stats.stopped:  # damage before the first scan (read under --skip-bad-lines)
                 raise LmsbenchError(f"{spec}: no scan read: the file stops being readable at {reader.stats.stopped}")
             raise LmsbenchError(f"{spec}: no laser messages found (not a CARMEN log with FLASER / ROBOTLASER / RAWLASER "
@@ -501,6 +505,7 @@ def compare(
             if max_scans is not None and k >= max_scans:
                 break
             scan = rec.scan
+            check_beams(scan, f"{source_label(src)}: scan {k}")  # as extract refuses it, before any method runs on it
             src.range_maxes.add(float(scan.range_max))
             truth = check_truth(src.truth_of(rec)) if src.truth_of else None  # checked once, scored per method
             n_valid = int(np.count_nonzero(scan.valid))

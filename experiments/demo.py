@@ -12,7 +12,7 @@ from typing import Callable
 
 import pandas as pd
 
-from experiments.figures.make import draw_figures, draw_sweep
+from experiments.figures.make import article, draw_figures, draw_sweep
 from experiments.figures.study import StudyConfig, run_study, save_tables
 from experiments.figures.tables import panels_log_name
 from experiments.report import Section, figure, markdown_table, write_report
@@ -234,7 +234,7 @@ def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: Stud
     sig = Section("The paper's signals (Figs. 3-6)", [])
     for name, caption in (("fig3_scan", f"Fig. 3: the {cfg.world} scan of Figs. 4-6, in the sensor frame and in "
                                         f"sensor coordinates (range over beam index)."),
-                          ("fig4_ad", f"Fig. 4: AD_i{cfg.signals_k} of {_article(cfg.world)} {cfg.world} scan; the dashed line is "
+                          ("fig4_ad", f"Fig. 4: AD_i{cfg.signals_k} of {article(cfg.world)} {cfg.world} scan; the dashed line is "
                                       f"its value on any straight line, 1 + 2 Σ cos(jΔ)."),
                           ("fig5_theta", "Fig. 5: θ_i, the line normal angle estimated at each beam."),
                           ("fig6_psi", f"Fig. 6: ψ_i = θ_i − θ_(i+{cfg.signals_k}), large at corners.")):
@@ -296,8 +296,3 @@ def _real_log_caption(tables: dict[str, pd.DataFrame]) -> str:
                 "ranges: the extractor's defaults, its range noise estimated from each scan).")
     return (f"Fig. 9: the same on scans of the real log {name} (the extractor's defaults, its range noise "
             "estimated from each scan).")
-
-
-def _article(word: str) -> str:
-    """'an' before a vowel sound, else 'a' (captions name the world: an office, a corridor)."""
-    return "an" if word[:1].lower() in "aeiou" else "a"

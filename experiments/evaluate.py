@@ -67,7 +67,8 @@ def extract_timed(scans: Iterable[Scan], method: str, params: dict[str, Any] | N
     config = registry.make_config(method, **(params or {}))
     run = registry.get_method(method).run  # time the algorithm alone, not the registry look-up
     results, times = [], []
-    for scan in scans:
+    for k, scan in enumerate(scans):
+        registry.check_beams(scan, f"scan {k}")  # extract's beam limit, which run does not check
         start = time.perf_counter_ns()
         results.append(run(scan, config))
         times.append((time.perf_counter_ns() - start) / 1e6)

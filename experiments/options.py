@@ -73,6 +73,12 @@ def shorten_quoted(message: str) -> str:
     return _LONG_QUOTED.sub(lambda m: f"'{m[1][:40]}...{m[1][-8:]}' ({len(m[1])} characters)", message)
 
 
+def mid_sentence(reason: str) -> str:
+    """An OS or library reason ("No space left on device", "Port out of range 0-65535") as it reads
+    after a colon inside a message: its first letter lower-cased."""
+    return reason[:1].lower() + reason[1:]
+
+
 UNRECOGNIZED = "unrecognized arguments: "  # argparse's message of words no option or argument took
 NEAR_MISS_EDITS = 2  # edits (edits()) within which an unknown option of five letters or more is a near miss of a known one
 #: a word that is a negative number, not an option: argparse 3.11 takes -5 and -.5 only, so `--seed -1e3`,

@@ -654,6 +654,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     """
     from experiments.calibrate import FIT_DURATION_S, calibrate_log, same_geometry
     from experiments.compare import Source, compare, summarise
+    from features.registry import check_beams
     from sim import WORLD_NAMES, make_world, simulate_records
     from sim.records import scan_stamps
 
@@ -667,6 +668,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     reader = read_log(log, **opts)
     for k, rec in enumerate(reader):
         if k % stride == 0:
+            check_beams(rec.scan, f"{log}: scan {k}")  # the extractors' limit (extract's), before any work
             real.append(rec)
         if rec.odom is not None:
             odometry.extend((rec.scan.stamp, *rec.odom))
@@ -676,7 +678,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
         raise LmsbenchError(f"{log}: no laser scans")
     for k, rec in enumerate(real):  # one sensor is simulated: a log of two geometries compared half its scans
         try:
-            same_geometry(rec.scan, real[0].scan, f"scan {k * stride + 1}", "scan 1")
+            same_geometry(rec.scan, real[0].scan, f"scan {k * stride}", "scan 0")
         except LmsbenchError as exc:
             raise LmsbenchError(f"{log}: {exc}") from None
     if not any(rec.scan.valid.any() for rec in real):

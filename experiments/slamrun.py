@@ -173,6 +173,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         sources["relations"] = str(rel_path)
     if rate_hz is not None and not rate_hz >= MIN_RATE_HZ:  # 1e-308 kept the first scan alone
         raise LmsbenchError(f"--rate-hz must be at least {RATE_FLOOR_TEXT}, got {rate_hz}")
+    from features.registry import check_beams
+
     records: list[Record] = []
     reader = read_log(log, **(read_options or {}))
     first_stamp, last_stamp, n_read, timed = None, None, 0, False  # timed: some scan read has another stamp than the first
@@ -187,6 +189,9 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         else:
             keep = k % every == 0
         if keep:
+            # the extractors' limit (extract refuses it at that scan, after the notes on the input), named
+            # by the log's own scan number (counted from 0), not the kept scan's
+            check_beams(rec.scan, f"{log}: scan {k}")
             records.append(rec)
             if max_scans is not None and len(records) >= max_scans:
                 break

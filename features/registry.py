@@ -252,10 +252,19 @@ def warn_unread_noise(m: Method, cfg: Any, params: dict[str, Any], range_max: fl
 
 
 
-def too_many_beams(n: int) -> str:
-    """The message of a scan with more than MAX_BEAMS beams."""
-    return (f"scan: {n} beams is more than the extractors handle ({MAX_BEAMS}, a 0.022 deg step over 360 deg); "
+def too_many_beams(n: int, where: str = "scan") -> str:
+    """The message of a scan with more than MAX_BEAMS beams; ``where`` names it ("scan", or a log's
+    file and the scan's index)."""
+    return (f"{where}: {n} beams is more than the extractors handle ({MAX_BEAMS}, a 0.022 deg step over 360 deg); "
             "split the scan into sectors")
+
+
+def check_beams(scan: Scan, where: str = "scan") -> None:
+    """ScanGeometryError (:func:`too_many_beams`, naming ``where``) for a scan of more than MAX_BEAMS
+    beams: what ``extract`` refuses, for the drivers that call a method's ``run`` directly to time it
+    (``compare``, ``sim2real``, the benchmarks), which ran 20,000-beam scans unchecked."""
+    if len(scan) > MAX_BEAMS:
+        raise ScanGeometryError(too_many_beams(len(scan), where))
 
 
 #: scans per compiled batch call: the call stacks its scans' ranges into one array, which for a

@@ -18,6 +18,7 @@ import math
 import os
 import struct
 import time
+from contextvars import ContextVar
 from bisect import bisect_left, insort
 from collections import deque
 from dataclasses import dataclass, field
@@ -30,7 +31,7 @@ import numpy as np
 from .codes import finite_negative
 from .errors import InputError, LmsbenchError, LogNotFoundError
 from .records import Pose2D, Record, SkipLog
-from .scan import Scan, snap_angle
+from .scan import Scan, snap_float32_angle
 from .tum import MAX_TILT_DEG, quaternion_to_yaw, tilt_deg
 from .timing import lms200_shaped, mirror_time_increment, scan_period, smallest_range
 
@@ -143,13 +144,24 @@ class _BoundedZstd:
         return getattr(self._module, name)
 
     def decompress(self, data: bytes) -> bytes:
-        return _bounded(data, self._module.ZstdDecompressor, "a zstd-compressed message", True)
+        try:
+            return _bounded(data, self._module.ZstdDecompressor, "a zstd-compressed message", True)
+        except BagTooLargeError as exc:
+            raise _unnamed(exc) from None
 
     def open(self, file: Any, mode: str = "rb", **kwargs: Any) -> Any:  # noqa: ANN401
         """rosbags opens a file-compressed bag's storage file so and copies it whole to a temporary
         file: the stream read is bounded (:class:`_BoundedZstdFile`)."""
         stream = self._module.open(file, mode, **kwargs)
         return _BoundedZstdFile(stream, str(getattr(file, "name", file))) if "r" in mode else stream
+
+
+def _unnamed(exc: BagTooLargeError) -> BagTooLargeError:
+    """``exc``, marked as naming no file: :class:`BagReader` puts the bag's path before its message
+    (told by the mark, not by the path's text within the message: a bag named ``bag`` or ``msg``
+    was found in any message and went unnamed)."""
+    exc.lmsbench_unnamed = True  # type: ignore[attr-defined]
+    return exc
 
 
 def _free_temp_bytes() -> int:
@@ -400,6 +412,7 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                     time_increment, scan_time = mirror_time_increment(scan.angle_increment), scan_period(scan.angle_increment)
                 else:  # another scanner: its timing is unknown (the LMS200's mirror's was written, as if it were one)
                     time_increment = scan_time = 0.0
+                range_min = max(scan.range_min, smallest_range(scan.range_max))
                 msg = LaserScan(
                     header=Header(**header_kw),
                     angle_min=scan.angle_min,
@@ -407,9 +420,9 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                     angle_increment=scan.angle_increment,
                     time_increment=time_increment,
                     scan_time=scan_time,
-                    range_min=max(scan.range_min, smallest_range(scan.range_max)),
+                    range_min=range_min,
                     range_max=scan.range_max,
-                    ranges=scan.ranges.astype(np.float32),
+                    ranges=float32_ranges(scan.ranges, range_min, scan.range_max),
                     intensities=np.zeros(0, dtype=np.float32),
                 )
                 writer.write(conn(topic, "sensor_msgs/msg/LaserScan"), bag_time(ns), serialize(msg, "sensor_msgs/msg/LaserScan"))
@@ -456,6 +469,20 @@ RANGE_MAX_HINT = ("give the sensor's maximum range instead: --laser-range-max M 
                   "(read_log(..., geometry=LaserGeometry(range_max=M)))")
 
 
+def float32_ranges(ranges: np.ndarray, range_min: float, range_max: float) -> np.ndarray:
+    """``ranges`` (m) as a LaserScan's float32, each on the side of ``range_min`` and ``range_max``
+    (written as float32 too) it lies on: REP-117 takes a reading above range_max (or below range_min)
+    for out of range, and a reader compares in the message's float32, where rounding put a reading
+    just above range_max onto it (8.18300005 m under 8.183 m: both 8.1829996 m), read back valid.
+    Such a reading is written as the next float32 beyond the limit; every other as its nearest float32."""
+    out = ranges.astype(np.float32)
+    low, high = np.float32(range_min), np.float32(range_max)
+    with np.errstate(invalid="ignore"):
+        out[(ranges > range_max) & (out <= high)] = np.nextafter(high, np.float32(np.inf))
+        out[(ranges < range_min) & (ranges > 0) & (out >= low)] = np.nextafter(low, np.float32(0))
+    return out
+
+
 def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
     """A LaserScan message as a Scan, its range_max replaced by ``range_max`` when given; raises
     ValueError for fields a scan cannot have."""
@@ -479,8 +506,8 @@ def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
         ranges, angle_min, increment = ranges[::-1].copy(), angle_min + (ranges.size - 1) * increment, -increment
     return Scan(
         ranges,
-        snap_angle(angle_min),  # float32 in the message: back onto the 0.05 deg grid
-        snap_angle(increment),
+        snap_float32_angle(angle_min),  # float32 in the message: back onto the 0.05 deg grid where its rounding explains
+        snap_float32_angle(increment),
         range_min,
         range_max,
         _stamp_of(msg),
@@ -601,6 +628,154 @@ class BagReadStats(SkipLog):
 #: header holds its message definition: a few KB); a larger one is damage, not a record
 MAX_RECORD_HEADER_BYTES = 16 * 2**20
 
+#: bytes: the most a ROS 1 connection record's fields (type, md5sum, callerid and the message
+#: definition, with those of every type it uses and their comments) may hold. rosbags reads each
+#: whole and parses the definition with a parser that costs about 1-10 us and 50 bytes of memory a
+#: byte: a 5.6 MB definition of comment lines took 6 s and 65 MB in `lmsbench info` (58 s and 340 MB as
+#: field lines). A definition is a few KB: the largest rosbags' Noetic store writes (visualization_msgs/
+#: InteractiveMarkerUpdate, with every type it uses) is 3 KB without comments; a larger one is refused unread
+#: (a ROS 2 bag's definition, read from its storage file, unparsed: :func:`_bound_definitions`).
+MAX_CONNECTION_BYTES = 256 * 2**10
+
+#: bytes: the most all the connection records of a ROS 1 bag may hold together (rosbags reads each
+#: whole and keeps its definition): a few hundred connections of a few KB each
+MAX_CONNECTIONS_TOTAL_BYTES = 4 * 2**20
+
+#: field lines (lines that are neither blank, nor comments, nor a section's separator or header) the
+#: distinct message definitions of one bag may hold together, every IDL section counted. Most of what
+#: an absurd definition costs is rosbags' ``Typestore.register``, which generates code for each field:
+#: 20,000 field lines (250 KB, under MAX_CONNECTION_BYTES) held `lmsbench info` 13 s at 280 MB, three
+#: such connections 44 s at 556 MB; 4,000 cost 0.3 s to parse and 0.6 s to register. Every type of
+#: rosbags' ROS Noetic store together has 529 fields; LaserScan's definition with its Header 14 lines.
+MAX_DEFINITION_FIELDS = 4096
+
+#: characters the distinct message definitions of one bag may hold together (parsing costs about
+#: 1 us a character of comment lines, 6 of field lines); the same definition on many connections counts once
+MAX_DEFINITIONS_BYTES = 1 * 2**20
+
+
+def _connection_too_large(path: object, cid: int | None, topic: str | None, size: int) -> BagTooLargeError:
+    """The error of a connection record whose fields (its message definition) exceed MAX_CONNECTION_BYTES,
+    or (``cid`` None) whose record header (op, conn and topic: a few bytes) does."""
+    if cid is None:
+        return BagTooLargeError(f"{path}: a connection record's header (its op, conn and topic) holds {size:,} bytes, "
+                                f"more than the {MAX_CONNECTION_BYTES:,} a ROS 1 bag's connection may "
+                                "(lms200.bag.MAX_CONNECTION_BYTES): damage; not read")
+    which = f"connection {cid}" + (f" ({topic})" if topic else "")
+    return BagTooLargeError(f"{path}: {which} holds {size:,} bytes of type, md5sum and message definition, more than "
+                            f"the {MAX_CONNECTION_BYTES:,} a ROS 1 bag's connection may (lms200.bag.MAX_CONNECTION_BYTES): "
+                            "an absurd message definition, or damage; not read")
+
+
+def _connections_too_large(path: object, count: int, size: int) -> BagTooLargeError:
+    return BagTooLargeError(f"{path}: its {count:,} connections hold {size:,} bytes of type, md5sum and message "
+                            f"definition together, more than the {MAX_CONNECTIONS_TOTAL_BYTES:,} a ROS 1 bag's may "
+                            "(lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES): absurd message definitions, or damage; not read")
+
+
+class _DefinitionBudget:
+    """What the message definitions of one bag opened have cost so far (:func:`_bound_definitions`)."""
+
+    def __init__(self) -> None:
+        self.chars = 0
+        self.fields = 0
+        self.parsed: dict[tuple, Any] = {}  # (parser, text, args): its types, parsed once
+
+
+#: the budget of the bag being opened (:meth:`BagReader._open`); None: each definition on its own
+_BUDGET: ContextVar[_DefinitionBudget | None] = ContextVar("lmsbench_definition_budget", default=None)
+
+
+def _field_lines(text: str) -> int:
+    """Lines of a message definition (MSG or IDL) that are neither blank, nor comments, nor a
+    section's separator or header: a bound on its fields (and the constants and IDL syntax)."""
+    return sum(1 for line in text.splitlines()
+               if (s := line.strip()) and not s.startswith(("#", "//", "/*", "*", "==", "MSG:", "IDL:")))
+
+
+def _bound_definitions() -> None:
+    """rosbags' AnyReader parses every connection's message definition (``get_types_from_msg``,
+    ``get_types_from_idl`` of its module, called for each IDL section) and registers the types (code
+    generated for each field) when it opens a bag: those names are pointed at parsers that first refuse
+    a definition of more than MAX_CONNECTION_BYTES characters, and a bag whose distinct definitions
+    together pass MAX_DEFINITION_FIELDS field lines or MAX_DEFINITIONS_BYTES characters (a
+    BagTooLargeError, which :meth:`BagReader._open` names the bag in); the same definition is parsed
+    once a bag. A ROS 1 bag's is refused by its length before it is read (:func:`_check_index_connections`);
+    a ROS 2 bag's comes from its storage file (sqlite3, mcap): one of 5.6 MB of comment lines held
+    `lmsbench info` 4.5 s at 63 MB. A rosbags without one of those names is left as it is."""
+    from rosbags.highlevel import anyreader
+
+    for name in ("get_types_from_msg", "get_types_from_idl"):
+        parse = getattr(anyreader, name, None)
+        if parse is None or getattr(parse, "lmsbench_bounded", False):
+            continue
+
+        def bounded(text: str, *args: Any, _parse: Callable[..., Any] = parse, _name: str = name,  # noqa: ANN401
+                    **kwargs: Any) -> Any:  # noqa: ANN401
+            which = f"{args[0]}'s message definition" if args else "a message definition (IDL)"
+            if len(text) > MAX_CONNECTION_BYTES:
+                raise _unnamed(BagTooLargeError(
+                    f"{which} holds {len(text):,} characters, more than the {MAX_CONNECTION_BYTES:,} a bag's may "
+                    "(lms200.bag.MAX_CONNECTION_BYTES): an absurd message definition, or damage; not parsed"))
+            budget = _BUDGET.get() or _DefinitionBudget()
+            key = (_name, text, args) if not kwargs else None
+            if key is not None and key in budget.parsed:
+                return dict(budget.parsed[key])
+            budget.chars += len(text)
+            budget.fields += _field_lines(text)
+            if budget.fields > MAX_DEFINITION_FIELDS:
+                raise _unnamed(BagTooLargeError(
+                    f"{which} brings the field lines of the bag's message definitions to {budget.fields:,}, more "
+                    f"than the {MAX_DEFINITION_FIELDS:,} a bag's may (lms200.bag.MAX_DEFINITION_FIELDS; every ROS "
+                    "Noetic type together has 529): absurd message definitions, or damage; not parsed"))
+            if budget.chars > MAX_DEFINITIONS_BYTES:
+                raise _unnamed(BagTooLargeError(
+                    f"{which} brings the bag's message definitions to {budget.chars:,} characters, more than the "
+                    f"{MAX_DEFINITIONS_BYTES:,} a bag's may (lms200.bag.MAX_DEFINITIONS_BYTES): absurd message "
+                    "definitions, or damage; not parsed"))
+            types = _parse(text, *args, **kwargs)
+            if key is not None:
+                budget.parsed[key] = types
+            return types
+
+        bounded.lmsbench_bounded = True  # type: ignore[attr-defined]
+        setattr(anyreader, name, bounded)
+
+
+def _check_index_connections(path: Any) -> None:  # noqa: ANN401 - a Path, or rosbags' RPath
+    """BagTooLargeError naming the file for an indexed ROS 1 bag whose index holds a connection record
+    of more than MAX_CONNECTION_BYTES of fields, told from the record lengths alone before rosbags
+    reads the index (it reads each connection whole and parses its message definition). A bag whose
+    header or index cannot be followed is left to rosbags, which says what is wrong."""
+    from rosbags.rosbag1 import reader as r1
+
+    try:
+        with path.open("rb") as bio:
+            size = os.fstat(bio.fileno()).st_size
+            if bio.read(13) != b"#ROSBAG V2.0\n":
+                return
+            header = r1.Header.read(bio, r1.RecordType.BAGHEADER)
+            index_pos, conn_count = header.get_uint64("index_pos"), header.get_uint32("conn_count")
+            if index_pos == 0 or index_pos >= size:
+                return
+            bio.seek(index_pos)
+            total = 0
+            for _ in range(conn_count):
+                hlen = r1.read_uint32(bio)
+                if hlen > MAX_CONNECTION_BYTES:  # op, conn and topic: a few bytes
+                    raise _connection_too_large(path, None, None, hlen)
+                bio.seek(-4, os.SEEK_CUR)
+                rec = r1.Header.read(bio, r1.RecordType.CONNECTION)
+                dlen = r1.read_uint32(bio)
+                if dlen > MAX_CONNECTION_BYTES:
+                    raise _connection_too_large(path, rec.get_uint32("conn"), rec.get_string("topic"), dlen)
+                total += dlen
+                if total > MAX_CONNECTIONS_TOTAL_BYTES:
+                    raise _connections_too_large(path, conn_count, total)
+                bio.seek(dlen, os.SEEK_CUR)
+    except (OSError, r1.ReaderError, KeyError, UnicodeDecodeError, struct.error):
+        return
+
 
 @dataclass
 class Recovered:
@@ -650,6 +825,7 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
 
         def open(self) -> None:
             if not self._unindexed():
+                _check_index_connections(self.path)
                 super().open()
             else:
                 self.bio = self.path.open("rb")
@@ -734,6 +910,12 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
         def _connection(self, header: Any, data: Any, dlen: int, conns: dict) -> None:  # noqa: ANN401
             cid = header.get_uint32("conn")
             topic = header.get_string("topic")
+            if dlen > MAX_CONNECTION_BYTES:
+                raise _connection_too_large(self.path, cid, topic, dlen)
+            if cid not in conns:  # a chunk repeats the connections of the chunks before it
+                self.connection_bytes = getattr(self, "connection_bytes", 0) + dlen
+                if self.connection_bytes > MAX_CONNECTIONS_TOTAL_BYTES:
+                    raise _connections_too_large(self.path, len(conns) + 1, self.connection_bytes)
             fields = r1.Header.read(BytesIO(struct.pack("<I", dlen) + data.read(dlen)))
             latching = fields.get_string("latching") if "latching" in fields else None
             if cid not in conns:
@@ -839,17 +1021,23 @@ class BagReader:
             check_metadata_size(self.path)
             _check_storage_files(self.path)
         _bound_zstd_messages()  # before open: a file-compressed ROS 2 bag is decompressed there
+        _bound_definitions()
+        budget = _BUDGET.set(_DefinitionBudget())  # the definitions of this bag together
         try:
             reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
             if not reader.is2:  # a bag never closed (a killed recording) is read from its chunks
                 reader.readers = [_recovering_reader(self.path)]
             reader.open()
-        except BagError:
+        except BagTooLargeError as exc:
+            if getattr(exc, "lmsbench_unnamed", False):  # a message definition's (_bound_definitions knows no file)
+                raise BagTooLargeError(f"{self.path}: {exc}") from None
             raise
-        except BagTooLargeError:
+        except BagError:
             raise
         except Exception as exc:  # rosbags raises its own types for every kind of damage
             raise BagError(f"{self.path}: cannot open as a ROS bag: {type(exc).__name__}: {exc}") from None
+        finally:
+            _BUDGET.reset(budget)
         _bound_decompression(reader, self.path)
         found = getattr(reader.readers[0], "recovered", None)
         if found is not None and not self._warned:
@@ -886,7 +1074,7 @@ class BagReader:
 
     def _fail(self, where: str, exc: Exception, index: int, fatal: bool) -> None:
         if isinstance(exc, BagTooLargeError):  # not a damaged message to skip: memory is at stake
-            if str(self.path) not in str(exc):  # a ROS 2 message's (rosbags' zstd knows no file)
+            if getattr(exc, "lmsbench_unnamed", False):  # a ROS 2 message's (rosbags' zstd knows no file)
                 raise BagTooLargeError(f"{self.path}: {where}: {exc}") from None
             raise exc
         reason = f"{type(exc).__name__}: {exc}" if not isinstance(exc, ValueError) else str(exc)

@@ -159,8 +159,14 @@ class CorrectedChain:
     - odometry that is not finite (poses near 1e308) ends the chain.
 
     Otherwise (a raw log) a scan without its anchor is handed back as read (its pose fields as
-    odometry, no corrected pose), and the chain starts again at the next anchor. Holds one record
-    at most.
+    odometry, no corrected pose), and the chain starts again at the next anchor. A chain's first
+    anchored scan is held until the chain runs: should the next scan have no anchor, it too is handed
+    back as read, so a raw log never has a corrected pose from one coincidence (a clock set back
+    100 s while the robot stood read the scan before the jump as corrected, and ``info`` said
+    "corrected poses 1 scans"), and the chain is confirmed only if an ODOM step on the odometry's
+    own clock came between its first two anchors (the odometry host's clock alone set back, the
+    robot standing, gave an "anchor" after every scan with none between); without one the first
+    scan is handed back as read and the chain starts again at the second. Holds two records at most.
     """
 
     def __init__(self) -> None:
@@ -169,20 +175,24 @@ class CorrectedChain:
         self.last_odom: Pose2D | None = None  # the last ODOM pose after that anchor
         self.step_stamp: float | None = None  # the stamp of the last ODOM line read as a step (s)
         self.in_a_row = 0  # anchors read in a row (CONFIRMING_ANCHORS: the chain runs)
+        self.stepped = False  # an ODOM step read (on the odometry's clock) since the chain's first anchor
         #: an ODOM line (pose, stamp s) at the held scan's pose read before any ODOM step: no clock yet
         #: judges its stamp, so it waits for the next ODOM line's (:meth:`_judge_first`)
         self.first: tuple[Pose2D, float] | None = None
+        #: a chain's first anchored scan, as read and anchored: given anchored once the chain runs, as
+        #: read if it ends first
+        self.tentative: tuple[Record, Record] | None = None
 
     def laser(self, rec: Record) -> Iterator[Record]:
         """A laser record of the kind read; held until the ODOM line after it is read."""
-        yield from self.flush()
+        yield from self._settle()
         if rec.odom is None:  # the log says its pose fields are no odometry (PARAM lmsbench_odometry)
-            self._end()
+            yield from self._end()
             yield rec
             return
         odom = rec.odom if self.anchor is None else self._odometry_now()  # a chain starts at the scan's own pose
         if not all(map(math.isfinite, odom)):
-            self._end()
+            yield from self._end()
             odom = rec.odom
         self.pending = (rec, odom)
 
@@ -207,10 +217,20 @@ class CorrectedChain:
                 and not stamp >= self.pending[0].scan.stamp - ANCHOR_STAMP_GAP_S):
             rec, odom = self.pending
             self.pending = None
-            self.in_a_row += 1
-            yield self._anchored(rec, odom)
+            if 0 < self.in_a_row < CONFIRMING_ANCHORS and not self.stepped:
+                # no ODOM step on the odometry's clock since the chain's first anchor: that clock jumped
+                # back (the odometry host's alone set back, while the robot stood), as a corrected log's
+                # never does (steps stamped by it follow every anchor); 51 of 100 scans read "corrected",
+                # their odometry frozen. The first scan as read, the clock goes on from this line, and a
+                # chain starts at this scan: handing both back as read started chains only in pairs, so
+                # a corrected log whose raw ODOM lines are sparse (none between some scans) read raw
+                yield from self._end()
+                self._step(pose, stamp)
+                yield from self._anchored(rec, pose)  # its own pose: a new chain starts there
+                return
+            yield from self._anchored(rec, odom)
             return
-        yield from self.flush()
+        yield from self._settle()
         if not all(map(math.isfinite, pose)):
             return
         if junk and self.anchor is not None:
@@ -218,7 +238,7 @@ class CorrectedChain:
             if all(map(math.isfinite, odom)):  # odometry restarts at its pose
                 self.anchor, self.last_odom = (pose, odom), None
             else:
-                self._end()
+                yield from self._end()
             return
         self._step(pose, stamp)
 
@@ -228,6 +248,12 @@ class CorrectedChain:
         return self.anchor is not None and self.in_a_row >= CONFIRMING_ANCHORS
 
     def flush(self) -> Iterator[Record]:
+        """The records held, at the end of the log: the last as :meth:`_settle` gives it, and a
+        chain's first anchored scan whose chain never ran as read."""
+        yield from self._settle()
+        yield from self._release()
+
+    def _settle(self) -> Iterator[Record]:
         """The held record, with no anchor after it: anchored all the same once a chain runs (its
         pose fields are its corrected pose), else as read (the chain ends)."""
         if self.first is not None:  # no ODOM line after it to judge it: a step, as read
@@ -237,9 +263,9 @@ class CorrectedChain:
             rec, odom = self.pending
             self.pending = None
             if self.running:
-                yield self._anchored(rec, odom)
+                yield from self._anchored(rec, odom)
             else:
-                self._end()
+                yield from self._end()
                 yield rec
 
     def _judge_first(self, clock: float) -> Iterator[Record]:
@@ -255,25 +281,45 @@ class CorrectedChain:
         rec, odom = self.pending
         if stamp < clock - ANCHOR_STAMP_GAP_S and stamp < rec.scan.stamp - ANCHOR_STAMP_GAP_S:
             self.pending = None
-            self.in_a_row += 1
-            yield self._anchored(rec, odom)
+            yield from self._anchored(rec, odom)
             return
-        yield from self.flush()
+        yield from self._settle()
         self._step(pose, stamp)
 
     def _step(self, pose: Pose2D, stamp: float) -> None:
         """An ODOM line read as a step of the odometry: its pose, and its stamp as the odometry's clock."""
         self.last_odom = pose
+        self.stepped = True
         if math.isfinite(stamp):
             self.step_stamp = stamp
 
-    def _end(self) -> None:
+    def _end(self) -> Iterator[Record]:
+        """The chain ends: a first anchored scan still held, its chain never run, as read."""
         self.anchor, self.last_odom, self.in_a_row = None, None, 0
+        yield from self._release()
 
-    def _anchored(self, rec: Record, odom: Pose2D) -> Record:
+    def _release(self) -> Iterator[Record]:
+        if self.tentative is not None:
+            rec = self.tentative[0]
+            self.tentative = None
+            yield rec
+
+    def _anchored(self, rec: Record, odom: Pose2D) -> Iterator[Record]:
+        """``rec`` with its anchor read: held while it is its chain's first, else given (after the
+        first, once the chain runs)."""
         assert rec.odom is not None
         self.anchor, self.last_odom = (rec.odom, odom), None
-        return dataclasses.replace(rec, odom=odom, corrected=rec.odom)
+        self.in_a_row += 1
+        if self.in_a_row == 1:
+            self.stepped = False
+        done = dataclasses.replace(rec, odom=odom, corrected=rec.odom)
+        if self.in_a_row < CONFIRMING_ANCHORS:
+            self.tentative = (rec, done)
+            return
+        if self.tentative is not None:
+            yield self.tentative[1]
+            self.tentative = None
+        yield done
 
     def _odometry_now(self) -> Pose2D:
         """The chained odometry at the last ODOM line read (at the anchor when none since)."""

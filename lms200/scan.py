@@ -60,6 +60,21 @@ def snap_angle(value: float) -> float:
     return snapped
 
 
+def snap_float32_angle(value: float) -> float:
+    """:func:`snap_angle` for an angle stored as float32 (a bag's LaserScan): onto the 0.05 deg grid
+    only when the grid angle's float32 is ``value``'s own or one float32 step from it (a driver's
+    float32 arithmetic), the most float32 rounding explains; else ``value`` as given. snap_angle's
+    allowance is that of 6-decimal text (5e-7 rad + 1e-6 of the value): a bag's angle_min 2e-6 rad
+    off the grid (a calibrated mount, 17 float32 steps at 90 deg) was snapped onto it."""
+    snapped = snap_angle(value)
+    if snapped == value:
+        return float(value)
+    grid, given = np.float32(snapped), np.float32(value)
+    if abs(float(given) - float(grid)) <= float(np.spacing(np.abs(grid))):
+        return snapped
+    return float(value)
+
+
 @dataclass(frozen=True, eq=False)
 class Scan:
     """One laser scan. Fields mirror ROS ``sensor_msgs/LaserScan``.

@@ -120,14 +120,18 @@ def tilt_deg(q: np.ndarray) -> float:
     """The angle (deg) between the z axis of the rotation a quaternion (qx, qy, qz, qw, any positive
     finite norm) stands for and the world's z: 0 for a rotation about z alone (a planar pose's)."""
     qx, qy, qz, qw = np.asarray(q, dtype=float) / np.max(np.abs(q))
-    cos_tilt = 1.0 - 2.0 * (qx * qx + qy * qy) / (qx * qx + qy * qy + qz * qz + qw * qw)
-    return math.degrees(math.acos(min(1.0, max(-1.0, cos_tilt))))
+    return _tilt_of_cos(1.0 - 2.0 * (qx * qx + qy * qy) / (qx * qx + qy * qy + qz * qz + qw * qw))
 
 
 def tilt_of_roll_pitch_deg(roll: float, pitch: float) -> float:
     """The tilt (deg) of a rotation given by roll and pitch (rad; any yaw, z-y-x order): the angle
     between its z axis and the world's, acos(cos roll cos pitch), as ``tilt_deg`` of its quaternion."""
-    return math.degrees(math.acos(min(1.0, max(-1.0, math.cos(roll) * math.cos(pitch)))))
+    return _tilt_of_cos(math.cos(roll) * math.cos(pitch))
+
+
+def _tilt_of_cos(cos_tilt: float) -> float:
+    """The angle (deg) whose cosine is ``cos_tilt``, clamped to [-1, 1] first (rounding can pass 1)."""
+    return math.degrees(math.acos(min(1.0, max(-1.0, cos_tilt))))
 
 
 def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.ndarray]:

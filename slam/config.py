@@ -422,8 +422,8 @@ class LoopClosureConfig:
             before the inflation) in every direction (a bare corridor does not fix its axis and
             cannot close a loop).
         gate_probability: ...and move the new keyframe by no more than the drift since the
-            candidate allows: the correction's Mahalanobis distance against the graph's marginal
-            covariances of the two keyframes plus the match's own covariance within this
+            candidate allows: the correction's Mahalanobis distance against that drift (``drift``,
+            below) plus the match's own covariance within this
             chi-square quantile (3 dof); only heading hypotheses inside that gate are tried (an
             aliased place half a turn or a door's spacing away is refused).
         kernel: robust loss of the closure factors, "cauchy" or "huber"...
@@ -431,6 +431,15 @@ class LoopClosureConfig:
             the closure match's covariance: its Hessian over its residual variance, as for the
             keyframe factors, so no global factor sets the balance between the two).
         prior_sigma: std of the first keyframe's prior (m and rad).
+        drift: the drift the gate allows: "marginals" (the graph's marginals of the two keyframes
+            added, their correlation left out: far from the start it allows metres even between
+            keyframes a few apart) or "joint" (the covariance of the new keyframe relative to the
+            candidate, from their joint marginal: the drift of the path between them, less what
+            the closures in between fixed)...
+        drift_inflation: ...times this (in [1, 1e6]). The keyframe factors and the closures are
+            the matches' covariances, over-confident where the scans are 1 degree apart (Intel and
+            ACES: a median chi-square of 27-31 against 2.4, 3 dof), and scaling them all scales the
+            joint marginal alike.
     """
 
     enabled: bool = True
@@ -448,6 +457,8 @@ class LoopClosureConfig:
     kernel: str = "huber"
     kernel_width: float = 1.0
     prior_sigma: float = 1e-4
+    drift: str = "marginals"
+    drift_inflation: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -496,6 +507,10 @@ class SlamConfig:
             object.__setattr__(self, name, _checked_fields(value, name))
         if self.loop_closure.kernel not in ("cauchy", "huber"):
             raise SlamConfigError(f"loop_closure.kernel: must be 'cauchy' or 'huber', got {self.loop_closure.kernel!r}")
+        if self.loop_closure.drift not in ("marginals", "joint"):
+            raise SlamConfigError(f"loop_closure.drift: must be 'marginals' or 'joint', got {self.loop_closure.drift!r}")
+        if not 1.0 <= self.loop_closure.drift_inflation <= 1e6:
+            raise SlamConfigError(f"loop_closure.drift_inflation: must be in [1, 1e6], got {self.loop_closure.drift_inflation}")
         for sec, name in (("alignment", "stride"), ("alignment", "max_iterations"), ("keyframes", "local_map"),
                           ("loop_closure", "every"), ("loop_closure", "candidates")):
             if getattr(getattr(self, sec), name) < 1:

@@ -78,7 +78,7 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
     least ``min_travel`` of path behind it; the first match that passes every check is returned.
 
     ``drift(candidate)`` is the (3, 3) world-frame covariance of the new keyframe's estimate
-    relative to the candidate's (from the graph's marginals); a closure whose correction lies
+    relative to the candidate's (from the graph: ``loop_closure.drift``); a closure whose correction lies
     outside its ``gate_probability`` chi-square gate (3 dof, with the match's own covariance
     added) is refused, and only heading hypotheses inside that gate are tried. Without
     ``drift`` the gate is not applied (any correction, any heading hypothesis). ``positions``

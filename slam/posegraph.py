@@ -76,6 +76,18 @@ class PoseGraph:
     def pose(self, key: int) -> np.ndarray:
         return _array(self.isam.calculateEstimate().atPose2(key))
 
+    def relative_covariance(self, old: int, new: int) -> np.ndarray:
+        """Covariance (3, 3) of pose ``new`` relative to pose ``old`` (the error of
+        ``old^-1 * new``, in the frame of ``new``) from their joint marginal: what a closure between
+        them may correct, the correlation of the two kept."""
+        joint = self.isam.jointMarginalCovariance([old, new])
+        s_oo, s_on, s_nn = (np.asarray(joint.at(a, b)) for a, b in ((old, old), (old, new), (new, new)))
+        est = self.isam.calculateEstimate()
+        rel = est.atPose2(new).between(est.atPose2(old))  # old in the frame of new
+        B = np.asarray(rel.AdjointMap())  # old's tangent -> new's
+        cov = s_nn - B @ s_on - s_on.T @ B.T + B @ s_oo @ B.T
+        return 0.5 * (cov + cov.T)
+
     def covariance(self, key: int) -> np.ndarray:
         """Marginal covariance (3x3) of a keyframe pose, in its own frame."""
         return np.asarray(self.isam.marginalCovariance(key))

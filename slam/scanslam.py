@@ -475,10 +475,14 @@ class ScanSlam:
 
     def _drift(self, new: Keyframe):
         """``drift(candidate)``: world-frame covariance (3, 3) of the error of ``new``'s estimate
-        relative to the candidate's, from the graph's marginals of both (their correlation left
-        out, which can only widen the gate)."""
+        relative to the candidate's, times ``loop_closure.drift_inflation``: from the graph's
+        marginals of both (``drift: marginals``, their correlation left out, which can only widen
+        the gate), or from their joint marginal (``drift: joint``)."""
         assert self.graph is not None
         graph = self.graph
+        scale = self.loop_cfg.drift_inflation
+        if self.loop_cfg.drift == "joint":
+            return lambda cand: scale * rotate_covariance(graph.relative_covariance(cand.key, new.key), new.pose[2])
         own: list[np.ndarray] = []  # computed at the first candidate (most searches have none)
 
         def drift(cand: Keyframe) -> np.ndarray:
@@ -486,7 +490,7 @@ class ScanSlam:
                 own.append(rotate_covariance(graph.covariance(new.key), new.pose[2]))
             dx, dy = new.pose[0] - cand.pose[0], new.pose[1] - cand.pose[1]
             J = np.array([[1.0, 0.0, -dy], [0.0, 1.0, dx], [0.0, 0.0, 1.0]])  # the candidate's heading error moves new
-            return own[0] + J @ rotate_covariance(graph.covariance(cand.key), cand.pose[2]) @ J.T
+            return scale * (own[0] + J @ rotate_covariance(graph.covariance(cand.key), cand.pose[2]) @ J.T)
 
         return drift
 

@@ -1594,3 +1594,16 @@ def test_review_of_the_hunt_valid_inputs_it_had_refused(tmp_path) -> None:
     with pytest.raises(InputError, match=r"^poses: none to write \(a TUM file of no pose is refused by read_tum"):
         write_tum(tmp_path / "none.tum", [], [])  # an empty list is no shape error (it wrote a file read_tum refuses)
     assert not (tmp_path / "none.tum").exists()
+
+
+@pytest.mark.parametrize("value, message", [
+    (dict(drift="chain"), r"^loop_closure.drift: must be 'marginals' or 'joint', got 'chain'$"),
+    (dict(drift_inflation=0.5), r"^loop_closure.drift_inflation: must be in \[1, 1e6\], got 0.5$"),
+    (dict(drift_inflation=float("nan")), r"^loop_closure.drift_inflation: must be finite, got nan$"),
+])
+def test_slam_config_checks_the_closure_drift_gate(value: dict, message: str) -> None:
+    from slam import SlamConfig, SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=message):
+        SlamConfig.from_dict({"loop_closure": value})
+    assert SlamConfig.from_dict({"loop_closure": {"drift": "joint", "drift_inflation": 10}}).loop_closure.drift == "joint"

@@ -266,3 +266,232 @@ def test_a_ros2_metadata_yaml_too_big_to_parse_is_refused_unread(tmp_path, capsy
     assert main(["info", str(bag)]) == 2
     assert capsys.readouterr().err.startswith(f"lmsbench info: error: {message} (refused unread")
     assert time.monotonic() - start < 2  # old: both parsed it (10 s of comments; minutes of content)
+
+
+def _bag_with_definition(path: Path, extra: int, unindexed: bool = False) -> Path:
+    """A ROS 1 bag of two LaserScans whose connection carries LaserScan's message definition and
+    ``extra`` bytes of comment lines (a definition's comments are part of it, as ROS writes them);
+    ``unindexed``: its index cut off and index_pos 0, as a killed recording leaves it."""
+    import math
+    import struct
+
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    T = ts.types
+    msgdef, md5 = ts.generate_msgdef("sensor_msgs/msg/LaserScan")
+    line = "# " + "x" * 77 + "\n"
+    with Writer(path) as w:
+        c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts,
+                             msgdef=msgdef + line * (extra // len(line)), md5sum=md5)
+        for k in range(2):
+            msg = T["sensor_msgs/msg/LaserScan"](
+                header=T["std_msgs/msg/Header"](seq=k, stamp=T["builtin_interfaces/msg/Time"](sec=10 + k, nanosec=0),
+                                                 frame_id="laser"),
+                angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360, time_increment=0.0,
+                scan_time=0.0, range_min=0.01, range_max=8.0, ranges=np.full(361, 2.0, np.float32),
+                intensities=np.zeros(0, np.float32))
+            w.write(c, (10 + k) * 10**9, ts.serialize_ros1(msg, "sensor_msgs/msg/LaserScan"))
+    if unindexed:
+        data = bytearray(path.read_bytes())
+        at = data.index(b"index_pos=") + 10
+        index_pos = struct.unpack("<Q", data[at:at + 8])[0]
+        data[at:at + 8] = bytes(8)
+        path.write_bytes(bytes(data[:index_pos]))
+    return path
+
+
+@pytest.mark.parametrize("unindexed", [False, True], ids=["indexed", "unindexed"])
+def test_a_ros1_connection_of_an_absurd_message_definition_is_refused_unread(tmp_path, capsys, unindexed) -> None:
+    """Review: a ROS 1 bag whose LaserScan connection carried a 5.6 MB message definition held
+    `lmsbench info` 6 s at 65 MB as comment lines (rosbags parses the definition, up to 50 bytes of memory a byte;
+    58 s and 340 MB as field lines). A connection of more than lms200.bag.MAX_CONNECTION_BYTES
+    (256 KiB; a definition is a few KB) is refused from the record lengths, before rosbags reads it."""
+    import re
+    import warnings
+
+    from experiments.cli import main
+    from lms200.bag import MAX_CONNECTION_BYTES
+
+    ok = _bag_with_definition(tmp_path / "ok.bag", 100_000, unindexed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the unindexed bag's recovery warning
+        assert [r.scan.stamp for r in read_log(ok)] == [10.0, 11.0]
+    bag = _bag_with_definition(tmp_path / "big.bag", MAX_CONNECTION_BYTES, unindexed)
+    with pytest.raises(BagTooLargeError, match=re.escape(f"{bag}: connection 0 (/scan) holds ")):
+        list(read_log(bag))
+    assert main(["info", str(bag)]) == 2  # old: exit 0 after parsing it
+    err = capsys.readouterr().err
+    assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(bag))}: connection 0 \(/scan\) holds 262,\d{{3}} bytes of "
+                        r"type, md5sum and message definition, more than the 262,144 a ROS 1 bag's connection may "
+                        r"\(lms200.bag.MAX_CONNECTION_BYTES\): an absurd message definition, or damage; not read\n", err)
+
+
+def test_a_connection_records_header_too_long_is_worded_as_its_header() -> None:
+    """A review: a connection record whose header (op, conn and topic) passed the bound was said to
+    hold that many "bytes of type, md5sum and message definition", which its header does not hold."""
+    from lms200.bag import _connection_too_large
+
+    assert str(_connection_too_large("x.bag", None, None, 300_000)) == (
+        "x.bag: a connection record's header (its op, conn and topic) holds 300,000 bytes, more than the 262,144 a "
+        "ROS 1 bag's connection may (lms200.bag.MAX_CONNECTION_BYTES): damage; not read")
+
+
+def _bag_with_connections(path: Path, definitions: list[str], one_type: bool = False) -> Path:
+    """A ROS 1 bag of one LaserScan on /scan and a connection /junkJ of type junk_msgs/msg/JJ with
+    each of ``definitions`` (its message definition); ``one_type``: all of type junk_msgs/msg/J0."""
+    import math
+
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    T = ts.types
+    msgdef, md5 = ts.generate_msgdef("sensor_msgs/msg/LaserScan")
+    with Writer(path) as w:
+        c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts, msgdef=msgdef, md5sum=md5)
+        for j, definition in enumerate(definitions):
+            name = f"junk_msgs/msg/J{0 if one_type else j}"
+            own = get_typestore(Stores.EMPTY)
+            own.register(get_types_from_msg(definition, name))
+            w.add_connection(f"/junk{j}", name, msgdef=definition, md5sum=own.generate_msgdef(name)[1])
+        msg = T["sensor_msgs/msg/LaserScan"](
+            header=T["std_msgs/msg/Header"](seq=0, stamp=T["builtin_interfaces/msg/Time"](sec=10, nanosec=0),
+                                             frame_id="laser"),
+            angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360, time_increment=0.0,
+            scan_time=0.0, range_min=0.01, range_max=8.0, ranges=np.full(361, 2.0, np.float32),
+            intensities=np.zeros(0, np.float32))
+        w.write(c, 10 * 10**9, ts.serialize_ros1(msg, "sensor_msgs/msg/LaserScan"))
+    return path
+
+
+def test_a_bags_message_definitions_are_bounded_together(tmp_path, capsys, monkeypatch) -> None:
+    """A review: the bound of one connection's definition (256 KiB) did not bound the cost, most of
+    which is rosbags registering the types (code generated for each field), nor a bag's connections
+    together: one connection of 250 KB of field lines held `lmsbench info` 13 s at 280 MB, three 44 s
+    at 556 MB. The distinct definitions of a bag together may hold MAX_DEFINITION_FIELDS field lines
+    (4,096) and MAX_DEFINITIONS_BYTES characters, every IDL section counted; a ROS 1 bag's connection
+    records together MAX_CONNECTIONS_TOTAL_BYTES. Here three connections of 1,500 field lines each
+    (each alone well under every bound) are refused before rosbags registers them."""
+    import re
+    import struct
+
+    from experiments.cli import main
+
+    fields = "".join(f"int32 f{i}\n" for i in range(1500))
+    registered = []
+    ok = _bag_with_connections(tmp_path / "ok.bag", [fields] * 3, one_type=True)  # one definition, three connections
+    assert [r.scan.stamp for r in read_log(ok)] == [10.0]
+    bag = _bag_with_connections(tmp_path / "many.bag", [fields, fields + "int32 g\n", fields + "int32 h\n"])
+    import rosbags.typesys.store as store
+
+    real_register = store.Typestore.register
+    monkeypatch.setattr(store.Typestore, "register", lambda self, typs: (registered.append(len(typs)),
+                                                                          real_register(self, typs))[1])
+    assert main(["info", str(bag)]) == 2  # old: exit 0 after registering 4,500 fields
+    err = capsys.readouterr().err
+    assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(bag))}: junk_msgs/msg/J2's message definition brings the "
+                        r"field lines of the bag's message definitions to 4,515, more than the 4,096 a bag's may "
+                        r"\(lms200.bag.MAX_DEFINITION_FIELDS; every ROS Noetic type together has 529\): absurd message "
+                        r"definitions, or damage; not parsed\n", err)
+    assert registered == []  # refused before rosbags registers a type (old: [8], 4,500 fields with LaserScan's)
+    # a ROS 1 bag's connection records together, told from the index before rosbags reads them
+    monkeypatch.setattr("lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES", 20_000)
+    comments = "# " + "x" * 77 + "\n"
+    big = _bag_with_connections(tmp_path / "big.bag", [comments * 150] * 2)
+    assert main(["info", str(big)]) == 2
+    err = capsys.readouterr().err
+    assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(big))}: its 3 connections hold 2\d,\d{{3}} bytes of type, "
+                        r"md5sum and message definition together, more than the 20,000 a ROS 1 bag's may "
+                        r"\(lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES\): absurd message definitions, or damage; not read\n", err)
+    # a bag never closed: the connection records as its chunks give them (each connection once)
+    data = bytearray(big.read_bytes())
+    at = data.index(b"index_pos=") + 10
+    index_pos = struct.unpack("<Q", data[at:at + 8])[0]
+    data[at:at + 8] = bytes(8)
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(bytes(data[:index_pos]))
+    assert main(["info", str(cut)]) == 2
+    err = capsys.readouterr().err
+    assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(cut))}: its 3 connections hold 2\d,\d{{3}} bytes of type, "
+                        r"md5sum and message definition together, more than the 20,000 a ROS 1 bag's may "
+                        r"\(lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES\): absurd message definitions, or damage; not read\n", err)
+
+
+def test_a_rosbags_without_a_parser_lmsbench_bounds_still_reads_bags(tmp_path, monkeypatch) -> None:
+    """A review: the bound looked up rosbags' parsers by name (getattr without a default): a rosbags
+    without one of them failed every bag open with AttributeError. Such a name is now left alone."""
+    from rosbags.highlevel import anyreader
+
+    monkeypatch.delattr(anyreader, "get_types_from_idl")
+    fields = "int32 a\n"
+    bag = _bag_with_connections(tmp_path / "ok.bag", [fields])
+    assert [r.scan.stamp for r in read_log(bag)] == [10.0]  # old: AttributeError
+
+
+def test_a_bag_named_like_words_of_the_message_is_still_named(tmp_path, capsys, monkeypatch) -> None:
+    """A review: whether an error named the bag was told by the bag's path appearing anywhere in the
+    message: a ROS 2 bag folder named `bag` (or msg, a, data) matched words of the message, so
+    `lmsbench info bag` said "error: sensor_msgs/msg/LaserScan's message definition holds ...", naming
+    no file. Errors that name no file are now marked so."""
+    import math
+
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from experiments.cli import main
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    T = ts.types
+    msgdef, _ = ts.generate_msgdef("sensor_msgs/msg/LaserScan", ros_version=2)
+    line = "# a bag's msg " + "x" * 65 + "\n"
+    monkeypatch.chdir(tmp_path)
+    with Writer(Path("bag"), version=8) as w:
+        c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts,
+                             msgdef=msgdef + line * 3400, rihs01=ts.hash_rihs01("sensor_msgs/msg/LaserScan"))
+        msg = T["sensor_msgs/msg/LaserScan"](
+            header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=10, nanosec=0), frame_id="l"),
+            angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360, time_increment=0.0,
+            scan_time=0.0, range_min=0.01, range_max=8.0, ranges=np.full(361, 2.0, np.float32),
+            intensities=np.zeros(0, np.float32))
+        w.write(c, 10 * 10**9, ts.serialize_cdr(msg, "sensor_msgs/msg/LaserScan"))
+    assert main(["info", "bag"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("lmsbench info: error: bag: sensor_msgs/msg/LaserScan's message definition holds ")  # old: no "bag: "
+
+
+def test_a_ros2_bags_absurd_message_definition_is_refused_unparsed(tmp_path, capsys) -> None:
+    """The same in a ROS 2 bag, whose message definitions come from its storage file (sqlite3 here):
+    one of 5.6 MB of comment lines held `lmsbench info` 4.5 s at 63 MB. A definition of more than
+    MAX_CONNECTION_BYTES characters is refused before rosbags parses it."""
+    import math
+    import re
+
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from experiments.cli import main
+    from lms200.bag import MAX_CONNECTION_BYTES
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    T = ts.types
+    msgdef, _ = ts.generate_msgdef("sensor_msgs/msg/LaserScan", ros_version=2)
+    line = "# " + "x" * 77 + "\n"
+    for name, extra in (("ok", 100_000), ("big", MAX_CONNECTION_BYTES)):
+        with Writer(tmp_path / name, version=8) as w:
+            c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts,
+                                 msgdef=msgdef + line * (extra // len(line)), rihs01=ts.hash_rihs01("sensor_msgs/msg/LaserScan"))
+            msg = T["sensor_msgs/msg/LaserScan"](
+                header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=10, nanosec=0), frame_id="l"),
+                angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360, time_increment=0.0,
+                scan_time=0.0, range_min=0.01, range_max=8.0, ranges=np.full(361, 2.0, np.float32),
+                intensities=np.zeros(0, np.float32))
+            w.write(c, 10 * 10**9, ts.serialize_cdr(msg, "sensor_msgs/msg/LaserScan"))
+    assert [r.scan.stamp for r in read_log(tmp_path / "ok")] == [10.0]
+    bag = tmp_path / "big"
+    assert main(["info", str(bag)]) == 2  # old: exit 0 after parsing it
+    err = capsys.readouterr().err
+    assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(bag))}: sensor_msgs/msg/LaserScan's message definition "
+                        r"holds 262,\d{3} characters, more than the 262,144 a bag's may \(lms200.bag.MAX_CONNECTION_BYTES\): "
+                        r"an absurd message definition, or damage; not parsed\n", err)

@@ -897,3 +897,43 @@ def test_write_bag_refuses_an_angle_increment_that_float32_makes_0(tmp_path: Pat
                                          r"\(a LaserScan's fields are float32, in which it is 0\)$"):
         write_bag(tmp_path / "s.bag", recs)
     assert [r.scan.stamp for r in read_log(tmp_path / "s.bag")] == [0.0]
+
+
+def test_a_reading_beyond_a_limit_stays_beyond_it_in_the_bags_float32(tmp_path: Path) -> None:
+    """REP-117: a reading above range_max (below range_min) is out of range, and a bag's reader compares
+    in the message's float32. write_bag rounded each field to its nearest float32, which put a reading
+    just above range_max onto it (8.18300005 m under 8.183 m: both 8.1829996 m) and one just below
+    range_min onto that: both read back valid. They are now written as the next float32 beyond."""
+    ranges = np.array([1.0, 8.183, 8.18300005, 0.01 - 1e-10, 0.01, 9.0])
+    scan = Scan(ranges, -math.pi / 2, math.radians(0.5), 0.01, 8.183, stamp=1.0)
+    assert scan.valid.tolist() == [True, True, False, False, True, False]
+    write_log(tmp_path / "edge.bag", [Record(scan)], fmt="bag")
+    got = next(iter(read_log(tmp_path / "edge.bag"))).scan
+    assert got.valid.tolist() == [True, True, False, False, True, False]  # old: [True] * 5 + [False]
+    f32 = np.float32
+    assert got.range_max == float(f32(8.183)) and got.range_min == float(f32(0.01))
+    assert got.ranges.tolist() == [1.0, float(f32(8.183)), float(np.nextafter(f32(8.183), f32(np.inf))),
+                                   float(np.nextafter(f32(0.01), f32(0))), float(f32(0.01)), 9.0]
+
+
+def test_a_bags_angles_are_snapped_only_as_far_as_float32_explains(tmp_path: Path) -> None:
+    """A bag's angle_min or angle_increment is float32; it was snapped onto the 0.05 deg grid with the
+    allowance of 6-decimal text (5e-7 rad + 1e-6 of the value), so an angle_min 2e-6 rad off the grid
+    (17 float32 steps at 90 deg: a calibrated mount) read as -90 deg. Now only an angle whose float32
+    is the grid angle's, or one float32 step from it, is snapped."""
+    from lms200.scan import snap_float32_angle
+
+    grid = -math.pi / 2
+    step = abs(float(np.spacing(np.float32(grid))))  # 1.19e-7 rad
+    f32 = lambda a: float(np.float32(a))  # noqa: E731 - the message's value
+    assert snap_float32_angle(f32(grid)) == grid
+    assert snap_float32_angle(f32(grid) + step) == grid and snap_float32_angle(f32(grid) - step) == grid
+    assert snap_float32_angle(f32(grid) + 2 * step) == f32(grid) + 2 * step
+    assert snap_float32_angle(f32(grid + 2e-6)) == f32(grid + 2e-6)  # old: -pi/2
+    assert snap_float32_angle(f32(math.radians(0.5))) == math.radians(0.5)
+    for k, (angle_min, expected) in enumerate([(grid, grid), (grid + 2e-6, f32(grid + 2e-6)),
+                                               (grid + 3e-7, f32(grid + 3e-7)), (grid + 5e-8, grid)]):
+        path = tmp_path / f"a{k}.bag"
+        write_log(path, [Record(Scan(np.full(361, 2.0), angle_min, math.radians(0.5), 0.0, 8.183, stamp=1.0))], fmt="bag")
+        got = next(iter(read_log(path))).scan
+        assert (got.angle_min, got.angle_increment) == (expected, math.radians(0.5)), angle_min

@@ -56,13 +56,15 @@ def _trajectories(n: int, seed: int = 3):
 
 def _write_corrected_log(path: Path, n: int, drop_anchor: int | None = None, anchors: bool = True,
                          anchor_stamped: bool = False, t0: float = 100.0, rear: bool = False,
-                         bad_line: int | None = None, cut_after: int | None = None, lead: bool = True) -> tuple:
+                         bad_line: int | None = None, cut_after: int | None = None, lead: bool = True,
+                         sparse: bool = False) -> tuple:
     """A corrected log as Radish writes them: FLASER at the corrected pose, its ODOM anchor (a junk
     stamp), then three ODOM lines of raw odometry from that anchor, the last at the next scan.
     ``rear``: each FLASER's anchor is followed by an RLASER line at the pose turned by pi and its
     anchor, from which the ODOM lines then go on; ``bad_line``: that FLASER line is malformed (its
     anchor stays); ``cut_after``: the log ends right after that scan's FLASER line; ``lead``: an ODOM
-    line before the first scan (else the log begins with that scan's FLASER line)."""
+    line before the first scan (else the log begins with that scan's FLASER line); ``sparse``: no raw
+    odometry after the even-numbered scans (their anchors stay)."""
     corrected, raw = _trajectories(n)
     lines = ["# a Radish-style corrected log", "PARAM robot_frontlaser_offset 0.0 host 0"]
     if lead:  # odometry before the first scan, as Intel and ACES have
@@ -85,7 +87,7 @@ def _write_corrected_log(path: Path, n: int, drop_anchor: int | None = None, anc
                          f"{t:.4f} host {t:.4f}")
             lines.append(f"ODOM {rx:.6f} {ry:.6f} {rth:.6f} 0 0 0 0 host 0")
             origin = _matrix((float(f"{rx:.6f}"), float(f"{ry:.6f}"), float(f"{rth:.6f}")))
-        if k + 1 < n:
+        if k + 1 < n and not (sparse and k % 2 == 0):
             start = np.linalg.inv(raw[k])
             for j, f in enumerate((0.3, 0.7, 1.0)):  # raw odometry samples towards the next scan
                 step = start @ raw[k + 1]
@@ -126,6 +128,24 @@ def test_a_corrected_log_gives_its_raw_odometry_and_its_corrected_poses(tmp_path
     assert drift > 0.05  # the odometry is not the corrected pose (before: identical)
 
 
+def test_a_corrected_log_with_sparse_odometry_is_read_corrected(tmp_path):
+    """A review: two anchors with no ODOM step between them handed both scans back as read, and the
+    chain waited for the next anchored scan, so chains started only in pairs: a corrected log with
+    no raw ODOM line after every other scan (Intel's log so cut: 0 of 910 scans corrected, before
+    the ODOM-step rule 910) read entirely raw. The second scan now starts a chain."""
+    corrected, _ = _trajectories(12)
+    _write_corrected_log(tmp_path / "sparse-corrected.log", 12, sparse=True)
+    recs = list(read_log(tmp_path / "sparse-corrected.log"))
+    assert len(recs) == 12
+    assert [r.corrected is not None for r in recs] == [k >= 1 for k in range(12)]  # old: all False
+    assert recs[0].odom == pytest.approx(np.round(corrected[0], 6))  # as read: its pose fields
+    assert recs[1].odom == pytest.approx(np.round(corrected[1], 6))  # the chain starts at its own pose
+    np.testing.assert_allclose([r.corrected for r in recs[1:]], np.round(corrected, 6)[1:], atol=1e-12)
+    # no raw odometry after scan 2: the odometry stands still to scan 3, and goes on from there
+    assert recs[3].odom == pytest.approx(recs[2].odom)
+    assert recs[2].odom != pytest.approx(recs[2].corrected, abs=1e-4)
+
+
 def test_a_damaged_corrected_log_keeps_its_chain_and_a_raw_log_is_read_as_before(tmp_path):
     """A review: one anchor missing (a cut log, a damaged anchor skipped) handed its scan back as
     read, its pose fields as odometry: a 22-29 m jump in Intel's odometry, and slam lost its score
@@ -144,10 +164,11 @@ def test_a_damaged_corrected_log_keeps_its_chain_and_a_raw_log_is_read_as_before
         np.testing.assert_allclose([r.corrected for r in recs], np.round(corrected, 6)[list(keep)], atol=1e-12)
         _assert_odometry(recs, expected[list(keep)])
     # before two anchors in a row the chain does not run: a second scan without its anchor is read as
-    # written, and the chain starts again at the next anchor
+    # written, and so is the first (one anchor is no chain), and the chain starts again at the next anchor
     _write_corrected_log(tmp_path / "second.log", 12, drop_anchor=1)
     recs = list(read_log(tmp_path / "second.log"))
-    assert [r.corrected is not None for r in recs] == [k != 1 for k in range(12)]
+    assert [r.corrected is not None for r in recs] == [k >= 2 for k in range(12)]
+    assert recs[0].odom == pytest.approx(np.round(corrected[0], 6))  # as read: its pose fields
     assert recs[1].odom == pytest.approx(np.round(corrected[1], 6))  # as read: its pose fields
     assert recs[2].odom == pytest.approx(np.round(corrected[2], 6))  # a new chain starts at its own pose
     for name, options in (("plain.log", {"anchors": False}), ("standing.log", {"anchor_stamped": True})):
@@ -294,25 +315,39 @@ def test_the_real_corrected_logs_give_raw_odometry(shared_data, name, count, ste
     assert abs(length_o / length_c - 1) < 0.01
 
 
-def test_a_raw_log_whose_clock_jumps_back_while_the_robot_stands_is_no_corrected_log(tmp_path):
+@pytest.mark.parametrize("jumped", ["both clocks", "odometry clock"])
+def test_a_raw_log_whose_clock_jumps_back_while_the_robot_stands_is_no_corrected_log(tmp_path, capsys, jumped):
     """Found by fuzzing: a raw FLASER + ODOM log whose clock jumped back 100 s (two runs joined, a
     clock set back) while the robot stood still had every later ODOM line junk by the odometry's
     clock, and the one at a standing scan's pose was taken for its anchor: 51 of 100 scans were read
     as a corrected log's (pose fields as corrected poses) and their odometry froze at x 4.75 m (3 m
     off at the end). An anchor's stamp must also lie ANCHOR_STAMP_GAP_S before its laser line's own
-    (21 s or more in Intel and ACES); only the scan just before the jump may still read as anchored,
-    its odometry and corrected pose both its own pose fields."""
+    (21 s or more in Intel and ACES). The scan just before the jump still found its "anchor" (the
+    first ODOM line after the jump, at its pose, 100 s before it by both clocks) and read as corrected,
+    `info` saying "corrected poses 1 scans": a chain's first anchored scan is now held until a second
+    anchor in a row confirms the chain, and read as written when none does. With the odometry host's
+    clock alone set back (two hosts), every ODOM line after the jump lay 100 s before both clocks, the
+    one after each standing scan at its pose: a chain ran, 51 scans "corrected", the odometry frozen at
+    4.75 m (7.75 m at the end). A chain is now confirmed only with an ODOM step on the odometry's own
+    clock between its first two anchors, as a corrected log has (at least two in Intel's and ACES's)."""
     lines, x = [], 0.0
     ranges = " ".join(["2.00"] * BEAMS)
     for k in range(200):
         x += 0.0 if 95 <= k < 140 else 0.05
         t = 1000.0 + 0.1 * k - (100.0 if k >= 100 else 0.0)
+        t_laser = t if jumped == "both clocks" else 1000.0 + 0.1 * k
         lines.append(f"ODOM {x:.3f} 0 0 0 0 0 {t:.3f} h {t:.3f}")
         if k % 2:
-            lines.append(f"FLASER {BEAMS} {ranges} {x:.3f} 0 0 {x:.3f} 0 0 {t + 0.01:.3f} h {t + 0.01:.3f}")
+            lines.append(f"FLASER {BEAMS} {ranges} {x:.3f} 0 0 {x:.3f} 0 0 {t_laser + 0.01:.3f} h {t_laser + 0.01:.3f}")
     (tmp_path / "joined.log").write_text("\n".join(lines) + "\n")
     recs = list(read_log(tmp_path / "joined.log"))
     fields = [float(line.split()[BEAMS + 5]) for line in lines if line.startswith("FLASER")]
     assert len(recs) == 100 and [r.odom[0] for r in recs] == fields  # old: 4.75 from scan 48 on
     anchored = [k for k, r in enumerate(recs) if r.corrected is not None]
-    assert anchored == [49] and recs[49].corrected == recs[49].odom  # old: 51 scans, 49 to 99
+    assert anchored == []  # both clocks, older: 51 scans, 49 to 99; old: [49]. odometry clock, old: 49 to 99
+    from experiments.cli import main
+
+    assert main(["info", str(tmp_path / "joined.log")]) == 0
+    out = capsys.readouterr().out
+    assert "corrected poses" not in out  # old: "corrected poses 1 scans" (odometry clock: 51 scans)
+    assert "  odometry        yes\n" in out  # old: "yes (raw: the ODOM lines between scans, chained)"

@@ -350,3 +350,57 @@ def test_the_odometry_retry_gate_passes_a_heading_slip_and_refuses_a_slide():
     assert not within(np.array([1.6, 0.0, 0.05]))  # 0.6 m along, heading agrees: a slide
     assert within(np.array([1.6, 0.0, 0.5]))  # 0.6 m off with a 0.5 rad heading slip
     assert not within(np.array([1.0, 0.45, -0.2]))
+
+
+def test_the_relative_covariance_of_two_keyframes_is_their_factors_composed_and_a_closure_shrinks_it():
+    """loop_closure.drift: joint. Along a chain of 0.1 rad turns the covariance of pose 12 relative
+    to pose 10 is the two factors' (the earlier one carried by the adjoint of the step), whatever
+    the marginals of the two (which grow from the start); a closure between them shrinks it."""
+    import gtsam
+
+    g = PoseGraph(np.zeros(3))
+    step, cov = np.array([1.0, 0.0, 0.1]), np.diag([0.01, 0.02, 0.001])
+    p = np.zeros(3)
+    for _ in range(30):
+        p = compose(p, step)
+        g.add(step, cov, p)
+    ad = np.asarray(gtsam.Pose2(*step).inverse().AdjointMap())
+    expected = cov + ad @ cov @ ad.T
+    assert np.allclose(g.relative_covariance(10, 12), expected, rtol=1e-6, atol=1e-12)
+    assert np.allclose(expected[:2, :2], [[0.02011, 0.00109], [0.00109, 0.04089]], atol=1e-5)
+    assert g.covariance(12)[0, 0] > 10 * expected[0, 0]  # the marginals' sum would allow far more
+    far = g.relative_covariance(0, 20)
+    g.close(0, 20, between(g.pose(0), g.pose(20)), robust_noise(np.array([0.01, 0.01, 0.001]), "huber", 1.0))
+    assert np.trace(g.relative_covariance(0, 20)) < 0.01 * np.trace(far)
+
+
+def test_the_joint_drift_gate_refuses_a_short_loops_alias_that_the_marginals_pass():
+    """The same room 0.6 m off the estimate, offered from a keyframe 5 factors back (2 cm each) but
+    far from the start (marginals of 1 m): the marginals' gate passes the correction, the joint
+    one (the 5 factors' drift, x10) refuses it; with 0.3 m factors it passes."""
+    from slam.scanslam import ScanSlam
+
+    cfg = AlignmentConfig()
+    room = ScanPoints.from_points(room_scan(walls("office"), (2.0, 1.0, 0.3), sigma=0.005, seed=1)[0].points, cfg)
+
+    def drift(kind: str, sigma: float) -> np.ndarray:
+        slam = ScanSlam(loop_cfg=LoopClosureConfig(drift=kind, drift_inflation=10.0))
+        slam.graph = PoseGraph(np.zeros(3))
+        slam.graph.add(np.array([50.0, 0.0, 0.0]), np.diag([1.0, 1.0, 0.001]), np.array([50.0, 0.0, 0.0]))
+        for k in range(2, 8):  # keys 2..7: 1 m steps
+            slam.graph.add(np.array([1.0, 0.0, 0.0]), np.diag([sigma, sigma, sigma / 100]) ** 2,
+                           np.array([48.0 + k, 0.0, 0.0]))
+        slam.keyframes = [Keyframe(k, k, 0.0, slam.graph.pose(k), room.points, room.normals, 0.0) for k in range(8)]
+        return slam._drift(slam.keyframes[7])(slam.keyframes[2])
+
+    old = Keyframe(2, 2, 0.0, np.zeros(3), room.points, room.normals, 0.0)
+    new = Keyframe(7, 500, 60.0, np.array([0.6, 0.0, 0.0]), room.points, room.normals, 40.0)
+
+    def closure(prior: np.ndarray):
+        return find_closure(new, room.matched, [old], LoopClosureConfig(), cfg, KeyframeConfig().voxel,
+                            drift=lambda cand: prior)
+
+    assert closure(drift("marginals", 0.02)) is not None
+    assert closure(drift("joint", 0.02)) is None
+    loop = closure(drift("joint", 0.3))
+    assert loop is not None and np.hypot(*loop.relative[:2]) < 0.01 and loop.correction > 0.55

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments.synthetic import L_ROOM, room_scan
-from features.registry import available_methods, backend_of, get_method, make_config
+from features.registry import available_methods, backend_of, check_beams, get_method, make_config
 
 NAME = "baselines"
 MIT_LOG = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "carmen" / "mit-csail.clf.gz"
@@ -49,6 +49,8 @@ def time_methods(scans: list, methods: list, repeats: int) -> tuple[dict[str, np
     ``methods``: names, or (label, method, params) tuples as from :func:`variants`."""
     specs = [(m, m, {}) if isinstance(m, str) else m for m in methods]
     runs = [(label, get_method(m).run, make_config(m, **params)) for label, m, params in specs]
+    for k, scan in enumerate(scans):  # extract's beam limit, which the methods' run (timed alone) does not check
+        check_beams(scan, f"scan {k}")
     for _, fn, cfg in runs:  # first calls load compiled kernels and fill caches: not timed
         fn(scans[0], cfg)
     wall = {label: np.empty(len(scans)) for label, _, _ in runs}

@@ -19,8 +19,8 @@ from lms200.virtual import MAX_TIME_SCALE
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, given_log_flags, read_log_options
-from experiments.options import (WORLDS, PORT, SEED, InputError, check_log, check_out_file, count, number, path_arg, text,
-                                 world_name)
+from experiments.options import (WORLDS, PORT, SEED, InputError, check_log, check_out_file, count, mid_sentence, number,
+                                 path_arg, text, world_name)
 
 
 #: emulate / record --duration: at least lms200.timing.MIN_DURATION_S, the shortest run that holds a scan in
@@ -284,7 +284,7 @@ def run_record(args: argparse.Namespace) -> int:
                 # kept, said as such (it said "[Errno 28] No space left on device" and left a bag of 0 bytes)
                 reason = exc.strerror or str(exc)
                 written = counted.written
-                stop["error"] = LmsbenchError(f"cannot write {args.out}: {reason[:1].lower()}{reason[1:]}")
+                stop["error"] = LmsbenchError(f"cannot write {args.out}: {mid_sentence(reason)}")
             finally:
                 progress.update(final=True)
             stats = dev.stats

@@ -100,6 +100,10 @@ def run(args: argparse.Namespace) -> int:
         check_yaml(args.sensor, "a sensor YAML")
         sensor = SensorConfig.from_yaml(args.sensor)
     first = next(iter(read_log(args.log, **read_options)), None)  # the log's geometry, before any work
+    if first is not None:
+        from features.registry import check_beams
+
+        check_beams(first.scan, f"{args.log}: scan 0")  # the extractors' limit, as extract's
     if sensor is not None:
         check_scan_rate(args.rate_hz, sensor.angle_increment, "--rate-hz")
         if first is not None and (len(first.scan) != sensor.n_beams

@@ -30,7 +30,8 @@ PAPER_FIGURES = ("fig3_scan", "fig4_ad", "fig5_theta", "fig6_psi", "fig7_timing"
                  "fig10_slam", "accuracy_speed")
 
 
-def _article(word: str) -> str:
+def article(word: str) -> str:
+    """'an' before a vowel sound, else 'a' (captions name the world: an office, a corridor)."""
     return "an" if word[:1].lower() in "aeiou" else "a"
 
 
@@ -98,7 +99,7 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
         plan += [
             ("fig3_scan", lambda: draw.fig_scan(sig, out / "fig3_scan", f"Fig. 3: a {len(sig)}-beam scan of the {world}")),
             ("fig4_ad", lambda: draw.fig_signal(sig, "ad", f"AD_i{signals_k}",
-                                                f"Fig. 4: AD_i{signals_k} of {_article(world)} {world} scan",
+                                                f"Fig. 4: AD_i{signals_k} of {article(world)} {world} scan",
                                                 out / "fig4_ad", reference=ad_reference(signals_k, inc))),
             ("fig5_theta", lambda: draw.fig_signal(sig, "theta_deg", "theta_i (deg)",
                                                    "Fig. 5: theta_i (line normal angle) of the scan", out / "fig5_theta")),

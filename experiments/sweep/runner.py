@@ -28,6 +28,7 @@ from features.batch import THREADS_ENV
 from lms200 import LmsbenchError
 from lms200.errors import LmsbenchWarning
 from lms200.yamlio import dump as dump_yaml
+from experiments.options import mid_sentence
 
 from .cells import INPUTS_KEY, WARNINGS_KEY, resolve_kind, run_cell
 from .spec import Scalar, SweepSpec, cell_key
@@ -318,7 +319,7 @@ def _check_address(address: str) -> None:
         host, port = parts.hostname, parts.port
     except ValueError as exc:  # "Invalid IPv6 URL", "Port out of range 0-65535", a port that is no number
         raise LmsbenchError(f"scheduler: {address!r} is not a Dask scheduler address ({scheme}://HOST:PORT): "
-                            f"{str(exc)[:1].lower()}{str(exc)[1:]}") from None
+                            f"{mid_sentence(str(exc))}") from None
     if not host or port is None or not 1 <= port <= 65535 or parts.path or parts.query:
         raise LmsbenchError(f"scheduler: {address!r} is not a Dask scheduler address: give {scheme}://HOST:PORT, "
                             "a host and a port 1-65535 (an IPv6 host in brackets: tcp://[::1]:8786)")

@@ -1,0 +1,80 @@
+"""The extractors' beam limit (``features.baselines.checks.MAX_BEAMS``, what ``features.extract``
+refuses) in the drivers that call a method's ``run`` directly to time it: ``compare``, ``sim2real``,
+``experiments.evaluate.extract_timed`` and the baselines benchmark ran scans of more beams
+unchecked (``lmsbench compare`` on a 20,000-beam log: exit 0, a table of 20,000-beam scans).
+``slam``, through ``extract``, refused it after a note on the input's beam timing, naming no file."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from experiments.cli import main
+from features.baselines.checks import MAX_BEAMS
+from features.errors import ScanGeometryError
+from lms200 import Record, Scan, write_log
+
+WIDE = MAX_BEAMS + 1
+
+
+def _scan(n: int, k: int) -> Scan:
+    return Scan(np.full(n, 3.0), -math.pi, 2 * math.pi / n, 0.0, 30.0, stamp=float(k))
+
+
+def _records(widths) -> list[Record]:
+    return [Record(scan=_scan(n, k), odom=(0.1 * k, 0.0, 0.0)) for k, n in enumerate(widths)]
+
+
+@pytest.mark.parametrize("command, index", [("compare", 0), ("sim2real", 0), ("slam", 0)])
+@pytest.mark.parametrize("name, fmt", [("wide.clf", "robotlaser1"), ("wide.bag", "bag")])
+def test_a_log_of_wider_scans_is_refused_before_any_work(tmp_path, capsys, command, index, name, fmt):
+    log = tmp_path / name
+    write_log(log, _records([WIDE, WIDE]), fmt=fmt)
+    out = tmp_path / "out"
+    assert main([command, str(log), "--out", str(out)]) == 2  # compare old: 0, its table written
+    lines = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert lines == [f"lmsbench {command}: error: {log}: scan {index}: {WIDE} beams is more than the extractors "
+                     f"handle ({MAX_BEAMS}, a 0.022 deg step over 360 deg); split the scan into sectors"]
+    assert not out.exists()
+
+
+def test_compare_refuses_a_wider_scan_within_a_source_as_extract_does():
+    from experiments.compare import Source, compare
+
+    src = Source.from_records(_records([361, 361, WIDE]), name="mixed")
+    with pytest.raises(ScanGeometryError, match=rf"^mixed: scan 2: {WIDE} beams is more than the extractors handle "
+                                                rf"\({MAX_BEAMS},"):
+        compare([src], methods=["split_merge"], sigma=0.01)  # old: three rows, the last a 16,385-beam scan's
+
+
+def test_the_timed_runs_refuse_wider_scans_before_timing():
+    from experiments.benchmarks.baselines import time_methods
+    from experiments.evaluate import extract_timed
+
+    scans = [_scan(361, 0), _scan(WIDE, 1)]
+    with pytest.raises(ScanGeometryError, match=rf"^scan 1: {WIDE} beams is more than the extractors handle"):
+        time_methods(scans, ["split_merge"], 1)
+    with pytest.raises(ScanGeometryError, match=rf"^scan 1: {WIDE} beams is more than the extractors handle"):
+        extract_timed(scans, "split_merge")
+    _, times = extract_timed(scans[:1], "split_merge")
+    assert times.shape == (1,)
+
+
+@pytest.mark.parametrize("command, thinning, damaged", [("slam", "--every", True), ("compare", "--stride", False)])
+def test_a_wider_scan_is_named_by_the_logs_own_scan_number_as_it_is_read(tmp_path, capsys, command, thinning, damaged):
+    """A review: with --every 2, slam named the wider scan by the index of the scans kept (scan 2 for
+    the log's scan 4), and refused it only after the whole log was read (a damaged line after it was
+    the error instead); compare --stride named it so, and by the log's base name where its first scan
+    was named by the path given (compare reads the whole log first, for its noise: no damaged line for it).
+    Scans are numbered as read from the log, from 0, in every command."""
+    log = tmp_path / "wide.clf"
+    write_log(log, _records([361, 361, 361, 361, WIDE, 361]), fmt="robotlaser1")
+    if damaged:
+        with open(log, "a", encoding="utf-8") as f:
+            f.write("ROBOTLASER1 damaged\n")  # after the wider scan: never read
+    assert main([command, str(log), thinning, "2", "--out", str(tmp_path / "out")]) == 2
+    lines = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert lines == [f"lmsbench {command}: error: {log}: scan 4: {WIDE} beams is more than the extractors "
+                     f"handle ({MAX_BEAMS}, a 0.022 deg step over 360 deg); split the scan into sectors"]
