@@ -153,7 +153,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         if (p / "world.json").exists():
             try:
                 text = regular_file(p / "world.json", "world.json").read_text(encoding="utf-8", errors="replace")
-                from sim.world import world_json_content
+                from sim.world import json_rows, world_json_content
 
                 try:  # a key given twice or misspelt: as World.from_json refuses it (simulate, compare)
                     content = world_json_content(text)
@@ -162,7 +162,11 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
                 if isinstance(content, dict) and not any(content.get(k) for k in ("walls", "circles", "boxes")):
                     raise LmsbenchError(f"{p / 'world.json'}: not a world.json: it holds no walls, circles or boxes, "
                                         "nothing to scan or score against")  # as World.from_json (compare): the
-                walls = np.asarray(content["walls"], float).reshape(-1, 4)  # map was scored against nothing, exit 0
+                # (the map was scored against nothing, exit 0); a wall of 3 numbers: numpy's "inhomogeneous shape"
+                try:
+                    walls = json_rows(content["walls"], "walls", "wall", 4, "x1, y1, x2, y2 (m)")
+                except ValueError as exc:  # as World.from_json words it (simulate, compare)
+                    raise LmsbenchError(f"{p / 'world.json'}: not a world.json ({exc})") from None
                 if not walls.size and content.get("boxes"):  # the boxes simulated the scans, the walls score the map:
                     _check_cut_boxes(p / "world.json", content)  # with none, 0 matched, exit 0
                 sources["walls"] = str(p / "world.json")

@@ -73,6 +73,26 @@ def world_json_content(text: str) -> dict:
     return d
 
 
+def json_rows(value: object, field: str, item: str, columns: int, what: str) -> np.ndarray:
+    """A world.json list of rows (``walls``, ``circles``, ``route_nodes``) as a float64 (k,
+    ``columns``) array: a list of lists of ``columns`` numbers, or a flat list of numbers (read
+    ``columns`` at a time, as before). ValueError, one line naming the field and the row's index
+    and saying what a row must be, for anything else: a wall of 3 numbers was numpy's
+    "inhomogeneous shape after 1 dimensions. The detected shape was (140,) + inhomogeneous part"."""
+    must = f"a {item} must be a list of {columns} numbers {what}"
+    if not isinstance(value, list):
+        raise ValueError(f"{field}: must be a list of {item}s ({must}), got {shown(value)}")
+    if all(is_number(v) for v in value):  # flat: one row, or rows run together
+        if len(value) % columns:
+            raise ValueError(f"{field}: a flat list of {len(value)} numbers is no whole number of {item}s ({must})")
+        return np.asarray(value, dtype=float).reshape(-1, columns)
+    for i, row in enumerate(value):
+        if not (isinstance(row, list) and len(row) == columns and all(is_number(v) for v in row)):
+            count = f" ({len(row)} numbers)" if isinstance(row, list) and all(is_number(v) for v in row) else ""
+            raise ValueError(f"{field}: {item} {i} is {shown(row)}{count}: {must}")
+    return np.asarray(value, dtype=float).reshape(-1, columns)
+
+
 @dataclass(eq=False)
 class World:
     """A simulated office world.
@@ -200,8 +220,8 @@ class World:
                                 f"hold (refused unread; the mit world's is 0.5 MB)")
         try:
             d = world_json_content((Path(path).read_bytes() if data is None else data).decode("ascii"))
-            walls = np.asarray(d.get("walls", []), dtype=float).reshape(-1, 4)
-            circles = np.asarray(d.get("circles", []), dtype=float).reshape(-1, 3)
+            walls = json_rows(d.get("walls", []), "walls", "wall", 4, "x1, y1, x2, y2 (m)")
+            circles = json_rows(d.get("circles", []), "circles", "circle", 3, "cx, cy, r (m)")
             for name, a in (("walls", walls), ("circles", circles)):  # before the walls-only rebuild, which
                 if not np.isfinite(a).all() or (a.size and np.abs(a).max() > MAX_COORD_M):  # overflowed (warnings)
                     raise InputError(f"{name}: must be finite numbers within +-{MAX_COORD_M:g} m")
@@ -217,7 +237,7 @@ class World:
             h = float(d.get("scan_height", SCAN_HEIGHT_M))
             walls_only = "boxes" not in d
             if walls_only:
-                route = np.asarray(d.get("route_nodes", []), dtype=float).reshape(-1, 2)
+                route = json_rows(d.get("route_nodes", []), "route_nodes", "route node", 2, "x, y (m)")
                 walls = orient_walls(walls, np.vstack([circles[:, :2], route]))
                 boxes = boxes_behind_faces(walls, h)
                 cylinders = np.array([[cx, cy, r, 0.0, 2.0] for cx, cy, r in circles], dtype=float).reshape(-1, 5)

@@ -246,6 +246,28 @@ class MapError:
         return asdict(self)
 
 
+#: numbers a (map lines x walls) array of :func:`map_error` holds at most (8 bytes each; a few
+#: such arrays live at once): the walls are taken a chunk at a time
+MAP_ERROR_CHUNK = 1 << 18
+
+
+def _segment_wall_terms(sa: np.ndarray, sb: np.ndarray, sd: np.ndarray, wa: np.ndarray, wd: np.ndarray,
+                        wn: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Of segments (ends sa, sb, direction sd) against walls (start wa, direction wd, normal wn),
+    broadcast over their leading axes: the direction error mod pi (rad), the ends' distances da,
+    db from the wall's line (m) and the segment's span lo, hi along the wall from its start (m).
+    Element by element (no matrix product), so a pair's numbers do not depend on what else is
+    computed beside it (a chunk of walls, or the matched pairs alone)."""
+    ang = np.arccos(np.clip(np.abs(sd[..., 0] * wd[..., 0] + sd[..., 1] * wd[..., 1]), 0.0, 1.0))
+    wan = wa[..., 0] * wn[..., 0] + wa[..., 1] * wn[..., 1]
+    wad = wa[..., 0] * wd[..., 0] + wa[..., 1] * wd[..., 1]
+    da = np.abs(sa[..., 0] * wn[..., 0] + sa[..., 1] * wn[..., 1] - wan)
+    db = np.abs(sb[..., 0] * wn[..., 0] + sb[..., 1] * wn[..., 1] - wan)
+    ta = sa[..., 0] * wd[..., 0] + sa[..., 1] * wd[..., 1] - wad
+    tb = sb[..., 0] * wd[..., 0] + sb[..., 1] * wd[..., 1] - wad
+    return ang, da, db, np.minimum(ta, tb), np.maximum(ta, tb)
+
+
 def map_error(map_segments: np.ndarray, walls: np.ndarray, alignment: Alignment2D | None = None,
               max_angle: float = np.radians(10.0), max_distance: float = 0.5) -> MapError:
     """Match each map segment (k, 4: x0, y0, x1, y1, map frame) to the true wall (n, 4) nearest in
@@ -276,33 +298,45 @@ def map_error(map_segments: np.ndarray, walls: np.ndarray, alignment: Alignment2
     wn = np.column_stack((-wd[:, 1], wd[:, 0]))
     sa, sb = seg[:, :2], seg[:, 2:]
     sd = (sb - sa) / np.maximum(np.hypot(*(sb - sa).T), 1e-12)[:, None]
-    ang = np.arccos(np.clip(np.abs(sd @ wd.T), 0.0, 1.0))  # (k, n), direction error mod pi
-    da = np.abs(np.einsum("kj,nj->kn", sa, wn) - np.sum(wa * wn, 1)[None, :])
-    db = np.abs(np.einsum("kj,nj->kn", sb, wn) - np.sum(wa * wn, 1)[None, :])
-    dist = 0.5 * (da + db)
-    ta = np.einsum("kj,nj->kn", sa, wd) - np.sum(wa * wd, 1)[None, :]
-    tb = np.einsum("kj,nj->kn", sb, wd) - np.sum(wa * wd, 1)[None, :]
-    lo, hi = np.minimum(ta, tb), np.maximum(ta, tb)
-    overlap = np.minimum(hi, wlen[None, :]) - np.maximum(lo, 0.0)
-    ok = (ang < max_angle) & (overlap > 0) & (dist < max_distance)
-    cost = np.where(ok, dist, np.inf)
-    best = np.argmin(cost, axis=1)
-    matched = np.isfinite(cost[np.arange(seg.shape[0]), best])
+    # the walls a chunk at a time, so that no (lines x walls) array holds more than MAP_ERROR_CHUNK
+    # numbers: a world.json within its 32 MB may hold a million walls, (lines x walls) was unbounded
+    n_seg = seg.shape[0]
+    step = max(1, MAP_ERROR_CHUNK // n_seg)
+    best = np.zeros(n_seg, dtype=np.int64)
+    best_cost = np.full(n_seg, np.inf)
+    for w0 in range(0, walls.shape[0], step):
+        w = slice(w0, w0 + step)
+        ang, da, db, lo, hi = _segment_wall_terms(sa[:, None, :], sb[:, None, :], sd[:, None, :],
+                                                  wa[None, w], wd[None, w], wn[None, w])
+        dist = 0.5 * (da + db)
+        overlap = np.minimum(hi, wlen[None, w]) - np.maximum(lo, 0.0)
+        ok = (ang < max_angle) & (overlap > 0) & (dist < max_distance)
+        cost = np.where(ok, dist, np.inf)
+        j = np.argmin(cost, axis=1)  # the first wall of least cost, as argmin over all walls took it
+        c = cost[np.arange(n_seg), j]
+        better = c < best_cost  # strictly: an earlier chunk's wall keeps a tie
+        best[better], best_cost[better] = w0 + j[better], c[better]
+    matched = np.isfinite(best_cost)
     if not matched.any():
         return MapError(seg.shape[0], 0, np.nan, np.nan, np.nan, 0.0)
     k = np.nonzero(matched)[0]
-    dk = np.concatenate((da[k, best[k]], db[k, best[k]]))
+    bk = best[k]
+    ang_k, da_k, db_k, lo_k, hi_k = _segment_wall_terms(sa[k], sb[k], sd[k], wa[bk], wd[bk], wn[bk])
+    dk = np.concatenate((da_k, db_k))
     covered = np.zeros(walls.shape[0])
-    for w in np.unique(best[k]):  # union of overlaps per wall
-        iv = sorted((max(lo[i, w], 0.0), min(hi[i, w], wlen[w])) for i in k[best[k] == w])
+    order = np.argsort(bk, kind="stable")  # the matched lines grouped by wall, in line order within one
+    groups = np.split(order, np.nonzero(np.diff(bk[order]))[0] + 1)
+    for g in groups:  # union of overlaps per wall
+        wi = int(bk[g[0]])
+        iv = sorted((max(float(lo_k[i]), 0.0), min(float(hi_k[i]), float(wlen[wi]))) for i in g)
         total, end = 0.0, -np.inf
         for a, b in iv:
             if b > end:
                 total += b - max(a, end)
                 end = b
-        covered[w] = total
+        covered[wi] = total
     return MapError(seg.shape[0], int(k.size), float(dk.mean()), float(np.sqrt(np.mean(dk**2))),
-                    float(ang[k, best[k]].mean()), float(covered.sum() / wlen.sum()))
+                    float(ang_k.mean()), float(covered.sum() / wlen.sum()))
 
 
 # --- relations (Kummerle et al. 2009) ----------------------------------------------------------------

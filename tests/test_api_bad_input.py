@@ -1218,12 +1218,12 @@ def test_sensor_range_noise_is_capped_like_the_baselines(field: str) -> None:
     from features.baselines.checks import MAX_SIGMA_M
     from features.errors import ConfigError
 
-    with pytest.raises(ConfigError, match=rf"^{field}: must be a range noise std in \(0, 1000\] m, or 'auto', got 1e\+300"):
+    with pytest.raises(ConfigError, match=rf"^{field}: must be a range noise std in \[1e-06, 1000\] m, or 'auto', got 1e\+300"):
         make_config("sensor", **{field: 1e300})
     cfg = make_config("sensor", **{field: MAX_SIGMA_M})  # the cap itself is taken
     assert getattr(cfg, field) == MAX_SIGMA_M
     for text in ("AUTO", "0.01"):  # "must be a finite number > 0 m, got 'AUTO'": no word of the one text taken
-        with pytest.raises(ConfigError, match=rf"^{field}: must be a range noise std in \(0, 1000\] m, or 'auto', "
+        with pytest.raises(ConfigError, match=rf"^{field}: must be a range noise std in \[1e-06, 1000\] m, or 'auto', "
                                               rf"got '{text}'$"):
             make_config("sensor", **{field: text})
     assert extract(Scan.lms200(np.full(361, 3.0)), "sensor").method == "sensor"

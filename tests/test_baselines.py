@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -376,3 +378,46 @@ def test_iepf_splits_a_closed_ring_whose_last_beam_repeats_its_first() -> None:
     np.testing.assert_allclose(fs.lines.alpha, [-np.pi, -np.pi / 2, 0.0, np.pi / 2, np.pi], atol=1e-9)
     np.testing.assert_allclose(fs.corners.values[:, 2], np.pi / 2, atol=1e-9)
     assert len(fs.corners) == 4
+
+
+@pytest.mark.parametrize("method, field, value, message", [
+    # the fuzz round: each ran, found no line on any scan, and compare exited 0 with F1 0
+    ("sensor", "min_length", 1e300, r"must be a length in \[0, 10000\] m"),
+    ("split_merge", "min_length", 1e300, r"must be a length in \[0, 10000\] m"),
+    ("sensor", "min_range", 1e300, r"must be a length in \[0, 10000\] m"),
+    ("sensor", "sigma_r", 1e-300, r"must be a range noise std in \[1e-06, 1000\] m, or 'auto'"),
+    ("sensor", "sigma_r_cm", 1e-300, r"must be a range noise std in \[1e-06, 1000\] m, or 'auto'"),
+    ("hough", "sigma", 1e-300, r"must be a range noise std in \[1e-06, 1000\] m"),
+    ("split_merge", "sigma_fit", 1e-300, r"must be a finite number >= 1e-06"),
+    ("hough", "rho_step", 1e300, r"must be a width in \[0.0001, 1\] m"),
+    ("hough", "band_coarse", 1e300, r"must be a width in \[0.0001, 1\] m"),
+    ("hough", "band_fine", 1e-300, r"must be a width in \[0.0001, 1\] m"),
+    ("ransac", "inlier_band", 1e-300, r"must be a width in \[0.0001, 1\] m"),
+    ("sensor", "ad_tau", 1e-300, r"must be 0 or a finite number >= 0.5 std"),
+    ("sensor", "inlier_tau", 1e-300, r"must be 0 or a finite number >= 0.5 std"),
+    ("sensor", "max_chi2", 0.1, r"must be 0 or a finite number >= 0.5 std"),
+    ("sensor", "curvature_tau", 1e-300, r"must be 0 or a finite number >= 0.5 std"),
+])
+def test_extractor_configs_refuse_values_that_can_never_give_a_line(method, field, value, message):
+    from features.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=rf"^{field}: {message}, got {re.escape(repr(value))}$"):
+        make_config(method, **{field: value})
+
+
+def test_extractor_configs_take_their_bounds_and_zero_thresholds():
+    """The bounds themselves are taken, and the thresholds' 0 as before; the sensor thresholds
+    whose small values find lines anyway (psi_tau, band_tau, bin_tau, merge_tau) keep any value >= 0."""
+    scan, truth = room_scan(L_ROOM, POSES[0], sigma=0.005, seed=1)
+    for method, fields in [
+        ("sensor", dict(min_length=1e4, min_range=0.0, sigma_r=1e-6, ad_tau=0.0, inlier_tau=0.5, max_chi2=0.0,
+                        curvature_tau=0.5, psi_tau=1e-300, band_tau=1e-300, bin_tau=1e-300, merge_tau=1e-300)),
+        ("sensor", dict(min_length=0.0, min_range=1e4, sigma_r_cm=1000.0)),
+        ("hough", dict(rho_step=1e-4, band_coarse=1.0, band_fine=1e-4, sigma=1e-6, min_length=1e4)),
+        ("ransac", dict(inlier_band=1.0, sigma=1000.0)),
+        ("iepf", dict(sigma_fit=1e-6)),
+    ]:
+        cfg = make_config(method, **fields)
+        assert {f: getattr(cfg, f) for f in fields} == fields
+    # at the bound the sensor method still finds the room's walls (0.5 std is no dead setting)
+    assert score_scan(extract(scan, "sensor", ad_tau=0.5, curvature_tau=0.5), truth).tp >= 3

@@ -103,18 +103,20 @@ def test_a_window_wider_than_any_scan_is_a_config_error_not_an_allocation():
 
 
 def test_extreme_hough_steps_and_bad_corner_configs_are_clear_errors():
-    """rho_step = 1e308 overflowed the accumulator size (OverflowError); a corners field that is not a
-    CornerConfig reached the extractor of hough / ransac (AttributeError). A geometry beyond a method's
-    bound is a ScanGeometryError: a ValueError (issue 12) and an LmsbenchError (one line on the CLI)."""
+    """rho_step = 1e308 overflowed the accumulator size (OverflowError; now refused by the config, as
+    1e-300); a corners field that is not a CornerConfig reached the extractor of hough / ransac
+    (AttributeError). A geometry beyond a method's bound is a ScanGeometryError: a ValueError (issue 12) and an LmsbenchError (one line on the CLI)."""
     from features.errors import ConfigError, ScanGeometryError
     from features.registry import MAX_BEAMS, make_config
     from lms200 import LmsbenchError
 
     b = np.deg2rad(0.5) * (np.arange(361) - 180)
     scan = Scan(np.minimum(3.0 / np.maximum(np.abs(np.cos(b)), 1e-3), 8.0), float(b[0]), np.deg2rad(0.5), 0.0, 8.183)
-    assert len(extract(scan, "hough", config=make_config("hough", rho_step=1e308)).lines) == 0  # one rho cell
-    with pytest.raises(ScanGeometryError, match="accumulator") as info:
-        extract(scan, "hough", config=make_config("hough", rho_step=1e-300))
+    for step in (1e308, 1e-300):  # one rho cell, no line, F1 0; or the accumulator error at the run
+        with pytest.raises(ConfigError, match=r"^rho_step: must be a width in \[0.0001, 1\] m"):
+            make_config("hough", rho_step=step)
+    with pytest.raises(ScanGeometryError, match="accumulator") as info:  # a small step still meets the accumulator's bound
+        extract(scan, "hough", config=make_config("hough", rho_step=1e-4))
     assert isinstance(info.value, ValueError) and isinstance(info.value, LmsbenchError)
     for method in ("hough", "ransac", "split_merge", "iepf"):
         for corners in ("abc", None, {}):

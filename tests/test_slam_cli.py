@@ -192,7 +192,8 @@ def test_slam_refuses_a_world_json_wall_simulate_and_compare_refuse_before_the_r
     ("world.json", '{"walls": [[0, 0, 1, 0]], "circle": []}',
      "{f}: not a world.json (unknown key(s) ['circle'] ('circle' for 'circles'?): a world.json has name, seed, "
      "scan_height, walls, circles, corners, boxes, cylinders, route_nodes, route_edges, route_targets, glass)"),
-    ("world.json", '{"walls": {"a": 1}}', "{f}: no wall list (float() argument must be a string or a real number, not 'dict')"),
+    ("world.json", '{"walls": {"a": 1}}', "{f}: not a world.json (walls: must be a list of walls (a wall must be a "
+     "list of 4 numbers x1, y1, x2, y2 (m)), got {{'a': 1}})"),
 ])
 def test_a_simulate_folder_whose_truth_or_world_is_a_folder_or_no_mapping_is_refused(sim_folder, tmp_path, capsys,
                                                                                     name, content, message):
@@ -496,7 +497,9 @@ def sparse_log(tmp_path_factory) -> Path:
     ("motion: {sigma_floor_xy: 1.0e-160, sigma_floor_theta: 1.0e-160}\nalignment: {motion_prior: true}",
      "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # OverflowError: sxy**-2 at the repeated stamp
     ("motion: {sigma_floor_xy: 0.01, sigma_floor_theta: 1.0e-160}", "motion.sigma_floor_theta: must be in [1e-06"),
-    ("motion: {sigma_accel: 1.0e200}", "motion.sigma_accel: must be in [0, 1000] m/s^2"),  # sxy**2 overflowed
+    ("motion: {sigma_accel: 1.0e200}", "motion.sigma_accel: must be in (0, 1000] m/s^2"),  # sxy**2 overflowed
+    # 0 was "must be > 0" while 1e200 said [0, 1000]: one interval, the one that holds
+    ("motion: {sigma_accel: 0}", "motion.sigma_accel: must be in (0, 1000] m/s^2"),
     ("consistency: {max_ambiguous: 2}", "consistency.max_ambiguous: a share of steps, must be in [0, 1]"),
     ("consistency: {min_matched_fraction: 2}", "consistency.min_matched_fraction: a share of steps, must be in [0, 1]"),
     ("alignment: {search_candidates: 1000000000}", "alignment.search_candidates: must be in [1, 32]"),  # an ICP per pose
@@ -1065,3 +1068,26 @@ def test_slam_messages_name_the_logs_own_scan_number_under_every(sim_folder, tmp
     assert (f"1 of 9 steps take no time (scan 6 has the stamp of the scan kept before it, scan 4's {t[4]:.6f} s)"
             in err)
     assert f"(scan 10 is stamped {t[10] + 100 - t[8]:.6g} s after scan 8, the one kept before it)" in err
+
+
+def test_a_world_json_wall_of_three_numbers_is_one_line_naming_the_file_and_the_wall(sim_folder, tmp_path, capsys):
+    """The fuzz round: a world.json wall of 3 numbers was numpy's "setting an array element with a
+    sequence. The requested array has an inhomogeneous shape after 1 dimensions. The detected shape
+    was (140,) + inhomogeneous part." in slam, compare and simulate. Now one line naming world.json,
+    the wall's index and what a wall must be, from each command, before any output."""
+    import json
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    d = {"walls": [[0, 0, 4, 0], [4, 0, 4, 3], [4, 3, 0]], "circles": [], "corners": []}
+    (run / "world.json").write_text(json.dumps(d))
+    said = "not a world.json (walls: wall 2 is [4, 3, 0] (3 numbers): a wall must be a list of 4 numbers x1, y1, x2, y2 (m))"
+    for command in (["slam", str(run), "--quiet"], ["compare", str(run), "--quiet"],
+                    ["simulate", "--world", str(run / "world.json"), "--duration", "1"]):
+        assert main([*command, "--out", str(tmp_path / "o")]) == 2
+        assert capsys.readouterr().err.strip().splitlines() == [
+            f"lmsbench {command[0]}: error: {run / 'world.json'}: {said}"], command
+        assert not (tmp_path / "o").exists()

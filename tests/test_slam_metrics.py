@@ -267,3 +267,73 @@ def test_tum_and_relations_files_saved_with_a_byte_order_mark_read_as_without_it
     tum.write_bytes(rows + bom + rows)
     with pytest.raises(LogFormatError, match=r"bom\.tum:3: TUM row has a non-number"):
         read_tum(tum)
+
+
+def _map_error_unchunked(seg: np.ndarray, walls: np.ndarray, max_angle: float = np.radians(10.0),
+                         max_distance: float = 0.5) -> tuple[int, float, float, float, float]:
+    """map_error's score as it was computed before the walls were chunked: (lines x walls) arrays
+    whole (matched, distance_mean, distance_rmse, angle_mean, wall_coverage)."""
+    wa, wb = walls[:, :2], walls[:, 2:]
+    wlen = np.hypot(*(wb - wa).T)
+    wd = (wb - wa) / wlen[:, None]
+    wn = np.column_stack((-wd[:, 1], wd[:, 0]))
+    sa, sb = seg[:, :2], seg[:, 2:]
+    sd = (sb - sa) / np.maximum(np.hypot(*(sb - sa).T), 1e-12)[:, None]
+    ang = np.arccos(np.clip(np.abs(sd @ wd.T), 0.0, 1.0))
+    da = np.abs(np.einsum("kj,nj->kn", sa, wn) - np.sum(wa * wn, 1)[None, :])
+    db = np.abs(np.einsum("kj,nj->kn", sb, wn) - np.sum(wa * wn, 1)[None, :])
+    dist = 0.5 * (da + db)
+    ta = np.einsum("kj,nj->kn", sa, wd) - np.sum(wa * wd, 1)[None, :]
+    tb = np.einsum("kj,nj->kn", sb, wd) - np.sum(wa * wd, 1)[None, :]
+    lo, hi = np.minimum(ta, tb), np.maximum(ta, tb)
+    overlap = np.minimum(hi, wlen[None, :]) - np.maximum(lo, 0.0)
+    cost = np.where((ang < max_angle) & (overlap > 0) & (dist < max_distance), dist, np.inf)
+    best = np.argmin(cost, axis=1)
+    k = np.nonzero(np.isfinite(cost[np.arange(seg.shape[0]), best]))[0]
+    dk = np.concatenate((da[k, best[k]], db[k, best[k]]))
+    covered = 0.0
+    for w in np.unique(best[k]):
+        total, end = 0.0, -np.inf
+        for a, b in sorted((max(lo[i, w], 0.0), min(hi[i, w], wlen[w])) for i in k[best[k] == w]):
+            if b > end:
+                total, end = total + b - max(a, end), b
+        covered += total
+    return int(k.size), float(dk.mean()), float(np.sqrt(np.mean(dk**2))), float(ang[k, best[k]].mean()), \
+        covered / wlen.sum()
+
+
+def test_map_error_takes_the_walls_in_chunks_with_the_unchunked_result(monkeypatch) -> None:
+    """A world.json may hold ~a million walls within its 32 MB: map_error's (lines x walls) arrays
+    were unbounded. Chunked, the score is that of the whole arrays (the same wall wins a tie)."""
+    import slam.metrics as metrics
+
+    rng = np.random.default_rng(7)
+    walls = rng.uniform(-5, 5, (300, 4))
+    walls = np.vstack((walls, walls[:40]))  # duplicate walls: ties, the first of them wins
+    lines = np.vstack((walls[:120] + rng.normal(0, 0.05, (120, 4)), rng.uniform(-5, 5, (30, 4)),
+                       [[np.nan] * 4]))  # a lost run's nan line matches none
+    whole = map_error(lines, walls)
+    assert whole.matched > 100
+    want = _map_error_unchunked(lines[:-1], walls)
+    got = (whole.matched, whole.distance_mean, whole.distance_rmse, whole.angle_mean, whole.wall_coverage)
+    assert got[0] == want[0] and got[1:] == pytest.approx(want[1:], rel=1e-12, abs=1e-12)
+    for chunk in (lines.shape[0] * 7, 1):  # 7 walls a chunk; one wall a chunk
+        monkeypatch.setattr(metrics, "MAP_ERROR_CHUNK", chunk)
+        assert map_error(lines, walls) == whole  # to the last bit
+
+
+def test_map_error_memory_is_bounded_by_the_chunk_not_the_wall_count() -> None:
+    import tracemalloc
+
+    rng = np.random.default_rng(3)
+    walls = rng.uniform(-50, 50, (40_000, 4))
+    lines = walls[:400] + 0.01
+    tracemalloc.start()
+    try:
+        e = map_error(lines, walls)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert e.matched == 400
+    # whole, each (400 x 40,000) array was 128 MB, and a dozen lived at once
+    assert peak < 48 << 20, f"peak {peak / 2**20:.0f} MiB"

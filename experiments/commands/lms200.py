@@ -20,8 +20,8 @@ from lms200.virtual import MAX_TIME_SCALE
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, given_log_flags, read_log_options
-from experiments.options import (WORLDS, PORT, SEED, InputError, check_log, check_out_file, count, mid_sentence, number, path_arg,
-                                 text, world_name)
+from experiments.options import (WORLDS, PORT, SEED, InputError, check_log, check_out_file, count, mid_sentence, number,
+                                 path_arg, text, world_name)
 
 
 #: emulate / record --duration: at least lms200.timing.MIN_DURATION_S (1e-300 stopped at once: "0 scans sent" /

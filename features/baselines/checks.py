@@ -16,6 +16,21 @@ MAX_BEAMS = 1 << 14  # most beams of a scan the extractors take (bounds the memo
 #: largest range noise sigma (m) a baseline takes: a line's covariance is sigma^2 over the scatter
 #: of its points, and sigma = 1e300 m overflowed it to inf (fuzzing: 6 of 4,000 calls)
 MAX_SIGMA_M = 1000.0
+#: smallest range noise sigma (m) an extractor takes: a micrometre, far below any rangefinder's
+#: (compare floors the simulator's noise here too); sigma_r = 1e-300 m made every noise-scaled
+#: threshold 0 and found no line, F1 0, exit 0 (the fuzz round)
+MIN_SIGMA_M = 1e-6
+#: longest length (m) a length field (min_length, min_range) may give: 10 km, beyond any scanner's
+#: reach (the LMS200 reads 81.9 m at most); min_length = 1e300 kept no line, silently
+MAX_LENGTH_M = 1e4
+#: bounds (m) of a Hough cell or an inlier band (hough rho_step, band_coarse, band_fine; ransac
+#: inlier_band): a tenth of the LMS200's 1 mm range step to 1 m, coarser than a wall is thick; a
+#: band of 1e-300 m or a cell of 1e300 m found no line, F1 0, exit 0
+MIN_BAND_M, MAX_BAND_M = 1e-4, 1.0
+#: smallest noise-scaled threshold (std) other than 0 of a test that a line's beams must pass (the
+#: sensor method's ad_tau, inlier_tau, max_chi2, curvature_tau): below half a std it passes almost
+#: none of a line's beams (ad_tau 1e-300 found no line, F1 0, exit 0); 0 is kept as before
+MIN_TAU = 0.5
 #: most rounds in a row without a line (hough, ransac max_failures): each is a full search over the
 #: points left, and max_failures = 1.7e8 ran for hours (a 542-beam scan: 34 ms a round at 16,384 beams)
 MAX_FAILURES = 100
@@ -80,6 +95,30 @@ def angle(name: str, value: object, high: float, low_open: bool = True) -> None:
         fail(name, f"must be an angle in {'(0' if low_open else '[0'}, {high:.6g}{']' if low_open else ')'} rad", value)
 
 
+def noise_sigma(name: str, value: object, also: str = "") -> None:
+    """``value`` must be a range noise std in [MIN_SIGMA_M, MAX_SIGMA_M] m."""
+    if not is_real(value) or not (finite(value) and MIN_SIGMA_M <= value <= MAX_SIGMA_M):
+        fail(name, f"must be a range noise std in [{MIN_SIGMA_M:g}, {MAX_SIGMA_M:g}] m{also}", value)
+
+
+def length(name: str, value: object) -> None:
+    """``value`` must be a length in [0, MAX_LENGTH_M] m."""
+    if not is_real(value) or not (finite(value) and 0 <= value <= MAX_LENGTH_M):
+        fail(name, f"must be a length in [0, {MAX_LENGTH_M:g}] m", value)
+
+
+def band(name: str, value: object) -> None:
+    """``value`` must be a cell or band width in [MIN_BAND_M, MAX_BAND_M] m."""
+    if not is_real(value) or not (finite(value) and MIN_BAND_M <= value <= MAX_BAND_M):
+        fail(name, f"must be a width in [{MIN_BAND_M:g}, {MAX_BAND_M:g}] m", value)
+
+
+def tau(name: str, value: object) -> None:
+    """``value`` must be 0 or a finite number >= MIN_TAU (std)."""
+    if not is_real(value) or not (finite(value) and (value == 0 or value >= MIN_TAU)):
+        fail(name, f"must be 0 or a finite number >= {MIN_TAU:g} std", value)
+
+
 def flag(name: str, value: object) -> None:
     """``value`` must be a bool."""
     if not isinstance(value, (bool, np.bool_)):
@@ -95,12 +134,10 @@ def choice(name: str, value: object, allowed: tuple[str, ...]) -> None:
 def shared_fields(cfg: object) -> None:
     """The fields every baseline has: sigma, breakpoint_lambda, min_points, min_length, max_skip,
     runs_z, corners."""
-    positive("sigma", cfg.sigma, "m")
-    if cfg.sigma > MAX_SIGMA_M:
-        fail("sigma", f"must be a range noise std in (0, {MAX_SIGMA_M:g}] m", cfg.sigma)
+    noise_sigma("sigma", cfg.sigma)
     angle("breakpoint_lambda", cfg.breakpoint_lambda, math.pi / 2)
     integer("min_points", cfg.min_points, 2)
-    non_negative("min_length", cfg.min_length, "m")
+    length("min_length", cfg.min_length)
     integer("max_skip", cfg.max_skip, 1)
     non_negative("runs_z", cfg.runs_z)
     from .common import CornerConfig  # noqa: PLC0415 (common imports this module)

@@ -231,7 +231,7 @@ class CornerConfig:
         checks.integer("max_gap_beams", self.max_gap_beams, 1)
         checks.non_negative("max_distance", self.max_distance, "m")
         checks.angle("breakpoint_lambda", self.breakpoint_lambda, np.pi / 2)
-        checks.positive("sigma", self.sigma, "m")
+        checks.noise_sigma("sigma", self.sigma)
         object.__setattr__(self, "_params", engine.CornerParams(
             float(self.min_turn), checks.beams(self.max_gap_beams), float(self.max_distance), float(self.breakpoint_lambda),
             float(self.sigma)))

@@ -68,9 +68,9 @@ class HoughConfig:
         checks.angle("alpha_step", self.alpha_step, np.pi)
         if self.alpha_step < np.pi / MAX_ANGLES:
             checks.fail("alpha_step", f"must be at least pi / {MAX_ANGLES} rad", self.alpha_step)
-        checks.positive("rho_step", self.rho_step, "m")
-        checks.positive("band_coarse", self.band_coarse, "m")
-        checks.positive("band_fine", self.band_fine, "m")
+        checks.band("rho_step", self.rho_step)  # 1e300: one rho cell, no line, F1 0, exit 0
+        checks.band("band_coarse", self.band_coarse)
+        checks.band("band_fine", self.band_fine)
         checks.shared_fields(self)
         checks.integer("max_lines", self.max_lines, 1)
         checks.integer("max_failures", self.max_failures, 1, checks.MAX_FAILURES)

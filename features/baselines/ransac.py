@@ -82,7 +82,7 @@ class RansacConfig:
         if self.hypotheses > MAX_HYPOTHESES:
             checks.fail("hypotheses", f"must be an integer in [1, {MAX_HYPOTHESES}]", self.hypotheses)
         checks.integer("window", self.window, 0)
-        checks.positive("inlier_band", self.inlier_band, "m")
+        checks.band("inlier_band", self.inlier_band)  # 1e-300: no inlier, no line, F1 0, exit 0
         checks.shared_fields(self)
         checks.integer("max_failures", self.max_failures, 1, checks.MAX_FAILURES)
         checks.integer("max_lines", self.max_lines, 1)

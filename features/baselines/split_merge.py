@@ -101,7 +101,7 @@ def check_split_fields(cfg: object, chord: bool) -> None:
     kernels' record (``split_params``) kept on it as ``_params``."""
     checks.shared_fields(cfg)
     if cfg.sigma_fit is not None:
-        checks.positive("sigma_fit", cfg.sigma_fit, "m")
+        checks.real_at_least("sigma_fit", cfg.sigma_fit, checks.MIN_SIGMA_M)  # 1e-300: every beam splits
     checks.positive("split_threshold", cfg.split_threshold, "m")
     checks.non_negative("split_sigmas", cfg.split_sigmas)
     checks.non_negative("merge_rms", cfg.merge_rms, "m")

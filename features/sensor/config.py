@@ -67,17 +67,13 @@ class SensorMethodConfig:
         checks.integer("k", self.k, 1, checks.MAX_BEAMS // 2)  # a window wider than any scan taken: no line
         for name in ("sigma_r", "sigma_r_cm"):
             if getattr(self, name) != AUTO:
-                if isinstance(getattr(self, name), str):  # 'AUTO', 'Auto': said as no number, with no word of "auto"
-                    checks.fail(name, f"must be a range noise std in (0, {checks.MAX_SIGMA_M:g}] m, or '{AUTO}'",
-                                getattr(self, name))
-                checks.positive(name, getattr(self, name), "m")
-                if getattr(self, name) > checks.MAX_SIGMA_M:  # 1e300 found no line, silently (the baselines' cap)
-                    checks.fail(name, f"must be a range noise std in (0, {checks.MAX_SIGMA_M:g}] m, or 'auto'",
-                                getattr(self, name))
-        checks.non_negative("min_range", self.min_range, "m")
-        for name in ("ad_tau", "psi_tau", "band_tau", "bin_tau", "inlier_tau", "max_chi2", "curvature_tau",
-                     "merge_tau"):
-            checks.non_negative(name, getattr(self, name), "std")
+                # 'AUTO' said as no number, with no word of "auto"; 1e300 or 1e-300 found no line, silently
+                checks.noise_sigma(name, getattr(self, name), f", or '{AUTO}'")
+        checks.length("min_range", self.min_range)  # 1e300: every beam invalid, no line, silently
+        for name in ("ad_tau", "inlier_tau", "max_chi2", "curvature_tau"):  # tests every line's beams must pass:
+            checks.tau(name, getattr(self, name))  # 1e-300 passed none, F1 0, exit 0
+        for name in ("psi_tau", "band_tau", "bin_tau", "merge_tau"):  # floored by psi_split, band_min, the step:
+            checks.non_negative(name, getattr(self, name), "std")  # any small value works
         checks.non_negative("psi_split", self.psi_split, "rad")
         checks.integer("hough_subdiv", self.hough_subdiv, 1, checks.BEAM_COUNT_CAP)  # 10**400 overflowed the template size
         checks.integer("hough_angles", self.hough_angles, 1)
@@ -86,7 +82,7 @@ class SensorMethodConfig:
         checks.positive("band_min", self.band_min, "rad")
         checks.between("min_inlier_fraction", self.min_inlier_fraction, 0.0, 1.0)
         checks.real_at_least("min_points", self.min_points, 3)
-        checks.non_negative("min_length", self.min_length, "m")
+        checks.length("min_length", self.min_length)
         for name in ("merge_gap", "bridge_invalid", "corner_max_gap"):
             checks.non_negative(name, getattr(self, name), "beams")
         checks.flag("corners", self.corners)

@@ -1774,11 +1774,31 @@ def inv2(a: float, b: float, d: float):  # noqa: ANN201
     return d / det, -b / det, a / det
 
 
+@inline_kernel
+def depth_jump(a, b, ranges, valid, increment, sigma_r) -> bool:  # noqa: ANN001
+    """Whether the valid beams a..b (a and b valid) hold a depth jump: two consecutive valid ones
+    farther apart than Borges & Aldon's adaptive breakpoint distance (BREAK_LAMBDA, plus 3 sigma_r,
+    as ``on_arcs`` and the baselines' clusters), i.e. a nearer surface between two lines' ends."""
+    j = a
+    for t in range(a + 1, b + 1):
+        if valid[t]:
+            dphi = (t - j) * increment
+            if not dphi < BREAK_LAMBDA:
+                return True
+            if abs(ranges[t] - ranges[j]) > ranges[j] * math.sin(dphi) / math.sin(BREAK_LAMBDA - dphi) + 3.0 * sigma_r:
+                return True
+            j = t
+    return False
+
+
 @kernel
-def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p) -> int:  # noqa: ANN001
+def merge_neighbours(rho, alpha, cov, first, last, npts, ranges, valid, increment, sigma_r, p) -> int:  # noqa: ANN001
     """In place: merge neighbouring lines that are one line: at most merge_gap beams apart, at
     most bridge_invalid invalid beams between (none by default: +inf and nan beams break
-    segments), and (rho, alpha) equal within merge_tau std (plus a model-error floor). The merged
+    segments), no depth jump between (``depth_jump``: a nearer object in front of a wall, a post
+    or a table leg, leaves two pieces of the wall, as the baselines' clusters do; merged, one
+    segment claimed the wall over the object's beams and matched neither visible piece), and
+    (rho, alpha) equal within merge_tau std (plus a model-error floor). The merged
     line is the information-weighted combination of the pieces (independent fits of one line).
     The lines left move to the front of the arrays (alpha wrapped when any merged); returns how
     many there are."""
@@ -1795,6 +1815,8 @@ def merge_neighbours(rho, alpha, cov, first, last, npts, valid, p) -> int:  # no
             for j in range(last[cur] + 1, first[i]):
                 n_invalid += 0 if valid[j] else 1
             apart = n_invalid > p.bridge_invalid
+        if not apart and gap > 0:
+            apart = depth_jump(last[cur], first[i], ranges, valid, increment, sigma_r)
         if apart:
             cur += 1
             move_line(rho, alpha, cov, first, last, npts, i, cur)
@@ -1845,14 +1867,14 @@ def move_line(rho, alpha, cov, first, last, npts, i, to) -> None:  # noqa: ANN00
 
 
 @kernel
-def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p):  # noqa: ANN001, ANN201
+def segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, increment, sigma_r, p):  # noqa: ANN001, ANN201
     """Merge neighbours, split the beams two neighbours both claim (around a corner) at the middle,
     project the end beams' points on the lines, drop segments shorter than min_length and those
     left with fewer than min_points beams (min_points counts the beams of the reported line); the
     line table (which find_lines made for this) is changed in place.
     Returns the rows of ``features.types.Lines``: line values (L, 10) rho, alpha, x0, y0, x1, y1,
     cov (row by row), line beams (L, 3) first, last, n_points."""
-    n_lines = merge_neighbours(rho, alpha, cov, first, last, npts, valid, p)
+    n_lines = merge_neighbours(rho, alpha, cov, first, last, npts, ranges, valid, increment, sigma_r, p)
     lv = np.empty((n_lines, 10))
     lb = np.empty((n_lines, 3), np.int64)
     min_len2 = p.min_length * p.min_length
@@ -2006,7 +2028,7 @@ def extract_scan(ranges, bearings, angle_min, increment, range_lo, range_hi, sig
     rho, alpha, cov, first, last, npts = find_lines(
         ranges, bearings, valid, sig, angle_min, increment, sigma_r, grid, p
     )
-    lv, lb = segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, p)
+    lv, lb = segments(rho, alpha, cov, first, last, npts, ranges, bearings, valid, increment, sigma_r, p)
     if p.corners and lv.shape[0] > 1:
         return (lv, lb) + corners(lv, lb, sig, ranges, valid, angle_min, increment, sigma_r, p)
     return lv, lb, np.empty((0, 3)), np.empty((0, 3), np.int64)
