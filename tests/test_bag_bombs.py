@@ -431,32 +431,38 @@ def test_a_rosbags_without_a_parser_lmsbench_bounds_still_reads_bags(tmp_path, m
     assert [r.scan.stamp for r in read_log(bag)] == [10.0]  # old: AttributeError
 
 
-def test_a_bag_named_like_words_of_the_message_is_still_named(tmp_path, capsys, monkeypatch) -> None:
-    """A review: whether an error named the bag was told by the bag's path appearing anywhere in the
-    message: a ROS 2 bag folder named `bag` (or msg, a, data) matched words of the message, so
-    `lmsbench info bag` said "error: sensor_msgs/msg/LaserScan's message definition holds ...", naming
-    no file. Errors that name no file are now marked so."""
+def _ros2_bag_with_definition(path: Path, extra: str) -> Path:
+    """A ROS 2 bag (sqlite3) at ``path`` of one LaserScan whose stored message definition is
+    LaserScan's own followed by ``extra`` (comment lines)."""
     import math
 
     from rosbags.rosbag2 import Writer
     from rosbags.typesys import Stores, get_typestore
 
-    from experiments.cli import main
-
     ts = get_typestore(Stores.ROS2_HUMBLE)
     T = ts.types
     msgdef, _ = ts.generate_msgdef("sensor_msgs/msg/LaserScan", ros_version=2)
-    line = "# a bag's msg " + "x" * 65 + "\n"
-    monkeypatch.chdir(tmp_path)
-    with Writer(Path("bag"), version=8) as w:
+    with Writer(path, version=8) as w:
         c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts,
-                             msgdef=msgdef + line * 3400, rihs01=ts.hash_rihs01("sensor_msgs/msg/LaserScan"))
+                             msgdef=msgdef + extra, rihs01=ts.hash_rihs01("sensor_msgs/msg/LaserScan"))
         msg = T["sensor_msgs/msg/LaserScan"](
             header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=10, nanosec=0), frame_id="l"),
             angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360, time_increment=0.0,
             scan_time=0.0, range_min=0.01, range_max=8.0, ranges=np.full(361, 2.0, np.float32),
             intensities=np.zeros(0, np.float32))
         w.write(c, 10 * 10**9, ts.serialize_cdr(msg, "sensor_msgs/msg/LaserScan"))
+    return path
+
+
+def test_a_bag_named_like_words_of_the_message_is_still_named(tmp_path, capsys, monkeypatch) -> None:
+    """A review: whether an error named the bag was told by the bag's path appearing anywhere in the
+    message: a ROS 2 bag folder named `bag` (or msg, a, data) matched words of the message, so
+    `lmsbench info bag` said "error: sensor_msgs/msg/LaserScan's message definition holds ...", naming
+    no file. Errors that name no file are now marked so."""
+    from experiments.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    _ros2_bag_with_definition(Path("bag"), ("# a bag's msg " + "x" * 65 + "\n") * 3400)
     assert main(["info", "bag"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("lmsbench info: error: bag: sensor_msgs/msg/LaserScan's message definition holds ")  # old: no "bag: "
@@ -466,29 +472,14 @@ def test_a_ros2_bags_absurd_message_definition_is_refused_unparsed(tmp_path, cap
     """The same in a ROS 2 bag, whose message definitions come from its storage file (sqlite3 here):
     one of 5.6 MB of comment lines held `lmsbench info` 4.5 s at 63 MB. A definition of more than
     MAX_CONNECTION_BYTES characters is refused before rosbags parses it."""
-    import math
     import re
-
-    from rosbags.rosbag2 import Writer
-    from rosbags.typesys import Stores, get_typestore
 
     from experiments.cli import main
     from lms200.bag import MAX_CONNECTION_BYTES
 
-    ts = get_typestore(Stores.ROS2_HUMBLE)
-    T = ts.types
-    msgdef, _ = ts.generate_msgdef("sensor_msgs/msg/LaserScan", ros_version=2)
     line = "# " + "x" * 77 + "\n"
     for name, extra in (("ok", 100_000), ("big", MAX_CONNECTION_BYTES)):
-        with Writer(tmp_path / name, version=8) as w:
-            c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts,
-                                 msgdef=msgdef + line * (extra // len(line)), rihs01=ts.hash_rihs01("sensor_msgs/msg/LaserScan"))
-            msg = T["sensor_msgs/msg/LaserScan"](
-                header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=10, nanosec=0), frame_id="l"),
-                angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360, time_increment=0.0,
-                scan_time=0.0, range_min=0.01, range_max=8.0, ranges=np.full(361, 2.0, np.float32),
-                intensities=np.zeros(0, np.float32))
-            w.write(c, 10 * 10**9, ts.serialize_cdr(msg, "sensor_msgs/msg/LaserScan"))
+        _ros2_bag_with_definition(tmp_path / name, line * (extra // len(line)))
     assert [r.scan.stamp for r in read_log(tmp_path / "ok")] == [10.0]
     bag = tmp_path / "big"
     assert main(["info", str(bag)]) == 2  # old: exit 0 after parsing it
