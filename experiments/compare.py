@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from features.baselines.checks import MIN_SIGMA_M as EXTRACTOR_MIN_SIGMA_M  # not this module's MIN_SIGMA_M (user's floor)
 from features.registry import available_methods, backend_of, check_beams, get_method, make_config, warn_unread_fields
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
 from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, score_scan
@@ -597,7 +598,7 @@ def _source_sigma(src: Source, sigma: float | str) -> float:
         src.sigma_r = float(estimate) if np.isfinite(estimate) else None
     if src.sigma_r is None:
         src.sigma_r = DATASHEET_SIGMA_M
-    return max(float(src.sigma_r), 1e-6)
+    return max(float(src.sigma_r), EXTRACTOR_MIN_SIGMA_M)  # the extractors' noise floor: they cannot drift apart
 
 
 NOISE_FIELDS = ("sigma_r", "sigma_r_cm", "sigma")  # extractor config fields holding the range noise (m)

@@ -47,6 +47,7 @@ class SlamInput:
     reference: str = "ground truth"  # what ``truth`` holds: "ground truth", or "corrected poses" of a log
     time_increment: float | None = None  # s between beams as a bag's LaserScans give it (BagReadStats)
     numbers: list[int] = field(default_factory=list)  # each record's own scan number in the log (from 0); [] as 0, 1, ...
+    notes: list[str] = field(default_factory=list)  # one line each on what the input lacks, for the command to print
 
     def number(self, k: int) -> int:
         """The log's own scan number of record ``k`` (messages name a scan by it, docs/commands.md), not
@@ -102,11 +103,13 @@ def _check_cut_boxes(path: Path, content: dict) -> None:
     simulate wrote that file itself (they were scanned as nothing)."""
     from sim.world import SCAN_HEIGHT_M, spans_plane
 
-    try:
-        boxes = np.asarray(content["boxes"], float).reshape(-1, 7)
+    from sim.world import json_rows
+
+    try:  # json_rows: a ragged box was numpy's "inhomogeneous shape", a 400-digit number an OverflowError
+        boxes = json_rows(content["boxes"], "boxes", "box", 7, "cx, cy, yaw, hx, hy, z0, z1")
         h = float(content.get("scan_height", SCAN_HEIGHT_M))
-    except (TypeError, ValueError) as exc:
-        raise LmsbenchError(f"{path}: not a world.json (boxes: rows of cx, cy, yaw, hx, hy, z0, z1: {exc})") from None
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise LmsbenchError(f"{path}: not a world.json ({exc})") from None
     cut = int(spans_plane(boxes[:, 5], boxes[:, 6], h).sum())
     if cut:
         raise LmsbenchError(f"{path}: not a world.json: its walls list is empty beside {cut} of its {len(boxes)} "
@@ -140,6 +143,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         raise LmsbenchError(f"--max-scans must be >= 2 (SLAM needs two or more scans), got {max_scans}")
     sources: dict[str, str] = {}
     truth = walls = rel = None
+    notes: list[str] = []
     check_simulate_finished(p)
     sim_log = simulate_log(p)
     if sim_log is not None:
@@ -169,7 +173,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
                     raise LmsbenchError(f"{p / 'world.json'}: not a world.json ({exc})") from None
                 if not walls.size and content.get("boxes"):  # the boxes simulated the scans, the walls score the map:
                     _check_cut_boxes(p / "world.json", content)  # with none, 0 matched, exit 0
-                sources["walls"] = str(p / "world.json")
+                if walls.size:
+                    sources["walls"] = str(p / "world.json")
             except (KeyError, TypeError, ValueError) as exc:  # TypeError: a JSON list, null or a dict of walls
                 raise LmsbenchError(f"{p / 'world.json'}: no wall list ({exc})") from None
             from sim.world import MAX_COORD_M
@@ -184,6 +189,10 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
                 k = int(np.argmin(np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1])))
                 raise LmsbenchError(f"{p / 'world.json'}: not a world.json (walls: wall {k}, {walls[k].tolist()}, has "
                                     "two equal ends: a wall of zero length has no direction to score the map against)")
+            if not walls.size:  # boxes all off the scan plane: scored "matched 0, wall_coverage 0.0", exit 0
+                notes.append(f"{p / 'world.json'}: the world has no wall in the scan plane to score the map against "
+                             "(no map score)")
+                walls = None
     elif p.is_dir() and not (p / "metadata.yaml").is_file():
         raise LmsbenchError(not_a_log_folder(p))
     else:
@@ -193,8 +202,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if rel_path is not None:
         rel = read_relations(rel_path)
         sources["relations"] = str(rel_path)
-    # > 0, no floor: a log may last a day (slam day.clf --rate-hz 0.0002 keeps 17 scans); a rate that keeps one
-    # scan alone (1e-308 did, exit 0) is refused below, after the read, with the count it kept
+    # > 0, no floor: a log may last a day (--rate-hz 0.0002 keeps 13 of a 24 h log's 25 hourly scans, docs/slam.md);
+    # a rate that keeps one scan alone (1e-308 did, exit 0) is refused below, after the read, with the count it kept
     if rate_hz is not None and not rate_hz > 0:
         raise LmsbenchError(f"--rate-hz must be > 0 scans/s, got {rate_hz}")
     from features.registry import check_beams
@@ -251,7 +260,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         reference = "corrected poses"
     time_increment = getattr(getattr(reader, "stats", None), "time_increment", None)  # bags only
     return SlamInput(p.name, records, truth, walls, rel, sources, reference,
-                     time_increment if isinstance(time_increment, float) else None, numbers)
+                     time_increment if isinstance(time_increment, float) else None, numbers, notes)
 
 
 def _check_truth_span(truth: np.ndarray, records: list[Record], where: str) -> None:

@@ -85,12 +85,19 @@ def json_rows(value: object, field: str, item: str, columns: int, what: str) -> 
     if all(is_number(v) for v in value):  # flat: one row, or rows run together
         if len(value) % columns:
             raise ValueError(f"{field}: a flat list of {len(value)} numbers is no whole number of {item}s ({must})")
-        return np.asarray(value, dtype=float).reshape(-1, columns)
-    for i, row in enumerate(value):
+        rows = [value[i:i + columns] for i in range(0, len(value), columns)]
+    else:
+        rows = value
+    for i, row in enumerate(rows):
         if not (isinstance(row, list) and len(row) == columns and all(is_number(v) for v in row)):
             count = f" ({len(row)} numbers)" if isinstance(row, list) and all(is_number(v) for v in row) else ""
             raise ValueError(f"{field}: {item} {i} is {shown(row)}{count}: {must}")
-    return np.asarray(value, dtype=float).reshape(-1, columns)
+        try:  # a whole number too large for a float (400 digits) was an internal OverflowError
+            [float(v) for v in row]
+        except OverflowError:
+            raise ValueError(f"{field}: {item} {i} is {shown(row)}, holding a number too large for a "
+                             f"float: {must}") from None
+    return np.asarray(rows, dtype=float).reshape(-1, columns)
 
 
 @dataclass(eq=False)
@@ -225,8 +232,9 @@ class World:
             for name, a in (("walls", walls), ("circles", circles)):  # before the walls-only rebuild, which
                 if not np.isfinite(a).all() or (a.size and np.abs(a).max() > MAX_COORD_M):  # overflowed (warnings)
                     raise InputError(f"{name}: must be finite numbers within +-{MAX_COORD_M:g} m")
+            route = json_rows(d.get("route_nodes", []), "route_nodes", "route node", 2, "x, y (m)")
             if "boxes" not in d:  # before the walls-only rebuild, quadratic in the walls
-                _check_sizes(len(walls) + len(circles), "walls and circles", len(d.get("route_nodes") or []))
+                _check_sizes(len(walls) + len(circles), "walls and circles", len(route))
         except WorldSizeError as exc:
             raise LmsbenchError(f"{path}: {exc}") from None
         except RecursionError:  # [[[[...]]]] 100,000 deep: json's RecursionError was an internal error
@@ -237,7 +245,6 @@ class World:
             h = float(d.get("scan_height", SCAN_HEIGHT_M))
             walls_only = "boxes" not in d
             if walls_only:
-                route = json_rows(d.get("route_nodes", []), "route_nodes", "route node", 2, "x, y (m)")
                 walls = orient_walls(walls, np.vstack([circles[:, :2], route]))
                 boxes = boxes_behind_faces(walls, h)
                 cylinders = np.array([[cx, cy, r, 0.0, 2.0] for cx, cy, r in circles], dtype=float).reshape(-1, 5)
@@ -252,15 +259,16 @@ class World:
                 boxes=boxes,
                 cylinders=cylinders,
                 scan_height=h,
-                route_nodes=d.get("route_nodes", []),
+                route_nodes=route,
                 route_edges=d.get("route_edges", []),
                 route_targets=d.get("route_targets", []),
                 glass=d.get("glass", []),
             )
         except WorldSizeError as exc:
             raise LmsbenchError(f"{path}: {exc}") from None
-        except (ValueError, TypeError, KeyError, IndexError, OverflowError) as exc:
-            raise LmsbenchError(f"{path}: not a world.json ({type(exc).__name__}: {exc})") from None
+        except (ValueError, TypeError, KeyError, IndexError, OverflowError) as exc:  # a ValueError's text names its
+            kind = "" if isinstance(exc, ValueError) else f"{type(exc).__name__}: "  # field (was "ValueError: ")
+            raise LmsbenchError(f"{path}: not a world.json ({kind}{exc})") from None
         bad = unreproduced(walls, world.walls, FACE_BOX_THICKNESS_M) if walls_only else None
         if bad is not None:
             x1, y1, x2, y2 = walls[bad]

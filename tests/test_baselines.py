@@ -393,10 +393,14 @@ def test_iepf_splits_a_closed_ring_whose_last_beam_repeats_its_first() -> None:
     ("hough", "band_coarse", 1e300, r"must be a width in \[0.0001, 1\] m"),
     ("hough", "band_fine", 1e-300, r"must be a width in \[0.0001, 1\] m"),
     ("ransac", "inlier_band", 1e-300, r"must be a width in \[0.0001, 1\] m"),
-    ("sensor", "ad_tau", 1e-300, r"must be 0 or a finite number >= 0.5 std"),
-    ("sensor", "inlier_tau", 1e-300, r"must be 0 or a finite number >= 0.5 std"),
-    ("sensor", "max_chi2", 0.1, r"must be 0 or a finite number >= 0.5 std"),
-    ("sensor", "curvature_tau", 1e-300, r"must be 0 or a finite number >= 0.5 std"),
+    ("sensor", "ad_tau", 1e-300, r"must be a finite number >= 1 std"),
+    ("sensor", "ad_tau", 0.0, r"must be a finite number >= 1 std"),
+    ("sensor", "inlier_tau", 0.5, r"must be a finite number >= 1 std"),
+    ("sensor", "inlier_tau", 0.0, r"must be a finite number >= 1 std"),
+    ("sensor", "max_chi2", 0.1, r"must be a finite number >= 1 std\^2"),
+    ("sensor", "max_chi2", 0.0, r"must be a finite number >= 1 std\^2"),
+    ("sensor", "curvature_tau", 1e-300, r"must be a finite number >= 1 std"),
+    ("sensor", "curvature_tau", 0.0, r"must be a finite number >= 1 std"),
 ])
 def test_extractor_configs_refuse_values_that_can_never_give_a_line(method, field, value, message):
     from features.errors import ConfigError
@@ -406,12 +410,12 @@ def test_extractor_configs_refuse_values_that_can_never_give_a_line(method, fiel
 
 
 def test_extractor_configs_take_their_bounds_and_zero_thresholds():
-    """The bounds themselves are taken, and the thresholds' 0 as before; the sensor thresholds
-    whose small values find lines anyway (psi_tau, band_tau, bin_tau, merge_tau) keep any value >= 0."""
+    """The bounds themselves are taken; the sensor thresholds whose small values find lines anyway
+    (psi_tau, band_tau, bin_tau, merge_tau) keep any value >= 0."""
     scan, truth = room_scan(L_ROOM, POSES[0], sigma=0.005, seed=1)
     for method, fields in [
-        ("sensor", dict(min_length=1e4, min_range=0.0, sigma_r=1e-6, ad_tau=0.0, inlier_tau=0.5, max_chi2=0.0,
-                        curvature_tau=0.5, psi_tau=1e-300, band_tau=1e-300, bin_tau=1e-300, merge_tau=1e-300)),
+        ("sensor", dict(min_length=1e4, min_range=0.0, sigma_r=1e-6, ad_tau=1.0, inlier_tau=1.0, max_chi2=1.0,
+                        curvature_tau=1.0, psi_tau=1e-300, band_tau=1e-300, bin_tau=1e-300, merge_tau=1e-300)),
         ("sensor", dict(min_length=0.0, min_range=1e4, sigma_r_cm=1000.0)),
         ("hough", dict(rho_step=1e-4, band_coarse=1.0, band_fine=1e-4, sigma=1e-6, min_length=1e4)),
         ("ransac", dict(inlier_band=1.0, sigma=1000.0)),
@@ -419,5 +423,18 @@ def test_extractor_configs_take_their_bounds_and_zero_thresholds():
     ]:
         cfg = make_config(method, **fields)
         assert {f: getattr(cfg, f) for f in fields} == fields
-    # at the bound the sensor method still finds the room's walls (0.5 std is no dead setting)
-    assert score_scan(extract(scan, "sensor", ad_tau=0.5, curvature_tau=0.5), truth).tp >= 3
+
+
+@pytest.mark.parametrize("field", ["ad_tau", "inlier_tau", "max_chi2", "curvature_tau"])
+def test_sensor_thresholds_at_their_floor_still_find_the_walls(field):
+    """Each line test at its floor (1 std, max_chi2 1 std^2) still finds the room's walls, none
+    false; inlier_tau 0.5 found none (tp 0, fp 10 over the 3 poses) and 0 passed no beam."""
+    from features.baselines.checks import MIN_TAU
+
+    tp = fp = 0
+    for pose in POSES:
+        scan, truth = room_scan(L_ROOM, pose, sigma=0.005, seed=1)
+        score = score_scan(extract(scan, "sensor", **{field: MIN_TAU}), truth)
+        tp, fp = tp + score.tp, fp + score.fp
+    assert MIN_TAU == 1.0
+    assert tp >= 12 and fp == 0, (tp, fp)

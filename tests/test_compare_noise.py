@@ -88,3 +88,15 @@ def test_compare_runs_the_sensor_method_with_the_sources_bearing_noise() -> None
     assert given.sigma_bearing == 0.02 and given.sigma_r_cm == 0.01  # the caller set sigma_r alone
     (_, _, estimated), = _with_noise(runs, {}, 0.01, None, 0.02)
     assert estimated.sigma_bearing == 0.02 and estimated.sigma_r == 0.01
+
+
+def test_source_sigma_floors_at_the_extractors_min_sigma(monkeypatch):
+    """compare floored a source's own noise at a bare 1e-6 beside features.baselines.checks.MIN_SIGMA_M
+    (the floor the extractors refuse below): one constant now, so the two cannot drift apart."""
+    from experiments import compare
+    from features.baselines import checks
+
+    src = compare.Source("tiny", "sim", 0, [], sigma_r=1e-300)
+    assert compare._source_sigma(src, "auto") == checks.MIN_SIGMA_M == 1e-6
+    monkeypatch.setattr(compare, "EXTRACTOR_MIN_SIGMA_M", 2e-6)
+    assert compare._source_sigma(src, "auto") == 2e-6

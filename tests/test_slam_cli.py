@@ -1028,7 +1028,9 @@ def test_a_world_json_whose_boxes_all_sit_off_the_scan_plane_is_read(sim_folder,
     written = json.loads((run / "world.json").read_text())
     assert written["walls"] == [] and len(written["boxes"]) == 2
     data = load_input(run)
-    assert data.sources["walls"] == str(run / "world.json") and data.walls.shape == (0, 4)
+    assert "walls" not in data.sources and data.walls is None
+    assert data.notes == [f"{run / 'world.json'}: the world has no wall in the scan plane to score the map against "
+                          "(no map score)"]
     # one box that reaches the plane (its top exactly at it, ends included as World cuts it) is refused
     written["boxes"][1][6] = 0.3
     (run / "world.json").write_text(json.dumps(written))
@@ -1091,3 +1093,70 @@ def test_a_world_json_wall_of_three_numbers_is_one_line_naming_the_file_and_the_
         assert capsys.readouterr().err.strip().splitlines() == [
             f"lmsbench {command[0]}: error: {run / 'world.json'}: {said}"], command
         assert not (tmp_path / "o").exists()
+
+
+def test_a_world_json_number_too_large_for_a_float_is_one_line_naming_the_field_and_row(sim_folder, tmp_path, capsys):
+    """A 400-digit whole number in a wall passed is_number and np.asarray raised OverflowError:
+    `simulate --world` said "internal error: OverflowError"; slam's check of the boxes beside an empty
+    walls list too, and a ragged box there was numpy's "inhomogeneous shape" text."""
+    import shutil
+
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    big = int("9" * 400)
+    world = tmp_path / "big.json"
+    world.write_text(json.dumps({"walls": [[0, 0, 4, 0], [4, 0, 4, 3], [4, 3, 0, big], [0, 3, 0, 0]]}))
+    assert main(["simulate", "--world", str(world), "--duration", "1", "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"lmsbench simulate: error: {world}: not a world.json (walls: wall 2 is {'[4, 3, 0, ' + '9' * 30}"
+        "...9999999] (411 characters), holding a number too large for a float: a wall must be a list of 4 numbers "
+        "x1, y1, x2, y2 (m))"]
+    box = "a box must be a list of 7 numbers cx, cy, yaw, hx, hy, z0, z1"
+    for boxes, said in [([[0, 0, 0, 1, 1, 0, 1], [0, 0, 0, 1, 1, 0, big]], f"box 1 is [0, 0, 0, 1, 1, 0, {'9' * 21}"
+                         "...9999999] (420 characters), holding a number too large for a float: " + box),
+                        ([[0, 0, 0, 1, 1, 0, 1], [0, 0, 0, 1, 1, 0]], f"box 1 is [0, 0, 0, 1, 1, 0] (6 numbers): {box}")]:
+        (run / "world.json").write_text(json.dumps({"walls": [], "boxes": boxes}))
+        assert main(["slam", str(run), "--quiet", "--out", str(tmp_path / "o")]) == 2
+        assert capsys.readouterr().err.strip().splitlines() == [
+            f"lmsbench slam: error: {run / 'world.json'}: not a world.json (boxes: {said})"]
+    assert not (tmp_path / "o").exists()
+
+
+def test_world_json_route_nodes_read_as_walls_are_flat_or_rows(tmp_path):
+    """docs/simulator.md: route_nodes, as walls, may be a flat list read two at a time; it was refused
+    ("route_nodes: must be a (k, 2) array (x, y), got shape (4,)"), and a bad route row's message bore
+    no row index in a world of boxes and a "ValueError: " prefix in a walls-only one."""
+    from sim.world import World
+
+    walls = [[0, 0, 4, 0], [4, 0, 4, 3], [4, 3, 0, 3], [0, 3, 0, 0]]
+    boxes = [[2, 1.5, 0, 2, 1.5, 0, 1]]
+    for extra in ({"walls": walls}, {"walls": [], "boxes": boxes, "cylinders": []}):
+        path = tmp_path / "w.json"
+        path.write_text(json.dumps({**extra, "route_nodes": [1, 2, 3, 1], "route_edges": [[0, 1]]}))
+        assert World.from_json(path).route_nodes.tolist() == [[1.0, 2.0], [3.0, 1.0]]
+        path.write_text(json.dumps({**extra, "route_nodes": [[1, 2], [3]]}))
+        with pytest.raises(LmsbenchError) as err:
+            World.from_json(path)
+        assert str(err.value) == (f"{path}: not a world.json (route_nodes: route node 1 is [3] (1 numbers): a route "
+                                  "node must be a list of 2 numbers x, y (m))")
+
+
+def test_slam_on_a_world_with_no_wall_in_the_scan_plane_writes_no_map_score(sim_folder, tmp_path, capsys):
+    """A world whose boxes all sit off the scan plane was scored "matched 0, coverage 0.0", exit 0:
+    now no map score, and one note saying why."""
+    import shutil
+
+    from experiments.cli import main
+    from sim.world import World
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    World(name="lowbox", seed=0, boxes=[[0, 0, 0, 0.5, 0.5, 0.0, 0.1]], cylinders=[[2, 2, 0.3, 0, 2]],
+          scan_height=0.3).to_json(run / "world.json")
+    assert main(["slam", str(run), "--max-scans", "5", "--quiet", "--out", str(tmp_path / "o")]) == 0
+    note = f"{run / 'world.json'}: the world has no wall in the scan plane to score the map against (no map score)"
+    assert capsys.readouterr().err.strip().splitlines().count(note) == 1
+    metrics = json.loads((tmp_path / "o" / "metrics.json").read_text())
+    assert "map" not in metrics and "ate" in metrics

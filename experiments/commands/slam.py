@@ -211,6 +211,8 @@ def run(args: argparse.Namespace) -> int:
     config = _config(args)
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
                       read_options=read_log_options(args))
+    for note in data.notes:
+        print(note, file=sys.stderr)
     _warn_unread(config, data.records, data.sources.get("scans", args.input))
     stamps = [r.scan.stamp for r in data.records]
     back = next((k for k in range(1, len(stamps)) if stamps[k] < stamps[k - 1]), None)

@@ -70,8 +70,9 @@ class SensorMethodConfig:
                 # 'AUTO' said as no number, with no word of "auto"; 1e300 or 1e-300 found no line, silently
                 checks.noise_sigma(name, getattr(self, name), f", or '{AUTO}'")
         checks.length("min_range", self.min_range)  # 1e300: every beam invalid, no line, silently
-        for name in ("ad_tau", "inlier_tau", "max_chi2", "curvature_tau"):  # tests every line's beams must pass:
-            checks.tau(name, getattr(self, name))  # 1e-300 passed none, F1 0, exit 0
+        for name in ("ad_tau", "inlier_tau", "curvature_tau"):  # tests every line's beams must pass:
+            checks.tau(name, getattr(self, name))  # 0 or 1e-300 passed none, F1 0, exit 0
+        checks.tau("max_chi2", self.max_chi2, "std^2")  # a mean squared normalised residual
         for name in ("psi_tau", "band_tau", "bin_tau", "merge_tau"):  # floored by psi_split, band_min, the step:
             checks.non_negative(name, getattr(self, name), "std")  # any small value works
         checks.non_negative("psi_split", self.psi_split, "rad")
