@@ -338,16 +338,27 @@ def test_a_connection_records_header_too_long_is_worded_as_its_header() -> None:
         "ROS 1 bag's connection may (lms200.bag.MAX_CONNECTION_BYTES): damage; not read")
 
 
+def _laser_scan(ts, **header):  # noqa: ANN001, ANN003, ANN202
+    """A LaserScan message of ``ts`` (a rosbags typestore) at 10 s: 361 beams over 180 deg, all 2 m;
+    ``header``: fields a ROS 1 header adds (seq)."""
+    import math
+
+    T = ts.types
+    return T["sensor_msgs/msg/LaserScan"](
+        header=T["std_msgs/msg/Header"](**header, stamp=T["builtin_interfaces/msg/Time"](sec=10, nanosec=0),
+                                        frame_id="laser"),
+        angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360, time_increment=0.0,
+        scan_time=0.0, range_min=0.01, range_max=8.0, ranges=np.full(361, 2.0, np.float32),
+        intensities=np.zeros(0, np.float32))
+
+
 def _bag_with_connections(path: Path, definitions: list[str], one_type: bool = False) -> Path:
     """A ROS 1 bag of one LaserScan on /scan and a connection /junkJ of type junk_msgs/msg/JJ with
     each of ``definitions`` (its message definition); ``one_type``: all of type junk_msgs/msg/J0."""
-    import math
-
     from rosbags.rosbag1 import Writer
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     ts = get_typestore(Stores.ROS1_NOETIC)
-    T = ts.types
     msgdef, md5 = ts.generate_msgdef("sensor_msgs/msg/LaserScan")
     with Writer(path) as w:
         c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts, msgdef=msgdef, md5sum=md5)
@@ -356,13 +367,7 @@ def _bag_with_connections(path: Path, definitions: list[str], one_type: bool = F
             own = get_typestore(Stores.EMPTY)
             own.register(get_types_from_msg(definition, name))
             w.add_connection(f"/junk{j}", name, msgdef=definition, md5sum=own.generate_msgdef(name)[1])
-        msg = T["sensor_msgs/msg/LaserScan"](
-            header=T["std_msgs/msg/Header"](seq=0, stamp=T["builtin_interfaces/msg/Time"](sec=10, nanosec=0),
-                                             frame_id="laser"),
-            angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360, time_increment=0.0,
-            scan_time=0.0, range_min=0.01, range_max=8.0, ranges=np.full(361, 2.0, np.float32),
-            intensities=np.zeros(0, np.float32))
-        w.write(c, 10 * 10**9, ts.serialize_ros1(msg, "sensor_msgs/msg/LaserScan"))
+        w.write(c, 10 * 10**9, ts.serialize_ros1(_laser_scan(ts, seq=0), "sensor_msgs/msg/LaserScan"))
     return path
 
 
@@ -434,23 +439,15 @@ def test_a_rosbags_without_a_parser_lmsbench_bounds_still_reads_bags(tmp_path, m
 def _ros2_bag_with_definition(path: Path, extra: str) -> Path:
     """A ROS 2 bag (sqlite3) at ``path`` of one LaserScan whose stored message definition is
     LaserScan's own followed by ``extra`` (comment lines)."""
-    import math
-
     from rosbags.rosbag2 import Writer
     from rosbags.typesys import Stores, get_typestore
 
     ts = get_typestore(Stores.ROS2_HUMBLE)
-    T = ts.types
     msgdef, _ = ts.generate_msgdef("sensor_msgs/msg/LaserScan", ros_version=2)
     with Writer(path, version=8) as w:
         c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts,
                              msgdef=msgdef + extra, rihs01=ts.hash_rihs01("sensor_msgs/msg/LaserScan"))
-        msg = T["sensor_msgs/msg/LaserScan"](
-            header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=10, nanosec=0), frame_id="l"),
-            angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360, time_increment=0.0,
-            scan_time=0.0, range_min=0.01, range_max=8.0, ranges=np.full(361, 2.0, np.float32),
-            intensities=np.zeros(0, np.float32))
-        w.write(c, 10 * 10**9, ts.serialize_cdr(msg, "sensor_msgs/msg/LaserScan"))
+        w.write(c, 10 * 10**9, ts.serialize_cdr(_laser_scan(ts), "sensor_msgs/msg/LaserScan"))
     return path
 
 
