@@ -370,13 +370,12 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
                                 "name, e.g. a link")
         reader = read_log(spec, **(read_options or {}))
         first = next(iter(reader), None)
-        if first is not None:  # its scans go to the extractors' run, which extract's beam limit does not guard
-            check_beams(first.scan, f"{spec}: scan 0")
         if first is None:
             if reader.stats.stopped:  # damage before the first scan (read under --skip-bad-lines)
                 raise LmsbenchError(f"{spec}: no scan read: the file stops being readable at {reader.stats.stopped}")
             raise LmsbenchError(f"{spec}: no laser messages found (not a CARMEN log with FLASER / ROBOTLASER / RAWLASER "
                                 "lines, nor a bag with LaserScan messages)")
+        check_beams(first.scan, f"{spec}: scan 0")  # its scans go to the extractors' run, which extract's limit does not guard
 
 
 def _check_types(method: str, overrides: dict[str, Any]) -> None:

@@ -101,9 +101,7 @@ def _check_cut_boxes(path: Path, content: dict) -> None:
     writes the faces of those boxes (sim.world.spans_plane, the rule World uses) as the walls, so an
     empty list beside them would score the map against no wall. Boxes all off the plane give no walls:
     simulate wrote that file itself (they were scanned as nothing)."""
-    from sim.world import SCAN_HEIGHT_M, spans_plane
-
-    from sim.world import json_rows
+    from sim.world import SCAN_HEIGHT_M, json_rows, spans_plane
 
     try:  # json_rows: a ragged box was numpy's "inhomogeneous shape", a 400-digit number an OverflowError
         boxes = json_rows(content["boxes"], "boxes", "box", 7, "cx, cy, yaw, hx, hy, z0, z1")

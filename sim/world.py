@@ -22,12 +22,6 @@ from .geometry import distance_to_segments, face_corners, rectangle_corners, uni
 from .walls_only import box_thickness, orient_walls, unreproduced
 
 SCAN_HEIGHT_M = 0.35  # height of the scan plane above the floor (LMS200 on a Pioneer-class robot)
-
-
-def spans_plane(z0: np.ndarray, z1: np.ndarray, scan_height: float) -> np.ndarray:
-    """Which solids (bottoms ``z0``, tops ``z1``) the scan plane at ``scan_height`` cuts, ends included:
-    only their cross-sections are walls and circles (World), and only they are scanned."""
-    return (np.asarray(z0) <= scan_height) & (np.asarray(z1) >= scan_height)
 MAX_COORD_M = 1e6  # m: the largest coordinate a world may hold (a building is < 1 km; beyond, float geometry degrades)
 FACE_BOX_THICKNESS_M = 0.05  # thickness of the boxes rebuilt behind faces for a walls-only world.json
 #: solids a world may hold at most (boxes + cylinders; a walls-only world.json's walls + circles): its
@@ -73,6 +67,12 @@ def world_json_content(text: str) -> dict:
     return d
 
 
+def spans_plane(z0: np.ndarray, z1: np.ndarray, scan_height: float) -> np.ndarray:
+    """Which solids (bottoms ``z0``, tops ``z1``) the scan plane at ``scan_height`` cuts, ends included:
+    only their cross-sections are walls and circles (World), and only they are scanned."""
+    return (np.asarray(z0) <= scan_height) & (np.asarray(z1) >= scan_height)
+
+
 def json_rows(value: object, field: str, item: str, columns: int, what: str) -> np.ndarray:
     """A world.json list of rows (``walls``, ``circles``, ``route_nodes``) as a float64 (k,
     ``columns``) array: a list of lists of ``columns`` numbers, or a flat list of numbers (read
@@ -92,12 +92,16 @@ def json_rows(value: object, field: str, item: str, columns: int, what: str) -> 
         if not (isinstance(row, list) and len(row) == columns and all(is_number(v) for v in row)):
             count = f" ({len(row)} numbers)" if isinstance(row, list) and all(is_number(v) for v in row) else ""
             raise ValueError(f"{field}: {item} {i} is {shown(row)}{count}: {must}")
-        try:  # a whole number too large for a float (400 digits) was an internal OverflowError
-            [float(v) for v in row]
-        except OverflowError:
-            raise ValueError(f"{field}: {item} {i} is {shown(row)}, holding a number too large for a "
-                             f"float: {must}") from None
-    return np.asarray(rows, dtype=float).reshape(-1, columns)
+    try:
+        return np.asarray(rows, dtype=float).reshape(-1, columns)
+    except OverflowError:  # a whole number too large for a float (400 digits) was an internal OverflowError
+        for i, row in enumerate(rows):  # the row that holds it, looked for only when there is one
+            try:
+                [float(v) for v in row]
+            except OverflowError:
+                raise ValueError(f"{field}: {item} {i} is {shown(row)}, holding a number too large for a "
+                                 f"float: {must}") from None
+        raise
 
 
 @dataclass(eq=False)
