@@ -484,9 +484,11 @@ def float32_ranges(ranges: np.ndarray, range_min: float, range_max: float) -> np
 
 
 def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
-    """A LaserScan message as a Scan, its range_max replaced by ``range_max`` when given; raises
+    """A LaserScan message as a Scan, its range_max replaced by ``range_max`` when given (a reading
+    stored as its float32 is at that limit); raises
     ValueError for fields a scan cannot have."""
     range_min = float(msg.range_min)
+    override = range_max is not None
     if range_max is None:
         range_max = float(msg.range_max)
         if not math.isfinite(range_max) or (math.isfinite(range_min) and range_max <= range_min):
@@ -500,6 +502,12 @@ def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
         raise ValueError(f"the range_max override ({range_max:g} m, --laser-range-max) is not above the scan's "
                          f"range_min ({range_min:g} m); give a larger one")
     ranges = np.asarray(msg.ranges, dtype=np.float64)
+    if override and range_max <= FLOAT32_MAX and np.asarray(msg.ranges).dtype == np.float32:
+        # compared in the message's float32, as its own range_max is: a reading stored as float32(M), just above
+        # M for most M (81.83000183 m for 81.83 m), is at the limit, not beyond it (it read invalid)
+        at_limit = float(np.float32(range_max))
+        if at_limit > range_max:
+            ranges[ranges == at_limit] = range_max
     ranges[finite_negative(ranges)] = np.nan  # some drivers mark invalid beams with negative values; -inf is REP-117's "too close"
     angle_min, increment = float(msg.angle_min), float(msg.angle_increment)
     if increment < 0 and ranges.size > 0:  # a laser mounted upside down sweeps clockwise: same bearings, ascending

@@ -937,3 +937,26 @@ def test_a_bags_angles_are_snapped_only_as_far_as_float32_explains(tmp_path: Pat
         write_log(path, [Record(Scan(np.full(361, 2.0), angle_min, math.radians(0.5), 0.0, 8.183, stamp=1.0))], fmt="bag")
         got = next(iter(read_log(path))).scan
         assert (got.angle_min, got.angle_increment) == (expected, math.radians(0.5)), angle_min
+
+
+def test_a_range_max_override_is_compared_in_the_bags_float32(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """A review: --laser-range-max M on a bag compared its float32 readings in float64, so a reading
+    stored as float32(M), above M for most M (81.83000183 m for 81.83 m), read invalid: `lmsbench info
+    bag --laser-range-max 81.83` said "invalid 100.00 %" of readings written as 81.83 m. It is at the
+    limit, valid, as a reading equal to the bag's own (float32) range_max is; the next float32 above stays beyond."""
+    from experiments.cli import main
+    from lms200.laser_geometry import LaserGeometry
+
+    f32 = np.float32
+    above = float(np.nextafter(f32(81.83), f32(np.inf)))
+    bag = _ros2_bag(tmp_path / "b", [("/scan", 1.0, 1.0, 81.83), ("/scan", 1.1, 1.1, above)], range_max=math.inf)
+    at, beyond = (r.scan for r in read_log(bag, geometry=LaserGeometry(range_max=81.83)))
+    assert at.range_max == 81.83 and at.valid.tolist() == [True] * 3  # old: [False] * 3
+    assert at.ranges.tolist() == [81.83] * 3
+    assert beyond.valid.tolist() == [False] * 3 and beyond.ranges.tolist() == [above] * 3
+    assert main(["info", str(bag), "--laser-range-max", "81.83"]) == 0
+    assert "  invalid         50.00 % of readings" in capsys.readouterr().out  # old: 100.00 %
+    # a limit whose float32 is below it: float32(8.183) is 8.1829996 m, valid either way
+    bag = _ros2_bag(tmp_path / "c", [("/scan", 1.0, 1.0, 8.183)], range_max=math.inf)
+    (scan,) = (r.scan for r in read_log(bag, geometry=LaserGeometry(range_max=8.183)))
+    assert scan.valid.tolist() == [True] * 3 and scan.ranges.tolist() == [float(f32(8.183))] * 3
