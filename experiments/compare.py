@@ -17,6 +17,7 @@ from __future__ import annotations
 from lms200.yamlio import load as load_yaml
 
 import dataclasses
+import itertools
 import os
 from functools import partial
 import time
@@ -494,19 +495,23 @@ def compare(
         from tqdm import tqdm
 
         bar = tqdm(total=total, unit="scan", desc="compare", disable=None)  # None: on a terminal only
+    # each source's first scan is checked before any work: a log of too wide scans was read whole for its
+    # range noise (sigma "auto") before compare() refused its scan 0 (the CLI checks it while parsing)
+    records = [_first_checked(src) for src in srcs]
     rows: list[dict[str, Any]] = []
     warmed = False
     rd_cfg = realdata_config or RealDataConfig()
-    for src in srcs:
+    for src, src_records in zip(srcs, records):
         sigma_r = _source_sigma(src, sigma)
         src_runs = _with_noise(runs, params, _extractor_noise(src, sigma_r), _fit_noise(src), _bearing_noise(src))
         src.ran = {name: cfg for name, _, cfg in src_runs}
         previous: dict[str, tuple[np.ndarray, Pose2D]] = {}  # method -> lines and pose of the last scan
-        for k, rec in enumerate(src.records):
+        for k, rec in enumerate(src_records):
             if max_scans is not None and k >= max_scans:
                 break
             scan = rec.scan
-            check_beams(scan, f"{source_label(src)}: scan {k}")  # as extract refuses it, before any method runs on it
+            number = k * src.stride  # the log's own scan number (record k of every stride-th), as in messages
+            check_beams(scan, f"{source_label(src)}: scan {number}")  # as extract refuses it, before any method runs on it
             src.range_maxes.add(float(scan.range_max))
             truth = check_truth(src.truth_of(rec)) if src.truth_of else None  # checked once, scored per method
             n_valid = int(np.count_nonzero(scan.valid))
@@ -523,7 +528,7 @@ def compare(
                     c1, t1 = time.thread_time_ns(), time.perf_counter_ns()
                     elapsed, cpu = t1 - t0, c1 - c0
                     explained, range_rms = explained_fraction(fs, scan, sigma_r)
-                    row = dict(method=name, backend=backends[name], source=src.name, kind=src.kind, seed=src.seed, scan=k,
+                    row = dict(method=name, backend=backends[name], source=src.name, kind=src.kind, seed=src.seed, scan=number,
                                stamp=scan.stamp, n_valid=n_valid, n_lines=len(fs.lines),
                                n_corners=len(fs.corners), microseconds=elapsed / 1e3, cpu_microseconds=cpu / 1e3,
                                explained=explained, range_rms=range_rms)
@@ -535,11 +540,11 @@ def compare(
                         if matches is not None:
                             for face, dr, da in zip(score.matches[:, 1].tolist(), score.rho_errors.tolist(),
                                                     score.alpha_errors.tolist()):
-                                matches.append(dict(method=name, source=src.name, seed=src.seed, scan=k,
+                                matches.append(dict(method=name, source=src.name, seed=src.seed, scan=number,
                                                     face=face, rho_err=dr, alpha_err=da))
                     rows.append(row)
             except UserMethodFailed as exc:
-                raise exc.at(source_label(src), k * src.stride)  # the log's own scan number, as docs/commands.md
+                raise exc.at(source_label(src), number)  # the log's own scan number, as docs/commands.md
             if bar is not None:
                 bar.update(1)
     if bar is not None:
@@ -552,6 +557,21 @@ def compare(
     if not table.empty:
         table.insert(table.columns.get_loc("microseconds") + 1, "time_ms", table["microseconds"] / 1e3)
     return table
+
+
+def _first_checked(src: Source) -> Iterable[Record]:
+    """``src``'s records, its first scan's beams checked (:func:`check_beams`) now, before its range
+    noise is estimated; a list of records is left as it is (re-iterable, for that estimate)."""
+    if isinstance(src.records, Sequence):
+        if len(src.records):
+            check_beams(src.records[0].scan, f"{source_label(src)}: scan 0")
+        return src.records
+    it = iter(src.records)
+    first = next(it, None)  # a log's records check their beams as read (log_source), naming the log's path
+    if first is None:
+        return ()
+    check_beams(first.scan, f"{source_label(src)}: scan 0")
+    return itertools.chain([first], it)
 
 
 def source_label(src: Source) -> str:

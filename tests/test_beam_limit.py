@@ -7,6 +7,7 @@ unchecked (``lmsbench compare`` on a 20,000-beam log: exit 0, a table of 20,000-
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -78,3 +79,38 @@ def test_a_wider_scan_is_named_by_the_logs_own_scan_number_as_it_is_read(tmp_pat
     lines = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
     assert lines == [f"lmsbench {command}: error: {log}: scan 4: {WIDE} beams is more than the extractors "
                      f"handle ({MAX_BEAMS}, a 0.022 deg step over 360 deg); split the scan into sectors"]
+
+
+def test_compare_from_python_refuses_a_log_of_wider_scans_before_reading_it_for_its_noise(tmp_path, monkeypatch):
+    """A review: the CLI checks a log's first scan while parsing its sources, but compare() called from
+    Python estimated the log's range noise (sigma "auto": a pass over the whole log) before it refused
+    scan 0. Each source's first scan is now checked before any work."""
+    import lms200.noise
+    from experiments.compare import Source, compare, log_source
+
+    log = tmp_path / "wide.clf"
+    write_log(log, _records([WIDE, WIDE, WIDE]), fmt="robotlaser1")
+    estimated = []
+    real = lms200.noise.estimate_range_noise
+    monkeypatch.setattr(lms200.noise, "estimate_range_noise", lambda scans: (estimated.append(1), real(scans))[1])
+    with pytest.raises(ScanGeometryError, match=rf"^{re.escape(str(log))}: scan 0: {WIDE} beams is more than the "
+                                                rf"extractors handle \({MAX_BEAMS},"):
+        compare([log_source(log)], methods=["split_merge"])
+    assert estimated == []  # old: [1], the whole log read for its noise first
+    with pytest.raises(ScanGeometryError, match=rf"^mixed: scan 0: {WIDE} beams"):
+        compare([Source.from_records(_records([WIDE, 361]), name="mixed")], methods=["split_merge"])
+    assert estimated == []  # old: [1]
+
+
+def test_compares_scan_column_is_the_logs_own_scan_number(tmp_path):
+    """A review: compare's `scan` column counted the scans kept, so under --stride 2 the log's scan 4
+    was row scan 2 (while its messages, and slam's, name the log's own number). It is the log's own."""
+    from experiments.compare import compare, log_source
+
+    log = tmp_path / "five.clf"
+    write_log(log, _records([361] * 5), fmt="robotlaser1")
+    table = compare([log_source(log, stride=2)], methods=["split_merge"], sigma=0.01)
+    assert table["scan"].tolist() == [0, 2, 4]  # old: [0, 1, 2]
+    assert table["stamp"].tolist() == [0.0, 2.0, 4.0]
+    table = compare([log_source(log, stride=2, max_scans=2)], methods=["split_merge"], sigma=0.01)
+    assert table["scan"].tolist() == [0, 2]
