@@ -689,6 +689,7 @@ class _DefinitionBudget:
         self.chars = 0
         self.fields = 0
         self.parsed: dict[tuple, Any] = {}  # (parser, text, args): its types, parsed once
+        self.mcap: dict[str, dict[int, int]] = {}  # an mcap file's schemas or channels: id -> characters held
 
 
 #: the budget of the bag being opened (:meth:`BagReader._open`); None: each definition on its own
@@ -754,6 +755,107 @@ def _bound_definitions() -> None:
 
         bounded.lmsbench_bounded = True  # type: ignore[attr-defined]
         setattr(anyreader, name, bounded)
+
+
+#: topics (connections) and message definitions one storage file of a ROS 2 bag may list, each
+#: (sqlite3: rows of its topics and message_definitions tables; mcap: distinct channel and schema
+#: ids). rosbags reads them all when it opens the file, before lmsbench sees one: the definitions
+#: parsed count each distinct one once (MAX_DEFINITION_FIELDS), but 20,000 rows of one 256 KB definition
+#: are 5 GB held. A bag has a few dozen topics; their definitions' characters together are bounded by
+#: MAX_CONNECTIONS_TOTAL_BYTES, as a ROS 1 bag's connection records are.
+MAX_CONNECTIONS = 4096
+
+
+def _storage_too_large(what: str, count: int, size: int | None = None, name: str = "") -> BagTooLargeError:
+    """The error of a ROS 2 storage file listing more than MAX_CONNECTIONS ``what`` (topics, message
+    definitions), or (``size``) whose definitions hold more than MAX_CONNECTIONS_TOTAL_BYTES."""
+    if size is None:
+        return _unnamed(BagTooLargeError(
+            f"its storage file{name and ' ' + name} lists {count:,} {what}, more than the {MAX_CONNECTIONS:,} a ROS 2 bag's may "
+            "(lms200.bag.MAX_CONNECTIONS): absurd, or damage; not read"))
+    return _unnamed(BagTooLargeError(
+        f"its storage file{name and ' ' + name}'s {count:,} {what} hold {size:,} characters together, more than the "
+        f"{MAX_CONNECTIONS_TOTAL_BYTES:,} a ROS 2 bag's may (lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES): absurd message "
+        "definitions, or damage; not read"))
+
+
+def _check_sqlite_connections(path: Any) -> None:  # noqa: ANN401 - a Path
+    """BagTooLargeError for a ROS 2 sqlite3 storage file whose topics or message_definitions tables hold
+    more than MAX_CONNECTIONS rows, or whose definitions (or topics' names, types and QoS) more than
+    MAX_CONNECTIONS_TOTAL_BYTES characters, counted by sqlite before rosbags reads the rows whole. A file
+    sqlite cannot read so is left to rosbags, which says what is wrong."""
+    import sqlite3
+
+    try:
+        db = sqlite3.connect(f"file:{path}?immutable=1", uri=True)
+    except sqlite3.Error:
+        return
+    try:
+        tables = {row[0] for row in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        wanted = {"topics": ("name", "type", "serialization_format", "offered_qos_profiles", "type_description_hash"),
+                  "message_definitions": ("topic_type", "encoding", "encoded_message_definition",
+                                          "type_description_hash")}
+        for table, what in (("topics", "topics"), ("message_definitions", "message definitions")):
+            if table not in tables:
+                continue
+            columns = [row[1] for row in db.execute(f"PRAGMA table_info({table})") if row[1] in wanted[table]]
+            size = " + ".join(f"coalesce(length({c}), 0)" for c in columns) or "0"
+            count, chars = db.execute(f"SELECT count(*), coalesce(sum({size}), 0) FROM {table}").fetchone()
+            if count > MAX_CONNECTIONS:
+                raise _storage_too_large(what, count, name=Path(path).name)
+            if chars > MAX_CONNECTIONS_TOTAL_BYTES:
+                raise _storage_too_large(what, count, chars, Path(path).name)
+    except sqlite3.Error:
+        return
+    finally:
+        db.close()
+
+
+class _CountedRecords:
+    """A NamedTuple type of rosbags' mcap reader (Schema, Channel) whose records, made while a bag is
+    opened (:data:`_BUDGET`), are counted: more than MAX_CONNECTIONS distinct ids, or more than
+    MAX_CONNECTIONS_TOTAL_BYTES of text held by the latest record of each id, is a BagTooLargeError."""
+
+    def __init__(self, typ: Any, what: str) -> None:  # noqa: ANN401 - a NamedTuple type
+        self.typ, self.what = typ, what
+
+    def __getattr__(self, name: str) -> Any:  # noqa: ANN401
+        return getattr(self.typ, name)
+
+    def __call__(self, *args: Any) -> Any:  # noqa: ANN401
+        record = self.typ(*args)
+        budget = _BUDGET.get()
+        if budget is not None:
+            held = budget.mcap.setdefault(self.what, {})
+            held[record[0]] = sum(len(v) for v in record[1:] if isinstance(v, (str, bytes)))
+            if len(held) > MAX_CONNECTIONS:
+                raise _storage_too_large(self.what, len(held))
+            chars = sum(held.values())
+            if chars > MAX_CONNECTIONS_TOTAL_BYTES:
+                raise _storage_too_large(self.what, len(held), chars)
+        return record
+
+
+def _bound_storage_connections() -> None:
+    """Bound what rosbags' ROS 2 storage readers hold of a bag's topics and message definitions when they
+    open a storage file (MAX_CONNECTIONS, MAX_CONNECTIONS_TOTAL_BYTES): a sqlite3 file is counted by
+    sqlite first (:func:`_check_sqlite_connections`), an mcap file's schema and channel records as they
+    are read (:class:`_CountedRecords`). A rosbags without those names is left as it is."""
+    from rosbags.rosbag2 import storage_mcap, storage_sqlite3
+
+    reader = getattr(storage_sqlite3, "Sqlite3Reader", None)
+    real_open = getattr(reader, "_open", None)
+    if real_open is not None and not getattr(real_open, "lmsbench_bounded", False):
+        def _open(self: Any, _real: Callable[[Any], None] = real_open) -> None:  # noqa: ANN401
+            _check_sqlite_connections(self.path)
+            _real(self)
+
+        _open.lmsbench_bounded = True  # type: ignore[attr-defined]
+        reader._open = _open  # type: ignore[union-attr]
+    for name, what in (("Schema", "message definitions (schemas)"), ("Channel", "topics (channels)")):
+        typ = getattr(storage_mcap, name, None)
+        if typ is not None and not isinstance(typ, _CountedRecords):
+            setattr(storage_mcap, name, _CountedRecords(typ, what))
 
 
 def _check_index_connections(path: Any) -> None:  # noqa: ANN401 - a Path, or rosbags' RPath
@@ -1036,6 +1138,7 @@ class BagReader:
             _check_storage_files(self.path)
         _bound_zstd_messages()  # before open: a file-compressed ROS 2 bag is decompressed there
         _bound_definitions()
+        _bound_storage_connections()
         budget = _BUDGET.set(_DefinitionBudget())  # the definitions of this bag together
         try:
             reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))

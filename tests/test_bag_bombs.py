@@ -538,3 +538,63 @@ def test_idl_comment_and_annotation_lines_are_not_counted_as_fields():
     # or quoted line (old: 29)
     assert _field_lines(LASERSCAN_IDL) == 11
     assert _field_lines("uint32 seq\n# a comment\ntime stamp\n\nstring frame_id\n") == 3  # MSG as before
+
+
+def _ros2_bag_of_topics(path: Path, topics: int, storage: str = "sqlite3") -> Path:
+    """A ROS 2 bag at ``path`` of ``topics`` LaserScan topics (one definition), one message on the first."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+    with Writer(path, version=8, storage_plugin=plugin) as w:
+        conns = [w.add_connection(f"/scan{k}", "sensor_msgs/msg/LaserScan", typestore=ts) for k in range(topics)]
+        w.write(conns[0], 10 * 10**9, ts.serialize_cdr(_laser_scan(ts), "sensor_msgs/msg/LaserScan"))
+    return path
+
+
+def test_a_ros2_bags_topics_and_definitions_are_bounded_in_number_and_size(tmp_path, capsys, monkeypatch) -> None:
+    """A review: a ROS 2 bag's message definitions were bounded per definition and as distinct ones
+    parsed, but the rows rosbags reads from the storage file (every topic, every message_definitions
+    row, every mcap schema and channel) only by the file's size: 20,000 rows of one definition read
+    whole. A storage file may list MAX_CONNECTIONS topics and as many definitions, holding
+    MAX_CONNECTIONS_TOTAL_BYTES characters together (here lowered to keep the bags small)."""
+    import re
+    import sqlite3
+
+    from experiments.cli import main
+
+    monkeypatch.setattr("lms200.bag.MAX_CONNECTIONS", 4, raising=False)  # raising: the old code had none
+    ok = _ros2_bag_of_topics(tmp_path / "ok", 4)
+    assert [r.scan.stamp for r in read_log(ok, topic="/scan0")] == [10.0]
+    for storage, file in (("sqlite3", "many.db3"), ("mcap", None)):
+        bag = _ros2_bag_of_topics(tmp_path / "many", 5, storage)
+        assert main(["info", str(bag), "--topic", "/scan0"]) == 2  # old: exit 0
+        err = capsys.readouterr().err
+        which = f"its storage file {file} lists 5 topics" if file else "its storage file lists 5 topics \\(channels\\)"
+        assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(bag))}: {which}, more than the 4 a ROS 2 bag's may "
+                            r"\(lms200.bag.MAX_CONNECTIONS\): absurd, or damage; not read\n", err), err
+        import shutil
+
+        shutil.rmtree(bag)
+    # one definition repeated in rows of message_definitions: each row is read, whatever its text
+    one = _ros2_bag_of_topics(tmp_path / "one", 1)
+    db = sqlite3.connect(one / "one.db3")
+    row = db.execute("SELECT topic_type, encoding, encoded_message_definition, type_description_hash "
+                     "FROM message_definitions").fetchone()
+    size = len(row[2]) + sum(len(v) for v in (row[0], row[1], row[3]))
+    db.executemany("INSERT INTO message_definitions (topic_type, encoding, encoded_message_definition, "
+                   "type_description_hash) VALUES (?, ?, ?, ?)", [row] * 4)
+    db.commit()
+    db.close()
+    assert main(["info", str(one)]) == 2  # old: exit 0
+    assert capsys.readouterr().err == (f"lmsbench info: error: {one}: its storage file one.db3 lists 5 message definitions, "
+                                       "more than the 4 a ROS 2 bag's may (lms200.bag.MAX_CONNECTIONS): absurd, or damage; "
+                                       "not read\n")
+    monkeypatch.setattr("lms200.bag.MAX_CONNECTIONS", 4096)
+    monkeypatch.setattr("lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES", 4 * size)
+    assert main(["info", str(one)]) == 2
+    assert capsys.readouterr().err == (f"lmsbench info: error: {one}: its storage file one.db3's 5 message definitions "
+                                       f"hold {5 * size:,} characters together, more than the {4 * size:,} a ROS 2 bag's "
+                                       "may (lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES): absurd message definitions, or "
+                                       "damage; not read\n")
