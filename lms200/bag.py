@@ -785,9 +785,10 @@ def _check_sqlite_connections(path: Any) -> None:  # noqa: ANN401 - a Path
     MAX_CONNECTIONS_TOTAL_BYTES characters, counted by sqlite before rosbags reads the rows whole. A file
     sqlite cannot read so is left to rosbags, which says what is wrong."""
     import sqlite3
+    from urllib.request import pathname2url
 
-    try:
-        db = sqlite3.connect(f"file:{path}?immutable=1", uri=True)
+    try:  # read-only: a name with ? or # in it must not be taken as another file, nor create one
+        db = sqlite3.connect(f"file:{pathname2url(os.path.abspath(path))}?mode=ro&immutable=1", uri=True)
     except sqlite3.Error:
         return
     try:
