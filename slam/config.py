@@ -372,6 +372,17 @@ class ConsistencyConfig:
             ``max_ambiguous``: on simulated runs at 0.5 scans/s with the simulator's odometry no step
             doubts it (seeds 0, 1, 3, 7, 11, 21, 22), while an odometry frozen, constant, reversed or
             with a 1.6 rad spike gave 1-9 such steps a run, and ATE 1.8-4.3 m reported healthy before.
+        degenerate_points, max_degenerate_drift: (default pipeline) not healthy when a stretch of
+            degenerate matches may have drifted more than ``max_degenerate_drift`` (m) along its weak
+            axis (``degenerate_drift``: a match is degenerate when its weakest position direction is
+            held by fewer than ``degenerate_points`` points' worth, a corridor's axis; over a stretch
+            of them, each new keyframe's std along that axis, from its match's own covariance, summed
+            as if every error had the same sign, since along such an axis the matching objective
+            itself is biased). Fixed before they were measured: 10 points' worth is where the
+            MIT-like corridor's stall sat (7-13, against 30 at the median of tracked steps,
+            docs/slam.md), and 0.3 m is ``slam.scanslam.DISTINCT_XY``, the distance at which two
+            poses are told apart. Simulated corridor worlds at 1 degree lost track (ATE 0.2-3.2 m)
+            and were reported healthy before.
     """
 
     nis_window: int = 20
@@ -381,6 +392,8 @@ class ConsistencyConfig:
     max_ambiguous: float = 0.0
     min_matched_fraction: float = 0.9
     max_odometry_doubt: float = 0.0
+    degenerate_points: float = 10.0
+    max_degenerate_drift: float = 0.3
 
 
 @dataclass(frozen=True)
