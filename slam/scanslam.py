@@ -90,6 +90,17 @@ def degenerate_drift(infos: list[ScanStep], points: float) -> tuple[float, int |
     return best, at
 
 
+def correlated_scale(points: np.ndarray, inliers: float, length: float) -> float:
+    """``keyframes.correlation_length``: the explained points (``inliers`` of ``points``, (n, 2))
+    over the squares of side ``length`` (m) the points occupy, at least 1. Points that close lie on
+    one wall and share the error of the map's points there, so a square counts as one measurement."""
+    p = np.asarray(points, float).reshape(-1, 2)
+    if p.shape[0] == 0:
+        return 1.0
+    cells = np.unique(np.floor(p / length).astype(np.int64), axis=0).shape[0]
+    return max(1.0, float(inliers) * p.shape[0] / cells)
+
+
 @dataclass
 class ScanPoints:
     """A scan's points in the sensor frame: all valid ones in beam order (for the map), and the
@@ -482,6 +493,8 @@ class ScanSlam:
                       info: ScanStep) -> np.ndarray:
         """Add the scan as a keyframe (and perhaps close a loop); returns its pose after optimisation."""
         assert self.graph is not None
+        if info.matched and self.keyframes_cfg.correlation_length > 0:
+            cov = cov * correlated_scale(sp.matched, info.inliers, self.keyframes_cfg.correlation_length)
         key = self.graph.add(rel, rotate_covariance(cov, -pose[2]), pose)  # world -> frame of pose
         kf = Keyframe(key, len(self.anchors), stamp, pose.copy(), *sp.surface(), self.travelled)
         self.keyframes.append(kf)

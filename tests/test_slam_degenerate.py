@@ -73,3 +73,33 @@ def test_the_warning_names_the_degenerate_stretch():
         "the run is not healthy: a stretch of degenerate matches (the weakest direction held by fewer than 10 "
         "points' worth, as along a corridor) ending at t=61.2 may have drifted 1.19 m along it (its keyframes' std "
         "there, summed; consistency.max_degenerate_drift 0.3 m) (metrics.json: consistency.healthy false)")
+
+
+def test_correlation_length_scales_a_keyframe_factor_by_its_points_per_square():
+    """``keyframes.correlation_length`` (off by default): 12 explained points in 3 squares of 1 m
+    count as 3 measurements, so the factor's covariance is 4 times the match's; never below 1."""
+    from slam.config import SlamConfigError
+    from slam.scanslam import correlated_scale
+
+    wall = np.array([[0.1 * k, 2.5] for k in range(1, 10)] + [[1.5, 0.5], [2.4, 0.6], [2.6, 0.7]])  # squares (0, 2), (1, 0), (2, 0)
+    assert correlated_scale(wall, 1.0, 1.0) == pytest.approx(4.0)
+    assert correlated_scale(wall, 0.5, 1.0) == pytest.approx(2.0)
+    assert correlated_scale(wall, 1.0, 0.01) == 1.0 and correlated_scale(np.zeros((0, 2)), 1.0, 1.0) == 1.0
+    assert SlamConfig().keyframes.correlation_length == 0.0
+    with pytest.raises(SlamConfigError, match=r"keyframes.correlation_length: must be 0 \(off\) or in \[0.001, 10000\] m, got 1e-300"):
+        SlamConfig.from_dict({"keyframes": {"correlation_length": 1e-300}})
+
+
+def test_correlation_length_widens_the_keyframe_factors_only():
+    """With the option the graph's factors are wider (the keyframes' marginals grow), the matches the same."""
+    import dataclasses
+
+    from sim import simulate_records
+
+    records = simulate_records("office", seed=0, duration=20.0, rate_hz=5.0)
+    base = SlamConfig(loop_closure=dataclasses.replace(SlamConfig().loop_closure, enabled=False))
+    wide = dataclasses.replace(base, keyframes=dataclasses.replace(base.keyframes, correlation_length=1.0))
+    a, b = run_slam(records, base), run_slam(records, wide)
+    np.testing.assert_allclose(a.trajectory, b.trajectory, atol=1e-9)  # no closure: the chain is the matches
+    ratio = np.trace(b.covariances[-1][:2, :2]) / np.trace(a.covariances[-1][:2, :2])
+    assert ratio > 2.0
