@@ -390,7 +390,7 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     if "prealign_used" in d:
         consistency["prealign_fraction"] = float(np.mean(d["prealign_used"]))
     for key in ("matched_fraction", "searched_fraction", "ambiguous_fraction", "odometry_fraction",
-                "odometry_doubt_fraction"):
+                "odometry_doubt_fraction", "degenerate_fraction", "degenerate_drift", "degenerate_drift_at"):
         if key in d:
             consistency[key] = d[key]
     metrics = {

@@ -372,6 +372,17 @@ class ConsistencyConfig:
             ``max_ambiguous``: on simulated runs at 0.5 scans/s with the simulator's odometry no step
             doubts it (seeds 0, 1, 3, 7, 11, 21, 22), while an odometry frozen, constant, reversed or
             with a 1.6 rad spike gave 1-9 such steps a run, and ATE 1.8-4.3 m reported healthy before.
+        degenerate_points, max_degenerate_drift: (default pipeline) not healthy when a stretch of
+            degenerate matches may have drifted more than ``max_degenerate_drift`` (m) along its weak
+            axis (``degenerate_drift``: a match is degenerate when its weakest position direction is
+            held by fewer than ``degenerate_points`` points' worth, a corridor's axis; over a stretch
+            of them, each new keyframe's std along that axis, from its match's own covariance, summed
+            as if every error had the same sign, since along such an axis the matching objective
+            itself is biased). Fixed before they were measured: 10 points' worth is where the
+            MIT-like corridor's stall sat (7-13, against 30 at the median of tracked steps,
+            docs/slam.md), and 0.3 m is ``slam.scanslam.DISTINCT_XY``, the distance at which two
+            poses are told apart. Simulated corridor worlds at 1 degree lost track (ATE 0.2-3.2 m)
+            and were reported healthy before.
     """
 
     nis_window: int = 20
@@ -381,6 +392,8 @@ class ConsistencyConfig:
     max_ambiguous: float = 0.0
     min_matched_fraction: float = 0.9
     max_odometry_doubt: float = 0.0
+    degenerate_points: float = 10.0
+    max_degenerate_drift: float = 0.3
 
 
 @dataclass(frozen=True)
@@ -394,6 +407,13 @@ class KeyframeConfig:
         local_map: the local map holds the points of the newest this many keyframes (20 beat 10
             on the tuning runs, seeds 100-105 at 5 and 37.5 scans/s: mean ATE 2.6 against 3.4 cm)...
         voxel: ...thinned to one point per square of this side (m).
+        correlation_length: (m; 0, the default, off) a keyframe factor's covariance (its match's)
+            is multiplied by the explained points over the squares of this side that the matched
+            points occupy (at least 1): points that close share the error of the map's wall they
+            lie on, so they count as one. The factors are over-confident on the keyframe logs (a
+            median whitened chi-square of 27-31 against 2.4). 1 m, fixed first and the only value
+            tried, scales them by 1.1-8 (median 2.5 on Intel, 4.4 on MIT CSAIL); not the default:
+            MIT CSAIL without odometry 0.0283 -> 0.0284 m, Intel without odometry worse (docs/slam.md).
     """
 
     distance: float = 0.3
@@ -401,6 +421,7 @@ class KeyframeConfig:
     min_inliers: float = 0.8
     local_map: int = 20
     voxel: float = 0.05
+    correlation_length: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -565,6 +586,10 @@ class SlamConfig:
         if not (voxel == 0 or MIN_VOXEL_M <= voxel <= MAX_VOXEL_M):  # 1e-12: the cell grid's size overflowed
             raise SlamConfigError(f"keyframes.voxel: must be 0 (no thinning) or in [{MIN_VOXEL_M:g}, {MAX_VOXEL_M:g}] m, "
                                   f"got {voxel}")
+        corr = self.keyframes.correlation_length
+        if not (corr == 0 or MIN_VOXEL_M <= corr <= MAX_MATCH_RANGE_M):  # 1e-300: the squares' indices overflowed
+            raise SlamConfigError(f"keyframes.correlation_length: must be 0 (off) or in [{MIN_VOXEL_M:g}, "
+                                  f"{MAX_MATCH_RANGE_M:g}] m, got {corr}")
         if not self.motion.max_gap >= MIN_MAX_GAP_S:  # 1e-300: every step restarted the motion, exit 0
             raise SlamConfigError(f"motion.max_gap: must be at least {MIN_MAX_GAP_S:g} s (100 scans/s, faster than any "
                                   f"scanner's: a shorter gap makes every step a gap, the motion model never runs), "

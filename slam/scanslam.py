@@ -52,7 +52,53 @@ class ScanStep:
     ambiguous: bool = False  # the search found a distinct pose that fits as well, which the prior barely tells apart
     odometry: bool = False  # the prediction was the odometry's step (motion.use_odometry)
     odometry_doubt: bool = False  # its match was poor and the constant-velocity prediction's clearly better
+    weak: float = float("nan")  # points' worth holding the match's weakest position direction (Hessian eigenvalue)
+    weak_sigma: float = float("nan")  # the match's own std along that direction (m)
     loop: LoopClosure | None = None
+
+
+def weakest_direction(m: Match) -> tuple[float, float]:
+    """The points' worth that hold ``m``'s weakest position direction (the smallest eigenvalue of
+    its Hessian's position block: each point on a surface adds its unit normal's square, Huber
+    weights below 1) and the match's own std (m) along that direction (its covariance). Along a
+    bare corridor's axis a few points' worth, across it tens."""
+    w, v = np.linalg.eigh(0.5 * (m.hessian[:2, :2] + m.hessian[:2, :2].T))
+    axis = v[:, 0]
+    return float(w[0]), float(np.sqrt(max(float(axis @ m.covariance[:2, :2] @ axis), 0.0)))
+
+
+def degenerate_drift(infos: list[ScanStep], points: float) -> tuple[float, int | None]:
+    """The largest drift (m) a stretch of degenerate matches can have left along its weak axis, and
+    the index of the scan where that stretch reached it (None without one). A step is degenerate
+    when its match's weakest position direction is held by fewer than ``points`` points' worth (a
+    corridor's axis); a matched step that is not ends the stretch. Within a stretch each new
+    keyframe adds its match's std along that direction (the keyframe factor's, the only ones that
+    carry the drift: between keyframes a scan is matched against the same local map), summed, not
+    in quadrature: along such an axis the matching objective itself is biased (the ICP started at
+    the true pose slides 0.1-0.2 m, docs/slam.md), so the steps' errors need not cancel."""
+    best, at, cur = 0.0, None, 0.0
+    for k, i in enumerate(infos):
+        if not i.matched:
+            continue  # the motion model's guess: counted by matched_fraction, neither adds nor ends a stretch
+        if not i.weak < points:
+            cur = 0.0
+            continue
+        if i.new_keyframe and np.isfinite(i.weak_sigma):
+            cur += i.weak_sigma
+            if cur > best:
+                best, at = cur, k
+    return best, at
+
+
+def correlated_scale(points: np.ndarray, inliers: float, length: float) -> float:
+    """``keyframes.correlation_length``: the explained points (``inliers`` of ``points``, (n, 2))
+    over the squares of side ``length`` (m) the points occupy, at least 1. Points that close lie on
+    one wall and share the error of the map's points there, so a square counts as one measurement."""
+    p = np.asarray(points, float).reshape(-1, 2)
+    if p.shape[0] == 0:
+        return 1.0
+    cells = np.unique(np.floor(p / length).astype(np.int64), axis=0).shape[0]
+    return max(1.0, float(inliers) * p.shape[0] / cells)
 
 
 @dataclass
@@ -252,6 +298,7 @@ class ScanSlam:
                     # wrong odometry either (simulated, 1.3-4.1 m)
                     info.odometry_doubt = better and alt.inliers >= al.retry_inliers
             info.inliers, info.rms, info.hypothesis = m.inliers, m.rms, m.start
+            info.weak, info.weak_sigma = weakest_direction(m)
         if m is not None and m.inliers >= self.alignment.min_inliers:
             pose, cov = m.pose, m.covariance
             info.matched = True
@@ -446,6 +493,8 @@ class ScanSlam:
                       info: ScanStep) -> np.ndarray:
         """Add the scan as a keyframe (and perhaps close a loop); returns its pose after optimisation."""
         assert self.graph is not None
+        if info.matched and self.keyframes_cfg.correlation_length > 0:
+            cov = cov * correlated_scale(sp.matched, info.inliers, self.keyframes_cfg.correlation_length)
         key = self.graph.add(rel, rotate_covariance(cov, -pose[2]), pose)  # world -> frame of pose
         kf = Keyframe(key, len(self.anchors), stamp, pose.copy(), *sp.surface(), self.travelled)
         self.keyframes.append(kf)
@@ -570,6 +619,8 @@ def run_scan_slam(steps, config) -> "SlamResult":
             break
     finite = nees[np.isfinite(nees)]
     ambiguous = np.array([i.ambiguous for i in infos])
+    cc = config.consistency
+    drift, drift_at = degenerate_drift(infos, cc.degenerate_points)
     ambiguous_fraction = float(ambiguous[1:].mean()) if ambiguous.size > 1 else 0.0
     matched_fraction = float(matched[1:].mean()) if matched.size > 1 else 1.0
     diag = {
@@ -583,7 +634,12 @@ def run_scan_slam(steps, config) -> "SlamResult":
         "diverged": diverged_at is not None, "diverged_at": diverged_at,
         "healthy": (bool(np.all(np.isfinite(poses))) and diverged_at is None
                     and ambiguous_fraction <= config.consistency.max_ambiguous
-                    and matched_fraction >= config.consistency.min_matched_fraction),
+                    and matched_fraction >= config.consistency.min_matched_fraction
+                    and drift <= cc.max_degenerate_drift),
+        "weak": np.array([i.weak for i in infos]), "weak_sigma": np.array([i.weak_sigma for i in infos]),
+        "degenerate_fraction": float(np.mean([i.matched and i.weak < cc.degenerate_points for i in infos[1:]]))
+        if len(infos) > 1 else 0.0,
+        "degenerate_drift": drift, "degenerate_drift_at": None if drift_at is None else stamps[drift_at],
         "searched": np.array([i.searched for i in infos]), "ambiguous": ambiguous, "fit": np.array([i.fit for i in infos]),
         "searched_fraction": float(np.mean([i.searched for i in infos[1:]])) if len(infos) > 1 else 0.0,
         "ambiguous_fraction": ambiguous_fraction,

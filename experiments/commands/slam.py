@@ -395,7 +395,8 @@ def _health_warning(m: dict[str, Any], config: "SlamConfig") -> str:
 
 def _unhealthy_reasons(m: dict[str, Any], config: "SlamConfig") -> list[str]:
     """Every reason ``m`` (metrics.json's mapping) gives against the run, one phrase each: a
-    divergence, too few matched steps, too many ambiguous steps, a broken filter state."""
+    divergence, too few matched steps, too many ambiguous steps, a stretch of degenerate matches that may
+    have drifted too far, a broken filter state."""
     c = m["consistency"]
     steps = max(int(m["n_scans"]) - 1, 1)
     cc = config.consistency
@@ -426,6 +427,12 @@ def _unhealthy_reasons(m: dict[str, Any], config: "SlamConfig") -> list[str]:
                    f"its step explained under {config.alignment.retry_inliers:g} of the points and the constant-"
                    f"velocity prediction's clearly more: a wrong odometry, or matching that is ambiguous there, as "
                    f"along a corridor; consistency.max_odometry_doubt {cc.max_odometry_doubt:g})")
+    drift = c.get("degenerate_drift")
+    if drift is not None and drift > cc.max_degenerate_drift:
+        out.append(f"a stretch of degenerate matches (the weakest direction held by fewer than "
+                   f"{cc.degenerate_points:g} points' worth, as along a corridor) ending at t={c['degenerate_drift_at']} "
+                   f"may have drifted {drift:.2f} m along it (its keyframes' std there, summed; "
+                   f"consistency.max_degenerate_drift {cc.max_degenerate_drift:g} m)")
     if config.preset == "paper" and not c["healthy"]:
         out.append("the filter's state is not finite or its covariance is not positive definite")
     return out
