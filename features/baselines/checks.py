@@ -27,6 +27,11 @@ MAX_LENGTH_M = 1e4
 #: inlier_band): a tenth of the LMS200's 1 mm range step to 1 m, coarser than a wall is thick; a
 #: band of 1e-300 m or a cell of 1e300 m found no line, F1 0, exit 0
 MIN_BAND_M, MAX_BAND_M = 1e-4, 1.0
+#: most noise-scaled multiple (split_merge / iepf split_sigmas, merge_sigmas): 100 standard
+#: deviations, far beyond any beam noise reaches; 1e300 made the threshold overflow-capped and every
+#: scan one line across its corners (office: F1 0.78, exit 0), and 0 (off, the fixed threshold alone)
+#: or at least 1: 1e-300 was 0 in all but name, 0.5 a merge test that noise alone fails
+MAX_SIGMAS = 100.0
 #: smallest noise-scaled threshold of a test that a line's beams must pass (the sensor method's
 #: ad_tau, inlier_tau, curvature_tau in std; max_chi2 in std^2, a mean squared normalised residual):
 #: 0 passed no beam and 0.5 too few (inlier_tau 0.5: tp 0, fp 10 on the 3 test rooms; 1.0: tp 13),
@@ -112,6 +117,12 @@ def band(name: str, value: object) -> None:
     """``value`` must be a cell or band width in [MIN_BAND_M, MAX_BAND_M] m."""
     if not is_real(value) or not (finite(value) and MIN_BAND_M <= value <= MAX_BAND_M):
         fail(name, f"must be a width in [{MIN_BAND_M:g}, {MAX_BAND_M:g}] m", value)
+
+
+def sigmas(name: str, value: object) -> None:
+    """``value`` must be 0 (off) or a number of standard deviations in [MIN_TAU, MAX_SIGMAS]."""
+    if not is_real(value) or not (value == 0 or MIN_TAU <= value <= MAX_SIGMAS):
+        fail(name, f"must be 0 (off) or a number in [{MIN_TAU:g}, {MAX_SIGMAS:g}] std", value)
 
 
 def tau(name: str, value: object, unit: str = "std") -> None:
