@@ -333,7 +333,7 @@ CASES = [
     (["slam", "{simrun}", "--extractor", "nosuch", "--out", O], "nosuch"),
     (["slam", "{simrun}", "--config", "{slam_nested.yaml}", "--out", O], "extractor: must be an extraction method's name"),
     (["slam", "{simrun}", "--config", "{slam_param.yaml}", "--out", O], "slam_param.yaml: extractor_params: unknown parameter(s) ['bogus']"),
-    (["slam", "{simrun}", "--config", "{slam_value.yaml}", "--out", O], "slam_value.yaml: extractor_params.split_threshold: must be a finite number > 0 m, got -1"),
+    (["slam", "{simrun}", "--config", "{slam_value.yaml}", "--out", O], "slam_value.yaml: extractor_params.split_threshold: must be a width in [0.0001, 1] m, got -1"),
     (["slam", "{simrun}", "--config", "{slam_type.yaml}", "--out", O], "motion.sigma_accel: must be a number"),
     (["slam", "{simrun}", "--config", "{slam_prob.yaml}", "--out", O], "prealign.widen_probability: a probability"),
     (["slam", "{simrun}", "--config", "{slam_noise.yaml}", "--out", O], "odom_noise: must be 3 numbers"),
