@@ -349,7 +349,7 @@ CASES = [
     (["slam", "{simrun}", "--out", "{notes_dir}"], "notes_dir: holds metrics.json, which this run would replace but "
                                                    "no earlier lmsbench slam run wrote"),
     (["simulate", "--duration", "1", "--out", "{pkg}"], "holds __init__.py, which this command does not write"),
-    (["slam", "{simrun}", "--config", "{slam_normal.yaml}", "--out", O], "alignment.normal_step: must be >= 1"),
+    (["slam", "{simrun}", "--config", "{slam_normal.yaml}", "--out", O], "alignment.normal_step: must be in [1, 100] beams, got 0"),
     (["slam", "{simrun}", "--config", "{slam_range.yaml}", "--out", O], "alignment.max_range: must be in [0.1, 10000] m"),
     (["slam", "{simrun}", "--config", "{slam_turn.yaml}", "--out", O], "alignment.heading_hypotheses: offsets"),
     (["slam", "{backwards.clf}", "--out", O], "backwards"),

@@ -490,18 +490,27 @@ def sparse_log(tmp_path_factory) -> Path:
     ("alignment: {search_step: 1.0e-160}", "alignment.search_step: must be in [0.1, 10] m"),  # OverflowError: step**-2
     ("alignment: {ambiguity_sigmas: 1.0e300}", "alignment.ambiguity_sigmas: must be in [0, 100] std"),  # OverflowError
     ("alignment: {ambiguity_sigmas: 1.0e300, fit_margin: 1.0e300}", "alignment.fit_margin: must be in [0, 1]"),
-    ("alignment: {max_turn_rate: 0}", "alignment.max_turn_rate: must be > 0"),
-    ("motion: {sigma_floor_xy: 0}", "motion.sigma_floor_xy: must be > 0"),  # a repeated stamp divided by a zero std
+    ("alignment: {max_turn_rate: 0}", "alignment.max_turn_rate: must be in [0.01, 100] rad/s"),
+    ("motion: {sigma_floor_xy: 0}", "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # a repeated stamp divided by a zero std
     ("motion: {sigma_floor_xy: 1.0e160}", "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # OverflowError: sxy**2
     ("motion: {sigma_floor_theta: 1.0e300}", "motion.sigma_floor_theta: must be in [1e-06, 1000] rad"),  # OverflowError
     ("motion: {sigma_floor_xy: 1.0e-160, sigma_floor_theta: 1.0e-160}\nalignment: {motion_prior: true}",
      "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # OverflowError: sxy**-2 at the repeated stamp
     ("motion: {sigma_floor_xy: 0.01, sigma_floor_theta: 1.0e-160}", "motion.sigma_floor_theta: must be in [1e-06"),
-    ("motion: {sigma_accel: 1.0e200}", "motion.sigma_accel: must be in (0, 1000] m/s^2"),  # sxy**2 overflowed
-    # 0 was "must be > 0" while 1e200 said [0, 1000]: one interval, the one that holds
-    ("motion: {sigma_accel: 0}", "motion.sigma_accel: must be in (0, 1000] m/s^2"),
-    ("consistency: {max_ambiguous: 2}", "consistency.max_ambiguous: a share of steps, must be in [0, 1]"),
-    ("consistency: {min_matched_fraction: 2}", "consistency.min_matched_fraction: a share of steps, must be in [0, 1]"),
+    ("motion: {sigma_accel: 1.0e200}", "motion.sigma_accel: must be in [0.001, 1000] m/s^2"),  # sxy**2 overflowed
+    # 0 was "must be > 0" while 1e200 said [0, 1000], and -1 "must be >= 0": one interval, the one that holds
+    ("motion: {sigma_accel: 0}", "motion.sigma_accel: must be in [0.001, 1000] m/s^2"),
+    ("motion: {sigma_accel: -1}", "motion.sigma_accel: must be in [0.001, 1000] m/s^2"),
+    ("motion: {sigma_alpha: 1.0e-300}", "motion.sigma_alpha: must be in [0.001, 1000] rad/s^2"),  # 0 in all but name
+    # each ran to its end, exit 0, with a "not healthy" warning (no step matched) or none (a useless run)
+    ("alignment: {stride: 1000000000000}", "alignment.stride: must be in [1, 30] beams"),
+    ("alignment: {damping: 1.0e300}", "alignment.damping: must be in [0, 1] of the Hessian's mean eigenvalue"),
+    ("alignment: {tolerance_xy: 1.0e300}", "alignment.tolerance_xy: must be in [0, 0.1] m"),
+    ("keyframes: {local_map: 1000000000000}", "keyframes.local_map: must be in [1, 1000] keyframes"),
+    ("observations: {min_line_points: 1000000000000}", "observations.min_line_points: must be in [0, 16384] beams"),
+    ("consistency: {nis_divergence: 0}", "consistency.nis_divergence: must be in [1, 1e+06] per degree of freedom"),
+    ("consistency: {max_ambiguous: 2}", "consistency.max_ambiguous: must be in [0, 1] (a share of steps)"),
+    ("consistency: {min_matched_fraction: 2}", "consistency.min_matched_fraction: must be in [0, 1] (a share of steps)"),
     ("alignment: {search_candidates: 1000000000}", "alignment.search_candidates: must be in [1, 32]"),  # an ICP per pose
     ("alignment: {search_step: 0.01, search_resolution: 0.01}",
      "the search window would hold 58,049,161 poses"),  # 361 x 401^2
@@ -906,7 +915,7 @@ def test_a_users_extractor_config_of_numpy_values_and_tuples_is_recorded(sim_fol
 
 
 @pytest.mark.parametrize("field, value, message", [
-    ("huber", 1e-300, r"alignment\.huber: must be at least 1e-06 m \(a residual's scale; .*\), got 1e-300"),
+    ("huber", 1e-300, r"alignment\.huber: must be in \[1e-06, 1\] m \(a residual's scale: .*\), got 1e-300"),
     ("covariance_inflation", 1e30, r"alignment\.covariance_inflation: must be in \[0\.01, 100\] \(a factor on the "
                                    r"match's covariance; 1, the default, is none\), got 1e\+30")])
 def test_slam_config_refuses_an_icp_scale_that_breaks_the_run(sim_folder, tmp_path, capsys, field, value, message):
