@@ -254,6 +254,11 @@ class World:
                 cylinders = np.array([[cx, cy, r, 0.0, 2.0] for cx, cy, r in circles], dtype=float).reshape(-1, 5)
             else:
                 boxes, cylinders = d["boxes"], d.get("cylinders", [])
+            for field_, item, columns, what, value in (  # a 400-digit number: the row that holds it, not "got list"
+                    ("boxes", "box", 7, "cx, cy, yaw, hx, hy, z0, z1", boxes),
+                    ("cylinders", "cylinder", 5, "cx, cy, r, z0, z1", cylinders),
+                    ("glass", "glass panel", 4, "x1, y1, x2, y2 (m)", d.get("glass", []))):
+                _overflow_row(value, field_, item, columns, what)
             if len(boxes) == 0 and len(cylinders) == 0:  # `{}` or `{"walls": []}`: compare scored every extractor
                 raise LmsbenchError(f"{path}: not a world.json: it holds no walls, circles or boxes, nothing to "
                                     "scan or score against")  # against no face (F1 0), slam ran, exit 0
@@ -304,6 +309,18 @@ class World:
             dc = np.hypot(p[:, None, 0] - c[:, 0], p[:, None, 1] - c[:, 1]) - c[:, 2]
             d = np.minimum(d, dc.min(axis=1))
         return d
+
+
+def _overflow_row(value: object, field: str, item: str, columns: int, what: str) -> None:
+    """ValueError naming the row (``json_rows``'s) when the world.json list ``value`` holds a whole
+    number too large for a float (World's own check said "boxes: must be a (k, 7) array of real
+    numbers ..., got list", naming no row); anything else is left to World's checks."""
+    try:
+        np.asarray(value, dtype=float)
+    except OverflowError:
+        json_rows(value, field, item, columns, what)
+    except (ValueError, TypeError):
+        pass
 
 
 def _rows_of(value: object, name: str, columns: int, what: str) -> np.ndarray:

@@ -1133,6 +1133,40 @@ def test_a_world_json_number_too_large_for_a_float_is_one_line_naming_the_field_
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("field, rows, row, must", [
+    ("boxes", [[0, 0, 0, 1, 1, 0, 1], [0, 0, 0, 1, 1, 0, "BIG"]], "box 1 is [0, 0, 0, 1, 1, 0, 999",
+     "a box must be a list of 7 numbers cx, cy, yaw, hx, hy, z0, z1"),
+    ("cylinders", [["BIG", 0, 0.2, 0, 2]], "cylinder 0 is [999",
+     "a cylinder must be a list of 5 numbers cx, cy, r, z0, z1"),
+    ("glass", [[0, 0, 1, 1], [0, 0, 1, "BIG"]], "glass panel 1 is [0, 0, 1, 999",
+     "a glass panel must be a list of 4 numbers x1, y1, x2, y2 (m)"),
+])
+def test_a_world_json_solid_too_large_for_a_float_names_the_row(sim_folder, tmp_path, capsys, field, rows, row, must):
+    """A 400-digit number in a world.json's boxes, cylinders or glass given to simulate or compare
+    was World's "boxes: must be a (k, 7) array of real numbers (...), got list" (before that an
+    internal "OverflowError: int too large to convert to float"), naming no row; now json_rows's
+    message, as the walls', naming field and row."""
+    from experiments.cli import main
+
+    big = int("9" * 400)
+    world = {"walls": [], "boxes": [[2, 0, 0, 0.1, 3, 0, 2], [-2, 0, 0, 0.1, 3, 0, 2]], "cylinders": []}
+    world[field] = [[big if v == "BIG" else v for v in r] for r in rows]
+    import shutil
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    path = run / "world.json"
+    path.write_text(json.dumps(world))
+    for command in (["simulate", "--world", str(path), "--duration", "1", "--quiet"],
+                    ["compare", str(run), "--no-progress"]):
+        assert main([*command, "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and re.fullmatch(
+            re.escape(f"lmsbench {command[0]}: error: {path}: not a world.json ({field}: {row}") + r"9*\.\.\.[0-9, .]*\] "
+            r"\(4\d\d characters\), " + re.escape(f"holding a number too large for a float: {must})"), err[0]), err
+        assert not (tmp_path / "o").exists()
+
+
 def test_world_json_route_nodes_read_as_walls_are_flat_or_rows(tmp_path):
     """docs/simulator.md: route_nodes, as walls, may be a flat list read two at a time; it was refused
     ("route_nodes: must be a (k, 2) array (x, y), got shape (4,)"), and a bad route row's message bore
