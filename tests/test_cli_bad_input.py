@@ -231,6 +231,12 @@ CASES = [
     (["simulate", "--duration", "1e9", "--out", O], "--duration"),
     (["simulate", "--seed", "-1", "--out", O], "--seed"),
     (["simulate", "--seed", "1.5", "--out", O], "--seed"),
+    # a whole number of 400 digits was a traceback (OverflowError in the bound check) in every integer option
+    (["simulate", "--seed", "9" * 400, "--out", O], "argument --seed: must be a whole number >= 0 and <= 4294967295, "
+     "got '" + "9" * 40 + "...99999999' (400 characters) (too large for a float)"),
+    (["compare", "office:0", "--max-scans", "9" * 400, "--out", O], "argument --max-scans: must be a whole number >= 1, "
+     "got '" + "9" * 40 + "...99999999' (400 characters) (too large for a float)"),
+    (["slam", "{good.clf}", "--every", "9" * 400, "--out", O], "argument --every/--stride: must be a whole number >= 1"),
     (["simulate", "--rate-hz", "-3", "--out", O], "--rate-hz"),
     (["simulate", "--rate-hz", "0", "--out", O], "--rate-hz"),
     (["simulate", "--rate-hz", "nan", "--out", O], "--rate-hz"),
