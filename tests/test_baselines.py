@@ -417,14 +417,28 @@ def test_iepf_splits_a_closed_ring_whose_last_beam_repeats_its_first() -> None:
     ("hough", "band_coarse", 1e300, r"must be a width in \[0.0001, 1\] m"),
     ("hough", "band_fine", 1e-300, r"must be a width in \[0.0001, 1\] m"),
     ("ransac", "inlier_band", 1e-300, r"must be a width in \[0.0001, 1\] m"),
-    ("sensor", "ad_tau", 1e-300, r"must be a finite number >= 1 std"),
-    ("sensor", "ad_tau", 0.0, r"must be a finite number >= 1 std"),
-    ("sensor", "inlier_tau", 0.5, r"must be a finite number >= 1 std"),
-    ("sensor", "inlier_tau", 0.0, r"must be a finite number >= 1 std"),
-    ("sensor", "max_chi2", 0.1, r"must be a finite number >= 1 std\^2"),
-    ("sensor", "max_chi2", 0.0, r"must be a finite number >= 1 std\^2"),
-    ("sensor", "curvature_tau", 1e-300, r"must be a finite number >= 1 std"),
-    ("sensor", "curvature_tau", 0.0, r"must be a finite number >= 1 std"),
+    ("sensor", "ad_tau", 1e-300, r"must be a number in \[1, 100\] std"),
+    ("sensor", "ad_tau", 0.0, r"must be a number in \[1, 100\] std"),
+    ("sensor", "inlier_tau", 0.5, r"must be a number in \[1, 100\] std"),
+    ("sensor", "inlier_tau", 0.0, r"must be a number in \[1, 100\] std"),
+    ("sensor", "max_chi2", 0.1, r"must be a number in \[1, 10000\] std\^2"),
+    ("sensor", "max_chi2", 0.0, r"must be a number in \[1, 10000\] std\^2"),
+    ("sensor", "curvature_tau", 1e-300, r"must be a number in \[1, 100\] std"),
+    ("sensor", "curvature_tau", 0.0, r"must be a number in \[1, 100\] std"),
+    # the fuzz round's second pass: each ran and exited 0 with no line, no corner or a test that passed anything
+    ("sensor", "min_points", 1e300, r"must be a number in \[3, 16384\] beams"),  # no line
+    ("sensor", "inlier_tau", 1e300, r"must be a number in \[1, 100\] std"),  # office line F1 0.77
+    ("sensor", "max_chi2", 1e300, r"must be a number in \[1, 10000\] std\^2"),
+    ("sensor", "merge_tau", 1e300, r"must be a number in \[0, 100\] std"),  # F1 0.62, no corner
+    ("sensor", "psi_split", 1e300, r"must be a number in \[0, 3.14159\] rad"),
+    ("sensor", "band_min", 1e300, r"must be an angle in \(0, 1.5708\] rad"),
+    ("sensor", "corner_psi", 1e300, r"must be a number in \[0, 1\] \(a share of the turn\)"),  # no corner
+    ("sensor", "corner_max_dist", 1e300, r"must be a width in \[0.0001, 1\] m"),  # 2 m: 42 corners for 22
+    ("sensor", "acute_min_var", 1e300, r"must be a number in \[0, 10000\] sigma_r\^2"),  # no corner
+    ("split_merge", "breakpoint_lambda", 1e-300, r"must be an angle in \[0.0174533, 1.5708\] rad \(1 to 90 deg\)"),
+    ("hough", "breakpoint_lambda", 0.01, r"must be an angle in \[0.0174533, 1.5708\] rad \(1 to 90 deg\)"),  # no line
+    ("split_merge", "runs_z", 1e-300, r"must be 0 \(off\) or a number in \[1, 100\] std"),  # F1 0.77
+    ("ransac", "runs_z", 0.5, r"must be 0 \(off\) or a number in \[1, 100\] std"),  # F1 0.85
 ])
 def test_extractor_configs_refuse_values_that_can_never_give_a_line(method, field, value, message):
     from features.errors import ConfigError
