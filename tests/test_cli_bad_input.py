@@ -262,6 +262,11 @@ CASES = [
     (["simulate", "--out", "{a_file}"], "not a folder"),
     (["simulate", "--resolution", "2", "--out", O], "--resolution"),
     (["simulate", "--clutter", "1e9", "--out", O], "--clutter"),
+    # one interval for both ends: -1 said "must be a finite number >= 0", 1e9 "must be at most 10"
+    (["simulate", "--clutter", "-1", "--out", O], "argument --clutter: must be a finite number >= 0 and <= 10 (10x a "
+     "furnished office at most), got '-1'"),
+    (["simulate", "--clutter", "10.5", "--out", O], "argument --clutter: must be a finite number >= 0 and <= 10 (10x a "
+     "furnished office at most), got '10.5'"),
     (["simulate", "--sensor", "{sensor_text.yaml}", "--out", O], "mixed_gap: must be a number"),
     (["simulate", "--sensor", "{sensor_flag.yaml}", "--out", O], "quantise: must be true or false"),
     (["simulate", "--sensor", "{sensor_dup.yaml}", "--out", O], "key 'noise_sigma' given twice"),
@@ -1610,3 +1615,11 @@ def test_yaml_files_not_utf8_past_the_head_are_one_line(tmp_path, capsys):
         assert capsys.readouterr().err == (f"lmsbench {argv[0]}: error: {tmp_path / name}: not text (byte {byte} is not "
                                            f"UTF-8), not {what}\n"), argv
     assert not Path(out).exists()
+
+
+def test_the_clutter_options_bound_is_the_simulators():
+    """simulate --clutter's argparse bound is sim.worlds.MAX_CLUTTER (kept apart: sim loads pybullet)."""
+    from experiments.commands.simulate import CLUTTER_MAX
+    from sim.worlds import MAX_CLUTTER
+
+    assert CLUTTER_MAX == MAX_CLUTTER
