@@ -1167,6 +1167,26 @@ def test_a_world_json_solid_too_large_for_a_float_names_the_row(sim_folder, tmp_
         assert not (tmp_path / "o").exists()
 
 
+def test_a_world_json_scan_height_too_large_or_a_name_too_long_is_refused(tmp_path):
+    """scan_height of 400 digits was "not a world.json (OverflowError: int too large to convert to
+    float)"; a name of 100,000 characters was taken and simulate drew it as map.png's title for over
+    a minute (30,000: 18 s), the image and its memory growing with it."""
+    from lms200 import LmsbenchError
+    from sim.world import MAX_NAME_CHARS, World
+
+    boxes = [[2, 0, 0, 0.1, 3, 0, 2], [-2, 0, 0, 0.1, 3, 0, 2]]
+    path = tmp_path / "world.json"
+    for extra, said in (({"scan_height": int("9" * 400)}, "scan_height: must be a finite height >= 0 m, got "
+                         + "9" * 40 + "...99999999 (400 characters)"),
+                        ({"name": "x" * 100_000}, "name: at most 255 characters (a title, as a file name), got '"
+                         + "x" * 39 + "...xxxxxxx' (100002 characters)")):
+        path.write_text(json.dumps({"boxes": boxes, **extra}))
+        with pytest.raises(LmsbenchError, match="^" + re.escape(f"{path}: not a world.json ({said})") + "$"):
+            World.from_json(path)
+    path.write_text(json.dumps({"boxes": boxes, "name": "x" * MAX_NAME_CHARS}))
+    assert World.from_json(path).name == "x" * 255
+
+
 def test_world_json_route_nodes_read_as_walls_are_flat_or_rows(tmp_path):
     """docs/simulator.md: route_nodes, as walls, may be a flat list read two at a time; it was refused
     ("route_nodes: must be a (k, 2) array (x, y), got shape (4,)"), and a bad route row's message bore
