@@ -11,7 +11,7 @@ from typing import Any, cast
 import numpy as np
 
 from lms200 import LmsbenchError
-from lms200.finite import float_of
+from lms200.finite import float_of, shown
 
 
 class SlamConfigError(LmsbenchError, ValueError):
@@ -558,9 +558,12 @@ class SlamConfig:
                                   f"between beams (0: the LMS200's timing), got {al.beam_time_increment}")
         if al.normal_step < 1:  # 0: an empty chord, an internal error on the first scan
             raise SlamConfigError(f"alignment.normal_step: must be >= 1 beam, got {al.normal_step}")
+        if len(al.heading_hypotheses) > MAX_HEADING_HYPOTHESES:  # 200,000 were taken: each retry scores them all
+            raise SlamConfigError(f"alignment.heading_hypotheses: at most {MAX_HEADING_HYPOTHESES} offsets (one a degree "
+                                  f"of a whole turn; each is scored on every retry), got {len(al.heading_hypotheses):,}")
         if any(abs(h) > 2 * math.pi for h in al.heading_hypotheses):  # 1e300 overflowed; a half turn may read 3.1416
             raise SlamConfigError(f"alignment.heading_hypotheses: offsets must be within +-2 pi rad, "
-                                  f"got {list(al.heading_hypotheses)!r}")
+                                  f"got {shown(list(al.heading_hypotheses))}")
         voxel = self.keyframes.voxel
         if not (voxel == 0 or MIN_VOXEL_M <= voxel <= MAX_VOXEL_M):  # 1e-12: the cell grid's size overflowed
             raise SlamConfigError(f"keyframes.voxel: must be 0 (no thinning) or in [{MIN_VOXEL_M:g}, {MAX_VOXEL_M:g}] m, "
@@ -604,7 +607,8 @@ class SlamConfig:
         if o.point_stride < 1 or pa.min_points < 1:
             raise SlamConfigError("observations.point_stride and prealign.min_points: must be >= 1")
         if len(m.odom_noise) != 3:
-            raise SlamConfigError(f"motion.odom_noise: must be 3 numbers (x, y, theta), got {list(m.odom_noise)!r}")
+            raise SlamConfigError(f"motion.odom_noise: must be 3 numbers (x, y, theta), got {len(m.odom_noise):,}: "
+                                  f"{shown(list(m.odom_noise))}")  # 200,000 numbers were echoed whole, a 1 MB line
         noise = cast(tuple[float, float, float], tuple(float(v) for v in m.odom_noise))
         if not all(v <= MAX_ODOM_NOISE for v in noise):  # (>= 0 checked above) 1e300: the std's square overflowed
             raise SlamConfigError(f"motion.odom_noise: must be factors of at most {MAX_ODOM_NOISE:g} (m/m, rad/rad, "
@@ -723,6 +727,7 @@ MIN_HUBER_M = 1e-6  # m: alignment.huber (1e-30 and below: gtsam's indeterminate
 #: alignment.covariance_inflation: 1e4 and more left a 120 s office run 2.5-3.5 m off (0.007 m at 1 to 1000)
 MIN_COVARIANCE_INFLATION, MAX_COVARIANCE_INFLATION = 0.01, 100.0
 MAX_BEAM_TIME_INCREMENT_S = 0.01  # s between beams: a 1081-beam scan would take 10.8 s
+MAX_HEADING_HYPOTHESES = 360  # alignment.heading_hypotheses: one a degree of a whole turn (the default 9)
 MAX_ICP_ITERATIONS = 1000  # alignment.max_iterations / fine_iterations (defaults 10 / 5)
 MAX_SIGMA_FLOOR = 1e3  # m and rad: a floor this wide leaves no motion model
 MAX_SIGMA_MOTION = 1e3  # m/s^2 and rad/s^2: the constant-velocity model's widest acceleration std
@@ -932,7 +937,7 @@ def _checked_fields(section: Any, name: str) -> Any:
                 raise SlamConfigError(f"{where}: must be a list of numbers, got {value!r}")
             numbers = tuple(_finite_number(where, v) for v in value)
             if f.name not in SIGNED_TUPLES and any(v < 0 for v in numbers):
-                raise SlamConfigError(f"{where}: must hold numbers >= 0, got {list(value)!r}")
+                raise SlamConfigError(f"{where}: must hold numbers >= 0, got {shown(list(value))}")
             changes[f.name] = numbers
     return dataclasses.replace(section, **changes)
 

@@ -1328,6 +1328,24 @@ def test_every_slam_number_has_one_stated_interval() -> None:
     assert SlamConfig(landmarks={"confirm_hits": 1000, "tentative_window": 999}).landmarks.confirm_hits == 1000
 
 
+def test_slam_lists_are_bounded_and_echoed_short() -> None:
+    """alignment.heading_hypotheses of 200,000 offsets were taken (each retry scores every one), and
+    a motion.odom_noise of 200,000 numbers was refused with all of them echoed, a 1 MB line."""
+    from slam import SlamConfig, SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=r"^alignment.heading_hypotheses: at most 360 offsets \(one a degree of a "
+                                              r"whole turn; each is scored on every retry\), got 200,000$"):
+        SlamConfig(alignment={"heading_hypotheses": [0.1] * 200_000})
+    assert len(SlamConfig(alignment={"heading_hypotheses": [0.1] * 360}).alignment.heading_hypotheses) == 360
+    with pytest.raises(SlamConfigError) as info:
+        SlamConfig(motion={"odom_noise": [0.1] * 200_000})
+    assert str(info.value) == ("motion.odom_noise: must be 3 numbers (x, y, theta), got 200,000: "
+                               "[0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1,....1, 0.1] (1000000 characters)")
+    with pytest.raises(SlamConfigError) as info:
+        SlamConfig(motion={"odom_noise": [-0.1] * 1000})
+    assert str(info.value).startswith("motion.odom_noise: must hold numbers >= 0, got [-0.1, ") and len(str(info.value)) < 200
+
+
 def test_slam_prior_sigma_and_icp_iterations_are_bounded_when_built() -> None:
     """loop_closure.prior_sigma=1e-300 ran into gtsam's 'Indeterminate linear system'; alignment.
     max_iterations / fine_iterations = 1e300 failed in numba's typing of the compiled ICP."""
