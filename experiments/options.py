@@ -260,8 +260,11 @@ def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = 
             value = plain_number(text, integer)
         except ValueError:
             raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}") from None
-        bad = not math.isfinite(value) or (lo is not None and (value <= lo if lo_open else value < lo)) \
-            or (hi is not None and value > hi)
+        try:
+            bad = not math.isfinite(value) or (lo is not None and (value <= lo if lo_open else value < lo)) \
+                or (hi is not None and value > hi)
+        except OverflowError:  # a whole number of 400 digits: --seed, --stride, --max-scans were a traceback
+            raise argparse.ArgumentTypeError(f"must be {what}, got {text!r} (too large for a float)") from None
         if bad:
             raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}")
         return value

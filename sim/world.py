@@ -33,6 +33,9 @@ MAX_SOLIDS = 5_000
 MAX_ROUTE_NODES = 2_000
 MAX_WORLD_JSON_BYTES = 32 << 20  # a world.json read at most (the mit world's is 0.54 MB): refused unread
 #: the keys of a world.json (``World.to_dict``); any other, or one given twice, is refused (:func:`world_json_content`)
+#: longest world name (a file name's 255 bytes): simulate draws it as map.png's title, and a world.json
+#: named with 100,000 characters ran over a minute in matplotlib, its image (and memory) growing with it
+MAX_NAME_CHARS = 255
 WORLD_JSON_KEYS = ("name", "seed", "scan_height", "walls", "circles", "corners", "boxes", "cylinders", "route_nodes",
                    "route_edges", "route_targets", "glass")
 
@@ -146,6 +149,8 @@ class World:
     def __post_init__(self) -> None:
         if not isinstance(self.name, str):
             raise InputError(f"name: must be text, got {type(self.name).__name__} {self.name!r}")
+        if len(self.name) > MAX_NAME_CHARS:  # map.png's title: 100,000 characters drew for minutes, growing
+            raise InputError(f"name: at most {MAX_NAME_CHARS} characters (a title, as a file name), got {shown(self.name)}")
         check_seed(self.seed)
         self.boxes = _rows_of(self.boxes, "boxes", 7, "cx, cy, yaw, hx, hy, z0, z1")
         self.cylinders = _rows_of(self.cylinders, "cylinders", 5, "cx, cy, r, z0, z1")
@@ -246,7 +251,11 @@ class World:
         except (ValueError, TypeError, UnicodeDecodeError) as exc:
             raise LmsbenchError(f"{path}: not a world.json ({exc})") from None
         try:
-            h = float(d.get("scan_height", SCAN_HEIGHT_M))
+            h = d.get("scan_height", SCAN_HEIGHT_M)
+            try:
+                h = float(h)
+            except OverflowError:  # 400 digits: "not a world.json (OverflowError: int too large to convert to float)"
+                raise ValueError(f"scan_height: must be a finite height >= 0 m, got {shown(h)}") from None
             walls_only = "boxes" not in d
             if walls_only:
                 walls = orient_walls(walls, np.vstack([circles[:, :2], route]))
@@ -254,6 +263,11 @@ class World:
                 cylinders = np.array([[cx, cy, r, 0.0, 2.0] for cx, cy, r in circles], dtype=float).reshape(-1, 5)
             else:
                 boxes, cylinders = d["boxes"], d.get("cylinders", [])
+            for field_, item, columns, what, value in (  # a 400-digit number: the row that holds it, not "got list"
+                    ("boxes", "box", 7, "cx, cy, yaw, hx, hy, z0, z1", boxes),
+                    ("cylinders", "cylinder", 5, "cx, cy, r, z0, z1", cylinders),
+                    ("glass", "glass panel", 4, "x1, y1, x2, y2 (m)", d.get("glass", []))):
+                _overflow_row(value, field_, item, columns, what)
             if len(boxes) == 0 and len(cylinders) == 0:  # `{}` or `{"walls": []}`: compare scored every extractor
                 raise LmsbenchError(f"{path}: not a world.json: it holds no walls, circles or boxes, nothing to "
                                     "scan or score against")  # against no face (F1 0), slam ran, exit 0
@@ -304,6 +318,18 @@ class World:
             dc = np.hypot(p[:, None, 0] - c[:, 0], p[:, None, 1] - c[:, 1]) - c[:, 2]
             d = np.minimum(d, dc.min(axis=1))
         return d
+
+
+def _overflow_row(value: object, field: str, item: str, columns: int, what: str) -> None:
+    """ValueError naming the row (``json_rows``'s) when the world.json list ``value`` holds a whole
+    number too large for a float (World's own check said "boxes: must be a (k, 7) array of real
+    numbers ..., got list", naming no row); anything else is left to World's checks."""
+    try:
+        np.asarray(value, dtype=float)
+    except OverflowError:
+        json_rows(value, field, item, columns, what)
+    except (ValueError, TypeError):
+        pass
 
 
 def _rows_of(value: object, name: str, columns: int, what: str) -> np.ndarray:

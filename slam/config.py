@@ -11,7 +11,7 @@ from typing import Any, cast
 import numpy as np
 
 from lms200 import LmsbenchError
-from lms200.finite import float_of
+from lms200.finite import float_of, shown
 
 
 class SlamConfigError(LmsbenchError, ValueError):
@@ -579,9 +579,12 @@ class SlamConfig:
                                   f"between beams (0: the LMS200's timing), got {al.beam_time_increment}")
         if al.normal_step < 1:  # 0: an empty chord, an internal error on the first scan
             raise SlamConfigError(f"alignment.normal_step: must be >= 1 beam, got {al.normal_step}")
+        if len(al.heading_hypotheses) > MAX_HEADING_HYPOTHESES:  # 200,000 were taken: each retry scores them all
+            raise SlamConfigError(f"alignment.heading_hypotheses: at most {MAX_HEADING_HYPOTHESES} offsets (one a degree "
+                                  f"of a whole turn; each is scored on every retry), got {len(al.heading_hypotheses):,}")
         if any(abs(h) > 2 * math.pi for h in al.heading_hypotheses):  # 1e300 overflowed; a half turn may read 3.1416
             raise SlamConfigError(f"alignment.heading_hypotheses: offsets must be within +-2 pi rad, "
-                                  f"got {list(al.heading_hypotheses)!r}")
+                                  f"got {shown(list(al.heading_hypotheses))}")
         voxel = self.keyframes.voxel
         if not (voxel == 0 or MIN_VOXEL_M <= voxel <= MAX_VOXEL_M):  # 1e-12: the cell grid's size overflowed
             raise SlamConfigError(f"keyframes.voxel: must be 0 (no thinning) or in [{MIN_VOXEL_M:g}, {MAX_VOXEL_M:g}] m, "
@@ -606,19 +609,6 @@ class SlamConfig:
                           ("observations", "sigma_corner"), ("prealign", "sigma_xy"), ("prealign", "sigma_phi")):
             if not getattr(getattr(self, sec), name) > 0:
                 raise SlamConfigError(f"{sec}.{name}: must be > 0, got {getattr(getattr(self, sec), name)}")
-        for name, lo, hi, unit in (("sigma_floor_xy", MIN_SIGMA_FLOOR, MAX_SIGMA_FLOOR, "m"),
-                                   ("sigma_floor_theta", MIN_SIGMA_FLOOR, MAX_SIGMA_FLOOR, "rad"),
-                                   ("sigma_accel", 0.0, MAX_SIGMA_MOTION, "m/s^2"),
-                                   ("sigma_alpha", 0.0, MAX_SIGMA_MOTION, "rad/s^2")):
-            # the accelerations any number > 0 (0 was refused as "must be > 0" while this said [0, 1000]): a
-            # tiny one is the default pipeline's floor-only prediction (1e-300: the default's ATE), and in the
-            # paper preset a rigid constant-velocity model whose ATE grows smoothly as it shrinks (0.1: 0.16 m,
-            # 0.01: 1.1 m, 1e-300: 1.4 m on a 40 s office run): no bound tells a mistake from a choice there
-            value = getattr(m, name)
-            if not (lo < value <= hi if lo == 0.0 else lo <= value <= hi):
-                interval = f"({lo:g}, {hi:g}]" if lo == 0.0 else f"[{lo:g}, {hi:g}]"
-                raise SlamConfigError(f"motion.{name}: must be in {interval} {unit} (the prediction's std and "
-                                      f"its inverse square stay finite), got {value}")
         for sec, name, unit in NOISE_SIGMAS:  # 1e300 overflowed its square, 1e-300 its inverse square (internal errors)
             value = getattr(getattr(self, sec), name)
             if not MIN_NOISE_SIGMA <= value <= MAX_NOISE_SIGMA:
@@ -635,12 +625,15 @@ class SlamConfig:
             raise SlamConfigError(f"loop_closure.gate_probability: must be in (0, 1), got {self.loop_closure.gate_probability}")
         if a.new_landmark_probability < a.gate_probability:
             raise SlamConfigError("association.new_landmark_probability: must be >= gate_probability")
-        if lm.confirm_hits < 1 or lm.tentative_window < 1:
-            raise SlamConfigError("landmarks.confirm_hits and landmarks.tentative_window: must be >= 1")
+        if lm.confirm_hits > lm.tentative_window + 1:  # 7 of a window of 6 confirmed no landmark: an empty map
+            raise SlamConfigError(f"landmarks.confirm_hits: must be at most tentative_window + 1 "
+                                  f"({lm.tentative_window + 1}, the sightings a landmark can have before it is "
+                                  f"pruned), got {lm.confirm_hits}")
         if o.point_stride < 1 or pa.min_points < 1:
             raise SlamConfigError("observations.point_stride and prealign.min_points: must be >= 1")
         if len(m.odom_noise) != 3:
-            raise SlamConfigError(f"motion.odom_noise: must be 3 numbers (x, y, theta), got {list(m.odom_noise)!r}")
+            raise SlamConfigError(f"motion.odom_noise: must be 3 numbers (x, y, theta), got {len(m.odom_noise):,}: "
+                                  f"{shown(list(m.odom_noise))}")  # 200,000 numbers were echoed whole, a 1 MB line
         noise = cast(tuple[float, float, float], tuple(float(v) for v in m.odom_noise))
         if not all(v <= MAX_ODOM_NOISE for v in noise):  # (>= 0 checked above) 1e300: the std's square overflowed
             raise SlamConfigError(f"motion.odom_noise: must be factors of at most {MAX_ODOM_NOISE:g} (m/m, rad/rad, "
@@ -759,9 +752,13 @@ MIN_HUBER_M = 1e-6  # m: alignment.huber (1e-30 and below: gtsam's indeterminate
 #: alignment.covariance_inflation: 1e4 and more left a 120 s office run 2.5-3.5 m off (0.007 m at 1 to 1000)
 MIN_COVARIANCE_INFLATION, MAX_COVARIANCE_INFLATION = 0.01, 100.0
 MAX_BEAM_TIME_INCREMENT_S = 0.01  # s between beams: a 1081-beam scan would take 10.8 s
+MAX_HEADING_HYPOTHESES = 360  # alignment.heading_hypotheses: one a degree of a whole turn (the default 9)
 MAX_ICP_ITERATIONS = 1000  # alignment.max_iterations / fine_iterations (defaults 10 / 5)
 MAX_SIGMA_FLOOR = 1e3  # m and rad: a floor this wide leaves no motion model
 MAX_SIGMA_MOTION = 1e3  # m/s^2 and rad/s^2: the constant-velocity model's widest acceleration std
+#: m/s^2 and rad/s^2: its narrowest, a rigid constant velocity (1e-300 was 0 in all but name: the
+#: default pipeline's floor-only prediction, the paper preset's rigid model; 1e-3 is both already)
+MIN_SIGMA_MOTION = 1e-3
 MAX_ODOM_NOISE = 10.0  # m/m, rad/rad, rad/m: ten times the motion itself, as the simulator's odometry alphas (sim.records)
 MAX_SEARCH_SIGMAS = 10.0  # std: the window's half-width is search_sigmas std, its prior that width / search_sigmas
 MAX_SEARCH_CANDIDATES = 32  # distinct poses refined per searched step (each an ICP run; the default 4)
@@ -774,6 +771,146 @@ MAX_MATCH_RANGE_M = 1e4  # alignment.max_range: at most 10 km (as the command li
 MIN_VOXEL_M, MAX_VOXEL_M = 1e-3, 10.0  # keyframes.voxel: a local map's cells (m), when thinned
 MIN_MAX_GAP_S = 0.01  # s: motion.max_gap; the LMS200 scans at most 75 times a second, a Hokuyo 40
 MIN_MAX_DT_S = 1e-3  # s: finest prediction step of the paper preset (a 10 s gap: at most 10,000 steps)
+PI = math.pi
+#: every numeric scalar field's accepted interval, checked when the config is built (SlamConfigError
+#: "section.field: must be in [lo, hi] unit (why), got V", the same interval for a negative value as
+#: for any other): (low, high, unit, low_open, why). Each is a physical bound, wide around the
+#: default; beyond them a run did no useful work and ended exit 0 with at most a "not healthy"
+#: warning (alignment.stride 1e12 matched one point a scan, damping 1e300 never moved a pose,
+#: motion.sigma_accel 1e-300 was 0 in all but name). Fields missing here are checked by their own
+#: rule in SlamConfig (the search window's, which depend on one another).
+FieldRange = tuple[float, float, str, bool, str]
+NOISE_WHY = "a std whose square and inverse square stay finite"
+FIELD_RANGES: dict[str, FieldRange] = {
+    # alignment (the default pipeline's ICP)
+    # 30 keeps 13 points of a 361-beam scan, and a 10 s office run stayed healthy; 40 left 40 % of its steps
+    # unmatched, 60 and more (1e12) every one
+    "alignment.stride": (1, 30, "beams", False, "a 361-beam scan keeps 13 points at 30"),
+    "alignment.max_range": (MIN_MATCH_RANGE_M, MAX_MATCH_RANGE_M, "m", False, ""),
+    "alignment.max_correspondence": (MIN_REACH_M, SEARCH_CELL_M, "m", False, "the LMS200's range quantum to the cell "
+                                     "of the scan matcher's search grid"),
+    "alignment.fine_correspondence": (MIN_REACH_M, SEARCH_CELL_M, "m", False, "the LMS200's range quantum to the cell "
+                                      "of the scan matcher's search grid"),
+    "alignment.huber": (MIN_HUBER_M, 1.0, "m", False, "a residual's scale: below it every point's weight vanishes; "
+                        "beyond the 0.5 m reach every residual is quadratic alike"),
+    "alignment.max_iterations": (1, MAX_ICP_ITERATIONS, "Gauss-Newton steps", False, ""),
+    "alignment.fine_iterations": (0, MAX_ICP_ITERATIONS, "Gauss-Newton steps", False, ""),
+    "alignment.tolerance_xy": (0, 0.1, "m", False, "a step below it ends a stage: 0.1 m, a fifth of the reach"),
+    "alignment.tolerance_theta": (0, 0.1, "rad", False, "a step below it ends a stage"),
+    "alignment.damping": (0, 1, "of the Hessian's mean eigenvalue", False, "1e300 held every pose at its prediction"),
+    "alignment.inlier_distance": (MIN_REACH_M, 1.0, "m", False, "a shorter one pairs no point"),
+    "alignment.sigma_point": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "m", False, NOISE_WHY),
+    "alignment.covariance_inflation": (MIN_COVARIANCE_INFLATION, MAX_COVARIANCE_INFLATION, "", False,
+                                       "a factor on the match's covariance; 1, the default, is none"),
+    "alignment.retry_inliers": (0, 1, "", False, "a share of points"),
+    "alignment.refine_hypotheses": (0, 100, "", False, "retry starts refined, each an ICP run"),
+    "alignment.hypothesis_margin": (0, 1, "", False, "a share of points"),
+    "alignment.min_inliers": (0, 1, "", False, "a share of points"),
+    "alignment.normal_step": (1, 100, "beams", False, ""),
+    "alignment.normal_gap": (MIN_REACH_M, 10, "m", False, ""),
+    "alignment.normal_gap_per_range": (0, 1, "m per m of range", False, ""),
+    "alignment.beam_time_increment": (0, MAX_BEAM_TIME_INCREMENT_S, "s between beams", False,
+                                      "0: the LMS200's timing"),
+    "alignment.normal_agreement": (0, PI, "rad", True, "pi: no normal check"),
+    "alignment.search_points": (1, 16384, "points", False, "the most beams of a scan the extractors take"),
+    "alignment.max_turn_rate": (0.01, 100, "rad/s", False, "beyond 100 the whole turn is searched at any rate"),
+    # motion
+    "motion.sigma_accel": (MIN_SIGMA_MOTION, MAX_SIGMA_MOTION, "m/s^2", False,
+                           "the prediction's std and its inverse square stay finite"),
+    "motion.sigma_alpha": (MIN_SIGMA_MOTION, MAX_SIGMA_MOTION, "rad/s^2", False,
+                           "the prediction's std and its inverse square stay finite"),
+    "motion.sigma_floor_xy": (MIN_SIGMA_FLOOR, MAX_SIGMA_FLOOR, "m", False,
+                              "the prediction's std and its inverse square stay finite"),
+    "motion.sigma_floor_theta": (MIN_SIGMA_FLOOR, MAX_SIGMA_FLOOR, "rad", False,
+                                 "the prediction's std and its inverse square stay finite"),
+    "motion.jump_margin": (0, 1, "", False, "a share of points"),
+    "motion.sigma_lateral": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "m/s", False, NOISE_WHY),
+    "motion.max_dt": (MIN_MAX_DT_S, 3600, "s", False, "a gap is integrated in steps of at most max_dt"),
+    "motion.max_gap": (MIN_MAX_GAP_S, 1e6, "s", False, "100 scans/s, faster than any scanner's, to about 12 days: "
+                       "a shorter gap makes every step a gap"),
+    "motion.odom_max_turn_error": (0, PI, "rad", False, ""),
+    # observations
+    "observations.min_line_points": (0, 16384, "beams", False, "the most beams of a scan the extractors take"),
+    "observations.min_line_length": (0, 100, "m", False, ""),
+    "observations.sigma_rho": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "m", False, NOISE_WHY),
+    "observations.sigma_alpha_obs": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "rad", False, NOISE_WHY),
+    "observations.sigma_corner": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "m", False, NOISE_WHY),
+    "observations.point_stride": (1, 100, "beams", False, ""),
+    # association, landmarks (the paper preset)
+    "association.extent_margin": (0, 100, "m", False, ""),
+    "association.extent_sigmas": (0, 100, "std", False, ""),
+    "landmarks.confirm_hits": (1, 1000, "sightings", False, ""),
+    "landmarks.tentative_window": (1, 1000, "scans", False, ""),
+    # prealign (the paper preset)
+    "prealign.radius": (0.1, 1000, "m", False, ""),
+    "prealign.sigma_xy": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "m", False, NOISE_WHY),
+    "prealign.sigma_phi": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "rad", False, NOISE_WHY),
+    "prealign.min_fraction": (0, 1, "", False, "a share of line length"),
+    "prealign.xy_turn": (0, PI, "rad", False, ""),
+    "prealign.max_turn_rate": (0.01, 100, "rad/s", False, ""),
+    "prealign.turn_margin": (0, PI, "rad", False, ""),
+    "prealign.near_heading": (0, PI, "rad", False, ""),
+    "prealign.verify_tolerance": (MIN_REACH_M, 1, "m", False, ""),
+    "prealign.verify_margin": (0, 1, "", False, "a share of points"),
+    "prealign.turn_rate_widening": (0, 100, "", False, ""),
+    "prealign.min_map_line_length": (0, 100, "m", False, ""),
+    "prealign.point_min_score": (0, 1, "", False, "a share of points"),
+    "prealign.min_points": (1, 16384, "points", False, ""),
+    "prealign.scan_velocity_min_score": (0, 1, "", False, "a share of points"),
+    "prealign.scan_velocity_min_fraction": (0, 1, "", False, "a share of points"),
+    "prealign.scan_velocity_sigma": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "m", False, NOISE_WHY),
+    "prealign.scan_velocity_floor": (0, 100, "m/s", False, ""),
+    "prealign.scan_velocity_baseline": (0, 100, "s", False, ""),
+    # consistency
+    "consistency.nis_window": (1, 100_000, "scans", False, ""),
+    "consistency.nis_divergence": (1, 1e6, "per degree of freedom", False, "a consistent filter's is 1"),
+    "consistency.point_window": (1, 100_000, "scans", False, ""),
+    "consistency.point_min_score": (0, 1, "", False, "a share of points"),
+    "consistency.max_ambiguous": (0, 1, "", False, "a share of steps"),
+    "consistency.min_matched_fraction": (0, 1, "", False, "a share of steps"),
+    "consistency.max_odometry_doubt": (0, 1, "", False, "a share of steps"),
+    # keyframes (the default pipeline)
+    "keyframes.distance": (MIN_REACH_M, 100, "m", False, ""),
+    "keyframes.angle": (1e-3, PI, "rad", False, ""),
+    "keyframes.min_inliers": (0, 1, "", False, "a share of points"),
+    "keyframes.local_map": (1, 1000, "keyframes", False, "its points are matched at every scan"),
+    # loop closures (the default pipeline)
+    "loop_closure.every": (1, 1000, "keyframes", False, ""),
+    "loop_closure.search_radius": (0.1, 1000, "m", False, ""),
+    "loop_closure.search_growth": (0, 1, "m per m of path", False, ""),
+    "loop_closure.min_travel": (0, 1e5, "m", False, ""),
+    "loop_closure.candidates": (1, 100, "visits", False, ""),
+    "loop_closure.visit_gap": (0, 100_000, "keyframes", False, ""),
+    "loop_closure.submap": (0, 100, "keyframes", False, ""),
+    "loop_closure.min_inliers": (0, 1, "", False, "a share of points"),
+    "loop_closure.max_rms": (MIN_FIELD_SIGMA_M, 1, "m", False, ""),
+    "loop_closure.max_sigma_xy": (MIN_FIELD_SIGMA_M, 10, "m", False, ""),
+    "loop_closure.kernel_width": (0.01, 100, "std", False, ""),
+    "loop_closure.prior_sigma": (MIN_NOISE_SIGMA, MAX_PRIOR_SIGMA, "m and rad", False,
+                                 "a looser prior leaves the graph without an anchor"),
+    "loop_closure.drift_inflation": (1, 1e6, "", False, "a factor on the drift the closure gate allows"),
+}
+#: fields checked by their own rule in SlamConfig (``_check_search``: bounds that depend on one
+#: another, or each side with its reason); their negative values are left to that rule too
+OWN_RULE = frozenset({"alignment.search_sigmas", "alignment.search_step_theta", "alignment.search_resolution",
+                      "alignment.search_sigma", "alignment.fit_sigma", "alignment.search_step", "alignment.search_xy",
+                      "alignment.fit_margin", "alignment.ambiguity_sigmas", "alignment.search_candidates",
+                      "keyframes.voxel"})
+
+
+def field_range_text(where: str) -> str:
+    """``"must be in [lo, hi] unit (why)"`` for the field ``where`` of FIELD_RANGES."""
+    lo, hi, unit, lo_open, why = FIELD_RANGES[where]
+    interval = f"{'(' if lo_open else '['}{lo:g}, {'pi' if hi == PI else f'{hi:g}'}]"
+    return f"must be in {interval}{' ' + unit if unit else ''}{f' ({why})' if why else ''}"
+
+
+def in_range(where: str, value: float) -> bool:
+    """Whether ``value`` lies in the field ``where``'s interval (FIELD_RANGES)."""
+    lo, hi, _, lo_open, _ = FIELD_RANGES[where]
+    return (lo < value if lo_open else lo <= value) and value <= hi
+
+
 SECTIONS: dict[str, type] = {"motion": MotionConfig, "observations": ObservationConfig, "alignment": AlignmentConfig,
                              "keyframes": KeyframeConfig, "loop_closure": LoopClosureConfig,
                              "association": AssociationConfig, "landmarks": LandmarkConfig,
@@ -805,7 +942,9 @@ def _checked_fields(section: Any, name: str) -> Any:
                 raise SlamConfigError(f"{where}: must be a string, got {value!r}")
         elif kind in (int, float):
             number = _finite_number(where, value)
-            if number < 0:
+            if where in FIELD_RANGES and not in_range(where, number):  # the real interval, for -1 as for 1e300
+                raise SlamConfigError(f"{where}: {field_range_text(where)}, got {value!r}")
+            if number < 0 and where not in OWN_RULE:
                 raise SlamConfigError(f"{where}: must be >= 0, got {value!r}")
             if kind is int:
                 if number != int(number):
@@ -823,7 +962,7 @@ def _checked_fields(section: Any, name: str) -> Any:
                 raise SlamConfigError(f"{where}: must be a list of numbers, got {value!r}")
             numbers = tuple(_finite_number(where, v) for v in value)
             if f.name not in SIGNED_TUPLES and any(v < 0 for v in numbers):
-                raise SlamConfigError(f"{where}: must hold numbers >= 0, got {list(value)!r}")
+                raise SlamConfigError(f"{where}: must hold numbers >= 0, got {shown(list(value))}")
             changes[f.name] = numbers
     return dataclasses.replace(section, **changes)
 

@@ -200,10 +200,11 @@ def test_extract_method_that_is_not_a_name(method: object) -> None:
     assert "sensor" in str(info.value)
 
 
-@pytest.mark.parametrize("field", ["min_points", "merge_gap", "bridge_invalid", "corner_max_gap"])
+@pytest.mark.parametrize("field", ["merge_gap", "bridge_invalid", "corner_max_gap"])
 def test_sensor_beam_counts_beyond_any_scan(field: str) -> None:
     """1e300 beams was an OverflowError building the kernels' int64 record; it means the same as
-    any count above the scan's beams: min_points=1e300 finds no line, the gaps join every run."""
+    any count above the scan's beams: the gaps join every run. (min_points=1e300 found no line, exit
+    0: it is at most 16,384 beams now, tests/test_baselines.py.)"""
     from features import extract
 
     rng = np.random.default_rng(3)
@@ -1285,15 +1286,75 @@ def test_slam_noise_stds_are_bounded_when_built(section: str, field: str, value:
         assert getattr(getattr(SlamConfig(**{section: {field: ok}}), section), field) == ok
 
 
+def _slam_field(where: str, value: float) -> dict:
+    section, name = where.split(".")
+    return {section: {name: value}}
+
+
+def test_every_slam_number_has_one_stated_interval() -> None:
+    """Every numeric field of a SlamConfig section has its interval (slam.config.FIELD_RANGES, or its
+    own rule for the search window's): a value just outside either end is refused naming the field
+    and the same interval, a negative one too (motion.sigma_accel -1 said '>= 0' while 0 said
+    '(0, 1000]'), and both ends are taken. alignment.stride 1e12 or damping 1e300 ran a whole run
+    that matched no step, exit 0 with a warning; sigma_accel 1e-300 was taken."""
+    import dataclasses
+    import typing
+
+    from slam import SlamConfig, SlamConfigError
+    from slam.config import FIELD_RANGES, OWN_RULE, SECTIONS, field_range_text
+
+    numeric = {f"{name}.{f.name}" for name, cls in SECTIONS.items() for f in dataclasses.fields(cls)
+               if typing.get_type_hints(cls)[f.name] in (int, float) and not f.name.endswith("_probability")}
+    assert numeric == set(FIELD_RANGES) | OWN_RULE
+    assert field_range_text("motion.sigma_accel") == ("must be in [0.001, 1000] m/s^2 (the prediction's std and its "
+                                                      "inverse square stay finite)")
+    assert field_range_text("alignment.normal_agreement") == "must be in (0, pi] rad (pi: no normal check)"
+    for where, (lo, hi, _, lo_open, _) in FIELD_RANGES.items():
+        section, name = where.split(".")
+        for bad in {lo if lo_open else lo - max(abs(lo) * 0.5, 0.5), hi + max(hi * 0.5, 1), -1.0, 1e300}:
+            if bad == -1.0 and lo <= -1.0:
+                continue
+            if isinstance(getattr(SECTIONS[section](), name), int) and bad != 1e300:
+                bad = float(math.floor(bad)) if bad < lo else float(math.ceil(bad))
+            with pytest.raises(SlamConfigError, match="^" + re.escape(f"{where}: {field_range_text(where)}, got ")):
+                SlamConfig(**_slam_field(where, bad))
+        for ok in ((hi,) if lo_open else (lo, hi)):
+            values = _slam_field(where, ok)
+            if section == "landmarks":  # confirm_hits at most tentative_window + 1 (below)
+                values["landmarks"] = {"confirm_hits": 1, "tentative_window": 1000} | values["landmarks"]
+            assert getattr(getattr(SlamConfig(**values), section), name) == ok
+    with pytest.raises(SlamConfigError, match=r"^landmarks.confirm_hits: must be at most tentative_window \+ 1 \(7, "):
+        SlamConfig(landmarks={"confirm_hits": 8})  # no landmark could ever be confirmed: an empty map
+    assert SlamConfig(landmarks={"confirm_hits": 1000, "tentative_window": 999}).landmarks.confirm_hits == 1000
+
+
+def test_slam_lists_are_bounded_and_echoed_short() -> None:
+    """alignment.heading_hypotheses of 200,000 offsets were taken (each retry scores every one), and
+    a motion.odom_noise of 200,000 numbers was refused with all of them echoed, a 1 MB line."""
+    from slam import SlamConfig, SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=r"^alignment.heading_hypotheses: at most 360 offsets \(one a degree of a "
+                                              r"whole turn; each is scored on every retry\), got 200,000$"):
+        SlamConfig(alignment={"heading_hypotheses": [0.1] * 200_000})
+    assert len(SlamConfig(alignment={"heading_hypotheses": [0.1] * 360}).alignment.heading_hypotheses) == 360
+    with pytest.raises(SlamConfigError) as info:
+        SlamConfig(motion={"odom_noise": [0.1] * 200_000})
+    assert str(info.value) == ("motion.odom_noise: must be 3 numbers (x, y, theta), got 200,000: "
+                               "[0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1,....1, 0.1] (1000000 characters)")
+    with pytest.raises(SlamConfigError) as info:
+        SlamConfig(motion={"odom_noise": [-0.1] * 1000})
+    assert str(info.value).startswith("motion.odom_noise: must hold numbers >= 0, got [-0.1, ") and len(str(info.value)) < 200
+
+
 def test_slam_prior_sigma_and_icp_iterations_are_bounded_when_built() -> None:
     """loop_closure.prior_sigma=1e-300 ran into gtsam's 'Indeterminate linear system'; alignment.
     max_iterations / fine_iterations = 1e300 failed in numba's typing of the compiled ICP."""
     from slam import SlamConfig, SlamConfigError
 
-    with pytest.raises(SlamConfigError, match=r"^loop_closure.prior_sigma: must be in \[1e-06, 1000\]"):
+    with pytest.raises(SlamConfigError, match=r"^loop_closure.prior_sigma: must be in \[1e-06, 1\] m and rad"):
         SlamConfig(loop_closure={"prior_sigma": 1e-300})
     for field in ("max_iterations", "fine_iterations"):
-        with pytest.raises(SlamConfigError, match=rf"^alignment.{field}: must be at most 1000 Gauss-Newton steps, got \d+"):
+        with pytest.raises(SlamConfigError, match=rf"^alignment.{field}: must be in \[[01], 1000\] Gauss-Newton steps, got 1e\+300"):
             SlamConfig(alignment={field: 1e300})
         assert getattr(SlamConfig(alignment={field: 1000}).alignment, field) == 1000
 
@@ -1599,7 +1660,7 @@ def test_review_of_the_hunt_valid_inputs_it_had_refused(tmp_path) -> None:
 
 @pytest.mark.parametrize("value, message", [
     (dict(drift="chain"), r"^loop_closure.drift: must be 'marginals' or 'joint', got 'chain'$"),
-    (dict(drift_inflation=0.5), r"^loop_closure.drift_inflation: must be in \[1, 1e6\], got 0.5$"),
+    (dict(drift_inflation=0.5), r"^loop_closure.drift_inflation: must be in \[1, 1e\+06\] \(a factor on the drift the closure gate allows\), got 0.5$"),
     (dict(drift_inflation=float("nan")), r"^loop_closure.drift_inflation: must be finite, got nan$"),
 ])
 def test_slam_config_checks_the_closure_drift_gate(value: dict, message: str) -> None:

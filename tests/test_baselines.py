@@ -206,6 +206,20 @@ def test_runs_test_option_drops_lines_on_a_pillar(method):
         ("split_merge", {"split_sigmas": -1.0}, "split_sigmas"),
         ("split_merge", {"merge_sigmas": float("nan")}, "merge_sigmas"),
         ("split_merge", {"sigma_fit": 0.0}, "sigma_fit"),
+        # no floor or ceiling: 1e300 ran one line across every corner (office F1 0.78, exit 0), 1e-300
+        # was 0 (off) in all but name
+        ("split_merge", {"split_threshold": 1e300}, "split_threshold"),
+        ("split_merge", {"split_threshold": 1e-300}, "split_threshold"),
+        ("iepf", {"split_threshold": 1.5}, "split_threshold"),
+        ("split_merge", {"split_sigmas": 1e300}, "split_sigmas"),
+        ("split_merge", {"split_sigmas": 1e-300}, "split_sigmas"),
+        ("iepf", {"split_sigmas": 0.5}, "split_sigmas"),
+        ("split_merge", {"merge_sigmas": 1e300}, "merge_sigmas"),
+        ("iepf", {"merge_sigmas": 1e-300}, "merge_sigmas"),
+        ("split_merge", {"merge_sigmas": 101}, "merge_sigmas"),
+        ("split_merge", {"merge_rms": 1e300}, "merge_rms"),
+        ("iepf", {"merge_rms": float("inf")}, "merge_rms"),
+        ("split_merge", {"sigma_fit": 1e300}, "sigma_fit"),
         ("iepf", {"sigma_fit": float("inf")}, "sigma_fit"),
         ("iepf", {"breakpoint_lambda": 0}, "breakpoint_lambda"),
         ("iepf", {"breakpoint_lambda": 10.0}, "breakpoint_lambda"),
@@ -233,7 +247,8 @@ def test_bad_config_values_raise_naming_the_field(method: str, params: dict, fie
 @pytest.mark.parametrize(
     "params, field",
     [({"min_turn": np.pi}, "min_turn"), ({"min_turn": 30.0}, "min_turn"), ({"max_gap_beams": 0}, "max_gap_beams"),
-     ({"max_distance": -1.0}, "max_distance"), ({"sigma": 0.0}, "sigma"),
+     ({"max_distance": -1.0}, "max_distance"), ({"max_distance": 1e300}, "max_distance"),
+     ({"max_distance": 1e-300}, "max_distance"), ({"max_distance": 0.0}, "max_distance"), ({"sigma": 0.0}, "sigma"),
      ({"breakpoint_lambda": np.deg2rad(95.0)}, "breakpoint_lambda")],
 )
 def test_bad_corner_config_values_raise(params: dict, field: str) -> None:
@@ -320,21 +335,30 @@ def test_beam_counts_beyond_any_scan_mean_what_any_large_count_means(method: str
         assert a == b and len(a.lines) >= 2
 
 
-@pytest.mark.parametrize("method", ["split_merge", "iepf"])
-def test_a_merge_threshold_beyond_the_floats_merges_every_neighbour(method: str) -> None:
-    """merge_sigmas x sigma_fit = 1e9 x 1e300 overflowed the merge RMS to inf: the merge pass then
-    counted the non-adjacent pairs' inf RMS as mergeable, picked none and looped forever (fuzzing:
-    3 hangs). The threshold is capped at the largest float: the same lines as merge_rms = 1.79e308
-    (every neighbour whose merged RMS is finite is merged)."""
-    from features.baselines.split_merge import MAX_FLOAT, thresholds
+def test_split_and_merge_bounds_name_the_range_and_keep_the_defaults() -> None:
+    """The split / merge fields and the corners' max_distance say the interval they take; its ends
+    work (a threshold beyond the floats, merge_sigmas 1e9 x sigma_fit 1e300, looped forever in the
+    merge pass before the cap in ``thresholds``; such values are refused now)."""
+    from features import ConfigError
+    from features.baselines.common import CornerConfig
 
-    cfg = make_config(method, merge_sigmas=1e9, sigma_fit=1e300)
-    split = {"split_merge": 3e300, "iepf": 4e300}[method]  # split_sigmas x sigma_fit
-    assert thresholds(cfg) == (split, MAX_FLOAT)
-    ref = make_config(method, merge_rms=MAX_FLOAT, split_threshold=split)  # the same thresholds, given
-    for s, _ in _box_room_scans(3):
-        got = extract(s, method, cfg)
-        assert got == extract(s, method, ref) and len(got.lines) >= 1
+    scan = Scan.lms200(np.full(361, 2.0))
+    for params, message in (
+            ({"split_threshold": 1e300}, "split_threshold: must be a width in [0.0001, 1] m, got 1e+300"),
+            ({"split_sigmas": 1e-300}, "split_sigmas: must be 0 (off) or a number in [1, 100] std, got 1e-300"),
+            ({"merge_sigmas": 1e9, "sigma_fit": 1e300}, "sigma_fit: must be a range noise std in [1e-06, 1000] m"),
+            ({"merge_sigmas": 1e9}, "merge_sigmas: must be 0 (off) or a number in [1, 100] std, got 1000000000.0"),
+            ({"merge_rms": 2.0}, "merge_rms: must be a number in [0, 1] m, got 2.0")):
+        with pytest.raises(ConfigError, match=re.escape(message)):
+            extract(scan, "split_merge", **params)
+    with pytest.raises(ConfigError, match=re.escape("max_distance: must be a width in [0.0001, 1] m, got 1e+300")):
+        CornerConfig(max_distance=1e300)
+    for method in ("split_merge", "iepf"):  # both ends of every interval are taken
+        for params in ({"split_threshold": 1e-4, "split_sigmas": 1, "merge_rms": 0, "merge_sigmas": 1},
+                       {"split_threshold": 1, "split_sigmas": 100, "merge_rms": 1, "merge_sigmas": 100,
+                        "sigma_fit": 1000, "corners": CornerConfig(max_distance=1e-4)},
+                       {"split_sigmas": 0, "merge_sigmas": 0, "corners": CornerConfig(max_distance=1)}):
+            make_config(method, **params)
 
 
 def test_ransac_stops_at_its_work_bound_and_runs_what_fits(monkeypatch):
@@ -388,19 +412,33 @@ def test_iepf_splits_a_closed_ring_whose_last_beam_repeats_its_first() -> None:
     ("sensor", "sigma_r", 1e-300, r"must be a range noise std in \[1e-06, 1000\] m, or 'auto'"),
     ("sensor", "sigma_r_cm", 1e-300, r"must be a range noise std in \[1e-06, 1000\] m, or 'auto'"),
     ("hough", "sigma", 1e-300, r"must be a range noise std in \[1e-06, 1000\] m"),
-    ("split_merge", "sigma_fit", 1e-300, r"must be a finite number >= 1e-06"),
+    ("split_merge", "sigma_fit", 1e-300, r"must be a range noise std in \[1e-06, 1000\] m"),
     ("hough", "rho_step", 1e300, r"must be a width in \[0.0001, 1\] m"),
     ("hough", "band_coarse", 1e300, r"must be a width in \[0.0001, 1\] m"),
     ("hough", "band_fine", 1e-300, r"must be a width in \[0.0001, 1\] m"),
     ("ransac", "inlier_band", 1e-300, r"must be a width in \[0.0001, 1\] m"),
-    ("sensor", "ad_tau", 1e-300, r"must be a finite number >= 1 std"),
-    ("sensor", "ad_tau", 0.0, r"must be a finite number >= 1 std"),
-    ("sensor", "inlier_tau", 0.5, r"must be a finite number >= 1 std"),
-    ("sensor", "inlier_tau", 0.0, r"must be a finite number >= 1 std"),
-    ("sensor", "max_chi2", 0.1, r"must be a finite number >= 1 std\^2"),
-    ("sensor", "max_chi2", 0.0, r"must be a finite number >= 1 std\^2"),
-    ("sensor", "curvature_tau", 1e-300, r"must be a finite number >= 1 std"),
-    ("sensor", "curvature_tau", 0.0, r"must be a finite number >= 1 std"),
+    ("sensor", "ad_tau", 1e-300, r"must be a number in \[1, 100\] std"),
+    ("sensor", "ad_tau", 0.0, r"must be a number in \[1, 100\] std"),
+    ("sensor", "inlier_tau", 0.5, r"must be a number in \[1, 100\] std"),
+    ("sensor", "inlier_tau", 0.0, r"must be a number in \[1, 100\] std"),
+    ("sensor", "max_chi2", 0.1, r"must be a number in \[1, 10000\] std\^2"),
+    ("sensor", "max_chi2", 0.0, r"must be a number in \[1, 10000\] std\^2"),
+    ("sensor", "curvature_tau", 1e-300, r"must be a number in \[1, 100\] std"),
+    ("sensor", "curvature_tau", 0.0, r"must be a number in \[1, 100\] std"),
+    # the fuzz round's second pass: each ran and exited 0 with no line, no corner or a test that passed anything
+    ("sensor", "min_points", 1e300, r"must be a number in \[3, 16384\] beams"),  # no line
+    ("sensor", "inlier_tau", 1e300, r"must be a number in \[1, 100\] std"),  # office line F1 0.77
+    ("sensor", "max_chi2", 1e300, r"must be a number in \[1, 10000\] std\^2"),
+    ("sensor", "merge_tau", 1e300, r"must be a number in \[0, 100\] std"),  # F1 0.62, no corner
+    ("sensor", "psi_split", 1e300, r"must be a number in \[0, 3.14159\] rad"),
+    ("sensor", "band_min", 1e300, r"must be an angle in \(0, 1.5708\] rad"),
+    ("sensor", "corner_psi", 1e300, r"must be a number in \[0, 1\] \(a share of the turn\)"),  # no corner
+    ("sensor", "corner_max_dist", 1e300, r"must be a width in \[0.0001, 1\] m"),  # 2 m: 42 corners for 22
+    ("sensor", "acute_min_var", 1e300, r"must be a number in \[0, 10000\] sigma_r\^2"),  # no corner
+    ("split_merge", "breakpoint_lambda", 1e-300, r"must be an angle in \[0.0174533, 1.5708\] rad \(1 to 90 deg\)"),
+    ("hough", "breakpoint_lambda", 0.01, r"must be an angle in \[0.0174533, 1.5708\] rad \(1 to 90 deg\)"),  # no line
+    ("split_merge", "runs_z", 1e-300, r"must be 0 \(off\) or a number in \[1, 100\] std"),  # F1 0.77
+    ("ransac", "runs_z", 0.5, r"must be 0 \(off\) or a number in \[1, 100\] std"),  # F1 0.85
 ])
 def test_extractor_configs_refuse_values_that_can_never_give_a_line(method, field, value, message):
     from features.errors import ConfigError

@@ -231,6 +231,12 @@ CASES = [
     (["simulate", "--duration", "1e9", "--out", O], "--duration"),
     (["simulate", "--seed", "-1", "--out", O], "--seed"),
     (["simulate", "--seed", "1.5", "--out", O], "--seed"),
+    # a whole number of 400 digits was a traceback (OverflowError in the bound check) in every integer option
+    (["simulate", "--seed", "9" * 400, "--out", O], "argument --seed: must be a whole number >= 0 and <= 4294967295, "
+     "got '" + "9" * 40 + "...99999999' (400 characters) (too large for a float)"),
+    (["compare", "office:0", "--max-scans", "9" * 400, "--out", O], "argument --max-scans: must be a whole number >= 1, "
+     "got '" + "9" * 40 + "...99999999' (400 characters) (too large for a float)"),
+    (["slam", "{good.clf}", "--every", "9" * 400, "--out", O], "argument --every/--stride: must be a whole number >= 1"),
     (["simulate", "--rate-hz", "-3", "--out", O], "--rate-hz"),
     (["simulate", "--rate-hz", "0", "--out", O], "--rate-hz"),
     (["simulate", "--rate-hz", "nan", "--out", O], "--rate-hz"),
@@ -256,6 +262,11 @@ CASES = [
     (["simulate", "--out", "{a_file}"], "not a folder"),
     (["simulate", "--resolution", "2", "--out", O], "--resolution"),
     (["simulate", "--clutter", "1e9", "--out", O], "--clutter"),
+    # one interval for both ends: -1 said "must be a finite number >= 0", 1e9 "must be at most 10"
+    (["simulate", "--clutter", "-1", "--out", O], "argument --clutter: must be a finite number >= 0 and <= 10 (10x a "
+     "furnished office at most), got '-1'"),
+    (["simulate", "--clutter", "10.5", "--out", O], "argument --clutter: must be a finite number >= 0 and <= 10 (10x a "
+     "furnished office at most), got '10.5'"),
     (["simulate", "--sensor", "{sensor_text.yaml}", "--out", O], "mixed_gap: must be a number"),
     (["simulate", "--sensor", "{sensor_flag.yaml}", "--out", O], "quantise: must be true or false"),
     (["simulate", "--sensor", "{sensor_dup.yaml}", "--out", O], "key 'noise_sigma' given twice"),
@@ -333,7 +344,7 @@ CASES = [
     (["slam", "{simrun}", "--extractor", "nosuch", "--out", O], "nosuch"),
     (["slam", "{simrun}", "--config", "{slam_nested.yaml}", "--out", O], "extractor: must be an extraction method's name"),
     (["slam", "{simrun}", "--config", "{slam_param.yaml}", "--out", O], "slam_param.yaml: extractor_params: unknown parameter(s) ['bogus']"),
-    (["slam", "{simrun}", "--config", "{slam_value.yaml}", "--out", O], "slam_value.yaml: extractor_params.split_threshold: must be a finite number > 0 m, got -1"),
+    (["slam", "{simrun}", "--config", "{slam_value.yaml}", "--out", O], "slam_value.yaml: extractor_params.split_threshold: must be a width in [0.0001, 1] m, got -1"),
     (["slam", "{simrun}", "--config", "{slam_type.yaml}", "--out", O], "motion.sigma_accel: must be a number"),
     (["slam", "{simrun}", "--config", "{slam_prob.yaml}", "--out", O], "prealign.widen_probability: a probability"),
     (["slam", "{simrun}", "--config", "{slam_noise.yaml}", "--out", O], "odom_noise: must be 3 numbers"),
@@ -349,7 +360,7 @@ CASES = [
     (["slam", "{simrun}", "--out", "{notes_dir}"], "notes_dir: holds metrics.json, which this run would replace but "
                                                    "no earlier lmsbench slam run wrote"),
     (["simulate", "--duration", "1", "--out", "{pkg}"], "holds __init__.py, which this command does not write"),
-    (["slam", "{simrun}", "--config", "{slam_normal.yaml}", "--out", O], "alignment.normal_step: must be >= 1"),
+    (["slam", "{simrun}", "--config", "{slam_normal.yaml}", "--out", O], "alignment.normal_step: must be in [1, 100] beams, got 0"),
     (["slam", "{simrun}", "--config", "{slam_range.yaml}", "--out", O], "alignment.max_range: must be in [0.1, 10000] m"),
     (["slam", "{simrun}", "--config", "{slam_turn.yaml}", "--out", O], "alignment.heading_hypotheses: offsets"),
     (["slam", "{backwards.clf}", "--out", O], "backwards"),
@@ -1604,3 +1615,11 @@ def test_yaml_files_not_utf8_past_the_head_are_one_line(tmp_path, capsys):
         assert capsys.readouterr().err == (f"lmsbench {argv[0]}: error: {tmp_path / name}: not text (byte {byte} is not "
                                            f"UTF-8), not {what}\n"), argv
     assert not Path(out).exists()
+
+
+def test_the_clutter_options_bound_is_the_simulators():
+    """simulate --clutter's argparse bound is sim.worlds.MAX_CLUTTER (kept apart: sim loads pybullet)."""
+    from experiments.commands.simulate import CLUTTER_MAX
+    from sim.worlds import MAX_CLUTTER
+
+    assert CLUTTER_MAX == MAX_CLUTTER

@@ -151,7 +151,7 @@ def test_beam_time_increment_is_bounded(tmp_path):
 
     with pytest.raises(SlamConfigError, match=r"alignment.beam_time_increment: must be in \[0, 0.01\] s"):
         SlamConfig.from_dict({"alignment": {"beam_time_increment": 1.0}})
-    with pytest.raises(SlamConfigError, match=r"alignment.beam_time_increment: must be >= 0"):
+    with pytest.raises(SlamConfigError, match=r"alignment.beam_time_increment: must be in \[0, 0.01\] s between beams"):
         SlamConfig.from_dict({"alignment": {"beam_time_increment": -1e-5}})
 
 

@@ -490,18 +490,27 @@ def sparse_log(tmp_path_factory) -> Path:
     ("alignment: {search_step: 1.0e-160}", "alignment.search_step: must be in [0.1, 10] m"),  # OverflowError: step**-2
     ("alignment: {ambiguity_sigmas: 1.0e300}", "alignment.ambiguity_sigmas: must be in [0, 100] std"),  # OverflowError
     ("alignment: {ambiguity_sigmas: 1.0e300, fit_margin: 1.0e300}", "alignment.fit_margin: must be in [0, 1]"),
-    ("alignment: {max_turn_rate: 0}", "alignment.max_turn_rate: must be > 0"),
-    ("motion: {sigma_floor_xy: 0}", "motion.sigma_floor_xy: must be > 0"),  # a repeated stamp divided by a zero std
+    ("alignment: {max_turn_rate: 0}", "alignment.max_turn_rate: must be in [0.01, 100] rad/s"),
+    ("motion: {sigma_floor_xy: 0}", "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # a repeated stamp divided by a zero std
     ("motion: {sigma_floor_xy: 1.0e160}", "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # OverflowError: sxy**2
     ("motion: {sigma_floor_theta: 1.0e300}", "motion.sigma_floor_theta: must be in [1e-06, 1000] rad"),  # OverflowError
     ("motion: {sigma_floor_xy: 1.0e-160, sigma_floor_theta: 1.0e-160}\nalignment: {motion_prior: true}",
      "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # OverflowError: sxy**-2 at the repeated stamp
     ("motion: {sigma_floor_xy: 0.01, sigma_floor_theta: 1.0e-160}", "motion.sigma_floor_theta: must be in [1e-06"),
-    ("motion: {sigma_accel: 1.0e200}", "motion.sigma_accel: must be in (0, 1000] m/s^2"),  # sxy**2 overflowed
-    # 0 was "must be > 0" while 1e200 said [0, 1000]: one interval, the one that holds
-    ("motion: {sigma_accel: 0}", "motion.sigma_accel: must be in (0, 1000] m/s^2"),
-    ("consistency: {max_ambiguous: 2}", "consistency.max_ambiguous: a share of steps, must be in [0, 1]"),
-    ("consistency: {min_matched_fraction: 2}", "consistency.min_matched_fraction: a share of steps, must be in [0, 1]"),
+    ("motion: {sigma_accel: 1.0e200}", "motion.sigma_accel: must be in [0.001, 1000] m/s^2"),  # sxy**2 overflowed
+    # 0 was "must be > 0" while 1e200 said [0, 1000], and -1 "must be >= 0": one interval, the one that holds
+    ("motion: {sigma_accel: 0}", "motion.sigma_accel: must be in [0.001, 1000] m/s^2"),
+    ("motion: {sigma_accel: -1}", "motion.sigma_accel: must be in [0.001, 1000] m/s^2"),
+    ("motion: {sigma_alpha: 1.0e-300}", "motion.sigma_alpha: must be in [0.001, 1000] rad/s^2"),  # 0 in all but name
+    # each ran to its end, exit 0, with a "not healthy" warning (no step matched) or none (a useless run)
+    ("alignment: {stride: 1000000000000}", "alignment.stride: must be in [1, 30] beams"),
+    ("alignment: {damping: 1.0e300}", "alignment.damping: must be in [0, 1] of the Hessian's mean eigenvalue"),
+    ("alignment: {tolerance_xy: 1.0e300}", "alignment.tolerance_xy: must be in [0, 0.1] m"),
+    ("keyframes: {local_map: 1000000000000}", "keyframes.local_map: must be in [1, 1000] keyframes"),
+    ("observations: {min_line_points: 1000000000000}", "observations.min_line_points: must be in [0, 16384] beams"),
+    ("consistency: {nis_divergence: 0}", "consistency.nis_divergence: must be in [1, 1e+06] per degree of freedom"),
+    ("consistency: {max_ambiguous: 2}", "consistency.max_ambiguous: must be in [0, 1] (a share of steps)"),
+    ("consistency: {min_matched_fraction: 2}", "consistency.min_matched_fraction: must be in [0, 1] (a share of steps)"),
     ("alignment: {search_candidates: 1000000000}", "alignment.search_candidates: must be in [1, 32]"),  # an ICP per pose
     ("alignment: {search_step: 0.01, search_resolution: 0.01}",
      "the search window would hold 58,049,161 poses"),  # 361 x 401^2
@@ -906,7 +915,7 @@ def test_a_users_extractor_config_of_numpy_values_and_tuples_is_recorded(sim_fol
 
 
 @pytest.mark.parametrize("field, value, message", [
-    ("huber", 1e-300, r"alignment\.huber: must be at least 1e-06 m \(a residual's scale; .*\), got 1e-300"),
+    ("huber", 1e-300, r"alignment\.huber: must be in \[1e-06, 1\] m \(a residual's scale: .*\), got 1e-300"),
     ("covariance_inflation", 1e30, r"alignment\.covariance_inflation: must be in \[0\.01, 100\] \(a factor on the "
                                    r"match's covariance; 1, the default, is none\), got 1e\+30")])
 def test_slam_config_refuses_an_icp_scale_that_breaks_the_run(sim_folder, tmp_path, capsys, field, value, message):
@@ -1122,6 +1131,60 @@ def test_a_world_json_number_too_large_for_a_float_is_one_line_naming_the_field_
         assert capsys.readouterr().err.strip().splitlines() == [
             f"lmsbench slam: error: {run / 'world.json'}: not a world.json (boxes: {said})"]
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("field, rows, row, must", [
+    ("boxes", [[0, 0, 0, 1, 1, 0, 1], [0, 0, 0, 1, 1, 0, "BIG"]], "box 1 is [0, 0, 0, 1, 1, 0, 999",
+     "a box must be a list of 7 numbers cx, cy, yaw, hx, hy, z0, z1"),
+    ("cylinders", [["BIG", 0, 0.2, 0, 2]], "cylinder 0 is [999",
+     "a cylinder must be a list of 5 numbers cx, cy, r, z0, z1"),
+    ("glass", [[0, 0, 1, 1], [0, 0, 1, "BIG"]], "glass panel 1 is [0, 0, 1, 999",
+     "a glass panel must be a list of 4 numbers x1, y1, x2, y2 (m)"),
+])
+def test_a_world_json_solid_too_large_for_a_float_names_the_row(sim_folder, tmp_path, capsys, field, rows, row, must):
+    """A 400-digit number in a world.json's boxes, cylinders or glass given to simulate or compare
+    was World's "boxes: must be a (k, 7) array of real numbers (...), got list" (before that an
+    internal "OverflowError: int too large to convert to float"), naming no row; now json_rows's
+    message, as the walls', naming field and row."""
+    from experiments.cli import main
+
+    big = int("9" * 400)
+    world = {"walls": [], "boxes": [[2, 0, 0, 0.1, 3, 0, 2], [-2, 0, 0, 0.1, 3, 0, 2]], "cylinders": []}
+    world[field] = [[big if v == "BIG" else v for v in r] for r in rows]
+    import shutil
+
+    run = tmp_path / "run"
+    shutil.copytree(sim_folder, run)
+    path = run / "world.json"
+    path.write_text(json.dumps(world))
+    for command in (["simulate", "--world", str(path), "--duration", "1", "--quiet"],
+                    ["compare", str(run), "--no-progress"]):
+        assert main([*command, "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and re.fullmatch(
+            re.escape(f"lmsbench {command[0]}: error: {path}: not a world.json ({field}: {row}") + r"9*\.\.\.[0-9, .]*\] "
+            r"\(4\d\d characters\), " + re.escape(f"holding a number too large for a float: {must})"), err[0]), err
+        assert not (tmp_path / "o").exists()
+
+
+def test_a_world_json_scan_height_too_large_or_a_name_too_long_is_refused(tmp_path):
+    """scan_height of 400 digits was "not a world.json (OverflowError: int too large to convert to
+    float)"; a name of 100,000 characters was taken and simulate drew it as map.png's title for over
+    a minute (30,000: 18 s), the image and its memory growing with it."""
+    from lms200 import LmsbenchError
+    from sim.world import MAX_NAME_CHARS, World
+
+    boxes = [[2, 0, 0, 0.1, 3, 0, 2], [-2, 0, 0, 0.1, 3, 0, 2]]
+    path = tmp_path / "world.json"
+    for extra, said in (({"scan_height": int("9" * 400)}, "scan_height: must be a finite height >= 0 m, got "
+                         + "9" * 40 + "...99999999 (400 characters)"),
+                        ({"name": "x" * 100_000}, "name: at most 255 characters (a title, as a file name), got '"
+                         + "x" * 39 + "...xxxxxxx' (100002 characters)")):
+        path.write_text(json.dumps({"boxes": boxes, **extra}))
+        with pytest.raises(LmsbenchError, match="^" + re.escape(f"{path}: not a world.json ({said})") + "$"):
+            World.from_json(path)
+    path.write_text(json.dumps({"boxes": boxes, "name": "x" * MAX_NAME_CHARS}))
+    assert World.from_json(path).name == "x" * 255
 
 
 def test_world_json_route_nodes_read_as_walls_are_flat_or_rows(tmp_path):

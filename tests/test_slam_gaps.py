@@ -105,8 +105,8 @@ def test_a_max_gap_shorter_than_any_scanners_step_is_refused(gap):
     from slam.config import SlamConfigError
 
     with pytest.raises(SlamConfigError, match=re.escape(
-            f"motion.max_gap: must be at least 0.01 s (100 scans/s, faster than any scanner's: a shorter gap makes "
-            f"every step a gap, the motion model never runs), got {gap}")):
+            f"motion.max_gap: must be in [0.01, 1e+06] s (100 scans/s, faster than any scanner's, to about 12 days: "
+            f"a shorter gap makes every step a gap), got {gap}")):
         SlamConfig.from_dict({"motion": {"max_gap": gap}})
     assert SlamConfig.from_dict({"motion": {"max_gap": 0.01}}).motion.max_gap == 0.01  # the bound itself is taken
 
@@ -114,10 +114,10 @@ def test_a_max_gap_shorter_than_any_scanners_step_is_refused(gap):
 @pytest.mark.parametrize("name, bad, message", [
     ("max_range", 1e-300, "alignment.max_range: must be in [0.1, 10000] m, got 1e-300"),
     ("max_range", 0.05, "alignment.max_range: must be in [0.1, 10000] m, got 0.05"),
-    ("max_correspondence", 1e-300, "alignment.max_correspondence: must be at least 0.001 m (the LMS200's range quantum: "
-                                   "a shorter reach pairs no point), got 1e-300"),
-    ("fine_correspondence", 1e-300, "alignment.fine_correspondence: must be at least 0.001 m"),
-    ("inlier_distance", 1e-4, "alignment.inlier_distance: must be at least 0.001 m")])
+    ("max_correspondence", 1e-300, "alignment.max_correspondence: must be in [0.001, 0.5] m (the LMS200's range quantum "
+                                   "to the cell of the scan matcher's search grid), got 1e-300"),
+    ("fine_correspondence", 1e-300, "alignment.fine_correspondence: must be in [0.001, 0.5] m"),
+    ("inlier_distance", 1e-4, "alignment.inlier_distance: must be in [0.001, 1] m (a shorter one pairs no point)")])
 def test_a_match_reach_that_pairs_no_point_is_refused(name, bad, message):
     """``alignment.max_range`` / ``max_correspondence`` / ``fine_correspondence`` / ``inlier_distance``
     of 1e-300 were taken: no beam was paired, none of the steps matched, and the run ended exit 0

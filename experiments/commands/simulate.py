@@ -13,13 +13,18 @@ from experiments.options import (WORLDS, DURATION, MAX_DURATION_S, MIN_DURATION_
                                  check_out, check_out_spares, check_yaml, known_worlds, number, path_arg, scan_rate, world_hint)
 
 
+CLUTTER_MAX = 10.0  # sim.worlds.MAX_CLUTTER (tests/test_cli_bad_input.py checks they agree)
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("simulate", help="simulate an LMS200 run through an office world (scans.clf, "
                                         "groundtruth.tum, world.json, config.yaml, map.png)")
     p.add_argument("--world", default=None,
                    help="a built-in world (" + WORLDS + "; cluttered is the office with clutter 1, mit the "
                         "MIT-CSAIL-like preset) or a world.json (default office)")
-    p.add_argument("--clutter", type=number(0.0), default=None,
+    # the interval in one message: -1 said ">= 0" while 1e300 said "at most 10" (sim.worlds.MAX_CLUTTER, not
+    # imported here: sim loads pybullet)
+    p.add_argument("--clutter", type=number(0.0, CLUTTER_MAX, unit="(10x a furnished office at most)"), default=None,
                    help="clutter level of a named world: 0 none, 1 a furnished office, 2-3 busy "
                         "(chair and table legs, people, plants, bins, glass, doors at any angle; at most 10; default: the world's own)")
     p.add_argument("--seed", type=SEED, default=None, help="seed of the world, tour and sensor noise (>= 0; default 0)")
@@ -105,10 +110,6 @@ def _config(args: argparse.Namespace):
         check_file(args.world, "a world.json")
     if args.clutter is not None and args.world.endswith(".json"):
         raise InputError("--clutter applies to named worlds; a world.json holds its own solids")
-    from sim.worlds import MAX_CLUTTER
-
-    if args.clutter is not None and args.clutter > MAX_CLUTTER:
-        raise InputError(f"--clutter: must be at most {MAX_CLUTTER:g} (10x a furnished office), got {args.clutter:g}")
     beams = {0.5: 361, 1.0: 181, 0.25: 401}[args.resolution_deg]
     base = SensorConfig.ideal if args.ideal else SensorConfig
     if args.sensor is not None:

@@ -27,11 +27,23 @@ MAX_LENGTH_M = 1e4
 #: inlier_band): a tenth of the LMS200's 1 mm range step to 1 m, coarser than a wall is thick; a
 #: band of 1e-300 m or a cell of 1e300 m found no line, F1 0, exit 0
 MIN_BAND_M, MAX_BAND_M = 1e-4, 1.0
+#: most noise-scaled multiple (split_merge / iepf split_sigmas, merge_sigmas): 100 standard
+#: deviations, far beyond any beam noise reaches; 1e300 made the threshold overflow-capped and every
+#: scan one line across its corners (office: F1 0.78, exit 0), and 0 (off, the fixed threshold alone)
+#: or at least 1: 1e-300 was 0 in all but name, 0.5 a merge test that noise alone fails
+MAX_SIGMAS = 100.0
 #: smallest noise-scaled threshold of a test that a line's beams must pass (the sensor method's
 #: ad_tau, inlier_tau, curvature_tau in std; max_chi2 in std^2, a mean squared normalised residual):
 #: 0 passed no beam and 0.5 too few (inlier_tau 0.5: tp 0, fp 10 on the 3 test rooms; 1.0: tp 13),
 #: while each at 1 still finds the room's walls (tests/test_baselines.py)
 MIN_TAU = 1.0
+#: largest noise-scaled threshold (std; max_chi2 its square): a Gaussian never reaches 100 std, so a
+#: larger one means the same; 1e300 passed anything, noise or not (sensor inlier_tau: office line F1
+#: 0.77 against 0.99, merge_tau 0.62 and no corner, exit 0)
+MAX_TAU = 100.0
+#: smallest adaptive breakpoint angle lambda (rad): 1 deg, the LMS200's coarsest beam step; a lambda
+#: below a scan's step connects no two beams (1e-300: no line at all, F1 0, exit 0)
+MIN_LAMBDA = math.radians(1.0)
 #: most rounds in a row without a line (hough, ransac max_failures): each is a full search over the
 #: points left, and max_failures = 1.7e8 ran for hours (a 542-beam scan: 34 ms a round at 16,384 beams)
 MAX_FAILURES = 100
@@ -114,10 +126,22 @@ def band(name: str, value: object) -> None:
         fail(name, f"must be a width in [{MIN_BAND_M:g}, {MAX_BAND_M:g}] m", value)
 
 
-def tau(name: str, value: object, unit: str = "std") -> None:
-    """``value`` must be a finite number >= MIN_TAU (in ``unit``)."""
-    if not is_real(value) or not (finite(value) and value >= MIN_TAU):
-        fail(name, f"must be a finite number >= {MIN_TAU:g} {unit}", value)
+def sigmas(name: str, value: object) -> None:
+    """``value`` must be 0 (off) or a number of standard deviations in [MIN_TAU, MAX_SIGMAS]."""
+    if not is_real(value) or not (value == 0 or MIN_TAU <= value <= MAX_SIGMAS):
+        fail(name, f"must be 0 (off) or a number in [{MIN_TAU:g}, {MAX_SIGMAS:g}] std", value)
+
+
+def tau(name: str, value: object, unit: str = "std", high: float = MAX_TAU) -> None:
+    """``value`` must be a number in [MIN_TAU, ``high``] (in ``unit``)."""
+    if not is_real(value) or not (finite(value) and MIN_TAU <= value <= high):
+        fail(name, f"must be a number in [{MIN_TAU:g}, {high:g}] {unit}", value)
+
+
+def breakpoint_angle(name: str, value: object) -> None:
+    """``value`` must be an adaptive breakpoint angle in [MIN_LAMBDA, pi / 2] rad."""
+    if not is_real(value) or not (MIN_LAMBDA <= value <= math.pi / 2):
+        fail(name, f"must be an angle in [{MIN_LAMBDA:.6g}, {math.pi / 2:.6g}] rad (1 to 90 deg)", value)
 
 
 def flag(name: str, value: object) -> None:
@@ -136,11 +160,11 @@ def shared_fields(cfg: object) -> None:
     """The fields every baseline has: sigma, breakpoint_lambda, min_points, min_length, max_skip,
     runs_z, corners."""
     noise_sigma("sigma", cfg.sigma)
-    angle("breakpoint_lambda", cfg.breakpoint_lambda, math.pi / 2)
+    breakpoint_angle("breakpoint_lambda", cfg.breakpoint_lambda)
     integer("min_points", cfg.min_points, 2)
     length("min_length", cfg.min_length)
     integer("max_skip", cfg.max_skip, 1)
-    non_negative("runs_z", cfg.runs_z)
+    sigmas("runs_z", cfg.runs_z)  # 1e-300 (0.5) dropped straight walls: office line F1 0.77 (0.85), exit 0
     from .common import CornerConfig  # noqa: PLC0415 (common imports this module)
 
     if not isinstance(cfg.corners, CornerConfig):

@@ -229,8 +229,8 @@ class CornerConfig:
     def __post_init__(self) -> None:
         checks.angle("min_turn", self.min_turn, np.pi, low_open=False)
         checks.integer("max_gap_beams", self.max_gap_beams, 1)
-        checks.non_negative("max_distance", self.max_distance, "m")
-        checks.angle("breakpoint_lambda", self.breakpoint_lambda, np.pi / 2)
+        checks.band("max_distance", self.max_distance)  # 1e300: any turn of neighbours a corner, however far
+        checks.breakpoint_angle("breakpoint_lambda", self.breakpoint_lambda)
         checks.noise_sigma("sigma", self.sigma)
         object.__setattr__(self, "_params", engine.CornerParams(
             float(self.min_turn), checks.beams(self.max_gap_beams), float(self.max_distance), float(self.breakpoint_lambda),

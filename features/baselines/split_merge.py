@@ -101,11 +101,11 @@ def check_split_fields(cfg: object, chord: bool) -> None:
     kernels' record (``split_params``) kept on it as ``_params``."""
     checks.shared_fields(cfg)
     if cfg.sigma_fit is not None:
-        checks.real_at_least("sigma_fit", cfg.sigma_fit, checks.MIN_SIGMA_M)  # 1e-300: every beam splits
-    checks.positive("split_threshold", cfg.split_threshold, "m")
-    checks.non_negative("split_sigmas", cfg.split_sigmas)
-    checks.non_negative("merge_rms", cfg.merge_rms, "m")
-    checks.non_negative("merge_sigmas", cfg.merge_sigmas)
+        checks.noise_sigma("sigma_fit", cfg.sigma_fit)  # 1e-300: every beam splits; 1e300: one line a scan
+    checks.band("split_threshold", cfg.split_threshold)  # 1e300: one line across every corner, exit 0
+    checks.sigmas("split_sigmas", cfg.split_sigmas)
+    checks.between("merge_rms", cfg.merge_rms, 0.0, checks.MAX_BAND_M, "m")  # 0: the noise-following part alone
+    checks.sigmas("merge_sigmas", cfg.merge_sigmas)
     object.__setattr__(cfg, "_params", split_params(cfg, chord))
 
 

@@ -12,6 +12,9 @@ from .engine import Params
 
 CM_MODE_RANGE_MAX = 10.0  # m: a scan with a larger range_max comes in SICK cm codes (1 cm steps)
 MAX_HOUGH_ANGLES = 1001  # most normal angles searched per band (bounds the accumulator)
+#: acute_min_var's largest (sigma_r^2): a true corner's neighbourhood varies by tens to thousands of
+#: sigma_r^2 (60 in tests/test_sensor_lines.py's room; 0.5 m of depth at 5 mm noise is 2,500); 1e300 kept no corner
+MAX_ACUTE_MIN_VAR = 1e4
 MAX_SIGMA_BEARING = 0.1  # rad (5.7 deg): ten beam steps at 0.5 deg; the logs read 0-5 mrad
 
 
@@ -72,17 +75,17 @@ class SensorMethodConfig:
         checks.length("min_range", self.min_range)  # 1e300: every beam invalid, no line, silently
         for name in ("ad_tau", "inlier_tau", "curvature_tau"):  # tests every line's beams must pass:
             checks.tau(name, getattr(self, name))  # 0 or 1e-300 passed none, F1 0, exit 0
-        checks.tau("max_chi2", self.max_chi2, "std^2")  # a mean squared normalised residual
+        checks.tau("max_chi2", self.max_chi2, "std^2", checks.MAX_TAU**2)  # a mean squared normalised residual
         for name in ("psi_tau", "band_tau", "bin_tau", "merge_tau"):  # floored by psi_split, band_min, the step:
-            checks.non_negative(name, getattr(self, name), "std")  # any small value works
-        checks.non_negative("psi_split", self.psi_split, "rad")
+            checks.between(name, getattr(self, name), 0.0, checks.MAX_TAU, "std")  # any small value works
+        checks.between("psi_split", self.psi_split, 0.0, math.pi, "rad")
         checks.integer("hough_subdiv", self.hough_subdiv, 1, checks.BEAM_COUNT_CAP)  # 10**400 overflowed the template size
         checks.integer("hough_angles", self.hough_angles, 1)
         if self.hough_angles % 2 == 0 or self.hough_angles > MAX_HOUGH_ANGLES:
             checks.fail("hough_angles", f"must be an odd integer in [1, {MAX_HOUGH_ANGLES}]", self.hough_angles)
-        checks.positive("band_min", self.band_min, "rad")
+        checks.angle("band_min", self.band_min, math.pi / 2)
         checks.between("min_inlier_fraction", self.min_inlier_fraction, 0.0, 1.0)
-        checks.real_at_least("min_points", self.min_points, 3)
+        checks.between("min_points", self.min_points, 3, checks.MAX_BEAMS, "beams")  # 1e300: no line, F1 0, exit 0
         checks.length("min_length", self.min_length)
         for name in ("merge_gap", "bridge_invalid", "corner_max_gap"):
             checks.non_negative(name, getattr(self, name), "beams")
@@ -90,9 +93,9 @@ class SensorMethodConfig:
         checks.flag("acute_check", self.acute_check)
         checks.flag("arc_check", self.arc_check)
         checks.between("corner_min_turn", self.corner_min_turn, 0.0, math.pi / 2, "rad")
-        checks.non_negative("corner_psi", self.corner_psi)
-        checks.non_negative("corner_max_dist", self.corner_max_dist, "m")
-        checks.non_negative("acute_min_var", self.acute_min_var, "sigma_r^2")
+        checks.between("corner_psi", self.corner_psi, 0.0, 1.0, "(a share of the turn)")  # above 0.9: ~no corner
+        checks.band("corner_max_dist", self.corner_max_dist)  # as the baselines' max_distance; 2 m: 42 corners for 22
+        checks.between("acute_min_var", self.acute_min_var, 0.0, MAX_ACUTE_MIN_VAR, "sigma_r^2")  # 1e300: no corner
         checks.between("sigma_bearing", self.sigma_bearing, 0.0, MAX_SIGMA_BEARING,
                        "rad (a bearing error of a few mrad; degrees given as radians?)")
         object.__setattr__(self, "_params", Params(
