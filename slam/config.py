@@ -376,9 +376,13 @@ class ConsistencyConfig:
             degenerate matches may have drifted more than ``max_degenerate_drift`` (m) along its weak
             axis (``degenerate_drift``: a match is degenerate when its weakest position direction is
             held by fewer than ``degenerate_points`` points' worth, a corridor's axis; over a stretch
-            of them, each new keyframe's std along that axis, from its match's own covariance, summed
-            as if every error had the same sign, since along such an axis the matching objective
-            itself is biased). Fixed before they were measured: 10 points' worth is where the
+            of them, each new keyframe's std along that axis, its factor's (the match's own
+            covariance, times ``keyframes.correlation_length``'s scale when on), at most the
+            predictions' stds summed since the previous keyframe (what holds the pose along an axis
+            the scan does not fix), summed as if every error had the same sign, since along such an
+            axis the matching objective itself is biased). ``degenerate_points`` in [1, 8192] (0
+            marked no step degenerate); ``max_degenerate_drift`` in [0.001, 1e6] m, and 1e6, its
+            largest, turns the check off. Fixed before they were measured: 10 points' worth is where the
             MIT-like corridor's stall sat (7-13, against 30 at the median of tracked steps,
             docs/slam.md), and 0.3 m is ``slam.scanslam.DISTINCT_XY``, the distance at which two
             poses are told apart. Simulated corridor worlds at 1 degree lost track (ATE 0.2-3.2 m)
@@ -394,6 +398,11 @@ class ConsistencyConfig:
     max_odometry_doubt: float = 0.0
     degenerate_points: float = 10.0
     max_degenerate_drift: float = 0.3
+
+    def degenerate_stretch_flagged(self, drift: float) -> bool:
+        """Whether a run whose ``degenerate_drift`` is ``drift`` (m) fails the degenerate-stretch
+        check: above ``max_degenerate_drift``, unless that is its largest value (the check off)."""
+        return drift > self.max_degenerate_drift and self.max_degenerate_drift < MAX_DEGENERATE_DRIFT_M
 
 
 @dataclass(frozen=True)
@@ -769,6 +778,7 @@ MIN_MATCH_RANGE_M = 0.1  # alignment.max_range: at least 10 cm (as the command l
 MIN_REACH_M = 1e-3  # m: alignment's correspondence reaches and inlier_distance, the LMS200's range quantum
 MAX_MATCH_RANGE_M = 1e4  # alignment.max_range: at most 10 km (as the command line's --laser-range-max)
 MIN_VOXEL_M, MAX_VOXEL_M = 1e-3, 10.0  # keyframes.voxel: a local map's cells (m), when thinned
+MAX_DEGENERATE_DRIFT_M = 1e6  # consistency.max_degenerate_drift at this value: the degenerate-stretch check is off
 MIN_MAX_GAP_S = 0.01  # s: motion.max_gap; the LMS200 scans at most 75 times a second, a Hokuyo 40
 MIN_MAX_DT_S = 1e-3  # s: finest prediction step of the paper preset (a 10 s gap: at most 10,000 steps)
 PI = math.pi
@@ -869,6 +879,12 @@ FIELD_RANGES: dict[str, FieldRange] = {
     "consistency.max_ambiguous": (0, 1, "", False, "a share of steps"),
     "consistency.min_matched_fraction": (0, 1, "", False, "a share of steps"),
     "consistency.max_odometry_doubt": (0, 1, "", False, "a share of steps"),
+    # 0 made no step degenerate (the check off, silently), 1e300 every matched one: the weaker of two directions
+    # holds at most half of a scan's points (16384 beams at most)
+    "consistency.degenerate_points": (1, 8192, "points' worth", False, "half the most beams of a scan"),
+    # 0 flagged any degenerate keyframe; the largest, 1e6, turns the check off (ConsistencyConfig.degenerate_stretch_flagged)
+    "consistency.max_degenerate_drift": (MIN_REACH_M, MAX_DEGENERATE_DRIFT_M, "m", False,
+                                         f"{MAX_DEGENERATE_DRIFT_M:g}: the check off"),
     # keyframes (the default pipeline)
     "keyframes.distance": (MIN_REACH_M, 100, "m", False, ""),
     "keyframes.angle": (1e-3, PI, "rad", False, ""),
@@ -895,7 +911,7 @@ FIELD_RANGES: dict[str, FieldRange] = {
 OWN_RULE = frozenset({"alignment.search_sigmas", "alignment.search_step_theta", "alignment.search_resolution",
                       "alignment.search_sigma", "alignment.fit_sigma", "alignment.search_step", "alignment.search_xy",
                       "alignment.fit_margin", "alignment.ambiguity_sigmas", "alignment.search_candidates",
-                      "keyframes.voxel"})
+                      "keyframes.voxel", "keyframes.correlation_length"})
 
 
 def field_range_text(where: str) -> str:

@@ -54,6 +54,8 @@ class ScanStep:
     odometry_doubt: bool = False  # its match was poor and the constant-velocity prediction's clearly better
     weak: float = float("nan")  # points' worth holding the match's weakest position direction (Hessian eigenvalue)
     weak_sigma: float = float("nan")  # the match's own std along that direction (m)
+    prediction_sigma: float = float("nan")  # std (m) of the step's prediction (motion model or odometry), the ICP's start
+    factor_scale: float = 1.0  # a keyframe factor's covariance over its match's (keyframes.correlation_length)
     loop: LoopClosure | None = None
 
 
@@ -72,21 +74,32 @@ def degenerate_drift(infos: list[ScanStep], points: float) -> tuple[float, int |
     the index of the scan where that stretch reached it (None without one). A step is degenerate
     when its match's weakest position direction is held by fewer than ``points`` points' worth (a
     corridor's axis); a matched step that is not ends the stretch. Within a stretch each new
-    keyframe adds its match's std along that direction (the keyframe factor's, the only ones that
-    carry the drift: between keyframes a scan is matched against the same local map), summed, not
-    in quadrature: along such an axis the matching objective itself is biased (the ICP started at
-    the true pose slides 0.1-0.2 m, docs/slam.md), so the steps' errors need not cancel."""
-    best, at, cur = 0.0, None, 0.0
+    keyframe adds its factor's std along that direction (the match's, times the square root of
+    ``keyframes.correlation_length``'s scale where that is on; the keyframe factors carry the
+    drift: between keyframes a scan is matched against the same local map), at most the
+    predictions' stds summed over the steps since the previous keyframe (or since the stretch
+    began): along an axis the scan does not fix the pose is where the prediction put it, so that is
+    what holds it there (a free axis's match std is 1/sqrt(1e-9) = 31,623 m, ``Match.covariance``'s
+    regularisation, not a distance). Summed, not in quadrature: along such an axis the matching
+    objective itself is biased (the ICP started at the true pose slides 0.1-0.2 m, docs/slam.md),
+    so the steps' errors need not cancel."""
+    best, at, cur, held = 0.0, None, 0.0, 0.0
     for k, i in enumerate(infos):
+        if np.isfinite(i.prediction_sigma):
+            held += i.prediction_sigma
         if not i.matched:
-            continue  # the motion model's guess: counted by matched_fraction, neither adds nor ends a stretch
-        if not i.weak < points:
-            cur = 0.0
+            if i.new_keyframe:  # the motion model's guess: neither adds nor ends a stretch, counted by matched_fraction
+                held = 0.0
             continue
-        if i.new_keyframe and np.isfinite(i.weak_sigma):
-            cur += i.weak_sigma
-            if cur > best:
-                best, at = cur, k
+        if not i.weak < points:
+            cur = held = 0.0  # the match holds every direction: the stretch, and what the predictions held, start again
+            continue
+        if i.new_keyframe:
+            if np.isfinite(i.weak_sigma):
+                cur += min(i.weak_sigma * float(np.sqrt(i.factor_scale)), held)
+                if cur > best:
+                    best, at = cur, k
+            held = 0.0
     return best, at
 
 
@@ -249,7 +262,7 @@ class ScanSlam:
             pred, (sxy, sth) = predicted
         else:
             pred, (sxy, sth) = self.predict(stamp), self._motion_sigma(dt)
-        info = ScanStep(keyframe=self.keyframes[-1].key, odometry=by_odometry)
+        info = ScanStep(keyframe=self.keyframes[-1].key, odometry=by_odometry, prediction_sigma=sxy)
         m: Match | None = None
         if sp.matched.shape[0] >= 10 and self.ref is not None:
             if by_odometry:  # the odometry's increment, not a guess: no start at the last pose
@@ -494,7 +507,8 @@ class ScanSlam:
         """Add the scan as a keyframe (and perhaps close a loop); returns its pose after optimisation."""
         assert self.graph is not None
         if info.matched and self.keyframes_cfg.correlation_length > 0:
-            cov = cov * correlated_scale(sp.matched, info.inliers, self.keyframes_cfg.correlation_length)
+            info.factor_scale = correlated_scale(sp.matched, info.inliers, self.keyframes_cfg.correlation_length)
+            cov = cov * info.factor_scale
         key = self.graph.add(rel, rotate_covariance(cov, -pose[2]), pose)  # world -> frame of pose
         kf = Keyframe(key, len(self.anchors), stamp, pose.copy(), *sp.surface(), self.travelled)
         self.keyframes.append(kf)
@@ -635,7 +649,7 @@ def run_scan_slam(steps, config) -> "SlamResult":
         "healthy": (bool(np.all(np.isfinite(poses))) and diverged_at is None
                     and ambiguous_fraction <= config.consistency.max_ambiguous
                     and matched_fraction >= config.consistency.min_matched_fraction
-                    and drift <= cc.max_degenerate_drift),
+                    and not cc.degenerate_stretch_flagged(drift)),
         "weak": np.array([i.weak for i in infos]), "weak_sigma": np.array([i.weak_sigma for i in infos]),
         "degenerate_fraction": float(np.mean([i.matched and i.weak < cc.degenerate_points for i in infos[1:]]))
         if len(infos) > 1 else 0.0,

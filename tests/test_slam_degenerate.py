@@ -44,8 +44,10 @@ def test_a_tracked_run_stays_healthy():
     assert d["degenerate_drift"] < 0.1 and d["healthy"]
 
 
-def _step(matched: bool = True, weak: float = 50.0, sigma: float = 0.1, keyframe: bool = True) -> ScanStep:
-    return ScanStep(keyframe=0, matched=matched, weak=weak, weak_sigma=sigma, new_keyframe=keyframe)
+def _step(matched: bool = True, weak: float = 50.0, sigma: float = 0.1, keyframe: bool = True,
+          predicted: float = 1.0, scale: float = 1.0) -> ScanStep:
+    return ScanStep(keyframe=0, matched=matched, weak=weak, weak_sigma=sigma, new_keyframe=keyframe,
+                    prediction_sigma=predicted, factor_scale=scale)
 
 
 def test_degenerate_drift_sums_the_keyframes_of_one_stretch():
@@ -65,14 +67,16 @@ def test_degenerate_drift_sums_the_keyframes_of_one_stretch():
 
 
 def test_the_warning_names_the_degenerate_stretch():
+    """The stamp is the keyframe where the stretch's sum peaked (it said "ending at")."""
     from experiments.commands.slam import _health_warning
 
     m = {"n_scans": 600, "consistency": {"diverged": False, "healthy": False, "degenerate_drift": 1.1879,
                                          "degenerate_drift_at": 61.2}}
     assert _health_warning(m, SlamConfig()) == (
         "the run is not healthy: a stretch of degenerate matches (the weakest direction held by fewer than 10 "
-        "points' worth, as along a corridor) ending at t=61.2 may have drifted 1.19 m along it (its keyframes' std "
-        "there, summed; consistency.max_degenerate_drift 0.3 m) (metrics.json: consistency.healthy false)")
+        "points' worth, as along a corridor) reaching it at t=61.2 may have drifted 1.19 m along it (its keyframes' "
+        "std there, each at most its predictions', summed; consistency.max_degenerate_drift 0.3 m) (metrics.json: "
+        "consistency.healthy false)")
 
 
 def test_correlation_length_scales_a_keyframe_factor_by_its_points_per_square():
@@ -103,3 +107,109 @@ def test_correlation_length_widens_the_keyframe_factors_only():
     np.testing.assert_allclose(a.trajectory, b.trajectory, atol=1e-9)  # no closure: the chain is the matches
     ratio = np.trace(b.covariances[-1][:2, :2]) / np.trace(a.covariances[-1][:2, :2])
     assert ratio > 2.0
+
+
+def _bare_corridor(odometry: bool):
+    """60 noise-free scans (361 beams, 5 scans/s) along two endless walls 2 m apart, driving at
+    0.5 m/s: nothing fixes the position along the axis (the match's Hessian is singular there)."""
+    from lms200 import Record
+    from sim import simulate_records
+
+    template = simulate_records("corridor", seed=0, duration=13.0, rate_hz=5.0)[:60]
+    out = []
+    for k, r in enumerate(template):
+        x, y = 0.1 * k, 0.1
+        s = np.sin(r.scan.angle_min + r.scan.angle_increment * np.arange(r.scan.ranges.size))
+        with np.errstate(divide="ignore"):
+            ranges = np.where(s > 1e-9, (1 - y) / s, np.where(s < -1e-9, (-1 - y) / s, np.inf))
+        ranges = np.where(ranges <= 8.0, ranges, 0.0).astype(r.scan.ranges.dtype)
+        out.append(Record(r.scan.replace(ranges=ranges), truth=(x, y, 0.0), odom=(x, y, 0.0) if odometry else None))
+    return out
+
+
+def test_a_free_axis_counts_what_the_prediction_held():
+    """Along an axis nothing fixes, the match's std is Match.covariance's regularisation, 1/sqrt(1e-9)
+    = 31,622.78 m: with a keyframe at every scan the 59 summed to 1,865,743.8 m ("may have drifted
+    1865743.82 m"). What holds the pose there is the prediction: each keyframe counts at most the
+    predictions' stds since the previous one (constant velocity: 1 m/s^2 * dt^2 + 0.01 m a scan,
+    dt = 0.213 s; with odometry 0.1 of the step + 0.01 m). The trajectory is unchanged."""
+    from experiments.commands.slam import _health_warning
+
+    config = SlamConfig(keyframes={"min_inliers": 1.0})  # every scan a keyframe (none explains all its points)
+    records = _bare_corridor(False)
+    result = run_slam(records, config)
+    d = result.diagnostics
+    assert d["n_keyframes"] == 60 and d["degenerate_fraction"] == 1.0
+    assert d["weak_sigma"][1] == pytest.approx(31622.78, abs=0.01)
+    dt = records[1].scan.stamp - records[0].scan.stamp
+    assert d["degenerate_drift"] == pytest.approx(59 * (dt**2 + 0.01), rel=1e-6)
+    assert d["degenerate_drift"] == pytest.approx(3.275, abs=0.001) and not d["healthy"]
+    assert np.abs(result.trajectory[:, 1]).max() < 1e-9  # it stood still on the map: the truth went 5.9 m
+    m = {"n_scans": 60, "consistency": {"diverged": False, "healthy": False, "degenerate_drift": d["degenerate_drift"],
+                                        "degenerate_drift_at": d["degenerate_drift_at"]}}
+    assert "may have drifted 3.28 m along it" in _health_warning(m, config)
+    d = run_slam(_bare_corridor(True), SlamConfig(motion={"use_odometry": True})).diagnostics
+    assert d["n_keyframes"] == 17 and d["degenerate_drift_at"] == records[56].scan.stamp  # the last keyframe
+    assert d["degenerate_drift"] == pytest.approx(56 * (0.1 * 0.1 + 0.01))  # the odometry's 56 steps up to it
+
+
+def test_a_keyframe_counts_at_most_the_predictions_since_the_previous_one():
+    """A keyframe adds the smaller of its factor's std along the weak axis and the predictions'
+    stds summed since the previous keyframe (or since a matched step that held every direction)."""
+    from slam.scanslam import degenerate_drift
+
+    free = 31622.78
+    steps = [_step(weak=0.0, sigma=free, keyframe=False, predicted=0.05),
+             _step(weak=0.0, sigma=free, predicted=0.05),  # 0.1 m: two predictions
+             _step(weak=3.0, sigma=0.02, predicted=0.05),  # the match's own 0.02 m is smaller
+             _step(matched=False, keyframe=False, predicted=0.05),  # unmatched: its prediction still counts
+             _step(weak=0.0, sigma=free, predicted=0.05)]
+    assert degenerate_drift(steps, 10.0) == (pytest.approx(0.22), 4)
+    held = [_step(weak=0.0, sigma=free, keyframe=False, predicted=0.05), _step(keyframe=False, predicted=0.05),
+            _step(weak=0.0, sigma=free, predicted=0.05)]  # the matched step in between held every direction
+    assert degenerate_drift(held, 10.0) == (pytest.approx(0.05), 2)
+
+
+def test_degenerate_drift_uses_the_keyframe_factors_scaled_std(monkeypatch):
+    """With keyframes.correlation_length on a keyframe factor's covariance is its match's times a
+    scale (the run records it); the drift sums the factor's std, sqrt(scale) times the match's
+    (it summed the match's)."""
+    import dataclasses
+
+    import slam.scanslam as scanslam
+    from sim import simulate_records
+
+    steps = [_step(weak=3.0, sigma=0.1, scale=4.0), _step(weak=3.0, sigma=0.1, scale=1.0)]
+    assert scanslam.degenerate_drift(steps, 10.0) == (pytest.approx(0.3), 1)
+    seen: list[list[ScanStep]] = []
+    drift = scanslam.degenerate_drift
+    monkeypatch.setattr(scanslam, "degenerate_drift", lambda infos, points: (seen.append(infos), drift(infos, points))[1])
+    records = simulate_records("office", seed=0, duration=10.0, rate_hz=5.0)
+    base = SlamConfig(loop_closure=dataclasses.replace(SlamConfig().loop_closure, enabled=False))
+    wide = dataclasses.replace(base, keyframes=dataclasses.replace(base.keyframes, correlation_length=1.0))
+    run_slam(records, base), run_slam(records, wide)
+    scales = [[i.factor_scale for i in infos if i.new_keyframe and i.matched] for infos in seen]
+    assert scales[0] and set(scales[0]) == {1.0}
+    assert min(scales[1]) >= 1.0 and np.median(scales[1]) > 2.0
+
+
+def test_the_degenerate_check_has_its_intervals():
+    """consistency.degenerate_points 0 made no step degenerate (the check off, silently) and 1e300
+    every matched one; max_degenerate_drift 0 flagged any degenerate keyframe, 1e300 was taken.
+    Now each has an interval, and max_degenerate_drift at its largest, 1e6 m, turns the check off."""
+    from slam.config import SlamConfigError
+
+    with pytest.raises(SlamConfigError, match=r"^consistency.degenerate_points: must be in \[1, 8192\] points' worth "
+                                              r"\(half the most beams of a scan\), got 0$"):
+        SlamConfig(consistency={"degenerate_points": 0})
+    with pytest.raises(SlamConfigError, match=r"^consistency.degenerate_points: .*got 1e\+300$"):
+        SlamConfig(consistency={"degenerate_points": 1e300})
+    with pytest.raises(SlamConfigError, match=r"^consistency.max_degenerate_drift: must be in \[0.001, 1e\+06\] m "
+                                              r"\(1e\+06: the check off\), got 0$"):
+        SlamConfig(consistency={"max_degenerate_drift": 0})
+    with pytest.raises(SlamConfigError, match=r"^keyframes.correlation_length: must be 0 \(off\) or in"):
+        SlamConfig(keyframes={"correlation_length": -1})
+    cc = SlamConfig().consistency
+    assert cc.degenerate_stretch_flagged(0.31) and not cc.degenerate_stretch_flagged(0.3)
+    off = SlamConfig(consistency={"max_degenerate_drift": 1e6}).consistency
+    assert not off.degenerate_stretch_flagged(1e7)
