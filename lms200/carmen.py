@@ -75,7 +75,7 @@ from . import laser_geometry
 from .errors import InputError, LmsbenchError, LmsbenchWarning, LogFormatError, LogNotFoundError
 from .finite import fixed
 from .laser_geometry import LaserGeometry
-from .records import Pose2D, Record, SkipLog
+from .records import Pose2D, Record, SkipLog, stamp_problem
 from .scan import Scan, snap_angle, valid_ranges
 
 UNITS_PARAM = "lmsbench_range_units"
@@ -485,11 +485,12 @@ class CarmenReader:
                     pose = _pose(words, 1, "TRUEPOS")
                     _require(len(words) >= 8, "TRUEPOS needs at least 7 numbers")
                     _require(len(words) <= MAX_POSE_WORDS, _too_many_words("TRUEPOS", len(words)))
-                    truth = (pose, _few_floats(words[7:8], "TRUEPOS timestamp")[0])
+                    truth = (pose, _stamps(words, _few_floats(words[7:8], "TRUEPOS timestamp")[0], 9))
                 elif kind == "ODOM":
                     _require(len(words) >= 8, "ODOM needs x y theta tv rv accel timestamp")
                     _require(len(words) <= MAX_POSE_WORDS, _too_many_words("ODOM", len(words)))
                     values = _few_floats(words[1:8], "ODOM")
+                    values[6] = _stamps(words, values[6], 9)
                     if pairing is not None:  # odometry for the scans of a RAWLASER kind, which carry none
                         yield from pairing.odom(values[6], (values[0], values[1], values[2]))
                     elif chain is not None:
@@ -816,6 +817,18 @@ def _count(word: str, what: str) -> int:
     return int(value)
 
 
+def _stamps(words: list[str], ipc: float, logger_at: int) -> float:
+    """``ipc``, a line's ipc_timestamp (s), once it and the line's logger_timestamp (``words[logger_at]``,
+    where the line has it) are checked against :data:`lms200.records.MAX_STAMP_S` (a stamp of 1e300 s
+    was read; the logger_timestamp, not used, was not even read as a number)."""
+    problem = stamp_problem(ipc, "ipc_timestamp")
+    if problem is None and logger_at < len(words):
+        logger = _few_floats(words[logger_at : logger_at + 1], "logger_timestamp")[0]
+        problem = stamp_problem(logger, "logger_timestamp")
+    _require(problem is None, problem or "")
+    return ipc
+
+
 def _pose(words: list[str], start: int, what: str) -> Pose2D:
     _require(len(words) >= start + 3, f"{what} needs x y theta")
     return _finite_pose(_few_floats(words[start : start + 3], what), what)
@@ -850,6 +863,7 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     _require(len(words) == _field_count(kind, n), f"{kind} with {n} beams needs {_field_count(kind, n)} fields, got {len(words)}")
     ranges, u = _ranges(_range_floats(words[2 : 2 + n], f"{kind} ranges", cache), units, kind)
     tail = _few_floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
+    _stamps(words, tail[6], len(words) - 1)
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
     angle_min, increment = _exact_or_snapped(angle_min, exact[0]), _exact_or_snapped(increment, exact[1])
     range_max = geometry.range_max if geometry.range_max is not None else LMS200_MAX_RANGE[u]
@@ -894,7 +908,7 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind)
     tail = _few_floats(words[10 + n + m : 10 + n + m + (1 if kind.startswith("RAWLASER") else 12)],
                        f"{kind} timestamp" if kind.startswith("RAWLASER") else f"{kind} poses and timestamp")
-    stamp = tail[-1]
+    stamp = _stamps(words, tail[-1], len(words) - 1)
     # max_range 1e-300 made every reading invalid, silently, and -5 became 81.83 m (a review's reproduction)
     # (an override replaces it: a converter's placeholder 0 is then no error)
     _require(range_max_override is not None or laser_geometry.MIN_RANGE_MAX_M <= max_range <= laser_geometry.MAX_RANGE_M,

@@ -1,0 +1,92 @@
+"""Values no log holds, which the readers took (a fuzzing round of the CARMEN, bag and TUM readers):
+stamps of 1e300 s or below 0, angle steps finer than any rangefinder's, range_max beyond any
+rangefinder's, nan in a ROBOTLASER1 line's laser pose and a beam count written ``361.0``. Each is
+one line naming the file and line (or message), an ``LmsbenchError``, exit 2 from the CLI."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from lms200 import LogFormatError, read_log, read_tum, write_tum
+from lms200.errors import InputError, LmsbenchError
+
+STAMP_RULE = "is outside 0 .. 2^32 s (4294967296 s, 2106-02-07): a log's clock is UNIX time or seconds since its start"
+
+
+def _robotlaser(t: str = "5", logger: str | None = None, laser_pose: str = "0 0 0", count: str = "3",
+                resolution: str = "1.5707963", fov: str = "3.1415926", max_range: str = "80") -> str:
+    return (f"ROBOTLASER1 0 -1.5707963 {fov} {resolution} {max_range} 0.01 0 {count} 1 2 3 0 "
+            f"{laser_pose} 0 0 0 0 0 0 0 0 {t} h {t if logger is None else logger}\n")
+
+
+def _flaser(t: str, logger: str | None = None) -> str:
+    return f"FLASER 3 1 2 3 0 0 0 0 0 0 {t} h {t if logger is None else logger}\n"
+
+
+@pytest.mark.parametrize("line, kind, message", [
+    (_robotlaser("1e300"), "ROBOTLASER1", f"ipc_timestamp 1e+300 s {STAMP_RULE}"),
+    (_robotlaser("6", logger="1e300"), "ROBOTLASER1", f"logger_timestamp 1e+300 s {STAMP_RULE}"),
+    (_robotlaser("6", logger="-3"), "ROBOTLASER1", f"logger_timestamp -3.000000 s {STAMP_RULE}"),
+    (_robotlaser("6", logger="x"), "ROBOTLASER1", "logger_timestamp: 'x' is not a number"),
+    (_robotlaser("-1"), "ROBOTLASER1", f"ipc_timestamp -1.000000 s {STAMP_RULE}"),
+    (_robotlaser("4294967296.5"), "ROBOTLASER1", f"ipc_timestamp 4294967296.500000 s {STAMP_RULE}"),
+    ("ODOM 0 0 0 0 0 0 1e300 h 6\n", "ODOM", f"ipc_timestamp 1e+300 s {STAMP_RULE}"),
+    ("ODOM 0 0 0 0 0 0 6 h nan\n", "ODOM", f"logger_timestamp nan s {STAMP_RULE}"),
+    ("TRUEPOS 0 0 0 0 0 0 1e300 h 6\n", "TRUEPOS", f"ipc_timestamp 1e+300 s {STAMP_RULE}"),
+])
+def test_a_carmen_stamp_outside_0_to_2_32_s_is_a_malformed_line(tmp_path: Path, line: str, kind: str,
+                                                                  message: str) -> None:
+    # was read: `lmsbench info` said "duration 1e+300 s", "scan rate 1e-300 scans/s", exit 0
+    path = tmp_path / "t.log"
+    path.write_text(_robotlaser("5") + line)
+    with pytest.raises(LogFormatError) as err:
+        list(read_log(path))
+    assert str(err.value) == f"{path}:2: malformed {kind} line: {message}"
+
+
+def test_a_flaser_stamp_of_1e300_s_is_refused_by_info_in_one_line(tmp_path: Path, capsys) -> None:  # noqa: ANN001
+    from experiments.cli import main
+
+    path = tmp_path / "t.log"
+    path.write_text(_flaser("5") + _flaser("1e300"))
+    assert main(["info", str(path)]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"lmsbench info: error: {path}:2: malformed FLASER line: ipc_timestamp 1e+300 s {STAMP_RULE} "
+        "(--skip-bad-lines skips malformed lines, each reported)")
+
+
+def test_stamps_at_the_bounds_read(tmp_path: Path) -> None:
+    path = tmp_path / "t.log"
+    path.write_text("ODOM 0 0 0 0 0 0 0 h 0\n" + _robotlaser("0") + _robotlaser("4294967296", logger="0"))
+    assert [r.scan.stamp for r in read_log(path)] == [0.0, 4294967296.0]
+
+
+@pytest.mark.parametrize("stamp, shown", [("1e300", "1e+300"), ("-0.5", "-0.500000"), ("inf", None)])
+def test_a_tum_time_outside_0_to_2_32_s_is_refused_naming_its_line(tmp_path: Path, stamp: str, shown: str | None) -> None:
+    path = tmp_path / "t.tum"
+    path.write_text(f"1 0 0 0 0 0 0 1\n{stamp} 0 0 0 0 0 0 1\n")
+    with pytest.raises(LogFormatError) as err:
+        read_tum(path)
+    if shown is None:  # refused before, as non-finite
+        assert str(err.value).startswith(f"{path}:2: TUM row has a non-finite number")
+    else:
+        assert str(err.value) == f"{path}:2: TUM time {shown} s {STAMP_RULE}"
+
+
+def test_write_tum_refuses_a_stamp_read_tum_refuses(tmp_path: Path) -> None:
+    with pytest.raises(InputError) as err:
+        write_tum(tmp_path / "t.tum", [1.0, 1e300], [[0.0, 0.0, 0.0]] * 2)
+    assert str(err.value) == "stamps: stamp 1 (1e+300 s) is outside 0 .. 2^32 s, which read_tum refuses (lms200.records.MAX_STAMP_S)"
+    assert not (tmp_path / "t.tum").exists()
+
+
+def test_a_relations_time_outside_0_to_2_32_s_is_refused_naming_its_line(tmp_path: Path) -> None:
+    from slam.metrics import read_relations
+
+    path = tmp_path / "r.relations"
+    path.write_text("1 2 0 0 0 0 0 0\n3 1e300 0 0 0 0 0 0\n")
+    with pytest.raises(LmsbenchError) as err:
+        read_relations(path)
+    assert str(err.value) == f"{path}:2: relation row's t2 1e+300 s {STAMP_RULE}"
