@@ -30,7 +30,8 @@ import numpy as np
 
 from .codes import finite_negative
 from .errors import InputError, LmsbenchError, LogNotFoundError
-from .records import Pose2D, Record, SkipLog
+from . import laser_geometry
+from .records import Pose2D, Record, SkipLog, stamp_problem
 from .scan import Scan, snap_float32_angle
 from .tum import MAX_TILT_DEG, quaternion_to_yaw, tilt_deg
 from .timing import lms200_shaped, mirror_time_increment, scan_period, smallest_range
@@ -387,9 +388,16 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                 if np.float32(scan.angle_increment) == 0:  # stored as 0, which no reader takes ("must be > 0, got 0.0")
                     raise InputError(f"records: item {seq}: angle_increment {scan.angle_increment:g} rad cannot be stored "
                                      f"in a bag (a LaserScan's fields are float32, in which it is 0)")
+                if scan.angle_increment < laser_geometry.MIN_RESOLUTION_RAD:  # a bag its own reader refuses
+                    raise InputError(f"records: item {seq}: angle_increment {scan.angle_increment:g} rad is finer than "
+                                     f"{laser_geometry.MIN_RESOLUTION_RAD:g} rad, which the bag reader refuses")
                 if scan.range_max > FLOAT32_MAX or np.any(np.isfinite(scan.ranges) & (scan.ranges > FLOAT32_MAX)):
                     raise InputError(f"records: item {seq}: a range or range_max beyond {FLOAT32_MAX:.4g} m cannot be "
                                      f"stored in a bag (a LaserScan's fields are float32), got range_max {scan.range_max:g} m")
+                if not laser_geometry.MIN_RANGE_MAX_M <= scan.range_max <= laser_geometry.MAX_RANGE_M:
+                    raise InputError(f"records: item {seq}: range_max {scan.range_max:g} m is outside "
+                                     f"[{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, which "
+                                     "the bag reader refuses")
                 sec, nsec = divmod(ns, 1_000_000_000)
                 header_kw = {"stamp": Time(sec=sec, nanosec=nsec), "frame_id": "laser"}
 
@@ -498,6 +506,11 @@ def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
                     else f"{range_max:g} m, not above range_min ({range_min:g} m)")
             raise ValueError(f"range_max is {what}, which no scan takes (a reading's validity is judged against "
                              f"it); {RANGE_MAX_HINT}")
+        # the CARMEN reader's and --laser-range-max's bounds: range_max 1e30 m was read (a 0.05 m one too)
+        if not laser_geometry.MIN_RANGE_MAX_M <= range_max <= laser_geometry.MAX_RANGE_M:
+            raise ValueError(f"range_max is {range_max:g} m, outside [{laser_geometry.MIN_RANGE_MAX_M:g}, "
+                             f"{laser_geometry.MAX_RANGE_M:g}] m, which no laser rangefinder's maximum range lies "
+                             f"outside; {RANGE_MAX_HINT}")
     elif math.isfinite(range_min) and range_max <= range_min:
         raise ValueError(f"the range_max override ({range_max:g} m, --laser-range-max) is not above the scan's "
                          f"range_min ({range_min:g} m); give a larger one")
@@ -512,19 +525,31 @@ def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
     angle_min, increment = float(msg.angle_min), float(msg.angle_increment)
     if increment < 0 and ranges.size > 0:  # a laser mounted upside down sweeps clockwise: same bearings, ascending
         ranges, angle_min, increment = ranges[::-1].copy(), angle_min + (ranges.size - 1) * increment, -increment
+    # the bound of the CARMEN reader and the geometry overrides, compared in the message's float32 (in which
+    # 1e-5 rad is 9.99999975e-06): an angle_increment of 1e-30 rad was read
+    if 0 < increment < MIN_INCREMENT_FLOAT32:
+        raise ValueError(f"angle_increment is {increment:.6g} rad ({math.degrees(increment):.6g} deg), finer than any "
+                         f"rangefinder's step (at least {laser_geometry.MIN_RESOLUTION_RAD:g} rad, "
+                         f"{math.degrees(laser_geometry.MIN_RESOLUTION_RAD):.5f} deg)")
+    stamp = _stamp_of(msg)
+    problem = stamp_problem(stamp, "header stamp")
+    if problem is not None:  # a ROS 2 stamp may be negative (int32 seconds)
+        raise ValueError(problem)
     return Scan(
         ranges,
         snap_float32_angle(angle_min),  # float32 in the message: back onto the 0.05 deg grid where its rounding explains
         snap_float32_angle(increment),
         range_min,
         range_max,
-        _stamp_of(msg),
+        stamp,
     )
 
 
 #: m: the largest finite float32, a LaserScan's range fields (1e300 was rosbags' raw OverflowError
 #: "float too large to pack with f format" and a RuntimeWarning from the float32 cast)
 FLOAT32_MAX = float(np.finfo(np.float32).max)
+#: rad: ``laser_geometry.MIN_RESOLUTION_RAD`` as a LaserScan's float32 stores it (a bag's finest angle_increment)
+MIN_INCREMENT_FLOAT32 = float(np.float32(laser_geometry.MIN_RESOLUTION_RAD))
 
 _TIME = "builtin_interfaces/msg/Time"
 #: how ROS lays out the start of a LaserScan (its header, then the header's stamp), ROS 1 and ROS 2:

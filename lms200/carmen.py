@@ -11,8 +11,9 @@ Formats (one message a line, ``#`` comments; messages of other kinds, named in c
   side_safety turn_axis ipc_timestamp hostname logger_timestamp`` (ROBOTLASER2: the rear laser);
   the declared field of view must hold the count at the declared resolution (fov = n x res, or
   (n - 1) x res), lines with the same declared geometry must carry the same count (of the first
-  ``MAX_GEOMETRIES`` geometries a pass meets), and max_range
-  must lie in [MIN_RANGE_MAX_M, MAX_RANGE_M] (:mod:`lms200.laser_geometry`).
+  ``MAX_GEOMETRIES`` geometries a pass meets), max_range
+  must lie in [MIN_RANGE_MAX_M, MAX_RANGE_M] and the resolution be at least MIN_RESOLUTION_RAD
+  (:mod:`lms200.laser_geometry`).
 - ``RAWLASER1`` .. ``RAWLASER4`` (CARMEN 0.7 loggers): the ROBOTLASER1 fields up to the remissions,
   then ``ipc_timestamp hostname logger_timestamp``; no poses, same checks: ``.odom`` is interpolated
   from the ODOM lines around the scan's stamp (:mod:`lms200.carmen_odom`), else None.
@@ -903,6 +904,11 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     _require(min(abs(steps - n), abs(steps - (n - 1))) <= ROBOTLASER_FIT_TOLERANCE_BEAMS,
              f"declares a field of view of {fixed(math.degrees(fov), 3)} deg at {fixed(math.degrees(resolution), 4)} deg, "
              f"which holds {fixed(steps, 1)} steps, but carries {n} beams (fov must be n or n - 1 steps)")
+    # the bound of the geometry overrides and the bag reader: 1e-7 rad was read
+    _require(resolution >= laser_geometry.MIN_RESOLUTION_RAD,
+             f"angular resolution must be at least {laser_geometry.MIN_RESOLUTION_RAD:g} rad "
+             f"({math.degrees(laser_geometry.MIN_RESOLUTION_RAD):.5f} deg; finer than any rangefinder's step), "
+             f"got {words[4]}")
     if units is None and accuracy in (0.01, 0.001):
         units = "cm" if accuracy == 0.01 else "mm"
     ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind)
@@ -1061,8 +1067,9 @@ def write_carmen(
 
     Raises:
         InputError: an unknown ``fmt``, a ``hostname`` that is not one word of printable ASCII, scans of mixed units, or a scan whose range_max lies outside
-            [MIN_RANGE_MAX_M, MAX_RANGE_M] (0.1 to 10000 m), which the reader refuses (such a log was
-            written, and could not be read back).
+            [MIN_RANGE_MAX_M, MAX_RANGE_M] (0.1 to 10000 m), an angle_increment under MIN_RESOLUTION_RAD
+            (1e-5 rad) or a stamp outside 0 .. ``records.MAX_STAMP_S`` (2^32 s), which the reader refuses
+            (such a log was written, and could not be read back).
     """
     if fmt not in ("robotlaser1", "flaser"):
         raise InputError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
@@ -1089,6 +1096,14 @@ def write_carmen(
                     raise InputError(f"records: item {count}: range_max {scan.range_max:g} m is outside "
                                      f"[{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, which "
                                      "the CARMEN reader refuses (the log could not be read back)")
+                if scan.angle_increment < laser_geometry.MIN_RESOLUTION_RAD:
+                    raise InputError(f"records: item {count}: angle_increment {scan.angle_increment:g} rad is finer "
+                                     f"than {laser_geometry.MIN_RESOLUTION_RAD:g} rad, which the CARMEN reader refuses "
+                                     "(the log could not be read back)")
+                problem = stamp_problem(scan.stamp, "stamp")
+                if problem is not None:
+                    raise InputError(f"records: item {count}: {problem}; the CARMEN reader refuses it (the log could "
+                                     "not be read back)")
                 u = _units_of(scan)
                 if units is None:
                     units = u

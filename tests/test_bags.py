@@ -23,7 +23,8 @@ def _scan(t: float, v: float = 1.0) -> Scan:
     return Scan(np.full(5, v), -0.1, 0.05, 0.0, 8.0, stamp=t)
 
 
-def _ros2_bag(path: Path, messages: list[tuple], beams: int = 3, range_max: float = 10.0) -> Path:
+def _ros2_bag(path: Path, messages: list[tuple], beams: int = 3, range_max: float = 10.0,
+             increment: float = 0.01) -> Path:
     """A ROS 2 bag written with rosbags itself: ``messages`` are (topic, bag time s, header stamp s,
     payload) in the order written; payload a range value for /scan (``beams`` of it), (x, y, qx, qy, qz, qw) for a
     pose topic (PoseStamped)."""
@@ -42,7 +43,7 @@ def _ros2_bag(path: Path, messages: list[tuple], beams: int = 3, range_max: floa
             header = H(stamp=Time(sec=ns // 10**9, nanosec=ns % 10**9), frame_id="x")
             if topic == "/scan":
                 kind = "sensor_msgs/msg/LaserScan"
-                msg = LS(header=header, angle_min=-1.0, angle_max=-1.0 + (beams - 1) * 0.01, angle_increment=0.01,
+                msg = LS(header=header, angle_min=-1.0, angle_max=-1.0 + (beams - 1) * increment, angle_increment=increment,
                          time_increment=0.0, scan_time=0.0, range_min=0.1, range_max=range_max,
                          ranges=np.full(beams, payload, np.float32),
                          intensities=np.zeros(0, np.float32))

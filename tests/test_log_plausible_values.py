@@ -90,3 +90,84 @@ def test_a_relations_time_outside_0_to_2_32_s_is_refused_naming_its_line(tmp_pat
     with pytest.raises(LmsbenchError) as err:
         read_relations(path)
     assert str(err.value) == f"{path}:2: relation row's t2 1e+300 s {STAMP_RULE}"
+
+
+# -- bags: the CARMEN reader's and the overrides' bounds --------------------------------------------
+RANGE_HINT = "give the sensor's maximum range instead: --laser-range-max M (read_log(..., geometry=LaserGeometry(range_max=M)))"
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(increment=1e-30), "angle_increment is 1e-30 rad (5.72958e-29 deg), finer than any rangefinder's step "
+                            "(at least 1e-05 rad, 0.00057 deg)"),
+    (dict(increment=9e-6), "angle_increment is 9e-06 rad (0.000515662 deg), finer than any rangefinder's step "
+                           "(at least 1e-05 rad, 0.00057 deg)"),
+    (dict(range_max=1e30), f"range_max is 1e+30 m, outside [0.1, 10000] m, which no laser rangefinder's maximum range "
+                           f"lies outside; {RANGE_HINT}"),
+    (dict(range_max=10001.0), f"range_max is 10001 m, outside [0.1, 10000] m, which no laser rangefinder's maximum "
+                              f"range lies outside; {RANGE_HINT}"),
+])
+def test_a_bag_scan_of_an_impossible_step_or_range_max_is_a_bag_error(tmp_path: Path, capsys, kw: dict,  # noqa: ANN001
+                                                                       message: str) -> None:
+    # were read: `lmsbench info` showed a resolution of 5.73e-29 deg, or scans of range_max 1e30 m
+    from experiments.cli import main
+    from lms200.bag import BagError
+    from test_bags import _ros2_bag
+
+    bag = _ros2_bag(tmp_path / "b", [("/scan", 1.0, 1.0, 2.0), ("/scan", 1.1, 1.1, 2.0)], **kw)
+    with pytest.raises(BagError) as err:
+        list(read_log(bag))
+    assert str(err.value) == f"{bag}: topic /scan message 0: cannot read: {message}"
+    assert main(["info", str(bag)]) == 2
+    assert capsys.readouterr().err.strip() == f"lmsbench info: error: {bag}: topic /scan message 0: cannot read: {message}"
+
+
+def test_a_bag_at_the_bounds_reads_and_an_override_replaces_its_range_max(tmp_path: Path) -> None:
+    from lms200.laser_geometry import LaserGeometry
+    from test_bags import _ros2_bag
+
+    bag = _ros2_bag(tmp_path / "b", [("/scan", 1.0, 1.0, 2.0)], range_max=10000.0, increment=1e-5)
+    (scan,) = [r.scan for r in read_log(bag)]
+    assert scan.range_max == 10000.0 and scan.angle_increment == pytest.approx(1e-5, rel=1e-7)
+    far = _ros2_bag(tmp_path / "far", [("/scan", 1.0, 1.0, 2.0)], range_max=1e30)
+    assert [r.scan.range_max for r in read_log(far, geometry=LaserGeometry(range_max=8.0))] == [8.0]
+
+
+def test_a_bag_scan_stamped_before_0_is_a_bag_error(tmp_path: Path) -> None:
+    from lms200.bag import BagError
+    from test_bags import _ros2_bag
+
+    bag = _ros2_bag(tmp_path / "b", [("/scan", 1.0, -5.0, 2.0)])
+    with pytest.raises(BagError) as err:
+        list(read_log(bag))
+    assert str(err.value) == f"{bag}: topic /scan message 0: cannot read: header stamp -5.000000 s {STAMP_RULE}"
+
+
+@pytest.mark.parametrize("fmt", ["robotlaser1", "flaser", "bag"])
+def test_write_log_refuses_a_step_range_max_or_stamp_its_reader_refuses(tmp_path: Path, fmt: str) -> None:
+    import numpy as np
+
+    from lms200 import Record, Scan, write_log
+
+    good = Scan(np.full(3, 2.0), -0.05, 0.05, 0.0, 8.0, stamp=1.0)  # centred, as FLASER needs
+    bad = {"angle_increment": Scan(np.full(3, 2.0), -1e-7, 1e-7, 0.0, 8.0, stamp=1.0),
+           "range_max": Scan(np.full(3, 2.0), -0.05, 0.05, 0.0, 2e4, stamp=1.0)}
+    if fmt != "bag":
+        bad["stamp"] = good.replace(stamp=1e300)
+    for field, scan in bad.items():
+        path = tmp_path / (f"{field}-{fmt}" + (".clf" if fmt != "bag" else ""))
+        kw = {} if fmt == "bag" else {"fmt": fmt}
+        with pytest.raises(InputError, match=rf"^records: item 1: {field} "):
+            write_log(path, [Record(good), Record(scan)], **kw)
+
+
+@pytest.mark.parametrize("resolution, fov", [("0.0000001", "0.0000003"), ("0.000009", "0.000027")])
+def test_a_robotlaser_step_finer_than_1e_5_rad_is_a_malformed_line(tmp_path: Path, resolution: str, fov: str) -> None:
+    # was read ("resolution 5.73e-06 deg" in info), though --laser-resolution-deg refuses a step under 1e-5 rad
+    path = tmp_path / "t.log"
+    path.write_text(_robotlaser("5") + _robotlaser("6", resolution=resolution, fov=fov))
+    with pytest.raises(LogFormatError) as err:
+        list(read_log(path))
+    assert str(err.value) == (f"{path}:2: malformed ROBOTLASER1 line: angular resolution must be at least 1e-05 rad "
+                              f"(0.00057 deg; finer than any rangefinder's step), got {resolution}")
+    path.write_text(_robotlaser("5", resolution="0.00001", fov="0.00003"))
+    assert [r.scan.angle_increment for r in read_log(path)] == [1e-5]

@@ -93,11 +93,15 @@ def test_calibrate_and_info_show_a_tiny_resolution_as_it_is(tmp_path: Path, caps
             words[3:5] = ["3.6e-288", "1e-290"]
             lines[k] = " ".join(words)
     log.write_text("".join(lines))
-    assert main(["calibrate", str(log), "--out", str(tmp_path / "s.yaml")]) == 2
-    assert capsys.readouterr().err == (f"lmsbench calibrate: error: {log}: angular resolution 5.73e-289 deg: the LMS200 "
-                                       "model has 0.25, 0.5 or 1 deg\n")
-    assert main(["info", str(log)]) == 0
-    assert "\n  resolution      5.73e-289 deg\n" in capsys.readouterr().out
+    # the reader refuses the line now (a step under laser_geometry.MIN_RESOLUTION_RAD, 1e-5 rad): both commands did not
+    # show it as 0 but took it (calibrate said "angular resolution 5.73e-289 deg: the LMS200 model has ...", info exit 0)
+    first = 1 + next(k for k, line in enumerate(lines) if line.startswith("ROBOTLASER1 "))
+    for command in (["calibrate", str(log), "--out", str(tmp_path / "s.yaml")], ["info", str(log)]):
+        assert main(command) == 2
+        assert capsys.readouterr().err == (
+            f"lmsbench {command[0]}: error: {log}:{first}: malformed ROBOTLASER1 line: angular resolution must be at "
+            "least 1e-05 rad (0.00057 deg; finer than any rangefinder's step), got 1e-290 (--skip-bad-lines skips "
+            "malformed lines, each reported)\n")
 
 
 def test_a_tum_stamp_near_1e308_is_quoted_compactly(tmp_path: Path) -> None:
