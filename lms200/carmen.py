@@ -34,7 +34,7 @@ gives it for the laser lines that follow.
 One laser is read per pass (``topic``: a message kind); by default the first kind that carries
 poses (FLASER, RLASER, ROBOTLASER1 / 2; from a line whose fields add up to its counts) up to
 ``DEFAULT_TOPIC_LINES`` lines after the first laser line, else the first RAWLASER kind: CARMEN 0.7 loggers write each reading twice, as RAWLASER1 and as ROBOTLASER1.
-Every failure while reading (a malformed line, a count that is not a finite non-negative integer,
+Every failure while reading (a malformed line, a count that is not a non-negative integer written in digits,
 compressed data that cannot be decompressed, a line over ``MAX_LINE_CHARS``) is a ``LogFormatError`` naming
 file and line; ``skip_bad_lines`` records it in ``stats.skipped`` (the first
 ``lms200.records.MAX_SKIPPED_KEPT``; ``stats.skipped_count`` counts them all) and goes on.
@@ -807,15 +807,20 @@ def _is_number(word: str) -> bool:
 
 
 def _count(word: str, what: str) -> int:
-    """A count field: a finite non-negative integer (written ``361`` or ``361.0``; not ``3_0``)."""
-    try:
-        value = float(word)
-        _require("_" not in word, "")
-    except ValueError:
-        raise ValueError(f"{what} {word!r} is not a number") from None
-    if not math.isfinite(value) or value < 0 or value != math.floor(value):
-        raise ValueError(f"{what} must be a finite non-negative integer, got {word!r}")
-    return int(value)
+    """A count field: a non-negative integer written as one (``361``; not ``361.0``, ``3.61e2`` or
+    ``3_0``): CARMEN reads a count with atoi, which takes ``3.61e2`` as 3, so a count in any other
+    form is no count CARMEN's own tools read alike (``361.0`` was taken as 361, here and nowhere else)."""
+    if _DIGITS.fullmatch(word) is None:
+        try:
+            float(word)
+            _require("_" not in word, "")
+        except ValueError:
+            raise ValueError(f"{what} {word!r} is not a number") from None
+        raise ValueError(f"{what} must be a non-negative integer written in digits, got {word!r}")
+    return int(word)
+
+
+_DIGITS = re.compile(r"[0-9]+")  # ASCII digits only: int() also takes '٣' and '+3'
 
 
 def _stamps(words: list[str], ipc: float, logger_at: int) -> float:
@@ -869,6 +874,7 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     angle_min, increment = _exact_or_snapped(angle_min, exact[0]), _exact_or_snapped(increment, exact[1])
     range_max = geometry.range_max if geometry.range_max is not None else LMS200_MAX_RANGE[u]
     scan = Scan(ranges, angle_min, increment, range_min, range_max, tail[6])
+    _finite_pose(tail[0:3], f"{kind} laser")  # (not read, but no pose: nan was taken)
     return scan, _finite_pose(tail[3:6], f"{kind} odometry")
 
 
@@ -925,7 +931,10 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     scan = Scan(ranges, snap(start), snap(resolution), range_min, range_max, stamp)
     if kind.startswith("RAWLASER"):
         return scan, None
-    return scan, _finite_pose(tail[3:6], f"{kind} robot pose")
+    # the laser pose, speeds, safety distances and turn axis are not read, but nan or inf is no such value (was taken)
+    _finite_pose(tail[0:3], f"{kind} laser")
+    _require(all(map(math.isfinite, tail[6:11])), f"{kind} speeds, safety distances or turn axis are not finite")
+    return scan, _finite_pose(tail[3:6], f"{kind} robot")
 
 
 # ---------------------------------------------------------------------------------------------

@@ -171,3 +171,40 @@ def test_a_robotlaser_step_finer_than_1e_5_rad_is_a_malformed_line(tmp_path: Pat
                               f"(0.00057 deg; finer than any rangefinder's step), got {resolution}")
     path.write_text(_robotlaser("5", resolution="0.00001", fov="0.00003"))
     assert [r.scan.angle_increment for r in read_log(path)] == [1e-5]
+
+
+# -- ROBOTLASER1 / FLASER fields that are not read ---------------------------------------------------
+@pytest.mark.parametrize("line, message", [
+    (_robotlaser("6", laser_pose="nan 0 0"), "ROBOTLASER1 laser pose is not finite"),
+    (_robotlaser("6", laser_pose="0 0 inf"), "ROBOTLASER1 laser pose is not finite"),
+    ("ROBOTLASER1 0 -1.5707963 3.1415926 1.5707963 80 0.01 0 3 1 2 3 0 0 0 0 0 0 0 nan 0 0 0 0 6 h 6\n",
+     "ROBOTLASER1 speeds, safety distances or turn axis are not finite"),
+    ("ROBOTLASER1 0 -1.5707963 3.1415926 1.5707963 80 0.01 0 3 1 2 3 0 0 0 0 0 nan 0 0 0 0 0 0 6 h 6\n",
+     "ROBOTLASER1 robot pose is not finite"),
+    ("FLASER 3 1 2 3 nan inf 0 0 0 0 6 h 6\n", "FLASER laser pose is not finite"),
+])
+def test_a_non_finite_laser_pose_is_a_malformed_line(tmp_path: Path, line: str, message: str) -> None:
+    # the laser pose was read as nan / inf without a word (the robot pose and odometry were refused)
+    path = tmp_path / "t.log"
+    path.write_text((_flaser("1") if line.startswith("FLASER") else _robotlaser("1")) + line)
+    with pytest.raises(LogFormatError) as err:
+        list(read_log(path))
+    assert str(err.value) == f"{path}:2: malformed {line.split()[0]} line: {message}"
+
+
+@pytest.mark.parametrize("line, word", [
+    (_robotlaser("6", count="3.0"), "3.0"),
+    (_robotlaser("6", count="+3"), "+3"),
+    ("ROBOTLASER1 0 -1.5707963 3.1415926 1.5707963 80 0.01 0 3 1 2 3 0.0 0 0 0 0 0 0 0 0 0 0 0 6 h 6\n", "0.0"),
+    ("FLASER 3.0 1 2 3 0 0 0 0 0 0 6 h 6\n", "3.0"),
+    ("FLASER 3e0 1 2 3 0 0 0 0 0 0 6 h 6\n", "3e0"),
+])
+def test_a_count_not_written_in_digits_is_a_malformed_line(tmp_path: Path, line: str, word: str) -> None:
+    # '361.0' was read as 361 beams (CARMEN's atoi reads '3.61e2' as 3: only digits mean one count to both)
+    kind = line.split()[0]
+    path = tmp_path / "t.log"
+    path.write_text((_flaser("1") if kind == "FLASER" else _robotlaser("1")) + line)
+    what = "remission count" if word == "0.0" else "beam count"
+    with pytest.raises(LogFormatError) as err:
+        list(read_log(path))
+    assert str(err.value) == f"{path}:2: malformed {kind} line: {what} must be a non-negative integer written in digits, got {word!r}"
