@@ -517,7 +517,7 @@ def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
     ranges = np.asarray(msg.ranges, dtype=np.float64)
     if override and range_max <= FLOAT32_MAX and np.asarray(msg.ranges).dtype == np.float32:
         # compared in the message's float32, as its own range_max is: a reading stored as float32(M), just above
-        # M for most M (81.83000183 m for 81.83 m), is at the limit, not beyond it (it read invalid)
+        # M for about half of all M (81.83 m -> 81.83000183), is at the limit, not beyond it (it read invalid)
         at_limit = float(np.float32(range_max))
         if at_limit > range_max:
             ranges[ranges == at_limit] = range_max

@@ -942,7 +942,7 @@ def test_a_bags_angles_are_snapped_only_as_far_as_float32_explains(tmp_path: Pat
 
 def test_a_range_max_override_is_compared_in_the_bags_float32(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     """A review: --laser-range-max M on a bag compared its float32 readings in float64, so a reading
-    stored as float32(M), above M for most M (81.83000183 m for 81.83 m), read invalid: `lmsbench info
+    stored as float32(M), above M for about half of all M (81.83 m -> 81.83000183), read invalid: `lmsbench info
     bag --laser-range-max 81.83` said "invalid 100.00 %" of readings written as 81.83 m. It is at the
     limit, valid, as a reading equal to the bag's own (float32) range_max is; the next float32 above stays beyond."""
     from experiments.cli import main
