@@ -495,13 +495,15 @@ def compare(
         from tqdm import tqdm
 
         bar = tqdm(total=total, unit="scan", desc="compare", disable=None)  # None: on a terminal only
-    # each source's first scan is checked before any work: a log of too wide scans was read whole for its
-    # range noise (sigma "auto") before compare() refused its scan 0 (the CLI checks it while parsing)
-    records = [_first_checked(src) for src in srcs]
     rows: list[dict[str, Any]] = []
     warmed = False
     rd_cfg = realdata_config or RealDataConfig()
-    for src, src_records in zip(srcs, records):
+    for src in srcs:
+        # the source's first scan is checked before its range noise is estimated: a log of too wide scans was
+        # read whole for its noise (sigma "auto") before compare() refused its scan 0 (the CLI checks it while
+        # parsing); checked here, source by source, so that one log is open at a time (first scans taken for
+        # every source before the loop kept every log's reader open: 60 logs, "too many open files")
+        src_records = _first_checked(src)
         sigma_r = _source_sigma(src, sigma)
         src_runs = _with_noise(runs, params, _extractor_noise(src, sigma_r), _fit_noise(src), _bearing_noise(src))
         src.ran = {name: cfg for name, _, cfg in src_runs}

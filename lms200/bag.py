@@ -30,7 +30,8 @@ import numpy as np
 
 from .codes import finite_negative
 from .errors import InputError, LmsbenchError, LogNotFoundError
-from .records import Pose2D, Record, SkipLog
+from . import laser_geometry
+from .records import Pose2D, Record, SkipLog, stamp_problem
 from .scan import Scan, snap_float32_angle
 from .tum import MAX_TILT_DEG, quaternion_to_yaw, tilt_deg
 from .timing import lms200_shaped, mirror_time_increment, scan_period, smallest_range
@@ -387,9 +388,16 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                 if np.float32(scan.angle_increment) == 0:  # stored as 0, which no reader takes ("must be > 0, got 0.0")
                     raise InputError(f"records: item {seq}: angle_increment {scan.angle_increment:g} rad cannot be stored "
                                      f"in a bag (a LaserScan's fields are float32, in which it is 0)")
+                if scan.angle_increment < laser_geometry.MIN_RESOLUTION_RAD:  # a bag its own reader refuses
+                    raise InputError(f"records: item {seq}: angle_increment {scan.angle_increment:g} rad is finer than "
+                                     f"{laser_geometry.MIN_RESOLUTION_RAD:g} rad, which the bag reader refuses")
                 if scan.range_max > FLOAT32_MAX or np.any(np.isfinite(scan.ranges) & (scan.ranges > FLOAT32_MAX)):
                     raise InputError(f"records: item {seq}: a range or range_max beyond {FLOAT32_MAX:.4g} m cannot be "
                                      f"stored in a bag (a LaserScan's fields are float32), got range_max {scan.range_max:g} m")
+                if not laser_geometry.MIN_RANGE_MAX_M <= scan.range_max <= laser_geometry.MAX_RANGE_M:
+                    raise InputError(f"records: item {seq}: range_max {scan.range_max:g} m is outside "
+                                     f"[{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, which "
+                                     "the bag reader refuses")
                 sec, nsec = divmod(ns, 1_000_000_000)
                 header_kw = {"stamp": Time(sec=sec, nanosec=nsec), "frame_id": "laser"}
 
@@ -498,13 +506,18 @@ def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
                     else f"{range_max:g} m, not above range_min ({range_min:g} m)")
             raise ValueError(f"range_max is {what}, which no scan takes (a reading's validity is judged against "
                              f"it); {RANGE_MAX_HINT}")
+        # the CARMEN reader's and --laser-range-max's bounds: range_max 1e30 m was read (a 0.05 m one too)
+        if not laser_geometry.MIN_RANGE_MAX_M <= range_max <= laser_geometry.MAX_RANGE_M:
+            raise ValueError(f"range_max is {range_max:g} m, outside [{laser_geometry.MIN_RANGE_MAX_M:g}, "
+                             f"{laser_geometry.MAX_RANGE_M:g}] m, which no laser rangefinder's maximum range lies "
+                             f"outside; {RANGE_MAX_HINT}")
     elif math.isfinite(range_min) and range_max <= range_min:
         raise ValueError(f"the range_max override ({range_max:g} m, --laser-range-max) is not above the scan's "
                          f"range_min ({range_min:g} m); give a larger one")
     ranges = np.asarray(msg.ranges, dtype=np.float64)
     if override and range_max <= FLOAT32_MAX and np.asarray(msg.ranges).dtype == np.float32:
         # compared in the message's float32, as its own range_max is: a reading stored as float32(M), just above
-        # M for most M (81.83000183 m for 81.83 m), is at the limit, not beyond it (it read invalid)
+        # M for about half of all M (81.83 m -> 81.83000183), is at the limit, not beyond it (it read invalid)
         at_limit = float(np.float32(range_max))
         if at_limit > range_max:
             ranges[ranges == at_limit] = range_max
@@ -512,19 +525,31 @@ def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
     angle_min, increment = float(msg.angle_min), float(msg.angle_increment)
     if increment < 0 and ranges.size > 0:  # a laser mounted upside down sweeps clockwise: same bearings, ascending
         ranges, angle_min, increment = ranges[::-1].copy(), angle_min + (ranges.size - 1) * increment, -increment
+    # the bound of the CARMEN reader and the geometry overrides, compared in the message's float32 (in which
+    # 1e-5 rad is 9.99999975e-06): an angle_increment of 1e-30 rad was read
+    if 0 < increment < MIN_INCREMENT_FLOAT32:
+        raise ValueError(f"angle_increment is {increment:.6g} rad ({math.degrees(increment):.6g} deg), finer than any "
+                         f"rangefinder's step (at least {laser_geometry.MIN_RESOLUTION_RAD:g} rad, "
+                         f"{math.degrees(laser_geometry.MIN_RESOLUTION_RAD):.5f} deg)")
+    stamp = _stamp_of(msg)
+    problem = stamp_problem(stamp, "header stamp")
+    if problem is not None:  # a ROS 2 stamp may be negative (int32 seconds)
+        raise ValueError(problem)
     return Scan(
         ranges,
         snap_float32_angle(angle_min),  # float32 in the message: back onto the 0.05 deg grid where its rounding explains
         snap_float32_angle(increment),
         range_min,
         range_max,
-        _stamp_of(msg),
+        stamp,
     )
 
 
 #: m: the largest finite float32, a LaserScan's range fields (1e300 was rosbags' raw OverflowError
 #: "float too large to pack with f format" and a RuntimeWarning from the float32 cast)
 FLOAT32_MAX = float(np.finfo(np.float32).max)
+#: rad: ``laser_geometry.MIN_RESOLUTION_RAD`` as a LaserScan's float32 stores it (a bag's finest angle_increment)
+MIN_INCREMENT_FLOAT32 = float(np.float32(laser_geometry.MIN_RESOLUTION_RAD))
 
 _TIME = "builtin_interfaces/msg/Time"
 #: how ROS lays out the start of a LaserScan (its header, then the header's stamp), ROS 1 and ROS 2:
@@ -689,7 +714,8 @@ class _DefinitionBudget:
         self.chars = 0
         self.fields = 0
         self.parsed: dict[tuple, Any] = {}  # (parser, text, args): its types, parsed once
-        self.mcap: dict[str, dict[int, int]] = {}  # an mcap file's schemas or channels: id -> characters held
+        self.mcap: dict[str, dict[int, int]] = {}  # the mcap file's schemas or channels: id -> characters held
+        self.storage = ""  # the name of the mcap storage file being opened (its count's messages name it)
 
 
 #: the budget of the bag being opened (:meth:`BagReader._open`); None: each definition on its own
@@ -761,29 +787,39 @@ def _bound_definitions() -> None:
 #: (sqlite3: rows of its topics and message_definitions tables; mcap: distinct channel and schema
 #: ids). rosbags reads them all when it opens the file, before lmsbench sees one: the definitions
 #: parsed count each distinct one once (MAX_DEFINITION_FIELDS), but 20,000 rows of one 256 KB definition
-#: are 5 GB held. A bag has a few dozen topics; their definitions' characters together are bounded by
-#: MAX_CONNECTIONS_TOTAL_BYTES, as a ROS 1 bag's connection records are.
+#: are 5 GB held. A bag has a few dozen topics; the characters of a storage file's topics and message
+#: definitions together (one total) are bounded by MAX_CONNECTIONS_TOTAL_BYTES, as a ROS 1 bag's connection
+#: records are.
 MAX_CONNECTIONS = 4096
 
 
-def _storage_too_large(what: str, count: int, size: int | None = None, name: str = "") -> BagTooLargeError:
-    """The error of a ROS 2 storage file listing more than MAX_CONNECTIONS ``what`` (topics, message
-    definitions), or (``size``) whose definitions hold more than MAX_CONNECTIONS_TOTAL_BYTES."""
-    if size is None:
-        return _unnamed(BagTooLargeError(
-            f"its storage file{name and ' ' + name} lists {count:,} {what}, more than the {MAX_CONNECTIONS:,} a ROS 2 bag's may "
-            "(lms200.bag.MAX_CONNECTIONS): absurd, or damage; not read"))
+def _storage_too_many(what: str, name: str, count: int | None = None) -> BagTooLargeError:
+    """The error of a ROS 2 storage file (named ``name``) listing more than MAX_CONNECTIONS ``what``
+    (topics, message definitions): ``count`` of them (sqlite3, counted whole), or None where counting
+    stopped at the first too many (mcap, counted as read)."""
+    lists = f"lists {count:,} {what}, more than the {MAX_CONNECTIONS:,}" if count is not None else \
+        f"lists more than {MAX_CONNECTIONS:,} {what}, the most"
     return _unnamed(BagTooLargeError(
-        f"its storage file{name and ' ' + name}'s {count:,} {what} hold {size:,} characters together, more than the "
-        f"{MAX_CONNECTIONS_TOTAL_BYTES:,} a ROS 2 bag's may (lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES): absurd message "
-        "definitions, or damage; not read"))
+        f"its storage file{name and ' ' + name} {lists} a ROS 2 bag's may (lms200.bag.MAX_CONNECTIONS): absurd, or "
+        "damage; not read"))
+
+
+def _storage_too_full(what: str, name: str, size: int | None = None) -> BagTooLargeError:
+    """The error of a ROS 2 storage file (named ``name``) whose topics and message definitions (``what``:
+    their counts, sqlite3) hold more than MAX_CONNECTIONS_TOTAL_BYTES characters together: ``size`` of
+    them (sqlite3, counted whole), or None where counting stopped (mcap, counted as read)."""
+    hold = f"hold {size:,} characters together, more than the {MAX_CONNECTIONS_TOTAL_BYTES:,}" if size is not None \
+        else f"hold more than {MAX_CONNECTIONS_TOTAL_BYTES:,} characters together, the most"
+    return _unnamed(BagTooLargeError(
+        f"its storage file{name and ' ' + name}'s {what} {hold} a ROS 2 bag's may "
+        "(lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES): absurd message definitions, or damage; not read"))
 
 
 def _check_sqlite_connections(path: Any) -> None:  # noqa: ANN401 - a Path
     """BagTooLargeError for a ROS 2 sqlite3 storage file whose topics or message_definitions tables hold
-    more than MAX_CONNECTIONS rows, or whose definitions (or topics' names, types and QoS) more than
-    MAX_CONNECTIONS_TOTAL_BYTES characters, counted by sqlite before rosbags reads the rows whole. A file
-    sqlite cannot read so is left to rosbags, which says what is wrong."""
+    more than MAX_CONNECTIONS rows, or whose definitions and topics' names, types and QoS more than
+    MAX_CONNECTIONS_TOTAL_BYTES characters together (both tables in one total), counted by sqlite before
+    rosbags reads the rows whole. A file sqlite cannot read so is left to rosbags, which says what is wrong."""
     import sqlite3
     from urllib.request import pathname2url
 
@@ -796,6 +832,8 @@ def _check_sqlite_connections(path: Any) -> None:  # noqa: ANN401 - a Path
         wanted = {"topics": ("name", "type", "serialization_format", "offered_qos_profiles", "type_description_hash"),
                   "message_definitions": ("topic_type", "encoding", "encoded_message_definition",
                                           "type_description_hash")}
+        counted: list[str] = []  # "5 topics", "5 message definitions": the tables counted
+        total = 0  # the characters of both tables together (the topics' and the definitions' were bounded apart: 2x)
         for table, what in (("topics", "topics"), ("message_definitions", "message definitions")):
             if table not in tables:
                 continue
@@ -803,19 +841,28 @@ def _check_sqlite_connections(path: Any) -> None:  # noqa: ANN401 - a Path
             size = " + ".join(f"coalesce(length({c}), 0)" for c in columns) or "0"
             count, chars = db.execute(f"SELECT count(*), coalesce(sum({size}), 0) FROM {table}").fetchone()
             if count > MAX_CONNECTIONS:
-                raise _storage_too_large(what, count, name=Path(path).name)
-            if chars > MAX_CONNECTIONS_TOTAL_BYTES:
-                raise _storage_too_large(what, count, chars, Path(path).name)
+                raise _storage_too_many(what, Path(path).name, count)
+            counted.append(f"{count:,} {what}")
+            total += chars
+        if total > MAX_CONNECTIONS_TOTAL_BYTES:
+            raise _storage_too_full(" and ".join(counted), Path(path).name, total)
     except sqlite3.Error:
         return
     finally:
         db.close()
 
 
+#: the Schema rosbags' mcap reader makes for each channel, as the default of ``schemas.get(id, ...)``
+#: (evaluated whether or not the channel's schema is listed): no record of the file, not counted (counted,
+#: it made 4 distinct types under MAX_CONNECTIONS = 4 too many). MCAP reserves schema id 0 for "no schema".
+_SCHEMALESS = (0, "__schemaless__", "cdr", "")
+
+
 class _CountedRecords:
-    """A NamedTuple type of rosbags' mcap reader (Schema, Channel) whose records, made while a bag is
-    opened (:data:`_BUDGET`), are counted: more than MAX_CONNECTIONS distinct ids, or more than
-    MAX_CONNECTIONS_TOTAL_BYTES of text held by the latest record of each id, is a BagTooLargeError."""
+    """A NamedTuple type of rosbags' mcap reader (Schema, Channel) whose records, made while a storage
+    file of a bag is opened (:data:`_BUDGET`, its ``storage`` the file's name), are counted: more than
+    MAX_CONNECTIONS distinct ids of a type, or more than MAX_CONNECTIONS_TOTAL_BYTES of text held by the
+    latest record of each id of both types together, is a BagTooLargeError naming the storage file."""
 
     def __init__(self, typ: Any, what: str) -> None:  # noqa: ANN401 - a NamedTuple type
         self.typ, self.what = typ, what
@@ -826,14 +873,13 @@ class _CountedRecords:
     def __call__(self, *args: Any) -> Any:  # noqa: ANN401
         record = self.typ(*args)
         budget = _BUDGET.get()
-        if budget is not None:
+        if budget is not None and tuple(record) != _SCHEMALESS:
             held = budget.mcap.setdefault(self.what, {})
             held[record[0]] = sum(len(v) for v in record[1:] if isinstance(v, (str, bytes)))
             if len(held) > MAX_CONNECTIONS:
-                raise _storage_too_large(self.what, len(held))
-            chars = sum(held.values())
-            if chars > MAX_CONNECTIONS_TOTAL_BYTES:
-                raise _storage_too_large(self.what, len(held), chars)
+                raise _storage_too_many(self.what, budget.storage)
+            if sum(sum(ids.values()) for ids in budget.mcap.values()) > MAX_CONNECTIONS_TOTAL_BYTES:
+                raise _storage_too_full("topics (channels) and message definitions (schemas)", budget.storage)
         return record
 
 
@@ -841,8 +887,21 @@ def _bound_storage_connections() -> None:
     """Bound what rosbags' ROS 2 storage readers hold of a bag's topics and message definitions when they
     open a storage file (MAX_CONNECTIONS, MAX_CONNECTIONS_TOTAL_BYTES): a sqlite3 file is counted by
     sqlite first (:func:`_check_sqlite_connections`), an mcap file's schema and channel records as they
-    are read (:class:`_CountedRecords`). A rosbags without those names is left as it is."""
+    are read (:class:`_CountedRecords`), each file on its own, named. A rosbags without those names is
+    left as it is."""
     from rosbags.rosbag2 import storage_mcap, storage_sqlite3
+
+    mcap = getattr(storage_mcap, "McapReader", None)
+    mcap_open = getattr(mcap, "_open", None)
+    if mcap_open is not None and not getattr(mcap_open, "lmsbench_bounded", False):
+        def _open_mcap(self: Any, _real: Callable[[Any], None] = mcap_open) -> None:  # noqa: ANN401
+            budget = _BUDGET.get()
+            if budget is not None:  # this storage file's records, counted apart from another file's, name it
+                budget.mcap, budget.storage = {}, Path(str(self.path)).name
+            _real(self)
+
+        _open_mcap.lmsbench_bounded = True  # type: ignore[attr-defined]
+        mcap._open = _open_mcap  # type: ignore[union-attr]
 
     reader = getattr(storage_sqlite3, "Sqlite3Reader", None)
     real_open = getattr(reader, "_open", None)

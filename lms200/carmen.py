@@ -11,8 +11,9 @@ Formats (one message a line, ``#`` comments; messages of other kinds, named in c
   side_safety turn_axis ipc_timestamp hostname logger_timestamp`` (ROBOTLASER2: the rear laser);
   the declared field of view must hold the count at the declared resolution (fov = n x res, or
   (n - 1) x res), lines with the same declared geometry must carry the same count (of the first
-  ``MAX_GEOMETRIES`` geometries a pass meets), and max_range
-  must lie in [MIN_RANGE_MAX_M, MAX_RANGE_M] (:mod:`lms200.laser_geometry`).
+  ``MAX_GEOMETRIES`` geometries a pass meets), max_range
+  must lie in [MIN_RANGE_MAX_M, MAX_RANGE_M] and the resolution be at least MIN_RESOLUTION_RAD
+  (:mod:`lms200.laser_geometry`).
 - ``RAWLASER1`` .. ``RAWLASER4`` (CARMEN 0.7 loggers): the ROBOTLASER1 fields up to the remissions,
   then ``ipc_timestamp hostname logger_timestamp``; no poses, same checks: ``.odom`` is interpolated
   from the ODOM lines around the scan's stamp (:mod:`lms200.carmen_odom`), else None.
@@ -33,7 +34,7 @@ gives it for the laser lines that follow.
 One laser is read per pass (``topic``: a message kind); by default the first kind that carries
 poses (FLASER, RLASER, ROBOTLASER1 / 2; from a line whose fields add up to its counts) up to
 ``DEFAULT_TOPIC_LINES`` lines after the first laser line, else the first RAWLASER kind: CARMEN 0.7 loggers write each reading twice, as RAWLASER1 and as ROBOTLASER1.
-Every failure while reading (a malformed line, a count that is not a finite non-negative integer,
+Every failure while reading (a malformed line, a count that is not a non-negative integer written in digits,
 compressed data that cannot be decompressed, a line over ``MAX_LINE_CHARS``) is a ``LogFormatError`` naming
 file and line; ``skip_bad_lines`` records it in ``stats.skipped`` (the first
 ``lms200.records.MAX_SKIPPED_KEPT``; ``stats.skipped_count`` counts them all) and goes on.
@@ -75,7 +76,7 @@ from . import laser_geometry
 from .errors import InputError, LmsbenchError, LmsbenchWarning, LogFormatError, LogNotFoundError
 from .finite import fixed
 from .laser_geometry import LaserGeometry
-from .records import Pose2D, Record, SkipLog
+from .records import Pose2D, Record, SkipLog, stamp_problem
 from .scan import Scan, snap_angle, valid_ranges
 
 UNITS_PARAM = "lmsbench_range_units"
@@ -485,11 +486,12 @@ class CarmenReader:
                     pose = _pose(words, 1, "TRUEPOS")
                     _require(len(words) >= 8, "TRUEPOS needs at least 7 numbers")
                     _require(len(words) <= MAX_POSE_WORDS, _too_many_words("TRUEPOS", len(words)))
-                    truth = (pose, _few_floats(words[7:8], "TRUEPOS timestamp")[0])
+                    truth = (pose, _stamps(words, _few_floats(words[7:8], "TRUEPOS timestamp")[0], 9))
                 elif kind == "ODOM":
                     _require(len(words) >= 8, "ODOM needs x y theta tv rv accel timestamp")
                     _require(len(words) <= MAX_POSE_WORDS, _too_many_words("ODOM", len(words)))
                     values = _few_floats(words[1:8], "ODOM")
+                    values[6] = _stamps(words, values[6], 9)
                     if pairing is not None:  # odometry for the scans of a RAWLASER kind, which carry none
                         yield from pairing.odom(values[6], (values[0], values[1], values[2]))
                     elif chain is not None:
@@ -805,15 +807,32 @@ def _is_number(word: str) -> bool:
 
 
 def _count(word: str, what: str) -> int:
-    """A count field: a finite non-negative integer (written ``361`` or ``361.0``; not ``3_0``)."""
-    try:
-        value = float(word)
-        _require("_" not in word, "")
-    except ValueError:
-        raise ValueError(f"{what} {word!r} is not a number") from None
-    if not math.isfinite(value) or value < 0 or value != math.floor(value):
-        raise ValueError(f"{what} must be a finite non-negative integer, got {word!r}")
-    return int(value)
+    """A count field: a non-negative integer written as one (``361``; not ``361.0``, ``3.61e2`` or
+    ``3_0``): CARMEN reads a count with atoi, which takes ``3.61e2`` as 3, so a count in any other
+    form is no count CARMEN's own tools read alike (``361.0`` was taken as 361, here and nowhere else)."""
+    if _DIGITS.fullmatch(word) is None:
+        try:
+            float(word)
+            _require("_" not in word, "")
+        except ValueError:
+            raise ValueError(f"{what} {word!r} is not a number") from None
+        raise ValueError(f"{what} must be a non-negative integer written in digits, got {word!r}")
+    return int(word)
+
+
+_DIGITS = re.compile(r"[0-9]+")  # ASCII digits only: int() also takes '٣' and '+3'
+
+
+def _stamps(words: list[str], ipc: float, logger_at: int) -> float:
+    """``ipc``, a line's ipc_timestamp (s), once it and the line's logger_timestamp (``words[logger_at]``,
+    where the line has it) are checked against :data:`lms200.records.MAX_STAMP_S` (a stamp of 1e300 s
+    was read; the logger_timestamp, not used, was not even read as a number)."""
+    problem = stamp_problem(ipc, "ipc_timestamp")
+    if problem is None and logger_at < len(words):
+        logger = _few_floats(words[logger_at : logger_at + 1], "logger_timestamp")[0]
+        problem = stamp_problem(logger, "logger_timestamp")
+    _require(problem is None, problem or "")
+    return ipc
 
 
 def _pose(words: list[str], start: int, what: str) -> Pose2D:
@@ -850,10 +869,12 @@ def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry
     _require(len(words) == _field_count(kind, n), f"{kind} with {n} beams needs {_field_count(kind, n)} fields, got {len(words)}")
     ranges, u = _ranges(_range_floats(words[2 : 2 + n], f"{kind} ranges", cache), units, kind)
     tail = _few_floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
+    _stamps(words, tail[6], len(words) - 1)
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
     angle_min, increment = _exact_or_snapped(angle_min, exact[0]), _exact_or_snapped(increment, exact[1])
     range_max = geometry.range_max if geometry.range_max is not None else LMS200_MAX_RANGE[u]
     scan = Scan(ranges, angle_min, increment, range_min, range_max, tail[6])
+    _finite_pose(tail[0:3], f"{kind} laser")  # (not read, but no pose: nan was taken)
     return scan, _finite_pose(tail[3:6], f"{kind} odometry")
 
 
@@ -889,12 +910,17 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     _require(min(abs(steps - n), abs(steps - (n - 1))) <= ROBOTLASER_FIT_TOLERANCE_BEAMS,
              f"declares a field of view of {fixed(math.degrees(fov), 3)} deg at {fixed(math.degrees(resolution), 4)} deg, "
              f"which holds {fixed(steps, 1)} steps, but carries {n} beams (fov must be n or n - 1 steps)")
+    # the bound of the geometry overrides and the bag reader: 1e-7 rad was read
+    _require(resolution >= laser_geometry.MIN_RESOLUTION_RAD,
+             f"angular resolution must be at least {laser_geometry.MIN_RESOLUTION_RAD:g} rad "
+             f"({math.degrees(laser_geometry.MIN_RESOLUTION_RAD):.5f} deg; finer than any rangefinder's step), "
+             f"got {words[4]}")
     if units is None and accuracy in (0.01, 0.001):
         units = "cm" if accuracy == 0.01 else "mm"
     ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind)
     tail = _few_floats(words[10 + n + m : 10 + n + m + (1 if kind.startswith("RAWLASER") else 12)],
                        f"{kind} timestamp" if kind.startswith("RAWLASER") else f"{kind} poses and timestamp")
-    stamp = tail[-1]
+    stamp = _stamps(words, tail[-1], len(words) - 1)
     # max_range 1e-300 made every reading invalid, silently, and -5 became 81.83 m (a review's reproduction)
     # (an override replaces it: a converter's placeholder 0 is then no error)
     _require(range_max_override is not None or laser_geometry.MIN_RANGE_MAX_M <= max_range <= laser_geometry.MAX_RANGE_M,
@@ -905,7 +931,10 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     scan = Scan(ranges, snap(start), snap(resolution), range_min, range_max, stamp)
     if kind.startswith("RAWLASER"):
         return scan, None
-    return scan, _finite_pose(tail[3:6], f"{kind} robot pose")
+    # the laser pose, speeds, safety distances and turn axis are not read, but nan or inf is no such value (was taken)
+    _finite_pose(tail[0:3], f"{kind} laser")
+    _require(all(map(math.isfinite, tail[6:11])), f"{kind} speeds, safety distances or turn axis are not finite")
+    return scan, _finite_pose(tail[3:6], f"{kind} robot")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1047,8 +1076,9 @@ def write_carmen(
 
     Raises:
         InputError: an unknown ``fmt``, a ``hostname`` that is not one word of printable ASCII, scans of mixed units, or a scan whose range_max lies outside
-            [MIN_RANGE_MAX_M, MAX_RANGE_M] (0.1 to 10000 m), which the reader refuses (such a log was
-            written, and could not be read back).
+            [MIN_RANGE_MAX_M, MAX_RANGE_M] (0.1 to 10000 m), an angle_increment under MIN_RESOLUTION_RAD
+            (1e-5 rad) or a stamp outside 0 .. ``records.MAX_STAMP_S`` (2^32 s), which the reader refuses
+            (such a log was written, and could not be read back).
     """
     if fmt not in ("robotlaser1", "flaser"):
         raise InputError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
@@ -1075,6 +1105,14 @@ def write_carmen(
                     raise InputError(f"records: item {count}: range_max {scan.range_max:g} m is outside "
                                      f"[{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, which "
                                      "the CARMEN reader refuses (the log could not be read back)")
+                if scan.angle_increment < laser_geometry.MIN_RESOLUTION_RAD:
+                    raise InputError(f"records: item {count}: angle_increment {scan.angle_increment:g} rad is finer "
+                                     f"than {laser_geometry.MIN_RESOLUTION_RAD:g} rad, which the CARMEN reader refuses "
+                                     "(the log could not be read back)")
+                problem = stamp_problem(scan.stamp, "stamp")
+                if problem is not None:
+                    raise InputError(f"records: item {count}: {problem}; the CARMEN reader refuses it (the log could "
+                                     "not be read back)")
                 u = _units_of(scan)
                 if units is None:
                     units = u

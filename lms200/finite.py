@@ -55,8 +55,9 @@ def fixed(value: float, decimals: int = 6) -> str:
 
 
 def overflow_text(value: object) -> str:
-    """How a value beyond float64 is named in a message: by its type, never printed."""
-    return f"a {type(value).__name__} beyond float64's range"
+    """How a value beyond float64 is named in a message: by its type, never printed ("an int", "a Fraction")."""
+    name = type(value).__name__
+    return f"{'an' if name[:1].lower() in 'aeiou' else 'a'} {name} beyond float64's range"
 
 
 def check_seed(seed: object) -> None:

@@ -15,6 +15,7 @@ import numpy as np
 from .codes import real_rows, real_vector
 from .errors import InputError, LogFormatError
 from .finite import fixed
+from .records import MAX_STAMP_S, stamp_problem
 
 
 def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
@@ -65,7 +66,8 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
             4k garbled rows, and decreasing or nan stamps made a file ``read_tum`` refuses).
             Poses that are nan (a lost SLAM run's) are written as nan, which
             ``read_tum(path, allow_nan=True)`` reads back; an infinite pose entry, or an x or y beyond
-            +-``logs.MAX_COORD_M`` (1e9 m), which no reader takes, is an InputError naming its row; so
+            +-``logs.MAX_COORD_M`` (1e9 m), or a stamp outside 0 .. ``records.MAX_STAMP_S`` (2^32 s),
+            which no reader takes, is an InputError naming its row; so
             is no pose at all (``read_tum`` refuses a file of none). A ``path`` that is a folder or a device, or in
             a folder that does not exist, or that cannot be written, is an InputError naming it
             (they were a raw IsADirectoryError, FileNotFoundError, ...: the wrong-input hunt).
@@ -92,6 +94,11 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
         raise InputError(f"stamps: {stamps.size} stamps for {poses.shape[0]} poses")
     if not stamps.size:  # read_tum refuses a file of no pose: a file written that its own reader does not take
         raise InputError("poses: none to write (a TUM file of no pose is refused by read_tum, as a cut or emptied file)")
+    outside = (stamps < 0) | (stamps > MAX_STAMP_S)
+    if outside.any():  # read_tum refuses such a row: a file written that its own reader does not take
+        k = int(np.nonzero(outside)[0][0])
+        raise InputError(f"stamps: stamp {k} ({stamps[k].item()!r} s) is outside 0 .. 2^32 s, which read_tum refuses "
+                         "(lms200.records.MAX_STAMP_S)")
     if np.any(np.diff(stamps) < 0):
         k = int(np.nonzero(np.diff(stamps) < 0)[0][0]) + 1
         raise InputError(f"stamps: must not decrease (stamp {k}: {stamps[k].item()!r} s after {stamps[k - 1].item()!r} s)")
@@ -151,7 +158,7 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
             with ``allow_nan``; no ``_`` in a number), x or y beyond +-``logs.MAX_COORD_M``, a zero
             quaternion, a quaternion tilted more than ``MAX_TILT_DEG`` (30 deg) from a rotation about
             z (a frame whose z is not up: its yaw is no heading; was read as one, silently), a stamp
-            before the previous one, a line longer than ``logs.MAX_ROW_CHARS``; naming the file alone,
+            before the previous one or outside 0 .. ``records.MAX_STAMP_S`` (2^32 s), a line longer than ``logs.MAX_ROW_CHARS``; naming the file alone,
             a file of no pose (empty, or blank and comment lines only: it read as no poses).
 
     Warns:
@@ -181,6 +188,9 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
             raise LogFormatError(path, no, f"TUM row has a non-finite number: {s[:60]!r}")
         if abs(v[1]) > MAX_COORD_M or abs(v[2]) > MAX_COORD_M:
             raise LogFormatError(path, no, f"TUM row's x or y is beyond +-{MAX_COORD_M:g} m: {s[:60]!r}")
+        problem = stamp_problem(v[0], "TUM time")
+        if problem is not None:
+            raise LogFormatError(path, no, problem)
         if stamps and v[0] < stamps[-1]:
             raise LogFormatError(path, no, f"TUM stamps go backwards ({fixed(v[0])} s after {fixed(stamps[-1])} s)")
         yaw = float(quaternion_to_yaw(np.array(v[4:8]))[0])

@@ -15,6 +15,7 @@ import numpy as np
 from lms200 import InputError, LmsbenchError, LogFormatError
 from lms200.codes import real_rows, real_vector
 from lms200.logs import MAX_COORD_M, regular_file, row_lines, row_numbers
+from lms200.records import stamp_problem
 from lms200.tum import MAX_TILT_DEG, tilt_of_roll_pitch_deg
 from features.baselines.checks import positive
 
@@ -369,6 +370,9 @@ def read_relations(path: str | Path) -> np.ndarray:
         v = row_numbers(path, no, s, "relation row")
         if not all(math.isfinite(x) for x in v):  # a nan made the mean error null, silently
             raise LogFormatError(path, no, f"relation row has a non-finite number: {line.strip()[:60]!r}")
+        problem = stamp_problem(v[0], "relation row's t1") or stamp_problem(v[1], "relation row's t2")
+        if problem is not None:
+            raise LogFormatError(path, no, problem)
         if abs(v[2]) > MAX_COORD_M or abs(v[3]) > MAX_COORD_M:
             raise LogFormatError(path, no, f"relation row's x or y is beyond +-{MAX_COORD_M:g} m: {line.strip()[:60]!r}")
         rows.append((v[0], v[1], v[2], v[3], v[7]))

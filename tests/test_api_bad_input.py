@@ -8,6 +8,7 @@ import dataclasses
 import math
 import re
 from decimal import Decimal
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -604,8 +605,9 @@ def test_a_sensor_yaml_with_only_its_calibration_section_is_refused(tmp_path):
 # -- fuzzing of 2026-12-03: the public Python API ------------------------------------------------------
 @pytest.mark.parametrize("field", ["angle_min", "angle_increment", "range_min", "range_max", "stamp"])
 @pytest.mark.parametrize("value, message", [
-    (10**400, "must be finite, got a int beyond float64's range"),  # was OverflowError: int too large to convert to float
-    pytest.param(10**5000, "must be finite, got a int beyond float64's range", id="10**5000"),  # printed: ValueError
+    (10**400, "must be finite, got an int beyond float64's range"),  # was OverflowError: int too large to convert to float
+    pytest.param(10**5000, "must be finite, got an int beyond float64's range", id="10**5000"),  # printed: ValueError
+    (Fraction(10**400), "must be finite, got a Fraction beyond float64's range"),  # "an int" above (was "a int")
     (True, "must be a number, got True"),                       # was 1.0 (rad, m or s), as bool ranges are refused
     ("0.5", "must be a number, got '0.5'"),                     # was 0.5, as text ranges are refused
 ])
@@ -1155,7 +1157,7 @@ def test_simulator_poses_must_be_three_finite_numbers(pose: object) -> None:
     (lambda sim: sim.simulate_records("office", seed=0, duration=1.0, rate_hz=10**400), "^rate_hz: must be a finite number"),  # OverflowError
     (lambda sim: sim.make_world("office", 0, scale=10**400), "^scale: must be finite"),            # numpy TypeError
     (lambda sim: sim.make_world("office", 0, clutter=10**400), "^clutter: must be finite"),        # OverflowError
-    (lambda sim: sim.make_world("office", 0, scale=10**5000), "^scale: must be finite, got a int beyond"),  # its message: ValueError
+    (lambda sim: sim.make_world("office", 0, scale=10**5000), "^scale: must be finite, got an int beyond"),  # its message: ValueError
     (lambda sim: sim.simulate_records("office", seed=0, duration=1.0, rate_hz=10**5000), "^rate_hz: must be a finite number"),
 ])
 def test_sim_arguments(call, message: str) -> None:
@@ -1206,7 +1208,7 @@ def test_slam_config_numbers_beyond_float64(section: str, field: str) -> None:
     from slam.config import SlamConfigError
 
     for huge in (10**400, 10**5000):  # 10**5000: its message printed the int, a ValueError (4,300 digits)
-        with pytest.raises(SlamConfigError, match=f"{field}: must be finite, got a int beyond float64's range"):
+        with pytest.raises(SlamConfigError, match=f"{field}: must be finite, got an int beyond float64's range"):
             SlamConfig(**{section: {field: huge}})
     assert SlamConfig(**{section: {field: 3}}) is not None
 
@@ -1369,7 +1371,7 @@ def test_robot_limits_and_odometry_config_check_their_fields() -> None:
     assert RobotLimits(v_max=2).v_max == 2.0 and RobotLimits(pause_s=[0, 0]).pause_s == (0.0, 0.0)
     with pytest.raises(InputError, match=r"^w_max: must be a finite number in \[0\.01, 20\] rad/s, got inf"):
         RobotLimits(w_max=float("inf"))
-    with pytest.raises(InputError, match=r"^radius: must be a finite number in \[0, 2\] m, got a int beyond"):
+    with pytest.raises(InputError, match=r"^radius: must be a finite number in \[0, 2\] m, got an int beyond"):
         RobotLimits(radius=10**400)
     with pytest.raises(InputError, match=r"^alpha3: must be a finite number in \[0, 10\], got True"):
         OdometryConfig(alpha3=True)

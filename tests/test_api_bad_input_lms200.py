@@ -34,7 +34,7 @@ SCAN = Scan.lms200(np.full(361, 3.0))
     (lambda: protocol.encode_measurement(np.zeros(3, np.uint16), np.array(["mm"])), r"^units: must be 'mm' or 'cm'"),
     (lambda: protocol.frame_seconds(10, 0), r"^baud: must be a finite number > 0, got 0$"),  # ZeroDivisionError
     (lambda: protocol.frame_seconds(None, 9600), r"^n_bytes: must be a finite number >= 0, got None$"),  # TypeError
-    (lambda: protocol.frame_seconds(10**400, 9600), r"^n_bytes: must be a finite number >= 0, got a int beyond"),  # OverflowError
+    (lambda: protocol.frame_seconds(10**400, 9600), r"^n_bytes: must be a finite number >= 0, got an int beyond"),  # OverflowError
     (lambda: beam_angles(0), r"^n: must be an integer in 1\.\.2147483648 \(beams\), got 0$"),  # a plain ValueError
     (lambda: beam_angles(None), r"^n: must be an integer"),  # TypeError
     (lambda: beam_angles(10**400), r"^n: must be an integer .* got 1000"),  # OverflowError
@@ -147,7 +147,7 @@ def test_codec_and_virtual_device_take_again_what_worked_before_the_checks() -> 
     (lambda: noise.interlace_stride(0.0), r"^angle_increment: must be a finite number in \(0, 6\.28319\] rad, got 0\.0$"),  # OverflowError
     (lambda: noise.line_residuals("abc", 0.01), r"^ranges: must be real numbers"),
     (lambda: noise.line_residuals(np.ones((2, 361)), 0.01), r"^ranges: must be 1-D \(the ranges of one scan, m\), got shape \(2, 361\)$"),
-    (lambda: noise.line_residuals(SCAN.ranges, 10**400), r"^angle_increment: must be a finite number .* got a int beyond"),
+    (lambda: noise.line_residuals(SCAN.ranges, 10**400), r"^angle_increment: must be a finite number .* got an int beyond"),
     (lambda: noise.line_residuals(SCAN.ranges, 0.01, range_min=None), r"^range_min: must be a finite number >= 0 m, got None$"),
     (lambda: noise.line_residuals(SCAN.ranges, 0.01, range_max="8"), r"^range_max: must be a number >= 0 m, got '8'$"),
     (lambda: noise.line_residuals(SCAN.ranges, 0.01, stride=0), r"^stride: must be an integer >= 1 \(beams\), got 0$"),  # broadcast error
@@ -197,7 +197,7 @@ def _device(**kw: object) -> virtual.VirtualLMS200:
     (lambda: protocol.with_units(None, "mm"), r"^config: must be bytes .* got NoneType$"),  # TypeError
     (lambda: protocol.units_of_config("abcdefg"), r"^config: must be bytes .* got str$"),  # AttributeError
     (lambda: _device().receive(TELEGRAM, None), r"^now: must be a finite number in \[-1e\+12, 1e\+12\] s, got None$"),  # TypeError
-    (lambda: _device().receive(TELEGRAM, 10**400), r"^now: must be a finite number in .* got a int beyond"),  # OverflowError
+    (lambda: _device().receive(TELEGRAM, 10**400), r"^now: must be a finite number in .* got an int beyond"),  # OverflowError
     (lambda: _device().transmit(math.inf), r"^now: must be a finite number in \[-1e\+12, 1e\+12\] s, got inf$"),  # OverflowError
     (lambda: _device().transmit(1e308), r"^now: must be a finite number in \[-1e\+12, 1e\+12\] s, got 1e\+308$"),  # int(inf)
     (lambda: _device().transmit("1"), r"^now: must be a finite number in .* got '1'$"),  # TypeError
@@ -205,7 +205,7 @@ def _device(**kw: object) -> virtual.VirtualLMS200:
     (lambda: _device(faults=0.5), r"^faults: must be a lms200\.Faults or None, got float$"),  # AttributeError: seed
     (lambda: _device(timing="fast"), r"^timing: must be a lms200\.DeviceTiming or None, got str$"),
     (lambda: virtual.DeviceTiming(ack_s=None), r"^ack_s: must be a finite number in \[0, 3600\] s, got None$"),  # TypeError later
-    (lambda: virtual.DeviceTiming(reset_s=10**400), r"^reset_s: must be a finite number in \[0, 3600\] s, got a int beyond"),
+    (lambda: virtual.DeviceTiming(reset_s=10**400), r"^reset_s: must be a finite number in \[0, 3600\] s, got an int beyond"),
     (lambda: virtual.Faults(corrupt_prob="0.1"), r"^corrupt_prob: must be a finite number in \[0, 1\], got '0\.1'$"),  # UFuncTypeError
     (lambda: virtual.Faults(drop_prob=2.0), r"^drop_prob: must be a finite number in \[0, 1\], got 2\.0$"),
     (lambda: virtual.Faults(seed=-1), r"^seed: must be a whole number >= 0, got -1$"),

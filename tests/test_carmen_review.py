@@ -17,7 +17,7 @@ def _scan() -> Scan:
 
 
 @pytest.mark.parametrize("pose, message", [
-    ((10**400, 0, 0), "odom: must be finite, got a int beyond float64's range"),
+    ((10**400, 0, 0), "odom: must be finite, got an int beyond float64's range"),
     ("123", "odom: must be None or three numbers (x m, y m, theta rad), got str '123'"),
     ((True, False, True), "odom: must be None or three numbers (x m, y m, theta rad), got bool True among them"),
     ((1.0, 2.0), "odom: must be None or three numbers (x m, y m, theta rad), got 2 items"),
@@ -34,7 +34,7 @@ def test_record_pose_refused_with_input_error_naming_the_field(pose, message):
 
 @pytest.mark.parametrize("kw, message", [
     (dict(fov=-1), r"fov: must be > 0, got -1 rad \(-57.2958 deg\)"),
-    (dict(range_max=10**400), "range_max: must be finite, got a int beyond float64's range"),
+    (dict(range_max=10**400), "range_max: must be finite, got an int beyond float64's range"),
     (dict(fov="3"), "fov: must be a number, got str '3'"),
     (dict(resolution=True), "resolution: must be a number, got bool True"),
 ])

@@ -503,9 +503,9 @@ def test_arguments_of_the_wrong_shape_or_size_are_one_line_input_errors() -> Non
         ({"baud": [9600]}, "baud: the LMS200 supports [9600, 19200, 38400, 500000], got [9600]"),
         ({"baud": 9600.0}, "baud: the LMS200 supports [9600, 19200, 38400, 500000], got 9600.0"),
         ({"resolution_deg": 1e307}, "fov_deg, resolution_deg: (180 deg, 1e+307 deg) is not an LMS200 variant"),
-        ({"resolution_deg": huge}, "resolution_deg: must be finite, got a int beyond float64's range"),
-        ({"fov_deg": huge}, "fov_deg: must be finite, got a int beyond float64's range"),
-        ({"timeout": huge}, "timeout: must be finite, got a int beyond float64's range"),
+        ({"resolution_deg": huge}, "resolution_deg: must be finite, got an int beyond float64's range"),
+        ({"fov_deg": huge}, "fov_deg: must be finite, got an int beyond float64's range"),
+        ({"timeout": huge}, "timeout: must be finite, got an int beyond float64's range"),
         ({"units": np.array(["mm", "cm"])}, "units: must be 'mm' or 'cm', got array(['mm', 'cm'], dtype='<U2')"),
         ({"timeout": np.zeros((2, 2))}, "timeout: must be a number, got ndarray array([[0., 0.], [0., 0.]])"),
         ({"address": huge}, "address: must be in 0..127 (replies come from address + 0x80), got "

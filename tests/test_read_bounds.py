@@ -18,7 +18,7 @@ from lms200.records import MAX_REASON_CHARS, MAX_SKIPPED_KEPT
 GOOD = "FLASER 3 1.00 2.00 3.00 0 0 0 0 0 0 {t} h {t}\n"
 BAD = [  # one of each kind of malformed line a FLASER log can hold, each with its reason
     ("FLASER 3 1.00 x{i} 3.00 0 0 0 0 0 0 1 h 1\n", "FLASER: FLASER ranges: 'x{i}' is not a number"),
-    ("FLASER inf 1.00 {i}\n", "FLASER: beam count must be a finite non-negative integer, got 'inf'"),
+    ("FLASER inf 1.00 {i}\n", "FLASER: beam count must be a non-negative integer written in digits, got 'inf'"),
     ("ODOM 0 0 1e400 0 0 0 {i} h {i}\n", "ODOM: ODOM: '1e400' is beyond float64's range"),
     ("TRUEPOS nan 0 0 0 0 0 {i} h {i}\n", "TRUEPOS: TRUEPOS pose is not finite"),
     ("PARAM robot_front_laser_max -{i} h 0\n", "PARAM: robot_front_laser_max must be a finite number > 0, got '-{i}'"),

@@ -93,11 +93,15 @@ def test_calibrate_and_info_show_a_tiny_resolution_as_it_is(tmp_path: Path, caps
             words[3:5] = ["3.6e-288", "1e-290"]
             lines[k] = " ".join(words)
     log.write_text("".join(lines))
-    assert main(["calibrate", str(log), "--out", str(tmp_path / "s.yaml")]) == 2
-    assert capsys.readouterr().err == (f"lmsbench calibrate: error: {log}: angular resolution 5.73e-289 deg: the LMS200 "
-                                       "model has 0.25, 0.5 or 1 deg\n")
-    assert main(["info", str(log)]) == 0
-    assert "\n  resolution      5.73e-289 deg\n" in capsys.readouterr().out
+    # the reader refuses the line now (a step under laser_geometry.MIN_RESOLUTION_RAD, 1e-5 rad): both commands did not
+    # show it as 0 but took it (calibrate said "angular resolution 5.73e-289 deg: the LMS200 model has ...", info exit 0)
+    first = 1 + next(k for k, line in enumerate(lines) if line.startswith("ROBOTLASER1 "))
+    for command in (["calibrate", str(log), "--out", str(tmp_path / "s.yaml")], ["info", str(log)]):
+        assert main(command) == 2
+        assert capsys.readouterr().err == (
+            f"lmsbench {command[0]}: error: {log}:{first}: malformed ROBOTLASER1 line: angular resolution must be at "
+            "least 1e-05 rad (0.00057 deg; finer than any rangefinder's step), got 1e-290 (--skip-bad-lines skips "
+            "malformed lines, each reported)\n")
 
 
 def test_a_tum_stamp_near_1e308_is_quoted_compactly(tmp_path: Path) -> None:
@@ -107,7 +111,9 @@ def test_a_tum_stamp_near_1e308_is_quoted_compactly(tmp_path: Path) -> None:
     (tmp_path / "t.tum").write_text("1e308 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n")
     with pytest.raises(LogFormatError) as info:
         read_tum(tmp_path / "t.tum")
-    assert str(info.value) == f"{tmp_path / 't.tum'}:2: TUM stamps go backwards (1.000000 s after 1e+308 s)"
+    # refused at its own line now (lms200.records.MAX_STAMP_S), still quoted compactly
+    assert str(info.value) == (f"{tmp_path / 't.tum'}:1: TUM time 1e+308 s is outside 0 .. 2^32 s (4294967296 s, "
+                               "2106-02-07): a log's clock is UNIX time or seconds since its start")
 
 
 def _flaser_log(path: Path, stamps: list[str]) -> Path:
@@ -117,15 +123,17 @@ def _flaser_log(path: Path, stamps: list[str]) -> Path:
 
 
 def test_slam_and_info_quote_a_stamp_near_1e308_compactly(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """Both said "time goes backwards ... after 1e+308 s" / "duration 1e+308 s"; now the stamp is
+    refused at its line (lms200.records.MAX_STAMP_S), still quoted compactly."""
     from experiments.cli import main
 
     log = _flaser_log(tmp_path / "big.log", ["1e308", "1", "2"])
-    assert main(["slam", str(log), "--out", str(tmp_path / "s")]) == 2
-    err = capsys.readouterr().err.strip()
-    assert err == (f"lmsbench slam: error: {log}: time goes backwards at scan 1 (stamp 1.000000 s after 1e+308 s); "
-                   "SLAM needs scans in time order (--skip-bad-lines skips the fewest scans that leave the rest in order)")
-    assert main(["info", str(log)]) == 0
-    assert "  duration        1e+308 s\n" in capsys.readouterr().out
+    for command in (["slam", str(log), "--out", str(tmp_path / "s")], ["info", str(log)]):
+        assert main(command) == 2
+        err = capsys.readouterr().err.strip()
+        assert err == (f"lmsbench {command[0]}: error: {log}:1: malformed FLASER line: ipc_timestamp 1e+308 s is "
+                       "outside 0 .. 2^32 s (4294967296 s, 2106-02-07): a log's clock is UNIX time or seconds since "
+                       "its start (--skip-bad-lines skips malformed lines, each reported)")
 
 
 def test_a_robotlaser_header_of_1e300_steps_is_quoted_compactly(tmp_path: Path) -> None:

@@ -8,7 +8,7 @@ import pickle
 import numpy as np
 import pytest
 
-from lms200 import Scan, codes_to_ranges, decode_logged_ranges, ranges_to_codes
+from lms200 import InputError, Scan, codes_to_ranges, decode_logged_ranges, ranges_to_codes
 from lms200.scan import snap_angle
 
 
@@ -157,10 +157,13 @@ def test_snap_angle_never_snaps_a_nonzero_angle_onto_0(tmp_path) -> None:
 
     assert snap_angle(1e-9) == 1e-9 and snap_angle(-3e-7) == -3e-7 and snap_angle(0.0) == 0.0
     assert snap_angle(-0.0) == 0.0 and snap_angle(0.000873) == np.deg2rad(0.05)  # the grid's next step still snaps
-    scans = [Scan(np.full(361, 2.0), 3e-7, 1e-9, 0.0, 8.0), Scan(np.full(3, 2.0), -1e-7, 2e-7, 0.0, 8.0)]
+    # (a step under laser_geometry.MIN_RESOLUTION_RAD, 1e-5 rad, is refused by the reader and so by write_log now)
+    scans = [Scan(np.full(361, 2.0), 3e-7, 1e-5, 0.0, 8.0), Scan(np.full(3, 2.0), -1e-7, 2e-5, 0.0, 8.0)]
     for k, scan in enumerate(scans):
         write_log(tmp_path / f"{k}.clf", [Record(scan)])
         assert [r.scan for r in read_log(tmp_path / f"{k}.clf")] == [scan]
+    with pytest.raises(InputError, match=r"^records: item 0: angle_increment 1e-09 rad is finer than 1e-05 rad"):
+        write_log(tmp_path / "fine.clf", [Record(Scan(np.full(361, 2.0), 3e-7, 1e-9, 0.0, 8.0))])
 
 
 def test_decoding_a_huge_logged_range_keeps_it_without_a_warning():
