@@ -1323,9 +1323,52 @@ def test_every_slam_number_has_one_stated_interval() -> None:
             if section == "landmarks":  # confirm_hits at most tentative_window + 1 (below)
                 values["landmarks"] = {"confirm_hits": 1, "tentative_window": 1000} | values["landmarks"]
             assert getattr(getattr(SlamConfig(**values), section), name) == ok
+    # the search window's own rule (OWN_RULE): -1, 0 and 1e300 get the same interval; no
+    # empty "()" (fit_margin -1 said "must be in [0, 1] (), got -1.0"; search_step -1 "must be > 0" and
+    # 1e300 "must be in [0.1, 10] m (...)"; search_candidates 1e300 was echoed with its 301 digits)
+    for where in sorted(OWN_RULE):
+        section, name = where.split(".")
+        messages = set()
+        for bad in (-1.0, 0.0, 1e300):
+            if bad == 0.0 and name in ("fit_margin", "ambiguity_sigmas", "voxel"):  # 0 is taken: no margin, off
+                assert getattr(getattr(SlamConfig(**_slam_field(where, 0)), section), name) == 0
+                continue
+            if isinstance(getattr(SECTIONS[section](), name), int) and bad != 1e300:
+                bad = int(bad)
+            with pytest.raises(SlamConfigError) as info:
+                SlamConfig(**_slam_field(where, bad))
+            text = str(info.value)
+            assert text.startswith(f"{where}: must be ") and "()" not in text and len(text) < 200, text
+            messages.add(text.split(" (")[0].rsplit(", got ", 1)[0])  # the reason names the side
+        assert len(messages) == 1, messages
+    with pytest.raises(SlamConfigError) as info:
+        SlamConfig(alignment={"fit_margin": -1})
+    assert str(info.value) == "alignment.fit_margin: must be in [0, 1] (a fit is a share of points), got -1.0"
+    with pytest.raises(SlamConfigError) as info:
+        SlamConfig(alignment={"search_candidates": 1e300})
+    assert str(info.value) == ("alignment.search_candidates: must be in [1, 32] (each is refined by the ICP on every "
+                               "searched step), got 1e+300")
     with pytest.raises(SlamConfigError, match=r"^landmarks.confirm_hits: must be at most tentative_window \+ 1 \(7, "):
         SlamConfig(landmarks={"confirm_hits": 8})  # no landmark could ever be confirmed: an empty map
     assert SlamConfig(landmarks={"confirm_hits": 1000, "tentative_window": 999}).landmarks.confirm_hits == 1000
+
+
+def test_slam_probabilities_have_one_interval() -> None:
+    """Every ``*_probability`` field is one open interval (0, 1) whichever side: -1 said "must be >=
+    0" while 0 and 2 said "a probability, must be in (0, 1)"."""
+    import dataclasses
+
+    from slam import SlamConfig, SlamConfigError
+    from slam.config import SECTIONS
+
+    fields = [(name, f.name) for name, cls in SECTIONS.items() for f in dataclasses.fields(cls)
+              if f.name.endswith("_probability")]
+    assert len(fields) == 7
+    for section, name in fields:
+        for bad in (-1, 0, 1, 2, 1e300):
+            with pytest.raises(SlamConfigError) as info:
+                SlamConfig(**{section: {name: bad}})
+            assert str(info.value) == f"{section}.{name}: a probability, must be in (0, 1), got {bad!r}"
 
 
 def test_slam_lists_are_bounded_and_echoed_short() -> None:
@@ -1343,7 +1386,15 @@ def test_slam_lists_are_bounded_and_echoed_short() -> None:
                                "[0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1,....1, 0.1] (1000000 characters)")
     with pytest.raises(SlamConfigError) as info:
         SlamConfig(motion={"odom_noise": [-0.1] * 1000})
-    assert str(info.value).startswith("motion.odom_noise: must hold numbers >= 0, got [-0.1, ") and len(str(info.value)) < 200
+    assert str(info.value).startswith("motion.odom_noise: must hold factors in [0, 10] (m/m, rad/rad, rad/m), "
+                                      "got [-0.1, ") and len(str(info.value)) < 200
+    # one interval for -1 as for 1e300 (-1 said "must hold numbers >= 0", 1e300 "factors of at most 10")
+    for bad in (-1, 11, 1e300):
+        with pytest.raises(SlamConfigError) as info:
+            SlamConfig(motion={"odom_noise": [0.1, bad, 0.1]})
+        assert str(info.value) == (f"motion.odom_noise: must hold factors in [0, 10] (m/m, rad/rad, rad/m), "
+                                   f"got [0.1, {bad!r}, 0.1]")
+    assert SlamConfig(motion={"odom_noise": [0, 10, 10]}).motion.odom_noise == (0.0, 10.0, 10.0)
 
 
 def test_slam_prior_sigma_and_icp_iterations_are_bounded_when_built() -> None:

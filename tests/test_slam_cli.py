@@ -476,9 +476,9 @@ def sparse_log(tmp_path_factory) -> Path:
 @pytest.mark.parametrize("config, expected", [
     ("alignment: {search_sigmas: 0}", "alignment.search_sigmas: must be in [1, 10]"),  # was a ZeroDivisionError mid-run
     ("alignment: {search_sigmas: 1e300}", "alignment.search_sigmas: must be in [1, 10]"),  # the prior's std underflowed
-    ("alignment: {search_step_theta: 1e-9}", "alignment.search_step_theta: must be in [0.001, 3.14159] rad (finer "
+    ("alignment: {search_step_theta: 1e-9}", "alignment.search_step_theta: must be in [0.001, pi] rad (finer "
                                              "needs more memory"),  # was a MemoryError
-    ("alignment: {search_step_theta: 4}", "alignment.search_step_theta: must be in [0.001, 3.14159] rad (at most "
+    ("alignment: {search_step_theta: 4}", "alignment.search_step_theta: must be in [0.001, pi] rad (at most "
                                           "half a turn)"),  # said "finer needs more memory"
     ("alignment: {search_resolution: 1e-6}", "alignment.search_resolution: must be in [0.01, 1] m (finer"),  # MemoryError
     ("alignment: {search_resolution: 2}", "alignment.search_resolution: must be in [0.01, 1] m (coarser cells"),
