@@ -100,7 +100,8 @@ class AlignmentConfig:
             wrong way could win (csail-robotlaser1, 0.64 s apart, flipped twice: ATE 10 m). Half
             a turn a second (pi), above the fastest turns of the logs' corrected poses
             (csail-robotlaser1 2.1 rad/s, ACES 1.1, MIT CSAIL 1.9 at the 99th percentile); from
-            1 s between scans on it allows the whole turn.
+            1 s between scans on it allows the whole turn. In [0.01, 1e4] rad/s (``MAX_TURN_RATE``: 1e4
+            allows any heading even at 100 scans/s; 100 allowed only 1.33 rad at the LMS200's 75).
         search_step, search_step_theta: the window's grid (m, rad): 0.2 m and 1 degree, well
             inside the ICP's 0.5 m reach (1 degree moves a point 10 m away by 0.17 m); at least
             1e-3 rad, a step at least ``search_resolution``, and a window of at most 4 million
@@ -654,8 +655,6 @@ def _check_extractor(method: str, params: dict[str, Any]) -> None:
 def _check_search(al: AlignmentConfig) -> None:
     """The correlative search's fields (``slam.correlative``), whose memory grows as the inverse
     square of the steps: each within its bounds, and the window within ``MAX_SEARCH_POSES``."""
-    if not 0 < al.max_turn_rate:
-        raise SlamConfigError(f"alignment.max_turn_rate: must be > 0 rad/s, got {al.max_turn_rate}")
     # (name, low, high, unit, (why below, why above)): the same interval for every value outside it
     # (-1 and 0 said "must be > 0", 1e300 the interval), with the reason of the side it is on
     for name, lo, hi, unit, why in (
@@ -749,6 +748,10 @@ PI = math.pi
 #: motion.sigma_accel 1e-300 was 0 in all but name). Fields missing here are checked by their own
 #: rule in SlamConfig (the search window's, which depend on one another).
 FieldRange = tuple[float, float, str, bool, str]
+#: rad/s: alignment / prealign.max_turn_rate's widest; the turn allowed between scans is max_turn_rate * dt (and
+#: prealign's turn_margin), so 1e4 allows any heading (100 rad) even at 100 scans/s, faster than any scanner's
+MAX_TURN_RATE = 1e4
+TURN_RATE_WHY = "the turn allowed between scans is it times their interval: 1e4 allows any heading at 100 scans/s"
 NOISE_WHY = "a std whose square and inverse square stay finite"
 FIELD_RANGES: dict[str, FieldRange] = {
     # alignment (the default pipeline's ICP)
@@ -782,7 +785,9 @@ FIELD_RANGES: dict[str, FieldRange] = {
                                       "0: the LMS200's timing"),
     "alignment.normal_agreement": (0, PI, "rad", True, "pi: no normal check"),
     "alignment.search_points": (1, 16384, "points", False, "the most beams of a scan the extractors take"),
-    "alignment.max_turn_rate": (0.01, 100, "rad/s", False, "beyond 100 the whole turn is searched at any rate"),
+    # the headings searched are within max_turn_rate * dt (slam.scanslam): 100 rad/s allowed only 1.33 rad between
+    # scans at 75 scans/s; MAX_TURN_RATE allows every heading (100 rad) even at 100 scans/s
+    "alignment.max_turn_rate": (0.01, MAX_TURN_RATE, "rad/s", False, TURN_RATE_WHY),
     # motion
     "motion.sigma_accel": (MIN_SIGMA_MOTION, MAX_SIGMA_MOTION, "m/s^2", False,
                            "the prediction's std and its inverse square stay finite"),
@@ -816,7 +821,7 @@ FIELD_RANGES: dict[str, FieldRange] = {
     "prealign.sigma_phi": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "rad", False, NOISE_WHY),
     "prealign.min_fraction": (0, 1, "", False, "a share of line length"),
     "prealign.xy_turn": (0, PI, "rad", False, ""),
-    "prealign.max_turn_rate": (0.01, 100, "rad/s", False, ""),
+    "prealign.max_turn_rate": (0.01, MAX_TURN_RATE, "rad/s", False, TURN_RATE_WHY),
     "prealign.turn_margin": (0, PI, "rad", False, ""),
     "prealign.near_heading": (0, PI, "rad", False, ""),
     "prealign.verify_tolerance": (MIN_REACH_M, 1, "m", False, ""),

@@ -1353,6 +1353,24 @@ def test_every_slam_number_has_one_stated_interval() -> None:
     assert SlamConfig(landmarks={"confirm_hits": 1000, "tentative_window": 999}).landmarks.confirm_hits == 1000
 
 
+def test_slam_turn_rate_bound_allows_any_turn_at_any_scan_rate() -> None:
+    """alignment / prealign.max_turn_rate were capped at 100 rad/s, "beyond 100 the whole turn is
+    searched at any rate": false, the turn allowed is max_turn_rate * dt, 1.33 rad at 75 scans/s.
+    The cap is 1e4 rad/s (any heading at 100 scans/s) with that reason."""
+    from slam import SlamConfig, SlamConfigError
+
+    for section in ("alignment", "prealign"):
+        assert getattr(SlamConfig(**{section: {"max_turn_rate": 1000.0}}), section).max_turn_rate == 1000.0
+        assert getattr(SlamConfig(**{section: {"max_turn_rate": 1e4}}), section).max_turn_rate == 1e4
+        for bad in (0, 1e5):
+            with pytest.raises(SlamConfigError) as info:
+                SlamConfig(**{section: {"max_turn_rate": bad}})
+            assert str(info.value) == (f"{section}.max_turn_rate: must be in [0.01, 10000] rad/s (the turn allowed "
+                                       f"between scans is it times their interval: 1e4 allows any heading at 100 "
+                                       f"scans/s), got {bad!r}")
+    assert 1e4 / 100 > 2 * math.pi  # 100 scans/s: every heading within the bound
+
+
 def test_slam_probabilities_have_one_interval() -> None:
     """Every ``*_probability`` field is one open interval (0, 1) whichever side: -1 said "must be >=
     0" while 0 and 2 said "a probability, must be in (0, 1)"."""

@@ -490,7 +490,7 @@ def sparse_log(tmp_path_factory) -> Path:
     ("alignment: {search_step: 1.0e-160}", "alignment.search_step: must be in [0.1, 10] m"),  # OverflowError: step**-2
     ("alignment: {ambiguity_sigmas: 1.0e300}", "alignment.ambiguity_sigmas: must be in [0, 100] std"),  # OverflowError
     ("alignment: {ambiguity_sigmas: 1.0e300, fit_margin: 1.0e300}", "alignment.fit_margin: must be in [0, 1]"),
-    ("alignment: {max_turn_rate: 0}", "alignment.max_turn_rate: must be in [0.01, 100] rad/s"),
+    ("alignment: {max_turn_rate: 0}", "alignment.max_turn_rate: must be in [0.01, 10000] rad/s"),
     ("motion: {sigma_floor_xy: 0}", "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # a repeated stamp divided by a zero std
     ("motion: {sigma_floor_xy: 1.0e160}", "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # OverflowError: sxy**2
     ("motion: {sigma_floor_theta: 1.0e300}", "motion.sigma_floor_theta: must be in [1e-06, 1000] rad"),  # OverflowError
