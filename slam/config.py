@@ -10,6 +10,7 @@ from typing import Any, cast
 
 import numpy as np
 
+from features.baselines.checks import MAX_BEAMS
 from lms200 import LmsbenchError
 from lms200.finite import float_of, shown
 
@@ -23,7 +24,8 @@ class AlignmentConfig:
     """Scan matching (``slam.icp``): robust point-to-line ICP of a scan against the local map.
 
     Attributes:
-        stride: every ``stride``-th valid beam of a scan is matched (1 = all).
+        stride: every ``stride``-th valid beam of a scan is matched (1 = all); at most 16,384 (``MAX_BEAMS``),
+            and a run refuses at its first scan one that keeps fewer than ``MIN_MATCH_POINTS`` of its beams.
         max_range: beams longer than this (m) are not matched (far points are sparse and noisy); in
             [0.1, 1e4] m.
         max_correspondence: a point further than this (m) from every map point is left out of a step...
@@ -748,6 +750,10 @@ PI = math.pi
 #: motion.sigma_accel 1e-300 was 0 in all but name). Fields missing here are checked by their own
 #: rule in SlamConfig (the search window's, which depend on one another).
 FieldRange = tuple[float, float, str, bool, str]
+#: points of a scan the default pipeline's ICP needs at least (alignment.stride): 13, what stride 30 kept of a
+#: 361-beam LMS200 scan, where a 10 s office run stayed healthy; 40 (10 points) left 40 % of its steps
+#: unmatched, 60 (7) every one, exit 0 with a "not healthy" warning (the ICP itself takes 4: 3 dof)
+MIN_MATCH_POINTS = 13
 #: rad/s: alignment / prealign.max_turn_rate's widest; the turn allowed between scans is max_turn_rate * dt (and
 #: prealign's turn_margin), so 1e4 allows any heading (100 rad) even at 100 scans/s, faster than any scanner's
 MAX_TURN_RATE = 1e4
@@ -755,9 +761,9 @@ TURN_RATE_WHY = "the turn allowed between scans is it times their interval: 1e4 
 NOISE_WHY = "a std whose square and inverse square stay finite"
 FIELD_RANGES: dict[str, FieldRange] = {
     # alignment (the default pipeline's ICP)
-    # 30 keeps 13 points of a 361-beam scan, and a 10 s office run stayed healthy; 40 left 40 % of its steps
-    # unmatched, 60 and more (1e12) every one
-    "alignment.stride": (1, 30, "beams", False, "a 361-beam scan keeps 13 points at 30"),
+    # up to the most beams a scan may have: 1e12 matched one point a scan; a stride that leaves fewer than
+    # MIN_MATCH_POINTS of the first scan's beams is refused when the run starts (slam.run.check_stride)
+    "alignment.stride": (1, MAX_BEAMS, "beams", False, "the most beams of a scan the extractors take"),
     "alignment.max_range": (MIN_MATCH_RANGE_M, MAX_MATCH_RANGE_M, "m", False, ""),
     "alignment.max_correspondence": (MIN_REACH_M, SEARCH_CELL_M, "m", False, "the LMS200's range quantum to the cell "
                                      "of the scan matcher's search grid"),

@@ -1353,6 +1353,44 @@ def test_every_slam_number_has_one_stated_interval() -> None:
     assert SlamConfig(landmarks={"confirm_hits": 1000, "tentative_window": 999}).landmarks.confirm_hits == 1000
 
 
+def test_slam_stride_is_bounded_by_the_scans_beams() -> None:
+    """alignment.stride was at most 30 whatever the scanner, though scans of up to 16,384 beams are
+    taken (features.baselines.checks.MAX_BEAMS), where 60-150 keeps as many points as 3 on an LMS200.
+    The config takes up to MAX_BEAMS; the run refuses, at its first scan and before any matching, a
+    stride that keeps fewer than the 13 points the matcher needs, naming the largest that works."""
+    from types import SimpleNamespace
+
+    from features.baselines.checks import MAX_BEAMS
+    from sim import simulate_records
+    from slam import SlamConfig, SlamConfigError, run_slam
+    from slam.run import SlamInputError, check_stride
+
+    assert SlamConfig(alignment={"stride": 150}).alignment.stride == 150
+    assert SlamConfig(alignment={"stride": MAX_BEAMS}).alignment.stride == 16384
+    with pytest.raises(SlamConfigError, match=re.escape("alignment.stride: must be in [1, 16384] beams (the most beams "
+                                                        "of a scan the extractors take), got 16385")):
+        SlamConfig(alignment={"stride": MAX_BEAMS + 1})
+
+    def scans(beams: int) -> list:
+        return [SimpleNamespace(scan=SimpleNamespace(ranges=np.ones(beams)))] * 3
+
+    assert len(list(check_stride(scans(16384), SlamConfig(alignment={"stride": 150})))) == 3  # 110 points
+    assert len(list(check_stride(scans(16384), SlamConfig(alignment={"stride": 1365})))) == 3  # 13 points
+    with pytest.raises(SlamInputError) as info:
+        list(check_stride(scans(16384), SlamConfig(alignment={"stride": 1366})))
+    assert str(info.value) == ("alignment.stride: 1,366 keeps 12 of the first scan's 16,384 beams, fewer than the 13 "
+                               "points the scan matcher needs; at most 1,365 for these scans")
+    assert len(list(check_stride(scans(5), SlamConfig()))) == 3  # too short at any stride: the stride is not why
+    with pytest.raises(SlamInputError, match=r"^alignment.stride: 3 keeps 5 of the first scan's 13 beams, fewer than "
+                                             r"the 13 points the scan matcher needs; at most 1 for these scans$"):
+        list(check_stride(scans(13), SlamConfig()))
+    records = simulate_records("office", seed=0, duration=1.0, rate_hz=5)  # 361-beam scans
+    with pytest.raises(SlamInputError, match=r"^alignment.stride: 31 keeps 12 of the first scan's 361 beams, .* "
+                                             r"at most 30 for these scans$"):
+        run_slam(records, SlamConfig(alignment={"stride": 31}))
+    assert run_slam(records, SlamConfig(alignment={"stride": 30})).trajectory.shape[0] == len(records)
+
+
 def test_slam_turn_rate_bound_allows_any_turn_at_any_scan_rate() -> None:
     """alignment / prealign.max_turn_rate were capped at 100 rad/s, "beyond 100 the whole turn is
     searched at any rate": false, the turn allowed is max_turn_rate * dt, 1.33 rad at 75 scans/s.

@@ -503,7 +503,7 @@ def sparse_log(tmp_path_factory) -> Path:
     ("motion: {sigma_accel: -1}", "motion.sigma_accel: must be in [0.001, 1000] m/s^2"),
     ("motion: {sigma_alpha: 1.0e-300}", "motion.sigma_alpha: must be in [0.001, 1000] rad/s^2"),  # 0 in all but name
     # each ran to its end, exit 0, with a "not healthy" warning (no step matched) or none (a useless run)
-    ("alignment: {stride: 1000000000000}", "alignment.stride: must be in [1, 30] beams"),
+    ("alignment: {stride: 1000000000000}", "alignment.stride: must be in [1, 16384] beams"),
     ("alignment: {damping: 1.0e300}", "alignment.damping: must be in [0, 1] of the Hessian's mean eigenvalue"),
     ("alignment: {tolerance_xy: 1.0e300}", "alignment.tolerance_xy: must be in [0, 0.1] m"),
     ("keyframes: {local_map: 1000000000000}", "keyframes.local_map: must be in [1, 1000] keyframes"),
@@ -527,6 +527,25 @@ def test_search_fields_out_of_bounds_are_one_line_exit_2(sparse_log, tmp_path, c
     assert code == 2
     assert len(err) == 1 and expected in err[0], err
     assert "Traceback" not in captured.err and "Warning" not in captured.err
+    assert not (out / "metrics.json").exists()
+
+
+def test_stride_too_coarse_for_the_scans_is_one_line_exit_2(tmp_path, capsys):
+    """alignment.stride is bounded by the most beams a scan may have (16,384: 60-150 there keeps as
+    many points as 3 on an LMS200; it was at most 30 whatever the scanner), and refused at the first
+    scan, before any matching, when it keeps fewer points than the matcher needs: 31 keeps 12 of a
+    361-beam scan's beams (it ran to exit 0 with unmatched steps and a warning)."""
+    from sim import simulate_records
+
+    records = simulate_records("office", seed=0, duration=4.0, rate_hz=2)
+    log = tmp_path / "scans.clf"
+    write_log(log, records)
+    out = tmp_path / "o"
+    assert _slam_with_config(log, "alignment: {stride: 31}", out) == 2
+    captured = capsys.readouterr()
+    assert captured.err.strip().splitlines() == [
+        "lmsbench slam: error: alignment.stride: 31 keeps 12 of the first scan's 361 beams, fewer than the 13 points the scan "
+        "matcher needs; at most 30 for these scans"], captured.err
     assert not (out / "metrics.json").exists()
 
 
