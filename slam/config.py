@@ -910,7 +910,7 @@ SECTIONS: dict[str, type] = {"motion": MotionConfig, "observations": Observation
 UNIT_FRACTION_SUFFIXES = ("_fraction", "min_inliers", "retry_inliers", "min_score")  # shares of points, in [0, 1]
 STEP_SHARES = ("max_ambiguous", "min_matched_fraction", "max_odometry_doubt")  # consistency: shares of a run's steps, in [0, 1]
 SIGNED_TUPLES = ("heading_hypotheses",)  # rad: offsets either way; the other tuple, motion.odom_noise, holds factors
-ODOM_NOISE_TEXT = f"must hold factors in [0, {MAX_ODOM_NOISE:g}] (m/m, rad/rad, rad/m)"
+ODOM_NOISE_TEXT = f"must be factors in [0, {MAX_ODOM_NOISE:g}] (m/m, rad/rad, rad/m)"
 
 
 def _checked_fields(section: Any, name: str) -> Any:

@@ -1442,13 +1442,13 @@ def test_slam_lists_are_bounded_and_echoed_short() -> None:
                                "[0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1,....1, 0.1] (1000000 characters)")
     with pytest.raises(SlamConfigError) as info:
         SlamConfig(motion={"odom_noise": [-0.1] * 1000})
-    assert str(info.value).startswith("motion.odom_noise: must hold factors in [0, 10] (m/m, rad/rad, rad/m), "
+    assert str(info.value).startswith("motion.odom_noise: must be factors in [0, 10] (m/m, rad/rad, rad/m), "
                                       "got [-0.1, ") and len(str(info.value)) < 200
     # one interval for -1 as for 1e300 (-1 said "must hold numbers >= 0", 1e300 "factors of at most 10")
     for bad in (-1, 11, 1e300):
         with pytest.raises(SlamConfigError) as info:
             SlamConfig(motion={"odom_noise": [0.1, bad, 0.1]})
-        assert str(info.value) == (f"motion.odom_noise: must hold factors in [0, 10] (m/m, rad/rad, rad/m), "
+        assert str(info.value) == (f"motion.odom_noise: must be factors in [0, 10] (m/m, rad/rad, rad/m), "
                                    f"got [0.1, {bad!r}, 0.1]")
     assert SlamConfig(motion={"odom_noise": [0, 10, 10]}).motion.odom_noise == (0.0, 10.0, 10.0)
 
