@@ -264,7 +264,9 @@ def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = 
             bad = not math.isfinite(value) or (lo is not None and (value <= lo if lo_open else value < lo)) \
                 or (hi is not None and value > hi)
         except OverflowError:  # a whole number of 400 digits: --seed, --stride, --max-scans were a traceback
-            raise argparse.ArgumentTypeError(f"must be {what}, got {text!r} (too large for a float)") from None
+            # beyond a stated upper bound the range says why (--seed said it, then "too large for a float")
+            why = "" if hi is not None else " (too large for a float)"
+            raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}{why}") from None
         if bad:
             raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}")
         return value

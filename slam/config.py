@@ -10,6 +10,7 @@ from typing import Any, cast
 
 import numpy as np
 
+from features.baselines.checks import MAX_BEAMS
 from lms200 import LmsbenchError
 from lms200.finite import float_of, shown
 
@@ -23,7 +24,8 @@ class AlignmentConfig:
     """Scan matching (``slam.icp``): robust point-to-line ICP of a scan against the local map.
 
     Attributes:
-        stride: every ``stride``-th valid beam of a scan is matched (1 = all).
+        stride: every ``stride``-th valid beam of a scan is matched (1 = all); at most 16,384 (``MAX_BEAMS``),
+            and a run refuses at its first scan one that keeps fewer than ``MIN_MATCH_POINTS`` of its beams.
         max_range: beams longer than this (m) are not matched (far points are sparse and noisy); in
             [0.1, 1e4] m.
         max_correspondence: a point further than this (m) from every map point is left out of a step...
@@ -100,7 +102,8 @@ class AlignmentConfig:
             wrong way could win (csail-robotlaser1, 0.64 s apart, flipped twice: ATE 10 m). Half
             a turn a second (pi), above the fastest turns of the logs' corrected poses
             (csail-robotlaser1 2.1 rad/s, ACES 1.1, MIT CSAIL 1.9 at the 99th percentile); from
-            1 s between scans on it allows the whole turn.
+            1 s between scans on it allows the whole turn. In [0.01, 1e4] rad/s (``MAX_TURN_RATE``: 1e4
+            allows any heading even at 100 scans/s; 100 allowed only 1.33 rad at the LMS200's 75).
         search_step, search_step_theta: the window's grid (m, rad): 0.2 m and 1 degree, well
             inside the ICP's 0.5 m reach (1 degree moves a point 10 m away by 0.17 m); at least
             1e-3 rad, a step at least ``search_resolution``, and a window of at most 4 million
@@ -545,10 +548,8 @@ class SlamConfig:
                           ("loop_closure", "every"), ("loop_closure", "candidates")):
             if getattr(getattr(self, sec), name) < 1:
                 raise SlamConfigError(f"{sec}.{name}: must be >= 1, got {getattr(getattr(self, sec), name)}")
-        for sec, name in (("alignment", "search_step"), ("alignment", "search_step_theta"),
-                          ("alignment", "search_resolution"), ("alignment", "search_sigma"), ("alignment", "fit_sigma"),
-                          ("alignment", "search_points"), ("alignment", "search_candidates"),
-                          ("alignment", "max_correspondence"), ("alignment", "huber"), ("alignment", "sigma_point"),
+        # the search window's fields (OWN_RULE) are left to _check_search: one interval for every value
+        for sec, name in (("alignment", "search_points"), ("alignment", "max_correspondence"), ("alignment", "huber"), ("alignment", "sigma_point"),
                           ("alignment", "covariance_inflation"), ("alignment", "inlier_distance"),
                           ("keyframes", "distance"), ("keyframes", "angle"), ("loop_closure", "kernel_width"),
                           ("loop_closure", "prior_sigma")):
@@ -643,10 +644,8 @@ class SlamConfig:
         if len(m.odom_noise) != 3:
             raise SlamConfigError(f"motion.odom_noise: must be 3 numbers (x, y, theta), got {len(m.odom_noise):,}: "
                                   f"{shown(list(m.odom_noise))}")  # 200,000 numbers were echoed whole, a 1 MB line
+        # in [0, MAX_ODOM_NOISE], checked above (1e300: the std's square overflowed)
         noise = cast(tuple[float, float, float], tuple(float(v) for v in m.odom_noise))
-        if not all(v <= MAX_ODOM_NOISE for v in noise):  # (>= 0 checked above) 1e300: the std's square overflowed
-            raise SlamConfigError(f"motion.odom_noise: must be factors of at most {MAX_ODOM_NOISE:g} (m/m, rad/rad, "
-                                  f"rad/m), got {list(m.odom_noise)!r}")
         if not 0.0 <= m.odom_max_turn_error <= math.pi:
             raise SlamConfigError(f"motion.odom_max_turn_error: must be in [0, pi] rad, got {m.odom_max_turn_error}")
         object.__setattr__(self, "motion", dataclasses.replace(m, odom_noise=noise))
@@ -692,12 +691,10 @@ def _check_extractor(method: str, params: dict[str, Any]) -> None:
 def _check_search(al: AlignmentConfig) -> None:
     """The correlative search's fields (``slam.correlative``), whose memory grows as the inverse
     square of the steps: each within its bounds, and the window within ``MAX_SEARCH_POSES``."""
-    if not 1 <= al.search_sigmas <= MAX_SEARCH_SIGMAS:
-        raise SlamConfigError(f"alignment.search_sigmas: must be in [1, {MAX_SEARCH_SIGMAS:g}] std of the prediction, "
-                              f"got {al.search_sigmas}")
-    if not 0 < al.max_turn_rate:
-        raise SlamConfigError(f"alignment.max_turn_rate: must be > 0 rad/s, got {al.max_turn_rate}")
+    # (name, low, high, unit, (why below, why above)): the same interval for every value outside it
+    # (-1 and 0 said "must be > 0", 1e300 the interval), with the reason of the side it is on
     for name, lo, hi, unit, why in (
+            ("search_sigmas", 1.0, MAX_SEARCH_SIGMAS, "std of the prediction", ("", "")),
             ("search_step_theta", MIN_SEARCH_STEP_THETA, math.pi, "rad", ("finer needs more memory than the search "
                                                                            "is worth", "at most half a turn")),
             ("search_resolution", MIN_SEARCH_RESOLUTION_M, MAX_SEARCH_RESOLUTION_M, "m",
@@ -710,17 +707,15 @@ def _check_search(al: AlignmentConfig) -> None:
              ("the window's step is at least one cell of search_resolution", "the window's widest half-side")),
             ("search_xy", al.search_step, MAX_SEARCH_XY_M, "m",
              ("the window's half-side is at least one search_step", "10 m/s for a second")),
-            ("fit_margin", 0.0, 1.0, "", ("", "a fit is a share of points, in [0, 1]")),
+            ("fit_margin", 0.0, 1.0, "", ("a fit is a share of points", "a fit is a share of points")),
             ("ambiguity_sigmas", 0.0, MAX_AMBIGUITY_SIGMAS, "std",
-             ("", f"the prior tells poses apart by a few times search_sigmas (<= {MAX_SEARCH_SIGMAS:g}) std at most"))):
+             ("", f"the prior tells poses apart by a few times search_sigmas (<= {MAX_SEARCH_SIGMAS:g}) std at most")),
+            ("search_candidates", 1, MAX_SEARCH_CANDIDATES, "",
+             ("each is refined by the ICP on every searched step",) * 2)):
         value = getattr(al, name)
-        if not lo <= value <= hi:
+        if not lo <= value <= hi:  # an empty reason is left out (fit_margin -1 printed "()")
             reason = why[0] if value < lo else why[1]
-            unit_s = f" {unit}" if unit else ""
-            raise SlamConfigError(f"alignment.{name}: must be in [{lo:g}, {hi:g}]{unit_s} ({reason}), got {value}")
-    if not 1 <= al.search_candidates <= MAX_SEARCH_CANDIDATES:
-        raise SlamConfigError(f"alignment.search_candidates: must be in [1, {MAX_SEARCH_CANDIDATES}] (each is refined by "
-                              f"the ICP on every searched step), got {al.search_candidates}")
+            raise SlamConfigError(f"alignment.{name}: {interval_text(lo, hi, unit, reason)}, got {short_number(value)}")
     poses = search_window_poses(al)
     if poses > MAX_SEARCH_POSES:
         raise SlamConfigError(f"alignment.search_xy / search_step / search_step_theta: the search window would hold "
@@ -790,12 +785,20 @@ PI = math.pi
 #: motion.sigma_accel 1e-300 was 0 in all but name). Fields missing here are checked by their own
 #: rule in SlamConfig (the search window's, which depend on one another).
 FieldRange = tuple[float, float, str, bool, str]
+#: points of a scan the default pipeline's ICP needs at least (alignment.stride): 13, what stride 30 kept of a
+#: 361-beam LMS200 scan, where a 10 s office run stayed healthy; 40 (10 points) left 40 % of its steps
+#: unmatched, 60 (7) every one, exit 0 with a "not healthy" warning (the ICP itself takes 4: 3 dof)
+MIN_MATCH_POINTS = 13
+#: rad/s: alignment / prealign.max_turn_rate's widest; the turn allowed between scans is max_turn_rate * dt (and
+#: prealign's turn_margin), so 1e4 allows any heading (100 rad) even at 100 scans/s, faster than any scanner's
+MAX_TURN_RATE = 1e4
+TURN_RATE_WHY = "the turn allowed between scans is it times their interval: 1e4 allows any heading at 100 scans/s"
 NOISE_WHY = "a std whose square and inverse square stay finite"
 FIELD_RANGES: dict[str, FieldRange] = {
     # alignment (the default pipeline's ICP)
-    # 30 keeps 13 points of a 361-beam scan, and a 10 s office run stayed healthy; 40 left 40 % of its steps
-    # unmatched, 60 and more (1e12) every one
-    "alignment.stride": (1, 30, "beams", False, "a 361-beam scan keeps 13 points at 30"),
+    # up to the most beams a scan may have: 1e12 matched one point a scan; a stride that leaves fewer than
+    # MIN_MATCH_POINTS of the first scan's beams is refused when the run starts (slam.run.check_stride)
+    "alignment.stride": (1, MAX_BEAMS, "beams", False, "the most beams of a scan the extractors take"),
     "alignment.max_range": (MIN_MATCH_RANGE_M, MAX_MATCH_RANGE_M, "m", False, ""),
     "alignment.max_correspondence": (MIN_REACH_M, SEARCH_CELL_M, "m", False, "the LMS200's range quantum to the cell "
                                      "of the scan matcher's search grid"),
@@ -823,7 +826,9 @@ FIELD_RANGES: dict[str, FieldRange] = {
                                       "0: the LMS200's timing"),
     "alignment.normal_agreement": (0, PI, "rad", True, "pi: no normal check"),
     "alignment.search_points": (1, 16384, "points", False, "the most beams of a scan the extractors take"),
-    "alignment.max_turn_rate": (0.01, 100, "rad/s", False, "beyond 100 the whole turn is searched at any rate"),
+    # the headings searched are within max_turn_rate * dt (slam.scanslam): 100 rad/s allowed only 1.33 rad between
+    # scans at 75 scans/s; MAX_TURN_RATE allows every heading (100 rad) even at 100 scans/s
+    "alignment.max_turn_rate": (0.01, MAX_TURN_RATE, "rad/s", False, TURN_RATE_WHY),
     # motion
     "motion.sigma_accel": (MIN_SIGMA_MOTION, MAX_SIGMA_MOTION, "m/s^2", False,
                            "the prediction's std and its inverse square stay finite"),
@@ -857,7 +862,7 @@ FIELD_RANGES: dict[str, FieldRange] = {
     "prealign.sigma_phi": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "rad", False, NOISE_WHY),
     "prealign.min_fraction": (0, 1, "", False, "a share of line length"),
     "prealign.xy_turn": (0, PI, "rad", False, ""),
-    "prealign.max_turn_rate": (0.01, 100, "rad/s", False, ""),
+    "prealign.max_turn_rate": (0.01, MAX_TURN_RATE, "rad/s", False, TURN_RATE_WHY),
     "prealign.turn_margin": (0, PI, "rad", False, ""),
     "prealign.near_heading": (0, PI, "rad", False, ""),
     "prealign.verify_tolerance": (MIN_REACH_M, 1, "m", False, ""),
@@ -917,8 +922,18 @@ OWN_RULE = frozenset({"alignment.search_sigmas", "alignment.search_step_theta", 
 def field_range_text(where: str) -> str:
     """``"must be in [lo, hi] unit (why)"`` for the field ``where`` of FIELD_RANGES."""
     lo, hi, unit, lo_open, why = FIELD_RANGES[where]
+    return interval_text(lo, hi, unit, why, lo_open)
+
+
+def interval_text(lo: float, hi: float, unit: str, why: str, lo_open: bool = False) -> str:
+    """``"must be in [lo, hi] unit (why)"``; no unit or reason where they are empty."""
     interval = f"{'(' if lo_open else '['}{lo:g}, {'pi' if hi == PI else f'{hi:g}'}]"
     return f"must be in {interval}{' ' + unit if unit else ''}{f' ({why})' if why else ''}"
+
+
+def short_number(value: float) -> str:
+    """A number for a message: ``1e+300`` taken as a whole number is not echoed with its 301 digits."""
+    return f"{float(value):.6g}" if isinstance(value, int) and abs(value) >= 1e15 else str(value)
 
 
 def in_range(where: str, value: float) -> bool:
@@ -935,7 +950,8 @@ SECTIONS: dict[str, type] = {"motion": MotionConfig, "observations": Observation
 
 UNIT_FRACTION_SUFFIXES = ("_fraction", "min_inliers", "retry_inliers", "min_score")  # shares of points, in [0, 1]
 STEP_SHARES = ("max_ambiguous", "min_matched_fraction", "max_odometry_doubt")  # consistency: shares of a run's steps, in [0, 1]
-SIGNED_TUPLES = ("heading_hypotheses",)  # rad: offsets either way; every other tuple holds sigmas, >= 0
+SIGNED_TUPLES = ("heading_hypotheses",)  # rad: offsets either way; the other tuple, motion.odom_noise, holds factors
+ODOM_NOISE_TEXT = f"must be factors in [0, {MAX_ODOM_NOISE:g}] (m/m, rad/rad, rad/m)"
 
 
 def _checked_fields(section: Any, name: str) -> Any:
@@ -960,6 +976,8 @@ def _checked_fields(section: Any, name: str) -> Any:
             number = _finite_number(where, value)
             if where in FIELD_RANGES and not in_range(where, number):  # the real interval, for -1 as for 1e300
                 raise SlamConfigError(f"{where}: {field_range_text(where)}, got {value!r}")
+            if f.name.endswith("_probability") and not 0 < number < 1:  # -1 too (it said "must be >= 0")
+                raise SlamConfigError(f"{where}: a probability, must be in (0, 1), got {value!r}")
             if number < 0 and where not in OWN_RULE:
                 raise SlamConfigError(f"{where}: must be >= 0, got {value!r}")
             if kind is int:
@@ -970,15 +988,14 @@ def _checked_fields(section: Any, name: str) -> Any:
                 raise SlamConfigError(f"{where}: a share of steps, must be in [0, 1], got {value!r}")
             elif f.name.endswith(UNIT_FRACTION_SUFFIXES) and number > 1:
                 raise SlamConfigError(f"{where}: a share of points, must be in [0, 1], got {value!r}")
-            elif f.name.endswith("_probability") and not 0 < number < 1:
-                raise SlamConfigError(f"{where}: a probability, must be in (0, 1), got {value!r}")
             changes[f.name] = number
         elif origin is tuple:
             if isinstance(value, (str, bytes, dict)) or not isinstance(value, (tuple, list, np.ndarray)):
                 raise SlamConfigError(f"{where}: must be a list of numbers, got {value!r}")
             numbers = tuple(_finite_number(where, v) for v in value)
-            if f.name not in SIGNED_TUPLES and any(v < 0 for v in numbers):
-                raise SlamConfigError(f"{where}: must hold numbers >= 0, got {shown(list(value))}")
+            if f.name not in SIGNED_TUPLES and not all(0 <= v <= MAX_ODOM_NOISE for v in numbers):
+                # -1 said "must hold numbers >= 0" and 1e300 "factors of at most 10": one interval
+                raise SlamConfigError(f"{where}: {ODOM_NOISE_TEXT}, got {shown(list(value))}")
             changes[f.name] = numbers
     return dataclasses.replace(section, **changes)
 

@@ -13,7 +13,7 @@ from lms200.finite import shown
 from lms200.logs import MAX_COORD_M, checked_records
 from lms200.records import Record, pose_of
 
-from .config import SlamConfig
+from .config import MIN_MATCH_POINTS, SlamConfig
 from .filter import SlamFilter
 from .models import wrap
 from .observations import Observations, from_features
@@ -263,6 +263,7 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
 
     records = seen(records)
     if config.preset == "default":
+        records = check_stride(records, config)
         from .scanslam import run_scan_slam
 
         result = run_scan_slam(((rec.scan.stamp, rec.scan, rec.odom, rec.truth) for rec in records), config)
@@ -281,6 +282,24 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
     result = run_steps(steps(), config)
     _warn_unread(config, range_maxes)
     return result
+
+
+def check_stride(records: Iterable[Record], config: SlamConfig) -> Iterator[Record]:
+    """The records, raising SlamInputError at the first scan (before any matching) when
+    ``alignment.stride`` keeps fewer of its beams than the ICP needs (``MIN_MATCH_POINTS``; a scan
+    with fewer beams is too short at any stride, and runs to its "not healthy" warning): the stride is bounded by the most beams a scan may have (16,384, where
+    60-150 keeps as many points as 3 on an LMS200), so a 361-beam scan's limit is checked here."""
+    stride = config.alignment.stride
+    for i, rec in enumerate(records):
+        if i == 0:
+            beams = int(np.size(rec.scan.ranges))
+            need = MIN_MATCH_POINTS  # a scan with fewer beams is short whatever the stride (it runs, "not healthy")
+            if beams >= need and -(-beams // stride) < need:  # ceil: beams 0, stride, 2 stride, ...
+                largest = (beams - 1) // (need - 1)
+                raise SlamInputError(f"alignment.stride: {stride:,} keeps {-(-beams // stride)} of the first scan's "
+                                     f"{beams:,} beams, fewer than the {need} points the scan matcher needs; "
+                                     f"at most {largest:,} for these scans")
+        yield rec
 
 
 def _warn_unread(config: SlamConfig, range_maxes: set[float]) -> None:

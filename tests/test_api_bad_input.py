@@ -1325,9 +1325,108 @@ def test_every_slam_number_has_one_stated_interval() -> None:
             if section == "landmarks":  # confirm_hits at most tentative_window + 1 (below)
                 values["landmarks"] = {"confirm_hits": 1, "tentative_window": 1000} | values["landmarks"]
             assert getattr(getattr(SlamConfig(**values), section), name) == ok
+    # the search window's own rule (OWN_RULE): -1, 0 and 1e300 get the same interval; no
+    # empty "()" (fit_margin -1 said "must be in [0, 1] (), got -1.0"; search_step -1 "must be > 0" and
+    # 1e300 "must be in [0.1, 10] m (...)"; search_candidates 1e300 was echoed with its 301 digits)
+    for where in sorted(OWN_RULE):
+        section, name = where.split(".")
+        messages = set()
+        for bad in (-1.0, 0.0, 1e300):
+            if bad == 0.0 and name in ("fit_margin", "ambiguity_sigmas", "voxel"):  # 0 is taken: no margin, off
+                assert getattr(getattr(SlamConfig(**_slam_field(where, 0)), section), name) == 0
+                continue
+            if isinstance(getattr(SECTIONS[section](), name), int) and bad != 1e300:
+                bad = int(bad)
+            with pytest.raises(SlamConfigError) as info:
+                SlamConfig(**_slam_field(where, bad))
+            text = str(info.value)
+            assert text.startswith(f"{where}: must be ") and "()" not in text and len(text) < 200, text
+            messages.add(text.split(" (")[0].rsplit(", got ", 1)[0])  # the reason names the side
+        assert len(messages) == 1, messages
+    with pytest.raises(SlamConfigError) as info:
+        SlamConfig(alignment={"fit_margin": -1})
+    assert str(info.value) == "alignment.fit_margin: must be in [0, 1] (a fit is a share of points), got -1.0"
+    with pytest.raises(SlamConfigError) as info:
+        SlamConfig(alignment={"search_candidates": 1e300})
+    assert str(info.value) == ("alignment.search_candidates: must be in [1, 32] (each is refined by the ICP on every "
+                               "searched step), got 1e+300")
     with pytest.raises(SlamConfigError, match=r"^landmarks.confirm_hits: must be at most tentative_window \+ 1 \(7, "):
         SlamConfig(landmarks={"confirm_hits": 8})  # no landmark could ever be confirmed: an empty map
     assert SlamConfig(landmarks={"confirm_hits": 1000, "tentative_window": 999}).landmarks.confirm_hits == 1000
+
+
+def test_slam_stride_is_bounded_by_the_scans_beams() -> None:
+    """alignment.stride was at most 30 whatever the scanner, though scans of up to 16,384 beams are
+    taken (features.baselines.checks.MAX_BEAMS), where 60-150 keeps as many points as 3 on an LMS200.
+    The config takes up to MAX_BEAMS; the run refuses, at its first scan and before any matching, a
+    stride that keeps fewer than the 13 points the matcher needs, naming the largest that works."""
+    from types import SimpleNamespace
+
+    from features.baselines.checks import MAX_BEAMS
+    from sim import simulate_records
+    from slam import SlamConfig, SlamConfigError, run_slam
+    from slam.run import SlamInputError, check_stride
+
+    assert SlamConfig(alignment={"stride": 150}).alignment.stride == 150
+    assert SlamConfig(alignment={"stride": MAX_BEAMS}).alignment.stride == 16384
+    with pytest.raises(SlamConfigError, match=re.escape("alignment.stride: must be in [1, 16384] beams (the most beams "
+                                                        "of a scan the extractors take), got 16385")):
+        SlamConfig(alignment={"stride": MAX_BEAMS + 1})
+
+    def scans(beams: int) -> list:
+        return [SimpleNamespace(scan=SimpleNamespace(ranges=np.ones(beams)))] * 3
+
+    assert len(list(check_stride(scans(16384), SlamConfig(alignment={"stride": 150})))) == 3  # 110 points
+    assert len(list(check_stride(scans(16384), SlamConfig(alignment={"stride": 1365})))) == 3  # 13 points
+    with pytest.raises(SlamInputError) as info:
+        list(check_stride(scans(16384), SlamConfig(alignment={"stride": 1366})))
+    assert str(info.value) == ("alignment.stride: 1,366 keeps 12 of the first scan's 16,384 beams, fewer than the 13 "
+                               "points the scan matcher needs; at most 1,365 for these scans")
+    assert len(list(check_stride(scans(5), SlamConfig()))) == 3  # too short at any stride: the stride is not why
+    with pytest.raises(SlamInputError, match=r"^alignment.stride: 3 keeps 5 of the first scan's 13 beams, fewer than "
+                                             r"the 13 points the scan matcher needs; at most 1 for these scans$"):
+        list(check_stride(scans(13), SlamConfig()))
+    records = simulate_records("office", seed=0, duration=1.0, rate_hz=5)  # 361-beam scans
+    with pytest.raises(SlamInputError, match=r"^alignment.stride: 31 keeps 12 of the first scan's 361 beams, .* "
+                                             r"at most 30 for these scans$"):
+        run_slam(records, SlamConfig(alignment={"stride": 31}))
+    assert run_slam(records, SlamConfig(alignment={"stride": 30})).trajectory.shape[0] == len(records)
+
+
+def test_slam_turn_rate_bound_allows_any_turn_at_any_scan_rate() -> None:
+    """alignment / prealign.max_turn_rate were capped at 100 rad/s, "beyond 100 the whole turn is
+    searched at any rate": false, the turn allowed is max_turn_rate * dt, 1.33 rad at 75 scans/s.
+    The cap is 1e4 rad/s (any heading at 100 scans/s) with that reason."""
+    from slam import SlamConfig, SlamConfigError
+
+    for section in ("alignment", "prealign"):
+        assert getattr(SlamConfig(**{section: {"max_turn_rate": 1000.0}}), section).max_turn_rate == 1000.0
+        assert getattr(SlamConfig(**{section: {"max_turn_rate": 1e4}}), section).max_turn_rate == 1e4
+        for bad in (0, 1e5):
+            with pytest.raises(SlamConfigError) as info:
+                SlamConfig(**{section: {"max_turn_rate": bad}})
+            assert str(info.value) == (f"{section}.max_turn_rate: must be in [0.01, 10000] rad/s (the turn allowed "
+                                       f"between scans is it times their interval: 1e4 allows any heading at 100 "
+                                       f"scans/s), got {bad!r}")
+    assert 1e4 / 100 > 2 * math.pi  # 100 scans/s: every heading within the bound
+
+
+def test_slam_probabilities_have_one_interval() -> None:
+    """Every ``*_probability`` field is one open interval (0, 1) whichever side: -1 said "must be >=
+    0" while 0 and 2 said "a probability, must be in (0, 1)"."""
+    import dataclasses
+
+    from slam import SlamConfig, SlamConfigError
+    from slam.config import SECTIONS
+
+    fields = [(name, f.name) for name, cls in SECTIONS.items() for f in dataclasses.fields(cls)
+              if f.name.endswith("_probability")]
+    assert len(fields) == 7
+    for section, name in fields:
+        for bad in (-1, 0, 1, 2, 1e300):
+            with pytest.raises(SlamConfigError) as info:
+                SlamConfig(**{section: {name: bad}})
+            assert str(info.value) == f"{section}.{name}: a probability, must be in (0, 1), got {bad!r}"
 
 
 def test_slam_lists_are_bounded_and_echoed_short() -> None:
@@ -1345,7 +1444,15 @@ def test_slam_lists_are_bounded_and_echoed_short() -> None:
                                "[0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1,....1, 0.1] (1000000 characters)")
     with pytest.raises(SlamConfigError) as info:
         SlamConfig(motion={"odom_noise": [-0.1] * 1000})
-    assert str(info.value).startswith("motion.odom_noise: must hold numbers >= 0, got [-0.1, ") and len(str(info.value)) < 200
+    assert str(info.value).startswith("motion.odom_noise: must be factors in [0, 10] (m/m, rad/rad, rad/m), "
+                                      "got [-0.1, ") and len(str(info.value)) < 200
+    # one interval for -1 as for 1e300 (-1 said "must hold numbers >= 0", 1e300 "factors of at most 10")
+    for bad in (-1, 11, 1e300):
+        with pytest.raises(SlamConfigError) as info:
+            SlamConfig(motion={"odom_noise": [0.1, bad, 0.1]})
+        assert str(info.value) == (f"motion.odom_noise: must be factors in [0, 10] (m/m, rad/rad, rad/m), "
+                                   f"got [0.1, {bad!r}, 0.1]")
+    assert SlamConfig(motion={"odom_noise": [0, 10, 10]}).motion.odom_noise == (0.0, 10.0, 10.0)
 
 
 def test_slam_prior_sigma_and_icp_iterations_are_bounded_when_built() -> None:

@@ -248,7 +248,7 @@ def test_bad_config_values_raise_naming_the_field(method: str, params: dict, fie
     "params, field",
     [({"min_turn": np.pi}, "min_turn"), ({"min_turn": 30.0}, "min_turn"), ({"max_gap_beams": 0}, "max_gap_beams"),
      ({"max_distance": -1.0}, "max_distance"), ({"max_distance": 1e300}, "max_distance"),
-     ({"max_distance": 1e-300}, "max_distance"), ({"max_distance": 0.0}, "max_distance"), ({"sigma": 0.0}, "sigma"),
+     ({"sigma": 0.0}, "sigma"),  # max_distance 0: contact within the gap only, taken
      ({"breakpoint_lambda": np.deg2rad(95.0)}, "breakpoint_lambda")],
 )
 def test_bad_corner_config_values_raise(params: dict, field: str) -> None:
@@ -351,12 +351,12 @@ def test_split_and_merge_bounds_name_the_range_and_keep_the_defaults() -> None:
             ({"merge_rms": 2.0}, "merge_rms: must be a number in [0, 1] m, got 2.0")):
         with pytest.raises(ConfigError, match=re.escape(message)):
             extract(scan, "split_merge", **params)
-    with pytest.raises(ConfigError, match=re.escape("max_distance: must be a width in [0.0001, 1] m, got 1e+300")):
+    with pytest.raises(ConfigError, match=re.escape("max_distance: must be a number in [0, 1] m, got 1e+300")):
         CornerConfig(max_distance=1e300)
     for method in ("split_merge", "iepf"):  # both ends of every interval are taken
         for params in ({"split_threshold": 1e-4, "split_sigmas": 1, "merge_rms": 0, "merge_sigmas": 1},
                        {"split_threshold": 1, "split_sigmas": 100, "merge_rms": 1, "merge_sigmas": 100,
-                        "sigma_fit": 1000, "corners": CornerConfig(max_distance=1e-4)},
+                        "sigma_fit": 1000, "corners": CornerConfig(max_distance=0)},
                        {"split_sigmas": 0, "merge_sigmas": 0, "corners": CornerConfig(max_distance=1)}):
             make_config(method, **params)
 
@@ -433,7 +433,7 @@ def test_iepf_splits_a_closed_ring_whose_last_beam_repeats_its_first() -> None:
     ("sensor", "psi_split", 1e300, r"must be a number in \[0, 3.14159\] rad"),
     ("sensor", "band_min", 1e300, r"must be an angle in \(0, 1.5708\] rad"),
     ("sensor", "corner_psi", 1e300, r"must be a number in \[0, 1\] \(a share of the turn\)"),  # no corner
-    ("sensor", "corner_max_dist", 1e300, r"must be a width in \[0.0001, 1\] m"),  # 2 m: 42 corners for 22
+    ("sensor", "corner_max_dist", 1e300, r"must be a number in \[0, 1\] m"),  # 2 m: 42 corners for 22
     ("sensor", "acute_min_var", 1e300, r"must be a number in \[0, 10000\] sigma_r\^2"),  # no corner
     ("split_merge", "breakpoint_lambda", 1e-300, r"must be an angle in \[0.0174533, 1.5708\] rad \(1 to 90 deg\)"),
     ("hough", "breakpoint_lambda", 0.01, r"must be an angle in \[0.0174533, 1.5708\] rad \(1 to 90 deg\)"),  # no line
@@ -476,3 +476,24 @@ def test_sensor_thresholds_at_their_floor_still_find_the_walls(field):
         tp, fp = tp + score.tp, fp + score.fp
     assert MIN_TAU == 1.0
     assert tp >= 12 and fp == 0, (tp, fp)
+
+
+def test_corner_distance_zero_is_taken() -> None:
+    """A corner distance of 0 means contact within the beams' gap only (the rule is ``dist <=
+    max_distance + gap``) and worked before the bounds; the [1e-4, 1] m width refused it. The split
+    and merge corners' ``max_distance`` and the sensor method's ``corner_max_dist`` take 0 and find
+    the office view's two corners, as at 0.15 m; above 1 m is refused still."""
+    from features import ConfigError
+    from features.baselines.common import CornerConfig
+    from sim import LMS200Sim, SensorConfig, make_world
+
+    with LMS200Sim(make_world("office", seed=0), SensorConfig(), seed=0) as lidar:
+        scan = lidar.scan_at((6.0, 5.0, 0.0))
+    for method in ("split_merge", "iepf"):
+        assert len(extract(scan, method=method, corners=CornerConfig(max_distance=0.0)).corners) == 2
+    assert len(extract(scan, method="sensor", corner_max_dist=0.0).corners) == 2
+    assert len(extract(scan, method="sensor", corner_max_dist=0.15).corners) == 2
+    with pytest.raises(ConfigError, match=re.escape("max_distance: must be a number in [0, 1] m, got -1e-09")):
+        CornerConfig(max_distance=-1e-9)
+    with pytest.raises(ConfigError, match=re.escape("corner_max_dist: must be a number in [0, 1] m, got 1.5")):
+        make_config("sensor", corner_max_dist=1.5)

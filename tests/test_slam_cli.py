@@ -483,9 +483,9 @@ def sparse_log(tmp_path_factory) -> Path:
 @pytest.mark.parametrize("config, expected", [
     ("alignment: {search_sigmas: 0}", "alignment.search_sigmas: must be in [1, 10]"),  # was a ZeroDivisionError mid-run
     ("alignment: {search_sigmas: 1e300}", "alignment.search_sigmas: must be in [1, 10]"),  # the prior's std underflowed
-    ("alignment: {search_step_theta: 1e-9}", "alignment.search_step_theta: must be in [0.001, 3.14159] rad (finer "
+    ("alignment: {search_step_theta: 1e-9}", "alignment.search_step_theta: must be in [0.001, pi] rad (finer "
                                              "needs more memory"),  # was a MemoryError
-    ("alignment: {search_step_theta: 4}", "alignment.search_step_theta: must be in [0.001, 3.14159] rad (at most "
+    ("alignment: {search_step_theta: 4}", "alignment.search_step_theta: must be in [0.001, pi] rad (at most "
                                           "half a turn)"),  # said "finer needs more memory"
     ("alignment: {search_resolution: 1e-6}", "alignment.search_resolution: must be in [0.01, 1] m (finer"),  # MemoryError
     ("alignment: {search_resolution: 2}", "alignment.search_resolution: must be in [0.01, 1] m (coarser cells"),
@@ -497,7 +497,7 @@ def sparse_log(tmp_path_factory) -> Path:
     ("alignment: {search_step: 1.0e-160}", "alignment.search_step: must be in [0.1, 10] m"),  # OverflowError: step**-2
     ("alignment: {ambiguity_sigmas: 1.0e300}", "alignment.ambiguity_sigmas: must be in [0, 100] std"),  # OverflowError
     ("alignment: {ambiguity_sigmas: 1.0e300, fit_margin: 1.0e300}", "alignment.fit_margin: must be in [0, 1]"),
-    ("alignment: {max_turn_rate: 0}", "alignment.max_turn_rate: must be in [0.01, 100] rad/s"),
+    ("alignment: {max_turn_rate: 0}", "alignment.max_turn_rate: must be in [0.01, 10000] rad/s"),
     ("motion: {sigma_floor_xy: 0}", "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # a repeated stamp divided by a zero std
     ("motion: {sigma_floor_xy: 1.0e160}", "motion.sigma_floor_xy: must be in [1e-06, 1000] m"),  # OverflowError: sxy**2
     ("motion: {sigma_floor_theta: 1.0e300}", "motion.sigma_floor_theta: must be in [1e-06, 1000] rad"),  # OverflowError
@@ -510,7 +510,7 @@ def sparse_log(tmp_path_factory) -> Path:
     ("motion: {sigma_accel: -1}", "motion.sigma_accel: must be in [0.001, 1000] m/s^2"),
     ("motion: {sigma_alpha: 1.0e-300}", "motion.sigma_alpha: must be in [0.001, 1000] rad/s^2"),  # 0 in all but name
     # each ran to its end, exit 0, with a "not healthy" warning (no step matched) or none (a useless run)
-    ("alignment: {stride: 1000000000000}", "alignment.stride: must be in [1, 30] beams"),
+    ("alignment: {stride: 1000000000000}", "alignment.stride: must be in [1, 16384] beams"),
     ("alignment: {damping: 1.0e300}", "alignment.damping: must be in [0, 1] of the Hessian's mean eigenvalue"),
     ("alignment: {tolerance_xy: 1.0e300}", "alignment.tolerance_xy: must be in [0, 0.1] m"),
     ("keyframes: {local_map: 1000000000000}", "keyframes.local_map: must be in [1, 1000] keyframes"),
@@ -534,6 +534,25 @@ def test_search_fields_out_of_bounds_are_one_line_exit_2(sparse_log, tmp_path, c
     assert code == 2
     assert len(err) == 1 and expected in err[0], err
     assert "Traceback" not in captured.err and "Warning" not in captured.err
+    assert not (out / "metrics.json").exists()
+
+
+def test_stride_too_coarse_for_the_scans_is_one_line_exit_2(tmp_path, capsys):
+    """alignment.stride is bounded by the most beams a scan may have (16,384: 60-150 there keeps as
+    many points as 3 on an LMS200; it was at most 30 whatever the scanner), and refused at the first
+    scan, before any matching, when it keeps fewer points than the matcher needs: 31 keeps 12 of a
+    361-beam scan's beams (it ran to exit 0 with unmatched steps and a warning)."""
+    from sim import simulate_records
+
+    records = simulate_records("office", seed=0, duration=4.0, rate_hz=2)
+    log = tmp_path / "scans.clf"
+    write_log(log, records)
+    out = tmp_path / "o"
+    assert _slam_with_config(log, "alignment: {stride: 31}", out) == 2
+    captured = capsys.readouterr()
+    assert captured.err.strip().splitlines() == [
+        "lmsbench slam: error: alignment.stride: 31 keeps 12 of the first scan's 361 beams, fewer than the 13 points the scan "
+        "matcher needs; at most 30 for these scans"], captured.err
     assert not (out / "metrics.json").exists()
 
 

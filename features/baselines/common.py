@@ -229,7 +229,9 @@ class CornerConfig:
     def __post_init__(self) -> None:
         checks.angle("min_turn", self.min_turn, np.pi, low_open=False)
         checks.integer("max_gap_beams", self.max_gap_beams, 1)
-        checks.band("max_distance", self.max_distance)  # 1e300: any turn of neighbours a corner, however far
+        # 1e300: any turn of neighbours a corner, however far; 0: contact within the beams' gap only (the
+        # rule is dist <= max_distance + gap), as before the bound
+        checks.between("max_distance", self.max_distance, 0.0, checks.MAX_BAND_M, "m")
         checks.breakpoint_angle("breakpoint_lambda", self.breakpoint_lambda)
         checks.noise_sigma("sigma", self.sigma)
         object.__setattr__(self, "_params", engine.CornerParams(

@@ -94,7 +94,8 @@ class SensorMethodConfig:
         checks.flag("arc_check", self.arc_check)
         checks.between("corner_min_turn", self.corner_min_turn, 0.0, math.pi / 2, "rad")
         checks.between("corner_psi", self.corner_psi, 0.0, 1.0, "(a share of the turn)")  # above 0.9: ~no corner
-        checks.band("corner_max_dist", self.corner_max_dist)  # as the baselines' max_distance; 2 m: 42 corners for 22
+        # as the baselines' max_distance; 2 m: 42 corners for 22; 0: within the beam spacing only
+        checks.between("corner_max_dist", self.corner_max_dist, 0.0, checks.MAX_BAND_M, "m")
         checks.between("acute_min_var", self.acute_min_var, 0.0, MAX_ACUTE_MIN_VAR, "sigma_r^2")  # 1e300: no corner
         checks.between("sigma_bearing", self.sigma_bearing, 0.0, MAX_SIGMA_BEARING,
                        "rad (a bearing error of a few mrad; degrees given as radians?)")
