@@ -1332,7 +1332,7 @@ def test_every_slam_number_has_one_stated_interval() -> None:
         section, name = where.split(".")
         messages = set()
         for bad in (-1.0, 0.0, 1e300):
-            if bad == 0.0 and name in ("fit_margin", "ambiguity_sigmas", "voxel"):  # 0 is taken: no margin, off
+            if bad == 0.0 and name in ("fit_margin", "ambiguity_sigmas", "voxel", "correlation_length"):  # 0 is taken: no margin, off
                 assert getattr(getattr(SlamConfig(**_slam_field(where, 0)), section), name) == 0
                 continue
             if isinstance(getattr(SECTIONS[section](), name), int) and bad != 1e300:
