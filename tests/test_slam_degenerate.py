@@ -67,14 +67,14 @@ def test_degenerate_drift_sums_the_keyframes_of_one_stretch():
 
 
 def test_the_warning_names_the_degenerate_stretch():
-    """The stamp is the keyframe where the stretch's sum peaked (it said "ending at")."""
+    """The stamp is the keyframe where the stretch's sum peaked (it said "ending at", then "reaching it at", which named no antecedent)."""
     from experiments.commands.slam import _health_warning
 
     m = {"n_scans": 600, "consistency": {"diverged": False, "healthy": False, "degenerate_drift": 1.1879,
                                          "degenerate_drift_at": 61.2}}
     assert _health_warning(m, SlamConfig()) == (
         "the run is not healthy: a stretch of degenerate matches (the weakest direction held by fewer than 10 "
-        "points' worth, as along a corridor) reaching it at t=61.2 may have drifted 1.19 m along it (its keyframes' "
+        "points' worth, as along a corridor) may have drifted 1.19 m along its weak axis by t=61.2 (its keyframes' "
         "std there, each at most its predictions', summed; consistency.max_degenerate_drift 0.3 m) (metrics.json: "
         "consistency.healthy false)")
 

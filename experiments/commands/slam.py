@@ -431,8 +431,8 @@ def _unhealthy_reasons(m: dict[str, Any], config: "SlamConfig") -> list[str]:
     if drift is not None and cc.degenerate_stretch_flagged(drift):
         # the stamp is the keyframe where the stretch's sum peaked, not where the stretch ended
         out.append(f"a stretch of degenerate matches (the weakest direction held by fewer than "
-                   f"{cc.degenerate_points:g} points' worth, as along a corridor) reaching it at "
-                   f"t={c['degenerate_drift_at']} may have drifted {drift:.2f} m along it (its keyframes' std there, "
+                   f"{cc.degenerate_points:g} points' worth, as along a corridor) may have drifted {drift:.2f} m along "
+                   f"its weak axis by t={c['degenerate_drift_at']} (its keyframes' std there, "
                    f"each at most its predictions', summed; "
                    f"consistency.max_degenerate_drift {cc.max_degenerate_drift:g} m)")
     if config.preset == "paper" and not c["healthy"]:
