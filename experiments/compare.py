@@ -30,7 +30,8 @@ import pandas as pd
 import yaml
 
 from features.baselines.checks import MIN_SIGMA_M as EXTRACTOR_MIN_SIGMA_M  # not this module's MIN_SIGMA_M (user's floor)
-from features.registry import available_methods, backend_of, check_beams, get_method, make_config, warn_unread_fields
+from features.registry import (available_methods, backend_of, check_beams, check_step, get_method, make_config,
+                               warn_unread_fields)
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
 from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
@@ -303,12 +304,13 @@ def parse_sources(specs: Sequence[str], seeds: Sequence[int] = (0,), duration: f
 
 
 def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = None,
-                  seeds: Sequence[int] = (0,)) -> None:
+                  seeds: Sequence[int] = (0,), configs: dict[str, Any] | None = None) -> None:
     """Check command-line source words before any work: world names and seeds, simulate folders
     (world.json loads), logs (their kind, and at least one laser scan), and that no two words give
     the same source or sources of one name (the tables group by name: ``compare a.clf a.clf``
     counted each scan twice, ``compare x/a.clf y/a.clf`` reported two logs as one); ``seeds``:
-    the seeds of a world given without one."""
+    the seeds of a world given without one; ``configs`` (method -> its config, as it will run):
+    each log's first beam step is one they segment (``features.registry.check_step``)."""
     from experiments.options import check_log
 
     seen: dict[tuple[str, int | None], str] = {}  # (source name, seed or None) -> the word that gave it
@@ -377,6 +379,8 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
             raise LmsbenchError(f"{spec}: no laser messages found (not a CARMEN log with FLASER / ROBOTLASER / RAWLASER "
                                 "lines, nor a bag with LaserScan messages)")
         check_beams(first.scan, f"{spec}: scan 0")  # its scans go to the extractors' run, which extract's limit does not guard
+        for method, cfg in (configs or {}).items():  # a breakpoint_lambda not above the step: no line, silently
+            check_step(cfg, first.scan.angle_increment, method, f"{spec}: scan 0")
 
 
 def _check_types(method: str, overrides: dict[str, Any]) -> None:
@@ -514,6 +518,8 @@ def compare(
             scan = rec.scan
             number = k * src.stride  # the log's own scan number (record k of every stride-th), as in messages
             check_beams(scan, f"{source_label(src)}: scan {number}")  # as extract refuses it, before any method runs on it
+            for name, _, cfg in src_runs:  # as extract refuses a breakpoint_lambda not above the step (no line found)
+                check_step(cfg, scan.angle_increment, name, f"{source_label(src)}: scan {number}")
             src.range_maxes.add(float(scan.range_max))
             truth = check_truth(src.truth_of(rec)) if src.truth_of else None  # checked once, scored per method
             n_valid = int(np.count_nonzero(scan.valid))

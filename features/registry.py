@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import importlib.util
+import math
 import warnings
 from dataclasses import dataclass
 from collections.abc import Sequence
@@ -171,6 +172,8 @@ def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: An
 
     Raises:
         ScanTypeError: ``scan`` is not an ``lms200.Scan`` (an ``LmsbenchError`` and a ``TypeError``).
+        ConfigError: a baseline's ``breakpoint_lambda`` not above the scan's beam step
+            (:func:`step_problem`: it would find no line, silently).
     """
     m = (_REGISTRY.get(method) if type(method) is str else None) or get_method(method)
     cfg = _config(m, config, params)
@@ -178,6 +181,7 @@ def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: An
         raise not_a_scan(scan, "extract")
     if len(scan) > MAX_BEAMS:
         raise ScanGeometryError(too_many_beams(len(scan)))
+    check_step(cfg, scan.angle_increment, m.name)
     if params:
         warn_unread_noise(m, cfg, params, scan.range_max, "extract")
     return m.run(scan, cfg)
@@ -267,6 +271,39 @@ def check_beams(scan: Scan, where: str = "scan") -> None:
         raise ScanGeometryError(too_many_beams(len(scan), where))
 
 
+#: rad: the breakpoint_lambda a step problem suggests at least (the baselines' default, Borges & Aldon's 10 deg)
+SUGGESTED_LAMBDA = math.radians(10.0)
+
+
+def step_problem(cfg: Any, increment: float, method: str, where: str = "scan") -> str | None:
+    """Why a baseline config (its ``breakpoint_lambda``) cannot segment scans whose beam step is
+    ``increment`` (rad), as a message beginning with ``where``; None when it can, or for a config
+    without the field (the sensor method's; one comparison in the common case).
+
+    The adaptive breakpoint distance r sin(step) / sin(lambda - step) (Borges & Aldon 2004) has no
+    meaning for a step at or above lambda: at it the distance is infinite (every beam connects, no
+    occlusion cuts a line), above it negative (no two neighbouring beams connect: no line is ever
+    found, silently: a 2-deg scan at breakpoint_lambda 1 deg). A step of 90 deg or
+    more, which no breakpoint_lambda (at most 90 deg) fits, is no mismatch of the config: None."""
+    lam = getattr(cfg, "breakpoint_lambda", None)
+    if lam is None or increment < lam or increment >= math.pi / 2:
+        return None
+    fit = min(max(SUGGESTED_LAMBDA, 10 * increment), math.pi / 2)
+    return (f"{where}: the beam step {math.degrees(increment):.6g} deg is not below {method}'s breakpoint_lambda "
+            f"{math.degrees(lam):.6g} deg ({lam:.6g} rad): the adaptive breakpoint distance r sin(step) / "
+            "sin(breakpoint_lambda - step) (Borges & Aldon) has no meaning there, and no line would be found; "
+            f"set breakpoint_lambda above the step, e.g. {fit:.6g} rad ({math.degrees(fit):.6g} deg)")
+
+
+def check_step(cfg: Any, increment: float, method: str, where: str = "scan") -> None:
+    """ConfigError (:func:`step_problem`) for a baseline config that cannot segment scans of this
+    beam step (rad): what ``extract`` and ``extract_many`` refuse, for the drivers that call a
+    method's ``run`` directly (``compare``)."""
+    problem = step_problem(cfg, increment, method, where)
+    if problem is not None:
+        raise ConfigError(problem)
+
+
 #: scans per compiled batch call: the call stacks its scans' ranges into one array, which for a
 #: 50,000-scan batch was a second 144 MB copy of them (peak RSS +166 MB); chunks of this many
 #: bound that copy to 12 MB at 361 beams (results identical, scan by scan).
@@ -291,7 +328,8 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
         ValueError: naming the first scan whose geometry differs from the first's.
         ScanTypeError: naming the first item that is not an ``lms200.Scan``.
         BatchSizeError: an iterator of more than MAX_ITERATOR_BEAMS beams, or one that never ends.
-        ConfigError: a ``threads`` that is not a whole number >= 1.
+        ConfigError: a ``threads`` that is not a whole number >= 1; a baseline's ``breakpoint_lambda``
+            not above the scans' beam step (as ``extract``).
     """
     m = (_REGISTRY.get(method) if type(method) is str else None) or get_method(method)
     cfg = _config(m, config, params)
@@ -306,6 +344,8 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
         raise ScanTypeError(f"extract_many: expected a sequence of lms200.Scan, got {type(scans).__name__}") from None  # its items are checked to be Scans by common_geometry, on every path below
     if scans and isinstance(scans[0], Scan) and len(scans[0]) > MAX_BEAMS:
         raise ScanGeometryError(too_many_beams(len(scans[0])))
+    if scans and isinstance(scans[0], Scan):  # one geometry: the first scan's step is every scan's
+        check_step(cfg, scans[0].angle_increment, m.name)
     if params and scans and isinstance(scans[0], Scan):  # one geometry: the first scan's range_max is every scan's
         warn_unread_noise(m, cfg, params, scans[0].range_max, "extract_many")
     if m.run_many is not None:

@@ -45,7 +45,11 @@ _POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "nav_msgs/msg/Odometry")
 #: s: how often ``lmsbench lms200 record`` writes a bag's messages out as a chunk (``write_bag(flush_s=...)``)
 RECORD_FLUSH_S = 1.0
 
-MAX_STAMP_NS = 2**31 * 1_000_000_000  # a stamp a bag stores: 0 <= stamp < 2**31 s (int32 seconds in ROS 2)
+#: ns: a stamp a ROS 2 bag stores: 0 <= stamp < 2**31 s (builtin_interfaces/Time's sec is int32: 2038-01-19)
+MAX_STAMP_NS = 2**31 * 1_000_000_000
+#: ns: a stamp a ROS 1 bag stores: 0 <= stamp < 2**32 s (ROS 1's time is uint32 seconds: up to 2^32 - 1 s plus
+#: 999999999 ns, 2106-02-07), what the readers take (``records.MAX_STAMP_S``) but 2^32 s itself
+MAX_STAMP_NS_ROS1 = 2**32 * 1_000_000_000
 
 
 class BagError(LmsbenchError):
@@ -320,7 +324,8 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
 
     Raises:
         BagExistsError: (an ``InputError`` and a ``FileExistsError``) ``path`` exists.
-        InputError: a scan stamp outside 0 <= stamp < 2**31 s (naming the item and the stamp). The
+        InputError: a scan stamp outside 0 <= stamp < 2**32 s in a ROS 1 bag (uint32 seconds), outside
+            0 <= stamp < 2**31 s in a ROS 2 bag (int32 seconds) (naming the item and the stamp). The
             records before the refused one are left in ``path`` as a readable bag.
     """
     path = Path(path)
@@ -342,6 +347,10 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
         from rosbags.rosbag2 import Writer as Writer2
 
         writer = Writer2(path, version=8)
+    limit_ns = MAX_STAMP_NS_ROS1 if ros1 else MAX_STAMP_NS
+    holds = (f"a ROS 1 bag holds 0 <= stamp < 2**32 s = {MAX_STAMP_NS_ROS1 // 1_000_000_000} s, uint32 seconds" if ros1
+             else f"a ROS 2 bag holds 0 <= stamp < 2**31 s = {MAX_STAMP_NS // 1_000_000_000} s, int32 seconds; "
+                  "a ROS 1 bag (*.bag) holds stamps to 2**32 s")
     count = 0
     last = [-1]  # the bag time of the message written last (ns)
     flushed = [-math.inf]  # when the last chunk was written (time.monotonic()): the first scan's at once
@@ -363,6 +372,9 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
         topic, so a record's poses and scan, or records of one stamp, came back out of the order
         written and could not be told apart."""
         last[0] = max(ns, last[0] + 1)
+        if last[0] >= limit_ns:  # records of the last stamp a bag holds, moved past it (was struct.error)
+            raise InputError(f"records: item {count}: bag time {last[0]} ns (the stamp, moved 1 ns past the message "
+                             f"before) cannot be stored in a bag ({holds})")
         return last[0]
 
     with writer:
@@ -382,9 +394,8 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                 seq = count
                 scan = rec.scan
                 ns = _stamp_ns(scan.stamp)
-                if scan.stamp < 0 or ns >= MAX_STAMP_NS:  # was struct.error from rosbags' serialiser
-                    raise InputError(f"records: item {seq}: stamp {scan.stamp!r} s cannot be stored in a bag "
-                                     f"(0 <= stamp < 2**31 s = {MAX_STAMP_NS // 1_000_000_000} s, a ROS time's range)")
+                if scan.stamp < 0 or ns >= limit_ns:  # was struct.error from rosbags' serialiser
+                    raise InputError(f"records: item {seq}: stamp {scan.stamp!r} s cannot be stored in a bag ({holds})")
                 if np.float32(scan.angle_increment) == 0:  # stored as 0, which no reader takes ("must be > 0, got 0.0")
                     raise InputError(f"records: item {seq}: angle_increment {scan.angle_increment:g} rad cannot be stored "
                                      f"in a bag (a LaserScan's fields are float32, in which it is 0)")
@@ -399,6 +410,8 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                                      f"[{laser_geometry.MIN_RANGE_MAX_M:g}, {laser_geometry.MAX_RANGE_M:g}] m, which "
                                      "the bag reader refuses")
                 sec, nsec = divmod(ns, 1_000_000_000)
+                if sec >= 2**31:  # ROS 1's uint32 seconds, which rosbags packs as int32: the same four bytes
+                    sec -= 2**32
                 header_kw = {"stamp": Time(sec=sec, nanosec=nsec), "frame_id": "laser"}
 
                 if ros1:
@@ -472,6 +485,25 @@ def _header_ns(msg) -> int:  # noqa: ANN001
     return int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
 
 
+def _unsigned_ros1_stamp(msg):  # noqa: ANN001, ANN202
+    """``msg`` with its header stamp's seconds read as ROS 1 has them, uint32: rosbags decodes them
+    as int32, so a ROS 1 stamp from 2^31 s (2038-01-19) read negative and was refused."""
+    stamp = msg.header.stamp
+    if stamp.sec < 0:
+        stamp.sec += 2**32
+    return msg
+
+
+def _checked_pose_ns(msg) -> int:  # noqa: ANN001
+    """A pose message's header stamp (ns); ValueError for one outside 0 .. ``records.MAX_STAMP_S``
+    (as a scan's: a pose stamped 1e300 s or negative was matched on, silently)."""
+    ns = _header_ns(msg)
+    problem = stamp_problem(_ns_stamp(ns), "header stamp")
+    if problem is not None:
+        raise ValueError(problem)
+    return ns
+
+
 #: what a user can do about a LaserScan's range_max that no Scan takes
 RANGE_MAX_HINT = ("give the sensor's maximum range instead: --laser-range-max M "
                   "(read_log(..., geometry=LaserGeometry(range_max=M)))")
@@ -533,7 +565,7 @@ def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
                          f"{math.degrees(laser_geometry.MIN_RESOLUTION_RAD):.5f} deg)")
     stamp = _stamp_of(msg)
     problem = stamp_problem(stamp, "header stamp")
-    if problem is not None:  # a ROS 2 stamp may be negative (int32 seconds)
+    if problem is not None:  # a ROS 2 stamp may be negative (int32 seconds); a ROS 1 one is read unsigned
         raise ValueError(problem)
     return Scan(
         ranges,
@@ -561,7 +593,8 @@ _SCAN_LAYOUT = {
     "ros2 std_msgs/msg/Header": (("stamp", _TIME),),
     _TIME: (("sec", ("int32", 0)), ("nanosec", ("uint32", 0))),
 }
-_STAMP_LE, _STAMP_BE = struct.Struct("<iI"), struct.Struct(">iI")
+_STAMP_CDR_LE, _STAMP_BE = struct.Struct("<iI"), struct.Struct(">iI")
+_STAMP_ROS1 = struct.Struct("<II")  # ROS 1: uint32 seconds (as _unsigned_ros1_stamp reads the decoded message)
 
 
 def _raw_stamp_reader(reader) -> Callable[[bytes], int | None] | None:  # noqa: ANN001 - rosbags' AnyReader
@@ -586,7 +619,7 @@ def _raw_stamp_reader(reader) -> Callable[[bytes], int | None] | None:  # noqa: 
     def stamp(raw: bytes) -> int | None:
         if len(raw) < 12 or (ros2 and (raw[0] != 0 or raw[1] > 1)):
             return None
-        sec, nanosec = (_STAMP_LE if not ros2 or raw[1] else _STAMP_BE).unpack_from(raw, 4)
+        sec, nanosec = (_STAMP_ROS1 if not ros2 else _STAMP_CDR_LE if raw[1] else _STAMP_BE).unpack_from(raw, 4)
         return sec * 1_000_000_000 + nanosec
 
     return stamp
@@ -1289,8 +1322,10 @@ class BagReader:
                 stats.messages[conn.topic] = index + 1
                 try:
                     msg = reader.deserialize(raw, conn.msgtype)
+                    if not reader.is2:
+                        msg = _unsigned_ros1_stamp(msg)
                     if conn.msgtype != "sensor_msgs/msg/LaserScan":
-                        matcher.add_pose(conn.topic, _header_ns(msg), _pose_of(msg))
+                        matcher.add_pose(conn.topic, _checked_pose_ns(msg), _pose_of(msg))
                     else:
                         matcher.add_scan(_header_ns(msg), _scan_of(msg, self.range_max), index, t)
                         stats.see_timing(float(msg.time_increment), float(msg.angle_increment))
@@ -1333,7 +1368,8 @@ class BagReader:
                     yield ns
                 continue
             try:
-                yield _header_ns(reader.deserialize(raw, conn.msgtype))
+                msg = reader.deserialize(raw, conn.msgtype)
+                yield _header_ns(msg if reader.is2 else _unsigned_ros1_stamp(msg))
             except Exception:  # noqa: BLE001, S112 - rosbags' own types; reported by the reading pass
                 continue
 

@@ -89,18 +89,64 @@ def test_a_stamp_below_2_to_23_s_reads_back_to_the_nearest_nanosecond(tmp_path: 
 
 
 # --- what write_log cannot store in a bag -----------------------------------------------------------
-@pytest.mark.parametrize("name", ["s.bag", "s2"])
 @pytest.mark.parametrize("stamp", [-1.5, -1e-10, 2.0**31, 2.0**31 + 0.5, 2.0**32 + 0.5, 1e12])
-def test_a_stamp_a_bag_cannot_hold_is_an_input_error(tmp_path: Path, name: str, stamp: float) -> None:
+def test_a_stamp_a_ros2_bag_cannot_hold_is_an_input_error(tmp_path: Path, stamp: float) -> None:
     """-1.5 s and >= 2**31 s raised struct.error from rosbags' serialiser (ROS 2 read -1.5 back)."""
     recs = [Record(_scan(1.0)), Record(_scan(stamp))]
-    with pytest.raises(InputError, match=rf"records: item 1: stamp {re.escape(repr(stamp))} s cannot be stored in a "
-                                         r"bag \(0 <= stamp < 2\*\*31 s = 2147483648 s"):
-        write_log(tmp_path / name, recs, fmt="bag" if name.endswith(".bag") else "bag2")
-    assert not (tmp_path / name).exists()
-    last = np.nextafter(2.0**31, 0)  # the largest stamp a bag holds
-    write_log(tmp_path / name, [Record(_scan(0.0)), Record(_scan(last))], fmt="bag" if name.endswith(".bag") else "bag2")
-    assert [r.scan.stamp for r in read_log(tmp_path / name)] == [0.0, last]
+    with pytest.raises(InputError, match=rf"^records: item 1: stamp {re.escape(repr(stamp))} s cannot be stored in a "
+                                         r"bag \(a ROS 2 bag holds 0 <= stamp < 2\*\*31 s = 2147483648 s, int32 seconds; "
+                                         r"a ROS 1 bag \(\*\.bag\) holds stamps to 2\*\*32 s\)$"):
+        write_log(tmp_path / "s2", recs, fmt="bag2")
+    assert not (tmp_path / "s2").exists()
+    last = np.nextafter(2.0**31, 0)  # the largest stamp a ROS 2 bag holds
+    write_log(tmp_path / "s2", [Record(_scan(0.0)), Record(_scan(last))], fmt="bag2")
+    assert [r.scan.stamp for r in read_log(tmp_path / "s2")] == [0.0, last]
+
+
+@pytest.mark.parametrize("stamp", [-1.5, -1e-10, 2.0**32, 2.0**32 + 0.5, 1e12])
+def test_a_stamp_a_ros1_bag_cannot_hold_is_an_input_error(tmp_path: Path, stamp: float) -> None:
+    recs = [Record(_scan(1.0)), Record(_scan(stamp))]
+    with pytest.raises(InputError, match=rf"^records: item 1: stamp {re.escape(repr(stamp))} s cannot be stored in a "
+                                         r"bag \(a ROS 1 bag holds 0 <= stamp < 2\*\*32 s = 4294967296 s, uint32 seconds\)$"):
+        write_log(tmp_path / "s.bag", recs, fmt="bag")
+    assert not (tmp_path / "s.bag").exists()
+
+
+def test_a_ros1_bag_holds_the_stamps_a_log_reader_takes_up_to_2106(tmp_path: Path) -> None:
+    """write_bag refused stamps from 2**31 s (2038-01-19) in a ROS 1 bag too, though its time is uint32
+    seconds and a CARMEN log stamped 2038-2106 reads: it could not be converted; and rosbags decodes
+    ROS 1 seconds as int32, so such a bag read back negative (refused)."""
+    last = np.nextafter(2.0**32, 0)  # the largest stamp a ROS 1 bag holds (2^32 s itself does not fit uint32)
+    stamps = [1.0, 2.0**31 - 0.5, 2.0**31, 2.0**31 + 0.25, 3e9, last]
+    recs = [Record(_scan(t), odom=(t * 1e-9, 0.0, 0.0), truth=(0.0, 1.0, 0.5)) for t in stamps]
+    assert write_log(tmp_path / "s.bag", recs, fmt="bag") == 6
+    back = list(read_log(tmp_path / "s.bag"))
+    assert [r.scan.stamp for r in back] == stamps
+    assert [r.odom for r in back] == [(t * 1e-9, 0.0, 0.0) for t in stamps]  # each scan its own pose, by header stamp
+    assert all(r.truth == (0.0, 1.0, pytest.approx(0.5)) for r in back)
+    assert (2**31, 0) in [(s % 2**32, n) for s, n in _header_stamps(tmp_path / "s.bag")]
+
+
+def test_records_of_the_last_stamp_a_ros1_bag_holds_moved_past_it_are_an_input_error(tmp_path: Path) -> None:
+    """Bag times move 1 ns past the message before; at the last stamp a ROS 1 bag holds they would
+    leave its uint32 seconds (struct.error from rosbags' writer)."""
+    last = float(np.nextafter(2.0**32, 0))
+    with pytest.raises(InputError, match=r"^records: item \d+: bag time 4294967296000000000 ns \(the stamp, moved 1 ns "
+                                         r"past the message before\) cannot be stored in a bag \(a ROS 1 bag holds"):
+        write_log(tmp_path / "s.bag", [Record(_scan(last))] * 1000, fmt="bag")
+
+
+def test_a_bag_pose_stamped_outside_the_logs_range_is_a_bag_error(tmp_path: Path) -> None:
+    """A pose's header stamp was not checked (a scan's is): /odom stamped -5 s read, silently."""
+    msgs = [("/odom", 10, -5.0, (1.0, 2.0, 0.0, 0.0, 0.0, 1.0)), ("/scan", 10, 10.0, 1.0),
+            ("/scan", 11, 11.0, 1.0)]
+    path = _ros2_bag(tmp_path / "b", msgs)
+    with pytest.raises(BagError, match=r"^.*b: topic /odom message 0: cannot read: header stamp -5.000000 s is outside "
+                                       r"0 \.\. 2\^32 s \(4294967296 s, 2106-02-07\)"):
+        list(read_log(path))
+    reader = read_log(path, skip_bad_lines=True)
+    assert [(r.scan.stamp, r.odom) for r in reader] == [(10.0, None), (11.0, None)]
+    assert reader.stats.skipped_count == 1
 
 
 @pytest.mark.parametrize("name", ["a.bag", "a2"])
@@ -528,7 +574,7 @@ def test_a_stamp_read_from_the_bytes_is_the_decoded_messages(store: str) -> None
 
     from rosbags.typesys import Stores, get_typestore
 
-    from lms200.bag import _header_ns, _raw_stamp_reader
+    from lms200.bag import _header_ns, _raw_stamp_reader, _unsigned_ros1_stamp
 
     ts = get_typestore(Stores.ROS1_NOETIC if store == "ros1" else Stores.ROS2_HUMBLE)
     T = ts.types
@@ -544,7 +590,10 @@ def test_a_stamp_read_from_the_bytes_is_the_decoded_messages(store: str) -> None
         raw = bytes(ts.serialize_ros1(msg, kind) if store == "ros1"
                     else ts.serialize_cdr(msg, kind, little_endian=store == "cdr_le"))
         decoded = ts.deserialize_ros1(raw, kind) if store == "ros1" else ts.deserialize_cdr(raw, kind)
-        assert stamp_of(raw) == _header_ns(decoded) == sec * 10**9 + nanosec
+        # ROS 1's seconds are uint32 (rosbags decodes them as int32): -1 there is 2^32 - 1 s
+        unsigned = sec % 2**32 if store == "ros1" else sec
+        assert stamp_of(raw) == _header_ns(decoded if store != "ros1" else _unsigned_ros1_stamp(decoded)) \
+            == unsigned * 10**9 + nanosec
     assert stamp_of(b"\x00\x01\x00") is None  # too short to hold a stamp: left out, as a message that fails to decode
 
 

@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from features import FeatureSet, available_methods, extract, extract_many
-from features.errors import ScanGeometryError
+from features.errors import ConfigError, ScanGeometryError
 from lms200 import Scan
 from lms200.errors import LmsbenchError, ScanError
 
@@ -100,6 +100,20 @@ def check_well_formed(fs: FeatureSet, scan: Scan) -> None:
         assert 0 <= c.index < n
 
 
+def step_too_coarse(method: str, scan: Scan) -> bool:
+    """Whether the method's default config cannot segment the scan: a baseline's breakpoint_lambda
+    (10 deg) not above the beam step, below 90 deg (``features.registry.step_problem``)."""
+    return method != "sensor" and np.deg2rad(10.0) <= scan.angle_increment < np.pi / 2
+
+
+def check_step_refusal(exc: ConfigError, method: str, scan: Scan) -> None:
+    """A ConfigError of extract is the step mismatch, and only for such a scan."""
+    assert step_too_coarse(method, scan), exc
+    assert str(exc).startswith(f"scan: the beam step {np.rad2deg(scan.angle_increment):.6g} deg is not below "
+                               f"{method}'s breakpoint_lambda 10 deg (0.174533 rad): "), exc
+    assert "; set breakpoint_lambda above the step, e.g. " in str(exc), exc
+
+
 def same(a: FeatureSet, b: FeatureSet) -> bool:
     return (np.array_equal(a.lines.values, b.lines.values, equal_nan=True)
             and np.array_equal(a.lines.beams, b.lines.beams)
@@ -124,6 +138,10 @@ def test_any_ranges_give_well_formed_features_or_a_scan_error(method: str, case)
             # range too large for hough's accumulator; the message names the field or the method
             assert str(exc).startswith(("angle_increment: ", "scan: ", f"{method}: ")), exc
             return
+        except ConfigError as exc:  # a baseline's default breakpoint_lambda not above the step: it would find nothing
+            check_step_refusal(exc, method, scan)
+            return
+    assert not step_too_coarse(method, scan)
     check_well_formed(fs, scan)
 
 
@@ -144,6 +162,10 @@ def test_extract_many_equals_extract_scan_by_scan(method: str, batch) -> None:  
             except ScanGeometryError as one:
                 messages.append(str(one))
         assert str(exc) in messages
+        return
+    except ConfigError as exc:  # as extract refuses each of them
+        assert scans
+        check_step_refusal(exc, method, scans[0])
         return
     assert len(many) == len(scans)
     for s, fs in zip(scans, many):

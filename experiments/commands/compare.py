@@ -149,7 +149,10 @@ def run(args: argparse.Namespace) -> int:
     args.stride = args.stride or 1
     args.poses = args.poses or "auto"
     check_seeds(args.seeds)
-    check_sources(args.sources, read_log_options(args), args.seeds)
+    from features.registry import check_step, make_config
+
+    runs = {m: make_config(m, **params.get(m, {})) for m in methods}  # as compare makes them (checked above)
+    check_sources(args.sources, read_log_options(args), args.seeds, runs)
     sensor = None
     if args.sensor is not None:
         import sim
@@ -163,7 +166,10 @@ def run(args: argparse.Namespace) -> int:
     if world_words(args.sources):  # simulated here, at --rate
         import sim
 
-        check_scan_rate(args.rate, (sensor or sim.SensorConfig()).angle_increment, "--rate")
+        step = (sensor or sim.SensorConfig()).angle_increment
+        check_scan_rate(args.rate, step, "--rate")
+        for m, cfg in runs.items():  # the simulated scans' step, before any is simulated
+            check_step(cfg, step, m, f"the simulated scans ({args.sensor or 'the default sensor'})")
     warm_up_kernels()
     sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans,
                             read_options=read_log_options(args), poses=args.poses, sensor=sensor)
