@@ -89,12 +89,6 @@ def non_negative(name: str, value: object, unit: str = "") -> None:
         fail(name, f"must be a finite number >= 0{' ' + unit if unit else ''}", value)
 
 
-def real_at_least(name: str, value: object, minimum: float) -> None:
-    """``value`` must be a finite number >= ``minimum``."""
-    if not is_real(value) or not (finite(value) and value >= minimum):
-        fail(name, f"must be a finite number >= {minimum:g}", value)
-
-
 def between(name: str, value: object, low: float, high: float, unit: str = "") -> None:
     """``value`` must be a number in [low, high] (in ``unit``)."""
     if not is_real(value) or not (low <= value <= high):
