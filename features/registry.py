@@ -291,7 +291,7 @@ def step_problem(cfg: Any, increment: float, method: str, where: str = "scan") -
     fit = min(max(SUGGESTED_LAMBDA, 10 * increment), math.pi / 2)
     return (f"{where}: the beam step {math.degrees(increment):.6g} deg is not below {method}'s breakpoint_lambda "
             f"{math.degrees(lam):.6g} deg ({lam:.6g} rad): the adaptive breakpoint distance r sin(step) / "
-            "sin(breakpoint_lambda - step) (Borges & Aldon) has no meaning there, and no line would be found; "
+            "sin(breakpoint_lambda - step) (Borges & Aldon) has no meaning there (at the step every beam connects, beyond it none: no line); "
             f"set breakpoint_lambda above the step, e.g. {fit:.6g} rad ({math.degrees(fit):.6g} deg)")
 
 

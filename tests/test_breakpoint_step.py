@@ -34,7 +34,7 @@ def _room(step_deg: float, stamp: float = 0.0) -> Scan:
 def _message(method: str, step_deg: float, lam_deg: float, fit_deg: float, where: str = "scan") -> str:
     return (f"{where}: the beam step {step_deg:g} deg is not below {method}'s breakpoint_lambda {lam_deg:g} deg "
             f"({math.radians(lam_deg):.6g} rad): the adaptive breakpoint distance r sin(step) / "
-            "sin(breakpoint_lambda - step) (Borges & Aldon) has no meaning there, and no line would be found; "
+            "sin(breakpoint_lambda - step) (Borges & Aldon) has no meaning there (at the step every beam connects, beyond it none: no line); "
             f"set breakpoint_lambda above the step, e.g. {math.radians(fit_deg):.6g} rad ({fit_deg:g} deg)")
 
 
