@@ -193,18 +193,27 @@ def test_record_refuses_an_impossible_variant_in_one_line(tmp_path: Path) -> Non
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["rec.clf", "rec.bag"])
-def test_a_recording_of_no_scan_leaves_no_file(tmp_path: Path, name: str) -> None:
+def test_a_recording_of_no_scan_leaves_no_file(tmp_path: Path, name: str, capsys: pytest.CaptureFixture[str]) -> None:
     """A device that sends no scan: record said "the 0 scans before it are saved in OUT" and left a
     log of headers alone, which no command reads, and the same command again was refused ("--out
-    OUT exists"). Now no file is left, and the run can be repeated as it was."""
+    OUT exists"). Now no file is left, and the run can be repeated as it was (the first run in a
+    subprocess, its status and stderr; the repeat in this process, which reads the same folder)."""
+    from experiments.cli import main
+
     out = tmp_path / name
     with TcpServer(VirtualLMS200([], time_scale=0.01)) as ad:
-        for _ in range(2):
-            run = subprocess.run(cli("record", "--port", ad.url, "--out", str(out), "--max-scans", "5", "--timeout", "0.5",
-                                     "--mode-timeout", "0.5"),
-                                 env=ENV, capture_output=True, text=True, timeout=60)
-            assert run.returncode == 2, run.stderr
-            last = run.stderr.strip().splitlines()[-1]
+        argv = cli("record", "--port", ad.url, "--out", str(out), "--max-scans", "5", "--timeout", "0.5",
+                   "--mode-timeout", "0.5")
+        for again in (False, True):
+            if again:
+                capsys.readouterr()
+                assert main(argv[3:]) == 2
+                stderr = capsys.readouterr().err
+            else:
+                run = subprocess.run(argv, env=ENV, capture_output=True, text=True, timeout=60)
+                assert run.returncode == 2, run.stderr
+                stderr = run.stderr
+            last = stderr.strip().splitlines()[-1]
             assert last.startswith("lmsbench lms200 record: error: no scan from")
             assert last.endswith(f"; no scan was recorded, so {out} was not written") and not out.exists()
             # --mode-timeout 0.5 is the wait for the first scan after the start (default 3.5 s on top)

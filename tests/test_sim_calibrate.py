@@ -402,16 +402,18 @@ def test_calibrate_real_logs(shared_data: Path) -> None:
 
 # -- sim2real --------------------------------------------------------------------------------
 @pytest.mark.slow
-def test_sim2real_of_a_simulated_log_agrees_with_itself(tmp_path: Path) -> None:
+def test_sim2real_of_a_simulated_log_agrees_with_itself(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     """A simulated log of the cluttered office against its calibrated simulation: the same world,
     tour and noise stream (seed 7), with the sensor model fitted to the log instead of the true
     one. Every method's explained fraction within 0.02, lines per scan within 5 %; the files are
-    written. (Across seeds the explained fraction of 20 s runs varies by 0.03-0.04 alone.)"""
+    written. (Across seeds the explained fraction of 20 s runs varies by 0.03-0.04 alone.) In this
+    process: the command in a subprocess, its status and stderr, is the next test's."""
+    from experiments.cli import main
+
     truth = SensorConfig(units="cm", noise_sigma=0.006, dropout_prob=0.01, beam_width=math.radians(0.2))
     write_carmen(tmp_path / "log.clf", simulate_records("cluttered", seed=7, duration=20.0, sensor=truth, rate_hz=3.0))
-    run = _cli("sim2real", str(tmp_path / "log.clf"), "--world", "cluttered", "--seeds", "7", "--duration", "20",
-               "--rate-hz", "3", "--stride", "1", "--out", str(tmp_path / "out"))
-    assert run.returncode == 0, run.stderr
+    assert main(["sim2real", str(tmp_path / "log.clf"), "--world", "cluttered", "--seeds", "7", "--duration", "20",
+                 "--rate-hz", "3", "--stride", "1", "--out", str(tmp_path / "out")]) == 0, capsys.readouterr().err
     import pandas as pd
 
     table = pd.read_csv(tmp_path / "out" / "sim2real.csv")
@@ -422,8 +424,9 @@ def test_sim2real_of_a_simulated_log_agrees_with_itself(tmp_path: Path) -> None:
         assert (tmp_path / "out" / name).is_file()
     assert SensorConfig.from_yaml(tmp_path / "out" / "sensor.yaml").units == "cm"
     assert "rad/s (the simulator's defaults: the log has no odometry); sensor" in (tmp_path / "out" / "sim2real.md").read_text()
-    bad = _cli("sim2real", str(tmp_path / "log.clf"), "--world", "moon")
-    assert bad.returncode == 2 and "unknown world" in bad.stderr
+    capsys.readouterr()
+    assert main(["sim2real", str(tmp_path / "log.clf"), "--world", "moon"]) == 2
+    assert "unknown world" in capsys.readouterr().err
 
 
 def test_sim2real_warns_on_tiny_samples_and_refuses_a_log_with_nothing_to_measure(tmp_path: Path) -> None:
