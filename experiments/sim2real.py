@@ -650,11 +650,13 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
             ``lmsbench sim2real`` options of each short side).
 
     Raises:
-        LmsbenchError: for a log without scans or an unknown world.
+        LmsbenchError: for a log without scans or an unknown world; ``features.ConfigError`` for a log whose
+            first scan's beam step is not below a baseline's breakpoint_lambda (``features.registry.check_step``,
+            as ``compare``), before any work.
     """
     from experiments.calibrate import FIT_DURATION_S, calibrate_log, same_geometry
     from experiments.compare import Source, compare, summarise
-    from features.registry import check_beams
+    from features.registry import check_beams, check_step, is_method, make_config
     from sim import WORLD_NAMES, make_world, simulate_records
     from sim.records import scan_stamps
 
@@ -669,6 +671,11 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     for k, rec in enumerate(reader):
         if k % stride == 0:
             check_beams(rec.scan, f"{log}: scan {k}")  # the extractors' limit (extract's), before any work
+            if k == 0:  # a baseline's breakpoint_lambda not above the step (compare's check and message): the
+                # scene statistics' split_merge found no line, silently, and compare refused it only after the
+                # calibration, the fits and the simulation
+                for method in (m for m in dict.fromkeys((*methods, STATS_METHOD)) if is_method(m)):
+                    check_step(make_config(method), rec.scan.angle_increment, method, f"{log}: scan 0")
             real.append(rec)
         if rec.odom is not None:
             odometry.extend((rec.scan.stamp, *rec.odom))
