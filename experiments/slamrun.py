@@ -117,12 +117,15 @@ def _check_cut_boxes(path: Path, content: dict) -> None:
 
 def load_input(path: str | Path, relations: str | Path | None = None, every: int = 1,
                max_scans: int | None = None, rate_hz: float | None = None,
-               read_options: dict[str, Any] | None = None) -> SlamInput:
+               read_options: dict[str, Any] | None = None, config: SlamConfig | None = None) -> SlamInput:
     """Read a simulator output folder (scans.clf, groundtruth.tum, world.json), a CARMEN log or a
     bag; keep every ``every``-th scan (or, with ``rate_hz``, the first scan at least 1/rate_hz s
     after the last one kept), at most ``max_scans``. Relations come from ``relations`` or a
     ``NAME.relations`` file beside a log. ``read_options``: keywords of ``lms200.read_log``
-    (topic, skip_bad_lines, geometry).
+    (topic, skip_bad_lines, geometry). ``config``: the SLAM config the scans are for, checked
+    against the first scan kept as it is read (``slam.run.check_first_scan``: a stride, a
+    min_line_points or an extractor's breakpoint_lambda that cannot work on these scans), not
+    after the whole log.
 
     Raises:
         FileNotFoundError: the input does not exist.
@@ -205,6 +208,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if rate_hz is not None and not rate_hz > 0:
         raise LmsbenchError(f"--rate-hz must be > 0 scans/s, got {rate_hz}")
     from features.registry import check_beams
+    from slam.run import check_first_scan
 
     records: list[Record] = []
     numbers: list[int] = []  # the log's own scan number of each record kept
@@ -224,6 +228,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
             # the extractors' limit (extract refuses it at that scan, after the notes on the input), named
             # by the log's own scan number (counted from 0), not the kept scan's
             check_beams(rec.scan, f"{log}: scan {k}")
+            if config is not None and not records:
+                check_first_scan(rec.scan, config, f"{log}: scan {k}")
             records.append(rec)
             numbers.append(k)
             if max_scans is not None and len(records) >= max_scans:

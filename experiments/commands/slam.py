@@ -210,7 +210,7 @@ def run(args: argparse.Namespace) -> int:
     check_out(args.out, writes=SLAM_OUTPUTS, owner=SLAM_OWNER)  # after: an input in --out is the sharper message
     config = _config(args)
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
-                      read_options=read_log_options(args))
+                      read_options=read_log_options(args), config=config)
     for note in data.notes:
         print(note, file=sys.stderr)
     _warn_unread(config, data.records, data.sources.get("scans", args.input))
