@@ -18,7 +18,7 @@ from typing import Any, Collection, Iterable
 import numpy as np
 
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
-from lms200.finite import fixed
+from lms200.finite import fixed, shown
 from lms200.logs import regular_file
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml, dump as dump_yaml
@@ -83,7 +83,9 @@ def deskew_for_sensor(config: SlamConfig, interlaced: bool) -> SlamConfig:
 
 def simulated_interlaced(path: str | Path) -> bool | None:
     """The ``sensor.interlaced`` of a simulator output folder's config.yaml (None: not a simulator
-    folder, or the file does not say)."""
+    folder, or the file does not say). LmsbenchError naming the file for an ``interlaced`` that is
+    no true / false (``"no"``, ``0``): it was read as "does not say", so a run simulated without
+    interlacing was de-skewed as an interlaced LMS200's, silently (``compare`` refuses the file)."""
     cfg = Path(path) / "config.yaml"
     if simulate_log(path) is None or not cfg.is_file():
         return None
@@ -92,8 +94,13 @@ def simulated_interlaced(path: str | Path) -> bool | None:
     except Exception:  # noqa: BLE001 - a damaged config.yaml only loses this hint
         return None
     sensor = raw.get("sensor") if isinstance(raw, dict) else None
-    value = sensor.get("interlaced") if isinstance(sensor, dict) else None
-    return value if isinstance(value, bool) else None
+    if not isinstance(sensor, dict) or "interlaced" not in sensor:
+        return None
+    value = sensor["interlaced"]
+    if not isinstance(value, bool):
+        raise LmsbenchError(f"{cfg}: sensor.interlaced: must be true or false (whether the scans were simulated with "
+                            f"the LMS200's interlaced sweeps, which decides their de-skew), got {shown(value)}")
+    return value
 
 
 def _check_cut_boxes(path: Path, content: dict) -> None:
