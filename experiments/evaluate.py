@@ -61,7 +61,13 @@ def truths_for(world, records: Sequence[Record], sensor=None) -> list[Any]:
 
 def extract_timed(scans: Iterable[Scan], method: str, params: dict[str, Any] | None = None
                   ) -> tuple[list[Any], np.ndarray]:
-    """Feature sets of every scan and the time each extraction took (ms, perf_counter_ns)."""
+    """Feature sets of every scan and the time each extraction took (ms, perf_counter_ns).
+
+    Raises:
+        ScanGeometryError, ConfigError: what ``extract`` refuses and ``run`` does not check, naming the
+            scan: more beams than the extractors take, a baseline's breakpoint_lambda not above its beam
+            step (``features.registry.check_step``: Fig. 9's panels of a 12-deg log had no line, silently).
+    """
     from features import registry
 
     config = registry.make_config(method, **(params or {}))
@@ -69,6 +75,7 @@ def extract_timed(scans: Iterable[Scan], method: str, params: dict[str, Any] | N
     results, times = [], []
     for k, scan in enumerate(scans):
         registry.check_beams(scan, f"scan {k}")  # extract's beam limit, which run does not check
+        registry.check_step(config, scan.angle_increment, method, f"scan {k}")  # and its breakpoint_lambda check
         start = time.perf_counter_ns()
         results.append(run(scan, config))
         times.append((time.perf_counter_ns() - start) / 1e6)

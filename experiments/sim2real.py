@@ -33,7 +33,9 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
-from lms200 import LmsbenchError, Record, read_log
+from lms200 import InputError, LmsbenchError, Record, read_log
+from lms200.finite import shown
+from lms200.timing import check_scan_rate
 from lms200.calibration import missing_readings
 from lms200.yamlio import dump as dump_yaml
 
@@ -650,16 +652,19 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
             ``lmsbench sim2real`` options of each short side).
 
     Raises:
-        LmsbenchError: for a log without scans or an unknown world.
+        LmsbenchError: for a log without scans or an unknown world; ``features.ConfigError`` for a log whose
+            first scan's beam step is not below a baseline's breakpoint_lambda (``features.registry.check_step``,
+            as ``compare``), before any work.
     """
     from experiments.calibrate import FIT_DURATION_S, calibrate_log, same_geometry
     from experiments.compare import Source, compare, summarise
-    from features.registry import check_beams
+    from features.registry import check_beams, check_step, is_method, make_config
     from sim import WORLD_NAMES, make_world, simulate_records
     from sim.records import scan_stamps
 
     if world not in WORLD_NAMES:
         raise LmsbenchError(f"world: unknown world {world!r}; known worlds: {', '.join(WORLD_NAMES)}")
+    stride, max_scans, seeds, methods = _checked_arguments(stride, max_scans, seeds, methods, duration, probe_duration)
     probes = resolve_probe_seeds(seeds, probe_seeds) if world == "mit" else []
     opts = read_options or {}
     span = None if max_scans is None else max_scans * stride
@@ -669,6 +674,15 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     for k, rec in enumerate(reader):
         if k % stride == 0:
             check_beams(rec.scan, f"{log}: scan {k}")  # the extractors' limit (extract's), before any work
+            if k == 0:  # the rates the scans' step allows (the CLI's --rate-hz check), before any work
+                step = sensor.angle_increment if sensor is not None else rec.scan.angle_increment
+                check_scan_rate(rate_hz, step, "rate_hz")
+                check_scan_rate(probe_rate_hz, step, "probe_rate_hz")
+            if k == 0:  # a baseline's breakpoint_lambda not above the step (compare's check and message): the
+                # scene statistics' split_merge found no line, silently, and compare refused it only after the
+                # calibration, the fits and the simulation
+                for method in (m for m in dict.fromkeys((*methods, STATS_METHOD)) if is_method(m)):
+                    check_step(make_config(method), rec.scan.angle_increment, method, f"{log}: scan 0")
             real.append(rec)
         if rec.odom is not None:
             odometry.extend((rec.scan.stamp, *rec.odom))
@@ -716,6 +730,46 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     n_probe = (len(scan_stamps(sensor, probe_duration, probe_rate_hz)) * len(probes)) if result.probe_seeds else None
     result.warnings = small_sample_warnings(len(real), len(simulated), n_probe, advice) + bound_warnings(rough, scale, relief)
     return result
+
+
+def _checked_arguments(stride: Any, max_scans: Any, seeds: Any, methods: Any, duration: Any,
+                       probe_duration: Any) -> tuple[int, int | None, list[int], list[str]]:
+    """:func:`sim2real`'s arguments that need no scan, checked before any work (InputError naming the
+    argument; an unknown method UnknownMethodError): ``stride`` 0 was an internal ZeroDivisionError, and 1.5,
+    -1, ``max_scans`` 0, ``seeds`` [], ``duration`` -1 or nan, ``methods`` [] or an unknown name ran the
+    calibration, or read the log and simulated, before failing or comparing nothing. The CLI's options
+    have these bounds (``lmsbench sim2real``)."""
+    from features.registry import get_method
+    from lms200.finite import check_integer, check_number, check_seed
+    from lms200.timing import MAX_DURATION_S, MIN_DURATION_S
+
+    from experiments.options import check_seeds
+    from experiments.user_methods import ensure_method, is_user_method
+
+    stride = check_integer(stride, "stride", 1, strict=True)
+    if max_scans is not None:
+        max_scans = check_integer(max_scans, "max_scans", 1, what="(or None: every scan)", strict=True)
+    if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__iter__"):
+        raise InputError(f"seeds: must be a list of seeds (one simulated world each), got {shown(seeds)}")
+    seeds = list(seeds)
+    if not seeds:
+        raise InputError("seeds: no simulated world: give one seed or more")
+    for seed in seeds:
+        check_seed(seed)
+    check_seeds(seeds, "seeds")
+    for name, value in (("duration", duration), ("probe_duration", probe_duration)):
+        check_number(value, name, MIN_DURATION_S, MAX_DURATION_S, unit="s")
+    if isinstance(methods, (str, bytes)) or not hasattr(methods, "__iter__"):
+        raise InputError(f"methods: must be a list of extraction method names, got {shown(methods)}")
+    methods = list(methods)
+    if not methods:
+        raise InputError("methods: no extraction method: give one or more (default: every built-in method)")
+    for method in methods:
+        if isinstance(method, str) and is_user_method(method):
+            ensure_method(method)
+        else:
+            get_method(method)
+    return stride, max_scans, seeds, methods
 
 
 def _bound_note(at_bound: bool, log_share: float, probe_shares: Sequence[float]) -> str:

@@ -18,7 +18,7 @@ from typing import Any, Collection, Iterable
 import numpy as np
 
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
-from lms200.finite import fixed
+from lms200.finite import fixed, shown
 from lms200.logs import regular_file
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml, dump as dump_yaml
@@ -83,7 +83,9 @@ def deskew_for_sensor(config: SlamConfig, interlaced: bool) -> SlamConfig:
 
 def simulated_interlaced(path: str | Path) -> bool | None:
     """The ``sensor.interlaced`` of a simulator output folder's config.yaml (None: not a simulator
-    folder, or the file does not say)."""
+    folder, or the file does not say). LmsbenchError naming the file for an ``interlaced`` that is
+    no true / false (``"no"``, ``0``): it was read as "does not say", so a run simulated without
+    interlacing was de-skewed as an interlaced LMS200's, silently (``compare`` refuses the file)."""
     cfg = Path(path) / "config.yaml"
     if simulate_log(path) is None or not cfg.is_file():
         return None
@@ -92,8 +94,13 @@ def simulated_interlaced(path: str | Path) -> bool | None:
     except Exception:  # noqa: BLE001 - a damaged config.yaml only loses this hint
         return None
     sensor = raw.get("sensor") if isinstance(raw, dict) else None
-    value = sensor.get("interlaced") if isinstance(sensor, dict) else None
-    return value if isinstance(value, bool) else None
+    if not isinstance(sensor, dict) or "interlaced" not in sensor:
+        return None
+    value = sensor["interlaced"]
+    if not isinstance(value, bool):
+        raise LmsbenchError(f"{cfg}: sensor.interlaced: must be true or false (whether the scans were simulated with "
+                            f"the LMS200's interlaced sweeps, which decides their de-skew), got {shown(value)}")
+    return value
 
 
 def _check_cut_boxes(path: Path, content: dict) -> None:
@@ -117,12 +124,15 @@ def _check_cut_boxes(path: Path, content: dict) -> None:
 
 def load_input(path: str | Path, relations: str | Path | None = None, every: int = 1,
                max_scans: int | None = None, rate_hz: float | None = None,
-               read_options: dict[str, Any] | None = None) -> SlamInput:
+               read_options: dict[str, Any] | None = None, config: SlamConfig | None = None) -> SlamInput:
     """Read a simulator output folder (scans.clf, groundtruth.tum, world.json), a CARMEN log or a
     bag; keep every ``every``-th scan (or, with ``rate_hz``, the first scan at least 1/rate_hz s
     after the last one kept), at most ``max_scans``. Relations come from ``relations`` or a
     ``NAME.relations`` file beside a log. ``read_options``: keywords of ``lms200.read_log``
-    (topic, skip_bad_lines, geometry).
+    (topic, skip_bad_lines, geometry). ``config``: the SLAM config the scans are for, checked
+    against the first scan kept as it is read (``slam.run.check_first_scan``: a stride, a
+    min_line_points or an extractor's breakpoint_lambda that cannot work on these scans), not
+    after the whole log.
 
     Raises:
         FileNotFoundError: the input does not exist.
@@ -205,6 +215,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if rate_hz is not None and not rate_hz > 0:
         raise LmsbenchError(f"--rate-hz must be > 0 scans/s, got {rate_hz}")
     from features.registry import check_beams
+    from slam.run import check_first_scan
 
     records: list[Record] = []
     numbers: list[int] = []  # the log's own scan number of each record kept
@@ -224,6 +235,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
             # the extractors' limit (extract refuses it at that scan, after the notes on the input), named
             # by the log's own scan number (counted from 0), not the kept scan's
             check_beams(rec.scan, f"{log}: scan {k}")
+            if config is not None and not records:
+                check_first_scan(rec.scan, config, f"{log}: scan {k}")
             records.append(rec)
             numbers.append(k)
             if max_scans is not None and len(records) >= max_scans:

@@ -284,15 +284,26 @@ def step_problem(cfg: Any, increment: float, method: str, where: str = "scan") -
     meaning for a step at or above lambda: at it the distance is infinite (every beam connects, no
     occlusion cuts a line), above it negative (no two neighbouring beams connect: no line is ever
     found, silently: a 2-deg scan at breakpoint_lambda 1 deg). A step of 90 deg or
-    more, which no breakpoint_lambda (at most 90 deg) fits, is no mismatch of the config: None."""
-    lam = getattr(cfg, "breakpoint_lambda", None)
-    if lam is None or increment < lam or increment >= math.pi / 2:
+    more, which no breakpoint_lambda (at most 90 deg) fits, is no mismatch of the config: None.
+
+    The baselines' corner step (``config.corners``, a ``CornerConfig``) has a ``breakpoint_lambda``
+    of its own, of the same meaning: two lines' facing end points, one beam step apart, connect
+    within that distance. Not above the step, no corner was found, silently (split_merge on a 2-deg
+    scan at corners.breakpoint_lambda 1.5 deg: its 3 walls, 0 corners), or every facing end
+    connected; it is checked after the lines' and named ``corners.breakpoint_lambda``."""
+    if increment >= math.pi / 2:
         return None
-    fit = min(max(SUGGESTED_LAMBDA, 10 * increment), math.pi / 2)
-    return (f"{where}: the beam step {math.degrees(increment):.6g} deg is not below {method}'s breakpoint_lambda "
-            f"{math.degrees(lam):.6g} deg ({lam:.6g} rad): the adaptive breakpoint distance r sin(step) / "
-            "sin(breakpoint_lambda - step) (Borges & Aldon) has no meaning there (at the step every beam connects, beyond it none: no line); "
-            f"set breakpoint_lambda above the step, e.g. {fit:.6g} rad ({math.degrees(fit):.6g} deg)")
+    for field, owner in (("breakpoint_lambda", cfg), ("corners.breakpoint_lambda", getattr(cfg, "corners", None))):
+        lam = getattr(owner, "breakpoint_lambda", None) if owner is not None else None
+        if lam is None or increment < lam:
+            continue
+        fit = min(max(SUGGESTED_LAMBDA, 10 * increment), math.pi / 2)
+        what = "no line" if field == "breakpoint_lambda" else "no corner"
+        return (f"{where}: the beam step {math.degrees(increment):.6g} deg is not below {method}'s {field} "
+                f"{math.degrees(lam):.6g} deg ({lam:.6g} rad): the adaptive breakpoint distance r sin(step) / "
+                f"sin(breakpoint_lambda - step) (Borges & Aldon) has no meaning there (at the step every beam connects, "
+                f"beyond it none: {what}); set {field} above the step, e.g. {fit:.6g} rad ({math.degrees(fit):.6g} deg)")
+    return None
 
 
 def check_step(cfg: Any, increment: float, method: str, where: str = "scan") -> None:

@@ -10,7 +10,7 @@ import numpy as np
 from .codes import NOT_NUMBER_ITEMS
 from .errors import InputError
 from .finite import fixed, float_of
-from .scan import Scan
+from .scan import MAX_STAMP_S as SCAN_MAX_STAMP_S, Scan
 
 Pose2D = tuple[float, float, float]  # (x m, y m, theta rad) in the world / odometry frame
 
@@ -19,11 +19,12 @@ Pose2D = tuple[float, float, float]  # (x m, y m, theta rad) in the world / odom
 #: (221-299 MB resident); now 1.3 MB traced, 30 MB resident
 MAX_SKIPPED_KEPT = 1000
 MAX_REASON_CHARS = 300  # a kept reason is cut past this (a bad word of a 1 MB line is named in it whole)
-#: s: the latest stamp a log reader takes (CARMEN ipc and logger timestamps, TUM and relations times);
-#: the earliest is 0. A log's clock is UNIX time or seconds since its start, and 2^32 s (2106-02-07) is
-#: the end of ROS 1's time, which a bag cannot pass: a stamp of 1e300 s was read, and ``info`` said
-#: "duration 1e+300 s, scan rate 1.9e-299 scans/s"; a negative one is no clock's
-MAX_STAMP_S = float(2**32)
+#: s: the latest stamp a log reader takes (CARMEN ipc and logger timestamps, TUM and relations times),
+#: and a Scan (``lms200.scan.MAX_STAMP_S``, the same); the earliest is 0. A log's clock is UNIX time or
+#: seconds since its start, and 2^32 s (2106-02-07) is the end of ROS 1's time, which a bag cannot pass:
+#: a stamp of 1e300 s was read, and ``info`` said "duration 1e+300 s, scan rate 1.9e-299 scans/s"; a
+#: negative one is no clock's
+MAX_STAMP_S = SCAN_MAX_STAMP_S
 
 
 def stamp_problem(t: float, what: str) -> str | None:

@@ -17,7 +17,7 @@ import numpy as np
 
 from .codes import NOT_NUMBER_ITEMS, check_real_items, check_real_kind, finite_negative, float64_copy, real_numbers
 from .errors import ScanError
-from .finite import overflow_text
+from .finite import fixed, overflow_text
 
 LMS200_BEAMS = 361
 LMS200_RESOLUTION_RAD = np.deg2rad(0.5)
@@ -31,6 +31,10 @@ ANGLE_GRID_DEG = 0.05  # every LMS2xx start angle and resolution is a multiple o
 #: a unit of the last decimal; float32 (a bag's LaserScan) moves it by at most 2**-24 of its value
 SNAP_TEXT_ERROR_RAD = 5e-7
 SNAP_RELATIVE_ERROR = 1e-6  # of the value: float32 (6e-8) with room to spare
+#: s: the latest stamp a Scan takes, and every log reader and writer (``lms200.records.MAX_STAMP_S``); the earliest
+#: is 0. A clock is UNIX time or seconds since a run's start, and 2^32 s (2106-02-07) is the end of ROS 1's time: a
+#: Scan stamped 1e300 s or -1e300 s was taken, and failed only where a log was written or SLAM's motion model stepped
+MAX_STAMP_S = float(2**32)
 MAX_SNAP_RAD = 4 * np.pi  # rad: larger angles are left as given (a Scan refuses them: bearings within +-2 pi)
 
 
@@ -89,7 +93,8 @@ class Scan:
         range_min: smallest valid range in metres (a range of 0 is never a measurement: loggers
             write 0 for a missing one, so it is invalid whatever range_min says).
         range_max: largest valid range in metres.
-        stamp: time of the first beam in seconds.
+        stamp: time of the first beam in seconds, in [0, MAX_STAMP_S] (2^32 s, 2106-02-07), as every log
+            reader and writer takes it.
 
     Raises:
         ScanError: (an ``LmsbenchError`` and a ``ValueError``) naming the field, when the fields are
@@ -114,6 +119,9 @@ class Scan:
             raise ScanError("ranges: must hold at least one beam")
         for name in ("angle_min", "angle_increment", "range_min", "range_max", "stamp"):
             object.__setattr__(self, name, _number(name, getattr(self, name)))
+        if not 0.0 <= self.stamp <= MAX_STAMP_S:
+            raise ScanError(f"stamp: must be in 0 .. 2^32 s ({MAX_STAMP_S:.0f} s, 2106-02-07), as every log reader and "
+                            f"writer takes it (a clock's UNIX time or seconds since the run's start), got {fixed(self.stamp)} s")
         if self.angle_increment <= 0:  # a ROS LaserScan of a laser mounted upside down has a negative one
             flip = (" (beams clockwise, a laser mounted upside down: reverse the ranges, ranges[::-1], and start "
                     "at the last beam's bearing, angle_min + (n - 1) * angle_increment)") if self.angle_increment < 0 else ""

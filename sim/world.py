@@ -67,7 +67,42 @@ def world_json_content(text: str) -> dict:
         hint = "; ".join(f"{k!r} for {m[0]!r}?" for k, m in near.items() if m)
         raise ValueError(f"unknown key(s) {unknown}{' (' + hint + ')' if hint else ''}: a world.json has "
                          f"{', '.join(WORLD_JSON_KEYS)}")
+    _check_plain_fields(d)
     return d
+
+
+#: the largest seed a world.json gives (as ``lmsbench simulate --seed`` and a sweep's seeds: worlds take 32 bits)
+MAX_WORLD_SEED = 2**32 - 1
+
+
+def _check_plain_fields(d: dict) -> None:
+    """ValueError naming the field (and the row) for a world.json's ``name``, ``seed`` or ``corners``
+    of the wrong kind: they were taken unread or as anything. A ``seed`` of 400 digits was kept and
+    written again into simulate's world.json and drawn in map.png's title; 1.5 said only "must be a
+    whole number"; ``"name": ["x"]`` became the title "['x']"; ``corners`` (the public truth, written
+    for the user and rebuilt from the solids on reading) holding ``"x"`` or a row of two numbers
+    was read, exit 0, though no world wrote it."""
+    if "name" in d and not isinstance(d["name"], str):
+        raise ValueError(f"name: must be text (the world's name), got {shown(d['name'])}")
+    if "seed" in d:
+        seed = d["seed"]
+        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_WORLD_SEED:
+            raise ValueError(f"seed: must be a whole number in [0, {MAX_WORLD_SEED}] (a world's seed, as simulate "
+                             f"--seed takes), got {shown(seed)}")
+    corners = d.get("corners", [])
+    must = ("a corner must be a list of x, y (m), angle_rad (finite numbers) and convex (true or false), "
+            "as World.to_json writes it")
+    if not isinstance(corners, list):
+        raise ValueError(f"corners: must be a list of corners ({must}), got {shown(corners)}")
+    for i, row in enumerate(corners):
+        ok = isinstance(row, list) and len(row) == 4 and all(is_number(v) for v in row[:3]) and isinstance(row[3], bool)
+        if ok:
+            try:
+                ok = all(math.isfinite(float(v)) for v in row[:3])
+            except OverflowError:  # a whole number of 400 digits
+                ok = False
+        if not ok:
+            raise ValueError(f"corners: corner {i} is {shown(row)}: {must}")
 
 
 def spans_plane(z0: np.ndarray, z1: np.ndarray, scan_height: float) -> np.ndarray:

@@ -717,7 +717,7 @@ NOISE_WHY = "a std whose square and inverse square stay finite"
 FIELD_RANGES: dict[str, FieldRange] = {
     # alignment (the default pipeline's ICP)
     # up to the most beams a scan may have: 1e12 matched one point a scan; a stride that leaves fewer than
-    # MIN_MATCH_POINTS of the first scan's beams is refused when the run starts (slam.run.check_stride)
+    # MIN_MATCH_POINTS of the first scan's beams is refused when the run starts (slam.run.check_first_scan)
     "alignment.stride": (1, MAX_BEAMS, "beams", False, "the most beams of a scan the extractors take"),
     "alignment.max_range": (MIN_MATCH_RANGE_M, MAX_MATCH_RANGE_M, "m", False, ""),
     "alignment.max_correspondence": (MIN_REACH_M, SEARCH_CELL_M, "m", False, "the LMS200's range quantum to the cell "
@@ -764,7 +764,7 @@ FIELD_RANGES: dict[str, FieldRange] = {
     "motion.max_gap": (MIN_MAX_GAP_S, 1e6, "s", False, "100 scans/s, faster than any scanner's, to about 12 days: "
                        "a shorter gap makes every step a gap"),
     "motion.odom_max_turn_error": (0, PI, "rad", False, ""),
-    # observations
+    # observations (a min_line_points above the first scan's beams is refused when the run starts: slam.run.check_first_scan)
     "observations.min_line_points": (0, 16384, "beams", False, "the most beams of a scan the extractors take"),
     "observations.min_line_length": (0, 100, "m", False, ""),
     "observations.sigma_rho": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "m", False, NOISE_WHY),

@@ -261,9 +261,8 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
             range_maxes.add(float(rec.scan.range_max))
             yield rec
 
-    records = seen(records)
+    records = check_stride(seen(records), config)  # the first scan against the config: before any work
     if config.preset == "default":
-        records = check_stride(records, config)
         from .scanslam import run_scan_slam
 
         result = run_scan_slam(((rec.scan.stamp, rec.scan, rec.odom, rec.truth) for rec in records), config)
@@ -284,22 +283,50 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
     return result
 
 
-def check_stride(records: Iterable[Record], config: SlamConfig) -> Iterator[Record]:
-    """The records, raising SlamInputError at the first scan (before any matching) when
-    ``alignment.stride`` keeps fewer of its beams than the ICP needs (``MIN_MATCH_POINTS``; a scan
-    with fewer beams is too short at any stride, and runs to its "not healthy" warning): the stride is bounded by the most beams a scan may have (16,384, where
-    60-150 keeps as many points as 3 on an LMS200), so a 361-beam scan's limit is checked here."""
-    stride = config.alignment.stride
+def check_stride(records: Iterable[Record], config: SlamConfig, where: str = "records[0]") -> Iterator[Record]:
+    """The records, raising SlamInputError at the first scan (before any matching or extraction)
+    when :func:`first_scan_problem` finds one (the scan named by ``where`` where the message names
+    it); the rest pass unchecked."""
     for i, rec in enumerate(records):
         if i == 0:
-            beams = int(np.size(rec.scan.ranges))
-            need = MIN_MATCH_POINTS  # a scan with fewer beams is short whatever the stride (it runs, "not healthy")
-            if beams >= need and -(-beams // stride) < need:  # ceil: beams 0, stride, 2 stride, ...
-                largest = (beams - 1) // (need - 1)
-                raise SlamInputError(f"alignment.stride: {stride:,} keeps {-(-beams // stride)} of the first scan's "
-                                     f"{beams:,} beams, fewer than the {need} points the scan matcher needs; "
-                                     f"at most {largest:,} for these scans")
+            check_first_scan(rec.scan, config, where)
         yield rec
+
+
+def check_first_scan(scan: Any, config: SlamConfig, where: str = "records[0]") -> None:
+    """SlamInputError (or ``features.ConfigError``, as ``extract`` raises it) when the run's first
+    scan shows that the config cannot work on these scans, each checked once, at the first scan, as
+    the scans come (``lmsbench slam`` as it reads the log: it refused them after reading the whole
+    log, or, for the extractor's step, after the whole default run):
+
+    - the default preset's ``alignment.stride`` keeps fewer of its beams than the ICP needs
+      (``MIN_MATCH_POINTS``; a scan with fewer beams is too short at any stride, and runs to its "not
+      healthy" warning): the stride is bounded by the most beams a scan may have (16,384, where 60-150
+      keeps as many points as 3 on an LMS200), so a 361-beam scan's limit is checked here;
+    - ``observations.min_line_points`` is more than its beams (bounded alike, by 16,384): no line of
+      the scan can have that many points, so none was observed (the paper preset ran on odometry
+      alone, the default preset's map held no line), silently;
+    - a baseline extractor's ``breakpoint_lambda`` (or its corners') is not below its beam step
+      (``features.registry.check_step``, compare's message, naming ``where``)."""
+    beams = int(np.size(scan.ranges))
+    if config.preset == "default":
+        stride = config.alignment.stride
+        need = MIN_MATCH_POINTS  # a scan with fewer beams is short whatever the stride (it runs, "not healthy")
+        if beams >= need and -(-beams // stride) < need:  # ceil: beams 0, stride, 2 stride, ...
+            largest = (beams - 1) // (need - 1)
+            raise SlamInputError(f"alignment.stride: {stride:,} keeps {-(-beams // stride)} of the first scan's "
+                                 f"{beams:,} beams, fewer than the {need} points the scan matcher needs; "
+                                 f"at most {largest:,} for these scans")
+    least = config.observations.min_line_points
+    if least > beams:
+        found = "the map would hold no line" if config.preset == "default" else "the filter would observe no line"
+        raise SlamInputError(f"observations.min_line_points: {least:,} is more than the first scan's {beams:,} beams: "
+                             f"no line of these scans has that many points, so {found}; at most {beams:,} for these "
+                             "scans")
+    from features.registry import check_step, make_config
+
+    check_step(make_config(config.extractor, **config.extractor_params), float(scan.angle_increment),
+               config.extractor, where)
 
 
 def _warn_unread(config: SlamConfig, range_maxes: set[float]) -> None:

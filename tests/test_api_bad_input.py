@@ -1374,7 +1374,7 @@ def test_slam_stride_is_bounded_by_the_scans_beams() -> None:
         SlamConfig(alignment={"stride": MAX_BEAMS + 1})
 
     def scans(beams: int) -> list:
-        return [SimpleNamespace(scan=SimpleNamespace(ranges=np.ones(beams)))] * 3
+        return [SimpleNamespace(scan=SimpleNamespace(ranges=np.ones(beams), angle_increment=0.001))] * 3
 
     assert len(list(check_stride(scans(16384), SlamConfig(alignment={"stride": 150})))) == 3  # 110 points
     assert len(list(check_stride(scans(16384), SlamConfig(alignment={"stride": 1365})))) == 3  # 13 points
@@ -1382,7 +1382,8 @@ def test_slam_stride_is_bounded_by_the_scans_beams() -> None:
         list(check_stride(scans(16384), SlamConfig(alignment={"stride": 1366})))
     assert str(info.value) == ("alignment.stride: 1,366 keeps 12 of the first scan's 16,384 beams, fewer than the 13 "
                                "points the scan matcher needs; at most 1,365 for these scans")
-    assert len(list(check_stride(scans(5), SlamConfig()))) == 3  # too short at any stride: the stride is not why
+    # too short at any stride: the stride is not why (min_line_points, 8 by default, is above 5 beams: its own refusal)
+    assert len(list(check_stride(scans(5), SlamConfig(observations={"min_line_points": 5})))) == 3
     with pytest.raises(SlamInputError, match=r"^alignment.stride: 3 keeps 5 of the first scan's 13 beams, fewer than "
                                              r"the 13 points the scan matcher needs; at most 1 for these scans$"):
         list(check_stride(scans(13), SlamConfig()))

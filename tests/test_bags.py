@@ -20,7 +20,13 @@ from lms200.errors import InputError, LmsbenchError, LogFormatError, LogNotFound
 
 
 def _scan(t: float, v: float = 1.0) -> Scan:
-    return Scan(np.full(5, v), -0.1, 0.05, 0.0, 8.0, stamp=t)
+    """A 5-beam scan stamped ``t``; a stamp outside 0 .. 2^32 s, which Scan refuses, is set in place past its
+    check: what the bag writer still refuses for a Scan changed after it was made."""
+    if 0.0 <= t <= 2.0**32:
+        return Scan(np.full(5, v), -0.1, 0.05, 0.0, 8.0, stamp=t)
+    scan = Scan(np.full(5, v), -0.1, 0.05, 0.0, 8.0)
+    object.__setattr__(scan, "stamp", t)
+    return scan
 
 
 def _ros2_bag(path: Path, messages: list[tuple], beams: int = 3, range_max: float = 10.0,

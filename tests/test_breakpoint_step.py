@@ -85,3 +85,70 @@ def test_compare_refuses_it_before_any_method_runs(tmp_path: Path) -> None:
     with pytest.raises(ConfigError) as info:
         compare([str(log)], ["split_merge", "hough"], params={"hough": {"breakpoint_lambda": math.radians(1.5)}})
     assert str(info.value) == _message("hough", 2.0, 1.5, 20.0, "room.clf: scan 0")
+
+
+def _corner_message(method: str, step_deg: float, lam_deg: float, fit_deg: float, where: str = "scan") -> str:
+    return (f"{where}: the beam step {step_deg:g} deg is not below {method}'s corners.breakpoint_lambda {lam_deg:g} deg "
+            f"({math.radians(lam_deg):.6g} rad): the adaptive breakpoint distance r sin(step) / "
+            "sin(breakpoint_lambda - step) (Borges & Aldon) has no meaning there (at the step every beam connects, beyond it none: no corner); "
+            f"set corners.breakpoint_lambda above the step, e.g. {math.radians(fit_deg):.6g} rad ({fit_deg:g} deg)")
+
+
+@pytest.mark.parametrize("method", BASELINES)
+def test_the_corner_steps_own_breakpoint_lambda_is_checked_the_same_way(method: str) -> None:
+    """The shared corner step (``CornerConfig.breakpoint_lambda``) connects two lines' facing ends within the
+    same adaptive distance: at 1.5 deg on a 2-deg scan every baseline found the room's 3 walls and 0 of its 2
+    corners, silently. Now refused as the lines' lambda is, naming corners.breakpoint_lambda; 10 deg finds both."""
+    from features.baselines.common import CornerConfig
+
+    scan = _room(2.0)
+    with pytest.raises(ConfigError) as info:
+        extract(scan, method, corners=CornerConfig(breakpoint_lambda=math.radians(1.5)))
+    assert str(info.value) == _corner_message(method, 2.0, 1.5, 20.0)
+    with pytest.raises(ConfigError) as many:
+        extract_many([_room(2.0, 0.0), _room(2.0, 1.0)], method, corners=CornerConfig(breakpoint_lambda=math.radians(1.5)))
+    assert str(many.value) == str(info.value)
+    fs = extract(scan, method, corners=CornerConfig(breakpoint_lambda=math.radians(10.0)))
+    assert (len(fs.lines), len(fs.corners)) == (3, 2)
+
+
+def test_figures_refuses_a_log_its_panels_method_cannot_segment_before_any_work(tmp_path: Path,
+                                                                               capsys: pytest.CaptureFixture[str]) -> None:
+    """`lmsbench figures --methods split_merge --log` a 12-deg log drew Fig. 9's real-log panels with no
+    line (fig9_intel_lines.csv empty), exit 0, after the whole study; the panels' extract_timed called
+    the method's run without extract's check. Now compare's message, before any work."""
+    log = tmp_path / "coarse.clf"
+    write_log(log, [Record(_room(12.0, float(k))) for k in range(3)])
+    out = tmp_path / "figs"
+    rc = main(["figures", "--methods", "split_merge", "--log", str(log), "--no-slam", "--duration", "2", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 2, err
+    assert err.strip().splitlines() == [f"lmsbench figures: error: {_message('split_merge', 12.0, 10.0, 90.0, f'{log}: scan 0')}"]
+    assert not out.exists()
+
+
+def test_extract_timed_refuses_it_naming_the_scan() -> None:
+    """experiments.evaluate.extract_timed (Fig. 9's panels) ran the method's run directly: no line, silently."""
+    from experiments.evaluate import extract_timed
+
+    with pytest.raises(ConfigError) as info:
+        extract_timed([_room(2.0, 0.0), _room(12.0, 1.0)], "iepf")
+    assert str(info.value) == _message("iepf", 12.0, 10.0, 90.0, "scan 1")
+
+
+def test_sim2real_refuses_it_before_any_simulation(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """sim2real (given a sensor, so no calibration) read the log, then simulated its worlds and compared,
+    and only compare refused the log's 12-deg step, minutes later at the defaults (the scene statistics'
+    split_merge found no line on it, silently). Now refused at the log's first scan, compare's message."""
+    import sim
+    from experiments.sim2real import sim2real
+
+    def no_simulation(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        raise AssertionError("simulated before the log's beam step was checked")
+
+    monkeypatch.setattr(sim, "simulate_records", no_simulation)
+    log = tmp_path / "coarse.clf"
+    write_log(log, [Record(_room(12.0, float(k))) for k in range(3)])
+    with pytest.raises(ConfigError) as info:
+        sim2real(log, world="office", seeds=[1], duration=1.0, stride=1, sensor=sim.SensorConfig(interlaced=False))
+    assert str(info.value) == _message("split_merge", 12.0, 10.0, 90.0, f"{log}: scan 0")

@@ -517,7 +517,12 @@ CASES = [
     (["lms200", "emulate", "--duration", "-5"], "--duration"),
     (["lms200", "emulate", "--time-scale", "0"], "--time-scale"),
     # ran as long as asked: a byte time of days, a reply awaited for 31 years
-    (["lms200", "emulate", "--time-scale", "1e9"], "argument --time-scale: must be a finite number > 0 and <= 100, got '1e9'"),
+    (["lms200", "emulate", "--time-scale", "1e9"], "argument --time-scale: must be a finite number >= 1e-06 and <= 100, got '1e9'"),
+    # 1e-310 was "internal error: OverflowError: cannot convert float infinity to integer" once a host asked for
+    # scans; 1e-300 served what 1e-6 does (the emulator's own pace)
+    (["lms200", "emulate", "--time-scale", "1e-310"], "argument --time-scale: must be a finite number >= 1e-06 and <= 100, got '1e-310'"),
+    (["lms200", "emulate", "--time-scale", "1e-300"], "argument --time-scale: must be a finite number >= 1e-06 and <= 100, got '1e-300'"),
+    (["lms200", "emulate", "--time-scale", "nan"], "argument --time-scale: must be a finite number >= 1e-06 and <= 100, got 'nan'"),
     (["lms200", "emulate", "--seed", "-1"], "--seed"),
     (["lms200", "emulate", "--log", "{binary.clf}"], "binary"),
     (["lms200", "emulate", "--log", "{missing.clf}"], "missing.clf"),

@@ -195,8 +195,24 @@ def test_a_reply_wait_or_time_scale_beyond_its_bound_is_refused_before_any_io():
     for kw in ({"timeout": 1e9}, {"mode_timeout": 61.0}, {"timeout": float("nan")}):
         with pytest.raises(ValueError, match=rf"^{next(iter(kw))}: must be in \(0, 60\] s, got "):
             LMS200("loop://", **kw)
-    with pytest.raises(ValueError, match=r"^time_scale: must be in \(0, 100\], got 1000000000"):
+    with pytest.raises(ValueError, match=r"^time_scale: must be in \[1e-06, 100\] \(a million times faster than the "
+                                         r"device to 100 times slower\), got 1000000000"):
         VirtualLMS200([], time_scale=1e9)
+
+
+@pytest.mark.parametrize("scale", [1e-310, 1e-300, 9.9e-7, 0.0, -1.0])
+def test_a_time_scale_below_a_millionth_is_refused(scale: float) -> None:
+    """1e-310 (any scale under about 1e-302) overflowed the device's clock arithmetic once a host asked for
+    scans: "internal error: OverflowError: cannot convert float infinity to integer"; down to that, a smaller
+    scale served what 1e-6 does. lms200.virtual.MIN_TIME_SCALE (1e-6) is the floor, the CLI's too."""
+    from lms200 import InputError
+    from lms200.virtual import MIN_TIME_SCALE
+
+    with pytest.raises(InputError) as info:
+        VirtualLMS200([], time_scale=scale)
+    assert str(info.value) == (f"time_scale: must be in [1e-06, 100] (a million times faster than the device to 100 times "
+                               f"slower), got {scale!r}")
+    assert VirtualLMS200([], time_scale=MIN_TIME_SCALE).time_scale == 1e-6
 
 
 def test_bad_arguments_are_input_errors_naming_the_argument_and_the_variants() -> None:

@@ -30,8 +30,12 @@ def test_points_at_the_origin_and_beyond_1e154_m_give_no_warning() -> None:
     scan = Scan(np.array([5e-324, 1e300] * 6 + [5e-324]), 0.0, 0.5, 0.0, 1e308)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        # breakpoint_lambda above the 0.5 rad step (the default 10 deg is not: a ConfigError, registry.step_problem)
-        assert len(extract(scan, method="ransac", breakpoint_lambda=1.0).lines) == 0
+        # breakpoint_lambda above the 0.5 rad step (the default 10 deg is not: a ConfigError, registry.step_problem),
+        # the corner step's own too (checked alike)
+        from features.baselines.common import CornerConfig
+
+        assert len(extract(scan, method="ransac", breakpoint_lambda=1.0,
+                           corners=CornerConfig(breakpoint_lambda=1.0)).lines) == 0
 
 
 def test_a_near_wall_beside_a_far_one_is_still_found() -> None:

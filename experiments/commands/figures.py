@@ -38,7 +38,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from experiments.figures.make import DRIVING_TABLES, check_tables, draw_figures, draw_sweep
     from experiments.provenance import link_latest, new_run_folder, write_record
-    from experiments.figures.study import StudyConfig, check_study, load_config, load_tables, run_study, save_tables
+    from experiments.figures.study import (StudyConfig, check_panel_log, check_study, load_config, load_tables, run_study,
+                                           save_tables)
 
     started = datetime.datetime.now()
     writes = FIGURES_OUTPUTS
@@ -84,6 +85,7 @@ def run(args: argparse.Namespace) -> int:
             cfg.intel_log = str(check_log(args.intel))
         cfg.log_options = plain_log_options(read_log_options(args))
         check_study(cfg, hint=", or --no-slam")
+        check_panel_log(cfg)  # before any work: a log the panels cannot draw (as the demo checks it)
         tables, notes = run_study(cfg)
     run_folder = args.out is None  # results/figures/DATE_TIME, linked as latest once its figures are drawn
     args.out = args.out or new_run_folder("results/figures", now=started)  # named by the run's start

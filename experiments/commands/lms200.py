@@ -16,7 +16,7 @@ from lms200.carmen import write_carmen
 from lms200.driver import LMS200, MAX_TIMEOUT_S
 from lms200.protocol import BAUD_MODES
 from lms200.timing import MIN_DURATION_S
-from lms200.virtual import MAX_TIME_SCALE
+from lms200.virtual import MAX_TIME_SCALE, MIN_TIME_SCALE
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, given_log_flags, read_log_options
@@ -45,8 +45,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--rfc2217", action="store_true", help="with --tcp: speak RFC 2217 (rfc2217://HOST:PORT), so the host sets the baud")
     e.add_argument("--host", type=text("an address, e.g. 127.0.0.1, 0.0.0.0 or ::1"), help="address to listen on with --tcp (default 127.0.0.1; ::1 for IPv6, its URL socket://[::1]:PORT)")
     e.add_argument("--units", choices=("cm", "mm"), default="cm", help="power-on unit mode (default cm, as the LMS200 ships)")
-    e.add_argument("--time-scale", type=number(0.0, MAX_TIME_SCALE, lo_open=True), default=1.0,
-                   help=f"multiplies every byte time and device delay (default 1, real time; 0.01 = 100x faster; at most {MAX_TIME_SCALE:g})")
+    e.add_argument("--time-scale", type=number(MIN_TIME_SCALE, MAX_TIME_SCALE), default=1.0,
+                   help=f"multiplies every byte time and device delay (default 1, real time; 0.01 = 100x faster; "
+                        f"{MIN_TIME_SCALE:g} to {MAX_TIME_SCALE:g}: faster than a millionth changes nothing a host sees)")
     e.add_argument("--duration", type=STOP_AFTER, help=f"stop after this many seconds of wall-clock time, whatever --time-scale "
                                                       f"(at least {MIN_DURATION_S:g}; default: until Ctrl-C)")
     add_log_options(e)  # with --log

@@ -209,8 +209,9 @@ def run(args: argparse.Namespace) -> int:
     # by name alone a folder of the user's metrics.json and slam.png passed, and the run deleted them
     check_out(args.out, writes=SLAM_OUTPUTS, owner=SLAM_OWNER)  # after: an input in --out is the sharper message
     config = _config(args)
+    interlaced = simulated_interlaced(args.input)  # before the read: a config.yaml whose interlaced is no bool is refused
     data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
-                      read_options=read_log_options(args))
+                      read_options=read_log_options(args), config=config)
     for note in data.notes:
         print(note, file=sys.stderr)
     _warn_unread(config, data.records, data.sources.get("scans", args.input))
@@ -268,7 +269,7 @@ def run(args: argparse.Namespace) -> int:
         has = "has no odometry" if missing == len(data.records) else f"has none on {missing} of its {len(data.records)} scans"
         raise InputError(f"--no-odometry-baseline: {args.input} {has}, so there is no odometry baseline to leave out "
                          "(it runs only on an input with odometry on every scan)")
-    if simulated_interlaced(args.input) is False and config.preset == "default" and config.alignment.deskew:
+    if interlaced is False and config.preset == "default" and config.alignment.deskew:
         config = deskew_for_sensor(config, interlaced=False)
         print(f"{args.input}: simulated with interlaced=False (every beam from one pose): alignment.deskew off",
               file=sys.stderr)

@@ -95,7 +95,7 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
     # the SLAM's kernels too: the demo's first report timed the default pipeline with their compile
     # (5.9 s for 375 scans, 7x the paper preset's, where warm it is 0.3 s, 3x faster)
     warm_up_kernels(log=say, slam=cfg.slam)
-    panel_method = "sensor" if "sensor" in cfg.methods else cfg.methods[0]
+    panel_method = panel_method_of(cfg)
     # the real log first: one it cannot draw is refused before the simulation and comparison
     intel = Path(cfg.intel_log) if cfg.intel_log else None
     if intel is not None and intel.exists():
@@ -194,13 +194,23 @@ def read_table(path: Path) -> pd.DataFrame:
         raise LmsbenchError(f"{path}: not a readable parquet table ({' '.join(str(exc).split())[:200]})") from None
 
 
+def panel_method_of(cfg: StudyConfig) -> str:
+    """The method whose features Fig. 9 draws: the sensor method when the study runs it, else its first."""
+    return "sensor" if "sensor" in cfg.methods else cfg.methods[0]
+
+
 def check_panel_log(cfg: StudyConfig) -> None:
     """Refuse, before any output, a Fig. 9 log that does not read, or holds no scan with a valid
     beam: it is read with the study's log options up to its first scan with one (a file that is not
     a log fails on its first lines). ``demo --log run/groundtruth.tum`` made the run folder and
     moved ``results/demo/latest`` to it, empty, before the study refused the file; a log of only
-    +inf / nan readings still left the run folder (or ``--out``) behind, empty (the wrong-input hunt)."""
+    +inf / nan readings still left the run folder (or ``--out``) behind, empty (the wrong-input hunt).
+    Its first scan's beam step is one the panels' method segments (``features.registry.check_step``,
+    compare's message): ``figures --methods split_merge --log`` a 12-deg log drew Fig. 9's real-log
+    panels with no line, exit 0."""
     from lms200 import LmsbenchError, read_log
+
+    from features.registry import check_step, make_config
 
     from experiments.logargs import log_options_from_plain
 
@@ -208,9 +218,13 @@ def check_panel_log(cfg: StudyConfig) -> None:
         return
     path = Path(cfg.intel_log)
     records = iter(read_log(path, **log_options_from_plain(cfg.log_options)))
+    method = panel_method_of(cfg)
     n = 0
     try:
         for record in records:  # the first scan of a log has a valid beam but for a damaged one: no second pass
+            if n == 0:
+                check_step(make_config(method, **(cfg.intel_sensor_params if method == "sensor" else {})),
+                           record.scan.angle_increment, method, f"{path}: scan 0")
             n += 1
             if record.scan.valid.any():
                 return

@@ -315,17 +315,30 @@ def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: s
                                  f"got {rate!r}")
 
 
-def _check_sensors(cells: list[dict[str, Any]], files: dict[str, Any], defaults: dict[str, Any]) -> None:
+def _sensor_key(cell: dict[str, Any]) -> tuple:
+    """What decides a cell's sensor: its ``sensor.*`` items and its ``sensor_file``."""
+    return tuple(sorted(split_params(cell, "sensor").items())), cell.get("sensor_file")
+
+
+def _sensor_words(key: tuple) -> str:
+    """A cell's sensor as a message names it: ``the simulated scans (sensor {...}, FILE)``."""
+    items, sensor_file = key
+    said = [str(dict(items)) if items else "the default sensor"] + ([str(sensor_file)] if sensor_file is not None else [])
+    return f"the simulated scans ({', '.join(said)})"
+
+
+def _check_sensors(cells: list[dict[str, Any]], files: dict[str, Any], defaults: dict[str, Any]) -> dict[tuple, Any]:
     """Every distinct sensor of the cells builds (a bad value fails before any cell runs), and the
     cell's ``rate_hz`` is one it gives (``rate_hz: 1e300`` failed in every cell, "more than the
     sensor gives", exit 1); a cell's ``sensor_file`` is taken from ``files`` (read once, by
-    :func:`_read_sensor_files`)."""
+    :func:`_read_sensor_files`). Returns each distinct sensor by :func:`_sensor_key`."""
     from lms200 import LmsbenchError
     from lms200.timing import check_scan_rate
 
     from .spec import SweepSpecError
 
     seen = set()
+    sensors: dict[tuple, Any] = {}
     for cell in cells:
         items = tuple(sorted(split_params(cell, "sensor").items()))
         rate = {**defaults, **cell}.get("rate_hz")
@@ -347,6 +360,8 @@ def _check_sensors(cells: list[dict[str, Any]], files: dict[str, Any], defaults:
             check_scan_rate(rate, sensor.resolution)
         except LmsbenchError as exc:
             raise SweepSpecError(str(exc)) from None
+        sensors[_sensor_key(cell)] = sensor
+    return sensors
 
 
 def check_extract_params(cells: list[dict[str, Any]]) -> None:
@@ -361,7 +376,9 @@ def check_extract_params(cells: list[dict[str, Any]]) -> None:
     files = _read_sensor_files(cells)
     _unknown(cells, "sensor", _sensor_fields)
     _check_plain(cells, EXTRACT_DEFAULTS, set(), ("sensor", "extractor"))
-    _check_sensors(cells, files, EXTRACT_DEFAULTS)
+    sensors = _check_sensors(cells, files, EXTRACT_DEFAULTS)
+    from features.registry import step_problem
+
     from .spec import SweepSpecError
 
     seen = set()
@@ -372,14 +389,19 @@ def check_extract_params(cells: list[dict[str, Any]]) -> None:
             overrides = extractor_overrides(cell, [method], other_methods=True).get(method, {})
         except OverrideError as exc:
             raise SweepSpecError(str(exc)) from None
-        key = (method, tuple(sorted(overrides.items(), key=lambda kv: kv[0])))
+        key = (method, tuple(sorted(overrides.items(), key=lambda kv: kv[0])), _sensor_key(cell))
         if key in seen:
             continue
         seen.add(key)
         try:
-            make_config(method, **overrides)
+            config = make_config(method, **overrides)
         except (LmsbenchError, TypeError, ValueError) as exc:
             raise SweepSpecError(f"extractor {method} {overrides}: {exc}") from None
+        # a baseline's breakpoint_lambda (or its corners') not below the cell's beam step: every such cell failed
+        # after its simulation, compare refusing its first scan (features.registry.check_step); said now, compare's words
+        problem = step_problem(config, sensors[_sensor_key(cell)].angle_increment, method, _sensor_words(_sensor_key(cell)))
+        if problem is not None:
+            raise SweepSpecError(f"extractor {method} {overrides}: {problem}")
 
 
 def check_slam_params(cells: list[dict[str, Any]]) -> None:
@@ -397,7 +419,10 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
     default = SlamConfig().extractor
     _unknown(cells, "slam.extractor_params", lambda c: _extractor_fields(str(c.get("slam.extractor", default))))
     _check_plain(cells, SLAM_DEFAULTS, set(), ("sensor", "slam", "extractor"))
-    _check_sensors(cells, files, SLAM_DEFAULTS)
+    sensors = _check_sensors(cells, files, SLAM_DEFAULTS)
+    from types import SimpleNamespace
+
+    from slam.run import check_first_scan
     from lms200 import LmsbenchError
 
     from experiments.user_methods import ensure_method
@@ -414,14 +439,22 @@ def check_slam_params(cells: list[dict[str, Any]]) -> None:
         if isinstance(motion, dict) and motion.get("use_odometry") is True:  # ran without it, the column saying True
             raise SweepSpecError("slam.motion.use_odometry: true, but the slam cells' simulated runs carry no "
                                  "odometry: the filter would run without it, as with false")
-        key = repr(sorted(nested.items(), key=lambda kv: kv[0]))
+        key = repr((sorted(nested.items(), key=lambda kv: kv[0]), _sensor_key(cell)))
         if key in seen:
             continue
         seen.add(key)
         try:
             ensure_method(str(nested.get("extractor", "")))  # a MODULE:FUNCTION extractor: registered before the check
-            SlamConfig.from_dict(nested)
+            config = SlamConfig.from_dict(nested)
         except (LmsbenchError, TypeError, ValueError, KeyError) as exc:
+            raise SweepSpecError(f"slam {nested}: {exc}") from None
+        # what run_slam refuses at its first scan (a stride or min_line_points beyond the sensor's beams, an
+        # extractor's breakpoint_lambda not below its step): every such cell failed after its simulation
+        sensor = sensors[_sensor_key(cell)]
+        try:
+            check_first_scan(SimpleNamespace(ranges=np.empty(sensor.n_beams), angle_increment=sensor.angle_increment),
+                             config, _sensor_words(_sensor_key(cell)))
+        except LmsbenchError as exc:
             raise SweepSpecError(f"slam {nested}: {exc}") from None
 
 
