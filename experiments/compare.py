@@ -123,10 +123,13 @@ def _truth_in(world: Any, sensor: Any) -> Callable[[Record], Any]:
 
 def is_simulation_folder(path: str | Path) -> bool:
     """A ``lmsbench simulate`` output folder (``options.simulate_log``) with its world.json, whose
-    scans are scored against their truth (without it, its scans.clf is compared as a log)."""
+    scans are scored against their truth (without it, its scans.clf is compared as a log). A
+    world.json that is there but no regular file (a pipe, a link to /dev/zero) makes it one too, to
+    be refused by ``World.from_json`` as slam refuses it: it was compared as a log, its truth
+    dropped without a word, exit 0 (found by fuzzing)."""
     from experiments.options import simulate_log
 
-    return simulate_log(path) is not None and (Path(path) / "world.json").is_file()
+    return simulate_log(path) is not None and (Path(path) / "world.json").exists()
 
 
 def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = None) -> Source:
