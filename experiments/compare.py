@@ -151,7 +151,13 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
     settings: dict[str, Any] = {"folder": str(p)}
     sensor = sim.SensorConfig()
     seed = None
-    if (p / "config.yaml").is_file():
+    if (p / "config.yaml").exists():  # a pipe or a device in its place is refused (regular_file), not passed over
+        from lms200.logs import regular_file
+        from lms200.yamlio import size_problem
+
+        too_big = size_problem(regular_file(p / "config.yaml", "simulate config").stat().st_size)
+        if too_big:  # simulate writes 2 KB; 3 GB was read whole (MemoryError), 35 MB parsed for minutes (fuzzing)
+            raise LmsbenchError(f"{p / 'config.yaml'}: {too_big}")
         try:  # the simulate config the folder was made with: its sensor model scores the scans
             cfg = load_yaml((p / "config.yaml").read_text(), words=True) or {}  # simulate's record, an earlier version's too
             if not isinstance(cfg, dict):

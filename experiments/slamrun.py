@@ -83,9 +83,11 @@ def deskew_for_sensor(config: SlamConfig, interlaced: bool) -> SlamConfig:
 def simulated_interlaced(path: str | Path) -> bool | None:
     """The ``sensor.interlaced`` of a simulator output folder's config.yaml (None: not a simulator
     folder, or the file does not say)."""
+    from lms200.yamlio import size_problem
+
     cfg = Path(path) / "config.yaml"
-    if simulate_log(path) is None or not cfg.is_file():
-        return None
+    if simulate_log(path) is None or not cfg.is_file() or size_problem(cfg.stat().st_size):
+        return None  # beyond a config's size no hint is read: 3 GB took as much memory, 35 MB minutes (fuzzing)
     try:
         raw = load_yaml(cfg.read_text())
     except Exception:  # noqa: BLE001 - a damaged config.yaml only loses this hint
