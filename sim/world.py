@@ -270,6 +270,8 @@ class World:
         except (ValueError, TypeError, UnicodeDecodeError) as exc:
             raise LmsbenchError(f"{path}: not a world.json ({exc})") from None
         try:
+            if not isinstance(d.get("name", ""), str):  # str() made a list, a number or null ("None") the world's name
+                raise ValueError(f"name: must be a string (the world's title), got {shown(d['name'])}")
             h = d.get("scan_height", SCAN_HEIGHT_M)
             try:
                 h = float(h)

@@ -65,3 +65,21 @@ def test_compare_refuses_a_world_json_that_is_no_regular_file(folder, tmp_path, 
     assert re.fullmatch(rf"lmsbench compare: error: {re.escape(str(run / 'world.json'))}: a world.json must be a "
                         r"regular file, not a device or pipe\n", err)
     assert not out.exists()  # refused before any work (old: its scans compared as a log's, the truth dropped)
+
+
+@pytest.mark.parametrize("name, shown", [(None, "None"), ([1, 2], "[1, 2]"), (3, "3")])
+def test_a_world_json_name_that_is_no_string_is_refused(folder, tmp_path, name, shown) -> None:
+    """simulate took str() of it: null became the world "None", a list its text (exit 0)."""
+    import json
+
+    from lms200 import LmsbenchError
+    from sim import World
+
+    d = json.loads((folder / "world.json").read_text())
+    World.from_json(folder / "world.json")  # as written: it reads
+    d["name"] = name
+    (tmp_path / "w.json").write_text(json.dumps(d))
+    with pytest.raises(LmsbenchError) as err:
+        World.from_json(tmp_path / "w.json")
+    assert str(err.value) == (f"{tmp_path / 'w.json'}: not a world.json (name: must be a string (the world's title), "
+                              f"got {shown})")
