@@ -123,10 +123,13 @@ def _truth_in(world: Any, sensor: Any) -> Callable[[Record], Any]:
 
 def is_simulation_folder(path: str | Path) -> bool:
     """A ``lmsbench simulate`` output folder (``options.simulate_log``) with its world.json, whose
-    scans are scored against their truth (without it, its scans.clf is compared as a log)."""
+    scans are scored against their truth (without it, its scans.clf is compared as a log). A
+    world.json that is there but no regular file (a pipe, a link to /dev/zero) makes it one too, to
+    be refused by ``World.from_json`` as slam refuses it: it was compared as a log, its truth
+    dropped without a word, exit 0 (found by fuzzing)."""
     from experiments.options import simulate_log
 
-    return simulate_log(path) is not None and (Path(path) / "world.json").is_file()
+    return simulate_log(path) is not None and (Path(path) / "world.json").exists()
 
 
 def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = None) -> Source:
@@ -148,7 +151,13 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
     settings: dict[str, Any] = {"folder": str(p)}
     sensor = sim.SensorConfig()
     seed = None
-    if (p / "config.yaml").is_file():
+    if (p / "config.yaml").exists():  # a pipe or a device in its place is refused (regular_file), not passed over
+        from lms200.logs import regular_file
+        from lms200.yamlio import size_problem
+
+        too_big = size_problem(regular_file(p / "config.yaml", "simulate config").stat().st_size)
+        if too_big:  # simulate writes 2 KB; 3 GB was read whole (MemoryError), 35 MB parsed for minutes (fuzzing)
+            raise LmsbenchError(f"{p / 'config.yaml'}: {too_big}")
         try:  # the simulate config the folder was made with: its sensor model scores the scans
             cfg = load_yaml((p / "config.yaml").read_text(), words=True) or {}  # simulate's record, an earlier version's too
             if not isinstance(cfg, dict):

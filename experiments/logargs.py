@@ -24,6 +24,19 @@ _GEOMETRY_FLAGS = (("laser_fov_deg", "fov", True), ("laser_resolution_deg", "res
 LOG_HELP = "CARMEN log (plain, .gz, .bz2 or .xz), ROS 1 .bag, ROS 2 bag folder or lmsbench simulate folder"
 
 
+def _float(text: str) -> float:
+    """``float(text)`` of a number as a command line writes it (``options.plain_number``): "1_0" (read as
+    10) and non-ASCII digits ("١٢" read as 12) are a ValueError, "invalid float value", as for any other
+    word that is no number (the four geometry flags took them: `--laser-fov-deg 1_0` read a 10 deg field of
+    view, exit 0; found by fuzzing). nan and inf pass here and are refused by LaserGeometry, naming the flag."""
+    from experiments.options import plain_number
+
+    return plain_number(text)
+
+
+_float.__name__ = "float"  # argparse's message: "invalid float value: '1_0'"
+
+
 def add_log_options(parser: argparse.ArgumentParser) -> None:
     """Add the shared log-reading options to a command's parser."""
     g = parser.add_argument_group("reading logs")
@@ -32,13 +45,13 @@ def add_log_options(parser: argparse.ArgumentParser) -> None:
                                    "default: the first with poses in the log, else the first RAWLASER)")
     g.add_argument("--skip-bad-lines", action="store_true",
                    help="skip malformed log lines / unreadable bag messages (reported on stderr) instead of stopping")
-    g.add_argument("--laser-fov-deg", type=float, metavar="DEG",
+    g.add_argument("--laser-fov-deg", type=_float, metavar="DEG",
                    help="FLASER/RLASER field of view (deg), overriding PARAM lines and the 180 deg convention")
-    g.add_argument("--laser-resolution-deg", type=float, metavar="DEG",
+    g.add_argument("--laser-resolution-deg", type=_float, metavar="DEG",
                    help="FLASER/RLASER angle between beams (deg), overriding PARAM lines and the count convention")
-    g.add_argument("--laser-angle-min-deg", type=float, metavar="DEG",
+    g.add_argument("--laser-angle-min-deg", type=_float, metavar="DEG",
                    help="FLASER/RLASER bearing of the first beam (deg; default: the scan is centred ahead)")
-    g.add_argument("--laser-range-max", type=float, metavar="M", help="largest valid range (m, 0.1 to 10000, above the log's range_min), overriding the log's own "
+    g.add_argument("--laser-range-max", type=_float, metavar="M", help="largest valid range (m, 0.1 to 10000, above the log's range_min), overriding the log's own "
                         "(PARAM lines, ROBOTLASER's field, a bag's LaserScan range_max, else the unit's 8.183 / 81.83 m)")
 
 

@@ -555,9 +555,19 @@ def simulate_log(path: str | os.PathLike) -> Path | None:
 
 
 def not_a_log_folder(path: str | os.PathLike) -> str:
-    """The message of a folder given as a log that is neither kind of folder a log may be."""
-    return (f"{path} is a folder but neither a ROS 2 bag (no metadata.yaml) nor a lmsbench simulate folder "
-            "(no scans.clf)")
+    """The message of a folder given as a log that is neither kind of folder a log may be. A scans.clf
+    that is there but no regular file is named so: it said "(no scans.clf)" of a folder, a pipe, a link to
+    /dev/zero or to nothing in its place (fuzzing)."""
+    log = Path(path) / SIMULATE_LOG
+    if log.is_dir():
+        why = f"its {SIMULATE_LOG} is a folder"
+    elif log.exists():
+        why = f"its {SIMULATE_LOG} is not a regular file but a pipe, a device or a socket"
+    elif log.is_symlink():
+        why = f"its {SIMULATE_LOG} is a link to {os.readlink(log)}, which does not exist (or a loop of links)"
+    else:
+        why = f"no {SIMULATE_LOG}"
+    return f"{path} is a folder but neither a ROS 2 bag (no metadata.yaml) nor a lmsbench simulate folder ({why})"
 
 
 def real_path(path: str | os.PathLike) -> Path:
@@ -682,8 +692,28 @@ DEMO_OUTPUTS = OutTree(("report.md", "report.html"),
                         "sim2real": OutTree(SIM2REAL_OUTPUTS), "sweeps": OutTree(folders={"demo_k_vs_noise": SWEEP_OUTPUTS})})
 
 
+#: Largest record a command reads to tell an earlier run's folder (bytes): YAML (the largest, a sweep's
+#: sweep.yaml of its most cells, is under 2 MB; PyYAML parses about a MiB in 4 s) and JSON (slam's
+#: metrics.json and map.json). A larger file is no record of a run, unread: `simulate --out DIR` read a
+#: 3 GB DIR/config.yaml whole (3.2 GB of memory, over 30 s) to find it was not its own (fuzzing).
+MAX_RECORD_YAML_BYTES = 4 << 20
+MAX_RECORD_JSON_BYTES = 64 << 20
+
+
+def _small_file(path: Path, limit: int) -> bool:
+    """Whether ``path`` is a regular file of at most ``limit`` bytes (a pipe waits for ever)."""
+    try:
+        st = path.stat()
+    except OSError:
+        return False
+    return stat.S_ISREG(st.st_mode) and st.st_size <= limit
+
+
 def _yaml_mapping(path: Path) -> dict | None:
-    """The mapping a YAML file holds, or None (unreadable, not UTF-8, not YAML, not a mapping)."""
+    """The mapping a YAML file holds, or None (unreadable, not UTF-8, not YAML, not a mapping, larger
+    than ``MAX_RECORD_YAML_BYTES``)."""
+    if not _small_file(path, MAX_RECORD_YAML_BYTES):
+        return None
     try:
         raw = load_yaml(path.read_text(encoding="utf-8"), words=True)  # an earlier version's record may hold a plain n
     except Exception:  # noqa: BLE001 - whatever it is, it is not a record of a run
@@ -692,9 +722,11 @@ def _yaml_mapping(path: Path) -> dict | None:
 
 
 def _json_object(path: Path) -> dict | None:
-    """The object a JSON file holds, or None."""
+    """The object a JSON file holds, or None (also for a file larger than ``MAX_RECORD_JSON_BYTES``)."""
     import json
 
+    if not _small_file(path, MAX_RECORD_JSON_BYTES):
+        return None
     try:
         raw = json.loads(path.read_text(encoding="utf-8"))
     except Exception:  # noqa: BLE001

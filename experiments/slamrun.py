@@ -19,7 +19,6 @@ import numpy as np
 
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.finite import fixed, shown
-from lms200.logs import regular_file
 from lms200.records import Record
 from lms200.yamlio import load as load_yaml, dump as dump_yaml
 from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished, not_a_log_folder, simulate_log
@@ -86,9 +85,11 @@ def simulated_interlaced(path: str | Path) -> bool | None:
     folder, or the file does not say). LmsbenchError naming the file for an ``interlaced`` that is
     no true / false (``"no"``, ``0``): it was read as "does not say", so a run simulated without
     interlacing was de-skewed as an interlaced LMS200's, silently (``compare`` refuses the file)."""
+    from lms200.yamlio import size_problem
+
     cfg = Path(path) / "config.yaml"
-    if simulate_log(path) is None or not cfg.is_file():
-        return None
+    if simulate_log(path) is None or not cfg.is_file() or size_problem(cfg.stat().st_size):
+        return None  # beyond a config's size no hint is read: 3 GB took as much memory, 35 MB minutes (fuzzing)
     try:
         raw = load_yaml(cfg.read_text())
     except Exception:  # noqa: BLE001 - a damaged config.yaml only loses this hint
@@ -164,9 +165,9 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
             sources["truth"] = str(p / "groundtruth.tum")
         if (p / "world.json").exists():
             try:
-                text = regular_file(p / "world.json", "world.json").read_text(encoding="utf-8", errors="replace")
-                from sim.world import json_rows, world_json_content
+                from sim.world import json_rows, read_world_json, world_json_content
 
+                text = read_world_json(p / "world.json").decode("utf-8", errors="replace")  # bounded, a regular file
                 try:  # a key given twice or misspelt: as World.from_json refuses it (simulate, compare)
                     content = world_json_content(text)
                 except (TypeError, ValueError) as exc:

@@ -491,6 +491,7 @@ class CarmenReader:
                     _require(len(words) >= 8, "ODOM needs x y theta tv rv accel timestamp")
                     _require(len(words) <= MAX_POSE_WORDS, _too_many_words("ODOM", len(words)))
                     values = _few_floats(words[1:8], "ODOM")
+                    _finite_pose(values[0:3], "ODOM")  # nan or 1e308 m was chained into every scan's odometry
                     values[6] = _stamps(words, values[6], 9)
                     if pairing is not None:  # odometry for the scans of a RAWLASER kind, which carry none
                         yield from pairing.odom(values[6], (values[0], values[1], values[2]))
@@ -840,9 +841,16 @@ def _pose(words: list[str], start: int, what: str) -> Pose2D:
     return _finite_pose(_few_floats(words[start : start + 3], what), what)
 
 
+#: Largest |x|, |y| (m) a pose may hold (``logs.MAX_COORD_M``, the TUM and relations readers' bound too):
+#: a FLASER pose of 1e308 m was read, and `compare --poses corrected` scored its repeatability 0, exit 0.
+MAX_COORD_M = 1e9
+
+
 def _finite_pose(values: list[float], what: str) -> Pose2D:
     x, y, t = values
     _require(math.isfinite(x) and math.isfinite(y) and math.isfinite(t), f"{what} pose is not finite")
+    _require(abs(x) <= MAX_COORD_M and abs(y) <= MAX_COORD_M,
+             f"{what} pose ({x:.6g}, {y:.6g}) m lies beyond +-{MAX_COORD_M:g} m (damaged?)")
     return (x, y, t)
 
 

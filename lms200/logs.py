@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Iterable, Iterator
 
 from .bag import BagError, BagReader, is_bag, write_bag
+from . import carmen
 from .carmen import UTF8_BOM, CarmenReader, write_carmen
 from .errors import InputError, LogFormatError, LogNotFoundError
 from .laser_geometry import LaserGeometry
@@ -224,10 +225,10 @@ MAX_ROW_CHARS = 1 << 20
 """Longest line of a text file of rows (TUM, relations) read (characters, as ``carmen.MAX_LINE_CHARS``):
 a row is 8 numbers, under 200 characters. A file of zeros or of binary data with no line break
 was read as one line, whole: a 3 GB one ended in MemoryError ("internal error", exit 1)."""
-MAX_COORD_M = 1e9
-"""Largest |x|, |y| (m) a TUM or relations row may hold: far beyond any trajectory on Earth (UTM
-northings are below 1e7 m); 1e300 m overflowed the squares of the metrics (RuntimeWarnings on
-stderr and an error of inf, exit 0)."""
+MAX_COORD_M = carmen.MAX_COORD_M
+"""Largest |x|, |y| (m) a TUM or relations row (or a CARMEN line's pose) may hold: far beyond any
+trajectory on Earth (UTM northings are below 1e7 m); 1e300 m overflowed the squares of the metrics
+(RuntimeWarnings on stderr and an error of inf, exit 0)."""
 
 
 def row_lines(path: str | Path, p: Path) -> Iterator[tuple[int, str]]:

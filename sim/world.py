@@ -50,13 +50,33 @@ def _unique_keys(pairs: list[tuple[str, object]]) -> dict[str, object]:
     return out
 
 
+def read_world_json(path: str | Path) -> bytes:
+    """The bytes of the world.json at ``path``, for :meth:`World.from_json` and slam's reader of a
+    simulate folder: LmsbenchError, unread, for a path that is no regular file (a pipe was waited on
+    for ever, /dev/zero read until the memory ran out) or one of more than ``MAX_WORLD_JSON_BYTES``
+    (slam's reader of a simulate folder read a world.json of any size whole: 3 GB took as much
+    memory and more, an internal MemoryError; found by fuzzing)."""
+    from lms200.logs import regular_file
+
+    p = regular_file(path, "world.json")
+    size = p.stat().st_size
+    if size > MAX_WORLD_JSON_BYTES:  # read whole: a 3 GB file took as much memory
+        raise LmsbenchError(f"{path}: {size:,} bytes, more than the {MAX_WORLD_JSON_BYTES:,} a world.json may "
+                            f"hold (refused unread; the mit world's is 0.5 MB)")
+    return p.read_bytes()
+
+
 def world_json_content(text: str) -> dict:
     """The mapping a world.json's text holds, for :meth:`World.from_json` and slam's reader of a
     simulate folder: ValueError / TypeError for text that is no JSON mapping, for a key given twice
     in any object, and for a key that is none of ``WORLD_JSON_KEYS``: a misspelt key
     (``"cylinder"``) or a second ``"cylinders": []`` left the pillars out of the simulation (or the
-    walls out of slam's map score) without a word, exit 0."""
-    d = json.loads(text, object_pairs_hook=_unique_keys)
+    walls out of slam's map score) without a word, exit 0. Text nested too deeply for ``json``
+    (``[[[[...]]]]`` 100,000 deep) is a ValueError too: its RecursionError was slam's internal error."""
+    try:
+        d = json.loads(text, object_pairs_hook=_unique_keys)
+    except RecursionError:
+        raise ValueError("nested too deeply to parse") from None
     if not isinstance(d, dict):
         raise TypeError(f"the top level is a {type(d).__name__}, not a mapping of walls, boxes, ...")
     unknown = sorted(set(d) - set(WORLD_JSON_KEYS))
@@ -265,12 +285,13 @@ class World:
             LmsbenchError: for a file that is not a world description, or a walls-only file whose
                 rebuilt boxes do not give back its walls as faces.
         """
-        size = Path(path).stat().st_size if data is None else len(data)
-        if size > MAX_WORLD_JSON_BYTES:  # read whole: a 3 GB file took as much memory
-            raise LmsbenchError(f"{path}: {size:,} bytes, more than the {MAX_WORLD_JSON_BYTES:,} a world.json may "
-                                f"hold (refused unread; the mit world's is 0.5 MB)")
+        if data is None:
+            data = read_world_json(path)
+        elif len(data) > MAX_WORLD_JSON_BYTES:  # read whole: a 3 GB file took as much memory
+            raise LmsbenchError(f"{path}: {len(data):,} bytes, more than the {MAX_WORLD_JSON_BYTES:,} a world.json "
+                                f"may hold (refused unread; the mit world's is 0.5 MB)")
         try:
-            d = world_json_content((Path(path).read_bytes() if data is None else data).decode("ascii"))
+            d = world_json_content(data.decode("ascii"))
             walls = json_rows(d.get("walls", []), "walls", "wall", 4, "x1, y1, x2, y2 (m)")
             circles = json_rows(d.get("circles", []), "circles", "circle", 3, "cx, cy, r (m)")
             for name, a in (("walls", walls), ("circles", circles)):  # before the walls-only rebuild, which
@@ -281,8 +302,6 @@ class World:
                 _check_sizes(len(walls) + len(circles), "walls and circles", len(route))
         except WorldSizeError as exc:
             raise LmsbenchError(f"{path}: {exc}") from None
-        except RecursionError:  # [[[[...]]]] 100,000 deep: json's RecursionError was an internal error
-            raise LmsbenchError(f"{path}: not a world.json (nested too deeply to parse)") from None
         except (ValueError, TypeError, UnicodeDecodeError) as exc:
             raise LmsbenchError(f"{path}: not a world.json ({exc})") from None
         try:

@@ -96,6 +96,8 @@ def _whole_parquet(path: Path) -> bool:
     footer alone (a cut file has none; the row itself is read by :meth:`CellStore.read`)."""
     import pyarrow.parquet as pq
 
+    if not path.is_file():  # a pipe in cells/ was waited on for ever (`lmsbench sweep` resuming hung; fuzzing)
+        return False
     try:
         meta = pq.read_metadata(path)
     except Exception:  # noqa: BLE001 - pyarrow's ArrowInvalid, OSError: damaged
@@ -105,7 +107,9 @@ def _whole_parquet(path: Path) -> bool:
 
 def _cell_row(path: Path, columns: list[str] | None = None) -> pd.DataFrame | None:
     """A cell file's row (``columns`` of it), or None where there is no file or it does not read
-    as one row with a ``status`` and a ``cell`` column (a damaged file)."""
+    as one row with a ``status`` and a ``cell`` column (a damaged file, or no regular file: a pipe waits)."""
+    if not path.is_file():
+        return None
     try:
         table = pd.read_parquet(path, columns=columns if columns is None else [*columns, "cell"])
     except FileNotFoundError:

@@ -1,0 +1,51 @@
+"""Poses no log holds, which the CARMEN reader took (a fuzzing round): a FLASER line's poses of 1e308 m
+(`compare --poses corrected` scored such a log's repeatability 0, exit 0) and an ODOM line of nan
+(chained into the scans' odometry). Each is a malformed line, as the TUM and relations readers refuse
+x or y beyond 1e9 m (lms200.logs.MAX_COORD_M)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from lms200 import LogFormatError, read_log
+
+
+def _flaser(t: float, pose: str = "0 0 0", odom: str = "0 0 0") -> str:
+    return f"FLASER 3 1 2 3 {pose} {odom} {t} h {t}\n"
+
+
+@pytest.mark.parametrize("lines, message", [
+    ([_flaser(1.0), _flaser(2.0, pose="1e308 0 0")],
+     "2: malformed FLASER line: FLASER laser pose (1e+308, 0) m lies beyond +-1e+09 m (damaged?)"),
+    ([_flaser(1.0, odom="0 -2e9 0")],
+     "1: malformed FLASER line: FLASER odometry pose (0, -2e+09) m lies beyond +-1e+09 m (damaged?)"),
+    (["ODOM nan 0 0 0 0 0 1.0 h 1.0\n", _flaser(2.0)], "1: malformed ODOM line: ODOM pose is not finite"),
+    (["TRUEPOS 0 1e10 0 0 0 0 1.0 h 1.0\n", _flaser(1.0)],
+     "1: malformed TRUEPOS line: TRUEPOS pose (0, 1e+10) m lies beyond +-1e+09 m (damaged?)"),
+])
+def test_a_carmen_pose_beyond_1e9_m_or_not_finite_is_a_malformed_line(tmp_path: Path, lines, message) -> None:
+    log = tmp_path / "a.log"
+    log.write_text("".join(lines))
+    with pytest.raises(LogFormatError) as err:  # old: read, 1e308 m and nan as poses
+        list(read_log(log))
+    assert str(err.value).startswith(f"{log}:{message}")
+    assert len(list(read_log(log, skip_bad_lines=True))) == sum(line.startswith("FLASER") for line in lines) - (
+        "FLASER" in message)
+    ok = tmp_path / "ok.log"
+    ok.write_text(_flaser(1.0, odom="1e9 -1e9 0"))
+    assert [r.odom for r in read_log(ok)] == [(1e9, -1e9, 0.0)]  # the bound itself is a pose
+
+
+def test_compare_refuses_a_log_of_a_pose_at_1e308_m(tmp_path: Path, capsys) -> None:
+    from experiments.cli import main
+
+    log = tmp_path / "far.log"
+    log.write_text("".join(_flaser(float(k), pose=f"{1e308 if k == 3 else 0} 0 0") for k in range(1, 6)))
+    assert main(["compare", str(log), "--poses", "corrected", "--methods", "sensor", "--sigma", "0.01",
+                 "--out", str(tmp_path / "o"),
+                 "--no-progress"]) == 2  # old: 0, repeatability 0
+    assert capsys.readouterr().err == (f"lmsbench compare: error: {log}:3: malformed FLASER line: FLASER laser pose "
+                                       "(1e+308, 0) m lies beyond +-1e+09 m (damaged?) (--skip-bad-lines skips "
+                                       "malformed lines, each reported)\n")

@@ -1,0 +1,35 @@
+"""A pipe in a sweep's cells/ (a fuzzing round): resuming the sweep opened it to read its footer and
+waited for ever (`lmsbench sweep` hung). It is no finished cell: computed again, with the one warning
+a damaged cell file gets, its file replaced."""
+
+from __future__ import annotations
+
+import os
+import threading
+import warnings
+from pathlib import Path
+
+from experiments.sweep.store import CellStore
+
+
+def test_a_pipe_among_the_cell_files_is_a_damaged_cell_not_a_hang(tmp_path: Path) -> None:
+    store = CellStore(tmp_path)
+    store.write("aaaa", {"cell": "aaaa", "status": "ok", "x": 1.0})
+    os.mkfifo(store.path("bbbb"))
+    found: list = []
+
+    def look() -> None:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            found.append((store.done(), store.status("bbbb"), [str(w.message) for w in caught]))
+
+    worker = threading.Thread(target=look, daemon=True)
+    worker.start()
+    worker.join(10)
+    assert not worker.is_alive()  # old: blocked opening the pipe
+    done, status, said = found[0]
+    assert done == {"aaaa"} and status is None
+    assert said == [f"{store.cells}: 1 cell file cannot be read as a finished cell (damaged: bbbb.parquet); "
+                    "computed again"]
+    store.write("bbbb", {"cell": "bbbb", "status": "ok", "x": 2.0})  # the pipe replaced by the cell's file
+    assert store.done() == {"aaaa", "bbbb"}
