@@ -382,7 +382,8 @@ class ConsistencyConfig:
             of them, each new keyframe's std along that axis, its factor's (the match's own
             covariance, times ``keyframes.correlation_length``'s scale when on), at most the
             predictions' stds summed since the previous keyframe (what holds the pose along an axis
-            the scan does not fix), summed as if every error had the same sign, since along such an
+            the scan does not fix; a scan between keyframes counts what a keyframe there would
+            reach, so a stretch that makes no keyframe counts too), summed as if every error had the same sign, since along such an
             axis the matching objective itself is biased). ``degenerate_points`` in [1, 8192] (0
             marked no step degenerate); ``max_degenerate_drift`` in [0.001, 1e6] m, and 1e6, its
             largest, turns the check off. Fixed before they were measured: 10 points' worth is where the

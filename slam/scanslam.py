@@ -82,7 +82,10 @@ def degenerate_drift(infos: list[ScanStep], points: float) -> tuple[float, int |
     what holds it there (a free axis's match std is 1/sqrt(1e-9) = 31,623 m, ``Match.covariance``'s
     regularisation, not a distance). Summed, not in quadrature: along such an axis the matching
     objective itself is biased (the ICP started at the true pose slides 0.1-0.2 m, docs/slam.md),
-    so the steps' errors need not cancel."""
+    so the steps' errors need not cancel. A degenerate scan between keyframes counts what a
+    keyframe there would have added (its pose is held to the last keyframe by its own match the
+    same way), without adding it to the stretch: so a stretch that makes no keyframe, where the
+    estimate stands still along a corridor while the robot drives on, is counted too."""
     best, at, cur, held = 0.0, None, 0.0, 0.0
     for k, i in enumerate(infos):
         if np.isfinite(i.prediction_sigma):
@@ -94,11 +97,13 @@ def degenerate_drift(infos: list[ScanStep], points: float) -> tuple[float, int |
         if not i.weak < points:
             cur = held = 0.0  # the match holds every direction: the stretch, and what the predictions held, start again
             continue
+        if np.isfinite(i.weak_sigma):
+            reached = cur + min(i.weak_sigma * float(np.sqrt(i.factor_scale)), held)
+            if reached > best:
+                best, at = reached, k
+            if i.new_keyframe:
+                cur = reached
         if i.new_keyframe:
-            if np.isfinite(i.weak_sigma):
-                cur += min(i.weak_sigma * float(np.sqrt(i.factor_scale)), held)
-                if cur > best:
-                    best, at = cur, k
             held = 0.0
     return best, at
 

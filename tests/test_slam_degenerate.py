@@ -52,8 +52,9 @@ def _step(matched: bool = True, weak: float = 50.0, sigma: float = 0.1, keyframe
 
 def test_degenerate_drift_sums_the_keyframes_of_one_stretch():
     """Each degenerate keyframe adds its std along the weak axis; a matched step that is not
-    degenerate ends the stretch; an unmatched step neither adds nor ends it; scans between
-    keyframes add nothing (they match the same local map)."""
+    degenerate ends the stretch; an unmatched step neither adds nor ends it; a scan between
+    keyframes adds nothing to the stretch (it matches the same local map) but counts what a
+    keyframe there would reach."""
     from slam.scanslam import degenerate_drift
 
     steps = [_step(weak=3.0, sigma=0.2), _step(weak=3.0, sigma=0.2, keyframe=False), _step(weak=3.0, sigma=0.2),
@@ -63,19 +64,20 @@ def test_degenerate_drift_sums_the_keyframes_of_one_stretch():
     drift, at = degenerate_drift(steps, 10.0)
     assert drift == pytest.approx(0.65) and at == 7
     assert degenerate_drift(steps, 2.0) == (pytest.approx(0.25), 6)
+    assert degenerate_drift(steps[:3], 10.0) == (pytest.approx(0.4), 1)  # 0.6 at 2 if scan 1 were added
     assert degenerate_drift([_step(), _step(weak=float("nan"))], 10.0) == (0.0, None)
 
 
 def test_the_warning_names_the_degenerate_stretch():
-    """The stamp is the keyframe where the stretch's sum peaked (it said "ending at", then "reaching it at", which named no antecedent)."""
+    """The stamp is the scan where the stretch's sum peaked (it said "ending at", then "reaching it at", which named no antecedent)."""
     from experiments.commands.slam import _health_warning
 
     m = {"n_scans": 600, "consistency": {"diverged": False, "healthy": False, "degenerate_drift": 1.1879,
                                          "degenerate_drift_at": 61.2}}
     assert _health_warning(m, SlamConfig()) == (
         "the run is not healthy: a stretch of degenerate matches (the weakest direction held by fewer than 10 "
-        "points' worth, as along a corridor) may have drifted 1.19 m along its weak axis by t=61.2 (its keyframes' "
-        "std there, each at most its predictions', summed; consistency.max_degenerate_drift 0.3 m) (metrics.json: "
+        "points' worth, as along a corridor) may have drifted 1.19 m along its weak axis by t=61.2 (the stds along "
+        "it of its keyframes and of that scan, each at most its predictions', summed; consistency.max_degenerate_drift 0.3 m) (metrics.json: "
         "consistency.healthy false)")
 
 
@@ -149,8 +151,24 @@ def test_a_free_axis_counts_what_the_prediction_held():
                                         "degenerate_drift_at": d["degenerate_drift_at"]}}
     assert "may have drifted 3.28 m along it" in _health_warning(m, config)
     d = run_slam(_bare_corridor(True), SlamConfig(motion={"use_odometry": True})).diagnostics
-    assert d["n_keyframes"] == 17 and d["degenerate_drift_at"] == records[56].scan.stamp  # the last keyframe
-    assert d["degenerate_drift"] == pytest.approx(56 * (0.1 * 0.1 + 0.01))  # the odometry's 56 steps up to it
+    # the odometry's 56 steps up to the last keyframe, and the 3 scans after it held to it by their matches
+    assert d["n_keyframes"] == 17 and d["degenerate_drift_at"] == records[59].scan.stamp
+    assert d["degenerate_drift"] == pytest.approx(59 * (0.1 * 0.1 + 0.01))
+
+
+def test_a_stretch_that_makes_no_keyframe_is_counted():
+    """With the default keyframe rules the estimate stood still from the first scan (the truth drove
+    5.9 m along the bare corridor), so no keyframe followed the first one and the check, which summed
+    keyframes only, read a drift of 0 and the run healthy. A scan between keyframes now counts what a
+    keyframe there would add: the 59 predictions' stds the last scan's match stands on."""
+    records = _bare_corridor(False)
+    result = run_slam(records, SlamConfig())
+    d = result.diagnostics
+    assert d["n_keyframes"] == 1 and d["degenerate_fraction"] == 1.0
+    assert np.abs(result.trajectory[:, 1]).max() < 1e-9
+    dt = records[1].scan.stamp - records[0].scan.stamp
+    assert d["degenerate_drift"] == pytest.approx(59 * (dt**2 + 0.01), rel=1e-6)
+    assert d["degenerate_drift_at"] == records[59].scan.stamp and not d["healthy"]
 
 
 def test_a_keyframe_counts_at_most_the_predictions_since_the_previous_one():
@@ -167,7 +185,7 @@ def test_a_keyframe_counts_at_most_the_predictions_since_the_previous_one():
     assert degenerate_drift(steps, 10.0) == (pytest.approx(0.22), 4)
     held = [_step(weak=0.0, sigma=free, keyframe=False, predicted=0.05), _step(keyframe=False, predicted=0.05),
             _step(weak=0.0, sigma=free, predicted=0.05)]  # the matched step in between held every direction
-    assert degenerate_drift(held, 10.0) == (pytest.approx(0.05), 2)
+    assert degenerate_drift(held, 10.0) == (pytest.approx(0.05), 0)  # reached at the first scan, not first at the keyframe
 
 
 def test_degenerate_drift_uses_the_keyframe_factors_scaled_std(monkeypatch):

@@ -429,11 +429,11 @@ def _unhealthy_reasons(m: dict[str, Any], config: "SlamConfig") -> list[str]:
                    f"along a corridor; consistency.max_odometry_doubt {cc.max_odometry_doubt:g})")
     drift = c.get("degenerate_drift")
     if drift is not None and cc.degenerate_stretch_flagged(drift):
-        # the stamp is the keyframe where the stretch's sum peaked, not where the stretch ended
+        # the stamp is the scan where the stretch's sum peaked, not where the stretch ended
         out.append(f"a stretch of degenerate matches (the weakest direction held by fewer than "
                    f"{cc.degenerate_points:g} points' worth, as along a corridor) may have drifted {drift:.2f} m along "
-                   f"its weak axis by t={c['degenerate_drift_at']} (its keyframes' std there, "
-                   f"each at most its predictions', summed; "
+                   f"its weak axis by t={c['degenerate_drift_at']} (the stds along it of its keyframes and of that "
+                   f"scan, each at most its predictions', summed; "
                    f"consistency.max_degenerate_drift {cc.max_degenerate_drift:g} m)")
     if config.preset == "paper" and not c["healthy"]:
         out.append("the filter's state is not finite or its covariance is not positive definite")
