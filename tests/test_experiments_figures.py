@@ -312,8 +312,8 @@ def test_a_random_choice_of_booleans_is_drawn_as_two_categories(tmp_path, monkey
 
 
 def test_segments_drawn_as_one_collection_look_as_one_line_each():
-    """Fig. 9's lines and Fig. 10's walls and map lines were one Line2D a segment (Fig. 10: 2.4 s, 2.2
-    of them the legend's "best" testing every wall); ``draw.add_segments`` draws them as one
+    """Fig. 9's lines and Fig. 10's walls and map lines were one Line2D a segment (Fig. 10 of a 40 s run:
+    2.8-4.0 s, 1.1-1.2 s now; its legends' "best" testing every wall was 40 % of it in a profile); ``draw.add_segments`` draws them as one
     LineCollection with the same pixels: caps, widths, colours and order as ``ax.plot``."""
     from experiments.style import new_figure
 

@@ -21,8 +21,8 @@ from experiments.style import (CORNER_COLOR, LINE_COLOR, SCAN_COLOR, SHOWN_IN_DE
 def add_segments(ax, table: pd.DataFrame, lw: float, color: str, label: str | None = None) -> None:
     """Draw the segments of ``table`` (x1, y1, x2, y2) as ``ax.plot`` draws each ("-", projecting
     caps, z-order 2, the axes' limits taken in), but as one LineCollection instead of a Line2D a
-    segment: drawing, layout and legend placement paid per artist (Fig. 10 took 2.4 s, 2.2 of them
-    "best" testing every wall). ``label``: one legend entry, a line of that width and colour (an
+    segment: drawing, layout and legend placement paid per artist (Fig. 10 of a 40 s run took
+    2.8-4.0 s, 1.1-1.2 s now; its legends' "best", testing every wall, was 40 % of it in a profile). ``label``: one legend entry, a line of that width and colour (an
     empty Line2D, as before: a collection's own handle has butt caps). Nothing where ``table`` is empty."""
     if not len(table):
         return
