@@ -309,3 +309,66 @@ def test_a_random_choice_of_booleans_is_drawn_as_two_categories(tmp_path, monkey
     fig = axes_seen[0].figure
     fig.canvas.draw()
     assert [t.get_text() for t in axes_seen[0].get_xticklabels()] == ["True", "False"]
+
+
+def test_segments_drawn_as_one_collection_look_as_one_line_each():
+    """Fig. 9's lines and Fig. 10's walls and map lines were one Line2D a segment (Fig. 10 of a 40 s run:
+    2.8-4.0 s, 1.1-1.2 s now; its legends' "best" testing every wall was 40 % of it in a profile); ``draw.add_segments`` draws them as one
+    LineCollection with the same pixels: caps, widths, colours and order as ``ax.plot``."""
+    from experiments.style import new_figure
+
+    table = pd.DataFrame({"x1": [0.0, 0.0, 1.0, 0.2], "y1": [0.0, 0.0, 0.0, 0.9],
+                          "x2": [2.0, 0.0, 1.7, 1.9], "y2": [0.0, 1.5, 1.2, 0.3]})
+    pixels = []
+    for one_artist in (False, True):
+        fig, ax = new_figure(width=3.0, height=2.5)
+        ax.plot([0.5, 1.5], [-0.2, 1.4], "-", lw=1.4, color="k")  # drawn below the segments, as before
+        if one_artist:
+            draw.add_segments(ax, table, 3.0, "#d0d0d0", label="true walls")
+            assert len(ax.collections) == 1 and len(ax.lines) == 2  # the line above and the empty legend proxy
+        else:
+            for i, row in enumerate(table.itertuples()):
+                ax.plot([row.x1, row.x2], [row.y1, row.y2], "-", lw=3.0, color="#d0d0d0",
+                        label="true walls" if i == 0 else None)
+        ax.plot([0.1, 1.8], [1.4, 0.1], "--", lw=1.4, color="#1f77b4")  # and this one above them
+        ax.legend(loc="upper right")
+        fig.canvas.draw()
+        pixels.append(np.asarray(fig.canvas.buffer_rgba()).copy())
+        draw.plt.close(fig)
+    assert pixels[0].shape == pixels[1].shape
+    assert np.count_nonzero((pixels[0] != pixels[1]).any(axis=-1)) == 0
+
+
+def test_fig_slam_draws_each_map_as_one_collection_with_one_legend_below(tmp_path, monkeypatch):
+    """Each panel's walls and map lines are one LineCollection each; the legend is one, below the
+    panels (a map fills its panel: "best" inside it covered walls), each entry once, start last."""
+    captured = []
+    save = draw.save_figure
+
+    def keep(fig, *args, **kwargs):
+        captured.append(([[(c.get_segments(), c.get_linewidths()[0]) for c in ax.collections] for ax in fig.axes],
+                         [ax.get_legend() for ax in fig.axes],
+                         [[t.get_text() for t in legend.get_texts()] for legend in fig.legends]))
+        return save(fig, *args, **kwargs)
+
+    monkeypatch.setattr(draw, "save_figure", keep)
+    walls = pd.DataFrame({"source": "truth", "x1": [0.0, 4.0, 0.0], "y1": [0.0, 0.0, 3.0],
+                          "x2": [4.0, 4.0, 4.0], "y2": [0.0, 3.0, 3.0]})
+    slam_lines = pd.DataFrame({"source": ["slam", "slam", "paper preset"], "x1": [0.1, 3.9, 0.2],
+                               "y1": [0.0, 0.1, 2.9], "x2": [3.8, 3.9, 3.7], "y2": [0.1, 2.8, 3.0]})
+    t = np.linspace(0, 1, 5)
+    trajectory = pd.concat([pd.DataFrame({"source": s, "t": t, "x": 1 + t, "y": 1 + d * t, "theta": 0.0})
+                            for s, d in (("truth", 0.0), ("slam", 0.01), ("paper preset", 0.05))])
+    paths = draw.fig_slam(trajectory, pd.concat([walls, slam_lines]), tmp_path / "fig10_slam", "t")
+    assert sorted(p.name for p in paths) == ["fig10_slam.pdf", "fig10_slam.png", "fig10_slam_map.csv",
+                                             "fig10_slam_trajectory.csv"]
+    ((collections, axes_legends, legends),) = captured
+    wall_segments = walls[["x1", "y1", "x2", "y2"]].to_numpy().reshape(-1, 2, 2)
+    for panel, mine in zip(collections, (slam_lines.iloc[[2]], slam_lines.iloc[:2])):  # paper preset, then slam
+        (drawn_walls, wall_width), (drawn_lines, line_width) = panel
+        np.testing.assert_array_equal(np.array(drawn_walls), wall_segments)
+        np.testing.assert_array_equal(np.array(drawn_lines), mine[["x1", "y1", "x2", "y2"]].to_numpy().reshape(-1, 2, 2))
+        assert (wall_width, line_width) == (3.0, 1.2)
+    assert axes_legends == [None, None]
+    assert legends == [["true walls", "SLAM map lines", "true trajectory", "paper preset trajectory",
+                        "slam trajectory", "start"]]
