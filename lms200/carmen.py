@@ -1085,8 +1085,9 @@ def write_carmen(
     Raises:
         InputError: an unknown ``fmt``, a ``hostname`` that is not one word of printable ASCII, scans of mixed units, or a scan whose range_max lies outside
             [MIN_RANGE_MAX_M, MAX_RANGE_M] (0.1 to 10000 m), an angle_increment under MIN_RESOLUTION_RAD
-            (1e-5 rad) or a stamp outside 0 .. ``records.MAX_STAMP_S`` (2^32 s), which the reader refuses
-            (such a log was written, and could not be read back).
+            (1e-5 rad), a stamp outside 0 .. ``records.MAX_STAMP_S`` (2^32 s) or an odometry or truth pose
+            beyond +-``MAX_COORD_M`` (1e9 m), which the reader refuses (such a log was written, and could not
+            be read back).
     """
     if fmt not in ("robotlaser1", "flaser"):
         raise InputError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
@@ -1121,6 +1122,11 @@ def write_carmen(
                 if problem is not None:
                     raise InputError(f"records: item {count}: {problem}; the CARMEN reader refuses it (the log could "
                                      "not be read back)")
+                for which, pose in (("odom", rec.odom), ("truth", rec.truth)):
+                    if pose is not None and max(abs(pose[0]), abs(pose[1])) > MAX_COORD_M:
+                        raise InputError(f"records: item {count}: {which} pose ({pose[0]:.6g}, {pose[1]:.6g}) m lies "
+                                         f"beyond +-{MAX_COORD_M:g} m, which the CARMEN reader refuses (the log could "
+                                         "not be read back)")
                 u = _units_of(scan)
                 if units is None:
                     units = u

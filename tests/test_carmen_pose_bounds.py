@@ -49,3 +49,23 @@ def test_compare_refuses_a_log_of_a_pose_at_1e308_m(tmp_path: Path, capsys) -> N
     assert capsys.readouterr().err == (f"lmsbench compare: error: {log}:3: malformed FLASER line: FLASER laser pose "
                                        "(1e+308, 0) m lies beyond +-1e+09 m (damaged?) (--skip-bad-lines skips "
                                        "malformed lines, each reported)\n")
+
+
+@pytest.mark.parametrize("which", ["odom", "truth"])
+def test_write_carmen_refuses_a_pose_its_reader_refuses(tmp_path: Path, which: str) -> None:
+    """write_carmen wrote an odometry or truth pose of 2e9 m, which read_log then refused as a malformed
+    line: the log could not be read back (it already refuses such stamps, ranges and steps)."""
+    from lms200 import InputError, Record, Scan
+    from lms200.carmen import write_carmen
+
+    scan = Scan.lms200([1.0] * 361, stamp=1.0)
+    far = (2e9, 0.0, 0.0)
+    records = [Record(scan, odom=(0.0, 0.0, 0.0), truth=(0.0, 0.0, 0.0)),
+               Record(scan.replace(stamp=2.0), **{"odom": (0.0, 0.0, 0.0), "truth": (0.0, 0.0, 0.0), which: far})]
+    with pytest.raises(InputError) as err:
+        write_carmen(tmp_path / "a.log", records)
+    assert str(err.value) == (f"records: item 1: {which} pose (2e+09, 0) m lies beyond +-1e+09 m, which the CARMEN "
+                              "reader refuses (the log could not be read back)")
+    edge = [Record(scan, odom=(1e9, -1e9, 0.0), truth=(-1e9, 1e9, 0.0))]
+    assert write_carmen(tmp_path / "b.log", edge) == 1
+    assert [(r.odom, r.truth) for r in read_log(tmp_path / "b.log")] == [((1e9, -1e9, 0.0), (-1e9, 1e9, 0.0))]
