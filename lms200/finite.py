@@ -60,12 +60,28 @@ def overflow_text(value: object) -> str:
     return f"{'an' if name[:1].lower() in 'aeiou' else 'a'} {name} beyond float64's range"
 
 
+#: the largest seed anything takes (64 bits): a world.json's seed must be one the simulator wrote,
+#: and a seed of 400 digits was kept and written again (the command line's --seed stays 32 bits)
+MAX_SEED = 2**64 - 1
+
+
 def check_seed(seed: object) -> None:
-    """A seed is a whole number >= 0 (numpy's Generators take no other); InputError naming it.
-    The simulator's, and the bootstrap's of ``lms200.noise`` and ``lms200.calibration`` (there a
-    text or float seed was numpy's TypeError, -1 its ValueError: found by fuzzing)."""
+    """A seed is a whole number in [0, ``MAX_SEED``] (numpy's Generators take no other sign or
+    kind); InputError naming it. The simulator's, and the bootstrap's of ``lms200.noise`` and
+    ``lms200.calibration`` (there a text or float seed was numpy's TypeError, -1 its ValueError:
+    found by fuzzing)."""
+    problem = seed_problem(seed)
+    if problem is not None:
+        raise InputError(f"seed: {problem}")
+
+
+def seed_problem(seed: object) -> str | None:
+    """Why ``seed`` is no seed (``check_seed``'s rule), or None."""
     if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputError(f"seed: must be a whole number >= 0, got {seed!r}")
+        return f"must be a whole number >= 0, got {shown(seed)}"
+    if seed > MAX_SEED:
+        return f"must be a whole number >= 0 and at most 2^64 - 1 (64 bits), got {shown(seed)}"
+    return None
 
 
 def is_number(value: object) -> bool:

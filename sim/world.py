@@ -16,7 +16,7 @@ import numpy as np
 from lms200 import LmsbenchError
 from lms200.codes import real_rows
 from lms200.errors import InputError
-from lms200.finite import check_seed, is_number, shown
+from lms200.finite import check_seed, is_number, seed_problem, shown
 
 from .geometry import distance_to_segments, face_corners, rectangle_corners, union_faces
 from .walls_only import box_thickness, orient_walls, unreproduced
@@ -91,10 +91,6 @@ def world_json_content(text: str) -> dict:
     return d
 
 
-#: the largest seed a world.json gives (as ``lmsbench simulate --seed`` and a sweep's seeds: worlds take 32 bits)
-MAX_WORLD_SEED = 2**32 - 1
-
-
 def _check_plain_fields(d: dict) -> None:
     """ValueError naming the field (and the row) for a world.json's ``name``, ``seed`` or ``corners``
     of the wrong kind: they were taken unread or as anything. A ``seed`` of 400 digits was kept and
@@ -105,10 +101,9 @@ def _check_plain_fields(d: dict) -> None:
     if "name" in d and not isinstance(d["name"], str):
         raise ValueError(f"name: must be text (the world's name), got {shown(d['name'])}")
     if "seed" in d:
-        seed = d["seed"]
-        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_WORLD_SEED:
-            raise ValueError(f"seed: must be a whole number in [0, {MAX_WORLD_SEED}] (a world's seed, as simulate "
-                             f"--seed takes), got {shown(seed)}")
+        problem = seed_problem(d["seed"])  # the simulator's own rule: a world it made and wrote reads back
+        if problem is not None:
+            raise ValueError(f"seed: {problem}")
     corners = d.get("corners", [])
     must = ("a corner must be a list of x, y (m), angle_rad (finite numbers) and convex (true or false), "
             "as World.to_json writes it")
