@@ -91,6 +91,12 @@ def extractor_overrides(flat: Mapping[str, Any], methods: Sequence[str], *,
             if method not in fields:
                 known = methods if method in available_methods() else available_methods()
                 raise OverrideError(f"{key}: {method!r} is not an extractor of this run; known: {', '.join(known)}")
+            outer, _, inner = field.partition(".")
+            if inner and outer == "corners" and outer in fields[method]:  # METHOD.corners.FIELD: the corner step's own
+                corners = out[method].setdefault("corners", {})
+                if isinstance(corners, dict):
+                    corners[inner] = value
+                    continue
             if field not in fields[method]:
                 raise OverrideError(f"{key}: {method} has no field {field!r}; its fields: {', '.join(fields[method])}")
             out[method][field] = value

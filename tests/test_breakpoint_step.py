@@ -152,3 +152,28 @@ def test_sim2real_refuses_it_before_any_simulation(tmp_path: Path, monkeypatch: 
     with pytest.raises(ConfigError) as info:
         sim2real(log, world="office", seeds=[1], duration=1.0, stride=1, sensor=sim.SensorConfig(interlaced=False))
     assert str(info.value) == _message("split_merge", 12.0, 10.0, 90.0, f"{log}: scan 0")
+
+
+def test_the_corners_breakpoint_lambda_is_set_from_the_command_line(tmp_path, capsys):
+    """After the corners' own breakpoint_lambda was checked against the beam step, nothing on the command
+    line could set it (`--set extractor.split_merge.corners.breakpoint_lambda=...` "has no field",
+    `corners={...}` "must be a CornerConfig"): a baseline on a 12-degree log was refused whatever was set
+    (a review). Both spellings set it now; a field the corner step does not have is named."""
+    from experiments.cli import main
+    from lms200 import Record, Scan
+    from lms200.carmen import write_carmen
+
+    step = np.deg2rad(12.0)
+    scans = [Scan(np.full(16, 3.0), -np.deg2rad(90.0), step, 0.0, 30.0, float(k)) for k in range(3)]
+    log = tmp_path / "coarse.clf"
+    write_carmen(log, [Record(s) for s in scans])
+    base = ["compare", str(log), "--methods", "split_merge", "--sigma", "0.01", "--no-progress",
+            "--set", "extractor.split_merge.breakpoint_lambda=0.5"]
+    assert main(base + ["--out", str(tmp_path / "a")]) == 2
+    assert "corners.breakpoint_lambda 10 deg" in capsys.readouterr().err
+    assert main(base + ["--set", "extractor.split_merge.corners.breakpoint_lambda=0.5", "--out", str(tmp_path / "b")]) == 0
+    capsys.readouterr()
+    assert main(base + ["--set", "extractor.split_merge.corners={breakpoint_lambda: 0.5}", "--out", str(tmp_path / "c")]) == 0
+    capsys.readouterr()
+    assert main(base + ["--set", "extractor.split_merge.corners.bogus=1", "--out", str(tmp_path / "d")]) == 2
+    assert capsys.readouterr().err.startswith("lmsbench compare: error: corners: has no field 'bogus' (its fields: ")

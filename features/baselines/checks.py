@@ -4,6 +4,9 @@ instead of deep inside an extractor (a ZeroDivisionError, a numpy shape error)."
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Mapping
+
 import math
 
 import numpy as np
@@ -161,5 +164,11 @@ def shared_fields(cfg: object) -> None:
     sigmas("runs_z", cfg.runs_z)  # 1e-300 (0.5) dropped straight walls: office line F1 0.77 (0.85), exit 0
     from .common import CornerConfig  # noqa: PLC0415 (common imports this module)
 
+    if isinstance(cfg.corners, Mapping):  # from a YAML config or --set METHOD.corners.FIELD=V: the corner step's fields
+        known = [f.name for f in dataclasses.fields(CornerConfig)]
+        unknown = [k for k in cfg.corners if k not in known]
+        if unknown:
+            fail("corners", f"has no field {unknown[0]!r} (its fields: {', '.join(known)})", dict(cfg.corners))
+        object.__setattr__(cfg, "corners", CornerConfig(**cfg.corners))
     if not isinstance(cfg.corners, CornerConfig):
-        fail("corners", "must be a CornerConfig", cfg.corners)
+        fail("corners", "must be a CornerConfig (or a mapping of its fields)", cfg.corners)
