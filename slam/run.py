@@ -305,7 +305,9 @@ def check_first_scan(scan: Any, config: SlamConfig, where: str = "records[0]") -
       keeps as many points as 3 on an LMS200), so a 361-beam scan's limit is checked here;
     - ``observations.min_line_points`` is more than its beams (bounded alike, by 16,384): no line of
       the scan can have that many points, so none was observed (the paper preset ran on odometry
-      alone, the default preset's map held no line), silently;
+      alone, the default preset's map held no line), silently; as for the stride, a scan of fewer
+      than ``MIN_MATCH_POINTS`` beams is left to its "not healthy" warning (the default 8 refused a
+      7-beam log the user had set nothing for);
     - a baseline extractor's ``breakpoint_lambda`` (or its corners') is not below its beam step
       (``features.registry.check_step``, compare's message, naming ``where``)."""
     beams = int(np.size(scan.ranges))
@@ -318,7 +320,7 @@ def check_first_scan(scan: Any, config: SlamConfig, where: str = "records[0]") -
                                  f"{beams:,} beams, fewer than the {need} points the scan matcher needs; "
                                  f"at most {largest:,} for these scans")
     least = config.observations.min_line_points
-    if least > beams:
+    if least > beams and beams >= MIN_MATCH_POINTS:  # a scan shorter than that runs to its "not healthy" warning
         found = "the map would hold no line" if config.preset == "default" else "the filter would observe no line"
         raise SlamInputError(f"observations.min_line_points: {least:,} is more than the first scan's {beams:,} beams: "
                              f"no line of these scans has that many points, so {found}; at most {beams:,} for these "
