@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pytest
 
+from lms200 import LmsbenchError
+
 from sim_folder import write_sim_folder
 
 
@@ -71,8 +73,13 @@ def test_slams_deskew_hint_reads_no_config_beyond_a_configs_size(folder, tmp_pat
     read: list[Path] = []
     real = Path.read_text
     monkeypatch.setattr(Path, "read_text", lambda self, *a, **k: read.append(self) or real(self, *a, **k))
-    assert simulated_interlaced(run) is None
+    with pytest.raises(LmsbenchError, match=r"config\.yaml: 1,048,577 bytes, more than the 1,048,576 a config"):
+        simulated_interlaced(run)  # passed over, the run de-skewed as the LMS200's whatever the file said (a review)
     assert read == []  # old: read whole (3 GB: as much memory and 56 s), then passed over as damaged
+    (run / "config.yaml").unlink()
+    os.mkfifo(run / "config.yaml")
+    with pytest.raises(LmsbenchError, match="a simulate config must be a regular file"):
+        simulated_interlaced(run)
 
 
 def test_an_out_folders_record_beyond_its_bound_is_no_record_and_is_not_read(tmp_path, capsys) -> None:
