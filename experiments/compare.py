@@ -132,6 +132,22 @@ def is_simulation_folder(path: str | Path) -> bool:
     return simulate_log(path) is not None and (Path(path) / "world.json").exists()
 
 
+def check_simulate_config(folder: Path) -> bool:
+    """Whether a simulate folder has a config.yaml to read; LmsbenchError naming it for a pipe or a
+    device in its place (regular_file) or a file beyond a config's size (refused unread: simulate
+    writes 2 KB; 3 GB was read whole, MemoryError, 35 MB parsed for minutes: fuzzing)."""
+    from lms200.logs import regular_file
+    from lms200.yamlio import size_problem
+
+    cfg = folder / "config.yaml"
+    if not cfg.exists():
+        return False
+    too_big = size_problem(regular_file(cfg, "simulate config").stat().st_size)
+    if too_big:
+        raise LmsbenchError(f"{cfg}: {too_big}")
+    return True
+
+
 def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = None) -> Source:
     """The scans of a ``lmsbench simulate`` folder, scored against the visible truth of its
     world.json at each scan's true pose (its TRUEPOS lines), for the sensor of its config.yaml.
@@ -151,13 +167,7 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
     settings: dict[str, Any] = {"folder": str(p)}
     sensor = sim.SensorConfig()
     seed = None
-    if (p / "config.yaml").exists():  # a pipe or a device in its place is refused (regular_file), not passed over
-        from lms200.logs import regular_file
-        from lms200.yamlio import size_problem
-
-        too_big = size_problem(regular_file(p / "config.yaml", "simulate config").stat().st_size)
-        if too_big:  # simulate writes 2 KB; 3 GB was read whole (MemoryError), 35 MB parsed for minutes (fuzzing)
-            raise LmsbenchError(f"{p / 'config.yaml'}: {too_big}")
+    if check_simulate_config(p):
         try:  # the simulate config the folder was made with: its sensor model scores the scans
             cfg = load_yaml((p / "config.yaml").read_text(), words=True) or {}  # simulate's record, an earlier version's too
             if not isinstance(cfg, dict):
@@ -356,6 +366,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
                 raise
             except (ValueError, KeyError, TypeError) as exc:
                 raise LmsbenchError(f"{spec}/world.json: not a world ({type(exc).__name__}: {exc})") from None
+            check_simulate_config(Path(spec))  # before any work: it was refused after the kernels' warm-up (a review)
             spec = str(Path(spec) / SIMULATE_LOG)
         elif not Path(spec).exists() and not Path(spec).is_symlink():  # a link to nothing: check_log says so
             close = [w for w in known_worlds() if _close(w, name)]

@@ -37,12 +37,16 @@ def _sparse(path: Path, size: int) -> None:
         fh.truncate(size)
 
 
-def test_compare_refuses_a_simulate_config_beyond_a_configs_size_unread(folder, tmp_path, capsys) -> None:
+def test_compare_refuses_a_simulate_config_beyond_a_configs_size_unread(folder, tmp_path, capsys,
+                                                                         monkeypatch) -> None:
+    import experiments.progress
     from experiments.cli import main
     from lms200.yamlio import MAX_YAML_BYTES
 
     run = _copy(folder, tmp_path)
     _sparse(run / "config.yaml", MAX_YAML_BYTES + 1)
+    # before any work: it was refused after the kernels' warm-up (on a fresh checkout a 1-2 min compile; a review)
+    monkeypatch.setattr(experiments.progress, "warm_up_kernels", lambda *a, **k: pytest.fail("warmed up first"))
     assert main(["compare", str(run), "--methods", "sensor", "--out", str(tmp_path / "out"), "--no-progress"]) == 2
     assert capsys.readouterr().err == (  # old: read whole, then "not a simulate config (...)"
         f"lmsbench compare: error: {run / 'config.yaml'}: 1,048,577 bytes, more than the 1,048,576 a config or sweep "
