@@ -119,9 +119,10 @@ def test_extreme_hough_steps_and_bad_corner_configs_are_clear_errors():
         extract(scan, "hough", config=make_config("hough", rho_step=1e-4))
     assert isinstance(info.value, ValueError) and isinstance(info.value, LmsbenchError)
     for method in ("hough", "ransac", "split_merge", "iepf"):
-        for corners in ("abc", None, {}):
+        for corners in ("abc", None, 3.0):  # a mapping is the corner step's fields ({}: its defaults)
             with pytest.raises(ConfigError, match="^corners: must be a CornerConfig"):
                 make_config(method, corners=corners)
+        assert make_config(method, corners={}).corners == make_config(method).corners
     wide = Scan(np.full(MAX_BEAMS + 1, 2.0), -1.0, 1e-4, 0.0, 8.0)
     with pytest.raises(ScanGeometryError, match="beams is more than"):
         extract(wide, "split_merge")
