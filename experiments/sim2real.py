@@ -664,7 +664,8 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
 
     if world not in WORLD_NAMES:
         raise LmsbenchError(f"world: unknown world {world!r}; known worlds: {', '.join(WORLD_NAMES)}")
-    stride, max_scans, seeds, methods = _checked_arguments(stride, max_scans, seeds, methods, duration, probe_duration)
+    stride, max_scans, seeds, methods = _checked_arguments(stride, max_scans, seeds, methods, duration, probe_duration,
+                                                           fit_duration)
     probes = resolve_probe_seeds(seeds, probe_seeds) if world == "mit" else []
     opts = read_options or {}
     span = None if max_scans is None else max_scans * stride
@@ -733,7 +734,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
 
 
 def _checked_arguments(stride: Any, max_scans: Any, seeds: Any, methods: Any, duration: Any,
-                       probe_duration: Any) -> tuple[int, int | None, list[int], list[str]]:
+                       probe_duration: Any, fit_duration: Any = None) -> tuple[int, int | None, list[int], list[str]]:
     """:func:`sim2real`'s arguments that need no scan, checked before any work (InputError naming the
     argument; an unknown method UnknownMethodError): ``stride`` 0 was an internal ZeroDivisionError, and 1.5,
     -1, ``max_scans`` 0, ``seeds`` [], ``duration`` -1 or nan, ``methods`` [] or an unknown name ran the
@@ -759,6 +760,10 @@ def _checked_arguments(stride: Any, max_scans: Any, seeds: Any, methods: Any, du
     check_seeds(seeds, "seeds")
     for name, value in (("duration", duration), ("probe_duration", probe_duration)):
         check_number(value, name, MIN_DURATION_S, MAX_DURATION_S, unit="s")
+    if fit_duration is not None:  # -5 or nan ran the calibration and the simulation (a review): --fit-duration's bounds
+        from experiments.calibrate import MAX_FIT_DURATION_S, MIN_FIT_DURATION_S
+
+        check_number(fit_duration, "fit_duration", MIN_FIT_DURATION_S, MAX_FIT_DURATION_S, unit="s")
     if isinstance(methods, (str, bytes)) or not hasattr(methods, "__iter__"):
         raise InputError(f"methods: must be a list of extraction method names, got {shown(methods)}")
     methods = list(methods)

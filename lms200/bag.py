@@ -420,6 +420,12 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                     if pose is None:
                         continue
                     x, y, th = pose
+                    from .carmen import MAX_COORD_M
+
+                    if max(abs(x), abs(y)) > MAX_COORD_M:  # a bag its own reader refuses (as write_carmen, write_tum)
+                        which = "odom" if name == ODOM_TOPIC else "truth"
+                        raise InputError(f"records: item {seq}: {which} pose ({x:.6g}, {y:.6g}) m lies beyond "
+                                         f"+-{MAX_COORD_M:g} m, which the bag reader refuses")
                     msg = PoseStamped(
                         header=Header(**{**header_kw, "frame_id": "map" if name == TRUTH_TOPIC else "odom"}),
                         pose=Pose(
@@ -474,6 +480,10 @@ def _pose_of(msg) -> Pose2D:  # noqa: ANN001
     x, y = float(pose.position.x), float(pose.position.y)
     if not (np.isfinite(x) and np.isfinite(y)):  # was Record's "odom: must be finite", without bag, topic or index
         raise ValueError(f"position (x, y) = ({x!r}, {y!r}) is not finite")
+    from .carmen import MAX_COORD_M  # as the CARMEN, TUM and relations readers: 1e300 m was read (a review)
+
+    if max(abs(x), abs(y)) > MAX_COORD_M:
+        raise ValueError(f"position (x, y) = ({x:.6g}, {y:.6g}) m lies beyond +-{MAX_COORD_M:g} m (damaged?)")
     return (x, y, yaw)
 
 

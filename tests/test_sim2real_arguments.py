@@ -32,6 +32,8 @@ def _room(stamp: float) -> Scan:
     ({"duration": -1.0}, "duration: must be a finite number in [0.1, 3600] s, got -1.0"),
     ({"duration": math.nan}, "duration: must be a finite number in [0.1, 3600] s, got nan"),
     ({"rate_hz": 1e300}, "rate_hz: 1e+300 scans/s is more than the sensor gives (75 scans/s at 1 deg)"),
+    ({"fit_duration": -5.0}, "fit_duration: must be a finite number in [1, 600] s, got -5.0"),
+    ({"fit_duration": math.nan}, "fit_duration: must be a finite number in [1, 600] s, got nan"),
     ({"methods": []}, "methods: no extraction method: give one or more (default: every built-in method)"),
     ({"methods": ["sensor", "nope"]},
      "unknown extraction method 'nope'; available: sensor, split_merge, iepf, hough, ransac"),

@@ -33,3 +33,20 @@ def test_a_pipe_among_the_cell_files_is_a_damaged_cell_not_a_hang(tmp_path: Path
                     "computed again"]
     store.write("bbbb", {"cell": "bbbb", "status": "ok", "x": 2.0})  # the pipe replaced by the cell's file
     assert store.done() == {"aaaa", "bbbb"}
+
+
+def test_a_folder_among_the_cell_files_is_refused_before_any_cell(tmp_path: Path) -> None:
+    """A folder named like a cell file was counted damaged, its cell computed, and the write failed with
+    IsADirectoryError (no LmsbenchError: a traceback) after the work (a review). Refused when the
+    finished cells are listed, before any cell runs, naming it."""
+    import pytest
+
+    from lms200 import LmsbenchError
+
+    store = CellStore(tmp_path)
+    store.write("aaaa", {"cell": "aaaa", "status": "ok", "x": 1.0})
+    store.path("bbbb").mkdir()
+    with pytest.raises(LmsbenchError) as err:
+        store.done()
+    assert str(err.value) == (f"{store.path('bbbb')}: a folder where a cell's file goes: move it out of {store.cells} "
+                              "(the sweep would compute that cell and fail to write it)")

@@ -23,7 +23,7 @@ from typing import Any
 
 import pandas as pd
 
-from lms200.errors import LmsbenchWarning
+from lms200.errors import LmsbenchError, LmsbenchWarning
 
 CELLS_DIR = "cells"
 
@@ -52,6 +52,9 @@ class CellStore:
         cell's row here cost a resumed sweep 1.6 ms a cell (3.2 s for 2,000) before any work."""
         keys, damaged = set(), []
         for p in sorted(self.cells.glob("*.parquet")):
+            if p.is_dir():  # its cell would be computed, then not written: os.replace's IsADirectoryError (a review)
+                raise LmsbenchError(f"{p}: a folder where a cell's file goes: move it out of {self.cells} (the sweep "
+                                    "would compute that cell and fail to write it)")
             (keys.add(p.stem) if _whole_parquet(p) else damaged.append(p.name))
         if damaged:
             warnings.warn(f"{self.cells}: {len(damaged)} cell file{'s' if len(damaged) > 1 else ''} cannot be read as "
