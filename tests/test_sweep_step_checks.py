@@ -48,3 +48,19 @@ def test_a_slam_sweep_cell_run_slam_would_refuse_at_its_first_scan_is_refused(fi
         check_spec(spec)
     assert str(info.value).endswith(": " + message), str(info.value)
     assert str(info.value).startswith("slam {")
+
+
+def test_an_extract_sweep_over_a_corner_steps_field_is_checked() -> None:
+    """A grid over extractor.METHOD.corners.FIELD (settable since the corners' breakpoint_lambda is checked
+    against the step) made the checks' key hold a dict: "internal error: TypeError: unhashable type: 'dict'"
+    (the last read). It is checked like any field, and refused on the sensor's step in the corners' words."""
+    grid = {"extractor.split_merge.corners.breakpoint_lambda": [0.3, ONE_DEG]}
+    ok = SweepSpec.from_dict({"name": "c", "kind": "extract", "fixed": {"method": "split_merge"}, "grid": grid,
+                              "seeds": [0]})
+    check_spec(ok)  # the default sensor's 0.5 deg step is below both
+    coarse = SweepSpec.from_dict({"name": "c", "kind": "extract",
+                                  "fixed": {"method": "split_merge", "sensor.resolution": ONE_DEG, "sensor.n_beams": 181},
+                                  "grid": grid, "seeds": [0]})
+    with pytest.raises(SweepSpecError, match=r"^extractor split_merge \{'corners': \{'breakpoint_lambda': 0.01745.*"
+                                             r"not below split_merge's corners.breakpoint_lambda 1 deg"):
+        check_spec(coarse)

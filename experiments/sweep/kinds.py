@@ -389,7 +389,7 @@ def check_extract_params(cells: list[dict[str, Any]]) -> None:
             overrides = extractor_overrides(cell, [method], other_methods=True).get(method, {})
         except OverrideError as exc:
             raise SweepSpecError(str(exc)) from None
-        key = (method, tuple(sorted(overrides.items(), key=lambda kv: kv[0])), _sensor_key(cell))
+        key = repr((method, sorted(overrides.items(), key=lambda kv: kv[0]), _sensor_key(cell)))  # corners: a dict
         if key in seen:
             continue
         seen.add(key)
