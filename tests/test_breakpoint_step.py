@@ -31,11 +31,14 @@ def _room(step_deg: float, stamp: float = 0.0) -> Scan:
     return Scan(r, -np.pi / 2, np.deg2rad(step_deg), 0.0, 8.0, stamp=stamp)
 
 
-def _message(method: str, step_deg: float, lam_deg: float, fit_deg: float, where: str = "scan") -> str:
-    return (f"{where}: the beam step {step_deg:g} deg is not below {method}'s breakpoint_lambda {lam_deg:g} deg "
+def _message(method: str, step_deg: float, lam_deg: float, fit_deg: float, where: str = "scan",
+             field: str = "breakpoint_lambda") -> str:
+    """registry.step_problem's text, for the lines' field or the corner step's (``corners.breakpoint_lambda``)."""
+    what = "no corner" if field.startswith("corners.") else "no line"
+    return (f"{where}: the beam step {step_deg:g} deg is not below {method}'s {field} {lam_deg:g} deg "
             f"({math.radians(lam_deg):.6g} rad): the adaptive breakpoint distance r sin(step) / "
-            "sin(breakpoint_lambda - step) (Borges & Aldon) has no meaning there (at the step every beam connects, beyond it none: no line); "
-            f"set breakpoint_lambda above the step, e.g. {math.radians(fit_deg):.6g} rad ({fit_deg:g} deg)")
+            f"sin(breakpoint_lambda - step) (Borges & Aldon) has no meaning there (at the step every beam connects, beyond it none: {what}); "
+            f"set {field} above the step, e.g. {math.radians(fit_deg):.6g} rad ({fit_deg:g} deg)")
 
 
 @pytest.mark.parametrize("method", BASELINES)
@@ -88,10 +91,7 @@ def test_compare_refuses_it_before_any_method_runs(tmp_path: Path) -> None:
 
 
 def _corner_message(method: str, step_deg: float, lam_deg: float, fit_deg: float, where: str = "scan") -> str:
-    return (f"{where}: the beam step {step_deg:g} deg is not below {method}'s corners.breakpoint_lambda {lam_deg:g} deg "
-            f"({math.radians(lam_deg):.6g} rad): the adaptive breakpoint distance r sin(step) / "
-            "sin(breakpoint_lambda - step) (Borges & Aldon) has no meaning there (at the step every beam connects, beyond it none: no corner); "
-            f"set corners.breakpoint_lambda above the step, e.g. {math.radians(fit_deg):.6g} rad ({fit_deg:g} deg)")
+    return _message(method, step_deg, lam_deg, fit_deg, where, field="corners.breakpoint_lambda")
 
 
 @pytest.mark.parametrize("method", BASELINES)
