@@ -284,9 +284,9 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
 
 
 def check_stride(records: Iterable[Record], config: SlamConfig, where: str = "records[0]") -> Iterator[Record]:
-    """The records, raising SlamInputError at the first scan (before any matching or extraction)
-    when :func:`first_scan_problem` finds one (the scan named by ``where`` where the message names
-    it); the rest pass unchecked."""
+    """The records, raising SlamInputError (or ``features.ConfigError``) at the first scan, before
+    any matching or extraction, where :func:`check_first_scan` refuses it (naming it ``where`` where
+    its message names the scan); the rest pass unchecked."""
     for i, rec in enumerate(records):
         if i == 0:
             check_first_scan(rec.scan, config, where)
