@@ -349,8 +349,12 @@ PORT = count(0, 65535)
 
 
 def check_seeds(seeds: Sequence[int], flag: str = "--seeds") -> list[int]:
-    """Seeds given once each (a repeated seed would count the same run twice in every mean)."""
-    seen = sorted({s for s in seeds if list(seeds).count(s) > 1})
+    """Seeds given once each (a repeated seed would count the same run twice in every mean). One
+    count of them: a count per seed over a copy of the list was quadratic in it, and
+    ``sim2real()`` passes a caller's list of any length."""
+    from collections import Counter
+
+    seen = sorted(s for s, n in Counter(seeds).items() if n > 1)
     if seen:
         raise InputError(f"{flag}: seed(s) {', '.join(map(str, seen))} given more than once")
     return list(seeds)
