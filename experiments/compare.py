@@ -30,6 +30,7 @@ import pandas as pd
 import yaml
 
 from features.baselines.checks import MIN_SIGMA_M as EXTRACTOR_MIN_SIGMA_M  # not this module's MIN_SIGMA_M (user's floor)
+from features.errors import ConfigError
 from features.registry import (available_methods, backend_of, check_beams, check_step, get_method, make_config,
                                warn_unread_fields)
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
@@ -937,6 +938,8 @@ def resolved_configs(methods: Sequence[str], params: dict[str, dict[str, Any]] |
         try:
             # a user's config with np.deg2rad(20) as a default failed yaml.safe_dump: internal error, exit 1
             out[m] = plain_data(dataclasses.asdict(make_config(m, **params.get(m, {}))))
+        except ConfigError as exc:  # "min_points: ..." named no method: extractor.min_points goes to several
+            raise ConfigError(f"{m}: {exc}") from None
         except LmsbenchError:
             raise
         except (ValueError, TypeError) as exc:

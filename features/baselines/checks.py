@@ -169,6 +169,10 @@ def shared_fields(cfg: object) -> None:
         unknown = [k for k in cfg.corners if k not in known]
         if unknown:
             fail("corners", f"has no field {unknown[0]!r} (its fields: {', '.join(known)})", dict(cfg.corners))
-        object.__setattr__(cfg, "corners", CornerConfig(**cfg.corners))
+        try:
+            corners = CornerConfig(**cfg.corners)
+        except ConfigError as exc:  # "sigma: ..." named no step: the method's own sigma has that name too
+            raise ConfigError(f"corners.{exc}") from None
+        object.__setattr__(cfg, "corners", corners)
     if not isinstance(cfg.corners, CornerConfig):
         fail("corners", "must be a CornerConfig (or a mapping of its fields)", cfg.corners)
