@@ -88,11 +88,14 @@ def test_compare_run_again_leaves_none_of_the_earlier_runs_outputs_beside_its_ow
     base = ["--methods", "sensor", "--max-scans", "3", "--no-progress", "--out", str(out)]
     assert main(["compare", str(tmp_path / "a.clf"), *base]) == 0
     assert {p.name for p in out.iterdir()} >= {"compare.parquet", "realdata_a_clf.png", "realdata_a_clf.csv"}
-    assert main(["compare", str(tmp_path / "b.clf"), *base, "--format", "csv"]) == 0
     capsys.readouterr()
-    assert sorted(p.name for p in out.iterdir()) == [
+    assert main(["compare", str(tmp_path / "b.clf"), *base, "--format", "csv"]) == 0
+    written = sorted(p.name for p in out.iterdir())
+    assert written == [
         "compare.csv", "config.yaml", "realdata_b_clf.csv", "realdata_b_clf.pdf", "realdata_b_clf.png",
         "summary.csv", "summary.txt"]
+    wrote = [line for line in capsys.readouterr().out.splitlines() if line.startswith("wrote ")]
+    assert sorted(Path(p).name for p in wrote[0][len("wrote "):].split(", ")) == written  # the .pdf and .csv were left out
 
 
 def test_slam_config_in_out_is_refused(sim, tmp_path, capsys):

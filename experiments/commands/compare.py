@@ -220,8 +220,7 @@ def run(args: argparse.Namespace) -> int:
         if src.kind == "log" and src.name in set(summary["source"]):
             from experiments.figures.realdata import fig_explained_vs_lines, figure_stem
 
-            figures += [str(p) for p in fig_explained_vs_lines(summary, src.name, figure_stem(args.out, src.name))
-                        if p.suffix == ".png"]
+            figures += [str(p) for p in fig_explained_vs_lines(summary, src.name, figure_stem(args.out, src.name))]
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     if run_folder:
         link_latest(args.out)
