@@ -692,7 +692,8 @@ def test_a_log_packed_in_a_way_the_reader_does_not_open_is_named(tmp_path: Path,
         list(read_log(path))
 
 
-STAMP_RULE = r"is outside 0 \.\. 2\^32 s \(4294967296 s, 2106-02-07\): a log's clock is UNIX time or seconds since its start"
+STAMP_RULE = (r"is outside 0 \.\. 2\^32 s \(4294967296 s, 2106-02-07\), the stamps every log reader and writer takes: "
+              r"a clock's UNIX time, or seconds since the run's start")
 
 
 @pytest.mark.parametrize("bad, reason", [

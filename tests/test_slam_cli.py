@@ -131,8 +131,9 @@ def test_slam_refuses_a_log_of_one_stamp_and_warns_of_steps_without_time(sim_fol
 @pytest.mark.parametrize("damage, message", [
     # no log holds such a stamp now (0 .. 2^32 s, lms200.records.MAX_STAMP_S: write_log refuses it, and the reader,
     # tests/test_log_plausible_values.py); run_slam still refuses it its own way
-    ("gap", "records: item 10: stamp 1e+200 s is outside 0 .. 2^32 s (4294967296 s, 2106-02-07): a log's clock is UNIX "
-            "time or seconds since its start; the CARMEN reader refuses it (the log could not be read back)"),
+    ("gap", "records: item 10: stamp 1e+200 s is outside 0 .. 2^32 s (4294967296 s, 2106-02-07), the stamps every log "
+            "reader and writer takes: a clock's UNIX time, or seconds since the run's start; the CARMEN reader refuses it "
+            "(the log could not be read back)"),
     # nor such a pose: the CARMEN reader refuses it, as the TUM reader does (lms200.carmen.MAX_COORD_M), and so does
     # write_log (tests/test_carmen_pose_bounds.py, with the reader's refusal on the command line)
     ("odom", "records: item 10: odom pose (1e+300, -3) m lies beyond +-1e+09 m, which the CARMEN reader refuses "
