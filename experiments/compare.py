@@ -140,10 +140,13 @@ def check_simulate_config(folder: Path) -> bool:
     from lms200.logs import regular_file
     from lms200.yamlio import size_problem
 
+    from experiments.options import SIMULATE_CONFIG
+
     cfg = folder / "config.yaml"
     if not cfg.exists():
         return False
-    too_big = size_problem(regular_file(cfg, "simulate config").stat().st_size)
+    too_big = size_problem(regular_file(cfg, "simulate config").stat().st_size, SIMULATE_CONFIG,
+                           "lmsbench simulate writes one of a few KB at most")
     if too_big:
         raise LmsbenchError(f"{cfg}: {too_big}")
     return True

@@ -499,13 +499,18 @@ def check_world_file(world: str) -> None:
         raise InputError(f"{world}: not a world.json ({type(exc).__name__}: {' '.join(str(exc).split())})") from None
 
 
-def check_yaml(path: str | os.PathLike, what: str = "a YAML file", sized: bool = True) -> Path:
+#: what the size refusal of a simulate folder's config.yaml names it
+SIMULATE_CONFIG = "a simulate folder's config.yaml"
+
+
+def check_yaml(path: str | os.PathLike, what: str = "a YAML file", sized: bool = True,
+               size_hint: str = "they are a few KB") -> Path:
     """An existing, readable text file, of at most ``lms200.yamlio.MAX_YAML_BYTES`` when ``sized`` (a
     file the user writes; not the sweep.yaml a sweep wrote, which lists a grid one value a line). YAML
     is parsed by the caller, which names its errors."""
     p = check_file(path, what)
     _text_head(p, what)
-    too_big = size_problem(p.stat().st_size) if sized else None
+    too_big = size_problem(p.stat().st_size, what, size_hint) if sized else None
     if too_big:
         raise InputError(f"{p}: {too_big}")
     _utf8(p, what)

@@ -65,6 +65,35 @@ def _fields(method: str) -> list[str]:
     return [f.name for f in dataclasses.fields(get_method(method).config_type)]
 
 
+def _corner_fields(method: str) -> list[str] | None:
+    """The fields of ``method``'s corner step (its config's ``corners``, a dataclass: the baselines'
+    CornerConfig), or None where ``corners`` is no such config (the sensor method's flag)."""
+    from features.registry import get_method
+
+    for f in dataclasses.fields(get_method(method).config_type):
+        if f.name == "corners":
+            default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
+            if dataclasses.is_dataclass(default):
+                return [g.name for g in dataclasses.fields(default)]
+    return None
+
+
+def _check_field(key: str, method: str, field: str, fields: list[str]) -> None:
+    """OverrideError naming ``key`` and ``method`` for a ``field`` (``FIELD`` or ``corners.FIELD``) that
+    ``method``'s config (of ``fields``) or its corner step does not have. An unknown corner field was
+    left to the config's check, which names no method: `--set extractor.iepf.corners.bogus=1` said
+    "corners: has no field 'bogus' (its fields: ...)"."""
+    outer, _, inner = field.partition(".")
+    if inner and outer == "corners" and outer in fields:
+        known = _corner_fields(method)
+        if known is not None and inner not in known:
+            raise OverrideError(f"{key}: {method}'s corner step (corners) has no field {inner!r}; its fields: "
+                                f"{', '.join(known)}")
+        return  # the sensor method's corners, a flag: its config says so ("sensor: corners must be true or false")
+    if field not in fields:
+        raise OverrideError(f"{key}: {method} has no field {field!r}; its fields: {', '.join(fields)}")
+
+
 def extractor_overrides(flat: Mapping[str, Any], methods: Sequence[str], *,
                         other_methods: bool = False) -> dict[str, dict[str, Any]]:
     """``{method: {field: value}}`` from the ``extractor.*`` entries of ``flat`` (others ignored).
@@ -85,12 +114,12 @@ def extractor_overrides(flat: Mapping[str, Any], methods: Sequence[str], *,
         method, _, field = name.partition(".")
         if field:
             if method not in fields and other_methods and method in available_methods():
-                if field not in _fields(method):
-                    raise OverrideError(f"{key}: {method} has no field {field!r}; its fields: {', '.join(_fields(method))}")
+                _check_field(key, method, field, _fields(method))
                 continue
             if method not in fields:
                 known = methods if method in available_methods() else available_methods()
                 raise OverrideError(f"{key}: {method!r} is not an extractor of this run; known: {', '.join(known)}")
+            _check_field(key, method, field, fields[method])
             outer, _, inner = field.partition(".")
             if inner and outer == "corners" and outer in fields[method]:  # METHOD.corners.FIELD: the corner step's own
                 corners = out[method].setdefault("corners", {})

@@ -88,12 +88,15 @@ def simulated_interlaced(path: str | Path) -> bool | None:
     from lms200.logs import regular_file
     from lms200.yamlio import size_problem
 
+    from experiments.options import SIMULATE_CONFIG
+
     cfg = Path(path) / "config.yaml"
     if simulate_log(path) is None or not cfg.exists():
         return None
     # as compare refuses it: a pipe in its place, or a file beyond a config's size (unread: 3 GB took as much
     # memory, 35 MB minutes), was passed over, and a run simulated without interlacing was de-skewed, silently
-    too_big = size_problem(regular_file(cfg, "simulate config").stat().st_size)
+    too_big = size_problem(regular_file(cfg, "simulate config").stat().st_size, SIMULATE_CONFIG,
+                           "lmsbench simulate writes one of a few KB at most")
     if too_big:
         raise LmsbenchError(f"{cfg}: {too_big}")
     try:

@@ -931,6 +931,40 @@ class _CountedRecords:
         return record
 
 
+#: the kinds of mcap record (by opcode) whose declared length :func:`_bounded_read_sized` bounds by
+#: MAX_CONNECTIONS_TOTAL_BYTES before rosbags reads them whole: a schema or channel record holds one
+#: message definition or one topic's name, type and QoS, which the file's schemas and channels together
+#: may hold at most that many characters of anyway (:class:`_CountedRecords`, counted once read)
+_MCAP_BOUNDED_RECORDS = {0x03: "schema", 0x04: "channel"}
+
+
+def _bounded_read_sized(bio: Any, _real: Callable[[Any], bytes]) -> bytes:  # noqa: ANN401 - a binary file
+    """rosbags' mcap ``read_sized`` (a record's uint64 length, then that many bytes, read whole), refusing a
+    schema or channel record (told by the opcode byte before the length) whose declared length exceeds
+    MAX_CONNECTIONS_TOTAL_BYTES before reading it: a BagTooLargeError naming the storage file, the record
+    and where it starts. Such a record was read whole, bounded only by the file's size (a 300 MB schema
+    record held `lmsbench info` at 928 MB before the total's count refused it; one declaring 1 TiB in a
+    small file was a MemoryError)."""
+    start = bio.tell()
+    if start >= 1:
+        head = bio.read(8)
+        bio.seek(start - 1)
+        op = bio.read(1)
+        bio.seek(start)
+        kind = _MCAP_BOUNDED_RECORDS.get(op[0]) if len(op) == 1 else None
+        if kind is not None and len(head) == 8:
+            size = struct.unpack("<Q", head)[0]
+            if size > MAX_CONNECTIONS_TOTAL_BYTES:
+                budget = _BUDGET.get()
+                name = budget.storage if budget is not None else ""
+                raise _unnamed(BagTooLargeError(
+                    f"its storage file{name and ' ' + name}'s {kind} record at byte {start - 1:,} declares {size:,} "
+                    f"bytes, more than the {MAX_CONNECTIONS_TOTAL_BYTES:,} a ROS 2 bag's topics and message "
+                    "definitions may hold together (lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES): an absurd message "
+                    "definition, or damage; not read"))
+    return _real(bio)
+
+
 def _bound_storage_connections() -> None:
     """Bound what rosbags' ROS 2 storage readers hold of a bag's topics and message definitions when they
     open a storage file (MAX_CONNECTIONS, MAX_CONNECTIONS_TOTAL_BYTES): a sqlite3 file is counted by
@@ -960,6 +994,13 @@ def _bound_storage_connections() -> None:
 
         _open.lmsbench_bounded = True  # type: ignore[attr-defined]
         reader._open = _open  # type: ignore[union-attr]
+    read_sized = getattr(storage_mcap, "read_sized", None)
+    if read_sized is not None and not getattr(read_sized, "lmsbench_bounded", False):
+        def _read_sized(bio: Any, _real: Callable[[Any], bytes] = read_sized) -> bytes:  # noqa: ANN401
+            return _bounded_read_sized(bio, _real)
+
+        _read_sized.lmsbench_bounded = True  # type: ignore[attr-defined]
+        storage_mcap.read_sized = _read_sized
     for name, what in (("Schema", "message definitions (schemas)"), ("Channel", "topics (channels)")):
         typ = getattr(storage_mcap, name, None)
         if typ is not None and not isinstance(typ, _CountedRecords):

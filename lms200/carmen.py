@@ -613,6 +613,7 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
            has_odometry: bool) -> tuple[Units | None, bool]:
     """Apply a PARAM line: the range unit, odometry flag, range_min and laser geometry; returns (units, odometry)."""
     _require(len(words) >= 3, "PARAM needs a name and a value")
+    _param_stamps(words)
     name, value = words[1], words[2]
     if name == UNITS_PARAM:
         _require(value in ("mm", "cm"), f"{UNITS_PARAM} must be mm or cm, got {value!r}")
@@ -653,6 +654,27 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
             raise ValueError(f"{name} {value}: {exc}") from None
         params[name] = number
     return units, has_odometry
+
+
+def _param_stamps(words: list[str]) -> None:
+    """A PARAM line's stamps, where it has them, checked as other lines' are (:func:`_stamps`: numbers in
+    0 .. ``records.MAX_STAMP_S``; they were not read at all, so `PARAM ... nohost 1e300` or `nan` passed).
+    CARMEN writes ``PARAM name value hostname ipc_timestamp`` (the logs of ../shared/data, this package's
+    writer) or, since 0.7, ``PARAM name value ipc_timestamp ipc_hostname logger_timestamp``, and a value may
+    hold spaces; so a line of 5 words or more ends with a stamp (the ipc_timestamp, or the logger_timestamp
+    where the third word from its end, past the value, reads as a number: the ipc_timestamp). A line of 3
+    or 4 words (written by hand) has none."""
+    if len(words) < 5:
+        return
+    if len(words) >= 6:
+        try:
+            float(words[-3])
+        except ValueError:
+            pass
+        else:
+            _stamps(words, _few_floats(words[-3:-2], "ipc_timestamp")[0], len(words) - 1)
+            return
+    _stamps(words, _few_floats(words[-1:], "ipc_timestamp")[0], len(words))
 
 
 def _misspelt_param(name: str) -> str | None:

@@ -9,8 +9,8 @@ import numpy as np
 
 from .codes import NOT_NUMBER_ITEMS
 from .errors import InputError
-from .finite import fixed, float_of
-from .scan import MAX_STAMP_S as SCAN_MAX_STAMP_S, Scan
+from .finite import float_of
+from .scan import MAX_STAMP_S as SCAN_MAX_STAMP_S, Scan, stamp_problem  # noqa: F401 - the readers' name for it
 
 Pose2D = tuple[float, float, float]  # (x m, y m, theta rad) in the world / odometry frame
 
@@ -25,15 +25,6 @@ MAX_REASON_CHARS = 300  # a kept reason is cut past this (a bad word of a 1 MB l
 #: a stamp of 1e300 s was read, and ``info`` said "duration 1e+300 s, scan rate 1.9e-299 scans/s"; a
 #: negative one is no clock's
 MAX_STAMP_S = SCAN_MAX_STAMP_S
-
-
-def stamp_problem(t: float, what: str) -> str | None:
-    """Why ``t`` (s) is no stamp a log holds (nan, infinite, negative or after :data:`MAX_STAMP_S`),
-    as a message beginning with ``what``; None for a stamp in [0, MAX_STAMP_S]."""
-    if 0.0 <= t <= MAX_STAMP_S:
-        return None
-    return (f"{what} {fixed(t)} s is outside 0 .. 2^32 s ({MAX_STAMP_S:.0f} s, 2106-02-07): a log's clock is UNIX "
-            "time or seconds since its start")
 
 
 @dataclass

@@ -35,6 +35,17 @@ SNAP_RELATIVE_ERROR = 1e-6  # of the value: float32 (6e-8) with room to spare
 #: is 0. A clock is UNIX time or seconds since a run's start, and 2^32 s (2106-02-07) is the end of ROS 1's time: a
 #: Scan stamped 1e300 s or -1e300 s was taken, and failed only where a log was written or SLAM's motion model stepped
 MAX_STAMP_S = float(2**32)
+
+
+def stamp_problem(t: float, what: str) -> str | None:
+    """Why ``t`` (s) is no stamp (nan, infinite, negative or after :data:`MAX_STAMP_S`), as a message
+    beginning with ``what``; None for a stamp in [0, MAX_STAMP_S]. The one wording of the rule, for a
+    Scan and every log reader and writer (``lms200.records.stamp_problem``, the same function): the Scan's
+    said "stamp: must be in 0 .. 2^32 s ..., as every log reader and writer takes it (...), got V s"."""
+    if 0.0 <= t <= MAX_STAMP_S:
+        return None
+    return (f"{what} {fixed(t)} s is outside 0 .. 2^32 s ({MAX_STAMP_S:.0f} s, 2106-02-07), the stamps every log "
+            "reader and writer takes: a clock's UNIX time, or seconds since the run's start")
 MAX_SNAP_RAD = 4 * np.pi  # rad: larger angles are left as given (a Scan refuses them: bearings within +-2 pi)
 
 
@@ -119,9 +130,9 @@ class Scan:
             raise ScanError("ranges: must hold at least one beam")
         for name in ("angle_min", "angle_increment", "range_min", "range_max", "stamp"):
             object.__setattr__(self, name, _number(name, getattr(self, name)))
-        if not 0.0 <= self.stamp <= MAX_STAMP_S:
-            raise ScanError(f"stamp: must be in 0 .. 2^32 s ({MAX_STAMP_S:.0f} s, 2106-02-07), as every log reader and "
-                            f"writer takes it (a clock's UNIX time or seconds since the run's start), got {fixed(self.stamp)} s")
+        problem = stamp_problem(self.stamp, "stamp")
+        if problem is not None:
+            raise ScanError(problem)
         if self.angle_increment <= 0:  # a ROS LaserScan of a laser mounted upside down has a negative one
             flip = (" (beams clockwise, a laser mounted upside down: reverse the ranges, ranges[::-1], and start "
                     "at the last beam's bearing, angle_min + (n - 1) * angle_increment)") if self.angle_increment < 0 else ""

@@ -222,12 +222,17 @@ class SelfReference(yaml.YAMLError):
 MAX_YAML_BYTES = 1 << 20
 
 
-def size_problem(size: int) -> str | None:
-    """Why a YAML file of ``size`` bytes is not read as a config or sweep (None: it may be)."""
+#: what a sweep file's size refusal adds: how a sweep file of the most cells stays small
+SWEEP_SIZE_HINT = "sweep files are a few KB: a sweep's grid lists the values of each parameter, not every cell"
+
+
+def size_problem(size: int, what: str = "a config file", hint: str = "they are a few KB") -> str | None:
+    """Why a YAML file of ``size`` bytes is not read as ``what`` (a config file, a sweep file, a simulate
+    folder's config.yaml, ...; None: it may be), ``hint`` saying how large one is. The message spoke of "a
+    config or sweep file" and "a sweep's grid" for every file, a simulate folder's config.yaml too."""
     if size <= MAX_YAML_BYTES:
         return None
-    return (f"{size:,} bytes, more than the {MAX_YAML_BYTES:,} a config or sweep file may hold (refused unread; they "
-            "are a few KB: a sweep's grid lists the values of each parameter, not every cell)")
+    return f"{size:,} bytes, more than the {MAX_YAML_BYTES:,} {what} may hold (refused unread; {hint})"
 
 
 #: Values a document may expand to through its aliases beyond the size of its text (each value

@@ -263,7 +263,7 @@ class SensorConfig:
             raise InputError(f"{p}: a symbolic link to {os.readlink(p)}, which does not exist (or a loop of links)")
         if not p.is_file():
             raise LmsbenchError(f"{p}: no such sensor file")
-        too_big = size_problem(p.stat().st_size)
+        too_big = size_problem(p.stat().st_size, "a sensor YAML")
         if too_big:
             raise InputError(f"{p}: {too_big}")
         return cls._from_text(p, p.read_bytes())
@@ -273,7 +273,7 @@ class SensorConfig:
         """:meth:`from_yaml` of the bytes ``data`` of the file ``p``."""
         import yaml
 
-        too_big = size_problem(len(data))
+        too_big = size_problem(len(data), "a sensor YAML")
         if too_big:
             raise InputError(f"{p}: {too_big}")
         try:

@@ -257,11 +257,15 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
     range_maxes: set[float] = set()
 
     def seen(records: Iterable[Record]) -> Iterator[Record]:
-        for rec in records:
+        """The records, the first scan checked against the config before any matching or extraction
+        (:func:`check_first_scan`), each scan's range_max noted."""
+        for i, rec in enumerate(records):
+            if i == 0:
+                check_first_scan(rec.scan, config, "records[0]")
             range_maxes.add(float(rec.scan.range_max))
             yield rec
 
-    records = check_stride(seen(records), config)  # the first scan against the config: before any work
+    records = seen(records)
     if config.preset == "default":
         from .scanslam import run_scan_slam
 
@@ -281,16 +285,6 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
     result = run_steps(steps(), config)
     _warn_unread(config, range_maxes)
     return result
-
-
-def check_stride(records: Iterable[Record], config: SlamConfig, where: str = "records[0]") -> Iterator[Record]:
-    """The records, raising SlamInputError (or ``features.ConfigError``) at the first scan, before
-    any matching or extraction, where :func:`check_first_scan` refuses it (naming it ``where`` where
-    its message names the scan); the rest pass unchecked."""
-    for i, rec in enumerate(records):
-        if i == 0:
-            check_first_scan(rec.scan, config, where)
-        yield rec
 
 
 def check_first_scan(scan: Any, config: SlamConfig, where: str = "records[0]") -> None:

@@ -1365,7 +1365,7 @@ def test_slam_stride_is_bounded_by_the_scans_beams() -> None:
     from features.baselines.checks import MAX_BEAMS
     from sim import simulate_records
     from slam import SlamConfig, SlamConfigError, run_slam
-    from slam.run import SlamInputError, check_stride
+    from slam.run import SlamInputError, check_first_scan
 
     assert SlamConfig(alignment={"stride": 150}).alignment.stride == 150
     assert SlamConfig(alignment={"stride": MAX_BEAMS}).alignment.stride == 16384
@@ -1373,20 +1373,20 @@ def test_slam_stride_is_bounded_by_the_scans_beams() -> None:
                                                         "of a scan the extractors take), got 16385")):
         SlamConfig(alignment={"stride": MAX_BEAMS + 1})
 
-    def scans(beams: int) -> list:
-        return [SimpleNamespace(scan=SimpleNamespace(ranges=np.ones(beams), angle_increment=0.001))] * 3
+    def scans(beams: int) -> SimpleNamespace:  # a first scan
+        return SimpleNamespace(ranges=np.ones(beams), angle_increment=0.001)
 
-    assert len(list(check_stride(scans(16384), SlamConfig(alignment={"stride": 150})))) == 3  # 110 points
-    assert len(list(check_stride(scans(16384), SlamConfig(alignment={"stride": 1365})))) == 3  # 13 points
+    check_first_scan(scans(16384), SlamConfig(alignment={"stride": 150}))  # 110 points
+    check_first_scan(scans(16384), SlamConfig(alignment={"stride": 1365}))  # 13 points
     with pytest.raises(SlamInputError) as info:
-        list(check_stride(scans(16384), SlamConfig(alignment={"stride": 1366})))
+        check_first_scan(scans(16384), SlamConfig(alignment={"stride": 1366}))
     assert str(info.value) == ("alignment.stride: 1,366 keeps 12 of the first scan's 16,384 beams, fewer than the 13 "
                                "points the scan matcher needs; at most 1,365 for these scans")
     # too short at any stride: the stride is not why (min_line_points, 8 by default, is above 5 beams: its own refusal)
-    assert len(list(check_stride(scans(5), SlamConfig(observations={"min_line_points": 5})))) == 3
+    check_first_scan(scans(5), SlamConfig(observations={"min_line_points": 5}))
     with pytest.raises(SlamInputError, match=r"^alignment.stride: 3 keeps 5 of the first scan's 13 beams, fewer than "
                                              r"the 13 points the scan matcher needs; at most 1 for these scans$"):
-        list(check_stride(scans(13), SlamConfig()))
+        check_first_scan(scans(13), SlamConfig())
     records = simulate_records("office", seed=0, duration=1.0, rate_hz=5)  # 361-beam scans
     with pytest.raises(SlamInputError, match=r"^alignment.stride: 31 keeps 12 of the first scan's 361 beams, .* "
                                              r"at most 30 for these scans$"):

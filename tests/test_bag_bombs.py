@@ -675,3 +675,42 @@ def test_a_ros2_storage_files_topics_and_definitions_are_bounded_in_one_total(tm
             "characters together, the most")
     assert str(exc.value) == (f"{bag}: its storage file {hold} a ROS 2 bag's may "
                               "(lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES): absurd message definitions, or damage; not read")
+
+
+def _mcap_with_declared_record(path: Path, op: int, declared: int) -> Path:
+    """A ROS 2 mcap bag (one LaserScan topic, one message) whose data section starts with a record of
+    opcode ``op`` (3 schema, 4 channel) declaring ``declared`` bytes, of which it holds a few; the footer's
+    summary offset cleared, so the reader scans the data section."""
+    import struct
+
+    bag = _ros2_bag_of_topics(path, 1, "mcap")
+    mcap = next(bag.glob("*.mcap"))
+    data = mcap.read_bytes()
+    end_header = 8 + 1 + 8 + struct.unpack_from("<Q", data, 9)[0]
+    record = bytes([op]) + struct.pack("<Q", declared) + struct.pack("<HH", 9, 1) + b"\0" * 16
+    footer = data[-37:-28] + struct.pack("<Q", 0) + data[-20:]
+    mcap.write_bytes(data[:end_header] + record + data[end_header:-37] + footer)
+    return bag
+
+
+@pytest.mark.parametrize(("op", "kind"), [(3, "schema"), (4, "channel")])
+def test_an_mcap_schema_or_channel_record_of_absurd_length_is_refused_unread(tmp_path, capsys, op, kind) -> None:
+    """A review: an mcap file's schema and channel records were counted once read (MAX_CONNECTIONS_TOTAL_BYTES
+    together), but rosbags reads each whole first, bounded only by the file's size: a 300 MB schema record
+    held `lmsbench info` at 928 MB; one declaring 1 TiB in a 1.5 KB file was `cannot open as a ROS bag:
+    MemoryError`. A schema or channel record declaring more than MAX_CONNECTIONS_TOTAL_BYTES is refused
+    from its length, before it is read, naming the storage file and the record."""
+    from experiments.cli import main
+
+    bag = _mcap_with_declared_record(tmp_path / "b", op, 2**40)
+    assert main(["info", str(bag)]) == 2
+    err = capsys.readouterr().err
+    at = err.index("record at byte ")
+    start = int(err[at + len("record at byte "):].split(" ")[0].replace(",", ""))
+    assert (bag / "b.mcap").read_bytes()[start] == op  # the record it names
+    assert err == (f"lmsbench info: error: {bag}: its storage file b.mcap's {kind} record at byte {start:,} declares "
+                   "1,099,511,627,776 bytes, more than the 4,194,304 a ROS 2 bag's topics and message definitions may "
+                   "hold together (lms200.bag.MAX_CONNECTIONS_TOTAL_BYTES): an absurd message definition, or damage; "
+                   "not read\n"), err
+    ok = _ros2_bag_of_topics(tmp_path / "ok", 1, "mcap")  # the same bag without it reads
+    assert [r.scan.stamp for r in read_log(ok, topic="/scan0")] == [10.0]

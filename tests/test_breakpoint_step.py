@@ -176,4 +176,7 @@ def test_the_corners_breakpoint_lambda_is_set_from_the_command_line(tmp_path, ca
     assert main(base + ["--set", "extractor.split_merge.corners={breakpoint_lambda: 0.5}", "--out", str(tmp_path / "c")]) == 0
     capsys.readouterr()
     assert main(base + ["--set", "extractor.split_merge.corners.bogus=1", "--out", str(tmp_path / "d")]) == 2
-    assert capsys.readouterr().err.startswith("lmsbench compare: error: corners: has no field 'bogus' (its fields: ")
+    # named as an unknown field of the method is (it said "corners: has no field 'bogus' (its fields: ...)", no method)
+    assert capsys.readouterr().err == ("lmsbench compare: error: extractor.split_merge.corners.bogus: split_merge's "
+                                       "corner step (corners) has no field 'bogus'; its fields: min_turn, max_gap_beams, "
+                                       "max_distance, breakpoint_lambda, sigma\n")

@@ -576,10 +576,13 @@ CASES = [
     (["sweep", "{sweep_underscore.yaml}", "--out", O], "sweep_underscore.yaml: not valid YAML: line 4, column 17: key "
      "'extractor.k', item 1: 1_0 is read as 10"),
     # configs and sweep files over 1 MiB: refused unread (a 1.5 MB sweep file took 81 s to be refused)
-    (["sweep", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576 a config or sweep file "
-     "may hold (refused unread"),
-    (["slam", "{good.clf}", "--config", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576"),
-    (["simulate", "--sensor", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576"),
+    (["sweep", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576 a sweep file "
+     "may hold (refused unread; sweep files are a few KB: a sweep's grid lists the values of each parameter, not every cell)"),
+    # each file named as what it is (all spoke of "a config or sweep file" and "a sweep's grid")
+    (["slam", "{good.clf}", "--config", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576 "
+     "a SLAM config.yaml may hold (refused unread; they are a few KB)"),
+    (["simulate", "--sensor", "{huge.yaml}", "--out", O], "huge.yaml: 1,048,598 bytes, more than the 1,048,576 a sensor "
+     "YAML may hold (refused unread; they are a few KB)"),
     # a config through a pipe: refused, "(a pipe, a device or a socket)", without why
     (["slam", "{good.clf}", "--config", "{pipe.yaml}", "--out", O], "pipe.yaml: not a regular file but a pipe (<(cat FILE), "
      "/dev/stdin fed by a pipe, a FIFO): a SLAM config.yaml must be a regular file, as it is checked before it is read"),

@@ -286,3 +286,16 @@ def test_the_docs_sweep_files_pass_the_sweeps_checks() -> None:
         spec = SweepSpec.from_dict(data)
         check_spec(spec)
         assert spec.cells(), name
+
+
+def test_the_out_folders_paragraph_gives_the_record_size_bounds() -> None:
+    """A review: docs/commands.md's paragraph on --out folders said which records tell an earlier run's
+    folder, but not how large a record is read back (options.MAX_RECORD_YAML_BYTES, MAX_RECORD_JSON_BYTES):
+    it gives both, and they are the code's."""
+    from experiments.options import MAX_RECORD_JSON_BYTES, MAX_RECORD_YAML_BYTES
+
+    text = (ROOT / "docs" / "commands.md").read_text()
+    paragraph = next(p for p in text.split("\n\n") if "(`experiments.options.Owner`)" in p)
+    assert (f"at most {MAX_RECORD_YAML_BYTES >> 20} MiB (YAML" in paragraph
+            and "`experiments.options.MAX_RECORD_YAML_BYTES`" in paragraph)
+    assert f"or {MAX_RECORD_JSON_BYTES >> 20} MiB (JSON" in paragraph and "`MAX_RECORD_JSON_BYTES`" in paragraph

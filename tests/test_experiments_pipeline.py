@@ -383,3 +383,47 @@ def test_compare_still_takes_a_generator_of_sources() -> None:
 
     table = compare((s for s in [sim_source("office", duration=0.1, rate_hz=None)]), ["split_merge"])
     assert set(table["method"]) == {"split_merge"} and len(table) == 4  # 0.1 s: four scans
+
+
+def _study_tables(folder: Path, summary: pd.DataFrame | None) -> Path:
+    """A tables folder of `lmsbench figures` holding only the timing table of two methods and ``summary``."""
+    from experiments.figures.study import StudyConfig, save_tables
+
+    folder.mkdir()
+    timing = pd.DataFrame({"method": ["sensor"] * 3 + ["iepf"] * 3, "scan": [0, 1, 2] * 2,
+                           "time_ms": [0.1, 0.2, 0.1, 0.05, 0.04, 0.05]})
+    save_tables({"timing": timing, **({"summary": summary} if summary is not None else {})},
+                StudyConfig(methods=("sensor", "iepf"), slam=False), [], folder)
+    return folder
+
+
+SUMMARY = pd.DataFrame({"method": ["sensor", "iepf"], "f1": [0.98, 0.99], "time_ms_median": [0.1, 0.05],
+                        "time_ms_p25": [0.1, 0.04], "time_ms_p75": [0.2, 0.05]})
+
+
+@pytest.mark.parametrize("case, note", [
+    ("missing", "there is no table summary (summary.parquet), which it is drawn from"),
+    ("no f1", "table summary has no column f1 (line F1 against ground truth), which it plots"),
+    ("all nan", "none of table summary's 2 rows holds a number (not nan) in both f1 and time_ms_median, which it plots"),
+    ("f1 nan", "none of table summary's 2 rows holds a number (not nan) in both f1 and time_ms_median, which it plots"),
+])
+def test_figures_says_why_accuracy_speed_is_not_drawn(tmp_path, capsys, case, note) -> None:
+    """A review: `figures --tables DIR` with no summary.parquet, or one without an f1 column, dropped
+    accuracy_speed without a word; with its f1 (or time_ms_median) all nan it drew empty axes, exit 0.
+    It is not drawn, and a note line says which figure and why, as for an empty table (exit 0: the
+    other figures are drawn)."""
+    summary = {"missing": None, "no f1": SUMMARY.drop(columns=["f1"]),
+               "all nan": SUMMARY.assign(f1=np.nan, time_ms_median=np.nan),
+               "f1 nan": SUMMARY.assign(f1=[np.nan, np.nan])}[case]
+    tables = _study_tables(tmp_path / "tables", summary)
+    assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "out")]) == 0
+    printed = capsys.readouterr().out
+    assert not (tmp_path / "out" / "accuracy_speed.png").exists() and (tmp_path / "out" / "fig7_timing.png").exists()
+    assert f"note: accuracy_speed is not drawn: {note}\n" in printed, printed
+    if case != "f1 nan":
+        return
+    # one row with both numbers draws it, without a note
+    ok = _study_tables(tmp_path / "ok", SUMMARY.assign(f1=[np.nan, 0.99]))
+    assert main(["figures", "--tables", str(ok), "--out", str(tmp_path / "ok_out")]) == 0
+    assert "accuracy_speed is not drawn" not in capsys.readouterr().out
+    assert (tmp_path / "ok_out" / "accuracy_speed.png").exists()

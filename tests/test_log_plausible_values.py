@@ -12,7 +12,8 @@ import pytest
 from lms200 import LogFormatError, read_log, read_tum, write_tum
 from lms200.errors import InputError, LmsbenchError
 
-STAMP_RULE = "is outside 0 .. 2^32 s (4294967296 s, 2106-02-07): a log's clock is UNIX time or seconds since its start"
+STAMP_RULE = ("is outside 0 .. 2^32 s (4294967296 s, 2106-02-07), the stamps every log reader and writer takes: a "
+              "clock's UNIX time, or seconds since the run's start")
 
 
 def _robotlaser(t: str = "5", logger: str | None = None, laser_pose: str = "0 0 0", count: str = "3",

@@ -120,6 +120,11 @@ def test_slam_says_an_extractor_field_no_scan_reads(cm_log, tmp_path, capsys) ->
     assert record["extractor_config"]["sigma_r"] == "0.02: not read (no mm-mode scan)"
     assert record["extractor_config"]["sigma_r_cm"] == "auto"
     assert record["slam"]["extractor_params"] == {"sigma_r": 0.02}  # the setting itself, read back by --config
+    # read back as it is: the record's "not read" mark is no edit of the extractor's settings (edits are refused)
+    assert main(["slam", str(cm_log), "--config", str(tmp_path / "a" / "config.yaml"), "--out", str(tmp_path / "c"),
+                 *common]) == 0
+    assert yaml.safe_load((tmp_path / "c" / "config.yaml").read_text())["extractor_config"] == record["extractor_config"]
+    capsys.readouterr()
     assert main(["slam", str(cm_log), "--set", "extractor.sigma_r_cm=0.02", "--out", str(tmp_path / "b"), *common]) == 0
     assert "warning: sensor" not in capsys.readouterr().err
     assert yaml.safe_load((tmp_path / "b" / "config.yaml").read_text())["extractor_config"]["sigma_r_cm"] == 0.02

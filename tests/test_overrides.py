@@ -57,3 +57,21 @@ def test_a_noise_field_takes_metres_or_auto_and_nothing_else(name):
             make_config("sensor", **{name: value})
     with pytest.raises(LmsbenchError, match="k must be a whole number"):
         _check_types("sensor", {"k": 2.5})
+
+
+@pytest.mark.parametrize("method", ["split_merge", "iepf", "hough", "ransac"])
+def test_an_unknown_corner_field_names_the_method_and_a_known_one_is_set(method):
+    """A review: `--set extractor.METHOD.corners.FIELD=V` of a field the corner step does not have said
+    "corners: has no field 'bogus' (its fields: ...)" (the config's check), naming no method, where an
+    unknown field of the method itself names the key and the method. And a sweep cell of another method
+    refused a known corner field of this one ("iepf has no field 'corners.sigma'"): it is ignored there,
+    checked as its own method's is."""
+    fields = "min_turn, max_gap_beams, max_distance, breakpoint_lambda, sigma"
+    for other in (False, True):
+        with pytest.raises(OverrideError) as info:
+            extractor_overrides({f"extractor.{method}.corners.bogus": 1}, [method] if not other else ["sensor"],
+                                other_methods=other)
+        assert str(info.value) == (f"extractor.{method}.corners.bogus: {method}'s corner step (corners) has no field "
+                                   f"'bogus'; its fields: {fields}")
+    assert extractor_overrides({f"extractor.{method}.corners.sigma": 0.01}, [method]) == {method: {"corners": {"sigma": 0.01}}}
+    assert extractor_overrides({f"extractor.{method}.corners.sigma": 0.01}, ["sensor"], other_methods=True) == {}  # old: refused

@@ -48,10 +48,11 @@ def test_compare_refuses_a_simulate_config_beyond_a_configs_size_unread(folder, 
     # before any work: it was refused after the kernels' warm-up (on a fresh checkout a 1-2 min compile; a review)
     monkeypatch.setattr(experiments.progress, "warm_up_kernels", lambda *a, **k: pytest.fail("warmed up first"))
     assert main(["compare", str(run), "--methods", "sensor", "--out", str(tmp_path / "out"), "--no-progress"]) == 2
-    assert capsys.readouterr().err == (  # old: read whole, then "not a simulate config (...)"
-        f"lmsbench compare: error: {run / 'config.yaml'}: 1,048,577 bytes, more than the 1,048,576 a config or sweep "
-        "file may hold (refused unread; they are a few KB: a sweep's grid lists the values of each parameter, not "
-        "every cell)\n")
+    # old: read whole, then "not a simulate config (...)"; then "... a config or sweep file may hold (refused unread;
+    # they are a few KB: a sweep's grid lists the values of each parameter, not every cell)", of a file no sweep's
+    assert capsys.readouterr().err == (
+        f"lmsbench compare: error: {run / 'config.yaml'}: 1,048,577 bytes, more than the 1,048,576 a simulate folder's "
+        "config.yaml may hold (refused unread; lmsbench simulate writes one of a few KB at most)\n")
 
 
 def test_compare_refuses_a_simulate_config_that_is_a_pipe(folder, tmp_path, capsys) -> None:
@@ -77,7 +78,8 @@ def test_slams_deskew_hint_reads_no_config_beyond_a_configs_size(folder, tmp_pat
     read: list[Path] = []
     real = Path.read_text
     monkeypatch.setattr(Path, "read_text", lambda self, *a, **k: read.append(self) or real(self, *a, **k))
-    with pytest.raises(LmsbenchError, match=r"config\.yaml: 1,048,577 bytes, more than the 1,048,576 a config"):
+    with pytest.raises(LmsbenchError, match=r"config\.yaml: 1,048,577 bytes, more than the 1,048,576 a simulate "
+                                            r"folder's config\.yaml may hold"):
         simulated_interlaced(run)  # passed over, the run de-skewed as the LMS200's whatever the file said (a review)
     assert read == []  # old: read whole (3 GB: as much memory and 56 s), then passed over as damaged
     (run / "config.yaml").unlink()

@@ -113,7 +113,8 @@ def test_a_tum_stamp_near_1e308_is_quoted_compactly(tmp_path: Path) -> None:
         read_tum(tmp_path / "t.tum")
     # refused at its own line now (lms200.records.MAX_STAMP_S), still quoted compactly
     assert str(info.value) == (f"{tmp_path / 't.tum'}:1: TUM time 1e+308 s is outside 0 .. 2^32 s (4294967296 s, "
-                               "2106-02-07): a log's clock is UNIX time or seconds since its start")
+                               "2106-02-07), the stamps every log reader and writer takes: a clock's UNIX time, or "
+                               "seconds since the run's start")
 
 
 def _flaser_log(path: Path, stamps: list[str]) -> Path:
@@ -132,8 +133,9 @@ def test_slam_and_info_quote_a_stamp_near_1e308_compactly(tmp_path: Path, capsys
         assert main(command) == 2
         err = capsys.readouterr().err.strip()
         assert err == (f"lmsbench {command[0]}: error: {log}:1: malformed FLASER line: ipc_timestamp 1e+308 s is "
-                       "outside 0 .. 2^32 s (4294967296 s, 2106-02-07): a log's clock is UNIX time or seconds since "
-                       "its start (--skip-bad-lines skips malformed lines, each reported)")
+                       "outside 0 .. 2^32 s (4294967296 s, 2106-02-07), the stamps every log reader and writer takes: "
+                       "a clock's UNIX time, or seconds since the run's start (--skip-bad-lines skips malformed lines, "
+                       "each reported)")
 
 
 def test_a_robotlaser_header_of_1e300_steps_is_quoted_compactly(tmp_path: Path) -> None:

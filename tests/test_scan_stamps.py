@@ -4,12 +4,14 @@ a step of 1e200 s, in SLAM's motion model)."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
 from lms200 import LmsbenchError, Scan
 from lms200.errors import ScanError
-from lms200.records import MAX_STAMP_S
+from lms200.records import MAX_STAMP_S, stamp_problem
 
 
 @pytest.mark.parametrize("stamp, shown", [(-1e300, "-1e+300"), (1e300, "1e+300"), (-1.0, "-1.000000"),
@@ -17,10 +19,14 @@ from lms200.records import MAX_STAMP_S
 def test_a_stamp_outside_0_to_2_32_s_is_refused_naming_the_field(stamp: float, shown: str) -> None:
     with pytest.raises(ScanError) as info:
         Scan(np.ones(3), 0.0, 0.01, 0.0, 8.0, stamp=stamp)
-    assert str(info.value) == ("stamp: must be in 0 .. 2^32 s (4294967296 s, 2106-02-07), as every log reader and writer "
-                               "takes it (a clock's UNIX time or seconds since the run's start), got " + shown + " s")
+    # the readers' wording (lms200.records.stamp_problem, the same function); it said "stamp: must be in 0 .. 2^32 s
+    # (4294967296 s, 2106-02-07), as every log reader and writer takes it (a clock's UNIX time or seconds since the
+    # run's start), got V s", the one rule in two wordings
+    assert str(info.value) == (f"stamp {shown} s is outside 0 .. 2^32 s (4294967296 s, 2106-02-07), the stamps every log "
+                               "reader and writer takes: a clock's UNIX time, or seconds since the run's start")
+    assert str(info.value) == stamp_problem(stamp, "stamp")
     assert isinstance(info.value, LmsbenchError) and isinstance(info.value, ValueError)
-    with pytest.raises(ScanError, match="^stamp: must be in 0 .. 2"):
+    with pytest.raises(ScanError, match=f"^stamp {re.escape(shown)} s is outside 0 .. 2"):
         Scan(np.ones(3), 0.0, 0.01, 0.0, 8.0).replace(stamp=stamp)
 
 

@@ -131,8 +131,9 @@ def test_slam_refuses_a_log_of_one_stamp_and_warns_of_steps_without_time(sim_fol
 @pytest.mark.parametrize("damage, message", [
     # no log holds such a stamp now (0 .. 2^32 s, lms200.records.MAX_STAMP_S: write_log refuses it, and the reader,
     # tests/test_log_plausible_values.py); run_slam still refuses it its own way
-    ("gap", "records: item 10: stamp 1e+200 s is outside 0 .. 2^32 s (4294967296 s, 2106-02-07): a log's clock is UNIX "
-            "time or seconds since its start; the CARMEN reader refuses it (the log could not be read back)"),
+    ("gap", "records: item 10: stamp 1e+200 s is outside 0 .. 2^32 s (4294967296 s, 2106-02-07), the stamps every log "
+            "reader and writer takes: a clock's UNIX time, or seconds since the run's start; the CARMEN reader refuses it "
+            "(the log could not be read back)"),
     # nor such a pose: the CARMEN reader refuses it, as the TUM reader does (lms200.carmen.MAX_COORD_M), and so does
     # write_log (tests/test_carmen_pose_bounds.py, with the reader's refusal on the command line)
     ("odom", "records: item 10: odom pose (1e+300, -3) m lies beyond +-1e+09 m, which the CARMEN reader refuses "
@@ -1247,3 +1248,46 @@ def test_slam_on_a_world_with_no_wall_in_the_scan_plane_writes_no_map_score(sim_
     assert capsys.readouterr().err.strip().splitlines().count(note) == 1
     metrics = json.loads((tmp_path / "o" / "metrics.json").read_text())
     assert "map" not in metrics and "ate" in metrics
+
+
+HINT = ("set extractor fields under {}extractor_params: (`extractor_params: {{k: 7}}`), or with --set "
+        "extractor.FIELD=VALUE (extractor.corners.FIELD=VALUE for a corner field)")
+
+
+def test_an_edit_of_a_runs_extractor_config_record_is_refused(sim_folder, tmp_path, capsys) -> None:
+    """A review: a run's config.yaml records the extractor's resolved settings under extractor_config:,
+    which `slam --config` reads past: `k: 3` edited to `k: 7` there ran k = 3, exit 0 (the same
+    trajectory, the new run's record saying 3). An edit is refused, naming the key and the field and
+    saying where extractor fields go; the record as written is read past as before; extractor_config:
+    as a SLAM field (flat, or under slam:) says the same instead of only "unknown SLAM config field"."""
+    from experiments.cli import main
+
+    common = ["--quiet", "--no-paper-baseline", "--max-scans", "4"]
+    assert main(["slam", str(sim_folder), "--out", str(tmp_path / "a"), *common]) == 0
+    text = (tmp_path / "a" / "config.yaml").read_text()
+    assert text.count("\n  k: 3\n") == 1
+    edited = tmp_path / "edited.yaml"
+    edited.write_text(text.replace("\n  k: 3\n", "\n  k: 7\n"))
+    capsys.readouterr()
+    assert main(["slam", str(sim_folder), "--config", str(edited), "--out", str(tmp_path / "b"), *common]) == 2  # old: 0
+    assert capsys.readouterr().err == (
+        f"lmsbench slam: error: {edited}: extractor_config: k: 7 differs from what its slam: section gives 3 (sensor); "
+        "extractor_config: is the record of what a run ran, which --config does not read (the run would ignore the "
+        f"edit); {HINT.format('slam: ')}\n")
+    assert not (tmp_path / "b").exists()
+    edited.write_text(text.replace("extractor_config:\n", "extractor_config:\n  kk: 1\n"))
+    assert main(["slam", str(sim_folder), "--config", str(edited), "--out", str(tmp_path / "b"), *common]) == 2
+    assert "extractor_config: kk: 1 differs from what its slam: section names no such field (sensor);" in \
+        capsys.readouterr().err
+    assert main(["slam", str(sim_folder), "--config", str(tmp_path / "a" / "config.yaml"), "--out", str(tmp_path / "c"),
+                 *common]) == 0  # the record as written
+    assert (tmp_path / "c" / "trajectory.tum").read_text() == (tmp_path / "a" / "trajectory.tum").read_text()
+    for text, where, nested in (("extractor_config: {k: 7}\n", "in it", ""),
+                                ("slam: {extractor_config: {k: 7}}\n", "under slam:", "slam: ")):
+        edited.write_text(text)
+        capsys.readouterr()
+        assert main(["slam", str(sim_folder), "--config", str(edited), "--out", str(tmp_path / "d"), *common]) == 2
+        assert capsys.readouterr().err == (
+            f"lmsbench slam: error: {edited}: extractor_config: {where} is no SLAM config field (a slam run's config.yaml "
+            "records the extractor's resolved settings under that name, beside slam:, and --config does not read "
+            f"them); {HINT.format(nested)}\n")

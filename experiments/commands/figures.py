@@ -36,7 +36,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from experiments.figures.make import DRIVING_TABLES, check_tables, draw_figures, draw_sweep
+    from experiments.figures.make import DRIVING_TABLES, accuracy_speed_problem, check_tables, draw_figures, draw_sweep
     from experiments.provenance import link_latest, new_run_folder, write_record
     from experiments.figures.study import (StudyConfig, check_panel_log, check_study, load_config, load_tables, run_study,
                                            save_tables)
@@ -119,6 +119,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"note: {note}")
     for name in sorted(n for n, t in tables.items() if not len(t) and n in DRIVING_TABLES):
         print(f"note: table {name} is empty: the figures drawn from it are not drawn")
+    if (problem := accuracy_speed_problem(tables)) is not None:
+        print(f"note: {problem}")
     print(f"wrote {sum(len(p) for p in written.values())} files in {args.out}")
     return 0
 

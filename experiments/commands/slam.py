@@ -59,6 +59,55 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+def _extractor_fields_hint(nested: bool) -> str:
+    """How to set an extractor's fields, in a run's config.yaml (``nested``: under slam:) or a mapping of SLAM fields."""
+    return (f"set extractor fields under {'slam: ' if nested else ''}extractor_params: (`extractor_params: {{k: 7}}`), "
+            "or with --set extractor.FIELD=VALUE (extractor.corners.FIELD=VALUE for a corner field)")
+
+
+def _check_extractor_record(config: Path, recorded: dict, cfg: Any) -> None:  # noqa: ANN401 - a SlamConfig
+    """InputError for a run's config.yaml whose ``extractor_config:`` record (the extractor's resolved
+    settings, :func:`experiments.slamrun.write_config`) differs from what its ``slam:`` section gives
+    (``extractor`` with ``extractor_params``): an edit of the record, which ``--config`` does not read
+    (`k: 3` -> `k: 7` there ran k = 3, exit 0, the record of the new run saying 3). A field the record
+    lacks (an earlier version's, or removed) is no edit; a mode-bound noise field recorded as
+    ``"V: not read (no MODE-mode scan)"`` matches V."""
+    from experiments.compare import resolved_configs
+    from experiments.overrides import MODE_FIELDS
+    from lms200.yamlio import dump as dump_yaml
+
+    try:
+        resolved = resolved_configs([cfg.extractor], {cfg.extractor: cfg.extractor_params})[cfg.extractor]
+    except Exception:  # noqa: BLE001 - the run checks its extractor's fields itself, with its own message
+        return
+    expected = load_yaml(dump_yaml(resolved))  # as the record was written and read back: tuples as lists
+
+    def differs(path: str, got: Any, want: Any, raw: Any) -> tuple[str, Any, Any] | None:  # noqa: ANN401
+        if isinstance(got, dict) and isinstance(want, dict):
+            for key, value in got.items():
+                if key not in want:
+                    return f"{path}{key}", value, "no such field"
+                found = differs(f"{path}{key}.", value, want[key], raw.get(key) if isinstance(raw, dict) else None)
+                if found:
+                    return found
+            return None
+        if got == want:
+            return None
+        field = path.rstrip(".")
+        if field in MODE_FIELDS and isinstance(got, str) and got.startswith(f"{raw!r}: not read ("):
+            return None
+        return field, got, want
+
+    found = differs("", recorded, expected, resolved)
+    if found is None:
+        return
+    field, got, want = found
+    gives = "names no such field" if want == "no such field" else f"gives {want!r}"
+    raise InputError(f"{config}: extractor_config: {field}: {got!r} differs from what its slam: section {gives} "
+                     f"({cfg.extractor}); extractor_config: is the record of what a run ran, which --config does not "
+                     f"read (the run would ignore the edit); {_extractor_fields_hint(True)}")
+
+
 def _config(args: argparse.Namespace):
     import dataclasses
 
@@ -90,12 +139,19 @@ def _config(args: argparse.Namespace):
             if not isinstance(raw["slam"], dict):
                 raise InputError(f"{args.config}: slam: must be a mapping of SLAM config fields, got {raw['slam']!r}")
         fields = raw.get("slam", raw)
+        if "extractor_config" in fields:  # refused as an unknown field, without saying where extractor fields go
+            where = "under slam:" if "slam" in raw else "in it"
+            raise InputError(f"{args.config}: extractor_config: {where} is no SLAM config field (a slam run's config.yaml "
+                             "records the extractor's resolved settings under that name, beside slam:, and --config does "
+                             f"not read them); {_extractor_fields_hint('slam' in raw)}")
         try:
             if isinstance(fields.get("extractor"), str) and is_user_method(fields["extractor"]):
                 ensure_method(fields["extractor"])  # registered before SlamConfig checks the name
             cfg = SlamConfig.from_dict(fields)
         except LmsbenchError as exc:
             raise InputError(f"{args.config}: {exc}") from None
+        if "slam" in raw and isinstance(raw.get("extractor_config"), dict):
+            _check_extractor_record(args.config, raw["extractor_config"], cfg)
     changes = {}
     if args.preset:
         changes["preset"] = args.preset

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from experiments.options import SWEEP_OUTPUTS, SWEEP_OWNER, InputError, check_link, check_out, check_out_spares, check_yaml, count, path_arg, real_path, text
+from lms200.yamlio import SWEEP_SIZE_HINT
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
     from experiments.sweep import SweepSpecError, load_sweep, run_sweep
     from experiments.sweep.runner import spec_record
 
-    check_yaml(args.sweep, "a sweep file")
+    check_yaml(args.sweep, "a sweep file", size_hint=SWEEP_SIZE_HINT)
     spec = load_sweep(args.sweep)
     out = args.out = args.out or Path("results/sweeps") / spec.name  # named if a reader of stdout that goes away stops it
     check_link(out)  # a loop of links is said by name (real_path below leaves it as it is)

@@ -54,6 +54,31 @@ TABLE_COLUMNS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 }
 
 
+def accuracy_speed_problem(tables: dict[str, pd.DataFrame]) -> str | None:
+    """Why ``accuracy_speed`` cannot be drawn from ``tables`` (the note ``figures`` prints), or None when
+    it can or when its table ``summary`` is there without rows (noted as an empty table). From a
+    ``--tables`` folder without summary.parquet, or whose summary had no ``f1``, it was dropped without
+    a word; one whose f1 or time_ms_median were all nan drew empty axes, exit 0."""
+    summary = tables.get("summary")
+    if summary is None:
+        return "accuracy_speed is not drawn: there is no table summary (summary.parquet), which it is drawn from"
+    if not len(summary):
+        return None
+    if "f1" not in summary:
+        return ("accuracy_speed is not drawn: table summary has no column f1 (line F1 against ground truth), "
+                "which it plots")
+    if "time_ms_median" in summary and not (_finite(summary["f1"]) & _finite(summary["time_ms_median"])).any():
+        return (f"accuracy_speed is not drawn: none of table summary's {len(summary)} rows holds a number (not nan) "
+                "in both f1 and time_ms_median, which it plots")
+    return None
+
+
+def _finite(column: pd.Series) -> pd.Series:
+    """Which values of ``column`` are finite numbers (text, nan and inf are not)."""
+    numbers = pd.to_numeric(column, errors="coerce").astype(float)
+    return numbers.notna() & (numbers.abs() != float("inf"))
+
+
 def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
     """LmsbenchError naming ``where`` (the tables' folder), the table and the column, for a table
     that lacks a column the figures read or holds text (or dates, ...) where they plot numbers.
@@ -121,7 +146,7 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
     if "trajectory" in tables and "map" in tables:
         plan.append(("fig10_slam", lambda: draw.fig_slam(tables["trajectory"], tables["map"], out / "fig10_slam",
                                                          "Fig. 10: SLAM without odometry against ground truth")))
-    if "summary" in tables and "f1" in tables["summary"]:
+    if "summary" in tables and accuracy_speed_problem(tables) is None:
         plan.append(("accuracy_speed", lambda: draw.fig_accuracy_speed(tables["summary"], out / "accuracy_speed")))
     written: dict[str, list[Path]] = {}
     for number, (name, figure) in enumerate(plan, 1):

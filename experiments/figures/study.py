@@ -292,7 +292,7 @@ def load_config(folder: Path) -> StudyConfig:
     from lms200.yamlio import size_problem
 
     path = folder / "study.yaml"
-    too_big = size_problem(path.stat().st_size) if path.is_file() else None
+    too_big = size_problem(path.stat().st_size, "a study.yaml", "lmsbench figures writes a few KB") if path.is_file() else None
     if too_big:  # read whole and parsed, a 30 MB one took 10 s before its error
         raise LmsbenchError(f"{path}: {too_big}")
     try:

@@ -31,7 +31,7 @@ parameter becomes a column of the result table, under the name written here.
 
 from __future__ import annotations
 
-from lms200.yamlio import load as load_yaml, size_problem
+from lms200.yamlio import SWEEP_SIZE_HINT, load as load_yaml, size_problem
 
 import hashlib
 import itertools
@@ -154,7 +154,7 @@ class SweepSpec:
 def load_sweep(path: str | Path) -> SweepSpec:
     """Read and check a sweep YAML file."""
     path = Path(path)
-    too_big = size_problem(path.stat().st_size) if path.is_file() else None
+    too_big = size_problem(path.stat().st_size, "a sweep file", SWEEP_SIZE_HINT) if path.is_file() else None
     if too_big:  # refused unread: a 1.5 MB file took 81 s to parse and check
         raise SweepSpecError(f"{path}: {too_big}")
     try:
