@@ -1247,3 +1247,20 @@ def test_slam_on_a_world_with_no_wall_in_the_scan_plane_writes_no_map_score(sim_
     assert capsys.readouterr().err.strip().splitlines().count(note) == 1
     metrics = json.loads((tmp_path / "o" / "metrics.json").read_text())
     assert "map" not in metrics and "ate" in metrics
+
+
+def test_every_and_rate_hz_together_are_refused_before_any_work(sim_folder, tmp_path, capsys):
+    """`lmsbench slam RUN --every 2 --rate-hz 5` kept the scans by the rate alone (the --every was ignored,
+    exit 0, while config.yaml said `every: 2`). Each chooses the scans kept: given together they are refused,
+    one line, exit 2, no output folder made; the library's load_input likewise."""
+    from experiments.cli import main
+    from experiments.slamrun import load_input
+
+    message = ("--every 2 and --rate-hz 5 both choose the scans kept (every N-th scan, or about that many a second "
+               "by the stamps); give one of them")
+    assert main(["slam", str(sim_folder), "--every", "2", "--rate-hz", "5", "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [f"lmsbench slam: error: {message}"]
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(LmsbenchError, match=re.escape(message)):
+        load_input(sim_folder, every=2, rate_hz=5.0)
+    assert len(load_input(sim_folder, every=1, rate_hz=5.0).records) == len(load_input(sim_folder, rate_hz=5.0).records)
