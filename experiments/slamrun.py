@@ -132,6 +132,12 @@ def _check_cut_boxes(path: Path, content: dict) -> None:
                             "wall (simulate writes those boxes' faces there)")
 
 
+#: --every and --rate-hz given together: each chooses the scans kept, and load_input kept them by the rate alone
+#: (`slam RUN --every 2 --rate-hz 5` ran 5 scans/s, exit 0, its config.yaml saying every: 2)
+EVERY_AND_RATE = ("--every {every} and --rate-hz {rate_hz:g} both choose the scans kept (every N-th scan, or about "
+                  "that many a second by the stamps); give one of them")
+
+
 def load_input(path: str | Path, relations: str | Path | None = None, every: int = 1,
                max_scans: int | None = None, rate_hz: float | None = None,
                read_options: dict[str, Any] | None = None, config: SlamConfig | None = None) -> SlamInput:
@@ -150,13 +156,15 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
             (options.check_simulate_finished), an input without scans, or none with a valid beam, or
             more than one scan read and all of one stamp (no time between scans for the motion model), or
             one scan to run on (an input of one scan, ``max_scans`` below 2, ``rate_hz`` / ``every`` that
-            keep one scan of several).
+            keep one scan of several), or ``every`` other than 1 beside ``rate_hz`` (give one).
     """
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"no such input: {p}")
     if every < 1:
         raise LmsbenchError(f"--every must be >= 1, got {every}")
+    if every != 1 and rate_hz is not None:  # both choose the scans kept: --every was ignored, config.yaml saying it
+        raise LmsbenchError(EVERY_AND_RATE.format(every=every, rate_hz=rate_hz))
     if max_scans is not None and max_scans < 2:
         raise LmsbenchError(f"--max-scans must be >= 2 (SLAM needs two or more scans), got {max_scans}")
     sources: dict[str, str] = {}

@@ -299,3 +299,47 @@ def test_the_out_folders_paragraph_gives_the_record_size_bounds() -> None:
     assert (f"at most {MAX_RECORD_YAML_BYTES >> 20} MiB (YAML" in paragraph
             and "`experiments.options.MAX_RECORD_YAML_BYTES`" in paragraph)
     assert f"or {MAX_RECORD_JSON_BYTES >> 20} MiB (JSON" in paragraph and "`MAX_RECORD_JSON_BYTES`" in paragraph
+
+
+#: the reading options every command that reads a log takes (experiments.cli), written `[LOG OPTIONS]` in the
+#: usage lines of docs/commands.md's table
+LOG_OPTIONS = ("--topic", "--skip-bad-lines", "--laser-fov-deg", "--laser-resolution-deg", "--laser-angle-min-deg",
+               "--laser-range-max")
+
+
+def test_the_commands_table_usage_lines_name_every_option() -> None:
+    """docs/commands.md's table showed `lmsbench slam INPUT --out DIR [--preset P] [--rate-hz HZ] [--set ...]`,
+    without --config, --extractor, --odometry, --relations, --every, --max-scans, ... of `slam --help`, and
+    `sweep`, `figures`, `compare`, `simulate`, `demo` and `lms200 record` the same way. Each usage line of the
+    table names every option of its command (one spelling of each; `LOG OPTIONS` for the log-reading ones),
+    and only options the command has."""
+    import argparse
+
+    from experiments.cli import build_parser
+
+    def subcommands(parser, name=""):
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub, subparser in action.choices.items():
+                    yield f"{name} {sub}".strip(), subparser
+                    yield from subcommands(subparser, f"{name} {sub}".strip())
+
+    parsers = dict(subcommands(build_parser()))
+    rows = [line for line in (ROOT / "docs" / "commands.md").read_text().splitlines() if line.startswith("| `lmsbench ")]
+    usages = [u for row in rows for u in re.findall(r"`(lmsbench [a-z][^`]*)`", row.split(" | ")[0])]
+    seen, wrong = set(), []
+    for usage in usages:
+        words = usage.split()
+        name = " ".join(words[1:3]) if words[1] == "lms200" else words[1]
+        parser = parsers[name]
+        seen.add(name)
+        flags = set(re.findall(r"(?<![\w-])(--[a-z][a-z0-9-]*)", usage))
+        if "LOG OPTIONS" in usage:
+            flags |= set(LOG_OPTIONS)
+        spellings: dict[str, list[str]] = {}  # by dest: `compare --method` is `--methods` again
+        for action in parser._actions:
+            spellings.setdefault(action.dest, []).extend(o for o in action.option_strings if o.startswith("--") and o != "--help")
+        wrong += [f"{name}: the usage line lacks {names[0]}" for names in spellings.values() if names and not flags & set(names)]
+        wrong += [f"{name}: the usage line names {f}, which it does not have" for f in flags - set(parser._option_string_actions)]
+    assert not wrong, wrong
+    assert seen == {n for n, p in parsers.items() if n != "lms200"}, sorted(seen)

@@ -1291,3 +1291,20 @@ def test_an_edit_of_a_runs_extractor_config_record_is_refused(sim_folder, tmp_pa
             f"lmsbench slam: error: {edited}: extractor_config: {where} is no SLAM config field (a slam run's config.yaml "
             "records the extractor's resolved settings under that name, beside slam:, and --config does not read "
             f"them); {HINT.format(nested)}\n")
+
+
+def test_every_and_rate_hz_together_are_refused_before_any_work(sim_folder, tmp_path, capsys):
+    """`lmsbench slam RUN --every 2 --rate-hz 5` kept the scans by the rate alone (the --every was ignored,
+    exit 0, while config.yaml said `every: 2`). Each chooses the scans kept: given together they are refused,
+    one line, exit 2, no output folder made; the library's load_input likewise."""
+    from experiments.cli import main
+    from experiments.slamrun import load_input
+
+    message = ("--every 2 and --rate-hz 5 both choose the scans kept (every N-th scan, or about that many a second "
+               "by the stamps); give one of them")
+    assert main(["slam", str(sim_folder), "--every", "2", "--rate-hz", "5", "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [f"lmsbench slam: error: {message}"]
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(LmsbenchError, match=re.escape(message)):
+        load_input(sim_folder, every=2, rate_hz=5.0)
+    assert len(load_input(sim_folder, every=1, rate_hz=5.0).records) == len(load_input(sim_folder, rate_hz=5.0).records)

@@ -255,7 +255,11 @@ def run(args: argparse.Namespace) -> int:
     from experiments.slamrun import (deskew_for_sensor, load_input, run as run_slam, simulated_interlaced,
                                      write_scores)
 
+    from experiments.slamrun import EVERY_AND_RATE
+
     started = time.perf_counter()  # the whole command's wall clock, which the summary says beside the run's own
+    if args.every != 1 and args.rate_hz is not None:  # before any work, as load_input refuses them too
+        raise LmsbenchError(EVERY_AND_RATE.format(every=args.every, rate_hz=args.rate_hz))
     _check_input(Path(args.input))
     if args.relations is not None:
         check_file(args.relations, "a relations file")
