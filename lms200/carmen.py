@@ -510,11 +510,12 @@ class CarmenReader:
                     self._check_range_max(line_no, params.get(RANGE_MIN_PARAM, 0.0))
                     odom: Pose2D | None
                     if kind in ("FLASER", "RLASER"):
-                        geometry = self.geometry.merged(laser_geometry.from_params(kind, params))
+                        declared = laser_geometry.from_params(kind, params)
+                        geometry = self.geometry.merged(declared)
                         exact_min, exact_step = EXACT_GEOMETRY_NAMES[kind]
                         exact = (params.get(exact_min), params.get(exact_step))
                         scan, odom = _parse_flaser(words, units, geometry, params.get(RANGE_MIN_PARAM, 0.0), exact,
-                                                   range_words)
+                                                   range_words, declared.range_max)
                     else:
                         scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
                                                        params.get(RANGE_MIN_PARAM, 0.0), range_words,
@@ -929,29 +930,46 @@ def _finite_pose(values: list[float], what: str) -> Pose2D:
     return (x, y, t)
 
 
-def _ranges(values: np.ndarray, units: Units | None, what: str) -> tuple[np.ndarray, Units]:
+def _ranges(values: np.ndarray, units: Units | None, what: str,
+            declared_max: float | None = None) -> tuple[np.ndarray, Units]:
     """Logged ranges (m) in REP-117 form: SICK codes decoded; ``nan`` / ``inf`` written as text
     (logs converted from ROS) keep their REP-117 meaning, ``-inf`` too (an object too close to
-    measure); a finite negative range is malformed."""
+    measure); a finite negative range is malformed. A reading equal to the maximum range the log
+    declares for the line (``declared_max``: ROBOTLASER / RAWLASER's max_range field, FLASER's
+    ``PARAM robot_front_laser_max``) is the logger's max-range reading: +inf (no return), as the
+    LMS200's code 8183, its own maximum range, is."""
     negative = finite_negative(values)
     if np.any(negative):
         raise ValueError(f"{what}: negative range {values[negative][0]:g} in the log")
     u = units or infer_units(values)
-    return decode_logged_ranges(values, u), u
+    return at_max_range(decode_logged_ranges(values, u), declared_max), u
+
+
+def at_max_range(ranges: np.ndarray, declared_max: float | None) -> np.ndarray:
+    """``ranges`` with each reading equal to ``declared_max`` (a CARMEN line's declared maximum range,
+    or None) made +inf, in place: CARMEN loggers write a beam with no return as the sensor's maximum
+    range (a Hokuyo's 30 m), and CARMEN's tools count a reading at the maximum range as no hit; read
+    as a valid reading, a 270 deg scan's open sectors became arcs of points at 30 m, which the
+    extractors fitted lines to (17.0 lines a scan against 13.0 where the same beams were written
+    above the maximum)."""
+    if declared_max is not None:
+        ranges[ranges == declared_max] = np.inf
+    return ranges
 
 
 def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry,
                   range_min: float = 0.0,
                   exact: tuple[float | None, float | None] = (None, None),
-                  cache: _RangeWords | None = None) -> tuple[Scan, Pose2D]:
-    """A FLASER / RLASER line's scan and odometry; ``cache``: the pass's range words (:func:`_range_floats`)."""
+                  cache: _RangeWords | None = None, declared_max: float | None = None) -> tuple[Scan, Pose2D]:
+    """A FLASER / RLASER line's scan and odometry; ``cache``: the pass's range words (:func:`_range_floats`);
+    ``declared_max``: the maximum range of the log's PARAM lines (a reading at it is no return, :func:`_ranges`)."""
     kind = words[0]
     _require(len(words) >= 2, f"{kind} needs a beam count")
     n = _count(words[1], "beam count")
     _require(n > 0, f"{kind} needs at least one beam, got a beam count of {n}")  # was "needs 11 fields, got 11"
     _require(_tail_fits(words, _field_count(kind, n) - 2, 2 + n),
              f"{kind} with {n} beams needs {_field_count(kind, n)} fields, got {len(words)}")
-    ranges, u = _ranges(_range_floats(words[2 : 2 + n], f"{kind} ranges", cache), units, kind)
+    ranges, u = _ranges(_range_floats(words[2 : 2 + n], f"{kind} ranges", cache), units, kind, declared_max)
     tail = _few_floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
     _stamps(words, tail[6], _logger_at(words, 2 + n + 7))
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
@@ -1002,7 +1020,8 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
              f"got {words[4]}")
     if units is None and accuracy in (0.01, 0.001):
         units = "cm" if accuracy == 0.01 else "mm"
-    ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind)
+    declared = max_range if laser_geometry.MIN_RANGE_MAX_M <= max_range <= laser_geometry.MAX_RANGE_M else None
+    ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind, declared)
     tail = _few_floats(words[10 + n + m : 10 + n + m + (1 if kind.startswith("RAWLASER") else 12)],
                        f"{kind} timestamp" if kind.startswith("RAWLASER") else f"{kind} poses and timestamp")
     stamp = _stamps(words, tail[-1], _logger_at(words, expected - 2))
@@ -1048,15 +1067,16 @@ def _format_ranges(scan: Scan, units: Units) -> str:
                                  | (x <= 2 * scale) | (np.abs(x / scale - SPECIAL_BAND_MIDDLE) <= SPECIAL_BAND_HALF + 2))
     index = np.flatnonzero(near)  # read back together: one at a time cost ~35 us a beam, 20x the writer's
     if index.size:  # time on scans whose no-returns are 0 or range_max
-        changed = _meaning_changed(scan, _read_back([words[i] for i in index], units), scale, index)
+        changed = _meaning_changed(scan, _read_back([words[i] for i in index], units, scan.range_max), scale, index)
         for i in index[changed]:
             words[i] = _kept_word(scan, int(i), units)
     return " ".join(words)
 
 
-def _read_back(words: list[str], units: Units) -> np.ndarray:
-    """The ranges (m, REP-117) a reader takes ``words`` (range words of ``units``) for."""
-    return decode_logged_ranges(np.array(words, dtype=np.float64), units)
+def _read_back(words: list[str], units: Units, declared_max: float) -> np.ndarray:
+    """The ranges (m, REP-117) a reader takes ``words`` (range words of ``units``, on a line that
+    declares ``declared_max`` as its maximum range, as the writer's lines do) for."""
+    return at_max_range(decode_logged_ranges(np.array(words, dtype=np.float64), units), declared_max)
 
 
 #: units: the SICK special codes (CODE_ABOVE_MAXIMUM .. CODE_NOT_VALID) as a middle and half width
@@ -1090,7 +1110,7 @@ def _kept_word(scan: Scan, i: int, units: Units) -> str:
         code = round(r / scale)
         words += [f"{(code - 0.5) * scale:.{decimals + 1}f}", f"{(code + 0.5) * scale:.{decimals + 1}f}"]
     for word in words:
-        back = _read_back([word], units)
+        back = _read_back([word], units, scan.range_max)
         if not _meaning_changed(scan, back, scale, i)[0]:
             return word
     raise AssertionError(f"no CARMEN word keeps range {r!r} m as it is (a bug)")  # pragma: no cover

@@ -86,3 +86,47 @@ def test_a_line_whose_tail_differs_from_the_first_lines_is_malformed(tmp_path: P
         list(read_log(path))
     reader = read_log(path, skip_bad_lines=True)
     assert [r.scan.stamp for r in reader] == [9.0, 11.0] and reader.stats.skipped_count == 1
+
+
+# --- readings at the declared maximum range --------------------------------------------------------
+def _hokuyo_line(t: float, ranges: list[str]) -> str:
+    """A ROBOTLASER1 line of a Hokuyo UTM-30LX-like laser (270 deg at 0.25 deg written to 6 decimals, max range
+    30 m, mm accuracy): ``len(ranges)`` beams from -135 deg."""
+    n = len(ranges)
+    return (f"ROBOTLASER1 0 -2.356194 {(n - 1) * 0.004363:.6f} 0.004363 30.000000 0.001000 0 {n} {' '.join(ranges)} 0 "
+            f"0 0 0 1 2 0.5 0 0 0 0 0 {t} hokuyo {t}")
+
+
+def test_a_reading_at_the_lines_declared_maximum_range_is_no_return(tmp_path: Path) -> None:
+    """CARMEN loggers write a beam with no return as the laser's maximum range: a Hokuyo log's open sectors at
+    30.000 m were read as valid readings on an arc at 30 m, which the extractors fitted lines to (a 1081-beam
+    log: 17.0 lines a scan against 13.0 with the same beams written above 30 m). Above it, a reading stays out
+    of limits (invalid); below it, valid."""
+    ranges = ["2.500"] * 1077 + ["30.000", "30", "30.5", "29.999"]
+    recs = list(read_log(_log(tmp_path, [_hokuyo_line(1.2e9, ranges)])))
+    scan = recs[0].scan
+    assert (len(scan), scan.range_max, scan.stamp) == (1081, 30.0, 1.2e9)
+    assert scan.angle_min == pytest.approx(np.radians(-135), abs=1e-12)
+    assert scan.angle_max == pytest.approx(np.radians(135), abs=1e-12)
+    assert scan.ranges[-4:-2].tolist() == [np.inf, np.inf] and scan.ranges[-2:].tolist() == [30.5, 29.999]
+    assert scan.valid[-4:].tolist() == [False, False, False, True] and scan.valid[:-4].all()
+
+
+def test_a_flaser_reading_at_the_param_maximum_range_is_no_return_and_the_writer_keeps_a_valid_one(
+        tmp_path: Path) -> None:
+    """FLASER's maximum range is the log's PARAM robot_front_laser_max (Freiburg's 80.99 m); the writer, which
+    declares the scan's range_max, writes a valid reading at exactly range_max so that it reads back valid."""
+    from lms200 import Record, Scan, write_log
+
+    path = _log(tmp_path, ["PARAM robot_front_laser_max 80.99 nohost 0",
+                           f"FLASER 4 1.00 80.99 81.00 81.83 {POSES} 10.0 b21 10.0"])
+    scan = list(read_log(path))[0].scan
+    assert scan.range_max == 80.99 and scan.ranges.tolist() == [1.0, np.inf, 81.0, np.inf]
+    assert scan.valid.tolist() == [True, False, False, False]
+    for fmt in ("robotlaser1", "flaser"):
+        written = Scan(np.array([1.0, 30.0, np.inf, 12.0]), -0.1, 0.05, 0.0, 30.0, stamp=3.0)
+        out = tmp_path / f"w-{fmt}.log"
+        write_log(out, [Record(written)], fmt=fmt)
+        back = list(read_log(out))[0].scan
+        assert back.valid.tolist() == [True, True, False, True], fmt
+        assert back.ranges[1] == pytest.approx(30.0, abs=0.005) and back.ranges[2] == np.inf
