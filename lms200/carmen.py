@@ -20,6 +20,9 @@ Formats (one message a line, ``#`` comments; messages of other kinds, named in c
 - ``ODOM x y theta tv rv accel ipc_timestamp hostname logger_timestamp``
 - ``TRUEPOS true_x true_y true_theta odom_x odom_y odom_theta ipc_timestamp hostname logger_timestamp``
 
+After the ipc_timestamp, lines of other writers may hold nothing, one word, or a hostname of several words
+before the logger_timestamp (:func:`_tail_fits`); the laser lines of a pass must end alike (:class:`_Tails`).
+
 Conventions: a scan's ``stamp`` is the message's ipc_timestamp; ``.odom`` is the robot pose the laser
 message carries (FLASER odom fields, ROBOTLASER1 robot fields); ``.truth`` is the pose of the last TRUEPOS
 line before the laser message (ODOM, PARAM, other laser kinds between do not matter), when no laser line of
@@ -440,6 +443,7 @@ class CarmenReader:
         counts: dict[tuple[str, str, str], tuple[int, int]] = {}  # ROBOTLASER header -> (beams, first line), bounded
         blank = _BlankRun(self.path)
         range_words = _RangeWords()  # range word -> its number (_range_floats), for this pass
+        tails = _Tails()  # the words after the laser lines' ipc_timestamps, line by line alike
         junk = 0  # lines that start with no message name
         # RAWLASER lines carry no pose: their odometry is interpolated from the log's ODOM lines
         pairing = OdomPairing() if stats.laser in RAW_LASER_KINDS else None
@@ -485,14 +489,14 @@ class CarmenReader:
                     truth = None  # a malformed TRUEPOS sets none
                     pose = _pose(words, 1, "TRUEPOS")
                     _require(len(words) >= 8, "TRUEPOS needs at least 7 numbers")
-                    _require(len(words) <= MAX_POSE_WORDS, _too_many_words("TRUEPOS", len(words)))
-                    truth = (pose, _stamps(words, _few_floats(words[7:8], "TRUEPOS timestamp")[0], 9))
+                    _require(len(words) <= MAX_POSE_WORDS or _tail_fits(words, 8, 1), _too_many_words("TRUEPOS", len(words)))
+                    truth = (pose, _stamps(words, _few_floats(words[7:8], "TRUEPOS timestamp")[0], _logger_at(words, 8)))
                 elif kind == "ODOM":
                     _require(len(words) >= 8, "ODOM needs x y theta tv rv accel timestamp")
-                    _require(len(words) <= MAX_POSE_WORDS, _too_many_words("ODOM", len(words)))
+                    _require(len(words) <= MAX_POSE_WORDS or _tail_fits(words, 8, 1), _too_many_words("ODOM", len(words)))
                     values = _few_floats(words[1:8], "ODOM")
                     _finite_pose(values[0:3], "ODOM")  # nan or 1e308 m was chained into every scan's odometry
-                    values[6] = _stamps(words, values[6], 9)
+                    values[6] = _stamps(words, values[6], _logger_at(words, 8))
                     if pairing is not None:  # odometry for the scans of a RAWLASER kind, which carry none
                         yield from pairing.odom(values[6], (values[0], values[1], values[2]))
                     elif chain is not None:
@@ -506,11 +510,12 @@ class CarmenReader:
                     self._check_range_max(line_no, params.get(RANGE_MIN_PARAM, 0.0))
                     odom: Pose2D | None
                     if kind in ("FLASER", "RLASER"):
-                        geometry = self.geometry.merged(laser_geometry.from_params(kind, params))
+                        declared = laser_geometry.from_params(kind, params)
+                        geometry = self.geometry.merged(declared)
                         exact_min, exact_step = EXACT_GEOMETRY_NAMES[kind]
                         exact = (params.get(exact_min), params.get(exact_step))
                         scan, odom = _parse_flaser(words, units, geometry, params.get(RANGE_MIN_PARAM, 0.0), exact,
-                                                   range_words)
+                                                   range_words, declared.range_max)
                     else:
                         scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
                                                        params.get(RANGE_MIN_PARAM, 0.0), range_words,
@@ -523,6 +528,7 @@ class CarmenReader:
                             _require(first[0] == len(scan),
                                      f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
                                      f"field of view and resolution carries {first[0]}")
+                    tails.check(words, line_no)
                     given = (held[0] if held is not None and abs(held[1] - scan.stamp) <= TRUTH_MAX_GAP_S
                              and (held[1] > last_stamp or held[1] == scan.stamp) else None)
                     last_stamp = scan.stamp
@@ -559,6 +565,39 @@ def _too_many_words(kind: str, n: int) -> str:
             "logger_timestamp): two lines run together (a lost line break)?")
 
 
+#: most words a line's hostname may take where it is not one word ("my robot"): CARMEN writes one (the
+#: host's name), but logs of other writers hold names with spaces
+MAX_HOST_WORDS = 8
+
+
+def _tail_fits(words: list[str], fixed: int, numbers_from: int) -> bool:
+    """Whether a line whose fields up to its ipc_timestamp are ``words[:fixed]`` (``words[numbers_from:fixed]``
+    the numbers before it: poses, speeds, the stamp) has a tail after it that CARMEN's readers take: two words
+    (hostname, logger_timestamp) as CARMEN writes them; or, as logs of other writers (converters, older
+    loggers) have them, none (the ipc_timestamp last), one (the hostname or the logger_timestamp alone) or a
+    hostname of up to MAX_HOST_WORDS words, none of them a number, and the logger_timestamp. CARMEN's own
+    readers take the fields in order and stop at the ipc_timestamp; a line that lost or gained a word
+    (damage, two lines run together) leaves a hostname among the numbers or numbers in the hostname, and
+    still does not fit: such lines were, and still are, malformed (those tails were all refused: "FLASER
+    with 361 beams needs 372 fields, got 371")."""
+    n = len(words)
+    if n == fixed + 2:
+        return True
+    if not fixed <= n <= fixed + 1 + MAX_HOST_WORDS:
+        return False
+    return not any(map(_is_number, words[fixed:n - 1])) and all(map(_is_number, words[numbers_from:fixed]))
+
+
+def _logger_at(words: list[str], fixed: int) -> int:
+    """Index of a line's logger_timestamp (the last word after the ipc_timestamp at ``words[fixed - 1]``),
+    or ``len(words)`` where it has none: no word after the ipc_timestamp, or one that is no number (the
+    hostname alone). See :func:`_tail_fits`."""
+    tail = len(words) - fixed
+    if tail <= 0 or (tail == 1 and not _is_number(words[-1])):
+        return len(words)
+    return len(words) - 1
+
+
 def _fields_fit(kind: str, line: str) -> bool:
     """Whether a FLASER / RLASER / ROBOTLASER1 / 2 line has the fields its counts announce (the
     beam count, and the remission count, against the number of words); True for a piece of a line
@@ -569,9 +608,10 @@ def _fields_fit(kind: str, line: str) -> bool:
     try:
         if kind in ("FLASER", "RLASER"):
             n = _count(words[1], "beam count")
-            return n > 0 and len(words) == _field_count(kind, n)
+            return n > 0 and _tail_fits(words, _field_count(kind, n) - 2, 2 + n)
         n = _count(words[8], "beam count")
-        return n > 0 and len(words) == _field_count(kind, n, _count(words[9 + n], "remission count"))
+        m = _count(words[9 + n], "remission count")
+        return n > 0 and _tail_fits(words, _field_count(kind, n, m) - 2, 10 + n + m)
     except (ValueError, IndexError):
         return False
 
@@ -583,6 +623,42 @@ def _field_count(kind: str, n: int, m: int = 0) -> int:
     if kind in ("FLASER", "RLASER"):
         return n + 11
     return 10 + n + m + (3 if kind.startswith("RAWLASER") else 14)
+
+
+class _Tails:
+    """The words after the ipc_timestamp of a pass's laser lines (:func:`_tail_fits`) must be alike:
+    once a line of CARMEN's own tail (hostname, logger_timestamp) was read, or a first line of another
+    (none, one word, a hostname of several words), a line of another tail is malformed. A line that lost
+    a range and its hostname fits a tail ending at the ipc_timestamp, its fields shifted by one; in a log
+    of lines that all end so it cannot be told from a good one."""
+
+    def __init__(self) -> None:
+        self.carmen = False  # a line with CARMEN's tail of two words was read
+        self.other: tuple[int, int] | None = None  # (words after the ipc_timestamp, line) of the first other tail
+
+    def check(self, words: list[str], line_no: int) -> None:
+        """Raises ValueError for a laser line (already parsed: its counts are numbers) whose tail differs."""
+        kind = words[0]
+        if kind in ("FLASER", "RLASER"):
+            n = int(words[1])
+            fixed, what = n + 9, f"{kind} with {n} beams"
+        else:
+            n = int(words[8])
+            m = int(words[9 + n])
+            fixed, what = _field_count(kind, n, m) - 2, f"{kind} with {n} ranges and {m} remissions"
+        tail = len(words) - fixed
+        if tail == 2:
+            self.carmen = True
+            return
+        if not self.carmen and self.other is None:
+            self.other = (tail, line_no)
+            return
+        if self.carmen:
+            raise ValueError(f"{what} needs {fixed + 2} fields, got {len(words)}: {tail} words after its ipc_timestamp, "
+                             "where earlier lines have a hostname and a logger_timestamp (a word lost or gained?)")
+        if self.other is not None and tail != self.other[0]:
+            raise ValueError(f"{what} needs {fixed + self.other[0]} fields, got {len(words)}: {tail} words after its "
+                             f"ipc_timestamp, where line {self.other[1]} has {self.other[0]} (a word lost or gained?)")
 
 
 class _BlankRun:
@@ -876,30 +952,48 @@ def _finite_pose(values: list[float], what: str) -> Pose2D:
     return (x, y, t)
 
 
-def _ranges(values: np.ndarray, units: Units | None, what: str) -> tuple[np.ndarray, Units]:
+def _ranges(values: np.ndarray, units: Units | None, what: str,
+            declared_max: float | None = None) -> tuple[np.ndarray, Units]:
     """Logged ranges (m) in REP-117 form: SICK codes decoded; ``nan`` / ``inf`` written as text
     (logs converted from ROS) keep their REP-117 meaning, ``-inf`` too (an object too close to
-    measure); a finite negative range is malformed."""
+    measure); a finite negative range is malformed. A reading equal to the maximum range the log
+    declares for the line (``declared_max``: ROBOTLASER / RAWLASER's max_range field, FLASER's
+    ``PARAM robot_front_laser_max``) is the logger's max-range reading: +inf (no return), as the
+    LMS200's code 8183, its own maximum range, is."""
     negative = finite_negative(values)
     if np.any(negative):
         raise ValueError(f"{what}: negative range {values[negative][0]:g} in the log")
     u = units or infer_units(values)
-    return decode_logged_ranges(values, u), u
+    return at_max_range(decode_logged_ranges(values, u), declared_max), u
+
+
+def at_max_range(ranges: np.ndarray, declared_max: float | None) -> np.ndarray:
+    """``ranges`` with each reading equal to ``declared_max`` (a CARMEN line's declared maximum range,
+    or None) made +inf, in place: CARMEN loggers write a beam with no return as the sensor's maximum
+    range (a Hokuyo's 30 m), and CARMEN's tools count a reading at the maximum range as no hit; read
+    as a valid reading, a 270 deg scan's open sectors became arcs of points at 30 m, which the
+    extractors fitted lines to (17.0 lines a scan against 13.0 where the same beams were written
+    above the maximum)."""
+    if declared_max is not None:
+        ranges[ranges == declared_max] = np.inf
+    return ranges
 
 
 def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry,
                   range_min: float = 0.0,
                   exact: tuple[float | None, float | None] = (None, None),
-                  cache: _RangeWords | None = None) -> tuple[Scan, Pose2D]:
-    """A FLASER / RLASER line's scan and odometry; ``cache``: the pass's range words (:func:`_range_floats`)."""
+                  cache: _RangeWords | None = None, declared_max: float | None = None) -> tuple[Scan, Pose2D]:
+    """A FLASER / RLASER line's scan and odometry; ``cache``: the pass's range words (:func:`_range_floats`);
+    ``declared_max``: the maximum range of the log's PARAM lines (a reading at it is no return, :func:`_ranges`)."""
     kind = words[0]
     _require(len(words) >= 2, f"{kind} needs a beam count")
     n = _count(words[1], "beam count")
     _require(n > 0, f"{kind} needs at least one beam, got a beam count of {n}")  # was "needs 11 fields, got 11"
-    _require(len(words) == _field_count(kind, n), f"{kind} with {n} beams needs {_field_count(kind, n)} fields, got {len(words)}")
-    ranges, u = _ranges(_range_floats(words[2 : 2 + n], f"{kind} ranges", cache), units, kind)
+    _require(_tail_fits(words, _field_count(kind, n) - 2, 2 + n),
+             f"{kind} with {n} beams needs {_field_count(kind, n)} fields, got {len(words)}")
+    ranges, u = _ranges(_range_floats(words[2 : 2 + n], f"{kind} ranges", cache), units, kind, declared_max)
     tail = _few_floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
-    _stamps(words, tail[6], len(words) - 1)
+    _stamps(words, tail[6], _logger_at(words, 2 + n + 7))
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
     angle_min, increment = _exact_or_snapped(angle_min, exact[0]), _exact_or_snapped(increment, exact[1])
     range_max = geometry.range_max if geometry.range_max is not None else LMS200_MAX_RANGE[u]
@@ -932,7 +1026,8 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     _require(len(words) > 9 + n, f"{kind} announces {n} beams but has fewer fields")
     m = _count(words[9 + n], "remission count")
     expected = _field_count(kind, n, m)
-    _require(len(words) == expected, f"{kind} with {n} ranges and {m} remissions needs {expected} fields, got {len(words)}")
+    _require(_tail_fits(words, expected - 2, 10 + n + m),
+             f"{kind} with {n} ranges and {m} remissions needs {expected} fields, got {len(words)}")
     _require(all(map(math.isfinite, head)), f"{kind} header is not finite")
     _require(resolution > 0, f"angular resolution must be > 0, got {resolution}")
     _require(fov >= 0, f"field of view must be >= 0, got {fov}")
@@ -947,10 +1042,11 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
              f"got {words[4]}")
     if units is None and accuracy in (0.01, 0.001):
         units = "cm" if accuracy == 0.01 else "mm"
-    ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind)
+    declared = max_range if laser_geometry.MIN_RANGE_MAX_M <= max_range <= laser_geometry.MAX_RANGE_M else None
+    ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind, declared)
     tail = _few_floats(words[10 + n + m : 10 + n + m + (1 if kind.startswith("RAWLASER") else 12)],
                        f"{kind} timestamp" if kind.startswith("RAWLASER") else f"{kind} poses and timestamp")
-    stamp = _stamps(words, tail[-1], len(words) - 1)
+    stamp = _stamps(words, tail[-1], _logger_at(words, expected - 2))
     # max_range 1e-300 made every reading invalid, silently, and -5 became 81.83 m (a review's reproduction)
     # (an override replaces it: a converter's placeholder 0 is then no error)
     _require(range_max_override is not None or laser_geometry.MIN_RANGE_MAX_M <= max_range <= laser_geometry.MAX_RANGE_M,
@@ -993,15 +1089,16 @@ def _format_ranges(scan: Scan, units: Units) -> str:
                                  | (x <= 2 * scale) | (np.abs(x / scale - SPECIAL_BAND_MIDDLE) <= SPECIAL_BAND_HALF + 2))
     index = np.flatnonzero(near)  # read back together: one at a time cost ~35 us a beam, 20x the writer's
     if index.size:  # time on scans whose no-returns are 0 or range_max
-        changed = _meaning_changed(scan, _read_back([words[i] for i in index], units), scale, index)
+        changed = _meaning_changed(scan, _read_back([words[i] for i in index], units, scan.range_max), scale, index)
         for i in index[changed]:
             words[i] = _kept_word(scan, int(i), units)
     return " ".join(words)
 
 
-def _read_back(words: list[str], units: Units) -> np.ndarray:
-    """The ranges (m, REP-117) a reader takes ``words`` (range words of ``units``) for."""
-    return decode_logged_ranges(np.array(words, dtype=np.float64), units)
+def _read_back(words: list[str], units: Units, declared_max: float) -> np.ndarray:
+    """The ranges (m, REP-117) a reader takes ``words`` (range words of ``units``, on a line that
+    declares ``declared_max`` as its maximum range, as the writer's lines do) for."""
+    return at_max_range(decode_logged_ranges(np.array(words, dtype=np.float64), units), declared_max)
 
 
 #: units: the SICK special codes (CODE_ABOVE_MAXIMUM .. CODE_NOT_VALID) as a middle and half width
@@ -1035,7 +1132,7 @@ def _kept_word(scan: Scan, i: int, units: Units) -> str:
         code = round(r / scale)
         words += [f"{(code - 0.5) * scale:.{decimals + 1}f}", f"{(code + 0.5) * scale:.{decimals + 1}f}"]
     for word in words:
-        back = _read_back([word], units)
+        back = _read_back([word], units, scan.range_max)
         if not _meaning_changed(scan, back, scale, i)[0]:
             return word
     raise AssertionError(f"no CARMEN word keeps range {r!r} m as it is (a bug)")  # pragma: no cover

@@ -38,11 +38,14 @@ def _kept(scan_ranges, back: Scan, range_min: float, range_max: float) -> None:
 @pytest.mark.parametrize("fmt", ["robotlaser1", "flaser"])
 def test_a_valid_reading_just_below_range_max_stays_valid(tmp_path, fmt):
     """range_max 4.9996 m (mm mode): 4.9996 and 4.99955 m were written 5.000, above it: not valid.
-    A reading just above range_max (8.0004 m at 8 m, not valid) was written 8.000: valid."""
+    A reading just above range_max (8.0004 m at 8 m, not valid) was written 8.000: valid. A valid
+    reading at exactly range_max is written half a unit below it (4.9995, 7.9995): the reader takes a
+    reading at a line's declared maximum range for no return (+inf)."""
     back = _round_trip(tmp_path / "a.log", [4.9996, 4.99955, 4.9994, 2.0], 0.0, 4.9996, fmt)
-    assert back.ranges.tolist() == [4.9996, 4.99955, 4.999, 2.0] and back.valid.all()
+    assert back.ranges.tolist() == [4.9995, 4.99955, 4.999, 2.0] and back.valid.all()
     back = _round_trip(tmp_path / "b.log", [8.0004, 8.0, 2.0], 0.0, 8.0, fmt)
-    assert back.ranges.tolist() == [8.0004, 8.0, 2.0] and back.valid.tolist() == [False, True, True]
+    # 8.0004 m is written 8.000, the line's maximum range, which reads back as no return (+inf): not valid still
+    assert back.ranges.tolist() == [np.inf, 7.9995, 2.0] and back.valid.tolist() == [False, True, True]
 
 
 def test_a_valid_tie_below_the_cm_special_band_is_not_written_as_no_return(tmp_path):
@@ -58,7 +61,7 @@ def test_a_valid_reading_below_half_a_unit_is_not_written_as_no_reading(tmp_path
     assert back.ranges.tolist() == [0.0004, 0.001, 1e-9, 0.0, 1.0]  # 0.0005: half a unit, rounded up
     assert back.valid.tolist() == [True, True, True, False, True]
     back = _round_trip(tmp_path / "e.log", [0.004, 0.0049, 30.0], 0.0, 30.0)
-    assert back.ranges.tolist() == [0.004, 0.0049, 30.0] and back.valid.all()
+    assert back.ranges.tolist() == [0.004, 0.0049, 29.995] and back.valid.all()  # at range_max: half a unit below
 
 
 def test_readings_at_range_min_keep_their_side_of_it(tmp_path):

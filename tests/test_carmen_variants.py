@@ -1,0 +1,132 @@
+"""Valid but unusual CARMEN logs of other writers (a measurement session's variants of the real logs,
+rebuilt here as small synthetic fixtures): lines whose hostname is missing, is more than one word,
+or whose tail ends at the ipc_timestamp."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lms200 import LogFormatError, read_log
+
+RANGES = "1.00 2.00 3.00"
+POSES = "0.5 0.25 0.1 1.5 -2.0 0.3"  # laser pose, then odometry
+
+
+def _log(tmp_path: Path, lines: list[str]) -> Path:
+    path = tmp_path / "log.clf"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+# the words after a line's ipc_timestamp, CARMEN's own first
+TAILS = {"carmen": "b21 {l}", "no host": "{l}", "ipc only": "", "host only": "b21",
+         "host with spaces": "my robot host {l}"}
+
+
+@pytest.mark.parametrize("tail", list(TAILS))
+def test_flaser_lines_read_whatever_follows_their_ipc_timestamp(tmp_path: Path, tail: str) -> None:
+    """FLASER lines without a hostname, without hostname and logger_timestamp, or with a hostname of
+    three words were refused ("FLASER with 3 beams needs 14 fields, got 13" / 12 / 16): CARMEN's
+    readers take the fields in order up to the ipc_timestamp, which is all this reader uses."""
+    end = TAILS[tail]
+    lines = [f"ODOM 1 2 0.5 0 0 0 {t} {end.format(l=t + 0.04)}".rstrip() for t in (10.0,)]
+    lines += [f"FLASER 3 {RANGES} {POSES} {t} {end.format(l=t + 0.04)}".rstrip() for t in (10.0, 10.2)]
+    lines += [f"TRUEPOS 7 8 0.25 1.5 -2.0 0.3 10.3 {end.format(l=10.34)}".rstrip(),
+              f"FLASER 3 {RANGES} {POSES} 10.4 {end.format(l=10.44)}".rstrip()]
+    recs = list(read_log(_log(tmp_path, lines)))
+    assert [r.scan.stamp for r in recs] == [10.0, 10.2, 10.4]
+    assert np.array_equal(recs[0].scan.ranges, [1.0, 2.0, 3.0])
+    assert recs[0].odom == (1.5, -2.0, 0.3) and recs[2].truth == (7.0, 8.0, 0.25)
+
+
+@pytest.mark.parametrize("tail", list(TAILS))
+def test_robotlaser_and_rawlaser_lines_read_whatever_follows_their_ipc_timestamp(tmp_path: Path, tail: str) -> None:
+    """The same for ROBOTLASER1 (robot pose as odometry) and RAWLASER1 with ODOM lines (CARMEN 0.7)."""
+    end = TAILS[tail]
+    head = "0 -0.017453 0.034906 0.017453 30.0 0.001 0 3 " + RANGES + " 0"
+    robot = [f"ROBOTLASER1 {head} 0 0 0 1.5 -2.0 0.3 0 0 0 0 0 {t} {end.format(l=t)}".rstrip() for t in (5.0, 5.1)]
+    recs = list(read_log(_log(tmp_path, robot)))
+    assert [(r.scan.stamp, r.odom) for r in recs] == [(5.0, (1.5, -2.0, 0.3)), (5.1, (1.5, -2.0, 0.3))]
+    raw = [f"ODOM 1 2 0.5 0 0 0 5.0 {end.format(l=5.0)}".rstrip(), f"RAWLASER1 {head} 5.0 {end.format(l=5.0)}".rstrip(),
+           f"ODOM 3 2 0.5 0 0 0 5.2 {end.format(l=5.2)}".rstrip(), f"RAWLASER1 {head} 5.1 {end.format(l=5.1)}".rstrip(),
+           f"ODOM 5 2 0.5 0 0 0 5.4 {end.format(l=5.4)}".rstrip()]
+    recs = list(read_log(_log(tmp_path, raw)))
+    assert [r.scan.stamp for r in recs] == [5.0, 5.1]
+    assert recs[0].odom == (1.0, 2.0, 0.5) and recs[1].odom == pytest.approx((2.0, 2.0, 0.5))
+    assert len(recs[0].scan) == 3 and recs[0].scan.range_max == 30.0
+
+
+@pytest.mark.parametrize(("line", "reason"), [
+    # a range lost, a range split in two (a CR in a word), two lines run together: still malformed
+    (f"FLASER 3 1.00 2.00 {POSES} 10.0 b21 10.0", "FLASER with 3 beams needs 14 fields, got 13"),
+    (f"FLASER 3 1.00 2.00 {POSES} 10.0 10.0", "FLASER with 3 beams needs 14 fields, got 12"),
+    (f"FLASER 3 1.00 2.00 3. 00 {POSES} 10.0 b21 10.0", "FLASER with 3 beams needs 14 fields, got 15"),
+    (f"FLASER 3 {RANGES} {POSES} 10.0 b21 10.0 FLASER 3", "FLASER with 3 beams needs 14 fields, got 16"),
+    ("ODOM 0 0 0 0 0 0 2 h 2 FLASER 3 1 2 3", "ODOM has 15 fields, at most 10"),
+    (f"FLASER 3 {RANGES} {POSES} 10.0 b21 x", "logger_timestamp: 'x' is not a number"),
+])
+def test_lines_that_lost_or_gained_a_word_are_still_malformed(tmp_path: Path, line: str, reason: str) -> None:
+    path = _log(tmp_path, [f"FLASER 3 {RANGES} {POSES} 9.0 b21 9.0", line])
+    with pytest.raises(LogFormatError, match=rf"log\.clf:2: malformed (FLASER|ODOM) line: .*{reason}"):
+        list(read_log(path))
+
+
+def test_a_line_whose_tail_differs_from_the_first_lines_is_malformed(tmp_path: Path) -> None:
+    """In a log whose lines end at "ipc_timestamp logger_timestamp" (no hostname), a line that lost a
+    range fits a tail that ends at its ipc_timestamp (its fields shifted by one: the logger_timestamp read
+    as the stamp): it is told by its tail, unlike the first line's."""
+    path = _log(tmp_path, [f"FLASER 3 {RANGES} {POSES} 9.0 9.01", f"FLASER 3 1.00 2.00 {POSES} 10.0 10.01",
+                           f"FLASER 3 {RANGES} {POSES} 11.0 11.01"])
+    with pytest.raises(LogFormatError, match=r"log\.clf:2: malformed FLASER line: FLASER with 3 beams needs 13 fields, "
+                                             r"got 12: 0 words after its ipc_timestamp, where line 1 has 1 \(a word "
+                                             r"lost or gained\?\)"):
+        list(read_log(path))
+    reader = read_log(path, skip_bad_lines=True)
+    assert [r.scan.stamp for r in reader] == [9.0, 11.0] and reader.stats.skipped_count == 1
+
+
+# --- readings at the declared maximum range --------------------------------------------------------
+def _hokuyo_line(t: float, ranges: list[str]) -> str:
+    """A ROBOTLASER1 line of a Hokuyo UTM-30LX-like laser (270 deg at 0.25 deg written to 6 decimals, max range
+    30 m, mm accuracy): ``len(ranges)`` beams from -135 deg."""
+    n = len(ranges)
+    return (f"ROBOTLASER1 0 -2.356194 {(n - 1) * 0.004363:.6f} 0.004363 30.000000 0.001000 0 {n} {' '.join(ranges)} 0 "
+            f"0 0 0 1 2 0.5 0 0 0 0 0 {t} hokuyo {t}")
+
+
+def test_a_reading_at_the_lines_declared_maximum_range_is_no_return(tmp_path: Path) -> None:
+    """CARMEN loggers write a beam with no return as the laser's maximum range: a Hokuyo log's open sectors at
+    30.000 m were read as valid readings on an arc at 30 m, which the extractors fitted lines to (a 1081-beam
+    log: 17.0 lines a scan against 13.0 with the same beams written above 30 m). Above it, a reading stays out
+    of limits (invalid); below it, valid."""
+    ranges = ["2.500"] * 1077 + ["30.000", "30", "30.5", "29.999"]
+    recs = list(read_log(_log(tmp_path, [_hokuyo_line(1.2e9, ranges)])))
+    scan = recs[0].scan
+    assert (len(scan), scan.range_max, scan.stamp) == (1081, 30.0, 1.2e9)
+    assert scan.angle_min == pytest.approx(np.radians(-135), abs=1e-12)
+    assert scan.angle_max == pytest.approx(np.radians(135), abs=1e-12)
+    assert scan.ranges[-4:-2].tolist() == [np.inf, np.inf] and scan.ranges[-2:].tolist() == [30.5, 29.999]
+    assert scan.valid[-4:].tolist() == [False, False, False, True] and scan.valid[:-4].all()
+
+
+def test_a_flaser_reading_at_the_param_maximum_range_is_no_return_and_the_writer_keeps_a_valid_one(
+        tmp_path: Path) -> None:
+    """FLASER's maximum range is the log's PARAM robot_front_laser_max (Freiburg's 80.99 m); the writer, which
+    declares the scan's range_max, writes a valid reading at exactly range_max so that it reads back valid."""
+    from lms200 import Record, Scan, write_log
+
+    path = _log(tmp_path, ["PARAM robot_front_laser_max 80.99 nohost 0",
+                           f"FLASER 4 1.00 80.99 81.00 81.83 {POSES} 10.0 b21 10.0"])
+    scan = list(read_log(path))[0].scan
+    assert scan.range_max == 80.99 and scan.ranges.tolist() == [1.0, np.inf, 81.0, np.inf]
+    assert scan.valid.tolist() == [True, False, False, False]
+    for fmt in ("robotlaser1", "flaser"):
+        written = Scan(np.array([1.0, 30.0, np.inf, 12.0]), -0.1, 0.05, 0.0, 30.0, stamp=3.0)
+        out = tmp_path / f"w-{fmt}.log"
+        write_log(out, [Record(written)], fmt=fmt)
+        back = list(read_log(out))[0].scan
+        assert back.valid.tolist() == [True, True, False, True], fmt
+        assert back.ranges[1] == pytest.approx(30.0, abs=0.005) and back.ranges[2] == np.inf
