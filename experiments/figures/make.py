@@ -18,6 +18,7 @@ from lms200.yamlio import load as load_yaml
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
 import pandas as pd
 
 from . import draw
@@ -79,6 +80,13 @@ def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
             raise LmsbenchError(f"{where}: table {name}'s column {text[0]} holds {table[text[0]].dtype} values, where "
                                 "the figures plot numbers: not a table of `lmsbench figures` or `lmsbench demo` "
                                 "(edited, or another program's?)")
+        if name == "summary":  # accuracy_speed's own checks (its f1, time columns)
+            continue
+        blank = [c for c in numbers if not np.isfinite(table[c].to_numpy(dtype=float)).any()]
+        if blank:  # every figure of it drawn empty, exit 0 (a damaged-input fuzz round: all nan, all inf)
+            raise LmsbenchError(f"{where}: table {name}'s column {blank[0]} holds no finite number ({len(table)} rows, "
+                                "all nan or infinite), so its figure would be empty: a damaged table, or not one of "
+                                "`lmsbench figures` or `lmsbench demo`")
 
 
 def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10,

@@ -170,10 +170,24 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
     (folder / "notes.txt").write_text("\n".join(notes) + ("\n" if notes else ""))
 
 
+#: the tables a study saves (run_study): a CSV of one of these names in a tables folder is refused, not left out
+STUDY_TABLE_NAMES = ("signals", "timing", "summary", "office_points", "office_lines", "office_corners", "intel_points",
+                     "intel_lines", "intel_corners", "trajectory", "map", "slam_metrics")
+
+
 def load_tables(folder: Path) -> tuple[dict[str, pd.DataFrame], list[str]]:
     """The tables and notes saved by :func:`save_tables`."""
     from lms200 import LmsbenchError
 
+    for p in sorted(folder.glob("*.parquet")):  # pyarrow reads a folder as a dataset: an empty one was no table
+        if not p.is_file():  # and its figures were left out, exit 0 (a damaged-input fuzz round)
+            raise LmsbenchError(f"{p}: {'a folder' if p.is_dir() else 'not a regular file'} where a table of the study "
+                                "goes; a table is a Parquet file")
+    for p in sorted(folder.glob("*.csv")):  # a table saved as CSV was left out, its figures not drawn, exit 0
+        if (folder / f"{p.stem}.parquet").exists() or p.stem not in STUDY_TABLE_NAMES:
+            continue
+        raise LmsbenchError(f"{p}: the study's tables are read as Parquet ({p.stem}.parquet, as `lmsbench figures` and "
+                            "`lmsbench demo` save them), not CSV")
     tables = {p.stem: read_table(p) for p in sorted(folder.glob("*.parquet"))}
     notes_file = folder / "notes.txt"
     if notes_file.exists() and not notes_file.is_file():  # a named pipe was waited on for ever (the wrong-input hunt)

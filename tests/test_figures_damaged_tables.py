@@ -1,0 +1,77 @@
+"""`lmsbench figures --tables DIR` / `--sweep DIR` with damaged inputs (a damaged-input fuzz round):
+each refused before any output, one line, exit 2, naming the table; none drawn empty or left out
+silently."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from experiments.cli import main
+
+
+@pytest.fixture
+def tables(tmp_path) -> Path:
+    """A tables folder Fig. 7 and Fig. 10 are drawn from (study settings, timing, trajectory, map)."""
+    t = tmp_path / "tables"
+    t.mkdir()
+    (t / "study.yaml").write_text(yaml.safe_dump({"world": "office", "seed": 0, "duration": 1.0, "resolved": {"sensor": {}}}))
+    pd.DataFrame({"method": ["sensor"] * 3, "scan": [0, 1, 2], "time_ms": [0.05, 0.04, 0.06]}).to_parquet(
+        t / "timing.parquet", index=False)
+    pd.DataFrame({"source": ["truth", "truth", "slam", "slam"], "t": [0.0, 1.0, 0.0, 1.0], "x": [0.0, 1.0, 0.0, 1.1],
+                  "y": [0.0, 0.0, 0.0, 0.1]}).to_parquet(t / "trajectory.parquet", index=False)
+    pd.DataFrame({"source": ["truth", "slam"], "x1": [0.0, 0.0], "y1": [1.0, 1.1], "x2": [2.0, 2.0],
+                  "y2": [1.0, 1.1]}).to_parquet(t / "map.parquet", index=False)
+    return t
+
+
+def _refused(capsys, tables: Path, out: Path) -> str:
+    assert main(["figures", "--tables", str(tables), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert not out.exists()  # before any output: no figures.yaml, no figure
+    return err.rstrip("\n")
+
+
+@pytest.mark.parametrize("table, column, value", [
+    ("timing", "time_ms", np.nan), ("timing", "time_ms", np.inf), ("trajectory", "x", np.nan), ("map", "y2", -np.inf)])
+def test_a_table_whose_plotted_column_holds_no_finite_number_is_refused(tables, tmp_path, capsys, table, column, value):
+    # drawn as empty axes, exit 0: every figure of the table useless
+    frame = pd.read_parquet(tables / f"{table}.parquet")
+    frame[column] = value
+    frame.to_parquet(tables / f"{table}.parquet", index=False)
+    n = len(frame)
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table {table}'s column {column} holds no finite number ({n} rows, "
+        "all nan or infinite), so its figure would be empty: a damaged table, or not one of `lmsbench figures` or "
+        "`lmsbench demo`")
+
+
+def test_a_table_with_some_nan_is_drawn(tables, tmp_path, capsys):
+    frame = pd.read_parquet(tables / "timing.parquet")
+    frame.loc[0, "time_ms"] = np.nan
+    frame.to_parquet(tables / "timing.parquet", index=False)
+    assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "o")]) == 0, capsys.readouterr().err
+    assert pd.read_csv(tmp_path / "o" / "fig7_timing.csv").shape[0] == 3
+
+
+def test_a_folder_in_place_of_a_table_is_refused(tables, tmp_path, capsys):
+    # pyarrow read it as an empty dataset: fig7_timing was left out, exit 0
+    (tables / "timing.parquet").unlink()
+    (tables / "timing.parquet").mkdir()
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: {tables / 'timing.parquet'}: a folder where a table of the study goes; a table is "
+        "a Parquet file")
+
+
+def test_a_table_saved_as_csv_is_refused(tables, tmp_path, capsys):
+    # left out, its figure not drawn, exit 0
+    pd.read_parquet(tables / "trajectory.parquet").to_csv(tables / "trajectory.csv", index=False)
+    (tables / "trajectory.parquet").unlink()
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: {tables / 'trajectory.csv'}: the study's tables are read as Parquet "
+        "(trajectory.parquet, as `lmsbench figures` and `lmsbench demo` save them), not CSV")
