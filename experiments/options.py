@@ -1270,6 +1270,9 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
         _check_readable_folder(p, "--sweep", "the sweep's results")
     if path.is_file() and not os.access(path, os.R_OK):  # it said "not a Parquet table (PermissionError)"
         raise InputError(f"--sweep {path}: cannot be read (permission denied)")
+    if path.is_dir():  # it said "no results.parquet: the sweep did not finish"
+        raise InputError(f"--sweep {path}: a folder where the sweep's table goes; it is the Parquet file `lmsbench sweep` "
+                         "writes")
     if not path.is_file():
         if (p / "sweep.yaml").is_file():  # a sweep stopped or killed before its table
             raise InputError(f"--sweep {p}: no results.parquet: the sweep did not finish; finish it with lmsbench "
@@ -1279,7 +1282,10 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
         table = pd.read_parquet(path)
     except Exception as exc:  # noqa: BLE001 - pyarrow raises several types for a broken file
         raise InputError(f"--sweep {path}: not a Parquet table ({type(exc).__name__})") from None
-    if "status" not in table or not (table["status"] == "ok").any():
+    if "status" not in table or "cell" not in table:  # a figures table said "361 cells, all failed"
+        raise InputError(f"--sweep {path}: not the table of `lmsbench sweep` (no {'status' if 'status' not in table else 'cell'} "
+                         "column: one row per cell with its status; another program's table, or edited?)")
+    if not (table["status"] == "ok").any():
         raise InputError(f"--sweep {p}: no successful cell to plot ({len(table)} cells, all failed; "
                          "their `error` column says why)")
     spec_path = check_yaml(p / "sweep.yaml", "the sweep.yaml `lmsbench sweep` writes beside its results", sized=False)
@@ -1290,8 +1296,19 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
     if not isinstance(spec, dict) or not all(isinstance(spec.get(k) or {}, dict) for k in ("grid", "random")):
         raise InputError(f"--sweep {spec_path}: not the sweep.yaml of `lmsbench sweep` (a mapping whose grid: and "
                          "random: are mappings)")
+    params = list(dict.fromkeys(n.strip() for key in (*(spec.get("grid") or {}), *(spec.get("random") or {}))
+                                for n in str(key).split(",")))
+    absent = [n for n in params if n not in table]
+    if absent:  # another sweep's table or sweep.yaml: "holds 2 of the 3 cells ...: the sweep did not finish"
+        raise InputError(f"--sweep {p}: its results.parquet has no column {absent[0]}, a parameter of its sweep.yaml "
+                         f"({spec_path}): the table and the sweep.yaml are of different sweeps (one copied over "
+                         "the other's?); run the sweep again into a new folder")
     cells = _sweep_cells(spec)
     held = int(table["cell"].nunique()) if "cell" in table else len(table)
+    if cells is not None and held > cells:  # "holds 3 of the 2 cells ...: the sweep did not finish"
+        raise InputError(f"--sweep {p}: its results.parquet holds {held} cells, more than the {cells} of its sweep.yaml "
+                         f"({spec_path}): the table and the sweep.yaml are of different sweeps (one copied over the "
+                         "other's?); run the sweep again into a new folder")
     if cells is not None and held != cells:  # a stopped sweep's table was drawn as the sweep's result, exit 0
         raise InputError(f"--sweep {p}: its results.parquet holds {held} of the {cells} cells of its sweep.yaml: the "
                          f"sweep did not finish (stopped, or cells not stored); finish it with lmsbench sweep "

@@ -75,3 +75,73 @@ def test_a_table_saved_as_csv_is_refused(tables, tmp_path, capsys):
     assert _refused(capsys, tables, tmp_path / "o") == (
         f"lmsbench figures: error: {tables / 'trajectory.csv'}: the study's tables are read as Parquet "
         "(trajectory.parquet, as `lmsbench figures` and `lmsbench demo` save them), not CSV")
+
+
+@pytest.fixture(scope="module")
+def sweeps(tmp_path_factory) -> dict[str, Path]:
+    """Two finished sweeps of different parameters (extract cells over k, over ad_tau), about 2 s."""
+    root = tmp_path_factory.mktemp("sweeps")
+    out = {}
+    for name, grid in (("k", {"extractor.k": [3, 5]}), ("tau", {"extractor.ad_tau": [2.0, 4.0, 8.0]})):
+        spec = root / f"{name}.yaml"
+        spec.write_text(yaml.safe_dump({"name": name, "kind": "extract", "fixed": {"duration": 0.5, "rate_hz": 4.0},
+                                        "grid": grid}))
+        out[name] = root / name
+        assert main(["sweep", str(spec), "--inprocess", "--no-progress", "--out", str(out[name])]) == 0
+    return out
+
+
+def _sweep_refused(capsys, tables: Path, sweep: Path, out: Path) -> str:
+    capsys.readouterr()
+    assert main(["figures", "--tables", str(tables), "--sweep", str(sweep), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert not out.exists()
+    return err.rstrip("\n")
+
+
+def test_a_sweep_folder_whose_table_and_sweep_yaml_are_of_different_sweeps_is_refused(sweeps, tables, tmp_path, capsys):
+    import shutil
+
+    mixed = tmp_path / "mixed"
+    shutil.copytree(sweeps["k"], mixed)
+    shutil.copy(sweeps["tau"] / "sweep.yaml", mixed / "sweep.yaml")
+    # it said "its results.parquet holds 2 of the 3 cells of its sweep.yaml: the sweep did not finish ..."
+    assert _sweep_refused(capsys, tables, mixed, tmp_path / "o") == (
+        f"lmsbench figures: error: --sweep {mixed}: its results.parquet has no column extractor.ad_tau, a parameter of "
+        f"its sweep.yaml ({mixed / 'sweep.yaml'}): the table and the sweep.yaml are of different sweeps (one copied over "
+        "the other's?); run the sweep again into a new folder")
+    shutil.copy(sweeps["tau"] / "results.parquet", mixed / "results.parquet")
+    shutil.copy(sweeps["k"] / "sweep.yaml", mixed / "sweep.yaml")
+    table = pd.read_parquet(mixed / "results.parquet").assign(**{"extractor.k": 3})  # a column of k's name, 3 cells
+    table.to_parquet(mixed / "results.parquet", index=False)
+    # it said "holds 3 of the 2 cells of its sweep.yaml: the sweep did not finish"
+    assert _sweep_refused(capsys, tables, mixed, tmp_path / "o") == (
+        f"lmsbench figures: error: --sweep {mixed}: its results.parquet holds 3 cells, more than the 2 of its sweep.yaml "
+        f"({mixed / 'sweep.yaml'}): the table and the sweep.yaml are of different sweeps (one copied over the other's?); "
+        "run the sweep again into a new folder")
+
+
+def test_a_sweep_table_that_is_no_sweeps_or_a_folder_is_refused(sweeps, tables, tmp_path, capsys):
+    import shutil
+
+    folder = tmp_path / "s"
+    shutil.copytree(sweeps["k"], folder)
+    shutil.copy(tables / "timing.parquet", folder / "results.parquet")
+    # it said "no successful cell to plot (3 cells, all failed; their `error` column says why)"
+    assert _sweep_refused(capsys, tables, folder, tmp_path / "o") == (
+        f"lmsbench figures: error: --sweep {folder / 'results.parquet'}: not the table of `lmsbench sweep` (no status "
+        "column: one row per cell with its status; another program's table, or edited?)")
+    (folder / "results.parquet").unlink()
+    (folder / "results.parquet").mkdir()
+    # it said "no results.parquet: the sweep did not finish; finish it with lmsbench sweep ..."
+    assert _sweep_refused(capsys, tables, folder, tmp_path / "o") == (
+        f"lmsbench figures: error: --sweep {folder / 'results.parquet'}: a folder where the sweep's table goes; it is "
+        "the Parquet file `lmsbench sweep` writes")
+
+
+def test_both_sweeps_draw(sweeps, tables, tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["figures", "--tables", str(tables), "--sweep", str(sweeps["k"]), "--sweep", str(sweeps["tau"]),
+                 "--out", str(out)]) == 0, capsys.readouterr().err
+    assert (out / "sweep_k_f1.png").is_file() and (out / "sweep_tau_f1.png").is_file()
