@@ -963,7 +963,7 @@ def _check_replaceable(p: Path, tree: OutTree, top: Path | None = None) -> None:
     for name in tree.files:
         for f in sorted(p.glob(name)) if any(c in name for c in "*?[") else [p / name]:
             if f.is_file() and not f.is_symlink() and not os.access(f, os.W_OK):
-                raise InputError(f"--out {top or p}: {f} is read-only and this run would replace it; make it writable "
+                raise InputError(f"--out {top or p}: {f} cannot be written (permission denied: read-only), and this run would replace it; make it writable "
                                  "(chmod u+w), or give another folder")
     for sub, inner in tree.folders.items():
         folder = p / sub

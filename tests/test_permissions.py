@@ -72,8 +72,9 @@ def test_figures_over_a_read_only_figure_is_refused_before_drawing(tables, tmp_p
     capsys.readouterr()
     assert main(["figures", "--tables", str(tables), "--out", str(out)]) == 2
     # it drew up to that figure (the whole study first, without --tables), then said "o/fig7_timing.png: permission denied"
-    assert _error(capsys) == (f"lmsbench figures: error: --out {out}: {out / 'fig7_timing.png'} is read-only and this run "
-                              "would replace it; make it writable (chmod u+w), or give another folder")
+    assert _error(capsys) == (f"lmsbench figures: error: --out {out}: {out / 'fig7_timing.png'} cannot be written (permission "
+                              "denied: read-only), and this run would replace it; make it writable (chmod u+w), or give "
+                              "another folder")
     assert (out / "figures.yaml").read_bytes() == record
 
 
