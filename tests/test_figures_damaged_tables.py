@@ -145,3 +145,20 @@ def test_both_sweeps_draw(sweeps, tables, tmp_path, capsys):
     assert main(["figures", "--tables", str(tables), "--sweep", str(sweeps["k"]), "--sweep", str(sweeps["tau"]),
                  "--out", str(out)]) == 0, capsys.readouterr().err
     assert (out / "sweep_k_f1.png").is_file() and (out / "sweep_tau_f1.png").is_file()
+
+
+@pytest.mark.parametrize("gone", ["map", "office_corners"])
+def test_a_table_drawn_beside_another_is_required_with_it(tables, tmp_path, capsys, gone):
+    # without office_corners Fig. 9 failed after the figures before it ("the tables do not hold what the figures
+    # read (KeyError: 'office_corners')", figures.yaml and five figures written); without map Fig. 10 was left out
+    pd.DataFrame({"panel": [0, 0], "label": ["a", "a"], "x": [1.0, 2.0], "y": [0.0, 0.5]}).to_parquet(
+        tables / "office_points.parquet", index=False)
+    pd.DataFrame({"panel": [0], "x1": [1.0], "y1": [0.0], "x2": [2.0], "y2": [0.5]}).to_parquet(
+        tables / "office_lines.parquet", index=False)
+    pd.DataFrame({"panel": [0], "x": [1.0], "y": [0.0]}).to_parquet(tables / "office_corners.parquet", index=False)
+    assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "ok")]) == 0, capsys.readouterr().err
+    (tables / f"{gone}.parquet").unlink()
+    driving = "trajectory" if gone == "map" else "office_points"
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table {driving} has no {gone} beside it ({gone}.parquet), which "
+        "its figure draws with it: a tables folder of `lmsbench figures` or `lmsbench demo` holds both")

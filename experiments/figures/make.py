@@ -65,6 +65,12 @@ def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
     wrong-input hunt)."""
     from lms200 import LmsbenchError
 
+    for driving, beside in (("office_points", ("office_lines", "office_corners")),
+                            ("intel_points", ("intel_lines", "intel_corners")), ("trajectory", ("map",))):
+        absent = [b for b in beside if driving in tables and len(tables[driving]) and b not in tables]
+        if absent:  # Fig. 9 failed after the figures before it ("KeyError: 'office_corners'"); Fig. 10 was left out
+            raise LmsbenchError(f"{where}: table {driving} has no {absent[0]} beside it ({absent[0]}.parquet), which its "
+                                "figure draws with it: a tables folder of `lmsbench figures` or `lmsbench demo` holds both")
     for name, (keys, numbers) in TABLE_COLUMNS.items():
         table = tables.get(name)
         if table is None or not len(table) or (name == "summary" and "f1" not in table):  # none drawn from
