@@ -162,3 +162,62 @@ def test_a_table_drawn_beside_another_is_required_with_it(tables, tmp_path, caps
     assert _refused(capsys, tables, tmp_path / "o") == (
         f"lmsbench figures: error: --tables {tables}: table {driving} has no {gone} beside it ({gone}.parquet), which "
         "its figure draws with it: a tables folder of `lmsbench figures` or `lmsbench demo` holds both")
+
+
+def _points(tables: Path, panels: list[float]) -> None:
+    n = len(panels)
+    pd.DataFrame({"panel": panels, "label": ["s"] * n, "x": np.linspace(1, 2, n), "y": np.zeros(n)}).to_parquet(
+        tables / "office_points.parquet", index=False)
+    pd.DataFrame({"panel": [0], "x1": [1.0], "y1": [0.0], "x2": [2.0], "y2": [0.5]}).to_parquet(
+        tables / "office_lines.parquet", index=False)
+    pd.DataFrame({"panel": [0], "x": [1.0], "y": [0.0]}).to_parquet(tables / "office_corners.parquet", index=False)
+
+
+def test_a_points_table_of_too_many_or_null_panels_is_refused(tables, tmp_path, capsys):
+    # 1,441 panels: "terminate called after throwing an instance of 'std::bad_alloc'", exit 134
+    _points(tables, list(range(17)))
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table office_points holds 17 panels (scans), more than Fig. 9 "
+        "draws (at most 16; a study draws 4): a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+    # a nan panel: "internal error: IndexError: single positional indexer is out-of-bounds", after five figures
+    _points(tables, [0.0, np.nan])
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table office_points's column panel has empty (null or nan) values "
+        "in 1 of its 2 rows, where every row names its scan: a damaged table, or not one of `lmsbench figures` or "
+        "`lmsbench demo`")
+    _points(tables, list(range(16)))
+    assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "ok")]) == 0, capsys.readouterr().err
+
+
+def test_a_trajectory_without_truth_or_estimate_and_a_map_without_walls_are_refused(tables, tmp_path, capsys):
+    trajectory = pd.read_parquet(tables / "trajectory.parquet")
+    trajectory.assign(source="other").to_parquet(tables / "trajectory.parquet", index=False)
+    # "internal error: ValueError: Number of columns must be a positive integer, not 0"
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table trajectory has no rows of source truth, which Fig. 10 draws: "
+        "a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+    trajectory.to_parquet(tables / "trajectory.parquet", index=False)
+    pd.read_parquet(tables / "map.parquet").assign(source="slam").to_parquet(tables / "map.parquet", index=False)
+    # drawn without the true walls, exit 0
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table map has no rows of source truth (the true walls Fig. 10 "
+        "draws): a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+
+
+def test_a_signals_table_longer_than_a_scan_is_refused(tables, tmp_path, capsys):
+    # a million rows drew for over two minutes
+    n = (1 << 14) + 1
+    pd.DataFrame({c: np.linspace(0, 1, n) for c in ("beam", "bearing_deg", "range_m", "ad", "theta_deg", "psi_deg")}).to_parquet(
+        tables / "signals.parquet", index=False)
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table signals holds {n} rows, more than a scan's beams (at most "
+        "16384; it is one scan): a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+
+
+def test_a_timing_table_with_a_null_method_is_refused(tables, tmp_path, capsys):
+    # drawn without its label ("No artists with labels found to put in legend"), exit 0
+    pd.read_parquet(tables / "timing.parquet").assign(method=None).to_parquet(tables / "timing.parquet", index=False)
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table timing's column method has empty (null or nan) values in 3 "
+        "of its 3 rows, where every row names its extractor: a damaged table, or not one of `lmsbench figures` or "
+        "`lmsbench demo`")

@@ -86,6 +86,12 @@ def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
             raise LmsbenchError(f"{where}: table {name}'s column {text[0]} holds {table[text[0]].dtype} values, where "
                                 "the figures plot numbers: not a table of `lmsbench figures` or `lmsbench demo` "
                                 "(edited, or another program's?)")
+        empty_key = [c for c in keys if table[c].isna().any()]
+        if empty_key:  # a null panel was "internal error: IndexError", a null method drawn without a label
+            raise LmsbenchError(f"{where}: table {name}'s column {empty_key[0]} has empty (null or nan) values in "
+                                f"{int(table[empty_key[0]].isna().sum())} of its {len(table)} rows, where every row "
+                                "names its " + {"method": "extractor", "panel": "scan", "source": "source"}[empty_key[0]]
+                                + ": a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
         if name == "summary":  # accuracy_speed's own checks (its f1, time columns)
             continue
         blank = [c for c in numbers if not np.isfinite(table[c].to_numpy(dtype=float)).any()]
@@ -93,6 +99,43 @@ def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
             raise LmsbenchError(f"{where}: table {name}'s column {blank[0]} holds no finite number ({len(table)} rows, "
                                 "all nan or infinite), so its figure would be empty: a damaged table, or not one of "
                                 "`lmsbench figures` or `lmsbench demo`")
+    _check_shapes(tables, where)
+
+
+def _check_shapes(tables: dict[str, pd.DataFrame], where: str) -> None:
+    """What the figures draw that no study saves and that they cannot draw: a signals table of more
+    rows than a scan has beams (a million rows drew for over two minutes), more Fig. 9 panels than
+    MAX_PANELS (1,441 panels: C++ std::bad_alloc, exit 134), a trajectory without the truth or an
+    estimate ("internal error: ValueError: Number of columns must be a positive integer, not 0")
+    and a map without the true walls (drawn without them, exit 0)."""
+    from lms200 import LmsbenchError
+
+    from features.baselines.checks import MAX_BEAMS
+
+    def refuse(text: str) -> None:
+        raise LmsbenchError(f"{where}: {text}: a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+
+    signals = tables.get("signals")
+    if signals is not None and len(signals) > MAX_BEAMS:
+        refuse(f"table signals holds {len(signals)} rows, more than a scan's beams (at most {MAX_BEAMS}; it is one scan)")
+    for name in ("office_points", "intel_points"):
+        points = tables.get(name)
+        if points is not None and len(points) and points["panel"].nunique() > MAX_PANELS:
+            refuse(f"table {name} holds {points['panel'].nunique()} panels (scans), more than Fig. 9 draws (at most "
+                   f"{MAX_PANELS}; a study draws 4)")
+    trajectory = tables.get("trajectory")
+    if trajectory is not None and len(trajectory):
+        sources = set(trajectory["source"])
+        if "truth" not in sources or not sources & {"slam", "paper preset"}:
+            refuse("table trajectory has no rows of source " + ("truth" if "truth" not in sources else
+                                                                "slam or paper preset") + ", which Fig. 10 draws")
+    walls = tables.get("map")
+    if trajectory is not None and len(trajectory) and walls is not None and len(walls) and "truth" not in set(walls["source"]):
+        refuse("table map has no rows of source truth (the true walls Fig. 10 draws)")
+
+
+#: most panels (scans) of Fig. 9 (a study draws 4, StudyConfig.panels)
+MAX_PANELS = 16
 
 
 def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10,
