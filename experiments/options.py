@@ -1285,6 +1285,8 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
     if "status" not in table or "cell" not in table:  # a figures table said "361 cells, all failed"
         raise InputError(f"--sweep {path}: not the table of `lmsbench sweep` (no {'status' if 'status' not in table else 'cell'} "
                          "column: one row per cell with its status; another program's table, or edited?)")
+    if not len(table):  # it said "no successful cell to plot (0 cells, all failed; ...)"
+        raise InputError(f"--sweep {path}: an empty table (no cell); run the sweep again into its folder to write it")
     if not (table["status"] == "ok").any():
         raise InputError(f"--sweep {p}: no successful cell to plot ({len(table)} cells, all failed; "
                          "their `error` column says why)")

@@ -221,3 +221,46 @@ def test_a_timing_table_with_a_null_method_is_refused(tables, tmp_path, capsys):
         f"lmsbench figures: error: --tables {tables}: table timing's column method has empty (null or nan) values in 3 "
         "of its 3 rows, where every row names its extractor: a damaged table, or not one of `lmsbench figures` or "
         "`lmsbench demo`")
+
+
+@pytest.mark.parametrize("field, value, said", [
+    # "internal error: TypeError: can only concatenate str (not "int") to str"
+    ("signals_k", "abc", "signals_k: must be a whole number from 1 to 8192, the AD window of Figs. 4-6 (got 'abc')"),
+    # drawn with AD_i-5 and its reference line, exit 0
+    ("signals_k", -5, "signals_k: must be a whole number from 1 to 8192, the AD window of Figs. 4-6 (got -5)"),
+    # "internal error: MemoryError: Unable to allocate 7.28 TiB", after figures.yaml
+    ("signals_k", 10**12, "signals_k: must be a whole number from 1 to 8192, the AD window of Figs. 4-6 (got 1000000000000)"),
+    ("world", [1, 2], "world: must be the name of the simulated world (got [1, 2])"),
+])
+def test_a_study_yaml_field_the_figures_draw_with_is_checked(tables, tmp_path, capsys, field, value, said):
+    settings = yaml.safe_load((tables / "study.yaml").read_text())
+    (tables / "study.yaml").write_text(yaml.safe_dump({**settings, field: value}))
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: {tables / 'study.yaml'}: not the study.yaml of lmsbench figures / demo ({said})")
+
+
+def test_binary_notes_and_a_table_of_column_levels_are_refused(tables, tmp_path, capsys):
+    (tables / "notes.txt").write_bytes(b"\xff\xfe\x00")
+    # "internal error: UnicodeDecodeError"
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: {tables / 'notes.txt'}: not UTF-8 text (byte 0); a study's notes are a text file")
+    (tables / "notes.txt").write_text("")
+    frame = pd.read_parquet(tables / "timing.parquet")
+    frame.columns = pd.MultiIndex.from_tuples([(c, "a") for c in frame.columns])
+    frame.to_parquet(tables / "timing.parquet")
+    # "internal error: AttributeError: 'DataFrame' object has no attribute 'dtype'"
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: {tables / 'timing.parquet'}: its column ('method', 'a') is no plain name (a table of "
+        "named columns, one level, as `lmsbench figures` saves them)")
+
+
+def test_an_empty_sweep_table_is_said_empty(sweeps, tables, tmp_path, capsys):
+    import shutil
+
+    folder = tmp_path / "s"
+    shutil.copytree(sweeps["k"], folder)
+    pd.read_parquet(folder / "results.parquet").iloc[:0].to_parquet(folder / "results.parquet", index=False)
+    # it said "no successful cell to plot (0 cells, all failed; their `error` column says why)"
+    assert _sweep_refused(capsys, tables, folder, tmp_path / "o") == (
+        f"lmsbench figures: error: --sweep {folder / 'results.parquet'}: an empty table (no cell); run the sweep again "
+        "into its folder to write it")

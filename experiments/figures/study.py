@@ -193,7 +193,10 @@ def load_tables(folder: Path) -> tuple[dict[str, pd.DataFrame], list[str]]:
     if notes_file.exists() and not notes_file.is_file():  # a named pipe was waited on for ever (the wrong-input hunt)
         raise LmsbenchError(f"{notes_file}: not a regular file (a pipe, a device or a socket); a study's notes are "
                             "a text file")
-    notes = notes_file.read_text().splitlines() if notes_file.exists() else []
+    try:
+        notes = notes_file.read_text(encoding="utf-8").splitlines() if notes_file.exists() else []
+    except UnicodeDecodeError as exc:  # was "internal error: UnicodeDecodeError"
+        raise LmsbenchError(f"{notes_file}: not UTF-8 text (byte {exc.start}); a study's notes are a text file") from None
     return tables, notes
 
 
@@ -203,9 +206,14 @@ def read_table(path: Path) -> pd.DataFrame:
     from lms200 import LmsbenchError
 
     try:
-        return pd.read_parquet(path)
+        table = pd.read_parquet(path)
     except (OSError, ValueError) as exc:
         raise LmsbenchError(f"{path}: not a readable parquet table ({' '.join(str(exc).split())[:200]})") from None
+    odd = [c for c in table.columns if not isinstance(c, str)]
+    if odd:  # levels of columns (a MultiIndex) were "internal error: AttributeError: 'DataFrame' object has no attribute 'dtype'"
+        raise LmsbenchError(f"{path}: its column {odd[0]!r} is no plain name (a table of named columns, one level, "
+                            "as `lmsbench figures` saves them)")
+    return table
 
 
 def panel_method_of(cfg: StudyConfig) -> str:
@@ -299,6 +307,10 @@ def _slam_in_world(result, records) -> tuple[np.ndarray, np.ndarray]:
     return traj, segs
 
 
+#: largest AD window of a study's signals (Figs. 4-6): half a scan of the extractors' most beams
+MAX_SIGNALS_K = 1 << 13
+
+
 def load_config(folder: Path) -> StudyConfig:
     """The settings saved beside the tables (defaults where there is no study.yaml)."""
     from lms200 import LmsbenchError
@@ -316,6 +328,13 @@ def load_config(folder: Path) -> StudyConfig:
         known = {f.name for f in dataclasses.fields(StudyConfig)}
         cfg = StudyConfig(**{k: v for k, v in (raw or {}).items() if k in known})
         cfg.methods = tuple(cfg.methods)
+        # what the figures draw with: a text signals_k or world was "internal error: TypeError", a huge k a
+        # MemoryError, a negative one drew Fig. 4's reference line and labels of AD_i-5, exit 0
+        if isinstance(cfg.signals_k, bool) or not isinstance(cfg.signals_k, int) or not 1 <= cfg.signals_k <= MAX_SIGNALS_K:
+            raise ValueError(f"signals_k: must be a whole number from 1 to {MAX_SIGNALS_K}, the AD window of Figs. 4-6 "
+                             f"(got {cfg.signals_k!r})")
+        if not isinstance(cfg.world, str):
+            raise ValueError(f"world: must be the name of the simulated world (got {cfg.world!r})")
     except (yaml.YAMLError, TypeError, ValueError, UnicodeDecodeError) as exc:
         raise LmsbenchError(f"{path}: not the study.yaml of lmsbench figures / demo ({' '.join(str(exc).split())[:200]})") from None
     return cfg
