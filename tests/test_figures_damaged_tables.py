@@ -264,3 +264,32 @@ def test_an_empty_sweep_table_is_said_empty(sweeps, tables, tmp_path, capsys):
     assert _sweep_refused(capsys, tables, folder, tmp_path / "o") == (
         f"lmsbench figures: error: --sweep {folder / 'results.parquet'}: an empty table (no cell); run the sweep again "
         "into its folder to write it")
+
+
+@pytest.mark.parametrize("value, said", [("0.5", "str"), ([0.5], "object")])
+def test_a_sweep_metric_of_text_is_refused(sweeps, tables, tmp_path, capsys, value, said):
+    import shutil
+
+    folder = tmp_path / "s"
+    shutil.copytree(sweeps["k"], folder)
+    table = pd.read_parquet(folder / "results.parquet")
+    table["f1"] = [value] * len(table)
+    table.to_parquet(folder / "results.parquet", index=False)
+    # "internal error: TypeError: dtype 'str' does not support operation 'mean'" (lists: "agg function failed")
+    assert _sweep_refused(capsys, tables, folder, tmp_path / "o") == (
+        f"lmsbench figures: error: --sweep {folder}: its results.parquet's column f1 holds {said} values, where a "
+        "sweep's metric is a number: a damaged or edited table, or not one of `lmsbench sweep`")
+
+
+def test_a_sweep_metric_of_no_finite_value_is_not_plotted(sweeps, tables, tmp_path, capsys):
+    import shutil
+
+    folder = tmp_path / "s"
+    shutil.copytree(sweeps["k"], folder)
+    table = pd.read_parquet(folder / "results.parquet")
+    table["f1"] = np.inf
+    table.to_parquet(folder / "results.parquet", index=False)
+    out = tmp_path / "o"
+    assert main(["figures", "--tables", str(tables), "--sweep", str(folder), "--out", str(out)]) == 0, capsys.readouterr().err
+    assert not (out / "sweep_k_f1.png").exists()  # an empty plot of all inf was drawn
+    assert (out / "sweep_k_corner_f1.png").is_file()

@@ -252,24 +252,42 @@ def _sweep_plan(folder: Path) -> tuple[pd.DataFrame, str, list[str], list[str], 
     varied = [key.split(",")[0].strip() for key in spec.get("grid", {})]
     varied = [n for n in varied if n in table and table[n].nunique() > 1]
     sampled = [n for n in spec.get("random", {}) if n in table]
-    return table, name, varied, sampled, sweep_metrics(table, spec)
+    return table, name, varied, sampled, sweep_metrics(table, spec, folder)
 
 
 #: a sweep row's columns that are no metric: the runner's own (docs/experiments.md, "Sweep outputs")
 SWEEP_BOOKKEEPING = ("seed", "status", "error", "elapsed_s", "cell")
 
 
-def sweep_metrics(table: pd.DataFrame, spec: dict) -> list[str]:
+def sweep_metrics(table: pd.DataFrame, spec: dict, folder: Path | None = None) -> list[str]:
     """The metrics of a sweep's plots: for a built-in kind, those of SWEEP_METRICS the table has
     values of; for a user's ``package.module:function`` kind (whose metrics are its own names:
     nothing was drawn for it, and one that also returned an "f1" had only that drawn), or a built-in
     kind without any, every numeric column with a value that is neither a parameter of the sweep
     file nor the runner's bookkeeping."""
-    known = [m for m in SWEEP_METRICS if m in table and table[m].notna().any()]
+    from lms200 import LmsbenchError
+
+    text = [m for m in SWEEP_METRICS if m in table and table[m].notna().any() and not _numbers(table[m])]
+    if text:  # "internal error: TypeError: dtype 'str' does not support operation 'mean'" (a damaged-input fuzz round)
+        raise LmsbenchError(f"--sweep {folder if folder is not None else spec.get('name', '')}: its results.parquet's column {text[0]} holds "
+                            f"{table[text[0]].dtype} values, where a sweep's metric is a number: a damaged or edited "
+                            "table, or not one of `lmsbench sweep`")
+    known = [m for m in SWEEP_METRICS if m in table and _finite(table[m]).any()]  # all inf was plotted as nothing
     if known and ":" not in str(spec.get("kind", "")):
         return known
     params = {n.strip() for key in (*spec.get("grid", {}), *spec.get("random", {}), *spec.get("fixed", {}))
               for n in str(key).split(",")}
     return [c for c in table.columns if c not in params and c not in SWEEP_BOOKKEEPING
-            and pd.api.types.is_numeric_dtype(table[c]) and not pd.api.types.is_bool_dtype(table[c])
-            and table[c].notna().any()]
+            and _numbers(table[c]) and _finite(table[c]).any()]
+
+
+def _numbers(column: pd.Series) -> bool:
+    """Whether a column holds numbers the plots can average (not text, lists or booleans)."""
+    return pd.api.types.is_numeric_dtype(column) and not pd.api.types.is_bool_dtype(column)
+
+
+def _finite(column: pd.Series) -> np.ndarray:
+    """Which values of a column are finite numbers (all False for a column of no numbers)."""
+    if not _numbers(column):
+        return np.zeros(len(column), bool)
+    return np.isfinite(column.to_numpy(dtype=float, na_value=np.nan))
