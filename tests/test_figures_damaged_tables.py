@@ -293,3 +293,20 @@ def test_a_sweep_metric_of_no_finite_value_is_not_plotted(sweeps, tables, tmp_pa
     assert main(["figures", "--tables", str(tables), "--sweep", str(folder), "--out", str(out)]) == 0, capsys.readouterr().err
     assert not (out / "sweep_k_f1.png").exists()  # an empty plot of all inf was drawn
     assert (out / "sweep_k_corner_f1.png").is_file()
+
+
+@pytest.mark.parametrize("name", ["../../outside", ["a", "b"], "", "a" * 300])
+def test_a_sweep_name_that_is_no_plain_name_is_refused(sweeps, tables, tmp_path, capsys, name):
+    import shutil
+
+    folder = tmp_path / "deep" / "er" / "s"
+    shutil.copytree(sweeps["k"], folder)
+    spec = yaml.safe_load((folder / "sweep.yaml").read_text())
+    (folder / "sweep.yaml").write_text(yaml.safe_dump({**spec, "name": name}))
+    out = tmp_path / "deep" / "er" / "o"
+    # "../../outside" wrote its plots beside --out, through a folder sweep_.. it made there, exit 0
+    err = _sweep_refused(capsys, tables, folder, out)
+    assert err.startswith(f"lmsbench figures: error: --sweep {folder}: its sweep.yaml's name: "), err
+    assert err.endswith("is no name a file can take (text of at most 150 characters, without / and not starting with .), "
+                        "and it names the sweep's plots (sweep_NAME_METRIC): not a sweep.yaml `lmsbench sweep` wrote (edited?)")
+    assert sorted(p.name for p in (tmp_path / "deep" / "er").iterdir()) == ["s"]

@@ -248,11 +248,29 @@ def _sweep_plan(folder: Path) -> tuple[pd.DataFrame, str, list[str], list[str], 
     table = read_table(folder / "results.parquet")
     spec = load_yaml((folder / "sweep.yaml").read_text(), words=True)  # the sweep's record, an earlier version's too
     name = spec.get("name", folder.name)
+    if "name" in spec and not _file_name(name):  # it names the plots' files
+        from lms200 import LmsbenchError
+
+        # "../../x" wrote its plots outside --out (through a folder "sweep_.." it made), a list was drawn as
+        # "sweep_['a', 'b']_f1", 300 characters failed after the paper's figures ("File name too long")
+        raise LmsbenchError(f"--sweep {folder}: its sweep.yaml's name: {str(name)[:120]!r} is no name a file can take "
+                            f"(text of at most {MAX_PLOT_NAME} characters, without / and not starting with .), and it "
+                            "names the sweep's plots (sweep_NAME_METRIC): not a sweep.yaml `lmsbench sweep` wrote (edited?)")
     # one name per grid key: parameters linked to it ("a,b") follow it and need no line of their own
     varied = [key.split(",")[0].strip() for key in spec.get("grid", {})]
     varied = [n for n in varied if n in table and table[n].nunique() > 1]
     sampled = [n for n in spec.get("random", {}) if n in table]
     return table, name, varied, sampled, sweep_metrics(table, spec, folder)
+
+
+#: longest sweep name a plot is named by (a sweep's own are at most 100: experiments.sweep.spec.MAX_NAME_CHARS)
+MAX_PLOT_NAME = 150
+
+
+def _file_name(name: object) -> bool:
+    """Whether a sweep.yaml's name can name its plots' files in --out: text, no path, not hidden."""
+    return (isinstance(name, str) and 0 < len(name) <= MAX_PLOT_NAME and "/" not in name and "\0" not in name
+            and not name.startswith("."))
 
 
 #: a sweep row's columns that are no metric: the runner's own (docs/experiments.md, "Sweep outputs")
