@@ -543,6 +543,8 @@ def check_simulate_finished(path: str | os.PathLike) -> None:
         real = p
     folders = [p] if p.is_dir() else [q.parent for q in dict.fromkeys((p, real)) if q.name in SIMULATE_OUTPUTS]
     for folder in folders:
+        if not os.access(folder, os.X_OK):  # said "FOLDER/.simulate-unfinished: permission denied", a file not given
+            raise InputError(f"{folder}: folder cannot be read (permission denied: its files cannot be opened)")
         marker = folder / SIMULATE_UNFINISHED
         if marker.exists():
             rerun = (f"rerun it with lmsbench simulate --config {marker} --out {folder} (that file holds its settings)"
@@ -935,15 +937,47 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
                              "folder (a folder of this command's own earlier outputs is replaced)")
         if owner is not None:  # its own names, but not written by it: a user's summary.txt or config.yaml
             theirs = owner.foreign(p, tree if replaces is None else replaces)
+            hidden = [n for n in theirs if not os.access(p / n, os.R_OK)]
+            if hidden:  # said "holds config.yaml, which ... no earlier lmsbench compare run wrote" of an unreadable record
+                raise InputError(f"--out {p}: {p / hidden[0]} cannot be read (permission denied), so this run cannot "
+                                 f"tell whether an earlier lmsbench {owner.command} run wrote it; make it readable, or "
+                                 "give another folder")
             if theirs:
                 shown = " and ".join(theirs) if len(theirs) <= 3 else ", ".join(theirs[:3]) + f" and {len(theirs) - 3} more"
                 raise InputError(f"--out {p}: holds {shown}, which this run would replace but no earlier lmsbench "
                                  f"{owner.command} run wrote; give a new or empty folder")
+        _check_replaceable(p, tree if replaces is None else replaces)
     parent = _nearest_existing(p)
     if not _writable_folder(parent):
         raise InputError(f"--out {p}: {parent} is not a writable folder")
     hold_output(p, make=True)  # a new folder is made here to be locked (removed as the command ends if still empty)
     return p
+
+
+#: a sub-folder of outputs not checked by :func:`_check_replaceable`: a sweep's finished cells
+#: (experiments.sweep.store.CELLS_DIR), read and kept, written only when cells are left to compute
+#: (the sweep checks that itself, experiments.sweep.runner)
+KEPT_FOLDERS = ("cells",)
+
+
+def _check_replaceable(p: Path, tree: OutTree, top: Path | None = None) -> None:
+    """Refuse, before any work, a read-only file of ``--out p`` that the run would replace, or a
+    sub-folder of its outputs it cannot write in: ``figures --out DIR`` over a read-only
+    ``fig3_scan.png`` computed its whole study, then failed ``DIR/fig3_scan.png: permission denied``
+    (a permission fuzz round, run as a user without root's powers: as root everything is writable)."""
+    for name in tree.files:
+        for f in sorted(p.glob(name)) if any(c in name for c in "*?[") else [p / name]:
+            if f.is_file() and not f.is_symlink() and not os.access(f, os.W_OK):
+                raise InputError(f"--out {top or p}: {f} cannot be written (permission denied: read-only), and this run would replace it; make it writable "
+                                 "(chmod u+w), or give another folder")
+    for sub, inner in tree.folders.items():
+        folder = p / sub
+        if sub in KEPT_FOLDERS or not folder.is_dir() or folder.is_symlink():
+            continue
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise InputError(f"--out {top or p}: {folder} is not a writable folder, and this run writes its outputs there; "
+                             "make it writable (chmod u+w), or give another folder")
+        _check_replaceable(folder, inner, top or p)
 
 
 #: the outputs (``--out`` folders and files) the running command holds, per thread (two ``cli.main``
@@ -1205,6 +1239,15 @@ def split_methods(methods: Sequence[str]) -> list[str]:
     return names
 
 
+def _check_readable_folder(p: Path, flag: str, what: str) -> None:
+    """Refuse a folder whose files cannot be listed or opened (no read or search permission): an
+    error named a file in it (``t/study.yaml: permission denied``) or said it held none (``no
+    study.yaml and tables``) where the folder itself could not be read."""
+    if not os.access(p, os.R_OK | os.X_OK):
+        raise InputError(f"{flag} {p}: folder cannot be read (permission denied), so {what} in it cannot be read; "
+                         "make it readable (chmod u+rx)")
+
+
 def check_study_tables(folder: str | os.PathLike) -> Path:
     """A folder of tables saved by an earlier ``lmsbench figures`` / ``demo`` (study.yaml and Parquet)."""
     p = Path(folder)
@@ -1212,6 +1255,7 @@ def check_study_tables(folder: str | os.PathLike) -> Path:
         raise InputError(f"--tables {p} is a file, not a folder of tables")
     if not p.is_dir():
         raise InputError(f"--tables {p}: no such folder")
+    _check_readable_folder(p, "--tables", "the tables")
     if not (p / "study.yaml").is_file() or not any(p.glob("*.parquet")):
         raise InputError(f"--tables {p}: no study.yaml and tables (*.parquet) from an earlier "
                          "`lmsbench figures` or `lmsbench demo` (they are in its tables/ folder)")
@@ -1227,6 +1271,13 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
     if p.exists() and not p.is_dir():  # a sweep file given for its folder: it said "no results.parquet"
         raise InputError(f"--sweep {p} is a file, not a sweep folder (the folder `lmsbench sweep` wrote: --out, "
                          "default results/sweeps/NAME)")
+    if p.is_dir():
+        _check_readable_folder(p, "--sweep", "the sweep's results")
+    if path.is_file() and not os.access(path, os.R_OK):  # it said "not a Parquet table (PermissionError)"
+        raise InputError(f"--sweep {path}: cannot be read (permission denied)")
+    if path.is_dir():  # it said "no results.parquet: the sweep did not finish"
+        raise InputError(f"--sweep {path}: a folder where the sweep's table goes; it is the Parquet file `lmsbench sweep` "
+                         "writes")
     if not path.is_file():
         if (p / "sweep.yaml").is_file():  # a sweep stopped or killed before its table
             raise InputError(f"--sweep {p}: no results.parquet: the sweep did not finish; finish it with lmsbench "
@@ -1236,7 +1287,12 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
         table = pd.read_parquet(path)
     except Exception as exc:  # noqa: BLE001 - pyarrow raises several types for a broken file
         raise InputError(f"--sweep {path}: not a Parquet table ({type(exc).__name__})") from None
-    if "status" not in table or not (table["status"] == "ok").any():
+    if "status" not in table or "cell" not in table:  # a figures table said "361 cells, all failed"
+        raise InputError(f"--sweep {path}: not the table of `lmsbench sweep` (no {'status' if 'status' not in table else 'cell'} "
+                         "column: one row per cell with its status; another program's table, or edited?)")
+    if not len(table):  # it said "no successful cell to plot (0 cells, all failed; ...)"
+        raise InputError(f"--sweep {path}: an empty table (no cell); run the sweep again into its folder to write it")
+    if not (table["status"] == "ok").any():
         raise InputError(f"--sweep {p}: no successful cell to plot ({len(table)} cells, all failed; "
                          "their `error` column says why)")
     spec_path = check_yaml(p / "sweep.yaml", "the sweep.yaml `lmsbench sweep` writes beside its results", sized=False)
@@ -1247,8 +1303,19 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
     if not isinstance(spec, dict) or not all(isinstance(spec.get(k) or {}, dict) for k in ("grid", "random")):
         raise InputError(f"--sweep {spec_path}: not the sweep.yaml of `lmsbench sweep` (a mapping whose grid: and "
                          "random: are mappings)")
+    params = list(dict.fromkeys(n.strip() for key in (*(spec.get("grid") or {}), *(spec.get("random") or {}))
+                                for n in str(key).split(",")))
+    absent = [n for n in params if n not in table]
+    if absent:  # another sweep's table or sweep.yaml: "holds 2 of the 3 cells ...: the sweep did not finish"
+        raise InputError(f"--sweep {p}: its results.parquet has no column {absent[0]}, a parameter of its sweep.yaml "
+                         f"({spec_path}): the table and the sweep.yaml are of different sweeps (one copied over "
+                         "the other's?); run the sweep again into a new folder")
     cells = _sweep_cells(spec)
     held = int(table["cell"].nunique()) if "cell" in table else len(table)
+    if cells is not None and held > cells:  # "holds 3 of the 2 cells ...: the sweep did not finish"
+        raise InputError(f"--sweep {p}: its results.parquet holds {held} cells, more than the {cells} of its sweep.yaml "
+                         f"({spec_path}): the table and the sweep.yaml are of different sweeps (one copied over the "
+                         "other's?); run the sweep again into a new folder")
     if cells is not None and held != cells:  # a stopped sweep's table was drawn as the sweep's result, exit 0
         raise InputError(f"--sweep {p}: its results.parquet holds {held} of the {cells} cells of its sweep.yaml: the "
                          f"sweep did not finish (stopped, or cells not stored); finish it with lmsbench sweep "

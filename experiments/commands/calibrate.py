@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 from experiments.logargs import LOG_HELP, add_log_options, read_log_options
@@ -42,6 +43,11 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"--out {args.out}: calibrate writes a sensor YAML; give a file name ending in .yaml")
         if args.out.exists() and Path(args.log).exists() and real_path(args.out) == real_path(args.log):
             raise InputError(f"--out {args.out} is the log being calibrated")
+        if args.out.is_file() and not os.access(args.out, os.R_OK):  # said "is not a sensor YAML that calibrate wrote"
+            raise InputError(f"--out {args.out} cannot be read (permission denied), so calibrate cannot tell whether it "
+                             "wrote it; make it readable, or give a new file name")
+        if args.out.is_file() and not os.access(args.out, os.W_OK):  # a read-only earlier output was replaced, exit 0
+            raise InputError(f"--out {args.out} is read-only; make it writable (chmod u+w), or give a new file name")
         if args.out.exists() and not _written_by_calibrate(args.out):  # a user's YAML was replaced silently
             raise InputError(f"--out {args.out} exists and is not a sensor YAML that calibrate wrote; give a new "
                              "file name (calibrate replaces only its own earlier output)")

@@ -18,6 +18,7 @@ from lms200.yamlio import load as load_yaml
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
 import pandas as pd
 
 from . import draw
@@ -89,6 +90,12 @@ def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
     wrong-input hunt)."""
     from lms200 import LmsbenchError
 
+    for driving, beside in (("office_points", ("office_lines", "office_corners")),
+                            ("intel_points", ("intel_lines", "intel_corners")), ("trajectory", ("map",))):
+        absent = [b for b in beside if driving in tables and len(tables[driving]) and b not in tables]
+        if absent:  # Fig. 9 failed after the figures before it ("KeyError: 'office_corners'"); Fig. 10 was left out
+            raise LmsbenchError(f"{where}: table {driving} has no {absent[0]} beside it ({absent[0]}.parquet), which its "
+                                "figure draws with it: a tables folder of `lmsbench figures` or `lmsbench demo` holds both")
     for name, (keys, numbers) in TABLE_COLUMNS.items():
         table = tables.get(name)
         if table is None or not len(table) or (name == "summary" and "f1" not in table):  # none drawn from
@@ -104,6 +111,56 @@ def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
             raise LmsbenchError(f"{where}: table {name}'s column {text[0]} holds {table[text[0]].dtype} values, where "
                                 "the figures plot numbers: not a table of `lmsbench figures` or `lmsbench demo` "
                                 "(edited, or another program's?)")
+        empty_key = [c for c in keys if table[c].isna().any()]
+        if empty_key:  # a null panel was "internal error: IndexError", a null method drawn without a label
+            raise LmsbenchError(f"{where}: table {name}'s column {empty_key[0]} has empty (null or nan) values in "
+                                f"{int(table[empty_key[0]].isna().sum())} of its {len(table)} rows, where every row "
+                                "names its " + {"method": "extractor", "panel": "scan", "source": "source"}[empty_key[0]]
+                                + ": a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+        if name == "summary":  # accuracy_speed's own checks (its f1, time columns)
+            continue
+        blank = [c for c in numbers if not np.isfinite(table[c].to_numpy(dtype=float)).any()]
+        if blank:  # every figure of it drawn empty, exit 0 (a damaged-input fuzz round: all nan, all inf)
+            raise LmsbenchError(f"{where}: table {name}'s column {blank[0]} holds no finite number ({len(table)} rows, "
+                                "all nan or infinite), so its figure would be empty: a damaged table, or not one of "
+                                "`lmsbench figures` or `lmsbench demo`")
+    _check_shapes(tables, where)
+
+
+def _check_shapes(tables: dict[str, pd.DataFrame], where: str) -> None:
+    """What the figures draw that no study saves and that they cannot draw: a signals table of more
+    rows than a scan has beams (a million rows drew for over two minutes), more Fig. 9 panels than
+    MAX_PANELS (1,441 panels: C++ std::bad_alloc, exit 134), a trajectory without the truth or an
+    estimate ("internal error: ValueError: Number of columns must be a positive integer, not 0")
+    and a map without the true walls (drawn without them, exit 0)."""
+    from lms200 import LmsbenchError
+
+    from features.baselines.checks import MAX_BEAMS
+
+    def refuse(text: str) -> None:
+        raise LmsbenchError(f"{where}: {text}: a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+
+    signals = tables.get("signals")
+    if signals is not None and len(signals) > MAX_BEAMS:
+        refuse(f"table signals holds {len(signals)} rows, more than a scan's beams (at most {MAX_BEAMS}; it is one scan)")
+    for name in ("office_points", "intel_points"):
+        points = tables.get(name)
+        if points is not None and len(points) and points["panel"].nunique() > MAX_PANELS:
+            refuse(f"table {name} holds {points['panel'].nunique()} panels (scans), more than Fig. 9 draws (at most "
+                   f"{MAX_PANELS}; a study draws 4)")
+    trajectory = tables.get("trajectory")
+    if trajectory is not None and len(trajectory):
+        sources = set(trajectory["source"])
+        if "truth" not in sources or not sources & {"slam", "paper preset"}:
+            refuse("table trajectory has no rows of source " + ("truth" if "truth" not in sources else
+                                                                "slam or paper preset") + ", which Fig. 10 draws")
+    walls = tables.get("map")
+    if trajectory is not None and len(trajectory) and walls is not None and len(walls) and "truth" not in set(walls["source"]):
+        refuse("table map has no rows of source truth (the true walls Fig. 10 draws)")
+
+
+#: most panels (scans) of Fig. 9 (a study draws 4, StudyConfig.panels)
+MAX_PANELS = 16
 
 
 def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10,
@@ -216,28 +273,64 @@ def _sweep_plan(folder: Path) -> tuple[pd.DataFrame, str, list[str], list[str], 
     table = read_table(folder / "results.parquet")
     spec = load_yaml((folder / "sweep.yaml").read_text(), words=True)  # the sweep's record, an earlier version's too
     name = spec.get("name", folder.name)
+    if "name" in spec and not _file_name(name):  # it names the plots' files
+        from lms200 import LmsbenchError
+
+        # "../../x" wrote its plots outside --out (through a folder "sweep_.." it made), a list was drawn as
+        # "sweep_['a', 'b']_f1", 300 characters failed after the paper's figures ("File name too long")
+        raise LmsbenchError(f"--sweep {folder}: its sweep.yaml's name: {str(name)[:120]!r} is no name a file can take "
+                            f"(text of at most {MAX_PLOT_NAME} characters, without / and not starting with .), and it "
+                            "names the sweep's plots (sweep_NAME_METRIC): not a sweep.yaml `lmsbench sweep` wrote (edited?)")
     # one name per grid key: parameters linked to it ("a,b") follow it and need no line of their own
     varied = [key.split(",")[0].strip() for key in spec.get("grid", {})]
     varied = [n for n in varied if n in table and table[n].nunique() > 1]
     sampled = [n for n in spec.get("random", {}) if n in table]
-    return table, name, varied, sampled, sweep_metrics(table, spec)
+    return table, name, varied, sampled, sweep_metrics(table, spec, folder)
+
+
+#: longest sweep name a plot is named by (a sweep's own are at most 100: experiments.sweep.spec.MAX_NAME_CHARS)
+MAX_PLOT_NAME = 150
+
+
+def _file_name(name: object) -> bool:
+    """Whether a sweep.yaml's name can name its plots' files in --out: text, no path, not hidden."""
+    return (isinstance(name, str) and 0 < len(name) <= MAX_PLOT_NAME and "/" not in name and "\0" not in name
+            and not name.startswith("."))
 
 
 #: a sweep row's columns that are no metric: the runner's own (docs/experiments.md, "Sweep outputs")
 SWEEP_BOOKKEEPING = ("seed", "status", "error", "elapsed_s", "cell")
 
 
-def sweep_metrics(table: pd.DataFrame, spec: dict) -> list[str]:
+def sweep_metrics(table: pd.DataFrame, spec: dict, folder: Path | None = None) -> list[str]:
     """The metrics of a sweep's plots: for a built-in kind, those of SWEEP_METRICS the table has
     values of; for a user's ``package.module:function`` kind (whose metrics are its own names:
     nothing was drawn for it, and one that also returned an "f1" had only that drawn), or a built-in
     kind without any, every numeric column with a value that is neither a parameter of the sweep
     file nor the runner's bookkeeping."""
-    known = [m for m in SWEEP_METRICS if m in table and table[m].notna().any()]
+    from lms200 import LmsbenchError
+
+    text = [m for m in SWEEP_METRICS if m in table and table[m].notna().any() and not _numbers(table[m])]
+    if text:  # "internal error: TypeError: dtype 'str' does not support operation 'mean'" (a damaged-input fuzz round)
+        raise LmsbenchError(f"--sweep {folder if folder is not None else spec.get('name', '')}: its results.parquet's column {text[0]} holds "
+                            f"{table[text[0]].dtype} values, where a sweep's metric is a number: a damaged or edited "
+                            "table, or not one of `lmsbench sweep`")
+    known = [m for m in SWEEP_METRICS if m in table and _finite(table[m]).any()]  # all inf was plotted as nothing
     if known and ":" not in str(spec.get("kind", "")):
         return known
     params = {n.strip() for key in (*spec.get("grid", {}), *spec.get("random", {}), *spec.get("fixed", {}))
               for n in str(key).split(",")}
     return [c for c in table.columns if c not in params and c not in SWEEP_BOOKKEEPING
-            and pd.api.types.is_numeric_dtype(table[c]) and not pd.api.types.is_bool_dtype(table[c])
-            and table[c].notna().any()]
+            and _numbers(table[c]) and _finite(table[c]).any()]
+
+
+def _numbers(column: pd.Series) -> bool:
+    """Whether a column holds numbers the plots can average (not text, lists or booleans)."""
+    return pd.api.types.is_numeric_dtype(column) and not pd.api.types.is_bool_dtype(column)
+
+
+def _finite(column: pd.Series) -> np.ndarray:
+    """Which values of a column are finite numbers (all False for a column of no numbers)."""
+    if not _numbers(column):
+        return np.zeros(len(column), bool)
+    return np.isfinite(column.to_numpy(dtype=float, na_value=np.nan))

@@ -170,16 +170,33 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
     (folder / "notes.txt").write_text("\n".join(notes) + ("\n" if notes else ""))
 
 
+#: the tables a study saves (run_study): a CSV of one of these names in a tables folder is refused, not left out
+STUDY_TABLE_NAMES = ("signals", "timing", "summary", "office_points", "office_lines", "office_corners", "intel_points",
+                     "intel_lines", "intel_corners", "trajectory", "map", "slam_metrics")
+
+
 def load_tables(folder: Path) -> tuple[dict[str, pd.DataFrame], list[str]]:
     """The tables and notes saved by :func:`save_tables`."""
     from lms200 import LmsbenchError
 
+    for p in sorted(folder.glob("*.parquet")):  # pyarrow reads a folder as a dataset: an empty one was no table
+        if not p.is_file():  # and its figures were left out, exit 0 (a damaged-input fuzz round)
+            raise LmsbenchError(f"{p}: {'a folder' if p.is_dir() else 'not a regular file'} where a table of the study "
+                                "goes; a table is a Parquet file")
+    for p in sorted(folder.glob("*.csv")):  # a table saved as CSV was left out, its figures not drawn, exit 0
+        if (folder / f"{p.stem}.parquet").exists() or p.stem not in STUDY_TABLE_NAMES:
+            continue
+        raise LmsbenchError(f"{p}: the study's tables are read as Parquet ({p.stem}.parquet, as `lmsbench figures` and "
+                            "`lmsbench demo` save them), not CSV")
     tables = {p.stem: read_table(p) for p in sorted(folder.glob("*.parquet"))}
     notes_file = folder / "notes.txt"
     if notes_file.exists() and not notes_file.is_file():  # a named pipe was waited on for ever (the wrong-input hunt)
         raise LmsbenchError(f"{notes_file}: not a regular file (a pipe, a device or a socket); a study's notes are "
                             "a text file")
-    notes = notes_file.read_text().splitlines() if notes_file.exists() else []
+    try:
+        notes = notes_file.read_text(encoding="utf-8").splitlines() if notes_file.exists() else []
+    except UnicodeDecodeError as exc:  # was "internal error: UnicodeDecodeError"
+        raise LmsbenchError(f"{notes_file}: not UTF-8 text (byte {exc.start}); a study's notes are a text file") from None
     return tables, notes
 
 
@@ -189,9 +206,14 @@ def read_table(path: Path) -> pd.DataFrame:
     from lms200 import LmsbenchError
 
     try:
-        return pd.read_parquet(path)
+        table = pd.read_parquet(path)
     except (OSError, ValueError) as exc:
         raise LmsbenchError(f"{path}: not a readable parquet table ({' '.join(str(exc).split())[:200]})") from None
+    odd = [c for c in table.columns if not isinstance(c, str)]
+    if odd:  # levels of columns (a MultiIndex) were "internal error: AttributeError: 'DataFrame' object has no attribute 'dtype'"
+        raise LmsbenchError(f"{path}: its column {odd[0]!r} is no plain name (a table of named columns, one level, "
+                            "as `lmsbench figures` saves them)")
+    return table
 
 
 def panel_method_of(cfg: StudyConfig) -> str:
@@ -285,6 +307,10 @@ def _slam_in_world(result, records) -> tuple[np.ndarray, np.ndarray]:
     return traj, segs
 
 
+#: largest AD window of a study's signals (Figs. 4-6): half a scan of the extractors' most beams
+MAX_SIGNALS_K = 1 << 13
+
+
 def load_config(folder: Path) -> StudyConfig:
     """The settings saved beside the tables (defaults where there is no study.yaml)."""
     from lms200 import LmsbenchError
@@ -302,6 +328,13 @@ def load_config(folder: Path) -> StudyConfig:
         known = {f.name for f in dataclasses.fields(StudyConfig)}
         cfg = StudyConfig(**{k: v for k, v in (raw or {}).items() if k in known})
         cfg.methods = tuple(cfg.methods)
+        # what the figures draw with: a text signals_k or world was "internal error: TypeError", a huge k a
+        # MemoryError, a negative one drew Fig. 4's reference line and labels of AD_i-5, exit 0
+        if isinstance(cfg.signals_k, bool) or not isinstance(cfg.signals_k, int) or not 1 <= cfg.signals_k <= MAX_SIGNALS_K:
+            raise ValueError(f"signals_k: must be a whole number from 1 to {MAX_SIGNALS_K}, the AD window of Figs. 4-6 "
+                             f"(got {cfg.signals_k!r})")
+        if not isinstance(cfg.world, str):
+            raise ValueError(f"world: must be the name of the simulated world (got {cfg.world!r})")
     except (yaml.YAMLError, TypeError, ValueError, UnicodeDecodeError) as exc:
         raise LmsbenchError(f"{path}: not the study.yaml of lmsbench figures / demo ({' '.join(str(exc).split())[:200]})") from None
     return cfg

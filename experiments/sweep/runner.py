@@ -129,6 +129,8 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
         done = {k for k in done if store.status(k) == "ok"}
     todo = [(key, params) for key, params in zip(keys, cells) if key not in done]
     todo = list({key: params for key, params in todo}.items())  # identical cells once
+    if todo:
+        store.check_writable()  # before any cell is computed
     skipped = len(set(keys)) - len(todo)
     counts = {"computed": 0, "failed": 0}
 

@@ -51,16 +51,30 @@ class CellStore:
         a damaged one is computed again, said in one warning). The footer alone: reading every
         cell's row here cost a resumed sweep 1.6 ms a cell (3.2 s for 2,000) before any work."""
         keys, damaged = set(), []
+        if not os.access(self.cells, os.R_OK | os.X_OK):  # "sw/cells: permission denied" named no reason
+            raise LmsbenchError(f"{self.cells}: the sweep's folder of finished cells cannot be read (permission "
+                                "denied); make it readable (chmod u+rx) to resume the sweep")
         for p in sorted(self.cells.glob("*.parquet")):
             if p.is_dir():  # its cell would be computed, then not written: os.replace's IsADirectoryError (a review)
                 raise LmsbenchError(f"{p}: a folder where a cell's file goes: move it out of {self.cells} (the sweep "
                                     "would compute that cell and fail to write it)")
+            if p.is_file() and not os.access(p, os.R_OK):  # was "damaged ...; computed again": the finished cell lost
+                raise LmsbenchError(f"{p}: a finished cell's file that cannot be read (permission denied); make it "
+                                    f"readable (chmod u+r) to resume the sweep with it, or remove it to compute the cell again")
             (keys.add(p.stem) if _whole_parquet(p) else damaged.append(p.name))
         if damaged:
             warnings.warn(f"{self.cells}: {len(damaged)} cell file{'s' if len(damaged) > 1 else ''} cannot be read as "
                           f"a finished cell (damaged: {', '.join(damaged[:3])}{', ...' if len(damaged) > 3 else ''}); "
                           "computed again", LmsbenchWarning, stacklevel=2)
         return keys
+
+    def check_writable(self) -> None:
+        """Raise LmsbenchError when cells cannot be written into the cells folder: a resumed sweep
+        whose cells/ was read-only computed its first cell, then failed naming a temporary file
+        (``cells/.KEY.xxxx.tmp: permission denied``)."""
+        if not os.access(self.cells, os.W_OK | os.X_OK):
+            raise LmsbenchError(f"{self.cells}: the sweep's folder of finished cells is not writable, and cells are "
+                                "left to compute; make it writable (chmod u+w) to resume the sweep")
 
     def status(self, key: str) -> str | None:
         """"ok", "error", or None when the cell has no file (or a damaged one)."""

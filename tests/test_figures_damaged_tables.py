@@ -1,0 +1,312 @@
+"""`lmsbench figures --tables DIR` / `--sweep DIR` with damaged inputs (a damaged-input fuzz round):
+each refused before any output, one line, exit 2, naming the table; none drawn empty or left out
+silently."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from experiments.cli import main
+
+
+@pytest.fixture
+def tables(tmp_path) -> Path:
+    """A tables folder Fig. 7 and Fig. 10 are drawn from (study settings, timing, trajectory, map)."""
+    t = tmp_path / "tables"
+    t.mkdir()
+    (t / "study.yaml").write_text(yaml.safe_dump({"world": "office", "seed": 0, "duration": 1.0, "resolved": {"sensor": {}}}))
+    pd.DataFrame({"method": ["sensor"] * 3, "scan": [0, 1, 2], "time_ms": [0.05, 0.04, 0.06]}).to_parquet(
+        t / "timing.parquet", index=False)
+    pd.DataFrame({"source": ["truth", "truth", "slam", "slam"], "t": [0.0, 1.0, 0.0, 1.0], "x": [0.0, 1.0, 0.0, 1.1],
+                  "y": [0.0, 0.0, 0.0, 0.1]}).to_parquet(t / "trajectory.parquet", index=False)
+    pd.DataFrame({"source": ["truth", "slam"], "x1": [0.0, 0.0], "y1": [1.0, 1.1], "x2": [2.0, 2.0],
+                  "y2": [1.0, 1.1]}).to_parquet(t / "map.parquet", index=False)
+    return t
+
+
+def _refused(capsys, tables: Path, out: Path) -> str:
+    assert main(["figures", "--tables", str(tables), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert not out.exists()  # before any output: no figures.yaml, no figure
+    return err.rstrip("\n")
+
+
+@pytest.mark.parametrize("table, column, value", [
+    ("timing", "time_ms", np.nan), ("timing", "time_ms", np.inf), ("trajectory", "x", np.nan), ("map", "y2", -np.inf)])
+def test_a_table_whose_plotted_column_holds_no_finite_number_is_refused(tables, tmp_path, capsys, table, column, value):
+    # drawn as empty axes, exit 0: every figure of the table useless
+    frame = pd.read_parquet(tables / f"{table}.parquet")
+    frame[column] = value
+    frame.to_parquet(tables / f"{table}.parquet", index=False)
+    n = len(frame)
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table {table}'s column {column} holds no finite number ({n} rows, "
+        "all nan or infinite), so its figure would be empty: a damaged table, or not one of `lmsbench figures` or "
+        "`lmsbench demo`")
+
+
+def test_a_table_with_some_nan_is_drawn(tables, tmp_path, capsys):
+    frame = pd.read_parquet(tables / "timing.parquet")
+    frame.loc[0, "time_ms"] = np.nan
+    frame.to_parquet(tables / "timing.parquet", index=False)
+    assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "o")]) == 0, capsys.readouterr().err
+    assert pd.read_csv(tmp_path / "o" / "fig7_timing.csv").shape[0] == 3
+
+
+def test_a_folder_in_place_of_a_table_is_refused(tables, tmp_path, capsys):
+    # pyarrow read it as an empty dataset: fig7_timing was left out, exit 0
+    (tables / "timing.parquet").unlink()
+    (tables / "timing.parquet").mkdir()
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: {tables / 'timing.parquet'}: a folder where a table of the study goes; a table is "
+        "a Parquet file")
+
+
+def test_a_table_saved_as_csv_is_refused(tables, tmp_path, capsys):
+    # left out, its figure not drawn, exit 0
+    pd.read_parquet(tables / "trajectory.parquet").to_csv(tables / "trajectory.csv", index=False)
+    (tables / "trajectory.parquet").unlink()
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: {tables / 'trajectory.csv'}: the study's tables are read as Parquet "
+        "(trajectory.parquet, as `lmsbench figures` and `lmsbench demo` save them), not CSV")
+
+
+@pytest.fixture(scope="module")
+def sweeps(tmp_path_factory) -> dict[str, Path]:
+    """Two finished sweeps of different parameters (extract cells over k, over ad_tau), about 2 s."""
+    root = tmp_path_factory.mktemp("sweeps")
+    out = {}
+    for name, grid in (("k", {"extractor.k": [3, 5]}), ("tau", {"extractor.ad_tau": [2.0, 4.0, 8.0]})):
+        spec = root / f"{name}.yaml"
+        spec.write_text(yaml.safe_dump({"name": name, "kind": "extract", "fixed": {"duration": 0.5, "rate_hz": 4.0},
+                                        "grid": grid}))
+        out[name] = root / name
+        assert main(["sweep", str(spec), "--inprocess", "--no-progress", "--out", str(out[name])]) == 0
+    return out
+
+
+def _sweep_refused(capsys, tables: Path, sweep: Path, out: Path) -> str:
+    capsys.readouterr()
+    assert main(["figures", "--tables", str(tables), "--sweep", str(sweep), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert not out.exists()
+    return err.rstrip("\n")
+
+
+def test_a_sweep_folder_whose_table_and_sweep_yaml_are_of_different_sweeps_is_refused(sweeps, tables, tmp_path, capsys):
+    import shutil
+
+    mixed = tmp_path / "mixed"
+    shutil.copytree(sweeps["k"], mixed)
+    shutil.copy(sweeps["tau"] / "sweep.yaml", mixed / "sweep.yaml")
+    # it said "its results.parquet holds 2 of the 3 cells of its sweep.yaml: the sweep did not finish ..."
+    assert _sweep_refused(capsys, tables, mixed, tmp_path / "o") == (
+        f"lmsbench figures: error: --sweep {mixed}: its results.parquet has no column extractor.ad_tau, a parameter of "
+        f"its sweep.yaml ({mixed / 'sweep.yaml'}): the table and the sweep.yaml are of different sweeps (one copied over "
+        "the other's?); run the sweep again into a new folder")
+    shutil.copy(sweeps["tau"] / "results.parquet", mixed / "results.parquet")
+    shutil.copy(sweeps["k"] / "sweep.yaml", mixed / "sweep.yaml")
+    table = pd.read_parquet(mixed / "results.parquet").assign(**{"extractor.k": 3})  # a column of k's name, 3 cells
+    table.to_parquet(mixed / "results.parquet", index=False)
+    # it said "holds 3 of the 2 cells of its sweep.yaml: the sweep did not finish"
+    assert _sweep_refused(capsys, tables, mixed, tmp_path / "o") == (
+        f"lmsbench figures: error: --sweep {mixed}: its results.parquet holds 3 cells, more than the 2 of its sweep.yaml "
+        f"({mixed / 'sweep.yaml'}): the table and the sweep.yaml are of different sweeps (one copied over the other's?); "
+        "run the sweep again into a new folder")
+
+
+def test_a_sweep_table_that_is_no_sweeps_or_a_folder_is_refused(sweeps, tables, tmp_path, capsys):
+    import shutil
+
+    folder = tmp_path / "s"
+    shutil.copytree(sweeps["k"], folder)
+    shutil.copy(tables / "timing.parquet", folder / "results.parquet")
+    # it said "no successful cell to plot (3 cells, all failed; their `error` column says why)"
+    assert _sweep_refused(capsys, tables, folder, tmp_path / "o") == (
+        f"lmsbench figures: error: --sweep {folder / 'results.parquet'}: not the table of `lmsbench sweep` (no status "
+        "column: one row per cell with its status; another program's table, or edited?)")
+    (folder / "results.parquet").unlink()
+    (folder / "results.parquet").mkdir()
+    # it said "no results.parquet: the sweep did not finish; finish it with lmsbench sweep ..."
+    assert _sweep_refused(capsys, tables, folder, tmp_path / "o") == (
+        f"lmsbench figures: error: --sweep {folder / 'results.parquet'}: a folder where the sweep's table goes; it is "
+        "the Parquet file `lmsbench sweep` writes")
+
+
+def test_both_sweeps_draw(sweeps, tables, tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["figures", "--tables", str(tables), "--sweep", str(sweeps["k"]), "--sweep", str(sweeps["tau"]),
+                 "--out", str(out)]) == 0, capsys.readouterr().err
+    assert (out / "sweep_k_f1.png").is_file() and (out / "sweep_tau_f1.png").is_file()
+
+
+@pytest.mark.parametrize("gone", ["map", "office_corners"])
+def test_a_table_drawn_beside_another_is_required_with_it(tables, tmp_path, capsys, gone):
+    # without office_corners Fig. 9 failed after the figures before it ("the tables do not hold what the figures
+    # read (KeyError: 'office_corners')", figures.yaml and five figures written); without map Fig. 10 was left out
+    pd.DataFrame({"panel": [0, 0], "label": ["a", "a"], "x": [1.0, 2.0], "y": [0.0, 0.5]}).to_parquet(
+        tables / "office_points.parquet", index=False)
+    pd.DataFrame({"panel": [0], "x1": [1.0], "y1": [0.0], "x2": [2.0], "y2": [0.5]}).to_parquet(
+        tables / "office_lines.parquet", index=False)
+    pd.DataFrame({"panel": [0], "x": [1.0], "y": [0.0]}).to_parquet(tables / "office_corners.parquet", index=False)
+    assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "ok")]) == 0, capsys.readouterr().err
+    (tables / f"{gone}.parquet").unlink()
+    driving = "trajectory" if gone == "map" else "office_points"
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table {driving} has no {gone} beside it ({gone}.parquet), which "
+        "its figure draws with it: a tables folder of `lmsbench figures` or `lmsbench demo` holds both")
+
+
+def _points(tables: Path, panels: list[float]) -> None:
+    n = len(panels)
+    pd.DataFrame({"panel": panels, "label": ["s"] * n, "x": np.linspace(1, 2, n), "y": np.zeros(n)}).to_parquet(
+        tables / "office_points.parquet", index=False)
+    pd.DataFrame({"panel": [0], "x1": [1.0], "y1": [0.0], "x2": [2.0], "y2": [0.5]}).to_parquet(
+        tables / "office_lines.parquet", index=False)
+    pd.DataFrame({"panel": [0], "x": [1.0], "y": [0.0]}).to_parquet(tables / "office_corners.parquet", index=False)
+
+
+def test_a_points_table_of_too_many_or_null_panels_is_refused(tables, tmp_path, capsys):
+    # 1,441 panels: "terminate called after throwing an instance of 'std::bad_alloc'", exit 134
+    _points(tables, list(range(17)))
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table office_points holds 17 panels (scans), more than Fig. 9 "
+        "draws (at most 16; a study draws 4): a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+    # a nan panel: "internal error: IndexError: single positional indexer is out-of-bounds", after five figures
+    _points(tables, [0.0, np.nan])
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table office_points's column panel has empty (null or nan) values "
+        "in 1 of its 2 rows, where every row names its scan: a damaged table, or not one of `lmsbench figures` or "
+        "`lmsbench demo`")
+    _points(tables, list(range(16)))
+    assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "ok")]) == 0, capsys.readouterr().err
+
+
+def test_a_trajectory_without_truth_or_estimate_and_a_map_without_walls_are_refused(tables, tmp_path, capsys):
+    trajectory = pd.read_parquet(tables / "trajectory.parquet")
+    trajectory.assign(source="other").to_parquet(tables / "trajectory.parquet", index=False)
+    # "internal error: ValueError: Number of columns must be a positive integer, not 0"
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table trajectory has no rows of source truth, which Fig. 10 draws: "
+        "a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+    trajectory.to_parquet(tables / "trajectory.parquet", index=False)
+    pd.read_parquet(tables / "map.parquet").assign(source="slam").to_parquet(tables / "map.parquet", index=False)
+    # drawn without the true walls, exit 0
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table map has no rows of source truth (the true walls Fig. 10 "
+        "draws): a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+
+
+def test_a_signals_table_longer_than_a_scan_is_refused(tables, tmp_path, capsys):
+    # a million rows drew for over two minutes
+    n = (1 << 14) + 1
+    pd.DataFrame({c: np.linspace(0, 1, n) for c in ("beam", "bearing_deg", "range_m", "ad", "theta_deg", "psi_deg")}).to_parquet(
+        tables / "signals.parquet", index=False)
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table signals holds {n} rows, more than a scan's beams (at most "
+        "16384; it is one scan): a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+
+
+def test_a_timing_table_with_a_null_method_is_refused(tables, tmp_path, capsys):
+    # drawn without its label ("No artists with labels found to put in legend"), exit 0
+    pd.read_parquet(tables / "timing.parquet").assign(method=None).to_parquet(tables / "timing.parquet", index=False)
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table timing's column method has empty (null or nan) values in 3 "
+        "of its 3 rows, where every row names its extractor: a damaged table, or not one of `lmsbench figures` or "
+        "`lmsbench demo`")
+
+
+@pytest.mark.parametrize("field, value, said", [
+    # "internal error: TypeError: can only concatenate str (not "int") to str"
+    ("signals_k", "abc", "signals_k: must be a whole number from 1 to 8192, the AD window of Figs. 4-6 (got 'abc')"),
+    # drawn with AD_i-5 and its reference line, exit 0
+    ("signals_k", -5, "signals_k: must be a whole number from 1 to 8192, the AD window of Figs. 4-6 (got -5)"),
+    # "internal error: MemoryError: Unable to allocate 7.28 TiB", after figures.yaml
+    ("signals_k", 10**12, "signals_k: must be a whole number from 1 to 8192, the AD window of Figs. 4-6 (got 1000000000000)"),
+    ("world", [1, 2], "world: must be the name of the simulated world (got [1, 2])"),
+])
+def test_a_study_yaml_field_the_figures_draw_with_is_checked(tables, tmp_path, capsys, field, value, said):
+    settings = yaml.safe_load((tables / "study.yaml").read_text())
+    (tables / "study.yaml").write_text(yaml.safe_dump({**settings, field: value}))
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: {tables / 'study.yaml'}: not the study.yaml of lmsbench figures / demo ({said})")
+
+
+def test_binary_notes_and_a_table_of_column_levels_are_refused(tables, tmp_path, capsys):
+    (tables / "notes.txt").write_bytes(b"\xff\xfe\x00")
+    # "internal error: UnicodeDecodeError"
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: {tables / 'notes.txt'}: not UTF-8 text (byte 0); a study's notes are a text file")
+    (tables / "notes.txt").write_text("")
+    frame = pd.read_parquet(tables / "timing.parquet")
+    frame.columns = pd.MultiIndex.from_tuples([(c, "a") for c in frame.columns])
+    frame.to_parquet(tables / "timing.parquet")
+    # "internal error: AttributeError: 'DataFrame' object has no attribute 'dtype'"
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: {tables / 'timing.parquet'}: its column ('method', 'a') is no plain name (a table of "
+        "named columns, one level, as `lmsbench figures` saves them)")
+
+
+def test_an_empty_sweep_table_is_said_empty(sweeps, tables, tmp_path, capsys):
+    import shutil
+
+    folder = tmp_path / "s"
+    shutil.copytree(sweeps["k"], folder)
+    pd.read_parquet(folder / "results.parquet").iloc[:0].to_parquet(folder / "results.parquet", index=False)
+    # it said "no successful cell to plot (0 cells, all failed; their `error` column says why)"
+    assert _sweep_refused(capsys, tables, folder, tmp_path / "o") == (
+        f"lmsbench figures: error: --sweep {folder / 'results.parquet'}: an empty table (no cell); run the sweep again "
+        "into its folder to write it")
+
+
+@pytest.mark.parametrize("value, said", [("0.5", "str"), ([0.5], "object")])
+def test_a_sweep_metric_of_text_is_refused(sweeps, tables, tmp_path, capsys, value, said):
+    import shutil
+
+    folder = tmp_path / "s"
+    shutil.copytree(sweeps["k"], folder)
+    table = pd.read_parquet(folder / "results.parquet")
+    table["f1"] = [value] * len(table)
+    table.to_parquet(folder / "results.parquet", index=False)
+    # "internal error: TypeError: dtype 'str' does not support operation 'mean'" (lists: "agg function failed")
+    assert _sweep_refused(capsys, tables, folder, tmp_path / "o") == (
+        f"lmsbench figures: error: --sweep {folder}: its results.parquet's column f1 holds {said} values, where a "
+        "sweep's metric is a number: a damaged or edited table, or not one of `lmsbench sweep`")
+
+
+def test_a_sweep_metric_of_no_finite_value_is_not_plotted(sweeps, tables, tmp_path, capsys):
+    import shutil
+
+    folder = tmp_path / "s"
+    shutil.copytree(sweeps["k"], folder)
+    table = pd.read_parquet(folder / "results.parquet")
+    table["f1"] = np.inf
+    table.to_parquet(folder / "results.parquet", index=False)
+    out = tmp_path / "o"
+    assert main(["figures", "--tables", str(tables), "--sweep", str(folder), "--out", str(out)]) == 0, capsys.readouterr().err
+    assert not (out / "sweep_k_f1.png").exists()  # an empty plot of all inf was drawn
+    assert (out / "sweep_k_corner_f1.png").is_file()
+
+
+@pytest.mark.parametrize("name", ["../../outside", ["a", "b"], "", "a" * 300])
+def test_a_sweep_name_that_is_no_plain_name_is_refused(sweeps, tables, tmp_path, capsys, name):
+    import shutil
+
+    folder = tmp_path / "deep" / "er" / "s"
+    shutil.copytree(sweeps["k"], folder)
+    spec = yaml.safe_load((folder / "sweep.yaml").read_text())
+    (folder / "sweep.yaml").write_text(yaml.safe_dump({**spec, "name": name}))
+    out = tmp_path / "deep" / "er" / "o"
+    # "../../outside" wrote its plots beside --out, through a folder sweep_.. it made there, exit 0
+    err = _sweep_refused(capsys, tables, folder, out)
+    assert err.startswith(f"lmsbench figures: error: --sweep {folder}: its sweep.yaml's name: "), err
+    assert err.endswith("is no name a file can take (text of at most 150 characters, without / and not starting with .), "
+                        "and it names the sweep's plots (sweep_NAME_METRIC): not a sweep.yaml `lmsbench sweep` wrote (edited?)")
+    assert sorted(p.name for p in (tmp_path / "deep" / "er").iterdir()) == ["s"]
