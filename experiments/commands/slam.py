@@ -62,31 +62,48 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _extractor_fields_hint(nested: bool) -> str:
     """How to set an extractor's fields, in a run's config.yaml (``nested``: under slam:) or a mapping of SLAM fields."""
     return (f"set extractor fields under {'slam: ' if nested else ''}extractor_params: (`extractor_params: {{k: 7}}`), "
-            "or with --set extractor.FIELD=VALUE (extractor.corners.FIELD=VALUE for a corner field)")
+            "or with --set extractor.FIELD=VALUE (extractor.METHOD.corners.FIELD=VALUE for a baseline's corner field)")
 
 
 def _check_extractor_record(config: Path, recorded: dict, cfg: Any) -> None:  # noqa: ANN401 - a SlamConfig
     """InputError for a run's config.yaml whose ``extractor_config:`` record (the extractor's resolved
     settings, :func:`experiments.slamrun.write_config`) differs from what its ``slam:`` section gives
-    (``extractor`` with ``extractor_params``): an edit of the record, which ``--config`` does not read
-    (`k: 3` -> `k: 7` there ran k = 3, exit 0, the record of the new run saying 3). A field the record
-    lacks (an earlier version's, or removed) is no edit; a mode-bound noise field recorded as
-    ``"V: not read (no MODE-mode scan)"`` matches V."""
+    (``extractor`` with ``extractor_params``) in a field that ``extractor_params`` does not set: an edit of
+    the record, which ``--config`` does not read (`k: 3` -> `k: 7` there ran k = 3, exit 0, the record of
+    the new run saying 3), or the record of an older version whose defaults differ (the run would not
+    be the recorded one). Not checked: a field ``slam: extractor_params`` sets (the edit that is read;
+    the record is then of the run before it), a record of another method's fields (``slam: extractor``
+    edited), a field the record lacks; a mode-bound noise field recorded as ``"V: not read (no
+    MODE-mode scan)"`` matches V."""
+    import dataclasses
+
     from experiments.compare import resolved_configs
     from experiments.overrides import MODE_FIELDS
+    from features.registry import get_method
     from lms200.yamlio import dump as dump_yaml
 
     try:
+        own = {f.name for f in dataclasses.fields(get_method(cfg.extractor).config_type)}
         resolved = resolved_configs([cfg.extractor], {cfg.extractor: cfg.extractor_params})[cfg.extractor]
     except Exception:  # noqa: BLE001 - the run checks its extractor's fields itself, with its own message
         return
+    if not set(recorded) <= own:  # another method's record (slam: extractor was changed: the edit that is read)?
+        from features.registry import available_methods
+
+        others = [{f.name for f in dataclasses.fields(get_method(m).config_type)} for m in available_methods()]
+        if any(set(recorded) <= fields for fields in others):
+            return
+        field = sorted(set(recorded) - own)[0]
+        raise InputError(f"{config}: extractor_config: {field}: {recorded[field]!r} is a field of no extractor (nor "
+                         f"of {cfg.extractor}, which its slam: section names): an edit of the record of what a run ran, "
+                         f"which --config does not read; delete it, or {_extractor_fields_hint(True)}")
     expected = load_yaml(dump_yaml(resolved))  # as the record was written and read back: tuples as lists
 
     def differs(path: str, got: Any, want: Any, raw: Any) -> tuple[str, Any, Any] | None:  # noqa: ANN401
         if isinstance(got, dict) and isinstance(want, dict):
             for key, value in got.items():
                 if key not in want:
-                    return f"{path}{key}", value, "no such field"
+                    return f"{path}{key}", value, None
                 found = differs(f"{path}{key}.", value, want[key], raw.get(key) if isinstance(raw, dict) else None)
                 if found:
                     return found
@@ -98,14 +115,16 @@ def _check_extractor_record(config: Path, recorded: dict, cfg: Any) -> None:  # 
             return None
         return field, got, want
 
-    found = differs("", recorded, expected, resolved)
+    unset = {k: v for k, v in recorded.items() if k not in cfg.extractor_params}
+    found = differs("", unset, expected, resolved)
     if found is None:
         return
     field, got, want = found
-    gives = "names no such field" if want == "no such field" else f"gives {want!r}"
-    raise InputError(f"{config}: extractor_config: {field}: {got!r} differs from what its slam: section {gives} "
-                     f"({cfg.extractor}); extractor_config: is the record of what a run ran, which --config does not "
-                     f"read (the run would ignore the edit); {_extractor_fields_hint(True)}")
+    gives = f"has no field {field.rpartition('.')[2]!r} there" if want is None else f"gives {want!r}"
+    raise InputError(f"{config}: extractor_config: {field}: {got!r}, where its slam: section ({cfg.extractor}) {gives}: "
+                     "extractor_config: is the record of what a run ran, which --config does not read, so an edit there "
+                     "would be ignored, and a record of another lmsbench version's defaults would not be reproduced; "
+                     f"delete extractor_config: to run what slam: gives, or {_extractor_fields_hint(True)}")
 
 
 def _config(args: argparse.Namespace):
