@@ -733,24 +733,16 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
 
 
 def _param_stamps(words: list[str]) -> None:
-    """A PARAM line's stamps, where it has them, checked as other lines' are (:func:`_stamps`: numbers in
-    0 .. ``records.MAX_STAMP_S``; they were not read at all, so `PARAM ... nohost 1e300` or `nan` passed).
+    """A PARAM line's last stamp, where it has one, checked as other lines' are (:func:`_stamps`: a number in
+    0 .. ``records.MAX_STAMP_S``; it was not read at all, so `PARAM ... nohost 1e300` or `nan` passed).
     CARMEN writes ``PARAM name value hostname ipc_timestamp`` (the logs of ../shared/data, this package's
     writer) or, since 0.7, ``PARAM name value ipc_timestamp ipc_hostname logger_timestamp``, and a value may
-    hold spaces; so a line of 5 words or more ends with a stamp (the ipc_timestamp, or the logger_timestamp
-    where the third word from its end, past the value, reads as a number: the ipc_timestamp). A line of 3
-    or 4 words (written by hand) has none."""
-    if len(words) < 5:
-        return
-    if len(words) >= 6:
-        try:
-            float(words[-3])
-        except ValueError:
-            pass
-        else:
-            _stamps(words, _few_floats(words[-3:-2], "ipc_timestamp")[0], len(words) - 1)
-            return
-    _stamps(words, _few_floats(words[-1:], "ipc_timestamp")[0], len(words))
+    hold spaces, so the two cannot be told apart (`PARAM offsets 0.5 -0.5 nohost 0` is either); in both a
+    line ends with a stamp, which is checked in a line of 5 words or more. A line of 3 or 4 words (written
+    by hand) has none."""
+    if len(words) >= 5:
+        problem = stamp_problem(_few_floats(words[-1:], "timestamp")[0], "timestamp")
+        _require(problem is None, problem or "")
 
 
 def _misspelt_param(name: str) -> str | None:
