@@ -133,7 +133,7 @@ def _check_cut_boxes(path: Path, content: dict) -> None:
 
 
 #: --every and --rate-hz given together: each chooses the scans kept, and load_input kept them by the rate alone
-#: (`slam RUN --every 2 --rate-hz 5` ran 5 scans/s, exit 0, its config.yaml saying every: 2)
+#: (`slam RUN --every 2 --rate-hz 5` ran 5 scans/s, exit 0)
 EVERY_AND_RATE = ("--every {every} and --rate-hz {rate_hz:g} both choose the scans kept (every N-th scan, or about "
                   "that many a second by the stamps); give one of them")
 
