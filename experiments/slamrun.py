@@ -277,6 +277,12 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if not any(r.scan.valid.any() for r in records):
         raise LmsbenchError(f"{log}: none of its {len(records)} scans has a valid beam (all +inf or nan): "
                             "nothing to localise against")
+    # which scans ran, recorded beside the files (config.yaml and metrics.json's input: --every, --rate-hz and
+    # --max-scans were in neither, so a run's record did not say which of the log's scans it ran on)
+    chosen = (f"the first at least 1/{rate_hz:g} s after the last kept (--rate-hz)" if rate_hz is not None
+              else "every scan" if every == 1 else f"one in {every} (--every)")
+    sources["scans_kept"] = (f"{len(records)} of the {n_read} read: {chosen}"
+                             + (f", at most {max_scans} (--max-scans)" if max_scans is not None else ""))
     if truth is not None:  # groundtruth.tum: its scores need it beside the scans (see _check_truth_span)
         _check_truth_span(truth, records, sources["truth"])
     if truth is None and all(r.truth is not None for r in records):

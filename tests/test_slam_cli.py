@@ -1321,3 +1321,18 @@ def test_every_and_rate_hz_together_are_refused_before_any_work(sim_folder, tmp_
     every = [r.scan.stamp for r in load_input(sim_folder).records]  # 6 s at the default 37.5 scans/s: 225
     kept = [r.scan.stamp for r in load_input(sim_folder, every=1, rate_hz=5.0).records]  # --every 1 is none given
     assert len(every) == 225 and 29 <= len(kept) <= 31 and set(kept) <= set(every)
+
+
+def test_a_runs_record_says_which_scans_ran(sim_folder, tmp_path, capsys):
+    """A review: config.yaml and metrics.json named the files read but not --every, --rate-hz or --max-scans,
+    so a run's record did not say which of the log's scans it ran on. Their input: says it."""
+    from experiments.cli import main
+    from lms200.yamlio import load
+
+    for flags, kept in ((["--every", "3", "--max-scans", "40"], "40 of the 118 read: one in 3 (--every), at most 40 "
+                         "(--max-scans)"), (["--rate-hz", "5"], "29 of the 225 read: the first at least 1/5 s after the last "
+                                                              "kept (--rate-hz)")):
+        out = tmp_path / flags[0].strip("-")
+        assert main(["slam", str(sim_folder), *flags, "--out", str(out), "--quiet", "--no-paper-baseline"]) == 0
+        assert load((out / "config.yaml").read_text())["input"]["scans_kept"] == kept
+        assert json.loads((out / "metrics.json").read_text())["input"]["scans_kept"] == kept
