@@ -137,16 +137,12 @@ def check_simulate_config(folder: Path) -> bool:
     """Whether a simulate folder has a config.yaml to read; LmsbenchError naming it for a pipe or a
     device in its place (regular_file) or a file beyond a config's size (refused unread: simulate
     writes 2 KB; 3 GB was read whole, MemoryError, 35 MB parsed for minutes: fuzzing)."""
-    from lms200.logs import regular_file
-    from lms200.yamlio import size_problem
-
-    from experiments.options import SIMULATE_CONFIG
+    from experiments.options import simulate_config_size_problem
 
     cfg = folder / "config.yaml"
     if not cfg.exists():
         return False
-    too_big = size_problem(regular_file(cfg, "simulate config").stat().st_size, SIMULATE_CONFIG,
-                           "lmsbench simulate writes one of a few KB at most")
+    too_big = simulate_config_size_problem(cfg)
     if too_big:
         raise LmsbenchError(f"{cfg}: {too_big}")
     return True

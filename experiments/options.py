@@ -499,8 +499,17 @@ def check_world_file(world: str) -> None:
         raise InputError(f"{world}: not a world.json ({type(exc).__name__}: {' '.join(str(exc).split())})") from None
 
 
-#: what the size refusal of a simulate folder's config.yaml names it
+#: what the size refusal of a simulate folder's config.yaml names it, and how large one is
 SIMULATE_CONFIG = "a simulate folder's config.yaml"
+SIMULATE_CONFIG_SIZE = "lmsbench simulate writes one of a few KB at most"
+
+
+def simulate_config_size_problem(cfg: Path) -> str | None:
+    """Why a simulate folder's config.yaml ``cfg`` is not read for its size (None: it may be), from its
+    size alone; raises (``regular_file``) where it is no regular file."""
+    from lms200.logs import regular_file
+
+    return size_problem(regular_file(cfg, "simulate config").stat().st_size, SIMULATE_CONFIG, SIMULATE_CONFIG_SIZE)
 
 
 def check_yaml(path: str | os.PathLike, what: str = "a YAML file", sized: bool = True,

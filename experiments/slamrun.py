@@ -85,18 +85,14 @@ def simulated_interlaced(path: str | Path) -> bool | None:
     folder, or the file does not say). LmsbenchError naming the file for an ``interlaced`` that is
     no true / false (``"no"``, ``0``): it was read as "does not say", so a run simulated without
     interlacing was de-skewed as an interlaced LMS200's, silently (``compare`` refuses the file)."""
-    from lms200.logs import regular_file
-    from lms200.yamlio import size_problem
-
-    from experiments.options import SIMULATE_CONFIG
+    from experiments.options import simulate_config_size_problem
 
     cfg = Path(path) / "config.yaml"
     if simulate_log(path) is None or not cfg.exists():
         return None
     # as compare refuses it: a pipe in its place, or a file beyond a config's size (unread: 3 GB took as much
     # memory, 35 MB minutes), was passed over, and a run simulated without interlacing was de-skewed, silently
-    too_big = size_problem(regular_file(cfg, "simulate config").stat().st_size, SIMULATE_CONFIG,
-                           "lmsbench simulate writes one of a few KB at most")
+    too_big = simulate_config_size_problem(cfg)
     if too_big:
         raise LmsbenchError(f"{cfg}: {too_big}")
     try:
