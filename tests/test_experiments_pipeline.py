@@ -404,26 +404,37 @@ SUMMARY = pd.DataFrame({"method": ["sensor", "iepf"], "f1": [0.98, 0.99], "time_
 @pytest.mark.parametrize("case, note", [
     ("missing", "there is no table summary (summary.parquet), which it is drawn from"),
     ("no f1", "table summary has no column f1 (line F1 against ground truth), which it plots"),
-    ("all nan", "none of table summary's 2 rows holds a number (not nan) in both f1 and time_ms_median, which it plots"),
-    ("f1 nan", "none of table summary's 2 rows holds a number (not nan) in both f1 and time_ms_median, which it plots"),
+    ("apart", "none of table summary's 2 rows holds a number (not nan) in both f1 and time_ms_median, which it plots"),
 ])
 def test_figures_says_why_accuracy_speed_is_not_drawn(tmp_path, capsys, case, note) -> None:
     """A review: `figures --tables DIR` with no summary.parquet, or one without an f1 column, dropped
     accuracy_speed without a word; with its f1 (or time_ms_median) all nan it drew empty axes, exit 0.
     It is not drawn, and a note line says which figure and why, as for an empty table (exit 0: the
-    other figures are drawn)."""
+    other figures are drawn); a plotted column of no number at all is a damaged table, refused as every
+    other table's (the next test)."""
     summary = {"missing": None, "no f1": SUMMARY.drop(columns=["f1"]),
-               "all nan": SUMMARY.assign(f1=np.nan, time_ms_median=np.nan),
-               "f1 nan": SUMMARY.assign(f1=[np.nan, np.nan])}[case]
+               "apart": SUMMARY.assign(f1=[np.nan, 0.99], time_ms_median=[0.1, np.nan])}[case]
     tables = _study_tables(tmp_path / "tables", summary)
     assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "out")]) == 0
     printed = capsys.readouterr().out
     assert not (tmp_path / "out" / "accuracy_speed.png").exists() and (tmp_path / "out" / "fig7_timing.png").exists()
     assert f"note: accuracy_speed is not drawn: {note}\n" in printed, printed
-    if case != "f1 nan":
+    if case != "apart":
         return
     # one row with both numbers draws it, without a note
     ok = _study_tables(tmp_path / "ok", SUMMARY.assign(f1=[np.nan, 0.99]))
     assert main(["figures", "--tables", str(ok), "--out", str(tmp_path / "ok_out")]) == 0
     assert "accuracy_speed is not drawn" not in capsys.readouterr().out
     assert (tmp_path / "ok_out" / "accuracy_speed.png").exists()
+
+
+@pytest.mark.parametrize("summary, column", [(SUMMARY.assign(f1=np.nan, time_ms_median=np.nan), "f1"),
+                                             (SUMMARY.assign(time_ms_median=np.inf), "time_ms_median")])
+def test_a_summary_of_no_number_in_a_plotted_column_is_refused(tmp_path, capsys, summary, column) -> None:
+    """The summary's f1 or time_ms_median of no finite number (all nan: empty axes, exit 0; then a note)
+    is a damaged table, refused before any output as every other table's plotted column is."""
+    tables = _study_tables(tmp_path / "tables", summary)
+    assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert f"table summary's column {column} holds no finite number (2 rows, all nan or infinite)" in err, err
+    assert not (tmp_path / "out").exists()
