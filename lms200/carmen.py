@@ -449,8 +449,50 @@ class CarmenReader:
         pairing = OdomPairing() if stats.laser in RAW_LASER_KINDS else None
         # a Radish corrected log: the laser lines' poses are a SLAM solution, the ODOM lines the raw odometry
         chain = CorrectedChain() if pairing is None else None
+        # laser lines held until their tail is told (_Tails), as (record, words, line, kind), with the ODOM
+        # lines' (stamp, pose) read among them, given to pairing / chain in log order when they are released
+        undecided: list[tuple[Record, list[str], int, str] | tuple[float, Pose2D]] = []
+
+        def emit(rec: Record) -> Iterator[Record]:
+            if pairing is not None:
+                yield from pairing.scan(rec)
+            elif chain is not None and stats.laser in ("FLASER", "RLASER"):  # every record's kind: the pass's laser
+                yield from chain.laser(rec)
+            else:
+                yield rec
+
+        def odometry(stamp: float, pose: Pose2D) -> Iterator[Record]:
+            if undecided:
+                undecided.append((stamp, pose))
+            elif pairing is not None:  # odometry for the scans of a RAWLASER kind, which carry none
+                yield from pairing.odom(stamp, pose)
+            elif chain is not None:
+                yield from chain.odom(pose, stamp)
+
+        def held_tails() -> list[tuple[int, int]]:
+            return [(_Tails.measure(e[1])[0], e[2]) for e in undecided if len(e) == 4]
+
+        def release(strict: bool = True) -> Iterator[Record]:
+            """The held lines and ODOM poses, in log order, once the rule is taken: each line of its tail
+            given, each of another malformed (``strict``; else, a pass ended by an error, left out)."""
+            tails.decide(held_tails(), final=True)
+            held = undecided[:]
+            undecided.clear()
+            for event in held:
+                if len(event) == 2:
+                    yield from odometry(*event)
+                    continue
+                rec, line_words, held_no, held_kind = event
+                wrong = tails.problem(line_words)
+                if wrong is None:
+                    yield from emit(rec)
+                elif strict:
+                    self._bad(held_no, held_kind, ValueError(wrong))
+
+        flushes += [lambda: release(strict=False)]
         flushes += [holder.flush for holder in (pairing, chain) if holder is not None]
         lines = quiet = 0  # lines read, and of them blank or comment lines (for a log of no laser line)
+        releasing = False  # the held laser lines' tail was told at this line: release them
         for line_no, line in self._lines():
             lines = line_no
             words = line.split()
@@ -497,10 +539,7 @@ class CarmenReader:
                     values = _few_floats(words[1:8], "ODOM")
                     _finite_pose(values[0:3], "ODOM")  # nan or 1e308 m was chained into every scan's odometry
                     values[6] = _stamps(words, values[6], _logger_at(words, 8))
-                    if pairing is not None:  # odometry for the scans of a RAWLASER kind, which carry none
-                        yield from pairing.odom(values[6], (values[0], values[1], values[2]))
-                    elif chain is not None:
-                        yield from chain.odom((values[0], values[1], values[2]), values[6])
+                    yield from odometry(values[6], (values[0], values[1], values[2]))
                 elif kind in LASER_KINDS:
                     if stats.laser is None:
                         stats.laser = kind
@@ -528,19 +567,24 @@ class CarmenReader:
                             _require(first[0] == len(scan),
                                      f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
                                      f"field of view and resolution carries {first[0]}")
-                    tails.check(words, line_no)
+                    wrong_tail = tails.problem(words)
+                    _require(wrong_tail is None, wrong_tail or "")
                     given = (held[0] if held is not None and abs(held[1] - scan.stamp) <= TRUTH_MAX_GAP_S
                              and (held[1] > last_stamp or held[1] == scan.stamp) else None)
                     last_stamp = scan.stamp
                     rec = Record(scan=scan, odom=odom if has_odometry else None, truth=given)
-                    if pairing is not None:
-                        yield from pairing.scan(rec)
-                    elif chain is not None and kind in ("FLASER", "RLASER"):
-                        yield from chain.laser(rec)
-                    else:
-                        yield rec
+                    if tails.rule is not None:
+                        yield from emit(rec)
+                    else:  # held until the pass's tail is told (_Tails)
+                        undecided.append((rec, words, line_no, kind))
+                        releasing = tails.decide(held_tails())
             except (ValueError, OverflowError, ArithmeticError) as exc:
                 self._bad(line_no, kind, exc)
+            if releasing:  # outside the line's try: a held line's error is its own, not this line's
+                releasing = False
+                yield from release()
+        if undecided:
+            yield from release()
         if pairing is not None:
             yield from pairing.flush()
         if chain is not None:
@@ -626,18 +670,25 @@ def _field_count(kind: str, n: int, m: int = 0) -> int:
 
 
 class _Tails:
-    """The words after the ipc_timestamp of a pass's laser lines (:func:`_tail_fits`) must be alike:
-    once a line of CARMEN's own tail (hostname, logger_timestamp) was read, or a first line of another
-    (none, one word, a hostname of several words), a line of another tail is malformed. A line that lost
-    a range and its hostname fits a tail ending at the ipc_timestamp, its fields shifted by one; in a log
-    of lines that all end so it cannot be told from a good one."""
+    """The words after the ipc_timestamp of a pass's laser lines (:func:`_tail_fits`) must be alike. The
+    rule is the tail two of the first laser lines share (CARMEN's own, hostname and logger_timestamp,
+    where the first three differ and one has it, else the first's; the first's too in a log of one or two
+    lines that differ); until then the lines are held (:meth:`CarmenReader._read`), and a held line of
+    another tail is malformed. A line that lost a range and its hostname fits a tail ending at the
+    ipc_timestamp, its fields shifted by one: the first line's tail alone set the rule, so such a first
+    line read silently (the lines after it had CARMEN's tail, which was taken from any line), and in a
+    log of other tails a damaged first line made every good line malformed. In a log of lines that all
+    end so, such a line cannot be told from a good one."""
+
+    #: laser lines held at most before the rule is taken (the first's, where they share no tail)
+    HELD = 3
 
     def __init__(self) -> None:
-        self.carmen = False  # a line with CARMEN's tail of two words was read
-        self.other: tuple[int, int] | None = None  # (words after the ipc_timestamp, line) of the first other tail
+        self.rule: tuple[int, int] | None = None  # (words after the ipc_timestamp, a line that has them)
 
-    def check(self, words: list[str], line_no: int) -> None:
-        """Raises ValueError for a laser line (already parsed: its counts are numbers) whose tail differs."""
+    @staticmethod
+    def measure(words: list[str]) -> tuple[int, int, str]:
+        """(words after the ipc_timestamp, fields up to it, what the line is) of a parsed laser line."""
         kind = words[0]
         if kind in ("FLASER", "RLASER"):
             n = int(words[1])
@@ -646,19 +697,33 @@ class _Tails:
             n = int(words[8])
             m = int(words[9 + n])
             fixed, what = _field_count(kind, n, m) - 2, f"{kind} with {n} ranges and {m} remissions"
-        tail = len(words) - fixed
-        if tail == 2:
-            self.carmen = True
-            return
-        if not self.carmen and self.other is None:
-            self.other = (tail, line_no)
-            return
-        if self.carmen:
-            raise ValueError(f"{what} needs {fixed + 2} fields, got {len(words)}: {tail} words after its ipc_timestamp, "
-                             "where earlier lines have a hostname and a logger_timestamp (a word lost or gained?)")
-        if self.other is not None and tail != self.other[0]:
-            raise ValueError(f"{what} needs {fixed + self.other[0]} fields, got {len(words)}: {tail} words after its "
-                             f"ipc_timestamp, where line {self.other[1]} has {self.other[0]} (a word lost or gained?)")
+        return len(words) - fixed, fixed, what
+
+    def problem(self, words: list[str]) -> str | None:
+        """Why a laser line's tail is not the rule's (None: it is, or no rule is taken yet)."""
+        if self.rule is None:
+            return None
+        tail, fixed, what = self.measure(words)
+        rule, line_no = self.rule
+        if tail == rule:
+            return None
+        where = f"line {line_no} has {rule}" + (" (a hostname and a logger_timestamp)" if rule == 2 else "")
+        return (f"{what} needs {fixed + rule} fields, got {len(words)}: {tail} word{'s' * (tail != 1)} after its "
+                f"ipc_timestamp, where {where} (a word lost or gained?)")
+
+    def decide(self, held: list[tuple[int, int]], final: bool = False) -> bool:
+        """Take the rule from the held lines' (tail, line) where it can be told (two share a tail; or
+        ``HELD`` lines, or the pass's end when ``final``); whether it is taken."""
+        if self.rule is not None or not held:
+            return self.rule is not None
+        tails = [t for t, _ in held]
+        shared = next((t for t in tails if tails.count(t) > 1), None)
+        if shared is None and not final and len(held) < self.HELD:
+            return False
+        if shared is None:
+            shared = 2 if 2 in tails else tails[0]
+        self.rule = (shared, next(n for t, n in held if t == shared))
+        return True
 
 
 class _BlankRun:

@@ -88,6 +88,44 @@ def test_a_line_whose_tail_differs_from_the_first_lines_is_malformed(tmp_path: P
     assert [r.scan.stamp for r in reader] == [9.0, 11.0] and reader.stats.skipped_count == 1
 
 
+@pytest.mark.parametrize("good_tail, bad", [
+    ("b21 {t}", "FLASER 3 1.00 2.00 {p} 9.0 9.01"),  # CARMEN's lines, the first lost a range and its hostname
+    ("{t}", "FLASER 3 1.00 2.00 {p} 9.0 9.01"),  # no hostname (ipc, logger), the first lost a range
+])
+def test_a_damaged_first_line_is_told_by_the_lines_after_it(tmp_path: Path, good_tail: str, bad: str) -> None:
+    """A review: the first laser line's tail set the rule alone. A first line that lost a range and its
+    hostname read silently with its fields shifted by one (Intel's first FLASER line so damaged: exit 0, its
+    last range the laser pose's x, its stamp the logger_timestamp), since CARMEN's tail was taken after any
+    first line; and in a log of other tails, a first line that lost a range made every good line after it
+    malformed (under skip_bad_lines only the damaged line was kept). The rule is the tail the first lines
+    share: the damaged line is malformed, the good ones read, with the ODOM lines among them in log order."""
+    lines = [bad.format(p=POSES)] + [f"FLASER 3 {RANGES} {POSES} {t} {good_tail.format(t=t)}".strip()
+                                      for t in (10.0, 11.0, 12.0)]
+    lines.insert(1, "ODOM 1.5 -2.0 0.3 0 0 0 9.5 b21 9.5")
+    path = _log(tmp_path, lines)
+    with pytest.raises(LogFormatError, match=r"log\.clf:1: malformed FLASER line: FLASER with 3 beams needs \d+ fields, "
+                                             r"got 12: 0 words after its ipc_timestamp, where line 3 has"):
+        list(read_log(path))
+    reader = read_log(path, skip_bad_lines=True)
+    recs = list(reader)
+    assert [r.scan.stamp for r in recs] == [10.0, 11.0, 12.0] and [n for n, _ in reader.stats.skipped] == [1]
+    assert all(r.scan.ranges.tolist() == [1.0, 2.0, 3.0] for r in recs)
+    good = _log(tmp_path, lines[1:])  # the same log without the damaged line: the same records
+    assert [(r.scan.stamp, r.odom, r.truth) for r in read_log(good)] == [(r.scan.stamp, r.odom, r.truth) for r in recs]
+
+
+def test_two_lines_of_differing_tails_take_the_firsts(tmp_path: Path) -> None:
+    """A log of two laser lines whose tails differ (nothing shared to tell the rule by) keeps the first's, as
+    before the rule was taken from the first lines shared; three that all differ, the first's too."""
+    path = _log(tmp_path, [f"FLASER 3 {RANGES} {POSES} 9.0 9.01", f"FLASER 3 {RANGES} {POSES} 10.0"])
+    with pytest.raises(LogFormatError, match=r"log\.clf:2: .* 0 words after its ipc_timestamp, where line 1 has 1 "):
+        list(read_log(path))
+    path = _log(tmp_path, [f"FLASER 3 {RANGES} {POSES} 9.0 9.01", f"FLASER 3 {RANGES} {POSES} 10.0",
+                           f"FLASER 3 {RANGES} {POSES} 11.0 a b 11.01", f"FLASER 3 {RANGES} {POSES} 12.0 12.01"])
+    reader = read_log(path, skip_bad_lines=True)
+    assert [r.scan.stamp for r in reader] == [9.0, 12.0] and [n for n, _ in reader.stats.skipped] == [2, 3]
+
+
 # --- readings at the declared maximum range --------------------------------------------------------
 def _hokuyo_line(t: float, ranges: list[str]) -> str:
     """A ROBOTLASER1 line of a Hokuyo UTM-30LX-like laser (270 deg at 0.25 deg written to 6 decimals, max range
