@@ -328,8 +328,3 @@ def _numbers(column: pd.Series) -> bool:
     return pd.api.types.is_numeric_dtype(column) and not pd.api.types.is_bool_dtype(column)
 
 
-def _finite(column: pd.Series) -> np.ndarray:
-    """Which values of a column are finite numbers (all False for a column of no numbers)."""
-    if not _numbers(column):
-        return np.zeros(len(column), bool)
-    return np.isfinite(column.to_numpy(dtype=float, na_value=np.nan))

@@ -167,7 +167,7 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
     write_record(folder / "study.yaml", dump_yaml(settings, sort_keys=False))
     for name, table in tables.items():
         table.to_parquet(folder / f"{name}.parquet", index=False)
-    (folder / "notes.txt").write_text("\n".join(notes) + ("\n" if notes else ""))
+    (folder / "notes.txt").write_text("\n".join(notes) + ("\n" if notes else ""), encoding="utf-8")  # read back as UTF-8 (--tables)
 
 
 #: the tables a study saves (run_study): a CSV of one of these names in a tables folder is refused, not left out
