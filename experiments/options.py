@@ -973,12 +973,17 @@ def _check_replaceable(p: Path, tree: OutTree, top: Path | None = None) -> None:
     """Refuse, before any work, a read-only file of ``--out p`` that the run would replace, or a
     sub-folder of its outputs it cannot write in: ``figures --out DIR`` over a read-only
     ``fig3_scan.png`` computed its whole study, then failed ``DIR/fig3_scan.png: permission denied``
-    (a permission fuzz round, run as a user without root's powers: as root everything is writable)."""
+    (a permission fuzz round, run as a user without root's powers: as root everything is writable).
+    Not a pattern's files (``sweep_*``, ``realdata_*``): the run writes only its own of them, and an
+    earlier run's it removes, which a read-only file allows (a review: `figures --out O` without --sweep
+    was refused over O's read-only `sweep_tiny_f1.png`, "which this run would replace")."""
     for name in tree.files:
-        for f in sorted(p.glob(name)) if any(c in name for c in "*?[") else [p / name]:
-            if f.is_file() and not f.is_symlink() and not os.access(f, os.W_OK):
-                raise InputError(f"--out {top or p}: {f} cannot be written (permission denied: read-only), and this run would replace it; make it writable "
-                                 "(chmod u+w), or give another folder")
+        if any(c in name for c in "*?["):  # a run's own names (sweep_*, realdata_*): others' are removed, not written
+            continue
+        f = p / name
+        if f.is_file() and not f.is_symlink() and not os.access(f, os.W_OK):
+            raise InputError(f"--out {top or p}: {f} cannot be written (permission denied: read-only), and this run would replace it; make it writable "
+                             "(chmod u+w), or give another folder")
     for sub, inner in tree.folders.items():
         folder = p / sub
         if sub in KEPT_FOLDERS or not folder.is_dir() or folder.is_symlink():

@@ -547,3 +547,34 @@ def test_a_study_yaml_larger_than_any_config_is_refused_unread(tmp_path):
         load_config(tmp_path)
     (tmp_path / "study.yaml").write_text("world: office\nseed: 3\n")
     assert load_config(tmp_path).seed == 3
+
+
+def test_a_read_only_output_is_refused_only_where_this_run_writes_it(sim, tmp_path, capsys, monkeypatch):
+    """A review: check_out refused a read-only file of every name the command may write, patterns too, so
+    `figures --out O` without --sweep was refused over O's read-only sweep_*.png ("which this run would
+    replace"; it was left as it was). A read-only file of a pattern (an earlier run's realdata_* here) is
+    removed as before; one of a name the run writes (summary.txt) is refused before any work. As root every
+    file is writable, so "read-only" is what os.access says (the permission tests run as another user)."""
+    import os
+    import shutil
+
+    from experiments import options
+
+    for name in ("a.clf", "b.clf"):
+        shutil.copy(sim / "scans.clf", tmp_path / name)
+    out = tmp_path / "cmp"
+    base = ["--methods", "sensor", "--max-scans", "3", "--no-progress", "--out", str(out)]
+    assert main(["compare", str(tmp_path / "a.clf"), *base]) == 0
+    read_only = {out / "realdata_a_clf.png"}
+    real_access = os.access
+    monkeypatch.setattr(options.os, "access", lambda p, mode, **kw: not (mode & os.W_OK and Path(p) in read_only)
+                        and real_access(p, mode, **kw))
+    capsys.readouterr()
+    assert main(["compare", str(tmp_path / "b.clf"), *base]) == 0  # was 2: "... realdata_a_clf.png cannot be written"
+    assert not (out / "realdata_a_clf.png").exists() and (out / "realdata_b_clf.png").exists()
+    read_only.add(out / "summary.txt")
+    capsys.readouterr()
+    assert main(["compare", str(tmp_path / "a.clf"), *base]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"lmsbench compare: error: --out {out}: {out / 'summary.txt'} cannot be written (permission denied: read-only), "
+        "and this run would replace it; make it writable (chmod u+w), or give another folder")
