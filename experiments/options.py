@@ -955,7 +955,7 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
                 shown = " and ".join(theirs) if len(theirs) <= 3 else ", ".join(theirs[:3]) + f" and {len(theirs) - 3} more"
                 raise InputError(f"--out {p}: holds {shown}, which this run would replace but no earlier lmsbench "
                                  f"{owner.command} run wrote; give a new or empty folder")
-        _check_replaceable(p, tree if replaces is None else replaces)
+        _check_replaceable(p, tree if replaces is None else replaces, removed=patterns)
     parent = _nearest_existing(p)
     if not _writable_folder(parent):
         raise InputError(f"--out {p}: {parent} is not a writable folder")
@@ -969,21 +969,23 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
 KEPT_FOLDERS = ("cells",)
 
 
-def _check_replaceable(p: Path, tree: OutTree, top: Path | None = None) -> None:
-    """Refuse, before any work, a read-only file of ``--out p`` that the run would replace, or a
-    sub-folder of its outputs it cannot write in: ``figures --out DIR`` over a read-only
-    ``fig3_scan.png`` computed its whole study, then failed ``DIR/fig3_scan.png: permission denied``
-    (a permission fuzz round, run as a user without root's powers: as root everything is writable).
-    Not a pattern's files (``sweep_*``, ``realdata_*``): the run writes only its own of them, and an
-    earlier run's it removes, which a read-only file allows (a review: `figures --out O` without --sweep
-    was refused over O's read-only `sweep_tiny_f1.png`, "which this run would replace")."""
+def _check_replaceable(p: Path, tree: OutTree, top: Path | None = None, removed: Sequence[str] = ()) -> None:
+    """Refuse, before any work, a read-only file of ``--out p`` that the run would replace or may write
+    (a pattern's: ``STEM_*.csv``, ``tables/*.parquet``, ``sweep_*``), or a sub-folder of its outputs it
+    cannot write in: ``figures --out DIR`` over a read-only ``fig3_scan.png`` computed its whole study,
+    then failed ``DIR/fig3_scan.png: permission denied`` (a permission fuzz round, run as a user without
+    root's powers: as root everything is writable). Not the files of ``removed``, patterns of which the
+    run removes an earlier run's files before writing its own (compare's ``realdata_*``), which a
+    read-only file allows (a review)."""
     for name in tree.files:
-        if any(c in name for c in "*?["):  # a run's own names (sweep_*, realdata_*): others' are removed, not written
+        if name in removed:
             continue
-        f = p / name
-        if f.is_file() and not f.is_symlink() and not os.access(f, os.W_OK):
-            raise InputError(f"--out {top or p}: {f} cannot be written (permission denied: read-only), and this run would replace it; make it writable "
-                             "(chmod u+w), or give another folder")
+        pattern = any(c in name for c in "*?[")
+        for f in sorted(p.glob(name)) if pattern else [p / name]:
+            if f.is_file() and not f.is_symlink() and not os.access(f, os.W_OK):
+                raise InputError(f"--out {top or p}: {f} cannot be written (permission denied: read-only), and this run "
+                                 f"{'may write' if pattern else 'would replace'} it; make it writable (chmod u+w), or "
+                                 "give another folder")
     for sub, inner in tree.folders.items():
         folder = p / sub
         if sub in KEPT_FOLDERS or not folder.is_dir() or folder.is_symlink():
@@ -991,7 +993,7 @@ def _check_replaceable(p: Path, tree: OutTree, top: Path | None = None) -> None:
         if not os.access(folder, os.W_OK | os.X_OK):
             raise InputError(f"--out {top or p}: {folder} is not a writable folder, and this run writes its outputs there; "
                              "make it writable (chmod u+w), or give another folder")
-        _check_replaceable(folder, inner, top or p)
+        _check_replaceable(folder, inner, top or p, removed)
 
 
 #: the outputs (``--out`` folders and files) the running command holds, per thread (two ``cli.main``

@@ -578,3 +578,32 @@ def test_a_read_only_output_is_refused_only_where_this_run_writes_it(sim, tmp_pa
     assert capsys.readouterr().err.strip() == (
         f"lmsbench compare: error: --out {out}: {out / 'summary.txt'} cannot be written (permission denied: read-only), "
         "and this run would replace it; make it writable (chmod u+w), or give another folder")
+
+
+def test_a_read_only_file_the_run_may_write_under_a_pattern_is_refused(tmp_path, monkeypatch):
+    """The second review: skipping every pattern (above) let a read-only figure CSV (STEM_*.csv) or table
+    (tables/*.parquet) through, which figures writes in place: the study ran, then failed writing it. Those
+    are refused, saying the run may write them; compare's realdata_*, which it removes, are not."""
+    import os
+
+    from experiments import options
+
+    out = tmp_path / "o"
+    (out / "tables").mkdir(parents=True)
+    for name in ("fig10_slam_map.csv", "tables/summary.parquet", "realdata_a_clf.png"):
+        (out / name).write_text("x")
+    read_only = {out / "fig10_slam_map.csv"}
+    real_access = os.access
+    monkeypatch.setattr(options.os, "access", lambda p, mode, **kw: not (mode & os.W_OK and Path(p) in read_only)
+                        and real_access(p, mode, **kw))
+    tree = options.OutTree(("fig*_*.csv", "realdata_*.png"), {"tables": options.OutTree(("*.parquet",))})
+    with pytest.raises(options.InputError, match=r"fig10_slam_map\.csv cannot be written \(permission denied: "
+                                                 r"read-only\), and this run may write it;"):
+        options._check_replaceable(out, tree)
+    read_only = {out / "tables" / "summary.parquet"}
+    with pytest.raises(options.InputError, match=r"summary\.parquet cannot be written .* this run may write it;"):
+        options._check_replaceable(out, tree)
+    read_only = {out / "realdata_a_clf.png"}
+    options._check_replaceable(out, tree, removed=("realdata_*.png",))  # removed by the run: allowed
+    with pytest.raises(options.InputError, match=r"realdata_a_clf\.png cannot be written"):
+        options._check_replaceable(out, tree)
