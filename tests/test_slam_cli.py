@@ -1293,6 +1293,12 @@ def test_an_edit_of_a_runs_extractor_config_record_is_refused(sim_folder, tmp_pa
         assert main(["slam", str(sim_folder), "--config", str(edited), "--out", str(tmp_path / "e"), *common]) == 0
         rerun = yaml.safe_load((tmp_path / "e" / "config.yaml").read_text())
         assert (rerun["slam"]["extractor"], rerun["extractor_config"].get("k")) == ran  # the slam: edit ran
+    # iepf's record, slam: extractor changed to split_merge, of the same fields (the third review: refused, its
+    # split_sigmas 3 against split_merge's 4)
+    iepf_record = yaml.safe_load((tmp_path / "e" / "config.yaml").read_text())
+    edited.write_text(yaml.safe_dump({**iepf_record, "slam": {**iepf_record["slam"], "extractor": "split_merge"}}))
+    assert main(["slam", str(sim_folder), "--config", str(edited), "--out", str(tmp_path / "f"), *common]) == 0
+    assert yaml.safe_load((tmp_path / "f" / "config.yaml").read_text())["slam"]["extractor"] == "split_merge"
     for text, where, nested in (("extractor_config: {k: 7}\n", "in it", ""),
                                 ("slam: {extractor_config: {k: 7}}\n", "under slam:", "slam: ")):
         edited.write_text(text)

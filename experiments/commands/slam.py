@@ -119,6 +119,17 @@ def _check_extractor_record(config: Path, recorded: dict, cfg: Any) -> None:  # 
     found = differs("", unset, expected, resolved)
     if found is None:
         return
+    from features.registry import available_methods
+
+    for method in available_methods():  # a record of another method of the same fields (split_merge / iepf)?
+        if method == cfg.extractor or {f.name for f in dataclasses.fields(get_method(method).config_type)} != own:
+            continue
+        try:
+            theirs = resolved_configs([method], {method: cfg.extractor_params})[method]
+        except Exception:  # noqa: BLE001 - the params may not suit that method: not its record then
+            continue
+        if differs("", unset, load_yaml(dump_yaml(theirs)), theirs) is None:
+            return  # slam: extractor was changed (the edit that is read); the record is the earlier method's
     field, got, want = found
     gives = f"has no field {field.rpartition('.')[2]!r} there" if want is None else f"gives {want!r}"
     raise InputError(f"{config}: extractor_config: {field}: {got!r}, where its slam: section ({cfg.extractor}) {gives}: "
