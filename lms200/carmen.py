@@ -540,6 +540,9 @@ class CarmenReader:
                     _finite_pose(values[0:3], "ODOM")  # nan or 1e308 m was chained into every scan's odometry
                     values[6] = _stamps(words, values[6], _logger_at(words, 8))
                     yield from odometry(values[6], (values[0], values[1], values[2]))
+                    # held beside the laser lines until their tail is told, and no more than HELD_EVENTS of them
+                    # (a first laser line and 500,000 ODOM lines held 130 MB more: the tail is then the first's)
+                    releasing = len(undecided) > _Tails.HELD_EVENTS
                 elif kind in LASER_KINDS:
                     if stats.laser is None:
                         stats.laser = kind
@@ -682,6 +685,9 @@ class _Tails:
 
     #: laser lines held at most before the rule is taken (the first's, where they share no tail)
     HELD = 3
+    #: laser and ODOM lines held at most (memory bound on any log, as OdomPairing's MAX_RECENT_ODOM):
+    #: beyond, the rule is taken from the laser lines held, as at the pass's end
+    HELD_EVENTS = 4096
 
     def __init__(self) -> None:
         self.rule: tuple[int, int] | None = None  # (words after the ipc_timestamp, a line that has them)

@@ -168,3 +168,19 @@ def test_a_flaser_reading_at_the_param_maximum_range_is_no_return_and_the_writer
         back = list(read_log(out))[0].scan
         assert back.valid.tolist() == [True, True, False, True], fmt
         assert back.ranges[1] == pytest.approx(30.0, abs=0.005) and back.ranges[2] == np.inf
+
+
+def test_the_lines_held_until_the_tail_is_told_are_bounded(tmp_path: Path, monkeypatch) -> None:
+    """The third review: the laser lines held until their tail is told were at most 3, but the ODOM lines read
+    among them were held without a bound (one FLASER line and 500,000 ODOM lines: 130 MB more). Beyond
+    _Tails.HELD_EVENTS held lines the tail is taken from the laser lines held, the first's, as at a pass's end."""
+    from lms200 import carmen
+
+    odom = [f"ODOM 1.5 -2.0 0.3 0 0 0 {9 + k / 100:.2f} b21 {9 + k / 100:.2f}" for k in range(1, 21)]
+    lines = [f"FLASER 3 {RANGES} {POSES} 9.0 9.01"] + odom + [f"FLASER 3 {RANGES} {POSES} {t} b21 {t}" for t in (10.0, 11.0)]
+    path = _log(tmp_path, lines)
+    reader = read_log(path, skip_bad_lines=True)  # the two lines after share CARMEN's tail: the first is malformed
+    assert [r.scan.stamp for r in reader] == [10.0, 11.0] and [n for n, _ in reader.stats.skipped] == [1]
+    monkeypatch.setattr(carmen._Tails, "HELD_EVENTS", 10)
+    reader = read_log(path, skip_bad_lines=True)  # 10 held: the first line's tail, told alone
+    assert [r.scan.stamp for r in reader] == [9.0] and [n for n, _ in reader.stats.skipped] == [22, 23]
