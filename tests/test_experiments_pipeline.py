@@ -438,3 +438,20 @@ def test_a_summary_of_no_number_in_a_plotted_column_is_refused(tmp_path, capsys,
     err = capsys.readouterr().err
     assert f"table summary's column {column} holds no finite number (2 rows, all nan or infinite)" in err, err
     assert not (tmp_path / "out").exists()
+
+
+def test_figures_says_which_tables_the_study_saved_are_missing(tmp_path, capsys) -> None:
+    """A review: `figures --tables DIR` with a table of the study deleted (signals.parquet, the Intel panels',
+    the trajectory) left its figures out without a word, exit 0. Each such table is named in a note, with the
+    figures not drawn; a table the study did not make (the trajectory of a study without SLAM, the Intel panels
+    where its notes say the log was skipped) is not."""
+    tables = _study_tables(tmp_path / "tables", SUMMARY)  # timing and summary only, slam=False, no notes
+    assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "out")]) == 0
+    notes = [line for line in capsys.readouterr().out.splitlines() if line.startswith("note: table")]
+    assert notes == [
+        "note: table signals is missing (signals.parquet, which the study saved): fig3_scan to fig6_psi are not drawn",
+        "note: table office_points is missing (office_points.parquet, which the study saved): fig9_office is not drawn",
+        "note: table intel_points is missing (intel_points.parquet, which the study saved): fig9_intel is not drawn"]
+    (tables / "notes.txt").write_text("Fig. 9 (Intel log) skipped: None is not present on this machine.\n")
+    assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "out2")]) == 0
+    assert "intel_points is missing" not in capsys.readouterr().out

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import datetime
 from pathlib import Path
+from typing import Any
 
 from lms200.yamlio import dump as dump_yaml
 
@@ -121,8 +122,26 @@ def run(args: argparse.Namespace) -> int:
         print(f"note: table {name} is empty: the figures drawn from it are not drawn")
     if (problem := accuracy_speed_problem(tables)) is not None:
         print(f"note: {problem}")
+    if args.tables:
+        for name, figures in _missing_tables(tables, cfg, notes):
+            print(f"note: table {name} is missing ({name}.parquet, which the study saved): {figures} not drawn")
     print(f"wrote {sum(len(p) for p in written.values())} files in {args.out}")
     return 0
+
+
+#: a study's driving tables (make.DRIVING_TABLES) but summary (accuracy_speed says its own) and the figures of each
+_FIGURES_OF = {"signals": "fig3_scan to fig6_psi are", "timing": "fig7_timing is", "office_points": "fig9_office is",
+               "intel_points": "fig9_intel is", "trajectory": "fig10_slam is"}
+
+
+def _missing_tables(tables: dict, cfg: Any, notes: list[str]) -> list[tuple[str, str]]:  # noqa: ANN401 - a StudyConfig
+    """(table, its figures) of each driving table the study of ``cfg`` saved (Intel's where its notes do
+    not say it was skipped; the trajectory where it ran the SLAM) that a --tables folder lacks: its
+    figures were left out without a word, exit 0."""
+    made = ["signals", "timing", "office_points"]
+    made += [] if any(n.startswith("Fig. 9 (Intel log) skipped") for n in notes) else ["intel_points"]
+    made += ["trajectory"] if cfg.slam else []
+    return [(name, _FIGURES_OF[name]) for name in made if name not in tables]
 
 
 def _check_not_a_demos_figures(out: Path, tables: Path | None) -> None:
