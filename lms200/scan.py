@@ -35,6 +35,7 @@ SNAP_RELATIVE_ERROR = 1e-6  # of the value: float32 (6e-8) with room to spare
 #: is 0. A clock is UNIX time or seconds since a run's start, and 2^32 s (2106-02-07) is the end of ROS 1's time: a
 #: Scan stamped 1e300 s or -1e300 s was taken, and failed only where a log was written or SLAM's motion model stepped
 MAX_STAMP_S = float(2**32)
+MAX_SNAP_RAD = 4 * np.pi  # rad: larger angles are left as given (a Scan refuses them: bearings within +-2 pi)
 
 
 def stamp_problem(t: float, what: str) -> str | None:
@@ -46,7 +47,6 @@ def stamp_problem(t: float, what: str) -> str | None:
         return None
     return (f"{what} {fixed(t)} s is outside 0 .. 2^32 s ({MAX_STAMP_S:.0f} s, 2106-02-07), the stamps every log "
             "reader and writer takes: a clock's UNIX time, or seconds since the run's start")
-MAX_SNAP_RAD = 4 * np.pi  # rad: larger angles are left as given (a Scan refuses them: bearings within +-2 pi)
 
 
 def snap_angle(value: float) -> float:

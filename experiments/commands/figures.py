@@ -139,7 +139,9 @@ def _missing_tables(tables: dict, cfg: Any, notes: list[str]) -> list[tuple[str,
     not say it was skipped; the trajectory where it ran the SLAM) that a --tables folder lacks: its
     figures were left out without a word, exit 0."""
     made = ["signals", "timing", "office_points"]
-    made += [] if any(n.startswith("Fig. 9 (Intel log) skipped") for n in notes) else ["intel_points"]
+    from experiments.figures.study import INTEL_SKIPPED
+
+    made += [] if any(n.startswith(INTEL_SKIPPED) for n in notes) else ["intel_points"]
     made += ["trajectory"] if cfg.slam else []
     return [(name, _FIGURES_OF[name]) for name in made if name not in tables]
 

@@ -18,7 +18,6 @@ from lms200.yamlio import load as load_yaml
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
 import pandas as pd
 
 from . import draw
@@ -118,7 +117,7 @@ def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
                                 "names its " + {"method": "extractor", "panel": "scan", "source": "source"}[empty_key[0]]
                                 + ": a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
         plotted = ("f1", "time_ms_median") if name == "summary" else numbers  # summary's others may be nan
-        blank = [c for c in plotted if not np.isfinite(table[c].to_numpy(dtype=float)).any()]
+        blank = [c for c in plotted if not _finite(table[c]).any()]
         if blank:  # every figure of it drawn empty, exit 0 (a damaged-input fuzz round: all nan, all inf)
             raise LmsbenchError(f"{where}: table {name}'s column {blank[0]} holds no finite number ({len(table)} rows, "
                                 "all nan or infinite), so its figure would be empty: a damaged table, or not one of "

@@ -103,7 +103,7 @@ def run_study(cfg: StudyConfig, log: Log = print) -> tuple[dict[str, pd.DataFram
                                     cfg.intel_sensor_params if panel_method == "sensor" else None, cfg.log_options))
         say(f"{log_name(intel)} log: {cfg.panels} scans with features")
     else:
-        notes.append(f"Fig. 9 (Intel log) skipped: {intel} is not present on this machine.")
+        notes.append(f"{INTEL_SKIPPED} {intel} is not present on this machine.")
         say(notes[-1])
     sensor = sensor_config(cfg.sensor)
     world, records = simulate_run(cfg.world, cfg.seed, cfg.duration, sensor, cfg.rate_hz)
@@ -168,6 +168,10 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
     for name, table in tables.items():
         table.to_parquet(folder / f"{name}.parquet", index=False)
     (folder / "notes.txt").write_text("\n".join(notes) + ("\n" if notes else ""), encoding="utf-8")  # read back as UTF-8 (--tables)
+
+
+#: how a study's note says the Intel panels were not made (run_study; figures --tables reads it back)
+INTEL_SKIPPED = "Fig. 9 (Intel log) skipped:"
 
 
 #: the tables a study saves (run_study): a CSV of one of these names in a tables folder is refused, not left out
