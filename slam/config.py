@@ -588,7 +588,7 @@ class SlamConfig:
     def from_dict(cls, values: dict[str, Any]) -> "SlamConfig":
         """Build from a mapping (e.g. parsed YAML); unknown keys raise SlamConfigError."""
         known = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(values) - known)
+        unknown = sorted(set(values) - known, key=str)  # YAML keys may be null, numbers, true
         if unknown:
             raise SlamConfigError(f"unknown SLAM config field(s) {unknown}; known: {sorted(known)}")
         return cls(**values)
@@ -933,7 +933,7 @@ def _finite_number(where: str, value: Any) -> float:
 def _section(cls: type, name: str, values: dict[str, Any]) -> Any:
     """A section dataclass from a mapping; unknown keys raise SlamConfigError."""
     known = {f.name for f in dataclasses.fields(cls)}
-    unknown = sorted(set(values) - known)
+    unknown = sorted(set(values) - known, key=str)
     if unknown:
         raise SlamConfigError(f"unknown field(s) {unknown} in SLAM config section {name!r}; known: {sorted(known)}")
     return cls(**values)  # types are checked by _checked_fields

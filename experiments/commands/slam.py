@@ -93,7 +93,7 @@ def _check_extractor_record(config: Path, recorded: dict, cfg: Any) -> None:  # 
         others = [{f.name for f in dataclasses.fields(get_method(m).config_type)} for m in available_methods()]
         if any(set(recorded) <= fields for fields in others):
             return
-        field = sorted(set(recorded) - own)[0]
+        field = sorted(set(recorded) - own, key=str)[0]
         raise InputError(f"{config}: extractor_config: {field}: {recorded[field]!r} is a field of no extractor (nor "
                          f"of {cfg.extractor}, which its slam: section names): an edit of the record of what a run ran, "
                          f"which --config does not read; delete it, or {_extractor_fields_hint(True)}")

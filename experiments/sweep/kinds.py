@@ -214,7 +214,7 @@ def _unknown(cells: Iterable[dict[str, Any]], prefix: str, known_for) -> None:
         if not names:
             continue
         known, owner = known_for(cell)
-        bad = sorted(set(names) - known)
+        bad = sorted(set(names) - known, key=str)
         if bad:
             raise SweepSpecError(f"unknown parameter(s) {[f'{prefix}.{n}' for n in bad]}: not fields of {owner}; "
                                  f"known {prefix}.* names: {sorted(known)}")
@@ -282,7 +282,7 @@ def _check_plain(cells: list[dict[str, Any]], defaults: dict[str, Any], extra: s
     read = ", ".join(f"{prefix}.*" for prefix in prefixes)
     for cell in cells:
         plain = {k for k in cell if "." not in k}
-        bad = sorted(plain - known)
+        bad = sorted(plain - known, key=str)
         if bad:
             raise SweepSpecError(f"unknown parameter(s) {bad}; known plain names: {sorted(known)} "
                                  f"(and {read} fields)")

@@ -84,7 +84,7 @@ class SweepSpec:
             raise SweepSpecError("a sweep file must be a YAML mapping (name, kind, grid, ...)")
         unknown = set(raw) - _KEYS
         if unknown:
-            raise SweepSpecError(f"unknown key(s) {sorted(unknown)} in the sweep file; known: {sorted(_KEYS)}")
+            raise SweepSpecError(f"unknown key(s) {sorted(unknown, key=str)} in the sweep file; known: {sorted(_KEYS)}")
         if "kind" not in raw:
             raise SweepSpecError("the sweep file needs `kind:` (a cell kind such as extract or slam)")
         for key in ("fixed", "grid", "random"):
