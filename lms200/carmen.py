@@ -335,6 +335,9 @@ class CarmenReader:
                 try:
                     line = f.readline(MAX_LINE_CHARS + 1)
                     too_long = len(line) > MAX_LINE_CHARS
+                    if too_long and not self.skip_bad_lines:  # refused here, not read to its end first: a gzip
+                        self._bad(line_no + 1, "overlong",  # of 4 GB of 'x' after a log's first scans took 42 s
+                                  ValueError(f"longer than {MAX_LINE_CHARS} characters"))  # to be refused
                     rest = line  # the overlong line is skipped to its end, which may be the file's
                     while too_long and rest and not rest.endswith("\n"):
                         rest = f.readline(MAX_LINE_CHARS)
