@@ -58,8 +58,7 @@ def write_report(folder: Path, title: str, sections: list[Section]) -> tuple[Pat
     from experiments.provenance import write_record
 
     md_path = write_record(folder / "report.md", "\n".join(md))  # whole: it tells a demo's folder (DEMO_OWNER)
-    html_path = folder / "report.html"
-    html_path.write_text(markdown_to_html("\n".join(md), title, images=folder))
+    html_path = write_record(folder / "report.html", markdown_to_html("\n".join(md), title, images=folder))
     return md_path, html_path
 
 

@@ -1023,7 +1023,7 @@ def draw(result: Sim2RealResult, path: Path, log: str) -> None:
         ax.legend(fontsize=7)
     fig.suptitle(f"{log} against simulated {result.world}")
     fig.tight_layout()
-    fig.savefig(path, dpi=110, metadata={"Software": None})
+    fig.savefig(path, format="png", dpi=110, metadata={"Software": None})  # path: a temporary name
     plt.close(fig)
 
 
@@ -1043,9 +1043,10 @@ def write_outputs(result: Sim2RealResult, out: Path, log: str, config: dict[str,
     # config.yaml first, whole: it tells the folder as sim2real's (options.SIM2REAL_OWNER); a run
     # stopped among the tables or the figure left a folder the next run into it refused
     write_record(paths[5], dump_yaml(resolved, sort_keys=False))
-    result.table.to_csv(paths[0], index=False)
-    scene_table(result).to_csv(paths[1], index=False)
-    paths[2].write_text(format_report(result, log))
-    draw(result, paths[3], log)
+    # every file whole (a hidden temporary file renamed into place): a full disk left cut ones beside whole
+    write_record(paths[0], lambda p: result.table.to_csv(p, index=False))
+    write_record(paths[1], lambda p: scene_table(result).to_csv(p, index=False))
+    write_record(paths[2], format_report(result, log))
+    write_record(paths[3], lambda p: draw(result, p, log))
     write_record(paths[4], lambda p: result.sensor.to_yaml(p, header=f"sensor model used by lmsbench sim2real {log}"))
     return paths

@@ -517,7 +517,8 @@ def write_scores(out: Path, data: SlamInput, slam_run: SlamRun) -> None:
     """metrics.json and slam.png in ``out``: what :func:`run` with ``out`` leaves to write once
     the run is scored (it wrote config.yaml, the trajectory and the map before the scores)."""
     write_record(out / "metrics.json", json.dumps(_jsonable(slam_run.metrics), indent=2) + "\n")
-    plot(out / "slam.png", data, slam_run.result)
+    # whole (a hidden temporary file renamed into place): a full disk left a cut slam.png beside whole files
+    write_record(out / "slam.png", lambda tmp: plot(tmp, data, slam_run.result))
 
 
 def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:
@@ -601,5 +602,5 @@ def plot(path: Path, data: SlamInput, res: SlamResult) -> None:
         equal_axes(ax)
     else:
         ax.set_aspect("equal")
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, format="png", dpi=120)  # path may be a temporary name (write_scores)
     plt.close(fig)

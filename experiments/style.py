@@ -189,15 +189,19 @@ def save_figure(fig, stem: Path | str, data: pd.DataFrame | dict[str, pd.DataFra
     """
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
+    from experiments.provenance import write_record
+
+    # each file whole (a hidden temporary file renamed into place): a full disk while saving left a cut
+    # PNG or PDF (an image 'file is truncated') or CSV beside whole ones, under an error line
     written = []
     for fmt in formats:
         path = stem.with_suffix(f".{fmt}")
-        fig.savefig(path)
+        write_record(path, lambda tmp, fmt=fmt: fig.savefig(tmp, format=fmt))
         written.append(path)
     plt.close(fig)
     tables = {"": data} if isinstance(data, pd.DataFrame) else dict(data or {})
     for name, table in tables.items():
         path = stem.parent / (f"{stem.name}_{name}.csv" if name else f"{stem.name}.csv")
-        table.to_csv(path, index=False)
+        write_record(path, lambda tmp, table=table: table.to_csv(tmp, index=False))
         written.append(path)
     return written

@@ -3,8 +3,12 @@ environment (2026-12-06). Each test failed on the code before its fix."""
 
 from __future__ import annotations
 
+import contextlib
+import resource
 from pathlib import Path
+from typing import Iterator
 
+import numpy as np
 import pytest
 
 from experiments.sweep.spec import SweepSpecError, load_sweep
@@ -68,3 +72,67 @@ def test_an_overlong_line_is_refused_without_reading_it_to_its_end(tmp_path: Pat
     assert sum(read) < 20_000  # it read all 2,000,000 characters of the line before refusing it
     reader = read_log(path, skip_bad_lines=True)  # skipping it reads on, as it must, to the line's end
     assert [r.scan.stamp for r in reader] == [10.0] and reader.stats.skipped[0][:1] == (2,)
+
+
+# A full disk while writing an output left it cut beside whole files, under the error line: slam's
+# trajectory.tum of 0 bytes beside its config.yaml, a slam.png 'image file is truncated' beside a whole
+# metrics.json, a figure's PNG / PDF / CSV, compare's table and summary.txt, sim2real's tables, a study's
+# tables and notes. Each is now written whole (a hidden temporary file renamed into place). A file-size
+# limit (RLIMIT_FSIZE; Python ignores SIGXFSZ, so a write past it fails with EFBIG) plays the full disk.
+
+@contextlib.contextmanager
+def file_size_limit(nbytes: int) -> Iterator[None]:
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (nbytes, hard))
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+
+
+def test_write_tum_on_a_full_disk_leaves_the_earlier_file_whole(tmp_path: Path) -> None:
+    from lms200 import InputError, read_tum, write_tum
+
+    path = tmp_path / "trajectory.tum"
+    write_tum(path, np.arange(3.0), np.zeros((3, 3)))
+    before = path.read_bytes()
+    with file_size_limit(200), pytest.raises(InputError, match=rf"^path: cannot write {path}: File too large$"):
+        write_tum(path, np.arange(50.0), np.ones((50, 3)))
+    assert path.read_bytes() == before  # it was cut to the 200 bytes the limit let through
+    assert [p.name for p in tmp_path.iterdir()] == ["trajectory.tum"]  # no temporary file left
+    assert len(read_tum(path)[0]) == 3
+    with file_size_limit(200), pytest.raises(InputError):
+        write_tum(tmp_path / "new.tum", np.arange(50.0), np.ones((50, 3)))
+    assert not (tmp_path / "new.tum").exists()  # a new file: none at all, not a cut one
+
+
+def test_save_figure_on_a_full_disk_leaves_no_cut_figure(tmp_path: Path) -> None:
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    from experiments.style import save_figure
+
+    table = pd.DataFrame({"x": np.arange(100.0)})
+    for formats, limit in ((("png", "pdf"), 4000), ((), 300)):  # (PIL removes a PNG it could not finish)
+        fig, ax = plt.subplots()
+        ax.plot(np.arange(100.0), np.sin(np.arange(100.0)))
+        with file_size_limit(limit), pytest.raises(OSError, match="File too large"):
+            save_figure(fig, tmp_path / "fig", table, formats=formats)
+        assert list(tmp_path.iterdir()) == []  # a fig.pdf of the 4000 bytes, a fig.csv of 300 were left
+        plt.close("all")
+
+
+def test_slam_png_on_a_full_disk_is_not_left_cut(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import errno
+    from types import SimpleNamespace
+
+    import experiments.slamrun as slamrun
+
+    def plot_to_a_full_disk(path: Path, data: object, result: object) -> None:
+        Path(path).write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(100))  # the first bytes, then no room
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(slamrun, "plot", plot_to_a_full_disk)
+    with pytest.raises(OSError, match="No space left"):
+        slamrun.write_scores(tmp_path, SimpleNamespace(), SimpleNamespace(metrics={"ate": 0.1}, result=None))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["metrics.json"]  # and a cut slam.png beside it

@@ -208,13 +208,13 @@ def run(args: argparse.Namespace) -> int:
     # after compare.parquet left a folder the next run into it refused
     write_record(args.out / "config.yaml", dump_yaml(resolved, sort_keys=False))
     path = args.out / f"compare.{args.format}"
-    if args.format == "parquet":
-        table.to_parquet(path, index=False)
+    if args.format == "parquet":  # whole, as every output: a full disk left a cut one beside whole files
+        write_record(path, lambda p: table.to_parquet(p, index=False))
     else:  # compare.csv and summary.csv are records too: whole, or a cut one refused the next run
         write_record(path, lambda p: table.to_csv(p, index=False))
     write_record(args.out / "summary.csv", lambda p: summary.to_csv(p, index=False))
     text = format_summary(summary) + "\n" + format_ran_with(resolved["ran_with"])  # the noise, as read: config.yaml
-    (args.out / "summary.txt").write_text(text + "\n")
+    write_record(args.out / "summary.txt", text + "\n")
     figures = []
     for src in sources:
         if src.kind == "log" and src.name in set(summary["source"]):

@@ -165,9 +165,9 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
 
         settings["resolved"]["slam"] = dataclasses.asdict(SlamConfig())
     write_record(folder / "study.yaml", dump_yaml(settings, sort_keys=False))
-    for name, table in tables.items():
-        table.to_parquet(folder / f"{name}.parquet", index=False)
-    (folder / "notes.txt").write_text("\n".join(notes) + ("\n" if notes else ""), encoding="utf-8")  # read back as UTF-8 (--tables)
+    for name, table in tables.items():  # each whole: a full disk left a cut table or notes.txt
+        write_record(folder / f"{name}.parquet", lambda p, table=table: table.to_parquet(p, index=False))
+    write_record(folder / "notes.txt", "\n".join(notes) + ("\n" if notes else ""))  # UTF-8, read back by --tables
 
 
 #: how a study's note says the Intel panels were not made (run_study; figures --tables reads it back)

@@ -119,7 +119,7 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
             (out / name).unlink(missing_ok=True)  # sweep.yaml, drawn by `figures --sweep` as this one's, exit 0
     write_record(out / "sweep.yaml", record)  # whole: it tells the folder as the sweep's (SWEEP_OWNER)
 
-    (out / "versions.yaml").write_text(dump_yaml(versions(), sort_keys=False))  # of the last run into `out`
+    write_record(out / "versions.yaml", dump_yaml(versions(), sort_keys=False))  # of the last run into `out`
     digests, seen = getattr(fn, "input_digests", None), {}  # the files a cell reads are part of its key
     inputs = [digests(params, seen) if digests else None for params in cells]
     keys = [cell_key(spec.kind, params, given) for params, given in zip(cells, inputs)]
