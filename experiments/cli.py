@@ -19,6 +19,7 @@ import errno
 import functools
 import importlib
 import io
+import logging
 import os
 import pkgutil
 import tempfile
@@ -286,8 +287,21 @@ def _standard_streams() -> None:
         sys.stdout = _ClosedStdout()
 
 
+class _NoConfigFolderWarning(logging.Filter):
+    """Drops matplotlib's two warnings where its config folder cannot be made (HOME read-only, missing or
+    a file: a container run as a user without a home has HOME=/, a cluster's compute nodes a read-only
+    one): "mkdir -p failed for path ..." and "Matplotlib created a temporary cache directory at ...",
+    three lines on stderr of every command that draws (simulate, slam, compare, ...), above their own.
+    matplotlib then uses a temporary folder, removed at exit: nothing for the user to do."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        text = str(record.msg)
+        return not (text.startswith("mkdir -p failed for path") or "created a temporary cache directory" in text)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     _standard_streams()
+    logging.getLogger("matplotlib").addFilter(_NoConfigFolderWarning())  # before matplotlib is imported
     try:
         return _flushed(_main(argv))
     except KeyboardInterrupt:  # before the command's handler is in place: its options being read

@@ -4,6 +4,7 @@ environment (2026-12-06). Each test failed on the code before its fix."""
 from __future__ import annotations
 
 import contextlib
+import os
 import resource
 from pathlib import Path
 from typing import Iterator
@@ -136,3 +137,20 @@ def test_slam_png_on_a_full_disk_is_not_left_cut(tmp_path: Path, monkeypatch: py
     with pytest.raises(OSError, match="No space left"):
         slamrun.write_scores(tmp_path, SimpleNamespace(), SimpleNamespace(metrics={"ate": 0.1}, result=None))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["metrics.json"]  # and a cut slam.png beside it
+
+
+def test_a_home_where_matplotlib_cannot_make_its_folder_adds_no_lines(tmp_path: Path) -> None:
+    """HOME=/dev/null (as a read-only or missing home: a container run as a user without one has HOME=/):
+    matplotlib said "mkdir -p failed for path /dev/null/.config/matplotlib ..." and "Matplotlib created
+    a temporary cache directory at ..." on stderr of every command that draws, above its own lines."""
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k not in ("MPLCONFIGDIR", "XDG_CONFIG_HOME", "XDG_CACHE_HOME")}
+    env["HOME"] = "/dev/null"
+    code = ("import sys\nfrom experiments.cli import main\nstatus = main(['--version'])\n"  # then a command's drawing
+            "import matplotlib.pyplot as plt\nplt.figure().savefig(sys.argv[1])\nprint('drawn')\nsys.exit(status)\n")
+    run = subprocess.run([sys.executable, "-c", code, str(tmp_path / "f.png")], env=env, cwd=Path(__file__).resolve().parents[1],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0 and run.stdout.endswith("\ndrawn\n"), run
+    assert run.stderr == ""
