@@ -154,3 +154,33 @@ def test_a_home_where_matplotlib_cannot_make_its_folder_adds_no_lines(tmp_path: 
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 0 and run.stdout.endswith("\ndrawn\n"), run
     assert run.stderr == ""
+
+
+def test_compare_into_its_own_folder_whose_summary_txt_is_a_pipe_does_not_wait_for_ever(tmp_path: Path) -> None:
+    """A named pipe in place of one of compare's own outputs (summary.txt) in a folder an earlier compare
+    wrote: the write opened the pipe and waited for a reader for ever (a hang, Ctrl-C only). Written
+    whole now, the pipe is replaced by the new file."""
+    import signal
+    import stat
+
+    from experiments.cli import main
+
+    out = tmp_path / "c"
+    argv = ["compare", "office:0", "--duration", "1", "--rate", "2", "--methods", "split_merge", "--out", str(out),
+            "--quiet"]
+    assert main(argv) == 0
+    (out / "summary.txt").unlink()
+    os.mkfifo(out / "summary.txt")
+
+    def hang(*_: object) -> None:
+        raise TimeoutError("compare waited on the pipe for 60 s")
+
+    previous = signal.signal(signal.SIGALRM, hang)
+    signal.alarm(60)
+    try:
+        assert main(argv) == 0
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    assert stat.S_ISREG((out / "summary.txt").stat().st_mode)
+    assert (out / "summary.txt").read_text().startswith("source")
