@@ -1023,7 +1023,9 @@ def draw(result: Sim2RealResult, path: Path, log: str) -> None:
         ax.legend(fontsize=7)
     fig.suptitle(f"{log} against simulated {result.world}")
     fig.tight_layout()
-    fig.savefig(path, format="png", dpi=110, metadata={"Software": None})  # path: a temporary name
+    from experiments.style import savefig  # a full disk its OSError, not matplotlib's cleanup error
+
+    savefig(fig, path, format="png", dpi=110, metadata={"Software": None})  # path: a temporary name
     plt.close(fig)
 
 

@@ -253,5 +253,7 @@ def draw_map(world: World, records: list[Record], path: Path) -> None:
         ax.set_aspect("equal")
     ax.set_title(f"world {world.name} (seed {world.seed})")
     ax.legend(loc="upper right")
-    fig.savefig(path, format="png", dpi=120, metadata={"Software": None})  # path: a temporary name
+    from experiments.style import savefig  # a full disk its OSError, not matplotlib's cleanup error
+
+    savefig(fig, path, format="png", dpi=120, metadata={"Software": None})  # path: a temporary name
     plt.close(fig)

@@ -602,5 +602,7 @@ def plot(path: Path, data: SlamInput, res: SlamResult) -> None:
         equal_axes(ax)
     else:
         ax.set_aspect("equal")
-    fig.savefig(path, format="png", dpi=120)  # path may be a temporary name (write_scores)
+    from experiments.style import savefig  # a full disk its OSError, not matplotlib's cleanup error
+
+    savefig(fig, path, format="png", dpi=120)  # path may be a temporary name (write_scores)
     plt.close(fig)

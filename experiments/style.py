@@ -180,6 +180,35 @@ def equal_axes(ax, xlabel: str = "x (m)", ylabel: str = "y (m)") -> None:
     ax.set_ylabel(ylabel)
 
 
+def savefig(fig, path: Path | str, **kwargs) -> None:
+    """``fig.savefig(path, **kwargs)``, a failed write raised as its own OSError: matplotlib's PDF
+    backend, cleaning up after a write that found a full disk, raised an error of its own (an
+    AttributeError "'Stream' object has no attribute 'pos'", or a zlib error) that masked the OSError
+    (ENOSPC) in its ``__context__``, and the command died with "internal error: ..." instead of the one
+    line a full disk is (``compare``, ``figures`` writing a PDF onto a full disk)."""
+    try:
+        fig.savefig(path, **kwargs)
+    except OSError:
+        raise
+    except Exception as exc:
+        failed = _oserror_in(exc)
+        if failed is None:
+            raise
+        raise failed from None
+
+
+def _oserror_in(exc: BaseException) -> OSError | None:
+    """The first OSError in ``exc``'s chain of causes and contexts, or None."""
+    seen: set[int] = set()
+    cur: BaseException | None = exc
+    while cur is not None and id(cur) not in seen:
+        if isinstance(cur, OSError):
+            return cur
+        seen.add(id(cur))
+        cur = cur.__cause__ or cur.__context__
+    return None
+
+
 def save_figure(fig, stem: Path | str, data: pd.DataFrame | dict[str, pd.DataFrame] | None = None,
                 formats: Iterable[str] = ("png", "pdf")) -> list[Path]:
     """Save ``fig`` as ``stem.png`` and ``stem.pdf`` and the data behind it beside them.
@@ -196,7 +225,7 @@ def save_figure(fig, stem: Path | str, data: pd.DataFrame | dict[str, pd.DataFra
     written = []
     for fmt in formats:
         path = stem.with_suffix(f".{fmt}")
-        write_record(path, lambda tmp, fmt=fmt: fig.savefig(tmp, format=fmt))
+        write_record(path, lambda tmp, fmt=fmt: savefig(fig, tmp, format=fmt))
         written.append(path)
     plt.close(fig)
     tables = {"": data} if isinstance(data, pd.DataFrame) else dict(data or {})

@@ -184,3 +184,74 @@ def test_compare_into_its_own_folder_whose_summary_txt_is_a_pipe_does_not_wait_f
         signal.signal(signal.SIGALRM, previous)
     assert stat.S_ISREG((out / "summary.txt").stat().st_mode)
     assert (out / "summary.txt").read_text().startswith("source")
+
+
+# A full disk while matplotlib writes a PDF (compare's realdata_* figures, `figures`): its PDF backend,
+# cleaning up after the failed write, raised an error of its own that masked the OSError (ENOSPC) in its
+# __context__: `internal error: AttributeError: 'Stream' object has no attribute 'pos'` (or a zlib
+# 'error'), exit 1, instead of the one line a full disk is (on a 72 KB tmpfs: `unshare -m sh -c 'mount -t
+# tmpfs -o size=72k tmpfs full && lmsbench compare LOG --methods split_merge --out full/c'`).
+
+def _pdf_disk_full_after(monkeypatch: pytest.MonkeyPatch, nbytes: int) -> None:
+    """The files matplotlib opens to write (its PDFs) find no room after ``nbytes`` bytes."""
+    import errno
+
+    import matplotlib.cbook as cbook
+
+    opened = cbook.to_filehandle
+
+    class Full:
+        def __init__(self, fh: object) -> None:
+            self.fh = fh
+
+        def write(self, data: bytes) -> int:
+            if self.fh.tell() + len(data) > nbytes:
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            return self.fh.write(data)
+
+        def __getattr__(self, name: str) -> object:
+            return getattr(self.fh, name)
+
+    def to_filehandle(fname: object, flag: str = "r", return_opened: bool = False, encoding: object = None) -> object:
+        fh, was_opened = opened(fname, flag, True, encoding)
+        if "w" in flag:
+            fh = Full(fh)
+        return (fh, was_opened) if return_opened else fh
+
+    monkeypatch.setattr(cbook, "to_filehandle", to_filehandle)
+
+
+@pytest.mark.parametrize("nbytes", [500, 2200])  # matplotlib's zlib error, its AttributeError
+def test_save_figure_of_a_pdf_on_a_full_disk_raises_the_full_disk(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                   nbytes: int) -> None:
+    import errno
+
+    import matplotlib.pyplot as plt
+
+    from experiments.style import save_figure
+
+    _pdf_disk_full_after(monkeypatch, nbytes)
+    fig, ax = plt.subplots()
+    ax.plot(range(100))
+    with pytest.raises(OSError) as raised:
+        save_figure(fig, tmp_path / "fig", None, formats=("pdf",))
+    assert type(raised.value) is OSError and raised.value.errno == errno.ENOSPC
+    assert list(tmp_path.iterdir()) == []  # no cut fig.pdf, no temporary file
+    plt.close("all")
+
+
+def test_compare_writing_a_pdf_on_a_full_disk_says_so_in_one_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                   capsys: pytest.CaptureFixture) -> None:
+    import tempfile
+
+    from experiments.cli import main
+    from test_log_readers import flaser, write
+
+    log = write(tmp_path, "short-corrected.log", [flaser(181, value=2.0 + t / 10, stamp=float(t)) for t in range(8)])
+    out = tmp_path / "c"
+    _pdf_disk_full_after(monkeypatch, 2200)
+    assert main(["compare", str(log), "--methods", "split_merge", "--no-progress", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"lmsbench compare: error: cannot write: no space left on device (on the disk of --out {out} "
+                   f"or of the temporary folder {tempfile.gettempdir()})\n"), err
+    assert not [p for p in out.iterdir() if p.suffix == ".pdf" or p.name.endswith(".tmp")]
