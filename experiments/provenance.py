@@ -108,19 +108,16 @@ def write_record(path: str | os.PathLike, content: str | Callable[[Path], object
     other output, so a run stopped at any moment (Ctrl-C, kill) leaves a folder the next run into
     the same --out recognises: files written before the record, or a record cut empty, were "not
     written by an earlier run" and refused that run."""
+    from lms200.logs import write_whole
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f"{_temporary_stem(path)}.{os.getpid()}.tmp")  # hidden: check_out passes it over
-    try:
-        if callable(content):
-            content(tmp)
-        else:
-            tmp.write_text(content, encoding="utf-8")
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
+    # .NAME.PID.tmp, hidden: check_out passes it over; an existing file's permission bits are kept, a
+    # symbolic link's target is replaced (write_whole)
+    if callable(content):
+        return write_whole(path, content)
+    text = content
+    return write_whole(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 
 def _temporary_stem(path: Path) -> str:

@@ -9,9 +9,10 @@ from __future__ import annotations
 import io
 import os
 import shutil
+import stat
 import tempfile
 from pathlib import Path
-from typing import Iterable, Iterator
+from typing import Callable, Iterable, Iterator
 
 from .bag import BagError, BagReader, is_bag, write_bag
 from . import carmen
@@ -177,6 +178,32 @@ def hidden_stem(path: Path, tail_bytes: int) -> str:
     except UnicodeDecodeError:  # a name that is no UTF-8 (os.fsencode's escapes): cut as bytes
         pass
     return os.fsdecode(b"." + head + b"." + digest)
+
+
+def write_whole(path: str | os.PathLike, write: Callable[[Path], object]) -> Path:
+    """Write the file ``path`` whole or not at all: ``write`` writes a hidden temporary file beside it
+    (``.NAME.PID.tmp``, the path it is given), renamed over ``path`` once whole (``os.replace``, atomic
+    on POSIX); on any error the temporary file is removed and ``path`` is as it was. As a write in
+    place did: a file that exists keeps its permission bits (a 0600 one became 0644 / 0664, the
+    umask's), and a symbolic link is followed, its target replaced (the link was replaced by a
+    regular file, its target left as it was). Returns ``path``. Every whole-file output goes
+    through here (``write_tum``, ``experiments.provenance.write_record``)."""
+    given = Path(path)
+    target = Path(os.path.realpath(given)) if os.path.islink(given) else given
+    tmp = target.with_name(f"{hidden_stem(target, len('.0123456789.tmp'))}.{os.getpid()}.tmp")
+    try:
+        write(tmp)
+        try:
+            mode = os.stat(target).st_mode
+        except FileNotFoundError:
+            mode = None
+        if mode is not None and stat.S_ISREG(mode):
+            os.chmod(tmp, mode & 0o777)
+        os.replace(tmp, target)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return given
 
 
 def folder_message(p: Path) -> str:

@@ -8,7 +8,6 @@ shortest decimal that reads back as the same float64 (as evo and any float parse
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 
 import numpy as np
@@ -73,7 +72,7 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
             a folder that does not exist, or that cannot be written, is an InputError naming it
             (they were a raw IsADirectoryError, FileNotFoundError, ...: the wrong-input hunt).
     """
-    from .logs import MAX_COORD_M, hidden_stem, path_of  # not at the top: logs imports bag, which imports this module
+    from .logs import MAX_COORD_M, path_of, write_whole  # not at the top: logs imports bag, which imports this module
 
     path = path_of(path)
     if not path.parent.is_dir():
@@ -106,16 +105,16 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
     rows = np.column_stack((stamps, poses[:, :2], np.zeros(stamps.size), yaw_to_quaternion(poses[:, 2])))
     # whole or not at all (a hidden temporary file beside it, renamed into place), as write_log: a full disk
     # left a cut trajectory (slam's trajectory.tum of 0 bytes beside its config.yaml), or an earlier one emptied
-    tmp = path.with_name(f"{hidden_stem(path, len('.0123456789.tmp'))}.{os.getpid()}.tmp")
-    try:
+    # (an existing file keeps its permission bits, a symbolic link's target is replaced: write_whole)
+    def write(tmp: Path) -> None:
         with open(tmp, "w", encoding="ascii") as f:
             f.write("# timestamp x y z qx qy qz qw\n")
             f.writelines(" ".join(map(repr, row)) + "\n" for row in rows.tolist())
-        os.replace(tmp, path)
+
+    try:
+        write_whole(path, write)
     except OSError as exc:
         raise InputError(f"path: cannot write {path}: {exc.strerror or exc}") from None
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 #: deg: a TUM pose tilted further from upright (the angle between its z axis and the plane's normal)

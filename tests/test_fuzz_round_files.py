@@ -255,3 +255,59 @@ def test_compare_writing_a_pdf_on_a_full_disk_says_so_in_one_line(tmp_path: Path
     assert err == (f"lmsbench compare: error: cannot write: no space left on device (on the disk of --out {out} "
                    f"or of the temporary folder {tempfile.gettempdir()})\n"), err
     assert not [p for p in out.iterdir() if p.suffix == ".pdf" or p.name.endswith(".tmp")]
+
+
+# Whole-file writes (a temporary file renamed into place) changed two things a write in place kept: an
+# existing file's permission bits (a 0600 trajectory.tum or fig.pdf became 0664 / 0644, the umask's),
+# and a symbolic link (fig.pdf -> paper/fig.pdf: the link was replaced by a regular file, paper/fig.pdf
+# left as it was). Both held for every whole-file output, through lms200.logs.write_whole.
+
+def _figure() -> object:
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots()
+    ax.plot([1.0, 2.0])
+    return fig
+
+
+def test_write_tum_keeps_an_existing_files_mode_and_writes_through_a_symbolic_link(tmp_path: Path) -> None:
+    import stat
+
+    from lms200 import read_tum, write_tum
+
+    own = tmp_path / "own.tum"
+    own.write_text("old\n")
+    own.chmod(0o600)
+    write_tum(own, np.arange(3.0), np.zeros((3, 3)))
+    assert stat.S_IMODE(own.stat().st_mode) == 0o600 and len(read_tum(own)[0]) == 3
+    (tmp_path / "real").mkdir()
+    target = tmp_path / "real" / "t.tum"
+    target.write_text("old\n")
+    link = tmp_path / "link.tum"
+    link.symlink_to(target)
+    write_tum(link, np.arange(4.0), np.zeros((4, 3)))
+    assert link.is_symlink() and os.readlink(link) == str(target)
+    assert len(read_tum(target)[0]) == 4
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.tum", "own.tum", "real"]
+    assert [p.name for p in (tmp_path / "real").iterdir()] == ["t.tum"]  # no temporary file left
+
+
+def test_save_figure_keeps_an_existing_files_mode_and_writes_through_a_symbolic_link(tmp_path: Path) -> None:
+    import stat
+
+    import pandas as pd
+
+    from experiments.style import save_figure
+
+    (tmp_path / "fig.pdf").write_text("old")
+    (tmp_path / "fig.pdf").chmod(0o600)
+    save_figure(_figure(), tmp_path / "fig", None, formats=("pdf",))
+    assert stat.S_IMODE((tmp_path / "fig.pdf").stat().st_mode) == 0o600
+    assert (tmp_path / "fig.pdf").read_bytes().startswith(b"%PDF")
+    (tmp_path / "paper").mkdir()
+    target = tmp_path / "paper" / "linked.pdf"
+    target.write_text("old")
+    (tmp_path / "linked.pdf").symlink_to(target)
+    save_figure(_figure(), tmp_path / "linked", pd.DataFrame({"x": [1]}), formats=("pdf",))
+    assert (tmp_path / "linked.pdf").is_symlink() and target.read_bytes().startswith(b"%PDF")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fig.pdf", "linked.csv", "linked.pdf", "paper"]
