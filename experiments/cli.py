@@ -288,20 +288,30 @@ def _standard_streams() -> None:
 
 
 class _NoConfigFolderWarning(logging.Filter):
-    """Drops matplotlib's two warnings where its config folder cannot be made (HOME read-only, missing or
-    a file: a container run as a user without a home has HOME=/, a cluster's compute nodes a read-only
-    one): "mkdir -p failed for path ..." and "Matplotlib created a temporary cache directory at ...",
-    three lines on stderr of every command that draws (simulate, slam, compare, ...), above their own.
-    matplotlib then uses a temporary folder, removed at exit: nothing for the user to do."""
+    """Drops matplotlib's warnings where the config folder it chose itself (MPLCONFIGDIR unset) cannot be
+    made (HOME read-only, missing or a file: a container run as a user without a home has
+    HOME=/, a cluster's compute nodes a read-only one): "mkdir -p failed for path ..." and "Matplotlib created a
+    temporary cache directory at ... because there was an issue with the default path (...)", lines on
+    stderr of every command that draws (simulate, slam, compare, ...), above their own. matplotlib then
+    uses a temporary folder, removed at exit: nothing for the user to do. A folder the user named
+    (MPLCONFIGDIR) that cannot be used is still said: that is theirs to mend."""
 
     def filter(self, record: logging.LogRecord) -> bool:
-        text = str(record.msg)
-        return not (text.startswith("mkdir -p failed for path") or "created a temporary cache directory" in text)
+        text = record.getMessage()
+        if "created a temporary cache directory" in text:  # said after matplotlib set MPLCONFIGDIR to it
+            return not ("an issue with the default path" in text or "an issue with resolving the home" in text)
+        if text.startswith("mkdir -p failed for path"):
+            return bool(os.environ.get("MPLCONFIGDIR"))  # said before matplotlib sets it: the user's, or unset
+        return True
+
+
+#: one filter for every main() (tests call it many times): added again, the same one is not doubled
+_NO_CONFIG_FOLDER_WARNING = _NoConfigFolderWarning()
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     _standard_streams()
-    logging.getLogger("matplotlib").addFilter(_NoConfigFolderWarning())  # before matplotlib is imported
+    logging.getLogger("matplotlib").addFilter(_NO_CONFIG_FOLDER_WARNING)  # before matplotlib is imported
     try:
         return _flushed(_main(argv))
     except KeyboardInterrupt:  # before the command's handler is in place: its options being read

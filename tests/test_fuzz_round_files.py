@@ -311,3 +311,38 @@ def test_save_figure_keeps_an_existing_files_mode_and_writes_through_a_symbolic_
     save_figure(_figure(), tmp_path / "linked", pd.DataFrame({"x": [1]}), formats=("pdf",))
     assert (tmp_path / "linked.pdf").is_symlink() and target.read_bytes().startswith(b"%PDF")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fig.pdf", "linked.csv", "linked.pdf", "paper"]
+
+
+def _draw_with_home(tmp_path: Path, env_set: dict[str, str], before: str = "") -> str:
+    """stderr of main(['--version']), then a drawing, in a process of its own with ``env_set``."""
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k not in ("MPLCONFIGDIR", "XDG_CONFIG_HOME", "XDG_CACHE_HOME")}
+    env.update(env_set)
+    code = (f"import sys\n{before}from experiments.cli import main\nstatus = main(['--version'])\n"
+            "import matplotlib.pyplot as plt\nplt.figure().savefig(sys.argv[1])\nprint('drawn')\nsys.exit(status)\n")
+    run = subprocess.run([sys.executable, "-c", code, str(tmp_path / "f.png")], env=env,
+                         cwd=Path(__file__).resolve().parents[1], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0 and run.stdout.endswith("\ndrawn\n"), run
+    return run.stderr
+
+
+def test_an_mplconfigdir_the_user_set_that_cannot_be_made_is_still_said(tmp_path: Path) -> None:
+    """`HOME=/dev/null MPLCONFIGDIR=/dev/null/mine lmsbench compare ...`: matplotlib's warnings about a
+    folder the user named were dropped with those about its own default (they are the user's to mend)."""
+    err = _draw_with_home(tmp_path, {"HOME": "/dev/null", "MPLCONFIGDIR": "/dev/null/mine"})
+    assert err.startswith("mkdir -p failed for path /dev/null/mine: [Errno 20] Not a directory: '/dev/null/mine'\n"), err
+    assert "Matplotlib created a temporary cache directory at " in err
+    assert "because there was an issue with MPLCONFIGDIR (/dev/null/mine)" in err
+
+
+def test_main_adds_its_matplotlib_warning_filter_once() -> None:
+    import logging
+
+    from experiments.cli import _NoConfigFolderWarning, main
+
+    main(["--version"])
+    main(["--version"])
+    assert sum(isinstance(f, _NoConfigFolderWarning) for f in logging.getLogger("matplotlib").filters) == 1
+
