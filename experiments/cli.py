@@ -289,8 +289,9 @@ def _standard_streams() -> None:
 
 class _NoConfigFolderWarning(logging.Filter):
     """Drops matplotlib's warnings where the config folder it chose itself (MPLCONFIGDIR unset) cannot be
-    made (HOME read-only, missing or a file: a container run as a user without a home has
-    HOME=/, a cluster's compute nodes a read-only one): "mkdir -p failed for path ..." and "Matplotlib created a
+    made or written (HOME read-only, missing or a file: a container run as a user without a home has
+    HOME=/, a cluster's compute nodes a read-only one): "mkdir -p failed for path ...", "... is not a
+    writable directory" (a read-only home that has ~/.config/matplotlib) and "Matplotlib created a
     temporary cache directory at ... because there was an issue with the default path (...)", lines on
     stderr of every command that draws (simulate, slam, compare, ...), above their own. matplotlib then
     uses a temporary folder, removed at exit: nothing for the user to do. A folder the user named
@@ -300,7 +301,7 @@ class _NoConfigFolderWarning(logging.Filter):
         text = record.getMessage()
         if "created a temporary cache directory" in text:  # said after matplotlib set MPLCONFIGDIR to it
             return not ("an issue with the default path" in text or "an issue with resolving the home" in text)
-        if text.startswith("mkdir -p failed for path"):
+        if text.startswith("mkdir -p failed for path") or text.endswith(" is not a writable directory"):
             return bool(os.environ.get("MPLCONFIGDIR"))  # said before matplotlib sets it: the user's, or unset
         return True
 

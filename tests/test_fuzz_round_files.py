@@ -346,3 +346,13 @@ def test_main_adds_its_matplotlib_warning_filter_once() -> None:
     main(["--version"])
     assert sum(isinstance(f, _NoConfigFolderWarning) for f in logging.getLogger("matplotlib").filters) == 1
 
+
+def test_a_read_only_home_that_has_its_matplotlib_folder_adds_no_lines(tmp_path: Path) -> None:
+    """A read-only home that already holds ~/.config/matplotlib: matplotlib's third warning, "... is not a
+    writable directory", was said alone (its other two were dropped). (Run as root, a read-only folder is
+    writable: os.access says it is not, as it does for a user on a read-only home.)"""
+    (tmp_path / "home" / ".config" / "matplotlib").mkdir(parents=True)
+    folder = str((tmp_path / "home" / ".config" / "matplotlib").resolve())
+    before = ("import os\n_access = os.access\n"
+              f"os.access = lambda p, m, **k: False if str(p) == {folder!r} and m == os.W_OK else _access(p, m, **k)\n")
+    assert _draw_with_home(tmp_path, {"HOME": str(tmp_path / "home")}, before) == ""
