@@ -1019,27 +1019,45 @@ def _ranges(values: np.ndarray, units: Units | None, what: str,
             declared_max: float | None = None) -> tuple[np.ndarray, Units]:
     """Logged ranges (m) in REP-117 form: SICK codes decoded; ``nan`` / ``inf`` written as text
     (logs converted from ROS) keep their REP-117 meaning, ``-inf`` too (an object too close to
-    measure); a finite negative range is malformed. A reading equal to the maximum range the log
+    measure); a finite negative range is malformed. A reading at the maximum range the log
     declares for the line (``declared_max``: ROBOTLASER / RAWLASER's max_range field, FLASER's
-    ``PARAM robot_front_laser_max``) is the logger's max-range reading: +inf (no return), as the
+    ``PARAM robot_front_laser_max``; equal to it, or the grid word of the line's unit it rounds to,
+    :func:`at_max_range`) is the logger's max-range reading: +inf (no return), as the
     LMS200's code 8183, its own maximum range, is."""
     negative = finite_negative(values)
     if np.any(negative):
         raise ValueError(f"{what}: negative range {values[negative][0]:g} in the log")
     u = units or infer_units(values)
-    return at_max_range(decode_logged_ranges(values, u), declared_max), u
+    return at_max_range(decode_logged_ranges(values, u), declared_max, u), u
 
 
-def at_max_range(ranges: np.ndarray, declared_max: float | None) -> np.ndarray:
-    """``ranges`` with each reading equal to ``declared_max`` (a CARMEN line's declared maximum range,
+def at_max_range(ranges: np.ndarray, declared_max: float | None, units: Units | None = None) -> np.ndarray:
+    """``ranges`` with each reading CARMEN writes for ``declared_max`` (a CARMEN line's declared maximum range,
     or None) made +inf, in place: CARMEN loggers write a beam with no return as the sensor's maximum
     range (a Hokuyo's 30 m), and CARMEN's tools count a reading at the maximum range as no hit; read
     as a valid reading, a 270 deg scan's open sectors became arcs of points at 30 m, which the
     extractors fitted lines to (17.0 lines a scan against 13.0 where the same beams were written
-    above the maximum)."""
-    if declared_max is not None:
-        ranges[ranges == declared_max] = np.inf
+    above the maximum). The readings so taken are ``declared_max`` itself and, on the grid of the
+    line's ``units`` (cm: 0.01 m, mm: 0.001 m), the grid values within half a unit of it: a maximum
+    off the grid is written rounded (4.095 m with %.2f as "4.09" or "4.10"), and "4.09" was read as a
+    valid reading 5 mm short of the maximum. A maximum on the grid has itself alone; a reading off the
+    grid (written with more digits) is no such word, so a valid reading just below the maximum is kept."""
+    if declared_max is None:
+        return ranges
+    at = ranges == declared_max
+    if units is not None:
+        scale = metres_per_unit(units)
+        for code in {math.floor(declared_max / scale), math.ceil(declared_max / scale)}:
+            word = code * scale
+            if abs(word - declared_max) <= scale / 2 * (1 + 1e-9):  # the maximum rounded to the grid, either way at a tie
+                at |= np.abs(ranges - word) <= GRID_WORD_TOLERANCE * max(1.0, abs(word))
+    ranges[at] = np.inf
     return ranges
+
+
+#: relative: a reading this close to a grid value (code x unit) is that value as written (4.09 read as
+#: 4.09, computed as 409 x 0.01 = 4.0900000000000003)
+GRID_WORD_TOLERANCE = 1e-12
 
 
 def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry,
@@ -1161,7 +1179,7 @@ def _format_ranges(scan: Scan, units: Units) -> str:
 def _read_back(words: list[str], units: Units, declared_max: float) -> np.ndarray:
     """The ranges (m, REP-117) a reader takes ``words`` (range words of ``units``, on a line that
     declares ``declared_max`` as its maximum range, as the writer's lines do) for."""
-    return at_max_range(decode_logged_ranges(np.array(words, dtype=np.float64), units), declared_max)
+    return at_max_range(decode_logged_ranges(np.array(words, dtype=np.float64), units), declared_max, units)
 
 
 #: units: the SICK special codes (CODE_ABOVE_MAXIMUM .. CODE_NOT_VALID) as a middle and half width
@@ -1186,14 +1204,17 @@ def _kept_word(scan: Scan, i: int, units: Units) -> str:
     """Beam ``i``'s range written with the digits it needs to keep its meaning: the shortest
     decimal that reads back as the same float64, or, for a valid reading whose exact value is a
     special code (8.183 m in mm mode at range_max 8.183 m, 81.86 m in cm mode at range_max 100 m),
-    the one half a unit below or above it."""
+    the one half a unit below or above it, or a quarter unit below or above it (off the grid)."""
     scale = metres_per_unit(units)
     decimals = 3 if units == "mm" else 2
     r = float(scan.ranges[i])
     words = [_num(r) if math.isfinite(r) else f"{r}"]
     if math.isfinite(r):
         code = round(r / scale)
-        words += [f"{(code - 0.5) * scale:.{decimals + 1}f}", f"{(code + 0.5) * scale:.{decimals + 1}f}"]
+        words += [f"{(code - 0.5) * scale:.{decimals + 1}f}", f"{(code + 0.5) * scale:.{decimals + 1}f}",
+                  # off the grid, a quarter unit away: a valid reading at a range_max off the grid (30.005 m in cm
+                  # mode), whose grid words and own value all read as no return (:func:`at_max_range`)
+                  f"{r - scale / 4:.{decimals + 2}f}", f"{r + scale / 4:.{decimals + 2}f}"]
     for word in words:
         back = _read_back([word], units, scan.range_max)
         if not _meaning_changed(scan, back, scale, i)[0]:

@@ -184,3 +184,28 @@ def test_the_lines_held_until_the_tail_is_told_are_bounded(tmp_path: Path, monke
     monkeypatch.setattr(carmen._Tails, "HELD_EVENTS", 10)
     reader = read_log(path, skip_bad_lines=True)  # 10 held: the first line's tail, told alone
     assert [r.scan.stamp for r in reader] == [9.0] and [n for n, _ in reader.stats.skipped] == [22, 23]
+
+
+def test_a_reading_at_a_declared_maximum_off_the_unit_grid_is_no_return(tmp_path: Path) -> None:
+    """A maximum range off the grid of the line's unit (4.095 m in a cm log) is written by CARMEN rounded, with
+    %.2f as "4.09" (or "4.10" at the tie): "4.09" was read as a valid reading 5 mm short of the maximum, where
+    the logger meant no return. The grid words within half a unit of the maximum (both, at a tie) and the
+    maximum itself are no return; a reading a unit below is valid; the writer keeps a valid reading at such a
+    maximum valid (it writes it off the grid)."""
+    from lms200 import Record, Scan, write_log
+
+    path = _log(tmp_path, ["PARAM robot_front_laser_max 4.095 nohost 0",
+                           f"FLASER 5 1.00 4.09 4.10 4.08 4.095 {POSES} 10.0 b21 10.0"])
+    scan = list(read_log(path))[0].scan
+    assert scan.range_max == 4.095 and scan.ranges.tolist() == [1.0, np.inf, np.inf, 4.08, np.inf]
+    assert scan.valid.tolist() == [True, False, False, True, False]
+    head = "0 -0.034906 0.069812 0.017453 4.093000 0.010000 0 5"  # 4.093 m: rounds to 4.09 only
+    path = _log(tmp_path, [f"ROBOTLASER1 {head} 1.00 4.09 4.10 4.08 4.093 0 0 0 0 1 2 0.5 0 0 0 0 0 10.0 b21 10.0"])
+    scan = list(read_log(path))[0].scan
+    assert scan.ranges.tolist() == [1.0, np.inf, 4.1, 4.08, np.inf] and scan.valid.tolist() == [True, False, False, True, False]
+    written = Scan(np.array([1.0, 30.0, 30.005, np.inf, 29.99]), -0.1, 0.05, 0.0, 30.005, stamp=3.0)  # cm: 30.005 off the grid
+    out = tmp_path / "w.log"
+    write_log(out, [Record(written)], fmt="robotlaser1")
+    back = list(read_log(out))[0].scan
+    assert back.valid.tolist() == [True, True, True, False, True]
+    assert back.ranges[1] == pytest.approx(30.0, abs=0.005) and back.ranges[2] == pytest.approx(30.005, abs=0.005)
