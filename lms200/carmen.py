@@ -290,6 +290,7 @@ class CarmenReader:
         self.topic = topic
         self.geometry = geometry or LaserGeometry()
         self.stats = ReadStats()
+        self._held: list[_Held] = []  # the pass's lines held until their tail is told (:meth:`_read`)
 
     def _laser_counts(self) -> dict[str, int]:
         """Laser message kind -> lines of it in the log, in the order met (one pass, a line's first
@@ -343,7 +344,7 @@ class CarmenReader:
                     if not self.skip_bad_lines:
                         raise LogFormatError(self.path, line_no + 1, reason) from None
                     self.stats.stopped = f"line {line_no + 1}: {reason}"
-                    self.stats.skip(line_no + 1, reason)
+                    self._skip(line_no + 1, reason)
                     return
                 if not line:
                     return
@@ -355,7 +356,16 @@ class CarmenReader:
     def _bad(self, line_no: int, kind: str, exc: Exception) -> None:
         if not self.skip_bad_lines:
             raise LogFormatError(self.path, line_no, f"malformed {kind} line: {exc}") from None
-        self.stats.skip(line_no, f"{kind}: {exc}")
+        self._skip(line_no, f"{kind}: {exc}")
+
+    def _skip(self, line_no: int, reason: str) -> None:
+        """Record a skipped line; while laser lines are held until their tail is told (:class:`_Tails`), held
+        beside them and recorded when they are released, so that ``stats.skipped`` is in log order (a line
+        skipped among held lines was listed before a held line later found malformed: [3, 1])."""
+        if self._held:
+            self._held.append(_HeldSkip(line_no, reason))
+        else:
+            self.stats.skip(line_no, reason)
 
     def _check_override(self, kind: str) -> None:
         """A beam-geometry override for a log whose laser lines carry their own geometry is an
@@ -449,9 +459,12 @@ class CarmenReader:
         pairing = OdomPairing() if stats.laser in RAW_LASER_KINDS else None
         # a Radish corrected log: the laser lines' poses are a SLAM solution, the ODOM lines the raw odometry
         chain = CorrectedChain() if pairing is None else None
-        # laser lines held until their tail is told (_Tails), as (record, words, line, kind), with the ODOM
-        # lines' (stamp, pose) read among them, given to pairing / chain in log order when they are released
-        undecided: list[tuple[Record, list[str], int, str] | tuple[float, Pose2D]] = []
+        # laser lines held until their tail is told (_Tails), with the ODOM lines' (stamp, pose) and the lines
+        # skipped among them, given to pairing / chain and recorded in log order when they are released; a held
+        # line is taken (its truth given, the last stamp and its geometry's count set) only then: one later found
+        # malformed leaves no trace (its stamp, read shifted, dropped the truth of the next scan)
+        undecided: list[_Held] = []
+        self._held = undecided
 
         def emit(rec: Record) -> Iterator[Record]:
             if pairing is not None:
@@ -470,24 +483,60 @@ class CarmenReader:
                 yield from chain.odom(pose, stamp)
 
         def held_tails() -> list[tuple[int, int]]:
-            return [(_Tails.measure(e[1])[0], e[2]) for e in undecided if len(e) == 4]
+            return [(_Tails.measure(e.words)[0], e.line_no) for e in undecided if isinstance(e, _HeldLaser)]
+
+        def take(line: _HeldLaser) -> Record:
+            """The record of a laser line whose tail is the rule's: its geometry's beam count checked (and set,
+            for the first line of a geometry), its truth given, the last stamp set (ValueError: malformed)."""
+            nonlocal last_stamp
+            scan, header = line.scan, line.header
+            if header is not None:
+                first = counts.get(header)
+                if first is None and len(counts) < MAX_GEOMETRIES and max(map(len, header)) <= MAX_CACHED_WORD_CHARS:
+                    first = counts[header] = (len(scan), line.line_no)
+                if first is not None:
+                    _require(first[0] == len(scan),
+                             f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
+                             f"field of view and resolution carries {first[0]}")
+            pose = line.truth
+            given = (pose[0] if pose is not None and abs(pose[1] - scan.stamp) <= TRUTH_MAX_GAP_S
+                     and (pose[1] > last_stamp or pose[1] == scan.stamp) else None)
+            last_stamp = scan.stamp
+            return Record(scan=scan, odom=line.odom, truth=given)
 
         def release(strict: bool = True) -> Iterator[Record]:
-            """The held lines and ODOM poses, in log order, once the rule is taken: each line of its tail
-            given, each of another malformed (``strict``; else, a pass ended by an error, left out)."""
-            tails.decide(held_tails(), final=True)
+            """The held lines, ODOM poses and skipped lines, in log order, once the rule is taken: each line of
+            its tail taken, each of another malformed. ``strict=False``: a pass ended by an error, where the rule
+            is taken as the pass would have taken it from the lines held (two of them share a tail, or HELD
+            lines), or where they all end alike, or one ends as CARMEN writes (the tail the rule prefers where
+            lines differ); lines of other differing tails tell no rule and are left out (the first's was taken:
+            a damaged first line given, a good one after it dropped)."""
+            if strict:
+                tails.decide(held_tails(), final=True)
+            elif not tails.decide(held_tails()):
+                told = {t for t, _ in held_tails()}
+                if len(told) == 1 or 2 in told:
+                    tails.decide(held_tails(), final=True)
             held = undecided[:]
             undecided.clear()
             for event in held:
-                if len(event) == 2:
+                if isinstance(event, _HeldSkip):
+                    self.stats.skip(event.line_no, event.reason)
+                    continue
+                if not isinstance(event, _HeldLaser):
                     yield from odometry(*event)
                     continue
-                rec, line_words, held_no, held_kind = event
-                wrong = tails.problem(line_words)
+                wrong: str | None = tails.problem(event.words) if tails.rule is not None else "no rule"
+                rec = None
                 if wrong is None:
+                    try:
+                        rec = take(event)
+                    except ValueError as exc:
+                        wrong = str(exc)
+                if rec is not None:
                     yield from emit(rec)
-                elif strict:
-                    self._bad(held_no, held_kind, ValueError(wrong))
+                elif strict or (self.skip_bad_lines and tails.rule is not None):
+                    self._bad(event.line_no, event.kind, ValueError(wrong))
 
         flushes += [lambda: release(strict=False)]
         flushes += [holder.flush for holder in (pairing, chain) if holder is not None]
@@ -540,9 +589,6 @@ class CarmenReader:
                     _finite_pose(values[0:3], "ODOM")  # nan or 1e308 m was chained into every scan's odometry
                     values[6] = _stamps(words, values[6], _logger_at(words, 8))
                     yield from odometry(values[6], (values[0], values[1], values[2]))
-                    # held beside the laser lines until their tail is told, and no more than HELD_EVENTS of them
-                    # (a first laser line and 500,000 ODOM lines held 130 MB more: the tail is then the first's)
-                    releasing = len(undecided) > _Tails.HELD_EVENTS
                 elif kind in LASER_KINDS:
                     if stats.laser is None:
                         stats.laser = kind
@@ -562,27 +608,20 @@ class CarmenReader:
                         scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
                                                        params.get(RANGE_MIN_PARAM, 0.0), range_words,
                                                        exact_angles=bool(params.get(EXACT_ANGLES_PARAM)))
-                        header = (words[2], words[3], words[4])  # start, fov, resolution as written
-                        first = counts.get(header)
-                        if first is None and len(counts) < MAX_GEOMETRIES and max(map(len, header)) <= MAX_CACHED_WORD_CHARS:
-                            first = counts[header] = (len(scan), line_no)
-                        if first is not None:
-                            _require(first[0] == len(scan),
-                                     f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
-                                     f"field of view and resolution carries {first[0]}")
                     wrong_tail = tails.problem(words)
                     _require(wrong_tail is None, wrong_tail or "")
-                    given = (held[0] if held is not None and abs(held[1] - scan.stamp) <= TRUTH_MAX_GAP_S
-                             and (held[1] > last_stamp or held[1] == scan.stamp) else None)
-                    last_stamp = scan.stamp
-                    rec = Record(scan=scan, odom=odom if has_odometry else None, truth=given)
+                    line_held = _HeldLaser(scan, odom if has_odometry else None, held, words, line_no, kind,
+                                           None if kind in ("FLASER", "RLASER") else (words[2], words[3], words[4]))
                     if tails.rule is not None:
-                        yield from emit(rec)
+                        yield from emit(take(line_held))
                     else:  # held until the pass's tail is told (_Tails)
-                        undecided.append((rec, words, line_no, kind))
+                        undecided.append(line_held)
                         releasing = tails.decide(held_tails())
             except (ValueError, OverflowError, ArithmeticError) as exc:
                 self._bad(line_no, kind, exc)
+            # held beside the laser lines until their tail is told, and no more than HELD_EVENTS of them (a first
+            # laser line and 500,000 ODOM lines held 130 MB more): beyond, the rule is taken from the laser lines held
+            releasing = releasing or len(undecided) > _Tails.HELD_EVENTS
             if releasing:  # outside the line's try: a held line's error is its own, not this line's
                 releasing = False
                 yield from release()
@@ -598,6 +637,32 @@ class CarmenReader:
             # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
             others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())
             raise InputError(f"topic: {self.path} has no {self.topic} lines; its laser lines: {others}")
+
+
+@dataclass
+class _HeldLaser:
+    """A laser line held until the pass's tail is told (:class:`_Tails`), parsed but not yet taken: its scan,
+    odometry (None where the log has none), the TRUEPOS (pose, stamp) it may take as its truth, its words,
+    line number and kind, and its declared geometry (start, fov, resolution as written; None for FLASER)."""
+
+    scan: Scan
+    odom: Pose2D | None
+    truth: tuple[Pose2D, float] | None
+    words: list[str]
+    line_no: int
+    kind: str
+    header: tuple[str, str, str] | None
+
+
+@dataclass
+class _HeldSkip:
+    """A line skipped (``skip_bad_lines``) while laser lines were held: recorded when they are released."""
+
+    line_no: int
+    reason: str
+
+
+_Held = _HeldLaser | _HeldSkip | tuple[float, Pose2D]  # a held laser line, skipped line, or ODOM (stamp, pose)
 
 
 #: most words of an ODOM or TRUEPOS line: its name, 6 numbers, ipc_timestamp, hostname, logger_timestamp.

@@ -209,3 +209,63 @@ def test_a_reading_at_a_declared_maximum_off_the_unit_grid_is_no_return(tmp_path
     back = list(read_log(out))[0].scan
     assert back.valid.tolist() == [True, True, True, False, True]
     assert back.ranges[1] == pytest.approx(30.0, abs=0.005) and back.ranges[2] == pytest.approx(30.005, abs=0.005)
+
+
+def test_a_pass_ended_by_an_error_takes_the_tail_the_held_lines_tell(tmp_path: Path) -> None:
+    """A pass ended by an error while laser lines were held took the first line's tail: in a log of lines
+    ending "ipc_timestamp logger_timestamp", a first line that lost a range (0 words after its ipc_timestamp)
+    was given with its fields shifted ([1, 2, 0.5] at 9.01) and the good line after it dropped. Two lines of
+    differing tails tell no rule (neither is CARMEN's): both are left out; lines that all end alike, or one
+    ending as CARMEN writes, are taken as the pass would have taken them."""
+    bad = f"FLASER 3 1.00 2.00 {POSES} 9.0 9.01"
+    path = _log(tmp_path, [bad, f"FLASER 3 {RANGES} {POSES} 10.0 10.01", "ODOM x"])
+    reader = read_log(path)
+    got = []
+    with pytest.raises(LogFormatError, match=r"log\.clf:3: malformed ODOM line: ODOM needs x y theta tv rv accel"):
+        got.extend(r.scan.stamp for r in reader)
+    assert got == []
+    path = _log(tmp_path, [f"FLASER 3 {RANGES} {POSES} 9.0 9.01", f"FLASER 3 {RANGES} {POSES} 10.0 10.01", "ODOM x"])
+    got = []
+    with pytest.raises(LogFormatError, match=r"log\.clf:3: "):
+        got.extend(r.scan.stamp for r in read_log(path))
+    assert got == [9.0, 10.0]
+    path = _log(tmp_path, [bad, f"FLASER 3 {RANGES} {POSES} 10.0 b21 10.01", "ODOM x"])  # the second CARMEN's
+    got = []
+    with pytest.raises(LogFormatError, match=r"log\.clf:3: "):
+        got.extend(r.scan.stamp for r in read_log(path))
+    assert got == [10.0]
+
+
+def test_lines_skipped_among_held_lines_are_reported_in_log_order(tmp_path: Path) -> None:
+    """A line skipped while laser lines were held was recorded at once, a held line found malformed later
+    when the lines were released: skipped [3, 1]. Both are recorded in log order."""
+    path = _log(tmp_path, [f"FLASER 3 1.00 2.00 {POSES} 9.0 9.01", f"FLASER 3 {RANGES} {POSES} 10.0 10.01", "ODOM x",
+                           f"FLASER 3 {RANGES} {POSES} 11.0 11.01", "ODOM y"])
+    reader = read_log(path, skip_bad_lines=True)
+    assert [r.scan.stamp for r in reader] == [10.0, 11.0]
+    assert [n for n, _ in reader.stats.skipped] == [1, 3, 5] and reader.stats.skipped_count == 3
+    assert reader.stats.skipped[0][1].startswith("FLASER: FLASER with 3 beams needs 13 fields, got 12")
+
+
+def test_a_held_line_found_malformed_leaves_no_trace(tmp_path: Path) -> None:
+    """A held line later found malformed still set the last scan's stamp: a first line that lost a range and
+    its hostname reads its logger_timestamp (9.7) as its stamp, and the TRUEPOS at 9.6 before the next scan
+    (10.0) was taken as stale, that scan's truth lost. The log reads as it does without the damaged line. A
+    ROBOTLASER1 line found malformed by its tail no longer sets its geometry's beam count either (the next
+    line of that geometry, one beam more, was refused as "line 3 ... carries 4")."""
+    lines = [f"FLASER 3 1.00 2.00 {POSES} 9.0 9.7", "TRUEPOS 7 8 0.25 1.5 -2.0 0.3 9.6 b21 9.6",
+             f"FLASER 3 {RANGES} {POSES} 10.0 b21 10.0", f"FLASER 3 {RANGES} {POSES} 11.0 b21 11.0"]
+    reader = read_log(_log(tmp_path, lines), skip_bad_lines=True)
+    recs = [(r.scan.stamp, r.truth) for r in reader]
+    assert recs == [(10.0, (7.0, 8.0, 0.25)), (11.0, None)] and [n for n, _ in reader.stats.skipped] == [1]
+    assert recs == [(r.scan.stamp, r.truth) for r in read_log(_log(tmp_path, lines[1:]))]
+
+    def robot(t: float, start: str, n: int, end: str) -> str:  # fov 4 steps: 4 or 5 beams
+        return (f"ROBOTLASER1 0 {start} 0.069812 0.017453 30.0 0.001 0 {n} {' '.join(['2.0'] * n)} 0 "
+                f"0 0 0 1 2 0.5 0 0 0 0 0 {t} {end}")
+
+    lines = [robot(1.0, "-0.034906", 5, "b21 1.0"), robot(2.0, "-0.034906", 5, "b21 2.0"),
+             robot(3.0, "-0.052360", 4, "3.0"), robot(4.0, "-0.052360", 5, "b21 4.0")]
+    reader = read_log(_log(tmp_path, lines), skip_bad_lines=True)
+    assert [(r.scan.stamp, len(r.scan)) for r in reader] == [(1.0, 5), (2.0, 5), (4.0, 5)]
+    assert [n for n, _ in reader.stats.skipped] == [3]
