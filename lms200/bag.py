@@ -936,13 +936,82 @@ class _CountedRecords:
 #: message definition or one topic's name, type and QoS, which the file's schemas and channels together
 #: may hold at most that many characters of anyway (:class:`_CountedRecords`, counted once read)
 _MCAP_BOUNDED_RECORDS = {0x03: "schema", 0x04: "channel"}
+#: the names of the other mcap records (by opcode), bounded by MAX_MCAP_RECORD_BYTES
+_MCAP_RECORDS = {0x01: "header", 0x02: "footer", 0x05: "message", 0x06: "chunk", 0x07: "message index",
+                 0x08: "chunk index", 0x09: "attachment", 0x0A: "attachment index", 0x0B: "statistics",
+                 0x0C: "metadata", 0x0D: "metadata index", 0x0E: "summary offset", 0x0F: "data end"}
+#: bytes: the most any other mcap record (header, message, chunk, summary records) may declare, read whole by
+#: rosbags: a chunk of MAX_DECOMPRESSED_BYTES stored uncompressed and its fields. Such records were bounded only
+#: by the file's size (a 300 MB chunk record held `lmsbench info` at 648 MB; a chunk record or a header declaring
+#: 1 TiB in a 5 KB file was `cannot open as a ROS bag: MemoryError:`)
+MAX_MCAP_RECORD_BYTES = MAX_DECOMPRESSED_BYTES + 2**16
+
+
+def _mcap_storage_name() -> str:
+    """" NAME": the mcap storage file being opened (:data:`_BUDGET`), or "" where none is known."""
+    budget = _BUDGET.get()
+    name = budget.storage if budget is not None else ""
+    return name and " " + name
+
+
+def _mcap_too_large(what: str, size: int, bound: int, bound_name: str, may: str = "a ROS 2 bag's mcap record may hold",
+                    declares: str = "") -> BagTooLargeError:
+    return _unnamed(BagTooLargeError(
+        f"its storage file{_mcap_storage_name()}'s {what} declares {size:,} bytes{declares}, more than the {bound:,} "
+        f"{may} (lms200.bag.{bound_name}): damage, or no bag of laser scans; not read"))
+
+
+def _bounded_read_exact(bio: Any, size: int, _real: Callable[[Any, int], bytes]) -> bytes:  # noqa: ANN401
+    """rosbags' mcap ``read_exact``, refusing a read of more than MAX_MCAP_RECORD_BYTES (a message's data, a
+    chunk's compressed data, told by a declared length) before it is made: Python allocates the whole
+    length a read asks for, whatever the file holds."""
+    if size > MAX_MCAP_RECORD_BYTES:
+        start = bio.tell()
+        raise _mcap_too_large(f"record data at byte {start:,}", size, MAX_MCAP_RECORD_BYTES, "MAX_MCAP_RECORD_BYTES")
+    return _real(bio, size)
+
+
+def _bounded_decompress(data: bytes, compression: str, size: int, crc: int,
+                        _real: Callable[[bytes, str, int, int], bytes]) -> bytes:
+    """rosbags' mcap chunk ``decompress``, refusing a chunk that declares more than MAX_DECOMPRESSED_BYTES
+    uncompressed before decompressing it, and decompressing at most one byte more than it declares: rosbags
+    decompressed the whole chunk first (37 KB of zstd declaring 1 GiB, or 1 KiB, held `lmsbench info` at 2.1 GB;
+    declared as 1 KiB it then said "Chunk size mismatch")."""
+    if size > MAX_DECOMPRESSED_BYTES:
+        raise _mcap_too_large("chunk", size, MAX_DECOMPRESSED_BYTES, "MAX_DECOMPRESSED_BYTES",
+                              "a chunk may decompress to", f" uncompressed ({compression or 'not compressed'})")
+    if compression == "zstd":
+        from rosbags.rosbag2 import storage_mcap
+
+        make: Callable[[], Any] = storage_mcap.zstd.ZstdDecompressor
+    elif compression == "lz4":
+        from lz4.frame import LZ4FrameDecompressor
+
+        make = LZ4FrameDecompressor
+    else:
+        return _real(data, compression, size, crc)  # none, or one rosbags refuses
+    pieces, got, rest = [], 0, data
+    while rest and got <= size:  # frame by frame, as rosbags' decompress reads them, each to the bound left
+        frame = make()
+        piece = frame.decompress(rest, max_length=size + 1 - got)
+        pieces.append(piece)
+        got += len(piece)
+        if not frame.eof:
+            break  # the bound reached, or data ending inside a frame (said below as rosbags says it)
+        rest = frame.unused_data
+    raw = b"".join(pieces)
+    if len(raw) > size:
+        raise _unnamed(BagTooLargeError(
+            f"its storage file{_mcap_storage_name()}'s {compression} chunk decompresses to more than the {size:,} "
+            "bytes it declares: damage, or a compression bomb; not read"))
+    return _real(raw, "", size, crc)  # the size and checksum checked as rosbags checks them
 
 
 def _bounded_read_sized(bio: Any, _real: Callable[[Any], bytes]) -> bytes:  # noqa: ANN401 - a binary file
     """rosbags' mcap ``read_sized`` (a record's uint64 length, then that many bytes, read whole), refusing a
     schema or channel record (told by the opcode byte before the length) whose declared length exceeds
-    MAX_CONNECTIONS_TOTAL_BYTES before reading it: a BagTooLargeError naming the storage file, the record
-    and where it starts. Such a record was read whole, bounded only by the file's size (a 300 MB schema
+    MAX_CONNECTIONS_TOTAL_BYTES, or any other record whose declared length exceeds MAX_MCAP_RECORD_BYTES,
+    before reading it: a BagTooLargeError naming the storage file, the record and where it starts. Such a record was read whole, bounded only by the file's size (a 300 MB schema
     record held `lmsbench info` at 928 MB before the total's count refused it; one declaring 1 TiB in a
     small file was a MemoryError)."""
     start = bio.tell()
@@ -952,6 +1021,12 @@ def _bounded_read_sized(bio: Any, _real: Callable[[Any], bytes]) -> bytes:  # no
         op = bio.read(1)
         bio.seek(start)
         kind = _MCAP_BOUNDED_RECORDS.get(op[0]) if len(op) == 1 else None
+        if kind is None and len(op) == 1 and len(head) == 8:  # any other record: MAX_MCAP_RECORD_BYTES
+            size = struct.unpack("<Q", head)[0]
+            if size > MAX_MCAP_RECORD_BYTES:
+                what = _MCAP_RECORDS.get(op[0], f"record of opcode {op[0]:#04x}")
+                raise _mcap_too_large(f"{what} record at byte {start - 1:,}", size, MAX_MCAP_RECORD_BYTES,
+                                      "MAX_MCAP_RECORD_BYTES")
         if kind is not None and len(head) == 8:
             size = struct.unpack("<Q", head)[0]
             if size > MAX_CONNECTIONS_TOTAL_BYTES:
@@ -1001,6 +1076,21 @@ def _bound_storage_connections() -> None:
 
         _read_sized.lmsbench_bounded = True  # type: ignore[attr-defined]
         storage_mcap.read_sized = _read_sized
+    read_exact = getattr(storage_mcap, "read_exact", None)
+    if read_exact is not None and not getattr(read_exact, "lmsbench_bounded", False):
+        def _read_exact(bio: Any, size: int, _real: Callable[[Any, int], bytes] = read_exact) -> bytes:  # noqa: ANN401
+            return _bounded_read_exact(bio, size, _real)
+
+        _read_exact.lmsbench_bounded = True  # type: ignore[attr-defined]
+        storage_mcap.read_exact = _read_exact
+    decompress = getattr(storage_mcap, "decompress", None)
+    if decompress is not None and not getattr(decompress, "lmsbench_bounded", False):
+        def _decompress(data: bytes, compression: str, size: int, crc: int,
+                        _real: Callable[[bytes, str, int, int], bytes] = decompress) -> bytes:
+            return _bounded_decompress(data, compression, size, crc, _real)
+
+        _decompress.lmsbench_bounded = True  # type: ignore[attr-defined]
+        storage_mcap.decompress = _decompress
     for name, what in (("Schema", "message definitions (schemas)"), ("Channel", "topics (channels)")):
         typ = getattr(storage_mcap, name, None)
         if typ is not None and not isinstance(typ, _CountedRecords):

@@ -13,6 +13,7 @@ import pytest
 
 from lms200 import Record, Scan, read_log, write_log
 from lms200.bag import BagTooLargeError
+from lms200.errors import LmsbenchError
 
 ROOT = Path(__file__).resolve().parents[1]
 MiB = 2**20
@@ -714,3 +715,96 @@ def test_an_mcap_schema_or_channel_record_of_absurd_length_is_refused_unread(tmp
                    "not read\n"), err
     ok = _ros2_bag_of_topics(tmp_path / "ok", 1, "mcap")  # the same bag without it reads
     assert [r.scan.stamp for r in read_log(ok, topic="/scan0")] == [10.0]
+
+
+def _mcap_chunk(declared: int, payload: bytes, compression: str = "zstd", record_length: int | None = None) -> bytes:
+    """An mcap chunk record declaring ``declared`` bytes uncompressed, holding ``payload`` (already compressed)."""
+    import struct
+
+    body = (struct.pack("<QQQI", 0, 0, declared, 0) + struct.pack("<I", len(compression)) + compression.encode()
+            + struct.pack("<Q", len(payload)) + payload)
+    return bytes([6]) + struct.pack("<Q", len(body) if record_length is None else record_length) + body
+
+
+def _mcap_with_record(path: Path, record: bytes) -> Path:
+    """A ROS 2 mcap bag (one LaserScan topic, one message) with ``record`` first in its data section and the
+    footer's summary offset cleared (the reader scans the data section)."""
+    import struct
+
+    bag = _ros2_bag_of_topics(path, 1, "mcap")
+    mcap = next(bag.glob("*.mcap"))
+    data = mcap.read_bytes()
+    end_header = 8 + 1 + 8 + struct.unpack_from("<Q", data, 9)[0]
+    footer = data[-37:-28] + struct.pack("<Q", 0) + data[-20:]
+    mcap.write_bytes(data[:end_header] + record + data[end_header:-37] + footer)
+    return bag
+
+
+def _zstd_frames(data: bytes, frames: int = 1):
+    from rosbags.rosbag2 import storage_mcap
+
+    return storage_mcap.zstd.compress(data) * frames
+
+
+def test_mcap_records_and_chunks_of_absurd_declared_length_are_refused_unread(tmp_path, capsys) -> None:
+    """A review: an mcap file's header, chunk and other records were read whole, bounded only by the file's
+    size, and its chunks decompressed whole before their declared size was compared: a header or chunk record
+    declaring 1 TiB in a 5 KB file was `cannot open as a ROS bag: MemoryError:`, a 300 MB chunk record held
+    `lmsbench info` at 648 MB, 37 KB of zstd declaring 1 GiB uncompressed at 2.1 GB (exit 0), and declaring
+    1 KiB at 2.1 GB before "Chunk size mismatch". Each is refused from what it declares, naming the storage
+    file, a chunk decompressed to one byte past what it declares at most."""
+    import struct
+    import tracemalloc
+
+    from experiments.cli import main
+
+    header = _ros2_bag_of_topics(tmp_path / "h", 1, "mcap")
+    data = bytearray((header / "h.mcap").read_bytes())
+    data[9:17] = struct.pack("<Q", 2**40)
+    (header / "h.mcap").write_bytes(bytes(data))
+    end = (f", more than the {134_283_264:,} a ROS 2 bag's mcap record may hold (lms200.bag.MAX_MCAP_RECORD_BYTES): "
+           "damage, or no bag of laser scans; not read\n")
+    assert main(["info", str(header)]) == 2
+    assert capsys.readouterr().err == (f"lmsbench info: error: {header}: its storage file h.mcap's header record at byte 8 "
+                                       f"declares 1,099,511,627,776 bytes{end}")
+    chunk = _mcap_with_record(tmp_path / "c", _mcap_chunk(2**30, b"", record_length=2**40))
+    assert main(["info", str(chunk)]) == 2
+    err = capsys.readouterr().err
+    start = int(err.split("chunk record at byte ")[1].split(" ")[0].replace(",", ""))
+    assert (chunk / "c.mcap").read_bytes()[start] == 6
+    assert err == (f"lmsbench info: error: {chunk}: its storage file c.mcap's chunk record at byte {start:,} declares "
+                   f"1,099,511,627,776 bytes{end}")
+    huge = _mcap_with_record(tmp_path / "u", _mcap_chunk(2**30, _zstd_frames(bytes(MiB))))
+    assert main(["info", str(huge)]) == 2
+    assert capsys.readouterr().err == (
+        f"lmsbench info: error: {huge}: its storage file u.mcap's chunk declares 1,073,741,824 bytes uncompressed (zstd), "
+        f"more than the {128 * MiB:,} a chunk may decompress to (lms200.bag.MAX_DECOMPRESSED_BYTES): damage, or no "
+        "bag of laser scans; not read\n")
+    bomb = _mcap_with_record(tmp_path / "b", _mcap_chunk(1024, _zstd_frames(bytes(MiB), 64)))  # 64 frames of 1 MiB
+    tracemalloc.start()
+    try:
+        with pytest.raises(BagTooLargeError) as exc:
+            list(read_log(bomb))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert str(exc.value) == (f"{bomb}: its storage file b.mcap's zstd chunk decompresses to more than the 1,024 bytes it "
+                              "declares: damage, or a compression bomb; not read")
+    assert peak < 16 * MiB, peak  # old: the 64 MiB decompressed whole
+
+
+@pytest.mark.parametrize("compression", ["zstd", "lz4", ""])
+def test_mcap_chunks_within_their_declared_size_read_as_before(tmp_path, compression) -> None:
+    """The bounded decompression reads a chunk as rosbags does: zstd of several frames, lz4, none."""
+    import struct
+
+    import lz4.frame
+
+    inner = bytes([0x80]) + struct.pack("<Q", 3000) + bytes(range(250)) * 12  # a record the reader skips
+    payload = {"zstd": lambda: _zstd_frames(inner[:1000]) + _zstd_frames(inner[1000:]),
+               "lz4": lambda: lz4.frame.compress(inner), "": lambda: inner}[compression]()
+    bag = _mcap_with_record(tmp_path / "ok", _mcap_chunk(len(inner), payload, compression))
+    assert [r.scan.stamp for r in read_log(bag, topic="/scan0")] == [10.0]
+    bad = _mcap_with_record(tmp_path / "short", _mcap_chunk(len(inner) + 1, payload, compression))
+    with pytest.raises(LmsbenchError, match=r"short: .*Chunk size mismatch: expected 3010 bytes, got 3009"):
+        list(read_log(bad, topic="/scan0"))
