@@ -14,6 +14,7 @@ so a record written without odometry or truth reads back without it.
 
 from __future__ import annotations
 
+import io
 import math
 import os
 import struct
@@ -947,10 +948,16 @@ _MCAP_RECORDS = {0x01: "header", 0x02: "footer", 0x05: "message", 0x06: "chunk",
 MAX_MCAP_RECORD_BYTES = MAX_DECOMPRESSED_BYTES + 2**16
 
 
+#: the mcap storage file whose messages are being read (:func:`_bound_storage_connections`): a chunk is
+#: decompressed, and a message read, while the bag's messages are iterated, after the file was opened
+_MCAP_READING: ContextVar[str] = ContextVar("lmsbench_mcap_reading", default="")
+
+
 def _mcap_storage_name() -> str:
-    """" NAME": the mcap storage file being opened (:data:`_BUDGET`), or "" where none is known."""
+    """" NAME": the mcap storage file being opened (:data:`_BUDGET`) or read (:data:`_MCAP_READING`), or ""
+    where none is known."""
     budget = _BUDGET.get()
-    name = budget.storage if budget is not None else ""
+    name = (budget.storage if budget is not None else "") or _MCAP_READING.get()
     return name and " " + name
 
 
@@ -969,6 +976,22 @@ def _bounded_read_exact(bio: Any, size: int, _real: Callable[[Any, int], bytes])
         start = bio.tell()
         raise _mcap_too_large(f"record data at byte {start:,}", size, MAX_MCAP_RECORD_BYTES, "MAX_MCAP_RECORD_BYTES")
     return _real(bio, size)
+
+
+def _bounded_skip_exact(bio: Any, size: int, _real: Callable[[Any, int], None]) -> None:  # noqa: ANN401
+    """rosbags' mcap ``skip_exact``, refusing a skip past the end of the file (or chunk) that holds the record:
+    a seek there succeeds, and the scan ended at it as at the data's end, so a record whose length was damaged
+    (declaring 1 TiB) dropped every message after it without a word (1 of 3 scans read, exit 0)."""
+    from rosbags.rosbag2.errors import ReaderError
+
+    pos = bio.tell()
+    end = bio.seek(0, 2)
+    bio.seek(pos)
+    if pos + size > end:
+        raise ReaderError(f"its storage file{_mcap_storage_name()}'s record data at byte {pos:,} declares {size:,} "
+                          f"bytes, past the end of the {'chunk' if isinstance(bio, io.BytesIO) else 'file'} that holds "
+                          f"it ({end - pos:,} bytes on): damage; not read")
+    _real(bio, size)
 
 
 def _bounded_decompress(data: bytes, compression: str, size: int, crc: int,
@@ -1059,6 +1082,26 @@ def _bound_storage_connections() -> None:
 
         _open_mcap.lmsbench_bounded = True  # type: ignore[attr-defined]
         mcap._open = _open_mcap  # type: ignore[union-attr]
+    mcap_messages = getattr(mcap, "messages", None)
+    if mcap_messages is not None and not getattr(mcap_messages, "lmsbench_bounded", False):
+        def _messages(self: Any, *args: Any, _real: Callable[..., Any] = mcap_messages,  # noqa: ANN401
+                      **kwargs: Any) -> Iterator[Any]:  # noqa: ANN401
+            """rosbags' messages of an mcap file, each read with the file's name known (:data:`_MCAP_READING`),
+            for the errors of its records and chunks to name it."""
+            messages = _real(self, *args, **kwargs)
+            name = Path(str(self.path)).name
+            while True:
+                token = _MCAP_READING.set(name)
+                try:
+                    item = next(messages)
+                except StopIteration:
+                    return
+                finally:
+                    _MCAP_READING.reset(token)
+                yield item
+
+        _messages.lmsbench_bounded = True  # type: ignore[attr-defined]
+        mcap.messages = _messages  # type: ignore[union-attr]
 
     reader = getattr(storage_sqlite3, "Sqlite3Reader", None)
     real_open = getattr(reader, "_open", None)
@@ -1083,6 +1126,13 @@ def _bound_storage_connections() -> None:
 
         _read_exact.lmsbench_bounded = True  # type: ignore[attr-defined]
         storage_mcap.read_exact = _read_exact
+    skip_exact = getattr(storage_mcap, "skip_exact", None)
+    if skip_exact is not None and not getattr(skip_exact, "lmsbench_bounded", False):
+        def _skip_exact(bio: Any, size: int, _real: Callable[[Any, int], None] = skip_exact) -> None:  # noqa: ANN401
+            _bounded_skip_exact(bio, size, _real)
+
+        _skip_exact.lmsbench_bounded = True  # type: ignore[attr-defined]
+        storage_mcap.skip_exact = _skip_exact
     decompress = getattr(storage_mcap, "decompress", None)
     if decompress is not None and not getattr(decompress, "lmsbench_bounded", False):
         def _decompress(data: bytes, compression: str, size: int, crc: int,

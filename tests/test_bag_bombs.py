@@ -4,6 +4,7 @@ bounds it (MAX_DECOMPRESSED_BYTES) and refuses the bag naming it, never reading 
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -808,3 +809,82 @@ def test_mcap_chunks_within_their_declared_size_read_as_before(tmp_path, compres
     bad = _mcap_with_record(tmp_path / "short", _mcap_chunk(len(inner) + 1, payload, compression))
     with pytest.raises(LmsbenchError, match=r"short: .*Chunk size mismatch: expected 3010 bytes, got 3009"):
         list(read_log(bad, topic="/scan0"))
+
+
+def test_an_indexed_mcap_chunk_that_decompresses_past_its_declared_size_is_refused_naming_the_file(
+        tmp_path, monkeypatch) -> None:
+    """The same bound where the chunk is read through the file's chunk index, as the messages are iterated
+    (msgsrc): 1 GiB of zeros behind two zstd-compressed scans held `lmsbench info` at 2.05 GB before "Chunk size
+    mismatch: expected 3669 bytes, got 1048579669"; refused now, naming the storage file, 64 MiB here."""
+    import tracemalloc
+
+    from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer, storage_mcap
+    from rosbags.typesys import Stores, get_typestore
+
+    zstd, zeros = storage_mcap.zstd, storage_mcap.zstd.compress(bytes(MiB))
+
+    class Bomb:
+        def __getattr__(self, name):
+            return getattr(zstd, name)
+
+        @staticmethod
+        def compress(data: bytes) -> bytes:
+            return zstd.compress(data) + zeros * 64
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    writer = Writer(tmp_path / "b", version=8, storage_plugin=StoragePlugin.MCAP)
+    writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+    with monkeypatch.context() as m:
+        m.setattr(storage_mcap, "zstd", Bomb())
+        with writer as w:
+            conn = w.add_connection("/scan0", "sensor_msgs/msg/LaserScan", typestore=ts)
+            for t in (10, 11):
+                w.write(conn, t * 10**9, ts.serialize_cdr(_laser_scan(ts), "sensor_msgs/msg/LaserScan"))
+    tracemalloc.start()
+    try:
+        with pytest.raises(BagTooLargeError) as exc:
+            list(read_log(tmp_path / "b"))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert re.fullmatch(rf"{tmp_path / 'b'}: topic /scan0 after message 0: its storage file b\.mcap's zstd chunk "
+                        r"decompresses to more than the [\d,]+ bytes it declares: damage, or a compression bomb; not read",
+                        str(exc.value)), exc.value
+    assert peak < 16 * MiB, peak
+
+
+def test_an_mcap_record_whose_length_runs_past_the_file_is_refused_not_the_scan_ended(tmp_path) -> None:
+    """A record between two chunks whose length was damaged (1 TiB) was skipped by a seek past the file's end,
+    and the scan stopped there as at the data's end: 1 of the bag's 3 scans read, exit 0. It is refused."""
+    import struct
+
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+
+    def mcap(name: str, stamps: tuple[int, ...]) -> tuple[Path, bytes]:
+        with Writer(tmp_path / name, version=8, storage_plugin=StoragePlugin.MCAP) as w:
+            conn = w.add_connection("/scan0", "sensor_msgs/msg/LaserScan", typestore=ts)
+            for t in stamps:
+                w.write(conn, t * 10**9, ts.serialize_cdr(_laser_scan(ts), "sensor_msgs/msg/LaserScan"))
+        file = tmp_path / name / f"{name}.mcap"
+        return file, file.read_bytes()
+
+    def first_chunk(data: bytes) -> tuple[int, bytes]:
+        at = 8 + 1 + 8 + struct.unpack_from("<Q", data, 9)[0]
+        return at, data[at: at + 9 + struct.unpack_from("<Q", data, at + 1)[0]]
+
+    _, a = mcap("a", (10,))
+    file, b = mcap("b", (11, 12))
+    at, chunk_b = first_chunk(b)
+    footer = b[-37:-28] + struct.pack("<Q", 0) + b[-20:]  # no summary: the data section is scanned
+    damaged = bytes([0x80]) + struct.pack("<Q", 2**40) + bytes(16)
+    file.write_bytes(b[:at] + first_chunk(a)[1] + damaged + chunk_b + b[at + len(chunk_b):-37] + footer)
+    start = at + len(first_chunk(a)[1]) + 9
+    with pytest.raises(LmsbenchError, match=rf"b: cannot open as a ROS bag: AnyReaderError: its storage file b\.mcap's "
+                                            rf"record data at byte {start:,} declares 1,099,511,627,776 bytes, past the "
+                                            r"end of the file that holds it \([\d,]+ bytes on\): damage; not read$"):
+        list(read_log(tmp_path / "b"))
+    file.write_bytes(b[:at] + first_chunk(a)[1] + chunk_b + b[at + len(chunk_b):-37] + footer)  # undamaged: 3 scans
+    assert len(list(read_log(tmp_path / "b"))) == 3
