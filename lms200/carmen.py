@@ -560,7 +560,7 @@ class CarmenReader:
                     reason = (f"more than {MAX_JUNK_LINES:,} lines that start with no CARMEN message name: junk from "
                               "here on, not read")
                     stats.stopped = f"line {line_no}: {reason}"
-                    stats.skip(line_no, f"message: {reason}")
+                    self._skip(line_no, f"message: {reason}")
                     break
             # a TRUEPOS pose is the truth of the next line of the laser kind read (that line, even when
             # malformed, takes it), when stamped within TRUTH_MAX_GAP_S of it: ODOM lines, other laser

@@ -236,15 +236,24 @@ def test_a_pass_ended_by_an_error_takes_the_tail_the_held_lines_tell(tmp_path: P
     assert got == [10.0]
 
 
-def test_lines_skipped_among_held_lines_are_reported_in_log_order(tmp_path: Path) -> None:
+def test_lines_skipped_among_held_lines_are_reported_in_log_order(tmp_path: Path, monkeypatch) -> None:
     """A line skipped while laser lines were held was recorded at once, a held line found malformed later
-    when the lines were released: skipped [3, 1]. Both are recorded in log order."""
+    when the lines were released: skipped [3, 1]. Both are recorded in log order, and so are junk lines up to
+    the one that ends the pass as junk."""
+    from lms200 import carmen
+
     path = _log(tmp_path, [f"FLASER 3 1.00 2.00 {POSES} 9.0 9.01", f"FLASER 3 {RANGES} {POSES} 10.0 10.01", "ODOM x",
                            f"FLASER 3 {RANGES} {POSES} 11.0 11.01", "ODOM y"])
     reader = read_log(path, skip_bad_lines=True)
     assert [r.scan.stamp for r in reader] == [10.0, 11.0]
     assert [n for n, _ in reader.stats.skipped] == [1, 3, 5] and reader.stats.skipped_count == 3
     assert reader.stats.skipped[0][1].startswith("FLASER: FLASER with 3 beams needs 13 fields, got 12")
+    monkeypatch.setattr(carmen, "MAX_JUNK_LINES", 3)
+    path = _log(tmp_path, [f"FLASER 3 1.00 2.00 {POSES} 9.0 9.01", f"FLASER 3 {RANGES} {POSES} 10.0 b21 10.01"]
+                + ["junk"] * 5)
+    reader = read_log(path, skip_bad_lines=True)
+    assert [r.scan.stamp for r in reader] == [10.0] and [n for n, _ in reader.stats.skipped] == [1, 3, 4, 5, 6]
+    assert reader.stats.stopped is not None and reader.stats.stopped.startswith("line 6: more than 3 lines")
 
 
 def test_a_held_line_found_malformed_leaves_no_trace(tmp_path: Path) -> None:
