@@ -602,12 +602,15 @@ class CarmenReader:
                         geometry = self.geometry.merged(declared)
                         exact_min, exact_step = EXACT_GEOMETRY_NAMES[kind]
                         exact = (params.get(exact_min), params.get(exact_step))
+                        # units is set only by a PARAM lmsbench_range_units line: this project's writer's log,
+                        # whose maximum is written exact, so its grid words are valid readings (at_max_range)
                         scan, odom = _parse_flaser(words, units, geometry, params.get(RANGE_MIN_PARAM, 0.0), exact,
-                                                   range_words, declared.range_max)
+                                                   range_words, declared.range_max, grid_max=units is None)
                     else:
                         scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
                                                        params.get(RANGE_MIN_PARAM, 0.0), range_words,
-                                                       exact_angles=bool(params.get(EXACT_ANGLES_PARAM)))
+                                                       exact_angles=bool(params.get(EXACT_ANGLES_PARAM)),
+                                                       grid_max=units is None)
                     wrong_tail = tails.problem(words)
                     _require(wrong_tail is None, wrong_tail or "")
                     line_held = _HeldLaser(scan, odom if has_odometry else None, held, words, line_no, kind,
@@ -1081,22 +1084,23 @@ def _finite_pose(values: list[float], what: str) -> Pose2D:
 
 
 def _ranges(values: np.ndarray, units: Units | None, what: str,
-            declared_max: float | None = None) -> tuple[np.ndarray, Units]:
+            declared_max: float | None = None, grid_max: bool = True) -> tuple[np.ndarray, Units]:
     """Logged ranges (m) in REP-117 form: SICK codes decoded; ``nan`` / ``inf`` written as text
     (logs converted from ROS) keep their REP-117 meaning, ``-inf`` too (an object too close to
     measure); a finite negative range is malformed. A reading at the maximum range the log
     declares for the line (``declared_max``: ROBOTLASER / RAWLASER's max_range field, FLASER's
     ``PARAM robot_front_laser_max``; equal to it, or the grid word of the line's unit it rounds to,
-    :func:`at_max_range`) is the logger's max-range reading: +inf (no return), as the
-    LMS200's code 8183, its own maximum range, is."""
+    :func:`at_max_range`; the grid word only with ``grid_max``) is the logger's max-range reading:
+    +inf (no return), as the LMS200's code 8183, its own maximum range, is."""
     negative = finite_negative(values)
     if np.any(negative):
         raise ValueError(f"{what}: negative range {values[negative][0]:g} in the log")
     u = units or infer_units(values)
-    return at_max_range(decode_logged_ranges(values, u), declared_max, u), u
+    return at_max_range(decode_logged_ranges(values, u), declared_max, u, grid_max), u
 
 
-def at_max_range(ranges: np.ndarray, declared_max: float | None, units: Units | None = None) -> np.ndarray:
+def at_max_range(ranges: np.ndarray, declared_max: float | None, units: Units | None = None,
+                 grid_max: bool = True) -> np.ndarray:
     """``ranges`` with each reading CARMEN writes for ``declared_max`` (a CARMEN line's declared maximum range,
     or None) made +inf, in place: CARMEN loggers write a beam with no return as the sensor's maximum
     range (a Hokuyo's 30 m), and CARMEN's tools count a reading at the maximum range as no hit; read
@@ -1106,11 +1110,17 @@ def at_max_range(ranges: np.ndarray, declared_max: float | None, units: Units | 
     line's ``units`` (cm: 0.01 m, mm: 0.001 m), the grid values within half a unit of it: a maximum
     off the grid is written rounded (4.095 m with %.2f as "4.09" or "4.10"), and "4.09" was read as a
     valid reading 5 mm short of the maximum. A maximum on the grid has itself alone; a reading off the
-    grid (written with more digits) is no such word, so a valid reading just below the maximum is kept."""
+    grid (written with more digits) is no such word, so a valid reading just below the maximum is kept.
+
+    ``grid_max`` False (a log with a ``PARAM lmsbench_range_units`` line, which only this project's
+    writer writes): ``declared_max`` itself alone. That writer writes the exact maximum and no return
+    as a SICK code, never a rounded maximum, and its older versions wrote a valid reading near a
+    maximum just off the grid (a ROS float32 range_max, 6.3 stored as 6.300000190734863) as the grid
+    word ("6.300"), which the grid rule read as no return."""
     if declared_max is None:
         return ranges
     at = ranges == declared_max
-    if units is not None:
+    if units is not None and grid_max:
         scale = metres_per_unit(units)
         for code in {math.floor(declared_max / scale), math.ceil(declared_max / scale)}:
             word = code * scale
@@ -1128,16 +1138,18 @@ GRID_WORD_TOLERANCE = 1e-12
 def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry,
                   range_min: float = 0.0,
                   exact: tuple[float | None, float | None] = (None, None),
-                  cache: _RangeWords | None = None, declared_max: float | None = None) -> tuple[Scan, Pose2D]:
+                  cache: _RangeWords | None = None, declared_max: float | None = None,
+                  grid_max: bool = True) -> tuple[Scan, Pose2D]:
     """A FLASER / RLASER line's scan and odometry; ``cache``: the pass's range words (:func:`_range_floats`);
-    ``declared_max``: the maximum range of the log's PARAM lines (a reading at it is no return, :func:`_ranges`)."""
+    ``declared_max``: the maximum range of the log's PARAM lines (a reading at it is no return, :func:`_ranges`;
+    its grid words too with ``grid_max``)."""
     kind = words[0]
     _require(len(words) >= 2, f"{kind} needs a beam count")
     n = _count(words[1], "beam count")
     _require(n > 0, f"{kind} needs at least one beam, got a beam count of {n}")  # was "needs 11 fields, got 11"
     _require(_tail_fits(words, _field_count(kind, n) - 2, 2 + n),
              f"{kind} with {n} beams needs {_field_count(kind, n)} fields, got {len(words)}")
-    ranges, u = _ranges(_range_floats(words[2 : 2 + n], f"{kind} ranges", cache), units, kind, declared_max)
+    ranges, u = _ranges(_range_floats(words[2 : 2 + n], f"{kind} ranges", cache), units, kind, declared_max, grid_max)
     tail = _few_floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
     _stamps(words, tail[6], _logger_at(words, 2 + n + 7))
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
@@ -1158,11 +1170,12 @@ def _exact_or_snapped(angle: float, exact: float | None) -> float:
 
 def _parse_robotlaser(words: list[str], units: Units | None, range_max_override: float | None,
                       range_min: float = 0.0, cache: _RangeWords | None = None,
-                      exact_angles: bool = False) -> tuple[Scan, Pose2D | None]:
+                      exact_angles: bool = False, grid_max: bool = True) -> tuple[Scan, Pose2D | None]:
     """A ROBOTLASER1 / 2 line (robot pose as odometry) or a RAWLASER1 .. 4 line (no pose); its start
     angle and resolution snapped onto the 0.05 deg grid where only text rounding explains their
     distance from it (:func:`snap_angle`), or taken as written with ``exact_angles`` (``PARAM
-    lmsbench_robotlaser_angles exact``)."""
+    lmsbench_robotlaser_angles exact``); ``grid_max``: a reading at the max_range field's grid word is
+    no return too (:func:`at_max_range`)."""
     kind = words[0]
     _require(len(words) >= 10, f"{kind} is too short")
     head = _few_floats(words[1:8], f"{kind} header")
@@ -1189,7 +1202,7 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     if units is None and accuracy in (0.01, 0.001):
         units = "cm" if accuracy == 0.01 else "mm"
     declared = max_range if laser_geometry.MIN_RANGE_MAX_M <= max_range <= laser_geometry.MAX_RANGE_M else None
-    ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind, declared)
+    ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind, declared, grid_max)
     tail = _few_floats(words[10 + n + m : 10 + n + m + (1 if kind.startswith("RAWLASER") else 12)],
                        f"{kind} timestamp" if kind.startswith("RAWLASER") else f"{kind} poses and timestamp")
     stamp = _stamps(words, tail[-1], _logger_at(words, expected - 2))
@@ -1243,8 +1256,10 @@ def _format_ranges(scan: Scan, units: Units) -> str:
 
 def _read_back(words: list[str], units: Units, declared_max: float) -> np.ndarray:
     """The ranges (m, REP-117) a reader takes ``words`` (range words of ``units``, on a line that
-    declares ``declared_max`` as its maximum range, as the writer's lines do) for."""
-    return at_max_range(decode_logged_ranges(np.array(words, dtype=np.float64), units), declared_max, units)
+    declares ``declared_max`` as its maximum range, as the writer's lines do) for: the writer's log has a
+    ``PARAM lmsbench_range_units`` line, so the maximum's grid words are valid readings (``grid_max`` False)."""
+    return at_max_range(decode_logged_ranges(np.array(words, dtype=np.float64), units), declared_max, units,
+                        grid_max=False)
 
 
 #: units: the SICK special codes (CODE_ABOVE_MAXIMUM .. CODE_NOT_VALID) as a middle and half width

@@ -278,3 +278,25 @@ def test_a_held_line_found_malformed_leaves_no_trace(tmp_path: Path) -> None:
     reader = read_log(_log(tmp_path, lines), skip_bad_lines=True)
     assert [(r.scan.stamp, len(r.scan)) for r in reader] == [(1.0, 5), (2.0, 5), (4.0, 5)]
     assert [n for n, _ in reader.stats.skipped] == [3]
+
+
+def test_a_log_of_this_projects_writer_reads_the_grid_words_near_its_maximum_as_valid(tmp_path: Path) -> None:
+    """This project's writer marks its logs with PARAM lmsbench_range_units, writes the exact maximum and no return
+    as a SICK code, never a rounded maximum. Its older versions wrote a valid reading near a maximum just off the
+    grid as the grid word: a ROS float32 range_max (6.3 stored as 6.300000190734863) in mm, 30.005 m in cm. Those
+    words were read as no return by the grid rule ([1.0, inf, inf], main read [1.0, 6.3, 6.3]); such a log reads
+    them as valid readings, and the exact maximum alone as no return. The lines are the older writer's own."""
+    rl = "0.0 0.0 0.0 0.0 0.0 0.0 0.000000 0.000000 0.000000 0.000000 0.000000 3.0 lmsbench 3.0"
+    path = _log(tmp_path, ["PARAM lmsbench_range_units mm lmsbench 0", "PARAM lmsbench_odometry absent lmsbench 0",
+                           f"ROBOTLASER1 0 -0.1 0.15000000000000002 0.05 6.300000190734863 0.001 0 4 1.000 6.300 6.300 "
+                           f"6.300000190734863 0 {rl}"])
+    scan = list(read_log(path))[0].scan
+    assert scan.ranges.tolist() == [1.0, 6.3, 6.3, np.inf] and scan.valid.tolist() == [True, True, True, False]
+    path = _log(tmp_path, ["PARAM lmsbench_range_units cm lmsbench 0", "PARAM lmsbench_odometry absent lmsbench 0",
+                           f"ROBOTLASER1 0 -0.1 0.15000000000000002 0.05 30.005 0.01 0 4 1.00 30.00 30.00 81.83 0 {rl}"])
+    scan = list(read_log(path))[0].scan
+    assert scan.ranges.tolist() == [1.0, 30.0, 30.0, np.inf] and scan.valid.tolist() == [True, True, True, False]
+    path = _log(tmp_path, ["PARAM lmsbench_range_units cm lmsbench 0", "PARAM robot_front_laser_max 4.095 nohost 0",
+                           f"FLASER 4 1.00 4.09 4.10 4.095 {POSES} 10.0 b21 10.0"])  # FLASER too
+    scan = list(read_log(path))[0].scan
+    assert scan.ranges.tolist() == [1.0, 4.09, 4.1, np.inf] and scan.valid.tolist() == [True, True, False, False]
