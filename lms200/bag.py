@@ -83,6 +83,36 @@ MIN_FREE_TEMP_BYTES = 1 * 2**30
 FREE_CHECK_BYTES = 64 * 2**20
 
 
+#: True only while lmsbench itself reads a bag (:func:`_lmsbench_read`, :func:`_read_inside`): rosbags' functions
+#: that lms200.bag replaces (mcap ``read_sized`` / ``read_exact`` / ``skip_exact`` / ``decompress``, the storage
+#: readers' ``_open`` and ``McapReader.messages``, AnyReader's definition parsers, the ROS 2 reader's zstd) are
+#: replaced for the whole process, and pass straight through to rosbags' own unless it is set: another user of
+#: rosbags in the process, after an lmsbench read, got lmsbench's bounds and messages
+_IN_LMSBENCH_READ: ContextVar[bool] = ContextVar("lmsbench_bag_read", default=False)
+
+
+class _lmsbench_read:
+    """Within it, rosbags' functions that lms200.bag replaces apply its bounds (:data:`_IN_LMSBENCH_READ`)."""
+
+    def __enter__(self) -> None:
+        self._token = _IN_LMSBENCH_READ.set(True)
+
+    def __exit__(self, *exc: object) -> None:
+        _IN_LMSBENCH_READ.reset(self._token)
+
+
+def _read_inside(items: Iterator[Any]) -> Iterator[Any]:
+    """``items`` (rosbags' messages) with each step taken inside :class:`_lmsbench_read`, and the caller's code
+    between steps outside it (a context variable set in a generator is its caller's)."""
+    while True:
+        with _lmsbench_read():
+            try:
+                item = next(items)
+            except StopIteration:
+                return
+        yield item
+
+
 def _too_large(what: str) -> BagTooLargeError:
     return BagTooLargeError(f"{what} decompresses to more than {MAX_DECOMPRESSED_BYTES / 2**20:g} MiB "
                             "(lms200.bag.MAX_DECOMPRESSED_BYTES): a compression bomb, or chunks or messages "
@@ -150,6 +180,8 @@ class _BoundedZstd:
         return getattr(self._module, name)
 
     def decompress(self, data: bytes) -> bytes:
+        if not _IN_LMSBENCH_READ.get():
+            return self._module.decompress(data)  # type: ignore[no-any-return]
         try:
             return _bounded(data, self._module.ZstdDecompressor, "a zstd-compressed message", True)
         except BagTooLargeError as exc:
@@ -159,6 +191,8 @@ class _BoundedZstd:
         """rosbags opens a file-compressed bag's storage file so and copies it whole to a temporary
         file: the stream read is bounded (:class:`_BoundedZstdFile`)."""
         stream = self._module.open(file, mode, **kwargs)
+        if not _IN_LMSBENCH_READ.get():
+            return stream
         return _BoundedZstdFile(stream, str(getattr(file, "name", file))) if "r" in mode else stream
 
 
@@ -797,6 +831,8 @@ def _bound_definitions() -> None:
 
         def bounded(text: str, *args: Any, _parse: Callable[..., Any] = parse, _name: str = name,  # noqa: ANN401
                     **kwargs: Any) -> Any:  # noqa: ANN401
+            if not _IN_LMSBENCH_READ.get():
+                return _parse(text, *args, **kwargs)
             which = f"{args[0]}'s message definition" if args else "a message definition (IDL)"
             if len(text) > MAX_CONNECTION_BYTES:
                 raise _unnamed(BagTooLargeError(
@@ -917,7 +953,7 @@ class _CountedRecords:
 
     def __call__(self, *args: Any) -> Any:  # noqa: ANN401
         record = self.typ(*args)
-        budget = _BUDGET.get()
+        budget = _BUDGET.get() if _IN_LMSBENCH_READ.get() else None
         if budget is not None and tuple(record) != _SCHEMALESS:
             held = budget.mcap.setdefault(self.what, {})
             chars = sum(len(v) for v in record[1:] if isinstance(v, (str, bytes)))
@@ -1076,7 +1112,7 @@ def _bound_storage_connections() -> None:
     if mcap_open is not None and not getattr(mcap_open, "lmsbench_bounded", False):
         def _open_mcap(self: Any, _real: Callable[[Any], None] = mcap_open) -> None:  # noqa: ANN401
             budget = _BUDGET.get()
-            if budget is not None:  # this storage file's records, counted apart from another file's, name it
+            if budget is not None and _IN_LMSBENCH_READ.get():  # this storage file's records, counted apart from another file's, name it
                 budget.mcap, budget.mcap_chars, budget.storage = {}, 0, Path(str(self.path)).name
             _real(self)
 
@@ -1087,9 +1123,12 @@ def _bound_storage_connections() -> None:
         def _messages(self: Any, *args: Any, _real: Callable[..., Any] = mcap_messages,  # noqa: ANN401
                       **kwargs: Any) -> Iterator[Any]:  # noqa: ANN401
             """rosbags' messages of an mcap file, each read with the file's name known (:data:`_MCAP_READING`),
-            for the errors of its records and chunks to name it."""
-            messages = _real(self, *args, **kwargs)
-            name = Path(str(self.path)).name
+            for the errors of its records and chunks to name it; rosbags' own outside an lmsbench read."""
+            if not _IN_LMSBENCH_READ.get():
+                return _real(self, *args, **kwargs)  # type: ignore[no-any-return]
+            return _named_messages(_real(self, *args, **kwargs), Path(str(self.path)).name)
+
+        def _named_messages(messages: Iterator[Any], name: str) -> Iterator[Any]:
             while True:
                 token = _MCAP_READING.set(name)
                 try:
@@ -1107,7 +1146,8 @@ def _bound_storage_connections() -> None:
     real_open = getattr(reader, "_open", None)
     if real_open is not None and not getattr(real_open, "lmsbench_bounded", False):
         def _open(self: Any, _real: Callable[[Any], None] = real_open) -> None:  # noqa: ANN401
-            _check_sqlite_connections(self.path)
+            if _IN_LMSBENCH_READ.get():
+                _check_sqlite_connections(self.path)
             _real(self)
 
         _open.lmsbench_bounded = True  # type: ignore[attr-defined]
@@ -1115,21 +1155,24 @@ def _bound_storage_connections() -> None:
     read_sized = getattr(storage_mcap, "read_sized", None)
     if read_sized is not None and not getattr(read_sized, "lmsbench_bounded", False):
         def _read_sized(bio: Any, _real: Callable[[Any], bytes] = read_sized) -> bytes:  # noqa: ANN401
-            return _bounded_read_sized(bio, _real)
+            return _bounded_read_sized(bio, _real) if _IN_LMSBENCH_READ.get() else _real(bio)
 
         _read_sized.lmsbench_bounded = True  # type: ignore[attr-defined]
         storage_mcap.read_sized = _read_sized
     read_exact = getattr(storage_mcap, "read_exact", None)
     if read_exact is not None and not getattr(read_exact, "lmsbench_bounded", False):
         def _read_exact(bio: Any, size: int, _real: Callable[[Any, int], bytes] = read_exact) -> bytes:  # noqa: ANN401
-            return _bounded_read_exact(bio, size, _real)
+            return _bounded_read_exact(bio, size, _real) if _IN_LMSBENCH_READ.get() else _real(bio, size)
 
         _read_exact.lmsbench_bounded = True  # type: ignore[attr-defined]
         storage_mcap.read_exact = _read_exact
     skip_exact = getattr(storage_mcap, "skip_exact", None)
     if skip_exact is not None and not getattr(skip_exact, "lmsbench_bounded", False):
         def _skip_exact(bio: Any, size: int, _real: Callable[[Any, int], None] = skip_exact) -> None:  # noqa: ANN401
-            _bounded_skip_exact(bio, size, _real)
+            if _IN_LMSBENCH_READ.get():
+                _bounded_skip_exact(bio, size, _real)
+            else:
+                _real(bio, size)
 
         _skip_exact.lmsbench_bounded = True  # type: ignore[attr-defined]
         storage_mcap.skip_exact = _skip_exact
@@ -1137,6 +1180,8 @@ def _bound_storage_connections() -> None:
     if decompress is not None and not getattr(decompress, "lmsbench_bounded", False):
         def _decompress(data: bytes, compression: str, size: int, crc: int,
                         _real: Callable[[bytes, str, int, int], bytes] = decompress) -> bytes:
+            if not _IN_LMSBENCH_READ.get():
+                return _real(data, compression, size, crc)
             return _bounded_decompress(data, compression, size, crc, _real)
 
         _decompress.lmsbench_bounded = True  # type: ignore[attr-defined]
@@ -1430,10 +1475,11 @@ class BagReader:
         _bound_storage_connections()
         budget = _BUDGET.set(_DefinitionBudget())  # the definitions of this bag together
         try:
-            reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
-            if not reader.is2:  # a bag never closed (a killed recording) is read from its chunks
-                reader.readers = [_recovering_reader(self.path)]
-            reader.open()
+            with _lmsbench_read():  # the replaced rosbags functions bound this read only
+                reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
+                if not reader.is2:  # a bag never closed (a killed recording) is read from its chunks
+                    reader.readers = [_recovering_reader(self.path)]
+                reader.open()
         except BagTooLargeError as exc:
             if getattr(exc, "lmsbench_unnamed", False):  # a message definition's (_bound_definitions knows no file)
                 raise BagTooLargeError(f"{self.path}: {exc}") from None
@@ -1503,7 +1549,7 @@ class BagReader:
                 self._fail(f"topic {stats.laser}", exc, 0, fatal=True)
                 return
             matcher = _PoseMatcher(sorted({c.topic for c in poses}), round(tolerance * 1e9))
-            messages = reader.messages(connections=scans + poses)
+            messages = _read_inside(reader.messages(connections=scans + poses))
             while True:
                 try:
                     item = next(messages, None)
@@ -1557,7 +1603,7 @@ class BagReader:
         them); with stamps read from the bytes, that is a message too short to hold one or, in ROS 2,
         one with no CDR encapsulation header."""
         raw_stamp = _raw_stamp_reader(reader)
-        for conn, _, raw in reader.messages(connections=scans):
+        for conn, _, raw in _read_inside(reader.messages(connections=scans)):
             if raw_stamp is not None:
                 ns = raw_stamp(raw)
                 if ns is not None:

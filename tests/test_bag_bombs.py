@@ -888,3 +888,26 @@ def test_an_mcap_record_whose_length_runs_past_the_file_is_refused_not_the_scan_
         list(read_log(tmp_path / "b"))
     file.write_bytes(b[:at] + first_chunk(a)[1] + chunk_b + b[at + len(chunk_b):-37] + footer)  # undamaged: 3 scans
     assert len(list(read_log(tmp_path / "b"))) == 3
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_rosbags_used_directly_after_an_lmsbench_read_keeps_its_own_behaviour(tmp_path, monkeypatch, storage) -> None:
+    """A review: lms200.bag replaces rosbags functions for the whole process (mcap read_sized / read_exact /
+    skip_exact / decompress, the storage readers' _open, McapReader.messages, AnyReader's definition parsers),
+    and they applied lmsbench's bounds to every rosbags user after one lmsbench read: a bag over a bound that
+    rosbags itself reads was refused by rosbags too (BagTooLargeError from AnyReader). They apply only inside
+    lmsbench's own reads."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    from lms200 import bag as lbag
+
+    b = _ros2_bag_of_topics(tmp_path / "b", 1, storage)
+    monkeypatch.setattr(lbag, "MAX_CONNECTION_BYTES", 10)  # the LaserScan definition is over it
+    monkeypatch.setattr(lbag, "MAX_MCAP_RECORD_BYTES", 100)  # and the mcap file's records
+    with pytest.raises(BagTooLargeError, match="MAX_CONNECTION_BYTES|MAX_MCAP_RECORD_BYTES"):
+        list(read_log(b, topic="/scan0"))
+    with AnyReader([b], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        assert [(c.topic, t) for c, t, _ in reader.messages()] == [("/scan0", 10 * 10**9)]
+    monkeypatch.undo()
+    assert [r.scan.stamp for r in read_log(b, topic="/scan0")] == [10.0]  # lmsbench reads it within its bounds
