@@ -1099,15 +1099,75 @@ def _bounded_read_sized(bio: Any, _real: Callable[[Any], bytes]) -> bytes:  # no
     return _real(bio)
 
 
+#: the first rosbags with the mcap functions lms200.bag bounds (read_exact, skip_exact, decompress): 0.10.0 ..
+#: 0.11.5 lack them, and the bounds were silently left out (an mcap bag read unbounded)
+ROSBAGS_MCAP_SINCE = "0.11.6"
+#: the rosbags mcap functions lms200.bag replaces, with the parameters it calls them with (those of 0.11.6 .. 0.11.9)
+_MCAP_PATCHED = {"read_sized": ("bio",), "read_exact": ("bio", "size"), "skip_exact": ("bio", "size"),
+                 "decompress": ("data", "compression", "size", "crc"), "McapReader._open": ("self",),
+                 "McapReader.messages": ("self", "connections", "start", "stop")}
+#: why this rosbags' mcap reader cannot be bounded (a function missing or of other parameters), or "" where it can
+#: (:func:`_bound_storage_connections`); an mcap bag is then refused (:meth:`BagReader._open`)
+_mcap_unsupported = ""
+
+
+def _mcap_support_problem(storage_mcap: Any) -> str:  # noqa: ANN401 - a module
+    """Why rosbags' ``storage_mcap`` lacks the functions lms200.bag replaces with the parameters it expects, or ""."""
+    import inspect
+
+    for name, expected in _MCAP_PATCHED.items():
+        owner, _, attr = name.rpartition(".")
+        real = getattr(getattr(storage_mcap, owner, None) if owner else storage_mcap, attr, None)
+        real = getattr(real, "lmsbench_real", real)  # already replaced: the original's
+        if real is None:
+            return f"it has no rosbags.rosbag2.storage_mcap.{name}"
+        try:
+            got = tuple(inspect.signature(real).parameters)
+        except (TypeError, ValueError):
+            return f"its rosbags.rosbag2.storage_mcap.{name} has no signature to check"
+        if got != expected:
+            return (f"its rosbags.rosbag2.storage_mcap.{name} takes ({', '.join(got)}), "
+                    f"not ({', '.join(expected)})")
+    return ""
+
+
+def _rosbags_version() -> str:
+    try:
+        from importlib.metadata import version
+
+        return version("rosbags")
+    except Exception:  # noqa: BLE001 - an install without metadata
+        return "of unknown version"
+
+
 def _bound_storage_connections() -> None:
     """Bound what rosbags' ROS 2 storage readers hold of a bag's topics and message definitions when they
     open a storage file (MAX_CONNECTIONS, MAX_CONNECTIONS_TOTAL_BYTES): a sqlite3 file is counted by
     sqlite first (:func:`_check_sqlite_connections`), an mcap file's schema and channel records as they
     are read (:class:`_CountedRecords`), each file on its own, named. A rosbags without those names is
     left as it is."""
+    global _mcap_unsupported
     from rosbags.rosbag2 import storage_mcap, storage_sqlite3
 
-    mcap = getattr(storage_mcap, "McapReader", None)
+    _mcap_unsupported = _mcap_support_problem(storage_mcap)
+    if not _mcap_unsupported:
+        _bound_mcap(storage_mcap)
+    reader = getattr(storage_sqlite3, "Sqlite3Reader", None)
+    real_open = getattr(reader, "_open", None)
+    if real_open is not None and not getattr(real_open, "lmsbench_bounded", False):
+        def _open(self: Any, _real: Callable[[Any], None] = real_open) -> None:  # noqa: ANN401
+            if _IN_LMSBENCH_READ.get():
+                _check_sqlite_connections(self.path)
+            _real(self)
+
+        _open.lmsbench_bounded = True  # type: ignore[attr-defined]
+        reader._open = _open  # type: ignore[union-attr]
+
+
+def _bound_mcap(storage_mcap: Any) -> None:  # noqa: ANN401 - a module
+    """Replace rosbags' mcap functions (:data:`_MCAP_PATCHED`, checked by :func:`_mcap_support_problem`) by
+    bounded ones, each keeping the original as ``lmsbench_real``."""
+    mcap = storage_mcap.McapReader
     mcap_open = getattr(mcap, "_open", None)
     if mcap_open is not None and not getattr(mcap_open, "lmsbench_bounded", False):
         def _open_mcap(self: Any, _real: Callable[[Any], None] = mcap_open) -> None:  # noqa: ANN401
@@ -1117,7 +1177,8 @@ def _bound_storage_connections() -> None:
             _real(self)
 
         _open_mcap.lmsbench_bounded = True  # type: ignore[attr-defined]
-        mcap._open = _open_mcap  # type: ignore[union-attr]
+        _open_mcap.lmsbench_real = mcap_open  # type: ignore[attr-defined]
+        mcap._open = _open_mcap
     mcap_messages = getattr(mcap, "messages", None)
     if mcap_messages is not None and not getattr(mcap_messages, "lmsbench_bounded", False):
         def _messages(self: Any, *args: Any, _real: Callable[..., Any] = mcap_messages,  # noqa: ANN401
@@ -1140,24 +1201,15 @@ def _bound_storage_connections() -> None:
                 yield item
 
         _messages.lmsbench_bounded = True  # type: ignore[attr-defined]
-        mcap.messages = _messages  # type: ignore[union-attr]
-
-    reader = getattr(storage_sqlite3, "Sqlite3Reader", None)
-    real_open = getattr(reader, "_open", None)
-    if real_open is not None and not getattr(real_open, "lmsbench_bounded", False):
-        def _open(self: Any, _real: Callable[[Any], None] = real_open) -> None:  # noqa: ANN401
-            if _IN_LMSBENCH_READ.get():
-                _check_sqlite_connections(self.path)
-            _real(self)
-
-        _open.lmsbench_bounded = True  # type: ignore[attr-defined]
-        reader._open = _open  # type: ignore[union-attr]
+        _messages.lmsbench_real = mcap_messages  # type: ignore[attr-defined]
+        mcap.messages = _messages
     read_sized = getattr(storage_mcap, "read_sized", None)
     if read_sized is not None and not getattr(read_sized, "lmsbench_bounded", False):
         def _read_sized(bio: Any, _real: Callable[[Any], bytes] = read_sized) -> bytes:  # noqa: ANN401
             return _bounded_read_sized(bio, _real) if _IN_LMSBENCH_READ.get() else _real(bio)
 
         _read_sized.lmsbench_bounded = True  # type: ignore[attr-defined]
+        _read_sized.lmsbench_real = read_sized  # type: ignore[attr-defined]
         storage_mcap.read_sized = _read_sized
     read_exact = getattr(storage_mcap, "read_exact", None)
     if read_exact is not None and not getattr(read_exact, "lmsbench_bounded", False):
@@ -1165,6 +1217,7 @@ def _bound_storage_connections() -> None:
             return _bounded_read_exact(bio, size, _real) if _IN_LMSBENCH_READ.get() else _real(bio, size)
 
         _read_exact.lmsbench_bounded = True  # type: ignore[attr-defined]
+        _read_exact.lmsbench_real = read_exact  # type: ignore[attr-defined]
         storage_mcap.read_exact = _read_exact
     skip_exact = getattr(storage_mcap, "skip_exact", None)
     if skip_exact is not None and not getattr(skip_exact, "lmsbench_bounded", False):
@@ -1175,6 +1228,7 @@ def _bound_storage_connections() -> None:
                 _real(bio, size)
 
         _skip_exact.lmsbench_bounded = True  # type: ignore[attr-defined]
+        _skip_exact.lmsbench_real = skip_exact  # type: ignore[attr-defined]
         storage_mcap.skip_exact = _skip_exact
     decompress = getattr(storage_mcap, "decompress", None)
     if decompress is not None and not getattr(decompress, "lmsbench_bounded", False):
@@ -1185,6 +1239,7 @@ def _bound_storage_connections() -> None:
             return _bounded_decompress(data, compression, size, crc, _real)
 
         _decompress.lmsbench_bounded = True  # type: ignore[attr-defined]
+        _decompress.lmsbench_real = decompress  # type: ignore[attr-defined]
         storage_mcap.decompress = _decompress
     for name, what in (("Schema", "message definitions (schemas)"), ("Channel", "topics (channels)")):
         typ = getattr(storage_mcap, name, None)
@@ -1473,6 +1528,9 @@ class BagReader:
         _bound_zstd_messages()  # before open: a file-compressed ROS 2 bag is decompressed there
         _bound_definitions()
         _bound_storage_connections()
+        if _mcap_unsupported and self._holds_mcap():  # read unbounded, silently, before
+            raise BagError(f"{self.path}: an mcap bag cannot be read with the installed rosbags {_rosbags_version()}: "
+                           f"{_mcap_unsupported} (lmsbench needs rosbags>={ROSBAGS_MCAP_SINCE} to bound its reads)")
         budget = _BUDGET.set(_DefinitionBudget())  # the definitions of this bag together
         try:
             with _lmsbench_read():  # the replaced rosbags functions bound this read only
@@ -1503,6 +1561,10 @@ class BagReader:
                           f"no index; {found.messages} messages recovered from its {found.chunks} whole chunks{cut}",
                           LmsbenchWarning, stacklevel=3)
         return reader
+
+    def _holds_mcap(self) -> bool:
+        """Whether the bag is a ROS 2 bag with an mcap storage file (its own, or one compressed whole)."""
+        return self.path.is_dir() and any(p.name.endswith((".mcap", ".mcap.zstd")) for p in self.path.iterdir())
 
     def _scan_connections(self, reader) -> list:  # noqa: ANN001
         scans = [c for c in reader.connections if c.msgtype == "sensor_msgs/msg/LaserScan"]

@@ -911,3 +911,40 @@ def test_rosbags_used_directly_after_an_lmsbench_read_keeps_its_own_behaviour(tm
         assert [(c.topic, t) for c, t, _ in reader.messages()] == [("/scan0", 10 * 10**9)]
     monkeypatch.undo()
     assert [r.scan.stamp for r in read_log(b, topic="/scan0")] == [10.0]  # lmsbench reads it within its bounds
+
+
+@pytest.mark.parametrize(("change", "said"), [
+    ("missing", "it has no rosbags.rosbag2.storage_mcap.read_exact"),
+    ("other parameters", "its rosbags.rosbag2.storage_mcap.skip_exact takes (bio, size, whence), not (bio, size)"),
+])
+def test_an_mcap_bag_is_refused_where_rosbags_lacks_the_functions_its_bounds_replace(tmp_path, monkeypatch, capsys,
+                                                                                    change, said) -> None:
+    """A review: pyproject allowed rosbags>=0.10, but 0.10.0 .. 0.11.5 have no mcap read_exact / skip_exact /
+    decompress: their bounds were silently left out and an mcap bag read unbounded (exit 0). The floor is the
+    first rosbags with them (0.11.6), and a rosbags whose functions are missing or take other parameters has its
+    mcap bags refused in one line; a sqlite3 bag still reads."""
+    from importlib.metadata import version
+
+    from rosbags.rosbag2 import storage_mcap
+
+    from experiments.cli import main
+    from lms200.bag import ROSBAGS_MCAP_SINCE, BagError
+
+    pyproject = (Path(__file__).parents[1] / "pyproject.toml").read_text()
+    assert f'"rosbags>={ROSBAGS_MCAP_SINCE}"' in pyproject and ROSBAGS_MCAP_SINCE == "0.11.6"
+    b = _ros2_bag_of_topics(tmp_path / "b", 1, "mcap")
+    if change == "missing":
+        monkeypatch.delattr(storage_mcap, "read_exact")
+    else:
+        monkeypatch.setattr(storage_mcap, "skip_exact", lambda bio, size, whence: None)
+    expected = (f"{b}: an mcap bag cannot be read with the installed rosbags {version('rosbags')}: {said} "
+                f"(lmsbench needs rosbags>=0.11.6 to bound its reads)")
+    with pytest.raises(BagError) as err:
+        list(read_log(b, topic="/scan0"))
+    assert str(err.value) == expected
+    assert main(["info", str(b)]) == 2
+    assert capsys.readouterr().err == f"lmsbench info: error: {expected}\n"
+    sq = _ros2_bag_of_topics(tmp_path / "sq", 1, "sqlite3")
+    assert [r.scan.stamp for r in read_log(sq, topic="/scan0")] == [10.0]
+    monkeypatch.undo()
+    assert [r.scan.stamp for r in read_log(b, topic="/scan0")] == [10.0]
