@@ -482,8 +482,11 @@ class CarmenReader:
             elif chain is not None:
                 yield from chain.odom(pose, stamp)
 
+        def held_tails_of(events: list[_Held]) -> list[tuple[int, int]]:
+            return [(_Tails.measure(e.words)[0], e.line_no) for e in events if isinstance(e, _HeldLaser)]
+
         def held_tails() -> list[tuple[int, int]]:
-            return [(_Tails.measure(e.words)[0], e.line_no) for e in undecided if isinstance(e, _HeldLaser)]
+            return held_tails_of(undecided)
 
         def take(line: _HeldLaser) -> Record:
             """The record of a laser line whose tail is the rule's: its geometry's beam count checked (and set,
@@ -537,6 +540,12 @@ class CarmenReader:
                     yield from emit(rec)
                 elif strict or (self.skip_bad_lines and tails.rule is not None):
                     self._bad(event.line_no, event.kind, ValueError(wrong))
+                elif self.skip_bad_lines:  # listed, in log order: it was left out without a word
+                    words_after = ", ".join(map(str, sorted({t for t, _ in held_tails_of(held)})))
+                    self._bad(event.line_no, event.kind, ValueError(
+                        f"the pass ended by an error before the laser lines' ending could be told (the held lines "
+                        f"have {words_after} words after their ipc_timestamp, none shared, none as CARMEN writes); "
+                        "not read"))
 
         flushes += [lambda: release(strict=False)]
         flushes += [holder.flush for holder in (pairing, chain) if holder is not None]
