@@ -63,7 +63,7 @@ from typing import IO, Callable, Iterable, Iterator
 
 import numpy as np
 
-from .carmen_odom import CorrectedChain, OdomPairing
+from .carmen_odom import CorrectedChain, OdomPairing, compose, relative
 from .codes import (
     CODE_ABOVE_MAXIMUM,
     CODE_NOT_VALID,
@@ -98,6 +98,15 @@ EXACT_GEOMETRY_NAMES = {
 }
 EXACT_GEOMETRY_PARAMS = frozenset(n for names in EXACT_GEOMETRY_NAMES.values() for n in names)
 EXACT_GEOMETRY_AGREEMENT = 1e-12  # rad, relative to max(1, |angle|): degrees to radians and back differ by ~1e-16
+#: CARMEN's robot-module PARAM lines that place a FLASER / RLASER laser on the robot: (forward offset m,
+#: side offset m (to the left), angular offset rad). Logs of CARMEN before 0.7 (Intel, ACES) carry only the
+#: first (``robot_frontlaser_offset``, ``robot_rearlaser_offset``); 0.7 added the side and angular ones
+#: (docs/data.md, "Laser mounting")
+MOUNT_PARAM_NAMES = {
+    "FLASER": ("robot_frontlaser_offset", "robot_frontlaser_side_offset", "robot_frontlaser_angular_offset"),
+    "RLASER": ("robot_rearlaser_offset", "robot_rearlaser_side_offset", "robot_rearlaser_angular_offset"),
+}
+MOUNT_PARAMS = frozenset(n for names in MOUNT_PARAM_NAMES.values() for n in names)
 POSED_LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages that carry poses
 RAW_LASER_KINDS = ("RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4")  # laser messages without poses
 LASER_KINDS = POSED_LASER_KINDS + RAW_LASER_KINDS  # laser messages read (one kind per pass)
@@ -423,14 +432,20 @@ class CarmenReader:
 
     def __iter__(self) -> Iterator[Record]:
         flushes: list[Callable[[], Iterator[Record]]] = []  # this pass's flush() of what holds records back
+        # id(scan) -> the laser's pose on the robot (laser_mount) of each record read and not yet given: its
+        # poses are the robot's until the corrected chain and the held tails are done with it (the ODOM
+        # lines are the robot's), then the laser's (on_the_laser)
+        mounts: dict[int, Pose2D] = {}
         try:
-            yield from self._read(flushes)
+            for rec in self._read(flushes, mounts):
+                yield on_the_laser(rec, mounts.pop(id(rec.scan), None))
         except Exception:  # a bad line ends the pass: the records held for a later line come first
             for flush in flushes:
-                yield from flush()
+                for rec in flush():
+                    yield on_the_laser(rec, mounts.pop(id(rec.scan), None))
             raise
 
-    def _read(self, flushes: list[Callable[[], Iterator[Record]]]) -> Iterator[Record]:
+    def _read(self, flushes: list[Callable[[], Iterator[Record]]], mounts: dict[int, Pose2D]) -> Iterator[Record]:
         default = self._survey()
         self.stats = stats = ReadStats(laser=self.topic or default)
         if stats.laser is not None:
@@ -486,8 +501,10 @@ class CarmenReader:
                 wrong = tails.problem(line_words)
                 if wrong is None:
                     yield from emit(rec)
-                elif strict:
-                    self._bad(held_no, held_kind, ValueError(wrong))
+                else:
+                    mounts.pop(id(rec.scan), None)
+                    if strict:
+                        self._bad(held_no, held_kind, ValueError(wrong))
 
         flushes += [lambda: release(strict=False)]
         flushes += [holder.flush for holder in (pairing, chain) if holder is not None]
@@ -551,6 +568,7 @@ class CarmenReader:
                         continue
                     self._check_range_max(line_no, params.get(RANGE_MIN_PARAM, 0.0))
                     odom: Pose2D | None
+                    mount: Pose2D | None = None  # the laser's pose on the robot (None: RAWLASER, not known)
                     if kind in ("FLASER", "RLASER"):
                         declared = laser_geometry.from_params(kind, params)
                         geometry = self.geometry.merged(declared)
@@ -558,10 +576,15 @@ class CarmenReader:
                         exact = (params.get(exact_min), params.get(exact_step))
                         scan, odom = _parse_flaser(words, units, geometry, params.get(RANGE_MIN_PARAM, 0.0), exact,
                                                    range_words, declared.range_max)
+                        mount = laser_mount(kind, params)
                     else:
-                        scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
-                                                       params.get(RANGE_MIN_PARAM, 0.0), range_words,
-                                                       exact_angles=bool(params.get(EXACT_ANGLES_PARAM)))
+                        scan, odom, laser = _parse_robotlaser(words, units, self.geometry.range_max,
+                                                              params.get(RANGE_MIN_PARAM, 0.0), range_words,
+                                                              exact_angles=bool(params.get(EXACT_ANGLES_PARAM)))
+                        # the line's own laser pose on its robot pose; a laser pose of exactly 0 0 0 beside
+                        # a robot pose is a converter's placeholder (this package's tests write such lines)
+                        if odom is not None and laser is not None and laser != (0.0, 0.0, 0.0):
+                            mount = relative(odom, laser)
                         header = (words[2], words[3], words[4])  # start, fov, resolution as written
                         first = counts.get(header)
                         if first is None and len(counts) < MAX_GEOMETRIES and max(map(len, header)) <= MAX_CACHED_WORD_CHARS:
@@ -576,6 +599,7 @@ class CarmenReader:
                              and (held[1] > last_stamp or held[1] == scan.stamp) else None)
                     last_stamp = scan.stamp
                     rec = Record(scan=scan, odom=odom if has_odometry else None, truth=given)
+                    mounts[id(scan)] = mount if mount is not None else (0.0, 0.0, 0.0)
                     if tails.rule is not None:
                         yield from emit(rec)
                     else:  # held until the pass's tail is told (_Tails)
@@ -775,6 +799,12 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
     elif name == EXACT_ANGLES_PARAM:
         _require(value in ("exact", "grid"), f"{EXACT_ANGLES_PARAM} must be exact or grid, got {value!r}")
         params[name] = float(value == "exact")
+    elif name in MOUNT_PARAMS:  # a laser's mounting on the robot (laser_mount)
+        number = float(_floats([value], name)[0])
+        angular = name.endswith("_angular_offset")
+        _require(math.isfinite(number) and (angular or abs(number) <= MAX_COORD_M),
+                 f"{name} must be a finite number ({'rad' if angular else f'm, within +-{MAX_COORD_M:g}'}), got {value!r}")
+        params[name] = number
     elif name == RANGE_MIN_PARAM:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number >= 0, f"{name} must be a finite number >= 0 (m), got {value!r}")
@@ -1042,11 +1072,40 @@ def at_max_range(ranges: np.ndarray, declared_max: float | None) -> np.ndarray:
     return ranges
 
 
+def laser_mount(kind: str, params: dict[str, float]) -> Pose2D:
+    """The pose of a FLASER / RLASER laser on the robot (x forward m, y left m, theta rad), from the log's
+    PARAM lines so far (``MOUNT_PARAM_NAMES``), as CARMEN's robot module placed it (docs/data.md, "Laser
+    mounting"): the front laser at (offset, side offset, angular offset), each 0 where the log has no
+    line. A rear laser whose log has no ``robot_rearlaser_side_offset`` / ``_angular_offset`` line is
+    placed as CARMEN's robot module before 0.7 placed it, the one that wrote RLASER lines: turned by pi,
+    and ``robot_rearlaser_offset`` along its own heading, (-offset, 0, pi); with either line, as 0.7's
+    module does, (offset, side offset, angular offset)."""
+    forward, side, angular = MOUNT_PARAM_NAMES[kind]
+    if kind == "RLASER" and side not in params and angular not in params:
+        return (-params.get(forward, 0.0), 0.0, math.pi)
+    return (params.get(forward, 0.0), params.get(side, 0.0), params.get(angular, 0.0))
+
+
+def on_the_laser(rec: Record, mount: Pose2D | None) -> Record:
+    """``rec`` with its robot poses (odometry, truth, corrected pose) moved onto the laser mounted at
+    ``mount`` on the robot (:func:`laser_mount`): each pose (+) mount. A zero or unknown (None) mount
+    leaves the record as it is, bit for bit."""
+    if mount is None or mount == (0.0, 0.0, 0.0):
+        return rec
+
+    def moved(pose: Pose2D | None) -> Pose2D | None:
+        return None if pose is None else compose(pose, mount)
+
+    return Record(scan=rec.scan, odom=moved(rec.odom), truth=moved(rec.truth), corrected=moved(rec.corrected))
+
+
 def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry,
                   range_min: float = 0.0,
                   exact: tuple[float | None, float | None] = (None, None),
                   cache: _RangeWords | None = None, declared_max: float | None = None) -> tuple[Scan, Pose2D]:
-    """A FLASER / RLASER line's scan and odometry; ``cache``: the pass's range words (:func:`_range_floats`);
+    """A FLASER / RLASER line's scan and odometry (the robot's: its second pose, odom_x odom_y odom_theta;
+    the first, x y theta, is the laser's by CARMEN's robot module or a scan matcher's corrected pose, not
+    read); ``cache``: the pass's range words (:func:`_range_floats`);
     ``declared_max``: the maximum range of the log's PARAM lines (a reading at it is no return, :func:`_ranges`)."""
     kind = words[0]
     _require(len(words) >= 2, f"{kind} needs a beam count")
@@ -1075,8 +1134,9 @@ def _exact_or_snapped(angle: float, exact: float | None) -> float:
 
 def _parse_robotlaser(words: list[str], units: Units | None, range_max_override: float | None,
                       range_min: float = 0.0, cache: _RangeWords | None = None,
-                      exact_angles: bool = False) -> tuple[Scan, Pose2D | None]:
-    """A ROBOTLASER1 / 2 line (robot pose as odometry) or a RAWLASER1 .. 4 line (no pose); its start
+                      exact_angles: bool = False) -> tuple[Scan, Pose2D | None, Pose2D | None]:
+    """A ROBOTLASER1 / 2 line's scan, robot pose (odometry) and laser pose, or a RAWLASER1 .. 4 line's
+    scan (no poses: None, None); its start
     angle and resolution snapped onto the 0.05 deg grid where only text rounding explains their
     distance from it (:func:`snap_angle`), or taken as written with ``exact_angles`` (``PARAM
     lmsbench_robotlaser_angles exact``)."""
@@ -1119,11 +1179,11 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     snap = (lambda angle: angle) if exact_angles else snap_angle
     scan = Scan(ranges, snap(start), snap(resolution), range_min, range_max, stamp)
     if kind.startswith("RAWLASER"):
-        return scan, None
-    # the laser pose, speeds, safety distances and turn axis are not read, but nan or inf is no such value (was taken)
-    _finite_pose(tail[0:3], f"{kind} laser")
+        return scan, None, None
+    # the speeds, safety distances and turn axis are not read, but nan or inf is no such value (was taken)
+    laser = _finite_pose(tail[0:3], f"{kind} laser")
     _require(all(map(math.isfinite, tail[6:11])), f"{kind} speeds, safety distances or turn axis are not finite")
-    return scan, _finite_pose(tail[3:6], f"{kind} robot")
+    return scan, _finite_pose(tail[3:6], f"{kind} robot"), laser
 
 
 # ---------------------------------------------------------------------------------------------
