@@ -23,7 +23,10 @@ Formats (one message a line, ``#`` comments; messages of other kinds, named in c
 After the ipc_timestamp, lines of other writers may hold nothing, one word, or a hostname of several words
 before the logger_timestamp (:func:`_tail_fits`); the laser lines of a pass must end alike (:class:`_Tails`).
 
-Conventions: a scan's ``stamp`` is the message's ipc_timestamp; ``.odom`` is the robot pose the laser
+Conventions: a record's poses are the laser's: the robot's moved by the laser's mounting on it (FLASER /
+RLASER: the log's ``PARAM robot_frontlaser_*`` / ``robot_rearlaser_*`` lines, :func:`laser_mount`;
+ROBOTLASER: the line's laser pose seen from its robot pose; docs/data.md, "Laser mounting"), each
+untouched where that is zero. A scan's ``stamp`` is the message's ipc_timestamp; ``.odom`` is the robot pose the laser
 message carries (FLASER odom fields, ROBOTLASER1 robot fields); ``.truth`` is the pose of the last TRUEPOS
 line before the laser message (ODOM, PARAM, other laser kinds between do not matter), when no laser line of
 the kind read (even a malformed one) came between and their ipc_timestamps lie within TRUTH_MAX_GAP_S. SICK special codes stored as ranges (81.83 / 81.91 m in
@@ -151,11 +154,15 @@ class ReadStats(SkipLog):
             ``lms200.records.MAX_SKIPPED_KEPT`` of them; ``skipped_count`` counts them all.
         stopped: why reading ended early (undecompressable data under ``skip_bad_lines``), or None.
         laser: the laser message kind read (see ``topic``), None before the first one.
+        mount: the laser's mounting on the robot (x m, y m, theta rad; :func:`laser_mount`) the last
+            record given was moved onto, where one was not zero, else None; ``mounted``: records so moved.
     """
 
     messages: dict[str, int] = field(default_factory=dict)
     stopped: str | None = None
     laser: str | None = None
+    mount: Pose2D | None = None
+    mounted: int = 0
 
     def count(self, kind: str) -> None:
         """Count a line of a message kind: the kinds this reader knows always, others up to
@@ -436,13 +443,21 @@ class CarmenReader:
         # poses are the robot's until the corrected chain and the held tails are done with it (the ODOM
         # lines are the robot's), then the laser's (on_the_laser)
         mounts: dict[int, Pose2D] = {}
+
+        def given(rec: Record) -> Record:
+            mount = mounts.pop(id(rec.scan), None)
+            moved = on_the_laser(rec, mount)
+            if moved is not rec:
+                self.stats.mount, self.stats.mounted = mount, self.stats.mounted + 1
+            return moved
+
         try:
             for rec in self._read(flushes, mounts):
-                yield on_the_laser(rec, mounts.pop(id(rec.scan), None))
+                yield given(rec)
         except Exception:  # a bad line ends the pass: the records held for a later line come first
             for flush in flushes:
                 for rec in flush():
-                    yield on_the_laser(rec, mounts.pop(id(rec.scan), None))
+                    yield given(rec)
             raise
 
     def _read(self, flushes: list[Callable[[], Iterator[Record]]], mounts: dict[int, Pose2D]) -> Iterator[Record]:

@@ -65,7 +65,7 @@ def _offset_log(tmp_path: Path, recs: list[Record], fmt: str, params: list[str],
     path = tmp_path / name
     write_log(path, robot, fmt=fmt)
     lines = path.read_text().splitlines()
-    laser_odom = iter(r.odom for r in recs)
+    laser_odom = iter([r.odom for r in recs if r.odom is not None])
     out = lines[:3] + [f"PARAM {p} lmsbench 0" for p in params]
     for line in lines[3:]:
         words = line.split()
@@ -203,3 +203,16 @@ def test_the_intel_log_moved_onto_a_mounted_laser_reads_its_own_laser_poses(tmp_
     assert len(got) == len(want) == 910 and all(r.corrected is not None for r in got)
     _assert_poses([r.corrected for r in got], [r.corrected for r in want], atol=1e-8)
     _assert_poses([r.odom for r in got], [r.odom for r in want], atol=1e-8)
+
+
+def test_info_says_where_the_laser_is_mounted(tmp_path, laser_records, capsys):
+    from experiments.cli import main
+
+    path = _offset_log(tmp_path, laser_records, "flaser", _front_params(), MOUNT, "front.log")
+    assert main(["info", str(path)]) == 0
+    assert ('  laser mount     x 0.250 m, y -0.100 m, 17.19 deg on the robot (14 scans): their poses are the '
+            'laser\'s (docs/data.md, "Laser mounting")\n') in capsys.readouterr().out
+    plain = tmp_path / "plain.log"
+    write_log(plain, laser_records, fmt="flaser")
+    assert main(["info", str(plain)]) == 0
+    assert "laser mount" not in capsys.readouterr().out
