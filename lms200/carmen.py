@@ -24,8 +24,8 @@ After the ipc_timestamp, lines of other writers may hold nothing, one word, or a
 before the logger_timestamp (:func:`_tail_fits`); the laser lines of a pass must end alike (:class:`_Tails`).
 
 Conventions: a record's poses are the laser's: the robot's moved by the laser's mounting on it (FLASER /
-RLASER: the log's ``PARAM robot_frontlaser_*`` / ``robot_rearlaser_*`` lines, :func:`laser_mount`;
-ROBOTLASER: the line's laser pose seen from its robot pose; docs/data.md, "Laser mounting"), each
+RLASER, ROBOTLASER1 / 2: the log's ``PARAM robot_frontlaser_*`` / ``robot_rearlaser_*`` lines,
+:func:`laser_mount`, never a ROBOTLASER line's own laser pose; docs/data.md, "Laser mounting"), each
 untouched where that is zero. A scan's ``stamp`` is the message's ipc_timestamp; ``.odom`` is the robot pose the laser
 message carries (FLASER odom fields, ROBOTLASER1 robot fields); ``.truth`` is the pose of the last TRUEPOS
 line before the laser message (ODOM, PARAM, other laser kinds between do not matter), when no laser line of
@@ -66,7 +66,7 @@ from typing import IO, Callable, Iterable, Iterator
 
 import numpy as np
 
-from .carmen_odom import CorrectedChain, OdomPairing, compose, relative
+from .carmen_odom import CorrectedChain, OdomPairing, compose
 from .codes import (
     CODE_ABOVE_MAXIMUM,
     CODE_NOT_VALID,
@@ -596,10 +596,10 @@ class CarmenReader:
                         scan, odom, laser = _parse_robotlaser(words, units, self.geometry.range_max,
                                                               params.get(RANGE_MIN_PARAM, 0.0), range_words,
                                                               exact_angles=bool(params.get(EXACT_ANGLES_PARAM)))
-                        # the line's own laser pose on its robot pose; a laser pose of exactly 0 0 0 beside
-                        # a robot pose is a converter's placeholder (this package's tests write such lines)
-                        if odom is not None and laser is not None and laser != (0.0, 0.0, 0.0):
-                            mount = relative(odom, laser)
+                        # the mount of the log's PARAM lines, never the line's own laser pose: CARMEN's scan
+                        # matcher (vasco) writes its corrected pose there beside the raw odometry (laser_mount)
+                        if odom is not None and laser is not None:
+                            mount = laser_mount(kind, params)
                         header = (words[2], words[3], words[4])  # start, fov, resolution as written
                         first = counts.get(header)
                         if first is None and len(counts) < MAX_GEOMETRIES and max(map(len, header)) <= MAX_CACHED_WORD_CHARS:
@@ -1088,14 +1088,17 @@ def at_max_range(ranges: np.ndarray, declared_max: float | None) -> np.ndarray:
 
 
 def laser_mount(kind: str, params: dict[str, float]) -> Pose2D:
-    """The pose of a FLASER / RLASER laser on the robot (x forward m, y left m, theta rad), from the log's
-    PARAM lines so far (``MOUNT_PARAM_NAMES``), as CARMEN's robot module placed it (docs/data.md, "Laser
-    mounting"): the front laser at (offset, side offset, angular offset), each 0 where the log has no
-    line. A rear laser whose log has no ``robot_rearlaser_side_offset`` / ``_angular_offset`` line is
-    placed as CARMEN's robot module before 0.7 placed it, the one that wrote RLASER lines: turned by pi,
-    and ``robot_rearlaser_offset`` along its own heading, (-offset, 0, pi); with either line, as 0.7's
-    module does, (offset, side offset, angular offset)."""
-    forward, side, angular = MOUNT_PARAM_NAMES[kind]
+    """The pose of a laser on the robot (x forward m, y left m, theta rad), from the log's PARAM lines so
+    far (``MOUNT_PARAM_NAMES``), as CARMEN's robot module placed it (docs/data.md, "Laser mounting"): the
+    front laser (FLASER, ROBOTLASER1) at (offset, side offset, angular offset), each 0 where the log has
+    no line. A rear laser (RLASER) whose log has no ``robot_rearlaser_side_offset`` / ``_angular_offset``
+    line is placed as CARMEN's robot module before 0.7 placed it, the one that wrote RLASER lines: turned
+    by pi, and ``robot_rearlaser_offset`` along its own heading, (-offset, 0, pi); with either line, as
+    0.7's module does, (offset, side offset, angular offset). ROBOTLASER2 (0.7's rear laser) is placed as
+    0.7's module places it, (offset, side offset, angular offset), with no pi of its own. A ROBOTLASER
+    line's own laser pose is not used: CARMEN's scan matcher (vasco) writes its corrected pose there,
+    beside the raw odometry as robot pose, so the two need not differ by the mount."""
+    forward, side, angular = MOUNT_PARAM_NAMES["FLASER" if kind in ("FLASER", "ROBOTLASER1") else "RLASER"]
     if kind == "RLASER" and side not in params and angular not in params:
         return (-params.get(forward, 0.0), 0.0, math.pi)
     return (params.get(forward, 0.0), params.get(side, 0.0), params.get(angular, 0.0))

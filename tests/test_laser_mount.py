@@ -2,7 +2,7 @@
 
 CARMEN's robot module places the laser at (robot_frontlaser_offset, _side_offset, _angular_offset) on the
 robot, the rear laser before CARMEN 0.7 turned by pi with robot_rearlaser_offset along its own heading, and
-ROBOTLASER lines carry both poses (docs/data.md, "Laser mounting"). The reader gives every record the
+ROBOTLASER1 / 2 lines are placed by the same PARAM lines, never by their own laser pose (docs/data.md, "Laser mounting"). The reader gives every record the
 laser's poses (odometry, truth, corrected pose), what the scan was taken from. Each test builds a log
 whose robot poses are the laser's moved by a known mount, with independent (numpy) geometry, and checks
 that it reads with the same laser poses as the log written at the laser's own poses; before, the
@@ -132,11 +132,61 @@ def test_a_carmen_07_rear_laser_takes_its_angular_offset(tmp_path, laser_records
     _assert_poses([r.odom for r in read_log(path)], [r.odom for r in laser_records])
 
 
-def test_a_robotlaser_line_places_the_scan_at_its_laser_pose(tmp_path, laser_records):
-    path = _offset_log(tmp_path, laser_records, "robotlaser1", [], MOUNT, "robotlaser.log")
+def test_a_robotlaser_log_is_moved_by_its_mounting_params(tmp_path, laser_records):
+    path = _offset_log(tmp_path, laser_records, "robotlaser1", _front_params(), MOUNT, "robotlaser.log")
     got = list(read_log(path))
     _assert_poses([r.odom for r in got], [r.odom for r in laser_records])
     _assert_poses([r.truth for r in got], [r.truth for r in laser_records])  # TRUEPOS is the robot's
+    # ROBOTLASER2, CARMEN 0.7's rear laser: robot_rearlaser_*, the angular offset holding its pi
+    rear = (-0.3, 0.05, 3.1415923)
+    params = ["robot_rearlaser_offset -0.3", "robot_rearlaser_side_offset 0.05", "robot_rearlaser_angular_offset 3.1415923"]
+    path2 = _offset_log(tmp_path, laser_records, "robotlaser1", params, rear, "robotlaser2.log")
+    path2.write_text(path2.read_text().replace("ROBOTLASER1 ", "ROBOTLASER2 "))
+    reader = read_log(path2)
+    got2 = list(reader)
+    assert reader.stats.laser == "ROBOTLASER2" and len(got2) == 14
+    _assert_poses([r.odom for r in got2], [r.odom for r in laser_records])
+
+
+def test_a_vasco_robotlaser_log_reads_its_raw_robot_poses_as_odometry(tmp_path, laser_records):
+    """CARMEN's scan matcher (vasco-tiny.c: ``l.laser_pose = corrpos``) writes ROBOTLASER1 lines whose laser
+    pose is the corrected pose and robot pose the raw odometry: no mounting PARAM, no mounting; before, the
+    line's laser pose seen from its robot pose was taken as the mounting and .odom read as the corrected pose."""
+    raw = [Record(r.scan, odom=r.odom) for r in laser_records]
+    path = tmp_path / "vasco.log"
+    write_log(path, raw, fmt="robotlaser1")
+    corrected = iter(r.truth for r in laser_records)
+    lines = []
+    for line in path.read_text().splitlines():
+        words = line.split()
+        if words[0] == "ROBOTLASER1":
+            at = 10 + int(words[8])
+            words[at : at + 3] = [repr(v) for v in next(corrected)]  # the laser pose field: vasco's corrpos
+            line = " ".join(words)
+        lines.append(line)
+    path.write_text("\n".join(lines) + "\n")
+    reader = read_log(path)
+    got = list(reader)
+    assert [r.odom for r in got] == [r.odom for r in raw]
+    assert got[7].odom != pytest.approx(laser_records[7].truth, abs=0.05)  # not the corrected pose
+    assert reader.stats.mount is None and reader.stats.mounted == 0
+
+
+def test_a_robotlaser_laser_starting_at_the_origin_takes_no_step(tmp_path, laser_records):
+    """A laser whose first pose is exactly 0 0 0 is mounted like the others; before, 0 0 0 was taken for a
+    converter's placeholder and that scan placed at the robot's pose, 0.27 m and 17 deg from the next."""
+    first = laser_records[0].odom
+    c, s = math.cos(first[2]), math.sin(first[2])
+
+    def from_first(p):
+        dx, dy = p[0] - first[0], p[1] - first[1]
+        return (c * dx + s * dy, -s * dx + c * dy, math.atan2(math.sin(p[2] - first[2]), math.cos(p[2] - first[2])))
+
+    laser = [Record(r.scan, odom=from_first(r.odom), truth=from_first(r.truth)) for r in laser_records]
+    assert laser[0].odom == (0.0, 0.0, 0.0)
+    got = list(read_log(_offset_log(tmp_path, laser, "robotlaser1", _front_params(), MOUNT, "origin.log")))
+    _assert_poses([r.odom for r in got], [r.odom for r in laser])
+    assert math.hypot(got[0].odom[0], got[0].odom[1]) < 1e-9 and abs(got[0].odom[2]) < 1e-9
 
 
 def test_written_back_the_laser_poses_are_both_flaser_poses_and_read_alike(tmp_path, laser_records):
