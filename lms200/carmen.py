@@ -156,6 +156,10 @@ class ReadStats(SkipLog):
         laser: the laser message kind read (see ``topic``), None before the first one.
         mount: the laser's mounting on the robot (x m, y m, theta rad; :func:`laser_mount`) the last
             record given was moved onto, where one was not zero, else None; ``mounted``: records so moved.
+        mount_changes: times a laser line of the kind read had another mounting than the one before it
+            (a mounting PARAM line between them: it applies from its line on, so the scans before are in
+            another frame); ``mount_changed_at``: the line number of the mounting PARAM line that made the
+            first change, ``mount_before``: the mounting before it; None without a change.
     """
 
     messages: dict[str, int] = field(default_factory=dict)
@@ -163,6 +167,9 @@ class ReadStats(SkipLog):
     laser: str | None = None
     mount: Pose2D | None = None
     mounted: int = 0
+    mount_changes: int = 0
+    mount_changed_at: int | None = None
+    mount_before: Pose2D | None = None
 
     def count(self, kind: str) -> None:
         """Count a line of a message kind: the kinds this reader knows always, others up to
@@ -470,6 +477,8 @@ class CarmenReader:
         last_stamp = -math.inf  # the last scan's stamp: a TRUEPOS stamped at or before it is its, not the next's
         has_odometry = True
         params: dict[str, float] = {}
+        last_mount: Pose2D | None = None  # the mounting of the last laser line read (mount_changes)
+        mount_line: int | None = None  # the last mounting PARAM line
         counts: dict[tuple[str, str, str], tuple[int, int]] = {}  # ROBOTLASER header -> (beams, first line), bounded
         blank = _BlankRun(self.path)
         range_words = _RangeWords()  # range word -> its number (_range_floats), for this pass
@@ -559,6 +568,8 @@ class CarmenReader:
                                      "PARAM, ...: capitals, digits and '_'); junk or a damaged line")
                 if kind == "PARAM":
                     units, has_odometry = _param(words, params, units, has_odometry)
+                    if len(words) > 1 and words[1] in MOUNT_PARAMS:
+                        mount_line = line_no
                 elif kind == "TRUEPOS":
                     truth = None  # a malformed TRUEPOS sets none
                     pose = _pose(words, 1, "TRUEPOS")
@@ -615,6 +626,12 @@ class CarmenReader:
                     last_stamp = scan.stamp
                     rec = Record(scan=scan, odom=odom if has_odometry else None, truth=given)
                     mounts[id(scan)] = mount if mount is not None else (0.0, 0.0, 0.0)
+                    if mount is not None:
+                        if last_mount is not None and mount != last_mount:  # a PARAM line changed it mid-log
+                            stats.mount_changes += 1
+                            if stats.mount_changed_at is None:
+                                stats.mount_changed_at, stats.mount_before = mount_line, last_mount
+                        last_mount = mount
                     if tails.rule is not None:
                         yield from emit(rec)
                     else:  # held until the pass's tail is told (_Tails)

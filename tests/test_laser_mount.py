@@ -266,3 +266,35 @@ def test_info_says_where_the_laser_is_mounted(tmp_path, laser_records, capsys):
     write_log(plain, laser_records, fmt="flaser")
     assert main(["info", str(plain)]) == 0
     assert "laser mount" not in capsys.readouterr().out
+
+
+def test_a_mounting_param_line_after_scans_is_told_as_a_change_of_frame(tmp_path, laser_records, capsys):
+    """A mounting PARAM line after laser lines applies from its line on: the scans before it are in another
+    frame. ReadStats and info say so (the line, the mounting before); before, only the last mount was told."""
+    from experiments.cli import main
+
+    path = _offset_log(tmp_path, laser_records, "flaser", _front_params(), MOUNT, "changed.log")
+    lines = path.read_text().splitlines()
+    at = [i for i, line in enumerate(lines) if line.startswith("FLASER")][5]
+    lines[at:at] = ["PARAM robot_frontlaser_offset 0.25 lmsbench 0",  # restated, unchanged: no change
+                    "PARAM robot_frontlaser_offset 0.5 lmsbench 0"]
+    path.write_text("\n".join(lines) + "\n")
+    reader = read_log(path)
+    got = list(reader)
+    assert len(got) == 14
+    stats = reader.stats
+    assert (stats.mount_changes, stats.mount_changed_at, stats.mount_before) == (1, at + 2, MOUNT)
+    assert stats.mount == (0.5, -0.1, 0.3) and stats.mounted == 14
+    _assert_poses([r.odom for r in got[:5]], [r.odom for r in laser_records[:5]])  # the first mount's frame
+    assert main(["info", str(path)]) == 0
+    assert (f"  laser mount     changed mid-log 1 time, first by the PARAM line {at + 2} (before it x 0.250 m, "
+            "y -0.100 m, 17.19 deg): each scan is placed by the mounting of the lines before it\n") in capsys.readouterr().out
+    assert main(["info", "--json", str(path)]) == 0
+    import json
+
+    assert json.loads(capsys.readouterr().out)["laser_mount_changes"] == {"count": 1, "first_line": at + 2,
+                                                                          "before": list(MOUNT)}
+    plain = _offset_log(tmp_path, laser_records, "flaser", _front_params(), MOUNT, "steady.log")
+    reader = read_log(plain)
+    list(reader)
+    assert (reader.stats.mount_changes, reader.stats.mount_changed_at, reader.stats.mount_before) == (0, None, None)
