@@ -155,7 +155,8 @@ class ReadStats(SkipLog):
         stopped: why reading ended early (undecompressable data under ``skip_bad_lines``), or None.
         laser: the laser message kind read (see ``topic``), None before the first one.
         mount: the laser's mounting on the robot (x m, y m, theta rad; :func:`laser_mount`) the last
-            record given was moved onto, where one was not zero, else None; ``mounted``: records so moved.
+            record given was moved onto, where one was not zero, else None (the last one only: ``mount_changes``
+            says whether it varied); ``mounted``: records so moved.
         mount_changes: times a laser line of the kind read had another mounting than the one before it
             (a mounting PARAM line between them: it applies from its line on, so the scans before are in
             another frame); ``mount_changed_at``: the line number of the mounting PARAM line that made the
