@@ -23,7 +23,10 @@ Formats (one message a line, ``#`` comments; messages of other kinds, named in c
 After the ipc_timestamp, lines of other writers may hold nothing, one word, or a hostname of several words
 before the logger_timestamp (:func:`_tail_fits`); the laser lines of a pass must end alike (:class:`_Tails`).
 
-Conventions: a scan's ``stamp`` is the message's ipc_timestamp; ``.odom`` is the robot pose the laser
+Conventions: a record's poses are the laser's: the robot's moved by the laser's mounting on it (FLASER /
+RLASER, ROBOTLASER1 / 2: the log's ``PARAM robot_frontlaser_*`` / ``robot_rearlaser_*`` lines,
+:func:`laser_mount`, never a ROBOTLASER line's own laser pose; docs/data.md, "Laser mounting"), each
+untouched where that is zero. A scan's ``stamp`` is the message's ipc_timestamp; ``.odom`` is the robot pose the laser
 message carries (FLASER odom fields, ROBOTLASER1 robot fields); ``.truth`` is the pose of the last TRUEPOS
 line before the laser message (ODOM, PARAM, other laser kinds between do not matter), when no laser line of
 the kind read (even a malformed one) came between and their ipc_timestamps lie within TRUTH_MAX_GAP_S. SICK special codes stored as ranges (81.83 / 81.91 m in
@@ -63,7 +66,7 @@ from typing import IO, Callable, Iterable, Iterator
 
 import numpy as np
 
-from .carmen_odom import CorrectedChain, OdomPairing
+from .carmen_odom import CorrectedChain, OdomPairing, compose
 from .codes import (
     CODE_ABOVE_MAXIMUM,
     CODE_NOT_VALID,
@@ -98,6 +101,15 @@ EXACT_GEOMETRY_NAMES = {
 }
 EXACT_GEOMETRY_PARAMS = frozenset(n for names in EXACT_GEOMETRY_NAMES.values() for n in names)
 EXACT_GEOMETRY_AGREEMENT = 1e-12  # rad, relative to max(1, |angle|): degrees to radians and back differ by ~1e-16
+#: CARMEN's robot-module PARAM lines that place a FLASER / RLASER laser on the robot: (forward offset m,
+#: side offset m (to the left), angular offset rad). Logs of CARMEN before 0.7 (Intel, ACES) carry only the
+#: first (``robot_frontlaser_offset``, ``robot_rearlaser_offset``); 0.7 added the side and angular ones
+#: (docs/data.md, "Laser mounting")
+MOUNT_PARAM_NAMES = {
+    "FLASER": ("robot_frontlaser_offset", "robot_frontlaser_side_offset", "robot_frontlaser_angular_offset"),
+    "RLASER": ("robot_rearlaser_offset", "robot_rearlaser_side_offset", "robot_rearlaser_angular_offset"),
+}
+MOUNT_PARAMS = frozenset(n for names in MOUNT_PARAM_NAMES.values() for n in names)
 POSED_LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages that carry poses
 RAW_LASER_KINDS = ("RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4")  # laser messages without poses
 LASER_KINDS = POSED_LASER_KINDS + RAW_LASER_KINDS  # laser messages read (one kind per pass)
@@ -142,11 +154,23 @@ class ReadStats(SkipLog):
             ``lms200.records.MAX_SKIPPED_KEPT`` of them; ``skipped_count`` counts them all.
         stopped: why reading ended early (undecompressable data under ``skip_bad_lines``), or None.
         laser: the laser message kind read (see ``topic``), None before the first one.
+        mount: the laser's mounting on the robot (x m, y m, theta rad; :func:`laser_mount`) the last
+            record given was moved onto, where one was not zero, else None (the last one only: ``mount_changes``
+            says whether it varied); ``mounted``: records so moved.
+        mount_changes: times a laser line of the kind read had another mounting than the one before it
+            (a mounting PARAM line between them: it applies from its line on, so the scans before are in
+            another frame); ``mount_changed_at``: the line number of the mounting PARAM line that made the
+            first change, ``mount_before``: the mounting before it; None without a change.
     """
 
     messages: dict[str, int] = field(default_factory=dict)
     stopped: str | None = None
     laser: str | None = None
+    mount: Pose2D | None = None
+    mounted: int = 0
+    mount_changes: int = 0
+    mount_changed_at: int | None = None
+    mount_before: Pose2D | None = None
 
     def count(self, kind: str) -> None:
         """Count a line of a message kind: the kinds this reader knows always, others up to
@@ -433,14 +457,28 @@ class CarmenReader:
 
     def __iter__(self) -> Iterator[Record]:
         flushes: list[Callable[[], Iterator[Record]]] = []  # this pass's flush() of what holds records back
+        # id(scan) -> the laser's pose on the robot (laser_mount) of each record read and not yet given: its
+        # poses are the robot's until the corrected chain and the held tails are done with it (the ODOM
+        # lines are the robot's), then the laser's (on_the_laser)
+        mounts: dict[int, Pose2D] = {}
+
+        def given(rec: Record) -> Record:
+            mount = mounts.pop(id(rec.scan), None)
+            moved = on_the_laser(rec, mount)
+            if moved is not rec:
+                self.stats.mount, self.stats.mounted = mount, self.stats.mounted + 1
+            return moved
+
         try:
-            yield from self._read(flushes)
+            for rec in self._read(flushes, mounts):
+                yield given(rec)
         except Exception:  # a bad line ends the pass: the records held for a later line come first
             for flush in flushes:
-                yield from flush()
+                for rec in flush():
+                    yield given(rec)
             raise
 
-    def _read(self, flushes: list[Callable[[], Iterator[Record]]]) -> Iterator[Record]:
+    def _read(self, flushes: list[Callable[[], Iterator[Record]]], mounts: dict[int, Pose2D]) -> Iterator[Record]:
         default = self._survey()
         self.stats = stats = ReadStats(laser=self.topic or default)
         if stats.laser is not None:
@@ -450,6 +488,8 @@ class CarmenReader:
         last_stamp = -math.inf  # the last scan's stamp: a TRUEPOS stamped at or before it is its, not the next's
         has_odometry = True
         params: dict[str, float] = {}
+        last_mount: Pose2D | None = None  # the mounting of the last laser line read (mount_changes)
+        mount_line: int | None = None  # the last mounting PARAM line
         counts: dict[tuple[str, str, str], tuple[int, int]] = {}  # ROBOTLASER header -> (beams, first line), bounded
         blank = _BlankRun(self.path)
         range_words = _RangeWords()  # range word -> its number (_range_floats), for this pass
@@ -491,7 +531,7 @@ class CarmenReader:
         def take(line: _HeldLaser) -> Record:
             """The record of a laser line whose tail is the rule's: its geometry's beam count checked (and set,
             for the first line of a geometry), its truth given, the last stamp set (ValueError: malformed)."""
-            nonlocal last_stamp
+            nonlocal last_stamp, last_mount
             scan, header = line.scan, line.header
             if header is not None:
                 first = counts.get(header)
@@ -505,6 +545,13 @@ class CarmenReader:
             given = (pose[0] if pose is not None and abs(pose[1] - scan.stamp) <= TRUTH_MAX_GAP_S
                      and (pose[1] > last_stamp or pose[1] == scan.stamp) else None)
             last_stamp = scan.stamp
+            mounts[id(scan)] = line.mount if line.mount is not None else (0.0, 0.0, 0.0)
+            if line.mount is not None:
+                if last_mount is not None and line.mount != last_mount:  # a PARAM line changed it mid-log
+                    stats.mount_changes += 1
+                    if stats.mount_changed_at is None:
+                        stats.mount_changed_at, stats.mount_before = line.mount_line, last_mount
+                last_mount = line.mount
             return Record(scan=scan, odom=line.odom, truth=given)
 
         def release(strict: bool = True) -> Iterator[Record]:
@@ -585,6 +632,8 @@ class CarmenReader:
                                      "PARAM, ...: capitals, digits and '_'); junk or a damaged line")
                 if kind == "PARAM":
                     units, has_odometry = _param(words, params, units, has_odometry)
+                    if len(words) > 1 and words[1] in MOUNT_PARAMS:
+                        mount_line = line_no
                 elif kind == "TRUEPOS":
                     truth = None  # a malformed TRUEPOS sets none
                     pose = _pose(words, 1, "TRUEPOS")
@@ -606,6 +655,7 @@ class CarmenReader:
                         continue
                     self._check_range_max(line_no, params.get(RANGE_MIN_PARAM, 0.0))
                     odom: Pose2D | None
+                    mount: Pose2D | None = None  # the laser's pose on the robot (None: RAWLASER, not known)
                     if kind in ("FLASER", "RLASER"):
                         declared = laser_geometry.from_params(kind, params)
                         geometry = self.geometry.merged(declared)
@@ -615,15 +665,21 @@ class CarmenReader:
                         # whose maximum is written exact, so its grid words are valid readings (at_max_range)
                         scan, odom = _parse_flaser(words, units, geometry, params.get(RANGE_MIN_PARAM, 0.0), exact,
                                                    range_words, declared.range_max, grid_max=units is None)
+                        mount = laser_mount(kind, params)
                     else:
                         scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
                                                        params.get(RANGE_MIN_PARAM, 0.0), range_words,
                                                        exact_angles=bool(params.get(EXACT_ANGLES_PARAM)),
                                                        grid_max=units is None)
+                        # the mount of the log's PARAM lines, never the line's own laser pose: CARMEN's scan
+                        # matcher (vasco) writes its corrected pose there beside the raw odometry (laser_mount)
+                        if odom is not None:  # a ROBOTLASER line (RAWLASER lines carry no pose)
+                            mount = laser_mount(kind, params)
                     wrong_tail = tails.problem(words)
                     _require(wrong_tail is None, wrong_tail or "")
                     line_held = _HeldLaser(scan, odom if has_odometry else None, held, words, line_no, kind,
-                                           None if kind in ("FLASER", "RLASER") else (words[2], words[3], words[4]))
+                                           None if kind in ("FLASER", "RLASER") else (words[2], words[3], words[4]),
+                                           mount, mount_line)
                     if tails.rule is not None:
                         yield from emit(take(line_held))
                     else:  # held until the pass's tail is told (_Tails)
@@ -664,6 +720,8 @@ class _HeldLaser:
     line_no: int
     kind: str
     header: tuple[str, str, str] | None
+    mount: Pose2D | None = None  # the laser's pose on the robot at its line (laser_mount; None: not known)
+    mount_line: int | None = None  # the last mounting PARAM line before it (ReadStats.mount_changed_at)
 
 
 @dataclass
@@ -852,6 +910,12 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
     elif name == EXACT_ANGLES_PARAM:
         _require(value in ("exact", "grid"), f"{EXACT_ANGLES_PARAM} must be exact or grid, got {value!r}")
         params[name] = float(value == "exact")
+    elif name in MOUNT_PARAMS:  # a laser's mounting on the robot (laser_mount)
+        number = float(_floats([value], name)[0])
+        angular = name.endswith("_angular_offset")
+        _require(math.isfinite(number) and (angular or abs(number) <= MAX_COORD_M),
+                 f"{name} must be a finite number ({'rad' if angular else f'm, within +-{MAX_COORD_M:g}'}), got {value!r}")
+        params[name] = number
     elif name == RANGE_MIN_PARAM:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number >= 0, f"{name} must be a finite number >= 0 (m), got {value!r}")
@@ -1144,12 +1208,44 @@ def at_max_range(ranges: np.ndarray, declared_max: float | None, units: Units | 
 GRID_WORD_TOLERANCE = 1e-12
 
 
+def laser_mount(kind: str, params: dict[str, float]) -> Pose2D:
+    """The pose of a laser on the robot (x forward m, y left m, theta rad), from the log's PARAM lines so
+    far (``MOUNT_PARAM_NAMES``), as CARMEN's robot module placed it (docs/data.md, "Laser mounting"): the
+    front laser (FLASER, ROBOTLASER1) at (offset, side offset, angular offset), each 0 where the log has
+    no line. A rear laser (RLASER) whose log has no ``robot_rearlaser_side_offset`` / ``_angular_offset``
+    line is placed as CARMEN's robot module before 0.7 placed it, the one that wrote RLASER lines: turned
+    by pi, and ``robot_rearlaser_offset`` along its own heading, (-offset, 0, pi); with either line, as
+    0.7's module does, (offset, side offset, angular offset). ROBOTLASER2 (0.7's rear laser) is placed as
+    0.7's module places it, (offset, side offset, angular offset), with no pi of its own. A ROBOTLASER
+    line's own laser pose is not used: CARMEN's scan matcher (vasco) writes its corrected pose there,
+    beside the raw odometry as robot pose, so the two need not differ by the mount."""
+    forward, side, angular = MOUNT_PARAM_NAMES["FLASER" if kind in ("FLASER", "ROBOTLASER1") else "RLASER"]
+    if kind == "RLASER" and side not in params and angular not in params:
+        return (-params.get(forward, 0.0), 0.0, math.pi)
+    return (params.get(forward, 0.0), params.get(side, 0.0), params.get(angular, 0.0))
+
+
+def on_the_laser(rec: Record, mount: Pose2D | None) -> Record:
+    """``rec`` with its robot poses (odometry, truth, corrected pose) moved onto the laser mounted at
+    ``mount`` on the robot (:func:`laser_mount`): each pose (+) mount. A zero or unknown (None) mount
+    leaves the record as it is, bit for bit."""
+    if mount is None or mount == (0.0, 0.0, 0.0):
+        return rec
+
+    def moved(pose: Pose2D | None) -> Pose2D | None:
+        return None if pose is None else compose(pose, mount)
+
+    return Record(scan=rec.scan, odom=moved(rec.odom), truth=moved(rec.truth), corrected=moved(rec.corrected))
+
+
 def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry,
                   range_min: float = 0.0,
                   exact: tuple[float | None, float | None] = (None, None),
                   cache: _RangeWords | None = None, declared_max: float | None = None,
                   grid_max: bool = True) -> tuple[Scan, Pose2D]:
-    """A FLASER / RLASER line's scan and odometry; ``cache``: the pass's range words (:func:`_range_floats`);
+    """A FLASER / RLASER line's scan and odometry (the robot's: its second pose, odom_x odom_y odom_theta;
+    the first, x y theta, is the laser's by CARMEN's robot module or a scan matcher's corrected pose, not
+    read); ``cache``: the pass's range words (:func:`_range_floats`);
     ``declared_max``: the maximum range of the log's PARAM lines (a reading at it is no return, :func:`_ranges`;
     its grid words too with ``grid_max``)."""
     kind = words[0]
@@ -1225,7 +1321,8 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     scan = Scan(ranges, snap(start), snap(resolution), range_min, range_max, stamp)
     if kind.startswith("RAWLASER"):
         return scan, None
-    # the laser pose, speeds, safety distances and turn axis are not read, but nan or inf is no such value (was taken)
+    # the laser pose (laser_mount: not the mount), speeds, safety distances and turn axis are not read, but nan
+    # or inf is no such value (was taken)
     _finite_pose(tail[0:3], f"{kind} laser")
     _require(all(map(math.isfinite, tail[6:11])), f"{kind} speeds, safety distances or turn axis are not finite")
     return scan, _finite_pose(tail[3:6], f"{kind} robot")
