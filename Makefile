@@ -41,7 +41,7 @@ check: $(STAMP)
 test: $(STAMP)
 	@$(BIN)/python tests/warm_kernels.py sensor >/dev/null 2>&1 & sensor=$$!; \
 	$(BIN)/python tests/warm_kernels.py others >/dev/null 2>&1 & others=$$!; \
-	$(MAKE) --no-print-directory check; status=$$?; wait $$sensor $$others; exit $$status
+	$(MAKE) --no-print-directory check || { kill $$sensor $$others 2>/dev/null; exit 2; }; wait $$sensor $$others || true
 	$(BIN)/python -m pytest -q -rs --durations=30 -n auto --dist worksteal $(PYTEST_ARGS)
 
 bench: $(STAMP)
