@@ -35,8 +35,13 @@ check: $(STAMP)
 # the tests on every core (pytest-xdist; the numba kernels are compiled once, before the workers start:
 # tests/conftest.py, which also starts the modules with a test marked slow first; --dist worksteal: a worker
 # whose queue is empty takes queued tests from the other's, where the default "load" keeps each queue);
-# `-n 0` in PYTEST_ARGS runs them in this process, one by one
-test: check
+# `-n 0` in PYTEST_ARGS runs them in this process, one by one. The static checks run beside two quiet
+# processes that compile most kernels first (tests/warm_kernels.py: ~85 s of CPU on a fresh checkout,
+# which conftest's warm-up spent alone after the checks; it then loads them from numba's cache)
+test: $(STAMP)
+	@$(BIN)/python tests/warm_kernels.py sensor >/dev/null 2>&1 & sensor=$$!; \
+	$(BIN)/python tests/warm_kernels.py others >/dev/null 2>&1 & others=$$!; \
+	$(MAKE) --no-print-directory check || { kill $$sensor $$others 2>/dev/null; exit 2; }; wait $$sensor $$others || true
 	$(BIN)/python -m pytest -q -rs --durations=30 -n auto --dist worksteal $(PYTEST_ARGS)
 
 bench: $(STAMP)

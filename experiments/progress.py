@@ -21,8 +21,9 @@ def stderr(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
-def warm_up_kernels(log: Log = stderr, slam: bool = False) -> float:
-    """Load (or compile, the first time in a checkout) the extractors' numba kernels now, and with
+def warm_up_kernels(log: Log = stderr, slam: bool = False, methods: tuple[str, ...] = COMPILED_METHODS) -> float:
+    """Load (or compile, the first time in a checkout) the extractors' numba kernels now (those of
+    ``methods``, by default every compiled one; the pooled noise estimate's with "sensor"), and with
     ``slam`` the default SLAM pipeline's (scan matching, pose graph, map merge), so that a run's
     scans/s measure the run, not the compiler. When numba compiles (a fresh checkout, or code that
     changed) and that takes more than a second, it says "compiling kernels, once" and then a line
@@ -48,10 +49,11 @@ def warm_up_kernels(log: Log = stderr, slam: bool = False) -> float:
     try:
         with Heartbeat(log, "compiling kernels", first=first, first_after=1.0, when=lambda: compiles.compiled) as beat:
             for sample in scans:  # single calls, batches and the pooled noise estimate take different kernels
-                for method in COMPILED_METHODS:
+                for method in methods:
                     extract(sample, method=method)
                     extract_many([sample, sample], method=method)
-            neighbour_sigma(list(scans))
+            if "sensor" in methods:
+                neighbour_sigma(list(scans))
             if slam:
                 for sample in scans:
                     _warm_up_slam(sample)

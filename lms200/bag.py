@@ -14,6 +14,7 @@ so a record written without odometry or truth reads back without it.
 
 from __future__ import annotations
 
+import io
 import math
 import os
 import struct
@@ -80,6 +81,36 @@ MIN_FREE_TEMP_BYTES = 1 * 2**30
 
 #: bytes decompressed between two looks at the temporary folder's free space
 FREE_CHECK_BYTES = 64 * 2**20
+
+
+#: True only while lmsbench itself reads a bag (:func:`_lmsbench_read`, :func:`_read_inside`): rosbags' functions
+#: that lms200.bag replaces (mcap ``read_sized`` / ``read_exact`` / ``skip_exact`` / ``decompress``, the storage
+#: readers' ``_open`` and ``McapReader.messages``, AnyReader's definition parsers, the ROS 2 reader's zstd) are
+#: replaced for the whole process, and pass straight through to rosbags' own unless it is set: another user of
+#: rosbags in the process, after an lmsbench read, got lmsbench's bounds and messages
+_IN_LMSBENCH_READ: ContextVar[bool] = ContextVar("lmsbench_bag_read", default=False)
+
+
+class _lmsbench_read:
+    """Within it, rosbags' functions that lms200.bag replaces apply its bounds (:data:`_IN_LMSBENCH_READ`)."""
+
+    def __enter__(self) -> None:
+        self._token = _IN_LMSBENCH_READ.set(True)
+
+    def __exit__(self, *exc: object) -> None:
+        _IN_LMSBENCH_READ.reset(self._token)
+
+
+def _read_inside(items: Iterator[Any]) -> Iterator[Any]:
+    """``items`` (rosbags' messages) with each step taken inside :class:`_lmsbench_read`, and the caller's code
+    between steps outside it (a context variable set in a generator is its caller's)."""
+    while True:
+        with _lmsbench_read():
+            try:
+                item = next(items)
+            except StopIteration:
+                return
+        yield item
 
 
 def _too_large(what: str) -> BagTooLargeError:
@@ -149,6 +180,8 @@ class _BoundedZstd:
         return getattr(self._module, name)
 
     def decompress(self, data: bytes) -> bytes:
+        if not _IN_LMSBENCH_READ.get():
+            return self._module.decompress(data)  # type: ignore[no-any-return]
         try:
             return _bounded(data, self._module.ZstdDecompressor, "a zstd-compressed message", True)
         except BagTooLargeError as exc:
@@ -158,6 +191,8 @@ class _BoundedZstd:
         """rosbags opens a file-compressed bag's storage file so and copies it whole to a temporary
         file: the stream read is bounded (:class:`_BoundedZstdFile`)."""
         stream = self._module.open(file, mode, **kwargs)
+        if not _IN_LMSBENCH_READ.get():
+            return stream
         return _BoundedZstdFile(stream, str(getattr(file, "name", file))) if "r" in mode else stream
 
 
@@ -796,6 +831,8 @@ def _bound_definitions() -> None:
 
         def bounded(text: str, *args: Any, _parse: Callable[..., Any] = parse, _name: str = name,  # noqa: ANN401
                     **kwargs: Any) -> Any:  # noqa: ANN401
+            if not _IN_LMSBENCH_READ.get():
+                return _parse(text, *args, **kwargs)
             which = f"{args[0]}'s message definition" if args else "a message definition (IDL)"
             if len(text) > MAX_CONNECTION_BYTES:
                 raise _unnamed(BagTooLargeError(
@@ -916,7 +953,7 @@ class _CountedRecords:
 
     def __call__(self, *args: Any) -> Any:  # noqa: ANN401
         record = self.typ(*args)
-        budget = _BUDGET.get()
+        budget = _BUDGET.get() if _IN_LMSBENCH_READ.get() else None
         if budget is not None and tuple(record) != _SCHEMALESS:
             held = budget.mcap.setdefault(self.what, {})
             chars = sum(len(v) for v in record[1:] if isinstance(v, (str, bytes)))
@@ -936,13 +973,104 @@ class _CountedRecords:
 #: message definition or one topic's name, type and QoS, which the file's schemas and channels together
 #: may hold at most that many characters of anyway (:class:`_CountedRecords`, counted once read)
 _MCAP_BOUNDED_RECORDS = {0x03: "schema", 0x04: "channel"}
+#: the names of the other mcap records (by opcode), bounded by MAX_MCAP_RECORD_BYTES
+_MCAP_RECORDS = {0x01: "header", 0x02: "footer", 0x05: "message", 0x06: "chunk", 0x07: "message index",
+                 0x08: "chunk index", 0x09: "attachment", 0x0A: "attachment index", 0x0B: "statistics",
+                 0x0C: "metadata", 0x0D: "metadata index", 0x0E: "summary offset", 0x0F: "data end"}
+#: bytes: the most any other mcap record (header, message, chunk, summary records) may declare, read whole by
+#: rosbags: a chunk of MAX_DECOMPRESSED_BYTES stored uncompressed and its fields. Such records were bounded only
+#: by the file's size (a 300 MB chunk record held `lmsbench info` at 648 MB; a chunk record or a header declaring
+#: 1 TiB in a 5 KB file was `cannot open as a ROS bag: MemoryError:`)
+MAX_MCAP_RECORD_BYTES = MAX_DECOMPRESSED_BYTES + 2**16
+
+
+#: the mcap storage file whose messages are being read (:func:`_bound_storage_connections`): a chunk is
+#: decompressed, and a message read, while the bag's messages are iterated, after the file was opened
+_MCAP_READING: ContextVar[str] = ContextVar("lmsbench_mcap_reading", default="")
+
+
+def _mcap_storage_name() -> str:
+    """" NAME": the mcap storage file being opened (:data:`_BUDGET`) or read (:data:`_MCAP_READING`), or ""
+    where none is known."""
+    budget = _BUDGET.get()
+    name = (budget.storage if budget is not None else "") or _MCAP_READING.get()
+    return name and " " + name
+
+
+def _mcap_too_large(what: str, size: int, bound: int, bound_name: str, may: str = "a ROS 2 bag's mcap record may hold",
+                    declares: str = "") -> BagTooLargeError:
+    return _unnamed(BagTooLargeError(
+        f"its storage file{_mcap_storage_name()}'s {what} declares {size:,} bytes{declares}, more than the {bound:,} "
+        f"{may} (lms200.bag.{bound_name}): damage, or no bag of laser scans; not read"))
+
+
+def _bounded_read_exact(bio: Any, size: int, _real: Callable[[Any, int], bytes]) -> bytes:  # noqa: ANN401
+    """rosbags' mcap ``read_exact``, refusing a read of more than MAX_MCAP_RECORD_BYTES (a message's data, a
+    chunk's compressed data, told by a declared length) before it is made: Python allocates the whole
+    length a read asks for, whatever the file holds."""
+    if size > MAX_MCAP_RECORD_BYTES:
+        start = bio.tell()
+        raise _mcap_too_large(f"record data at byte {start:,}", size, MAX_MCAP_RECORD_BYTES, "MAX_MCAP_RECORD_BYTES")
+    return _real(bio, size)
+
+
+def _bounded_skip_exact(bio: Any, size: int, _real: Callable[[Any, int], None]) -> None:  # noqa: ANN401
+    """rosbags' mcap ``skip_exact``, refusing a skip past the end of the file (or chunk) that holds the record:
+    a seek there succeeds, and the scan ended at it as at the data's end, so a record whose length was damaged
+    (declaring 1 TiB) dropped every message after it without a word (1 of 3 scans read, exit 0)."""
+    from rosbags.rosbag2.errors import ReaderError
+
+    pos = bio.tell()
+    end = bio.seek(0, 2)
+    bio.seek(pos)
+    if pos + size > end:
+        raise ReaderError(f"its storage file{_mcap_storage_name()}'s record data at byte {pos:,} declares {size:,} "
+                          f"bytes, past the end of the {'chunk' if isinstance(bio, io.BytesIO) else 'file'} that holds "
+                          f"it ({end - pos:,} bytes on): damage; not read")
+    _real(bio, size)
+
+
+def _bounded_decompress(data: bytes, compression: str, size: int, crc: int,
+                        _real: Callable[[bytes, str, int, int], bytes]) -> bytes:
+    """rosbags' mcap chunk ``decompress``, refusing a chunk that declares more than MAX_DECOMPRESSED_BYTES
+    uncompressed before decompressing it, and decompressing at most one byte more than it declares: rosbags
+    decompressed the whole chunk first (37 KB of zstd declaring 1 GiB, or 1 KiB, held `lmsbench info` at 2.1 GB;
+    declared as 1 KiB it then said "Chunk size mismatch")."""
+    if size > MAX_DECOMPRESSED_BYTES:
+        raise _mcap_too_large("chunk", size, MAX_DECOMPRESSED_BYTES, "MAX_DECOMPRESSED_BYTES",
+                              "a chunk may decompress to", f" uncompressed ({compression or 'not compressed'})")
+    if compression == "zstd":
+        from rosbags.rosbag2 import storage_mcap
+
+        make: Callable[[], Any] = storage_mcap.zstd.ZstdDecompressor
+    elif compression == "lz4":
+        from lz4.frame import LZ4FrameDecompressor
+
+        make = LZ4FrameDecompressor
+    else:
+        return _real(data, compression, size, crc)  # none, or one rosbags refuses
+    pieces, got, rest = [], 0, data
+    while rest and got <= size:  # frame by frame, as rosbags' decompress reads them, each to the bound left
+        frame = make()
+        piece = frame.decompress(rest, max_length=size + 1 - got)
+        pieces.append(piece)
+        got += len(piece)
+        if not frame.eof:
+            break  # the bound reached, or data ending inside a frame (said below as rosbags says it)
+        rest = frame.unused_data
+    raw = b"".join(pieces)
+    if len(raw) > size:
+        raise _unnamed(BagTooLargeError(
+            f"its storage file{_mcap_storage_name()}'s {compression} chunk decompresses to more than the {size:,} "
+            "bytes it declares: damage, or a compression bomb; not read"))
+    return _real(raw, "", size, crc)  # the size and checksum checked as rosbags checks them
 
 
 def _bounded_read_sized(bio: Any, _real: Callable[[Any], bytes]) -> bytes:  # noqa: ANN401 - a binary file
     """rosbags' mcap ``read_sized`` (a record's uint64 length, then that many bytes, read whole), refusing a
     schema or channel record (told by the opcode byte before the length) whose declared length exceeds
-    MAX_CONNECTIONS_TOTAL_BYTES before reading it: a BagTooLargeError naming the storage file, the record
-    and where it starts. Such a record was read whole, bounded only by the file's size (a 300 MB schema
+    MAX_CONNECTIONS_TOTAL_BYTES, or any other record whose declared length exceeds MAX_MCAP_RECORD_BYTES,
+    before reading it: a BagTooLargeError naming the storage file, the record and where it starts. Such a record was read whole, bounded only by the file's size (a 300 MB schema
     record held `lmsbench info` at 928 MB before the total's count refused it; one declaring 1 TiB in a
     small file was a MemoryError)."""
     start = bio.tell()
@@ -952,6 +1080,12 @@ def _bounded_read_sized(bio: Any, _real: Callable[[Any], bytes]) -> bytes:  # no
         op = bio.read(1)
         bio.seek(start)
         kind = _MCAP_BOUNDED_RECORDS.get(op[0]) if len(op) == 1 else None
+        if kind is None and len(op) == 1 and len(head) == 8:  # any other record: MAX_MCAP_RECORD_BYTES
+            size = struct.unpack("<Q", head)[0]
+            if size > MAX_MCAP_RECORD_BYTES:
+                what = _MCAP_RECORDS.get(op[0], f"record of opcode {op[0]:#04x}")
+                raise _mcap_too_large(f"{what} record at byte {start - 1:,}", size, MAX_MCAP_RECORD_BYTES,
+                                      "MAX_MCAP_RECORD_BYTES")
         if kind is not None and len(head) == 8:
             size = struct.unpack("<Q", head)[0]
             if size > MAX_CONNECTIONS_TOTAL_BYTES:
@@ -965,42 +1099,148 @@ def _bounded_read_sized(bio: Any, _real: Callable[[Any], bytes]) -> bytes:  # no
     return _real(bio)
 
 
+#: the first rosbags with the mcap functions lms200.bag bounds (read_exact, skip_exact, decompress): 0.10.0 ..
+#: 0.11.5 lack them, and the bounds were silently left out (an mcap bag read unbounded)
+ROSBAGS_MCAP_SINCE = "0.11.6"
+#: the rosbags mcap functions lms200.bag replaces, with the parameters it calls them with (those of 0.11.6 .. 0.11.9)
+_MCAP_PATCHED = {"read_sized": ("bio",), "read_exact": ("bio", "size"), "skip_exact": ("bio", "size"),
+                 "decompress": ("data", "compression", "size", "crc"), "McapReader._open": ("self",),
+                 "McapReader.messages": ("self", "connections", "start", "stop")}
+#: why this rosbags' mcap reader cannot be bounded (a function missing or of other parameters), or "" where it can
+#: (:func:`_bound_storage_connections`); an mcap bag is then refused (:meth:`BagReader._open`)
+_mcap_unsupported = ""
+
+
+def _mcap_support_problem(storage_mcap: Any) -> str:  # noqa: ANN401 - a module
+    """Why rosbags' ``storage_mcap`` lacks the functions lms200.bag replaces with the parameters it expects, or ""."""
+    import inspect
+
+    for name, expected in _MCAP_PATCHED.items():
+        owner, _, attr = name.rpartition(".")
+        real = getattr(getattr(storage_mcap, owner, None) if owner else storage_mcap, attr, None)
+        real = getattr(real, "lmsbench_real", real)  # already replaced: the original's
+        if real is None:
+            return f"it has no rosbags.rosbag2.storage_mcap.{name}"
+        try:
+            got = tuple(inspect.signature(real).parameters)
+        except (TypeError, ValueError):
+            return f"its rosbags.rosbag2.storage_mcap.{name} has no signature to check"
+        if got != expected:
+            return (f"its rosbags.rosbag2.storage_mcap.{name} takes ({', '.join(got)}), "
+                    f"not ({', '.join(expected)})")
+    return ""
+
+
+def _rosbags_version() -> str:
+    try:
+        from importlib.metadata import version
+
+        return version("rosbags")
+    except Exception:  # noqa: BLE001 - an install without metadata
+        return "of unknown version"
+
+
 def _bound_storage_connections() -> None:
     """Bound what rosbags' ROS 2 storage readers hold of a bag's topics and message definitions when they
     open a storage file (MAX_CONNECTIONS, MAX_CONNECTIONS_TOTAL_BYTES): a sqlite3 file is counted by
     sqlite first (:func:`_check_sqlite_connections`), an mcap file's schema and channel records as they
     are read (:class:`_CountedRecords`), each file on its own, named. A rosbags without those names is
     left as it is."""
+    global _mcap_unsupported
     from rosbags.rosbag2 import storage_mcap, storage_sqlite3
 
-    mcap = getattr(storage_mcap, "McapReader", None)
-    mcap_open = getattr(mcap, "_open", None)
-    if mcap_open is not None and not getattr(mcap_open, "lmsbench_bounded", False):
-        def _open_mcap(self: Any, _real: Callable[[Any], None] = mcap_open) -> None:  # noqa: ANN401
-            budget = _BUDGET.get()
-            if budget is not None:  # this storage file's records, counted apart from another file's, name it
-                budget.mcap, budget.mcap_chars, budget.storage = {}, 0, Path(str(self.path)).name
-            _real(self)
-
-        _open_mcap.lmsbench_bounded = True  # type: ignore[attr-defined]
-        mcap._open = _open_mcap  # type: ignore[union-attr]
-
+    _mcap_unsupported = _mcap_support_problem(storage_mcap)
+    if not _mcap_unsupported:
+        _bound_mcap(storage_mcap)
     reader = getattr(storage_sqlite3, "Sqlite3Reader", None)
     real_open = getattr(reader, "_open", None)
     if real_open is not None and not getattr(real_open, "lmsbench_bounded", False):
         def _open(self: Any, _real: Callable[[Any], None] = real_open) -> None:  # noqa: ANN401
-            _check_sqlite_connections(self.path)
+            if _IN_LMSBENCH_READ.get():
+                _check_sqlite_connections(self.path)
             _real(self)
 
         _open.lmsbench_bounded = True  # type: ignore[attr-defined]
         reader._open = _open  # type: ignore[union-attr]
+
+
+def _bound_mcap(storage_mcap: Any) -> None:  # noqa: ANN401 - a module
+    """Replace rosbags' mcap functions (:data:`_MCAP_PATCHED`, checked by :func:`_mcap_support_problem`) by
+    bounded ones, each keeping the original as ``lmsbench_real``."""
+    mcap = storage_mcap.McapReader
+    mcap_open = getattr(mcap, "_open", None)
+    if mcap_open is not None and not getattr(mcap_open, "lmsbench_bounded", False):
+        def _open_mcap(self: Any, _real: Callable[[Any], None] = mcap_open) -> None:  # noqa: ANN401
+            budget = _BUDGET.get()
+            if budget is not None and _IN_LMSBENCH_READ.get():  # this storage file's records, counted apart from another file's, name it
+                budget.mcap, budget.mcap_chars, budget.storage = {}, 0, Path(str(self.path)).name
+            _real(self)
+
+        _open_mcap.lmsbench_bounded = True  # type: ignore[attr-defined]
+        _open_mcap.lmsbench_real = mcap_open  # type: ignore[attr-defined]
+        mcap._open = _open_mcap
+    mcap_messages = getattr(mcap, "messages", None)
+    if mcap_messages is not None and not getattr(mcap_messages, "lmsbench_bounded", False):
+        def _messages(self: Any, *args: Any, _real: Callable[..., Any] = mcap_messages,  # noqa: ANN401
+                      **kwargs: Any) -> Iterator[Any]:  # noqa: ANN401
+            """rosbags' messages of an mcap file, each read with the file's name known (:data:`_MCAP_READING`),
+            for the errors of its records and chunks to name it; rosbags' own outside an lmsbench read."""
+            if not _IN_LMSBENCH_READ.get():
+                return _real(self, *args, **kwargs)  # type: ignore[no-any-return]
+            return _named_messages(_real(self, *args, **kwargs), Path(str(self.path)).name)
+
+        def _named_messages(messages: Iterator[Any], name: str) -> Iterator[Any]:
+            while True:
+                token = _MCAP_READING.set(name)
+                try:
+                    item = next(messages)
+                except StopIteration:
+                    return
+                finally:
+                    _MCAP_READING.reset(token)
+                yield item
+
+        _messages.lmsbench_bounded = True  # type: ignore[attr-defined]
+        _messages.lmsbench_real = mcap_messages  # type: ignore[attr-defined]
+        mcap.messages = _messages
     read_sized = getattr(storage_mcap, "read_sized", None)
     if read_sized is not None and not getattr(read_sized, "lmsbench_bounded", False):
         def _read_sized(bio: Any, _real: Callable[[Any], bytes] = read_sized) -> bytes:  # noqa: ANN401
-            return _bounded_read_sized(bio, _real)
+            return _bounded_read_sized(bio, _real) if _IN_LMSBENCH_READ.get() else _real(bio)
 
         _read_sized.lmsbench_bounded = True  # type: ignore[attr-defined]
+        _read_sized.lmsbench_real = read_sized  # type: ignore[attr-defined]
         storage_mcap.read_sized = _read_sized
+    read_exact = getattr(storage_mcap, "read_exact", None)
+    if read_exact is not None and not getattr(read_exact, "lmsbench_bounded", False):
+        def _read_exact(bio: Any, size: int, _real: Callable[[Any, int], bytes] = read_exact) -> bytes:  # noqa: ANN401
+            return _bounded_read_exact(bio, size, _real) if _IN_LMSBENCH_READ.get() else _real(bio, size)
+
+        _read_exact.lmsbench_bounded = True  # type: ignore[attr-defined]
+        _read_exact.lmsbench_real = read_exact  # type: ignore[attr-defined]
+        storage_mcap.read_exact = _read_exact
+    skip_exact = getattr(storage_mcap, "skip_exact", None)
+    if skip_exact is not None and not getattr(skip_exact, "lmsbench_bounded", False):
+        def _skip_exact(bio: Any, size: int, _real: Callable[[Any, int], None] = skip_exact) -> None:  # noqa: ANN401
+            if _IN_LMSBENCH_READ.get():
+                _bounded_skip_exact(bio, size, _real)
+            else:
+                _real(bio, size)
+
+        _skip_exact.lmsbench_bounded = True  # type: ignore[attr-defined]
+        _skip_exact.lmsbench_real = skip_exact  # type: ignore[attr-defined]
+        storage_mcap.skip_exact = _skip_exact
+    decompress = getattr(storage_mcap, "decompress", None)
+    if decompress is not None and not getattr(decompress, "lmsbench_bounded", False):
+        def _decompress(data: bytes, compression: str, size: int, crc: int,
+                        _real: Callable[[bytes, str, int, int], bytes] = decompress) -> bytes:
+            if not _IN_LMSBENCH_READ.get():
+                return _real(data, compression, size, crc)
+            return _bounded_decompress(data, compression, size, crc, _real)
+
+        _decompress.lmsbench_bounded = True  # type: ignore[attr-defined]
+        _decompress.lmsbench_real = decompress  # type: ignore[attr-defined]
+        storage_mcap.decompress = _decompress
     for name, what in (("Schema", "message definitions (schemas)"), ("Channel", "topics (channels)")):
         typ = getattr(storage_mcap, name, None)
         if typ is not None and not isinstance(typ, _CountedRecords):
@@ -1288,12 +1528,16 @@ class BagReader:
         _bound_zstd_messages()  # before open: a file-compressed ROS 2 bag is decompressed there
         _bound_definitions()
         _bound_storage_connections()
+        if _mcap_unsupported and self._holds_mcap():  # read unbounded, silently, before
+            raise BagError(f"{self.path}: an mcap bag cannot be read with the installed rosbags {_rosbags_version()}: "
+                           f"{_mcap_unsupported} (lmsbench needs rosbags>={ROSBAGS_MCAP_SINCE} to bound its reads)")
         budget = _BUDGET.set(_DefinitionBudget())  # the definitions of this bag together
         try:
-            reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
-            if not reader.is2:  # a bag never closed (a killed recording) is read from its chunks
-                reader.readers = [_recovering_reader(self.path)]
-            reader.open()
+            with _lmsbench_read():  # the replaced rosbags functions bound this read only
+                reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
+                if not reader.is2:  # a bag never closed (a killed recording) is read from its chunks
+                    reader.readers = [_recovering_reader(self.path)]
+                reader.open()
         except BagTooLargeError as exc:
             if getattr(exc, "lmsbench_unnamed", False):  # a message definition's (_bound_definitions knows no file)
                 raise BagTooLargeError(f"{self.path}: {exc}") from None
@@ -1317,6 +1561,10 @@ class BagReader:
                           f"no index; {found.messages} messages recovered from its {found.chunks} whole chunks{cut}",
                           LmsbenchWarning, stacklevel=3)
         return reader
+
+    def _holds_mcap(self) -> bool:
+        """Whether the bag is a ROS 2 bag with an mcap storage file (its own, or one compressed whole)."""
+        return self.path.is_dir() and any(p.name.endswith((".mcap", ".mcap.zstd")) for p in self.path.iterdir())
 
     def _scan_connections(self, reader) -> list:  # noqa: ANN001
         scans = [c for c in reader.connections if c.msgtype == "sensor_msgs/msg/LaserScan"]
@@ -1363,7 +1611,7 @@ class BagReader:
                 self._fail(f"topic {stats.laser}", exc, 0, fatal=True)
                 return
             matcher = _PoseMatcher(sorted({c.topic for c in poses}), round(tolerance * 1e9))
-            messages = reader.messages(connections=scans + poses)
+            messages = _read_inside(reader.messages(connections=scans + poses))
             while True:
                 try:
                     item = next(messages, None)
@@ -1417,7 +1665,7 @@ class BagReader:
         them); with stamps read from the bytes, that is a message too short to hold one or, in ROS 2,
         one with no CDR encapsulation header."""
         raw_stamp = _raw_stamp_reader(reader)
-        for conn, _, raw in reader.messages(connections=scans):
+        for conn, _, raw in _read_inside(reader.messages(connections=scans)):
             if raw_stamp is not None:
                 ns = raw_stamp(raw)
                 if ns is not None:

@@ -23,7 +23,10 @@ Formats (one message a line, ``#`` comments; messages of other kinds, named in c
 After the ipc_timestamp, lines of other writers may hold nothing, one word, or a hostname of several words
 before the logger_timestamp (:func:`_tail_fits`); the laser lines of a pass must end alike (:class:`_Tails`).
 
-Conventions: a scan's ``stamp`` is the message's ipc_timestamp; ``.odom`` is the robot pose the laser
+Conventions: a record's poses are the laser's: the robot's moved by the laser's mounting on it (FLASER /
+RLASER, ROBOTLASER1 / 2: the log's ``PARAM robot_frontlaser_*`` / ``robot_rearlaser_*`` lines,
+:func:`laser_mount`, never a ROBOTLASER line's own laser pose; docs/data.md, "Laser mounting"), each
+untouched where that is zero. A scan's ``stamp`` is the message's ipc_timestamp; ``.odom`` is the robot pose the laser
 message carries (FLASER odom fields, ROBOTLASER1 robot fields); ``.truth`` is the pose of the last TRUEPOS
 line before the laser message (ODOM, PARAM, other laser kinds between do not matter), when no laser line of
 the kind read (even a malformed one) came between and their ipc_timestamps lie within TRUTH_MAX_GAP_S. SICK special codes stored as ranges (81.83 / 81.91 m in
@@ -63,7 +66,7 @@ from typing import IO, Callable, Iterable, Iterator
 
 import numpy as np
 
-from .carmen_odom import CorrectedChain, OdomPairing
+from .carmen_odom import CorrectedChain, OdomPairing, compose
 from .codes import (
     CODE_ABOVE_MAXIMUM,
     CODE_NOT_VALID,
@@ -98,6 +101,15 @@ EXACT_GEOMETRY_NAMES = {
 }
 EXACT_GEOMETRY_PARAMS = frozenset(n for names in EXACT_GEOMETRY_NAMES.values() for n in names)
 EXACT_GEOMETRY_AGREEMENT = 1e-12  # rad, relative to max(1, |angle|): degrees to radians and back differ by ~1e-16
+#: CARMEN's robot-module PARAM lines that place a FLASER / RLASER laser on the robot: (forward offset m,
+#: side offset m (to the left), angular offset rad). Logs of CARMEN before 0.7 (Intel, ACES) carry only the
+#: first (``robot_frontlaser_offset``, ``robot_rearlaser_offset``); 0.7 added the side and angular ones
+#: (docs/data.md, "Laser mounting")
+MOUNT_PARAM_NAMES = {
+    "FLASER": ("robot_frontlaser_offset", "robot_frontlaser_side_offset", "robot_frontlaser_angular_offset"),
+    "RLASER": ("robot_rearlaser_offset", "robot_rearlaser_side_offset", "robot_rearlaser_angular_offset"),
+}
+MOUNT_PARAMS = frozenset(n for names in MOUNT_PARAM_NAMES.values() for n in names)
 POSED_LASER_KINDS = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # laser messages that carry poses
 RAW_LASER_KINDS = ("RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4")  # laser messages without poses
 LASER_KINDS = POSED_LASER_KINDS + RAW_LASER_KINDS  # laser messages read (one kind per pass)
@@ -142,11 +154,23 @@ class ReadStats(SkipLog):
             ``lms200.records.MAX_SKIPPED_KEPT`` of them; ``skipped_count`` counts them all.
         stopped: why reading ended early (undecompressable data under ``skip_bad_lines``), or None.
         laser: the laser message kind read (see ``topic``), None before the first one.
+        mount: the laser's mounting on the robot (x m, y m, theta rad; :func:`laser_mount`) the last
+            record given was moved onto, where one was not zero, else None (the last one only: ``mount_changes``
+            says whether it varied); ``mounted``: records so moved.
+        mount_changes: times a laser line of the kind read had another mounting than the one before it
+            (a mounting PARAM line between them: it applies from its line on, so the scans before are in
+            another frame); ``mount_changed_at``: the line number of the mounting PARAM line that made the
+            first change, ``mount_before``: the mounting before it; None without a change.
     """
 
     messages: dict[str, int] = field(default_factory=dict)
     stopped: str | None = None
     laser: str | None = None
+    mount: Pose2D | None = None
+    mounted: int = 0
+    mount_changes: int = 0
+    mount_changed_at: int | None = None
+    mount_before: Pose2D | None = None
 
     def count(self, kind: str) -> None:
         """Count a line of a message kind: the kinds this reader knows always, others up to
@@ -290,6 +314,7 @@ class CarmenReader:
         self.topic = topic
         self.geometry = geometry or LaserGeometry()
         self.stats = ReadStats()
+        self._held: list[_Held] = []  # the pass's lines held until their tail is told (:meth:`_read`)
 
     def _laser_counts(self) -> dict[str, int]:
         """Laser message kind -> lines of it in the log, in the order met (one pass, a line's first
@@ -346,7 +371,7 @@ class CarmenReader:
                     if not self.skip_bad_lines:
                         raise LogFormatError(self.path, line_no + 1, reason) from None
                     self.stats.stopped = f"line {line_no + 1}: {reason}"
-                    self.stats.skip(line_no + 1, reason)
+                    self._skip(line_no + 1, reason)
                     return
                 if not line:
                     return
@@ -358,7 +383,16 @@ class CarmenReader:
     def _bad(self, line_no: int, kind: str, exc: Exception) -> None:
         if not self.skip_bad_lines:
             raise LogFormatError(self.path, line_no, f"malformed {kind} line: {exc}") from None
-        self.stats.skip(line_no, f"{kind}: {exc}")
+        self._skip(line_no, f"{kind}: {exc}")
+
+    def _skip(self, line_no: int, reason: str) -> None:
+        """Record a skipped line; while laser lines are held until their tail is told (:class:`_Tails`), held
+        beside them and recorded when they are released, so that ``stats.skipped`` is in log order (a line
+        skipped among held lines was listed before a held line later found malformed: [3, 1])."""
+        if self._held:
+            self._held.append(_HeldSkip(line_no, reason))
+        else:
+            self.stats.skip(line_no, reason)
 
     def _check_override(self, kind: str) -> None:
         """A beam-geometry override for a log whose laser lines carry their own geometry is an
@@ -426,14 +460,28 @@ class CarmenReader:
 
     def __iter__(self) -> Iterator[Record]:
         flushes: list[Callable[[], Iterator[Record]]] = []  # this pass's flush() of what holds records back
+        # id(scan) -> the laser's pose on the robot (laser_mount) of each record read and not yet given: its
+        # poses are the robot's until the corrected chain and the held tails are done with it (the ODOM
+        # lines are the robot's), then the laser's (on_the_laser)
+        mounts: dict[int, Pose2D] = {}
+
+        def given(rec: Record) -> Record:
+            mount = mounts.pop(id(rec.scan), None)
+            moved = on_the_laser(rec, mount)
+            if moved is not rec:
+                self.stats.mount, self.stats.mounted = mount, self.stats.mounted + 1
+            return moved
+
         try:
-            yield from self._read(flushes)
+            for rec in self._read(flushes, mounts):
+                yield given(rec)
         except Exception:  # a bad line ends the pass: the records held for a later line come first
             for flush in flushes:
-                yield from flush()
+                for rec in flush():
+                    yield given(rec)
             raise
 
-    def _read(self, flushes: list[Callable[[], Iterator[Record]]]) -> Iterator[Record]:
+    def _read(self, flushes: list[Callable[[], Iterator[Record]]], mounts: dict[int, Pose2D]) -> Iterator[Record]:
         default = self._survey()
         self.stats = stats = ReadStats(laser=self.topic or default)
         if stats.laser is not None:
@@ -443,6 +491,8 @@ class CarmenReader:
         last_stamp = -math.inf  # the last scan's stamp: a TRUEPOS stamped at or before it is its, not the next's
         has_odometry = True
         params: dict[str, float] = {}
+        last_mount: Pose2D | None = None  # the mounting of the last laser line read (mount_changes)
+        mount_line: int | None = None  # the last mounting PARAM line
         counts: dict[tuple[str, str, str], tuple[int, int]] = {}  # ROBOTLASER header -> (beams, first line), bounded
         blank = _BlankRun(self.path)
         range_words = _RangeWords()  # range word -> its number (_range_floats), for this pass
@@ -452,9 +502,12 @@ class CarmenReader:
         pairing = OdomPairing() if stats.laser in RAW_LASER_KINDS else None
         # a Radish corrected log: the laser lines' poses are a SLAM solution, the ODOM lines the raw odometry
         chain = CorrectedChain() if pairing is None else None
-        # laser lines held until their tail is told (_Tails), as (record, words, line, kind), with the ODOM
-        # lines' (stamp, pose) read among them, given to pairing / chain in log order when they are released
-        undecided: list[tuple[Record, list[str], int, str] | tuple[float, Pose2D]] = []
+        # laser lines held until their tail is told (_Tails), with the ODOM lines' (stamp, pose) and the lines
+        # skipped among them, given to pairing / chain and recorded in log order when they are released; a held
+        # line is taken (its truth given, the last stamp and its geometry's count set) only then: one later found
+        # malformed leaves no trace (its stamp, read shifted, dropped the truth of the next scan)
+        undecided: list[_Held] = []
+        self._held = undecided
 
         def emit(rec: Record) -> Iterator[Record]:
             if pairing is not None:
@@ -472,25 +525,77 @@ class CarmenReader:
             elif chain is not None:
                 yield from chain.odom(pose, stamp)
 
+        def held_tails_of(events: list[_Held]) -> list[tuple[int, int]]:
+            return [(_Tails.measure(e.words)[0], e.line_no) for e in events if isinstance(e, _HeldLaser)]
+
         def held_tails() -> list[tuple[int, int]]:
-            return [(_Tails.measure(e[1])[0], e[2]) for e in undecided if len(e) == 4]
+            return held_tails_of(undecided)
+
+        def take(line: _HeldLaser) -> Record:
+            """The record of a laser line whose tail is the rule's: its geometry's beam count checked (and set,
+            for the first line of a geometry), its truth given, the last stamp set (ValueError: malformed)."""
+            nonlocal last_stamp, last_mount
+            scan, header = line.scan, line.header
+            if header is not None:
+                first = counts.get(header)
+                if first is None and len(counts) < MAX_GEOMETRIES and max(map(len, header)) <= MAX_CACHED_WORD_CHARS:
+                    first = counts[header] = (len(scan), line.line_no)
+                if first is not None:
+                    _require(first[0] == len(scan),
+                             f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
+                             f"field of view and resolution carries {first[0]}")
+            pose = line.truth
+            given = (pose[0] if pose is not None and abs(pose[1] - scan.stamp) <= TRUTH_MAX_GAP_S
+                     and (pose[1] > last_stamp or pose[1] == scan.stamp) else None)
+            last_stamp = scan.stamp
+            mounts[id(scan)] = line.mount if line.mount is not None else (0.0, 0.0, 0.0)
+            if line.mount is not None:
+                if last_mount is not None and line.mount != last_mount:  # a PARAM line changed it mid-log
+                    stats.mount_changes += 1
+                    if stats.mount_changed_at is None:
+                        stats.mount_changed_at, stats.mount_before = line.mount_line, last_mount
+                last_mount = line.mount
+            return Record(scan=scan, odom=line.odom, truth=given)
 
         def release(strict: bool = True) -> Iterator[Record]:
-            """The held lines and ODOM poses, in log order, once the rule is taken: each line of its tail
-            given, each of another malformed (``strict``; else, a pass ended by an error, left out)."""
-            tails.decide(held_tails(), final=True)
+            """The held lines, ODOM poses and skipped lines, in log order, once the rule is taken: each line of
+            its tail taken, each of another malformed. ``strict=False``: a pass ended by an error, where the rule
+            is taken as the pass would have taken it from the lines held (two of them share a tail, or HELD
+            lines), or where they all end alike, or one ends as CARMEN writes (the tail the rule prefers where
+            lines differ); lines of other differing tails tell no rule and are left out (the first's was taken:
+            a damaged first line given, a good one after it dropped)."""
+            if strict:
+                tails.decide(held_tails(), final=True)
+            elif not tails.decide(held_tails()):
+                told = {t for t, _ in held_tails()}
+                if len(told) == 1 or 2 in told:
+                    tails.decide(held_tails(), final=True)
             held = undecided[:]
             undecided.clear()
             for event in held:
-                if len(event) == 2:
+                if isinstance(event, _HeldSkip):
+                    self.stats.skip(event.line_no, event.reason)
+                    continue
+                if not isinstance(event, _HeldLaser):
                     yield from odometry(*event)
                     continue
-                rec, line_words, held_no, held_kind = event
-                wrong = tails.problem(line_words)
+                wrong: str | None = tails.problem(event.words) if tails.rule is not None else "no rule"
+                rec = None
                 if wrong is None:
+                    try:
+                        rec = take(event)
+                    except ValueError as exc:
+                        wrong = str(exc)
+                if rec is not None:
                     yield from emit(rec)
-                elif strict:
-                    self._bad(held_no, held_kind, ValueError(wrong))
+                elif strict or (self.skip_bad_lines and tails.rule is not None):
+                    self._bad(event.line_no, event.kind, ValueError(wrong))
+                elif self.skip_bad_lines:  # listed, in log order: it was left out without a word
+                    words_after = ", ".join(map(str, sorted({t for t, _ in held_tails_of(held)})))
+                    self._bad(event.line_no, event.kind, ValueError(
+                        f"the pass ended by an error before the laser lines' ending could be told (the held lines "
+                        f"have {words_after} words after their ipc_timestamp, none shared, none as CARMEN writes); "
+                        "not read"))
 
         flushes += [lambda: release(strict=False)]
         flushes += [holder.flush for holder in (pairing, chain) if holder is not None]
@@ -514,7 +619,7 @@ class CarmenReader:
                     reason = (f"more than {MAX_JUNK_LINES:,} lines that start with no CARMEN message name: junk from "
                               "here on, not read")
                     stats.stopped = f"line {line_no}: {reason}"
-                    stats.skip(line_no, f"message: {reason}")
+                    self._skip(line_no, f"message: {reason}")
                     break
             # a TRUEPOS pose is the truth of the next line of the laser kind read (that line, even when
             # malformed, takes it), when stamped within TRUTH_MAX_GAP_S of it: ODOM lines, other laser
@@ -530,6 +635,8 @@ class CarmenReader:
                                      "PARAM, ...: capitals, digits and '_'); junk or a damaged line")
                 if kind == "PARAM":
                     units, has_odometry = _param(words, params, units, has_odometry)
+                    if len(words) > 1 and words[1] in MOUNT_PARAMS:
+                        mount_line = line_no
                 elif kind == "TRUEPOS":
                     truth = None  # a malformed TRUEPOS sets none
                     pose = _pose(words, 1, "TRUEPOS")
@@ -543,9 +650,6 @@ class CarmenReader:
                     _finite_pose(values[0:3], "ODOM")  # nan or 1e308 m was chained into every scan's odometry
                     values[6] = _stamps(words, values[6], _logger_at(words, 8))
                     yield from odometry(values[6], (values[0], values[1], values[2]))
-                    # held beside the laser lines until their tail is told, and no more than HELD_EVENTS of them
-                    # (a first laser line and 500,000 ODOM lines held 130 MB more: the tail is then the first's)
-                    releasing = len(undecided) > _Tails.HELD_EVENTS
                 elif kind in LASER_KINDS:
                     if stats.laser is None:
                         stats.laser = kind
@@ -554,38 +658,41 @@ class CarmenReader:
                         continue
                     self._check_range_max(line_no, params.get(RANGE_MIN_PARAM, 0.0))
                     odom: Pose2D | None
+                    mount: Pose2D | None = None  # the laser's pose on the robot (None: RAWLASER, not known)
                     if kind in ("FLASER", "RLASER"):
                         declared = laser_geometry.from_params(kind, params)
                         geometry = self.geometry.merged(declared)
                         exact_min, exact_step = EXACT_GEOMETRY_NAMES[kind]
                         exact = (params.get(exact_min), params.get(exact_step))
+                        # units is set only by a PARAM lmsbench_range_units line: this project's writer's log,
+                        # whose maximum is written exact, so its grid words are valid readings (at_max_range)
                         scan, odom = _parse_flaser(words, units, geometry, params.get(RANGE_MIN_PARAM, 0.0), exact,
-                                                   range_words, declared.range_max)
+                                                   range_words, declared.range_max, grid_max=units is None)
+                        mount = laser_mount(kind, params)
                     else:
                         scan, odom = _parse_robotlaser(words, units, self.geometry.range_max,
                                                        params.get(RANGE_MIN_PARAM, 0.0), range_words,
-                                                       exact_angles=bool(params.get(EXACT_ANGLES_PARAM)))
-                        header = (words[2], words[3], words[4])  # start, fov, resolution as written
-                        first = counts.get(header)
-                        if first is None and len(counts) < MAX_GEOMETRIES and max(map(len, header)) <= MAX_CACHED_WORD_CHARS:
-                            first = counts[header] = (len(scan), line_no)
-                        if first is not None:
-                            _require(first[0] == len(scan),
-                                     f"carries {len(scan)} beams, but line {first[1]} with the same start angle, "
-                                     f"field of view and resolution carries {first[0]}")
+                                                       exact_angles=bool(params.get(EXACT_ANGLES_PARAM)),
+                                                       grid_max=units is None)
+                        # the mount of the log's PARAM lines, never the line's own laser pose: CARMEN's scan
+                        # matcher (vasco) writes its corrected pose there beside the raw odometry (laser_mount)
+                        if odom is not None:  # a ROBOTLASER line (RAWLASER lines carry no pose)
+                            mount = laser_mount(kind, params)
                     wrong_tail = tails.problem(words)
                     _require(wrong_tail is None, wrong_tail or "")
-                    given = (held[0] if held is not None and abs(held[1] - scan.stamp) <= TRUTH_MAX_GAP_S
-                             and (held[1] > last_stamp or held[1] == scan.stamp) else None)
-                    last_stamp = scan.stamp
-                    rec = Record(scan=scan, odom=odom if has_odometry else None, truth=given)
+                    line_held = _HeldLaser(scan, odom if has_odometry else None, held, words, line_no, kind,
+                                           None if kind in ("FLASER", "RLASER") else (words[2], words[3], words[4]),
+                                           mount, mount_line)
                     if tails.rule is not None:
-                        yield from emit(rec)
+                        yield from emit(take(line_held))
                     else:  # held until the pass's tail is told (_Tails)
-                        undecided.append((rec, words, line_no, kind))
+                        undecided.append(line_held)
                         releasing = tails.decide(held_tails())
             except (ValueError, OverflowError, ArithmeticError) as exc:
                 self._bad(line_no, kind, exc)
+            # held beside the laser lines until their tail is told, and no more than HELD_EVENTS of them (a first
+            # laser line and 500,000 ODOM lines held 130 MB more): beyond, the rule is taken from the laser lines held
+            releasing = releasing or len(undecided) > _Tails.HELD_EVENTS
             if releasing:  # outside the line's try: a held line's error is its own, not this line's
                 releasing = False
                 yield from release()
@@ -601,6 +708,34 @@ class CarmenReader:
             # as a bag names its topics: the commands said "no laser messages found: not a CARMEN log"
             others = ", ".join(f"{k} ({n})" for k, n in stats.other_lasers().items())
             raise InputError(f"topic: {self.path} has no {self.topic} lines; its laser lines: {others}")
+
+
+@dataclass
+class _HeldLaser:
+    """A laser line held until the pass's tail is told (:class:`_Tails`), parsed but not yet taken: its scan,
+    odometry (None where the log has none), the TRUEPOS (pose, stamp) it may take as its truth, its words,
+    line number and kind, and its declared geometry (start, fov, resolution as written; None for FLASER)."""
+
+    scan: Scan
+    odom: Pose2D | None
+    truth: tuple[Pose2D, float] | None
+    words: list[str]
+    line_no: int
+    kind: str
+    header: tuple[str, str, str] | None
+    mount: Pose2D | None = None  # the laser's pose on the robot at its line (laser_mount; None: not known)
+    mount_line: int | None = None  # the last mounting PARAM line before it (ReadStats.mount_changed_at)
+
+
+@dataclass
+class _HeldSkip:
+    """A line skipped (``skip_bad_lines``) while laser lines were held: recorded when they are released."""
+
+    line_no: int
+    reason: str
+
+
+_Held = _HeldLaser | _HeldSkip | tuple[float, Pose2D]  # a held laser line, skipped line, or ODOM (stamp, pose)
 
 
 #: most words of an ODOM or TRUEPOS line: its name, 6 numbers, ipc_timestamp, hostname, logger_timestamp.
@@ -778,6 +913,12 @@ def _param(words: list[str], params: dict[str, float], units: Units | None,
     elif name == EXACT_ANGLES_PARAM:
         _require(value in ("exact", "grid"), f"{EXACT_ANGLES_PARAM} must be exact or grid, got {value!r}")
         params[name] = float(value == "exact")
+    elif name in MOUNT_PARAMS:  # a laser's mounting on the robot (laser_mount)
+        number = float(_floats([value], name)[0])
+        angular = name.endswith("_angular_offset")
+        _require(math.isfinite(number) and (angular or abs(number) <= MAX_COORD_M),
+                 f"{name} must be a finite number ({'rad' if angular else f'm, within +-{MAX_COORD_M:g}'}), got {value!r}")
+        params[name] = number
     elif name == RANGE_MIN_PARAM:
         number = float(_floats([value], name)[0])
         _require(math.isfinite(number) and number >= 0, f"{name} must be a finite number >= 0 (m), got {value!r}")
@@ -1019,45 +1160,104 @@ def _finite_pose(values: list[float], what: str) -> Pose2D:
 
 
 def _ranges(values: np.ndarray, units: Units | None, what: str,
-            declared_max: float | None = None) -> tuple[np.ndarray, Units]:
+            declared_max: float | None = None, grid_max: bool = True) -> tuple[np.ndarray, Units]:
     """Logged ranges (m) in REP-117 form: SICK codes decoded; ``nan`` / ``inf`` written as text
     (logs converted from ROS) keep their REP-117 meaning, ``-inf`` too (an object too close to
-    measure); a finite negative range is malformed. A reading equal to the maximum range the log
+    measure); a finite negative range is malformed. A reading at the maximum range the log
     declares for the line (``declared_max``: ROBOTLASER / RAWLASER's max_range field, FLASER's
-    ``PARAM robot_front_laser_max``) is the logger's max-range reading: +inf (no return), as the
-    LMS200's code 8183, its own maximum range, is."""
+    ``PARAM robot_front_laser_max``; equal to it, or the grid word of the line's unit it rounds to,
+    :func:`at_max_range`; the grid word only with ``grid_max``) is the logger's max-range reading:
+    +inf (no return), as the LMS200's code 8183, its own maximum range, is."""
     negative = finite_negative(values)
     if np.any(negative):
         raise ValueError(f"{what}: negative range {values[negative][0]:g} in the log")
     u = units or infer_units(values)
-    return at_max_range(decode_logged_ranges(values, u), declared_max), u
+    return at_max_range(decode_logged_ranges(values, u), declared_max, u, grid_max), u
 
 
-def at_max_range(ranges: np.ndarray, declared_max: float | None) -> np.ndarray:
-    """``ranges`` with each reading equal to ``declared_max`` (a CARMEN line's declared maximum range,
+def at_max_range(ranges: np.ndarray, declared_max: float | None, units: Units | None = None,
+                 grid_max: bool = True) -> np.ndarray:
+    """``ranges`` with each reading CARMEN writes for ``declared_max`` (a CARMEN line's declared maximum range,
     or None) made +inf, in place: CARMEN loggers write a beam with no return as the sensor's maximum
     range (a Hokuyo's 30 m), and CARMEN's tools count a reading at the maximum range as no hit; read
     as a valid reading, a 270 deg scan's open sectors became arcs of points at 30 m, which the
     extractors fitted lines to (17.0 lines a scan against 13.0 where the same beams were written
-    above the maximum)."""
-    if declared_max is not None:
-        ranges[ranges == declared_max] = np.inf
+    above the maximum). The readings so taken are ``declared_max`` itself and, on the grid of the
+    line's ``units`` (cm: 0.01 m, mm: 0.001 m), the grid values within half a unit of it: a maximum
+    off the grid is written rounded (4.095 m with %.2f as "4.09" or "4.10"), and "4.09" was read as a
+    valid reading 5 mm short of the maximum. A maximum on the grid has itself alone; a reading off the
+    grid (written with more digits) is no such word, so a valid reading just below the maximum is kept.
+
+    ``grid_max`` False (a log with a ``PARAM lmsbench_range_units`` line, which only this project's
+    writer writes): ``declared_max`` itself alone. That writer writes the exact maximum and no return
+    as a SICK code, never a rounded maximum, and its older versions wrote a valid reading near a
+    maximum just off the grid (a ROS float32 range_max, 6.3 stored as 6.300000190734863) as the grid
+    word ("6.300"), which the grid rule read as no return."""
+    if declared_max is None:
+        return ranges
+    at = ranges == declared_max
+    if units is not None and grid_max:
+        scale = metres_per_unit(units)
+        for code in {math.floor(declared_max / scale), math.ceil(declared_max / scale)}:
+            word = code * scale
+            if abs(word - declared_max) <= scale / 2 * (1 + 1e-9):  # the maximum rounded to the grid, either way at a tie
+                at |= np.abs(ranges - word) <= GRID_WORD_TOLERANCE * max(1.0, abs(word))
+    ranges[at] = np.inf
     return ranges
+
+
+#: relative: a reading this close to a grid value (code x unit) is that value as written (4.09 read as
+#: 4.09, computed as 409 x 0.01 = 4.0900000000000003)
+GRID_WORD_TOLERANCE = 1e-12
+
+
+def laser_mount(kind: str, params: dict[str, float]) -> Pose2D:
+    """The pose of a laser on the robot (x forward m, y left m, theta rad), from the log's PARAM lines so
+    far (``MOUNT_PARAM_NAMES``), as CARMEN's robot module placed it (docs/data.md, "Laser mounting"): the
+    front laser (FLASER, ROBOTLASER1) at (offset, side offset, angular offset), each 0 where the log has
+    no line. A rear laser (RLASER) whose log has no ``robot_rearlaser_side_offset`` / ``_angular_offset``
+    line is placed as CARMEN's robot module before 0.7 placed it, the one that wrote RLASER lines: turned
+    by pi, and ``robot_rearlaser_offset`` along its own heading, (-offset, 0, pi); with either line, as
+    0.7's module does, (offset, side offset, angular offset). ROBOTLASER2 (0.7's rear laser) is placed as
+    0.7's module places it, (offset, side offset, angular offset), with no pi of its own. A ROBOTLASER
+    line's own laser pose is not used: CARMEN's scan matcher (vasco) writes its corrected pose there,
+    beside the raw odometry as robot pose, so the two need not differ by the mount."""
+    forward, side, angular = MOUNT_PARAM_NAMES["FLASER" if kind in ("FLASER", "ROBOTLASER1") else "RLASER"]
+    if kind == "RLASER" and side not in params and angular not in params:
+        return (-params.get(forward, 0.0), 0.0, math.pi)
+    return (params.get(forward, 0.0), params.get(side, 0.0), params.get(angular, 0.0))
+
+
+def on_the_laser(rec: Record, mount: Pose2D | None) -> Record:
+    """``rec`` with its robot poses (odometry, truth, corrected pose) moved onto the laser mounted at
+    ``mount`` on the robot (:func:`laser_mount`): each pose (+) mount. A zero or unknown (None) mount
+    leaves the record as it is, bit for bit."""
+    if mount is None or mount == (0.0, 0.0, 0.0):
+        return rec
+
+    def moved(pose: Pose2D | None) -> Pose2D | None:
+        return None if pose is None else compose(pose, mount)
+
+    return Record(scan=rec.scan, odom=moved(rec.odom), truth=moved(rec.truth), corrected=moved(rec.corrected))
 
 
 def _parse_flaser(words: list[str], units: Units | None, geometry: LaserGeometry,
                   range_min: float = 0.0,
                   exact: tuple[float | None, float | None] = (None, None),
-                  cache: _RangeWords | None = None, declared_max: float | None = None) -> tuple[Scan, Pose2D]:
-    """A FLASER / RLASER line's scan and odometry; ``cache``: the pass's range words (:func:`_range_floats`);
-    ``declared_max``: the maximum range of the log's PARAM lines (a reading at it is no return, :func:`_ranges`)."""
+                  cache: _RangeWords | None = None, declared_max: float | None = None,
+                  grid_max: bool = True) -> tuple[Scan, Pose2D]:
+    """A FLASER / RLASER line's scan and odometry (the robot's: its second pose, odom_x odom_y odom_theta;
+    the first, x y theta, is the laser's by CARMEN's robot module or a scan matcher's corrected pose, not
+    read); ``cache``: the pass's range words (:func:`_range_floats`);
+    ``declared_max``: the maximum range of the log's PARAM lines (a reading at it is no return, :func:`_ranges`;
+    its grid words too with ``grid_max``)."""
     kind = words[0]
     _require(len(words) >= 2, f"{kind} needs a beam count")
     n = _count(words[1], "beam count")
     _require(n > 0, f"{kind} needs at least one beam, got a beam count of {n}")  # was "needs 11 fields, got 11"
     _require(_tail_fits(words, _field_count(kind, n) - 2, 2 + n),
              f"{kind} with {n} beams needs {_field_count(kind, n)} fields, got {len(words)}")
-    ranges, u = _ranges(_range_floats(words[2 : 2 + n], f"{kind} ranges", cache), units, kind, declared_max)
+    ranges, u = _ranges(_range_floats(words[2 : 2 + n], f"{kind} ranges", cache), units, kind, declared_max, grid_max)
     tail = _few_floats(words[2 + n : 2 + n + 7], f"{kind} poses and timestamp")
     _stamps(words, tail[6], _logger_at(words, 2 + n + 7))
     angle_min, increment = laser_geometry.beam_angles(n, geometry)
@@ -1078,11 +1278,12 @@ def _exact_or_snapped(angle: float, exact: float | None) -> float:
 
 def _parse_robotlaser(words: list[str], units: Units | None, range_max_override: float | None,
                       range_min: float = 0.0, cache: _RangeWords | None = None,
-                      exact_angles: bool = False) -> tuple[Scan, Pose2D | None]:
+                      exact_angles: bool = False, grid_max: bool = True) -> tuple[Scan, Pose2D | None]:
     """A ROBOTLASER1 / 2 line (robot pose as odometry) or a RAWLASER1 .. 4 line (no pose); its start
     angle and resolution snapped onto the 0.05 deg grid where only text rounding explains their
     distance from it (:func:`snap_angle`), or taken as written with ``exact_angles`` (``PARAM
-    lmsbench_robotlaser_angles exact``)."""
+    lmsbench_robotlaser_angles exact``); ``grid_max``: a reading at the max_range field's grid word is
+    no return too (:func:`at_max_range`)."""
     kind = words[0]
     _require(len(words) >= 10, f"{kind} is too short")
     head = _few_floats(words[1:8], f"{kind} header")
@@ -1109,7 +1310,7 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     if units is None and accuracy in (0.01, 0.001):
         units = "cm" if accuracy == 0.01 else "mm"
     declared = max_range if laser_geometry.MIN_RANGE_MAX_M <= max_range <= laser_geometry.MAX_RANGE_M else None
-    ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind, declared)
+    ranges, _ = _ranges(_range_floats(words[9 : 9 + n], f"{kind} ranges", cache), units, kind, declared, grid_max)
     tail = _few_floats(words[10 + n + m : 10 + n + m + (1 if kind.startswith("RAWLASER") else 12)],
                        f"{kind} timestamp" if kind.startswith("RAWLASER") else f"{kind} poses and timestamp")
     stamp = _stamps(words, tail[-1], _logger_at(words, expected - 2))
@@ -1123,7 +1324,8 @@ def _parse_robotlaser(words: list[str], units: Units | None, range_max_override:
     scan = Scan(ranges, snap(start), snap(resolution), range_min, range_max, stamp)
     if kind.startswith("RAWLASER"):
         return scan, None
-    # the laser pose, speeds, safety distances and turn axis are not read, but nan or inf is no such value (was taken)
+    # the laser pose (laser_mount: not the mount), speeds, safety distances and turn axis are not read, but nan
+    # or inf is no such value (was taken)
     _finite_pose(tail[0:3], f"{kind} laser")
     _require(all(map(math.isfinite, tail[6:11])), f"{kind} speeds, safety distances or turn axis are not finite")
     return scan, _finite_pose(tail[3:6], f"{kind} robot")
@@ -1163,8 +1365,10 @@ def _format_ranges(scan: Scan, units: Units) -> str:
 
 def _read_back(words: list[str], units: Units, declared_max: float) -> np.ndarray:
     """The ranges (m, REP-117) a reader takes ``words`` (range words of ``units``, on a line that
-    declares ``declared_max`` as its maximum range, as the writer's lines do) for."""
-    return at_max_range(decode_logged_ranges(np.array(words, dtype=np.float64), units), declared_max)
+    declares ``declared_max`` as its maximum range, as the writer's lines do) for: the writer's log has a
+    ``PARAM lmsbench_range_units`` line, so the maximum's grid words are valid readings (``grid_max`` False)."""
+    return at_max_range(decode_logged_ranges(np.array(words, dtype=np.float64), units), declared_max, units,
+                        grid_max=False)
 
 
 #: units: the SICK special codes (CODE_ABOVE_MAXIMUM .. CODE_NOT_VALID) as a middle and half width
@@ -1189,14 +1393,17 @@ def _kept_word(scan: Scan, i: int, units: Units) -> str:
     """Beam ``i``'s range written with the digits it needs to keep its meaning: the shortest
     decimal that reads back as the same float64, or, for a valid reading whose exact value is a
     special code (8.183 m in mm mode at range_max 8.183 m, 81.86 m in cm mode at range_max 100 m),
-    the one half a unit below or above it."""
+    the one half a unit below or above it, or a quarter unit below or above it (off the grid)."""
     scale = metres_per_unit(units)
     decimals = 3 if units == "mm" else 2
     r = float(scan.ranges[i])
     words = [_num(r) if math.isfinite(r) else f"{r}"]
     if math.isfinite(r):
         code = round(r / scale)
-        words += [f"{(code - 0.5) * scale:.{decimals + 1}f}", f"{(code + 0.5) * scale:.{decimals + 1}f}"]
+        words += [f"{(code - 0.5) * scale:.{decimals + 1}f}", f"{(code + 0.5) * scale:.{decimals + 1}f}",
+                  # off the grid, a quarter unit away: a valid reading at a range_max off the grid (30.005 m in cm
+                  # mode), whose grid words and own value all read as no return (:func:`at_max_range`)
+                  f"{r - scale / 4:.{decimals + 2}f}", f"{r + scale / 4:.{decimals + 2}f}"]
     for word in words:
         back = _read_back([word], units, scan.range_max)
         if not _meaning_changed(scan, back, scale, i)[0]:

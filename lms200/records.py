@@ -50,7 +50,9 @@ class SkipLog:
 
 @dataclass(frozen=True)
 class Record:
-    """One scan with what the source knows of the robot's pose at the scan's ``stamp``.
+    """One scan with what the source knows of the robot's pose at the scan's ``stamp``: the pose of
+    the laser the scan was taken from (a CARMEN log's robot poses are moved by the laser's mounting on
+    the robot, ``lms200.carmen.laser_mount``; docs/data.md, "Laser mounting").
 
     Attributes:
         scan: the laser scan; ``scan.stamp`` is the source's timestamp (s).

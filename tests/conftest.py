@@ -84,7 +84,7 @@ def pytest_configure(config: pytest.Config) -> None:
     instead of compiling all of them again (about 40 s each on a fresh checkout), and no test's
     output carries a "compiling kernels" line that depends on which worker ran first. Not for
     ``--collect-only``; a warm-up that fails is one warning line, and the tests then show what
-    fails."""
+    fails. (`make test` compiles most of them beforehand, during its static checks: tests/warm_kernels.py.)"""
     if getattr(config, "workerinput", None) is not None or not getattr(config.option, "numprocesses", None):
         return
     if config.option.collectonly:
@@ -96,9 +96,9 @@ def pytest_configure(config: pytest.Config) -> None:
     said: list[str] = []  # warm_up_kernels speaks only when numba compiles (a cache load says nothing)
     try:
         seconds = warm_up_kernels(log=said.append, slam=True)
-        from sim import simulate_records
+        from warm_kernels import warm_simulator
 
-        simulate_records("mit", seed=0, duration=0.1, rate_hz=10)
+        warm_simulator()
     except Exception as exc:  # noqa: BLE001 - the tests themselves report what is broken
         print(f"warning: compiling the numba kernels before the workers failed ({type(exc).__name__}: {exc}); "
               "each worker compiles its own", file=sys.stderr)

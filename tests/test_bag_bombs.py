@@ -4,6 +4,7 @@ bounds it (MAX_DECOMPRESSED_BYTES) and refuses the bag naming it, never reading 
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -13,6 +14,7 @@ import pytest
 
 from lms200 import Record, Scan, read_log, write_log
 from lms200.bag import BagTooLargeError
+from lms200.errors import LmsbenchError
 
 ROOT = Path(__file__).resolve().parents[1]
 MiB = 2**20
@@ -714,3 +716,235 @@ def test_an_mcap_schema_or_channel_record_of_absurd_length_is_refused_unread(tmp
                    "not read\n"), err
     ok = _ros2_bag_of_topics(tmp_path / "ok", 1, "mcap")  # the same bag without it reads
     assert [r.scan.stamp for r in read_log(ok, topic="/scan0")] == [10.0]
+
+
+def _mcap_chunk(declared: int, payload: bytes, compression: str = "zstd", record_length: int | None = None) -> bytes:
+    """An mcap chunk record declaring ``declared`` bytes uncompressed, holding ``payload`` (already compressed)."""
+    import struct
+
+    body = (struct.pack("<QQQI", 0, 0, declared, 0) + struct.pack("<I", len(compression)) + compression.encode()
+            + struct.pack("<Q", len(payload)) + payload)
+    return bytes([6]) + struct.pack("<Q", len(body) if record_length is None else record_length) + body
+
+
+def _mcap_with_record(path: Path, record: bytes) -> Path:
+    """A ROS 2 mcap bag (one LaserScan topic, one message) with ``record`` first in its data section and the
+    footer's summary offset cleared (the reader scans the data section)."""
+    import struct
+
+    bag = _ros2_bag_of_topics(path, 1, "mcap")
+    mcap = next(bag.glob("*.mcap"))
+    data = mcap.read_bytes()
+    end_header = 8 + 1 + 8 + struct.unpack_from("<Q", data, 9)[0]
+    footer = data[-37:-28] + struct.pack("<Q", 0) + data[-20:]
+    mcap.write_bytes(data[:end_header] + record + data[end_header:-37] + footer)
+    return bag
+
+
+def _zstd_frames(data: bytes, frames: int = 1):
+    from rosbags.rosbag2 import storage_mcap
+
+    return storage_mcap.zstd.compress(data) * frames
+
+
+def test_mcap_records_and_chunks_of_absurd_declared_length_are_refused_unread(tmp_path, capsys) -> None:
+    """A review: an mcap file's header, chunk and other records were read whole, bounded only by the file's
+    size, and its chunks decompressed whole before their declared size was compared: a header or chunk record
+    declaring 1 TiB in a 5 KB file was `cannot open as a ROS bag: MemoryError:`, a 300 MB chunk record held
+    `lmsbench info` at 648 MB, 37 KB of zstd declaring 1 GiB uncompressed at 2.1 GB (exit 0), and declaring
+    1 KiB at 2.1 GB before "Chunk size mismatch". Each is refused from what it declares, naming the storage
+    file, a chunk decompressed to one byte past what it declares at most."""
+    import struct
+    import tracemalloc
+
+    from experiments.cli import main
+
+    header = _ros2_bag_of_topics(tmp_path / "h", 1, "mcap")
+    data = bytearray((header / "h.mcap").read_bytes())
+    data[9:17] = struct.pack("<Q", 2**40)
+    (header / "h.mcap").write_bytes(bytes(data))
+    end = (f", more than the {134_283_264:,} a ROS 2 bag's mcap record may hold (lms200.bag.MAX_MCAP_RECORD_BYTES): "
+           "damage, or no bag of laser scans; not read\n")
+    assert main(["info", str(header)]) == 2
+    assert capsys.readouterr().err == (f"lmsbench info: error: {header}: its storage file h.mcap's header record at byte 8 "
+                                       f"declares 1,099,511,627,776 bytes{end}")
+    chunk = _mcap_with_record(tmp_path / "c", _mcap_chunk(2**30, b"", record_length=2**40))
+    assert main(["info", str(chunk)]) == 2
+    err = capsys.readouterr().err
+    start = int(err.split("chunk record at byte ")[1].split(" ")[0].replace(",", ""))
+    assert (chunk / "c.mcap").read_bytes()[start] == 6
+    assert err == (f"lmsbench info: error: {chunk}: its storage file c.mcap's chunk record at byte {start:,} declares "
+                   f"1,099,511,627,776 bytes{end}")
+    huge = _mcap_with_record(tmp_path / "u", _mcap_chunk(2**30, _zstd_frames(bytes(MiB))))
+    assert main(["info", str(huge)]) == 2
+    assert capsys.readouterr().err == (
+        f"lmsbench info: error: {huge}: its storage file u.mcap's chunk declares 1,073,741,824 bytes uncompressed (zstd), "
+        f"more than the {128 * MiB:,} a chunk may decompress to (lms200.bag.MAX_DECOMPRESSED_BYTES): damage, or no "
+        "bag of laser scans; not read\n")
+    bomb = _mcap_with_record(tmp_path / "b", _mcap_chunk(1024, _zstd_frames(bytes(MiB), 64)))  # 64 frames of 1 MiB
+    tracemalloc.start()
+    try:
+        with pytest.raises(BagTooLargeError) as exc:
+            list(read_log(bomb))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert str(exc.value) == (f"{bomb}: its storage file b.mcap's zstd chunk decompresses to more than the 1,024 bytes it "
+                              "declares: damage, or a compression bomb; not read")
+    assert peak < 16 * MiB, peak  # old: the 64 MiB decompressed whole
+
+
+@pytest.mark.parametrize("compression", ["zstd", "lz4", ""])
+def test_mcap_chunks_within_their_declared_size_read_as_before(tmp_path, compression) -> None:
+    """The bounded decompression reads a chunk as rosbags does: zstd of several frames, lz4, none."""
+    import struct
+
+    import lz4.frame
+
+    inner = bytes([0x80]) + struct.pack("<Q", 3000) + bytes(range(250)) * 12  # a record the reader skips
+    payload = {"zstd": lambda: _zstd_frames(inner[:1000]) + _zstd_frames(inner[1000:]),
+               "lz4": lambda: lz4.frame.compress(inner), "": lambda: inner}[compression]()
+    bag = _mcap_with_record(tmp_path / "ok", _mcap_chunk(len(inner), payload, compression))
+    assert [r.scan.stamp for r in read_log(bag, topic="/scan0")] == [10.0]
+    bad = _mcap_with_record(tmp_path / "short", _mcap_chunk(len(inner) + 1, payload, compression))
+    with pytest.raises(LmsbenchError, match=r"short: .*Chunk size mismatch: expected 3010 bytes, got 3009"):
+        list(read_log(bad, topic="/scan0"))
+
+
+def test_an_indexed_mcap_chunk_that_decompresses_past_its_declared_size_is_refused_naming_the_file(
+        tmp_path, monkeypatch) -> None:
+    """The same bound where the chunk is read through the file's chunk index, as the messages are iterated
+    (msgsrc): 1 GiB of zeros behind two zstd-compressed scans held `lmsbench info` at 2.05 GB before "Chunk size
+    mismatch: expected 3669 bytes, got 1048579669"; refused now, naming the storage file, 64 MiB here."""
+    import tracemalloc
+
+    from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer, storage_mcap
+    from rosbags.typesys import Stores, get_typestore
+
+    zstd, zeros = storage_mcap.zstd, storage_mcap.zstd.compress(bytes(MiB))
+
+    class Bomb:
+        def __getattr__(self, name):
+            return getattr(zstd, name)
+
+        @staticmethod
+        def compress(data: bytes) -> bytes:
+            return zstd.compress(data) + zeros * 64
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    writer = Writer(tmp_path / "b", version=8, storage_plugin=StoragePlugin.MCAP)
+    writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+    with monkeypatch.context() as m:
+        m.setattr(storage_mcap, "zstd", Bomb())
+        with writer as w:
+            conn = w.add_connection("/scan0", "sensor_msgs/msg/LaserScan", typestore=ts)
+            for t in (10, 11):
+                w.write(conn, t * 10**9, ts.serialize_cdr(_laser_scan(ts), "sensor_msgs/msg/LaserScan"))
+    tracemalloc.start()
+    try:
+        with pytest.raises(BagTooLargeError) as exc:
+            list(read_log(tmp_path / "b"))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert re.fullmatch(rf"{tmp_path / 'b'}: topic /scan0 after message 0: its storage file b\.mcap's zstd chunk "
+                        r"decompresses to more than the [\d,]+ bytes it declares: damage, or a compression bomb; not read",
+                        str(exc.value)), exc.value
+    assert peak < 16 * MiB, peak
+
+
+def test_an_mcap_record_whose_length_runs_past_the_file_is_refused_not_the_scan_ended(tmp_path) -> None:
+    """A record between two chunks whose length was damaged (1 TiB) was skipped by a seek past the file's end,
+    and the scan stopped there as at the data's end: 1 of the bag's 3 scans read, exit 0. It is refused."""
+    import struct
+
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+
+    def mcap(name: str, stamps: tuple[int, ...]) -> tuple[Path, bytes]:
+        with Writer(tmp_path / name, version=8, storage_plugin=StoragePlugin.MCAP) as w:
+            conn = w.add_connection("/scan0", "sensor_msgs/msg/LaserScan", typestore=ts)
+            for t in stamps:
+                w.write(conn, t * 10**9, ts.serialize_cdr(_laser_scan(ts), "sensor_msgs/msg/LaserScan"))
+        file = tmp_path / name / f"{name}.mcap"
+        return file, file.read_bytes()
+
+    def first_chunk(data: bytes) -> tuple[int, bytes]:
+        at = 8 + 1 + 8 + struct.unpack_from("<Q", data, 9)[0]
+        return at, data[at: at + 9 + struct.unpack_from("<Q", data, at + 1)[0]]
+
+    _, a = mcap("a", (10,))
+    file, b = mcap("b", (11, 12))
+    at, chunk_b = first_chunk(b)
+    footer = b[-37:-28] + struct.pack("<Q", 0) + b[-20:]  # no summary: the data section is scanned
+    damaged = bytes([0x80]) + struct.pack("<Q", 2**40) + bytes(16)
+    file.write_bytes(b[:at] + first_chunk(a)[1] + damaged + chunk_b + b[at + len(chunk_b):-37] + footer)
+    start = at + len(first_chunk(a)[1]) + 9
+    with pytest.raises(LmsbenchError, match=rf"b: cannot open as a ROS bag: AnyReaderError: its storage file b\.mcap's "
+                                            rf"record data at byte {start:,} declares 1,099,511,627,776 bytes, past the "
+                                            r"end of the file that holds it \([\d,]+ bytes on\): damage; not read$"):
+        list(read_log(tmp_path / "b"))
+    file.write_bytes(b[:at] + first_chunk(a)[1] + chunk_b + b[at + len(chunk_b):-37] + footer)  # undamaged: 3 scans
+    assert len(list(read_log(tmp_path / "b"))) == 3
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_rosbags_used_directly_after_an_lmsbench_read_keeps_its_own_behaviour(tmp_path, monkeypatch, storage) -> None:
+    """A review: lms200.bag replaces rosbags functions for the whole process (mcap read_sized / read_exact /
+    skip_exact / decompress, the storage readers' _open, McapReader.messages, AnyReader's definition parsers),
+    and they applied lmsbench's bounds to every rosbags user after one lmsbench read: a bag over a bound that
+    rosbags itself reads was refused by rosbags too (BagTooLargeError from AnyReader). They apply only inside
+    lmsbench's own reads."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    from lms200 import bag as lbag
+
+    b = _ros2_bag_of_topics(tmp_path / "b", 1, storage)
+    monkeypatch.setattr(lbag, "MAX_CONNECTION_BYTES", 10)  # the LaserScan definition is over it
+    monkeypatch.setattr(lbag, "MAX_MCAP_RECORD_BYTES", 100)  # and the mcap file's records
+    with pytest.raises(BagTooLargeError, match="MAX_CONNECTION_BYTES|MAX_MCAP_RECORD_BYTES"):
+        list(read_log(b, topic="/scan0"))
+    with AnyReader([b], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        assert [(c.topic, t) for c, t, _ in reader.messages()] == [("/scan0", 10 * 10**9)]
+    monkeypatch.undo()
+    assert [r.scan.stamp for r in read_log(b, topic="/scan0")] == [10.0]  # lmsbench reads it within its bounds
+
+
+@pytest.mark.parametrize(("change", "said"), [
+    ("missing", "it has no rosbags.rosbag2.storage_mcap.read_exact"),
+    ("other parameters", "its rosbags.rosbag2.storage_mcap.skip_exact takes (bio, size, whence), not (bio, size)"),
+])
+def test_an_mcap_bag_is_refused_where_rosbags_lacks_the_functions_its_bounds_replace(tmp_path, monkeypatch, capsys,
+                                                                                    change, said) -> None:
+    """A review: pyproject allowed rosbags>=0.10, but 0.10.0 .. 0.11.5 have no mcap read_exact / skip_exact /
+    decompress: their bounds were silently left out and an mcap bag read unbounded (exit 0). The floor is the
+    first rosbags with them (0.11.6), and a rosbags whose functions are missing or take other parameters has its
+    mcap bags refused in one line; a sqlite3 bag still reads."""
+    from importlib.metadata import version
+
+    from rosbags.rosbag2 import storage_mcap
+
+    from experiments.cli import main
+    from lms200.bag import ROSBAGS_MCAP_SINCE, BagError
+
+    pyproject = (Path(__file__).parents[1] / "pyproject.toml").read_text()
+    assert f'"rosbags>={ROSBAGS_MCAP_SINCE}"' in pyproject and ROSBAGS_MCAP_SINCE == "0.11.6"
+    b = _ros2_bag_of_topics(tmp_path / "b", 1, "mcap")
+    if change == "missing":
+        monkeypatch.delattr(storage_mcap, "read_exact")
+    else:
+        monkeypatch.setattr(storage_mcap, "skip_exact", lambda bio, size, whence: None)
+    expected = (f"{b}: an mcap bag cannot be read with the installed rosbags {version('rosbags')}: {said} "
+                f"(lmsbench needs rosbags>=0.11.6 to bound its reads)")
+    with pytest.raises(BagError) as err:
+        list(read_log(b, topic="/scan0"))
+    assert str(err.value) == expected
+    assert main(["info", str(b)]) == 2
+    assert capsys.readouterr().err == f"lmsbench info: error: {expected}\n"
+    sq = _ros2_bag_of_topics(tmp_path / "sq", 1, "sqlite3")
+    assert [r.scan.stamp for r in read_log(sq, topic="/scan0")] == [10.0]
+    monkeypatch.undo()
+    assert [r.scan.stamp for r in read_log(b, topic="/scan0")] == [10.0]

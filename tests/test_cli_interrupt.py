@@ -482,6 +482,17 @@ def sim_run(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.fixture(scope="module")
+def paper_run(sim_run, tmp_path_factory) -> Path:
+    """A finished paper-preset `lmsbench slam` run of ``sim_run``, for the tests below to copy as the
+    earlier run in their folder (its outputs are deterministic; run once, not once a test: ~10 s)."""
+    from experiments.cli import main
+
+    out = tmp_path_factory.mktemp("paper") / "run"
+    assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--preset", "paper"]) == 0
+    return out
+
+
 def _slam_stopped_when(sim: Path, out: Path, ready, *extra: str) -> tuple[int, str]:
     """`lmsbench slam SIM --out OUT --quiet` in a subprocess, sent SIGINT (as Ctrl-C) once ``ready()``
     holds; (exit status, stderr). A run that ends before that is not signalled."""
@@ -524,14 +535,14 @@ def test_ctrl_c_after_slams_trajectory_keeps_the_users_own_metrics_and_figure(si
 
 
 @pytest.mark.slow
-def test_ctrl_c_in_the_baselines_leaves_no_earlier_runs_scores_beside_the_new_trajectory(sim_run, tmp_path):
+def test_ctrl_c_in_the_baselines_leaves_no_earlier_runs_scores_beside_the_new_trajectory(sim_run, paper_run, tmp_path):
     """The goal of 0e69180 still holds: DIR holding a finished paper-preset run, a default-preset run
     into it stopped in its baselines (its own config.yaml written) keeps its trajectory, keyframes,
     map and config, and none of the earlier run's metrics.json and slam.png."""
-    from experiments.cli import main
+    import shutil
 
     out = tmp_path / "run"
-    assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--preset", "paper"]) == 0
+    shutil.copytree(paper_run, out)
     before = (out / "trajectory.tum").read_text()
 
     def new_outputs() -> bool:  # map.json, the last of them, is written whole (a CI run sent SIGINT once
@@ -548,16 +559,18 @@ def test_ctrl_c_in_the_baselines_leaves_no_earlier_runs_scores_beside_the_new_tr
 
 
 @pytest.mark.slow
-def test_a_stop_while_slam_writes_its_files_leaves_none_of_an_earlier_runs_beside_them(sim_run, tmp_path,
+def test_a_stop_while_slam_writes_its_files_leaves_none_of_an_earlier_runs_beside_them(sim_run, paper_run, tmp_path,
                                                                                         monkeypatch, capsys):
     """A stop between this run's config.yaml and its map.json (a CI run's Ctrl-C landed there) left
     the earlier paper-preset run's map.json beside the new config.yaml and trajectory.tum, as if it
     were the new run's map. The earlier run's outputs are now removed before the new config.yaml."""
+    import shutil
+
     import experiments.slamrun as slamrun
     from experiments.cli import main
 
     out = tmp_path / "run"
-    assert main(["slam", str(sim_run), "--out", str(out), "--quiet", "--preset", "paper"]) == 0
+    shutil.copytree(paper_run, out)
     earlier = {p.name: p.read_bytes() for p in out.iterdir()}
     assert sorted(earlier) == ["config.yaml", "map.json", "metrics.json", "slam.png", "trajectory.tum"]
     write_tum = slamrun.write_tum

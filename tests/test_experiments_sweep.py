@@ -851,3 +851,21 @@ def test_a_sweep_rate_below_one_scan_an_hour_names_the_floor(tmp_path, capsys, r
                                        "1/3600 scans/s (one scan an hour, the longest simulated run: a lower rate keeps "
                                        f"the first scan alone), or null, got {float(rate) if 'e' in rate else int(rate)!r}\n")
     assert not out.exists()
+
+
+def test_a_sweep_refused_by_its_checks_leaves_the_folders_files_as_they_were(tmp_path):
+    """A sweep into a folder whose checks fail (here a folder where a cell's file goes, refused before any
+    cell is computed) rewrote sweep.yaml (as the new sweep's) and versions.yaml, and removed the earlier
+    sweep's results.parquet / results.csv, before it was refused: every check comes first, then any write."""
+    from lms200.errors import LmsbenchError
+
+    log = tmp_path / "log.txt"
+    out = tmp_path / "out"
+    run_sweep(make_spec(log, xs=[0, 1]), out, "inprocess", progress=False)
+    (out / "versions.yaml").write_text("versions of the earlier run\n")
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    assert sorted(before) == ["results.csv", "results.parquet", "sweep.yaml", "versions.yaml"]
+    (out / "cells" / "f00.parquet").mkdir()
+    with pytest.raises(LmsbenchError, match=r"cells/f00\.parquet: a folder where a cell's file goes"):
+        run_sweep(make_spec(log, xs=[0, 1, 2]), out, "inprocess", progress=False)
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 
 from lms200 import LogFormatError, read_log
+from lms200.finite import fixed
 
 from experiments.logargs import LOG_HELP, add_log_options, read_log_options, report_skipped
 from experiments.loginfo import summarise
@@ -33,9 +35,14 @@ def run(args: argparse.Namespace) -> int:
         raise LogFormatError(args.log, None, "no laser messages found: not a CARMEN log (FLASER/RLASER/ROBOTLASER/RAWLASER "
                                           f"lines) nor a bag with LaserScan messages{seen}")
     others = stats.other_lasers() if hasattr(stats, "other_lasers") else {}
+    mount = getattr(stats, "mount", None)  # a CARMEN laser off the robot's centre: its poses are the laser's
+    changes = getattr(stats, "mount_changes", 0)  # a mounting PARAM line after laser lines: frames differ
+    changed = ({"count": changes, "first_line": stats.mount_changed_at, "before": stats.mount_before}
+               if changes else None)
     report_skipped(reader)
     if args.json:
-        print(json.dumps({**summary.as_dict(), "laser": stats.laser, "skipped_lines": stats.skipped_count,
+        print(json.dumps({**summary.as_dict(), "laser": stats.laser, "laser_mount": mount, "laser_mount_changes": changed,
+                          "skipped_lines": stats.skipped_count,
                           "skipped": [{"at": at, "reason": reason} for at, reason in stats.skipped],
                           "stopped": stats.stopped, "other_lasers": others}, indent=2))
         return 0
@@ -43,6 +50,14 @@ def run(args: argparse.Namespace) -> int:
     for line in summary.lines():
         print("  " + line)
     print(f"  laser           {stats.laser}")
+    if mount is not None:
+        print(f"  laser mount     x {fixed(mount[0], 3)} m, y {fixed(mount[1], 3)} m, {fixed(math.degrees(mount[2]), 2)} deg "
+              f"on the robot ({stats.mounted} scans): their poses are the laser's (docs/data.md, \"Laser mounting\")")
+    if changed is not None:
+        before = stats.mount_before or (0.0, 0.0, 0.0)
+        print(f"  laser mount     changed mid-log {changes} time{'s' * (changes != 1)}, first by the PARAM line "
+              f"{stats.mount_changed_at} (before it x {fixed(before[0], 3)} m, y {fixed(before[1], 3)} m, "
+              f"{fixed(math.degrees(before[2]), 2)} deg): each scan is placed by the mounting of the lines before it")
     for kind, count in others.items():
         print(f"  also in the log {kind} ({count} lines, not read: --topic {kind})")
     return 0

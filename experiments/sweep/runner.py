@@ -114,12 +114,6 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
     from experiments.provenance import versions, write_record
 
     record = spec_record(spec)
-    if _recorded(out / "sweep.yaml") not in (None, record):  # the folder's table is another sweep file's: a run
-        for name in ("results.parquet", "results.csv"):  # killed before writing its own left it beside this
-            (out / name).unlink(missing_ok=True)  # sweep.yaml, drawn by `figures --sweep` as this one's, exit 0
-    write_record(out / "sweep.yaml", record)  # whole: it tells the folder as the sweep's (SWEEP_OWNER)
-
-    write_record(out / "versions.yaml", dump_yaml(versions(), sort_keys=False))  # of the last run into `out`
     digests, seen = getattr(fn, "input_digests", None), {}  # the files a cell reads are part of its key
     inputs = [digests(params, seen) if digests else None for params in cells]
     keys = [cell_key(spec.kind, params, given) for params, given in zip(cells, inputs)]
@@ -131,6 +125,14 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
     todo = list({key: params for key, params in todo}.items())  # identical cells once
     if todo:
         store.check_writable()  # before any cell is computed
+    # every check first, then the first write: a run refused above (a cell folder not writable, a folder where a
+    # cell's file goes, an input that cannot be read) rewrote sweep.yaml and versions.yaml and removed the
+    # folder's table of the earlier sweep before it was refused
+    if _recorded(out / "sweep.yaml") not in (None, record):  # the folder's table is another sweep file's: a run
+        for name in ("results.parquet", "results.csv"):  # killed before writing its own left it beside this
+            (out / name).unlink(missing_ok=True)  # sweep.yaml, drawn by `figures --sweep` as this one's, exit 0
+    write_record(out / "sweep.yaml", record)  # whole: it tells the folder as the sweep's (SWEEP_OWNER)
+    write_record(out / "versions.yaml", dump_yaml(versions(), sort_keys=False))  # of the last run into `out`
     skipped = len(set(keys)) - len(todo)
     counts = {"computed": 0, "failed": 0}
 
