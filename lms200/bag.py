@@ -1160,8 +1160,15 @@ def _bound_storage_connections() -> None:
                 _check_sqlite_connections(self.path)
             _real(self)
 
-        _open.lmsbench_bounded = True  # type: ignore[attr-defined]
-        reader._open = _open  # type: ignore[union-attr]
+        _replace(reader, "_open", _open, real_open)
+
+
+def _replace(owner: Any, name: str, wrapper: Callable[..., Any], real: Callable[..., Any]) -> None:  # noqa: ANN401
+    """Put ``wrapper`` in ``owner.name`` in place of rosbags' ``real``, marked ``lmsbench_bounded`` (never
+    wrapped twice) and keeping ``real`` as ``lmsbench_real``."""
+    wrapper.lmsbench_bounded = True  # type: ignore[attr-defined]
+    wrapper.lmsbench_real = real  # type: ignore[attr-defined]
+    setattr(owner, name, wrapper)
 
 
 def _bound_mcap(storage_mcap: Any) -> None:  # noqa: ANN401 - a module
@@ -1176,9 +1183,7 @@ def _bound_mcap(storage_mcap: Any) -> None:  # noqa: ANN401 - a module
                 budget.mcap, budget.mcap_chars, budget.storage = {}, 0, Path(str(self.path)).name
             _real(self)
 
-        _open_mcap.lmsbench_bounded = True  # type: ignore[attr-defined]
-        _open_mcap.lmsbench_real = mcap_open  # type: ignore[attr-defined]
-        mcap._open = _open_mcap
+        _replace(mcap, "_open", _open_mcap, mcap_open)
     mcap_messages = getattr(mcap, "messages", None)
     if mcap_messages is not None and not getattr(mcap_messages, "lmsbench_bounded", False):
         def _messages(self: Any, *args: Any, _real: Callable[..., Any] = mcap_messages,  # noqa: ANN401
@@ -1200,25 +1205,19 @@ def _bound_mcap(storage_mcap: Any) -> None:  # noqa: ANN401 - a module
                     _MCAP_READING.reset(token)
                 yield item
 
-        _messages.lmsbench_bounded = True  # type: ignore[attr-defined]
-        _messages.lmsbench_real = mcap_messages  # type: ignore[attr-defined]
-        mcap.messages = _messages
+        _replace(mcap, "messages", _messages, mcap_messages)
     read_sized = getattr(storage_mcap, "read_sized", None)
     if read_sized is not None and not getattr(read_sized, "lmsbench_bounded", False):
         def _read_sized(bio: Any, _real: Callable[[Any], bytes] = read_sized) -> bytes:  # noqa: ANN401
             return _bounded_read_sized(bio, _real) if _IN_LMSBENCH_READ.get() else _real(bio)
 
-        _read_sized.lmsbench_bounded = True  # type: ignore[attr-defined]
-        _read_sized.lmsbench_real = read_sized  # type: ignore[attr-defined]
-        storage_mcap.read_sized = _read_sized
+        _replace(storage_mcap, "read_sized", _read_sized, read_sized)
     read_exact = getattr(storage_mcap, "read_exact", None)
     if read_exact is not None and not getattr(read_exact, "lmsbench_bounded", False):
         def _read_exact(bio: Any, size: int, _real: Callable[[Any, int], bytes] = read_exact) -> bytes:  # noqa: ANN401
             return _bounded_read_exact(bio, size, _real) if _IN_LMSBENCH_READ.get() else _real(bio, size)
 
-        _read_exact.lmsbench_bounded = True  # type: ignore[attr-defined]
-        _read_exact.lmsbench_real = read_exact  # type: ignore[attr-defined]
-        storage_mcap.read_exact = _read_exact
+        _replace(storage_mcap, "read_exact", _read_exact, read_exact)
     skip_exact = getattr(storage_mcap, "skip_exact", None)
     if skip_exact is not None and not getattr(skip_exact, "lmsbench_bounded", False):
         def _skip_exact(bio: Any, size: int, _real: Callable[[Any, int], None] = skip_exact) -> None:  # noqa: ANN401
@@ -1227,9 +1226,7 @@ def _bound_mcap(storage_mcap: Any) -> None:  # noqa: ANN401 - a module
             else:
                 _real(bio, size)
 
-        _skip_exact.lmsbench_bounded = True  # type: ignore[attr-defined]
-        _skip_exact.lmsbench_real = skip_exact  # type: ignore[attr-defined]
-        storage_mcap.skip_exact = _skip_exact
+        _replace(storage_mcap, "skip_exact", _skip_exact, skip_exact)
     decompress = getattr(storage_mcap, "decompress", None)
     if decompress is not None and not getattr(decompress, "lmsbench_bounded", False):
         def _decompress(data: bytes, compression: str, size: int, crc: int,
@@ -1238,9 +1235,7 @@ def _bound_mcap(storage_mcap: Any) -> None:  # noqa: ANN401 - a module
                 return _real(data, compression, size, crc)
             return _bounded_decompress(data, compression, size, crc, _real)
 
-        _decompress.lmsbench_bounded = True  # type: ignore[attr-defined]
-        _decompress.lmsbench_real = decompress  # type: ignore[attr-defined]
-        storage_mcap.decompress = _decompress
+        _replace(storage_mcap, "decompress", _decompress, decompress)
     for name, what in (("Schema", "message definitions (schemas)"), ("Channel", "topics (channels)")):
         typ = getattr(storage_mcap, name, None)
         if typ is not None and not isinstance(typ, _CountedRecords):
