@@ -25,6 +25,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from lms200.errors import in_chain  # noqa: E402
+
 #: rcParams applied by :func:`apply_style`: small, print-sized, readable in a report.
 STYLE: dict[str, object] = {
     "figure.figsize": (6.4, 4.0),
@@ -191,22 +193,10 @@ def savefig(fig, path: Path | str, **kwargs) -> None:
     except OSError:
         raise
     except Exception as exc:
-        failed = _oserror_in(exc)
+        failed = in_chain(exc, OSError)
         if failed is None:
             raise
         raise failed from None
-
-
-def _oserror_in(exc: BaseException) -> OSError | None:
-    """The first OSError in ``exc``'s chain of causes and contexts, or None."""
-    seen: set[int] = set()
-    cur: BaseException | None = exc
-    while cur is not None and id(cur) not in seen:
-        if isinstance(cur, OSError):
-            return cur
-        seen.add(id(cur))
-        cur = cur.__cause__ or cur.__context__
-    return None
 
 
 def save_figure(fig, stem: Path | str, data: pd.DataFrame | dict[str, pd.DataFrame] | None = None,

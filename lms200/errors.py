@@ -4,6 +4,23 @@ The command line turns these into one-line messages (exit status 2) instead of t
 """
 
 import os
+from typing import TypeVar
+
+_E = TypeVar("_E", bound=BaseException)
+
+
+def in_chain(exc: BaseException, kind: type[_E]) -> _E | None:
+    """The first exception of ``kind`` among ``exc`` and its causes and contexts (``__cause__``, else
+    ``__context__``), or None: what an error raised while handling another hides (the command line's
+    Ctrl-C under a worker's error, a full disk under matplotlib's clean-up error)."""
+    seen: set[int] = set()
+    cur: BaseException | None = exc
+    while cur is not None and id(cur) not in seen:
+        if isinstance(cur, kind):
+            return cur
+        seen.add(id(cur))
+        cur = cur.__cause__ or cur.__context__
+    return None
 
 
 class LmsbenchError(Exception):
