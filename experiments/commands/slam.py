@@ -82,15 +82,18 @@ def _check_extractor_record(config: Path, recorded: dict, cfg: Any) -> None:  # 
     from features.registry import get_method
     from lms200.yamlio import dump as dump_yaml
 
+    def fields_of(method: str) -> set[str]:  # the names of a method's config fields
+        return {f.name for f in dataclasses.fields(get_method(method).config_type)}
+
     try:
-        own = {f.name for f in dataclasses.fields(get_method(cfg.extractor).config_type)}
+        own = fields_of(cfg.extractor)
         resolved = resolved_configs([cfg.extractor], {cfg.extractor: cfg.extractor_params})[cfg.extractor]
     except Exception:  # noqa: BLE001 - the run checks its extractor's fields itself, with its own message
         return
     if not set(recorded) <= own:  # another method's record (slam: extractor was changed: the edit that is read)?
         from features.registry import available_methods
 
-        others = [{f.name for f in dataclasses.fields(get_method(m).config_type)} for m in available_methods()]
+        others = [fields_of(m) for m in available_methods()]
         if any(set(recorded) <= fields for fields in others):
             return
         field = sorted(set(recorded) - own, key=str)[0]
@@ -122,7 +125,7 @@ def _check_extractor_record(config: Path, recorded: dict, cfg: Any) -> None:  # 
     from features.registry import available_methods
 
     for method in available_methods():  # a record of another method of the same fields (split_merge / iepf)?
-        if method == cfg.extractor or {f.name for f in dataclasses.fields(get_method(method).config_type)} != own:
+        if method == cfg.extractor or fields_of(method) != own:
             continue
         try:
             theirs = resolved_configs([method], {method: cfg.extractor_params})[method]
