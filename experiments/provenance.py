@@ -120,19 +120,12 @@ def write_record(path: str | os.PathLike, content: str | Callable[[Path], object
     return write_whole(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 
-def _temporary_stem(path: Path) -> str:
-    """``.NAME`` of write_record's ``.NAME.PID.tmp``, shortened for a name near the file system's
-    longest (``lms200.logs.hidden_stem``; room kept for a PID of 10 digits, so one stem for every run:
-    "...: file name too long" was ``calibrate --out``'s error after its work)."""
-    from lms200.logs import hidden_stem
-
-    return hidden_stem(path, len(".0123456789.tmp"))
-
-
 def leftover_temporaries(path: str | os.PathLike) -> list[Path]:
     """The temporary files :func:`write_record` left beside ``path`` in a process that was killed
     before it renamed them (``.NAME.PID.tmp`` only: a user's ``.NAME.notes.tmp`` is not one)."""
     path = Path(path)
-    stem = _temporary_stem(path)
+    from lms200.logs import temporary_stem
+
+    stem = temporary_stem(path)
     return [tmp for tmp in path.parent.glob(f"{glob.escape(stem)}.*.tmp")
             if tmp.name[len(stem) + 1 : -len(".tmp")].isdigit()]

@@ -180,6 +180,13 @@ def hidden_stem(path: Path, tail_bytes: int) -> str:
     return os.fsdecode(b"." + head + b"." + digest)
 
 
+def temporary_stem(path: Path) -> str:
+    """``.NAME`` of :func:`write_whole`'s ``.NAME.PID.tmp``, shortened for a name near the file system's
+    longest (:func:`hidden_stem`; room kept for a PID of 10 digits, so one stem for every run: "...: file
+    name too long" was ``calibrate --out``'s error after its work)."""
+    return hidden_stem(path, len(".0123456789.tmp"))
+
+
 def write_whole(path: str | os.PathLike, write: Callable[[Path], object]) -> Path:
     """Write the file ``path`` whole or not at all: ``write`` writes a hidden temporary file beside it
     (``.NAME.PID.tmp``, the path it is given), renamed over ``path`` once whole (``os.replace``, atomic
@@ -190,7 +197,7 @@ def write_whole(path: str | os.PathLike, write: Callable[[Path], object]) -> Pat
     through here (``write_tum``, ``experiments.provenance.write_record``)."""
     given = Path(path)
     target = Path(os.path.realpath(given)) if os.path.islink(given) else given
-    tmp = target.with_name(f"{hidden_stem(target, len('.0123456789.tmp'))}.{os.getpid()}.tmp")
+    tmp = target.with_name(f"{temporary_stem(target)}.{os.getpid()}.tmp")
     try:
         write(tmp)
         try:
