@@ -10,7 +10,6 @@ import io
 import os
 import shutil
 import stat
-import tempfile
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
@@ -90,10 +89,10 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
     ``fmt``: "robotlaser1" (default for CARMEN) or "flaser" for CARMEN text (``.gz``, ``.bz2``, ``.xz`` compress),
     "bag" for a ROS 1 bag (default for ``*.bag``), "bag2" for a ROS 2 bag folder.
 
-    A CARMEN log is written to a temporary file beside ``path`` and renamed onto it once every
-    record is written, so an error part-way (an item that is not a Record, scans of mixed units, a
-    full disk) leaves an existing file at ``path`` as it was; a bag, which is never written over,
-    is removed again.
+    A CARMEN log is written whole or not at all (:func:`write_whole`): an error part-way (an item that
+    is not a Record, scans of mixed units, a full disk) leaves an existing file at ``path`` as it was,
+    its permission bits are kept and a symbolic link's target is written; a bag, which is never
+    written over, is removed again.
 
     Raises:
         InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument: a path that is
@@ -132,20 +131,12 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
     if p.exists() and not p.is_file():
         raise InputError(f"path: {p} exists and is not a regular file (a folder or a device); "
                          "name a file to write the log to")
-    suffix = ".tmp" + "".join(p.suffixes[-1:])
-    # mkstemp puts 8 characters between prefix and suffix; a name near 255 bytes made one too long
-    fd, tmp = tempfile.mkstemp(prefix=hidden_stem(p, 1 + 8 + len(os.fsencode(suffix))) + ".", suffix=suffix, dir=p.parent)
-    os.close(fd)
-    os.chmod(tmp, (p.stat().st_mode & 0o777) if p.exists() else 0o644)  # mkstemp's is 0o600
+    written: list[int] = []  # .NAME.PID.tmp.gz: the temporary name keeps the suffix write_carmen packs by
     try:
-        n = write_carmen(Path(tmp), checked, fmt=fmt)
-        os.replace(tmp, p)
+        write_whole(p, lambda tmp: written.append(write_carmen(tmp, checked, fmt=fmt)), suffix="".join(p.suffixes[-1:]))
     except OSError as exc:
         raise InputError(f"path: cannot write {p}: {exc.strerror or exc}") from None
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return n
+    return written[0]
 
 
 SIMULATE_LOG = "scans.clf"
@@ -180,24 +171,25 @@ def hidden_stem(path: Path, tail_bytes: int) -> str:
     return os.fsdecode(b"." + head + b"." + digest)
 
 
-def temporary_stem(path: Path) -> str:
-    """``.NAME`` of :func:`write_whole`'s ``.NAME.PID.tmp``, shortened for a name near the file system's
-    longest (:func:`hidden_stem`; room kept for a PID of 10 digits, so one stem for every run: "...: file
-    name too long" was ``calibrate --out``'s error after its work)."""
-    return hidden_stem(path, len(".0123456789.tmp"))
+def temporary_stem(path: Path, suffix: str = "") -> str:
+    """``.NAME`` of :func:`write_whole`'s ``.NAME.PID.tmp`` (``.NAME.PID.tmpSUFFIX``), shortened for a
+    name near the file system's longest (:func:`hidden_stem`; room kept for a PID of 10 digits, so one
+    stem for every run: "...: file name too long" was ``calibrate --out``'s error after its work)."""
+    return hidden_stem(path, len(".0123456789.tmp") + len(os.fsencode(suffix)))
 
 
-def write_whole(path: str | os.PathLike, write: Callable[[Path], object]) -> Path:
+def write_whole(path: str | os.PathLike, write: Callable[[Path], object], suffix: str = "") -> Path:
     """Write the file ``path`` whole or not at all: ``write`` writes a hidden temporary file beside it
     (``.NAME.PID.tmp``, the path it is given), renamed over ``path`` once whole (``os.replace``, atomic
     on POSIX); on any error the temporary file is removed and ``path`` is as it was. As a write in
     place did: a file that exists keeps its permission bits (a 0600 one became 0644 / 0664, the
     umask's), and a symbolic link is followed, its target replaced (the link was replaced by a
-    regular file, its target left as it was). Returns ``path``. Every whole-file output goes
-    through here (``write_tum``, ``experiments.provenance.write_record``)."""
+    regular file, its target left as it was). ``suffix`` ends the temporary name (``.NAME.PID.tmp.gz``)
+    for a ``write`` that packs by the name's suffix. Returns ``path``. Every whole-file output goes
+    through here (``write_log``'s CARMEN logs, ``write_tum``, ``experiments.provenance.write_record``)."""
     given = Path(path)
     target = Path(os.path.realpath(given)) if os.path.islink(given) else given
-    tmp = target.with_name(f"{temporary_stem(target)}.{os.getpid()}.tmp")
+    tmp = target.with_name(f"{temporary_stem(target, suffix)}.{os.getpid()}.tmp{suffix}")
     try:
         write(tmp)
         try:

@@ -11,6 +11,8 @@ from decimal import Decimal
 from fractions import Fraction
 from typing import Any
 
+import os
+
 import numpy as np
 import pytest
 
@@ -124,6 +126,25 @@ def test_write_log_with_a_bad_record_keeps_the_existing_file(tmp_path) -> None:
     back = [r.scan.ranges for r in read_log(path)]
     assert len(back) == 5 and all(np.array_equal(a, g.scan.ranges) for a, g in zip(back, good))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.log"]  # no temporary file left
+
+
+def test_write_log_writes_a_links_target_keeps_a_files_mode_and_packs_by_the_name(tmp_path) -> None:
+    """write_log kept its own temporary-file-and-rename beside write_whole: a symbolic link was
+    replaced by a regular file (its target left as it was), where every other whole-file output
+    writes the target. One mechanism now; the temporary name keeps ``.gz`` so the log is packed."""
+    import gzip
+
+    target = tmp_path / "real.log.gz"
+    assert write_log(target, _records(2)) == 2
+    os.chmod(target, 0o600)
+    link = tmp_path / "latest.log.gz"
+    link.symlink_to(target.name)
+    assert write_log(link, _records(4)) == 4
+    assert link.is_symlink() and os.readlink(link) == target.name  # the link stays a link
+    assert os.stat(target).st_mode & 0o777 == 0o600
+    assert sum(line.startswith(b"ROBOTLASER1 ") for line in gzip.decompress(target.read_bytes()).splitlines()) == 4  # packed, by the .gz of the name
+    assert len(list(read_log(link))) == 4
+    assert sorted(q.name for q in tmp_path.iterdir()) == ["latest.log.gz", "real.log.gz"]
 
 
 def test_write_log_bag_with_a_bad_record_leaves_no_bag(tmp_path) -> None:
