@@ -382,12 +382,28 @@ def test_calibrate_without_out_prints_one_valid_sensor_yaml(tmp_path: Path, caps
     (["simulate", "--sensor", "nope.yaml", "--out", "x"], "no such sensor file"),
     (["compare", "office", "--sensor", "nope.yaml"], "no such sensor file"),
 ])
-def test_calibrate_errors_are_one_line(args: list[str], message: str, tmp_path: Path) -> None:
-    write_carmen(tmp_path / "log.clf", simulate_records("office", seed=0, duration=0.5, sensor=SensorConfig()))
+def test_calibrate_errors_are_one_line(args: list[str], message: str, tmp_path: Path, half_second_log: str,
+                                      monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    """In this process (a subprocess each was 7 interpreter starts and 7 simulations of the same log):
+    main's status is the process's (``sys.exit(main())``), and an exception it let out would fail the
+    test as the traceback did; the subprocess path itself is test_sim2real_warns_on_tiny_samples_...'s."""
+    from experiments.cli import main
+
+    (tmp_path / "log.clf").write_text(half_second_log)
     (tmp_path / "empty.clf").write_text("# nothing\n")
-    run = _cli(*args, cwd=tmp_path)
-    assert run.returncode == 2 and message in run.stderr and "Traceback" not in run.stderr
-    assert len(run.stderr.strip().splitlines()) == 1
+    monkeypatch.chdir(tmp_path)
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    assert code == 2 and message in err and "Traceback" not in err, err
+    assert len(err.strip().splitlines()) == 1 and out == ""
+
+
+@pytest.fixture(scope="module")
+def half_second_log(tmp_path_factory: pytest.TempPathFactory) -> str:
+    """The text of a CARMEN log of 0.5 s of the office world (the default sensor), simulated once."""
+    path = tmp_path_factory.mktemp("half_second") / "log.clf"
+    write_carmen(path, simulate_records("office", seed=0, duration=0.5, sensor=SensorConfig()))
+    return path.read_text()
 
 
 @pytest.mark.shared_data
