@@ -230,6 +230,11 @@ def test_random_sampling_is_seeded_in_range_and_crossed_with_grid_and_seeds():
         ({"kind": "k", "grid": [1, 2]}, r"grid must be a mapping of parameter -> values"),
         ({"kind": "k", "fixed": [1]}, r"fixed must be a mapping of parameter -> value"),
         ({"kind": "k", "random": "uniform", "samples": 2}, r"random must be a mapping of parameter -> distribution"),
+        # fuzz round: a description not text went into sweep.yaml as Python's text of it ('[1, 2]'), exit 0;
+        # a grid value given twice ran one cell, one row, without a word
+        ({"kind": "k", "description": [1, 2]}, r"^description: must be text .*got list \[1, 2\]"),
+        ({"kind": "k", "grid": {"x": [3, 5, 3]}}, r"^grid.x: 3 is given twice; a grid point runs once"),
+        ({"kind": "k", "grid": {"x,y": [[1, 2], [1, 2]]}}, r"^grid.x,y: \[1, 2\] is given twice"),
     ],
 )
 def test_bad_sweep_files_raise_errors_that_say_what_to_fix(raw, message):

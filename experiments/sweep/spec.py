@@ -116,7 +116,7 @@ class SweepSpec:
             samples=_whole("samples", raw.get("samples", 0), MAX_CELLS),
             sample_seed=_whole("sample_seed", raw.get("sample_seed", 0), MAX_SEED),
             seeds=_seeds(seeds),
-            description=str(raw.get("description", "")),
+            description=_description(raw.get("description")),
         )
         _degree_parameters(spec, where)
         return spec
@@ -172,6 +172,17 @@ def _whole(name: str, value: Any, maximum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= maximum:
         raise SweepSpecError(f"`{name}:` must be a whole number in [0, {maximum}], got {value!r}")
     return value
+
+
+def _description(raw: Any) -> str:
+    """The ``description:`` text ('' when absent or empty): anything else was written as its Python
+    text into sweep.yaml (`description:` with no value as 'None', a list as "[1, 2]"), exit 0."""
+    if raw is None:
+        return ""
+    if not isinstance(raw, str):
+        raise SweepSpecError(f"description: must be text (quote it if YAML reads it otherwise), got "
+                             f"{type(raw).__name__} {raw!r:.60}")
+    return raw
 
 
 def _seeds(raw: Any) -> list[int]:
@@ -261,6 +272,11 @@ def _check(spec: SweepSpec) -> None:
     for name, values in spec.grid.items():
         if not values:
             raise SweepSpecError(f"grid.{name} is empty; give at least one value")
+        written = [repr(v) for v in values]  # `k: [3, 3]` ran one cell, one row, without a word (seeds refuse it)
+        twice = next((v for i, v in enumerate(values) if written[i] in written[:i]), None)
+        if len(set(written)) < len(written):
+            raise SweepSpecError(f"grid.{name}: {twice!r:.80} is given twice; a grid point runs once, so give each "
+                                 "value once (vary seeds: to repeat a run)")
         for value in values:
             if "," in name:
                 if not isinstance(value, (list, tuple)) or len(value) != len(_names(name)):
