@@ -787,6 +787,34 @@ def test_register_checks_its_arguments(args: dict, message: str) -> None:
     assert extract(Scan.lms200(np.full(361, 3.0))).method == "sensor"
 
 
+@pytest.mark.parametrize("run, run_many, call, message", [
+    # fuzz round: extract handed on None as the features, and extract_many [] for a batch of two, without a word
+    (lambda scan, cfg: None, None, "extract", r"^method 'fuzz_returns': its run returned NoneType, not a features.FeatureSet"),
+    (lambda scan, cfg: [], None, "extract_many", r"^method 'fuzz_returns': its run returned list, not a features.FeatureSet"),
+    (None, lambda scans, cfg: [], "extract_many", r"^method 'fuzz_returns': its run_many returned 0 items for 2 scans"),
+    (None, lambda scans, cfg: [None, None], "extract_many", r"^method 'fuzz_returns': its run returned NoneType"),
+])
+def test_a_registered_method_returning_no_feature_sets_is_named(run, run_many, call, message: str) -> None:  # noqa: ANN001
+    import dataclasses
+
+    import features
+    from features import FeatureSet, register
+    from features.errors import ConfigError
+    from features.registry import _REGISTRY
+
+    @dataclasses.dataclass(frozen=True)
+    class Cfg:
+        a: int = 1
+
+    register("fuzz_returns", Cfg, run or (lambda scan, cfg: FeatureSet()), run_many=run_many)
+    scan = Scan.lms200(np.full(361, 3.0))
+    try:
+        with pytest.raises(ConfigError, match=message):
+            features.extract(scan, method="fuzz_returns") if call == "extract" else features.extract_many([scan, scan], method="fuzz_returns")
+    finally:
+        _REGISTRY.pop("fuzz_returns", None)
+
+
 def test_register_takes_numpy_bools_for_thread_safe() -> None:
     """thread_safe=np.True_ was refused while every config flag takes numpy bools (review)."""
     import dataclasses
