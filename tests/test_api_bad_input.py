@@ -268,6 +268,18 @@ def test_a_rate_below_one_scan_an_hour_is_refused(rate_hz: float, tmp_path) -> N
     assert len(simulate_records("office", seed=0, duration=1.0, rate_hz=1 / 3600)) == 1  # the floor itself runs
 
 
+def test_slam_on_a_log_of_zero_readings_says_they_are_what_is_invalid(tmp_path) -> None:
+    """A log of 0 readings (invalid, as REP-117 gives no return as +inf) was refused as "all +inf or nan"
+    (fuzz round): the message named readings the log does not hold."""
+    from experiments.slamrun import load_input
+
+    log = tmp_path / "zeros.clf"
+    write_log(log, [Record(Scan.lms200(np.zeros(361), stamp=float(t))) for t in range(3)])
+    with pytest.raises(LmsbenchError, match=re.escape(f"{log}: none of its 3 scans has a valid beam (every reading "
+                                                      "+inf, -inf, nan, 0 or outside the scan's range limits)")):
+        load_input(log)
+
+
 @pytest.mark.parametrize("rate_hz", [1e-320, 5e-324, 1e-300])
 def test_a_rate_near_zero_keeps_the_first_scan_as_any_low_rate_does(rate_hz: float) -> None:
     """`simulate --rate-hz 1e-320` (also compare --rate, sim2real --rate-hz, sweeps' rate_hz) was
