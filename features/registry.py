@@ -363,10 +363,17 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
         use = n_threads if m.thread_safe else 1
         if not scans:  # threads=2 (or $LMSBENCH_THREADS=2) made an empty batch an IndexError
             return []
+        run_many = m.run_many
+
+        def checked(piece: Sequence[Scan], c: Any) -> list[FeatureSet]:
+            # each piece's return, before run_pieces joins them: joined, a None was 'NoneType' object is
+            # not iterable and a tuple was taken (threads > 1 or > BATCH_CHUNK scans), refused on one piece
+            return _returned_many(m, run_many(piece, c), len(piece))
+
         if len(scans) <= BATCH_CHUNK and use == 1:
-            return _returned_many(m, m.run_many(scans, cfg), len(scans))
+            return checked(scans, cfg)
         common_geometry(scans)  # the whole batch first: an error names the scan's index in it, not in a piece
-        return _returned_many(m, run_pieces(m.run_many, scans, cfg, use, BATCH_CHUNK), len(scans))
+        return run_pieces(checked, scans, cfg, use, BATCH_CHUNK)
     if scans:
         common_geometry(scans)
     return [_returned(m, m.run(s, cfg)) for s in scans]
@@ -384,7 +391,7 @@ def _returned_many(m: Method, out: object, n: int) -> list[FeatureSet]:
     """``out`` when a list of ``n`` FeatureSets: a run_many returning fewer (or another type) gave a
     batch of 2 scans [] features, exit 0 (fuzz round)."""
     if not isinstance(out, list) or len(out) != n:
-        got = f"{len(out)} items" if isinstance(out, (list, tuple)) else type(out).__name__
+        got = f"{len(out)} items" if isinstance(out, list) else type(out).__name__
         raise ConfigError(f"method {m.name!r}: its run_many returned {got} for {n} scans, not a list of one features.FeatureSet a scan")
     for fs in out:
         _returned(m, fs)

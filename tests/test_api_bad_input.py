@@ -799,12 +799,24 @@ def test_register_checks_its_arguments(args: dict, message: str) -> None:
     assert extract(Scan.lms200(np.full(361, 3.0))).method == "sensor"
 
 
+def _feature_set_tuple(scans: Any, cfg: Any) -> tuple:
+    """A run_many returning a tuple of FeatureSets, one a scan, not the list it must return."""
+    from features import FeatureSet
+
+    return tuple(FeatureSet() for _ in scans)
+
+
 @pytest.mark.parametrize("run, run_many, call, message", [
     # fuzz round: extract handed on None as the features, and extract_many [] for a batch of two, without a word
     (lambda scan, cfg: None, None, "extract", r"^method 'fuzz_returns': its run returned NoneType, not a features.FeatureSet"),
     (lambda scan, cfg: [], None, "extract_many", r"^method 'fuzz_returns': its run returned list, not a features.FeatureSet"),
     (None, lambda scans, cfg: [], "extract_many", r"^method 'fuzz_returns': its run_many returned 0 items for 2 scans"),
     (None, lambda scans, cfg: [None, None], "extract_many", r"^method 'fuzz_returns': its run returned NoneType"),
+    # review: split in pieces (threads > 1 here, or > BATCH_CHUNK scans), each piece's return was joined unchecked:
+    # None was "TypeError: 'NoneType' object is not iterable", a tuple was taken
+    (None, lambda scans, cfg: None, "extract_many threads", r"^method 'fuzz_returns': its run_many returned NoneType for 2 scans"),
+    (None, _feature_set_tuple, "extract_many threads", r"^method 'fuzz_returns': its run_many returned tuple for 2 scans"),
+    (None, _feature_set_tuple, "extract_many", r"^method 'fuzz_returns': its run_many returned tuple for 2 scans"),
 ])
 def test_a_registered_method_returning_no_feature_sets_is_named(run, run_many, call, message: str) -> None:  # noqa: ANN001
     import dataclasses
@@ -818,11 +830,14 @@ def test_a_registered_method_returning_no_feature_sets_is_named(run, run_many, c
     class Cfg:
         a: int = 1
 
-    register("fuzz_returns", Cfg, run or (lambda scan, cfg: FeatureSet()), run_many=run_many)
+    register("fuzz_returns", Cfg, run or (lambda scan, cfg: FeatureSet()), run_many=run_many, thread_safe=True)
     scan = Scan.lms200(np.full(361, 3.0))
     try:
         with pytest.raises(ConfigError, match=message):
-            features.extract(scan, method="fuzz_returns") if call == "extract" else features.extract_many([scan, scan], method="fuzz_returns")
+            if call == "extract":
+                features.extract(scan, method="fuzz_returns")
+            else:
+                features.extract_many([scan, scan], method="fuzz_returns", threads=2 if call.endswith("threads") else 1)
     finally:
         _REGISTRY.pop("fuzz_returns", None)
 
