@@ -393,8 +393,10 @@ def _returned_many(m: Method, out: object, n: int) -> list[FeatureSet]:
     if not isinstance(out, list) or len(out) != n:
         got = f"{len(out)} items" if isinstance(out, list) else type(out).__name__
         raise ConfigError(f"method {m.name!r}: its run_many returned {got} for {n} scans, not a list of one features.FeatureSet a scan")
-    for fs in out:
-        _returned(m, fs)
+    for i, fs in enumerate(out):  # named as run_many's: 'its run returned NoneType' sent the reader to run
+        if not isinstance(fs, FeatureSet):
+            raise ConfigError(f"method {m.name!r}: its run_many returned {type(fs).__name__} at item {i} of {n}, "
+                              "not a features.FeatureSet")
     return out
 
 

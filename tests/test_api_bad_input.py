@@ -811,7 +811,7 @@ def _feature_set_tuple(scans: Any, cfg: Any) -> tuple:
     (lambda scan, cfg: None, None, "extract", r"^method 'fuzz_returns': its run returned NoneType, not a features.FeatureSet"),
     (lambda scan, cfg: [], None, "extract_many", r"^method 'fuzz_returns': its run returned list, not a features.FeatureSet"),
     (None, lambda scans, cfg: [], "extract_many", r"^method 'fuzz_returns': its run_many returned 0 items for 2 scans"),
-    (None, lambda scans, cfg: [None, None], "extract_many", r"^method 'fuzz_returns': its run returned NoneType"),
+    (None, lambda scans, cfg: [None, None], "extract_many", r"^method 'fuzz_returns': its run_many returned NoneType at item 0 of 2, not a features"),
     # review: split in pieces (threads > 1 here, or > BATCH_CHUNK scans), each piece's return was joined unchecked:
     # None was "TypeError: 'NoneType' object is not iterable", a tuple was taken
     (None, lambda scans, cfg: None, "extract_many threads", r"^method 'fuzz_returns': its run_many returned NoneType for 2 scans"),
