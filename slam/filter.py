@@ -99,7 +99,7 @@ class SlamFilter:
         if not isinstance(config, SlamConfig):
             raise SlamInputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
         try:
-            initial_pose = pose_of("initial_pose", initial_pose)
+            initial_pose = pose_of("initial_pose", initial_pose, optional=False)  # None is refused: "must be None or" was self-contradictory
         except InputError as exc:
             raise SlamInputError(str(exc)) from None
         self.config = config

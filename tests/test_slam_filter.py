@@ -284,7 +284,9 @@ def _stepped(*steps: tuple) -> SlamFilter:
     # SlamFilter used directly (it is exported) took what run_observations refuses: a pair as the
     # initial pose was an IndexError, config=None an AttributeError, a nan pose a filter of nan poses
     (lambda: SlamFilter(None), r"^config: must be a slam.SlamConfig, got NoneType"),
-    (lambda: SlamFilter(P(), initial_pose=(0.0, 0.0)), r"^initial_pose: must be None or three numbers .*got 2 items"),
+    (lambda: SlamFilter(P(), initial_pose=(0.0, 0.0)), r"^initial_pose: must be three numbers .*got 2 items"),
+    # review: None was refused as "must be None or three numbers ..., got NoneType"
+    (lambda: SlamFilter(P(), initial_pose=None), r"^initial_pose: must be three numbers \(x m, y m, theta rad\), got NoneType$"),
     (lambda: SlamFilter(P(), initial_pose=(float("nan"), 0.0, 0.0)), r"^initial_pose: must be finite"),
     # its step: "cannot convert float NaN to integer", an AttributeError; backwards and nan odometry taken silently
     (lambda: _stepped((0.0, Observations()), (float("nan"), Observations())), r"^scan 1: its stamp must be a finite number"),
