@@ -235,11 +235,22 @@ def test_random_sampling_is_seeded_in_range_and_crossed_with_grid_and_seeds():
         ({"kind": "k", "description": [1, 2]}, r"^description: must be text .*got list \[1, 2\]"),
         ({"kind": "k", "grid": {"x": [3, 5, 3]}}, r"^grid.x: 3 is given twice; a grid point runs once"),
         ({"kind": "k", "grid": {"x,y": [[1, 2], [1, 2]]}}, r"^grid.x,y: \[1, 2\] is given twice"),
+        # review: repr was compared, so [1, 1.0] and [0.0, -0.0] ran two identical cells; the type check comes first
+        ({"kind": "k", "grid": {"x": [1, 1.0]}}, r"^grid.x: 1.0 is given twice \(equal to 1\)"),
+        ({"kind": "k", "grid": {"x": [0.0, -0.0]}}, r"^grid.x: -0.0 is given twice \(equal to 0.0\)"),
+        ({"kind": "k", "grid": {"x,y": [[4, True], [4.0, True]]}}, r"^grid.x,y: \[4.0, True\] is given twice"),
+        ({"kind": "k", "grid": {"x": [np.int64(3), np.int64(3)]}}, r"^grid.x must be a number, string, bool or null"),
     ],
 )
 def test_bad_sweep_files_raise_errors_that_say_what_to_fix(raw, message):
     with pytest.raises(SweepSpecError, match=message):
         SweepSpec.from_dict(raw)
+
+
+def test_grid_values_equal_as_numbers_but_apart_as_bools_are_two_points():
+    """The duplicate check compares numbers by value, but True is not 1 (review of the fuzz round)."""
+    spec = SweepSpec.from_dict({"kind": "k", "grid": {"x": [True, 1, False, 0.0], "y,z": [[1, True], [1, 1]]}})
+    assert len(spec.grid["x"]) == 4 and len(spec.grid["y,z"]) == 2
 
 
 def test_a_big_sweep_file_is_refused_fast(tmp_path):

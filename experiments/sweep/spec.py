@@ -272,11 +272,6 @@ def _check(spec: SweepSpec) -> None:
     for name, values in spec.grid.items():
         if not values:
             raise SweepSpecError(f"grid.{name} is empty; give at least one value")
-        written = [repr(v) for v in values]  # `k: [3, 3]` ran one cell, one row, without a word (seeds refuse it)
-        twice = next((v for i, v in enumerate(values) if written[i] in written[:i]), None)
-        if len(set(written)) < len(written):
-            raise SweepSpecError(f"grid.{name}: {twice!r:.80} is given twice; a grid point runs once, so give each "
-                                 "value once (vary seeds: to repeat a run)")
         for value in values:
             if "," in name:
                 if not isinstance(value, (list, tuple)) or len(value) != len(_names(name)):
@@ -286,6 +281,16 @@ def _check(spec: SweepSpec) -> None:
                     _check_scalar(f"grid.{name}", v)
             else:
                 _check_scalar(f"grid.{name}", value)
+        # after the type checks (an np.int64 gets their message); `k: [3, 3]` ran one cell, one row, without
+        # a word (seeds refuse it), and by value: [1, 1.0] or [0.0, -0.0] passed a comparison of repr
+        seen: dict[Any, Any] = {}
+        for value in values:
+            key = _value_key(value)
+            if key in seen:
+                same = "" if repr(seen[key]) == repr(value) else f" (equal to {seen[key]!r:.80})"
+                raise SweepSpecError(f"grid.{name}: {value!r:.80} is given twice{same}; a grid point runs once, so "
+                                     "give each value once (vary seeds: to repeat a run)")
+            seen[key] = value
     for name, dist in spec.random.items():
         if not (isinstance(dist, dict) and len(dist) == 1 and next(iter(dist)) in _DISTRIBUTIONS):
             raise SweepSpecError(f"random.{name} must be one of {{{'|'.join(_DISTRIBUTIONS)}: [...]}}, got {dist!r}")
@@ -331,6 +336,14 @@ def _finite(value: int | float) -> bool:
         return math.isfinite(value)
     except OverflowError:
         return False
+
+
+def _value_key(value: Any) -> Any:
+    """What makes two checked grid values one grid point: numbers by value (1 and 1.0, 0.0 and -0.0
+    are one), a bool apart from the numbers (True is not 1), a linked value item by item."""
+    if isinstance(value, (list, tuple)):
+        return tuple(_value_key(v) for v in value)
+    return (isinstance(value, bool), value)  # an int equals a float of its value, and hashes alike
 
 
 def _check_scalar(where: str, value: Any) -> None:
