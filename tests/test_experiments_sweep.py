@@ -247,6 +247,20 @@ def test_bad_sweep_files_raise_errors_that_say_what_to_fix(raw, message):
         SweepSpec.from_dict(raw)
 
 
+@pytest.mark.parametrize("raw", [
+    {"kind": "k", "grid": {"x": [10**5000]}}, {"kind": "k", "grid": {"x": 10**5000}}, {"kind": "k", "seeds": 10**5000},
+    {"kind": "k", "seeds": [10**5000]}, {"kind": "k", "random": {"u": {"uniform": [0, 10**5000]}}, "samples": 1},
+    {"kind": "k", "name": 10**5000}, {"kind": 10**5000}, {"kind": 5},
+])
+def test_a_whole_number_too_long_to_print_is_refused_in_one_line(raw):
+    """From the Python API (YAML refuses such a literal itself) an int of 5,001 digits in a sweep's
+    grid, seeds, bounds, name or kind was an internal ValueError: Python refuses to turn an int of
+    more than 4,300 digits into text, and the messages printed the value."""
+    with pytest.raises(SweepSpecError) as info:
+        SweepSpec.from_dict(raw)
+    assert "\n" not in str(info.value) and len(str(info.value)) < 400
+
+
 def test_grid_values_equal_as_numbers_but_apart_as_bools_are_two_points():
     """The duplicate check compares numbers by value, but True is not 1 (review of the fuzz round)."""
     spec = SweepSpec.from_dict({"kind": "k", "grid": {"x": [True, 1, False, 0.0], "y,z": [[1, True], [1, 1]]}})
