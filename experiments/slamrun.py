@@ -271,7 +271,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if len(records) == 1:  # it ran and reported a healthy run of no step (matched fraction 1 of 0 steps)
         raise LmsbenchError(f"{log}: holds one scan (stamp {fixed(first_stamp)} s); SLAM needs two or more")
     if not any(r.scan.valid.any() for r in records):
-        raise LmsbenchError(f"{log}: none of its {len(records)} scans has a valid beam (all +inf or nan): "
+        raise LmsbenchError(f"{log}: none of its {len(records)} scans has a valid beam (every reading +inf, -inf, nan, 0 "
+                            "or outside the scan's range limits): "
                             "nothing to localise against")
     # which scans ran, recorded beside the files (config.yaml and metrics.json's input: --every, --rate-hz and
     # --max-scans were in neither, so a run's record did not say which of the log's scans it ran on)

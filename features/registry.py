@@ -184,7 +184,7 @@ def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: An
     check_step(cfg, scan.angle_increment, m.name)
     if params:
         warn_unread_noise(m, cfg, params, scan.range_max, "extract")
-    return m.run(scan, cfg)
+    return _returned(m, m.run(scan, cfg))
 
 
 class UnreadNoiseWarning(LmsbenchWarning):
@@ -363,13 +363,41 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
         use = n_threads if m.thread_safe else 1
         if not scans:  # threads=2 (or $LMSBENCH_THREADS=2) made an empty batch an IndexError
             return []
+        run_many = m.run_many
+
+        def checked(piece: Sequence[Scan], c: Any) -> list[FeatureSet]:
+            # each piece's return, before run_pieces joins them: joined, a None was 'NoneType' object is
+            # not iterable and a tuple was taken (threads > 1 or > BATCH_CHUNK scans), refused on one piece
+            return _returned_many(m, run_many(piece, c), len(piece))
+
         if len(scans) <= BATCH_CHUNK and use == 1:
-            return m.run_many(scans, cfg)
+            return checked(scans, cfg)
         common_geometry(scans)  # the whole batch first: an error names the scan's index in it, not in a piece
-        return run_pieces(m.run_many, scans, cfg, use, BATCH_CHUNK)
+        return run_pieces(checked, scans, cfg, use, BATCH_CHUNK)
     if scans:
         common_geometry(scans)
-    return [m.run(s, cfg) for s in scans]
+    return [_returned(m, m.run(s, cfg)) for s in scans]
+
+
+def _returned(m: Method, out: object) -> FeatureSet:
+    """``out`` when a FeatureSet: a registered method returning anything else (None, a list) was
+    handed on as the features without a word, to fail later in the caller's code (fuzz round)."""
+    if not isinstance(out, FeatureSet):
+        raise ConfigError(f"method {m.name!r}: its run returned {type(out).__name__}, not a features.FeatureSet")
+    return out
+
+
+def _returned_many(m: Method, out: object, n: int) -> list[FeatureSet]:
+    """``out`` when a list of ``n`` FeatureSets: a run_many returning fewer (or another type) gave a
+    batch of 2 scans [] features, exit 0 (fuzz round)."""
+    if not isinstance(out, list) or len(out) != n:
+        got = f"{len(out)} items" if isinstance(out, list) else type(out).__name__
+        raise ConfigError(f"method {m.name!r}: its run_many returned {got} for {n} scans, not a list of one features.FeatureSet a scan")
+    for i, fs in enumerate(out):  # named as run_many's: 'its run returned NoneType' sent the reader to run
+        if not isinstance(fs, FeatureSet):
+            raise ConfigError(f"method {m.name!r}: its run_many returned {type(fs).__name__} at item {i} of {n}, "
+                              "not a features.FeatureSet")
+    return out
 
 
 def _config(m: Method, config: Any, params: dict[str, Any]) -> Any:

@@ -81,11 +81,12 @@ class Record:
                 object.__setattr__(self, name, pose_of(name, pose))
 
 
-def pose_of(name: str, pose: object) -> Pose2D:
+def pose_of(name: str, pose: object, *, optional: bool = True) -> Pose2D:
     """``pose`` as an (x, y, theta) tuple of floats; InputError naming ``name`` otherwise: text
     (``"123"`` was read as (1.0, 2.0, 3.0)), bools (True is not 1 m), ints beyond float64
-    (10**400 was a raw OverflowError), nan / inf. Found by a review's reproduction."""
-    shape = f"{name}: must be None or three numbers (x m, y m, theta rad)"
+    (10**400 was a raw OverflowError), nan / inf. Found by a review's reproduction. ``optional``:
+    the message says None is taken (the caller's own check); False for a pose that must be given."""
+    shape = f"{name}: must be {'None or ' if optional else ''}three numbers (x m, y m, theta rad)"
     if isinstance(pose, (str, bytes)):
         raise InputError(f"{shape}, got {type(pose).__name__} {pose!r}")
     try:

@@ -3,9 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.spatial import cKDTree
+
+from features.baselines.checks import finite, is_real
+from lms200.errors import InputError, LmsbenchError
+from lms200.finite import shown
+from lms200.records import pose_of
+
 from .models import chi2_quantile
 
 from . import association as assoc
@@ -16,6 +23,37 @@ from .models import ROBOT_DIM, wrap
 from .observations import Observations
 from .pointalign import align_to_previous, beam_normals, point_to_line_translation
 from .prealign import align
+
+
+class SlamInputError(LmsbenchError, ValueError):
+    """The records cannot be processed (no scans, time going backwards)."""
+
+
+def checked_step(k: int, t: object, obs: object, odom: object, truth: object) -> tuple[float, Any, Any]:
+    """Step ``k``'s stamp as a float, its odometry and true poses as float tuples (or None);
+    SlamInputError naming the scan otherwise. Found by fuzzing the Python API: a nan or inf stamp
+    was "cannot convert float NaN to integer" deep in the filter, text numpy's ValueError, an
+    item that is no Observations an AttributeError, a true pose of text an IndexError."""
+    if not (is_real(t) and finite(t)):
+        # shown: one line, cut past 60 characters (an Observations' repr was 187 lines)
+        raise SlamInputError(f"scan {k}: its stamp must be a finite number (s), got {shown(t)}")
+    stamp = float(t)  # type: ignore[arg-type]  # a real number: is_real
+    if not isinstance(obs, Observations):
+        raise SlamInputError(f"scan {k}: its observations must be a slam.Observations, got {type(obs).__name__}")
+    try:
+        return stamp, None if odom is None else pose_of("odometry", odom), None if truth is None else pose_of("truth", truth)
+    except InputError as exc:
+        raise SlamInputError(f"scan {k}: {exc}") from None
+
+
+def out_of_order(k: int, t: float, previous: float) -> SlamInputError:
+    """The error of scan ``k`` stamped ``t`` s, before the scan ahead of it (``previous`` s), saying
+    how to go on: Intel's corrected log has 4 such scans, and ``run_slam(read_log(...))`` stopped
+    there with no word of what to do (a library walkthrough; ``lmsbench slam --skip-bad-lines``
+    drops them)."""
+    return SlamInputError(f"scan {k}: timestamp {t} is earlier than the previous one ({previous}); SLAM needs scans in "
+                          "time order: drop those out of order (experiments.commands.slam.in_time_order(stamps) gives "
+                          "the indices of the most scans in order, which lmsbench slam --skip-bad-lines keeps)")
 
 
 _MIN_DT = 1e-3  # s: a turn-rate widening never divides by a shorter interval
@@ -53,6 +91,17 @@ class SlamFilter:
     """EKF-SLAM over line (and optionally corner) landmarks; call :meth:`step` once per scan."""
 
     def __init__(self, config: SlamConfig = SlamConfig(), initial_pose: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> None:
+        """Raises:
+            SlamInputError: ``config`` is no SlamConfig, ``initial_pose`` not three finite numbers
+                (None was an AttributeError inside, a pair an IndexError, nan a filter of nan poses
+                without a word; found by fuzzing the Python API).
+        """
+        if not isinstance(config, SlamConfig):
+            raise SlamInputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
+        try:
+            initial_pose = pose_of("initial_pose", initial_pose, optional=False)  # None is refused: "must be None or" was self-contradictory
+        except InputError as exc:
+            raise SlamInputError(str(exc)) from None
         self.config = config
         self.ekf = SlamEKF(initial_pose)
         self.landmarks: list[Landmark] = []
@@ -81,7 +130,17 @@ class SlamFilter:
 
     # -- one scan ------------------------------------------------------------------------------
     def step(self, stamp: float, obs: Observations, odom: tuple[float, float, float] | None = None) -> StepInfo:
-        """Process the observations of the scan taken at ``stamp`` (s)."""
+        """Process the observations of the scan taken at ``stamp`` (s), no earlier than the last one's.
+
+        Raises:
+            SlamInputError: a stamp that is no finite number or earlier than the last step's,
+                ``obs`` no Observations, ``odom`` neither None nor three finite numbers (checked as
+                run_steps checks them: called directly, a nan stamp was "cannot convert float NaN to
+                integer" inside, a stamp going backwards or a nan odometry was taken without a word).
+        """
+        stamp, odom, _ = checked_step(self.scan_no + 1, stamp, obs, odom, None)
+        if self.stamp is not None and stamp < self.stamp:
+            raise out_of_order(self.scan_no + 1, stamp, self.stamp)
         cfg = self.config
         self.scan_no += 1
         info = StepInfo(n_lines=obs.lines.shape[0])

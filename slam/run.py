@@ -7,20 +7,13 @@ from typing import Any, Iterable, Iterator, Sequence
 
 import numpy as np
 
-from features.baselines.checks import finite, is_real
-from lms200.errors import InputError, LmsbenchError
-from lms200.finite import shown
 from lms200.logs import MAX_COORD_M, checked_records
-from lms200.records import Record, pose_of
+from lms200.records import Record
 
 from .config import MIN_MATCH_POINTS, SlamConfig
-from .filter import SlamFilter
+from .filter import SlamFilter, SlamInputError, checked_step
 from .models import wrap
 from .observations import Observations, from_features
-
-
-class SlamInputError(LmsbenchError, ValueError):
-    """The records cannot be processed (no scans, time going backwards)."""
 
 
 @dataclass
@@ -95,33 +88,6 @@ def run_observations(
     return run_steps(zip(lists["stamps"], lists["observations"], lists["odometry"], lists["truths"]), config)
 
 
-def _checked_step(k: int, t: object, obs: object, odom: object, truth: object) -> tuple[float, Any, Any]:
-    """Step ``k``'s stamp as a float, its odometry and true poses as float tuples (or None);
-    SlamInputError naming the scan otherwise. Found by fuzzing the Python API: a nan or inf stamp
-    was "cannot convert float NaN to integer" deep in the filter, text numpy's ValueError, an
-    item that is no Observations an AttributeError, a true pose of text an IndexError."""
-    if not (is_real(t) and finite(t)):
-        # shown: one line, cut past 60 characters (an Observations' repr was 187 lines)
-        raise SlamInputError(f"scan {k}: its stamp must be a finite number (s), got {shown(t)}")
-    stamp = float(t)  # type: ignore[arg-type]  # a real number: is_real
-    if not isinstance(obs, Observations):
-        raise SlamInputError(f"scan {k}: its observations must be a slam.Observations, got {type(obs).__name__}")
-    try:
-        return stamp, None if odom is None else pose_of("odometry", odom), None if truth is None else pose_of("truth", truth)
-    except InputError as exc:
-        raise SlamInputError(f"scan {k}: {exc}") from None
-
-
-def out_of_order(k: int, t: float, previous: float) -> SlamInputError:
-    """The error of scan ``k`` stamped ``t`` s, before the scan ahead of it (``previous`` s), saying
-    how to go on: Intel's corrected log has 4 such scans, and ``run_slam(read_log(...))`` stopped
-    there with no word of what to do (a library walkthrough; ``lmsbench slam --skip-bad-lines``
-    drops them)."""
-    return SlamInputError(f"scan {k}: timestamp {t} is earlier than the previous one ({previous}); SLAM needs scans in "
-                          "time order: drop those out of order (experiments.commands.slam.in_time_order(stamps) gives "
-                          "the indices of the most scans in order, which lmsbench slam --skip-bad-lines keeps)")
-
-
 def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: SlamConfig = SlamConfig()) -> SlamResult:
     """Run the filter over (stamp s, observations, odometry pose or None, true pose or None).
 
@@ -137,13 +103,9 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
     diag: dict[str, list] = {k: [] for k in keys}
     diverged_at = None
     anchor = None
-    previous = None
     healthy = True
     for k, (t, obs, odom, truth) in enumerate(steps):
-        t, odom, truth = _checked_step(k, t, obs, odom, truth)
-        if previous is not None and t < previous:
-            raise out_of_order(k, t, previous)
-        previous = t
+        t, odom, truth = checked_step(k, t, obs, odom, truth)  # the filter's step checks the time order
         info = slam.step(t, obs, odom if config.motion.use_odometry else None)
         pose = slam.pose
         P = slam.ekf.P[:3, :3].copy()

@@ -597,7 +597,8 @@ def run_scan_slam(steps, config) -> "SlamResult":
     optimised poses and merged (:mod:`slam.linemap`).
     """
     from .linemap import merge_lines
-    from .run import SlamInputError, SlamResult, extract_all, lost_against_scan, out_of_order, pose_nees
+    from .filter import SlamInputError, out_of_order
+    from .run import SlamResult, extract_all, lost_against_scan, pose_nees
 
     slam = ScanSlam(config.alignment, config.motion, config.keyframes, config.loop_closure)
     stamps: list[float] = []

@@ -289,6 +289,18 @@ def test_a_rate_below_one_scan_an_hour_is_refused(rate_hz: float, tmp_path) -> N
     assert len(simulate_records("office", seed=0, duration=1.0, rate_hz=1 / 3600)) == 1  # the floor itself runs
 
 
+def test_slam_on_a_log_of_zero_readings_says_they_are_what_is_invalid(tmp_path) -> None:
+    """A log of 0 readings (invalid, as REP-117 gives no return as +inf) was refused as "all +inf or nan"
+    (fuzz round): the message named readings the log does not hold."""
+    from experiments.slamrun import load_input
+
+    log = tmp_path / "zeros.clf"
+    write_log(log, [Record(Scan.lms200(np.zeros(361), stamp=float(t))) for t in range(3)])
+    with pytest.raises(LmsbenchError, match=re.escape(f"{log}: none of its 3 scans has a valid beam (every reading "
+                                                      "+inf, -inf, nan, 0 or outside the scan's range limits)")):
+        load_input(log)
+
+
 @pytest.mark.parametrize("rate_hz", [1e-320, 5e-324, 1e-300])
 def test_a_rate_near_zero_keeps_the_first_scan_as_any_low_rate_does(rate_hz: float) -> None:
     """`simulate --rate-hz 1e-320` (also compare --rate, sim2real --rate-hz, sweeps' rate_hz) was
@@ -806,6 +818,49 @@ def test_register_checks_its_arguments(args: dict, message: str) -> None:
         register(**kw)
     assert _REGISTRY == before
     assert extract(Scan.lms200(np.full(361, 3.0))).method == "sensor"
+
+
+def _feature_set_tuple(scans: Any, cfg: Any) -> tuple:
+    """A run_many returning a tuple of FeatureSets, one a scan, not the list it must return."""
+    from features import FeatureSet
+
+    return tuple(FeatureSet() for _ in scans)
+
+
+@pytest.mark.parametrize("run, run_many, call, message", [
+    # fuzz round: extract handed on None as the features, and extract_many [] for a batch of two, without a word
+    (lambda scan, cfg: None, None, "extract", r"^method 'fuzz_returns': its run returned NoneType, not a features.FeatureSet"),
+    (lambda scan, cfg: [], None, "extract_many", r"^method 'fuzz_returns': its run returned list, not a features.FeatureSet"),
+    (None, lambda scans, cfg: [], "extract_many", r"^method 'fuzz_returns': its run_many returned 0 items for 2 scans"),
+    (None, lambda scans, cfg: [None, None], "extract_many", r"^method 'fuzz_returns': its run_many returned NoneType at item 0 of 2, not a features"),
+    # review: split in pieces (threads > 1 here, or > BATCH_CHUNK scans), each piece's return was joined unchecked:
+    # None was "TypeError: 'NoneType' object is not iterable", a tuple was taken
+    (None, lambda scans, cfg: None, "extract_many threads", r"^method 'fuzz_returns': its run_many returned NoneType for 2 scans"),
+    (None, _feature_set_tuple, "extract_many threads", r"^method 'fuzz_returns': its run_many returned tuple for 2 scans"),
+    (None, _feature_set_tuple, "extract_many", r"^method 'fuzz_returns': its run_many returned tuple for 2 scans"),
+])
+def test_a_registered_method_returning_no_feature_sets_is_named(run, run_many, call, message: str) -> None:  # noqa: ANN001
+    import dataclasses
+
+    import features
+    from features import FeatureSet, register
+    from features.errors import ConfigError
+    from features.registry import _REGISTRY
+
+    @dataclasses.dataclass(frozen=True)
+    class Cfg:
+        a: int = 1
+
+    register("fuzz_returns", Cfg, run or (lambda scan, cfg: FeatureSet()), run_many=run_many, thread_safe=True)
+    scan = Scan.lms200(np.full(361, 3.0))
+    try:
+        with pytest.raises(ConfigError, match=message):
+            if call == "extract":
+                features.extract(scan, method="fuzz_returns")
+            else:
+                features.extract_many([scan, scan], method="fuzz_returns", threads=2 if call.endswith("threads") else 1)
+    finally:
+        _REGISTRY.pop("fuzz_returns", None)
 
 
 def test_register_takes_numpy_bools_for_thread_safe() -> None:

@@ -82,20 +82,25 @@ def _cli(*args: str) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.slow
-def test_cli_on_a_log_writes_table_summary_and_config(tmp_path):
+def test_cli_on_a_log_writes_table_summary_and_config(tmp_path, capsys):
+    """In this process (the command's subprocess path, its status and stderr, is test_cli_errors_are_one_line's):
+    an interpreter start and numba's loading of both methods' kernels less."""
+    from experiments.cli import main
+
     log = tmp_path / "room.log"
     write_log(log, [Record(room_scan(L_ROOM, p, sigma=0.005, seed=k)[0].replace(stamp=float(k)))
                     for k, p in enumerate(POSES)])
     out = tmp_path / "out"
-    res = _cli(str(log), "--methods", "split_merge", "hough", "--format", "csv", "--out", str(out),
-               "--no-progress", "--set", "extractor.hough.rho_step=0.01")
-    assert res.returncode == 0, res.stderr
+    code = main(["compare", str(log), "--methods", "split_merge", "hough", "--format", "csv", "--out", str(out),
+                 "--no-progress", "--set", "extractor.hough.rho_step=0.01"])
+    res = capsys.readouterr()
+    assert code == 0, res.err
     table = pd.read_csv(out / "compare.csv")
     assert len(table) == 2 * len(POSES)
     assert (table["explained"] > 0.9).all()  # mm-mode log of 5 mm noise: 3 sigma explains ~99%
     summary = pd.read_csv(out / "summary.csv")
     assert list(summary["method"]) == ["split_merge", "hough"]
-    assert "split_merge" in res.stdout and (out / "summary.txt").exists()
+    assert "split_merge" in res.out and (out / "summary.txt").exists()
     assert "rho_step: 0.01" in (out / "config.yaml").read_text()
     import yaml
 

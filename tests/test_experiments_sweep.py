@@ -230,11 +230,41 @@ def test_random_sampling_is_seeded_in_range_and_crossed_with_grid_and_seeds():
         ({"kind": "k", "grid": [1, 2]}, r"grid must be a mapping of parameter -> values"),
         ({"kind": "k", "fixed": [1]}, r"fixed must be a mapping of parameter -> value"),
         ({"kind": "k", "random": "uniform", "samples": 2}, r"random must be a mapping of parameter -> distribution"),
+        # fuzz round: a description not text went into sweep.yaml as Python's text of it ('[1, 2]'), exit 0;
+        # a grid value given twice ran one cell, one row, without a word
+        ({"kind": "k", "description": [1, 2]}, r"^description: must be text .*got list \[1, 2\]"),
+        ({"kind": "k", "grid": {"x": [3, 5, 3]}}, r"^grid.x: 3 is given twice; a grid point runs once"),
+        ({"kind": "k", "grid": {"x,y": [[1, 2], [1, 2]]}}, r"^grid.x,y: \[1, 2\] is given twice"),
+        # review: repr was compared, so [1, 1.0] and [0.0, -0.0] ran two identical cells; the type check comes first
+        ({"kind": "k", "grid": {"x": [1, 1.0]}}, r"^grid.x: 1.0 is given twice \(equal to 1\)"),
+        ({"kind": "k", "grid": {"x": [0.0, -0.0]}}, r"^grid.x: -0.0 is given twice \(equal to 0.0\)"),
+        ({"kind": "k", "grid": {"x,y": [[4, True], [4.0, True]]}}, r"^grid.x,y: \[4.0, True\] is given twice"),
+        ({"kind": "k", "grid": {"x": [np.int64(3), np.int64(3)]}}, r"^grid.x must be a number, string, bool or null"),
     ],
 )
 def test_bad_sweep_files_raise_errors_that_say_what_to_fix(raw, message):
     with pytest.raises(SweepSpecError, match=message):
         SweepSpec.from_dict(raw)
+
+
+@pytest.mark.parametrize("raw", [
+    {"kind": "k", "grid": {"x": [10**5000]}}, {"kind": "k", "grid": {"x": 10**5000}}, {"kind": "k", "seeds": 10**5000},
+    {"kind": "k", "seeds": [10**5000]}, {"kind": "k", "random": {"u": {"uniform": [0, 10**5000]}}, "samples": 1},
+    {"kind": "k", "name": 10**5000}, {"kind": 10**5000}, {"kind": 5},
+])
+def test_a_whole_number_too_long_to_print_is_refused_in_one_line(raw):
+    """From the Python API (YAML refuses such a literal itself) an int of 5,001 digits in a sweep's
+    grid, seeds, bounds, name or kind was an internal ValueError: Python refuses to turn an int of
+    more than 4,300 digits into text, and the messages printed the value."""
+    with pytest.raises(SweepSpecError) as info:
+        SweepSpec.from_dict(raw)
+    assert "\n" not in str(info.value) and len(str(info.value)) < 400
+
+
+def test_grid_values_equal_as_numbers_but_apart_as_bools_are_two_points():
+    """The duplicate check compares numbers by value, but True is not 1 (review of the fuzz round)."""
+    spec = SweepSpec.from_dict({"kind": "k", "grid": {"x": [True, 1, False, 0.0], "y,z": [[1, True], [1, 1]]}})
+    assert len(spec.grid["x"]) == 4 and len(spec.grid["y,z"]) == 2
 
 
 def test_a_big_sweep_file_is_refused_fast(tmp_path):

@@ -382,12 +382,28 @@ def test_calibrate_without_out_prints_one_valid_sensor_yaml(tmp_path: Path, caps
     (["simulate", "--sensor", "nope.yaml", "--out", "x"], "no such sensor file"),
     (["compare", "office", "--sensor", "nope.yaml"], "no such sensor file"),
 ])
-def test_calibrate_errors_are_one_line(args: list[str], message: str, tmp_path: Path) -> None:
-    write_carmen(tmp_path / "log.clf", simulate_records("office", seed=0, duration=0.5, sensor=SensorConfig()))
+def test_calibrate_errors_are_one_line(args: list[str], message: str, tmp_path: Path, half_second_log: str,
+                                      monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    """In this process (a subprocess each was 7 interpreter starts and 7 simulations of the same log):
+    main's status is the process's (``sys.exit(main())``), and an exception it let out would fail the
+    test as the traceback did; the subprocess path itself is test_sim2real_warns_on_tiny_samples_...'s."""
+    from experiments.cli import main
+
+    (tmp_path / "log.clf").write_text(half_second_log)
     (tmp_path / "empty.clf").write_text("# nothing\n")
-    run = _cli(*args, cwd=tmp_path)
-    assert run.returncode == 2 and message in run.stderr and "Traceback" not in run.stderr
-    assert len(run.stderr.strip().splitlines()) == 1
+    monkeypatch.chdir(tmp_path)
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    assert code == 2 and message in err and "Traceback" not in err, err
+    assert len(err.strip().splitlines()) == 1 and out == ""
+
+
+@pytest.fixture(scope="module")
+def half_second_log(tmp_path_factory: pytest.TempPathFactory) -> str:
+    """The text of a CARMEN log of 0.5 s of the office world (the default sensor), simulated once."""
+    path = tmp_path_factory.mktemp("half_second") / "log.clf"
+    write_carmen(path, simulate_records("office", seed=0, duration=0.5, sensor=SensorConfig()))
+    return path.read_text()
 
 
 @pytest.mark.shared_data
@@ -461,16 +477,20 @@ def test_sim2real_warns_on_tiny_samples_and_refuses_a_log_with_nothing_to_measur
     assert bad.returncode == 2 and "nothing to compare" in bad.stderr and len(bad.stderr.splitlines()) == 1, bad.stderr
 
 
-def test_sim2real_of_a_log_a_method_finds_no_line_in_reports_no_ratio(tmp_path: Path) -> None:
+def test_sim2real_of_a_log_a_method_finds_no_line_in_reports_no_ratio(tmp_path: Path, capsys) -> None:
     """A log the sensor method finds no line in (every beam at 2 m: a circle, which it leaves alone)
     was 'internal error: ZeroDivisionError: float division by zero' (sim lines over real lines per
-    scan) after the whole run, exit 1. The ratio is nan, the report written."""
+    scan) after the whole run, exit 1. The ratio is nan, the report written. In this process (main
+    turns an internal error into status 1 here as in the command's process, whose path the previous
+    test runs): an interpreter start and numba's loading of every method's kernels less."""
+    from experiments.cli import main
+
     recs = simulate_records("office", seed=0, duration=2.0, sensor=SensorConfig(units="cm"), rate_hz=3.0)
     circle = [dataclasses.replace(r, scan=r.scan.replace(ranges=np.full_like(r.scan.ranges, 2.0))) for r in recs]
     write_carmen(tmp_path / "circle.clf", circle)
-    run = _cli("sim2real", str(tmp_path / "circle.clf"), "--world", "office", "--seeds", "0", "--duration", "1",
-               "--fit-duration", "1", "--out", str(tmp_path / "out"))  # the calibration's fit: 1 s runs, not 30
-    assert run.returncode == 0, run.stderr
+    code = main(["sim2real", str(tmp_path / "circle.clf"), "--world", "office", "--seeds", "0", "--duration", "1",
+                 "--fit-duration", "1", "--out", str(tmp_path / "out")])  # the calibration's fit: 1 s runs, not 30
+    assert code == 0, capsys.readouterr().err
     table = pd.read_csv(tmp_path / "out" / "sim2real.csv").set_index("method")
     assert table.at["sensor", "lines_per_scan_real"] == 0 and np.isnan(table.at["sensor", "lines_ratio"])
     assert table.at["split_merge", "lines_ratio"] == table.at["split_merge", "lines_per_scan_sim"] / \

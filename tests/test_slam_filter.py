@@ -273,6 +273,32 @@ def test_run_observations_names_a_bad_argument(call, message: str) -> None:
         call()
 
 
+def _stepped(*steps: tuple) -> SlamFilter:
+    f = SlamFilter(P())
+    for step in steps:
+        f.step(*step)
+    return f
+
+
+@pytest.mark.parametrize("call, message", [
+    # SlamFilter used directly (it is exported) took what run_observations refuses: a pair as the
+    # initial pose was an IndexError, config=None an AttributeError, a nan pose a filter of nan poses
+    (lambda: SlamFilter(None), r"^config: must be a slam.SlamConfig, got NoneType"),
+    (lambda: SlamFilter(P(), initial_pose=(0.0, 0.0)), r"^initial_pose: must be three numbers .*got 2 items"),
+    # review: None was refused as "must be None or three numbers ..., got NoneType"
+    (lambda: SlamFilter(P(), initial_pose=None), r"^initial_pose: must be three numbers \(x m, y m, theta rad\), got NoneType$"),
+    (lambda: SlamFilter(P(), initial_pose=(float("nan"), 0.0, 0.0)), r"^initial_pose: must be finite"),
+    # its step: "cannot convert float NaN to integer", an AttributeError; backwards and nan odometry taken silently
+    (lambda: _stepped((0.0, Observations()), (float("nan"), Observations())), r"^scan 1: its stamp must be a finite number"),
+    (lambda: _stepped((0.0, None)), r"^scan 0: its observations must be a slam.Observations, got NoneType"),
+    (lambda: _stepped((0.0, Observations()), (-5.0, Observations())), r"^scan 1: timestamp -5.0 is earlier than the previous one \(0.0\)"),
+    (lambda: _stepped((0.0, Observations(), (float("nan"), 0.0, 0.0))), r"^scan 0: odometry: must be finite"),
+])
+def test_slam_filter_names_a_bad_argument(call, message: str) -> None:
+    with pytest.raises(SlamInputError, match=message):
+        call()
+
+
 @pytest.mark.parametrize("fields, message", [
     ({"lines": "abc"}, r"^observations.lines: must be a \(k, 2\) array of real numbers"),  # AttributeError in the filter
     ({**_LINE, "lines": np.zeros((1, 3))}, r"^observations.lines: must be a \(k, 2\) array .*got shape \(1, 3\)"),  # unpacking

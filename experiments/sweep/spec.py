@@ -31,6 +31,7 @@ parameter becomes a column of the result table, under the name written here.
 
 from __future__ import annotations
 
+from lms200.finite import shown
 from lms200.yamlio import SWEEP_SIZE_HINT, load as load_yaml, size_problem
 
 import hashlib
@@ -87,36 +88,40 @@ class SweepSpec:
             raise SweepSpecError(f"unknown key(s) {sorted(unknown, key=str)} in the sweep file; known: {sorted(_KEYS)}")
         if "kind" not in raw:
             raise SweepSpecError("the sweep file needs `kind:` (a cell kind such as extract or slam)")
+        if not isinstance(raw["kind"], str):  # str() of it ran: an int of 5,000 digits was an internal error
+            raise SweepSpecError(f"kind: must be text (a cell kind such as extract or slam, or MODULE:FUNCTION), "
+                                 f"got {type(raw['kind']).__name__} {shown(raw['kind'], 60)}")
         for key in ("fixed", "grid", "random"):
             if raw.get(key) is not None and not isinstance(raw[key], dict):
                 raise SweepSpecError(f"{key} must be a mapping of parameter -> "
                                      f"{'value' if key == 'fixed' else 'values' if key == 'grid' else 'distribution'}, "
-                                     f"got {type(raw[key]).__name__} {raw[key]!r:.60}")
+                                     f"got {type(raw[key]).__name__} {shown(raw[key], 60)}")
         seeds = raw.get("seeds", [0])
         if isinstance(seeds, int) and not isinstance(seeds, bool):  # `seeds: 3` ran the one seed 3
             n = seeds if 2 <= seeds <= 10 else 3
-            raise SweepSpecError(f"`seeds: {seeds}` is one number: write a list, `seeds: {list(range(n))}` for {n} "
-                                 f"seeds, `seeds: [{seeds}]` for the one seed {seeds}")
+            one = shown(seeds)
+            raise SweepSpecError(f"`seeds: {one}` is one number: write a list, `seeds: {list(range(n))}` for {n} "
+                                 f"seeds, `seeds: [{one}]` for the one seed {one}")
         for key, values in (raw.get("grid") or {}).items():
             if not isinstance(values, (list, tuple)):  # `k: 3, 5, 10` is the one string '3, 5, 10' in YAML
-                raise SweepSpecError(f"grid.{key}: {values!r} is a single value: write a list of the values to vary "
-                                     f"(`[{values}]` for this one, or put it under fixed:)")
+                raise SweepSpecError(f"grid.{key}: {shown(values, 80)} is a single value: write a list of the values to vary "
+                                     f"(`[{values if isinstance(values, str) else shown(values, 80)}]` for this one, or put it under fixed:)")
         name = raw.get("name", default_name)
         if not isinstance(name, str):
-            raise SweepSpecError(f"name: must be a string (it names the output folder results/sweeps/NAME), got {name!r}")
+            raise SweepSpecError(f"name: must be a string (it names the output folder results/sweeps/NAME), got {shown(name, 80)}")
         if "name" not in raw and not _plain_name(name):  # "name: 'my sweep' must be ..." blamed a key not written
             raise SweepSpecError(f"no `name:` given, and the file's name {name!r} cannot name the output folder "
                                  f"results/sweeps/NAME ({NAME_RULE}); add a `name:`")
         spec = cls(
             name=name,
-            kind=str(raw["kind"]),
+            kind=raw["kind"],
             fixed=dict(raw.get("fixed") or {}),
             grid={k: list(v) for k, v in (raw.get("grid") or {}).items()},
             random=dict(raw.get("random") or {}),
             samples=_whole("samples", raw.get("samples", 0), MAX_CELLS),
             sample_seed=_whole("sample_seed", raw.get("sample_seed", 0), MAX_SEED),
             seeds=_seeds(seeds),
-            description=str(raw.get("description", "")),
+            description=_description(raw.get("description")),
         )
         _degree_parameters(spec, where)
         return spec
@@ -170,14 +175,25 @@ def load_sweep(path: str | Path) -> SweepSpec:
 def _whole(name: str, value: Any, maximum: int) -> int:
     """A whole number in [0, maximum] from the sweep file (not a bool, string or fraction)."""
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= maximum:
-        raise SweepSpecError(f"`{name}:` must be a whole number in [0, {maximum}], got {value!r}")
+        raise SweepSpecError(f"`{name}:` must be a whole number in [0, {maximum}], got {shown(value, 80)}")
     return value
+
+
+def _description(raw: Any) -> str:
+    """The ``description:`` text ('' when absent or empty): anything else was written as its Python
+    text into sweep.yaml (`description:` with no value as 'None', a list as "[1, 2]"), exit 0."""
+    if raw is None:
+        return ""
+    if not isinstance(raw, str):
+        raise SweepSpecError(f"description: must be text (quote it if YAML reads it otherwise), got "
+                             f"{type(raw).__name__} {shown(raw, 60)}")
+    return raw
 
 
 def _seeds(raw: Any) -> list[int]:
     """The ``seeds:`` list: whole numbers (a bare number is refused before: ``seeds: 3`` is ambiguous)."""
     if not isinstance(raw, (list, tuple)) or not all(isinstance(s, int) and not isinstance(s, bool) for s in raw):
-        raise SweepSpecError(f"`seeds:` must be a list of whole numbers >= 0, got {raw!r}")
+        raise SweepSpecError(f"`seeds:` must be a list of whole numbers >= 0, got {shown(raw, 80)}")
     return list(raw)
 
 
@@ -265,11 +281,21 @@ def _check(spec: SweepSpec) -> None:
             if "," in name:
                 if not isinstance(value, (list, tuple)) or len(value) != len(_names(name)):
                     raise SweepSpecError(f"grid.{name} links {len(_names(name))} parameters: each value must be "
-                                         f"a list of {len(_names(name))}, got {value!r}")
+                                         f"a list of {len(_names(name))}, got {shown(value, 80)}")
                 for v in value:
                     _check_scalar(f"grid.{name}", v)
             else:
                 _check_scalar(f"grid.{name}", value)
+        # after the type checks (an np.int64 gets their message); `k: [3, 3]` ran one cell, one row, without
+        # a word (seeds refuse it), and by value: [1, 1.0] or [0.0, -0.0] passed a comparison of repr
+        seen: dict[Any, Any] = {}
+        for value in values:
+            key = _value_key(value)
+            if key in seen:
+                same = "" if repr(seen[key]) == repr(value) else f" (equal to {shown(seen[key], 80)})"
+                raise SweepSpecError(f"grid.{name}: {shown(value, 80)} is given twice{same}; a grid point runs once, so "
+                                     "give each value once (vary seeds: to repeat a run)")
+            seen[key] = value
     for name, dist in spec.random.items():
         if not (isinstance(dist, dict) and len(dist) == 1 and next(iter(dist)) in _DISTRIBUTIONS):
             raise SweepSpecError(f"random.{name} must be one of {{{'|'.join(_DISTRIBUTIONS)}: [...]}}, got {dist!r}")
@@ -277,31 +303,31 @@ def _check(spec: SweepSpec) -> None:
         numeric = isinstance(args, list) and all(
             not isinstance(a, bool) and isinstance(a, (int, float)) and _finite(a) for a in args)
         if law != "choice" and (not numeric or len(args) != 2 or not args[0] <= args[1]):
-            raise SweepSpecError(f"random.{name}: {law} needs [low, high], finite numbers with low <= high, got {args!r:.80}")
+            raise SweepSpecError(f"random.{name}: {law} needs [low, high], finite numbers with low <= high, got {shown(args, 80)}")
         if law == "int" and not all(isinstance(a, int) for a in args):
-            raise SweepSpecError(f"random.{name}: int needs whole-number bounds [low, high], got {args!r}")
+            raise SweepSpecError(f"random.{name}: int needs whole-number bounds [low, high], got {shown(args, 80)}")
         if law == "int" and not all(-(2**63) <= a < 2**63 for a in args):  # 10**24: numpy's "high is out of bounds"
-            raise SweepSpecError(f"random.{name}: int needs bounds in [-2**63, 2**63 - 1] (64-bit integers), got {args!r}")
+            raise SweepSpecError(f"random.{name}: int needs bounds in [-2**63, 2**63 - 1] (64-bit integers), got {shown(args, 80)}")
         if law == "uniform" and not math.isfinite(args[1] - args[0]):  # [-1e308, 1e308]: numpy's OverflowError
-            raise SweepSpecError(f"random.{name}: uniform needs high - low finite, got {args!r}")
+            raise SweepSpecError(f"random.{name}: uniform needs high - low finite, got {shown(args, 80)}")
         if law == "loguniform" and args[0] <= 0:
-            raise SweepSpecError(f"random.{name}: loguniform needs low > 0, got {args!r}")
+            raise SweepSpecError(f"random.{name}: loguniform needs low > 0, got {shown(args, 80)}")
         if law == "choice" and (not isinstance(args, list) or not args):
-            raise SweepSpecError(f"random.{name}: choice needs a non-empty list, got {args!r}")
+            raise SweepSpecError(f"random.{name}: choice needs a non-empty list, got {shown(args, 80)}")
         if law == "choice":  # each a cell's value, as a grid's: a list drawn was an internal TypeError, nan a cell
             for value in args:
                 _check_scalar(f"random.{name}", value)
     if spec.random and spec.samples < 1:
         raise SweepSpecError("`random:` needs `samples:` >= 1 (the number of draws)")
     if not spec.random and (spec.samples or spec.sample_seed):  # ignored: `samples: 8` ran 1 cell, not 8, exit 0
-        given = f"`samples: {spec.samples}`" if spec.samples else f"`sample_seed: {spec.sample_seed}`"
+        given = f"`samples: {shown(spec.samples)}`" if spec.samples else f"`sample_seed: {shown(spec.sample_seed)}`"
         raise SweepSpecError(f"{given} is for random draws, and the sweep has no `random:` parameters to draw "
                              "(each grid point would run once, not once a draw); add a `random:` mapping, "
                              "e.g. `random: {extractor.ad_tau: {uniform: [2.0, 8.0]}}`, or leave it out")
     if not spec.seeds:
         raise SweepSpecError("`seeds:` is empty; give at least one seed")
     if any(not 0 <= s <= MAX_SEED for s in spec.seeds) or len(set(spec.seeds)) != len(spec.seeds):
-        raise SweepSpecError(f"`seeds:` must be distinct integers in [0, {MAX_SEED}], got {spec.seeds}")
+        raise SweepSpecError(f"`seeds:` must be distinct integers in [0, {MAX_SEED}], got {shown(spec.seeds, 80)}")
     n_cells = math.prod(len(v) for v in spec.grid.values()) * (spec.samples if spec.random else 1) * len(spec.seeds)
     if n_cells > MAX_CELLS:
         raise SweepSpecError(f"the sweep has {n_cells} cells (grid x samples x seeds), more than {MAX_CELLS}; "
@@ -317,13 +343,31 @@ def _finite(value: int | float) -> bool:
         return False
 
 
+def _value_key(value: Any) -> Any:
+    """What makes two checked grid values one grid point: numbers by value (1 and 1.0, 0.0 and -0.0
+    are one), a bool apart from the numbers (True is not 1), a linked value item by item."""
+    if isinstance(value, (list, tuple)):
+        return tuple(_value_key(v) for v in value)
+    return (isinstance(value, bool), value)  # an int equals a float of its value, and hashes alike
+
+
+def _digits(n: int) -> str:
+    """How many decimal digits the whole number ``n`` has; past Python's 4,300-digit limit on int-to-text
+    conversion (``str`` raised ValueError: an internal error for a 5,000-digit value in a sweep file)
+    the count from its bits, "about N"."""
+    try:
+        return str(len(str(abs(n))))
+    except ValueError:
+        return f"about {int(abs(n).bit_length() * math.log10(2)) + 1}"
+
+
 def _check_scalar(where: str, value: Any) -> None:
     if not isinstance(value, (str, int, float, bool, type(None))):
         hint = " (to vary it, put it under grid:)" if where.startswith("fixed.") and isinstance(value, list) else ""
-        raise SweepSpecError(f"{where} must be a number, string, bool or null, got {value!r}{hint}")
+        raise SweepSpecError(f"{where} must be a number, string, bool or null, got {shown(value, 80)}{hint}")
     if isinstance(value, (int, float)) and not _finite(value):
-        shown = repr(value) if isinstance(value, float) else f"a whole number of {len(str(abs(value)))} digits"
-        raise SweepSpecError(f"{where} must be finite (within float64's range, +-1.8e308), got {shown}")
+        text = repr(value) if isinstance(value, float) else f"a whole number of {_digits(value)} digits"
+        raise SweepSpecError(f"{where} must be finite (within float64's range, +-1.8e308), got {text}")
 
 
 def _draw(space: dict[str, dict[str, list[Any]]], samples: int, seed: int) -> list[dict[str, Scalar]]:
