@@ -556,9 +556,8 @@ class SlamConfig:
             raise SlamConfigError(f"loop_closure.kernel: must be 'cauchy' or 'huber', got {self.loop_closure.kernel!r}")
         if self.loop_closure.drift not in ("marginals", "joint"):
             raise SlamConfigError(f"loop_closure.drift: must be 'marginals' or 'joint', got {self.loop_closure.drift!r}")
-        if self.loop_closure.search not in ("nearest", "window", "both"):
-            raise SlamConfigError(f"loop_closure.search: must be 'nearest', 'window' or 'both', got "
-                                  f"{self.loop_closure.search!r}")
+        if self.loop_closure.search not in ("nearest", "window"):
+            raise SlamConfigError(f"loop_closure.search: must be 'nearest' or 'window', got {self.loop_closure.search!r}")
         # every number's own interval (FIELD_RANGES, the probabilities, the shares) was checked by
         # _checked_fields above; what stays here depends on more than one field, or is no single number
         al = self.alignment

@@ -140,8 +140,9 @@ def find_closure_window(new: Keyframe, scan_points: np.ndarray, keyframes: list[
     visits (``visit_gap``), nearest first, whose estimate lies within ``search_radius`` plus the
     window of the new one's and whose heading lies within a quarter turn plus the window's
     heading of it (beyond, a 180-degree scan shares less than half its view: passes the other
-    way down a corridor share only the side walls, whose door recesses alias); ``candidates``
-    of them are searched. The window is ``sqrt(chi2(gate_probability, 3))`` std of ``P`` either
+    way down a corridor share only the side walls, whose door recesses alias), nearest first: a
+    keyframe is searched when it lies within ``search_radius`` plus its own window (else the next
+    is looked at), at most one per visit and ``candidates`` in all. The window is ``sqrt(chi2(gate_probability, 3))`` std of ``P`` either
     side (at least the ICP's reach and ``DISTINCT_THETA``, at most ``window_xy`` and
     ``window_theta``); every pose of it (``alignment.search_step`` m, ``search_step_theta`` rad
     apart) scores the likelihood field of the candidate's visit: its keyframes within the window
@@ -156,10 +157,10 @@ def find_closure_window(new: Keyframe, scan_points: np.ndarray, keyframes: list[
         return None
     gate = chi2_quantile(cfg.gate_probability, 3)
     dist = np.hypot(*(positions[idx] - new.pose[:2]).T)
-    near = dist <= cfg.search_radius + cfg.window_xy
-    turned = np.array([abs(wrap(new.pose[2] - keyframes[int(k)].pose[2])) for k in idx])
-    facing = turned <= 0.5 * np.pi + cfg.window_theta
-    order = [int(idx[k]) for k in np.argsort(dist) if near[k] and facing[k]]
+    turned = np.full(idx.size, np.inf)  # rad between the headings, for the keyframes near enough
+    near = np.flatnonzero(dist <= cfg.search_radius + cfg.window_xy)
+    turned[near] = np.abs(wrap(new.pose[2] - np.array([keyframes[int(k)].pose[2] for k in idx[near]])))
+    order = [int(idx[k]) for k in np.argsort(dist) if turned[k] <= 0.5 * np.pi + cfg.window_theta]
     hold = np.diag([alignment.search_step**-2, alignment.search_step**-2, alignment.search_step_theta**-2])
     min_cos = float(np.cos(alignment.normal_agreement))
     pts = scan_points[:: max(1, -(-scan_points.shape[0] // alignment.search_points))]

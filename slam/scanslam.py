@@ -524,14 +524,14 @@ class ScanSlam:
         if lc.enabled and self._since_search >= lc.every and sp.matched.shape[0] >= 10:
             self._since_search = 0
             normals = sp.matched_normals if self.alignment.normal_agreement < np.pi else None
-            loop = None
-            if lc.search in ("window", "both"):
+            loop: LoopClosure | None
+            if lc.search == "window":
                 graph = self.graph
                 loop = find_closure_window(
                     kf, sp.matched, self.keyframes[:-1], lc, self.alignment, self.keyframes_cfg.voxel,
                     lambda cand: rotate_covariance(graph.relative_covariance(cand.key, kf.key), kf.pose[2]),
                     self._kf_xy[:-1], self._kf_travel[:-1], normals)
-            if loop is None and lc.search != "window":
+            else:
                 loop = find_closure(kf, sp.matched, self.keyframes[:-1], lc, self.alignment, self.keyframes_cfg.voxel,
                                     self.travelled - self._closed_at, self._drift(kf), self._kf_xy[:-1],
                                     self._kf_travel[:-1], normals)
