@@ -847,7 +847,7 @@ FIELD_RANGES: dict[str, FieldRange] = {
     "loop_closure.drift_inflation": (1, 1e6, "", False, "a factor on the drift the closure gate allows"),
     "loop_closure.window_inflation": (1, 1e6, "", False, "a factor on the relative covariance the closure window covers"),
     "loop_closure.window_xy": (0.1, 10, "m", False, ""),
-    "loop_closure.window_theta": (0.01, 3.1416, "rad", False, ""),
+    "loop_closure.window_theta": (0.01, PI, "rad", False, ""),
 }
 #: fields checked by their own rule in SlamConfig (``_check_search``: bounds that depend on one
 #: another, or each side with its reason); their negative values are left to that rule too
