@@ -172,6 +172,8 @@ def find_closure_window(new: Keyframe, scan_points: np.ndarray, keyframes: list[
             continue
         cand = keyframes[k]
         P = cfg.window_inflation * relative(cand)
+        if not np.isfinite(P).all():
+            continue  # no window to search (a NaN or infinite covariance from the graph)
         sxy = float(np.sqrt(max(np.linalg.eigvalsh(P[:2, :2]).max(), 0.0)))
         half_xy = min(max(np.sqrt(gate) * sxy, alignment.max_correspondence), cfg.window_xy)
         half_th = min(max(np.sqrt(gate * max(P[2, 2], 0.0)), DISTINCT_THETA), cfg.window_theta)

@@ -30,12 +30,15 @@ def _keyframe(walls: np.ndarray, key: int, true: np.ndarray, estimate: np.ndarra
     return Keyframe(key, key, float(key), np.asarray(estimate, float), *sp.surface(), travelled), sp
 
 
-def _search(new: Keyframe, sp: ScanPoints, old: list[Keyframe], relative: np.ndarray, window: bool):
+def _search(new: Keyframe, sp: ScanPoints, old: list[Keyframe], relative: np.ndarray, window: bool,
+            nan_for: frozenset[int] = frozenset()):
+    """``nan_for``: the keys whose relative covariance is given as NaN (the window search only)."""
     xy = np.array([kf.pose[:2] for kf in old])
     travel = np.array([kf.travelled for kf in old])
     if window:
-        return find_closure_window(new, sp.matched, old, LOOP, ALIGN, VOXEL, lambda cand: relative, xy, travel,
-                                   sp.matched_normals)
+        return find_closure_window(new, sp.matched, old, LOOP, ALIGN, VOXEL,
+                                   lambda cand: np.full((3, 3), np.nan) if cand.key in nan_for else relative,
+                                   xy, travel, sp.matched_normals)
     return find_closure(new, sp.matched, old, LoopClosureConfig(), ALIGN, VOXEL, 0.0,
                         lambda cand: LOOP.window_inflation * relative, xy, travel, sp.matched_normals)
 
@@ -47,19 +50,25 @@ def _room_walls() -> np.ndarray:
     return np.vstack((room, box))
 
 
-def test_a_revisit_metres_off_the_estimate_is_closed_where_the_icp_cannot_reach():
-    """Five keyframes of a first visit at their true poses; the revisit's estimate has drifted
-    3 m and 8 degrees (within 2 std of the relative covariance given, times the 10 of
-    ``window_inflation``). The nearest-visit ICP starts at the estimate and reaches 0.5 m: no
-    closure. The window search closes it, within 3 cm and 0.5 degree of the truth."""
+def _room_revisit():
+    """Five keyframes of a first visit at their true poses, a revisit whose estimate drifted 3 m and
+    8 degrees (within 2 std of the relative covariance returned, times the 10 of ``window_inflation``)."""
     walls, rng = _room_walls(), np.random.default_rng(3)
     old = [_keyframe(walls, k, p, p, 0.5 * k, rng)[0]
            for k, p in enumerate(np.array([[1.0, 1.0, 0.2], [1.5, 1.2, 0.3], [2.0, 1.3, 0.4], [2.5, 1.5, 0.5],
                                            [3.0, 1.7, 0.5]]))]
     true = np.array([2.2, 1.1, 0.35])
-    drifted = compose(true, np.array([3.0, 0.0, np.radians(8.0)]))
-    new, sp = _keyframe(walls, 40, true, drifted, 30.0, rng)
+    new, sp = _keyframe(walls, 40, true, compose(true, np.array([3.0, 0.0, np.radians(8.0)])), 30.0, rng)
     relative = np.diag([0.5**2, 0.5**2, 0.05**2])  # x10: 1.6 m and 9 degrees std
+    return old, true, new, sp, relative
+
+
+def test_a_revisit_metres_off_the_estimate_is_closed_where_the_icp_cannot_reach():
+    """Five keyframes of a first visit at their true poses; the revisit's estimate has drifted
+    3 m and 8 degrees (within 2 std of the relative covariance given, times the 10 of
+    ``window_inflation``). The nearest-visit ICP starts at the estimate and reaches 0.5 m: no
+    closure. The window search closes it, within 3 cm and 0.5 degree of the truth."""
+    old, true, new, sp, relative = _room_revisit()
     assert _search(new, sp, old, relative, window=False) is None
     loop = _search(new, sp, old, relative, window=True)
     assert loop is not None
@@ -96,3 +105,17 @@ def test_a_door_spacing_away_along_an_aliased_corridor_is_refused(offset):
     closed = compose(old[wrong.old].pose, wrong.relative)
     assert abs(closed[0] - true[0] - offset) < 0.1
     assert _search(new, sp, old, relative, window=True) is None
+
+
+def test_a_candidate_without_a_finite_relative_covariance_is_passed_over():
+    """A NaN relative covariance (a graph gone singular) leaves no window: that candidate is passed
+    over (it was a ValueError, NaN to integer) and the next keyframe of the visit is searched; with
+    none finite, no closure."""
+    old, true, new, sp, relative = _room_revisit()
+    first = _search(new, sp, old, relative, window=True)
+    assert first is not None
+    loop = _search(new, sp, old, relative, window=True, nan_for=frozenset({first.old}))
+    assert loop is not None and loop.old != first.old
+    closed = compose(old[loop.old].pose, loop.relative)
+    assert np.hypot(*(closed[:2] - true[:2])) < 0.03
+    assert _search(new, sp, old, relative, window=True, nan_for=frozenset(kf.key for kf in old)) is None
