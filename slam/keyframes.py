@@ -136,13 +136,13 @@ def find_closure_window(new: Keyframe, scan_points: np.ndarray, keyframes: list[
     ``relative(candidate)`` is the (3, 3) world-frame covariance of the new keyframe's estimate
     relative to the candidate's (the joint marginal: the drift of the path between them, less
     what the closures in between fixed); times ``window_inflation`` it is the drift ``P``.
-    Candidates are the earlier keyframes at least ``min_travel`` of path behind, in different
-    visits (``visit_gap``), nearest first, whose estimate lies within ``search_radius`` plus the
-    window of the new one's and whose heading lies within a quarter turn plus the window's
-    heading of it (beyond, a 180-degree scan shares less than half its view: passes the other
-    way down a corridor share only the side walls, whose door recesses alias), nearest first: a
-    keyframe is searched when it lies within ``search_radius`` plus its own window (else the next
-    is looked at), at most one per visit and ``candidates`` in all. The window is ``sqrt(chi2(gate_probability, 3))`` std of ``P`` either
+    Candidates are the earlier keyframes at least ``min_travel`` of path behind, looked at
+    nearest first; one is searched when its estimate lies within ``search_radius`` plus its own
+    window of the new one's and its heading within a quarter turn plus the window's heading of it
+    (beyond, a 180-degree scan shares less than half its view: passes the other way down a
+    corridor share only the side walls, whose door recesses alias), at most one per visit
+    (``visit_gap``) and ``candidates`` in all; one whose ``P`` is not finite is passed over (no
+    window). ``loop_closure.drift`` and ``drift_inflation`` are not used here. The window is ``sqrt(chi2(gate_probability, 3))`` std of ``P`` either
     side (at least the ICP's reach and ``DISTINCT_THETA``, at most ``window_xy`` and
     ``window_theta``); every pose of it (``alignment.search_step`` m, ``search_step_theta`` rad
     apart) scores the likelihood field of the candidate's visit: its keyframes within the window
