@@ -74,7 +74,10 @@ def search(points: np.ndarray, field: Field, centre: np.ndarray, half_xy: float,
     ``turn`` = (heading rad, max_turn rad): only headings within ``max_turn`` of that heading
     (the last pose's: the turn a robot can make since) are scored (none left: no candidates).
     ``peaks``: only local maxima of the window (no better pose among the 26 neighbours on its
-    grid) are candidates, so the runner-up is another place that fits, not a neighbour of the best."""
+    grid) are candidates, so the runner-up is another place that fits, not a neighbour of the best;
+    the heading axis is not wrapped there (with the full turn, ``half_theta`` >= pi, the first and
+    last headings are each compared with one heading neighbour only, so a slope that crosses the
+    turn's seam may give a candidate)."""
     p = np.asarray(points, float).reshape(-1, 2)
     if p.shape[0] == 0:
         return []

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from slam.config import AlignmentConfig, LoopClosureConfig
+from slam.correlative import Field, search
 from slam.geometry import compose
 from slam.keyframes import Keyframe, find_closure, find_closure_window
 from slam.models import wrap
@@ -119,3 +120,26 @@ def test_a_candidate_without_a_finite_relative_covariance_is_passed_over():
     closed = compose(old[loop.old].pose, loop.relative)
     assert np.hypot(*(closed[:2] - true[:2])) < 0.03
     assert _search(new, sp, old, relative, window=True, nan_for=frozenset(kf.key for kf in old)) is None
+
+
+def test_the_peaks_search_gives_another_place_as_runner_up_not_a_shoulder_of_the_best():
+    """A hand-built field (0.1 m cells): a wide bump (1 at (1, 1), 0.5 m std) and a narrow second
+    peak (0.7 at (2.5, 1), 0.05 m std) 1.5 m away; one scan point at the sensor's origin, so a
+    pose scores the field at its position. The best 2 poses 0.3 m apart are the bump and its
+    shoulder 0.3 m off (exp(-0.18) = 0.84 > 0.7); the best 2 local maxima are the bump and the
+    second peak."""
+    res = 0.1
+    origin = np.array([-0.5, -0.5])
+    x, y = np.meshgrid(origin[0] + res * np.arange(41), origin[1] + res * np.arange(31), indexing="ij")
+    values = np.maximum(np.exp(-0.5 * ((x - 1.0) ** 2 + (y - 1.0) ** 2) / 0.5**2),
+                        0.7 * np.exp(-0.5 * ((x - 2.5) ** 2 + (y - 1.0) ** 2) / 0.05**2))
+    field = Field(values, origin, res)
+    args = (np.zeros((1, 2)), field, np.array([1.5, 1.0, 0.0]), 1.5, 0.0, res, 0.01, 2, 0.3, 0.1)
+    best, shoulder = search(*args)
+    np.testing.assert_allclose(best.pose, [1.0, 1.0, 0.0], atol=1e-9)
+    assert abs(np.hypot(*(shoulder.pose[:2] - best.pose[:2])) - 0.3) < 1e-9
+    assert shoulder.score == pytest.approx(np.exp(-0.18))
+    best, second = search(*args, peaks=True)
+    np.testing.assert_allclose(best.pose, [1.0, 1.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(second.pose, [2.5, 1.0, 0.0], atol=1e-9)
+    assert second.score == pytest.approx(0.7)
