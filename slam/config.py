@@ -474,6 +474,15 @@ class LoopClosureConfig:
             the matches' covariances, over-confident where the scans are 1 degree apart (Intel and
             ACES: a median chi-square of 27-31 against 2.4, 3 dof), and scaling them all scales the
             joint marginal alike.
+        search: how a candidate is matched: "nearest" (the ICP from the new keyframe's estimate,
+            reaching ``alignment.max_correspondence`` from it, against the nearest ``candidates``
+            visits) or "window" (:func:`slam.keyframes.find_closure_window`: a correlative search
+            over the window the two keyframes' relative uncertainty allows, accepted only when
+            unambiguous; ``drift`` and ``drift_inflation`` are then not used)...
+        window_inflation: ...whose window is ``sqrt(chi2(gate_probability, 3))`` std of the joint
+            relative covariance times this (the keyframe factors' measured over-confidence on
+            1-degree scans: a median chi-square of 27-31 per 3 dof, about 10)...
+        window_xy, window_theta: ...at most this (m either side in x and y, rad either side)...
     """
 
     enabled: bool = True
@@ -493,6 +502,10 @@ class LoopClosureConfig:
     prior_sigma: float = 1e-4
     drift: str = "marginals"
     drift_inflation: float = 1.0
+    search: str = "nearest"
+    window_inflation: float = 10.0
+    window_xy: float = 6.0
+    window_theta: float = 0.26
 
 
 @dataclass(frozen=True)
@@ -543,6 +556,8 @@ class SlamConfig:
             raise SlamConfigError(f"loop_closure.kernel: must be 'cauchy' or 'huber', got {self.loop_closure.kernel!r}")
         if self.loop_closure.drift not in ("marginals", "joint"):
             raise SlamConfigError(f"loop_closure.drift: must be 'marginals' or 'joint', got {self.loop_closure.drift!r}")
+        if self.loop_closure.search not in ("nearest", "window"):
+            raise SlamConfigError(f"loop_closure.search: must be 'nearest' or 'window', got {self.loop_closure.search!r}")
         # every number's own interval (FIELD_RANGES, the probabilities, the shares) was checked by
         # _checked_fields above; what stays here depends on more than one field, or is no single number
         al = self.alignment
@@ -830,6 +845,9 @@ FIELD_RANGES: dict[str, FieldRange] = {
     "loop_closure.prior_sigma": (MIN_NOISE_SIGMA, MAX_PRIOR_SIGMA, "m and rad", False,
                                  "a looser prior leaves the graph without an anchor"),
     "loop_closure.drift_inflation": (1, 1e6, "", False, "a factor on the drift the closure gate allows"),
+    "loop_closure.window_inflation": (1, 1e6, "", False, "a factor on the relative covariance the closure window covers"),
+    "loop_closure.window_xy": (0.1, 10, "m", False, ""),
+    "loop_closure.window_theta": (0.01, PI, "rad", False, ""),
 }
 #: fields checked by their own rule in SlamConfig (``_check_search``: bounds that depend on one
 #: another, or each side with its reason); their negative values are left to that rule too

@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import distance_transform_edt
+from scipy.ndimage import distance_transform_edt, maximum_filter
 
 from .icp import Reference
 from .icpkernel import _nearest_facing, kernel
@@ -66,13 +66,18 @@ class Candidate:
 
 def search(points: np.ndarray, field: Field, centre: np.ndarray, half_xy: float, half_theta: float,
            step: float, step_theta: float, count: int, min_xy: float, min_theta: float,
-           turn: tuple[float, float] | None = None) -> list[Candidate]:
+           turn: tuple[float, float] | None = None, peaks: bool = False) -> list[Candidate]:
     """The ``count`` best poses of the window ``centre`` +- ``half_xy`` m (x and y, ``step`` m
     apart, rounded to whole cells of the field) and +- ``half_theta`` rad (``step_theta`` apart;
     the full turn when ``half_theta`` >= pi), best first; each at least ``min_xy`` m or
     ``min_theta`` rad from every better one (distinct local maxima, not neighbours of one).
     ``turn`` = (heading rad, max_turn rad): only headings within ``max_turn`` of that heading
-    (the last pose's: the turn a robot can make since) are scored (none left: no candidates)."""
+    (the last pose's: the turn a robot can make since) are scored (none left: no candidates).
+    ``peaks``: only local maxima of the window (no better pose among the 26 neighbours on its
+    grid) are candidates, so the runner-up is another place that fits, not a neighbour of the best;
+    the heading axis is not wrapped there (with the full turn, ``half_theta`` >= pi, the first and
+    last headings are each compared with one heading neighbour only, so a slope that crosses the
+    turn's seam may give a candidate)."""
     p = np.asarray(points, float).reshape(-1, 2)
     if p.shape[0] == 0:
         return []
@@ -94,12 +99,16 @@ def search(points: np.ndarray, field: Field, centre: np.ndarray, half_xy: float,
                      float(field.origin[0]), float(field.origin[1]), res, float(centre[0]), float(centre[1]),
                      thetas, n, k)
     flat = scores.ravel()
+    if peaks:
+        flat = np.where(scores >= maximum_filter(scores, size=3, mode="nearest"), scores, -1.0).ravel()
     top = min(flat.size, max(64, 32 * count))
     order = np.argpartition(-flat, top - 1)[:top]
     order = order[np.argsort(-flat[order], kind="stable")]
     side = 2 * n + 1
     out: list[Candidate] = []
     for f in order:
+        if flat[f] < 0:
+            break
         a, rest = divmod(int(f), side * side)
         i, j = divmod(rest, side)
         pose = np.array([centre[0] + (i - n) * k * res, centre[1] + (j - n) * k * res,

@@ -10,8 +10,12 @@ import numpy as np
 from .config import AlignmentConfig, LoopClosureConfig
 from .geometry import between, rotate_covariance, to_world
 from .models import chi2_quantile, wrap
-from .icp import Match, Reference, make_reference, match
+from .correlative import fit, make_field, search
+from .icp import Match, Reference, make_reference, match, refine
 
+#: poses this far apart (m, rad) are distinct: the search's candidates, and the rivals of an ambiguous step
+DISTINCT_XY = 0.3
+DISTINCT_THETA = 0.1
 
 @dataclass
 class Keyframe:
@@ -120,6 +124,97 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
         return LoopClosure(cand.key, new.key, between(cand.pose, m.pose), m.inliers, m.rms,
                            float(np.hypot(*(m.pose[:2] - new.pose[:2]))),
                            rotate_covariance(m.covariance, -m.pose[2]), d2)  # world -> frame of the new keyframe
+    return None
+
+
+def find_closure_window(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyframe], cfg: LoopClosureConfig,
+                        alignment: AlignmentConfig, voxel: float, relative: Callable[[Keyframe], np.ndarray],
+                        positions: np.ndarray, travelled: np.ndarray,
+                        normals: np.ndarray | None = None) -> LoopClosure | None:
+    """A closure found by a correlative search over the window the relative uncertainty allows.
+
+    ``relative(candidate)`` is the (3, 3) world-frame covariance of the new keyframe's estimate
+    relative to the candidate's (the joint marginal: the drift of the path between them, less
+    what the closures in between fixed); times ``window_inflation`` it is the drift ``P``.
+    Candidates are the earlier keyframes at least ``min_travel`` of path behind, looked at
+    nearest first; one is searched when its estimate lies within ``search_radius`` plus its own
+    window of the new one's and its heading within a quarter turn plus the window's heading of it
+    (beyond, a 180-degree scan shares less than half its view: passes the other way down a
+    corridor share only the side walls, whose door recesses alias), at most one per visit
+    (``visit_gap``) and ``candidates`` in all; one whose ``P`` is not finite is passed over (no
+    window). ``loop_closure.drift`` and ``drift_inflation`` are not used here. The window is ``sqrt(chi2(gate_probability, 3))`` std of ``P`` either
+    side (at least the ICP's reach and ``DISTINCT_THETA``, at most ``window_xy`` and
+    ``window_theta``); every pose of it (``alignment.search_step`` m, ``search_step_theta`` rad
+    apart) scores the likelihood field of the candidate's visit: its keyframes within the window
+    and ``submap`` either side of them (:mod:`slam.correlative`), the best
+    ``search_candidates`` distinct poses are refined by the ICP held near each (a prior of the
+    window's step) and ranked by their fit. The best is a closure only when it passes
+    :func:`_verified`, its correction lies inside the gate of ``P`` plus the match's covariance,
+    and no distinct pose (``DISTINCT_XY`` m or ``DISTINCT_THETA`` rad away) fits within
+    ``alignment.fit_margin`` of it (a door's spacing along a corridor, a corridor's axis)."""
+    idx = np.flatnonzero(new.travelled - travelled >= cfg.min_travel)
+    if not idx.size:
+        return None
+    gate = chi2_quantile(cfg.gate_probability, 3)
+    dist = np.hypot(*(positions[idx] - new.pose[:2]).T)
+    turned = np.full(idx.size, np.inf)  # rad between the headings, for the keyframes near enough
+    near = np.flatnonzero(dist <= cfg.search_radius + cfg.window_xy)
+    turned[near] = np.abs(wrap(new.pose[2] - np.array([keyframes[int(k)].pose[2] for k in idx[near]])))
+    order = [int(idx[k]) for k in np.argsort(dist) if turned[k] <= 0.5 * np.pi + cfg.window_theta]
+    hold = np.diag([alignment.search_step**-2, alignment.search_step**-2, alignment.search_step_theta**-2])
+    min_cos = float(np.cos(alignment.normal_agreement))
+    pts = scan_points[:: max(1, -(-scan_points.shape[0] // alignment.search_points))]
+    tried: list[int] = []
+    for k in order:
+        if len(tried) >= cfg.candidates:
+            break
+        if any(abs(keyframes[k].key - t) <= cfg.visit_gap for t in tried):
+            continue
+        cand = keyframes[k]
+        P = cfg.window_inflation * relative(cand)
+        if not np.isfinite(P).all():
+            continue  # no window to search (a NaN or infinite covariance from the graph)
+        sxy = float(np.sqrt(max(np.linalg.eigvalsh(P[:2, :2]).max(), 0.0)))
+        half_xy = min(max(np.sqrt(gate) * sxy, alignment.max_correspondence), cfg.window_xy)
+        half_th = min(max(np.sqrt(gate * max(P[2, 2], 0.0)), DISTINCT_THETA), cfg.window_theta)
+        if dist[np.searchsorted(idx, k)] > cfg.search_radius + half_xy or \
+                turned[np.searchsorted(idx, k)] > 0.5 * np.pi + half_th:
+            continue  # the drift cannot bring it within view of the new keyframe
+        tried.append(cand.key)
+        # the visit's keyframes within the window (the places the new keyframe may be), and the
+        # ``submap`` keyframes either side of them: the scan is matched to what was seen there
+        visit = np.arange(max(0, cand.key - cfg.visit_gap), min(len(keyframes), cand.key + cfg.visit_gap + 1))
+        inside = visit[np.all(np.abs(positions[visit] - new.pose[:2]) <= half_xy + DISTINCT_XY,
+                              axis=1)]
+        lo = max(0, int(min(inside.min(initial=cand.key), cand.key)) - cfg.submap)
+        hi = int(max(inside.max(initial=cand.key), cand.key)) + cfg.submap + 1
+        sub = [kf for kf in keyframes[lo:hi] if new.travelled - kf.travelled >= cfg.min_travel]
+        ref = local_map(sub, voxel)
+        field = make_field(ref.points, alignment.search_resolution, alignment.search_sigma, new.pose,
+                           alignment.max_range + half_xy)
+        peaks = search(pts, field, new.pose, half_xy, half_th, alignment.search_step, alignment.search_step_theta,
+                       alignment.search_candidates, DISTINCT_XY, DISTINCT_THETA, peaks=True)
+        results = [refine(scan_points, ref, c.pose, alignment, prior=hold, normals=normals) for c in peaks]
+        if not results:
+            continue
+        fits = [fit(scan_points, normals, ref, r.pose, alignment.fine_correspondence, alignment.fit_sigma, min_cos)
+                for r in results]
+        b = int(np.argmax(fits))
+        m = results[b]
+        if any(i != b and fits[i] >= fits[b] - alignment.fit_margin
+               and (np.hypot(*(r.pose[:2] - m.pose[:2])) > DISTINCT_XY or abs(wrap(r.pose[2] - m.pose[2])) > DISTINCT_THETA)
+               for i, r in enumerate(results)):
+            continue  # a distinct pose fits as well: aliased
+        if not _verified(m, cfg, alignment):
+            continue
+        d = m.pose - new.pose
+        d[2] = wrap(d[2])
+        d2 = float(d @ np.linalg.solve(P + m.covariance, d))
+        if d2 > gate:
+            continue
+        return LoopClosure(cand.key, new.key, between(cand.pose, m.pose), m.inliers, m.rms,
+                           float(np.hypot(*(m.pose[:2] - new.pose[:2]))),
+                           rotate_covariance(m.covariance, -m.pose[2]), d2)
     return None
 
 

@@ -82,8 +82,7 @@ class PoseGraph:
         them may correct, the correlation of the two kept."""
         joint = self.isam.jointMarginalCovariance([old, new])
         s_oo, s_on, s_nn = (np.asarray(joint.at(a, b)) for a, b in ((old, old), (old, new), (new, new)))
-        est = self.isam.calculateEstimate()
-        rel = est.atPose2(new).between(est.atPose2(old))  # old in the frame of new
+        rel = self.isam.calculateEstimatePose2(new).between(self.isam.calculateEstimatePose2(old))  # old in new's frame
         B = np.asarray(rel.AdjointMap())  # old's tangent -> new's
         cov = s_nn - B @ s_on - s_on.T @ B.T + B @ s_oo @ B.T
         return 0.5 * (cov + cov.T)

@@ -25,15 +25,13 @@ from .models import chi2_quantile, wrap
 from .geometry import between, compose, rotate_covariance
 from .correlative import Field, fit, make_field, search
 from .icp import Match, Reference, chord_normals, chord_normals_at, match, refine
-from .keyframes import Keyframe, LoopClosure, find_closure, local_map
+from .keyframes import DISTINCT_THETA, DISTINCT_XY, Keyframe, LoopClosure, find_closure, find_closure_window, local_map
 from .posegraph import PoseGraph, robust_noise
 
 if TYPE_CHECKING:
     from .run import SlamResult
 
-#: poses this far apart (m, rad) are distinct: the search's candidates, and the rivals of an ambiguous step
-DISTINCT_XY = 0.3
-DISTINCT_THETA = 0.1
+__all__ = ["DISTINCT_THETA", "DISTINCT_XY", "ScanSlam", "ScanStep", "run_scan_slam"]
 
 
 @dataclass
@@ -525,9 +523,18 @@ class ScanSlam:
         lc = self.loop_cfg
         if lc.enabled and self._since_search >= lc.every and sp.matched.shape[0] >= 10:
             self._since_search = 0
-            loop = find_closure(kf, sp.matched, self.keyframes[:-1], lc, self.alignment, self.keyframes_cfg.voxel,
-                                self.travelled - self._closed_at, self._drift(kf), self._kf_xy[:-1], self._kf_travel[:-1],
-                                sp.matched_normals if self.alignment.normal_agreement < np.pi else None)
+            normals = sp.matched_normals if self.alignment.normal_agreement < np.pi else None
+            loop: LoopClosure | None
+            if lc.search == "window":
+                graph = self.graph
+                loop = find_closure_window(
+                    kf, sp.matched, self.keyframes[:-1], lc, self.alignment, self.keyframes_cfg.voxel,
+                    lambda cand: rotate_covariance(graph.relative_covariance(cand.key, kf.key), kf.pose[2]),
+                    self._kf_xy[:-1], self._kf_travel[:-1], normals)
+            else:
+                loop = find_closure(kf, sp.matched, self.keyframes[:-1], lc, self.alignment, self.keyframes_cfg.voxel,
+                                    self.travelled - self._closed_at, self._drift(kf), self._kf_xy[:-1],
+                                    self._kf_travel[:-1], normals)
             if loop is not None:
                 self._closed_at = self.travelled
                 noise = robust_noise(loop.covariance, lc.kernel, lc.kernel_width)

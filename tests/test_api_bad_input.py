@@ -1848,10 +1848,14 @@ def test_review_of_the_hunt_valid_inputs_it_had_refused(tmp_path) -> None:
     (dict(drift="chain"), r"^loop_closure.drift: must be 'marginals' or 'joint', got 'chain'$"),
     (dict(drift_inflation=0.5), r"^loop_closure.drift_inflation: must be in \[1, 1e\+06\] \(a factor on the drift the closure gate allows\), got 0.5$"),
     (dict(drift_inflation=float("nan")), r"^loop_closure.drift_inflation: must be finite, got nan$"),
+    (dict(search="both"), r"^loop_closure.search: must be 'nearest' or 'window', got 'both'$"),
+    (dict(search=5), r"^loop_closure.search: must be a string, got 5$"),
+    (dict(window_theta=3.1416), r"^loop_closure.window_theta: must be in \[0.01, pi\] rad, got 3.1416$"),
 ])
-def test_slam_config_checks_the_closure_drift_gate(value: dict, message: str) -> None:
+def test_slam_config_checks_the_closure_drift_gate_and_search(value: dict, message: str) -> None:
     from slam import SlamConfig, SlamConfigError
 
     with pytest.raises(SlamConfigError, match=message):
         SlamConfig.from_dict({"loop_closure": value})
     assert SlamConfig.from_dict({"loop_closure": {"drift": "joint", "drift_inflation": 10}}).loop_closure.drift == "joint"
+    assert SlamConfig.from_dict({"loop_closure": {"search": "window", "window_theta": np.pi}}).loop_closure.search == "window"
