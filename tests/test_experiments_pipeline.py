@@ -96,14 +96,15 @@ def test_the_figure_command_writes_every_named_figure_and_redraws_from_its_table
     emptied = tmp_path / "emptied"
     shutil.copytree(out / "tables", emptied)
     (emptied / "mine.txt").unlink()
-    # (the signals and the trajectory emptied too: five figures fewer to draw, 4 s of the test's 25)
-    for name in ("summary", "office_corners", "signals", "trajectory"):  # a scan without corners still has its Fig. 9 (review)
-        pd.read_parquet(emptied / f"{name}.parquet").iloc[:0].to_parquet(emptied / f"{name}.parquet")
+    # (the signals, the trajectory and the Intel panels emptied too: six figures fewer to draw, 5 s of the test's 25)
+    for name in ("summary", "office_corners", "signals", "trajectory", "intel_points"):  # a scan without corners still has its Fig. 9 (review)
+        if (emptied / f"{name}.parquet").exists():  # intel_points only where the Intel log is
+            pd.read_parquet(emptied / f"{name}.parquet").iloc[:0].to_parquet(emptied / f"{name}.parquet")
     capsys.readouterr()
     assert main(["figures", "--tables", str(emptied), "--out", str(tmp_path / "e1")]) == 0
     assert not (tmp_path / "e1" / "accuracy_speed.png").exists() and (tmp_path / "e1" / "fig7_timing.png").exists()
     assert (tmp_path / "e1" / "fig9_office.png").exists()
-    assert not any((tmp_path / "e1" / f"{name}.png").exists() for name in ("fig3_scan", "fig4_ad", "fig10_slam"))
+    assert not any((tmp_path / "e1" / f"{name}.png").exists() for name in ("fig3_scan", "fig4_ad", "fig10_slam", "fig9_intel"))
     printed = capsys.readouterr().out
     for name in ("summary", "signals", "trajectory"):
         assert f"note: table {name} is empty: the figures drawn from it are not drawn" in printed
