@@ -32,7 +32,8 @@ check: $(STAMP)
 	$(BIN)/ruff check --no-cache .
 	$(BIN)/mypy
 
-# the tests on every core (pytest-xdist; the numba kernels are compiled once, before the workers start:
+# the tests on every core and one worker more, for the tests that wait (pytest-xdist; the count: tests/conftest.py;
+# the numba kernels are compiled once, before the workers start:
 # tests/conftest.py, which also starts the modules with a test marked slow first; --dist worksteal: a worker
 # whose queue is empty takes queued tests from the other's, where the default "load" keeps each queue);
 # `-n 0` in PYTEST_ARGS runs them in this process, one by one. The static checks run beside two quiet
