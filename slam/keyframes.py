@@ -114,16 +114,9 @@ def find_closure(new: Keyframe, scan_points: np.ndarray, keyframes: list[Keyfram
         prior = drift(cand) if drift is not None else None
         max_heading = np.inf if prior is None else float(np.sqrt(gate * max(prior[2, 2], 0.0)))
         m = match(scan_points, ref, [new.pose], alignment, max_heading, normals=normals)
-        d = m.pose - new.pose
-        d[2] = wrap(d[2])
-        d2 = float(d @ np.linalg.solve(prior + m.covariance, d)) if prior is not None else 0.0
-        if not _verified(m, cfg, alignment):
-            continue
-        if d2 > gate:
-            continue  # further than the drift since the candidate allows: an aliased place
-        return LoopClosure(cand.key, new.key, between(cand.pose, m.pose), m.inliers, m.rms,
-                           float(np.hypot(*(m.pose[:2] - new.pose[:2]))),
-                           rotate_covariance(m.covariance, -m.pose[2]), d2)  # world -> frame of the new keyframe
+        closure = _accepted(new, cand, m, prior, gate, cfg, alignment)
+        if closure is not None:
+            return closure
     return None
 
 
@@ -205,17 +198,28 @@ def find_closure_window(new: Keyframe, scan_points: np.ndarray, keyframes: list[
                and (np.hypot(*(r.pose[:2] - m.pose[:2])) > DISTINCT_XY or abs(wrap(r.pose[2] - m.pose[2])) > DISTINCT_THETA)
                for i, r in enumerate(results)):
             continue  # a distinct pose fits as well: aliased
-        if not _verified(m, cfg, alignment):
-            continue
-        d = m.pose - new.pose
-        d[2] = wrap(d[2])
-        d2 = float(d @ np.linalg.solve(P + m.covariance, d))
-        if d2 > gate:
-            continue
-        return LoopClosure(cand.key, new.key, between(cand.pose, m.pose), m.inliers, m.rms,
-                           float(np.hypot(*(m.pose[:2] - new.pose[:2]))),
-                           rotate_covariance(m.covariance, -m.pose[2]), d2)
+        closure = _accepted(new, cand, m, P, gate, cfg, alignment)
+        if closure is not None:
+            return closure
     return None
+
+
+def _accepted(new: Keyframe, cand: Keyframe, m: Match, drift: np.ndarray | None, gate: float,
+              cfg: LoopClosureConfig, alignment: AlignmentConfig) -> LoopClosure | None:
+    """The closure of ``new`` to ``cand`` by the match ``m`` (world frame) when it passes
+    :func:`_verified` and its correction lies inside the chi-square ``gate`` of ``drift`` (the
+    world-frame covariance the graph allows) plus the match's covariance; no ``drift``: no gate.
+    Beyond the gate: an aliased place. The closure's covariance is in the new keyframe's frame."""
+    if not _verified(m, cfg, alignment):
+        return None
+    d = m.pose - new.pose
+    d[2] = wrap(d[2])
+    d2 = float(d @ np.linalg.solve(drift + m.covariance, d)) if drift is not None else 0.0
+    if d2 > gate:
+        return None
+    return LoopClosure(cand.key, new.key, between(cand.pose, m.pose), m.inliers, m.rms,
+                       float(np.hypot(*(m.pose[:2] - new.pose[:2]))),
+                       rotate_covariance(m.covariance, -m.pose[2]), d2)  # world -> frame of the new keyframe
 
 
 def _verified(m: Match, cfg: LoopClosureConfig, alignment: AlignmentConfig) -> bool:
