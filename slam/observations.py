@@ -76,13 +76,15 @@ def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) 
 
     Raises:
         InputError / ScanTypeError: ``fs`` is no FeatureSet, ``config`` no SlamConfig, ``scan``
-            neither None nor a Scan (each was an AttributeError inside; found by fuzzing).
+            neither None nor a Scan (each was an AttributeError inside; found by fuzzing), or a
+            scan that has fewer beams than ``fs``'s lines and corners reach (features of another
+            scan: its points were taken beside them, silently).
     """
     check_features(fs)
     if not isinstance(config, SlamConfig):
         raise InputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
-    if scan is not None and not isinstance(scan, Scan):
-        raise not_a_scan(scan, "from_features")
+    if scan is not None:
+        check_scan_of(fs, scan)
     floor = np.diag([config.observations.sigma_rho**2, config.observations.sigma_alpha_obs**2])
     ln = fs.lines
     keep = ~((ln.n_points > 0) & (ln.n_points < config.observations.min_line_points)) & ~(ln.length < config.observations.min_line_length)
@@ -99,6 +101,17 @@ def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) 
         lines, covs, ends.copy(), corners.copy(), ccov,
         scan_points(scan, config.observations.point_stride) if scan is not None else np.zeros((0, 2)),
     )
+
+
+def check_scan_of(fs: FeatureSet, scan: object) -> None:
+    """ScanTypeError unless ``scan`` is a Scan, InputError unless it has every beam ``fs``'s lines
+    (``first`` .. ``last``) and corners (``index``) name: the features were found on another scan."""
+    if not isinstance(scan, Scan):
+        raise not_a_scan(scan, "from_features")
+    beams = np.concatenate((fs.lines.beams[:, :2].ravel(), fs.corners.beams[:, 0]))
+    if beams.size and int(beams.max()) >= len(scan):
+        raise InputError(f"scan: has {len(scan)} beams, but fs's features reach beam {int(beams.max())} "
+                         f"(features of another scan?)")
 
 
 def scan_points(scan: Scan, stride: int = 2) -> np.ndarray:

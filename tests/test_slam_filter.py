@@ -338,3 +338,19 @@ def test_from_features_and_scan_points_name_a_bad_argument(call, error: str, mes
     with pytest.raises(LmsbenchError, match=message) as info:
         call(FeatureSet(), Scan.lms200(np.full(361, 2.0)))
     assert type(info.value).__name__ == error
+
+
+def test_from_features_refuses_the_scan_of_other_features() -> None:
+    """A scan with fewer beams than the features reach (features of another scan) was taken: its
+    points came along as if the lines had been found on it (fuzzing, 2026-12-07)."""
+    from features import Corner, FeatureSet, Line
+    from lms200 import InputError, Scan
+
+    wall = Line(2.0, 0.0, (2.0, -1.0), (2.0, 1.0), 100, 260, np.eye(2) * 1e-4, 161)
+    short = Scan(np.full(200, 2.0), -1.0, 0.01, 0.0, 80.0)
+    with pytest.raises(InputError, match=r"^scan: has 200 beams, but fs's features reach beam 260 \(features of another scan\?\)$"):
+        from_features(FeatureSet([wall]), P(), short)
+    with pytest.raises(InputError, match=r"^scan: has 200 beams, but fs's features reach beam 230 "):
+        from_features(FeatureSet([], [Corner(2.0, 0.0, 1.5, 230, (0, 1))]), P(), short)
+    whole = Scan(np.full(261, 2.0), -1.3, 0.01, 0.0, 80.0)
+    assert from_features(FeatureSet([wall]), P(), whole).points.shape == (131, 2)  # every 2nd of 261 beams
