@@ -11,6 +11,8 @@ from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import math
+
 import numpy as np
 
 from lms200.errors import InputError
@@ -34,7 +36,11 @@ class Line:
         cov: 2x2 covariance of (rho, alpha) in (m^2, m rad, rad^2); of a ``FeatureSet``'s line
             (``fs.lines[i]``), a read-only view of its arrays (writing through it changed the
             FeatureSet, silently): ``cov.copy()`` to change it.
-        n_points: number of valid beams that support the line.
+        n_points: number of valid beams that support the line (at most ``last - first + 1``; 0:
+            not known).
+
+    Raises:
+        InputError: built with a field outside these meanings (:func:`check_line`).
     """
 
     rho: float
@@ -45,6 +51,9 @@ class Line:
     last: int
     cov: np.ndarray = field(default_factory=lambda: np.full((2, 2), np.nan))
     n_points: int = 0
+
+    def __post_init__(self) -> None:
+        check_line(self)
 
     @property
     def length(self) -> float:
@@ -61,6 +70,9 @@ class Corner:
         angle: angle between the two lines (rad, in (0, pi)); pi/2 for a right-angle corner.
         index: beam index of the corner.
         lines: indices of the two lines in ``FeatureSet.lines`` (beam order).
+
+    Raises:
+        InputError: built with a field outside these meanings (:func:`check_corner`).
     """
 
     x: float
@@ -68,6 +80,105 @@ class Corner:
     angle: float
     index: int
     lines: tuple[int, int]
+
+    def __post_init__(self) -> None:
+        check_corner(self)
+
+
+ALPHA_SLACK = 1e-9  # rad: an alpha rounded past +-pi (atan2's -pi for y = -0.0) is the same normal
+RHO_SLACK = 1e-9  # m: a line through the origin may carry rho -1e-12 after rounding
+COV_SLACK = 1e-9  # of the covariance's largest entry: asymmetry and negative eigenvalue left by rounding
+
+
+def _real(v: object) -> float | None:
+    """``v`` as a finite float (an int, float or numpy number; no bool, no text), else None."""
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
+        return None
+    try:
+        f = float(v)
+    except OverflowError:  # 10**400
+        return None
+    return f if math.isfinite(f) else None
+
+
+def _point(v: object) -> tuple[float, float] | None:
+    """``v`` as two finite numbers (a tuple, list or array of two), else None."""
+    if isinstance(v, (str, bytes)) or not isinstance(v, (tuple, list, np.ndarray)) or len(v) != 2 \
+            or (isinstance(v, np.ndarray) and v.ndim != 1):
+        return None
+    x, y = _real(v[0]), _real(v[1])
+    return None if x is None or y is None else (x, y)
+
+
+def _cov_problem(cov: object) -> str:
+    """Why ``cov`` is no covariance of (rho, alpha) ("" when it is one): a 2x2 array of numbers,
+    all nan (not known, the default) or finite, symmetric and positive semi-definite."""
+    try:
+        c = np.asarray(cov, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        return "must be a 2x2 array of numbers"
+    if c.shape != (2, 2):
+        return f"must be a 2x2 array, got shape {c.shape}"
+    if np.isnan(c).all():
+        return ""
+    if not np.isfinite(c).all():
+        return "must be finite (or all nan: not known)"
+    scale = COV_SLACK * max(float(np.abs(c).max()), 1e-300)
+    if abs(c[0, 1] - c[1, 0]) > scale:
+        return "must be symmetric"
+    if np.linalg.eigvalsh(c).min() < -scale:
+        return "must be positive semi-definite (a variance below 0, or a correlation beyond 1)"
+    return ""
+
+
+def check_line(line: Line) -> None:
+    """InputError naming the field of ``line`` that is outside its documented meaning: rho a finite
+    number >= 0 m, alpha a finite angle in (-pi, pi] rad, start and end two finite numbers each,
+    first and last whole beam indices with 0 <= first <= last, n_points a whole number in
+    [0, last - first + 1] (0: not known), cov a 2x2 covariance (all nan: not known). Found by
+    fuzzing the Python API: a Line was checked only inside a FeatureSet, so a nan, negative or
+    inverted one reached the scoring and the SLAM observations built by hand."""
+    rho, alpha = _real(line.rho), _real(line.alpha)
+    if rho is None or rho < -RHO_SLACK:
+        raise InputError(f"Line.rho: must be a finite number >= 0 m (the line's distance from the origin), got {line.rho!r}")
+    if alpha is None or abs(alpha) > math.pi + ALPHA_SLACK:
+        raise InputError(f"Line.alpha: must be a finite angle in (-pi, pi] rad (the line's normal; wrap it), got {line.alpha!r}")
+    for name in ("start", "end"):
+        if _point(getattr(line, name)) is None:
+            raise InputError(f"Line.{name}: must be two finite numbers (x, y m), got {getattr(line, name)!r}")
+    first, last, n = whole_number(line.first), whole_number(line.last), whole_number(line.n_points)
+    if first is None or last is None or not 0 <= first <= last:
+        raise InputError(f"Line.first, Line.last: must be whole beam indices with 0 <= first <= last, "
+                         f"got {line.first!r}, {line.last!r}")
+    if n is None or not 0 <= n <= last - first + 1:
+        raise InputError(f"Line.n_points: must be a whole number in [0, {last - first + 1}] (the beams {first}..{last} "
+                         f"that support the line; 0: not known), got {line.n_points!r}")
+    problem = _cov_problem(line.cov)
+    if problem:
+        raise InputError(f"Line.cov: {problem} (the covariance of rho, alpha), got {line.cov!r}".replace("\n", ""))
+
+
+def check_corner(corner: Corner) -> None:
+    """InputError naming the field of ``corner`` outside its documented meaning: x, y finite
+    numbers (m), angle in (0, pi) rad, index a whole beam index >= 0, lines two different whole
+    line indices >= 0 (a tuple, list or array). Found by fuzzing: a Corner was checked only inside
+    a FeatureSet, and an angle of 0, 4 rad or nan or a corner of one line with itself was taken there."""
+    for name in ("x", "y"):
+        if _real(getattr(corner, name)) is None:
+            raise InputError(f"Corner.{name}: must be a finite number (m), got {getattr(corner, name)!r}")
+    angle = _real(corner.angle)
+    if angle is None or not 0 < angle < math.pi:
+        raise InputError(f"Corner.angle: must be in (0, pi) rad (the angle between its two lines), got {corner.angle!r}")
+    index = whole_number(corner.index)
+    if index is None or index < 0:
+        raise InputError(f"Corner.index: must be a whole beam index >= 0, got {corner.index!r}")
+    try:
+        pair = tuple(corner.lines) if not isinstance(corner.lines, (str, bytes)) else ()
+    except TypeError:
+        pair = ()
+    whole = [whole_number(v) for v in pair]
+    if len(whole) != 2 or None in whole or min(w for w in whole if w is not None) < 0 or whole[0] == whole[1]:
+        raise InputError(f"Corner.lines: must be two different whole line indices >= 0, got {corner.lines!r}")
 
 
 def row_index(i: Any, n: int, what: str) -> int | slice | np.ndarray:
@@ -314,7 +425,9 @@ class Corners(Sequence):
             return Corners(self.values[i], self.beams[i])
         x, y, angle = self.values[i].tolist()
         index, a, b = self.beams[i].tolist()
-        return Corner(x, y, angle, index, (a, b))
+        corner = object.__new__(Corner)  # rows already checked or an extractor's: no per-access check
+        corner.__dict__.update(x=x, y=y, angle=angle, index=index, lines=(a, b))
+        return corner
 
     def __iter__(self) -> Iterator[Corner]:
         return (self[i] for i in range(len(self)))

@@ -1719,23 +1719,62 @@ def _wall_features() -> tuple[Scan, Any]:
 
 
 @pytest.mark.parametrize("change, message", [
-    # each scored a nan ray RMSE / explained fraction, silently
+    # each scored a nan ray RMSE / explained fraction, silently: checked inside a FeatureSet, now when built
+    ({"rho": float("nan")}, r"^Line.rho: must be a finite number >= 0 m \(the line's distance from the origin\), got nan$"),
+    ({"rho": -3.0}, r"^Line.rho: must be a finite number >= 0 m .*got -3.0$"),
+    ({"end": (float("inf"), 0.0)}, r"^Line.end: must be two finite numbers \(x, y m\), got \(inf, 0.0\)$"),
+    ({"first": 200, "last": 100}, r"^Line.first, Line.last: must be whole beam indices with 0 <= first <= last, got 200, 100$"),
+    ({"first": 2.5}, r"^Line.first, Line.last: must be whole beam indices .*got 2.5, "),  # truncated to 2
+    ({"rho": "abc"}, r"^Line.rho: must be a finite number"),  # numpy's ValueError
+    ({"start": (1.0, 2.0, 3.0)}, r"^Line.start: must be two finite numbers"),  # a broadcast error
+    ({"first": 10**30, "last": 10**30}, r"^Line.first, Line.last: must be whole beam indices"),  # an OverflowError
+    # taken before (2026-12-07): outside (-pi, pi], a support beyond the line's beams, covariances of no distribution
+    ({"alpha": 4.0}, r"^Line.alpha: must be a finite angle in \(-pi, pi\] rad \(the line's normal; wrap it\), got 4.0$"),
+    ({"alpha": float("inf")}, r"^Line.alpha: must be a finite angle"),
+    ({"n_points": -1}, r"^Line.n_points: must be a whole number in \[0, \d+\] \(the beams \d+..\d+ that support the line; 0: not known\), got -1$"),
+    ({"n_points": 10_000}, r"^Line.n_points: must be a whole number in \[0, "),
+    ({"cov": np.eye(3)}, r"^Line.cov: must be a 2x2 array, got shape \(3, 3\) \(the covariance of rho, alpha\)"),
+    ({"cov": np.array([[1.0, 0.5], [0.0, 1.0]])}, r"^Line.cov: must be symmetric"),
+    ({"cov": np.array([[1.0, 2.0], [2.0, 1.0]])}, r"^Line.cov: must be positive semi-definite"),  # a correlation of 2
+    ({"cov": np.array([[-1.0, 0.0], [0.0, 1.0]])}, r"^Line.cov: must be positive semi-definite"),
+    ({"cov": np.array([[1.0, np.nan], [np.nan, 1.0]])}, r"^Line.cov: must be finite \(or all nan: not known\)"),
+    ({"cov": "abc"}, r"^Line.cov: must be a 2x2 array of numbers"),
+])
+def test_hand_built_lines_are_checked_when_built(change: dict, message: str) -> None:
+    _, line = _wall_features()
+    with pytest.raises(InputError, match=message):
+        dataclasses.replace(line, **change)
+
+
+def test_hand_built_lines_within_their_meanings_are_taken() -> None:
+    """The meanings' edges: rho 0 (and -1e-12 of rounding), alpha pi and -pi (atan2's for y = -0.0),
+    n_points 0 (not known) or every beam, the default all-nan covariance, a singular one."""
+    from features import FeatureSet, Line
+
+    for rho, alpha, n, cov in ((0.0, np.pi, 0, np.full((2, 2), np.nan)), (-1e-12, -np.pi, 11, np.zeros((2, 2))),
+                               (2.0, 0.0, 5, [[1e-4, 1e-5], [1e-5, 1e-6]])):
+        line = Line(rho, alpha, (0.0, -1.0), (0.0, 1.0), 50, 60, cov=cov, n_points=n)
+        assert FeatureSet([line]).lines.beams.tolist() == [[50, 60, n]]
+    assert Line(1.0, 0.0, np.array([1.0, 0.0]), [1.0, 1.0], np.int64(3), 4.0).n_points == 0
+
+
+@pytest.mark.parametrize("change, message", [
+    # a Line that skipped its construction's check (set through object.__setattr__) is still checked in a FeatureSet
     ({"rho": float("nan")}, r"^lines: line 0: its values must be finite"),
     ({"rho": -3.0}, r"^lines: line 0: rho must be >= 0 m \(rho, alpha, x0, y0, x1, y1, first, last = -3, "),
-    ({"end": (float("inf"), 0.0)}, r"^lines: line 0: its values must be finite"),
     ({"first": 200, "last": 100}, r"^lines: line 0: its beams must be whole numbers with 0 <= first <= last"),
-    ({"first": 2.5}, r"^lines\[0\].first: must be a whole number \(a beam index or count\), got 2.5"),  # truncated to 2
-    # numpy's ValueError, a broadcast error, an OverflowError
-    ({"rho": "abc"}, r"^lines: each Line must hold numbers"),
+    ({"first": 2.5}, r"^lines\[0\].first: must be a whole number \(a beam index or count\), got 2.5"),
     ({"start": (1.0, 2.0, 3.0)}, r"^lines: each Line must hold numbers"),
-    ({"first": 10**30, "last": 10**30}, r"^lines\[0\]\.first: must be a whole number"),
 ])
 def test_feature_sets_of_hand_built_lines_are_checked(change: dict, message: str) -> None:
     from features import FeatureSet
 
     _, line = _wall_features()
+    line = dataclasses.replace(line)
+    for field_name, value in change.items():
+        object.__setattr__(line, field_name, value)
     with pytest.raises(InputError, match=message):
-        FeatureSet([dataclasses.replace(line, **change)])
+        FeatureSet([line])
 
 
 @pytest.mark.parametrize("lines, message", [
@@ -1802,6 +1841,7 @@ def test_noise_and_calibration_seeds_and_bands_are_checked(call, message: str) -
 @pytest.mark.parametrize("corners, message", [
     ([1.0], r"^corners\[0\]: must be a features.Corner, got float"),  # AttributeError: no attribute 'x'
     ("abc", r"^corners: must be a features.Corners or a sequence of features.Corner, got str"),
+    # a Corner that skipped its construction's check (set through object.__setattr__) is still checked in a FeatureSet
     ("corner:x=nan", r"^corners\[0\]: x, y and angle must be finite numbers, got nan"),  # a nan corner, scored as a miss
     ("corner:x=text", r"^corners\[0\]: x, y and angle must be finite numbers, got 'a'"),  # numpy's ValueError
     ("corner:index=2.5", r"^corners\[0\]: index and lines must be whole numbers .*got 2.5, \(0, 1\)"),  # truncated to 2
@@ -1809,14 +1849,38 @@ def test_noise_and_calibration_seeds_and_bands_are_checked(call, message: str) -
 def test_feature_set_corners_are_checked(corners: object, message: str) -> None:
     from features import Corner, FeatureSet
 
-    good = dict(x=1.0, y=0.5, angle=1.5, index=10, lines=(0, 1))
     if isinstance(corners, str) and corners.startswith("corner:"):
         field, value = corners[7:].split("=")
-        good[field] = {"nan": float("nan"), "text": "a", "2.5": 2.5}[value]
-        corners = [Corner(**good)]
+        corner = Corner(x=1.0, y=0.5, angle=1.5, index=10, lines=(0, 1))
+        object.__setattr__(corner, field, {"nan": float("nan"), "text": "a", "2.5": 2.5}[value])
+        corners = [corner]
     with pytest.raises(InputError, match=message):
         FeatureSet(corners=corners)
     assert len(FeatureSet(corners=[Corner(1.0, 0.5, 1.5, 10, (0, 1))]).corners) == 1
+
+
+@pytest.mark.parametrize("change, message", [
+    # taken when built before (2026-12-07); the first three only inside a FeatureSet
+    (dict(x=float("nan")), r"^Corner.x: must be a finite number \(m\), got nan$"),
+    (dict(y="a"), r"^Corner.y: must be a finite number \(m\), got 'a'$"),
+    (dict(index=2.5), r"^Corner.index: must be a whole beam index >= 0, got 2.5$"),
+    (dict(index=-1), r"^Corner.index: must be a whole beam index >= 0, got -1$"),
+    (dict(angle=0.0), r"^Corner.angle: must be in \(0, pi\) rad \(the angle between its two lines\), got 0.0$"),
+    (dict(angle=4.0), r"^Corner.angle: must be in \(0, pi\) rad"),
+    (dict(angle=float("nan")), r"^Corner.angle: must be in \(0, pi\) rad"),
+    (dict(lines=(1, 1)), r"^Corner.lines: must be two different whole line indices >= 0, got \(1, 1\)$"),
+    (dict(lines=(-1, 0)), r"^Corner.lines: must be two different whole line indices >= 0, got \(-1, 0\)$"),
+    (dict(lines=(0, 1, 2)), r"^Corner.lines: must be two different"),
+    (dict(lines="01"), r"^Corner.lines: must be two different"),
+    (dict(lines=5), r"^Corner.lines: must be two different"),
+])
+def test_hand_built_corners_are_checked_when_built(change: dict, message: str) -> None:
+    from features import Corner
+
+    good = dict(x=1.0, y=0.5, angle=1.5, index=10, lines=(0, 1))
+    with pytest.raises(InputError, match=message):
+        Corner(**{**good, **change})
+    assert Corner(**{**good, "lines": np.array([2, 1]), "index": 0.0}).index == 0.0
 
 
 def test_review_of_the_hunt_valid_inputs_it_had_refused(tmp_path) -> None:

@@ -132,7 +132,7 @@ def test_line_through_the_origin_matches_either_normal():
     seg = np.array([[-1.0, -1.0, 1.0, 1.0]])
     truth = Truth(seg, np.array([[0, 100]]), np.empty((0, 4)), np.empty(0, int))
     base = line_from(seg[0], 0, 100)
-    flipped = Line(0.0, base.alpha + np.pi, base.start, base.end, 0, 100)
+    flipped = Line(0.0, float(np.remainder(base.alpha + 2 * np.pi, 2 * np.pi) - np.pi), base.start, base.end, 0, 100)  # the other normal, in (-pi, pi]
     s = score_scan(FeatureSet([flipped], [], "hand"), truth)
     assert s.tp == 1
     assert s.alpha_errors[0] == pytest.approx(0.0, abs=1e-9)
