@@ -53,7 +53,9 @@ class AlignmentConfig:
             60, 90 and 180 degrees: a fast turn between two scans); without odometry first only
             those within ``max_turn_rate`` times the time since the last scan plus 0.1 rad
             (``slam.scanslam.DISTINCT_THETA``) of the last heading, the search's bound (below),
-            and all of them only when no pose within that bound fits.
+            and all of them only when no pose within that bound fits. Empty (``[]``): the retry
+            tries no turn, only standing still (and nothing with odometry or in a loop closure,
+            which have no other start), as ``refine_hypotheses: 0`` refines no retry start.
         refine_hypotheses: how many of the retry starts (best first by their initial score) are refined.
         hypothesis_margin: a retry wins only with this much larger inlier fraction.
         min_inliers: a match explaining fewer points is not used (the pose follows the prediction).

@@ -404,3 +404,28 @@ def test_the_joint_drift_gate_refuses_a_short_loops_alias_that_the_marginals_pas
     assert closure(drift("joint", 0.02)) is None
     loop = closure(drift("joint", 0.3))
     assert loop is not None and np.hypot(*loop.relative[:2]) < 0.01 and loop.correction > 0.55
+
+
+def test_an_empty_heading_hypotheses_is_a_retry_without_turns() -> None:
+    """``alignment.heading_hypotheses: []`` (docs/slam.md) is taken: the retry then starts from the
+    other starts alone (standing still; none with odometry or in a loop closure), so a scan turned
+    1.05 rad from its prediction is recovered by the default hypotheses (one is 1.05) and not
+    without them."""
+    import dataclasses
+
+    from slam import SlamConfig
+    from slam.icp import chord_normals, make_reference, match
+
+    corners = np.array([[-2, -1], [4, -1], [4, 2], [1, 2], [1, 1.2], [0, 1.2], [0, 2], [-2, 2], [-2, -1]], float)
+    world = np.concatenate([np.linspace(a, b, int(np.hypot(*(b - a)) / 0.02), endpoint=False)
+                            for a, b in zip(corners[:-1], corners[1:])])  # a 6 x 3 m room with a notch
+    ref = make_reference(world, chord_normals(world)[0])
+    c, s = np.cos(1.05), np.sin(1.05)
+    scan = world @ np.array([[c, -s], [s, c]])  # the room seen from (0, 0, 1.05 rad)
+    cfg = SlamConfig.from_dict({"alignment": {"heading_hypotheses": []}}).alignment
+    assert cfg.heading_hypotheses == ()
+    turned = match(scan, ref, [np.zeros(3)], AlignmentConfig())
+    assert turned.inliers == 1.0 and np.allclose(turned.pose, [0.0, 0.0, 1.05], atol=1e-6)
+    stuck = match(scan, ref, [np.zeros(3)], cfg)
+    assert stuck.inliers < 0.5 and abs(stuck.pose[2] - 1.05) > 0.5
+    assert stuck.pose.tolist() == match(scan, ref, [np.zeros(3)], dataclasses.replace(AlignmentConfig(), retry_inliers=0.0)).pose.tolist()
