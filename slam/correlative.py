@@ -75,32 +75,40 @@ def search(points: np.ndarray, field: Field, centre: np.ndarray, half_xy: float,
     (the last pose's: the turn a robot can make since) are scored (none left: no candidates).
     ``peaks``: only local maxima of the window (no better pose among the 26 neighbours on its
     grid) are candidates, so the runner-up is another place that fits, not a neighbour of the best;
-    the heading axis is not wrapped there (with the full turn, ``half_theta`` >= pi, the first and
-    last headings are each compared with one heading neighbour only, so a slope that crosses the
-    turn's seam may give a candidate)."""
+    with the full turn, ``half_theta`` >= pi, the heading axis wraps there: the first and last
+    headings are neighbours (unwrapped, a slope that crossed the turn's seam gave a candidate, the
+    best pose's neighbour 10 degrees and 0.3 m off), and the headings ``turn`` keeps are taken
+    from the start of their arc, so that they stay neighbours across the seam too."""
     p = np.asarray(points, float).reshape(-1, 2)
     if p.shape[0] == 0:
         return []
     res = field.resolution
     k = max(1, int(round(step / res)))  # cells per translation step
     n = int(math.floor(half_xy / (k * res)))
-    if half_theta >= math.pi:
+    full = half_theta >= math.pi
+    if full:
         m = int(math.ceil(2 * math.pi / step_theta))
         thetas = centre[2] + (np.arange(m) - m // 2) * (2 * math.pi / m)
     else:
         m = int(math.floor(half_theta / step_theta))
         thetas = centre[2] + np.arange(-m, m + 1) * step_theta
+    ring = full  # the headings go round the whole turn: the peaks' heading axis wraps
     if turn is not None and turn[1] < math.pi:
-        off = np.abs(wrap(thetas - turn[0]))
-        thetas = thetas[off <= turn[1]]
-        if thetas.size == 0:
+        keep = np.abs(wrap(thetas - turn[0])) <= turn[1]
+        if not keep.any():
             return []
+        if peaks and full and not keep.all():  # one arc of the ring: start at its first heading
+            thetas = np.roll(thetas, -int(np.flatnonzero(keep & ~np.roll(keep, 1))[0]))
+            keep = np.abs(wrap(thetas - turn[0])) <= turn[1]
+        ring = full and bool(keep.all())
+        thetas = thetas[keep]
     scores = _scores(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), field.values,
                      float(field.origin[0]), float(field.origin[1]), res, float(centre[0]), float(centre[1]),
                      thetas, n, k)
     flat = scores.ravel()
     if peaks:
-        flat = np.where(scores >= maximum_filter(scores, size=3, mode="nearest"), scores, -1.0).ravel()
+        modes = ("wrap" if ring else "nearest", "nearest", "nearest")
+        flat = np.where(scores >= maximum_filter(scores, size=3, mode=modes), scores, -1.0).ravel()
     top = min(flat.size, max(64, 32 * count))
     order = np.argpartition(-flat, top - 1)[:top]
     order = order[np.argsort(-flat[order], kind="stable")]

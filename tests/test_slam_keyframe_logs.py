@@ -151,6 +151,25 @@ def _room() -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(pts), np.concatenate(nrm)
 
 
+@pytest.mark.parametrize("turn", [None, (np.pi, 1.0)])
+def test_the_search_peaks_wrap_round_the_whole_turn(turn):
+    """``peaks=True`` with the whole turn: the first and last headings of the window are
+    neighbours. The room seen at the window's second heading (5 degrees past the seam at -pi):
+    unwrapped, the last heading, the best pose's neighbour across the seam, was a peak of its own
+    (0.47, 10 degrees and 0.28 m from the best), also with a turn bound whose arc spans the seam."""
+    world = _room()[0]
+    step = np.radians(5.0)
+    true = np.array([1.5, 1.2, -np.pi + step])
+    c, s = np.cos(true[2]), np.sin(true[2])
+    scan = (world[::7] - true[:2]) @ np.array([[c, -s], [s, c]])
+    field = make_field(world, 0.1, 0.2)
+    out = search(scan, field, np.array([1.5, 1.2, 0.0]), 0.4, np.pi, 0.2, step, 6, 0.001, 0.001, turn=turn, peaks=True)
+    assert np.allclose(out[0].pose, true) and out[0].score == pytest.approx(1.0)
+    near = [o for o in out[1:] if abs(np.angle(np.exp(1j * (o.pose[2] - true[2])))) <= 1.5 * step]
+    assert near == [], [(o.pose, o.score) for o in near]  # every other candidate is another heading
+    assert all(o.score < 0.25 for o in out[1:])
+
+
 def test_search_finds_a_pose_a_metre_and_a_half_turn_from_the_guess():
     world = _room()[0]
     true = np.array([1.5, 1.2, 2.0])
