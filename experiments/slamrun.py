@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, Collection, Iterable
 
 import numpy as np
+import yaml
 
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.finite import fixed, shown
@@ -95,11 +96,20 @@ def simulated_interlaced(path: str | Path) -> bool | None:
     too_big = simulate_config_size_problem(cfg)
     if too_big:
         raise LmsbenchError(f"{cfg}: {too_big}")
+    # a file that is no YAML mapping (not UTF-8, not YAML, a list, empty: a damaged or cut one) was passed over the
+    # same way, the run de-skewed as the LMS200's whatever it had been simulated with (fuzzing; compare refuses it)
     try:
         raw = load_yaml(cfg.read_text())
-    except Exception:  # noqa: BLE001 - a damaged config.yaml only loses this hint
-        return None
-    sensor = raw.get("sensor") if isinstance(raw, dict) else None
+    except (UnicodeDecodeError, yaml.YAMLError) as exc:
+        raise LmsbenchError(f"{cfg}: not a simulate config ({' '.join(str(exc).split())}); its sensor.interlaced decides the scans' "
+                            f"de-skew: restore it, or simulate the folder again") from None
+    except OSError as exc:
+        raise LmsbenchError(f"{cfg}: cannot be read ({exc.strerror or exc})") from None
+    if not isinstance(raw, dict):
+        raise LmsbenchError(f"{cfg}: not a simulate config (expected a mapping of world, seed, duration, sensor, ..., "
+                            f"got {'an empty file' if raw is None else type(raw).__name__}); its sensor.interlaced decides "
+                            f"the scans' de-skew: restore it, or simulate the folder again")
+    sensor = raw.get("sensor")
     if not isinstance(sensor, dict) or "interlaced" not in sensor:
         return None
     value = sensor["interlaced"]
