@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import typing
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, cast
 
@@ -603,7 +604,12 @@ class SlamConfig:
 
     @classmethod
     def from_dict(cls, values: dict[str, Any]) -> "SlamConfig":
-        """Build from a mapping (e.g. parsed YAML); unknown keys raise SlamConfigError."""
+        """Build from a mapping (e.g. parsed YAML); unknown keys raise SlamConfigError, and so does
+        ``values`` that is no mapping (None, a number, a list: Python's TypeError "object is not
+        iterable", or a list of names read as unknown fields; found by fuzzing the Python API)."""
+        if not isinstance(values, Mapping):
+            raise SlamConfigError(f"SlamConfig.from_dict: expected a mapping of SLAM config fields (section: fields), "
+                                  f"got {type(values).__name__}")
         known = {f.name for f in dataclasses.fields(cls)}
         unknown = sorted(set(values) - known, key=str)  # YAML keys may be null, numbers, true
         if unknown:

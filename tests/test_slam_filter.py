@@ -354,3 +354,13 @@ def test_from_features_refuses_the_scan_of_other_features() -> None:
         from_features(FeatureSet([], [Corner(2.0, 0.0, 1.5, 230, (0, 1))]), P(), short)
     whole = Scan(np.full(261, 2.0), -1.3, 0.01, 0.0, 80.0)
     assert from_features(FeatureSet([wall]), P(), whole).points.shape == (131, 2)  # every 2nd of 261 beams
+
+
+@pytest.mark.parametrize("values", [None, 3, 2.5, ["alignment"], "alignment"])
+def test_slam_config_from_dict_refuses_what_is_no_mapping(values: object) -> None:
+    """None or a number was Python's TypeError "object is not iterable", a list of a section's name
+    "argument after ** must be a mapping" (fuzzing the Python API, 2026-12-07)."""
+    with pytest.raises(SlamConfigError, match=rf"^SlamConfig.from_dict: expected a mapping of SLAM config fields \(section: "
+                                              rf"fields\), got {type(values).__name__}$"):
+        SlamConfig.from_dict(values)  # type: ignore[arg-type]
+    assert SlamConfig.from_dict({}) == SlamConfig()
