@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .codes import NOT_NUMBER_ITEMS, check_real_items, check_real_kind, finite_negative, float64_copy, real_numbers
-from .errors import ScanError
-from .finite import fixed, overflow_text
+from .errors import InputError, ScanError
+from .finite import fixed, overflow_text, shown
 
 LMS200_BEAMS = 361
 LMS200_RESOLUTION_RAD = np.deg2rad(0.5)
@@ -209,9 +209,20 @@ class Scan:
         """The beam index (int64) of each bearing (rad, sensor frame), counted from the first beam
         modulo a full turn (a bearing within half a beam before the first is the first's); an index
         outside [0, len(self)) is a bearing the scan does not cover. arctan2's bearings lie in
-        (-pi, pi]: taken as they were, a 360 deg scan from 0 to 2 pi covered none of -pi .. 0."""
+        (-pi, pi]: taken as they were, a 360 deg scan from 0 to 2 pi covered none of -pi .. 0.
+
+        Raises:
+            InputError: bearings that are not finite numbers (fuzzing: nan gave beam -2^63 and a
+                RuntimeWarning, text numpy's ValueError).
+        """
+        try:
+            b = np.asarray(bearings, dtype=float)
+        except (TypeError, ValueError, OverflowError):
+            raise InputError(f"bearings: must be finite numbers (rad), got {shown(bearings)}") from None
+        if not np.isfinite(b).all():
+            raise InputError(f"bearings: must be finite numbers (rad), got {shown(bearings)}")
         half = 0.5 * self.angle_increment
-        offset = np.mod(np.asarray(bearings, dtype=float) - self.angle_min + half, 2 * np.pi) - half
+        offset = np.mod(b - self.angle_min + half, 2 * np.pi) - half
         return np.rint(offset / self.angle_increment).astype(np.int64)
 
     @property

@@ -221,3 +221,13 @@ def test_scans_of_one_geometry_share_their_read_only_bearings() -> None:
     assert other.angles is first.angles
     moved = Scan(ranges, -np.pi / 2 + 1e-12, np.deg2rad(0.5), 0.0, 8.183)
     assert moved.angles is not first.angles and moved.angles[0] == -np.pi / 2 + 1e-12
+
+
+@pytest.mark.parametrize("bearings", [np.nan, [0.1, np.inf], "abc", None])
+def test_beam_of_refuses_bearings_that_are_no_finite_numbers(bearings: object) -> None:
+    """nan gave beam -2**63 (and numpy's RuntimeWarning of the cast), text numpy's ValueError
+    (fuzzing the Python API, 2026-12-07)."""
+    scan = Scan.lms200(np.ones(361))
+    with pytest.raises(InputError, match=r"^bearings: must be finite numbers \(rad\), got "):
+        scan.beam_of(bearings)
+    assert scan.beam_of(np.array([-np.pi / 2, 0.0, np.pi / 2])).tolist() == [0, 180, 360]
