@@ -20,6 +20,18 @@ def _empty(shape: tuple[int, ...]) -> np.ndarray:
     return np.zeros(shape)
 
 
+RHO_SLACK = 1e-9  # m: a line through the sensor may carry rho -1e-12 after rounding
+COV_SLACK = 1e-9  # of a covariance's largest entry: asymmetry and negative eigenvalue left by rounding
+
+
+def _not_covariance(c: np.ndarray) -> np.ndarray:
+    """(m,) mask of the (m, 2, 2) matrices that are not symmetric positive semi-definite (within
+    ``COV_SLACK`` of their largest entry); closed form: a, d >= 0 and a d - b^2 >= 0."""
+    a, b, b2, d = c[:, 0, 0], c[:, 0, 1], c[:, 1, 0], c[:, 1, 1]
+    tol = COV_SLACK * np.abs(c).reshape(-1, 4).max(axis=1, initial=0.0)
+    return (np.abs(b - b2) > tol) | (a < -tol) | (d < -tol) | (a * d - b * b2 < -tol * np.maximum(np.abs(a), np.abs(d)))
+
+
 @dataclass(frozen=True)
 class Observations:
     """Line and corner observations of one scan, in the sensor frame.
@@ -42,9 +54,11 @@ class Observations:
 
     def __post_init__(self) -> None:
         """Every field as a finite float64 array of its shape, covariances one a row of the lines /
-        corners; InputError naming the field otherwise. Found by fuzzing the Python API: text was
-        an AttributeError in the filter, (2, 2) lines with one covariance an IndexError, (1, 3)
-        lines a bare unpacking error, nan covariances a nan trajectory, silently."""
+        corners, symmetric and positive semi-definite, lines' rho >= 0 m; InputError naming the
+        field otherwise. Found by fuzzing the Python API: text was an AttributeError in the filter,
+        (2, 2) lines with one covariance an IndexError, (1, 3) lines a bare unpacking error, nan
+        covariances a nan trajectory, silently; a negative or asymmetric covariance or a negative
+        rho was taken (2026-12-07)."""
         rows = {name: real_rows(getattr(self, name), f"observations.{name}", cols, what)
                 for name, cols, what in (("lines", 2, "rho m, alpha rad"), ("line_ends", 4, "x0, y0, x1, y1 m"),
                                          ("corners", 2, "x m, y m"), ("points", 2, "x m, y m"))}
@@ -59,7 +73,17 @@ class Observations:
             if c.shape != (m, 2, 2) or not np.isfinite(c).all():
                 raise InputError(f"observations.{cov}: must be ({m}, 2, 2) finite covariances, one a row of "
                                  f"observations.{of}, got {'shape ' + str(c.shape) if c.shape != (m, 2, 2) else 'nan / inf'}")
+            bad = _not_covariance(c)
+            if bad.any():  # a negative variance, a correlation beyond 1 or an asymmetric one: the EKF's S was no
+                k = int(np.flatnonzero(bad)[0])  # covariance and its gate and update nonsense, silently (fuzzing)
+                raise InputError(f"observations.{cov}: row {k} is no covariance (it must be symmetric and positive "
+                                 f"semi-definite), got {c[k].tolist()}")
             rows[cov] = c
+        rho = rows["lines"][:, 0]
+        if (rho < -RHO_SLACK).any():  # documented rho >= 0: a negative one is the same line with its normal turned
+            k = int(np.flatnonzero(rho < -RHO_SLACK)[0])
+            raise InputError(f"observations.lines: row {k}: rho must be >= 0 m (the line's distance from the sensor; "
+                             f"the same line is rho {-rho[k]:g}, alpha + pi), got {rows['lines'][k].tolist()}")
         for name, a in rows.items():
             object.__setattr__(self, name, a)
 

@@ -307,12 +307,23 @@ def test_slam_filter_names_a_bad_argument(call, message: str) -> None:
     ({**_LINE, "line_cov": np.eye(2)}, r"^observations.line_cov: must be \(1, 2, 2\) .*got shape \(2, 2\)"),
     ({"corners": np.zeros((1, 2))}, r"^observations.corner_cov: must be \(1, 2, 2\) .*got shape \(0, 2, 2\)"),
     ({"points": np.array([[np.nan, 1.0]])}, r"^observations.points: must be finite"),
+    # taken before (2026-12-07): the EKF gated and updated with them, silently
+    ({**_LINE, "line_cov": np.diag([-1.0, 1.0])[None]}, r"^observations.line_cov: row 0 is no covariance \(it must be symmetric and "
+                                              r"positive semi-definite\), got \[\[-1.0, 0.0\], \[0.0, 1.0\]\]$"),
+    ({**_LINE, "line_cov": np.array([[[1.0, 5.0], [0.0, 1.0]]])}, r"^observations.line_cov: row 0 is no covariance"),
+    ({**_LINE, "line_cov": np.array([[[1.0, 2.0], [2.0, 1.0]]])}, r"^observations.line_cov: row 0 is no covariance"),
+    ({"corners": np.zeros((1, 2)), "corner_cov": np.array([[[1.0, 0.0], [0.0, -1e-3]]])}, r"^observations.corner_cov: row 0 is no covariance"),
+    ({**_LINE, "lines": np.array([[-1.0, 0.0]])}, r"^observations.lines: row 0: rho must be >= 0 m \(the line's distance from the "
+                                                 r"sensor; the same line is rho 1, alpha \+ pi\), got \[-1.0, 0.0\]$"),
 ])
 def test_observations_check_their_fields(fields: dict, message: str) -> None:
     from lms200 import InputError
 
     with pytest.raises(InputError, match=message):
         Observations(**fields)
+    ok = Observations(lines=[[0.0, 7.0], [-1e-12, 0.0]], line_cov=[np.zeros((2, 2)), [[1e-4, 1e-6], [1e-6, 1e-8]]],
+                      line_ends=np.zeros((2, 4)))  # rho 0 (and its rounding), any alpha, singular covariances: taken
+    assert ok.lines.shape == (2, 2)
 
 
 def test_observations_of_lists_are_float_arrays_and_run() -> None:
