@@ -232,6 +232,46 @@ def check_line_rows(rows: np.ndarray, name: str) -> None:
             raise InputError(f"{name}: line {i}: {what} (rho, alpha, x0, y0, x1, y1, first, last = {shown})")
 
 
+def _storage(values: object, beams: object, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """``values`` (k, 10 or 3) float64 and ``beams`` (k, 3) int64 arrays of one row count, as
+    ``Lines`` / ``Corners`` hold them; InputError naming ``name`` otherwise."""
+    cols = 10 if name == "lines" else 3
+    if not (isinstance(values, np.ndarray) and isinstance(beams, np.ndarray) and values.dtype == np.float64
+            and np.issubdtype(beams.dtype, np.integer) and values.ndim == 2 and values.shape[1] == cols
+            and beams.shape == (values.shape[0], 3)):
+        raise InputError(f"{name}: its values must be a (k, {cols}) float64 array and its beams a (k, 3) integer array, "
+                         f"got {getattr(values, 'shape', type(values).__name__)} and {getattr(beams, 'shape', type(beams).__name__)}")
+    return values, beams
+
+
+def check_lines(lines: Lines) -> None:
+    """InputError naming the first bad row of ready ``Lines`` (a user's extractor builds them with
+    ``Lines.from_arrays``, unchecked): the storage's shapes, :func:`check_line_rows`, n_points in
+    [0, last - first + 1] and each covariance finite or all nan. Found by fuzzing: a FeatureSet of
+    Lines with nan rho was taken whole, and scored a nan ray RMSE, silently."""
+    values, beams = _storage(lines.values, lines.beams, "lines")
+    check_line_rows(np.column_stack((values[:, :6], beams[:, :2])), "lines")
+    n, span = beams[:, 2], beams[:, 1] - beams[:, 0] + 1
+    cov = values[:, 6:10]
+    for bad, what in (((n < 0) | (n > span), "n_points must be in [0, last - first + 1]"),
+                      (~np.isfinite(cov).all(axis=1) & ~np.isnan(cov).all(axis=1), "its cov must be finite or all nan (not known)")):
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise InputError(f"lines: line {i}: {what} (first, last, n_points = {beams[i].tolist()}, cov = {cov[i].tolist()})")
+
+
+def check_corners(corners: Corners) -> None:
+    """InputError naming the first bad row of ready ``Corners``: the storage's shapes, x and y
+    finite, angle in (0, pi) rad, beam and line indices >= 0 (as :func:`check_corner`)."""
+    values, beams = _storage(corners.values, corners.beams, "corners")
+    with np.errstate(invalid="ignore"):
+        bad = ~np.isfinite(values).all(axis=1) | ~((values[:, 2] > 0) & (values[:, 2] < math.pi)) | (beams < 0).any(axis=1)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise InputError(f"corners: corner {i}: x, y must be finite, angle in (0, pi) rad, its beam and lines >= 0 "
+                         f"(x, y, angle = {values[i].tolist()}, beam, lines = {beams[i].tolist()})")
+
+
 def read_only(a: np.ndarray) -> np.ndarray:
     """A view of ``a`` that cannot be written through (``a`` itself stays writable): what the
     Line / Corner records and the column properties of Lines / Corners hand out, so that
@@ -265,14 +305,24 @@ class Lines(Sequence):
     def from_arrays(cls, rho: np.ndarray, alpha: np.ndarray, start: np.ndarray, end: np.ndarray,
                     cov: np.ndarray, first: np.ndarray, last: np.ndarray, n_points: np.ndarray) -> Lines:
         """Lines from per-line arrays: rho, alpha (L,), start, end (L, 2), cov (L, 2, 2), first,
-        last, n_points (L,)."""
-        n = len(rho)
-        values = np.empty((n, 10))
-        values[:, 0], values[:, 1] = rho, alpha
-        values[:, 2:4], values[:, 4:6] = start, end
-        values[:, 6:10] = np.asarray(cov, dtype=float).reshape(n, 4)
-        beams = np.empty((n, 3), np.int64)
-        beams[:, 0], beams[:, 1], beams[:, 2] = first, last, n_points
+        last, n_points (L,). Their values are not checked (the baselines' fast path): a FeatureSet
+        built of them checks them (:func:`check_lines`).
+
+        Raises:
+            InputError: arrays of other lengths or shapes than these, or not numbers (fuzzing: a
+                broadcast ValueError).
+        """
+        try:
+            n = len(rho)
+            values = np.empty((n, 10))
+            values[:, 0], values[:, 1] = rho, alpha
+            values[:, 2:4], values[:, 4:6] = start, end
+            values[:, 6:10] = np.asarray(cov, dtype=float).reshape(n, 4)
+            beams = np.empty((n, 3), np.int64)
+            beams[:, 0], beams[:, 1], beams[:, 2] = first, last, n_points
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise InputError(f"Lines.from_arrays: rho, alpha (L,), start, end (L, 2), cov (L, 2, 2), first, last and "
+                             f"n_points (L,) must be numbers of these shapes, one a line ({' '.join(str(exc).split())})") from None
         return cls(values, beams)
 
     @classmethod
@@ -449,8 +499,9 @@ class FeatureSet:
     """The features extracted from one scan: ``lines`` (``Lines``) and ``corners`` (``Corners``),
     arrays in the scan's sensor frame, and the ``method`` that found them.
 
-    Built from ``Lines`` / ``Corners`` (what the extractors do) or from sequences of ``Line`` /
-    ``Corner`` records.
+    Built from ``Lines`` / ``Corners`` or from sequences of ``Line`` / ``Corner`` records, each
+    checked (:func:`check_lines`, :func:`check_corners`, :func:`check_line`, :func:`check_corner`;
+    an InputError naming the first bad one); the extractors' own use the unchecked ``FeatureSet.of``.
     """
 
     __slots__ = ("lines", "corners", "method")
@@ -461,6 +512,10 @@ class FeatureSet:
             if not isinstance(value, (kind, Iterable)) or isinstance(value, (str, bytes)):
                 raise InputError(f"{name}: must be a features.{kind.__name__} or a sequence of "
                                  f"features.{kind.__name__[:-1]}, got {type(value).__name__}")
+        if isinstance(lines, Lines):
+            check_lines(lines)
+        if isinstance(corners, Corners):
+            check_corners(corners)
         self.lines = lines if isinstance(lines, Lines) else Lines.from_lines(list(lines))
         self.corners = corners if isinstance(corners, Corners) else Corners.from_corners(list(corners))
         self.method = method

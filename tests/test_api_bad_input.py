@@ -1777,6 +1777,40 @@ def test_feature_sets_of_hand_built_lines_are_checked(change: dict, message: str
         FeatureSet([line])
 
 
+def _from_arrays(**change: Any) -> Any:
+    from features import Lines
+
+    arrays = dict(rho=[1.0], alpha=[0.0], start=[[1.0, -1.0]], end=[[1.0, 1.0]], cov=[np.eye(2) * 1e-4], first=[10],
+                  last=[49], n_points=[40])
+    return Lines.from_arrays(**{**arrays, **change})
+
+
+@pytest.mark.parametrize("make, message", [
+    # a FeatureSet of ready Lines / Corners (a user's extractor's) was taken unchecked: nan scores, silently
+    (lambda: _from_arrays(rho=[np.nan]), r"^lines: line 0: its values must be finite \(rho, alpha, x0, y0, x1, y1, first, last = nan, "),
+    (lambda: _from_arrays(rho=[-2.0]), r"^lines: line 0: rho must be >= 0 m"),
+    (lambda: _from_arrays(first=[60]), r"^lines: line 0: its beams must be whole numbers with 0 <= first <= last"),
+    (lambda: _from_arrays(n_points=[41]), r"^lines: line 0: n_points must be in \[0, last - first \+ 1\] \(first, last, n_points = \[10, 49, 41\]"),
+    (lambda: _from_arrays(cov=[[[1.0, np.nan], [np.nan, 1.0]]]), r"^lines: line 0: its cov must be finite or all nan \(not known\)"),
+    (lambda: __import__("features").Lines(np.zeros((2, 3)), np.zeros((2, 3), np.int64)),
+     r"^lines: its values must be a \(k, 10\) float64 array and its beams a \(k, 3\) integer array, got \(2, 3\) and \(2, 3\)$"),
+    (lambda: _from_arrays(alpha=[0.0, 1.0]), r"^Lines.from_arrays: rho, alpha \(L,\), .* must be numbers of these shapes, one a line "
+                                            r"\(could not broadcast"),  # numpy's ValueError
+    (lambda: __import__("features").Corners(np.array([[1.0, 1.0, 0.0]]), np.zeros((1, 3), np.int64)),
+     r"^corners: corner 0: x, y must be finite, angle in \(0, pi\) rad, its beam and lines >= 0 \(x, y, angle = \[1.0, 1.0, 0.0\]"),
+    (lambda: __import__("features").Corners(np.array([[np.nan, 1.0, 1.5]]), np.zeros((1, 3), np.int64)), r"^corners: corner 0: "),
+])
+def test_feature_sets_of_ready_arrays_are_checked(make: Any, message: str) -> None:
+    from features import Corners, FeatureSet, Lines
+
+    with pytest.raises(InputError, match=message):
+        made = make()
+        FeatureSet(made) if isinstance(made, Lines) else FeatureSet([], made)
+    fs = FeatureSet(_from_arrays(), Corners(np.array([[1.0, 1.0, 1.5]]), np.array([[49, 0, 1]])), "mine")
+    assert fs.lines.beams.tolist() == [[10, 49, 40]] and len(fs.corners) == 1
+    assert len(FeatureSet(_from_arrays(cov=[np.full((2, 2), np.nan)], n_points=[0])).lines) == 1  # cov, support not known
+
+
 @pytest.mark.parametrize("lines, message", [
     (None, r"^lines: must be a features.Lines or a sequence of features.Line, got NoneType"),  # "not iterable"
     ("abc", r"^lines: must be a features.Lines or a sequence of features.Line, got str"),    # AttributeError
