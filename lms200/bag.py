@@ -54,7 +54,22 @@ MAX_STAMP_NS_ROS1 = 2**32 * 1_000_000_000
 
 
 class BagError(LmsbenchError):
-    """A bag that cannot be read as laser scans."""
+    """A bag that cannot be read as laser scans; its message is one line (rosbags' own errors, which
+    it quotes, span lines: a message definition it cannot parse, quoted whole, or PyYAML's error on
+    a ROS 2 bag's metadata.yaml with the text under a caret; found by fuzzing ``read_log``)."""
+
+    def __init__(self, message: object = "", *args: object) -> None:
+        super().__init__(" ".join(str(message).split()), *args)
+
+
+#: characters of a rosbags error quoted in a BagError (a message definition it cannot parse is quoted whole)
+MAX_QUOTED_CHARS = 300
+
+
+def _quoted(exc: BaseException) -> str:
+    """``exc``'s text (or its type's name) in one line of at most MAX_QUOTED_CHARS characters."""
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) <= MAX_QUOTED_CHARS else text[: MAX_QUOTED_CHARS - 3] + "..."
 
 
 class BagTooLargeError(BagError):
@@ -1540,7 +1555,7 @@ class BagReader:
         except BagError:
             raise
         except Exception as exc:  # rosbags raises its own types for every kind of damage
-            raise BagError(f"{self.path}: cannot open as a ROS bag: {type(exc).__name__}: {exc}") from None
+            raise BagError(f"{self.path}: cannot open as a ROS bag: {type(exc).__name__}: {_quoted(exc)}") from None
         finally:
             _BUDGET.reset(budget)
         _bound_decompression(reader, self.path)
@@ -1586,7 +1601,7 @@ class BagReader:
             if getattr(exc, "lmsbench_unnamed", False):  # a ROS 2 message's (rosbags' zstd knows no file)
                 raise BagTooLargeError(f"{self.path}: {where}: {exc}") from None
             raise exc
-        reason = f"{type(exc).__name__}: {exc}" if not isinstance(exc, ValueError) else str(exc)
+        reason = f"{type(exc).__name__}: {_quoted(exc)}" if not isinstance(exc, ValueError) else _quoted(exc)
         if not self.skip_bad_lines:
             raise BagError(f"{self.path}: {where}: cannot read: {reason}") from None
         self.stats.skip(index, f"{where}: {reason}")

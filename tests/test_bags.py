@@ -1033,3 +1033,20 @@ def test_a_range_max_override_is_compared_in_the_bags_float32(tmp_path: Path, ca
     bag = _ros2_bag(tmp_path / "c", [("/scan", 1.0, 1.0, 8.183)], range_max=math.inf)
     (scan,) = (r.scan for r in read_log(bag, geometry=LaserGeometry(range_max=8.183)))
     assert scan.valid.tolist() == [True] * 3 and scan.ranges.tolist() == [float(f32(8.183))] * 3
+
+
+def test_a_bag_rosbags_cannot_open_is_one_line(tmp_path: Path) -> None:
+    """rosbags' own errors span lines (PyYAML's on a ROS 2 bag's metadata.yaml quotes the text under a
+    caret; a message definition it cannot parse is quoted whole), and read_log's BagError quoted them
+    as they were: a multi-line error from the API (fuzzing read_log with damaged bags, 2026-12-07)."""
+    bag = tmp_path / "b2"
+    write_log(bag, [Record(_scan(float(k))) for k in range(2)], fmt="bag2")
+    meta = bag / "metadata.yaml"
+    lines = meta.read_text().split("\n")
+    lines[3] += ": x: y"  # "mapping values are not allowed here"
+    meta.write_text("\n".join(lines))
+    with pytest.raises(BagError) as e:
+        list(read_log(bag))
+    assert "\n" not in str(e.value) and len(str(e.value)) < 500, str(e.value)
+    assert re.match(rf"^{re.escape(str(bag))}: cannot open as a ROS bag: AnyReaderError: .*mapping values are not allowed "
+                    r"here in \"<unicode string>\", line 4", str(e.value)), str(e.value)
