@@ -14,6 +14,7 @@ import numpy as np
 
 from lms200 import InputError, LmsbenchError, LogFormatError
 from lms200.codes import real_rows, real_vector
+from lms200.finite import shown
 from lms200.logs import MAX_COORD_M, regular_file, row_lines, row_numbers
 from lms200.records import stamp_problem
 from lms200.tum import MAX_TILT_DEG, tilt_of_roll_pitch_deg
@@ -199,7 +200,7 @@ def rpe(estimate: np.ndarray, truth: np.ndarray, delta: float = 1.0, pairs: str 
             ``delta`` that is no finite number > 0.
     """
     if not isinstance(pairs, str) or pairs not in RPE_PAIRS:
-        raise InputError(f"pairs: must be one of {', '.join(RPE_PAIRS)}, got {pairs!r}")
+        raise InputError(f"pairs: must be one of {', '.join(RPE_PAIRS)}, got {shown(pairs)}")
     positive("delta", delta, "m of true travel")  # nan, 0 or -1 paired every pose with itself
     est = checked_trajectory(estimate, "estimate", finite_poses=False)
     tru, inside = interpolate_poses(checked_trajectory(truth, "truth"), est[:, 0])

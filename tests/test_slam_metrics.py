@@ -196,6 +196,19 @@ def test_metrics_name_a_bad_argument(call, message: str) -> None:
     assert isinstance(info.value, ValueError)
 
 
+@pytest.mark.parametrize("kwargs, message", [
+    ({"delta": "TRAJ"}, r"^delta: must be a finite number > 0 m of true travel, got array\(\[\[0\., 0\., 0\., 0\.\], \[1\., "),
+    ({"pairs": "TRAJ"}, r"^pairs: must be one of every, evo, got array\(\[\[0\., 0\., 0\., 0\.\], \[1\., "),
+])
+def test_metrics_errors_quote_an_array_on_one_line(kwargs: dict, message: str) -> None:
+    """A trajectory given as rpe's delta or pairs (arguments swapped) was quoted by its repr, one line
+    a row: a multi-line error from the API (fuzzing, 2026-12-07)."""
+    traj = np.column_stack((np.arange(10.0), np.arange(10.0), np.zeros(10), np.zeros(10)))
+    with pytest.raises(LmsbenchError, match=message) as info:
+        rpe(traj, traj, **{k: traj for k in kwargs})
+    assert "\n" not in str(info.value) and len(str(info.value)) < 300, str(info.value)
+
+
 def test_ate_of_a_lost_run_is_nan_not_a_linalg_error() -> None:
     """A run whose estimate went nan (an unhealthy paper-preset run) scores nan; the SVD raised
     numpy's LinAlgError ("SVD did not converge")."""

@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from lms200.finite import is_number as is_real  # a plain or numpy number, not a bool
+from lms200.finite import shown
 
 from ..errors import ConfigError
 
@@ -61,8 +62,12 @@ def beams(n: int) -> int:
 
 
 def fail(name: str, requirement: str, value: object) -> None:
-    """Raise the ConfigError ``"<name>: <requirement>, got <value>"``."""
-    raise ConfigError(f"{name}: {requirement}, got {value!r}")
+    """Raise the ConfigError ``"<name>: <requirement>, got <value>"``, the value on one line
+    (``lms200.finite.shown``; a 2-D array's repr spanned lines: ``rpe(delta=trajectory)``, fuzzing)."""
+    raise ConfigError(f"{name}: {requirement}, got {shown(value, MAX_SHOWN)}")
+
+
+MAX_SHOWN = 200  # characters of a value quoted in a ConfigError (longer: its start, end and length)
 
 
 def finite(value: object) -> bool:
