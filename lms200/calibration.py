@@ -57,6 +57,7 @@ STRAIGHT_M = 0.01  # m: rms of those 2 x STRAIGHT_HALF points about their line (
 MAX_READING_SHARE = 1e-3  # a top value read this often (or more) is the logger's cap
 MIN_SCANS = 2  # a bootstrap over scans needs two
 MAX_SCANS = 20_000  # memory bound: scans beyond this many are not read
+MAX_READ = 10 * MAX_SCANS  # time bound: items read at most, repeats included (an endless repeat never ended)
 TAIL_WINDOW = 20.0  # the tail fit uses residuals within this many core sigmas
 TAIL_CLUSTER_SIGMAS = 5.0  # a triple whose residual exceeds this many core sigmas is in the tail
 TAIL_CLUSTER_STEP = 3  # the tail's clustering pairs triples this many strides apart (no beam shared)
@@ -395,6 +396,8 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
         InputError: (an LmsbenchError and a ValueError; was a bare ValueError, found by fuzzing)
             for fewer than ``MIN_SCANS`` scans, ``scans`` that are no Scans or records, or a
             ``seed`` that is not a whole number >= 0.
+
+    At most ``MAX_SCANS`` distinct scans are used and ``MAX_READ`` items read, repeats included.
     """
     check_seed(seed)
     kept: list[Scan] = []
@@ -404,9 +407,11 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
         # over) was measured with each scan counted twice, its standard errors 1/sqrt(2) as large.
         if _repeats(s, kept[-1] if kept else None):
             repeated += 1
+            if repeated + len(kept) >= MAX_READ:  # itertools.repeat(scan) was read for ever (fuzzing)
+                break
             continue
         kept.append(s)
-        if len(kept) >= MAX_SCANS:
+        if len(kept) >= MAX_SCANS or repeated + len(kept) >= MAX_READ:
             break
     if len(kept) < MIN_SCANS:
         # "got 1" for 50 copies of one scan: the count of distinct scans, not what was given

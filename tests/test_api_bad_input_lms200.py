@@ -325,3 +325,16 @@ def test_an_adapter_still_takes_a_numpy_port() -> None:
 
     with TcpServer(virtual.VirtualLMS200([SCAN]), "127.0.0.1", np.int64(0)) as adapter:
         assert adapter.url.startswith("socket://127.0.0.1:") and adapter.port > 0
+
+
+def test_calibrate_scans_reads_an_endless_repeat_to_a_bound() -> None:
+    """calibrate_scans(itertools.repeat(scan)) passed over each repeat of the scan before and read on
+    for ever (fuzzing the Python API, 2026-12-07); now at most MAX_READ items, then the count."""
+    import itertools
+
+    from lms200.calibration import MAX_READ, calibrate_scans
+
+    scan = Scan.lms200(np.full(361, 2.0))
+    with pytest.raises(InputError, match=rf"^scans: calibrating needs at least 2 distinct scans .*got {MAX_READ} scans but "
+                                         rf"only 1 distinct: {MAX_READ - 1} repeat the scan before them"):
+        calibrate_scans(itertools.islice(itertools.repeat(scan), MAX_READ + 5))  # endless: the same (old code: "got 200005")
