@@ -57,7 +57,8 @@ TIE_BREAK = 1e-3  # votes a band angle loses per step from the band centre (pref
 MERGE_FLOOR_RHO_VAR = 0.005**2  # model-error floor added to the merge test's (rho) variance, m^2
 MERGE_FLOOR_ALPHA_VAR = 0.005**2  # ... and (alpha) variance, rad^2
 ARC_TAU = 3.0  # the arc test's chi^2 comparisons, in std of the chi^2 difference
-ARC_GN_STEPS = 3  # geometric Gauss-Newton steps of a circle fit after the algebraic (Kasa) start
+ARC_GN_STEPS = 1  # geometric Gauss-Newton steps of a circle fit after the algebraic (Taubin) start
+TAUBIN_NEWTON_STEPS = 99  # most Newton steps on the Taubin fit's characteristic polynomial (it stops when they do)
 BREAK_LAMBDA = math.radians(10.0)  # adaptive breakpoint angle of a smooth surface (Borges & Aldon 2004)
 ONE_DEG = math.radians(1.0)  # an LMS200 mirror turn's beam step (finer scans interlace such turns)
 ROBUST_STEPS = 1  # reweighted steps of the final biweight refit (``robust_refit``): one step from the
@@ -1479,11 +1480,44 @@ def circle_gn_sums(work, valid, f, m):  # noqa: ANN001, ANN201
     return h00, h01, h02, h11, h12, h22, g0, g1, g2
 
 
+@inline_kernel
+def taubin_circle(mxx, mxy, myy, mxz, myz, mzz):  # noqa: ANN001, ANN201
+    """Taubin's algebraic circle fit (G. Taubin, IEEE PAMI 13(11), 1991, in N. Chernov's Newton
+    form, "Circular and linear regression", 2010) from the mean moments of points about their
+    centroid (u, v; z = u^2 + v^2; m^2, m^3, m^4): the centre (uc, vc) about the centroid and the
+    radius (m). Unlike Kasa's fit (the centre from a 2x2 system, biased towards small circles on
+    short arcs and corners), it is close to the geometric (least-squares distance) circle: one
+    geometric Gauss-Newton step from it decides the arc check as three from Kasa's did not (see
+    ``circle_fits``). Non-finite values where the moments are degenerate."""
+    mz = mxx + myy
+    cov_xy = mxx * myy - mxy * mxy
+    var_z = mzz - mz * mz
+    a3 = 4.0 * mz
+    a2 = -3.0 * mz * mz - mzz
+    a1 = var_z * mz + 4.0 * cov_xy * mz - mxz * mxz - myz * myz
+    a0 = mxz * (mxz * myy - myz * mxy) + myz * (myz * mxx - mxz * mxy) - var_z * cov_xy
+    x = 0.0  # Newton from 0 on a0 + a1 x + a2 x^2 + a3 x^3: its smallest root (the fit's eigenvalue)
+    y = a0
+    for _ in range(TAUBIN_NEWTON_STEPS):
+        dy = a1 + x * (2.0 * a2 + 3.0 * a3 * x)
+        xn = x - y / dy
+        if xn == x or not math.isfinite(xn):
+            break
+        yn = a0 + xn * (a1 + xn * (a2 + xn * a3))
+        if abs(yn) >= abs(y):
+            break
+        x, y = xn, yn
+    det = 2.0 * (x * x - x * mz + cov_xy)
+    uc = (mxz * (myy - x) - myz * mxy) / det
+    vc = (myz * (mxx - x) - mxz * mxy) / det
+    return uc, vc, math.sqrt(uc * uc + vc * vc + mz)
+
+
 @kernel
 def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p, work) -> bool:  # noqa: ANN001
-    """Do the valid beams f..l trace one round surface? One circle (algebraic Kasa fit, then
-    ARC_GN_STEPS geometric Gauss-Newton steps) must fit them as the line checks ask of a line
-    (min_inlier_fraction of the beams within inlier_tau sigma_r, chi^2 per dof <= max_chi2), and
+    """Do the valid beams f..l trace one round surface? One circle (algebraic Taubin fit,
+    ``taubin_circle``, then ARC_GN_STEPS geometric Gauss-Newton steps) must fit them as the line
+    checks ask of a line (min_inlier_fraction of the beams within inlier_tau sigma_r, chi^2 per dof <= max_chi2), and
     the surface must turn along them by at least corner_min_turn (a smooth turn that a polyline
     would break into false corners; a gently bent wall is no round surface). Then:
 
@@ -1520,26 +1554,23 @@ def circle_fits(f, l, lf, ll, lrho, lalpha, ranges, bearings, valid, sigma_r, p,
         return False
     mx /= n
     my /= n
-    suu = suv = svv = suuu = svvv = suvv = svuu = 0.0
+    suu = suv = svv = suz = svz = szz = 0.0  # second to fourth moments about the centroid (z = u^2 + v^2)
     for t in range(m):
         if valid[f + t]:
             u = work[C_X, t] - mx
             v = work[C_Y, t] - my
-            suu += u * u
+            uu = u * u
+            vv = v * v
+            z = uu + vv
+            suu += uu
             suv += u * v
-            svv += v * v
-            suuu += u * u * u
-            svvv += v * v * v
-            suvv += u * v * v
-            svuu += v * u * u
-    det = suu * svv - suv * suv
-    if not abs(det) > 1e-18:
-        return False
-    b1 = 0.5 * (suuu + suvv)  # Kasa: the centre (uc, vc) solves the 2x2 normal equations
-    b2 = 0.5 * (svvv + svuu)
-    uc = (b1 * svv - b2 * suv) / det
-    vc = (suu * b2 - suv * b1) / det
-    rad = math.sqrt(uc * uc + vc * vc + (suu + svv) / n)
+            svv += vv
+            suz += u * z
+            svz += v * z
+            szz += z * z
+    if not abs(suu * svv - suv * suv) > 1e-18:
+        return False  # the points on one line (or one point): no circle
+    uc, vc, rad = taubin_circle(suu / n, suv / n, svv / n, suz / n, svz / n, szz / n)
     cx, cy = uc + mx, vc + my
     if not surface_turn(f, l, cx, cy, ranges, bearings) >= 0.5 * p.corner_min_turn:
         return False  # nearly straight (most lines): no geometric fit needed
