@@ -164,6 +164,7 @@ class AlignmentConfig:
     fit_margin: float = 0.05
     ambiguity_sigmas: float = 3.0
     max_turn_rate: float = math.pi
+    see_through: bool = False
 
 
 @dataclass(frozen=True)
