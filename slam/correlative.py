@@ -194,3 +194,39 @@ def _fit(px, py, qnx, qny, pose, rx, ry, nrx, nry, order, start, lox, loy, cell,
             r = (wx - rx[m]) * nrx[m] + (wy - ry[m]) * nry[m]
             acc += math.exp(-0.5 * (r / sigma) ** 2)
     return acc / px.shape[0]
+
+
+def see_through(map_points: np.ndarray, pose: np.ndarray, bearings: np.ndarray, ranges: np.ndarray,
+                gap: float, gap_per_range: float, max_range: float) -> float:
+    """The share of the map's points in the scan's view that the scan, placed at ``pose`` (world
+    m, m, rad), sees through: a beam at the point's bearing and both its neighbours return from
+    beyond the point's range plus ``gap + gap_per_range * range`` m (the chord test's tolerance
+    for one surface). ``bearings`` (rad, ascending) and ``ranges`` (m) are the scan's valid
+    beams (sensor frame); a map point further than ``max_range``, or whose bearing lies more
+    than 1.5 beam steps from a valid beam (outside the view, or where the beams returned
+    nothing), says nothing. 0 when no map point is in view.
+
+    Negative information: a scan turned half a turn, or slid along a corridor, puts its beams
+    through the walls the map holds behind the robot, while the fit (:func:`fit`) counts only the
+    points that land on something and a map is richest where the robot has been."""
+    q = np.asarray(map_points, float).reshape(-1, 2)
+    b = np.asarray(bearings, float)
+    r = np.asarray(ranges, float)
+    if q.shape[0] == 0 or b.size < 3:
+        return 0.0
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    dx, dy = q[:, 0] - pose[0], q[:, 1] - pose[1]
+    x, y = c * dx + s * dy, -s * dx + c * dy
+    rho = np.hypot(x, y)
+    near = rho <= max_range
+    rho, beta = rho[near], np.arctan2(y[near], x[near])
+    step = float(np.median(np.diff(b)))
+    j = np.clip(np.searchsorted(b, beta), 1, b.size - 1)
+    j = np.where(np.abs(b[j - 1] - beta) < np.abs(b[j] - beta), j - 1, j)  # the nearest valid beam
+    seen = np.abs(b[j] - beta) <= 1.5 * step
+    if not np.any(seen):
+        return 0.0
+    j, rho = j[seen], rho[seen]
+    lo, hi = np.maximum(j - 1, 0), np.minimum(j + 1, b.size - 1)
+    reach = np.minimum(np.minimum(r[lo], r[j]), r[hi])
+    return float(np.mean(reach > rho + gap + gap_per_range * rho))

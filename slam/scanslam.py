@@ -23,7 +23,7 @@ from dataclasses import replace
 from .config import AlignmentConfig, KeyframeConfig, LoopClosureConfig, MotionConfig
 from .models import chi2_quantile, wrap
 from .geometry import between, compose, rotate_covariance
-from .correlative import Field, fit, make_field, search
+from .correlative import Field, fit, make_field, search, see_through
 from .icp import Match, Reference, chord_normals, chord_normals_at, match, refine
 from .keyframes import DISTINCT_THETA, DISTINCT_XY, Keyframe, LoopClosure, find_closure, find_closure_window, local_map
 from .posegraph import PoseGraph, robust_noise
@@ -31,7 +31,12 @@ from .posegraph import PoseGraph, robust_noise
 if TYPE_CHECKING:
     from .run import SlamResult
 
-__all__ = ["DISTINCT_THETA", "DISTINCT_XY", "ScanSlam", "ScanStep", "run_scan_slam"]
+__all__ = ["DISTINCT_THETA", "DISTINCT_XY", "SEE_THROUGH_POOL", "ScanSlam", "ScanStep", "run_scan_slam"]
+
+#: ``alignment.see_through``: the correlative search's best distinct window poses re-ranked by their
+#: score less the share of the map they see through, of which the ``search_candidates`` best are
+#: refined (32: the most ``search_candidates`` allows, each an ICP run)
+SEE_THROUGH_POOL = 32
 
 
 @dataclass
@@ -160,6 +165,14 @@ class ScanPoints:
             n[~ok] = 0.0
             out[inner] = n
         return out
+
+    @cached_property
+    def beams(self) -> tuple[np.ndarray, np.ndarray]:
+        """Bearings (rad, ascending) and ranges (m) of the valid points (sensor frame), for
+        :func:`slam.correlative.see_through`."""
+        b = np.arctan2(self.valid[:, 1], self.valid[:, 0])
+        order = np.argsort(b, kind="stable")
+        return b[order], np.hypot(self.valid[order, 0], self.valid[order, 1])
 
     @property
     def points(self) -> np.ndarray:
@@ -426,8 +439,13 @@ class ScanSlam:
         hold = np.diag([al.search_step**-2, al.search_step**-2, al.search_step_theta**-2])
         results = [m]
         for c in centres:
-            for cand in search(pts, field, c, half_xy, half_th, al.search_step, al.search_step_theta,
-                               al.search_candidates, DISTINCT_XY, DISTINCT_THETA, turn):
+            cands = search(pts, field, c, half_xy, half_th, al.search_step, al.search_step_theta,
+                           SEE_THROUGH_POOL if al.see_through else al.search_candidates, DISTINCT_XY, DISTINCT_THETA,
+                           turn)
+            if al.see_through:  # the window's best poses, less the share of the map each sees through
+                score = [cd.score - self._see_through(sp, cd.pose) for cd in cands]
+                cands = [cands[i] for i in np.argsort(-np.array(score), kind="stable")[:al.search_candidates]]
+            for cand in cands:
                 r = refine(sp.matched, self.ref, cand.pose, al, prior=hold, normals=normals)
                 if turn is not None and abs(wrap(r.pose[2] - last[2])) > max_turn + DISTINCT_THETA:
                     continue  # the refinement turned it beyond reach
@@ -435,6 +453,8 @@ class ScanSlam:
         min_cos = float(np.cos(al.normal_agreement))
         fits = [fit(sp.matched, normals, self.ref, r.pose, al.fine_correspondence, al.fit_sigma, min_cos)
                 for r in results]
+        if al.see_through:  # the share of the map in view that the scan sees through counts against a pose
+            fits = [f - self._see_through(sp, r.pose) for f, r in zip(fits, results)]
         best = max(fits)
         close = [i for i, f in enumerate(fits) if f >= best - al.fit_margin]
         wxy, wth = half_xy / al.search_sigmas, half_th / al.search_sigmas  # the prior, truncated to the window
@@ -459,6 +479,15 @@ class ScanSlam:
                     DISTINCT_THETA) and prior[i] - prior[k] < al.ambiguity_sigmas**2:
                 info.ambiguous = True
         return chosen
+
+    def _see_through(self, sp: ScanPoints, pose: np.ndarray) -> float:
+        """The share of the local map's points in the scan's view at ``pose`` that its beams pass
+        (:func:`slam.correlative.see_through`, with the chord test's tolerance for one surface)."""
+        al = self.alignment
+        assert self.ref is not None
+        bearings, ranges = sp.beams
+        return see_through(self.ref.points, pose, bearings, ranges, al.normal_gap, al.normal_gap_per_range,
+                           al.max_range)
 
     def _field(self, centre: np.ndarray, radius: float) -> Field:
         """The likelihood field of the local map about ``centre`` (kept while the map is unchanged)."""
