@@ -1801,11 +1801,14 @@ def _from_arrays(**change: Any) -> Any:
     (lambda: __import__("features").Corners(np.array([[np.nan, 1.0, 1.5]]), np.zeros((1, 3), np.int64)), r"^corners: corner 0: "),
 ])
 def test_feature_sets_of_ready_arrays_are_checked(make: Any, message: str) -> None:
+    # by check_feature_set, which extract / extract_many / compare run on a user's method's result
+    # (outside compare's timed span: test_user_method_errors), not by FeatureSet() itself
     from features import Corners, FeatureSet, Lines
+    from features.types import check_feature_set
 
     with pytest.raises(InputError, match=message):
         made = make()
-        FeatureSet(made) if isinstance(made, Lines) else FeatureSet([], made)
+        check_feature_set(FeatureSet(made) if isinstance(made, Lines) else FeatureSet([], made))
     fs = FeatureSet(_from_arrays(), Corners(np.array([[1.0, 1.0, 1.5]]), np.array([[49, 0, 1]])), "mine")
     assert fs.lines.beams.tolist() == [[10, 49, 40]] and len(fs.corners) == 1
     assert len(FeatureSet(_from_arrays(cov=[np.full((2, 2), np.nan)], n_points=[0])).lines) == 1  # cov, support not known
