@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from lms200.errors import InputError
-from lms200.finite import whole_number
+from lms200.finite import shown, whole_number
 
 LINE_COLUMNS = ("rho", "alpha", "x0", "y0", "x1", "y1", "cov_rr", "cov_ra", "cov_ar", "cov_aa")
 CORNER_COLUMNS = ("x", "y", "angle")
@@ -118,7 +118,7 @@ def _cov_problem(cov: object) -> str:
     except (TypeError, ValueError, OverflowError):
         return "must be a 2x2 array of numbers"
     if c.shape != (2, 2):
-        return f"must be a 2x2 array, got shape {c.shape}"
+        return f"must be a 2x2 array, not one of shape {c.shape}"
     if np.isnan(c).all():
         return ""
     if not np.isfinite(c).all():
@@ -140,22 +140,22 @@ def check_line(line: Line) -> None:
     inverted one reached the scoring and the SLAM observations built by hand."""
     rho, alpha = _real(line.rho), _real(line.alpha)
     if rho is None or rho < -RHO_SLACK:
-        raise InputError(f"Line.rho: must be a finite number >= 0 m (the line's distance from the origin), got {line.rho!r}")
+        raise InputError(f"Line.rho: must be a finite number >= 0 m (the line's distance from the origin), got {shown(line.rho)}")
     if alpha is None or abs(alpha) > math.pi + ALPHA_SLACK:
-        raise InputError(f"Line.alpha: must be a finite angle in (-pi, pi] rad (the line's normal; wrap it), got {line.alpha!r}")
+        raise InputError(f"Line.alpha: must be a finite angle in (-pi, pi] rad (the line's normal; wrap it), got {shown(line.alpha)}")
     for name in ("start", "end"):
         if _point(getattr(line, name)) is None:
-            raise InputError(f"Line.{name}: must be two finite numbers (x, y m), got {getattr(line, name)!r}")
+            raise InputError(f"Line.{name}: must be two finite numbers (x, y m), got {shown(getattr(line, name))}")
     first, last, n = whole_number(line.first), whole_number(line.last), whole_number(line.n_points)
     if first is None or last is None or not 0 <= first <= last:
         raise InputError(f"Line.first, Line.last: must be whole beam indices with 0 <= first <= last, "
-                         f"got {line.first!r}, {line.last!r}")
+                         f"got {shown(line.first)}, {shown(line.last)}")
     if n is None or not 0 <= n <= last - first + 1:
         raise InputError(f"Line.n_points: must be a whole number in [0, {last - first + 1}] (the beams {first}..{last} "
-                         f"that support the line; 0: not known), got {line.n_points!r}")
+                         f"that support the line; 0: not known), got {shown(line.n_points)}")
     problem = _cov_problem(line.cov)
     if problem:
-        raise InputError(f"Line.cov: {problem} (the covariance of rho, alpha), got {line.cov!r}".replace("\n", ""))
+        raise InputError(f"Line.cov: {problem} (the covariance of rho, alpha), got {shown(line.cov)}")
 
 
 def check_corner(corner: Corner) -> None:
@@ -165,20 +165,20 @@ def check_corner(corner: Corner) -> None:
     a FeatureSet, and an angle of 0, 4 rad or nan or a corner of one line with itself was taken there."""
     for name in ("x", "y"):
         if _real(getattr(corner, name)) is None:
-            raise InputError(f"Corner.{name}: must be a finite number (m), got {getattr(corner, name)!r}")
+            raise InputError(f"Corner.{name}: must be a finite number (m), got {shown(getattr(corner, name))}")
     angle = _real(corner.angle)
     if angle is None or not 0 < angle < math.pi:
-        raise InputError(f"Corner.angle: must be in (0, pi) rad (the angle between its two lines), got {corner.angle!r}")
+        raise InputError(f"Corner.angle: must be in (0, pi) rad (the angle between its two lines), got {shown(corner.angle)}")
     index = whole_number(corner.index)
     if index is None or index < 0:
-        raise InputError(f"Corner.index: must be a whole beam index >= 0, got {corner.index!r}")
+        raise InputError(f"Corner.index: must be a whole beam index >= 0, got {shown(corner.index)}")
     try:
         pair = tuple(corner.lines) if not isinstance(corner.lines, (str, bytes)) else ()
     except TypeError:
         pair = ()
     whole = [whole_number(v) for v in pair]
     if len(whole) != 2 or None in whole or min(w for w in whole if w is not None) < 0 or whole[0] == whole[1]:
-        raise InputError(f"Corner.lines: must be two different whole line indices >= 0, got {corner.lines!r}")
+        raise InputError(f"Corner.lines: must be two different whole line indices >= 0, got {shown(corner.lines)}")
 
 
 def row_index(i: Any, n: int, what: str) -> int | slice | np.ndarray:
@@ -351,7 +351,7 @@ class Lines(Sequence):
             for field_name in ("first", "last", "n_points"):  # the int64 beams array truncated 2.5 to 2
                 v = getattr(line, field_name)
                 if whole_number(v) is None:
-                    raise InputError(f"lines[{i}].{field_name}: must be a whole number (a beam index or count), got {v!r}")
+                    raise InputError(f"lines[{i}].{field_name}: must be a whole number (a beam index or count), got {shown(v)}")
         try:
             out = cls.from_arrays(
                 [l.rho for l in lines], [l.alpha for l in lines], [l.start for l in lines], [l.end for l in lines],
@@ -456,13 +456,13 @@ class Corners(Sequence):
             whole = [whole_number(v) for v in (c.index, *pair)] if len(pair) == 2 else []
             if len(whole) != 3 or None in whole:
                 raise InputError(f"corners[{i}]: index and lines must be whole numbers (a beam, two line indices), "
-                                 f"got {c.index!r}, {c.lines!r}")
+                                 f"got {shown(c.index)}, {shown(c.lines)}")
             try:
                 ok = all(np.isfinite(float(v)) for v in (c.x, c.y, c.angle))
             except (TypeError, ValueError, OverflowError):
                 ok = False
             if not ok:
-                raise InputError(f"corners[{i}]: x, y and angle must be finite numbers, got {c.x!r}, {c.y!r}, {c.angle!r}")
+                raise InputError(f"corners[{i}]: x, y and angle must be finite numbers, got {shown(c.x)}, {shown(c.y)}, {shown(c.angle)}")
         values = np.array([(c.x, c.y, c.angle) for c in corners], dtype=float)
         beams = np.array([[whole_number(v) for v in (c.index, *tuple(c.lines))] for c in corners], dtype=np.int64)
         return cls(values, beams)

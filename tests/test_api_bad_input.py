@@ -1733,7 +1733,7 @@ def _wall_features() -> tuple[Scan, Any]:
     ({"alpha": float("inf")}, r"^Line.alpha: must be a finite angle"),
     ({"n_points": -1}, r"^Line.n_points: must be a whole number in \[0, \d+\] \(the beams \d+..\d+ that support the line; 0: not known\), got -1$"),
     ({"n_points": 10_000}, r"^Line.n_points: must be a whole number in \[0, "),
-    ({"cov": np.eye(3)}, r"^Line.cov: must be a 2x2 array, got shape \(3, 3\) \(the covariance of rho, alpha\)"),
+    ({"cov": np.eye(3)}, r"^Line.cov: must be a 2x2 array, not one of shape \(3, 3\) \(the covariance of rho, alpha\), got array\(\[\[1"),
     ({"cov": np.array([[1.0, 0.5], [0.0, 1.0]])}, r"^Line.cov: must be symmetric"),
     ({"cov": np.array([[1.0, 2.0], [2.0, 1.0]])}, r"^Line.cov: must be positive semi-definite"),  # a correlation of 2
     ({"cov": np.array([[-1.0, 0.0], [0.0, 1.0]])}, r"^Line.cov: must be positive semi-definite"),
@@ -1744,6 +1744,25 @@ def test_hand_built_lines_are_checked_when_built(change: dict, message: str) -> 
     _, line = _wall_features()
     with pytest.raises(InputError, match=message):
         dataclasses.replace(line, **change)
+
+
+@pytest.mark.parametrize("change", [
+    {"start": np.array([[0.0], [1.0]])}, {"rho": "x" * 5000}, {"cov": np.arange(1600.0).reshape(40, 40)},
+    {"cov": -np.eye(2) * np.arange(1, 3)}, {"alpha": np.full((3, 3), 9.0)}, {"first": np.array([[1], [2]])},
+])
+def test_line_and_corner_messages_quote_values_on_one_short_line(change: dict) -> None:
+    """A review: the values were quoted by their repr, a 2-D array a line a row and a 5,000-character
+    text whole (the cov's patched with .replace, 336 characters of runs of spaces for a 40x40 array)."""
+    from features import Corner
+
+    _, line = _wall_features()
+    for build in (lambda: dataclasses.replace(line, **change),
+                  lambda: Corner(**{"x": 1.0, "y": 0.5, "angle": 1.5, "index": 10, "lines": (0, 1),
+                                    **{k: v for k, v in (("x", next(iter(change.values()))),)}})):
+        with pytest.raises(InputError) as err:
+            build()
+        text = str(err.value)
+        assert "\n" not in text and "  " not in text and len(text) < 250, text
 
 
 def test_hand_built_lines_within_their_meanings_are_taken() -> None:
