@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from lms200.errors import InputError
-from lms200.finite import shown, whole_number
+from lms200.finite import is_number, shown, whole_number
 
 LINE_COLUMNS = ("rho", "alpha", "x0", "y0", "x1", "y1", "cov_rr", "cov_ra", "cov_ar", "cov_aa")
 CORNER_COLUMNS = ("x", "y", "angle")
@@ -85,18 +85,22 @@ class Corner:
         check_corner(self)
 
 
-ALPHA_SLACK = 1e-9  # rad: an alpha rounded past +-pi (atan2's -pi for y = -0.0) is the same normal
+ALPHA_SLACK = 1e-6  # rad: an alpha rounded past +-pi (atan2's -pi for y = -0.0; float32's pi, 8.7e-8 above) is the same normal
 RHO_SLACK = 1e-9  # m: a line through the origin may carry rho -1e-12 after rounding
 COV_SLACK = 1e-9  # of the covariance's largest entry: asymmetry and negative eigenvalue left by rounding
 
 
 def _real(v: object) -> float | None:
-    """``v`` as a finite float (an int, float or numpy number; no bool, no text), else None."""
-    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
+    """``v`` as a finite float (any real number, :func:`lms200.finite.is_number`: an int, float,
+    numpy number or ``fractions.Fraction``, and a numeric 0-d array; no bool, no text), else None.
+    A review found Fraction and 0-d arrays refused, which worked before the checks."""
+    if isinstance(v, np.ndarray) and v.ndim == 0 and v.dtype.kind in "iuf":
+        v = v[()]
+    if not is_number(v):
         return None
     try:
-        f = float(v)
-    except OverflowError:  # 10**400
+        f = float(v)  # type: ignore[arg-type]
+    except (OverflowError, TypeError, ValueError):  # 10**400, Fraction(10**400)
         return None
     return f if math.isfinite(f) else None
 

@@ -1765,6 +1765,23 @@ def test_line_and_corner_messages_quote_values_on_one_short_line(change: dict) -
         assert "\n" not in text and "  " not in text and len(text) < 250, text
 
 
+def test_hand_built_records_take_float32_pi_fractions_and_0d_arrays() -> None:
+    """A review: float32's pi (8.7e-8 above pi) as alpha, a Fraction and a 0-d array as a number
+    were refused when built; main took them (lms200.finite.is_number records the Fraction regression)."""
+    from fractions import Fraction
+
+    from features import Corner, FeatureSet, Line
+
+    lines = [Line(Fraction(1, 2), np.float32(np.pi), (np.array(1.0), Fraction(1, 4)), (1.0, 1.0), 10, 20, n_points=3),
+             Line(np.array(0.5), -np.float32(np.pi), (1.0, 0.0), (1.0, 1.0), 10, 20)]
+    fs = FeatureSet(lines, [Corner(np.array(1.0), Fraction(1, 2), Fraction(3, 2), 10, (0, 1))])
+    assert fs.lines.values[:, :4].tolist() == [[0.5, float(np.float32(np.pi)), 1.0, 0.25],
+                                               [0.5, -float(np.float32(np.pi)), 1.0, 0.0]]
+    assert fs.corners.values.tolist() == [[1.0, 0.5, 1.5]]
+    with pytest.raises(InputError, match=r"^Line.alpha: "):  # still refused: beyond float32's rounding
+        Line(0.5, np.pi + 1e-5, (1.0, 0.0), (1.0, 1.0), 10, 20)
+
+
 def test_hand_built_lines_within_their_meanings_are_taken() -> None:
     """The meanings' edges: rho 0 (and -1e-12 of rounding), alpha pi and -pi (atan2's for y = -0.0),
     n_points 0 (not known) or every beam, the default all-nan covariance, a singular one."""
