@@ -322,11 +322,34 @@ class Lines(Sequence):
         result is checked by ``extract`` / ``extract_many`` / ``compare`` (:func:`check_lines`).
 
         Raises:
-            InputError: arrays of other lengths or shapes than these, or not numbers (fuzzing: a
-                broadcast ValueError).
+            InputError: an argument of another length than rho's (a length-1 array broadcast to
+                every line, silently), other shapes than these, not numbers (fuzzing: a broadcast
+                ValueError), or beams (first, last, n_points) that are not whole numbers (2.7 was cut
+                to 2, silently).
         """
+        shapes = "rho, alpha (L,), start, end (L, 2), cov (L, 2, 2), first, last and n_points (L,)"
+        args = (("alpha", alpha), ("start", start), ("end", end), ("cov", cov), ("first", first), ("last", last),
+                ("n_points", n_points))
         try:
             n = len(rho)
+            lengths = [(name, len(a)) for name, a in args]
+        except TypeError:
+            raise InputError(f"Lines.from_arrays: {shapes} must be arrays (or lists), one item a line") from None
+        wrong = next(((name, k) for name, k in lengths if k != n), None)
+        if wrong is not None:
+            raise InputError(f"Lines.from_arrays: {wrong[0]} has {wrong[1]} item{'' if wrong[1] == 1 else 's'} for "
+                             f"{n} line{'' if n == 1 else 's'} (rho's); {shapes}")
+        if n == 0:
+            return cls.empty()
+        for name, a in args[4:]:
+            b = a if isinstance(a, np.ndarray) else np.asarray(a)
+            if b.dtype.kind == "f":
+                with np.errstate(invalid="ignore"):
+                    bad = ~(np.isfinite(b) & (b == np.floor(b)))
+                if bad.any():
+                    raise InputError(f"Lines.from_arrays: {name} must be whole numbers (beam indices, counts), "
+                                     f"got {shown(b[bad].ravel()[0].item())} at line {int(np.flatnonzero(bad.reshape(n, -1).any(axis=1))[0])}")
+        try:
             values = np.empty((n, 10))
             values[:, 0], values[:, 1] = rho, alpha
             values[:, 2:4], values[:, 4:6] = start, end
@@ -334,8 +357,8 @@ class Lines(Sequence):
             beams = np.empty((n, 3), np.int64)
             beams[:, 0], beams[:, 1], beams[:, 2] = first, last, n_points
         except (TypeError, ValueError, OverflowError) as exc:
-            raise InputError(f"Lines.from_arrays: rho, alpha (L,), start, end (L, 2), cov (L, 2, 2), first, last and "
-                             f"n_points (L,) must be numbers of these shapes, one a line ({' '.join(str(exc).split())})") from None
+            raise InputError(f"Lines.from_arrays: {shapes} must be numbers of these shapes, one a line "
+                             f"({' '.join(str(exc).split())})") from None
         return cls(values, beams)
 
     @classmethod

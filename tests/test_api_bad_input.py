@@ -1830,8 +1830,14 @@ def _from_arrays(**change: Any) -> Any:
     (lambda: _from_arrays(cov=[[[1.0, np.nan], [np.nan, 1.0]]]), r"^lines: line 0: its cov must be finite or all nan \(not known\)"),
     (lambda: __import__("features").Lines(np.zeros((2, 3)), np.zeros((2, 3), np.int64)),
      r"^lines: its values must be a \(k, 10\) float64 array and its beams a \(k, 3\) integer array, got \(2, 3\) and \(2, 3\)$"),
-    (lambda: _from_arrays(alpha=[0.0, 1.0]), r"^Lines.from_arrays: rho, alpha \(L,\), .* must be numbers of these shapes, one a line "
-                                            r"\(could not broadcast"),  # numpy's ValueError
+    (lambda: _from_arrays(alpha=[0.0, 1.0]), r"^Lines.from_arrays: alpha has 2 items for 1 line \(rho's\); "),  # numpy's ValueError
+    (lambda: _from_arrays(start=[[1.0, -1.0, 0.0]]), r"^Lines.from_arrays: rho, alpha \(L,\), .* must be numbers of these shapes, one a line "
+                                                      r"\(could not broadcast"),
+    # a review: a length-1 array broadcast to every line, and a beam 2.7 was cut to 2, silently
+    (lambda: _from_arrays(rho=[1.0, 2.0], alpha=[0.0, 0.0], start=[[1.0, -1.0]] * 2, end=[[1.0, 1.0]] * 2, first=[10, 10],
+                          last=[49, 49], n_points=[40, 40]), r"^Lines.from_arrays: cov has 1 item for 2 lines \(rho's\); "),
+    (lambda: _from_arrays(n_points=[2.7]), r"^Lines.from_arrays: n_points must be whole numbers \(beam indices, counts\), got 2.7 at line 0$"),
+    (lambda: _from_arrays(first=np.array([np.nan])), r"^Lines.from_arrays: first must be whole numbers .*got nan at line 0$"),
     (lambda: __import__("features").Corners(np.array([[1.0, 1.0, 0.0]]), np.zeros((1, 3), np.int64)),
      r"^corners: corner 0: x, y must be finite, angle in \(0, pi\) rad, its beam and lines >= 0 \(x, y, angle = \[1.0, 1.0, 0.0\]"),
     (lambda: __import__("features").Corners(np.array([[np.nan, 1.0, 1.5]]), np.zeros((1, 3), np.int64)), r"^corners: corner 0: "),
@@ -1848,6 +1854,9 @@ def test_feature_sets_of_ready_arrays_are_checked(make: Any, message: str) -> No
     fs = FeatureSet(_from_arrays(), Corners(np.array([[1.0, 1.0, 1.5]]), np.array([[49, 0, 1]])), "mine")
     assert fs.lines.beams.tolist() == [[10, 49, 40]] and len(fs.corners) == 1
     assert len(FeatureSet(_from_arrays(cov=[np.full((2, 2), np.nan)], n_points=[0])).lines) == 1  # cov, support not known
+    empty = _from_arrays(**{k: [] for k in ("rho", "alpha", "start", "end", "cov", "first", "last", "n_points")})
+    assert empty == Lines.empty() and len(FeatureSet(empty).lines) == 0  # refused (reshape of 0 lines) before the review
+    assert _from_arrays(first=[10.0], last=np.array([49.0])).beams.tolist() == [[10, 49, 40]]  # whole floats are beams
 
 
 @pytest.mark.parametrize("lines, message", [
