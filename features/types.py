@@ -87,7 +87,21 @@ class Corner:
 
 ALPHA_SLACK = 1e-6  # rad: an alpha rounded past +-pi (atan2's -pi for y = -0.0; float32's pi, 8.7e-8 above) is the same normal
 RHO_SLACK = 1e-9  # m: a line through the origin may carry rho -1e-12 after rounding
-COV_SLACK = 1e-9  # of the covariance's largest entry: asymmetry and negative eigenvalue left by rounding
+COV_SLACK = 1e-9  # relative: asymmetry and negative diagonal (of the largest entry), b b' beyond a d, left by rounding
+COV_TINY = 1e-300  # absolute: b b' of an exactly singular covariance may round past a d where both underflow
+
+
+def not_covariance(c: np.ndarray) -> np.ndarray:
+    """(m,) mask of the (m, 2, 2) finite matrices ``[[a, b], [b', d]]`` that are no covariance:
+    asymmetric (|b - b'| beyond ``COV_SLACK`` of the largest entry), a diagonal below ``-COV_SLACK``
+    of it, or a correlation beyond 1 (b b' > a d (1 + COV_SLACK) + COV_TINY): positive semi-definite
+    in closed form. The one check of ``Line.cov``, ``slam.Observations`` and ``slam.from_features``
+    (there were three, with tolerances relative to the largest entry that took [[1, 3e-5], [3e-5,
+    1e-12]], a correlation of 30)."""
+    a, b, b2, d = c[:, 0, 0], c[:, 0, 1], c[:, 1, 0], c[:, 1, 1]
+    tol = COV_SLACK * np.abs(c).reshape(-1, 4).max(axis=1, initial=0.0)
+    return ((np.abs(b - b2) > tol) | (a < -tol) | (d < -tol)
+            | (b * b2 > np.maximum(a, 0.0) * np.maximum(d, 0.0) * (1.0 + COV_SLACK) + COV_TINY))
 
 
 def _real(v: object) -> float | None:
@@ -127,10 +141,9 @@ def _cov_problem(cov: object) -> str:
         return ""
     if not np.isfinite(c).all():
         return "must be finite (or all nan: not known)"
-    scale = COV_SLACK * max(float(np.abs(c).max()), 1e-300)
-    if abs(c[0, 1] - c[1, 0]) > scale:
-        return "must be symmetric"
-    if np.linalg.eigvalsh(c).min() < -scale:
+    if not_covariance(c[None])[0]:
+        if abs(c[0, 1] - c[1, 0]) > COV_SLACK * float(np.abs(c).max()):
+            return "must be symmetric"
         return "must be positive semi-definite (a variance below 0, or a correlation beyond 1)"
     return ""
 
@@ -225,7 +238,7 @@ def check_line_rows(rows: np.ndarray, name: str) -> None:
     with np.errstate(invalid="ignore"):
         checks = (
             (~np.isfinite(rows).all(axis=1), "its values must be finite"),
-            (rho < -1e-9, "rho must be >= 0 m"),  # a line through the origin: rounding may leave -1e-12
+            (rho < -RHO_SLACK, "rho must be >= 0 m"),  # a line through the origin: rounding may leave -1e-12
             ((first < 0) | (first > last) | (first != np.floor(first)) | (last != np.floor(last)),
              "its beams must be whole numbers with 0 <= first <= last"),
         )

@@ -9,7 +9,7 @@ import numpy as np
 from features.baselines.checks import integer
 from features.errors import not_a_scan
 from features.realdata import check_features
-from features.types import FeatureSet
+from features.types import RHO_SLACK, FeatureSet, not_covariance
 from lms200 import InputError, Scan
 from lms200.codes import real_rows
 
@@ -18,18 +18,6 @@ from .config import SlamConfig
 
 def _empty(shape: tuple[int, ...]) -> np.ndarray:
     return np.zeros(shape)
-
-
-RHO_SLACK = 1e-9  # m: a line through the sensor may carry rho -1e-12 after rounding
-COV_SLACK = 1e-9  # of a covariance's largest entry: asymmetry and negative eigenvalue left by rounding
-
-
-def _not_covariance(c: np.ndarray) -> np.ndarray:
-    """(m,) mask of the (m, 2, 2) matrices that are not symmetric positive semi-definite (within
-    ``COV_SLACK`` of their largest entry); closed form: a, d >= 0 and a d - b^2 >= 0."""
-    a, b, b2, d = c[:, 0, 0], c[:, 0, 1], c[:, 1, 0], c[:, 1, 1]
-    tol = COV_SLACK * np.abs(c).reshape(-1, 4).max(axis=1, initial=0.0)
-    return (np.abs(b - b2) > tol) | (a < -tol) | (d < -tol) | (a * d - b * b2 < -tol * np.maximum(np.abs(a), np.abs(d)))
 
 
 @dataclass(frozen=True)
@@ -73,7 +61,7 @@ class Observations:
             if c.shape != (m, 2, 2) or not np.isfinite(c).all():
                 raise InputError(f"observations.{cov}: must be ({m}, 2, 2) finite covariances, one a row of "
                                  f"observations.{of}, got {'shape ' + str(c.shape) if c.shape != (m, 2, 2) else 'nan / inf'}")
-            bad = _not_covariance(c)
+            bad = not_covariance(c)
             if bad.any():  # a negative variance, a correlation beyond 1 or an asymmetric one: the EKF's S was no
                 k = int(np.flatnonzero(bad)[0])  # covariance and its gate and update nonsense, silently (fuzzing)
                 raise InputError(f"observations.{cov}: row {k} is no covariance (it must be symmetric and positive "
@@ -114,8 +102,8 @@ def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) 
     keep = ~((ln.n_points > 0) & (ln.n_points < config.observations.min_line_points)) & ~(ln.length < config.observations.min_line_length)
     c = ln.cov[keep]
     sym = 0.5 * (c + c.transpose(0, 2, 1))
-    good = np.isfinite(c).all(axis=(1, 2))  # finite and positive semi-definite, else the floor alone
-    good[good] = np.linalg.eigvalsh(sym[good]).min(axis=1) >= 0
+    good = np.isfinite(c).all(axis=(1, 2))  # finite and a covariance (features.types.not_covariance), else the floor alone
+    good[good] = ~not_covariance(c[good])
     covs = np.where(good[:, None, None], sym, 0.0) + floor
     lines = np.column_stack((ln.rho[keep], ln.alpha[keep]))
     ends = ln.values[keep, 2:6]
