@@ -14,7 +14,6 @@ in an order rotated by one per scan, so no method always runs first (cold caches
 
 from __future__ import annotations
 
-from lms200.yamlio import load as load_yaml
 
 import dataclasses
 import itertools
@@ -41,7 +40,7 @@ from lms200.finite import check_integer, shown
 from lms200.logs import SIMULATE_LOG
 from lms200.noise import QUANTUM_CANDIDATES_M
 
-from experiments.options import known_worlds, real_path  # sim.WORLD_NAMES, the simulator imported when first asked
+from experiments.options import known_worlds, load_simulate_config, real_path  # sim.WORLD_NAMES, the simulator imported when first asked
 
 
 @dataclass
@@ -169,7 +168,7 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
     seed = None
     if check_simulate_config(p):
         try:  # the simulate config the folder was made with: its sensor model scores the scans
-            cfg = load_yaml((p / "config.yaml").read_text(), words=True) or {}  # simulate's record, an earlier version's too
+            cfg = load_simulate_config(p / "config.yaml") or {}  # simulate's record, an earlier version's too
             if not isinstance(cfg, dict):
                 raise TypeError("expected a mapping of world, seed, duration, sensor, ...")
             raw_sensor = cfg.get("sensor")
