@@ -331,8 +331,9 @@ class Lines(Sequence):
     def from_arrays(cls, rho: np.ndarray, alpha: np.ndarray, start: np.ndarray, end: np.ndarray,
                     cov: np.ndarray, first: np.ndarray, last: np.ndarray, n_points: np.ndarray) -> Lines:
         """Lines from per-line arrays: rho, alpha (L,), start, end (L, 2), cov (L, 2, 2), first,
-        last, n_points (L,). Their values are not checked (the baselines' fast path): a method's
-        result is checked by ``extract`` / ``extract_many`` / ``compare`` (:func:`check_lines`).
+        last, n_points (L,). The arguments' lengths and beams are checked here, the values (a nan
+        rho, first > last) where a method's result is taken (``extract`` / ``extract_many`` /
+        ``compare``: :func:`check_lines`); the baselines build theirs with the unchecked ``Lines.of``.
 
         Raises:
             InputError: an argument of another length than rho's (a length-1 array broadcast to
@@ -363,15 +364,24 @@ class Lines(Sequence):
                     raise InputError(f"Lines.from_arrays: {name} must be whole numbers (beam indices, counts), "
                                      f"got {shown(b[bad].ravel()[0].item())} at line {int(np.flatnonzero(bad.reshape(n, -1).any(axis=1))[0])}")
         try:
-            values = np.empty((n, 10))
-            values[:, 0], values[:, 1] = rho, alpha
-            values[:, 2:4], values[:, 4:6] = start, end
-            values[:, 6:10] = np.asarray(cov, dtype=float).reshape(n, 4)
-            beams = np.empty((n, 3), np.int64)
-            beams[:, 0], beams[:, 1], beams[:, 2] = first, last, n_points
+            return cls.of(rho, alpha, start, end, cov, first, last, n_points)
         except (TypeError, ValueError, OverflowError) as exc:
             raise InputError(f"Lines.from_arrays: {shapes} must be numbers of these shapes, one a line "
                              f"({' '.join(str(exc).split())})") from None
+
+    @classmethod
+    def of(cls, rho: np.ndarray, alpha: np.ndarray, start: np.ndarray, end: np.ndarray,
+           cov: np.ndarray, first: np.ndarray, last: np.ndarray, n_points: np.ndarray) -> Lines:
+        """``from_arrays`` without its checks of the arguments (the baselines' fast path, as
+        ``FeatureSet.of``: their arrays are of one length and whole beams by construction; the
+        checks cost 12 us a scan): numpy's errors, and a length-1 array broadcast, as numpy does."""
+        n = len(rho)
+        values = np.empty((n, 10))
+        values[:, 0], values[:, 1] = rho, alpha
+        values[:, 2:4], values[:, 4:6] = start, end
+        values[:, 6:10] = np.asarray(cov, dtype=float).reshape(n, 4)
+        beams = np.empty((n, 3), np.int64)
+        beams[:, 0], beams[:, 1], beams[:, 2] = first, last, n_points
         return cls(values, beams)
 
     @classmethod
