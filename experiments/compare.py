@@ -14,7 +14,6 @@ in an order rotated by one per scan, so no method always runs first (cold caches
 
 from __future__ import annotations
 
-from lms200.yamlio import load as load_yaml
 
 import dataclasses
 import itertools
@@ -32,7 +31,7 @@ import yaml
 from features.baselines.checks import MIN_SIGMA_M as EXTRACTOR_MIN_SIGMA_M  # not this module's MIN_SIGMA_M (user's floor)
 from features.errors import ConfigError
 from features.registry import (available_methods, backend_of, check_beams, check_step, get_method, make_config,
-                               warn_unread_fields)
+                               returned_problem, warn_unread_fields)
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
 from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
@@ -41,7 +40,7 @@ from lms200.finite import check_integer, shown
 from lms200.logs import SIMULATE_LOG
 from lms200.noise import QUANTUM_CANDIDATES_M
 
-from experiments.options import known_worlds, real_path  # sim.WORLD_NAMES, the simulator imported when first asked
+from experiments.options import known_worlds, load_simulate_config, real_path  # sim.WORLD_NAMES, the simulator imported when first asked
 
 
 @dataclass
@@ -169,7 +168,7 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
     seed = None
     if check_simulate_config(p):
         try:  # the simulate config the folder was made with: its sensor model scores the scans
-            cfg = load_yaml((p / "config.yaml").read_text(), words=True) or {}  # simulate's record, an earlier version's too
+            cfg = load_simulate_config(p / "config.yaml") or {}  # simulate's record, an earlier version's too
             if not isinstance(cfg, dict):
                 raise TypeError("expected a mapping of world, seed, duration, sensor, ...")
             raw_sensor = cfg.get("sensor")
@@ -484,7 +483,7 @@ def compare(
         alpha_err_mean / alpha_err_rms (rad), endpoint_err_mean (m), n_truth_corners, corner_tp,
         corner_fp, corner_fn, corner_err_mean (m).
     """
-    from experiments.user_methods import UserMethodFailed, ensure_method
+    from experiments.user_methods import UserMethodFailed, ensure_method, is_user_method
 
     if isinstance(methods, (str, bytes)):  # its letters were taken as names: "unknown extraction method 's'"
         raise InputError(f"methods: must be a list of method names, got the text {methods!r} (give [{methods!r}])")
@@ -510,7 +509,8 @@ def compare(
         raise InputError("sources: no source given")
     if max_scans is not None:
         max_scans = check_integer(max_scans, "max_scans", 1, what="(or None: every scan)", strict=True)
-    runs = [(m, get_method(m).run, make_config(m, **params.get(m, {}))) for m in methods]
+    registered = {m: get_method(m) for m in methods}
+    runs = [(m, registered[m].run, make_config(m, **params.get(m, {}))) for m in methods]
     backends = {name: backend_of(name, cfg) for name, _, cfg in runs}
     srcs = [s for spec in sources for s in ([spec] if isinstance(spec, Source) else parse_sources([spec]))]
     total = sum(min(s.total or 0, max_scans or s.total or 0) for s in srcs) or None
@@ -555,6 +555,11 @@ def compare(
                     fs = fn(scan, cfg)
                     c1, t1 = time.thread_time_ns(), time.perf_counter_ns()
                     elapsed, cpu = t1 - t0, c1 - c0
+                    problem = returned_problem(registered[name], fs)  # a user method's rows, outside the timed span
+                    if problem:
+                        if is_user_method(name):
+                            raise UserMethodFailed(name, f"returned {problem}", scan, False)
+                        raise ConfigError(f"method {name!r}: its run returned {problem} on {source_label(src)} scan {number}")
                     explained, range_rms = explained_fraction(fs, scan, sigma_r)
                     row = dict(method=name, backend=backends[name], source=src.name, kind=src.kind, seed=src.seed, scan=number,
                                stamp=scan.stamp, n_valid=n_valid, n_lines=len(fs.lines),

@@ -512,6 +512,15 @@ def simulate_config_size_problem(cfg: Path) -> str | None:
     return size_problem(regular_file(cfg, "simulate config").stat().st_size, SIMULATE_CONFIG, SIMULATE_CONFIG_SIZE)
 
 
+def load_simulate_config(cfg: Path) -> Any:
+    """The parsed config.yaml ``cfg`` of a simulate folder, as ``compare`` and ``slam`` both read it:
+    with YAML 1.1's words (``lms200.yamlio.load(words=True)``: a record of an earlier version, or
+    one edited by hand, may say ``interlaced: no``). slam read it with the strict loader and refused
+    a ``name: n`` that compare read (a review). Raises what ``load`` raises, and OSError /
+    UnicodeDecodeError of reading it; the callers name the file."""
+    return load_yaml(cfg.read_text(), words=True)
+
+
 def check_yaml(path: str | os.PathLike, what: str = "a YAML file", sized: bool = True,
                size_hint: str = "they are a few KB") -> Path:
     """An existing, readable text file, of at most ``lms200.yamlio.MAX_YAML_BYTES`` when ``sized`` (a

@@ -21,7 +21,7 @@ import yaml
 from lms200 import LmsbenchError, read_log, read_tum, write_tum
 from lms200.finite import fixed, shown
 from lms200.records import Record
-from lms200.yamlio import load as load_yaml, dump as dump_yaml
+from lms200.yamlio import dump as dump_yaml
 from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished, not_a_log_folder, simulate_log
 from experiments.progress import say_on_terminal
 from experiments.provenance import write_record
@@ -86,7 +86,7 @@ def simulated_interlaced(path: str | Path) -> bool | None:
     folder, or the file does not say). LmsbenchError naming the file for an ``interlaced`` that is
     no true / false (``"no"``, ``0``): it was read as "does not say", so a run simulated without
     interlacing was de-skewed as an interlaced LMS200's, silently (``compare`` refuses the file)."""
-    from experiments.options import simulate_config_size_problem
+    from experiments.options import load_simulate_config, simulate_config_size_problem
 
     cfg = Path(path) / "config.yaml"
     if simulate_log(path) is None or not cfg.exists():
@@ -99,7 +99,7 @@ def simulated_interlaced(path: str | Path) -> bool | None:
     # a file that is no YAML mapping (not UTF-8, not YAML, a list, empty: a damaged or cut one) was passed over the
     # same way, the run de-skewed as the LMS200's whatever it had been simulated with (fuzzing; compare refuses it)
     try:
-        raw = load_yaml(cfg.read_text())
+        raw = load_simulate_config(cfg)  # as compare reads it (YAML 1.1's words too)
     except (UnicodeDecodeError, yaml.YAMLError) as exc:
         raise LmsbenchError(f"{cfg}: not a simulate config ({' '.join(str(exc).split())}); its sensor.interlaced decides the scans' "
                             f"de-skew: restore it, or simulate the folder again") from None

@@ -18,12 +18,12 @@ from typing import Any, Callable
 import numpy as np
 
 from lms200 import Scan
-from lms200.errors import LmsbenchWarning
+from lms200.errors import InputError, LmsbenchWarning
 
 from .baselines.checks import MAX_BEAMS
 from .batch import check_threads, common_geometry, run_pieces, scan_list
 from .errors import ConfigError, ScanGeometryError, ScanTypeError, not_a_scan
-from .types import FeatureSet
+from .types import FeatureSet, check_feature_set
 
 # name -> module that registers it on import (kept lazy so `import features` stays cheap)
 _METHOD_MODULES: dict[str, str] = {
@@ -384,7 +384,26 @@ def _returned(m: Method, out: object) -> FeatureSet:
     handed on as the features without a word, to fail later in the caller's code (fuzz round)."""
     if not isinstance(out, FeatureSet):
         raise ConfigError(f"method {m.name!r}: its run returned {type(out).__name__}, not a features.FeatureSet")
+    problem = returned_problem(m, out)
+    if problem:
+        raise ConfigError(f"method {m.name!r}: its run returned {problem}")
     return out
+
+
+def returned_problem(m: Method, fs: FeatureSet) -> str:
+    """What is wrong with the rows of ``fs``, method ``m``'s result ("" when nothing, and for a
+    built-in method, whose rows are right by construction): :func:`features.types.check_feature_set`'s
+    message. Run outside any timed span (``compare`` times the method alone): a user's extractor's
+    ``Lines.from_arrays`` with a nan rho or first > last was scored nan, silently (fuzzing)."""
+    if m.name in _METHOD_MODULES:
+        return ""
+    if not isinstance(fs, FeatureSet):  # compare calls a registered method's run itself
+        return f"{type(fs).__name__}, not a features.FeatureSet"
+    try:
+        check_feature_set(fs)
+    except InputError as exc:
+        return f"features out of their meaning: {exc}"
+    return ""
 
 
 def _returned_many(m: Method, out: object, n: int) -> list[FeatureSet]:
@@ -397,6 +416,9 @@ def _returned_many(m: Method, out: object, n: int) -> list[FeatureSet]:
         if not isinstance(fs, FeatureSet):
             raise ConfigError(f"method {m.name!r}: its run_many returned {type(fs).__name__} at item {i} of {n}, "
                               "not a features.FeatureSet")
+        problem = returned_problem(m, fs)
+        if problem:
+            raise ConfigError(f"method {m.name!r}: its run_many returned, at item {i} of {n}, {problem}")
     return out
 
 

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from lms200.errors import InputError
-from lms200.finite import whole_number
+from lms200.finite import is_number, shown, whole_number
 
 LINE_COLUMNS = ("rho", "alpha", "x0", "y0", "x1", "y1", "cov_rr", "cov_ra", "cov_ar", "cov_aa")
 CORNER_COLUMNS = ("x", "y", "angle")
@@ -85,18 +85,36 @@ class Corner:
         check_corner(self)
 
 
-ALPHA_SLACK = 1e-9  # rad: an alpha rounded past +-pi (atan2's -pi for y = -0.0) is the same normal
+ALPHA_SLACK = 1e-6  # rad: an alpha rounded past +-pi (atan2's -pi for y = -0.0; float32's pi, 8.7e-8 above) is the same normal
 RHO_SLACK = 1e-9  # m: a line through the origin may carry rho -1e-12 after rounding
-COV_SLACK = 1e-9  # of the covariance's largest entry: asymmetry and negative eigenvalue left by rounding
+COV_SLACK = 1e-9  # relative: asymmetry and negative diagonal (of the largest entry), b b' beyond a d, left by rounding
+COV_TINY = 1e-300  # absolute: b b' of an exactly singular covariance may round past a d where both underflow
+
+
+def not_covariance(c: np.ndarray) -> np.ndarray:
+    """(m,) mask of the (m, 2, 2) finite matrices ``[[a, b], [b', d]]`` that are no covariance:
+    asymmetric (|b - b'| beyond ``COV_SLACK`` of the largest entry), a diagonal below ``-COV_SLACK``
+    of it, or a correlation beyond 1 (b b' > a d (1 + COV_SLACK) + COV_TINY): positive semi-definite
+    in closed form. The one check of ``Line.cov``, ``slam.Observations`` and ``slam.from_features``
+    (there were three, with tolerances relative to the largest entry that took [[1, 3e-5], [3e-5,
+    1e-12]], a correlation of 30)."""
+    a, b, b2, d = c[:, 0, 0], c[:, 0, 1], c[:, 1, 0], c[:, 1, 1]
+    tol = COV_SLACK * np.abs(c).reshape(-1, 4).max(axis=1, initial=0.0)
+    return ((np.abs(b - b2) > tol) | (a < -tol) | (d < -tol)
+            | (b * b2 > np.maximum(a, 0.0) * np.maximum(d, 0.0) * (1.0 + COV_SLACK) + COV_TINY))
 
 
 def _real(v: object) -> float | None:
-    """``v`` as a finite float (an int, float or numpy number; no bool, no text), else None."""
-    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
+    """``v`` as a finite float (any real number, :func:`lms200.finite.is_number`: an int, float,
+    numpy number or ``fractions.Fraction``, and a numeric 0-d array; no bool, no text), else None.
+    A review found Fraction and 0-d arrays refused, which worked before the checks."""
+    if isinstance(v, np.ndarray) and v.ndim == 0 and v.dtype.kind in "iuf":
+        v = v[()]
+    if not is_number(v):
         return None
     try:
-        f = float(v)
-    except OverflowError:  # 10**400
+        f = float(v)  # type: ignore[arg-type]
+    except (OverflowError, TypeError, ValueError):  # 10**400, Fraction(10**400)
         return None
     return f if math.isfinite(f) else None
 
@@ -118,15 +136,14 @@ def _cov_problem(cov: object) -> str:
     except (TypeError, ValueError, OverflowError):
         return "must be a 2x2 array of numbers"
     if c.shape != (2, 2):
-        return f"must be a 2x2 array, got shape {c.shape}"
+        return f"must be a 2x2 array, not one of shape {c.shape}"
     if np.isnan(c).all():
         return ""
     if not np.isfinite(c).all():
         return "must be finite (or all nan: not known)"
-    scale = COV_SLACK * max(float(np.abs(c).max()), 1e-300)
-    if abs(c[0, 1] - c[1, 0]) > scale:
-        return "must be symmetric"
-    if np.linalg.eigvalsh(c).min() < -scale:
+    if not_covariance(c[None])[0]:
+        if abs(c[0, 1] - c[1, 0]) > COV_SLACK * float(np.abs(c).max()):
+            return "must be symmetric"
         return "must be positive semi-definite (a variance below 0, or a correlation beyond 1)"
     return ""
 
@@ -140,22 +157,22 @@ def check_line(line: Line) -> None:
     inverted one reached the scoring and the SLAM observations built by hand."""
     rho, alpha = _real(line.rho), _real(line.alpha)
     if rho is None or rho < -RHO_SLACK:
-        raise InputError(f"Line.rho: must be a finite number >= 0 m (the line's distance from the origin), got {line.rho!r}")
+        raise InputError(f"Line.rho: must be a finite number >= 0 m (the line's distance from the origin), got {shown(line.rho)}")
     if alpha is None or abs(alpha) > math.pi + ALPHA_SLACK:
-        raise InputError(f"Line.alpha: must be a finite angle in (-pi, pi] rad (the line's normal; wrap it), got {line.alpha!r}")
+        raise InputError(f"Line.alpha: must be a finite angle in (-pi, pi] rad (the line's normal; wrap it), got {shown(line.alpha)}")
     for name in ("start", "end"):
         if _point(getattr(line, name)) is None:
-            raise InputError(f"Line.{name}: must be two finite numbers (x, y m), got {getattr(line, name)!r}")
+            raise InputError(f"Line.{name}: must be two finite numbers (x, y m), got {shown(getattr(line, name))}")
     first, last, n = whole_number(line.first), whole_number(line.last), whole_number(line.n_points)
     if first is None or last is None or not 0 <= first <= last:
         raise InputError(f"Line.first, Line.last: must be whole beam indices with 0 <= first <= last, "
-                         f"got {line.first!r}, {line.last!r}")
+                         f"got {shown(line.first)}, {shown(line.last)}")
     if n is None or not 0 <= n <= last - first + 1:
         raise InputError(f"Line.n_points: must be a whole number in [0, {last - first + 1}] (the beams {first}..{last} "
-                         f"that support the line; 0: not known), got {line.n_points!r}")
+                         f"that support the line; 0: not known), got {shown(line.n_points)}")
     problem = _cov_problem(line.cov)
     if problem:
-        raise InputError(f"Line.cov: {problem} (the covariance of rho, alpha), got {line.cov!r}".replace("\n", ""))
+        raise InputError(f"Line.cov: {problem} (the covariance of rho, alpha), got {shown(line.cov)}")
 
 
 def check_corner(corner: Corner) -> None:
@@ -165,20 +182,20 @@ def check_corner(corner: Corner) -> None:
     a FeatureSet, and an angle of 0, 4 rad or nan or a corner of one line with itself was taken there."""
     for name in ("x", "y"):
         if _real(getattr(corner, name)) is None:
-            raise InputError(f"Corner.{name}: must be a finite number (m), got {getattr(corner, name)!r}")
+            raise InputError(f"Corner.{name}: must be a finite number (m), got {shown(getattr(corner, name))}")
     angle = _real(corner.angle)
     if angle is None or not 0 < angle < math.pi:
-        raise InputError(f"Corner.angle: must be in (0, pi) rad (the angle between its two lines), got {corner.angle!r}")
+        raise InputError(f"Corner.angle: must be in (0, pi) rad (the angle between its two lines), got {shown(corner.angle)}")
     index = whole_number(corner.index)
     if index is None or index < 0:
-        raise InputError(f"Corner.index: must be a whole beam index >= 0, got {corner.index!r}")
+        raise InputError(f"Corner.index: must be a whole beam index >= 0, got {shown(corner.index)}")
     try:
         pair = tuple(corner.lines) if not isinstance(corner.lines, (str, bytes)) else ()
     except TypeError:
         pair = ()
     whole = [whole_number(v) for v in pair]
     if len(whole) != 2 or None in whole or min(w for w in whole if w is not None) < 0 or whole[0] == whole[1]:
-        raise InputError(f"Corner.lines: must be two different whole line indices >= 0, got {corner.lines!r}")
+        raise InputError(f"Corner.lines: must be two different whole line indices >= 0, got {shown(corner.lines)}")
 
 
 def row_index(i: Any, n: int, what: str) -> int | slice | np.ndarray:
@@ -221,7 +238,7 @@ def check_line_rows(rows: np.ndarray, name: str) -> None:
     with np.errstate(invalid="ignore"):
         checks = (
             (~np.isfinite(rows).all(axis=1), "its values must be finite"),
-            (rho < -1e-9, "rho must be >= 0 m"),  # a line through the origin: rounding may leave -1e-12
+            (rho < -RHO_SLACK, "rho must be >= 0 m"),  # a line through the origin: rounding may leave -1e-12
             ((first < 0) | (first > last) | (first != np.floor(first)) | (last != np.floor(last)),
              "its beams must be whole numbers with 0 <= first <= last"),
         )
@@ -272,6 +289,15 @@ def check_corners(corners: Corners) -> None:
                          f"(x, y, angle = {values[i].tolist()}, beam, lines = {beams[i].tolist()})")
 
 
+def check_feature_set(fs: FeatureSet) -> None:
+    """InputError naming the first bad row of ``fs``'s lines or corners (:func:`check_lines`,
+    :func:`check_corners`): what ``extract``, ``extract_many`` and ``compare`` run on the result of
+    a method that is not built in, outside the timed span (in ``FeatureSet()`` it cost a user's
+    extractor 50-70 us a scan of its timing)."""
+    check_lines(fs.lines)
+    check_corners(fs.corners)
+
+
 def read_only(a: np.ndarray) -> np.ndarray:
     """A view of ``a`` that cannot be written through (``a`` itself stays writable): what the
     Line / Corner records and the column properties of Lines / Corners hand out, so that
@@ -305,24 +331,57 @@ class Lines(Sequence):
     def from_arrays(cls, rho: np.ndarray, alpha: np.ndarray, start: np.ndarray, end: np.ndarray,
                     cov: np.ndarray, first: np.ndarray, last: np.ndarray, n_points: np.ndarray) -> Lines:
         """Lines from per-line arrays: rho, alpha (L,), start, end (L, 2), cov (L, 2, 2), first,
-        last, n_points (L,). Their values are not checked (the baselines' fast path): a FeatureSet
-        built of them checks them (:func:`check_lines`).
+        last, n_points (L,). The arguments' lengths and beams are checked here, the values (a nan
+        rho, first > last) where a method's result is taken (``extract`` / ``extract_many`` /
+        ``compare``: :func:`check_lines`); the baselines build theirs with the unchecked ``Lines.of``.
 
         Raises:
-            InputError: arrays of other lengths or shapes than these, or not numbers (fuzzing: a
-                broadcast ValueError).
+            InputError: an argument of another length than rho's (a length-1 array broadcast to
+                every line, silently), other shapes than these, not numbers (fuzzing: a broadcast
+                ValueError), or beams (first, last, n_points) that are not whole numbers (2.7 was cut
+                to 2, silently).
         """
+        shapes = "rho, alpha (L,), start, end (L, 2), cov (L, 2, 2), first, last and n_points (L,)"
+        args = (("alpha", alpha), ("start", start), ("end", end), ("cov", cov), ("first", first), ("last", last),
+                ("n_points", n_points))
         try:
             n = len(rho)
-            values = np.empty((n, 10))
-            values[:, 0], values[:, 1] = rho, alpha
-            values[:, 2:4], values[:, 4:6] = start, end
-            values[:, 6:10] = np.asarray(cov, dtype=float).reshape(n, 4)
-            beams = np.empty((n, 3), np.int64)
-            beams[:, 0], beams[:, 1], beams[:, 2] = first, last, n_points
+            lengths = [(name, len(a)) for name, a in args]
+        except TypeError:
+            raise InputError(f"Lines.from_arrays: {shapes} must be arrays (or lists), one item a line") from None
+        wrong = next(((name, k) for name, k in lengths if k != n), None)
+        if wrong is not None:
+            raise InputError(f"Lines.from_arrays: {wrong[0]} has {wrong[1]} item{'' if wrong[1] == 1 else 's'} for "
+                             f"{n} line{'' if n == 1 else 's'} (rho's); {shapes}")
+        if n == 0:
+            return cls.empty()
+        for name, a in args[4:]:
+            b = a if isinstance(a, np.ndarray) else np.asarray(a)
+            if b.dtype.kind == "f":
+                with np.errstate(invalid="ignore"):
+                    bad = ~(np.isfinite(b) & (b == np.floor(b)))
+                if bad.any():
+                    raise InputError(f"Lines.from_arrays: {name} must be whole numbers (beam indices, counts), "
+                                     f"got {shown(b[bad].ravel()[0].item())} at line {int(np.flatnonzero(bad.reshape(n, -1).any(axis=1))[0])}")
+        try:
+            return cls.of(rho, alpha, start, end, cov, first, last, n_points)
         except (TypeError, ValueError, OverflowError) as exc:
-            raise InputError(f"Lines.from_arrays: rho, alpha (L,), start, end (L, 2), cov (L, 2, 2), first, last and "
-                             f"n_points (L,) must be numbers of these shapes, one a line ({' '.join(str(exc).split())})") from None
+            raise InputError(f"Lines.from_arrays: {shapes} must be numbers of these shapes, one a line "
+                             f"({' '.join(str(exc).split())})") from None
+
+    @classmethod
+    def of(cls, rho: np.ndarray, alpha: np.ndarray, start: np.ndarray, end: np.ndarray,
+           cov: np.ndarray, first: np.ndarray, last: np.ndarray, n_points: np.ndarray) -> Lines:
+        """``from_arrays`` without its checks of the arguments (the baselines' fast path, as
+        ``FeatureSet.of``: their arrays are of one length and whole beams by construction; the
+        checks cost 12 us a scan): numpy's errors, and a length-1 array broadcast, as numpy does."""
+        n = len(rho)
+        values = np.empty((n, 10))
+        values[:, 0], values[:, 1] = rho, alpha
+        values[:, 2:4], values[:, 4:6] = start, end
+        values[:, 6:10] = np.asarray(cov, dtype=float).reshape(n, 4)
+        beams = np.empty((n, 3), np.int64)
+        beams[:, 0], beams[:, 1], beams[:, 2] = first, last, n_points
         return cls(values, beams)
 
     @classmethod
@@ -342,7 +401,7 @@ class Lines(Sequence):
             for field_name in ("first", "last", "n_points"):  # the int64 beams array truncated 2.5 to 2
                 v = getattr(line, field_name)
                 if whole_number(v) is None:
-                    raise InputError(f"lines[{i}].{field_name}: must be a whole number (a beam index or count), got {v!r}")
+                    raise InputError(f"lines[{i}].{field_name}: must be a whole number (a beam index or count), got {shown(v)}")
         try:
             out = cls.from_arrays(
                 [l.rho for l in lines], [l.alpha for l in lines], [l.start for l in lines], [l.end for l in lines],
@@ -447,13 +506,13 @@ class Corners(Sequence):
             whole = [whole_number(v) for v in (c.index, *pair)] if len(pair) == 2 else []
             if len(whole) != 3 or None in whole:
                 raise InputError(f"corners[{i}]: index and lines must be whole numbers (a beam, two line indices), "
-                                 f"got {c.index!r}, {c.lines!r}")
+                                 f"got {shown(c.index)}, {shown(c.lines)}")
             try:
                 ok = all(np.isfinite(float(v)) for v in (c.x, c.y, c.angle))
             except (TypeError, ValueError, OverflowError):
                 ok = False
             if not ok:
-                raise InputError(f"corners[{i}]: x, y and angle must be finite numbers, got {c.x!r}, {c.y!r}, {c.angle!r}")
+                raise InputError(f"corners[{i}]: x, y and angle must be finite numbers, got {shown(c.x)}, {shown(c.y)}, {shown(c.angle)}")
         values = np.array([(c.x, c.y, c.angle) for c in corners], dtype=float)
         beams = np.array([[whole_number(v) for v in (c.index, *tuple(c.lines))] for c in corners], dtype=np.int64)
         return cls(values, beams)
@@ -499,9 +558,11 @@ class FeatureSet:
     """The features extracted from one scan: ``lines`` (``Lines``) and ``corners`` (``Corners``),
     arrays in the scan's sensor frame, and the ``method`` that found them.
 
-    Built from ``Lines`` / ``Corners`` or from sequences of ``Line`` / ``Corner`` records, each
-    checked (:func:`check_lines`, :func:`check_corners`, :func:`check_line`, :func:`check_corner`;
-    an InputError naming the first bad one); the extractors' own use the unchecked ``FeatureSet.of``.
+    Built from ``Lines`` / ``Corners`` as they are (cheap: a user's extractor builds one a scan
+    inside ``compare``'s timed span; :func:`check_feature_set` checks their rows, which
+    ``extract``, ``extract_many`` and ``compare`` run on a method's result outside that span), or
+    from sequences of ``Line`` / ``Corner`` records (each checked when it was built, by
+    :func:`check_line` / :func:`check_corner`). The extractors use ``FeatureSet.of``.
     """
 
     __slots__ = ("lines", "corners", "method")
@@ -512,10 +573,6 @@ class FeatureSet:
             if not isinstance(value, (kind, Iterable)) or isinstance(value, (str, bytes)):
                 raise InputError(f"{name}: must be a features.{kind.__name__} or a sequence of "
                                  f"features.{kind.__name__[:-1]}, got {type(value).__name__}")
-        if isinstance(lines, Lines):
-            check_lines(lines)
-        if isinstance(corners, Corners):
-            check_corners(corners)
         self.lines = lines if isinstance(lines, Lines) else Lines.from_lines(list(lines))
         self.corners = corners if isinstance(corners, Corners) else Corners.from_corners(list(corners))
         self.method = method

@@ -9,7 +9,7 @@ import numpy as np
 from features.baselines.checks import integer
 from features.errors import not_a_scan
 from features.realdata import check_features
-from features.types import FeatureSet
+from features.types import RHO_SLACK, FeatureSet, not_covariance
 from lms200 import InputError, Scan
 from lms200.codes import real_rows
 
@@ -18,18 +18,6 @@ from .config import SlamConfig
 
 def _empty(shape: tuple[int, ...]) -> np.ndarray:
     return np.zeros(shape)
-
-
-RHO_SLACK = 1e-9  # m: a line through the sensor may carry rho -1e-12 after rounding
-COV_SLACK = 1e-9  # of a covariance's largest entry: asymmetry and negative eigenvalue left by rounding
-
-
-def _not_covariance(c: np.ndarray) -> np.ndarray:
-    """(m,) mask of the (m, 2, 2) matrices that are not symmetric positive semi-definite (within
-    ``COV_SLACK`` of their largest entry); closed form: a, d >= 0 and a d - b^2 >= 0."""
-    a, b, b2, d = c[:, 0, 0], c[:, 0, 1], c[:, 1, 0], c[:, 1, 1]
-    tol = COV_SLACK * np.abs(c).reshape(-1, 4).max(axis=1, initial=0.0)
-    return (np.abs(b - b2) > tol) | (a < -tol) | (d < -tol) | (a * d - b * b2 < -tol * np.maximum(np.abs(a), np.abs(d)))
 
 
 @dataclass(frozen=True)
@@ -59,6 +47,23 @@ class Observations:
         (2, 2) lines with one covariance an IndexError, (1, 3) lines a bare unpacking error, nan
         covariances a nan trajectory, silently; a negative or asymmetric covariance or a negative
         rho was taken (2026-12-07)."""
+        self._check(covariances=True)
+
+    @classmethod
+    def _built(cls, lines: np.ndarray, line_cov: np.ndarray, line_ends: np.ndarray, corners: np.ndarray,
+               corner_cov: np.ndarray, points: np.ndarray) -> Observations:
+        """Observations of covariances that are covariances by construction (``from_features``'s:
+        an extractor's that passed :func:`features.types.not_covariance`, or none, plus a diagonal
+        floor): every other field checked, the covariances' shapes and finiteness too."""
+        obs = object.__new__(cls)
+        for name, a in zip(("lines", "line_cov", "line_ends", "corners", "corner_cov", "points"),
+                           (lines, line_cov, line_ends, corners, corner_cov, points)):
+            object.__setattr__(obs, name, a)
+        obs._check(covariances=False)
+        return obs
+
+    def _check(self, covariances: bool) -> None:
+        """The checks of ``__post_init__``; the covariances' :func:`not_covariance` when ``covariances``."""
         rows = {name: real_rows(getattr(self, name), f"observations.{name}", cols, what)
                 for name, cols, what in (("lines", 2, "rho m, alpha rad"), ("line_ends", 4, "x0, y0, x1, y1 m"),
                                          ("corners", 2, "x m, y m"), ("points", 2, "x m, y m"))}
@@ -73,7 +78,7 @@ class Observations:
             if c.shape != (m, 2, 2) or not np.isfinite(c).all():
                 raise InputError(f"observations.{cov}: must be ({m}, 2, 2) finite covariances, one a row of "
                                  f"observations.{of}, got {'shape ' + str(c.shape) if c.shape != (m, 2, 2) else 'nan / inf'}")
-            bad = _not_covariance(c)
+            bad = not_covariance(c) if covariances and m else c[:0, 0, 0]
             if bad.any():  # a negative variance, a correlation beyond 1 or an asymmetric one: the EKF's S was no
                 k = int(np.flatnonzero(bad)[0])  # covariance and its gate and update nonsense, silently (fuzzing)
                 raise InputError(f"observations.{cov}: row {k} is no covariance (it must be symmetric and positive "
@@ -114,14 +119,14 @@ def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) 
     keep = ~((ln.n_points > 0) & (ln.n_points < config.observations.min_line_points)) & ~(ln.length < config.observations.min_line_length)
     c = ln.cov[keep]
     sym = 0.5 * (c + c.transpose(0, 2, 1))
-    good = np.isfinite(c).all(axis=(1, 2))  # finite and positive semi-definite, else the floor alone
-    good[good] = np.linalg.eigvalsh(sym[good]).min(axis=1) >= 0
+    good = np.isfinite(c).all(axis=(1, 2))  # finite and a covariance (features.types.not_covariance), else the floor alone
+    good[good] = ~not_covariance(c[good])
     covs = np.where(good[:, None, None], sym, 0.0) + floor
     lines = np.column_stack((ln.rho[keep], ln.alpha[keep]))
     ends = ln.values[keep, 2:6]
     corners = fs.corners.values[:, :2] if config.observations.use_corners else np.zeros((0, 2))
     ccov = np.broadcast_to(np.eye(2) * config.observations.sigma_corner**2, (corners.shape[0], 2, 2)).copy()
-    return Observations(
+    return Observations._built(
         lines, covs, ends.copy(), corners.copy(), ccov,
         scan_points(scan, config.observations.point_stride) if scan is not None else np.zeros((0, 2)),
     )

@@ -1050,3 +1050,5 @@ def test_a_bag_rosbags_cannot_open_is_one_line(tmp_path: Path) -> None:
     assert "\n" not in str(e.value) and len(str(e.value)) < 500, str(e.value)
     assert re.match(rf"^{re.escape(str(bag))}: cannot open as a ROS bag: AnyReaderError: .*mapping values are not allowed "
                     r"here in \"<unicode string>\", line 4", str(e.value)), str(e.value)
+    spaced = tmp_path / "two  spaces.bag"  # a review: every run of whitespace was collapsed, a path with two spaces misquoted
+    assert str(BagError(f"{spaced}: cannot open\n   ^ here")) == f"{spaced}: cannot open ^ here"

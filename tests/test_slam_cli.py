@@ -460,6 +460,9 @@ def test_a_simulator_folder_without_interlacing_turns_deskew_off(tmp_path):
         (tmp_path / "config.yaml").write_text(f"world: office\nsensor:\n  n_beams: 361\n  interlaced: {str(flag).lower()}\n")
         assert simulated_interlaced(tmp_path) is flag
     assert simulated_interlaced(tmp_path / "scans.clf") is None  # a log file, not a folder
+    # read as compare reads it (YAML 1.1's words): the strict loader refused `name: n`, which compare read (a review)
+    (tmp_path / "config.yaml").write_text("world: office\nname: n\nsensor:\n  interlaced: no\n")
+    assert simulated_interlaced(tmp_path) is False
     cfg = SlamConfig()
     assert cfg.alignment.deskew
     assert deskew_for_sensor(cfg, interlaced=True) is cfg

@@ -326,6 +326,28 @@ def test_observations_check_their_fields(fields: dict, message: str) -> None:
     assert ok.lines.shape == (2, 2)
 
 
+def test_one_covariance_check_refuses_a_correlation_of_30_everywhere() -> None:
+    """A review: three covariance checks (eigenvalues, a closed form, from_features' own), their
+    tolerances relative to the largest entry, took [[1, 3e-5], [3e-5, 1e-12]] (a correlation of 30)
+    as a Line's and an Observations' covariance; one check now (features.types.not_covariance)."""
+    from features import Corners, FeatureSet, Line, Lines
+    from features.types import not_covariance
+    from lms200 import InputError
+
+    c30 = np.array([[1.0, 3e-5], [3e-5, 1e-12]])
+    singular = np.array([[1e-4, 1e-5], [1e-5, 1e-6]])  # a correlation of exactly 1: a covariance
+    assert not_covariance(np.stack([c30, singular, np.zeros((2, 2)), np.diag([1e-4, -1e-14])])).tolist() == [True, False, False, False]
+    with pytest.raises(InputError, match=r"^Line.cov: must be positive semi-definite"):
+        Line(1.0, 0.0, (1.0, -1.0), (1.0, 1.0), 10, 49, cov=c30)
+    with pytest.raises(InputError, match=r"^observations.line_cov: row 0 is no covariance"):
+        Observations(lines=[[1.0, 0.0]], line_cov=[c30], line_ends=np.zeros((1, 4)))
+    cfg = P()
+    lines = Lines.from_arrays([1.0, 1.0], [0.0, 0.5], [[1.0, -1.0]] * 2, [[1.0, 1.0]] * 2, [c30, singular], [10, 60], [49, 99], [40, 40])
+    obs = from_features(FeatureSet.of(lines, Corners.empty(), "m"), cfg)
+    floor = np.diag([cfg.observations.sigma_rho**2, cfg.observations.sigma_alpha_obs**2])
+    assert np.array_equal(obs.line_cov, np.stack([floor, singular + floor]))  # no covariance: the floor alone
+
+
 def test_observations_of_lists_are_float_arrays_and_run() -> None:
     obs = Observations(lines=[[1.0, 0.0]], line_cov=[[[1e-4, 0.0], [0.0, 1e-4]]], line_ends=[[1.0, -1.0, 1.0, 1.0]])
     assert obs.lines.dtype == np.float64 and obs.line_cov.shape == (1, 2, 2)

@@ -143,6 +143,47 @@ def test_a_wrong_result_names_its_scan_too(boom, capsys) -> None:
                                        "features.FeatureSet on office:0 scan 0\n")
 
 
+def test_a_users_lines_out_of_their_meaning_are_refused_naming_the_method_outside_the_timing(boom, capsys) -> None:
+    """A user's extractor's ``Lines.from_arrays`` with a nan rho or first > last (scored nan,
+    silently, before the fuzz round) is one error naming the method, in compare, extract and
+    extract_many; the rows are checked after the call, not inside ``FeatureSet()`` (which cost a
+    user's extractor 50-70 us a scan of its timed span)."""
+    import numpy as np
+
+    from features import FeatureSet, extract, extract_many
+    from features.errors import ConfigError
+    from experiments.compare import parse_sources
+    from experiments.user_methods import ensure_method
+
+    (boom / "wrongext.py").write_text(
+        "import numpy as np\n"
+        "from features import Corners, FeatureSet, Lines\n"
+        "def lines(rho, first):\n"
+        "    return Lines.from_arrays([rho], [0.0], [[1.0, -1.0]], [[1.0, 1.0]], [np.eye(2) * 1e-4], [first], [49], [0])\n"
+        "def nan(scan):\n"
+        "    return FeatureSet(lines(float('nan'), 10), Corners.empty(), 'nan')\n"
+        "def inverted(scan):\n"
+        "    return FeatureSet(lines(1.0, 60), Corners.empty(), 'inverted')\n")
+    assert main(["compare", "office:0", "--duration", "1", "--methods", "wrongext:nan", "--out", "cmp",
+                 "--no-progress"]) == 2
+    assert capsys.readouterr().err == (
+        "lmsbench compare: error: your extractor wrongext:nan returned features out of their meaning: lines: line 0: "
+        "its values must be finite (rho, alpha, x0, y0, x1, y1, first, last = nan, 0, 1, -1, 1, 1, 10, 49) "
+        "on office:0 scan 0\n")
+    import wrongext
+
+    bad = wrongext.inverted(None)  # built as cheaply as an extractor's: its rows are checked where the method's result is
+    assert isinstance(bad, FeatureSet) and bad.lines.first.tolist() == [60]
+    scan = next(iter(parse_sources(["office:0"], duration=1.0)[0].records)).scan
+    ensure_method("wrongext:inverted")
+    message = r"^method 'wrongext:inverted': its run returned features out of their meaning: lines: line 0: its beams must be whole"
+    with pytest.raises(ConfigError, match=message):
+        extract(scan, "wrongext:inverted")
+    with pytest.raises(ConfigError, match=message):
+        extract_many([scan, scan], "wrongext:inverted")
+    assert np.isnan(wrongext.nan(None).lines.rho[0])
+
+
 LAZY_MODULES = ("lazyext", "lazyhelper")
 
 

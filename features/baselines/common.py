@@ -199,8 +199,8 @@ def build_lines(
     cov_ra = t * var_a
     o = order
     cov = np.column_stack((var_r[o], cov_ra[o], cov_ra[o], var_a[o]))
-    return Lines.from_arrays(rho[o], alpha[o], np.column_stack((px0[o], py0[o])), np.column_stack((px1[o], py1[o])),
-                             cov, pts.idx[start][o], pts.idx[end][o], n[o])
+    return Lines.of(rho[o], alpha[o], np.column_stack((px0[o], py0[o])), np.column_stack((px1[o], py1[o])),
+                    cov, pts.idx[start][o], pts.idx[end][o], n[o])
 
 
 @dataclass(frozen=True)
