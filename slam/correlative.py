@@ -204,7 +204,8 @@ def see_through(map_points: np.ndarray, pose: np.ndarray, bearings: np.ndarray, 
     for one surface). ``bearings`` (rad, ascending) and ``ranges`` (m) are the scan's valid
     beams (sensor frame); a map point further than ``max_range``, or whose bearing lies more
     than 1.5 beam steps from a valid beam (outside the view, or where the beams returned
-    nothing), says nothing. 0 when no map point is in view.
+    nothing), says nothing. 0 when no map point is in view. A scan of a full turn (its first and
+    last beams one step apart across +-pi) wraps: those two are neighbours.
 
     Negative information: a scan turned half a turn, or slid along a corridor, puts its beams
     through the walls the map holds behind the robot, while the fit (:func:`fit`) counts only the
@@ -221,12 +222,19 @@ def see_through(map_points: np.ndarray, pose: np.ndarray, bearings: np.ndarray, 
     near = rho <= max_range
     rho, beta = rho[near], np.arctan2(y[near], x[near])
     step = float(np.median(np.diff(b)))
-    j = np.clip(np.searchsorted(b, beta), 1, b.size - 1)
-    j = np.where(np.abs(b[j - 1] - beta) < np.abs(b[j] - beta), j - 1, j)  # the nearest valid beam
-    seen = np.abs(b[j] - beta) <= 1.5 * step
+    n = b.size
+    ring = b[0] + 2.0 * math.pi - b[-1] <= 1.5 * step  # a full turn of beams: the first and last are neighbours
+    be = np.concatenate(([b[-1] - 2.0 * math.pi], b, [b[0] + 2.0 * math.pi])) if ring else b
+    j = np.clip(np.searchsorted(be, beta), 1, be.size - 1)
+    j = np.where(np.abs(be[j - 1] - beta) < np.abs(be[j] - beta), j - 1, j)  # the nearest valid beam
+    seen = np.abs(be[j] - beta) <= 1.5 * step
     if not np.any(seen):
         return 0.0
     j, rho = j[seen], rho[seen]
-    lo, hi = np.maximum(j - 1, 0), np.minimum(j + 1, b.size - 1)
+    if ring:  # back to the scan's beams, neighbours across the seam
+        j = (j - 1) % n
+        lo, hi = (j - 1) % n, (j + 1) % n
+    else:
+        lo, hi = np.maximum(j - 1, 0), np.minimum(j + 1, n - 1)
     reach = np.minimum(np.minimum(r[lo], r[j]), r[hi])
     return float(np.mean(reach > rho + gap + gap_per_range * rho))

@@ -20,7 +20,7 @@ import numpy as np
 
 from dataclasses import replace
 
-from .config import AlignmentConfig, KeyframeConfig, LoopClosureConfig, MotionConfig
+from .config import MAX_SEARCH_CANDIDATES, AlignmentConfig, KeyframeConfig, LoopClosureConfig, MotionConfig
 from .models import chi2_quantile, wrap
 from .geometry import between, compose, rotate_covariance
 from .correlative import Field, fit, make_field, search, see_through
@@ -35,8 +35,8 @@ __all__ = ["DISTINCT_THETA", "DISTINCT_XY", "SEE_THROUGH_POOL", "ScanSlam", "Sca
 
 #: ``alignment.see_through``: the correlative search's best distinct window poses re-ranked by their
 #: score less the share of the map they see through, of which the ``search_candidates`` best are
-#: refined (32: the most ``search_candidates`` allows, each an ICP run)
-SEE_THROUGH_POOL = 32
+#: refined (the most ``search_candidates`` allows, 32, each an ICP run)
+SEE_THROUGH_POOL = MAX_SEARCH_CANDIDATES
 
 
 @dataclass
@@ -51,7 +51,7 @@ class ScanStep:
     new_keyframe: bool = False
     jump_rejected: bool = False  # the match jumped from the prediction and failed the point check
     searched: bool = False  # the correlative search ran (the motion may lie beyond the ICP's reach)
-    fit: float = float("nan")  # the chosen pose's fit (slam.correlative.fit) when searched
+    fit: float = float("nan")  # the chosen pose's fit (slam.correlative.fit) when searched; with alignment.see_through, less its see-through share
     ambiguous: bool = False  # the search found a distinct pose that fits as well, which the prior barely tells apart
     odometry: bool = False  # the prediction was the odometry's step (motion.use_odometry)
     odometry_doubt: bool = False  # its match was poor and the constant-velocity prediction's clearly better

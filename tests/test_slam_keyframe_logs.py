@@ -234,6 +234,26 @@ def test_see_through_is_the_share_of_the_map_in_view_that_the_beams_pass():
     assert through > 0 and share == pytest.approx(through / seen, abs=1e-12)
 
 
+def test_see_through_wraps_a_full_turn_of_beams_at_the_seam():
+    """A 360-beam ring scan (1 degree apart, from -pi + 0.5 deg): every beam returns at 3 m but the
+    last, which returns at 1 m. A map point at 2 m just past -pi is nearest the first beam, whose
+    neighbour across the seam returns short of it, so it is not passed.
+    Unwrapped, its neighbours were taken on one side only and it read as passed (share 1); with
+    the short beam on the far side of the scan instead, it is passed (the beams either side reach
+    3 m), which both readings agree on."""
+    step = np.deg2rad(1.0)
+    bearings = -np.pi + step / 2 + np.arange(360) * step
+    ranges = np.full(360, 3.0)
+    ranges[-1] = 1.0
+    point = 2.0 * np.array([[np.cos(-np.pi + 0.1 * step), np.sin(-np.pi + 0.1 * step)]])  # nearest the first beam
+    args = (0.3, 0.05, 30.0)
+    assert see_through(point, np.array([0.0, 0.0, 0.0]), bearings, ranges, *args) == 0.0
+    ranges[-1], ranges[180] = 3.0, 1.0
+    assert see_through(point, np.array([0.0, 0.0, 0.0]), bearings, ranges, *args) == 1.0
+    assert see_through(np.empty((0, 2)), np.zeros(3), bearings, ranges, *args) == 0.0
+    assert see_through(point, np.zeros(3), bearings[:2], ranges[:2], *args) == 0.0
+
+
 @pytest.fixture(scope="module")
 def corridor_three_seconds_apart():
     """The simulated corridor scanned at 1 degree (181 beams, as Intel's and ACES's logs), 3 s
