@@ -98,10 +98,9 @@ def test_wide_circle_pieces_are_chords_within_the_noise() -> None:
 
 
 def test_medians_and_pairwise_sums_equal_numpys() -> None:
-    """The engine's median (quickselect, branchless three-way partitions, the last SELECT_SORT (8) or
-    fewer candidates sorted by insertion) and pairwise sums (fixed levels up to 1,928 terms, an
-    explicit stack beyond) equal numpy's bit for bit: ties, constant, sorted and reversed data, even
-    and odd sizes on both sides of SELECT_SORT, sums across the levels' limits."""
+    """The engine's median (quickselect, branchless three-way partitions) and pairwise sums (fixed levels up
+    to 1,928 terms, an explicit stack beyond) equal numpy's bit for bit: ties, constant, sorted and
+    reversed data, even and odd sizes, sums across the levels' limits."""
     from features.sensor import engine
 
     rng = np.random.default_rng(12)

@@ -349,10 +349,6 @@ def median3(x: float, y: float, z: float) -> float:
     return max(min(x, y), min(max(x, y), z))
 
 
-# a selection's candidates at most this many are sorted, not partitioned further (``select``)
-SELECT_SORT = 8
-
-
 @kernel
 def select(w, ra, rb, n, k):  # noqa: ANN001, ANN201
     """The k-th smallest of w[ra, :n] (0-based; no nan) and the (k-1)-th (-inf for k = 0), by
@@ -362,16 +358,14 @@ def select(w, ra, rb, n, k):  # noqa: ANN001, ANN201
     pivot's copies dropped. Both writes are made for every value, without branches: which side a
     value takes is data, not predictable, and no value is read back from a slot just written (an
     in-place partition waits on a store to load every next value). The pivot: the median of three,
-    of three medians of three on long ranges. The last SELECT_SORT candidates or fewer are sorted in
-    place by insertion and indexed (a partition pass costs its setup and a mispredicted exit
-    whatever its length: a median of 40 values 148 -> 119 ns). Indexed unsigned: numba then adds
-    no negative-index wraparound."""
+    of three medians of three on long ranges. Indexed unsigned: numba then adds no negative-index
+    wraparound."""
     src, dst = ra, rb  # rows of w
     off = np.uint64(0)  # the candidates: w[src, off:off + m], k counted from off
     m = np.uint64(n)
     kk = np.uint64(k)
     below = -np.inf  # the largest value known to be below the candidates
-    while m > np.uint64(SELECT_SORT):
+    while m > np.uint64(1):
         if m > np.uint64(64):
             st = m // np.uint64(9)
             b = off + st // np.uint64(2)
@@ -403,16 +397,7 @@ def select(w, ra, rb, n, k):  # noqa: ANN001, ANN201
                 below = max(below, w[dst, off + i])
             return pivot, below
         src, dst = dst, src
-    for i in range(np.uint64(1), m):  # the few candidates left sorted by insertion
-        x = w[src, off + i]
-        j = i
-        while j > np.uint64(0) and w[src, off + j - np.uint64(1)] > x:
-            w[src, off + j] = w[src, off + j - np.uint64(1)]
-            j -= np.uint64(1)
-        w[src, off + j] = x
-    if kk > np.uint64(0):  # the next smaller one is a candidate too
-        below = w[src, off + kk - np.uint64(1)]
-    return w[src, off + kk], below
+    return w[src, off], below
 
 
 @kernel
