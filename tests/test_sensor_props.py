@@ -60,11 +60,9 @@ def test_merged_lines_near_the_origin_keep_rho_non_negative() -> None:
     (0-10 m, 100-3,000 beams) had such a line, e.g. rho = -0.5742 m below. Now the same line is
     reported as (-rho, alpha + pi), with the covariance's off-diagonal negated. (Seeds 21 and 203
     were here too until the merge stopped at depth jumps: their pieces no longer merge; 435 and
-    712 are the next seeds whose one line is such a fusion. The values follow the biweight refit's
-    scale, a median of triple medians since 2026-12-07: 0.09959 -> 0.09997 m on seed 115, the
-    others within 0.5 mm.)"""
-    want_rho = {115: [0.09996939700779706], 230: [0.5737541616191799], 435: [0.40401282064640176],
-                712: [0.6679770028956735]}
+    712 are the next seeds whose one line is such a fusion.)"""
+    want_rho = {115: [0.09959437841423124], 230: [0.5741846243811728], 435: [0.40403227598860536],
+                712: [0.6679779658475677]}
     for seed, rho_abs in want_rho.items():
         rng = np.random.default_rng(seed)
         n = int(rng.integers(100, 400))
