@@ -64,7 +64,6 @@ ONE_DEG = math.radians(1.0)  # an LMS200 mirror turn's beam step (finer scans in
 ROBUST_STEPS = 1  # reweighted steps of the final biweight refit (``robust_refit``): one step from the
 # least-squares line is one iteratively-reweighted step, not the fixed point (nor Bickel's Newton
 # step): it removes most, not all, of the least-squares line's pull towards outliers
-REFIT_TRIPLES = 9  # from this many used beams on, the biweight refit's scale is a median of triple medians
 TUKEY_C = 4.685  # biweight tuning constant, in robust scales (95 % efficiency under Gaussian noise)
 MAD_TO_SIGMA = 1.4826  # median absolute deviation -> std of a Gaussian
 SIGMA_FLOOR_RAY = 0.001  # smallest robust scale of a line's residuals (m): noiseless scans
@@ -1315,12 +1314,7 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
     """In place: each line (rho, alpha) refitted on the valid beams first..last by ROBUST_STEPS
     iteratively reweighted steps of Tukey's biweight M-estimator (tuning TUKEY_C scales) on the ray
     residuals z = r - rho / cos(b - alpha), the scale 1.4826 median |z| about the line as it comes
-    in (at least SIGMA_FLOOR_RAY); from REFIT_TRIPLES used beams on, the median of the medians of
-    consecutive triples of |z| (the k // 3 triples in beam order, a last one or two beams left out):
-    the median of three values each at or below the population median with probability 1/2 is
-    so too (3F^2 - 2F^3 = 1/2 at F = 1/2), so the factor stays 1.4826, and the scale's standard
-    error grows by sqrt(4/3) (the triple median's density at the median is 1.5 times that of |z|)
-    for a selection on a third of the values (the refit 1.17x; the full median was ~1/3 of it). The ray normalisation 1 / cos(b - alpha) is taken at the
+    in (at least SIGMA_FLOOR_RAY). The ray normalisation 1 / cos(b - alpha) is taken at the
     incoming line (the steps move alpha by far less than a beam step). Real residuals are
     heavy-tailed (a chair leg before a wall, mixed pixels, a stretch of rough surface) and their
     scatter varies along a scan, so the least-squares line over the inlier_tau sigma_r inliers is
@@ -1348,12 +1342,7 @@ def robust_refit(rho, alpha, first, last, ranges, bearings, valid) -> None:  # n
             j += np.uint64(1)
         if k < 3:
             continue
-        nm = k  # the scale's sample: the medians of consecutive triples of |z| from REFIT_TRIPLES beams on
-        if k >= REFIT_TRIPLES:
-            nm = k // 3
-            for t in range(nm):  # written in place behind the reads
-                z[t] = median3(z[3 * t], z[3 * t + 1], z[3 * t + 2])
-        scale = max(MAD_TO_SIGMA * median_rows(work, 3, 4, nm), SIGMA_FLOOR_RAY)  # z (row 3) selected in place: not read again
+        scale = max(MAD_TO_SIGMA * median_rows(work, 3, 4, k), SIGMA_FLOOR_RAY)  # z (row 3) selected in place: not read again
         inv_cut = 1.0 / (TUKEY_C * scale)
         for _ in range(ROBUST_STEPS):
             sw, swg, swgg, swr, swgr = biweight_sums(x, y, inv_c, k, ca, sa, r_m, inv_cut)  # cos, sin of a_m
