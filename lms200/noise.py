@@ -160,10 +160,11 @@ def _line_residuals(r: np.ndarray, angle_increment: float, range_min: float, ran
     idx = np.flatnonzero(use)
     rm, r0, rp = rm[idx], r0[idx], rp[idx]
     c2 = 2.0 * np.cos(k * angle_increment)
-    s = rm + rp
-    e = r0 - c2 * rm * rp / s
-    wm, wp = c2 * rp**2 / s**2, c2 * rm**2 / s**2
-    z = e / np.sqrt(1.0 + wm**2 + wp**2)
+    q = 1.0 / (rm + rp)  # one division a triple (``features.sensor.engine`` computes it in this order)
+    q2 = q * q
+    e = r0 - c2 * rm * rp * q
+    wm, wp = c2 * (rp * rp) * q2, c2 * (rm * rm) * q2
+    z = e / np.sqrt(1.0 + wm * wm + wp * wp)
     return z, r0, idx + k
 
 

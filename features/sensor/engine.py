@@ -287,11 +287,11 @@ def neighbour_residuals(ranges, c2, lo, hi, z, m):  # noqa: ANN001, ANN201
     rm_, r0_, rp_ = ranges[:n], ranges[1:n + 1], ranges[2:n + 2]
     for i in range(n):
         rm, r0, rp = rm_[i], r0_[i], rp_[i]
-        s = rm + rp
-        s2 = s * s
-        wm = c2 * (rp * rp) / s2
-        wp = c2 * (rm * rm) / s2
-        res = (r0 - c2 * rm * rp / s) / math.sqrt(1.0 + wm * wm + wp * wp)
+        q = 1.0 / (rm + rp)  # one division a triple for the three by r- + r+ or its square
+        q2 = q * q
+        wm = c2 * (rp * rp) * q2
+        wp = c2 * (rm * rm) * q2
+        res = (r0 - c2 * rm * rp * q) / math.sqrt(1.0 + wm * wm + wp * wp)
         # in range (False on nan, inf < inf) and no depth step
         use = lo <= rm < hi and lo <= r0 < hi and lo <= rp < hi and abs(rp - rm) <= JUMP_FRACTION * r0
         zz[i] = res if use else np.nan
@@ -1060,11 +1060,11 @@ def local_scale(ranges, valid, f, l, t, c2, w, ra, rb) -> float:  # noqa: ANN001
             rm, r0, rp = ranges[j - t], ranges[j], ranges[j + t]
             if not abs(rp - rm) <= JUMP_FRACTION * r0:  # a depth step, as lms200.noise skips it
                 continue
-            s = rm + rp
-            s2 = s * s
-            wm = c2 * (rp * rp) / s2
-            wp = c2 * (rm * rm) / s2
-            w[ra, m] = abs(r0 - c2 * rm * rp / s) / math.sqrt(1.0 + wm * wm + wp * wp)
+            q = 1.0 / (rm + rp)  # as ``neighbour_residuals``
+            q2 = q * q
+            wm = c2 * (rp * rp) * q2
+            wp = c2 * (rm * rm) * q2
+            w[ra, m] = abs(r0 - c2 * rm * rp * q) / math.sqrt(1.0 + wm * wm + wp * wp)
             m += 1
     if m < LOCAL_MIN_TRIPLES:
         return 0.0
