@@ -4,7 +4,13 @@ saying it cannot be read or written, and nothing of an earlier run is lost.
 
 Root reads and writes every file whatever its mode (``os.access`` says yes, ``open`` succeeds),
 so these tests skip when run as root: a mode of 000 or 0444 is no obstacle there. They were
-checked as an unprivileged user (``su fuzzer -c 'python -m pytest tests/test_permissions.py'``)."""
+checked as an unprivileged user (``su fuzzer -c 'python -m pytest tests/test_permissions.py'``).
+
+What lets root pass over a file's mode is two capabilities, CAP_DAC_OVERRIDE and CAP_DAC_READ_SEARCH, not
+the user id. So under root (as on CI) `test_the_permission_tests_pass_without_root_powers` runs this module
+again in a child process whose capability bounding set lacks those two: a root process then obeys file
+modes like any user (``open`` and ``os.access`` both refuse), and the tests below run there instead of
+skipping."""
 
 from __future__ import annotations
 
@@ -16,8 +22,33 @@ import yaml
 
 from experiments.cli import main
 
-pytestmark = pytest.mark.skipif(os.geteuid() == 0, reason="root reads and writes any file whatever its mode, so "
-                                "an unreadable or read-only path cannot be made for it")
+CAP_DAC_OVERRIDE, CAP_DAC_READ_SEARCH = 1, 2  # linux/capability.h
+PR_CAPBSET_DROP = 24  # linux/prctl.h
+
+
+def _capabilities(field: str) -> int | None:
+    """This process's capability set `field` ("CapEff", "CapPrm", "CapBnd") as a bit mask, None off Linux."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith(field + ":"):
+                return int(line.split()[1], 16)
+    except OSError:
+        pass
+    return None
+
+
+def _overrides_modes() -> bool:
+    """Whether this process reads and writes files whatever their modes (root with its usual capabilities)."""
+    eff = _capabilities("CapEff")
+    if eff is None:
+        return os.geteuid() == 0
+    return bool(eff & (1 << CAP_DAC_OVERRIDE | 1 << CAP_DAC_READ_SEARCH))
+
+
+OVERRIDES_MODES = _overrides_modes()
+needs_modes_obeyed = pytest.mark.skipif(OVERRIDES_MODES, reason="this process reads and writes any file whatever its "
+                                        "mode (root), so an unreadable or read-only path cannot be made for it; "
+                                        "test_the_permission_tests_pass_without_root_powers runs them without it")
 
 
 @pytest.fixture
@@ -64,6 +95,7 @@ def _sweep(tmp_path: Path, k: list[int]) -> tuple[Path, Path]:
     return spec, tmp_path / "sw"
 
 
+@needs_modes_obeyed
 def test_figures_over_a_read_only_figure_is_refused_before_drawing(tables, tmp_path, capsys, unlock):
     out = tmp_path / "o"
     assert main(["figures", "--tables", str(tables), "--out", str(out)]) == 0
@@ -78,6 +110,7 @@ def test_figures_over_a_read_only_figure_is_refused_before_drawing(tables, tmp_p
     assert (out / "figures.yaml").read_bytes() == record
 
 
+@needs_modes_obeyed
 def test_a_read_only_tables_folder_of_a_study_is_refused_before_the_study(tmp_path, capsys, unlock, monkeypatch):
     import experiments.figures.study as study
 
@@ -91,6 +124,7 @@ def test_a_read_only_tables_folder_of_a_study_is_refused_before_the_study(tmp_pa
                               "run writes its outputs there; make it writable (chmod u+w), or give another folder")
 
 
+@needs_modes_obeyed
 def test_calibrate_does_not_replace_a_read_only_or_unreadable_sensor_yaml(sim, tmp_path, capsys, unlock):
     out = tmp_path / "s.yaml"
     text = "# lmsbench calibrate run\nnoise_sigma: 0.01\n"
@@ -106,6 +140,7 @@ def test_calibrate_does_not_replace_a_read_only_or_unreadable_sensor_yaml(sim, t
                               "cannot tell whether it wrote it; make it readable, or give a new file name")
 
 
+@needs_modes_obeyed
 def test_an_unreadable_record_in_out_is_said_unreadable(sim, tmp_path, capsys, unlock):
     out = tmp_path / "o"
     assert main(["compare", str(sim), "--methods", "sensor", "--out", str(out)]) == 0
@@ -118,6 +153,7 @@ def test_an_unreadable_record_in_out_is_said_unreadable(sim, tmp_path, capsys, u
                               "readable, or give another folder")
 
 
+@needs_modes_obeyed
 @pytest.mark.parametrize("mode", [0o000, 0o600])
 def test_an_unreadable_simulate_folder_is_named(sim, tmp_path, capsys, unlock, mode):
     import shutil
@@ -130,6 +166,7 @@ def test_an_unreadable_simulate_folder_is_named(sim, tmp_path, capsys, unlock, m
     assert _error(capsys) == f"lmsbench info: error: {run}: folder cannot be read (permission denied: its files cannot be opened)"
 
 
+@needs_modes_obeyed
 def test_a_resumed_sweep_whose_cells_are_read_only_is_refused_before_computing(tmp_path, capsys, unlock, monkeypatch):
     import experiments.sweep.runner as runner
 
@@ -146,6 +183,7 @@ def test_a_resumed_sweep_whose_cells_are_read_only_is_refused_before_computing(t
                               "writable, and cells are left to compute; make it writable (chmod u+w) to resume the sweep")
 
 
+@needs_modes_obeyed
 def test_a_resumed_sweep_with_an_unreadable_cell_keeps_it(tmp_path, capsys, unlock):
     spec, out = _sweep(tmp_path, [3, 5])
     assert main(["sweep", str(spec), "--inprocess", "--no-progress", "--out", str(out)]) == 0
@@ -162,6 +200,7 @@ def test_a_resumed_sweep_with_an_unreadable_cell_keeps_it(tmp_path, capsys, unlo
     assert cell.read_bytes() == kept
 
 
+@needs_modes_obeyed
 def test_unreadable_tables_and_sweep_folders_are_named(tables, tmp_path, capsys, unlock):
     import shutil
 
@@ -184,3 +223,32 @@ def test_unreadable_tables_and_sweep_folders_are_named(tables, tmp_path, capsys,
     assert main(["figures", "--tables", str(t), "--sweep", str(sw), "--out", str(tmp_path / "o")]) == 2
     assert _error(capsys) == (f"lmsbench figures: error: --sweep {sw}: folder cannot be read (permission denied), so the "
                               "sweep's results in it cannot be read; make it readable (chmod u+rx)")
+
+
+def _drop_mode_override() -> None:
+    """In the child before exec: take CAP_DAC_OVERRIDE and CAP_DAC_READ_SEARCH out of the bounding set, so the
+    program it runs (as root) gets neither and obeys file modes."""
+    import ctypes
+
+    libc = ctypes.CDLL(None, use_errno=True)
+    for cap in (CAP_DAC_OVERRIDE, CAP_DAC_READ_SEARCH):
+        if libc.prctl(PR_CAPBSET_DROP, cap, 0, 0, 0) != 0:
+            raise OSError(ctypes.get_errno(), f"prctl(PR_CAPBSET_DROP, {cap})")
+
+
+@pytest.mark.skipif(not OVERRIDES_MODES or os.geteuid() != 0 or _capabilities("CapBnd") is None,
+                    reason="only root on Linux passes over file modes here (the tests above run themselves)")
+def test_the_permission_tests_pass_without_root_powers() -> None:
+    import subprocess
+    import sys
+
+    tests = [name for name in globals() if name.startswith("test_") and name != "test_the_permission_tests_pass_without_root_powers"]
+    child = subprocess.run([sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider", "-rs", __file__],
+                           capture_output=True, text=True, preexec_fn=_drop_mode_override, cwd=Path(__file__).parents[1],
+                           timeout=600)
+    assert child.returncode == 0, child.stdout[-3000:] + child.stderr[-3000:]
+    # every test of this module ran there and passed; none but this one skipped
+    import re
+
+    summary = re.match(r"(\d+) passed, 1 skipped in ", child.stdout.splitlines()[-1])
+    assert summary and int(summary[1]) >= len(tests), child.stdout[-2000:]
