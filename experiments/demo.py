@@ -83,7 +83,8 @@ MIT_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "carmen" / "
 
 def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -> Section:
     """A calibrated simulation of the MIT-like preset next to the MIT CSAIL log (demo size:
-    the study's duration and seed; at most duration x rate scans of the log), or a note."""
+    the study's duration and seed; at most duration x rate scans of the log, but at least 20),
+    or a note."""
     from experiments.sim2real import PROBE_RATE_HZ, PROBE_SEEDS, format_report, sim2real, write_outputs
 
     path = Path(cfg.sim2real_log) if getattr(cfg, "sim2real_log", None) else MIT_LOG

@@ -46,6 +46,17 @@ def test_compare_table_rows_and_scores():
     assert set(s["method"]) == set(BASELINES) and (s["f1"] == 1.0).all()
     assert s["speed_vs_sensor"].isna().all()  # no sensor method in this run
     assert (s["cpu_us_median"] > 0).all() and s["cpu_speed_vs_sensor"].isna().all()
+    # every summary column is documented: in docs/baselines.md's paragraph on summary.csv or docs/realdata.md's
+    # table of its real-data columns (source, method, kind and backend were in neither)
+    import re
+
+    said = (ROOT / "docs" / "baselines.md").read_text()
+    said = said[said.index("`summary.csv` / `summary.txt` (per source"):]
+    said = said[:said.index("and `config.yaml`")]
+    realdata = (ROOT / "docs" / "realdata.md").read_text()
+    said += realdata[realdata.index("| column | meaning |"):realdata.index("The ray residual of a beam")]
+    names = set(re.findall(r"`([a-z0-9_]+)`", said))
+    assert not set(s.columns) - names, sorted(set(s.columns) - names)
 
 
 def test_methods_run_interleaved_in_rotating_order():

@@ -65,6 +65,10 @@ def test_info_json_numbers_are_numbers(tmp_path: Path, capsys: pytest.CaptureFix
     assert main(["info", str(tmp_path / "one.clf"), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
     assert info["beams"] == 361 and isinstance(info["fov_deg"], float) and info["fov_deg"] == pytest.approx(180.0)
+    # docs/commands.md's list of the keys names every key --json gives (it lacked laser_mount and laser_mount_changes)
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "commands.md").read_text()
+    keys = doc[doc.index("Its keys (`experiments.loginfo.LogSummary`)"):doc.index("A command whose output's reader")]
+    assert not [k for k in info if f"`{k}`" not in keys], [k for k in info if f"`{k}`" not in keys]
     # invalid readings: nan, 0 m (a logger's missing reading) and finite ones out of limits, not +inf
     r = np.full(361, 2.0)
     r[:10], r[10:30], r[30:31], r[31:36] = np.nan, 0.0, 9.0, np.inf

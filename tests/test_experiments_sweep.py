@@ -656,6 +656,11 @@ def test_a_sweep_that_fails_before_any_cell_leaves_no_folder(tmp_path, monkeypat
     assert sorted(p.name for p in (tmp_path / "new").iterdir()) == ["cells", "results.csv", "results.parquet",
                                                                      "sweep.yaml", "versions.yaml"]
     assert len(list((tmp_path / "new" / "cells").iterdir())) == 1 and computed(log) == ["0 0"]
+    # docs/experiments.md's listing of a sweep folder names each of them (it lacked versions.yaml and results.csv)
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "experiments.md").read_text()
+    listing = doc[doc.index("```\nresults/sweeps/NAME/") + 4:].split("```")[0]  # the listing's code block
+    listed = sorted(line.split()[0].split("/")[0] for line in listing.splitlines()[1:] if line.strip())
+    assert listed == sorted(p.name for p in (tmp_path / "new").iterdir()), listed
 
 
 def test_a_cell_calling_sys_exit_is_an_error_row_not_the_end_of_the_sweep():

@@ -11,7 +11,7 @@ from experiments.options import WORLDS, DEMO_OUTPUTS, DEMO_OWNER, DURATION, SEED
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("demo", help="simulate an office run, compare every extractor, run SLAM, a sweep, "
-                                    "figures and results/demo/report.md")
+                                    "sim2real of the MIT CSAIL log where present, figures and results/demo/report.md")
     p.add_argument("--out", type=path_arg, help="output folder (default: a new results/demo/DATE_TIME, "
                                             "linked as results/demo/latest)")
     p.add_argument("--seed", type=SEED, default=0, help="world and run seed (default 0)")

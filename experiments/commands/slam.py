@@ -26,7 +26,7 @@ from experiments.options import (SLAM_OUTPUTS, SLAM_OWNER, SLAM_RECORD_KEYS, Inp
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("slam", help="odometry-free SLAM (scan matching + pose graph, or the paper's EKF) over a simulator folder, CARMEN log or bag "
-                                    "(trajectory.tum, map.json, metrics.json, config.yaml, slam.png)")
+                                    "(trajectory.tum, keyframes.tum, map.json, metrics.json, config.yaml, slam.png)")
     p.add_argument("input", type=path_arg, help="simulator output folder (scans.clf, groundtruth.tum, world.json), CARMEN log or bag")
     p.add_argument("--out", type=path_arg, required=True, help="output folder")
     p.add_argument("--config", type=path_arg, help="a SLAM config.yaml (its 'slam' section or a flat mapping)")
