@@ -29,7 +29,7 @@ MAX_FIELD_SIDE = 2000  # cells: a field about a centre is at most 2,000 x 2,000 
 class Field:
     """A likelihood raster: ``values[i, j]`` at world (origin[0] + i res, origin[1] + j res)."""
 
-    values: np.ndarray  # (nx, ny), in [0, 1]
+    values: np.ndarray  # (nx, ny), in [0, 1]; -1 in known free space (:func:`free_space`)
     origin: np.ndarray  # (2,) m, world position of cell (0, 0)
     resolution: float  # m
 
@@ -58,7 +58,8 @@ def make_field(points: np.ndarray, resolution: float, sigma: float, centre: np.n
 
 @dataclass(frozen=True)
 class Candidate:
-    """A pose of the window (world frame, m, m, rad) and its score (mean field value, in [0, 1])."""
+    """A pose of the window (world frame, m, m, rad) and its score (mean field value, in [0, 1]; in
+    [-1, 1] on a field with known free space, :func:`free_space`)."""
 
     pose: np.ndarray
     score: float
@@ -258,7 +259,11 @@ def free_space(field: Field, origins: np.ndarray, points: list[np.ndarray], gap:
         if q.shape[0]:
             _trace(crossed, float(o[0]), float(o[1]), np.ascontiguousarray(q[:, 0]), np.ascontiguousarray(q[:, 1]),
                    float(field.origin[0]), float(field.origin[1]), res, float(gap), float(gap_per_range))
-    far = field.values < math.exp(-0.5 * (gap / sigma) ** 2)  # more than gap m from every map point
+    level = math.exp(-0.5 * (gap / sigma) ** 2)  # the field's value gap m from the nearest map point
+    if level > 0.0:
+        far = field.values < level  # more than gap m from every map point
+    else:  # gap > ~38.6 sigma: that value underflows to 0, and so does the field's beyond ~38.6 sigma
+        far = distance_transform_edt(field.values < 1.0, sampling=field.resolution) > gap  # 1 on map points' cells
     return Field(np.where(crossed & far, -1.0, field.values), field.origin, res)
 
 

@@ -243,7 +243,8 @@ def test_free_space_marks_the_cells_the_map_beams_crossed_short_of_every_surface
     al = AlignmentConfig()
     y = np.arange(-3.0, 3.0 + 1e-9, 0.05)
     wall = np.column_stack((np.full_like(y, 5.0), y))
-    corners = np.array([[-1.0, -4.0], [7.0, 4.0]])  # map points that stretch the field over the fan (not traced)
+    # map points that stretch the field over the fan, and one inside the fan (none of them traced)
+    corners = np.array([[-1.0, -4.0], [7.0, 4.0], [2.75, -0.6]])
     field = make_field(np.vstack((wall, corners)), al.search_resolution, al.search_sigma)
     free = free_space(field, np.zeros((1, 2)), [wall], al.normal_gap, al.normal_gap_per_range, al.search_sigma)
 
@@ -255,9 +256,20 @@ def test_free_space_marks_the_cells_the_map_beams_crossed_short_of_every_surface
     for x in np.arange(0.5, stop - 0.1, 0.5):
         for yy in (-0.4 * x, 0.0, 0.4 * x):  # inside the fan (|y| <= 0.6 x) and short of the tolerance
             assert value(free, x, yy) == -1.0
-    for x, yy in ((4.9, 0.0), (5.0, 1.0), (6.0, 0.0), (2.0, 2.0), (1.0, -1.0)):
-        # on or near the wall, behind it, outside the fan (|y| > 0.6 x): the field's own value
+    for x, yy in ((4.9, 0.0), (4.6, 0.0), (5.0, 1.0), (6.0, 0.0), (2.0, 2.0), (1.0, -1.0), (2.75, -0.6)):
+        # on or near the wall, past the stop point (4.45 m: the tolerance grows with range) but short of
+        # the wall, behind it, outside the fan (|y| > 0.6 x), on a map point inside the crossed space:
+        # the field's own value
         assert value(free, x, yy) == value(field, x, yy) >= 0.0
+    assert value(field, 2.75, -0.6) > 0.0
+    # a sigma so small that the field's value gap m from a point underflows: the same cells are free
+    tiny = make_field(np.vstack((wall, corners)), al.search_resolution, 0.005)
+    free_tiny = free_space(tiny, np.zeros((1, 2)), [wall], al.normal_gap, al.normal_gap_per_range, 0.005)
+    for x in np.arange(0.5, stop - 0.1, 0.5):
+        for yy in (-0.4 * x, 0.0, 0.4 * x):
+            assert value(free_tiny, x, yy) == -1.0
+    for x, yy in ((4.9, 0.0), (4.6, 0.0), (2.75, -0.6)):
+        assert value(free_tiny, x, yy) >= 0.0
     scan = np.array([[2.0, 0.0], [3.0, 0.5], [5.0, 0.0], [5.0, 1.0]])  # two in the crossed space, two on the wall
     assert free_share(scan, free, np.zeros(3)) == 0.5
     assert free_share(scan, field, np.zeros(3)) == 0.0  # a field without free space marks none
