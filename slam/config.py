@@ -139,6 +139,15 @@ class AlignmentConfig:
             out-scored the true pose even on a map placed by the logs' corrected poses. Off by
             default: fewer half-turn steps on Intel and ACES without odometry, but Intel's ATE
             worse (docs/slam.md).
+        free_space: (off by default) the search's likelihood field also counts the known free
+            space against a pose: a cell that a local-map keyframe's beam crossed, short of its
+            return by the chord test's tolerance (``normal_gap`` + ``normal_gap_per_range`` x
+            range) and more than ``normal_gap`` from every map point, scores -1 instead of the
+            field's value (:func:`slam.correlative.free_space`), so the window ranks poses by hits
+            less points in free space (points where no beam went say nothing); every competitor's
+            fit is less the share of its points in such cells (:func:`slam.correlative.free_share`).
+            Off by default: fewer bad steps on Intel and ACES without odometry, but Intel's ATE
+            worse (docs/slam.md).
     """
 
     stride: int = 3
@@ -180,6 +189,7 @@ class AlignmentConfig:
     ambiguity_sigmas: float = 3.0
     max_turn_rate: float = math.pi
     see_through: bool = False
+    free_space: bool = False
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ MAX_FIELD_SIDE = 2000  # cells: a field about a centre is at most 2,000 x 2,000 
 class Field:
     """A likelihood raster: ``values[i, j]`` at world (origin[0] + i res, origin[1] + j res)."""
 
-    values: np.ndarray  # (nx, ny), in [0, 1]
+    values: np.ndarray  # (nx, ny), in [0, 1]; -1 in known free space (:func:`free_space`)
     origin: np.ndarray  # (2,) m, world position of cell (0, 0)
     resolution: float  # m
 
@@ -58,7 +58,8 @@ def make_field(points: np.ndarray, resolution: float, sigma: float, centre: np.n
 
 @dataclass(frozen=True)
 class Candidate:
-    """A pose of the window (world frame, m, m, rad) and its score (mean field value, in [0, 1])."""
+    """A pose of the window (world frame, m, m, rad) and its score (mean field value, in [0, 1]; in
+    [-1, 1] on a field with known free space, :func:`free_space`)."""
 
     pose: np.ndarray
     score: float
@@ -108,14 +109,14 @@ def search(points: np.ndarray, field: Field, centre: np.ndarray, half_xy: float,
     flat = scores.ravel()
     if peaks:
         modes = ("wrap" if ring else "nearest", "nearest", "nearest")
-        flat = np.where(scores >= maximum_filter(scores, size=3, mode=modes), scores, -1.0).ravel()
+        flat = np.where(scores >= maximum_filter(scores, size=3, mode=modes), scores, -np.inf).ravel()
     top = min(flat.size, max(64, 32 * count))
     order = np.argpartition(-flat, top - 1)[:top]
     order = order[np.argsort(-flat[order], kind="stable")]
     side = 2 * n + 1
     out: list[Candidate] = []
     for f in order:
-        if flat[f] < 0:
+        if flat[f] == -np.inf:  # not a peak (scores with known free space may be negative)
             break
         a, rest = divmod(int(f), side * side)
         i, j = divmod(rest, side)
@@ -238,3 +239,63 @@ def see_through(map_points: np.ndarray, pose: np.ndarray, bearings: np.ndarray, 
         lo, hi = np.maximum(j - 1, 0), np.minimum(j + 1, n - 1)
     reach = np.minimum(np.minimum(r[lo], r[j]), r[hi])
     return float(np.mean(reach > rho + gap + gap_per_range * rho))
+
+
+def free_space(field: Field, origins: np.ndarray, points: list[np.ndarray], gap: float, gap_per_range: float,
+               sigma: float) -> Field:
+    """``field`` with the known free space counted against a point: -1 in every cell that a
+    keyframe's beam crossed (from its sensor at ``origins[k]`` (2,) to each of its world points
+    ``points[k]`` (p, 2), up to ``gap + gap_per_range * range`` m short of the point, the chord test's
+    tolerance for one surface) and that lies more than ``gap`` m from every map point (so a point a
+    surface's tolerance off the wall still scores as on it), the field's value elsewhere.
+
+    The field counts only the points that land on the map; a point in space the map's own beams
+    crossed is evidence against the pose (a scan turned half a turn, or slid along a corridor, puts
+    its far points there), and a point where no beam went (unknown) says nothing either way."""
+    res = field.resolution
+    crossed = np.zeros(field.values.shape, np.bool_)
+    for o, p in zip(np.asarray(origins, float).reshape(-1, 2), points):
+        q = np.asarray(p, float).reshape(-1, 2)
+        if q.shape[0]:
+            _trace(crossed, float(o[0]), float(o[1]), np.ascontiguousarray(q[:, 0]), np.ascontiguousarray(q[:, 1]),
+                   float(field.origin[0]), float(field.origin[1]), res, float(gap), float(gap_per_range))
+    level = math.exp(-0.5 * (gap / sigma) ** 2)  # the field's value gap m from the nearest map point
+    if level > 0.0:
+        far = field.values < level  # more than gap m from every map point
+    else:  # gap > ~38.6 sigma: that value underflows to 0, and so does the field's beyond ~38.6 sigma
+        far = distance_transform_edt(field.values < 1.0, sampling=field.resolution) > gap  # 1 on map points' cells
+    return Field(np.where(crossed & far, -1.0, field.values), field.origin, res)
+
+
+@kernel
+def _trace(crossed, ox, oy, px, py, gx, gy, res, gap, gap_per_range):
+    """Mark the cells of ``crossed`` (origin (gx, gy), ``res`` m cells) that the beams from (ox, oy)
+    to each point cross, sampled every half cell, stopping ``gap + gap_per_range * range`` m short."""
+    nx, ny = crossed.shape
+    h = 0.5 * res
+    for q in range(px.shape[0]):
+        dx, dy = px[q] - ox, py[q] - oy
+        r = math.sqrt(dx * dx + dy * dy)
+        stop = r - gap - gap_per_range * r
+        if stop <= 0.0:
+            continue
+        ux, uy = dx / r, dy / r
+        for t in range(int(stop / h) + 1):
+            u = int(math.floor((ox + ux * t * h - gx) / res + 0.5))
+            v = int(math.floor((oy + uy * t * h - gy) / res + 0.5))
+            if u >= 0 and u < nx and v >= 0 and v < ny:
+                crossed[u, v] = True
+
+
+def free_share(points: np.ndarray, field: Field, pose: np.ndarray) -> float:
+    """The share of the scan's points (p, 2, sensor frame) that land, at ``pose`` (world m, m, rad),
+    in a cell of ``field`` marked known free (value -1, :func:`free_space`); 0 without points."""
+    p = np.asarray(points, float).reshape(-1, 2)
+    if p.shape[0] == 0:
+        return 0.0
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    u = np.floor((c * p[:, 0] - s * p[:, 1] + pose[0] - field.origin[0]) / field.resolution + 0.5).astype(int)
+    v = np.floor((s * p[:, 0] + c * p[:, 1] + pose[1] - field.origin[1]) / field.resolution + 0.5).astype(int)
+    nx, ny = field.values.shape
+    inside = (u >= 0) & (u < nx) & (v >= 0) & (v < ny)
+    return float(np.sum(field.values[u[inside], v[inside]] < 0.0)) / p.shape[0]

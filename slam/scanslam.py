@@ -23,7 +23,7 @@ from dataclasses import replace
 from .config import MAX_SEARCH_CANDIDATES, AlignmentConfig, KeyframeConfig, LoopClosureConfig, MotionConfig
 from .models import chi2_quantile, wrap
 from .geometry import between, compose, rotate_covariance
-from .correlative import Field, fit, make_field, search, see_through
+from .correlative import Field, fit, free_share, free_space, make_field, search, see_through
 from .icp import Match, Reference, chord_normals, chord_normals_at, match, refine
 from .keyframes import DISTINCT_THETA, DISTINCT_XY, Keyframe, LoopClosure, find_closure, find_closure_window, local_map
 from .posegraph import PoseGraph, robust_noise
@@ -51,7 +51,7 @@ class ScanStep:
     new_keyframe: bool = False
     jump_rejected: bool = False  # the match jumped from the prediction and failed the point check
     searched: bool = False  # the correlative search ran (the motion may lie beyond the ICP's reach)
-    fit: float = float("nan")  # the chosen pose's fit (slam.correlative.fit) when searched; with alignment.see_through, less its see-through share
+    fit: float = float("nan")  # the chosen pose's fit (slam.correlative.fit) when searched; less its see-through share (alignment.see_through) and its free-space share (alignment.free_space)
     ambiguous: bool = False  # the search found a distinct pose that fits as well, which the prior barely tells apart
     odometry: bool = False  # the prediction was the odometry's step (motion.use_odometry)
     odometry_doubt: bool = False  # its match was poor and the constant-velocity prediction's clearly better
@@ -455,6 +455,8 @@ class ScanSlam:
                 for r in results]
         if al.see_through:  # the share of the map in view that the scan sees through counts against a pose
             fits = [f - self._see_through(sp, r.pose) for f, r in zip(fits, results)]
+        if al.free_space:  # the share of the scan's points in space the map's beams crossed counts against it
+            fits = [f - free_share(sp.matched, field, r.pose) for f, r in zip(fits, results)]
         best = max(fits)
         close = [i for i, f in enumerate(fits) if f >= best - al.fit_margin]
         wxy, wth = half_xy / al.search_sigmas, half_th / al.search_sigmas  # the prior, truncated to the window
@@ -494,8 +496,12 @@ class ScanSlam:
         al = self.alignment
         assert self.ref is not None
         if self._field_cache is None or self._field_cache[0] is not self.ref:
-            self._field_cache = (self.ref, make_field(self.ref.points, al.search_resolution, al.search_sigma,
-                                                      centre, radius))
+            fld = make_field(self.ref.points, al.search_resolution, al.search_sigma, centre, radius)
+            if al.free_space:
+                kfs = self.keyframes[-self.keyframes_cfg.local_map:]
+                fld = free_space(fld, np.array([kf.pose[:2] for kf in kfs]), [kf.world()[0] for kf in kfs],
+                                 al.normal_gap, al.normal_gap_per_range, al.search_sigma)
+            self._field_cache = (self.ref, fld)
         return self._field_cache[1]
 
     def odometry_prediction(self, odom_before: np.ndarray,
