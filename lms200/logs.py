@@ -7,6 +7,7 @@ name; both yield :class:`lms200.Record` objects.
 from __future__ import annotations
 
 import io
+import itertools
 import os
 import shutil
 import stat
@@ -97,7 +98,9 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
     Raises:
         InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument: a path that is
             a folder, a device or in a missing folder, an unknown ``fmt``, an item of ``records``
-            that is not an ``lms200.Record`` (naming its index), records that are not iterable.
+            that is not an ``lms200.Record`` (naming its index), records that are not iterable,
+            no record at all (nothing is written: ``read_log`` refuses a log of no scan; an empty
+            CARMEN log or bag was written, exit 0, and the reader refused it).
     """
     p = path_of(path)
     if fmt is None:
@@ -111,6 +114,10 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
     except TypeError:
         raise InputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
     checked = checked_records(items)
+    first = next(checked, None)  # before anything is written: a log of no scan is one read_log refuses
+    if first is None:
+        raise InputError(f"records: none to write to {p}: read_log refuses a log of no scan, so nothing was written")
+    checked = itertools.chain([first], checked)
     if fmt in ("bag", "bag2"):
         if fmt == "bag" and p.suffix != ".bag":
             raise InputError(f"path: a ROS 1 bag must end in .bag, got {p.name}")

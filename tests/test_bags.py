@@ -672,7 +672,9 @@ def test_a_bag_of_no_message_says_it_holds_no_topic(tmp_path: Path, name: str) -
     as "no any sensor_msgs/LaserScan topic; topics: []"."""
     from lms200.bag import BagError
 
-    write_log(tmp_path / name, [], fmt="bag" if name.endswith(".bag") else "bag2")
+    from lms200.bag import write_bag
+
+    write_bag(tmp_path / name, [])  # write_log refuses no records; the reader still meets such bags
     with pytest.raises(BagError, match=rf"^{re.escape(str(tmp_path / name))}: no sensor_msgs/LaserScan topic; it holds "
                                        r"no topic \(an empty bag\)$"):
         list(read_log(tmp_path / name))
@@ -1052,3 +1054,19 @@ def test_a_bag_rosbags_cannot_open_is_one_line(tmp_path: Path) -> None:
                     r"here in \"<unicode string>\", line 4", str(e.value)), str(e.value)
     spaced = tmp_path / "two  spaces.bag"  # a review: every run of whitespace was collapsed, a path with two spaces misquoted
     assert str(BagError(f"{spaced}: cannot open\n   ^ here")) == f"{spaced}: cannot open ^ here"
+
+
+@pytest.mark.parametrize("name, fmt", [("empty.clf", None), ("empty.clf.gz", None), ("empty.bag", None),
+                                       ("empty2", "bag2")])
+def test_write_log_of_no_record_writes_nothing(tmp_path: Path, name: str, fmt: str | None) -> None:
+    """Defect: write_log(path, []) wrote a CARMEN log of comments (or a bag of no message) that
+    read_log refused; now the pair agrees: no record is an InputError and an older log is kept."""
+    path = tmp_path / name
+    with pytest.raises(InputError, match=rf"^records: none to write to {re.escape(str(path))}: read_log refuses"):
+        write_log(path, iter([]), fmt=fmt)
+    assert not path.exists() and list(tmp_path.iterdir()) == []
+    if fmt is None and not name.endswith(".bag"):
+        write_log(path, [Record(_scan(1.0))])
+        with pytest.raises(InputError):
+            write_log(path, [])
+        assert [r.scan.stamp for r in read_log(path)] == [1.0]
