@@ -192,11 +192,15 @@ def write_whole(path: str | os.PathLike, write: Callable[[Path], object], suffix
     place did: a file that exists keeps its permission bits (a 0600 one became 0644 / 0664, the
     umask's), and a symbolic link is followed, its target replaced (the link was replaced by a
     regular file, its target left as it was). ``suffix`` ends the temporary name (``.NAME.PID.tmp.gz``)
-    for a ``write`` that packs by the name's suffix. Returns ``path``. Every whole-file output goes
+    for a ``write`` that packs by the name's suffix. First, the temporary files of ``path`` that a
+    process which no longer runs left (killed between write and rename) are removed
+    (:func:`remove_dead_temporaries`). Returns ``path``. Every whole-file output goes
     through here (``write_log``'s CARMEN logs, ``write_tum``, ``experiments.provenance.write_record``)."""
     given = Path(path)
     target = Path(os.path.realpath(given)) if os.path.islink(given) else given
-    tmp = target.with_name(f"{temporary_stem(target, suffix)}.{os.getpid()}.tmp{suffix}")
+    stem = temporary_stem(target, suffix)
+    tmp = target.with_name(f"{stem}.{os.getpid()}.tmp{suffix}")
+    remove_dead_temporaries(target, stem, suffix)
     try:
         write(tmp)
         try:
@@ -210,6 +214,37 @@ def write_whole(path: str | os.PathLike, write: Callable[[Path], object], suffix
         tmp.unlink(missing_ok=True)
         raise
     return given
+
+
+def process_alive(pid: int) -> bool:
+    """Whether a process ``pid`` runs on this machine (one of another user's counts: it may be writing)."""
+    try:
+        os.kill(pid, 0)
+    except (ProcessLookupError, OverflowError):  # none; a pid beyond any the kernel gives
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return pid > 0
+
+
+def remove_dead_temporaries(target: Path, stem: str, suffix: str) -> None:
+    """Remove the ``STEM.PID.tmpSUFFIX`` files beside ``target`` whose process no longer runs: what a
+    :func:`write_whole` killed (SIGKILL, a power cut) between its write and its rename left, which
+    stayed for ever (a user's ``.NAME.notes.tmp``, or a live writer's, is kept). Best effort: a file
+    that cannot be removed is left."""
+    import glob
+
+    if not target.parent.is_dir():
+        return
+    end = f".tmp{suffix}"
+    for old in target.parent.glob(f"{glob.escape(stem)}.*{glob.escape(end)}"):
+        pid = old.name[len(stem) + 1 : len(old.name) - len(end)]
+        if pid.isdigit() and len(pid) <= 10 and int(pid) != os.getpid() and not process_alive(int(pid)):
+            try:
+                if old.is_file() and not old.is_symlink():
+                    old.unlink()
+            except OSError:
+                pass
 
 
 def folder_message(p: Path) -> str:

@@ -1070,3 +1070,20 @@ def test_write_log_of_no_record_writes_nothing(tmp_path: Path, name: str, fmt: s
         with pytest.raises(InputError):
             write_log(path, [])
         assert [r.scan.stamp for r in read_log(path)] == [1.0]
+
+
+def test_a_killed_writers_temporary_file_is_removed_by_the_next_write(tmp_path: Path) -> None:
+    """Defect: a SIGKILL between write_whole's write and rename left .NAME.PID.tmp for ever; the
+    next write of that path removes those of a PID no process has (a live writer's, another
+    suffix's and a user's .NAME.notes.tmp are kept)."""
+    import os
+
+    path = tmp_path / "x.clf.gz"
+    dead = tmp_path / ".x.clf.gz.4194303.tmp.gz"  # beyond pid_max (2^22): no process has it
+    live = tmp_path / f".x.clf.gz.{os.getppid()}.tmp.gz"
+    kept = [live, tmp_path / ".x.clf.gz.notes.tmp.gz", tmp_path / ".x.clf.gz.4194303.tmp", tmp_path / ".y.clf.gz.4194303.tmp.gz"]
+    for p in (dead, *kept):
+        p.write_text("cut")
+    write_log(path, [Record(_scan(1.0))])
+    assert not dead.exists() and all(p.exists() for p in kept)
+    assert [r.scan.stamp for r in read_log(path)] == [1.0]
