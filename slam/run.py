@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Iterator, Sequence
+import itertools
+from typing import Any, Iterable, Iterator, Sequence, Sized
 
 import numpy as np
 
+from features.batch import MAX_ITERATOR_BEAMS
 from lms200.logs import MAX_COORD_M, checked_records
 from lms200.records import Record
 
@@ -196,7 +198,7 @@ def pose_nees(traj: np.ndarray, covs: np.ndarray, truths: list) -> np.ndarray:
     return out
 
 
-def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> SlamResult:
+def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_scans: int | None = None) -> SlamResult:
     """Odometry-free SLAM over a scan source (a log reader, the simulator's records...).
 
     ``config.preset == "default"``: motion measured by scan matching, keyframe pose graph with
@@ -207,24 +209,47 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
     ``config.motion.use_odometry`` (either preset; a record without it is predicted by the
     motion model); true poses only for the NEES diagnostic.
 
+    ``max_scans``: at most this many records are read (the rest are not: a live source may stop
+    there). Without it, an iterator or generator of records (not a list, a tuple, or another sized
+    collection, which is taken whole) is read up to ``MAX_ITERATOR_BEAMS`` beams (2^27, as
+    ``features.extract_many``: 371,794 scans of 361 beams, 2.75 h of an LMS200), then refused.
+
     Returns:
         SlamResult with one pose per record, stamped with the record's ``scan.stamp``.
+
+    Raises:
+        SlamInputError: an item that is no Record (naming its index), scans out of time order, a
+            ``max_scans`` that is no integer >= 1, an iterator that yields more than ``MAX_ITERATOR_BEAMS`` beams with
+            no ``max_scans`` (``itertools.repeat(record)`` ran for ever, its trajectory growing).
     """
     if not isinstance(config, SlamConfig):
         raise SlamInputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
+    if max_scans is not None and (isinstance(max_scans, bool) or not isinstance(max_scans, (int, np.integer))
+                                  or max_scans < 1):
+        raise SlamInputError(f"max_scans: must be an integer >= 1 (or None), got {max_scans!r}")
+    bounded = max_scans is None and not isinstance(records, Sized)
     try:
-        records = in_scale(checked_records(iter(records), SlamInputError))
+        source = iter(records) if max_scans is None else itertools.islice(records, int(max_scans))
+        records = in_scale(checked_records(source, SlamInputError))
     except TypeError:
         raise SlamInputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
     range_maxes: set[float] = set()
 
     def seen(records: Iterable[Record]) -> Iterator[Record]:
         """The records, the first scan checked against the config before any matching or extraction
-        (:func:`check_first_scan`), each scan's range_max noted."""
+        (:func:`check_first_scan`), each scan's range_max noted; an iterator's beams counted."""
+        beams = 0
         for i, rec in enumerate(records):
             if i == 0:
                 check_first_scan(rec.scan, config, "records[0]")
             range_maxes.add(float(rec.scan.range_max))
+            if bounded:
+                beams += int(np.size(rec.scan.ranges))
+                if beams > MAX_ITERATOR_BEAMS:
+                    raise SlamInputError(
+                        f"records: an iterator or generator that yielded more than {MAX_ITERATOR_BEAMS:,} beams "
+                        f"({i + 1:,} scans) without ending (itertools.repeat?); pass a list of records, or "
+                        "run_slam(records, max_scans=N) to read at most N")
             yield rec
 
     records = seen(records)
