@@ -9,6 +9,7 @@ from typing import Any, Iterable, Iterator, Sequence, Sized
 import numpy as np
 
 from features.batch import MAX_ITERATOR_BEAMS
+from lms200.errors import LmsbenchWarning
 from lms200.logs import MAX_COORD_M, checked_records
 from lms200.records import Record
 
@@ -101,7 +102,7 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
     slam = SlamFilter(config)
     traj, covs = [], []
     keys = ("nis", "nis_dof", "nees", "n_landmarks", "n_matched", "n_lines", "prealign_used", "prealign_shift",
-            "point_score")
+            "point_score", "n_unobserved", "n_unadded")
     diag: dict[str, list] = {k: [] for k in keys}
     diverged_at = None
     anchor = None
@@ -135,7 +136,8 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
         for key, value in (("nis", info.nis), ("nis_dof", info.nis_dof), ("nees", nees),
                            ("n_landmarks", len(slam.landmarks)), ("n_matched", info.n_matched),
                            ("n_lines", info.n_lines), ("prealign_used", info.prealign_used),
-                           ("prealign_shift", info.prealign_shift), ("point_score", info.point_score)):
+                           ("prealign_shift", info.prealign_shift), ("point_score", info.point_score),
+                           ("n_unobserved", info.n_unobserved), ("n_unadded", info.n_unadded)):
             diag[key].append(value)
         ok = slam.healthy(full=(k % 50 == 0))
         healthy &= ok
@@ -148,6 +150,7 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
     if not traj:
         raise SlamInputError("no scans in the input")
     out: dict[str, Any] = {k: np.array(v) for k, v in diag.items()}
+    warn_limits(out, config)
     dof = out["nis_dof"].sum()
     finite_nees = out["nees"][np.isfinite(out["nees"])]
     out.update(
@@ -162,6 +165,25 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
     )
     return SlamResult(np.array(traj, float).reshape(-1, 4), np.array(covs).reshape(-1, 3, 3),
                       slam.map_lines(), slam.map_corners(), out)
+
+
+class SlamLimitWarning(LmsbenchWarning):
+    """The paper preset's filter left observations out at one of its bounds
+    (``observations.max_lines`` a scan, ``landmarks.max_landmarks`` in the map)."""
+
+
+def warn_limits(diag: dict[str, Any], config: SlamConfig) -> None:
+    """A SlamLimitWarning for each bound of the filter a run met (once a run: its scans and counts)."""
+    import warnings
+
+    for key, what, name, value in (
+            ("n_unobserved", "lines or corners were not observed", "observations.max_lines", config.observations.max_lines),
+            ("n_unadded", "observations started no landmark", "landmarks.max_landmarks", config.landmarks.max_landmarks)):
+        counts = diag[key]
+        if counts.sum():
+            warnings.warn(f"{int(counts.sum()):,} {what} in {int(np.count_nonzero(counts)):,} of {counts.size:,} scans: "
+                          f"beyond {name} ({value:,}, a bound of the filter's time and memory)",
+                          SlamLimitWarning, stacklevel=4)
 
 
 def lost_against_scan(scores: list[float], cfg) -> bool:

@@ -49,3 +49,52 @@ def test_an_endless_iterator_is_refused_at_the_beam_bound(monkeypatch: pytest.Mo
     for bad in (0, -1, True, 2.5, "3"):
         with pytest.raises(SlamInputError, match=r"^max_scans: must be an integer >= 1 \(or None\), got "):
             run_slam(records, max_scans=bad)
+
+
+def _many_lines(m: int, seed: int = 0):
+    """Observations of ``m`` distinct short lines (rho 1-20 m, lengths 0.3-3 m) in the sensor frame."""
+    from slam.observations import Observations
+
+    rng = np.random.default_rng(seed)
+    rho, alpha, length = rng.uniform(1, 20, m), rng.uniform(-np.pi, np.pi, m), rng.uniform(0.3, 3, m)
+    foot = np.column_stack((rho * np.cos(alpha), rho * np.sin(alpha)))
+    along = np.column_stack((-np.sin(alpha), np.cos(alpha))) * (length / 2)[:, None]
+    ends = np.hstack((foot - along, foot + along))
+    cov = np.tile(np.diag([0.02**2, 0.01**2]), (m, 1, 1))
+    return Observations(lines=np.column_stack((rho, alpha)), line_cov=cov, line_ends=ends), length
+
+
+def test_a_scan_of_very_many_lines_is_observed_up_to_max_lines() -> None:
+    """Defect: the paper preset's filter took every line of a step: 20,000 lines ran over 60 s,
+    growing the state toward a 12.8 GB covariance. Now it observes the longest
+    observations.max_lines (100) of them, says how many it left, and the step is quick."""
+    import time
+
+    from slam.filter import SlamFilter
+    from slam.run import SlamLimitWarning, run_observations
+
+    obs, length = _many_lines(20_000)
+    f = SlamFilter(SlamConfig(preset="paper"))
+    t0 = time.perf_counter()
+    info = f.step(0.0, obs)
+    assert time.perf_counter() - t0 < 10  # ~0.1 s; the old code did not finish in 60 s
+    assert info.n_unobserved == 19_900 and info.n_new == len(f.landmarks) == 100
+    assert f.ekf.P.shape == (205, 205)
+    # the landmarks are the 100 longest lines (the filter starts at the origin: a line's landmark is its observation)
+    longest = np.sort(np.argsort(-length)[:100])
+    got = f.ekf.x[5:, 0].reshape(-1, 2)
+    assert np.allclose(got[:, 0], obs.lines[longest, 0]) and np.allclose(np.cos(got[:, 1] - obs.lines[longest, 1]), 1)
+    # the map's bound: 30 landmarks, the other 70 lines start none; both bounds warn once a run
+    small, _ = _many_lines(100, seed=1)
+    cfg = SlamConfig(preset="paper", landmarks={"max_landmarks": 30}, observations={"max_lines": 60})
+    with pytest.warns(SlamLimitWarning) as seen:
+        result = run_observations([0.0, 0.1], [small, small], cfg)
+    d = result.diagnostics
+    assert d["n_unobserved"].tolist() == [40, 40] and d["n_unadded"][0] == 30 and d["n_landmarks"].max() == 30
+    assert [str(w.message) for w in seen] == [
+        "80 lines or corners were not observed in 2 of 2 scans: beyond observations.max_lines (60, a bound of the "
+        "filter's time and memory)",
+        f"{int(d['n_unadded'].sum())} observations started no landmark in {int(np.count_nonzero(d['n_unadded']))} of 2 "
+        "scans: beyond landmarks.max_landmarks (30, a bound of the filter's time and memory)"]
+    with pytest.raises(Exception, match=r"^landmarks.max_landmarks: "):
+        SlamConfig(preset="paper", landmarks={"max_landmarks": 10_001})
