@@ -577,7 +577,7 @@ def test_a_slam_sweep_spells_its_extractors_fields_as_every_other_run_does(tmp_p
         assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("name", ["a/b", "../x", "..", ".hidden", "-x", "a\\b", "a" * 101, "a\nb", ""])
+@pytest.mark.parametrize("name", ["a/b", "../x", "..", ".hidden", "-x", "a\\b", "a" * 101, "a" * 300, "a\nb", ""])
 def test_a_sweep_name_that_is_no_plain_folder_name_is_refused_at_load(tmp_path, name):
     """The name names results/sweeps/NAME: a path separator, `..` or a hidden name was refused at
     load, but a 300-character one only when its folder was made ("File name too long")."""
@@ -587,6 +587,8 @@ def test_a_sweep_name_that_is_no_plain_folder_name_is_refused_at_load(tmp_path, 
                                              r"not starting with . or -, at most 100 characters\)") as info:
         load_sweep(path)
     assert "\n" not in str(info.value)
+    if len(name) > 100:  # its length as it is: the name cut to 120 characters was said to be "(120 characters)"
+        assert f"...{'a' * 7}' ({len(name) + 2} characters) must be" in str(info.value)
     path.write_text(yaml.safe_dump({"name": "a" * 100, "kind": "extract", "grid": {"extractor.k": [3]}}))
     assert load_sweep(path).name == "a" * 100
 

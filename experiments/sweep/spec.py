@@ -261,7 +261,7 @@ def _plain_name(name: str) -> bool:
 
 def _check(spec: SweepSpec) -> None:
     if not _plain_name(spec.name):
-        raise SweepSpecError(f"name: {spec.name[:MAX_NAME_CHARS + 20]!r} must be a plain folder name ({NAME_RULE}), "
+        raise SweepSpecError(f"name: {shown(spec.name)} must be a plain folder name ({NAME_RULE}), "
                              "as it names the output folder results/sweeps/NAME")
     for part in ("fixed", "grid", "random"):  # `null: 3` or `1: 3` was an internal AttributeError at the kinds' check
         for key in getattr(spec, part):
