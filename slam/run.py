@@ -83,20 +83,52 @@ def run_observations(
             continue
         if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
             raise SlamInputError(f"{name}: must be an iterable (one item a scan), got {type(value).__name__}")
-        lists[name] = list(value)
+        lists[name] = list(bounded(value, name))
         if name == "stamps":
             n = len(lists[name])
         elif len(lists[name]) != n:
             raise SlamInputError(f"{name}: {len(lists[name])} items for {n} stamps (one a scan)")
-    return run_steps(zip(lists["stamps"], lists["observations"], lists["odometry"], lists["truths"]), config)
+    return _run_steps(zip(lists["stamps"], lists["observations"], lists["odometry"], lists["truths"]), config)
+
+
+#: most items run_steps and run_observations read from an iterator or generator (a list, a tuple is
+#: taken whole): as many scans of 361 beams as run_slam and features.extract_many read from one
+#: (MAX_ITERATOR_BEAMS); ``run_observations(itertools.count(), itertools.repeat(obs))`` ran until
+#: memory ran out (a MemoryError), ``run_steps`` of an endless generator for ever
+MAX_ITERATOR_STEPS = MAX_ITERATOR_BEAMS // 361
+
+
+def bounded(items: Iterable[Any], name: str) -> Iterable[Any]:
+    """``items`` as they are when sized (a list, a tuple); an iterator's items, SlamInputError
+    naming ``name`` past ``MAX_ITERATOR_STEPS`` of them."""
+    if isinstance(items, Sized):
+        return items
+
+    def read() -> Iterator[Any]:
+        for i, item in enumerate(items):
+            if i >= MAX_ITERATOR_STEPS:
+                raise SlamInputError(f"{name}: an iterator or generator that yielded more than {MAX_ITERATOR_STEPS:,} "
+                                     "items (one a scan) without ending (itertools.count?); pass a list, or a finite "
+                                     "piece of it (itertools.islice)")
+            yield item
+
+    return read()
 
 
 def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: SlamConfig = SlamConfig()) -> SlamResult:
     """Run the filter over (stamp s, observations, odometry pose or None, true pose or None).
 
     The filter starts at the origin; with true poses, the pose NEES is computed in the truth frame
-    anchored at the first true pose.
+    anchored at the first true pose. An iterator of steps is read up to ``MAX_ITERATOR_STEPS``
+    (371,794) steps, then refused (SlamInputError); a list or tuple is taken whole.
     """
+    if isinstance(steps, (str, bytes)) or not isinstance(steps, Iterable):
+        raise SlamInputError(f"steps: must be an iterable (one item a scan), got {type(steps).__name__}")
+    return _run_steps(bounded(steps, "steps"), config)
+
+
+def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: SlamConfig) -> SlamResult:
+    """:func:`run_steps` without its bound (run_slam's records are bounded by their beams)."""
     if not isinstance(config, SlamConfig):
         raise SlamInputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
     slam = SlamFilter(config)
@@ -291,7 +323,7 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_s
                 batch = []
         yield from _observed(batch, config)
 
-    result = run_steps(steps(), config)
+    result = _run_steps(steps(), config)
     _warn_unread(config, range_maxes)
     return result
 

@@ -98,3 +98,23 @@ def test_a_scan_of_very_many_lines_is_observed_up_to_max_lines() -> None:
         "scans: beyond landmarks.max_landmarks (30, a bound of the filter's time and memory)"]
     with pytest.raises(Exception, match=r"^landmarks.max_landmarks: "):
         SlamConfig(preset="paper", landmarks={"max_landmarks": 10_001})
+
+
+def test_run_observations_and_run_steps_refuse_an_endless_iterator(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Fuzzing: run_observations(itertools.count(), itertools.repeat(obs)) listed the stamps until
+    memory ran out (a MemoryError under a 2 GB limit); run_steps of an endless generator ran for
+    ever. An iterator is read up to MAX_ITERATOR_STEPS items (made 10 here), a list taken whole."""
+    import slam.run
+    from slam import run_observations, run_steps
+    from slam.observations import Observations
+
+    monkeypatch.setattr(slam.run, "MAX_ITERATOR_STEPS", 10)
+    obs = Observations()
+    with pytest.raises(SlamInputError, match=r"^stamps: an iterator or generator that yielded more than 10 items"):
+        run_observations(itertools.count(), itertools.repeat(obs))
+    with pytest.raises(SlamInputError, match=r"^steps: an iterator or generator that yielded more than 10 items"):
+        run_steps((0.1 * k, obs, None, None) for k in itertools.count())
+    with pytest.raises(SlamInputError, match=r"^steps: must be an iterable \(one item a scan\), got int"):
+        run_steps(5)
+    assert run_steps([(0.1 * k, obs, None, None) for k in range(12)], SlamConfig(preset="paper")).trajectory.shape == (12, 4)
+    assert run_steps(((0.1 * k, obs, None, None) for k in range(10)), SlamConfig(preset="paper")).trajectory.shape == (10, 4)
