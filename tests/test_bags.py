@@ -1087,3 +1087,29 @@ def test_a_killed_writers_temporary_file_is_removed_by_the_next_write(tmp_path: 
     write_log(path, [Record(_scan(1.0))])
     assert not dead.exists() and all(p.exists() for p in kept)
     assert [r.scan.stamp for r in read_log(path)] == [1.0]
+
+
+def test_a_signalling_nan_reads_and_writes_as_nan_without_a_warning(tmp_path: Path) -> None:
+    """Fuzzing (a byte of a ROS 2 bag changed): a float32 signalling nan (0x7f800001, a driver's raw
+    bits) among the ranges made numpy's cast warn, "RuntimeWarning: invalid value encountered in
+    cast", two lines on stderr for each such scan of `lmsbench info`, exit 0; a float64 one warned in
+    write_log alike. Both are a nan: an invalid reading (REP-117)."""
+    import struct
+    import warnings
+
+    ranges = np.full(5, 2.0)
+    ranges[2] = np.frombuffer(struct.pack("<Q", 0x7FF0000000000001), np.float64)[0]
+    for name in ("s.bag", "s2"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            write_log(tmp_path / name, [Record(Scan(ranges, -0.1, 0.05, 0.0, 8.0, stamp=1.0))],
+                      fmt=None if name.endswith(".bag") else "bag2")
+    data = (tmp_path / "s.bag").read_bytes()
+    quiet = struct.pack("<f", np.float32(np.nan))
+    assert data.count(quiet) == 1
+    (tmp_path / "s.bag").write_bytes(data.replace(quiet, struct.pack("<I", 0x7F800001)))
+    for name in ("s.bag", "s2"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            got = [r.scan.ranges for r in read_log(tmp_path / name)]
+        assert len(got) == 1 and np.isnan(got[0][2]) and np.array_equal(np.delete(got[0], 2), np.full(4, 2.0))
