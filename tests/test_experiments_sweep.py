@@ -901,3 +901,18 @@ def test_a_sweep_refused_by_its_checks_leaves_the_folders_files_as_they_were(tmp
     with pytest.raises(LmsbenchError, match=r"cells/f00\.parquet: a folder where a cell's file goes"):
         run_sweep(make_spec(log, xs=[0, 1, 2]), out, "inprocess", progress=False)
     assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+
+
+def test_a_killed_sweeps_temporary_tables_are_removed_by_the_next_run(tmp_path):
+    """A kill between write_atomic's write of results.parquet / results.csv and its rename left
+    .results.parquet.XXXX.tmp in the sweep folder for ever (cells/' were removed); the next run's
+    store removes them, and no other hidden file."""
+    from experiments.sweep.store import CellStore
+
+    left = [tmp_path / ".results.parquet.k3x_9q.tmp", tmp_path / ".results.csv.ab12cd.tmp", tmp_path / "cells" / ".k.x1.tmp"]
+    kept = [tmp_path / ".notes.tmp", tmp_path / ".results.parquet.bak", tmp_path / "results.parquet"]
+    (tmp_path / "cells").mkdir()
+    for p in left + kept:
+        p.write_text("cut")
+    CellStore(tmp_path)
+    assert not any(p.exists() for p in left) and all(p.exists() for p in kept)
