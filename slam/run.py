@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 import itertools
+import sys
+import warnings
+from dataclasses import dataclass, field
 from typing import Any, Iterable, Iterator, Sequence, Sized
 
 import numpy as np
 
-from features.batch import MAX_ITERATOR_BEAMS
 from lms200.errors import LmsbenchWarning
+from lms200.finite import shown
 from lms200.logs import MAX_COORD_M, checked_records
 from lms200.records import Record
 
@@ -83,7 +85,7 @@ def run_observations(
             continue
         if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
             raise SlamInputError(f"{name}: must be an iterable (one item a scan), got {type(value).__name__}")
-        lists[name] = list(bounded(value, name))
+        lists[name] = list(listed(value, name))
         if name == "stamps":
             n = len(lists[name])
         elif len(lists[name]) != n:
@@ -91,44 +93,83 @@ def run_observations(
     return _run_steps(zip(lists["stamps"], lists["observations"], lists["odometry"], lists["truths"]), config)
 
 
-#: most items run_steps and run_observations read from an iterator or generator (a list, a tuple is
-#: taken whole): as many scans of 361 beams as run_slam and features.extract_many read from one
-#: (MAX_ITERATOR_BEAMS); ``run_observations(itertools.count(), itertools.repeat(obs))`` ran until
-#: memory ran out (a MemoryError), ``run_steps`` of an endless generator for ever
-MAX_ITERATOR_STEPS = MAX_ITERATOR_BEAMS // 361
-
-
-def bounded(items: Iterable[Any], name: str) -> Iterable[Any]:
-    """``items`` as they are when sized (a list, a tuple); an iterator's items, SlamInputError
-    naming ``name`` past ``MAX_ITERATOR_STEPS`` of them."""
+def listed(items: Iterable[Any], name: str) -> Iterable[Any]:
+    """``items`` for :func:`run_observations`, which lists them all before the run: an iterator of
+    more than ``MAX_SLAM_SCANS`` items is refused (SlamInputError naming ``name``) as a list is."""
     if isinstance(items, Sized):
+        Capped(items, name)  # refuses one of more than MAX_SLAM_SCANS
         return items
+    out = list(itertools.islice(items, MAX_SLAM_SCANS + 1))
+    if len(out) > MAX_SLAM_SCANS:
+        raise SlamInputError(f"{name}: an iterator or generator that yielded more than {MAX_SLAM_SCANS:,} items "
+                             "(slam.run.MAX_SLAM_SCANS, one a scan: 24 h at 75 Hz) without ending (itertools.count?); "
+                             "pass a finite piece of it (itertools.islice), or run_steps, which ends the run there")
+    return out
 
-    def read() -> Iterator[Any]:
-        for i, item in enumerate(items):
-            if i >= MAX_ITERATOR_STEPS:
-                raise SlamInputError(f"{name}: an iterator or generator that yielded more than {MAX_ITERATOR_STEPS:,} "
-                                     "items (one a scan) without ending (itertools.count?); pass a list, or a finite "
-                                     "piece of it (itertools.islice)")
+
+#: most scans one run reads (run_slam, run_steps, run_observations): 24 h of an LMS200 at its 75 Hz.
+#: A run keeps a few hundred bytes a scan whatever the scan (its pose, 3x3 covariance and per-scan
+#: diagnostics: the paper preset's result 185 B a scan, 1.2 GB at the bound; its lists while it runs
+#: ~670 B a scan, measured with tracemalloc); past it a source is most likely one that never ends
+#: (``run_slam(itertools.repeat(record))`` ran for ever, its trajectory growing). An iterator is read
+#: up to it and the run ends there, with a SlamLimitWarning (its result kept: a live source, a day's
+#: bag); a list, a tuple (any sized collection) or ``run_observations``' inputs (listed first) longer
+#: than it are refused before any work (SlamInputError).
+MAX_SLAM_SCANS = 24 * 3600 * 75
+
+
+class SlamLimitWarning(LmsbenchWarning):
+    """A run met one of its bounds: the paper preset's filter left observations out
+    (``observations.max_lines`` a scan, ``landmarks.max_landmarks`` in the map), or an iterator of
+    scans was read up to ``MAX_SLAM_SCANS`` and the run ended there."""
+
+
+class Capped:
+    """An iterable's items for one run: a sized one (a list, a tuple) whole, SlamInputError naming
+    ``name`` when it holds more than ``MAX_SLAM_SCANS``; an iterator's first ``MAX_SLAM_SCANS``
+    (``ended`` is then True: :meth:`warn` says so)."""
+
+    def __init__(self, items: Iterable[Any], name: str) -> None:
+        self.items, self.name, self.read, self.ended = items, name, 0, False
+        if isinstance(items, Sized) and len(items) > MAX_SLAM_SCANS:
+            raise SlamInputError(f"{name}: {len(items):,} scans, more than a run reads (slam.run.MAX_SLAM_SCANS, "
+                                 f"{MAX_SLAM_SCANS:,}: 24 h at 75 Hz); pass a piece of it")
+
+    def __iter__(self) -> Iterator[Any]:
+        if isinstance(self.items, Sized):
+            yield from self.items
+            return
+        for item in itertools.islice(self.items, MAX_SLAM_SCANS):
+            self.read += 1
             yield item
+        self.ended = self.read >= MAX_SLAM_SCANS
 
-    return read()
+    def warn(self, stacklevel: int) -> None:
+        """A one-line SlamLimitWarning when the iterator was cut at ``MAX_SLAM_SCANS``."""
+        if self.ended:
+            warnings.warn(f"{self.name}: the run ended after {self.read:,} scans (slam.run.MAX_SLAM_SCANS, 24 h at "
+                          "75 Hz); the iterator's scans after them, if any, were not read", SlamLimitWarning,
+                          stacklevel=stacklevel + 1)
 
 
 def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: SlamConfig = SlamConfig()) -> SlamResult:
     """Run the filter over (stamp s, observations, odometry pose or None, true pose or None).
 
     The filter starts at the origin; with true poses, the pose NEES is computed in the truth frame
-    anchored at the first true pose. An iterator of steps is read up to ``MAX_ITERATOR_STEPS``
-    (371,794) steps, then refused (SlamInputError); a list or tuple is taken whole.
+    anchored at the first true pose. An iterator of steps is read up to ``MAX_SLAM_SCANS``
+    (6,480,000) steps and the run ends there (a SlamLimitWarning); a list or tuple longer than that
+    is refused (SlamInputError).
     """
     if isinstance(steps, (str, bytes)) or not isinstance(steps, Iterable):
         raise SlamInputError(f"steps: must be an iterable (one item a scan), got {type(steps).__name__}")
-    return _run_steps(bounded(steps, "steps"), config)
+    capped = Capped(steps, "steps")
+    result = _run_steps(capped, config)
+    capped.warn(stacklevel=2)
+    return result
 
 
 def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: SlamConfig) -> SlamResult:
-    """:func:`run_steps` without its bound (run_slam's records are bounded by their beams)."""
+    """:func:`run_steps` without its bound (its callers bound their input: :class:`Capped`)."""
     if not isinstance(config, SlamConfig):
         raise SlamInputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
     slam = SlamFilter(config)
@@ -199,15 +240,8 @@ def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sl
                       slam.map_lines(), slam.map_corners(), out)
 
 
-class SlamLimitWarning(LmsbenchWarning):
-    """The paper preset's filter left observations out at one of its bounds
-    (``observations.max_lines`` a scan, ``landmarks.max_landmarks`` in the map)."""
-
-
 def warn_limits(diag: dict[str, Any], config: SlamConfig) -> None:
     """A SlamLimitWarning for each bound of the filter a run met (once a run: its scans and counts)."""
-    import warnings
-
     for key, what, name, value in (
             ("n_unobserved", "lines or corners were not observed", "observations.max_lines", config.observations.max_lines),
             ("n_unadded", "observations started no landmark", "landmarks.max_landmarks", config.landmarks.max_landmarks)):
@@ -264,46 +298,42 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_s
     motion model); true poses only for the NEES diagnostic.
 
     ``max_scans``: at most this many records are read (the rest are not: a live source may stop
-    there). Without it, an iterator or generator of records (not a list, a tuple, or another sized
-    collection, which is taken whole) is read up to ``MAX_ITERATOR_BEAMS`` beams (2^27, as
-    ``features.extract_many``: 371,794 scans of 361 beams, 2.75 h of an LMS200), then refused.
+    there), silently. Without it, an iterator or generator of records is read up to
+    ``MAX_SLAM_SCANS`` (6,480,000: 24 h at the LMS200's 75 Hz) and the run ends there, its result
+    returned with a one-line SlamLimitWarning (how many scans were read; the rest were not); a
+    list, a tuple or another sized collection is taken whole, and refused before any work when it
+    holds more than ``MAX_SLAM_SCANS``.
 
     Returns:
         SlamResult with one pose per record, stamped with the record's ``scan.stamp``.
 
     Raises:
         SlamInputError: an item that is no Record (naming its index), scans out of time order, a
-            ``max_scans`` that is no integer >= 1, an iterator that yields more than ``MAX_ITERATOR_BEAMS`` beams with
-            no ``max_scans`` (``itertools.repeat(record)`` ran for ever, its trajectory growing).
+            ``max_scans`` that is no integer >= 1, a sized ``records`` of more than ``MAX_SLAM_SCANS``
+            with no ``max_scans``.
     """
     if not isinstance(config, SlamConfig):
         raise SlamInputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
     if max_scans is not None and (isinstance(max_scans, bool) or not isinstance(max_scans, (int, np.integer))
                                   or max_scans < 1):
-        raise SlamInputError(f"max_scans: must be an integer >= 1 (or None), got {max_scans!r}")
-    bounded = max_scans is None and not isinstance(records, Sized)
+        raise SlamInputError(f"max_scans: must be an integer >= 1 (or None), got {shown(max_scans)}")
     try:
-        source = iter(records) if max_scans is None else itertools.islice(records, int(max_scans))
-        records = in_scale(checked_records(source, SlamInputError))
+        iter(records)
     except TypeError:
         raise SlamInputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
+    # an int past sys.maxsize is no count islice takes (a raw ValueError); no source holds that many
+    capped: Iterable[Any] = (Capped(records, "records") if max_scans is None
+                             else itertools.islice(records, min(int(max_scans), sys.maxsize)))
+    records = in_scale(checked_records(iter(capped), SlamInputError))
     range_maxes: set[float] = set()
 
     def seen(records: Iterable[Record]) -> Iterator[Record]:
         """The records, the first scan checked against the config before any matching or extraction
-        (:func:`check_first_scan`), each scan's range_max noted; an iterator's beams counted."""
-        beams = 0
+        (:func:`check_first_scan`), each scan's range_max noted."""
         for i, rec in enumerate(records):
             if i == 0:
                 check_first_scan(rec.scan, config, "records[0]")
             range_maxes.add(float(rec.scan.range_max))
-            if bounded:
-                beams += int(np.size(rec.scan.ranges))
-                if beams > MAX_ITERATOR_BEAMS:
-                    raise SlamInputError(
-                        f"records: an iterator or generator that yielded more than {MAX_ITERATOR_BEAMS:,} beams "
-                        f"({i + 1:,} scans) without ending (itertools.repeat?); pass a list of records, or "
-                        "run_slam(records, max_scans=N) to read at most N")
             yield rec
 
     records = seen(records)
@@ -312,6 +342,8 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_s
 
         result = run_scan_slam(((rec.scan.stamp, rec.scan, rec.odom, rec.truth) for rec in records), config)
         _warn_unread(config, range_maxes)
+        if isinstance(capped, Capped):
+            capped.warn(stacklevel=2)
         return result
 
     def steps():
@@ -325,6 +357,8 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_s
 
     result = _run_steps(steps(), config)
     _warn_unread(config, range_maxes)
+    if isinstance(capped, Capped):
+        capped.warn(stacklevel=2)
     return result
 
 

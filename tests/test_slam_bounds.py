@@ -10,6 +10,7 @@ import pytest
 
 from lms200 import Record, Scan
 from slam import SlamConfig, SlamInputError, run_slam
+from slam.config import SlamConfigError
 
 
 def _records(n: int, beams: int = 181) -> list[Record]:
@@ -21,13 +22,19 @@ def _records(n: int, beams: int = 181) -> list[Record]:
             for k in range(n)]
 
 
-def test_an_endless_iterator_is_refused_at_the_beam_bound(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Defect: run_slam(itertools.repeat(record)) never ended, its trajectory growing; an iterator
-    is now read up to MAX_ITERATOR_BEAMS beams (made 20 scans' worth here), then refused."""
-    import slam.run
+def test_an_endless_iterator_ends_the_run_at_the_scan_bound(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Defect: run_slam(itertools.repeat(record)) never ended, its trajectory growing; then an
+    iterator past a beam bound was refused after all the work (a 1081-beam bag at 40 Hz after
+    52 min), its result lost. An iterator is now read up to MAX_SLAM_SCANS (made 20 here) and the
+    run ends there, its result returned with a one-line SlamLimitWarning."""
+    import warnings
 
+    import slam.run
+    from slam.run import SlamLimitWarning
+
+    assert slam.run.MAX_SLAM_SCANS == 24 * 3600 * 75  # 24 h of an LMS200 at 75 Hz
     rec = _records(1)[0]
-    monkeypatch.setattr(slam.run, "MAX_ITERATOR_BEAMS", 20 * rec.scan.ranges.size)
+    monkeypatch.setattr(slam.run, "MAX_SLAM_SCANS", 20)
     read = itertools.count()
 
     def endless():
@@ -36,17 +43,26 @@ def test_an_endless_iterator_is_refused_at_the_beam_bound(monkeypatch: pytest.Mo
             yield rec
 
     for preset in ("default", "paper"):
-        with pytest.raises(SlamInputError, match=r"^records: an iterator or generator that yielded more than 3,620 "
-                                                 r"beams \(21 scans\) without ending"):
-            run_slam(endless(), SlamConfig(preset=preset))
-    # a list is taken whole (it is held already), max_scans reads no further than it says
-    records = _records(25)
-    assert run_slam(records, SlamConfig(preset="paper")).trajectory.shape == (25, 4)
-    assert run_slam(itertools.repeat(rec), SlamConfig(preset="paper"), max_scans=30).trajectory.shape == (30, 4)
-    it = iter(records)
-    assert run_slam(it, SlamConfig(preset="paper"), max_scans=5).trajectory.shape == (5, 4)
-    assert next(it) is records[5]  # the source is not read past max_scans
-    for bad in (0, -1, True, 2.5, "3"):
+        with pytest.warns(SlamLimitWarning, match=r"^records: the run ended after 20 scans \(slam.run.MAX_SLAM_SCANS"
+                                                  r".*; the iterator's scans after them, if any, were not read$"):
+            result = run_slam(endless(), SlamConfig(preset=preset))
+        assert result.trajectory.shape == (20, 4)
+    # a list longer than the bound is refused before any work; one within it is taken whole
+    records = _records(21)
+    with pytest.raises(SlamInputError, match=r"^records: 21 scans, more than a run reads \(slam.run.MAX_SLAM_SCANS, 20"):
+        run_slam(records, SlamConfig(preset="paper"))
+    records = records[:20]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SlamLimitWarning)
+        assert run_slam(records, SlamConfig(preset="paper")).trajectory.shape == (20, 4)
+        # max_scans reads no further than it says, silently, whatever the bound
+        assert run_slam(itertools.repeat(rec), SlamConfig(preset="paper"), max_scans=30).trajectory.shape == (30, 4)
+        it = iter(records)
+        assert run_slam(it, SlamConfig(preset="paper"), max_scans=5).trajectory.shape == (5, 4)
+        assert next(it) is records[5]  # the source is not read past max_scans
+        # a count past sys.maxsize is no islice count (a raw ValueError): it reads the whole source
+        assert run_slam(records[:3], SlamConfig(preset="paper"), max_scans=2**63).trajectory.shape == (3, 4)
+    for bad in (0, -1, True, 2.5, "3", -10**5000):  # the last one's repr (> 4,300 digits) raised inside the message
         with pytest.raises(SlamInputError, match=r"^max_scans: must be an integer >= 1 \(or None\), got "):
             run_slam(records, max_scans=bad)
 
@@ -96,25 +112,32 @@ def test_a_scan_of_very_many_lines_is_observed_up_to_max_lines() -> None:
         "filter's time and memory)",
         f"{int(d['n_unadded'].sum())} observations started no landmark in {int(np.count_nonzero(d['n_unadded']))} of 2 "
         "scans: beyond landmarks.max_landmarks (30, a bound of the filter's time and memory)"]
-    with pytest.raises(Exception, match=r"^landmarks.max_landmarks: "):
+    with pytest.raises(SlamConfigError, match=r"^landmarks.max_landmarks: "):
         SlamConfig(preset="paper", landmarks={"max_landmarks": 10_001})
 
 
-def test_run_observations_and_run_steps_refuse_an_endless_iterator(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_run_steps_ends_an_endless_iterator_and_run_observations_refuses_it(monkeypatch: pytest.MonkeyPatch) -> None:
     """Fuzzing: run_observations(itertools.count(), itertools.repeat(obs)) listed the stamps until
     memory ran out (a MemoryError under a 2 GB limit); run_steps of an endless generator ran for
-    ever. An iterator is read up to MAX_ITERATOR_STEPS items (made 10 here), a list taken whole."""
+    ever. run_steps now reads an iterator up to MAX_SLAM_SCANS (made 10 here) and ends the run
+    there with a SlamLimitWarning; run_observations, which lists its inputs first, refuses one
+    longer (and a list longer), before any work."""
     import slam.run
     from slam import run_observations, run_steps
     from slam.observations import Observations
+    from slam.run import SlamLimitWarning
 
-    monkeypatch.setattr(slam.run, "MAX_ITERATOR_STEPS", 10)
+    monkeypatch.setattr(slam.run, "MAX_SLAM_SCANS", 10)
     obs = Observations()
     with pytest.raises(SlamInputError, match=r"^stamps: an iterator or generator that yielded more than 10 items"):
         run_observations(itertools.count(), itertools.repeat(obs))
-    with pytest.raises(SlamInputError, match=r"^steps: an iterator or generator that yielded more than 10 items"):
-        run_steps((0.1 * k, obs, None, None) for k in itertools.count())
+    with pytest.raises(SlamInputError, match=r"^stamps: 11 scans, more than a run reads"):
+        run_observations([0.1 * k for k in range(11)], [obs] * 11)
+    with pytest.warns(SlamLimitWarning, match=r"^steps: the run ended after 10 scans"):
+        result = run_steps(((0.1 * k, obs, None, None) for k in itertools.count()), SlamConfig(preset="paper"))
+    assert result.trajectory.shape == (10, 4)
     with pytest.raises(SlamInputError, match=r"^steps: must be an iterable \(one item a scan\), got int"):
         run_steps(5)
-    assert run_steps([(0.1 * k, obs, None, None) for k in range(12)], SlamConfig(preset="paper")).trajectory.shape == (12, 4)
-    assert run_steps(((0.1 * k, obs, None, None) for k in range(10)), SlamConfig(preset="paper")).trajectory.shape == (10, 4)
+    with pytest.raises(SlamInputError, match=r"^steps: 12 scans, more than a run reads"):
+        run_steps([(0.1 * k, obs, None, None) for k in range(12)], SlamConfig(preset="paper"))
+    assert run_observations([0.1 * k for k in range(10)], [obs] * 10, SlamConfig(preset="paper")).trajectory.shape == (10, 4)
