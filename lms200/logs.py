@@ -6,11 +6,13 @@ name; both yield :class:`lms200.Record` objects.
 
 from __future__ import annotations
 
+import glob
 import io
 import itertools
 import os
 import shutil
 import stat
+import time
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
@@ -216,6 +218,23 @@ def write_whole(path: str | os.PathLike, write: Callable[[Path], object], suffix
     return given
 
 
+#: age (s, by mtime) past which a dead writer's ``.NAME.PID.tmp`` is removed: a write_whole writes
+#: and renames within seconds; a younger one may be a live writer's on another host (NFS) or in
+#: another container, whose PID means nothing here
+STALE_TEMPORARY_S = 600.0
+
+#: the kernel's pid_max where /proc/sys/kernel/pid_max cannot be read (its largest, 2^22)
+DEFAULT_PID_MAX = 4194304
+
+
+def pid_max() -> int:
+    """The PIDs this host gives are below this (/proc/sys/kernel/pid_max, else ``DEFAULT_PID_MAX``)."""
+    try:
+        return int(Path("/proc/sys/kernel/pid_max").read_text().strip())
+    except (OSError, ValueError):
+        return DEFAULT_PID_MAX
+
+
 def process_alive(pid: int) -> bool:
     """Whether a process ``pid`` runs on this machine (one of another user's counts: it may be writing)."""
     try:
@@ -227,24 +246,40 @@ def process_alive(pid: int) -> bool:
     return pid > 0
 
 
-def remove_dead_temporaries(target: Path, stem: str, suffix: str) -> None:
-    """Remove the ``STEM.PID.tmpSUFFIX`` files beside ``target`` whose process no longer runs: what a
-    :func:`write_whole` killed (SIGKILL, a power cut) between its write and its rename left, which
-    stayed for ever (a user's ``.NAME.notes.tmp``, or a live writer's, is kept). Best effort: a file
-    that cannot be removed is left."""
-    import glob
+def temporaries(path: Path, stem: str | None = None, suffix: str = "") -> list[tuple[Path, int]]:
+    """The ``STEM.PID.tmpSUFFIX`` files :func:`write_whole` writes ``path`` through that lie beside
+    it (``stem`` :func:`temporary_stem` of it by default), each with its PID: a name whose PID part
+    is no number (a user's ``.NAME.notes.tmp``) is none. In name order."""
+    stem = temporary_stem(path, suffix) if stem is None else stem
+    end = f".tmp{suffix}"
+    out = []
+    for tmp in sorted(path.parent.glob(f"{glob.escape(stem)}.*{glob.escape(end)}")):
+        pid = tmp.name[len(stem) + 1 : len(tmp.name) - len(end)]
+        if pid.isascii() and pid.isdigit():
+            out.append((tmp, int(pid)))
+    return out
 
+
+def remove_dead_temporaries(target: Path, stem: str, suffix: str) -> None:
+    """Remove the ``STEM.PID.tmpSUFFIX`` files beside ``target`` that a :func:`write_whole` killed
+    (SIGKILL, a power cut) between its write and its rename left (they stayed for ever). One is
+    removed only when (a) its PID is one this host gives (1 to :func:`pid_max` - 1: a 10-digit one
+    is another host's), (b) no process of that PID runs here, and (c) it was last written more than
+    ``STALE_TEMPORARY_S`` (10 min) ago: a PID dead here may be a live writer's on another host
+    sharing the folder (NFS) or in another container, and a write_whole writes and renames within
+    seconds. A user's ``.NAME.notes.tmp`` is kept. Best effort: a file that cannot be removed is left."""
     if not target.parent.is_dir():
         return
-    end = f".tmp{suffix}"
-    for old in target.parent.glob(f"{glob.escape(stem)}.*{glob.escape(end)}"):
-        pid = old.name[len(stem) + 1 : len(old.name) - len(end)]
-        if pid.isdigit() and len(pid) <= 10 and int(pid) != os.getpid() and not process_alive(int(pid)):
-            try:
-                if old.is_file() and not old.is_symlink():
-                    old.unlink()
-            except OSError:
-                pass
+    most, now = pid_max(), time.time()
+    for old, pid in temporaries(target, stem, suffix):
+        if not 0 < pid < most or pid == os.getpid() or process_alive(pid):
+            continue
+        try:
+            st = old.lstat()
+            if stat.S_ISREG(st.st_mode) and now - st.st_mtime > STALE_TEMPORARY_S:
+                old.unlink()
+        except OSError:
+            pass
 
 
 def folder_message(p: Path) -> str:

@@ -1074,18 +1074,31 @@ def test_write_log_of_no_record_writes_nothing(tmp_path: Path, name: str, fmt: s
 
 def test_a_killed_writers_temporary_file_is_removed_by_the_next_write(tmp_path: Path) -> None:
     """Defect: a SIGKILL between write_whole's write and rename left .NAME.PID.tmp for ever; the
-    next write of that path removes those of a PID no process has (a live writer's, another
-    suffix's and a user's .NAME.notes.tmp are kept)."""
+    next write of that path removes one whose PID this host gives, no process here has, and that is
+    older than STALE_TEMPORARY_S (10 min). Kept: a fresh one of a dead PID and one of a PID beyond
+    pid_max (a live writer's on another host, NFS, or in a container), a live writer's, another
+    suffix's or name's, and a user's .NAME.notes.tmp."""
+    import itertools
     import os
+    import time
 
+    from lms200.logs import STALE_TEMPORARY_S, pid_max, process_alive
+
+    dead_pid, other_dead_pid = itertools.islice((p for p in range(pid_max() - 1, 1, -1) if not process_alive(p)), 2)
     path = tmp_path / "x.clf.gz"
-    dead = tmp_path / ".x.clf.gz.4194303.tmp.gz"  # beyond pid_max (2^22): no process has it
-    live = tmp_path / f".x.clf.gz.{os.getppid()}.tmp.gz"
-    kept = [live, tmp_path / ".x.clf.gz.notes.tmp.gz", tmp_path / ".x.clf.gz.4194303.tmp", tmp_path / ".y.clf.gz.4194303.tmp.gz"]
-    for p in (dead, *kept):
+    dead = tmp_path / f".x.clf.gz.{dead_pid}.tmp.gz"
+    fresh = tmp_path / f".x.clf.gz.{other_dead_pid}.tmp.gz"
+    old_kept = [tmp_path / f".x.clf.gz.{os.getppid()}.tmp.gz",  # a live writer's
+                tmp_path / ".x.clf.gz.9876543210.tmp.gz",  # 10 digits: beyond any pid_max, another host's
+                tmp_path / ".x.clf.gz.notes.tmp.gz", tmp_path / f".x.clf.gz.{dead_pid}.tmp",
+                tmp_path / f".y.clf.gz.{dead_pid}.tmp.gz"]
+    long_ago = time.time() - STALE_TEMPORARY_S - 60
+    for p in (dead, fresh, *old_kept):
         p.write_text("cut")
+        if p is not fresh:
+            os.utime(p, (long_ago, long_ago))
     write_log(path, [Record(_scan(1.0))])
-    assert not dead.exists() and all(p.exists() for p in kept)
+    assert not dead.exists() and fresh.exists() and all(p.exists() for p in old_kept)
     assert [r.scan.stamp for r in read_log(path)] == [1.0]
 
 
