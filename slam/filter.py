@@ -162,6 +162,7 @@ class SlamFilter:
         pairs_c, new_c = self._associate_corners(obs)
         self._update(obs, pairs_l, pairs_c, info)
         self._extend(obs, pairs_l)
+        self._manage()  # before the room is counted: the tentative landmarks it prunes make room this scan
         room = max(cfg.landmarks.max_landmarks - len(self.landmarks), 0)  # the map's bound (memory: P is n^2)
         new_l, new_c = list(new_l), list(new_c)
         info.n_unadded = max(len(new_l) + len(new_c) - room, 0)
@@ -172,7 +173,6 @@ class SlamFilter:
         for o in new_c:
             self._add("corner", obs.corners[o], obs.corner_cov[o], None)
         info.n_new = len(new_l) + len(new_c)
-        self._manage()
         verify = self._verifier(obs.points)
         if verify is not None:
             info.point_score = verify(self.ekf.x[:3, 0])

@@ -141,3 +141,21 @@ def test_run_steps_ends_an_endless_iterator_and_run_observations_refuses_it(monk
     with pytest.raises(SlamInputError, match=r"^steps: 12 scans, more than a run reads"):
         run_steps([(0.1 * k, obs, None, None) for k in range(12)], SlamConfig(preset="paper"))
     assert run_observations([0.1 * k for k in range(10)], [obs] * 10, SlamConfig(preset="paper")).trajectory.shape == (10, 4)
+
+
+def test_tentative_landmarks_pruned_in_a_scan_make_room_in_that_scan() -> None:
+    """Review: the map's room was counted before the scan's pruning, so a full map of tentative
+    landmarks pruned in that scan still refused its new lines (and ended the scan empty). Pruning
+    now comes first: 30 landmarks of a first scan, not seen again within tentative_window (1 scan), give
+    their room to the second scan's 30 other lines."""
+    import dataclasses
+
+    from slam.filter import SlamFilter
+
+    first, _ = _many_lines(30, seed=1)
+    second = dataclasses.replace(first, lines=first.lines + [25.0, 0.0])  # 25 m farther: no line pairs with the first's
+    f = SlamFilter(SlamConfig(preset="paper", landmarks={"max_landmarks": 30, "tentative_window": 1, "confirm_hits": 2}))
+    assert f.step(0.0, first).n_new == 30
+    info = f.step(0.1, second)
+    assert info.n_matched == 0 and info.n_unadded == 0 and info.n_new == 30 and len(f.landmarks) == 30
+    assert np.allclose(f.ekf.x[5:, 0].reshape(-1, 2)[:, 0], second.lines[:, 0], atol=0.5)
