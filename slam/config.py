@@ -307,9 +307,9 @@ class LandmarkConfig:
         tentative_window: ...within this many scans of its creation, else it is pruned.
         max_landmarks: the most landmarks (tentative and confirmed) the map holds: an observation
             that would start one more is not added (``diagnostics["n_unadded"]``; ``run_slam``
-            warns); a pruned tentative landmark makes room again. It bounds the filter's memory and
-            time: its covariance is (5 + 2 n)^2 float64, 128 MB at the default 2,000 landmarks,
-            3.2 GB at the largest allowed, 10,000.
+            warns); the tentative landmarks a scan prunes make room, that scan already. It bounds the
+            filter's memory and time: its covariance is (5 + 2 n)^2 float64, 128 MB at the default
+            2,000 landmarks (paper preset), 3.2 GB at the largest allowed, 10,000.
     """
 
     confirm_hits: int = 3
