@@ -588,7 +588,7 @@ def test_a_sweep_name_that_is_no_plain_folder_name_is_refused_at_load(tmp_path, 
         load_sweep(path)
     assert "\n" not in str(info.value)
     if len(name) > 100:  # its length as it is: the name cut to 120 characters was said to be "(120 characters)"
-        assert f"...{'a' * 7}' ({len(name) + 2} characters) must be" in str(info.value)
+        assert f"...'{'a' * 8}' ({len(name)} characters) must be" in str(info.value)
     path.write_text(yaml.safe_dump({"name": "a" * 100, "kind": "extract", "grid": {"extractor.k": [3]}}))
     assert load_sweep(path).name == "a" * 100
 
