@@ -1598,7 +1598,7 @@ class BagReader:
         if not scans:
             topics = sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections})
             wanted = f"topic {self.topic!r}" if self.topic else "sensor_msgs/LaserScan topic"
-            # was "no any sensor_msgs/LaserScan topic; topics: []" for a bag of no message (write_log of no record)
+            # was "no any sensor_msgs/LaserScan topic; topics: []" for a bag of no message (write_bag of no record, other tools')
             held = f"topics: {', '.join(topics)}" if topics else "it holds no topic (an empty bag)"
             raise BagError(f"{self.path}: no {wanted}; {held}")
         if len(names) > 1 and self.topic is None:

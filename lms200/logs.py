@@ -115,16 +115,25 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
         items = iter(records)
     except TypeError:
         raise InputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
+    if fmt == "bag" and p.suffix != ".bag":
+        raise InputError(f"path: a ROS 1 bag must end in .bag, got {p.name}")
+    if fmt == "bag2" and p.suffix == ".bag":
+        raise InputError(f"path: a ROS 2 bag is a folder; do not name it {p.name}")
+    if fmt not in ("bag", "bag2"):
+        if p.suffix.lower() in UNWRITTEN_PACKINGS:  # plain text was written under the name, silently
+            raise InputError(f"path: {p.name} names a {UNWRITTEN_PACKINGS[p.suffix.lower()]}, which write_log does "
+                             "not write (a CARMEN log is plain text, or compressed as .gz, .bz2 or .xz)")
+        if p.exists() and not p.is_file():
+            raise InputError(f"path: {p} exists and is not a regular file (a folder or a device); "
+                             "name a file to write the log to")
+    # the path and format checked, then the first record taken: a refused path left a live source
+    # one record short; before anything is written, as a log of no scan is one read_log refuses
     checked = checked_records(items)
-    first = next(checked, None)  # before anything is written: a log of no scan is one read_log refuses
+    first = next(checked, None)
     if first is None:
         raise InputError(f"records: none to write to {p}: read_log refuses a log of no scan, so nothing was written")
     checked = itertools.chain([first], checked)
     if fmt in ("bag", "bag2"):
-        if fmt == "bag" and p.suffix != ".bag":
-            raise InputError(f"path: a ROS 1 bag must end in .bag, got {p.name}")
-        if fmt == "bag2" and p.suffix == ".bag":
-            raise InputError(f"path: a ROS 2 bag is a folder; do not name it {p.name}")
         existed = p.exists()
         try:
             return write_bag(p, checked)
@@ -134,12 +143,6 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
             elif not existed and p.exists():
                 p.unlink()
             raise
-    if p.suffix.lower() in UNWRITTEN_PACKINGS:  # plain text was written under the name, silently
-        raise InputError(f"path: {p.name} names a {UNWRITTEN_PACKINGS[p.suffix.lower()]}, which write_log does not "
-                         "write (a CARMEN log is plain text, or compressed as .gz, .bz2 or .xz)")
-    if p.exists() and not p.is_file():
-        raise InputError(f"path: {p} exists and is not a regular file (a folder or a device); "
-                         "name a file to write the log to")
     written: list[int] = []  # .NAME.PID.tmp.gz: the temporary name keeps the suffix write_carmen packs by
     try:
         write_whole(p, lambda tmp: written.append(write_carmen(tmp, checked, fmt=fmt)), suffix="".join(p.suffixes[-1:]))

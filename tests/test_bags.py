@@ -668,8 +668,8 @@ def test_a_scan_write_bag_refuses_leaves_the_ones_before_it_readable(tmp_path: P
 
 @pytest.mark.parametrize("name", ["empty.bag", "empty2"])
 def test_a_bag_of_no_message_says_it_holds_no_topic(tmp_path: Path, name: str) -> None:
-    """The wrong-input hunt: write_log(BAG, []) writes a bag of no message, which read_log refused
-    as "no any sensor_msgs/LaserScan topic; topics: []"."""
+    """The wrong-input hunt: a bag of no message (write_bag of no record; write_log now refuses to
+    write one, but other tools make them) was refused as "no any sensor_msgs/LaserScan topic; topics: []"."""
     from lms200.bag import BagError
 
     from lms200.bag import write_bag
@@ -1070,6 +1070,22 @@ def test_write_log_of_no_record_writes_nothing(tmp_path: Path, name: str, fmt: s
         with pytest.raises(InputError):
             write_log(path, [])
         assert [r.scan.stamp for r in read_log(path)] == [1.0]
+
+
+def test_write_log_checks_its_path_before_it_takes_a_record(tmp_path: Path) -> None:
+    """Review: write_log took the first record (to refuse no record) before its path checks, so a
+    path it refuses left a live source one record short. The path and fmt are checked first."""
+    rec = Record(_scan(1.0))
+    for name, fmt in (("x.clf.zip", None), ("x.clf", "bag"), ("x.bag", "bag2")):
+        source = iter([rec])
+        with pytest.raises(InputError, match=r"^path: "):
+            write_log(tmp_path / name, source, fmt=fmt)
+        assert next(source) is rec
+    (tmp_path / "folder").mkdir()
+    source = iter([rec])
+    with pytest.raises(InputError, match=r"^path: .* exists and is not a regular file"):
+        write_log(tmp_path / "folder", source)
+    assert next(source) is rec
 
 
 def test_a_killed_writers_temporary_file_is_removed_by_the_next_write(tmp_path: Path) -> None:
