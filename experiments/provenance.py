@@ -5,7 +5,6 @@ the run has finished)."""
 from __future__ import annotations
 
 import datetime
-import glob
 import os
 import platform
 import subprocess
@@ -123,9 +122,6 @@ def write_record(path: str | os.PathLike, content: str | Callable[[Path], object
 def leftover_temporaries(path: str | os.PathLike) -> list[Path]:
     """The temporary files :func:`write_record` left beside ``path`` in a process that was killed
     before it renamed them (``.NAME.PID.tmp`` only: a user's ``.NAME.notes.tmp`` is not one)."""
-    path = Path(path)
-    from lms200.logs import temporary_stem
+    from lms200.logs import temporaries
 
-    stem = temporary_stem(path)
-    return [tmp for tmp in path.parent.glob(f"{glob.escape(stem)}.*.tmp")
-            if tmp.name[len(stem) + 1 : -len(".tmp")].isdigit()]
+    return [tmp for tmp, _ in temporaries(Path(path))]

@@ -584,9 +584,9 @@ def float32_ranges(ranges: np.ndarray, range_min: float, range_max: float) -> np
     for out of range, and a reader compares in the message's float32, where rounding put a reading
     just above range_max onto it (8.18300005 m under 8.183 m: both 8.1829996 m), read back valid.
     Such a reading is written as the next float32 beyond the limit; every other as its nearest float32."""
-    out = ranges.astype(np.float32)
     low, high = np.float32(range_min), np.float32(range_max)
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore"):  # a signalling nan's cast warned ("invalid value encountered in cast")
+        out = ranges.astype(np.float32)
         out[(ranges > range_max) & (out <= high)] = np.nextafter(high, np.float32(np.inf))
         out[(ranges < range_min) & (ranges > 0) & (out >= low)] = np.nextafter(low, np.float32(0))
     return out
@@ -615,7 +615,8 @@ def _scan_of(msg, range_max: float | None = None) -> Scan:  # noqa: ANN001
     elif math.isfinite(range_min) and range_max <= range_min:
         raise ValueError(f"the range_max override ({range_max:g} m, --laser-range-max) is not above the scan's "
                          f"range_min ({range_min:g} m); give a larger one")
-    ranges = np.asarray(msg.ranges, dtype=np.float64)
+    with np.errstate(invalid="ignore"):  # a signalling nan (float32 0x7f800001, a driver's raw bits) is a nan:
+        ranges = np.asarray(msg.ranges, dtype=np.float64)  # its cast warned, two lines a scan on stderr, exit 0
     if override and range_max <= FLOAT32_MAX and np.asarray(msg.ranges).dtype == np.float32:
         # compared in the message's float32, as its own range_max is: a reading stored as float32(M), just above
         # M for about half of all M (81.83 m -> 81.83000183), is at the limit, not beyond it (it read invalid)
@@ -1597,7 +1598,7 @@ class BagReader:
         if not scans:
             topics = sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections})
             wanted = f"topic {self.topic!r}" if self.topic else "sensor_msgs/LaserScan topic"
-            # was "no any sensor_msgs/LaserScan topic; topics: []" for a bag of no message (write_log of no record)
+            # was "no any sensor_msgs/LaserScan topic; topics: []" for a bag of no message (write_bag of no record, other tools')
             held = f"topics: {', '.join(topics)}" if topics else "it holds no topic (an empty bag)"
             raise BagError(f"{self.path}: no {wanted}; {held}")
         if len(names) > 1 and self.topic is None:

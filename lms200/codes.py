@@ -179,10 +179,15 @@ def float64_copy(a: np.ndarray, error: type[Exception] = InputError) -> np.ndarr
     array's ``Decimal("1e400")``), which the cast made +inf, REP-117's no return, silently (the
     CARMEN reader refuses its 1e400 so)."""
     try:
+        # a float32's (a long double's) signalling nan casts to a nan, REP-117's invalid reading, but numpy
+        # warned "invalid value encountered in cast" (two lines on stderr) for it: ignored
         if a.dtype.kind == "O" or a.dtype.itemsize > 8:  # a long double beyond float64: FloatingPointError, not inf
-            with np.errstate(over="raise"):
+            with np.errstate(over="raise", invalid="ignore"):
                 r = np.array(a, dtype=np.float64)
-        else:  # float64, float32, ints: no cast overflows (and no errstate, on every scan read)
+        elif a.dtype.kind == "f" and a.dtype.itemsize < 8:  # float32, float16: no cast overflows
+            with np.errstate(invalid="ignore"):
+                r = np.array(a, dtype=np.float64)
+        else:  # float64, ints: no cast overflows nor warns (and no errstate, on every scan read)
             r = np.array(a, dtype=np.float64)
     except FloatingPointError:
         raise error(f"ranges: a number beyond float64's range (dtype {a.dtype}) would read as inf") from None

@@ -6,10 +6,13 @@ name; both yield :class:`lms200.Record` objects.
 
 from __future__ import annotations
 
+import glob
 import io
+import itertools
 import os
 import shutil
 import stat
+import time
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
@@ -97,7 +100,9 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
     Raises:
         InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument: a path that is
             a folder, a device or in a missing folder, an unknown ``fmt``, an item of ``records``
-            that is not an ``lms200.Record`` (naming its index), records that are not iterable.
+            that is not an ``lms200.Record`` (naming its index), records that are not iterable,
+            no record at all (nothing is written: ``read_log`` refuses a log of no scan; an empty
+            CARMEN log or bag was written, exit 0, and the reader refused it).
     """
     p = path_of(path)
     if fmt is None:
@@ -110,12 +115,25 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
         items = iter(records)
     except TypeError:
         raise InputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
+    if fmt == "bag" and p.suffix != ".bag":
+        raise InputError(f"path: a ROS 1 bag must end in .bag, got {p.name}")
+    if fmt == "bag2" and p.suffix == ".bag":
+        raise InputError(f"path: a ROS 2 bag is a folder; do not name it {p.name}")
+    if fmt not in ("bag", "bag2"):
+        if p.suffix.lower() in UNWRITTEN_PACKINGS:  # plain text was written under the name, silently
+            raise InputError(f"path: {p.name} names a {UNWRITTEN_PACKINGS[p.suffix.lower()]}, which write_log does "
+                             "not write (a CARMEN log is plain text, or compressed as .gz, .bz2 or .xz)")
+        if p.exists() and not p.is_file():
+            raise InputError(f"path: {p} exists and is not a regular file (a folder or a device); "
+                             "name a file to write the log to")
+    # the path and format checked, then the first record taken: a refused path left a live source
+    # one record short; before anything is written, as a log of no scan is one read_log refuses
     checked = checked_records(items)
+    first = next(checked, None)
+    if first is None:
+        raise InputError(f"records: none to write to {p}: read_log refuses a log of no scan, so nothing was written")
+    checked = itertools.chain([first], checked)
     if fmt in ("bag", "bag2"):
-        if fmt == "bag" and p.suffix != ".bag":
-            raise InputError(f"path: a ROS 1 bag must end in .bag, got {p.name}")
-        if fmt == "bag2" and p.suffix == ".bag":
-            raise InputError(f"path: a ROS 2 bag is a folder; do not name it {p.name}")
         existed = p.exists()
         try:
             return write_bag(p, checked)
@@ -125,12 +143,6 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
             elif not existed and p.exists():
                 p.unlink()
             raise
-    if p.suffix.lower() in UNWRITTEN_PACKINGS:  # plain text was written under the name, silently
-        raise InputError(f"path: {p.name} names a {UNWRITTEN_PACKINGS[p.suffix.lower()]}, which write_log does not "
-                         "write (a CARMEN log is plain text, or compressed as .gz, .bz2 or .xz)")
-    if p.exists() and not p.is_file():
-        raise InputError(f"path: {p} exists and is not a regular file (a folder or a device); "
-                         "name a file to write the log to")
     written: list[int] = []  # .NAME.PID.tmp.gz: the temporary name keeps the suffix write_carmen packs by
     try:
         write_whole(p, lambda tmp: written.append(write_carmen(tmp, checked, fmt=fmt)), suffix="".join(p.suffixes[-1:]))
@@ -185,11 +197,15 @@ def write_whole(path: str | os.PathLike, write: Callable[[Path], object], suffix
     place did: a file that exists keeps its permission bits (a 0600 one became 0644 / 0664, the
     umask's), and a symbolic link is followed, its target replaced (the link was replaced by a
     regular file, its target left as it was). ``suffix`` ends the temporary name (``.NAME.PID.tmp.gz``)
-    for a ``write`` that packs by the name's suffix. Returns ``path``. Every whole-file output goes
+    for a ``write`` that packs by the name's suffix. First, the temporary files of ``path`` that a
+    process which no longer runs left (killed between write and rename) are removed
+    (:func:`remove_dead_temporaries`). Returns ``path``. Every whole-file output goes
     through here (``write_log``'s CARMEN logs, ``write_tum``, ``experiments.provenance.write_record``)."""
     given = Path(path)
     target = Path(os.path.realpath(given)) if os.path.islink(given) else given
-    tmp = target.with_name(f"{temporary_stem(target, suffix)}.{os.getpid()}.tmp{suffix}")
+    stem = temporary_stem(target, suffix)
+    tmp = target.with_name(f"{stem}.{os.getpid()}.tmp{suffix}")
+    remove_dead_temporaries(target, stem, suffix)
     try:
         write(tmp)
         try:
@@ -203,6 +219,70 @@ def write_whole(path: str | os.PathLike, write: Callable[[Path], object], suffix
         tmp.unlink(missing_ok=True)
         raise
     return given
+
+
+#: age (s, by mtime) past which a dead writer's ``.NAME.PID.tmp`` is removed: a write_whole writes
+#: and renames within seconds; a younger one may be a live writer's on another host (NFS) or in
+#: another container, whose PID means nothing here
+STALE_TEMPORARY_S = 600.0
+
+#: the kernel's pid_max where /proc/sys/kernel/pid_max cannot be read (its largest, 2^22)
+DEFAULT_PID_MAX = 4194304
+
+
+def pid_max() -> int:
+    """The PIDs this host gives are below this (/proc/sys/kernel/pid_max, else ``DEFAULT_PID_MAX``)."""
+    try:
+        return int(Path("/proc/sys/kernel/pid_max").read_text().strip())
+    except (OSError, ValueError):
+        return DEFAULT_PID_MAX
+
+
+def process_alive(pid: int) -> bool:
+    """Whether a process ``pid`` runs on this machine (one of another user's counts: it may be writing)."""
+    try:
+        os.kill(pid, 0)
+    except (ProcessLookupError, OverflowError):  # none; a pid beyond any the kernel gives
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return pid > 0
+
+
+def temporaries(path: Path, stem: str | None = None, suffix: str = "") -> list[tuple[Path, int]]:
+    """The ``STEM.PID.tmpSUFFIX`` files :func:`write_whole` writes ``path`` through that lie beside
+    it (``stem`` :func:`temporary_stem` of it by default), each with its PID: a name whose PID part
+    is no number (a user's ``.NAME.notes.tmp``) is none. In name order."""
+    stem = temporary_stem(path, suffix) if stem is None else stem
+    end = f".tmp{suffix}"
+    out = []
+    for tmp in sorted(path.parent.glob(f"{glob.escape(stem)}.*{glob.escape(end)}")):
+        pid = tmp.name[len(stem) + 1 : len(tmp.name) - len(end)]
+        if pid.isascii() and pid.isdigit():
+            out.append((tmp, int(pid)))
+    return out
+
+
+def remove_dead_temporaries(target: Path, stem: str, suffix: str) -> None:
+    """Remove the ``STEM.PID.tmpSUFFIX`` files beside ``target`` that a :func:`write_whole` killed
+    (SIGKILL, a power cut) between its write and its rename left (they stayed for ever). One is
+    removed only when (a) its PID is one this host gives (1 to :func:`pid_max` - 1: a 10-digit one
+    is another host's), (b) no process of that PID runs here, and (c) it was last written more than
+    ``STALE_TEMPORARY_S`` (10 min) ago: a PID dead here may be a live writer's on another host
+    sharing the folder (NFS) or in another container, and a write_whole writes and renames within
+    seconds. A user's ``.NAME.notes.tmp`` is kept. Best effort: a file that cannot be removed is left."""
+    if not target.parent.is_dir():
+        return
+    most, now = pid_max(), time.time()
+    for old, pid in temporaries(target, stem, suffix):
+        if not 0 < pid < most or pid == os.getpid() or process_alive(pid):
+            continue
+        try:
+            st = old.lstat()
+            if stat.S_ISREG(st.st_mode) and now - st.st_mtime > STALE_TEMPORARY_S:
+                old.unlink()
+        except OSError:
+            pass
 
 
 def folder_message(p: Path) -> str:

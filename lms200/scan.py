@@ -332,7 +332,8 @@ def _ranges_view(ranges: object) -> np.ndarray:
         check_real_kind(ranges.dtype, ScanError)
         if ranges.dtype.kind == "O":
             check_real_items(ranges.compressed(), ScanError)  # masked items become nan, whatever they hold
-        ranges = np.ma.filled(ranges.astype(np.float64), np.nan)
+        with np.errstate(invalid="ignore"):  # a float32 signalling nan: a nan, without numpy's warning
+            ranges = np.ma.filled(ranges.astype(np.float64), np.nan)
     return real_numbers(ranges, ScanError)
 
 

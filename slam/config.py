@@ -267,6 +267,12 @@ class ObservationConfig:
             added to the extractor's covariance (or used alone where it gives none).
         use_corners: (paper preset) add corner landmarks (x, y); ``sigma_corner`` (m) their noise.
         point_stride: (paper preset) every ``point_stride``-th beam's point checks a pre-alignment.
+        max_lines: (paper preset) the most lines, and apart the most corners, of one scan the filter
+            observes: a scan with more keeps its longest lines (its first corners) and the rest are
+            not observed (``diagnostics["n_unobserved"]``; ``run_slam`` warns). It bounds a step's
+            work and memory: a scan of 20,000 lines ran over 60 s in one step, toward a 12.8 GB
+            covariance (the LMS200's scans have at most a few dozen; 100 keeps every line of the
+            four real logs).
     """
 
     min_line_points: int = 8
@@ -276,6 +282,7 @@ class ObservationConfig:
     use_corners: bool = False
     sigma_corner: float = 0.05
     point_stride: int = 2
+    max_lines: int = 100
 
 
 @dataclass(frozen=True)
@@ -308,10 +315,16 @@ class LandmarkConfig:
     Attributes:
         confirm_hits: sightings (including the first) that confirm a tentative landmark...
         tentative_window: ...within this many scans of its creation, else it is pruned.
+        max_landmarks: the most landmarks (tentative and confirmed) the map holds: an observation
+            that would start one more is not added (``diagnostics["n_unadded"]``; ``run_slam``
+            warns); the tentative landmarks a scan prunes make room, that scan already. It bounds the
+            filter's memory and time: its covariance is (5 + 2 n)^2 float64, 128 MB at the default
+            2,000 landmarks (paper preset), 3.2 GB at the largest allowed, 10,000.
     """
 
     confirm_hits: int = 3
     tentative_window: int = 6
+    max_landmarks: int = 2000
 
 
 @dataclass(frozen=True)
@@ -817,11 +830,13 @@ FIELD_RANGES: dict[str, FieldRange] = {
     "observations.sigma_alpha_obs": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "rad", False, NOISE_WHY),
     "observations.sigma_corner": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "m", False, NOISE_WHY),
     "observations.point_stride": (1, 100, "beams", False, ""),
+    "observations.max_lines": (1, 16384, "lines", False, ""),
     # association, landmarks (the paper preset)
     "association.extent_margin": (0, 100, "m", False, ""),
     "association.extent_sigmas": (0, 100, "std", False, ""),
     "landmarks.confirm_hits": (1, 1000, "sightings", False, ""),
     "landmarks.tentative_window": (1, 1000, "scans", False, ""),
+    "landmarks.max_landmarks": (1, 10000, "landmarks", False, "the covariance is (5 + 2 n)^2 float64: 3.2 GB at 10,000"),
     # prealign (the paper preset)
     "prealign.radius": (0.1, 1000, "m", False, ""),
     "prealign.sigma_xy": (MIN_NOISE_SIGMA, MAX_NOISE_SIGMA, "m", False, NOISE_WHY),

@@ -25,8 +25,9 @@ from .models import wrap
 
 def checked_trajectory(traj: object, name: str, finite_poses: bool = True) -> np.ndarray:
     """``traj`` as a float64 (n >= 1, 4) trajectory (t s, x m, y m, theta rad) whose stamps are
-    finite and do not decrease; with ``finite_poses`` its poses finite too (a reference's must be;
-    an estimate of a lost run may hold nan poses, which its scores then read as nan)."""
+    finite and do not decrease, its positions within +-MAX_COORD_M (as read_tum reads them); with
+    ``finite_poses`` its poses finite too (a reference's must be; an estimate of a lost run may
+    hold nan poses, which its scores then read as nan)."""
     a = real_rows(traj, name, 4, "t s, x m, y m, theta rad", finite=False)
     if a.shape[0] == 0:
         raise InputError(f"{name}: has no poses")
@@ -38,6 +39,12 @@ def checked_trajectory(traj: object, name: str, finite_poses: bool = True) -> np
         raise InputError(f"{name}: stamps must not decrease (row {k}: {t[k].item()!r} s after {t[k - 1].item()!r} s)")
     if finite_poses and not np.isfinite(a[:, 1:]).all():
         raise InputError(f"{name}: its poses must be finite; row {int(np.nonzero(~np.isfinite(a[:, 1:]).all(1))[0][0])} is not")
+    with np.errstate(invalid="ignore"):  # nan poses (a lost estimate) are not beyond the bound
+        far = np.abs(a[:, 1:3]) > MAX_COORD_M
+    if far.any():  # the readers' bound (read_tum, read_relations): 1e300 m overflowed ate's squares, its RMSE inf
+        k = int(np.nonzero(far.any(1))[0][0])
+        raise InputError(f"{name}: row {k}: position ({a[k, 1]:.6g}, {a[k, 2]:.6g}) m lies beyond +-{MAX_COORD_M:g} m "
+                         "(the bound of the trajectory readers; damaged, or not metres?)")
     return a
 
 

@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import itertools
+import sys
+import warnings
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Iterator, Sequence
+from typing import Any, Iterable, Iterator, Sequence, Sized
 
 import numpy as np
 
+from lms200.errors import LmsbenchWarning
+from lms200.finite import shown
 from lms200.logs import MAX_COORD_M, checked_records
 from lms200.records import Record
 
@@ -80,26 +85,97 @@ def run_observations(
             continue
         if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
             raise SlamInputError(f"{name}: must be an iterable (one item a scan), got {type(value).__name__}")
-        lists[name] = list(value)
+        lists[name] = list(listed(value, name))
         if name == "stamps":
             n = len(lists[name])
         elif len(lists[name]) != n:
             raise SlamInputError(f"{name}: {len(lists[name])} items for {n} stamps (one a scan)")
-    return run_steps(zip(lists["stamps"], lists["observations"], lists["odometry"], lists["truths"]), config)
+    return _run_steps(zip(lists["stamps"], lists["observations"], lists["odometry"], lists["truths"]), config)
+
+
+def listed(items: Iterable[Any], name: str) -> Iterable[Any]:
+    """``items`` for :func:`run_observations`, which lists them all before the run: an iterator of
+    more than ``MAX_SLAM_SCANS`` items is refused (SlamInputError naming ``name``) as a list is."""
+    if isinstance(items, Sized):
+        Capped(items, name)  # refuses one of more than MAX_SLAM_SCANS
+        return items
+    out = list(itertools.islice(items, MAX_SLAM_SCANS + 1))
+    if len(out) > MAX_SLAM_SCANS:
+        raise SlamInputError(f"{name}: an iterator or generator that yielded more than {MAX_SLAM_SCANS:,} items "
+                             "(slam.run.MAX_SLAM_SCANS, one a scan: 24 h at 75 Hz) without ending (itertools.count?); "
+                             "pass a finite piece of it (itertools.islice), or run_steps, which ends the run there")
+    return out
+
+
+#: most scans one run reads (run_slam, run_steps, run_observations): 24 h of an LMS200 at its 75 Hz.
+#: A run keeps a few hundred bytes a scan whatever the scan (its pose, 3x3 covariance and per-scan
+#: diagnostics: the paper preset's result 185 B a scan, 1.2 GB at the bound; its lists while it runs
+#: ~670 B a scan, measured with tracemalloc); past it a source is most likely one that never ends
+#: (``run_slam(itertools.repeat(record))`` ran for ever, its trajectory growing). An iterator is read
+#: up to it and the run ends there, with a SlamLimitWarning (its result kept: a live source, a day's
+#: bag); a list, a tuple (any sized collection) or ``run_observations``' inputs (listed first) longer
+#: than it are refused before any work (SlamInputError).
+MAX_SLAM_SCANS = 24 * 3600 * 75
+
+
+class SlamLimitWarning(LmsbenchWarning):
+    """A run met one of its bounds: the paper preset's filter left observations out
+    (``observations.max_lines`` a scan, ``landmarks.max_landmarks`` in the map), or an iterator of
+    scans was read up to ``MAX_SLAM_SCANS`` and the run ended there."""
+
+
+class Capped:
+    """An iterable's items for one run: a sized one (a list, a tuple) whole, SlamInputError naming
+    ``name`` when it holds more than ``MAX_SLAM_SCANS``; an iterator's first ``MAX_SLAM_SCANS``
+    (``ended`` is then True: :meth:`warn` says so)."""
+
+    def __init__(self, items: Iterable[Any], name: str) -> None:
+        self.items, self.name, self.read, self.ended = items, name, 0, False
+        if isinstance(items, Sized) and len(items) > MAX_SLAM_SCANS:
+            raise SlamInputError(f"{name}: {len(items):,} scans, more than a run reads (slam.run.MAX_SLAM_SCANS, "
+                                 f"{MAX_SLAM_SCANS:,}: 24 h at 75 Hz); pass a piece of it")
+
+    def __iter__(self) -> Iterator[Any]:
+        if isinstance(self.items, Sized):
+            yield from self.items
+            return
+        for item in itertools.islice(self.items, MAX_SLAM_SCANS):
+            self.read += 1
+            yield item
+        self.ended = self.read >= MAX_SLAM_SCANS
+
+    def warn(self, stacklevel: int) -> None:
+        """A one-line SlamLimitWarning when the iterator was cut at ``MAX_SLAM_SCANS``."""
+        if self.ended:
+            warnings.warn(f"{self.name}: the run ended after {self.read:,} scans (slam.run.MAX_SLAM_SCANS, 24 h at "
+                          "75 Hz); the iterator's scans after them, if any, were not read", SlamLimitWarning,
+                          stacklevel=stacklevel + 1)
 
 
 def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: SlamConfig = SlamConfig()) -> SlamResult:
     """Run the filter over (stamp s, observations, odometry pose or None, true pose or None).
 
     The filter starts at the origin; with true poses, the pose NEES is computed in the truth frame
-    anchored at the first true pose.
+    anchored at the first true pose. An iterator of steps is read up to ``MAX_SLAM_SCANS``
+    (6,480,000) steps and the run ends there (a SlamLimitWarning); a list or tuple longer than that
+    is refused (SlamInputError).
     """
+    if isinstance(steps, (str, bytes)) or not isinstance(steps, Iterable):
+        raise SlamInputError(f"steps: must be an iterable (one item a scan), got {type(steps).__name__}")
+    capped = Capped(steps, "steps")
+    result = _run_steps(capped, config)
+    capped.warn(stacklevel=2)
+    return result
+
+
+def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: SlamConfig) -> SlamResult:
+    """:func:`run_steps` without its bound (its callers bound their input: :class:`Capped`)."""
     if not isinstance(config, SlamConfig):
         raise SlamInputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
     slam = SlamFilter(config)
     traj, covs = [], []
     keys = ("nis", "nis_dof", "nees", "n_landmarks", "n_matched", "n_lines", "prealign_used", "prealign_shift",
-            "point_score")
+            "point_score", "n_unobserved", "n_unadded")
     diag: dict[str, list] = {k: [] for k in keys}
     diverged_at = None
     anchor = None
@@ -133,7 +209,8 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
         for key, value in (("nis", info.nis), ("nis_dof", info.nis_dof), ("nees", nees),
                            ("n_landmarks", len(slam.landmarks)), ("n_matched", info.n_matched),
                            ("n_lines", info.n_lines), ("prealign_used", info.prealign_used),
-                           ("prealign_shift", info.prealign_shift), ("point_score", info.point_score)):
+                           ("prealign_shift", info.prealign_shift), ("point_score", info.point_score),
+                           ("n_unobserved", info.n_unobserved), ("n_unadded", info.n_unadded)):
             diag[key].append(value)
         ok = slam.healthy(full=(k % 50 == 0))
         healthy &= ok
@@ -146,6 +223,7 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
     if not traj:
         raise SlamInputError("no scans in the input")
     out: dict[str, Any] = {k: np.array(v) for k, v in diag.items()}
+    warn_limits(out, config)
     dof = out["nis_dof"].sum()
     finite_nees = out["nees"][np.isfinite(out["nees"])]
     out.update(
@@ -160,6 +238,18 @@ def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sla
     )
     return SlamResult(np.array(traj, float).reshape(-1, 4), np.array(covs).reshape(-1, 3, 3),
                       slam.map_lines(), slam.map_corners(), out)
+
+
+def warn_limits(diag: dict[str, Any], config: SlamConfig) -> None:
+    """A SlamLimitWarning for each bound of the filter a run met (once a run: its scans and counts)."""
+    for key, what, name, value in (
+            ("n_unobserved", "lines or corners were not observed", "observations.max_lines", config.observations.max_lines),
+            ("n_unadded", "observations started no landmark", "landmarks.max_landmarks", config.landmarks.max_landmarks)):
+        counts = diag[key]
+        if counts.sum():
+            warnings.warn(f"{int(counts.sum()):,} {what} in {int(np.count_nonzero(counts)):,} of {counts.size:,} scans: "
+                          f"beyond {name} ({value:,}, a bound of the filter's time and memory)",
+                          SlamLimitWarning, stacklevel=4)
 
 
 def lost_against_scan(scores: list[float], cfg) -> bool:
@@ -196,7 +286,7 @@ def pose_nees(traj: np.ndarray, covs: np.ndarray, truths: list) -> np.ndarray:
     return out
 
 
-def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> SlamResult:
+def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_scans: int | None = None) -> SlamResult:
     """Odometry-free SLAM over a scan source (a log reader, the simulator's records...).
 
     ``config.preset == "default"``: motion measured by scan matching, keyframe pose graph with
@@ -207,15 +297,34 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
     ``config.motion.use_odometry`` (either preset; a record without it is predicted by the
     motion model); true poses only for the NEES diagnostic.
 
+    ``max_scans``: at most this many records are read (the rest are not: a live source may stop
+    there), silently. Without it, an iterator or generator of records is read up to
+    ``MAX_SLAM_SCANS`` (6,480,000: 24 h at the LMS200's 75 Hz) and the run ends there, its result
+    returned with a one-line SlamLimitWarning (how many scans were read; the rest were not); a
+    list, a tuple or another sized collection is taken whole, and refused before any work when it
+    holds more than ``MAX_SLAM_SCANS``.
+
     Returns:
         SlamResult with one pose per record, stamped with the record's ``scan.stamp``.
+
+    Raises:
+        SlamInputError: an item that is no Record (naming its index), scans out of time order, a
+            ``max_scans`` that is no integer >= 1, a sized ``records`` of more than ``MAX_SLAM_SCANS``
+            with no ``max_scans``.
     """
     if not isinstance(config, SlamConfig):
         raise SlamInputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
+    if max_scans is not None and (isinstance(max_scans, bool) or not isinstance(max_scans, (int, np.integer))
+                                  or max_scans < 1):
+        raise SlamInputError(f"max_scans: must be an integer >= 1 (or None), got {shown(max_scans)}")
     try:
-        records = in_scale(checked_records(iter(records), SlamInputError))
+        iter(records)
     except TypeError:
         raise SlamInputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
+    # an int past sys.maxsize is no count islice takes (a raw ValueError); no source holds that many
+    capped: Iterable[Any] = (Capped(records, "records") if max_scans is None
+                             else itertools.islice(records, min(int(max_scans), sys.maxsize)))
+    records = in_scale(checked_records(iter(capped), SlamInputError))
     range_maxes: set[float] = set()
 
     def seen(records: Iterable[Record]) -> Iterator[Record]:
@@ -233,6 +342,8 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
 
         result = run_scan_slam(((rec.scan.stamp, rec.scan, rec.odom, rec.truth) for rec in records), config)
         _warn_unread(config, range_maxes)
+        if isinstance(capped, Capped):
+            capped.warn(stacklevel=2)
         return result
 
     def steps():
@@ -244,8 +355,10 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig()) -> Sl
                 batch = []
         yield from _observed(batch, config)
 
-    result = run_steps(steps(), config)
+    result = _run_steps(steps(), config)
     _warn_unread(config, range_maxes)
+    if isinstance(capped, Capped):
+        capped.warn(stacklevel=2)
     return result
 
 

@@ -668,11 +668,13 @@ def test_a_scan_write_bag_refuses_leaves_the_ones_before_it_readable(tmp_path: P
 
 @pytest.mark.parametrize("name", ["empty.bag", "empty2"])
 def test_a_bag_of_no_message_says_it_holds_no_topic(tmp_path: Path, name: str) -> None:
-    """The wrong-input hunt: write_log(BAG, []) writes a bag of no message, which read_log refused
-    as "no any sensor_msgs/LaserScan topic; topics: []"."""
+    """The wrong-input hunt: a bag of no message (write_bag of no record; write_log now refuses to
+    write one, but other tools make them) was refused as "no any sensor_msgs/LaserScan topic; topics: []"."""
     from lms200.bag import BagError
 
-    write_log(tmp_path / name, [], fmt="bag" if name.endswith(".bag") else "bag2")
+    from lms200.bag import write_bag
+
+    write_bag(tmp_path / name, [])  # write_log refuses no records; the reader still meets such bags
     with pytest.raises(BagError, match=rf"^{re.escape(str(tmp_path / name))}: no sensor_msgs/LaserScan topic; it holds "
                                        r"no topic \(an empty bag\)$"):
         list(read_log(tmp_path / name))
@@ -1052,3 +1054,91 @@ def test_a_bag_rosbags_cannot_open_is_one_line(tmp_path: Path) -> None:
                     r"here in \"<unicode string>\", line 4", str(e.value)), str(e.value)
     spaced = tmp_path / "two  spaces.bag"  # a review: every run of whitespace was collapsed, a path with two spaces misquoted
     assert str(BagError(f"{spaced}: cannot open\n   ^ here")) == f"{spaced}: cannot open ^ here"
+
+
+@pytest.mark.parametrize("name, fmt", [("empty.clf", None), ("empty.clf.gz", None), ("empty.bag", None),
+                                       ("empty2", "bag2")])
+def test_write_log_of_no_record_writes_nothing(tmp_path: Path, name: str, fmt: str | None) -> None:
+    """Defect: write_log(path, []) wrote a CARMEN log of comments (or a bag of no message) that
+    read_log refused; now the pair agrees: no record is an InputError and an older log is kept."""
+    path = tmp_path / name
+    with pytest.raises(InputError, match=rf"^records: none to write to {re.escape(str(path))}: read_log refuses"):
+        write_log(path, iter([]), fmt=fmt)
+    assert not path.exists() and list(tmp_path.iterdir()) == []
+    if fmt is None and not name.endswith(".bag"):
+        write_log(path, [Record(_scan(1.0))])
+        with pytest.raises(InputError):
+            write_log(path, [])
+        assert [r.scan.stamp for r in read_log(path)] == [1.0]
+
+
+def test_write_log_checks_its_path_before_it_takes_a_record(tmp_path: Path) -> None:
+    """Review: write_log took the first record (to refuse no record) before its path checks, so a
+    path it refuses left a live source one record short. The path and fmt are checked first."""
+    rec = Record(_scan(1.0))
+    for name, fmt in (("x.clf.zip", None), ("x.clf", "bag"), ("x.bag", "bag2")):
+        source = iter([rec])
+        with pytest.raises(InputError, match=r"^path: "):
+            write_log(tmp_path / name, source, fmt=fmt)
+        assert next(source) is rec
+    (tmp_path / "folder").mkdir()
+    source = iter([rec])
+    with pytest.raises(InputError, match=r"^path: .* exists and is not a regular file"):
+        write_log(tmp_path / "folder", source)
+    assert next(source) is rec
+
+
+def test_a_killed_writers_temporary_file_is_removed_by_the_next_write(tmp_path: Path) -> None:
+    """Defect: a SIGKILL between write_whole's write and rename left .NAME.PID.tmp for ever; the
+    next write of that path removes one whose PID this host gives, no process here has, and that is
+    older than STALE_TEMPORARY_S (10 min). Kept: a fresh one of a dead PID and one of a PID beyond
+    pid_max (a live writer's on another host, NFS, or in a container), a live writer's, another
+    suffix's or name's, and a user's .NAME.notes.tmp."""
+    import itertools
+    import os
+    import time
+
+    from lms200.logs import STALE_TEMPORARY_S, pid_max, process_alive
+
+    dead_pid, other_dead_pid = itertools.islice((p for p in range(pid_max() - 1, 1, -1) if not process_alive(p)), 2)
+    path = tmp_path / "x.clf.gz"
+    dead = tmp_path / f".x.clf.gz.{dead_pid}.tmp.gz"
+    fresh = tmp_path / f".x.clf.gz.{other_dead_pid}.tmp.gz"
+    old_kept = [tmp_path / f".x.clf.gz.{os.getppid()}.tmp.gz",  # a live writer's
+                tmp_path / ".x.clf.gz.9876543210.tmp.gz",  # 10 digits: beyond any pid_max, another host's
+                tmp_path / ".x.clf.gz.notes.tmp.gz", tmp_path / f".x.clf.gz.{dead_pid}.tmp",
+                tmp_path / f".y.clf.gz.{dead_pid}.tmp.gz"]
+    long_ago = time.time() - STALE_TEMPORARY_S - 60
+    for p in (dead, fresh, *old_kept):
+        p.write_text("cut")
+        if p is not fresh:
+            os.utime(p, (long_ago, long_ago))
+    write_log(path, [Record(_scan(1.0))])
+    assert not dead.exists() and fresh.exists() and all(p.exists() for p in old_kept)
+    assert [r.scan.stamp for r in read_log(path)] == [1.0]
+
+
+def test_a_signalling_nan_reads_and_writes_as_nan_without_a_warning(tmp_path: Path) -> None:
+    """Fuzzing (a byte of a ROS 2 bag changed): a float32 signalling nan (0x7f800001, a driver's raw
+    bits) among the ranges made numpy's cast warn, "RuntimeWarning: invalid value encountered in
+    cast", two lines on stderr for each such scan of `lmsbench info`, exit 0; a float64 one warned in
+    write_log alike. Both are a nan: an invalid reading (REP-117)."""
+    import struct
+    import warnings
+
+    ranges = np.full(5, 2.0)
+    ranges[2] = np.frombuffer(struct.pack("<Q", 0x7FF0000000000001), np.float64)[0]
+    for name in ("s.bag", "s2"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            write_log(tmp_path / name, [Record(Scan(ranges, -0.1, 0.05, 0.0, 8.0, stamp=1.0))],
+                      fmt=None if name.endswith(".bag") else "bag2")
+    data = (tmp_path / "s.bag").read_bytes()
+    quiet = struct.pack("<f", np.float32(np.nan))
+    assert data.count(quiet) == 1
+    (tmp_path / "s.bag").write_bytes(data.replace(quiet, struct.pack("<I", 0x7F800001)))
+    for name in ("s.bag", "s2"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            got = [r.scan.ranges for r in read_log(tmp_path / name)]
+        assert len(got) == 1 and np.isnan(got[0][2]) and np.array_equal(np.delete(got[0], 2), np.full(4, 2.0))

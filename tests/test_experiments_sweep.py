@@ -577,7 +577,7 @@ def test_a_slam_sweep_spells_its_extractors_fields_as_every_other_run_does(tmp_p
         assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("name", ["a/b", "../x", "..", ".hidden", "-x", "a\\b", "a" * 101, "a\nb", ""])
+@pytest.mark.parametrize("name", ["a/b", "../x", "..", ".hidden", "-x", "a\\b", "a" * 101, "a" * 300, "a\nb", ""])
 def test_a_sweep_name_that_is_no_plain_folder_name_is_refused_at_load(tmp_path, name):
     """The name names results/sweeps/NAME: a path separator, `..` or a hidden name was refused at
     load, but a 300-character one only when its folder was made ("File name too long")."""
@@ -587,6 +587,8 @@ def test_a_sweep_name_that_is_no_plain_folder_name_is_refused_at_load(tmp_path, 
                                              r"not starting with . or -, at most 100 characters\)") as info:
         load_sweep(path)
     assert "\n" not in str(info.value)
+    if len(name) > 100:  # its length as it is: the name cut to 120 characters was said to be "(120 characters)"
+        assert f"...'{'a' * 8}' ({len(name)} characters) must be" in str(info.value)
     path.write_text(yaml.safe_dump({"name": "a" * 100, "kind": "extract", "grid": {"extractor.k": [3]}}))
     assert load_sweep(path).name == "a" * 100
 
@@ -904,3 +906,18 @@ def test_a_sweep_refused_by_its_checks_leaves_the_folders_files_as_they_were(tmp
     with pytest.raises(LmsbenchError, match=r"cells/f00\.parquet: a folder where a cell's file goes"):
         run_sweep(make_spec(log, xs=[0, 1, 2]), out, "inprocess", progress=False)
     assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+
+
+def test_a_killed_sweeps_temporary_tables_are_removed_by_the_next_run(tmp_path):
+    """A kill between write_atomic's write of results.parquet / results.csv and its rename left
+    .results.parquet.XXXX.tmp in the sweep folder for ever (cells/' were removed); the next run's
+    store removes them, and no other hidden file."""
+    from experiments.sweep.store import CellStore
+
+    left = [tmp_path / ".results.parquet.k3x_9q.tmp", tmp_path / ".results.csv.ab12cd.tmp", tmp_path / "cells" / ".k.x1.tmp"]
+    kept = [tmp_path / ".notes.tmp", tmp_path / ".results.parquet.bak", tmp_path / "results.parquet"]
+    (tmp_path / "cells").mkdir()
+    for p in left + kept:
+        p.write_text("cut")
+    CellStore(tmp_path)
+    assert not any(p.exists() for p in left) and all(p.exists() for p in kept)

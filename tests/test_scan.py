@@ -231,3 +231,19 @@ def test_beam_of_refuses_bearings_that_are_no_finite_numbers(bearings: object) -
     with pytest.raises(InputError, match=r"^bearings: must be finite numbers \(rad\), got "):
         scan.beam_of(bearings)
     assert scan.beam_of(np.array([-np.pi / 2, 0.0, np.pi / 2])).tolist() == [0, 180, 360]
+
+
+def test_a_float32_signalling_nan_in_ranges_is_a_nan_without_a_warning() -> None:
+    """Review: a float32 signalling nan (0x7f800001, a driver's raw bits) among a Scan's ranges made
+    numpy's float64 cast warn "RuntimeWarning: invalid value encountered in cast" (the bag readers
+    ignored it, Scan did not); it is a nan, an invalid reading (REP-117), silently, masked or not."""
+    import warnings
+
+    raw = np.array([2.0, 2.0, 3.0], np.float32)
+    raw.view(np.uint32)[1] = 0x7F800001
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        plain = Scan(raw, -np.pi / 2, np.pi / 2, 0.0, 8.0)
+        masked = Scan(np.ma.array(raw, mask=[True, False, False]), -np.pi / 2, np.pi / 2, 0.0, 8.0)
+    assert plain.ranges.dtype == np.float64 and np.isnan(plain.ranges[1]) and plain.ranges[[0, 2]].tolist() == [2.0, 3.0]
+    assert np.isnan(masked.ranges[:2]).all() and masked.ranges[2] == 3.0

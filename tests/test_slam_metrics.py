@@ -350,3 +350,29 @@ def test_map_error_memory_is_bounded_by_the_chunk_not_the_wall_count() -> None:
     assert e.matched == 400
     # whole, each (400 x 40,000) array was 128 MB, and a dozen lived at once
     assert peak < 48 << 20, f"peak {peak / 2**20:.0f} MiB"
+
+
+def test_a_position_beyond_the_readers_bound_is_refused_not_overflowed() -> None:
+    """Fuzzing the Python API: ate of a trajectory at 1e300 m warned "overflow encountered in
+    matmul / square" on stderr and scored an RMSE of inf (against itself 0.0); read_tum refuses
+    such a row, and the metrics now refuse it alike, naming the trajectory and row."""
+    import warnings
+
+    from lms200 import InputError
+    from slam.metrics import ate, rpe
+
+    t = np.column_stack((np.arange(10.0), np.arange(10.0), np.zeros(10), np.zeros(10)))
+    far = t.copy()
+    far[3, 1:3] = (3e300, -1e10)
+    for fn in (ate, rpe):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with pytest.raises(InputError, match=r"^estimate: row 3: position \(3e\+300, -1e\+10\) m lies beyond \+-1e\+09 m"):
+                fn(far, t)
+            with pytest.raises(InputError, match=r"^truth: row 3: position"):
+                fn(t, far)
+    edge = t.copy()
+    edge[3, 1] = 1e9  # the bound itself is taken; a lost estimate's nan is no position beyond it
+    assert ate(edge, t).n == 10
+    edge[3, 1] = np.nan
+    assert np.isnan(ate(edge, t).rmse)

@@ -32,7 +32,7 @@ from experiments.options import mid_sentence
 
 from .cells import INPUTS_KEY, WARNINGS_KEY, resolve_kind, run_cell
 from .spec import Scalar, SweepSpec, cell_key
-from .store import CellStore, write_atomic
+from .store import RESULT_TABLES, CellStore, write_atomic
 
 #: Columns every row has besides its parameters and metrics.
 BOOKKEEPING = ("status", "error", "elapsed_s", "cell", WARNINGS_KEY, INPUTS_KEY)
@@ -129,7 +129,7 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
     # cell's file goes, an input that cannot be read) rewrote sweep.yaml and versions.yaml and removed the
     # folder's table of the earlier sweep before it was refused
     if _recorded(out / "sweep.yaml") not in (None, record):  # the folder's table is another sweep file's: a run
-        for name in ("results.parquet", "results.csv"):  # killed before writing its own left it beside this
+        for name in RESULT_TABLES:  # killed before writing its own left it beside this
             (out / name).unlink(missing_ok=True)  # sweep.yaml, drawn by `figures --sweep` as this one's, exit 0
     write_record(out / "sweep.yaml", record)  # whole: it tells the folder as the sweep's (SWEEP_OWNER)
     write_record(out / "versions.yaml", dump_yaml(versions(), sort_keys=False))  # of the last run into `out`
@@ -177,8 +177,8 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
         table = store.read(keys)
         if not table.empty:
             table = table.drop_duplicates("cell", ignore_index=True)
-            write_atomic(table, out / "results.parquet")
-            write_atomic(table, out / "results.csv")
+            for name in RESULT_TABLES:
+                write_atomic(table, out / name)
     failed = int((table["status"] != "ok").sum()) if not table.empty else 0
     return SweepResult(table, len(set(keys)), counts["computed"], skipped, failed, out)
 

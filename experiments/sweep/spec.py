@@ -259,9 +259,16 @@ def _plain_name(name: str) -> bool:
     return len(name) <= MAX_NAME_CHARS and re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", name) is not None
 
 
+def _quoted(name: str) -> str:
+    """``name`` quoted for a one-line message, a long one cut to its start and end with its own length
+    (``shown`` gives its quoted repr's: 302 characters for a name of 300)."""
+    text = repr(name)
+    return text if len(text) <= 60 else f"{name[:40]!r}...{name[-8:]!r} ({len(name):,} characters)"
+
+
 def _check(spec: SweepSpec) -> None:
     if not _plain_name(spec.name):
-        raise SweepSpecError(f"name: {spec.name[:MAX_NAME_CHARS + 20]!r} must be a plain folder name ({NAME_RULE}), "
+        raise SweepSpecError(f"name: {_quoted(str(spec.name))} must be a plain folder name ({NAME_RULE}), "
                              "as it names the output folder results/sweeps/NAME")
     for part in ("fixed", "grid", "random"):  # `null: 3` or `1: 3` was an internal AttributeError at the kinds' check
         for key in getattr(spec, part):

@@ -26,6 +26,7 @@ import pandas as pd
 from lms200.errors import LmsbenchError, LmsbenchWarning
 
 CELLS_DIR = "cells"
+RESULT_TABLES = ("results.parquet", "results.csv")  # the tables write_atomic writes into a sweep folder
 
 
 class CellStore:
@@ -37,6 +38,10 @@ class CellStore:
         self.cells.mkdir(parents=True, exist_ok=True)
         for stale in self.cells.glob(".*.tmp"):  # left by a kill between write and rename
             stale.unlink(missing_ok=True)
+        for table in RESULT_TABLES:  # write_atomic's of the tables, as a kill left them (they stayed for ever)
+            for stale in self.root.glob(f".{table}.*.tmp"):
+                if stale.is_file() and not stale.is_symlink():
+                    stale.unlink(missing_ok=True)
 
     @staticmethod
     def finished(root: str | Path) -> bool:

@@ -1,0 +1,161 @@
+"""Bounds of SLAM on hostile input: an endless iterator of records (run_slam), a scan of very
+many lines (the paper preset's EKF)."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from lms200 import Record, Scan
+from slam import SlamConfig, SlamInputError, run_slam
+from slam.config import SlamConfigError
+
+
+def _records(n: int, beams: int = 181) -> list[Record]:
+    """``n`` scans 0.1 s apart of a robot standing in a square room (ranges to its walls)."""
+    bearings = np.linspace(-np.pi / 2, np.pi / 2, beams)
+    with np.errstate(divide="ignore"):
+        ranges = np.minimum(3.0 / np.maximum(np.cos(bearings), 1e-9), 2.0 / np.abs(np.sin(bearings)))
+    return [Record(Scan(np.minimum(ranges, 7.9), -np.pi / 2, np.pi / (beams - 1), 0.0, 8.0, stamp=0.1 * k))
+            for k in range(n)]
+
+
+def test_an_endless_iterator_ends_the_run_at_the_scan_bound(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Defect: run_slam(itertools.repeat(record)) never ended, its trajectory growing; then an
+    iterator past a beam bound was refused after all the work (a 1081-beam bag at 40 Hz after
+    52 min), its result lost. An iterator is now read up to MAX_SLAM_SCANS (made 20 here) and the
+    run ends there, its result returned with a one-line SlamLimitWarning."""
+    import warnings
+
+    import slam.run
+    from slam.run import SlamLimitWarning
+
+    assert slam.run.MAX_SLAM_SCANS == 24 * 3600 * 75  # 24 h of an LMS200 at 75 Hz
+    rec = _records(1)[0]
+    monkeypatch.setattr(slam.run, "MAX_SLAM_SCANS", 20)
+    read = itertools.count()
+
+    def endless():
+        for _ in itertools.repeat(None):
+            assert next(read) < 100, "read on past the bound"
+            yield rec
+
+    for preset in ("default", "paper"):
+        with pytest.warns(SlamLimitWarning, match=r"^records: the run ended after 20 scans \(slam.run.MAX_SLAM_SCANS"
+                                                  r".*; the iterator's scans after them, if any, were not read$"):
+            result = run_slam(endless(), SlamConfig(preset=preset))
+        assert result.trajectory.shape == (20, 4)
+    # a list longer than the bound is refused before any work; one within it is taken whole
+    records = _records(21)
+    with pytest.raises(SlamInputError, match=r"^records: 21 scans, more than a run reads \(slam.run.MAX_SLAM_SCANS, 20"):
+        run_slam(records, SlamConfig(preset="paper"))
+    records = records[:20]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SlamLimitWarning)
+        assert run_slam(records, SlamConfig(preset="paper")).trajectory.shape == (20, 4)
+        # max_scans reads no further than it says, silently, whatever the bound
+        assert run_slam(itertools.repeat(rec), SlamConfig(preset="paper"), max_scans=30).trajectory.shape == (30, 4)
+        it = iter(records)
+        assert run_slam(it, SlamConfig(preset="paper"), max_scans=5).trajectory.shape == (5, 4)
+        assert next(it) is records[5]  # the source is not read past max_scans
+        # a count past sys.maxsize is no islice count (a raw ValueError): it reads the whole source
+        assert run_slam(records[:3], SlamConfig(preset="paper"), max_scans=2**63).trajectory.shape == (3, 4)
+    for bad in (0, -1, True, 2.5, "3", -10**5000):  # the last one's repr (> 4,300 digits) raised inside the message
+        with pytest.raises(SlamInputError, match=r"^max_scans: must be an integer >= 1 \(or None\), got "):
+            run_slam(records, max_scans=bad)
+
+
+def _many_lines(m: int, seed: int = 0):
+    """Observations of ``m`` distinct short lines (rho 1-20 m, lengths 0.3-3 m) in the sensor frame."""
+    from slam.observations import Observations
+
+    rng = np.random.default_rng(seed)
+    rho, alpha, length = rng.uniform(1, 20, m), rng.uniform(-np.pi, np.pi, m), rng.uniform(0.3, 3, m)
+    foot = np.column_stack((rho * np.cos(alpha), rho * np.sin(alpha)))
+    along = np.column_stack((-np.sin(alpha), np.cos(alpha))) * (length / 2)[:, None]
+    ends = np.hstack((foot - along, foot + along))
+    cov = np.tile(np.diag([0.02**2, 0.01**2]), (m, 1, 1))
+    return Observations(lines=np.column_stack((rho, alpha)), line_cov=cov, line_ends=ends), length
+
+
+def test_a_scan_of_very_many_lines_is_observed_up_to_max_lines() -> None:
+    """Defect: the paper preset's filter took every line of a step: 20,000 lines ran over 60 s,
+    growing the state toward a 12.8 GB covariance. Now it observes the longest
+    observations.max_lines (100) of them, says how many it left, and the step is quick."""
+    import time
+
+    from slam.filter import SlamFilter
+    from slam.run import SlamLimitWarning, run_observations
+
+    obs, length = _many_lines(20_000)
+    f = SlamFilter(SlamConfig(preset="paper"))
+    t0 = time.perf_counter()
+    info = f.step(0.0, obs)
+    assert time.perf_counter() - t0 < 10  # ~0.1 s; the old code did not finish in 60 s
+    assert info.n_unobserved == 19_900 and info.n_new == len(f.landmarks) == 100
+    assert f.ekf.P.shape == (205, 205)
+    # the landmarks are the 100 longest lines (the filter starts at the origin: a line's landmark is its observation)
+    longest = np.sort(np.argsort(-length)[:100])
+    got = f.ekf.x[5:, 0].reshape(-1, 2)
+    assert np.allclose(got[:, 0], obs.lines[longest, 0]) and np.allclose(np.cos(got[:, 1] - obs.lines[longest, 1]), 1)
+    # the map's bound: 30 landmarks, the other 70 lines start none; both bounds warn once a run
+    small, _ = _many_lines(100, seed=1)
+    cfg = SlamConfig(preset="paper", landmarks={"max_landmarks": 30}, observations={"max_lines": 60})
+    with pytest.warns(SlamLimitWarning) as seen:
+        result = run_observations([0.0, 0.1], [small, small], cfg)
+    d = result.diagnostics
+    assert d["n_unobserved"].tolist() == [40, 40] and d["n_unadded"][0] == 30 and d["n_landmarks"].max() == 30
+    assert [str(w.message) for w in seen] == [
+        "80 lines or corners were not observed in 2 of 2 scans: beyond observations.max_lines (60, a bound of the "
+        "filter's time and memory)",
+        f"{int(d['n_unadded'].sum())} observations started no landmark in {int(np.count_nonzero(d['n_unadded']))} of 2 "
+        "scans: beyond landmarks.max_landmarks (30, a bound of the filter's time and memory)"]
+    with pytest.raises(SlamConfigError, match=r"^landmarks.max_landmarks: "):
+        SlamConfig(preset="paper", landmarks={"max_landmarks": 10_001})
+
+
+def test_run_steps_ends_an_endless_iterator_and_run_observations_refuses_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Fuzzing: run_observations(itertools.count(), itertools.repeat(obs)) listed the stamps until
+    memory ran out (a MemoryError under a 2 GB limit); run_steps of an endless generator ran for
+    ever. run_steps now reads an iterator up to MAX_SLAM_SCANS (made 10 here) and ends the run
+    there with a SlamLimitWarning; run_observations, which lists its inputs first, refuses one
+    longer (and a list longer), before any work."""
+    import slam.run
+    from slam import run_observations, run_steps
+    from slam.observations import Observations
+    from slam.run import SlamLimitWarning
+
+    monkeypatch.setattr(slam.run, "MAX_SLAM_SCANS", 10)
+    obs = Observations()
+    with pytest.raises(SlamInputError, match=r"^stamps: an iterator or generator that yielded more than 10 items"):
+        run_observations(itertools.count(), itertools.repeat(obs))
+    with pytest.raises(SlamInputError, match=r"^stamps: 11 scans, more than a run reads"):
+        run_observations([0.1 * k for k in range(11)], [obs] * 11)
+    with pytest.warns(SlamLimitWarning, match=r"^steps: the run ended after 10 scans"):
+        result = run_steps(((0.1 * k, obs, None, None) for k in itertools.count()), SlamConfig(preset="paper"))
+    assert result.trajectory.shape == (10, 4)
+    with pytest.raises(SlamInputError, match=r"^steps: must be an iterable \(one item a scan\), got int"):
+        run_steps(5)
+    with pytest.raises(SlamInputError, match=r"^steps: 12 scans, more than a run reads"):
+        run_steps([(0.1 * k, obs, None, None) for k in range(12)], SlamConfig(preset="paper"))
+    assert run_observations([0.1 * k for k in range(10)], [obs] * 10, SlamConfig(preset="paper")).trajectory.shape == (10, 4)
+
+
+def test_tentative_landmarks_pruned_in_a_scan_make_room_in_that_scan() -> None:
+    """Review: the map's room was counted before the scan's pruning, so a full map of tentative
+    landmarks pruned in that scan still refused its new lines (and ended the scan empty). Pruning
+    now comes first: 30 landmarks of a first scan, not seen again within tentative_window (1 scan), give
+    their room to the second scan's 30 other lines."""
+    import dataclasses
+
+    from slam.filter import SlamFilter
+
+    first, _ = _many_lines(30, seed=1)
+    second = dataclasses.replace(first, lines=first.lines + [25.0, 0.0])  # 25 m farther: no line pairs with the first's
+    f = SlamFilter(SlamConfig(preset="paper", landmarks={"max_landmarks": 30, "tentative_window": 1, "confirm_hits": 2}))
+    assert f.step(0.0, first).n_new == 30
+    info = f.step(0.1, second)
+    assert info.n_matched == 0 and info.n_unadded == 0 and info.n_new == 30 and len(f.landmarks) == 30
+    assert np.allclose(f.ekf.x[5:, 0].reshape(-1, 2)[:, 0], second.lines[:, 0], atol=0.5)
