@@ -108,9 +108,12 @@ def listed(items: Iterable[Any], name: str) -> Iterable[Any]:
 
 
 #: most scans one run reads (run_slam, run_steps, run_observations): 24 h of an LMS200 at its 75 Hz.
-#: A run keeps a few hundred bytes a scan whatever the scan (its pose, 3x3 covariance and per-scan
-#: diagnostics: the paper preset's result 185 B a scan, 1.2 GB at the bound; its lists while it runs
-#: ~670 B a scan, measured with tracemalloc); past it a source is most likely one that never ends
+#: A run keeps a few hundred bytes to 1 kB a scan whatever the scan (its pose, 3x3 covariance and per-scan
+#: diagnostics: the paper preset's result 185 B a scan, 1.2 GB at the bound; its peak while it runs
+#: 267 B a scan, 1.7 GB, its numpy blocks (:class:`Column`) and the result they are joined into; its
+#: Python lists were ~730 B, 4.7 GB. The default preset's peak: ~970 B a scan, 6.3 GB, its per-scan
+#: records being Python objects; tracemalloc, 20,000 vs 40,000 steps and 2,000 vs 4,000 scans); past
+#: it a source is most likely one that never ends
 #: (``run_slam(itertools.repeat(record))`` ran for ever, its trajectory growing). An iterator is read
 #: up to it and the run ends there, with a SlamLimitWarning (its result kept: a live source, a day's
 #: bag); a list, a tuple (any sized collection) or ``run_observations``' inputs (listed first) longer
@@ -152,6 +155,51 @@ class Capped:
                           stacklevel=stacklevel + 1)
 
 
+class Column:
+    """Per-scan values of one dtype and row shape, appended one at a time into numpy blocks of
+    ``BLOCK_ROWS`` rows (a scan's pose, covariance or diagnostic): 8 B a float where a list of
+    Python floats held 32 B (a pointer and the float) and a list of 3x3 covariance arrays ~190 B a
+    scan for 72 B of numbers. :meth:`taken` joins the blocks into one array and lets them go."""
+
+    BLOCK_ROWS = 4096
+
+    def __init__(self, dtype: type | np.dtype, shape: tuple[int, ...] = ()) -> None:
+        self.dtype, self.shape = np.dtype(dtype), shape
+        self.full: list[np.ndarray] = []  # the blocks filled
+        self.block = np.empty((0, *shape), self.dtype)
+        self.fill = 0  # rows of self.block in use
+        self.size = 0  # rows in all
+
+    def append(self, value: Any) -> None:
+        if self.fill == len(self.block):
+            if self.fill:
+                self.full.append(self.block)
+            self.block, self.fill = np.empty((self.BLOCK_ROWS, *self.shape), self.dtype), 0
+        self.block[self.fill] = value
+        self.fill += 1
+        self.size += 1
+
+    def last(self, k: int) -> np.ndarray:
+        """The last ``k`` rows (all of them when there are fewer), oldest first, one contiguous array."""
+        if k <= self.fill:
+            return self.block[self.fill - k:self.fill]
+        parts, need = [self.block[:self.fill]], k - self.fill
+        for block in reversed(self.full):
+            if need <= 0:
+                break
+            parts.append(block[max(len(block) - need, 0):])
+            need -= len(block)
+        return np.concatenate(parts[::-1])
+
+    def taken(self) -> np.ndarray:
+        """All rows as one array; the column is empty after (its blocks released)."""
+        blocks, self.full = self.full + [self.block[:self.fill]], []
+        self.block, self.fill, self.size = np.empty((0, *self.shape), self.dtype), 0, 0
+        out = blocks[0].copy() if len(blocks) == 1 else np.concatenate(blocks)
+        del blocks
+        return out
+
+
 def run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: SlamConfig = SlamConfig()) -> SlamResult:
     """Run the filter over (stamp s, observations, odometry pose or None, true pose or None).
 
@@ -173,10 +221,11 @@ def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sl
     if not isinstance(config, SlamConfig):
         raise SlamInputError(f"config: must be a slam.SlamConfig, got {type(config).__name__}")
     slam = SlamFilter(config)
-    traj, covs = [], []
-    keys = ("nis", "nis_dof", "nees", "n_landmarks", "n_matched", "n_lines", "prealign_used", "prealign_shift",
-            "point_score", "n_unobserved", "n_unadded")
-    diag: dict[str, list] = {k: [] for k in keys}
+    traj, covs = Column(np.float64, (4,)), Column(np.float64, (3, 3))  # numpy blocks, not lists: see MAX_SLAM_SCANS
+    kinds = {"nis": np.float64, "nis_dof": np.int64, "nees": np.float64, "n_landmarks": np.int64,
+             "n_matched": np.int64, "n_lines": np.int64, "prealign_used": np.bool_, "prealign_shift": np.float64,
+             "point_score": np.float64, "n_unobserved": np.int64, "n_unadded": np.int64}
+    diag = {k: Column(kind) for k, kind in kinds.items()}
     diverged_at = None
     anchor = None
     healthy = True
@@ -215,14 +264,15 @@ def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sl
         ok = slam.healthy(full=(k % 50 == 0))
         healthy &= ok
         window = config.consistency.nis_window
-        nis_w = np.sum(diag["nis"][-window:])
-        dof_w = np.sum(diag["nis_dof"][-window:])
-        if diverged_at is None and (not ok or (len(diag["nis"]) >= window and dof_w > 0 and nis_w / dof_w > config.consistency.nis_divergence)
-                                    or lost_against_scan(diag["point_score"], config.consistency)):
+        nis_w = np.sum(diag["nis"].last(window))
+        dof_w = np.sum(diag["nis_dof"].last(window))
+        if diverged_at is None and (not ok or (diag["nis"].size >= window and dof_w > 0 and nis_w / dof_w > config.consistency.nis_divergence)
+                                    or lost_against_scan(diag["point_score"].last(config.consistency.point_window),
+                                                         config.consistency)):
             diverged_at = t
-    if not traj:
+    if not traj.size:
         raise SlamInputError("no scans in the input")
-    out: dict[str, Any] = {k: np.array(v) for k, v in diag.items()}
+    out: dict[str, Any] = {k: column.taken() for k, column in diag.items()}  # one at a time: blocks let go
     warn_limits(out, config)
     dof = out["nis_dof"].sum()
     finite_nees = out["nees"][np.isfinite(out["nees"])]
@@ -232,12 +282,11 @@ def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sl
         healthy=bool(healthy and slam.healthy(full=True)),
         # the steps whose scan had a line paired with a landmark (the rest are the motion model's
         # guess): a run of scans without a line (every beam nan, 3-beam scans) was said nothing of
-        matched_fraction=float(np.mean(out["n_matched"][1:] > 0)) if len(traj) > 1 else 1.0,
+        matched_fraction=float(np.mean(out["n_matched"][1:] > 0)) if out["n_matched"].size > 1 else 1.0,
         mean_nis_per_dof=float(out["nis"].sum() / dof) if dof else float("nan"),
         mean_nees=float(finite_nees.mean()) if finite_nees.size else float("nan"),
     )
-    return SlamResult(np.array(traj, float).reshape(-1, 4), np.array(covs).reshape(-1, 3, 3),
-                      slam.map_lines(), slam.map_corners(), out)
+    return SlamResult(traj.taken(), covs.taken(), slam.map_lines(), slam.map_corners(), out)
 
 
 def warn_limits(diag: dict[str, Any], config: SlamConfig) -> None:
@@ -252,7 +301,7 @@ def warn_limits(diag: dict[str, Any], config: SlamConfig) -> None:
                           SlamLimitWarning, stacklevel=4)
 
 
-def lost_against_scan(scores: list[float], cfg) -> bool:
+def lost_against_scan(scores: Sequence[float] | np.ndarray, cfg) -> bool:
     """The NEES-like check against the scan itself: the last ``cfg.point_window`` scans all put
     fewer than ``cfg.point_min_score`` of their points on the map (nan scores, no reference, are
     not counted as bad)."""
