@@ -31,3 +31,28 @@ def test_a_missing_numba_is_a_clear_lmsbench_error(use: str) -> None:
     assert out.returncode == 0, out.stderr[-1000:]
     assert out.stdout.startswith("NumbaUnavailableError")
     assert "numba" in out.stdout and "pip install" in out.stdout
+
+
+def test_numba_prints_no_colour_reset_on_a_terminal() -> None:
+    """Defect: every command that compiles (simulate, slam, figures, sweep) wrote a stray "ESC[0m"
+    after its last line on a terminal: numba's error highlighting (colorama, which evo requires)
+    ran colorama.init() at the first compile, whose exit handler resets the terminal's colours."""
+    import os
+    import pty
+
+    master, slave = pty.openpty()
+    code = "from lms200.numba_required import numba\nprint(numba.njit(lambda x: x + 1)(1))\n"
+    try:
+        proc = subprocess.Popen([sys.executable, "-c", code], cwd=ROOT, stdout=slave, stderr=slave,
+                                env={k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING"})
+        os.close(slave)
+        shown = bytearray()
+        try:
+            while chunk := os.read(master, 4096):
+                shown.extend(chunk)
+        except OSError:  # EIO: the process has closed the terminal
+            pass
+        assert proc.wait(timeout=120) == 0
+    finally:
+        os.close(master)
+    assert bytes(shown) == b"2\r\n"
