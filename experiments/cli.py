@@ -5,7 +5,8 @@ Known errors (``lms200.LmsbenchError``, any ``OSError``: missing files, bad path
 schedulers or devices) and bad options become one-line messages ``lmsbench CMD: error: ...`` with
 exit status 2; Ctrl-C exits with 130 and one line, within INTERRUPT_GRACE_S even when a cleanup
 (closing a Dask cluster whose workers are in the middle of cells) would take longer; SIGTERM (``kill``,
-a batch system's time limit) stops the same way, with 143 and "terminated". An exception raised by the user's own code that a
+a batch system's time limit) stops the same way, with 143 and "terminated"; either after the command
+ended, while the interpreter exits, leaves the command's own status, with no line. An exception raised by the user's own code that a
 command runs (a ``--methods MODULE:FUNCTION`` extractor: ``experiments.user_methods.UserMethodFailed``)
 is a user error too, named as such (exit 2; ``LMSBENCH_TRACEBACK=1`` shows its traceback). Anything
 else is a bug: one line saying so, exit status 1 (``LMSBENCH_TRACEBACK=1`` shows the traceback).
@@ -117,6 +118,8 @@ STOP_SIGNALS = {signal.SIGINT: ("interrupted", 130), signal.SIGTERM: ("terminate
 
 #: the command was stopped by a signal (its line written): the stop signals are ignored at the exit's end
 _STOPPED = threading.Event()
+#: the command ended, not stopped (the process's own main()): the same (see _Interrupt.after_the_end)
+_ENDED = threading.Event()
 
 
 @atexit.register  # at this module's import: it runs after the exit handlers of libraries imported later (Dask's)
@@ -124,8 +127,11 @@ def _ignore_stop_signals_at_the_end() -> None:
     """Once a command stopped by Ctrl-C or SIGTERM has run the exit handlers (Dask closing its
     cluster, where a second Ctrl-C still ends it at once), the stop signals are ignored: Python's
     finalization then sets a handled signal back to its default, and one more Ctrl-C there (a
-    user's, or a test's repeated SIGINT) killed the process after its line: exit -2, not 130."""
-    if _STOPPED.is_set() and threading.current_thread() is threading.main_thread():
+    user's, or a test's repeated SIGINT) killed the process after its line: exit -2, not 130. The
+    same after a command that returned (its status stands: _Interrupt.after_the_end): the
+    modules' teardown that follows took ~0.7 s after ``simulate``, and a SIGTERM there was exit 143
+    with no line."""
+    if (_STOPPED.is_set() or _ENDED.is_set()) and threading.current_thread() is threading.main_thread():
         for sig in STOP_SIGNALS:
             signal.signal(sig, signal.SIG_IGN)
 
@@ -139,6 +145,9 @@ class _Interrupt:
 
     def __init__(self, name: str) -> None:
         self.name, self.reported = name, False
+        self.ended = False  # the command returned or failed, in the process's own main(): see after_the_end
+        self.status: int | None = None  # its exit status, once main() has it
+        self.late: threading.Timer | None = None  # a stop signal came after the end: see after_the_end
         self.lock = threading.Lock()  # the one line: written once, whoever comes first (see report)
         self.timer: threading.Timer | None = None
         self.signum: int = signal.SIGINT
@@ -160,6 +169,9 @@ class _Interrupt:
                 return
             self.redeliver = False
             raise KeyboardInterrupt
+        if self.ended:  # the command is over: the signal meets the interpreter's exit, nothing to stop
+            self.after_the_end(signum)
+            return
         if self.timer is not None:  # a second Ctrl-C while the first one's stop runs: stop now, as said
             self.hard_stop()  # (it raised KeyboardInterrupt inside the cleanup: a traceback, exit -2)
         self.signum = signum
@@ -215,6 +227,32 @@ class _Interrupt:
         finally:
             if blocked is not None:
                 signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+
+    def after_the_end(self, signum: int) -> None:
+        """A stop signal after the command ended (returned, its outputs and last line written, or
+        failed, its error said next), while the interpreter exits (~0.7 s after ``simulate``: the
+        exit handlers, then the modules' teardown): the command's own status stands, with no line.
+        The exit goes on as it would (every exit handler run: matplotlib's temporary folder
+        removed, a cluster closed), ended with that status if it is not over in INTERRUPT_GRACE_S;
+        a second signal ends it at once (children killed). It was killed by the signal: exit 143
+        (SIGTERM) with no "terminated" line, or Ctrl-C's KeyboardInterrupt from where it landed."""
+        if self.late is None:
+            self.signum = signum
+            self.late = threading.Timer(INTERRUPT_GRACE_S, self.end_with_status)
+            self.late.daemon = True
+            self.late.start()
+        else:
+            self.end_with_status()
+
+    def end_with_status(self) -> None:
+        """Exit at once with the command's status, its children killed (stdout was flushed when
+        main() got the status). Before main() has it (the command's last writes stuck on a full
+        pipe), a stop as any other: the one line and 130 / 143."""
+        if self.status is None:
+            self.hard_stop()
+            return
+        _kill_children()
+        os._exit(self.status)
 
     def hard_stop(self) -> None:
         _kill_children()
@@ -311,12 +349,21 @@ _NO_CONFIG_FOLDER_WARNING = _NoConfigFolderWarning()
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command ``argv`` names (None: ``sys.argv[1:]``) and return its exit status. Run so, as
+    the process itself (the ``lmsbench`` script, ``python -m experiments.cli``), its handler of
+    Ctrl-C and SIGTERM stays in place after the command returns, until the process exits: a stop
+    signal then ends nothing and the command's status stands (_Interrupt.after_the_end). Called
+    with ``argv`` (a test, a script of the user's), the handlers before it are put back."""
     _standard_streams()
     logging.getLogger("matplotlib").addFilter(_NO_CONFIG_FOLDER_WARNING)  # before matplotlib is imported
+    ended: list[_Interrupt] | None = [] if argv is None else None  # the process's own: its handler kept
     try:
-        return _flushed(_main(argv))
+        status = _flushed(_main(argv, ended))
     except KeyboardInterrupt:  # before the command's handler is in place: its options being read
         return _flushed(_stopped_while_starting(sys.argv[1:] if argv is None else argv))
+    for interrupt in ended or ():
+        interrupt.status = status
+    return status
 
 
 def _flushed(status: int) -> int:
@@ -335,7 +382,9 @@ def _flushed(status: int) -> int:
     return status
 
 
-def _main(argv: Sequence[str] | None) -> int:
+def _main(argv: Sequence[str] | None, ended: list[_Interrupt] | None = None) -> int:
+    """main()'s work; ``ended``, a list where the process's own main() runs it, is given the
+    command's stop handler, which then stays in place after the command (main() sets its status)."""
     parser = build_parser()
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
@@ -357,6 +406,9 @@ def _main(argv: Sequence[str] | None) -> int:
     interrupt = _Interrupt(name)
     main_thread = threading.current_thread() is threading.main_thread()
     previous = {sig: signal.signal(sig, interrupt.handler) for sig in STOP_SIGNALS} if main_thread else {}
+    keep = ended is not None and main_thread  # the handler stays after the command (see main)
+    if keep and ended is not None:
+        ended.append(interrupt)
     previous_hook = sys.unraisablehook
     if main_thread:
         sys.unraisablehook = lambda u: interrupt.swallowed(u) or previous_hook(u)
@@ -378,6 +430,10 @@ def _main(argv: Sequence[str] | None) -> int:
             sys.stdout.flush()  # here, not at exit: a reader that went away (`| head`) is said below
         finally:
             interrupt.running = False
+            # returned, or failed (its error said next): a stop signal from here on leaves its status as
+            # it is (after_the_end). In release_outputs below, SIGTERM after simulate's last line was
+            # "interrupted", 130 (a KeyboardInterrupt out of this function); after it, exit 143, no line
+            interrupt.ended = keep and interrupt.timer is None
             if sys.stdout is watched:
                 sys.stdout = watched.stream
         return status
@@ -424,8 +480,11 @@ def _main(argv: Sequence[str] | None) -> int:
 
         release_outputs()
         if interrupt.timer is None:  # stopped by a signal: the handler stays for the exit's own cleanup
-            for sig, handler in previous.items():  # (atexit: Dask closing clusters), where a second
-                signal.signal(sig, handler)  # Ctrl-C printed a traceback; it now ends the process at once
+            if interrupt.ended:  # (atexit: Dask closing clusters), where a second Ctrl-C printed a traceback;
+                _ENDED.set()  # it now ends the process at once. A command that ended: kept till the exit
+            else:
+                for sig, handler in previous.items():
+                    signal.signal(sig, handler)
             if main_thread:
                 sys.unraisablehook = previous_hook
             warnings.showwarning = previous_show

@@ -405,6 +405,55 @@ def test_sigterm_stops_a_command_with_one_line_and_143() -> None:
     assert out.stdout.splitlines() == ["status 143"], out.stdout
 
 
+SIGNALS_AFTER_THE_COMMAND = r"""
+import atexit, os, signal, sys, types
+
+atexit.register(signal.raise_signal, signal.SIGTERM)  # registered first: run last, after lmsbench's own
+
+
+class Teardown:
+    def __del__(self) -> None:  # run in the modules' teardown, after every exit handler
+        os.write(1, b"teardown\n")
+        signal.raise_signal(signal.SIGTERM)
+
+
+probe = types.ModuleType("teardown_probe")
+probe.teardown = Teardown()
+sys.modules[probe.__name__] = probe
+del probe
+from experiments import cli
+from experiments.commands import info
+
+
+def run(args):
+    print("the command's last line")
+    return 3
+
+
+info.run = run
+sys.argv = ["lmsbench", "info", "x.clf"]  # main() as the lmsbench script runs it
+status = cli.main()
+for sig in SIGNALS:  # `kill PID` in the ~1 s of the interpreter's exit after simulate's last line
+    signal.raise_signal(sig)
+print(f"status {status}", flush=True)
+sys.exit(status)
+"""
+
+
+@pytest.mark.parametrize("signals, stdout", [
+    ("SIGTERM", "the command's last line\nstatus 3\nteardown\n"),
+    ("SIGTERM, signal.SIGINT", "the command's last line\n"),  # a second one ends the exit at once
+])
+def test_a_stop_signal_after_the_command_leaves_its_status(signals: str, stdout: str) -> None:
+    """SIGTERM after the command's last line, in the interpreter's exit (~1 s after ``simulate``),
+    killed it: exit 143 with no "terminated" line (Ctrl-C: a traceback or 130). The command is over
+    and its status stands (3 here): the exit goes on, a stop signal in its exit handlers or the
+    modules' teardown is ignored, a second one ends it at once with that status."""
+    script = SIGNALS_AFTER_THE_COMMAND.replace("SIGNALS", f"(signal.{signals},)")
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=REPO, env=_env(), timeout=120)
+    assert (out.returncode, out.stdout, out.stderr) == (3, stdout, "")
+
+
 @pytest.mark.slow
 def test_sigterm_stops_a_sweep_whose_cells_resume(tmp_path, capsys):
     """SIGTERM to a sweep's process (not its group: `kill PID`) in the middle of a cell: one line,
