@@ -14,7 +14,6 @@ in an order rotated by one per scan, so no method always runs first (cold caches
 
 from __future__ import annotations
 
-
 import dataclasses
 import itertools
 import os

@@ -97,7 +97,7 @@ def listed(items: Iterable[Any], name: str) -> Iterable[Any]:
     """``items`` for :func:`run_observations`, which lists them all before the run: an iterator of
     more than ``MAX_SLAM_SCANS`` items is refused (SlamInputError naming ``name``) as a list is."""
     if isinstance(items, Sized):
-        Capped(items, name)  # refuses one of more than MAX_SLAM_SCANS
+        check_size(items, name)
         return items
     out = list(itertools.islice(items, MAX_SLAM_SCANS + 1))
     if len(out) > MAX_SLAM_SCANS:
@@ -121,6 +121,13 @@ def listed(items: Iterable[Any], name: str) -> Iterable[Any]:
 MAX_SLAM_SCANS = 24 * 3600 * 75
 
 
+def check_size(items: Sized, name: str) -> None:
+    """SlamInputError naming ``name`` when the sized ``items`` hold more than ``MAX_SLAM_SCANS``."""
+    if len(items) > MAX_SLAM_SCANS:
+        raise SlamInputError(f"{name}: {len(items):,} scans, more than a run reads (slam.run.MAX_SLAM_SCANS, "
+                             f"{MAX_SLAM_SCANS:,}: 24 h at 75 Hz); pass a piece of it")
+
+
 class SlamLimitWarning(LmsbenchWarning):
     """A run met one of its bounds: the paper preset's filter left observations out
     (``observations.max_lines`` a scan, ``landmarks.max_landmarks`` in the map), or an iterator of
@@ -134,9 +141,8 @@ class Capped:
 
     def __init__(self, items: Iterable[Any], name: str) -> None:
         self.items, self.name, self.read, self.ended = items, name, 0, False
-        if isinstance(items, Sized) and len(items) > MAX_SLAM_SCANS:
-            raise SlamInputError(f"{name}: {len(items):,} scans, more than a run reads (slam.run.MAX_SLAM_SCANS, "
-                                 f"{MAX_SLAM_SCANS:,}: 24 h at 75 Hz); pass a piece of it")
+        if isinstance(items, Sized):
+            check_size(items, name)
 
     def __iter__(self) -> Iterator[Any]:
         if isinstance(self.items, Sized):
