@@ -11,6 +11,7 @@ import io
 import itertools
 import os
 import shutil
+import sqlite3
 import stat
 import time
 from pathlib import Path
@@ -102,7 +103,9 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
             a folder, a device or in a missing folder, an unknown ``fmt``, an item of ``records``
             that is not an ``lms200.Record`` (naming its index), records that are not iterable,
             no record at all (nothing is written: ``read_log`` refuses a log of no scan; an empty
-            CARMEN log or bag was written, exit 0, and the reader refused it).
+            CARMEN log or bag was written, exit 0, and the reader refused it), a write that fails
+            (a full disk: "path: cannot write PATH: No space left on device"; a bag's was a raw
+            ``OSError`` or ``sqlite3.OperationalError``).
     """
     p = path_of(path)
     if fmt is None:
@@ -136,13 +139,17 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
     if fmt in ("bag", "bag2"):
         existed = p.exists()
         try:
-            return write_bag(p, checked)
-        except BaseException:
-            if not existed and p.is_dir():
-                shutil.rmtree(p, ignore_errors=True)
-            elif not existed and p.exists():
-                p.unlink()
-            raise
+            try:
+                return write_bag(p, checked)
+            except BaseException:
+                if not existed and p.is_dir():
+                    shutil.rmtree(p, ignore_errors=True)
+                elif not existed and p.exists():
+                    p.unlink()
+                raise
+        except (OSError, sqlite3.OperationalError) as exc:  # a full disk, an I/O error: one line, as a CARMEN
+            # log's (was a raw OSError from a ROS 1 bag, sqlite3's "database or disk is full" from a ROS 2 one)
+            raise InputError(f"path: cannot write {p}: {getattr(exc, 'strerror', None) or exc}") from None
     written: list[int] = []  # .NAME.PID.tmp.gz: the temporary name keeps the suffix write_carmen packs by
     try:
         write_whole(p, lambda tmp: written.append(write_carmen(tmp, checked, fmt=fmt)), suffix="".join(p.suffixes[-1:]))

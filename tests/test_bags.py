@@ -165,6 +165,32 @@ def test_writing_over_an_existing_bag_is_an_input_error_naming_it(tmp_path: Path
     assert [r.scan.stamp for r in read_log(tmp_path / name)] == [1.0]  # left as it was
 
 
+@pytest.mark.parametrize("name", ["full.bag", "full2"])
+def test_a_full_disk_while_writing_a_bag_is_one_input_error_and_leaves_no_bag(
+        tmp_path: Path, name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """ENOSPC from rosbags' writer (a chunk's write) was a raw OSError (a traceback from the command
+    line); it is the CARMEN writer's one line now, and the half-written bag is removed."""
+    import errno
+    import sqlite3
+
+    from rosbags.rosbag1 import Writer as Writer1
+    from rosbags.rosbag2 import Writer as Writer2
+
+    fmt = "bag" if name.endswith(".bag") else "bag2"
+
+    def full(*args: object, **kwargs: object) -> None:  # as each writer says it on a full tmpfs
+        if fmt == "bag":
+            raise OSError(errno.ENOSPC, "No space left on device")
+        raise sqlite3.OperationalError("database or disk is full")
+
+    monkeypatch.setattr(Writer1 if fmt == "bag" else Writer2, "write", full)
+    reason = "No space left on device" if fmt == "bag" else "database or disk is full"
+    with pytest.raises(InputError, match=rf"^path: cannot write .*{name}: {reason}$") as info:
+        write_log(tmp_path / name, [Record(_scan(1.0)), Record(_scan(2.0))], fmt=fmt)
+    assert isinstance(info.value, LmsbenchError)
+    assert not (tmp_path / name).exists()
+
+
 # --- quaternions: normalised, a zero one refused ---------------------------------------------------
 _POS = (1.0, 2.0)
 
