@@ -20,7 +20,7 @@ from typing import Callable, Iterable, Iterator
 from .bag import BagError, BagReader, is_bag, write_bag
 from . import carmen
 from .carmen import UTF8_BOM, CarmenReader, write_carmen
-from .errors import InputError, LogFormatError, LogNotFoundError
+from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
 from .laser_geometry import LaserGeometry
 from .records import Record
 
@@ -147,6 +147,8 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
                 elif not existed and p.exists():
                     p.unlink()
                 raise
+        except LmsbenchError:  # the writer's own (a bag that exists is a FileExistsError too): as it is
+            raise
         except (OSError, sqlite3.OperationalError) as exc:  # a full disk, an I/O error: one line, as a CARMEN
             # log's (was a raw OSError from a ROS 1 bag, sqlite3's "database or disk is full" from a ROS 2 one)
             raise InputError(f"path: cannot write {p}: {getattr(exc, 'strerror', None) or exc}") from None
