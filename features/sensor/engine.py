@@ -856,7 +856,7 @@ R_ROWS = 6
 
 # rows of the scratch blocks ``find_lines`` allocates once a scan and every pass of ``fit_spans``
 # reuses, ``cap`` columns (``find_lines``: at least the beams of a pass), instead of ~14 arrays a
-# pass (a gain within the machine's noise, docs/features.md's ninth round; kept as the passes'
+# pass (a gain within the machine's noise, docs/history/sensor-speed.md's ninth round; kept as the passes'
 # one data layout): floats (W_ROWS, cap + VOTE_BLOCK): a pass's log ranges, bands (centre,
 # half-width, cell half-width), Log-Hough peaks (alpha, rho), one angle's votes, a run's
 # residuals z and scratch, the refined lines (rho, alpha, covariance 00, 01, 11); the vote
