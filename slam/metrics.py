@@ -225,7 +225,9 @@ def rpe(estimate: np.ndarray, truth: np.ndarray, delta: float = 1.0, pairs: str 
         i, j = np.asarray(kept[:-1], dtype=int), np.asarray(kept[1:], dtype=int)
     else:
         travelled = np.concatenate(([0.0], np.cumsum(steps)))
-        j = np.searchsorted(travelled, travelled + delta)
+        # the first pose past i that has travelled at all: a delta below the spacing of floats at
+        # the distance travelled (1e-300 m) is lost in travelled + delta, which paired a pose with itself
+        j = np.maximum(np.searchsorted(travelled, travelled + delta), np.searchsorted(travelled, travelled, side="right"))
         ok = j < travelled.size
         i, j = np.nonzero(ok)[0], j[ok]
     if i.size == 0:
