@@ -99,7 +99,8 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
 
     Raises:
         InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument: a path that is
-            a folder, a device or in a missing folder, an unknown ``fmt``, an item of ``records``
+            a folder, a device or in a missing folder, an unknown ``fmt``, a CARMEN ``fmt`` for a path
+            ending in ``.bag`` (which read_log reads as a ROS 1 bag), an item of ``records``
             that is not an ``lms200.Record`` (naming its index), records that are not iterable,
             no record at all (nothing is written: ``read_log`` refuses a log of no scan; an empty
             CARMEN log or bag was written, exit 0, and the reader refused it).
@@ -119,6 +120,9 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
         raise InputError(f"path: a ROS 1 bag must end in .bag, got {p.name}")
     if fmt == "bag2" and p.suffix == ".bag":
         raise InputError(f"path: a ROS 2 bag is a folder; do not name it {p.name}")
+    if fmt in ("robotlaser1", "flaser") and p.suffix == ".bag":  # written, and read_log refused it: "File magic is invalid"
+        raise InputError(f"path: a CARMEN log ({fmt}) named {p.name} is not read back: read_log reads a .bag as a ROS 1 "
+                         "bag; name it .clf, .log or .gz, or give fmt='bag'")
     if fmt not in ("bag", "bag2"):
         if p.suffix.lower() in UNWRITTEN_PACKINGS:  # plain text was written under the name, silently
             raise InputError(f"path: {p.name} names a {UNWRITTEN_PACKINGS[p.suffix.lower()]}, which write_log does "
