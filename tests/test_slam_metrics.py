@@ -223,6 +223,22 @@ def test_metrics_errors_quote_an_array_on_one_line(kwargs: dict, message: str) -
     assert "\n" not in str(info.value) and len(str(info.value)) < 300, str(info.value)
 
 
+def test_a_heading_beyond_1e6_rad_is_refused_by_the_relations_reader_and_the_metrics(tmp_path) -> None:
+    """fuzz4: a relation's yaw of 1e300 rad scored 138.6 deg, and an estimate's heading of 1e300 a heading
+    error of noise, exit 0; such a float holds no angle. 1e6 rad (160,000 turns) is read as before."""
+    rel = tmp_path / "r.relations"
+    rel.write_text("1 2 0.1 0 0 0 0 1e6\n3 4 0.1 0 0 0 0 1e300\n")
+    with pytest.raises(LogFormatError, match=r"r\.relations:2: relation row's roll, pitch or yaw is beyond \+-1e\+06 rad"):
+        read_relations(rel)
+    rel.write_text("1 2 0.1 0 0 0 0 1e6\n")
+    assert read_relations(rel)[0, 4] == 1e6
+    truth = square_path()
+    est = truth.copy()
+    est[3, 3] = -1e300
+    for metric in (ate, rpe):
+        with pytest.raises(LmsbenchError, match=r"^estimate: row 3: heading -1e\+300 rad lies beyond \+-1e\+06 rad"):
+            metric(est, truth)
+
 def test_ate_of_a_lost_run_is_nan_not_a_linalg_error() -> None:
     """A run whose estimate went nan (an unhealthy paper-preset run) scores nan; the SVD raised
     numpy's LinAlgError ("SVD did not converge")."""
