@@ -76,3 +76,18 @@ def test_write_carmen_refuses_a_pose_its_reader_refuses(tmp_path: Path, which: s
     edge = [Record(scan, odom=(1e9, -1e9, 1e6), truth=(-1e9, 1e9, -1e6))]
     assert write_carmen(tmp_path / "b.log", edge) == 1
     assert [(r.odom, r.truth) for r in read_log(tmp_path / "b.log")] == [((1e9, -1e9, 1e6), (-1e9, 1e9, -1e6))]
+
+
+def test_the_bag_and_tum_writers_refuse_a_heading_that_holds_no_angle(tmp_path: Path) -> None:
+    """fuzz4: a heading of 1e300 rad was written as the quaternion of its noise, which read back as a
+    heading no one gave; as write_carmen, write_bag and write_tum refuse it (1e6 rad, the bound, is written)."""
+    from lms200 import InputError, Record, Scan, write_log, write_tum
+
+    scan = Scan.lms200([1.0] * 361, stamp=1.0)
+    with pytest.raises(InputError, match=r"^records: item 0: odom pose's heading 1e\+300 rad lies beyond \+-1e\+06 rad"):
+        write_log(tmp_path / "a.bag", [Record(scan, odom=(0.0, 0.0, 1e300))])
+    assert not (tmp_path / "a.bag").exists()
+    with pytest.raises(InputError, match=r"^poses: row 1's heading -1e\+300 rad lies beyond \+-1e\+06 rad"):
+        write_tum(tmp_path / "a.tum", [0.0, 1.0], [[0.0, 0.0, 0.0], [0.0, 0.0, -1e300]])
+    write_tum(tmp_path / "b.tum", [0.0, 1.0], [[0.0, 0.0, float("nan")], [0.0, 0.0, 1e6]])  # a lost pose, the bound
+    assert (tmp_path / "b.tum").read_text().count("\n") == 3
