@@ -299,7 +299,21 @@ def folder_message(p: Path) -> str:
     if log.is_file():
         return (f"{p} is a folder, not a log: it holds {SIMULATE_LOG}, as a lmsbench simulate output folder does; "
                 f"read_log({str(log)!r}) reads its scans (`lmsbench info {p}` also checks that its run finished)")
-    return f"{p} is a folder but not a ROS 2 bag (no metadata.yaml)"
+    return f"{p} is a folder but not a ROS 2 bag ({missing_file_reason(p / 'metadata.yaml')})"
+
+
+def missing_file_reason(path: Path) -> str:
+    """Why a folder's file ``path`` (a ROS 2 bag's metadata.yaml, a simulate folder's scans.clf) is not
+    there as a regular file, in a few words: ``no NAME``, or what stands in its place (a folder, a pipe
+    or a device, a link to nothing): "no metadata.yaml" was said of a metadata.yaml that was a pipe."""
+    name = path.name
+    if path.is_dir():
+        return f"its {name} is a folder"
+    if path.exists():
+        return f"its {name} is not a regular file but a pipe, a device or a socket"
+    if path.is_symlink():
+        return f"its {name} is a link to {os.readlink(path)}, which does not exist (or a loop of links)"
+    return f"no {name}"
 
 
 def path_of(path: object) -> Path:
