@@ -554,7 +554,7 @@ def compare(
                     fs = fn(scan, cfg)
                     c1, t1 = time.thread_time_ns(), time.perf_counter_ns()
                     elapsed, cpu = t1 - t0, c1 - c0
-                    problem = returned_problem(registered[name], fs)  # a user method's rows, outside the timed span
+                    problem = returned_problem(registered[name], fs, len(scan))  # a user method's rows, outside the timed span
                     if problem:
                         if is_user_method(name):
                             raise UserMethodFailed(name, f"returned {problem}", scan, False)

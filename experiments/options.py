@@ -586,17 +586,11 @@ def simulate_log(path: str | os.PathLike) -> Path | None:
 def not_a_log_folder(path: str | os.PathLike) -> str:
     """The message of a folder given as a log that is neither kind of folder a log may be. A scans.clf
     that is there but no regular file is named so: it said "(no scans.clf)" of a folder, a pipe, a link to
-    /dev/zero or to nothing in its place (fuzzing)."""
-    log = Path(path) / SIMULATE_LOG
-    if log.is_dir():
-        why = f"its {SIMULATE_LOG} is a folder"
-    elif log.exists():
-        why = f"its {SIMULATE_LOG} is not a regular file but a pipe, a device or a socket"
-    elif log.is_symlink():
-        why = f"its {SIMULATE_LOG} is a link to {os.readlink(log)}, which does not exist (or a loop of links)"
-    else:
-        why = f"no {SIMULATE_LOG}"
-    return f"{path} is a folder but neither a ROS 2 bag (no metadata.yaml) nor a lmsbench simulate folder ({why})"
+    /dev/zero or to nothing in its place (fuzzing); so is a metadata.yaml (it said "no metadata.yaml": fuzz4)."""
+    from lms200.logs import missing_file_reason
+
+    meta, log = missing_file_reason(Path(path) / "metadata.yaml"), missing_file_reason(Path(path) / SIMULATE_LOG)
+    return f"{path} is a folder but neither a ROS 2 bag ({meta}) nor a lmsbench simulate folder ({log})"
 
 
 def real_path(path: str | os.PathLike) -> Path:

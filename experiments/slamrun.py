@@ -188,11 +188,11 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
             sources["truth"] = str(p / "groundtruth.tum")
         if (p / "world.json").exists():
             try:
-                from sim.world import json_rows, read_world_json, world_json_content
+                from sim.world import json_rows, read_world_json, world_json_content, world_json_text
 
-                text = read_world_json(p / "world.json").decode("utf-8", errors="replace")  # bounded, a regular file
+                data = read_world_json(p / "world.json")  # bounded, a regular file
                 try:  # a key given twice or misspelt: as World.from_json refuses it (simulate, compare)
-                    content = world_json_content(text)
+                    content = world_json_content(world_json_text(data))
                 except (TypeError, ValueError) as exc:
                     raise LmsbenchError(f"{p / 'world.json'}: not a world.json ({exc})") from None
                 if isinstance(content, dict) and not any(content.get(k) for k in ("walls", "circles", "boxes")):

@@ -184,7 +184,7 @@ def extract(scan: Scan, method: str = "sensor", config: Any = None, **params: An
     check_step(cfg, scan.angle_increment, m.name)
     if params:
         warn_unread_noise(m, cfg, params, scan.range_max, "extract")
-    return _returned(m, m.run(scan, cfg))
+    return _returned(m, m.run(scan, cfg), len(scan))
 
 
 class UnreadNoiseWarning(LmsbenchWarning):
@@ -368,7 +368,7 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
         def checked(piece: Sequence[Scan], c: Any) -> list[FeatureSet]:
             # each piece's return, before run_pieces joins them: joined, a None was 'NoneType' object is
             # not iterable and a tuple was taken (threads > 1 or > BATCH_CHUNK scans), refused on one piece
-            return _returned_many(m, run_many(piece, c), len(piece))
+            return _returned_many(m, run_many(piece, c), [len(s) for s in piece])
 
         if len(scans) <= BATCH_CHUNK and use == 1:
             return checked(scans, cfg)
@@ -376,25 +376,27 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
         return run_pieces(checked, scans, cfg, use, BATCH_CHUNK)
     if scans:
         common_geometry(scans)
-    return [_returned(m, m.run(s, cfg)) for s in scans]
+    return [_returned(m, m.run(s, cfg), len(s)) for s in scans]
 
 
-def _returned(m: Method, out: object) -> FeatureSet:
+def _returned(m: Method, out: object, beams: int | None = None) -> FeatureSet:
     """``out`` when a FeatureSet: a registered method returning anything else (None, a list) was
     handed on as the features without a word, to fail later in the caller's code (fuzz round)."""
     if not isinstance(out, FeatureSet):
         raise ConfigError(f"method {m.name!r}: its run returned {type(out).__name__}, not a features.FeatureSet")
-    problem = returned_problem(m, out)
+    problem = returned_problem(m, out, beams)
     if problem:
         raise ConfigError(f"method {m.name!r}: its run returned {problem}")
     return out
 
 
-def returned_problem(m: Method, fs: FeatureSet) -> str:
-    """What is wrong with the rows of ``fs``, method ``m``'s result ("" when nothing, and for a
-    built-in method, whose rows are right by construction): :func:`features.types.check_feature_set`'s
-    message. Run outside any timed span (``compare`` times the method alone): a user's extractor's
-    ``Lines.from_arrays`` with a nan rho or first > last was scored nan, silently (fuzzing)."""
+def returned_problem(m: Method, fs: FeatureSet, beams: int | None = None) -> str:
+    """What is wrong with the rows of ``fs``, method ``m``'s result on a scan of ``beams`` beams ("" when
+    nothing, and for a built-in method, whose rows are right by construction): :func:`features.types.check_feature_set`'s
+    message, or features that reach past the scan's last beam. Run outside any timed span (``compare`` times the
+    method alone): a user's extractor's ``Lines.from_arrays`` with a nan rho or first > last was scored nan,
+    silently (fuzzing); lines past the scan's beams were said by the scoring as "fs: its lines span beams 0..411",
+    naming neither the extractor nor the scan (fuzz4)."""
     if m.name in _METHOD_MODULES:
         return ""
     if not isinstance(fs, FeatureSet):  # compare calls a registered method's run itself
@@ -403,12 +405,17 @@ def returned_problem(m: Method, fs: FeatureSet) -> str:
         check_feature_set(fs)
     except InputError as exc:
         return f"features out of their meaning: {exc}"
+    if beams is not None:
+        reach = np.concatenate((fs.lines.beams[:, :2].ravel(), fs.corners.beams[:, 0]))
+        if reach.size and int(reach.max()) >= beams:
+            return f"features that reach beam {int(reach.max())} of a {beams}-beam scan (features of another scan?)"
     return ""
 
 
-def _returned_many(m: Method, out: object, n: int) -> list[FeatureSet]:
-    """``out`` when a list of ``n`` FeatureSets: a run_many returning fewer (or another type) gave a
-    batch of 2 scans [] features, exit 0 (fuzz round)."""
+def _returned_many(m: Method, out: object, beams: list[int]) -> list[FeatureSet]:
+    """``out`` when a list of one FeatureSet for each scan (``beams``: their beam counts): a run_many
+    returning fewer (or another type) gave a batch of 2 scans [] features, exit 0 (fuzz round)."""
+    n = len(beams)
     if not isinstance(out, list) or len(out) != n:
         got = f"{len(out)} items" if isinstance(out, list) else type(out).__name__
         raise ConfigError(f"method {m.name!r}: its run_many returned {got} for {n} scans, not a list of one features.FeatureSet a scan")
@@ -416,7 +423,7 @@ def _returned_many(m: Method, out: object, n: int) -> list[FeatureSet]:
         if not isinstance(fs, FeatureSet):
             raise ConfigError(f"method {m.name!r}: its run_many returned {type(fs).__name__} at item {i} of {n}, "
                               "not a features.FeatureSet")
-        problem = returned_problem(m, fs)
+        problem = returned_problem(m, fs, beams[i])
         if problem:
             raise ConfigError(f"method {m.name!r}: its run_many returned, at item {i} of {n}, {problem}")
     return out

@@ -479,12 +479,16 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                     if pose is None:
                         continue
                     x, y, th = pose
-                    from .carmen import MAX_COORD_M
+                    from .carmen import MAX_COORD_M, MAX_HEADING_RAD
 
                     if max(abs(x), abs(y)) > MAX_COORD_M:  # a bag its own reader refuses (as write_carmen, write_tum)
                         which = "odom" if name == ODOM_TOPIC else "truth"
                         raise InputError(f"records: item {seq}: {which} pose ({x:.6g}, {y:.6g}) m lies beyond "
                                          f"+-{MAX_COORD_M:g} m, which the bag reader refuses")
+                    if abs(th) > MAX_HEADING_RAD:  # 1e300 rad holds no angle: its quaternion was noise, read back as one
+                        which = "odom" if name == ODOM_TOPIC else "truth"
+                        raise InputError(f"records: item {seq}: {which} pose's heading {th:.6g} rad lies beyond "
+                                         f"+-{MAX_HEADING_RAD:g} rad, which the CARMEN reader refuses (as write_carmen)")
                     msg = PoseStamped(
                         header=Header(**{**header_kw, "frame_id": "map" if name == TRUTH_TOPIC else "odom"}),
                         pose=Pose(

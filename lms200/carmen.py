@@ -1150,12 +1150,19 @@ def _pose(words: list[str], start: int, what: str) -> Pose2D:
 #: a FLASER pose of 1e308 m was read, and `compare --poses corrected` scored its repeatability 0, exit 0.
 MAX_COORD_M = 1e9
 
+#: Largest |heading| (rad) a pose or relation may hold (``logs.MAX_HEADING_RAD``; the relations reader's and the
+#: trajectory metrics' bound too): 160,000 turns of an odometry heading never wrapped, whose float spacing is
+#: still 1e-10 rad. Beyond ~1e16 rad a float holds no angle at all: an odometry heading of 1e300 was read as it
+#: was (every step's turn from it noise), and a relation's yaw of 1e300 scored 138.6 deg, exit 0 (fuzz4).
+MAX_HEADING_RAD = 1e6
+
 
 def _finite_pose(values: list[float], what: str) -> Pose2D:
     x, y, t = values
     _require(math.isfinite(x) and math.isfinite(y) and math.isfinite(t), f"{what} pose is not finite")
     _require(abs(x) <= MAX_COORD_M and abs(y) <= MAX_COORD_M,
              f"{what} pose ({x:.6g}, {y:.6g}) m lies beyond +-{MAX_COORD_M:g} m (damaged?)")
+    _require(abs(t) <= MAX_HEADING_RAD, f"{what} pose's heading {t:.6g} rad lies beyond +-{MAX_HEADING_RAD:g} rad (damaged?)")
     return (x, y, t)
 
 
@@ -1478,8 +1485,8 @@ def write_carmen(
         InputError: an unknown ``fmt``, a ``hostname`` that is not one word of printable ASCII, scans of mixed units, or a scan whose range_max lies outside
             [MIN_RANGE_MAX_M, MAX_RANGE_M] (0.1 to 10000 m), an angle_increment under MIN_RESOLUTION_RAD
             (1e-5 rad), a stamp outside 0 .. ``records.MAX_STAMP_S`` (2^32 s) or an odometry or truth pose
-            beyond +-``MAX_COORD_M`` (1e9 m), which the reader refuses (such a log was written, and could not
-            be read back).
+            beyond +-``MAX_COORD_M`` (1e9 m) or with a heading beyond +-``MAX_HEADING_RAD`` (1e6 rad), which the
+            reader refuses (such a log was written, and could not be read back).
     """
     if fmt not in ("robotlaser1", "flaser"):
         raise InputError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
@@ -1518,6 +1525,10 @@ def write_carmen(
                     if pose is not None and max(abs(pose[0]), abs(pose[1])) > MAX_COORD_M:
                         raise InputError(f"records: item {count}: {which} pose ({pose[0]:.6g}, {pose[1]:.6g}) m lies "
                                          f"beyond +-{MAX_COORD_M:g} m, which the CARMEN reader refuses (the log could "
+                                         "not be read back)")
+                    if pose is not None and abs(pose[2]) > MAX_HEADING_RAD:
+                        raise InputError(f"records: item {count}: {which} pose's heading {pose[2]:.6g} rad lies beyond "
+                                         f"+-{MAX_HEADING_RAD:g} rad, which the CARMEN reader refuses (the log could "
                                          "not be read back)")
                 u = _units_of(scan)
                 if units is None:

@@ -100,7 +100,8 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
 
     Raises:
         InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument: a path that is
-            a folder, a device or in a missing folder, an unknown ``fmt``, an item of ``records``
+            a folder, a device or in a missing folder, an unknown ``fmt``, a CARMEN ``fmt`` for a path
+            ending in ``.bag`` (which read_log reads as a ROS 1 bag), an item of ``records``
             that is not an ``lms200.Record`` (naming its index), records that are not iterable,
             no record at all (nothing is written: ``read_log`` refuses a log of no scan; an empty
             CARMEN log or bag was written, exit 0, and the reader refused it), a write that fails
@@ -122,6 +123,9 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
         raise InputError(f"path: a ROS 1 bag must end in .bag, got {p.name}")
     if fmt == "bag2" and p.suffix == ".bag":
         raise InputError(f"path: a ROS 2 bag is a folder; do not name it {p.name}")
+    if fmt in ("robotlaser1", "flaser") and p.suffix == ".bag":  # written, and read_log refused it: "File magic is invalid"
+        raise InputError(f"path: a CARMEN log ({fmt}) named {p.name} is not read back: read_log reads a .bag as a ROS 1 "
+                         "bag; name it .clf, .log or .gz, or give fmt='bag'")
     if fmt not in ("bag", "bag2"):
         if p.suffix.lower() in UNWRITTEN_PACKINGS:  # plain text was written under the name, silently
             raise InputError(f"path: {p.name} names a {UNWRITTEN_PACKINGS[p.suffix.lower()]}, which write_log does "
@@ -304,7 +308,21 @@ def folder_message(p: Path) -> str:
     if log.is_file():
         return (f"{p} is a folder, not a log: it holds {SIMULATE_LOG}, as a lmsbench simulate output folder does; "
                 f"read_log({str(log)!r}) reads its scans (`lmsbench info {p}` also checks that its run finished)")
-    return f"{p} is a folder but not a ROS 2 bag (no metadata.yaml)"
+    return f"{p} is a folder but not a ROS 2 bag ({missing_file_reason(p / 'metadata.yaml')})"
+
+
+def missing_file_reason(path: Path) -> str:
+    """Why a folder's file ``path`` (a ROS 2 bag's metadata.yaml, a simulate folder's scans.clf) is not
+    there as a regular file, in a few words: ``no NAME``, or what stands in its place (a folder, a pipe
+    or a device, a link to nothing): "no metadata.yaml" was said of a metadata.yaml that was a pipe."""
+    name = path.name
+    if path.is_dir():
+        return f"its {name} is a folder"
+    if path.exists():
+        return f"its {name} is not a regular file but a pipe, a device or a socket"
+    if path.is_symlink():
+        return f"its {name} is a link to {os.readlink(path)}, which does not exist (or a loop of links)"
+    return f"no {name}"
 
 
 def path_of(path: object) -> Path:
@@ -344,6 +362,9 @@ MAX_COORD_M = carmen.MAX_COORD_M
 """Largest |x|, |y| (m) a TUM or relations row (or a CARMEN line's pose) may hold: far beyond any
 trajectory on Earth (UTM northings are below 1e7 m); 1e300 m overflowed the squares of the metrics
 (RuntimeWarnings on stderr and an error of inf, exit 0)."""
+MAX_HEADING_RAD = carmen.MAX_HEADING_RAD
+"""Largest |heading| (rad) a CARMEN pose, a relations row's roll, pitch or yaw, or a trajectory given to
+``slam.metrics`` may hold (160,000 turns): a float of 1e300 holds no angle, and it was read as one."""
 
 
 def row_lines(path: str | Path, p: Path) -> Iterator[tuple[int, str]]:

@@ -66,13 +66,13 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
             4k garbled rows, and decreasing or nan stamps made a file ``read_tum`` refuses).
             Poses that are nan (a lost SLAM run's) are written as nan, which
             ``read_tum(path, allow_nan=True)`` reads back; an infinite pose entry, or an x or y beyond
-            +-``logs.MAX_COORD_M`` (1e9 m), or a stamp outside 0 .. ``records.MAX_STAMP_S`` (2^32 s),
+            +-``logs.MAX_COORD_M`` (1e9 m), a heading beyond +-``logs.MAX_HEADING_RAD`` (1e6 rad), or a stamp outside 0 .. ``records.MAX_STAMP_S`` (2^32 s),
             which no reader takes, is an InputError naming its row; so
             is no pose at all (``read_tum`` refuses a file of none). A ``path`` that is a folder or a device, or in
             a folder that does not exist, or that cannot be written, is an InputError naming it
             (they were a raw IsADirectoryError, FileNotFoundError, ...: the wrong-input hunt).
     """
-    from .logs import MAX_COORD_M, path_of, write_whole  # not at the top: logs imports bag, which imports this module
+    from .logs import MAX_COORD_M, MAX_HEADING_RAD, path_of, write_whole  # not at the top: logs imports bag, which imports this module
 
     path = path_of(path)
     if not path.parent.is_dir():
@@ -90,6 +90,12 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
         k = int(np.nonzero(far.any(axis=1))[0][0])
         raise InputError(f"poses: row {k} lies beyond +-{MAX_COORD_M:g} m ({poses[k].tolist()}), which read_tum "
                          "refuses; a lost pose is written as nan")
+    with np.errstate(invalid="ignore"):  # a lost (nan) pose is written as nan
+        turned = np.abs(poses[:, 2]) > MAX_HEADING_RAD
+    if turned.any():  # 1e300 rad holds no angle: its quaternion was noise, read back as a heading
+        k = int(np.nonzero(turned)[0][0])
+        raise InputError(f"poses: row {k}'s heading {poses[k, 2].item():.6g} rad lies beyond +-{MAX_HEADING_RAD:g} rad, "
+                         "which holds no angle the quaternion could keep (the metrics and the CARMEN reader refuse it)")
     if stamps.size != poses.shape[0]:
         raise InputError(f"stamps: {stamps.size} stamps for {poses.shape[0]} poses")
     if not stamps.size:  # read_tum refuses a file of no pose: a file written that its own reader does not take

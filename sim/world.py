@@ -66,6 +66,18 @@ def read_world_json(path: str | Path) -> bytes:
     return p.read_bytes()
 
 
+def world_json_text(data: bytes) -> str:
+    """A world.json's bytes as text: UTF-8 (JSON's encoding, RFC 8259), after a byte-order mark some
+    editors put first, which a JSON reader may skip (the TUM, relations and CARMEN readers skip it
+    too); ValueError naming the first byte that is not UTF-8. It was read as ASCII: a world.json saved
+    with a mark, or holding a "name" of letters beyond ASCII, was "'ascii' codec can't decode byte 0xef
+    in position 0" for simulate and compare, while slam read it (fuzz4)."""
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"not UTF-8 text (byte {exc.start} is not UTF-8)") from None
+
+
 def world_json_content(text: str) -> dict:
     """The mapping a world.json's text holds, for :meth:`World.from_json` and slam's reader of a
     simulate folder: ValueError / TypeError for text that is no JSON mapping, for a key given twice
@@ -286,7 +298,7 @@ class World:
             raise LmsbenchError(f"{path}: {len(data):,} bytes, more than the {MAX_WORLD_JSON_BYTES:,} a world.json "
                                 f"may hold (refused unread; the mit world's is 0.5 MB)")
         try:
-            d = world_json_content(data.decode("ascii"))
+            d = world_json_content(world_json_text(data))
             walls = json_rows(d.get("walls", []), "walls", "wall", 4, "x1, y1, x2, y2 (m)")
             circles = json_rows(d.get("circles", []), "circles", "circle", 3, "cx, cy, r (m)")
             for name, a in (("walls", walls), ("circles", circles)):  # before the walls-only rebuild, which

@@ -15,7 +15,7 @@ import numpy as np
 from lms200 import InputError, LmsbenchError, LogFormatError
 from lms200.codes import real_rows, real_vector
 from lms200.finite import shown
-from lms200.logs import MAX_COORD_M, regular_file, row_lines, row_numbers
+from lms200.logs import MAX_COORD_M, MAX_HEADING_RAD, regular_file, row_lines, row_numbers
 from lms200.records import stamp_problem
 from lms200.tum import MAX_TILT_DEG, tilt_of_roll_pitch_deg
 from features.baselines.checks import positive
@@ -45,6 +45,12 @@ def checked_trajectory(traj: object, name: str, finite_poses: bool = True) -> np
         k = int(np.nonzero(far.any(1))[0][0])
         raise InputError(f"{name}: row {k}: position ({a[k, 1]:.6g}, {a[k, 2]:.6g}) m lies beyond +-{MAX_COORD_M:g} m "
                          "(the bound of the trajectory readers; damaged, or not metres?)")
+    with np.errstate(invalid="ignore"):
+        turned = np.abs(a[:, 3]) > MAX_HEADING_RAD
+    if turned.any():  # a heading of 1e300 rad is no angle: its wrap is noise, scored as a heading error
+        k = int(np.nonzero(turned)[0][0])
+        raise InputError(f"{name}: row {k}: heading {a[k, 3]:.6g} rad lies beyond +-{MAX_HEADING_RAD:g} rad "
+                         "(the bound of the log readers; damaged?)")
     return a
 
 
@@ -225,7 +231,9 @@ def rpe(estimate: np.ndarray, truth: np.ndarray, delta: float = 1.0, pairs: str 
         i, j = np.asarray(kept[:-1], dtype=int), np.asarray(kept[1:], dtype=int)
     else:
         travelled = np.concatenate(([0.0], np.cumsum(steps)))
-        j = np.searchsorted(travelled, travelled + delta)
+        # the first pose past i that has travelled at all: a delta below the spacing of floats at
+        # the distance travelled (1e-300 m) is lost in travelled + delta, which paired a pose with itself
+        j = np.maximum(np.searchsorted(travelled, travelled + delta), np.searchsorted(travelled, travelled, side="right"))
         ok = j < travelled.size
         i, j = np.nonzero(ok)[0], j[ok]
     if i.size == 0:
@@ -358,7 +366,7 @@ def read_relations(path: str | Path) -> np.ndarray:
 
     Raises:
         LogFormatError: a row that is not 8 finite numbers (no ``_`` in a number), x or y beyond
-            +-``lms200.logs.MAX_COORD_M``, a line longer than ``lms200.logs.MAX_ROW_CHARS``, naming file and line.
+            +-``lms200.logs.MAX_COORD_M``, roll, pitch or yaw beyond +-``lms200.logs.MAX_HEADING_RAD`` (1e6 rad), a line longer than ``lms200.logs.MAX_ROW_CHARS``, naming file and line.
         LmsbenchError: a file without rows, or a TUM trajectory (``t x y z qx qy qz qw``, also 8 numbers
             a row): every row's last four numbers of norm 1 and some row's z, roll or pitch (qx, qy, qz)
             not 0 (a 2-D relation's z, roll, pitch and yaw are (0, 0, 0, yaw)).
@@ -383,6 +391,9 @@ def read_relations(path: str | Path) -> np.ndarray:
             raise LogFormatError(path, no, problem)
         if abs(v[2]) > MAX_COORD_M or abs(v[3]) > MAX_COORD_M:
             raise LogFormatError(path, no, f"relation row's x or y is beyond +-{MAX_COORD_M:g} m: {line.strip()[:60]!r}")
+        if max(abs(v[5]), abs(v[6]), abs(v[7])) > MAX_HEADING_RAD:  # a yaw of 1e300 scored 138.6 deg, exit 0
+            raise LogFormatError(path, no, f"relation row's roll, pitch or yaw is beyond +-{MAX_HEADING_RAD:g} rad: "
+                                           f"{line.strip()[:60]!r}")
         rows.append((v[0], v[1], v[2], v[3], v[7]))
         unit_quaternions += abs(math.hypot(*v[4:8]) - 1.0) <= QUATERNION_NORM_TOLERANCE
         turned |= any(v[4:7])  # a TUM row's qz of a pose turned from the first; a 2-D relation's z, roll, pitch are 0

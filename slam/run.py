@@ -12,7 +12,7 @@ import numpy as np
 
 from lms200.errors import LmsbenchWarning
 from lms200.finite import shown
-from lms200.logs import MAX_COORD_M, checked_records
+from lms200.logs import MAX_COORD_M, MAX_HEADING_RAD, checked_records
 from lms200.records import Record
 
 from .config import MIN_MATCH_POINTS, SlamConfig
@@ -483,7 +483,7 @@ def in_scale(records: Iterable[Record], label: str = "records[{k}]",
     """The records, raising SlamInputError (naming the record by ``label``, formatted with its index
     ``k``, or with ``numbers[k]``: the log's own scan number of each record) at the first whose stamp lies
     more than MAX_STAMP_STEP_S after the one before or whose odometry, true or corrected pose has a
-    coordinate beyond +-MAX_POSE_M (lazily, as they are used)."""
+    coordinate beyond +-MAX_POSE_M or a heading beyond +-MAX_HEADING_RAD (lazily, as they are used)."""
     before = None
     for i, rec in enumerate(records):
         k = numbers[i] if numbers else i
@@ -498,6 +498,9 @@ def in_scale(records: Iterable[Record], label: str = "records[{k}]",
             if pose is not None and not (abs(pose[0]) <= MAX_POSE_M and abs(pose[1]) <= MAX_POSE_M):
                 raise SlamInputError(f"{label.format(k=k)}: its {name} pose ({pose[0]:.6g}, {pose[1]:.6g}) m lies beyond "
                                      f"+-{MAX_POSE_M:g} m (damaged?): SLAM's models cannot take it")
+            if pose is not None and not abs(pose[2]) <= MAX_HEADING_RAD:  # 1e300 rad: each step's turn was noise
+                raise SlamInputError(f"{label.format(k=k)}: its {name} pose's heading {pose[2]:.6g} rad lies beyond "
+                                     f"+-{MAX_HEADING_RAD:g} rad (damaged?): SLAM's models cannot take it")
         yield rec
 
 

@@ -195,6 +195,8 @@ def test_write_log_bag_refuses_numbers_a_laserscan_cannot_hold(tmp_path, ranges:
                                               r"not write \(a CARMEN log is plain text, or compressed as \.gz, \.bz2 or "
                                               r"\.xz\)$"),  # plain text under a .zst name
     (lambda d: d / "x.log.ZIP", "good", None, r"^path: x\.log\.ZIP names a zip archive"),  # the same
+    (lambda d: d / "x.bag", "good", "flaser", r"^path: a CARMEN log \(flaser\) named x\.bag is not read back"),  # written,
+    (lambda d: d / "x.bag", "good", "robotlaser1", r"read_log reads a \.bag as a ROS 1 bag"),  # then refused by read_log
 ])
 def test_write_log_bad_paths_and_arguments(tmp_path, path_of, records, fmt, message: str) -> None:
     recs = _records(2) if records == "good" else records

@@ -24,6 +24,10 @@ def _flaser(t: float, pose: str = "0 0 0", odom: str = "0 0 0") -> str:
     (["ODOM nan 0 0 0 0 0 1.0 h 1.0\n", _flaser(2.0)], "1: malformed ODOM line: ODOM pose is not finite"),
     (["TRUEPOS 0 1e10 0 0 0 0 1.0 h 1.0\n", _flaser(1.0)],
      "1: malformed TRUEPOS line: TRUEPOS pose (0, 1e+10) m lies beyond +-1e+09 m (damaged?)"),
+    ([_flaser(1.0), _flaser(2.0, odom="0 0 1e300")],  # fuzz4: read as it was, every odometry turn from it noise
+     "2: malformed FLASER line: FLASER odometry pose's heading 1e+300 rad lies beyond +-1e+06 rad (damaged?)"),
+    (["ODOM 0 0 -2e6 0 0 0 1.0 h 1.0\n", _flaser(2.0)],
+     "1: malformed ODOM line: ODOM pose's heading -2e+06 rad lies beyond +-1e+06 rad (damaged?)"),
 ])
 def test_a_carmen_pose_beyond_1e9_m_or_not_finite_is_a_malformed_line(tmp_path: Path, lines, message) -> None:
     log = tmp_path / "a.log"
@@ -66,6 +70,24 @@ def test_write_carmen_refuses_a_pose_its_reader_refuses(tmp_path: Path, which: s
         write_carmen(tmp_path / "a.log", records)
     assert str(err.value) == (f"records: item 1: {which} pose (2e+09, 0) m lies beyond +-1e+09 m, which the CARMEN "
                               "reader refuses (the log could not be read back)")
-    edge = [Record(scan, odom=(1e9, -1e9, 0.0), truth=(-1e9, 1e9, 0.0))]
+    turned = [Record(scan, **{"odom": (0.0, 0.0, 0.0), "truth": (0.0, 0.0, 0.0), which: (0.0, 0.0, 1e300)})]
+    with pytest.raises(InputError, match=rf"^records: item 0: {which} pose's heading 1e\+300 rad lies beyond \+-1e\+06 rad"):
+        write_carmen(tmp_path / "c.log", turned)
+    edge = [Record(scan, odom=(1e9, -1e9, 1e6), truth=(-1e9, 1e9, -1e6))]
     assert write_carmen(tmp_path / "b.log", edge) == 1
-    assert [(r.odom, r.truth) for r in read_log(tmp_path / "b.log")] == [((1e9, -1e9, 0.0), (-1e9, 1e9, 0.0))]
+    assert [(r.odom, r.truth) for r in read_log(tmp_path / "b.log")] == [((1e9, -1e9, 1e6), (-1e9, 1e9, -1e6))]
+
+
+def test_the_bag_and_tum_writers_refuse_a_heading_that_holds_no_angle(tmp_path: Path) -> None:
+    """fuzz4: a heading of 1e300 rad was written as the quaternion of its noise, which read back as a
+    heading no one gave; as write_carmen, write_bag and write_tum refuse it (1e6 rad, the bound, is written)."""
+    from lms200 import InputError, Record, Scan, write_log, write_tum
+
+    scan = Scan.lms200([1.0] * 361, stamp=1.0)
+    with pytest.raises(InputError, match=r"^records: item 0: odom pose's heading 1e\+300 rad lies beyond \+-1e\+06 rad"):
+        write_log(tmp_path / "a.bag", [Record(scan, odom=(0.0, 0.0, 1e300))])
+    assert not (tmp_path / "a.bag").exists()
+    with pytest.raises(InputError, match=r"^poses: row 1's heading -1e\+300 rad lies beyond \+-1e\+06 rad"):
+        write_tum(tmp_path / "a.tum", [0.0, 1.0], [[0.0, 0.0, 0.0], [0.0, 0.0, -1e300]])
+    write_tum(tmp_path / "b.tum", [0.0, 1.0], [[0.0, 0.0, float("nan")], [0.0, 0.0, 1e6]])  # a lost pose, the bound
+    assert (tmp_path / "b.tum").read_text().count("\n") == 3

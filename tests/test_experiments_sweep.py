@@ -921,3 +921,32 @@ def test_a_killed_sweeps_temporary_tables_are_removed_by_the_next_run(tmp_path):
         p.write_text("cut")
     CellStore(tmp_path)
     assert not any(p.exists() for p in left) and all(p.exists() for p in kept)
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda s, d: run_sweep(s.to_dict(), d / "o", "inprocess", progress=False),
+     r"^spec: must be a SweepSpec .* got dict$"),  # AttributeError: 'dict' object has no attribute 'kind'
+    (lambda s, d: run_sweep(s, d / "o", None, progress=False), r"^executor: must be 'local', .* got None$"),  # AttributeError
+    (lambda s, d: run_sweep(s, "", "inprocess", progress=False), r"^out: must name the sweep's folder"),  # into the cwd
+    (lambda s, d: run_sweep(s, None, "inprocess", progress=False), r"^path: must be a str or os\.PathLike"),  # TypeError
+    (lambda s, d: run_sweep(s, d / "log.txt", "inprocess", progress=False), r"log\.txt exists and is not a folder"),
+    (lambda s, d: run_sweep(s, d / "o", "inprocess", progress="no"), r"^progress: must be True or False, got 'no'$"),
+    (lambda s, d: run_sweep(s, d / "o", "inprocess", retry_failed="yes"), r"^retry_failed: must be True or False"),
+    (lambda s, d: load_sweep(d), r"is a folder, not a sweep file$"),  # IsADirectoryError
+    (lambda s, d: load_sweep(d / "missing.yaml"), r"^no such sweep file: .*missing\.yaml$"),  # FileNotFoundError
+    (lambda s, d: SweepSpec.from_dict({**s.to_dict(), "fixed": {"log": "x", "z": np.float64(0.5)}}),
+     r"^fixed\.z must be .* got the numpy scalar np\.float64\(0\.5\): give a Python one"),  # RepresenterError at the run
+])
+def test_the_sweep_api_names_a_bad_argument(tmp_path: Path, call, message: str) -> None:
+    """The library's sweep functions given what the command line never passes (fuzz4): each was a raw
+    Python error, and an empty `out` wrote the sweep's cells/ and tables into the current folder."""
+    from experiments.sweep import load_results
+    from lms200 import LmsbenchError
+
+    log = tmp_path / "log.txt"
+    log.write_text("")
+    with pytest.raises(LmsbenchError, match=message):
+        call(make_spec(log, xs=[1]), tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["log.txt"] and log.read_text() == ""  # nothing ran or was made
+    with pytest.raises(LmsbenchError, match=r"no results\.parquet there"):  # FileNotFoundError
+        load_results(tmp_path)

@@ -579,3 +579,29 @@ def test_a_duration_shorter_than_a_scans_telegram_is_an_error(tmp_path: Path, ca
                    "written): one 361-beam scan telegram takes 0.76 s at 9600 baud, and the first whole one can take "
                    "twice that; give --duration 1.6 or more (or a higher --baud)")
     assert not out.exists()
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_stop_while_the_device_is_opened_ends_the_opening_at_once(tmp_path: Path, signum: int,
+                                                                     capsys: pytest.CaptureFixture[str]) -> None:
+    """Ctrl-C or SIGTERM while `record` probes the bauds for a device that does not answer (loop://
+    echoes the requests) was held until the probe gave up, 8 requests of --timeout later, and then
+    said "no LMS200 answered", exit 2 (40 s at --timeout 5; found by the fuzz4 round). It ends the
+    opening at once: exit 0, as a stop while recording, no file made."""
+    import threading
+
+    from experiments.cli import main
+
+    out = tmp_path / "rec.clf"
+    timer = threading.Timer(0.3, signal.raise_signal, (signum,))
+    start = time.monotonic()
+    timer.start()
+    try:
+        status = main(["lms200", "record", "--port", "loop://", "--out", str(out), "--timeout", "2"])
+    finally:
+        timer.cancel()
+    took = time.monotonic() - start
+    captured = capsys.readouterr()
+    assert status == 0 and took < 3, (status, took, captured.err)
+    assert captured.out.strip() == f"stopped while opening loop://: recorded no scan; {out} not written"
+    assert not out.exists() and list(tmp_path.iterdir()) == []

@@ -298,3 +298,28 @@ def test_slam_every_names_the_failing_scan_by_the_logs_own_number(boom, capsys) 
         sys.modules.pop("late", None)
     assert capsys.readouterr().err == ("lmsbench slam: error: your extractor late:late raised RuntimeError: late on "
                                        f"run.clf scan 4{TRACEBACK_HINT}\n")
+
+
+def test_a_users_lines_past_the_scans_beams_are_refused_naming_the_method_and_scan(boom, capsys) -> None:
+    """fuzz4: lines reaching past the scan's last beam were said by the scoring as "fs: its lines span beams
+    0..411, the scan has 361", naming neither the extractor nor the scan; `features.extract` handed them on."""
+    from features import ConfigError, extract
+    from features.registry import get_method
+    from experiments.user_methods import ensure_method
+    from lms200 import Scan
+
+    (boom / "wrongext.py").write_text(
+        "import dataclasses\n"
+        "from features import FeatureSet, extract\n"
+        "def past(scan):\n"
+        "    fs = extract(scan, method='split_merge')\n"
+        "    return FeatureSet([dataclasses.replace(l, last=len(scan) + 50) for l in fs.lines], fs.corners)\n")
+    assert main(["compare", "office:0", "--duration", "0.5", "--methods", "wrongext:past", "--out", "cmp",
+                 "--no-progress"]) == 2
+    assert capsys.readouterr().err == ("lmsbench compare: error: your extractor wrongext:past returned features that "
+                                       "reach beam 411 of a 361-beam scan (features of another scan?) on office:0 scan 0\n")
+    ensure_method("wrongext:past")
+    assert get_method("wrongext:past") is not None
+    with pytest.raises(ConfigError, match=r"^method 'wrongext:past': its run returned features that reach beam 411 "
+                                          r"of a 361-beam scan"):
+        extract(Scan.lms200([2.0] * 361), method="wrongext:past")

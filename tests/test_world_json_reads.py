@@ -83,3 +83,29 @@ def test_a_world_json_name_that_is_no_string_is_refused(folder, tmp_path, name, 
         World.from_json(tmp_path / "w.json")
     assert str(err.value) == (f"{tmp_path / 'w.json'}: not a world.json (name: must be text (the world's name), "
                               f"got {shown})")
+
+
+def test_a_world_json_is_utf8_with_or_without_a_byte_order_mark(folder, tmp_path) -> None:
+    """fuzz4: a world.json saved with a byte-order mark (a Windows editor), or naming its world "Büro", was
+    "'ascii' codec can't decode byte 0xef in position 0" for simulate and compare (read as ASCII), and the
+    mark "Unexpected UTF-8 BOM" for slam (read as UTF-8); JSON is UTF-8, and the other readers skip a mark.
+    Bytes that are not UTF-8 (latin-1) are named so."""
+    import json
+
+    import numpy as np
+
+    from experiments.slamrun import load_input
+    from lms200 import LmsbenchError
+    from sim import World
+
+    raw = (folder / "world.json").read_bytes()
+    plain = World.from_json(folder / "world.json")
+    d = json.loads(raw)
+    d["name"] = "Büro"
+    for name, data in (("bom.json", b"\xef\xbb\xbf" + raw), ("name.json", json.dumps(d, ensure_ascii=False).encode())):
+        world = World.from_json(tmp_path / name, data=data)
+        assert np.array_equal(world.walls, plain.walls) and world.name == ("Büro" if name == "name.json" else plain.name)
+    run = _with_world(folder, tmp_path, lambda p: p.write_bytes(b"\xef\xbb\xbf" + raw))
+    assert np.array_equal(load_input(run).walls, plain.walls)
+    with pytest.raises(LmsbenchError, match=r"w\.json: not a world\.json \(not UTF-8 text \(byte 11 is not UTF-8\)\)$"):
+        World.from_json(tmp_path / "w.json", data=json.dumps(d, ensure_ascii=False).encode("latin-1"))

@@ -270,6 +270,10 @@ def _no_scan_within(duration: float, baud: int, variant: tuple[int, int], out: P
             f"--duration {need:g} or more (or a higher --baud)")
 
 
+class _StoppedOpening(KeyboardInterrupt):
+    """Ctrl-C or SIGTERM while ``lms200 record`` opens and sets up the device, before any scan."""
+
+
 def run_record(args: argparse.Namespace) -> int:
     if args.out.is_dir():  # was "unknown kind '(no suffix)'"
         raise InputError(f"--out {args.out} is a folder; give a file name (.clf, .log, .gz or .bag)")
@@ -281,9 +285,18 @@ def run_record(args: argparse.Namespace) -> int:
     check_out_file(args.out)
     stop: dict = {"now": False}
     written, set_up = 0, False
+
+    def on_stop(*_: object) -> None:
+        stop["now"] = True
+        if not set_up:  # the driver's requests while it opens the device do not look at `stop`
+            raise _StoppedOpening
+
     # Ctrl-C and SIGTERM (a batch system's limit) end the recording as asked: the file closed and
-    # readable (SIGTERM went to the CLI's interrupt: a bag cut in its index, "Bag is not indexed")
-    previous = {sig: signal.signal(sig, lambda *_: stop.update(now=True)) for sig in (signal.SIGINT, signal.SIGTERM)}
+    # readable (SIGTERM went to the CLI's interrupt: a bag cut in its index, "Bag is not indexed");
+    # while the device is still being opened (the baud probe: up to 8 requests of --timeout each) they
+    # end the opening at once (they were held until it gave up: "no LMS200 answered", 40 s at --timeout 5)
+    status = ""
+    previous = {sig: signal.signal(sig, on_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         # a status the next line overwrites, on a terminal only (like the progress bars), so that
         # a port that cannot be opened leaves the error as stderr's one line
@@ -291,10 +304,10 @@ def run_record(args: argparse.Namespace) -> int:
         print(status, end="\r" if status else "", file=sys.stderr, flush=True)
         with LMS200(args.port, baud=args.baud, fov_deg=args.fov_deg, resolution_deg=args.resolution_deg,
                     units=args.units, timeout=args.timeout, mode_timeout=args.mode_timeout) as dev:
+            set_up = True
             opened = (f"{dev.type_string.strip()} at {dev.baud} baud, {args.units}; recording to {args.out} "
                       f"(Ctrl-C stops)")
             print(f"{opened:<{len(status)}}", file=sys.stderr, flush=True)
-            set_up = True
             line = (dev.baud, dev.variant)
             progress = _Progress(dev)
             counted = _Counted(_records(dev, progress, stop, args.max_scans, args.duration))
@@ -312,6 +325,10 @@ def run_record(args: argparse.Namespace) -> int:
             finally:
                 progress.update(final=True)
             stats = dev.stats
+    except _StoppedOpening:  # the port is closed (the driver closes it when its opening fails)
+        print(f"{' ' * len(status)}\r" if status else "", end="", file=sys.stderr, flush=True)
+        print(f"stopped while opening {args.port}: recorded no scan; {args.out} not written")
+        return 0
     except LmsbenchError as exc:  # the device did not return to on-request mode as the port closed
         if not set_up:  # the port did not open, or the device was not set up: no file was made, said as it was
             raise

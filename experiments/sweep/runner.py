@@ -27,11 +27,12 @@ from tqdm import tqdm
 from features.batch import THREADS_ENV
 from lms200 import LmsbenchError
 from lms200.errors import LmsbenchWarning
+from lms200.finite import shown
 from lms200.yamlio import dump as dump_yaml
 from experiments.options import mid_sentence
 
 from .cells import INPUTS_KEY, WARNINGS_KEY, resolve_kind, run_cell
-from .spec import Scalar, SweepSpec, cell_key
+from .spec import Scalar, SweepSpec, SweepSpecError, cell_key
 from .store import RESULT_TABLES, CellStore, write_atomic
 
 #: Columns every row has besides its parameters and metrics.
@@ -77,7 +78,13 @@ def run_sweep(
     Returns:
         A :class:`SweepResult`; ``out/results.parquet`` and ``out/results.csv`` hold its table.
     """
-    out = Path(out)
+    if not isinstance(spec, SweepSpec):  # a mapping was an AttributeError ('dict' object has no attribute 'kind')
+        raise SweepSpecError(f"spec: must be a SweepSpec (load_sweep(path), or SweepSpec.from_dict(mapping) for a "
+                             f"mapping), got {type(spec).__name__}")
+    out = _sweep_folder(out)
+    for name, value in (("retry_failed", retry_failed), ("progress", progress), ("checked", checked)):
+        if not isinstance(value, bool):
+            raise LmsbenchError(f"{name}: must be True or False, got {shown(value, 60)}")
     check_executor(executor, workers)
     fn = resolve_kind(spec.kind) if checked else check_spec(spec)
     cells = spec.cells()
@@ -88,6 +95,20 @@ def run_sweep(
     except Exception:
         _undo(out, fresh, before)
         raise
+
+
+def _sweep_folder(out: object) -> Path:
+    """``out`` as the Path of a sweep folder, new or a folder: an empty path wrote the sweep's cells/ and
+    tables into the current folder, a file was NotADirectoryError after the spec's checks, and None or a
+    number a TypeError (found by the fuzz4 round)."""
+    from lms200.logs import path_of
+
+    if isinstance(out, str) and not out.strip():
+        raise LmsbenchError(f"out: must name the sweep's folder, got {out!r} (an empty path is the current folder)")
+    p = path_of(out)
+    if (p.exists() or p.is_symlink()) and not p.is_dir():
+        raise LmsbenchError(f"out: {p} exists and is not a folder; give the sweep's folder (new, or one a sweep wrote)")
+    return p
 
 
 def _undo(out: Path, fresh: bool, before: set[str]) -> None:
@@ -212,8 +233,19 @@ def _changed_inputs(digests: Any, params: dict[str, Scalar], given: dict[str, st
 
 
 def load_results(out: str | Path) -> pd.DataFrame:
-    """The table of a sweep folder (``results.parquet``)."""
-    return pd.read_parquet(Path(out) / "results.parquet")
+    """The table of a sweep folder (``results.parquet``).
+
+    Raises:
+        LmsbenchError: ``out`` is no folder holding a ``results.parquet`` (a missing one was a raw
+            FileNotFoundError, a file a NotADirectoryError).
+    """
+    from lms200.logs import path_of
+
+    table = path_of(out) / "results.parquet"
+    if not table.is_file():
+        raise LmsbenchError(f"{out}: no results.parquet there (not a sweep folder, or no run of its sweep has "
+                            "written its table yet)")
+    return pd.read_parquet(table)
 
 
 def _row(params: dict[str, Scalar], result: dict[str, Any], key: str) -> dict[str, Any]:
@@ -299,6 +331,9 @@ def spec_record(spec: SweepSpec) -> str:
 
 def check_executor(executor: Any, workers: int) -> None:
     """A known executor, before anything is written."""
+    if not isinstance(executor, str) and not callable(getattr(executor, "submit", None)):  # None, 5: AttributeError 'submit'
+        raise LmsbenchError(f"executor: must be 'local', 'inprocess', a scheduler address (tcp://HOST:PORT) or a "
+                            f"distributed.Client, got {shown(executor, 60)}")
     if executor == "local" and not (isinstance(workers, int) and workers >= 1):
         raise LmsbenchError(f"workers: a local cluster needs at least 1 worker process, got {workers}")
     if isinstance(executor, str) and executor not in ("local", "inprocess") and not executor.startswith(SCHEMES):

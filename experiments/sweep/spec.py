@@ -157,8 +157,15 @@ class SweepSpec:
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
-    """Read and check a sweep YAML file."""
-    path = Path(path)
+    """Read and check a sweep YAML file.
+
+    Raises:
+        LmsbenchError: a path that is no str / PathLike, missing, a folder, a device or a pipe (a raw
+            FileNotFoundError or IsADirectoryError), or a file that is no sweep (``SweepSpecError``).
+    """
+    from lms200.logs import regular_file
+
+    path = regular_file(path, "sweep file")
     too_big = size_problem(path.stat().st_size, "a sweep file", SWEEP_SIZE_HINT) if path.is_file() else None
     if too_big:  # refused unread: a 1.5 MB file took 81 s to parse and check
         raise SweepSpecError(f"{path}: {too_big}")
@@ -369,6 +376,9 @@ def _digits(n: int) -> str:
 
 
 def _check_scalar(where: str, value: Any) -> None:
+    if isinstance(value, np.generic):  # np.float64, a float, passed and failed as sweep.yaml was written (RepresenterError)
+        raise SweepSpecError(f"{where} must be a number, string, bool or null, got the numpy scalar {shown(value, 80)}: "
+                             "give a Python one (value.item())")
     if not isinstance(value, (str, int, float, bool, type(None))):
         hint = " (to vary it, put it under grid:)" if where.startswith("fixed.") and isinstance(value, list) else ""
         raise SweepSpecError(f"{where} must be a number, string, bool or null, got {shown(value, 80)}{hint}")
