@@ -488,7 +488,8 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                     if abs(th) > MAX_HEADING_RAD:  # 1e300 rad holds no angle: its quaternion was noise, read back as one
                         which = "odom" if name == ODOM_TOPIC else "truth"
                         raise InputError(f"records: item {seq}: {which} pose's heading {th:.6g} rad lies beyond "
-                                         f"+-{MAX_HEADING_RAD:g} rad, which the CARMEN reader refuses (as write_carmen)")
+                                         f"+-{MAX_HEADING_RAD:g} rad, which holds no angle its quaternion could keep "
+                                         "(wrap it into (-pi, pi]; write_carmen and write_tum refuse it too)")
                     msg = PoseStamped(
                         header=Header(**{**header_kw, "frame_id": "map" if name == TRUTH_TOPIC else "odom"}),
                         pose=Pose(

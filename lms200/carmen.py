@@ -1529,7 +1529,7 @@ def write_carmen(
                     if pose is not None and abs(pose[2]) > MAX_HEADING_RAD:
                         raise InputError(f"records: item {count}: {which} pose's heading {pose[2]:.6g} rad lies beyond "
                                          f"+-{MAX_HEADING_RAD:g} rad, which the CARMEN reader refuses (the log could "
-                                         "not be read back)")
+                                         "not be read back; wrap it into (-pi, pi])")
                 u = _units_of(scan)
                 if units is None:
                     units = u

@@ -135,33 +135,61 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
                              "name a file to write the log to")
     # the path and format checked, then the first record taken: a refused path left a live source
     # one record short; before anything is written, as a log of no scan is one read_log refuses
-    checked = checked_records(items)
-    first = next(checked, None)
+    checked = checked_records(_source_errors_marked(items))
+    try:
+        first = next(checked, None)
+    except _SourceError as exc:
+        raise exc.error from exc.error.__cause__
     if first is None:
         raise InputError(f"records: none to write to {p}: read_log refuses a log of no scan, so nothing was written")
     checked = itertools.chain([first], checked)
-    if fmt in ("bag", "bag2"):
-        existed = p.exists()
-        try:
-            try:
-                return write_bag(p, checked)
-            except BaseException:
-                if not existed and p.is_dir():
-                    shutil.rmtree(p, ignore_errors=True)
-                elif not existed and p.exists():
-                    p.unlink()
-                raise
-        except LmsbenchError:  # the writer's own (a bag that exists is a FileExistsError too): as it is
-            raise
-        except (OSError, sqlite3.OperationalError) as exc:  # a full disk, an I/O error: one line, as a CARMEN
-            # log's (was a raw OSError from a ROS 1 bag, sqlite3's "database or disk is full" from a ROS 2 one)
-            raise InputError(f"path: cannot write {p}: {getattr(exc, 'strerror', None) or exc}") from None
-    written: list[int] = []  # .NAME.PID.tmp.gz: the temporary name keeps the suffix write_carmen packs by
     try:
-        write_whole(p, lambda tmp: written.append(write_carmen(tmp, checked, fmt=fmt)), suffix="".join(p.suffixes[-1:]))
-    except OSError as exc:
-        raise InputError(f"path: cannot write {p}: {exc.strerror or exc}") from None
-    return written[0]
+        if fmt in ("bag", "bag2"):
+            existed = p.exists()
+            try:
+                try:
+                    return write_bag(p, checked)
+                except BaseException:
+                    if not existed and p.is_dir():
+                        shutil.rmtree(p, ignore_errors=True)
+                    elif not existed and p.exists():
+                        p.unlink()
+                    raise
+            except LmsbenchError:  # the writer's own (a bag that exists is a FileExistsError too): as it is
+                raise
+            except (OSError, sqlite3.OperationalError) as exc:  # a full disk, an I/O error: one line, as a
+                # CARMEN log's (was a raw OSError from a ROS 1 bag, sqlite3's "database or disk is full" from a ROS 2 one)
+                raise InputError(f"path: cannot write {p}: {getattr(exc, 'strerror', None) or exc}") from None
+        written: list[int] = []  # .NAME.PID.tmp.gz: the temporary name keeps the suffix write_carmen packs by
+        try:
+            write_whole(p, lambda tmp: written.append(write_carmen(tmp, checked, fmt=fmt)), suffix="".join(p.suffixes[-1:]))
+        except OSError as exc:
+            raise InputError(f"path: cannot write {p}: {exc.strerror or exc}") from None
+        return written[0]
+    except _SourceError as exc:  # the records' own error (a reader's, a generator's): as it is, not "cannot write"
+        raise exc.error from exc.error.__cause__
+
+
+class _SourceError(Exception):
+    """An exception raised by the records given to ``write_log`` while they were read, carried past the
+    writers' handling of their own errors (an ``OSError`` of the source, a reader's missing file, said
+    "path: cannot write OUT: No such file or directory", blaming the output)."""
+
+    def __init__(self, error: BaseException) -> None:
+        super().__init__(str(error))
+        self.error = error
+
+
+def _source_errors_marked(items: Iterator[object]) -> Iterator[object]:
+    """``items``, with an ``Exception`` raised while taking one wrapped as ``_SourceError``."""
+    while True:
+        try:
+            item = next(items)
+        except StopIteration:
+            return
+        except Exception as exc:
+            raise _SourceError(exc) from exc
+        yield item
 
 
 SIMULATE_LOG = "scans.clf"

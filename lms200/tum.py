@@ -95,7 +95,8 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
     if turned.any():  # 1e300 rad holds no angle: its quaternion was noise, read back as a heading
         k = int(np.nonzero(turned)[0][0])
         raise InputError(f"poses: row {k}'s heading {poses[k, 2].item():.6g} rad lies beyond +-{MAX_HEADING_RAD:g} rad, "
-                         "which holds no angle the quaternion could keep (the metrics and the CARMEN reader refuse it)")
+                         "which holds no angle the quaternion could keep (the metrics and the CARMEN reader refuse it; "
+                         "wrap it into (-pi, pi])")
     if stamps.size != poses.shape[0]:
         raise InputError(f"stamps: {stamps.size} stamps for {poses.shape[0]} poses")
     if not stamps.size:  # read_tum refuses a file of no pose: a file written that its own reader does not take

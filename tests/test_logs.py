@@ -256,3 +256,18 @@ def test_missing_and_unknown(tmp_path: Path) -> None:
     path.write_text("NEFF 3\nSYNC 1 2\nRAWLASER1 whatever\n" + GOOD + "\n")
     reader = read_log(path)
     assert len(list(reader)) == 1 and reader.stats.messages["NEFF"] == 1
+
+
+@pytest.mark.parametrize("name", ["src.clf", "src.log.gz", "src.bag", "src2"])
+def test_an_error_of_the_records_themselves_is_raised_as_it_is_not_as_a_failed_write(tmp_path: Path, name: str) -> None:
+    """A source that fails while read (a reader's missing file: FileNotFoundError) was said as
+    "path: cannot write OUT: No such file or directory", blaming the output; its own exception is
+    raised now, and nothing is left at the output."""
+    def source():  # noqa: ANN202
+        yield Record(Scan(np.full(5, 1.0), -0.1, 0.05, 0.0, 8.0, stamp=1.0))
+        raise FileNotFoundError(2, "No such file or directory", "the-input.clf")
+
+    with pytest.raises(FileNotFoundError) as info:
+        write_log(tmp_path / name, source(), fmt="bag2" if name == "src2" else None)
+    assert info.value.filename == "the-input.clf"
+    assert list(tmp_path.iterdir()) == []
