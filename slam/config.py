@@ -338,7 +338,8 @@ class PrealignConfig:
     """The paper preset's heading search before each update (``slam.prealign``, ``slam.pointalign``).
 
     Attributes:
-        enabled: find the scan's heading (and position) against the map's lines before the update.
+        enabled: find the scan's heading (and position) against the map's lines before the update
+            (the heading search alone: ``scan_velocity`` is a switch of its own, on whatever this says).
         radius: map lines within this distance (m) of the predicted position take part.
         sigma_xy, sigma_phi: std of the resulting pose pseudo-measurement (m, rad).
         xy_turn: the alignment's position is used (besides its heading) only when its heading
@@ -363,7 +364,8 @@ class PrealignConfig:
             travel (on: along a corridor whose lines fix only the sideways position, the
             constant-velocity speed sagged and the filter diverged on MIT CSAIL; docs/slam.md,
             "The paper preset"): baseline (s), min_score, min_fraction, sigma (m), floor (m/s),
-            prior_probability (1 dof, a speed this far out widens the prior).
+            prior_probability (1 dof, a speed this far out widens the prior). Independent of
+            ``enabled``; not used with ``motion.use_odometry`` (the odometry gives the speed).
     """
 
     enabled: bool = True

@@ -928,7 +928,7 @@ def test_a_killed_sweeps_temporary_tables_are_removed_by_the_next_run(tmp_path):
      r"^spec: must be a SweepSpec .* got dict$"),  # AttributeError: 'dict' object has no attribute 'kind'
     (lambda s, d: run_sweep(s, d / "o", None, progress=False), r"^executor: must be 'local', .* got None$"),  # AttributeError
     (lambda s, d: run_sweep(s, "", "inprocess", progress=False), r"^out: must name the sweep's folder"),  # into the cwd
-    (lambda s, d: run_sweep(s, None, "inprocess", progress=False), r"^path: must be a str or os\.PathLike"),  # TypeError
+    (lambda s, d: run_sweep(s, None, "inprocess", progress=False), r"^out: must be a str or os\.PathLike"),  # TypeError
     (lambda s, d: run_sweep(s, d / "log.txt", "inprocess", progress=False), r"log\.txt exists and is not a folder"),
     (lambda s, d: run_sweep(s, d / "o", "inprocess", progress="no"), r"^progress: must be True or False, got 'no'$"),
     (lambda s, d: run_sweep(s, d / "o", "inprocess", retry_failed="yes"), r"^retry_failed: must be True or False"),
@@ -937,11 +937,14 @@ def test_a_killed_sweeps_temporary_tables_are_removed_by_the_next_run(tmp_path):
     (lambda s, d: SweepSpec.from_dict({**s.to_dict(), "fixed": {"log": "x", "z": np.float64(0.5)}}),
      r"^fixed\.z must be .* got the numpy scalar np\.float64\(0\.5\): give a Python one"),  # RepresenterError at the run
 ])
-def test_the_sweep_api_names_a_bad_argument(tmp_path: Path, call, message: str) -> None:
+def test_the_sweep_api_names_a_bad_argument(tmp_path: Path, call, message: str, monkeypatch: pytest.MonkeyPatch) -> None:
     """The library's sweep functions given what the command line never passes (fuzz4): each was a raw
-    Python error, and an empty `out` wrote the sweep's cells/ and tables into the current folder."""
+    Python error, and an empty `out` wrote the sweep's cells/ and tables into the current folder (here
+    tmp_path, so that the check below sees what such a run would leave)."""
     from experiments.sweep import load_results
     from lms200 import LmsbenchError
+
+    monkeypatch.chdir(tmp_path)
 
     log = tmp_path / "log.txt"
     log.write_text("")

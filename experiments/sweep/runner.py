@@ -97,6 +97,15 @@ def run_sweep(
         raise
 
 
+def _named_out(out: object) -> object:
+    """``out`` unchanged when it is a path; else the error names the argument ``out`` (``path_of``'s said "path")."""
+    import os
+
+    if not isinstance(out, (str, os.PathLike)):
+        raise LmsbenchError(f"out: must be a str or os.PathLike (the sweep's folder), got {type(out).__name__}")
+    return out
+
+
 def _sweep_folder(out: object) -> Path:
     """``out`` as the Path of a sweep folder, new or a folder: an empty path wrote the sweep's cells/ and
     tables into the current folder, a file was NotADirectoryError after the spec's checks, and None or a
@@ -105,7 +114,7 @@ def _sweep_folder(out: object) -> Path:
 
     if isinstance(out, str) and not out.strip():
         raise LmsbenchError(f"out: must name the sweep's folder, got {out!r} (an empty path is the current folder)")
-    p = path_of(out)
+    p = path_of(_named_out(out))
     if (p.exists() or p.is_symlink()) and not p.is_dir():
         raise LmsbenchError(f"out: {p} exists and is not a folder; give the sweep's folder (new, or one a sweep wrote)")
     return p
@@ -241,7 +250,7 @@ def load_results(out: str | Path) -> pd.DataFrame:
     """
     from lms200.logs import path_of
 
-    table = path_of(out) / "results.parquet"
+    table = path_of(_named_out(out)) / "results.parquet"
     if not table.is_file():
         raise LmsbenchError(f"{out}: no results.parquet there (not a sweep folder, or no run of its sweep has "
                             "written its table yet)")
