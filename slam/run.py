@@ -230,7 +230,7 @@ def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sl
     traj, covs = Column(np.float64, (4,)), Column(np.float64, (3, 3))  # numpy blocks, not lists: see MAX_SLAM_SCANS
     kinds = {"nis": np.float64, "nis_dof": np.int64, "nees": np.float64, "n_landmarks": np.int64,
              "n_matched": np.int64, "n_lines": np.int64, "prealign_used": np.bool_, "prealign_shift": np.float64,
-             "point_score": np.float64, "n_unobserved": np.int64, "n_unadded": np.int64}
+             "point_score": np.float64, "n_unobserved": np.int64, "n_unadded": np.int64, "n_dropped": np.int64}
     diag = {k: Column(kind) for k, kind in kinds.items()}
     diverged_at = None
     anchor = None
@@ -265,7 +265,8 @@ def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sl
                            ("n_landmarks", len(slam.landmarks)), ("n_matched", info.n_matched),
                            ("n_lines", info.n_lines), ("prealign_used", info.prealign_used),
                            ("prealign_shift", info.prealign_shift), ("point_score", info.point_score),
-                           ("n_unobserved", info.n_unobserved), ("n_unadded", info.n_unadded)):
+                           ("n_unobserved", info.n_unobserved), ("n_unadded", info.n_unadded),
+                           ("n_dropped", info.n_dropped)):
             diag[key].append(value)
         ok = slam.healthy(full=(k % 50 == 0))
         healthy &= ok

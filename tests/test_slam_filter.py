@@ -419,3 +419,6 @@ def test_the_joint_check_drops_a_pair_when_the_pairs_together_fail_their_gate(of
     info = StepInfo()
     kept, _ = f._jointly_compatible(seen, [(0, 0), (1, 1)], [], info)
     assert info.n_dropped == dropped and len(kept) == 2 - dropped
+    info = f.step(0.0, seen)  # the same through the filter's step (no time passed: the pose stays exact)
+    assert info.n_dropped == dropped and info.n_matched == 2 - dropped and info.n_new == 0
+    assert sorted(lm.hits for lm in f.landmarks) == ([2, 2] if dropped == 0 else [1, 2])  # the dropped pair updated none
