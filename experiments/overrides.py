@@ -19,6 +19,9 @@ from lms200 import LmsbenchError
 from lms200.yamlio import load as load_yaml
 
 PREFIX = "extractor"
+SLAM_SECTIONS = ("motion", "observations", "alignment", "keyframes", "loop_closure", "association", "landmarks",
+                 "prealign", "consistency")
+"""The sections of ``slam.SlamConfig`` (its nested dataclasses), named in ``--set``'s hint."""
 
 
 class OverrideError(LmsbenchError, ValueError):
@@ -33,6 +36,12 @@ def set_option(text: str) -> tuple[str, Any]:
                                          f"{key.strip()}={value.strip()}")
     if not eq or not key.startswith(PREFIX + ".") or len(key) <= len(PREFIX + "."):
         hint = f" (write extractor.{key})" if eq and "." in key and not key.startswith(PREFIX + ".") else ""
+        section = key.split(".", 1)[0]
+        if eq and "." in key and section in SLAM_SECTIONS:  # 'prealign.scan_velocity=false' was told
+            # "(write extractor.prealign.scan_velocity)", a name no extractor has
+            field = key.split(".", 1)[1]
+            hint = (f" ({key} is a SLAM setting, not an extractor's: give it to lmsbench slam in --config FILE.yaml "
+                    f"as '{section}: {{{field}: {value.strip() or '...'}}}')")
         raise argparse.ArgumentTypeError(f"--set takes extractor.FIELD=VALUE or extractor.METHOD.FIELD=VALUE, "
                                          f"got {text!r}{hint}")
     if not value.strip():  # YAML reads nothing as null: "sensor: k must be a whole number (default 3), got None"

@@ -75,3 +75,23 @@ def test_an_unknown_corner_field_names_the_method_and_a_known_one_is_set(method)
                                    f"'bogus'; its fields: {fields}")
     assert extractor_overrides({f"extractor.{method}.corners.sigma": 0.01}, [method]) == {method: {"corners": {"sigma": 0.01}}}
     assert extractor_overrides({f"extractor.{method}.corners.sigma": 0.01}, ["sensor"], other_methods=True) == {}  # old: refused
+
+
+def test_set_names_a_slam_setting_and_where_it_goes_not_a_made_up_extractor_field() -> None:
+    """`--set prealign.scan_velocity=false` was told "(write extractor.prealign.scan_velocity)", a field no
+    extractor has; it names the SLAM section and --config now. The section list follows SlamConfig's."""
+    import argparse
+    import dataclasses
+
+    from experiments.overrides import SLAM_SECTIONS, set_option
+    from slam import SlamConfig
+
+    nested = tuple(f.name for f in dataclasses.fields(SlamConfig) if dataclasses.is_dataclass(f.type) or
+                   dataclasses.is_dataclass(getattr(SlamConfig(), f.name)))
+    assert SLAM_SECTIONS == nested
+    with pytest.raises(argparse.ArgumentTypeError, match=r"\(prealign\.scan_velocity is a SLAM setting, not an extractor's: "
+                                                         r"give it to lmsbench slam in --config FILE\.yaml as "
+                                                         r"'prealign: \{scan_velocity: false\}'\)$"):
+        set_option("prealign.scan_velocity=false")
+    with pytest.raises(argparse.ArgumentTypeError, match=r"\(write extractor\.sensor\.k\)$"):  # a method's name: as before
+        set_option("sensor.k=3")
