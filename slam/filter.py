@@ -431,15 +431,9 @@ class SlamFilter:
         """The EKF update with the scan's pairs (observation, landmark); returns the line pairs used."""
         if self.config.association.joint_check:
             pairs_l, pairs_c = self._jointly_compatible(obs, pairs_l, pairs_c, info)
-        kinds = ["line"] * len(pairs_l) + ["corner"] * len(pairs_c)
-        if not kinds:
+        if not pairs_l and not pairs_c:
             return pairs_l
-        ids = [ROBOT_DIM + 2 * k for _, k in pairs_l] + [ROBOT_DIM + 2 * k for _, k in pairs_c]
-        z = np.concatenate([obs.lines[o] for o, _ in pairs_l] + [obs.corners[o] for o, _ in pairs_c])
-        covs = [obs.line_cov[o] for o, _ in pairs_l] + [obs.corner_cov[o] for o, _ in pairs_c]
-        R = np.zeros((2 * len(covs), 2 * len(covs)))
-        for k, c in enumerate(covs):
-            R[2 * k : 2 * k + 2, 2 * k : 2 * k + 2] = c
+        kinds, ids, z, R = _stacked(obs, pairs_l, pairs_c)
         self.ekf.update(z.reshape(-1, 1), stacked_H, stacked_h, R=R, args=(kinds, ids), hx_args=(kinds, ids),
                         residual=stacked_residual(kinds))
         self.ekf.x[2, 0] = wrap(self.ekf.x[2, 0])
@@ -460,18 +454,13 @@ class SlamFilter:
         the pair whose removal leaves the smallest NIS is dropped (``info.n_dropped``). Each pair
         passed its own gate; together they may not (MIT CSAIL step 453: three pairs, NIS 29.6 on
         6 dof, moved the robot 2.4 m along a corridor)."""
-        pairs = [("line", o, k) for o, k in pairs_l] + [("corner", o, k) for o, k in pairs_c]
-        if len(pairs) < 2:
+        n_lines, n = len(pairs_l), len(pairs_l) + len(pairs_c)
+        if n < 2:
             return pairs_l, pairs_c
         x, P = self.ekf.x, self.ekf.P
-        kinds = [kind for kind, _, _ in pairs]
-        ids = [ROBOT_DIM + 2 * k for _, _, k in pairs]
-        z = np.concatenate([obs.lines[o] if kind == "line" else obs.corners[o] for kind, o, _ in pairs])
-        covs = [obs.line_cov[o] if kind == "line" else obs.corner_cov[o] for kind, o, _ in pairs]
+        kinds, ids, z, R = _stacked(obs, pairs_l, pairs_c)
         H = stacked_H(x, kinds, ids)
-        S = H @ P @ H.T
-        for j, c in enumerate(covs):
-            S[2 * j : 2 * j + 2, 2 * j : 2 * j + 2] += c
+        S = H @ P @ H.T + R
         y = stacked_residual(kinds)(z, stacked_h(x, kinds, ids))[:, 0]
         p = self.config.association.gate_probability
 
@@ -482,15 +471,14 @@ class SlamFilter:
             except np.linalg.LinAlgError:
                 return np.inf
 
-        keep = list(range(len(pairs)))
+        keep = list(range(n))  # the stacked pairs' indices: the lines', then the corners'
         while len(keep) > 1 and nis(keep) > chi2_quantile(p, 2 * len(keep)):
             trials = [(nis([j for j in keep if j != drop]), drop) for drop in keep]
             keep.remove(min(trials)[1])
         if len(keep) == 1 and nis(keep) > chi2_quantile(p, 2):  # (each pair passed its gate: not reached)
             keep = []
-        info.n_dropped = len(pairs) - len(keep)
-        kept = [pairs[j] for j in keep]
-        return [(o, k) for kind, o, k in kept if kind == "line"], [(o, k) for kind, o, k in kept if kind == "corner"]
+        info.n_dropped = n - len(keep)
+        return [pairs_l[j] for j in keep if j < n_lines], [pairs_c[j - n_lines] for j in keep if j >= n_lines]
 
     def _extend(self, obs: Observations, pairs_l) -> None:
         if not pairs_l:
@@ -564,6 +552,19 @@ class SlamFilter:
         except np.linalg.LinAlgError:
             return False
         return True
+
+
+def _stacked(obs: Observations, pairs_l, pairs_c) -> tuple[list[str], list[int], np.ndarray, np.ndarray]:
+    """One update's stacked measurement of its pairs (observation, landmark), lines first: their kinds,
+    each landmark's first state row, z (2m,) and the block-diagonal R (2m, 2m); at least one pair."""
+    kinds = ["line"] * len(pairs_l) + ["corner"] * len(pairs_c)
+    ids = [ROBOT_DIM + 2 * k for _, k in pairs_l] + [ROBOT_DIM + 2 * k for _, k in pairs_c]
+    z = np.concatenate([obs.lines[o] for o, _ in pairs_l] + [obs.corners[o] for o, _ in pairs_c])
+    covs = [obs.line_cov[o] for o, _ in pairs_l] + [obs.corner_cov[o] for o, _ in pairs_c]
+    R = np.zeros((2 * len(covs), 2 * len(covs)))
+    for k, c in enumerate(covs):
+        R[2 * k : 2 * k + 2, 2 * k : 2 * k + 2] = c
+    return kinds, ids, z, R
 
 
 def capped(obs: Observations, most: int, info: StepInfo) -> Observations:

@@ -99,8 +99,6 @@ def run_sweep(
 
 def _named_out(out: object) -> object:
     """``out`` unchanged when it is a path; else the error names the argument ``out`` (``path_of``'s said "path")."""
-    import os
-
     if not isinstance(out, (str, os.PathLike)):
         raise LmsbenchError(f"out: must be a str or os.PathLike (the sweep's folder), got {type(out).__name__}")
     return out
