@@ -138,36 +138,34 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
     checked = checked_records(_source_errors_marked(items))
     try:
         first = next(checked, None)
-    except _SourceError as exc:
-        raise exc.error from exc.error.__cause__
-    if first is None:
-        raise InputError(f"records: none to write to {p}: read_log refuses a log of no scan, so nothing was written")
-    checked = itertools.chain([first], checked)
-    try:
+        if first is None:
+            raise InputError(f"records: none to write to {p}: read_log refuses a log of no scan, so nothing was written")
+        checked = itertools.chain([first], checked)
         if fmt in ("bag", "bag2"):
-            existed = p.exists()
-            try:
-                try:
-                    return write_bag(p, checked)
-                except BaseException:
-                    if not existed and p.is_dir():
-                        shutil.rmtree(p, ignore_errors=True)
-                    elif not existed and p.exists():
-                        p.unlink()
-                    raise
-            except LmsbenchError:  # the writer's own (a bag that exists is a FileExistsError too): as it is
-                raise
-            except (OSError, sqlite3.OperationalError) as exc:  # a full disk, an I/O error: one line, as a
-                # CARMEN log's (was a raw OSError from a ROS 1 bag, sqlite3's "database or disk is full" from a ROS 2 one)
-                raise InputError(f"path: cannot write {p}: {getattr(exc, 'strerror', None) or exc}") from None
+            return _bag_whole(p, checked)
         written: list[int] = []  # .NAME.PID.tmp.gz: the temporary name keeps the suffix write_carmen packs by
-        try:
-            write_whole(p, lambda tmp: written.append(write_carmen(tmp, checked, fmt=fmt)), suffix="".join(p.suffixes[-1:]))
-        except OSError as exc:
-            raise InputError(f"path: cannot write {p}: {exc.strerror or exc}") from None
+        write_whole(p, lambda tmp: written.append(write_carmen(tmp, checked, fmt=fmt)), suffix="".join(p.suffixes[-1:]))
         return written[0]
     except _SourceError as exc:  # the records' own error (a reader's, a generator's): as it is, not "cannot write"
         raise exc.error from exc.error.__cause__
+    except LmsbenchError:  # the writers' own (a bag that exists is a FileExistsError too): as it is
+        raise
+    except (OSError, sqlite3.OperationalError) as exc:  # a full disk, an I/O error: one line, for either writer
+        # (a bag's was a raw OSError, or sqlite3's "database or disk is full" for a ROS 2 one)
+        raise InputError(f"path: cannot write {p}: {getattr(exc, 'strerror', None) or exc}") from None
+
+
+def _bag_whole(p: Path, records: Iterable[Record]) -> int:
+    """``write_bag`` to ``p``; a bag that did not exist before is removed again when the write fails."""
+    existed = p.exists()
+    try:
+        return write_bag(p, records)
+    except BaseException:
+        if not existed and p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
+        elif not existed and p.exists():
+            p.unlink()
+        raise
 
 
 class _SourceError(Exception):
