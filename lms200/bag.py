@@ -33,7 +33,7 @@ import numpy as np
 from .codes import finite_negative
 from .errors import InputError, LmsbenchError, LogNotFoundError
 from . import laser_geometry
-from .records import Pose2D, Record, SkipLog, stamp_problem
+from .records import Pose2D, Record, SkipLog, pose_problem, stamp_problem
 from .scan import Scan, snap_float32_angle
 from .tum import MAX_TILT_DEG, quaternion_to_yaw, tilt_deg
 from .timing import lms200_shaped, mirror_time_increment, scan_period, smallest_range
@@ -479,17 +479,9 @@ def write_bag(path: str | Path, records: Iterable[Record | None], topic: str = S
                     if pose is None:
                         continue
                     x, y, th = pose
-                    from .carmen import MAX_COORD_M, MAX_HEADING_RAD
-
-                    if max(abs(x), abs(y)) > MAX_COORD_M:  # a bag its own reader refuses (as write_carmen, write_tum)
-                        which = "odom" if name == ODOM_TOPIC else "truth"
-                        raise InputError(f"records: item {seq}: {which} pose ({x:.6g}, {y:.6g}) m lies beyond "
-                                         f"+-{MAX_COORD_M:g} m, which the bag reader refuses")
-                    if abs(th) > MAX_HEADING_RAD:  # 1e300 rad holds no angle: its quaternion was noise, read back as one
-                        which = "odom" if name == ODOM_TOPIC else "truth"
-                        raise InputError(f"records: item {seq}: {which} pose's heading {th:.6g} rad lies beyond "
-                                         f"+-{MAX_HEADING_RAD:g} rad, which holds no angle its quaternion could keep "
-                                         "(wrap it into (-pi, pi]; write_carmen and write_tum refuse it too)")
+                    problem = pose_problem(x, y, th, f"{'odom' if name == ODOM_TOPIC else 'truth'} pose")
+                    if problem is not None:  # a bag its own reader refuses (1e300 rad: its quaternion noise, read back as one)
+                        raise InputError(f"records: item {seq}: {problem}, which the bag reader refuses")
                     msg = PoseStamped(
                         header=Header(**{**header_kw, "frame_id": "map" if name == TRUTH_TOPIC else "odom"}),
                         pose=Pose(
@@ -544,10 +536,9 @@ def _pose_of(msg) -> Pose2D:  # noqa: ANN001
     x, y = float(pose.position.x), float(pose.position.y)
     if not (np.isfinite(x) and np.isfinite(y)):  # was Record's "odom: must be finite", without bag, topic or index
         raise ValueError(f"position (x, y) = ({x!r}, {y!r}) is not finite")
-    from .carmen import MAX_COORD_M  # as the CARMEN, TUM and relations readers: 1e300 m was read (a review)
-
-    if max(abs(x), abs(y)) > MAX_COORD_M:
-        raise ValueError(f"position (x, y) = ({x:.6g}, {y:.6g}) m lies beyond +-{MAX_COORD_M:g} m (damaged?)")
+    problem = pose_problem(x, y, yaw, "pose")  # as the CARMEN, TUM and relations readers: 1e300 m was read (a review)
+    if problem is not None:
+        raise ValueError(problem)
     return (x, y, yaw)
 
 

@@ -82,7 +82,7 @@ from . import laser_geometry
 from .errors import InputError, LmsbenchError, LmsbenchWarning, LogFormatError, LogNotFoundError
 from .finite import fixed
 from .laser_geometry import LaserGeometry
-from .records import Pose2D, Record, SkipLog, stamp_problem
+from .records import MAX_COORD_M, MAX_HEADING_RAD, Pose2D, Record, SkipLog, pose_problem, stamp_problem  # noqa: F401 - carmen's names too
 from .scan import Scan, snap_angle, valid_ranges
 
 UNITS_PARAM = "lmsbench_range_units"
@@ -1146,23 +1146,11 @@ def _pose(words: list[str], start: int, what: str) -> Pose2D:
     return _finite_pose(_few_floats(words[start : start + 3], what), what)
 
 
-#: Largest |x|, |y| (m) a pose may hold (``logs.MAX_COORD_M``, the TUM and relations readers' bound too):
-#: a FLASER pose of 1e308 m was read, and `compare --poses corrected` scored its repeatability 0, exit 0.
-MAX_COORD_M = 1e9
-
-#: Largest |heading| (rad) a pose or relation may hold (``logs.MAX_HEADING_RAD``; the relations reader's and the
-#: trajectory metrics' bound too): 160,000 turns of an odometry heading never wrapped, whose float spacing is
-#: still 1e-10 rad. Beyond ~1e16 rad a float holds no angle at all: an odometry heading of 1e300 was read as it
-#: was (every step's turn from it noise), and a relation's yaw of 1e300 scored 138.6 deg, exit 0 (fuzz4).
-MAX_HEADING_RAD = 1e6
-
-
 def _finite_pose(values: list[float], what: str) -> Pose2D:
     x, y, t = values
     _require(math.isfinite(x) and math.isfinite(y) and math.isfinite(t), f"{what} pose is not finite")
-    _require(abs(x) <= MAX_COORD_M and abs(y) <= MAX_COORD_M,
-             f"{what} pose ({x:.6g}, {y:.6g}) m lies beyond +-{MAX_COORD_M:g} m (damaged?)")
-    _require(abs(t) <= MAX_HEADING_RAD, f"{what} pose's heading {t:.6g} rad lies beyond +-{MAX_HEADING_RAD:g} rad (damaged?)")
+    problem = pose_problem(x, y, t, f"{what} pose")
+    _require(problem is None, problem or "")
     return (x, y, t)
 
 
@@ -1522,14 +1510,10 @@ def write_carmen(
                     raise InputError(f"records: item {count}: {problem}; the CARMEN reader refuses it (the log could "
                                      "not be read back)")
                 for which, pose in (("odom", rec.odom), ("truth", rec.truth)):
-                    if pose is not None and max(abs(pose[0]), abs(pose[1])) > MAX_COORD_M:
-                        raise InputError(f"records: item {count}: {which} pose ({pose[0]:.6g}, {pose[1]:.6g}) m lies "
-                                         f"beyond +-{MAX_COORD_M:g} m, which the CARMEN reader refuses (the log could "
-                                         "not be read back)")
-                    if pose is not None and abs(pose[2]) > MAX_HEADING_RAD:
-                        raise InputError(f"records: item {count}: {which} pose's heading {pose[2]:.6g} rad lies beyond "
-                                         f"+-{MAX_HEADING_RAD:g} rad, which the CARMEN reader refuses (the log could "
-                                         "not be read back; wrap it into (-pi, pi])")
+                    problem = None if pose is None else pose_problem(*pose, f"{which} pose")
+                    if problem is not None:
+                        raise InputError(f"records: item {count}: {problem}, which the CARMEN reader refuses (the log "
+                                         "could not be read back)")
                 u = _units_of(scan)
                 if units is None:
                     units = u

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
 from .bag import BagError, BagReader, is_bag, write_bag
-from . import carmen
+from . import records
 from .carmen import UTF8_BOM, CarmenReader, write_carmen
 from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
 from .laser_geometry import LaserGeometry
@@ -384,11 +384,11 @@ MAX_ROW_CHARS = 1 << 20
 """Longest line of a text file of rows (TUM, relations) read (characters, as ``carmen.MAX_LINE_CHARS``):
 a row is 8 numbers, under 200 characters. A file of zeros or of binary data with no line break
 was read as one line, whole: a 3 GB one ended in MemoryError ("internal error", exit 1)."""
-MAX_COORD_M = carmen.MAX_COORD_M
+MAX_COORD_M = records.MAX_COORD_M
 """Largest |x|, |y| (m) a TUM or relations row (or a CARMEN line's pose) may hold: far beyond any
 trajectory on Earth (UTM northings are below 1e7 m); 1e300 m overflowed the squares of the metrics
 (RuntimeWarnings on stderr and an error of inf, exit 0)."""
-MAX_HEADING_RAD = carmen.MAX_HEADING_RAD
+MAX_HEADING_RAD = records.MAX_HEADING_RAD
 """Largest |heading| (rad) a CARMEN pose, a relations row's roll, pitch or yaw, or a trajectory given to
 ``slam.metrics`` may hold (160,000 turns): a float of 1e300 holds no angle, and it was read as one."""
 

@@ -26,6 +26,51 @@ MAX_REASON_CHARS = 300  # a kept reason is cut past this (a bad word of a 1 MB l
 #: negative one is no clock's
 MAX_STAMP_S = SCAN_MAX_STAMP_S
 
+#: Largest |x|, |y| (m) a pose may hold (``logs.MAX_COORD_M``, every log and trajectory reader's and writer's
+#: bound, :func:`pose_problem`): a FLASER pose of 1e308 m was read, and `compare --poses corrected` scored its
+#: repeatability 0, exit 0.
+MAX_COORD_M = 1e9
+
+#: Largest |heading| (rad) a pose or relation may hold (``logs.MAX_HEADING_RAD``, :func:`pose_problem`): 160,000
+#: turns of an odometry heading never wrapped, whose float spacing is still 1e-10 rad. Beyond ~1e16 rad a float
+#: holds no angle at all: an odometry heading of 1e300 was read as it was (every step's turn from it noise), and
+#: a relation's yaw of 1e300 scored 138.6 deg, exit 0 (fuzz4).
+MAX_HEADING_RAD = 1e6
+
+
+def angle_problem(angle: float, what: str) -> str | None:
+    """Why ``angle`` (rad) is no angle a pose may hold (beyond +-:data:`MAX_HEADING_RAD`), as a message
+    beginning with ``what``; None within the bound, and for nan (a lost pose, which each caller judges)."""
+    if not abs(angle) > MAX_HEADING_RAD:
+        return None
+    return f"{what} {angle:.6g} rad lies beyond +-{MAX_HEADING_RAD:g} rad (damaged? wrap it into (-pi, pi])"
+
+
+def pose_problem(x: float, y: float, theta: float, what: str) -> str | None:
+    """Why (x m, y m, theta rad) is no pose the log and trajectory readers take (x or y beyond
+    +-:data:`MAX_COORD_M`, theta beyond +-:data:`MAX_HEADING_RAD`), as a message beginning with ``what``
+    (``"odom pose"``); None within the bounds, and for nan (a lost pose, which each caller judges).
+    The one wording of the rule for every reader, writer and check (:func:`poses_problem` for arrays);
+    the caller adds its context (file and line, item, row) and what refuses it."""
+    if abs(x) > MAX_COORD_M or abs(y) > MAX_COORD_M:
+        return f"{what} ({x:.6g}, {y:.6g}) m lies beyond +-{MAX_COORD_M:g} m (damaged, or not metres?)"
+    return angle_problem(theta, f"{what}'s heading")
+
+
+def poses_problem(poses: np.ndarray, what: str) -> tuple[int, str] | None:
+    """The first row of ``poses`` ((n, 3): x m, y m, theta rad; nan rows pass) that :func:`pose_problem`
+    refuses, and its message (beginning with ``what``); None when every row is within the bounds."""
+    poses = np.asarray(poses, float)
+    with np.errstate(invalid="ignore"):  # nan: a lost pose, not beyond the bound
+        bad = (np.abs(poses[:, :2]) > MAX_COORD_M).any(axis=1) | (np.abs(poses[:, 2]) > MAX_HEADING_RAD)
+    if not bad.any():
+        return None
+    k = int(np.argmax(bad))
+    x, y, theta = (float(v) for v in poses[k, :3])
+    problem = pose_problem(x, y, theta, what)
+    assert problem is not None
+    return k, problem
+
 
 @dataclass
 class SkipLog:

@@ -15,7 +15,7 @@ import numpy as np
 from .codes import real_rows, real_vector
 from .errors import InputError, LogFormatError
 from .finite import fixed
-from .records import MAX_STAMP_S, stamp_problem
+from .records import MAX_STAMP_S, pose_problem, poses_problem, stamp_problem
 
 
 def yaw_to_quaternion(theta: np.ndarray) -> np.ndarray:
@@ -72,7 +72,7 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
             a folder that does not exist, or that cannot be written, is an InputError naming it
             (they were a raw IsADirectoryError, FileNotFoundError, ...: the wrong-input hunt).
     """
-    from .logs import MAX_COORD_M, MAX_HEADING_RAD, path_of, write_whole  # not at the top: logs imports bag, which imports this module
+    from .logs import path_of, write_whole  # not at the top: logs imports bag, which imports this module
 
     path = path_of(path)
     if not path.parent.is_dir():
@@ -85,18 +85,9 @@ def write_tum(path: str | Path, stamps: np.ndarray, poses: np.ndarray) -> None:
     if np.isinf(poses).any():  # was written as 'inf', which read_tum refuses
         k = int(np.nonzero(np.isinf(poses).any(axis=1))[0][0])
         raise InputError(f"poses: row {k} is infinite ({poses[k].tolist()}); a lost pose is written as nan")
-    far = np.abs(poses[:, :2]) > MAX_COORD_M
-    if far.any():  # read_tum refuses such a row: a file written that its own reader does not take
-        k = int(np.nonzero(far.any(axis=1))[0][0])
-        raise InputError(f"poses: row {k} lies beyond +-{MAX_COORD_M:g} m ({poses[k].tolist()}), which read_tum "
-                         "refuses; a lost pose is written as nan")
-    with np.errstate(invalid="ignore"):  # a lost (nan) pose is written as nan
-        turned = np.abs(poses[:, 2]) > MAX_HEADING_RAD
-    if turned.any():  # 1e300 rad holds no angle: its quaternion was noise, read back as a heading
-        k = int(np.nonzero(turned)[0][0])
-        raise InputError(f"poses: row {k}'s heading {poses[k, 2].item():.6g} rad lies beyond +-{MAX_HEADING_RAD:g} rad, "
-                         "which holds no angle the quaternion could keep (the metrics and the CARMEN reader refuse it; "
-                         "wrap it into (-pi, pi])")
+    problem = poses_problem(poses, "pose")
+    if problem is not None:  # read_tum refuses such a row (1e300 rad: its quaternion noise): a file its reader does not take
+        raise InputError(f"poses: row {problem[0]}: {problem[1]}, which read_tum refuses; a lost pose is written as nan")
     if stamps.size != poses.shape[0]:
         raise InputError(f"stamps: {stamps.size} stamps for {poses.shape[0]} poses")
     if not stamps.size:  # read_tum refuses a file of no pose: a file written that its own reader does not take
@@ -178,7 +169,7 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
         LmsbenchWarning: once for a file with poses tilted by more than ``TILT_NOTE_DEG`` (5 deg) and
             up to 30 deg (roll or pitch): read as their heading, naming the line of the largest tilt.
     """
-    from .logs import MAX_COORD_M, regular_file, row_lines, row_numbers  # not at the top: logs imports bag, which imports this module
+    from .logs import regular_file, row_lines, row_numbers  # not at the top: logs imports bag, which imports this module
 
     if not isinstance(allow_nan, bool):
         raise InputError(f"allow_nan: must be True or False, got {type(allow_nan).__name__}")
@@ -199,8 +190,9 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
         lost = allow_nan and math.isfinite(v[0]) and not any(math.isinf(x) for x in v)
         if not lost and not all(math.isfinite(x) for x in v):  # slam on a folder with a nan here: "internal error"
             raise LogFormatError(path, no, f"TUM row has a non-finite number: {s[:60]!r}")
-        if abs(v[1]) > MAX_COORD_M or abs(v[2]) > MAX_COORD_M:
-            raise LogFormatError(path, no, f"TUM row's x or y is beyond +-{MAX_COORD_M:g} m: {s[:60]!r}")
+        problem = pose_problem(v[1], v[2], 0.0, "TUM row's pose")  # its heading, of a unit quaternion, is an angle
+        if problem is not None:
+            raise LogFormatError(path, no, problem)
         problem = stamp_problem(v[0], "TUM time")
         if problem is not None:
             raise LogFormatError(path, no, problem)

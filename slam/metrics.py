@@ -15,8 +15,8 @@ import numpy as np
 from lms200 import InputError, LmsbenchError, LogFormatError
 from lms200.codes import real_rows, real_vector
 from lms200.finite import shown
-from lms200.logs import MAX_COORD_M, MAX_HEADING_RAD, regular_file, row_lines, row_numbers
-from lms200.records import stamp_problem
+from lms200.logs import regular_file, row_lines, row_numbers
+from lms200.records import angle_problem, pose_problem, poses_problem, stamp_problem
 from lms200.tum import MAX_TILT_DEG, tilt_of_roll_pitch_deg
 from features.baselines.checks import positive
 
@@ -39,18 +39,9 @@ def checked_trajectory(traj: object, name: str, finite_poses: bool = True) -> np
         raise InputError(f"{name}: stamps must not decrease (row {k}: {t[k].item()!r} s after {t[k - 1].item()!r} s)")
     if finite_poses and not np.isfinite(a[:, 1:]).all():
         raise InputError(f"{name}: its poses must be finite; row {int(np.nonzero(~np.isfinite(a[:, 1:]).all(1))[0][0])} is not")
-    with np.errstate(invalid="ignore"):  # nan poses (a lost estimate) are not beyond the bound
-        far = np.abs(a[:, 1:3]) > MAX_COORD_M
-    if far.any():  # the readers' bound (read_tum, read_relations): 1e300 m overflowed ate's squares, its RMSE inf
-        k = int(np.nonzero(far.any(1))[0][0])
-        raise InputError(f"{name}: row {k}: position ({a[k, 1]:.6g}, {a[k, 2]:.6g}) m lies beyond +-{MAX_COORD_M:g} m "
-                         "(the bound of the trajectory readers; damaged, or not metres?)")
-    with np.errstate(invalid="ignore"):
-        turned = np.abs(a[:, 3]) > MAX_HEADING_RAD
-    if turned.any():  # a heading of 1e300 rad is no angle: its wrap is noise, scored as a heading error
-        k = int(np.nonzero(turned)[0][0])
-        raise InputError(f"{name}: row {k}: heading {a[k, 3]:.6g} rad lies beyond +-{MAX_HEADING_RAD:g} rad "
-                         "(the bound of the log readers; damaged?)")
+    problem = poses_problem(a[:, 1:], "pose")  # nan poses (a lost estimate) are not beyond the bounds
+    if problem is not None:  # 1e300 m overflowed ate's squares, its RMSE inf; a heading of 1e300 rad is no angle,
+        raise InputError(f"{name}: row {problem[0]}: {problem[1]}")  # its wrap noise scored as a heading error
     return a
 
 
@@ -389,11 +380,10 @@ def read_relations(path: str | Path) -> np.ndarray:
         problem = stamp_problem(v[0], "relation row's t1") or stamp_problem(v[1], "relation row's t2")
         if problem is not None:
             raise LogFormatError(path, no, problem)
-        if abs(v[2]) > MAX_COORD_M or abs(v[3]) > MAX_COORD_M:
-            raise LogFormatError(path, no, f"relation row's x or y is beyond +-{MAX_COORD_M:g} m: {line.strip()[:60]!r}")
-        if max(abs(v[5]), abs(v[6]), abs(v[7])) > MAX_HEADING_RAD:  # a yaw of 1e300 scored 138.6 deg, exit 0
-            raise LogFormatError(path, no, f"relation row's roll, pitch or yaw is beyond +-{MAX_HEADING_RAD:g} rad: "
-                                           f"{line.strip()[:60]!r}")
+        problem = (pose_problem(v[2], v[3], v[7], "relation row's motion")  # a yaw of 1e300 scored 138.6 deg, exit 0
+                   or angle_problem(v[5], "relation row's roll") or angle_problem(v[6], "relation row's pitch"))
+        if problem is not None:
+            raise LogFormatError(path, no, problem)
         rows.append((v[0], v[1], v[2], v[3], v[7]))
         unit_quaternions += abs(math.hypot(*v[4:8]) - 1.0) <= QUATERNION_NORM_TOLERANCE
         turned |= any(v[4:7])  # a TUM row's qz of a pose turned from the first; a 2-D relation's z, roll, pitch are 0

@@ -12,8 +12,8 @@ import numpy as np
 
 from lms200.errors import LmsbenchWarning
 from lms200.finite import shown
-from lms200.logs import MAX_COORD_M, MAX_HEADING_RAD, checked_records
-from lms200.records import Record
+from lms200.logs import MAX_COORD_M, checked_records
+from lms200.records import Record, pose_problem
 
 from .config import MIN_MATCH_POINTS, SlamConfig
 from .filter import SlamFilter, SlamInputError, checked_step
@@ -495,13 +495,10 @@ def in_scale(records: Iterable[Record], label: str = "records[{k}]",
                                  "SLAM's motion model cannot step that far")
         before = stamp
         for name in ("odom", "truth", "corrected"):
-            pose = getattr(rec, name)
-            if pose is not None and not (abs(pose[0]) <= MAX_POSE_M and abs(pose[1]) <= MAX_POSE_M):
-                raise SlamInputError(f"{label.format(k=k)}: its {name} pose ({pose[0]:.6g}, {pose[1]:.6g}) m lies beyond "
-                                     f"+-{MAX_POSE_M:g} m (damaged?): SLAM's models cannot take it")
-            if pose is not None and not abs(pose[2]) <= MAX_HEADING_RAD:  # 1e300 rad: each step's turn was noise
-                raise SlamInputError(f"{label.format(k=k)}: its {name} pose's heading {pose[2]:.6g} rad lies beyond "
-                                     f"+-{MAX_HEADING_RAD:g} rad (damaged?): SLAM's models cannot take it")
+            pose = getattr(rec, name)  # a Record's poses are finite (1e300 rad: each step's turn was noise)
+            problem = None if pose is None else pose_problem(pose[0], pose[1], pose[2], f"its {name} pose")
+            if problem is not None:
+                raise SlamInputError(f"{label.format(k=k)}: {problem}: SLAM's models cannot take it")
         yield rec
 
 

@@ -136,7 +136,7 @@ def test_slam_refuses_a_log_of_one_stamp_and_warns_of_steps_without_time(sim_fol
             "(the log could not be read back)"),
     # nor such a pose: the CARMEN reader refuses it, as the TUM reader does (lms200.carmen.MAX_COORD_M), and so does
     # write_log (tests/test_carmen_pose_bounds.py, with the reader's refusal on the command line)
-    ("odom", "records: item 10: odom pose (1e+300, -3) m lies beyond +-1e+09 m, which the CARMEN reader refuses "
+    ("odom", "records: item 10: odom pose (1e+300, -3) m lies beyond +-1e+09 m (damaged, or not metres?), which the CARMEN reader refuses "
              "(the log could not be read back)"),
 ])
 def test_slam_refuses_stamps_and_poses_its_models_overflow_on(sim_folder, tmp_path, damage, message):

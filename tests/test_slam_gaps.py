@@ -74,7 +74,7 @@ def test_the_paper_filter_restarts_its_velocity_after_a_gap():
 
 
 def test_write_tum_refuses_what_read_tum_refuses(tmp_path):
-    with pytest.raises(InputError, match=r"poses: row 1 lies beyond \+-1e\+09 m .* which read_tum refuses"):
+    with pytest.raises(InputError, match=r"poses: row 1: pose \(1\.2e\+11, 0\) m lies beyond \+-1e\+09 m .* which read_tum refuses"):
         write_tum(tmp_path / "t.tum", np.array([0.0, 1.0]), np.array([[0.0, 0.0, 0.0], [1.2e11, 0.0, 0.0]]))
     assert not (tmp_path / "t.tum").exists()
 
