@@ -928,6 +928,9 @@ def test_a_killed_sweeps_temporary_tables_are_removed_by_the_next_run(tmp_path):
      r"^spec: must be a SweepSpec .* got dict$"),  # AttributeError: 'dict' object has no attribute 'kind'
     (lambda s, d: run_sweep(s, d / "o", None, progress=False), r"^executor: must be 'local', .* got None$"),  # AttributeError
     (lambda s, d: run_sweep(s, "", "inprocess", progress=False), r"^out: must name the sweep's folder"),  # into the cwd
+    # Path("") is Path("."): it wrote into the cwd while the str "" was refused; "." and Path(".") alike now
+    (lambda s, d: run_sweep(s, Path(""), "inprocess", progress=False), r"^out: must name the sweep's folder, got \w*Path\('\.'\), the current folder"),
+    (lambda s, d: run_sweep(s, "./", "inprocess", progress=False), r"^out: .* give Path\.cwd\(\) to write the sweep"),
     (lambda s, d: run_sweep(s, None, "inprocess", progress=False), r"^out: must be a str or os\.PathLike"),  # TypeError
     (lambda s, d: run_sweep(s, d / "log.txt", "inprocess", progress=False), r"log\.txt exists and is not a folder"),
     (lambda s, d: run_sweep(s, d / "o", "inprocess", progress="no"), r"^progress: must be True or False, got 'no'$"),

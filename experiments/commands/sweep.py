@@ -61,7 +61,9 @@ def run(args: argparse.Namespace) -> int:
 
         warm_up_kernels(slam=spec.kind == "slam")
     try:
-        result = run_sweep(spec, out, executor, workers=args.workers, retry_failed=args.retry_failed,
+        # `--out .` names the current folder as text ("" is refused by path_arg); the library takes it only as
+        # an absolute path (Path("") is Path("."), so run_sweep refuses both)
+        result = run_sweep(spec, Path.cwd() if out == Path(".") else out, executor, workers=args.workers, retry_failed=args.retry_failed,
                            progress=not args.no_progress, checked=True)  # checked above: its warnings were said once
     except SweepSpecError as exc:  # an unknown kind or parameter name, found before any cell ran
         raise SweepSpecError(f"{args.sweep}: {exc}") from exc

@@ -107,12 +107,20 @@ def _named_out(out: object) -> object:
 def _sweep_folder(out: object) -> Path:
     """``out`` as the Path of a sweep folder, new or a folder: an empty path wrote the sweep's cells/ and
     tables into the current folder, a file was NotADirectoryError after the spec's checks, and None or a
-    number a TypeError (found by the fuzz4 round)."""
+    number a TypeError (found by the fuzz4 round). The current folder named relatively is refused however
+    it is spelled (``""``, ``"."``, ``Path("")``, ``Path(".")``): pathlib reads ``Path("")`` as ``Path(".")``,
+    so an unset ``Path(os.environ.get("OUT", ""))`` cannot be told from a meant ``Path(".")``, and the str ``""``
+    was refused while ``Path("")`` wrote into the current folder; ``Path.cwd()`` names it on purpose (the
+    command line's ``--out .`` passes it so)."""
     from lms200.logs import path_of
 
     if isinstance(out, str) and not out.strip():
         raise LmsbenchError(f"out: must name the sweep's folder, got {out!r} (an empty path is the current folder)")
     p = path_of(_named_out(out))
+    if p == Path("."):
+        raise LmsbenchError(f"out: must name the sweep's folder, got {out!r}, the current folder named relatively (pathlib "
+                            "reads Path('') as Path('.'), so an empty path cannot be told from it); give "
+                            "Path.cwd() to write the sweep into the current folder")
     if (p.exists() or p.is_symlink()) and not p.is_dir():
         raise LmsbenchError(f"out: {p} exists and is not a folder; give the sweep's folder (new, or one a sweep wrote)")
     return p
