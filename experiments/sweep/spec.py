@@ -75,6 +75,8 @@ class SweepSpec:
     description: str = ""
 
     def __post_init__(self) -> None:
+        for key in ("fixed", "grid", "random", "seeds"):  # np.linspace's values, as researchers write them
+            object.__setattr__(self, key, _plain(getattr(self, key)))
         _check(self)
 
     @classmethod
@@ -83,6 +85,8 @@ class SweepSpec:
         degree parameter (see :func:`_degree_parameters`)."""
         if not isinstance(raw, dict):
             raise SweepSpecError("a sweep file must be a YAML mapping (name, kind, grid, ...)")
+        raw = {key: _plain(value) if key in ("fixed", "grid", "random", "seeds", "samples", "sample_seed") else value
+               for key, value in raw.items()}
         unknown = set(raw) - _KEYS
         if unknown:
             raise SweepSpecError(f"unknown key(s) {sorted(unknown, key=str)} in the sweep file; known: {sorted(_KEYS)}")
@@ -375,10 +379,24 @@ def _digits(n: int) -> str:
         return f"about {int(abs(n).bit_length() * math.log10(2)) + 1}"
 
 
+def _plain(value: Any) -> Any:
+    """``value`` with numpy scalars as their Python values (``np.float64(0.5)`` as 0.5, ``np.str_``,
+    ``np.bool_``, ``np.int64`` alike) and numpy arrays as lists of them (``np.linspace(0.1, 0.5, 5)``,
+    ``np.arange(3)`` as seeds), lists, tuples and mappings item by item; anything else as given, for the
+    checks after. A numpy scalar was refused ("give a Python one"): it passed as a float and failed as
+    sweep.yaml was written (RepresenterError)."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        return type(value)(_plain(v) for v in value)
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
 def _check_scalar(where: str, value: Any) -> None:
-    if isinstance(value, np.generic):  # np.float64, a float, passed and failed as sweep.yaml was written (RepresenterError)
-        raise SweepSpecError(f"{where} must be a number, string, bool or null, got the numpy scalar {shown(value, 80)}: "
-                             "give a Python one (value.item())")
     if not isinstance(value, (str, int, float, bool, type(None))):
         hint = " (to vary it, put it under grid:)" if where.startswith("fixed.") and isinstance(value, list) else ""
         raise SweepSpecError(f"{where} must be a number, string, bool or null, got {shown(value, 80)}{hint}")
