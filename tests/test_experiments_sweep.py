@@ -204,6 +204,25 @@ def test_random_sampling_is_seeded_in_range_and_crossed_with_grid_and_seeds():
     assert len(keys) == len(cells)
 
 
+def test_random_draws_that_repeat_are_said_once_with_how_many(tmp_path: Path) -> None:
+    """A random search over a small discrete space (x in {4, 5, 6}, 8 draws) ran each repeated draw's cell
+    once, without a word: 8 draws asked, 3 cells run. The run says how many draws repeated, once."""
+    log = tmp_path / "log.txt"
+    spec = SweepSpec.from_dict({"name": "few", "kind": KIND, "fixed": {"log": str(log)},
+                                "random": {"x": {"int": [4, 6]}}, "samples": 8, "sample_seed": 0, "seeds": [0]})
+    distinct = {c["x"] for c in spec.cells()}  # the draws as the cells hold them, told apart by value
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        result = run_sweep(spec, tmp_path / "o", "inprocess", progress=False)
+    repeats = [str(w.message) for w in said if "random draws" in str(w.message)]
+    assert repeats == [f"sweep few: {8 - len(distinct)} of the 8 random draws (samples:) repeat an earlier draw, and "
+                       f"a cell runs once: {len(distinct)} distinct draws run; its random space has 3 points: give "
+                       "samples: 3 or fewer, or list the points under grid: to run each once"]
+    assert result.total == len(distinct) == len(log.read_text().splitlines())
+    wide = SweepSpec.from_dict({**spec.to_dict(), "random": {"x": {"uniform": [4.0, 6.0]}}})
+    assert wide.repeated_draws() == (0, None)  # a continuous space: no repeat, nothing said
+
+
 @pytest.mark.parametrize(
     "raw, message",
     [

@@ -381,11 +381,24 @@ def _check_address(address: str) -> None:
 
 def check_spec(spec: SweepSpec):
     """The cell function of ``spec``'s kind, after checking the kind and every cell's parameter
-    names (a kind may check them before any cell runs)."""
+    names (a kind may check them before any cell runs).
+
+    Warns:
+        LmsbenchWarning: random draws that repeat an earlier draw (a small discrete space, or more
+            ``samples`` than its points), naming how many: their cells run once (draws are with
+            replacement, so that a sweep's draws stay those of its ``sample_seed`` and a sweep resumes).
+    """
     fn = resolve_kind(spec.kind)
     check = getattr(fn, "check_params", None)
     if check is not None:
         check(spec.cells())
+    repeats, points = spec.repeated_draws()
+    if repeats:  # the cells of a repeated draw ran once: the sweep had fewer cells than asked, without a word
+        space = (f"its random space has {points} point{'s' if points != 1 else ''}: give samples: {min(points, spec.samples)} "
+                 "or fewer, or list the points under grid: to run each once") if points is not None else ""
+        warnings.warn(f"sweep {spec.name}: {repeats} of the {spec.samples} random draws (samples:) repeat an earlier "
+                      f"draw, and a cell runs once: {spec.samples - repeats} distinct draws run{'; ' + space if space else ''}",
+                      LmsbenchWarning, stacklevel=2)
     return fn
 
 

@@ -159,6 +159,32 @@ class SweepSpec:
                     cells.append({**self.fixed, **combo, **draw, "seed": seed})
         return cells
 
+    def repeated_draws(self) -> tuple[int, int | None]:
+        """How many of the ``samples`` random draws repeat an earlier one (the same value of every random
+        parameter, so the same cells: a cell runs once, and the sweep has that many draws fewer than
+        asked), and the number of points of the random space when it is finite (every law ``int``,
+        ``choice``, or a ``uniform`` / ``loguniform`` of low == high; None otherwise)."""
+        if not self.random:
+            return 0, None
+        draws = _draw(self.random, self.samples, self.sample_seed)
+        distinct = {json.dumps(draw, sort_keys=True) for draw in draws}  # as cell_key tells cells apart
+        return len(draws) - len(distinct), _space_points(self.random)
+
+
+def _space_points(space: dict[str, dict[str, list[Any]]]) -> int | None:
+    """The number of points of a random space (their product over the parameters), None for a
+    continuous one."""
+    points = 1
+    for dist in space.values():
+        (law, args), = dist.items()
+        if law == "int":
+            points *= int(args[1]) - int(args[0]) + 1
+        elif law == "choice":
+            points *= len({json.dumps(v) for v in args})
+        elif args[0] != args[1]:
+            return None
+    return points
+
 
 def load_sweep(path: str | Path) -> SweepSpec:
     """Read and check a sweep YAML file.
