@@ -17,7 +17,7 @@ from lms200.codes import real_rows, real_vector
 from lms200.finite import shown
 from lms200.logs import regular_file, row_lines, row_numbers
 from lms200.records import angle_problem, pose_problem, poses_problem, stamp_problem
-from lms200.tum import MAX_TILT_DEG, tilt_of_roll_pitch_deg
+from lms200.tum import MAX_TILT_DEG, TILT_NOTE_DEG, tilt_of_roll_pitch_deg
 from features.baselines.checks import positive
 
 from .models import wrap
@@ -350,6 +350,11 @@ def map_error(map_segments: np.ndarray, walls: np.ndarray, alignment: Alignment2
 # --- relations (Kummerle et al. 2009) ----------------------------------------------------------------
 #: how far from 1 the norm of a row's last four numbers may be for them to read as a TUM quaternion
 QUATERNION_NORM_TOLERANCE = 1e-4
+#: m: a relation's z up to this is taken as 0 (a planar relation's is 0; a 3-D dataset's text rounding or
+#: noise on a relation of no x, y motion is no climb); beyond it, the motion's climb over its x, y part,
+#: atan2(|z|, hypot(x, y)), is held to the tilt bounds (``lms200.tum.MAX_TILT_DEG``, ``TILT_NOTE_DEG``):
+#: a row of z = 5 m over 0.3 m was scored on its x and y, silently
+RELATION_Z_FLOOR_M = 0.01
 
 
 def read_relations(path: str | Path) -> np.ndarray:
@@ -361,13 +366,20 @@ def read_relations(path: str | Path) -> np.ndarray:
         LmsbenchError: a file without rows, or a TUM trajectory (``t x y z qx qy qz qw``, also 8 numbers
             a row): every row's last four numbers of norm 1 and some row's z, roll or pitch (qx, qy, qz)
             not 0 (a 2-D relation's z, roll, pitch and yaw are (0, 0, 0, yaw)).
-        LogFormatError: a row whose roll and pitch tilt it by more than ``lms200.tum.MAX_TILT_DEG`` (30 deg; acos(cos roll cos pitch)):
+        LogFormatError: a row whose roll and pitch tilt it by more than ``lms200.tum.MAX_TILT_DEG`` (30 deg; acos(cos roll cos pitch)),
+            or whose z (beyond ``RELATION_Z_FLOOR_M``, 1 cm) climbs more than that over its x, y motion:
             a motion out of the plane (its x, y and yaw were scored, silently), naming file and line.
+
+    Warns:
+        LmsbenchWarning: once for a file with rows tilted or climbing by more than ``lms200.tum.TILT_NOTE_DEG``
+            (5 deg) and up to 30 deg, naming how many and the line of the largest (as ``read_tum``): scored on
+            their x, y and yaw.
     """
     rows = []
     unit_quaternions = 0  # rows whose last four numbers have norm 1, as a TUM row's quaternion has
     turned = False  # a row with z, roll or pitch (a TUM row's qx, qy, qz) not 0
-    tilted: tuple[int, str] | None = None  # the first row tilted by more than MAX_TILT_DEG, and its text
+    tilted: tuple[int, str] | None = None  # the first row tilted or climbing by more than MAX_TILT_DEG, and why
+    noted, most = 0, (0.0, 0)  # rows off the plane by more than TILT_NOTE_DEG, and the largest angle with its line
     for no, line in row_lines(path, regular_file(path, "relations file")):  # a 3 GB line was read whole: MemoryError
         s = line.split()
         if not s or s[0].startswith("#"):
@@ -389,8 +401,19 @@ def read_relations(path: str | Path) -> np.ndarray:
         turned |= any(v[4:7])  # a TUM row's qz of a pose turned from the first; a 2-D relation's z, roll, pitch are 0
         # tilted as read_tum and the bags measure it; roll and pitch both near +-pi tilt it by ~0 but turn its
         # heading by pi (its yaw would be scored half a turn off): a planar relation's are near 0
-        if tilted is None and (tilt_of_roll_pitch_deg(v[5], v[6]) > MAX_TILT_DEG or math.cos(v[5]) < 0):
-            tilted = (no, line.strip()[:60])
+        tilt = tilt_of_roll_pitch_deg(v[5], v[6])
+        climb = math.degrees(math.atan2(abs(v[4]), math.hypot(v[2], v[3]))) if abs(v[4]) > RELATION_Z_FLOOR_M else 0.0
+        if tilted is None and (tilt > MAX_TILT_DEG or math.cos(v[5]) < 0):
+            tilted = (no, f"relation row's roll and pitch tilt it by more than {MAX_TILT_DEG:g} deg, or are not near 0: "
+                          f"not a planar motion, whose x, y and yaw could be scored: {line.strip()[:60]!r}")
+        elif tilted is None and climb > MAX_TILT_DEG:
+            tilted = (no, f"relation row's z {v[4]:g} m climbs {climb:.1f} deg over its x, y motion of "
+                          f"{math.hypot(v[2], v[3]):.3g} m (at most {MAX_TILT_DEG:g} deg; z within "
+                          f"{RELATION_Z_FLOOR_M:g} m is read as 0): not a planar motion, whose x, y and yaw could be "
+                          f"scored: {line.strip()[:60]!r}")
+        if max(tilt, climb) > TILT_NOTE_DEG:
+            noted += 1
+            most = max(most, (max(tilt, climb), -no))  # the largest, the first line of it
     if not rows:  # an empty file gave "none of the 0 relations falls inside the run" after the run
         raise LmsbenchError(f"{path}: no relations (t1 t2 x y z roll pitch yaw a line)")
     if unit_quaternions == len(rows) and turned:  # a TUM file (slam --relations RUN/groundtruth.tum) scored 1.42 m, exit 0
@@ -398,9 +421,15 @@ def read_relations(path: str | Path) -> np.ndarray:
                             "unit quaternion), not a relations file (t1 t2 x y z roll pitch yaw a line: the pairs "
                             "of stamps and the true motion between them)")
     if tilted is not None:  # a 3-D relation's motion read as its x, y and yaw, silently (as read_tum refuses a tilted pose)
-        raise LogFormatError(path, tilted[0], f"relation row's roll and pitch tilt it by more than {MAX_TILT_DEG:g} "
-                                              "deg, or are not near 0: not a planar motion, whose x, y "
-                                              f"and yaw could be scored: {tilted[1]!r}")
+        raise LogFormatError(path, tilted[0], tilted[1])
+    if noted:  # as read_tum says of poses tilted by 5 to 30 deg
+        import warnings
+
+        from lms200.errors import LmsbenchWarning
+
+        warnings.warn(f"{path}: {noted} of its {len(rows)} relations leave the plane by more than {TILT_NOTE_DEG:g} deg "
+                      f"(roll / pitch tilt, or z climbing over the x, y motion; up to {most[0]:.1f} deg, line "
+                      f"{-most[1]}): scored on their x, y and yaw", LmsbenchWarning, stacklevel=2)
     return np.array(rows, float).reshape(-1, 5)
 
 

@@ -450,7 +450,39 @@ def test_a_relation_of_large_roll_or_pitch_is_refused_naming_its_line(tmp_path: 
                                              r"deg, or are not near 0: not a planar motion"):
         read_relations(rel)
     rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 0.1 0.05 -0.1 0.2\n")
-    assert read_relations(rel).tolist() == [[1, 2, 0.3, 0, 0.2], [2, 3, 0.3, 0, 0.2]]  # a little: as before
+    with pytest.warns(LmsbenchWarning, match=r"1 of its 2 relations leave the plane"):  # a little: read, and said
+        assert read_relations(rel).tolist() == [[1, 2, 0.3, 0, 0.2], [2, 3, 0.3, 0, 0.2]]
+
+
+def test_a_relation_whose_z_climbs_off_the_plane_is_refused_or_said(tmp_path: Path, shared_data: Path) -> None:
+    """A relation's z was not read: a row of z = 5 m over 0.3 m of x, y motion was scored on its x and y,
+    silently. Its climb, atan2(|z|, hypot(x, y)), is held to the tilt bounds: refused beyond 30 deg naming
+    file and line, said once from 5 deg (as read_tum says tilted poses); a z within 1 cm is read as 0.
+    MIT CSAIL's relations (every z, roll and pitch 0) read without a word."""
+    import math
+    import warnings
+
+    from slam.metrics import read_relations
+
+    rel = tmp_path / "r.relations"
+    rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 5 0 0 0.2\n")
+    climb = math.degrees(math.atan(5 / 0.3))
+    with pytest.raises(LogFormatError, match=re.escape(f"r.relations:2: relation row's z 5 m climbs {climb:.1f} deg over "
+                                                       "its x, y motion of 0.3 m (at most 30 deg; z within 0.01 m is "
+                                                       "read as 0): not a planar motion")):
+        read_relations(rel)  # old: read, scored on x = 0.3, y = 0
+    # 0.1 m over 0.3 m climbs 18.4 deg (line 2), a roll of 0.17 rad tilts 9.7 deg (line 4): said once; 0.05 m over
+    # 1 m climbs 2.9 deg, and 5 mm over no x, y motion is within the floor (text rounding, not a climb)
+    rel.write_text("1 2 0.3 0 0 0 0 0.2\n2 3 0.3 0 0.1 0 0 0.2\n3 4 1 0 0.05 0 0 0\n4 5 0.3 0 0 0.17 0 0.1\n"
+                   "5 6 0 0 0.005 0 0 0.3\n")
+    with pytest.warns(LmsbenchWarning) as said:
+        assert read_relations(rel)[:, 2].tolist() == [0.3, 0.3, 1.0, 0.3, 0.0]
+    assert [str(w.message) for w in said] == [
+        f"{rel}: 2 of its 5 relations leave the plane by more than 5 deg (roll / pitch tilt, or z climbing over the "
+        f"x, y motion; up to {math.degrees(math.atan(0.1 / 0.3)):.1f} deg, line 2): scored on their x, y and yaw"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert read_relations(shared_data / "mit-csail.relations").shape == (1172, 5)
 
 
 def test_a_misspelt_lmsbench_param_is_a_malformed_line(tmp_path: Path) -> None:
