@@ -130,8 +130,36 @@ def check_size(items: Sized, name: str) -> None:
 
 class SlamLimitWarning(LmsbenchWarning):
     """A run met one of its bounds: the paper preset's filter left observations out
-    (``observations.max_lines`` a scan, ``landmarks.max_landmarks`` in the map), or an iterator of
-    scans was read up to ``MAX_SLAM_SCANS`` and the run ended there."""
+    (``observations.max_lines`` a scan, ``landmarks.max_landmarks`` in the map: a
+    :class:`SlamBoundWarning`), or an iterator of scans was read up to ``MAX_SLAM_SCANS`` and the run
+    ended there."""
+
+
+class SlamBoundWarning(SlamLimitWarning):
+    """The paper preset's filter left observations out (``observations.max_lines``,
+    ``landmarks.max_landmarks``): once a run, what :func:`bounds_met` finds in its diagnostics. A driver
+    of several runs (``lmsbench slam``'s baselines) may silence these and say the runs' in one line."""
+
+
+@dataclass(frozen=True)
+class BoundMet:
+    """A bound of the filter a run met: ``count`` observations left out in ``scans`` of its ``n_scans``
+    scans, beyond the config field ``name`` of value ``value``."""
+
+    name: str
+    value: int
+    what: str  # what was left out, e.g. "lines or corners were not observed"
+    count: int
+    scans: int
+    n_scans: int
+
+    def counted(self) -> str:
+        """``"830 lines or corners were not observed in 150 of 150 scans"``."""
+        return f"{self.count:,} {self.what} in {self.scans:,} of {self.n_scans:,} scans"
+
+    def beyond(self) -> str:
+        """``"beyond observations.max_lines (2, a bound of the filter's time and memory)"``."""
+        return f"beyond {self.name} ({self.value:,}, a bound of the filter's time and memory)"
 
 
 class Capped:
@@ -296,16 +324,23 @@ def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sl
     return SlamResult(traj.taken(), covs.taken(), slam.map_lines(), slam.map_corners(), out)
 
 
-def warn_limits(diag: dict[str, Any], config: SlamConfig) -> None:
-    """A SlamLimitWarning for each bound of the filter a run met (once a run: its scans and counts)."""
+def bounds_met(diag: dict[str, Any], config: SlamConfig) -> list[BoundMet]:
+    """The bounds of the filter a run met, from its diagnostics (``n_unobserved``, ``n_unadded`` a
+    scan; a run without them, the default preset's, met none)."""
+    met = []
     for key, what, name, value in (
             ("n_unobserved", "lines or corners were not observed", "observations.max_lines", config.observations.max_lines),
             ("n_unadded", "observations started no landmark", "landmarks.max_landmarks", config.landmarks.max_landmarks)):
-        counts = diag[key]
-        if counts.sum():
-            warnings.warn(f"{int(counts.sum()):,} {what} in {int(np.count_nonzero(counts)):,} of {counts.size:,} scans: "
-                          f"beyond {name} ({value:,}, a bound of the filter's time and memory)",
-                          SlamLimitWarning, stacklevel=4)
+        counts = diag.get(key)
+        if counts is not None and counts.sum():
+            met.append(BoundMet(name, value, what, int(counts.sum()), int(np.count_nonzero(counts)), int(counts.size)))
+    return met
+
+
+def warn_limits(diag: dict[str, Any], config: SlamConfig) -> None:
+    """A SlamBoundWarning for each bound of the filter a run met (once a run: its scans and counts)."""
+    for bound in bounds_met(diag, config):
+        warnings.warn(f"{bound.counted()}: {bound.beyond()}", SlamBoundWarning, stacklevel=4)
 
 
 def lost_against_scan(scores: Sequence[float] | np.ndarray, cfg) -> bool:

@@ -213,3 +213,33 @@ def test_run_steps_keeps_near_its_result_s_size_a_scan(monkeypatch: pytest.Monke
     per_scan = (size_b - size_a) / 1000
     assert per_scan >= 180  # pose 32 B, covariance 72 B, 11 diagnostics
     assert (peak_b - peak_a) / 1000 < 2 * per_scan, ((peak_b - peak_a) / 1000, per_scan)
+
+
+def test_lmsbench_slams_runs_say_a_bound_they_met_once_naming_each_run(tmp_path) -> None:
+    """`slam --preset paper` with an extractor of more lines a scan than observations.max_lines said
+    "N lines or corners were not observed ..." twice, the same line, once for the run and once for its
+    paper preset (odometry) baseline, naming neither: one warning now, naming each run with its counts."""
+    import warnings
+
+    from lms200 import write_log
+    from slam.run import SlamBoundWarning, bounds_met
+
+    from experiments.slamrun import load_input, run
+
+    log = tmp_path / "room.clf"
+    write_log(log, [Record(r.scan, odom=(0.0, 0.0, 0.0), truth=(0.0, 0.0, 0.0)) for r in _records(12)])
+    config = SlamConfig(preset="paper", observations={"max_lines": 1})
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        done = run(load_input(log), config, progress=False)
+    bound, = bounds_met(done.result.diagnostics, config)  # the room's walls: more than one line a scan
+    assert bound.scans == 12 and bound.count >= 12
+    # the baseline is the same filter driven by the (standing) odometry: its own counts, from its own run
+    with pytest.warns(SlamBoundWarning, match=r"^\d+ lines or corners were not observed in \d+ of 12 scans: beyond "):
+        odo = run_slam(load_input(log).records, SlamConfig(preset="paper", observations={"max_lines": 1},
+                                                          motion={"use_odometry": True}))  # run_slam says its own
+    other, = bounds_met(odo.diagnostics, config)
+    assert [str(w.message) for w in said if issubclass(w.category, SlamBoundWarning)] == [
+        f"{bound.count:,} lines or corners were not observed in 12 of 12 scans of this run (paper preset); "
+        f"{other.count:,} in {other.scans} of 12 scans of the paper preset (odometry) baseline: beyond "
+        "observations.max_lines (1, a bound of the filter's time and memory)"]
