@@ -358,7 +358,7 @@ class SlamRun:
 
 
 def _quiet_bounds(records: Iterable[Record], config: SlamConfig) -> SlamResult:
-    """``run_slam`` without its SlamBoundWarnings (:func:`say_bounds` says them once for the command)."""
+    """``run_slam`` without its SlamBoundWarnings (:func:`say_bounds` says them naming the run)."""
     import warnings
 
     from slam.run import SlamBoundWarning
@@ -368,23 +368,18 @@ def _quiet_bounds(records: Iterable[Record], config: SlamConfig) -> SlamResult:
         return run_slam(records, config)
 
 
-def say_bounds(runs: list[tuple[str, SlamResult, SlamConfig]]) -> None:
+def say_bounds(label: str, result: SlamResult, config: SlamConfig) -> None:
     """One SlamBoundWarning for each bound of the filter (``observations.max_lines``,
-    ``landmarks.max_landmarks``) the runs met, naming each run that met it with its counts. The run and
-    its paper-preset baselines each said it, the same line twice, naming neither: `slam --preset paper`
-    with an extractor of more lines a scan than observations.max_lines."""
+    ``landmarks.max_landmarks``) the run ``label`` met, naming it with its counts: said as each run of
+    the command ends (the run's own after its files are written), so that a stop during a later
+    baseline loses none. The run and its paper-preset baselines each said the same line, naming
+    neither: `slam --preset paper` with an extractor of more lines a scan than observations.max_lines."""
     import warnings
 
     from slam.run import SlamBoundWarning, bounds_met
 
-    met: dict[str, list[tuple[str, Any]]] = {}
-    for label, result, config in runs:
-        for bound in bounds_met(result.diagnostics, config):
-            met.setdefault(bound.name, []).append((label, bound))
-    for said in met.values():
-        (label, first), rest = said[0], said[1:]
-        others = "".join(f"; {b.count:,} in {b.scans:,} of {b.n_scans:,} scans of {lab}" for lab, b in rest)
-        warnings.warn(f"{first.counted()} of {label}{others}: {first.beyond()}", SlamBoundWarning, stacklevel=3)
+    for bound in bounds_met(result.diagnostics, config):
+        warnings.warn(f"{bound.counted()} of {label}: {bound.beyond()}", SlamBoundWarning, stacklevel=3)
 
 
 def _source_name(config: SlamConfig) -> str:
@@ -410,10 +405,8 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     and slam.png in --out were deleted).
     """
     t0, c0 = time.perf_counter(), time.process_time()
-    bounds: list[tuple[str, SlamResult, SlamConfig]] = []  # each run's filter bounds, said once below
     with scans_of(data.name, data.records, data.numbers):  # a user's --extractor MODULE:FUNCTION that fails names its scan
         result = _quiet_bounds(_bar(data.records, "slam", progress), config)
-    bounds.append((f"this run ({_source_name(config)})", result, config))
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     if out is not None:
         earlier = earlier_run_files(out) if replace_earlier and out.is_dir() else set()  # before this run writes
@@ -422,6 +415,7 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
                 (out / stale).unlink(missing_ok=True)
         write_config(out, data, config)  # first: a stop after it leaves a folder told as slam's (SLAM_OWNER)
         write_result(out, result, earlier)
+    say_bounds(f"this run ({_source_name(config)})", result, config)  # after its files: -W error loses none
     d = result.diagnostics
     scores = score(result.trajectory, data, result)
     # "seconds": each SLAM's wall-clock time (extraction + SLAM), so that a summary can say what took the time
@@ -437,7 +431,7 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
         paper_config = dataclasses.replace(config, preset="paper")  # the same motion input as the run
         with scans_of(data.name, data.records, data.numbers):
             paper = _quiet_bounds(_bar(data.records, "paper preset", progress), paper_config)
-        bounds.append(("the paper preset baseline", paper, paper_config))
+        say_bounds("the paper preset baseline", paper, paper_config)
         table.append({"source": _source_name(paper_config), **_flat(score(paper.trajectory, data, paper)),
                       "cpu_scans_per_s": len(data.records) / max(time.process_time() - c1, 1e-9),
                       "seconds": time.perf_counter() - t1})
@@ -455,10 +449,9 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
             odo_config = dataclasses.replace(config, preset="paper", motion=dataclasses.replace(config.motion, use_odometry=True))
             with scans_of(data.name, data.records, data.numbers):
                 with_odo = _quiet_bounds(_bar(data.records, "paper preset (odometry)", progress), odo_config)
-            bounds.append(("the paper preset (odometry) baseline", with_odo, odo_config))
+            say_bounds("the paper preset (odometry) baseline", with_odo, odo_config)
             table.append({"source": "paper preset (odometry)", **_flat(score(with_odo.trajectory, data, with_odo)),
                           "seconds": time.perf_counter() - t1})
-    say_bounds(bounds)
     consistency = {
         "diverged": bool(d["diverged"]),
         "diverged_at": d["diverged_at"],
