@@ -23,6 +23,7 @@ import yaml
 
 from experiments.sweep import SweepSpec, SweepSpecError, cell_key, load_sweep, run_sweep
 from experiments.sweep.cells import INPUTS_KEY
+from experiments.sweep.runner import check_spec
 from lms200.errors import LmsbenchWarning
 
 REPO = Path(__file__).resolve().parents[1]
@@ -216,11 +217,22 @@ def test_random_draws_that_repeat_are_said_once_with_how_many(tmp_path: Path) ->
         result = run_sweep(spec, tmp_path / "o", "inprocess", progress=False)
     repeats = [str(w.message) for w in said if "random draws" in str(w.message)]
     assert repeats == [f"sweep few: {8 - len(distinct)} of the 8 random draws (samples:) repeat an earlier draw, and "
-                       f"a cell runs once: {len(distinct)} distinct draws run; its random space has 3 points: give "
-                       "samples: 3 or fewer, or list the points under grid: to run each once"]
+                       f"a cell runs once: {len(distinct)} distinct draws run; its random space has 3 points, fewer "
+                       "than the draws: list the points under grid: to run each once"]
     assert result.total == len(distinct) == len(log.read_text().splitlines())
     wide = SweepSpec.from_dict({**spec.to_dict(), "random": {"x": {"uniform": [4.0, 6.0]}}})
     assert wide.repeated_draws() == (0, None)  # a continuous space: no repeat, nothing said
+    # as many draws as points repeat too (with replacement): fewer samples is no advice, the grid is (review)
+    three = SweepSpec.from_dict({**spec.to_dict(), "samples": 3, "sample_seed": 0})
+    repeats, points = three.repeated_draws()
+    n = 3 - repeats
+    assert points == 3 and 0 < repeats < 3, repeats  # this seed's three draws repeat one or two
+    with pytest.warns(LmsbenchWarning) as said:
+        check_spec(three)
+    assert [str(w.message) for w in said] == [
+        f"sweep few: {repeats} of the 3 random draws (samples:) repeat an earlier draw, and a cell runs once: {n} "
+        f"distinct draw{'s run' if n != 1 else ' runs'}; draws are with replacement over its 3 points: list the "
+        "points under grid: to run each once"]
 
 
 @pytest.mark.parametrize(
@@ -289,6 +301,19 @@ def test_numpy_values_in_a_sweep_are_taken_as_their_python_values() -> None:
     assert yaml.safe_load(yaml.safe_dump(spec.to_dict())) == spec.to_dict()
     direct = SweepSpec(name="s", kind="k", grid={"x": np.arange(3)}, seeds=[np.int64(4)])
     assert direct.grid == {"x": [0, 1, 2]} and type(direct.seeds[0]) is int
+    # every field, and mapping keys: np.int64 samples and np.str_ names passed the checks and failed as
+    # sweep.yaml was written (RepresenterError; review)
+    direct = SweepSpec(name=np.str_("s"), kind="k", random={"u": {"int": [4, 6]}}, samples=np.int64(2),
+                       sample_seed=np.int64(1))
+    keyed = SweepSpec.from_dict({"kind": "k", "grid": {np.str_("x"): [4, 5]}})
+    for done in (direct, keyed):
+        assert yaml.safe_load(yaml.safe_dump(done.to_dict())) == done.to_dict()
+    assert type(direct.samples) is int and type(direct.name) is str and type(next(iter(keyed.grid))) is str
+    deep: list = []
+    for _ in range(5000):  # a RecursionError, not a SweepSpecError
+        deep = [deep]
+    with pytest.raises(SweepSpecError, match="nested deeper than 32 levels"):
+        SweepSpec.from_dict({"kind": "k", "grid": {"x": deep}})
 
 
 @pytest.mark.parametrize("raw", [

@@ -394,10 +394,16 @@ def check_spec(spec: SweepSpec):
         check(spec.cells())
     repeats, points = spec.repeated_draws()
     if repeats:  # the cells of a repeated draw ran once: the sweep had fewer cells than asked, without a word
-        space = (f"its random space has {points} point{'s' if points != 1 else ''}: give samples: {min(points, spec.samples)} "
-                 "or fewer, or list the points under grid: to run each once") if points is not None else ""
+        n = spec.samples - repeats
+        if points is not None and spec.samples > points:
+            space = f"; its random space has {points} point{'s' if points != 1 else ''}, fewer than the draws"
+        elif points is not None:
+            space = f"; draws are with replacement over its {points} points"
+        else:
+            space = ""
+        hint = ": list the points under grid: to run each once" if points is not None else ""
         warnings.warn(f"sweep {spec.name}: {repeats} of the {spec.samples} random draws (samples:) repeat an earlier "
-                      f"draw, and a cell runs once: {spec.samples - repeats} distinct draws run{'; ' + space if space else ''}",
+                      f"draw, and a cell runs once: {n} distinct draw{'s run' if n != 1 else ' runs'}{space}{hint}",
                       LmsbenchWarning, stacklevel=2)
     return fn
 

@@ -40,7 +40,7 @@ from collections import Counter
 import json
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -75,8 +75,8 @@ class SweepSpec:
     description: str = ""
 
     def __post_init__(self) -> None:
-        for key in ("fixed", "grid", "random", "seeds"):  # np.linspace's values, as researchers write them
-            object.__setattr__(self, key, _plain(getattr(self, key)))
+        for f in fields(self):  # np.linspace's values, as researchers write them (np.int64 samples, np.str_ names)
+            object.__setattr__(self, f.name, _plain(getattr(self, f.name)))
         _check(self)
 
     @classmethod
@@ -85,8 +85,7 @@ class SweepSpec:
         degree parameter (see :func:`_degree_parameters`)."""
         if not isinstance(raw, dict):
             raise SweepSpecError("a sweep file must be a YAML mapping (name, kind, grid, ...)")
-        raw = {key: _plain(value) if key in ("fixed", "grid", "random", "seeds", "samples", "sample_seed") else value
-               for key, value in raw.items()}
+        raw = _plain(raw)
         unknown = set(raw) - _KEYS
         if unknown:
             raise SweepSpecError(f"unknown key(s) {sorted(unknown, key=str)} in the sweep file; known: {sorted(_KEYS)}")
@@ -405,22 +404,34 @@ def _digits(n: int) -> str:
         return f"about {int(abs(n).bit_length() * math.log10(2)) + 1}"
 
 
-def _plain(value: Any) -> Any:
+#: deepest nesting a sweep's values may have (a linked key's points are lists of lists: 3 levels under
+#: ``grid:``); a Python list nested 5,000 deep was a RecursionError
+MAX_SPEC_DEPTH = 32
+
+
+def _plain(value: Any, depth: int = 0) -> Any:
     """``value`` with numpy scalars as their Python values (``np.float64(0.5)`` as 0.5, ``np.str_``,
     ``np.bool_``, ``np.int64`` alike) and numpy arrays as lists of them (``np.linspace(0.1, 0.5, 5)``,
-    ``np.arange(3)`` as seeds), lists, tuples and mappings item by item; anything else as given, for the
-    checks after. A numpy scalar was refused ("give a Python one"): it passed as a float and failed as
-    sweep.yaml was written (RepresenterError)."""
+    ``np.arange(3)`` as seeds), lists, tuples and mappings item by item (keys too); anything else as
+    given, for the checks after. A numpy scalar was refused ("give a Python one"): it passed as a float
+    and failed as sweep.yaml was written (RepresenterError).
+
+    Raises:
+        SweepSpecError: nested deeper than MAX_SPEC_DEPTH.
+    """
+    if depth > MAX_SPEC_DEPTH:
+        raise SweepSpecError(f"a sweep's value is nested deeper than {MAX_SPEC_DEPTH} levels (lists or mappings): "
+                             "a value is a number, string, bool or null, a grid's points a list of them")
     if isinstance(value, np.ndarray):
-        return value.tolist()
+        return _plain(value.tolist(), depth)  # an object array's items stay numpy's in tolist()
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, tuple):
-        return tuple(_plain(v) for v in value)
+        return tuple(_plain(v, depth + 1) for v in value)
     if isinstance(value, list):
-        return [_plain(v) for v in value]
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
+        return [_plain(v, depth + 1) for v in value]
+    if isinstance(value, dict):  # keys too: an np.str_ parameter name passed the name check as a str
+        return {_plain(k, depth + 1): _plain(v, depth + 1) for k, v in value.items()}
     return value
 
 
