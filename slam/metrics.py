@@ -355,6 +355,10 @@ QUATERNION_NORM_TOLERANCE = 1e-4
 #: atan2(|z|, hypot(x, y)), is held to the tilt bounds (``lms200.tum.MAX_TILT_DEG``, ``TILT_NOTE_DEG``):
 #: a row of z = 5 m over 0.3 m was scored on its x and y, silently
 RELATION_Z_FLOOR_M = 0.01
+#: m: a climb beyond MAX_TILT_DEG refuses the file only where z is beyond this too; below it (a turn on the
+#: spot with z = 2 cm climbs 90 deg) the row is scored and counted in the warning: a z left out of the score
+#: hides at most that much error, a few times the relations metric's typical centimetres
+RELATION_Z_REFUSE_M = 0.1
 
 
 def read_relations(path: str | Path) -> np.ndarray:
@@ -367,7 +371,7 @@ def read_relations(path: str | Path) -> np.ndarray:
             a row): every row's last four numbers of norm 1 and some row's z, roll or pitch (qx, qy, qz)
             not 0 (a 2-D relation's z, roll, pitch and yaw are (0, 0, 0, yaw)).
         LogFormatError: a row whose roll and pitch tilt it by more than ``lms200.tum.MAX_TILT_DEG`` (30 deg; acos(cos roll cos pitch)),
-            or whose z (beyond ``RELATION_Z_FLOOR_M``, 1 cm) climbs more than that over its x, y motion:
+            or whose z (beyond ``RELATION_Z_REFUSE_M``, 10 cm) climbs more than that over its x, y motion:
             a motion out of the plane (its x, y and yaw were scored, silently), naming file and line.
 
     Warns:
@@ -392,7 +396,8 @@ def read_relations(path: str | Path) -> np.ndarray:
         problem = stamp_problem(v[0], "relation row's t1") or stamp_problem(v[1], "relation row's t2")
         if problem is not None:
             raise LogFormatError(path, no, problem)
-        problem = (pose_problem(v[2], v[3], v[7], "relation row's motion")  # a yaw of 1e300 scored 138.6 deg, exit 0
+        problem = (pose_problem(v[2], v[3], 0.0, "relation row's motion")
+                   or angle_problem(v[7], "relation row's yaw")  # a yaw of 1e300 scored 138.6 deg, exit 0
                    or angle_problem(v[5], "relation row's roll") or angle_problem(v[6], "relation row's pitch"))
         if problem is not None:
             raise LogFormatError(path, no, problem)
@@ -406,10 +411,10 @@ def read_relations(path: str | Path) -> np.ndarray:
         if tilted is None and (tilt > MAX_TILT_DEG or math.cos(v[5]) < 0):
             tilted = (no, f"relation row's roll and pitch tilt it by more than {MAX_TILT_DEG:g} deg, or are not near 0: "
                           f"not a planar motion, whose x, y and yaw could be scored: {line.strip()[:60]!r}")
-        elif tilted is None and climb > MAX_TILT_DEG:
+        elif tilted is None and climb > MAX_TILT_DEG and abs(v[4]) > RELATION_Z_REFUSE_M:
             tilted = (no, f"relation row's z {v[4]:g} m climbs {climb:.1f} deg over its x, y motion of "
-                          f"{math.hypot(v[2], v[3]):.3g} m (at most {MAX_TILT_DEG:g} deg; z within "
-                          f"{RELATION_Z_FLOOR_M:g} m is read as 0): not a planar motion, whose x, y and yaw could be "
+                          f"{math.hypot(v[2], v[3]):.3g} m (at most {MAX_TILT_DEG:g} deg where z is beyond "
+                          f"{RELATION_Z_REFUSE_M:g} m): not a planar motion, whose x, y and yaw could be "
                           f"scored: {line.strip()[:60]!r}")
         if max(tilt, climb) > TILT_NOTE_DEG:
             noted += 1
@@ -427,8 +432,8 @@ def read_relations(path: str | Path) -> np.ndarray:
 
         from lms200.errors import LmsbenchWarning
 
-        warnings.warn(f"{path}: {noted} of its {len(rows)} relations leave the plane by more than {TILT_NOTE_DEG:g} deg "
-                      f"(roll / pitch tilt, or z climbing over the x, y motion; up to {most[0]:.1f} deg, line "
+        warnings.warn(f"{path}: {noted} of its {len(rows)} relation{'s' if len(rows) != 1 else ''} leave the plane by more than {TILT_NOTE_DEG:g} deg "
+                      f"(roll / pitch tilt, or a z beyond {RELATION_Z_FLOOR_M:g} m climbing over the x, y motion; up to {most[0]:.1f} deg, line "
                       f"{-most[1]}): scored on their x, y and yaw", LmsbenchWarning, stacklevel=2)
     return np.array(rows, float).reshape(-1, 5)
 

@@ -468,18 +468,19 @@ def test_a_relation_whose_z_climbs_off_the_plane_is_refused_or_said(tmp_path: Pa
     rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 5 0 0 0.2\n")
     climb = math.degrees(math.atan(5 / 0.3))
     with pytest.raises(LogFormatError, match=re.escape(f"r.relations:2: relation row's z 5 m climbs {climb:.1f} deg over "
-                                                       "its x, y motion of 0.3 m (at most 30 deg; z within 0.01 m is "
-                                                       "read as 0): not a planar motion")):
+                                                       "its x, y motion of 0.3 m (at most 30 deg where z is beyond "
+                                                       "0.1 m): not a planar motion")):
         read_relations(rel)  # old: read, scored on x = 0.3, y = 0
     # 0.1 m over 0.3 m climbs 18.4 deg (line 2), a roll of 0.17 rad tilts 9.7 deg (line 4): said once; 0.05 m over
-    # 1 m climbs 2.9 deg, and 5 mm over no x, y motion is within the floor (text rounding, not a climb)
+    # 1 m climbs 2.9 deg, and 5 mm over no x, y motion is within the floor (text rounding, not a climb); a turn on
+    # the spot with z = 2 cm climbs 90 deg but hides at most 2 cm: said, not refused (it refused the file; review)
     rel.write_text("1 2 0.3 0 0 0 0 0.2\n2 3 0.3 0 0.1 0 0 0.2\n3 4 1 0 0.05 0 0 0\n4 5 0.3 0 0 0.17 0 0.1\n"
-                   "5 6 0 0 0.005 0 0 0.3\n")
+                   "5 6 0 0 0.005 0 0 0.3\n6 7 0 0 0.02 0 0 0.5\n")
     with pytest.warns(LmsbenchWarning) as said:
-        assert read_relations(rel)[:, 2].tolist() == [0.3, 0.3, 1.0, 0.3, 0.0]
+        assert read_relations(rel)[:, 2].tolist() == [0.3, 0.3, 1.0, 0.3, 0.0, 0.0]
     assert [str(w.message) for w in said] == [
-        f"{rel}: 2 of its 5 relations leave the plane by more than 5 deg (roll / pitch tilt, or z climbing over the "
-        f"x, y motion; up to {math.degrees(math.atan(0.1 / 0.3)):.1f} deg, line 2): scored on their x, y and yaw"]
+        f"{rel}: 3 of its 6 relations leave the plane by more than 5 deg (roll / pitch tilt, or a z beyond 0.01 m "
+        "climbing over the x, y motion; up to 90.0 deg, line 6): scored on their x, y and yaw"]
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert read_relations(shared_data / "mit-csail.relations").shape == (1172, 5)

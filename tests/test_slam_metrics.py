@@ -231,7 +231,7 @@ def test_a_heading_beyond_1e6_rad_is_refused_by_the_relations_reader_and_the_met
     error of noise, exit 0; such a float holds no angle. 1e6 rad (160,000 turns) is read as before."""
     rel = tmp_path / "r.relations"
     rel.write_text("1 2 0.1 0 0 0 0 1e6\n3 4 0.1 0 0 0 0 1e300\n")
-    with pytest.raises(LogFormatError, match=r"r\.relations:2: relation row's motion's heading 1e\+300 rad lies beyond \+-1e\+06 rad"):
+    with pytest.raises(LogFormatError, match=r"r\.relations:2: relation row's yaw 1e\+300 rad lies beyond \+-1e\+06 rad"):
         read_relations(rel)
     rel.write_text("1 2 0.1 0 0 0 0 1e6\n")
     assert read_relations(rel)[0, 4] == 1e6
