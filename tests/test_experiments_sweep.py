@@ -1023,3 +1023,23 @@ def test_the_sweep_api_names_a_bad_argument(tmp_path: Path, call, message: str, 
     assert sorted(p.name for p in tmp_path.iterdir()) == ["log.txt"] and log.read_text() == ""  # nothing ran or was made
     with pytest.raises(LmsbenchError, match=r"no results\.parquet there"):  # FileNotFoundError
         load_results(tmp_path)
+
+
+def test_the_cli_runs_out_dot_in_the_current_folder_and_says_repeated_draws_once(tmp_path, monkeypatch, capsys):
+    """`sweep --out .` passes the current folder as Path.cwd() (run_sweep refuses it spelled relatively, as
+    Path("") cannot be told from it), and the repeated-draws warning, checked before the run, is said once
+    (review: neither had a test)."""
+    from experiments.cli import main
+
+    log = tmp_path / "log.txt"
+    spec = tmp_path / "few.yaml"
+    spec.write_text(yaml.safe_dump({"name": "few", "kind": KIND, "fixed": {"log": str(log)},
+                                    "random": {"x": {"int": [4, 6]}}, "samples": 8, "sample_seed": 0, "seeds": [0]}))
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    assert main(["sweep", str(spec), "--inprocess", "--no-progress", "--out", "."]) == 0
+    out, err = capsys.readouterr()
+    assert err.count("random draws (samples:) repeat an earlier draw") == 1, err  # the CLI says warnings on stderr
+    assert (here / "results.parquet").is_file() and (here / "cells").is_dir()
+    assert "0 failed" in out
