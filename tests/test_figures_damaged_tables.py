@@ -274,6 +274,29 @@ def test_a_timing_table_with_a_null_method_is_refused(tables, tmp_path, capsys):
         "`lmsbench demo`")
 
 
+@pytest.mark.parametrize("method, shown", [(7, "int values (7)"), (True, "bool values (True)")])
+def test_a_timing_table_whose_method_is_no_text_is_refused(tables, tmp_path, capsys, method, shown):
+    # fuzz round 5: "internal error: TypeError: 'int' object is not iterable", after figures.yaml
+    pd.read_parquet(tables / "timing.parquet").assign(method=method).to_parquet(tables / "timing.parquet", index=False)
+    assert _refused(capsys, _only(tables, "timing"), tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table timing's column method holds {shown}, where every row names "
+        "its extractor as text: a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+
+
+def test_a_signals_table_whose_ad_band_is_text_is_refused(tables, tmp_path, capsys):
+    # fuzz round 5: "internal error: TypeError: operation 'rsub' not supported for dtype 'str'"; ad_band is
+    # drawn only where the table has it, and a signals table without it is still drawn
+    n = 11
+    signals = pd.DataFrame({"beam": np.arange(n), "bearing_deg": np.linspace(-90, 90, n), "range_m": np.full(n, 2.0),
+                            "ad": np.zeros(n), "theta_deg": np.zeros(n), "psi_deg": np.zeros(n)})
+    signals.to_parquet(_only(tables) / "signals.parquet", index=False)
+    assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "drawn")]) == 0, capsys.readouterr().err
+    signals.assign(ad_band="x").to_parquet(tables / "signals.parquet", index=False)
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table signals's column ad_band holds str values, where the figures "
+        "plot numbers: not a table of `lmsbench figures` or `lmsbench demo` (edited, or another program's?)")
+
+
 @pytest.mark.parametrize("field, value, said", [
     # "internal error: TypeError: can only concatenate str (not "int") to str"
     ("signals_k", "abc", "signals_k: must be a whole number from 1 to 8192, the AD window of Figs. 4-6 (got 'abc')"),
