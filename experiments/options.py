@@ -1339,7 +1339,57 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
         raise InputError(f"--sweep {p}: its results.parquet holds {held} of the {cells} cells of its sweep.yaml: the "
                          f"sweep did not finish (stopped, or cells not stored); finish it with lmsbench sweep "
                          f"{spec_path} --out {p}, then draw it")
+    strange = _foreign_rows(table, spec, params)
+    if strange is not None:  # k 0..39999 beside a grid of k [3, 8], or each cell 50 times, was drawn, exit 0
+        raise InputError(f"--sweep {p}: its results.parquet's row {strange}: the table and the sweep.yaml "
+                         f"({spec_path}) are of different sweeps, or the table was edited; run the sweep again into a "
+                         "new folder")
     return p
+
+
+def _foreign_rows(table: Any, raw: dict, params: list[str]) -> str | None:
+    """What is wrong with the first row of a sweep's table (a pandas DataFrame) that is no cell of its sweep.yaml (its grid and
+    random parameters and seed, compared as values: a linked grid key's values, a random draw's
+    number), or that repeats a cell; None when every row is one cell of it, or when the sweep.yaml
+    does not read as a sweep (an older lmsbench's: its table is drawn as it is)."""
+    import warnings
+
+    from lms200 import LmsbenchError
+
+    from experiments.sweep.spec import SweepSpec
+
+    try:
+        with warnings.catch_warnings():  # an old spelling was said when the sweep ran
+            warnings.simplefilter("ignore")
+            spec = SweepSpec.from_dict(raw)
+        names = [*params, "seed"]
+        cells = {tuple(_cell_value(cell.get(n)) for n in names) for cell in spec.cells()}
+    except (LmsbenchError, ValueError, TypeError):
+        return None
+    if "seed" not in table:
+        return None  # said by the caller's count of cells, or drawn as an older table
+    seen: set[tuple] = set()
+    for i, row in enumerate(zip(*(table[n] for n in names))):
+        key = tuple(_cell_value(v) for v in row)
+        if key not in cells:
+            shown = ", ".join(f"{n}={v!r}"[:40] for n, v in zip(names, key))
+            return f"{i} ({shown}) is no cell of its sweep.yaml"
+        if key in seen:
+            return f"{i} repeats a cell of an earlier row"
+        seen.add(key)
+    return None
+
+
+def _cell_value(value: object) -> object:
+    """A sweep cell's parameter value as a table row holds it, comparable with the sweep.yaml's: numpy
+    numbers as Python's, nan and None (a null parameter in a column of numbers) alike."""
+    import numpy as np
+
+    if isinstance(value, np.generic):
+        value = value.item()
+    if value is None or (isinstance(value, float) and value != value):
+        return None
+    return value
 
 
 def _sweep_cells(raw: dict) -> int | None:

@@ -61,10 +61,8 @@ def default_threads() -> int:
     gave a compute-only loop 1.10-1.23x), so threads are asked for, not assumed."""
     env = os.environ.get(THREADS_ENV)
     if env is not None and env.strip():
-        try:
-            value = int(env)
-        except ValueError:
-            value = 0
+        text = env.strip()  # ASCII digits, as every option takes: int() also read "1_0" as 10 and "２" as 2
+        value = int(text) if text.isascii() and text.isdigit() else 0
         if not 1 <= value <= MAX_THREADS:
             raise ConfigError(f"{THREADS_ENV}: must be a whole number from 1 to {MAX_THREADS}, got {env!r}")
         return value

@@ -263,7 +263,8 @@ def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sl
     diverged_at = None
     anchor = None
     healthy = True
-    for k, (t, obs, odom, truth) in enumerate(steps):
+    for k, step in enumerate(steps):
+        t, obs, odom, truth = _step_items(k, step)
         t, odom, truth = checked_step(k, t, obs, odom, truth)  # the filter's step checks the time order
         info = slam.step(t, obs, odom if config.motion.use_odometry else None)
         pose = slam.pose
@@ -322,6 +323,18 @@ def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sl
         mean_nees=float(finite_nees.mean()) if finite_nees.size else float("nan"),
     )
     return SlamResult(traj.taken(), covs.taken(), slam.map_lines(), slam.map_corners(), out)
+
+
+def _step_items(k: int, step: object) -> tuple[Any, Any, Any, Any]:
+    """Step ``k`` of :func:`run_steps` as its four items; SlamInputError naming it when it is no
+    (stamp, observations, odometry, truth) tuple: a (stamp, observations) pair was "ValueError: not
+    enough values to unpack", a bare stamp "TypeError: cannot unpack non-iterable float"."""
+    items = isinstance(step, (Sequence, np.ndarray)) and not isinstance(step, (str, bytes))
+    if items and len(step) == 4:  # type: ignore[arg-type]  # a Sequence or an array: sized
+        return step[0], step[1], step[2], step[3]  # type: ignore[index]
+    what = f"{len(step)} items" if items else type(step).__name__  # type: ignore[arg-type]
+    raise SlamInputError(f"steps[{k}]: must be a tuple (stamp s, slam.Observations, odometry pose or None, true pose "
+                         f"or None), got {what}")
 
 
 def bounds_met(diag: dict[str, Any], config: SlamConfig) -> list[BoundMet]:

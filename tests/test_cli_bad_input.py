@@ -953,7 +953,8 @@ def test_two_logs_of_one_figure_name_are_refused_before_any_work(files, tmp_path
 
 def _sweep_folder(folder: Path, f1: float, spec: str) -> Path:
     folder.mkdir(parents=True)
-    pd.DataFrame({"x": [1, 2], "status": ["ok", "ok"], "error": ["", ""], "cell": ["a", "b"], "seed": [0, 0],
+    seeds = [0, 1] if "seeds: [0, 1]" in spec else [0, 0]  # each row one cell of the spec (figures checks it)
+    pd.DataFrame({"x": [1, 2], "status": ["ok", "ok"], "error": ["", ""], "cell": ["a", "b"], "seed": seeds,
                   "f1": [f1, f1]}).to_parquet(folder / "results.parquet")
     (folder / "sweep.yaml").write_text(spec)
     return folder

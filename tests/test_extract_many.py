@@ -283,9 +283,12 @@ def test_thread_counts_are_checked(monkeypatch: pytest.MonkeyPatch) -> None:
             extract_many(scans, threads=bad)
     monkeypatch.setenv(THREADS_ENV, "3")
     assert default_threads() == 3
-    monkeypatch.setenv(THREADS_ENV, "all")
-    with pytest.raises(ConfigError, match=r"^LMSBENCH_THREADS: must be a whole number from 1 to 1024, got 'all'"):
-        extract_many(scans)
+    monkeypatch.setenv(THREADS_ENV, " 2 ")  # spaces around it, as a shell may leave them
+    assert default_threads() == 2
+    for text in ("all", "1_0", "\uff12", "\u0663"):  # int() read "1_0" as 10, fullwidth 2 and Arabic-Indic 3 as digits
+        monkeypatch.setenv(THREADS_ENV, text)
+        with pytest.raises(ConfigError, match=rf"^LMSBENCH_THREADS: must be a whole number from 1 to 1024, got '{text}'"):
+            extract_many(scans)
     monkeypatch.delenv(THREADS_ENV)
     assert default_threads() == 1  # asked for, not assumed
     assert available_cpus() == len(os.sched_getaffinity(0))

@@ -131,6 +131,43 @@ def test_a_sweep_folder_whose_table_and_sweep_yaml_are_of_different_sweeps_is_re
         "run the sweep again into a new folder")
 
 
+@pytest.mark.parametrize("table, column, values", [
+    ("map", "y2", [1e308, -1e308]),      # was "internal error: ValueError: Axis limits cannot be NaN or Inf"
+    ("timing", "time_ms", [1e300] * 3),  # was drawn under matplotlib's overflow warnings, exit 0
+])
+def test_a_table_of_numbers_beyond_any_plot_is_refused(tables, tmp_path, capsys, table, column, values):
+    """Fuzz round 5: a finite number no table of lmsbench holds (beyond +-1e100) overflowed the plots' axis
+    arithmetic; now refused before any output, naming the table, column and row."""
+    frame = pd.read_parquet(tables / f"{table}.parquet")
+    frame[column] = values
+    frame.to_parquet(tables / f"{table}.parquet", index=False)
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: {tables / f'{table}.parquet'}: its column {column} holds {values[0]:g} (row 0), "
+        "beyond +-1e+100: no number lmsbench writes to a table (stamps below 2^32 s, coordinates within 1e9 m), and its "
+        "plot's axis arithmetic would overflow; a damaged or edited table")
+
+
+@pytest.mark.parametrize("edit, said", [
+    # k 1e308 beside the sweep's k [3, 5] was "internal error: ValueError: arange: cannot compute length"
+    (lambda t: t.assign(**{"extractor.k": [1e308, -1e308]}), "row 0 (extractor.k=1e+308, seed=0) is no cell"),
+    # values of another grid, or text, under the sweep's own cell ids were drawn, exit 0
+    (lambda t: t.assign(**{"extractor.k": [3, 8]}), "row 1 (extractor.k=8, seed=0) is no cell"),
+    (lambda t: t.assign(**{"extractor.k": ["a", "b"]}), "row 0 (extractor.k='a', seed=0) is no cell"),
+    # each cell 50 times was drawn as a mean over "50 seeds", exit 0
+    (lambda t: pd.concat([t] * 50, ignore_index=True), "row 2 repeats a cell of an earlier row"),
+])
+def test_a_sweep_table_whose_rows_are_not_its_sweep_yamls_cells_is_refused(sweeps, tables, tmp_path, capsys, edit, said):
+    import shutil
+
+    edited = tmp_path / "edited"
+    shutil.copytree(sweeps["k"], edited)
+    edit(pd.read_parquet(edited / "results.parquet")).to_parquet(edited / "results.parquet", index=False)
+    err = _sweep_refused(capsys, tables, edited, tmp_path / "o")
+    assert err.startswith(f"lmsbench figures: error: --sweep {edited}: its results.parquet's row "), err
+    assert said in err and err.endswith(f"the table and the sweep.yaml ({edited / 'sweep.yaml'}) are of different sweeps, "
+                                        "or the table was edited; run the sweep again into a new folder"), err
+
+
 def test_a_sweep_table_that_is_no_sweeps_or_a_folder_is_refused(sweeps, tables, tmp_path, capsys):
     import shutil
 
@@ -235,6 +272,29 @@ def test_a_timing_table_with_a_null_method_is_refused(tables, tmp_path, capsys):
         f"lmsbench figures: error: --tables {tables}: table timing's column method has empty (null or nan) values in 3 "
         "of its 3 rows, where every row names its extractor: a damaged table, or not one of `lmsbench figures` or "
         "`lmsbench demo`")
+
+
+@pytest.mark.parametrize("method, shown", [(7, "int values (7)"), (True, "bool values (True)")])
+def test_a_timing_table_whose_method_is_no_text_is_refused(tables, tmp_path, capsys, method, shown):
+    # fuzz round 5: "internal error: TypeError: 'int' object is not iterable", after figures.yaml
+    pd.read_parquet(tables / "timing.parquet").assign(method=method).to_parquet(tables / "timing.parquet", index=False)
+    assert _refused(capsys, _only(tables, "timing"), tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table timing's column method holds {shown}, where every row names "
+        "its extractor as text: a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+
+
+def test_a_signals_table_whose_ad_band_is_text_is_refused(tables, tmp_path, capsys):
+    # fuzz round 5: "internal error: TypeError: operation 'rsub' not supported for dtype 'str'"; ad_band is
+    # drawn only where the table has it, and a signals table without it is still drawn
+    n = 11
+    signals = pd.DataFrame({"beam": np.arange(n), "bearing_deg": np.linspace(-90, 90, n), "range_m": np.full(n, 2.0),
+                            "ad": np.zeros(n), "theta_deg": np.zeros(n), "psi_deg": np.zeros(n)})
+    signals.to_parquet(_only(tables) / "signals.parquet", index=False)
+    assert main(["figures", "--tables", str(tables), "--out", str(tmp_path / "drawn")]) == 0, capsys.readouterr().err
+    signals.assign(ad_band="x").to_parquet(tables / "signals.parquet", index=False)
+    assert _refused(capsys, tables, tmp_path / "o") == (
+        f"lmsbench figures: error: --tables {tables}: table signals's column ad_band holds str values, where the figures "
+        "plot numbers: not a table of `lmsbench figures` or `lmsbench demo` (edited, or another program's?)")
 
 
 @pytest.mark.parametrize("field, value, said", [

@@ -143,6 +143,30 @@ def test_run_steps_ends_an_endless_iterator_and_run_observations_refuses_it(monk
     assert run_observations([0.1 * k for k in range(10)], [obs] * 10, SlamConfig(preset="paper")).trajectory.shape == (10, 4)
 
 
+@pytest.mark.parametrize("step, got", [
+    ("pair", "2 items"),          # (stamp, observations): was "ValueError: not enough values to unpack (expected 4, got 2)"
+    (0.0, "float"),               # was "TypeError: cannot unpack non-iterable float object"
+    (None, "NoneType"),
+    ("abcd", "str"),              # four characters were unpacked as its four items
+    (np.zeros((2, 2)), "2 items"),
+])
+def test_run_steps_names_a_step_that_is_no_four_items(step: object, got: str) -> None:
+    """Fuzz round 5: a step of run_steps that was no (stamp, observations, odometry, truth) was a raw
+    ValueError or TypeError from the unpacking; now a SlamInputError naming the step. A step given
+    as a list or a 1-d object array of four items still runs."""
+    from slam import run_steps
+    from slam.observations import Observations
+
+    obs = Observations()
+    good = (0.0, obs, None, None)
+    with pytest.raises(SlamInputError, match=rf"^steps\[1\]: must be a tuple \(stamp s, slam.Observations, odometry "
+                                             rf"pose or None, true pose or None\), got {got}$"):
+        run_steps([good, (0.1, obs) if isinstance(step, str) and step == "pair" else step], SlamConfig(preset="paper"))
+    row = np.empty(4, object)
+    row[:] = [0.1, obs, None, None]
+    assert run_steps([list(good), row], SlamConfig(preset="paper")).trajectory.shape == (2, 4)
+
+
 def test_tentative_landmarks_pruned_in_a_scan_make_room_in_that_scan() -> None:
     """Review: the map's room was counted before the scan's pruning, so a full map of tentative
     landmarks pruned in that scan still refused its new lines (and ended the scan empty). Pruning

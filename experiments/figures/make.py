@@ -52,6 +52,11 @@ TABLE_COLUMNS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "map": (("source",), ("x1", "y1", "x2", "y2")),
     "summary": (("method",), ("f1", "time_ms_median", "time_ms_p25", "time_ms_p75")),
 }
+#: columns a figure draws only where its table has them, which must then hold numbers too (all nan draws
+#: nothing of them): signals' ad_band of text was "internal error: TypeError: operation 'rsub' not supported"
+OPTIONAL_NUMBERS: dict[str, tuple[str, ...]] = {"signals": ("ad_band",), "summary": ("rho_rms_mm",)}
+#: the key columns that name an extractor or a source, text in every row (a panel is a scan's number)
+TEXT_KEYS = ("method", "source")
 
 
 def accuracy_speed_problem(tables: dict[str, pd.DataFrame]) -> str | None:
@@ -99,8 +104,8 @@ def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
         table = tables.get(name)
         if table is None or not len(table) or (name == "summary" and "f1" not in table):  # none drawn from
             continue
-        numbers = numbers + (("rho_rms_mm",) if name == "summary" and "rho_rms_mm" in table else ())
         missing = [c for c in keys + numbers if c not in table]
+        numbers = numbers + tuple(c for c in OPTIONAL_NUMBERS.get(name, ()) if c in table)
         if missing:
             raise LmsbenchError(f"{where}: table {name} has no column{'s' if len(missing) > 1 else ''} {', '.join(missing)}, "
                                 "which the figures read: "
@@ -116,7 +121,14 @@ def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
                                 f"{int(table[empty_key[0]].isna().sum())} of its {len(table)} rows, where every row "
                                 "names its " + {"method": "extractor", "panel": "scan", "source": "source"}[empty_key[0]]
                                 + ": a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
-        plotted = ("f1", "time_ms_median") if name == "summary" else numbers  # summary's others may be nan
+        named = [c for c in keys if c in TEXT_KEYS and not table[c].map(lambda v: isinstance(v, str)).all()]
+        if named:  # timing's method of numbers was "internal error: TypeError: 'int' object is not iterable"
+            odd = next(v for v in table[named[0]] if not isinstance(v, str))
+            raise LmsbenchError(f"{where}: table {name}'s column {named[0]} holds {type(odd).__name__} values ({odd!r}), "
+                                "where every row names its " + {"method": "extractor", "source": "source"}[named[0]]
+                                + " as text: a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+        plotted = (("f1", "time_ms_median") if name == "summary"  # summary's others may be nan
+                   else tuple(c for c in numbers if c not in OPTIONAL_NUMBERS.get(name, ())))
         blank = [c for c in plotted if not _finite(table[c]).any()]
         if blank:  # every figure of it drawn empty, exit 0 (a damaged-input fuzz round: all nan, all inf)
             raise LmsbenchError(f"{where}: table {name}'s column {blank[0]} holds no finite number ({len(table)} rows, "

@@ -217,7 +217,24 @@ def read_table(path: Path) -> pd.DataFrame:
     if odd:  # levels of columns (a MultiIndex) were "internal error: AttributeError: 'DataFrame' object has no attribute 'dtype'"
         raise LmsbenchError(f"{path}: its column {odd[0]!r} is no plain name (a table of named columns, one level, "
                             "as `lmsbench figures` saves them)")
+    for column in table.columns:
+        values = table[column]
+        if not pd.api.types.is_float_dtype(values):  # int64 stays below 1e19; text and booleans are no magnitudes
+            continue
+        numbers = values.to_numpy(dtype=float, na_value=np.nan)
+        big = np.isfinite(numbers) & (np.abs(numbers) > MAX_TABLE_VALUE)  # nan and inf: said where a figure needs them
+        if big.any():  # +-1e308 was "internal error: ValueError: Axis limits cannot be NaN or Inf", 1e308 alone a figure
+            row = int(np.argmax(big))  # drawn under matplotlib's overflow warnings, exit 0 (a damaged-input round)
+            raise LmsbenchError(f"{path}: its column {column} holds {float(values.iloc[row]):g} (row {row}), beyond "
+                                f"+-{MAX_TABLE_VALUE:g}: no number lmsbench writes to a table (stamps below 2^32 s, "
+                                "coordinates within 1e9 m), and its plot's axis arithmetic would overflow; a damaged or "
+                                "edited table")
     return table
+
+
+#: largest magnitude of a finite number in a table the figures are drawn from (:func:`read_table`): no
+#: quantity lmsbench writes comes near it, and squared (a std over seeds) or scaled to degrees it stays finite
+MAX_TABLE_VALUE = 1e100
 
 
 def panel_method_of(cfg: StudyConfig) -> str:
