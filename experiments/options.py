@@ -1348,48 +1348,71 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
 
 
 def _foreign_rows(table: Any, raw: dict, params: list[str]) -> str | None:
-    """What is wrong with the first row of a sweep's table (a pandas DataFrame) that is no cell of its sweep.yaml (its grid and
-    random parameters and seed, compared as values: a linked grid key's values, a random draw's
-    number), or that repeats a cell; None when every row is one cell of it, or when the sweep.yaml
-    does not read as a sweep (an older lmsbench's: its table is drawn as it is)."""
+    """What is wrong with the first row of a sweep's table (a pandas DataFrame) that is no cell of its
+    sweep.yaml (its grid and random parameters and seed, compared as values: a linked grid key's
+    values, a random draw's number), or that repeats a cell; None when the rows are cells of it, each at
+    most as often as the sweep has it, or when the sweep.yaml does not read as a sweep (an older
+    lmsbench's: its table is drawn as it is). Values are compared as the table stores them
+    (:func:`_cell_value`): a column that mixed text with numbers holds them as text, a column of numbers
+    holds a bool as 1 and a whole number beyond 2^53 rounded, so two cells may be one value there."""
     import warnings
+    from collections import Counter
 
     from lms200 import LmsbenchError
 
     from experiments.sweep.spec import SweepSpec
 
+    if "seed" not in table:
+        return None  # said by the caller's count of cells, or drawn as an older table
+    names = [*params, "seed"]
     try:
         with warnings.catch_warnings():  # an old spelling was said when the sweep ran
             warnings.simplefilter("ignore")
             spec = SweepSpec.from_dict(raw)
-        names = [*params, "seed"]
-        cells = {tuple(_cell_value(cell.get(n)) for n in names) for cell in spec.cells()}
+        kinds = [_column_kind(table[n]) for n in names]
+        expected = Counter(tuple(_cell_value(cell.get(n), k) for n, k in zip(names, kinds)) for cell in spec.cells())
     except (LmsbenchError, ValueError, TypeError):
         return None
-    if "seed" not in table:
-        return None  # said by the caller's count of cells, or drawn as an older table
-    seen: set[tuple] = set()
     for i, row in enumerate(zip(*(table[n] for n in names))):
-        key = tuple(_cell_value(v) for v in row)
-        if key not in cells:
-            shown = ", ".join(f"{n}={v!r}"[:40] for n, v in zip(names, key))
+        key = tuple(_cell_value(v, k) for v, k in zip(row, kinds))
+        if not expected[key]:
+            if key in expected:  # each of its cells already had its row
+                return f"{i} repeats a cell of an earlier row"
+            shown = ", ".join(f"{n}={v!r}"[:40] for n, v in zip(names, row))
             return f"{i} ({shown}) is no cell of its sweep.yaml"
-        if key in seen:
-            return f"{i} repeats a cell of an earlier row"
-        seen.add(key)
+        expected[key] -= 1
     return None
 
 
-def _cell_value(value: object) -> object:
-    """A sweep cell's parameter value as a table row holds it, comparable with the sweep.yaml's: numpy
-    numbers as Python's, nan and None (a null parameter in a column of numbers) alike."""
+def _column_kind(column: Any) -> str:
+    """How a sweep table's column (a pandas Series) holds its cells' values: "text" (a column that
+    mixed text with numbers was stored as text, ``sweep.store._tidy``), "number" (a bool is 1 there,
+    a whole number a float where the column has nulls), or "value" (as the sweep.yaml holds them)."""
+    import pandas as pd
+
+    if any(isinstance(v, str) for v in column):
+        return "text"
+    if pd.api.types.is_numeric_dtype(column) and not pd.api.types.is_bool_dtype(column):
+        return "number"
+    return "value"
+
+
+def _cell_value(value: object, kind: str) -> object:
+    """A sweep cell's parameter value, of the sweep.yaml or of a table row, as a column of ``kind``
+    (:func:`_column_kind`) holds it, so that the two compare equal: numpy's as Python's, nan and None
+    (a null parameter in a column of numbers) alike; a bool apart from the numbers where the column
+    keeps it."""
     import numpy as np
 
     if isinstance(value, np.generic):
         value = value.item()
     if value is None or (isinstance(value, float) and value != value):
         return None
-    return value
+    if kind == "text":  # a null in a column stored as text may be 'nan' there (the string of a float nan)
+        return None if value == "nan" else str(value)
+    if kind == "number" and isinstance(value, (int, float)):
+        return float(value)
+    return (type(value).__name__, value) if isinstance(value, bool) else value
 
 
 def _sweep_cells(raw: dict) -> int | None:

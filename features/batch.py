@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from lms200 import Scan
+from lms200.finite import shown
 
 from .errors import BatchSizeError, ConfigError, ScanGeometryError, not_a_scan
 from .types import BatchFeatureSet, FeatureSet
@@ -62,9 +63,9 @@ def default_threads() -> int:
     env = os.environ.get(THREADS_ENV)
     if env is not None and env.strip():
         text = env.strip()  # ASCII digits, as every option takes: int() also read "1_0" as 10 and "２" as 2
-        value = int(text) if text.isascii() and text.isdigit() else 0
+        value = int(text) if text.isascii() and text.isdigit() and len(text) <= 9 else 0  # 5,000 digits: int()'s limit
         if not 1 <= value <= MAX_THREADS:
-            raise ConfigError(f"{THREADS_ENV}: must be a whole number from 1 to {MAX_THREADS}, got {env!r}")
+            raise ConfigError(f"{THREADS_ENV}: must be a whole number from 1 to {MAX_THREADS}, got {shown(env)}")
         return value
     return 1
 

@@ -432,7 +432,7 @@ def read_relations(path: str | Path) -> np.ndarray:
 
         from lms200.errors import LmsbenchWarning
 
-        warnings.warn(f"{path}: {noted} of its {len(rows)} relation{'s' if len(rows) != 1 else ''} leave the plane by more than {TILT_NOTE_DEG:g} deg "
+        warnings.warn(f"{path}: {noted} of its {len(rows)} relation{'s' if len(rows) != 1 else ''} {'leave' if noted != 1 else 'leaves'} the plane by more than {TILT_NOTE_DEG:g} deg "
                       f"(roll / pitch tilt, or a z beyond {RELATION_Z_FLOOR_M:g} m climbing over the x, y motion; up to {most[0]:.1f} deg, line "
                       f"{-most[1]}): scored on their x, y and yaw", LmsbenchWarning, stacklevel=2)
     return np.array(rows, float).reshape(-1, 5)

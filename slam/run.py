@@ -329,7 +329,7 @@ def _step_items(k: int, step: object) -> tuple[Any, Any, Any, Any]:
     """Step ``k`` of :func:`run_steps` as its four items; SlamInputError naming it when it is no
     (stamp, observations, odometry, truth) tuple: a (stamp, observations) pair was "ValueError: not
     enough values to unpack", a bare stamp "TypeError: cannot unpack non-iterable float"."""
-    items = isinstance(step, (Sequence, np.ndarray)) and not isinstance(step, (str, bytes))
+    items = (isinstance(step, Sequence) and not isinstance(step, (str, bytes))) or (isinstance(step, np.ndarray) and step.ndim == 1)
     if items and len(step) == 4:  # type: ignore[arg-type]  # a Sequence or an array: sized
         return step[0], step[1], step[2], step[3]  # type: ignore[index]
     what = f"{len(step)} items" if items else type(step).__name__  # type: ignore[arg-type]

@@ -30,6 +30,11 @@ REPO = Path(__file__).resolve().parents[1]
 KIND = f"{Path(__file__).stem}:square"
 
 
+def echo(params: dict) -> dict:
+    """A cell of any parameters: one metric."""
+    return {"y": 1.0}
+
+
 def square(params: dict) -> dict:
     """y = x^2 + seed; x == 3 raises; x == $SWEEP_TEST_DIE_AT kills the process (no clean-up)."""
     with open(params["log"], "a") as handle:
@@ -1043,3 +1048,25 @@ def test_the_cli_runs_out_dot_in_the_current_folder_and_says_repeated_draws_once
     assert err.count("random draws (samples:) repeat an earlier draw") == 1, err  # the CLI says warnings on stderr
     assert (here / "results.parquet").is_file() and (here / "cells").is_dir()
     assert "0 failed" in out
+
+
+@pytest.mark.parametrize("extra", [
+    {"grid": {"x": [1, "auto"]}},  # stored as text ('1'): it was refused as 'no cell of its sweep.yaml'
+    {"random": {"c": {"choice": [1, "auto"]}}, "samples": 4},
+    {"grid": {"x": [1, True]}},  # stored as 1 and 1: it was refused as 'repeats a cell'
+    {"grid": {"x": [9007199254740993, None]}},  # stored as a float, rounded
+    {"grid": {"x": ["a", 0.1, 1e-300, True, None]}},
+    {"grid": {"x": [None, 3, 0.5], "a, b": [["p", 1], ["q", 2.5]]}, "seeds": [0, 2**32 - 1]},
+    {"random": {"u": {"uniform": [0.0, 1.0]}, "l": {"loguniform": [1e-3, 1.0]}, "i": {"int": [0, 9]}}, "samples": 5},
+])
+def test_a_finished_sweeps_table_is_taken_as_its_sweep_yamls_cells(tmp_path: Path, extra: dict) -> None:
+    """figures --sweep checks that the table's rows are the sweep.yaml's cells; values the table stores
+    otherwise than the sweep.yaml (text, a bool as 1, a rounded whole number) made a finished sweep
+    refused as edited (review)."""
+    from experiments.options import check_sweep_results
+
+    spec = SweepSpec.from_dict({"name": "kept", "kind": f"{Path(__file__).stem}:echo", **extra})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # repeated random draws
+        run_sweep(spec, tmp_path / "s", "inprocess", progress=False)
+    assert check_sweep_results(tmp_path / "s") == tmp_path / "s"

@@ -289,6 +289,9 @@ def test_thread_counts_are_checked(monkeypatch: pytest.MonkeyPatch) -> None:
         monkeypatch.setenv(THREADS_ENV, text)
         with pytest.raises(ConfigError, match=rf"^LMSBENCH_THREADS: must be a whole number from 1 to 1024, got '{text}'"):
             extract_many(scans)
+    monkeypatch.setenv(THREADS_ENV, "9" * 5000)  # int()'s limit of 4,300 digits: an internal ValueError (review)
+    with pytest.raises(ConfigError, match=r"^LMSBENCH_THREADS: must be a whole number from 1 to 1024, got '9{39}\.\.\."):
+        extract_many(scans)
     monkeypatch.delenv(THREADS_ENV)
     assert default_threads() == 1  # asked for, not assumed
     assert available_cpus() == len(os.sched_getaffinity(0))

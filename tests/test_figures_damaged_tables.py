@@ -143,8 +143,9 @@ def test_a_table_of_numbers_beyond_any_plot_is_refused(tables, tmp_path, capsys,
     frame.to_parquet(tables / f"{table}.parquet", index=False)
     assert _refused(capsys, tables, tmp_path / "o") == (
         f"lmsbench figures: error: {tables / f'{table}.parquet'}: its column {column} holds {values[0]:g} (row 0), "
-        "beyond +-1e+100: no number lmsbench writes to a table (stamps below 2^32 s, coordinates within 1e9 m), and its "
-        "plot's axis arithmetic would overflow; a damaged or edited table")
+        "beyond +-1e+100, where its plot's axis arithmetic would overflow: the figures cannot draw it (lmsbench's own "
+        "tables hold stamps below 2^32 s and coordinates within 1e9 m: a damaged or edited table, or a sweep's "
+        "parameter or metric that large)")
 
 
 @pytest.mark.parametrize("edit, said", [

@@ -450,7 +450,7 @@ def test_a_relation_of_large_roll_or_pitch_is_refused_naming_its_line(tmp_path: 
                                              r"deg, or are not near 0: not a planar motion"):
         read_relations(rel)
     rel.write_text("1 2 0.3 0.0 0 0 0 0.2\n2 3 0.3 0.0 0.1 0.05 -0.1 0.2\n")
-    with pytest.warns(LmsbenchWarning, match=r"1 of its 2 relations leave the plane"):  # a little: read, and said
+    with pytest.warns(LmsbenchWarning, match=r"1 of its 2 relations leaves the plane"):  # a little: read, and said
         assert read_relations(rel).tolist() == [[1, 2, 0.3, 0, 0.2], [2, 3, 0.3, 0, 0.2]]
 
 

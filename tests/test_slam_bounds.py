@@ -148,7 +148,8 @@ def test_run_steps_ends_an_endless_iterator_and_run_observations_refuses_it(monk
     (0.0, "float"),               # was "TypeError: cannot unpack non-iterable float object"
     (None, "NoneType"),
     ("abcd", "str"),              # four characters were unpacked as its four items
-    (np.zeros((2, 2)), "2 items"),
+    (np.zeros((2, 2)), "ndarray"),  # an array step is 1-d
+    (np.array(5.0), "ndarray"),     # 0-d: "TypeError: len() of unsized object" (review)
 ])
 def test_run_steps_names_a_step_that_is_no_four_items(step: object, got: str) -> None:
     """Fuzz round 5: a step of run_steps that was no (stamp, observations, odometry, truth) was a raw

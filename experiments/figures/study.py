@@ -226,9 +226,9 @@ def read_table(path: Path) -> pd.DataFrame:
         if big.any():  # +-1e308 was "internal error: ValueError: Axis limits cannot be NaN or Inf", 1e308 alone a figure
             row = int(np.argmax(big))  # drawn under matplotlib's overflow warnings, exit 0 (a damaged-input round)
             raise LmsbenchError(f"{path}: its column {column} holds {float(values.iloc[row]):g} (row {row}), beyond "
-                                f"+-{MAX_TABLE_VALUE:g}: no number lmsbench writes to a table (stamps below 2^32 s, "
-                                "coordinates within 1e9 m), and its plot's axis arithmetic would overflow; a damaged or "
-                                "edited table")
+                                f"+-{MAX_TABLE_VALUE:g}, where its plot's axis arithmetic would overflow: the figures "
+                                "cannot draw it (lmsbench's own tables hold stamps below 2^32 s and coordinates within "
+                                "1e9 m: a damaged or edited table, or a sweep's parameter or metric that large)")
     return table
 
 
