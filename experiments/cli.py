@@ -80,7 +80,17 @@ def _as_the_command() -> bool:
     return __name__ == "__main__" or Path(sys.argv[0]).name == "lmsbench"
 
 
-if (_as_the_command() and threading.current_thread() is threading.main_thread()
+def _a_worker_process() -> bool:
+    """Whether this is a child process of multiprocessing (a local cluster's Dask worker, given
+    lmsbench's ``sys.argv``): its SIGTERM, from a ``kill`` of the whole process group, is left
+    as it was (with the handler above, workers that were importing printed 75 lines of traceback)."""
+    if "--multiprocessing-fork" in getattr(sys, "orig_argv", ()):  # a spawned child, given the script's argv
+        return True
+    mp = sys.modules.get("multiprocessing")  # not yet imported here in lmsbench itself
+    return mp is not None and mp.parent_process() is not None
+
+
+if (_as_the_command() and not _a_worker_process() and threading.current_thread() is threading.main_thread()
         and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL):
     signal.signal(signal.SIGTERM, _stop_while_starting)
 

@@ -775,3 +775,17 @@ def test_a_ctrl_c_after_the_stops_exit_handlers_does_not_change_its_status() -> 
     out = subprocess.run([sys.executable, "-c", STOPPED_THEN_EXITING], capture_output=True, text=True, cwd=REPO,
                          env=_env(), timeout=120)
     assert (out.returncode, out.stdout, out.stderr) == (130, "at the end: ignored\n", "lmsbench info: interrupted\n")
+
+
+
+def test_a_local_clusters_worker_keeps_its_sigterm_while_it_imports_lmsbench() -> None:
+    """The stop of SIGTERM in lmsbench's imports is the command's alone: a spawned Dask worker (given
+    the script's sys.argv, it imports experiments.cli as it runs the script again as __mp_main__)
+    took it as well, and `kill` of the process group of a sweep on the local cluster printed 57-75
+    lines of the workers' tracebacks. A spawned child's command line has --multiprocessing-fork."""
+    code = ("import signal, sys; sys.argv[0] = '/venv/bin/lmsbench'; import experiments.cli; "
+            "print(signal.getsignal(signal.SIGTERM) == signal.SIG_DFL)")
+    for child, default in (["--multiprocessing-fork"], "True"), ([], "False"):
+        out = subprocess.run([sys.executable, "-c", code, *child], capture_output=True, text=True, cwd=REPO,
+                             env=_env(), timeout=120)
+        assert (out.stdout.strip(), out.stderr) == (default, "")
