@@ -47,18 +47,52 @@ def _command_words(argv: Sequence[str]) -> str:
     return " ".join(words)
 
 
+#: The signals that stop a command in order, with the word said and the exit status (128 + signal).
+STOP_SIGNALS = {signal.SIGINT: ("interrupted", 130), signal.SIGTERM: ("terminated", 143)}
+#: the stop signal that came before the command's own handler was in place (see _stopped_while_starting)
+_EARLY_STOP: list[int] = []
+
+
+def _stop_while_starting(signum: int, frame: Any) -> None:
+    """SIGTERM before the command's own handler is in place: stop as Ctrl-C does there."""
+    _EARLY_STOP.append(signum)
+    raise KeyboardInterrupt
+
+
 def _stopped_while_starting(argv: Sequence[str]) -> int:
     """Ctrl-C before the command's own handler is in place (lmsbench's imports, ~0.5-1 s, and
     the reading of its options): the one line and 130. It was Python's traceback of the import it
-    cut (`lmsbench sweep S.yaml` stopped 0.5 s in) and exit status -2."""
+    cut (`lmsbench sweep S.yaml` stopped 0.5 s in) and exit status -2. SIGTERM there: "terminated"
+    and 143 (it killed the process: exit -15, no line)."""
     name = _command_words(argv)
+    word, status = STOP_SIGNALS[signal.Signals(_EARLY_STOP[-1])] if _EARLY_STOP else STOP_SIGNALS[signal.SIGINT]
     try:
-        sys.stderr.write(f"lmsbench{' ' + name if name else ''}: interrupted\n")
+        sys.stderr.write(f"lmsbench{' ' + name if name else ''}: {word}\n")
         sys.stderr.flush()
     except (OSError, ValueError):
         pass
-    return 130
+    return status
 
+
+def _as_the_command() -> bool:
+    """Whether this module is imported by the ``lmsbench`` command (its script, ``python -m
+    experiments.cli``), not by a program of the user's, whose signals are its own."""
+    return __name__ == "__main__" or Path(sys.argv[0]).name == "lmsbench"
+
+
+def _a_worker_process() -> bool:
+    """Whether this is a child process of multiprocessing (a local cluster's Dask worker, given
+    lmsbench's ``sys.argv``): its SIGTERM, from a ``kill`` of the whole process group, is left
+    as it was (with the handler above, workers that were importing printed 75 lines of traceback)."""
+    if "--multiprocessing-fork" in getattr(sys, "orig_argv", ()):  # a spawned child, given the script's argv
+        return True
+    mp = sys.modules.get("multiprocessing")  # not yet imported here in lmsbench itself
+    return mp is not None and mp.parent_process() is not None
+
+
+if (_as_the_command() and not _a_worker_process() and threading.current_thread() is threading.main_thread()
+        and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL):
+    signal.signal(signal.SIGTERM, _stop_while_starting)
 
 try:  # lmsbench's packages: most of its start-up time
     from features.batch import default_threads
@@ -68,7 +102,7 @@ try:  # lmsbench's packages: most of its start-up time
     from . import commands
     from .options import OneLineParser, mid_sentence, shorten_quoted
 except KeyboardInterrupt:
-    if __name__ != "__main__" and Path(sys.argv[0]).name != "lmsbench":  # imported by a program: its own Ctrl-C
+    if not _as_the_command():  # imported by a program: its own Ctrl-C
         raise
     raise SystemExit(_stopped_while_starting(sys.argv[1:])) from None
 
@@ -111,10 +145,6 @@ class _Version(argparse.Action):
 
 REDELIVER_S = 0.05  # s after a swallowed stop (see _Interrupt.swallowed) before it is raised again
 INTERRUPT_GRACE_S = 15.0  # s after Ctrl-C for cleanup; then child processes are killed and the process exits 130
-
-
-#: The signals that stop a command in order, with the word said and the exit status (128 + signal).
-STOP_SIGNALS = {signal.SIGINT: ("interrupted", 130), signal.SIGTERM: ("terminated", 143)}
 
 #: the command was stopped by a signal (its line written): the stop signals are ignored at the exit's end
 _STOPPED = threading.Event()

@@ -19,7 +19,7 @@ from typing import Callable, Iterable, Iterator
 
 from .bag import BagError, BagReader, is_bag, write_bag
 from . import records
-from .carmen import UTF8_BOM, CarmenReader, write_carmen
+from .carmen import UTF8_BOM, CarmenReader, _first_line_end, write_carmen
 from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
 from .laser_geometry import LaserGeometry
 from .records import Record
@@ -398,11 +398,15 @@ def row_lines(path: str | Path, p: Path) -> Iterator[tuple[int, str]]:
     :data:`MAX_ROW_CHARS` characters at a time: a longer one is a LogFormatError naming it. A UTF-8
     byte-order mark before the first line (a file saved by a Windows editor) is skipped, as the CARMEN
     reader skips it: it read as three replacement characters, so a TUM file's header comment was a
-    row of 9 entries and a first row a non-number."""
+    row of 9 entries and a first row a non-number. Lines end as in a CARMEN log
+    (:func:`lms200.carmen.open_text`): at "\\n" ("\\r\\n" too), a lone "\\r" being whitespace within its
+    line, or at "\\r" in a file of classic Mac line ends; a line's number is the one an editor or
+    ``sed -n Np`` gives it (a lone "\\r" ended a line, so every error after one named the wrong line)."""
     with open(p, "rb") as raw:
-        if raw.read(len(UTF8_BOM)) != UTF8_BOM:
-            raw.seek(0)
-        f = io.TextIOWrapper(raw, encoding="ascii", errors="replace")
+        head = raw.read(4096)
+        mac = b"\r" in (ends := _first_line_end(head, raw)) and b"\n" not in ends
+        raw.seek(len(UTF8_BOM) if head.startswith(UTF8_BOM) else 0)
+        f = io.TextIOWrapper(raw, encoding="ascii", errors="replace", newline=None if mac else "\n")
         for no, line in enumerate(iter(lambda: f.readline(MAX_ROW_CHARS + 1), ""), 1):
             if len(line) > MAX_ROW_CHARS:
                 raise LogFormatError(path, no, f"longer than {MAX_ROW_CHARS:,} characters: not a text file of rows "

@@ -90,7 +90,23 @@ class Alignment2D:
 
 def align_2d(est_xy: np.ndarray, true_xy: np.ndarray) -> tuple[Alignment2D, float]:
     """Least-squares rigid 2-D alignment (Umeyama without scale) of est onto truth, restricted to
-    a proper rotation; also returns the RMSE of the best *reflection*, to detect a mirrored estimate."""
+    a proper rotation; also returns the RMSE of the best *reflection*, to detect a mirrored estimate.
+    ``est_xy`` and ``true_xy``: (n >= 1, 2) finite real arrays (m) of one n, within +-MAX_COORD_M, else an
+    InputError naming the argument (a list was "AttributeError: 'list' object has no attribute 'mean'",
+    unequal lengths numpy's matmul ValueError, no points an alignment of nan, a nan "SVD did not converge")."""
+    from lms200.logs import MAX_COORD_M
+
+    est_xy = real_rows(est_xy, "est_xy", 2, "x m, y m")
+    true_xy = real_rows(true_xy, "true_xy", 2, "x m, y m")
+    for name, xy in (("est_xy", est_xy), ("true_xy", true_xy)):
+        if xy.shape[0] == 0:
+            raise InputError(f"{name}: has no points")
+        if np.abs(xy).max() > MAX_COORD_M:
+            raise InputError(f"{name}: row {int(np.nonzero((np.abs(xy) > MAX_COORD_M).any(1))[0][0])}: x or y beyond "
+                             f"+-{MAX_COORD_M:g} m")
+    if est_xy.shape[0] != true_xy.shape[0]:
+        raise InputError(f"est_xy and true_xy: must hold one point each for the other, got {est_xy.shape[0]} and "
+                         f"{true_xy.shape[0]}")
     mu_e, mu_t = est_xy.mean(0), true_xy.mean(0)
     E, T = est_xy - mu_e, true_xy - mu_t
     U, _, Vt = np.linalg.svd(E.T @ T)

@@ -62,3 +62,30 @@ def test_line_ends_are_told_when_the_first_line_passes_4096_bytes(tmp_path: Path
     path.write_bytes(end.join(lines + [lines[0].replace("1.360", "z")]).encode() + end.encode())
     with pytest.raises(LogFormatError, match=rf"{name}\.log:4: malformed ROBOTLASER1 line: ROBOTLASER1 ranges: 'z' is not a number"):
         list(read_log(path))
+
+
+@pytest.mark.parametrize("kind", ["tum", "relations"])
+def test_a_stray_carriage_return_does_not_shift_the_line_numbers_of_tum_and_relations_files(tmp_path: Path,
+                                                                                            kind: str) -> None:
+    """The TUM and relations readers (lms200.logs.row_lines) ended a line at a lone "\\r" too, unlike
+    the CARMEN reader: a 0x0d in line 1's comment made the bad row of line 3 "line 4". Lines now end
+    as in a CARMEN log, numbered as `wc -l`, an editor or `sed -n Np` count them; a lone "\\r" in a row
+    is whitespace (a CR in place of a space changes nothing); "\\r\\n" and classic Mac files still read."""
+    from lms200 import read_tum
+    from slam.metrics import read_relations
+
+    read = read_tum if kind == "tum" else read_relations
+    rows = ["# written by\rhand", "1.0 0 0 0 0 0 0 1", "2.0 0 0 0 0 0 0 1", "3.0 0 0 0 0 0 0 x"]
+    rows[2] = rows[2].replace(" 0 0 1", " 0\r0 1")
+    path = tmp_path / f"cr.{kind}"
+    path.write_bytes(("\n".join(rows) + "\n").encode())
+    with pytest.raises(LogFormatError, match=rf"cr\.{kind}:4: .*non-number"):  # old: line 5
+        read(path)
+    for end, name in (("\r\n", "crlf"), ("\r", "mac")):
+        good = tmp_path / f"{name}.{kind}"
+        good.write_bytes(end.join(["# hand", "1.0 0 0 0 0 0 0 1", "2.0 0 0 0 0 0 0 1"]).encode() + end.encode())
+        assert len(read(good)) == 2
+        bad = tmp_path / f"{name}_bad.{kind}"
+        bad.write_bytes(end.join(["1.0 0 0 0 0 0 0 1", "2.0 0 0 0 0 0 0 1", "3.0 0 0 0 0 0 0 x"]).encode() + end.encode())
+        with pytest.raises(LogFormatError, match=rf"{name}_bad\.{kind}:3: "):
+            read(bad)

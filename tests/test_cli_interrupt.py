@@ -112,13 +112,14 @@ def test_ctrl_c_while_the_local_cluster_starts_stops_the_sweep_with_one_line(tmp
 
 
 CTRL_C_IN_THE_IMPORTS = r"""
-import sys
+import signal, sys
 
 class Stop:  # Ctrl-C while lmsbench imports its packages (the first 0.5-1 s of every command)
     def find_spec(self, name, path=None, target=None):
         if name == "features.batch":
-            raise KeyboardInterrupt
+            signal.raise_signal(SIG)  # SIGINT: the KeyboardInterrupt of Python's own handler
 
+SIG = getattr(signal, sys.argv[2])
 sys.argv = [sys.argv[1], "lms200", "record", "--port", "socket://x:1"]
 sys.meta_path.insert(0, Stop())
 from experiments.cli import main
@@ -126,17 +127,22 @@ print("imported", flush=True)
 """
 
 
-@pytest.mark.parametrize("argv0", ["/venv/bin/lmsbench", "my_program.py"])
-def test_ctrl_c_while_lmsbench_imports_its_packages_is_one_line(argv0) -> None:
+@pytest.mark.parametrize("argv0, sig", [("/venv/bin/lmsbench", "SIGINT"), ("my_program.py", "SIGINT"),
+                                        ("/venv/bin/lmsbench", "SIGTERM"), ("my_program.py", "SIGTERM")])
+def test_ctrl_c_while_lmsbench_imports_its_packages_is_one_line(argv0, sig) -> None:
     """`lmsbench sweep S.yaml` stopped 0.5 s in: Python's traceback of the import it cut, exit -2.
     Now the one line and 130 from the lmsbench command; a program that imports experiments.cli
-    gets its KeyboardInterrupt as before."""
-    out = subprocess.run([sys.executable, "-c", CTRL_C_IN_THE_IMPORTS, argv0], capture_output=True, text=True,
+    gets its KeyboardInterrupt as before. SIGTERM there (`lmsbench simulate` sent it 0.3 s in)
+    killed the process: exit -15, no line; now "terminated" and 143, a program's SIGTERM its own."""
+    out = subprocess.run([sys.executable, "-c", CTRL_C_IN_THE_IMPORTS, argv0, sig], capture_output=True, text=True,
                          cwd=REPO, env=_env(), timeout=120)
     if argv0.endswith("lmsbench"):
-        assert (out.returncode, out.stderr, out.stdout) == (130, "lmsbench lms200 record: interrupted\n", "")
-    else:
+        word, status = ("interrupted", 130) if sig == "SIGINT" else ("terminated", 143)  # old SIGTERM: -15, ""
+        assert (out.returncode, out.stderr, out.stdout) == (status, f"lmsbench lms200 record: {word}\n", "")
+    elif sig == "SIGINT":
         assert out.returncode == -signal.SIGINT and out.stderr.rstrip().endswith("KeyboardInterrupt") and out.stdout == ""
+    else:
+        assert (out.returncode, out.stderr, out.stdout) == (-signal.SIGTERM, "", "")
 
 
 def test_ctrl_c_while_the_options_are_read_is_one_line(monkeypatch, capsys) -> None:
@@ -769,3 +775,17 @@ def test_a_ctrl_c_after_the_stops_exit_handlers_does_not_change_its_status() -> 
     out = subprocess.run([sys.executable, "-c", STOPPED_THEN_EXITING], capture_output=True, text=True, cwd=REPO,
                          env=_env(), timeout=120)
     assert (out.returncode, out.stdout, out.stderr) == (130, "at the end: ignored\n", "lmsbench info: interrupted\n")
+
+
+
+def test_a_local_clusters_worker_keeps_its_sigterm_while_it_imports_lmsbench() -> None:
+    """The stop of SIGTERM in lmsbench's imports is the command's alone: a spawned Dask worker (given
+    the script's sys.argv, it imports experiments.cli as it runs the script again as __mp_main__)
+    took it as well, and `kill` of the process group of a sweep on the local cluster printed 57-75
+    lines of the workers' tracebacks. A spawned child's command line has --multiprocessing-fork."""
+    code = ("import signal, sys; sys.argv[0] = '/venv/bin/lmsbench'; import experiments.cli; "
+            "print(signal.getsignal(signal.SIGTERM) == signal.SIG_DFL)")
+    for child, default in (["--multiprocessing-fork"], "True"), ([], "False"):
+        out = subprocess.run([sys.executable, "-c", code, *child], capture_output=True, text=True, cwd=REPO,
+                             env=_env(), timeout=120)
+        assert (out.stdout.strip(), out.stderr) == (default, "")

@@ -306,6 +306,21 @@ def test_a_signals_table_whose_ad_band_is_text_is_refused(tables, tmp_path, caps
     # "internal error: MemoryError: Unable to allocate 7.28 TiB", after figures.yaml
     ("signals_k", 10**12, "signals_k: must be a whole number from 1 to 8192, the AD window of Figs. 4-6 (got 1000000000000)"),
     ("world", [1, 2], "world: must be the name of the simulated world (got [1, 2])"),
+    # each below was taken, exit 0, the figures drawn (fuzz round 6); a study writes none of them
+    ("world", "mars", "world: must be the name of a built-in world (office, corridor, angles, pillars, random, "
+                      "cluttered, mit) (got 'mars')"),
+    ("seed", "abc", "seed: must be a whole number from 0 to 2^32 - 1 (got 'abc')"),
+    ("seed", -1, "seed: must be a whole number from 0 to 2^32 - 1 (got -1)"),
+    ("duration", -5.0, "duration: must be a number of seconds from 0.1 to 3600 (got -5.0)"),
+    ("duration", float("nan"), "duration: must be a number of seconds from 0.1 to 3600 (got nan)"),
+    ("rate_hz", True, "rate_hz: must be a number of scans/s of at least 0.000278 (got True)"),
+    ("methods", "sensor", "methods: must be a list of extractor names (got 'sensor')"),
+    ("methods", [], "methods: must be a list of extractor names (got [])"),
+    ("panels", 0, "panels: must be a whole number from 1 to 16 (got 0)"),
+    ("slam", "no", "slam: must be true or false (got 'no')"),  # taken as true: "table trajectory is missing"
+    ("intel_log", 7, "intel_log: must be a log's path or null (got 7)"),
+    ("resolved", [1], "resolved: must be a mapping (got [1])"),
+    ("sensor", "x", "sensor: must be a mapping (got 'x')"),
 ])
 def test_a_study_yaml_field_the_figures_draw_with_is_checked(tables, tmp_path, capsys, field, value, said):
     settings = yaml.safe_load((tables / "study.yaml").read_text())

@@ -7,7 +7,7 @@ import pytest
 
 from lms200.errors import LmsbenchWarning
 from lms200 import LmsbenchError, LogFormatError
-from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
+from slam.metrics import Alignment2D, align_2d, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
 
 
 def square_path(n: int = 81) -> np.ndarray:
@@ -204,6 +204,12 @@ def test_interpolation_takes_the_short_way_round():
     (lambda t: map_error(np.array([[0, 0, 1, 0]]), np.array([[0, 0, 2, 0]]), max_distance=None),
      r"max_distance: must be a finite number > 0 m, got None"),  # TypeError
     (lambda t: map_error(np.array([[0, 0, 1]]), np.array([[0, 0, 2, 0]])), r"map_segments: must be a \(k, 4\) array"),
+    # align_2d (the Alignment2D map_error takes): fuzz round 6
+    (lambda t: align_2d(None, t[:, 1:3]), r"est_xy: must be a \(k, 2\) array of real numbers \(x m, y m\), got NoneType"),
+    (lambda t: align_2d(t[:3, 1:3], t[:4, 1:3]), r"est_xy and true_xy: must hold one point each .*got 3 and 4"),  # matmul ValueError
+    (lambda t: align_2d(t[:0, 1:3], t[:0, 1:3]), r"est_xy: has no points"),  # an alignment of nan, RuntimeWarnings
+    (lambda t: align_2d(t[:, 1:3], np.where(np.arange(2) == 0, np.nan, t[:, 1:3])), r"true_xy: must be finite .*row 0"),  # LinAlgError
+    (lambda t: align_2d(t[:, 1:3], t[:, 1:3] + 1e300), r"true_xy: row 0: x or y beyond \+-1e\+09 m"),
 ])
 def test_metrics_name_a_bad_argument(call, message: str) -> None:
     """InputError, or ConfigError for the numbers (features.baselines.checks.positive): both are
@@ -409,3 +415,13 @@ def test_a_position_beyond_the_readers_bound_is_refused_not_overflowed() -> None
     assert ate(edge, t).n == 10
     edge[3, 1] = np.nan
     assert np.isnan(ate(edge, t).rmse)
+
+
+def test_align_2d_takes_lists_as_arrays() -> None:
+    """A list of points was "AttributeError: 'list' object has no attribute 'mean'"; the alignment
+    of a path turned by 30 deg and moved is that motion."""
+    t = square_path()
+    c, s = np.cos(np.radians(30)), np.sin(np.radians(30))
+    moved = t[:, 1:3] @ np.array([[c, s], [-s, c]]) + [2.0, -1.0]
+    al, _ = align_2d(t[:, 1:3].tolist(), moved.tolist())
+    assert np.isclose(al.rotation, np.radians(30)) and np.allclose(al.translation, [2.0, -1.0])

@@ -348,6 +348,7 @@ def load_config(folder: Path) -> StudyConfig:
             raise TypeError("expected a mapping of the study's settings")
         known = {f.name for f in dataclasses.fields(StudyConfig)}
         cfg = StudyConfig(**{k: v for k, v in (raw or {}).items() if k in known})
+        _check_settings(cfg, raw or {})
         cfg.methods = tuple(cfg.methods)
         # what the figures draw with: a text signals_k or world was "internal error: TypeError", a huge k a
         # MemoryError, a negative one drew Fig. 4's reference line and labels of AD_i-5, exit 0
@@ -359,3 +360,42 @@ def load_config(folder: Path) -> StudyConfig:
     except (yaml.YAMLError, TypeError, ValueError, UnicodeDecodeError) as exc:
         raise LmsbenchError(f"{path}: not the study.yaml of lmsbench figures / demo ({' '.join(str(exc).split())[:200]})") from None
     return cfg
+
+
+def _check_settings(cfg: StudyConfig, raw: dict) -> None:
+    """Refuse (ValueError naming the field) a study.yaml field that is not what a study writes, with
+    the bounds its options have (``figures --seed``, ``--duration``, ``--rate-hz``, ``--world``,
+    ``--methods``): a text seed, a negative duration, a ``slam: "no"`` (taken as true: Fig. 10's
+    table said missing) or a list for a mapping was taken without a word, exit 0."""
+    import math
+
+    from lms200.timing import MAX_DURATION_S, MIN_DURATION_S, MIN_RATE_HZ
+    from sim.worlds import WORLD_NAMES
+
+    from experiments.figures.make import MAX_PANELS
+
+    def whole(value: object) -> bool:
+        return isinstance(value, int) and not isinstance(value, bool)
+
+    def real(value: object) -> bool:
+        return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+    if not isinstance(cfg.world, str):
+        return  # said as before, below
+    problems = [
+        ("world", cfg.world in WORLD_NAMES, f"the name of a built-in world ({', '.join(WORLD_NAMES)})"),
+        ("seed", whole(cfg.seed) and 0 <= cfg.seed <= 2**32 - 1, "a whole number from 0 to 2^32 - 1"),
+        ("duration", real(cfg.duration) and MIN_DURATION_S <= cfg.duration <= MAX_DURATION_S,
+         f"a number of seconds from {MIN_DURATION_S:g} to {MAX_DURATION_S:g}"),
+        ("rate_hz", real(cfg.rate_hz) and cfg.rate_hz >= MIN_RATE_HZ, f"a number of scans/s of at least {MIN_RATE_HZ:.3g}"),
+        ("methods", isinstance(cfg.methods, (list, tuple)) and len(cfg.methods) > 0
+         and all(isinstance(m, str) and m.strip() for m in cfg.methods), "a list of extractor names"),
+        ("panels", whole(cfg.panels) and 1 <= cfg.panels <= MAX_PANELS, f"a whole number from 1 to {MAX_PANELS}"),
+        ("slam", isinstance(cfg.slam, bool), "true or false"),
+        ("intel_log", cfg.intel_log is None or isinstance(cfg.intel_log, str), "a log's path or null"),
+    ]
+    problems += [(name, isinstance(raw.get(name, {}), dict), "a mapping")
+                 for name in ("intel_sensor_params", "sensor", "log_options", "resolved")]
+    for name, ok, what in problems:
+        if not ok:
+            raise ValueError(f"{name}: must be {what} (got {raw.get(name)!r:.80})")
