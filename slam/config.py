@@ -269,7 +269,7 @@ class ObservationConfig:
         point_stride: (paper preset) every ``point_stride``-th beam's point checks a pre-alignment.
         max_lines: (paper preset) the most lines, and apart the most corners, of one scan the filter
             observes: a scan with more keeps its longest lines (its first corners) and the rest are
-            not observed (``diagnostics["n_unobserved"]``; ``run_slam`` warns, ``lmsbench slam`` once for its runs). It bounds a step's
+            not observed (``diagnostics["n_unobserved"]``; ``run_slam`` warns, ``lmsbench slam`` once a run, naming it). It bounds a step's
             work and memory: a scan of 20,000 lines ran over 60 s in one step, toward a 12.8 GB
             covariance (the LMS200's scans have at most a few dozen; 100 keeps every line of the
             four real logs).

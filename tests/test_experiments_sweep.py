@@ -1005,6 +1005,9 @@ def test_a_killed_sweeps_temporary_tables_are_removed_by_the_next_run(tmp_path):
     # Path("") is Path("."): it wrote into the cwd while the str "" was refused; "." and Path(".") alike now
     (lambda s, d: run_sweep(s, Path(""), "inprocess", progress=False), r"^out: must name the sweep's folder, got \w*Path\('\.'\), the current folder"),
     (lambda s, d: run_sweep(s, "./", "inprocess", progress=False), r"^out: .* give Path\.cwd\(\) to write the sweep"),
+    # pathlib keeps "sub/.." as it is: it wrote into the cwd and made an empty sub/ (review)
+    (lambda s, d: run_sweep(s, "sub/..", "inprocess", progress=False), r"^out: .* give Path\.cwd\(\) to write the sweep"),
+    (lambda s, d: run_sweep(s, Path("..") / d.name, "inprocess", progress=False), r"^out: .* the current folder named"),
     (lambda s, d: run_sweep(s, None, "inprocess", progress=False), r"^out: must be a str or os\.PathLike"),  # TypeError
     (lambda s, d: run_sweep(s, d / "log.txt", "inprocess", progress=False), r"log\.txt exists and is not a folder"),
     (lambda s, d: run_sweep(s, d / "o", "inprocess", progress="no"), r"^progress: must be True or False, got 'no'$"),

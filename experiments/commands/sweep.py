@@ -7,6 +7,7 @@ Exit status: 0 when every cell succeeded, 1 when any failed (the table is writte
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -61,9 +62,9 @@ def run(args: argparse.Namespace) -> int:
 
         warm_up_kernels(slam=spec.kind == "slam")
     try:
-        # `--out .` names the current folder as text ("" is refused by path_arg); the library takes it only as
-        # an absolute path (Path("") is Path("."), so run_sweep refuses both)
-        result = run_sweep(spec, Path.cwd() if out == Path(".") else out, executor, workers=args.workers, retry_failed=args.retry_failed,
+        # `--out .` (or `sub/..`) names the current folder as text ("" is refused by path_arg); the library takes
+        # it only as an absolute path (Path("") is Path("."), so run_sweep refuses both)
+        result = run_sweep(spec, Path.cwd() if os.path.abspath(out) == os.getcwd() else out, executor, workers=args.workers, retry_failed=args.retry_failed,
                            progress=not args.no_progress, checked=True)  # checked above: its warnings were said once
     except SweepSpecError as exc:  # an unknown kind or parameter name, found before any cell ran
         raise SweepSpecError(f"{args.sweep}: {exc}") from exc

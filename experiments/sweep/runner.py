@@ -117,7 +117,7 @@ def _sweep_folder(out: object) -> Path:
     if isinstance(out, str) and not out.strip():
         raise LmsbenchError(f"out: must name the sweep's folder, got {out!r} (an empty path is the current folder)")
     p = path_of(_named_out(out))
-    if p == Path("."):
+    if p == Path(".") or (not p.is_absolute() and os.path.abspath(p) == os.getcwd()):  # "sub/..", "../here" too
         raise LmsbenchError(f"out: must name the sweep's folder, got {out!r}, the current folder named relatively (pathlib "
                             "reads Path('') as Path('.'), so an empty path cannot be told from it); give "
                             "Path.cwd() to write the sweep into the current folder")
