@@ -116,8 +116,10 @@ import signal, sys
 
 class Stop:  # Ctrl-C while lmsbench imports its packages (the first 0.5-1 s of every command)
     def find_spec(self, name, path=None, target=None):
-        if name == "features.batch":
-            signal.raise_signal(SIG)  # SIGINT: the KeyboardInterrupt of Python's own handler
+        if name == "features.batch":  # SIGINT as Python's own handler gives it (raised, not sent: a background
+            if SIG == signal.SIGINT:  # job's SIGINT is ignored, and Python then installs no handler)
+                raise KeyboardInterrupt
+            signal.raise_signal(SIG)
 
 SIG = getattr(signal, sys.argv[2])
 sys.argv = [sys.argv[1], "lms200", "record", "--port", "socket://x:1"]
