@@ -363,13 +363,13 @@ def load_config(folder: Path) -> StudyConfig:
 
 
 def _check_settings(cfg: StudyConfig, raw: dict) -> None:
-    """Refuse (ValueError naming the field) a study.yaml field that is not what a study writes, with
-    the bounds its options have (``figures --seed``, ``--duration``, ``--rate-hz``, ``--world``,
-    ``--methods``): a text seed, a negative duration, a ``slam: "no"`` (taken as true: Fig. 10's
-    table said missing) or a list for a mapping was taken without a word, exit 0."""
+    """Refuse (ValueError naming the field) a study.yaml field that is not what a study writes: a text
+    seed, a negative duration, a ``slam: "no"`` (taken as true: Fig. 10's table said missing) or a list
+    for a mapping was taken without a word, exit 0. The bounds are what ``run_study`` itself takes
+    (a world by name or world.json path, any seed from 0, a positive duration and rate), not the
+    command line's narrower ones: a study run from Python with ``seed=2**40`` draws (review)."""
     import math
 
-    from lms200.timing import MAX_DURATION_S, MIN_DURATION_S, MIN_RATE_HZ
     from sim.worlds import WORLD_NAMES
 
     from experiments.figures.make import MAX_PANELS
@@ -383,11 +383,10 @@ def _check_settings(cfg: StudyConfig, raw: dict) -> None:
     if not isinstance(cfg.world, str):
         return  # said as before, below
     problems = [
-        ("world", cfg.world in WORLD_NAMES, f"the name of a built-in world ({', '.join(WORLD_NAMES)})"),
-        ("seed", whole(cfg.seed) and 0 <= cfg.seed <= 2**32 - 1, "a whole number from 0 to 2^32 - 1"),
-        ("duration", real(cfg.duration) and MIN_DURATION_S <= cfg.duration <= MAX_DURATION_S,
-         f"a number of seconds from {MIN_DURATION_S:g} to {MAX_DURATION_S:g}"),
-        ("rate_hz", real(cfg.rate_hz) and cfg.rate_hz >= MIN_RATE_HZ, f"a number of scans/s of at least {MIN_RATE_HZ:.3g}"),
+        ("world", bool(cfg.world.strip()), f"a built-in world's name ({', '.join(WORLD_NAMES)}) or a world.json path"),
+        ("seed", whole(cfg.seed) and cfg.seed >= 0, "a whole number from 0"),
+        ("duration", real(cfg.duration) and cfg.duration > 0, "a positive number of seconds"),
+        ("rate_hz", real(cfg.rate_hz) and cfg.rate_hz > 0, "a positive number of scans/s"),
         ("methods", isinstance(cfg.methods, (list, tuple)) and len(cfg.methods) > 0
          and all(isinstance(m, str) and m.strip() for m in cfg.methods), "a list of extractor names"),
         ("panels", whole(cfg.panels) and 1 <= cfg.panels <= MAX_PANELS, f"a whole number from 1 to {MAX_PANELS}"),
