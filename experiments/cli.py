@@ -87,7 +87,11 @@ def _a_worker_process() -> bool:
     if "--multiprocessing-fork" in getattr(sys, "orig_argv", ()):  # a spawned child, given the script's argv
         return True
     mp = sys.modules.get("multiprocessing")  # not yet imported here in lmsbench itself
-    return mp is not None and mp.parent_process() is not None
+    if mp is None:
+        return False
+    # a forkserver's child runs the script again with the parent's argv and no parent_process() yet: it is
+    # "inheriting" while it prepares (review: its SIGTERM was caught for its whole life)
+    return mp.parent_process() is not None or bool(getattr(mp.process.current_process(), "_inheriting", False))
 
 
 if (_as_the_command() and not _a_worker_process() and threading.current_thread() is threading.main_thread()
@@ -391,9 +395,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         status = _flushed(_main(argv, ended))
     except KeyboardInterrupt:  # before the command's handler is in place: its options being read
         return _flushed(_stopped_while_starting(sys.argv[1:] if argv is None else argv))
+    finally:
+        _end_start_handler()
     for interrupt in ended or ():
         interrupt.status = status
     return status
+
+
+def _end_start_handler() -> None:
+    """SIGTERM back to its default where the start-up handler (``_stop_while_starting``) is still in
+    place once the command returned (``--help``, a usage error, an error before the command's own
+    handler): a SIGTERM at the exit then raised KeyboardInterrupt in an exit handler ("Exception
+    ignored in atexit callback"), or added "terminated" and 143 after a usage error's line (review)."""
+    if (threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGTERM) is _stop_while_starting):
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def _flushed(status: int) -> int:

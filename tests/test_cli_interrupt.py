@@ -791,3 +791,15 @@ def test_a_local_clusters_worker_keeps_its_sigterm_while_it_imports_lmsbench() -
         out = subprocess.run([sys.executable, "-c", code, *child], capture_output=True, text=True, cwd=REPO,
                              env=_env(), timeout=120)
         assert (out.stdout.strip(), out.stderr) == (default, "")
+
+
+def test_the_start_up_sigterm_handler_ends_with_the_command() -> None:
+    """The SIGTERM handler of lmsbench's start-up stayed after a command that never put its own in
+    place (a usage error, --help): a SIGTERM at the exit raised KeyboardInterrupt in an exit handler, or
+    added "terminated" and 143 after the usage error's line. It is the default again once main() returns
+    (review)."""
+    code = ("import signal, sys; sys.argv = ['/venv/bin/lmsbench', 'info']; import experiments.cli as c; "
+            "before = signal.getsignal(signal.SIGTERM) is c._stop_while_starting; status = c.main(); "
+            "print(before, status, signal.getsignal(signal.SIGTERM) == signal.SIG_DFL)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, env=_env(), timeout=120)
+    assert out.stdout.split() == ["True", "2", "True"], (out.stdout, out.stderr)
