@@ -1329,7 +1329,10 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
         raise InputError(f"--sweep {p}: its results.parquet has no column {absent[0]}, a parameter of its sweep.yaml "
                          f"({spec_path}): the table and the sweep.yaml are of different sweeps (one copied over "
                          "the other's?); run the sweep again into a new folder")
-    cells = _sweep_cells(spec)
+    from experiments.sweep.spec import cell_key
+
+    drawn = _sweep_cells(spec)  # the sweep.yaml's cells, read once for the count and the rows' check
+    cells = None if drawn is None else len({cell_key(drawn[0], cell) for cell in drawn[1]})
     held = int(table["cell"].nunique()) if "cell" in table else len(table)
     if cells is not None and held > cells:  # "holds 3 of the 2 cells ...: the sweep did not finish"
         raise InputError(f"--sweep {p}: its results.parquet holds {held} cells, more than the {cells} of its sweep.yaml "
@@ -1339,7 +1342,7 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
         raise InputError(f"--sweep {p}: its results.parquet holds {held} of the {cells} cells of its sweep.yaml: the "
                          f"sweep did not finish (stopped, or cells not stored); finish it with lmsbench sweep "
                          f"{spec_path} --out {p}, then draw it")
-    strange = _foreign_rows(table, spec, params)
+    strange = None if drawn is None else _foreign_rows(table, drawn[1], params)
     if strange is not None:  # k 0..39999 beside a grid of k [3, 8], or each cell 50 times, was drawn, exit 0
         raise InputError(f"--sweep {p}: its results.parquet's row {strange}: the table and the sweep.yaml "
                          f"({spec_path}) are of different sweeps, or the table was edited; run the sweep again into a "
@@ -1347,32 +1350,20 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
     return p
 
 
-def _foreign_rows(table: Any, raw: dict, params: list[str]) -> str | None:
+def _foreign_rows(table: Any, cells: list[dict], params: list[str]) -> str | None:
     """What is wrong with the first row of a sweep's table (a pandas DataFrame) that is no cell of its
-    sweep.yaml (its grid and random parameters and seed, compared as values: a linked grid key's
-    values, a random draw's number), or that repeats a cell; None when the rows are cells of it, each at
-    most as often as the sweep has it, or when the sweep.yaml does not read as a sweep (an older
-    lmsbench's: its table is drawn as it is). Values are compared as the table stores them
+    sweep.yaml (``cells``; its grid and random parameters and seed, compared as values: a linked grid
+    key's values, a random draw's number), or that repeats a cell; None when the rows are cells of it,
+    each at most as often as the sweep has it. Values are compared as the table stores them
     (:func:`_cell_value`): a column that mixed text with numbers holds them as text, a column of numbers
     holds a bool as 1 and a whole number beyond 2^53 rounded, so two cells may be one value there."""
-    import warnings
     from collections import Counter
-
-    from lms200 import LmsbenchError
-
-    from experiments.sweep.spec import SweepSpec
 
     if "seed" not in table:
         return None  # said by the caller's count of cells, or drawn as an older table
     names = [*params, "seed"]
-    try:
-        with warnings.catch_warnings():  # an old spelling was said when the sweep ran
-            warnings.simplefilter("ignore")
-            spec = SweepSpec.from_dict(raw)
-        kinds = [_column_kind(table[n]) for n in names]
-        expected = Counter(tuple(_cell_value(cell.get(n), k) for n, k in zip(names, kinds)) for cell in spec.cells())
-    except (LmsbenchError, ValueError, TypeError):
-        return None
+    kinds = [_column_kind(table[n]) for n in names]
+    expected = Counter(tuple(_cell_value(cell.get(n), k) for n, k in zip(names, kinds)) for cell in cells)
     for i, row in enumerate(zip(*(table[n] for n in names))):
         key = tuple(_cell_value(v, k) for v, k in zip(row, kinds))
         if not expected[key]:
@@ -1412,22 +1403,24 @@ def _cell_value(value: object, kind: str) -> object:
         return None if value == "nan" else str(value)
     if kind == "number" and isinstance(value, (int, float)):
         return float(value)
-    return (type(value).__name__, value) if isinstance(value, bool) else value
+    from experiments.sweep.spec import _value_key
+
+    return _value_key(value)  # as the spec tells grid points apart: a bool apart from the numbers
 
 
-def _sweep_cells(raw: dict) -> int | None:
-    """The number of distinct cells of a sweep.yaml's sweep, None when it does not read as a sweep
-    (one of an older lmsbench: its table is drawn as it is)."""
+def _sweep_cells(raw: dict) -> tuple[str, list[dict]] | None:
+    """The kind and cells of a sweep.yaml's sweep, None when it does not read as a sweep (one of an
+    older lmsbench: its table is drawn as it is)."""
     import warnings
 
     from lms200 import LmsbenchError
 
-    from experiments.sweep.spec import SweepSpec, cell_key
+    from experiments.sweep.spec import SweepSpec
 
     try:
         with warnings.catch_warnings():  # an old spelling was said when the sweep ran
             warnings.simplefilter("ignore")
             spec = SweepSpec.from_dict(raw)
-        return len({cell_key(spec.kind, cell) for cell in spec.cells()})
+        return spec.kind, spec.cells()
     except (LmsbenchError, ValueError, TypeError):
         return None
