@@ -42,6 +42,8 @@ SCAN_TOPIC = "/scan"
 ODOM_TOPIC = "/odom"
 TRUTH_TOPIC = "/ground_truth"
 _POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "nav_msgs/msg/Odometry")
+#: the message types lmsbench deserializes from a bag; the others' definitions are not parsed (see _recovering_reader)
+READ_TYPES = frozenset(("sensor_msgs/msg/LaserScan", *_POSE_TYPES))
 
 
 #: s: how often ``lmsbench lms200 record`` writes a bag's messages out as a chunk (``write_bag(flush_s=...)``)
@@ -1357,6 +1359,12 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
                     if bio is not None:
                         bio.close()
                     raise
+            # The message definitions of the types lmsbench never reads are set aside, so AnyReader neither
+            # registers them nor checks their md5sum: a /tf connection recorded by goroslib or rosnodejs (an
+            # empty definition, md5 d41d8cd9... computed) or an edited one refused the whole bag, its
+            # LaserScan topic too ("hash mismatch"). A type read (READ_TYPES) is still checked.
+            none = MessageDefinition(MessageDefinitionFormat.NONE, "")
+            self.connections = [c if c.msgtype in READ_TYPES else c._replace(msgdef=none) for c in self.connections]
 
         def _damaged(self, pos: int, what: str) -> BagError:
             return BagError(f"{self.path}: an unindexed bag (not closed) whose record at byte {pos} is damaged: {what}"

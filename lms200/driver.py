@@ -655,6 +655,7 @@ class LMS200:
         last = time.monotonic()
         idle_at = last if idle_s is None else last + idle_s  # when to yield None next (idle_s given)
         refused, why = 0, ""  # scans the STATUS byte refused since the last usable one, and the last one's reason
+        strays, stray_why = 0, ""  # the same for scans of another variant or unit than the one set
         while stop is None or not stop():
             events = self._pump()
             now = time.monotonic()
@@ -668,8 +669,13 @@ class LMS200:
                         self._flagged += 1
                         refused, why = refused + 1, str(exc)
                     continue
+                other = self._other_setting(ev.payload)
+                if other:  # a 181-beam scan amid 361-beam ones was yielded, and recorded, as one
+                    self._decode_errors += 1
+                    strays, stray_why = strays + 1, other
+                    continue
                 self._scans += 1
-                last, allowed, refused = now, limit, 0
+                last, allowed, refused, strays = now, limit, 0, 0
                 if idle_s is not None:
                     idle_at = now + idle_s
                 yield scan
@@ -677,6 +683,10 @@ class LMS200:
                 raise LmsDeviceError(
                     f"no usable scan from {self.port} for {now - last:.2f} s: the device sent {refused} scans, each "
                     f"flagged by its STATUS byte as not to be used (the last: {why}); see the device")
+            if now - last > allowed and strays:
+                raise LmsProtocolError(
+                    f"no usable scan from {self.port} for {now - last:.2f} s: the device sent {strays} scans "
+                    f"of another variant or unit than the one set (the last: {stray_why}); see the device")
             if now - last > allowed:  # said "no scan ... (0 frames dropped)" of a device flagging every scan
                 raise LmsTimeoutError(
                     f"no scan from {self.port} for {now - last:.2f} s in continuous mode at {self.baud} baud "
@@ -685,6 +695,20 @@ class LMS200:
             if idle_s is not None and now >= idle_at:
                 idle_at = now + idle_s
                 yield None
+
+    def _other_setting(self, payload: bytes) -> str | None:
+        """What differs between a decoded 0xB0 ``payload`` and the variant and units the device was
+        set to (:meth:`_set_variant`, :meth:`_set_units`), or None. Such a telegram, its CRC good,
+        is no scan of this connection: a corrupted count word or a unit set by another host. It was
+        yielded as one, so a recording mixed 181-, 361- and 401-beam scans, or mm and cm."""
+        count = payload[1] | (payload[2] << 8)
+        beams, units = count & 0x3FF, "mm" if count >> 14 == 1 else "cm"
+        want = VARIANTS[self.variant]
+        if beams == want and units == self.units:
+            return None
+        fov, res = self.variant
+        return (f"a scan of {beams} values in {units}, not the {want} values in {self.units} of "
+                f"{fov} deg at {res / 100:g} deg set")
 
     def close(self) -> None:
         """Return the device to on-request mode and 9600 baud, then close the port.

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from typing import Union
 
 from .errors import InputError
+from .finite import check_integer
 from .protocol import ACK, MAX_LEN, NAK, OVERHEAD_BYTES, REPLY_FLAG, STX, crc16
 
 HEAD_BYTES = 5
@@ -97,6 +98,11 @@ class FrameParser:
     """
 
     def __init__(self, address: int = REPLY_FLAG, max_len: int = MAX_LEN) -> None:
+        # an InputError naming each (300 was bytes()'s ValueError, None a TypeError, 'x' a TypeError at the
+        # first feed; a max_len of 0 or less dropped every frame as too long: a parser that never yields, silently)
+        address = check_integer(address, "address", 0, 0xFF, "(the reply address byte: device address + 0x80)", strict=True)
+        max_len = check_integer(max_len, "max_len", 1, 0xFFFF, "(the largest LEN a frame may have; 812 for the LMS2xx)",
+                                strict=True)
         self._sync = bytes([STX, address])
         self.max_len = max_len
         self._buf = bytearray()

@@ -83,6 +83,11 @@ MIN_TIME_SCALE = 1e-6
 MAX_CLOCK_S = 1e12  # |now| a device takes (s, any monotonic clock; 1e308 overflowed a byte count: int(inf))
 MAX_DELAY_S = 3600.0  # longest device delay a DeviceTiming takes (the listing's longest is 3 s)
 MIRROR_PERIOD_S = 1.0 / 75.0  # one mirror turn: a 1 deg scan every 13.3 ms
+#: telegrams and handshakes waiting for the device's line: a host telegram received while this many wait is dropped
+#: unanswered (the device busy), counted in ``requests_dropped``. A host that wrote requests without reading the
+#: answers (1 MB of scan requests, or of telegrams with a bad CRC, each NAKed) queued every reply: memory and a
+#: simulated scan each without bound (5 ms and 1.8 KB a scan request). A driver waits for each answer: 2 at most.
+MAX_QUEUED = 16
 TYPE_STRING = b"LMS200;301063;V02.10 "
 SOURCE_GRID_DEG = (-90.0, 0.5, 361)  # every scan source is resampled onto the 0.5 deg frame
 # Power-on configuration block: blanking 0, sensitivity 0, availability 0, 8 m / 80 m mode, cm.
@@ -318,6 +323,7 @@ class VirtualLMS200:
         self._ready = self._next_scan()  # built now, not after the 0x24 reply (see the module doc)
         self.scans_sent = 0
         self.requests = 0
+        self.requests_dropped = 0  # host telegrams dropped unanswered while MAX_QUEUED answers waited for the line
         self._queue: deque[_Chunk] = deque()
         self._line_free = 0.0
         self._continuous_from = 0.0
@@ -376,6 +382,9 @@ class VirtualLMS200:
             frame = bytes(buf[:end])
             del buf[:end]
             if self.faults.mute:
+                continue
+            if len(self._queue) >= MAX_QUEUED:  # busy: see MAX_QUEUED
+                self.requests_dropped += 1
                 continue
             hit = self.faults.rx_corrupt_prob and self._rng.random() < self.faults.rx_corrupt_prob
             if hit or crc16(frame[:-2]) != (frame[-2] | (frame[-1] << 8)):

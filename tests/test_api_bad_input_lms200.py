@@ -12,6 +12,7 @@ import pytest
 
 from lms200 import LmsbenchError, Scan
 from lms200.errors import InputError, LmsProtocolError
+from lms200.framing import FrameParser
 from lms200 import noise, protocol, tum, virtual
 from lms200.laser_geometry import LaserGeometry, beam_angles
 
@@ -51,6 +52,12 @@ SCAN = Scan.lms200(np.full(361, 3.0))
     (lambda: virtual.garble(b"abc", 9600, None), r"^baud_read: must be an integer >= 1, got None$"),  # TypeError
     (lambda: virtual.garble(b"abc", 5e-324, 9600), r"^baud_sent: must be an integer >= 1, got 5e-324$"),  # OverflowError
     (lambda: virtual.garble("abc", 9600, 19200), r"^data: must be bytes"),
+    # fuzz round 8: FrameParser's arguments (300 bytes()'s ValueError, None a TypeError, a max_len of 'x' a TypeError
+    # at the first feed, of 0 or -3 a parser that dropped every frame as too long, silently)
+    (lambda: FrameParser(address=300), r"^address: must be an integer in 0\.\.255 \(the reply address byte"),
+    (lambda: FrameParser(address=None), r"^address: must be an integer in 0\.\.255 .* got None$"),
+    (lambda: FrameParser(max_len=0), r"^max_len: must be an integer in 1\.\.65535 \(the largest LEN .* got 0$"),
+    (lambda: FrameParser(max_len="x"), r"^max_len: must be an integer in 1\.\.65535 .* got 'x'$"),
 ])
 def test_codec_and_virtual_device_name_the_bad_argument(call, message: str) -> None:
     with pytest.raises(InputError, match=message) as info:

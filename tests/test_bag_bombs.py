@@ -354,9 +354,10 @@ def _laser_scan(ts, **header):  # noqa: ANN001, ANN003, ANN202
         intensities=np.zeros(0, np.float32))
 
 
-def _bag_with_connections(path: Path, definitions: list[str], one_type: bool = False) -> Path:
+def _bag_with_connections(path: Path, definitions: list[str], one_type: bool = False, type_name: str = "") -> Path:
     """A ROS 1 bag of one LaserScan on /scan and a connection /junkJ of type junk_msgs/msg/JJ with
-    each of ``definitions`` (its message definition); ``one_type``: all of type junk_msgs/msg/J0."""
+    each of ``definitions`` (its message definition); ``one_type``: all of type junk_msgs/msg/J0;
+    ``type_name``: all of that type (one lmsbench reads, whose definitions it parses)."""
     from rosbags.rosbag1 import Writer
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -365,7 +366,7 @@ def _bag_with_connections(path: Path, definitions: list[str], one_type: bool = F
     with Writer(path) as w:
         c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts, msgdef=msgdef, md5sum=md5)
         for j, definition in enumerate(definitions):
-            name = f"junk_msgs/msg/J{0 if one_type else j}"
+            name = type_name or f"junk_msgs/msg/J{0 if one_type else j}"
             own = get_typestore(Stores.EMPTY)
             own.register(get_types_from_msg(definition, name))
             w.add_connection(f"/junk{j}", name, msgdef=definition, md5sum=own.generate_msgdef(name)[1])
@@ -390,15 +391,23 @@ def test_a_bags_message_definitions_are_bounded_together(tmp_path, capsys, monke
     registered = []
     ok = _bag_with_connections(tmp_path / "ok.bag", [fields] * 3, one_type=True)  # one definition, three connections
     assert [r.scan.stamp for r in read_log(ok)] == [10.0]
-    bag = _bag_with_connections(tmp_path / "many.bag", [fields, fields + "int32 g\n", fields + "int32 h\n"])
+    definitions = [fields, fields + "int32 g\n", fields + "int32 h\n"]
     import rosbags.typesys.store as store
 
     real_register = store.Typestore.register
     monkeypatch.setattr(store.Typestore, "register", lambda self, typs: (registered.append(len(typs)),
                                                                           real_register(self, typs))[1])
+    # of types lmsbench does not read, the definitions are not parsed (fuzz round 8: see test_bags)
+    junk = _bag_with_connections(tmp_path / "junk.bag", definitions)
+    registered.clear()
+    assert main(["info", str(junk)]) == 0
+    assert registered and max(registered) < 20  # LaserScan's types alone
+    capsys.readouterr()
+    bag = _bag_with_connections(tmp_path / "many.bag", definitions, type_name="nav_msgs/msg/Odometry")
+    registered.clear()
     assert main(["info", str(bag)]) == 2  # old: exit 0 after registering 4,500 fields
     err = capsys.readouterr().err
-    assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(bag))}: junk_msgs/msg/J2's message definition brings the "
+    assert re.fullmatch(rf"lmsbench info: error: {re.escape(str(bag))}: nav_msgs/msg/Odometry's message definition brings the "
                         r"field lines of the bag's message definitions to 4,515, more than the 4,096 a bag's may "
                         r"\(lms200.bag.MAX_DEFINITION_FIELDS; the 164 ROS Noetic types, each with the definitions it nests, total "
                         r"2,011\): absurd message "
@@ -948,3 +957,30 @@ def test_an_mcap_bag_is_refused_where_rosbags_lacks_the_functions_its_bounds_rep
     assert [r.scan.stamp for r in read_log(sq, topic="/scan0")] == [10.0]
     monkeypatch.undo()
     assert [r.scan.stamp for r in read_log(b, topic="/scan0")] == [10.0]
+
+
+def test_a_connection_of_a_type_not_read_whose_md5sum_disagrees_with_its_definition_costs_no_bag(tmp_path, capsys) -> None:
+    """Found by fuzzing the bag readers (round 8): a /tf connection with an empty message definition (as
+    goroslib and rosnodejs record, md5 computed d41d8cd9...) refused the whole bag, its LaserScan topic
+    too: "cannot open as a ROS bag: AnyReaderError: Message type 'tf2_msgs/msg/TFMessage' hash mismatch".
+    Definitions of types lmsbench does not read are no longer parsed; a LaserScan's is still checked."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from experiments.cli import main
+
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    raw = ts.serialize_ros1(_laser_scan(ts, seq=0), "sensor_msgs/msg/LaserScan")
+    bags = {}
+    for name, scan_md5 in (("tf.bag", None), ("scan.bag", "0123456789abcdef0123456789abcdef")):
+        bags[name] = tmp_path / name
+        with Writer(bags[name]) as w:
+            msgdef, md5 = ts.generate_msgdef("sensor_msgs/msg/LaserScan")
+            c = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", msgdef=msgdef, md5sum=scan_md5 or md5)
+            tf = w.add_connection("/tf", "tf2_msgs/msg/TFMessage", msgdef="", md5sum="94810edda583a504dfda3829e70d7eec")
+            w.write(c, 10 * 10**9, raw)
+            w.write(tf, 10 * 10**9, bytes(4))
+    assert [r.scan.stamp for r in read_log(bags["tf.bag"])] == [10.0]  # old: BagError, hash mismatch
+    assert main(["info", str(bags["scan.bag"])]) == 2
+    assert ("cannot open as a ROS bag: AnyReaderError: Message type 'sensor_msgs/msg/LaserScan' hash mismatch"
+            in capsys.readouterr().err)

@@ -190,6 +190,23 @@ def test_a_damaged_cell_file_is_computed_again_with_one_warning(tmp_path):
     assert computed(log) == ["0 0", "1 0", "0 0", "1 0"]
 
 
+def test_a_cell_file_holding_another_cells_row_is_computed_again_with_one_warning(tmp_path):
+    """Found by fuzzing resumed sweeps (round 8): a whole cell file holding another cell's row (one
+    cell's file copied over another's, by hand or from another sweep) was taken as its name's cell
+    finished: "2 already done", exit 0, and the table lacked that cell (the two rows one cell),
+    which figures --sweep then asked to finish by running the sweep again, which did nothing."""
+    log = tmp_path / "log.txt"
+    spec = make_spec(log, xs=[0, 1], seeds=[0])
+    first = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    cells = sorted((tmp_path / "out" / "cells").glob("*.parquet"))
+    cells[1].write_bytes(cells[0].read_bytes())
+    with pytest.warns(LmsbenchWarning, match=rf"cells: 1 cell file holds the row of another cell than its name "
+                      rf"\({cells[1].name} holds {cells[0].stem}: copied or renamed by hand\); computed again$"):
+        again = run_sweep(spec, tmp_path / "out", "inprocess", progress=False)
+    assert (again.computed, again.skipped) == (1, 1)  # old: (0, 2), one row
+    pd.testing.assert_frame_equal(comparable(again.table), comparable(first.table))
+
+
 def test_random_sampling_is_seeded_in_range_and_crossed_with_grid_and_seeds():
     raw = {"kind": KIND, "grid": {"method": ["a", "b"]}, "seeds": [0, 1, 2], "samples": 5, "sample_seed": 7,
            "random": {"u": {"uniform": [1.0, 2.0]}, "l": {"loguniform": [1e-3, 1e-1]},

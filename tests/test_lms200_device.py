@@ -307,3 +307,22 @@ def test_a_partial_scan_still_leaves_the_frame_it_does_not_cover_nan() -> None:
     covered = np.flatnonzero(~np.isnan(out))
     assert (covered[0], covered[-1]) == (90, 270)
     assert out[90] == 1.0 and out[270] == 2.0 and out[180] == pytest.approx(1.5)
+
+
+def test_a_host_flooding_requests_without_reading_gets_a_bounded_queue() -> None:
+    """Found by fuzzing the emulator's input (round 8): requests written without reading the answers
+    (a flood of scan requests, or of telegrams with a bad CRC, each NAKed) queued every answer, a
+    simulated scan each, without bound (400 scan requests: 800 chunks, 2 s). A telegram received while
+    MAX_QUEUED answers wait is dropped unanswered and counted; the answers queued go out whole."""
+    from lms200.virtual import MAX_QUEUED
+
+    host = Host(VirtualLMS200(scans(3)))
+    bad = bytearray(build_frame(type_request()))
+    bad[-1] ^= 0xFF
+    host.dev.receive(bytes(bad) * 100 + build_frame(measure_request()) * 100, 0.0)
+    assert len(host.dev._queue) == MAX_QUEUED  # old: 300 (100 NAKs, 100 ACKs and 100 scans)
+    assert host.dev.requests_dropped == 200 - MAX_QUEUED
+    assert host.run(0.05) == [NAK] * MAX_QUEUED
+    host.send(measure_request())  # the line free again: answered (732 bytes at 9600 baud: 0.76 s)
+    events = host.run(1.0)
+    assert events[0] == ACK and [len(e.payload) for e in events[1:]] == [4 + 2 * 361]

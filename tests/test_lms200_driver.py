@@ -1162,3 +1162,36 @@ def test_scans_with_idle_s_yields_none_while_the_device_is_silent() -> None:
         took = time.monotonic() - start
     assert [g for g in got if g is not None] == [361, 361] and got[-3:] == [None, None, None]
     assert took > 0.25  # the three Nones after the last scan come idle_s apart, not at once
+
+
+def test_scans_of_another_variant_or_unit_than_the_one_set_are_dropped_and_counted(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Found by fuzzing the telegram stream (round 8): a 0xB0 telegram with a good CRC whose beam
+    count or unit is not the one the driver set (181 or 401 values amid 361, cm amid mm) was
+    yielded as a scan, so a recording mixed variants and units. It is dropped and counted among
+    ``decode_errors``; a device that sends only such scans for the stall time is said so."""
+    from lms200.errors import LmsProtocolError
+    from lms200.protocol import encode_measurement
+    from lms200_fake_port import answer, fake_port, reply
+
+    def frame(n: int, value: int, units: str = "mm") -> bytes:
+        return reply(encode_measurement(np.full(n, value, np.uint16), units))  # type: ignore[arg-type]
+
+    sent = [frame(361, 1000), frame(181, 1001), frame(401, 1002), frame(361, 103, "cm"), frame(361, 1004)]
+    sent += [frame(181, 1005)] * 3
+
+    def script(payload: bytes, n: int) -> list[tuple[float, bytes]]:
+        if payload == b"\x20\x24":
+            return [*answer(payload), (0.05, b"".join(sent))]
+        return answer(payload)
+
+    fake_port(monkeypatch, script)
+    lms = LMS200("fake://", baud=9600, probe=False)
+    stream = lms.scans(stall_timeout=0.3)
+    got = [(len(s), round(float(s.ranges[0]) * 1000)) for s in itertools.islice(stream, 2)]
+    assert got == [(361, 1000), (361, 1004)]  # old: (181, 1001), (401, 1002), (361, 1030) between them
+    with pytest.raises(LmsProtocolError, match=r"^no usable scan from fake:// for 0\.\d\d s: the device sent 3 scans of "
+                                               r"another variant or unit than the one set \(the last: a scan of 181 "
+                                               r"values in mm, not the 361 values in mm of 180 deg at 0\.5 deg set\)"):
+        next(stream)
+    assert lms.stats.decode_errors == 6
+    lms.close()

@@ -129,7 +129,8 @@ def run_emulate(args: argparse.Namespace) -> int:
         adapter.close()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
-    print(f"virtual LMS200 stopped: {device.scans_sent} scans sent, {device.requests} requests", file=sys.stderr)
+    busy = f", {device.requests_dropped} dropped unanswered while busy" if device.requests_dropped else ""
+    print(f"virtual LMS200 stopped: {device.scans_sent} scans sent, {device.requests} requests{busy}", file=sys.stderr)
     return 0
 
 

@@ -10,7 +10,8 @@ A cell file is written to a temporary name in the same folder and renamed into p
 (``os.replace`` is atomic on POSIX), so a sweep killed at any moment leaves only whole cell files.
 A cell file damaged otherwise (a disk error, a copy cut short, an edit) is no finished cell: it is
 computed again, with one warning line (it stopped the resumed sweep with "internal error:
-ArrowInvalid: ... smaller than the minimum file footer", exit 1).
+ArrowInvalid: ... smaller than the minimum file footer", exit 1), and so is a whole file of another
+cell's row under this cell's name (one cell's file copied over another's).
 """
 
 from __future__ import annotations
@@ -55,7 +56,7 @@ class CellStore:
         """Keys of every cell with a finished file (a Parquet file of one cell's row, by its footer:
         a damaged one is computed again, said in one warning). The footer alone: reading every
         cell's row here cost a resumed sweep 1.6 ms a cell (3.2 s for 2,000) before any work."""
-        keys, damaged = set(), []
+        keys, damaged, foreign = set(), [], []  # foreign: a whole file of another cell's row (its `cell` not its name)
         if not os.access(self.cells, os.R_OK | os.X_OK):  # "sw/cells: permission denied" named no reason
             raise LmsbenchError(f"{self.cells}: the sweep's folder of finished cells cannot be read (permission "
                                 "denied); make it readable (chmod u+rx) to resume the sweep")
@@ -66,10 +67,20 @@ class CellStore:
             if p.is_file() and not os.access(p, os.R_OK):  # was "damaged ...; computed again": the finished cell lost
                 raise LmsbenchError(f"{p}: a finished cell's file that cannot be read (permission denied); make it "
                                     f"readable (chmod u+r) to resume the sweep with it, or remove it to compute the cell again")
-            (keys.add(p.stem) if _whole_parquet(p) else damaged.append(p.name))
+            if not _whole_parquet(p):
+                damaged.append(p.name)
+            elif (held := _cell_of(p)) != p.stem:
+                foreign.append(f"{p.name} holds {held}")
+            else:
+                keys.add(p.stem)
         if damaged:
             warnings.warn(f"{self.cells}: {len(damaged)} cell file{'s' if len(damaged) > 1 else ''} cannot be read as "
                           f"a finished cell (damaged: {', '.join(damaged[:3])}{', ...' if len(damaged) > 3 else ''}); "
+                          "computed again", LmsbenchWarning, stacklevel=2)
+        if foreign:
+            warnings.warn(f"{self.cells}: {len(foreign)} cell file{'s' if len(foreign) > 1 else ''} hold{'s' if len(foreign) == 1 else ''} "
+                          f"the row of another cell than {'their' if len(foreign) > 1 else 'its'} name "
+                          f"({'; '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''}: copied or renamed by hand); "
                           "computed again", LmsbenchWarning, stacklevel=2)
         return keys
 
@@ -125,6 +136,25 @@ def _whole_parquet(path: Path) -> bool:
     except Exception:  # noqa: BLE001 - pyarrow's ArrowInvalid, OSError: damaged
         return False
     return meta.num_rows == 1 and {"status", "cell"} <= set(meta.schema.names)
+
+
+def _cell_of(path: Path) -> str | None:
+    """The key in the ``cell`` column of a whole cell file (see :func:`_whole_parquet`), from the
+    footer's statistics (the runner's files carry them; the column is read where they are missing).
+    A file of another cell's row under this name was taken as this cell finished: a sweep
+    said "3 already done", exit 0, and its table lacked the cell (copied over by the other's row),
+    which `figures --sweep` then asked to finish by running the sweep again, which did nothing."""
+    import pyarrow.parquet as pq
+
+    try:
+        meta = pq.read_metadata(path)
+        stats = meta.row_group(0).column(meta.schema.names.index("cell")).statistics if meta.num_row_groups == 1 else None
+        if stats is not None and stats.has_min_max and stats.min == stats.max and isinstance(stats.min, str):
+            return stats.min
+        row = _cell_row(path, ["status"])
+    except Exception:  # noqa: BLE001 - pyarrow's ArrowInvalid, OSError: damaged since the footer was read
+        return None
+    return None if row is None else str(row["cell"].iloc[0])
 
 
 def _cell_row(path: Path, columns: list[str] | None = None) -> pd.DataFrame | None:
