@@ -214,6 +214,22 @@ def test_extract_many_of_something_not_iterable(scans: object) -> None:
         extract_many(scans)  # type: ignore[arg-type]
 
 
+@pytest.mark.parametrize("call, starts", [
+    (lambda a: Scan(np.ones(3), a, 0.01, 0.0, 1.0), "angle_min: must be a number, got array([[1., 1., 1.], [1., 1., 1.]])"),
+    (lambda a: __import__("features").extract(Scan.lms200(np.full(361, 3.0)), method=a), "method: must be a method name"),
+    (lambda a: __import__("features").extract_many([Scan.lms200(np.full(361, 3.0))], threads=a), "threads: must be"),
+    (lambda a: next(iter(read_log("x.clf", topic=a))), "topic: must be a topic name (str) or None, got array([[1., 1., 1.], [1."),
+    # its != "auto" was elementwise: "ValueError: The truth value of an array ... is ambiguous"
+    (lambda a: __import__("features").extract(Scan.lms200(np.full(361, 3.0)), sigma_r=a), "sigma_r: must be a range noise std"),
+])
+def test_an_array_given_for_a_scalar_is_an_error_of_one_line(call, starts: str) -> None:
+    """Round 7: a 2-D array's repr spans lines, and ~90 messages quote a value by its repr: each was an
+    LmsbenchError of two lines (LmsbenchError now makes its message one line)."""
+    with pytest.raises(LmsbenchError) as info:
+        call(np.ones((2, 3)))
+    assert str(info.value).startswith(starts) and "\n" not in str(info.value)
+
+
 @pytest.mark.parametrize("method", [["sensor"], 5])
 def test_extract_method_that_is_not_a_name(method: object) -> None:
     from features import extract
