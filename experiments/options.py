@@ -652,6 +652,11 @@ def check_log(path: str | os.PathLike) -> Path:
         return p
     if stat.S_ISFIFO(p.stat().st_mode):  # <(zcat LOG): refused as every pipe is, saying why
         raise InputError(f"{p}: a pipe (such as <(zcat LOG)), not a file: {PIPE_REASON}")
+    from lms200.logs import bag_member_message
+
+    member = bag_member_message(p)  # a bag's .db3 was "a binary file", its metadata.yaml "not a CARMEN log"
+    if member is not None:
+        raise InputError(member)
     head = _head(p)
     if p.suffix == ".bag":
         if not head.startswith(b"#ROSBAG V2.0"):

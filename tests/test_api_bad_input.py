@@ -113,6 +113,24 @@ def test_read_log_of_a_device_folder_or_nothing(path: str, message: str) -> None
     assert isinstance(info.value, FileNotFoundError)
 
 
+def test_a_file_of_a_ros2_bag_folder_names_the_folder_to_give(tmp_path, capsys) -> None:
+    """Round 7: a bag's metadata.yaml given as the log was "not a CARMEN log: none of its 38 lines ... starts
+    with a message name", its .db3 "a binary file, not a CARMEN log, ROS 1 .bag or ROS 2 bag folder" (the
+    command line): a bag is read as its folder, which the error now names, in read_log and the command line."""
+    from experiments.cli import main
+
+    bag = tmp_path / "run"
+    write_log(bag, [Record(scan=Scan(np.full(5, 2.0), **GEOM))] * 2, fmt="bag2")
+    for member, what in ((bag / "metadata.yaml", "metadata"), (bag / "run.db3", "storage file")):
+        said = (f"{member}: a file of the ROS 2 bag {bag} (its {what}), not a log by itself: a ROS 2 bag is read as its "
+                f"folder; give {bag}")
+        with pytest.raises(InputError, match=f"^{re.escape(said)}$"):
+            read_log(member)
+        assert main(["info", str(member)]) == 2
+        assert capsys.readouterr().err.splitlines() == [f"lmsbench info: error: {said}"]
+    assert sum(1 for _ in read_log(bag)) == 2
+
+
 def test_write_log_with_a_bad_record_keeps_the_existing_file(tmp_path) -> None:
     """Before: a bad item part-way was an AttributeError after the file had been truncated, and the
     5-scan log at the path was left with the scans before the bad item."""
