@@ -573,6 +573,24 @@ def check_simulate_finished(path: str | os.PathLike) -> None:
                              f"cut short or an earlier run's; {rerun}")
 
 
+def check_sim2real_finished(path: str | os.PathLike, flag: str = "") -> None:
+    """Raise InputError when ``path`` (``flag``'s value; through a link: where it points) is a file
+    ``lmsbench sim2real`` writes (SIM2REAL_OUTPUTS: its sensor.yaml is a sensor model of its own) in a
+    folder whose run did not finish (its SIM2REAL_UNFINISHED file is there): the file is then an
+    earlier run's, beside the new run's tables, or the tables are cut short of it."""
+    p = Path(path)
+    try:
+        real = p.resolve()
+    except (OSError, RuntimeError):  # a loop of links: the reader says so
+        real = p
+    for q in dict.fromkeys((p, real)):
+        if q.name in SIM2REAL_OUTPUTS and (q.parent / SIM2REAL_UNFINISHED).exists():
+            raise InputError(f"{flag + ' ' if flag else ''}{path}: the lmsbench sim2real run that wrote {q.parent} did not finish (it was "
+                             f"stopped or killed while writing its files; {SIM2REAL_UNFINISHED} is left, holding its "
+                             f"settings), so its {q.name} is an earlier run's or of a run cut short; run that "
+                             f"lmsbench sim2real --out {q.parent} again")
+
+
 def simulate_log(path: str | os.PathLike) -> Path | None:
     """The log of a ``lmsbench simulate`` output folder, its scans.clf (a CARMEN log with the true
     poses), or None when ``path`` is not such a folder. The one test of every command that reads a
@@ -634,6 +652,11 @@ def check_log(path: str | os.PathLike) -> Path:
         return p
     if stat.S_ISFIFO(p.stat().st_mode):  # <(zcat LOG): refused as every pipe is, saying why
         raise InputError(f"{p}: a pipe (such as <(zcat LOG)), not a file: {PIPE_REASON}")
+    from lms200.logs import bag_member_message
+
+    member = bag_member_message(p)  # a bag's .db3 was "a binary file", its metadata.yaml "not a CARMEN log"
+    if member is not None:
+        raise InputError(member)
     head = _head(p)
     if p.suffix == ".bag":
         if not head.startswith(b"#ROSBAG V2.0"):
@@ -658,6 +681,13 @@ SLAM_OUTPUTS = ("trajectory.tum", "keyframes.tum", "map.json", "metrics.json", "
 COMPARE_OUTPUTS = ("compare.parquet", "compare.csv", "summary.csv", "summary.txt", "config.yaml")  # and a figure per log
 COMPARE_FIGURES = ("realdata_*.png", "realdata_*.pdf", "realdata_*.csv")  # a log's figure and its rows (figures.realdata)
 SIM2REAL_OUTPUTS = ("sim2real.csv", "scene.csv", "sim2real.md", "sim2real.png", "sensor.yaml", "config.yaml")
+#: The hidden file ``lmsbench sim2real`` (and the demo, in its sim2real/) writes into its folder before
+#: its outputs and removes once they are all whole (experiments.sim2real.write_outputs), as simulate's
+#: SIMULATE_UNFINISHED: a run stopped while writing (Ctrl-C, SIGTERM at the figure) left its tables and
+#: report without sim2real.png and sensor.yaml, or beside an earlier run's, with nothing to tell it. The
+#: readers of its sensor.yaml (``--sensor``, a sweep's ``sensor_file``) refuse it
+#: (check_sim2real_finished); the next run into the folder takes it. It holds the run's settings.
+SIM2REAL_UNFINISHED = ".sim2real-unfinished"
 BENCH_OUTPUTS = ("bench.csv", "versions.yaml")
 
 

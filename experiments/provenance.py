@@ -125,3 +125,21 @@ def leftover_temporaries(path: str | os.PathLike) -> list[Path]:
     from lms200.logs import temporaries
 
     return [tmp for tmp, _ in temporaries(Path(path))]
+
+
+def write_synced(path: Path, text: str) -> None:
+    """``text`` into ``path``, on disk (the file and its folder's entry) when this returns."""
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+        fh.flush()
+        os.fsync(fh.fileno())
+    fsync_path(path.parent)
+
+
+def fsync_path(path: Path) -> None:
+    """Push a file's bytes, or a folder's entries, to the disk."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)

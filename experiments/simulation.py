@@ -19,7 +19,6 @@ run's settings (config.yaml's content under a comment), so ``simulate --config D
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -37,7 +36,7 @@ from sim.sensor import upgrade_fields
 from sim.robot import RobotLimits
 
 from experiments.options import SIMULATE_OUTPUTS, SIMULATE_UNFINISHED
-from experiments.provenance import leftover_temporaries, write_record
+from experiments.provenance import fsync_path, leftover_temporaries, write_record, write_synced
 
 
 SIMULATION_KEYS = frozenset({"world", "seed", "duration", "rate_hz", "sensor", "odometry", "robot", "clutter"})
@@ -172,8 +171,8 @@ def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> 
               "# holding this file is one whose run did not finish). Below, the settings of that run (a\n"
               "# simulate config): lmsbench simulate --config DIR/.simulate-unfinished --out DIR reruns it.\n"
               + dump_yaml(cfg.to_dict(), sort_keys=False))
-    write_record(unfinished, lambda tmp: _write_synced(tmp, marker))
-    _fsync(out)
+    write_record(unfinished, lambda tmp: write_synced(tmp, marker))
+    fsync_path(out)
     # config.yaml first, whole: it tells the folder as simulate's (options.SIMULATE_OWNER); a run
     # stopped while writing scans.clf left a folder the next run into it refused
     write_record(out / "config.yaml", dump_yaml(cfg.to_dict(), sort_keys=False))
@@ -184,10 +183,10 @@ def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> 
     write_record(out / "world.json", world.to_json)  # a record too: whole, or a cut one refused the next run
     write_record(out / "map.png", lambda tmp: draw_map(world, records, tmp))
     for name in SIMULATE_OUTPUTS:  # on disk before the marker goes: after a power loss it stays, or they are whole
-        _fsync(out / name)
-    _fsync(out)
+        fsync_path(out / name)
+    fsync_path(out)
     unfinished.unlink()
-    _fsync(out)
+    fsync_path(out)
     return records
 
 
@@ -196,24 +195,6 @@ def _remove_temporary_files(out: Path) -> None:
     for name in (*SIMULATE_OUTPUTS, SIMULATE_UNFINISHED):
         for tmp in leftover_temporaries(out / name):  # not a user's own .scans.clf.notes.tmp (a review)
             tmp.unlink(missing_ok=True)
-
-
-def _write_synced(path: Path, text: str) -> None:
-    """``text`` into ``path``, on disk (the file and its folder's entry) when this returns."""
-    with open(path, "w", encoding="utf-8") as fh:
-        fh.write(text)
-        fh.flush()
-        os.fsync(fh.fileno())
-    _fsync(path.parent)
-
-
-def _fsync(path: Path) -> None:
-    """Push a file's bytes, or a folder's entries, to the disk."""
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
 
 
 def draw_map(world: World, records: list[Record], path: Path) -> None:

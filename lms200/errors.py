@@ -4,6 +4,7 @@ The command line turns these into one-line messages (exit status 2) instead of t
 """
 
 import os
+import re
 from typing import TypeVar
 
 _E = TypeVar("_E", bound=BaseException)
@@ -23,8 +24,21 @@ def in_chain(exc: BaseException, kind: type[_E]) -> _E | None:
     return None
 
 
+#: a line break with the blanks around it (LmsbenchError's messages are one line)
+_LINE_BREAK = re.compile(r"[ \t]*[\r\n]+[ \t]*")
+
+
 class LmsbenchError(Exception):
-    """A known error whose message says what went wrong and what to do about it."""
+    """A known error whose message says what went wrong and what to do about it, on one line: a
+    message's line breaks (and the spaces around them) become one space, so a value quoted by its
+    repr, a 2-D array's spanning lines, does not break it (``Scan(ranges, angle_min=np.ones((2, 3)),
+    ...)``, ``extract(scan, method=array)``, ``read_log(path, topic=array)``: the API raised
+    multi-line errors from the ~90 messages that quote a value with ``!r``; fuzz round 7)."""
+
+    def __init__(self, *args: object) -> None:
+        if len(args) == 1 and isinstance(args[0], str) and "\n" in args[0]:
+            args = (_LINE_BREAK.sub(" ", args[0]),)
+        super().__init__(*args)
 
 
 class NumbaUnavailableError(LmsbenchError, ImportError):

@@ -123,7 +123,10 @@ def check_integer(value: object, name: str, lo: int, hi: int | None = None, what
     float does not pack)."""
     i = whole_number(value) if not strict or is_integer(value) else None
     if i is None or i < lo or (hi is not None and i > hi):
-        span = f"in {lo}..{hi}" if hi is not None else f">= {lo}"
+        beyond = (hi is None and not isinstance(value, (bool, np.bool_))
+                  and isinstance(value, (int, float, np.integer, np.floating)) and value >= 2**63)
+        # int64's bound said where it refused: max_scans=10**29 was "must be an integer >= 1, got 10**29" (round 7)
+        span = f"in {lo}..{hi}" if hi is not None else f"in {lo}..2^63 - 1" if beyond else f">= {lo}"
         raise InputError(f"{name}: must be an integer {span}{' ' + what if what else ''}, got {shown(value)}")
     return i
 

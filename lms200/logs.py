@@ -49,7 +49,8 @@ def read_log(
     Raises:
         InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument, for a path that
             is not a str / PathLike, ``skip_bad_lines`` that is not a bool, ``topic`` that is not a
-            str, ``geometry`` that is not a LaserGeometry.
+            str, ``geometry`` that is not a LaserGeometry, a file of a ROS 2 bag folder (its metadata.yaml,
+            a .db3 or .mcap), naming the folder to give instead (:func:`bag_member_message`).
         LogNotFoundError: (an ``LmsbenchError`` and a ``FileNotFoundError``) when the path does not exist, or is a folder that is not a ROS 2 bag or
             not a regular file (a device, a pipe); for a ``lmsbench simulate`` folder the message names
             its scans.clf to read instead (:func:`folder_message`).
@@ -77,6 +78,9 @@ def read_log(
                          range_max=geometry.range_max if geometry is not None else None)
     if p.is_dir():
         raise LogNotFoundError(folder_message(p))
+    member = bag_member_message(p)
+    if member is not None:
+        raise InputError(member)
     return CarmenReader(p, skip_bad_lines=skip_bad_lines, topic=topic, geometry=geometry)
 
 
@@ -335,6 +339,19 @@ def folder_message(p: Path) -> str:
         return (f"{p} is a folder, not a log: it holds {SIMULATE_LOG}, as a lmsbench simulate output folder does; "
                 f"read_log({str(log)!r}) reads its scans (`lmsbench info {p}` also checks that its run finished)")
     return f"{p} is a folder but not a ROS 2 bag ({missing_file_reason(p / 'metadata.yaml')})"
+
+
+def bag_member_message(p: Path) -> str | None:
+    """Why the file ``p``, one of a ROS 2 bag folder's own (its metadata.yaml, a .db3 or .mcap storage
+    file), is no log by itself, naming the folder to give instead; None for any other file. Given one,
+    ``read_log`` said "not a CARMEN log: none of its 38 lines ... starts with a message name" and the
+    command line "a binary file, not a CARMEN log, ROS 1 .bag or ROS 2 bag folder" (round 7)."""
+    folder = p.parent
+    if not (p.is_file() and (p.name == "metadata.yaml" or p.suffix in (".db3", ".mcap"))
+            and (folder / "metadata.yaml").is_file()):
+        return None
+    return (f"{p}: a file of the ROS 2 bag {folder} (its {'metadata' if p.name == 'metadata.yaml' else 'storage file'}), "
+            f"not a log by itself: a ROS 2 bag is read as its folder; give {folder}")
 
 
 def missing_file_reason(path: Path) -> str:

@@ -377,6 +377,12 @@ RELATION_Z_FLOOR_M = 0.01
 RELATION_Z_REFUSE_M = 0.1
 
 
+def _not_relations(path: str | Path) -> str:
+    """What :func:`read_relations` says of a TUM trajectory given as a relations file."""
+    return (f"{path}: a TUM trajectory (t x y z qx qy qz qw: the last four numbers of every row a unit quaternion), "
+            "not a relations file (t1 t2 x y z roll pitch yaw a line: the pairs of stamps and the true motion between them)")
+
+
 def read_relations(path: str | Path) -> np.ndarray:
     """Read a relations file (``t1 t2 x y z roll pitch yaw`` a line) into (m, 5): t1, t2, x, y, yaw.
 
@@ -395,7 +401,7 @@ def read_relations(path: str | Path) -> np.ndarray:
             (5 deg) and up to 30 deg, naming how many and the line of the largest (as ``read_tum``): scored on
             their x, y and yaw.
     """
-    rows = []
+    rows: list[tuple[float, float, float, float, float]] = []
     unit_quaternions = 0  # rows whose last four numbers have norm 1, as a TUM row's quaternion has
     turned = False  # a row with z, roll or pitch (a TUM row's qx, qy, qz) not 0
     tilted: tuple[int, str] | None = None  # the first row tilted or climbing by more than MAX_TILT_DEG, and why
@@ -409,8 +415,11 @@ def read_relations(path: str | Path) -> np.ndarray:
         v = row_numbers(path, no, s, "relation row")
         if not all(math.isfinite(x) for x in v):  # a nan made the mean error null, silently
             raise LogFormatError(path, no, f"relation row has a non-finite number: {line.strip()[:60]!r}")
+        unit = abs(math.hypot(*v[4:8]) - 1.0) <= QUATERNION_NORM_TOLERANCE
         problem = stamp_problem(v[0], "relation row's t1") or stamp_problem(v[1], "relation row's t2")
         if problem is not None:
+            if unit and unit_quaternions == len(rows):  # a TUM row's x or y read as a stamp: a slam run's trajectory.tum
+                raise LmsbenchError(_not_relations(path))  # was "t2 -0.000217 s is outside 0 .. 2^32 s" (round 7)
             raise LogFormatError(path, no, problem)
         problem = (pose_problem(v[2], v[3], 0.0, "relation row's motion")
                    or angle_problem(v[7], "relation row's yaw")  # a yaw of 1e300 scored 138.6 deg, exit 0
@@ -418,7 +427,7 @@ def read_relations(path: str | Path) -> np.ndarray:
         if problem is not None:
             raise LogFormatError(path, no, problem)
         rows.append((v[0], v[1], v[2], v[3], v[7]))
-        unit_quaternions += abs(math.hypot(*v[4:8]) - 1.0) <= QUATERNION_NORM_TOLERANCE
+        unit_quaternions += unit
         turned |= any(v[4:7])  # a TUM row's qz of a pose turned from the first; a 2-D relation's z, roll, pitch are 0
         # tilted as read_tum and the bags measure it; roll and pitch both near +-pi tilt it by ~0 but turn its
         # heading by pi (its yaw would be scored half a turn off): a planar relation's are near 0
@@ -438,9 +447,7 @@ def read_relations(path: str | Path) -> np.ndarray:
     if not rows:  # an empty file gave "none of the 0 relations falls inside the run" after the run
         raise LmsbenchError(f"{path}: no relations (t1 t2 x y z roll pitch yaw a line)")
     if unit_quaternions == len(rows) and turned:  # a TUM file (slam --relations RUN/groundtruth.tum) scored 1.42 m, exit 0
-        raise LmsbenchError(f"{path}: a TUM trajectory (t x y z qx qy qz qw: the last four numbers of every row a "
-                            "unit quaternion), not a relations file (t1 t2 x y z roll pitch yaw a line: the pairs "
-                            "of stamps and the true motion between them)")
+        raise LmsbenchError(_not_relations(path))
     if tilted is not None:  # a 3-D relation's motion read as its x, y and yaw, silently (as read_tum refuses a tilted pose)
         raise LogFormatError(path, tilted[0], tilted[1])
     if noted:  # as read_tum says of poses tilted by 5 to 30 deg

@@ -113,6 +113,24 @@ def test_read_log_of_a_device_folder_or_nothing(path: str, message: str) -> None
     assert isinstance(info.value, FileNotFoundError)
 
 
+def test_a_file_of_a_ros2_bag_folder_names_the_folder_to_give(tmp_path, capsys) -> None:
+    """Round 7: a bag's metadata.yaml given as the log was "not a CARMEN log: none of its 38 lines ... starts
+    with a message name", its .db3 "a binary file, not a CARMEN log, ROS 1 .bag or ROS 2 bag folder" (the
+    command line): a bag is read as its folder, which the error now names, in read_log and the command line."""
+    from experiments.cli import main
+
+    bag = tmp_path / "run"
+    write_log(bag, [Record(scan=Scan(np.full(5, 2.0), **GEOM))] * 2, fmt="bag2")
+    for member, what in ((bag / "metadata.yaml", "metadata"), (bag / "run.db3", "storage file")):
+        said = (f"{member}: a file of the ROS 2 bag {bag} (its {what}), not a log by itself: a ROS 2 bag is read as its "
+                f"folder; give {bag}")
+        with pytest.raises(InputError, match=f"^{re.escape(said)}$"):
+            read_log(member)
+        assert main(["info", str(member)]) == 2
+        assert capsys.readouterr().err.splitlines() == [f"lmsbench info: error: {said}"]
+    assert sum(1 for _ in read_log(bag)) == 2
+
+
 def test_write_log_with_a_bad_record_keeps_the_existing_file(tmp_path) -> None:
     """Before: a bad item part-way was an AttributeError after the file had been truncated, and the
     5-scan log at the path was left with the scans before the bad item."""
@@ -212,6 +230,22 @@ def test_extract_many_of_something_not_iterable(scans: object) -> None:
 
     with pytest.raises(ScanTypeError, match="^extract_many: expected a sequence of lms200.Scan"):  # was TypeError
         extract_many(scans)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("call, starts", [
+    (lambda a: Scan(np.ones(3), a, 0.01, 0.0, 1.0), "angle_min: must be a number, got array([[1., 1., 1.], [1., 1., 1.]])"),
+    (lambda a: __import__("features").extract(Scan.lms200(np.full(361, 3.0)), method=a), "method: must be a method name"),
+    (lambda a: __import__("features").extract_many([Scan.lms200(np.full(361, 3.0))], threads=a), "threads: must be"),
+    (lambda a: next(iter(read_log("x.clf", topic=a))), "topic: must be a topic name (str) or None, got array([[1., 1., 1.], [1."),
+    # its != "auto" was elementwise: "ValueError: The truth value of an array ... is ambiguous"
+    (lambda a: __import__("features").extract(Scan.lms200(np.full(361, 3.0)), sigma_r=a), "sigma_r: must be a range noise std"),
+])
+def test_an_array_given_for_a_scalar_is_an_error_of_one_line(call, starts: str) -> None:
+    """Round 7: a 2-D array's repr spans lines, and ~90 messages quote a value by its repr: each was an
+    LmsbenchError of two lines (LmsbenchError now makes its message one line)."""
+    with pytest.raises(LmsbenchError) as info:
+        call(np.ones((2, 3)))
+    assert str(info.value).startswith(starts) and "\n" not in str(info.value)
 
 
 @pytest.mark.parametrize("method", [["sensor"], 5])

@@ -1257,7 +1257,7 @@ def test_a_full_disk_says_where_the_command_writes(argv, where, tmp_path, capsys
     def full(*args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(experiments.simulation, "_write_synced", full)  # simulate's first write
+    monkeypatch.setattr(experiments.simulation, "write_synced", full)  # simulate's first write
     monkeypatch.setattr("experiments.provenance.write_record", full)  # calibrate's YAML, every record
     out = tmp_path / "o"
     assert run_main([a.format(out=out, sim=sim) for a in argv]) == 2

@@ -341,6 +341,9 @@ def _tiny_log(tmp_path: Path) -> Path:
     (dict(stride=0), r"^stride: must be an integer >= 1"),
     (dict(max_scans=0), r"^max_scans: must be an integer >= 1 \(or None: every scan\), got 0$"),  # no scan, silently
     (dict(max_scans=-1), r"^max_scans: must be an integer >= 1"),  # the same
+    # int64's bound named (round 7: `compare --max-scans 1e29`'s digits were "must be an integer >= 1, got 1000...")
+    (dict(max_scans=10**29), r"^max_scans: must be an integer in 1\.\.2\^63 - 1 \(or None: every scan\), got 10{29}$"),
+    (dict(stride=1e300), r"^stride: must be an integer in 1\.\.2\^63 - 1 .*, got 1e\+300$"),
 ])
 def test_log_source_refuses_counts_that_are_not_whole_numbers_from_1(tmp_path: Path, kw: dict, message: str) -> None:
     from experiments.compare import log_source

@@ -148,6 +148,35 @@ def test_a_table_of_numbers_beyond_any_plot_is_refused(tables, tmp_path, capsys,
         "parameter or metric that large)")
 
 
+@pytest.mark.parametrize("table, column, value, said", [
+    # each drawn on Fig. 7's log axis, exit 0: -9e99 and 0 under matplotlib's warnings, 9e99 as 100 decades of nothing
+    ("timing", "time_ms", -9e99, "holds -9e+99 (row 1), which is no time per scan (1 ns to a day, 1e-06 to 8.64e+07 ms)"),
+    ("timing", "time_ms", 9e99, "holds 9e+99 (row 1), which is no time per scan"),
+    ("timing", "time_ms", 0.0, "holds 0 (row 1), which is no time per scan"),
+    ("timing", "time_ms", np.inf, "holds inf (row 1), which is no time per scan"),
+    ("summary", "time_ms_median", -1.0, "holds -1 (row 1), which is no time per scan"),
+    ("summary", "f1", 7.0, "holds 7 (row 1), which is no line F1 score (0 to 1)"),  # drawn off its 0-1.02 axis
+    # a figure of one dot at 9e99 m, exit 0
+    ("trajectory", "x", 9e99, "holds 9e+99 (row 1), which is no position (x and y within +-1e+09 m, as every log and "
+                              "trajectory lmsbench reads or writes)"),
+    ("map", "y2", -2e9, "holds -2e+09 (row 1), which is no position"),
+    # a 25 % time above the median: "internal error: ValueError: 'xerr' must not contain negative values"
+    ("summary", "time_ms_p25", 0.5, "row 1 holds the times time_ms_p25 0.5, time_ms_median 0.05, time_ms_p75 0.06 ms, "
+                                    "not in that order"),
+])
+def test_a_time_score_or_position_the_figures_cannot_draw_as_one_is_refused(tables, tmp_path, capsys, table, column, value,
+                                                                           said):
+    """Round 7: finite values under the 1e100 bound that no time per scan (log axes), F1 or position can be."""
+    pd.DataFrame({"method": ["sensor", "iepf"], "f1": [0.9, 0.8], "time_ms_median": [0.05, 0.05],
+                  "time_ms_p25": [0.04, 0.04], "time_ms_p75": [0.06, 0.06]}).to_parquet(tables / "summary.parquet")
+    frame = pd.read_parquet(tables / f"{table}.parquet")
+    frame.loc[1, column] = value
+    frame.to_parquet(tables / f"{table}.parquet", index=False)
+    err = _refused(capsys, tables, tmp_path / "o")
+    assert err.startswith(f"lmsbench figures: error: --tables {tables}: table {table}")
+    assert said in err and err.endswith("a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+
+
 @pytest.mark.parametrize("edit, said", [
     # k 1e308 beside the sweep's k [3, 5] was "internal error: ValueError: arange: cannot compute length"
     (lambda t: t.assign(**{"extractor.k": [1e308, -1e308]}), "row 0 (extractor.k=1e+308, seed=0) is no cell"),

@@ -13,7 +13,7 @@ import pytest
 import yaml
 
 from experiments.cli import main
-from experiments.options import BENCH_OUTPUTS, BENCH_OWNER, SIM2REAL_OUTPUTS, SIM2REAL_OWNER, SWEEP_OUTPUTS, SWEEP_OWNER, OutTree
+from experiments.options import BENCH_OUTPUTS, BENCH_OWNER, SIM2REAL_OUTPUTS, SIM2REAL_OWNER, SIM2REAL_UNFINISHED, SWEEP_OUTPUTS, SWEEP_OWNER, OutTree
 
 
 @pytest.fixture(scope="module")
@@ -381,12 +381,16 @@ def test_a_demo_or_sim2real_stopped_at_its_first_files_is_taken_by_the_next_run(
     s2r = tmp_path / "s2r"
     argv = ["sim2real", str(sim / "scans.clf"), "--world", "office", "--seeds", "0", "--duration", "2", "--rate-hz", "1",
             "--stride", "4", "--max-scans", "10", "--fit-duration", "1", "--out", str(s2r)]  # the fit: 1 s runs, not 30
-    with monkeypatch.context() as m:
-        _stop_at_write(m, s2r, 2)
+    with monkeypatch.context() as m:  # at its figure (files: the marker, config.yaml, the tables, the report, the figure)
+        _stop_at_write(m, s2r, 6)
         assert main(argv) == 130
     capsys.readouterr()
+    # the tables and report without the figure and sensor.yaml: said by the marker (there was none), which holds the settings
+    assert sorted(p.name for p in s2r.iterdir() if not p.name.endswith(".tmp")) == [
+        SIM2REAL_UNFINISHED, "config.yaml", "scene.csv", "sim2real.csv", "sim2real.md"]
+    assert (s2r / SIM2REAL_UNFINISHED).read_text().split("\n")[2:] == (s2r / "config.yaml").read_text().split("\n")
     assert main(argv) == 0, capsys.readouterr().err
-    assert (s2r / "sim2real.png").is_file()
+    assert sorted(p.name for p in s2r.iterdir()) == sorted(SIM2REAL_OUTPUTS)  # the marker and temporary files gone
 
 
 def test_a_demo_run_again_leaves_no_figures_record_beside_its_own_figures(tmp_path, capsys, monkeypatch):

@@ -9,6 +9,7 @@ folder, one line, exit 2; the next simulate into it takes it and leaves no tempo
 from __future__ import annotations
 
 import json
+import re
 import os
 import signal
 import subprocess
@@ -182,3 +183,32 @@ def test_simulate_killed_while_writing_its_log_is_refused_and_rerun(tmp_path, ca
     _readers_refuse(folder, capsys, tmp_path)
     assert (folder / SIMULATE_UNFINISHED).is_file() and not (folder / "scans.clf").exists()
     _taken_by_the_next_run(folder, capsys)
+
+
+def test_the_sensor_yaml_of_an_unfinished_sim2real_folder_is_refused_by_its_readers(tmp_path, capsys):
+    """sim2real stopped while writing left its tables beside no sensor.yaml, or an earlier run's, with no
+    mark (round 7); now its .sim2real-unfinished (options.SIM2REAL_UNFINISHED) is left, and the readers of
+    its sensor.yaml refuse it, one line, exit 2, before any output. The folder here is made by hand (the
+    marker beside an earlier run's sensor.yaml); test_out_folders stops a real run at its figure."""
+    from sim import SensorConfig
+
+    from experiments.options import SIM2REAL_UNFINISHED
+    from experiments.sweep.kinds import _read_sensor_files
+    from experiments.sweep.spec import SweepSpecError
+
+    s2r = tmp_path / "s2r"
+    s2r.mkdir()
+    SensorConfig().to_yaml(s2r / "sensor.yaml", header="sensor model used by lmsbench sim2real x.clf")
+    (s2r / SIM2REAL_UNFINISHED).write_text("# lmsbench sim2real is writing this folder\n")
+    said = (f"{s2r / 'sensor.yaml'}: the lmsbench sim2real run that wrote {s2r} did not finish (it was stopped or killed "
+            f"while writing its files; {SIM2REAL_UNFINISHED} is left, holding its settings), so its sensor.yaml is an "
+            f"earlier run's or of a run cut short; run that lmsbench sim2real --out {s2r} again")
+    for argv in (["simulate", "--duration", "1", "--quiet"], ["compare", "office", "--duration", "1"]):
+        out = tmp_path / argv[0]
+        assert main([*argv, "--sensor", str(s2r / "sensor.yaml"), "--out", str(out)]) == 2
+        assert capsys.readouterr().err.splitlines() == [f"lmsbench {argv[0]}: error: --sensor {said}"]
+        assert not out.exists()
+    with pytest.raises(SweepSpecError, match=f"^sensor_file: {re.escape(said)}$"):
+        _read_sensor_files([{"sensor_file": str(s2r / "sensor.yaml")}])
+    (s2r / SIM2REAL_UNFINISHED).unlink()  # a finished folder's sensor.yaml reads
+    assert _read_sensor_files([{"sensor_file": str(s2r / "sensor.yaml")}])

@@ -376,6 +376,35 @@ def test_odometry_options_that_would_set_nothing_are_refused(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+def test_config_sections_no_run_of_the_command_reads_are_refused(sim_folder, tmp_path, capsys):
+    """Round 7: `slam RUN --config C --preset paper` with C's `loop_closure: {every: 5}` (the default pipeline's)
+    ran, exit 0, and wrote the unread setting into config.yaml as if it had run; so did the paper preset's
+    sections where no paper preset ran. Refused before any work; an earlier run's config.yaml (every section at
+    its defaults but what was set) is taken, and a section a baseline reads is taken."""
+    from experiments.cli import main
+
+    (tmp_path / "lc.yaml").write_text("loop_closure: {every: 5}\nkeyframes: {distance: 0.4}\n")
+    (tmp_path / "pa.yaml").write_text("prealign: {radius: 5}\n")
+    out = tmp_path / "o"
+    for argv, said in [
+        (["--config", str(tmp_path / "lc.yaml"), "--preset", "paper"],
+         f"{tmp_path / 'lc.yaml'}: keyframes.distance, loop_closure.every set the default pipeline, which --preset paper "
+         "does not run (its baselines are the paper preset's too): drop them, or run the default preset"),
+        (["--config", str(tmp_path / "pa.yaml"), "--no-paper-baseline", "--no-odometry-baseline"],
+         f"{tmp_path / 'pa.yaml'}: prealign.radius sets the paper preset's filter, which this run does not use"),
+    ]:
+        assert main(["slam", str(sim_folder), "--out", str(out), "--quiet", *argv]) == 2
+        err = capsys.readouterr().err.splitlines()
+        assert len(err) == 1 and said in err[0], err
+        assert not out.exists()
+    from experiments.commands.slam import _config
+    from experiments.cli import build_parser
+
+    for argv in (["--config", str(tmp_path / "pa.yaml")], ["--config", str(tmp_path / "lc.yaml")]):  # read by a run
+        args = build_parser().parse_args(["slam", str(sim_folder), "--out", str(out), *argv])
+        assert _config(args).preset == "default"
+
+
 def test_odometry_drives_the_default_pipeline_and_names_its_rows(tmp_path, capsys):
     """``lmsbench slam --odometry`` with the default preset: config.yaml says so, the summary
     table's rows are "slam (odometry)" and the paper preset with the same motion input, and the

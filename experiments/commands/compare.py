@@ -17,7 +17,7 @@ from lms200.yamlio import dump as dump_yaml
 
 from experiments.overrides import check_set_once, set_option
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options, report_skipped
-from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, SIMULATE_OUTPUTS, listed_seed, InputError, check_methods, check_out,
+from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, check_sim2real_finished, SIMULATE_OUTPUTS, listed_seed, InputError, check_methods, check_out,
                                  check_out_spares, check_seeds, count, plain_number, path_arg, scan_rate, text)
 
 
@@ -157,6 +157,7 @@ def run(args: argparse.Namespace) -> int:
     if args.sensor is not None:
         import sim
 
+        check_sim2real_finished(args.sensor, "--sensor")
         try:
             sensor = sim.SensorConfig.from_yaml(args.sensor)
         except LmsbenchError:

@@ -21,6 +21,7 @@ from experiments.options import (
     check_out,
     check_out_spares,
     check_seeds,
+    check_sim2real_finished,
     check_yaml,
     count,
     scan_rate,
@@ -98,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
     sensor = None
     if args.sensor is not None:
         check_yaml(args.sensor, "a sensor YAML")
+        check_sim2real_finished(args.sensor, "--sensor")
         sensor = SensorConfig.from_yaml(args.sensor)
     first = next(iter(read_log(args.log, **read_options)), None)  # the log's geometry, before any work
     if first is not None:

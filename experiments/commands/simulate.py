@@ -8,7 +8,7 @@ from lms200.yamlio import load as load_yaml
 import argparse
 import math
 
-from experiments.options import (WORLDS, DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, SIMULATE_OWNER, InputError, check_file,
+from experiments.options import (WORLDS, DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, SIMULATE_OWNER, InputError, check_file, check_sim2real_finished,
                                  check_world_file,
                                  check_out, check_out_spares, check_yaml, known_worlds, number, path_arg, scan_rate, world_hint)
 
@@ -115,6 +115,7 @@ def _config(args: argparse.Namespace):
     if args.sensor is not None:
         if args.ideal:
             raise InputError("--sensor and --ideal exclude each other (the file holds the whole sensor model)")
+        check_sim2real_finished(args.sensor, "--sensor")
         try:
             sensor = SensorConfig.from_yaml(args.sensor)
         except LmsbenchError:

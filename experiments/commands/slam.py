@@ -223,7 +223,37 @@ def _config(args: argparse.Namespace):
         why = "--no-odometry-baseline" if args.no_odometry_baseline else "--odometry, which has no separate odometry baseline"
         raise InputError(f"{', '.join(paper_only)} set the paper preset's filter, which this run does not use (the "
                          f"default pipeline, with --no-paper-baseline and {why}): add --preset paper or drop them")
+    if cfg.preset == "paper":  # no run of it is the default pipeline (nor any baseline): its sections unread
+        _refuse_unread_sections(cfg, DEFAULT_ONLY_SECTIONS, args.config,
+                                "the default pipeline, which --preset paper does not run (its baselines are the paper "
+                                "preset's too): drop them, or run the default preset")
+    elif args.no_paper_baseline and (args.no_odometry_baseline or cfg.motion.use_odometry):
+        _refuse_unread_sections(cfg, PAPER_ONLY_SECTIONS, args.config,
+                                "the paper preset's filter, which this run does not use (the default pipeline, with "
+                                "--no-paper-baseline and no odometry baseline): add --preset paper or drop them")
     return cfg
+
+
+#: the SlamConfig sections only the default pipeline reads, and only the paper preset's filter (docs/slam.md's table)
+DEFAULT_ONLY_SECTIONS = ("alignment", "keyframes", "loop_closure")
+PAPER_ONLY_SECTIONS = ("association", "landmarks", "prealign")
+
+
+def _refuse_unread_sections(cfg: "SlamConfig", sections: tuple[str, ...], where: Path | None, what: str) -> None:
+    """InputError naming the fields of ``sections`` that ``cfg`` sets to other than their defaults (a --config
+    file's), which no run of this command reads: `slam RUN --config C --preset paper` with C's
+    `loop_closure: {every: 5}` ran, exit 0, and wrote the unread setting into config.yaml as if it had run
+    (round 7). An earlier run's config.yaml, every section at its defaults but the ones set, is taken."""
+    import dataclasses
+
+    from slam import SlamConfig
+
+    defaults = SlamConfig()
+    changed = [f"{section}.{f.name}" for section in sections for f in dataclasses.fields(getattr(cfg, section))
+               if getattr(getattr(cfg, section), f.name) != getattr(getattr(defaults, section), f.name)]
+    if changed:
+        shown = ", ".join(changed[:3]) + (f" and {len(changed) - 3} more" if len(changed) > 3 else "")
+        raise InputError(f"{where}: {shown} set{'s' if len(changed) == 1 else ''} {what}")
 
 
 def _warn_unread(config: "SlamConfig", records: list, where: Any) -> None:

@@ -13,11 +13,13 @@ Figure names (files ``NAME.png``, ``NAME.pdf`` and the data ``NAME*.csv`` in the
 
 from __future__ import annotations
 
+from lms200.records import MAX_COORD_M
 from lms200.yamlio import load as load_yaml
 
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
 import pandas as pd
 
 from . import draw
@@ -134,7 +136,61 @@ def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
             raise LmsbenchError(f"{where}: table {name}'s column {blank[0]} holds no finite number ({len(table)} rows, "
                                 "all nan or infinite), so its figure would be empty: a damaged table, or not one of "
                                 "`lmsbench figures` or `lmsbench demo`")
+    _check_ranges(tables, where)
     _check_shapes(tables, where)
+
+
+#: times per scan (ms) the figures draw on log axes (Fig. 7, accuracy_speed): from 1 ns, the step of the
+#: clock compare times with (``perf_counter_ns``), to a day; zero or less has no place on a log axis
+MIN_TIME_MS = 1e-6
+MAX_TIME_MS = 86_400_000.0
+#: the bound of a position's x and y (m) the figures draw (Figs. 9, 10), every log's and trajectory's of lmsbench
+MAX_POSITION_M = MAX_COORD_M
+_TIME = (MIN_TIME_MS, MAX_TIME_MS, "time per scan (1 ns to a day, 1e-06 to 8.64e+07 ms)")
+_POSITION = (-MAX_POSITION_M, MAX_POSITION_M, f"position (x and y within +-{MAX_POSITION_M:g} m, as every log and "
+                                             "trajectory lmsbench reads or writes)")
+#: each table's columns whose finite values must lie in bounds (nan is a row without that number): low, high,
+#: and what a value is, said when one lies outside
+PLOTTED_RANGES: dict[str, dict[str, tuple[float, float, str]]] = {
+    "timing": {"time_ms": _TIME},
+    "summary": {**{c: _TIME for c in ("time_ms_median", "time_ms_p25", "time_ms_p75")},
+                "f1": (0.0, 1.0, "line F1 score (0 to 1)")},
+    **{name: {c: _POSITION for c in numbers} for name, (_, numbers) in TABLE_COLUMNS.items()
+       if name in ("trajectory", "map") or name.endswith(("_points", "_lines", "_corners"))},
+}
+
+
+def _check_ranges(tables: dict[str, pd.DataFrame], where: str) -> None:
+    """LmsbenchError naming the table, column and row of a value the figures cannot draw as what it is:
+    a time per scan (Fig. 7's and accuracy_speed's log axes) of zero or less, infinite, below 1 ns or beyond
+    a day, an F1 outside [0, 1] (its axis is 0 to 1.02), a position beyond +-MAX_POSITION_M, and a summary
+    row whose 25 % time exceeds its median or its median its 75 % (the error bars' lengths). Before, -9e99 or
+    0 ms was drawn under matplotlib's warnings (or none: a line off the log axis), a point or trajectory at
+    9e99 m as a figure of one dot, exit 0, and a 25 % time above the median was "internal error: ValueError:
+    'xerr' must not contain negative values" after figures.yaml (the wrong-input hunt, round 7)."""
+    from lms200 import LmsbenchError
+
+    for name, columns in PLOTTED_RANGES.items():
+        table = tables.get(name)
+        if table is None or not len(table) or (name == "summary" and "f1" not in table):
+            continue
+        for column, (low, high, what) in columns.items():
+            values = table[column].to_numpy(dtype=float, na_value=np.nan)
+            bad = ~np.isnan(values) & ~((values >= low) & (values <= high))
+            if bad.any():
+                row = int(np.argmax(bad))
+                raise LmsbenchError(f"{where}: table {name}'s column {column} holds {values[row]:g} (row {row}), which is no "
+                                    f"{what}: a damaged table, or not one of `lmsbench figures` or `lmsbench demo`")
+        if name == "summary":
+            p25, median, p75 = (table[c].to_numpy(dtype=float, na_value=np.nan)
+                                for c in ("time_ms_p25", "time_ms_median", "time_ms_p75"))
+            unordered = (p25 > median) | (median > p75)  # False where any is nan
+            if unordered.any():
+                row = int(np.argmax(unordered))
+                raise LmsbenchError(f"{where}: table summary's row {row} holds the times time_ms_p25 {p25[row]:g}, "
+                                    f"time_ms_median {median[row]:g}, time_ms_p75 {p75[row]:g} ms, not in that order "
+                                    "(quantiles of one method's times): a damaged table, or not one of `lmsbench "
+                                    "figures` or `lmsbench demo`")
 
 
 def _check_shapes(tables: dict[str, pd.DataFrame], where: str) -> None:

@@ -249,12 +249,15 @@ def _read_sensor_files(cells: Iterable[dict[str, Any]]) -> dict[str, Any]:
     (raises LmsbenchError naming a file that does not read as one)."""
     from sim import SensorConfig
 
+    from experiments.options import check_sim2real_finished
+
     from .spec import SweepSpecError
 
     paths = sorted({str(c["sensor_file"]) for c in cells if c.get("sensor_file") is not None})
     files = {}
     for path in paths:
         try:
+            check_sim2real_finished(path)
             files[path] = SensorConfig.from_yaml(path)
         except LmsbenchError as exc:
             raise SweepSpecError(f"sensor_file: {exc}{_relative_hint(path)}") from None

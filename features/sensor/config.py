@@ -69,9 +69,10 @@ class SensorMethodConfig:
     def __post_init__(self) -> None:
         checks.integer("k", self.k, 1, checks.MAX_BEAMS // 2)  # a window wider than any scan taken: no line
         for name in ("sigma_r", "sigma_r_cm"):
-            if getattr(self, name) != AUTO:
+            value = getattr(self, name)
+            if not (isinstance(value, str) and value == AUTO):  # an array's != was elementwise: numpy's ValueError
                 # 'AUTO' said as no number, with no word of "auto"; 1e300 or 1e-300 found no line, silently
-                checks.noise_sigma(name, getattr(self, name), f", or '{AUTO}'")
+                checks.noise_sigma(name, value, f", or '{AUTO}'")
         checks.length("min_range", self.min_range)  # 1e300: every beam invalid, no line, silently
         for name in ("ad_tau", "inlier_tau", "curvature_tau"):  # tests every line's beams must pass:
             checks.tau(name, getattr(self, name))  # 0 or 1e-300 passed none, F1 0, exit 0
