@@ -31,6 +31,7 @@ import sys
 from typing import Any, Callable, Iterator, Sequence
 
 from lms200 import LmsbenchError
+from lms200.errors import one_line
 from lms200.finite import fixed
 
 
@@ -57,7 +58,7 @@ class UserMethodFailed(UserMethodError):
         """This error, naming its scan as ``index`` (0-based) of ``source`` (a driver that knows
         the source better than the one it called names it again: the last place given stays)."""
         self.place = f"on {source} scan {index}"
-        self.args = (self._message(),)
+        self.args = (one_line(self._message()),)  # one line, as LmsbenchError makes every message
         return self
 
     def at_scan_of(self, source: str, scans: Sequence[Any], numbers: Sequence[int] | None = None) -> "UserMethodFailed":

@@ -17,7 +17,6 @@ from __future__ import annotations
 import io
 import math
 import os
-import re
 import struct
 import time
 from contextvars import ContextVar
@@ -31,7 +30,7 @@ from typing import Any, Callable, ClassVar, Iterable, Iterator
 import numpy as np
 
 from .codes import finite_negative
-from .errors import InputError, LmsbenchError, LogNotFoundError
+from .errors import InputError, LmsbenchError, LogNotFoundError, one_line
 from . import laser_geometry
 from .records import Pose2D, Record, SkipLog, pose_problem, stamp_problem
 from .scan import Scan, snap_float32_angle
@@ -62,16 +61,8 @@ class BagError(LmsbenchError):
     a ROS 2 bag's metadata.yaml with the text under a caret; found by fuzzing ``read_log``)."""
 
     def __init__(self, message: object = "", *args: object) -> None:
-        super().__init__(_one_line(str(message)), *args)
+        super().__init__(one_line(str(message)), *args)
 
-
-def _one_line(text: str) -> str:
-    """``text`` with each line break (and the blanks around it: the indent under PyYAML's caret) one
-    space; other whitespace kept (every run was collapsed: a path with two spaces was quoted wrongly)."""
-    return _LINE_BREAK.sub(" ", text).strip() if "\n" in text or "\r" in text else text
-
-
-_LINE_BREAK = re.compile(r"[ \t]*[\r\n]+\s*")
 
 #: characters of a rosbags error quoted in a BagError (a message definition it cannot parse is quoted whole)
 MAX_QUOTED_CHARS = 300
@@ -79,7 +70,7 @@ MAX_QUOTED_CHARS = 300
 
 def _quoted(exc: BaseException) -> str:
     """``exc``'s text (or its type's name) in one line of at most MAX_QUOTED_CHARS characters."""
-    text = _one_line(str(exc)) or type(exc).__name__
+    text = one_line(str(exc)) or type(exc).__name__
     return text if len(text) <= MAX_QUOTED_CHARS else text[: MAX_QUOTED_CHARS - 3] + "..."
 
 

@@ -25,20 +25,30 @@ def in_chain(exc: BaseException, kind: type[_E]) -> _E | None:
 
 
 #: a line break with the blanks around it (LmsbenchError's messages are one line)
-_LINE_BREAK = re.compile(r"[ \t]*[\r\n]+[ \t]*")
+_LINE_BREAK = re.compile(r"[ \t]*[\r\n]+\s*")
+
+
+def one_line(text: str) -> str:
+    """``text`` with each line break (``\\n``, ``\\r``, and the blanks around it: the indent under
+    PyYAML's caret) one space, and no blanks at its ends when it had a break; other whitespace kept
+    (a path with two spaces stays itself). Text without a line break is returned as it is."""
+    return _LINE_BREAK.sub(" ", text).strip() if "\n" in text or "\r" in text else text
 
 
 class LmsbenchError(Exception):
     """A known error whose message says what went wrong and what to do about it, on one line: a
-    message's line breaks (and the spaces around them) become one space, so a value quoted by its
-    repr, a 2-D array's spanning lines, does not break it (``Scan(ranges, angle_min=np.ones((2, 3)),
-    ...)``, ``extract(scan, method=array)``, ``read_log(path, topic=array)``: the API raised
-    multi-line errors from the ~90 messages that quote a value with ``!r``; fuzz round 7)."""
+    message's line breaks (and the spaces around them) become one space (:func:`one_line`), so a
+    value quoted by its repr, a 2-D array's spanning lines, does not break it (``Scan(ranges,
+    angle_min=np.ones((2, 3)), ...)``, ``extract(scan, method=array)``, ``read_log(path,
+    topic=array)``: the API raised multi-line errors from the ~90 messages that quote a value with
+    ``!r``; fuzz round 7). A subclass that sets its ``args`` again later passes them through
+    :func:`one_line` too. Keyword arguments go to the other base (``ImportError``'s ``name``,
+    ``path``)."""
 
-    def __init__(self, *args: object) -> None:
-        if len(args) == 1 and isinstance(args[0], str) and "\n" in args[0]:
-            args = (_LINE_BREAK.sub(" ", args[0]),)
-        super().__init__(*args)
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        if len(args) == 1 and isinstance(args[0], str):
+            args = (one_line(args[0]),)
+        super().__init__(*args, **kwargs)
 
 
 class NumbaUnavailableError(LmsbenchError, ImportError):

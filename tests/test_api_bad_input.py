@@ -248,6 +248,19 @@ def test_an_array_given_for_a_scalar_is_an_error_of_one_line(call, starts: str) 
     assert str(info.value).startswith(starts) and "\n" not in str(info.value)
 
 
+def test_error_messages_stay_one_line_when_named_again_and_keep_keyword_arguments() -> None:
+    """Review of round 7: a lone \\r stayed, a trailing break left a blank, a user extractor's
+    multi-line error came back on two lines once ``at`` named its scan (``args`` set again), and
+    ImportError's ``name=`` of NumbaUnavailableError was a TypeError."""
+    from experiments.user_methods import UserMethodFailed
+    from lms200.errors import NumbaUnavailableError
+
+    assert [str(LmsbenchError(m)) for m in ("a\rb", "end\n", "a\n \n b", "two  spaces")] == ["a b", "end", "a b", "two  spaces"]
+    failed = UserMethodFailed("m:f", "raised ValueError: bad value:\n  line two", Scan.lms200(np.full(361, 3.0)), True)
+    assert str(failed.at("office:0", 3)) == "your extractor m:f raised ValueError: bad value: line two on office:0 scan 3"
+    assert NumbaUnavailableError("no numba", name="numba").name == "numba"
+
+
 @pytest.mark.parametrize("method", [["sensor"], 5])
 def test_extract_method_that_is_not_a_name(method: object) -> None:
     from features import extract
