@@ -392,6 +392,11 @@ def test_config_sections_no_run_of_the_command_reads_are_refused(sim_folder, tmp
          "does not run (its baselines are the paper preset's too): drop them, or run the default preset"),
         (["--config", str(tmp_path / "pa.yaml"), "--no-paper-baseline", "--no-odometry-baseline"],
          f"{tmp_path / 'pa.yaml'}: prealign.radius sets the paper preset's filter, which this run does not use"),
+        # the review: an input without odometry runs no odometry baseline either (ran, exit 0)
+        (["--config", str(tmp_path / "pa.yaml"), "--no-paper-baseline"],
+         f"{tmp_path / 'pa.yaml'}: prealign.radius sets the paper preset's filter, which this run does not use (the "
+         f"default pipeline, with --no-paper-baseline, on {sim_folder}, which has no odometry for an odometry baseline)"),
+        (["--corners", "--no-paper-baseline"], "--corners set the paper preset's filter, which this run does not use"),
     ]:
         assert main(["slam", str(sim_folder), "--out", str(out), "--quiet", *argv]) == 2
         err = capsys.readouterr().err.splitlines()
