@@ -418,7 +418,9 @@ def read_relations(path: str | Path) -> np.ndarray:
         unit = abs(math.hypot(*v[4:8]) - 1.0) <= QUATERNION_NORM_TOLERANCE
         problem = stamp_problem(v[0], "relation row's t1") or stamp_problem(v[1], "relation row's t2")
         if problem is not None:
-            if unit and unit_quaternions == len(rows):  # a TUM row's x or y read as a stamp: a slam run's trajectory.tum
+            # a TUM row's x or y read as a stamp (a slam run's trajectory.tum): every row so far a unit quaternion,
+            # and one of them turned (its qx, qy or qz not 0); a relation of yaw +-1 rad alone has norm 1 too
+            if unit and unit_quaternions == len(rows) and (turned or any(v[4:7])):
                 raise LmsbenchError(_not_relations(path))  # was "t2 -0.000217 s is outside 0 .. 2^32 s" (round 7)
             raise LogFormatError(path, no, problem)
         problem = (pose_problem(v[2], v[3], 0.0, "relation row's motion")

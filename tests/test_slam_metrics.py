@@ -167,9 +167,10 @@ def test_a_tum_trajectory_given_as_relations_is_refused_naming_both_formats(tmp_
     write_tum(p, np.arange(3.0), np.array([[0.0, 0.0, 0.0], [-0.001, 0.0, 0.01], [0.002, 0.0, 0.02]]))
     with pytest.raises(LmsbenchError, match=r"groundtruth\.tum: a TUM trajectory \(t x y z qx qy qz qw"):
         read_relations(p)
-    p.write_text("0 -1 1 0 0 0 0 0.3\n")  # a relation's own bad stamp is said as it was
-    with pytest.raises(LogFormatError, match=r"groundtruth\.tum:1: relation row's t2 -1.000000 s is outside"):
-        read_relations(p)
+    for row in ("0 -1 1 0 0 0 0 0.3\n", "5 -3 1 0 0 0 0 1.0\n"):  # a relation's own bad stamp is said as it was,
+        p.write_text(row)  # also where its yaw of 1 rad makes (z, roll, pitch, yaw) of norm 1 (the review)
+        with pytest.raises(LogFormatError, match=r"groundtruth\.tum:1: relation row's t2 -[13].000000 s is outside"):
+            read_relations(p)
     # relations whose yaw is 1 rad (z, roll, pitch 0) and relations with a 3-D part still read (the climb of
     # z = 0.5 m over 1 m, 26.6 deg, said: tests/test_review_silent_passes.py)
     p.write_text("0 1 1 0 0 0 0 1.0\n1 2 1 0 0 0 0 -1.0\n2 3 1 0 0.5 0 0 0.3\n")
