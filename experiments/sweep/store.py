@@ -67,9 +67,9 @@ class CellStore:
             if p.is_file() and not os.access(p, os.R_OK):  # was "damaged ...; computed again": the finished cell lost
                 raise LmsbenchError(f"{p}: a finished cell's file that cannot be read (permission denied); make it "
                                     f"readable (chmod u+r) to resume the sweep with it, or remove it to compute the cell again")
-            if not _whole_parquet(p):
+            if (meta := _whole_parquet(p)) is None:
                 damaged.append(p.name)
-            elif (held := _cell_of(p)) != p.stem:
+            elif (held := _cell_of(p, meta)) != p.stem:
                 foreign.append(f"{p.name} holds {held}")
             else:
                 keys.add(p.stem)
@@ -124,30 +124,28 @@ class CellStore:
         return _tidy(pd.concat(frames, ignore_index=True, sort=False).reindex(columns=columns))
 
 
-def _whole_parquet(path: Path) -> bool:
-    """``path`` holds a whole Parquet file of one row with a ``status`` and a ``cell`` column, by its
-    footer alone (a cut file has none; the row itself is read by :meth:`CellStore.read`)."""
+def _whole_parquet(path: Path) -> Any:
+    """The footer (pyarrow's ``FileMetaData``) of ``path`` where it holds a whole Parquet file of one
+    row with a ``status`` and a ``cell`` column, else None: by its footer alone (a cut file has none;
+    the row itself is read by :meth:`CellStore.read`)."""
     import pyarrow.parquet as pq
 
     if not path.is_file():  # a pipe in cells/ was waited on for ever (`lmsbench sweep` resuming hung; fuzzing)
-        return False
+        return None
     try:
         meta = pq.read_metadata(path)
     except Exception:  # noqa: BLE001 - pyarrow's ArrowInvalid, OSError: damaged
-        return False
-    return meta.num_rows == 1 and {"status", "cell"} <= set(meta.schema.names)
+        return None
+    return meta if meta.num_rows == 1 and {"status", "cell"} <= set(meta.schema.names) else None
 
 
-def _cell_of(path: Path) -> str | None:
-    """The key in the ``cell`` column of a whole cell file (see :func:`_whole_parquet`), from the
-    footer's statistics (the runner's files carry them; the column is read where they are missing).
+def _cell_of(path: Path, meta: Any) -> str | None:
+    """The key in the ``cell`` column of a whole cell file, from its footer ``meta`` (that
+    :func:`_whole_parquet` read: read once a cell, which a resume does for every cell)'s statistics (the runner's files carry them; the column is read where they are missing).
     A file of another cell's row under this name was taken as this cell finished: a sweep
     said "3 already done", exit 0, and its table lacked the cell (copied over by the other's row),
     which `figures --sweep` then asked to finish by running the sweep again, which did nothing."""
-    import pyarrow.parquet as pq
-
     try:
-        meta = pq.read_metadata(path)
         stats = meta.row_group(0).column(meta.schema.names.index("cell")).statistics if meta.num_row_groups == 1 else None
         if stats is not None and stats.has_min_max and stats.min == stats.max and isinstance(stats.min, str):
             return stats.min
