@@ -140,9 +140,9 @@ def _whole_parquet(path: Path) -> Any:
 
 
 def _cell_of(path: Path, meta: Any) -> str | None:
-    """The key in the ``cell`` column of a whole cell file, from its footer ``meta`` (that
-    :func:`_whole_parquet` read: read once a cell, which a resume does for every cell)'s statistics (the runner's files carry them; the column is read where they are missing).
-    A file of another cell's row under this name was taken as this cell finished: a sweep
+    """The key in the ``cell`` column of a whole cell file, from the statistics of its footer
+    ``meta`` (the one :func:`_whole_parquet` read: a resume reads each cell's footer once); the
+    runner's files carry them, and the column is read where they are missing. A file of another cell's row under this name was taken as this cell finished: a sweep
     said "3 already done", exit 0, and its table lacked the cell (copied over by the other's row),
     which `figures --sweep` then asked to finish by running the sweep again, which did nothing."""
     try:
