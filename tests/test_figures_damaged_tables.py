@@ -12,6 +12,7 @@ import pytest
 import yaml
 
 from experiments.cli import main
+from lms200 import LmsbenchError
 
 
 @pytest.fixture
@@ -442,3 +443,21 @@ def test_a_sweep_name_that_is_no_plain_name_is_refused(sweeps, tables, tmp_path,
     assert err.endswith("is no name a file can take (text of at most 150 characters, without / and not starting with .), "
                         "and it names the sweep's plots (sweep_NAME_METRIC): not a sweep.yaml `lmsbench sweep` wrote (edited?)")
     assert sorted(p.name for p in (tmp_path / "deep" / "er").iterdir()) == ["s"]
+
+
+def test_times_scores_and_positions_at_the_bounds_and_nan_rows_are_taken(tables) -> None:
+    """The review of round 7: the checks above refuse nothing at their bounds (1 ns and a day a scan, F1 0
+    and 1, +-1e9 m) nor a NaN row (a method with no time, a row lmsbench leaves empty on purpose)."""
+    from experiments.figures.make import check_tables
+
+    frames = {name: pd.read_parquet(tables / f"{name}.parquet") for name in ("timing", "trajectory", "map")}
+    frames["timing"]["time_ms"] = [1e-6, 8.64e7, np.nan]
+    frames["trajectory"]["x"] = [1e9, -1e9, np.nan, 0.0]
+    frames["map"]["y2"] = [-1e9, np.nan]
+    frames["summary"] = pd.DataFrame({"method": ["sensor", "iepf", "hough"], "f1": [0.0, 1.0, np.nan],
+                                      "time_ms_median": [1e-6, 0.05, np.nan], "time_ms_p25": [1e-6, 0.04, np.nan],
+                                      "time_ms_p75": [1e-6, 0.06, np.nan]})
+    check_tables(frames, str(tables))  # raises on a refused value
+    frames["timing"].loc[0, "time_ms"] = 0.9e-6  # and just beyond a bound is refused (the test can fail)
+    with pytest.raises(LmsbenchError, match=r"holds 9e-07 \(row 0\), which is no time per scan"):
+        check_tables(frames, str(tables))
