@@ -269,6 +269,23 @@ def test_a_large_text_file_that_is_no_log_is_refused_after_its_first_lines(tmp_p
     assert len(list(read_log(late))) == 1
 
 
+def test_a_file_of_long_lines_that_is_no_log_is_said_by_its_lines(tmp_path: Path, monkeypatch) -> None:
+    """Round 9: the first lines' check reads 4096-character pieces and counted each as a line, so a
+    single 512 MB line of junk was "none of its first 10,000 lines starts with a message name", and 3
+    lines of 9,000 characters "none of its 9 lines". What was seen is said (the bound lowered to 10 pieces
+    to keep the file small: 10,000 pieces, 41 MB, before)."""
+    monkeypatch.setattr("lms200.carmen.DEFAULT_TOPIC_LINES", 10)
+    one = tmp_path / "one.clf"
+    one.write_text("x" * (20 * 4096))
+    with pytest.raises(LogFormatError, match=r"one.clf: not a CARMEN log: its first line runs on past 40,960 characters "
+                                             r"with no line end and starts with no message name \(FLASER, "):
+        list(read_log(one))
+    three = write(tmp_path, "three.clf", ["y" * 9000] * 3)
+    with pytest.raises(LogFormatError, match=r"three.clf: not a CARMEN log: none of its 3 lines \(comments aside\) "
+                                             "starts with a message name"):
+        list(read_log(three))
+
+
 def test_a_log_of_blank_lines_is_refused_after_a_bounded_run(tmp_path: Path) -> None:
     """A gzip of 100 MB of blank lines (10^8 of them) was read to its end twice, 48 s, to say it held
     no laser line: blank and comment lines were not counted by the first lines' check. A run of more
