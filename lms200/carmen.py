@@ -280,7 +280,8 @@ class CarmenReader:
     Args:
         path: CARMEN log, plain or compressed (gzip, bzip2 or xz, told by the first bytes).
         skip_bad_lines: skip malformed lines (recorded in ``stats.skipped``) instead of raising; a
-            gzip stream that cannot be decompressed further ends the pass (``stats.stopped``).
+            gzip stream that cannot be decompressed further ends the pass (``stats.stopped``), and is
+            a LogFormatError where the pass gave no record before it (as every command refuses it).
         topic: the laser message kind to read (FLASER, RLASER, ROBOTLASER1 / 2, RAWLASER1 .. 4); by
             default the first kind with poses met in the log, else the first RAWLASER kind (see
             the module docstring; the others are counted in ``stats.messages``).
@@ -290,7 +291,7 @@ class CarmenReader:
 
     Raises:
         LogFormatError: naming the file and line, for a malformed line (unless skipped) or data that
-            cannot be decompressed.
+            cannot be decompressed (under ``skip_bad_lines``: before any record, "no scan read").
         InputError: a ``topic`` that is no laser kind (the message lists the log's laser lines).
     """
 
@@ -488,14 +489,19 @@ class CarmenReader:
                 self.stats.mount, self.stats.mounted = mount, self.stats.mounted + 1
             return moved
 
+        n = 0  # records given
         try:
             for rec in self._read(flushes, mounts):
+                n += 1
                 yield given(rec)
         except Exception:  # a bad line ends the pass: the records held for a later line come first
             for flush in flushes:
                 for rec in flush():
                     yield given(rec)
             raise
+        if n == 0 and self.stats.stopped is not None:  # wholly damaged under skip_bad_lines: 0 records, silently,
+            # where every command refused it (lmsbench info, compare: "no scan read"; a broken head in check_log)
+            raise LogFormatError(self.path, None, f"no scan read: the file stops being readable at {self.stats.stopped}")
 
     def _read(self, flushes: list[Callable[[], Iterator[Record]]], mounts: dict[int, Pose2D]) -> Iterator[Record]:
         default = self._survey()
