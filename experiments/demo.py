@@ -108,7 +108,8 @@ def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -
                       # the log as a path from here: its bare name did not run from the checkout (a review)
                       advice=f"a longer demo --duration, or `{full_run}` for the full comparison")
     for warning in result.warnings:  # in the report and, as sim2real says them, on the terminal
-        log(f"warning: sim2real: {warning}")
+        if warning not in result.warned_early:  # said before the work (too few real scans)
+            log(f"warning: sim2real: {warning}")
     from experiments.provenance import versions
 
     write_outputs(result, out / "sim2real", str(path), dict(log=str(path), **settings, versions=versions()))

@@ -25,7 +25,7 @@ import yaml
 
 from lms200.carmen import COMPRESSION_SUFFIXES, PIPE_REASON, READ_ERRORS, archive_kind, compression, open_bytes
 from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
-from lms200.logs import SIMULATE_LOG
+from lms200.logs import SIMULATE_LOG, SIMULATE_OTHER_FILES
 from lms200.timing import MAX_DURATION_S, MIN_DURATION_S  # a simulated run's bounds (s)
 from lms200.yamlio import load as load_yaml, size_problem
 
@@ -652,9 +652,10 @@ def check_log(path: str | os.PathLike) -> Path:
         return p
     if stat.S_ISFIFO(p.stat().st_mode):  # <(zcat LOG): refused as every pipe is, saying why
         raise InputError(f"{p}: a pipe (such as <(zcat LOG)), not a file: {PIPE_REASON}")
-    from lms200.logs import bag_member_message
+    from lms200.logs import bag_member_message, simulate_member_message
 
-    member = bag_member_message(p)  # a bag's .db3 was "a binary file", its metadata.yaml "not a CARMEN log"
+    # a bag's .db3 was "a binary file", its metadata.yaml "not a CARMEN log"; a simulate folder's world.json too
+    member = bag_member_message(p) or simulate_member_message(p, give_folder=True)
     if member is not None:
         raise InputError(member)
     head = _head(p)
@@ -668,7 +669,7 @@ def check_log(path: str | os.PathLike) -> Path:
     return p
 
 
-SIMULATE_OUTPUTS = (SIMULATE_LOG, "groundtruth.tum", "world.json", "config.yaml", "map.png")
+SIMULATE_OUTPUTS = (SIMULATE_LOG, *SIMULATE_OTHER_FILES)
 #: The hidden file ``lmsbench simulate`` writes into its --out folder before any of its outputs and
 #: removes once they are all whole (experiments.simulation.run_simulation): a run stopped or killed
 #: while writing (Ctrl-C, SIGKILL, a crash, a power loss) leaves it, and the readers of the folder

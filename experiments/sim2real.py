@@ -26,6 +26,7 @@ lines per scan, segment lengths, explained fraction by method), ``sensor.yaml`` 
 from __future__ import annotations
 
 import math
+import warnings
 from array import array
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,6 +35,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 
 from lms200 import InputError, LmsbenchError, Record, read_log
+from lms200.errors import LmsbenchWarning
 from lms200.finite import shown
 from lms200.timing import check_scan_rate
 from lms200.calibration import missing_readings
@@ -116,7 +118,8 @@ DEFAULT_RATE_HZ = 0.25  # simulated scans kept per second in the report's runs
 # Fewer scans than this on a side (the real scans used, the report's simulated scans, the probe
 # scans behind each probe value of a fit) and the figures are not worth comparing: the report's
 # worlds keep 30 scans each, and one world's explained fraction already spreads by 0.04-0.06 (1 sd)
-# from seed to seed (DEFAULT_SEEDS). sim2real still reports, with a warning (Sim2RealResult.warnings).
+# from seed to seed (DEFAULT_SEEDS). sim2real still reports, with a warning (Sim2RealResult.warnings;
+# too few real scans is warned once the log is read, before the work).
 MIN_SCANS = 30
 RELIEF_WINDOW = 10  # beams in each straight stretch either side of a joint
 RELIEF_RANGE_M = (0.5, 4.0)  # beams used (m)
@@ -271,6 +274,7 @@ class Sim2RealResult:
     relief: ReliefFit | None = None  # the mit worlds' wall relief fitted to the log (fit_relief)
     probe_seeds: list[int] = field(default_factory=list)  # the worlds of the fits' probe runs (none: no fit)
     warnings: list[str] = field(default_factory=list)  # one line each: samples too small to mean much (MIN_SCANS)
+    warned_early: list[str] = field(default_factory=list)  # of ``warnings``, those warned (LmsbenchWarning) before the work
     limits_source: str = ""  # where ``limits`` come from (odometry_limits_and_source)
 
 
@@ -672,7 +676,9 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     real: list[Record] = []  # the scans used: every stride-th of the first span
     odometry = array("d")  # stamp, x, y, theta of every record read with odometry (the motion): 32 bytes each
     reader = read_log(log, **opts)
+    n_read = 0  # the records read
     for k, rec in enumerate(reader):
+        n_read = k + 1
         if k % stride == 0:
             check_beams(rec.scan, f"{log}: scan {k}")  # the extractors' limit (extract's), before any work
             if k == 0:  # the rates the scans' step allows (the CLI's --rate-hz check), before any work
@@ -698,6 +704,14 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
             raise LmsbenchError(f"{log}: {exc}") from None
     if not any(rec.scan.valid.any() for rec in real):
         raise LmsbenchError(f"{log}: nothing to compare: none of the {len(real)} scans used has a valid reading")
+    # too few real scans is known now: said at once, not after minutes of calibration, fits and simulation
+    # (a log of 6 scans warned only at the end, 2.5 min in); the run goes on, as the docs say it reports
+    real_advice = advice
+    if advice is None and (span is None or n_read < span):  # the log holds no more: --max-scans gives none
+        real_advice = f"{'a lower --stride or ' if stride > 1 else ''}a longer log: it holds {n_read} scans"
+    early = small_sample_warnings(len(real), MIN_SCANS, None, real_advice)
+    for line in early:
+        warnings.warn(line, LmsbenchWarning, stacklevel=2)
     if sensor is not None:  # else the calibration's pass, over the whole log, says what it skipped
         report_skipped(reader)
     if sensor is None:
@@ -729,7 +743,9 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
         raise LmsbenchError(f"{log}: nothing to compare: no method measured an explained fraction on both sources")
     result.checks = targets(table)
     n_probe = (len(scan_stamps(sensor, probe_duration, probe_rate_hz)) * len(probes)) if result.probe_seeds else None
-    result.warnings = small_sample_warnings(len(real), len(simulated), n_probe, advice) + bound_warnings(rough, scale, relief)
+    result.warnings = early + small_sample_warnings(MIN_SCANS, len(simulated), n_probe, advice) + bound_warnings(rough, scale,
+                                                                                                           relief)
+    result.warned_early = early
     return result
 
 

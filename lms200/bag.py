@@ -1300,6 +1300,33 @@ class Recovered:
     dropped_at: int | None = None  # the byte offset of a truncated last record, dropped
 
 
+def _unread_set_aside(connections: list) -> list:
+    """``connections`` (rosbags Connections) with the message definitions of the types lmsbench never
+    reads (not in READ_TYPES) set aside (format NONE), so rosbags' AnyReader neither parses them nor checks
+    them against the connection's hash (ROS 1 md5sum, ROS 2 type_description_hash): one bad unrelated
+    topic refused the whole bag. A type read is still parsed and checked."""
+    from rosbags.interfaces import MessageDefinition, MessageDefinitionFormat
+
+    none = MessageDefinition(MessageDefinitionFormat.NONE, "")
+    return [c if c.msgtype in READ_TYPES else c._replace(msgdef=none) for c in connections]
+
+
+def _read_types_reader2(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag2 Reader
+    """A rosbags ROS 2 reader of the bag folder ``path`` whose connections, once open, carry only the
+    message definitions of the types lmsbench reads (:func:`_unread_set_aside`), as a ROS 1 bag's
+    (:func:`_recovering_reader`): a /tf topic whose stored type_description_hash disagrees with its
+    definition refused the whole bag ("hash mismatch"), its LaserScan topic unread."""
+    from rosbags.rosbag2 import Reader
+
+    class ReadTypesReader(Reader):
+        def open(self) -> None:
+            super().open()
+            connections = self.connections  # the storage's own list, which messages() matches against
+            connections[:] = _unread_set_aside(connections)
+
+    return ReadTypesReader(path)
+
+
 def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 Reader
     """A rosbags ROS 1 reader of ``path`` that also opens a bag that was never closed (a recording
     killed by SIGKILL or a power cut): its header says index_pos 0 and it has no index, which rosbags
@@ -1350,12 +1377,9 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
                     if bio is not None:
                         bio.close()
                     raise
-            # The message definitions of the types lmsbench never reads are set aside, so AnyReader neither
-            # registers them nor checks their md5sum: a /tf connection recorded by goroslib or rosnodejs (an
-            # empty definition, md5 d41d8cd9... computed) or an edited one refused the whole bag, its
-            # LaserScan topic too ("hash mismatch"). A type read (READ_TYPES) is still checked.
-            none = MessageDefinition(MessageDefinitionFormat.NONE, "")
-            self.connections = [c if c.msgtype in READ_TYPES else c._replace(msgdef=none) for c in self.connections]
+            # a /tf connection recorded by goroslib or rosnodejs (an empty definition, md5 d41d8cd9... computed)
+            # or an edited one refused the whole bag, its LaserScan topic too ("hash mismatch")
+            self.connections = _unread_set_aside(self.connections)
 
         def _damaged(self, pos: int, what: str) -> BagError:
             return BagError(f"{self.path}: an unindexed bag (not closed) whose record at byte {pos} is damaged: {what}"
@@ -1552,6 +1576,8 @@ class BagReader:
                 reader = AnyReader([self.path], default_typestore=_typestore(self.path.suffix == ".bag"))
                 if not reader.is2:  # a bag never closed (a killed recording) is read from its chunks
                     reader.readers = [_recovering_reader(self.path)]
+                else:  # as the ROS 1 reader: only the definitions of the types read are checked
+                    reader.readers = [_read_types_reader2(self.path)]
                 reader.open()
         except BagTooLargeError as exc:
             if getattr(exc, "lmsbench_unnamed", False):  # a message definition's (_bound_definitions knows no file)

@@ -280,7 +280,8 @@ class CarmenReader:
     Args:
         path: CARMEN log, plain or compressed (gzip, bzip2 or xz, told by the first bytes).
         skip_bad_lines: skip malformed lines (recorded in ``stats.skipped``) instead of raising; a
-            gzip stream that cannot be decompressed further ends the pass (``stats.stopped``).
+            gzip stream that cannot be decompressed further ends the pass (``stats.stopped``), and is
+            a LogFormatError where the pass gave no record before it (as every command refuses it).
         topic: the laser message kind to read (FLASER, RLASER, ROBOTLASER1 / 2, RAWLASER1 .. 4); by
             default the first kind with poses met in the log, else the first RAWLASER kind (see
             the module docstring; the others are counted in ``stats.messages``).
@@ -290,7 +291,7 @@ class CarmenReader:
 
     Raises:
         LogFormatError: naming the file and line, for a malformed line (unless skipped) or data that
-            cannot be decompressed.
+            cannot be decompressed (under ``skip_bad_lines``: before any record, "no scan read").
         InputError: a ``topic`` that is no laser kind (the message lists the log's laser lines).
     """
 
@@ -427,6 +428,9 @@ class CarmenReader:
         raw, named, looked, since_raw = None, False, 0, 0
         blank = _BlankRun(self.path)
         line_no = 0
+        starts = chars = 0  # the lines begun (comments aside) among the pieces looked at (a long line's pieces are
+        # one), and the characters looked at
+        at_start, first_ended = True, False  # the next piece begins a line; the first line (any) has ended
         try:
             with open_text(self.path) as f:
                 # junk is told after DEFAULT_TOPIC_LINES lines; a log is looked at until its first laser
@@ -436,6 +440,13 @@ class CarmenReader:
                     if not line:
                         break
                     line_no += 1  # pieces of a long line count as lines here: only a bound's place
+                    chars += len(line)
+                    start, at_start = at_start, line.endswith("\n")
+                    first_ended = first_ended or at_start
+                    if not start:  # the rest of a long line: counted towards the bound, its words no line's start
+                        looked += 1  # (a 512 MB line of junk was "none of its first 10,000 lines ...")
+                        since_raw += raw is not None
+                        continue
                     words = line[:24].split(None, 1)
                     kind = words[0] if words else ""
                     if not kind or kind.startswith("#"):
@@ -443,6 +454,7 @@ class CarmenReader:
                         continue
                     blank.reset()
                     looked += 1
+                    starts += 1
                     since_raw += raw is not None
                     named = named or _MESSAGE_NAME.fullmatch(kind) is not None
                     if (kind in POSED_LASER_KINDS and _fields_fit(kind, line)) or (named and self.topic is not None):
@@ -450,12 +462,17 @@ class CarmenReader:
                     raw = raw or (kind if kind in RAW_LASER_KINDS else None)
         except (*READ_ERRORS, UnicodeError):
             return raw  # damage is reported, with its line, by the pass itself
+        names = "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)"
+        if looked >= DEFAULT_TOPIC_LINES and not named and not first_ended:  # what was seen: one line, unfinished
+            raise LogFormatError(self.path, None, f"not a CARMEN log: its first line runs on past {chars:,} characters "
+                                                  f"with no line end and {names.replace('with a', 'with no', 1)}")
         if looked >= DEFAULT_TOPIC_LINES and not named:
-            raise LogFormatError(self.path, None, f"not a CARMEN log: none of its first {DEFAULT_TOPIC_LINES:,} lines "
-                                                  "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
+            first = f"first {DEFAULT_TOPIC_LINES:,} lines" if starts >= DEFAULT_TOPIC_LINES else (
+                f"first {starts:,} lines (comments aside; long ones, {chars:,} characters looked at)")
+            raise LogFormatError(self.path, None, f"not a CARMEN log: none of its {first} {names}")
         if looked and not named:  # a shorter file, read to its end: it gave no record, silently (binary junk)
-            raise LogFormatError(self.path, None, f"not a CARMEN log: none of its {looked:,} lines (comments aside) "
-                                                  "starts with a message name (FLASER, ROBOTLASER1, PARAM, ODOM, ...)")
+            raise LogFormatError(self.path, None, f"not a CARMEN log: none of its {starts:,} lines (comments aside) "
+                                                  f"{names}")
         return raw
 
     def __iter__(self) -> Iterator[Record]:
@@ -472,14 +489,19 @@ class CarmenReader:
                 self.stats.mount, self.stats.mounted = mount, self.stats.mounted + 1
             return moved
 
+        n = 0  # records given
         try:
             for rec in self._read(flushes, mounts):
+                n += 1
                 yield given(rec)
         except Exception:  # a bad line ends the pass: the records held for a later line come first
             for flush in flushes:
                 for rec in flush():
                     yield given(rec)
             raise
+        if n == 0 and self.stats.stopped is not None:  # wholly damaged under skip_bad_lines: 0 records, silently,
+            # where every command refused it (lmsbench info, compare: "no scan read"; a broken head in check_log)
+            raise LogFormatError(self.path, None, f"no scan read: the file stops being readable at {self.stats.stopped}")
 
     def _read(self, flushes: list[Callable[[], Iterator[Record]]], mounts: dict[int, Pose2D]) -> Iterator[Record]:
         default = self._survey()

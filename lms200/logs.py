@@ -50,7 +50,9 @@ def read_log(
         InputError: (an ``LmsbenchError`` and a ``ValueError``) naming the argument, for a path that
             is not a str / PathLike, ``skip_bad_lines`` that is not a bool, ``topic`` that is not a
             str, ``geometry`` that is not a LaserGeometry, a file of a ROS 2 bag folder (its metadata.yaml,
-            a .db3 or .mcap), naming the folder to give instead (:func:`bag_member_message`).
+            a .db3 or .mcap), naming the folder to give instead (:func:`bag_member_message`), or of a
+            ``lmsbench simulate`` folder beside its scans.clf (groundtruth.tum, world.json, config.yaml,
+            map.png), naming its scans.clf (:func:`simulate_member_message`).
         LogNotFoundError: (an ``LmsbenchError`` and a ``FileNotFoundError``) when the path does not exist, or is a folder that is not a ROS 2 bag or
             not a regular file (a device, a pipe); for a ``lmsbench simulate`` folder the message names
             its scans.clf to read instead (:func:`folder_message`).
@@ -78,7 +80,7 @@ def read_log(
                          range_max=geometry.range_max if geometry is not None else None)
     if p.is_dir():
         raise LogNotFoundError(folder_message(p))
-    member = bag_member_message(p)
+    member = bag_member_message(p) or simulate_member_message(p)
     if member is not None:
         raise InputError(member)
     return CarmenReader(p, skip_bad_lines=skip_bad_lines, topic=topic, geometry=geometry)
@@ -196,6 +198,9 @@ def _source_errors_marked(items: Iterator[object]) -> Iterator[object]:
 
 SIMULATE_LOG = "scans.clf"
 """The CARMEN log a ``lmsbench simulate`` output folder holds (beside its ground truth and world)."""
+#: the other files a ``lmsbench simulate`` output folder holds, each said as what it is (none is a log)
+SIMULATE_OTHER_FILES = {"groundtruth.tum": "its ground-truth trajectory", "world.json": "its world",
+                        "config.yaml": "its settings", "map.png": "its map figure"}
 
 
 def hidden_stem(path: Path, tail_bytes: int) -> str:
@@ -352,6 +357,20 @@ def bag_member_message(p: Path) -> str | None:
         return None
     return (f"{p}: a file of the ROS 2 bag {folder} (its {'metadata' if p.name == 'metadata.yaml' else 'storage file'}), "
             f"not a log by itself: a ROS 2 bag is read as its folder; give {folder}")
+
+
+def simulate_member_message(p: Path, give_folder: bool = False) -> str | None:
+    """Why the file ``p``, one of a ``lmsbench simulate`` output folder's own beside its scans.clf (its
+    groundtruth.tum, world.json, config.yaml or map.png: SIMULATE_OTHER_FILES), is no log, naming what
+    to give instead: the folder (``give_folder``: the command line, which checks the run finished) or
+    its scans.clf (``read_log``); None for any other file. Given one, both said "not a CARMEN log: none
+    of its 37 lines ... starts with a message name" (map.png "a binary file"), with no hint (round 9)."""
+    folder = p.parent
+    what = SIMULATE_OTHER_FILES.get(p.name)
+    if what is None or not p.is_file() or not (folder / SIMULATE_LOG).is_file():
+        return None
+    return (f"{p}: a file of the lmsbench simulate output folder {folder} ({what}), not a log: the run's scans "
+            f"are its {SIMULATE_LOG}; give {folder if give_folder else folder / SIMULATE_LOG}")
 
 
 def missing_file_reason(path: Path) -> str:

@@ -131,6 +131,31 @@ def test_a_file_of_a_ros2_bag_folder_names_the_folder_to_give(tmp_path, capsys) 
     assert sum(1 for _ in read_log(bag)) == 2
 
 
+def test_a_file_of_a_simulate_folder_names_what_to_give(tmp_path, capsys) -> None:
+    """Round 9: a lmsbench simulate folder's groundtruth.tum, world.json or config.yaml given as the log was
+    "not a CARMEN log: none of its 37 lines ... starts with a message name", its map.png "a binary file" (the
+    command line), with no hint: the error names the folder to give (command line) or its scans.clf (read_log)."""
+    from experiments.cli import main
+
+    run = tmp_path / "run"
+    run.mkdir()
+    write_log(run / "scans.clf", [Record(scan=Scan(np.full(5, 2.0), **GEOM))] * 2)
+    files = {"groundtruth.tum": ("# t x y z qx qy qz qw\n0 1 2 0 0 0 0 1\n", "its ground-truth trajectory"),
+             "world.json": ('{"walls": []}\n', "its world"), "map.png": ("\x89PNG\r\n\x1a\n\x00", "its map figure")}
+    for name, (text, what) in files.items():
+        member = run / name
+        member.write_text(text, encoding="latin-1")
+        said = (f"{member}: a file of the lmsbench simulate output folder {run} ({what}), not a log: the run's scans "
+                "are its scans.clf; give ")
+        with pytest.raises(InputError, match=f"^{re.escape(said + str(run / 'scans.clf'))}$"):  # old: LogFormatError
+            read_log(member)
+        assert main(["info", str(member)]) == 2
+        assert capsys.readouterr().err.splitlines() == [f"lmsbench info: error: {said}{run}"]
+    (run / "scans.clf").unlink()  # no simulate folder: the file is said as what it holds
+    with pytest.raises(LmsbenchError, match="not a CARMEN log"):
+        list(read_log(run / "groundtruth.tum"))
+
+
 def test_write_log_with_a_bad_record_keeps_the_existing_file(tmp_path) -> None:
     """Before: a bad item part-way was an AttributeError after the file had been truncated, and the
     5-scan log at the path was left with the scans before the bad item."""

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from lms200 import Record, Scan, read_log, write_log
-from lms200.bag import BagTooLargeError
+from lms200.bag import BagError, BagTooLargeError
 from lms200.errors import LmsbenchError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -984,3 +984,28 @@ def test_a_connection_of_a_type_not_read_whose_md5sum_disagrees_with_its_definit
     assert main(["info", str(bags["scan.bag"])]) == 2
     assert ("cannot open as a ROS bag: AnyReaderError: Message type 'sensor_msgs/msg/LaserScan' hash mismatch"
             in capsys.readouterr().err)
+
+
+def test_a_ros2_topic_of_a_type_not_read_whose_hash_disagrees_costs_no_bag(tmp_path) -> None:
+    """Found by fuzzing the bag readers (round 9): the same in a ROS 2 bag, whose connections rosbags'
+    own reader checked, each against its type_description_hash: a /tf topic whose hash disagreed with its
+    definition refused the whole bag ("AnyReaderError: Message type 'tf2_msgs/msg/TFMessage' hash
+    mismatch"). A LaserScan topic whose hash disagrees is still refused so."""
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    bad = "RIHS01_" + "0" * 64
+    for name, scan_hash, tf_hash in (("tf", None, bad), ("scan", bad, None)):
+        with Writer(tmp_path / name, version=8) as w:
+            typ = "sensor_msgs/msg/LaserScan"
+            c = w.add_connection("/scan", typ, typestore=ts, msgdef=ts.generate_msgdef(typ, ros_version=2)[0],
+                                 rihs01=scan_hash or ts.hash_rihs01(typ))
+            tf = "tf2_msgs/msg/TFMessage"
+            w.add_connection("/tf", tf, typestore=ts, msgdef=ts.generate_msgdef(tf, ros_version=2)[0],
+                             rihs01=tf_hash or ts.hash_rihs01(tf))
+            w.write(c, 10 * 10**9, ts.serialize_cdr(_laser_scan(ts), typ))
+    assert [r.scan.stamp for r in read_log(tmp_path / "tf")] == [10.0]  # old: BagError, hash mismatch
+    with pytest.raises(BagError, match="cannot open as a ROS bag: AnyReaderError: Message type "
+                                       "'sensor_msgs/msg/LaserScan' hash mismatch"):
+        list(read_log(tmp_path / "scan"))

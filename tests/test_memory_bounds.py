@@ -13,6 +13,7 @@ import pytest
 
 from features import available_methods, extract
 from lms200 import Scan
+from lms200.errors import LmsbenchWarning
 
 ROOT = Path(__file__).resolve().parents[1]
 LIMIT_MB = 50
@@ -203,7 +204,7 @@ def test_sim2real_keeps_only_the_scans_it_uses(tmp_path: Path, monkeypatch: pyte
     monkeypatch.setattr(sim, "simulate_records", stop)
     gc.collect()
     before = sum(type(o) is Scan for o in gc.get_objects())  # type(), not isinstance: a dead weakref.proxy raises ReferenceError
-    with pytest.raises(_Stop):
+    with pytest.raises(_Stop), pytest.warns(LmsbenchWarning, match="only 3 real scans"):  # said before the work
         sim2real.sim2real(tmp_path / "log.clf", world="office", seeds=[1], stride=100, max_scans=1000,
                           sensor=SensorConfig())
     assert seen["scans"] - before <= 3, seen  # the 3 scans used (0, 100, 200); was 300

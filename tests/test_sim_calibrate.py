@@ -445,6 +445,30 @@ def test_sim2real_of_a_simulated_log_agrees_with_itself(tmp_path: Path, capsys: 
     assert "unknown world" in capsys.readouterr().err
 
 
+def test_sim2real_warns_of_too_few_real_scans_before_the_work(tmp_path: Path, monkeypatch) -> None:
+    """Found by fuzzing (round 9): a log of 6 scans ran sim2real's calibration, fits and simulation,
+    about 2.5 minutes, and only then warned "only 2 real scans"; the count is known once the log is
+    read, so it is warned then, naming what gives more (the log ends: --max-scans gives none)."""
+    import experiments.calibrate
+    from experiments.sim2real import sim2real
+    from lms200.errors import LmsbenchWarning
+
+    class Stop(Exception):
+        pass
+
+    def calibrate_log(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202 - the work starts here
+        raise Stop
+
+    monkeypatch.setattr(experiments.calibrate, "calibrate_log", calibrate_log)
+    recs = simulate_records("cluttered", seed=7, duration=2.0, sensor=SensorConfig(units="cm"), rate_hz=3.0)
+    write_carmen(tmp_path / "log.clf", recs)
+    with pytest.warns(LmsbenchWarning) as warned, pytest.raises(Stop):  # old: Stop, no warning
+        sim2real(tmp_path / "log.clf", world="cluttered", seeds=[7])  # every 5th scan (stride 5)
+    assert [str(w.message) for w in warned] == [
+        f"only {len(recs[::5])} real scans (fewer than 30): the figures are too noisy to compare real and simulated "
+        f"(more with a lower --stride or a longer log: it holds {len(recs)} scans)"]
+
+
 def test_sim2real_warns_on_tiny_samples_and_refuses_a_log_with_nothing_to_measure(tmp_path: Path, capsys) -> None:
     """--max-scans 1 and --duration 0.1: one real scan and one simulated scan (a world's first)
     still give a report, with one warning line on stderr naming both counts; a log whose scans hold
@@ -460,8 +484,11 @@ def test_sim2real_warns_on_tiny_samples_and_refuses_a_log_with_nothing_to_measur
                "--max-scans", "1", "--fit-duration", "1", "--out", str(tmp_path / "out"))  # the fit: 1 s runs, not 30
     assert run.returncode == 0, run.stderr
     warned = [line for line in run.stderr.splitlines() if "warning" in line]
-    assert len(warned) == 1 and "only 1 real scans and 1 simulated scans" in warned[0], run.stderr
-    assert "Warning: only 1 real scans" in (tmp_path / "out" / "sim2real.md").read_text()
+    # the real side before the work (round 9: test_sim2real_warns_of_too_few_real_scans_before_the_work), once
+    assert len(warned) == 2 and "only 1 real scans (fewer than" in warned[0], run.stderr
+    assert "only 1 simulated scans (fewer than" in warned[1], run.stderr
+    report = (tmp_path / "out" / "sim2real.md").read_text()
+    assert "Warning: only 1 real scans" in report and "Warning: only 1 simulated scans" in report
     assert small_sample_warnings(MIN_SCANS, MIN_SCANS, MIN_SCANS) == []
     assert small_sample_warnings(400, 720, None) == []
     assert "12 probe scans per probe value" in small_sample_warnings(400, 720, 12)[0]
@@ -708,7 +735,8 @@ def test_fits_outside_their_probes_range_are_flagged_at_their_bound(monkeypatch)
 def test_sim2real_reports_fits_at_a_bound_with_one_warning_line(tmp_path: Path, monkeypatch, capsys) -> None:
     """The mit world's fits replaced by fits at their bounds (ACES-like: fill 0 and level 3 below
     every probe, relief 1 above): the report names each bound, stderr carries one warning line for
-    them (and one for the small sample); fits inside their range add no warning."""
+    them (and one for the few real scans, said before the work, one for the few simulated ones); fits
+    inside their range add no warning."""
     from experiments import sim2real
     from experiments.cli import main
 
@@ -723,8 +751,8 @@ def test_sim2real_reports_fits_at_a_bound_with_one_warning_line(tmp_path: Path, 
     err = capsys.readouterr().err
     assert code == 0, err
     warned = [line for line in err.splitlines() if "warning" in line]
-    assert len(warned) == 2 and "only 13 real scans" in warned[0], err
-    assert warned[1] == ("lmsbench sim2real: warning: fitted at a bound: rough fill 0.00, clutter level 3.00, "
+    assert len(warned) == 3 and "only 13 real scans" in warned[0] and "only 4 simulated scans" in warned[1], err
+    assert warned[2] == ("lmsbench sim2real: warning: fitted at a bound: rough fill 0.00, clutter level 3.00, "
                          "wall relief 1.00 (the log lies outside the probes' range: the simulated worlds do not "
                          "reach it there; see the report's first lines)")
     report = (tmp_path / "out" / "sim2real.md").read_text()

@@ -137,6 +137,7 @@ def run(args: argparse.Namespace) -> int:
         link_latest(args.out)
     print(format_report(result, str(args.log)), end="")
     for warning in result.warnings:
-        print(f"lmsbench sim2real: warning: {warning}", file=sys.stderr)
+        if warning not in result.warned_early:  # said before the work (too few real scans)
+            print(f"lmsbench sim2real: warning: {warning}", file=sys.stderr)
     print("wrote " + ", ".join(str(p) for p in paths))
     return 0
