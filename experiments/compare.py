@@ -34,6 +34,7 @@ from features.registry import (available_methods, backend_of, check_beams, check
 from features.realdata import RealDataConfig, repeat_counts, scan_measures, truth_lines
 from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, score_scan
 from lms200 import LmsbenchError, Pose2D, Record, read_log
+from lms200.carmen import no_scan_read
 from lms200.errors import InputError
 from lms200.finite import check_integer, shown
 from lms200.logs import SIMULATE_LOG
@@ -393,7 +394,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
         first = next(iter(reader), None)
         if first is None:
             if reader.stats.stopped:  # damage before the first scan (read under --skip-bad-lines)
-                raise LmsbenchError(f"{spec}: no scan read: the file stops being readable at {reader.stats.stopped}")
+                raise LmsbenchError(f"{spec}: {no_scan_read(reader.stats.stopped)}")
             raise LmsbenchError(f"{spec}: no laser messages found (not a CARMEN log with FLASER / ROBOTLASER / RAWLASER "
                                 "lines, nor a bag with LaserScan messages)")
         check_beams(first.scan, f"{spec}: scan 0")  # its scans go to the extractors' run, which extract's limit does not guard

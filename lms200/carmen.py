@@ -274,14 +274,22 @@ def _first_line_end(head: bytes, f: IO[bytes]) -> bytes:
     return ends
 
 
+def no_scan_read(stopped: str) -> str:
+    """What a log whose pass ended before its first record is told (``ReadStats.stopped``: ``line N:
+    why``): a compressed stream damaged from its start, or junk before any laser line
+    (``MAX_JUNK_LINES``), said as the reason it stopped, not as a file that cannot be read."""
+    return f"no scan read: the pass stopped at {stopped}"
+
+
 class CarmenReader:
     """Iterate a CARMEN log's laser messages as Records; iterable several times.
 
     Args:
         path: CARMEN log, plain or compressed (gzip, bzip2 or xz, told by the first bytes).
         skip_bad_lines: skip malformed lines (recorded in ``stats.skipped``) instead of raising; a
-            gzip stream that cannot be decompressed further ends the pass (``stats.stopped``), and is
-            a LogFormatError where the pass gave no record before it (as every command refuses it).
+            compressed stream that cannot be decompressed further, or more than MAX_JUNK_LINES lines
+            of junk, ends the pass (``stats.stopped``), and is a LogFormatError where the pass gave no
+            record before it (as every command refuses it: :func:`no_scan_read`).
         topic: the laser message kind to read (FLASER, RLASER, ROBOTLASER1 / 2, RAWLASER1 .. 4); by
             default the first kind with poses met in the log, else the first RAWLASER kind (see
             the module docstring; the others are counted in ``stats.messages``).
@@ -291,7 +299,8 @@ class CarmenReader:
 
     Raises:
         LogFormatError: naming the file and line, for a malformed line (unless skipped) or data that
-            cannot be decompressed (under ``skip_bad_lines``: before any record, "no scan read").
+            cannot be decompressed (under ``skip_bad_lines``: a pass that ends so, or at the junk
+            limit, before any record, "no scan read").
         InputError: a ``topic`` that is no laser kind (the message lists the log's laser lines).
     """
 
@@ -501,7 +510,7 @@ class CarmenReader:
             raise
         if n == 0 and self.stats.stopped is not None:  # wholly damaged under skip_bad_lines: 0 records, silently,
             # where every command refused it (lmsbench info, compare: "no scan read"; a broken head in check_log)
-            raise LogFormatError(self.path, None, f"no scan read: the file stops being readable at {self.stats.stopped}")
+            raise LogFormatError(self.path, None, no_scan_read(self.stats.stopped))
 
     def _read(self, flushes: list[Callable[[], Iterator[Record]]], mounts: dict[int, Pose2D]) -> Iterator[Record]:
         default = self._survey()

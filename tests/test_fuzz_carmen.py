@@ -207,6 +207,6 @@ def test_damaged_compressed_data_reads_or_names_the_file_and_the_line(data: byte
         assert isinstance(exc, LogFormatError), repr(exc)
         assert exc.path == path and str(exc).startswith(f"{path}:{exc.line_no}: " if exc.line_no else f"{path}: ")
         assert exc.line_no is not None or any(s in str(exc) for s in ("archive", "not a CARMEN log", "no laser lines",
-                                                                      "no scan read: the file stops being readable at line ")), exc
+                                                                      "no scan read: the pass stopped at line ")), exc
     for rec in recs:
         assert len(rec.scan) in (181, 361)

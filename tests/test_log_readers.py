@@ -354,7 +354,7 @@ def test_every_byte_flip_of_a_gzip_log_is_a_log_format_error(tmp_path: Path) -> 
         try:
             given = len(list(reader))
         except LogFormatError as exc:  # only where it stopped before any record
-            assert str(exc).startswith(f"{path}: no scan read: the file stops being readable at line ")
+            assert str(exc).startswith(f"{path}: no scan read: the pass stopped at line ")
             given = 0
             nothing += 1
         assert given > 0 or reader.stats.stopped
@@ -402,7 +402,7 @@ def test_compressed_logs_are_read_in_place_and_written_by_suffix(tmp_path: Path,
         list(read_log(cut))
     reader = read_log(cut, skip_bad_lines=True)
     if suffix == ".bz2":  # bzip2 gives nothing of a 900 kB block that is cut: no record, refused (round 9)
-        with pytest.raises(LogFormatError, match=f"^{cut}: no scan read: the file stops being readable at line 1: "
+        with pytest.raises(LogFormatError, match=f"^{cut}: no scan read: the pass stopped at line 1: "
                                                  "cannot read on"):
             list(reader)
     else:
@@ -412,7 +412,7 @@ def test_compressed_logs_are_read_in_place_and_written_by_suffix(tmp_path: Path,
 
 def test_damage_before_the_first_scan_is_reported_as_damage(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     """info / compare --skip-bad-lines on a log whose compressed stream breaks before its first scan
-    said "no laser messages found: not a CARMEN log"; they now say where it stops being readable. So does
+    said "no laser messages found: not a CARMEN log"; they now say where the pass stopped and why. So does
     read_log(..., skip_bad_lines=True) (round 9): it gave 0 records, silently, the damage only in its stats."""
     from experiments.cli import main
 
@@ -423,7 +423,7 @@ def test_damage_before_the_first_scan_is_reported_as_damage(tmp_path: Path, caps
     data = gzip.compress(text)
     path.write_bytes(data[: len(data) // 3])  # cut inside the ODOM lines
     reader = read_log(path, skip_bad_lines=True)
-    with pytest.raises(LogFormatError, match=f"^{path}: no scan read: the file stops being readable at line "
+    with pytest.raises(LogFormatError, match=f"^{path}: no scan read: the pass stopped at line "
                                              "[0-9]+: cannot read on"):  # old: no record, no error
         list(reader)
     assert "cannot read on" in reader.stats.stopped
@@ -431,8 +431,13 @@ def test_damage_before_the_first_scan_is_reported_as_damage(tmp_path: Path, caps
                  ["compare", str(path), "--skip-bad-lines", "--methods", "sensor", "--out", str(tmp_path / "o")]):
         assert main(argv) == 2
         err = capsys.readouterr().err
-        assert err.count("\n") == 1 and "no scan read: the file stops being readable at line" in err, err
+        assert err.count("\n") == 1 and "no scan read: the pass stopped at line" in err, err
         assert "not a CARMEN log" not in err
+    junk = tmp_path / "junk.log"  # junk before any laser line ends the pass as well: said by its reason (the
+    junk.write_text("PARAM a 1 nohost 0\n" + "".join(f"junk {i}\n" for i in range(10_001)) + flaser(181) + "\n")
+    with pytest.raises(LogFormatError, match=f"^{junk}: no scan read: the pass stopped at line 10002: more than "
+                                             "10,000 lines that start with no CARMEN message name"):  # review: not
+        list(read_log(junk, skip_bad_lines=True))  # "the file stops being readable", which it is
 
 
 @pytest.mark.parametrize("kind", ["tar", "tar.gz", "zip"])

@@ -7,6 +7,7 @@ import json
 import math
 
 from lms200 import LogFormatError, read_log
+from lms200.carmen import no_scan_read
 from lms200.finite import fixed
 
 from experiments.logargs import LOG_HELP, add_log_options, read_log_options, report_skipped
@@ -29,7 +30,7 @@ def run(args: argparse.Namespace) -> int:
     stats = reader.stats
     if summary.scans == 0:
         if stats.stopped:  # damage before the first scan (read under --skip-bad-lines)
-            raise LogFormatError(args.log, None, f"no scan read: the file stops being readable at {stats.stopped}")
+            raise LogFormatError(args.log, None, no_scan_read(stats.stopped))
         met = getattr(stats, "messages", {})
         seen = f" (other lines: {sum(met.values())})" if met else ""
         raise LogFormatError(args.log, None, "no laser messages found: not a CARMEN log (FLASER/RLASER/ROBOTLASER/RAWLASER "

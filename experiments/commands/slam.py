@@ -395,15 +395,15 @@ def run(args: argparse.Namespace) -> int:
     if config.preset == "default" and args.no_paper_baseline and data.odometry is None:
         # the paper preset's filter runs in no baseline: not the paper one (left out), nor the odometry one (no
         # odometry on this input); the option check above could not know the input (review of round 7)
+        missing = sum(r.odom is None for r in data.records)  # the baseline needs odometry on every scan
+        has = "has no odometry" if missing == len(data.records) else f"has none on {missing} of its {len(data.records)} scans"
+        why = f"the default pipeline, with --no-paper-baseline, on {args.input}, which {has} for an odometry baseline"
         paper_only = [flag for flag, given in (("--association", args.association), ("--corners", args.corners)) if given]
         if paper_only:
-            raise InputError(f"{', '.join(paper_only)} set the paper preset's filter, which this run does not use (the "
-                             f"default pipeline, with --no-paper-baseline, on {args.input}, which has no odometry for an "
-                             "odometry baseline): add --preset paper or drop them")
-        _refuse_unread_sections(config, PAPER_ONLY_SECTIONS, args.config,
-                                "the paper preset's filter, which this run does not use (the default pipeline, with "
-                                f"--no-paper-baseline, on {args.input}, which has no odometry for an odometry "
-                                "baseline): add --preset paper or drop them")
+            raise InputError(f"{', '.join(paper_only)} set the paper preset's filter, which this run does not use "
+                             f"({why}): add --preset paper or drop them")
+        _refuse_unread_sections(config, PAPER_ONLY_SECTIONS, args.config, "the paper preset's filter, which this run "
+                                f"does not use ({why}): add --preset paper or drop them")
     if interlaced is False and config.preset == "default" and config.alignment.deskew:
         config = deskew_for_sensor(config, interlaced=False)
         print(f"{args.input}: simulated with interlaced=False (every beam from one pose): alignment.deskew off",
