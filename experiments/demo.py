@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import shutil
 import time
+import warnings
 from pathlib import Path
 from typing import Callable
 
@@ -16,6 +17,7 @@ from experiments.figures.make import article, draw_figures, draw_sweep
 from experiments.figures.study import StudyConfig, run_study, save_tables
 from experiments.figures.tables import panels_log_name
 from experiments.report import Section, figure, markdown_table, write_report
+from lms200.errors import LmsbenchWarning
 
 #: The demo's sweep: window size k of the paper's extractor against range noise (a few seconds).
 DEMO_SWEEP = {
@@ -103,10 +105,20 @@ def _sim2real_section(cfg: StudyConfig, out: Path, log: Callable[[str], None]) -
                     probe_rate_hz=PROBE_RATE_HZ)
     full_run = f"lmsbench sim2real {os.path.relpath(path)}"  # the report said `lmsbench sim2real mit-csail.clf.gz`,
     # a bare name that does not run from the checkout, where the warnings' advice already gave the path
-    result = sim2real(path, world="mit", seeds=(cfg.seed,), **settings,
-                      probe_seeds=[next(s for s in PROBE_SEEDS if s != cfg.seed)],
-                      # the log as a path from here: its bare name did not run from the checkout (a review)
-                      advice=f"a longer demo --duration, or `{full_run}` for the full comparison")
+    with warnings.catch_warnings():  # its early warnings (too few real scans) labelled as its later ones below
+        shown = warnings.showwarning  # (the command line's "lmsbench demo: warning: ..." named no step; a review)
+
+        def said(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001, ANN202
+            if issubclass(category, LmsbenchWarning):
+                log(f"warning: sim2real: {message}")
+            else:
+                shown(message, category, filename, lineno, file, line)
+
+        warnings.showwarning = said
+        result = sim2real(path, world="mit", seeds=(cfg.seed,), **settings,
+                          probe_seeds=[next(s for s in PROBE_SEEDS if s != cfg.seed)],
+                          # the log as a path from here: its bare name did not run from the checkout (a review)
+                          advice=f"a longer demo --duration, or `{full_run}` for the full comparison")
     for warning in result.warnings:  # in the report and, as sim2real says them, on the terminal
         if warning not in result.warned_early:  # said before the work (too few real scans)
             log(f"warning: sim2real: {warning}")
