@@ -215,28 +215,39 @@ def _config(args: argparse.Namespace):
     if cfg.preset == "paper" and args.no_paper_baseline:  # it set nothing: `slam RUN --preset paper --no-paper-baseline` ran, exit 0
         raise InputError("--no-paper-baseline: this run is the paper preset itself, so there is no separate paper "
                          "baseline to leave out (--no-odometry-baseline leaves out the run driven by the odometry)")
-    paper_only = [flag for flag, given in (("--association", args.association), ("--corners", args.corners)) if given]
-    # with the default preset they set the paper preset's baselines (its run and, without --odometry, the
-    # odometry one): ignored only when neither runs
-    if paper_only and cfg.preset != "paper" and args.no_paper_baseline and (args.no_odometry_baseline
-                                                                          or cfg.motion.use_odometry):
-        why = "--no-odometry-baseline" if args.no_odometry_baseline else "--odometry, which has no separate odometry baseline"
-        raise InputError(f"{', '.join(paper_only)} set the paper preset's filter, which this run does not use (the "
-                         f"default pipeline, with --no-paper-baseline and {why}): add --preset paper or drop them")
     if cfg.preset == "paper":  # no run of it is the default pipeline (nor any baseline): its sections unread
         _refuse_unread_sections(cfg, DEFAULT_ONLY_SECTIONS, args.config,
                                 "the default pipeline, which --preset paper does not run (its baselines are the paper "
                                 "preset's too): drop them, or run the default preset")
     elif args.no_paper_baseline and (args.no_odometry_baseline or cfg.motion.use_odometry):
-        _refuse_unread_sections(cfg, PAPER_ONLY_SECTIONS, args.config,
-                                "the paper preset's filter, which this run does not use (the default pipeline, with "
-                                "--no-paper-baseline and no odometry baseline): add --preset paper or drop them")
+        # with the default preset, --association / --corners and the paper-only sections set the paper preset's
+        # baselines (its run and, without --odometry, the odometry one): unread only when neither runs
+        odometry = "--no-odometry-baseline" if args.no_odometry_baseline else "--odometry, which has no separate odometry baseline"
+        _refuse_paper_settings(args, cfg, f"the default pipeline, with --no-paper-baseline and {odometry}")
     return cfg
 
 
 #: the SlamConfig sections only the default pipeline reads, and only the paper preset's filter (docs/slam.md's table)
 DEFAULT_ONLY_SECTIONS = ("alignment", "keyframes", "loop_closure")
 PAPER_ONLY_SECTIONS = ("association", "landmarks", "prealign")
+
+
+def _refuse_paper_settings(args: argparse.Namespace, cfg: "SlamConfig", why: str) -> None:
+    """InputError for --association / --corners, or a --config field of the paper preset's own sections
+    (PAPER_ONLY_SECTIONS), where no run of the command reads the paper preset's filter; ``why``: the
+    run that does run, said in parentheses. Checked from the options, and again once the input is read
+    (an input without odometry on every scan runs no odometry baseline)."""
+    paper_only = [flag for flag, given in (("--association", args.association), ("--corners", args.corners)) if given]
+    what = f"the paper preset's filter, which this run does not use ({why}): add --preset paper or drop them"
+    if paper_only:
+        raise InputError(f"{', '.join(paper_only)} set {what}")
+    _refuse_unread_sections(cfg, PAPER_ONLY_SECTIONS, args.config, what)
+
+
+def _odometry_lack(data: Any) -> str:
+    """How an input (``data.records``) lacks the odometry on every scan that an odometry baseline needs."""
+    missing = sum(r.odom is None for r in data.records)
+    return "has no odometry" if missing == len(data.records) else f"has none on {missing} of its {len(data.records)} scans"
 
 
 def _refuse_unread_sections(cfg: "SlamConfig", sections: tuple[str, ...], where: Path | None, what: str) -> None:
@@ -388,22 +399,13 @@ def run(args: argparse.Namespace) -> int:
         has = "this input has none" if missing == len(data.records) else f"{missing} of the {len(data.records)} scans have none"
         raise LmsbenchError(f"{args.input}: {asked} needs odometry on every scan, and {has}")
     if args.no_odometry_baseline and data.odometry is None:  # it set nothing: the baseline runs only with odometry
-        missing = sum(r.odom is None for r in data.records)
-        has = "has no odometry" if missing == len(data.records) else f"has none on {missing} of its {len(data.records)} scans"
-        raise InputError(f"--no-odometry-baseline: {args.input} {has}, so there is no odometry baseline to leave out "
-                         "(it runs only on an input with odometry on every scan)")
+        raise InputError(f"--no-odometry-baseline: {args.input} {_odometry_lack(data)}, so there is no odometry "
+                         "baseline to leave out (it runs only on an input with odometry on every scan)")
     if config.preset == "default" and args.no_paper_baseline and data.odometry is None:
         # the paper preset's filter runs in no baseline: not the paper one (left out), nor the odometry one (no
-        # odometry on this input); the option check above could not know the input (review of round 7)
-        missing = sum(r.odom is None for r in data.records)  # the baseline needs odometry on every scan
-        has = "has no odometry" if missing == len(data.records) else f"has none on {missing} of its {len(data.records)} scans"
-        why = f"the default pipeline, with --no-paper-baseline, on {args.input}, which {has} for an odometry baseline"
-        paper_only = [flag for flag, given in (("--association", args.association), ("--corners", args.corners)) if given]
-        if paper_only:
-            raise InputError(f"{', '.join(paper_only)} set the paper preset's filter, which this run does not use "
-                             f"({why}): add --preset paper or drop them")
-        _refuse_unread_sections(config, PAPER_ONLY_SECTIONS, args.config, "the paper preset's filter, which this run "
-                                f"does not use ({why}): add --preset paper or drop them")
+        # odometry on this input); the option check could not know the input (review of round 7)
+        _refuse_paper_settings(args, config, f"the default pipeline, with --no-paper-baseline, on {args.input}, which "
+                                             f"{_odometry_lack(data)} for an odometry baseline")
     if interlaced is False and config.preset == "default" and config.alignment.deskew:
         config = deskew_for_sensor(config, interlaced=False)
         print(f"{args.input}: simulated with interlaced=False (every beam from one pose): alignment.deskew off",
