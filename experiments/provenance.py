@@ -4,6 +4,7 @@ the run has finished)."""
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import os
 import platform
@@ -11,7 +12,7 @@ import subprocess
 import sys
 from importlib import metadata
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterator, Sequence
 
 #: Distributions whose version can change a result.
 PACKAGES = ("lmsbench", "numpy", "scipy", "numba", "pybullet", "pandas", "filterpy", "gtsam", "matplotlib")
@@ -143,3 +144,27 @@ def fsync_path(path: Path) -> None:
         os.fsync(fd)
     finally:
         os.close(fd)
+
+
+@contextlib.contextmanager
+def marked_unfinished(out: Path, marker: str, text: str, outputs: Sequence[str]) -> Iterator[None]:
+    """Write a command's ``outputs`` (file names in ``out``) inside this block, with the folder marked
+    unfinished meanwhile: a killed run's temporary files of them (and of ``marker``) removed, then
+    ``marker`` written whole and on disk before any output, holding ``text`` (the run's settings),
+    and removed once every output is on disk. A run stopped or killed in the block (Ctrl-C, SIGKILL,
+    a crash, a power loss) leaves the marker, which the readers of the folder refuse
+    (``experiments.options.check_simulate_finished`` / ``check_sim2real_finished``); an exception in
+    the block leaves it too. ``lmsbench simulate`` and ``sim2real`` write their folders so."""
+    out.mkdir(parents=True, exist_ok=True)
+    for name in (*outputs, marker):  # .NAME.PID.tmp only: not a user's own .scans.clf.notes.tmp (a review)
+        for tmp in leftover_temporaries(out / name):
+            tmp.unlink(missing_ok=True)
+    unfinished = out / marker
+    write_record(unfinished, lambda tmp: write_synced(tmp, text))  # whole or not at all: a cut one lost settings
+    fsync_path(out)
+    yield
+    for name in outputs:  # on disk before the marker goes: after a power loss it stays, or they are whole
+        fsync_path(out / name)
+    fsync_path(out)
+    unfinished.unlink()
+    fsync_path(out)

@@ -1050,7 +1050,7 @@ def write_outputs(result: Sim2RealResult, out: Path, log: str, config: dict[str,
     import dataclasses
 
     from experiments.options import SIM2REAL_OUTPUTS, SIM2REAL_UNFINISHED
-    from experiments.provenance import fsync_path, leftover_temporaries, write_record, write_synced
+    from experiments.provenance import marked_unfinished, write_record
 
     paths = [out / "sim2real.csv", out / "scene.csv", out / "sim2real.md", out / "sim2real.png",
              out / "sensor.yaml", out / "config.yaml"]
@@ -1060,31 +1060,20 @@ def write_outputs(result: Sim2RealResult, out: Path, log: str, config: dict[str,
                     relief=None if result.relief is None else dataclasses.asdict(result.relief))
     resolved["robot"]["pause_s"] = list(resolved["robot"]["pause_s"])
     settings = dump_yaml(resolved, sort_keys=False)
-    out.mkdir(parents=True, exist_ok=True)
-    for name in (*SIM2REAL_OUTPUTS, SIM2REAL_UNFINISHED):  # a killed run's .NAME.PID.tmp (not a user's hidden files)
-        for tmp in leftover_temporaries(out / name):
-            tmp.unlink(missing_ok=True)
-    # before any output, whole and on disk, removed once they all are (as simulate's marker): a run
-    # stopped while drawing the figure left the tables and report without sim2real.png and sensor.yaml,
-    # or beside an earlier run's, with nothing to tell it; the readers of its sensor.yaml refuse it
-    unfinished = out / SIM2REAL_UNFINISHED
-    write_record(unfinished, lambda tmp: write_synced(tmp, (
-        "# lmsbench sim2real is writing this folder; removed once its files are whole (a folder holding\n"
-        "# this file is one whose run did not finish). Below, the settings of that run (its config.yaml).\n"
-        + settings)))
-    fsync_path(out)
-    # config.yaml first, whole: it tells the folder as sim2real's (options.SIM2REAL_OWNER); a run
-    # stopped among the tables or the figure left a folder the next run into it refused
-    write_record(paths[5], settings)
-    # every file whole (a hidden temporary file renamed into place): a full disk left cut ones beside whole
-    write_record(paths[0], lambda p: result.table.to_csv(p, index=False))
-    write_record(paths[1], lambda p: scene_table(result).to_csv(p, index=False))
-    write_record(paths[2], format_report(result, log))
-    write_record(paths[3], lambda p: draw(result, p, log))
-    write_record(paths[4], lambda p: result.sensor.to_yaml(p, header=f"sensor model used by lmsbench sim2real {log}"))
-    for path in paths:  # on disk before the marker goes: after a power loss it stays, or they are whole
-        fsync_path(path)
-    fsync_path(out)
-    unfinished.unlink()
-    fsync_path(out)
+    # the folder marked unfinished until its files are whole and on disk (as simulate's): a run stopped
+    # while drawing the figure left the tables and report without sim2real.png and sensor.yaml, or beside
+    # an earlier run's, with nothing to tell it; the readers of its sensor.yaml refuse it
+    marker = ("# lmsbench sim2real is writing this folder; removed once its files are whole (a folder holding\n"
+              "# this file is one whose run did not finish). Below, the settings of that run (its config.yaml).\n"
+              + settings)
+    with marked_unfinished(out, SIM2REAL_UNFINISHED, marker, SIM2REAL_OUTPUTS):
+        # config.yaml first, whole: it tells the folder as sim2real's (options.SIM2REAL_OWNER); a run
+        # stopped among the tables or the figure left a folder the next run into it refused
+        write_record(paths[5], settings)
+        # every file whole (a hidden temporary file renamed into place): a full disk left cut ones beside whole
+        write_record(paths[0], lambda p: result.table.to_csv(p, index=False))
+        write_record(paths[1], lambda p: scene_table(result).to_csv(p, index=False))
+        write_record(paths[2], format_report(result, log))
+        write_record(paths[3], lambda p: draw(result, p, log))
+        write_record(paths[4], lambda p: result.sensor.to_yaml(p, header=f"sensor model used by lmsbench sim2real {log}"))
     return paths

@@ -36,7 +36,7 @@ from sim.sensor import upgrade_fields
 from sim.robot import RobotLimits
 
 from experiments.options import SIMULATE_OUTPUTS, SIMULATE_UNFINISHED
-from experiments.provenance import fsync_path, leftover_temporaries, write_record, write_synced
+from experiments.provenance import marked_unfinished, write_record
 
 
 SIMULATION_KEYS = frozenset({"world", "seed", "duration", "rate_hz", "sensor", "odometry", "robot", "clutter"})
@@ -159,42 +159,26 @@ def run_simulation(cfg: SimulationConfig, out: Path, progress: bool = False) -> 
     finally:
         if bar is not None:
             bar.close()
-    out.mkdir(parents=True, exist_ok=True)
-    _remove_temporary_files(out)
-    # before any output, whole and on disk: a run killed from here on (SIGKILL, a crash, a power
-    # loss) left a cut scans.clf, or the earlier run's files beside its new config.yaml, read as a
-    # finished run. It holds the run's settings, which the readers' refusal reruns with --config
-    # MARKER (config.yaml, written next, is still the earlier run's, or absent, when the run stops
-    # before it); whole or not at all, as a cut one would run the defaults for the settings it lost
-    unfinished = out / SIMULATE_UNFINISHED
+    # the folder marked unfinished from before any output until all are whole and on disk: a run killed
+    # from here on (SIGKILL, a crash, a power loss) left a cut scans.clf, or the earlier run's files beside
+    # its new config.yaml, read as a finished run. The marker holds the run's settings, which the readers'
+    # refusal reruns with --config MARKER (config.yaml, written next, is still the earlier run's, or absent,
+    # when the run stops before it)
     marker = ("# lmsbench simulate is writing this folder; removed once its files are whole (a folder\n"
               "# holding this file is one whose run did not finish). Below, the settings of that run (a\n"
               "# simulate config): lmsbench simulate --config DIR/.simulate-unfinished --out DIR reruns it.\n"
               + dump_yaml(cfg.to_dict(), sort_keys=False))
-    write_record(unfinished, lambda tmp: write_synced(tmp, marker))
-    fsync_path(out)
-    # config.yaml first, whole: it tells the folder as simulate's (options.SIMULATE_OWNER); a run
-    # stopped while writing scans.clf left a folder the next run into it refused
-    write_record(out / "config.yaml", dump_yaml(cfg.to_dict(), sort_keys=False))
-    write_record(out / SIMULATE_LOG, lambda tmp: write_carmen(tmp, records))  # streamed into the temporary file
-    stamps = np.array([r.scan.stamp for r in records], dtype=float)
-    write_record(out / "groundtruth.tum",
-                 lambda tmp: write_tum(tmp, stamps, np.array([r.truth for r in records]).reshape(-1, 3)))
-    write_record(out / "world.json", world.to_json)  # a record too: whole, or a cut one refused the next run
-    write_record(out / "map.png", lambda tmp: draw_map(world, records, tmp))
-    for name in SIMULATE_OUTPUTS:  # on disk before the marker goes: after a power loss it stays, or they are whole
-        fsync_path(out / name)
-    fsync_path(out)
-    unfinished.unlink()
-    fsync_path(out)
+    with marked_unfinished(out, SIMULATE_UNFINISHED, marker, SIMULATE_OUTPUTS):
+        # config.yaml first, whole: it tells the folder as simulate's (options.SIMULATE_OWNER); a run
+        # stopped while writing scans.clf left a folder the next run into it refused
+        write_record(out / "config.yaml", dump_yaml(cfg.to_dict(), sort_keys=False))
+        write_record(out / SIMULATE_LOG, lambda tmp: write_carmen(tmp, records))  # streamed into the temporary file
+        stamps = np.array([r.scan.stamp for r in records], dtype=float)
+        write_record(out / "groundtruth.tum",
+                     lambda tmp: write_tum(tmp, stamps, np.array([r.truth for r in records]).reshape(-1, 3)))
+        write_record(out / "world.json", world.to_json)  # a record too: whole, or a cut one refused the next run
+        write_record(out / "map.png", lambda tmp: draw_map(world, records, tmp))
     return records
-
-
-def _remove_temporary_files(out: Path) -> None:
-    """The temporary files (provenance.write_record's ``.NAME.PID.tmp``, the marker's too) a killed run left in ``out``."""
-    for name in (*SIMULATE_OUTPUTS, SIMULATE_UNFINISHED):
-        for tmp in leftover_temporaries(out / name):  # not a user's own .scans.clf.notes.tmp (a review)
-            tmp.unlink(missing_ok=True)
 
 
 def draw_map(world: World, records: list[Record], path: Path) -> None:

@@ -1247,8 +1247,6 @@ def test_a_full_disk_says_where_the_command_writes(argv, where, tmp_path, capsys
     import errno
     import tempfile
 
-    import experiments.simulation
-
     sim = tmp_path / "sim"
     if argv[0] == "calibrate":
         assert run_main(["simulate", "--duration", "0.5", "--quiet", "--out", str(sim)]) == 0
@@ -1257,7 +1255,7 @@ def test_a_full_disk_says_where_the_command_writes(argv, where, tmp_path, capsys
     def full(*args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(experiments.simulation, "write_synced", full)  # simulate's first write
+    monkeypatch.setattr("experiments.provenance.write_synced", full)  # simulate's first write (its marker)
     monkeypatch.setattr("experiments.provenance.write_record", full)  # calibrate's YAML, every record
     out = tmp_path / "o"
     assert run_main([a.format(out=out, sim=sim) for a in argv]) == 2
