@@ -555,11 +555,7 @@ def check_simulate_finished(path: str | os.PathLike) -> None:
     --out DIR``: "run lmsbench simulate --out DIR again" ran the defaults, and config.yaml may still
     be the earlier run's (a run stopped before writing it)."""
     p = Path(path)
-    try:
-        real = p.resolve()
-    except (OSError, RuntimeError):  # a loop of links: the caller says so
-        real = p
-    folders = [p] if p.is_dir() else [q.parent for q in dict.fromkeys((p, real)) if q.name in SIMULATE_OUTPUTS]
+    folders = [p] if p.is_dir() else [q.parent for q in _output_names(p, SIMULATE_OUTPUTS)]
     for folder in folders:
         if not os.access(folder, os.X_OK):  # said "FOLDER/.simulate-unfinished: permission denied", a file not given
             raise InputError(f"{folder}: folder cannot be read (permission denied: its files cannot be opened)")
@@ -578,17 +574,21 @@ def check_sim2real_finished(path: str | os.PathLike, flag: str = "") -> None:
     ``lmsbench sim2real`` writes (SIM2REAL_OUTPUTS: its sensor.yaml is a sensor model of its own) in a
     folder whose run did not finish (its SIM2REAL_UNFINISHED file is there): the file is then an
     earlier run's, beside the new run's tables, or the tables are cut short of it."""
-    p = Path(path)
-    try:
-        real = p.resolve()
-    except (OSError, RuntimeError):  # a loop of links: the reader says so
-        real = p
-    for q in dict.fromkeys((p, real)):
-        if q.name in SIM2REAL_OUTPUTS and (q.parent / SIM2REAL_UNFINISHED).exists():
+    for q in _output_names(Path(path), SIM2REAL_OUTPUTS):
+        if (q.parent / SIM2REAL_UNFINISHED).exists():
             raise InputError(f"{flag + ' ' if flag else ''}{path}: the lmsbench sim2real run that wrote {q.parent} did not finish (it was "
                              f"stopped or killed while writing its files; {SIM2REAL_UNFINISHED} is left, holding its "
                              f"settings), so its {q.name} is an earlier run's or of a run cut short; run that "
                              f"lmsbench sim2real --out {q.parent} again")
+
+
+def _output_names(p: Path, outputs: tuple[str, ...]) -> list[Path]:
+    """``p`` and, through a link, where it points, those of them named as one of a command's ``outputs``."""
+    try:
+        real = p.resolve()
+    except (OSError, RuntimeError):  # a loop of links: the reader says so
+        real = p
+    return [q for q in dict.fromkeys((p, real)) if q.name in outputs]
 
 
 def simulate_log(path: str | os.PathLike) -> Path | None:
