@@ -247,7 +247,14 @@ def open_text(path: str | Path) -> IO[str]:
     what = archive_kind(head)
     if what:
         raise LogFormatError(path, None, f"{what}, not a log: extract the log from it first")
-    raw = open_bytes(path)
+    return text_lines(open_bytes(path), head, ends)
+
+
+def text_lines(raw: IO[bytes], head: bytes, ends: bytes) -> io.TextIOWrapper:
+    """``raw`` (a binary stream at its start, whose first bytes are ``head`` and whose first line ends
+    in ``ends``: :func:`_first_line_end`) as text lines, as a CARMEN log's and every row file's are read
+    (:func:`open_text`, ``lms200.logs.row_lines``): a leading UTF-8 byte-order mark skipped, ASCII with
+    a replacement character for any other byte, lines ending as below."""
     if head.startswith(UTF8_BOM):  # a log saved by a Windows editor: the mark would hide line 1's message name
         raw.read(len(UTF8_BOM))
     # lines end at "\n" alone ("\r\n" too: the "\r" is whitespace to the word split), as the line numbers

@@ -7,7 +7,6 @@ name; both yield :class:`lms200.Record` objects.
 from __future__ import annotations
 
 import glob
-import io
 import itertools
 import os
 import shutil
@@ -19,7 +18,7 @@ from typing import Callable, Iterable, Iterator
 
 from .bag import BagError, BagReader, is_bag, write_bag
 from . import records
-from .carmen import UTF8_BOM, CarmenReader, _first_line_end, write_carmen
+from .carmen import CarmenReader, _first_line_end, text_lines, write_carmen
 from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
 from .laser_geometry import LaserGeometry
 from .records import Record
@@ -440,9 +439,9 @@ def row_lines(path: str | Path, p: Path) -> Iterator[tuple[int, str]]:
     ``sed -n Np`` gives it (a lone "\\r" ended a line, so every error after one named the wrong line)."""
     with open(p, "rb") as raw:
         head = raw.read(4096)
-        mac = b"\r" in (ends := _first_line_end(head, raw)) and b"\n" not in ends
-        raw.seek(len(UTF8_BOM) if head.startswith(UTF8_BOM) else 0)
-        f = io.TextIOWrapper(raw, encoding="ascii", errors="replace", newline=None if mac else "\n")
+        ends = _first_line_end(head, raw)
+        raw.seek(0)
+        f = text_lines(raw, head, ends)
         for no, line in enumerate(iter(lambda: f.readline(MAX_ROW_CHARS + 1), ""), 1):
             if len(line) > MAX_ROW_CHARS:
                 raise LogFormatError(path, no, f"longer than {MAX_ROW_CHARS:,} characters: not a text file of rows "
