@@ -103,8 +103,8 @@ def check_tables(tables: dict[str, pd.DataFrame], where: str) -> None:
             raise LmsbenchError(f"{where}: table {driving} has no {absent[0]} beside it ({absent[0]}.parquet), which its "
                                 "figure draws with it: a tables folder of `lmsbench figures` or `lmsbench demo` holds both")
     for name, (keys, numbers) in TABLE_COLUMNS.items():
-        table = tables.get(name)
-        if table is None or not len(table) or (name == "summary" and "f1" not in table):  # none drawn from
+        table = _drawn_from(tables, name)
+        if table is None:
             continue
         missing = [c for c in keys + numbers if c not in table]
         numbers = numbers + tuple(c for c in OPTIONAL_NUMBERS.get(name, ()) if c in table)
@@ -160,6 +160,15 @@ PLOTTED_RANGES: dict[str, dict[str, tuple[float, float, str]]] = {
 }
 
 
+def _drawn_from(tables: dict[str, pd.DataFrame], name: str) -> pd.DataFrame | None:
+    """The table ``name`` where a figure is drawn from it, else None: absent, empty, or a summary
+    without f1 (no accuracy-speed figure then), whose columns the checks then leave alone."""
+    table = tables.get(name)
+    if table is None or not len(table) or (name == "summary" and "f1" not in table):
+        return None
+    return table
+
+
 def _check_ranges(tables: dict[str, pd.DataFrame], where: str) -> None:
     """LmsbenchError naming the table, column and row of a value the figures cannot draw as what it is:
     a time per scan (Fig. 7's and accuracy_speed's log axes) of zero or less, infinite, below 1 ns or beyond
@@ -171,8 +180,8 @@ def _check_ranges(tables: dict[str, pd.DataFrame], where: str) -> None:
     from lms200 import LmsbenchError
 
     for name, columns in PLOTTED_RANGES.items():
-        table = tables.get(name)
-        if table is None or not len(table) or (name == "summary" and "f1" not in table):
+        table = _drawn_from(tables, name)
+        if table is None:
             continue
         for column, (low, high, what) in columns.items():
             values = table[column].to_numpy(dtype=float, na_value=np.nan)
