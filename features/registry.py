@@ -370,9 +370,14 @@ def extract_many(scans: Sequence[Scan], method: str = "sensor", config: Any = No
             # not iterable and a tuple was taken (threads > 1 or > BATCH_CHUNK scans), refused on one piece
             return _returned_many(m, run_many(piece, c), [len(s) for s in piece])
 
+        if len(scans) <= BATCH_CHUNK and use == 1 and m.name in _METHOD_MODULES:
+            return checked(scans, cfg)  # a built-in run_many checks the geometry itself (common_geometry)
+        # the whole batch first: an error names the scan's index in it, not in a piece; and a user's run_many is
+        # given scans of one geometry, as split in pieces (a batch of one piece was handed on unchecked: scans of two
+        # range_max, a str or None among them, which its run_many could not tell apart or failed on, a raw TypeError)
+        common_geometry(scans)
         if len(scans) <= BATCH_CHUNK and use == 1:
             return checked(scans, cfg)
-        common_geometry(scans)  # the whole batch first: an error names the scan's index in it, not in a piece
         return run_pieces(checked, scans, cfg, use, BATCH_CHUNK)
     if scans:
         common_geometry(scans)

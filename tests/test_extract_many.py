@@ -396,3 +396,33 @@ def test_an_empty_batch_on_several_threads_is_an_empty_list(method: str, monkeyp
     assert extract_many(iter(()), method=method, threads=4) == []
     monkeypatch.setenv(THREADS_ENV, "2")
     assert extract_many((), method=method) == []
+
+
+def test_a_registered_run_many_is_given_scans_of_one_geometry_only() -> None:
+    """Fuzz round 10: a user's run_many was handed a batch of one piece unchecked (a str among the scans, or scans of
+    two range_max, went in, exit 0; None a raw TypeError after it ran); the built-in methods and a batch in pieces
+    refused them."""
+    import dataclasses
+
+    from features import FeatureSet, register
+    from features.errors import ScanTypeError
+    from features.registry import _REGISTRY
+
+    @dataclasses.dataclass(frozen=True)
+    class Cfg:
+        a: int = 1
+
+    given: list[list[object]] = []
+    register("fuzz_geometry", Cfg, lambda scan, cfg: FeatureSet(),
+             run_many=lambda scans, cfg: given.append(list(scans)) or [FeatureSet() for _ in scans])
+    scan = room(0)
+    try:
+        with pytest.raises(ValueError, match=r"^scans\[1\]: geometry"):
+            extract_many([scan, scan.replace(range_max=81.83)], method="fuzz_geometry")
+        for item in ("x", None):
+            with pytest.raises(ScanTypeError, match=r"^scans\[1\]: expected an lms200.Scan"):
+                extract_many([scan, item], method="fuzz_geometry")  # type: ignore[list-item]
+        assert given == []
+        assert len(extract_many([scan, scan], method="fuzz_geometry")) == 2 and given == [[scan, scan]]
+    finally:
+        _REGISTRY.pop("fuzz_geometry", None)
