@@ -59,10 +59,28 @@ def codes_to_ranges(codes: np.ndarray, units: Units = "mm") -> np.ndarray:
     return np.where(c == CODE_ABOVE_MAXIMUM, np.inf, r)
 
 
+def unmasked(value: object) -> object:
+    """``value`` with the masked items of a numpy masked array as nan, anything else as given: the one
+    reading of a masked array wherever lms200 reads numbers (a Scan's ranges, codes, poses, trajectory rows,
+    bearings, the Gymnasium env's action). A masked item has no value: nan, an invalid reading (REP-117) in
+    ranges and refused where a value is needed. ``np.asarray`` drops the mask and reads the hidden data,
+    silently (fuzz round 10: a Record's odometry ``[1, --, 0.5]`` read as (1.0, 0.0, 0.5), a masked action or
+    trajectory row as its data). Another dtype than numbers (bool, text) is its plain array, for the caller's
+    own refusal of that dtype."""
+    if not isinstance(value, np.ma.MaskedArray):
+        return value
+    if value.dtype.kind in "iuf":
+        with np.errstate(invalid="ignore"):  # a float32 signalling nan: a nan, without numpy's warning
+            return np.ma.filled(value.astype(np.float64), np.nan)
+    if value.dtype.kind == "O":  # masked items become nan whatever they hold; the others are checked as items
+        return np.ma.filled(value, np.nan)
+    return np.asarray(value.data)
+
+
 def check_codes(codes: object) -> np.ndarray:
     """``codes`` as an array of raw 16-bit LMS200 values; InputError naming ``codes`` otherwise."""
     try:
-        c = np.asarray(codes)
+        c = np.asarray(unmasked(codes))
     except (TypeError, ValueError) as exc:
         raise InputError(f"codes: must be raw LMS200 values (whole numbers 0..65535) ({exc})") from None
     if c.dtype in (np.uint16, np.uint8):  # what the protocol gives: nothing to check
@@ -95,6 +113,7 @@ def real_numbers(ranges: object, error: type[Exception] = InputError) -> np.ndar
     if isinstance(ranges, bytearray) or (isinstance(ranges, memoryview) and ranges.format in RAW_BYTE_FORMATS):
         raise error(f"ranges: must be real numbers (m), got {type(ranges).__name__} of raw bytes (read them as "
                     "numbers first, e.g. np.frombuffer(data, '<f4'))")
+    ranges = unmasked(ranges)
     try:
         a = ranges if isinstance(ranges, np.ndarray) else np.asarray(ranges)
     except (TypeError, ValueError, OverflowError) as exc:
@@ -117,7 +136,7 @@ def real_rows(value: object, name: str, columns: int, what: str, finite: bool = 
     try:
         if value is None:  # np.asarray(None).astype(float) is nan
             raise TypeError
-        a = np.asarray(value)
+        a = np.asarray(unmasked(value))
         check_real_kind(a.dtype, InputError)
         a = a.astype(np.float64)
     except (InputError, TypeError, ValueError, OverflowError):

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .codes import NOT_NUMBER_ITEMS
+from .codes import NOT_NUMBER_ITEMS, unmasked
 from .errors import InputError
 from .finite import float_of
 from .scan import MAX_STAMP_S as SCAN_MAX_STAMP_S, Scan, stamp_problem  # noqa: F401 - the readers' name for it
@@ -132,6 +132,7 @@ def pose_of(name: str, pose: object, *, optional: bool = True) -> Pose2D:
     (10**400 was a raw OverflowError), nan / inf. Found by a review's reproduction. ``optional``:
     the message says None is taken (the caller's own check); False for a pose that must be given."""
     shape = f"{name}: must be {'None or ' if optional else ''}three numbers (x m, y m, theta rad)"
+    pose = unmasked(pose)  # a masked item is no number: nan, refused below (it was read as 0.0)
     if isinstance(pose, (str, bytes)):
         raise InputError(f"{shape}, got {type(pose).__name__} {pose!r}")
     try:

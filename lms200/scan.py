@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .codes import NOT_NUMBER_ITEMS, check_real_items, check_real_kind, finite_negative, float64_copy, real_numbers
+from .codes import NOT_NUMBER_ITEMS, finite_negative, float64_copy, real_numbers, unmasked
 from .errors import InputError, ScanError
 from .finite import fixed, overflow_text, shown
 
@@ -216,7 +216,7 @@ class Scan:
                 RuntimeWarning, text numpy's ValueError).
         """
         try:
-            b = np.asarray(bearings, dtype=float)
+            b = np.asarray(unmasked(bearings), dtype=float)  # a masked bearing: nan, refused
         except (TypeError, ValueError, OverflowError):
             raise InputError(f"bearings: must be finite numbers (rad), got {shown(bearings)}") from None
         if not np.isfinite(b).all():
@@ -328,13 +328,7 @@ def _ranges_view(ranges: object) -> np.ndarray:
     values that are not real numbers (a bool, complex, text or date array would otherwise be cast
     silently: 1+1j to 1.0, True to 1.0 m), a masked array's included. The masked beams of a masked
     array become nan (invalid)."""
-    if isinstance(ranges, np.ma.MaskedArray):
-        check_real_kind(ranges.dtype, ScanError)
-        if ranges.dtype.kind == "O":
-            check_real_items(ranges.compressed(), ScanError)  # masked items become nan, whatever they hold
-        with np.errstate(invalid="ignore"):  # a float32 signalling nan: a nan, without numpy's warning
-            ranges = np.ma.filled(ranges.astype(np.float64), np.nan)
-    return real_numbers(ranges, ScanError)
+    return real_numbers(ranges, ScanError)  # a masked array's masked beams as nan (codes.unmasked)
 
 
 def _ranges_copy(a: np.ndarray) -> np.ndarray:

@@ -23,6 +23,7 @@ import numpy as np
 from gymnasium import spaces
 
 from lms200 import Scan
+from lms200.codes import unmasked
 from lms200.errors import InputError
 
 from .lidar import LMS200Sim
@@ -163,7 +164,7 @@ def _action(action: object) -> np.ndarray:
     real numbers (a nan drove the pose to nan, and a scalar or a 1-element array was broadcast to
     both v and w; out-of-bounds values are clipped to the action space, as before)."""
     try:
-        a = np.asarray(action)
+        a = np.asarray(unmasked(action))  # a masked v or w: nan, refused (its hidden value was driven)
     except (TypeError, ValueError):
         a = np.asarray(None)
     if a.shape != (2,) or a.dtype.kind not in "iuf" or not np.all(np.isfinite(a)):

@@ -2079,3 +2079,25 @@ def test_slam_config_checks_the_closure_drift_gate_and_search(value: dict, messa
         SlamConfig.from_dict({"loop_closure": value})
     assert SlamConfig.from_dict({"loop_closure": {"drift": "joint", "drift_inflation": 10}}).loop_closure.drift == "joint"
     assert SlamConfig.from_dict({"loop_closure": {"search": "window", "window_theta": np.pi}}).loop_closure.search == "window"
+
+
+def test_masked_items_are_nan_wherever_numbers_are_read() -> None:
+    """Fuzz round 10: np.asarray dropped a masked array's mask and read its hidden data, silently, everywhere but a
+    Scan's ranges: a Record's odometry [1, --, 0.5] was (1.0, 0.0, 0.5), a masked code, bearing or action its data.
+    One helper (lms200.codes.unmasked) reads the masked items as nan: refused where a number is needed."""
+    from lms200 import Record, codes_to_ranges
+    from lms200.codes import unmasked
+    from sim.gym_env import _action
+
+    scan = Scan(np.ma.array([1.0, 2.0, 3.0], mask=[False, True, False]), **GEOM)
+    assert np.array_equal(scan.ranges, [1.0, np.nan, 3.0], equal_nan=True)  # the rule Scan had, kept
+    with pytest.raises(InputError, match=r"^odom: must be finite \(x m, y m, theta rad\), got array\(\[1\. , nan, 0\.5\]\)$"):
+        Record(scan, odom=np.ma.array([1.0, 2.0, 0.5], mask=[False, True, False]))
+    with pytest.raises(InputError, match=r"^codes: must be raw LMS200 values .* and nan / inf$"):
+        codes_to_ranges(np.ma.array([100, 8183, 200], mask=[False, False, True]), "mm")
+    with pytest.raises(InputError, match=r"^bearings: must be finite numbers"):
+        scan.beam_of(np.ma.array([0.1, 0.2], mask=[False, True]))
+    with pytest.raises(InputError, match=r"^action: must be two finite numbers"):
+        _action(np.ma.array([1.0, 0.5], mask=[True, False]))
+    assert Record(scan, odom=np.ma.array([1.0, 2.0, 0.5])).odom == (1.0, 2.0, 0.5)  # nothing masked: its values
+    assert unmasked(np.ma.array([True], mask=[True])).dtype == bool  # another dtype: for the caller's refusal
