@@ -105,6 +105,8 @@ class OfficeEnv(gym.Env):
         return self._observe(None), self._info()
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
+        if self._scan is None:  # no episode: it stepped from pose (0, 0, 0), unseeded, with a reward and no word
+            raise InputError("step: no episode yet: call reset() first (gymnasium.make's env says so too)")
         space = self.action_space
         assert isinstance(space, spaces.Box)
         v, w = np.clip(_action(action), space.low, space.high)

@@ -469,6 +469,18 @@ def test_gym_step_refuses_actions_that_are_not_two_finite_numbers(action: object
     assert np.all(np.isfinite(env.pose)) and env.observation_space.contains(obs)
 
 
+def test_gym_step_before_reset_is_refused() -> None:
+    """Fuzz round 10: OfficeEnv().step(...) before reset() stepped from pose (0, 0, 0), with a reward, exit 0."""
+    from sim.gym_env import OfficeEnv
+
+    env = OfficeEnv()
+    with pytest.raises(InputError, match=r"^step: no episode yet: call reset\(\) first"):
+        env.step(np.array([0.1, 0.0]))
+    assert env.steps == 0
+    env.reset(seed=0)
+    assert env.step(np.array([0.1, 0.0]))[4]["progress_m"] >= 0
+
+
 @pytest.mark.parametrize("seed", [-1, 1.5, "a"])
 def test_gym_reset_seed_must_be_a_whole_number(seed: object) -> None:
     """reset(seed=-1) raised Gymnasium's own error, not an LmsbenchError."""
