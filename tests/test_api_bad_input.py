@@ -1403,6 +1403,8 @@ def test_sensor_range_noise_is_capped_like_the_baselines(field: str) -> None:
     (dict(extractor="hough", extractor_params={"k": 3}), r"^extractor_params: unknown parameter\(s\) \['k'\] for method 'hough'"),
     (dict(extractor_params={"k": -3}), r"^extractor_params.k: must be an integer >= 1"),
     (dict(extractor="split_merge", extractor_params={"split_threshold": "x"}), "^extractor_params.split_threshold: must be"),
+    (dict(preset=np.array(["default", "paper"])), r"^preset: must be one of \['default', 'paper'\], got array"),  # fuzz round 10:
+    (dict(preset=["default"]), r"^preset: must be one of"),  # numpy's "truth value of an array ... is ambiguous"
 ])
 def test_slam_config_checks_its_extractor_when_built(kw: dict, message: str) -> None:
     from slam import SlamConfig, SlamConfigError
