@@ -36,7 +36,7 @@ from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, 
 from lms200 import LmsbenchError, Pose2D, Record, read_log
 from lms200.carmen import no_scan_read
 from lms200.errors import InputError
-from lms200.finite import check_integer, shown
+from lms200.finite import check_integer, is_one_of, shown
 from lms200.logs import SIMULATE_LOG
 from lms200.noise import QUANTUM_CANDIDATES_M
 
@@ -227,7 +227,7 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
             "none"; the odometry then is the raw one the ODOM lines give, never trusted.
     """
     stride, max_scans = check_counts(stride, max_scans)
-    if poses not in POSES:
+    if not is_one_of(poses, POSES):
         raise LmsbenchError(f"poses: must be one of {', '.join(POSES)}, got {poses!r}")
     options = dict(read_options or {})
     reader = read_log(path, **options)

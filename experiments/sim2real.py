@@ -36,7 +36,7 @@ import numpy as np
 
 from lms200 import InputError, LmsbenchError, Record, read_log
 from lms200.errors import LmsbenchWarning
-from lms200.finite import shown
+from lms200.finite import is_one_of, shown
 from lms200.timing import check_scan_rate
 from lms200.calibration import missing_readings
 from lms200.yamlio import dump as dump_yaml
@@ -666,7 +666,7 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
     from sim import WORLD_NAMES, make_world, simulate_records
     from sim.records import scan_stamps
 
-    if world not in WORLD_NAMES:
+    if not is_one_of(world, WORLD_NAMES):
         raise LmsbenchError(f"world: unknown world {world!r}; known worlds: {', '.join(WORLD_NAMES)}")
     stride, max_scans, seeds, methods = _checked_arguments(stride, max_scans, seeds, methods, duration, probe_duration,
                                                            fit_duration)

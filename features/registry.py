@@ -19,6 +19,7 @@ import numpy as np
 
 from lms200 import Scan
 from lms200.errors import InputError, LmsbenchWarning
+from lms200.finite import is_one_of
 
 from .baselines.checks import MAX_BEAMS
 from .batch import check_threads, common_geometry, run_pieces, scan_list
@@ -82,7 +83,7 @@ def register(name: str, config_type: type, run: Callable[[Scan, Any], FeatureSet
         raise ConfigError(f"run: must be callable (scan, config) -> FeatureSet, got {run!r}")
     if run_many is not None and not callable(run_many):
         raise ConfigError(f"run_many: must be None or callable (scans, config) -> list of FeatureSet, got {run_many!r}")
-    if backend not in BACKENDS:
+    if not is_one_of(backend, BACKENDS):
         raise ConfigError(f"backend: must be one of {', '.join(BACKENDS)}, got {backend!r}")
     if not isinstance(thread_safe, (bool, np.bool_)):
         raise ConfigError(f"thread_safe: must be True or False, got {thread_safe!r}")

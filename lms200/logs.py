@@ -20,6 +20,7 @@ from .bag import BagError, BagReader, is_bag, write_bag
 from . import records
 from .carmen import CarmenReader, _first_line_end, text_lines, write_carmen
 from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
+from .finite import is_one_of
 from .laser_geometry import LaserGeometry
 from .records import Record
 
@@ -116,7 +117,7 @@ def write_log(path: str | Path, records: Iterable[Record], fmt: str | None = Non
     p = path_of(path)
     if fmt is None:
         fmt = "bag" if p.suffix == ".bag" else "robotlaser1"
-    if fmt not in ("robotlaser1", "flaser", "bag", "bag2"):
+    if not is_one_of(fmt, ("robotlaser1", "flaser", "bag", "bag2")):
         raise InputError(f"fmt: must be 'robotlaser1', 'flaser', 'bag' or 'bag2', got {fmt!r}")
     if not p.parent.is_dir():
         raise InputError(f"path: the folder {p.parent} does not exist")

@@ -24,6 +24,7 @@ import numpy as np
 
 from lms200 import LmsbenchError
 from lms200.errors import InputError, LmsbenchWarning
+from lms200.finite import is_one_of
 from lms200.codes import LMS200_MAX_RANGE, metres_per_unit
 from lms200.laser_geometry import MIN_RANGE_MAX_M
 from lms200.timing import MIRROR_TURN_S, scan_period, turns_per_scan
@@ -149,7 +150,7 @@ class SensorConfig:
                     finite = False
                 if not finite:  # nan passes every comparison below: refuse it (and inf) first
                     raise InputError(f"{f.name}: must be finite, got {value}")
-        if self.units not in ("mm", "cm"):
+        if not is_one_of(self.units, ("mm", "cm")):
             raise InputError(f"units: must be 'mm' or 'cm', got {self.units!r}")
         if self.n_beams < 2:
             raise InputError(f"n_beams: must be >= 2, got {self.n_beams}")

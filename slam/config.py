@@ -13,7 +13,7 @@ import numpy as np
 
 from features.baselines.checks import MAX_BEAMS
 from lms200 import LmsbenchError
-from lms200.finite import float_of, shown
+from lms200.finite import float_of, is_one_of, shown
 
 
 class SlamConfigError(LmsbenchError, ValueError):
@@ -587,8 +587,8 @@ class SlamConfig:
     consistency: ConsistencyConfig = field(default_factory=ConsistencyConfig)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.preset, str) or self.preset not in PRESETS:  # an array's `in` was numpy's "truth value
-            raise SlamConfigError(f"preset: must be one of {list(PRESETS)}, got {self.preset!r}")  # ... is ambiguous"
+        if not is_one_of(self.preset, PRESETS):
+            raise SlamConfigError(f"preset: must be one of {list(PRESETS)}, got {self.preset!r}")
         if not isinstance(self.extractor, str) or not self.extractor.strip():
             raise SlamConfigError(f"extractor: must be an extraction method's name, got {self.extractor!r}")
         if not isinstance(self.extractor_params, dict) or not all(isinstance(k, str) for k in self.extractor_params):

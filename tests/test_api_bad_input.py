@@ -2115,3 +2115,37 @@ def test_masked_items_are_nan_wherever_numbers_are_read() -> None:
         _action(np.ma.array([1.0, 0.5], mask=[True, False]))
     assert Record(scan, odom=np.ma.array([1.0, 2.0, 0.5])).odom == (1.0, 2.0, 0.5)  # nothing masked: its values
     assert unmasked(np.ma.array([True], mask=[True])).dtype == bool  # another dtype: for the caller's refusal
+
+
+def _array_names() -> list:
+    import dataclasses
+
+    from experiments.compare import log_source
+    from experiments.sim2real import sim2real
+    from features import FeatureSet, register
+    from lms200 import Record, write_log
+    from sim import SensorConfig
+
+    @dataclasses.dataclass(frozen=True)
+    class Cfg:
+        a: int = 1
+
+    names = np.array(["numpy", "x"])
+    return [
+        (lambda tmp: write_log(tmp / "a.clf", [Record(Scan.lms200(np.full(361, 3.0)))], fmt=names), "^fmt: must be"),
+        (lambda tmp: SensorConfig(units=names), "^units: must be 'mm' or 'cm'"),
+        (lambda tmp: register("fuzz_array_backend", Cfg, lambda scan, cfg: FeatureSet(), backend=names), "^backend: must be"),
+        (lambda tmp: log_source(tmp / "none.clf", poses=names), "^poses: must be one of"),
+        (lambda tmp: sim2real(tmp / "none.clf", world=names), "^world: unknown world"),
+    ]
+
+
+@pytest.mark.parametrize("case", range(5))
+def test_a_name_given_as_an_array_is_refused_naming_the_argument(tmp_path, case: int) -> None:
+    """Fuzz round 10: `value in NAMES` of a numpy array compares item by item: numpy's "truth value of an array with
+    more than one element is ambiguous" ValueError, not the argument's own refusal (lms200.finite.is_one_of)."""
+    from lms200 import LmsbenchError
+
+    call, message = _array_names()[case]
+    with pytest.raises(LmsbenchError, match=message):
+        call(tmp_path)
