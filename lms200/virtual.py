@@ -211,7 +211,8 @@ def resample_to_grid(scan: Scan) -> np.ndarray:
 def variant_codes(ranges361: np.ndarray, variant: tuple[int, int], units: Units) -> np.ndarray:
     """Distance codes a variant reports from 0.5 deg ranges: 1 deg takes every other beam, 100 deg
     the beams from -50 to +50 deg, 0.25 deg adds midpoints: the mean of the two neighbours, so nan
-    (8191, not valid) next to a nan, else +inf (8183, above the maximum) next to a +inf.
+    (8191, not valid) next to a nan, else +inf (8183, above the maximum) next to a +inf; -inf (too close)
+    is not valid, as nan is (its midpoint with +inf too: it warned "invalid value encountered in add").
 
     Raises:
         InputError: ``ranges361`` that are not 361 real numbers (text was numpy's ValueError; other
@@ -229,7 +230,8 @@ def variant_codes(ranges361: np.ndarray, variant: tuple[int, int], units: Units)
     if res == 100:
         r = r[::2]
     elif res == 25:
-        mid = 0.5 * (r[:-1] + r[1:])  # inf + x = inf, nan propagates
+        with np.errstate(invalid="ignore"):  # -inf + inf: nan, not valid as -inf's code is, without numpy's warning
+            mid = 0.5 * (r[:-1] + r[1:])  # inf + x = inf, nan propagates
         fine = np.empty(2 * r.size - 1)
         fine[0::2], fine[1::2] = r, mid
         r = fine

@@ -345,3 +345,14 @@ def test_calibrate_scans_reads_an_endless_repeat_to_a_bound() -> None:
     with pytest.raises(InputError, match=rf"^scans: calibrating needs at least 2 distinct scans .*got {MAX_READ} scans but "
                                          rf"only 1 distinct: {MAX_READ - 1} repeat the scan before them"):
         calibrate_scans(itertools.islice(itertools.repeat(scan), MAX_READ + 5))  # endless: the same (old code: "got 200005")
+
+
+def test_quarter_degree_midpoints_of_too_close_and_no_return_are_not_valid_without_a_warning() -> None:
+    """Fuzz round 10: a -inf (too close) beside a +inf gave the 0.25 deg midpoint -inf + inf, numpy's RuntimeWarning
+    "invalid value encountered in add" at every such scan (the driver read the scans right)."""
+    ranges = np.full(361, 2.0)
+    ranges[10], ranges[11], ranges[20] = -np.inf, np.inf, -np.inf
+    codes = virtual.variant_codes(ranges, (100, 25), "mm")  # beams 80..280 at 0.5 deg: none of these
+    assert codes.tolist() == [2000] * 401
+    codes = virtual.variant_codes(np.roll(ranges, 80), (100, 25), "mm")  # beam 90 = -inf, 91 = +inf, 100 = -inf
+    assert codes[[20, 21, 22, 39, 40, 41]].tolist() == [8191, 8191, 8183, 8191, 8191, 8191]
