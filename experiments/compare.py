@@ -36,7 +36,7 @@ from features.scoring import ScoreConfig, check_truth, explained_fraction, prf, 
 from lms200 import LmsbenchError, Pose2D, Record, read_log
 from lms200.carmen import no_scan_read
 from lms200.errors import InputError
-from lms200.finite import check_integer, is_one_of, shown
+from lms200.finite import check_integer, is_number, is_one_of, shown
 from lms200.logs import SIMULATE_LOG
 from lms200.noise import QUANTUM_CANDIDATES_M
 
@@ -495,6 +495,10 @@ def compare(
     twice = next((m for i, m in enumerate(methods) if m in methods[:i]), None)
     if twice is not None:  # each of its scans was measured and counted twice
         raise InputError(f"methods: {twice!r} is given twice")
+    fixed_sigma = checked_sigma(sigma)
+    if matches is not None and not isinstance(matches, list):  # appended to after every scan was run: 'dict' object
+        raise InputError(f"matches: must be a list (one dict is appended a matched line) or None, "  # has no attribute
+                         f"got {type(matches).__name__}")  # 'append', at the end
     params = {} if params is None else params
     if not isinstance(params, dict) or not all(isinstance(v, dict) for v in params.values()):  # 'int' object has no attribute 'get'
         raise InputError(f"params: must be a mapping of method name to its fields, {{'hough': {{'rho_step': 0.01}}}}, "
@@ -528,7 +532,7 @@ def compare(
         # parsing); checked here, source by source, so that one log is open at a time (first scans taken for
         # every source before the loop kept every log's reader open: 60 logs, "too many open files")
         src_records = _first_checked(src)
-        sigma_r = _source_sigma(src, sigma)
+        sigma_r = _source_sigma(src, fixed_sigma)
         src_runs = _with_noise(runs, params, _extractor_noise(src, sigma_r), _fit_noise(src), _bearing_noise(src))
         src.ran = {name: cfg for name, _, cfg in src_runs}
         previous: dict[str, tuple[np.ndarray, Pose2D]] = {}  # method -> lines and pose of the last scan
@@ -630,17 +634,24 @@ def sigma_problem(value: float) -> str | None:
     return None
 
 
-def _source_sigma(src: Source, sigma: float | str) -> float:
-    """The range noise (m) a source is scored with: ``sigma`` if a number, else the source's own."""
-    if sigma != "auto":
-        try:
-            value = float(sigma)
-        except (TypeError, ValueError):
-            value = float("nan")
-        problem = sigma_problem(value)
-        if problem:
-            raise LmsbenchError(f"sigma: {problem}, got {sigma!r}")
-        return value
+def checked_sigma(sigma: object) -> float | None:
+    """``compare``'s ``sigma`` (m) as a float, None for "auto"; LmsbenchError naming it otherwise, before any
+    source is read: a bool was taken as 1 m (``float(True)``), and an array was numpy's "truth value of an array
+    ... is ambiguous" ValueError (fuzz round 10)."""
+    if is_one_of(sigma, ("auto",)):
+        return None
+    value = float(sigma) if is_number(sigma) else float("nan")  # type: ignore[arg-type]  # a real number
+    problem = sigma_problem(value)
+    if problem:
+        raise LmsbenchError(f"sigma: {problem}, got {shown(sigma)}")
+    return value
+
+
+def _source_sigma(src: Source, sigma: float | None) -> float:
+    """The range noise (m) a source is scored with: ``sigma`` if a number (:func:`checked_sigma`), else the
+    source's own."""
+    if sigma is not None:
+        return sigma
     if src.sigma_r is None and src.estimate_sigma is not None:
         src.sigma_r = src.estimate_sigma()
     if src.sigma_r is None and isinstance(src.records, Sequence):  # re-iterable: estimate from it

@@ -2149,3 +2149,21 @@ def test_a_name_given_as_an_array_is_refused_naming_the_argument(tmp_path, case:
     call, message = _array_names()[case]
     with pytest.raises(LmsbenchError, match=message):
         call(tmp_path)
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(sigma=True), r"^sigma: must be a range noise std in \[0.0001, 1000\] m, or 'auto', got True$"),  # was 1 m
+    (dict(sigma=np.array([0.01, 0.02])), r"^sigma: must be a range noise std"),  # numpy's "truth value ... ambiguous"
+    (dict(matches={}), r"^matches: must be a list .* got dict$"),  # 'dict' object has no attribute 'append', at the end
+])
+def test_compare_arguments_are_checked_before_any_source_is_read(kw: dict, message: str) -> None:
+    """Fuzz round 10; a source that would fail if it were read shows that nothing was."""
+    from experiments.compare import Source, compare
+    from lms200 import LmsbenchError
+
+    def never() -> object:
+        raise AssertionError("a source was read")
+
+    src = Source("never", "sim", 0, [], estimate_sigma=never)
+    with pytest.raises(LmsbenchError, match=message):
+        compare([src], ["split_merge"], **kw)

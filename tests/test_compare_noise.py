@@ -97,6 +97,6 @@ def test_source_sigma_floors_at_the_extractors_min_sigma(monkeypatch):
     from features.baselines import checks
 
     src = compare.Source("tiny", "sim", 0, [], sigma_r=1e-300)
-    assert compare._source_sigma(src, "auto") == checks.MIN_SIGMA_M == 1e-6
+    assert compare._source_sigma(src, None) == checks.MIN_SIGMA_M == 1e-6
     monkeypatch.setattr(compare, "EXTRACTOR_MIN_SIGMA_M", 2e-6)
-    assert compare._source_sigma(src, "auto") == 2e-6
+    assert compare._source_sigma(src, None) == 2e-6
