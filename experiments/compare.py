@@ -780,6 +780,10 @@ def _weighted(values: pd.Series, weights: pd.Series) -> float:
     return float((values[ok] * weights[ok]).sum() / weights[ok].sum()) if ok.any() else float("nan")
 
 
+#: the columns of compare's table that summarise reads from every one it is given
+SUMMARISED = ("source", "method", "kind", "seed", "n_lines", "explained", "range_rms", "microseconds")
+
+
 def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
     """One row per source x method: counts pooled over scans and seeds (micro-averaged precision,
     recall, F1), error bias and RMS pooled over matched lines (rho in mm, alpha in deg), corner
@@ -790,7 +794,18 @@ def summarise(table: pd.DataFrame, reference: str = "sensor") -> pd.DataFrame:
     ``cpu_us_median`` and ``cpu_speed_vs_sensor`` are the same from CPU time: under load a call
     longer than the scheduler's slice is pre-empted more often, which wall time penalises.
     ``time_ms_p05`` / ``_p25`` / ``_median`` / ``_p75`` / ``_p95``: quantiles of the wall time per
-    scan in ms (the figures' error bars)."""
+    scan in ms (the figures' error bars).
+
+    Raises:
+        InputError: a ``table`` that is no DataFrame with :data:`SUMMARISED`, the columns of :func:`compare` it
+            reads (a list was an AttributeError, another table a KeyError naming one column).
+    """
+    if not isinstance(table, pd.DataFrame):
+        raise InputError(f"table: must be compare()'s table (a pandas DataFrame), got {type(table).__name__}")
+    missing = [c for c in SUMMARISED if c not in table.columns]
+    if missing:
+        raise InputError(f"table: lacks compare()'s column(s) {', '.join(missing)}: summarise reads the table compare() "
+                         "returns")
     out = []
     for (source, method), g in table.groupby(["source", "method"], sort=False):
         row: dict[str, Any] = dict(source=source, method=method, kind=g["kind"].iloc[0], scans=len(g),

@@ -2167,3 +2167,16 @@ def test_compare_arguments_are_checked_before_any_source_is_read(kw: dict, messa
     src = Source("never", "sim", 0, [], estimate_sigma=never)
     with pytest.raises(LmsbenchError, match=message):
         compare([src], ["split_merge"], **kw)
+
+
+def test_summarise_names_a_table_that_is_not_compares() -> None:
+    """Fuzz round 10: summarise([1, 2]) was an AttributeError ('list' object has no attribute 'groupby'), a table of
+    other columns a KeyError naming one of them."""
+    import pandas as pd
+
+    from experiments.compare import summarise
+
+    with pytest.raises(InputError, match=r"^table: must be compare\(\)'s table \(a pandas DataFrame\), got list$"):
+        summarise([1, 2])  # type: ignore[arg-type]
+    with pytest.raises(InputError, match=r"^table: lacks compare\(\)'s column\(s\) kind, seed, n_lines, .*microseconds"):
+        summarise(pd.DataFrame({"source": ["s"], "method": ["m"]}))
