@@ -58,6 +58,10 @@ MIN_SCALE, MAX_SCALE = 0.7, 3.0  # the rooms' size factor (make_world(scale=...)
 # to a solid than the robot's radius (0.17 m at 0.5, 0.25 at 0.6; >= 0.33 m at 0.7 over 8 seeds of every roomed world)
 ROOMED_WORLDS = ("office", "cluttered", "random", "mit")  # the office generator's worlds, whose rooms scale
 MAX_CLUTTER = 10.0  # densest clutter level (10x a furnished office); the object count grows with it
+#: most glass panels per 10 m of route and clutter level (make_world(glass=...)): a panel is 1-2.5 m of a wall at least
+#: 2.5 m long, so the walls are full long before it (office, clutter 10: 15 panels at 1, 18 at 10, 19 at 100), and
+#: each draw past that still tries 10 walls: 100 ran 103 s, 10**6 for hours, 2**70 was numpy's "lam value too large"
+MAX_GLASS = 10.0
 
 
 def make_world(name: str = "office", seed: int = 0, clutter: float | None = None, glass: float | None = None,
@@ -87,7 +91,7 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
 
     Raises:
         InputError: (an ``LmsbenchError`` and a ``ValueError``) for an unknown name (listing the known ones), a seed that is not a whole number
-            >= 0, a clutter level outside [0, MAX_CLUTTER], a negative glass rate, a rough or relief
+            >= 0, a clutter level outside [0, MAX_CLUTTER], a glass rate outside [0, MAX_GLASS], a rough or relief
             share outside [0, 1] (or > 0 at clutter level 0), or a scale outside [MIN_SCALE, MAX_SCALE]
             (or other than 1 for a world without rooms).
     """
@@ -105,8 +109,9 @@ def make_world(name: str = "office", seed: int = 0, clutter: float | None = None
     level = float(MIT_PRESET["clutter"] if name == "mit" else DEFAULT_CLUTTER.get(name, 0.0)) if clutter is None else float(clutter)
     if not 0 <= level <= MAX_CLUTTER:
         raise InputError(f"clutter: must be in [0, {MAX_CLUTTER:g}], got {clutter}")
-    if glass is not None and not (np.isfinite(glass) and glass >= 0):
-        raise InputError(f"glass: must be a rate >= 0 (panels per 10 m), got {glass}")
+    if glass is not None and not (np.isfinite(glass) and 0 <= glass <= MAX_GLASS):
+        raise InputError(f"glass: must be a rate in [0, {MAX_GLASS:g}] (panels per 10 m of route and clutter level; "
+                         f"the walls are full of glass well before {MAX_GLASS:g}), got {glass:g}")
     if rough is not None and not (np.isfinite(rough) and 0 <= rough <= 1):
         raise InputError(f"rough: must be a share in [0, 1] of the rooms' wall length, got {rough}")
     if relief is not None and not (np.isfinite(relief) and 0 <= relief <= 1):
