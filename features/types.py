@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from lms200.codes import unmasked
 from lms200.errors import InputError
 from lms200.finite import is_number, shown, whole_number
 
@@ -342,6 +343,9 @@ class Lines(Sequence):
                 to 2, silently).
         """
         shapes = "rho, alpha (L,), start, end (L, 2), cov (L, 2, 2), first, last and n_points (L,)"
+        # a masked array's masked items as nan (lms200.codes.unmasked): refused as beams here, as values by check_lines
+        rho, alpha, start, end, cov, first, last, n_points = (
+            unmasked(a) for a in (rho, alpha, start, end, cov, first, last, n_points))  # type: ignore[misc]
         args = (("alpha", alpha), ("start", start), ("end", end), ("cov", cov), ("first", first), ("last", last),
                 ("n_points", n_points))
         try:

@@ -11,7 +11,7 @@ from features.errors import not_a_scan
 from features.realdata import check_features
 from features.types import RHO_SLACK, FeatureSet, not_covariance
 from lms200 import InputError, Scan
-from lms200.codes import real_rows
+from lms200.codes import real_rows, unmasked
 
 from .config import SlamConfig
 
@@ -72,7 +72,7 @@ class Observations:
         for cov, of in (("line_cov", "lines"), ("corner_cov", "corners")):
             m = rows[of].shape[0]
             try:
-                c = np.asarray(getattr(self, cov), dtype=np.float64)
+                c = np.asarray(unmasked(getattr(self, cov)), dtype=np.float64)  # a masked item: nan, refused
             except (TypeError, ValueError):
                 c = np.empty(0)
             if c.shape != (m, 2, 2) or not np.isfinite(c).all():

@@ -2116,6 +2116,15 @@ def test_masked_items_are_nan_wherever_numbers_are_read() -> None:
         scan.beam_of(np.ma.array([0.1, 0.2], mask=[False, True]))
     with pytest.raises(InputError, match=r"^action: must be two finite numbers"):
         _action(np.ma.array([1.0, 0.5], mask=[True, False]))
+    from features.types import Lines
+    from slam import Observations
+
+    with pytest.raises(InputError, match=r"^observations.line_cov: must be \(1, 2, 2\) finite covariances"):
+        Observations(lines=[[1.0, 0.1]], line_ends=[[0.0, 0.0, 1.0, 1.0]],
+                     line_cov=np.ma.array(np.eye(2)[None] * 0.01, mask=[[[True, False], [False, False]]]))
+    with pytest.raises(InputError, match=r"^Lines.from_arrays: first must be whole numbers"):
+        Lines.from_arrays([1.0], [0.1], [[0.0, 1.0]], [[1.0, 1.0]], np.full((1, 2, 2), np.nan),
+                          np.ma.array([3], mask=[True]), [5], [3])
     assert Record(scan, odom=np.ma.array([1.0, 2.0, 0.5])).odom == (1.0, 2.0, 0.5)  # nothing masked: its values
     assert unmasked(np.ma.array([True], mask=[True])).dtype == bool  # another dtype: for the caller's refusal
 
