@@ -60,7 +60,7 @@ def mahalanobis2(nu: np.ndarray, S: np.ndarray) -> np.ndarray:
     a, b, c, d = S[..., 0, 0], S[..., 0, 1], S[..., 1, 0], S[..., 1, 1]
     det = a * d - b * c
     x, y = nu[..., 0], nu[..., 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # a det of 1e-300: inf, as a 0 one
         m = (d * x * x - (b + c) * x * y + a * y * y) / det
     return np.where(det > 0, m, np.inf)
 

@@ -11,6 +11,8 @@ from features.errors import not_a_scan
 from features.realdata import check_features
 from features.types import RHO_SLACK, FeatureSet, not_covariance
 from lms200 import InputError, Scan
+from lms200.finite import shown
+from lms200.records import MAX_COORD_M
 from lms200.codes import real_rows, unmasked
 
 from .config import SlamConfig
@@ -67,6 +69,8 @@ class Observations:
         rows = {name: real_rows(getattr(self, name), f"observations.{name}", cols, what)
                 for name, cols, what in (("lines", 2, "rho m, alpha rad"), ("line_ends", 4, "x0, y0, x1, y1 m"),
                                          ("corners", 2, "x m, y m"), ("points", 2, "x m, y m"))}
+        if covariances:  # built by a user (from_features' are a scan's, from its extractor): within the bounds of
+            _check_scale(rows)  # every log and trajectory, so that the filter's products stay finite
         if rows["line_ends"].shape[0] != rows["lines"].shape[0]:
             raise InputError(f"observations.line_ends: {rows['line_ends'].shape[0]} rows for {rows['lines'].shape[0]} lines")
         for cov, of in (("line_cov", "lines"), ("corner_cov", "corners")):
@@ -78,6 +82,8 @@ class Observations:
             if c.shape != (m, 2, 2) or not np.isfinite(c).all():
                 raise InputError(f"observations.{cov}: must be ({m}, 2, 2) finite covariances, one a row of "
                                  f"observations.{of}, got {'shape ' + str(c.shape) if c.shape != (m, 2, 2) else 'nan / inf'}")
+            if covariances:
+                _check_scale({cov: c.reshape(m, 4)})
             bad = not_covariance(c) if covariances and m else c[:0, 0, 0]
             if bad.any():  # a negative variance, a correlation beyond 1 or an asymmetric one: the EKF's S was no
                 k = int(np.flatnonzero(bad)[0])  # covariance and its gate and update nonsense, silently (fuzzing)
@@ -96,6 +102,27 @@ class Observations:
     def line_lengths(self) -> np.ndarray:
         e = self.line_ends
         return np.hypot(e[:, 2] - e[:, 0], e[:, 3] - e[:, 1])
+
+
+#: m^2 (or rad^2, alpha's): the largest covariance entry an Observations built by hand takes, a std of MAX_COORD_M
+MAX_OBSERVATION_VARIANCE = MAX_COORD_M**2
+
+
+def _check_scale(rows: dict[str, np.ndarray]) -> None:
+    """InputError naming the first field of an Observations built by hand with a coordinate beyond +-MAX_COORD_M
+    (1e9 m, every log reader's and trajectory's bound) or a covariance entry beyond MAX_OBSERVATION_VARIANCE: 1e300
+    was taken, and the filter's products overflowed (numpy's RuntimeWarnings, 'overflow encountered in multiply' in
+    its determinants, 'invalid value' in its segment projections; fuzz round 10)."""
+    for name, bound, unit in (("lines", MAX_COORD_M, "m"), ("line_ends", MAX_COORD_M, "m"), ("corners", MAX_COORD_M, "m"),
+                              ("points", MAX_COORD_M, "m"), ("line_cov", MAX_OBSERVATION_VARIANCE, "m^2 / rad^2"),
+                              ("corner_cov", MAX_OBSERVATION_VARIANCE, "m^2")):
+        if name not in rows:
+            continue
+        a = rows[name][:, :1] if name == "lines" else rows[name]  # a line's alpha is an angle, within +-pi or wrapped
+        if a.size and np.abs(a).max() > bound:
+            k = int(np.flatnonzero((np.abs(a) > bound).reshape(len(a), -1).any(axis=1))[0])
+            raise InputError(f"observations.{name}: row {k} holds {shown(float(np.abs(a[k]).max()))} {unit}, beyond "
+                             f"{bound:g} {unit} (slam.observations: every log's and trajectory's bound)")
 
 
 def from_features(fs: FeatureSet, config: SlamConfig, scan: Scan | None = None) -> Observations:

@@ -134,7 +134,8 @@ class ScanPoints:
     @classmethod
     def from_points(cls, points: np.ndarray, cfg: AlignmentConfig) -> "ScanPoints":
         p = np.asarray(points, float).reshape(-1, 2)
-        p = p[np.isfinite(p[:, 0]) & (p[:, 0] ** 2 + p[:, 1] ** 2 <= cfg.max_range**2)]
+        with np.errstate(over="ignore"):  # a point beyond 1e154 m squares to inf: beyond max_range, without numpy's warning
+            p = p[np.isfinite(p[:, 0]) & (p[:, 0] ** 2 + p[:, 1] ** 2 <= cfg.max_range**2)]
         return cls(p, p[:: cfg.stride], cfg)
 
     @cached_property

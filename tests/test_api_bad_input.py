@@ -2192,3 +2192,31 @@ def test_summarise_names_a_table_that_is_not_compares() -> None:
         summarise([1, 2])  # type: ignore[arg-type]
     with pytest.raises(InputError, match=r"^table: lacks compare\(\)'s column\(s\) kind, seed, n_lines, .*microseconds"):
         summarise(pd.DataFrame({"source": ["s"], "method": ["m"]}))
+
+
+def test_slam_observations_beyond_every_logs_bounds_or_singular_against_the_map_are_named() -> None:
+    """Fuzz round 10: Observations built by hand took coordinates of 1e300 m and covariances of 1e300 (the filter
+    overflowed under numpy's RuntimeWarnings), and variances of 1e-300 m^2 against a map made uncertain by 1000 s
+    gaps left the EKF's innovation covariance singular: numpy's raw LinAlgError 'Singular matrix'."""
+    from slam import Observations, SlamConfig, run_observations
+    from slam.run import SlamInputError
+
+    with pytest.raises(InputError, match=r"^observations.points: row 0 holds 1e\+300 m, beyond 1e\+09 m"):
+        Observations(points=[[1e300, 0.0]])
+    with pytest.raises(InputError, match=r"^observations.line_cov: row 0 holds 1e\+300 m\^2 / rad\^2, beyond 1e\+18"):
+        Observations(lines=[[1.0, 0.0]], line_cov=[np.eye(2) * 1e300], line_ends=[[1.0, -1.0, 1.0, 1.0]])
+
+    def obs(lines: list, variance: float) -> Observations:
+        rows = np.array(lines, float).reshape(-1, 6)
+        return Observations(lines=rows[:, :2], line_ends=rows[:, 2:], line_cov=np.repeat(np.eye(2)[None] * variance, len(rows), 0))
+
+    steps = [(0.1, obs([[9.438e-12, 2.145876, 3.556e-10, 5.665e-10, -4.504e-10, -4.714e-10]], 1e-300)),
+             (1000.1, obs([], 1.0)),
+             (2000.1, obs([[0.291398, 3.102188, 0.018406, 0.588280, -0.736400, 0.118196]], 1e4)),
+             (2000.1, obs([[5.960e-10, -2.270278, 8.654e-10, 5.407e-10, 3.424e-11, -9.987e-10],
+                           [5.783e-10, 1.692669, -6.271e-10, 1.482e-10, -5.428e-10, -1.175e-10]], 1e-300)),
+             (2000.1, obs([], 1.0)), (2000.2, obs([], 1.0)), (2000.2, obs([], 1.0)),
+             (2000.200000001, obs([[3.485e-10, 1.862456, -7.181e-10, 1.452e-10, -2.890e-10, 5.384e-10],
+                                   [4.956e-10, -2.123189, 1.157e-10, -6.262e-10, 7.585e-10, -7.808e-10]], 1e-300))]
+    with pytest.raises(SlamInputError, match=r"^scan 7: the filter's innovation covariance is singular in float64"):
+        run_observations([t for t, _ in steps], [o for _, o in steps], SlamConfig(preset="paper"))
