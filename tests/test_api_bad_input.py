@@ -2220,3 +2220,16 @@ def test_slam_observations_beyond_every_logs_bounds_or_singular_against_the_map_
                                    [4.956e-10, -2.123189, 1.157e-10, -6.262e-10, 7.585e-10, -7.808e-10]], 1e-300))]
     with pytest.raises(SlamInputError, match=r"^scan 7: the filter's innovation covariance is singular in float64"):
         run_observations([t for t, _ in steps], [o for _, o in steps], SlamConfig(preset="paper"))
+
+
+def test_slam_overflow_to_inf_is_said_without_numpys_warnings() -> None:
+    """Fuzz round 10 (pytest turns RuntimeWarnings into errors): a squared Mahalanobis distance beyond float64 (a
+    variance of 1e-300) is inf, and a scan point of 1e200 m is beyond the matcher's max_range, both as before, without
+    'overflow encountered' warnings (the default preset warned at every scan of 1e200 m ranges)."""
+    from slam.association import mahalanobis2
+    from slam.config import AlignmentConfig
+    from slam.scanslam import ScanPoints
+
+    assert mahalanobis2(np.array([0.0, 1e5]), np.diag([1.0, 1e-300])) == np.inf
+    points = ScanPoints.from_points(np.array([[1e200, 0.0], [1.0, 2.0]]), AlignmentConfig())
+    assert points.valid.tolist() == [[1.0, 2.0]]
