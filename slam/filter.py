@@ -137,6 +137,7 @@ class SlamFilter:
 
         Raises:
             SlamInputError: a stamp that is no finite number or earlier than the last step's,
+                an update whose innovation covariance is singular in float64 (hand-built observations),
                 ``obs`` no Observations, ``odom`` neither None nor three finite numbers (checked as
                 run_steps checks them: called directly, a nan stamp was "cannot convert float NaN to
                 integer" inside, a stamp going backwards or a nan odometry was taken without a word).
@@ -161,7 +162,14 @@ class SlamFilter:
             self._scan_velocity(obs, info)
         pairs_l, new_l = self._associate_lines(obs)
         pairs_c, new_c = self._associate_corners(obs)
-        pairs_l = self._update(obs, pairs_l, pairs_c, info)  # the pairs it kept
+        try:
+            pairs_l = self._update(obs, pairs_l, pairs_c, info)  # the pairs it kept
+        except np.linalg.LinAlgError:  # numpy's "Singular matrix", raw (fuzz round 10): from_features' observations
+            # carry a variance floor, so only observations built by hand reach it
+            raise SlamInputError(f"scan {self.scan_no}: the filter's innovation covariance is singular in float64: the "
+                                 "observations' covariances (line_cov, corner_cov) are too close to singular against "
+                                 "the map's (variances of 1e-300 m^2 beside 1e18); give each a variance the filter "
+                                 "can invert, as from_features' floor (observations.sigma_rho, sigma_alpha_obs)") from None
         self._extend(obs, pairs_l)
         self._manage()  # before the room is counted: the tentative landmarks it prunes make room this scan
         room = max(cfg.landmarks.max_landmarks - len(self.landmarks), 0)  # the map's bound (memory: P is n^2)

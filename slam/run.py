@@ -266,14 +266,7 @@ def _run_steps(steps: Iterable[tuple[float, Observations, Any, Any]], config: Sl
     for k, step in enumerate(steps):
         t, obs, odom, truth = _step_items(k, step)
         t, odom, truth = checked_step(k, t, obs, odom, truth)  # the filter's step checks the time order
-        try:
-            info = slam.step(t, obs, odom if config.motion.use_odometry else None)
-        except np.linalg.LinAlgError:  # numpy's "Singular matrix", raw (fuzz round 10): from_features' observations
-            # carry a variance floor, so only observations built by hand reach it
-            raise SlamInputError(f"scan {k}: the filter's innovation covariance is singular in float64: the "
-                                 "observations' covariances (line_cov, corner_cov) are too close to singular against "
-                                 "the map's (variances of 1e-300 m^2 beside 1e18); give each a variance the filter "
-                                 "can invert, as from_features' floor (observations.sigma_rho, sigma_alpha_obs)") from None
+        info = slam.step(t, obs, odom if config.motion.use_odometry else None)
         pose = slam.pose
         P = slam.ekf.P[:3, :3].copy()
         if not np.all(np.abs(pose[:2]) <= MAX_COORD_M):  # diverged beyond every reader's bound (the TUM reader's):
