@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .jit import kernel
+from .jit import inline_kernel, kernel
 
 
-@kernel
+@inline_kernel
 def grow(a, rows):  # noqa: ANN001, ANN201
     """``a`` (N, c) with room for at least ``rows`` rows (doubling), the first N rows kept."""
     if rows <= a.shape[0]:
@@ -32,7 +32,7 @@ def new_rows(n_scans):  # noqa: ANN001, ANN201
             np.empty((2 * n_scans + 2, 3), np.int64), np.zeros(n_scans + 1, np.int64), np.zeros(n_scans + 1, np.int64))
 
 
-@kernel
+@inline_kernel
 def append_rows(rows, s, scan_rows):  # noqa: ANN001, ANN201
     """``rows`` with scan ``s``'s (line values, line beams, corner values, corner beams) added."""
     lv, lb, cv, cb, line_off, corner_off = rows

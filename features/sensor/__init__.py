@@ -28,6 +28,7 @@ __all__ = ["SensorMethodConfig", "extract_sensor", "extract_sensor_many", "signa
 
 METHOD = "sensor"
 _extract_scan = FixedTypeCall(engine.extract_scan)  # a Scan's types: read-only float64 arrays, floats, a bool
+_extract_batch = FixedTypeCall(engine.extract_batch)  # stacked_ranges: a read-only C-contiguous float64 (S, n) array
 
 
 def extract_sensor(scan: Scan, cfg: SensorMethodConfig) -> FeatureSet:
@@ -56,7 +57,7 @@ def extract_sensor_many(scans: Sequence[Scan], cfg: SensorMethodConfig) -> list[
     grid = grid_constants(p.k, scan.angle_increment, p.hough_subdiv)
     ranges = stacked_ranges(scans)
     sigma = cfg.sigma_for(scan.range_max)
-    rows = engine.extract_batch(
+    rows = _extract_batch(
         ranges, bearings_of(scan.angle_min, scan.angle_increment, len(scan)), scan.angle_min,
         scan.angle_increment, float(max(scan.range_min, cfg.min_range)), scan.range_max,
         0.0 if sigma == AUTO else float(sigma), sigma == AUTO, float(scan.range_min), AUTO_FALLBACK, grid, p,
