@@ -764,6 +764,8 @@ CASES = [
     # lms200 record replaced an earlier CARMEN recording silently (bags were refused); a folder was "unknown kind"
     (["lms200", "record", "--port", "loop://", "--out", "{good.clf}"], "good.clf exists; a recording is not written over a file"),
     (["lms200", "record", "--port", "loop://", "--out", "{empty_dir}"], "empty_dir is a folder; give a file name"),
+    # a link to nothing was said to exist ("dangling.clf exists; a recording is not written over a file")
+    (["lms200", "record", "--port", "loop://", "--out", "{dangling.clf}"], "dangling.clf: a symbolic link to "),
     # an empty path is the current folder to pathlib (`--out "$OUT"` with OUT unset)
     (["slam", "", "--out", O], "lmsbench slam: error: argument input: empty path ''; give a file or folder name"),
     (["info", ""], "lmsbench info: error: empty path '' given as a log"),
