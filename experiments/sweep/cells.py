@@ -135,6 +135,35 @@ def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> 
     return row
 
 
+#: the largest whole number a sweep's table holds (int64): 10**30 from a kind of one's own was an internal
+#: OverflowError where the cell's row was written, which ended the sweep
+MAX_METRIC_INT = 2**63 - 1
+
+
+def _check_metrics(kind: str, metrics: dict[Any, Any]) -> None:
+    """Raise (the cell fails, its error recorded) for a metric a sweep's table cannot hold: a name that
+    is no plain name (:func:`metric_name_problem`), a value that is no scalar (a number, text, a
+    bool or None; a list was kept in the table and plotted as "nan for every metric") or a whole number
+    beyond int64."""
+    import numpy as np
+
+    from .spec import metric_name_problem
+
+    for name, value in metrics.items():
+        if name == INPUTS_KEY:  # a built-in cell's record of its files (checked above for other kinds)
+            continue
+        problem = metric_name_problem(name)
+        if problem:
+            raise ValueError(f"cell kind {kind!r} returned {problem}")
+        if not isinstance(value, (bool, int, float, str, np.generic)) and value is not None:
+            raise TypeError(f"cell kind {kind!r} returned metric {name!r} as {type(value).__name__}, not a scalar "
+                            "(a number, text, a bool or None): a sweep's table holds one value a cell")
+        if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) \
+                and not -MAX_METRIC_INT - 1 <= int(value) <= MAX_METRIC_INT:
+            raise ValueError(f"cell kind {kind!r} returned metric {name!r} as a whole number of {len(str(abs(int(value))))} "
+                             "digits, beyond int64's range (+-9.2e18) that a sweep's table holds; return it as a float")
+
+
 def _run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None) -> dict[str, Any]:
     """:func:`run_cell`'s row without its time and warnings."""
     try:
@@ -149,6 +178,7 @@ def _run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None) -> dict[s
         clash = sorted(set(metrics) & (set(params) | {"status", "error", "elapsed_s", "cell", WARNINGS_KEY}))
         if clash:
             raise ValueError(f"cell kind {kind!r} returned metric(s) {clash} that clash with parameter/column names")
+        _check_metrics(kind, metrics)
         row = {"status": "ok", "error": "", **metrics}
     except (Exception, SystemExit) as exc:  # noqa: BLE001 - a failing cell is recorded, not fatal
         from experiments.user_methods import UserMethodFailed, raised_text

@@ -295,6 +295,18 @@ def _plain_name(name: str) -> bool:
     return len(name) <= MAX_NAME_CHARS and re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", name) is not None
 
 
+def metric_name_problem(name: object) -> str | None:
+    """Why ``name`` cannot be a sweep metric's name, or None: a cell's metric names a column of the
+    sweep's tables and the figures' files of its plots (``sweep_NAME_METRIC.png``), so it is a plain
+    name as a sweep's is. A kind of one's own returned ``"a/b\\n"`` (its plot written as ``b\\n.png`` in a
+    folder ``sweep_NAME_a/`` the next ``figures --out`` refused) or 5,000 characters (figures: internal
+    MemoryError)."""
+    if isinstance(name, str) and _plain_name(name):
+        return None
+    shown = _quoted(name) if isinstance(name, str) else f"{name!r} ({type(name).__name__})"
+    return f"a metric named {shown}: a metric's name is text of {NAME_RULE}, as it names a column and the plots' files"
+
+
 def _quoted(name: str) -> str:
     """``name`` quoted for a one-line message, a long one cut to its start and end with its own length
     (``shown`` gives its quoted repr's: 302 characters for a name of 300)."""
