@@ -986,7 +986,8 @@ def test_two_sweeps_of_one_plot_name_are_refused_before_any_work(tmp_path, capsy
 
 @pytest.mark.parametrize("f1, spec, why", [
     (float("nan"), "name: nan\nkind: extract\ngrid:\n  x: [1, 2]\n",
-     "no metric has a value in its results.parquet (0 of its 2 cells failed, the others gave nan for every metric"),
+     "no metric has a value in its results.parquet (0 of its 2 cells failed, the others gave no finite number for any "
+     "metric (nan, inf, text or a bool)"),
     (0.5, "name: flat\nkind: extract\nfixed:\n  x: 1\nseeds: [0, 1]\n",  # two cells, as its table's
      "no grid parameter takes two values and none is sampled, so there is nothing to plot the metrics against")])
 def test_a_sweep_with_nothing_to_plot_is_refused_before_any_work(tmp_path, capsys, f1, spec, why):

@@ -209,9 +209,10 @@ def _nothing_to_plot(folder: Path) -> str:
     table, _, varied, sampled, metrics = _sweep_plan(folder)
     if not metrics:
         failed = int((table["status"] != "ok").sum()) if "status" in table else 0
+        # "the others gave nan for every metric" was said of a kind's text, inf or boolean metrics too
         return (f"no metric has a value in its results.parquet ({failed} of its {len(table)} cells failed, the others "
-                "gave nan for every metric; the error column of its results.csv holds the failures' reasons), so "
-                "there is nothing to plot")
+                "gave no finite number for any metric (nan, inf, text or a bool); the error column of its results.csv "
+                "holds the failures' reasons), so there is nothing to plot")
     return ("no grid parameter takes two values and none is sampled, so there is nothing to plot the metrics "
             "against (its results.csv holds them)")
 
