@@ -20,7 +20,7 @@ from typing import Any, Callable
 
 from lms200.errors import LmsbenchWarning
 
-from .spec import Scalar, SweepSpecError
+from .spec import RUNNER_COLUMNS, Scalar, SweepSpecError
 
 CellFn = Callable[[dict[str, Scalar]], dict[str, Any]]
 
@@ -135,11 +135,6 @@ def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> 
     return row
 
 
-#: the largest whole number a sweep's table holds (int64): 10**30 from a kind of one's own was an internal
-#: OverflowError where the cell's row was written, which ended the sweep
-MAX_METRIC_INT = 2**63 - 1
-
-
 def _check_metrics(kind: str, metrics: dict[Any, Any]) -> None:
     """Raise (the cell fails, its error recorded) for a metric a sweep's table cannot hold: a name that
     is no plain name (:func:`metric_name_problem`), a value that is no scalar (a number, text, a
@@ -147,7 +142,7 @@ def _check_metrics(kind: str, metrics: dict[Any, Any]) -> None:
     beyond int64."""
     import numpy as np
 
-    from .spec import metric_name_problem
+    from .spec import MAX_TABLE_INT, metric_name_problem
 
     for name, value in metrics.items():
         if name == INPUTS_KEY:  # a built-in cell's record of its files (checked above for other kinds)
@@ -159,7 +154,7 @@ def _check_metrics(kind: str, metrics: dict[Any, Any]) -> None:
             raise TypeError(f"cell kind {kind!r} returned metric {name!r} as {type(value).__name__}, not a scalar "
                             "(a number, text, a bool or None): a sweep's table holds one value a cell")
         if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) \
-                and not -MAX_METRIC_INT - 1 <= int(value) <= MAX_METRIC_INT:
+                and not -MAX_TABLE_INT - 1 <= int(value) <= MAX_TABLE_INT:
             raise ValueError(f"cell kind {kind!r} returned metric {name!r} as a whole number of {len(str(abs(int(value))))} "
                              "digits, beyond int64's range (+-9.2e18) that a sweep's table holds; return it as a float")
 
@@ -175,7 +170,7 @@ def _run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None) -> dict[s
             raise ValueError(f"cell kind {kind!r} returned a metric named {INPUTS_KEY!r}, the runner's record of the "
                              "files a built-in cell read (cells.INPUTS_KEY), not a metric a cell may return; name it "
                              "otherwise")
-        clash = sorted(set(metrics) & (set(params) | {"status", "error", "elapsed_s", "cell", WARNINGS_KEY}))
+        clash = sorted(set(metrics) & (set(params) | {*RUNNER_COLUMNS, WARNINGS_KEY}))
         if clash:
             raise ValueError(f"cell kind {kind!r} returned metric(s) {clash} that clash with parameter/column names")
         _check_metrics(kind, metrics)
