@@ -18,7 +18,7 @@ from typing import Callable, Iterable, Iterator
 
 from .bag import BagError, BagReader, is_bag, write_bag
 from . import records
-from .carmen import CarmenReader, _first_line_end, archive_kind, compression, text_lines, write_carmen
+from .carmen import KNOWN_KINDS, CarmenReader, _first_line_end, archive_kind, compression, text_lines, write_carmen
 from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
 from .laser_geometry import LaserGeometry
 from .records import Record
@@ -457,10 +457,16 @@ def row_lines(path: str | Path, p: Path, what: str = "a text file of rows") -> I
         ends = _first_line_end(head, raw)
         raw.seek(0)
         f = text_lines(raw, head, ends)
+        first = True  # the first row yet to come: a CARMEN log's message there says what the file is
         for no, line in enumerate(iter(lambda: f.readline(MAX_ROW_CHARS + 1), ""), 1):
             if len(line) > MAX_ROW_CHARS:
                 raise LogFormatError(path, no, f"longer than {MAX_ROW_CHARS:,} characters: not a text file of rows "
                                                "(binary data, or no line breaks)")
+            words = line.split(maxsplit=1) if first else None
+            if words and not words[0].startswith("#"):
+                first = False
+                if words[0] in KNOWN_KINDS:  # was "relation rows need 8 numbers (...), got 5" of a log's PARAM line
+                    raise LogFormatError(path, None, f"a CARMEN log (its line {no} is a {words[0]} message), not {what}")
             yield no, line
 
 
