@@ -218,6 +218,12 @@ def test_bench_runs_again_into_its_own_folder(tmp_path, monkeypatch, capsys):
     for names in (["features"], ["sim", "slam"], ["slam"]):
         assert main(["bench", *names, "--out", str(out)]) == 0, capsys.readouterr().err
         assert (out / "bench.csv").read_text().startswith("area,")
+    with monkeypatch.context() as m:  # stopped at its bench.csv: the earlier run's was left beside its versions.yaml
+        _stop_at_write(m, out, 2)
+        assert main(["bench", "features", "--out", str(out)]) == 130
+    assert yaml.safe_load((out / "versions.yaml").read_text())["benchmarks"] == ["features"]
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["versions.yaml"]
+    assert main(["bench", "features", "--out", str(out)]) == 0, capsys.readouterr().err
     (out / "bench.csv").write_text("region,area\n")  # not bench's own: refused, left as it is
     (out / "versions.yaml").unlink()
     assert main(["bench", "slam", "--out", str(out)]) == 2
