@@ -16,6 +16,7 @@ import pandas as pd
 from experiments.figures.make import article, draw_figures, draw_sweep
 from experiments.figures.study import StudyConfig, run_study, save_tables
 from experiments.figures.tables import panels_log_name
+from experiments.options import DEMO_OUTPUTS, DEMO_OWNER
 from experiments.report import Section, figure, markdown_table, write_report
 from lms200.errors import LmsbenchWarning
 
@@ -50,6 +51,9 @@ def _run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None, beat) -> 
     out.mkdir(parents=True, exist_ok=True)
     log(f"== lmsbench demo -> {out}")
     tables, notes = run_study(cfg, log=log)
+    # the earlier demo's files this one may not write again (its sweep's and sim2real's, with --no-sweep or no
+    # log; its Fig. 9 / 10 tables; a figures run's figures.yaml): they stayed beside its report as if they were its
+    DEMO_OWNER.remove_earlier(out, DEMO_OUTPUTS, keep=("tables/study.yaml",))  # study.yaml: written first, next
     save_tables(tables, cfg, notes, out / "tables")
     sweep_table = None
     if sweep_executor:
@@ -65,7 +69,6 @@ def _run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None, beat) -> 
     s2r = _sim2real_section(cfg, out, log)
     beat.label = "figures"
     log("== figures")
-    (out / "figures" / "figures.yaml").unlink(missing_ok=True)  # a figures run's record: these are the demo's
     figs = draw_figures(tables, out / "figures", signals_k=cfg.signals_k, world=cfg.world)
     if sweep_table is not None:
         figs.update(draw_sweep(out / "sweeps" / DEMO_SWEEP["name"], out / "figures"))

@@ -898,6 +898,31 @@ class Owner:
         earlier = self.earlier(folder, writes)
         return [n for n in writes.present(folder) if n not in earlier]
 
+    def remove_earlier(self, folder: Path, writes: OutTree, keep: Sequence[str] = ()) -> list[str]:
+        """Remove the output files of ``folder`` (of ``writes``) an earlier run of the command wrote,
+        but ``keep`` (the record this run writes first, whole, over the earlier one), before this run
+        writes any: the others first, the records last, so that a stop between leaves either files told
+        as the command's or none; the sub-folders of ``writes`` it empties go too. A run replaced only
+        the files it wrote again, so the earlier run's others stayed beside its own as if they were
+        its: ``figures --no-slam --out D`` over a run with SLAM left fig10_slam.png and
+        tables/trajectory.parquet (which ``figures --tables D/tables`` drew as the new study's Fig. 10),
+        and a run stopped while drawing left the earlier run's figures beside its first ones. Call it
+        after :func:`check_out` (which refused a file of these names no earlier run wrote). Returns the
+        names removed (``sub/name`` in sub-folders)."""
+        earlier = self.earlier(folder, writes) if folder.is_dir() else set()
+        gone = sorted(n for n in earlier if n not in self.records) + sorted(n for n in earlier if n in self.records)
+        gone = [n for n in gone if n not in keep]
+        for name in gone:
+            (folder / name).unlink(missing_ok=True)
+        emptied = {str(Path(n).parent) for n in gone if "/" in n}
+        for sub in sorted(emptied, key=lambda s: -s.count("/")):  # deepest first; one holding anything stays
+            for parent in [Path(sub), *Path(sub).parents][:-1]:
+                try:
+                    (folder / parent).rmdir()
+                except OSError:
+                    break
+        return gone
+
 
 #: What each command's earlier run left that says so (a user's summary.txt or config.yaml in a
 #: folder of nothing else was written over: check_out allowed a folder by its file names alone).

@@ -409,10 +409,9 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
         result = _quiet_bounds(_bar(data.records, "slam", progress), config)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     if out is not None:
-        earlier = earlier_run_files(out) if replace_earlier and out.is_dir() else set()  # before this run writes
-        for stale in _STALE_ORDER:  # an earlier run's outputs, all but the config.yaml written over whole next,
-            if stale in earlier:  # so that no stop leaves one of them beside this run's files; records last
-                (out / stale).unlink(missing_ok=True)
+        # an earlier run's outputs, all but the config.yaml written over whole next, so that no stop leaves one of
+        # them beside this run's files; records (map.json, metrics.json) last (options.Owner.remove_earlier)
+        earlier = SLAM_OWNER.remove_earlier(out, OutTree(OUTPUTS), keep=("config.yaml",)) if replace_earlier else []
         write_config(out, data, config)  # first: a stop after it leaves a folder told as slam's (SLAM_OWNER)
         write_result(out, result, earlier)
     say_bounds(f"this run ({_source_name(config)})", result, config)  # after its files: -W error loses none
@@ -519,9 +518,6 @@ def write_result(out: Path, res: SlamResult, earlier: Collection[str] = ()) -> N
 
 #: What lmsbench slam writes in its --out folder.
 OUTPUTS = SLAM_OUTPUTS
-#: An earlier run's outputs removed before a run writes its own, the files told by a record first,
-#: the records (map.json, metrics.json) last, so that a stop between leaves the folder told as slam's.
-_STALE_ORDER = ("slam.png", "trajectory.tum", "keyframes.tum", "metrics.json", "map.json")
 
 
 def earlier_run_files(out: Path) -> set[str]:

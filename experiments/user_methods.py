@@ -110,9 +110,6 @@ def ensure_method(name: str) -> None:
 
 
 def _load(name: str) -> Callable[..., Any]:
-    module_name, _, attr = name.partition(":")
-    if not module_name or not attr:
-        raise UserMethodError(f"{name!r}: a user extractor is named MODULE:FUNCTION (e.g. myext:extract)")
     return import_named(name, name, UserMethodError)
 
 
@@ -154,10 +151,15 @@ def import_named(target: str, what: str, error: type[LmsbenchError] = UserMethod
     output folder), which lmsbench imports lazily too.
 
     Raises:
-        error: naming ``what``, when MODULE cannot be imported (with the hint "importable from the
-            current folder or PYTHONPATH"), fails while importing, has no ATTR, or ATTR is not callable.
+        error: naming ``what``, when ``target`` is not MODULE:ATTR (a part empty: a sweep's ``kind: ":"``
+            was "importing '' failed: ValueError: Empty module name", ``os:`` "module 'os' has no ''"),
+            MODULE cannot be imported (with the hint "importable from the current folder or
+            PYTHONPATH"), fails while importing, has no ATTR, or ATTR is not callable.
     """
     module_name, _, attr = target.partition(":")
+    if not module_name or not all(attr.split(".")):
+        raise error(f"{what if what != target else repr(target)}: not MODULE:FUNCTION, a module and a callable of it "
+                    "(e.g. myext:extract)")
     cwd = os.getcwd()
     added = cwd not in sys.path
     if added:

@@ -18,7 +18,7 @@ from typing import Callable, Iterable, Iterator
 
 from .bag import BagError, BagReader, is_bag, write_bag
 from . import records
-from .carmen import CarmenReader, _first_line_end, text_lines, write_carmen
+from .carmen import KNOWN_KINDS, CarmenReader, _first_line_end, archive_kind, compression, text_lines, write_carmen
 from .errors import InputError, LmsbenchError, LogFormatError, LogNotFoundError
 from .finite import is_one_of
 from .laser_geometry import LaserGeometry
@@ -429,8 +429,20 @@ MAX_HEADING_RAD = records.MAX_HEADING_RAD
 ``slam.metrics`` may hold (160,000 turns): a float of 1e300 holds no angle, and it was read as one."""
 
 
-def row_lines(path: str | Path, p: Path) -> Iterator[tuple[int, str]]:
-    """(line number, line) of the text file ``p`` (named ``path`` in messages), each line read at most
+def _not_rows(head: bytes, what: str) -> str | None:
+    """Why a file whose first bytes are ``head`` is not ``what`` (a text file of rows): compressed, an
+    archive, binary; or None."""
+    packed, archive = compression(head), archive_kind(head)
+    if packed:
+        return f"{packed}-compressed, not {what} (read as plain text); decompress it first"
+    if archive:
+        return f"{archive}, not {what}; extract it first"
+    return f"a binary file, not {what}" if b"\x00" in head else None
+
+
+def row_lines(path: str | Path, p: Path, what: str = "a text file of rows") -> Iterator[tuple[int, str]]:
+    """(line number, line) of the text file ``p`` (named ``path`` in messages, ``what`` its kind: a
+    compressed, archived or binary file is a LogFormatError saying so), each line read at most
     :data:`MAX_ROW_CHARS` characters at a time: a longer one is a LogFormatError naming it. A UTF-8
     byte-order mark before the first line (a file saved by a Windows editor) is skipped, as the CARMEN
     reader skips it: it read as three replacement characters, so a TUM file's header comment was a
@@ -440,13 +452,22 @@ def row_lines(path: str | Path, p: Path) -> Iterator[tuple[int, str]]:
     ``sed -n Np`` gives it (a lone "\\r" ended a line, so every error after one named the wrong line)."""
     with open(p, "rb") as raw:
         head = raw.read(4096)
+        problem = _not_rows(head, what)
+        if problem:  # read as text: "line 1: relation rows need 8 numbers, got 16" of a gzip-compressed file
+            raise LogFormatError(path, None, problem)
         ends = _first_line_end(head, raw)
         raw.seek(0)
         f = text_lines(raw, head, ends)
+        first = True  # the first row yet to come: a CARMEN log's message there says what the file is
         for no, line in enumerate(iter(lambda: f.readline(MAX_ROW_CHARS + 1), ""), 1):
             if len(line) > MAX_ROW_CHARS:
                 raise LogFormatError(path, no, f"longer than {MAX_ROW_CHARS:,} characters: not a text file of rows "
                                                "(binary data, or no line breaks)")
+            words = line.split(maxsplit=1) if first else None
+            if words and not words[0].startswith("#"):
+                first = False
+                if words[0] in KNOWN_KINDS:  # was "relation rows need 8 numbers (...), got 5" of a log's PARAM line
+                    raise LogFormatError(path, None, f"a CARMEN log (its line {no} is a {words[0]} message), not {what}")
             yield no, line
 
 

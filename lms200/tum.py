@@ -178,7 +178,7 @@ def read_tum(path: str | Path, allow_nan: bool = False) -> tuple[np.ndarray, np.
     poses: list[tuple[float, float, float]] = []
     tilted, most = 0, (0.0, 0)  # poses tilted beyond TILT_NOTE_DEG, and the largest tilt with its line
     lines = 0
-    for no, line in row_lines(path, p):  # a line of 3 GB (a file of zeros) was read whole: MemoryError
+    for no, line in row_lines(path, p, "a TUM trajectory"):  # a line of 3 GB (a file of zeros) was read whole: MemoryError
         lines = no
         s = line.strip()
         if not s or s.startswith("#"):

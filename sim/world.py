@@ -89,6 +89,13 @@ def world_json_content(text: str) -> dict:
         d = json.loads(text, object_pairs_hook=_unique_keys)
     except RecursionError:
         raise ValueError("nested too deeply to parse") from None
+    except ValueError as exc:  # Python's own limit: "... use sys.set_int_max_str_digits() to increase the limit"
+        if "integer string conversion" not in str(exc):
+            raise
+        import sys
+
+        raise ValueError(f"a whole number of more than {sys.get_int_max_str_digits()} digits, which no field "
+                         "takes") from None
     if not isinstance(d, dict):
         raise TypeError(f"the top level is a {type(d).__name__}, not a mapping of walls, boxes, ...")
     unknown = sorted(set(d) - set(WORLD_JSON_KEYS))

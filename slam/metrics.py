@@ -406,7 +406,7 @@ def read_relations(path: str | Path) -> np.ndarray:
     turned = False  # a row with z, roll or pitch (a TUM row's qx, qy, qz) not 0
     tilted: tuple[int, str] | None = None  # the first row tilted or climbing by more than MAX_TILT_DEG, and why
     noted, most = 0, (0.0, 0)  # rows off the plane by more than TILT_NOTE_DEG, and the largest angle with its line
-    for no, line in row_lines(path, regular_file(path, "relations file")):  # a 3 GB line was read whole: MemoryError
+    for no, line in row_lines(path, regular_file(path, "relations file"), "a relations file"):  # a 3 GB line was read whole: MemoryError
         s = line.split()
         if not s or s[0].startswith("#"):
             continue

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -89,3 +90,26 @@ def test_a_stray_carriage_return_does_not_shift_the_line_numbers_of_tum_and_rela
         bad.write_bytes(end.join(["1.0 0 0 0 0 0 0 1", "2.0 0 0 0 0 0 0 1", "3.0 0 0 0 0 0 0 x"]).encode() + end.encode())
         with pytest.raises(LogFormatError, match=rf"{name}_bad\.{kind}:3: "):
             read(bad)
+
+
+@pytest.mark.parametrize("kind, what", [("tum", "a TUM trajectory"), ("relations", "a relations file")])
+def test_a_compressed_or_binary_tum_or_relations_file_is_said_to_be_one(tmp_path: Path, kind: str, what: str) -> None:
+    """A gzip-compressed relations file (or a log given as one) was read as text: "line 1: relation rows need
+    8 numbers (t1 t2 x y z roll pitch yaw), got 16"; a PNG "got 1", a CARMEN log "line 3: ..., got 3". Refused as
+    what it is, naming the file."""
+    import gzip
+
+    from lms200 import read_tum
+    from slam.metrics import read_relations
+
+    read = read_tum if kind == "tum" else read_relations
+    text = b"1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n"
+    for name, data, said in (("r.gz", gzip.compress(text), f"gzip-compressed, not {what} (read as plain text); "
+                                                           "decompress it first"),
+                             ("r.bz2", __import__("bz2").compress(text), "bzip2-compressed, not"),
+                             ("r.png", b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR" + text, f"a binary file, not {what}"),
+                             ("r.clf", b"# a log\n\nPARAM laser_front_laser_resolution 1.0\nFLASER 3 1 1 1 0 0 0 0 0 0 1.0 h 1.0\n",
+                              f"a CARMEN log (its line 3 is a PARAM message), not {what}")):
+        (tmp_path / name).write_bytes(data)
+        with pytest.raises(LogFormatError, match=rf"^{tmp_path / name}: {re.escape(said)}"):
+            read(tmp_path / name)

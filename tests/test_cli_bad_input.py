@@ -764,6 +764,8 @@ CASES = [
     # lms200 record replaced an earlier CARMEN recording silently (bags were refused); a folder was "unknown kind"
     (["lms200", "record", "--port", "loop://", "--out", "{good.clf}"], "good.clf exists; a recording is not written over a file"),
     (["lms200", "record", "--port", "loop://", "--out", "{empty_dir}"], "empty_dir is a folder; give a file name"),
+    # a link to nothing was said to exist ("dangling.clf exists; a recording is not written over a file")
+    (["lms200", "record", "--port", "loop://", "--out", "{dangling.clf}"], "dangling.clf: a symbolic link to "),
     # an empty path is the current folder to pathlib (`--out "$OUT"` with OUT unset)
     (["slam", "", "--out", O], "lmsbench slam: error: argument input: empty path ''; give a file or folder name"),
     (["info", ""], "lmsbench info: error: empty path '' given as a log"),
@@ -984,7 +986,8 @@ def test_two_sweeps_of_one_plot_name_are_refused_before_any_work(tmp_path, capsy
 
 @pytest.mark.parametrize("f1, spec, why", [
     (float("nan"), "name: nan\nkind: extract\ngrid:\n  x: [1, 2]\n",
-     "no metric has a value in its results.parquet (0 of its 2 cells failed, the others gave nan for every metric"),
+     "no metric has a value in its results.parquet (0 of its 2 cells failed, the others gave no finite number for any "
+     "metric (nan, inf, text or a bool)"),
     (0.5, "name: flat\nkind: extract\nfixed:\n  x: 1\nseeds: [0, 1]\n",  # two cells, as its table's
      "no grid parameter takes two values and none is sampled, so there is nothing to plot the metrics against")])
 def test_a_sweep_with_nothing_to_plot_is_refused_before_any_work(tmp_path, capsys, f1, spec, why):

@@ -833,6 +833,57 @@ def test_a_user_cells_metric_named_as_the_runners_inputs_record_is_refused():
     assert builtin["status"] == "ok" and builtin[INPUTS_KEY] == {}
 
 
+@pytest.mark.parametrize("metrics, said", [
+    ({"m": 10**30}, "ValueError: cell kind 'mysw:cell' returned metric 'm' as a whole number of 31 digits, beyond "
+                    "int64's range (+-9.2e18) that a sweep's table holds; return it as a float ("),
+    ({"m": [1, 2]}, "TypeError: cell kind 'mysw:cell' returned metric 'm' as list, not a scalar (a number, text, a bool "
+                    "or None): a sweep's table holds one value a cell ("),
+    ({"a/b\n": 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named 'a/b\\n': a metric's name is text of "
+                      "letters, digits, _ . -, not starting with . or -, at most 100 characters, as it names a column "
+                      "and the plots' files ("),
+    ({"m" * 5000: 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named 'mmmm"),
+    ({3: 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named 3 (int): "),
+])
+def test_a_cells_metric_its_table_cannot_hold_fails_the_cell(metrics, said):
+    """A kind of one's own returning 10**30 ended the sweep with an internal OverflowError where the row
+    was written; a metric named "a/b\\n" had its plot drawn into a folder sweep_NAME_a/ (the next figures
+    --out refused it), 5,000 characters were figures' internal MemoryError, a list was kept and said to be
+    "nan for every metric". Each fails its cell now, the reason in its error column."""
+    from experiments.sweep.cells import run_cell
+
+    row = run_cell("mysw:cell", {"x": 1}, lambda params: {"y": 2, **metrics})
+    assert row["status"] == "error" and row["error"].startswith(said), row
+    ok = run_cell("mysw:cell", {"x": 1}, lambda params: {"y": np.int64(2**63 - 1), "z": None, "t": "text", "b": True})
+    assert ok["status"] == "ok", ok
+
+
+@pytest.mark.parametrize("raw, said", [
+    ({"grid": {"status": [1, 2]}}, "parameter(s) ['status'] named as a column the runner writes in every row (status, "
+                                   "error, elapsed_s, cell), which would overwrite its values; name it otherwise"),
+    ({"fixed": {"cell": 1}, "grid": {"a": [1, 2]}}, "parameter(s) ['cell'] named as a column the runner writes"),
+    ({"grid": {"a": [1, 10**30]}}, "grid.a: a whole number of 31 digits, beyond int64's range (+-9.2e18) that a "
+                                   "sweep's table holds; write it as a float (1e+30)"),
+    ({"grid": {"a,b": [[1, 2**63]]}}, "grid.a,b: a whole number of 19 digits, beyond int64's range"),
+])
+def test_a_parameter_the_table_cannot_hold_is_refused(raw, said):
+    """A kind of one's own swept `status` (or `cell`, `error`, `elapsed_s`): the runner's columns overwrote its
+    values, the cells told apart by nothing, exit 0; a grid value of 10**30 ended the sweep with an internal
+    OverflowError where the first row was written. Both are refused with the sweep file."""
+    with pytest.raises(SweepSpecError, match="^" + re.escape(said)):
+        SweepSpec.from_dict({"name": "t", "kind": "mysw:cell", **raw})
+    assert SweepSpec.from_dict({"name": "t", "kind": "mysw:cell", "grid": {"a": [-2**63, 2**63 - 1]}}).cells()
+
+
+def test_figures_refuse_a_sweep_metric_named_as_no_file_can_be():
+    from experiments.figures.make import sweep_metrics
+    from lms200 import LmsbenchError
+
+    table = pd.DataFrame({"a": [1, 2], "status": ["ok", "ok"], "a/b\n": [1.0, 2.0]})
+    with pytest.raises(LmsbenchError, match=r"^--sweep d: its results.parquet holds a metric named 'a/b\\n': a metric's "
+                                            r"name is text of .*: not a table of `lmsbench sweep` \(edited\?\)$"):
+        sweep_metrics(table, {"kind": "mysw:cell", "grid": {"a": [1, 2]}}, Path("d"))
+
+
 def test_a_cell_that_ran_after_its_sensor_file_changed_is_not_stored_under_the_old_files_key(tmp_path, monkeypatch):
     """A sensor file edited while a sweep ran: the cells computed after the edit read the new file,
     and were stored under the key of the old one (the digests are taken when the sweep starts), so a
@@ -961,7 +1012,10 @@ def test_sweep_values_and_names_no_cell_can_take_are_refused_at_load(raw, messag
     sweep ran (or ran a user's cell on it); each is now a SweepSpecError saying what to fix."""
     with pytest.raises(SweepSpecError, match=message):
         SweepSpec.from_dict(raw)
-    SweepSpec.from_dict({"kind": KIND, "random": {"c": {"choice": ["a", 2, 2.5, None, True, 10**300]}}, "samples": 3})
+    # a whole number within int64, as a sweep's table holds it (10**300, taken here before, ended the run with an
+    # internal OverflowError where its cell's row was written; a float of it runs)
+    SweepSpec.from_dict({"kind": KIND, "random": {"c": {"choice": ["a", 2, 2.5, None, True, 2**63 - 1, 1e300]}},
+                         "samples": 3})
 
 
 @pytest.mark.parametrize("rate", ["1e-308", "0"])

@@ -48,3 +48,15 @@ def test_log_replay_loops_in_order(tmp_path) -> None:  # noqa: ANN001
     got = [s.ranges[0] for s in itertools.islice(log_scans(tmp_path / "a.clf"), 7)]
     assert got == [1.0, 2.0, 3.0, 1.0, 2.0, 3.0, 1.0]
     assert math.isclose(next(log_scans(tmp_path / "a.clf", loop=False)).ranges[5], 1.0)
+
+
+def test_log_replay_keeps_no_scan(tmp_path) -> None:  # noqa: ANN001
+    """Each pass reads the log again, as the first did (emulate --log kept every scan for its loop:
+    250 MB for 60,000 scans), so a scan of one pass is not that of the pass before."""
+    write_log(tmp_path / "a.clf", [Record(Scan.lms200(np.full(361, 1.0 + i))) for i in range(2)])
+    first, _, again = itertools.islice(log_scans(tmp_path / "a.clf"), 3)
+    assert first is not again and first.ranges[0] == again.ranges[0] == 1.0
+    lines = (tmp_path / "a.clf").read_text().splitlines(keepends=True)
+    (tmp_path / "a.clf").write_text("".join(lines[:-1]) + "ROBOTLASER1 x\n" + lines[-1])
+    with pytest.raises(LmsbenchError, match="malformed"):  # the whole log is read before the first scan
+        log_scans(tmp_path / "a.clf")

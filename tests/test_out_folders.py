@@ -218,6 +218,12 @@ def test_bench_runs_again_into_its_own_folder(tmp_path, monkeypatch, capsys):
     for names in (["features"], ["sim", "slam"], ["slam"]):
         assert main(["bench", *names, "--out", str(out)]) == 0, capsys.readouterr().err
         assert (out / "bench.csv").read_text().startswith("area,")
+    with monkeypatch.context() as m:  # stopped at its bench.csv: the earlier run's was left beside its versions.yaml
+        _stop_at_write(m, out, 2)
+        assert main(["bench", "features", "--out", str(out)]) == 130
+    assert yaml.safe_load((out / "versions.yaml").read_text())["benchmarks"] == ["features"]
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["versions.yaml"]
+    assert main(["bench", "features", "--out", str(out)]) == 0, capsys.readouterr().err
     (out / "bench.csv").write_text("region,area\n")  # not bench's own: refused, left as it is
     (out / "versions.yaml").unlink()
     assert main(["bench", "slam", "--out", str(out)]) == 2
@@ -396,7 +402,9 @@ def test_a_demo_or_sim2real_stopped_at_its_first_files_is_taken_by_the_next_run(
 def test_a_demo_run_again_leaves_no_figures_record_beside_its_own_figures(tmp_path, capsys, monkeypatch):
     """`figures --tables DEMO/tables --out DEMO/figures` leaves its figures.yaml there; the next
     demo into DEMO redrew the figures and kept it, a record of a figures run (its tables, its
-    versions) beside figures the demo drew (a review). The demo removes it; the study and sim2real are stubbed."""
+    versions) beside figures the demo drew (a review). The demo removes it; the study and sim2real are stubbed.
+    So are the earlier demo's files this one does not write again: with --no-sweep or without the
+    sim2real log its sweep, sweep plots and sim2real files stayed beside the new report as its own."""
     import pandas as pd
 
     import experiments.demo
@@ -408,8 +416,43 @@ def test_a_demo_run_again_leaves_no_figures_record_beside_its_own_figures(tmp_pa
     assert main(argv) == 0, capsys.readouterr().err
     assert main(["figures", "--tables", str(demo / "tables"), "--out", str(demo / "figures")]) == 0
     assert (demo / "figures" / "figures.yaml").is_file()
+    earlier = ["figures/sweep_demo_k_vs_noise_f1.png", "sweeps/demo_k_vs_noise/results.parquet",
+               "sweeps/demo_k_vs_noise/cells/a.parquet", "sim2real/sim2real.csv", "tables/trajectory.parquet"]
+    for name in earlier:  # an earlier demo's (with its sweep, sim2real and SLAM), as its report.md tells them
+        (demo / name).parent.mkdir(parents=True, exist_ok=True)
+        (demo / name).write_bytes(b"earlier")
     assert main(argv) == 0, capsys.readouterr().err
     assert sorted(p.name for p in (demo / "figures").iterdir()) == ["fig7_timing.csv", "fig7_timing.pdf", "fig7_timing.png"]
+    assert sorted(p.name for p in demo.iterdir()) == ["figures", "report.html", "report.md", "tables"]
+    assert sorted(p.name for p in (demo / "tables").iterdir()) == ["notes.txt", "study.yaml", "summary.parquet", "timing.parquet"]
+
+
+def test_figures_run_again_removes_the_earlier_runs_files_it_does_not_write(tables, tmp_path, capsys, monkeypatch):
+    """`figures --no-slam --out D` over a run with SLAM left its fig10_slam.* and tables/trajectory.parquet
+    beside its own, exit 0: `figures --tables D/tables` then drew Fig. 10 of the earlier study as the new
+    one's (its study.yaml said slam: false); a run stopped while drawing left the earlier run's figures
+    beside its first ones. The earlier run's files go before this run writes its own (--tables: its
+    figures; the study is stubbed with a timing table)."""
+    import pandas as pd
+
+    import experiments.figures.study as study
+
+    timing = pd.read_parquet(tables / "timing.parquet")
+    monkeypatch.setattr(study, "run_study", lambda cfg, log=print: ({"timing": timing}, []))
+    monkeypatch.setattr(study, "check_panel_log", lambda cfg: None)
+    out = tmp_path / "out"
+    computed = ["figures", "--no-slam", "--duration", "1", "--methods", "sensor", "--out", str(out)]
+    figures = ["fig7_timing.csv", "fig7_timing.pdf", "fig7_timing.png"]
+    redrawn = ["figures", "--tables", str(tables), "--out", str(out)]
+    for argv in (computed, redrawn):
+        assert main(argv) == 0, capsys.readouterr().err
+        for name in ("fig10_slam.png", "fig10_slam_map.csv", "sweep_t_f1.png", "tables/trajectory.parquet"):
+            (out / name).write_bytes(b"earlier")  # a run's with SLAM and a --sweep (figures.yaml tells them)
+        assert main(argv) == 0, capsys.readouterr().err
+        assert sorted(p.name for p in out.iterdir()) == [*figures, "figures.yaml", "tables"]
+        # --tables from elsewhere writes no table: tables/ is left as it was
+        left = ["notes.txt", "study.yaml", "timing.parquet"] + (["trajectory.parquet"] if argv is redrawn else [])
+        assert sorted(p.name for p in (out / "tables").iterdir()) == left
 
 
 @pytest.mark.slow

@@ -281,7 +281,8 @@ def test_tum_and_relations_readers_bound_a_line_and_refuse_underscores_and_huge_
 
     zeros = tmp_path / "zeros.tum"
     with open(zeros, "wb") as f:
-        f.truncate(64 * MAX_ROW_CHARS)  # 64 MiB of zeros, no line break
+        f.write(b"0" * 4096)  # digits first: a NUL among the first 4 KB is a binary file, said at once (below)
+        f.truncate(64 * MAX_ROW_CHARS)  # 64 MiB in all, no line break
     for read in (read_tum, read_relations):
         tracemalloc.start()
         with pytest.raises(LogFormatError, match=r"zeros\.tum:1: longer than 1,048,576 characters: not a text file of rows"):
@@ -289,6 +290,10 @@ def test_tum_and_relations_readers_bound_a_line_and_refuse_underscores_and_huge_
         peak = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
         assert peak < 8 * MAX_ROW_CHARS  # old: the whole file, 64 MiB (and up) as one line
+    with open(tmp_path / "nuls.tum", "wb") as f:
+        f.truncate(64 * MAX_ROW_CHARS)
+    with pytest.raises(LogFormatError, match=r"nuls\.tum: a binary file, not a TUM trajectory$"):
+        read_tum(tmp_path / "nuls.tum")
     tum = tmp_path / "t.tum"
     tum.write_text("0 0 0 0 0 0 0 1\n1_000 1 0 0 0 0 0 1\n")
     with pytest.raises(LogFormatError, match=r"t\.tum:2: TUM row has a non-number: '1_000 1 0 0 0 0 0 1'"):

@@ -8,6 +8,7 @@ the module too."""
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -63,6 +64,10 @@ def test_a_missing_sweep_kind_gives_the_extractors_hint(tmp_path, monkeypatch, c
         ensure_method("nomodule_here:f")
     with pytest.raises(SweepSpecError, match=r"^cell kind 'mysw:nosuch': module 'mysw' has no 'nosuch'$"):
         resolve_kind("mysw:nosuch")
+    for kind in (":", ":cell", "mysw:", "mysw:a..b"):  # a part empty: "importing '' failed: ValueError: Empty module
+        with pytest.raises(SweepSpecError, match=rf"^cell kind '{re.escape(kind)}': not MODULE:FUNCTION, a module and a "
+                           r"callable of it \(e\.g\. myext:extract\)$"):  # name", "module 'mysw' has no ''", as an
+            resolve_kind(kind)  # extractor's name was checked
 
 
 def test_a_sweep_kind_in_the_current_folder_runs_on_the_local_cluster(tmp_path):

@@ -85,6 +85,21 @@ def test_a_world_json_name_that_is_no_string_is_refused(folder, tmp_path, name, 
                               f"got {shown})")
 
 
+def test_a_world_json_number_of_too_many_digits_names_no_python_setting(tmp_path) -> None:
+    """json's own error said "... use sys.set_int_max_str_digits() to increase the limit", advice for a
+    Python program, not for a world.json (whose numbers are metres and a seed)."""
+    import sys
+
+    from lms200 import LmsbenchError
+    from sim import World
+
+    (tmp_path / "w.json").write_text('{"seed": ' + "9" * 5000 + ', "walls": []}')
+    with pytest.raises(LmsbenchError) as err:
+        World.from_json(tmp_path / "w.json")
+    assert str(err.value) == (f"{tmp_path / 'w.json'}: not a world.json (a whole number of more than "
+                              f"{sys.get_int_max_str_digits()} digits, which no field takes)")
+
+
 def test_a_world_json_is_utf8_with_or_without_a_byte_order_mark(folder, tmp_path) -> None:
     """fuzz4: a world.json saved with a byte-order mark (a Windows editor), or naming its world "Büro", was
     "'ascii' codec can't decode byte 0xef in position 0" for simulate and compare (read as ASCII), and the

@@ -11,7 +11,7 @@ from lms200 import LmsbenchError
 from lms200.yamlio import dump as dump_yaml
 
 from experiments import benchmarks
-from experiments.options import BENCH_OUTPUTS, BENCH_OWNER, check_out, path_arg
+from experiments.options import BENCH_OUTPUTS, BENCH_OWNER, OutTree, check_out, path_arg
 
 
 def discover() -> dict[str, object]:
@@ -70,6 +70,8 @@ def run(args: argparse.Namespace) -> int:
     args.out = args.out or new_run_folder("results/bench", now=started)
     # versions.yaml first, whole: it tells the folder as bench's (options.BENCH_OWNER); a run stopped
     # while writing bench.csv left a folder the next run into it refused (a cut bench.csv too)
+    BENCH_OWNER.remove_earlier(args.out, OutTree(BENCH_OUTPUTS), keep=("versions.yaml",))  # a stop after it left
+    # the earlier run's bench.csv beside this run's versions.yaml, rows of other areas than it names
     write_record(args.out / "versions.yaml", dump_yaml(dict(benchmarks=names, quick=args.quick, versions=versions()),
                                                             sort_keys=False))
     write_record(args.out / "bench.csv", lambda p: pd.DataFrame(rows).to_csv(p, index=False))  # a record too

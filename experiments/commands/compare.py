@@ -17,7 +17,7 @@ from lms200.yamlio import dump as dump_yaml
 
 from experiments.overrides import check_set_once, set_option
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options, report_skipped
-from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, check_sim2real_finished, SIMULATE_OUTPUTS, listed_seed, InputError, check_methods, check_out,
+from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, OutTree, check_sim2real_finished, SIMULATE_OUTPUTS, listed_seed, InputError, check_methods, check_out,
                                  check_out_spares, check_seeds, count, plain_number, path_arg, scan_rate, text)
 
 
@@ -91,19 +91,6 @@ def _check_applies(args: argparse.Namespace) -> None:
     if args.sensor is not None and not worlds:  # it was ignored: logs and simulate folders carry their own
         raise InputError("--sensor sets the sensor of the worlds compare simulates (office, office:1, ...); "
                          f"none of {' '.join(args.sources)} is one (a log or a simulate folder has its own)")
-
-
-def _remove_earlier_outputs(out: Path, fmt: str) -> None:
-    """Remove the outputs an earlier compare left in ``out`` (check_out has told them as compare's)
-    that this run may not write again: every log's realdata_* figure and rows, and the table of the
-    other format. They stayed beside the new run's files as if they were its own: ``compare a.clf
-    --out D`` then ``compare b.clf --out D`` left a.clf's figures beside a summary of b.clf alone, and
-    a --format csv run left the parquet table of the run before."""
-    if not out.is_dir():
-        return
-    other = "csv" if fmt == "parquet" else "parquet"
-    for stale in [out / f"compare.{other}", *(p for pattern in COMPARE_FIGURES for p in out.glob(pattern))]:
-        stale.unlink(missing_ok=True)
 
 
 def _sigma(text: str) -> float | str:
@@ -204,7 +191,10 @@ def run(args: argparse.Namespace) -> int:
     resolved["versions"] = versions()
     run_folder = args.out is None  # results/compare/DATE_TIME, linked as latest once its files are written
     args.out = args.out or new_run_folder("results/compare", now=started)  # named by the run's start, as the demo's
-    _remove_earlier_outputs(args.out, args.format)
+    # the earlier run's outputs first (options.Owner.remove_earlier): those it may not write again stayed beside
+    # this run's as if they were its own (`compare a.clf` then `compare b.clf` into D left a.clf's realdata_*
+    # figure beside a summary of b.clf alone; a --format csv run the parquet table of the run before)
+    COMPARE_OWNER.remove_earlier(args.out, OutTree(COMPARE_OUTPUTS + COMPARE_FIGURES), keep=("config.yaml",))
     # config.yaml first, whole: it tells the folder as compare's (options.COMPARE_OWNER); a run stopped
     # after compare.parquet left a folder the next run into it refused
     write_record(args.out / "config.yaml", dump_yaml(resolved, sort_keys=False))

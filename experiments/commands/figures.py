@@ -53,8 +53,8 @@ def run(args: argparse.Namespace) -> int:
         writes = OutTree(FIGURES_OUTPUTS.files + STUDY_TABLES.files, FIGURES_OUTPUTS.folders)  # the tables it reads
     # a file of its names is replaced only beside its own record (options.FIGURES_OWNER): by names
     # alone a user's fig3_scan.png or accuracy_speed.csv in --out was written over; --tables: no table is
-    check_out(args.out, writes=writes, owner=FIGURES_OWNER,
-              replaces=FIGURES_OUTPUTS if args.tables is None else OutTree(FIGURES_OUTPUTS.files), default="results/figures")
+    replaces = FIGURES_OUTPUTS if args.tables is None else OutTree(FIGURES_OUTPUTS.files)
+    check_out(args.out, writes=writes, owner=FIGURES_OWNER, replaces=replaces, default="results/figures")
     for folder in args.sweep:
         check_sweep_results(folder)
     _check_sweeps_apart(args.sweep)
@@ -90,6 +90,8 @@ def run(args: argparse.Namespace) -> int:
         tables, notes = run_study(cfg)
     run_folder = args.out is None  # results/figures/DATE_TIME, linked as latest once its figures are drawn
     args.out = args.out or new_run_folder("results/figures", now=started)  # named by the run's start
+    if not run_folder and not _demos_figures(args.out):  # the earlier run's files this run may not write again (a
+        FIGURES_OWNER.remove_earlier(args.out, replaces, keep=("figures.yaml",))  # demo's: its sweep plots, kept)
     write_record(args.out / "figures.yaml", _record(args))  # first, whole: a run stopped after it is told as ours
     if not args.tables:
         save_tables(tables, cfg, notes, args.out / "tables")
@@ -154,9 +156,9 @@ def _check_not_a_demos_figures(out: Path, tables: Path | None) -> None:
     ("holds figures/tables/, which this command does not write"); with another study's tables
     (``--tables X/tables``) it drew X's figures over the demo's, exit 0, beside the demo's
     fig10_slam and under its report.md, which still described its own study."""
-    real = real_path(out)
-    if real.name != "figures" or not DEMO_OWNER.wrote_in(real.parent):
+    if not _demos_figures(out):
         return
+    real = real_path(out)
     demo = out.parent if out.name == "figures" else real.parent
     if tables is None:
         raise InputError(f"--out {out}: the figures of the lmsbench demo in {demo}, drawn from its tables/ and shown in its "
@@ -166,6 +168,12 @@ def _check_not_a_demos_figures(out: Path, tables: Path | None) -> None:
         raise InputError(f"--out {out}: the figures of the lmsbench demo in {demo}, drawn from its tables/ and shown in its "
                          f"report.md; figures drawn from --tables {tables}, not the demo's tables, would not match them: "
                          f"give a new folder as --out, or --tables {demo / 'tables'} to redraw the demo's figures")
+
+
+def _demos_figures(out: Path) -> bool:
+    """Whether ``out`` is the figures/ folder of an lmsbench demo's folder."""
+    real = real_path(out)
+    return real.name == "figures" and DEMO_OWNER.wrote_in(real.parent)
 
 
 def _check_sweeps_apart(folders: list[Path]) -> None:
@@ -201,9 +209,10 @@ def _nothing_to_plot(folder: Path) -> str:
     table, _, varied, sampled, metrics = _sweep_plan(folder)
     if not metrics:
         failed = int((table["status"] != "ok").sum()) if "status" in table else 0
+        # "the others gave nan for every metric" was said of a kind's text, inf or boolean metrics too
         return (f"no metric has a value in its results.parquet ({failed} of its {len(table)} cells failed, the others "
-                "gave nan for every metric; the error column of its results.csv holds the failures' reasons), so "
-                "there is nothing to plot")
+                "gave no finite number for any metric (nan, inf, text or a bool); the error column of its results.csv "
+                "holds the failures' reasons), so there is nothing to plot")
     return ("no grid parameter takes two values and none is sampled, so there is nothing to plot the metrics "
             "against (its results.csv holds them)")
 

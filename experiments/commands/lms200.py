@@ -20,7 +20,7 @@ from lms200.virtual import MAX_TIME_SCALE, MIN_TIME_SCALE
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, given_log_flags, read_log_options
-from experiments.options import (WORLDS, PORT, SEED, InputError, check_log, check_out_file, count, mid_sentence, number,
+from experiments.options import (WORLDS, PORT, SEED, InputError, check_link, check_log, check_out_file, count, mid_sentence, number,
                                  path_arg, text, world_name)
 
 
@@ -281,6 +281,7 @@ def run_record(args: argparse.Namespace) -> int:
     if args.out.suffix not in RECORD_SUFFIXES:
         raise InputError(f"--out {args.out}: unknown kind {args.out.suffix or '(no suffix)'!r}; "
                          f"write a CARMEN log (.clf, .log, .gz) or a ROS 1 bag (.bag)")
+    check_link(args.out)  # a link to nothing was said to exist, as a file a recording is not written over
     if args.out.exists() or args.out.is_symlink():  # a CARMEN recording replaced an earlier one silently
         raise InputError(f"--out {args.out} exists; a recording is not written over a file (give a new name)")
     check_out_file(args.out)

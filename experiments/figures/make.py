@@ -395,8 +395,16 @@ def sweep_metrics(table: pd.DataFrame, spec: dict, folder: Path | None = None) -
         return known
     params = {n.strip() for key in (*spec.get("grid", {}), *spec.get("random", {}), *spec.get("fixed", {}))
               for n in str(key).split(",")}
-    return [c for c in table.columns if c not in params and c not in SWEEP_BOOKKEEPING
-            and _numbers(table[c]) and _finite(table[c]).any()]
+    metrics = [c for c in table.columns if c not in params and c not in SWEEP_BOOKKEEPING
+               and _numbers(table[c]) and _finite(table[c]).any()]
+    from experiments.sweep.spec import metric_name_problem
+
+    for metric in metrics:  # it names a plot's files: "a/b\n" drew one into a folder of its own, 5,000 characters
+        problem = metric_name_problem(metric)  # were an internal MemoryError (the cells refuse them now)
+        if problem:
+            raise LmsbenchError(f"--sweep {folder if folder is not None else spec.get('name', '')}: its results.parquet "
+                                f"holds {problem}: not a table of `lmsbench sweep` (edited?)")
+    return metrics
 
 
 def _numbers(column: pd.Series) -> bool:

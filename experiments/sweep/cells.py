@@ -20,7 +20,7 @@ from typing import Any, Callable
 
 from lms200.errors import LmsbenchWarning
 
-from .spec import Scalar, SweepSpecError
+from .spec import RUNNER_COLUMNS, Scalar, SweepSpecError
 
 CellFn = Callable[[dict[str, Scalar]], dict[str, Any]]
 
@@ -135,6 +135,30 @@ def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> 
     return row
 
 
+def _check_metrics(kind: str, metrics: dict[Any, Any]) -> None:
+    """Raise (the cell fails, its error recorded) for a metric a sweep's table cannot hold: a name that
+    is no plain name (:func:`metric_name_problem`), a value that is no scalar (a number, text, a
+    bool or None; a list was kept in the table and plotted as "nan for every metric") or a whole number
+    beyond int64."""
+    import numpy as np
+
+    from .spec import MAX_TABLE_INT, metric_name_problem
+
+    for name, value in metrics.items():
+        if name == INPUTS_KEY:  # a built-in cell's record of its files (checked above for other kinds)
+            continue
+        problem = metric_name_problem(name)
+        if problem:
+            raise ValueError(f"cell kind {kind!r} returned {problem}")
+        if not isinstance(value, (bool, int, float, str, np.generic)) and value is not None:
+            raise TypeError(f"cell kind {kind!r} returned metric {name!r} as {type(value).__name__}, not a scalar "
+                            "(a number, text, a bool or None): a sweep's table holds one value a cell")
+        if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) \
+                and not -MAX_TABLE_INT - 1 <= int(value) <= MAX_TABLE_INT:
+            raise ValueError(f"cell kind {kind!r} returned metric {name!r} as a whole number of {len(str(abs(int(value))))} "
+                             "digits, beyond int64's range (+-9.2e18) that a sweep's table holds; return it as a float")
+
+
 def _run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None) -> dict[str, Any]:
     """:func:`run_cell`'s row without its time and warnings."""
     try:
@@ -146,9 +170,10 @@ def _run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None) -> dict[s
             raise ValueError(f"cell kind {kind!r} returned a metric named {INPUTS_KEY!r}, the runner's record of the "
                              "files a built-in cell read (cells.INPUTS_KEY), not a metric a cell may return; name it "
                              "otherwise")
-        clash = sorted(set(metrics) & (set(params) | {"status", "error", "elapsed_s", "cell", WARNINGS_KEY}))
+        clash = sorted(set(metrics) & (set(params) | {*RUNNER_COLUMNS, WARNINGS_KEY}))
         if clash:
             raise ValueError(f"cell kind {kind!r} returned metric(s) {clash} that clash with parameter/column names")
+        _check_metrics(kind, metrics)
         row = {"status": "ok", "error": "", **metrics}
     except (Exception, SystemExit) as exc:  # noqa: BLE001 - a failing cell is recorded, not fatal
         from experiments.user_methods import UserMethodFailed, raised_text

@@ -295,6 +295,26 @@ def _plain_name(name: str) -> bool:
     return len(name) <= MAX_NAME_CHARS and re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", name) is not None
 
 
+#: the runner's own columns of a sweep's table (runner._row): a parameter of one of these names (a kind of
+#: one's own takes any) had its values overwritten by them, the cells told apart by nothing, exit 0
+RUNNER_COLUMNS = ("status", "error", "elapsed_s", "cell")
+#: the largest whole number a sweep's table holds (int64): a grid value or a cell's metric of 10**30 was an
+#: internal OverflowError where the cell's row was written, which ended the sweep
+MAX_TABLE_INT = 2**63 - 1
+
+
+def metric_name_problem(name: object) -> str | None:
+    """Why ``name`` cannot be a sweep metric's name, or None: a cell's metric names a column of the
+    sweep's tables and the figures' files of its plots (``sweep_NAME_METRIC.png``), so it is a plain
+    name as a sweep's is. A kind of one's own returned ``"a/b\\n"`` (its plot written as ``b\\n.png`` in a
+    folder ``sweep_NAME_a/`` the next ``figures --out`` refused) or 5,000 characters (figures: internal
+    MemoryError)."""
+    if isinstance(name, str) and _plain_name(name):
+        return None
+    shown = _quoted(name) if isinstance(name, str) else f"{name!r} ({type(name).__name__})"
+    return f"a metric named {shown}: a metric's name is text of {NAME_RULE}, as it names a column and the plots' files"
+
+
 def _quoted(name: str) -> str:
     """``name`` quoted for a one-line message, a long one cut to its start and end with its own length
     (``shown`` gives its quoted repr's: 302 characters for a name of 300)."""
@@ -315,6 +335,10 @@ def _check(spec: SweepSpec) -> None:
     clashes = sorted({n for n, times in names.items() if times > 1} | ({"seed"} & set(names)))  # one pass (count() was n^2)
     if clashes:
         raise SweepSpecError(f"parameter(s) {clashes} given twice (fixed/grid/random/seeds); give each once")
+    taken = sorted(set(names) & set(RUNNER_COLUMNS))
+    if taken:
+        raise SweepSpecError(f"parameter(s) {taken} named as a column the runner writes in every row "
+                             f"({', '.join(RUNNER_COLUMNS)}), which would overwrite its values; name it otherwise")
     for name, value in spec.fixed.items():
         _check_scalar(f"fixed.{name}", value)
     for name, values in spec.grid.items():
@@ -442,6 +466,9 @@ def _check_scalar(where: str, value: Any) -> None:
     if isinstance(value, (int, float)) and not _finite(value):
         text = repr(value) if isinstance(value, float) else f"a whole number of {_digits(value)} digits"
         raise SweepSpecError(f"{where} must be finite (within float64's range, +-1.8e308), got {text}")
+    if type(value) is int and not -MAX_TABLE_INT - 1 <= value <= MAX_TABLE_INT:
+        raise SweepSpecError(f"{where}: a whole number of {_digits(value)} digits, beyond int64's range (+-9.2e18) "
+                             f"that a sweep's table holds; write it as a float ({float(value):g})")
 
 
 def _draw(space: dict[str, dict[str, list[Any]]], samples: int, seed: int) -> list[dict[str, Scalar]]:
