@@ -497,7 +497,7 @@ def compare(
         raise InputError(f"methods: {twice!r} is given twice")
     fixed_sigma = checked_sigma(sigma)
     if matches is not None and not isinstance(matches, list):  # appended to after every scan was run: 'dict' object
-        raise InputError(f"matches: must be a list (one dict is appended a matched line) or None, "  # has no attribute
+        raise InputError(f"matches: must be a list (one dict is appended per matched line) or None, "  # has no attribute
                          f"got {type(matches).__name__}")  # 'append', at the end
     params = {} if params is None else params
     if not isinstance(params, dict) or not all(isinstance(v, dict) for v in params.values()):  # 'int' object has no attribute 'get'

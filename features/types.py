@@ -133,7 +133,7 @@ def _cov_problem(cov: object) -> str:
     """Why ``cov`` is no covariance of (rho, alpha) ("" when it is one): a 2x2 array of numbers,
     all nan (not known, the default) or finite, symmetric and positive semi-definite."""
     try:
-        c = np.asarray(cov, dtype=float)
+        c = np.asarray(unmasked(cov), dtype=float)  # a masked item as nan (refused below), not its hidden data
     except (TypeError, ValueError, OverflowError):
         return "must be a 2x2 array of numbers"
     if c.shape != (2, 2):
@@ -409,7 +409,7 @@ class Lines(Sequence):
         try:
             out = cls.from_arrays(
                 [l.rho for l in lines], [l.alpha for l in lines], [l.start for l in lines], [l.end for l in lines],
-                np.array([np.asarray(l.cov, dtype=float).reshape(2, 2) for l in lines]),
+                np.array([np.asarray(unmasked(l.cov), dtype=float).reshape(2, 2) for l in lines]),
                 [whole_number(l.first) for l in lines], [whole_number(l.last) for l in lines],
                 [whole_number(l.n_points) for l in lines],
             )

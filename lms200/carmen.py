@@ -80,7 +80,7 @@ from .codes import (
 )
 from . import laser_geometry
 from .errors import InputError, LmsbenchError, LmsbenchWarning, LogFormatError, LogNotFoundError
-from .finite import fixed
+from .finite import fixed, is_one_of
 from .laser_geometry import LaserGeometry
 from .records import MAX_COORD_M, MAX_HEADING_RAD, Pose2D, Record, SkipLog, pose_problem, stamp_problem  # noqa: F401 - carmen's names too
 from .scan import Scan, snap_angle, valid_ranges
@@ -1514,7 +1514,7 @@ def write_carmen(
             beyond +-``MAX_COORD_M`` (1e9 m) or with a heading beyond +-``MAX_HEADING_RAD`` (1e6 rad), which the
             reader refuses (such a log was written, and could not be read back).
     """
-    if fmt not in ("robotlaser1", "flaser"):
+    if not is_one_of(fmt, ("robotlaser1", "flaser")):
         raise InputError(f"fmt: must be 'robotlaser1' or 'flaser', got {fmt!r}")
     if not isinstance(hostname, str) or not re.fullmatch(r"[!-~]+", hostname):  # "my host": two words, no line read back
         raise InputError(f"hostname: must be one word of printable ASCII (a CARMEN line's field), got {hostname!r}")

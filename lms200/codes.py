@@ -69,9 +69,10 @@ def unmasked(value: object) -> object:
     own refusal of that dtype."""
     if not isinstance(value, np.ma.MaskedArray):
         return value
-    if value.dtype.kind in "iuf":
-        with np.errstate(invalid="ignore"):  # a float32 signalling nan: a nan, without numpy's warning
-            return np.ma.filled(value.astype(np.float64), np.nan)
+    if value.dtype.kind == "f":  # in its own float type: a long double beyond float64 meets the caller's refusal as
+        return np.ma.filled(value, np.nan)  # unmasked (a cast first overflowed to inf under numpy's warning)
+    if value.dtype.kind in "iu":  # nan needs a float
+        return np.ma.filled(value.astype(np.float64), np.nan)
     if value.dtype.kind == "O":  # masked items become nan whatever they hold; the others are checked as items
         return np.ma.filled(value, np.nan)
     return np.asarray(value.data)

@@ -168,8 +168,8 @@ class SlamFilter:
             # carry a variance floor, so only observations built by hand reach it
             raise SlamInputError(f"scan {self.scan_no}: the filter's innovation covariance is singular in float64: the "
                                  "observations' covariances (line_cov, corner_cov) are too close to singular against "
-                                 "the map's (variances of 1e-300 m^2 beside 1e18); give each a variance the filter "
-                                 "can invert, as from_features' floor (observations.sigma_rho, sigma_alpha_obs)") from None
+                                 "the map's; give each a variance the filter can invert, as from_features' floor "
+                                 "(observations.sigma_rho, sigma_alpha_obs); the filter is left mid-step") from None
         self._extend(obs, pairs_l)
         self._manage()  # before the room is counted: the tentative landmarks it prunes make room this scan
         room = max(cfg.landmarks.max_landmarks - len(self.landmarks), 0)  # the map's bound (memory: P is n^2)

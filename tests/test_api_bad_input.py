@@ -395,8 +395,8 @@ def test_a_rate_near_zero_keeps_the_first_scan_as_any_low_rate_does(rate_hz: flo
     (dict(clutter="x"), "^clutter: must be a number or None"),   # was "could not convert string to float"
     (dict(name=None), "^name: unknown world None"),
     # fuzz round 10: 100 ran 103 s for 19 panels, 1e6 for hours, 2**70 was numpy's "lam value too large" ValueError
-    (dict(glass=2**70), r"^glass: must be a rate in \[0, 10\] \(panels per 10 m of route and clutter level"),
-    (dict(glass=10.5), r"^glass: must be a rate in \[0, 10\]"),
+    (dict(glass=2**70), r"^glass: must be a rate in \[0, 2\] \(panels per 10 m of route and clutter level"),
+    (dict(glass=2.5), r"^glass: must be a rate in \[0, 2\]"),
 ])
 def test_make_world_errors_are_lmsbench_errors(kw: dict, message: str) -> None:
     from sim import make_world
@@ -2125,6 +2125,17 @@ def test_masked_items_are_nan_wherever_numbers_are_read() -> None:
     with pytest.raises(InputError, match=r"^Lines.from_arrays: first must be whole numbers"):
         Lines.from_arrays([1.0], [0.1], [[0.0, 1.0]], [[1.0, 1.0]], np.full((1, 2, 2), np.nan),
                           np.ma.array([3], mask=[True]), [5], [3])
+    from features.types import Line
+    from lms200.codes import real_rows
+
+    row = real_rows(np.ma.array([[0.0, 1.0, 2.0, 0.5]], mask=[[False, False, True, False]]), "traj", 4, "t, x, y, theta",
+                    finite=False)  # trajectory rows, relations, Observations' lines, ... (review of round 10)
+    assert np.array_equal(row, [[0.0, 1.0, np.nan, 0.5]], equal_nan=True)
+    with pytest.raises(InputError, match=r"^Line.cov: must be finite \(or all nan: not known\)"):
+        Line(1.0, 0.0, (1.0, 0.0), (1.0, 1.0), 0, 5, np.ma.array(np.eye(2) * 1e-4, mask=[[True, False], [False, False]]), 6)
+    huge = np.array([1, 0, 0], dtype=np.longdouble) * np.longdouble(10) ** 4000  # beyond float64, where long double has it
+    with pytest.raises(InputError, match=r"^odom: must be finite .*dtype=float128\)$"):  # as unmasked, no numpy warning
+        Record(scan, odom=np.ma.array(huge))
     assert Record(scan, odom=np.ma.array([1.0, 2.0, 0.5])).odom == (1.0, 2.0, 0.5)  # nothing masked: its values
     assert unmasked(np.ma.array([True], mask=[True])).dtype == bool  # another dtype: for the caller's refusal
 
@@ -2176,7 +2187,11 @@ def test_compare_arguments_are_checked_before_any_source_is_read(kw: dict, messa
     def never() -> object:
         raise AssertionError("a source was read")
 
-    src = Source("never", "sim", 0, [], estimate_sigma=never)
+    class Unread:  # records that fail when iterated: the checks come before the first scan
+        def __iter__(self) -> object:
+            raise AssertionError("a source's records were read")
+
+    src = Source("never", "sim", 0, Unread(), estimate_sigma=never)  # type: ignore[arg-type]
     with pytest.raises(LmsbenchError, match=message):
         compare([src], ["split_merge"], **kw)
 
