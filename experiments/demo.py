@@ -14,9 +14,9 @@ from typing import Callable
 import pandas as pd
 
 from experiments.figures.make import article, draw_figures, draw_sweep
-from experiments.figures.study import StudyConfig, run_study, save_tables
+from experiments.figures.study import STUDY_TABLE_NAMES, StudyConfig, run_study, save_tables
 from experiments.figures.tables import panels_log_name
-from experiments.options import DEMO_OUTPUTS, DEMO_OWNER
+from experiments.options import DEMO_OUTPUTS, DEMO_OWNER, FIGURE_PART_FILES
 from experiments.report import Section, figure, markdown_table, write_report
 from lms200.errors import LmsbenchWarning
 
@@ -53,7 +53,9 @@ def _run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None, beat) -> 
     tables, notes = run_study(cfg, log=log)
     # the earlier demo's files this one may not write again (its sweep's and sim2real's, with --no-sweep or no
     # log; its Fig. 9 / 10 tables; a figures run's figures.yaml): they stayed beside its report as if they were its
-    DEMO_OWNER.remove_earlier(out, DEMO_OUTPUTS, keep=("tables/study.yaml",))  # study.yaml: written first, next
+    DEMO_OWNER.remove_earlier(out, DEMO_OUTPUTS, keep=("tables/study.yaml",), also=(  # study.yaml: written first, next
+        *(f"figures/{name}" for name in FIGURE_PART_FILES), *(f"tables/{name}.parquet" for name in STUDY_TABLE_NAMES),
+        f"figures/sweep_{DEMO_SWEEP['name']}_*", f"sweeps/{DEMO_SWEEP['name']}/cells/*.parquet"))
     save_tables(tables, cfg, notes, out / "tables")
     sweep_table = None
     if sweep_executor:

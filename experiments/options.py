@@ -725,6 +725,14 @@ class OutTree:
         entries (a temporary file of an atomic write) pass."""
         return [name for name, ours in self.entries(folder) if not ours]
 
+    def named(self, prefix: str = "") -> set[str]:
+        """The files this tree names exactly (``sub/name``), not by a pattern (``sweep_*``: a user's
+        ``sweep_notes.csv`` matches it too)."""
+        out = {f"{prefix}{name}" for name in self.files if not any(c in name for c in "*?[")}
+        for sub, tree in self.folders.items():
+            out |= tree.named(f"{prefix}{sub}/")
+        return out
+
 
 def _figure_files(stems: Sequence[str]) -> tuple[str, ...]:
     """The files of experiments.style.save_figure for each stem: STEM.png, STEM.pdf, STEM.csv, STEM_NAME.csv."""
@@ -737,6 +745,11 @@ STUDY_TABLES = OutTree(("*.parquet", "study.yaml", "notes.txt"))
 FIGURES_OUTPUTS = OutTree(("figures.yaml",) + _figure_files((
     "fig3_scan", "fig4_ad", "fig5_theta", "fig6_psi", "fig7_timing", "fig9_office", "fig9_intel", "fig10_slam",
     "accuracy_speed", "sweep_*")), {"tables": STUDY_TABLES})
+#: The files behind FIGURES_OUTPUTS's patterns that a figures run writes by name (Owner.remove_earlier's ``also``:
+#: a user's file matching a pattern is never removed): the tables save_figure writes beside Fig. 9 and Fig. 10
+#: (experiments.figures.draw's ``data=`` names; a test checks them against a drawn folder).
+FIGURE_PART_FILES = (tuple(f"fig9_{source}_{part}.csv" for source in ("office", "intel") for part in ("points", "lines", "corners"))
+                     + ("fig10_slam_trajectory.csv", "fig10_slam_map.csv"))
 #: A sweep folder (experiments.sweep.store).
 SWEEP_OUTPUTS = OutTree(("sweep.yaml", "versions.yaml", "results.parquet", "results.csv"),
                         {"cells": OutTree(("*.parquet",))})
@@ -898,7 +911,7 @@ class Owner:
         earlier = self.earlier(folder, writes)
         return [n for n in writes.present(folder) if n not in earlier]
 
-    def remove_earlier(self, folder: Path, writes: OutTree, keep: Sequence[str] = ()) -> list[str]:
+    def remove_earlier(self, folder: Path, writes: OutTree, keep: Sequence[str] = (), also: Sequence[str] = ()) -> list[str]:
         """Remove the output files of ``folder`` (of ``writes``) an earlier run of the command wrote,
         but ``keep`` (the record this run writes first, whole, over the earlier one), before this run
         writes any: the others first, the records last, so that a stop between leaves either files told
@@ -907,9 +920,15 @@ class Owner:
         its: ``figures --no-slam --out D`` over a run with SLAM left fig10_slam.png and
         tables/trajectory.parquet (which ``figures --tables D/tables`` drew as the new study's Fig. 10),
         and a run stopped while drawing left the earlier run's figures beside its first ones. Call it
-        after :func:`check_out` (which refused a file of these names no earlier run wrote). Returns the
-        names removed (``sub/name`` in sub-folders)."""
-        earlier = self.earlier(folder, writes) if folder.is_dir() else set()
+        after :func:`check_out` (which refused a file of these names no earlier run wrote). Only the
+        files ``writes`` names exactly go, and those ``also`` names (``sub/name`` or a pattern of
+        them, files the command writes by names a pattern of ``writes`` stands for): a user's file
+        that matches a pattern of an earlier run's folder (``sweep_notes.csv`` beside figures'
+        ``sweep_*``) was removed with them (review of round 10). Returns the names removed
+        (``sub/name`` in sub-folders)."""
+        named = writes.named()
+        earlier = {n for n in (self.earlier(folder, writes) if folder.is_dir() else set())
+                   if n in named or any(fnmatch.fnmatchcase(n, pat) for pat in also)}
         gone = sorted(n for n in earlier if n not in self.records) + sorted(n for n in earlier if n in self.records)
         gone = [n for n in gone if n not in keep]
         for name in gone:

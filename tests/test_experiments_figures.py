@@ -87,6 +87,10 @@ def test_every_figure_is_drawn_from_its_tables_with_the_data_beside_it(tmp_path,
     back_lines = pd.read_csv(tmp_path / "fig9_office_lines.csv")
     np.testing.assert_allclose(back_lines[["x1", "y1", "x2", "y2"]], lns[["x1", "y1", "x2", "y2"]])
     assert set(pd.read_csv(tmp_path / "fig10_slam_trajectory.csv")["source"]) == {"slam", "truth"}
+    from experiments.options import FIGURE_PART_FILES  # the tables by name a rerun removes (Owner.remove_earlier)
+
+    parts = {p.name for p in tmp_path.glob("*_*.csv") if not any(p.name == f"{n}.csv" for n in PAPER_FIGURES)}
+    assert parts == set(FIGURE_PART_FILES)
 
 
 def test_ad_reference_is_the_straight_line_value():

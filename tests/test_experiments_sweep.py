@@ -839,8 +839,9 @@ def test_a_user_cells_metric_named_as_the_runners_inputs_record_is_refused():
     ({"m": [1, 2]}, "TypeError: cell kind 'mysw:cell' returned metric 'm' as list, not a scalar (a number, text, a bool "
                     "or None): a sweep's table holds one value a cell ("),
     ({"a/b\n": 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named 'a/b\\n': a metric's name is text of "
-                      "letters, digits, _ . -, not starting with . or -, at most 100 characters, as it names a column "
+                      "1 to 100 printable characters, without / or \\, not starting with ., as it names a column "
                       "and the plots' files ("),
+    ({"m": np.complex128(1 + 2j)}, "TypeError: cell kind 'mysw:cell' returned metric 'm' as complex128, not a scalar"),
     ({"m" * 5000: 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named 'mmmm"),
     ({3: 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named 3 (int): "),
 ])
@@ -853,7 +854,8 @@ def test_a_cells_metric_its_table_cannot_hold_fails_the_cell(metrics, said):
 
     row = run_cell("mysw:cell", {"x": 1}, lambda params: {"y": 2, **metrics})
     assert row["status"] == "error" and row["error"].startswith(said), row
-    ok = run_cell("mysw:cell", {"x": 1}, lambda params: {"y": np.int64(2**63 - 1), "z": None, "t": "text", "b": True})
+    ok = run_cell("mysw:cell", {"x": 1}, lambda params: {"y": np.int64(2**63 - 1), "z": None, "t": "text", "b": True,
+                                                        "rmse (m)": 0.1, "F1@3cm": np.float32(0.5)})  # names a file takes
     assert ok["status"] == "ok", ok
 
 
@@ -880,7 +882,7 @@ def test_figures_refuse_a_sweep_metric_named_as_no_file_can_be():
 
     table = pd.DataFrame({"a": [1, 2], "status": ["ok", "ok"], "a/b\n": [1.0, 2.0]})
     with pytest.raises(LmsbenchError, match=r"^--sweep d: its results.parquet holds a metric named 'a/b\\n': a metric's "
-                                            r"name is text of .*: not a table of `lmsbench sweep` \(edited\?\)$"):
+                                            r"name is text of .*; no plot can be named by it$"):
         sweep_metrics(table, {"kind": "mysw:cell", "grid": {"a": [1, 2]}}, Path("d"))
 
 

@@ -446,10 +446,18 @@ def test_figures_run_again_removes_the_earlier_runs_files_it_does_not_write(tabl
     redrawn = ["figures", "--tables", str(tables), "--out", str(out)]
     for argv in (computed, redrawn):
         assert main(argv) == 0, capsys.readouterr().err
-        for name in ("fig10_slam.png", "fig10_slam_map.csv", "sweep_t_f1.png", "tables/trajectory.parquet"):
-            (out / name).write_bytes(b"earlier")  # a run's with SLAM and a --sweep (figures.yaml tells them)
+        for name in ("fig10_slam.png", "fig10_slam_map.csv", "tables/trajectory.parquet"):
+            (out / name).write_bytes(b"earlier")  # a run's with SLAM (figures.yaml tells them)
+        # a user's files that match the figures' patterns (sweep_*, STEM_*.csv) are no output of a run: kept
+        # (the review of round 10: removed with the earlier run's files, silently)
+        mine = ["fig3_scan_extra.csv", "sweep_mynotes.csv"]
+        for name in mine:
+            (out / name).write_bytes(b"mine")
         assert main(argv) == 0, capsys.readouterr().err
-        assert sorted(p.name for p in out.iterdir()) == [*figures, "figures.yaml", "tables"]
+        assert sorted(p.name for p in out.iterdir()) == sorted([*figures, *mine, "figures.yaml", "tables"])
+        assert all((out / name).read_bytes() == b"mine" for name in mine)
+        for name in mine:
+            (out / name).unlink()
         # --tables from elsewhere writes no table: tables/ is left as it was
         left = ["notes.txt", "study.yaml", "timing.parquet"] + (["trajectory.parquet"] if argv is redrawn else [])
         assert sorted(p.name for p in (out / "tables").iterdir()) == left

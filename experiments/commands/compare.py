@@ -194,7 +194,8 @@ def run(args: argparse.Namespace) -> int:
     # the earlier run's outputs first (options.Owner.remove_earlier): those it may not write again stayed beside
     # this run's as if they were its own (`compare a.clf` then `compare b.clf` into D left a.clf's realdata_*
     # figure beside a summary of b.clf alone; a --format csv run the parquet table of the run before)
-    COMPARE_OWNER.remove_earlier(args.out, OutTree(COMPARE_OUTPUTS + COMPARE_FIGURES), keep=("config.yaml",))
+    COMPARE_OWNER.remove_earlier(args.out, OutTree(COMPARE_OUTPUTS + COMPARE_FIGURES), keep=("config.yaml",),
+                                 also=COMPARE_FIGURES)  # a log's figure and rows: named by the log, every realdata_*
     # config.yaml first, whole: it tells the folder as compare's (options.COMPARE_OWNER); a run stopped
     # after compare.parquet left a folder the next run into it refused
     write_record(args.out / "config.yaml", dump_yaml(resolved, sort_keys=False))

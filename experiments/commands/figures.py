@@ -10,7 +10,7 @@ from typing import Any
 from lms200.yamlio import dump as dump_yaml
 
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options
-from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log, real_path,
+from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURE_PART_FILES, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log, real_path,
                                  check_methods, check_out, check_study_tables, check_sweep_results, path_arg, scan_rate, world_name,
                                  text, check_link)
 
@@ -39,8 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from experiments.figures.make import DRIVING_TABLES, accuracy_speed_problem, check_tables, draw_figures, draw_sweep
     from experiments.provenance import link_latest, new_run_folder, write_record
-    from experiments.figures.study import (StudyConfig, check_panel_log, check_study, load_config, load_tables, run_study,
-                                           save_tables)
+    from experiments.figures.study import (STUDY_TABLE_NAMES, StudyConfig, check_panel_log, check_study, load_config,
+                                           load_tables, run_study, save_tables)
 
     started = datetime.datetime.now()
     writes = FIGURES_OUTPUTS
@@ -91,7 +91,8 @@ def run(args: argparse.Namespace) -> int:
     run_folder = args.out is None  # results/figures/DATE_TIME, linked as latest once its figures are drawn
     args.out = args.out or new_run_folder("results/figures", now=started)  # named by the run's start
     if not run_folder and not _demos_figures(args.out):  # the earlier run's files this run may not write again (a
-        FIGURES_OWNER.remove_earlier(args.out, replaces, keep=("figures.yaml",))  # demo's: its sweep plots, kept)
+        FIGURES_OWNER.remove_earlier(args.out, replaces, keep=("figures.yaml",), also=(  # demo's: its sweep plots, kept)
+            *FIGURE_PART_FILES, *(f"tables/{name}.parquet" for name in STUDY_TABLE_NAMES)))
     write_record(args.out / "figures.yaml", _record(args))  # first, whole: a run stopped after it is told as ours
     if not args.tables:
         save_tables(tables, cfg, notes, args.out / "tables")

@@ -123,7 +123,9 @@ def run_emulate(args: argparse.Namespace) -> int:
     previous = {sig: signal.signal(sig, lambda *_: stop.update(now=True)) for sig in (signal.SIGINT, signal.SIGTERM)}
     start = time.monotonic()
     try:
-        while not stop["now"] and (args.duration is None or time.monotonic() - start < args.duration):
+        # adapter.error: its thread stopped (the log moved or changed while replayed: each pass reads it again);
+        # the device had gone silent and the error was said only when emulate was stopped
+        while not stop["now"] and adapter.error is None and (args.duration is None or time.monotonic() - start < args.duration):
             time.sleep(0.05)
     finally:
         adapter.close()

@@ -403,7 +403,7 @@ def sweep_metrics(table: pd.DataFrame, spec: dict, folder: Path | None = None) -
         problem = metric_name_problem(metric)  # were an internal MemoryError (the cells refuse them now)
         if problem:
             raise LmsbenchError(f"--sweep {folder if folder is not None else spec.get('name', '')}: its results.parquet "
-                                f"holds {problem}: not a table of `lmsbench sweep` (edited?)")
+                                f"holds {problem}; no plot can be named by it")
     return metrics
 
 

@@ -150,7 +150,8 @@ def _check_metrics(kind: str, metrics: dict[Any, Any]) -> None:
         problem = metric_name_problem(name)
         if problem:
             raise ValueError(f"cell kind {kind!r} returned {problem}")
-        if not isinstance(value, (bool, int, float, str, np.generic)) and value is not None:
+        if not isinstance(value, (bool, int, float, str, np.bool_, np.integer, np.floating, np.str_)) and value is not None:
+            # (numpy's complex and void were taken, and the table's Parquet write ended the sweep: internal error)
             raise TypeError(f"cell kind {kind!r} returned metric {name!r} as {type(value).__name__}, not a scalar "
                             "(a number, text, a bool or None): a sweep's table holds one value a cell")
         if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) \

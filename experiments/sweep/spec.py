@@ -303,16 +303,23 @@ RUNNER_COLUMNS = ("status", "error", "elapsed_s", "cell")
 MAX_TABLE_INT = 2**63 - 1
 
 
+#: what a metric's name may be: it names a column and the plots' files, sweep_NAME_METRIC.png ("rmse (m)" and
+#: "F1@3cm" are names a file takes, and earlier sweeps hold them)
+METRIC_NAME_RULE = f"text of 1 to {MAX_NAME_CHARS} printable characters, without / or \\, not starting with ."
+
+
 def metric_name_problem(name: object) -> str | None:
     """Why ``name`` cannot be a sweep metric's name, or None: a cell's metric names a column of the
-    sweep's tables and the figures' files of its plots (``sweep_NAME_METRIC.png``), so it is a plain
-    name as a sweep's is. A kind of one's own returned ``"a/b\\n"`` (its plot written as ``b\\n.png`` in a
+    sweep's tables and the figures' files of its plots (``sweep_NAME_METRIC.png``), so it is text a
+    file name takes. A kind of one's own returned ``"a/b\\n"`` (its plot written as ``b\\n.png`` in a
     folder ``sweep_NAME_a/`` the next ``figures --out`` refused) or 5,000 characters (figures: internal
     MemoryError)."""
-    if isinstance(name, str) and _plain_name(name):
+    if (isinstance(name, str) and 0 < len(name) <= MAX_NAME_CHARS and name.isprintable() and not name.startswith(".")
+            and "/" not in name and "\\" not in name):
         return None
-    shown = _quoted(name) if isinstance(name, str) else f"{name!r} ({type(name).__name__})"
-    return f"a metric named {shown}: a metric's name is text of {NAME_RULE}, as it names a column and the plots' files"
+    text = repr(name)  # one line whatever the key: a long one cut, as _quoted cuts a name
+    shown = _quoted(name) if isinstance(name, str) else f"{text if len(text) <= 60 else text[:40] + '...'} ({type(name).__name__})"
+    return f"a metric named {shown}: a metric's name is {METRIC_NAME_RULE}, as it names a column and the plots' files"
 
 
 def _quoted(name: str) -> str:
