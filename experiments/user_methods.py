@@ -157,7 +157,7 @@ def import_named(target: str, what: str, error: type[LmsbenchError] = UserMethod
             PYTHONPATH"), fails while importing, has no ATTR, or ATTR is not callable.
     """
     module_name, _, attr = target.partition(":")
-    if not module_name or not all(attr.split(".")):
+    if not all(module_name.split(".")) or not all(attr.split(".")):  # '.m', 'm.', 'a..b': raw import errors
         raise error(f"{what if what != target else repr(target)}: not MODULE:FUNCTION, a module and a callable of it "
                     "(e.g. myext:extract)")
     cwd = os.getcwd()

@@ -100,6 +100,17 @@ def is_one_of(value: object, names: Iterable[str]) -> bool:
     return isinstance(value, str) and value in names
 
 
+def digit_limit_problem(exc: BaseException) -> str | None:
+    """How to say ``exc`` when it is Python's limit on converting a whole number's digits (``int("9" * 5000)``:
+    "Exceeds the limit (4300 digits) for integer string conversion ...; use sys.set_int_max_str_digits()",
+    advice to a programmer), else None: the one test of it (world.json, YAML settings)."""
+    import sys
+
+    if isinstance(exc, ValueError) and "integer string conversion" in str(exc):
+        return f"a whole number of more than {sys.get_int_max_str_digits()} digits"
+    return None
+
+
 def is_integer(value: object) -> bool:
     """A plain or numpy int, not a bool (``0 <= address`` took a float, and 2.5 then failed in struct)."""
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))

@@ -26,6 +26,8 @@ from typing import Any
 
 import yaml
 
+from .finite import digit_limit_problem
+
 
 class Loader(yaml.SafeLoader):
     """The safe loader with YAML 1.2 floats (``1e9``, ``5e-3``)."""
@@ -131,9 +133,8 @@ def _construct_object(loader: Loader, node: yaml.Node, deep: bool = False) -> An
         if isinstance(exc, OverflowError) and kind == "int":  # a 401-digit number: an internal OverflowError where
             raise yaml.constructor.ConstructorError(  # a setting was cast to float (simulate's duration, a sweep's grid)
                 None, None, f"a whole number of {len(node.value)} characters, {exc}", node.start_mark) from None
-        if isinstance(exc, ValueError) and "digits" in str(exc):  # int("9" * 5000): Python's limit
-            problem = f"a whole number of more than {sys.get_int_max_str_digits()} digits"
-        else:
+        problem = digit_limit_problem(exc)  # int("9" * 5000): Python's limit
+        if problem is None:
             why = f" ({' '.join(str(exc).split())})" if isinstance(exc, (ValueError, OverflowError)) else ""
             problem = f"{shown!r} is not a valid {'date or time' if kind == 'timestamp' else kind}{why}"
         raise yaml.constructor.ConstructorError(None, None, problem, node.start_mark) from None

@@ -16,7 +16,7 @@ import numpy as np
 from lms200 import LmsbenchError
 from lms200.codes import real_rows
 from lms200.errors import InputError
-from lms200.finite import check_seed, is_number, seed_problem, shown
+from lms200.finite import check_seed, digit_limit_problem, is_number, seed_problem, shown
 
 from .geometry import distance_to_segments, face_corners, rectangle_corners, union_faces
 from .walls_only import box_thickness, orient_walls, unreproduced
@@ -90,12 +90,10 @@ def world_json_content(text: str) -> dict:
     except RecursionError:
         raise ValueError("nested too deeply to parse") from None
     except ValueError as exc:  # Python's own limit: "... use sys.set_int_max_str_digits() to increase the limit"
-        if "integer string conversion" not in str(exc):
+        problem = digit_limit_problem(exc)
+        if problem is None:
             raise
-        import sys
-
-        raise ValueError(f"a whole number of more than {sys.get_int_max_str_digits()} digits, which no field "
-                         "takes") from None
+        raise ValueError(f"{problem}, which no field takes") from None
     if not isinstance(d, dict):
         raise TypeError(f"the top level is a {type(d).__name__}, not a mapping of walls, boxes, ...")
     unknown = sorted(set(d) - set(WORLD_JSON_KEYS))

@@ -64,7 +64,7 @@ def test_a_missing_sweep_kind_gives_the_extractors_hint(tmp_path, monkeypatch, c
         ensure_method("nomodule_here:f")
     with pytest.raises(SweepSpecError, match=r"^cell kind 'mysw:nosuch': module 'mysw' has no 'nosuch'$"):
         resolve_kind("mysw:nosuch")
-    for kind in (":", ":cell", "mysw:", "mysw:a..b"):  # a part empty: "importing '' failed: ValueError: Empty module
+    for kind in (":", ":cell", "mysw:", "mysw:a..b", ".mysw:cell", "mysw.:cell", "a..b:cell"):  # a part empty: "importing '' failed: ValueError: Empty module
         with pytest.raises(SweepSpecError, match=rf"^cell kind '{re.escape(kind)}': not MODULE:FUNCTION, a module and a "
                            r"callable of it \(e\.g\. myext:extract\)$"):  # name", "module 'mysw' has no ''", as an
             resolve_kind(kind)  # extractor's name was checked
