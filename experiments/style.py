@@ -214,7 +214,8 @@ def save_figure(fig, stem: Path | str, data: pd.DataFrame | dict[str, pd.DataFra
     # PNG or PDF (an image 'file is truncated') or CSV beside whole ones, under an error line
     written = []
     for fmt in formats:
-        path = stem.with_suffix(f".{fmt}")
+        path = stem.parent / f"{stem.name}.{fmt}"  # with_suffix took a dot in the name for one: a sweep's metrics
+        # acc.5 and acc.6 drew into one sweep_NAME_acc.png, and a sweep named k.v put every plot in sweep_k.png
         write_record(path, lambda tmp, fmt=fmt: savefig(fig, tmp, format=fmt))
         written.append(path)
     plt.close(fig)

@@ -376,3 +376,18 @@ def test_fig_slam_draws_each_map_as_one_collection_with_one_legend_below(tmp_pat
     assert axes_legends == [None, None]
     assert legends == [["true walls", "SLAM map lines", "true trajectory", "paper preset trajectory",
                         "slam trajectory", "start"]]
+
+
+def test_a_dot_in_a_figures_name_is_no_suffix(tmp_path):
+    """save_figure took a dot in the stem for a suffix: a sweep's metrics acc.5 and acc.6 drew into one
+    sweep_NAME_acc.png (their CSVs apart), and a sweep named k.v put every plot in sweep_k.png (final read of
+    round 10)."""
+    import matplotlib.pyplot as plt
+
+    from experiments.style import save_figure
+
+    for metric in ("acc.5", "acc.6"):
+        fig, _ = plt.subplots()
+        save_figure(fig, tmp_path / f"sweep_k.v_{metric}", data=pd.DataFrame({"a": [1]}))
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        f"sweep_k.v_acc.{n}.{end}" for n in (5, 6) for end in ("csv", "pdf", "png")]

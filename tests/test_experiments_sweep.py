@@ -838,10 +838,15 @@ def test_a_user_cells_metric_named_as_the_runners_inputs_record_is_refused():
                     "int64's range (+-9.2e18) that a sweep's table holds; return it as a float ("),
     ({"m": [1, 2]}, "TypeError: cell kind 'mysw:cell' returned metric 'm' as list, not a scalar (a number, text, a bool "
                     "or None): a sweep's table holds one value a cell ("),
-    ({"a/b\n": 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named 'a/b\\n': a metric's name is text of "
-                      "1 to 100 printable characters, without / or \\, not starting with ., as it names a column "
+    ({"a/b\n": 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named 'a/b\\n': a metric's name is printable "
+                      "text of 1 to 100 bytes in UTF-8, without / or \\ or $, not starting with ., as it names a column "
                       "and the plots' files ("),
     ({"m": np.complex128(1 + 2j)}, "TypeError: cell kind 'mysw:cell' returned metric 'm' as complex128, not a scalar"),
+    pytest.param({"m": np.longdouble(1) / 3}, "TypeError: cell kind 'mysw:cell' returned metric 'm' as longdouble, wider than the float64",
+                 marks=pytest.mark.skipif(np.dtype(np.longdouble).itemsize <= 8, reason="long double is float64 here")),
+    ({"m": "a\ud800b"}, "ValueError: cell kind 'mysw:cell' returned metric 'm' as text that is no UTF-8"),
+    ({"$x^^2$": 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named '$x^^2$': "),  # matplotlib's maths
+    ({"\u20ac" * 100: 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named "),  # 300 bytes of a file name
     ({"m" * 5000: 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named 'mmmm"),
     ({3: 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named 3 (int): "),
 ])
@@ -882,7 +887,7 @@ def test_figures_refuse_a_sweep_metric_named_as_no_file_can_be():
 
     table = pd.DataFrame({"a": [1, 2], "status": ["ok", "ok"], "a/b\n": [1.0, 2.0]})
     with pytest.raises(LmsbenchError, match=r"^--sweep d: its results.parquet holds a metric named 'a/b\\n': a metric's "
-                                            r"name is text of .*; no plot can be named by it$"):
+                                            r"name is printable text of .*; no plot can be named by it$"):
         sweep_metrics(table, {"kind": "mysw:cell", "grid": {"a": [1, 2]}}, Path("d"))
 
 

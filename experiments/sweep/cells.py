@@ -135,6 +135,15 @@ def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> 
     return row
 
 
+def _utf8(text: str) -> bool:
+    """``text`` is writable as UTF-8 (no lone surrogate)."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return False
+    return True
+
+
 def _check_metrics(kind: str, metrics: dict[Any, Any]) -> None:
     """Raise (the cell fails, its error recorded) for a metric a sweep's table cannot hold: a name that
     is no plain name (:func:`metric_name_problem`), a value that is no scalar (a number, text, a
@@ -150,10 +159,16 @@ def _check_metrics(kind: str, metrics: dict[Any, Any]) -> None:
         problem = metric_name_problem(name)
         if problem:
             raise ValueError(f"cell kind {kind!r} returned {problem}")
+        # numpy's complex, void and long double were taken, and the table's Parquet write ended the sweep
         if not isinstance(value, (bool, int, float, str, np.bool_, np.integer, np.floating, np.str_)) and value is not None:
-            # (numpy's complex and void were taken, and the table's Parquet write ended the sweep: internal error)
             raise TypeError(f"cell kind {kind!r} returned metric {name!r} as {type(value).__name__}, not a scalar "
                             "(a number, text, a bool or None): a sweep's table holds one value a cell")
+        if isinstance(value, np.floating) and value.dtype.itemsize > 8:
+            raise TypeError(f"cell kind {kind!r} returned metric {name!r} as {type(value).__name__}, wider than the "
+                            "float64 a sweep's table holds; return float(value)")
+        if isinstance(value, str) and not _utf8(value):
+            raise ValueError(f"cell kind {kind!r} returned metric {name!r} as text that is no UTF-8 (a lone surrogate, as "
+                             "os.fsdecode gives for undecodable bytes): a sweep's table cannot hold it")
         if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) \
                 and not -MAX_TABLE_INT - 1 <= int(value) <= MAX_TABLE_INT:
             raise ValueError(f"cell kind {kind!r} returned metric {name!r} as a whole number of {len(str(abs(int(value))))} "

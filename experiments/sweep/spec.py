@@ -305,7 +305,8 @@ MAX_TABLE_INT = 2**63 - 1
 
 #: what a metric's name may be: it names a column and the plots' files, sweep_NAME_METRIC.png ("rmse (m)" and
 #: "F1@3cm" are names a file takes, and earlier sweeps hold them)
-METRIC_NAME_RULE = f"text of 1 to {MAX_NAME_CHARS} printable characters, without / or \\, not starting with ."
+METRIC_NAME_RULE = (f"printable text of 1 to {MAX_NAME_CHARS} bytes in UTF-8, without / or \\ or $, not starting "
+                    "with .")
 
 
 def metric_name_problem(name: object) -> str | None:
@@ -314,8 +315,11 @@ def metric_name_problem(name: object) -> str | None:
     file name takes. A kind of one's own returned ``"a/b\\n"`` (its plot written as ``b\\n.png`` in a
     folder ``sweep_NAME_a/`` the next ``figures --out`` refused) or 5,000 characters (figures: internal
     MemoryError)."""
-    if (isinstance(name, str) and 0 < len(name) <= MAX_NAME_CHARS and name.isprintable() and not name.startswith(".")
-            and "/" not in name and "\\" not in name):
+    # bytes, not characters: a file name takes 255 ('€' * 100 failed part-way, "file name too long"); no $,
+    # which matplotlib's labels read as maths ('$x^^2$' was an internal error part-way through the plots)
+    if (isinstance(name, str) and name.isprintable() and 0 < len(name.encode("utf-8", "replace")) <= MAX_NAME_CHARS  # a lone
+            # surrogate (os.fsdecode of undecodable bytes) is not printable
+            and not name.startswith(".") and not any(c in name for c in "/\\$")):
         return None
     text = repr(name)  # one line whatever the key: a long one cut, as _quoted cuts a name
     shown = _quoted(name) if isinstance(name, str) else f"{text if len(text) <= 60 else text[:40] + '...'} ({type(name).__name__})"
