@@ -23,9 +23,9 @@ from typing import Any, Callable, Mapping, Sequence
 
 import yaml
 
-from lms200.carmen import COMPRESSION_SUFFIXES, PIPE_REASON, READ_ERRORS, archive_kind, compression, open_bytes
+from lms200.carmen import COMPRESSION_SUFFIXES, PIPE_REASON, READ_ERRORS, compression, open_bytes
 from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
-from lms200.logs import SIMULATE_LOG, SIMULATE_OTHER_FILES
+from lms200.logs import SIMULATE_LOG, SIMULATE_OTHER_FILES, head_problem
 from lms200.timing import MAX_DURATION_S, MIN_DURATION_S  # a simulated run's bounds (s)
 from lms200.yamlio import load as load_yaml, size_problem
 
@@ -419,18 +419,16 @@ def _text_head(path: Path, what: str, utf8: bool = True) -> None:
     if named and kind != named:
         raise InputError(f"{path}: named {path.suffix} but not {named}-compressed")
     if kind and utf8:  # YAML is read as plain text: a .gz passed the check, then 'utf-8' codec can't decode 0x8b
-        raise InputError(f"{path}: {kind}-compressed, not {what} (read as plain text); decompress it first")
+        raise InputError(f"{path}: {head_problem(head, what)}")
     if kind:
         try:
             with open_bytes(path) as fh:
                 head = fh.read(4096)
         except READ_ERRORS as exc:
             raise InputError(f"{path}: broken {kind} file ({exc})") from None
-    archive = archive_kind(head)
-    if archive:
-        raise InputError(f"{path}: {archive}, not {what}; extract it first")
-    if b"\x00" in head:
-        raise InputError(f"{path}: a binary file, not {what}")
+    problem = head_problem(head, what, packed=False)  # an archive or binary data, compressed or not
+    if problem:
+        raise InputError(f"{path}: {problem}")
     if not utf8:
         odd = sum(1 for b in head if b >= 0x80 or (b < 0x20 and b not in b"\t\n\r\f\v"))
         if odd > MAX_ODD_BYTES * len(head):

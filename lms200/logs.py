@@ -429,12 +429,13 @@ MAX_HEADING_RAD = records.MAX_HEADING_RAD
 ``slam.metrics`` may hold (160,000 turns): a float of 1e300 holds no angle, and it was read as one."""
 
 
-def _not_rows(head: bytes, what: str) -> str | None:
-    """Why a file whose first bytes are ``head`` is not ``what`` (a text file of rows): compressed, an
-    archive, binary; or None."""
-    packed, archive = compression(head), archive_kind(head)
-    if packed:
-        return f"{packed}-compressed, not {what} (read as plain text); decompress it first"
+def head_problem(head: bytes, what: str, packed: bool = True) -> str | None:
+    """Why a file whose first bytes are ``head`` is not ``what``, a text file: compressed (unless ``packed``
+    is False: the caller reads through it), an archive, binary; or None. The one wording of the row files'
+    readers and of the command line's check of every text file (``experiments.options``)."""
+    kind, archive = compression(head) if packed else None, archive_kind(head)
+    if kind:
+        return f"{kind}-compressed, not {what} (read as plain text); decompress it first"
     if archive:
         return f"{archive}, not {what}; extract it first"
     return f"a binary file, not {what}" if b"\x00" in head else None
@@ -452,7 +453,7 @@ def row_lines(path: str | Path, p: Path, what: str = "a text file of rows") -> I
     ``sed -n Np`` gives it (a lone "\\r" ended a line, so every error after one named the wrong line)."""
     with open(p, "rb") as raw:
         head = raw.read(4096)
-        problem = _not_rows(head, what)
+        problem = head_problem(head, what)
         if problem:  # read as text: "line 1: relation rows need 8 numbers, got 16" of a gzip-compressed file
             raise LogFormatError(path, None, problem)
         ends = _first_line_end(head, raw)
