@@ -295,9 +295,13 @@ class SensorConfig:
         return cls.from_dict(d, where=str(p))
 
     def to_yaml(self, path: str | Path, header: str = "", extra: dict[str, Any] | None = None) -> None:
-        """Write the fields as YAML (``header`` as # comment lines, ``extra`` as more sections)."""
+        """Write the fields as YAML (``header`` as # comment lines, ``extra`` as more sections). A lone
+        surrogate in ``header`` (a path's undecodable bytes, as ``os.fsdecode`` gives them) is written
+        as its escape, as YAML writes it in ``extra``: it failed UTF-8's encoding (``lmsbench calibrate``
+        of a log under such a folder, an internal error after the whole calibration)."""
 
-        lines = "".join(f"# {line}\n" for line in header.splitlines())
+        safe = header.encode("utf-8", "backslashreplace").decode("utf-8")
+        lines = "".join(f"# {line}\n" for line in safe.splitlines())
         body = dump_yaml(self.to_dict(), sort_keys=False)
         if extra:
             body += dump_yaml(extra, sort_keys=False)

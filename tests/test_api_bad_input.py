@@ -724,6 +724,19 @@ def test_a_sensor_yaml_with_only_its_calibration_section_is_refused(tmp_path):
     assert SensorConfig.from_yaml(whole).noise_sigma == 0.007
 
 
+
+def test_a_sensor_yaml_header_naming_an_undecodable_path_is_written_and_read_back(tmp_path):
+    """`lmsbench calibrate b<0xff>/s.clf` put the log's path (os.fsdecode: lone surrogates) into the
+    YAML's comment header, whose UTF-8 write failed: an internal error after the whole calibration."""
+    from sim import SensorConfig
+
+    source = os.fsdecode(b"b\xff/s.clf")
+    out = tmp_path / "s.yaml"
+    SensorConfig(noise_sigma=0.007).to_yaml(out, header=f"lmsbench calibrate {source}",
+                                            extra={"calibration": {"source": source}})
+    assert out.read_text(encoding="utf-8").startswith("# lmsbench calibrate b\\udcff/s.clf\n")
+    assert SensorConfig.from_yaml(out).noise_sigma == 0.007
+
 # -- fuzzing of 2026-12-03: the public Python API ------------------------------------------------------
 @pytest.mark.parametrize("field", ["angle_min", "angle_increment", "range_min", "range_max", "stamp"])
 @pytest.mark.parametrize("value, message", [
