@@ -41,6 +41,7 @@ from lms200.logs import SIMULATE_LOG
 from lms200.noise import QUANTUM_CANDIDATES_M
 
 from experiments.options import known_worlds, load_simulate_config, real_path  # sim.WORLD_NAMES, the simulator imported when first asked
+from experiments.provenance import printable
 
 
 @dataclass
@@ -188,7 +189,7 @@ def folder_source(path: str | Path, stride: int = 1, max_scans: int | None = Non
         settings.update({k: cfg.get(k) for k in ("world", "seed", "duration", "rate_hz")})
     settings["sensor"] = dataclasses.asdict(sensor)
     inner = log_source(p / SIMULATE_LOG, stride, max_scans, poses="none")
-    return Source(p.name, "sim", int(seed) if seed is not None else None, inner.records, _truth_in(world, sensor),
+    return Source(printable(p.name), "sim", int(seed) if seed is not None else None, inner.records, _truth_in(world, sensor),
                   max_scans, sigma_r=sensor.noise_sigma, pose_of=lambda rec: rec.truth, reader=inner.reader,
                   settings=settings, stride=stride)
 
@@ -251,7 +252,7 @@ def log_source(path: str | Path, stride: int = 1, max_scans: int | None = None,
             raise LmsbenchError(f"{path}: too few straight runs of beams to estimate the range noise; give --sigma")
         return float(noise.sigma_m)
 
-    return Source(Path(path).name, "log", None, records(), None, max_scans, sigma_r=None,
+    return Source(printable(Path(path).name), "log", None, records(), None, max_scans, sigma_r=None,
                   pose_of=None if poses == "none" else partial(_corrected_pose, odometry_too=corrected),
                   estimate_sigma=estimate_sigma,
                   reader=reader, **log_noise_estimates(lambda: read_log(path, **options)),
@@ -341,7 +342,7 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
         world = name in known_worlds()  # as parse_sources reads it
         if world and colon:
             _check_seed(spec, seed)
-        label = name if world else Path(spec).name
+        label = name if world else printable(Path(spec).name)  # as the tables name it (parse_sources)
         where = "world" if world else str(real_path(spec))
         first = kinds.setdefault(label, (spec, where))
         if first[1] != where:

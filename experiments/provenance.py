@@ -116,8 +116,15 @@ def write_record(path: str | os.PathLike, content: str | Callable[[Path], object
     # symbolic link's target is replaced (write_whole)
     if callable(content):
         return write_whole(path, content)
-    text = content
+    text = printable(content)  # sim2real's report.md of a log under b<0xff>/ failed after the whole run
     return write_whole(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+
+
+def printable(text: str) -> str:
+    """``text`` with each lone surrogate (an undecodable byte of a path, as ``os.fsdecode`` gives it)
+    written as its escape (``\\udcff``), as stderr shows it: UTF-8 (a report, a table's text column,
+    a figure's title) cannot hold one, and a run on ``b<0xff>.clf`` failed after its work."""
+    return text.encode("utf-8", "backslashreplace").decode("utf-8")
 
 
 def leftover_temporaries(path: str | os.PathLike) -> list[Path]:

@@ -42,6 +42,7 @@ from lms200.calibration import missing_readings
 from lms200.yamlio import dump as dump_yaml
 
 from experiments.logargs import report_skipped
+from experiments.provenance import printable
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -1037,7 +1038,7 @@ def draw(result: Sim2RealResult, path: Path, log: str) -> None:
     axes[4].set_title("explained fraction (3 cm)")
     for ax in axes:
         ax.legend(fontsize=7)
-    fig.suptitle(f"{log} against simulated {result.world}")
+    fig.suptitle(f"{printable(log)} against simulated {result.world}")
     fig.tight_layout()
     from experiments.style import savefig  # a full disk its OSError, not matplotlib's cleanup error
 

@@ -24,7 +24,7 @@ from lms200.records import Record
 from lms200.yamlio import dump as dump_yaml
 from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished, not_a_log_folder, simulate_log
 from experiments.progress import say_on_terminal
-from experiments.provenance import write_record
+from experiments.provenance import printable, write_record
 from experiments.user_methods import scans_of
 from slam import SlamConfig, SlamResult, run_slam
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
@@ -631,7 +631,7 @@ def plot(path: Path, data: SlamInput, res: SlamResult) -> None:
     default_pipeline = "keyframes" in res.diagnostics
     ax.plot([], [], color="#1f77b4", lw=1.5, label="map lines" if default_pipeline else "line landmarks")
     ax.autoscale_view()  # the collections' extent, as the plots of each line set it
-    ax.set_title(f"{data.name}: {len(data.records)} scans, {res.map_lines.shape[0]} lines")
+    ax.set_title(f"{printable(data.name)}: {len(data.records)} scans, {res.map_lines.shape[0]} lines")
     ax.legend(loc="best")
     if equal_axes:
         equal_axes(ax)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import gzip
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -1649,3 +1650,20 @@ def test_huge_whole_number_beyond_a_stated_range_says_the_range_once():
     with pytest.raises(argparse.ArgumentTypeError) as info:
         count(1)("9" * 400)
     assert str(info.value) == f"must be a whole number >= 1, got '{'9' * 400}' (too large for a float)"
+
+
+def test_a_log_whose_name_is_not_utf8_is_named_by_its_escapes(files, tmp_path, capsys):
+    """A log named b<0xff>.clf (os.fsdecode: a lone surrogate): compare's table (pyarrow) and slam's
+    figure title (matplotlib) cannot hold its name, and both ended in an internal error after the
+    work; sim2real's report.md too. The name is written with its escapes, as stderr shows it."""
+    from experiments.provenance import write_record
+
+    log = tmp_path / os.fsdecode(b"b\xff.clf")
+    shutil.copyfile(files["good.clf"], log)
+    assert run_main(["compare", str(log), "--methods", "split_merge", "--format", "csv", "--out",
+                     str(tmp_path / "c")]) == 0
+    assert set(pd.read_csv(tmp_path / "c" / "compare.csv")["source"]) == {"b\\udcff.clf"}
+    assert run_main(["slam", str(log), "--max-scans", "5", "--no-paper-baseline", "--out", str(tmp_path / "s")]) == 0
+    assert "internal error" not in capsys.readouterr().err
+    write_record(tmp_path / "r.md", f"# sim2real: {log.name}\n")
+    assert (tmp_path / "r.md").read_text(encoding="utf-8") == "# sim2real: b\\udcff.clf\n"

@@ -24,6 +24,7 @@ from experiments.sweep.kinds import align, slam_metrics, true_trajectory
 from experiments.compare import Source, compare, summarise
 from experiments.evaluate import ALL_METHODS, extract_timed, sensor_config, simulate_run, truths_for
 from experiments.user_methods import scans_of
+from experiments.provenance import printable
 
 from .tables import feature_panels, map_table, pick_evenly, signals_table, trajectory_table
 
@@ -309,7 +310,7 @@ def _intel_panels(path: Path, n: int, method: str, params: dict | None,
 def log_name(path: Path) -> str:
     """How Fig. 9's real-log panels name their log: "Intel" for the Intel log (the default),
     else the file's name (`demo --log` / `figures --intel` take any log; every label said Intel)."""
-    return "Intel" if Path(path).name == INTEL_LOG.name else Path(path).name
+    return "Intel" if Path(path).name == INTEL_LOG.name else printable(Path(path).name)
 
 
 def _slam_in_world(result, records) -> tuple[np.ndarray, np.ndarray]:
