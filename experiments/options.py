@@ -1356,7 +1356,7 @@ def check_study_tables(folder: str | os.PathLike) -> Path:
 
 def check_sweep_results(folder: str | os.PathLike) -> Path:
     """A sweep folder with results.parquet holding at least one successful cell."""
-    import pandas as pd
+    from experiments.provenance import read_parquet
 
     p = Path(folder)
     path = p / "results.parquet"
@@ -1376,7 +1376,7 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
                              f"sweep {p / 'sweep.yaml'} --out {p}, then draw it")
         raise InputError(f"--sweep {p}: no results.parquet (run `lmsbench sweep` first)")
     try:
-        table = pd.read_parquet(path)
+        table = read_parquet(path)
     except Exception as exc:  # noqa: BLE001 - pyarrow raises several types for a broken file
         raise InputError(f"--sweep {path}: not a Parquet table ({type(exc).__name__})") from None
     if "status" not in table or "cell" not in table:  # a figures table said "361 cells, all failed"

@@ -12,7 +12,7 @@ import subprocess
 import sys
 from importlib import metadata
 from pathlib import Path
-from typing import Callable, Iterator, Sequence
+from typing import Any, Callable, Iterator, Sequence
 
 #: Distributions whose version can change a result.
 PACKAGES = ("lmsbench", "numpy", "scipy", "numba", "pybullet", "pandas", "filterpy", "gtsam", "matplotlib")
@@ -125,6 +125,26 @@ def printable(text: str) -> str:
     written as its escape (``\\udcff``), as stderr shows it: UTF-8 (a report, a table's text column,
     a figure's title) cannot hold one, and a run on ``b<0xff>.clf`` failed after its work."""
     return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def write_parquet(table: Any, path: str | os.PathLike) -> None:
+    """A pandas table as Parquet at ``path``, through a file handle: pyarrow opens a path itself only
+    when it is UTF-8 (`compare --out b<0xff>` failed at its table, after the work)."""
+    with open(path, "wb") as fh:
+        table.to_parquet(fh, index=False)
+
+
+def read_parquet(path: str | os.PathLike, **kwargs: Any) -> Any:
+    """``pandas.read_parquet(path, **kwargs)``, through a file handle where the path is not UTF-8
+    (pyarrow's own open failed: `figures --tables b<0xff>`); a path that is no regular file is given
+    to pyarrow as before (a pipe there is its error, not a wait in ``open``)."""
+    import pandas as pd
+
+    name = os.fspath(path)
+    if printable(name) == name or not Path(path).is_file():
+        return pd.read_parquet(path, **kwargs)
+    with open(path, "rb") as fh:
+        return pd.read_parquet(fh, **kwargs)
 
 
 def leftover_temporaries(path: str | os.PathLike) -> list[Path]:

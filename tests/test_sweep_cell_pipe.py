@@ -50,3 +50,26 @@ def test_a_folder_among_the_cell_files_is_refused_before_any_cell(tmp_path: Path
         store.done()
     assert str(err.value) == (f"{store.path('bbbb')}: a folder where a cell's file goes: move it out of {store.cells} "
                               "(the sweep would compute that cell and fail to write it)")
+
+
+def test_a_sweep_folder_whose_name_is_not_utf8_resumes_its_cells_and_its_tables_read(tmp_path: Path) -> None:
+    """pyarrow opens no path that is not UTF-8: in a sweep folder b<0xff> every finished cell was
+    "damaged" and computed again on resume, and `figures --sweep` / `--tables` of such a folder
+    refused its tables (compare / figures --out there failed after the work)."""
+    import pandas as pd
+
+    from experiments.sweep.store import write_atomic
+
+    root = tmp_path / os.fsdecode(b"b\xff")
+    store = CellStore(root)
+    store.write("aaaa", {"cell": "aaaa", "status": "ok", "x": 1.0})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the old code's "cannot be read as a finished cell" warning
+        assert store.done() == {"aaaa"} and store.status("aaaa") == "ok"
+    assert store.read(["aaaa"])["x"].tolist() == [1.0]
+    from experiments.provenance import read_parquet, write_parquet
+
+    write_atomic(store.read(["aaaa"]), root / "results.parquet")
+    assert read_parquet(root / "results.parquet")["cell"].tolist() == ["aaaa"]
+    write_parquet(pd.DataFrame({"y": [2.0]}), root / "t.parquet")
+    assert read_parquet(root / "t.parquet")["y"].tolist() == [2.0]

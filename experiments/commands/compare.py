@@ -173,7 +173,7 @@ def run(args: argparse.Namespace) -> int:
     summary = summarise(table)
     if matches:
         summary = summary.merge(common_errors(pd.DataFrame(matches)), on=["source", "method"], how="left")
-    from experiments.provenance import link_latest, new_run_folder, versions, write_record
+    from experiments.provenance import link_latest, new_run_folder, versions, write_parquet, write_record
 
     resolved = dict(
         sources=args.sources, seeds=args.seeds, duration=args.duration, rate_hz=args.rate, stride=args.stride,
@@ -201,7 +201,7 @@ def run(args: argparse.Namespace) -> int:
     write_record(args.out / "config.yaml", dump_yaml(resolved, sort_keys=False))
     path = args.out / f"compare.{args.format}"
     if args.format == "parquet":  # whole, as every output: a full disk left a cut one beside whole files
-        write_record(path, lambda p: table.to_parquet(p, index=False))
+        write_record(path, lambda p: write_parquet(table, p))
     else:  # compare.csv and summary.csv are records too: whole, or a cut one refused the next run
         write_record(path, lambda p: table.to_csv(p, index=False))
     write_record(args.out / "summary.csv", lambda p: summary.to_csv(p, index=False))

@@ -24,7 +24,7 @@ from experiments.sweep.kinds import align, slam_metrics, true_trajectory
 from experiments.compare import Source, compare, summarise
 from experiments.evaluate import ALL_METHODS, extract_timed, sensor_config, simulate_run, truths_for
 from experiments.user_methods import scans_of
-from experiments.provenance import printable
+from experiments.provenance import printable, read_parquet
 
 from .tables import feature_panels, map_table, pick_evenly, signals_table, trajectory_table
 
@@ -156,7 +156,7 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
     whole: they tell the demo's folder as its own (options.DEMO_OWNER), and a demo stopped among
     its tables left Parquet files without them, which the next demo into the folder refused."""
     from experiments.compare import resolved_configs
-    from experiments.provenance import versions, write_record
+    from experiments.provenance import versions, write_parquet, write_record
 
     settings = cfg.to_dict()
     settings["resolved"] = {"sensor": dataclasses.asdict(sensor_config(cfg.sensor)),
@@ -167,7 +167,7 @@ def save_tables(tables: dict[str, pd.DataFrame], cfg: StudyConfig, notes: list[s
         settings["resolved"]["slam"] = dataclasses.asdict(SlamConfig())
     write_record(folder / "study.yaml", dump_yaml(settings, sort_keys=False))
     for name, table in tables.items():  # each whole: a full disk left a cut table or notes.txt
-        write_record(folder / f"{name}.parquet", lambda p, table=table: table.to_parquet(p, index=False))
+        write_record(folder / f"{name}.parquet", lambda p, table=table: write_parquet(table, p))
     write_record(folder / "notes.txt", "\n".join(notes) + ("\n" if notes else ""))  # UTF-8, read back by --tables
 
 
@@ -211,7 +211,7 @@ def read_table(path: Path) -> pd.DataFrame:
     from lms200 import LmsbenchError
 
     try:
-        table = pd.read_parquet(path)
+        table = read_parquet(path)
     except (OSError, ValueError) as exc:
         raise LmsbenchError(f"{path}: not a readable parquet table ({' '.join(str(exc).split())[:200]})") from None
     odd = [c for c in table.columns if not isinstance(c, str)]

@@ -30,6 +30,7 @@ from lms200.errors import LmsbenchWarning
 from lms200.finite import shown
 from lms200.yamlio import dump as dump_yaml
 from experiments.options import mid_sentence
+from experiments.provenance import read_parquet
 
 from .cells import INPUTS_KEY, WARNINGS_KEY, resolve_kind, run_cell
 from .spec import Scalar, SweepSpec, SweepSpecError, cell_key
@@ -260,7 +261,7 @@ def load_results(out: str | Path) -> pd.DataFrame:
     if not table.is_file():
         raise LmsbenchError(f"{out}: no results.parquet there (not a sweep folder, or no run of its sweep has "
                             "written its table yet)")
-    return pd.read_parquet(table)
+    return read_parquet(table)
 
 
 def _row(params: dict[str, Scalar], result: dict[str, Any], key: str) -> dict[str, Any]:

@@ -26,6 +26,8 @@ import pandas as pd
 
 from lms200.errors import LmsbenchError, LmsbenchWarning
 
+from experiments.provenance import read_parquet, write_parquet
+
 CELLS_DIR = "cells"
 RESULT_TABLES = ("results.parquet", "results.csv")  # the tables write_atomic writes into a sweep folder
 
@@ -133,7 +135,8 @@ def _whole_parquet(path: Path) -> Any:
     if not path.is_file():  # a pipe in cells/ was waited on for ever (`lmsbench sweep` resuming hung; fuzzing)
         return None
     try:
-        meta = pq.read_metadata(path)
+        with open(path, "rb") as fh:  # pyarrow opens no path that is not UTF-8 (a sweep folder b<0xff>)
+            meta = pq.read_metadata(fh)
     except Exception:  # noqa: BLE001 - pyarrow's ArrowInvalid, OSError: damaged
         return None
     return meta if meta.num_rows == 1 and {"status", "cell"} <= set(meta.schema.names) else None
@@ -161,7 +164,7 @@ def _cell_row(path: Path, columns: list[str] | None = None) -> pd.DataFrame | No
     if not path.is_file():
         return None
     try:
-        table = pd.read_parquet(path, columns=columns if columns is None else [*columns, "cell"])
+        table = read_parquet(path, columns=columns if columns is None else [*columns, "cell"])
     except FileNotFoundError:
         return None
     except Exception:  # noqa: BLE001 - pyarrow's ArrowInvalid, OSError, KeyError of a column: damaged
@@ -188,7 +191,7 @@ def write_atomic(table: pd.DataFrame, path: Path) -> None:
         if path.suffix == ".csv":
             table.to_csv(tmp, index=False)
         else:
-            _tidy(table).to_parquet(tmp, index=False)
+            write_parquet(_tidy(table), tmp)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
