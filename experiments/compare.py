@@ -459,7 +459,8 @@ def compare(
     Args:
         sources: Source objects, or strings as for :func:`parse_sources` (seed 0).
         methods: extractor names; the order does not matter (it is rotated per scan).
-        params: per-method overrides of config fields, ``{"hough": {"rho_step": 0.01}}``.
+        params: per-method overrides of config fields, ``{"hough": {"rho_step": 0.01}}``; only for
+            methods in ``methods`` (another method's entry is an InputError, before any source is read).
         score_config: line / corner matching tolerances.
         sigma: range noise, 1 sigma (m, in [MIN_SIGMA_M, MAX_SIGMA_M]: 0.1 mm to 1000 m), for the
             noise-scaled explained fractions, or "auto": the sensor model's for simulated sources,
@@ -503,6 +504,10 @@ def compare(
     if not isinstance(params, dict) or not all(isinstance(v, dict) for v in params.values()):  # 'int' object has no attribute 'get'
         raise InputError(f"params: must be a mapping of method name to its fields, {{'hough': {{'rho_step': 0.01}}}}, "
                          f"got {shown(params)}")
+    idle = next((m for m in params if m not in methods), None)
+    if idle is not None:  # its fields were dropped without a word: a typo'd or left-out method ran on its defaults
+        raise InputError(f"params: {shown(idle)} is not among the methods run ({', '.join(methods)}); "
+                         f"give parameters only for a method in methods")
     if isinstance(sources, (str, bytes)):
         raise InputError(f"sources: must be a list of sources, got the text {sources!r} (give [{sources!r}])")
     try:

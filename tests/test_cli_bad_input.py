@@ -309,6 +309,9 @@ CASES = [
     (["compare", "office", "--set", "extractor.k=abc", "--out", O], "k"),
     (["compare", "office", "--set", "extractor.hough.rho_step=0", "--out", O], "rho_step"),
     (["compare", "office", "--set", "extractor.kk=3", "--out", O], "kk"),
+    # a method's fields for a method not run: as the library's compare(params=...) refuses them
+    (["compare", "office", "--methods", "sensor", "--set", "extractor.iepf.split_threshold=0.05", "--out", O],
+     "extractor.iepf.split_threshold: 'iepf' is not an extractor of this run; known: sensor"),
     (["compare", "office", "--set", "sensor.k=3", "--out", O], "extractor.sensor.k"),
     (["compare", "office", "--set", "novalue", "--out", O], "--set"),
     # Python's int() / float() take underscores and other scripts' digits: 1_0 (a typo of 1.0) ran 10 s,
