@@ -461,9 +461,13 @@ CASES = [
                                                               "numbers within +-1e+06 m)"),
     # a compressed file where YAML is read: passed the check (its text is inside), then "internal error:
     # UnicodeDecodeError: 'utf-8' codec can't decode byte 0x8b"
-    (["simulate", "--config", "{good.clf.gz}", "--out", O], "good.clf.gz: gzip-compressed, not a simulate config.yaml "
-                                                            "(read as plain text); decompress it first"),
-    (["sweep", "{good.clf.gz}", "--out", O], "good.clf.gz: gzip-compressed, not a sweep file"),
+    # (a compressed CARMEN log, said to be one: it was told to be decompressed, as if that would make it YAML)
+    (["simulate", "--config", "{good.clf.gz}", "--out", O], "good.clf.gz: a gzip-compressed CARMEN log (its line 4 is "
+                                                            "a PARAM message), not a simulate config.yaml"),
+    (["sweep", "{good.clf.gz}", "--out", O], "good.clf.gz: a gzip-compressed CARMEN log (its line 4 is a PARAM message), "
+                                             "not a sweep file"),
+    (["slam", "{good.clf}", "--relations", "{good.clf.gz}", "--out", O], "good.clf.gz: a gzip-compressed CARMEN log (its "
+                                                                       "line 4 is a PARAM message), not a relations file"),
     # options that apply to what the run does not do were ignored, exit 0
     # (with the default preset they set its paper-preset baselines: refused only when neither runs; review)
     (["slam", "{simrun}", "--association", "jcbb", "--no-paper-baseline", "--no-odometry-baseline", "--out", O],
