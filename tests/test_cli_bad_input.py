@@ -137,6 +137,7 @@ def files(tmp_path_factory):
     (d / "sensor_flag.yaml").write_text("quantise: 3\n")
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
     (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
+    (d / "sensor_underflow.yaml").write_text("noise_sigma: 1e-400\n")  # read as 0: a noise-free run
     (d / "sensor_cm.yaml").write_text("n_beams: 361\nresolution: 0.008726646259971648\nunits: cm\nnoise_sigma: 0.44\n")  # cm meant
     (d / "sensor_slope_mm.yaml").write_text("noise_sigma: 0.005\nnoise_sigma_per_m: 0.5\n")  # mm per m meant
     (d / "sensor_gap_cm.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 10\n")  # cm meant: no mixed pixel at all
@@ -280,6 +281,14 @@ CASES = [
     (["simulate", "--config", "{run_list.yaml}", "--out", O], "(duration: must be a number, got [2])"),
     (["simulate", "--config", "{run_robot.yaml}", "--out", O], "(robot: must be a mapping of fields, got 5)"),
     (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 0.1] m"),
+    # a float written nonzero that float64 reads as 0 ran as 0: a noise-free run, an office with no clutter
+    (["simulate", "--sensor", "{sensor_underflow.yaml}", "--out", O], "sensor_underflow.yaml: not valid YAML (line 1, "
+     "column 14: key 'noise_sigma': 1e-400 is below float64's smallest nonzero number (4.9e-324) and would be read as 0; "
+     "write 0 for zero)"),
+    (["simulate", "--clutter", "1e-400", "--out", O], "argument --clutter: must be a finite number >= 0 and <= 10 (10x a "
+     "furnished office at most), got '1e-400': 1e-400 is below float64's smallest nonzero number (4.9e-324)"),
+    (["info", "{good.clf}", "--laser-angle-min-deg", "-1e-999"], "argument --laser-angle-min-deg: got '-1e-999': -1e-999 "
+     "is below float64's smallest"),
     # a calibrated sensor with its noise in cm (MIT CSAIL's 4.4 mm as 0.44): sim2real compared the log
     # against 0.44 m of noise ("sensor: noise 440.00 mm", largest gap 0.514), exit 0
     (["sim2real", "{good.clf}", "--sensor", "{sensor_cm.yaml}", "--out", O], "sensor_cm.yaml: noise_sigma: must be in [0, "
