@@ -603,17 +603,27 @@ def compare(
 
 def _first_checked(src: Source) -> Iterable[Record]:
     """``src``'s records, its first scan's beams checked (:func:`check_beams`) now, before its range
-    noise is estimated; a list of records is left as it is (re-iterable, for that estimate)."""
+    noise is estimated; a list of records is left as it is (re-iterable, for that estimate). The
+    first scans of a source not read by a log reader (records of the user's, which the readers'
+    check does not see) are checked for ranges in millimetres (``lms200.units``: a warning)."""
+    from lms200.units import UNITS_SCANS, warn_units
+
     if isinstance(src.records, Sequence):
         if len(src.records):
             check_beams(src.records[0].scan, f"{source_label(src)}: scan 0")
+            if src.reader is None:
+                warn_units([rec.scan for rec in src.records[:UNITS_SCANS]], source_label(src))
         return src.records
     it = iter(src.records)
     first = next(it, None)  # a log's records check their beams as read (log_source), naming the log's path
     if first is None:
         return ()
     check_beams(first.scan, f"{source_label(src)}: scan 0")
-    return itertools.chain([first], it)
+    if src.reader is not None:
+        return itertools.chain([first], it)
+    head = [first, *itertools.islice(it, UNITS_SCANS - 1)]
+    warn_units([rec.scan for rec in head], source_label(src))
+    return itertools.chain(head, it)
 
 
 def source_label(src: Source) -> str:
